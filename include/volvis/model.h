@@ -1,0 +1,270 @@
+/*
+ * VolVis abstract model: the World of the VolVis paper (Avila et al., IEEE
+ * Visualization '94, section 3 "Abstract model"): lights, objects, views,
+ * global cut planes and global shading (ambient light, background colour).
+ * Plus scene files (JSON, read with Jansson; schema in docs/scene-format.md).
+ *
+ * Units: positions and distances in world units; angles in radians (scene
+ * files use degrees and are converted on load).
+ *
+ * Ownership: a World owns its objects; an object holds one reference to its
+ * volume. Thread-safety: a World may be read by many threads at once (a
+ * render); changing it while a render reads it is the caller's to prevent.
+ */
+#ifndef VOLVIS_MODEL_H
+#define VOLVIS_MODEL_H
+
+#include "core.h"
+#include "math.h"
+#include "volume.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define VV_TF_MAX_POINTS 256
+#define VV_MAX_CUT_PLANES 8
+#define VV_MAX_LIGHTS 16
+#define VV_NAME_MAX 64
+
+/* ---- transfer function ---------------------------------------------- */
+
+typedef struct vv_tf_opacity_point {
+    double value;   /**< data value */
+    double opacity; /**< in [0, 1], per opacity_unit_distance of ray length */
+} vv_tf_opacity_point;
+
+typedef struct vv_tf_color_point {
+    double value;
+    vv_vec3 color; /**< RGB in [0, 1] */
+} vv_tf_color_point;
+
+/**
+ * Piecewise-linear opacity and colour transfer functions of the data value.
+ * Points are kept sorted by value; outside the first and last point the end
+ * values hold. With no colour points the colour is white; with no opacity
+ * points the opacity is 0. Opacity is per opacity_unit_distance (world units)
+ * of ray length; a renderer that steps by s uses 1 - (1 - a)^(s / unit).
+ */
+typedef struct vv_tf {
+    int n_opacity;
+    vv_tf_opacity_point opacity[VV_TF_MAX_POINTS];
+    int n_color;
+    vv_tf_color_point color[VV_TF_MAX_POINTS];
+    double opacity_unit_distance; /**< world units, > 0 */
+} vv_tf;
+
+/** Empty TF (opacity 0, white) with unit distance 1. */
+void vv_tf_init(vv_tf *tf);
+/**
+ * Adds an opacity point, keeping the points sorted by value. Errors:
+ * VV_ERR_LIMIT when full, VV_ERR_INVALID for NaN values or opacity outside
+ * [0, 1].
+ */
+vv_status vv_tf_add_opacity(vv_tf *tf, double value, double opacity);
+/** Adds a colour point (sorted). Errors as vv_tf_add_opacity, colour in [0,1]. */
+vv_status vv_tf_add_color(vv_tf *tf, double value, vv_vec3 color);
+/** Opacity per unit distance at @p value (piecewise-linear). */
+double vv_tf_eval_opacity(const vv_tf *tf, double value);
+/** Colour at @p value (piecewise-linear; white when there are no points). */
+vv_vec3 vv_tf_eval_color(const vv_tf *tf, double value);
+/**
+ * Replaces the TF with a ramp: opacity 0 at lo rising linearly to
+ * @p max_opacity at hi, colour @p color throughout.
+ */
+void vv_tf_set_ramp(vv_tf *tf, double lo, double hi, double max_opacity, vv_vec3 color,
+                    double unit_distance);
+
+/* ---- lights, cut planes, material, view -------------------------------- */
+
+typedef enum vv_light_type { VV_LIGHT_DIRECTIONAL = 0, VV_LIGHT_POINT = 1 } vv_light_type;
+
+typedef struct vv_light {
+    vv_light_type type;
+    int headlight;     /**< 1: directional light from the eye along the view direction */
+    vv_vec3 direction; /**< directional: the direction the light travels (unit) */
+    vv_vec3 position;  /**< point light position, world units */
+    vv_vec3 color;     /**< RGB in [0, 1] */
+    double intensity;  /**< scales color */
+} vv_light;
+
+/** A cut plane keeps the half-space the normal points into: n·(x − point) >= 0. */
+typedef struct vv_cut_plane {
+    vv_vec3 point;
+    vv_vec3 normal; /**< unit */
+} vv_cut_plane;
+
+/** Phong material coefficients (the paper's object "material"). */
+typedef struct vv_material {
+    double ambient;   /**< ka */
+    double diffuse;   /**< kd */
+    double specular;  /**< ks */
+    double shininess; /**< Phong exponent */
+    vv_vec3 color;    /**< base colour for threshold segmentation and isosurfaces */
+} vv_material;
+
+typedef enum vv_projection {
+    VV_PROJECTION_PERSPECTIVE = 0,
+    VV_PROJECTION_ORTHOGRAPHIC = 1
+} vv_projection;
+
+/** A camera. */
+typedef struct vv_view {
+    vv_vec3 eye;
+    vv_vec3 at;
+    vv_vec3 up;
+    double fov;          /**< vertical field of view, radians (perspective) */
+    double ortho_height; /**< world height of the view (orthographic) */
+    vv_projection projection;
+    int width;  /**< image size in pixels */
+    int height;
+} vv_view;
+
+/**
+ * The primary ray through the centre of pixel (px, py), row 0 at the top.
+ * dir is unit. Pixel coordinates may be fractional.
+ */
+vv_ray vv_view_ray(const vv_view *view, double px, double py);
+
+/**
+ * Moves the eye along the current viewing direction so that a sphere around
+ * @p box fits in the view (both axes); sets `at` to the box centre.
+ */
+void vv_view_frame_box(vv_view *view, vv_box box);
+
+/**
+ * Places the eye on a sphere around `at` by azimuth (about `up`) and
+ * elevation (towards `up`), both radians, relative to the current eye
+ * direction, keeping the distance.
+ */
+void vv_view_orbit(vv_view *view, double azimuth, double elevation);
+
+/* ---- objects --------------------------------------------------------- */
+
+typedef enum vv_object_type { VV_OBJECT_VOLUME = 0 } vv_object_type;
+
+typedef enum vv_render_mode {
+    VV_MODE_COMPOSITE = 0, /**< front-to-back compositing through the TF */
+    VV_MODE_MIP = 1,       /**< maximum intensity projection */
+    VV_MODE_MINIP = 2,     /**< minimum intensity projection */
+    VV_MODE_XRAY = 3,      /**< average value along the ray */
+    VV_MODE_ISO = 4        /**< first isosurface hit, shaded */
+} vv_render_mode;
+
+typedef enum vv_segmentation {
+    VV_SEG_TRANSFER_FUNCTION = 0, /**< opacity and colour from tf */
+    VV_SEG_THRESHOLD = 1          /**< opaque in material.color where value >= threshold */
+} vv_segmentation;
+
+/**
+ * A volume object. World position of an object point q (the volume's own
+ * world coordinates) is  position + orientation ⊗ (scale ∘ q).
+ */
+typedef struct vv_object {
+    char name[VV_NAME_MAX];
+    vv_object_type type;
+    vv_volume *volume; /**< one reference held (released by vv_object_free) */
+    vv_vec3 position;
+    vv_quat orientation;
+    vv_vec3 scale;
+    vv_material material;
+    vv_segmentation segmentation;
+    double threshold; /**< VV_SEG_THRESHOLD */
+    vv_tf tf;         /**< VV_SEG_TRANSFER_FUNCTION; also the grey ramp of mip/minip/xray */
+    vv_render_mode mode;
+    double isovalue; /**< VV_MODE_ISO */
+    double step;     /**< sample step in units of the smallest voxel spacing, > 0 */
+    int shading;     /**< 1: Phong shading from gradients; 0: emission only */
+    int visible;
+    int n_cut_planes;
+    vv_cut_plane cut_planes[VV_MAX_CUT_PLANES]; /**< local, in world coordinates */
+} vv_object;
+
+/**
+ * A new volume object holding a reference to @p volume (borrowed; the object
+ * takes its own reference): identity transform, composite mode, step 0.5,
+ * shading on, material ka 0.1 kd 0.6 ks 0.3 shininess 30 colour white, TF a
+ * ramp over the volume's range. Errors: VV_ERR_NOMEM, VV_ERR_INVALID.
+ */
+vv_status vv_object_new_volume(vv_object **out, vv_volume *volume, const char *name);
+void vv_object_free(vv_object *obj);
+/** Object-to-world matrix (position, orientation, scale). */
+vv_mat4 vv_object_matrix(const vv_object *obj);
+/** Index-to-world matrix of the object's volume: object matrix * volume index-to-world. */
+vv_mat4 vv_object_index_to_world(const vv_object *obj);
+/** World bounding box of the object's volume. */
+vv_box vv_object_world_box(const vv_object *obj);
+
+/* ---- world ------------------------------------------------------------ */
+
+typedef struct vv_world {
+    vv_view view; /**< the current view */
+    int n_lights;
+    vv_light lights[VV_MAX_LIGHTS];
+    int n_objects;
+    int cap_objects;
+    vv_object **objects; /**< owned */
+    int n_cut_planes;
+    vv_cut_plane cut_planes[VV_MAX_CUT_PLANES]; /**< global */
+    vv_vec3 ambient;                            /**< global ambient light colour */
+    vv_vec3 background;                         /**< background colour */
+} vv_world;
+
+/**
+ * An empty World: a 512x512 perspective view (fov 30°) from +y... looking at
+ * the origin, no lights, ambient (1,1,1), black background.
+ */
+vv_status vv_world_new(vv_world **out);
+void vv_world_free(vv_world *w);
+/** Appends @p obj; the World takes ownership (also on failure it frees obj). */
+vv_status vv_world_add_object(vv_world *w, vv_object *obj);
+/** Appends a copy of @p light. Errors: VV_ERR_LIMIT beyond VV_MAX_LIGHTS. */
+vv_status vv_world_add_light(vv_world *w, const vv_light *light);
+/** Appends a global cut plane. Errors: VV_ERR_LIMIT, VV_ERR_INVALID (zero normal). */
+vv_status vv_world_add_cut_plane(vv_world *w, vv_vec3 point, vv_vec3 normal);
+/** Bounding box of all visible objects (an empty box at the origin if none). */
+vv_box vv_world_bounds(const vv_world *w);
+
+/** Options for vv_world_new_for_volume. */
+typedef struct vv_default_scene_options {
+    vv_render_mode mode;
+    int has_tf_range; /**< 1: use tf_lo/tf_hi, else derived from the histogram */
+    double tf_lo, tf_hi;
+    int has_isovalue;
+    double isovalue;
+    int width, height;
+    double azimuth, elevation; /**< radians, applied to the default view */
+    double zoom;               /**< > 1 moves closer */
+} vv_default_scene_options;
+
+/** Defaults: composite, histogram TF, 512x512, no rotation, zoom 1. */
+void vv_default_scene_options_init(vv_default_scene_options *o);
+
+/**
+ * A World showing one volume the way a user expects from `volvis render
+ * FILE`: the volume centred on the origin, a perspective view from the front
+ * (-y, up +z) framing it, a headlight, and a transfer function from the
+ * histogram (or the given range). Takes its own reference to @p volume.
+ */
+vv_status vv_world_new_for_volume(vv_world **out, vv_volume *volume,
+                                  const vv_default_scene_options *opt);
+
+/**
+ * Loads a scene file (JSON, docs/scene-format.md). Volume files are resolved
+ * relative to the scene file and loaded with vv_volume_load. Errors:
+ * VV_ERR_IO, VV_ERR_FORMAT ("scene.json:12:7: expected a number for
+ * view.fov"), or whatever loading a volume returned.
+ */
+vv_status vv_scene_load(vv_world **out, const char *path);
+
+/**
+ * Writes a World as a scene file, atomically. Volumes are referred to by
+ * @p volume_files[i] for object i (relative to the scene file). Errors:
+ * VV_ERR_IO, VV_ERR_INVALID.
+ */
+vv_status vv_scene_save(const vv_world *w, const char *path, const char *const *volume_files);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,69 @@
+/*
+ * VolVis rendering: one interface for every rendering method, and a registry.
+ *
+ * A renderer turns a World plus a View into an image (RGBA float + depth,
+ * see image.h). Each method implements vv_renderer_ops and is listed in the
+ * registry (src/render/registry.c); callers pick one by name ("raycast") and
+ * never special-case a method.
+ *
+ * Thread-safety: one vv_renderer must not render from two threads at once;
+ * distinct renderers are independent. A renderer may cache per-volume data
+ * (gradients, subvolume min/max) between renders; the cache is keyed on the
+ * volume and its `modified` counter and holds a reference to the volume.
+ */
+#ifndef VOLVIS_RENDER_H
+#define VOLVIS_RENDER_H
+
+#include "core.h"
+#include "image.h"
+#include "model.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Options of one render call. */
+typedef struct vv_render_options {
+    int threads;          /**< <= 0: vv_threads_get() */
+    int quality;          /**< 0 draft .. 2 final; methods may ignore it */
+    vv_progress progress; /**< reports the fraction of image tiles done; may cancel */
+} vv_render_options;
+
+/** threads 0, quality 2, no progress callback. */
+void vv_render_options_init(vv_render_options *o);
+
+/** The table every rendering method implements. */
+typedef struct vv_renderer_ops {
+    const char *name;        /**< registry key, e.g. "raycast" */
+    const char *description; /**< one line for --help */
+    vv_status (*create)(void **state);
+    /** Sets a method-specific option from text; VV_ERR_INVALID for unknown keys. */
+    vv_status (*set_option)(void *state, const char *key, const char *value);
+    vv_status (*render)(void *state, const vv_world *world, const vv_view *view,
+                        const vv_render_options *opt, vv_image *out);
+    void (*destroy)(void *state);
+} vv_renderer_ops;
+
+typedef struct vv_renderer vv_renderer;
+
+/** The registry: a NULL-terminated array of every method built in. */
+const vv_renderer_ops *const *vv_renderer_registry(void);
+
+/** Creates the method called @p name. Errors: VV_ERR_INVALID (unknown name), VV_ERR_NOMEM. */
+vv_status vv_renderer_new(vv_renderer **out, const char *name);
+void vv_renderer_free(vv_renderer *r);
+const char *vv_renderer_name(const vv_renderer *r);
+vv_status vv_renderer_set_option(vv_renderer *r, const char *key, const char *value);
+
+/**
+ * Renders @p world seen through @p view into @p out, which must be
+ * view->width x view->height. @p opt may be NULL (defaults). Errors:
+ * VV_ERR_INVALID (size mismatch, bad World), VV_ERR_NOMEM, VV_ERR_CANCELLED.
+ */
+vv_status vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
+                             const vv_render_options *opt, vv_image *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

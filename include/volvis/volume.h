@@ -1,0 +1,189 @@
+/*
+ * VolVis volume: a rectilinear scalar volume in its native voxel type.
+ *
+ * Layout: voxel (i, j, k) with i fastest, data[k][j][i], i.e. byte offset
+ * ((k * dims[1] + j) * dims[0] + i) * voxel_size. Node-centred:
+ *   world = origin + direction * (spacing ∘ (i, j, k)).
+ * direction is a row-major 3x3 matrix whose COLUMNS are the unit axis
+ * directions of i, j and k in world space (identity unless the file gave one).
+ * Spacing and origin are in world units (usually millimetres).
+ *
+ * Ownership: a volume is reference-counted. vv_volume_new() returns a count
+ * of 1; vv_volume_ref() adds one; vv_volume_free() drops one and frees the
+ * volume at zero. The fields are public for speed; change data only before
+ * sharing the volume, and call vv_volume_update_range() (and bump
+ * `modified`) after changing voxels so caches notice.
+ *
+ * Thread-safety: reading and sampling are thread-safe; ref/free are atomic.
+ */
+#ifndef VOLVIS_VOLUME_H
+#define VOLVIS_VOLUME_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core.h"
+#include "math.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** Native voxel types. */
+typedef enum vv_voxel_type {
+    VV_U8 = 0,
+    VV_I8,
+    VV_U16,
+    VV_I16,
+    VV_U32,
+    VV_I32,
+    VV_F32,
+    VV_F64
+} vv_voxel_type;
+
+/** Length unit of the spacing (SLC's enumeration; VV_UNIT_UNKNOWN otherwise). */
+typedef enum vv_unit {
+    VV_UNIT_METER = 0,
+    VV_UNIT_MM = 1,
+    VV_UNIT_MICRON = 2,
+    VV_UNIT_FOOT = 3,
+    VV_UNIT_INCH = 4,
+    VV_UNIT_UNKNOWN = 5
+} vv_unit;
+
+/** Where the data came from (SLC's "data origin" enumeration). */
+typedef enum vv_data_origin {
+    VV_ORIGIN_BIORAD_CONFOCAL = 0,
+    VV_ORIGIN_MRI = 1,
+    VV_ORIGIN_CT = 2,
+    VV_ORIGIN_SIMULATION = 3,
+    VV_ORIGIN_BINARY_VOXELIZED = 4,
+    VV_ORIGIN_FUZZY_VOXELIZED = 5,
+    VV_ORIGIN_FUNCTION_VOXELIZED = 6,
+    VV_ORIGIN_OTHER = 7
+} vv_data_origin;
+
+/** What was done to the data (SLC's "modification" enumeration). */
+typedef enum vv_modification {
+    VV_MOD_ORIGINAL = 0,
+    VV_MOD_RESAMPLED = 1,
+    VV_MOD_RESAMPLED_FILTERED = 2,
+    VV_MOD_FILTERED = 3,
+    VV_MOD_OTHER = 4
+} vv_modification;
+
+/** Largest accepted size along one axis. */
+#define VV_VOLUME_MAX_DIM 65536
+/** Largest accepted voxel count (2^33, i.e. 8 G voxels). */
+#define VV_VOLUME_MAX_VOXELS (((uint64_t)1) << 33)
+/** Largest accepted data size in bytes (32 GiB). */
+#define VV_VOLUME_MAX_BYTES (((uint64_t)32) << 30)
+
+typedef struct vv_volume {
+    int dims[3];           /**< voxels along i, j, k; each >= 1 */
+    double spacing[3];     /**< world units between voxel centres, > 0 */
+    double origin[3];      /**< world position of voxel (0, 0, 0) */
+    double direction[9];   /**< row-major 3x3; columns are the i, j, k axes */
+    vv_voxel_type type;    /**< native voxel type of data */
+    double range[2];       /**< min and max voxel value (vv_volume_update_range) */
+    void *data;            /**< dims[0]*dims[1]*dims[2] voxels; owned */
+    vv_unit unit;          /**< length unit of spacing and origin */
+    vv_data_origin data_origin;
+    vv_modification modification;
+    uint64_t modified;     /**< bumped on each change, for caches */
+    int refcount;          /**< use vv_volume_ref / vv_volume_free */
+} vv_volume;
+
+/** Bytes per voxel of a type (1, 2, 4 or 8). */
+size_t vv_voxel_type_size(vv_voxel_type t);
+/** Lower-case name: "u8", "i8", "u16", "i16", "u32", "i32", "f32", "f64". */
+const char *vv_voxel_type_name(vv_voxel_type t);
+/** Parses a name as printed by vv_voxel_type_name (also "uchar", "short", "float", ...). */
+vv_status vv_voxel_type_parse(const char *name, vv_voxel_type *out);
+
+/**
+ * Checks that a volume of @p dims voxels of type @p t is within the limits
+ * above (each dimension in [1, VV_VOLUME_MAX_DIM], no overflow, total voxels
+ * and bytes within VV_VOLUME_MAX_*). On success stores the byte count in
+ * *bytes (may be NULL). Errors: VV_ERR_LIMIT with a message giving the size.
+ * Readers call this on header values before allocating anything.
+ */
+vv_status vv_volume_check_size(const int dims[3], vv_voxel_type t, uint64_t *bytes);
+
+/**
+ * Allocates a zero-filled volume with unit spacing, zero origin, identity
+ * direction, range [0, 0], refcount 1. Errors: VV_ERR_LIMIT (see
+ * vv_volume_check_size), VV_ERR_NOMEM.
+ */
+vv_status vv_volume_new(vv_volume **out, const int dims[3], vv_voxel_type t);
+
+/** Adds a reference; returns @p v. */
+vv_volume *vv_volume_ref(vv_volume *v);
+
+/** Drops a reference; frees at zero. Accepts NULL. */
+void vv_volume_free(vv_volume *v);
+
+/** Number of voxels. */
+uint64_t vv_volume_voxel_count(const vv_volume *v);
+
+/** Recomputes range[] from the data and bumps `modified`. NaNs are ignored. */
+void vv_volume_update_range(vv_volume *v);
+
+/** Value of voxel (i, j, k) as double; indices must be inside. */
+double vv_volume_get(const vv_volume *v, int i, int j, int k);
+
+/** Sets voxel (i, j, k), converting (rounding, clamping) to the native type. */
+void vv_volume_set(vv_volume *v, int i, int j, int k, double value);
+
+/**
+ * Index-to-world matrix: world = M (i, j, k, 1). Includes direction, spacing
+ * and origin.
+ */
+vv_mat4 vv_volume_index_to_world(const vv_volume *v);
+
+/** World-to-index matrix (inverse of vv_volume_index_to_world). */
+vv_mat4 vv_volume_world_to_index(const vv_volume *v);
+
+/** World-space bounding box of the node-centred grid (all 8 corners). */
+vv_box vv_volume_world_box(const vv_volume *v);
+
+/**
+ * Trilinear sample at continuous index coordinates (x, y, z), clamped to the
+ * grid. Returns the interpolated value as float.
+ */
+float vv_volume_sample_index(const vv_volume *v, double x, double y, double z);
+
+/**
+ * Trilinear sample at world position @p p. Returns 1 and stores the value
+ * when p is inside the grid box, 0 (and *value = 0) outside.
+ */
+int vv_volume_sample_world(const vv_volume *v, vv_vec3 p, float *value);
+
+/**
+ * Gradient at world position @p p, in value units per world unit: central
+ * differences of trilinear samples half a voxel apart along each index axis,
+ * mapped to world axes through the direction matrix. Returns 1 inside the
+ * grid box, 0 outside (gradient zero).
+ */
+int vv_volume_gradient_world(const vv_volume *v, vv_vec3 p, vv_vec3 *gradient);
+
+/**
+ * Histogram of all voxels into @p nbins equal bins over [lo, hi] (values
+ * outside are clamped into the end bins; NaNs are skipped). @p bins has
+ * nbins entries and is overwritten. Errors: VV_ERR_INVALID if nbins < 1 or
+ * hi <= lo.
+ */
+vv_status vv_volume_histogram(const vv_volume *v, int nbins, double lo, double hi,
+                              uint64_t *bins);
+
+/**
+ * The value below which a fraction @p q of the voxels lies (q in [0, 1]),
+ * estimated from a 4096-bin histogram over range[]. Used to build default
+ * transfer functions.
+ */
+double vv_volume_quantile(const vv_volume *v, double q);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,16 @@
+/*
+ * VolVis: the whole public API. Each component has its own header; this one
+ * includes them all. See docs/architecture.md.
+ */
+#ifndef VOLVIS_VOLVIS_H
+#define VOLVIS_VOLVIS_H
+
+#include "core.h"
+#include "image.h"
+#include "io.h"
+#include "math.h"
+#include "model.h"
+#include "render.h"
+#include "volume.h"
+
+#endif

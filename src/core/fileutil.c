@@ -1,0 +1,181 @@
+/* Atomic output files, whole-file reads, paths, byte order. */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "core/internal.h"
+
+char *
+vv_strdup(const char *s)
+{
+    size_t n = strlen(s) + 1;
+    char *d = malloc(n);
+    if (d)
+        memcpy(d, s, n);
+    return d;
+}
+
+vv_status
+vv_atomic_file_open(vv_atomic_file *af, const char *path)
+{
+    memset(af, 0, sizeof *af);
+    size_t n = strlen(path);
+    af->path = vv_strdup(path);
+    af->tmp_path = malloc(n + 16);
+    if (!af->path || !af->tmp_path) {
+        free(af->path);
+        free(af->tmp_path);
+        memset(af, 0, sizeof *af);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    snprintf(af->tmp_path, n + 16, "%s.tmp-XXXXXX", path);
+    int fd = mkstemp(af->tmp_path);
+    if (fd < 0) {
+        vv_status s = vv_error_set(VV_ERR_IO, "%s: cannot create: %s", path, strerror(errno));
+        free(af->path);
+        free(af->tmp_path);
+        memset(af, 0, sizeof *af);
+        return s;
+    }
+    /* mkstemp creates 0600; give the file the usual permissions. */
+    mode_t mask = umask(0);
+    umask(mask);
+    fchmod(fd, 0666 & ~mask);
+    af->fp = fdopen(fd, "wb");
+    if (!af->fp) {
+        close(fd);
+        unlink(af->tmp_path);
+        free(af->path);
+        free(af->tmp_path);
+        memset(af, 0, sizeof *af);
+        return vv_error_set(VV_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    }
+    return VV_OK;
+}
+
+vv_status
+vv_atomic_file_commit(vv_atomic_file *af)
+{
+    if (!af->fp)
+        return vv_error_set(VV_ERR_IO, "atomic file not open");
+    int bad = ferror(af->fp) || fflush(af->fp) != 0 || fsync(fileno(af->fp)) != 0;
+    int err = errno;
+    if (fclose(af->fp) != 0 && !bad) {
+        bad = 1;
+        err = errno;
+    }
+    af->fp = NULL;
+    if (bad) {
+        vv_status s = vv_error_set(VV_ERR_IO, "%s: write failed: %s", af->path, strerror(err));
+        vv_atomic_file_abort(af);
+        return s;
+    }
+    if (rename(af->tmp_path, af->path) != 0) {
+        vv_status s = vv_error_set(VV_ERR_IO, "%s: cannot rename temporary file: %s", af->path,
+                                   strerror(errno));
+        vv_atomic_file_abort(af);
+        return s;
+    }
+    free(af->path);
+    free(af->tmp_path);
+    memset(af, 0, sizeof *af);
+    return VV_OK;
+}
+
+void
+vv_atomic_file_abort(vv_atomic_file *af)
+{
+    if (af->fp)
+        fclose(af->fp);
+    if (af->tmp_path)
+        unlink(af->tmp_path);
+    free(af->path);
+    free(af->tmp_path);
+    memset(af, 0, sizeof *af);
+}
+
+vv_status
+vv_read_file(const char *path, uint64_t max_bytes, unsigned char **data, uint64_t *size)
+{
+    *data = NULL;
+    *size = 0;
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return vv_error_set(VV_ERR_IO, "%s: %s", path, strerror(errno));
+    struct stat st;
+    if (fstat(fileno(f), &st) != 0 || !S_ISREG(st.st_mode)) {
+        fclose(f);
+        return vv_error_set(VV_ERR_IO, "%s: not a regular file", path);
+    }
+    if ((uint64_t)st.st_size > max_bytes) {
+        fclose(f);
+        return vv_error_set(VV_ERR_LIMIT, "%s: file of %lld bytes is over the limit of %llu",
+                            path, (long long)st.st_size, (unsigned long long)max_bytes);
+    }
+    size_t n = (size_t)st.st_size;
+    unsigned char *buf = malloc(n + 1);
+    if (!buf) {
+        fclose(f);
+        return vv_error_set(VV_ERR_NOMEM, "%s: out of memory for %zu bytes", path, n);
+    }
+    if (n && fread(buf, 1, n, f) != n) {
+        free(buf);
+        fclose(f);
+        return vv_error_set(VV_ERR_IO, "%s: read failed", path);
+    }
+    fclose(f);
+    buf[n] = 0;
+    *data = buf;
+    *size = n;
+    return VV_OK;
+}
+
+const char *
+vv_path_basename(const char *path)
+{
+    const char *s = strrchr(path, '/');
+    return s ? s + 1 : path;
+}
+
+char *
+vv_path_join_dir(const char *base_file, const char *rel)
+{
+    if (rel[0] == '/')
+        return vv_strdup(rel);
+    const char *slash = strrchr(base_file, '/');
+    if (!slash)
+        return vv_strdup(rel);
+    size_t dn = (size_t)(slash - base_file) + 1;
+    size_t rn = strlen(rel);
+    char *out = malloc(dn + rn + 1);
+    if (!out)
+        return NULL;
+    memcpy(out, base_file, dn);
+    memcpy(out + dn, rel, rn + 1);
+    return out;
+}
+
+int
+vv_host_is_little_endian(void)
+{
+    const uint16_t one = 1;
+    return *(const uint8_t *)&one == 1;
+}
+
+void
+vv_byteswap(void *data, uint64_t count, size_t size)
+{
+    uint8_t *p = data;
+    if (size < 2)
+        return;
+    for (uint64_t e = 0; e < count; e++, p += size) {
+        for (size_t a = 0, b = size - 1; a < b; a++, b--) {
+            uint8_t t = p[a];
+            p[a] = p[b];
+            p[b] = t;
+        }
+    }
+}

@@ -1,0 +1,56 @@
+/*
+ * Internal helpers shared by the components of libvolvis (not installed).
+ */
+#ifndef VOLVIS_INTERNAL_H
+#define VOLVIS_INTERNAL_H
+
+#include <stdint.h>
+#include <stdio.h>
+
+#include "volvis/core.h"
+
+/**
+ * An output file written atomically: the data goes to a temporary file
+ * beside the target ("<path>.tmp-XXXXXX"), renamed over the target only by
+ * vv_atomic_file_commit. On any failure call vv_atomic_file_abort, which
+ * removes the temporary file and leaves the target untouched.
+ */
+typedef struct vv_atomic_file {
+    FILE *fp;
+    char *path;
+    char *tmp_path;
+} vv_atomic_file;
+
+/** Opens the temporary file. Errors: VV_ERR_IO (with path and strerror), VV_ERR_NOMEM. */
+vv_status vv_atomic_file_open(vv_atomic_file *af, const char *path);
+/** Flushes, closes and renames. Errors: VV_ERR_IO (the temporary is removed). */
+vv_status vv_atomic_file_commit(vv_atomic_file *af);
+/** Closes and removes the temporary file. Safe to call twice or after a failed open. */
+void vv_atomic_file_abort(vv_atomic_file *af);
+
+/**
+ * Reads a whole file into memory (NUL-terminated for convenience). Refuses
+ * files larger than @p max_bytes with VV_ERR_LIMIT. Errors: VV_ERR_IO.
+ */
+vv_status vv_read_file(const char *path, uint64_t max_bytes, unsigned char **data,
+                       uint64_t *size);
+
+/** Base name of a path (pointer into it). */
+const char *vv_path_basename(const char *path);
+
+/**
+ * Joins @p rel to the directory of @p base_file unless @p rel is absolute.
+ * Returns a malloc'ed string or NULL on allocation failure.
+ */
+char *vv_path_join_dir(const char *base_file, const char *rel);
+
+/** 1 when the host is little-endian. */
+int vv_host_is_little_endian(void);
+
+/** Reverses the bytes of @p count elements of @p size bytes each, in place. */
+void vv_byteswap(void *data, uint64_t count, size_t size);
+
+/** strdup that returns NULL on failure. */
+char *vv_strdup(const char *s);
+
+#endif

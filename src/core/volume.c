@@ -1,0 +1,432 @@
+/* Rectilinear scalar volumes (see volvis/volume.h). */
+#include <math.h>
+#include <omp.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "volvis/volume.h"
+
+size_t
+vv_voxel_type_size(vv_voxel_type t)
+{
+    switch (t) {
+    case VV_U8:
+    case VV_I8:
+        return 1;
+    case VV_U16:
+    case VV_I16:
+        return 2;
+    case VV_U32:
+    case VV_I32:
+    case VV_F32:
+        return 4;
+    case VV_F64:
+        return 8;
+    }
+    return 0;
+}
+
+static const char *const type_names[] = {"u8", "i8", "u16", "i16", "u32", "i32", "f32", "f64"};
+
+const char *
+vv_voxel_type_name(vv_voxel_type t)
+{
+    return (unsigned)t < 8 ? type_names[t] : "unknown";
+}
+
+vv_status
+vv_voxel_type_parse(const char *name, vv_voxel_type *out)
+{
+    static const struct {
+        const char *name;
+        vv_voxel_type t;
+    } alias[] = {{"u8", VV_U8},     {"uint8", VV_U8},   {"uchar", VV_U8},    {"i8", VV_I8},
+                 {"int8", VV_I8},   {"char", VV_I8},    {"u16", VV_U16},     {"uint16", VV_U16},
+                 {"ushort", VV_U16}, {"i16", VV_I16},   {"int16", VV_I16},   {"short", VV_I16},
+                 {"u32", VV_U32},   {"uint32", VV_U32}, {"uint", VV_U32},    {"i32", VV_I32},
+                 {"int32", VV_I32}, {"int", VV_I32},    {"f32", VV_F32},     {"float", VV_F32},
+                 {"float32", VV_F32}, {"f64", VV_F64},  {"double", VV_F64},  {"float64", VV_F64}};
+    for (size_t i = 0; i < sizeof alias / sizeof alias[0]; i++)
+        if (strcmp(name, alias[i].name) == 0) {
+            *out = alias[i].t;
+            return VV_OK;
+        }
+    return vv_error_set(VV_ERR_INVALID, "unknown voxel type '%s' (u8, i8, u16, i16, u32, i32, f32, f64)",
+                        name);
+}
+
+vv_status
+vv_volume_check_size(const int dims[3], vv_voxel_type t, uint64_t *bytes)
+{
+    for (int a = 0; a < 3; a++)
+        if (dims[a] < 1 || dims[a] > VV_VOLUME_MAX_DIM)
+            return vv_error_set(VV_ERR_LIMIT,
+                                "volume size %d x %d x %d: axis %d is outside 1..%d", dims[0],
+                                dims[1], dims[2], a, VV_VOLUME_MAX_DIM);
+    size_t vs = vv_voxel_type_size(t);
+    if (vs == 0)
+        return vv_error_set(VV_ERR_INVALID, "invalid voxel type %d", (int)t);
+    uint64_t n = (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2];
+    if (n > VV_VOLUME_MAX_VOXELS)
+        return vv_error_set(VV_ERR_LIMIT, "volume size %d x %d x %d = %llu voxels is over the limit of %llu",
+                            dims[0], dims[1], dims[2], (unsigned long long)n,
+                            (unsigned long long)VV_VOLUME_MAX_VOXELS);
+    uint64_t b = n * vs;
+    if (b > VV_VOLUME_MAX_BYTES || b > (uint64_t)SIZE_MAX)
+        return vv_error_set(VV_ERR_LIMIT, "volume size %d x %d x %d %s = %llu bytes is over the limit of %llu",
+                            dims[0], dims[1], dims[2], vv_voxel_type_name(t),
+                            (unsigned long long)b, (unsigned long long)VV_VOLUME_MAX_BYTES);
+    if (bytes)
+        *bytes = b;
+    return VV_OK;
+}
+
+vv_status
+vv_volume_new(vv_volume **out, const int dims[3], vv_voxel_type t)
+{
+    *out = NULL;
+    uint64_t bytes;
+    vv_status s = vv_volume_check_size(dims, t, &bytes);
+    if (s != VV_OK)
+        return s;
+    vv_volume *v = calloc(1, sizeof *v);
+    if (!v)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    v->data = calloc((size_t)bytes, 1);
+    if (!v->data) {
+        free(v);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for a volume of %llu bytes",
+                            (unsigned long long)bytes);
+    }
+    memcpy(v->dims, dims, sizeof v->dims);
+    for (int a = 0; a < 3; a++)
+        v->spacing[a] = 1.0;
+    v->direction[0] = v->direction[4] = v->direction[8] = 1.0;
+    v->type = t;
+    v->unit = VV_UNIT_UNKNOWN;
+    v->data_origin = VV_ORIGIN_OTHER;
+    v->modification = VV_MOD_ORIGINAL;
+    v->refcount = 1;
+    *out = v;
+    return VV_OK;
+}
+
+vv_volume *
+vv_volume_ref(vv_volume *v)
+{
+    if (v)
+        atomic_fetch_add_explicit((_Atomic int *)&v->refcount, 1, memory_order_relaxed);
+    return v;
+}
+
+void
+vv_volume_free(vv_volume *v)
+{
+    if (!v)
+        return;
+    if (atomic_fetch_sub_explicit((_Atomic int *)&v->refcount, 1, memory_order_acq_rel) > 1)
+        return;
+    free(v->data);
+    free(v);
+}
+
+uint64_t
+vv_volume_voxel_count(const vv_volume *v)
+{
+    return (uint64_t)v->dims[0] * (uint64_t)v->dims[1] * (uint64_t)v->dims[2];
+}
+
+static inline double
+voxel_at(const vv_volume *v, size_t idx)
+{
+    switch (v->type) {
+    case VV_U8:
+        return ((const uint8_t *)v->data)[idx];
+    case VV_I8:
+        return ((const int8_t *)v->data)[idx];
+    case VV_U16:
+        return ((const uint16_t *)v->data)[idx];
+    case VV_I16:
+        return ((const int16_t *)v->data)[idx];
+    case VV_U32:
+        return ((const uint32_t *)v->data)[idx];
+    case VV_I32:
+        return ((const int32_t *)v->data)[idx];
+    case VV_F32:
+        return ((const float *)v->data)[idx];
+    case VV_F64:
+        return ((const double *)v->data)[idx];
+    }
+    return 0;
+}
+
+#define VV_RANGE_LOOP(T)                                                                           \
+    do {                                                                                           \
+        const T *p = (const T *)v->data;                                                           \
+        _Pragma("omp parallel for reduction(min : lo) reduction(max : hi) schedule(static)")      \
+        for (int64_t i = 0; i < (int64_t)n; i++) {                                                 \
+            double x = (double)p[i];                                                               \
+            if (x < lo)                                                                            \
+                lo = x;                                                                            \
+            if (x > hi)                                                                            \
+                hi = x;                                                                            \
+        }                                                                                          \
+    } while (0)
+
+void
+vv_volume_update_range(vv_volume *v)
+{
+    uint64_t n = vv_volume_voxel_count(v);
+    double lo = INFINITY, hi = -INFINITY;
+    switch (v->type) {
+    case VV_U8:
+        VV_RANGE_LOOP(uint8_t);
+        break;
+    case VV_I8:
+        VV_RANGE_LOOP(int8_t);
+        break;
+    case VV_U16:
+        VV_RANGE_LOOP(uint16_t);
+        break;
+    case VV_I16:
+        VV_RANGE_LOOP(int16_t);
+        break;
+    case VV_U32:
+        VV_RANGE_LOOP(uint32_t);
+        break;
+    case VV_I32:
+        VV_RANGE_LOOP(int32_t);
+        break;
+    case VV_F32:
+        VV_RANGE_LOOP(float); /* NaN compares false and is skipped */
+        break;
+    case VV_F64:
+        VV_RANGE_LOOP(double);
+        break;
+    }
+    if (!(lo <= hi))
+        lo = hi = 0;
+    v->range[0] = lo;
+    v->range[1] = hi;
+    v->modified++;
+}
+
+double
+vv_volume_get(const vv_volume *v, int i, int j, int k)
+{
+    size_t idx = ((size_t)k * (size_t)v->dims[1] + (size_t)j) * (size_t)v->dims[0] + (size_t)i;
+    return voxel_at(v, idx);
+}
+
+static double
+clamp_round(double x, double lo, double hi)
+{
+    if (!(x == x))
+        return 0;
+    x = nearbyint(x);
+    return x < lo ? lo : x > hi ? hi : x;
+}
+
+void
+vv_volume_set(vv_volume *v, int i, int j, int k, double value)
+{
+    size_t idx = ((size_t)k * (size_t)v->dims[1] + (size_t)j) * (size_t)v->dims[0] + (size_t)i;
+    switch (v->type) {
+    case VV_U8:
+        ((uint8_t *)v->data)[idx] = (uint8_t)clamp_round(value, 0, 255);
+        break;
+    case VV_I8:
+        ((int8_t *)v->data)[idx] = (int8_t)clamp_round(value, -128, 127);
+        break;
+    case VV_U16:
+        ((uint16_t *)v->data)[idx] = (uint16_t)clamp_round(value, 0, 65535);
+        break;
+    case VV_I16:
+        ((int16_t *)v->data)[idx] = (int16_t)clamp_round(value, -32768, 32767);
+        break;
+    case VV_U32:
+        ((uint32_t *)v->data)[idx] = (uint32_t)clamp_round(value, 0, 4294967295.0);
+        break;
+    case VV_I32:
+        ((int32_t *)v->data)[idx] = (int32_t)clamp_round(value, -2147483648.0, 2147483647.0);
+        break;
+    case VV_F32:
+        ((float *)v->data)[idx] = (float)value;
+        break;
+    case VV_F64:
+        ((double *)v->data)[idx] = value;
+        break;
+    }
+}
+
+vv_mat4
+vv_volume_index_to_world(const vv_volume *v)
+{
+    vv_mat4 m = vv_mat4_identity();
+    for (int r = 0; r < 3; r++) {
+        for (int c = 0; c < 3; c++)
+            m.m[r][c] = v->direction[3 * r + c] * v->spacing[c];
+        m.m[r][3] = v->origin[r];
+    }
+    return m;
+}
+
+vv_mat4
+vv_volume_world_to_index(const vv_volume *v)
+{
+    return vv_mat4_inverse(vv_volume_index_to_world(v), NULL);
+}
+
+vv_box
+vv_volume_world_box(const vv_volume *v)
+{
+    vv_box b = {{0, 0, 0}, {v->dims[0] - 1, v->dims[1] - 1, v->dims[2] - 1}};
+    return vv_box_transform(b, vv_volume_index_to_world(v));
+}
+
+float
+vv_volume_sample_index(const vv_volume *v, double x, double y, double z)
+{
+    const double p[3] = {x, y, z};
+    int i0[3], i1[3];
+    double f[3];
+    for (int a = 0; a < 3; a++) {
+        double c = p[a];
+        double mx = v->dims[a] - 1;
+        if (!(c > 0))
+            c = 0;
+        if (c > mx)
+            c = mx;
+        double fl = floor(c);
+        i0[a] = (int)fl;
+        i1[a] = i0[a] + 1 < v->dims[a] ? i0[a] + 1 : i0[a];
+        f[a] = c - fl;
+    }
+    double c00 = vv_volume_get(v, i0[0], i0[1], i0[2]) * (1 - f[0]) +
+                 vv_volume_get(v, i1[0], i0[1], i0[2]) * f[0];
+    double c10 = vv_volume_get(v, i0[0], i1[1], i0[2]) * (1 - f[0]) +
+                 vv_volume_get(v, i1[0], i1[1], i0[2]) * f[0];
+    double c01 = vv_volume_get(v, i0[0], i0[1], i1[2]) * (1 - f[0]) +
+                 vv_volume_get(v, i1[0], i0[1], i1[2]) * f[0];
+    double c11 = vv_volume_get(v, i0[0], i1[1], i1[2]) * (1 - f[0]) +
+                 vv_volume_get(v, i1[0], i1[1], i1[2]) * f[0];
+    double c0 = c00 * (1 - f[1]) + c10 * f[1];
+    double c1 = c01 * (1 - f[1]) + c11 * f[1];
+    return (float)(c0 * (1 - f[2]) + c1 * f[2]);
+}
+
+static int
+inside_index(const vv_volume *v, vv_vec3 q)
+{
+    const double eps = 1e-9;
+    return q.x >= -eps && q.y >= -eps && q.z >= -eps && q.x <= v->dims[0] - 1 + eps &&
+           q.y <= v->dims[1] - 1 + eps && q.z <= v->dims[2] - 1 + eps;
+}
+
+int
+vv_volume_sample_world(const vv_volume *v, vv_vec3 p, float *value)
+{
+    vv_vec3 q = vv_mat4_mul_point(vv_volume_world_to_index(v), p);
+    if (!inside_index(v, q)) {
+        *value = 0;
+        return 0;
+    }
+    *value = vv_volume_sample_index(v, q.x, q.y, q.z);
+    return 1;
+}
+
+int
+vv_volume_gradient_world(const vv_volume *v, vv_vec3 p, vv_vec3 *gradient)
+{
+    vv_vec3 q = vv_mat4_mul_point(vv_volume_world_to_index(v), p);
+    if (!inside_index(v, q)) {
+        *gradient = vv_vec3_make(0, 0, 0);
+        return 0;
+    }
+    /* d/d(index) by central differences half a voxel apart, then to world:
+     * grad_world = D^-T S^-1 grad_index; D is orthonormal so D^-T = D. */
+    double gi[3];
+    const double h = 0.5;
+    for (int a = 0; a < 3; a++) {
+        double qa[3] = {q.x, q.y, q.z}, qb[3] = {q.x, q.y, q.z};
+        qa[a] -= h;
+        qb[a] += h;
+        double lo = fmax(qa[a], 0), hi = fmin(qb[a], v->dims[a] - 1);
+        qa[a] = lo;
+        qb[a] = hi;
+        double d = hi - lo;
+        gi[a] = d > 0 ? (vv_volume_sample_index(v, qb[0], qb[1], qb[2]) -
+                         vv_volume_sample_index(v, qa[0], qa[1], qa[2])) /
+                            (d * v->spacing[a])
+                      : 0;
+    }
+    vv_vec3 g = {0, 0, 0};
+    g.x = v->direction[0] * gi[0] + v->direction[1] * gi[1] + v->direction[2] * gi[2];
+    g.y = v->direction[3] * gi[0] + v->direction[4] * gi[1] + v->direction[5] * gi[2];
+    g.z = v->direction[6] * gi[0] + v->direction[7] * gi[1] + v->direction[8] * gi[2];
+    *gradient = g;
+    return 1;
+}
+
+vv_status
+vv_volume_histogram(const vv_volume *v, int nbins, double lo, double hi, uint64_t *bins)
+{
+    if (nbins < 1 || !(hi > lo))
+        return vv_error_set(VV_ERR_INVALID, "histogram: need nbins >= 1 and hi > lo (got %d, [%g, %g])",
+                            nbins, lo, hi);
+    memset(bins, 0, sizeof *bins * (size_t)nbins);
+    uint64_t n = vv_volume_voxel_count(v);
+    double scale = nbins / (hi - lo);
+    int nt = vv_threads_get();
+    uint64_t *local = calloc((size_t)nt * (size_t)nbins, sizeof *local);
+    if (!local)
+        return vv_error_set(VV_ERR_NOMEM, "histogram: out of memory");
+#pragma omp parallel num_threads(nt)
+    {
+        uint64_t *mine = local + (size_t)omp_get_thread_num() * (size_t)nbins;
+#pragma omp for schedule(static)
+        for (int64_t i = 0; i < (int64_t)n; i++) {
+            double x = voxel_at(v, (size_t)i);
+            if (x != x)
+                continue;
+            double b = (x - lo) * scale;
+            int bi = b < 0 ? 0 : b >= nbins ? nbins - 1 : (int)b;
+            mine[bi]++;
+        }
+    }
+    for (int t = 0; t < nt; t++)
+        for (int b = 0; b < nbins; b++)
+            bins[b] += local[(size_t)t * (size_t)nbins + (size_t)b];
+    free(local);
+    return VV_OK;
+}
+
+double
+vv_volume_quantile(const vv_volume *v, double q)
+{
+    enum { NB = 4096 };
+    double lo = v->range[0], hi = v->range[1];
+    if (!(hi > lo))
+        return lo;
+    uint64_t *bins = malloc(sizeof *bins * NB);
+    if (!bins || vv_volume_histogram(v, NB, lo, hi, bins) != VV_OK) {
+        free(bins);
+        return lo + q * (hi - lo);
+    }
+    uint64_t total = 0;
+    for (int b = 0; b < NB; b++)
+        total += bins[b];
+    double target = q * (double)total, acc = 0;
+    double result = hi;
+    for (int b = 0; b < NB; b++) {
+        if (acc + (double)bins[b] >= target) {
+            double frac = bins[b] ? (target - acc) / (double)bins[b] : 0;
+            result = lo + (b + frac) * (hi - lo) / NB;
+            break;
+        }
+        acc += (double)bins[b];
+    }
+    free(bins);
+    return result;
+}

@@ -1,0 +1,1127 @@
+/*
+ * Direct volume ray casting (Levoy, "Display of Surfaces from Volume Data",
+ * IEEE CG&A 1988; the VolVis paper, section 5 "Rendering", volume ray
+ * casting), with empty-space skipping over a grid of subvolumes holding
+ * min/max values (the PARC idea of the VolVis paper's Navigator, section 4).
+ *
+ * Per volume, a cache holds the voxels as float, interleaved with the unit
+ * gradient direction quantised to 3 x int8 (central differences, computed
+ * once), and the min/max of every 8^3-cell subvolume. Per render and object,
+ * a transfer-function lookup table (opacity corrected for the step) marks
+ * which subvolumes are transparent; rays jump over those.
+ *
+ * Rays are traced in each object's index space: the world ray (unit
+ * direction, parameter t in world units) is mapped by the object's
+ * world-to-index matrix, so anisotropic spacing, direction matrices and
+ * object transforms all come for free, and samples sit at t = k * dt on a
+ * grid shared by all objects, which keeps images deterministic and
+ * independent of tiling and thread count.
+ */
+#include <math.h>
+#include <omp.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/internal.h"
+#include "render/registry.h"
+#include "volvis/render.h"
+
+#define RC_BLOCK 8      /* subvolume side in cells */
+#define RC_LUT 4096     /* transfer-function table entries */
+#define RC_TILE 16      /* image tile side in pixels */
+#define RC_MAX_CACHE 16 /* cached volumes per renderer */
+#define RC_MAX_OBJ 64   /* objects handled in one render */
+
+/* One voxel of the cache: value and quantised unit gradient. */
+typedef struct rc_voxel {
+    float v;
+    int8_t n[3];
+    uint8_t pad;
+} rc_voxel;
+
+/* Everything derived from one volume that does not depend on the TF. */
+typedef struct rc_cache {
+    vv_volume *vol; /* reference held */
+    uint64_t modified;
+    int nx, ny, nz;      /* cached grid (each >= 2; a 1-voxel axis is duplicated) */
+    size_t sy, sz;       /* strides in voxels */
+    rc_voxel *vox;       /* with normals, or NULL */
+    float *val;          /* values only (gradients on the fly), or NULL */
+    int bx, by, bz;      /* subvolume grid */
+    float *bmin, *bmax;  /* per subvolume */
+    uint64_t last_used;
+} rc_cache;
+
+typedef struct rc_state {
+    rc_cache cache[RC_MAX_CACHE];
+    int n_cache;
+    uint64_t clock;
+    double early_termination; /* accumulated opacity that ends a ray */
+    uint64_t gradient_budget; /* bytes allowed for cached gradients */
+    int skipping;             /* empty-space skipping on/off (for tests) */
+} rc_state;
+
+/* A light prepared for shading. */
+typedef struct rc_light {
+    int point;
+    float dir[3]; /* unit vector towards the light (directional) */
+    float pos[3]; /* world position (point) */
+    float col[3]; /* colour * intensity */
+} rc_light;
+
+/* One object prepared for this render. */
+typedef struct rc_obj {
+    const vv_object *obj;
+    rc_cache *c;
+    vv_render_mode mode;
+    double w2i[3][4];  /* world -> index */
+    float nrm[3][3];   /* index-space gradient -> world normal (M^-T) */
+    int dims[3];       /* the volume's real dims (box clip) */
+    float lut_lo, lut_scale; /* value -> LUT index */
+    float *lut;        /* RC_LUT x {alpha, r*alpha, g*alpha, b*alpha} */
+    uint8_t *bvis;     /* subvolume visible under the TF / isovalue */
+    float iso;
+    float ka, kd, ks, shin;
+    float base[3]; /* material colour (iso, threshold) */
+    int shading;
+    int n_planes;
+    vv_plane planes[2 * VV_MAX_CUT_PLANES];
+} rc_obj;
+
+typedef struct rc_frame {
+    rc_state *st;
+    rc_obj *objs;
+    int n_obj;
+    int n_comp; /* composite/iso objects first in objs[], then projections */
+    const vv_view *view;
+    float dt;
+    float ambient[3];
+    float bg[3];
+    rc_light lights[VV_MAX_LIGHTS];
+    int n_lights;
+    float et; /* early termination */
+} rc_frame;
+
+/* ---------------------------------------------------------------------- */
+/* Cache construction                                                       */
+
+static void
+cache_release(rc_cache *c)
+{
+    vv_volume_free(c->vol);
+    free(c->vox);
+    free(c->val);
+    free(c->bmin);
+    free(c->bmax);
+    memset(c, 0, sizeof *c);
+}
+
+static inline float
+src_value(const vv_volume *v, int i, int j, int k)
+{
+    if (i >= v->dims[0])
+        i = v->dims[0] - 1;
+    if (j >= v->dims[1])
+        j = v->dims[1] - 1;
+    if (k >= v->dims[2])
+        k = v->dims[2] - 1;
+    return (float)vv_volume_get(v, i, j, k);
+}
+
+static vv_status
+cache_build(rc_state *st, rc_cache *c, vv_volume *vol)
+{
+    memset(c, 0, sizeof *c);
+    c->nx = vol->dims[0] < 2 ? 2 : vol->dims[0];
+    c->ny = vol->dims[1] < 2 ? 2 : vol->dims[1];
+    c->nz = vol->dims[2] < 2 ? 2 : vol->dims[2];
+    c->sy = (size_t)c->nx;
+    c->sz = (size_t)c->nx * (size_t)c->ny;
+    size_t n = c->sz * (size_t)c->nz;
+    int with_normals = (uint64_t)n * sizeof(rc_voxel) <= st->gradient_budget;
+    float *val = malloc(n * sizeof *val);
+    if (!val)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for %zu voxels", n);
+    const int nx = c->nx, ny = c->ny, nz = c->nz;
+#pragma omp parallel for schedule(static)
+    for (int k = 0; k < nz; k++)
+        for (int j = 0; j < ny; j++) {
+            float *row = val + (size_t)k * c->sz + (size_t)j * c->sy;
+            if (vol->type == VV_I16 && j < vol->dims[1] && k < vol->dims[2] &&
+                vol->dims[0] == nx) {
+                const int16_t *s = (const int16_t *)vol->data +
+                                   ((size_t)k * vol->dims[1] + (size_t)j) * (size_t)nx;
+                for (int i = 0; i < nx; i++)
+                    row[i] = s[i];
+            } else if (vol->type == VV_U8 && j < vol->dims[1] && k < vol->dims[2] &&
+                       vol->dims[0] == nx) {
+                const uint8_t *s = (const uint8_t *)vol->data +
+                                   ((size_t)k * vol->dims[1] + (size_t)j) * (size_t)nx;
+                for (int i = 0; i < nx; i++)
+                    row[i] = s[i];
+            } else {
+                for (int i = 0; i < nx; i++) {
+                    float x = src_value(vol, i, j, k);
+                    row[i] = x == x ? x : (float)vol->range[0]; /* NaN: as the minimum */
+                }
+            }
+        }
+
+    if (with_normals) {
+        c->vox = malloc(n * sizeof *c->vox);
+        if (!c->vox) {
+            with_normals = 0;
+        }
+    }
+    if (with_normals) {
+        /* Central differences in index units; one-sided at the borders. */
+#pragma omp parallel for schedule(static)
+        for (int k = 0; k < nz; k++)
+            for (int j = 0; j < ny; j++) {
+                size_t base = (size_t)k * c->sz + (size_t)j * c->sy;
+                int j0 = j > 0 ? j - 1 : j, j1 = j < ny - 1 ? j + 1 : j;
+                int k0 = k > 0 ? k - 1 : k, k1 = k < nz - 1 ? k + 1 : k;
+                float fy = 1.0f / (float)(j1 - j0), fz = 1.0f / (float)(k1 - k0);
+                for (int i = 0; i < nx; i++) {
+                    int i0 = i > 0 ? i - 1 : i, i1 = i < nx - 1 ? i + 1 : i;
+                    float gx = (val[base + (size_t)i1] - val[base + (size_t)i0]) / (float)(i1 - i0);
+                    float gy = (val[(size_t)k * c->sz + (size_t)j1 * c->sy + (size_t)i] -
+                                val[(size_t)k * c->sz + (size_t)j0 * c->sy + (size_t)i]) *
+                               fy;
+                    float gz = (val[(size_t)k1 * c->sz + (size_t)j * c->sy + (size_t)i] -
+                                val[(size_t)k0 * c->sz + (size_t)j * c->sy + (size_t)i]) *
+                               fz;
+                    float g = sqrtf(gx * gx + gy * gy + gz * gz);
+                    rc_voxel *o = &c->vox[base + (size_t)i];
+                    o->v = val[base + (size_t)i];
+                    if (g > 0) {
+                        float s = 127.0f / g;
+                        o->n[0] = (int8_t)lrintf(gx * s);
+                        o->n[1] = (int8_t)lrintf(gy * s);
+                        o->n[2] = (int8_t)lrintf(gz * s);
+                    } else {
+                        o->n[0] = o->n[1] = o->n[2] = 0;
+                    }
+                    o->pad = 0;
+                }
+            }
+        free(val);
+        val = NULL;
+    } else {
+        c->val = val;
+    }
+
+    c->bx = (nx - 2) / RC_BLOCK + 1;
+    c->by = (ny - 2) / RC_BLOCK + 1;
+    c->bz = (nz - 2) / RC_BLOCK + 1;
+    size_t nb = (size_t)c->bx * (size_t)c->by * (size_t)c->bz;
+    c->bmin = malloc(nb * sizeof(float));
+    c->bmax = malloc(nb * sizeof(float));
+    if (!c->bmin || !c->bmax) {
+        free(c->vox);
+        free(c->val);
+        free(c->bmin);
+        free(c->bmax);
+        memset(c, 0, sizeof *c);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for subvolume tables");
+    }
+#pragma omp parallel for schedule(static) collapse(2)
+    for (int bk = 0; bk < c->bz; bk++)
+        for (int bj = 0; bj < c->by; bj++)
+            for (int bi = 0; bi < c->bx; bi++) {
+                float lo = INFINITY, hi = -INFINITY;
+                int k1 = bk * RC_BLOCK + RC_BLOCK, j1 = bj * RC_BLOCK + RC_BLOCK,
+                    i1 = bi * RC_BLOCK + RC_BLOCK;
+                if (k1 > nz - 1)
+                    k1 = nz - 1;
+                if (j1 > ny - 1)
+                    j1 = ny - 1;
+                if (i1 > nx - 1)
+                    i1 = nx - 1;
+                for (int k = bk * RC_BLOCK; k <= k1; k++)
+                    for (int j = bj * RC_BLOCK; j <= j1; j++) {
+                        size_t base = (size_t)k * c->sz + (size_t)j * c->sy;
+                        for (int i = bi * RC_BLOCK; i <= i1; i++) {
+                            float x = c->vox ? c->vox[base + (size_t)i].v : c->val[base + (size_t)i];
+                            lo = x < lo ? x : lo;
+                            hi = x > hi ? x : hi;
+                        }
+                    }
+                size_t b = ((size_t)bk * (size_t)c->by + (size_t)bj) * (size_t)c->bx + (size_t)bi;
+                c->bmin[b] = lo;
+                c->bmax[b] = hi;
+            }
+    c->vol = vv_volume_ref(vol);
+    c->modified = vol->modified;
+    return VV_OK;
+}
+
+static vv_status
+cache_get(rc_state *st, vv_volume *vol, rc_cache **out)
+{
+    st->clock++;
+    for (int i = 0; i < st->n_cache; i++)
+        if (st->cache[i].vol == vol) {
+            if (st->cache[i].modified == vol->modified) {
+                st->cache[i].last_used = st->clock;
+                *out = &st->cache[i];
+                return VV_OK;
+            }
+            cache_release(&st->cache[i]);
+            vv_status s = cache_build(st, &st->cache[i], vol);
+            if (s != VV_OK) {
+                st->cache[i] = st->cache[--st->n_cache];
+                return s;
+            }
+            st->cache[i].last_used = st->clock;
+            *out = &st->cache[i];
+            return VV_OK;
+        }
+    int slot = st->n_cache;
+    if (slot == RC_MAX_CACHE) {
+        slot = 0;
+        for (int i = 1; i < st->n_cache; i++)
+            if (st->cache[i].last_used < st->cache[slot].last_used)
+                slot = i;
+        cache_release(&st->cache[slot]);
+    } else {
+        st->n_cache++;
+    }
+    vv_status s = cache_build(st, &st->cache[slot], vol);
+    if (s != VV_OK) {
+        st->cache[slot] = st->cache[--st->n_cache];
+        return s;
+    }
+    st->cache[slot].last_used = st->clock;
+    *out = &st->cache[slot];
+    return VV_OK;
+}
+
+/* ---------------------------------------------------------------------- */
+/* Sampling                                                                 */
+
+/* Cell and fractions of index-space point p, clamped so that the cell's far
+ * corner is inside the cached grid. */
+static inline size_t
+cell_of(const rc_cache *c, const float p[3], float f[3])
+{
+    float x = p[0], y = p[1], z = p[2];
+    x = x < 0 ? 0 : x;
+    y = y < 0 ? 0 : y;
+    z = z < 0 ? 0 : z;
+    int i = (int)x, j = (int)y, k = (int)z;
+    if (i > c->nx - 2)
+        i = c->nx - 2;
+    if (j > c->ny - 2)
+        j = c->ny - 2;
+    if (k > c->nz - 2)
+        k = c->nz - 2;
+    f[0] = x - (float)i;
+    f[1] = y - (float)j;
+    f[2] = z - (float)k;
+    f[0] = f[0] > 1 ? 1 : f[0];
+    f[1] = f[1] > 1 ? 1 : f[1];
+    f[2] = f[2] > 1 ? 1 : f[2];
+    return (size_t)k * c->sz + (size_t)j * c->sy + (size_t)i;
+}
+
+static inline float
+lerpf(float a, float b, float t)
+{
+    return a + (b - a) * t;
+}
+
+static inline float
+sample_value(const rc_cache *c, const float p[3])
+{
+    float f[3];
+    size_t o = cell_of(c, p, f);
+    const size_t sy = c->sy, sz = c->sz;
+    if (c->vox) {
+        const rc_voxel *v = c->vox + o;
+        float c00 = lerpf(v[0].v, v[1].v, f[0]);
+        float c10 = lerpf(v[sy].v, v[sy + 1].v, f[0]);
+        float c01 = lerpf(v[sz].v, v[sz + 1].v, f[0]);
+        float c11 = lerpf(v[sz + sy].v, v[sz + sy + 1].v, f[0]);
+        return lerpf(lerpf(c00, c10, f[1]), lerpf(c01, c11, f[1]), f[2]);
+    }
+    const float *v = c->val + o;
+    float c00 = lerpf(v[0], v[1], f[0]);
+    float c10 = lerpf(v[sy], v[sy + 1], f[0]);
+    float c01 = lerpf(v[sz], v[sz + 1], f[0]);
+    float c11 = lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
+    return lerpf(lerpf(c00, c10, f[1]), lerpf(c01, c11, f[1]), f[2]);
+}
+
+/* Index-space gradient direction at p (not normalised): trilinear
+ * interpolation of the cached unit gradients, or central differences of
+ * trilinear samples when gradients are computed on the fly. */
+static inline void
+sample_gradient(const rc_cache *c, const float p[3], float g[3])
+{
+    if (c->vox) {
+        float f[3];
+        size_t o = cell_of(c, p, f);
+        const rc_voxel *v = c->vox + o;
+        const size_t sy = c->sy, sz = c->sz;
+        float w[8];
+        float fx0 = 1 - f[0], fy0 = 1 - f[1], fz0 = 1 - f[2];
+        w[0] = fx0 * fy0 * fz0;
+        w[1] = f[0] * fy0 * fz0;
+        w[2] = fx0 * f[1] * fz0;
+        w[3] = f[0] * f[1] * fz0;
+        w[4] = fx0 * fy0 * f[2];
+        w[5] = f[0] * fy0 * f[2];
+        w[6] = fx0 * f[1] * f[2];
+        w[7] = f[0] * f[1] * f[2];
+        const rc_voxel *q[8] = {v, v + 1, v + sy, v + sy + 1, v + sz, v + sz + 1, v + sz + sy,
+                                v + sz + sy + 1};
+        float gx = 0, gy = 0, gz = 0;
+        for (int i = 0; i < 8; i++) {
+            gx += w[i] * q[i]->n[0];
+            gy += w[i] * q[i]->n[1];
+            gz += w[i] * q[i]->n[2];
+        }
+        g[0] = gx;
+        g[1] = gy;
+        g[2] = gz;
+        return;
+    }
+    for (int a = 0; a < 3; a++) {
+        float pa[3] = {p[0], p[1], p[2]}, pb[3] = {p[0], p[1], p[2]};
+        pa[a] -= 0.5f;
+        pb[a] += 0.5f;
+        g[a] = sample_value(c, pb) - sample_value(c, pa);
+    }
+}
+
+/* ---------------------------------------------------------------------- */
+/* Shading                                                                  */
+
+/* Blinn-Phong with two-sided lighting. g: index-space gradient; p: world
+ * position; v: unit vector towards the eye. out = (ka*ambient + kd*diffuse)
+ * * colour + ks*specular. */
+static inline void
+shade(const rc_frame *fr, const rc_obj *o, const float g[3], const float pw[3],
+      const float v[3], const float col[3], float out[3])
+{
+    float n[3];
+    for (int r = 0; r < 3; r++)
+        n[r] = o->nrm[r][0] * g[0] + o->nrm[r][1] * g[1] + o->nrm[r][2] * g[2];
+    float len2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
+    float dif[3] = {o->ka * fr->ambient[0], o->ka * fr->ambient[1], o->ka * fr->ambient[2]};
+    float spec[3] = {0, 0, 0};
+    if (len2 > 1e-12f) {
+        float inv = 1.0f / sqrtf(len2);
+        n[0] *= inv;
+        n[1] *= inv;
+        n[2] *= inv;
+        for (int l = 0; l < fr->n_lights; l++) {
+            const rc_light *lt = &fr->lights[l];
+            float L[3];
+            if (lt->point) {
+                L[0] = lt->pos[0] - pw[0];
+                L[1] = lt->pos[1] - pw[1];
+                L[2] = lt->pos[2] - pw[2];
+                float ll = sqrtf(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]);
+                if (ll <= 0)
+                    continue;
+                L[0] /= ll;
+                L[1] /= ll;
+                L[2] /= ll;
+            } else {
+                L[0] = lt->dir[0];
+                L[1] = lt->dir[1];
+                L[2] = lt->dir[2];
+            }
+            float ndl = n[0] * L[0] + n[1] * L[1] + n[2] * L[2];
+            float sgn = ndl < 0 ? -1.0f : 1.0f; /* two-sided */
+            ndl *= sgn;
+            float h[3] = {L[0] + v[0], L[1] + v[1], L[2] + v[2]};
+            float hl = sqrtf(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+            float ndh = hl > 0 ? sgn * (n[0] * h[0] + n[1] * h[1] + n[2] * h[2]) / hl : 0;
+            float sp = ndh > 0 ? powf(ndh, o->shin) : 0;
+            for (int ch = 0; ch < 3; ch++) {
+                dif[ch] += o->kd * ndl * lt->col[ch];
+                spec[ch] += o->ks * sp * lt->col[ch];
+            }
+        }
+    }
+    for (int ch = 0; ch < 3; ch++)
+        out[ch] = dif[ch] * col[ch] + spec[ch];
+}
+
+/* ---------------------------------------------------------------------- */
+/* Ray set-up per object                                                    */
+
+typedef struct rc_ray {
+    float o[3], d[3];   /* index space */
+    float inv[3];       /* 1/d, or 0 where d == 0 (axis never crossed) */
+    double t0, t1;      /* clipped interval, world units */
+} rc_ray;
+
+static int
+ray_setup(const rc_obj *ob, const vv_ray *wr, rc_ray *r)
+{
+    double o[3], d[3];
+    for (int a = 0; a < 3; a++) {
+        o[a] = ob->w2i[a][0] * wr->origin.x + ob->w2i[a][1] * wr->origin.y +
+               ob->w2i[a][2] * wr->origin.z + ob->w2i[a][3];
+        d[a] = ob->w2i[a][0] * wr->dir.x + ob->w2i[a][1] * wr->dir.y + ob->w2i[a][2] * wr->dir.z;
+    }
+    double t0 = 0, t1 = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        double hi = ob->dims[a] - 1;
+        if (fabs(d[a]) < 1e-300) {
+            if (o[a] < 0 || o[a] > hi)
+                return 0;
+            continue;
+        }
+        double ta = (0 - o[a]) / d[a], tb = (hi - o[a]) / d[a];
+        if (ta > tb) {
+            double tt = ta;
+            ta = tb;
+            tb = tt;
+        }
+        t0 = ta > t0 ? ta : t0;
+        t1 = tb < t1 ? tb : t1;
+    }
+    for (int p = 0; p < ob->n_planes; p++)
+        if (!vv_plane_clip_ray(ob->planes[p], *wr, &t0, &t1))
+            return 0;
+    if (!(t0 <= t1))
+        return 0;
+    for (int a = 0; a < 3; a++) {
+        r->o[a] = (float)o[a];
+        r->d[a] = (float)d[a];
+        r->inv[a] = fabs(d[a]) < 1e-30 ? 0.0f : (float)(1.0 / d[a]);
+    }
+    r->t0 = t0;
+    r->t1 = t1;
+    return 1;
+}
+
+/* The subvolume containing index point p, and whether it is visible. */
+static inline size_t
+block_of(const rc_cache *c, const float p[3])
+{
+    int bi = (int)(p[0] * (1.0f / RC_BLOCK)), bj = (int)(p[1] * (1.0f / RC_BLOCK)),
+        bk = (int)(p[2] * (1.0f / RC_BLOCK));
+    bi = bi < 0 ? 0 : bi >= c->bx ? c->bx - 1 : bi;
+    bj = bj < 0 ? 0 : bj >= c->by ? c->by - 1 : bj;
+    bk = bk < 0 ? 0 : bk >= c->bz ? c->bz - 1 : bk;
+    return ((size_t)bk * (size_t)c->by + (size_t)bj) * (size_t)c->bx + (size_t)bi;
+}
+
+/* World parameter at which the ray leaves the subvolume containing p. */
+static inline double
+block_exit(const rc_cache *c, const rc_ray *r, const float p[3], double t)
+{
+    double te = INFINITY;
+    const int nb[3] = {c->bx, c->by, c->bz};
+    for (int a = 0; a < 3; a++) {
+        if (r->inv[a] == 0)
+            continue;
+        int b = (int)(p[a] * (1.0f / RC_BLOCK));
+        b = b < 0 ? 0 : b >= nb[a] ? nb[a] - 1 : b;
+        double bound = r->d[a] > 0 ? (double)(b + 1) * RC_BLOCK : (double)b * RC_BLOCK;
+        double ta = t + (bound - p[a]) * r->inv[a];
+        if (ta < te)
+            te = ta;
+    }
+    return te;
+}
+
+static inline void
+ray_point(const rc_ray *r, double t, float p[3])
+{
+    float tf = (float)t;
+    p[0] = r->o[0] + tf * r->d[0];
+    p[1] = r->o[1] + tf * r->d[1];
+    p[2] = r->o[2] + tf * r->d[2];
+}
+
+static inline float
+lut_index_f(const rc_obj *o, float v)
+{
+    float x = (v - o->lut_lo) * o->lut_scale;
+    return x < 0 ? 0 : x > RC_LUT - 1 ? RC_LUT - 1 : x;
+}
+
+/* ---------------------------------------------------------------------- */
+/* Ray kernels                                                              */
+
+typedef struct rc_result {
+    float rgb[3];
+    float a;
+    float depth;
+} rc_result;
+
+/* Front-to-back compositing of all composite and iso objects along one ray. */
+static void
+trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res)
+{
+    rc_ray rays[RC_MAX_OBJ];
+    int act[RC_MAX_OBJ];
+    int na = 0;
+    double tmin = INFINITY, tmax = -INFINITY;
+    for (int i = 0; i < fr->n_comp; i++)
+        if (ray_setup(&fr->objs[i], wr, &rays[i])) {
+            act[na++] = i;
+            tmin = rays[i].t0 < tmin ? rays[i].t0 : tmin;
+            tmax = rays[i].t1 > tmax ? rays[i].t1 : tmax;
+        }
+    float C[3] = {0, 0, 0}, A = 0;
+    float depth = INFINITY;
+    if (na == 0)
+        goto done;
+    const double dt = fr->dt;
+    const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
+    /* iso bookkeeping: previous sample per object */
+    float prev_v[RC_MAX_OBJ];
+    double prev_t[RC_MAX_OBJ];
+    int has_prev[RC_MAX_OBJ];
+    for (int i = 0; i < na; i++)
+        has_prev[i] = 0;
+
+    double k = ceil(tmin / dt);
+    const double kend = floor(tmax / dt);
+    while (k <= kend) {
+        const double t = k * dt;
+        double next_k = k + 1;
+        double skip_to = INFINITY; /* min block exit over objects in empty blocks */
+        int sampled = 0;
+        for (int ai = 0; ai < na; ai++) {
+            const rc_obj *ob = &fr->objs[act[ai]];
+            const rc_ray *r = &rays[act[ai]];
+            if (t < r->t0 || t > r->t1) {
+                if (t < r->t0 && r->t0 < skip_to)
+                    skip_to = r->t0;
+                has_prev[ai] = 0;
+                continue;
+            }
+            float p[3];
+            ray_point(r, t, p);
+            const rc_cache *c = ob->c;
+            size_t b = block_of(c, p);
+            if (!ob->bvis[b]) {
+                double te = block_exit(c, r, p, t);
+                if (te < skip_to)
+                    skip_to = te;
+                if (ob->mode == VV_MODE_ISO) {
+                    /* restart the crossing search at the block exit */
+                    double tx = te < r->t1 ? te : r->t1;
+                    float px[3];
+                    ray_point(r, tx, px);
+                    prev_v[ai] = sample_value(c, px);
+                    prev_t[ai] = tx;
+                    has_prev[ai] = 1;
+                }
+                continue;
+            }
+            sampled = 1;
+            const float val = sample_value(c, p);
+            if (ob->mode == VV_MODE_ISO) {
+                float iso = ob->iso;
+                double th = -1;
+                if (!has_prev[ai]) {
+                    if (val >= iso && t - r->t0 < dt)
+                        th = t; /* entered already inside (cut face) */
+                } else if ((prev_v[ai] < iso) != (val < iso)) {
+                    /* bisection between the previous sample and this one */
+                    double ta = prev_t[ai], tb = t;
+                    float va = prev_v[ai];
+                    for (int it = 0; it < 10; it++) {
+                        double tm = 0.5 * (ta + tb);
+                        float pm[3];
+                        ray_point(r, tm, pm);
+                        float vm = sample_value(c, pm);
+                        if ((va < iso) == (vm < iso)) {
+                            ta = tm;
+                            va = vm;
+                        } else {
+                            tb = tm;
+                        }
+                    }
+                    th = 0.5 * (ta + tb);
+                }
+                prev_v[ai] = val;
+                prev_t[ai] = t;
+                has_prev[ai] = 1;
+                if (th >= 0) {
+                    float ph[3], g[3], pw[3], col[3];
+                    ray_point(r, th, ph);
+                    sample_gradient(c, ph, g);
+                    pw[0] = (float)(wr->origin.x + th * wr->dir.x);
+                    pw[1] = (float)(wr->origin.y + th * wr->dir.y);
+                    pw[2] = (float)(wr->origin.z + th * wr->dir.z);
+                    if (ob->shading)
+                        shade(fr, ob, g, pw, v, ob->base, col);
+                    else
+                        memcpy(col, ob->base, sizeof col);
+                    float w = 1 - A;
+                    C[0] += w * col[0];
+                    C[1] += w * col[1];
+                    C[2] += w * col[2];
+                    A = 1;
+                    if (th < depth)
+                        depth = (float)th;
+                }
+                continue;
+            }
+            const float *e = ob->lut + 4 * (int)lut_index_f(ob, val);
+            const float alpha = e[0];
+            if (alpha <= 0)
+                continue;
+            float w = 1 - A;
+            if (ob->shading) {
+                float g[3], pw[3], col[3], out[3];
+                sample_gradient(c, p, g);
+                pw[0] = (float)(wr->origin.x + t * wr->dir.x);
+                pw[1] = (float)(wr->origin.y + t * wr->dir.y);
+                pw[2] = (float)(wr->origin.z + t * wr->dir.z);
+                col[0] = e[1];
+                col[1] = e[2];
+                col[2] = e[3];
+                shade(fr, ob, g, pw, v, col, out);
+                C[0] += w * out[0];
+                C[1] += w * out[1];
+                C[2] += w * out[2];
+            } else {
+                C[0] += w * e[1];
+                C[1] += w * e[2];
+                C[2] += w * e[3];
+            }
+            A += w * alpha;
+            if (depth == INFINITY)
+                depth = (float)t;
+        }
+        if (A >= fr->et)
+            break;
+        if (!sampled && skip_to < INFINITY) {
+            double ks = ceil(skip_to / dt);
+            if (ks > next_k)
+                next_k = ks;
+        }
+        k = next_k;
+    }
+done:
+    res->rgb[0] = C[0];
+    res->rgb[1] = C[1];
+    res->rgb[2] = C[2];
+    res->a = A > 1 ? 1 : A;
+    res->depth = depth;
+}
+
+/* Maximum / minimum intensity projection and X-ray (mean) of one object.
+ * Returns 0 when the ray misses the object. */
+static int
+trace_projection(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, float *value,
+                 float *depth)
+{
+    rc_ray r;
+    if (!ray_setup(ob, wr, &r))
+        return 0;
+    const double dt = fr->dt;
+    const rc_cache *c = ob->c;
+    double k = ceil(r.t0 / dt);
+    const double kend = floor(r.t1 / dt);
+    if (k > kend) {
+        /* shorter than one step: one sample in the middle */
+        float p[3];
+        double tm = 0.5 * (r.t0 + r.t1);
+        ray_point(&r, tm, p);
+        *value = sample_value(c, p);
+        *depth = (float)tm;
+        return 1;
+    }
+    if (ob->mode == VV_MODE_XRAY) {
+        double sum = 0;
+        long n = 0;
+        for (; k <= kend; k++) {
+            float p[3];
+            ray_point(&r, k * dt, p);
+            sum += sample_value(c, p);
+            n++;
+        }
+        *value = (float)(sum / (double)n);
+        *depth = (float)r.t0;
+        return 1;
+    }
+    const int mip = ob->mode == VV_MODE_MIP;
+    float best = mip ? -INFINITY : INFINITY;
+    double tbest = r.t0;
+    while (k <= kend) {
+        const double t = k * dt;
+        float p[3];
+        ray_point(&r, t, p);
+        size_t b = block_of(c, p);
+        /* a subvolume that cannot beat the current extreme is skipped */
+        if (fr->st->skipping && (mip ? c->bmax[b] <= best : c->bmin[b] >= best)) {
+            double ks = ceil(block_exit(c, &r, p, t) / dt);
+            k = ks > k + 1 ? ks : k + 1;
+            continue;
+        }
+        float x = sample_value(c, p);
+        if (mip ? x > best : x < best) {
+            best = x;
+            tbest = t;
+        }
+        k += 1;
+    }
+    *value = best;
+    *depth = (float)tbest;
+    return 1;
+}
+
+/* ---------------------------------------------------------------------- */
+/* Frame set-up                                                             */
+
+static vv_status
+prepare_object(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w)
+{
+    rc_state *st = fr->st;
+    memset(ro, 0, sizeof *ro);
+    ro->obj = obj;
+    ro->mode = obj->mode;
+    vv_status s = cache_get(st, obj->volume, &ro->c);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "object '%s'", obj->name);
+    vv_mat4 i2w = vv_object_index_to_world(obj);
+    int ok = 0;
+    vv_mat4 w2i = vv_mat4_inverse(i2w, &ok);
+    if (!ok)
+        return vv_error_set(VV_ERR_INVALID, "object '%s': singular transform", obj->name);
+    for (int r = 0; r < 3; r++)
+        for (int cc = 0; cc < 4; cc++)
+            ro->w2i[r][cc] = w2i.m[r][cc];
+    /* normals: world normal = (M^-1)^T g_index, M = linear part of i2w */
+    for (int r = 0; r < 3; r++)
+        for (int cc = 0; cc < 3; cc++)
+            ro->nrm[r][cc] = (float)w2i.m[cc][r];
+    for (int a = 0; a < 3; a++)
+        ro->dims[a] = obj->volume->dims[a];
+    ro->ka = (float)obj->material.ambient;
+    ro->kd = (float)obj->material.diffuse;
+    ro->ks = (float)obj->material.specular;
+    ro->shin = (float)obj->material.shininess;
+    ro->base[0] = (float)obj->material.color.x;
+    ro->base[1] = (float)obj->material.color.y;
+    ro->base[2] = (float)obj->material.color.z;
+    ro->shading = obj->shading;
+    ro->iso = (float)obj->isovalue;
+    for (int p = 0; p < w->n_cut_planes && ro->n_planes < 2 * VV_MAX_CUT_PLANES; p++)
+        ro->planes[ro->n_planes++] =
+            vv_plane_from_point_normal(w->cut_planes[p].point, w->cut_planes[p].normal);
+    for (int p = 0; p < obj->n_cut_planes && ro->n_planes < 2 * VV_MAX_CUT_PLANES; p++)
+        ro->planes[ro->n_planes++] =
+            vv_plane_from_point_normal(obj->cut_planes[p].point, obj->cut_planes[p].normal);
+    return VV_OK;
+}
+
+/* Step in world units of an object: step * smallest voxel spacing in world. */
+static double
+object_step(const vv_object *obj)
+{
+    vv_mat4 m = vv_object_index_to_world(obj);
+    double best = INFINITY;
+    for (int cc = 0; cc < 3; cc++) {
+        double l = sqrt(m.m[0][cc] * m.m[0][cc] + m.m[1][cc] * m.m[1][cc] + m.m[2][cc] * m.m[2][cc]);
+        if (l > 0 && l < best)
+            best = l;
+    }
+    return obj->step * best;
+}
+
+/* Builds the TF table (opacity corrected for dt, colour premultiplied) and
+ * the subvolume visibility flags. */
+static vv_status
+prepare_tables(rc_frame *fr, rc_obj *ro)
+{
+    const vv_object *obj = ro->obj;
+    const rc_cache *c = ro->c;
+    size_t nb = (size_t)c->bx * (size_t)c->by * (size_t)c->bz;
+    ro->bvis = malloc(nb);
+    if (!ro->bvis)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    double lo = obj->volume->range[0], hi = obj->volume->range[1];
+    if (!(hi > lo))
+        hi = lo + 1;
+    ro->lut_lo = (float)lo;
+    ro->lut_scale = (float)((RC_LUT - 1) / (hi - lo));
+    if (ro->mode == VV_MODE_ISO) {
+        for (size_t b = 0; b < nb; b++)
+            ro->bvis[b] = !(c->bmax[b] < ro->iso || c->bmin[b] > ro->iso) ||
+                          !fr->st->skipping;
+        return VV_OK;
+    }
+    ro->lut = malloc(sizeof(float) * 4 * RC_LUT);
+    int *nz = malloc(sizeof(int) * (RC_LUT + 1));
+    if (!ro->lut || !nz) {
+        free(nz);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    const double unit = obj->tf.opacity_unit_distance > 0 ? obj->tf.opacity_unit_distance : 1.0;
+    nz[0] = 0;
+    for (int i = 0; i < RC_LUT; i++) {
+        double x = lo + (hi - lo) * i / (RC_LUT - 1);
+        double a;
+        vv_vec3 col;
+        if (obj->segmentation == VV_SEG_THRESHOLD) {
+            a = x >= obj->threshold ? 1.0 : 0.0;
+            col = obj->material.color;
+        } else {
+            a = vv_tf_eval_opacity(&obj->tf, x);
+            col = vv_tf_eval_color(&obj->tf, x);
+        }
+        if (ro->mode == VV_MODE_COMPOSITE) {
+            a = a <= 0 ? 0 : a >= 1 ? 1 : 1.0 - pow(1.0 - a, fr->dt / unit);
+            ro->lut[4 * i + 0] = (float)a;
+            ro->lut[4 * i + 1] = (float)(col.x * a);
+            ro->lut[4 * i + 2] = (float)(col.y * a);
+            ro->lut[4 * i + 3] = (float)(col.z * a);
+        } else {
+            /* projections show the TF colour and opacity at the projected value */
+            a = a < 0 ? 0 : a > 1 ? 1 : a;
+            ro->lut[4 * i + 0] = (float)a;
+            ro->lut[4 * i + 1] = (float)col.x;
+            ro->lut[4 * i + 2] = (float)col.y;
+            ro->lut[4 * i + 3] = (float)col.z;
+        }
+        nz[i + 1] = nz[i] + (ro->lut[4 * i] > 0);
+    }
+    for (size_t b = 0; b < nb; b++) {
+        int i0 = (int)lut_index_f(ro, c->bmin[b]), i1 = (int)lut_index_f(ro, c->bmax[b]);
+        ro->bvis[b] = nz[i1 + 1] - nz[i0] > 0 || !fr->st->skipping;
+    }
+    free(nz);
+    return VV_OK;
+}
+
+static void
+prepare_lights(rc_frame *fr, const vv_world *w, const vv_view *view)
+{
+    vv_vec3 fwd = vv_vec3_normalize(vv_vec3_sub(view->at, view->eye));
+    fr->n_lights = 0;
+    for (int i = 0; i < w->n_lights && i < VV_MAX_LIGHTS; i++) {
+        const vv_light *l = &w->lights[i];
+        rc_light *o = &fr->lights[fr->n_lights++];
+        o->point = l->type == VV_LIGHT_POINT && !l->headlight;
+        vv_vec3 d = l->headlight ? fwd : vv_vec3_normalize(l->direction);
+        /* towards the light = against the direction it travels */
+        o->dir[0] = (float)-d.x;
+        o->dir[1] = (float)-d.y;
+        o->dir[2] = (float)-d.z;
+        o->pos[0] = (float)l->position.x;
+        o->pos[1] = (float)l->position.y;
+        o->pos[2] = (float)l->position.z;
+        o->col[0] = (float)(l->color.x * l->intensity);
+        o->col[1] = (float)(l->color.y * l->intensity);
+        o->col[2] = (float)(l->color.z * l->intensity);
+    }
+}
+
+/* ---------------------------------------------------------------------- */
+/* The renderer                                                             */
+
+static void
+render_pixel(const rc_frame *fr, int x, int y, vv_image *out)
+{
+    vv_ray wr = vv_view_ray(fr->view, x, y);
+    rc_result res = {{0, 0, 0}, 0, INFINITY};
+    if (fr->n_comp > 0)
+        trace_composite(fr, &wr, &res);
+    /* projection objects: combined behind the composited ones */
+    float P[3] = {0, 0, 0}, PA = 0, pdepth = INFINITY;
+    for (int i = fr->n_comp; i < fr->n_obj; i++) {
+        const rc_obj *ob = &fr->objs[i];
+        float val, dep;
+        if (!trace_projection(fr, ob, &wr, &val, &dep))
+            continue;
+        const float *e = ob->lut + 4 * (int)lut_index_f(ob, val);
+        for (int ch = 0; ch < 3; ch++) {
+            float cv = e[1 + ch] * e[0];
+            P[ch] = cv > P[ch] ? cv : P[ch];
+        }
+        PA = e[0] > PA ? e[0] : PA;
+        pdepth = dep < pdepth ? dep : pdepth;
+    }
+    float *px = out->rgba + 4 * ((size_t)y * (size_t)out->width + (size_t)x);
+    float A = res.a;
+    float rest = 1 - A;
+    float A2 = A + rest * PA;
+    for (int ch = 0; ch < 3; ch++)
+        px[ch] = res.rgb[ch] + rest * P[ch] + (1 - A2) * fr->bg[ch];
+    px[3] = A2;
+    out->depth[(size_t)y * (size_t)out->width + (size_t)x] =
+        res.depth < pdepth ? res.depth : pdepth;
+}
+
+static vv_status
+rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+          vv_image *out)
+{
+    rc_state *st = state;
+    rc_frame fr;
+    memset(&fr, 0, sizeof fr);
+    fr.st = st;
+    fr.view = view;
+    fr.et = (float)st->early_termination;
+    fr.ambient[0] = (float)w->ambient.x;
+    fr.ambient[1] = (float)w->ambient.y;
+    fr.ambient[2] = (float)w->ambient.z;
+    fr.bg[0] = (float)w->background.x;
+    fr.bg[1] = (float)w->background.y;
+    fr.bg[2] = (float)w->background.z;
+    prepare_lights(&fr, w, view);
+
+    int nvis = 0;
+    for (int i = 0; i < w->n_objects; i++)
+        if (w->objects[i]->visible && w->objects[i]->type == VV_OBJECT_VOLUME &&
+            w->objects[i]->volume)
+            nvis++;
+    if (nvis > RC_MAX_OBJ)
+        return vv_error_set(VV_ERR_LIMIT, "%d visible objects; at most %d are supported", nvis,
+                            RC_MAX_OBJ);
+    rc_obj *objs = calloc(nvis ? (size_t)nvis : 1, sizeof *objs);
+    if (!objs)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    fr.objs = objs;
+    /* composite and iso objects first, projections after */
+    double dt = INFINITY;
+    vv_status s = VV_OK;
+    for (int pass = 0; pass < 2 && s == VV_OK; pass++)
+        for (int i = 0; i < w->n_objects && s == VV_OK; i++) {
+            const vv_object *ob = w->objects[i];
+            if (!ob->visible || ob->type != VV_OBJECT_VOLUME || !ob->volume)
+                continue;
+            int comp = ob->mode == VV_MODE_COMPOSITE || ob->mode == VV_MODE_ISO;
+            if (comp != (pass == 0))
+                continue;
+            if (!(ob->step > 0))
+                s = vv_error_set(VV_ERR_INVALID, "object '%s': step must be > 0", ob->name);
+            else
+                s = prepare_object(&fr, &objs[fr.n_obj++], ob, w);
+            if (s == VV_OK) {
+                double sd = object_step(ob);
+                dt = sd < dt ? sd : dt;
+            }
+            if (pass == 0)
+                fr.n_comp = fr.n_obj;
+        }
+    fr.dt = (float)(dt < INFINITY ? dt : 1.0);
+    for (int i = 0; i < fr.n_obj && s == VV_OK; i++)
+        s = prepare_tables(&fr, &objs[i]);
+
+    if (s == VV_OK) {
+        const int tx = (view->width + RC_TILE - 1) / RC_TILE;
+        const int ty = (view->height + RC_TILE - 1) / RC_TILE;
+        const int ntiles = tx * ty;
+        const int nt = opt->threads > 0 ? opt->threads : vv_threads_get();
+        atomic_int cancelled = 0;
+        int done = 0;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
+        for (int tile = 0; tile < ntiles; tile++) {
+            if (atomic_load_explicit(&cancelled, memory_order_relaxed))
+                continue;
+            int x0 = (tile % tx) * RC_TILE, y0 = (tile / tx) * RC_TILE;
+            int x1 = x0 + RC_TILE < view->width ? x0 + RC_TILE : view->width;
+            int y1 = y0 + RC_TILE < view->height ? y0 + RC_TILE : view->height;
+            for (int y = y0; y < y1; y++)
+                for (int x = x0; x < x1; x++)
+                    render_pixel(&fr, x, y, out);
+            if (opt->progress.fn) {
+#pragma omp critical(vv_raycast_progress)
+                {
+                    done++;
+                    if (vv_progress_report(&opt->progress, (double)done / ntiles))
+                        atomic_store(&cancelled, 1);
+                }
+            }
+        }
+        if (atomic_load(&cancelled))
+            s = vv_error_set(VV_ERR_CANCELLED, "cancelled");
+    }
+    for (int i = 0; i < fr.n_obj; i++) {
+        free(objs[i].lut);
+        free(objs[i].bvis);
+    }
+    free(objs);
+    /* drop cached volumes the World no longer shows */
+    for (int i = 0; i < st->n_cache;) {
+        int used = 0;
+        for (int j = 0; j < w->n_objects; j++)
+            used |= w->objects[j]->volume == st->cache[i].vol;
+        if (!used) {
+            cache_release(&st->cache[i]);
+            st->cache[i] = st->cache[--st->n_cache];
+        } else {
+            i++;
+        }
+    }
+    return s;
+}
+
+static vv_status
+rc_create(void **state)
+{
+    rc_state *st = calloc(1, sizeof *st);
+    if (!st)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    st->early_termination = 0.99;
+    st->gradient_budget = (uint64_t)4 << 30;
+    st->skipping = 1;
+    *state = st;
+    return VV_OK;
+}
+
+static vv_status
+rc_set_option(void *state, const char *key, const char *value)
+{
+    rc_state *st = state;
+    char *end = NULL;
+    double x = strtod(value, &end);
+    if (!end || *end || end == value || x != x)
+        return vv_error_set(VV_ERR_INVALID, "option %s: '%s' is not a number", key, value);
+    if (strcmp(key, "early_termination") == 0) {
+        if (!(x > 0 && x <= 1))
+            return vv_error_set(VV_ERR_INVALID, "early_termination must be in (0, 1]");
+        st->early_termination = x;
+    } else if (strcmp(key, "gradient_budget_mb") == 0) {
+        if (!(x >= 0))
+            return vv_error_set(VV_ERR_INVALID, "gradient_budget_mb must be >= 0");
+        st->gradient_budget = (uint64_t)(x * 1048576.0);
+        for (int i = 0; i < st->n_cache; i++)
+            cache_release(&st->cache[i]);
+        st->n_cache = 0;
+    } else if (strcmp(key, "empty_space_skipping") == 0) {
+        st->skipping = x != 0;
+    } else {
+        return vv_error_set(VV_ERR_INVALID,
+                            "unknown option '%s' (early_termination, gradient_budget_mb, "
+                            "empty_space_skipping)",
+                            key);
+    }
+    return VV_OK;
+}
+
+static void
+rc_destroy(void *state)
+{
+    rc_state *st = state;
+    if (!st)
+        return;
+    for (int i = 0; i < st->n_cache; i++)
+        cache_release(&st->cache[i]);
+    free(st);
+}
+
+const vv_renderer_ops vv_raycast_ops = {
+    "raycast",
+    "direct volume ray casting: composite, mip, minip, xray, iso; subvolume skipping",
+    rc_create,
+    rc_set_option,
+    rc_render,
+    rc_destroy,
+};

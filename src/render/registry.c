@@ -1,0 +1,95 @@
+/* The renderer registry and the generic renderer object (see volvis/render.h). */
+#include <stdlib.h>
+#include <string.h>
+
+#include "render/registry.h"
+#include "volvis/render.h"
+
+struct vv_renderer {
+    const vv_renderer_ops *ops;
+    void *state;
+};
+
+/* Every rendering method built in, in the order --help lists them. */
+static const vv_renderer_ops *const registry[] = {&vv_raycast_ops, NULL};
+
+const vv_renderer_ops *const *
+vv_renderer_registry(void)
+{
+    return registry;
+}
+
+void
+vv_render_options_init(vv_render_options *o)
+{
+    memset(o, 0, sizeof *o);
+    o->quality = 2;
+}
+
+vv_status
+vv_renderer_new(vv_renderer **out, const char *name)
+{
+    *out = NULL;
+    for (int i = 0; registry[i]; i++) {
+        if (strcmp(registry[i]->name, name) != 0)
+            continue;
+        vv_renderer *r = calloc(1, sizeof *r);
+        if (!r)
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        r->ops = registry[i];
+        vv_status s = r->ops->create(&r->state);
+        if (s != VV_OK) {
+            free(r);
+            return vv_error_prefix(s, "%s", name);
+        }
+        *out = r;
+        return VV_OK;
+    }
+    char known[256] = "";
+    for (int i = 0; registry[i]; i++) {
+        if (i)
+            strncat(known, ", ", sizeof known - strlen(known) - 1);
+        strncat(known, registry[i]->name, sizeof known - strlen(known) - 1);
+    }
+    return vv_error_set(VV_ERR_INVALID, "unknown renderer '%s' (available: %s)", name, known);
+}
+
+void
+vv_renderer_free(vv_renderer *r)
+{
+    if (!r)
+        return;
+    r->ops->destroy(r->state);
+    free(r);
+}
+
+const char *
+vv_renderer_name(const vv_renderer *r)
+{
+    return r->ops->name;
+}
+
+vv_status
+vv_renderer_set_option(vv_renderer *r, const char *key, const char *value)
+{
+    vv_status s = r->ops->set_option(r->state, key, value);
+    return s == VV_OK ? s : vv_error_prefix(s, "%s", r->ops->name);
+}
+
+vv_status
+vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
+                   const vv_render_options *opt, vv_image *out)
+{
+    vv_render_options def;
+    if (!opt) {
+        vv_render_options_init(&def);
+        opt = &def;
+    }
+    if (!world || !view || !out)
+        return vv_error_set(VV_ERR_INVALID, "render: NULL world, view or image");
+    if (out->width != view->width || out->height != view->height)
+        return vv_error_set(VV_ERR_INVALID, "render: image is %d x %d but the view is %d x %d",
+                            out->width, out->height, view->width, view->height);
+    vv_status s = r->ops->render(r->state, world, view, opt, out);
+    return s == VV_OK ? s : vv_error_prefix(s, "%s", r->ops->name);
+}

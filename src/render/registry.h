@@ -1,0 +1,10 @@
+/* The operation tables of the built-in rendering methods (internal). */
+#ifndef VV_RENDER_REGISTRY_H
+#define VV_RENDER_REGISTRY_H
+
+#include "volvis/render.h"
+
+/** Direct volume ray casting (src/render/raycast). */
+extern const vv_renderer_ops vv_raycast_ops;
+
+#endif

@@ -1,0 +1,49 @@
+/*
+ * Helpers shared by the cmocka tests. Tests run from the project root, so
+ * the shared data is at ../shared/data (VV_DATA_DIR).
+ */
+#ifndef VV_TESTUTIL_H
+#define VV_TESTUTIL_H
+
+#include <setjmp.h>
+#include <stdarg.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <cmocka.h>
+
+#include "volvis/volvis.h"
+
+#define VV_DATA_DIR VV_SOURCE_DIR "/../shared/data"
+
+/** Path of a shared data file, e.g. vt_data("volumes/nut.slc"); static buffer per call site. */
+const char *vt_data(const char *rel);
+
+/** A fresh empty directory for this test's output under build/test-out/<name>. */
+const char *vt_outdir(const char *name);
+
+/** Writes @p n bytes to @p path (overwrites); fails the test on error. */
+void vt_write_file(const char *path, const void *data, size_t n);
+
+/** Reads a whole file (malloc'ed, caller frees); fails the test on error. */
+unsigned char *vt_read_file(const char *path, size_t *n);
+
+/** Asserts that status is VV_OK, printing the error trace otherwise. */
+#define vt_ok(expr)                                                                                \
+    do {                                                                                           \
+        vv_status vt_s_ = (expr);                                                                  \
+        if (vt_s_ != VV_OK)                                                                        \
+            fail_msg("%s -> %s: %s", #expr, vv_status_name(vt_s_), vv_error_message());            \
+    } while (0)
+
+/** Asserts an error (status < 0) with a non-empty message. */
+#define vt_err(expr)                                                                               \
+    do {                                                                                           \
+        vv_error_clear();                                                                          \
+        vv_status vt_s_ = (expr);                                                                  \
+        if (vt_s_ >= 0)                                                                            \
+            fail_msg("%s unexpectedly succeeded", #expr);                                          \
+        assert_true(vv_error_message()[0] != '\0');                                                \
+    } while (0)
+
+#endif
