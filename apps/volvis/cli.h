@@ -1,0 +1,159 @@
+/*
+ * Shared pieces of the `volvis` command-line tool: the subcommand table, a
+ * small long-option parser, number parsing with full validation, one-line
+ * error reporting, volume loading (with --raw descriptions) and a progress
+ * bar for terminals.
+ *
+ * Exit status: CLI_EXIT_OK (0) success, CLI_EXIT_FAIL (1) bad input (file,
+ * format or render errors), CLI_EXIT_USAGE (2) bad usage (unknown option,
+ * missing argument, unparsable number, unknown mode), CLI_EXIT_CANCEL (130)
+ * interrupted with Ctrl-C.
+ *
+ * Output rules: stdout carries only the command's real output; every error is
+ * ONE line on stderr, "volvis: <message>".
+ */
+#ifndef VOLVIS_CLI_H
+#define VOLVIS_CLI_H
+
+#include <stdio.h>
+
+#include "volvis/volvis.h"
+
+enum {
+    CLI_EXIT_OK = 0,
+    CLI_EXIT_FAIL = 1,
+    CLI_EXIT_USAGE = 2,
+    CLI_EXIT_CANCEL = 130,
+    /** Returned by cli_parse when --help/-h was given: print usage, exit 0. */
+    CLI_HELP = -1
+};
+
+/** One subcommand: argv[0] is the subcommand's name. */
+typedef struct cli_command {
+    const char *name;
+    const char *summary; /**< one line for `volvis --help` */
+    int (*run)(int argc, char **argv);
+    void (*usage)(FILE *out);
+} cli_command;
+
+int cli_info_main(int argc, char **argv);
+void cli_info_usage(FILE *out);
+int cli_render_main(int argc, char **argv);
+void cli_render_usage(FILE *out);
+int cli_convert_main(int argc, char **argv);
+void cli_convert_usage(FILE *out);
+
+/* ---- option parsing ------------------------------------------------------ */
+
+/** One accepted option. */
+typedef struct cli_opt_spec {
+    const char *name;    /**< long name without the leading "--" */
+    char short_name;     /**< single-letter alias ('o' for -o), 0 for none */
+    const char *metavar; /**< NULL: a flag without a value */
+} cli_opt_spec;
+
+#define CLI_MAX_ARGS 128
+
+typedef struct cli_seen {
+    int opt;           /**< index into specs */
+    const char *value; /**< NULL for flags */
+} cli_seen;
+
+/** The result of parsing: positionals and every option occurrence in order. */
+typedef struct cli_args {
+    const char *cmd; /**< subcommand name, for messages */
+    const cli_opt_spec *specs;
+    int n_specs;
+    int n_pos;
+    const char *pos[CLI_MAX_ARGS];
+    int n_seen;
+    cli_seen seen[CLI_MAX_ARGS];
+} cli_args;
+
+/**
+ * Parses argv[1..argc-1] against @p specs (n_specs entries). Accepts
+ * "--name VALUE", "--name=VALUE", "-x VALUE", "-xVALUE", flags "--name" and
+ * "-x", and "--" to end the options. --help and -h anywhere before "--"
+ * return CLI_HELP. Returns 0, CLI_HELP, or CLI_EXIT_USAGE after printing one
+ * error line.
+ */
+int cli_parse(cli_args *a, const char *cmd, const cli_opt_spec *specs, int n_specs, int argc,
+              char **argv);
+
+/** The value of the last occurrence of option @p name, or NULL. */
+const char *cli_get(const cli_args *a, const char *name);
+
+/** Number of occurrences of option @p name. */
+int cli_count(const cli_args *a, const char *name);
+
+/* ---- number parsing: each prints one error line and returns CLI_EXIT_USAGE on bad text ---- */
+
+/** A finite double in [lo, hi]. */
+int cli_parse_double(const cli_args *a, const char *opt, const char *text, double lo, double hi,
+                     double *out);
+/** An integer in [lo, hi]. */
+int cli_parse_int(const cli_args *a, const char *opt, const char *text, long lo, long hi, int *out);
+/** "WxH" with each side in 1..VV_IMAGE_MAX_SIDE. */
+int cli_parse_size(const cli_args *a, const char *opt, const char *text, int *w, int *h);
+/** "LO:HI", finite, LO < HI. */
+int cli_parse_range(const cli_args *a, const char *opt, const char *text, double *lo, double *hi);
+/**
+ * A raw-volume description "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]" into
+ * @p p (initialised here).
+ */
+int cli_parse_raw(const cli_args *a, const char *opt, const char *text, vv_raw_params *p);
+
+/* ---- errors ---------------------------------------------------------------- */
+
+/** Prints "volvis: <formatted>" as one line on stderr (newlines become "; "). */
+void cli_error(const char *fmt, ...) VV_PRINTF(1, 2);
+
+/** Prints a usage error "volvis: CMD: <formatted> (see 'volvis CMD --help')"; returns 2. */
+int cli_usage_error(const cli_args *a, const char *fmt, ...) VV_PRINTF(2, 3);
+
+/**
+ * Reports a failed library call: prints vv_error_message() (prefixed with
+ * @p path when the message does not name it; @p path may be NULL) and
+ * returns CLI_EXIT_FAIL, or CLI_EXIT_CANCEL for VV_ERR_CANCELLED.
+ */
+int cli_fail(vv_status s, const char *path);
+
+/* ---- input ------------------------------------------------------------------ */
+
+/**
+ * Checks that @p path names a readable regular file; prints "volvis: PATH:
+ * reason" and returns CLI_EXIT_FAIL otherwise, 0 when fine.
+ */
+int cli_check_readable(const char *path);
+
+/**
+ * Loads a volume: as raw when @p raw is non-NULL, else any detected format.
+ * Returns 0, or CLI_EXIT_FAIL after printing the error.
+ */
+int cli_load_volume(const char *path, const vv_raw_params *raw, vv_volume **out);
+
+/* ---- progress ----------------------------------------------------------------- */
+
+/** Progress bar state; see cli_progress_begin. */
+typedef struct cli_progress {
+    int draw;      /**< 1 when a bar is drawn (stderr is a terminal and not quiet) */
+    int last_pct;  /**< last percentage drawn, -1 at the start */
+    int drawn;     /**< 1 once something was drawn */
+    vv_progress p; /**< pass this to the library */
+} cli_progress;
+
+/**
+ * Prepares a progress bar on stderr when it is a terminal and @p quiet is 0,
+ * and installs a SIGINT handler so Ctrl-C cancels the operation through the
+ * callback (which is set either way).
+ */
+void cli_progress_begin(cli_progress *pr, int quiet);
+/** Erases the bar and restores the SIGINT handler. */
+void cli_progress_end(cli_progress *pr);
+/** 1 after Ctrl-C was pressed during an operation. */
+int cli_interrupted(void);
+
+/** Monotonic wall-clock time in seconds. */
+double cli_now(void);
+
+#endif

@@ -1,0 +1,117 @@
+/*
+ * volvis convert IN OUT: any readable volume to NRRD or SLC, atomically.
+ */
+#include <string.h>
+#include <strings.h>
+
+#include "cli.h"
+
+static const cli_opt_spec convert_opts[] = {
+    {"format", 0, "nrrd|slc"},
+    {"strict", 0, NULL},
+    {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
+    {"quiet", 'q', NULL},
+};
+#define N_CONVERT_OPTS ((int)(sizeof convert_opts / sizeof convert_opts[0]))
+
+void
+cli_convert_usage(FILE *out) {
+    fprintf(out, "usage: volvis convert [OPTIONS] IN OUT\n"
+                 "\n"
+                 "Converts any readable volume (SLC, NRRD, NIfTI, MetaImage, VTK, raw) to\n"
+                 "NRRD (.nrrd, .nhdr; gzip-compressed, keeps the voxel type, spacing and\n"
+                 "origin) or SLC (.slc; VolVis's own 8-bit format). SLC holds 8-bit data only:\n"
+                 "other voxel types are rescaled from the value range to 0..255, with a note\n"
+                 "on stderr. The output is written atomically: on failure an existing OUT is\n"
+                 "left untouched. Prints what was written.\n"
+                 "\n"
+                 "Options:\n"
+                 "  --format nrrd|slc  output format (default: from OUT's extension)\n"
+                 "  --strict           refuse to rescale to 8 bits for SLC (exit 1 instead)\n"
+                 "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
+                 "                     read IN as raw voxels (see 'volvis info --help')\n"
+                 "  -q, --quiet        no 'wrote' line and no rescaling note\n"
+                 "  -h, --help         show this help\n"
+                 "\n"
+                 "Examples:\n"
+                 "  volvis convert ../shared/data/volumes/nut.slc nut.nrrd\n"
+                 "  volvis convert ../shared/data/volumes/ct_head.nrrd head.slc\n"
+                 "  volvis convert --raw 64x64x64:f32 field.raw field.nrrd\n");
+}
+
+static int
+ends_with(const char *s, const char *suffix) {
+    size_t n = strlen(s), m = strlen(suffix);
+    return n >= m && strcasecmp(s + n - m, suffix) == 0;
+}
+
+int
+cli_convert_main(int argc, char **argv) {
+    cli_args a;
+    int rc = cli_parse(&a, "convert", convert_opts, N_CONVERT_OPTS, argc, argv);
+    if (rc == CLI_HELP) {
+        cli_convert_usage(stdout);
+        return CLI_EXIT_OK;
+    }
+    if (rc)
+        return rc;
+    if (a.n_pos < 2)
+        return cli_usage_error(&a, a.n_pos ? "missing OUT" : "missing IN and OUT");
+    if (a.n_pos > 2)
+        return cli_usage_error(&a, "expected IN and OUT, got %d arguments", a.n_pos);
+    const char *in = a.pos[0], *out = a.pos[1];
+
+    vv_format format;
+    const char *s = cli_get(&a, "format");
+    if (s) {
+        if (strcmp(s, "nrrd") == 0)
+            format = VV_FORMAT_NRRD;
+        else if (strcmp(s, "slc") == 0)
+            format = VV_FORMAT_SLC;
+        else
+            return cli_usage_error(&a, "--format: cannot write '%s' (nrrd or slc)", s);
+    } else if (ends_with(out, ".slc")) {
+        format = VV_FORMAT_SLC;
+    } else if (ends_with(out, ".nrrd") || ends_with(out, ".nhdr")) {
+        format = VV_FORMAT_NRRD;
+    } else {
+        return cli_usage_error(&a,
+                               "cannot tell the output format from '%s'; use --format "
+                               "nrrd|slc or a .nrrd/.slc extension",
+                               out);
+    }
+    int strict = cli_count(&a, "strict") > 0;
+    int quiet = cli_count(&a, "quiet") > 0;
+    vv_raw_params raw;
+    const char *raw_spec = cli_get(&a, "raw");
+    if (raw_spec && (rc = cli_parse_raw(&a, "raw", raw_spec, &raw)))
+        return rc;
+
+    vv_volume *v;
+    if ((rc = cli_load_volume(in, raw_spec ? &raw : NULL, &v)))
+        return rc;
+    int rescale = format == VV_FORMAT_SLC && v->type != VV_U8;
+    if (rescale && strict) {
+        cli_error("%s: SLC holds 8-bit voxels only; refusing to rescale %s data to 8 bits "
+                  "(--strict)",
+                  out, vv_voxel_type_name(v->type));
+        vv_volume_free(v);
+        return CLI_EXIT_FAIL;
+    }
+    vv_error_clear();
+    vv_status st = vv_volume_save(v, out, format, strict);
+    if (st != VV_OK) {
+        rc = cli_fail(st, out);
+        vv_volume_free(v);
+        return rc;
+    }
+    if (rescale && !quiet)
+        cli_error("note: %s: rescaled %s values %g..%g to 8 bits (0..255) for SLC", out,
+                  vv_voxel_type_name(v->type), v->range[0], v->range[1]);
+    if (!quiet)
+        printf("wrote %s (%s, %d x %d x %d, %s)\n", out, vv_format_name(format), v->dims[0],
+               v->dims[1], v->dims[2],
+               format == VV_FORMAT_SLC ? "u8" : vv_voxel_type_name(v->type));
+    vv_volume_free(v);
+    return CLI_EXIT_OK;
+}

@@ -1,0 +1,343 @@
+/*
+ * volvis info FILE: header, value statistics and a histogram summary.
+ *
+ * Statistics are computed here from the voxels in their native type, in
+ * double: mean and standard deviation exactly, percentiles exactly for
+ * integer volumes with at most 65 536 distinct values (one histogram bin per
+ * value) and to 1/65536 of the range otherwise.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+
+static const cli_opt_spec info_opts[] = {
+    {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
+    {"bins", 0, "N"},
+};
+#define N_INFO_OPTS ((int)(sizeof info_opts / sizeof info_opts[0]))
+
+void
+cli_info_usage(FILE *out) {
+    fprintf(out, "usage: volvis info [OPTIONS] FILE\n"
+                 "\n"
+                 "Prints a volume's format, dimensions, voxel type, voxel spacing, origin,\n"
+                 "direction (when not identity), unit, data origin, value range, mean,\n"
+                 "percentiles (1/5/50/95/99) and a text histogram.\n"
+                 "Formats: SLC, NRRD, NIfTI-1/2, MetaImage, VTK legacy, raw (with --raw).\n"
+                 "\n"
+                 "Options:\n"
+                 "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
+                 "                  read FILE as raw voxels: dimensions, voxel type (u8 i8 u16\n"
+                 "                  i16 u32 i32 f32 f64), byte order (default le), voxel\n"
+                 "                  spacing (default 1x1x1) and header bytes to skip (default 0)\n"
+                 "  --bins N        histogram bins, 1..256 (default 16)\n"
+                 "  -h, --help      show this help\n"
+                 "\n"
+                 "Example:\n"
+                 "  volvis info ../shared/data/volumes/nut.slc\n"
+                 "  volvis info --raw 256x256x128:u16:be:0.9x0.9x2 scan.raw\n");
+}
+
+static const char *
+unit_name(vv_unit u) {
+    switch (u) {
+    case VV_UNIT_METER:
+        return "m";
+    case VV_UNIT_MM:
+        return "mm";
+    case VV_UNIT_MICRON:
+        return "micron";
+    case VV_UNIT_FOOT:
+        return "foot";
+    case VV_UNIT_INCH:
+        return "inch";
+    default:
+        return "unknown";
+    }
+}
+
+static const char *
+data_origin_name(vv_data_origin o) {
+    switch (o) {
+    case VV_ORIGIN_BIORAD_CONFOCAL:
+        return "Bio-Rad confocal";
+    case VV_ORIGIN_MRI:
+        return "MRI";
+    case VV_ORIGIN_CT:
+        return "CT";
+    case VV_ORIGIN_SIMULATION:
+        return "simulation";
+    case VV_ORIGIN_BINARY_VOXELIZED:
+        return "binary voxelized";
+    case VV_ORIGIN_FUZZY_VOXELIZED:
+        return "fuzzy voxelized";
+    case VV_ORIGIN_FUNCTION_VOXELIZED:
+        return "function voxelized";
+    default:
+        return "other";
+    }
+}
+
+static const char *
+modification_name(vv_modification m) {
+    switch (m) {
+    case VV_MOD_ORIGINAL:
+        return "original";
+    case VV_MOD_RESAMPLED:
+        return "resampled";
+    case VV_MOD_RESAMPLED_FILTERED:
+        return "resampled and filtered";
+    case VV_MOD_FILTERED:
+        return "filtered";
+    default:
+        return "other";
+    }
+}
+
+static double
+voxel(const void *data, vv_voxel_type t, size_t i) {
+    switch (t) {
+    case VV_U8:
+        return ((const uint8_t *)data)[i];
+    case VV_I8:
+        return ((const int8_t *)data)[i];
+    case VV_U16:
+        return ((const uint16_t *)data)[i];
+    case VV_I16:
+        return ((const int16_t *)data)[i];
+    case VV_U32:
+        return ((const uint32_t *)data)[i];
+    case VV_I32:
+        return ((const int32_t *)data)[i];
+    case VV_F32:
+        return ((const float *)data)[i];
+    case VV_F64:
+        return ((const double *)data)[i];
+    }
+    return 0;
+}
+
+static int
+is_integer_type(vv_voxel_type t) {
+    return t != VV_F32 && t != VV_F64;
+}
+
+typedef struct stats {
+    uint64_t n;         /* finite voxels */
+    uint64_t nonfinite; /* NaN and infinite voxels */
+    double min, max, mean, stddev;
+    double pct[5];
+} stats;
+
+static const double pct_q[5] = {0.01, 0.05, 0.50, 0.95, 0.99};
+
+/* Fine histogram for percentiles: one bin per integer value when possible. */
+static int
+compute_stats(const vv_volume *v, stats *st) {
+    uint64_t count = vv_volume_voxel_count(v);
+    memset(st, 0, sizeof *st);
+    st->min = INFINITY;
+    st->max = -INFINITY;
+    double sum = 0;
+    for (uint64_t i = 0; i < count; i++) {
+        double x = voxel(v->data, v->type, (size_t)i);
+        if (!isfinite(x)) {
+            st->nonfinite++;
+            continue;
+        }
+        st->n++;
+        sum += x;
+        if (x < st->min)
+            st->min = x;
+        if (x > st->max)
+            st->max = x;
+    }
+    if (st->n == 0)
+        return 0;
+    st->mean = sum / (double)st->n;
+    double ss = 0; /* second pass: numerically stable variance */
+    for (uint64_t i = 0; i < count; i++) {
+        double x = voxel(v->data, v->type, (size_t)i);
+        if (isfinite(x))
+            ss += (x - st->mean) * (x - st->mean);
+    }
+    st->stddev = sqrt(ss / (double)st->n);
+
+    double span = st->max - st->min;
+    int exact = is_integer_type(v->type) && span < 65536;
+    size_t nbins = exact ? (size_t)span + 1 : 65536;
+    uint64_t *bins = calloc(nbins, sizeof *bins);
+    if (!bins) {
+        cli_error("out of memory computing the histogram");
+        return CLI_EXIT_FAIL;
+    }
+    double scale = span > 0 ? (double)nbins / span : 0;
+    for (uint64_t i = 0; i < count; i++) {
+        double x = voxel(v->data, v->type, (size_t)i);
+        if (!isfinite(x))
+            continue;
+        size_t b = exact ? (size_t)(x - st->min) : (size_t)((x - st->min) * scale);
+        if (b >= nbins)
+            b = nbins - 1;
+        bins[b]++;
+    }
+    for (int q = 0; q < 5; q++) {
+        /* Smallest value with at least a fraction q of the voxels at or below it. */
+        double target = pct_q[q] * (double)st->n;
+        uint64_t cum = 0;
+        size_t b = 0;
+        for (; b < nbins; b++) {
+            if ((double)(cum + bins[b]) >= target && bins[b] > 0)
+                break;
+            cum += bins[b];
+        }
+        if (b >= nbins)
+            b = nbins - 1;
+        if (exact) {
+            st->pct[q] = st->min + (double)b;
+        } else {
+            double frac = bins[b] ? (target - (double)cum) / (double)bins[b] : 0;
+            if (frac < 0)
+                frac = 0;
+            if (frac > 1)
+                frac = 1;
+            st->pct[q] = st->min + ((double)b + frac) / scale;
+        }
+    }
+    free(bins);
+    return 0;
+}
+
+static int
+print_histogram(const vv_volume *v, const stats *st, int nbins) {
+    double lo = st->min, hi = st->max;
+    if (!(hi > lo)) {
+        printf("histogram:    all %llu voxels are %g\n", (unsigned long long)st->n, lo);
+        return 0;
+    }
+    /* Integer volumes with few distinct values: no more bins than values. */
+    if (is_integer_type(v->type) && hi - lo + 1 < nbins)
+        nbins = (int)(hi - lo + 1);
+    uint64_t *bins = calloc((size_t)nbins, sizeof *bins);
+    if (!bins) {
+        cli_error("out of memory computing the histogram");
+        return CLI_EXIT_FAIL;
+    }
+    /* Integer data: bin b holds [lo + b*w, lo + (b+1)*w) with w over the span + 1. */
+    double width = is_integer_type(v->type) ? (hi - lo + 1) / nbins : (hi - lo) / nbins;
+    uint64_t count = vv_volume_voxel_count(v), peak = 0;
+    for (uint64_t i = 0; i < count; i++) {
+        double x = voxel(v->data, v->type, (size_t)i);
+        if (!isfinite(x))
+            continue;
+        long b = (long)floor((x - lo) / width);
+        if (b < 0)
+            b = 0;
+        if (b >= nbins)
+            b = nbins - 1;
+        bins[b]++;
+    }
+    for (int b = 0; b < nbins; b++)
+        if (bins[b] > peak)
+            peak = bins[b];
+    printf("histogram:    %d bins over [%g, %g], bars on a log scale\n", nbins, lo, hi);
+    const int bar_max = 40;
+    for (int b = 0; b < nbins; b++) {
+        double b0 = lo + b * width, b1 = lo + (b + 1) * width;
+        int len = bins[b] ? (int)ceil(bar_max * log1p((double)bins[b]) / log1p((double)peak)) : 0;
+        char bar[64];
+        memset(bar, '#', (size_t)len);
+        bar[len] = '\0';
+        if (is_integer_type(v->type)) {
+            b0 = ceil(b0);
+            b1 = ceil(b1) - 1;
+        }
+        printf("  %12.6g .. %-12.6g %12llu %6.2f%% %s\n", b0, b1, (unsigned long long)bins[b],
+               100.0 * (double)bins[b] / (double)st->n, bar);
+    }
+    free(bins);
+    return 0;
+}
+
+static int
+is_identity(const double d[9]) {
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++)
+            if (fabs(d[3 * r + c] - (r == c ? 1.0 : 0.0)) > 1e-12)
+                return 0;
+    return 1;
+}
+
+int
+cli_info_main(int argc, char **argv) {
+    cli_args a;
+    int rc = cli_parse(&a, "info", info_opts, N_INFO_OPTS, argc, argv);
+    if (rc == CLI_HELP) {
+        cli_info_usage(stdout);
+        return CLI_EXIT_OK;
+    }
+    if (rc)
+        return rc;
+    if (a.n_pos == 0)
+        return cli_usage_error(&a, "missing FILE");
+    if (a.n_pos > 1)
+        return cli_usage_error(&a, "expected one FILE, got %d arguments", a.n_pos);
+    int nbins = 16;
+    const char *s;
+    if ((s = cli_get(&a, "bins")) && (rc = cli_parse_int(&a, "bins", s, 1, 256, &nbins)))
+        return rc;
+    vv_raw_params raw;
+    const char *raw_spec = cli_get(&a, "raw");
+    if (raw_spec && (rc = cli_parse_raw(&a, "raw", raw_spec, &raw)))
+        return rc;
+
+    const char *path = a.pos[0];
+    vv_volume *v;
+    if ((rc = cli_load_volume(path, raw_spec ? &raw : NULL, &v)))
+        return rc;
+
+    stats st;
+    if ((rc = compute_stats(v, &st))) {
+        vv_volume_free(v);
+        return rc;
+    }
+    const char *format = raw_spec ? "raw" : vv_format_name(vv_format_detect(path));
+    uint64_t count = vv_volume_voxel_count(v);
+    const char *unit = unit_name(v->unit);
+    printf("file:         %s\n", path);
+    printf("format:       %s\n", format);
+    printf("dimensions:   %d x %d x %d (%llu voxels)\n", v->dims[0], v->dims[1], v->dims[2],
+           (unsigned long long)count);
+    printf("voxel type:   %s (%zu byte%s)\n", vv_voxel_type_name(v->type),
+           vv_voxel_type_size(v->type), vv_voxel_type_size(v->type) == 1 ? "" : "s");
+    printf("spacing:      %g x %g x %g%s%s\n", v->spacing[0], v->spacing[1], v->spacing[2],
+           v->unit == VV_UNIT_UNKNOWN ? "" : " ", v->unit == VV_UNIT_UNKNOWN ? "" : unit);
+    printf("origin:       %g %g %g\n", v->origin[0], v->origin[1], v->origin[2]);
+    if (!is_identity(v->direction))
+        printf("direction:    [%g %g %g; %g %g %g; %g %g %g] (columns: i, j, k axes)\n",
+               v->direction[0], v->direction[1], v->direction[2], v->direction[3], v->direction[4],
+               v->direction[5], v->direction[6], v->direction[7], v->direction[8]);
+    vv_box box = vv_volume_world_box(v);
+    printf("extent:       %g x %g x %g%s%s\n", box.max.x - box.min.x, box.max.y - box.min.y,
+           box.max.z - box.min.z, v->unit == VV_UNIT_UNKNOWN ? " (world units)" : " ",
+           v->unit == VV_UNIT_UNKNOWN ? "" : unit);
+    printf("unit:         %s\n", unit);
+    printf("data origin:  %s\n", data_origin_name(v->data_origin));
+    printf("modification: %s\n", modification_name(v->modification));
+    if (st.n == 0) {
+        printf("range:        none (no finite voxels)\n");
+    } else {
+        printf("range:        %g .. %g\n", st.min, st.max);
+        printf("mean:         %g (standard deviation %g)\n", st.mean, st.stddev);
+        if (st.nonfinite)
+            printf("non-finite:   %llu voxels (NaN or infinite; left out of the statistics)\n",
+                   (unsigned long long)st.nonfinite);
+        printf("percentiles:  1%%: %g  5%%: %g  50%%: %g  95%%: %g  99%%: %g\n", st.pct[0],
+               st.pct[1], st.pct[2], st.pct[3], st.pct[4]);
+        rc = print_histogram(v, &st, nbins);
+    }
+    vv_volume_free(v);
+    return rc;
+}

@@ -1,0 +1,194 @@
+/*
+ * Error reporting, volume loading and the terminal progress bar of the CLI.
+ */
+#include <errno.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "cli.h"
+
+/* Writes "volvis: " + message + "\n" as one line: embedded newlines become "; ". */
+static void
+print_line(const char *msg) {
+    char buf[4096];
+    size_t n = 0;
+    for (const char *p = msg; *p && n + 3 < sizeof buf; p++) {
+        if (*p == '\n' || *p == '\r') {
+            if (p[1] == '\0')
+                break;
+            buf[n++] = ';';
+            buf[n++] = ' ';
+        } else {
+            buf[n++] = *p;
+        }
+    }
+    buf[n] = '\0';
+    fprintf(stderr, "volvis: %s\n", buf);
+    fflush(stderr);
+}
+
+void
+cli_error(const char *fmt, ...) {
+    char msg[4096];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    print_line(msg);
+}
+
+int
+cli_usage_error(const cli_args *a, const char *fmt, ...) {
+    char msg[3072];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    if (a && a->cmd)
+        cli_error("%s: %s (see 'volvis %s --help')", a->cmd, msg, a->cmd);
+    else
+        cli_error("%s (see 'volvis --help')", msg);
+    return CLI_EXIT_USAGE;
+}
+
+static const char *
+base_name(const char *path) {
+    const char *slash = strrchr(path, '/');
+    return slash ? slash + 1 : path;
+}
+
+int
+cli_fail(vv_status s, const char *path) {
+    const char *msg = vv_error_message();
+    char fallback[128];
+    if (!msg || !*msg) {
+        snprintf(fallback, sizeof fallback, "failed (%s)", vv_status_name(s));
+        msg = fallback;
+    }
+    if (path && !strstr(msg, path) && !strstr(msg, base_name(path)))
+        cli_error("%s: %s", path, msg);
+    else
+        cli_error("%s", msg);
+    return s == VV_ERR_CANCELLED ? CLI_EXIT_CANCEL : CLI_EXIT_FAIL;
+}
+
+int
+cli_check_readable(const char *path) {
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        cli_error("%s: %s", path, strerror(errno));
+        return CLI_EXIT_FAIL;
+    }
+    if (S_ISDIR(st.st_mode)) {
+        cli_error("%s: is a directory", path);
+        return CLI_EXIT_FAIL;
+    }
+    if (access(path, R_OK) != 0) {
+        cli_error("%s: %s", path, strerror(errno));
+        return CLI_EXIT_FAIL;
+    }
+    return 0;
+}
+
+int
+cli_load_volume(const char *path, const vv_raw_params *raw, vv_volume **out) {
+    *out = NULL;
+    int rc = cli_check_readable(path);
+    if (rc)
+        return rc;
+    vv_load_options opt;
+    vv_load_options_init(&opt);
+    if (raw) {
+        opt.format = VV_FORMAT_RAW;
+        opt.has_raw = 1;
+        opt.raw = *raw;
+    }
+    vv_error_clear();
+    vv_status s = vv_volume_load(out, path, &opt);
+    if (s != VV_OK) {
+        vv_volume_free(*out);
+        *out = NULL;
+        return cli_fail(s, path);
+    }
+    return 0;
+}
+
+/* ---- progress bar and Ctrl-C --------------------------------------------- */
+
+/* Set from the SIGINT handler; the only global state of the tool. */
+static volatile sig_atomic_t g_interrupted;
+static struct sigaction g_old_sigint;
+
+static void
+on_sigint(int sig) {
+    (void)sig;
+    g_interrupted = 1;
+}
+
+int
+cli_interrupted(void) {
+    return g_interrupted != 0;
+}
+
+#define BAR_WIDTH 30
+
+static int
+progress_cb(void *user, double fraction) {
+    cli_progress *pr = user;
+    if (pr->draw) {
+        if (!(fraction >= 0))
+            fraction = 0;
+        if (fraction > 1)
+            fraction = 1;
+        int pct = (int)(fraction * 100.0 + 1e-9);
+        if (pct != pr->last_pct) {
+            char bar[BAR_WIDTH + 1];
+            int fill = (int)(fraction * BAR_WIDTH + 1e-9);
+            for (int i = 0; i < BAR_WIDTH; i++)
+                bar[i] = i < fill ? '#' : ' ';
+            bar[BAR_WIDTH] = '\0';
+            fprintf(stderr, "\r[%s] %3d%%", bar, pct);
+            fflush(stderr);
+            pr->last_pct = pct;
+            pr->drawn = 1;
+        }
+    }
+    return g_interrupted ? 1 : 0;
+}
+
+void
+cli_progress_begin(cli_progress *pr, int quiet) {
+    pr->draw = !quiet && isatty(STDERR_FILENO);
+    pr->last_pct = -1;
+    pr->drawn = 0;
+    pr->p.fn = progress_cb;
+    pr->p.user = pr;
+    g_interrupted = 0;
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_sigint;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &g_old_sigint);
+}
+
+void
+cli_progress_end(cli_progress *pr) {
+    if (pr->drawn) {
+        fprintf(stderr, "\r%*s\r", BAR_WIDTH + 8, "");
+        fflush(stderr);
+    }
+    pr->drawn = 0;
+    sigaction(SIGINT, &g_old_sigint, NULL);
+}
+
+double
+cli_now(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}

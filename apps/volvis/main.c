@@ -1,0 +1,76 @@
+/*
+ * volvis: the command-line tool. Dispatches a table of subcommands, one file
+ * each (cmd_info.c, cmd_render.c, cmd_convert.c). See docs/cli.md.
+ */
+#include <stdio.h>
+#include <string.h>
+
+#include "cli.h"
+
+static const cli_command commands[] = {
+    {"info", "print a volume's header, value range and histogram", cli_info_main, cli_info_usage},
+    {"render", "render a volume or a scene file to a PNG image", cli_render_main, cli_render_usage},
+    {"convert", "convert any readable volume to NRRD or SLC", cli_convert_main, cli_convert_usage},
+};
+#define N_COMMANDS ((int)(sizeof commands / sizeof commands[0]))
+
+static const cli_command *
+find_command(const char *name) {
+    for (int i = 0; i < N_COMMANDS; i++)
+        if (strcmp(commands[i].name, name) == 0)
+            return &commands[i];
+    return NULL;
+}
+
+static void
+usage(FILE *out) {
+    fprintf(out,
+            "usage: volvis COMMAND [OPTIONS] ARGS...\n"
+            "       volvis COMMAND --help\n"
+            "       volvis --help | --version\n"
+            "\n"
+            "VolVis %s: a volume visualization system.\n"
+            "\n"
+            "Commands:\n",
+            vv_version());
+    for (int i = 0; i < N_COMMANDS; i++)
+        fprintf(out, "  %-10s %s\n", commands[i].name, commands[i].summary);
+    fprintf(out, "  %-10s %s\n", "help", "show this help, or 'help COMMAND' for a command's");
+    fprintf(out, "\n"
+                 "Exit status: 0 success, 1 bad input (file, format or render error),\n"
+                 "2 bad usage, 130 interrupted. Errors are one line on stderr.\n");
+}
+
+int
+main(int argc, char **argv) {
+    if (argc < 2)
+        return cli_usage_error(NULL, "missing command");
+    const char *cmd = argv[1];
+    if (strcmp(cmd, "--help") == 0 || strcmp(cmd, "-h") == 0 || strcmp(cmd, "help") == 0) {
+        if (strcmp(cmd, "help") == 0 && argc > 2) {
+            const cli_command *c = find_command(argv[2]);
+            if (!c)
+                return cli_usage_error(NULL, "unknown command '%s'", argv[2]);
+            c->usage(stdout);
+            return CLI_EXIT_OK;
+        }
+        usage(stdout);
+        return CLI_EXIT_OK;
+    }
+    if (strcmp(cmd, "--version") == 0 || strcmp(cmd, "-V") == 0 || strcmp(cmd, "version") == 0) {
+        printf("volvis %s\n", vv_version());
+        return CLI_EXIT_OK;
+    }
+    const cli_command *c = find_command(cmd);
+    if (!c) {
+        if (cmd[0] == '-')
+            return cli_usage_error(NULL, "unknown option '%s' before the command", cmd);
+        return cli_usage_error(NULL, "unknown command '%s'", cmd);
+    }
+    int rc = c->run(argc - 1, argv + 1);
+    if (fflush(stdout) != 0 && rc == CLI_EXIT_OK) {
+        cli_error("cannot write to standard output");
+        rc = CLI_EXIT_FAIL;
+    }
+    return rc;
+}

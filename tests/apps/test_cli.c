@@ -1,0 +1,641 @@
+/*
+ * Tests of the `volvis` command-line tool, run as a separate process
+ * (posix_spawn) with stdout and stderr captured to files. The executable is
+ * $VV_CLI (set by CTest), output goes under $VV_TEST_OUT/cli.
+ */
+#include "testutil.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <spawn.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+extern char **environ;
+
+typedef struct run_result {
+    int status; /* exit status, or 128 + signal */
+    char *out;
+    char *err;
+} run_result;
+
+static char g_outdir[1024];
+
+static const char *
+cli_path(void) {
+    const char *p = getenv("VV_CLI");
+    return p && *p ? p : VV_BINARY_DIR "/volvis";
+}
+
+static const char *
+outdir(void) {
+    if (!g_outdir[0]) {
+        const char *base = getenv("VV_TEST_OUT");
+        if (base && *base) {
+            mkdir(base, 0755);
+            snprintf(g_outdir, sizeof g_outdir, "%s/cli", base);
+            mkdir(g_outdir, 0755);
+        } else {
+            snprintf(g_outdir, sizeof g_outdir, "%s", vt_outdir("cli"));
+        }
+    }
+    return g_outdir;
+}
+
+/* Path of a file in the output directory; 8 rotating buffers. */
+static const char *
+out_file(const char *name) {
+    static char buf[8][1200];
+    static int slot;
+    slot = (slot + 1) % 8;
+    snprintf(buf[slot], sizeof buf[slot], "%s/%s", outdir(), name);
+    return buf[slot];
+}
+
+static void
+free_result(run_result *r) {
+    free(r->out);
+    free(r->err);
+    r->out = r->err = NULL;
+}
+
+/* Runs the CLI with the NULL-terminated arguments that follow (argv[0] is added). */
+static run_result
+run_cli_v(const char *const *args) {
+    char *argv[64];
+    int n = 0;
+    argv[n++] = (char *)cli_path();
+    for (int i = 0; args[i]; i++) {
+        assert_true(n < 63);
+        argv[n++] = (char *)args[i];
+    }
+    argv[n] = NULL;
+
+    char out_path[1200], err_path[1200];
+    snprintf(out_path, sizeof out_path, "%s/.stdout", outdir());
+    snprintf(err_path, sizeof err_path, "%s/.stderr", outdir());
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 1, out_path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&fa, 2, err_path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    pid_t pid;
+    int rc = posix_spawn(&pid, argv[0], &fa, NULL, argv, environ);
+    posix_spawn_file_actions_destroy(&fa);
+    if (rc != 0)
+        fail_msg("cannot run %s: %s (set VV_CLI)", argv[0], strerror(rc));
+    int st;
+    while (waitpid(pid, &st, 0) < 0)
+        assert_int_equal(errno, EINTR);
+    run_result r;
+    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+    size_t len;
+    r.out = (char *)vt_read_file(out_path, &len);
+    r.err = (char *)vt_read_file(err_path, &len);
+    return r;
+}
+
+#define run_cli(...) run_cli_v((const char *const[]){__VA_ARGS__, NULL})
+
+static int
+file_exists(const char *path) {
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+static int
+count_char(const char *s, char c) {
+    int n = 0;
+    for (; *s; s++)
+        n += *s == c;
+    return n;
+}
+
+/* Exactly one line on stderr, starting "volvis:". */
+static void
+assert_one_error_line(const run_result *r) {
+    if (strncmp(r->err, "volvis:", 7) != 0 || count_char(r->err, '\n') != 1 ||
+        r->err[strlen(r->err) - 1] != '\n')
+        fail_msg("expected one 'volvis:' line on stderr, got: [%s]", r->err);
+}
+
+#define assert_contains(hay, needle)                                                               \
+    do {                                                                                           \
+        if (!strstr((hay), (needle)))                                                              \
+            fail_msg("expected \"%s\" in output:\n%s", (needle), (hay));                           \
+    } while (0)
+
+/* ---- help and version ----------------------------------------------------- */
+
+static void
+test_help(void **state) {
+    (void)state;
+    static const struct {
+        const char *cmd;
+        const char *mentions[8];
+    } cases[] = {
+        {"info", {"usage: volvis info", "--raw", "--bins", NULL}},
+        {"render",
+         {"usage: volvis render", "--mode", "--iso", "--tf", "--size", "--azimuth", "--renderer",
+          NULL}},
+        {"convert", {"usage: volvis convert", "--format", "--strict", "--raw", NULL}},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        run_result r = run_cli(cases[i].cmd, "--help");
+        assert_int_equal(r.status, 0);
+        assert_string_equal(r.err, "");
+        for (int k = 0; cases[i].mentions[k]; k++)
+            assert_contains(r.out, cases[i].mentions[k]);
+        run_result h = run_cli("help", cases[i].cmd);
+        assert_int_equal(h.status, 0);
+        assert_string_equal(h.out, r.out);
+        free_result(&h);
+        /* --help wins over other problems on the line */
+        h = run_cli(cases[i].cmd, "--bogus", "-h");
+        assert_int_equal(h.status, 0);
+        assert_string_equal(h.out, r.out);
+        free_result(&h);
+        free_result(&r);
+    }
+    {
+        run_result r = run_cli("render", "--help");
+        assert_contains(r.out, "--step");
+        assert_contains(r.out, "--gamma");
+        assert_contains(r.out, "--quiet");
+        assert_contains(r.out, "--threads");
+        assert_contains(r.out, "--zoom");
+        assert_contains(r.out, "--elevation");
+        /* the renderer registry is listed */
+        const vv_renderer_ops *const *reg = vv_renderer_registry();
+        assert_non_null(reg);
+        assert_non_null(reg[0]);
+        for (int i = 0; reg[i]; i++)
+            assert_contains(r.out, reg[i]->name);
+        free_result(&r);
+    }
+    const char *globals[] = {"--help", "help", "-h"};
+    for (int i = 0; i < 3; i++) {
+        run_result r = run_cli(globals[i]);
+        assert_int_equal(r.status, 0);
+        assert_string_equal(r.err, "");
+        assert_contains(r.out, "info");
+        assert_contains(r.out, "render");
+        assert_contains(r.out, "convert");
+        free_result(&r);
+    }
+    run_result r = run_cli("--version");
+    assert_int_equal(r.status, 0);
+    assert_true(strncmp(r.out, "volvis ", 7) == 0);
+    assert_contains(r.out, vv_version());
+    free_result(&r);
+}
+
+/* ---- usage errors ---------------------------------------------------------- */
+
+static void
+test_usage_errors(void **state) {
+    (void)state;
+    const char *nut = vt_data("volumes/nut.slc");
+    const char *neghip = vt_data("volumes/neghip.slc");
+    const char *png = out_file("usage.png");
+    unlink(png);
+    const char *const cases[][12] = {
+        {"frobnicate", NULL},
+        {"--frobnicate", NULL},
+        {"info", NULL},
+        {"info", "--bogus", nut, NULL},
+        {"info", nut, nut, NULL},
+        {"info", "--bins", "0", nut, NULL},
+        {"info", "--raw", "4x4:u8", nut, NULL},
+        {"info", "--raw", "4x4x4:q12", nut, NULL},
+        {"info", "--raw", "4x4x4:u8:sideways", nut, NULL},
+        {"info", "--raw", "4x4x4:u8:1x0x1", nut, NULL},
+        {"render", neghip, NULL},
+        {"render", "-o", png, NULL},
+        {"render", neghip, "-o", png, "--size", "5x", NULL},
+        {"render", neghip, "-o", png, "--size", "0x10", NULL},
+        {"render", neghip, "-o", png, "--size", "40000x10", NULL},
+        {"render", neghip, "-o", png, "--size", "64x48x", NULL},
+        {"render", neghip, "-o", png, "--size=", NULL},
+        {"render", neghip, "-o", png, "--zoom", "nan", NULL},
+        {"render", neghip, "-o", png, "--zoom", "0", NULL},
+        {"render", neghip, "-o", png, "--azimuth", "inf", NULL},
+        {"render", neghip, "-o", png, "--azimuth", "", NULL},
+        {"render", neghip, "-o", png, "--threads", "2.5", NULL},
+        {"render", neghip, "-o", png, "--mode", "foo", NULL},
+        {"render", neghip, "-o", png, "--tf", "5:1", NULL},
+        {"render", neghip, "-o", png, "--tf", "5", NULL},
+        {"render", neghip, "-o", png, "--iso", "1e999", NULL},
+        {"render", neghip, "-o", png, "--renderer", "nosuch", NULL},
+        {"render", neghip, "-o", png, "--quality=7", NULL},
+        {"render", neghip, "-o", png, "--quiet=1", NULL},
+        {"render", neghip, "-o", png, "--set", "novalue", NULL},
+        {"render", neghip, "-o", png, "--size", NULL},
+        {"convert", nut, NULL},
+        {"convert", nut, out_file("x.foo"), NULL},
+        {"convert", "--format", "tiff", nut, out_file("x.tif"), NULL},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        run_result r = run_cli_v(cases[i]);
+        if (r.status != 2)
+            fail_msg("case %zu (%s %s ...): exit %d, want 2; stderr: %s", i, cases[i][0],
+                     cases[i][1] ? cases[i][1] : "", r.status, r.err);
+        assert_one_error_line(&r);
+        assert_string_equal(r.out, "");
+        free_result(&r);
+    }
+    assert_false(file_exists(png));
+
+    /* no command at all */
+    run_result r = run_cli_v((const char *const[]){NULL});
+    assert_int_equal(r.status, 2);
+    assert_one_error_line(&r);
+    free_result(&r);
+
+    /* the message says what was wrong */
+    r = run_cli("render", neghip, "-o", png, "--size", "5x");
+    assert_contains(r.err, "5x");
+    free_result(&r);
+    r = run_cli("render", neghip, "-o", png, "--mode", "foo");
+    assert_contains(r.err, "foo");
+    free_result(&r);
+    r = run_cli("info", "--bogus", nut);
+    assert_contains(r.err, "--bogus");
+    free_result(&r);
+}
+
+/* ---- missing and bad files --------------------------------------------------- */
+
+static void
+test_missing_file(void **state) {
+    (void)state;
+    const char *missing = out_file("no-such-volume.slc");
+    const char *png = out_file("missing.png");
+    unlink(missing);
+    unlink(png);
+    const char *const cases[][8] = {
+        {"info", missing, NULL},
+        {"render", missing, "-o", png, NULL},
+        {"convert", missing, out_file("missing.nrrd"), NULL},
+        {"info", "--raw", "4x4x4:u8", missing, NULL},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        run_result r = run_cli_v(cases[i]);
+        assert_int_equal(r.status, 1);
+        assert_one_error_line(&r);
+        assert_contains(r.err, "no-such-volume.slc");
+        assert_string_equal(r.out, "");
+        free_result(&r);
+    }
+    assert_false(file_exists(png));
+    assert_false(file_exists(out_file("missing.nrrd")));
+
+    /* a file that is no volume */
+    const char *bad = out_file("garbage.slc");
+    vt_write_file(bad, "this is not a volume\n", 21);
+    run_result r = run_cli("info", bad);
+    assert_int_equal(r.status, 1);
+    assert_one_error_line(&r);
+    assert_contains(r.err, "garbage.slc");
+    free_result(&r);
+}
+
+/* ---- info ---------------------------------------------------------------------- */
+
+static void
+test_info_nut(void **state) {
+    (void)state;
+    run_result r = run_cli("info", vt_data("volumes/nut.slc"));
+    assert_int_equal(r.status, 0);
+    assert_string_equal(r.err, "");
+    assert_contains(r.out, "format:       slc");
+    assert_contains(r.out, "dimensions:   68 x 41 x 59 (164492 voxels)");
+    assert_contains(r.out, "voxel type:   u8");
+    assert_contains(r.out, "spacing:      1 x 1 x 1");
+    assert_contains(r.out, "data origin:  fuzzy voxelized");
+    assert_contains(r.out, "range:");
+    assert_contains(r.out, "mean:");
+    assert_contains(r.out, "percentiles:  1%:");
+    assert_contains(r.out, "99%:");
+    assert_contains(r.out, "histogram:");
+
+    /* the range agrees with the library's own */
+    vv_volume *v;
+    vt_ok(vv_volume_load(&v, vt_data("volumes/nut.slc"), NULL));
+    char want[128];
+    snprintf(want, sizeof want, "range:        %g .. %g\n", v->range[0], v->range[1]);
+    assert_contains(r.out, want);
+    vv_volume_free(v);
+    free_result(&r);
+
+    /* a CT with negative values and anisotropic voxel spacing */
+    r = run_cli("info", "--bins", "8", vt_data("volumes/ct_head.nrrd"));
+    assert_int_equal(r.status, 0);
+    assert_contains(r.out, "256 x 256 x 108");
+    assert_contains(r.out, "i16");
+    assert_contains(r.out, "8 bins");
+    free_result(&r);
+}
+
+/* Writes a 4x3x2 u16 volume, value 100 * linear index, big-endian, after @p skip junk bytes. */
+static void
+write_raw_u16(const char *path, int skip) {
+    unsigned char buf[64 + 48];
+    memset(buf, 0xAB, sizeof buf);
+    for (int i = 0; i < 24; i++) {
+        unsigned v = 100u * (unsigned)i;
+        buf[skip + 2 * i] = (unsigned char)(v >> 8);
+        buf[skip + 2 * i + 1] = (unsigned char)(v & 0xff);
+    }
+    vt_write_file(path, buf, (size_t)skip + 48);
+}
+
+static void
+test_info_raw(void **state) {
+    (void)state;
+    const char *raw = out_file("ramp.raw");
+    write_raw_u16(raw, 0);
+    run_result r = run_cli("info", "--raw", "4x3x2:u16:be:0.5x1x2", raw);
+    if (r.status != 0)
+        fail_msg("exit %d: %s", r.status, r.err);
+    assert_contains(r.out, "format:       raw");
+    assert_contains(r.out, "dimensions:   4 x 3 x 2 (24 voxels)");
+    assert_contains(r.out, "voxel type:   u16");
+    assert_contains(r.out, "spacing:      0.5 x 1 x 2");
+    assert_contains(r.out, "range:        0 .. 2300\n");
+    assert_contains(r.out, "mean:         1150 ");
+    free_result(&r);
+
+    /* --raw=... form, a header to skip, the options in another order */
+    const char *skipped = out_file("ramp-skip.raw");
+    write_raw_u16(skipped, 16);
+    r = run_cli("info", skipped, "--raw=4x3x2:u16:skip=16:be");
+    if (r.status != 0)
+        fail_msg("exit %d: %s", r.status, r.err);
+    assert_contains(r.out, "range:        0 .. 2300\n");
+    free_result(&r);
+
+    /* little-endian reading of the same bytes gives other values */
+    r = run_cli("info", "--raw", "4x3x2:u16:le", raw);
+    assert_int_equal(r.status, 0);
+    assert_true(strstr(r.out, "range:        0 .. 2300\n") == NULL);
+    free_result(&r);
+
+    /* a file too small for the dimensions */
+    r = run_cli("info", "--raw", "4x3x3:u16", raw);
+    assert_int_equal(r.status, 1);
+    assert_one_error_line(&r);
+    assert_contains(r.err, "ramp.raw");
+    free_result(&r);
+}
+
+/* ---- render ---------------------------------------------------------------------- */
+
+static unsigned
+be32(const unsigned char *p) {
+    return (unsigned)p[0] << 24 | (unsigned)p[1] << 16 | (unsigned)p[2] << 8 | p[3];
+}
+
+/* Checks the PNG signature and IHDR size, and that the image is not blank. */
+static void
+check_png(const char *path, int w, int h) {
+    size_t n;
+    unsigned char *b = vt_read_file(path, &n);
+    static const unsigned char sig[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    assert_true(n > 33);
+    assert_memory_equal(b, sig, 8);
+    assert_memory_equal(b + 12, "IHDR", 4);
+    assert_int_equal(be32(b + 16), (unsigned)w);
+    assert_int_equal(be32(b + 20), (unsigned)h);
+    free(b);
+
+    vv_image *img;
+    vt_ok(vv_image_read_png(&img, path));
+    assert_int_equal(img->width, w);
+    assert_int_equal(img->height, h);
+    float lo = INFINITY, hi = -INFINITY;
+    for (int i = 0; i < w * h; i++)
+        for (int c = 0; c < 3; c++) {
+            float v = img->rgba[4 * i + c];
+            lo = v < lo ? v : lo;
+            hi = v > hi ? v : hi;
+        }
+    vv_image_free(img);
+    if (!(hi - lo > 0.05f))
+        fail_msg("%s looks blank: values %g..%g", path, lo, hi);
+}
+
+static void
+test_render_png(void **state) {
+    (void)state;
+    const char *png = out_file("neghip.png");
+    unlink(png);
+    run_result r = run_cli("render", vt_data("volumes/neghip.slc"), "-o", png, "--size", "64x48");
+    if (r.status != 0)
+        fail_msg("exit %d: %s", r.status, r.err);
+    /* not a terminal: no progress bar, nothing on stderr */
+    assert_string_equal(r.err, "");
+    char want[1400];
+    snprintf(want, sizeof want, "wrote %s (64x48, ", png);
+    assert_true(strncmp(r.out, want, strlen(want)) == 0);
+    assert_contains(r.out, " s)\n");
+    assert_int_equal(count_char(r.out, '\n'), 1);
+    free_result(&r);
+    check_png(png, 64, 48);
+
+    /* --opt=VALUE forms, another mode and view, quiet */
+    const char *mip = out_file("neghip-mip.png");
+    unlink(mip);
+    r = run_cli("render", "--size=40x30", "--mode=mip", "--azimuth", "-30", "--elevation=20",
+                "--zoom", "1.5", "--threads", "2", "--step", "0.5", "--gamma", "2.2", "-q",
+                vt_data("volumes/neghip.slc"), "-o", mip);
+    if (r.status != 0)
+        fail_msg("exit %d: %s", r.status, r.err);
+    assert_string_equal(r.out, "");
+    assert_string_equal(r.err, "");
+    free_result(&r);
+    check_png(mip, 40, 30);
+
+    /* a transfer function range and an isosurface */
+    const char *iso = out_file("neghip-iso.png");
+    r = run_cli("render", vt_data("volumes/neghip.slc"), "-o", iso, "--size", "32x32", "--iso",
+                "60");
+    if (r.status != 0)
+        fail_msg("exit %d: %s", r.status, r.err);
+    free_result(&r);
+    check_png(iso, 32, 32);
+}
+
+/* Names in the output directory that start with @p prefix. */
+static int
+count_entries(const char *prefix) {
+    DIR *d = opendir(outdir());
+    assert_non_null(d);
+    int n = 0;
+    struct dirent *e;
+    while ((e = readdir(d)))
+        n += strncmp(e->d_name, prefix, strlen(prefix)) == 0;
+    closedir(d);
+    return n;
+}
+
+static void
+test_render_failure_keeps_output(void **state) {
+    (void)state;
+    const char *bad = out_file("keep-bad.slc");
+    vt_write_file(bad, "11111\n this is not really an SLC file\n", 39);
+    const char *fresh = out_file("keep-fresh.png");
+    unlink(fresh);
+    run_result r = run_cli("render", bad, "-o", fresh, "--size", "64x48");
+    assert_int_equal(r.status, 1);
+    assert_one_error_line(&r);
+    assert_string_equal(r.out, "");
+    free_result(&r);
+    assert_false(file_exists(fresh));
+
+    const char *existing = out_file("keep-existing.png");
+    static const char content[] = "previous image, must survive";
+    vt_write_file(existing, content, sizeof content);
+    r = run_cli("render", bad, "-o", existing, "--size", "64x48");
+    assert_int_equal(r.status, 1);
+    free_result(&r);
+    r = run_cli("render", out_file("keep-missing.slc"), "-o", existing);
+    assert_int_equal(r.status, 1);
+    free_result(&r);
+    size_t n;
+    unsigned char *got = vt_read_file(existing, &n);
+    assert_int_equal(n, sizeof content);
+    assert_memory_equal(got, content, sizeof content);
+    free(got);
+    /* no temporary files left beside the target */
+    assert_int_equal(count_entries("keep-"), 2);
+
+    /* an output directory that does not exist: exit 1, the message names the path */
+    r = run_cli("render", vt_data("volumes/neghip.slc"), "-o", out_file("no-dir/x.png"), "--size",
+                "8x8");
+    assert_int_equal(r.status, 1);
+    assert_one_error_line(&r);
+    assert_contains(r.err, "no-dir/x.png");
+    free_result(&r);
+}
+
+/* ---- convert ----------------------------------------------------------------------- */
+
+static void
+assert_same_voxels(const vv_volume *a, const vv_volume *b) {
+    assert_int_equal(a->dims[0], b->dims[0]);
+    assert_int_equal(a->dims[1], b->dims[1]);
+    assert_int_equal(a->dims[2], b->dims[2]);
+    assert_int_equal(a->type, b->type);
+    for (int i = 0; i < 3; i++)
+        assert_true(fabs(a->spacing[i] - b->spacing[i]) < 1e-9);
+    size_t bytes = (size_t)vv_volume_voxel_count(a) * vv_voxel_type_size(a->type);
+    assert_memory_equal(a->data, b->data, bytes);
+}
+
+static void
+test_convert_roundtrip(void **state) {
+    (void)state;
+    const char *nut = vt_data("volumes/nut.slc");
+    const char *nrrd = out_file("nut-rt.nrrd");
+    const char *slc = out_file("nut-rt.slc");
+    unlink(nrrd);
+    unlink(slc);
+    run_result r = run_cli("convert", nut, nrrd);
+    if (r.status != 0)
+        fail_msg("exit %d: %s", r.status, r.err);
+    assert_string_equal(r.err, "");
+    assert_contains(r.out, "wrote ");
+    assert_contains(r.out, "nut-rt.nrrd");
+    free_result(&r);
+    r = run_cli("convert", nrrd, slc);
+    if (r.status != 0)
+        fail_msg("exit %d: %s", r.status, r.err);
+    assert_string_equal(r.err, ""); /* u8 data: no rescaling note */
+    free_result(&r);
+
+    vv_volume *orig, *via_nrrd, *back;
+    vt_ok(vv_volume_load(&orig, nut, NULL));
+    vt_ok(vv_volume_load(&via_nrrd, nrrd, NULL));
+    vt_ok(vv_volume_load(&back, slc, NULL));
+    assert_int_equal(vv_format_detect(nrrd), VV_FORMAT_NRRD);
+    assert_int_equal(vv_format_detect(slc), VV_FORMAT_SLC);
+    assert_same_voxels(orig, via_nrrd);
+    assert_same_voxels(orig, back);
+    vv_volume_free(orig);
+    vv_volume_free(via_nrrd);
+    vv_volume_free(back);
+
+    /* --format overrides the extension */
+    const char *odd = out_file("nut-rt.vol");
+    r = run_cli("convert", "--format", "nrrd", nut, odd);
+    assert_int_equal(r.status, 0);
+    free_result(&r);
+    assert_int_equal(vv_format_detect(odd), VV_FORMAT_NRRD);
+}
+
+static void
+test_convert_rescale_and_strict(void **state) {
+    (void)state;
+    const char *raw = out_file("conv-ramp.raw");
+    write_raw_u16(raw, 0);
+    const char *slc = out_file("conv-ramp.slc");
+    unlink(slc);
+    run_result r = run_cli("convert", "--strict", "--raw", "4x3x2:u16:be", raw, slc);
+    assert_int_equal(r.status, 1);
+    assert_one_error_line(&r);
+    assert_contains(r.err, "conv-ramp.slc");
+    free_result(&r);
+    assert_false(file_exists(slc));
+
+    r = run_cli("convert", "--raw", "4x3x2:u16:be", raw, slc);
+    if (r.status != 0)
+        fail_msg("exit %d: %s", r.status, r.err);
+    assert_one_error_line(&r); /* the rescaling note */
+    assert_contains(r.err, "rescaled");
+    free_result(&r);
+    vv_volume *v;
+    vt_ok(vv_volume_load(&v, slc, NULL));
+    assert_int_equal(v->type, VV_U8);
+    assert_int_equal(v->dims[0], 4);
+    assert_int_equal(v->dims[2], 2);
+    assert_true(v->range[0] == 0 && v->range[1] == 255);
+    /* monotone ramp stays monotone */
+    for (int i = 1; i < 4; i++)
+        assert_true(vv_volume_get(v, i, 0, 0) > vv_volume_get(v, i - 1, 0, 0));
+    vv_volume_free(v);
+
+    /* raw u16 to NRRD keeps the values */
+    const char *nrrd = out_file("conv-ramp.nrrd");
+    r = run_cli("convert", "-q", "--raw", "4x3x2:u16:be", raw, nrrd);
+    assert_int_equal(r.status, 0);
+    assert_string_equal(r.out, "");
+    free_result(&r);
+    vt_ok(vv_volume_load(&v, nrrd, NULL));
+    assert_int_equal(v->type, VV_U16);
+    assert_true(vv_volume_get(v, 3, 2, 1) == 2300.0);
+    vv_volume_free(v);
+}
+
+int
+main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_help),
+        cmocka_unit_test(test_usage_errors),
+        cmocka_unit_test(test_missing_file),
+        cmocka_unit_test(test_info_nut),
+        cmocka_unit_test(test_info_raw),
+        cmocka_unit_test(test_render_png),
+        cmocka_unit_test(test_render_failure_keeps_output),
+        cmocka_unit_test(test_convert_roundtrip),
+        cmocka_unit_test(test_convert_rescale_and_strict),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
