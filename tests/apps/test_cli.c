@@ -299,7 +299,8 @@ test_missing_file(void **state) {
 
     /* a file that is no volume */
     const char *bad = out_file("garbage.slc");
-    vt_write_file(bad, "this is not a volume\n", 21);
+    static const char bad_text[] = "this is not a volume\n";
+    vt_write_file(bad, bad_text, strlen(bad_text));
     run_result r = run_cli("info", bad);
     assert_int_equal(r.status, 1);
     assert_one_error_line(&r);
@@ -490,7 +491,8 @@ static void
 test_render_failure_keeps_output(void **state) {
     (void)state;
     const char *bad = out_file("keep-bad.slc");
-    vt_write_file(bad, "11111\n this is not really an SLC file\n", 39);
+    static const char bad_text[] = "11111\n this is not really an SLC file\n";
+    vt_write_file(bad, bad_text, strlen(bad_text));
     const char *fresh = out_file("keep-fresh.png");
     unlink(fresh);
     run_result r = run_cli("render", bad, "-o", fresh, "--size", "64x48");
@@ -524,6 +526,78 @@ test_render_failure_keeps_output(void **state) {
     assert_one_error_line(&r);
     assert_contains(r.err, "no-dir/x.png");
     free_result(&r);
+}
+
+/* Writes a scene file showing neghip.slc (66^3, grid 0..65) from -y, @p w x @p h. */
+static void
+write_scene(const char *path, const char *leading, int w, int h) {
+    char text[2048];
+    int n =
+        snprintf(text, sizeof text,
+                 "%s{\n"
+                 "  \"view\": {\"eye\": [32.5, -180, 32.5], \"at\": [32.5, 32.5, 32.5],\n"
+                 "           \"up\": [0, 0, 1], \"fov\": 30, \"width\": %d, \"height\": %d},\n"
+                 "  \"lights\": [{\"type\": \"directional\", \"direction\": [0, 1, 0]}],\n"
+                 "  \"objects\": [{\"file\": \"%s\", \"mode\": \"composite\",\n"
+                 "    \"transfer_function\": {\"opacity\": [[20, 0], [120, 0.8]],\n"
+                 "                          \"color\": [[20, [1, 0.5, 0.2]], [120, [1, 1, 1]]]}}]\n"
+                 "}\n",
+                 leading, w, h, vt_data("volumes/neghip.slc"));
+    assert_true(n > 0 && (size_t)n < sizeof text);
+    vt_write_file(path, text, (size_t)n);
+}
+
+static void
+test_render_scene(void **state) {
+    (void)state;
+    const char *scene = out_file("scene.json");
+    write_scene(scene, "", 40, 30);
+    const char *png = out_file("scene.png");
+    unlink(png);
+    run_result r = run_cli("render", scene, "-o", png);
+    if (r.status != 0)
+        fail_msg("exit %d: %s", r.status, r.err);
+    assert_contains(r.out, "(40x30, ");
+    free_result(&r);
+    check_png(png, 40, 30); /* the scene's own size */
+
+    /* overrides: size, view and mode; content-detected scene without .json */
+    const char *txt = out_file("scene.txt");
+    write_scene(txt, "  \n\t", 40, 30);
+    const char *png2 = out_file("scene-override.png");
+    r = run_cli("render", txt, "-o", png2, "--size", "24x20", "--azimuth", "40", "--zoom", "2",
+                "--mode", "mip", "--tf", "0:200");
+    if (r.status != 0)
+        fail_msg("exit %d: %s", r.status, r.err);
+    assert_contains(r.out, "(24x20, ");
+    free_result(&r);
+    check_png(png2, 24, 20);
+
+    /* --zoom changes the picture */
+    const char *a = out_file("scene-a.png"), *b = out_file("scene-b.png");
+    r = run_cli("render", scene, "-o", a, "--size", "32x32");
+    assert_int_equal(r.status, 0);
+    free_result(&r);
+    r = run_cli("render", scene, "-o", b, "--size", "32x32", "--zoom", "2");
+    assert_int_equal(r.status, 0);
+    free_result(&r);
+    vv_image *ia, *ib;
+    vt_ok(vv_image_read_png(&ia, a));
+    vt_ok(vv_image_read_png(&ib, b));
+    assert_true(isfinite(vv_image_psnr(ia, ib))); /* --zoom changed the picture */
+    vv_image_free(ia);
+    vv_image_free(ib);
+
+    /* a broken scene: exit 1, one line naming the file */
+    const char *broken = out_file("broken.json");
+    static const char broken_text[] = "{\"view\": {\"fov\": \"wide\"}}\n";
+    vt_write_file(broken, broken_text, strlen(broken_text));
+    r = run_cli("render", broken, "-o", out_file("broken.png"));
+    assert_int_equal(r.status, 1);
+    assert_one_error_line(&r);
+    assert_contains(r.err, "broken.json");
+    free_result(&r);
+    assert_false(file_exists(out_file("broken.png")));
 }
 
 /* ---- convert ----------------------------------------------------------------------- */
@@ -634,6 +708,7 @@ main(void) {
         cmocka_unit_test(test_info_raw),
         cmocka_unit_test(test_render_png),
         cmocka_unit_test(test_render_failure_keeps_output),
+        cmocka_unit_test(test_render_scene),
         cmocka_unit_test(test_convert_roundtrip),
         cmocka_unit_test(test_convert_rescale_and_strict),
     };
