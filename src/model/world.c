@@ -1,0 +1,119 @@
+/*
+ * The World: lights, objects, the current view, global cut planes and
+ * global shading (the paper's abstract model, section 3).
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "volvis/model.h"
+
+vv_status
+vv_world_new(vv_world **out) {
+    if (!out)
+        return vv_error_set(VV_ERR_INVALID, "world: NULL output");
+    *out = NULL;
+    vv_world *w = calloc(1, sizeof *w);
+    if (!w)
+        return vv_error_set(VV_ERR_NOMEM, "world: out of memory");
+    w->view.eye = vv_vec3_make(0, -1000, 0);
+    w->view.at = vv_vec3_make(0, 0, 0);
+    w->view.up = vv_vec3_make(0, 0, 1);
+    w->view.fov = vv_deg_to_rad(30.0);
+    w->view.ortho_height = 500.0;
+    w->view.projection = VV_PROJECTION_PERSPECTIVE;
+    w->view.width = 512;
+    w->view.height = 512;
+    w->ambient = vv_vec3_make(1, 1, 1);
+    w->background = vv_vec3_make(0, 0, 0);
+    *out = w;
+    return VV_OK;
+}
+
+void
+vv_world_free(vv_world *w) {
+    if (!w)
+        return;
+    for (int i = 0; i < w->n_objects; i++)
+        vv_object_free(w->objects[i]);
+    free(w->objects);
+    free(w);
+}
+
+vv_status
+vv_world_add_object(vv_world *w, vv_object *obj) {
+    if (!w || !obj) {
+        vv_object_free(obj);
+        return vv_error_set(VV_ERR_INVALID, "world: NULL %s", w ? "object" : "world");
+    }
+    if (w->n_objects >= w->cap_objects) {
+        if (w->cap_objects > (1 << 20)) {
+            vv_object_free(obj);
+            return vv_error_set(VV_ERR_LIMIT, "world: more than %d objects", w->cap_objects);
+        }
+        int cap = w->cap_objects ? 2 * w->cap_objects : 4;
+        vv_object **p = realloc(w->objects, (size_t)cap * sizeof *p);
+        if (!p) {
+            vv_object_free(obj);
+            return vv_error_set(VV_ERR_NOMEM, "world: out of memory");
+        }
+        w->objects = p;
+        w->cap_objects = cap;
+    }
+    w->objects[w->n_objects++] = obj;
+    return VV_OK;
+}
+
+vv_status
+vv_world_add_light(vv_world *w, const vv_light *light) {
+    if (!w || !light)
+        return vv_error_set(VV_ERR_INVALID, "world: NULL %s", w ? "light" : "world");
+    if (w->n_lights >= VV_MAX_LIGHTS)
+        return vv_error_set(VV_ERR_LIMIT, "world: more than %d lights", VV_MAX_LIGHTS);
+    w->lights[w->n_lights++] = *light;
+    return VV_OK;
+}
+
+vv_status
+vv_world_add_cut_plane(vv_world *w, vv_vec3 point, vv_vec3 normal) {
+    if (!w)
+        return vv_error_set(VV_ERR_INVALID, "world: NULL world");
+    double len = vv_vec3_length(normal);
+    if (!(len > 0.0) || !isfinite(len) || !isfinite(point.x) || !isfinite(point.y) ||
+        !isfinite(point.z))
+        return vv_error_set(VV_ERR_INVALID, "world: cut plane normal (%g, %g, %g) is not usable",
+                            normal.x, normal.y, normal.z);
+    if (w->n_cut_planes >= VV_MAX_CUT_PLANES)
+        return vv_error_set(VV_ERR_LIMIT, "world: more than %d global cut planes",
+                            VV_MAX_CUT_PLANES);
+    w->cut_planes[w->n_cut_planes].point = point;
+    w->cut_planes[w->n_cut_planes].normal = vv_vec3_scale(normal, 1.0 / len);
+    w->n_cut_planes++;
+    return VV_OK;
+}
+
+vv_box
+vv_world_bounds(const vv_world *w) {
+    vv_box b = {{0, 0, 0}, {0, 0, 0}};
+    if (!w)
+        return b;
+    int any = 0;
+    for (int i = 0; i < w->n_objects; i++) {
+        const vv_object *o = w->objects[i];
+        if (!o || !o->visible || !o->volume)
+            continue;
+        vv_box ob = vv_object_world_box(o);
+        if (!any) {
+            b = ob;
+            any = 1;
+            continue;
+        }
+        b.min.x = fmin(b.min.x, ob.min.x);
+        b.min.y = fmin(b.min.y, ob.min.y);
+        b.min.z = fmin(b.min.z, ob.min.z);
+        b.max.x = fmax(b.max.x, ob.max.x);
+        b.max.y = fmax(b.max.y, ob.max.y);
+        b.max.z = fmax(b.max.z, ob.max.z);
+    }
+    return b;
+}
