@@ -85,7 +85,7 @@ cli_render_usage(FILE *out) {
             "Examples:\n"
             "  volvis render ../shared/data/volumes/ct_head.nrrd --tf 100:1500 -o head.png\n"
             "  volvis render ../shared/data/volumes/neghip.slc --mode mip --azimuth 30 -o mip.png\n"
-            "  volvis render examples/figure3.json --size 1024x1024 -o figure3.png\n");
+            "  volvis render scene.json --size 1024x1024 --azimuth 45 -o scene.png\n");
 }
 
 static int
