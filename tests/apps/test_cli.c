@@ -372,6 +372,18 @@ test_info_raw(void **state) {
     assert_contains(r.out, "spacing:      0.5 x 1 x 2");
     assert_contains(r.out, "range:        0 .. 2300\n");
     assert_contains(r.out, "mean:         1150 ");
+    /* exact percentiles of the 24 values 0, 100, ..., 2300 */
+    assert_contains(r.out, "percentiles:  1%: 0  5%: 100  50%: 1100  95%: 2200  99%: 2300\n");
+    free_result(&r);
+
+    /* four histogram bins of six values each */
+    r = run_cli("info", "--bins", "4", "--raw", "4x3x2:u16:be", raw);
+    assert_int_equal(r.status, 0);
+    int quarters = 0;
+    for (const char *p = r.out; (p = strstr(p, " 6  25.00% ")); p++)
+        quarters++;
+    if (quarters != 4)
+        fail_msg("expected 4 bins of 6 voxels:\n%s", r.out);
     free_result(&r);
 
     /* --raw=... form, a header to skip, the options in another order */
@@ -472,6 +484,35 @@ test_render_png(void **state) {
         fail_msg("exit %d: %s", r.status, r.err);
     free_result(&r);
     check_png(iso, 32, 32);
+
+    /* --iso alone implies --mode iso; it differs from composite */
+    const char *iso2 = out_file("neghip-iso2.png");
+    const char *comp = out_file("neghip-comp.png");
+    r = run_cli("render", vt_data("volumes/neghip.slc"), "-o", iso2, "--size", "32x32", "--mode",
+                "iso", "--iso", "60");
+    assert_int_equal(r.status, 0);
+    free_result(&r);
+    r = run_cli("render", vt_data("volumes/neghip.slc"), "-o", comp, "--size", "32x32");
+    assert_int_equal(r.status, 0);
+    free_result(&r);
+    vv_image *i1, *i2, *i3;
+    vt_ok(vv_image_read_png(&i1, iso));
+    vt_ok(vv_image_read_png(&i2, iso2));
+    vt_ok(vv_image_read_png(&i3, comp));
+    assert_true(isinf(vv_image_psnr(i1, i2)));
+    assert_true(isfinite(vv_image_psnr(i1, i3)));
+    vv_image_free(i1);
+    vv_image_free(i2);
+    vv_image_free(i3);
+
+    /* the real CT head with the documented transfer function */
+    const char *ct = out_file("ct_head.png");
+    r = run_cli("render", vt_data("volumes/ct_head.nrrd"), "--tf", "100:1500", "--size", "48x40",
+                "-o", ct);
+    if (r.status != 0)
+        fail_msg("exit %d: %s", r.status, r.err);
+    free_result(&r);
+    check_png(ct, 48, 40);
 }
 
 /* Names in the output directory that start with @p prefix. */
