@@ -58,6 +58,9 @@ teem_error(vv_status s, const char *what) {
         if (colon && colon[2] && !memchr(line, ' ', (size_t)(colon - line)))
             line = colon + 2;
         why = line;
+        /* a detached data file that is missing or unreadable is an I/O error */
+        if (s == VV_ERR_FORMAT && strstr(why, "couldn't open"))
+            s = VV_ERR_IO;
     }
     s = vv_error_set(s, "%s%s%s", what, why[0] ? ": " : "", why);
     free(msg);

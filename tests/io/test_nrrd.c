@@ -382,11 +382,11 @@ test_bad_input(void **state) {
     /* missing detached data file, and a missing file of a pattern */
     write_text(out_path("nodata.nhdr"), "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\n"
                                         "encoding: raw\ndata file: nowhere.raw\n");
-    expect_error(out_path("nodata.nhdr"), VV_ERR_FORMAT);
+    expect_error(out_path("nodata.nhdr"), VV_ERR_IO);
     write_text(out_path("nopat.nhdr"), "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\n"
                                        "encoding: raw\ndata file: nopat.%d 1 2 1\n");
     write_text(out_path("nopat.1"), "abcd");
-    expect_error(out_path("nopat.nhdr"), VV_ERR_FORMAT);
+    expect_error(out_path("nopat.nhdr"), VV_ERR_IO);
 
     /* 4-D data that is not a volume, and an unsupported type */
     write_text(out_path("vec.nrrd"), "NRRD0004\ntype: uchar\ndimension: 4\nsizes: 3 2 2 2\n"
