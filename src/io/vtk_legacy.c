@@ -1,0 +1,361 @@
+/*
+ * VTK legacy files ("# vtk DataFile Version x.x"), DATASET
+ * STRUCTURED_POINTS with one scalar array, ASCII or BINARY (big-endian).
+ */
+#include <ctype.h>
+#include <errno.h>
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/types.h>
+
+#include "core/internal.h"
+#include "volvis/io.h"
+
+#define VTK_LINE_MAX 1024
+#define VTK_TOKEN_MAX 256
+
+typedef struct vtk_in {
+    FILE *fp;
+    uint64_t size;
+} vtk_in;
+
+static uint64_t
+vtk_remaining(const vtk_in *in) {
+    off_t pos = ftello(in->fp);
+    if (pos < 0 || (uint64_t)pos > in->size)
+        return 0;
+    return in->size - (uint64_t)pos;
+}
+
+/* Reads one line without its end-of-line; 0 at end of file. */
+static int
+vtk_line(vtk_in *in, char *buf, size_t cap) {
+    size_t n = 0;
+    int c;
+    while ((c = getc(in->fp)) != EOF && c != '\n') {
+        if (n + 1 < cap)
+            buf[n++] = (char)c;
+    }
+    if (n > 0 && buf[n - 1] == '\r')
+        n--;
+    buf[n] = '\0';
+    return c != EOF || n > 0;
+}
+
+/* Next whitespace-separated token; 0 at end of file. */
+static int
+vtk_token(vtk_in *in, char *buf, size_t cap) {
+    int c;
+    size_t n = 0;
+    do {
+        c = getc(in->fp);
+    } while (c != EOF && isspace(c));
+    while (c != EOF && !isspace(c)) {
+        if (n + 1 < cap)
+            buf[n++] = (char)c;
+        else
+            return vv_error_set(VV_ERR_FORMAT, "token too long"), -1;
+        c = getc(in->fp);
+    }
+    if (c != EOF)
+        ungetc(c, in->fp);
+    buf[n] = '\0';
+    return n > 0;
+}
+
+/* Reads a token that must be present, for keywords and their arguments. */
+static vv_status
+vtk_need(vtk_in *in, char *buf, size_t cap, const char *what) {
+    int r = vtk_token(in, buf, cap);
+    if (r < 0)
+        return VV_ERR_FORMAT;
+    if (r == 0)
+        return vv_error_set(VV_ERR_FORMAT, "%s: missing (truncated header)", what);
+    return VV_OK;
+}
+
+static vv_status
+vtk_need_double(vtk_in *in, const char *what, double *out) {
+    char buf[VTK_TOKEN_MAX];
+    vv_status s = vtk_need(in, buf, sizeof buf, what);
+    if (s != VV_OK)
+        return s;
+    char *end;
+    *out = strtod(buf, &end);
+    if (*end != '\0' || !isfinite(*out))
+        return vv_error_set(VV_ERR_FORMAT, "%s: expected a number, got \"%s\"", what, buf);
+    return VV_OK;
+}
+
+static vv_status
+vtk_need_long(vtk_in *in, const char *what, long *out) {
+    char buf[VTK_TOKEN_MAX];
+    vv_status s = vtk_need(in, buf, sizeof buf, what);
+    if (s != VV_OK)
+        return s;
+    char *end;
+    errno = 0;
+    *out = strtol(buf, &end, 10);
+    if (*end != '\0' || errno == ERANGE)
+        return vv_error_set(VV_ERR_FORMAT, "%s: expected an integer, got \"%s\"", what, buf);
+    return VV_OK;
+}
+
+static vv_status
+vtk_parse_type(const char *s, vv_voxel_type *t) {
+    static const struct {
+        const char *name;
+        vv_voxel_type type;
+    } map[] = {{"unsigned_char", VV_U8},  {"char", VV_I8},
+               {"signed_char", VV_I8},    {"unsigned_short", VV_U16},
+               {"short", VV_I16},         {"unsigned_int", VV_U32},
+               {"int", VV_I32},           {"float", VV_F32},
+               {"double", VV_F64},        {"vtktypeuint8", VV_U8},
+               {"vtktypeint8", VV_I8},    {"vtktypeuint16", VV_U16},
+               {"vtktypeint16", VV_I16},  {"vtktypeuint32", VV_U32},
+               {"vtktypeint32", VV_I32},  {"vtktypefloat32", VV_F32},
+               {"vtktypefloat64", VV_F64}};
+    for (size_t i = 0; i < sizeof map / sizeof map[0]; i++)
+        if (!strcasecmp(s, map[i].name)) {
+            *t = map[i].type;
+            return VV_OK;
+        }
+    return vv_error_set(VV_ERR_UNSUPPORTED, "scalar type %s is not supported", s);
+}
+
+/* Stores one ASCII value into voxel @p i, rejecting values the type cannot
+   hold rather than silently clamping them. */
+static vv_status
+vtk_store(void *data, vv_voxel_type t, uint64_t i, const char *tok) {
+    char *end;
+    double x = strtod(tok, &end);
+    if (*end != '\0' || end == tok)
+        return vv_error_set(VV_ERR_FORMAT, "value %llu: expected a number, got \"%s\"",
+                            (unsigned long long)i, tok);
+    static const double lo[] = {0, -128, 0, -32768, 0, -2147483648.0};
+    static const double hi[] = {255, 127, 65535, 32767, 4294967295.0, 2147483647.0};
+    if (t <= VV_I32 && (!(x >= lo[t] && x <= hi[t]) || x != floor(x)))
+        return vv_error_set(VV_ERR_FORMAT, "value %llu: \"%s\" is not a valid %s",
+                            (unsigned long long)i, tok, vv_voxel_type_name(t));
+    switch (t) {
+    case VV_U8:
+        ((uint8_t *)data)[i] = (uint8_t)x;
+        break;
+    case VV_I8:
+        ((int8_t *)data)[i] = (int8_t)x;
+        break;
+    case VV_U16:
+        ((uint16_t *)data)[i] = (uint16_t)x;
+        break;
+    case VV_I16:
+        ((int16_t *)data)[i] = (int16_t)x;
+        break;
+    case VV_U32:
+        ((uint32_t *)data)[i] = (uint32_t)x;
+        break;
+    case VV_I32:
+        ((int32_t *)data)[i] = (int32_t)x;
+        break;
+    case VV_F32:
+        if (isfinite(x) && fabs(x) > FLT_MAX)
+            return vv_error_set(VV_ERR_FORMAT, "value %llu: \"%s\" is out of float range",
+                                (unsigned long long)i, tok);
+        ((float *)data)[i] = (float)x;
+        break;
+    case VV_F64:
+        ((double *)data)[i] = x;
+        break;
+    }
+    return VV_OK;
+}
+
+static vv_status
+vtk_read_stream(vv_volume **out, vtk_in *in) {
+    char line[VTK_LINE_MAX], tok[VTK_TOKEN_MAX];
+    vv_status s;
+    if (!vtk_line(in, line, sizeof line))
+        return vv_error_set(VV_ERR_FORMAT, "empty file");
+    if (strncmp(line, "# vtk DataFile Version", 22) != 0)
+        return vv_error_set(VV_ERR_FORMAT, "not a VTK legacy file (no \"# vtk DataFile\" line)");
+    if (!vtk_line(in, line, sizeof line))
+        return vv_error_set(VV_ERR_FORMAT, "truncated header (no title line)");
+    /* The format keyword is a token: some writers put a blank line before it. */
+    int r = vtk_token(in, tok, sizeof tok);
+    if (r < 0)
+        return VV_ERR_FORMAT;
+    if (r == 0)
+        return vv_error_set(VV_ERR_FORMAT, "truncated header (no ASCII/BINARY line)");
+    const char *fmt = tok;
+    int binary;
+    if (!strcasecmp(fmt, "BINARY"))
+        binary = 1;
+    else if (!strcasecmp(fmt, "ASCII"))
+        binary = 0;
+    else
+        return vv_error_set(VV_ERR_FORMAT, "third line is \"%.40s\", expected ASCII or BINARY",
+                            fmt);
+
+    long dims[3] = {0, 0, 0};
+    int have_dims = 0, have_dataset = 0;
+    double spacing[3] = {1, 1, 1}, origin[3] = {0, 0, 0};
+    long npoints = -1;
+    for (;;) {
+        if ((s = vtk_need(in, tok, sizeof tok, "POINT_DATA")) != VV_OK)
+            return s;
+        if (!strcasecmp(tok, "DATASET")) {
+            if ((s = vtk_need(in, tok, sizeof tok, "DATASET type")) != VV_OK)
+                return s;
+            if (strcasecmp(tok, "STRUCTURED_POINTS"))
+                return vv_error_set(VV_ERR_UNSUPPORTED,
+                                    "DATASET %s is not supported (only STRUCTURED_POINTS)", tok);
+            have_dataset = 1;
+        } else if (!strcasecmp(tok, "DIMENSIONS")) {
+            for (int a = 0; a < 3; a++)
+                if ((s = vtk_need_long(in, "DIMENSIONS", &dims[a])) != VV_OK)
+                    return s;
+            have_dims = 1;
+        } else if (!strcasecmp(tok, "SPACING") || !strcasecmp(tok, "ASPECT_RATIO")) {
+            for (int a = 0; a < 3; a++)
+                if ((s = vtk_need_double(in, "SPACING", &spacing[a])) != VV_OK)
+                    return s;
+            for (int a = 0; a < 3; a++)
+                if (!(spacing[a] > 0))
+                    return vv_error_set(VV_ERR_FORMAT, "bad SPACING %g %g %g", spacing[0],
+                                        spacing[1], spacing[2]);
+        } else if (!strcasecmp(tok, "ORIGIN")) {
+            for (int a = 0; a < 3; a++)
+                if ((s = vtk_need_double(in, "ORIGIN", &origin[a])) != VV_OK)
+                    return s;
+        } else if (!strcasecmp(tok, "POINT_DATA")) {
+            if ((s = vtk_need_long(in, "POINT_DATA", &npoints)) != VV_OK)
+                return s;
+            break;
+        } else if (!strcasecmp(tok, "CELL_DATA") || !strcasecmp(tok, "FIELD")) {
+            return vv_error_set(VV_ERR_UNSUPPORTED, "%s before POINT_DATA is not supported", tok);
+        } else {
+            return vv_error_set(VV_ERR_FORMAT, "unexpected keyword \"%.40s\" in the header", tok);
+        }
+    }
+    if (!have_dataset)
+        return vv_error_set(VV_ERR_FORMAT, "no DATASET line");
+    if (!have_dims)
+        return vv_error_set(VV_ERR_FORMAT, "no DIMENSIONS");
+    if (dims[0] < 1 || dims[1] < 1 || dims[2] < 1)
+        return vv_error_set(VV_ERR_FORMAT, "bad DIMENSIONS %ld %ld %ld", dims[0], dims[1], dims[2]);
+    if (dims[0] > VV_VOLUME_MAX_DIM || dims[1] > VV_VOLUME_MAX_DIM || dims[2] > VV_VOLUME_MAX_DIM)
+        return vv_error_set(VV_ERR_LIMIT, "DIMENSIONS %ld %ld %ld over the limit of %d per axis",
+                            dims[0], dims[1], dims[2], VV_VOLUME_MAX_DIM);
+    int idims[3] = {(int)dims[0], (int)dims[1], (int)dims[2]};
+    uint64_t count = (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2];
+    if (npoints < 0 || (uint64_t)npoints != count)
+        return vv_error_set(VV_ERR_FORMAT, "POINT_DATA %ld does not match DIMENSIONS (%llu)",
+                            npoints, (unsigned long long)count);
+
+    /* SCALARS name type [ncomp] on one line. */
+    if ((s = vtk_need(in, tok, sizeof tok, "SCALARS")) != VV_OK)
+        return s;
+    if (strcasecmp(tok, "SCALARS"))
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "point data \"%.40s\" is not supported (only SCALARS)", tok);
+    if (!vtk_line(in, line, sizeof line))
+        return vv_error_set(VV_ERR_FORMAT, "SCALARS: truncated");
+    char name[VTK_TOKEN_MAX], tname[VTK_TOKEN_MAX], extra[VTK_TOKEN_MAX];
+    long ncomp = 1;
+    int nf = sscanf(line, "%255s %255s %ld %255s", name, tname, &ncomp, extra);
+    if (nf < 2)
+        return vv_error_set(VV_ERR_FORMAT, "SCALARS: expected a name and a type");
+    vv_voxel_type type;
+    if ((s = vtk_parse_type(tname, &type)) != VV_OK)
+        return s;
+    if (nf >= 3 && ncomp != 1)
+        return vv_error_set(VV_ERR_UNSUPPORTED, "SCALARS with %ld components (only 1)", ncomp);
+    uint64_t bytes;
+    if ((s = vv_volume_check_size(idims, type, &bytes)) != VV_OK)
+        return s;
+
+    /* Optional LOOKUP_TABLE line. */
+    off_t mark = ftello(in->fp);
+    if (mark < 0)
+        return vv_error_set(VV_ERR_IO, "cannot tell the position");
+    r = vtk_token(in, tok, sizeof tok);
+    if (r < 0)
+        return VV_ERR_FORMAT;
+    if (r > 0 && !strcasecmp(tok, "LOOKUP_TABLE")) {
+        if (!vtk_line(in, line, sizeof line))
+            return vv_error_set(VV_ERR_FORMAT, "LOOKUP_TABLE: truncated");
+    } else if (fseeko(in->fp, mark, SEEK_SET) != 0) {
+        return vv_error_set(VV_ERR_IO, "cannot seek");
+    }
+
+    /* Every ASCII value takes at least two characters, every binary value
+       its size: check the file can hold the data before allocating it. */
+    uint64_t rest = vtk_remaining(in);
+    if (binary ? rest < bytes : rest < 2 * count - 1)
+        return vv_error_set(
+            VV_ERR_FORMAT,
+            "truncated data: %llu %s values need %s%llu bytes, the file has %llu "
+            "left",
+            (unsigned long long)count, vv_voxel_type_name(type), binary ? "" : "at least ",
+            (unsigned long long)(binary ? bytes : 2 * count - 1), (unsigned long long)rest);
+    vv_volume *v = NULL;
+    if ((s = vv_volume_new(&v, idims, type)) != VV_OK)
+        return s;
+    if (binary) {
+        if (fread(v->data, 1, (size_t)bytes, in->fp) != (size_t)bytes) {
+            vv_volume_free(v);
+            return vv_error_set(VV_ERR_FORMAT, "truncated binary data");
+        }
+        size_t vs = vv_voxel_type_size(type);
+        if (vs > 1 && vv_host_is_little_endian())
+            vv_byteswap(v->data, count, vs);
+    } else {
+        for (uint64_t i = 0; i < count; i++) {
+            r = vtk_token(in, tok, sizeof tok);
+            if (r <= 0) {
+                vv_volume_free(v);
+                if (r < 0)
+                    return vv_error_prefix(VV_ERR_FORMAT, "value %llu", (unsigned long long)i);
+                return vv_error_set(VV_ERR_FORMAT, "truncated data: %llu of %llu values",
+                                    (unsigned long long)i, (unsigned long long)count);
+            }
+            if ((s = vtk_store(v->data, type, i, tok)) != VV_OK) {
+                vv_volume_free(v);
+                return s;
+            }
+        }
+    }
+    for (int a = 0; a < 3; a++) {
+        v->spacing[a] = spacing[a];
+        v->origin[a] = origin[a];
+    }
+    vv_volume_update_range(v);
+    *out = v;
+    return VV_OK;
+}
+
+vv_status
+vv_vtk_read(vv_volume **out, const char *path) {
+    if (!out || !path)
+        return vv_error_set(VV_ERR_INVALID, "vtk: NULL argument");
+    *out = NULL;
+    const char *name = vv_path_basename(path);
+    vtk_in in = {fopen(path, "rb"), 0};
+    if (!in.fp)
+        return vv_error_set(VV_ERR_IO, "vtk: %s: cannot open: %s", name, strerror(errno));
+    vv_status s;
+    if (fseeko(in.fp, 0, SEEK_END) != 0 || ftello(in.fp) < 0) {
+        s = vv_error_set(VV_ERR_IO, "cannot seek: %s", strerror(errno));
+    } else {
+        in.size = (uint64_t)ftello(in.fp);
+        rewind(in.fp);
+        s = vtk_read_stream(out, &in);
+    }
+    fclose(in.fp);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "vtk: %s", name);
+    return VV_OK;
+}
