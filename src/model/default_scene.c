@@ -1,0 +1,333 @@
+/*
+ * The default scene for one volume (what `volvis render FILE` shows): the
+ * volume centred on the origin, a framed perspective view from the front, a
+ * headlight and a transfer function derived from the histogram. The rule is
+ * documented in docs/scene-format.md, "Default scene".
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "model/model_internal.h"
+#include "volvis/model.h"
+
+/* Opacity per smallest voxel spacing at the top of the composite ramp. */
+#define DEFAULT_MAX_OPACITY 0.5
+#define HIST_MAX_BINS 4096
+
+void
+vv_default_scene_options_init(vv_default_scene_options *o) {
+    if (!o)
+        return;
+    memset(o, 0, sizeof *o);
+    o->mode = VV_MODE_COMPOSITE;
+    o->width = 512;
+    o->height = 512;
+    o->zoom = 1.0;
+}
+
+typedef struct hist {
+    int nb;
+    double lo, bw; /* value of the left edge of bin 0, bin width */
+    uint64_t *bins;
+    double total;
+} hist;
+
+static int
+type_is_integer(vv_voxel_type t) {
+    return t != VV_F32 && t != VV_F64;
+}
+
+/* Integer data with few distinct values gets one bin per value. */
+static int
+hist_build(hist *h, const vv_volume *v) {
+    double rmin = v->range[0], rmax = v->range[1];
+    memset(h, 0, sizeof *h);
+    if (!isfinite(rmin) || !isfinite(rmax) || !(rmax > rmin))
+        return 0;
+    double lo = rmin, hi = rmax;
+    int nb = HIST_MAX_BINS;
+    if (type_is_integer(v->type) && rmax - rmin + 1.0 <= HIST_MAX_BINS) {
+        nb = (int)(rmax - rmin) + 1;
+        lo = rmin - 0.5;
+        hi = rmax + 0.5;
+    }
+    h->bins = malloc((size_t)nb * sizeof *h->bins);
+    if (!h->bins)
+        return 0;
+    if (vv_volume_histogram(v, nb, lo, hi, h->bins) != VV_OK) {
+        free(h->bins);
+        h->bins = NULL;
+        vv_error_clear();
+        return 0;
+    }
+    h->nb = nb;
+    h->lo = lo;
+    h->bw = (hi - lo) / nb;
+    for (int i = 0; i < nb; i++)
+        h->total += (double)h->bins[i];
+    if (!(h->total > 0.0)) {
+        free(h->bins);
+        h->bins = NULL;
+        return 0;
+    }
+    return 1;
+}
+
+/* The value below which a count @p target of voxels lies (linear inside a bin). */
+static double
+hist_value_at_count(const hist *h, double target) {
+    double cum = 0.0;
+    for (int i = 0; i < h->nb; i++) {
+        double c = (double)h->bins[i];
+        if (c > 0.0 && cum + c >= target) {
+            double f = (target - cum) / c;
+            if (f < 0.0)
+                f = 0.0;
+            return h->lo + (i + f) * h->bw;
+        }
+        cum += c;
+    }
+    return h->lo + h->nb * h->bw;
+}
+
+static double
+clampd(double x, double lo, double hi) {
+    return x < lo ? lo : (x > hi ? hi : x);
+}
+
+#define COARSE_BINS 64
+
+/*
+ * Number of background voxels. On a coarse histogram (at most 64 bins): the
+ * background peak p is the fullest bin in the lowest quarter of the range
+ * (air in CT, the dark surround in MRI, empty space in synthetic data).
+ * Walking right from p, the valley is the lowest bin before the histogram
+ * first rises clearly above it (by half, and by 0.2% of all voxels) within
+ * the lower half of the range (a spike of saturated values at the top end is
+ * not a tissue); the background is everything up to the middle of the
+ * valley bin. Without a valley, the background is the peak bin and its
+ * falling right flank down to 2% of the peak. 0 when the lowest quarter
+ * holds no clear mode (its fullest coarse bin has < 5% of the voxels).
+ */
+static double
+hist_background(const hist *h) {
+    int nc = h->nb < COARSE_BINS ? h->nb : COARSE_BINS;
+    double c[COARSE_BINS];
+    int first[COARSE_BINS + 1];
+    for (int k = 0; k <= nc; k++)
+        first[k] = (int)((int64_t)k * h->nb / nc);
+    for (int k = 0; k < nc; k++) {
+        c[k] = 0.0;
+        for (int i = first[k]; i < first[k + 1]; i++)
+            c[k] += (double)h->bins[i];
+    }
+    int quarter = nc / 4 > 1 ? nc / 4 : 1;
+    int p = 0;
+    for (int k = 1; k < quarter; k++)
+        if (c[k] > c[p])
+            p = k;
+    if (c[p] < 0.05 * h->total)
+        return 0.0;
+    /* the valley: walking right from p, the lowest bin before the histogram
+     * first rises clearly (by half and by 0.2% of the voxels) above it */
+    int valley = -1;
+    int run_min = p;
+    for (int q = p + 1; q <= nc / 2 && q < nc; q++) {
+        if (c[q] < c[run_min])
+            run_min = q;
+        if (run_min > p && c[q] > 1.5 * c[run_min] + 0.002 * h->total) {
+            valley = run_min;
+            break;
+        }
+    }
+    double mass = 0.0;
+    if (valley >= 0) {
+        int mid = (first[valley] + first[valley + 1]) / 2;
+        for (int i = 0; i < mid; i++)
+            mass += (double)h->bins[i];
+        return mass;
+    }
+    int e = p;
+    while (e + 1 < nc && c[e + 1] <= c[e] && c[e + 1] >= 0.02 * c[p])
+        e++;
+    for (int k = 0; k <= e; k++)
+        mass += c[k];
+    return mass;
+}
+
+static void
+composite_tf(vv_tf *tf, double lo, double hi, double unit) {
+    vv_tf_init(tf);
+    tf->opacity_unit_distance = unit;
+    if (!(hi > lo))
+        hi = lo + 1.0;
+    double mid = 0.5 * (lo + hi);
+    (void)vv_tf_add_opacity(tf, lo, 0.0);
+    (void)vv_tf_add_opacity(tf, hi, DEFAULT_MAX_OPACITY);
+    /* warm map: flesh at the low end through light tan to ivory (bone) */
+    (void)vv_tf_add_color(tf, lo, vv_vec3_make(0.85, 0.55, 0.45));
+    (void)vv_tf_add_color(tf, mid, vv_vec3_make(0.95, 0.85, 0.70));
+    (void)vv_tf_add_color(tf, hi, vv_vec3_make(1.0, 1.0, 0.95));
+}
+
+static void
+grey_tf(vv_tf *tf, double lo, double hi, double unit) {
+    vv_tf_init(tf);
+    tf->opacity_unit_distance = unit;
+    if (!(hi > lo))
+        hi = lo + 1.0;
+    (void)vv_tf_add_opacity(tf, lo, 0.0);
+    (void)vv_tf_add_opacity(tf, hi, 1.0);
+    (void)vv_tf_add_color(tf, lo, vv_vec3_make(0, 0, 0));
+    (void)vv_tf_add_color(tf, hi, vv_vec3_make(1, 1, 1));
+}
+
+static int
+is_projection_mode(vv_render_mode m) {
+    return m == VV_MODE_MIP || m == VV_MODE_MINIP || m == VV_MODE_XRAY;
+}
+
+/* The composite range [lo, hi] and the projection range [plo, phi]. */
+static void
+default_ranges(const vv_volume *v, double *lo, double *hi, double *plo, double *phi) {
+    double rmin = v->range[0], rmax = v->range[1];
+    if (!isfinite(rmin) || !isfinite(rmax)) {
+        rmin = 0.0;
+        rmax = 1.0;
+    }
+    if (!(rmax > rmin))
+        rmax = rmin + 1.0;
+    *lo = rmin + 0.1 * (rmax - rmin);
+    *hi = rmax;
+    *plo = rmin;
+    *phi = rmax;
+    hist h;
+    if (!hist_build(&h, v))
+        return;
+    double bg = hist_background(&h);
+    double fg = h.total - bg;
+    if (fg < 0.001 * h.total) {
+        /* (almost) everything is background: show what is above it */
+        bg = 0.0;
+        fg = h.total;
+    }
+    double l = clampd(hist_value_at_count(&h, bg + 0.02 * fg), rmin, rmax);
+    double u = clampd(hist_value_at_count(&h, bg + 0.995 * fg), rmin, rmax);
+    if (u > l) {
+        *lo = l;
+        *hi = u;
+    }
+    double pl = clampd(hist_value_at_count(&h, 0.01 * h.total), rmin, rmax);
+    double pu = clampd(hist_value_at_count(&h, 0.999 * h.total), rmin, rmax);
+    if (pu > pl) {
+        *plo = pl;
+        *phi = pu;
+    }
+    free(h.bins);
+}
+
+void
+vv_model_default_tf(const vv_volume *v, vv_render_mode mode, vv_tf *tf, double *iso_lo) {
+    double lo, hi, plo, phi;
+    default_ranges(v, &lo, &hi, &plo, &phi);
+    double unit = vv_model_min_spacing(v);
+    if (is_projection_mode(mode))
+        grey_tf(tf, plo, phi, unit);
+    else
+        composite_tf(tf, lo, hi, unit);
+    if (iso_lo)
+        *iso_lo = lo;
+}
+
+vv_status
+vv_world_new_for_volume(vv_world **out, vv_volume *volume, const vv_default_scene_options *opt) {
+    if (!out)
+        return vv_error_set(VV_ERR_INVALID, "default scene: NULL output");
+    *out = NULL;
+    vv_default_scene_options defaults;
+    if (!opt) {
+        vv_default_scene_options_init(&defaults);
+        opt = &defaults;
+    }
+    if (!volume)
+        return vv_error_set(VV_ERR_INVALID, "default scene: NULL volume");
+    if (opt->mode < VV_MODE_COMPOSITE || opt->mode > VV_MODE_ISO)
+        return vv_error_set(VV_ERR_INVALID, "default scene: unknown mode %d", (int)opt->mode);
+    if (opt->width < 1 || opt->width > 32768 || opt->height < 1 || opt->height > 32768)
+        return vv_error_set(VV_ERR_INVALID, "default scene: image size %dx%d outside 1..32768",
+                            opt->width, opt->height);
+    if (!(opt->zoom > 0.0) || !isfinite(opt->zoom))
+        return vv_error_set(VV_ERR_INVALID, "default scene: zoom %g must be > 0", opt->zoom);
+    if (!isfinite(opt->azimuth) || !isfinite(opt->elevation))
+        return vv_error_set(VV_ERR_INVALID, "default scene: azimuth and elevation must be finite");
+    if (opt->has_tf_range &&
+        (!isfinite(opt->tf_lo) || !isfinite(opt->tf_hi) || !(opt->tf_hi > opt->tf_lo)))
+        return vv_error_set(VV_ERR_INVALID, "default scene: transfer function range %g..%g",
+                            opt->tf_lo, opt->tf_hi);
+    if (opt->has_isovalue && !isfinite(opt->isovalue))
+        return vv_error_set(VV_ERR_INVALID, "default scene: isovalue is not finite");
+
+    vv_world *w;
+    vv_status st = vv_world_new(&w);
+    if (st != VV_OK)
+        return st;
+    vv_object *o;
+    st = vv_object_new_volume(&o, volume, "volume");
+    if (st != VV_OK) {
+        vv_world_free(w);
+        return vv_error_prefix(st, "default scene");
+    }
+    o->mode = opt->mode;
+    double iso_lo;
+    vv_model_default_tf(volume, opt->mode, &o->tf, &iso_lo);
+    if (opt->has_tf_range) {
+        double unit = vv_model_min_spacing(volume);
+        if (is_projection_mode(opt->mode))
+            grey_tf(&o->tf, opt->tf_lo, opt->tf_hi, unit);
+        else
+            composite_tf(&o->tf, opt->tf_lo, opt->tf_hi, unit);
+        iso_lo = opt->tf_lo;
+    }
+    o->isovalue = opt->has_isovalue ? opt->isovalue : iso_lo;
+    o->threshold = o->isovalue;
+
+    /* centre the volume's own world box on the origin */
+    vv_box vb = vv_volume_world_box(volume);
+    vv_vec3 c = vv_vec3_scale(vv_vec3_add(vb.min, vb.max), 0.5);
+    o->position = vv_vec3_scale(c, -1.0);
+    st = vv_world_add_object(w, o);
+    if (st != VV_OK) {
+        vv_world_free(w);
+        return st;
+    }
+
+    vv_view *v = &w->view;
+    v->width = opt->width;
+    v->height = opt->height;
+    v->projection = VV_PROJECTION_PERSPECTIVE;
+    v->fov = vv_deg_to_rad(30.0);
+    v->eye = vv_vec3_make(0, -1, 0);
+    v->at = vv_vec3_make(0, 0, 0);
+    v->up = vv_vec3_make(0, 0, 1);
+    vv_box wb = vv_world_bounds(w);
+    vv_view_frame_box(v, wb);
+    vv_view_orbit(v, opt->azimuth, opt->elevation);
+    vv_vec3 off = vv_vec3_sub(v->eye, v->at);
+    v->eye = vv_vec3_add(v->at, vv_vec3_scale(off, 1.0 / opt->zoom));
+    /* a view of the same extent if the user switches to orthographic */
+    v->ortho_height = 2.0 * vv_vec3_length(off) / opt->zoom * tan(0.5 * v->fov);
+
+    vv_light light;
+    memset(&light, 0, sizeof light);
+    light.type = VV_LIGHT_DIRECTIONAL;
+    light.headlight = 1;
+    light.direction = vv_vec3_normalize(vv_vec3_sub(v->at, v->eye));
+    light.color = vv_vec3_make(1, 1, 1);
+    light.intensity = 1.0;
+    (void)vv_world_add_light(w, &light);
+    w->ambient = vv_vec3_make(1, 1, 1);
+    w->background = vv_vec3_make(0, 0, 0);
+    *out = w;
+    return VV_OK;
+}
