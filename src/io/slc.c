@@ -48,6 +48,10 @@ slc_token(slc_in *in, char *buf, size_t cap, const char *what) {
            c != 'X') {
         if (n + 1 >= cap)
             return vv_error_set(VV_ERR_FORMAT, "%s: token too long", what);
+        /* Binary junk never ends up in an error message. */
+        if (c < 0x21 || c > 0x7E)
+            return vv_error_set(VV_ERR_FORMAT, "%s: unexpected byte 0x%02x in the header", what,
+                                (unsigned)c);
         buf[n++] = (char)c;
         c = getc(in->fp);
     }

@@ -55,6 +55,11 @@ vtk_token(vtk_in *in, char *buf, size_t cap) {
         c = getc(in->fp);
     } while (c != EOF && isspace(c));
     while (c != EOF && !isspace(c)) {
+        /* Binary junk never ends up in an error message. */
+        if (c < 0x21 || c > 0x7E)
+            return vv_error_set(VV_ERR_FORMAT, "unexpected byte 0x%02x in a text part",
+                                (unsigned)c),
+                   -1;
         if (n + 1 < cap)
             buf[n++] = (char)c;
         else
@@ -186,7 +191,7 @@ vtk_read_stream(vv_volume **out, vtk_in *in) {
     /* The format keyword is a token: some writers put a blank line before it. */
     int r = vtk_token(in, tok, sizeof tok);
     if (r < 0)
-        return VV_ERR_FORMAT;
+        return vv_error_prefix(VV_ERR_FORMAT, "ASCII/BINARY line");
     if (r == 0)
         return vv_error_set(VV_ERR_FORMAT, "truncated header (no ASCII/BINARY line)");
     const char *fmt = tok;
