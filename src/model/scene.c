@@ -1,0 +1,1348 @@
+/*
+ * Scene files: the World as JSON (schema in docs/scene-format.md), read with
+ * Jansson. Scene loading is the one place where the model calls io
+ * (vv_volume_load): a scene file names its volume files.
+ *
+ * Error positions: Jansson reports line:column for syntax errors but keeps
+ * no positions for values, so a schema error is located by a second, lazy
+ * pass over the raw text (scan_locate) that walks to the offending path
+ * ("objects[0].transfer_function") and reports where its key (or, for an
+ * array element, its value) starts. This pass runs only when there is an
+ * error to report.
+ */
+#include <jansson.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/internal.h"
+#include "model/model_internal.h"
+#include "volvis/io.h"
+#include "volvis/model.h"
+
+#define SCENE_MAX_BYTES (16u << 20)
+#define PATH_MAX_LEN 256
+#define IMAGE_MAX_SIDE 32768
+
+typedef struct sctx {
+    const char *path; /* scene file as given */
+    const char *text;
+    size_t len;
+} sctx;
+
+/* ---- locating a path in the raw text ---------------------------------- */
+
+typedef struct scan {
+    const char *s;
+    size_t n, i;
+    int line, col;
+    const char *target;
+    int found, fline, fcol;
+} scan;
+
+static int
+sc_peek(const scan *sc) {
+    return sc->i < sc->n ? (unsigned char)sc->s[sc->i] : -1;
+}
+
+static void
+sc_adv(scan *sc) {
+    if (sc->i >= sc->n)
+        return;
+    unsigned char ch = (unsigned char)sc->s[sc->i++];
+    if (ch == '\n') {
+        sc->line++;
+        sc->col = 1;
+    } else if ((ch & 0xC0) != 0x80) {
+        /* columns count characters: UTF-8 continuation bytes add nothing */
+        sc->col++;
+    }
+}
+
+static void
+sc_ws(scan *sc) {
+    for (;;) {
+        int ch = sc_peek(sc);
+        if (ch == ' ' || ch == '\t' || ch == '\n' || ch == '\r')
+            sc_adv(sc);
+        else
+            return;
+    }
+}
+
+/* Consumes a string at the cursor, copying its (roughly decoded) text. */
+static void
+sc_string(scan *sc, char *buf, size_t cap) {
+    size_t k = 0;
+    sc_adv(sc); /* opening quote */
+    while (sc->i < sc->n) {
+        int ch = sc_peek(sc);
+        if (ch == '"') {
+            sc_adv(sc);
+            break;
+        }
+        if (ch == '\\') {
+            sc_adv(sc);
+            ch = sc_peek(sc);
+            if (ch < 0)
+                break;
+        }
+        if (buf && k + 1 < cap)
+            buf[k++] = (char)ch;
+        sc_adv(sc);
+    }
+    if (buf && cap)
+        buf[k] = '\0';
+}
+
+/* Skips one value without recursion. */
+static void
+sc_skip(scan *sc) {
+    int depth = 0;
+    do {
+        sc_ws(sc);
+        int ch = sc_peek(sc);
+        if (ch < 0)
+            return;
+        if (ch == '"') {
+            sc_string(sc, NULL, 0);
+        } else if (ch == '{' || ch == '[') {
+            depth++;
+            sc_adv(sc);
+        } else if (ch == '}' || ch == ']') {
+            depth--;
+            sc_adv(sc);
+        } else if (ch == ',' || ch == ':') {
+            sc_adv(sc);
+        } else {
+            while (sc->i < sc->n) {
+                ch = sc_peek(sc);
+                if (ch == ',' || ch == ']' || ch == '}' || ch == ' ' || ch == '\n' || ch == '\t' ||
+                    ch == '\r')
+                    break;
+                sc_adv(sc);
+            }
+        }
+    } while (depth > 0 && sc->i < sc->n);
+}
+
+static int
+path_is_prefix(const char *path, const char *target) {
+    size_t l = strlen(path);
+    if (l == 0)
+        return 1;
+    return strncmp(path, target, l) == 0 && (target[l] == '.' || target[l] == '[');
+}
+
+static void
+sc_found(scan *sc) {
+    sc->found = 1;
+    sc->fline = sc->line;
+    sc->fcol = sc->col;
+}
+
+/* Walks the value at the cursor whose path is @p path, descending only
+ * towards the target; the recursion depth is the target's depth. */
+static void
+sc_value(scan *sc, const char *path) {
+    sc_ws(sc);
+    if (strcmp(path, sc->target) == 0) {
+        sc_found(sc);
+        return;
+    }
+    int ch = sc_peek(sc);
+    if (!path_is_prefix(path, sc->target) || (ch != '{' && ch != '[')) {
+        sc_skip(sc);
+        return;
+    }
+    char child[2 * PATH_MAX_LEN + 32];
+    if (ch == '{') {
+        sc_adv(sc);
+        for (;;) {
+            sc_ws(sc);
+            ch = sc_peek(sc);
+            if (ch != '"') {
+                if (ch == '}')
+                    sc_adv(sc);
+                return;
+            }
+            int kl = sc->line, kc = sc->col;
+            char key[PATH_MAX_LEN];
+            sc_string(sc, key, sizeof key);
+            if (path[0])
+                snprintf(child, sizeof child, "%s.%s", path, key);
+            else
+                snprintf(child, sizeof child, "%s", key);
+            sc_ws(sc);
+            if (sc_peek(sc) == ':')
+                sc_adv(sc);
+            if (strcmp(child, sc->target) == 0) {
+                sc->found = 1;
+                sc->fline = kl;
+                sc->fcol = kc;
+                return;
+            }
+            sc_value(sc, child);
+            if (sc->found)
+                return;
+            sc_ws(sc);
+            if (sc_peek(sc) == ',')
+                sc_adv(sc);
+            else {
+                if (sc_peek(sc) == '}')
+                    sc_adv(sc);
+                return;
+            }
+        }
+    } else {
+        sc_adv(sc);
+        for (int idx = 0;; idx++) {
+            sc_ws(sc);
+            ch = sc_peek(sc);
+            if (ch < 0 || ch == ']') {
+                sc_adv(sc);
+                return;
+            }
+            snprintf(child, sizeof child, "%s[%d]", path, idx);
+            sc_value(sc, child);
+            if (sc->found)
+                return;
+            sc_ws(sc);
+            if (sc_peek(sc) == ',')
+                sc_adv(sc);
+            else {
+                if (sc_peek(sc) == ']')
+                    sc_adv(sc);
+                return;
+            }
+        }
+    }
+}
+
+/* Strips the last ".key" or "[i]" of a path in place; 0 when nothing is left. */
+static int
+path_parent(char *p) {
+    size_t l = strlen(p);
+    if (l == 0)
+        return 0;
+    while (l > 0 && p[l - 1] != '.' && p[l - 1] != '[')
+        l--;
+    if (l == 0) {
+        p[0] = '\0';
+        return 1;
+    }
+    p[l - 1] = '\0';
+    return 1;
+}
+
+/* Line and column of @p path in the scene text (its nearest ancestor's when
+ * the path itself cannot be found). */
+static void
+scene_locate(const sctx *c, const char *path, int *line, int *col) {
+    char p[PATH_MAX_LEN];
+    snprintf(p, sizeof p, "%s", path ? path : "");
+    for (;;) {
+        scan sc = {c->text, c->len, 0, 1, 1, p, 0, 1, 1};
+        sc_value(&sc, "");
+        if (sc.found) {
+            *line = sc.fline;
+            *col = sc.fcol;
+            return;
+        }
+        if (!path_parent(p))
+            break;
+    }
+    *line = 1;
+    *col = 1;
+}
+
+/* ---- error reporting ---------------------------------------------------- */
+
+static vv_status serr(const sctx *c, const char *path, const char *fmt, ...) VV_PRINTF(3, 4);
+
+static vv_status
+serr(const sctx *c, const char *path, const char *fmt, ...) {
+    char msg[768];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    int line, col;
+    scene_locate(c, path, &line, &col);
+    if (path && path[0])
+        return vv_error_set(VV_ERR_FORMAT, "%s:%d:%d: %s: %s", c->path, line, col, path, msg);
+    return vv_error_set(VV_ERR_FORMAT, "%s:%d:%d: %s", c->path, line, col, msg);
+}
+
+static const char *
+json_kind(const json_t *v) {
+    switch (json_typeof(v)) {
+    case JSON_OBJECT:
+        return "an object";
+    case JSON_ARRAY:
+        return "an array";
+    case JSON_STRING:
+        return "a string";
+    case JSON_INTEGER:
+    case JSON_REAL:
+        return "a number";
+    case JSON_TRUE:
+    case JSON_FALSE:
+        return "a boolean";
+    default:
+        return "null";
+    }
+}
+
+/* dst = a + sep + b, truncated to PATH_MAX_LEN - 1 bytes (a truncated path
+ * only makes an error position less precise). */
+static void
+path_cat(char *dst, const char *a, const char *sep, const char *b) {
+    size_t k = 0;
+    const char *parts[3] = {a, sep, b};
+    for (int p = 0; p < 3; p++)
+        for (const char *q = parts[p]; q && *q && k + 1 < PATH_MAX_LEN; q++)
+            dst[k++] = *q;
+    dst[k] = '\0';
+}
+
+static void
+path_key(char *dst, const char *parent, const char *key) {
+    if (parent && parent[0])
+        path_cat(dst, parent, ".", key);
+    else
+        path_cat(dst, "", "", key);
+}
+
+static void
+path_index(char *dst, const char *parent, size_t i) {
+    char idx[32];
+    snprintf(idx, sizeof idx, "[%zu]", i);
+    path_cat(dst, parent, "", idx);
+}
+
+/* Optimal string alignment distance (edits incl. transpositions), capped. */
+static int
+edit_distance(const char *a, const char *b) {
+    size_t la = strlen(a), lb = strlen(b);
+    if (la > 40 || lb > 40)
+        return 99;
+    int d[41][41];
+    for (size_t i = 0; i <= la; i++)
+        d[i][0] = (int)i;
+    for (size_t j = 0; j <= lb; j++)
+        d[0][j] = (int)j;
+    for (size_t i = 1; i <= la; i++) {
+        for (size_t j = 1; j <= lb; j++) {
+            int cost = a[i - 1] == b[j - 1] ? 0 : 1;
+            int best = d[i - 1][j] + 1;
+            if (d[i][j - 1] + 1 < best)
+                best = d[i][j - 1] + 1;
+            if (d[i - 1][j - 1] + cost < best)
+                best = d[i - 1][j - 1] + cost;
+            if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1] &&
+                d[i - 2][j - 2] + 1 < best)
+                best = d[i - 2][j - 2] + 1;
+            d[i][j] = best;
+        }
+    }
+    return d[la][lb];
+}
+
+/* Every key of @p obj must be in the NULL-terminated @p allowed list. */
+static vv_status
+check_keys(const sctx *c, json_t *obj, const char *path, const char *const *allowed) {
+    const char *key;
+    json_t *val;
+    json_object_foreach(obj, key, val) {
+        int ok = 0;
+        for (int i = 0; allowed[i]; i++)
+            if (strcmp(key, allowed[i]) == 0)
+                ok = 1;
+        if (ok)
+            continue;
+        char kp[PATH_MAX_LEN];
+        path_key(kp, path, key);
+        const char *best = NULL;
+        int bd = 99;
+        for (int i = 0; allowed[i]; i++) {
+            int d = edit_distance(key, allowed[i]);
+            if (d < bd) {
+                bd = d;
+                best = allowed[i];
+            }
+        }
+        size_t kl = strlen(key);
+        int limit = kl <= 4 ? 1 : (kl <= 8 ? 2 : 3);
+        if (best && bd <= limit)
+            return serr(c, kp, "unknown key (did you mean %s?)", best);
+        char list[512];
+        size_t off = 0;
+        list[0] = '\0';
+        for (int i = 0; allowed[i] && off < sizeof list; i++)
+            off +=
+                (size_t)snprintf(list + off, sizeof list - off, "%s%s", i ? ", " : "", allowed[i]);
+        return serr(c, kp, "unknown key; expected one of: %s", list);
+    }
+    return VV_OK;
+}
+
+/* ---- typed fields -------------------------------------------------------- */
+
+static vv_status
+value_number(const sctx *c, json_t *v, const char *path, double *out) {
+    if (!json_is_number(v))
+        return serr(c, path, "expected a number, got %s", json_kind(v));
+    double d = json_number_value(v);
+    if (!isfinite(d))
+        return serr(c, path, "number is not finite");
+    *out = d;
+    return VV_OK;
+}
+
+static vv_status
+value_vec3(const sctx *c, json_t *v, const char *path, vv_vec3 *out) {
+    if (!json_is_array(v) || json_array_size(v) != 3)
+        return serr(c, path, "expected an array of 3 numbers, got %s%s", json_kind(v),
+                    json_is_array(v) ? " of another length" : "");
+    double d[3];
+    for (size_t i = 0; i < 3; i++) {
+        json_t *e = json_array_get(v, i);
+        if (!json_is_number(e)) {
+            char ep[PATH_MAX_LEN];
+            path_index(ep, path, i);
+            return serr(c, ep, "expected a number, got %s", json_kind(e));
+        }
+        d[i] = json_number_value(e);
+    }
+    *out = vv_vec3_make(d[0], d[1], d[2]);
+    return VV_OK;
+}
+
+static vv_status
+value_color(const sctx *c, json_t *v, const char *path, vv_vec3 *out) {
+    vv_status st = value_vec3(c, v, path, out);
+    if (st != VV_OK)
+        return st;
+    double d[3] = {out->x, out->y, out->z};
+    for (int i = 0; i < 3; i++)
+        if (!(d[i] >= 0.0 && d[i] <= 1.0))
+            return serr(c, path, "colour component %g is outside [0, 1]", d[i]);
+    return VV_OK;
+}
+
+/* Field getters: *present (may be NULL) says whether the key was there; a
+ * missing key leaves *out unchanged and is not an error. */
+static json_t *
+field(json_t *obj, const char *key, char *kp, const char *path, int *present) {
+    json_t *v = json_object_get(obj, key);
+    path_key(kp, path, key);
+    if (present)
+        *present = v != NULL;
+    return v;
+}
+
+static vv_status
+get_number(const sctx *c, json_t *obj, const char *path, const char *key, double *out,
+           int *present) {
+    char kp[PATH_MAX_LEN];
+    json_t *v = field(obj, key, kp, path, present);
+    return v ? value_number(c, v, kp, out) : VV_OK;
+}
+
+/* A number in a range; open ends when lo_open / hi_open. */
+static vv_status
+get_number_in(const sctx *c, json_t *obj, const char *path, const char *key, double *out,
+              int *present, double lo, int lo_open, double hi, int hi_open) {
+    char kp[PATH_MAX_LEN];
+    int here;
+    json_t *v = field(obj, key, kp, path, &here);
+    if (present)
+        *present = here;
+    if (!v)
+        return VV_OK;
+    double d = 0.0;
+    vv_status st = value_number(c, v, kp, &d);
+    if (st != VV_OK)
+        return st;
+    int ok = (lo_open ? d > lo : d >= lo) && (hi_open ? d < hi : d <= hi);
+    if (!ok) {
+        char hs[64];
+        if (isinf(hi))
+            snprintf(hs, sizeof hs, "inf");
+        else
+            snprintf(hs, sizeof hs, "%g", hi);
+        return serr(c, kp, "%g is outside %c%g, %s%c", d, lo_open ? '(' : '[', lo, hs,
+                    hi_open ? ')' : ']');
+    }
+    *out = d;
+    return VV_OK;
+}
+
+static vv_status
+get_int_in(const sctx *c, json_t *obj, const char *path, const char *key, int *out, int lo,
+           int hi) {
+    char kp[PATH_MAX_LEN];
+    json_t *v = field(obj, key, kp, path, NULL);
+    if (!v)
+        return VV_OK;
+    double d = 0.0;
+    vv_status st = value_number(c, v, kp, &d);
+    if (st != VV_OK)
+        return st;
+    if (d != floor(d))
+        return serr(c, kp, "expected an integer, got %g", d);
+    if (d < lo || d > hi)
+        return serr(c, kp, "%g is outside %d..%d", d, lo, hi);
+    *out = (int)d;
+    return VV_OK;
+}
+
+static vv_status
+get_vec3(const sctx *c, json_t *obj, const char *path, const char *key, vv_vec3 *out,
+         int *present) {
+    char kp[PATH_MAX_LEN];
+    json_t *v = field(obj, key, kp, path, present);
+    return v ? value_vec3(c, v, kp, out) : VV_OK;
+}
+
+static vv_status
+get_nonzero_vec3(const sctx *c, json_t *obj, const char *path, const char *key, vv_vec3 *out,
+                 int *present) {
+    char kp[PATH_MAX_LEN];
+    json_t *v = field(obj, key, kp, path, present);
+    if (!v)
+        return VV_OK;
+    vv_status st = value_vec3(c, v, kp, out);
+    if (st != VV_OK)
+        return st;
+    if (!(vv_vec3_length(*out) > 0.0))
+        return serr(c, kp, "must not be the zero vector");
+    return VV_OK;
+}
+
+static vv_status
+get_color(const sctx *c, json_t *obj, const char *path, const char *key, vv_vec3 *out,
+          int *present) {
+    char kp[PATH_MAX_LEN];
+    json_t *v = field(obj, key, kp, path, present);
+    return v ? value_color(c, v, kp, out) : VV_OK;
+}
+
+static vv_status
+get_bool(const sctx *c, json_t *obj, const char *path, const char *key, int *out) {
+    char kp[PATH_MAX_LEN];
+    json_t *v = field(obj, key, kp, path, NULL);
+    if (!v)
+        return VV_OK;
+    if (!json_is_boolean(v))
+        return serr(c, kp, "expected true or false, got %s", json_kind(v));
+    *out = json_is_true(v) ? 1 : 0;
+    return VV_OK;
+}
+
+static vv_status
+get_string(const sctx *c, json_t *obj, const char *path, const char *key, const char **out) {
+    char kp[PATH_MAX_LEN];
+    json_t *v = field(obj, key, kp, path, NULL);
+    if (!v)
+        return VV_OK;
+    if (!json_is_string(v))
+        return serr(c, kp, "expected a string, got %s", json_kind(v));
+    *out = json_string_value(v);
+    return VV_OK;
+}
+
+/* An optional sub-object; *out is NULL when absent. */
+static vv_status
+get_object(const sctx *c, json_t *obj, const char *path, const char *key, json_t **out) {
+    char kp[PATH_MAX_LEN];
+    json_t *v = field(obj, key, kp, path, NULL);
+    *out = NULL;
+    if (!v)
+        return VV_OK;
+    if (!json_is_object(v))
+        return serr(c, kp, "expected an object, got %s", json_kind(v));
+    *out = v;
+    return VV_OK;
+}
+
+static vv_status
+get_array(const sctx *c, json_t *obj, const char *path, const char *key, json_t **out) {
+    char kp[PATH_MAX_LEN];
+    json_t *v = field(obj, key, kp, path, NULL);
+    *out = NULL;
+    if (!v)
+        return VV_OK;
+    if (!json_is_array(v))
+        return serr(c, kp, "expected an array, got %s", json_kind(v));
+    *out = v;
+    return VV_OK;
+}
+
+static vv_status
+missing(const sctx *c, const char *path, const char *key, const char *what) {
+    return serr(c, path, "missing required key \"%s\" (%s)", key, what);
+}
+
+/* ---- sections ------------------------------------------------------------ */
+
+static vv_status
+parse_cut_planes(const sctx *c, json_t *arr, const char *path, vv_cut_plane *planes, int *n) {
+    static const char *const keys[] = {"point", "normal", NULL};
+    size_t i;
+    json_t *e;
+    *n = 0;
+    json_array_foreach(arr, i, e) {
+        char ep[PATH_MAX_LEN];
+        path_index(ep, path, i);
+        if (!json_is_object(e))
+            return serr(c, ep, "expected an object {\"point\", \"normal\"}, got %s", json_kind(e));
+        if (i >= VV_MAX_CUT_PLANES)
+            return serr(c, ep, "more than %d cut planes", VV_MAX_CUT_PLANES);
+        vv_status st = check_keys(c, e, ep, keys);
+        if (st != VV_OK)
+            return st;
+        int hp, hn;
+        vv_vec3 p = {0, 0, 0}, nrm = {0, 0, 0};
+        if ((st = get_vec3(c, e, ep, "point", &p, &hp)) != VV_OK ||
+            (st = get_nonzero_vec3(c, e, ep, "normal", &nrm, &hn)) != VV_OK)
+            return st;
+        if (!hp)
+            return missing(c, ep, "point", "a point on the plane");
+        if (!hn)
+            return missing(c, ep, "normal", "the normal of the kept half-space");
+        planes[i].point = p;
+        planes[i].normal = vv_vec3_normalize(nrm);
+        (*n)++;
+    }
+    return VV_OK;
+}
+
+static vv_status
+parse_view(const sctx *c, json_t *v, vv_world *w, int *has_background) {
+    static const char *const keys[] = {
+        "eye",          "at",    "up",     "fov",        "projection",
+        "ortho_height", "width", "height", "background", NULL};
+    const char *path = "view";
+    vv_status st = check_keys(c, v, path, keys);
+    if (st != VV_OK)
+        return st;
+    vv_view *vw = &w->view;
+    double fov = vv_rad_to_deg(vw->fov);
+    const char *proj = NULL;
+    if ((st = get_vec3(c, v, path, "eye", &vw->eye, NULL)) != VV_OK ||
+        (st = get_vec3(c, v, path, "at", &vw->at, NULL)) != VV_OK ||
+        (st = get_nonzero_vec3(c, v, path, "up", &vw->up, NULL)) != VV_OK ||
+        (st = get_number_in(c, v, path, "fov", &fov, NULL, 0, 1, 180, 1)) != VV_OK ||
+        (st = get_string(c, v, path, "projection", &proj)) != VV_OK ||
+        (st = get_number_in(c, v, path, "ortho_height", &vw->ortho_height, NULL, 0, 1, INFINITY,
+                            1)) != VV_OK ||
+        (st = get_int_in(c, v, path, "width", &vw->width, 1, IMAGE_MAX_SIDE)) != VV_OK ||
+        (st = get_int_in(c, v, path, "height", &vw->height, 1, IMAGE_MAX_SIDE)) != VV_OK ||
+        (st = get_color(c, v, path, "background", &w->background, has_background)) != VV_OK)
+        return st;
+    vw->fov = vv_deg_to_rad(fov);
+    if (proj) {
+        if (strcmp(proj, "perspective") == 0)
+            vw->projection = VV_PROJECTION_PERSPECTIVE;
+        else if (strcmp(proj, "orthographic") == 0)
+            vw->projection = VV_PROJECTION_ORTHOGRAPHIC;
+        else
+            return serr(c, "view.projection",
+                        "unknown projection \"%s\"; expected perspective or orthographic", proj);
+    }
+    vv_vec3 dir = vv_vec3_sub(vw->at, vw->eye);
+    if (!(vv_vec3_length(dir) > 0.0))
+        return serr(c, "view.at", "the eye and the point looked at are the same");
+    vv_vec3 cr = vv_vec3_cross(vv_vec3_normalize(dir), vv_vec3_normalize(vw->up));
+    if (!(vv_vec3_length(cr) > 1e-9))
+        return serr(c, "view.up", "up is parallel to the viewing direction");
+    return VV_OK;
+}
+
+static vv_status
+parse_lights(const sctx *c, json_t *arr, vv_world *w) {
+    static const char *const keys[] = {"type", "direction", "position", "color", "intensity", NULL};
+    size_t i;
+    json_t *e;
+    vv_vec3 view_dir = vv_vec3_normalize(vv_vec3_sub(w->view.at, w->view.eye));
+    json_array_foreach(arr, i, e) {
+        char ep[PATH_MAX_LEN];
+        path_index(ep, "lights", i);
+        if (!json_is_object(e))
+            return serr(c, ep, "expected an object, got %s", json_kind(e));
+        if (i >= VV_MAX_LIGHTS)
+            return serr(c, ep, "more than %d lights", VV_MAX_LIGHTS);
+        vv_status st = check_keys(c, e, ep, keys);
+        if (st != VV_OK)
+            return st;
+        vv_light l;
+        memset(&l, 0, sizeof l);
+        l.color = vv_vec3_make(1, 1, 1);
+        l.intensity = 1.0;
+        const char *type = "directional";
+        int hd, hp;
+        if ((st = get_string(c, e, ep, "type", &type)) != VV_OK ||
+            (st = get_nonzero_vec3(c, e, ep, "direction", &l.direction, &hd)) != VV_OK ||
+            (st = get_vec3(c, e, ep, "position", &l.position, &hp)) != VV_OK ||
+            (st = get_color(c, e, ep, "color", &l.color, NULL)) != VV_OK ||
+            (st = get_number_in(c, e, ep, "intensity", &l.intensity, NULL, 0, 0, INFINITY, 1)) !=
+                VV_OK)
+            return st;
+        char kp[PATH_MAX_LEN];
+        if (strcmp(type, "directional") == 0) {
+            l.type = VV_LIGHT_DIRECTIONAL;
+            if (hp) {
+                path_key(kp, ep, "position");
+                return serr(c, kp,
+                            "a directional light has no position (use \"type\": "
+                            "\"point\")");
+            }
+            if (hd) {
+                l.direction = vv_vec3_normalize(l.direction);
+            } else {
+                l.headlight = 1;
+                l.direction = view_dir;
+            }
+        } else if (strcmp(type, "point") == 0) {
+            l.type = VV_LIGHT_POINT;
+            if (hd) {
+                path_key(kp, ep, "direction");
+                return serr(c, kp, "a point light has no direction");
+            }
+            if (!hp)
+                return missing(c, ep, "position", "where the point light is");
+        } else {
+            path_key(kp, ep, "type");
+            return serr(c, kp, "unknown light type \"%s\"; expected directional or point", type);
+        }
+        w->lights[w->n_lights++] = l;
+    }
+    return VV_OK;
+}
+
+static vv_status
+parse_tf_points(const sctx *c, json_t *tfj, const char *tp, vv_tf *tf, int opacity) {
+    const char *key = opacity ? "opacity" : "color";
+    json_t *arr;
+    vv_status st = get_array(c, tfj, tp, key, &arr);
+    if (st != VV_OK || !arr)
+        return st;
+    char ap[PATH_MAX_LEN];
+    path_key(ap, tp, key);
+    if (json_array_size(arr) > VV_TF_MAX_POINTS)
+        return serr(c, ap, "more than %d points", VV_TF_MAX_POINTS);
+    size_t i;
+    json_t *e;
+    json_array_foreach(arr, i, e) {
+        char ep[PATH_MAX_LEN];
+        path_index(ep, ap, i);
+        if (!json_is_array(e) || json_array_size(e) != 2)
+            return serr(c, ep, "expected a pair [value, %s], got %s",
+                        opacity ? "opacity" : "[r, g, b]", json_kind(e));
+        char vp[PATH_MAX_LEN], op[PATH_MAX_LEN];
+        path_index(vp, ep, 0);
+        path_index(op, ep, 1);
+        double value;
+        if ((st = value_number(c, json_array_get(e, 0), vp, &value)) != VV_OK)
+            return st;
+        if (opacity) {
+            double a;
+            if ((st = value_number(c, json_array_get(e, 1), op, &a)) != VV_OK)
+                return st;
+            if (!(a >= 0.0 && a <= 1.0))
+                return serr(c, op, "opacity %g is outside [0, 1]", a);
+            if (vv_tf_add_opacity(tf, value, a) != VV_OK)
+                return serr(c, ep, "%s", vv_error_message());
+        } else {
+            vv_vec3 col;
+            if ((st = value_color(c, json_array_get(e, 1), op, &col)) != VV_OK)
+                return st;
+            if (vv_tf_add_color(tf, value, col) != VV_OK)
+                return serr(c, ep, "%s", vv_error_message());
+        }
+    }
+    return VV_OK;
+}
+
+static vv_status
+parse_tf(const sctx *c, json_t *tfj, const char *tp, vv_object *o) {
+    static const char *const keys[] = {"opacity", "color", "opacity_unit_distance", NULL};
+    vv_status st = check_keys(c, tfj, tp, keys);
+    if (st != VV_OK)
+        return st;
+    if (!json_object_get(tfj, "opacity"))
+        return missing(c, tp, "opacity", "[[value, opacity], ...]");
+    vv_tf tf;
+    vv_tf_init(&tf);
+    tf.opacity_unit_distance = vv_model_min_spacing(o->volume);
+    if ((st = parse_tf_points(c, tfj, tp, &tf, 1)) != VV_OK ||
+        (st = parse_tf_points(c, tfj, tp, &tf, 0)) != VV_OK ||
+        (st = get_number_in(c, tfj, tp, "opacity_unit_distance", &tf.opacity_unit_distance, NULL, 0,
+                            1, INFINITY, 1)) != VV_OK)
+        return st;
+    o->tf = tf;
+    return VV_OK;
+}
+
+static vv_status
+parse_material(const sctx *c, json_t *m, const char *mp, vv_material *mat) {
+    static const char *const keys[] = {"ambient",   "diffuse", "specular",
+                                       "shininess", "color",   NULL};
+    vv_status st = check_keys(c, m, mp, keys);
+    if (st != VV_OK)
+        return st;
+    if ((st = get_number_in(c, m, mp, "ambient", &mat->ambient, NULL, 0, 0, INFINITY, 1)) !=
+            VV_OK ||
+        (st = get_number_in(c, m, mp, "diffuse", &mat->diffuse, NULL, 0, 0, INFINITY, 1)) !=
+            VV_OK ||
+        (st = get_number_in(c, m, mp, "specular", &mat->specular, NULL, 0, 0, INFINITY, 1)) !=
+            VV_OK ||
+        (st = get_number_in(c, m, mp, "shininess", &mat->shininess, NULL, 0, 0, INFINITY, 1)) !=
+            VV_OK ||
+        (st = get_color(c, m, mp, "color", &mat->color, NULL)) != VV_OK)
+        return st;
+    return VV_OK;
+}
+
+static const char *const mode_names[] = {"composite", "mip", "minip", "xray", "iso"};
+
+static vv_status
+parse_mode(const sctx *c, const char *op, const char *s, vv_render_mode *out) {
+    for (int i = 0; i < 5; i++) {
+        if (strcmp(s, mode_names[i]) == 0) {
+            *out = (vv_render_mode)i;
+            return VV_OK;
+        }
+    }
+    char kp[PATH_MAX_LEN];
+    path_key(kp, op, "mode");
+    return serr(c, kp, "unknown mode \"%s\"; expected composite, mip, minip, xray or iso", s);
+}
+
+/* Object fields other than the volume source (file, origin, spacing). */
+static vv_status
+parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
+    vv_status st;
+    char kp[PATH_MAX_LEN];
+    const char *mode = NULL;
+    int has_iso, has_rot, has_ori;
+    if ((st = get_string(c, e, op, "mode", &mode)) != VV_OK)
+        return st;
+    if (mode && (st = parse_mode(c, op, mode, &o->mode)) != VV_OK)
+        return st;
+    if ((st = get_number(c, e, op, "isovalue", &o->isovalue, &has_iso)) != VV_OK ||
+        (st = get_number_in(c, e, op, "step", &o->step, NULL, 0, 1, INFINITY, 1)) != VV_OK ||
+        (st = get_bool(c, e, op, "shading", &o->shading)) != VV_OK ||
+        (st = get_bool(c, e, op, "visible", &o->visible)) != VV_OK ||
+        (st = get_vec3(c, e, op, "position", &o->position, NULL)) != VV_OK)
+        return st;
+    if (o->mode == VV_MODE_ISO && !has_iso) {
+        path_key(kp, op, "mode");
+        return serr(c, kp, "mode \"iso\" needs an \"isovalue\"");
+    }
+
+    /* rotation (axis-angle, degrees) or orientation (quaternion) */
+    json_t *rot;
+    if ((st = get_object(c, e, op, "rotation", &rot)) != VV_OK)
+        return st;
+    has_rot = rot != NULL;
+    has_ori = json_object_get(e, "orientation") != NULL;
+    if (has_rot && has_ori) {
+        path_key(kp, op, "orientation");
+        return serr(c, kp, "give either \"rotation\" or \"orientation\", not both");
+    }
+    if (rot) {
+        static const char *const rkeys[] = {"axis", "angle", NULL};
+        char rp[PATH_MAX_LEN];
+        path_key(rp, op, "rotation");
+        vv_vec3 axis = {0, 0, 1};
+        double angle = 0.0;
+        int ha, hg;
+        if ((st = check_keys(c, rot, rp, rkeys)) != VV_OK ||
+            (st = get_nonzero_vec3(c, rot, rp, "axis", &axis, &ha)) != VV_OK ||
+            (st = get_number(c, rot, rp, "angle", &angle, &hg)) != VV_OK)
+            return st;
+        if (!ha)
+            return missing(c, rp, "axis", "the rotation axis [x, y, z]");
+        if (!hg)
+            return missing(c, rp, "angle", "degrees");
+        o->orientation = vv_quat_from_axis_angle(axis, vv_deg_to_rad(angle));
+    }
+    if (has_ori) {
+        json_t *q = json_object_get(e, "orientation");
+        path_key(kp, op, "orientation");
+        if (!json_is_array(q) || json_array_size(q) != 4)
+            return serr(c, kp, "expected a quaternion [w, x, y, z], got %s", json_kind(q));
+        double d[4];
+        for (size_t i = 0; i < 4; i++) {
+            char ip[PATH_MAX_LEN];
+            path_index(ip, kp, i);
+            if ((st = value_number(c, json_array_get(q, i), ip, &d[i])) != VV_OK)
+                return st;
+        }
+        double n = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + d[3] * d[3]);
+        if (!(n > 0.0))
+            return serr(c, kp, "the zero quaternion is not a rotation");
+        o->orientation = (vv_quat){d[0] / n, d[1] / n, d[2] / n, d[3] / n};
+    }
+
+    /* scale: a number (uniform) or [sx, sy, sz], all > 0 */
+    json_t *sc = json_object_get(e, "scale");
+    if (sc) {
+        path_key(kp, op, "scale");
+        vv_vec3 s;
+        if (json_is_number(sc)) {
+            double u = json_number_value(sc);
+            s = vv_vec3_make(u, u, u);
+        } else if ((st = value_vec3(c, sc, kp, &s)) != VV_OK) {
+            return st;
+        }
+        if (!(s.x > 0.0 && s.y > 0.0 && s.z > 0.0))
+            return serr(c, kp, "scale factors must be > 0");
+        o->scale = s;
+    }
+
+    /* segmentation: a transfer function or a threshold */
+    json_t *tfj, *seg, *mat, *cuts;
+    if ((st = get_object(c, e, op, "transfer_function", &tfj)) != VV_OK ||
+        (st = get_object(c, e, op, "segmentation", &seg)) != VV_OK ||
+        (st = get_object(c, e, op, "material", &mat)) != VV_OK ||
+        (st = get_array(c, e, op, "cut_planes", &cuts)) != VV_OK)
+        return st;
+    if (tfj && seg) {
+        path_key(kp, op, "segmentation");
+        return serr(c, kp, "give either \"transfer_function\" or \"segmentation\", not both");
+    }
+    if (tfj) {
+        path_key(kp, op, "transfer_function");
+        if ((st = parse_tf(c, tfj, kp, o)) != VV_OK)
+            return st;
+    } else {
+        /* the default TF depends on the mode, known only now */
+        double iso_lo;
+        vv_model_default_tf(o->volume, o->mode, &o->tf, &iso_lo);
+    }
+    if (seg) {
+        static const char *const skeys[] = {"threshold", NULL};
+        path_key(kp, op, "segmentation");
+        int ht;
+        if ((st = check_keys(c, seg, kp, skeys)) != VV_OK ||
+            (st = get_number(c, seg, kp, "threshold", &o->threshold, &ht)) != VV_OK)
+            return st;
+        if (!ht)
+            return missing(c, kp, "threshold", "the data value from which voxels are opaque");
+        o->segmentation = VV_SEG_THRESHOLD;
+    }
+    if (mat) {
+        path_key(kp, op, "material");
+        if ((st = parse_material(c, mat, kp, &o->material)) != VV_OK)
+            return st;
+    }
+    if (cuts) {
+        path_key(kp, op, "cut_planes");
+        if ((st = parse_cut_planes(c, cuts, kp, o->cut_planes, &o->n_cut_planes)) != VV_OK)
+            return st;
+    }
+    return VV_OK;
+}
+
+/* Name from a file path: its base name without the extension(s). */
+static void
+name_from_file(char dst[VV_NAME_MAX], const char *file) {
+    vv_model_copy_name(dst, vv_path_basename(file));
+    char *dot = strchr(dst, '.');
+    if (dot && dot != dst)
+        *dot = '\0';
+}
+
+static vv_status
+parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
+    static const char *const keys[] = {
+        "name",         "type",     "file",        "origin",  "spacing",
+        "mode",         "isovalue", "step",        "shading", "visible",
+        "position",     "rotation", "orientation", "scale",   "transfer_function",
+        "segmentation", "material", "cut_planes",  NULL};
+    char op[PATH_MAX_LEN], kp[PATH_MAX_LEN];
+    path_index(op, "objects", idx);
+    if (!json_is_object(e))
+        return serr(c, op, "expected an object, got %s", json_kind(e));
+    vv_status st = check_keys(c, e, op, keys);
+    if (st != VV_OK)
+        return st;
+    const char *type = "volume", *name = NULL, *file = NULL;
+    if ((st = get_string(c, e, op, "type", &type)) != VV_OK ||
+        (st = get_string(c, e, op, "name", &name)) != VV_OK ||
+        (st = get_string(c, e, op, "file", &file)) != VV_OK)
+        return st;
+    if (strcmp(type, "volume") != 0) {
+        path_key(kp, op, "type");
+        return serr(c, kp, "unsupported object type \"%s\"; expected volume", type);
+    }
+    if (name && strlen(name) >= VV_NAME_MAX) {
+        path_key(kp, op, "name");
+        return serr(c, kp, "longer than %d bytes", VV_NAME_MAX - 1);
+    }
+    if (!file)
+        return missing(c, op, "file", "the volume file, relative to the scene file");
+    path_key(kp, op, "file");
+    if (!file[0])
+        return serr(c, kp, "empty file name");
+    vv_vec3 origin, spacing;
+    int has_origin, has_spacing;
+    if ((st = get_vec3(c, e, op, "origin", &origin, &has_origin)) != VV_OK ||
+        (st = get_vec3(c, e, op, "spacing", &spacing, &has_spacing)) != VV_OK)
+        return st;
+    if (has_spacing && !(spacing.x > 0.0 && spacing.y > 0.0 && spacing.z > 0.0)) {
+        path_key(kp, op, "spacing");
+        return serr(c, kp, "voxel spacing must be > 0");
+    }
+
+    char *full = vv_path_join_dir(c->path, file);
+    if (!full)
+        return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
+    vv_volume *vol = NULL;
+    st = vv_volume_load(&vol, full, NULL);
+    free(full);
+    if (st != VV_OK) {
+        int line, col;
+        path_key(kp, op, "file");
+        scene_locate(c, kp, &line, &col);
+        return vv_error_prefix(st, "%s:%d:%d: %s", c->path, line, col, kp);
+    }
+    /* the volume is freshly loaded and ours alone, so overriding is safe */
+    if (has_origin) {
+        vol->origin[0] = origin.x;
+        vol->origin[1] = origin.y;
+        vol->origin[2] = origin.z;
+    }
+    if (has_spacing) {
+        vol->spacing[0] = spacing.x;
+        vol->spacing[1] = spacing.y;
+        vol->spacing[2] = spacing.z;
+    }
+    char defname[VV_NAME_MAX];
+    name_from_file(defname, file);
+    vv_object *o = NULL;
+    st = vv_object_new_volume(&o, vol, name ? name : defname);
+    vv_volume_free(vol);
+    if (st != VV_OK)
+        return vv_error_prefix(st, "%s: %s", c->path, op);
+    st = parse_object_fields(c, e, op, o);
+    if (st != VV_OK) {
+        vv_object_free(o);
+        return st;
+    }
+    return vv_world_add_object(w, o);
+}
+
+static vv_status
+parse_scene(const sctx *c, json_t *root, vv_world *w) {
+    static const char *const keys[] = {"view", "lights", "shading", "objects", "cut_planes", NULL};
+    if (!json_is_object(root))
+        return serr(c, "", "expected a JSON object at the top level, got %s", json_kind(root));
+    vv_status st = check_keys(c, root, "", keys);
+    if (st != VV_OK)
+        return st;
+    json_t *view, *lights, *shading, *objects, *cuts;
+    if ((st = get_object(c, root, "", "view", &view)) != VV_OK ||
+        (st = get_array(c, root, "", "lights", &lights)) != VV_OK ||
+        (st = get_object(c, root, "", "shading", &shading)) != VV_OK ||
+        (st = get_array(c, root, "", "objects", &objects)) != VV_OK ||
+        (st = get_array(c, root, "", "cut_planes", &cuts)) != VV_OK)
+        return st;
+    int view_bg = 0;
+    if (view && (st = parse_view(c, view, w, &view_bg)) != VV_OK)
+        return st;
+    if (shading) {
+        static const char *const skeys[] = {"ambient", "background", NULL};
+        vv_vec3 bg;
+        int has_bg;
+        if ((st = check_keys(c, shading, "shading", skeys)) != VV_OK ||
+            (st = get_color(c, shading, "shading", "ambient", &w->ambient, NULL)) != VV_OK ||
+            (st = get_color(c, shading, "shading", "background", &bg, &has_bg)) != VV_OK)
+            return st;
+        if (has_bg && view_bg)
+            return serr(c, "shading.background",
+                        "the background is also given in view.background; give it once");
+        if (has_bg)
+            w->background = bg;
+    }
+    if (lights && (st = parse_lights(c, lights, w)) != VV_OK)
+        return st;
+    if (cuts &&
+        (st = parse_cut_planes(c, cuts, "cut_planes", w->cut_planes, &w->n_cut_planes)) != VV_OK)
+        return st;
+    if (objects) {
+        size_t i;
+        json_t *e;
+        json_array_foreach(objects, i, e) {
+            if ((st = parse_object(c, e, i, w)) != VV_OK)
+                return st;
+        }
+    }
+    return VV_OK;
+}
+
+vv_status
+vv_scene_load(vv_world **out, const char *path) {
+    if (!out)
+        return vv_error_set(VV_ERR_INVALID, "scene: NULL output");
+    *out = NULL;
+    if (!path)
+        return vv_error_set(VV_ERR_INVALID, "scene: NULL path");
+    unsigned char *data = NULL;
+    uint64_t size = 0;
+    vv_status st = vv_read_file(path, SCENE_MAX_BYTES, &data, &size);
+    if (st != VV_OK)
+        return vv_error_prefix(st, "scene");
+    sctx c = {path, (const char *)data, (size_t)size};
+    json_error_t jerr;
+    json_t *root = json_loadb((const char *)data, (size_t)size,
+                              JSON_REJECT_DUPLICATES | JSON_DECODE_INT_AS_REAL, &jerr);
+    if (!root) {
+        st = vv_error_set(VV_ERR_FORMAT, "%s:%d:%d: %s", path, jerr.line > 0 ? jerr.line : 1,
+                          jerr.column > 0 ? jerr.column : 1, jerr.text);
+        free(data);
+        return st;
+    }
+    vv_world *w = NULL;
+    st = vv_world_new(&w);
+    if (st == VV_OK)
+        st = parse_scene(&c, root, w);
+    json_decref(root);
+    free(data);
+    if (st != VV_OK) {
+        vv_world_free(w);
+        return st;
+    }
+    *out = w;
+    return VV_OK;
+}
+
+/* ---- writing ------------------------------------------------------------- */
+
+static void
+put_num(FILE *f, double v) {
+    char buf[64];
+    if (!isfinite(v))
+        v = 0.0; /* never produced by a valid World; keep the file parseable */
+    snprintf(buf, sizeof buf, "%.15g", v);
+    if (strtod(buf, NULL) != v)
+        snprintf(buf, sizeof buf, "%.17g", v);
+    fputs(buf, f);
+}
+
+/* An angle in degrees, written with as few digits as read back to the same radians. */
+static void
+put_degrees(FILE *f, double rad) {
+    double deg = vv_rad_to_deg(rad);
+    for (int prec = 6; prec <= 17; prec++) {
+        char buf[64];
+        snprintf(buf, sizeof buf, "%.*g", prec, deg);
+        if (vv_deg_to_rad(strtod(buf, NULL)) == rad || prec == 17) {
+            fputs(buf, f);
+            return;
+        }
+    }
+}
+
+static void
+put_vec3(FILE *f, vv_vec3 v) {
+    fputc('[', f);
+    put_num(f, v.x);
+    fputs(", ", f);
+    put_num(f, v.y);
+    fputs(", ", f);
+    put_num(f, v.z);
+    fputc(']', f);
+}
+
+static void
+put_str(FILE *f, const char *s) {
+    fputc('"', f);
+    for (const unsigned char *p = (const unsigned char *)s; *p; p++) {
+        if (*p == '"' || *p == '\\')
+            fprintf(f, "\\%c", *p);
+        else if (*p < 0x20)
+            fprintf(f, "\\u%04x", *p);
+        else
+            fputc(*p, f);
+    }
+    fputc('"', f);
+}
+
+static void
+put_cut_planes(FILE *f, const vv_cut_plane *p, int n, const char *indent) {
+    fputc('[', f);
+    for (int i = 0; i < n; i++) {
+        fprintf(f, "%s\n%s  {\"point\": ", i ? "," : "", indent);
+        put_vec3(f, p[i].point);
+        fputs(", \"normal\": ", f);
+        put_vec3(f, p[i].normal);
+        fputc('}', f);
+    }
+    if (n)
+        fprintf(f, "\n%s", indent);
+    fputc(']', f);
+}
+
+static void
+put_object(FILE *f, const vv_object *o, const char *file) {
+    const vv_volume *v = o->volume;
+    fputs("    {\n      \"name\": ", f);
+    put_str(f, o->name);
+    fputs(",\n      \"type\": \"volume\",\n      \"file\": ", f);
+    put_str(f, file);
+    fputs(",\n      \"origin\": ", f);
+    put_vec3(f, vv_vec3_make(v->origin[0], v->origin[1], v->origin[2]));
+    fputs(",\n      \"spacing\": ", f);
+    put_vec3(f, vv_vec3_make(v->spacing[0], v->spacing[1], v->spacing[2]));
+    fputs(",\n      \"position\": ", f);
+    put_vec3(f, o->position);
+    vv_quat q = vv_quat_normalize(o->orientation);
+    fputs(",\n      \"orientation\": [", f);
+    put_num(f, q.w);
+    fputs(", ", f);
+    put_num(f, q.x);
+    fputs(", ", f);
+    put_num(f, q.y);
+    fputs(", ", f);
+    put_num(f, q.z);
+    fputs("],\n      \"scale\": ", f);
+    put_vec3(f, o->scale);
+    int mode = (int)o->mode;
+    fprintf(f, ",\n      \"mode\": \"%s\"", mode_names[mode >= 0 && mode < 5 ? mode : 0]);
+    fputs(",\n      \"isovalue\": ", f);
+    put_num(f, o->isovalue);
+    fputs(",\n      \"step\": ", f);
+    put_num(f, o->step);
+    fprintf(f, ",\n      \"shading\": %s,\n      \"visible\": %s", o->shading ? "true" : "false",
+            o->visible ? "true" : "false");
+    if (o->segmentation == VV_SEG_THRESHOLD) {
+        fputs(",\n      \"segmentation\": {\"threshold\": ", f);
+        put_num(f, o->threshold);
+        fputc('}', f);
+    } else {
+        fputs(",\n      \"transfer_function\": {\n        \"opacity\": [", f);
+        for (int i = 0; i < o->tf.n_opacity; i++) {
+            fputs(i ? ", [" : "[", f);
+            put_num(f, o->tf.opacity[i].value);
+            fputs(", ", f);
+            put_num(f, o->tf.opacity[i].opacity);
+            fputc(']', f);
+        }
+        fputs("],\n        \"color\": [", f);
+        for (int i = 0; i < o->tf.n_color; i++) {
+            fputs(i ? ", [" : "[", f);
+            put_num(f, o->tf.color[i].value);
+            fputs(", ", f);
+            put_vec3(f, o->tf.color[i].color);
+            fputc(']', f);
+        }
+        fputs("],\n        \"opacity_unit_distance\": ", f);
+        put_num(f, o->tf.opacity_unit_distance);
+        fputs("\n      }", f);
+    }
+    fputs(",\n      \"material\": {\"ambient\": ", f);
+    put_num(f, o->material.ambient);
+    fputs(", \"diffuse\": ", f);
+    put_num(f, o->material.diffuse);
+    fputs(", \"specular\": ", f);
+    put_num(f, o->material.specular);
+    fputs(", \"shininess\": ", f);
+    put_num(f, o->material.shininess);
+    fputs(", \"color\": ", f);
+    put_vec3(f, o->material.color);
+    fputs("},\n      \"cut_planes\": ", f);
+    put_cut_planes(f, o->cut_planes, o->n_cut_planes, "      ");
+    fputs("\n    }", f);
+}
+
+static vv_status
+check_saveable(const vv_world *w, const char *const *volume_files) {
+    const vv_view *v = &w->view;
+    if (v->width < 1 || v->width > IMAGE_MAX_SIDE || v->height < 1 || v->height > IMAGE_MAX_SIDE)
+        return vv_error_set(VV_ERR_INVALID, "view size %dx%d outside 1..%d", v->width, v->height,
+                            IMAGE_MAX_SIDE);
+    if (w->n_objects > 0 && !volume_files)
+        return vv_error_set(VV_ERR_INVALID, "no volume file names given for %d objects",
+                            w->n_objects);
+    for (int i = 0; i < w->n_objects; i++) {
+        if (!w->objects[i] || !w->objects[i]->volume)
+            return vv_error_set(VV_ERR_INVALID, "object %d has no volume", i);
+        if (!volume_files[i] || !volume_files[i][0])
+            return vv_error_set(VV_ERR_INVALID, "object %d: no volume file name", i);
+    }
+    return VV_OK;
+}
+
+vv_status
+vv_scene_save(const vv_world *w, const char *path, const char *const *volume_files) {
+    if (!w || !path)
+        return vv_error_set(VV_ERR_INVALID, "scene: NULL %s", w ? "path" : "world");
+    vv_status st = check_saveable(w, volume_files);
+    if (st != VV_OK)
+        return vv_error_prefix(st, "scene: %s", path);
+    vv_atomic_file af;
+    st = vv_atomic_file_open(&af, path);
+    if (st != VV_OK)
+        return vv_error_prefix(st, "scene");
+    FILE *f = af.fp;
+    const vv_view *v = &w->view;
+    fputs("{\n  \"view\": {\n    \"eye\": ", f);
+    put_vec3(f, v->eye);
+    fputs(",\n    \"at\": ", f);
+    put_vec3(f, v->at);
+    fputs(",\n    \"up\": ", f);
+    put_vec3(f, v->up);
+    fputs(",\n    \"fov\": ", f);
+    put_degrees(f, v->fov);
+    fprintf(f, ",\n    \"projection\": \"%s\"",
+            v->projection == VV_PROJECTION_ORTHOGRAPHIC ? "orthographic" : "perspective");
+    fputs(",\n    \"ortho_height\": ", f);
+    put_num(f, v->ortho_height);
+    fprintf(f, ",\n    \"width\": %d,\n    \"height\": %d", v->width, v->height);
+    fputs(",\n    \"background\": ", f);
+    put_vec3(f, w->background);
+    fputs("\n  },\n  \"lights\": [", f);
+    for (int i = 0; i < w->n_lights; i++) {
+        const vv_light *l = &w->lights[i];
+        fprintf(f, "%s\n    {\"type\": \"%s\"", i ? "," : "",
+                l->type == VV_LIGHT_POINT ? "point" : "directional");
+        if (l->type == VV_LIGHT_POINT) {
+            fputs(", \"position\": ", f);
+            put_vec3(f, l->position);
+        } else if (!l->headlight) {
+            fputs(", \"direction\": ", f);
+            put_vec3(f, l->direction);
+        }
+        fputs(", \"color\": ", f);
+        put_vec3(f, l->color);
+        fputs(", \"intensity\": ", f);
+        put_num(f, l->intensity);
+        fputc('}', f);
+    }
+    fputs(w->n_lights ? "\n  ],\n" : "],\n", f);
+    fputs("  \"shading\": {\"ambient\": ", f);
+    put_vec3(f, w->ambient);
+    fputs("},\n  \"cut_planes\": ", f);
+    put_cut_planes(f, w->cut_planes, w->n_cut_planes, "  ");
+    fputs(",\n  \"objects\": [", f);
+    for (int i = 0; i < w->n_objects; i++) {
+        fputs(i ? ",\n" : "\n", f);
+        put_object(f, w->objects[i], volume_files[i]);
+    }
+    fputs(w->n_objects ? "\n  ]\n}\n" : "]\n}\n", f);
+    if (ferror(f)) {
+        vv_atomic_file_abort(&af);
+        return vv_error_set(VV_ERR_IO, "scene: %s: write failed", path);
+    }
+    st = vv_atomic_file_commit(&af);
+    if (st != VV_OK)
+        return vv_error_prefix(st, "scene");
+    return VV_OK;
+}

@@ -1,0 +1,408 @@
+/* Scene files: the documented schema, errors with file:line:column, round trips. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testutil.h"
+
+#define assert_near(a, b, eps)                                                                     \
+    do {                                                                                           \
+        double a_ = (a), b_ = (b);                                                                 \
+        if (!(fabs(a_ - b_) <= (eps)))                                                             \
+            fail_msg("%s = %.17g, expected %.17g (+-%g)", #a, a_, b_, (double)(eps));              \
+    } while (0)
+
+static char g_dir[1024];
+
+/* A 6x5x4 i16 volume with spacing (0.957, 0.957, 1.5) and origin (1, 2, 3). */
+static int
+setup(void **state) {
+    (void)state;
+    snprintf(g_dir, sizeof g_dir, "%s", vt_outdir("model_scene"));
+    int dims[3] = {6, 5, 4};
+    vv_volume *v = NULL;
+    if (vv_volume_new(&v, dims, VV_I16) != VV_OK)
+        return -1;
+    for (int k = 0; k < 4; k++)
+        for (int j = 0; j < 5; j++)
+            for (int i = 0; i < 6; i++)
+                vv_volume_set(v, i, j, k, -1000 + 100 * (i + j + k));
+    vv_volume_update_range(v);
+    v->spacing[0] = v->spacing[1] = 0.957;
+    v->spacing[2] = 1.5;
+    v->origin[0] = 1;
+    v->origin[1] = 2;
+    v->origin[2] = 3;
+    char path[1200];
+    snprintf(path, sizeof path, "%s/ct_head.nrrd", g_dir);
+    vv_status st = vv_nrrd_write(v, path, 0);
+    vv_volume_free(v);
+    return st == VV_OK ? 0 : -1;
+}
+
+static const char *
+write_scene(const char *name, const char *text) {
+    static char path[1200];
+    snprintf(path, sizeof path, "%s/%s", g_dir, name);
+    vt_write_file(path, text, strlen(text));
+    return path;
+}
+
+/* Loading must fail with a message containing "<path>:<line>:<col>:" and @p needle. */
+static void
+expect_error(const char *name, const char *text, int line, int col, const char *needle) {
+    const char *path = write_scene(name, text);
+    vv_world *w = (vv_world *)1;
+    vv_error_clear();
+    vv_status st = vv_scene_load(&w, path);
+    if (st == VV_OK)
+        fail_msg("%s: loaded, expected an error containing \"%s\"", name, needle);
+    assert_null(w);
+    const char *msg = vv_error_message();
+    char where[1400];
+    snprintf(where, sizeof where, "%s:%d:%d: ", path, line, col);
+    if (!strstr(msg, where) || !strstr(msg, needle))
+        fail_msg("%s: message \"%s\" lacks \"%s\" or \"%s\"", name, msg, where, needle);
+}
+
+static const char *example =
+    "{\n"
+    "  \"view\": {\"eye\": [0, -600, 0], \"at\": [0, 0, 0], \"up\": [0, 0, 1],\n"
+    "           \"fov\": 20, \"projection\": \"perspective\",\n"
+    "           \"width\": 512, \"height\": 512, \"background\": [0, 0, 0]},\n"
+    "  \"lights\": [{\"type\": \"directional\", \"direction\": [0, 1, 0],\n"
+    "              \"color\": [1, 1, 1], \"intensity\": 1.0}],\n"
+    "  \"shading\": {\"ambient\": [1, 1, 1]},\n"
+    "  \"objects\": [{\n"
+    "    \"name\": \"head\", \"type\": \"volume\", \"file\": \"ct_head.nrrd\",\n"
+    "    \"origin\": [-122.0, -122.0, -80.25],\n"
+    "    \"mode\": \"composite\",\n"
+    "    \"step\": 0.5,\n"
+    "    \"transfer_function\": {\n"
+    "      \"opacity\": [[100, 0.0], [1500, 0.5]],\n"
+    "      \"color\": [[100, [1, 1, 1]], [1500, [1, 1, 1]]],\n"
+    "      \"opacity_unit_distance\": 0.957\n"
+    "    },\n"
+    "    \"material\": {\"ambient\": 0.1, \"diffuse\": 0.6, \"specular\": 0.3, \"shininess\": "
+    "30},\n"
+    "    \"cut_planes\": [{\"point\": [0, 0, 0], \"normal\": [1, 0, 0]}]\n"
+    "  }]\n"
+    "}\n";
+
+static void
+test_example(void **state) {
+    (void)state;
+    vv_world *w = NULL;
+    vt_ok(vv_scene_load(&w, write_scene("example.json", example)));
+    assert_near(w->view.eye.y, -600, 0);
+    assert_near(w->view.up.z, 1, 0);
+    assert_near(w->view.fov, vv_deg_to_rad(20), 1e-15);
+    assert_int_equal(w->view.projection, VV_PROJECTION_PERSPECTIVE);
+    assert_int_equal(w->view.width, 512);
+    assert_int_equal(w->n_lights, 1);
+    assert_int_equal(w->lights[0].type, VV_LIGHT_DIRECTIONAL);
+    assert_int_equal(w->lights[0].headlight, 0);
+    assert_near(w->lights[0].direction.y, 1, 0);
+    assert_near(w->ambient.x, 1, 0);
+    assert_int_equal(w->n_objects, 1);
+    const vv_object *o = w->objects[0];
+    assert_string_equal(o->name, "head");
+    assert_int_equal(o->volume->dims[0], 6);
+    /* origin overrides the file's; spacing is the file's */
+    assert_near(o->volume->origin[0], -122, 0);
+    assert_near(o->volume->origin[2], -80.25, 0);
+    assert_near(o->volume->spacing[2], 1.5, 1e-12);
+    assert_int_equal(o->mode, VV_MODE_COMPOSITE);
+    assert_near(o->step, 0.5, 0);
+    assert_int_equal(o->segmentation, VV_SEG_TRANSFER_FUNCTION);
+    assert_int_equal(o->tf.n_opacity, 2);
+    assert_near(vv_tf_eval_opacity(&o->tf, 800), 0.25, 1e-12);
+    assert_int_equal(o->tf.n_color, 2);
+    assert_near(o->tf.opacity_unit_distance, 0.957, 0);
+    assert_near(o->material.diffuse, 0.6, 0);
+    assert_near(o->material.shininess, 30, 0);
+    assert_int_equal(o->n_cut_planes, 1);
+    assert_near(o->cut_planes[0].normal.x, 1, 0);
+    assert_int_equal(w->n_cut_planes, 0);
+    vv_world_free(w);
+}
+
+static const char *every_key =
+    "{\n"
+    "  \"view\": {\"eye\": [10, 0, 0], \"at\": [0, 0, 0], \"up\": [0, 0, 1],\n"
+    "           \"projection\": \"orthographic\", \"ortho_height\": 123.5,\n"
+    "           \"fov\": 45, \"width\": 320, \"height\": 200},\n"
+    "  \"lights\": [{\"color\": [1, 0.5, 0.25], \"intensity\": 0.75},\n"
+    "             {\"type\": \"point\", \"position\": [1, 2, 3]}],\n"
+    "  \"shading\": {\"ambient\": [0.2, 0.3, 0.4], \"background\": [0.1, 0.2, 0.3]},\n"
+    "  \"cut_planes\": [{\"point\": [1, 1, 1], \"normal\": [0, 0, -2]}],\n"
+    "  \"objects\": [\n"
+    "    {\"file\": \"ct_head.nrrd\", \"spacing\": [2, 2, 2], \"position\": [5, 6, 7],\n"
+    "     \"rotation\": {\"axis\": [0, 0, 1], \"angle\": 90}, \"scale\": 2,\n"
+    "     \"shading\": false, \"visible\": false, \"mode\": \"iso\", \"isovalue\": -250,\n"
+    "     \"segmentation\": {\"threshold\": -300},\n"
+    "     \"material\": {\"color\": [0.9, 0.8, 0.7], \"shininess\": 5}},\n"
+    "    {\"name\": \"second\", \"file\": \"ct_head.nrrd\", \"orientation\": [0, 1, 0, 0],\n"
+    "     \"scale\": [1, 2, 3], \"mode\": \"mip\", \"step\": 0.25},\n"
+    "    {\"file\": \"ct_head.nrrd\", \"mode\": \"minip\"},\n"
+    "    {\"file\": \"ct_head.nrrd\", \"mode\": \"xray\", \"transfer_function\": {\"opacity\": "
+    "[]}}\n"
+    "  ]\n"
+    "}\n";
+
+static void
+test_every_key(void **state) {
+    (void)state;
+    vv_world *w = NULL;
+    vt_ok(vv_scene_load(&w, write_scene("every.json", every_key)));
+    assert_int_equal(w->view.projection, VV_PROJECTION_ORTHOGRAPHIC);
+    assert_near(w->view.ortho_height, 123.5, 0);
+    assert_int_equal(w->view.width, 320);
+    assert_int_equal(w->view.height, 200);
+    /* a light without direction is a headlight along the view direction */
+    assert_int_equal(w->n_lights, 2);
+    assert_int_equal(w->lights[0].headlight, 1);
+    assert_near(w->lights[0].direction.x, -1, 1e-12);
+    assert_near(w->lights[0].color.z, 0.25, 0);
+    assert_near(w->lights[0].intensity, 0.75, 0);
+    assert_int_equal(w->lights[1].type, VV_LIGHT_POINT);
+    assert_near(w->lights[1].position.z, 3, 0);
+    assert_near(w->lights[1].intensity, 1, 0);
+    assert_near(w->ambient.z, 0.4, 0);
+    assert_near(w->background.y, 0.2, 0);
+    assert_int_equal(w->n_cut_planes, 1);
+    assert_near(w->cut_planes[0].normal.z, -1, 0);
+    assert_int_equal(w->n_objects, 4);
+
+    const vv_object *o = w->objects[0];
+    assert_string_equal(o->name, "ct_head");
+    assert_near(o->volume->spacing[1], 2, 0);
+    assert_near(o->volume->origin[1], 2, 1e-12); /* the file's origin */
+    assert_near(o->position.y, 6, 0);
+    vv_vec3 r = vv_quat_rotate(o->orientation, vv_vec3_make(1, 0, 0));
+    assert_near(r.y, 1, 1e-12);
+    assert_near(o->scale.z, 2, 0);
+    assert_int_equal(o->shading, 0);
+    assert_int_equal(o->visible, 0);
+    assert_int_equal(o->mode, VV_MODE_ISO);
+    assert_near(o->isovalue, -250, 0);
+    assert_int_equal(o->segmentation, VV_SEG_THRESHOLD);
+    assert_near(o->threshold, -300, 0);
+    assert_near(o->material.color.x, 0.9, 0);
+    assert_near(o->material.shininess, 5, 0);
+    assert_near(o->material.diffuse, 0.6, 0); /* default kept */
+
+    o = w->objects[1];
+    assert_string_equal(o->name, "second");
+    r = vv_quat_rotate(o->orientation, vv_vec3_make(0, 1, 0));
+    assert_near(r.y, -1, 1e-12);
+    assert_near(o->scale.y, 2, 0);
+    assert_int_equal(o->mode, VV_MODE_MIP);
+    assert_near(o->step, 0.25, 0);
+    assert_true(o->tf.n_opacity >= 2); /* the default grey ramp */
+    assert_int_equal(w->objects[2]->mode, VV_MODE_MINIP);
+    assert_int_equal(w->objects[3]->mode, VV_MODE_XRAY);
+    assert_int_equal(w->objects[3]->tf.n_opacity, 0);
+    vv_world_free(w);
+}
+
+static void
+compare_worlds(const vv_world *a, const vv_world *b) {
+    const double e = 1e-12;
+    assert_near(vv_vec3_length(vv_vec3_sub(a->view.eye, b->view.eye)), 0, e);
+    assert_near(vv_vec3_length(vv_vec3_sub(a->view.at, b->view.at)), 0, e);
+    assert_near(vv_vec3_length(vv_vec3_sub(a->view.up, b->view.up)), 0, e);
+    assert_near(a->view.fov, b->view.fov, e);
+    assert_near(a->view.ortho_height, b->view.ortho_height, 0);
+    assert_int_equal(a->view.projection, b->view.projection);
+    assert_int_equal(a->view.width, b->view.width);
+    assert_int_equal(a->view.height, b->view.height);
+    assert_int_equal(a->n_lights, b->n_lights);
+    for (int i = 0; i < a->n_lights; i++) {
+        assert_int_equal(a->lights[i].type, b->lights[i].type);
+        assert_int_equal(a->lights[i].headlight, b->lights[i].headlight);
+        assert_near(vv_vec3_length(vv_vec3_sub(a->lights[i].direction, b->lights[i].direction)), 0,
+                    e);
+        assert_near(vv_vec3_length(vv_vec3_sub(a->lights[i].position, b->lights[i].position)), 0,
+                    e);
+        assert_near(vv_vec3_length(vv_vec3_sub(a->lights[i].color, b->lights[i].color)), 0, 0);
+        assert_near(a->lights[i].intensity, b->lights[i].intensity, 0);
+    }
+    assert_near(vv_vec3_length(vv_vec3_sub(a->ambient, b->ambient)), 0, 0);
+    assert_near(vv_vec3_length(vv_vec3_sub(a->background, b->background)), 0, 0);
+    assert_int_equal(a->n_cut_planes, b->n_cut_planes);
+    for (int i = 0; i < a->n_cut_planes; i++)
+        assert_near(vv_vec3_length(vv_vec3_sub(a->cut_planes[i].normal, b->cut_planes[i].normal)),
+                    0, e);
+    assert_int_equal(a->n_objects, b->n_objects);
+    for (int i = 0; i < a->n_objects; i++) {
+        const vv_object *p = a->objects[i], *q = b->objects[i];
+        assert_string_equal(p->name, q->name);
+        for (int k = 0; k < 3; k++) {
+            assert_near(p->volume->origin[k], q->volume->origin[k], 0);
+            assert_near(p->volume->spacing[k], q->volume->spacing[k], 0);
+        }
+        assert_near(vv_vec3_length(vv_vec3_sub(p->position, q->position)), 0, 0);
+        assert_near(fabs(vv_quat_mul(p->orientation, vv_quat_conjugate(q->orientation)).w), 1, e);
+        assert_near(vv_vec3_length(vv_vec3_sub(p->scale, q->scale)), 0, 0);
+        assert_int_equal(p->mode, q->mode);
+        assert_near(p->isovalue, q->isovalue, 0);
+        assert_near(p->step, q->step, 0);
+        assert_int_equal(p->shading, q->shading);
+        assert_int_equal(p->visible, q->visible);
+        assert_int_equal(p->segmentation, q->segmentation);
+        if (p->segmentation == VV_SEG_THRESHOLD) {
+            assert_near(p->threshold, q->threshold, 0);
+        } else {
+            assert_int_equal(p->tf.n_opacity, q->tf.n_opacity);
+            assert_int_equal(p->tf.n_color, q->tf.n_color);
+            assert_memory_equal(p->tf.opacity, q->tf.opacity,
+                                (size_t)p->tf.n_opacity * sizeof p->tf.opacity[0]);
+            assert_memory_equal(p->tf.color, q->tf.color,
+                                (size_t)p->tf.n_color * sizeof p->tf.color[0]);
+            assert_near(p->tf.opacity_unit_distance, q->tf.opacity_unit_distance, 0);
+        }
+        assert_memory_equal(&p->material, &q->material, sizeof p->material);
+        assert_int_equal(p->n_cut_planes, q->n_cut_planes);
+    }
+}
+
+static void
+test_round_trip(void **state) {
+    (void)state;
+    const char *sources[] = {example, every_key};
+    for (int s = 0; s < 2; s++) {
+        vv_world *a = NULL, *b = NULL;
+        vt_ok(vv_scene_load(&a, write_scene("rt_in.json", sources[s])));
+        /* awkward values survive too */
+        a->objects[0]->position = vv_vec3_make(0.1, 1.0 / 3.0, -1e-300);
+        snprintf(a->objects[0]->name, VV_NAME_MAX, "we\"ird\\name\t");
+        const char *files[4] = {"ct_head.nrrd", "ct_head.nrrd", "ct_head.nrrd", "ct_head.nrrd"};
+        char out[1200];
+        snprintf(out, sizeof out, "%s/rt_out.json", g_dir);
+        vt_ok(vv_scene_save(a, out, files));
+        vt_ok(vv_scene_load(&b, out));
+        compare_worlds(a, b);
+        vv_world_free(a);
+        vv_world_free(b);
+    }
+    /* an empty world */
+    vv_world *a = NULL, *b = NULL;
+    vt_ok(vv_world_new(&a));
+    char out[1200];
+    snprintf(out, sizeof out, "%s/rt_empty.json", g_dir);
+    vt_ok(vv_scene_save(a, out, NULL));
+    vt_ok(vv_scene_load(&b, out));
+    compare_worlds(a, b);
+    /* a world of the default scene (headlight, histogram TF) */
+    vv_world_free(b);
+    vv_world_free(a);
+    vv_volume *v = NULL;
+    snprintf(out, sizeof out, "%s/ct_head.nrrd", g_dir);
+    vt_ok(vv_volume_load(&v, out, NULL));
+    vt_ok(vv_world_new_for_volume(&a, v, NULL));
+    vv_volume_free(v);
+    const char *files[1] = {"ct_head.nrrd"};
+    snprintf(out, sizeof out, "%s/rt_default.json", g_dir);
+    vt_ok(vv_scene_save(a, out, files));
+    vt_ok(vv_scene_load(&b, out));
+    compare_worlds(a, b);
+    /* save errors: no file names, and a failed save leaves the old file */
+    vt_err(vv_scene_save(a, out, NULL));
+    vt_err(vv_scene_save(a, "/nonexistent-dir/x/scene.json", files));
+    vv_world *c = NULL;
+    vt_ok(vv_scene_load(&c, out));
+    vv_world_free(c);
+    vv_world_free(a);
+    vv_world_free(b);
+}
+
+static void
+test_errors(void **state) {
+    (void)state;
+    expect_error("syntax.json", "{\n  \"view\": {\n    \"fov\": 20,\n  }\n}\n", 4, 3, "");
+    expect_error("empty.json", "", 1, 1, "");
+    expect_error("wrong_type.json",
+                 "{\n  \"view\": {\n    \"width\": 10,\n    \"fov\": \"wide\"\n  }\n}\n", 4, 5,
+                 "view.fov: expected a number, got a string");
+    expect_error(
+        "unknown.json",
+        "{\"objects\": [\n  {\"file\": \"ct_head.nrrd\",\n   \"trasnfer_function\": {}}]}\n", 3, 4,
+        "objects[0].trasnfer_function: unknown key (did you mean transfer_function?)");
+    expect_error("unknown_top.json", "{\"view\": {},\n \"zebra\": 1}", 2, 2,
+                 "zebra: unknown key; expected one of");
+    expect_error("missing.json", "{\"objects\": [\n  {\"name\": \"x\"}\n]}", 2, 3,
+                 "objects[0]: missing required key \"file\"");
+    expect_error("bad_mode.json",
+                 "{\"objects\": [{\"file\": \"ct_head.nrrd\",\n \"mode\": \"mipp\"}]}", 2, 2,
+                 "objects[0].mode: unknown mode \"mipp\"");
+    expect_error("iso.json", "{\"objects\": [{\"file\": \"ct_head.nrrd\",\n  \"mode\": \"iso\"}]}",
+                 2, 3, "needs an \"isovalue\"");
+    expect_error("no_volume.json", "{\"objects\": [{\n  \"file\": \"nothere.nrrd\"}]}", 2, 3,
+                 "objects[0].file");
+    expect_error("width.json", "{\"view\": {\"width\": 0}}", 1, 11, "view.width: 0 is outside");
+    expect_error("width2.json", "{\"view\": {\"width\": 10.5}}", 1, 11, "expected an integer");
+    expect_error("fov.json", "{\"view\": {\"fov\": 180}}", 1, 11, "view.fov");
+    expect_error("opacity.json",
+                 "{\"objects\": [{\"file\": \"ct_head.nrrd\", \"transfer_function\":\n"
+                 "  {\"opacity\": [[0, 0], [1, 1.5]]}}]}",
+                 2, 28, "objects[0].transfer_function.opacity[1][1]: opacity 1.5 is outside");
+    expect_error("color.json", "{\"view\": {\"background\": [0, 2, 0]}}", 1, 11, "outside [0, 1]");
+    expect_error("step.json", "{\"objects\": [{\"file\": \"ct_head.nrrd\", \"step\": 0}]}", 1, 39,
+                 "objects[0].step");
+    expect_error("normal.json",
+                 "{\"cut_planes\": [{\"point\": [0, 0, 0],\n \"normal\": [0, 0, 0]}]}", 2, 2,
+                 "cut_planes[0].normal: must not be the zero vector");
+    expect_error("vec.json", "{\"view\": {\"eye\": [1, 2]}}", 1, 11,
+                 "view.eye: expected an array of 3");
+    expect_error("elem.json", "{\"view\": {\"eye\": [1, \"2\", 3]}}", 1, 22, "view.eye[1]");
+    expect_error("top.json", "[1, 2]", 1, 1, "expected a JSON object at the top level");
+    expect_error("dup.json", "{\"view\": {}, \"view\": {}}", 1, 19, "duplicate");
+    expect_error("tf_noopacity.json",
+                 "{\"objects\": [{\"file\": \"ct_head.nrrd\", \"transfer_function\": {}}]}", 1, 39,
+                 "missing required key \"opacity\"");
+    expect_error(
+        "both.json",
+        "{\"objects\": [{\"file\": \"ct_head.nrrd\", \"transfer_function\": {\"opacity\": []},\n"
+        "  \"segmentation\": {\"threshold\": 1}}]}",
+        2, 3, "not both");
+    expect_error("light.json", "{\"lights\": [{\"type\": \"spot\"}]}", 1, 14, "unknown light type");
+    expect_error("point.json", "{\"lights\": [{\"type\": \"point\"}]}", 1, 13,
+                 "missing required key \"position\"");
+    expect_error("up.json", "{\"view\": {\"eye\": [0, 0, -5], \"up\": [0, 0, 1]}}", 1, 30,
+                 "parallel");
+    expect_error("utf8.json", "{\"objects\": [{\"name\": \"\xc3\xa9\xc3\xa9\", \"file\": 5}]}", 1,
+                 29, "objects[0].file: expected a string, got a number");
+
+    /* a missing scene file, and a file over the size limit */
+    vv_world *w = NULL;
+    char path[1200];
+    snprintf(path, sizeof path, "%s/absent.json", g_dir);
+    vt_err(vv_scene_load(&w, path));
+    assert_null(w);
+    assert_non_null(strstr(vv_error_message(), "absent.json"));
+    size_t big = (16u << 20) + 10;
+    char *text = malloc(big);
+    assert_non_null(text);
+    memset(text, ' ', big);
+    text[0] = '{';
+    text[big - 1] = '}';
+    snprintf(path, sizeof path, "%s/big.json", g_dir);
+    vt_write_file(path, text, big);
+    free(text);
+    vt_err(vv_scene_load(&w, path));
+    assert_null(w);
+    vt_err(vv_scene_load(NULL, path));
+}
+
+int
+main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_example),
+        cmocka_unit_test(test_every_key),
+        cmocka_unit_test(test_round_trip),
+        cmocka_unit_test(test_errors),
+    };
+    return cmocka_run_group_tests(tests, setup, NULL);
+}
