@@ -42,8 +42,10 @@ typedef struct vv_tf_color_point {
 /**
  * Piecewise-linear opacity and colour transfer functions of the data value.
  * Points are kept sorted by value; outside the first and last point the end
- * values hold. With no colour points the colour is white; with no opacity
- * points the opacity is 0. Opacity is per opacity_unit_distance (world units)
+ * values hold; two points at the same value make a step (the one added later
+ * holds from that value up). With no colour points the colour is white; with
+ * no opacity points the opacity is 0. A NaN value has opacity 0 and the
+ * first colour. Opacity is per opacity_unit_distance (world units)
  * of ray length; a renderer that steps by s uses 1 - (1 - a)^(s / unit).
  */
 typedef struct vv_tf {
@@ -121,21 +123,34 @@ typedef struct vv_view {
 } vv_view;
 
 /**
- * The primary ray through the centre of pixel (px, py), row 0 at the top.
- * dir is unit. Pixel coordinates may be fractional.
+ * The primary ray through image position (px + 0.5, py + 0.5): pixel (px,
+ * py) covers [px, px + 1) x [py, py + 1), so integer px, py give the ray
+ * through the centre of that pixel. Column 0 is at the left, row 0 at the
+ * top. Fractional coordinates are allowed (supersampling).
+ *
+ * Camera basis: forward = normalize(at - eye), right = normalize(forward x
+ * up), true up = right x forward (a degenerate up falls back to +z or +x).
+ * Perspective: origin at the eye, dir through the image plane spanning
+ * vertical angle fov and aspect width/height. Orthographic: dir = forward,
+ * origin on the plane through the eye, the view ortho_height tall and
+ * ortho_height * width / height wide. dir is unit.
  */
 vv_ray vv_view_ray(const vv_view *view, double px, double py);
 
 /**
- * Moves the eye along the current viewing direction so that a sphere around
- * @p box fits in the view (both axes); sets `at` to the box centre.
+ * Sets `at` to the centre of @p box and moves the eye along the current
+ * viewing direction so that the bounding sphere of the box fits the view
+ * (the narrower of the two image axes). Perspective: distance r / sin(half
+ * the narrower field of view). Orthographic: ortho_height is set to hold the
+ * sphere in both axes and the eye is put 2r from the centre. `up` is kept.
  */
 void vv_view_frame_box(vv_view *view, vv_box box);
 
 /**
  * Places the eye on a sphere around `at` by azimuth (about `up`) and
  * elevation (towards `up`), both radians, relative to the current eye
- * direction, keeping the distance.
+ * direction, keeping the distance. The up vector turns with the elevation
+ * (a trackball), so orbiting over a pole never degenerates.
  */
 void vv_view_orbit(vv_view *view, double azimuth, double elevation);
 
@@ -183,16 +198,19 @@ typedef struct vv_object {
 /**
  * A new volume object holding a reference to @p volume (borrowed; the object
  * takes its own reference): identity transform, composite mode, step 0.5,
- * shading on, material ka 0.1 kd 0.6 ks 0.3 shininess 30 colour white, TF a
- * ramp over the volume's range. Errors: VV_ERR_NOMEM, VV_ERR_INVALID.
+ * shading on, visible, material ka 0.1 kd 0.6 ks 0.3 shininess 30 colour
+ * white, TF a white ramp from opacity 0 at range[0] to 1 at range[1] with
+ * opacity_unit_distance the smallest voxel spacing; threshold and isovalue
+ * the middle of the range. @p name may be NULL ("volume"); it is truncated
+ * to VV_NAME_MAX - 1 bytes. Errors: VV_ERR_NOMEM, VV_ERR_INVALID.
  */
 vv_status vv_object_new_volume(vv_object **out, vv_volume *volume, const char *name);
 void vv_object_free(vv_object *obj);
-/** Object-to-world matrix (position, orientation, scale). */
+/** Object-to-world matrix T(position) * R(orientation) * S(scale). */
 vv_mat4 vv_object_matrix(const vv_object *obj);
 /** Index-to-world matrix of the object's volume: object matrix * volume index-to-world. */
 vv_mat4 vv_object_index_to_world(const vv_object *obj);
-/** World bounding box of the object's volume. */
+/** World bounding box of the object's volume (its 8 index-box corners transformed). */
 vv_box vv_object_world_box(const vv_object *obj);
 
 /* ---- world ------------------------------------------------------------ */
@@ -211,8 +229,9 @@ typedef struct vv_world {
 } vv_world;
 
 /**
- * An empty World: a 512x512 perspective view (fov 30°) from +y... looking at
- * the origin, no lights, ambient (1,1,1), black background.
+ * An empty World: a 512x512 perspective view with fov 30° from eye
+ * (0, -1000, 0) looking at the origin with up +z (ortho_height 500), no
+ * objects, no lights, no cut planes, ambient (1,1,1), black background.
  */
 vv_status vv_world_new(vv_world **out);
 void vv_world_free(vv_world *w);
@@ -242,24 +261,37 @@ void vv_default_scene_options_init(vv_default_scene_options *o);
 
 /**
  * A World showing one volume the way a user expects from `volvis render
- * FILE`: the volume centred on the origin, a perspective view from the front
- * (-y, up +z) framing it, a headlight, and a transfer function from the
- * histogram (or the given range). Takes its own reference to @p volume.
+ * FILE`: the volume centred on the origin (object position = minus the
+ * centre of its world box), a perspective view (fov 30°) from the front
+ * (eye on -y, up +z) framed with vv_view_frame_box, orbited by azimuth and
+ * elevation, then the eye distance divided by zoom; one white headlight of
+ * intensity 1, ambient (1,1,1), black background; material and step as
+ * vv_object_new_volume; and a transfer function from the histogram (or the
+ * given range). The rule is in docs/scene-format.md, "Default scene". @p opt
+ * may be NULL (defaults). Takes its own reference to @p volume. Errors:
+ * VV_ERR_INVALID (bad options), VV_ERR_NOMEM.
  */
 vv_status vv_world_new_for_volume(vv_world **out, vv_volume *volume,
                                   const vv_default_scene_options *opt);
 
 /**
- * Loads a scene file (JSON, docs/scene-format.md). Volume files are resolved
- * relative to the scene file and loaded with vv_volume_load. Errors:
- * VV_ERR_IO, VV_ERR_FORMAT ("scene.json:12:7: expected a number for
- * view.fov"), or whatever loading a volume returned.
+ * Loads a scene file (JSON, docs/scene-format.md; at most 16 MiB). Volume
+ * files are resolved relative to the scene file and loaded with
+ * vv_volume_load. Unknown keys are errors. On failure *out is NULL. Errors:
+ * VV_ERR_IO, VV_ERR_LIMIT (file too large), VV_ERR_FORMAT with the file,
+ * line and column (1-based) and the path of the offending value
+ * ("scene.json:12:7: view.fov: expected a number, got a string"), or
+ * whatever loading a volume returned, prefixed with the position of its
+ * "file" key.
  */
 vv_status vv_scene_load(vv_world **out, const char *path);
 
 /**
  * Writes a World as a scene file, atomically. Volumes are referred to by
- * @p volume_files[i] for object i (relative to the scene file). Errors:
+ * @p volume_files[i] for object i (relative to the scene file; may be NULL
+ * when there are no objects). Every field is written (the volume's current
+ * origin and spacing too), so vv_scene_load of the file reproduces the
+ * World; the TF of a threshold-segmented object is not kept. Errors:
  * VV_ERR_IO, VV_ERR_INVALID.
  */
 vv_status vv_scene_save(const vv_world *w, const char *path, const char *const *volume_files);
