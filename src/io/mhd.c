@@ -149,6 +149,9 @@ mhd_expand_pattern(mhd_header *h, const char *value) {
         q++;
     if (*q != 'd' && *q != 'i')
         return vv_error_set(VV_ERR_FORMAT, "bad ElementDataFile pattern \"%s\"", fmt);
+    /* Bounded first so that the arithmetic below cannot overflow. */
+    if (labs(lo) > 1000000000L || labs(hi) > 1000000000L || labs(step) > 1000000000L)
+        return vv_error_set(VV_ERR_FORMAT, "bad ElementDataFile range %ld %ld %ld", lo, hi, step);
     if (step == 0 || (hi - lo) / step < 0 || (hi - lo) / step >= MHD_MAX_FILES)
         return vv_error_set(VV_ERR_FORMAT, "bad ElementDataFile range %ld %ld %ld", lo, hi, step);
     long count = (hi - lo) / step + 1;

@@ -6,6 +6,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/types.h>
 
 #include "core/internal.h"
@@ -43,12 +44,10 @@ raw_read_stream(vv_volume **out, FILE *fp, const vv_raw_params *p) {
     vv_status s = vv_volume_check_size(p->dims, p->type, &bytes);
     if (s != VV_OK)
         return s;
-    if (fseeko(fp, 0, SEEK_END) != 0)
-        return vv_error_set(VV_ERR_IO, "cannot seek: %s", strerror(errno));
-    off_t end = ftello(fp);
-    if (end < 0)
-        return vv_error_set(VV_ERR_IO, "cannot tell the file size: %s", strerror(errno));
-    uint64_t size = (uint64_t)end;
+    struct stat st;
+    if (fstat(fileno(fp), &st) != 0 || !S_ISREG(st.st_mode))
+        return vv_error_set(VV_ERR_IO, "not a regular file");
+    uint64_t size = (uint64_t)st.st_size;
     if (p->header_skip > size || size - p->header_skip < bytes)
         return vv_error_set(VV_ERR_FORMAT,
                             "file too small: %d x %d x %d %s after a %llu-byte header needs "

@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <sys/types.h>
 
 #include "core/internal.h"
@@ -282,10 +283,11 @@ vv_slc_read(vv_volume **out, const char *path) {
     if (!in.fp)
         return vv_error_set(VV_ERR_IO, "slc: %s: cannot open: %s", name, strerror(errno));
     vv_status s;
-    if (fseeko(in.fp, 0, SEEK_END) != 0 || ftello(in.fp) < 0) {
-        s = vv_error_set(VV_ERR_IO, "cannot seek: %s", strerror(errno));
+    struct stat st;
+    if (fstat(fileno(in.fp), &st) != 0 || !S_ISREG(st.st_mode)) {
+        s = vv_error_set(VV_ERR_IO, "not a regular file");
     } else {
-        in.size = (uint64_t)ftello(in.fp);
+        in.size = (uint64_t)st.st_size;
         rewind(in.fp);
         s = slc_read_stream(out, &in);
     }

@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 #include <sys/types.h>
 
 #include "core/internal.h"
@@ -352,10 +353,11 @@ vv_vtk_read(vv_volume **out, const char *path) {
     if (!in.fp)
         return vv_error_set(VV_ERR_IO, "vtk: %s: cannot open: %s", name, strerror(errno));
     vv_status s;
-    if (fseeko(in.fp, 0, SEEK_END) != 0 || ftello(in.fp) < 0) {
-        s = vv_error_set(VV_ERR_IO, "cannot seek: %s", strerror(errno));
+    struct stat st;
+    if (fstat(fileno(in.fp), &st) != 0 || !S_ISREG(st.st_mode)) {
+        s = vv_error_set(VV_ERR_IO, "not a regular file");
     } else {
-        in.size = (uint64_t)ftello(in.fp);
+        in.size = (uint64_t)st.st_size;
         rewind(in.fp);
         s = vtk_read_stream(out, &in);
     }

@@ -233,6 +233,17 @@ test_data_files(void **state) {
                                     NULL, 0)));
     assert_memory_equal(v->data, d, 12);
     vv_volume_free(v);
+    /* Patterns with a bad range or conversion. */
+    vt_err(vv_mhd_read(&v, write_mha("pattern2.mhd",
+                                     "NDims = 3\nDimSize = 2 2 3\nElementType = MET_UCHAR\n"
+                                     "ElementDataFile = s%d.raw -9223372036854775807 "
+                                     "9223372036854775807 1\n",
+                                     NULL, 0)));
+    vt_err(vv_mhd_read(&v, write_mha("pattern3.mhd",
+                                     "NDims = 3\nDimSize = 2 2 3\nElementType = MET_UCHAR\n"
+                                     "ElementDataFile = s%s.raw 1 3 1\n",
+                                     NULL, 0)));
+    assert_null(v);
     /* A list naming a missing file. */
     vt_err(vv_mhd_read(&v, write_mha("list2.mhd",
                                      "NDims = 3\nDimSize = 2 2 3\nElementType = MET_UCHAR\n"

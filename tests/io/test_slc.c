@@ -323,6 +323,7 @@ test_bad_input(void **state) {
     expect_error("raw.slc", raw, sizeof raw - 1, VV_ERR_FORMAT, "truncated");
 
     vv_volume *v = (vv_volume *)1;
+    assert_int_equal(vv_slc_read(&v, vt_outdir("io_slc_bad")), VV_ERR_IO); /* a directory */
     vt_err(vv_slc_read(&v, "/nonexistent/dir/x.slc"));
     assert_null(v);
     assert_int_equal(vv_slc_read(&v, "/nonexistent/dir/x.slc"), VV_ERR_IO);
