@@ -147,8 +147,9 @@ slc_rle_decode(const unsigned char *in, uint64_t n, unsigned char *out, uint64_t
 
 static vv_status
 slc_read_stream(vv_volume **out, slc_in *in) {
-    long magic, nx, ny, nz, bits, unit, origin, mod, comp, iw, ih;
-    double sp[3];
+    long magic = 0, nx = 0, ny = 0, nz = 0, bits = 0, unit = 0, origin = 0, mod = 0, comp = 0;
+    long iw = 0, ih = 0;
+    double sp[3] = {0, 0, 0};
     vv_status s;
     if ((s = slc_read_long(in, "magic", &magic)) != VV_OK)
         return s;
@@ -232,7 +233,7 @@ slc_read_stream(vv_volume **out, slc_in *in) {
             }
             continue;
         }
-        long n;
+        long n = 0;
         char what[48];
         snprintf(what, sizeof what, "slice %ld: size", z);
         if ((s = slc_read_long(in, what, &n)) != VV_OK || (s = slc_expect_x(in, what)) != VV_OK)
@@ -408,7 +409,7 @@ slc_write_stream(const vv_volume *v, FILE *fp, int rle) {
         origin = VV_ORIGIN_OTHER;
     if (mod < 0 || mod > 4)
         mod = VV_MOD_OTHER;
-    int iw, ih;
+    int iw = 0, ih = 0;
     unsigned char *icon = NULL;
     vv_status s = slc_make_icon(v, &iw, &ih, &icon);
     if (s != VV_OK)

@@ -274,7 +274,7 @@ vtk_read_stream(vv_volume **out, vtk_in *in) {
     int nf = sscanf(line, "%255s %255s %ld %255s", name, tname, &ncomp, extra);
     if (nf < 2)
         return vv_error_set(VV_ERR_FORMAT, "SCALARS: expected a name and a type");
-    vv_voxel_type type;
+    vv_voxel_type type = VV_U8;
     if ((s = vtk_parse_type(tname, &type)) != VV_OK)
         return s;
     if (nf >= 3 && ncomp != 1)
