@@ -60,8 +60,7 @@ void vv_image_to_8bit(const vv_image *img, int channels, double gamma, uint8_t *
  * libpng, atomically: a temporary file beside @p path is renamed over it
  * only when complete. Errors: VV_ERR_IO with the path and the reason.
  */
-vv_status vv_image_write_png(const vv_image *img, const char *path, double gamma,
-                             int with_alpha);
+vv_status vv_image_write_png(const vv_image *img, const char *path, double gamma, int with_alpha);
 
 /**
  * Reads an 8-bit or 16-bit PNG (grey, grey+alpha, RGB, RGBA, palette) into a

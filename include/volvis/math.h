@@ -82,8 +82,8 @@ vv_mat4 vv_mat4_look_at(vv_vec3 eye, vv_vec3 at, vv_vec3 up);
 /** OpenGL-style perspective projection; fovy in radians, clip z to [-1, 1]. */
 vv_mat4 vv_mat4_perspective(double fovy, double aspect, double znear, double zfar);
 /** OpenGL-style orthographic projection onto clip space [-1, 1]^3. */
-vv_mat4 vv_mat4_orthographic(double left, double right, double bottom, double top,
-                             double znear, double zfar);
+vv_mat4 vv_mat4_orthographic(double left, double right, double bottom, double top, double znear,
+                             double zfar);
 
 vv_quat vv_quat_identity(void);
 /** Rotation by @p angle radians about @p axis (need not be unit). */

@@ -118,7 +118,7 @@ typedef struct vv_view {
     double fov;          /**< vertical field of view, radians (perspective) */
     double ortho_height; /**< world height of the view (orthographic) */
     vv_projection projection;
-    int width;  /**< image size in pixels */
+    int width; /**< image size in pixels */
     int height;
 } vv_view;
 

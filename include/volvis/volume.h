@@ -80,18 +80,18 @@ typedef enum vv_modification {
 #define VV_VOLUME_MAX_BYTES (((uint64_t)32) << 30)
 
 typedef struct vv_volume {
-    int dims[3];           /**< voxels along i, j, k; each >= 1 */
-    double spacing[3];     /**< world units between voxel centres, > 0 */
-    double origin[3];      /**< world position of voxel (0, 0, 0) */
-    double direction[9];   /**< row-major 3x3; columns are the i, j, k axes */
-    vv_voxel_type type;    /**< native voxel type of data */
-    double range[2];       /**< min and max voxel value (vv_volume_update_range) */
-    void *data;            /**< dims[0]*dims[1]*dims[2] voxels; owned */
-    vv_unit unit;          /**< length unit of spacing and origin */
+    int dims[3];         /**< voxels along i, j, k; each >= 1 */
+    double spacing[3];   /**< world units between voxel centres, > 0 */
+    double origin[3];    /**< world position of voxel (0, 0, 0) */
+    double direction[9]; /**< row-major 3x3; columns are the i, j, k axes */
+    vv_voxel_type type;  /**< native voxel type of data */
+    double range[2];     /**< min and max voxel value (vv_volume_update_range) */
+    void *data;          /**< dims[0]*dims[1]*dims[2] voxels; owned */
+    vv_unit unit;        /**< length unit of spacing and origin */
     vv_data_origin data_origin;
     vv_modification modification;
-    uint64_t modified;     /**< bumped on each change, for caches */
-    int refcount;          /**< use vv_volume_ref / vv_volume_free */
+    uint64_t modified; /**< bumped on each change, for caches */
+    int refcount;      /**< use vv_volume_ref / vv_volume_free */
 } vv_volume;
 
 /** Bytes per voxel of a type (1, 2, 4 or 8). */
@@ -173,8 +173,7 @@ int vv_volume_gradient_world(const vv_volume *v, vv_vec3 p, vv_vec3 *gradient);
  * nbins entries and is overwritten. Errors: VV_ERR_INVALID if nbins < 1 or
  * hi <= lo.
  */
-vv_status vv_volume_histogram(const vv_volume *v, int nbins, double lo, double hi,
-                              uint64_t *bins);
+vv_status vv_volume_histogram(const vv_volume *v, int nbins, double lo, double hi, uint64_t *bins);
 
 /**
  * The value below which a fraction @p q of the voxels lies (q in [0, 1]),

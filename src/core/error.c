@@ -4,16 +4,15 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "vv_version.h"
 #include "volvis/core.h"
+#include "vv_version.h"
 
 #define VV_TRACE_MAX 2048
 
 static _Thread_local char trace[VV_TRACE_MAX];
 
 const char *
-vv_status_name(vv_status s)
-{
+vv_status_name(vv_status s) {
     switch (s) {
     case VV_OK:
         return "VV_OK";
@@ -36,20 +35,17 @@ vv_status_name(vv_status s)
 }
 
 const char *
-vv_error_message(void)
-{
+vv_error_message(void) {
     return trace;
 }
 
 void
-vv_error_clear(void)
-{
+vv_error_clear(void) {
     trace[0] = '\0';
 }
 
 vv_status
-vv_error_set(vv_status s, const char *fmt, ...)
-{
+vv_error_set(vv_status s, const char *fmt, ...) {
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(trace, sizeof trace, fmt, ap);
@@ -58,8 +54,7 @@ vv_error_set(vv_status s, const char *fmt, ...)
 }
 
 vv_status
-vv_error_prefix(vv_status s, const char *fmt, ...)
-{
+vv_error_prefix(vv_status s, const char *fmt, ...) {
     char prefix[VV_TRACE_MAX];
     char old[VV_TRACE_MAX];
     va_list ap;
@@ -86,8 +81,7 @@ vv_error_prefix(vv_status s, const char *fmt, ...)
 }
 
 int
-vv_progress_report(const vv_progress *p, double fraction)
-{
+vv_progress_report(const vv_progress *p, double fraction) {
     if (!p || !p->fn)
         return 0;
     if (fraction < 0)
@@ -98,19 +92,16 @@ vv_progress_report(const vv_progress *p, double fraction)
 }
 
 void
-vv_threads_set(int n)
-{
+vv_threads_set(int n) {
     omp_set_num_threads(n > 0 ? n : omp_get_num_procs());
 }
 
 int
-vv_threads_get(void)
-{
+vv_threads_get(void) {
     return omp_get_max_threads();
 }
 
 const char *
-vv_version(void)
-{
+vv_version(void) {
     return VV_VERSION_STRING;
 }

@@ -9,8 +9,7 @@
 #include "core/internal.h"
 
 char *
-vv_strdup(const char *s)
-{
+vv_strdup(const char *s) {
     size_t n = strlen(s) + 1;
     char *d = malloc(n);
     if (d)
@@ -19,8 +18,7 @@ vv_strdup(const char *s)
 }
 
 vv_status
-vv_atomic_file_open(vv_atomic_file *af, const char *path)
-{
+vv_atomic_file_open(vv_atomic_file *af, const char *path) {
     memset(af, 0, sizeof *af);
     size_t n = strlen(path);
     af->path = vv_strdup(path);
@@ -57,8 +55,7 @@ vv_atomic_file_open(vv_atomic_file *af, const char *path)
 }
 
 vv_status
-vv_atomic_file_commit(vv_atomic_file *af)
-{
+vv_atomic_file_commit(vv_atomic_file *af) {
     if (!af->fp)
         return vv_error_set(VV_ERR_IO, "atomic file not open");
     int bad = ferror(af->fp) || fflush(af->fp) != 0 || fsync(fileno(af->fp)) != 0;
@@ -86,8 +83,7 @@ vv_atomic_file_commit(vv_atomic_file *af)
 }
 
 void
-vv_atomic_file_abort(vv_atomic_file *af)
-{
+vv_atomic_file_abort(vv_atomic_file *af) {
     if (af->fp)
         fclose(af->fp);
     if (af->tmp_path)
@@ -98,8 +94,7 @@ vv_atomic_file_abort(vv_atomic_file *af)
 }
 
 vv_status
-vv_read_file(const char *path, uint64_t max_bytes, unsigned char **data, uint64_t *size)
-{
+vv_read_file(const char *path, uint64_t max_bytes, unsigned char **data, uint64_t *size) {
     *data = NULL;
     *size = 0;
     FILE *f = fopen(path, "rb");
@@ -112,8 +107,8 @@ vv_read_file(const char *path, uint64_t max_bytes, unsigned char **data, uint64_
     }
     if ((uint64_t)st.st_size > max_bytes) {
         fclose(f);
-        return vv_error_set(VV_ERR_LIMIT, "%s: file of %lld bytes is over the limit of %llu",
-                            path, (long long)st.st_size, (unsigned long long)max_bytes);
+        return vv_error_set(VV_ERR_LIMIT, "%s: file of %lld bytes is over the limit of %llu", path,
+                            (long long)st.st_size, (unsigned long long)max_bytes);
     }
     size_t n = (size_t)st.st_size;
     unsigned char *buf = malloc(n + 1);
@@ -134,15 +129,13 @@ vv_read_file(const char *path, uint64_t max_bytes, unsigned char **data, uint64_
 }
 
 const char *
-vv_path_basename(const char *path)
-{
+vv_path_basename(const char *path) {
     const char *s = strrchr(path, '/');
     return s ? s + 1 : path;
 }
 
 char *
-vv_path_join_dir(const char *base_file, const char *rel)
-{
+vv_path_join_dir(const char *base_file, const char *rel) {
     if (rel[0] == '/')
         return vv_strdup(rel);
     const char *slash = strrchr(base_file, '/');
@@ -159,15 +152,13 @@ vv_path_join_dir(const char *base_file, const char *rel)
 }
 
 int
-vv_host_is_little_endian(void)
-{
+vv_host_is_little_endian(void) {
     const uint16_t one = 1;
     return *(const uint8_t *)&one == 1;
 }
 
 void
-vv_byteswap(void *data, uint64_t count, size_t size)
-{
+vv_byteswap(void *data, uint64_t count, size_t size) {
     uint8_t *p = data;
     if (size < 2)
         return;

@@ -5,8 +5,7 @@
 #include "volvis/image.h"
 
 vv_status
-vv_image_new(vv_image **out, int width, int height)
-{
+vv_image_new(vv_image **out, int width, int height) {
     *out = NULL;
     if (width < 1 || height < 1 || width > VV_IMAGE_MAX_SIDE || height > VV_IMAGE_MAX_SIDE)
         return vv_error_set(VV_ERR_INVALID, "image size %d x %d is outside 1..%d", width, height,
@@ -29,8 +28,7 @@ vv_image_new(vv_image **out, int width, int height)
 }
 
 void
-vv_image_free(vv_image *img)
-{
+vv_image_free(vv_image *img) {
     if (!img)
         return;
     free(img->rgba);
@@ -39,8 +37,7 @@ vv_image_free(vv_image *img)
 }
 
 void
-vv_image_clear(vv_image *img, float r, float g, float b, float a)
-{
+vv_image_clear(vv_image *img, float r, float g, float b, float a) {
     size_t n = (size_t)img->width * (size_t)img->height;
     for (size_t i = 0; i < n; i++) {
         img->rgba[4 * i + 0] = r;
@@ -52,8 +49,7 @@ vv_image_clear(vv_image *img, float r, float g, float b, float a)
 }
 
 static uint8_t
-to8(float v, double inv_gamma)
-{
+to8(float v, double inv_gamma) {
     if (!(v > 0))
         return 0;
     if (v >= 1)
@@ -63,8 +59,7 @@ to8(float v, double inv_gamma)
 }
 
 void
-vv_image_to_8bit(const vv_image *img, int channels, double gamma, uint8_t *out)
-{
+vv_image_to_8bit(const vv_image *img, int channels, double gamma, uint8_t *out) {
     double ig = gamma > 0 ? 1.0 / gamma : 1.0;
     size_t n = (size_t)img->width * (size_t)img->height;
     for (size_t i = 0; i < n; i++) {
@@ -76,8 +71,7 @@ vv_image_to_8bit(const vv_image *img, int channels, double gamma, uint8_t *out)
 }
 
 double
-vv_image_psnr(const vv_image *a, const vv_image *b)
-{
+vv_image_psnr(const vv_image *a, const vv_image *b) {
     if (a->width != b->width || a->height != b->height)
         return NAN;
     size_t n = (size_t)a->width * (size_t)a->height;

@@ -4,77 +4,65 @@
 #include "volvis/math.h"
 
 vv_vec3
-vv_vec3_make(double x, double y, double z)
-{
+vv_vec3_make(double x, double y, double z) {
     vv_vec3 v = {x, y, z};
     return v;
 }
 
 vv_vec3
-vv_vec3_add(vv_vec3 a, vv_vec3 b)
-{
+vv_vec3_add(vv_vec3 a, vv_vec3 b) {
     return vv_vec3_make(a.x + b.x, a.y + b.y, a.z + b.z);
 }
 
 vv_vec3
-vv_vec3_sub(vv_vec3 a, vv_vec3 b)
-{
+vv_vec3_sub(vv_vec3 a, vv_vec3 b) {
     return vv_vec3_make(a.x - b.x, a.y - b.y, a.z - b.z);
 }
 
 vv_vec3
-vv_vec3_scale(vv_vec3 a, double s)
-{
+vv_vec3_scale(vv_vec3 a, double s) {
     return vv_vec3_make(a.x * s, a.y * s, a.z * s);
 }
 
 vv_vec3
-vv_vec3_mul(vv_vec3 a, vv_vec3 b)
-{
+vv_vec3_mul(vv_vec3 a, vv_vec3 b) {
     return vv_vec3_make(a.x * b.x, a.y * b.y, a.z * b.z);
 }
 
 double
-vv_vec3_dot(vv_vec3 a, vv_vec3 b)
-{
+vv_vec3_dot(vv_vec3 a, vv_vec3 b) {
     return a.x * b.x + a.y * b.y + a.z * b.z;
 }
 
 vv_vec3
-vv_vec3_cross(vv_vec3 a, vv_vec3 b)
-{
+vv_vec3_cross(vv_vec3 a, vv_vec3 b) {
     return vv_vec3_make(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
 }
 
 double
-vv_vec3_length(vv_vec3 a)
-{
+vv_vec3_length(vv_vec3 a) {
     return sqrt(vv_vec3_dot(a, a));
 }
 
 vv_vec3
-vv_vec3_normalize(vv_vec3 a)
-{
+vv_vec3_normalize(vv_vec3 a) {
     double l = vv_vec3_length(a);
     return l > 0 ? vv_vec3_scale(a, 1.0 / l) : a;
 }
 
 vv_vec3
-vv_vec3_lerp(vv_vec3 a, vv_vec3 b, double t)
-{
+vv_vec3_lerp(vv_vec3 a, vv_vec3 b, double t) {
     return vv_vec3_add(a, vv_vec3_scale(vv_vec3_sub(b, a), t));
 }
 
 vv_mat4
-vv_mat4_identity(void)
-{
+vv_mat4_identity(void) {
     vv_mat4 r = {{{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}}};
     return r;
 }
 
 vv_mat4
-vv_mat4_mul(vv_mat4 a, vv_mat4 b)
-{
+vv_mat4_mul(vv_mat4 a, vv_mat4 b) {
     vv_mat4 r;
     for (int i = 0; i < 4; i++)
         for (int j = 0; j < 4; j++) {
@@ -87,8 +75,7 @@ vv_mat4_mul(vv_mat4 a, vv_mat4 b)
 }
 
 vv_mat4
-vv_mat4_transpose(vv_mat4 a)
-{
+vv_mat4_transpose(vv_mat4 a) {
     vv_mat4 r;
     for (int i = 0; i < 4; i++)
         for (int j = 0; j < 4; j++)
@@ -97,8 +84,7 @@ vv_mat4_transpose(vv_mat4 a)
 }
 
 vv_mat4
-vv_mat4_inverse(vv_mat4 a, int *ok)
-{
+vv_mat4_inverse(vv_mat4 a, int *ok) {
     /* Gauss-Jordan elimination with partial pivoting. */
     double m[4][8];
     for (int i = 0; i < 4; i++)
@@ -144,8 +130,7 @@ vv_mat4_inverse(vv_mat4 a, int *ok)
 }
 
 vv_vec3
-vv_mat4_mul_point(vv_mat4 m, vv_vec3 p)
-{
+vv_mat4_mul_point(vv_mat4 m, vv_vec3 p) {
     double x = m.m[0][0] * p.x + m.m[0][1] * p.y + m.m[0][2] * p.z + m.m[0][3];
     double y = m.m[1][0] * p.x + m.m[1][1] * p.y + m.m[1][2] * p.z + m.m[1][3];
     double z = m.m[2][0] * p.x + m.m[2][1] * p.y + m.m[2][2] * p.z + m.m[2][3];
@@ -156,16 +141,14 @@ vv_mat4_mul_point(vv_mat4 m, vv_vec3 p)
 }
 
 vv_vec3
-vv_mat4_mul_dir(vv_mat4 m, vv_vec3 v)
-{
+vv_mat4_mul_dir(vv_mat4 m, vv_vec3 v) {
     return vv_vec3_make(m.m[0][0] * v.x + m.m[0][1] * v.y + m.m[0][2] * v.z,
                         m.m[1][0] * v.x + m.m[1][1] * v.y + m.m[1][2] * v.z,
                         m.m[2][0] * v.x + m.m[2][1] * v.y + m.m[2][2] * v.z);
 }
 
 vv_mat4
-vv_mat4_translate(vv_vec3 t)
-{
+vv_mat4_translate(vv_vec3 t) {
     vv_mat4 r = vv_mat4_identity();
     r.m[0][3] = t.x;
     r.m[1][3] = t.y;
@@ -174,8 +157,7 @@ vv_mat4_translate(vv_vec3 t)
 }
 
 vv_mat4
-vv_mat4_scale(vv_vec3 s)
-{
+vv_mat4_scale(vv_vec3 s) {
     vv_mat4 r = vv_mat4_identity();
     r.m[0][0] = s.x;
     r.m[1][1] = s.y;
@@ -184,14 +166,12 @@ vv_mat4_scale(vv_vec3 s)
 }
 
 vv_mat4
-vv_mat4_rotate(vv_vec3 axis, double angle)
-{
+vv_mat4_rotate(vv_vec3 axis, double angle) {
     return vv_quat_to_mat4(vv_quat_from_axis_angle(axis, angle));
 }
 
 vv_mat4
-vv_mat4_look_at(vv_vec3 eye, vv_vec3 at, vv_vec3 up)
-{
+vv_mat4_look_at(vv_vec3 eye, vv_vec3 at, vv_vec3 up) {
     vv_vec3 f = vv_vec3_normalize(vv_vec3_sub(at, eye));
     vv_vec3 s = vv_vec3_normalize(vv_vec3_cross(f, up));
     vv_vec3 u = vv_vec3_cross(s, f);
@@ -212,8 +192,7 @@ vv_mat4_look_at(vv_vec3 eye, vv_vec3 at, vv_vec3 up)
 }
 
 vv_mat4
-vv_mat4_perspective(double fovy, double aspect, double znear, double zfar)
-{
+vv_mat4_perspective(double fovy, double aspect, double znear, double zfar) {
     double f = 1.0 / tan(fovy / 2.0);
     vv_mat4 r = {{{0}}};
     r.m[0][0] = f / aspect;
@@ -226,8 +205,7 @@ vv_mat4_perspective(double fovy, double aspect, double znear, double zfar)
 
 vv_mat4
 vv_mat4_orthographic(double left, double right, double bottom, double top, double znear,
-                     double zfar)
-{
+                     double zfar) {
     vv_mat4 r = vv_mat4_identity();
     r.m[0][0] = 2.0 / (right - left);
     r.m[1][1] = 2.0 / (top - bottom);
@@ -239,15 +217,13 @@ vv_mat4_orthographic(double left, double right, double bottom, double top, doubl
 }
 
 vv_quat
-vv_quat_identity(void)
-{
+vv_quat_identity(void) {
     vv_quat q = {1, 0, 0, 0};
     return q;
 }
 
 vv_quat
-vv_quat_from_axis_angle(vv_vec3 axis, double angle)
-{
+vv_quat_from_axis_angle(vv_vec3 axis, double angle) {
     vv_vec3 a = vv_vec3_normalize(axis);
     double s = sin(angle / 2.0);
     vv_quat q = {cos(angle / 2.0), a.x * s, a.y * s, a.z * s};
@@ -255,8 +231,7 @@ vv_quat_from_axis_angle(vv_vec3 axis, double angle)
 }
 
 vv_quat
-vv_quat_mul(vv_quat a, vv_quat b)
-{
+vv_quat_mul(vv_quat a, vv_quat b) {
     vv_quat r = {a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z,
                  a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y,
                  a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
@@ -265,8 +240,7 @@ vv_quat_mul(vv_quat a, vv_quat b)
 }
 
 vv_quat
-vv_quat_normalize(vv_quat q)
-{
+vv_quat_normalize(vv_quat q) {
     double l = sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
     if (l <= 0)
         return vv_quat_identity();
@@ -275,15 +249,13 @@ vv_quat_normalize(vv_quat q)
 }
 
 vv_quat
-vv_quat_conjugate(vv_quat q)
-{
+vv_quat_conjugate(vv_quat q) {
     vv_quat r = {q.w, -q.x, -q.y, -q.z};
     return r;
 }
 
 vv_quat
-vv_quat_slerp(vv_quat a, vv_quat b, double t)
-{
+vv_quat_slerp(vv_quat a, vv_quat b, double t) {
     double d = a.w * b.w + a.x * b.x + a.y * b.y + a.z * b.z;
     if (d < 0) {
         d = -d;
@@ -307,16 +279,14 @@ vv_quat_slerp(vv_quat a, vv_quat b, double t)
 }
 
 vv_vec3
-vv_quat_rotate(vv_quat q, vv_vec3 v)
-{
+vv_quat_rotate(vv_quat q, vv_vec3 v) {
     vv_quat p = {0, v.x, v.y, v.z};
     vv_quat r = vv_quat_mul(vv_quat_mul(q, p), vv_quat_conjugate(q));
     return vv_vec3_make(r.x, r.y, r.z);
 }
 
 vv_mat4
-vv_quat_to_mat4(vv_quat q)
-{
+vv_quat_to_mat4(vv_quat q) {
     q = vv_quat_normalize(q);
     double w = q.w, x = q.x, y = q.y, z = q.z;
     vv_mat4 r = vv_mat4_identity();
@@ -333,14 +303,12 @@ vv_quat_to_mat4(vv_quat q)
 }
 
 vv_vec3
-vv_ray_at(vv_ray r, double t)
-{
+vv_ray_at(vv_ray r, double t) {
     return vv_vec3_add(r.origin, vv_vec3_scale(r.dir, t));
 }
 
 int
-vv_box_intersect_ray(vv_box b, vv_ray r, double *t0, double *t1)
-{
+vv_box_intersect_ray(vv_box b, vv_ray r, double *t0, double *t1) {
     double lo = -INFINITY, hi = INFINITY;
     const double o[3] = {r.origin.x, r.origin.y, r.origin.z};
     const double d[3] = {r.dir.x, r.dir.y, r.dir.z};
@@ -371,8 +339,7 @@ vv_box_intersect_ray(vv_box b, vv_ray r, double *t0, double *t1)
 }
 
 vv_box
-vv_box_transform(vv_box b, vv_mat4 m)
-{
+vv_box_transform(vv_box b, vv_mat4 m) {
     vv_box r = {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
     for (int c = 0; c < 8; c++) {
         vv_vec3 p = vv_vec3_make(c & 1 ? b.max.x : b.min.x, c & 2 ? b.max.y : b.min.y,
@@ -389,8 +356,7 @@ vv_box_transform(vv_box b, vv_mat4 m)
 }
 
 vv_plane
-vv_plane_from_point_normal(vv_vec3 point, vv_vec3 normal)
-{
+vv_plane_from_point_normal(vv_vec3 point, vv_vec3 normal) {
     vv_plane p;
     p.n = vv_vec3_normalize(normal);
     p.d = -vv_vec3_dot(p.n, point);
@@ -398,14 +364,12 @@ vv_plane_from_point_normal(vv_vec3 point, vv_vec3 normal)
 }
 
 double
-vv_plane_distance(vv_plane pl, vv_vec3 p)
-{
+vv_plane_distance(vv_plane pl, vv_vec3 p) {
     return vv_vec3_dot(pl.n, p) + pl.d;
 }
 
 int
-vv_plane_clip_ray(vv_plane pl, vv_ray r, double *t0, double *t1)
-{
+vv_plane_clip_ray(vv_plane pl, vv_ray r, double *t0, double *t1) {
     double dn = vv_vec3_dot(pl.n, r.dir);
     double s0 = vv_plane_distance(pl, r.origin);
     if (dn == 0)
@@ -422,13 +386,11 @@ vv_plane_clip_ray(vv_plane pl, vv_ray r, double *t0, double *t1)
 }
 
 double
-vv_deg_to_rad(double deg)
-{
+vv_deg_to_rad(double deg) {
     return deg * (VV_PI / 180.0);
 }
 
 double
-vv_rad_to_deg(double rad)
-{
+vv_rad_to_deg(double rad) {
     return rad * (180.0 / VV_PI);
 }

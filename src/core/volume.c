@@ -8,8 +8,7 @@
 #include "volvis/volume.h"
 
 size_t
-vv_voxel_type_size(vv_voxel_type t)
-{
+vv_voxel_type_size(vv_voxel_type t) {
     switch (t) {
     case VV_U8:
     case VV_I8:
@@ -30,61 +29,58 @@ vv_voxel_type_size(vv_voxel_type t)
 static const char *const type_names[] = {"u8", "i8", "u16", "i16", "u32", "i32", "f32", "f64"};
 
 const char *
-vv_voxel_type_name(vv_voxel_type t)
-{
+vv_voxel_type_name(vv_voxel_type t) {
     return (unsigned)t < 8 ? type_names[t] : "unknown";
 }
 
 vv_status
-vv_voxel_type_parse(const char *name, vv_voxel_type *out)
-{
+vv_voxel_type_parse(const char *name, vv_voxel_type *out) {
     static const struct {
         const char *name;
         vv_voxel_type t;
-    } alias[] = {{"u8", VV_U8},     {"uint8", VV_U8},   {"uchar", VV_U8},    {"i8", VV_I8},
-                 {"int8", VV_I8},   {"char", VV_I8},    {"u16", VV_U16},     {"uint16", VV_U16},
-                 {"ushort", VV_U16}, {"i16", VV_I16},   {"int16", VV_I16},   {"short", VV_I16},
-                 {"u32", VV_U32},   {"uint32", VV_U32}, {"uint", VV_U32},    {"i32", VV_I32},
-                 {"int32", VV_I32}, {"int", VV_I32},    {"f32", VV_F32},     {"float", VV_F32},
-                 {"float32", VV_F32}, {"f64", VV_F64},  {"double", VV_F64},  {"float64", VV_F64}};
+    } alias[] = {{"u8", VV_U8},       {"uint8", VV_U8},   {"uchar", VV_U8},   {"i8", VV_I8},
+                 {"int8", VV_I8},     {"char", VV_I8},    {"u16", VV_U16},    {"uint16", VV_U16},
+                 {"ushort", VV_U16},  {"i16", VV_I16},    {"int16", VV_I16},  {"short", VV_I16},
+                 {"u32", VV_U32},     {"uint32", VV_U32}, {"uint", VV_U32},   {"i32", VV_I32},
+                 {"int32", VV_I32},   {"int", VV_I32},    {"f32", VV_F32},    {"float", VV_F32},
+                 {"float32", VV_F32}, {"f64", VV_F64},    {"double", VV_F64}, {"float64", VV_F64}};
     for (size_t i = 0; i < sizeof alias / sizeof alias[0]; i++)
         if (strcmp(name, alias[i].name) == 0) {
             *out = alias[i].t;
             return VV_OK;
         }
-    return vv_error_set(VV_ERR_INVALID, "unknown voxel type '%s' (u8, i8, u16, i16, u32, i32, f32, f64)",
-                        name);
+    return vv_error_set(VV_ERR_INVALID,
+                        "unknown voxel type '%s' (u8, i8, u16, i16, u32, i32, f32, f64)", name);
 }
 
 vv_status
-vv_volume_check_size(const int dims[3], vv_voxel_type t, uint64_t *bytes)
-{
+vv_volume_check_size(const int dims[3], vv_voxel_type t, uint64_t *bytes) {
     for (int a = 0; a < 3; a++)
         if (dims[a] < 1 || dims[a] > VV_VOLUME_MAX_DIM)
-            return vv_error_set(VV_ERR_LIMIT,
-                                "volume size %d x %d x %d: axis %d is outside 1..%d", dims[0],
-                                dims[1], dims[2], a, VV_VOLUME_MAX_DIM);
+            return vv_error_set(VV_ERR_LIMIT, "volume size %d x %d x %d: axis %d is outside 1..%d",
+                                dims[0], dims[1], dims[2], a, VV_VOLUME_MAX_DIM);
     size_t vs = vv_voxel_type_size(t);
     if (vs == 0)
         return vv_error_set(VV_ERR_INVALID, "invalid voxel type %d", (int)t);
     uint64_t n = (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2];
     if (n > VV_VOLUME_MAX_VOXELS)
-        return vv_error_set(VV_ERR_LIMIT, "volume size %d x %d x %d = %llu voxels is over the limit of %llu",
+        return vv_error_set(VV_ERR_LIMIT,
+                            "volume size %d x %d x %d = %llu voxels is over the limit of %llu",
                             dims[0], dims[1], dims[2], (unsigned long long)n,
                             (unsigned long long)VV_VOLUME_MAX_VOXELS);
     uint64_t b = n * vs;
     if (b > VV_VOLUME_MAX_BYTES || b > (uint64_t)SIZE_MAX)
-        return vv_error_set(VV_ERR_LIMIT, "volume size %d x %d x %d %s = %llu bytes is over the limit of %llu",
-                            dims[0], dims[1], dims[2], vv_voxel_type_name(t),
-                            (unsigned long long)b, (unsigned long long)VV_VOLUME_MAX_BYTES);
+        return vv_error_set(VV_ERR_LIMIT,
+                            "volume size %d x %d x %d %s = %llu bytes is over the limit of %llu",
+                            dims[0], dims[1], dims[2], vv_voxel_type_name(t), (unsigned long long)b,
+                            (unsigned long long)VV_VOLUME_MAX_BYTES);
     if (bytes)
         *bytes = b;
     return VV_OK;
 }
 
 vv_status
-vv_volume_new(vv_volume **out, const int dims[3], vv_voxel_type t)
-{
+vv_volume_new(vv_volume **out, const int dims[3], vv_voxel_type t) {
     *out = NULL;
     uint64_t bytes;
     vv_status s = vv_volume_check_size(dims, t, &bytes);
@@ -113,16 +109,14 @@ vv_volume_new(vv_volume **out, const int dims[3], vv_voxel_type t)
 }
 
 vv_volume *
-vv_volume_ref(vv_volume *v)
-{
+vv_volume_ref(vv_volume *v) {
     if (v)
         atomic_fetch_add_explicit((_Atomic int *)&v->refcount, 1, memory_order_relaxed);
     return v;
 }
 
 void
-vv_volume_free(vv_volume *v)
-{
+vv_volume_free(vv_volume *v) {
     if (!v)
         return;
     if (atomic_fetch_sub_explicit((_Atomic int *)&v->refcount, 1, memory_order_acq_rel) > 1)
@@ -132,14 +126,12 @@ vv_volume_free(vv_volume *v)
 }
 
 uint64_t
-vv_volume_voxel_count(const vv_volume *v)
-{
+vv_volume_voxel_count(const vv_volume *v) {
     return (uint64_t)v->dims[0] * (uint64_t)v->dims[1] * (uint64_t)v->dims[2];
 }
 
 static inline double
-voxel_at(const vv_volume *v, size_t idx)
-{
+voxel_at(const vv_volume *v, size_t idx) {
     switch (v->type) {
     case VV_U8:
         return ((const uint8_t *)v->data)[idx];
@@ -164,8 +156,8 @@ voxel_at(const vv_volume *v, size_t idx)
 #define VV_RANGE_LOOP(T)                                                                           \
     do {                                                                                           \
         const T *p = (const T *)v->data;                                                           \
-        _Pragma("omp parallel for reduction(min : lo) reduction(max : hi) schedule(static)")      \
-        for (int64_t i = 0; i < (int64_t)n; i++) {                                                 \
+        _Pragma("omp parallel for reduction(min : lo) reduction(max : hi) schedule(static)") for ( \
+            int64_t i = 0; i < (int64_t)n; i++) {                                                  \
             double x = (double)p[i];                                                               \
             if (x < lo)                                                                            \
                 lo = x;                                                                            \
@@ -175,8 +167,7 @@ voxel_at(const vv_volume *v, size_t idx)
     } while (0)
 
 void
-vv_volume_update_range(vv_volume *v)
-{
+vv_volume_update_range(vv_volume *v) {
     uint64_t n = vv_volume_voxel_count(v);
     double lo = INFINITY, hi = -INFINITY;
     switch (v->type) {
@@ -213,15 +204,13 @@ vv_volume_update_range(vv_volume *v)
 }
 
 double
-vv_volume_get(const vv_volume *v, int i, int j, int k)
-{
+vv_volume_get(const vv_volume *v, int i, int j, int k) {
     size_t idx = ((size_t)k * (size_t)v->dims[1] + (size_t)j) * (size_t)v->dims[0] + (size_t)i;
     return voxel_at(v, idx);
 }
 
 static double
-clamp_round(double x, double lo, double hi)
-{
+clamp_round(double x, double lo, double hi) {
     if (!(x == x))
         return 0;
     x = nearbyint(x);
@@ -229,8 +218,7 @@ clamp_round(double x, double lo, double hi)
 }
 
 void
-vv_volume_set(vv_volume *v, int i, int j, int k, double value)
-{
+vv_volume_set(vv_volume *v, int i, int j, int k, double value) {
     size_t idx = ((size_t)k * (size_t)v->dims[1] + (size_t)j) * (size_t)v->dims[0] + (size_t)i;
     switch (v->type) {
     case VV_U8:
@@ -261,8 +249,7 @@ vv_volume_set(vv_volume *v, int i, int j, int k, double value)
 }
 
 vv_mat4
-vv_volume_index_to_world(const vv_volume *v)
-{
+vv_volume_index_to_world(const vv_volume *v) {
     vv_mat4 m = vv_mat4_identity();
     for (int r = 0; r < 3; r++) {
         for (int c = 0; c < 3; c++)
@@ -273,21 +260,18 @@ vv_volume_index_to_world(const vv_volume *v)
 }
 
 vv_mat4
-vv_volume_world_to_index(const vv_volume *v)
-{
+vv_volume_world_to_index(const vv_volume *v) {
     return vv_mat4_inverse(vv_volume_index_to_world(v), NULL);
 }
 
 vv_box
-vv_volume_world_box(const vv_volume *v)
-{
+vv_volume_world_box(const vv_volume *v) {
     vv_box b = {{0, 0, 0}, {v->dims[0] - 1, v->dims[1] - 1, v->dims[2] - 1}};
     return vv_box_transform(b, vv_volume_index_to_world(v));
 }
 
 float
-vv_volume_sample_index(const vv_volume *v, double x, double y, double z)
-{
+vv_volume_sample_index(const vv_volume *v, double x, double y, double z) {
     const double p[3] = {x, y, z};
     int i0[3], i1[3];
     double f[3];
@@ -317,16 +301,14 @@ vv_volume_sample_index(const vv_volume *v, double x, double y, double z)
 }
 
 static int
-inside_index(const vv_volume *v, vv_vec3 q)
-{
+inside_index(const vv_volume *v, vv_vec3 q) {
     const double eps = 1e-9;
     return q.x >= -eps && q.y >= -eps && q.z >= -eps && q.x <= v->dims[0] - 1 + eps &&
            q.y <= v->dims[1] - 1 + eps && q.z <= v->dims[2] - 1 + eps;
 }
 
 int
-vv_volume_sample_world(const vv_volume *v, vv_vec3 p, float *value)
-{
+vv_volume_sample_world(const vv_volume *v, vv_vec3 p, float *value) {
     vv_vec3 q = vv_mat4_mul_point(vv_volume_world_to_index(v), p);
     if (!inside_index(v, q)) {
         *value = 0;
@@ -337,8 +319,7 @@ vv_volume_sample_world(const vv_volume *v, vv_vec3 p, float *value)
 }
 
 int
-vv_volume_gradient_world(const vv_volume *v, vv_vec3 p, vv_vec3 *gradient)
-{
+vv_volume_gradient_world(const vv_volume *v, vv_vec3 p, vv_vec3 *gradient) {
     vv_vec3 q = vv_mat4_mul_point(vv_volume_world_to_index(v), p);
     if (!inside_index(v, q)) {
         *gradient = vv_vec3_make(0, 0, 0);
@@ -370,11 +351,11 @@ vv_volume_gradient_world(const vv_volume *v, vv_vec3 p, vv_vec3 *gradient)
 }
 
 vv_status
-vv_volume_histogram(const vv_volume *v, int nbins, double lo, double hi, uint64_t *bins)
-{
+vv_volume_histogram(const vv_volume *v, int nbins, double lo, double hi, uint64_t *bins) {
     if (nbins < 1 || !(hi > lo))
-        return vv_error_set(VV_ERR_INVALID, "histogram: need nbins >= 1 and hi > lo (got %d, [%g, %g])",
-                            nbins, lo, hi);
+        return vv_error_set(VV_ERR_INVALID,
+                            "histogram: need nbins >= 1 and hi > lo (got %d, [%g, %g])", nbins, lo,
+                            hi);
     memset(bins, 0, sizeof *bins * (size_t)nbins);
     uint64_t n = vv_volume_voxel_count(v);
     double scale = nbins / (hi - lo);
@@ -403,8 +384,7 @@ vv_volume_histogram(const vv_volume *v, int nbins, double lo, double hi, uint64_
 }
 
 double
-vv_volume_quantile(const vv_volume *v, double q)
-{
+vv_volume_quantile(const vv_volume *v, double q) {
     enum { NB = 4096 };
     double lo = v->range[0], hi = v->range[1];
     if (!(hi > lo))

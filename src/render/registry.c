@@ -14,21 +14,18 @@ struct vv_renderer {
 static const vv_renderer_ops *const registry[] = {&vv_raycast_ops, NULL};
 
 const vv_renderer_ops *const *
-vv_renderer_registry(void)
-{
+vv_renderer_registry(void) {
     return registry;
 }
 
 void
-vv_render_options_init(vv_render_options *o)
-{
+vv_render_options_init(vv_render_options *o) {
     memset(o, 0, sizeof *o);
     o->quality = 2;
 }
 
 vv_status
-vv_renderer_new(vv_renderer **out, const char *name)
-{
+vv_renderer_new(vv_renderer **out, const char *name) {
     *out = NULL;
     for (int i = 0; registry[i]; i++) {
         if (strcmp(registry[i]->name, name) != 0)
@@ -55,8 +52,7 @@ vv_renderer_new(vv_renderer **out, const char *name)
 }
 
 void
-vv_renderer_free(vv_renderer *r)
-{
+vv_renderer_free(vv_renderer *r) {
     if (!r)
         return;
     r->ops->destroy(r->state);
@@ -64,22 +60,19 @@ vv_renderer_free(vv_renderer *r)
 }
 
 const char *
-vv_renderer_name(const vv_renderer *r)
-{
+vv_renderer_name(const vv_renderer *r) {
     return r->ops->name;
 }
 
 vv_status
-vv_renderer_set_option(vv_renderer *r, const char *key, const char *value)
-{
+vv_renderer_set_option(vv_renderer *r, const char *key, const char *value) {
     vv_status s = r->ops->set_option(r->state, key, value);
     return s == VV_OK ? s : vv_error_prefix(s, "%s", r->ops->name);
 }
 
 vv_status
 vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
-                   const vv_render_options *opt, vv_image *out)
-{
+                   const vv_render_options *opt, vv_image *out) {
     vv_render_options def;
     if (!opt) {
         vv_render_options_init(&def);
