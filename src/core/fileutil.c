@@ -1,5 +1,7 @@
 /* Atomic output files, whole-file reads, paths, byte order. */
 #include <errno.h>
+#include <fcntl.h>
+#include <time.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -29,8 +31,21 @@ vv_atomic_file_open(vv_atomic_file *af, const char *path) {
         memset(af, 0, sizeof *af);
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     }
-    snprintf(af->tmp_path, n + 16, "%s.tmp-XXXXXX", path);
-    int fd = mkstemp(af->tmp_path);
+    /* open(O_CREAT | O_EXCL, 0666) rather than mkstemp: the kernel applies the
+     * umask, so the file gets the usual permissions without touching the
+     * process-wide umask (not thread-safe). The name only needs to be unique
+     * beside the target; collisions are retried. */
+    int fd = -1;
+    for (int attempt = 0; attempt < 100 && fd < 0; attempt++) {
+        struct timespec ts;
+        clock_gettime(CLOCK_REALTIME, &ts);
+        unsigned r = (unsigned)getpid() * 2654435761u ^ (unsigned)ts.tv_nsec ^
+                     (unsigned)(uintptr_t)af * 40503u ^ ((unsigned)attempt << 20);
+        snprintf(af->tmp_path, n + 16, "%s.tmp-%06x", path, r & 0xFFFFFFu);
+        fd = open(af->tmp_path, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+        if (fd < 0 && errno != EEXIST)
+            break;
+    }
     if (fd < 0) {
         vv_status s = vv_error_set(VV_ERR_IO, "%s: cannot create: %s", path, strerror(errno));
         free(af->path);
@@ -38,10 +53,6 @@ vv_atomic_file_open(vv_atomic_file *af, const char *path) {
         memset(af, 0, sizeof *af);
         return s;
     }
-    /* mkstemp creates 0600; give the file the usual permissions. */
-    mode_t mask = umask(0);
-    umask(mask);
-    fchmod(fd, 0666 & ~mask);
     af->fp = fdopen(fd, "wb");
     if (!af->fp) {
         close(fd);

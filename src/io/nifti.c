@@ -244,7 +244,7 @@ read_locked(vv_volume **out, const char *path) {
                             "not a readable NIfTI-1/NIfTI-2 or Analyze header (names must end in "
                             ".nii, .nii.gz, .hdr or .img)");
     int dims[3];
-    vv_voxel_type stored;
+    vv_voxel_type stored = VV_U8;
     vv_status s = header_dims(nim, dims, &stored);
     if (s == VV_OK && nim->iname) {
         FILE *f = fopen(nim->iname, "rb");
