@@ -263,7 +263,8 @@ void vv_default_scene_options_init(vv_default_scene_options *o);
  * A World showing one volume the way a user expects from `volvis render
  * FILE`: the volume centred on the origin (object position = minus the
  * centre of its world box), a perspective view (fov 30°) from the front
- * (eye on -y, up +z) framed with vv_view_frame_box, orbited by azimuth and
+ * (eye on the anterior side: -y when volume->space is VV_SPACE_LPS, else +y;
+ * up +z) framed with vv_view_frame_box, orbited by azimuth and
  * elevation, then the eye distance divided by zoom; one white headlight of
  * intensity 1, ambient (1,1,1), black background; material and step as
  * vv_object_new_volume; and a transfer function from the histogram (or the

@@ -72,6 +72,14 @@ typedef enum vv_modification {
     VV_MOD_OTHER = 4
 } vv_modification;
 
+/**
+ * The anatomical frame world coordinates are given in, when the file says:
+ * RAS (+x right, +y anterior, +z superior; NIfTI) or LPS (+x left, +y
+ * posterior, +z superior; DICOM, many NRRD files). Used to put default views
+ * in front of a patient.
+ */
+typedef enum vv_space { VV_SPACE_UNKNOWN = 0, VV_SPACE_RAS = 1, VV_SPACE_LPS = 2 } vv_space;
+
 /** Largest accepted size along one axis. */
 #define VV_VOLUME_MAX_DIM 65536
 /** Largest accepted voxel count (2^33, i.e. 8 G voxels). */
@@ -90,6 +98,7 @@ typedef struct vv_volume {
     vv_unit unit;        /**< length unit of spacing and origin */
     vv_data_origin data_origin;
     vv_modification modification;
+    vv_space space;        /**< anatomical frame of world coordinates, if known */
     uint64_t modified; /**< bumped on each change, for caches */
     int refcount;      /**< use vv_volume_ref / vv_volume_free */
 } vv_volume;

@@ -137,6 +137,7 @@ static void
 set_geometry(vv_volume *v, const nifti_image *nim) {
     double m[3][4] = {{0}};
     if (nim->sform_code > 0 || nim->qform_code > 0) {
+        v->space = VV_SPACE_RAS; /* NIfTI's world is RAS by definition */
         const nifti_dmat44 *x = nim->sform_code > 0 ? &nim->sto_xyz : &nim->qto_xyz;
         for (int r = 0; r < 3; r++)
             for (int c = 0; c < 4; c++)

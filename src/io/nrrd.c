@@ -229,6 +229,10 @@ set_geometry(vv_volume *v, const Nrrd *n) {
     double spacing[3] = {1, 1, 1};
     double origin[3] = {0, 0, 0};
 
+    if (n->space == nrrdSpaceRightAnteriorSuperior || n->space == nrrdSpace3DRightHanded)
+        v->space = n->space == nrrdSpaceRightAnteriorSuperior ? VV_SPACE_RAS : VV_SPACE_UNKNOWN;
+    else if (n->space == nrrdSpaceLeftPosteriorSuperior)
+        v->space = VV_SPACE_LPS;
     if (n->spaceDim == 3) {
         for (int i = 0; i < nax; i++) {
             const double *d = n->axis[ax[i]].spaceDirection;

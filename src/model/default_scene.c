@@ -307,7 +307,10 @@ vv_world_new_for_volume(vv_world **out, vv_volume *volume, const vv_default_scen
     v->height = opt->height;
     v->projection = VV_PROJECTION_PERSPECTIVE;
     v->fov = vv_deg_to_rad(30.0);
-    v->eye = vv_vec3_make(0, -1, 0);
+    /* In front of the patient: anterior is -y in LPS and +y in RAS; data
+     * without a known frame (most CT and MRI exports, e.g. the InVesalius
+     * head) are far more often RAS-like, so +y is the default. */
+    v->eye = vv_vec3_make(0, volume->space == VV_SPACE_LPS ? -1 : 1, 0);
     v->at = vv_vec3_make(0, 0, 0);
     v->up = vv_vec3_make(0, 0, 1);
     vv_box wb = vv_world_bounds(w);

@@ -35,6 +35,7 @@ test_mni_template(void **state) {
     (void)state;
     vv_volume *v = NULL;
     vt_ok(vv_nifti_read(&v, vt_data("volumes/avg152T1_RL_nifti.nii.gz")));
+    assert_int_equal(v->space, VV_SPACE_RAS);
     assert_int_equal(v->dims[0], 91);
     assert_int_equal(v->dims[1], 109);
     assert_int_equal(v->dims[2], 91);

@@ -269,6 +269,7 @@ test_space_lps_and_4d(void **state) {
     vt_write_file(path, buf, h + 8);
     vv_volume *v = NULL;
     vt_ok(vv_nrrd_read(&v, path));
+    assert_int_equal(v->space, VV_SPACE_LPS);
     assert_int_equal(v->dims[0], 2);
     assert_int_equal(v->dims[2], 2);
     assert_near(v->spacing[0], 2, 1e-12);

@@ -32,7 +32,7 @@ check_box_in_view(const vv_view *v, vv_box b) {
     for (int i = 0; i < 8; i++) {
         vv_vec3 p = vv_vec3_make(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y,
                                  i & 4 ? b.max.z : b.min.z);
-        double px, py;
+        double px = -1, py = -1;
         assert_true(project(v, p, &px, &py));
         assert_true(px >= 0 && px <= v->width);
         assert_true(py >= 0 && py <= v->height);
@@ -77,8 +77,8 @@ test_ct_head(void **state) {
     assert_near(0.5 * (b.min.x + b.max.x), 0, 1e-6);
     assert_near(0.5 * (b.min.y + b.max.y), 0, 1e-6);
     assert_near(0.5 * (b.min.z + b.max.z), 0, 1e-6);
-    /* from the front (-y), up +z, the whole box in view */
-    assert_true(w->view.eye.y < 0);
+    /* from the front (+y: no declared space, RAS-like), up +z, the whole box in view */
+    assert_true(w->view.eye.y > 0);
     assert_near(w->view.eye.x, 0, 1e-9);
     assert_near(w->view.up.z, 1, 1e-9);
     assert_near(w->view.fov, vv_deg_to_rad(30), 1e-12);
@@ -105,6 +105,13 @@ test_ct_head(void **state) {
     double fa = fraction_above(v, lo);
     assert_true(fa > 0.05 && fa < 0.5);
     vv_world_free(w);
+
+    /* data declared LPS (DICOM-style): anterior is -y, so the eye is on -y */
+    v->space = VV_SPACE_LPS;
+    vt_ok(vv_world_new_for_volume(&w, v, NULL));
+    assert_true(w->view.eye.y < 0);
+    vv_world_free(w);
+    v->space = VV_SPACE_UNKNOWN;
 
     /* MIP: grey ramp over the 1st..99.9th percentile; iso: a value above air */
     vv_default_scene_options opt;
@@ -186,8 +193,8 @@ test_synthetic(void **state) {
     vv_box b = vv_world_bounds(w);
     assert_near(b.min.x + b.max.x, 0, 1e-9);
     assert_near(b.max.z - b.min.z, 78, 1e-9);
-    /* azimuth 90° about +z: the eye moves from -y to +x */
-    assert_true(w->view.eye.x > 0);
+    /* azimuth 90° about +z: the eye moves from +y to -x */
+    assert_true(w->view.eye.x < 0);
     assert_near(w->view.eye.y, 0, 1e-6);
     vv_world_free(w);
 

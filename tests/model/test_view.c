@@ -111,7 +111,7 @@ check_box_in_view(const vv_view *v, vv_box b) {
     for (int i = 0; i < 8; i++) {
         vv_vec3 p = vv_vec3_make(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y,
                                  i & 4 ? b.max.z : b.min.z);
-        double px, py;
+        double px = -1, py = -1;
         assert_true(project(v, p, &px, &py));
         assert_true(px >= 0 && px <= v->width);
         assert_true(py >= 0 && py <= v->height);

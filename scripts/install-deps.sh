@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages VolVis needs, only those that are missing.
+# Safe to run again. Usage: scripts/install-deps.sh [build|demo|test|bench]...
+#   build  compiler, CMake and the libraries (always included)
+#   demo   mricron-data (the real MRI head used by the quick-start demo)
+#   test   cmocka
+#   bench  VTK, numpy, Xvfb and Teem's tools, to measure the peers side by side
+set -euo pipefail
+
+pkgs=(build-essential cmake pkg-config libteem-dev libnifti2-dev libjansson-dev
+      libpng-dev zlib1g-dev)
+for what in "$@"; do
+  case "$what" in
+    build) ;;
+    demo) pkgs+=(mricron-data) ;;
+    test) pkgs+=(libcmocka-dev) ;;
+    bench) pkgs+=(python3-vtk9 python3-numpy xvfb libgl1-mesa-dri teem-apps) ;;
+    *) echo "install-deps.sh: unknown group '$what' (build, demo, test, bench)" >&2; exit 2 ;;
+  esac
+done
+
+missing=()
+for p in "${pkgs[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q 'install ok installed'; then
+    missing+=("$p")
+  fi
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+echo "install-deps.sh: installing ${missing[*]}" >&2
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then
+  sudo="sudo"
+fi
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null

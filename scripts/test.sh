@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Quick start 2: install what is missing, build the release and the asan
+# (AddressSanitizer + UndefinedBehaviorSanitizer) presets, and run the whole
+# test suite on both.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/install-deps.sh build demo test
+jobs="$(nproc)"
+status=0
+for preset in release asan; do
+  echo "== $preset: build" >&2
+  cmake --preset "$preset" >/dev/null
+  log="build/$preset-build.log"
+  mkdir -p build
+  if ! cmake --build --preset "$preset" -j"$jobs" >"$log" 2>&1; then
+    cat "$log" >&2
+    echo "== $preset: build failed" >&2
+    exit 1
+  fi
+  if grep -q 'warning:' "$log"; then
+    grep -A3 'warning:' "$log" >&2
+    echo "== $preset: the build has warnings" >&2
+    status=1
+  fi
+  echo "== $preset: test" >&2
+  ctest --preset "$preset" -j"$jobs" || status=1
+done
+exit $status
