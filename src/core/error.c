@@ -84,7 +84,7 @@ int
 vv_progress_report(const vv_progress *p, double fraction) {
     if (!p || !p->fn)
         return 0;
-    if (fraction < 0)
+    if (!(fraction >= 0)) /* also NaN */
         fraction = 0;
     if (fraction > 1)
         fraction = 1;
