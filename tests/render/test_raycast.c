@@ -1,0 +1,1059 @@
+/*
+ * Tests of the direct volume ray caster (src/render/raycast/raycast.c).
+ *
+ * The checks are analytic where possible: the transmittance of a constant
+ * slab, projections of axis-aligned views against voxel columns, the
+ * silhouette area and depth of a sampled sphere, and how object transforms
+ * and cut planes move or cut that silhouette. Then agreement checks (step
+ * halving, on-the-fly gradients, skipping on/off, thread counts), progress
+ * and cancellation, bad input, and every shared real volume.
+ *
+ * Geometry used throughout: an orthographic view looking down -z from an
+ * eye at z = E, right = +x, up = +y, so pixel (px, py) of a W x H view of
+ * height h centred on (cx, cy) has its ray through
+ *   x = cx + (px + 0.5 - W/2) * h/H,  y = cy - (py + 0.5 - H/2) * h/H,
+ * and samples lie at z = E - k * dt.
+ */
+#include "testutil.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---------------------------------------------------------------------- */
+/* Helpers                                                                  */
+
+static vv_volume *
+new_volume(int nx, int ny, int nz, vv_voxel_type t, double sx, double sy, double sz) {
+    vv_volume *v = NULL;
+    const int dims[3] = {nx, ny, nz};
+    vt_ok(vv_volume_new(&v, dims, t));
+    v->spacing[0] = sx;
+    v->spacing[1] = sy;
+    v->spacing[2] = sz;
+    return v;
+}
+
+static vv_volume *
+constant_volume(int nx, int ny, int nz, vv_voxel_type t, double sx, double sy, double sz,
+                double value) {
+    vv_volume *v = new_volume(nx, ny, nz, t, sx, sy, sz);
+    for (int k = 0; k < nz; k++)
+        for (int j = 0; j < ny; j++)
+            for (int i = 0; i < nx; i++)
+                vv_volume_set(v, i, j, k, value);
+    vv_volume_update_range(v);
+    return v;
+}
+
+/* value = r - distance from the grid centre (f32, spacing 1): the isosurface
+ * 0 is a sphere of radius r around ((n-1)/2, (n-1)/2, (n-1)/2). */
+static vv_volume *
+sphere_volume(int n, double r) {
+    vv_volume *v = new_volume(n, n, n, VV_F32, 1, 1, 1);
+    const double c = 0.5 * (n - 1);
+    for (int k = 0; k < n; k++)
+        for (int j = 0; j < n; j++)
+            for (int i = 0; i < n; i++)
+                vv_volume_set(v, i, j, k,
+                              r - sqrt((i - c) * (i - c) + (j - c) * (j - c) + (k - c) * (k - c)));
+    vv_volume_update_range(v);
+    return v;
+}
+
+/* xorshift64*: deterministic pseudo-random numbers in [0, 1). */
+static double
+rnd(uint64_t *s) {
+    *s ^= *s >> 12;
+    *s ^= *s << 25;
+    *s ^= *s >> 27;
+    return (double)((*s * 2685821657736338717ULL) >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static vv_world *
+new_world(void) {
+    vv_world *w = NULL;
+    vt_ok(vv_world_new(&w));
+    w->background = vv_vec3_make(0, 0, 0);
+    return w;
+}
+
+/* Adds a volume object (the World owns it) and returns it. */
+static vv_object *
+add_object(vv_world *w, vv_volume *v, vv_render_mode mode) {
+    vv_object *o = NULL;
+    vt_ok(vv_object_new_volume(&o, v, NULL));
+    o->mode = mode;
+    o->shading = 0;
+    vt_ok(vv_world_add_object(w, o));
+    return o;
+}
+
+/* Orthographic view looking down -z (right +x, up +y) from z = eye_z. */
+static vv_view
+ortho_z(double cx, double cy, double eye_z, double height, int width_px, int height_px) {
+    vv_view v;
+    memset(&v, 0, sizeof v);
+    v.eye = vv_vec3_make(cx, cy, eye_z);
+    v.at = vv_vec3_make(cx, cy, eye_z - 1);
+    v.up = vv_vec3_make(0, 1, 0);
+    v.fov = vv_deg_to_rad(30);
+    v.ortho_height = height;
+    v.projection = VV_PROJECTION_ORTHOGRAPHIC;
+    v.width = width_px;
+    v.height = height_px;
+    return v;
+}
+
+static vv_renderer *
+new_raycaster(void) {
+    vv_renderer *r = NULL;
+    vt_ok(vv_renderer_new(&r, "raycast"));
+    return r;
+}
+
+static vv_image *
+render_t(vv_renderer *r, const vv_world *w, const vv_view *view, int threads) {
+    vv_image *img = NULL;
+    vt_ok(vv_image_new(&img, view->width, view->height));
+    vv_render_options opt;
+    vv_render_options_init(&opt);
+    opt.threads = threads;
+    vt_ok(vv_renderer_render(r, w, view, &opt, img));
+    return img;
+}
+
+static vv_image *
+render(vv_renderer *r, const vv_world *w, const vv_view *view) {
+    return render_t(r, w, view, 0);
+}
+
+static const float *
+px(const vv_image *img, int x, int y) {
+    return img->rgba + 4 * ((size_t)y * (size_t)img->width + (size_t)x);
+}
+
+/* Pixels with alpha > 0.5 (hit), their count and centroid (pixel units). */
+typedef struct hits {
+    long n;
+    double cx, cy;
+    int x0, x1, y0, y1; /* bounding box, inclusive */
+} hits;
+
+static hits
+count_hits(const vv_image *img, int xa, int xb) {
+    hits h = {0, 0, 0, img->width, -1, img->height, -1};
+    for (int y = 0; y < img->height; y++)
+        for (int x = xa; x < xb; x++)
+            if (px(img, x, y)[3] > 0.5f) {
+                h.n++;
+                h.cx += x;
+                h.cy += y;
+                h.x0 = x < h.x0 ? x : h.x0;
+                h.x1 = x > h.x1 ? x : h.x1;
+                h.y0 = y < h.y0 ? y : h.y0;
+                h.y1 = y > h.y1 ? y : h.y1;
+            }
+    if (h.n) {
+        h.cx /= (double)h.n;
+        h.cy /= (double)h.n;
+    }
+    return h;
+}
+
+static int
+images_identical(const vv_image *a, const vv_image *b) {
+    size_t n = (size_t)a->width * (size_t)a->height;
+    if (a->width != b->width || a->height != b->height)
+        return 0;
+    return memcmp(a->rgba, b->rgba, 4 * n * sizeof(float)) == 0 &&
+           memcmp(a->depth, b->depth, n * sizeof(float)) == 0;
+}
+
+static double
+max_abs_diff(const vv_image *a, const vv_image *b) {
+    double m = 0;
+    for (size_t i = 0; i < 4 * (size_t)a->width * (size_t)a->height; i++) {
+        double d = fabs((double)a->rgba[i] - (double)b->rgba[i]);
+        m = d > m ? d : m;
+    }
+    return m;
+}
+
+static void
+write_png(const vv_image *img, const char *name) {
+    char path[1200];
+    snprintf(path, sizeof path, "%s/%s.png", vt_outdir("render"), name);
+    vt_ok(vv_image_write_png(img, path, 1.0, 0));
+}
+
+/* ---------------------------------------------------------------------- */
+/* Analytic: transmittance of a constant slab                               */
+
+/* One slab: nx x ny x nz voxels of constant value, spacing s, TF opacity a
+ * per unit distance u, white, unshaded, seen straight down z. The eye sits
+ * half a step off the sample grid relative to both faces, so that exactly
+ * L / dt samples fall inside the slab (the midpoint rule): then 1 - alpha
+ * must equal (1 - a)^(L / u) = exp(-tau L), tau = -ln(1 - a) / u. */
+static double
+slab_error(vv_voxel_type type, double value, const double s[3], int nz, double step, double a,
+           double u) {
+    vv_volume *v = constant_volume(6, 6, nz, type, s[0], s[1], s[2], value);
+    vv_world *w = new_world();
+    vv_object *o = add_object(w, v, VV_MODE_COMPOSITE);
+    vv_tf_init(&o->tf);
+    vt_ok(vv_tf_add_opacity(&o->tf, value, a));
+    o->tf.opacity_unit_distance = u;
+    o->step = step;
+    double smin = s[0] < s[1] ? s[0] : s[1];
+    smin = s[2] < smin ? s[2] : smin;
+    const double dt = step * smin;
+    const double L = (nz - 1) * s[2];
+    /* L must be a whole number of steps for the midpoint placement */
+    assert_true(fabs(L / dt - floor(L / dt + 0.5)) < 1e-9);
+    const double eye_z = L + (floor(50.0 / dt) + 0.5) * dt;
+    vv_view view = ortho_z(2.5 * s[0], 2.5 * s[1], eye_z, 2.0 * s[1], 4, 4);
+    vv_renderer *r = new_raycaster();
+    vt_ok(vv_renderer_set_option(r, "early_termination", "1"));
+    vv_image *img = render(r, w, &view);
+    const double expect = exp(log(1.0 - a) / u * L); /* exp(-tau L) */
+    double worst = 0;
+    for (int y = 0; y < 4; y++)
+        for (int x = 0; x < 4; x++) {
+            const float *p = px(img, x, y);
+            double trans = 1.0 - p[3];
+            double err = fabs(trans / expect - 1.0);
+            worst = err > worst ? err : worst;
+            /* white emission over black: colour equals coverage */
+            assert_float_equal(p[0], p[3], 1e-5);
+            assert_float_equal(p[2], p[3], 1e-5);
+            /* depth: the first sample, half a step inside the front face */
+            assert_float_equal(img->depth[y * 4 + x], eye_z - L + 0.5 * dt, 1e-3);
+        }
+    print_message("slab type %s L=%.2f dt=%.3f a=%.2f u=%.2f: exp(-tau L)=%.5f, rel err %.2e\n",
+                  vv_voxel_type_name(type), L, dt, a, u, expect, worst);
+    vv_image_free(img);
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(v);
+    return worst;
+}
+
+static void
+test_slab_transmittance(void **state) {
+    (void)state;
+    const double iso[3] = {1, 1, 1};
+    const double aniso[3] = {2.0, 3.0, 0.7};
+    const double aniso2[3] = {0.5, 0.8, 2.5};
+    assert_true(slab_error(VV_F32, 3.0, iso, 5, 0.5, 0.5, 1.0) < 0.01);
+    assert_true(slab_error(VV_U8, 100, iso, 21, 0.5, 0.2, 2.5) < 0.01);
+    assert_true(slab_error(VV_I16, -7, iso, 5, 0.25, 0.9, 2.0) < 0.01);
+    assert_true(slab_error(VV_F32, 1.0, iso, 31, 1.0, 0.05, 0.3) < 0.01);
+    /* anisotropic: dt follows the smallest spacing */
+    assert_true(slab_error(VV_F32, 2.0, aniso, 9, 0.5, 0.4, 1.0) < 0.01);
+    assert_true(slab_error(VV_U16, 500, aniso2, 7, 0.5, 0.3, 4.0) < 0.01);
+}
+
+/* With both faces on the sample grid, L / dt + 1 samples fall inside: the
+ * documented sampling (t = k dt, faces included) gives (1 - a)^((L + dt)/u). */
+static void
+test_slab_sample_count(void **state) {
+    (void)state;
+    vv_volume *v = constant_volume(4, 4, 9, VV_F32, 1, 1, 1, 5.0);
+    vv_world *w = new_world();
+    vv_object *o = add_object(w, v, VV_MODE_COMPOSITE);
+    vv_tf_init(&o->tf);
+    vt_ok(vv_tf_add_opacity(&o->tf, 5.0, 0.3));
+    o->tf.opacity_unit_distance = 1.0;
+    o->step = 0.5;
+    vv_view view = ortho_z(1.5, 1.5, 8.0 + 40.0, 2.0, 2, 2);
+    vv_renderer *r = new_raycaster();
+    vt_ok(vv_renderer_set_option(r, "early_termination", "1"));
+    vv_image *img = render(r, w, &view);
+    double expect = 1.0 - pow(0.7, (8.0 + 0.5) / 1.0);
+    assert_float_equal(px(img, 0, 0)[3], expect, 1e-4);
+    assert_float_equal(img->depth[0], 40.0, 1e-4);
+    vv_image_free(img);
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
+/* Early termination at the default 0.99 stops a thick opaque slab's ray,
+ * which is visible as coverage just above 0.99 instead of 1 - 0.5^20. */
+static void
+test_early_termination(void **state) {
+    (void)state;
+    vv_volume *v = constant_volume(4, 4, 21, VV_F32, 1, 1, 1, 1.0);
+    vv_world *w = new_world();
+    vv_object *o = add_object(w, v, VV_MODE_COMPOSITE);
+    vv_tf_init(&o->tf);
+    vt_ok(vv_tf_add_opacity(&o->tf, 1.0, 0.5));
+    o->step = 0.5;
+    vv_view view = ortho_z(1.5, 1.5, 20.0 + 30.25, 2.0, 2, 2);
+    vv_renderer *r = new_raycaster();
+    vv_image *img = render(r, w, &view);
+    float a = px(img, 0, 0)[3];
+    assert_true(a >= 0.99f && a < 0.995f);
+    vt_ok(vv_renderer_set_option(r, "early_termination", "1.0"));
+    vv_image *img2 = render(r, w, &view);
+    assert_float_equal(px(img2, 0, 0)[3], 1.0 - pow(0.5, 20.0), 1e-5);
+    vv_image_free(img);
+    vv_image_free(img2);
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
+/* ---------------------------------------------------------------------- */
+/* Projections against voxel columns                                        */
+
+/* A seeded random n x n x d volume rendered with @p mode through a view whose
+ * pixel centres sit exactly on the voxel columns (power-of-two n keeps the
+ * arithmetic exact); every pixel must show the column's reduction (max, min
+ * or mean) through a grey ramp from range[0] (black) to range[1] (white),
+ * opacity 1, within one step of the 4096-entry table. */
+static vv_image *
+check_projection(vv_render_mode mode, vv_voxel_type type, int skipping, double step) {
+    const int n = 32, d = 24;
+    vv_volume *v = new_volume(n, n, d, type, 1, 1, 1);
+    uint64_t seed = 0x9e3779b97f4a7c15ULL + (uint64_t)mode;
+    for (int k = 0; k < d; k++)
+        for (int j = 0; j < n; j++)
+            for (int i = 0; i < n; i++) {
+                double x = rnd(&seed);
+                /* some structure so that whole subvolumes can be skipped */
+                if (k > 8 && k < 16 && i > 16)
+                    x = x * 0.3;
+                vv_volume_set(v, i, j, k, type == VV_F32 ? 1000.0 * x - 200.0 : floor(4000 * x));
+            }
+    vv_volume_update_range(v);
+    const double lo = v->range[0], hi = v->range[1];
+    vv_world *w = new_world();
+    vv_object *o = add_object(w, v, mode);
+    o->step = step;
+    vv_tf_init(&o->tf);
+    vt_ok(vv_tf_add_opacity(&o->tf, lo, 1.0));
+    vt_ok(vv_tf_add_color(&o->tf, lo, vv_vec3_make(0, 0, 0)));
+    vt_ok(vv_tf_add_color(&o->tf, hi, vv_vec3_make(1, 1, 1)));
+    vv_view view = ortho_z(0.5 * (n - 1), 0.5 * (n - 1), 64.0, n, n, n);
+    vv_renderer *r = new_raycaster();
+    vt_ok(vv_renderer_set_option(r, "empty_space_skipping", skipping ? "1" : "0"));
+    vv_image *img = render(r, w, &view);
+    double worst = 0;
+    for (int y = 0; y < n; y++)
+        for (int x = 0; x < n; x++) {
+            const int j = n - 1 - y; /* row 0 is the top, +y */
+            double acc = mode == VV_MODE_MIP ? -INFINITY : mode == VV_MODE_MINIP ? INFINITY : 0;
+            for (int k = 0; k < d; k++) {
+                double val = vv_volume_get(v, x, j, k);
+                if (mode == VV_MODE_MIP)
+                    acc = val > acc ? val : acc;
+                else if (mode == VV_MODE_MINIP)
+                    acc = val < acc ? val : acc;
+                else
+                    acc += val / d;
+            }
+            const double grey = (acc - lo) / (hi - lo);
+            const float *p = px(img, x, y);
+            /* the table index is floor((v - lo) * 4095 / (hi - lo)) */
+            double err = grey - p[0];
+            if (!(err > -1e-5 && err < 1.0 / 4095 + 1e-5))
+                fail_msg("mode %d skipping %d pixel (%d, %d): expected %.6f (value %.3f), got "
+                         "%.6f",
+                         (int)mode, skipping, x, y, grey, acc, (double)p[0]);
+            assert_float_equal(p[1], p[0], 0);
+            assert_float_equal(p[3], 1.0, 0);
+            worst = fabs(err) > worst ? fabs(err) : worst;
+        }
+    print_message("projection mode %d type %s skipping %d step %.2f: worst grey error %.2e\n",
+                  (int)mode, vv_voxel_type_name(type), skipping, step, worst);
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(v);
+    return img;
+}
+
+/* Renders with skipping on and off; both must be right and identical. */
+static void
+check_projection_both(vv_render_mode mode, vv_voxel_type type, double step) {
+    vv_image *on = check_projection(mode, type, 1, step);
+    vv_image *off = check_projection(mode, type, 0, step);
+    if (!images_identical(on, off))
+        fail_msg("mode %d: skipping on/off differ by up to %.3g", (int)mode, max_abs_diff(on, off));
+    vv_image_free(on);
+    vv_image_free(off);
+}
+
+static void
+test_mip_columns(void **state) {
+    (void)state;
+    check_projection_both(VV_MODE_MIP, VV_F32, 0.5);
+    check_projection_both(VV_MODE_MIP, VV_U16, 0.5);
+}
+
+static void
+test_minip_columns(void **state) {
+    (void)state;
+    check_projection_both(VV_MODE_MINIP, VV_F32, 0.5);
+    check_projection_both(VV_MODE_MINIP, VV_U16, 0.5);
+}
+
+/* X-ray is the mean of the samples; with step 1 they are the voxels. */
+static void
+test_xray_columns(void **state) {
+    (void)state;
+    check_projection_both(VV_MODE_XRAY, VV_F32, 1.0);
+    check_projection_both(VV_MODE_XRAY, VV_U16, 1.0);
+}
+
+/* ---------------------------------------------------------------------- */
+/* Isosurface of a sampled sphere                                           */
+
+static void
+test_iso_sphere_silhouette(void **state) {
+    (void)state;
+    const int n = 64;
+    const double R = 24, c = 31.5;
+    vv_volume *v = sphere_volume(n, R);
+    vv_world *w = new_world();
+    vv_object *o = add_object(w, v, VV_MODE_ISO);
+    o->isovalue = 0;
+    /* pixel size 0.5 */
+    vv_view view = ortho_z(c, c, 200, 64, 128, 128);
+    vv_renderer *r = new_raycaster();
+    vv_image *img = render(r, w, &view);
+    write_png(img, "iso_sphere_ortho");
+    hits h = count_hits(img, 0, 128);
+    double area = h.n * 0.25, expect = VV_PI * R * R;
+    double err = area / expect - 1;
+    print_message("iso sphere R=%g: silhouette area %.2f, pi R^2 %.2f, rel err %.2e\n", R, area,
+                  expect, err);
+    assert_true(fabs(err) < 0.01);
+    /* centred: centroid on the middle of the image */
+    assert_float_equal(h.cx, 63.5, 0.05);
+    assert_float_equal(h.cy, 63.5, 0.05);
+    /* depth of the centre pixels: eye distance to the front of the sphere */
+    assert_float_equal(img->depth[64 * 128 + 64], 200 - (c + R), 0.05);
+    vv_image_free(img);
+
+    /* perspective: odd size puts the centre pixel's ray on the axis */
+    vv_view pv;
+    memset(&pv, 0, sizeof pv);
+    pv.eye = vv_vec3_make(c, c, c + 100);
+    pv.at = vv_vec3_make(c, c, c);
+    pv.up = vv_vec3_make(0, 1, 0);
+    pv.fov = vv_deg_to_rad(30);
+    pv.projection = VV_PROJECTION_PERSPECTIVE;
+    pv.width = pv.height = 65;
+    img = render(r, w, &pv);
+    double dep = img->depth[32 * 65 + 32];
+    print_message("iso sphere perspective: centre depth %.4f, expected %.4f\n", dep, 100 - R);
+    assert_float_equal(dep, 100 - R, 0.05);
+    /* silhouette of a sphere seen in perspective: a disc of angular radius
+     * asin(R / D); in image-plane units tan(asin(R/D)) / tan(fov/2) * 32.5 px */
+    hits hp = count_hits(img, 0, 65);
+    double rp = tan(asin(R / 100.0)) / tan(pv.fov / 2) * 32.5;
+    double perr = hp.n / (VV_PI * rp * rp) - 1;
+    print_message("iso sphere perspective: %ld pixels, expected %.1f, rel err %.2e\n", hp.n,
+                  VV_PI * rp * rp, perr);
+    assert_true(fabs(perr) < 0.02);
+    vv_image_free(img);
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
+/* ---------------------------------------------------------------------- */
+/* Several objects; object transforms                                       */
+
+/* Renders the World with only object @p only visible (-1: all). */
+static vv_image *
+render_only(vv_renderer *r, vv_world *w, const vv_view *view, int only) {
+    for (int i = 0; i < w->n_objects; i++)
+        w->objects[i]->visible = only < 0 || i == only;
+    vv_image *img = render(r, w, view);
+    for (int i = 0; i < w->n_objects; i++)
+        w->objects[i]->visible = 1;
+    return img;
+}
+
+static void
+test_two_slabs_order(void **state) {
+    (void)state;
+    vv_volume *v = constant_volume(8, 8, 5, VV_U8, 1, 1, 1, 10);
+    vv_world *w = new_world();
+    vv_object *red = add_object(w, v, VV_MODE_COMPOSITE);
+    vv_object *green = add_object(w, v, VV_MODE_COMPOSITE);
+    const vv_vec3 colors[2] = {vv_vec3_make(1, 0, 0), vv_vec3_make(0, 1, 0)};
+    vv_object *objs[2] = {red, green};
+    for (int i = 0; i < 2; i++) {
+        vv_tf_init(&objs[i]->tf);
+        vt_ok(vv_tf_add_opacity(&objs[i]->tf, 10, 0.3));
+        vt_ok(vv_tf_add_color(&objs[i]->tf, 10, colors[i]));
+    }
+    vv_view view = ortho_z(3.5, 3.5, 100.25, 4, 8, 8);
+    vv_renderer *r = new_raycaster();
+    for (int swap = 0; swap < 2; swap++) {
+        vv_object *front = swap ? green : red, *back = swap ? red : green;
+        front->position = vv_vec3_make(0, 0, 20);
+        back->position = vv_vec3_make(0, 0, 0);
+        vv_image *both = render_only(r, w, &view, -1);
+        vv_image *a0 = render_only(r, w, &view, swap ? 1 : 0);
+        vv_image *a1 = render_only(r, w, &view, swap ? 0 : 1);
+        for (int y = 0; y < 8; y++)
+            for (int x = 0; x < 8; x++) {
+                const float *p = px(both, x, y), *f = px(a0, x, y), *b = px(a1, x, y);
+                /* the one-object renders (single-volume kernel) composited front to
+                 * back must give the two-object render (general kernel) */
+                for (int ch = 0; ch < 4; ch++)
+                    assert_float_equal(p[ch], f[ch] + (1 - f[3]) * b[ch], 1e-4);
+                const int fc = swap ? 1 : 0, bc = swap ? 0 : 1;
+                /* front alpha 1 - 0.7^4 = 0.76; the back shows through 0.24 of it */
+                assert_true(p[fc] > 0.7f && p[bc] < 0.25f && p[bc] > 0.1f && p[fc] > 3 * p[bc]);
+                assert_float_equal(both->depth[y * 8 + x], 100.25 - 24 + 0.25, 1e-3);
+            }
+        if (swap == 0)
+            print_message("two slabs: front red (%.4f, %.4f, %.4f, %.4f)\n", px(both, 3, 3)[0],
+                          px(both, 3, 3)[1], px(both, 3, 3)[2], px(both, 3, 3)[3]);
+        vv_image_free(both);
+        vv_image_free(a0);
+        vv_image_free(a1);
+    }
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
+static void
+test_object_translate_scale(void **state) {
+    (void)state;
+    const double R = 10;
+    vv_volume *v = sphere_volume(32, R);
+    vv_world *w = new_world();
+    vv_object *o = add_object(w, v, VV_MODE_ISO);
+    o->isovalue = 0;
+    /* pixel size 0.5, view centre (20, 20) */
+    vv_view view = ortho_z(20, 20, 200, 64, 128, 128);
+    vv_renderer *r = new_raycaster();
+    vv_image *img0 = render(r, w, &view);
+    hits h0 = count_hits(img0, 0, 128);
+    /* sphere centre (15.5, 15.5) -> pixel centre x = 64 + (15.5 - 20) / 0.5 - 0.5 */
+    assert_float_equal(h0.cx, 54.5, 0.05);
+    assert_float_equal(h0.cy, 72.5, 0.05);
+
+    o->position = vv_vec3_make(6, -3, 0);
+    vv_image *img1 = render(r, w, &view);
+    hits h1 = count_hits(img1, 0, 128);
+    print_message("translate (6, -3): centroid moved by (%.3f, %.3f) px, expected (12, 6)\n",
+                  h1.cx - h0.cx, h1.cy - h0.cy);
+    assert_int_equal(h1.n, h0.n);
+    assert_float_equal(h1.cx - h0.cx, 12, 0.01);
+    assert_float_equal(h1.cy - h0.cy, 6, 0.01);
+
+    o->position = vv_vec3_make(0, 0, 0);
+    o->scale = vv_vec3_make(1.5, 1.5, 1.5);
+    vv_image *img2 = render(r, w, &view);
+    hits h2 = count_hits(img2, 0, 128);
+    double ratio = (double)h2.n / (double)h0.n;
+    print_message("scale 1.5: area ratio %.4f (expected 2.25)\n", ratio);
+    assert_float_equal(ratio, 2.25, 0.02);
+    /* the centre scales about the object origin: 15.5 * 1.5 = 23.25 */
+    assert_float_equal(h2.cx, 64 + (23.25 - 20) / 0.5 - 0.5, 0.05);
+    assert_float_equal(h2.cy, 64 - (23.25 - 20) / 0.5 - 0.5, 0.05);
+    vv_image_free(img0);
+    vv_image_free(img1);
+    vv_image_free(img2);
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
+/* A 20 x 6 x 5 box (voxels of 1 inside a border of 0, isovalue 0.5) turned
+ * +90 degrees about z (x -> y): its silhouette turns from wide to tall and
+ * its centre goes from (10.5, 3.5) to (-3.5, 10.5). */
+static void
+test_object_orientation(void **state) {
+    (void)state;
+    vv_volume *v = new_volume(22, 8, 7, VV_U8, 1, 1, 1);
+    for (int k = 1; k <= 5; k++)
+        for (int j = 1; j <= 6; j++)
+            for (int i = 1; i <= 20; i++)
+                vv_volume_set(v, i, j, k, 1);
+    vv_volume_update_range(v);
+    vv_world *w = new_world();
+    vv_object *o = add_object(w, v, VV_MODE_ISO);
+    o->isovalue = 0.5;
+    const double cx = 5, cy = 8, ps = 0.5;
+    vv_view view = ortho_z(cx, cy, 100, 64, 128, 128);
+    vv_renderer *r = new_raycaster();
+    for (int rot = 0; rot < 2; rot++) {
+        o->orientation =
+            rot ? vv_quat_from_axis_angle(vv_vec3_make(0, 0, 1), 0.5 * VV_PI) : vv_quat_identity();
+        vv_image *img = render(r, w, &view);
+        hits h = count_hits(img, 0, 128);
+        double wx = (h.x1 - h.x0 + 1) * ps, wy = (h.y1 - h.y0 + 1) * ps;
+        double mx = cx + (h.cx + 0.5 - 64) * ps, my = cy - (h.cy + 0.5 - 64) * ps;
+        print_message("box rot %d: extent %.1f x %.1f, centre (%.2f, %.2f)\n", rot * 90, wx, wy, mx,
+                      my);
+        assert_float_equal(wx, rot ? 6 : 20, 0.6);
+        assert_float_equal(wy, rot ? 20 : 6, 0.6);
+        assert_float_equal(mx, rot ? -3.5 : 10.5, 0.3);
+        assert_float_equal(my, rot ? 10.5 : 3.5, 0.3);
+        vv_image_free(img);
+    }
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
+/* Iso mode where the ray enters the volume already inside the surface (a
+ * constant volume above the isovalue: the box face is a cut face, which the
+ * ray caster shades at the first sample). Empty-space skipping must not
+ * change that: every pixel over the box is hit, at the box's front face. */
+static void
+test_iso_enter_inside(void **state) {
+    (void)state;
+    vv_volume *v = constant_volume(9, 9, 9, VV_F32, 1, 1, 1, 1.0);
+    vv_world *w = new_world();
+    vv_object *o = add_object(w, v, VV_MODE_ISO);
+    o->isovalue = 0.5;
+    vv_view view = ortho_z(4, 4, 50, 4, 8, 8);
+    int ok[2] = {0, 0};
+    for (int skipping = 0; skipping < 2; skipping++) {
+        vv_renderer *r = new_raycaster();
+        vt_ok(vv_renderer_set_option(r, "empty_space_skipping", skipping ? "1" : "0"));
+        vv_image *img = render(r, w, &view);
+        long n = count_hits(img, 0, 8).n;
+        print_message("iso, constant volume above the isovalue, skipping %d: %ld of 64 pixels "
+                      "hit, centre depth %g (front face at 42)\n",
+                      skipping, n, (double)img->depth[4 * 8 + 4]);
+        ok[skipping] = n == 64 && fabs(img->depth[4 * 8 + 4] - 42) < 0.51;
+        vv_image_free(img);
+        vv_renderer_free(r);
+    }
+    vv_world_free(w);
+    vv_volume_free(v);
+    assert_true(ok[0]);
+    assert_true(ok[1]);
+}
+
+/* ---------------------------------------------------------------------- */
+/* Cut planes                                                               */
+
+static void
+test_global_cut_plane(void **state) {
+    (void)state;
+    const double R = 10, c = 15.5;
+    vv_volume *v = sphere_volume(32, R);
+    vv_world *w = new_world();
+    vv_object *o = add_object(w, v, VV_MODE_ISO);
+    o->isovalue = 0;
+    vv_view view = ortho_z(c, c, 100, 32, 64, 64); /* pixel 0.5, sphere centred */
+    vv_renderer *r = new_raycaster();
+    vv_image *full = render(r, w, &view);
+    hits hf = count_hits(full, 0, 64);
+    assert_true(hf.n > 1000);
+
+    /* normal +x keeps x >= 15.5: the right half of the image (columns 32..) */
+    vt_ok(vv_world_add_cut_plane(w, vv_vec3_make(c, c, c), vv_vec3_make(1, 0, 0)));
+    vv_image *img = render(r, w, &view);
+    hits h = count_hits(img, 0, 64);
+    print_message("global cut +x: %ld of %ld pixels kept (%.4f)\n", h.n, hf.n,
+                  (double)h.n / (double)hf.n);
+    assert_int_equal(count_hits(img, 0, 32).n, 0);
+    assert_int_equal(h.n, count_hits(full, 32, 64).n);
+    assert_float_equal((double)h.n / (double)hf.n, 0.5, 0.01);
+    vv_image_free(img);
+
+    /* normal -x keeps the left half */
+    w->cut_planes[0].normal = vv_vec3_make(-1, 0, 0);
+    img = render(r, w, &view);
+    assert_int_equal(count_hits(img, 32, 64).n, 0);
+    assert_int_equal(count_hits(img, 0, 32).n, count_hits(full, 0, 32).n);
+    vv_image_free(img);
+
+    /* normal -z (away from the eye) keeps the back half: the silhouette stays
+     * and the depth is the eye's distance to the cut face */
+    w->cut_planes[0].normal = vv_vec3_make(0, 0, -1);
+    img = render(r, w, &view);
+    assert_int_equal(count_hits(img, 0, 64).n, hf.n);
+    const double dt = 0.5;
+    int bad = 0;
+    for (int y = 28; y < 36; y++)
+        for (int x = 28; x < 36; x++) {
+            float d = img->depth[y * 64 + x];
+            if (!(d >= 100 - c - 1e-3 && d < 100 - c + dt + 1e-3) && !bad++)
+                print_error("cut plane normal -z through the centre: pixel (%d, %d) depth %g, "
+                            "expected the cut face at %g (+ < one step %g)\n",
+                            x, y, (double)d, 100 - c, dt);
+        }
+    vv_image_free(img);
+    vv_image_free(full);
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(v);
+    assert_int_equal(bad, 0);
+}
+
+/* Two spheres side by side; a local cut plane on the left one (normal +y)
+ * halves it and leaves the right one whole. */
+static void
+test_local_cut_plane(void **state) {
+    (void)state;
+    const double R = 10, c = 15.5;
+    vv_volume *v = sphere_volume(32, R);
+    vv_world *w = new_world();
+    vv_object *a = add_object(w, v, VV_MODE_ISO);
+    vv_object *b = add_object(w, v, VV_MODE_ISO);
+    a->isovalue = b->isovalue = 0;
+    b->position = vv_vec3_make(24, 0, 0);
+    vv_view view = ortho_z(27.5, c, 100, 32, 128, 64); /* pixel 0.5 */
+    vv_renderer *r = new_raycaster();
+    vv_image *full = render(r, w, &view);
+    hits fa = count_hits(full, 0, 64), fb = count_hits(full, 64, 128);
+    assert_true(fa.n > 1000);
+    assert_int_equal(fa.n, fb.n);
+
+    a->n_cut_planes = 1;
+    a->cut_planes[0].point = vv_vec3_make(c, c, c);
+    a->cut_planes[0].normal = vv_vec3_make(0, 1, 0);
+    vv_image *img = render(r, w, &view);
+    hits ha = count_hits(img, 0, 64), hb = count_hits(img, 64, 128);
+    print_message("local cut +y on the left sphere: left %ld of %ld, right %ld of %ld\n", ha.n,
+                  fa.n, hb.n, fb.n);
+    assert_int_equal(hb.n, fb.n);
+    assert_float_equal((double)ha.n / (double)fa.n, 0.5, 0.01);
+    /* +y is up: only the upper rows (y < 32) remain */
+    assert_true(ha.y1 < 32);
+    vv_image_free(img);
+    vv_image_free(full);
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
+/* ---------------------------------------------------------------------- */
+/* Agreement checks on a real CT                                            */
+
+static vv_world *
+headsq_world(int size, vv_volume **vol) {
+    vt_ok(vv_volume_load(vol, vt_data("volumes/headsq/quarter.nhdr"), NULL));
+    vv_default_scene_options so;
+    vv_default_scene_options_init(&so);
+    so.width = so.height = size;
+    so.azimuth = vv_deg_to_rad(30);
+    so.elevation = vv_deg_to_rad(20);
+    vv_world *w = NULL;
+    vt_ok(vv_world_new_for_volume(&w, *vol, &so));
+    assert_int_equal(w->n_objects, 1);
+    assert_int_equal(w->objects[0]->mode, VV_MODE_COMPOSITE);
+    assert_true(w->objects[0]->shading);
+    return w;
+}
+
+static void
+test_step_halving(void **state) {
+    (void)state;
+    vv_volume *v = NULL;
+    vv_world *w = headsq_world(128, &v);
+    vv_renderer *r = new_raycaster();
+    w->objects[0]->step = 0.5;
+    vv_image *a = render(r, w, &w->view);
+    w->objects[0]->step = 0.25;
+    vv_image *b = render(r, w, &w->view);
+    write_png(a, "headsq_step050");
+    write_png(b, "headsq_step025");
+    double psnr = vv_image_psnr(a, b);
+    print_message("headsq composite, step 0.5 vs 0.25: PSNR %.2f dB\n", psnr);
+    long lit = count_hits(a, 0, 128).n;
+    vv_image_free(a);
+    vv_image_free(b);
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(v);
+    assert_true(lit > 1000);
+    assert_true(psnr >= 40.0);
+}
+
+static void
+test_gradients_on_the_fly(void **state) {
+    (void)state;
+    vv_volume *v = NULL;
+    vv_world *w = headsq_world(128, &v);
+    vv_renderer *r = new_raycaster();
+    vv_image *a = render(r, w, &w->view);
+    vt_ok(vv_renderer_set_option(r, "gradient_budget_mb", "0"));
+    vv_image *b = render(r, w, &w->view);
+    double psnr = vv_image_psnr(a, b);
+    print_message("headsq: cached vs on-the-fly gradients: PSNR %.2f dB\n", psnr);
+    /* they must differ at all (otherwise the option did nothing) */
+    int same = images_identical(a, b);
+    vv_image_free(a);
+    vv_image_free(b);
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(v);
+    assert_false(same);
+    assert_true(psnr >= 30.0);
+}
+
+static void
+test_determinism(void **state) {
+    (void)state;
+    vv_volume *v = NULL;
+    vv_world *w = headsq_world(96, &v);
+    vv_renderer *r = new_raycaster();
+    vv_image *t1 = render_t(r, w, &w->view, 1);
+    vv_image *t2 = render_t(r, w, &w->view, 2);
+    vv_image *t2b = render_t(r, w, &w->view, 2); /* cache reused */
+    assert_true(count_hits(t1, 0, 96).n > 500);
+    assert_true(images_identical(t1, t2));
+    assert_true(images_identical(t2, t2b));
+    /* a fresh renderer (fresh cache) gives the same image too */
+    vv_renderer *r2 = new_raycaster();
+    vv_image *f = render_t(r2, w, &w->view, 2);
+    assert_true(images_identical(t1, f));
+
+    vv_image_free(f);
+    vv_image_free(t1);
+    vv_image_free(t2);
+    vv_image_free(t2b);
+    vv_renderer_free(r2);
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
+/* Empty-space skipping must not change a composite image, with one object
+ * (the single-volume kernel) or two overlapping ones (the general kernel). */
+static void
+test_skipping_exact(void **state) {
+    (void)state;
+    vv_volume *v = NULL;
+    vv_world *w = headsq_world(96, &v);
+    vv_renderer *on = new_raycaster(), *off = new_raycaster();
+    vt_ok(vv_renderer_set_option(off, "empty_space_skipping", "0"));
+    vv_image *a = render(on, w, &w->view), *b = render(off, w, &w->view);
+    int same1 = images_identical(a, b);
+    print_message("one object, skipping on vs off: %s (max |diff| %.3g, PSNR %.2f dB)\n",
+                  same1 ? "identical" : "DIFFERENT", max_abs_diff(a, b), vv_image_psnr(a, b));
+    vv_image_free(a);
+    vv_image_free(b);
+
+    vv_object *o2 = NULL;
+    vt_ok(vv_object_new_volume(&o2, v, "second"));
+    o2->tf = w->objects[0]->tf;
+    o2->position = vv_vec3_add(w->objects[0]->position, vv_vec3_make(60, 0, 0));
+    vt_ok(vv_world_add_object(w, o2));
+    a = render(on, w, &w->view);
+    b = render(off, w, &w->view);
+    int same2 = images_identical(a, b);
+    print_message("two objects, skipping on vs off: %s (max |diff| %.3g)\n",
+                  same2 ? "identical" : "DIFFERENT", max_abs_diff(a, b));
+    assert_true(count_hits(a, 0, 96).n > 500);
+    vv_image_free(a);
+    vv_image_free(b);
+    vv_renderer_free(on);
+    vv_renderer_free(off);
+    vv_world_free(w);
+    vv_volume_free(v);
+    assert_true(same1);
+    assert_true(same2);
+}
+
+/* ---------------------------------------------------------------------- */
+/* Progress and cancellation                                                */
+
+typedef struct progress_log {
+    int n;
+    double f[1024];
+    int cancel_at; /* call number at which to cancel; 0: never */
+} progress_log;
+
+static int
+on_progress(void *user, double fraction) {
+    progress_log *l = user;
+    if (l->n < 1024)
+        l->f[l->n] = fraction;
+    l->n++;
+    return l->cancel_at > 0 && l->n >= l->cancel_at;
+}
+
+static void
+test_progress_and_cancel(void **state) {
+    (void)state;
+    vv_volume *v = sphere_volume(32, 10);
+    vv_world *w = new_world();
+    vv_object *o = add_object(w, v, VV_MODE_COMPOSITE);
+    (void)o;
+    vv_view view = ortho_z(15.5, 15.5, 100, 32, 64, 64);
+    vv_renderer *r = new_raycaster();
+    vv_image *img = NULL;
+    vt_ok(vv_image_new(&img, 64, 64));
+    progress_log log;
+    memset(&log, 0, sizeof log);
+    vv_render_options opt;
+    vv_render_options_init(&opt);
+    opt.threads = 2;
+    opt.progress.fn = on_progress;
+    opt.progress.user = &log;
+    vt_ok(vv_renderer_render(r, w, &view, &opt, img));
+    assert_true(log.n >= 2);
+    for (int i = 1; i < log.n; i++)
+        assert_true(log.f[i] > log.f[i - 1]);
+    assert_true(log.f[0] > 0);
+    assert_float_equal(log.f[log.n - 1], 1.0, 1e-12);
+
+    memset(&log, 0, sizeof log);
+    log.cancel_at = 1;
+    vv_error_clear();
+    assert_int_equal(vv_renderer_render(r, w, &view, &opt, img), VV_ERR_CANCELLED);
+    assert_true(vv_error_message()[0] != '\0');
+    assert_true(log.n >= 1 && log.n < 16); /* stopped well before the 16 tiles */
+    /* the renderer still works afterwards */
+    vt_ok(vv_renderer_render(r, w, &view, NULL, img));
+    vv_image_free(img);
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
+/* ---------------------------------------------------------------------- */
+/* Bad input                                                                */
+
+static void
+test_bad_input(void **state) {
+    (void)state;
+    vv_renderer *bad = NULL;
+    vv_error_clear();
+    assert_int_equal(vv_renderer_new(&bad, "no-such-method"), VV_ERR_INVALID);
+    assert_null(bad);
+    assert_non_null(strstr(vv_error_message(), "no-such-method"));
+
+    vv_renderer *r = new_raycaster();
+    assert_string_equal(vv_renderer_name(r), "raycast");
+    const char *bad_opts[][2] = {
+        {"early_termination", "0"},   {"early_termination", "1.5"},
+        {"early_termination", "abc"}, {"early_termination", ""},
+        {"early_termination", "nan"}, {"early_termination", "0.5x"},
+        {"gradient_budget_mb", "-1"}, {"empty_space_skipping", "yes"},
+        {"no_such_option", "1"},
+    };
+    for (size_t i = 0; i < sizeof bad_opts / sizeof bad_opts[0]; i++) {
+        vv_error_clear();
+        vv_status s = vv_renderer_set_option(r, bad_opts[i][0], bad_opts[i][1]);
+        if (s != VV_ERR_INVALID)
+            fail_msg("option %s=%s: got %s", bad_opts[i][0], bad_opts[i][1], vv_status_name(s));
+        assert_true(vv_error_message()[0] != '\0');
+    }
+    vt_ok(vv_renderer_set_option(r, "early_termination", "0.95"));
+    vt_ok(vv_renderer_set_option(r, "gradient_budget_mb", "16"));
+    vt_ok(vv_renderer_set_option(r, "empty_space_skipping", "0"));
+
+    vv_volume *v = sphere_volume(8, 3);
+    vv_world *w = new_world();
+    vv_object *o = add_object(w, v, VV_MODE_COMPOSITE);
+    vv_view view = ortho_z(3.5, 3.5, 50, 8, 16, 16);
+    vv_image *img = NULL;
+    vt_ok(vv_image_new(&img, 16, 8));
+    vv_error_clear();
+    assert_int_equal(vv_renderer_render(r, w, &view, NULL, img), VV_ERR_INVALID);
+    assert_true(vv_error_message()[0] != '\0');
+    vv_image_free(img);
+    vt_ok(vv_image_new(&img, 16, 16));
+    vt_ok(vv_renderer_render(r, w, &view, NULL, img));
+    o->step = 0;
+    vt_err(vv_renderer_render(r, w, &view, NULL, img));
+    o->step = -1;
+    vt_err(vv_renderer_render(r, w, &view, NULL, img));
+    o->step = NAN;
+    vt_err(vv_renderer_render(r, w, &view, NULL, img));
+    o->step = 0.5;
+    vt_ok(vv_renderer_render(r, w, &view, NULL, img));
+    vv_image_free(img);
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
+/* ---------------------------------------------------------------------- */
+/* Every shared real volume renders through the default scene               */
+
+static void
+test_real_files(void **state) {
+    (void)state;
+    static const char *files[] = {
+        "nut.slc",          "bolt.slc",
+        "neghip.slc",       "sphere.slc",
+        "ct_head.nrrd",     "headsq/quarter.nhdr",
+        "ironProt.vtk",     "heart.vtk",
+        "HeadMRVolume.mhd", "avg152T1_RL_nifti.nii.gz",
+    };
+    vv_renderer *r = new_raycaster();
+    for (size_t f = 0; f < sizeof files / sizeof files[0]; f++) {
+        char rel[256];
+        snprintf(rel, sizeof rel, "volumes/%s", files[f]);
+        vv_volume *v = NULL;
+        vt_ok(vv_volume_load(&v, vt_data(rel), NULL));
+        vv_default_scene_options so;
+        vv_default_scene_options_init(&so);
+        so.width = so.height = 64;
+        so.azimuth = vv_deg_to_rad(30);
+        so.elevation = vv_deg_to_rad(20);
+        vv_world *w = NULL;
+        vt_ok(vv_world_new_for_volume(&w, v, &so));
+        vv_image *img = render(r, w, &w->view);
+        long lit = 0;
+        for (int y = 0; y < 64; y++)
+            for (int x = 0; x < 64; x++) {
+                const float *p = px(img, x, y);
+                double d = fabs(p[0] - w->background.x) + fabs(p[1] - w->background.y) +
+                           fabs(p[2] - w->background.z);
+                lit += d > 0.1;
+            }
+        print_message("%s: %d x %d x %d %s, %ld of 4096 pixels differ from the background\n",
+                      files[f], v->dims[0], v->dims[1], v->dims[2], vv_voxel_type_name(v->type),
+                      lit);
+        if (lit < 40)
+            fail_msg("%s renders (almost) blank: %ld lit pixels", files[f], lit);
+        char name[256];
+        snprintf(name, sizeof name, "real_%s", files[f]);
+        for (char *c = name; *c; c++)
+            if (*c == '/' || *c == '.')
+                *c = '_';
+        write_png(img, name);
+        vv_image_free(img);
+        vv_world_free(w);
+        vv_volume_free(v);
+    }
+    vv_renderer_free(r);
+}
+
+int
+main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_slab_transmittance),
+        cmocka_unit_test(test_slab_sample_count),
+        cmocka_unit_test(test_early_termination),
+        cmocka_unit_test(test_mip_columns),
+        cmocka_unit_test(test_minip_columns),
+        cmocka_unit_test(test_xray_columns),
+        cmocka_unit_test(test_iso_sphere_silhouette),
+        cmocka_unit_test(test_two_slabs_order),
+        cmocka_unit_test(test_object_translate_scale),
+        cmocka_unit_test(test_object_orientation),
+        cmocka_unit_test(test_iso_enter_inside),
+        cmocka_unit_test(test_global_cut_plane),
+        cmocka_unit_test(test_local_cut_plane),
+        cmocka_unit_test(test_step_halving),
+        cmocka_unit_test(test_gradients_on_the_fly),
+        cmocka_unit_test(test_determinism),
+        cmocka_unit_test(test_skipping_exact),
+        cmocka_unit_test(test_progress_and_cancel),
+        cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_real_files),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
