@@ -7,8 +7,7 @@
 #include <sys/stat.h>
 
 const char *
-vt_data(const char *rel)
-{
+vt_data(const char *rel) {
     static _Thread_local char buf[8][1024];
     static _Thread_local int slot;
     slot = (slot + 1) % 8;
@@ -17,8 +16,7 @@ vt_data(const char *rel)
 }
 
 static void
-mkdir_p(const char *path)
-{
+mkdir_p(const char *path) {
     char tmp[1024];
     snprintf(tmp, sizeof tmp, "%s", path);
     for (char *p = tmp + 1; *p; p++) {
@@ -32,8 +30,7 @@ mkdir_p(const char *path)
 }
 
 const char *
-vt_outdir(const char *name)
-{
+vt_outdir(const char *name) {
     static char buf[1024];
     snprintf(buf, sizeof buf, "%s/test-out/%s", VV_BINARY_DIR, name);
     mkdir_p(buf);
@@ -41,8 +38,7 @@ vt_outdir(const char *name)
 }
 
 void
-vt_write_file(const char *path, const void *data, size_t n)
-{
+vt_write_file(const char *path, const void *data, size_t n) {
     FILE *f = fopen(path, "wb");
     if (!f)
         fail_msg("cannot write %s: %s", path, strerror(errno));
@@ -52,8 +48,7 @@ vt_write_file(const char *path, const void *data, size_t n)
 }
 
 unsigned char *
-vt_read_file(const char *path, size_t *n)
-{
+vt_read_file(const char *path, size_t *n) {
     FILE *f = fopen(path, "rb");
     if (!f)
         fail_msg("cannot read %s: %s", path, strerror(errno));

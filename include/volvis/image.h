@@ -65,7 +65,9 @@ vv_status vv_image_write_png(const vv_image *img, const char *path, double gamma
 /**
  * Reads an 8-bit or 16-bit PNG (grey, grey+alpha, RGB, RGBA, palette) into a
  * new image; colour values are v/maxval (no gamma change), A = 1 when the file
- * has none. Errors: VV_ERR_IO, VV_ERR_FORMAT, VV_ERR_LIMIT.
+ * has none. Errors: VV_ERR_IO, VV_ERR_FORMAT, VV_ERR_LIMIT (a side over
+ * VV_IMAGE_MAX_SIDE or more than 2^26 pixels, checked from the header before
+ * allocating).
  */
 vv_status vv_image_read_png(vv_image **out, const char *path);
 

@@ -46,10 +46,14 @@ vv_error_clear(void) {
 
 vv_status
 vv_error_set(vv_status s, const char *fmt, ...) {
+    /* format into a local buffer: the arguments may point into the trace
+     * itself (vv_error_set(s, "outer: %s", vv_error_message())) */
+    char buf[VV_TRACE_MAX];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(trace, sizeof trace, fmt, ap);
+    vsnprintf(buf, sizeof buf, fmt, ap);
     va_end(ap);
+    memcpy(trace, buf, sizeof trace);
     return s;
 }
 

@@ -1,11 +1,11 @@
 /* Atomic output files, whole-file reads, paths, byte order. */
 #include <errno.h>
 #include <fcntl.h>
-#include <time.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "core/internal.h"

@@ -87,6 +87,13 @@ vv_mat4
 vv_mat4_inverse(vv_mat4 a, int *ok) {
     /* Gauss-Jordan elimination with partial pivoting. */
     double m[4][8];
+    /* a pivot below this (relative to the largest entry) means singular:
+     * rounding rarely leaves an exact zero */
+    double scale = 0;
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; j < 4; j++)
+            scale = fabs(a.m[i][j]) > scale ? fabs(a.m[i][j]) : scale;
+    const double tiny = 1e-12 * scale;
     for (int i = 0; i < 4; i++)
         for (int j = 0; j < 4; j++) {
             m[i][j] = a.m[i][j];
@@ -97,7 +104,7 @@ vv_mat4_inverse(vv_mat4 a, int *ok) {
         for (int r = c + 1; r < 4; r++)
             if (fabs(m[r][c]) > fabs(m[p][c]))
                 p = r;
-        if (fabs(m[p][c]) < 1e-300) {
+        if (!(fabs(m[p][c]) > tiny)) {
             if (ok)
                 *ok = 0;
             return vv_mat4_identity();

@@ -8,13 +8,15 @@
 #include "core/internal.h"
 #include "volvis/image.h"
 
+/* Largest image vv_image_read_png accepts (2^26 pixels: 1 GiB as float RGBA). */
+#define VV_PNG_READ_MAX_PIXELS (((uint64_t)1) << 26)
+
 typedef struct png_err {
     char msg[256];
 } png_err;
 
 static void
-on_png_error(png_structp png, png_const_charp msg)
-{
+on_png_error(png_structp png, png_const_charp msg) {
     png_err *e = png_get_error_ptr(png);
     if (e)
         snprintf(e->msg, sizeof e->msg, "%s", msg);
@@ -22,15 +24,13 @@ on_png_error(png_structp png, png_const_charp msg)
 }
 
 static void
-on_png_warning(png_structp png, png_const_charp msg)
-{
+on_png_warning(png_structp png, png_const_charp msg) {
     (void)png;
     (void)msg;
 }
 
 vv_status
-vv_image_write_png(const vv_image *img, const char *path, double gamma, int with_alpha)
-{
+vv_image_write_png(const vv_image *img, const char *path, double gamma, int with_alpha) {
     int ch = with_alpha ? 4 : 3;
     size_t stride = (size_t)img->width * (size_t)ch;
     uint8_t *pix = malloc(stride * (size_t)img->height);
@@ -52,8 +52,8 @@ vv_image_write_png(const vv_image *img, const char *path, double gamma, int with
         return vv_error_prefix(s, "png");
     }
     png_err err = {{0}};
-    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &err, on_png_error,
-                                              on_png_warning);
+    png_structp png =
+        png_create_write_struct(PNG_LIBPNG_VER_STRING, &err, on_png_error, on_png_warning);
     png_infop info = png ? png_create_info_struct(png) : NULL;
     if (!png || !info) {
         png_destroy_write_struct(&png, &info);
@@ -85,8 +85,7 @@ vv_image_write_png(const vv_image *img, const char *path, double gamma, int with
 }
 
 vv_status
-vv_image_read_png(vv_image **out, const char *path)
-{
+vv_image_read_png(vv_image **out, const char *path) {
     *out = NULL;
     FILE *fp = fopen(path, "rb");
     if (!fp)
@@ -97,8 +96,8 @@ vv_image_read_png(vv_image **out, const char *path)
         return vv_error_set(VV_ERR_FORMAT, "png: %s: not a PNG file", path);
     }
     png_err err = {{0}};
-    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &err, on_png_error,
-                                             on_png_warning);
+    png_structp png =
+        png_create_read_struct(PNG_LIBPNG_VER_STRING, &err, on_png_error, on_png_warning);
     png_infop info = png ? png_create_info_struct(png) : NULL;
     if (!png || !info) {
         png_destroy_read_struct(&png, &info, NULL);
@@ -117,11 +116,20 @@ vv_image_read_png(vv_image **out, const char *path)
         vv_image_free(img);
         return vv_error_set(VV_ERR_FORMAT, "png: %s: %s", path, err.msg);
     }
-    png_set_user_limits(png, VV_IMAGE_MAX_SIDE, VV_IMAGE_MAX_SIDE);
+    /* sizes are checked below with our own limits and error code */
+    png_set_user_limits(png, 0x7fffffff, 0x7fffffff);
     png_init_io(png, fp);
     png_set_sig_bytes(png, 8);
     png_read_info(png, info);
     png_uint_32 w = png_get_image_width(png, info), h = png_get_image_height(png, info);
+    if (w > VV_IMAGE_MAX_SIDE || h > VV_IMAGE_MAX_SIDE ||
+        (uint64_t)w * h > VV_PNG_READ_MAX_PIXELS) {
+        /* checked before anything the size of the image is allocated */
+        png_destroy_read_struct(&png, &info, NULL);
+        fclose(fp);
+        return vv_error_set(VV_ERR_LIMIT, "png: %s: %u x %u pixels is over the limit of %llu", path,
+                            (unsigned)w, (unsigned)h, (unsigned long long)VV_PNG_READ_MAX_PIXELS);
+    }
     int depth = png_get_bit_depth(png, info);
     png_set_expand(png);
     png_set_gray_to_rgb(png);

@@ -19,6 +19,9 @@
  */
 #include <math.h>
 #include <omp.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -105,7 +108,8 @@ typedef struct rc_frame {
     float bg[3];
     rc_light lights[VV_MAX_LIGHTS];
     int n_lights;
-    float et; /* early termination */
+    float et;         /* early termination */
+    int point_lights; /* any point light (needs the world position of samples) */
     /* primary rays: origin and unnormalised direction are affine in (px, py) */
     vv_vec3 o00, ox, oy, d00, dx, dy;
 } rc_frame;
@@ -348,10 +352,9 @@ lerpf(float a, float b, float t) {
     return a + (b - a) * t;
 }
 
+/* Trilinear value in the cell at offset o with fractions f. */
 static inline float
-sample_value(const rc_cache *c, const float p[3]) {
-    float f[3];
-    size_t o = cell_of(c, p, f);
+value_at(const rc_cache *c, size_t o, const float f[3]) {
     const size_t sy = c->sy, sz = c->sz;
     float c00, c10, c01, c11;
     if (c->q16) {
@@ -370,31 +373,66 @@ sample_value(const rc_cache *c, const float p[3]) {
     return lerpf(lerpf(c00, c10, f[1]), lerpf(c01, c11, f[1]), f[2]);
 }
 
-/* Index-space gradient direction at p (not normalised): trilinear
- * interpolation of the cached unit gradients, or central differences of
- * trilinear samples when gradients are computed on the fly. */
+static inline float
+sample_value(const rc_cache *c, const float p[3]) {
+    float f[3];
+    size_t o = cell_of(c, p, f);
+    return value_at(c, o, f);
+}
+
+typedef float rc_v4f __attribute__((vector_size(16)));
+
+/* The cached unit gradient of voxel idx as 4 floats (x, y, z, 0), times 127:
+ * one 32-bit load, sign-extended in registers (compilers scalarise the
+ * generic int8 -> float vector conversion). */
+static inline rc_v4f
+normal_at(const rc_cache *c, size_t idx) {
+#ifdef __SSE2__
+    int32_t word;
+    memcpy(&word, c->nrm[idx], sizeof word);
+    __m128i x = _mm_cvtsi32_si128(word);
+    x = _mm_unpacklo_epi8(x, x);
+    x = _mm_unpacklo_epi16(x, x);
+    x = _mm_srai_epi32(x, 24);
+    return (rc_v4f)_mm_cvtepi32_ps(x);
+#else
+    const int8_t *n = c->nrm[idx];
+    rc_v4f r = {n[0], n[1], n[2], 0};
+    return r;
+#endif
+}
+
+/* Index-space gradient direction (not normalised) in the cell at offset o
+ * with fractions f: trilinear interpolation of the cached unit gradients,
+ * the same lerp tree as value_at, four lanes at a time. Needs c->nrm. */
+static inline void
+gradient_at(const rc_cache *c, size_t o, const float f[3], float g[3]) {
+    const size_t sy = c->sy, sz = c->sz;
+    rc_v4f c00 = normal_at(c, o), c01 = normal_at(c, o + 1);
+    rc_v4f c10 = normal_at(c, o + sy), c11 = normal_at(c, o + sy + 1);
+    rc_v4f c20 = normal_at(c, o + sz), c21 = normal_at(c, o + sz + 1);
+    rc_v4f c30 = normal_at(c, o + sz + sy), c31 = normal_at(c, o + sz + sy + 1);
+    c00 += (c01 - c00) * f[0];
+    c10 += (c11 - c10) * f[0];
+    c20 += (c21 - c20) * f[0];
+    c30 += (c31 - c30) * f[0];
+    c00 += (c10 - c00) * f[1];
+    c20 += (c30 - c20) * f[1];
+    c00 += (c20 - c00) * f[2];
+    g[0] = c00[0];
+    g[1] = c00[1];
+    g[2] = c00[2];
+}
+
+/* Index-space gradient direction at p (not normalised): cached gradients
+ * when there are, else central differences of trilinear samples half a
+ * voxel apart. */
 static inline void
 sample_gradient(const rc_cache *c, const float p[3], float g[3]) {
     if (c->nrm) {
         float f[3];
         size_t o = cell_of(c, p, f);
-        const size_t sy = c->sy, sz = c->sz;
-        float fx0 = 1 - f[0], fy0 = 1 - f[1], fz0 = 1 - f[2];
-        const float w[8] = {fx0 * fy0 * fz0,   f[0] * fy0 * fz0,  fx0 * f[1] * fz0,
-                            f[0] * f[1] * fz0, fx0 * fy0 * f[2],  f[0] * fy0 * f[2],
-                            fx0 * f[1] * f[2], f[0] * f[1] * f[2]};
-        const size_t q[8] = {o,      o + 1,      o + sy,      o + sy + 1,
-                             o + sz, o + sz + 1, o + sz + sy, o + sz + sy + 1};
-        float gx = 0, gy = 0, gz = 0;
-        for (int i = 0; i < 8; i++) {
-            const int8_t *n = c->nrm[q[i]];
-            gx += w[i] * n[0];
-            gy += w[i] * n[1];
-            gz += w[i] * n[2];
-        }
-        g[0] = gx;
-        g[1] = gy;
-        g[2] = gz;
+        gradient_at(c, o, f, g);
         return;
     }
     for (int a = 0; a < 3; a++) {
@@ -405,15 +443,33 @@ sample_gradient(const rc_cache *c, const float p[3], float g[3]) {
     }
 }
 
+/* ceil and floor of a non-negative double without libm: the x86-64
+ * baseline (SSE2) has no rounding instruction, and these sit on the
+ * traversal's hot path. Parameters here are sample indices, well inside
+ * int64. */
+static inline double
+ceil_pos(double x) {
+    double i = (double)(int64_t)x;
+    return i < x ? i + 1 : i;
+}
+
+static inline double
+floor_pos(double x) {
+    return (double)(int64_t)x;
+}
+
 /* ---------------------------------------------------------------------- */
 /* Shading                                                                  */
 
 /* Phong (reflection vector) with two-sided lighting. g: index-space gradient; p: world
- * position; v: unit vector towards the eye. out = (ka*ambient + kd*diffuse)
- * * colour + ks*specular. */
+ * position; v: unit vector towards the eye; col: colour times the sample's
+ * opacity, alpha: that opacity. out = (ka*ambient + kd*diffuse) * col +
+ * alpha * ks * specular: the highlight is emitted by the sample like its
+ * colour, so it too is weighted by the sample's opacity (otherwise it would
+ * grow as the step shrinks). */
 static inline void
 shade(const rc_frame *fr, const rc_obj *o, const float g[3], const float pw[3], const float v[3],
-      const float col[3], float out[3]) {
+      const float col[3], float alpha, float out[3]) {
     float n[3];
     for (int r = 0; r < 3; r++)
         n[r] = o->nrm[r][0] * g[0] + o->nrm[r][1] * g[1] + o->nrm[r][2] * g[2];
@@ -458,7 +514,7 @@ shade(const rc_frame *fr, const rc_obj *o, const float g[3], const float pw[3], 
         }
     }
     for (int ch = 0; ch < 3; ch++)
-        out[ch] = dif[ch] * col[ch] + spec[ch];
+        out[ch] = dif[ch] * col[ch] + alpha * spec[ch];
 }
 
 /* ---------------------------------------------------------------------- */
@@ -527,18 +583,18 @@ block_of(const rc_cache *c, const float p[3]) {
  * (aligned to multiples of size) containing p. */
 static inline double
 cube_exit(const rc_ray *r, const float p[3], double t, int size) {
-    double te = INFINITY;
+    float te = INFINITY;
+    const float inv_size = 1.0f / (float)size;
     for (int a = 0; a < 3; a++) {
         if (r->inv[a] == 0)
             continue;
-        int b = (int)(p[a] * (1.0f / (float)size));
+        float b = (float)(int)(p[a] * inv_size); /* floor: p >= 0 up to rounding */
         b = b < 0 ? 0 : b;
-        double bound = r->d[a] > 0 ? (double)(b + 1) * size : (double)b * size;
-        double ta = t + (bound - p[a]) * r->inv[a];
-        if (ta < te)
-            te = ta;
+        float bound = (r->d[a] > 0 ? b + 1 : b) * (float)size;
+        float ta = (bound - p[a]) * r->inv[a];
+        te = ta < te ? ta : te;
     }
-    return te;
+    return t + te;
 }
 
 /* World parameter at which the ray leaves the subvolume containing p. */
@@ -586,54 +642,68 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
     const double dt = fr->dt, inv_dt = 1.0 / fr->dt;
     const float et = fr->et;
     const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
-    const float dp[3] = {(float)dt * r.d[0], (float)dt * r.d[1], (float)dt * r.d[2]};
     const int skipping = fr->st->skipping;
-    double k = ceil(r.t0 * inv_dt);
-    const double kend = floor(r.t1 * inv_dt);
+    double k = ceil_pos(r.t0 * inv_dt);
+    const double kend = floor_pos(r.t1 * inv_dt);
+    const unsigned bxm = (unsigned)c->bx - 1, bym = (unsigned)c->by - 1, bzm = (unsigned)c->bz - 1;
     while (k <= kend) {
         double t = k * dt;
         float p[3];
         ray_point(&r, t, p);
         if (skipping) {
-            int bi = (int)(p[0] * (1.0f / RC_BLOCK)), bj = (int)(p[1] * (1.0f / RC_BLOCK)),
-                bk = (int)(p[2] * (1.0f / RC_BLOCK));
-            bi = bi < 0 ? 0 : bi >= c->bx ? c->bx - 1 : bi;
-            bj = bj < 0 ? 0 : bj >= c->by ? c->by - 1 : bj;
-            bk = bk < 0 ? 0 : bk >= c->bz ? c->bz - 1 : bk;
+            /* p >= 0 up to rounding: a negative index wraps and clamps high,
+             * so clamp the float instead */
+            unsigned bi = (unsigned)(int)((p[0] > 0 ? p[0] : 0) * (1.0f / RC_BLOCK));
+            unsigned bj = (unsigned)(int)((p[1] > 0 ? p[1] : 0) * (1.0f / RC_BLOCK));
+            unsigned bk = (unsigned)(int)((p[2] > 0 ? p[2] : 0) * (1.0f / RC_BLOCK));
+            bi = bi > bxm ? bxm : bi;
+            bj = bj > bym ? bym : bj;
+            bk = bk > bzm ? bzm : bk;
             size_t cb = ((size_t)(bk / RC_COARSE) * (size_t)ob->cy + (size_t)(bj / RC_COARSE)) *
                             (size_t)ob->cx +
                         (size_t)(bi / RC_COARSE);
             if (!ob->cvis[cb]) {
-                double ks = ceil(cube_exit(&r, p, t, RC_BLOCK * RC_COARSE) * inv_dt);
+                double ks = ceil_pos(cube_exit(&r, p, t, RC_BLOCK * RC_COARSE) * inv_dt);
                 k = ks > k + 1 ? ks : k + 1;
                 continue;
             }
             size_t b = ((size_t)bk * (size_t)c->by + (size_t)bj) * (size_t)c->bx + (size_t)bi;
             double te = cube_exit(&r, p, t, RC_BLOCK);
             if (!ob->bvis[b]) {
-                double ks = ceil(te * inv_dt);
+                double ks = ceil_pos(te * inv_dt);
                 k = ks > k + 1 ? ks : k + 1;
                 continue;
             }
             /* march to the last sample inside this subvolume */
-            double klast = floor(te * inv_dt);
+            double klast = floor_pos(te * inv_dt);
             klast = klast < kend ? klast : kend;
             klast = klast < k ? k : klast;
             int n = (int)(klast - k) + 1;
             k = klast + 1;
-            for (int s = 0; s < n; s++, t += dt, p[0] += dp[0], p[1] += dp[1], p[2] += dp[2]) {
-                const float *e = ob->lut + 4 * (int)lut_index_f(ob, sample_value(c, p));
+            for (int s = 0; s < n; s++) {
+                /* every position from k: the same arithmetic as without
+                 * skipping, so skipping changes no pixel */
+                t = (klast - (n - 1 - s)) * dt;
+                ray_point(&r, t, p);
+                float f[3];
+                const size_t o = cell_of(c, p, f);
+                const float *e = ob->lut + 4 * (int)lut_index_f(ob, value_at(c, o, f));
                 const float alpha = e[0];
                 if (alpha <= 0)
                     continue;
                 const float w = 1 - A;
                 if (ob->shading) {
-                    float g[3], pw[3], out[3];
-                    sample_gradient(c, p, g);
-                    pw[0] = (float)(wr->origin.x + t * wr->dir.x);
-                    pw[1] = (float)(wr->origin.y + t * wr->dir.y);
-                    pw[2] = (float)(wr->origin.z + t * wr->dir.z);
-                    shade(fr, ob, g, pw, v, e + 1, out);
+                    float g[3], pw[3] = {0, 0, 0}, out[3];
+                    if (c->nrm)
+                        gradient_at(c, o, f, g);
+                    else
+                        sample_gradient(c, p, g);
+                    if (fr->point_lights) {
+                        pw[0] = (float)(wr->origin.x + t * wr->dir.x);
+                        pw[1] = (float)(wr->origin.y + t * wr->dir.y);
+                        pw[2] = (float)(wr->origin.z + t * wr->dir.z);
+                    }
+                    shade(fr, ob, g, pw, v, e + 1, e[0], out);
                     C[0] += w * out[0];
                     C[1] += w * out[1];
                     C[2] += w * out[2];
@@ -663,7 +733,7 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
             pw[0] = (float)(wr->origin.x + t * wr->dir.x);
             pw[1] = (float)(wr->origin.y + t * wr->dir.y);
             pw[2] = (float)(wr->origin.z + t * wr->dir.z);
-            shade(fr, ob, g, pw, v, e + 1, out);
+            shade(fr, ob, g, pw, v, e + 1, e[0], out);
         }
         C[0] += w * out[0];
         C[1] += w * out[1];
@@ -780,7 +850,7 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
                     pw[1] = (float)(wr->origin.y + th * wr->dir.y);
                     pw[2] = (float)(wr->origin.z + th * wr->dir.z);
                     if (ob->shading)
-                        shade(fr, ob, g, pw, v, ob->base, col);
+                        shade(fr, ob, g, pw, v, ob->base, 1.0f, col);
                     else
                         memcpy(col, ob->base, sizeof col);
                     float w = 1 - A;
@@ -807,7 +877,7 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
                 col[0] = e[1];
                 col[1] = e[2];
                 col[2] = e[3];
-                shade(fr, ob, g, pw, v, col, out);
+                shade(fr, ob, g, pw, v, col, alpha, out);
                 C[0] += w * out[0];
                 C[1] += w * out[1];
                 C[2] += w * out[2];
@@ -995,7 +1065,10 @@ prepare_tables(rc_frame *fr, rc_obj *ro) {
     ro->lut_scale = (float)((RC_LUT - 1) / (hi - lo));
     if (ro->mode == VV_MODE_ISO) {
         for (size_t b = 0; b < nb; b++)
-            ro->bvis[b] = !(c->bmax[b] < ro->iso || c->bmin[b] > ro->iso) || !fr->st->skipping;
+            /* only subvolumes wholly below the isovalue are empty: one wholly
+             * above may hold the start of a ray that enters the surface
+             * through a cut plane or the box face */
+            ro->bvis[b] = !(c->bmax[b] < ro->iso) || !fr->st->skipping;
         return prepare_coarse(ro);
     }
     ro->lut = malloc(sizeof(float) * 4 * RC_LUT);
@@ -1049,6 +1122,7 @@ prepare_lights(rc_frame *fr, const vv_world *w, const vv_view *view) {
         const vv_light *l = &w->lights[i];
         rc_light *o = &fr->lights[fr->n_lights++];
         o->point = l->type == VV_LIGHT_POINT && !l->headlight;
+        fr->point_lights |= o->point;
         vv_vec3 d = l->headlight ? fwd : vv_vec3_normalize(l->direction);
         /* towards the light = against the direction it travels */
         o->dir[0] = (float)-d.x;
