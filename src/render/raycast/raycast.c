@@ -31,10 +31,10 @@
 #include "volvis/render.h"
 
 #define RC_BLOCK 4      /* subvolume side in cells */
-#define RC_COARSE 4     /* subvolumes per side of a coarse subvolume (16^3 cells) */
 #define RC_LUT 4096     /* transfer-function table entries */
 #define RC_TILE 16      /* image tile side in pixels */
-#define RC_MAX_CACHE 16 /* cached volumes per renderer */
+#define RC_MAX_CACHE 64 /* cached volumes per renderer: >= RC_MAX_OBJ, so none in use is evicted   \
+                         */
 #define RC_MAX_OBJ 64   /* objects handled in one render */
 #define RC_SPEC 2048    /* specular table entries */
 
@@ -44,6 +44,26 @@
  * float), else as float; all values inside the ray caster ("stored units")
  * are real value - qoff. Unit gradient directions are quantised to int8 in a
  * separate array, touched only where a sample is shaded. */
+/* What the per-object tables (TF lookup, subvolume visibility, distances)
+ * depend on besides the volume: they are kept between frames and rebuilt
+ * only when one of these changes. */
+typedef struct rc_tables_key {
+    vv_render_mode mode;
+    vv_segmentation segmentation;
+    double threshold, iso, dt;
+    vv_vec3 base;
+    int skipping;
+    vv_tf tf;
+} rc_tables_key;
+
+typedef struct rc_tables {
+    int valid;
+    rc_tables_key key;
+    float *lut;
+    uint8_t *bvis, *bdist;
+    uint64_t frame; /* the frame that last borrowed them */
+} rc_tables;
+
 typedef struct rc_cache {
     vv_volume *vol; /* reference held */
     uint64_t modified;
@@ -55,6 +75,7 @@ typedef struct rc_cache {
     int8_t (*nrm)[4];   /* unit gradients * 127 (index space), or NULL: on the fly */
     int bx, by, bz;     /* subvolume grid */
     float *bmin, *bmax; /* per subvolume, stored units */
+    rc_tables tables;   /* the last object tables built for this volume */
     uint64_t last_used;
 } rc_cache;
 
@@ -62,6 +83,7 @@ typedef struct rc_state {
     rc_cache cache[RC_MAX_CACHE];
     int n_cache;
     uint64_t clock;
+    uint64_t frame;           /* renders so far, to know which cached tables are in use */
     double early_termination; /* accumulated opacity that ends a ray */
     uint64_t gradient_budget; /* bytes allowed for cached gradients */
     int skipping;             /* empty-space skipping on/off (for tests) */
@@ -86,8 +108,9 @@ typedef struct rc_obj {
     float lut_lo, lut_scale; /* value -> LUT index */
     float *lut;              /* RC_LUT x {alpha, r*alpha, g*alpha, b*alpha} */
     uint8_t *bvis;           /* subvolume visible under the TF / isovalue */
-    uint8_t *cvis;           /* coarse subvolume (RC_COARSE^3 subvolumes) has a visible one */
-    int cx, cy, cz;          /* coarse grid */
+    uint8_t
+        *bdist; /* chessboard distance, in subvolumes, to the nearest visible one (0: visible) */
+    int owns_tables; /* lut, bvis, bdist are this object's (else borrowed from the cache) */
     float iso;
     float ka, kd, ks, shin;
     float spec[RC_SPEC + 1]; /* x^shininess for x in [0, 1] */
@@ -125,6 +148,9 @@ cache_release(rc_cache *c) {
     free(c->nrm);
     free(c->bmin);
     free(c->bmax);
+    free(c->tables.lut);
+    free(c->tables.bvis);
+    free(c->tables.bdist);
     memset(c, 0, sizeof *c);
 }
 
@@ -659,21 +685,25 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
             bi = bi > bxm ? bxm : bi;
             bj = bj > bym ? bym : bj;
             bk = bk > bzm ? bzm : bk;
-            size_t cb = ((size_t)(bk / RC_COARSE) * (size_t)ob->cy + (size_t)(bj / RC_COARSE)) *
-                            (size_t)ob->cx +
-                        (size_t)(bi / RC_COARSE);
-            if (!ob->cvis[cb]) {
-                double ks = ceil_pos(cube_exit(&r, p, t, RC_BLOCK * RC_COARSE) * inv_dt);
-                k = ks > k + 1 ? ks : k + 1;
-                continue;
-            }
             size_t b = ((size_t)bk * (size_t)c->by + (size_t)bj) * (size_t)c->bx + (size_t)bi;
-            double te = cube_exit(&r, p, t, RC_BLOCK);
-            if (!ob->bvis[b]) {
-                double ks = ceil_pos(te * inv_dt);
+            const int dist = ob->bdist[b];
+            if (dist) {
+                /* leave the empty cube of 2 dist - 1 subvolumes around b */
+                const unsigned bc[3] = {bi, bj, bk};
+                float te = INFINITY;
+                for (int a = 0; a < 3; a++) {
+                    if (r.inv[a] == 0)
+                        continue;
+                    float bound = r.d[a] > 0 ? (float)((int)bc[a] + dist) * RC_BLOCK
+                                             : (float)((int)bc[a] - dist + 1) * RC_BLOCK;
+                    float ta = (bound - p[a]) * r.inv[a];
+                    te = ta < te ? ta : te;
+                }
+                double ks = ceil_pos((t + te) * inv_dt);
                 k = ks > k + 1 ? ks : k + 1;
                 continue;
             }
+            double te = cube_exit(&r, p, t, RC_BLOCK);
             /* march to the last sample inside this subvolume */
             double klast = floor_pos(te * inv_dt);
             klast = klast < kend ? klast : kend;
@@ -1027,31 +1057,55 @@ object_step(const vv_object *obj) {
     return obj->step * best;
 }
 
-/* Coarse visibility: a coarse subvolume is visible if any of its
- * subvolumes is. Lets rays cross large empty regions in one jump. */
+/* Empty-space leaping: the chessboard distance from each subvolume to the
+ * nearest visible one, capped at 255, by two chamfer passes over the 26
+ * neighbours (exact for the chessboard metric). A ray in a subvolume at
+ * distance d can jump to where it leaves the cube of 2d - 1 subvolumes
+ * around it, all of them empty. */
 static vv_status
-prepare_coarse(rc_obj *ro) {
+prepare_distance(rc_obj *ro) {
     const rc_cache *c = ro->c;
-    ro->cx = (c->bx + RC_COARSE - 1) / RC_COARSE;
-    ro->cy = (c->by + RC_COARSE - 1) / RC_COARSE;
-    ro->cz = (c->bz + RC_COARSE - 1) / RC_COARSE;
-    ro->cvis = calloc((size_t)ro->cx * (size_t)ro->cy * (size_t)ro->cz, 1);
-    if (!ro->cvis)
+    const int nx = c->bx, ny = c->by, nz = c->bz;
+    const size_t n = (size_t)nx * (size_t)ny * (size_t)nz;
+    uint8_t *d = malloc(n);
+    if (!d)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    for (int k = 0; k < c->bz; k++)
-        for (int j = 0; j < c->by; j++)
-            for (int i = 0; i < c->bx; i++)
-                if (ro->bvis[((size_t)k * (size_t)c->by + (size_t)j) * (size_t)c->bx + (size_t)i])
-                    ro->cvis[((size_t)(k / RC_COARSE) * (size_t)ro->cy + (size_t)(j / RC_COARSE)) *
-                                 (size_t)ro->cx +
-                             (size_t)(i / RC_COARSE)] = 1;
+    for (size_t b = 0; b < n; b++)
+        d[b] = ro->bvis[b] ? 0 : 255;
+    for (int pass = 0; pass < 2; pass++) {
+        const int step = pass == 0 ? 1 : -1;
+        for (int k = pass == 0 ? 0 : nz - 1; k >= 0 && k < nz; k += step)
+            for (int j = pass == 0 ? 0 : ny - 1; j >= 0 && j < ny; j += step)
+                for (int i = pass == 0 ? 0 : nx - 1; i >= 0 && i < nx; i += step) {
+                    size_t b = ((size_t)k * (size_t)ny + (size_t)j) * (size_t)nx + (size_t)i;
+                    int best = d[b];
+                    if (best == 0)
+                        continue;
+                    /* the 13 neighbours already visited in this pass */
+                    for (int dk = -1; dk <= 0; dk++)
+                        for (int dj = -1; dj <= 1; dj++)
+                            for (int di = -1; di <= 1; di++) {
+                                if (dk == 0 && (dj > 0 || (dj == 0 && di >= 0)))
+                                    continue;
+                                int kk = k + step * dk, jj = j + step * dj, ii = i + step * di;
+                                if (kk < 0 || kk >= nz || jj < 0 || jj >= ny || ii < 0 || ii >= nx)
+                                    continue;
+                                int v = d[((size_t)kk * (size_t)ny + (size_t)jj) * (size_t)nx +
+                                          (size_t)ii] +
+                                        1;
+                                best = v < best ? v : best;
+                            }
+                    d[b] = (uint8_t)(best > 255 ? 255 : best);
+                }
+    }
+    ro->bdist = d;
     return VV_OK;
 }
 
 /* Builds the TF table (opacity corrected for dt, colour premultiplied) and
  * the subvolume visibility flags. */
 static vv_status
-prepare_tables(rc_frame *fr, rc_obj *ro) {
+build_tables(rc_frame *fr, rc_obj *ro) {
     const vv_object *obj = ro->obj;
     const rc_cache *c = ro->c;
     size_t nb = (size_t)c->bx * (size_t)c->by * (size_t)c->bz;
@@ -1069,7 +1123,7 @@ prepare_tables(rc_frame *fr, rc_obj *ro) {
              * above may hold the start of a ray that enters the surface
              * through a cut plane or the box face */
             ro->bvis[b] = !(c->bmax[b] < ro->iso) || !fr->st->skipping;
-        return prepare_coarse(ro);
+        return prepare_distance(ro);
     }
     ro->lut = malloc(sizeof(float) * 4 * RC_LUT);
     int *nz = malloc(sizeof(int) * (RC_LUT + 1));
@@ -1111,7 +1165,80 @@ prepare_tables(rc_frame *fr, rc_obj *ro) {
         ro->bvis[b] = nz[i1 + 1] - nz[i0] > 0 || !fr->st->skipping;
     }
     free(nz);
-    return prepare_coarse(ro);
+    return prepare_distance(ro);
+}
+
+static int
+tf_equal(const vv_tf *a, const vv_tf *b) {
+    if (a->n_opacity != b->n_opacity || a->n_color != b->n_color ||
+        a->opacity_unit_distance != b->opacity_unit_distance)
+        return 0;
+    for (int i = 0; i < a->n_opacity; i++)
+        if (a->opacity[i].value != b->opacity[i].value ||
+            a->opacity[i].opacity != b->opacity[i].opacity)
+            return 0;
+    for (int i = 0; i < a->n_color; i++)
+        if (a->color[i].value != b->color[i].value || a->color[i].color.x != b->color[i].color.x ||
+            a->color[i].color.y != b->color[i].color.y ||
+            a->color[i].color.z != b->color[i].color.z)
+            return 0;
+    return 1;
+}
+
+static int
+key_equal(const rc_tables_key *a, const rc_tables_key *b) {
+    return a->mode == b->mode && a->segmentation == b->segmentation &&
+           a->threshold == b->threshold && a->iso == b->iso && a->dt == b->dt &&
+           a->base.x == b->base.x && a->base.y == b->base.y && a->base.z == b->base.z &&
+           a->skipping == b->skipping && tf_equal(&a->tf, &b->tf);
+}
+
+/* The object's tables: borrowed from its volume's cache when nothing they
+ * depend on changed since they were built (the common case between frames),
+ * else built, and handed to the cache unless another object of this frame
+ * still borrows the cached ones. */
+static vv_status
+prepare_tables(rc_frame *fr, rc_obj *ro) {
+    const vv_object *obj = ro->obj;
+    rc_cache *c = ro->c;
+    rc_tables_key key;
+    memset(&key, 0, sizeof key);
+    key.mode = ro->mode;
+    key.segmentation = obj->segmentation;
+    key.threshold = obj->threshold;
+    key.iso = ro->iso;
+    key.dt = fr->dt;
+    key.base = obj->material.color;
+    key.skipping = fr->st->skipping;
+    key.tf = obj->tf;
+    double lo = obj->volume->range[0], hi = obj->volume->range[1];
+    if (!(hi > lo))
+        hi = lo + 1;
+    if (c->tables.valid && key_equal(&c->tables.key, &key)) {
+        ro->lut_lo = (float)(lo - c->qoff);
+        ro->lut_scale = (float)((RC_LUT - 1) / (hi - lo));
+        ro->lut = c->tables.lut;
+        ro->bvis = c->tables.bvis;
+        ro->bdist = c->tables.bdist;
+        ro->owns_tables = 0;
+        c->tables.frame = fr->st->frame;
+        return VV_OK;
+    }
+    ro->owns_tables = 1;
+    vv_status s = build_tables(fr, ro);
+    if (s != VV_OK || (c->tables.valid && c->tables.frame == fr->st->frame))
+        return s;
+    free(c->tables.lut);
+    free(c->tables.bvis);
+    free(c->tables.bdist);
+    c->tables.valid = 1;
+    c->tables.key = key;
+    c->tables.lut = ro->lut;
+    c->tables.bvis = ro->bvis;
+    c->tables.bdist = ro->bdist;
+    c->tables.frame = fr->st->frame;
+    ro->owns_tables = 0;
+    return VV_OK;
 }
 
 static void
@@ -1164,11 +1291,19 @@ prepare_rays(rc_frame *fr, const vv_view *view) {
 
 static void
 render_pixel(const rc_frame *fr, int x, int y, vv_image *out) {
+    /* inline: this runs for every pixel, most of which miss the volume */
+    const double fx = x, fy = y;
     vv_ray wr;
-    wr.origin =
-        vv_vec3_add(fr->o00, vv_vec3_add(vv_vec3_scale(fr->ox, x), vv_vec3_scale(fr->oy, y)));
-    wr.dir = vv_vec3_normalize(
-        vv_vec3_add(fr->d00, vv_vec3_add(vv_vec3_scale(fr->dx, x), vv_vec3_scale(fr->dy, y))));
+    wr.origin.x = fr->o00.x + fx * fr->ox.x + fy * fr->oy.x;
+    wr.origin.y = fr->o00.y + fx * fr->ox.y + fy * fr->oy.y;
+    wr.origin.z = fr->o00.z + fx * fr->ox.z + fy * fr->oy.z;
+    double dx = fr->d00.x + fx * fr->dx.x + fy * fr->dy.x;
+    double dy = fr->d00.y + fx * fr->dx.y + fy * fr->dy.y;
+    double dz = fr->d00.z + fx * fr->dx.z + fy * fr->dy.z;
+    double inv = 1.0 / sqrt(dx * dx + dy * dy + dz * dz);
+    wr.dir.x = dx * inv;
+    wr.dir.y = dy * inv;
+    wr.dir.z = dz * inv;
     rc_result res = {{0, 0, 0}, 0, INFINITY};
     if (fr->n_comp == 1 && fr->objs[0].mode == VV_MODE_COMPOSITE)
         trace_composite_one(fr, &fr->objs[0], &wr, &res);
@@ -1189,13 +1324,13 @@ render_pixel(const rc_frame *fr, int x, int y, vv_image *out) {
         PA = e[0] > PA ? e[0] : PA;
         pdepth = dep < pdepth ? dep : pdepth;
     }
-    float *px = out->rgba + 4 * ((size_t)y * (size_t)out->width + (size_t)x);
+    float *pix = out->rgba + 4 * ((size_t)y * (size_t)out->width + (size_t)x);
     float A = res.a;
     float rest = 1 - A;
     float A2 = A + rest * PA;
     for (int ch = 0; ch < 3; ch++)
-        px[ch] = res.rgb[ch] + rest * P[ch] + (1 - A2) * fr->bg[ch];
-    px[3] = A2;
+        pix[ch] = res.rgb[ch] + rest * P[ch] + (1 - A2) * fr->bg[ch];
+    pix[3] = A2;
     out->depth[(size_t)y * (size_t)out->width + (size_t)x] =
         res.depth < pdepth ? res.depth : pdepth;
 }
@@ -1207,6 +1342,7 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     rc_frame fr;
     memset(&fr, 0, sizeof fr);
     fr.st = st;
+    st->frame++;
     fr.view = view;
     fr.et = (float)st->early_termination;
     fr.ambient[0] = (float)w->ambient.x;
@@ -1286,9 +1422,11 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
             s = vv_error_set(VV_ERR_CANCELLED, "cancelled");
     }
     for (int i = 0; i < fr.n_obj; i++) {
-        free(objs[i].lut);
-        free(objs[i].bvis);
-        free(objs[i].cvis);
+        if (objs[i].owns_tables) {
+            free(objs[i].lut);
+            free(objs[i].bvis);
+            free(objs[i].bdist);
+        }
     }
     free(objs);
     /* drop cached volumes the World no longer shows */
