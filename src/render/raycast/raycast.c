@@ -25,18 +25,20 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "core/internal.h"
 #include "render/registry.h"
 #include "volvis/render.h"
 
-#define RC_BLOCK 4      /* subvolume side in cells */
-#define RC_LUT 4096     /* transfer-function table entries */
-#define RC_TILE 16      /* image tile side in pixels */
-#define RC_MAX_CACHE 64 /* cached volumes per renderer: >= RC_MAX_OBJ, so none in use is evicted   \
-                         */
-#define RC_MAX_OBJ 64   /* objects handled in one render */
-#define RC_SPEC 2048    /* specular table entries */
+#define RC_BLOCK 4  /* subvolume side in cells */
+#define RC_LUT 4096 /* transfer-function table entries */
+#define RC_TILE 16  /* image tile side in pixels */
+#define RC_MAX_CACHE                                                                               \
+    64                /* cached volumes per renderer: >= RC_MAX_OBJ, so none in use is evicted     \
+                       */
+#define RC_MAX_OBJ 64 /* objects handled in one render */
+#define RC_SPEC 2048  /* specular table entries */
 
 /* Everything derived from one volume that does not depend on the TF.
  * Values are stored as 16-bit offsets from range[0] when the data are
@@ -1450,7 +1452,14 @@ rc_create(void **state) {
     if (!st)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     st->early_termination = 0.99;
-    st->gradient_budget = (uint64_t)4 << 30;
+    /* cached gradients take 4 bytes a voxel: allow them up to a quarter of
+     * physical memory (at most 8 GiB); beyond, gradients are computed on the
+     * fly from the values */
+    uint64_t budget = (uint64_t)8 << 30;
+    long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+    if (pages > 0 && page > 0 && (uint64_t)pages * (uint64_t)page / 4 < budget)
+        budget = (uint64_t)pages * (uint64_t)page / 4;
+    st->gradient_budget = budget;
     st->skipping = 1;
     *state = st;
     return VV_OK;
