@@ -7,6 +7,7 @@
  * usage: bench_raycast VOLUME [--iso V] [--tf-lo A] [--tf-hi B] [--size N]
  *                      [--runs N] [--threads N] [--outdir DIR] [--step-vox S]
  *                      [--opacity O] [--modes composite,mip,iso]
+ *                      [--option KEY=VALUE]...   (renderer options, e.g. early_termination=0.98)
  */
 #include <math.h>
 #include <stdio.h>
@@ -48,7 +49,9 @@ typedef struct bench_cfg {
     double iso, tf_lo, tf_hi, step_vox, opacity;
     int size, runs, threads;
     const char *outdir;
-    const char *modes; /* comma list of modes to run */
+    const char *modes;      /* comma list of modes to run */
+    const char *options[8]; /* renderer options KEY=VALUE */
+    int n_options;
 } bench_cfg;
 
 /* The peers' view: volume centred, eye at scale * 11 * normalize(1,-1.6,1). */
@@ -108,7 +111,7 @@ save(const vv_image *img, const bench_cfg *cfg, const char *stem, const char *mo
 
 int
 main(int argc, char **argv) {
-    bench_cfg cfg = {NAN, NAN, NAN, 0.5, 0.5, 512, 5, 0, "bench_out", "composite,mip,iso"};
+    bench_cfg cfg = {NAN, NAN, NAN, 0.5, 0.5, 512, 5, 0, "bench_out", "composite,mip,iso", {NULL}, 0};
     const char *path = NULL;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -137,6 +140,8 @@ main(int argc, char **argv) {
             cfg.outdir = val;
         else if (!strcmp(a, "--step-vox"))
             cfg.step_vox = atof(val);
+        else if (!strcmp(a, "--option") && cfg.n_options < 8)
+            cfg.options[cfg.n_options++] = val;
         else if (!strcmp(a, "--modes"))
             cfg.modes = val;
         else if (!strcmp(a, "--opacity"))
@@ -150,7 +155,8 @@ main(int argc, char **argv) {
     if (!path || cfg.size < 1 || cfg.runs < 1) {
         fprintf(stderr,
                 "usage: bench_raycast VOLUME [--iso V] [--tf-lo A] [--tf-hi B] "
-                "[--size N] [--runs N] [--threads N] [--outdir DIR] [--modes composite,mip,iso]\n");
+                "[--size N] [--runs N] [--threads N] [--outdir DIR] [--modes composite,mip,iso] "
+                "[--option KEY=VALUE]\n");
         return 2;
     }
     dataset = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
@@ -215,6 +221,18 @@ main(int argc, char **argv) {
         vv_renderer *r;
         if (vv_renderer_new(&r, "raycast") != VV_OK)
             die("renderer");
+        for (int o = 0; o < cfg.n_options; o++) {
+            char key[128];
+            const char *eq = strchr(cfg.options[o], '=');
+            if (!eq || (size_t)(eq - cfg.options[o]) >= sizeof key) {
+                fprintf(stderr, "bench_raycast: --option needs KEY=VALUE\n");
+                return 2;
+            }
+            memcpy(key, cfg.options[o], (size_t)(eq - cfg.options[o]));
+            key[eq - cfg.options[o]] = 0;
+            if (vv_renderer_set_option(r, key, eq + 1) != VV_OK)
+                die("option");
+        }
         /* first frame: a fresh renderer, so gradients and subvolumes are built */
         double a = now();
         if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK)

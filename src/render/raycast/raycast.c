@@ -38,6 +38,7 @@
     64                /* cached volumes per renderer: >= RC_MAX_OBJ, so none in use is evicted     \
                        */
 #define RC_MAX_OBJ 64 /* objects handled in one render */
+#define RC_CHUNK 32   /* samples classified ahead of compositing */
 #define RC_SPEC 2048  /* specular table entries */
 
 /* Everything derived from one volume that does not depend on the TF.
@@ -115,8 +116,11 @@ typedef struct rc_obj {
     int owns_tables; /* lut, bvis, bdist are this object's (else borrowed from the cache) */
     float iso;
     float ka, kd, ks, shin;
-    float spec[RC_SPEC + 1]; /* x^shininess for x in [0, 1] */
-    float base[3];           /* material colour (iso, threshold) */
+    float spec[RC_SPEC + 1];        /* x^shininess for x in [0, 1] */
+    float amb[3];                   /* ka * ambient light */
+    float kd_col[VV_MAX_LIGHTS][3]; /* kd * light colour */
+    float ks_col[VV_MAX_LIGHTS][3]; /* ks * light colour */
+    float base[3];                  /* material colour (iso, threshold) */
     int shading;
     int n_planes;
     vv_plane planes[2 * VV_MAX_CUT_PLANES];
@@ -375,6 +379,25 @@ cell_of(const rc_cache *c, const float p[3], float f[3]) {
     return (size_t)k * c->sz + (size_t)j * c->sy + (size_t)i;
 }
 
+/* cell_of for points inside the grid box (the clipped ray), up to float
+ * rounding: no float clamps, only the integer clamps that keep every read
+ * inside the grid. A point a rounding error outside extrapolates by that
+ * error, which is harmless. */
+static inline size_t
+cell_in(const rc_cache *c, const float p[3], float f[3]) {
+    int i = (int)p[0], j = (int)p[1], k = (int)p[2];
+    i = i < c->nx - 2 ? i : c->nx - 2;
+    j = j < c->ny - 2 ? j : c->ny - 2;
+    k = k < c->nz - 2 ? k : c->nz - 2;
+    i = i > 0 ? i : 0;
+    j = j > 0 ? j : 0;
+    k = k > 0 ? k : 0;
+    f[0] = p[0] - (float)i;
+    f[1] = p[1] - (float)j;
+    f[2] = p[2] - (float)k;
+    return (size_t)k * c->sz + (size_t)j * c->sy + (size_t)i;
+}
+
 static inline float
 lerpf(float a, float b, float t) {
     return a + (b - a) * t;
@@ -385,6 +408,29 @@ static inline float
 value_at(const rc_cache *c, size_t o, const float f[3]) {
     const size_t sy = c->sy, sz = c->sz;
     float c00, c10, c01, c11;
+#ifdef __SSE2__
+    if (c->q16) {
+        /* the four x-pairs of the cell in one register, both corners of each
+         * pair lerped at once */
+        const uint16_t *v = c->q16 + o;
+        int32_t a0, a1, a2, a3;
+        memcpy(&a0, v, 4);
+        memcpy(&a1, v + sy, 4);
+        memcpy(&a2, v + sz, 4);
+        memcpy(&a3, v + sz + sy, 4);
+        const __m128i x = _mm_set_epi32(a3, a2, a1, a0);
+        const __m128 lo = _mm_cvtepi32_ps(_mm_and_si128(x, _mm_set1_epi32(0xFFFF)));
+        const __m128 hi = _mm_cvtepi32_ps(_mm_srli_epi32(x, 16));
+        const __m128 cx = _mm_add_ps(lo, _mm_mul_ps(_mm_sub_ps(hi, lo), _mm_set1_ps(f[0])));
+        /* cx = (c00, c10, c01, c11): lerp (c00, c01) towards (c10, c11) in y */
+        const __m128 y0 = _mm_shuffle_ps(cx, cx, _MM_SHUFFLE(2, 0, 2, 0));
+        const __m128 y1 = _mm_shuffle_ps(cx, cx, _MM_SHUFFLE(3, 1, 3, 1));
+        const __m128 cy = _mm_add_ps(y0, _mm_mul_ps(_mm_sub_ps(y1, y0), _mm_set1_ps(f[1])));
+        const float z0 = _mm_cvtss_f32(cy);
+        const float z1 = _mm_cvtss_f32(_mm_shuffle_ps(cy, cy, _MM_SHUFFLE(1, 1, 1, 1)));
+        return lerpf(z0, z1, f[2]);
+    }
+#endif
     if (c->q16) {
         const uint16_t *v = c->q16 + o;
         c00 = lerpf(v[0], v[1], f[0]);
@@ -498,51 +544,47 @@ floor_pos(double x) {
 static inline void
 shade(const rc_frame *fr, const rc_obj *o, const float g[3], const float pw[3], const float v[3],
       const float col[3], float alpha, float out[3]) {
-    float n[3];
-    for (int r = 0; r < 3; r++)
-        n[r] = o->nrm[r][0] * g[0] + o->nrm[r][1] * g[1] + o->nrm[r][2] * g[2];
-    float len2 = n[0] * n[0] + n[1] * n[1] + n[2] * n[2];
-    float dif[3] = {o->ka * fr->ambient[0], o->ka * fr->ambient[1], o->ka * fr->ambient[2]};
-    float spec[3] = {0, 0, 0};
+    const float n0 = o->nrm[0][0] * g[0] + o->nrm[0][1] * g[1] + o->nrm[0][2] * g[2];
+    const float n1 = o->nrm[1][0] * g[0] + o->nrm[1][1] * g[1] + o->nrm[1][2] * g[2];
+    const float n2 = o->nrm[2][0] * g[0] + o->nrm[2][1] * g[1] + o->nrm[2][2] * g[2];
+    const float len2 = n0 * n0 + n1 * n1 + n2 * n2;
+    float d0 = o->amb[0], d1 = o->amb[1], d2 = o->amb[2];
+    float s0 = 0, s1 = 0, s2 = 0;
     if (len2 > 1e-12f) {
-        float inv = 1.0f / sqrtf(len2);
-        n[0] *= inv;
-        n[1] *= inv;
-        n[2] *= inv;
+        const float inv = 1.0f / sqrtf(len2);
+        const float nv = (n0 * v[0] + n1 * v[1] + n2 * v[2]) * inv;
         for (int l = 0; l < fr->n_lights; l++) {
             const rc_light *lt = &fr->lights[l];
-            float L[3];
+            float L0 = lt->dir[0], L1 = lt->dir[1], L2 = lt->dir[2];
             if (lt->point) {
-                L[0] = lt->pos[0] - pw[0];
-                L[1] = lt->pos[1] - pw[1];
-                L[2] = lt->pos[2] - pw[2];
-                float ll = sqrtf(L[0] * L[0] + L[1] * L[1] + L[2] * L[2]);
-                if (ll <= 0)
+                L0 = lt->pos[0] - pw[0];
+                L1 = lt->pos[1] - pw[1];
+                L2 = lt->pos[2] - pw[2];
+                const float ll = sqrtf(L0 * L0 + L1 * L1 + L2 * L2);
+                if (!(ll > 0))
                     continue;
-                L[0] /= ll;
-                L[1] /= ll;
-                L[2] /= ll;
-            } else {
-                L[0] = lt->dir[0];
-                L[1] = lt->dir[1];
-                L[2] = lt->dir[2];
+                L0 /= ll;
+                L1 /= ll;
+                L2 /= ll;
             }
-            float ndl = n[0] * L[0] + n[1] * L[1] + n[2] * L[2];
-            float sgn = ndl < 0 ? -1.0f : 1.0f; /* two-sided */
-            ndl *= sgn;
+            float ndl = (n0 * L0 + n1 * L1 + n2 * L2) * inv;
+            /* two-sided: a normal facing away from the light is flipped */
+            const float ndv = ndl < 0 ? -nv : nv;
+            ndl = ndl < 0 ? -ndl : ndl;
             /* Phong: R.V with R the mirror of L about n */
-            float ndv = sgn * (n[0] * v[0] + n[1] * v[1] + n[2] * v[2]);
-            float ldv = L[0] * v[0] + L[1] * v[1] + L[2] * v[2];
-            float ndh = 2 * ndl * ndv - ldv;
-            float sp = ndh > 0 ? o->spec[(int)(ndh * RC_SPEC + 0.5f)] : 0;
-            for (int ch = 0; ch < 3; ch++) {
-                dif[ch] += o->kd * ndl * lt->col[ch];
-                spec[ch] += o->ks * sp * lt->col[ch];
-            }
+            const float rv = 2 * ndl * ndv - (L0 * v[0] + L1 * v[1] + L2 * v[2]);
+            const float sp = rv > 0 ? o->spec[(int)(rv * RC_SPEC + 0.5f)] : 0;
+            d0 += ndl * o->kd_col[l][0];
+            d1 += ndl * o->kd_col[l][1];
+            d2 += ndl * o->kd_col[l][2];
+            s0 += sp * o->ks_col[l][0];
+            s1 += sp * o->ks_col[l][1];
+            s2 += sp * o->ks_col[l][2];
         }
     }
-    for (int ch = 0; ch < 3; ch++)
-        out[ch] = dif[ch] * col[ch] + alpha * spec[ch];
+    out[0] = d0 * col[0] + alpha * s0;
+    out[1] = d1 * col[1] + alpha * s1;
+    out[2] = d2 * col[2] + alpha * s2;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -712,43 +754,57 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
             klast = klast < k ? k : klast;
             int n = (int)(klast - k) + 1;
             k = klast + 1;
-            for (int s = 0; s < n; s++) {
-                /* every position from k: the same arithmetic as without
-                 * skipping, so skipping changes no pixel */
-                t = (klast - (n - 1 - s)) * dt;
-                ray_point(&r, t, p);
-                float f[3];
-                const size_t o = cell_of(c, p, f);
-                const float *e = ob->lut + 4 * (int)lut_index_f(ob, value_at(c, o, f));
-                const float alpha = e[0];
-                if (alpha <= 0)
-                    continue;
-                const float w = 1 - A;
-                if (ob->shading) {
-                    float g[3], pw[3] = {0, 0, 0}, out[3];
-                    if (c->nrm)
-                        gradient_at(c, o, f, g);
-                    else
-                        sample_gradient(c, p, g);
-                    if (fr->point_lights) {
-                        pw[0] = (float)(wr->origin.x + t * wr->dir.x);
-                        pw[1] = (float)(wr->origin.y + t * wr->dir.y);
-                        pw[2] = (float)(wr->origin.z + t * wr->dir.z);
-                    }
-                    shade(fr, ob, g, pw, v, e + 1, e[0], out);
-                    C[0] += w * out[0];
-                    C[1] += w * out[1];
-                    C[2] += w * out[2];
-                } else {
-                    C[0] += w * e[1];
-                    C[1] += w * e[2];
-                    C[2] += w * e[3];
+            /* Two passes per chunk of samples: first every value and its
+             * table entry, with no branches, so that the independent samples
+             * overlap in the pipeline; then shading and compositing of the
+             * non-transparent ones only. */
+            for (int s0 = 0; s0 < n; s0 += RC_CHUNK) {
+                const int m = n - s0 < RC_CHUNK ? n - s0 : RC_CHUNK;
+                size_t cell[RC_CHUNK];
+                float frac[RC_CHUNK][3];
+                int entry[RC_CHUNK];
+                for (int s = 0; s < m; s++) {
+                    /* every position from k: the same arithmetic as without
+                     * skipping, so skipping changes no pixel */
+                    ray_point(&r, (klast - (n - 1 - (s0 + s))) * dt, p);
+                    cell[s] = cell_in(c, p, frac[s]);
+                    entry[s] = 4 * (int)lut_index_f(ob, value_at(c, cell[s], frac[s]));
                 }
-                A += w * alpha;
-                if (depth == INFINITY)
-                    depth = (float)t;
-                if (A >= et)
-                    goto done;
+                for (int s = 0; s < m; s++) {
+                    const float *e = ob->lut + entry[s];
+                    const float alpha = e[0];
+                    if (alpha <= 0)
+                        continue;
+                    t = (klast - (n - 1 - (s0 + s))) * dt;
+                    const float w = 1 - A;
+                    if (ob->shading) {
+                        float g[3], pw[3] = {0, 0, 0}, out[3];
+                        if (c->nrm) {
+                            gradient_at(c, cell[s], frac[s], g);
+                        } else {
+                            ray_point(&r, t, p);
+                            sample_gradient(c, p, g);
+                        }
+                        if (fr->point_lights) {
+                            pw[0] = (float)(wr->origin.x + t * wr->dir.x);
+                            pw[1] = (float)(wr->origin.y + t * wr->dir.y);
+                            pw[2] = (float)(wr->origin.z + t * wr->dir.z);
+                        }
+                        shade(fr, ob, g, pw, v, e + 1, e[0], out);
+                        C[0] += w * out[0];
+                        C[1] += w * out[1];
+                        C[2] += w * out[2];
+                    } else {
+                        C[0] += w * e[1];
+                        C[1] += w * e[2];
+                        C[2] += w * e[3];
+                    }
+                    A += w * alpha;
+                    if (depth == INFINITY)
+                        depth = (float)t;
+                    if (A >= et)
+                        goto done;
+                }
             }
             continue;
         }
@@ -1391,8 +1447,17 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
                 fr.n_comp = fr.n_obj;
         }
     fr.dt = (float)(dt < INFINITY ? dt : 1.0);
-    for (int i = 0; i < fr.n_obj && s == VV_OK; i++)
-        s = prepare_tables(&fr, &objs[i]);
+    for (int i = 0; i < fr.n_obj && s == VV_OK; i++) {
+        rc_obj *ro = &objs[i];
+        for (int ch = 0; ch < 3; ch++) {
+            ro->amb[ch] = ro->ka * fr.ambient[ch];
+            for (int l = 0; l < fr.n_lights; l++) {
+                ro->kd_col[l][ch] = ro->kd * fr.lights[l].col[ch];
+                ro->ks_col[l][ch] = ro->ks * fr.lights[l].col[ch];
+            }
+        }
+        s = prepare_tables(&fr, ro);
+    }
 
     if (s == VV_OK) {
         const int tx = (view->width + RC_TILE - 1) / RC_TILE;
