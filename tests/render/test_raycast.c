@@ -863,6 +863,37 @@ test_skipping_exact(void **state) {
     assert_true(same2);
 }
 
+/* The AVX2 classification pass (chosen at run time) and the portable one
+ * differ only in fused multiply-add rounding: the images must agree to far
+ * better than any visible difference, with and without skipping. On a
+ * processor without AVX2 both renders take the portable path. */
+static void
+test_simd_matches_portable(void **state) {
+    (void)state;
+    vv_volume *v = NULL;
+    vv_world *w = headsq_world(96, &v);
+    vv_renderer *simd = new_raycaster(), *plain = new_raycaster();
+    vt_ok(vv_renderer_set_option(plain, "simd", "0"));
+    vv_image *a = render(simd, w, &w->view), *b = render(plain, w, &w->view);
+    double psnr = vv_image_psnr(a, b);
+    print_message("simd vs portable: PSNR %.2f dB, max |diff| %.3g\n", psnr, max_abs_diff(a, b));
+    assert_true(psnr >= 60);
+    assert_true(count_hits(a, 0, 96).n > 500);
+    vv_image_free(a);
+    vv_image_free(b);
+    vt_ok(vv_renderer_set_option(simd, "empty_space_skipping", "0"));
+    vt_ok(vv_renderer_set_option(plain, "empty_space_skipping", "0"));
+    a = render(simd, w, &w->view);
+    b = render(plain, w, &w->view);
+    assert_true(vv_image_psnr(a, b) >= 60);
+    vv_image_free(a);
+    vv_image_free(b);
+    vv_renderer_free(simd);
+    vv_renderer_free(plain);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
 /* ---------------------------------------------------------------------- */
 /* Progress and cancellation                                                */
 
@@ -1051,6 +1082,7 @@ main(void) {
         cmocka_unit_test(test_gradients_on_the_fly),
         cmocka_unit_test(test_determinism),
         cmocka_unit_test(test_skipping_exact),
+        cmocka_unit_test(test_simd_matches_portable),
         cmocka_unit_test(test_progress_and_cancel),
         cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_real_files),
