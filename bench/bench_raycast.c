@@ -111,7 +111,8 @@ save(const vv_image *img, const bench_cfg *cfg, const char *stem, const char *mo
 
 int
 main(int argc, char **argv) {
-    bench_cfg cfg = {NAN, NAN, NAN, 0.5, 0.5, 512, 5, 0, "bench_out", "composite,mip,iso", {NULL}, 0};
+    bench_cfg cfg = {NAN,    NAN, NAN, 0.5, 0.5, 512, 5, 0, "bench_out", "composite,mip,iso",
+                     {NULL}, 0};
     const char *path = NULL;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];

@@ -98,7 +98,7 @@ typedef struct vv_volume {
     vv_unit unit;        /**< length unit of spacing and origin */
     vv_data_origin data_origin;
     vv_modification modification;
-    vv_space space;        /**< anatomical frame of world coordinates, if known */
+    vv_space space;    /**< anatomical frame of world coordinates, if known */
     uint64_t modified; /**< bumped on each change, for caches */
     int refcount;      /**< use vv_volume_ref / vv_volume_free */
 } vv_volume;
