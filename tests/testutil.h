@@ -5,6 +5,7 @@
 #ifndef VV_TESTUTIL_H
 #define VV_TESTUTIL_H
 
+#include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
 #include <stddef.h>
@@ -19,7 +20,8 @@
 /** Path of a shared data file, e.g. vt_data("volumes/nut.slc"); static buffer per call site. */
 const char *vt_data(const char *rel);
 
-/** A fresh empty directory for this test's output under build/test-out/<name>. */
+/** A directory for this test's output, build/test-out/<name>, created if needed
+ * (not emptied: tests name their files and overwrite them). Static buffer. */
 const char *vt_outdir(const char *name);
 
 /** Writes @p n bytes to @p path (overwrites); fails the test on error. */
@@ -34,6 +36,14 @@ unsigned char *vt_read_file(const char *path, size_t *n);
         vv_status vt_s_ = (expr);                                                                  \
         if (vt_s_ != VV_OK)                                                                        \
             fail_msg("%s -> %s: %s", #expr, vv_status_name(vt_s_), vv_error_message());            \
+    } while (0)
+
+/** Asserts |a - b| <= eps, printing both values on failure. */
+#define assert_near(a, b, eps)                                                                     \
+    do {                                                                                           \
+        double a_ = (a), b_ = (b);                                                                 \
+        if (!(fabs(a_ - b_) <= (eps)))                                                             \
+            fail_msg("%s = %.17g, expected %.17g (+-%g)", #a, a_, b_, (double)(eps));              \
     } while (0)
 
 /** Asserts an error (status < 0) with a non-empty message. */

@@ -41,24 +41,6 @@ cli_info_usage(FILE *out) {
 }
 
 static const char *
-unit_name(vv_unit u) {
-    switch (u) {
-    case VV_UNIT_METER:
-        return "m";
-    case VV_UNIT_MM:
-        return "mm";
-    case VV_UNIT_MICRON:
-        return "micron";
-    case VV_UNIT_FOOT:
-        return "foot";
-    case VV_UNIT_INCH:
-        return "inch";
-    default:
-        return "unknown";
-    }
-}
-
-static const char *
 data_origin_name(vv_data_origin o) {
     switch (o) {
     case VV_ORIGIN_BIORAD_CONFOCAL:
@@ -305,7 +287,7 @@ cli_info_main(int argc, char **argv) {
     }
     const char *format = raw_spec ? "raw" : vv_format_name(vv_format_detect(path));
     uint64_t count = vv_volume_voxel_count(v);
-    const char *unit = unit_name(v->unit);
+    const char *unit = vv_unit_name(v->unit);
     printf("file:         %s\n", path);
     printf("format:       %s\n", format);
     printf("dimensions:   %d x %d x %d (%llu voxels)\n", v->dims[0], v->dims[1], v->dims[2],

@@ -103,6 +103,19 @@ typedef struct vv_volume {
     int refcount;      /**< use vv_volume_ref / vv_volume_free */
 } vv_volume;
 
+/**
+ * Short name of a length unit: "m", "mm", "um", "ft", "in"; "unknown" for
+ * VV_UNIT_UNKNOWN and out-of-range values. Never NULL.
+ */
+const char *vv_unit_name(vv_unit u);
+
+/**
+ * Parses a unit name: the short names of vv_unit_name and the usual long
+ * forms ("millimeter(s)", "micron(s)", "micrometer", "inch(es)", "foot",
+ * "feet", "meter(s)"). Anything else gives VV_UNIT_UNKNOWN.
+ */
+vv_unit vv_unit_parse(const char *name);
+
 /** Bytes per voxel of a type (1, 2, 4 or 8). */
 size_t vv_voxel_type_size(vv_voxel_type t);
 /** Lower-case name: "u8", "i8", "u16", "i16", "u32", "i32", "f32", "f64". */

@@ -139,6 +139,21 @@ vv_read_file(const char *path, uint64_t max_bytes, unsigned char **data, uint64_
     return VV_OK;
 }
 
+vv_status
+vv_open_regular(const char *path, FILE **fp, uint64_t *size) {
+    *fp = fopen(path, "rb");
+    if (!*fp)
+        return vv_error_set(VV_ERR_IO, "cannot open: %s", strerror(errno));
+    struct stat st;
+    if (fstat(fileno(*fp), &st) != 0 || !S_ISREG(st.st_mode)) {
+        fclose(*fp);
+        *fp = NULL;
+        return vv_error_set(VV_ERR_IO, "not a regular file");
+    }
+    *size = (uint64_t)st.st_size;
+    return VV_OK;
+}
+
 const char *
 vv_path_basename(const char *path) {
     const char *s = strrchr(path, '/');

@@ -34,6 +34,13 @@ void vv_atomic_file_abort(vv_atomic_file *af);
  */
 vv_status vv_read_file(const char *path, uint64_t max_bytes, unsigned char **data, uint64_t *size);
 
+/**
+ * Opens @p path for binary reading and checks that it is a regular file
+ * (not a directory or a device); stores its size. The message does not name
+ * the file: callers prefix "<format>: <name>". Errors: VV_ERR_IO.
+ */
+vv_status vv_open_regular(const char *path, FILE **fp, uint64_t *size);
+
 /** Base name of a path (pointer into it). */
 const char *vv_path_basename(const char *path);
 

@@ -26,6 +26,31 @@ vv_voxel_type_size(vv_voxel_type t) {
     return 0;
 }
 
+const char *
+vv_unit_name(vv_unit u) {
+    static const char *const names[] = {"m", "mm", "um", "ft", "in"};
+    return (unsigned)u < 5 ? names[u] : "unknown";
+}
+
+vv_unit
+vv_unit_parse(const char *u) {
+    static const struct {
+        const char *name;
+        vv_unit unit;
+    } alias[] = {{"m", VV_UNIT_METER},        {"meter", VV_UNIT_METER},
+                 {"meters", VV_UNIT_METER},   {"mm", VV_UNIT_MM},
+                 {"millimeter", VV_UNIT_MM},  {"millimeters", VV_UNIT_MM},
+                 {"um", VV_UNIT_MICRON},      {"micron", VV_UNIT_MICRON},
+                 {"microns", VV_UNIT_MICRON}, {"micrometer", VV_UNIT_MICRON},
+                 {"ft", VV_UNIT_FOOT},        {"foot", VV_UNIT_FOOT},
+                 {"feet", VV_UNIT_FOOT},      {"in", VV_UNIT_INCH},
+                 {"inch", VV_UNIT_INCH},      {"inches", VV_UNIT_INCH}};
+    for (size_t i = 0; u && i < sizeof alias / sizeof alias[0]; i++)
+        if (strcmp(u, alias[i].name) == 0)
+            return alias[i].unit;
+    return VV_UNIT_UNKNOWN;
+}
+
 static const char *const type_names[] = {"u8", "i8", "u16", "i16", "u32", "i32", "f32", "f64"};
 
 const char *

@@ -173,42 +173,6 @@ header_dims(const Nrrd *n, int dims[3], vv_voxel_type *type) {
     return vv_volume_check_size(dims, *type, NULL);
 }
 
-static vv_unit
-unit_from_name(const char *u) {
-    if (!u)
-        return VV_UNIT_UNKNOWN;
-    if (!strcmp(u, "mm") || !strcmp(u, "millimeter") || !strcmp(u, "millimeters"))
-        return VV_UNIT_MM;
-    if (!strcmp(u, "m") || !strcmp(u, "meter") || !strcmp(u, "meters"))
-        return VV_UNIT_METER;
-    if (!strcmp(u, "um") || !strcmp(u, "micron") || !strcmp(u, "microns") ||
-        !strcmp(u, "micrometer"))
-        return VV_UNIT_MICRON;
-    if (!strcmp(u, "in") || !strcmp(u, "inch") || !strcmp(u, "inches"))
-        return VV_UNIT_INCH;
-    if (!strcmp(u, "ft") || !strcmp(u, "foot") || !strcmp(u, "feet"))
-        return VV_UNIT_FOOT;
-    return VV_UNIT_UNKNOWN;
-}
-
-static const char *
-unit_name(vv_unit u) {
-    switch (u) {
-    case VV_UNIT_METER:
-        return "m";
-    case VV_UNIT_MM:
-        return "mm";
-    case VV_UNIT_MICRON:
-        return "um";
-    case VV_UNIT_FOOT:
-        return "ft";
-    case VV_UNIT_INCH:
-        return "in";
-    default:
-        return NULL;
-    }
-}
-
 static void
 cross(const double a[3], const double b[3], double c[3]) {
     c[0] = a[1] * b[2] - a[2] * b[1];
@@ -267,7 +231,7 @@ set_geometry(vv_volume *v, const Nrrd *n) {
         for (int r = 0; r < 3; r++)
             if (isfinite(n->spaceOrigin[r]))
                 origin[r] = n->spaceOrigin[r];
-        vv_unit u = unit_from_name(n->spaceUnits[0]);
+        vv_unit u = vv_unit_parse(n->spaceUnits[0]);
         if (u != VV_UNIT_UNKNOWN)
             v->unit = u;
     } else {
@@ -467,7 +431,7 @@ write_locked(const vv_volume *v, FILE *fp, int gzip) {
         s = teem_error(VV_ERR_INVALID, "cannot set the space origin");
         goto done;
     }
-    const char *un = unit_name(v->unit);
+    const char *un = v->unit == VV_UNIT_UNKNOWN ? NULL : vv_unit_name(v->unit);
     if (un) {
         for (int i = 0; i < 3; i++) {
             n->spaceUnits[i] = airStrdup(un);

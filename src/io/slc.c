@@ -280,18 +280,11 @@ vv_slc_read(vv_volume **out, const char *path) {
         return vv_error_set(VV_ERR_INVALID, "slc: NULL argument");
     *out = NULL;
     const char *name = vv_path_basename(path);
-    slc_in in = {fopen(path, "rb"), 0};
-    if (!in.fp)
-        return vv_error_set(VV_ERR_IO, "slc: %s: cannot open: %s", name, strerror(errno));
-    vv_status s;
-    struct stat st;
-    if (fstat(fileno(in.fp), &st) != 0 || !S_ISREG(st.st_mode)) {
-        s = vv_error_set(VV_ERR_IO, "not a regular file");
-    } else {
-        in.size = (uint64_t)st.st_size;
-        rewind(in.fp);
-        s = slc_read_stream(out, &in);
-    }
+    slc_in in = {NULL, 0};
+    vv_status s = vv_open_regular(path, &in.fp, &in.size);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "slc: %s", name);
+    s = slc_read_stream(out, &in);
     fclose(in.fp);
     if (s != VV_OK)
         return vv_error_prefix(s, "slc: %s", name);

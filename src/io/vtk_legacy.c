@@ -349,18 +349,11 @@ vv_vtk_read(vv_volume **out, const char *path) {
         return vv_error_set(VV_ERR_INVALID, "vtk: NULL argument");
     *out = NULL;
     const char *name = vv_path_basename(path);
-    vtk_in in = {fopen(path, "rb"), 0};
-    if (!in.fp)
-        return vv_error_set(VV_ERR_IO, "vtk: %s: cannot open: %s", name, strerror(errno));
-    vv_status s;
-    struct stat st;
-    if (fstat(fileno(in.fp), &st) != 0 || !S_ISREG(st.st_mode)) {
-        s = vv_error_set(VV_ERR_IO, "not a regular file");
-    } else {
-        in.size = (uint64_t)st.st_size;
-        rewind(in.fp);
-        s = vtk_read_stream(out, &in);
-    }
+    vtk_in in = {NULL, 0};
+    vv_status s = vv_open_regular(path, &in.fp, &in.size);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "vtk: %s", name);
+    s = vtk_read_stream(out, &in);
     fclose(in.fp);
     if (s != VV_OK)
         return vv_error_prefix(s, "vtk: %s", name);

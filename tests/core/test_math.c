@@ -7,12 +7,6 @@
 #define EPS 1e-12
 
 static void
-assert_near(double got, double want, double tol) {
-    if (!(fabs(got - want) <= tol))
-        fail_msg("got %.17g, want %.17g (tolerance %g)", got, want, tol);
-}
-
-static void
 assert_vec_near(vv_vec3 got, vv_vec3 want, double tol) {
     if (!(fabs(got.x - want.x) <= tol && fabs(got.y - want.y) <= tol &&
           fabs(got.z - want.z) <= tol))

@@ -14,12 +14,6 @@
 #include <zlib.h>
 
 /* cmocka 1.1.5 has no assert_double_equal */
-#define assert_near(a, b, eps)                                                                     \
-    do {                                                                                           \
-        double a_ = (a), b_ = (b);                                                                 \
-        if (!(fabs(a_ - b_) <= (eps)))                                                             \
-            fail_msg("%s = %.17g, expected %.17g", #a, a_, b_);                                    \
-    } while (0)
 
 static char *
 out_path(const char *name) {

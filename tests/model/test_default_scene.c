@@ -5,13 +5,6 @@
 
 #include "testutil.h"
 
-#define assert_near(a, b, eps)                                                                     \
-    do {                                                                                           \
-        double a_ = (a), b_ = (b);                                                                 \
-        if (!(fabs(a_ - b_) <= (eps)))                                                             \
-            fail_msg("%s = %.17g, expected %.17g (+-%g)", #a, a_, b_, (double)(eps));              \
-    } while (0)
-
 static int
 project(const vv_view *v, vv_vec3 p, double *px, double *py) {
     vv_vec3 f = vv_vec3_normalize(vv_vec3_sub(v->at, v->eye));

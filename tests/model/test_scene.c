@@ -6,13 +6,6 @@
 
 #include "testutil.h"
 
-#define assert_near(a, b, eps)                                                                     \
-    do {                                                                                           \
-        double a_ = (a), b_ = (b);                                                                 \
-        if (!(fabs(a_ - b_) <= (eps)))                                                             \
-            fail_msg("%s = %.17g, expected %.17g (+-%g)", #a, a_, b_, (double)(eps));              \
-    } while (0)
-
 static char g_dir[1024];
 
 /* A 6x5x4 i16 volume with spacing (0.957, 0.957, 1.5) and origin (1, 2, 3). */

@@ -184,37 +184,9 @@ static void
 fill_row(rc_cache *c, const vv_volume *vol, int j, int k, size_t base) {
     int sj = j < vol->dims[1] ? j : vol->dims[1] - 1;
     int sk = k < vol->dims[2] ? k : vol->dims[2] - 1;
-    size_t src = ((size_t)sk * (size_t)vol->dims[1] + (size_t)sj) * (size_t)vol->dims[0];
-    int snx = vol->dims[0];
+    const int snx = vol->dims[0];
     for (int i = 0; i < c->nx; i++) {
-        size_t s = src + (size_t)(i < snx ? i : snx - 1);
-        double x;
-        switch (vol->type) {
-        case VV_U8:
-            x = ((const uint8_t *)vol->data)[s];
-            break;
-        case VV_I8:
-            x = ((const int8_t *)vol->data)[s];
-            break;
-        case VV_U16:
-            x = ((const uint16_t *)vol->data)[s];
-            break;
-        case VV_I16:
-            x = ((const int16_t *)vol->data)[s];
-            break;
-        case VV_U32:
-            x = ((const uint32_t *)vol->data)[s];
-            break;
-        case VV_I32:
-            x = ((const int32_t *)vol->data)[s];
-            break;
-        case VV_F32:
-            x = ((const float *)vol->data)[s];
-            break;
-        default:
-            x = ((const double *)vol->data)[s];
-            break;
-        }
+        const double x = vv_volume_get(vol, i < snx ? i : snx - 1, sj, sk);
         if (c->q16)
             c->q16[base + (size_t)i] = (uint16_t)(x - c->qoff);
         else
