@@ -1072,8 +1072,8 @@ trace_projection(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, float *
         return 0;
     const double dt = fr->dt;
     const rc_cache *c = ob->c;
-    double k = ceil(r.t0 / dt);
-    const double kend = floor(r.t1 / dt);
+    double k = ceil_pos(r.t0 / dt);
+    const double kend = floor_pos(r.t1 / dt);
     if (k > kend) {
         /* shorter than one step: one sample in the middle */
         float p[3];
@@ -1087,9 +1087,10 @@ trace_projection(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, float *
         double sum = 0;
         long n = 0;
         for (; k <= kend; k++) {
-            float p[3];
+            float p[3], f[3];
             ray_point(&r, k * dt, p);
-            sum += sample_value(c, p);
+            const size_t o = cell_in(c, p, f);
+            sum += value_at(c, o, f);
             n++;
         }
         *value = (float)(sum / (double)n);
@@ -1097,25 +1098,34 @@ trace_projection(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, float *
         return 1;
     }
     const int mip = ob->mode == VV_MODE_MIP;
+    const int skipping = fr->st->skipping;
     float best = mip ? -INFINITY : INFINITY;
     double tbest = r.t0;
     while (k <= kend) {
-        const double t = k * dt;
         float p[3];
-        ray_point(&r, t, p);
-        size_t b = block_of(c, p);
-        /* a subvolume that cannot beat the current extreme is skipped */
-        if (fr->st->skipping && (mip ? c->bmax[b] <= best : c->bmin[b] >= best)) {
-            double ks = ceil(block_exit(c, &r, p, t) / dt);
+        ray_point(&r, k * dt, p);
+        const size_t b = block_of(c, p);
+        const double te = block_exit(c, &r, p, k * dt);
+        /* a subvolume that cannot beat the current extreme is skipped whole
+         * (its samples could not change the result: the test is strict) */
+        if (skipping && (mip ? c->bmax[b] <= best : c->bmin[b] >= best)) {
+            const double ks = ceil_pos(te / dt);
             k = ks > k + 1 ? ks : k + 1;
             continue;
         }
-        float x = sample_value(c, p);
-        if (mip ? x > best : x < best) {
-            best = x;
-            tbest = t;
+        double klast = floor_pos(te / dt);
+        klast = klast < kend ? klast : kend;
+        klast = klast < k ? k : klast;
+        for (; k <= klast; k++) {
+            float f[3];
+            ray_point(&r, k * dt, p);
+            const size_t o = cell_in(c, p, f);
+            const float x = value_at(c, o, f);
+            if (mip ? x > best : x < best) {
+                best = x;
+                tbest = k * dt;
+            }
         }
-        k += 1;
     }
     *value = best;
     *depth = (float)tbest;
