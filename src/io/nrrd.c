@@ -20,7 +20,9 @@
  * and origin from "axis mins" (0 when absent).
  *
  * Writing always produces a single file with an attached header, encoding
- * gzip or raw, host byte order, "space dimension: 3" with "space directions"
+ * gzip or raw, host byte order, "space: right-anterior-superior" or
+ * "left-posterior-superior" when the volume's space is known, else "space
+ * dimension: 3", with "space directions"
  * (direction column times spacing) and "space origin", kinds "space", node
  * centring, and "space units" when the unit is known.
  */
@@ -415,7 +417,12 @@ write_locked(const vv_volume *v, FILE *fp, int gzip) {
         s = teem_error(VV_ERR_INVALID, "cannot describe the volume");
         goto done;
     }
-    if (nrrdSpaceDimensionSet(n, 3)) {
+    /* the anatomical frame when known (so LPS data stay LPS), else a plain
+     * 3-D space */
+    if (v->space == VV_SPACE_RAS || v->space == VV_SPACE_LPS
+            ? nrrdSpaceSet(n, v->space == VV_SPACE_RAS ? nrrdSpaceRightAnteriorSuperior
+                                                       : nrrdSpaceLeftPosteriorSuperior)
+            : nrrdSpaceDimensionSet(n, 3)) {
         s = teem_error(VV_ERR_INVALID, "cannot set the space");
         goto done;
     }

@@ -277,6 +277,13 @@ test_space_lps_and_4d(void **state) {
     assert_near(v->origin[1], -20, 0);
     assert_near(v->origin[2], 30.5, 0);
     assert_near(vv_volume_get(v, 1, 1, 1), 70, 0);
+    /* the anatomical space survives a write and a read */
+    vt_ok(vv_nrrd_write(v, out_path("lps_again.nrrd"), 1));
+    vv_volume *back = NULL;
+    vt_ok(vv_nrrd_read(&back, out_path("lps_again.nrrd")));
+    assert_int_equal(back->space, VV_SPACE_LPS);
+    assert_near(back->origin[1], -20, 0);
+    vv_volume_free(back);
     vv_volume_free(v);
 
     /* a 64-bit integer type in range becomes f64; out of range is refused */
