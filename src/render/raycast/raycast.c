@@ -4,19 +4,24 @@
  * casting), with empty-space skipping over a grid of subvolumes holding
  * min/max values (the PARC idea of the VolVis paper's Navigator, section 4).
  *
- * Per volume, a cache holds the voxels as float, interleaved with the unit
- * gradient direction quantised to 3 x int8 (central differences, computed
- * once), and the min/max of every 8^3-cell subvolume. Per render and object,
- * a transfer-function lookup table (opacity corrected for the step) marks
- * which subvolumes are transparent; rays jump over those.
+ * Per volume, a cache holds the voxels as 16-bit offsets (integer data) or
+ * float, the unit gradient direction of every voxel quantised to 3 x int8
+ * in a separate array (central differences, computed once), and the min/max
+ * of every 4^3-cell subvolume. Per object, a transfer-function lookup table
+ * (opacity corrected for the step) marks which subvolumes are visible, and
+ * each subvolume gets its chessboard distance to the nearest visible one;
+ * rays leap over empty cubes of subvolumes. These tables are kept between
+ * frames while nothing they depend on changes.
  *
  * Rays are traced in each object's index space: the world ray (unit
  * direction, parameter t in world units) is mapped by the object's
  * world-to-index matrix, so anisotropic spacing, direction matrices and
  * object transforms all come for free, and samples sit at t = k * dt on a
  * grid shared by all objects, which keeps images deterministic and
- * independent of tiling and thread count.
- */
+ * independent of tiling and thread count. The single-volume composite
+ * kernel classifies a subvolume's samples first (SSE2, or AVX2 where the
+ * processor has it) and then shades and composites the visible ones.
+ * docs/rendering.md describes the method and its measurements. */
 #include <math.h>
 #include <omp.h>
 #ifdef __SSE2__
@@ -40,9 +45,8 @@
 #define RC_BLOCK 4  /* subvolume side in cells */
 #define RC_LUT 4096 /* transfer-function table entries */
 #define RC_TILE 16  /* image tile side in pixels */
-#define RC_MAX_CACHE                                                                               \
-    64                /* cached volumes per renderer: >= RC_MAX_OBJ, so none in use is evicted     \
-                       */
+/* cached volumes per renderer: >= RC_MAX_OBJ, so none in use is evicted */
+#define RC_MAX_CACHE 64
 #define RC_MAX_OBJ 64 /* objects handled in one render */
 #define RC_CHUNK 32   /* samples classified ahead of compositing */
 #define RC_SPEC 2048  /* specular table entries */
