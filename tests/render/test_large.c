@@ -22,6 +22,7 @@
 
 enum { NX = 640, NY = 640, NZ = 384, IMG = 96 };
 
+#ifndef VT_UNDER_ASAN
 static vv_volume *
 make_ellipsoid(void) {
     const int dims[3] = {NX, NY, NZ};
@@ -48,6 +49,7 @@ make_ellipsoid(void) {
     vv_volume_update_range(v);
     return v;
 }
+#endif
 
 static void
 test_large_volume(void **state) {
