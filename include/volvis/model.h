@@ -264,9 +264,9 @@ void vv_default_scene_options_init(vv_default_scene_options *o);
  * FILE`: the volume centred on the origin (object position = minus the
  * centre of its world box), a perspective view (fov 30°) from the front
  * (eye on the anterior side: -y when volume->space is VV_SPACE_LPS, else +y;
- * up +z) framed with vv_view_frame_box, orbited by azimuth and
- * elevation, then the eye distance divided by zoom; one white headlight of
- * intensity 1, ambient (1,1,1), black background; material and step as
+ * up +z; a single slice, one voxel along an axis, is seen face on along it) framed with
+ * vv_view_frame_box, orbited by azimuth and elevation, then the eye distance divided by zoom; one
+ * white headlight of intensity 1, ambient (1,1,1), black background; material and step as
  * vv_object_new_volume; and a transfer function from the histogram (or the
  * given range). The rule is in docs/scene-format.md, "Default scene". @p opt
  * may be NULL (defaults). Takes its own reference to @p volume. Errors:

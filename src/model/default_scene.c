@@ -313,6 +313,20 @@ vv_world_new_for_volume(vv_world **out, vv_volume *volume, const vv_default_scen
     v->eye = vv_vec3_make(0, volume->space == VV_SPACE_LPS ? -1 : 1, 0);
     v->at = vv_vec3_make(0, 0, 0);
     v->up = vv_vec3_make(0, 0, 1);
+    /* a single slice (a 2-D image) is looked at face on, along its one-voxel
+     * axis (as seen through the direction matrix), not edge on */
+    for (int a = 0; a < 3; a++)
+        if (volume->dims[a] == 1 && volume->dims[(a + 1) % 3] > 1 &&
+            volume->dims[(a + 2) % 3] > 1) {
+            const double *d = volume->direction;
+            vv_vec3 axis = vv_vec3_make(d[a], d[3 + a], d[6 + a]);
+            int b = (a + 1) % 3; /* the slice's first in-plane axis gives "up" */
+            v->eye = axis;
+            v->up = vv_vec3_make(d[b + 3 * 0], d[b + 3 * 1], d[b + 3 * 2]);
+            if (a == 2) /* z-slices: x right, y up, as an image is shown */
+                v->up = vv_vec3_make(d[1], d[4], d[7]);
+            break;
+        }
     vv_box wb = vv_world_bounds(w);
     vv_view_frame_box(v, wb);
     vv_view_orbit(v, opt->azimuth, opt->elevation);

@@ -154,6 +154,26 @@ test_mri(void **state) {
     }
 }
 
+/* A single slice (a 2-D image) is viewed face on, along its one-voxel axis. */
+static void
+test_single_slice(void **state) {
+    (void)state;
+    const int dims[3] = {40, 30, 1};
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_new(&v, dims, VV_U8));
+    for (int j = 0; j < 30; j++)
+        for (int i = 0; i < 40; i++)
+            vv_volume_set(v, i, j, 0, (i * 7 + j * 3) % 200);
+    vv_volume_update_range(v);
+    vv_world *w = NULL;
+    vt_ok(vv_world_new_for_volume(&w, v, NULL));
+    vv_vec3 dir = vv_vec3_normalize(vv_vec3_sub(w->view.eye, w->view.at));
+    assert_near(fabs(dir.z), 1, 1e-9);
+    assert_near(w->view.up.y, 1, 1e-9);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
 static void
 test_synthetic(void **state) {
     (void)state;
@@ -229,6 +249,7 @@ main(void) {
         cmocka_unit_test(test_ct_head),
         cmocka_unit_test(test_mri),
         cmocka_unit_test(test_synthetic),
+        cmocka_unit_test(test_single_slice),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -894,6 +894,39 @@ test_simd_matches_portable(void **state) {
     vv_volume_free(v);
 }
 
+/* A 2-D image (one voxel along z) renders as a slab one voxel thick, face
+ * on through the default scene, in composite and MIP modes. */
+static void
+test_single_slice(void **state) {
+    (void)state;
+    const int dims[3] = {48, 48, 1};
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_new(&v, dims, VV_U8));
+    for (int j = 0; j < 48; j++)
+        for (int i = 0; i < 48; i++)
+            vv_volume_set(v, i, j, 0, 40 + (i + j) * 2);
+    vv_volume_update_range(v);
+    for (int mode = 0; mode < 2; mode++) {
+        vv_default_scene_options o;
+        vv_default_scene_options_init(&o);
+        o.width = o.height = 64;
+        o.mode = mode ? VV_MODE_MIP : VV_MODE_COMPOSITE;
+        vv_world *w = NULL;
+        vt_ok(vv_world_new_for_volume(&w, v, &o));
+        vv_renderer *r = new_raycaster();
+        vv_image *img = render(r, w, &w->view);
+        int lit = 0;
+        for (int p = 0; p < 64 * 64; p++)
+            lit += img->rgba[4 * p + 0] > 0.02f;
+        print_message("single slice, %s: %d of 4096 pixels lit\n", mode ? "mip" : "composite", lit);
+        assert_true(lit > 1000); /* face on: a large square, not an edge */
+        vv_image_free(img);
+        vv_renderer_free(r);
+        vv_world_free(w);
+    }
+    vv_volume_free(v);
+}
+
 /* ---------------------------------------------------------------------- */
 /* Progress and cancellation                                                */
 
@@ -1083,6 +1116,7 @@ main(void) {
         cmocka_unit_test(test_determinism),
         cmocka_unit_test(test_skipping_exact),
         cmocka_unit_test(test_simd_matches_portable),
+        cmocka_unit_test(test_single_slice),
         cmocka_unit_test(test_progress_and_cancel),
         cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_real_files),

@@ -1161,7 +1161,9 @@ prepare_object(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w
         for (int cc = 0; cc < 3; cc++)
             ro->nrm[r][cc] = (float)w2i.m[cc][r];
     for (int a = 0; a < 3; a++)
-        ro->dims[a] = obj->volume->dims[a];
+        /* a single-voxel axis (a 2-D image) is one voxel thick: the cache
+         * holds that slice twice */
+        ro->dims[a] = obj->volume->dims[a] > 1 ? obj->volume->dims[a] : 2;
     ro->ka = (float)obj->material.ambient;
     ro->kd = (float)obj->material.diffuse;
     ro->ks = (float)obj->material.specular;
