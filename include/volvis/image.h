@@ -43,6 +43,7 @@ typedef struct vv_image {
  */
 vv_status vv_image_new(vv_image **out, int width, int height);
 
+/** Releases an image and its buffers. Accepts NULL. */
 void vv_image_free(vv_image *img);
 
 /** Sets every pixel to (r, g, b, a) and depth to INFINITY. */

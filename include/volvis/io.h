@@ -73,6 +73,7 @@ typedef struct vv_load_options {
     vv_raw_params raw;
 } vv_load_options;
 
+/** Format VV_FORMAT_AUTO, no raw parameters (has_raw 0, raw as vv_raw_params_init). */
 void vv_load_options_init(vv_load_options *o);
 
 /**
@@ -97,13 +98,21 @@ vv_status vv_slc_read(vv_volume **out, const char *path);
 /** Writes 8-bit SLC, RLE-compressed when @p rle, with a maximum-projection icon. */
 vv_status vv_slc_write(const vv_volume *v, const char *path, int rle);
 
+/** NRRD through Teem (attached or detached header, lists, patterns). */
 vv_status vv_nrrd_read(vv_volume **out, const char *path);
 /** Writes NRRD with gzip encoding (raw when @p gzip is 0), spacing and origin. */
 vv_status vv_nrrd_write(const vv_volume *v, const char *path, int gzip);
 
+/** NIfTI-1/NIfTI-2 (.nii, .nii.gz, .hdr/.img) through nifti_clib; scaling applied. */
 vv_status vv_nifti_read(vv_volume **out, const char *path);
+/** MetaImage .mhd (detached data) or .mha (LOCAL data), optionally zlib-compressed. */
 vv_status vv_mhd_read(vv_volume **out, const char *path);
+/** VTK legacy STRUCTURED_POINTS, BINARY (big-endian) or ASCII, first SCALARS array. */
 vv_status vv_vtk_read(vv_volume **out, const char *path);
+/**
+ * Raw voxels described by @p params (borrowed). The file must hold at least
+ * header_skip + the volume's bytes; VV_ERR_FORMAT names both sizes otherwise.
+ */
 vv_status vv_raw_read(vv_volume **out, const char *path, const vv_raw_params *params);
 
 #ifdef __cplusplus

@@ -52,6 +52,7 @@ typedef struct vv_plane {
     double d;
 } vv_plane;
 
+/* Component arithmetic on vectors: a + b, a - b, s a, a ∘ b, a · b, a × b, |a|. */
 vv_vec3 vv_vec3_make(double x, double y, double z);
 vv_vec3 vv_vec3_add(vv_vec3 a, vv_vec3 b);
 vv_vec3 vv_vec3_sub(vv_vec3 a, vv_vec3 b);
@@ -62,8 +63,10 @@ vv_vec3 vv_vec3_cross(vv_vec3 a, vv_vec3 b);
 double vv_vec3_length(vv_vec3 a);
 /** a / |a|; the zero vector is returned unchanged. */
 vv_vec3 vv_vec3_normalize(vv_vec3 a);
+/** a + t (b - a). */
 vv_vec3 vv_vec3_lerp(vv_vec3 a, vv_vec3 b, double t);
 
+/* Identity, product a b (b applied first), transpose. */
 vv_mat4 vv_mat4_identity(void);
 vv_mat4 vv_mat4_mul(vv_mat4 a, vv_mat4 b);
 vv_mat4 vv_mat4_transpose(vv_mat4 a);
@@ -73,6 +76,7 @@ vv_mat4 vv_mat4_inverse(vv_mat4 a, int *ok);
 vv_vec3 vv_mat4_mul_point(vv_mat4 m, vv_vec3 p);
 /** Upper 3x3 times v (no translation). */
 vv_vec3 vv_mat4_mul_dir(vv_mat4 m, vv_vec3 v);
+/* Translation by t; scaling by s along the axes. */
 vv_mat4 vv_mat4_translate(vv_vec3 t);
 vv_mat4 vv_mat4_scale(vv_vec3 s);
 /** Rotation by @p angle radians about @p axis (need not be unit), right-handed. */
@@ -85,15 +89,18 @@ vv_mat4 vv_mat4_perspective(double fovy, double aspect, double znear, double zfa
 vv_mat4 vv_mat4_orthographic(double left, double right, double bottom, double top, double znear,
                              double zfar);
 
+/** The identity rotation (1, 0, 0, 0). */
 vv_quat vv_quat_identity(void);
 /** Rotation by @p angle radians about @p axis (need not be unit). */
 vv_quat vv_quat_from_axis_angle(vv_vec3 axis, double angle);
 /** a * b: rotation b then a. */
 vv_quat vv_quat_mul(vv_quat a, vv_quat b);
+/** q / |q| (identity for the zero quaternion); conjugate (inverse of a unit q). */
 vv_quat vv_quat_normalize(vv_quat q);
 vv_quat vv_quat_conjugate(vv_quat q);
 /** Spherical linear interpolation along the shorter arc, t in [0, 1]. */
 vv_quat vv_quat_slerp(vv_quat a, vv_quat b, double t);
+/** v rotated by q (q v q*); the same rotation as a matrix. */
 vv_vec3 vv_quat_rotate(vv_quat q, vv_vec3 v);
 vv_mat4 vv_quat_to_mat4(vv_quat q);
 
@@ -117,6 +124,7 @@ double vv_plane_distance(vv_plane pl, vv_vec3 p);
  */
 int vv_plane_clip_ray(vv_plane pl, vv_ray r, double *t0, double *t1);
 
+/** Degrees to radians and back (files and the CLI use degrees). */
 double vv_deg_to_rad(double deg);
 double vv_rad_to_deg(double rad);
 

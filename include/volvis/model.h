@@ -205,6 +205,7 @@ typedef struct vv_object {
  * to VV_NAME_MAX - 1 bytes. Errors: VV_ERR_NOMEM, VV_ERR_INVALID.
  */
 vv_status vv_object_new_volume(vv_object **out, vv_volume *volume, const char *name);
+/** Releases an object and its reference to the volume. Accepts NULL. */
 void vv_object_free(vv_object *obj);
 /** Object-to-world matrix T(position) * R(orientation) * S(scale). */
 vv_mat4 vv_object_matrix(const vv_object *obj);
@@ -234,6 +235,7 @@ typedef struct vv_world {
  * objects, no lights, no cut planes, ambient (1,1,1), black background.
  */
 vv_status vv_world_new(vv_world **out);
+/** Releases a World and every object it owns. Accepts NULL. */
 void vv_world_free(vv_world *w);
 /** Appends @p obj; the World takes ownership (also on failure it frees obj). */
 vv_status vv_world_add_object(vv_world *w, vv_object *obj);

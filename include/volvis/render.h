@@ -51,8 +51,15 @@ const vv_renderer_ops *const *vv_renderer_registry(void);
 
 /** Creates the method called @p name. Errors: VV_ERR_INVALID (unknown name), VV_ERR_NOMEM. */
 vv_status vv_renderer_new(vv_renderer **out, const char *name);
+/** Releases a renderer and its caches (and their volume references). Accepts NULL. */
 void vv_renderer_free(vv_renderer *r);
+/** The method's registry name ("raycast"); owned by the library. */
 const char *vv_renderer_name(const vv_renderer *r);
+/**
+ * Sets a method-specific option from text (for raycast: early_termination,
+ * gradient_budget_mb, empty_space_skipping, simd; docs/rendering.md).
+ * Errors: VV_ERR_INVALID for an unknown key or a bad value, with a message.
+ */
 vv_status vv_renderer_set_option(vv_renderer *r, const char *key, const char *value);
 
 /**

@@ -555,31 +555,30 @@ get_string(const sctx *c, json_t *obj, const char *path, const char *key, const 
     return VV_OK;
 }
 
-/* An optional sub-object; *out is NULL when absent. */
+/* An optional object or array (@p want, named @p what in the error); *out is
+ * NULL when absent. */
 static vv_status
-get_object(const sctx *c, json_t *obj, const char *path, const char *key, json_t **out) {
+get_container(const sctx *c, json_t *obj, const char *path, const char *key, json_type want,
+              const char *what, json_t **out) {
     char kp[PATH_MAX_LEN];
     json_t *v = field(obj, key, kp, path, NULL);
     *out = NULL;
     if (!v)
         return VV_OK;
-    if (!json_is_object(v))
-        return serr(c, kp, "expected an object, got %s", json_kind(v));
+    if (json_typeof(v) != want)
+        return serr(c, kp, "expected %s, got %s", what, json_kind(v));
     *out = v;
     return VV_OK;
 }
 
 static vv_status
+get_object(const sctx *c, json_t *obj, const char *path, const char *key, json_t **out) {
+    return get_container(c, obj, path, key, JSON_OBJECT, "an object", out);
+}
+
+static vv_status
 get_array(const sctx *c, json_t *obj, const char *path, const char *key, json_t **out) {
-    char kp[PATH_MAX_LEN];
-    json_t *v = field(obj, key, kp, path, NULL);
-    *out = NULL;
-    if (!v)
-        return VV_OK;
-    if (!json_is_array(v))
-        return serr(c, kp, "expected an array, got %s", json_kind(v));
-    *out = v;
-    return VV_OK;
+    return get_container(c, obj, path, key, JSON_ARRAY, "an array", out);
 }
 
 static vv_status

@@ -126,7 +126,6 @@ typedef struct rc_obj {
         *bdist; /* chessboard distance, in subvolumes, to the nearest visible one (0: visible) */
     int owns_tables; /* lut, bvis, bdist are this object's (else borrowed from the cache) */
     float iso;
-    float ka, kd, ks, shin;
     float spec[RC_SPEC + 1];        /* x^shininess for x in [0, 1] */
     float amb[3];                   /* ka * ambient light */
     float kd_col[VV_MAX_LIGHTS][3]; /* kd * light colour */
@@ -651,13 +650,6 @@ cube_exit(const rc_ray *r, const float p[3], double t, int size) {
     return t + te;
 }
 
-/* World parameter at which the ray leaves the subvolume containing p. */
-static inline double
-block_exit(const rc_cache *c, const rc_ray *r, const float p[3], double t) {
-    (void)c;
-    return cube_exit(r, p, t, RC_BLOCK);
-}
-
 static inline void
 ray_point(const rc_ray *r, double t, float p[3]) {
     float tf = (float)(t - r->tb);
@@ -680,6 +672,32 @@ typedef struct rc_result {
     float a;
     float depth;
 } rc_result;
+
+/* Composites one classified sample (table entry e: opacity, then colour
+ * times opacity) at ray parameter t under the accumulated C, A. g is the
+ * index-space gradient there (read only when the object is shaded). */
+static inline void
+composite_sample(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, const float v[3],
+                 const float *e, double t, const float g[3], float C[3], float *A) {
+    const float w = 1 - *A;
+    if (ob->shading) {
+        float pw[3] = {0, 0, 0}, out[3];
+        if (fr->point_lights) {
+            pw[0] = (float)(wr->origin.x + t * wr->dir.x);
+            pw[1] = (float)(wr->origin.y + t * wr->dir.y);
+            pw[2] = (float)(wr->origin.z + t * wr->dir.z);
+        }
+        shade(fr, ob, g, pw, v, e + 1, e[0], out);
+        C[0] += w * out[0];
+        C[1] += w * out[1];
+        C[2] += w * out[2];
+    } else {
+        C[0] += w * e[1];
+        C[1] += w * e[2];
+        C[2] += w * e[3];
+    }
+    *A += w * e[0];
+}
 
 /* Pass 1 of the composite kernel: for samples k = kfirst .. kfirst + m - 1
  * of ray r, the cell offset, the fractions and the TF table entry (4 *
@@ -869,31 +887,15 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
                     if (alpha <= 0)
                         continue;
                     t = (klast - (n - 1 - (s0 + s))) * dt;
-                    const float w = 1 - A;
-                    if (ob->shading) {
-                        float g[3], pw[3] = {0, 0, 0}, out[3];
-                        if (c->nrm) {
-                            const float f[3] = {fx[s], fy[s], fz[s]};
-                            gradient_at(c, cell[s], f, g);
-                        } else {
-                            ray_point(&r, t, p);
-                            sample_gradient(c, p, g);
-                        }
-                        if (fr->point_lights) {
-                            pw[0] = (float)(wr->origin.x + t * wr->dir.x);
-                            pw[1] = (float)(wr->origin.y + t * wr->dir.y);
-                            pw[2] = (float)(wr->origin.z + t * wr->dir.z);
-                        }
-                        shade(fr, ob, g, pw, v, e + 1, e[0], out);
-                        C[0] += w * out[0];
-                        C[1] += w * out[1];
-                        C[2] += w * out[2];
-                    } else {
-                        C[0] += w * e[1];
-                        C[1] += w * e[2];
-                        C[2] += w * e[3];
+                    float g[3] = {0, 0, 0};
+                    if (ob->shading && c->nrm) {
+                        const float f[3] = {fx[s], fy[s], fz[s]};
+                        gradient_at(c, cell[s], f, g);
+                    } else if (ob->shading) {
+                        ray_point(&r, t, p);
+                        sample_gradient(c, p, g);
                     }
-                    A += w * alpha;
+                    composite_sample(fr, ob, wr, v, e, t, g, C, &A);
                     if (depth == INFINITY)
                         depth = (float)t;
                     if (A >= et)
@@ -937,8 +939,8 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
     for (int i = 0; i < na; i++)
         has_prev[i] = 0;
 
-    double k = ceil(tmin / dt);
-    const double kend = floor(tmax / dt);
+    double k = ceil_pos(tmin / dt);
+    const double kend = floor_pos(tmax / dt);
     while (k <= kend) {
         const double t = k * dt;
         double next_k = k + 1;
@@ -958,7 +960,7 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
             const rc_cache *c = ob->c;
             size_t b = block_of(c, p);
             if (!ob->bvis[b]) {
-                double te = block_exit(c, r, p, t);
+                double te = cube_exit(r, p, t, RC_BLOCK);
                 if (te < skip_to)
                     skip_to = te;
                 if (ob->mode == VV_MODE_ISO) {
@@ -1026,33 +1028,17 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
             const float alpha = e[0];
             if (alpha <= 0)
                 continue;
-            float w = 1 - A;
-            if (ob->shading) {
-                float g[3], pw[3], col[3], out[3];
+            float g[3] = {0, 0, 0};
+            if (ob->shading)
                 sample_gradient(c, p, g);
-                pw[0] = (float)(wr->origin.x + t * wr->dir.x);
-                pw[1] = (float)(wr->origin.y + t * wr->dir.y);
-                pw[2] = (float)(wr->origin.z + t * wr->dir.z);
-                col[0] = e[1];
-                col[1] = e[2];
-                col[2] = e[3];
-                shade(fr, ob, g, pw, v, col, alpha, out);
-                C[0] += w * out[0];
-                C[1] += w * out[1];
-                C[2] += w * out[2];
-            } else {
-                C[0] += w * e[1];
-                C[1] += w * e[2];
-                C[2] += w * e[3];
-            }
-            A += w * alpha;
+            composite_sample(fr, ob, wr, v, e, t, g, C, &A);
             if (depth == INFINITY)
                 depth = (float)t;
         }
         if (A >= fr->et)
             break;
         if (!sampled && skip_to < INFINITY) {
-            double ks = ceil(skip_to / dt);
+            double ks = ceil_pos(skip_to / dt);
             if (ks > next_k)
                 next_k = ks;
         }
@@ -1109,7 +1095,7 @@ trace_projection(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, float *
         float p[3];
         ray_point(&r, k * dt, p);
         const size_t b = block_of(c, p);
-        const double te = block_exit(c, &r, p, k * dt);
+        const double te = cube_exit(&r, p, k * dt, RC_BLOCK);
         /* a subvolume that cannot beat the current extreme is skipped whole
          * (its samples could not change the result: the test is strict) */
         if (skipping && (mip ? c->bmax[b] <= best : c->bmin[b] >= best)) {
@@ -1164,10 +1150,6 @@ prepare_object(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w
         /* a single-voxel axis (a 2-D image) is one voxel thick: the cache
          * holds that slice twice */
         ro->dims[a] = obj->volume->dims[a] > 1 ? obj->volume->dims[a] : 2;
-    ro->ka = (float)obj->material.ambient;
-    ro->kd = (float)obj->material.diffuse;
-    ro->ks = (float)obj->material.specular;
-    ro->shin = (float)obj->material.shininess;
     for (int i = 0; i <= RC_SPEC; i++)
         ro->spec[i] = (float)pow((double)i / RC_SPEC, obj->material.shininess);
     ro->base[0] = (float)obj->material.color.x;
@@ -1536,10 +1518,10 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     for (int i = 0; i < fr.n_obj && s == VV_OK; i++) {
         rc_obj *ro = &objs[i];
         for (int ch = 0; ch < 3; ch++) {
-            ro->amb[ch] = ro->ka * fr.ambient[ch];
+            ro->amb[ch] = (float)ro->obj->material.ambient * fr.ambient[ch];
             for (int l = 0; l < fr.n_lights; l++) {
-                ro->kd_col[l][ch] = ro->kd * fr.lights[l].col[ch];
-                ro->ks_col[l][ch] = ro->ks * fr.lights[l].col[ch];
+                ro->kd_col[l][ch] = (float)ro->obj->material.diffuse * fr.lights[l].col[ch];
+                ro->ks_col[l][ch] = (float)ro->obj->material.specular * fr.lights[l].col[ch];
             }
         }
         s = prepare_tables(&fr, ro);
