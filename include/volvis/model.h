@@ -16,6 +16,7 @@
 
 #include "core.h"
 #include "math.h"
+#include "mesh.h"
 #include "volume.h"
 
 #ifdef __cplusplus
@@ -96,13 +97,21 @@ typedef struct vv_cut_plane {
     vv_vec3 normal; /**< unit */
 } vv_cut_plane;
 
-/** Phong material coefficients (the paper's object "material"). */
+/**
+ * Phong material coefficients (the paper's object "material"), plus the
+ * global-illumination terms of volumetric ray tracing (Sobierajski and
+ * Kaufman 1994): a mirror reflectance and a transparency with an index of
+ * refraction. Renderers without global effects ignore the last three.
+ */
 typedef struct vv_material {
-    double ambient;   /**< ka */
-    double diffuse;   /**< kd */
-    double specular;  /**< ks */
-    double shininess; /**< Phong exponent */
-    vv_vec3 color;    /**< base colour for threshold segmentation and isosurfaces */
+    double ambient;      /**< ka */
+    double diffuse;      /**< kd */
+    double specular;     /**< ks */
+    double shininess;    /**< Phong exponent */
+    vv_vec3 color;       /**< base colour (threshold segmentation, isosurfaces, geometry) */
+    double reflectance;  /**< fraction of light mirrored, [0, 1]; 0 by default */
+    double transparency; /**< fraction of light transmitted, [0, 1]; 0 by default */
+    double ior;          /**< index of refraction of a transparent object, > 0; 1 by default */
 } vv_material;
 
 typedef enum vv_projection {
@@ -156,7 +165,40 @@ void vv_view_orbit(vv_view *view, double azimuth, double elevation);
 
 /* ---- objects --------------------------------------------------------- */
 
-typedef enum vv_object_type { VV_OBJECT_VOLUME = 0 } vv_object_type;
+/**
+ * What an object is. Geometric objects are defined in object coordinates by
+ * vv_geometry and placed in the World by the object transform like volumes.
+ */
+typedef enum vv_object_type {
+    VV_OBJECT_VOLUME = 0,   /**< a vv_volume */
+    VV_OBJECT_PLANE = 1,    /**< infinite plane: geometry.point, geometry.normal */
+    VV_OBJECT_POLYGON = 2,  /**< planar polygon: geometry.vertices (n >= 3) */
+    VV_OBJECT_SPHERE = 3,   /**< geometry.center, geometry.radius */
+    VV_OBJECT_BOX = 4,      /**< axis-aligned in object space: geometry.box */
+    VV_OBJECT_CYLINDER = 5, /**< axis geometry.base to geometry.top, radius; capped */
+    VV_OBJECT_MESH = 6      /**< geometry.mesh (a triangle mesh) */
+} vv_object_type;
+
+/** Name of an object type as in scene files ("volume", "sphere", ...). Never NULL. */
+const char *vv_object_type_name(vv_object_type t);
+
+/**
+ * Shape of a geometric object, in object coordinates (world units before the
+ * object transform). Only the fields of the object's type are meaningful.
+ */
+typedef struct vv_geometry {
+    vv_vec3 center;    /**< sphere centre */
+    double radius;     /**< sphere, cylinder radius, > 0 */
+    vv_vec3 point;     /**< plane: a point on it */
+    vv_vec3 normal;    /**< plane: unit normal (its front side) */
+    vv_box box;        /**< box: [min, max] corners */
+    vv_vec3 base, top; /**< cylinder: centres of the two cap discs */
+    int capped;        /**< cylinder: 1 closed with discs, 0 an open tube */
+    int n_vertices;    /**< polygon: number of vertices, >= 3 */
+    vv_vec3 *vertices; /**< polygon: owned, planar, in order (either winding) */
+    vv_mesh *mesh;     /**< mesh: one reference held */
+    char *source;      /**< mesh: file it came from (owned, may be NULL), for scene saving */
+} vv_geometry;
 
 typedef enum vv_render_mode {
     VV_MODE_COMPOSITE = 0, /**< front-to-back compositing through the TF */
@@ -172,13 +214,19 @@ typedef enum vv_segmentation {
 } vv_segmentation;
 
 /**
- * A volume object. World position of an object point q (the volume's own
- * world coordinates) is  position + orientation ⊗ (scale ∘ q).
+ * An object of the World: a volume or a geometric shape. World position of
+ * an object point q (the volume's own world coordinates, or the geometry's
+ * coordinates) is  position + orientation ⊗ (scale ∘ q).
+ *
+ * The shading-effect flags are the per-object control of global effects of
+ * volumetric ray tracing (VolVis paper, section 5, Figure 5); renderers
+ * without global effects ignore them.
  */
 typedef struct vv_object {
     char name[VV_NAME_MAX];
     vv_object_type type;
-    vv_volume *volume; /**< one reference held (released by vv_object_free) */
+    vv_volume *volume;    /**< VV_OBJECT_VOLUME: one reference held (released by vv_object_free) */
+    vv_geometry geometry; /**< geometric types; owned */
     vv_vec3 position;
     vv_quat orientation;
     vv_vec3 scale;
@@ -191,6 +239,10 @@ typedef struct vv_object {
     double step;     /**< sample step in units of the smallest voxel spacing, > 0 */
     int shading;     /**< 1: Phong shading from gradients; 0: emission only */
     int visible;
+    int casts_shadows;          /**< 1: blocks light on its way to other points */
+    int receives_shadows;       /**< 1: its points are shaded with shadow rays */
+    int visible_in_reflections; /**< 1: seen by reflected and transmitted rays */
+    int reflects;               /**< 1: spawns reflected rays when material.reflectance > 0 */
     int n_cut_planes;
     vv_cut_plane cut_planes[VV_MAX_CUT_PLANES]; /**< local, in world coordinates */
 } vv_object;
@@ -205,13 +257,38 @@ typedef struct vv_object {
  * to VV_NAME_MAX - 1 bytes. Errors: VV_ERR_NOMEM, VV_ERR_INVALID.
  */
 vv_status vv_object_new_volume(vv_object **out, vv_volume *volume, const char *name);
-/** Releases an object and its reference to the volume. Accepts NULL. */
+/**
+ * A new geometric object of @p type (not VV_OBJECT_VOLUME) with the same
+ * defaults as vv_object_new_volume (material, flags) and a unit shape: sphere
+ * at the origin with radius 1, plane z = 0 facing +z, box [-1, 1]^3, capped
+ * cylinder from (0,0,-1) to (0,0,1) radius 1; polygon and mesh start empty
+ * (vv_object_set_polygon, vv_object_set_mesh). @p name may be NULL (the
+ * type name). Errors: VV_ERR_INVALID, VV_ERR_NOMEM.
+ */
+vv_status vv_object_new_geometry(vv_object **out, vv_object_type type, const char *name);
+/**
+ * Sets a polygon object's vertices (copied). Errors: VV_ERR_INVALID (not a
+ * polygon, fewer than 3 vertices, not planar within 1e-6 of its size, zero
+ * area), VV_ERR_NOMEM.
+ */
+vv_status vv_object_set_polygon(vv_object *obj, int n, const vv_vec3 *vertices);
+/**
+ * Sets a mesh object's mesh (the object takes its own reference; @p source
+ * is the file name kept for scene saving, may be NULL). Errors:
+ * VV_ERR_INVALID (not a mesh object, empty mesh), VV_ERR_NOMEM.
+ */
+vv_status vv_object_set_mesh(vv_object *obj, vv_mesh *mesh, const char *source);
+/** Releases an object, its reference to the volume and its geometry. Accepts NULL. */
 void vv_object_free(vv_object *obj);
 /** Object-to-world matrix T(position) * R(orientation) * S(scale). */
 vv_mat4 vv_object_matrix(const vv_object *obj);
 /** Index-to-world matrix of the object's volume: object matrix * volume index-to-world. */
 vv_mat4 vv_object_index_to_world(const vv_object *obj);
-/** World bounding box of the object's volume (its 8 index-box corners transformed). */
+/**
+ * World bounding box of the object: a volume's 8 index-box corners
+ * transformed, a shape's object-space bounds transformed. A plane is
+ * unbounded: its box is empty (min > max) and vv_world_bounds skips it.
+ */
 vv_box vv_object_world_box(const vv_object *obj);
 
 /* ---- world ------------------------------------------------------------ */
@@ -243,7 +320,7 @@ vv_status vv_world_add_object(vv_world *w, vv_object *obj);
 vv_status vv_world_add_light(vv_world *w, const vv_light *light);
 /** Appends a global cut plane. Errors: VV_ERR_LIMIT, VV_ERR_INVALID (zero normal). */
 vv_status vv_world_add_cut_plane(vv_world *w, vv_vec3 point, vv_vec3 normal);
-/** Bounding box of all visible objects (an empty box at the origin if none). */
+/** Bounding box of all visible bounded objects (an empty box at the origin if none). */
 vv_box vv_world_bounds(const vv_world *w);
 
 /** Options for vv_world_new_for_volume. */

@@ -9,6 +9,7 @@
 #include "image.h"
 #include "io.h"
 #include "math.h"
+#include "mesh.h"
 #include "model.h"
 #include "render.h"
 #include "volume.h"

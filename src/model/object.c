@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/internal.h"
 #include "model/model_internal.h"
 #include "volvis/model.h"
 
@@ -32,6 +33,53 @@ vv_model_copy_name(char dst[VV_NAME_MAX], const char *src) {
     dst[n] = '\0';
 }
 
+/* Defaults shared by volume and geometric objects. */
+static void
+object_defaults(vv_object *o) {
+    o->position = vv_vec3_make(0, 0, 0);
+    o->orientation = vv_quat_identity();
+    o->scale = vv_vec3_make(1, 1, 1);
+    o->material.ambient = 0.1;
+    o->material.diffuse = 0.6;
+    o->material.specular = 0.3;
+    o->material.shininess = 30.0;
+    o->material.color = vv_vec3_make(1, 1, 1);
+    o->material.reflectance = 0.0;
+    o->material.transparency = 0.0;
+    o->material.ior = 1.0;
+    o->segmentation = VV_SEG_TRANSFER_FUNCTION;
+    o->mode = VV_MODE_COMPOSITE;
+    o->step = 0.5;
+    o->shading = 1;
+    o->visible = 1;
+    o->casts_shadows = 1;
+    o->receives_shadows = 1;
+    o->visible_in_reflections = 1;
+    o->reflects = 1;
+    o->n_cut_planes = 0;
+}
+
+const char *
+vv_object_type_name(vv_object_type t) {
+    switch (t) {
+    case VV_OBJECT_VOLUME:
+        return "volume";
+    case VV_OBJECT_PLANE:
+        return "plane";
+    case VV_OBJECT_POLYGON:
+        return "polygon";
+    case VV_OBJECT_SPHERE:
+        return "sphere";
+    case VV_OBJECT_BOX:
+        return "box";
+    case VV_OBJECT_CYLINDER:
+        return "cylinder";
+    case VV_OBJECT_MESH:
+        return "mesh";
+    }
+    return "unknown";
+}
+
 vv_status
 vv_object_new_volume(vv_object **out, vv_volume *volume, const char *name) {
     if (!out)
@@ -48,15 +96,7 @@ vv_object_new_volume(vv_object **out, vv_volume *volume, const char *name) {
     vv_model_copy_name(o->name, name ? name : "volume");
     o->type = VV_OBJECT_VOLUME;
     o->volume = vv_volume_ref(volume);
-    o->position = vv_vec3_make(0, 0, 0);
-    o->orientation = vv_quat_identity();
-    o->scale = vv_vec3_make(1, 1, 1);
-    o->material.ambient = 0.1;
-    o->material.diffuse = 0.6;
-    o->material.specular = 0.3;
-    o->material.shininess = 30.0;
-    o->material.color = vv_vec3_make(1, 1, 1);
-    o->segmentation = VV_SEG_TRANSFER_FUNCTION;
+    object_defaults(o);
     double lo = volume->range[0], hi = volume->range[1];
     if (!isfinite(lo) || !isfinite(hi)) {
         lo = 0.0;
@@ -66,13 +106,99 @@ vv_object_new_volume(vv_object **out, vv_volume *volume, const char *name) {
         hi = lo + 1.0;
     o->threshold = 0.5 * (lo + hi);
     vv_tf_set_ramp(&o->tf, lo, hi, 1.0, vv_vec3_make(1, 1, 1), vv_model_min_spacing(volume));
-    o->mode = VV_MODE_COMPOSITE;
     o->isovalue = 0.5 * (lo + hi);
-    o->step = 0.5;
-    o->shading = 1;
-    o->visible = 1;
-    o->n_cut_planes = 0;
     *out = o;
+    return VV_OK;
+}
+
+vv_status
+vv_object_new_geometry(vv_object **out, vv_object_type type, const char *name) {
+    if (!out)
+        return vv_error_set(VV_ERR_INVALID, "object: NULL output");
+    *out = NULL;
+    if (type <= VV_OBJECT_VOLUME || type > VV_OBJECT_MESH)
+        return vv_error_set(VV_ERR_INVALID, "object: %d is not a geometric object type", (int)type);
+    vv_object *o = calloc(1, sizeof *o);
+    if (!o)
+        return vv_error_set(VV_ERR_NOMEM, "object: out of memory");
+    vv_model_copy_name(o->name, name ? name : vv_object_type_name(type));
+    o->type = type;
+    object_defaults(o);
+    vv_tf_init(&o->tf);
+    o->threshold = 0.5;
+    o->isovalue = 0.5;
+    vv_geometry *g = &o->geometry;
+    g->center = vv_vec3_make(0, 0, 0);
+    g->radius = 1.0;
+    g->point = vv_vec3_make(0, 0, 0);
+    g->normal = vv_vec3_make(0, 0, 1);
+    g->box.min = vv_vec3_make(-1, -1, -1);
+    g->box.max = vv_vec3_make(1, 1, 1);
+    g->base = vv_vec3_make(0, 0, -1);
+    g->top = vv_vec3_make(0, 0, 1);
+    g->capped = 1;
+    *out = o;
+    return VV_OK;
+}
+
+vv_status
+vv_object_set_polygon(vv_object *obj, int n, const vv_vec3 *vertices) {
+    if (!obj || obj->type != VV_OBJECT_POLYGON)
+        return vv_error_set(VV_ERR_INVALID, "polygon: not a polygon object");
+    if (n < 3 || !vertices)
+        return vv_error_set(VV_ERR_INVALID, "polygon: needs at least 3 vertices, got %d", n);
+    if (n > 1000000)
+        return vv_error_set(VV_ERR_LIMIT, "polygon: %d vertices (at most 1000000)", n);
+    /* Newell's normal: robust for any simple planar polygon, either winding. */
+    vv_vec3 nrm = {0, 0, 0};
+    double size = 0.0;
+    for (int i = 0; i < n; i++) {
+        vv_vec3 a = vertices[i], b = vertices[(i + 1) % n];
+        if (!isfinite(a.x) || !isfinite(a.y) || !isfinite(a.z))
+            return vv_error_set(VV_ERR_INVALID, "polygon: vertex %d is not finite", i);
+        nrm.x += (a.y - b.y) * (a.z + b.z);
+        nrm.y += (a.z - b.z) * (a.x + b.x);
+        nrm.z += (a.x - b.x) * (a.y + b.y);
+        size = fmax(size, vv_vec3_length(vv_vec3_sub(a, vertices[0])));
+    }
+    double len = vv_vec3_length(nrm);
+    if (!(len > 1e-12 * size * size) || !(size > 0))
+        return vv_error_set(VV_ERR_INVALID, "polygon: zero area");
+    nrm = vv_vec3_scale(nrm, 1.0 / len);
+    for (int i = 0; i < n; i++) {
+        double d = vv_vec3_dot(nrm, vv_vec3_sub(vertices[i], vertices[0]));
+        if (fabs(d) > 1e-6 * size)
+            return vv_error_set(VV_ERR_INVALID,
+                                "polygon: vertex %d is %g off the plane of the others", i, d);
+    }
+    vv_vec3 *v = malloc((size_t)n * sizeof *v);
+    if (!v)
+        return vv_error_set(VV_ERR_NOMEM, "polygon: out of memory");
+    memcpy(v, vertices, (size_t)n * sizeof *v);
+    free(obj->geometry.vertices);
+    obj->geometry.vertices = v;
+    obj->geometry.n_vertices = n;
+    obj->geometry.point = vertices[0];
+    obj->geometry.normal = nrm;
+    return VV_OK;
+}
+
+vv_status
+vv_object_set_mesh(vv_object *obj, vv_mesh *mesh, const char *source) {
+    if (!obj || obj->type != VV_OBJECT_MESH)
+        return vv_error_set(VV_ERR_INVALID, "mesh object: not a mesh object");
+    if (!mesh || mesh->n_triangles == 0)
+        return vv_error_set(VV_ERR_INVALID, "mesh object: the mesh has no triangles");
+    char *src = NULL;
+    if (source) {
+        src = vv_strdup(source);
+        if (!src)
+            return vv_error_set(VV_ERR_NOMEM, "mesh object: out of memory");
+    }
+    free(obj->geometry.source);
+    obj->geometry.source = src;
+    vv_mesh_free(obj->geometry.mesh);
+    obj->geometry.mesh = vv_mesh_ref(mesh);
     return VV_OK;
 }
 
@@ -81,6 +207,9 @@ vv_object_free(vv_object *obj) {
     if (!obj)
         return;
     vv_volume_free(obj->volume);
+    free(obj->geometry.vertices);
+    vv_mesh_free(obj->geometry.mesh);
+    free(obj->geometry.source);
     free(obj);
 }
 
@@ -101,10 +230,75 @@ vv_object_index_to_world(const vv_object *obj) {
     return vv_mat4_mul(vv_object_matrix(obj), vv_volume_index_to_world(obj->volume));
 }
 
+/* Object-space bounds of a shape; 0 for an unbounded or empty one. */
+static int
+geometry_bounds(const vv_object *obj, vv_box *b) {
+    const vv_geometry *g = &obj->geometry;
+    switch (obj->type) {
+    case VV_OBJECT_SPHERE: {
+        vv_vec3 r = {g->radius, g->radius, g->radius};
+        b->min = vv_vec3_sub(g->center, r);
+        b->max = vv_vec3_add(g->center, r);
+        return 1;
+    }
+    case VV_OBJECT_BOX:
+        *b = g->box;
+        return 1;
+    case VV_OBJECT_CYLINDER: {
+        /* exact bounds of the two cap discs */
+        vv_vec3 a = vv_vec3_sub(g->top, g->base);
+        double l2 = vv_vec3_dot(a, a);
+        if (!(l2 > 0))
+            return 0;
+        double e[3] = {g->radius * sqrt(fmax(0.0, 1.0 - a.x * a.x / l2)),
+                       g->radius * sqrt(fmax(0.0, 1.0 - a.y * a.y / l2)),
+                       g->radius * sqrt(fmax(0.0, 1.0 - a.z * a.z / l2))};
+        vv_vec3 ev = {e[0], e[1], e[2]};
+        vv_vec3 lo = {fmin(g->base.x, g->top.x), fmin(g->base.y, g->top.y),
+                      fmin(g->base.z, g->top.z)};
+        vv_vec3 hi = {fmax(g->base.x, g->top.x), fmax(g->base.y, g->top.y),
+                      fmax(g->base.z, g->top.z)};
+        b->min = vv_vec3_sub(lo, ev);
+        b->max = vv_vec3_add(hi, ev);
+        return 1;
+    }
+    case VV_OBJECT_POLYGON:
+        if (g->n_vertices < 1 || !g->vertices)
+            return 0;
+        b->min = b->max = g->vertices[0];
+        for (int i = 1; i < g->n_vertices; i++) {
+            vv_vec3 p = g->vertices[i];
+            b->min = vv_vec3_make(fmin(b->min.x, p.x), fmin(b->min.y, p.y), fmin(b->min.z, p.z));
+            b->max = vv_vec3_make(fmax(b->max.x, p.x), fmax(b->max.y, p.y), fmax(b->max.z, p.z));
+        }
+        return 1;
+    case VV_OBJECT_MESH:
+        if (!g->mesh || g->mesh->n_vertices == 0)
+            return 0;
+        *b = vv_mesh_bounds(g->mesh);
+        return 1;
+    case VV_OBJECT_PLANE:
+    case VV_OBJECT_VOLUME:
+        break;
+    }
+    return 0;
+}
+
 vv_box
 vv_object_world_box(const vv_object *obj) {
     vv_box b = {{0, 0, 0}, {0, 0, 0}};
-    if (!obj || !obj->volume)
+    if (!obj)
+        return b;
+    if (obj->type != VV_OBJECT_VOLUME) {
+        vv_box ob;
+        if (!geometry_bounds(obj, &ob)) {
+            b.min = vv_vec3_make(1, 1, 1);
+            b.max = vv_vec3_make(-1, -1, -1);
+            return b;
+        }
+        return vv_box_transform(ob, vv_object_matrix(obj));
+    }
+    if (!obj->volume)
         return b;
     vv_box idx = {
         {0, 0, 0},

@@ -100,9 +100,11 @@ vv_world_bounds(const vv_world *w) {
     int any = 0;
     for (int i = 0; i < w->n_objects; i++) {
         const vv_object *o = w->objects[i];
-        if (!o || !o->visible || !o->volume)
+        if (!o || !o->visible || (o->type == VV_OBJECT_VOLUME && !o->volume))
             continue;
         vv_box ob = vv_object_world_box(o);
+        if (ob.min.x > ob.max.x)
+            continue; /* unbounded (a plane) or empty */
         if (!any) {
             b = ob;
             any = 1;
