@@ -204,6 +204,33 @@ vv_status vv_volume_histogram(const vv_volume *v, int nbins, double lo, double h
  */
 double vv_volume_quantile(const vv_volume *v, double q);
 
+/**
+ * Minimum and maximum of the voxel values over uniform subvolumes: the
+ * subvolume grid behind PARC (polygon-assisted ray casting; VolVis paper,
+ * section 4, Navigator) and empty-space skipping. Subvolume (bi, bj, bk)
+ * covers the cells with index i in [bi*block, (bi+1)*block] (its voxels
+ * include the shared boundary layer, so a cell never straddles two
+ * subvolumes unseen), likewise j and k, clamped to the grid. An axis of one
+ * voxel has one subvolume. min and max hold dims[0]*dims[1]*dims[2] floats,
+ * bi fastest; NaN voxels are ignored (an all-NaN subvolume has min +inf,
+ * max -inf). Owned by the grid.
+ */
+typedef struct vv_minmax_grid {
+    int block;   /**< cells per subvolume side, >= 1 */
+    int dims[3]; /**< subvolumes per axis: max(1, ceil((volume dims - 1) / block)) */
+    float *min;
+    float *max;
+} vv_minmax_grid;
+
+/**
+ * Builds the min/max grid of @p v with subvolumes of @p block cells a side
+ * (OpenMP-parallel). Errors: VV_ERR_INVALID (block < 1), VV_ERR_NOMEM.
+ * Thread-safe with respect to @p v (reads only).
+ */
+vv_status vv_minmax_grid_build(vv_minmax_grid **out, const vv_volume *v, int block);
+/** Releases a grid. Accepts NULL. */
+void vv_minmax_grid_free(vv_minmax_grid *g);
+
 #ifdef __cplusplus
 }
 #endif

@@ -435,3 +435,64 @@ vv_volume_quantile(const vv_volume *v, double q) {
     free(bins);
     return result;
 }
+
+vv_status
+vv_minmax_grid_build(vv_minmax_grid **out, const vv_volume *v, int block) {
+    if (!out || !v)
+        return vv_error_set(VV_ERR_INVALID, "min/max grid: NULL argument");
+    *out = NULL;
+    if (block < 1)
+        return vv_error_set(VV_ERR_INVALID, "min/max grid: block %d < 1", block);
+    vv_minmax_grid *g = calloc(1, sizeof *g);
+    if (!g)
+        return vv_error_set(VV_ERR_NOMEM, "min/max grid: out of memory");
+    g->block = block;
+    for (int a = 0; a < 3; a++) {
+        int cells = v->dims[a] - 1;
+        g->dims[a] = cells < 1 ? 1 : (cells + block - 1) / block;
+    }
+    size_t n = (size_t)g->dims[0] * (size_t)g->dims[1] * (size_t)g->dims[2];
+    g->min = malloc(n * sizeof *g->min);
+    g->max = malloc(n * sizeof *g->max);
+    if (!g->min || !g->max) {
+        vv_minmax_grid_free(g);
+        return vv_error_set(VV_ERR_NOMEM, "min/max grid: out of memory for %zu subvolumes", n);
+    }
+    const int bx = g->dims[0], by = g->dims[1], bz = g->dims[2];
+    const size_t sy = (size_t)v->dims[0], sz = sy * (size_t)v->dims[1];
+#pragma omp parallel for schedule(dynamic, 1) collapse(2)
+    for (int bk = 0; bk < bz; bk++)
+        for (int bj = 0; bj < by; bj++)
+            for (int bi = 0; bi < bx; bi++) {
+                int lo[3] = {bi * block, bj * block, bk * block}, hi[3];
+                for (int a = 0; a < 3; a++) {
+                    hi[a] = lo[a] + block;
+                    if (hi[a] > v->dims[a] - 1)
+                        hi[a] = v->dims[a] - 1;
+                }
+                float mn = INFINITY, mx = -INFINITY;
+                for (int k = lo[2]; k <= hi[2]; k++)
+                    for (int j = lo[1]; j <= hi[1]; j++) {
+                        size_t base = (size_t)k * sz + (size_t)j * sy;
+                        for (int i = lo[0]; i <= hi[0]; i++) {
+                            float x = (float)voxel_at(v, base + (size_t)i);
+                            mn = x < mn ? x : mn; /* NaN compares false: ignored */
+                            mx = x > mx ? x : mx;
+                        }
+                    }
+                size_t b = ((size_t)bk * (size_t)by + (size_t)bj) * (size_t)bx + (size_t)bi;
+                g->min[b] = mn;
+                g->max[b] = mx;
+            }
+    *out = g;
+    return VV_OK;
+}
+
+void
+vv_minmax_grid_free(vv_minmax_grid *g) {
+    if (!g)
+        return;
+    free(g->min);
+    free(g->max);
+    free(g);
+}

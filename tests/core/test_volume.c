@@ -728,16 +728,47 @@ test_type_names(void **state) {
     assert_int_equal(vv_voxel_type_size((vv_voxel_type)42), 0);
 }
 
+/* The min/max grid against a brute-force scan of each subvolume's voxels. */
+static void
+test_minmax_grid(void **state) {
+    (void)state;
+    vv_volume *v = make_volume(13, 9, 1, VV_I16);
+    uint64_t seed = 7;
+    for (int j = 0; j < 9; j++)
+        for (int i = 0; i < 13; i++)
+            vv_volume_set(v, i, j, 0, rnd(&seed, -1000, 1000));
+    vv_minmax_grid *g = NULL;
+    vt_err(vv_minmax_grid_build(&g, v, 0));
+    vt_ok(vv_minmax_grid_build(&g, v, 4));
+    assert_int_equal(g->dims[0], 3);
+    assert_int_equal(g->dims[1], 2);
+    assert_int_equal(g->dims[2], 1);
+    for (int bj = 0; bj < 2; bj++)
+        for (int bi = 0; bi < 3; bi++) {
+            double mn = INFINITY, mx = -INFINITY;
+            for (int j = 4 * bj; j <= 4 * bj + 4 && j < 9; j++)
+                for (int i = 4 * bi; i <= 4 * bi + 4 && i < 13; i++) {
+                    mn = fmin(mn, vv_volume_get(v, i, j, 0));
+                    mx = fmax(mx, vv_volume_get(v, i, j, 0));
+                }
+            assert_near(g->min[bj * 3 + bi], mn, 0);
+            assert_near(g->max[bj * 3 + bi], mx, 0);
+        }
+    vv_minmax_grid_free(g);
+    vv_volume_free(v);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_check_size),    cmocka_unit_test(test_new_ref_free),
-        cmocka_unit_test(test_ref_threads),   cmocka_unit_test(test_layout),
-        cmocka_unit_test(test_get_set_round), cmocka_unit_test(test_update_range),
-        cmocka_unit_test(test_index_world),   cmocka_unit_test(test_sample_index),
-        cmocka_unit_test(test_sample_world),  cmocka_unit_test(test_gradient_world),
-        cmocka_unit_test(test_histogram),     cmocka_unit_test(test_quantile),
-        cmocka_unit_test(test_large),         cmocka_unit_test(test_type_names),
+        cmocka_unit_test(test_minmax_grid),    cmocka_unit_test(test_check_size),
+        cmocka_unit_test(test_new_ref_free),   cmocka_unit_test(test_ref_threads),
+        cmocka_unit_test(test_layout),         cmocka_unit_test(test_get_set_round),
+        cmocka_unit_test(test_update_range),   cmocka_unit_test(test_index_world),
+        cmocka_unit_test(test_sample_index),   cmocka_unit_test(test_sample_world),
+        cmocka_unit_test(test_gradient_world), cmocka_unit_test(test_histogram),
+        cmocka_unit_test(test_quantile),       cmocka_unit_test(test_large),
+        cmocka_unit_test(test_type_names),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
