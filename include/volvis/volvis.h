@@ -12,6 +12,7 @@
 #include "mesh.h"
 #include "model.h"
 #include "render.h"
+#include "surface.h"
 #include "volume.h"
 
 #endif
