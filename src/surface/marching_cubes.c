@@ -60,27 +60,68 @@ typedef struct mc_job {
     int failed;
 } mc_job;
 
+/* Voxel i of data of type t. The hot functions take t as a parameter and are inlined into
+ * one copy per type (the dispatchers below), so the switch disappears from their loops. */
 static inline double
-val(const vv_volume *v, size_t i) {
-    switch (v->type) {
+valt(vv_voxel_type t, const void *data, size_t i) {
+    switch (t) {
     case VV_U8:
-        return ((const uint8_t *)v->data)[i];
+        return ((const uint8_t *)data)[i];
     case VV_I8:
-        return ((const int8_t *)v->data)[i];
+        return ((const int8_t *)data)[i];
     case VV_U16:
-        return ((const uint16_t *)v->data)[i];
+        return ((const uint16_t *)data)[i];
     case VV_I16:
-        return ((const int16_t *)v->data)[i];
+        return ((const int16_t *)data)[i];
     case VV_U32:
-        return ((const uint32_t *)v->data)[i];
+        return ((const uint32_t *)data)[i];
     case VV_I32:
-        return ((const int32_t *)v->data)[i];
+        return ((const int32_t *)data)[i];
     case VV_F32:
-        return ((const float *)v->data)[i];
+        return ((const float *)data)[i];
     default:
-        return ((const double *)v->data)[i];
+        return ((const double *)data)[i];
     }
 }
+
+static inline double
+val(const vv_volume *v, size_t i) {
+    return valt(v->type, v->data, i);
+}
+
+#if defined(__GNUC__)
+#define MC_INLINE static inline __attribute__((always_inline))
+#else
+#define MC_INLINE static inline
+#endif
+/* Hardware popcount where the CPU has it, chosen at load time (the build is for any x86-64). */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define MC_POPCNT_CLONES __attribute__((target_clones("popcnt", "default")))
+#else
+#define MC_POPCNT_CLONES
+#endif
+
+/* Instantiates name##_t for every voxel type: a switch calling the inlined body with a
+ * constant type. */
+#define MC_DISPATCH(call_with_type)                                                                \
+    switch (J->v->type) {                                                                          \
+    case VV_U8:                                                                                    \
+        return call_with_type(VV_U8);                                                              \
+    case VV_I8:                                                                                    \
+        return call_with_type(VV_I8);                                                              \
+    case VV_U16:                                                                                   \
+        return call_with_type(VV_U16);                                                             \
+    case VV_I16:                                                                                   \
+        return call_with_type(VV_I16);                                                             \
+    case VV_U32:                                                                                   \
+        return call_with_type(VV_U32);                                                             \
+    case VV_I32:                                                                                   \
+        return call_with_type(VV_I32);                                                             \
+    case VV_F32:                                                                                   \
+        return call_with_type(VV_F32);                                                             \
+    default:                                                                                       \
+        return call_with_type(VV_F64);                                                             \
+    }
 
 /* ---- pass 1: classification ----------------------------------------------- */
 
@@ -250,8 +291,8 @@ cell_case(const mc_words *q, int b) {
 }
 
 /* Configuration index of case cs at the cell whose corner 0 is voxel index c0. */
-static inline int
-cell_config(const mc_job *J, int cs, size_t c0) {
+MC_INLINE int
+cell_config(const mc_job *J, int cs, size_t c0, const vv_voxel_type T) {
     const mc_tables *tb = J->tb;
     int na = tb->n_amb[cs];
     if (!na)
@@ -260,7 +301,7 @@ cell_config(const mc_job *J, int cs, size_t c0) {
     const size_t off[8] = {0, 1, 1 + sy, sy, sz, 1 + sz, 1 + sy + sz, sy + sz};
     double w[8];
     for (int c = 0; c < 8; c++)
-        w[c] = val(J->v, c0 + off[c]) - J->iso;
+        w[c] = valt(T, J->v->data, c0 + off[c]) - J->iso;
     int d = 0;
     for (int m = 0; m < na; m++) {
         const int *q = mc_face_corner[tb->amb_face[cs][m]];
@@ -276,8 +317,8 @@ row_bits(const mc_job *J, int j, int k) {
 
 /* ---- pass 2: counting -------------------------------------------------------- */
 
-static void
-count_row(mc_job *J, int j, int k) {
+MC_INLINE void
+count_row_t(mc_job *J, int j, int k, const vv_voxel_type T) {
     const int W = J->W, n1 = J->n[1], n2 = J->n[2];
     const uint64_t *r0 = row_bits(J, j, k);
     uint32_t nx = 0, ny = 0, nz = 0, nt = 0, nc = 0;
@@ -309,7 +350,7 @@ count_row(mc_job *J, int j, int k) {
                 act &= act - 1;
                 int cs = cell_case(&q, b);
                 const mc_config *cf =
-                    &J->tb->configs[cell_config(J, cs, rowbase + (size_t)(w * MC_WORD + b))];
+                    &J->tb->configs[cell_config(J, cs, rowbase + (size_t)(w * MC_WORD + b), T)];
                 nt += cf->n_tri;
                 nc += cf->n_centre;
             }
@@ -325,9 +366,10 @@ count_row(mc_job *J, int j, int k) {
 
 /* ---- pass 4: generation -------------------------------------------------------- */
 
-static inline void
-gradient(const mc_job *J, int I, int Jy, int K, size_t idx, double g[3]) {
+MC_INLINE void
+gradient(const mc_job *J, int I, int Jy, int K, size_t idx, double g[3], const vv_voxel_type T) {
     const vv_volume *v = J->v;
+    const void *d = v->data;
     const int P[3] = {I, Jy, K};
     const size_t st[3] = {1, J->sy, J->sz};
     for (int a = 0; a < 3; a++) {
@@ -335,21 +377,21 @@ gradient(const mc_job *J, int I, int Jy, int K, size_t idx, double g[3]) {
         if (n < 2)
             g[a] = 0;
         else if (p == 0)
-            g[a] = val(v, idx + st[a]) - val(v, idx);
+            g[a] = valt(T, d, idx + st[a]) - valt(T, d, idx);
         else if (p == n - 1)
-            g[a] = val(v, idx) - val(v, idx - st[a]);
+            g[a] = valt(T, d, idx) - valt(T, d, idx - st[a]);
         else
-            g[a] = 0.5 * (val(v, idx + st[a]) - val(v, idx - st[a]));
+            g[a] = 0.5 * (valt(T, d, idx + st[a]) - valt(T, d, idx - st[a]));
     }
 }
 
 /* Writes vertex vi on the edge from voxel (I, Jy, K) along axis; returns 1 if its normal is 0. */
-static int
-emit_vertex(mc_job *J, uint64_t vi, int I, int Jy, int K, int axis) {
+MC_INLINE int
+emit_vertex(mc_job *J, uint64_t vi, int I, int Jy, int K, int axis, const vv_voxel_type T) {
     const vv_volume *v = J->v;
     const size_t st[3] = {1, J->sy, J->sz};
     const size_t i0 = (size_t)K * J->sz + (size_t)Jy * J->sy + (size_t)I, i1 = i0 + st[axis];
-    const double a = val(v, i0), b = val(v, i1);
+    const double a = valt(T, v->data, i0), b = valt(T, v->data, i1);
     double t = (J->iso - a) / (b - a);
     if (!(t >= 0))
         t = 0; /* also NaN */
@@ -377,8 +419,8 @@ emit_vertex(mc_job *J, uint64_t vi, int I, int Jy, int K, int axis) {
     int P1[3] = {I, Jy, K};
     P1[axis]++;
     double g0[3], g1[3], gw[3];
-    gradient(J, I, Jy, K, i0, g0);
-    gradient(J, P1[0], P1[1], P1[2], i1, g1);
+    gradient(J, I, Jy, K, i0, g0, T);
+    gradient(J, P1[0], P1[1], P1[2], i1, g1, T);
     for (int r = 0; r < 3; r++)
         g0[r] += t * (g1[r] - g0[r]);
     for (int r = 0; r < 3; r++)
@@ -421,8 +463,8 @@ emit_centre(mc_job *J, uint64_t vi, size_t c0, int I, int Jy, int K, unsigned ma
             p[r] += ca[r] + t * (cb[r] - ca[r]);
         if (J->normals) {
             double ga[3], gb[3];
-            gradient(J, I + ca[0], Jy + ca[1], K + ca[2], ia, ga);
-            gradient(J, I + cb[0], Jy + cb[1], K + cb[2], ib, gb);
+            gradient(J, I + ca[0], Jy + ca[1], K + ca[2], ia, ga, J->v->type);
+            gradient(J, I + cb[0], Jy + cb[1], K + cb[2], ib, gb, J->v->type);
             for (int r = 0; r < 3; r++)
                 g[r] += ga[r] + t * (gb[r] - ga[r]);
         }
@@ -464,8 +506,8 @@ emit_centre(mc_job *J, uint64_t vi, size_t c0, int I, int Jy, int K, unsigned ma
     return 0;
 }
 
-static int
-generate_row(mc_job *J, int j, int k) {
+MC_INLINE int
+generate_row_t(mc_job *J, int j, int k, const vv_voxel_type T) {
     const int W = J->W, n1 = J->n[1], n2 = J->n[2];
     const size_t R = (size_t)k * (size_t)n1 + (size_t)j;
     const uint32_t *c = J->cnt + MC_CNT * R;
@@ -483,14 +525,14 @@ generate_row(mc_job *J, int j, int k) {
         while (X) {
             int b = __builtin_ctzll(X);
             X &= X - 1;
-            zero_normals += emit_vertex(J, vx++, I0 + w * MC_WORD + b, Jy, K, 0);
+            zero_normals += emit_vertex(J, vx++, I0 + w * MC_WORD + b, Jy, K, 0, T);
         }
         if (r1) {
             uint64_t Y = x ^ r1[w];
             while (Y) {
                 int b = __builtin_ctzll(Y);
                 Y &= Y - 1;
-                zero_normals += emit_vertex(J, vy++, I0 + w * MC_WORD + b, Jy, K, 1);
+                zero_normals += emit_vertex(J, vy++, I0 + w * MC_WORD + b, Jy, K, 1, T);
             }
         }
         if (r2) {
@@ -498,7 +540,7 @@ generate_row(mc_job *J, int j, int k) {
             while (Z) {
                 int b = __builtin_ctzll(Z);
                 Z &= Z - 1;
-                zero_normals += emit_vertex(J, vz++, I0 + w * MC_WORD + b, Jy, K, 2);
+                zero_normals += emit_vertex(J, vz++, I0 + w * MC_WORD + b, Jy, K, 2, T);
             }
         }
     }
@@ -528,23 +570,37 @@ generate_row(mc_job *J, int j, int k) {
         while (act) {
             int b = __builtin_ctzll(act);
             act &= act - 1;
-            const uint64_t below = (1ULL << b) - 1;
             int cs = cell_case(&q, b);
             const mc_config *cf =
-                &J->tb->configs[cell_config(J, cs, rowbase + (size_t)(w * MC_WORD + b))];
+                &J->tb->configs[cell_config(J, cs, rowbase + (size_t)(w * MC_WORD + b), T)];
+            /* Every crossing bit of these rows sits at an active cell (an inactive cell has no
+             * crossing edge), so counting the bits of the active cells visited so far gives
+             * the crossings before this cell: no popcount. */
+            const unsigned bx0 = (unsigned)(X[0] >> b) & 1, bx1 = (unsigned)(X[1] >> b) & 1,
+                           bx2 = (unsigned)(X[2] >> b) & 1, bx3 = (unsigned)(X[3] >> b) & 1,
+                           by0 = (unsigned)(Y0 >> b) & 1, by2 = (unsigned)(Y2 >> b) & 1,
+                           bz0 = (unsigned)(Z0 >> b) & 1, bz1 = (unsigned)(Z1 >> b) & 1;
             uint32_t e[12];
-            e[0] = (uint32_t)(x0 + cx[0] + (uint64_t)__builtin_popcountll(X[0] & below));
-            e[2] = (uint32_t)(x1 + cx[1] + (uint64_t)__builtin_popcountll(X[1] & below));
-            e[4] = (uint32_t)(x2 + cx[2] + (uint64_t)__builtin_popcountll(X[2] & below));
-            e[6] = (uint32_t)(x3 + cx[3] + (uint64_t)__builtin_popcountll(X[3] & below));
-            e[3] = (uint32_t)(y0 + cy[0] + (uint64_t)__builtin_popcountll(Y0 & below));
-            e[1] = e[3] + (uint32_t)((Y0 >> b) & 1);
-            e[7] = (uint32_t)(y2 + cy[1] + (uint64_t)__builtin_popcountll(Y2 & below));
-            e[5] = e[7] + (uint32_t)((Y2 >> b) & 1);
-            e[8] = (uint32_t)(z0 + cz[0] + (uint64_t)__builtin_popcountll(Z0 & below));
-            e[9] = e[8] + (uint32_t)((Z0 >> b) & 1);
-            e[11] = (uint32_t)(z1 + cz[1] + (uint64_t)__builtin_popcountll(Z1 & below));
-            e[10] = e[11] + (uint32_t)((Z1 >> b) & 1);
+            e[0] = (uint32_t)(x0 + cx[0]);
+            e[2] = (uint32_t)(x1 + cx[1]);
+            e[4] = (uint32_t)(x2 + cx[2]);
+            e[6] = (uint32_t)(x3 + cx[3]);
+            e[3] = (uint32_t)(y0 + cy[0]);
+            e[1] = e[3] + by0;
+            e[7] = (uint32_t)(y2 + cy[1]);
+            e[5] = e[7] + by2;
+            e[8] = (uint32_t)(z0 + cz[0]);
+            e[9] = e[8] + bz0;
+            e[11] = (uint32_t)(z1 + cz[1]);
+            e[10] = e[11] + bz1;
+            cx[0] += bx0;
+            cx[1] += bx1;
+            cx[2] += bx2;
+            cx[3] += bx3;
+            cy[0] += by0;
+            cy[1] += by2;
+            cz[0] += bz0;
+            cz[1] += bz1;
             uint32_t ev[12 + MC_MAX_CENTRE];
             memcpy(ev, e, sizeof e);
             for (int q2 = 0; q2 < cf->n_centre; q2++) {
@@ -559,14 +615,20 @@ generate_row(mc_job *J, int j, int k) {
                 tri += 3;
             }
         }
-        for (int a = 0; a < 4; a++)
-            cx[a] += (uint64_t)__builtin_popcountll(X[a]);
-        cy[0] += (uint64_t)__builtin_popcountll(Y0);
-        cy[1] += (uint64_t)__builtin_popcountll(Y2);
-        cz[0] += (uint64_t)__builtin_popcountll(Z0);
-        cz[1] += (uint64_t)__builtin_popcountll(Z1);
     }
     return zero_normals;
+}
+
+#define MC_GENERATE(T) generate_row_t(J, j, k, T)
+static int
+generate_row(mc_job *J, int j, int k) {
+    MC_DISPATCH(MC_GENERATE)
+}
+
+#define MC_COUNT(T) (count_row_t(J, j, k, T), 0)
+static MC_POPCNT_CLONES int
+count_row(mc_job *J, int j, int k) {
+    MC_DISPATCH(MC_COUNT)
 }
 
 /* Replaces zero normals (vanishing gradient) by the area-weighted face normals. */
