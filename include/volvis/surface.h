@@ -114,6 +114,7 @@ typedef struct vv_parc {
     vv_minmax_grid *grid;   /**< per-box min/max, owned */
     int volume_dims[3];     /**< voxels of the volume */
     vv_mat4 index_to_world; /**< of the volume */
+    uint8_t *kept;          /**< one byte per box: 1 when in the list (owned) */
 } vv_parc;
 
 /**
@@ -134,9 +135,11 @@ vv_status vv_parc_set_isovalue(vv_parc *p, double isovalue);
 int vv_parc_box_kept(const vv_parc *p, int bi, int bj, int bk);
 /**
  * The preview: a quad (two triangles) for every face of a kept box whose
- * neighbour is not kept, in world coordinates, outward winding, with flat
- * normals; the mesh of each connected group of boxes is closed. Errors:
- * VV_ERR_INVALID, VV_ERR_LIMIT, VV_ERR_NOMEM.
+ * neighbour is not kept, in world coordinates, counter-clockwise seen from
+ * outside the boxes. Box corners are shared vertices, so the surface of
+ * each group of boxes is closed (edge-connected groups may share an edge);
+ * no normals: draw it flat-shaded. Errors: VV_ERR_INVALID, VV_ERR_LIMIT,
+ * VV_ERR_NOMEM.
  */
 vv_status vv_parc_mesh(const vv_parc *p, vv_mesh **out);
 /** Releases a PARC structure. Accepts NULL. */
@@ -164,6 +167,9 @@ typedef struct vv_coarse_surface {
                               bits 2 * (v % 4) of byte v / 4 */
     size_t n_triangles;  /**< triangles of the current surface */
     uint32_t *triangles; /**< 3 * n_triangles vertex indices */
+    size_t n_centres;    /**< vertices with edge id UINT32_MAX (a cell-centre vertex of a
+                              tunnel configuration), stored as positions */
+    float *centres;      /**< 3 * n_centres world coordinates, in vertex order */
     vv_volume *reduced;  /**< the reduced grid (f32), owned; world placement of the volume */
 } vv_coarse_surface;
 
