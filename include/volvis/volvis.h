@@ -12,6 +12,8 @@
 #include "mesh.h"
 #include "model.h"
 #include "render.h"
+#include "measure.h"
+#include "surface.h"
 #include "volume.h"
 
 #endif
