@@ -569,7 +569,8 @@ tables_bytes(int M, const vv_huff_table *dc, const vv_huff_table *ac) {
     return 4 + 4 * H * H * H + 16 + 2 * (size_t)dc->nvals + 16 + 2 * (size_t)ac->nvals + 4;
 }
 
-/* Exact file size for the given steps (tables built from the statistics). */
+/* File size for the given steps (tables built from the statistics): exact
+ * but for the byte padding of each subcube, counted as 7 bits (an upper bound). */
 static vv_status
 count_file_bytes(const enc *en, const float *step_abs, int M, uint64_t *file_bytes) {
     uint64_t *dcf = malloc(sizeof *dcf * VVC_DC_SYMS), *acf = malloc(sizeof *acf * VVC_AC_SYMS);
@@ -587,28 +588,15 @@ count_file_bytes(const enc *en, const float *step_abs, int M, uint64_t *file_byt
     vv_huff_build(acf, VVC_AC_SYMS, &t[1]);
     if ((s = vv_huff_make_enc(&t[0], &e[0])) != VV_OK || (s = vv_huff_make_enc(&t[1], &e[1])))
         goto done;
-    uint64_t data = 0;
-    int failed = 0;
-#pragma omp parallel num_threads(en->threads) reduction(+ : data)
-    {
-        int64_t *q = malloc(sizeof *q * (size_t)en->sc->N);
-#pragma omp for schedule(dynamic, 8)
-        for (int k = 0; k < en->nsub; k++) {
-            if (!q) {
-                failed = 1;
-                continue;
-            }
-            sym_counter c = {NULL, NULL, 0, &e[0], &e[1], 0, NULL};
-            quantise(en->sc, en->spectra + (size_t)k * en->per, step_abs, q);
-            symbolise(q, en->sc->N, &c);
-            data += (c.bits + 7) / 8;
-        }
-        free(q);
-    }
-    if (failed) {
-        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
-        goto done;
-    }
+    /* the code bits follow from the statistics; each subcube's stream is
+     * padded to a byte, at most 7 bits, counted in full so that the
+     * estimate is an upper bound */
+    uint64_t bits = amp + 7 * (uint64_t)en->nsub;
+    for (int i = 0; i < VVC_DC_SYMS; i++)
+        bits += dcf[i] * e[0].len[i];
+    for (int i = 0; i < VVC_AC_SYMS; i++)
+        bits += acf[i] * e[1].len[i];
+    const uint64_t data = bits / 8;
     const uint64_t total_data = data + 4;
     const uint64_t index = (uint64_t)en->nsub * (total_data - 4 < (1ull << 32) ? 4 : 8) + 4;
     *file_bytes = VVC_HEADER_BYTES + tables_bytes(M, &t[0], &t[1]) + index + total_data;
@@ -825,7 +813,7 @@ vv_vvc_compress(vv_vvc **out, const vv_volume *v, const vv_vvc_params *p) {
             if (s == VV_OK && (double)bytes <= target_bytes) {
                 lo = hi;
             } else {
-                for (int it = 0; it < 24 && s == VV_OK; it++) {
+                for (int it = 0; it < 16 && s == VV_OK; it++) {
                     const double mid = 0.5 * (lo + hi);
                     make_table(qtab, M, mid, p->slope);
                     make_step_abs(&sc, qtab, step_abs);
@@ -835,7 +823,7 @@ vv_vvc_compress(vv_vvc **out, const vv_volume *v, const vv_vvc_params *p) {
                         lo = mid;
                     else
                         hi = mid;
-                    if (vv_progress_report(&p->progress, 0.3 + 0.4 * (it + 1) / 24.0)) {
+                    if (vv_progress_report(&p->progress, 0.3 + 0.4 * (it + 1) / 16.0)) {
                         s = vv_error_set(VV_ERR_CANCELLED, "cancelled");
                         break;
                     }
