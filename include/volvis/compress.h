@@ -23,14 +23,17 @@
  * subcube decodes alone. Each section of the file carries a CRC-32: a
  * corrupt or truncated file gives VV_ERR_FORMAT, never garbage.
  *
- * Quality q in [0, 100]: the step of the unitary DFT coefficient at folded
- * frequency (fx, fy, fz) is  s(q) * (1 + b(q) * |f| / (M/2)),  with
- * s(q) = 0.1 * 2^((100 - q) / 6) grey levels (each 6 points of quality halve
- * the step, about +6 dB) and b(q) = slope * min(1, (100 - q) / 20). At
- * q = 100 the table is flat with step 0.1: integer data within 16 bits
- * decode exactly (error well under 0.5 of a grey level). A target bit rate is
- * met by bisection on q (the file size of every candidate is counted
- * exactly, without writing it).
+ * Quality q in [0, 100]: the step of the unitary DFT coefficient (F / M^1.5)
+ * at folded frequency (fx, fy, fz) is  s(q) * (1 + b(q) * |f| / (M/2)),
+ * with s(q) = 0.5 / M^1.5 * 2^((100 - q) / 5) grey levels (each 5 points of
+ * quality halve the step, about +6 dB) and b(q) = slope * min(1, (100 - q)
+ * / 20). At q = 100 the table is flat and the unnormalised coefficients
+ * have step 0.5, so no voxel can move by more than 0.354 grey levels, even
+ * when the coefficients' rounding errors line up: integer data within 16
+ * bits decode exactly. A target bit rate is met by bisection on q (the size
+ * of every candidate file follows from its symbol statistics, without
+ * writing it; the byte padding of each subcube is counted as 7 bits, so the
+ * file is never over the rate).
  *
  * Ownership: a vv_vvc holds the whole encoded file in memory plus its parsed
  * header, tables and index; vv_vvc_free releases it. Thread-safety: a vv_vvc

@@ -148,7 +148,10 @@ vv_vvc_params_init(vv_vvc_params *p) {
 static void
 make_table(float *tab, int M, double quality, double slope) {
     const int H = M / 2 + 1;
-    const double s = 0.1 * pow(2.0, (100.0 - quality) / 6.0);
+    /* at quality 100 the step of the unnormalised coefficients is 0.5, so
+     * no voxel can move by more than 0.5 * sqrt(2) / 2 < 0.5 grey levels
+     * however the rounding errors of the coefficients line up */
+    const double s = 0.5 / sqrt((double)M * M * M) * pow(2.0, (100.0 - quality) / 5.0);
     double b = slope * (100.0 - quality) / 20.0;
     b = b < slope ? b : slope;
     for (int fz = 0; fz < H; fz++)
