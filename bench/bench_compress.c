@@ -11,7 +11,8 @@
  * rate search found, and _search_wall (the search plus the final coding).
  * Then the fourier renderer against the ray caster's X-ray mode (the
  * spatial reference) at 512 x 512, orthographic, both taking the mean value
- * along the ray through the same grey ramp: xray_frame, fourier_frame
+ * along the ray through the same linear grey ramp, from the minimum to the
+ * brightest mean of the X-ray image: xray_frame, fourier_frame
  * (median of --runs after a first frame), fourier_first_frame (transforms
  * and oversampling included), the image agreement fourier_xray_psnr, and
  * per rate fourier_rateR_psnr (rendering from the compressed data against
@@ -297,7 +298,7 @@ main(int argc, char **argv) {
     vv_renderer *rc = NULL, *fo = NULL;
     if (vv_renderer_new(&rc, "raycast") != VV_OK || vv_renderer_new(&fo, "fourier") != VV_OK)
         die("renderer");
-    char bs[8];
+    char bs[16];
     snprintf(bs, sizeof bs, "%d", block);
     if (vv_renderer_set_option(fo, "block", bs) != VV_OK)
         die("block");
@@ -307,6 +308,7 @@ main(int argc, char **argv) {
         for (int i = 0; i < size * size; i++)
             m = probe->rgba[4 * i] > m ? probe->rgba[4 * i] : m;
         vv_image_free(probe);
+        m = sqrtf(m); /* the default grey ramp also ramps the colour: grey = t^2 */
         vv_object *obj = w->objects[0];
         vv_tf_set_ramp(&obj->tf, vol->range[0],
                        vol->range[0] + (vol->range[1] - vol->range[0]) * (m > 0 ? m : 1), 1.0,
