@@ -115,10 +115,21 @@ parse_num(const char *text, double lo, double hi, double *out) {
     return 1;
 }
 
+static void
+drop_cache(fr_state *st) {
+    for (int i = 0; i < st->n_cache; i++)
+        source_release(&st->cache[i]);
+    st->n_cache = 0;
+}
+
 static vv_status
 fr_set_option(void *state, const char *key, const char *value) {
     fr_state *st = state;
     double v;
+    /* a new source of spectra: nothing cached from the old one is valid */
+    if (strcmp(key, "vvc") == 0 || strcmp(key, "quality") == 0 || strcmp(key, "rate") == 0 ||
+        strcmp(key, "block") == 0)
+        drop_cache(st);
     if (strcmp(key, "vvc") == 0) {
         vv_vvc *c = NULL;
         if (*value) {
