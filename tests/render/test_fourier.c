@@ -126,6 +126,34 @@ test_ct_head_equals_xray(void **state) {
     check_equals_xray("volumes/ct_head.nrrd", "ct_head");
 }
 
+static void
+test_object_transform(void **state) {
+    (void)state;
+    /* a rotated, anisotropically scaled object with a direction matrix: the
+     * view direction in index space has no zero component */
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_load(&v, vt_data("volumes/neghip.slc"), NULL));
+    const double d[9] = {0, -1, 0, 1, 0, 0, 0, 0, 1};
+    memcpy(v->direction, d, sizeof d);
+    v->spacing[2] = 1.7;
+    vv_world *w = world_for(v, 25, -35, 200);
+    vv_object *obj = w->objects[0];
+    obj->orientation = vv_quat_from_axis_angle(vv_vec3_make(1, 2, 0.5), vv_deg_to_rad(40));
+    obj->scale = vv_vec3_make(1.3, 0.8, 1.1);
+    vv_view_frame_box(&w->view, vv_world_bounds(w));
+    vv_tf_set_ramp(&obj->tf, 0, 60, 1, vv_vec3_make(1, 1, 1), 1);
+    vv_image *ref = render_named("raycast", w, NULL), *f = render_named("fourier", w, NULL);
+    const double psnr = vv_image_psnr(ref, f);
+    printf("transformed object: PSNR %.2f dB against the spatial X-ray\n", psnr);
+    save(ref, "transformed_xray.png");
+    save(f, "transformed_fourier.png");
+    assert_true(psnr >= 35);
+    vv_image_free(ref);
+    vv_image_free(f);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
 /* 32 x 32 x nz u8 volume: value `va` in the box [8, 23]^2 x [za, za + 15], `vb` in [8, 23]^2 x
  * [zb, zb + 15] (when zb >= 0), 0 elsewhere. */
 static vv_volume *
@@ -345,6 +373,7 @@ main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_neghip_equals_xray),
         cmocka_unit_test(test_ct_head_equals_xray),
+        cmocka_unit_test(test_object_transform),
         cmocka_unit_test(test_block_phantom),
         cmocka_unit_test(test_attenuation_front_counts_more),
         cmocka_unit_test(test_compressed_degrades_gracefully),
