@@ -140,6 +140,19 @@ vv_huff_make_dec(const vv_huff_table *t, vv_huff_dec *d) {
     if (canonical(t, NULL, d))
         return vv_error_set(VV_ERR_FORMAT, "Huffman table over-fills the code space");
     memcpy(d->vals, t->vals, sizeof(uint16_t) * (size_t)t->nvals);
+    /* every code of up to VV_HUFF_LOOK bits fills the entries it prefixes */
+    uint32_t code = 0;
+    int k = 0;
+    for (int l = 1; l <= VV_HUFF_MAX_LEN; l++) {
+        for (int c = 0; c < t->bits[l]; c++, k++, code++) {
+            if (l > VV_HUFF_LOOK)
+                continue;
+            const uint32_t first = code << (VV_HUFF_LOOK - l), n = 1u << (VV_HUFF_LOOK - l);
+            for (uint32_t e = 0; e < n; e++)
+                d->look[first + e] = (uint16_t)(t->vals[k] + 1024 * l);
+        }
+        code <<= 1;
+    }
     return VV_OK;
 }
 
@@ -218,8 +231,26 @@ vv_br_overrun(const vv_bitreader *r) {
 
 int
 vv_huff_decode(vv_bitreader *r, const vv_huff_dec *d) {
-    int32_t code = 0;
-    for (int l = 1; l <= VV_HUFF_MAX_LEN; l++) {
+    /* peek VV_HUFF_LOOK bits (zeros past the end, counted as overrun) */
+    while (r->nacc < VV_HUFF_LOOK) {
+        uint64_t byte = 0;
+        if (r->p < r->end)
+            byte = *r->p++;
+        else
+            r->overrun++;
+        r->acc = (r->acc << 8) | byte;
+        r->nacc += 8;
+    }
+    const uint32_t peek =
+        (uint32_t)(r->acc >> (r->nacc - VV_HUFF_LOOK)) & ((1u << VV_HUFF_LOOK) - 1);
+    const uint16_t e = d->look[peek];
+    if (e) {
+        r->nacc -= e >> 10;
+        return e & 1023;
+    }
+    /* a longer code: its first VV_HUFF_LOOK bits, then bit by bit */
+    int32_t code = (int32_t)vv_br_get(r, VV_HUFF_LOOK);
+    for (int l = VV_HUFF_LOOK + 1; l <= VV_HUFF_MAX_LEN; l++) {
         code = (code << 1) | (int32_t)vv_br_get(r, 1);
         if (d->maxcode[l] >= 0 && code <= d->maxcode[l] && code >= d->mincode[l])
             return d->vals[d->valptr[l] + code - d->mincode[l]];

@@ -24,8 +24,11 @@ typedef struct vv_huff_enc {
     uint8_t len[VV_HUFF_MAX_SYMS];
 } vv_huff_enc;
 
-/** Decoder view (Annex F.2.2.3). */
+#define VV_HUFF_LOOK 9 /* bits decoded by one table lookup */
+
+/** Decoder view (Annex F.2.2.3), with a lookup table for codes of up to 9 bits. */
 typedef struct vv_huff_dec {
+    uint16_t look[1 << VV_HUFF_LOOK]; /* symbol + 1024 * length, or 0: longer code */
     int32_t mincode[VV_HUFF_MAX_LEN + 1];
     int32_t maxcode[VV_HUFF_MAX_LEN + 2]; /* -1: no code of that length */
     int valptr[VV_HUFF_MAX_LEN + 1];

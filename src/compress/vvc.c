@@ -174,9 +174,71 @@ vv_vvc_value_scale(const vv_volume *v, double *offset, double *unit) {
 /* ---------------------------------------------------------------------- */
 /* Forward transform of every subcube                                       */
 
-static inline int
-clampi(int x, int hi) {
-    return x < hi ? x : hi;
+/* Voxel n of a row starting at element `base`, as double. */
+static inline double
+voxel_at(const vv_volume *v, size_t idx) {
+    switch (v->type) {
+    case VV_U8:
+        return ((const uint8_t *)v->data)[idx];
+    case VV_I8:
+        return ((const int8_t *)v->data)[idx];
+    case VV_U16:
+        return ((const uint16_t *)v->data)[idx];
+    case VV_I16:
+        return ((const int16_t *)v->data)[idx];
+    case VV_U32:
+        return ((const uint32_t *)v->data)[idx];
+    case VV_I32:
+        return ((const int32_t *)v->data)[idx];
+    case VV_F32:
+        return ((const float *)v->data)[idx];
+    case VV_F64:
+        return ((const double *)v->data)[idx];
+    }
+    return 0;
+}
+
+/* Writes n values (rounded and clamped to the native type; NaN as 0) at element idx. */
+static void
+store_row(vv_volume *v, size_t idx, const float *vals, int n) {
+#define VVC_STORE(T, LO, HI)                                                                       \
+    do {                                                                                           \
+        T *d = (T *)v->data + idx;                                                                 \
+        for (int i = 0; i < n; i++) {                                                              \
+            double x = vals[i];                                                                    \
+            x = x == x ? floor(x + 0.5) : 0;                                                       \
+            d[i] = (T)(x < (LO) ? (LO) : x > (HI) ? (HI) : x);                                     \
+        }                                                                                          \
+    } while (0)
+    switch (v->type) {
+    case VV_U8:
+        VVC_STORE(uint8_t, 0, 255);
+        break;
+    case VV_I8:
+        VVC_STORE(int8_t, -128, 127);
+        break;
+    case VV_U16:
+        VVC_STORE(uint16_t, 0, 65535);
+        break;
+    case VV_I16:
+        VVC_STORE(int16_t, -32768, 32767);
+        break;
+    case VV_U32:
+        VVC_STORE(uint32_t, 0, 4294967295.0);
+        break;
+    case VV_I32:
+        VVC_STORE(int32_t, -2147483648.0, 2147483647.0);
+        break;
+    case VV_F32:
+        for (int i = 0; i < n; i++)
+            ((float *)v->data)[idx + (size_t)i] = vals[i];
+        break;
+    case VV_F64:
+        for (int i = 0; i < n; i++)
+            ((double *)v->data)[idx + (size_t)i] = vals[i];
+        break;
+    }
+#undef VVC_STORE
 }
 
 vv_status
@@ -228,16 +290,22 @@ vv_vvc_spectra(const vv_volume *v, int M, int threads, float **spectra, double *
             const int bx = (int)(s % nb[0]), by = (int)((s / nb[0]) % nb[1]),
                       bz = (int)(s / ((long)nb[0] * nb[1]));
             for (int z = 0; z < M; z++)
-                for (int y = 0; y < M; y++)
-                    for (int x = 0; x < M; x++) {
-                        const int i = bx * M + x, j = by * M + y, k = bz * M + z;
-                        float val = 0;
-                        if (i < v->dims[0] && j < v->dims[1] && k < v->dims[2]) {
-                            double d = vv_volume_get(v, i, j, k);
-                            val = d == d ? (float)((d - off) * inv) : 0.0f;
+                for (int y = 0; y < M; y++) {
+                    const int j = by * M + y, k = bz * M + z;
+                    float *row = in + (z * M + y) * M;
+                    int x = 0;
+                    if (j < v->dims[1] && k < v->dims[2]) {
+                        const size_t base =
+                            ((size_t)k * v->dims[1] + (size_t)j) * v->dims[0] + (size_t)bx * M;
+                        const int nx = v->dims[0] - bx * M < M ? v->dims[0] - bx * M : M;
+                        for (; x < nx; x++) {
+                            const double d = voxel_at(v, base + (size_t)x);
+                            row[x] = d == d ? (float)((d - off) * inv) : 0.0f;
                         }
-                        in[(z * M + y) * M + x] = val;
                     }
+                    for (; x < M; x++)
+                        row[x] = 0; /* padding: the minimum */
+                }
             fftwf_execute_dft_r2c(plan, in, (fftwf_complex *)sp);
             memcpy(out + (size_t)s * per, sp, sizeof(float) * per);
             if (progress && progress->fn) {
@@ -264,7 +332,6 @@ vv_vvc_spectra(const vv_volume *v, int M, int threads, float **spectra, double *
         return cancelled == 2 ? vv_error_set(VV_ERR_NOMEM, "out of memory")
                               : vv_error_set(VV_ERR_CANCELLED, "cancelled");
     }
-    (void)clampi;
     *spectra = out;
     return VV_OK;
 }
@@ -291,9 +358,9 @@ amp_bits(int64_t v, int size) {
 
 /* Quantises one subcube's spectrum to N integers in scan order. */
 static void
-quantise(const vvc_scan *sc, const float *sp, const float *step_abs, int64_t *q) {
+quantise(const vvc_scan *sc, const float *sp, const double *inv_step, int64_t *q) {
     for (int e = 0; e < sc->N; e++) {
-        const double x = (double)sp[sc->entry[e]] / (double)step_abs[e];
+        const double x = (double)sp[sc->entry[e]] * inv_step[e];
         q[e] = x >= 0 ? (int64_t)(x + 0.5) : -(int64_t)(-x + 0.5);
     }
 }
@@ -534,6 +601,11 @@ gather_stats(const enc *en, const float *step_abs, uint64_t *dcf, uint64_t *acf,
     memset(dcf, 0, sizeof(uint64_t) * VVC_DC_SYMS);
     memset(acf, 0, sizeof(uint64_t) * VVC_AC_SYMS);
     *amp = 0;
+    double *inv = malloc(sizeof(double) * (size_t)en->sc->N);
+    if (!inv)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    for (int e = 0; e < en->sc->N; e++)
+        inv[e] = 1.0 / (double)step_abs[e];
     int failed = 0;
 #pragma omp parallel num_threads(en->threads)
     {
@@ -545,7 +617,7 @@ gather_stats(const enc *en, const float *step_abs, uint64_t *dcf, uint64_t *acf,
         for (int s = 0; s < en->nsub; s++) {
             if (!lac || !q)
                 continue;
-            quantise(en->sc, en->spectra + (size_t)s * en->per, step_abs, q);
+            quantise(en->sc, en->spectra + (size_t)s * en->per, inv, q);
             symbolise(q, en->sc->N, &c);
         }
 #pragma omp critical(vvc_stats)
@@ -563,6 +635,7 @@ gather_stats(const enc *en, const float *step_abs, uint64_t *dcf, uint64_t *acf,
         free(lac);
         free(q);
     }
+    free(inv);
     return failed ? vv_error_set(VV_ERR_NOMEM, "out of memory") : VV_OK;
 }
 
@@ -638,6 +711,13 @@ encode_file(const enc *en, const vv_volume *v, int M, double quality, double slo
     vv_huff_build(acf, VVC_AC_SYMS, &t[1]);
     if ((s = vv_huff_make_enc(&t[0], &e[0])) != VV_OK || (s = vv_huff_make_enc(&t[1], &e[1])))
         goto done;
+    double *inv = malloc(sizeof(double) * (size_t)sc->N);
+    if (!inv) {
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    for (int i = 0; i < sc->N; i++)
+        inv[i] = 1.0 / (double)step_abs[i];
     int failed = 0;
     int cancelled = 0;
     long done_n = 0;
@@ -651,7 +731,7 @@ encode_file(const enc *en, const vv_volume *v, int M, double quality, double slo
                 continue;
             }
             sym_counter c = {NULL, NULL, 0, &e[0], &e[1], 0, &streams[k]};
-            quantise(sc, en->spectra + (size_t)k * en->per, step_abs, q);
+            quantise(sc, en->spectra + (size_t)k * en->per, inv, q);
             symbolise(q, sc->N, &c);
             vv_bw_flush(&streams[k]);
             if (streams[k].failed)
@@ -667,6 +747,7 @@ encode_file(const enc *en, const vv_volume *v, int M, double quality, double slo
         }
         free(q);
     }
+    free(inv);
     if (failed) {
         s = vv_error_set(VV_ERR_NOMEM, "out of memory");
         goto done;
@@ -1310,6 +1391,7 @@ vv_vvc_decompress(vv_volume **out, const vv_vvc *c, int threads, const vv_progre
             }
             subcube_values(c, sp, vals);
             const int bx = k % nb[0], by = (k / nb[0]) % nb[1], bz = k / (nb[0] * nb[1]);
+            const int nx = v->dims[0] - bx * M < M ? v->dims[0] - bx * M : M;
             for (int z = 0; z < M; z++) {
                 const int kk = bz * M + z;
                 if (kk >= v->dims[2])
@@ -1318,12 +1400,9 @@ vv_vvc_decompress(vv_volume **out, const vv_vvc *c, int threads, const vv_progre
                     const int jj = by * M + y;
                     if (jj >= v->dims[1])
                         break;
-                    for (int x = 0; x < M; x++) {
-                        const int ii = bx * M + x;
-                        if (ii >= v->dims[0])
-                            break;
-                        vv_volume_set(v, ii, jj, kk, vals[(z * M + y) * M + x]);
-                    }
+                    store_row(v,
+                              ((size_t)kk * v->dims[1] + (size_t)jj) * v->dims[0] + (size_t)bx * M,
+                              vals + (z * M + y) * M, nx);
                 }
             }
             if (progress && progress->fn) {
