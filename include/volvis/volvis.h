@@ -5,6 +5,7 @@
 #ifndef VOLVIS_VOLVIS_H
 #define VOLVIS_VOLVIS_H
 
+#include "compress.h"
 #include "core.h"
 #include "image.h"
 #include "io.h"
