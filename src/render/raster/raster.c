@@ -49,11 +49,13 @@ typedef struct rs_light {
  * with their capacity between frames. */
 typedef struct rs_draw {
     const vv_mesh *mesh;
-    uint32_t base; /* visibility id of triangle 0 */
-    float *wpos;   /* 3 * n_vertices, world */
-    float *wnrm;   /* 3 * n_vertices, world, unit */
-    float *vcol;   /* 3 * n_vertices Gouraud colours */
-    size_t cap_v;
+    uint32_t base;    /* visibility id of triangle 0 */
+    const float *nrm; /* object-space vertex normals: the mesh's, or own_nrm */
+    float *own_nrm;   /* 3 * n_vertices normals computed for a mesh without */
+    float *vcol;      /* 3 * n_vertices Gouraud colours */
+    size_t cap_nrm, cap_col;
+    float M[3][4]; /* object to world */
+    float N[3][3]; /* normals: inverse transpose of M's linear part */
     vv_raster_shading shading;
     int lit;
     float base_col[3], amb[3];
@@ -73,7 +75,7 @@ typedef struct rs_stri {
     uint32_t prim;  /* triangle index in the draw */
     uint32_t lam;   /* index of 9 floats in the chunk's lams (rows: screen vertices), or RS_NONE */
     uint32_t flags; /* bit i: edge v_i -> v_(i+1) is an original edge; RS_SWAPPED */
-    int px0, px1, py0, py1; /* pixel bounding box, clamped to the image */
+    int16_t px0, px1, py0, py1; /* pixel bounding box, clamped to the image */
 } rs_stri;
 
 typedef struct rs_chunk {
@@ -114,14 +116,16 @@ struct vv_raster {
     vv_raster_cull cull;
     vv_plane planes[2 * VV_MAX_CUT_PLANES];
     int n_planes;
+    double oplanes[2 * VV_MAX_CUT_PLANES][4]; /* the cut planes in the object space of a draw */
     /* frame */
     rs_draw *draws;
     int n_draws, cap_draws;
     uint64_t next_base;
     size_t drawn;
     /* scratch of one draw */
-    float *clip;  /* 4 * n_vertices */
-    uint32_t *oc; /* outcodes */
+    float *clip;         /* 4 * n_vertices */
+    uint32_t *oc;        /* outcodes */
+    struct rs_svert *sv; /* screen positions of the vertices with no outcode */
     size_t cap_scratch;
     rs_chunk *chunks;
     int n_chunks;
@@ -188,8 +192,7 @@ vv_raster_free(vv_raster *r) {
     if (!r)
         return;
     for (int i = 0; i < r->cap_draws; i++) {
-        free(r->draws[i].wpos);
-        free(r->draws[i].wnrm);
+        free(r->draws[i].own_nrm);
         free(r->draws[i].vcol);
     }
     free(r->draws);
@@ -198,6 +201,7 @@ vv_raster_free(vv_raster *r) {
     free(r->chunks);
     free(r->clip);
     free(r->oc);
+    free(r->sv);
     free(r->pix);
     free(r);
 }
@@ -423,6 +427,15 @@ light_eval(const rs_draw *d, const float p[3], const float nin[3], float out[3])
     out[2] = db * d->base_col[2] + sb;
 }
 
+/* World position and (unnormalised) normal of an object-space point. */
+static inline void
+to_world(const rs_draw *d, const float p[3], const float n[3], float pw[3], float nw[3]) {
+    for (int k = 0; k < 3; k++) {
+        pw[k] = d->M[k][0] * p[0] + d->M[k][1] * p[1] + d->M[k][2] * p[2] + d->M[k][3];
+        nw[k] = d->N[k][0] * n[0] + d->N[k][1] * n[1] + d->N[k][2] * n[2];
+    }
+}
+
 static void
 prepare_draw_shading(const vv_raster *r, rs_draw *d) {
     const vv_material *m = &r->mat;
@@ -468,7 +481,7 @@ prepare_draw_shading(const vv_raster *r, rs_draw *d) {
 
 typedef struct rs_cvert {
     double c[4]; /* clip coordinates */
-    double p[3]; /* world position (cut planes) */
+    double p[3]; /* object-space position (cut planes) */
     float lam[3];
     int edge; /* the polygon edge from this vertex to the next is an original edge */
 } rs_cvert;
@@ -482,7 +495,6 @@ typedef struct rs_setup {
     int cull_front; /* discard screen-counter-clockwise-in-world (front) triangles */
     int cull_back;
     int wire;
-    float W2, H2;
 } rs_setup;
 
 static inline int
@@ -505,60 +517,46 @@ top_left(int64_t dx, int64_t dy) {
     return dy < 0 || (dy == 0 && dx > 0);
 }
 
-/* Projects, snaps, culls and bins one triangle of clip-space vertices. lam
- * (may be NULL: the identity) gives each vertex's barycentric coordinates in
- * the original triangle; edges: bit i for the edge v_i -> v_(i+1). */
+/* A vertex on screen: 1/256-pixel position (y down), depth key, 1/w. */
+typedef struct rs_svert {
+    int32_t X, Y;
+    float key, iw;
+} rs_svert;
+
+/* Rounds half away from zero (no libm call, same result everywhere). */
+static inline int32_t
+snap(double v) {
+    v *= RS_SUB;
+    return (int32_t)(v >= 0 ? v + 0.5 : v - 0.5);
+}
+
+/* Screen position of a clip-space vertex inside the guard band. */
+static inline void
+project(const vv_raster *r, const double c[4], rs_svert *o) {
+    const double iw = r->persp ? 1.0 / c[3] : 1.0;
+    o->X = snap((c[0] * iw + 1.0) * (0.5 * r->w));
+    o->Y = snap((1.0 - c[1] * iw) * (0.5 * r->h));
+    o->key = (float)(r->persp ? iw : -c[2]);
+    o->iw = (float)iw;
+}
+
+/* Culls and bins one screen triangle. lam (may be NULL: the identity) gives
+ * each vertex's barycentric coordinates in the original triangle; edges:
+ * bit i for the edge v_i -> v_(i+1). */
 static void
-emit_triangle(const rs_setup *s, rs_chunk *ch, double c[3][4], float lam[3][3], uint32_t prim,
-              uint32_t edges) {
+emit_triangle(const rs_setup *s, rs_chunk *ch, const rs_svert *v0, const rs_svert *v1,
+              const rs_svert *v2, float lam[3][3], uint32_t prim, uint32_t edges) {
     const vv_raster *r = s->r;
-    rs_stri t;
-    int64_t X[3], Y[3];
-    for (int i = 0; i < 3; i++) {
-        const double iw = r->persp ? 1.0 / c[i][3] : 1.0;
-        const double sx = (c[i][0] * iw + 1.0) * s->W2;
-        const double sy = (1.0 - c[i][1] * iw) * s->H2;
-        X[i] = (int64_t)llrint(sx * RS_SUB);
-        Y[i] = (int64_t)llrint(sy * RS_SUB);
-        t.key[i] = (float)(r->persp ? iw : -c[i][2]);
-        t.iw[i] = (float)iw;
-    }
-    int64_t A = (X[1] - X[0]) * (Y[2] - Y[0]) - (Y[1] - Y[0]) * (X[2] - X[0]);
-    if (A == 0)
-        return;
-    /* y points down on screen: a triangle counter-clockwise in the image
-     * (front facing) has a negative area here */
-    const int front = A < 0;
-    if ((front && s->cull_front) || (!front && s->cull_back))
-        return;
-    int order[3] = {0, 1, 2};
-    t.flags = edges;
-    if (A < 0) {
-        order[1] = 2;
-        order[2] = 1;
-        A = -A;
-        /* edges v0->v1, v1->v2, v2->v0 become v0->v2 (old bit 2), v2->v1 (1), v1->v0 (0) */
-        t.flags = ((edges & 1u) << 2) | (edges & 2u) | ((edges >> 2) & 1u);
-        if (!lam)
-            t.flags |= RS_SWAPPED;
-        float k1 = t.key[1], w1 = t.iw[1];
-        t.key[1] = t.key[2];
-        t.iw[1] = t.iw[2];
-        t.key[2] = k1;
-        t.iw[2] = w1;
-    }
-    int64_t minx = INT64_MAX, maxx = INT64_MIN, miny = INT64_MAX, maxy = INT64_MIN;
-    for (int i = 0; i < 3; i++) {
-        t.X[i] = (int32_t)X[order[i]];
-        t.Y[i] = (int32_t)Y[order[i]];
-        minx = X[i] < minx ? X[i] : minx;
-        maxx = X[i] > maxx ? X[i] : maxx;
-        miny = Y[i] < miny ? Y[i] : miny;
-        maxy = Y[i] > maxy ? Y[i] : maxy;
-    }
-    /* pixels whose centres (p + 1/2) lie in the box (arithmetic shifts floor) */
-    int64_t px0 = (minx - RS_SUB / 2 + RS_SUB - 1) >> 8, px1 = (maxx - RS_SUB / 2) >> 8;
-    int64_t py0 = (miny - RS_SUB / 2 + RS_SUB - 1) >> 8, py1 = (maxy - RS_SUB / 2) >> 8;
+    /* pixels whose centres (p + 1/2) lie in the bounding box (arithmetic
+     * shifts floor); most triangles of a fine mesh have none */
+    int32_t minx = v0->X < v1->X ? v0->X : v1->X, maxx = v0->X > v1->X ? v0->X : v1->X;
+    int32_t miny = v0->Y < v1->Y ? v0->Y : v1->Y, maxy = v0->Y > v1->Y ? v0->Y : v1->Y;
+    minx = v2->X < minx ? v2->X : minx;
+    maxx = v2->X > maxx ? v2->X : maxx;
+    miny = v2->Y < miny ? v2->Y : miny;
+    maxy = v2->Y > maxy ? v2->Y : maxy;
+    int px0 = (minx - RS_SUB / 2 + RS_SUB - 1) >> 8, px1 = (maxx - RS_SUB / 2) >> 8;
+    int py0 = (miny - RS_SUB / 2 + RS_SUB - 1) >> 8, py1 = (maxy - RS_SUB / 2) >> 8;
     if (s->wire) {
         px0--;
         py0--;
@@ -571,10 +569,38 @@ emit_triangle(const rs_setup *s, rs_chunk *ch, double c[3][4], float lam[3][3], 
     py1 = py1 > r->h - 1 ? r->h - 1 : py1;
     if (px0 > px1 || py0 > py1)
         return;
-    t.px0 = (int)px0;
-    t.px1 = (int)px1;
-    t.py0 = (int)py0;
-    t.py1 = (int)py1;
+    const int64_t A = ((int64_t)v1->X - v0->X) * ((int64_t)v2->Y - v0->Y) -
+                      ((int64_t)v1->Y - v0->Y) * ((int64_t)v2->X - v0->X);
+    if (A == 0)
+        return;
+    /* y points down on screen: a triangle counter-clockwise in the image
+     * (front facing) has a negative area here */
+    const int front = A < 0;
+    if ((front && s->cull_front) || (!front && s->cull_back))
+        return;
+    rs_stri t;
+    const rs_svert *v[3] = {v0, v1, v2};
+    int order[3] = {0, 1, 2};
+    t.flags = edges;
+    if (A < 0) {
+        order[1] = 2;
+        order[2] = 1;
+        /* edges v0->v1, v1->v2, v2->v0 become v0->v2 (old bit 2), v2->v1 (1), v1->v0 (0) */
+        t.flags = ((edges & 1u) << 2) | (edges & 2u) | ((edges >> 2) & 1u);
+        if (!lam)
+            t.flags |= RS_SWAPPED;
+    }
+    for (int i = 0; i < 3; i++) {
+        const rs_svert *q = v[order[i]];
+        t.X[i] = q->X;
+        t.Y[i] = q->Y;
+        t.key[i] = q->key;
+        t.iw[i] = q->iw;
+    }
+    t.px0 = (int16_t)px0;
+    t.px1 = (int16_t)px1;
+    t.py0 = (int16_t)py0;
+    t.py1 = (int16_t)py1;
     t.prim = prim;
     t.lam = RS_NONE;
     if (lam) {
@@ -588,8 +614,8 @@ emit_triangle(const rs_setup *s, rs_chunk *ch, double c[3][4], float lam[3][3], 
                 ch->lams[ch->n_lams + 3 * (size_t)i + (size_t)k] = lam[order[i]][k];
         ch->n_lams += 9;
     }
-    const int tx0 = (int)px0 / RS_TILE, tx1 = (int)px1 / RS_TILE;
-    const int ty0 = (int)py0 / RS_TILE, ty1 = (int)py1 / RS_TILE;
+    const int tx0 = px0 / RS_TILE, tx1 = px1 / RS_TILE;
+    const int ty0 = py0 / RS_TILE, ty1 = py1 / RS_TILE;
     const size_t nent = (size_t)(tx1 - tx0 + 1) * (size_t)(ty1 - ty0 + 1);
     if (!grow_buf((void **)&ch->tris, &ch->cap_tris, ch->n_tris + 1, sizeof *ch->tris) ||
         !grow_buf((void **)&ch->ent, &ch->cap_ent, 2 * (ch->n_ent + nent), sizeof(uint32_t))) {
@@ -625,8 +651,8 @@ plane_dist(const vv_raster *r, int k, const rs_cvert *v) {
     case 5:
         return g * c[3] + c[1];
     default: {
-        const vv_plane *pl = &r->planes[k - 6];
-        return pl->n.x * v->p[0] + pl->n.y * v->p[1] + pl->n.z * v->p[2] + pl->d;
+        const double *pl = r->oplanes[k - 6];
+        return pl[0] * v->p[0] + pl[1] * v->p[1] + pl[2] * v->p[2] + pl[3];
     }
     }
 }
@@ -640,7 +666,7 @@ clip_triangle(const rs_setup *s, rs_chunk *ch, const uint32_t vi[3], uint32_t pr
     int n = 3;
     for (int i = 0; i < 3; i++) {
         const float *cc = r->clip + 4 * (size_t)vi[i];
-        const float *p = s->d->wpos + 3 * (size_t)vi[i];
+        const float *p = s->d->mesh->positions + 3 * (size_t)vi[i];
         for (int k = 0; k < 4; k++)
             in[i].c[k] = cc[k];
         for (int k = 0; k < 3; k++) {
@@ -680,20 +706,20 @@ clip_triangle(const rs_setup *s, rs_chunk *ch, const uint32_t vi[3], uint32_t pr
         out = tmp;
         n = m;
     }
+    rs_svert sv[RS_MAX_POLY];
+    for (int i = 0; i < n; i++)
+        project(r, in[i].c, &sv[i]);
     for (int i = 1; i + 1 < n; i++) {
-        double c[3][4];
         float lam[3][3];
         const rs_cvert *v[3] = {&in[0], &in[i], &in[i + 1]};
-        for (int j = 0; j < 3; j++) {
-            memcpy(c[j], v[j]->c, sizeof c[j]);
+        for (int j = 0; j < 3; j++)
             memcpy(lam[j], v[j]->lam, sizeof lam[j]);
-        }
         uint32_t edges = (uint32_t)in[i].edge << 1;
         if (i == 1)
             edges |= (uint32_t)in[0].edge;
         if (i + 2 == n)
             edges |= (uint32_t)in[n - 1].edge << 2;
-        emit_triangle(s, ch, c, lam, prim, edges);
+        emit_triangle(s, ch, &sv[0], &sv[i], &sv[i + 1], lam, prim, edges);
     }
 }
 
@@ -717,15 +743,7 @@ setup_chunk(const rs_setup *s, rs_chunk *ch, size_t t0, size_t t1) {
             clip_triangle(s, ch, vi, (uint32_t)t, any);
             continue;
         }
-        double c[3][4];
-        for (int i = 0; i < 3; i++) {
-            const float *cc = r->clip + 4 * (size_t)vi[i];
-            c[i][0] = cc[0];
-            c[i][1] = cc[1];
-            c[i][2] = cc[2];
-            c[i][3] = cc[3];
-        }
-        emit_triangle(s, ch, c, NULL, (uint32_t)t, 7u);
+        emit_triangle(s, ch, &r->sv[vi[0]], &r->sv[vi[1]], &r->sv[vi[2]], NULL, (uint32_t)t, 7u);
     }
     if (ch->err)
         return;
@@ -924,35 +942,26 @@ vv_raster_draw_mesh(vv_raster *r, const vv_mesh *mesh, vv_mat4 model) {
     }
     rs_draw *d = &r->draws[r->n_draws];
     const int gouraud = r->shading == VV_RASTER_GOURAUD && r->lit;
-    if (nv > d->cap_v || (gouraud && !d->vcol)) {
-        size_t cap = nv > d->cap_v ? nv : d->cap_v;
-        free(d->wpos);
-        free(d->wnrm);
-        free(d->vcol);
-        d->wpos = malloc(3 * cap * sizeof(float));
-        d->wnrm = malloc(3 * cap * sizeof(float));
-        d->vcol = gouraud ? malloc(3 * cap * sizeof(float)) : NULL;
-        d->cap_v = cap;
-        if (!d->wpos || !d->wnrm || (gouraud && !d->vcol)) {
-            free(d->wpos);
-            free(d->wnrm);
-            free(d->vcol);
-            d->wpos = d->wnrm = d->vcol = NULL;
-            d->cap_v = 0;
-            return vv_error_set(VV_ERR_NOMEM, "raster: out of memory for %zu vertices", nv);
-        }
-    }
+    const int has_normals = mesh->normals != NULL;
+    if (!has_normals && !grow_buf((void **)&d->own_nrm, &d->cap_nrm, 3 * nv, sizeof(float)))
+        return vv_error_set(VV_ERR_NOMEM, "raster: out of memory for %zu normals", nv);
+    if (gouraud && !grow_buf((void **)&d->vcol, &d->cap_col, 3 * nv, sizeof(float)))
+        return vv_error_set(VV_ERR_NOMEM, "raster: out of memory for %zu colours", nv);
     if (nv > r->cap_scratch) {
         free(r->clip);
         free(r->oc);
+        free(r->sv);
         r->clip = malloc(4 * nv * sizeof(float));
         r->oc = malloc(nv * sizeof(uint32_t));
+        r->sv = malloc(nv * sizeof *r->sv);
         r->cap_scratch = nv;
-        if (!r->clip || !r->oc) {
+        if (!r->clip || !r->oc || !r->sv) {
             free(r->clip);
             free(r->oc);
+            free(r->sv);
             r->clip = NULL;
             r->oc = NULL;
+            r->sv = NULL;
             r->cap_scratch = 0;
             return vv_error_set(VV_ERR_NOMEM, "raster: out of memory for %zu vertices", nv);
         }
@@ -965,24 +974,35 @@ vv_raster_draw_mesh(vv_raster *r, const vv_mesh *mesh, vv_mat4 model) {
     d->base = (uint32_t)r->next_base;
     prepare_draw_shading(r, d);
 
-    /* 1. vertices */
-    const vv_mat4 M = model, MVP = vv_mat4_mul(r->vp, model);
+    /* 1. vertices (object coordinates: world positions and normals are
+     * only needed where a pixel is shaded) */
+    const vv_mat4 MVP = vv_mat4_mul(r->vp, model);
     const vv_mat4 N = vv_mat4_transpose(inv);
-    const int has_normals = mesh->normals != NULL;
+    for (int i = 0; i < 3; i++)
+        for (int k = 0; k < 4; k++) {
+            d->M[i][k] = (float)model.m[i][k];
+            if (k < 3)
+                d->N[i][k] = (float)N.m[i][k];
+        }
+    /* world cut plane n.x + c >= 0 with x = A p + t: (A^T n).p + (n.t + c) >= 0 */
     const int n_planes = r->n_planes;
+    for (int k = 0; k < n_planes; k++) {
+        const vv_plane *pl = &r->planes[k];
+        const double n[3] = {pl->n.x, pl->n.y, pl->n.z};
+        for (int a = 0; a < 3; a++)
+            r->oplanes[k][a] = n[0] * model.m[0][a] + n[1] * model.m[1][a] + n[2] * model.m[2][a];
+        r->oplanes[k][3] =
+            n[0] * model.m[0][3] + n[1] * model.m[1][3] + n[2] * model.m[2][3] + pl->d;
+    }
     const double gb = r->gb;
 #pragma omp parallel for schedule(static) num_threads(nt)
     for (size_t i = 0; i < nv; i++) {
         const float *p = mesh->positions + 3 * i;
         const double x = p[0], y = p[1], z = p[2];
-        double wp[3], c[4];
-        for (int k = 0; k < 3; k++)
-            wp[k] = M.m[k][0] * x + M.m[k][1] * y + M.m[k][2] * z + M.m[k][3];
+        double c[4];
         for (int k = 0; k < 4; k++)
             c[k] = MVP.m[k][0] * x + MVP.m[k][1] * y + MVP.m[k][2] * z + MVP.m[k][3];
-        float *wo = d->wpos + 3 * i, *co = r->clip + 4 * i;
-        for (int k = 0; k < 3; k++)
-            wo[k] = (float)wp[k];
+        float *co = r->clip + 4 * i;
         for (int k = 0; k < 4; k++)
             co[k] = (float)c[k];
         uint32_t oc = 0;
@@ -993,54 +1013,47 @@ vv_raster_draw_mesh(vv_raster *r, const vv_mesh *mesh, vv_mat4 model) {
         oc |= (uint32_t)(gb * c[3] - c[1] < 0) << 4;
         oc |= (uint32_t)(gb * c[3] + c[1] < 0) << 5;
         for (int k = 0; k < n_planes; k++) {
-            const vv_plane *pl = &r->planes[k];
-            oc |= (uint32_t)(pl->n.x * wo[0] + pl->n.y * wo[1] + pl->n.z * wo[2] + pl->d < 0)
-                  << (6 + k);
+            const double *pl = r->oplanes[k];
+            oc |= (uint32_t)(pl[0] * x + pl[1] * y + pl[2] * z + pl[3] < 0) << (6 + k);
         }
         r->oc[i] = oc;
-        if (has_normals) {
-            const float *n = mesh->normals + 3 * i;
-            double wn[3];
-            for (int k = 0; k < 3; k++)
-                wn[k] = N.m[k][0] * n[0] + N.m[k][1] * n[1] + N.m[k][2] * n[2];
-            double l = sqrt(wn[0] * wn[0] + wn[1] * wn[1] + wn[2] * wn[2]);
-            l = l > 0 ? 1.0 / l : 0.0;
-            for (int k = 0; k < 3; k++)
-                d->wnrm[3 * i + (size_t)k] = (float)(wn[k] * l);
+        if (!oc) {
+            /* from the stored floats, as the clipping path does */
+            const double cf[4] = {co[0], co[1], co[2], co[3]};
+            project(r, cf, &r->sv[i]);
         }
     }
     if (!has_normals) {
         /* area-weighted face normals, summed in triangle order (deterministic) */
-        memset(d->wnrm, 0, 3 * nv * sizeof(float));
+        float *on = d->own_nrm;
+        memset(on, 0, 3 * nv * sizeof(float));
         for (size_t t = 0; t < mesh->n_triangles; t++) {
             const uint32_t *v = mesh->triangles + 3 * t;
             if (v[0] >= nv || v[1] >= nv || v[2] >= nv)
                 return vv_error_set(VV_ERR_INVALID,
                                     "raster: triangle %zu has a vertex index out of range", t);
-            const float *a = d->wpos + 3 * (size_t)v[0], *b = d->wpos + 3 * (size_t)v[1],
-                        *c = d->wpos + 3 * (size_t)v[2];
+            const float *a = mesh->positions + 3 * (size_t)v[0],
+                        *b = mesh->positions + 3 * (size_t)v[1],
+                        *c = mesh->positions + 3 * (size_t)v[2];
             const float e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
             const float e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
             const float fn[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
                                  e1[0] * e2[1] - e1[1] * e2[0]};
             for (int j = 0; j < 3; j++)
                 for (int k = 0; k < 3; k++)
-                    d->wnrm[3 * (size_t)v[j] + (size_t)k] += fn[k];
+                    on[3 * (size_t)v[j] + (size_t)k] += fn[k];
         }
-#pragma omp parallel for schedule(static) num_threads(nt)
-        for (size_t i = 0; i < nv; i++) {
-            float *n = d->wnrm + 3 * i;
-            float l = sqrtf(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-            l = l > 0 ? 1.0f / l : 0.0f;
-            n[0] *= l;
-            n[1] *= l;
-            n[2] *= l;
-        }
+        d->nrm = on;
+    } else {
+        d->nrm = mesh->normals;
     }
     if (gouraud) {
 #pragma omp parallel for schedule(static) num_threads(nt)
-        for (size_t i = 0; i < nv; i++)
-            light_eval(d, d->wpos + 3 * i, d->wnrm + 3 * i, d->vcol + 3 * i);
+        for (size_t i = 0; i < nv; i++) {
+            float pw[3], nw[3];
+            to_world(d, mesh->positions + 3 * i, d->nrm + 3 * i, pw, nw);
+            light_eval(d, pw, nw, d->vcol + 3 * i);
+        }
     }
 
     /* 2. triangles, in chunks */
@@ -1053,8 +1066,6 @@ vv_raster_draw_mesh(vv_raster *r, const vv_mesh *mesh, vv_mat4 model) {
     su.cull_back = r->cull == (flip ? VV_RASTER_CULL_FRONT : VV_RASTER_CULL_BACK);
     su.cull_front = r->cull == (flip ? VV_RASTER_CULL_BACK : VV_RASTER_CULL_FRONT);
     su.wire = r->wireframe;
-    su.W2 = 0.5f * (float)r->w;
-    su.H2 = 0.5f * (float)r->h;
     const int nch = 4 * nt;
     const size_t ntri = mesh->n_triangles;
 #pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
@@ -1149,11 +1160,17 @@ vv_raster_finish(vv_raster *r, vv_image *out, int merge) {
             }
             for (int k = 0; k < 3; k++)
                 l[k] /= sum;
-            const float *P[3] = {d->wpos + 3 * (size_t)tv[0], d->wpos + 3 * (size_t)tv[1],
-                                 d->wpos + 3 * (size_t)tv[2]};
-            float p[3];
-            for (int k = 0; k < 3; k++)
-                p[k] = l[0] * P[0][k] + l[1] * P[1][k] + l[2] * P[2][k];
+            const float *pos = d->mesh->positions;
+            const float *P[3] = {pos + 3 * (size_t)tv[0], pos + 3 * (size_t)tv[1],
+                                 pos + 3 * (size_t)tv[2]};
+            const float *Nn[3] = {d->nrm + 3 * (size_t)tv[0], d->nrm + 3 * (size_t)tv[1],
+                                  d->nrm + 3 * (size_t)tv[2]};
+            float po[3], no[3], p[3], n[3];
+            for (int k = 0; k < 3; k++) {
+                po[k] = l[0] * P[0][k] + l[1] * P[1][k] + l[2] * P[2][k];
+                no[k] = l[0] * Nn[0][k] + l[1] * Nn[1][k] + l[2] * Nn[2][k];
+            }
+            to_world(d, po, no, p, n);
             float depth;
             if (d->persp) {
                 const float dx = p[0] - d->eye[0], dy = p[1] - d->eye[1], dz = p[2] - d->eye[2];
@@ -1179,15 +1196,14 @@ vv_raster_finish(vv_raster *r, vv_image *out, int merge) {
                     e2[k] = P[2][k] - P[0][k];
                     c[k] = (P[0][k] + P[1][k] + P[2][k]) * (1.0f / 3.0f);
                 }
+                /* the face normal transforms like a vertex normal (up to the
+                 * sign, which two-sided lighting ignores) */
                 const float fn[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
                                      e1[0] * e2[1] - e1[1] * e2[0]};
-                light_eval(d, c, fn, col);
+                float cw[3], fw[3];
+                to_world(d, c, fn, cw, fw);
+                light_eval(d, cw, fw, col);
             } else {
-                const float *Nn[3] = {d->wnrm + 3 * (size_t)tv[0], d->wnrm + 3 * (size_t)tv[1],
-                                      d->wnrm + 3 * (size_t)tv[2]};
-                float n[3];
-                for (int k = 0; k < 3; k++)
-                    n[k] = l[0] * Nn[0][k] + l[1] * Nn[1][k] + l[2] * Nn[2][k];
                 light_eval(d, p, n, col);
             }
             o[0] = col[0];
