@@ -78,9 +78,22 @@ typedef struct rs_stri {
     int16_t px0, px1, py0, py1; /* pixel bounding box, clamped to the image */
 } rs_stri;
 
+/* A triangle that covers a single pixel centre, already interpolated there
+ * (most triangles of a fine mesh): only the depth test is left. */
+typedef struct rs_frag {
+    uint32_t pixel; /* y * width + x */
+    float key;
+    uint32_t prim;
+    float l1, l2;
+} rs_frag;
+
+#define RS_FRAG 0x80000000u /* entry flag: the index is a fragment's */
+
 typedef struct rs_chunk {
     rs_stri *tris;
     size_t n_tris, cap_tris;
+    rs_frag *frags;
+    size_t n_frags, cap_frags;
     float *lams;
     size_t n_lams, cap_lams;
     uint32_t *ent; /* pairs (tile, triangle) */
@@ -181,6 +194,7 @@ vv_raster_new(vv_raster **out, int width, int height) {
 static void
 chunk_release(rs_chunk *c) {
     free(c->tris);
+    free(c->frags);
     free(c->lams);
     free(c->ent);
     free(c->sorted);
@@ -517,6 +531,35 @@ top_left(int64_t dx, int64_t dy) {
     return dy < 0 || (dy == 0 && dx > 0);
 }
 
+/* Writes a fragment of @p t with screen barycentric coordinates b0..b2: the
+ * perspective-correct barycentric coordinates of the original triangle's
+ * vertices 1 and 2. L: 3 x 3 rows mapping t's vertices to the original
+ * triangle's, or NULL (t is the original, vertices 1 and 2 swapped when
+ * RS_SWAPPED). */
+static inline void
+store_fragment(rs_pix *px, const rs_stri *t, const float *L, float key, float b0, float b1,
+               float b2, uint32_t id) {
+    const float q0 = b0 * t->iw[0], q1 = b1 * t->iw[1], q2 = b2 * t->iw[2];
+    const float inv = 1.0f / (q0 + q1 + q2);
+    float l1, l2;
+    if (!L) {
+        if (t->flags & RS_SWAPPED) {
+            l1 = q2 * inv;
+            l2 = q1 * inv;
+        } else {
+            l1 = q1 * inv;
+            l2 = q2 * inv;
+        }
+    } else {
+        l1 = (q0 * L[1] + q1 * L[4] + q2 * L[7]) * inv;
+        l2 = (q0 * L[2] + q1 * L[5] + q2 * L[8]) * inv;
+    }
+    px->key = key;
+    px->id = id;
+    px->l1 = l1;
+    px->l2 = l2;
+}
+
 /* A vertex on screen: 1/256-pixel position (y down), depth key, 1/w. */
 typedef struct rs_svert {
     int32_t X, Y;
@@ -603,6 +646,45 @@ emit_triangle(const rs_setup *s, rs_chunk *ch, const rs_svert *v0, const rs_sver
     t.py1 = (int16_t)py1;
     t.prim = prim;
     t.lam = RS_NONE;
+    if (!s->wire && px0 == px1 && py0 == py1) {
+        /* one candidate pixel centre: test and interpolate it now */
+        const int64_t Px = (int64_t)px0 * RS_SUB + RS_SUB / 2,
+                      Py = (int64_t)py0 * RS_SUB + RS_SUB / 2;
+        int64_t E[3];
+        for (int e = 0; e < 3; e++) {
+            const int a = (e + 1) % 3, b = (e + 2) % 3;
+            const int64_t dx = (int64_t)t.X[b] - t.X[a], dy = (int64_t)t.Y[b] - t.Y[a];
+            E[e] = -dy * (Px - t.X[a]) + dx * (Py - t.Y[a]);
+            if (E[e] < 0 || (E[e] == 0 && !top_left(dx, dy)))
+                return;
+        }
+        const float invA = 1.0f / (float)(A < 0 ? -A : A);
+        const float b0 = (float)E[0] * invA, b1 = (float)E[1] * invA, b2 = (float)E[2] * invA;
+        float L[9];
+        if (lam)
+            for (int i = 0; i < 3; i++)
+                for (int k = 0; k < 3; k++)
+                    L[3 * i + k] = lam[order[i]][k];
+        rs_pix f;
+        store_fragment(&f, &t, lam ? L : NULL, b0 * t.key[0] + b1 * t.key[1] + b2 * t.key[2], b0,
+                       b1, b2, prim);
+        if (!grow_buf((void **)&ch->frags, &ch->cap_frags, ch->n_frags + 1, sizeof *ch->frags) ||
+            !grow_buf((void **)&ch->ent, &ch->cap_ent, 2 * (ch->n_ent + 1), sizeof(uint32_t))) {
+            ch->err = 1;
+            return;
+        }
+        rs_frag *fr = &ch->frags[ch->n_frags];
+        fr->pixel = (uint32_t)py0 * (uint32_t)r->w + (uint32_t)px0;
+        fr->key = f.key;
+        fr->prim = prim;
+        fr->l1 = f.l1;
+        fr->l2 = f.l2;
+        ch->ent[2 * ch->n_ent] = (uint32_t)((py0 / RS_TILE) * r->tx + px0 / RS_TILE);
+        ch->ent[2 * ch->n_ent + 1] = (uint32_t)ch->n_frags | RS_FRAG;
+        ch->n_ent++;
+        ch->n_frags++;
+        return;
+    }
     if (lam) {
         if (!grow_buf((void **)&ch->lams, &ch->cap_lams, ch->n_lams + 9, sizeof(float))) {
             ch->err = 1;
@@ -727,7 +809,7 @@ clip_triangle(const rs_setup *s, rs_chunk *ch, const uint32_t vi[3], uint32_t pr
 static void
 setup_chunk(const rs_setup *s, rs_chunk *ch, size_t t0, size_t t1) {
     const vv_raster *r = s->r;
-    ch->n_tris = ch->n_lams = ch->n_ent = 0;
+    ch->n_tris = ch->n_frags = ch->n_lams = ch->n_ent = 0;
     ch->err = 0;
     for (size_t t = t0; t < t1 && !ch->err; t++) {
         const uint32_t vi[3] = {s->tri[3 * t], s->tri[3 * t + 1], s->tri[3 * t + 2]};
@@ -743,7 +825,23 @@ setup_chunk(const rs_setup *s, rs_chunk *ch, size_t t0, size_t t1) {
             clip_triangle(s, ch, vi, (uint32_t)t, any);
             continue;
         }
-        emit_triangle(s, ch, &r->sv[vi[0]], &r->sv[vi[1]], &r->sv[vi[2]], NULL, (uint32_t)t, 7u);
+        const rs_svert *a = &r->sv[vi[0]], *b = &r->sv[vi[1]], *c = &r->sv[vi[2]];
+        if (!s->wire) {
+            /* the common case of a fine mesh, without a call: no pixel
+             * centre between the extreme x (or y) of the vertices */
+            int32_t lo = a->X < b->X ? a->X : b->X, hi = a->X > b->X ? a->X : b->X;
+            lo = c->X < lo ? c->X : lo;
+            hi = c->X > hi ? c->X : hi;
+            if (((lo - RS_SUB / 2 + RS_SUB - 1) >> 8) > ((hi - RS_SUB / 2) >> 8))
+                continue;
+            lo = a->Y < b->Y ? a->Y : b->Y;
+            hi = a->Y > b->Y ? a->Y : b->Y;
+            lo = c->Y < lo ? c->Y : lo;
+            hi = c->Y > hi ? c->Y : hi;
+            if (((lo - RS_SUB / 2 + RS_SUB - 1) >> 8) > ((hi - RS_SUB / 2) >> 8))
+                continue;
+        }
+        emit_triangle(s, ch, a, b, c, NULL, (uint32_t)t, 7u);
     }
     if (ch->err)
         return;
@@ -769,35 +867,11 @@ setup_chunk(const rs_setup *s, rs_chunk *ch, size_t t0, size_t t1) {
 /* ---------------------------------------------------------------------- */
 /* Scanning                                                                 */
 
-static inline void
-store_fragment(rs_pix *px, const rs_stri *t, const float *lams, float key, float b0, float b1,
-               float b2, uint32_t id) {
-    const float q0 = b0 * t->iw[0], q1 = b1 * t->iw[1], q2 = b2 * t->iw[2];
-    const float inv = 1.0f / (q0 + q1 + q2);
-    float l1, l2;
-    if (t->lam == RS_NONE) {
-        if (t->flags & RS_SWAPPED) {
-            l1 = q2 * inv;
-            l2 = q1 * inv;
-        } else {
-            l1 = q1 * inv;
-            l2 = q2 * inv;
-        }
-    } else {
-        const float *L = lams + 9 * (size_t)t->lam;
-        l1 = (q0 * L[1] + q1 * L[4] + q2 * L[7]) * inv;
-        l2 = (q0 * L[2] + q1 * L[5] + q2 * L[8]) * inv;
-    }
-    px->key = key;
-    px->id = id;
-    px->l1 = l1;
-    px->l2 = l2;
-}
-
 /* Fills the part of triangle @p t inside the tile rectangle. */
 static void
 scan_fill(vv_raster *r, const rs_stri *t, const float *lams, uint32_t id, int x0, int x1, int y0,
           int y1) {
+    const float *L = t->lam == RS_NONE ? NULL : lams + 9 * (size_t)t->lam;
     int64_t ax[3], ay[3], bias[3];
     for (int e = 0; e < 3; e++) {
         /* edge opposite vertex e: from v_(e+1) to v_(e+2) */
@@ -825,7 +899,7 @@ scan_fill(vv_raster *r, const rs_stri *t, const float *lams, uint32_t id, int x0
                 const float b2 = (float)(E2 - bias[2]) * invA;
                 const float key = b0 * t->key[0] + b1 * t->key[1] + b2 * t->key[2];
                 if (key > px->key)
-                    store_fragment(px, t, lams, key, b0, b1, b2, id);
+                    store_fragment(px, t, L, key, b0, b1, b2, id);
             }
             E0 += ax[0] * RS_SUB;
             E1 += ax[1] * RS_SUB;
@@ -842,6 +916,7 @@ scan_fill(vv_raster *r, const rs_stri *t, const float *lams, uint32_t id, int x0
 static void
 scan_wire(vv_raster *r, const rs_stri *t, const float *lams, uint32_t id, int x0, int x1, int y0,
           int y1) {
+    const float *L = t->lam == RS_NONE ? NULL : lams + 9 * (size_t)t->lam;
     const double A = ((double)t->X[1] - t->X[0]) * ((double)t->Y[2] - t->Y[0]) -
                      ((double)t->Y[1] - t->Y[0]) * ((double)t->X[2] - t->X[0]);
     for (int y = y0; y <= y1; y++) {
@@ -874,7 +949,7 @@ scan_wire(vv_raster *r, const rs_stri *t, const float *lams, uint32_t id, int x0
             }
             const float key = (float)(b[0] * t->key[0] + b[1] * t->key[1] + b[2] * t->key[2]);
             if (key > px->key && b[0] * t->iw[0] + b[1] * t->iw[1] + b[2] * t->iw[2] > 0)
-                store_fragment(px, t, lams, key, (float)b[0], (float)b[1], (float)b[2], id);
+                store_fragment(px, t, L, key, (float)b[0], (float)b[1], (float)b[2], id);
         }
     }
 }
@@ -1079,7 +1154,7 @@ vv_raster_draw_mesh(vv_raster *r, const vv_mesh *mesh, vv_mat4 model) {
                                 nv);
         if (r->chunks[c].err)
             return vv_error_set(VV_ERR_NOMEM, "raster: out of memory for triangles");
-        r->drawn += r->chunks[c].n_tris;
+        r->drawn += r->chunks[c].n_tris + r->chunks[c].n_frags;
     }
 
     /* 3. tiles */
@@ -1093,7 +1168,19 @@ vv_raster_draw_mesh(vv_raster *r, const vv_mesh *mesh, vv_mat4 model) {
         for (int c = 0; c < nch; c++) {
             const rs_chunk *ch = &r->chunks[c];
             for (uint32_t e = ch->off[tile]; e < ch->off[tile + 1]; e++) {
-                const rs_stri *t = &ch->tris[ch->sorted[e]];
+                const uint32_t idx = ch->sorted[e];
+                if (idx & RS_FRAG) {
+                    const rs_frag *f = &ch->frags[idx & ~RS_FRAG];
+                    rs_pix *px = &r->pix[f->pixel];
+                    if (f->key > px->key) {
+                        px->key = f->key;
+                        px->id = base + f->prim;
+                        px->l1 = f->l1;
+                        px->l2 = f->l2;
+                    }
+                    continue;
+                }
+                const rs_stri *t = &ch->tris[idx];
                 const int a0 = t->px0 > x0 ? t->px0 : x0, a1 = t->px1 < x1 ? t->px1 : x1;
                 const int b0 = t->py0 > y0 ? t->py0 : y0, b1 = t->py1 < y1 ? t->py1 : y1;
                 if (wire)
