@@ -13,6 +13,8 @@
 #include "model.h"
 #include "raster.h"
 #include "render.h"
+#include "measure.h"
+#include "surface.h"
 #include "volume.h"
 
 #endif
