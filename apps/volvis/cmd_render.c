@@ -72,7 +72,9 @@ cli_render_usage(FILE *out) {
             "  --quality Q      0 draft, 1 medium, 2 final (default 2)\n"
             "  --set KEY=VALUE  renderer-specific option (repeatable); raycast takes\n"
             "                   early_termination (0.99), gradient_budget_mb,\n"
-            "                   empty_space_skipping (1), simd (1); see docs/rendering.md\n"
+            "                   empty_space_skipping (1), simd (1); surface takes\n"
+            "                   shading (flat|gouraud|phong), wireframe (0), cull\n"
+            "                   (auto|back|none), segments (64); see docs/rendering.md\n"
             "  --alpha          write RGBA (coverage in the alpha channel); default RGB\n"
             "  -q, --quiet      no progress bar and no 'wrote' line\n"
             "  -h, --help       show this help\n"
@@ -87,6 +89,8 @@ cli_render_usage(FILE *out) {
             "Examples:\n"
             "  volvis render ../shared/data/volumes/ct_head.nrrd --tf 100:1500 -o head.png\n"
             "  volvis render ../shared/data/volumes/neghip.slc --mode mip --azimuth 30 -o mip.png\n"
+            "  volvis render ../shared/data/volumes/ct_head.nrrd --iso 400 --renderer surface \\\n"
+            "      --set shading=gouraud -o bone.png\n"
             "  volvis render scene.json --size 1024x1024 --azimuth 45 -o scene.png\n");
 }
 

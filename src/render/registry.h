@@ -6,5 +6,7 @@
 
 /** Direct volume ray casting (src/render/raycast). */
 extern const vv_renderer_ops vv_raycast_ops;
+/** Geometry rendering of isosurfaces and geometric objects (src/render/raster). */
+extern const vv_renderer_ops vv_surface_ops;
 
 #endif
