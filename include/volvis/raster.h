@@ -78,7 +78,7 @@ typedef struct vv_raster vv_raster;
  * A context for @p width x @p height pixels (1..VV_IMAGE_MAX_SIDE) with an
  * identity camera, no lights, ambient (1,1,1), background black, the
  * default material of vv_object_new_volume, Phong shading, no culling, no
- * wireframe, no cut planes, threads from vv_threads_get(). Errors:
+ * wireframe, no cut planes, no capping, threads from vv_threads_get(). Errors:
  * VV_ERR_INVALID (size), VV_ERR_NOMEM.
  */
 vv_status vv_raster_new(vv_raster **out, int width, int height);
@@ -155,6 +155,21 @@ void vv_raster_set_wireframe(vv_raster *r, int on);
  * Errors: VV_ERR_LIMIT (more than 2 * VV_MAX_CUT_PLANES), VV_ERR_INVALID.
  */
 vv_status vv_raster_set_cut_planes(vv_raster *r, const vv_cut_plane *planes, int n);
+
+/**
+ * Solid cut faces for later draws (the ray caster shows a cut volume as
+ * solid; a cut surface is open). With @p on, a pixel where a triangle is
+ * seen from behind, i.e. the view looks into the inside of a closed,
+ * outward-oriented surface through an opening, shows instead the face
+ * where the pixel's ray entered the solid: the last crossing into the
+ * half-spaces of the current cut planes and of @p bounds (0..6 extra
+ * half-spaces that also bound the solid, e.g. the faces of the volume an
+ * isosurface was extracted from, where Marching Cubes leaves the surface
+ * open), lit with that plane's normal in the current material. Only for
+ * surfaces that are closed up to those planes and whose triangles are
+ * counter-clockwise seen from outside. Errors: VV_ERR_INVALID.
+ */
+vv_status vv_raster_set_capping(vv_raster *r, int on, const vv_cut_plane *bounds, int n_bounds);
 
 /**
  * Draws the triangles of @p mesh placed by @p model (object to world) with

@@ -529,7 +529,7 @@ test_cut_planes(void **state) {
     b->cut_planes[0].normal = vv_vec3_make(0, 0, -1);
     vv_image *loc = render_t(r, w, &view, 0);
     write_png(loc, "cut_local");
-    long changed_a = 0, deeper_b = 0, covered_b = 0;
+    long changed_a = 0, cap_b = 0, covered_b = 0;
     for (int y = 0; y < H; y++)
         for (int x = 0; x < W; x++) {
             const size_t i = (size_t)y * W + (size_t)x;
@@ -541,16 +541,31 @@ test_cut_planes(void **state) {
                 covered_b++;
                 /* visible points lie in the kept half-space z <= 5 */
                 assert_true(100 - loc->depth[i] <= 5 + 1e-3);
-                deeper_b += loc->depth[i] > full->depth[i] + 1e-3;
+                /* the solid cut face z = 5, lit head on (ka 0.1 + kd 0.6 + ks 0.3) */
+                const double wx = x + 0.5 - W / 2.0 - 22, wy = H / 2.0 - y - 0.5;
+                if (wx * wx + wy * wy < 18.5 * 18.5) {
+                    cap_b++;
+                    assert_near(loc->depth[i], 95, 1e-3);
+                    assert_near(px(loc, x, y)[0], 1.0, 1e-3);
+                }
             }
         }
-    print_message("local cut: %ld pixels of b (%ld deeper), %ld pixels of a changed\n", covered_b,
-                  deeper_b, changed_a);
+    print_message("local cut: %ld pixels of b (%ld on the cut face), %ld pixels of a changed\n",
+                  covered_b, cap_b, changed_a);
     assert_int_equal(changed_a, 0);
-    /* looking into the cut sphere: its inside is seen through the hole, so
-     * the silhouette is the full disc */
     assert_true(labs(covered_b - (long)(VV_PI * 400)) < 60);
-    assert_true(deeper_b > 800);
+    assert_true(cap_b > 1000);
+    /* caps=0: the cut surface is open and its inside shows, deeper than the face */
+    vt_ok(vv_renderer_set_option(r, "caps", "0"));
+    vv_image *open = render_t(r, w, &view, 0);
+    write_png(open, "cut_local_open");
+    long deeper = 0;
+    for (int y = 0; y < H; y++)
+        for (int x = W / 2; x < W; x++)
+            deeper += px(open, x, y)[3] > 0.5f && open->depth[(size_t)y * W + (size_t)x] > 95.01f;
+    assert_true(deeper > 1000);
+    vv_image_free(open);
+    vt_ok(vv_renderer_set_option(r, "caps", "1"));
     /* global: x >= 0 removes sphere a and leaves sphere b's silhouette */
     b->n_cut_planes = 0;
     vt_ok(vv_world_add_cut_plane(w, vv_vec3_make(0, 0, 0), vv_vec3_make(1, 0, 0)));
@@ -1060,7 +1075,11 @@ sphere_volume(int n, double r) {
 }
 
 /* Renders @p w with the ray caster and the surface renderer; returns the
- * PSNR and the largest depth difference where both hit. */
+ * PSNR, the largest depth difference where both hit, the pixels hit by one
+ * only and the pixels hit by both whose depths differ by more than one
+ * voxel (1 world unit here). */
+static long cross_far;
+
 static double
 cross_check(vv_world *w, const vv_view *view, const char *name, double *depth_diff,
             long *coverage_diff) {
@@ -1075,12 +1094,14 @@ cross_check(vv_world *w, const vv_view *view, const char *name, double *depth_di
     write_png(b, n2);
     double worst = 0;
     long cov = 0;
+    cross_far = 0;
     for (int i = 0; i < view->width * view->height; i++) {
         int ha = a->rgba[4 * i + 3] > 0.5f, hb = b->rgba[4 * i + 3] > 0.5f;
         cov += ha != hb;
         if (ha && hb) {
             double d = fabs(a->depth[i] - b->depth[i]);
             worst = d > worst ? d : worst;
+            cross_far += d > 1;
         }
     }
     double psnr = vv_image_psnr(a, b);
@@ -1115,6 +1136,16 @@ test_iso_sphere_vs_raycast(void **state) {
     assert_true(psnr > 35);
     assert_true(dd < 0.2);
     assert_true(cov < 30);
+    /* cut by a plane: both show a solid cut face at the same place (shaded
+     * with the plane's normal here, with the volume's gradient by the ray
+     * caster, so only the shapes are compared) */
+    vt_ok(vv_world_add_cut_plane(w, vv_vec3_make(26, 23.5, 23.5), vv_vec3_make(-1, 0.3, -0.2)));
+    psnr = cross_check(w, &view, "iso_sphere_cut", &dd, &cov);
+    print_message("sphere r=18, cut: PSNR %.1f dB, depth difference <= %.3f, %ld pixels differ in "
+                  "coverage\n",
+                  psnr, dd, cov);
+    assert_true(dd < 0.3);
+    assert_true(cov < 40);
     vv_world_free(w);
     vv_volume_free(v);
 }
@@ -1144,10 +1175,22 @@ test_neghip_cross_check(void **state) {
         char name[64];
         snprintf(name, sizeof name, "neghip_iso%.0f", isos[k]);
         double psnr = cross_check(w, &w->view, name, &dd, &cov);
-        print_message("neghip iso %.0f: PSNR %.1f dB, depth difference <= %.3f voxels, %ld "
-                      "pixels differ in coverage\n",
-                      isos[k], psnr, dd, cov);
+        print_message("neghip iso %.0f: PSNR %.1f dB, %ld pixels differ in coverage, %ld in depth "
+                      "by more than a voxel\n",
+                      isos[k], psnr, cov, cross_far);
         assert_true(psnr >= 30);
+        assert_true(cross_far < 100);
+        assert_true(cov < 100);
+        /* cut through the middle: solid cut faces in both, in the same place
+         * (shaded differently: plane normal here, gradient in the ray caster) */
+        vt_ok(vv_world_add_cut_plane(w, vv_vec3_make(0, 0, 0), vv_vec3_make(0.3, -1, 0.2)));
+        snprintf(name, sizeof name, "neghip_iso%.0f_cut", isos[k]);
+        psnr = cross_check(w, &w->view, name, &dd, &cov);
+        print_message("neghip iso %.0f, cut: PSNR %.1f dB, %ld pixels differ in coverage, %ld in "
+                      "depth by more than a voxel\n",
+                      isos[k], psnr, cov, cross_far);
+        assert_true(cross_far < 100);
+        assert_true(cov < 100);
         vv_world_free(w);
     }
     vv_volume_free(v);

@@ -35,7 +35,9 @@
 #define RS_MAX_PLANES (6 + 2 * VV_MAX_CUT_PLANES)
 #define RS_MAX_POLY (3 + RS_MAX_PLANES + 1) /* each plane adds at most one vertex */
 #define RS_NONE 0xffffffffu
-#define RS_SWAPPED 8u /* flags: vertices 1 and 2 were swapped (unclipped triangles) */
+#define RS_SWAPPED 8u       /* flags: vertices 1 and 2 were swapped (unclipped triangles) */
+#define RS_BACK 0x80000000u /* visibility id and prim flag: the triangle is seen from behind */
+#define RS_MAX_CAP (2 * VV_MAX_CUT_PLANES + 6)
 
 typedef struct rs_light {
     int point;
@@ -54,8 +56,11 @@ typedef struct rs_draw {
     float *own_nrm;   /* 3 * n_vertices normals computed for a mesh without */
     float *vcol;      /* 3 * n_vertices Gouraud colours */
     size_t cap_nrm, cap_col;
-    float M[3][4]; /* object to world */
-    float N[3][3]; /* normals: inverse transpose of M's linear part */
+    int cap; /* show cut faces where the surface is seen from behind */
+    int n_cap;
+    float capp[RS_MAX_CAP][4]; /* world half-spaces n.x + d >= 0 bounding the solid */
+    float M[3][4];             /* object to world */
+    float N[3][3];             /* normals: inverse transpose of M's linear part */
     vv_raster_shading shading;
     int lit;
     float base_col[3], amb[3];
@@ -127,6 +132,9 @@ struct vv_raster {
     int lit, wireframe;
     vv_raster_shading shading;
     vv_raster_cull cull;
+    int capping;
+    int n_bounds;
+    vv_plane bounds[6];
     vv_plane planes[2 * VV_MAX_CUT_PLANES];
     int n_planes;
     double oplanes[2 * VV_MAX_CUT_PLANES][4]; /* the cut planes in the object space of a draw */
@@ -375,6 +383,20 @@ vv_raster_set_cut_planes(vv_raster *r, const vv_cut_plane *planes, int n) {
     return VV_OK;
 }
 
+vv_status
+vv_raster_set_capping(vv_raster *r, int on, const vv_cut_plane *bounds, int n_bounds) {
+    if (n_bounds < 0 || n_bounds > 6 || (n_bounds > 0 && !bounds))
+        return vv_error_set(VV_ERR_INVALID, "raster: %d bounding planes (0..6)", n_bounds);
+    for (int i = 0; i < n_bounds; i++)
+        if (!(vv_vec3_length(bounds[i].normal) > 0))
+            return vv_error_set(VV_ERR_INVALID, "raster: bounding plane %d has a zero normal", i);
+    for (int i = 0; i < n_bounds; i++)
+        r->bounds[i] = vv_plane_from_point_normal(bounds[i].point, bounds[i].normal);
+    r->n_bounds = n_bounds;
+    r->capping = on != 0;
+    return VV_OK;
+}
+
 size_t
 vv_raster_triangles_drawn(const vv_raster *r) {
     return r->drawn;
@@ -508,6 +530,7 @@ typedef struct rs_setup {
     size_t n_vertices;
     int cull_front; /* discard screen-counter-clockwise-in-world (front) triangles */
     int cull_back;
+    int flip; /* the model matrix or view mirrors: screen winding is reversed */
     int wire;
 } rs_setup;
 
@@ -621,6 +644,8 @@ emit_triangle(const rs_setup *s, rs_chunk *ch, const rs_svert *v0, const rs_sver
     const int front = A < 0;
     if ((front && s->cull_front) || (!front && s->cull_back))
         return;
+    const uint32_t back = front == s->flip ? RS_BACK : 0;
+    prim |= back;
     rs_stri t;
     const rs_svert *v[3] = {v0, v1, v2};
     int order[3] = {0, 1, 2};
@@ -1002,9 +1027,9 @@ vv_raster_draw_mesh(vv_raster *r, const vv_mesh *mesh, vv_mat4 model) {
     vv_mat4 inv = vv_mat4_inverse(model, &ok);
     if (!ok || !(fabs(det) > 0) || !isfinite(det))
         return vv_error_set(VV_ERR_INVALID, "raster: singular model matrix");
-    if (r->next_base + mesh->n_triangles >= RS_NONE)
+    if (r->next_base + mesh->n_triangles >= RS_BACK - 1)
         return vv_error_set(VV_ERR_LIMIT, "raster: more than %u triangles in one frame",
-                            RS_NONE - 1);
+                            RS_BACK - 2);
     const size_t nv = mesh->n_vertices;
     if (r->n_draws == r->cap_draws) {
         int nc = r->cap_draws ? 2 * r->cap_draws : 8;
@@ -1048,6 +1073,16 @@ vv_raster_draw_mesh(vv_raster *r, const vv_mesh *mesh, vv_mat4 model) {
     d->mesh = mesh;
     d->base = (uint32_t)r->next_base;
     prepare_draw_shading(r, d);
+    d->cap = r->capping;
+    d->n_cap = 0;
+    for (int k = 0; k < r->n_planes + r->n_bounds; k++) {
+        const vv_plane *pl = k < r->n_planes ? &r->planes[k] : &r->bounds[k - r->n_planes];
+        d->capp[d->n_cap][0] = (float)pl->n.x;
+        d->capp[d->n_cap][1] = (float)pl->n.y;
+        d->capp[d->n_cap][2] = (float)pl->n.z;
+        d->capp[d->n_cap][3] = (float)pl->d;
+        d->n_cap++;
+    }
 
     /* 1. vertices (object coordinates: world positions and normals are
      * only needed where a pixel is shaded) */
@@ -1140,6 +1175,7 @@ vv_raster_draw_mesh(vv_raster *r, const vv_mesh *mesh, vv_mat4 model) {
     int flip = (det < 0) != (det3(r->view) < 0);
     su.cull_back = r->cull == (flip ? VV_RASTER_CULL_FRONT : VV_RASTER_CULL_BACK);
     su.cull_front = r->cull == (flip ? VV_RASTER_CULL_BACK : VV_RASTER_CULL_FRONT);
+    su.flip = flip;
     su.wire = r->wireframe;
     const int nch = 4 * nt;
     const size_t ntri = mesh->n_triangles;
@@ -1198,6 +1234,59 @@ vv_raster_draw_mesh(vv_raster *r, const vv_mesh *mesh, vv_mat4 model) {
 /* ---------------------------------------------------------------------- */
 /* Shading                                                                  */
 
+/* The solid's cut face seen where the surface is seen from behind at the
+ * world point @p p, @p t from the eye: the ray entered the solid where it
+ * last crossed into the half-spaces that bound it. Writes that distance and
+ * the face's shaded colour; 0 when no bounding plane explains the view
+ * (the surface is then shown as it is). */
+static int
+cap_face(const rs_draw *d, const float p[3], float t, float *t_out, float col[3]) {
+    float dir[3];
+    if (d->persp) {
+        const float it = t > 0 ? 1.0f / t : 0.0f;
+        for (int k = 0; k < 3; k++)
+            dir[k] = (p[k] - d->eye[k]) * it;
+    } else {
+        memcpy(dir, d->fwd, sizeof dir);
+    }
+    float te = -INFINITY;
+    int best = -1;
+    for (int k = 0; k < d->n_cap; k++) {
+        const float *pl = d->capp[k];
+        const float nd = pl[0] * dir[0] + pl[1] * dir[1] + pl[2] * dir[2];
+        if (!(nd > 1e-6f))
+            continue; /* not entered along the ray */
+        const float sp = pl[0] * p[0] + pl[1] * p[1] + pl[2] * p[2] + pl[3];
+        const float tk = t - sp / nd;
+        if (tk > te) {
+            te = tk;
+            best = k;
+        }
+    }
+    if (best < 0 || !(te < t))
+        return 0;
+    float q[3], n[3];
+    if (te <= 0) {
+        /* the eye is inside the solid: the face is at the eye */
+        te = 0;
+        for (int k = 0; k < 3; k++) {
+            q[k] = p[k] - t * dir[k];
+            n[k] = -dir[k];
+        }
+    } else {
+        for (int k = 0; k < 3; k++) {
+            q[k] = p[k] + (te - t) * dir[k];
+            n[k] = d->capp[best][k];
+        }
+    }
+    if (d->lit)
+        light_eval(d, q, n, col);
+    else
+        memcpy(col, d->base_col, 3 * sizeof(float));
+    *t_out = te;
+    return 1;
+}
+
 static const rs_draw *
 find_draw(const vv_raster *r, uint32_t id) {
     int lo = 0, hi = r->n_draws - 1;
@@ -1236,8 +1325,9 @@ vv_raster_finish(vv_raster *r, vv_image *out, int merge) {
                 }
                 continue;
             }
-            const rs_draw *d = find_draw(r, px->id);
-            const uint32_t *tv = d->mesh->triangles + 3 * (size_t)(px->id - d->base);
+            const uint32_t id = px->id & ~RS_BACK;
+            const rs_draw *d = find_draw(r, id);
+            const uint32_t *tv = d->mesh->triangles + 3 * (size_t)(id - d->base);
             float l[3] = {1.0f - px->l1 - px->l2, px->l1, px->l2};
             /* wireframe pixels may lie up to half a pixel outside */
             float sum = 0;
@@ -1266,10 +1356,13 @@ vv_raster_finish(vv_raster *r, vv_image *out, int merge) {
                 depth = (p[0] - d->eye[0]) * d->fwd[0] + (p[1] - d->eye[1]) * d->fwd[1] +
                         (p[2] - d->eye[2]) * d->fwd[2];
             }
-            if (merge && !(depth < out->depth[i]))
-                continue;
             float col[3];
-            if (!d->lit) {
+            if ((px->id & RS_BACK) && d->cap && cap_face(d, p, depth, &depth, col)) {
+                if (merge && !(depth < out->depth[i]))
+                    continue;
+            } else if (merge && !(depth < out->depth[i])) {
+                continue;
+            } else if (!d->lit) {
                 memcpy(col, d->base_col, sizeof col);
             } else if (d->shading == VV_RASTER_GOURAUD && d->vcol) {
                 const float *C[3] = {d->vcol + 3 * (size_t)tv[0], d->vcol + 3 * (size_t)tv[1],

@@ -53,6 +53,7 @@ typedef struct sf_state {
     int wireframe;
     sf_cull cull;
     int segments;
+    int caps;
     sf_iso cache[SF_MAX_CACHE];
     int n_cache;
     sf_topo topo[SF_MAX_CACHE];
@@ -397,6 +398,31 @@ object_isovalue(const vv_object *obj, double *iso, vv_vec3 *color) {
     return 0;
 }
 
+/* The faces of a volume object's grid box [0, n - 1] as world half-spaces
+ * keeping the inside (axes of one voxel are left out). */
+static int
+volume_bounds(const vv_object *obj, vv_cut_plane out[6]) {
+    const vv_mat4 M = vv_object_index_to_world(obj);
+    int ok = 0;
+    const vv_mat4 NT = vv_mat4_transpose(vv_mat4_inverse(M, &ok));
+    if (!ok)
+        return 0;
+    int n = 0;
+    for (int a = 0; a < 3; a++) {
+        const int hi = obj->volume->dims[a] - 1;
+        if (hi < 1)
+            continue;
+        vv_vec3 e = vv_vec3_make(a == 0, a == 1, a == 2);
+        vv_vec3 nrm = vv_vec3_normalize(vv_mat4_mul_dir(NT, e));
+        vv_vec3 lo = vv_vec3_make(0, 0, 0), up = vv_vec3_scale(e, hi);
+        out[n].point = vv_mat4_mul_point(M, lo);
+        out[n++].normal = nrm;
+        out[n].point = vv_mat4_mul_point(M, up);
+        out[n++].normal = vv_vec3_scale(nrm, -1);
+    }
+    return n;
+}
+
 /* Topology of a mesh object's mesh, computed once per mesh. */
 static vv_status
 mesh_topo(sf_state *st, const vv_mesh *m, sf_topo **out) {
@@ -445,6 +471,7 @@ sf_create(void **state) {
     st->shading = VV_RASTER_PHONG;
     st->cull = SF_CULL_AUTO;
     st->segments = 64;
+    st->caps = 1;
     *state = st;
     return VV_OK;
 }
@@ -498,6 +525,9 @@ sf_set_option(void *state, const char *key, const char *value) {
         else
             return vv_error_set(VV_ERR_INVALID, "option cull: '%s' is not auto, back or none",
                                 value);
+    } else if (!strcmp(key, "caps")) {
+        if (!parse_bool(value, &st->caps))
+            return vv_error_set(VV_ERR_INVALID, "option caps: '%s' is not 0 or 1", value);
     } else if (!strcmp(key, "segments")) {
         char *end = NULL;
         long n = strtol(value, &end, 10);
@@ -507,7 +537,7 @@ sf_set_option(void *state, const char *key, const char *value) {
         st->segments = (int)n;
     } else {
         return vv_error_set(VV_ERR_INVALID,
-                            "unknown option '%s' (shading, wireframe, cull, segments)", key);
+                            "unknown option '%s' (shading, wireframe, cull, caps, segments)", key);
     }
     return VV_OK;
 }
@@ -634,7 +664,9 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         vv_material mat = obj->material;
         vv_mat4 model = vv_object_matrix(obj);
         const vv_mesh *mesh = NULL;
-        int closed = 0, positive = 1;
+        int closed = 0, positive = 1, solid = 0;
+        vv_cut_plane bounds[6];
+        int n_bounds = 0;
         if (obj->type == VV_OBJECT_VOLUME) {
             if (!obj->volume)
                 continue;
@@ -649,6 +681,10 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
             }
             mesh = c->mesh;
             closed = c->closed;
+            /* Marching Cubes leaves the surface open where it leaves the
+             * volume: the volume's faces bound the solid */
+            solid = 1;
+            n_bounds = volume_bounds(obj, bounds);
         } else if (obj->type == VV_OBJECT_MESH) {
             if (!obj->geometry.mesh)
                 continue;
@@ -660,6 +696,11 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
                     break;
                 closed = t->closed;
                 positive = t->positive;
+            } else if (np > 0 && st->caps) {
+                s = mesh_topo(st, mesh, &t);
+                if (s != VV_OK)
+                    break;
+                solid = t->closed && t->positive;
             }
         } else {
             int world = 0;
@@ -670,6 +711,7 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
                 break;
             }
             mesh = temp[n_temp++];
+            solid = closed;
             if (world)
                 model = vv_mat4_identity();
         }
@@ -677,6 +719,9 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         if (st->cull == SF_CULL_BACK || (st->cull == SF_CULL_AUTO && closed && np == 0))
             cull = positive ? VV_RASTER_CULL_BACK : VV_RASTER_CULL_FRONT;
         vv_raster_set_cull(ras, cull);
+        s = vv_raster_set_capping(ras, st->caps && solid, bounds, n_bounds);
+        if (s != VV_OK)
+            break;
         vv_raster_set_material(ras, &mat, obj->shading);
         s = vv_raster_draw_mesh(ras, mesh, model);
         if (s != VV_OK) {
