@@ -6,6 +6,8 @@
 
 /** Direct volume ray casting (src/render/raycast). */
 extern const vv_renderer_ops vv_raycast_ops;
+/** Geometry rendering of isosurfaces and geometric objects (src/render/raster). */
+extern const vv_renderer_ops vv_surface_ops;
 
 /** Compression-domain Fourier projection (src/render/fourier). */
 extern const vv_renderer_ops vv_fourier_ops;
