@@ -6,5 +6,7 @@
 
 /** Direct volume ray casting (src/render/raycast). */
 extern const vv_renderer_ops vv_raycast_ops;
+/** Volumetric ray tracing with global effects (src/render/raytrace). */
+extern const vv_renderer_ops vv_raytrace_ops;
 
 #endif
