@@ -962,7 +962,7 @@ shadow_ray(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start) {
 static float
 volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float pi[3],
                      const float pw[3]) {
-    if (!fr->st->shadow_grid)
+    if (!ob->sgrid[l]) /* isosurfaces, or shadow_grid=0: an exact shadow ray */
         return shadow_ray(fr, vv_vec3_make(pw[0], pw[1], pw[2]), &fr->lights[l], ob->vox);
     _Atomic uint32_t *g = ob->sgrid[l];
     float f[3];
