@@ -53,7 +53,7 @@ cli_render_usage(FILE *out) {
             "  --mode MODE      composite (default), mip (maximum intensity projection),\n"
             "                   minip (minimum intensity projection), xray (average\n"
             "                   along the ray) or iso (shaded isosurface); for a scene,\n"
-            "                   applies to every volume object\n"
+            "                   applies to every volume object (geometric objects have none)\n"
             "  --iso V          isovalue for --mode iso (alone it implies --mode iso)\n"
             "  --tf LO:HI       transfer function ramp from LO (transparent) to HI (opaque)\n"
             "                   in data values (default: from the histogram); for a scene,\n"
@@ -69,10 +69,15 @@ cli_render_usage(FILE *out) {
             "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
             "                   read INPUT as raw voxels (see 'volvis info --help')\n"
             "  --gamma G        8-bit conversion v^(1/G) (default 1: values unchanged)\n"
-            "  --quality Q      0 draft, 1 medium, 2 final (default 2)\n"
+            "  --quality Q      0 draft, 1 medium, 2 final (default 2); raytrace: 0 no\n"
+            "                   shadow or secondary rays, 1 one ray a pixel, 2 supersampled\n"
             "  --set KEY=VALUE  renderer-specific option (repeatable); raycast takes\n"
             "                   early_termination (0.99), gradient_budget_mb,\n"
-            "                   empty_space_skipping (1), simd (1); see docs/rendering.md\n"
+            "                   empty_space_skipping (1), simd (1); raytrace takes\n"
+            "                   shadows (1), max_depth (3), samples (2: 2x2 a pixel at\n"
+            "                   quality 2), jitter (0), seed (1), adaptive (1),\n"
+            "                   adaptive_threshold (0.05), parc (1), shadow_grid (1),\n"
+            "                   early_termination (0.99); see docs/rendering.md\n"
             "  --alpha          write RGBA (coverage in the alpha channel); default RGB\n"
             "  -q, --quiet      no progress bar and no 'wrote' line\n"
             "  -h, --help       show this help\n"
@@ -87,7 +92,8 @@ cli_render_usage(FILE *out) {
             "Examples:\n"
             "  volvis render ../shared/data/volumes/ct_head.nrrd --tf 100:1500 -o head.png\n"
             "  volvis render ../shared/data/volumes/neghip.slc --mode mip --azimuth 30 -o mip.png\n"
-            "  volvis render scene.json --size 1024x1024 --azimuth 45 -o scene.png\n");
+            "  volvis render scene.json --size 1024x1024 --azimuth 45 -o scene.png\n"
+            "  volvis render examples/head_mirror.json --renderer raytrace -o mirror.png\n");
 }
 
 static int
