@@ -56,6 +56,49 @@
 #define RT_EPS 1e-6                   /* relative ray offset off surfaces */
 
 /* ---------------------------------------------------------------------- */
+/* Vector helpers, inline (the library's are in another translation unit
+ * and sit on the hot path of every intersection)                            */
+
+static inline vv_vec3
+v3(double x, double y, double z) {
+    vv_vec3 r = {x, y, z};
+    return r;
+}
+static inline vv_vec3
+v3add(vv_vec3 a, vv_vec3 b) {
+    return v3(a.x + b.x, a.y + b.y, a.z + b.z);
+}
+static inline vv_vec3
+v3sub(vv_vec3 a, vv_vec3 b) {
+    return v3(a.x - b.x, a.y - b.y, a.z - b.z);
+}
+static inline vv_vec3
+v3scale(vv_vec3 a, double k) {
+    return v3(a.x * k, a.y * k, a.z * k);
+}
+static inline double
+v3dot(vv_vec3 a, vv_vec3 b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+static inline vv_vec3
+v3cross(vv_vec3 a, vv_vec3 b) {
+    return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+static inline double
+v3len(vv_vec3 a) {
+    return sqrt(v3dot(a, a));
+}
+static inline vv_vec3
+v3norm(vv_vec3 a) {
+    double l = v3len(a);
+    return l > 0 ? v3scale(a, 1.0 / l) : a;
+}
+static inline vv_vec3
+ray_at(const vv_ray *r, double t) {
+    return v3add(r->origin, v3scale(r->dir, t));
+}
+
+/* ---------------------------------------------------------------------- */
 /* Per-volume cache                                                          */
 
 typedef struct rt_cache {
@@ -116,7 +159,9 @@ typedef struct rt_vobj {
     int n_planes;
     vv_plane planes[2 * VV_MAX_CUT_PLANES];
     int gdim[3];                            /* shadow grid points per axis */
-    _Atomic uint32_t *sgrid[VV_MAX_LIGHTS]; /* bits of (T + 1), 0 = not yet traced */
+    _Atomic uint32_t *sgrid[VV_MAX_LIGHTS]; /* point lights: bits of (T + 1), 0 = not traced */
+    float *sweep[VV_MAX_LIGHTS];            /* directional lights: swept transmittance */
+    float lidx[VV_MAX_LIGHTS][3];           /* index-space direction to the light per world unit */
 } rt_vobj;
 
 /* Bounding volume hierarchy over a mesh's triangles (object space). */
@@ -473,16 +518,16 @@ ceil_pos(double x) {
 
 static inline vv_vec3
 xf_point(const double m[3][4], vv_vec3 p) {
-    return vv_vec3_make(m[0][0] * p.x + m[0][1] * p.y + m[0][2] * p.z + m[0][3],
-                        m[1][0] * p.x + m[1][1] * p.y + m[1][2] * p.z + m[1][3],
-                        m[2][0] * p.x + m[2][1] * p.y + m[2][2] * p.z + m[2][3]);
+    return v3(m[0][0] * p.x + m[0][1] * p.y + m[0][2] * p.z + m[0][3],
+              m[1][0] * p.x + m[1][1] * p.y + m[1][2] * p.z + m[1][3],
+              m[2][0] * p.x + m[2][1] * p.y + m[2][2] * p.z + m[2][3]);
 }
 
 static inline vv_vec3
 xf_dir(const double m[3][4], vv_vec3 d) {
-    return vv_vec3_make(m[0][0] * d.x + m[0][1] * d.y + m[0][2] * d.z,
-                        m[1][0] * d.x + m[1][1] * d.y + m[1][2] * d.z,
-                        m[2][0] * d.x + m[2][1] * d.y + m[2][2] * d.z);
+    return v3(m[0][0] * d.x + m[0][1] * d.y + m[0][2] * d.z,
+              m[1][0] * d.x + m[1][1] * d.y + m[1][2] * d.z,
+              m[2][0] * d.x + m[2][1] * d.y + m[2][2] * d.z);
 }
 
 static inline double
@@ -517,27 +562,27 @@ tri_hit(const float *P, const uint32_t *T, uint32_t ti, vv_vec3 o, vv_vec3 d, do
         double tmax, double *t, vv_vec3 *n) {
     const float *a = P + 3 * (size_t)T[3 * ti], *b = P + 3 * (size_t)T[3 * ti + 1],
                 *c = P + 3 * (size_t)T[3 * ti + 2];
-    vv_vec3 A = vv_vec3_make(a[0], a[1], a[2]);
-    vv_vec3 e1 = vv_vec3_make(b[0] - a[0], b[1] - a[1], b[2] - a[2]);
-    vv_vec3 e2 = vv_vec3_make(c[0] - a[0], c[1] - a[1], c[2] - a[2]);
-    vv_vec3 pv = vv_vec3_cross(d, e2);
-    double det = vv_vec3_dot(e1, pv);
+    vv_vec3 A = v3(a[0], a[1], a[2]);
+    vv_vec3 e1 = v3(b[0] - a[0], b[1] - a[1], b[2] - a[2]);
+    vv_vec3 e2 = v3(c[0] - a[0], c[1] - a[1], c[2] - a[2]);
+    vv_vec3 pv = v3cross(d, e2);
+    double det = v3dot(e1, pv);
     if (fabs(det) < 1e-300)
         return 0;
     double id = 1.0 / det;
-    vv_vec3 tv = vv_vec3_sub(o, A);
-    double u = vv_vec3_dot(tv, pv) * id;
+    vv_vec3 tv = v3sub(o, A);
+    double u = v3dot(tv, pv) * id;
     if (u < 0 || u > 1)
         return 0;
-    vv_vec3 qv = vv_vec3_cross(tv, e1);
-    double v = vv_vec3_dot(d, qv) * id;
+    vv_vec3 qv = v3cross(tv, e1);
+    double v = v3dot(d, qv) * id;
     if (v < 0 || u + v > 1)
         return 0;
-    double tt = vv_vec3_dot(e2, qv) * id;
+    double tt = v3dot(e2, qv) * id;
     if (!(tt > tmin && tt < tmax))
         return 0;
     *t = tt;
-    *n = vv_vec3_cross(e1, e2);
+    *n = v3cross(e1, e2);
     return 1;
 }
 
@@ -685,21 +730,21 @@ gobj_hit(const rt_gobj *g, const vv_ray *wr, double tmin, double tmax, double *t
     double th = INFINITY;
     switch (g->type) {
     case VV_OBJECT_PLANE: {
-        double dn = vv_vec3_dot(ge->normal, d);
+        double dn = v3dot(ge->normal, d);
         if (fabs(dn) < 1e-300)
             return 0;
-        th = vv_vec3_dot(ge->normal, vv_vec3_sub(ge->point, o)) / dn;
+        th = v3dot(ge->normal, v3sub(ge->point, o)) / dn;
         n = ge->normal;
         break;
     }
     case VV_OBJECT_POLYGON: {
-        double dn = vv_vec3_dot(g->plane.n, d);
+        double dn = v3dot(g->plane.n, d);
         if (fabs(dn) < 1e-300)
             return 0;
         th = -vv_plane_distance(g->plane, o) / dn;
         if (!(th > tmin && th < tmax))
             return 0;
-        vv_vec3 p = vv_vec3_add(o, vv_vec3_scale(d, th));
+        vv_vec3 p = v3add(o, v3scale(d, th));
         const int u = g->drop == 0 ? 1 : 0, v = g->drop == 2 ? 1 : 2;
         const double pu = v3get(p, u), pv = v3get(p, v);
         int inside = 0;
@@ -715,9 +760,8 @@ gobj_hit(const rt_gobj *g, const vv_ray *wr, double tmin, double tmax, double *t
         break;
     }
     case VV_OBJECT_SPHERE: {
-        vv_vec3 oc = vv_vec3_sub(o, ge->center);
-        double a = vv_vec3_dot(d, d), b = vv_vec3_dot(oc, d),
-               c = vv_vec3_dot(oc, oc) - ge->radius * ge->radius;
+        vv_vec3 oc = v3sub(o, ge->center);
+        double a = v3dot(d, d), b = v3dot(oc, d), c = v3dot(oc, oc) - ge->radius * ge->radius;
         double disc = b * b - a * c;
         if (disc < 0)
             return 0;
@@ -726,7 +770,7 @@ gobj_hit(const rt_gobj *g, const vv_ray *wr, double tmin, double tmax, double *t
         th = t0 > tmin ? t0 : t1;
         if (!(th > tmin && th < tmax))
             return 0;
-        n = vv_vec3_sub(vv_vec3_add(o, vv_vec3_scale(d, th)), ge->center);
+        n = v3sub(v3add(o, v3scale(d, th)), ge->center);
         break;
     }
     case VV_OBJECT_BOX: {
@@ -775,21 +819,19 @@ gobj_hit(const rt_gobj *g, const vv_ray *wr, double tmin, double tmax, double *t
             ax = a1;
             sg = s1;
         }
-        n = vv_vec3_make(ax == 0 ? sg : 0, ax == 1 ? sg : 0, ax == 2 ? sg : 0);
+        n = v3(ax == 0 ? sg : 0, ax == 1 ? sg : 0, ax == 2 ? sg : 0);
         break;
     }
     case VV_OBJECT_CYLINDER: {
-        vv_vec3 axis = vv_vec3_sub(ge->top, ge->base);
-        double h = vv_vec3_length(axis);
+        vv_vec3 axis = v3sub(ge->top, ge->base);
+        double h = v3len(axis);
         if (!(h > 0))
             return 0;
-        vv_vec3 a = vv_vec3_scale(axis, 1.0 / h);
-        vv_vec3 oc = vv_vec3_sub(o, ge->base);
-        double da = vv_vec3_dot(d, a), oa = vv_vec3_dot(oc, a);
-        vv_vec3 dp = vv_vec3_sub(d, vv_vec3_scale(a, da)),
-                op = vv_vec3_sub(oc, vv_vec3_scale(a, oa));
-        double A = vv_vec3_dot(dp, dp), B = vv_vec3_dot(op, dp),
-               C = vv_vec3_dot(op, op) - ge->radius * ge->radius;
+        vv_vec3 a = v3scale(axis, 1.0 / h);
+        vv_vec3 oc = v3sub(o, ge->base);
+        double da = v3dot(d, a), oa = v3dot(oc, a);
+        vv_vec3 dp = v3sub(d, v3scale(a, da)), op = v3sub(oc, v3scale(a, oa));
+        double A = v3dot(dp, dp), B = v3dot(op, dp), C = v3dot(op, op) - ge->radius * ge->radius;
         if (A > 1e-300) {
             double disc = B * B - A * C;
             if (disc >= 0) {
@@ -799,7 +841,7 @@ gobj_hit(const rt_gobj *g, const vv_ray *wr, double tmin, double tmax, double *t
                     double z = oa + ts[i] * da;
                     if (ts[i] > tmin && ts[i] < th && z >= 0 && z <= h) {
                         th = ts[i];
-                        n = vv_vec3_add(op, vv_vec3_scale(dp, ts[i]));
+                        n = v3add(op, v3scale(dp, ts[i]));
                     }
                 }
             }
@@ -809,10 +851,10 @@ gobj_hit(const rt_gobj *g, const vv_ray *wr, double tmin, double tmax, double *t
                 double tc = ((i ? h : 0) - oa) / da;
                 if (!(tc > tmin && tc < th))
                     continue;
-                vv_vec3 q = vv_vec3_add(op, vv_vec3_scale(dp, tc));
-                if (vv_vec3_dot(q, q) <= ge->radius * ge->radius) {
+                vv_vec3 q = v3add(op, v3scale(dp, tc));
+                if (v3dot(q, q) <= ge->radius * ge->radius) {
                     th = tc;
-                    n = i ? a : vv_vec3_scale(a, -1);
+                    n = i ? a : v3scale(a, -1);
                 }
             }
         }
@@ -829,10 +871,10 @@ gobj_hit(const rt_gobj *g, const vv_ray *wr, double tmin, double tmax, double *t
     if (!(th > tmin && th < tmax))
         return 0;
     *t = th;
-    vv_vec3 w = vv_vec3_make(g->nrm[0][0] * n.x + g->nrm[0][1] * n.y + g->nrm[0][2] * n.z,
-                             g->nrm[1][0] * n.x + g->nrm[1][1] * n.y + g->nrm[1][2] * n.z,
-                             g->nrm[2][0] * n.x + g->nrm[2][1] * n.y + g->nrm[2][2] * n.z);
-    *nw = vv_vec3_normalize(w);
+    vv_vec3 w = v3(g->nrm[0][0] * n.x + g->nrm[0][1] * n.y + g->nrm[0][2] * n.z,
+                   g->nrm[1][0] * n.x + g->nrm[1][1] * n.y + g->nrm[1][2] * n.z,
+                   g->nrm[2][0] * n.x + g->nrm[2][1] * n.y + g->nrm[2][2] * n.z);
+    *nw = v3norm(w);
     return 1;
 }
 
@@ -875,7 +917,7 @@ volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, do
          * into equal parts no longer than dt, sampled at their midpoints */
         double tau = 0;
         double t = r.t0;
-        const double ds = ob->vox > dt ? ob->vox : dt; /* shadows are smooth: a voxel a step */
+        const double ds = 2 * ob->vox > dt ? 2 * ob->vox : dt; /* shadows are smooth */
         while (t < r.t1) {
             float p[3];
             vray_point(&r, t, p);
@@ -944,22 +986,24 @@ volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, do
     return 1.0f - ob->lut[4 * (int)lut_index_f(ob, val)];
 }
 
-/* Transmittance from world point p towards light l, past every object that
- * casts shadows, starting @p start world units from p. */
+/* Transmittance from world point p towards light l over [start, limit]
+ * world units from p (limit INFINITY: up to the light), past every object
+ * that casts shadows. */
 static float
-shadow_ray(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start) {
+shadow_segment(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start, double limit) {
     vv_ray r;
     double tmax;
     if (l->point) {
-        vv_vec3 d = vv_vec3_sub(vv_vec3_make(l->pos[0], l->pos[1], l->pos[2]), p);
-        tmax = vv_vec3_length(d);
+        vv_vec3 d = v3sub(v3(l->pos[0], l->pos[1], l->pos[2]), p);
+        tmax = v3len(d);
         if (!(tmax > 0))
             return 1.0f;
-        r.dir = vv_vec3_scale(d, 1.0 / tmax);
+        r.dir = v3scale(d, 1.0 / tmax);
     } else {
-        r.dir = vv_vec3_make(l->dir[0], l->dir[1], l->dir[2]);
+        r.dir = v3(l->dir[0], l->dir[1], l->dir[2]);
         tmax = INFINITY;
     }
+    tmax = limit < tmax ? limit : tmax;
     r.origin = p;
     float T = 1.0f;
     const double eps = RT_EPS * fr->scene_size;
@@ -980,12 +1024,116 @@ shadow_ray(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start) {
     return T;
 }
 
+static float
+shadow_ray(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start) {
+    return shadow_segment(fr, p, l, start, INFINITY);
+}
+
+static inline vv_vec3
+index_to_world(const rt_vobj *ob, const double q[3]) {
+    return v3(ob->i2w[0][0] * q[0] + ob->i2w[0][1] * q[1] + ob->i2w[0][2] * q[2] + ob->i2w[0][3],
+              ob->i2w[1][0] * q[0] + ob->i2w[1][1] * q[1] + ob->i2w[1][2] * q[2] + ob->i2w[1][3],
+              ob->i2w[2][0] * q[0] + ob->i2w[2][1] * q[1] + ob->i2w[2][2] * q[2] + ob->i2w[2][3]);
+}
+
+/* The shadow grid of a directional light, swept layer by layer from the
+ * light's side (a light volume): a grid point's transmittance is that of
+ * the point one layer towards the light (bilinear in that layer) times the
+ * transmittance of the segment between them (shadow_segment: this volume,
+ * the other volumes and geometry). The first layer, and points whose
+ * upstream point leaves the grid, trace a whole shadow ray. */
+static vv_status
+sweep_light(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
+    const rt_light *lt = &fr->lights[l];
+    double li[3];
+    for (int a = 0; a < 3; a++)
+        li[a] =
+            ob->w2i[a][0] * lt->dir[0] + ob->w2i[a][1] * lt->dir[1] + ob->w2i[a][2] * lt->dir[2];
+    int A = 0;
+    for (int a = 1; a < 3; a++)
+        if (fabs(li[a]) > fabs(li[A]))
+            A = a;
+    if (!(fabs(li[A]) > 0))
+        return VV_OK;
+    const int B = (A + 1) % 3, Cc = (A + 2) % 3;
+    const int *gd = ob->gdim;
+    const size_t ng = (size_t)gd[0] * (size_t)gd[1] * (size_t)gd[2];
+    float *T = malloc(ng * sizeof *T);
+    if (!T)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for a shadow grid");
+    const double G = RT_SGRID, seg = G / fabs(li[A]);
+    const int up = li[A] > 0 ? 1 : -1; /* the layer towards the light */
+    const int first = up > 0 ? gd[A] - 1 : 0;
+    const int nb = gd[B], nc = gd[Cc];
+    for (int n = 0; n < gd[A]; n++) {
+        const int la = first - up * n;
+#pragma omp parallel for schedule(dynamic, 16) num_threads(nt)
+        for (int bc = 0; bc < nb * nc; bc++) {
+            int id[3];
+            id[A] = la;
+            id[B] = bc % nb;
+            id[Cc] = bc / nb;
+            const double p[3] = {id[0] * G, id[1] * G, id[2] * G};
+            const vv_vec3 wp = index_to_world(ob, p);
+            float t = -1;
+            if (n > 0) {
+                const double qb = (p[B] + li[B] * seg) / G, qc = (p[Cc] + li[Cc] * seg) / G;
+                if (qb >= 0 && qb <= nb - 1 && qc >= 0 && qc <= nc - 1) {
+                    int ib = (int)qb, ic = (int)qc;
+                    ib = ib > nb - 2 ? nb - 2 : ib;
+                    ic = ic > nc - 2 ? nc - 2 : ic;
+                    const float fb = (float)(qb - ib), fc = (float)(qc - ic);
+                    float v[4];
+                    for (int k = 0; k < 4; k++) {
+                        int q[3];
+                        q[A] = la + up;
+                        q[B] = ib + (k & 1);
+                        q[Cc] = ic + (k >> 1);
+                        v[k] = T[((size_t)q[2] * (size_t)gd[1] + (size_t)q[1]) * (size_t)gd[0] +
+                                 (size_t)q[0]];
+                    }
+                    const float tq = lerpf(lerpf(v[0], v[1], fb), lerpf(v[2], v[3], fb), fc);
+                    t = tq > 0 ? tq * shadow_segment(fr, wp, lt, 0, seg) : 0.0f;
+                }
+            }
+            if (t < 0)
+                t = shadow_ray(fr, wp, lt, 0);
+            T[((size_t)id[2] * (size_t)gd[1] + (size_t)id[1]) * (size_t)gd[0] + (size_t)id[0]] = t;
+        }
+    }
+    ob->sweep[l] = T;
+    for (int a = 0; a < 3; a++)
+        ob->lidx[l][a] = (float)li[a];
+    return VV_OK;
+}
+
 /* Shadow of a volume sample at index point pi (world pw) for light l. */
 static float
 volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float pi[3],
                      const float pw[3]) {
+    if (ob->sweep[l]) {
+        /* the swept grid, looked up 1.5 grid cells towards the light so that
+         * a surface does not shadow itself */
+        const float bias = (float)(1.5 * RT_SGRID * ob->vox);
+        float f[3];
+        int i0[3];
+        for (int a = 0; a < 3; a++) {
+            float x = (pi[a] + ob->lidx[l][a] * bias) * (1.0f / RT_SGRID);
+            x = x < 0 ? 0 : x > (float)(ob->gdim[a] - 1) ? (float)(ob->gdim[a] - 1) : x;
+            int i = (int)x;
+            i = i > ob->gdim[a] - 2 ? ob->gdim[a] - 2 : i;
+            i0[a] = i;
+            f[a] = x - (float)i;
+        }
+        const float *T = ob->sweep[l];
+        const size_t sy = (size_t)ob->gdim[0], sz = sy * (size_t)ob->gdim[1];
+        const float *v = T + (size_t)i0[2] * sz + (size_t)i0[1] * sy + (size_t)i0[0];
+        float x0 = lerpf(v[0], v[1], f[0]), x1 = lerpf(v[sy], v[sy + 1], f[0]);
+        float x2 = lerpf(v[sz], v[sz + 1], f[0]), x3 = lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
+        return lerpf(lerpf(x0, x1, f[1]), lerpf(x2, x3, f[1]), f[2]);
+    }
     if (!ob->sgrid[l]) /* isosurfaces, or shadow_grid=0: an exact shadow ray */
-        return shadow_ray(fr, vv_vec3_make(pw[0], pw[1], pw[2]), &fr->lights[l], ob->vox);
+        return shadow_ray(fr, v3(pw[0], pw[1], pw[2]), &fr->lights[l], ob->vox);
     _Atomic uint32_t *g = ob->sgrid[l];
     float f[3];
     int i0[3];
@@ -1014,7 +1162,7 @@ volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float p
             double q[3] = {(double)gi * RT_SGRID, (double)gj * RT_SGRID, (double)gk * RT_SGRID};
             for (int a = 0; a < 3; a++)
                 q[a] = q[a] > ob->dims[a] - 1 ? ob->dims[a] - 1 : q[a];
-            vv_vec3 wp = vv_vec3_make(
+            vv_vec3 wp = v3(
                 ob->i2w[0][0] * q[0] + ob->i2w[0][1] * q[1] + ob->i2w[0][2] * q[2] + ob->i2w[0][3],
                 ob->i2w[1][0] * q[0] + ob->i2w[1][1] * q[1] + ob->i2w[1][2] * q[2] + ob->i2w[1][3],
                 ob->i2w[2][0] * q[0] + ob->i2w[2][1] * q[1] + ob->i2w[2][2] * q[2] + ob->i2w[2][3]);
@@ -1089,20 +1237,20 @@ shade_surface_local(const rt_frame *fr, const vv_material *m, const float col[3]
     for (int ch = 0; ch < 3; ch++)
         d[ch] = (float)m->ambient * fr->ambient[ch];
     const double eps = RT_EPS * fr->scene_size;
-    vv_vec3 po = vv_vec3_add(p, vv_vec3_scale(n, eps));
+    vv_vec3 po = v3add(p, v3scale(n, eps));
     for (int l = 0; l < fr->n_lights; l++) {
         const rt_light *lt = &fr->lights[l];
-        vv_vec3 L = vv_vec3_make(lt->dir[0], lt->dir[1], lt->dir[2]);
+        vv_vec3 L = v3(lt->dir[0], lt->dir[1], lt->dir[2]);
         if (lt->point)
-            L = vv_vec3_normalize(vv_vec3_sub(vv_vec3_make(lt->pos[0], lt->pos[1], lt->pos[2]), p));
-        double ndl = vv_vec3_dot(n, L);
+            L = v3norm(v3sub(v3(lt->pos[0], lt->pos[1], lt->pos[2]), p));
+        double ndl = v3dot(n, L);
         if (ndl <= 0)
             continue;
         float sh = fr->shadows && receives ? shadow_ray(fr, po, lt, 0) : 1.0f;
         if (sh <= 0)
             continue;
-        vv_vec3 R = vv_vec3_sub(vv_vec3_scale(n, 2 * ndl), L);
-        double rv = vv_vec3_dot(R, v);
+        vv_vec3 R = v3sub(v3scale(n, 2 * ndl), L);
+        double rv = v3dot(R, v);
         double sp = rv > 0 ? pow(rv, m->shininess) : 0;
         for (int ch = 0; ch < 3; ch++) {
             d[ch] += sh * (float)(m->diffuse * ndl) * lt->col[ch];
@@ -1122,12 +1270,12 @@ shade_secondary(const rt_frame *fr, const vv_ray *wr, vv_vec3 p, vv_vec3 n, vv_v
     if (depth >= fr->max_depth)
         return;
     const double eps = RT_EPS * fr->scene_size;
-    const double dn = vv_vec3_dot(wr->dir, n);
+    const double dn = v3dot(wr->dir, n);
     float tmp[3], a, dd;
     if (kr > 0 && weight * kr >= RT_MIN_WEIGHT) {
         vv_ray rr;
-        rr.dir = vv_vec3_normalize(vv_vec3_sub(wr->dir, vv_vec3_scale(n, 2 * dn)));
-        rr.origin = vv_vec3_add(p, vv_vec3_scale(n, eps));
+        rr.dir = v3norm(v3sub(wr->dir, v3scale(n, 2 * dn)));
+        rr.origin = v3add(p, v3scale(n, eps));
         trace(fr, &rr, depth + 1, 0, weight * kr, tmp, &a, &dd);
         for (int ch = 0; ch < 3; ch++)
             out[ch] += kr * tmp[ch];
@@ -1137,18 +1285,17 @@ shade_secondary(const rt_frame *fr, const vv_ray *wr, vv_vec3 p, vv_vec3 n, vv_v
         tr.dir = wr->dir;
         if (solid && ior > 0 && ior != 1) {
             /* Snell: entering when the ray meets the outward normal head on */
-            const int entering = vv_vec3_dot(wr->dir, outward) < 0;
+            const int entering = v3dot(wr->dir, outward) < 0;
             const double eta = entering ? 1.0 / ior : ior;
             const double ci = -dn; /* cos of incidence, n faces the ray origin */
             const double k = 1 - eta * eta * (1 - ci * ci);
             if (k < 0) /* total internal reflection */
-                tr.dir = vv_vec3_normalize(vv_vec3_sub(wr->dir, vv_vec3_scale(n, 2 * dn)));
+                tr.dir = v3norm(v3sub(wr->dir, v3scale(n, 2 * dn)));
             else
-                tr.dir = vv_vec3_normalize(
-                    vv_vec3_add(vv_vec3_scale(wr->dir, eta), vv_vec3_scale(n, eta * ci - sqrt(k))));
+                tr.dir = v3norm(v3add(v3scale(wr->dir, eta), v3scale(n, eta * ci - sqrt(k))));
         }
-        const double side = vv_vec3_dot(tr.dir, n) < 0 ? -1 : 1;
-        tr.origin = vv_vec3_add(p, vv_vec3_scale(n, side * eps));
+        const double side = v3dot(tr.dir, n) < 0 ? -1 : 1;
+        tr.origin = v3add(p, v3scale(n, side * eps));
         trace(fr, &tr, depth + 1, 0, weight * kt, tmp, &a, &dd);
         for (int ch = 0; ch < 3; ch++)
             out[ch] += kt * tmp[ch];
@@ -1160,11 +1307,11 @@ static void
 shade_geometry(const rt_frame *fr, const vv_ray *wr, const rt_hit *h, int depth, float weight,
                float out[3]) {
     const rt_gobj *g = &fr->gobjs[h->gobj];
-    vv_vec3 p = vv_ray_at(*wr, h->t);
+    vv_vec3 p = ray_at(wr, h->t);
     vv_vec3 n = h->n;
-    if (vv_vec3_dot(n, wr->dir) > 0)
-        n = vv_vec3_scale(n, -1);
-    vv_vec3 v = vv_vec3_scale(wr->dir, -1);
+    if (v3dot(n, wr->dir) > 0)
+        n = v3scale(n, -1);
+    vv_vec3 v = v3scale(wr->dir, -1);
     float loc[3];
     shade_surface_local(fr, &g->obj->material, g->col, g->obj->receives_shadows, p, n, v, loc);
     float kl = 1 - g->kr - g->kt;
@@ -1176,6 +1323,71 @@ shade_geometry(const rt_frame *fr, const vv_ray *wr, const rt_hit *h, int depth,
 
 /* ---------------------------------------------------------------------- */
 /* Ray tracing                                                               */
+
+/* Composites one classified sample (opacity and premultiplied colour e) at
+ * index point p, ray parameter t, under the accumulated C, A. */
+static inline void
+composite_sample(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, const float v[3],
+                 const float *e, const float p[3], double t, float C[3], float *A) {
+    const float w = 1 - *A;
+    if (ob->obj->shading) {
+        float g[3], pw[3], o3[3];
+        sample_gradient(ob->c, p, g);
+        pw[0] = (float)(wr->origin.x + t * wr->dir.x);
+        pw[1] = (float)(wr->origin.y + t * wr->dir.y);
+        pw[2] = (float)(wr->origin.z + t * wr->dir.z);
+        shade_volume(fr, ob, g, p, pw, v, e + 1, e[0], o3);
+        C[0] += w * o3[0];
+        C[1] += w * o3[1];
+        C[2] += w * o3[2];
+    } else {
+        C[0] += w * e[1];
+        C[1] += w * e[2];
+        C[2] += w * e[3];
+    }
+    *A += w * e[0];
+}
+
+/* The common case, one composite volume on the ray: subvolume by
+ * subvolume, leaping over empty ones, the same samples t = k dt as the
+ * general loop below. */
+static void
+march_one(const rt_frame *fr, const rt_vobj *ob, const rt_vray *r, const vv_ray *wr,
+          const float v[3], float C[3], float *Aout, float *dep) {
+    const double dt = fr->dt, inv_dt = 1.0 / fr->dt;
+    const rt_cache *c = ob->c;
+    float A = 0;
+    double k = ceil_pos(r->t0 * inv_dt);
+    const double kend = floor(r->t1 * inv_dt);
+    while (k <= kend) {
+        float p[3];
+        vray_point(r, k * dt, p);
+        const size_t b = block_of(ob, p);
+        if (!ob->bvis[b]) {
+            const double ks = ceil_pos(leap_exit(ob, r, p, k * dt, ob->bdist[b]) * inv_dt);
+            k = ks > k + 1 ? ks : k + 1;
+            continue;
+        }
+        double klast = floor(block_exit(r, p, k * dt) * inv_dt);
+        klast = klast < kend ? klast : kend;
+        klast = klast < k ? k : klast;
+        for (; k <= klast; k++) {
+            const double t = k * dt;
+            vray_point(r, t, p);
+            const float *e = ob->lut + 4 * (int)lut_index_f(ob, sample_value(c, p));
+            if (e[0] <= 0)
+                continue;
+            composite_sample(fr, ob, wr, v, e, p, t, C, &A);
+            if (*dep == INFINITY)
+                *dep = (float)t;
+            if (A >= fr->et) {
+                *Aout = A > 1 ? 1 : A;
+                return;
+            }
+        }
+    }
+    *Aout = A > 1 ? 1 : A;
+}
 
 /* Front-to-back compositing of the composite and iso volumes along the ray
  * over [0, tlim] on the samples t = k dt (the ray caster's grid). An iso
@@ -1207,6 +1419,10 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
     }
     const double dt = fr->dt;
     const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
+    if (na == 1 && fr->vobjs[act[0]].mode == VV_MODE_COMPOSITE) {
+        march_one(fr, &fr->vobjs[act[0]], &rays[0], wr, v, C, Aout, dep);
+        return;
+    }
     float prev_v[RT_MAX_OBJ];
     double prev_t[RT_MAX_OBJ];
     int has_prev[RT_MAX_OBJ];
@@ -1291,19 +1507,19 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                     if ((kr > 0 || kt > 0) && fr->max_depth > depth) {
                         /* the isosurface as a mirror or a window: world
                          * normal from the gradient, facing the ray */
-                        vv_vec3 nw = vv_vec3_make(
-                            ob->nrm[0][0] * g[0] + ob->nrm[0][1] * g[1] + ob->nrm[0][2] * g[2],
-                            ob->nrm[1][0] * g[0] + ob->nrm[1][1] * g[1] + ob->nrm[1][2] * g[2],
-                            ob->nrm[2][0] * g[0] + ob->nrm[2][1] * g[1] + ob->nrm[2][2] * g[2]);
-                        nw = vv_vec3_normalize(nw);
+                        vv_vec3 nw =
+                            v3(ob->nrm[0][0] * g[0] + ob->nrm[0][1] * g[1] + ob->nrm[0][2] * g[2],
+                               ob->nrm[1][0] * g[0] + ob->nrm[1][1] * g[1] + ob->nrm[1][2] * g[2],
+                               ob->nrm[2][0] * g[0] + ob->nrm[2][1] * g[1] + ob->nrm[2][2] * g[2]);
+                        nw = v3norm(nw);
                         /* gradients point to higher values: inside; outward is minus */
-                        vv_vec3 outward = vv_vec3_scale(nw, -1);
-                        vv_vec3 nf = vv_vec3_dot(outward, wr->dir) > 0 ? nw : outward;
+                        vv_vec3 outward = v3scale(nw, -1);
+                        vv_vec3 nf = v3dot(outward, wr->dir) > 0 ? nw : outward;
                         float kl = 1 - kr - kt;
                         kl = kl < 0 ? 0 : kl;
                         for (int ch = 0; ch < 3; ch++)
                             col[ch] *= kl;
-                        shade_secondary(fr, wr, vv_ray_at(*wr, th), nf, outward, kr, kt, m->ior, 1,
+                        shade_secondary(fr, wr, ray_at(wr, th), nf, outward, kr, kt, m->ior, 1,
                                         depth, weight * (1 - A), col);
                     }
                     const float w = 1 - A;
@@ -1320,23 +1536,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
             const float alpha = e[0];
             if (alpha <= 0)
                 continue;
-            const float w = 1 - A;
-            if (ob->obj->shading) {
-                float g[3], pw[3], o3[3];
-                sample_gradient(c, p, g);
-                pw[0] = (float)(wr->origin.x + t * wr->dir.x);
-                pw[1] = (float)(wr->origin.y + t * wr->dir.y);
-                pw[2] = (float)(wr->origin.z + t * wr->dir.z);
-                shade_volume(fr, ob, g, p, pw, v, e + 1, alpha, o3);
-                C[0] += w * o3[0];
-                C[1] += w * o3[1];
-                C[2] += w * o3[2];
-            } else {
-                C[0] += w * e[1];
-                C[1] += w * e[2];
-                C[2] += w * e[3];
-            }
-            A += w * alpha;
+            composite_sample(fr, ob, wr, v, e, p, t, C, &A);
             if (*dep == INFINITY)
                 *dep = (float)t;
         }
@@ -1631,6 +1831,8 @@ build_tables(rt_frame *fr, rt_vobj *ro) {
             ng *= (size_t)ro->gdim[a];
         }
         for (int l = 0; l < fr->n_lights; l++) {
+            if (!fr->lights[l].point && fr->st->shadow_grid == 2)
+                continue; /* swept once all objects are ready (sweep_light) */
             ro->sgrid[l] = calloc(ng, sizeof *ro->sgrid[l]);
             if (!ro->sgrid[l])
                 return vv_error_set(VV_ERR_NOMEM, "out of memory for a shadow grid");
@@ -1665,7 +1867,7 @@ prepare_geometry(rt_frame *fr, rt_gobj *g, const vv_object *obj) {
     const vv_geometry *ge = &obj->geometry;
     switch (obj->type) {
     case VV_OBJECT_PLANE:
-        if (!(vv_vec3_length(ge->normal) > 0))
+        if (!(v3len(ge->normal) > 0))
             return vv_error_set(VV_ERR_INVALID, "object '%s': plane with a zero normal", obj->name);
         break;
     case VV_OBJECT_POLYGON: {
@@ -1679,7 +1881,7 @@ prepare_geometry(rt_frame *fr, rt_gobj *g, const vv_object *obj) {
             nn.y += (a.z - b.z) * (a.x + b.x);
             nn.z += (a.x - b.x) * (a.y + b.y);
         }
-        if (!(vv_vec3_length(nn) > 0))
+        if (!(v3len(nn) > 0))
             return vv_error_set(VV_ERR_INVALID, "object '%s': degenerate polygon", obj->name);
         g->plane = vv_plane_from_point_normal(ge->vertices[0], nn);
         double ax = fabs(nn.x), ay = fabs(nn.y), az = fabs(nn.z);
@@ -1699,7 +1901,7 @@ prepare_geometry(rt_frame *fr, rt_gobj *g, const vv_object *obj) {
         g->closed = 1;
         break;
     case VV_OBJECT_CYLINDER:
-        if (!(ge->radius > 0) || !(vv_vec3_length(vv_vec3_sub(ge->top, ge->base)) > 0))
+        if (!(ge->radius > 0) || !(v3len(v3sub(ge->top, ge->base)) > 0))
             return vv_error_set(VV_ERR_INVALID,
                                 "object '%s': cylinder needs radius > 0 and base != top",
                                 obj->name);
@@ -1725,13 +1927,13 @@ prepare_geometry(rt_frame *fr, rt_gobj *g, const vv_object *obj) {
 
 static void
 prepare_lights(rt_frame *fr, const vv_world *w, const vv_view *view) {
-    vv_vec3 fwd = vv_vec3_normalize(vv_vec3_sub(view->at, view->eye));
+    vv_vec3 fwd = v3norm(v3sub(view->at, view->eye));
     fr->n_lights = 0;
     for (int i = 0; i < w->n_lights && i < VV_MAX_LIGHTS; i++) {
         const vv_light *l = &w->lights[i];
         rt_light *o = &fr->lights[fr->n_lights++];
         o->point = l->type == VV_LIGHT_POINT && !l->headlight;
-        vv_vec3 d = l->headlight ? fwd : vv_vec3_normalize(l->direction);
+        vv_vec3 d = l->headlight ? fwd : v3norm(l->direction);
         o->dir[0] = -d.x;
         o->dir[1] = -d.y;
         o->dir[2] = -d.z;
@@ -1764,8 +1966,10 @@ frame_release(rt_frame *fr) {
         free(fr->vobjs[i].ext);
         free(fr->vobjs[i].bvis);
         free(fr->vobjs[i].bdist);
-        for (int l = 0; l < VV_MAX_LIGHTS; l++)
+        for (int l = 0; l < VV_MAX_LIGHTS; l++) {
             free(fr->vobjs[i].sgrid[l]);
+            free(fr->vobjs[i].sweep[l]);
+        }
     }
     for (int i = 0; i < fr->n_gobj; i++) {
         free(fr->gobjs[i].bvh.nodes);
@@ -1904,9 +2108,8 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         }
     }
     fr.dt = (float)(dt < INFINITY ? dt : 1.0);
-    double size = vv_vec3_length(vv_vec3_sub(bounds.max, bounds.min));
-    size += vv_vec3_length(
-        vv_vec3_sub(view->eye, vv_vec3_scale(vv_vec3_add(bounds.max, bounds.min), 0.5)));
+    double size = v3len(v3sub(bounds.max, bounds.min));
+    size += v3len(v3sub(view->eye, v3scale(v3add(bounds.max, bounds.min), 0.5)));
     fr.scene_size = size > 0 && size < INFINITY ? size : 1.0;
     for (int i = 0; i < fr.n_vobj && s == VV_OK; i++) {
         rt_vobj *ro = &fr.vobjs[i];
@@ -1924,10 +2127,23 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         return s;
     }
 
+    const int nt = opt->threads > 0 ? opt->threads : vv_threads_get();
+    /* shadow grids of directional lights, now that every object is ready */
+    for (int i = 0; i < fr.n_vobj && s == VV_OK; i++) {
+        rt_vobj *ro = &fr.vobjs[i];
+        if (ro->gdim[0] == 0)
+            continue;
+        for (int l = 0; l < fr.n_lights && s == VV_OK; l++)
+            if (!fr.lights[l].point && st->shadow_grid == 2)
+                s = sweep_light(&fr, ro, l, nt);
+    }
+    if (s != VV_OK) {
+        frame_release(&fr);
+        return s;
+    }
     const int W = view->width, H = view->height;
     const int tx = (W + RT_TILE - 1) / RT_TILE, ty = (H + RT_TILE - 1) / RT_TILE;
     const int ntiles = tx * ty;
-    const int nt = opt->threads > 0 ? opt->threads : vv_threads_get();
     const int adaptive = nss > 1 && st->adaptive;
     rt_progress pr;
     pr.p = &opt->progress;
@@ -2039,7 +2255,9 @@ rt_set_option(void *state, const char *key, const char *value) {
     } else if (strcmp(key, "shadows") == 0) {
         st->shadows = x != 0;
     } else if (strcmp(key, "shadow_grid") == 0) {
-        st->shadow_grid = x != 0;
+        if (x != 0 && x != 1 && x != 2)
+            return vv_error_set(VV_ERR_INVALID, "shadow_grid must be 0, 1 or 2");
+        st->shadow_grid = (int)x;
     } else if (strcmp(key, "max_depth") == 0) {
         if (!(x >= 0 && x <= 64) || x != floor(x))
             return vv_error_set(VV_ERR_INVALID, "max_depth must be an integer in 0..64");
