@@ -225,6 +225,49 @@ test_shadow_mask(void **state) {
     vv_world_free(s.w);
 }
 
+/* A point light: a floor point is in shadow when the segment from it to
+ * the light meets the sphere. */
+static void
+test_point_light_shadow(void **state) {
+    (void)state;
+    shadow_scene s;
+    shadow_scene_make(&s, 0);
+    s.w->n_lights = 0;
+    vv_light l;
+    memset(&l, 0, sizeof l);
+    l.type = VV_LIGHT_POINT;
+    l.position = vv_vec3_make(-20, -6, 25);
+    l.color = vv_vec3_make(1, 1, 1);
+    l.intensity = 1;
+    vt_ok(vv_world_add_light(s.w, &l));
+    vv_renderer *r = new_tracer((const char *const[]){"samples", "1", NULL});
+    vv_image *img = render_q(r, s.w, &s.view, 2, 0);
+    save(img, "shadow_point_light.png");
+    const double pixel = s.view.ortho_height / s.view.height;
+    long n_shadow = 0, wrong = 0;
+    for (int y = 0; y < s.view.height; y++)
+        for (int x = 0; x < s.view.width; x++) {
+            vv_ray pr = vv_view_ray(&s.view, x, y);
+            if (sphere_margin(pr.origin, pr.dir, s.c[0], s.r[0]) < pixel)
+                continue;
+            vv_vec3 p = floor_point(&s.view, x, y);
+            vv_vec3 d = vv_vec3_normalize(vv_vec3_sub(l.position, p));
+            double m = sphere_margin(p, d, s.c[0], s.r[0]);
+            if (fabs(m) < 2 * pixel)
+                continue;
+            const double lit = 0.2 + 0.8 * d.z; /* N.L on the floor */
+            const double v = px(img, x, y)[0];
+            n_shadow += m < 0;
+            wrong += fabs(v - (m < 0 ? 0.2 : lit)) > 0.01;
+        }
+    print_message("point light: %ld shadow pixels, %ld wrong\n", n_shadow, wrong);
+    assert_true(n_shadow > 300);
+    assert_int_equal(wrong, 0);
+    vv_image_free(img);
+    vv_renderer_free(r);
+    vv_world_free(s.w);
+}
+
 /* Switching off casts_shadows of one sphere changes exactly its shadow. */
 static void
 test_flag_casts_shadows(void **state) {
@@ -568,6 +611,37 @@ test_parc_same_image(void **state) {
     vv_world_free(w);
 }
 
+/* The shadow grid of volume samples (lazy shadow rays, or a swept light
+ * volume) against one exact shadow ray per sample. */
+static void
+test_shadow_grid_vs_exact(void **state) {
+    (void)state;
+    vv_world *w = NULL;
+    vt_ok(vv_scene_load(&w, VV_SOURCE_DIR "/examples/head_mirror.json"));
+    w->view.width = w->view.height = 96;
+    double psnr[3];
+    vv_image *img[3];
+    for (int g = 0; g < 3; g++) {
+        char gs[8];
+        snprintf(gs, sizeof gs, "%d", g);
+        vv_renderer *r = new_tracer((const char *const[]){"samples", "1", "shadow_grid", gs, NULL});
+        img[g] = render_q(r, w, &w->view, 1, 0);
+        vv_renderer_free(r);
+    }
+    save(img[0], "shadow_exact.png");
+    save(img[1], "shadow_grid.png");
+    save(img[2], "shadow_sweep.png");
+    psnr[1] = vv_image_psnr(img[0], img[1]);
+    psnr[2] = vv_image_psnr(img[0], img[2]);
+    print_message("volume shadows vs exact shadow rays: grid %.2f dB, swept %.2f dB\n", psnr[1],
+                  psnr[2]);
+    assert_true(psnr[1] >= 30.0);
+    assert_true(psnr[2] >= 30.0);
+    for (int g = 0; g < 3; g++)
+        vv_image_free(img[g]);
+    vv_world_free(w);
+}
+
 /* ---------------------------------------------------------------------- */
 /* Primitives, antialiasing, threads, progress                               */
 
@@ -851,12 +925,14 @@ int
 main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_shadow_mask),
+        cmocka_unit_test(test_point_light_shadow),
         cmocka_unit_test(test_flag_casts_shadows),
         cmocka_unit_test(test_volume_attenuation),
         cmocka_unit_test(test_mirror_equals_mirrored_camera),
         cmocka_unit_test(test_facing_mirrors_terminate),
         cmocka_unit_test(test_equals_raycast),
         cmocka_unit_test(test_parc_same_image),
+        cmocka_unit_test(test_shadow_grid_vs_exact),
         cmocka_unit_test(test_primitive_silhouettes),
         cmocka_unit_test(test_refraction_sphere),
         cmocka_unit_test(test_supersampling),
