@@ -1251,7 +1251,7 @@ shade_surface_local(const rt_frame *fr, const vv_material *m, const float col[3]
             continue;
         vv_vec3 R = v3sub(v3scale(n, 2 * ndl), L);
         double rv = v3dot(R, v);
-        double sp = rv > 0 ? pow(rv, m->shininess) : 0;
+        double sp = rv > 0 && m->specular > 0 ? pow(rv, m->shininess) : 0;
         for (int ch = 0; ch < 3; ch++) {
             d[ch] += sh * (float)(m->diffuse * ndl) * lt->col[ch];
             s[ch] += sh * (float)(m->specular * sp) * lt->col[ch];
