@@ -38,6 +38,7 @@
 #define RS_SWAPPED 8u       /* flags: vertices 1 and 2 were swapped (unclipped triangles) */
 #define RS_BACK 0x80000000u /* visibility id and prim flag: the triangle is seen from behind */
 #define RS_MAX_CAP (2 * VV_MAX_CUT_PLANES + 6)
+#define RS_OC_BAD 0x80000000u /* outcode of a vertex with a NaN or infinite coordinate */
 
 typedef struct rs_light {
     int point;
@@ -846,6 +847,8 @@ setup_chunk(const rs_setup *s, rs_chunk *ch, size_t t0, size_t t1) {
         if (o0 & o1 & o2)
             continue;
         const uint32_t any = o0 | o1 | o2;
+        if (any & RS_OC_BAD)
+            continue; /* a vertex that is not a finite point */
         if (any) {
             clip_triangle(s, ch, vi, (uint32_t)t, any);
             continue;
@@ -1126,6 +1129,8 @@ vv_raster_draw_mesh(vv_raster *r, const vv_mesh *mesh, vv_mat4 model) {
             const double *pl = r->oplanes[k];
             oc |= (uint32_t)(pl[0] * x + pl[1] * y + pl[2] * z + pl[3] < 0) << (6 + k);
         }
+        if (!(isfinite(c[0]) && isfinite(c[1]) && isfinite(c[2]) && isfinite(c[3])))
+            oc = RS_OC_BAD;
         r->oc[i] = oc;
         if (!oc) {
             /* from the stored floats, as the clipping path does */
