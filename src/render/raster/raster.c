@@ -240,6 +240,8 @@ vv_raster_set_threads(vv_raster *r, int n) {
 void
 vv_raster_begin(vv_raster *r, vv_vec3 background) {
     const size_t n = (size_t)r->w * (size_t)r->h;
+    const int nt = r->threads > 0 ? r->threads : vv_threads_get();
+#pragma omp parallel for schedule(static) num_threads(nt)
     for (size_t i = 0; i < n; i++) {
         r->pix[i].key = -INFINITY;
         r->pix[i].id = RS_NONE;
