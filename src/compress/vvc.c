@@ -359,9 +359,10 @@ amp_bits(int64_t v, int size) {
 /* Quantises one subcube's spectrum to N integers in scan order. */
 static void
 quantise(const vvc_scan *sc, const float *sp, const double *inv_step, int64_t *q) {
+    /* sp is in scan order already; round halves away from zero, branch-free */
     for (int e = 0; e < sc->N; e++) {
-        const double x = (double)sp[sc->entry[e]] * inv_step[e];
-        q[e] = x >= 0 ? (int64_t)(x + 0.5) : -(int64_t)(-x + 0.5);
+        const double x = (double)sp[e] * inv_step[e];
+        q[e] = (int64_t)(x + copysign(0.5, x));
     }
 }
 
@@ -589,8 +590,8 @@ rd_f32(const unsigned char *p) {
 
 typedef struct enc {
     const vvc_scan *sc;
-    const float *spectra;
-    size_t per; /* floats per subcube spectrum */
+    const float *spectra; /* per subcube: its M^3 numbers in scan order */
+    size_t per;           /* floats per subcube (M^3) */
     int nsub;
     int threads;
 } enc;
@@ -876,9 +877,30 @@ vv_vvc_compress(vv_vvc **out, const vv_volume *v, const vv_vvc_params *p) {
         scan_free(&sc);
         return s;
     }
-    enc en = {&sc, spectra, 2 * (size_t)M * M * (M / 2 + 1), 0, threads};
+    enc en = {&sc, NULL, (size_t)sc.N, 0, threads};
     en.nsub = (int)(((v->dims[0] + M - 1) / M) * (size_t)((v->dims[1] + M - 1) / M) *
                     (size_t)((v->dims[2] + M - 1) / M));
+    {
+        /* the M^3 independent numbers of each spectrum in scan order, so that
+         * every quantisation pass reads them contiguously */
+        const size_t per = 2 * (size_t)M * M * (M / 2 + 1);
+        float *scanned = malloc(sizeof(float) * (size_t)sc.N * (size_t)en.nsub);
+        if (!scanned) {
+            fftwf_free(spectra);
+            scan_free(&sc);
+            return vv_error_set(VV_ERR_NOMEM, "vvc: out of memory");
+        }
+#pragma omp parallel for num_threads(threads) schedule(static)
+        for (int k = 0; k < en.nsub; k++) {
+            const float *src = spectra + per * (size_t)k;
+            float *dst = scanned + (size_t)sc.N * (size_t)k;
+            for (int e = 0; e < sc.N; e++)
+                dst[e] = src[sc.entry[e]];
+        }
+        fftwf_free(spectra);
+        spectra = NULL;
+        en.spectra = scanned;
+    }
     double quality = p->quality;
     if (p->target == VV_VVC_RATE) {
         const int H = M / 2 + 1;
@@ -921,7 +943,7 @@ vv_vvc_compress(vv_vvc **out, const vv_volume *v, const vv_vvc_params *p) {
     bytebuf b = {0};
     if (s == VV_OK)
         s = encode_file(&en, v, M, quality, p->slope, offset, unit, &b, &p->progress);
-    fftwf_free(spectra);
+    free((void *)en.spectra);
     scan_free(&sc);
     if (s != VV_OK) {
         free(b.p);
