@@ -841,8 +841,8 @@ sheared_sample(const fr_sheared *sh, const float *img, double P, double Q) {
 
 /* Slab test of a ray in index space against the box [lo, hi]^3 per axis. */
 static int
-box_hit(const double o[3], const double d[3], const double lo[3], const double hi[3], double *t0,
-        double *t1) {
+box_hit(const double o[3], const double d[3], const double inv[3], const double lo[3],
+        const double hi[3], double *t0, double *t1) {
     double a = -INFINITY, b = INFINITY;
     for (int i = 0; i < 3; i++) {
         if (d[i] == 0) {
@@ -850,7 +850,7 @@ box_hit(const double o[3], const double d[3], const double lo[3], const double h
                 return 0;
             continue;
         }
-        double u = (lo[i] - o[i]) / d[i], v = (hi[i] - o[i]) / d[i];
+        double u = (lo[i] - o[i]) * inv[i], v = (hi[i] - o[i]) * inv[i];
         if (u > v) {
             double t = u;
             u = v;
@@ -956,6 +956,9 @@ fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
                      ghi[3] = {vol->dims[0] - 1, vol->dims[1] - 1, vol->dims[2] - 1};
         const int att = fr.attenuation > 0;
         const double offset = ob.src->offset;
+        double dinv[3];
+        for (int k = 0; k < 3; k++)
+            dinv[k] = ob.di[k] != 0 ? 1.0 / ob.di[k] : 0;
         /* as the ray caster: FR_LUT entries over the value range, colour and
          * opacity at the projected value, looked up by truncation */
         double lut_lo = vol->range[0], lut_hi = vol->range[1];
@@ -989,8 +992,8 @@ fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
                 /* the samples of the spatial X-ray lie in the node-centred grid
                  * box; each voxel's band-limited footprint reaches half a voxel
                  * further, which is the length the integral is divided by */
-                if (!box_hit(o, ob.di, glo, ghi, &t0, &t1) ||
-                    !box_hit(o, ob.di, blo, bhi, &u0, &u1))
+                if (!box_hit(o, ob.di, dinv, glo, ghi, &t0, &t1) ||
+                    !box_hit(o, ob.di, dinv, blo, bhi, &u0, &u1))
                     continue;
                 const double Pq = Pp0 + Ppx * px + Ppy * py, Qq = Qp0 + Qpx * px + Qpy * py;
                 const double len = att ? sheared_sample(&sh, sh.L, Pq, Qq) : u1 - u0;
