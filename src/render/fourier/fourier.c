@@ -18,9 +18,11 @@
  * coefficients by exact Dirichlet-kernel interpolation in frequency space:
  * this keeps the sheared projection, up to 2M wide, free of wrap-around),
  * and along w it is interpolated with the exact periodic-sinc (Dirichlet)
- * kernel of the M-point DFT. A 2-D inverse FFT gives the subimage, which is
- * resampled (Catmull-Rom) into the output image, and the subimages are
- * composited front to back with an attenuation per subcube.
+ * kernel of the M-point DFT. The fractional offset of each slab of subcubes
+ * on the sheared plane is applied as a phase ramp, so after a 2-D inverse
+ * FFT every subimage adds onto one integer grid (or, with attenuation, is
+ * composited front to back with a transmittance per subcube); the sheared
+ * image is finally resampled (Catmull-Rom) into the output image.
  */
 #include <math.h>
 #include <omp.h>
@@ -31,8 +33,8 @@
 #include "render/registry.h"
 #include "volvis/render.h"
 
-#define FR_MAX_CACHE 8
-#define FR_LUT 4096 /* transfer-function table entries, as the ray caster */
+#define FR_MAX_CACHE 4 /* volumes whose spectra are kept (each several times the volume) */
+#define FR_LUT 4096    /* transfer-function table entries, as the ray caster */
 
 /* Spectra of one volume, kept between frames. */
 typedef struct fr_source {
