@@ -1004,7 +1004,7 @@ fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
                 const double mean = offset + sheared_sample(&sh, sh.C, Pq, Qq) / len;
                 /* the transfer-function table of the ray caster's projections */
                 double xi = (mean - lut_lo) * lut_scale;
-                xi = xi < 0 ? 0 : xi > FR_LUT - 1 ? FR_LUT - 1 : xi;
+                xi = !(xi > 0) ? 0 : xi > FR_LUT - 1 ? FR_LUT - 1 : xi; /* NaN: 0 */
                 const float *e = lut + 4 * (int)xi;
                 const float a = e[0];
                 const float cv[3] = {e[1] * a, e[2] * a, e[3] * a};
