@@ -366,12 +366,12 @@ quantise(const vvc_scan *sc, const float *sp, const double *inv_step, int64_t *q
     }
 }
 
-/* Calls sym(ctx, symbol, is_dc, value, size) for the JPEG symbol sequence of q. */
+/* Where the JPEG symbol sequence of a subcube goes: symbol statistics
+ * (dcf, acf, amp) or, with w, Huffman codes and amplitude bits. */
 typedef struct sym_counter {
     uint64_t *dcf, *acf;
     uint64_t amp;                 /* amplitude bits */
-    const vv_huff_enc *dce, *ace; /* for counting exact bits, or NULL */
-    uint64_t bits;                /* code + amplitude bits (with dce/ace) */
+    const vv_huff_enc *dce, *ace; /* codes, for writing */
     vv_bitwriter *w;              /* for writing, or NULL */
 } sym_counter;
 
@@ -387,10 +387,6 @@ emit(sym_counter *c, int is_dc, int sym, int64_t v, int size) {
         } else if (size > 0) {
             vv_bw_put(c->w, (uint32_t)amp_bits(v, size), size);
         }
-        return;
-    }
-    if (c->dce) {
-        c->bits += (uint64_t)(is_dc ? c->dce->len[sym] : c->ace->len[sym]) + (uint64_t)size;
         return;
     }
     (is_dc ? c->dcf : c->acf)[sym]++;
@@ -613,7 +609,7 @@ gather_stats(const enc *en, const float *step_abs, uint64_t *dcf, uint64_t *acf,
         uint64_t ldc[VVC_DC_SYMS] = {0};
         uint64_t *lac = calloc(VVC_AC_SYMS, sizeof *lac);
         int64_t *q = malloc(sizeof *q * (size_t)en->sc->N);
-        sym_counter c = {ldc, lac, 0, NULL, NULL, 0, NULL};
+        sym_counter c = {ldc, lac, 0, NULL, NULL, NULL};
 #pragma omp for schedule(dynamic, 8)
         for (int s = 0; s < en->nsub; s++) {
             if (!lac || !q)
@@ -731,7 +727,7 @@ encode_file(const enc *en, const vv_volume *v, int M, double quality, double slo
                 failed |= !q;
                 continue;
             }
-            sym_counter c = {NULL, NULL, 0, &e[0], &e[1], 0, &streams[k]};
+            sym_counter c = {NULL, NULL, 0, &e[0], &e[1], &streams[k]};
             quantise(sc, en->spectra + (size_t)k * en->per, inv, q);
             symbolise(q, sc->N, &c);
             vv_bw_flush(&streams[k]);
