@@ -94,7 +94,7 @@ cli_render_usage(FILE *out) {
             "  volvis render ../shared/data/volumes/neghip.slc --mode mip --azimuth 30 -o mip.png\n"
             "  volvis render scene.json --size 1024x1024 --azimuth 45 -o scene.png\n"
             "  volvis render head.nrrd --renderer fourier --ortho --set vvc=head.vvc \\\n"
-            "      --mode xray -o fourier.png\n");
+            "      --mode xray --tf -1024:300 -o fourier.png\n");
 }
 
 static int
