@@ -167,6 +167,7 @@ fr_set_option(void *state, const char *key, const char *value) {
     if (strcmp(key, "quality") == 0) {
         if (strcmp(value, "exact") == 0) {
             st->quality = -1;
+            st->rate = -1;
             return VV_OK;
         }
         if (!parse_num(value, 0, 100, &v))
@@ -616,7 +617,8 @@ slice_points(const fr_coef *U, const float *wsl, int M, int n, float *sr, float 
     }
 }
 
-/* The 2M x 2M inverse FFT, planned once per renderer (FFTW_MEASURE). */
+/* The 2M x 2M inverse FFT, planned once per renderer. FFTW_ESTIMATE, not
+ * MEASURE: a measured plan depends on timing, and so would the image. */
 static fftwf_plan
 plan_for(fr_state *st, int M) {
     const int slot = M == 8 ? 0 : M == 16 ? 1 : 2;
@@ -627,7 +629,7 @@ plan_for(fr_state *st, int M) {
     float *out = fftwf_malloc(sizeof(float) * (size_t)M2 * M2);
     if (in && out) {
         vv_fftw_lock();
-        st->plan2d[slot] = fftwf_plan_dft_c2r_2d(M2, M2, (fftwf_complex *)in, out, FFTW_MEASURE);
+        st->plan2d[slot] = fftwf_plan_dft_c2r_2d(M2, M2, (fftwf_complex *)in, out, FFTW_ESTIMATE);
         vv_fftw_unlock();
     }
     fftwf_free(in);
@@ -760,7 +762,7 @@ project_object(fr_state *st, const fr_frame *fr, fr_obj *ob, int threads,
         free(wtab);
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     }
-    int failed = 0, cancelled = 0, next = 0;
+    int failed = 0, cancelled = 0;
     long done = 0;
 #pragma omp parallel num_threads(nthreads)
     {
@@ -776,18 +778,13 @@ project_object(fr_state *st, const fr_frame *fr, fr_obj *ob, int threads,
         if (!slice || !g || !sr)
             failed = 1;
         /* with attenuation each thread composites a contiguous run of the
-         * ordered subcubes; without, the order does not matter */
-        const int lo = (int)((long)n * tid / nt), hi = (int)((long)n * (tid + 1) / nt);
-        for (int it = lo; !failed && !cancelled; it++) {
-            int oi = it;
-            if (!att) {
-#pragma omp atomic capture
-                oi = next++;
-                if (oi >= n)
-                    break;
-            } else if (it >= hi) {
-                break;
-            }
+         * ordered subcubes; without, thread t sums subcubes t, t + nt, ...
+         * (balanced, and a fixed assignment: the image depends on the
+         * thread count only, never on timing) */
+        const int lo = att ? (int)((long)n * tid / nt) : tid;
+        const int hi = att ? (int)((long)n * (tid + 1) / nt) : n;
+        const int stride = att ? 1 : nt;
+        for (int oi = lo; oi < hi && !failed && !cancelled; oi += stride) {
             const int sub = order[oi].index;
             const int bi[3] = {sub % s->nb[0], (sub / s->nb[0]) % s->nb[1],
                                sub / (s->nb[0] * s->nb[1])};
