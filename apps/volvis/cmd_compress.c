@@ -34,7 +34,7 @@ cli_compress_usage(FILE *out) {
                  "                  data within 16 bits; each 6 points less halve the\n"
                  "                  precision)\n"
                  "  --rate BITS     target file size in bits per voxel (> 0): the quality\n"
-                 "                  is found by bisection so that the file is at most that\n"
+                 "                  is searched so that the file is at most that\n"
                  "  --block M       subcube side 8, 16 or 32 (default 16)\n"
                  "  --slope S       frequency dependence of the quantisation table, >= 0\n"
                  "                  (default 0.5; 0: flat)\n"

@@ -104,7 +104,7 @@ cli_render_usage(FILE *out) {
             "  volvis render scene.json --size 1024x1024 --azimuth 45 -o scene.png\n"
             "  volvis render examples/head_mirror.json --renderer raytrace -o mirror.png\n"
             "  volvis render head.nrrd --renderer fourier --ortho --set vvc=head.vvc \\\n"
-            "      --mode xray -o fourier.png\n");
+            "      --mode xray --tf -1024:300 -o fourier.png\n");
 }
 
 static int

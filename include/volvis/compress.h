@@ -30,7 +30,7 @@
  * / 20). At q = 100 the table is flat and the unnormalised coefficients
  * have step 0.5, so no voxel can move by more than 0.354 grey levels, even
  * when the coefficients' rounding errors line up: integer data within 16
- * bits decode exactly. A target bit rate is met by bisection on q (the size
+ * bits decode exactly. A target bit rate is met by a bracketed search on q (the size
  * of every candidate file follows from its symbol statistics, without
  * writing it; the byte padding of each subcube is counted as 7 bits, so the
  * file is never over the rate).
@@ -59,7 +59,7 @@ extern "C" {
 /** What the quality setting aims at. */
 typedef enum vv_vvc_target {
     VV_VVC_QUALITY = 0, /**< a quality factor in [0, 100] */
-    VV_VVC_RATE = 1     /**< a file size in bits per voxel, reached by bisection on quality */
+    VV_VVC_RATE = 1     /**< a file size in bits per voxel, reached by searching the quality */
 } vv_vvc_target;
 
 /** Parameters of vv_vvc_compress. */
@@ -105,7 +105,7 @@ typedef struct vv_vvc_info {
 
 /**
  * Compresses @p v (borrowed) into a new in-memory .vvc. NaN voxels are coded
- * as the minimum. For VV_VVC_RATE the quality is searched by bisection so
+ * as the minimum. For VV_VVC_RATE the quality is searched (regula falsi) so
  * that the file is at most the rate (the closest quality reachable when the
  * rate is out of reach; check the info). Errors: VV_ERR_INVALID (block not 8,
  * 16 or 32, quality outside [0, 100], rate <= 0, slope < 0 or a volume whose

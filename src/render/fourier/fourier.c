@@ -18,9 +18,11 @@
  * coefficients by exact Dirichlet-kernel interpolation in frequency space:
  * this keeps the sheared projection, up to 2M wide, free of wrap-around),
  * and along w it is interpolated with the exact periodic-sinc (Dirichlet)
- * kernel of the M-point DFT. A 2-D inverse FFT gives the subimage, which is
- * resampled (Catmull-Rom) into the output image, and the subimages are
- * composited front to back with an attenuation per subcube.
+ * kernel of the M-point DFT. The fractional offset of each slab of subcubes
+ * on the sheared plane is applied as a phase ramp, so after a 2-D inverse
+ * FFT every subimage adds onto one integer grid (or, with attenuation, is
+ * composited front to back with a transmittance per subcube); the sheared
+ * image is finally resampled (Catmull-Rom) into the output image.
  */
 #include <math.h>
 #include <omp.h>
@@ -31,8 +33,20 @@
 #include "render/registry.h"
 #include "volvis/render.h"
 
-#define FR_MAX_CACHE 8
-#define FR_LUT 4096 /* transfer-function table entries, as the ray caster */
+#define FR_MAX_CACHE 4 /* volumes whose spectra are kept (each several times the volume) */
+#define FR_LUT 4096    /* transfer-function table entries, as the ray caster */
+
+/* Storage of the oversampled spectra: float, or with FR_BF16 bfloat16 (half
+ * the memory; measured on the CT head: no faster, since the slice is not
+ * limited by memory bandwidth with this layout, and 8 significant bits). */
+#ifndef FR_BF16
+#define FR_BF16 0
+#endif
+#if FR_BF16
+typedef uint16_t fr_coef;
+#else
+typedef float fr_coef;
+#endif
 
 /* Spectra of one volume, kept between frames. */
 typedef struct fr_source {
@@ -45,7 +59,7 @@ typedef struct fr_source {
     float *spectra;   /* nsub * 2 * M * M * H, FFTW r2c layout, dequantised */
     uint8_t *nonzero; /* subcube has a non-zero coefficient */
     double offset, unit;
-    float *over[3]; /* per projection axis c: nsub * M * 2M * (M + 1) complex, or NULL */
+    fr_coef *over[3]; /* per projection axis c: nsub * M * 2M * (M + 1) complex, or NULL */
     double bits_per_voxel;
     uint64_t last_used;
 } fr_source;
@@ -153,6 +167,7 @@ fr_set_option(void *state, const char *key, const char *value) {
     if (strcmp(key, "quality") == 0) {
         if (strcmp(value, "exact") == 0) {
             st->quality = -1;
+            st->rate = -1;
             return VV_OK;
         }
         if (!parse_num(value, 0, 100, &v))
@@ -328,6 +343,32 @@ get_source(fr_state *st, vv_volume *vol, int threads, fr_source **out) {
     return VV_OK;
 }
 
+/* bfloat16: the upper half of a float, rounded to nearest even (8
+ * significant bits, the range of float). */
+static inline fr_coef
+to_coef(float f) {
+#if FR_BF16
+    uint32_t u;
+    memcpy(&u, &f, 4);
+    u += 0x7FFFu + ((u >> 16) & 1u);
+    return (uint16_t)(u >> 16);
+#else
+    return f;
+#endif
+}
+
+static inline float
+from_coef(fr_coef h) {
+#if FR_BF16
+    const uint32_t u = (uint32_t)h << 16;
+    float f;
+    memcpy(&f, &u, 4);
+    return f;
+#else
+    return h;
+#endif
+}
+
 /* D(delta) = (1/M) sum_{x=0}^{M-1} e^{-2 pi i delta x / M}: evaluates the
  * DTFT of M samples from their DFT, F(nu) = sum_k F[k] D(nu - k). */
 static void
@@ -358,13 +399,13 @@ build_over(fr_source *s, int c, int threads) {
     const int p = (c + 1) % 3, q = (c + 2) % 3;
     const size_t per_over = (size_t)M * M2 * W * 2;
     const size_t per = 2 * (size_t)M * M * H;
-    float *over = fftwf_malloc(sizeof(float) * per_over * (size_t)s->nsub);
+    fr_coef *over = fftwf_malloc(sizeof(fr_coef) * per_over * (size_t)s->nsub);
     double *dodd = malloc(sizeof(double) * 2 * (size_t)M * M);
     if (!over || !dodd) {
         fftwf_free(over);
         free(dodd);
         return vv_error_set(VV_ERR_NOMEM, "out of memory (%zu MB of oversampled spectra)",
-                            sizeof(float) * per_over * (size_t)s->nsub >> 20);
+                            sizeof(fr_coef) * per_over * (size_t)s->nsub >> 20);
     }
     for (int j = 0; j < M; j++)
         for (int k = 0; k < M; k++)
@@ -378,11 +419,11 @@ build_over(fr_source *s, int c, int threads) {
             failed = 1;
 #pragma omp for schedule(dynamic, 4)
         for (int sub = 0; sub < s->nsub; sub++) {
-            float *U = over + per_over * (size_t)sub;
+            fr_coef *U = over + per_over * (size_t)sub;
             if (failed)
                 continue;
             if (!s->nonzero[sub]) {
-                memset(U, 0, sizeof(float) * per_over);
+                memset(U, 0, sizeof(fr_coef) * per_over);
                 continue;
             }
             const float *S = s->spectra + per * (size_t)sub;
@@ -429,27 +470,32 @@ build_over(fr_source *s, int c, int threads) {
                     ol[2 * up + 1] = (float)im;
                 }
             }
-            /* along q, stored [uq][up] then M real and M imaginary parts over kc,
-             * so that the slice reads kc contiguously */
+            /* along q; stored per kc: the M2 * W real parts of the points
+             * (uq * W + up), then their imaginary parts, so that the slice
+             * runs over the points in SIMD lanes for one kc at a time */
+            const size_t npts = (size_t)M2 * W;
             for (int kc = 0; kc < M; kc++)
                 for (int uq = 0; uq < M2; uq++) {
                     const double *d = dodd + 2 * (size_t)(uq / 2) * M;
                     for (int up = 0; up < W; up++) {
-                        float *ue = U + 2 * (size_t)(uq * W + up) * M + kc;
+                        fr_coef *ue = U + 2 * npts * kc + (size_t)uq * W + up;
+                        float re, im;
                         if (!(uq & 1)) {
                             const float *g = G1 + 2 * ((size_t)(kc * M + uq / 2) * W + up);
-                            ue[0] = g[0];
-                            ue[M] = g[1];
-                            continue;
+                            re = g[0];
+                            im = g[1];
+                        } else {
+                            double r = 0, i = 0;
+                            for (int k = 0; k < M; k++) {
+                                const float *g = G1 + 2 * ((size_t)(kc * M + k) * W + up);
+                                r += g[0] * d[2 * k] - g[1] * d[2 * k + 1];
+                                i += g[0] * d[2 * k + 1] + g[1] * d[2 * k];
+                            }
+                            re = (float)r;
+                            im = (float)i;
                         }
-                        double re = 0, im = 0;
-                        for (int k = 0; k < M; k++) {
-                            const float *g = G1 + 2 * ((size_t)(kc * M + k) * W + up);
-                            re += g[0] * d[2 * k] - g[1] * d[2 * k + 1];
-                            im += g[0] * d[2 * k + 1] + g[1] * d[2 * k];
-                        }
-                        ue[0] = (float)re;
-                        ue[M] = (float)im;
+                        ue[0] = to_coef(re);
+                        ue[npts] = to_coef(im);
                     }
                 }
         }
@@ -544,29 +590,35 @@ typedef struct fr_sheared {
 } fr_sheared;
 
 /* The slice: for each of the n points, the sum over kc of the oversampled
- * spectrum times the frame's weights (both stored as M real then M
- * imaginary parts per point). The hot loop of a frame: compiled for AVX2
- * as well where the compiler can, picked at run time. */
+ * spectrum times the frame's weights (both stored per kc as n real then n
+ * imaginary parts), accumulated in sr, si and written interleaved to
+ * slice. The hot loop of a frame: compiled for AVX2 as well where the
+ * compiler can, picked at run time. */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("avx2", "default")))
 #endif
 static void
-slice_points(const float *U, const float *wsl, int M, int n, float *slice) {
-    for (int e = 0; e < n; e++) {
-        const float *wr = wsl + 2 * (size_t)e * M, *wi = wr + M;
-        const float *ur = U + 2 * (size_t)e * M, *ui = ur + M;
-        float sre = 0, sim = 0;
-#pragma omp simd reduction(+ : sre, sim)
-        for (int kc = 0; kc < M; kc++) {
-            sre += ur[kc] * wr[kc] - ui[kc] * wi[kc];
-            sim += ur[kc] * wi[kc] + ui[kc] * wr[kc];
+slice_points(const fr_coef *U, const float *wsl, int M, int n, float *sr, float *si, float *slice) {
+    for (int e = 0; e < n; e++)
+        sr[e] = si[e] = 0;
+    for (int kc = 0; kc < M; kc++) {
+        const fr_coef *ur = U + 2 * (size_t)kc * n, *ui = ur + n;
+        const float *wr = wsl + 2 * (size_t)kc * n, *wi = wr + n;
+#pragma omp simd
+        for (int e = 0; e < n; e++) {
+            const float xr = from_coef(ur[e]), xi = from_coef(ui[e]);
+            sr[e] += xr * wr[e] - xi * wi[e];
+            si[e] += xr * wi[e] + xi * wr[e];
         }
-        slice[2 * e] = sre;
-        slice[2 * e + 1] = sim;
+    }
+    for (int e = 0; e < n; e++) {
+        slice[2 * e] = sr[e];
+        slice[2 * e + 1] = si[e];
     }
 }
 
-/* The 2M x 2M inverse FFT, planned once per renderer (FFTW_MEASURE). */
+/* The 2M x 2M inverse FFT, planned once per renderer. FFTW_ESTIMATE, not
+ * MEASURE: a measured plan depends on timing, and so would the image. */
 static fftwf_plan
 plan_for(fr_state *st, int M) {
     const int slot = M == 8 ? 0 : M == 16 ? 1 : 2;
@@ -577,7 +629,7 @@ plan_for(fr_state *st, int M) {
     float *out = fftwf_malloc(sizeof(float) * (size_t)M2 * M2);
     if (in && out) {
         vv_fftw_lock();
-        st->plan2d[slot] = fftwf_plan_dft_c2r_2d(M2, M2, (fftwf_complex *)in, out, FFTW_MEASURE);
+        st->plan2d[slot] = fftwf_plan_dft_c2r_2d(M2, M2, (fftwf_complex *)in, out, FFTW_ESTIMATE);
         vv_fftw_unlock();
     }
     fftwf_free(in);
@@ -648,7 +700,8 @@ project_object(fr_state *st, const fr_frame *fr, fr_obj *ob, int threads,
 
     /* Dirichlet weights D(w - kc) of every slice point times the phase of
      * the slab's fractional shift: the same for all subcubes of a slab
-     * (stored as M real then M imaginary parts). The Nyquist row and column
+     * (stored per kc as the real parts of all points, then the imaginary
+     * parts, as the spectra). The Nyquist row and column
      * (up or uq = M) stand for both +M/2 and -M/2, whose planes and phases
      * differ: their weights are averaged. */
     const size_t per_w = 2 * (size_t)M2 * W * M;
@@ -677,18 +730,24 @@ project_object(fr_state *st, const fr_frame *fr, fr_obj *ob, int threads,
             for (int sl = 0; sl < nslab; sl++) {
                 const double fp = -a * sl * M - floor(-a * sl * M);
                 const double fq = -b * sl * M - floor(-b * sl * M);
-                float *wt = wtab + per_w * (size_t)sl + 2 * (size_t)(uq * W + up) * M;
+                float *wt = wtab + per_w * (size_t)sl;
+                const size_t e = (size_t)uq * W + up, npts = (size_t)M2 * W;
+                double wre[64], wim[64];
                 for (int kc = 0; kc < M; kc++)
-                    wt[kc] = wt[M + kc] = 0;
+                    wre[kc] = wim[kc] = 0;
                 for (int cb = 0; cb < ncomb; cb++) {
                     /* h(m) = g(m - f): multiply by e^{-2 pi i (vp fp + vq fq) / M} */
                     const double ph = -2 * VV_PI * (vps[cb] * fp + vqs[cb] * fq) / M;
                     const double cr = cos(ph) / ncomb, ci = sin(ph) / ncomb;
                     for (int kc = 0; kc < M; kc++) {
                         const double dre = dw[2 * (cb * M + kc)], dim = dw[2 * (cb * M + kc) + 1];
-                        wt[kc] += (float)(dre * cr - dim * ci);
-                        wt[M + kc] += (float)(dre * ci + dim * cr);
+                        wre[kc] += dre * cr - dim * ci;
+                        wim[kc] += dre * ci + dim * cr;
                     }
+                }
+                for (int kc = 0; kc < M; kc++) {
+                    wt[2 * npts * kc + e] = (float)wre[kc];
+                    wt[2 * npts * kc + npts + e] = (float)wim[kc];
                 }
             }
         }
@@ -703,7 +762,7 @@ project_object(fr_state *st, const fr_frame *fr, fr_obj *ob, int threads,
         free(wtab);
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     }
-    int failed = 0, cancelled = 0, next = 0;
+    int failed = 0, cancelled = 0;
     long done = 0;
 #pragma omp parallel num_threads(nthreads)
     {
@@ -714,22 +773,18 @@ project_object(fr_state *st, const fr_frame *fr, fr_obj *ob, int threads,
             for (size_t i = 0; i < nsh; i++)
                 T[i] = 1;
         float *slice = fftwf_malloc(sizeof(float) * 2 * (size_t)M2 * W);
+        float *sr = malloc(sizeof(float) * 2 * (size_t)M2 * W), *si = sr ? sr + M2 * W : NULL;
         float *g = fftwf_malloc(sizeof(float) * (size_t)M2 * M2);
-        if (!slice || !g)
+        if (!slice || !g || !sr)
             failed = 1;
         /* with attenuation each thread composites a contiguous run of the
-         * ordered subcubes; without, the order does not matter */
-        const int lo = (int)((long)n * tid / nt), hi = (int)((long)n * (tid + 1) / nt);
-        for (int it = lo; !failed && !cancelled; it++) {
-            int oi = it;
-            if (!att) {
-#pragma omp atomic capture
-                oi = next++;
-                if (oi >= n)
-                    break;
-            } else if (it >= hi) {
-                break;
-            }
+         * ordered subcubes; without, thread t sums subcubes t, t + nt, ...
+         * (balanced, and a fixed assignment: the image depends on the
+         * thread count only, never on timing) */
+        const int lo = att ? (int)((long)n * tid / nt) : tid;
+        const int hi = att ? (int)((long)n * (tid + 1) / nt) : n;
+        const int stride = att ? 1 : nt;
+        for (int oi = lo; oi < hi && !failed && !cancelled; oi += stride) {
             const int sub = order[oi].index;
             const int bi[3] = {sub % s->nb[0], (sub / s->nb[0]) % s->nb[1],
                                sub / (s->nb[0] * s->nb[1])};
@@ -737,9 +792,9 @@ project_object(fr_state *st, const fr_frame *fr, fr_obj *ob, int threads,
             const int nz = s->nonzero[sub];
             if (nz) {
                 /* the slice w = -(a u + b v) through the oversampled spectrum */
-                const float *U = s->over[c] + per_over * (size_t)sub;
+                const fr_coef *U = s->over[c] + per_over * (size_t)sub;
                 const float *wsl = wtab + per_w * (size_t)sl;
-                slice_points(U, wsl, M, M2 * W, slice);
+                slice_points(U, wsl, M, M2 * W, sr, si, slice);
                 fftwf_execute_dft_c2r(plan, (fftwf_complex *)slice, g);
             }
             /* where the window lands on the global grid */
@@ -790,6 +845,7 @@ project_object(fr_state *st, const fr_frame *fr, fr_obj *ob, int threads,
             }
         }
         fftwf_free(slice);
+        free(sr);
         fftwf_free(g);
     }
     free(order);
@@ -841,8 +897,8 @@ sheared_sample(const fr_sheared *sh, const float *img, double P, double Q) {
 
 /* Slab test of a ray in index space against the box [lo, hi]^3 per axis. */
 static int
-box_hit(const double o[3], const double d[3], const double lo[3], const double hi[3], double *t0,
-        double *t1) {
+box_hit(const double o[3], const double d[3], const double inv[3], const double lo[3],
+        const double hi[3], double *t0, double *t1) {
     double a = -INFINITY, b = INFINITY;
     for (int i = 0; i < 3; i++) {
         if (d[i] == 0) {
@@ -850,7 +906,7 @@ box_hit(const double o[3], const double d[3], const double lo[3], const double h
                 return 0;
             continue;
         }
-        double u = (lo[i] - o[i]) / d[i], v = (hi[i] - o[i]) / d[i];
+        double u = (lo[i] - o[i]) * inv[i], v = (hi[i] - o[i]) * inv[i];
         if (u > v) {
             double t = u;
             u = v;
@@ -956,6 +1012,9 @@ fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
                      ghi[3] = {vol->dims[0] - 1, vol->dims[1] - 1, vol->dims[2] - 1};
         const int att = fr.attenuation > 0;
         const double offset = ob.src->offset;
+        double dinv[3];
+        for (int k = 0; k < 3; k++)
+            dinv[k] = ob.di[k] != 0 ? 1.0 / ob.di[k] : 0;
         /* as the ray caster: FR_LUT entries over the value range, colour and
          * opacity at the projected value, looked up by truncation */
         double lut_lo = vol->range[0], lut_hi = vol->range[1];
@@ -989,8 +1048,8 @@ fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
                 /* the samples of the spatial X-ray lie in the node-centred grid
                  * box; each voxel's band-limited footprint reaches half a voxel
                  * further, which is the length the integral is divided by */
-                if (!box_hit(o, ob.di, glo, ghi, &t0, &t1) ||
-                    !box_hit(o, ob.di, blo, bhi, &u0, &u1))
+                if (!box_hit(o, ob.di, dinv, glo, ghi, &t0, &t1) ||
+                    !box_hit(o, ob.di, dinv, blo, bhi, &u0, &u1))
                     continue;
                 const double Pq = Pp0 + Ppx * px + Ppy * py, Qq = Qp0 + Qpx * px + Qpy * py;
                 const double len = att ? sheared_sample(&sh, sh.L, Pq, Qq) : u1 - u0;
@@ -999,7 +1058,7 @@ fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
                 const double mean = offset + sheared_sample(&sh, sh.C, Pq, Qq) / len;
                 /* the transfer-function table of the ray caster's projections */
                 double xi = (mean - lut_lo) * lut_scale;
-                xi = xi < 0 ? 0 : xi > FR_LUT - 1 ? FR_LUT - 1 : xi;
+                xi = !(xi > 0) ? 0 : xi > FR_LUT - 1 ? FR_LUT - 1 : xi; /* NaN: 0 */
                 const float *e = lut + 4 * (int)xi;
                 const float a = e[0];
                 const float cv[3] = {e[1] * a, e[2] * a, e[3] * a};
