@@ -62,6 +62,38 @@ inside(const vv_volume *v, size_t i, double iso) {
     return get(v, i) >= iso;
 }
 
+#define COUNT_RUN(T)                                                                               \
+    {                                                                                              \
+        const T *d = (const T *)v->data + i0;                                                      \
+        for (int i = 0; i < n; i++)                                                                \
+            c += (double)d[i] >= iso;                                                              \
+        return c;                                                                                  \
+    }
+
+/* Voxels >= iso among n voxels from linear index i0. */
+static uint64_t
+count_run(const vv_volume *v, size_t i0, int n, double iso) {
+    uint64_t c = 0;
+    switch (v->type) {
+    case VV_U8:
+        COUNT_RUN(uint8_t)
+    case VV_I8:
+        COUNT_RUN(int8_t)
+    case VV_U16:
+        COUNT_RUN(uint16_t)
+    case VV_I16:
+        COUNT_RUN(int16_t)
+    case VV_U32:
+        COUNT_RUN(uint32_t)
+    case VV_I32:
+        COUNT_RUN(int32_t)
+    case VV_F32:
+        COUNT_RUN(float)
+    default:
+        COUNT_RUN(double)
+    }
+}
+
 /* The inside voxel of the region nearest (in world distance) to seed, within 2 voxels. */
 static vv_status
 find_seed(const vv_volume *v, double iso, const region_box *rb, const double seed[3], int out[3]) {
@@ -215,18 +247,26 @@ mc_measure(const vv_volume *w, double iso, const int lo[3], const int hi[3], int
     const vv_mat4 M = vv_volume_index_to_world(w);
     const vv_vec3 c = vv_mat4_mul_point(
         M, vv_vec3_make(0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])));
-    double vol = 0;
+    double vol = 0, area = 0;
+    const double cx = c.x, cy = c.y, cz = c.z;
+    const float *P = mesh->positions;
 #pragma omp parallel for num_threads(threads > 0 ? threads : vv_threads_get())                  \
-    schedule(static) reduction(+ : vol)
+    schedule(static) reduction(+ : vol, area)
     for (long t = 0; t < (long)mesh->n_triangles; t++) {
         const uint32_t *tr = mesh->triangles + 3 * t;
-        vv_vec3 p0 = vv_vec3_sub(vv_mesh_vertex(mesh, tr[0]), c),
-                p1 = vv_vec3_sub(vv_mesh_vertex(mesh, tr[1]), c),
-                p2 = vv_vec3_sub(vv_mesh_vertex(mesh, tr[2]), c);
-        vol += vv_vec3_dot(p0, vv_vec3_cross(p1, p2));
+        const float *q0 = P + 3 * (size_t)tr[0], *q1 = P + 3 * (size_t)tr[1],
+                    *q2 = P + 3 * (size_t)tr[2];
+        double a0 = q0[0] - cx, a1 = q0[1] - cy, a2 = q0[2] - cz;
+        double b0 = q1[0] - cx, b1 = q1[1] - cy, b2 = q1[2] - cz;
+        double d0 = q2[0] - cx, d1 = q2[1] - cy, d2 = q2[2] - cz;
+        /* p0 . (p1 x p2) and |(p1 - p0) x (p2 - p0)| */
+        vol += a0 * (b1 * d2 - b2 * d1) + a1 * (b2 * d0 - b0 * d2) + a2 * (b0 * d1 - b1 * d0);
+        double u0 = b0 - a0, u1 = b1 - a1, u2 = b2 - a2, w0 = d0 - a0, w1 = d1 - a1, w2 = d2 - a2;
+        double x0 = u1 * w2 - u2 * w1, x1 = u2 * w0 - u0 * w2, x2 = u0 * w1 - u1 * w0;
+        area += sqrt(x0 * x0 + x1 * x1 + x2 * x2);
     }
     vol /= 6;
-    m->area = vv_mesh_area(mesh);
+    m->area = 0.5 * area;
     m->n_triangles = mesh->n_triangles;
     vv_mesh_free(mesh);
     /* caps on the six faces of the box */
@@ -311,8 +351,8 @@ vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, double iso
 #pragma omp parallel for num_threads(threads) reduction(+ : cnt)
         for (int k = rb.lo[2]; k <= rb.hi[2]; k++)
             for (int j = rb.lo[1]; j <= rb.hi[1]; j++)
-                for (int i = rb.lo[0]; i <= rb.hi[0]; i++)
-                    cnt += inside(v, (size_t)k * sz + (size_t)j * sy + (size_t)i, isovalue);
+                cnt += count_run(v, (size_t)k * sz + (size_t)j * sy + (size_t)rb.lo[0],
+                                 rb.hi[0] - rb.lo[0] + 1, isovalue);
         out->voxels = cnt;
         return VV_OK;
     }
