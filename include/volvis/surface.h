@@ -43,8 +43,8 @@ extern "C" {
 
 /** Options of vv_isosurface_extract; initialise with vv_isosurface_options_init. */
 typedef struct vv_isosurface_options {
-    int threads;                /**< <= 0: vv_threads_get() */
-    int compute_normals;        /**< 1 (default): per-vertex normals from the volume gradient */
+    int threads;         /**< <= 0: vv_threads_get(); at most one per 2^20 voxels of the region */
+    int compute_normals; /**< 1 (default): per-vertex normals from the volume gradient */
     int roi_min[3], roi_max[3]; /**< voxel index region, inclusive; roi_max[0] < 0: whole volume */
     int n_cut_planes;           /**< world-space cut planes; keeps n·(x−p) >= 0 */
     vv_cut_plane cut_planes[VV_MAX_CUT_PLANES];
