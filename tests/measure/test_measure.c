@@ -13,6 +13,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* cairo's text rendering leaves fontconfig's process-wide caches allocated at exit (a
+ * library cache, not a leak of ours): suppress that for LeakSanitizer. */
+const char *__lsan_default_suppressions(void);
+const char *
+__lsan_default_suppressions(void) {
+    return "leak:libfontconfig.so\n";
+}
+
 static vv_volume *
 new_volume(int nx, int ny, int nz, vv_voxel_type t) {
     vv_volume *v = NULL;
