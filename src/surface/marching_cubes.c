@@ -769,12 +769,16 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
     for (int r = 0; r < 3; r++)
         for (int c = 0; c < 3; c++)
             J.G[r][c] = v->direction[3 * r + c] / v->spacing[c];
-    int nt = opt->threads > 0 ? opt->threads : vv_threads_get();
-    /* at most one thread per 2^20 voxels: on small grids the passes' barriers cost more
-     * than the threads save (and much more on a loaded machine) */
-    const uint64_t region_voxels = (uint64_t)J.n[0] * (uint64_t)J.n[1] * (uint64_t)J.n[2];
-    if ((uint64_t)nt > (region_voxels >> 20))
-        nt = (int)(region_voxels >> 20) > 1 ? (int)(region_voxels >> 20) : 1;
+    int nt = opt->threads;
+    if (nt <= 0) {
+        /* by default at most one thread per 2^20 voxels: on small grids the passes'
+         * barriers cost more than the threads save (and much more on a loaded machine) */
+        const uint64_t region_voxels = (uint64_t)J.n[0] * (uint64_t)J.n[1] * (uint64_t)J.n[2];
+        const uint64_t cap = region_voxels >> 20 > 0 ? region_voxels >> 20 : 1;
+        nt = vv_threads_get();
+        if ((uint64_t)nt > cap)
+            nt = (int)cap;
+    }
     const size_t rows = (size_t)J.n[1] * (size_t)J.n[2];
     vv_status st = VV_OK;
     vv_mesh *m = NULL;
