@@ -23,6 +23,8 @@ static const cli_opt_spec measure_opts[] = {
     {"range", 0, "LO:HI"},
     {"log", 0, NULL},
     {"distance", 0, "P1 P2"}, /* rewritten from "--distance P1 P2" before parsing */
+    {"geodesic", 0, "P1 P2"}, /* likewise */
+    {"steiner", 0, "K"},
     {"roi", 0, "I0,J0,K0:I1,J1,K1"},
     {"cut", 0, "PX,PY,PZ:NX,NY,NZ"},
     {"to", 0, "MESH"},
@@ -141,6 +143,8 @@ typedef struct measure_req {
     const char *plot, *to;
     int has_distance, dvox[2];
     double dp[2][3];
+    int has_geodesic, gvox[2], steiner;
+    double gp[2][3];
     vv_region region;
 } measure_req;
 
@@ -265,6 +269,40 @@ measure_volume(const char *in, const vv_raw_params *raw, const measure_req *r) {
             return rc;
         }
     }
+    double geo = NAN;
+    vv_vec3 gon[2] = {{0, 0, 0}, {0, 0, 0}};
+    if (r->has_geodesic) {
+        vv_isosurface_measure_options o;
+        vv_isosurface_measure_options_init(&o);
+        o.region = r->region;
+        o.threads = r->threads;
+        o.has_seed = r->has_seed;
+        if (r->has_seed) {
+            vv_vec3 p = vv_vec3_make(r->seed[0], r->seed[1], r->seed[2]);
+            if (!r->seed_voxel)
+                p = vv_mat4_mul_point(vv_volume_world_to_index(v), p);
+            o.seed[0] = p.x;
+            o.seed[1] = p.y;
+            o.seed[2] = p.z;
+        }
+        vv_mat4 M = vv_volume_index_to_world(v);
+        vv_vec3 gp[2];
+        for (int i = 0; i < 2; i++) {
+            gp[i] = vv_vec3_make(r->gp[i][0], r->gp[i][1], r->gp[i][2]);
+            if (r->gvox[i])
+                gp[i] = vv_mat4_mul_point(M, gp[i]);
+        }
+        vv_mesh *gm = NULL;
+        if ((s = vv_measure_isosurface_mesh(&gm, v, r->iso, &o)) != VV_OK ||
+            (s = vv_measure_geodesic(gm, gp[0], gp[1], r->steiner, &geo, &gon[0], &gon[1])) !=
+                VV_OK) {
+            rc = cli_fail(s, in);
+            vv_mesh_free(gm);
+            vv_volume_free(v);
+            return rc;
+        }
+        vv_mesh_free(gm);
+    }
     if (r->histogram) {
         if ((s = vv_measure_histogram(&h, v, r->bins, r->has_range ? r->lo : 0,
                                       r->has_range ? r->hi : 0, &r->region)) != VV_OK ||
@@ -310,6 +348,13 @@ measure_volume(const char *in, const vv_raw_params *raw, const measure_req *r) {
             if (r->has_seed)
                 printf(", \"seed_voxel\": [%d, %d, %d]", im.seed_voxel[0], im.seed_voxel[1],
                        im.seed_voxel[2]);
+            if (r->has_geodesic) {
+                printf(", \"geodesic\": {\"p1\": [%.10g, %.10g, %.10g], \"p2\": [%.10g, %.10g, "
+                       "%.10g], \"steiner\": %d, \"value\": ",
+                       gon[0].x, gon[0].y, gon[0].z, gon[1].x, gon[1].y, gon[1].z, r->steiner);
+                json_num(geo);
+                printf("}");
+            }
             printf("}");
         }
         if (h) {
@@ -368,6 +413,11 @@ measure_volume(const char *in, const vv_raw_params *raw, const measure_req *r) {
             }
             if (r->method == VV_MEASURE_MC)
                 printf("%-22s %llu\n", "voxels inside", (unsigned long long)im.voxels);
+            if (r->has_geodesic)
+                printf("%-22s %.10g %s along the surface between (%g, %g, %g) and (%g, %g, %g) "
+                       "(Steiner graph, %d points per edge)\n",
+                       "geodesic distance", geo, u, gon[0].x, gon[0].y, gon[0].z, gon[1].x,
+                       gon[1].y, gon[1].z, r->steiner);
         }
         if (h) {
             printf("%-22s %llu voxels (%llu outside the range, %llu NaN), min %g, max %g, mean "
@@ -402,29 +452,33 @@ int
 cli_measure_main(int argc, char **argv) {
     /* "--distance P1 P2" takes two arguments: join them for the parser ("P1;P2") */
     char **av = malloc(((size_t)argc + 1) * sizeof *av);
-    char *joined = NULL;
+    char *joined[2] = {NULL, NULL};
     if (!av) {
         cli_error("out of memory");
         return CLI_EXIT_FAIL;
     }
     int ac = 0;
     for (int i = 0; i < argc; i++) {
-        if (strcmp(argv[i], "--distance") == 0) {
+        if (strcmp(argv[i], "--distance") == 0 || strcmp(argv[i], "--geodesic") == 0) {
+            int g = argv[i][2] == 'g';
             if (i + 2 >= argc) {
                 free(av);
-                cli_error("measure: --distance needs two points P1 P2 (see 'volvis measure "
-                          "--help')");
+                free(joined[0]);
+                free(joined[1]);
+                cli_error("measure: %s needs two points P1 P2 (see 'volvis measure --help')",
+                          argv[i]);
                 return CLI_EXIT_USAGE;
             }
-            free(joined);
+            free(joined[g]);
             size_t n = strlen(argv[i + 1]) + strlen(argv[i + 2]) + 16;
-            joined = malloc(n);
-            if (!joined) {
+            joined[g] = malloc(n);
+            if (!joined[g]) {
                 free(av);
+                free(joined[1 - g]);
                 return CLI_EXIT_FAIL;
             }
-            snprintf(joined, n, "--distance=%s;%s", argv[i + 1], argv[i + 2]);
-            av[ac++] = joined;
+            snprintf(joined[g], n, "%s=%s;%s", argv[i], argv[i + 1], argv[i + 2]);
+            av[ac++] = joined[g];
             i += 2;
         } else {
             av[ac++] = argv[i];
@@ -521,6 +575,33 @@ cli_measure_main(int argc, char **argv) {
             (rc = cli_parse_point(&a, "distance", semi + 1, r.dp[1], &r.dvox[1])))
             goto done;
     }
+    r.steiner = 8;
+    if ((s = cli_get(&a, "steiner")) && (rc = cli_parse_int(&a, "steiner", s, 0, 64, &r.steiner)))
+        goto done;
+    if ((s = cli_get(&a, "geodesic"))) {
+        r.has_geodesic = 1;
+        const char *semi = strchr(s, ';');
+        char p1[256];
+        size_t n1 = semi ? (size_t)(semi - s) : 0;
+        if (!semi || n1 >= sizeof p1) {
+            rc = cli_usage_error(&a, "--geodesic needs two points P1 P2");
+            goto done;
+        }
+        memcpy(p1, s, n1);
+        p1[n1] = '\0';
+        if ((rc = cli_parse_point(&a, "geodesic", p1, r.gp[0], &r.gvox[0])) ||
+            (rc = cli_parse_point(&a, "geodesic", semi + 1, r.gp[1], &r.gvox[1])))
+            goto done;
+        if (!r.has_iso) {
+            rc = cli_usage_error(&a, "--geodesic needs --iso (the surface to follow)");
+            goto done;
+        }
+        if (r.method == VV_MEASURE_VOXEL) {
+            rc = cli_usage_error(&a, "--geodesic follows the Marching Cubes surface (not with "
+                                     "--method voxel)");
+            goto done;
+        }
+    }
     const char *in = a.pos[0];
     if (is_mesh_file(in) && !cli_get(&a, "raw")) {
         if (r.has_iso || r.histogram || cli_get(&a, "roi") || r.region.n_cut_planes ||
@@ -551,7 +632,8 @@ cli_measure_main(int argc, char **argv) {
         goto done;
     rc = measure_volume(in, raw_spec ? &raw : NULL, &r);
 done:
-    free(joined);
+    free(joined[0]);
+    free(joined[1]);
     free(av);
     return rc;
 }

@@ -165,8 +165,8 @@ test_isosurface_files(void **state) {
     assert_non_null(strstr(r.out, "PARC"));
     free_result(&r);
     /* region and cut plane */
-    r = run_cli("isosurface", in, "--iso", "60.5", "--roi", "0,0,0:40,65,65", "--cut", "0,0,30:0,0,1",
-                "-o", out_file("cut.ply"));
+    r = run_cli("isosurface", in, "--iso", "60.5", "--roi", "0,0,0:40,65,65", "--cut",
+                "0,0,30:0,0,1", "-o", out_file("cut.ply"));
     assert_int_equal(r.status, 0);
     free_result(&r);
     vv_mesh_free(ref);
@@ -183,13 +183,13 @@ test_isosurface_errors(void **state) {
         int status;
         const char *args[10];
     } cases[] = {
-        {2, {"isosurface", in, "-o", "never.ply", NULL}},            /* no --iso */
+        {2, {"isosurface", in, "-o", "never.ply", NULL}},              /* no --iso */
         {2, {"isosurface", in, "--iso", "60.5", NULL}},                /* no -o */
         {2, {"isosurface", in, "--iso", "60.5", "-o", "x.vtk", NULL}}, /* format */
-        {2, {"isosurface", in, "--iso", "6x", "-o", "x.ply", NULL}}, /* number */
+        {2, {"isosurface", in, "--iso", "6x", "-o", "x.ply", NULL}},   /* number */
         {2, {"isosurface", in, "--iso", "60.5", "--coarse", "1", "--parc", "1", "-o", "x.ply"}},
         {2, {"isosurface", in, "--iso", "60.5", "--roi", "0,0:1,1", "-o", "x.ply", NULL}},
-        {1, {"isosurface", in, "--iso", "900", "-o", NULL, NULL}},                /* range */
+        {1, {"isosurface", in, "--iso", "900", "-o", NULL, NULL}},                  /* range */
         {1, {"isosurface", "/nonexistent.slc", "--iso", "60.5", "-o", NULL, NULL}}, /* file */
     };
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
@@ -248,6 +248,18 @@ test_measure_volume(void **state) {
     assert_true(file_exists(png));
     assert_near(json_number(r.out, "total"), 256.0 * 256 * 108, 0.5);
     assert_near(json_number(r.out, "value"), 10 * v->spacing[0], 1e-6);
+    free_result(&r);
+    /* geodesic across the sphere phantom: half a great circle of the measured sphere */
+    r = run_cli("measure", vt_data("volumes/sphere.slc"), "--iso", "127.5", "--geodesic", "0,0,0",
+                "49,49,49", "--json");
+    assert_int_equal(r.status, 0);
+    {
+        double area = json_number(r.out, "area"), rad = sqrt(area / (4 * VV_PI));
+        const char *g = strstr(r.out, "\"geodesic\"");
+        assert_non_null(g);
+        double geo = json_number(g, "value");
+        assert_true(fabs(geo / (VV_PI * rad) - 1) < 0.01);
+    }
     free_result(&r);
     r = run_cli("measure", in, "--histogram", "--bins", "4");
     assert_int_equal(r.status, 0);
