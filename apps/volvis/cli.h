@@ -42,6 +42,10 @@ int cli_render_main(int argc, char **argv);
 void cli_render_usage(FILE *out);
 int cli_convert_main(int argc, char **argv);
 void cli_convert_usage(FILE *out);
+int cli_compress_main(int argc, char **argv);
+void cli_compress_usage(FILE *out);
+int cli_decompress_main(int argc, char **argv);
+void cli_decompress_usage(FILE *out);
 int cli_measure_main(int argc, char **argv);
 void cli_measure_usage(FILE *out);
 int cli_isosurface_main(int argc, char **argv);
@@ -154,6 +158,8 @@ typedef struct cli_progress {
     int draw;      /**< 1 when a bar is drawn (stderr is a terminal and not quiet) */
     int last_pct;  /**< last percentage drawn, -1 at the start */
     int drawn;     /**< 1 once something was drawn */
+    double start;  /**< cli_now() at cli_progress_begin, for the time-left estimate */
+    int last_left; /**< seconds left last drawn, -1 none */
     vv_progress p; /**< pass this to the library */
 } cli_progress;
 

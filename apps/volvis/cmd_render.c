@@ -28,6 +28,7 @@ static const cli_opt_spec render_opts[] = {
     {"quality", 0, "0|1|2"},
     {"set", 0, "KEY=VALUE"},
     {"alpha", 0, NULL},
+    {"ortho", 0, NULL},
     {"quiet", 'q', NULL},
 };
 #define N_RENDER_OPTS ((int)(sizeof render_opts / sizeof render_opts[0]))
@@ -53,7 +54,7 @@ cli_render_usage(FILE *out) {
             "  --mode MODE      composite (default), mip (maximum intensity projection),\n"
             "                   minip (minimum intensity projection), xray (average\n"
             "                   along the ray) or iso (shaded isosurface); for a scene,\n"
-            "                   applies to every volume object\n"
+            "                   applies to every volume object (geometric objects have none)\n"
             "  --iso V          isovalue for --mode iso (alone it implies --mode iso)\n"
             "  --tf LO:HI       transfer function ramp from LO (transparent) to HI (opaque)\n"
             "                   in data values (default: from the histogram); for a scene,\n"
@@ -69,11 +70,22 @@ cli_render_usage(FILE *out) {
             "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
             "                   read INPUT as raw voxels (see 'volvis info --help')\n"
             "  --gamma G        8-bit conversion v^(1/G) (default 1: values unchanged)\n"
-            "  --quality Q      0 draft, 1 medium, 2 final (default 2)\n"
+            "  --quality Q      0 draft, 1 medium, 2 final (default 2); raytrace: 0 no\n"
+            "                   shadow or secondary rays, 1 one ray a pixel, 2 supersampled\n"
             "  --set KEY=VALUE  renderer-specific option (repeatable); raycast takes\n"
             "                   early_termination (0.99), gradient_budget_mb,\n"
-            "                   empty_space_skipping (1), simd (1); see docs/rendering.md\n"
+            "                   empty_space_skipping (1), simd (1); raytrace takes\n"
+            "                   shadows (1), max_depth (3), samples (2: 2x2 a pixel at\n"
+            "                   quality 2), jitter (0), seed (1), adaptive (1),\n"
+            "                   adaptive_threshold (0.05), parc (1), shadow_grid (1),\n"
+            "                   early_termination (0.99); surface takes\n"
+            "                   shading (flat|gouraud|phong), wireframe (0), cull\n"
+            "                   (auto|back|none), caps (1), segments (64); fourier\n"
+            "                   takes vvc=FILE, quality (exact), rate, block (16),\n"
+            "                   attenuation (0); see docs/rendering.md\n"
             "  --alpha          write RGBA (coverage in the alpha channel); default RGB\n"
+            "  --ortho          parallel projection (orthographic), the view framed on\n"
+            "                   the scene; needed by the fourier renderer\n"
             "  -q, --quiet      no progress bar and no 'wrote' line\n"
             "  -h, --help       show this help\n"
             "\n"
@@ -87,7 +99,12 @@ cli_render_usage(FILE *out) {
             "Examples:\n"
             "  volvis render ../shared/data/volumes/ct_head.nrrd --tf 100:1500 -o head.png\n"
             "  volvis render ../shared/data/volumes/neghip.slc --mode mip --azimuth 30 -o mip.png\n"
-            "  volvis render scene.json --size 1024x1024 --azimuth 45 -o scene.png\n");
+            "  volvis render ../shared/data/volumes/ct_head.nrrd --iso 400 --renderer surface \\\n"
+            "      --set shading=gouraud -o bone.png\n"
+            "  volvis render scene.json --size 1024x1024 --azimuth 45 -o scene.png\n"
+            "  volvis render examples/head_mirror.json --renderer raytrace -o mirror.png\n"
+            "  volvis render head.nrrd --renderer fourier --ortho --set vvc=head.vvc \\\n"
+            "      --mode xray -o fourier.png\n");
 }
 
 static int
@@ -169,7 +186,7 @@ typedef struct render_args {
     vv_raw_params raw;
     double gamma;
     int quality;
-    int alpha, quiet;
+    int alpha, quiet, ortho;
 } render_args;
 
 static int
@@ -271,6 +288,7 @@ parse_render_args(cli_args *a, render_args *r) {
     }
     r->alpha = cli_count(a, "alpha") > 0;
     r->quiet = cli_count(a, "quiet") > 0;
+    r->ortho = cli_count(a, "ortho") > 0;
     return 0;
 }
 
@@ -366,6 +384,13 @@ cli_render_main(int argc, char **argv) {
     if (rc) {
         vv_world_free(w);
         return rc;
+    }
+    if (r.ortho && w->view.projection != VV_PROJECTION_ORTHOGRAPHIC) {
+        /* the same direction, parallel rays, the scene framed */
+        w->view.projection = VV_PROJECTION_ORTHOGRAPHIC;
+        vv_view_frame_box(&w->view, vv_world_bounds(w));
+        if (r.zoom != 1)
+            w->view.ortho_height /= r.zoom;
     }
     if (r.has_step)
         for (int i = 0; i < w->n_objects; i++)

@@ -5,12 +5,14 @@
 #ifndef VOLVIS_VOLVIS_H
 #define VOLVIS_VOLVIS_H
 
+#include "compress.h"
 #include "core.h"
 #include "image.h"
 #include "io.h"
 #include "math.h"
 #include "mesh.h"
 #include "model.h"
+#include "raster.h"
 #include "render.h"
 #include "measure.h"
 #include "surface.h"
