@@ -127,7 +127,9 @@ typedef struct vv_parc {
 vv_status vv_parc_new(vv_parc **out, const vv_volume *v, int level);
 /**
  * Rebuilds the box list for @p isovalue from the stored min/max (no voxel
- * is read: fast enough for an isovalue slider). Errors: VV_ERR_INVALID
+ * is read: fast enough for an isovalue slider). The min/max are floats, so
+ * for u32, i32 and f64 data a box whose extreme lies within float rounding
+ * of the isovalue can be misjudged. Errors: VV_ERR_INVALID
  * (NULL, non-finite isovalue), VV_ERR_NOMEM.
  */
 vv_status vv_parc_set_isovalue(vv_parc *p, double isovalue);
