@@ -6,6 +6,7 @@
  * compare ratios; see ../shared/BENCHMARKS.md).
  *
  * usage: bench_surface VOLUME [--iso V] [--runs N] [--threads N] [--level L]
+ *        (--level: the PARC subdivision level, default 4)
  *
  * Timings are the median of --runs (default 5) after one warm-up run, wall
  * clock, --threads threads (default 2, the peers' count):
@@ -18,7 +19,7 @@
  *                          capped divergence volume; VTK: extraction + massprops)
  *   measure_voxel_time     the same by voxel counting
  *   parc_build_time        vv_parc_set_isovalue + vv_parc_mesh at a new isovalue
- *   coarse_mc_build_time   vv_coarse_set_isovalue at a new isovalue
+ *   coarse_mc_build_time   vv_coarse_set_isovalue at a new isovalue (level 1)
  *   parc_grid_time, coarse_grid_time: the one-off reduced structures
  * The PARC and coarse rebuilds alternate between iso and iso + 1 so each
  * run is a real change of isovalue.
@@ -114,8 +115,9 @@ main(int argc, char **argv) {
             path = a;
     }
     if (!path || runs < 1 || runs > MAX_RUNS) {
-        fprintf(stderr, "usage: bench_surface VOLUME [--iso V] [--runs 1..%d] [--threads N] "
-                        "[--level L]\n",
+        fprintf(stderr,
+                "usage: bench_surface VOLUME [--iso V] [--runs 1..%d] [--threads N] "
+                "[--level L]\n",
                 MAX_RUNS);
         return 2;
     }
@@ -153,7 +155,69 @@ main(int argc, char **argv) {
     emit("iso_mc_grid_time", time_extract(v, iso, &o, runs, NULL), "s");
     o.minmax = NULL;
     vv_minmax_grid_free(g);
-    (void)level;
+
+    /* measurement: Marching Cubes area + capped volume, and voxel counting */
+    vv_isosurface_measure_options mo;
+    vv_isosurface_measure_options_init(&mo);
+    mo.threads = threads;
+    vv_isosurface_measure res;
+    double t[MAX_RUNS];
+    for (int method = 0; method < 2; method++) {
+        mo.method = method ? VV_MEASURE_VOXEL : VV_MEASURE_MC;
+        if (vv_measure_isosurface(&res, v, iso, &mo) != VV_OK)
+            die("measure");
+        for (int r = 0; r < runs; r++) {
+            double t0 = now();
+            if (vv_measure_isosurface(&res, v, iso, &mo) != VV_OK)
+                die("measure");
+            t[r] = now() - t0;
+        }
+        emit(method ? "measure_voxel_time" : "measure_mc_time", median(t, runs), "s");
+        emit(method ? "measure_voxel_area" : "measure_mc_area", res.area, "world^2");
+        emit(method ? "measure_voxel_volume" : "measure_mc_volume", res.volume, "world^3");
+    }
+
+    /* PARC: grid once, then rebuilds at alternating isovalues */
+    vv_parc *p = NULL;
+    double t0 = now();
+    if (vv_parc_new(&p, v, level) != VV_OK)
+        die("parc");
+    emit("parc_grid_time", now() - t0, "s");
+    size_t faces = 0;
+    for (int r = -1; r < runs; r++) {
+        double q0 = now();
+        vv_mesh *pm = NULL;
+        if (vv_parc_set_isovalue(p, iso + (r & 1)) != VV_OK || vv_parc_mesh(p, &pm) != VV_OK)
+            die("parc");
+        if (r >= 0)
+            t[r] = now() - q0;
+        faces = pm->n_triangles / 2;
+        vv_mesh_free(pm);
+    }
+    emit("parc_build_time", median(t, runs), "s");
+    emit("parc_boxes", (double)p->n_boxes, "boxes");
+    emit("parc_faces", (double)faces, "quads");
+    printf("# PARC level %d: %d-cell boxes, %d x %d x %d\n", level, p->block, p->dims[0],
+           p->dims[1], p->dims[2]);
+    vv_parc_free(p);
+
+    /* coarse Marching Cubes at level 1 (every second voxel) */
+    vv_coarse_surface *c = NULL;
+    t0 = now();
+    if (vv_coarse_new(&c, v, 1) != VV_OK)
+        die("coarse");
+    emit("coarse_grid_time", now() - t0, "s");
+    for (int r = -1; r < runs; r++) {
+        double q0 = now();
+        if (vv_coarse_set_isovalue(c, iso + (r & 1), threads) != VV_OK)
+            die("coarse");
+        if (r >= 0)
+            t[r] = now() - q0;
+    }
+    emit("coarse_mc_build_time", median(t, runs), "s");
+    emit("coarse_mc_triangles", (double)c->n_triangles, "triangles");
+    emit("coarse_mc_bytes", (double)vv_coarse_bytes(c), "bytes");
+    vv_coarse_free(c);
     vv_volume_free(v);
     return 0;
 }

@@ -46,6 +46,10 @@ int cli_compress_main(int argc, char **argv);
 void cli_compress_usage(FILE *out);
 int cli_decompress_main(int argc, char **argv);
 void cli_decompress_usage(FILE *out);
+int cli_measure_main(int argc, char **argv);
+void cli_measure_usage(FILE *out);
+int cli_isosurface_main(int argc, char **argv);
+void cli_isosurface_usage(FILE *out);
 
 /* ---- option parsing ------------------------------------------------------ */
 
@@ -106,6 +110,17 @@ int cli_parse_range(const cli_args *a, const char *opt, const char *text, double
  * @p p (initialised here).
  */
 int cli_parse_raw(const cli_args *a, const char *opt, const char *text, vv_raw_params *p);
+
+/**
+ * A point "X,Y,Z" (world) or "voxel:I,J,K" (voxel indices, fractional allowed; "world:"
+ * may prefix a world point); *is_voxel says which.
+ */
+int cli_parse_point(const cli_args *a, const char *opt, const char *text, double out[3],
+                    int *is_voxel);
+/** A voxel box "I0,J0,K0:I1,J1,K1", inclusive (checked against a volume by the caller). */
+int cli_parse_roi(const cli_args *a, const char *opt, const char *text, int lo[3], int hi[3]);
+/** A cut plane "PX,PY,PZ:NX,NY,NZ" (world point and normal; the normal's side is kept). */
+int cli_parse_plane(const cli_args *a, const char *opt, const char *text, vv_cut_plane *pl);
 
 /* ---- errors ---------------------------------------------------------------- */
 

@@ -1,6 +1,7 @@
 /*
  * volvis: the command-line tool. Dispatches a table of subcommands, one file
- * each (cmd_info.c, cmd_render.c, cmd_convert.c, cmd_compress.c). See docs/cli.md.
+ * each (cmd_info.c, cmd_render.c, cmd_convert.c, cmd_compress.c,
+ * cmd_isosurface.c, cmd_measure.c). See docs/cli.md.
  */
 #include <stdio.h>
 #include <string.h>
@@ -15,6 +16,10 @@ static const cli_command commands[] = {
      cli_compress_usage},
     {"decompress", "decompress a .vvc file to NRRD or SLC", cli_decompress_main,
      cli_decompress_usage},
+    {"isosurface", "extract an isosurface (or a preview of it) to PLY, OBJ or STL",
+     cli_isosurface_main, cli_isosurface_usage},
+    {"measure", "isosurface area and volume, histograms, distances; mesh area and volume",
+     cli_measure_main, cli_measure_usage},
 };
 #define N_COMMANDS ((int)(sizeof commands / sizeof commands[0]))
 

@@ -332,3 +332,86 @@ bad_field:
                            "SXxSYxSZ or skip=N)",
                            opt, (int)strcspn(s, ":"), s, text);
 }
+
+int
+cli_parse_point(const cli_args *a, const char *opt, const char *text, double out[3],
+                int *is_voxel) {
+    const char *p = text, *end;
+    *is_voxel = 0;
+    if (strncmp(p, "voxel:", 6) == 0) {
+        *is_voxel = 1;
+        p += 6;
+    } else if (strncmp(p, "world:", 6) == 0) {
+        p += 6;
+    }
+    for (int i = 0; i < 3; i++) {
+        if (!scan_double(p, &end, &out[i]))
+            goto bad;
+        p = end;
+        if (i < 2) {
+            if (*p != ',')
+                goto bad;
+            p++;
+        }
+    }
+    if (*p == '\0')
+        return 0;
+bad:
+    return cli_usage_error(a,
+                           "--%s: expected a point X,Y,Z (world) or voxel:I,J,K (voxel "
+                           "indices), got '%s'",
+                           opt, text);
+}
+
+int
+cli_parse_roi(const cli_args *a, const char *opt, const char *text, int lo[3], int hi[3]) {
+    const char *p = text, *end;
+    for (int i = 0; i < 6; i++) {
+        long v;
+        if (!scan_long(p, &end, &v) || v < 0 || v > VV_VOLUME_MAX_DIM)
+            goto bad;
+        if (i < 3)
+            lo[i] = (int)v;
+        else
+            hi[i - 3] = (int)v;
+        p = end;
+        char sep = i == 2 ? ':' : ',';
+        if (i < 5) {
+            if (*p != sep)
+                goto bad;
+            p++;
+        }
+    }
+    if (*p == '\0')
+        return 0;
+bad:
+    return cli_usage_error(a, "--%s: expected a voxel box I0,J0,K0:I1,J1,K1 (inclusive), got '%s'",
+                           opt, text);
+}
+
+int
+cli_parse_plane(const cli_args *a, const char *opt, const char *text, vv_cut_plane *pl) {
+    const char *p = text, *end;
+    double v[6];
+    for (int i = 0; i < 6; i++) {
+        if (!scan_double(p, &end, &v[i]))
+            goto bad;
+        p = end;
+        char sep = i == 2 ? ':' : ',';
+        if (i < 5) {
+            if (*p != sep)
+                goto bad;
+            p++;
+        }
+    }
+    if (*p != '\0' || !(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] > 0))
+        goto bad;
+    pl->point = vv_vec3_make(v[0], v[1], v[2]);
+    pl->normal = vv_vec3_normalize(vv_vec3_make(v[3], v[4], v[5]));
+    return 0;
+bad:
+    return cli_usage_error(a,
+                           "--%s: expected a plane PX,PY,PZ:NX,NY,NZ (a world point and a "
+                           "non-zero normal; keeps the side the normal points to), got '%s'",
+                           opt, text);
+}

@@ -125,6 +125,15 @@ typedef struct vv_isosurface_measure {
 vv_status vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, double isovalue,
                                 const vv_isosurface_measure_options *opt);
 
+/**
+ * The Marching Cubes surface that vv_measure_isosurface measures with
+ * VV_MEASURE_MC (method ignored): the whole surface in the region, or the
+ * surface-tracked section when seeded, with normals; cut planes clip it.
+ * *out is new (caller frees). Errors: as vv_measure_isosurface.
+ */
+vv_status vv_measure_isosurface_mesh(vv_mesh **out, const vv_volume *v, double isovalue,
+                                     const vv_isosurface_measure_options *opt);
+
 /* ---- distances -------------------------------------------------------------- */
 
 /**
@@ -136,6 +145,24 @@ vv_status vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, 
  */
 vv_status vv_measure_distance(const vv_volume *v, vv_vec3 a, int a_voxel, vv_vec3 b, int b_voxel,
                               double *out);
+
+/**
+ * Geodesic distance along the surface of mesh @p m between the points of
+ * the mesh closest to @p a and @p b (stored in a_on, b_on; may be NULL):
+ * the shortest path in the Steiner graph of the mesh (Lanthier, Maheshwari
+ * and Sack 2001) with @p steiner points per edge (0..64; 8 is a good
+ * default): within every triangle each pair of its boundary points (vertices
+ * and Steiner points) is joined by a straight segment. The result is the
+ * length of a real path on the surface (never below the true geodesic of
+ * the mesh) and approaches it roughly as 1/steiner^2: on a Marching Cubes
+ * plane +4.3 % with no Steiner points, +0.25 % with 6, +0.18 % with 8
+ * (tested). Serial;
+ * memory O(triangles x steiner). Errors: VV_ERR_INVALID (NULL, empty mesh,
+ * steiner out of range, points on different connected parts),
+ * VV_ERR_NOMEM.
+ */
+vv_status vv_measure_geodesic(const vv_mesh *m, vv_vec3 a, vv_vec3 b, int steiner, double *out,
+                              vv_vec3 *a_on, vv_vec3 *b_on);
 
 /* ---- meshes ------------------------------------------------------------------- */
 

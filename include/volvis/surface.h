@@ -43,7 +43,7 @@ extern "C" {
 
 /** Options of vv_isosurface_extract; initialise with vv_isosurface_options_init. */
 typedef struct vv_isosurface_options {
-    int threads;                /**< <= 0: vv_threads_get() */
+    int threads; /**< <= 0: vv_threads_get(), but at most one per 2^20 voxels of the region */
     int compute_normals;        /**< 1 (default): per-vertex normals from the volume gradient */
     int roi_min[3], roi_max[3]; /**< voxel index region, inclusive; roi_max[0] < 0: whole volume */
     int n_cut_planes;           /**< world-space cut planes; keeps n·(x−p) >= 0 */
@@ -127,7 +127,9 @@ typedef struct vv_parc {
 vv_status vv_parc_new(vv_parc **out, const vv_volume *v, int level);
 /**
  * Rebuilds the box list for @p isovalue from the stored min/max (no voxel
- * is read: fast enough for an isovalue slider). Errors: VV_ERR_INVALID
+ * is read: fast enough for an isovalue slider). The min/max are floats, so
+ * for u32, i32 and f64 data a box whose extreme lies within float rounding
+ * of the isovalue can be misjudged. Errors: VV_ERR_INVALID
  * (NULL, non-finite isovalue), VV_ERR_NOMEM.
  */
 vv_status vv_parc_set_isovalue(vv_parc *p, double isovalue);
@@ -180,8 +182,9 @@ typedef struct vv_coarse_surface {
  */
 vv_status vv_coarse_new(vv_coarse_surface **out, const vv_volume *v, int level);
 /**
- * Extracts the coarse surface at @p isovalue with @p threads threads (<= 0:
- * vv_threads_get()). Errors: VV_ERR_INVALID, VV_ERR_LIMIT, VV_ERR_NOMEM.
+ * Extracts the coarse surface at @p isovalue with at most @p threads threads
+ * (<= 0: vv_threads_get()) and at most one per 2^20 voxels of the reduced
+ * grid. Errors: VV_ERR_INVALID, VV_ERR_LIMIT, VV_ERR_NOMEM.
  */
 vv_status vv_coarse_set_isovalue(vv_coarse_surface *c, double isovalue, int threads);
 /**

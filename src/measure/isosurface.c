@@ -62,6 +62,38 @@ inside(const vv_volume *v, size_t i, double iso) {
     return get(v, i) >= iso;
 }
 
+#define COUNT_RUN(T)                                                                               \
+    {                                                                                              \
+        const T *d = (const T *)v->data + i0;                                                      \
+        for (int i = 0; i < n; i++)                                                                \
+            c += (double)d[i] >= iso;                                                              \
+        return c;                                                                                  \
+    }
+
+/* Voxels >= iso among n voxels from linear index i0. */
+static uint64_t
+count_run(const vv_volume *v, size_t i0, int n, double iso) {
+    uint64_t c = 0;
+    switch (v->type) {
+    case VV_U8:
+        COUNT_RUN(uint8_t)
+    case VV_I8:
+        COUNT_RUN(int8_t)
+    case VV_U16:
+        COUNT_RUN(uint16_t)
+    case VV_I16:
+        COUNT_RUN(int16_t)
+    case VV_U32:
+        COUNT_RUN(uint32_t)
+    case VV_I32:
+        COUNT_RUN(int32_t)
+    case VV_F32:
+        COUNT_RUN(float)
+    default:
+        COUNT_RUN(double)
+    }
+}
+
 /* The inside voxel of the region nearest (in world distance) to seed, within 2 voxels. */
 static vv_status
 find_seed(const vv_volume *v, double iso, const region_box *rb, const double seed[3], int out[3]) {
@@ -215,18 +247,26 @@ mc_measure(const vv_volume *w, double iso, const int lo[3], const int hi[3], int
     const vv_mat4 M = vv_volume_index_to_world(w);
     const vv_vec3 c = vv_mat4_mul_point(
         M, vv_vec3_make(0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])));
-    double vol = 0;
+    double vol = 0, area = 0;
+    const double cx = c.x, cy = c.y, cz = c.z;
+    const float *P = mesh->positions;
 #pragma omp parallel for num_threads(threads > 0 ? threads : vv_threads_get())                  \
-    schedule(static) reduction(+ : vol)
+    schedule(static) reduction(+ : vol, area)
     for (long t = 0; t < (long)mesh->n_triangles; t++) {
         const uint32_t *tr = mesh->triangles + 3 * t;
-        vv_vec3 p0 = vv_vec3_sub(vv_mesh_vertex(mesh, tr[0]), c),
-                p1 = vv_vec3_sub(vv_mesh_vertex(mesh, tr[1]), c),
-                p2 = vv_vec3_sub(vv_mesh_vertex(mesh, tr[2]), c);
-        vol += vv_vec3_dot(p0, vv_vec3_cross(p1, p2));
+        const float *q0 = P + 3 * (size_t)tr[0], *q1 = P + 3 * (size_t)tr[1],
+                    *q2 = P + 3 * (size_t)tr[2];
+        double a0 = q0[0] - cx, a1 = q0[1] - cy, a2 = q0[2] - cz;
+        double b0 = q1[0] - cx, b1 = q1[1] - cy, b2 = q1[2] - cz;
+        double d0 = q2[0] - cx, d1 = q2[1] - cy, d2 = q2[2] - cz;
+        /* p0 . (p1 x p2) and |(p1 - p0) x (p2 - p0)| */
+        vol += a0 * (b1 * d2 - b2 * d1) + a1 * (b2 * d0 - b0 * d2) + a2 * (b0 * d1 - b1 * d0);
+        double u0 = b0 - a0, u1 = b1 - a1, u2 = b2 - a2, w0 = d0 - a0, w1 = d1 - a1, w2 = d2 - a2;
+        double x0 = u1 * w2 - u2 * w1, x1 = u2 * w0 - u0 * w2, x2 = u0 * w1 - u1 * w0;
+        area += sqrt(x0 * x0 + x1 * x1 + x2 * x2);
     }
     vol /= 6;
-    m->area = vv_mesh_area(mesh);
+    m->area = 0.5 * area;
     m->n_triangles = mesh->n_triangles;
     vv_mesh_free(mesh);
     /* caps on the six faces of the box */
@@ -257,6 +297,61 @@ mc_measure(const vv_volume *w, double iso, const int lo[3], const int hi[3], int
     m->volume = vol;
     m->cut_area = cut;
     m->area_bias = 1;
+    return VV_OK;
+}
+
+/* Copy of the section's box (bmin..bmax) plus one voxel, clamped to the region, in which
+ * the inside voxels not in mask are lowered just below the isovalue. */
+static vv_status
+masked_copy(const vv_volume *v, double isovalue, const region_box *rbp, const uint8_t *mask,
+            const int bmin[3], const int bmax[3], int threads, vv_volume **out) {
+    const region_box rb = *rbp;
+    vv_status s;
+    int lo[3], hi[3], dims[3];
+    for (int a = 0; a < 3; a++) {
+        lo[a] = bmin[a] - 1 < rb.lo[a] ? rb.lo[a] : bmin[a] - 1;
+        hi[a] = bmax[a] + 1 > rb.hi[a] ? rb.hi[a] : bmax[a] + 1;
+        if (hi[a] == lo[a]) { /* keep two voxels for cells */
+            if (hi[a] < rb.hi[a])
+                hi[a]++;
+            else
+                lo[a]--;
+        }
+        dims[a] = hi[a] - lo[a] + 1;
+    }
+    const int exact_float = v->type == VV_U8 || v->type == VV_I8 || v->type == VV_U16 ||
+                            v->type == VV_I16 || v->type == VV_F32;
+    vv_volume *w = NULL;
+    if ((s = vv_volume_new(&w, dims, exact_float ? VV_F32 : VV_F64)) != VV_OK)
+        return s;
+    vv_mat4 M = vv_volume_index_to_world(v);
+    vv_vec3 o = vv_mat4_mul_point(M, vv_vec3_make(lo[0], lo[1], lo[2]));
+    w->origin[0] = o.x;
+    w->origin[1] = o.y;
+    w->origin[2] = o.z;
+    memcpy(w->spacing, v->spacing, sizeof w->spacing);
+    memcpy(w->direction, v->direction, sizeof w->direction);
+    float below_f = (float)isovalue;
+    while ((double)below_f >= isovalue)
+        below_f = nextafterf(below_f, -INFINITY);
+    const double below_d = nextafter(isovalue, -INFINITY);
+    const size_t sy = (size_t)v->dims[0], sz = sy * (size_t)v->dims[1];
+#pragma omp parallel for num_threads(threads) schedule(static)
+    for (int k = 0; k < dims[2]; k++)
+        for (int j = 0; j < dims[1]; j++)
+            for (int i = 0; i < dims[0]; i++) {
+                int I = lo[0] + i, Jj = lo[1] + j, K = lo[2] + k;
+                const size_t src = (size_t)K * sz + (size_t)Jj * sy + (size_t)I;
+                double x = get(v, src);
+                int own = mask[src];
+                size_t q = ((size_t)k * (size_t)dims[1] + (size_t)j) * (size_t)dims[0] + (size_t)i;
+                if (exact_float)
+                    ((float *)w->data)[q] = !own && x >= isovalue ? below_f : (float)x;
+                else
+                    ((double *)w->data)[q] = !own && x >= isovalue ? below_d : x;
+            }
+    vv_volume_update_range(w);
+    *out = w;
     return VV_OK;
 }
 
@@ -311,8 +406,8 @@ vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, double iso
 #pragma omp parallel for num_threads(threads) reduction(+ : cnt)
         for (int k = rb.lo[2]; k <= rb.hi[2]; k++)
             for (int j = rb.lo[1]; j <= rb.hi[1]; j++)
-                for (int i = rb.lo[0]; i <= rb.hi[0]; i++)
-                    cnt += inside(v, (size_t)k * sz + (size_t)j * sy + (size_t)i, isovalue);
+                cnt += count_run(v, (size_t)k * sz + (size_t)j * sy + (size_t)rb.lo[0],
+                                 rb.hi[0] - rb.lo[0] + 1, isovalue);
         out->voxels = cnt;
         return VV_OK;
     }
@@ -335,54 +430,12 @@ vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, double iso
         free(mask);
         return VV_OK;
     }
-    /* copy of the section's box plus one voxel, other components lowered below the isovalue */
-    int lo[3], hi[3], dims[3];
-    for (int a = 0; a < 3; a++) {
-        lo[a] = bmin[a] - 1 < rb.lo[a] ? rb.lo[a] : bmin[a] - 1;
-        hi[a] = bmax[a] + 1 > rb.hi[a] ? rb.hi[a] : bmax[a] + 1;
-        if (hi[a] == lo[a]) { /* keep two voxels for cells */
-            if (hi[a] < rb.hi[a])
-                hi[a]++;
-            else
-                lo[a]--;
-        }
-        dims[a] = hi[a] - lo[a] + 1;
-    }
-    const int exact_float = v->type == VV_U8 || v->type == VV_I8 || v->type == VV_U16 ||
-                            v->type == VV_I16 || v->type == VV_F32;
     vv_volume *w = NULL;
-    if ((s = vv_volume_new(&w, dims, exact_float ? VV_F32 : VV_F64)) != VV_OK) {
-        free(mask);
-        return vv_error_prefix(s, "measure");
-    }
-    vv_mat4 M = vv_volume_index_to_world(v);
-    vv_vec3 o = vv_mat4_mul_point(M, vv_vec3_make(lo[0], lo[1], lo[2]));
-    w->origin[0] = o.x;
-    w->origin[1] = o.y;
-    w->origin[2] = o.z;
-    memcpy(w->spacing, v->spacing, sizeof w->spacing);
-    memcpy(w->direction, v->direction, sizeof w->direction);
-    float below_f = (float)isovalue;
-    while ((double)below_f >= isovalue)
-        below_f = nextafterf(below_f, -INFINITY);
-    const double below_d = nextafter(isovalue, -INFINITY);
-    const size_t sy = (size_t)v->dims[0], sz = sy * (size_t)v->dims[1];
-#pragma omp parallel for num_threads(threads) schedule(static)
-    for (int k = 0; k < dims[2]; k++)
-        for (int j = 0; j < dims[1]; j++)
-            for (int i = 0; i < dims[0]; i++) {
-                int I = lo[0] + i, Jj = lo[1] + j, K = lo[2] + k;
-                const size_t src = (size_t)K * sz + (size_t)Jj * sy + (size_t)I;
-                double x = get(v, src);
-                int own = mask[src];
-                size_t q = ((size_t)k * (size_t)dims[1] + (size_t)j) * (size_t)dims[0] + (size_t)i;
-                if (exact_float)
-                    ((float *)w->data)[q] = !own && x >= isovalue ? below_f : (float)x;
-                else
-                    ((double *)w->data)[q] = !own && x >= isovalue ? below_d : x;
-            }
+    s = masked_copy(v, isovalue, &rb, mask, bmin, bmax, threads, &w);
     free(mask);
-    vv_volume_update_range(w);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "measure");
+    const int dims[3] = {w->dims[0], w->dims[1], w->dims[2]};
     const int wlo[3] = {0, 0, 0}, whi[3] = {dims[0] - 1, dims[1] - 1, dims[2] - 1};
     s = mc_measure(w, isovalue, wlo, whi, threads, &opt->progress, out);
     vv_volume_free(w);
@@ -390,6 +443,59 @@ vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, double iso
         return vv_error_prefix(s, "measure");
     out->voxels = cnt;
     return VV_OK;
+}
+
+vv_status
+vv_measure_isosurface_mesh(vv_mesh **out, const vv_volume *v, double isovalue,
+                           const vv_isosurface_measure_options *opt) {
+    if (out)
+        *out = NULL;
+    if (!out || !v || !v->data)
+        return vv_error_set(VV_ERR_INVALID, "measure: NULL argument");
+    vv_isosurface_measure_options defaults;
+    if (!opt) {
+        vv_isosurface_measure_options_init(&defaults);
+        opt = &defaults;
+    }
+    if (!isfinite(isovalue) || !(isovalue > v->range[0]) || !(isovalue <= v->range[1]))
+        return vv_error_set(VV_ERR_INVALID,
+                            "measure: isovalue %g is outside the volume's range (%g, %g]: there "
+                            "is no isosurface",
+                            isovalue, v->range[0], v->range[1]);
+    region_box rb;
+    vv_status s = region_resolve(v, &opt->region, &rb);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "measure");
+    const int threads = opt->threads > 0 ? opt->threads : vv_threads_get();
+    vv_isosurface_options o;
+    vv_isosurface_options_init(&o);
+    o.threads = threads;
+    o.progress = opt->progress;
+    o.n_cut_planes = opt->region.n_cut_planes;
+    memcpy(o.cut_planes, opt->region.cut_planes, sizeof o.cut_planes);
+    if (!opt->has_seed) {
+        for (int a = 0; a < 3; a++) {
+            o.roi_min[a] = rb.lo[a];
+            o.roi_max[a] = rb.hi[a];
+        }
+        s = vv_isosurface_extract(out, v, isovalue, &o);
+        return s == VV_OK ? VV_OK : vv_error_prefix(s, "measure");
+    }
+    int sv[3], bmin[3], bmax[3];
+    uint64_t cnt;
+    if ((s = find_seed(v, isovalue, &rb, opt->seed, sv)) != VV_OK)
+        return vv_error_prefix(s, "measure");
+    uint8_t *mask = calloc((size_t)vv_volume_voxel_count(v), 1);
+    if (!mask)
+        return vv_error_set(VV_ERR_NOMEM, "measure: out of memory for the section mask");
+    vv_volume *w = NULL;
+    if ((s = flood_fill(v, isovalue, &rb, sv, mask, &cnt, bmin, bmax)) == VV_OK)
+        s = masked_copy(v, isovalue, &rb, mask, bmin, bmax, threads, &w);
+    free(mask);
+    if (s == VV_OK)
+        s = vv_isosurface_extract(out, w, isovalue, &o);
+    vv_volume_free(w);
+    return s == VV_OK ? VV_OK : vv_error_prefix(s, "measure");
 }
 
 vv_status

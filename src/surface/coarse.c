@@ -31,6 +31,37 @@ tent_decimate(const float *src, size_t st, int n, int s, float *out, size_t ost,
     }
 }
 
+#define ROW_AS_FLOAT(T)                                                                            \
+    {                                                                                              \
+        const T *d = (const T *)v->data + i0;                                                      \
+        for (int i = 0; i < n; i++)                                                                \
+            out[i] = (float)d[i];                                                                  \
+    }                                                                                              \
+    break;
+
+/* n voxels from linear index i0 as float. */
+static void
+to_float_row(const vv_volume *v, size_t i0, int n, float *out) {
+    switch (v->type) {
+    case VV_U8:
+        ROW_AS_FLOAT(uint8_t)
+    case VV_I8:
+        ROW_AS_FLOAT(int8_t)
+    case VV_U16:
+        ROW_AS_FLOAT(uint16_t)
+    case VV_I16:
+        ROW_AS_FLOAT(int16_t)
+    case VV_U32:
+        ROW_AS_FLOAT(uint32_t)
+    case VV_I32:
+        ROW_AS_FLOAT(int32_t)
+    case VV_F32:
+        ROW_AS_FLOAT(float)
+    default:
+        ROW_AS_FLOAT(double)
+    }
+}
+
 vv_status
 vv_coarse_new(vv_coarse_surface **out, const vv_volume *v, int level) {
     if (!out || !v || !v->data)
@@ -80,8 +111,7 @@ vv_coarse_new(vv_coarse_surface **out, const vv_volume *v, int level) {
                 if (!row)
                     continue;
                 int j = (int)(q % n1), k = (int)(q / n1);
-                for (int i = 0; i < n0; i++)
-                    row[i] = (float)vv_volume_get(v, i, j, k);
+                to_float_row(v, ((size_t)k * (size_t)n1 + (size_t)j) * (size_t)n0, n0, row);
                 tent_decimate(row, 1, n0, s, ax + (size_t)q * (size_t)nd[0], 1, nd[0]);
             }
             free(row);
@@ -114,7 +144,11 @@ vv_coarse_set_isovalue(vv_coarse_surface *c, double isovalue, int threads) {
         return vv_error_set(VV_ERR_INVALID, "coarse surface: NULL argument");
     vv_isosurface_options o;
     vv_isosurface_options_init(&o);
-    o.threads = threads;
+    /* a small grid: one thread per 2^20 voxels at most (see vv_isosurface_options) */
+    uint64_t cap = vv_volume_voxel_count(c->reduced) >> 20;
+    if (threads <= 0)
+        threads = vv_threads_get();
+    o.threads = (uint64_t)threads > cap ? (cap > 0 ? (int)cap : 1) : threads;
     o.compute_normals = 0;
     mc_extra x = {1, NULL, NULL};
     vv_mesh *m = NULL;

@@ -235,17 +235,26 @@ classify_row(mc_job *J, const vv_minmax_grid *g, int j, int k, uint8_t *c) {
         const size_t gb = ((size_t)bk * (size_t)g->dims[1] + (size_t)bj) * (size_t)g->dims[0];
         int i = I0;
         const int iend = I0 + n0; /* exclusive */
+        /* runs of subvolumes in the same state (0 all outside, 1 all inside, 2 mixed) are
+         * handled in one go */
         while (i < iend) {
-            int bi = i / B;
-            if (bi >= g->dims[0])
-                bi = g->dims[0] - 1;
-            int e = (bi + 1) * B + 1; /* the subvolume's voxels are bi*B .. bi*B+B */
-            if (bi == g->dims[0] - 1 || e > iend)
-                e = iend;
-            float mn = g->min[gb + (size_t)bi], mx = g->max[gb + (size_t)bi];
-            if ((double)mx < J->iso)
+            int e = i, state = -1;
+            while (e < iend) {
+                int bi = e / B;
+                if (bi >= g->dims[0])
+                    bi = g->dims[0] - 1;
+                float mn = g->min[gb + (size_t)bi], mx = g->max[gb + (size_t)bi];
+                int s = (double)mx < J->iso ? 0 : (double)mn >= J->iso ? 1 : 2;
+                if (state >= 0 && s != state)
+                    break;
+                state = s;
+                /* the subvolume's voxels are bi*B .. bi*B+B; the last one reaches the end */
+                int next = bi == g->dims[0] - 1 ? iend : (bi + 1) * B + 1;
+                e = next > iend ? iend : next;
+            }
+            if (state == 0)
                 memset(c + (i - I0), 0, (size_t)(e - i));
-            else if ((double)mn >= J->iso)
+            else if (state == 1)
                 memset(c + (i - I0), 1, (size_t)(e - i));
             else
                 classify_run(row + (size_t)i * vs, v->type, e - i, J->iso, c + (i - I0));
@@ -760,7 +769,16 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
     for (int r = 0; r < 3; r++)
         for (int c = 0; c < 3; c++)
             J.G[r][c] = v->direction[3 * r + c] / v->spacing[c];
-    const int nt = opt->threads > 0 ? opt->threads : vv_threads_get();
+    int nt = opt->threads;
+    if (nt <= 0) {
+        /* by default at most one thread per 2^20 voxels: on small grids the passes'
+         * barriers cost more than the threads save (and much more on a loaded machine) */
+        const uint64_t region_voxels = (uint64_t)J.n[0] * (uint64_t)J.n[1] * (uint64_t)J.n[2];
+        const uint64_t cap = region_voxels >> 20 > 0 ? region_voxels >> 20 : 1;
+        nt = vv_threads_get();
+        if ((uint64_t)nt > cap)
+            nt = (int)cap;
+    }
     const size_t rows = (size_t)J.n[1] * (size_t)J.n[2];
     vv_status st = VV_OK;
     vv_mesh *m = NULL;

@@ -1,0 +1,639 @@
+/*
+ * volvis measure INPUT [--iso V] [--seed P] [--method voxel|mc]
+ *                [--histogram [--plot OUT.png]] [--distance P1 P2] [--json]
+ * The Measurement component on the command line: a readable table, or the
+ * same numbers as JSON. INPUT is a volume, or a mesh (.ply .obj .stl .off),
+ * for which area, enclosed volume, distances and the distance to another
+ * mesh (--to) are measured.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "cli.h"
+
+static const cli_opt_spec measure_opts[] = {
+    {"iso", 0, "V"},
+    {"seed", 0, "P"},
+    {"method", 0, "voxel|mc"},
+    {"histogram", 0, NULL},
+    {"plot", 0, "OUT.png"},
+    {"bins", 0, "N"},
+    {"range", 0, "LO:HI"},
+    {"log", 0, NULL},
+    {"distance", 0, "P1 P2"}, /* rewritten from "--distance P1 P2" before parsing */
+    {"geodesic", 0, "P1 P2"}, /* likewise */
+    {"steiner", 0, "K"},
+    {"roi", 0, "I0,J0,K0:I1,J1,K1"},
+    {"cut", 0, "PX,PY,PZ:NX,NY,NZ"},
+    {"to", 0, "MESH"},
+    {"volume", 0, NULL},
+    {"json", 0, NULL},
+    {"threads", 0, "N"},
+    {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
+    {"quiet", 'q', NULL},
+};
+#define N_MEASURE_OPTS ((int)(sizeof measure_opts / sizeof measure_opts[0]))
+
+void
+cli_measure_usage(FILE *out) {
+    fprintf(out,
+            "usage: volvis measure [OPTIONS] INPUT\n"
+            "\n"
+            "Measures a volume or a mesh and prints a table (or JSON with --json). Lengths,\n"
+            "areas and volumes are in world units (the file's unit, usually mm).\n"
+            "\n"
+            "Volumes:\n"
+            "  --iso V          area and enclosed volume of the isosurface value == V (voxels\n"
+            "                   >= V are inside)\n"
+            "  --method mc|voxel  mc (default): Marching Cubes triangle area; volume by the\n"
+            "                   divergence theorem, closed with caps where the volume (or\n"
+            "                   --roi) boundary cuts the surface. voxel: voxels >= V times the\n"
+            "                   voxel volume; area from exposed voxel faces, which overestimates\n"
+            "                   a smooth surface by about 1.5x (reported)\n"
+            "  --seed P         only the surface-tracked section: the 6-connected region of\n"
+            "                   voxels >= V that holds the voxel nearest to P (within 2 voxels)\n"
+            "  --histogram      histogram of the voxel values (of --roi/--cut), as a table\n"
+            "  --bins N         histogram bins, 1..100000 (default 32)\n"
+            "  --range LO:HI    histogram range (default: the values' range)\n"
+            "  --plot OUT.png   also draw the histogram as a PNG bar chart with axes\n"
+            "  --log            logarithmic count axis in the plot\n"
+            "  --roi I0,J0,K0:I1,J1,K1  restrict to this voxel box (inclusive)\n"
+            "  --cut PX,PY,PZ:NX,NY,NZ  keep the side of this world plane the normal points to\n"
+            "                   (repeatable, up to 8; histogram and --method voxel)\n"
+            "Meshes (.ply .obj .stl .off):\n"
+            "  area, whether the mesh is closed, and its enclosed volume when it is;\n"
+            "  --volume         require the volume: an open mesh is an error (exit 1)\n"
+            "  --to MESH        the minimum distance to another mesh, with the closest points\n"
+            "Both:\n"
+            "  --distance P1 P2  distance between two points (two arguments)\n"
+            "  --json           print JSON instead of the table\n"
+            "  --threads N      threads (default: all cores)\n"
+            "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]  read INPUT as raw voxels\n"
+            "  -h, --help       show this help\n"
+            "\n"
+            "A point P is X,Y,Z in world coordinates, or voxel:I,J,K in voxel indices\n"
+            "(fractional allowed).\n"
+            "\n"
+            "Examples:\n"
+            "  volvis measure ../shared/data/volumes/ct_head.nrrd --iso 300\n"
+            "  volvis measure ct_head.nrrd --iso 300 --method voxel --json\n"
+            "  volvis measure ct_head.nrrd --iso 300 --seed voxel:128,60,54\n"
+            "  volvis measure ct_head.nrrd --histogram --bins 64 --plot hist.png --log\n"
+            "  volvis measure ct_head.nrrd --distance voxel:0,0,0 voxel:255,255,107\n"
+            "  volvis measure ../shared/data/meshes/bunny.ply --to other.stl\n");
+}
+
+#if defined(__SANITIZE_ADDRESS__)
+/* Sanitizer builds: cairo's text rendering (the --plot labels) leaves fontconfig's
+ * process-wide caches allocated at exit; that is a library cache, not a leak. */
+const char *__lsan_default_suppressions(void);
+const char *
+__lsan_default_suppressions(void) {
+    return "leak:libfontconfig.so\n";
+}
+#endif
+
+static int
+is_mesh_file(const char *path) {
+    static const char *ext[] = {".ply", ".obj", ".stl", ".off"};
+    size_t n = strlen(path);
+    for (size_t i = 0; i < sizeof ext / sizeof ext[0]; i++)
+        if (n > 4 && strcasecmp(path + n - 4, ext[i]) == 0)
+            return 1;
+    return 0;
+}
+
+/* JSON string with escapes. */
+static void
+json_str(const char *s) {
+    putchar('"');
+    for (; *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\')
+            printf("\\%c", c);
+        else if (c < 0x20)
+            printf("\\u%04x", c);
+        else
+            putchar(c);
+    }
+    putchar('"');
+}
+
+/* A number as JSON (null when not finite). */
+static void
+json_num(double x) {
+    if (isfinite(x))
+        printf("%.10g", x);
+    else
+        printf("null");
+}
+
+static const char *
+unit_of(vv_unit u) {
+    return u == VV_UNIT_UNKNOWN ? "units" : vv_unit_name(u);
+}
+
+typedef struct measure_req {
+    int json, histogram, log, bins, threads, want_volume;
+    int has_iso, has_seed, seed_voxel, has_range;
+    double iso, seed[3], lo, hi;
+    vv_measure_method method;
+    const char *plot, *to;
+    int has_distance, dvox[2];
+    double dp[2][3];
+    int has_geodesic, gvox[2], steiner;
+    double gp[2][3];
+    vv_region region;
+} measure_req;
+
+static int
+measure_mesh(const char *in, const measure_req *r) {
+    vv_mesh *m = NULL, *other = NULL;
+    vv_status s = vv_mesh_load(&m, in);
+    if (s != VV_OK)
+        return cli_fail(s, in);
+    vv_mesh_topology t;
+    if ((s = vv_mesh_topology_compute(m, &t)) != VV_OK) {
+        vv_mesh_free(m);
+        return cli_fail(s, in);
+    }
+    double area = vv_mesh_area(m), vol = NAN;
+    vv_error_clear();
+    vv_status vs = vv_measure_mesh_volume(m, &vol);
+    if (vs != VV_OK && r->want_volume) {
+        int rc = cli_fail(vs, in);
+        vv_mesh_free(m);
+        return rc;
+    }
+    double dist = NAN, md = NAN, pd[2][3] = {{0}};
+    vv_vec3 pa = {0, 0, 0}, pb = {0, 0, 0};
+    if (r->has_distance) {
+        for (int i = 0; i < 2; i++)
+            if (r->dvox[i]) {
+                vv_mesh_free(m);
+                cli_error("%s: voxel:I,J,K points need a volume, not a mesh", in);
+                return CLI_EXIT_USAGE;
+            }
+        vv_measure_distance(NULL, vv_vec3_make(r->dp[0][0], r->dp[0][1], r->dp[0][2]), 0,
+                            vv_vec3_make(r->dp[1][0], r->dp[1][1], r->dp[1][2]), 0, &dist);
+        memcpy(pd, r->dp, sizeof pd);
+    }
+    if (r->to) {
+        if ((s = vv_mesh_load(&other, r->to)) != VV_OK ||
+            (s = vv_measure_mesh_distance(m, other, r->threads, &md, &pa, &pb)) != VV_OK) {
+            int rc = cli_fail(s, r->to);
+            vv_mesh_free(m);
+            vv_mesh_free(other);
+            return rc;
+        }
+    }
+    if (r->json) {
+        printf("{\"input\": ");
+        json_str(in);
+        printf(", \"kind\": \"mesh\", \"unit\": \"units\", \"vertices\": %zu, \"triangles\": %zu, "
+               "\"area\": ",
+               m->n_vertices, m->n_triangles);
+        json_num(area);
+        printf(", \"closed\": %s, \"boundary_edges\": %zu, \"volume\": ",
+               t.closed && t.oriented ? "true" : "false", t.n_boundary_edges);
+        json_num(vol);
+        if (r->has_distance) {
+            printf(", \"distance\": {\"p1\": [%.10g, %.10g, %.10g], \"p2\": [%.10g, %.10g, "
+                   "%.10g], \"value\": ",
+                   pd[0][0], pd[0][1], pd[0][2], pd[1][0], pd[1][1], pd[1][2]);
+            json_num(dist);
+            printf("}");
+        }
+        if (r->to) {
+            printf(", \"mesh_distance\": {\"to\": ");
+            json_str(r->to);
+            printf(", \"value\": ");
+            json_num(md);
+            printf(", \"point\": [%.10g, %.10g, %.10g], \"point_to\": [%.10g, %.10g, %.10g]}", pa.x,
+                   pa.y, pa.z, pb.x, pb.y, pb.z);
+        }
+        printf("}\n");
+    } else {
+        printf("%-22s %s (mesh, %zu vertices, %zu triangles)\n", "input", in, m->n_vertices,
+               m->n_triangles);
+        printf("%-22s %.10g units^2\n", "surface area", area);
+        if (vs == VV_OK)
+            printf("%-22s %.10g units^3 (closed mesh, divergence theorem)\n", "enclosed volume",
+                   vol);
+        else
+            printf("%-22s not defined: open mesh (%zu boundary edges, %zu non-manifold)\n",
+                   "enclosed volume", t.n_boundary_edges, t.n_nonmanifold_edges);
+        if (r->has_distance)
+            printf("%-22s %.10g units between (%g, %g, %g) and (%g, %g, %g)\n", "distance", dist,
+                   pd[0][0], pd[0][1], pd[0][2], pd[1][0], pd[1][1], pd[1][2]);
+        if (r->to)
+            printf("%-22s %.10g units to %s, closest points (%g, %g, %g) and (%g, %g, %g)\n",
+                   "minimum distance", md, r->to, pa.x, pa.y, pa.z, pb.x, pb.y, pb.z);
+    }
+    vv_mesh_free(m);
+    vv_mesh_free(other);
+    return CLI_EXIT_OK;
+}
+
+static int
+measure_volume(const char *in, const vv_raw_params *raw, const measure_req *r) {
+    vv_volume *v;
+    int rc;
+    if ((rc = cli_load_volume(in, raw, &v)))
+        return rc;
+    const char *u = unit_of(v->unit);
+    vv_isosurface_measure im;
+    vv_histogram *h = NULL;
+    double dist = NAN, dw[2][3] = {{0}};
+    vv_status s;
+    if (r->has_iso) {
+        vv_isosurface_measure_options o;
+        vv_isosurface_measure_options_init(&o);
+        o.method = r->method;
+        o.region = r->region;
+        o.threads = r->threads;
+        if (r->has_seed) {
+            o.has_seed = 1;
+            vv_vec3 p = vv_vec3_make(r->seed[0], r->seed[1], r->seed[2]);
+            if (!r->seed_voxel)
+                p = vv_mat4_mul_point(vv_volume_world_to_index(v), p);
+            o.seed[0] = p.x;
+            o.seed[1] = p.y;
+            o.seed[2] = p.z;
+        }
+        if ((s = vv_measure_isosurface(&im, v, r->iso, &o)) != VV_OK) {
+            rc = cli_fail(s, in);
+            vv_volume_free(v);
+            return rc;
+        }
+    }
+    double geo = NAN;
+    vv_vec3 gon[2] = {{0, 0, 0}, {0, 0, 0}};
+    if (r->has_geodesic) {
+        vv_isosurface_measure_options o;
+        vv_isosurface_measure_options_init(&o);
+        o.region = r->region;
+        o.threads = r->threads;
+        o.has_seed = r->has_seed;
+        if (r->has_seed) {
+            vv_vec3 p = vv_vec3_make(r->seed[0], r->seed[1], r->seed[2]);
+            if (!r->seed_voxel)
+                p = vv_mat4_mul_point(vv_volume_world_to_index(v), p);
+            o.seed[0] = p.x;
+            o.seed[1] = p.y;
+            o.seed[2] = p.z;
+        }
+        vv_mat4 M = vv_volume_index_to_world(v);
+        vv_vec3 gp[2];
+        for (int i = 0; i < 2; i++) {
+            gp[i] = vv_vec3_make(r->gp[i][0], r->gp[i][1], r->gp[i][2]);
+            if (r->gvox[i])
+                gp[i] = vv_mat4_mul_point(M, gp[i]);
+        }
+        vv_mesh *gm = NULL;
+        if ((s = vv_measure_isosurface_mesh(&gm, v, r->iso, &o)) != VV_OK ||
+            (s = vv_measure_geodesic(gm, gp[0], gp[1], r->steiner, &geo, &gon[0], &gon[1])) !=
+                VV_OK) {
+            rc = cli_fail(s, in);
+            vv_mesh_free(gm);
+            vv_volume_free(v);
+            return rc;
+        }
+        vv_mesh_free(gm);
+    }
+    if (r->histogram) {
+        if ((s = vv_measure_histogram(&h, v, r->bins, r->has_range ? r->lo : 0,
+                                      r->has_range ? r->hi : 0, &r->region)) != VV_OK ||
+            (r->plot && (s = vv_histogram_plot_png(h, r->plot, 900, 560,
+                                                   strrchr(in, '/') ? strrchr(in, '/') + 1 : in,
+                                                   "value", r->log)) != VV_OK)) {
+            rc = cli_fail(s, r->plot && h ? r->plot : in);
+            vv_histogram_free(h);
+            vv_volume_free(v);
+            return rc;
+        }
+    }
+    if (r->has_distance) {
+        vv_mat4 M = vv_volume_index_to_world(v);
+        for (int i = 0; i < 2; i++) {
+            vv_vec3 p = vv_vec3_make(r->dp[i][0], r->dp[i][1], r->dp[i][2]);
+            if (r->dvox[i])
+                p = vv_mat4_mul_point(M, p);
+            dw[i][0] = p.x;
+            dw[i][1] = p.y;
+            dw[i][2] = p.z;
+        }
+        vv_measure_distance(NULL, vv_vec3_make(dw[0][0], dw[0][1], dw[0][2]), 0,
+                            vv_vec3_make(dw[1][0], dw[1][1], dw[1][2]), 0, &dist);
+    }
+    const char *mname = r->method == VV_MEASURE_VOXEL ? "voxel" : "mc";
+    if (r->json) {
+        printf("{\"input\": ");
+        json_str(in);
+        printf(", \"kind\": \"volume\", \"dims\": [%d, %d, %d], \"spacing\": [%.10g, %.10g, "
+               "%.10g], \"unit\": \"%s\"",
+               v->dims[0], v->dims[1], v->dims[2], v->spacing[0], v->spacing[1], v->spacing[2], u);
+        if (r->has_iso) {
+            printf(", \"isosurface\": {\"isovalue\": %.10g, \"method\": \"%s\", \"area\": ", r->iso,
+                   mname);
+            json_num(im.area);
+            printf(", \"volume\": ");
+            json_num(im.volume);
+            printf(", \"cut_area\": ");
+            json_num(im.cut_area);
+            printf(", \"voxels\": %llu, \"triangles\": %zu, \"area_bias\": %g",
+                   (unsigned long long)im.voxels, im.n_triangles, im.area_bias);
+            if (r->has_seed)
+                printf(", \"seed_voxel\": [%d, %d, %d]", im.seed_voxel[0], im.seed_voxel[1],
+                       im.seed_voxel[2]);
+            if (r->has_geodesic) {
+                printf(", \"geodesic\": {\"p1\": [%.10g, %.10g, %.10g], \"p2\": [%.10g, %.10g, "
+                       "%.10g], \"steiner\": %d, \"value\": ",
+                       gon[0].x, gon[0].y, gon[0].z, gon[1].x, gon[1].y, gon[1].z, r->steiner);
+                json_num(geo);
+                printf("}");
+            }
+            printf("}");
+        }
+        if (h) {
+            printf(", \"histogram\": {\"lo\": %.10g, \"hi\": %.10g, \"bins\": %d, \"total\": %llu, "
+                   "\"outside\": %llu, \"nan\": %llu, \"min\": ",
+                   h->lo, h->hi, h->nbins, (unsigned long long)h->total,
+                   (unsigned long long)h->outside, (unsigned long long)h->nan);
+            json_num(h->min);
+            printf(", \"max\": ");
+            json_num(h->max);
+            printf(", \"mean\": ");
+            json_num(h->mean);
+            printf(", \"sd\": ");
+            json_num(h->sd);
+            printf(", \"counts\": [");
+            for (int b = 0; b < h->nbins; b++)
+                printf("%s%llu", b ? ", " : "", (unsigned long long)h->counts[b]);
+            printf("]");
+            if (r->plot) {
+                printf(", \"plot\": ");
+                json_str(r->plot);
+            }
+            printf("}");
+        }
+        if (r->has_distance) {
+            printf(", \"distance\": {\"p1\": [%.10g, %.10g, %.10g], \"p2\": [%.10g, %.10g, "
+                   "%.10g], \"value\": ",
+                   dw[0][0], dw[0][1], dw[0][2], dw[1][0], dw[1][1], dw[1][2]);
+            json_num(dist);
+            printf("}");
+        }
+        printf("}\n");
+    } else {
+        printf("%-22s %s (%d x %d x %d %s, spacing %g x %g x %g %s)\n", "input", in, v->dims[0],
+               v->dims[1], v->dims[2], vv_voxel_type_name(v->type), v->spacing[0], v->spacing[1],
+               v->spacing[2], u);
+        if (r->has_iso) {
+            printf("%-22s %g (inside: values >= %g)\n", "isovalue", r->iso, r->iso);
+            if (r->has_seed)
+                printf("%-22s surface-tracked section from voxel (%d, %d, %d)\n", "region",
+                       im.seed_voxel[0], im.seed_voxel[1], im.seed_voxel[2]);
+            if (r->method == VV_MEASURE_MC) {
+                printf("%-22s Marching Cubes (%zu triangles)\n", "method", im.n_triangles);
+                printf("%-22s %.10g %s^2\n", "surface area", im.area, u);
+                printf("%-22s %.10g %s^3 (divergence theorem, closed by %.6g %s^2 of caps)\n",
+                       "enclosed volume", im.volume, u, im.cut_area, u);
+            } else {
+                printf("%-22s voxel counting\n", "method");
+                printf("%-22s %.10g %s^2 (exposed voxel faces: about %.2gx the smooth surface)\n",
+                       "surface area", im.area, u, im.area_bias);
+                printf("%-22s %.10g %s^3 (%llu voxels)\n", "enclosed volume", im.volume, u,
+                       (unsigned long long)im.voxels);
+                if (im.cut_area > 0)
+                    printf("%-22s %.10g %s^2 of voxel faces on the region's boundary\n", "cut",
+                           im.cut_area, u);
+            }
+            if (r->method == VV_MEASURE_MC)
+                printf("%-22s %llu\n", "voxels inside", (unsigned long long)im.voxels);
+            if (r->has_geodesic)
+                printf("%-22s %.10g %s along the surface between (%g, %g, %g) and (%g, %g, %g) "
+                       "(Steiner graph, %d points per edge)\n",
+                       "geodesic distance", geo, u, gon[0].x, gon[0].y, gon[0].z, gon[1].x,
+                       gon[1].y, gon[1].z, r->steiner);
+        }
+        if (h) {
+            printf("%-22s %llu voxels (%llu outside the range, %llu NaN), min %g, max %g, mean "
+                   "%.6g, sd %.6g\n",
+                   "histogram", (unsigned long long)h->total, (unsigned long long)h->outside,
+                   (unsigned long long)h->nan, h->min, h->max, h->mean, h->sd);
+            uint64_t cmax = 1;
+            for (int b = 0; b < h->nbins; b++)
+                cmax = h->counts[b] > cmax ? h->counts[b] : cmax;
+            double w = (h->hi - h->lo) / h->nbins;
+            for (int b = 0; b < h->nbins; b++) {
+                int bar = (int)(40.0 * (double)h->counts[b] / (double)cmax + 0.5);
+                printf("  [%12.6g, %12.6g%c %12llu  ", h->lo + b * w, h->lo + (b + 1) * w,
+                       b == h->nbins - 1 ? ']' : ')', (unsigned long long)h->counts[b]);
+                for (int q = 0; q < bar; q++)
+                    putchar('#');
+                putchar('\n');
+            }
+            if (r->plot)
+                printf("%-22s %s\n", "plot", r->plot);
+        }
+        if (r->has_distance)
+            printf("%-22s %.10g %s between (%g, %g, %g) and (%g, %g, %g) (world)\n", "distance",
+                   dist, u, dw[0][0], dw[0][1], dw[0][2], dw[1][0], dw[1][1], dw[1][2]);
+    }
+    vv_histogram_free(h);
+    vv_volume_free(v);
+    return CLI_EXIT_OK;
+}
+
+int
+cli_measure_main(int argc, char **argv) {
+    /* "--distance P1 P2" takes two arguments: join them for the parser ("P1;P2") */
+    char **av = malloc(((size_t)argc + 1) * sizeof *av);
+    char *joined[2] = {NULL, NULL};
+    if (!av) {
+        cli_error("out of memory");
+        return CLI_EXIT_FAIL;
+    }
+    int ac = 0;
+    for (int i = 0; i < argc; i++) {
+        if (strcmp(argv[i], "--distance") == 0 || strcmp(argv[i], "--geodesic") == 0) {
+            int g = argv[i][2] == 'g';
+            if (i + 2 >= argc) {
+                free(av);
+                free(joined[0]);
+                free(joined[1]);
+                cli_error("measure: %s needs two points P1 P2 (see 'volvis measure --help')",
+                          argv[i]);
+                return CLI_EXIT_USAGE;
+            }
+            free(joined[g]);
+            size_t n = strlen(argv[i + 1]) + strlen(argv[i + 2]) + 16;
+            joined[g] = malloc(n);
+            if (!joined[g]) {
+                free(av);
+                free(joined[1 - g]);
+                return CLI_EXIT_FAIL;
+            }
+            snprintf(joined[g], n, "%s=%s;%s", argv[i], argv[i + 1], argv[i + 2]);
+            av[ac++] = joined[g];
+            i += 2;
+        } else {
+            av[ac++] = argv[i];
+        }
+    }
+    av[ac] = NULL;
+    cli_args a;
+    int rc = cli_parse(&a, "measure", measure_opts, N_MEASURE_OPTS, ac, av);
+    if (rc == CLI_HELP) {
+        cli_measure_usage(stdout);
+        rc = CLI_EXIT_OK;
+        goto done;
+    }
+    if (rc)
+        goto done;
+    if (a.n_pos != 1) {
+        rc = cli_usage_error(&a, a.n_pos ? "expected one INPUT, got %d arguments" : "missing INPUT",
+                             a.n_pos);
+        goto done;
+    }
+    measure_req r;
+    memset(&r, 0, sizeof r);
+    vv_region_init(&r.region);
+    r.bins = 32;
+    r.method = VV_MEASURE_MC;
+    r.json = cli_count(&a, "json") > 0;
+    r.histogram = cli_count(&a, "histogram") > 0;
+    r.log = cli_count(&a, "log") > 0;
+    r.want_volume = cli_count(&a, "volume") > 0;
+    r.plot = cli_get(&a, "plot");
+    r.to = cli_get(&a, "to");
+    const char *s;
+    if ((s = cli_get(&a, "iso"))) {
+        r.has_iso = 1;
+        if ((rc = cli_parse_double(&a, "iso", s, -HUGE_VAL, HUGE_VAL, &r.iso)))
+            goto done;
+    }
+    if ((s = cli_get(&a, "seed"))) {
+        r.has_seed = 1;
+        if ((rc = cli_parse_point(&a, "seed", s, r.seed, &r.seed_voxel)))
+            goto done;
+        if (!r.has_iso) {
+            rc = cli_usage_error(&a, "--seed needs --iso");
+            goto done;
+        }
+    }
+    if ((s = cli_get(&a, "method"))) {
+        if (!strcmp(s, "voxel"))
+            r.method = VV_MEASURE_VOXEL;
+        else if (strcmp(s, "mc")) {
+            rc = cli_usage_error(&a, "--method: expected voxel or mc, got '%s'", s);
+            goto done;
+        }
+    }
+    if ((s = cli_get(&a, "bins")) && (rc = cli_parse_int(&a, "bins", s, 1, 100000, &r.bins)))
+        goto done;
+    if ((s = cli_get(&a, "range"))) {
+        r.has_range = 1;
+        if ((rc = cli_parse_range(&a, "range", s, &r.lo, &r.hi)))
+            goto done;
+    }
+    if ((r.plot || cli_get(&a, "bins") || cli_get(&a, "range") || r.log) && !r.histogram) {
+        rc = cli_usage_error(&a, "--plot, --bins, --range and --log go with --histogram");
+        goto done;
+    }
+    if ((s = cli_get(&a, "threads")) && (rc = cli_parse_int(&a, "threads", s, 0, 4096, &r.threads)))
+        goto done;
+    if ((s = cli_get(&a, "roi")) &&
+        (rc = cli_parse_roi(&a, "roi", s, r.region.roi_min, r.region.roi_max)))
+        goto done;
+    for (int i = 0; i < a.n_seen; i++) {
+        if (strcmp(a.specs[a.seen[i].opt].name, "cut"))
+            continue;
+        if (r.region.n_cut_planes == VV_MAX_CUT_PLANES) {
+            rc = cli_usage_error(&a, "--cut: at most %d planes", VV_MAX_CUT_PLANES);
+            goto done;
+        }
+        if ((rc = cli_parse_plane(&a, "cut", a.seen[i].value,
+                                  &r.region.cut_planes[r.region.n_cut_planes++])))
+            goto done;
+    }
+    if ((s = cli_get(&a, "distance"))) {
+        r.has_distance = 1;
+        const char *semi = strchr(s, ';');
+        char p1[256];
+        size_t n1 = semi ? (size_t)(semi - s) : 0;
+        if (!semi || n1 >= sizeof p1) {
+            rc = cli_usage_error(&a, "--distance needs two points P1 P2");
+            goto done;
+        }
+        memcpy(p1, s, n1);
+        p1[n1] = '\0';
+        if ((rc = cli_parse_point(&a, "distance", p1, r.dp[0], &r.dvox[0])) ||
+            (rc = cli_parse_point(&a, "distance", semi + 1, r.dp[1], &r.dvox[1])))
+            goto done;
+    }
+    r.steiner = 8;
+    if ((s = cli_get(&a, "steiner")) && (rc = cli_parse_int(&a, "steiner", s, 0, 64, &r.steiner)))
+        goto done;
+    if ((s = cli_get(&a, "geodesic"))) {
+        r.has_geodesic = 1;
+        const char *semi = strchr(s, ';');
+        char p1[256];
+        size_t n1 = semi ? (size_t)(semi - s) : 0;
+        if (!semi || n1 >= sizeof p1) {
+            rc = cli_usage_error(&a, "--geodesic needs two points P1 P2");
+            goto done;
+        }
+        memcpy(p1, s, n1);
+        p1[n1] = '\0';
+        if ((rc = cli_parse_point(&a, "geodesic", p1, r.gp[0], &r.gvox[0])) ||
+            (rc = cli_parse_point(&a, "geodesic", semi + 1, r.gp[1], &r.gvox[1])))
+            goto done;
+        if (!r.has_iso) {
+            rc = cli_usage_error(&a, "--geodesic needs --iso (the surface to follow)");
+            goto done;
+        }
+        if (r.method == VV_MEASURE_VOXEL) {
+            rc = cli_usage_error(&a, "--geodesic follows the Marching Cubes surface (not with "
+                                     "--method voxel)");
+            goto done;
+        }
+    }
+    const char *in = a.pos[0];
+    if (is_mesh_file(in) && !cli_get(&a, "raw")) {
+        if (r.has_iso || r.histogram || cli_get(&a, "roi") || r.region.n_cut_planes ||
+            cli_get(&a, "method")) {
+            rc = cli_usage_error(&a,
+                                 "%s is a mesh: --iso, --seed, --method, --histogram, --roi "
+                                 "and --cut measure volumes",
+                                 in);
+            goto done;
+        }
+        if ((rc = cli_check_readable(in)))
+            goto done;
+        rc = measure_mesh(in, &r);
+        goto done;
+    }
+    if (r.to || r.want_volume) {
+        rc = cli_usage_error(&a, "--to and --volume measure meshes (.ply .obj .stl .off)");
+        goto done;
+    }
+    if (!r.has_iso && !r.histogram && !r.has_distance) {
+        rc = cli_usage_error(&a, "nothing to measure: give --iso V, --histogram or --distance P1 "
+                                 "P2");
+        goto done;
+    }
+    vv_raw_params raw;
+    const char *raw_spec = cli_get(&a, "raw");
+    if (raw_spec && (rc = cli_parse_raw(&a, "raw", raw_spec, &raw)))
+        goto done;
+    rc = measure_volume(in, raw_spec ? &raw : NULL, &r);
+done:
+    free(joined[0]);
+    free(joined[1]);
+    free(av);
+    return rc;
+}

@@ -1,0 +1,355 @@
+/*
+ * Tests of `volvis isosurface` and `volvis measure`, run as a separate
+ * process (posix_spawn, the helper of test_cli.c) with stdout and stderr
+ * captured. The executable is $VV_CLI (set by CTest); output goes under
+ * $VV_TEST_OUT/cli_surface. Numbers printed are checked against the library.
+ */
+#include "testutil.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <spawn.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+extern char **environ;
+
+typedef struct run_result {
+    int status; /* exit status, or 128 + signal */
+    char *out;
+    char *err;
+} run_result;
+
+static char g_outdir[1024];
+
+static const char *
+cli_path(void) {
+    const char *p = getenv("VV_CLI");
+    return p && *p ? p : VV_BINARY_DIR "/volvis";
+}
+
+static const char *
+outdir(void) {
+    if (!g_outdir[0]) {
+        const char *base = getenv("VV_TEST_OUT");
+        if (base && *base) {
+            mkdir(base, 0755);
+            snprintf(g_outdir, sizeof g_outdir, "%s/cli_surface", base);
+            mkdir(g_outdir, 0755);
+        } else {
+            snprintf(g_outdir, sizeof g_outdir, "%s", vt_outdir("cli_surface"));
+        }
+    }
+    return g_outdir;
+}
+
+/* Path of a file in the output directory; 8 rotating buffers. */
+static const char *
+out_file(const char *name) {
+    static char buf[8][1200];
+    static int slot;
+    slot = (slot + 1) % 8;
+    snprintf(buf[slot], sizeof buf[slot], "%s/%s", outdir(), name);
+    return buf[slot];
+}
+
+static void
+free_result(run_result *r) {
+    free(r->out);
+    free(r->err);
+    r->out = r->err = NULL;
+}
+
+/* Runs the CLI with the NULL-terminated arguments that follow (argv[0] is added). */
+static run_result
+run_cli_v(const char *const *args) {
+    char *argv[64];
+    int n = 0;
+    argv[n++] = (char *)cli_path();
+    for (int i = 0; args[i]; i++) {
+        assert_true(n < 63);
+        argv[n++] = (char *)args[i];
+    }
+    argv[n] = NULL;
+
+    char out_path[1200], err_path[1200];
+    snprintf(out_path, sizeof out_path, "%s/.stdout", outdir());
+    snprintf(err_path, sizeof err_path, "%s/.stderr", outdir());
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 1, out_path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&fa, 2, err_path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    pid_t pid;
+    int rc = posix_spawn(&pid, argv[0], &fa, NULL, argv, environ);
+    posix_spawn_file_actions_destroy(&fa);
+    if (rc != 0)
+        fail_msg("cannot run %s: %s (set VV_CLI)", argv[0], strerror(rc));
+    int st;
+    while (waitpid(pid, &st, 0) < 0)
+        assert_int_equal(errno, EINTR);
+    run_result r;
+    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+    size_t len;
+    r.out = (char *)vt_read_file(out_path, &len);
+    r.err = (char *)vt_read_file(err_path, &len);
+    return r;
+}
+
+#define run_cli(...) run_cli_v((const char *const[]){__VA_ARGS__, NULL})
+
+static int
+file_exists(const char *path) {
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+static int
+count_lines(const char *s) {
+    int n = 0;
+    for (; *s; s++)
+        n += *s == '\n';
+    return n;
+}
+
+/* The number after "KEY": in a JSON text (first occurrence after from). */
+static double
+json_number(const char *text, const char *key) {
+    char pat[128];
+    snprintf(pat, sizeof pat, "\"%s\": ", key);
+    const char *p = strstr(text, pat);
+    if (!p)
+        fail_msg("no %s in %s", key, text);
+    return strtod(p + strlen(pat), NULL);
+}
+
+static void
+test_isosurface_files(void **state) {
+    (void)state;
+    const char *in = vt_data("volumes/neghip.slc");
+    const char *ext[] = {"ply", "obj", "stl"};
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_load(&v, in, NULL));
+    vv_mesh *ref = NULL;
+    vt_ok(vv_isosurface_extract(&ref, v, 60.5, NULL));
+    for (int e = 0; e < 3; e++) {
+        char name[64];
+        snprintf(name, sizeof name, "neghip.%s", ext[e]);
+        const char *out = out_file(name);
+        run_result r = run_cli("isosurface", in, "--iso", "60.5", "-o", out);
+        assert_int_equal(r.status, 0);
+        assert_non_null(strstr(r.out, "wrote"));
+        assert_string_equal(r.err, "");
+        vv_mesh *m = NULL;
+        vt_ok(vv_mesh_load(&m, out));
+        assert_int_equal(m->n_triangles, ref->n_triangles);
+        assert_near(vv_mesh_area(m), vv_mesh_area(ref), 1e-4 * vv_mesh_area(ref));
+        vv_mesh_free(m);
+        free_result(&r);
+    }
+    /* previews */
+    run_result r =
+        run_cli("isosurface", in, "--iso", "60.5", "--coarse", "1", "-o", out_file("coarse.ply"));
+    assert_int_equal(r.status, 0);
+    assert_non_null(strstr(r.out, "coarse Marching Cubes"));
+    free_result(&r);
+    r = run_cli("isosurface", in, "--iso", "60.5", "--parc", "3", "-o", out_file("parc.obj"));
+    assert_int_equal(r.status, 0);
+    assert_non_null(strstr(r.out, "PARC"));
+    free_result(&r);
+    /* region and cut plane */
+    r = run_cli("isosurface", in, "--iso", "60.5", "--roi", "0,0,0:40,65,65", "--cut",
+                "0,0,30:0,0,1", "-o", out_file("cut.ply"));
+    assert_int_equal(r.status, 0);
+    free_result(&r);
+    vv_mesh_free(ref);
+    vv_volume_free(v);
+}
+
+static void
+test_isosurface_errors(void **state) {
+    (void)state;
+    const char *in = vt_data("volumes/neghip.slc");
+    const char *out = out_file("never.ply");
+    remove(out);
+    struct {
+        int status;
+        const char *args[10];
+    } cases[] = {
+        {2, {"isosurface", in, "-o", "never.ply", NULL}},              /* no --iso */
+        {2, {"isosurface", in, "--iso", "60.5", NULL}},                /* no -o */
+        {2, {"isosurface", in, "--iso", "60.5", "-o", "x.vtk", NULL}}, /* format */
+        {2, {"isosurface", in, "--iso", "6x", "-o", "x.ply", NULL}},   /* number */
+        {2, {"isosurface", in, "--iso", "60.5", "--coarse", "1", "--parc", "1", "-o", "x.ply"}},
+        {2, {"isosurface", in, "--iso", "60.5", "--roi", "0,0:1,1", "-o", "x.ply", NULL}},
+        {1, {"isosurface", in, "--iso", "900", "-o", NULL, NULL}},                  /* range */
+        {1, {"isosurface", "/nonexistent.slc", "--iso", "60.5", "-o", NULL, NULL}}, /* file */
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        const char *args[12];
+        int n = 0;
+        for (int i = 0; i < 10 && cases[c].args[i]; i++)
+            args[n++] = cases[c].args[i];
+        if (cases[c].status == 1)
+            args[n++] = out;
+        args[n] = NULL;
+        run_result r = run_cli_v(args);
+        if (r.status != cases[c].status)
+            fail_msg("case %zu: status %d, want %d; stderr: %s", c, r.status, cases[c].status,
+                     r.err);
+        assert_int_equal(count_lines(r.err), 1);
+        assert_non_null(strstr(r.err, "volvis: "));
+        free_result(&r);
+    }
+    assert_false(file_exists(out));
+}
+
+static void
+test_measure_volume(void **state) {
+    (void)state;
+    const char *in = vt_data("volumes/ct_head.nrrd");
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_load(&v, in, NULL));
+    vv_isosurface_measure mc, vx;
+    vv_isosurface_measure_options o;
+    vv_isosurface_measure_options_init(&o);
+    vt_ok(vv_measure_isosurface(&mc, v, 300, &o));
+    o.method = VV_MEASURE_VOXEL;
+    vt_ok(vv_measure_isosurface(&vx, v, 300, &o));
+    run_result r = run_cli("measure", in, "--iso", "300");
+    assert_int_equal(r.status, 0);
+    assert_non_null(strstr(r.out, "surface area"));
+    assert_non_null(strstr(r.out, "enclosed volume"));
+    assert_non_null(strstr(r.out, "Marching Cubes"));
+    free_result(&r);
+    r = run_cli("measure", in, "--iso", "300", "--json");
+    assert_int_equal(r.status, 0);
+    assert_near(json_number(r.out, "area"), mc.area, 1e-6 * mc.area);
+    assert_near(json_number(r.out, "volume"), mc.volume, 1e-6 * mc.volume);
+    free_result(&r);
+    r = run_cli("measure", in, "--iso", "300", "--method", "voxel", "--json");
+    assert_int_equal(r.status, 0);
+    assert_near(json_number(r.out, "volume"), vx.volume, 1e-6 * vx.volume);
+    assert_near(json_number(r.out, "voxels"), (double)vx.voxels, 0.5);
+    free_result(&r);
+    /* histogram with a plot, distance in voxel coordinates */
+    const char *png = out_file("hist.png");
+    remove(png);
+    r = run_cli("measure", in, "--histogram", "--bins", "16", "--plot", png, "--log", "--json",
+                "--distance", "voxel:0,0,0", "voxel:10,0,0");
+    assert_int_equal(r.status, 0);
+    assert_true(file_exists(png));
+    assert_near(json_number(r.out, "total"), 256.0 * 256 * 108, 0.5);
+    assert_near(json_number(r.out, "value"), 10 * v->spacing[0], 1e-6);
+    free_result(&r);
+    /* geodesic across the sphere phantom: half a great circle of the measured sphere */
+    r = run_cli("measure", vt_data("volumes/sphere.slc"), "--iso", "127.5", "--geodesic", "0,0,0",
+                "49,49,49", "--json");
+    assert_int_equal(r.status, 0);
+    {
+        double area = json_number(r.out, "area"), rad = sqrt(area / (4 * VV_PI));
+        const char *g = strstr(r.out, "\"geodesic\"");
+        assert_non_null(g);
+        double geo = json_number(g, "value");
+        assert_true(fabs(geo / (VV_PI * rad) - 1) < 0.01);
+    }
+    free_result(&r);
+    r = run_cli("measure", in, "--histogram", "--bins", "4");
+    assert_int_equal(r.status, 0);
+    assert_int_equal(count_lines(r.out), 2 + 4);
+    free_result(&r);
+    vv_volume_free(v);
+}
+
+static void
+test_measure_sections_and_meshes(void **state) {
+    (void)state;
+    /* two spheres: the section of each */
+    const int n = 40;
+    const int dims[3] = {n, n, n};
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_new(&v, dims, VV_F32));
+    for (int k = 0; k < n; k++)
+        for (int j = 0; j < n; j++)
+            for (int i = 0; i < n; i++) {
+                double a =
+                    7 - sqrt((i - 10.) * (i - 10.) + (j - 10.) * (j - 10.) + (k - 10.) * (k - 10.));
+                double b =
+                    9 - sqrt((i - 28.) * (i - 28.) + (j - 27.) * (j - 27.) + (k - 26.) * (k - 26.));
+                vv_volume_set(v, i, j, k, a > b ? a : b);
+            }
+    vv_volume_update_range(v);
+    const char *nrrd = out_file("spheres.nrrd");
+    vt_ok(vv_volume_save(v, nrrd, VV_FORMAT_NRRD, 0));
+    run_result r = run_cli("measure", nrrd, "--iso", "0", "--seed", "voxel:10,10,17", "--json");
+    assert_int_equal(r.status, 0);
+    double v0 = 4.0 / 3 * VV_PI * 343;
+    assert_true(fabs(json_number(r.out, "volume") / v0 - 1) < 0.02);
+    free_result(&r);
+    r = run_cli("measure", nrrd, "--iso", "0", "--seed", "28,27,35", "--method", "voxel");
+    assert_int_equal(r.status, 0);
+    assert_non_null(strstr(r.out, "surface-tracked section"));
+    free_result(&r);
+    /* a closed mesh: its volume; the distance to another */
+    vv_mesh *m = NULL;
+    vt_ok(vv_isosurface_extract(&m, v, 0, NULL));
+    const char *ply = out_file("spheres.ply");
+    vt_ok(vv_mesh_save(m, ply));
+    r = run_cli("measure", ply, "--volume", "--json");
+    assert_int_equal(r.status, 0);
+    assert_near(json_number(r.out, "volume"), vv_mesh_signed_volume(m),
+                1e-5 * vv_mesh_signed_volume(m));
+    free_result(&r);
+    r = run_cli("measure", ply, "--to", vt_data("meshes/bunny.ply"));
+    assert_int_equal(r.status, 0);
+    assert_non_null(strstr(r.out, "minimum distance"));
+    free_result(&r);
+    /* an open mesh asked for its volume */
+    r = run_cli("measure", vt_data("meshes/bunny.ply"), "--volume");
+    assert_int_equal(r.status, 1);
+    assert_non_null(strstr(r.err, "boundary edges"));
+    free_result(&r);
+    /* bad input */
+    struct {
+        int status;
+        const char *args[8];
+    } cases[] = {
+        {1, {"measure", nrrd, "--iso", "100", NULL}},                    /* outside range */
+        {1, {"measure", nrrd, "--iso", "0", "--seed", "voxel:-9,0,0"}},  /* seed outside */
+        {1, {"measure", nrrd, "--iso", "0", "--seed", "voxel:0,0,39"}},  /* not near */
+        {2, {"measure", nrrd, NULL}},                                    /* nothing asked */
+        {2, {"measure", nrrd, "--iso", "0", "--method", "cubes", NULL}}, /* method */
+        {2, {"measure", nrrd, "--seed", "1,2,3", NULL}},                 /* seed, no iso */
+        {2, {"measure", nrrd, "--distance", "1,2", NULL}},               /* one point */
+        {2, {"measure", nrrd, "--plot", "x.png", NULL}},                 /* plot alone */
+        {2, {"measure", ply, "--iso", "3", NULL}},                       /* iso on mesh */
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        run_result q = run_cli_v(cases[c].args);
+        if (q.status != cases[c].status)
+            fail_msg("case %zu: status %d, want %d; stderr: %s", c, q.status, cases[c].status,
+                     q.err);
+        assert_int_equal(count_lines(q.err), 1);
+        free_result(&q);
+    }
+    vv_mesh_free(m);
+    vv_volume_free(v);
+}
+
+int
+main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_isosurface_files),
+        cmocka_unit_test(test_isosurface_errors),
+        cmocka_unit_test(test_measure_volume),
+        cmocka_unit_test(test_measure_sections_and_meshes),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
