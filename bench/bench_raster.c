@@ -23,22 +23,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <time.h>
 
+#include "common/bench_scene.h"
 #include "volvis/volvis.h"
-
-static double
-now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int
-cmp_double(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
 
 static const char *dataset;
 
@@ -52,37 +39,6 @@ static void
 die(const char *what) {
     fprintf(stderr, "bench_raster: %s: %s\n", what, vv_error_message());
     exit(1);
-}
-
-static double
-cpu_now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* Median wall time of a frame; *cpu (may be NULL) the median CPU time of
- * the process (all threads), which a loaded machine disturbs less. */
-static double
-median_frame(vv_renderer *r, const vv_world *w, const vv_render_options *opt, vv_image *img,
-             int runs, double *cpu) {
-    double *t = malloc(2 * (size_t)runs * sizeof *t);
-    if (!t)
-        die("memory");
-    for (int i = 0; i < runs; i++) {
-        double t0 = now(), c0 = cpu_now();
-        if (vv_renderer_render(r, w, &w->view, opt, img) != VV_OK)
-            die("render");
-        t[i] = now() - t0;
-        t[runs + i] = cpu_now() - c0;
-    }
-    qsort(t, (size_t)runs, sizeof *t, cmp_double);
-    qsort(t + runs, (size_t)runs, sizeof *t, cmp_double);
-    double m = t[runs / 2];
-    if (cpu)
-        *cpu = t[runs + runs / 2];
-    free(t);
-    return m;
 }
 
 static void
@@ -141,12 +97,6 @@ main(int argc, char **argv) {
         die(path);
     if (isnan(iso))
         iso = 0.5 * (vol->range[0] + vol->range[1]);
-    /* centred, identity direction: the peers' placement */
-    for (int a = 0; a < 3; a++)
-        vol->origin[a] = -(vol->dims[a] - 1) * vol->spacing[a] / 2.0;
-    for (int a = 0; a < 9; a++)
-        vol->direction[a] = a % 4 == 0;
-    vol->modified++;
     char stem[256];
     snprintf(stem, sizeof stem, "%s", dataset);
     char *dot = strchr(stem, '.');
@@ -154,41 +104,8 @@ main(int argc, char **argv) {
         *dot = 0;
 
     vv_world *w;
-    vv_object *obj;
-    if (vv_world_new(&w) != VV_OK || vv_object_new_volume(&obj, vol, "bench") != VV_OK ||
-        vv_world_add_object(w, obj) != VV_OK)
+    if (vvb_surface_world(&w, NULL, vol, iso, size) != VV_OK)
         die("world");
-    vv_light head;
-    memset(&head, 0, sizeof head);
-    head.type = VV_LIGHT_DIRECTIONAL;
-    head.headlight = 1;
-    head.color = vv_vec3_make(1, 1, 1);
-    head.intensity = 1;
-    if (vv_world_add_light(w, &head) != VV_OK)
-        die("light");
-    double ext = 0;
-    for (int a = 0; a < 3; a++) {
-        double e = (vol->dims[a] - 1) * vol->spacing[a];
-        ext = e > ext ? e : ext;
-    }
-    vv_vec3 dir = vv_vec3_normalize(vv_vec3_make(1, -1.6, 1));
-    w->view.eye = vv_vec3_scale(dir, ext / 2 * 11);
-    w->view.at = vv_vec3_make(0, 0, 0);
-    w->view.up = vv_vec3_make(0, 0, 1);
-    w->view.fov = vv_deg_to_rad(20);
-    w->view.projection = VV_PROJECTION_PERSPECTIVE;
-    w->view.width = w->view.height = size;
-    w->background = vv_vec3_make(0, 0, 0);
-    w->ambient = vv_vec3_make(1, 1, 1);
-    obj->mode = VV_MODE_ISO;
-    obj->isovalue = iso;
-    obj->step = 0.5;
-    obj->material.ambient = 0.1;
-    obj->material.diffuse = 0.6;
-    obj->material.specular = 0.3;
-    obj->material.shininess = 30;
-    obj->material.color = vv_vec3_make(1, 1, 1);
-    obj->shading = 1;
 
     vv_render_options opt;
     vv_render_options_init(&opt);
@@ -202,24 +119,25 @@ main(int argc, char **argv) {
     vv_isosurface_options_init(&io);
     io.threads = threads;
     vv_mesh *mesh;
-    double t0 = now();
+    double t0 = vvb_now();
     if (vv_isosurface_extract(&mesh, vol, iso, &io) != VV_OK)
         die("isosurface");
     printf("# %s %dx%dx%d, iso %g: %zu triangles, %zu vertices (extracted in %.3f s), %d threads, "
            "%dx%d\n",
            dataset, vol->dims[0], vol->dims[1], vol->dims[2], iso, mesh->n_triangles,
-           mesh->n_vertices, now() - t0, vv_threads_get(), size, size);
+           mesh->n_vertices, vvb_now() - t0, vv_threads_get(), size, size);
     emit("raster_triangles", (double)mesh->n_triangles, "triangles");
 
     vv_renderer *r;
     if (vv_renderer_new(&r, "surface") != VV_OK)
         die("surface renderer");
-    t0 = now();
+    t0 = vvb_now();
     if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK)
         die("render");
-    emit("raster_first_frame", now() - t0, "s");
-    double cpu = 0;
-    double tf = median_frame(r, w, &opt, img, runs, &cpu);
+    emit("raster_first_frame", vvb_now() - t0, "s");
+    double cpu = 0, tf = 0;
+    if (vvb_median_frame(&tf, &cpu, r, w, &opt, img, runs) != VV_OK)
+        die("render");
     emit("raster_frame", tf, "s");
     emit("raster_frame_cpu", cpu, "s");
     emit("raster_tri_rate", (double)mesh->n_triangles / tf, "triangles/s");
@@ -240,7 +158,10 @@ main(int argc, char **argv) {
             vv_renderer_set_option(rv, variants[v][0], variants[v][1]) != VV_OK ||
             vv_renderer_render(rv, w, &w->view, &opt, img) != VV_OK)
             die("render variant");
-        emit(names[v], median_frame(rv, w, &opt, img, runs, NULL), "s");
+        double tv = 0;
+        if (vvb_median_frame(&tv, NULL, rv, w, &opt, img, runs) != VV_OK)
+            die("render variant");
+        emit(names[v], tv, "s");
         save(img, outdir, stem, names[v] + 7);
         vv_renderer_free(rv);
     }

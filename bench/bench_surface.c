@@ -21,6 +21,11 @@
  *   parc_build_time        vv_parc_set_isovalue + vv_parc_mesh at a new isovalue
  *   coarse_mc_build_time   vv_coarse_set_isovalue at a new isovalue (level 1)
  *   parc_grid_time, coarse_grid_time: the one-off reduced structures
+ *   raster_frame           a 512x512 frame of the `surface` renderer drawing
+ *                          the isosurface, cached (bench_raster's scene and
+ *                          settings: the shared benchmark view, Phong,
+ *                          headlight; the volume is centred for it);
+ *                          raster_frame_cpu its CPU time, all threads
  * The PARC and coarse rebuilds alternate between iso and iso + 1 so each
  * run is a real change of isovalue.
  */
@@ -28,22 +33,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 
+#include "common/bench_scene.h"
 #include "volvis/volvis.h"
-
-static double
-now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int
-cmp_double(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
 
 static const char *dataset;
 
@@ -59,12 +51,6 @@ die(const char *what) {
     exit(1);
 }
 
-static double
-median(double *t, int n) {
-    qsort(t, (size_t)n, sizeof *t, cmp_double);
-    return n % 2 ? t[n / 2] : 0.5 * (t[n / 2 - 1] + t[n / 2]);
-}
-
 #define MAX_RUNS 101
 
 /* Median time of extracting with options o; the last mesh goes to *keep if asked. */
@@ -77,16 +63,16 @@ time_extract(const vv_volume *v, double iso, const vv_isosurface_options *o, int
         die("isosurface");
     vv_mesh_free(m);
     for (int r = 0; r < runs; r++) {
-        double t0 = now();
+        double t0 = vvb_now();
         if (vv_isosurface_extract(&m, v, iso, o) != VV_OK)
             die("isosurface");
-        t[r] = now() - t0;
+        t[r] = vvb_now() - t0;
         if (r + 1 < runs || !keep)
             vv_mesh_free(m);
         else
             *keep = m;
     }
-    return median(t, runs);
+    return vvb_median(t, runs);
 }
 
 int
@@ -167,34 +153,34 @@ main(int argc, char **argv) {
         if (vv_measure_isosurface(&res, v, iso, &mo) != VV_OK)
             die("measure");
         for (int r = 0; r < runs; r++) {
-            double t0 = now();
+            double t0 = vvb_now();
             if (vv_measure_isosurface(&res, v, iso, &mo) != VV_OK)
                 die("measure");
-            t[r] = now() - t0;
+            t[r] = vvb_now() - t0;
         }
-        emit(method ? "measure_voxel_time" : "measure_mc_time", median(t, runs), "s");
+        emit(method ? "measure_voxel_time" : "measure_mc_time", vvb_median(t, runs), "s");
         emit(method ? "measure_voxel_area" : "measure_mc_area", res.area, "world^2");
         emit(method ? "measure_voxel_volume" : "measure_mc_volume", res.volume, "world^3");
     }
 
     /* PARC: grid once, then rebuilds at alternating isovalues */
     vv_parc *p = NULL;
-    double t0 = now();
+    double t0 = vvb_now();
     if (vv_parc_new(&p, v, level) != VV_OK)
         die("parc");
-    emit("parc_grid_time", now() - t0, "s");
+    emit("parc_grid_time", vvb_now() - t0, "s");
     size_t faces = 0;
     for (int r = -1; r < runs; r++) {
-        double q0 = now();
+        double q0 = vvb_now();
         vv_mesh *pm = NULL;
         if (vv_parc_set_isovalue(p, iso + (r & 1)) != VV_OK || vv_parc_mesh(p, &pm) != VV_OK)
             die("parc");
         if (r >= 0)
-            t[r] = now() - q0;
+            t[r] = vvb_now() - q0;
         faces = pm->n_triangles / 2;
         vv_mesh_free(pm);
     }
-    emit("parc_build_time", median(t, runs), "s");
+    emit("parc_build_time", vvb_median(t, runs), "s");
     emit("parc_boxes", (double)p->n_boxes, "boxes");
     emit("parc_faces", (double)faces, "quads");
     printf("# PARC level %d: %d-cell boxes, %d x %d x %d\n", level, p->block, p->dims[0],
@@ -203,21 +189,42 @@ main(int argc, char **argv) {
 
     /* coarse Marching Cubes at level 1 (every second voxel) */
     vv_coarse_surface *c = NULL;
-    t0 = now();
+    t0 = vvb_now();
     if (vv_coarse_new(&c, v, 1) != VV_OK)
         die("coarse");
-    emit("coarse_grid_time", now() - t0, "s");
+    emit("coarse_grid_time", vvb_now() - t0, "s");
     for (int r = -1; r < runs; r++) {
-        double q0 = now();
+        double q0 = vvb_now();
         if (vv_coarse_set_isovalue(c, iso + (r & 1), threads) != VV_OK)
             die("coarse");
         if (r >= 0)
-            t[r] = now() - q0;
+            t[r] = vvb_now() - q0;
     }
-    emit("coarse_mc_build_time", median(t, runs), "s");
+    emit("coarse_mc_build_time", vvb_median(t, runs), "s");
     emit("coarse_mc_triangles", (double)c->n_triangles, "triangles");
     emit("coarse_mc_bytes", (double)vv_coarse_bytes(c), "bytes");
     vv_coarse_free(c);
+
+    /* the geometry renderer: bench_raster's scene, surface cached */
+    vv_world *w = NULL;
+    vv_renderer *rr = NULL;
+    vv_image *img = NULL;
+    if (vvb_surface_world(&w, NULL, v, iso, 512) != VV_OK ||
+        vv_image_new(&img, 512, 512) != VV_OK || vv_renderer_new(&rr, "surface") != VV_OK)
+        die("surface renderer");
+    vv_render_options ro;
+    vv_render_options_init(&ro);
+    ro.threads = threads;
+    if (vv_renderer_render(rr, w, &w->view, &ro, img) != VV_OK) /* extracts, caches */
+        die("render");
+    double tf = 0, cpu = 0;
+    if (vvb_median_frame(&tf, &cpu, rr, w, &ro, img, runs) != VV_OK)
+        die("render");
+    emit("raster_frame", tf, "s");
+    emit("raster_frame_cpu", cpu, "s");
+    vv_renderer_free(rr);
+    vv_image_free(img);
+    vv_world_free(w);
     vv_volume_free(v);
     return 0;
 }

@@ -1,0 +1,42 @@
+/*
+ * Shared set-up of the benchmark programs: the geometry renderer's benchmark
+ * scene (../shared/BENCHMARKS.md's view of a volume's isosurface) and frame
+ * timing, used by bench_raster and bench_surface so both print the same
+ * `raster_frame`.
+ */
+#ifndef VOLVIS_BENCH_SCENE_H
+#define VOLVIS_BENCH_SCENE_H
+
+#include "volvis/volvis.h"
+
+/* Wall-clock seconds (CLOCK_MONOTONIC). */
+double vvb_now(void);
+
+/* CPU seconds of the process, all threads. */
+double vvb_cpu_now(void);
+
+/* Median of t[0..n) (sorts t in place); n >= 1. */
+double vvb_median(double *t, int n);
+
+/*
+ * Builds the benchmark World around vol for the `surface` renderer: vol is
+ * centred at the origin with an identity direction (the peers' placement;
+ * vol->modified is bumped), drawn as its isosurface at iso (mode iso,
+ * Phong ka 0.1 kd 0.6 ks 0.3 n 30, white), one white headlight, black
+ * background; perspective view of size x size pixels, fov 20 degrees, eye at
+ * ext/2 * 11 * normalize(1, -1.6, 1) (ext the longest world extent of vol)
+ * looking at the origin with z up. The World takes a reference to vol.
+ * *obj (may be NULL) receives the volume object. Errors: vv_error_set.
+ */
+vv_status vvb_surface_world(vv_world **w, vv_object **obj, vv_volume *vol, double iso, int size);
+
+/*
+ * Renders runs frames of w's view with r and returns the median wall time;
+ * *cpu (may be NULL) gets the median CPU time of the process per frame.
+ * The image of the last frame stays in img. Errors: vv_error_set, *wall
+ * untouched.
+ */
+vv_status vvb_median_frame(double *wall, double *cpu, vv_renderer *r, const vv_world *w,
+                           const vv_render_options *opt, vv_image *img, int runs);
+
+#endif
