@@ -77,9 +77,10 @@ vv_status vv_histogram_plot_png(const vv_histogram *h, const char *path, int wid
 /* ---- isosurface volume and area ------------------------------------------- */
 
 typedef enum vv_measure_method {
-    /** Marching Cubes: area of the triangles; volume by the divergence theorem over the
-     * triangles plus the caps where the inside region meets the region's boundary (exact
-     * for the piecewise-linear surface, also when the volume boundary cuts it). */
+    /** Marching Cubes: area of the triangles (clipped to the cut planes); volume by the
+     * divergence theorem over the triangles plus the caps where the inside region meets the
+     * region's boundary: the box faces and the cut planes (exact for the piecewise-linear
+     * surface, also when the volume boundary or a cut plane cuts it). */
     VV_MEASURE_MC = 0,
     /** Voxel counting: volume = voxels inside x voxel volume; area = exposed voxel faces,
      * which overestimates a smooth surface (by 3/2 averaged over orientations). */
@@ -92,7 +93,7 @@ typedef struct vv_isosurface_measure_options {
      * voxels (flood fill) containing the inside voxel nearest to seed. */
     int has_seed;
     double seed[3];   /**< voxel index coordinates (fractional allowed) */
-    vv_region region; /**< default whole volume; cut planes only with VV_MEASURE_VOXEL */
+    vv_region region; /**< default whole volume; both methods take cut planes */
     int threads;      /**< <= 0: vv_threads_get() */
     vv_progress progress;
 } vv_isosurface_measure_options;
@@ -119,8 +120,10 @@ typedef struct vv_isosurface_measure {
  * vv_measure_method). Errors: VV_ERR_INVALID (NULL, isovalue outside
  * (range[0], range[1]] so that there is no surface, seed outside the volume
  * or with no inside voxel within 2 voxels, bad region, fewer than 2 voxels
- * on an axis for MC), VV_ERR_UNSUPPORTED (cut planes with MC),
- * VV_ERR_NOMEM, VV_ERR_CANCELLED.
+ * on an axis for MC), VV_ERR_NOMEM, VV_ERR_CANCELLED. With cut planes and
+ * a seed, the section is grown from the voxels the planes keep; voxels the
+ * planes remove keep their values for Marching Cubes, so the section's
+ * surface reaches the plane unchanged and is clipped there.
  */
 vv_status vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, double isovalue,
                                 const vv_isosurface_measure_options *opt);

@@ -19,6 +19,7 @@
  * face of outward normal n through x_F they contribute (x_F − c) · n A / 3.
  */
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -226,6 +227,278 @@ voxel_measure(const vv_volume *v, double iso, const region_box *rb, const uint8_
     m->area_bias = 1.5;
 }
 
+/* ---- cut planes: clipping the closed boundary ---------------------------------------- */
+
+/*
+ * With cut planes the solid is S ∩ H_0 ∩ ... ∩ H_{k-1} (S the inside region of the
+ * box, H_j = {x : n_j · x + d_j >= 0}). Its boundary is a closed polygon soup: the
+ * Marching Cubes triangles and the box-face caps, each clipped by every plane
+ * (Sutherland–Hodgman), plus one cap per plane. A polygon clipped by plane j leaves
+ * edges on the plane (from its exit to its entry point); reversed, they form the
+ * boundary of cap j, a 1-cycle because the soup it comes from is closed. Cap j is
+ * then the fan of triangles (o_j, b, a) from a point o_j on the plane over its
+ * reversed edges: a signed 2-chain whose winding number is 1 on the cap and 0
+ * elsewhere, so its integrals are the cap's whatever the cap's shape (holes, several
+ * pieces). Its triangles are clipped by the later planes j+1.. and feed their caps.
+ * The divergence volume and the areas are sums over the clipped pieces.
+ */
+
+#define CLIP_MAX_POINTS (8 + 2 * VV_MAX_CUT_PLANES + 4)
+
+typedef struct cap_segment {
+    double a[3], b[3]; /* cap boundary edge a -> b */
+} cap_segment;
+
+typedef struct clipper {
+    int np;
+    double n[VV_MAX_CUT_PLANES][3], d[VV_MAX_CUT_PLANES]; /* keep n·x + d >= 0 */
+    double c[3];                                          /* reference point of the volume */
+    cap_segment *seg[VV_MAX_CUT_PLANES];
+    size_t n_seg[VV_MAX_CUT_PLANES], cap_seg[VV_MAX_CUT_PLANES];
+    double vol6, area2, cut2; /* 6 V, 2 A, 2 cut area */
+    int nomem;
+} clipper;
+
+enum { PIECE_SURFACE, PIECE_CAP };
+
+static void
+add_segment(clipper *C, int j, const double *a, const double *b) {
+    if (C->n_seg[j] == C->cap_seg[j]) {
+        size_t cap = C->cap_seg[j] ? 2 * C->cap_seg[j] : 256;
+        cap_segment *ns = realloc(C->seg[j], cap * sizeof *ns);
+        if (!ns) {
+            C->nomem = 1;
+            return;
+        }
+        C->seg[j] = ns;
+        C->cap_seg[j] = cap;
+    }
+    cap_segment *g = C->seg[j] + C->n_seg[j]++;
+    memcpy(g->a, a, sizeof g->a);
+    memcpy(g->b, b, sizeof g->b);
+}
+
+/* The crossing of the plane on edge ab, computed from the lexicographically lower end so
+ * that the two polygons sharing the edge get the same point. */
+static void
+crossing(const double *a, double da, const double *b, double db, double *x) {
+    if (b[0] < a[0] || (b[0] == a[0] && (b[1] < a[1] || (b[1] == a[1] && b[2] < a[2])))) {
+        const double *t = a;
+        a = b;
+        b = t;
+        double td = da;
+        da = db;
+        db = td;
+    }
+    double t = da / (da - db);
+    for (int q = 0; q < 3; q++)
+        x[q] = a[q] + t * (b[q] - a[q]);
+}
+
+/* Clips polygon p (n points, world) by planes first.. and adds the rest to the sums: its
+ * divergence volume, its area (PIECE_SURFACE) or its area along outward normal out
+ * (PIECE_CAP). The clip edges go to the planes' caps. */
+static void
+clip_piece(clipper *C, int n, const double (*p)[3], int first, int kind, const double *out) {
+    double buf[2][CLIP_MAX_POINTS][3];
+    int cur = 0;
+    memcpy(buf[0], p, (size_t)n * sizeof *buf[0]);
+    for (int j = first; j < C->np && n >= 3; j++) {
+        double dist[CLIP_MAX_POINTS];
+        int all_in = 1;
+        for (int i = 0; i < n; i++) {
+            const double *x = buf[cur][i];
+            dist[i] = C->n[j][0] * x[0] + C->n[j][1] * x[1] + C->n[j][2] * x[2] + C->d[j];
+            all_in &= dist[i] >= 0;
+        }
+        if (all_in)
+            continue;
+        double(*src)[3] = buf[cur], (*dst)[3] = buf[cur ^ 1];
+        int m = 0, n_on = 0, on_idx[CLIP_MAX_POINTS], on_exit[CLIP_MAX_POINTS];
+        for (int i = 0; i < n && m < CLIP_MAX_POINTS - 1; i++) {
+            int i1 = i + 1 == n ? 0 : i + 1;
+            int in0 = dist[i] >= 0, in1 = dist[i1] >= 0;
+            if (in0)
+                memcpy(dst[m++], src[i], sizeof dst[0]);
+            if (in0 != in1) {
+                crossing(src[i], dist[i], src[i1], dist[i1], dst[m]);
+                on_idx[n_on] = m++;
+                on_exit[n_on++] = in0;
+            }
+        }
+        /* each exit point is followed (cyclically) by its entry point: edge exit -> entry */
+        for (int q = 0; q < n_on; q++) {
+            int r = q + 1 == n_on ? 0 : q + 1;
+            if (on_exit[q] && !on_exit[r])
+                add_segment(C, j, dst[on_idx[r]], dst[on_idx[q]]); /* reversed for the cap */
+        }
+        n = m;
+        cur ^= 1;
+    }
+    if (n < 3)
+        return;
+    const double(*q)[3] = (const double(*)[3])buf[cur];
+    double va[3] = {0, 0, 0}, v6 = 0;
+    double a0 = q[0][0] - C->c[0], a1 = q[0][1] - C->c[1], a2 = q[0][2] - C->c[2];
+    for (int i = 1; i + 1 < n; i++) {
+        double b0 = q[i][0] - C->c[0], b1 = q[i][1] - C->c[1], b2 = q[i][2] - C->c[2];
+        double e0 = q[i + 1][0] - C->c[0], e1 = q[i + 1][1] - C->c[1], e2 = q[i + 1][2] - C->c[2];
+        v6 += a0 * (b1 * e2 - b2 * e1) + a1 * (b2 * e0 - b0 * e2) + a2 * (b0 * e1 - b1 * e0);
+        double u0 = b0 - a0, u1 = b1 - a1, u2 = b2 - a2, w0 = e0 - a0, w1 = e1 - a1, w2 = e2 - a2;
+        va[0] += u1 * w2 - u2 * w1;
+        va[1] += u2 * w0 - u0 * w2;
+        va[2] += u0 * w1 - u1 * w0;
+    }
+    C->vol6 += v6;
+    if (kind == PIECE_SURFACE)
+        C->area2 += sqrt(va[0] * va[0] + va[1] * va[1] + va[2] * va[2]);
+    else
+        C->cut2 += va[0] * out[0] + va[1] * out[1] + va[2] * out[2];
+}
+
+/* Box-face cap polygons: index coordinates mapped to world, wound outwards. */
+typedef struct face_ctx {
+    clipper *C;
+    vv_mat4 M;
+    int reverse;
+    double out[3];
+} face_ctx;
+
+static void
+face_polygon(void *vctx, int n, const double (*pts)[3]) {
+    face_ctx *f = vctx;
+    double w[CLIP_MAX_POINTS][3];
+    for (int i = 0; i < n; i++) {
+        const double *x = pts[f->reverse ? n - 1 - i : i];
+        vv_vec3 y = vv_mat4_mul_point(f->M, vv_vec3_make(x[0], x[1], x[2]));
+        w[i][0] = y.x;
+        w[i][1] = y.y;
+        w[i][2] = y.z;
+    }
+    clip_piece(f->C, n, (const double(*)[3])w, 0, PIECE_CAP, f->out);
+}
+
+/* Marching Cubes measurement of volume w over its box lo..hi cut by world planes
+ * (n·(x − p) >= 0 kept). */
+static vv_status
+mc_measure_cut(const vv_volume *w, double iso, const int lo[3], const int hi[3], int n_planes,
+               const vv_cut_plane *planes, int threads, const vv_progress *progress,
+               vv_isosurface_measure *m) {
+    vv_isosurface_options o;
+    vv_isosurface_options_init(&o);
+    o.threads = threads;
+    o.compute_normals = 0;
+    if (progress)
+        o.progress = *progress;
+    for (int a = 0; a < 3; a++) {
+        o.roi_min[a] = lo[a];
+        o.roi_max[a] = hi[a];
+    }
+    vv_mesh *mesh = NULL;
+    vv_status s = vv_isosurface_extract(&mesh, w, iso, &o);
+    if (s != VV_OK)
+        return s;
+    const vv_mat4 M = vv_volume_index_to_world(w);
+    const vv_vec3 c = vv_mat4_mul_point(
+        M, vv_vec3_make(0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])));
+    clipper base;
+    memset(&base, 0, sizeof base);
+    base.np = n_planes;
+    base.c[0] = c.x;
+    base.c[1] = c.y;
+    base.c[2] = c.z;
+    for (int j = 0; j < n_planes; j++) {
+        vv_vec3 n = vv_vec3_normalize(planes[j].normal);
+        base.n[j][0] = n.x;
+        base.n[j][1] = n.y;
+        base.n[j][2] = n.z;
+        base.d[j] = -vv_vec3_dot(n, planes[j].point);
+    }
+    const int nt = threads > 0 ? threads : 1;
+    clipper *C = calloc((size_t)nt, sizeof *C);
+    if (!C) {
+        vv_mesh_free(mesh);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for the cut-plane caps");
+    }
+    for (int t = 0; t < nt; t++)
+        C[t] = base;
+    const float *P = mesh->positions;
+    const long n_tri = (long)mesh->n_triangles;
+#pragma omp parallel num_threads(nt)
+    {
+        clipper *my = C + omp_get_thread_num();
+#pragma omp for schedule(static)
+        for (long t = 0; t < n_tri; t++) {
+            double q[3][3];
+            for (int v = 0; v < 3; v++)
+                for (int a = 0; a < 3; a++)
+                    q[v][a] = P[3 * (size_t)mesh->triangles[3 * t + v] + a];
+            clip_piece(my, 3, (const double(*)[3])q, 0, PIECE_SURFACE, NULL);
+        }
+    }
+    m->n_triangles = mesh->n_triangles;
+    vv_mesh_free(mesh);
+    /* gather the threads' sums and cap edges into C[0] */
+    clipper *A = C;
+    for (int t = 1; t < nt; t++) {
+        A->vol6 += C[t].vol6;
+        A->area2 += C[t].area2;
+        A->cut2 += C[t].cut2;
+        A->nomem |= C[t].nomem;
+        for (int j = 0; j < n_planes; j++) {
+            for (size_t g = 0; g < C[t].n_seg[j]; g++)
+                add_segment(A, j, C[t].seg[j][g].a, C[t].seg[j][g].b);
+            free(C[t].seg[j]);
+        }
+    }
+    /* caps on the six faces of the box, wound outwards, clipped */
+    face_ctx f;
+    f.C = A;
+    f.M = M;
+    vv_vec3 col[3];
+    for (int a = 0; a < 3; a++)
+        col[a] = vv_vec3_make(M.m[0][a], M.m[1][a], M.m[2][a]); /* world step of one index */
+    for (int a = 0; a < 3; a++) {
+        const int u = a == 0 ? 1 : 0, ww = a == 2 ? 1 : 2;
+        vv_vec3 ccw = vv_vec3_cross(col[u], col[ww]); /* vector area of an emitted polygon */
+        vv_vec3 nrm = vv_vec3_normalize(ccw);
+        if (vv_vec3_dot(nrm, col[a]) < 0)
+            nrm = vv_vec3_scale(nrm, -1); /* towards increasing index a */
+        for (int side = 0; side < 2; side++) {
+            vv_vec3 out = side ? nrm : vv_vec3_scale(nrm, -1);
+            f.reverse = vv_vec3_dot(ccw, out) < 0;
+            f.out[0] = out.x;
+            f.out[1] = out.y;
+            f.out[2] = out.z;
+            vv_mc_face_inside_polygons(w, iso, a, side ? hi[a] : lo[a], lo, hi, face_polygon, &f);
+        }
+    }
+    /* the planes' caps, in order: cap j is clipped by the planes after it */
+    for (int j = 0; j < n_planes && !A->nomem; j++) {
+        const double *n = A->n[j];
+        double h = n[0] * A->c[0] + n[1] * A->c[1] + n[2] * A->c[2] + A->d[j];
+        double tri[3][3], out[3] = {-n[0], -n[1], -n[2]};
+        for (int q = 0; q < 3; q++)
+            tri[0][q] = A->c[q] - h * n[q]; /* o_j: c projected onto the plane */
+        for (size_t g = 0; g < A->n_seg[j]; g++) {
+            memcpy(tri[1], A->seg[j][g].a, sizeof tri[1]);
+            memcpy(tri[2], A->seg[j][g].b, sizeof tri[2]);
+            clip_piece(A, 3, (const double(*)[3])tri, j + 1, PIECE_CAP, out);
+        }
+    }
+    int nomem = A->nomem;
+    m->volume = A->vol6 / 6;
+    m->area = A->area2 / 2;
+    m->cut_area = A->cut2 / 2;
+    m->area_bias = 1;
+    for (int j = 0; j < n_planes; j++)
+        free(A->seg[j]);
+    free(C);
+    if (nomem)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for the cut-plane caps");
+    return VV_OK;
+}
+
 /* Marching Cubes area and capped divergence volume of volume w over its box lo..hi. */
 static vv_status
 mc_measure(const vv_volume *w, double iso, const int lo[3], const int hi[3], int threads,
@@ -300,17 +573,19 @@ mc_measure(const vv_volume *w, double iso, const int lo[3], const int hi[3], int
     return VV_OK;
 }
 
-/* Copy of the section's box (bmin..bmax) plus one voxel, clamped to the region, in which
- * the inside voxels not in mask are lowered just below the isovalue. */
+/* Copy of the section's box (bmin..bmax) plus one voxel (two with cut planes), clamped to
+ * the region, in which the inside voxels not in mask that the cut planes keep are lowered
+ * just below the isovalue. */
 static vv_status
 masked_copy(const vv_volume *v, double isovalue, const region_box *rbp, const uint8_t *mask,
             const int bmin[3], const int bmax[3], int threads, vv_volume **out) {
     const region_box rb = *rbp;
     vv_status s;
     int lo[3], hi[3], dims[3];
+    const int margin = rb.n_planes ? 2 : 1;
     for (int a = 0; a < 3; a++) {
-        lo[a] = bmin[a] - 1 < rb.lo[a] ? rb.lo[a] : bmin[a] - 1;
-        hi[a] = bmax[a] + 1 > rb.hi[a] ? rb.hi[a] : bmax[a] + 1;
+        lo[a] = bmin[a] - margin < rb.lo[a] ? rb.lo[a] : bmin[a] - margin;
+        hi[a] = bmax[a] + margin > rb.hi[a] ? rb.hi[a] : bmax[a] + margin;
         if (hi[a] == lo[a]) { /* keep two voxels for cells */
             if (hi[a] < rb.hi[a])
                 hi[a]++;
@@ -343,7 +618,9 @@ masked_copy(const vv_volume *v, double isovalue, const region_box *rbp, const ui
                 int I = lo[0] + i, Jj = lo[1] + j, K = lo[2] + k;
                 const size_t src = (size_t)K * sz + (size_t)Jj * sy + (size_t)I;
                 double x = get(v, src);
-                int own = mask[src];
+                /* voxels the cut planes remove keep their values: the section's surface
+                 * reaches across the planes unchanged and is clipped there */
+                int own = mask[src] || (rb.n_planes && !region_keeps(&rb, I, Jj, K));
                 size_t q = ((size_t)k * (size_t)dims[1] + (size_t)j) * (size_t)dims[0] + (size_t)i;
                 if (exact_float)
                     ((float *)w->data)[q] = !own && x >= isovalue ? below_f : (float)x;
@@ -378,10 +655,6 @@ vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, double iso
     if (s != VV_OK)
         return vv_error_prefix(s, "measure");
     if (opt->method == VV_MEASURE_MC) {
-        if (rb.n_planes)
-            return vv_error_set(VV_ERR_UNSUPPORTED,
-                                "measure: cut planes are supported by voxel counting only (the "
-                                "Marching Cubes volume closes the surface on box faces)");
         for (int a = 0; a < 3; a++)
             if (rb.hi[a] - rb.lo[a] < 1)
                 return vv_error_set(VV_ERR_INVALID,
@@ -397,7 +670,9 @@ vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, double iso
             voxel_measure(v, isovalue, &rb, NULL, out);
             return VV_OK;
         }
-        s = mc_measure(v, isovalue, rb.lo, rb.hi, threads, &opt->progress, out);
+        s = rb.n_planes ? mc_measure_cut(v, isovalue, rb.lo, rb.hi, rb.n_planes,
+                                         opt->region.cut_planes, threads, &opt->progress, out)
+                        : mc_measure(v, isovalue, rb.lo, rb.hi, threads, &opt->progress, out);
         if (s != VV_OK)
             return vv_error_prefix(s, "measure");
         /* voxel count for the report */
@@ -405,9 +680,15 @@ vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, double iso
         const size_t sy = (size_t)v->dims[0], sz = sy * (size_t)v->dims[1];
 #pragma omp parallel for num_threads(threads) reduction(+ : cnt)
         for (int k = rb.lo[2]; k <= rb.hi[2]; k++)
-            for (int j = rb.lo[1]; j <= rb.hi[1]; j++)
-                cnt += count_run(v, (size_t)k * sz + (size_t)j * sy + (size_t)rb.lo[0],
-                                 rb.hi[0] - rb.lo[0] + 1, isovalue);
+            for (int j = rb.lo[1]; j <= rb.hi[1]; j++) {
+                const size_t r0 = (size_t)k * sz + (size_t)j * sy;
+                if (!rb.n_planes) {
+                    cnt += count_run(v, r0 + (size_t)rb.lo[0], rb.hi[0] - rb.lo[0] + 1, isovalue);
+                    continue;
+                }
+                for (int i = rb.lo[0]; i <= rb.hi[0]; i++)
+                    cnt += region_keeps(&rb, i, j, k) && inside(v, r0 + (size_t)i, isovalue);
+            }
         out->voxels = cnt;
         return VV_OK;
     }
@@ -437,7 +718,9 @@ vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, double iso
         return vv_error_prefix(s, "measure");
     const int dims[3] = {w->dims[0], w->dims[1], w->dims[2]};
     const int wlo[3] = {0, 0, 0}, whi[3] = {dims[0] - 1, dims[1] - 1, dims[2] - 1};
-    s = mc_measure(w, isovalue, wlo, whi, threads, &opt->progress, out);
+    s = rb.n_planes ? mc_measure_cut(w, isovalue, wlo, whi, rb.n_planes, opt->region.cut_planes,
+                                     threads, &opt->progress, out)
+                    : mc_measure(w, isovalue, wlo, whi, threads, &opt->progress, out);
     vv_volume_free(w);
     if (s != VV_OK)
         return vv_error_prefix(s, "measure");

@@ -922,9 +922,29 @@ crossing_t(double a, double b, double iso) {
     return t > 1 ? 1 : t;
 }
 
+/* Emits the polygon (n points qu, qw in face cell (a, b)) in index coordinates. */
+static void
+face_emit(vv_mc_face_polygon_fn emit, void *ctx, int axis, int pos, int a, int b, int n,
+          const double *qu, const double *qw) {
+    const int u = axis == 0 ? 1 : 0, w = axis == 2 ? 1 : 2;
+    double pts[8][3];
+    for (int c = 0; c < n; c++) {
+        pts[c][axis] = pos;
+        pts[c][u] = a + qu[c];
+        pts[c][w] = b + qw[c];
+    }
+    emit(ctx, n, (const double(*)[3])pts);
+}
+
 double
 vv_mc_face_inside_area(const vv_volume *v, double isovalue, int axis, int pos, const int lo[3],
                        const int hi[3]) {
+    return vv_mc_face_inside_polygons(v, isovalue, axis, pos, lo, hi, NULL, NULL);
+}
+
+double
+vv_mc_face_inside_polygons(const vv_volume *v, double isovalue, int axis, int pos, const int lo[3],
+                           const int hi[3], vv_mc_face_polygon_fn emit, void *ctx) {
     const int u = axis == 0 ? 1 : 0, w = axis == 2 ? 1 : 2;
     const size_t st[3] = {1, (size_t)v->dims[0], (size_t)v->dims[0] * (size_t)v->dims[1]};
     double area = 0;
@@ -942,6 +962,8 @@ vv_mc_face_inside_area(const vv_volume *v, double isovalue, int axis, int pos, c
                 continue;
             if (nin == 4) {
                 area += 1;
+                if (emit)
+                    face_emit(emit, ctx, axis, pos, a, b, 4, cu, cw);
                 continue;
             }
             /* crossing points on the cyclic edges c -> c+1, t measured from the lower index */
@@ -964,6 +986,11 @@ vv_mc_face_inside_area(const vv_volume *v, double isovalue, int axis, int pos, c
                         int e0 = (c + 3) & 3, e1 = c;
                         area += 0.5 * fabs((pu[e0] - cu[c]) * (pw[e1] - cw[c]) -
                                            (pw[e0] - cw[c]) * (pu[e1] - cu[c]));
+                        if (emit) {
+                            const double tu[3] = {cu[c], pu[e1], pu[e0]},
+                                         tw[3] = {cw[c], pw[e1], pw[e0]};
+                            face_emit(emit, ctx, axis, pos, a, b, 3, tu, tw);
+                        }
                     }
                 continue;
             }
@@ -985,6 +1012,8 @@ vv_mc_face_inside_area(const vv_volume *v, double isovalue, int axis, int pos, c
                 s += qu[c] * qw[d] - qu[d] * qw[c];
             }
             area += 0.5 * fabs(s);
+            if (emit)
+                face_emit(emit, ctx, axis, pos, a, b, n, qu, qw);
         }
     return area;
 }

@@ -90,4 +90,18 @@ vv_status vv_mesh_clip_plane(vv_mesh *m, vv_vec3 n, double d);
 double vv_mc_face_inside_area(const vv_volume *v, double isovalue, int axis, int pos,
                               const int lo[3], const int hi[3]);
 
+/** Receives one polygon of n (3..6) points in index coordinates (see below). */
+typedef void (*vv_mc_face_polygon_fn)(void *ctx, int n, const double (*pts)[3]);
+
+/**
+ * vv_mc_face_inside_area, and when @p emit is not NULL also the inside part
+ * of every face cell as polygons (one per cell, two for an ambiguous face
+ * whose inside corners are not joined), in index coordinates, counter-
+ * clockwise in the (u, w) plane of the face, u < w the two other axes (so
+ * their vector area is along e_u x e_w). Called serially, cell by cell.
+ */
+double vv_mc_face_inside_polygons(const vv_volume *v, double isovalue, int axis, int pos,
+                                  const int lo[3], const int hi[3], vv_mc_face_polygon_fn emit,
+                                  void *ctx);
+
 #endif

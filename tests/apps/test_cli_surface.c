@@ -239,6 +239,19 @@ test_measure_volume(void **state) {
     assert_near(json_number(r.out, "volume"), vx.volume, 1e-6 * vx.volume);
     assert_near(json_number(r.out, "voxels"), (double)vx.voxels, 0.5);
     free_result(&r);
+    /* Marching Cubes with a cut plane: the two sides add up to the whole */
+    double side_v[2], side_a[2];
+    for (int h = 0; h < 2; h++) {
+        r = run_cli("measure", in, "--iso", "300", "--cut", h ? "122,0,0:-1,0,0" : "122,0,0:1,0,0",
+                    "--json");
+        assert_int_equal(r.status, 0);
+        side_v[h] = json_number(r.out, "volume");
+        side_a[h] = json_number(r.out, "area");
+        assert_true(side_v[h] > 0.3 * mc.volume && side_v[h] < 0.7 * mc.volume);
+        free_result(&r);
+    }
+    assert_near(side_v[0] + side_v[1], mc.volume, 1e-6 * mc.volume);
+    assert_near(side_a[0] + side_a[1], mc.area, 1e-6 * mc.area);
     /* histogram with a plot, distance in voxel coordinates */
     const char *png = out_file("hist.png");
     remove(png);

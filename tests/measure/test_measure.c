@@ -230,6 +230,161 @@ test_cut_sphere_volume(void **state) {
     vv_volume_free(v);
 }
 
+/* Ball of radius r cut to z' >= z0 (z' along the unit normal): volume and area of the
+ * spherical cap of height r - z0, and the disc. */
+static void
+cap_ref(double r, double z0, double *vol, double *area, double *disc) {
+    z0 = z0 < -r ? -r : z0; /* the whole ball */
+    double h = r - z0;
+    *vol = VV_PI * h * h * (3 * r - h) / 3;
+    *area = 2 * VV_PI * r * h;
+    *disc = VV_PI * (r * r - z0 * z0);
+}
+
+/* Marching Cubes measurement with cut planes: spherical caps, an octant, a slab, the two
+ * sides of a plane, voxel counting, and surface-tracked sections. */
+static void
+test_cut_planes_mc(void **state) {
+    (void)state;
+    const double sp[3] = {0.8, 1.0, 0.9};
+    const double c[1][3] = {{21.3, 24.6, 22.2}}, r[1] = {16.5};
+    vv_volume *v = spheres(50, c, r, 1, sp);
+    const vv_vec3 cen = vv_vec3_make(c[0][0], c[0][1], c[0][2]);
+    const double R = r[0];
+    vv_isosurface_measure whole, m, mv;
+    vv_isosurface_measure_options o;
+    vv_isosurface_measure_options_init(&o);
+    vt_ok(vv_measure_isosurface(&whole, v, 0.0, &o));
+    assert_near(whole.cut_area, 0, 1e-9);
+    /* one oblique plane at signed offsets z0 from the centre */
+    const vv_vec3 n = vv_vec3_normalize(vv_vec3_make(0.4, -0.7, 0.6));
+    const double offs[4] = {0, 5.3, -7.9, 12.1};
+    o.region.n_cut_planes = 1;
+    for (int q = 0; q < 4; q++) {
+        double rv, ra, rd;
+        cap_ref(R, offs[q], &rv, &ra, &rd);
+        o.region.cut_planes[0].point = vv_vec3_add(cen, vv_vec3_scale(n, offs[q]));
+        o.region.cut_planes[0].normal = n;
+        o.method = VV_MEASURE_MC;
+        vt_ok(vv_measure_isosurface(&m, v, 0.0, &o));
+        o.method = VV_MEASURE_VOXEL;
+        vt_ok(vv_measure_isosurface(&mv, v, 0.0, &o));
+        print_message("plane at %+.1f: MC volume %+.3f %% area %+.3f %% disc %+.3f %%; voxels "
+                      "volume %+.3f %%\n",
+                      offs[q], 100 * (m.volume / rv - 1), 100 * (m.area / ra - 1),
+                      100 * (m.cut_area / rd - 1), 100 * (mv.volume / rv - 1));
+        assert_true(fabs(m.volume / rv - 1) < 0.005);
+        assert_true(fabs(m.area / ra - 1) < 0.005);
+        assert_true(fabs(m.cut_area / rd - 1) < 0.005);
+        assert_true(fabs(mv.volume / rv - 1) < 0.03);
+        assert_true(fabs(m.volume / mv.volume - 1) < 0.03);
+        /* the other side: both add up to the whole */
+        vv_isosurface_measure other;
+        o.method = VV_MEASURE_MC;
+        o.region.cut_planes[0].normal = vv_vec3_scale(n, -1);
+        vt_ok(vv_measure_isosurface(&other, v, 0.0, &o));
+        assert_near(m.volume + other.volume, whole.volume, 1e-7 * whole.volume);
+        assert_near(m.area + other.area, whole.area, 1e-7 * whole.area);
+        assert_near(m.cut_area, other.cut_area, 1e-6 * rd);
+    }
+    /* three planes through the centre: an octant */
+    o.method = VV_MEASURE_MC;
+    o.region.n_cut_planes = 3;
+    const vv_vec3 ax[3] = {vv_vec3_normalize(vv_vec3_make(1, 1, 0)),
+                           vv_vec3_normalize(vv_vec3_make(-1, 1, 0)), vv_vec3_make(0, 0, 1)};
+    for (int p = 0; p < 3; p++) {
+        o.region.cut_planes[p].point = cen;
+        o.region.cut_planes[p].normal = ax[p];
+    }
+    vt_ok(vv_measure_isosurface(&m, v, 0.0, &o));
+    double V = 4.0 / 3 * VV_PI * R * R * R, A = 4 * VV_PI * R * R;
+    print_message("octant: volume %+.3f %% area %+.3f %% cut faces %+.3f %%\n",
+                  100 * (m.volume / (V / 8) - 1), 100 * (m.area / (A / 8) - 1),
+                  100 * (m.cut_area / (0.75 * VV_PI * R * R) - 1));
+    assert_true(fabs(m.volume / (V / 8) - 1) < 0.005);
+    assert_true(fabs(m.area / (A / 8) - 1) < 0.005);
+    assert_true(fabs(m.cut_area / (0.75 * VV_PI * R * R) - 1) < 0.005);
+    /* a slab -4 <= z' <= 6 along n (two parallel planes): V = pi (r^2 z - z^3/3) */
+    o.region.n_cut_planes = 2;
+    o.region.cut_planes[0].point = vv_vec3_add(cen, vv_vec3_scale(n, -4));
+    o.region.cut_planes[0].normal = n;
+    o.region.cut_planes[1].point = vv_vec3_add(cen, vv_vec3_scale(n, 6));
+    o.region.cut_planes[1].normal = vv_vec3_scale(n, -1);
+    vt_ok(vv_measure_isosurface(&m, v, 0.0, &o));
+    double vs = VV_PI * (R * R * 10 - (216.0 + 64.0) / 3), as = 2 * VV_PI * R * 10,
+           ds = VV_PI * (2 * R * R - 16 - 36);
+    print_message("slab: volume %+.3f %% area %+.3f %% discs %+.3f %%\n", 100 * (m.volume / vs - 1),
+                  100 * (m.area / as - 1), 100 * (m.cut_area / ds - 1));
+    assert_true(fabs(m.volume / vs - 1) < 0.005);
+    assert_true(fabs(m.area / as - 1) < 0.005);
+    assert_true(fabs(m.cut_area / ds - 1) < 0.005);
+    /* a plane that misses the ball keeps all of it, or nothing */
+    o.region.n_cut_planes = 1;
+    o.region.cut_planes[0].point = vv_vec3_add(cen, vv_vec3_scale(n, -R - 2));
+    o.region.cut_planes[0].normal = n;
+    vt_ok(vv_measure_isosurface(&m, v, 0.0, &o));
+    assert_near(m.volume, whole.volume, 1e-9 * whole.volume);
+    o.region.cut_planes[0].normal = vv_vec3_scale(n, -1);
+    vt_ok(vv_measure_isosurface(&m, v, 0.0, &o));
+    assert_near(m.volume, 0, 1e-9 * whole.volume);
+    assert_near(m.area, 0, 1e-9 * whole.area);
+    vv_volume_free(v);
+
+    /* a plane and the volume boundary together: a ball cut by x = 0 (index 0) and by a
+     * plane y' >= 3 through it; the two sides of the plane add up to the boundary-cut ball */
+    const double c2[1][3] = {{4.1, 20.3, 19.7}}, r2[1] = {13.0};
+    v = spheres(44, c2, r2, 1, sp);
+    o.region.n_cut_planes = 0;
+    vt_ok(vv_measure_isosurface(&whole, v, 0.0, &o));
+    vv_isosurface_measure side[2];
+    o.region.n_cut_planes = 1;
+    o.region.cut_planes[0].point = vv_vec3_make(c2[0][0], c2[0][1] + 3, c2[0][2]);
+    for (int h = 0; h < 2; h++) {
+        o.region.cut_planes[0].normal = vv_vec3_scale(vv_vec3_make(0.2, 1, 0.1), h ? -1 : 1);
+        vt_ok(vv_measure_isosurface(&side[h], v, 0.0, &o));
+    }
+    print_message("boundary and plane: %.2f + %.2f = %.2f (whole %.2f)\n", side[0].volume,
+                  side[1].volume, side[0].volume + side[1].volume, whole.volume);
+    assert_near(side[0].volume + side[1].volume, whole.volume, 1e-7 * whole.volume);
+    assert_near(side[0].area + side[1].area, whole.area, 1e-7 * whole.area);
+    vv_volume_free(v);
+
+    /* surface tracking with a cut plane through one of two spheres: the sections add up to
+     * the cut whole, and each matches the analytic cap (or ball) */
+    const double c3[2][3] = {{13.2, 14.1, 15.3}, {33.4, 31.2, 30.6}}, r3[2] = {8.5, 11.2},
+                 one[3] = {1, 1, 1};
+    v = spheres(46, c3, r3, 2, one);
+    const vv_vec3 nz = vv_vec3_normalize(vv_vec3_make(0.1, 0.2, 1));
+    o.region.n_cut_planes = 1;
+    o.region.cut_planes[0].point = vv_vec3_make(23, 22, 14); /* cuts sphere 0 only */
+    o.region.cut_planes[0].normal = nz;
+    o.has_seed = 0;
+    vt_ok(vv_measure_isosurface(&whole, v, 0.0, &o));
+    vv_isosurface_measure sec[2];
+    double sum_v = 0, sum_a = 0;
+    for (int s = 0; s < 2; s++) {
+        o.has_seed = 1;
+        vv_vec3 cs = vv_vec3_make(c3[s][0], c3[s][1], c3[s][2]);
+        vv_vec3 top = vv_vec3_add(cs, vv_vec3_scale(nz, r3[s])); /* on the kept side */
+        o.seed[0] = top.x;
+        o.seed[1] = top.y;
+        o.seed[2] = top.z;
+        vt_ok(vv_measure_isosurface(&sec[s], v, 0.0, &o));
+        double z0 = vv_vec3_dot(nz, vv_vec3_sub(o.region.cut_planes[0].point, cs)), rv, ra, rd;
+        cap_ref(r3[s], z0, &rv, &ra, &rd);
+        print_message("section %d (plane at %+.2f from its centre): volume %+.3f %% area %+.3f "
+                      "%%\n",
+                      s, z0, 100 * (sec[s].volume / rv - 1), 100 * (sec[s].area / ra - 1));
+        assert_true(fabs(sec[s].volume / rv - 1) < 0.01);
+        assert_true(fabs(sec[s].area / ra - 1) < 0.01);
+        sum_v += sec[s].volume;
+        sum_a += sec[s].area;
+    }
+    assert_near(sum_v, whole.volume, 1e-6 * whole.volume);
+    assert_near(sum_a, whole.area, 1e-6 * whole.area);
+    vv_volume_free(v);
+}
+
 static void
 test_surface_tracking(void **state) {
     (void)state;
@@ -308,10 +463,26 @@ test_ct_head(void **state) {
     o.method = VV_MEASURE_MC;
     vt_err(vv_measure_isosurface(&m, v, 5000, &o));
     vt_err(vv_measure_isosurface(&m, v, -1024, &o));
-    /* cut planes need voxel counting */
+    /* cut planes: the two halves of an oblique cut add up to the whole */
+    vv_isosurface_measure whole, half[2];
+    vt_ok(vv_measure_isosurface(&whole, v, 300, &o));
     o.region.n_cut_planes = 1;
-    o.region.cut_planes[0].normal = vv_vec3_make(0, 0, 1);
-    assert_int_equal(vv_measure_isosurface(&m, v, 300, &o), VV_ERR_UNSUPPORTED);
+    o.region.cut_planes[0].point =
+        vv_mat4_mul_point(vv_volume_index_to_world(v), vv_vec3_make(127.3, 120.8, 51.2));
+    for (int h = 0; h < 2; h++) {
+        o.region.cut_planes[0].normal = vv_vec3_scale(vv_vec3_make(0.3, -0.5, 1), h ? -1 : 1);
+        vt_ok(vv_measure_isosurface(&half[h], v, 300, &o));
+    }
+    print_message("halves: area %.1f + %.1f = %.1f (whole %.1f), volume %.1f + %.1f = %.1f "
+                  "(whole %.1f), cut faces %.1f, %.1f\n",
+                  half[0].area, half[1].area, half[0].area + half[1].area, whole.area,
+                  half[0].volume, half[1].volume, half[0].volume + half[1].volume, whole.volume,
+                  half[0].cut_area, half[1].cut_area);
+    assert_near(half[0].area + half[1].area, whole.area, 1e-6 * whole.area);
+    assert_near(half[0].volume + half[1].volume, whole.volume, 1e-6 * whole.volume);
+    /* the two caps on the plane are the same section: each side's cut area minus its share
+     * of the box caps; their sum is the box caps plus twice the section */
+    assert_true(half[0].cut_area + half[1].cut_area > whole.cut_area);
     vv_volume_free(v);
 }
 
@@ -491,6 +662,7 @@ main(void) {
         cmocka_unit_test(test_histogram_plot),
         cmocka_unit_test(test_sphere_mc_and_voxels),
         cmocka_unit_test(test_cut_sphere_volume),
+        cmocka_unit_test(test_cut_planes_mc),
         cmocka_unit_test(test_surface_tracking),
         cmocka_unit_test(test_ct_head),
         cmocka_unit_test(test_distance),
