@@ -150,29 +150,33 @@ vv_coarse_set_isovalue(vv_coarse_surface *c, double isovalue, int threads) {
         threads = vv_threads_get();
     o.threads = (uint64_t)threads > cap ? (cap > 0 ? (int)cap : 1) : threads;
     o.compute_normals = 0;
-    mc_extra x = {1, NULL, NULL};
+    mc_extra x;
+    memset(&x, 0, sizeof x);
+    x.quantize = 1;
+    x.edges_only = 1; /* edge ids, codes and the centres' positions: no float vertices */
     vv_mesh *m = NULL;
     vv_status s = vv_isosurface_extract_ex(&m, c->reduced, isovalue, &o, &x);
     if (s != VV_OK)
         return vv_error_prefix(s, "coarse surface");
-    size_t nv = m->n_vertices, ncent = 0;
-    for (size_t i = 0; i < nv; i++)
-        ncent += x.edge_ids[i] == UINT32_MAX;
-    uint8_t *codes = calloc(nv / 4 + 1, 1);
-    float *cent = malloc((ncent ? ncent : 1) * 3 * sizeof(float));
-    if (!codes || !cent) {
-        free(codes);
-        free(cent);
+    const size_t nv = x.n_vertices;
+    uint8_t *codes = malloc(nv / 4 + 1);
+    if (!codes) {
         free(x.edge_ids);
         free(x.codes);
+        free(x.centres);
         vv_mesh_free(m);
         return vv_error_set(VV_ERR_NOMEM, "coarse surface: out of memory");
     }
-    size_t q = 0;
-    for (size_t i = 0; i < nv; i++) {
-        codes[i / 4] |= (uint8_t)((x.codes[i] & 3) << (2 * (i % 4)));
-        if (x.edge_ids[i] == UINT32_MAX)
-            memcpy(cent + 3 * q++, m->positions + 3 * i, 3 * sizeof(float));
+    /* four 2-bit codes a byte */
+    const uint8_t *xc = x.codes;
+    for (size_t i = 0; i + 4 <= nv; i += 4)
+        codes[i / 4] = (uint8_t)((xc[i] & 3) | (xc[i + 1] & 3) << 2 | (xc[i + 2] & 3) << 4 |
+                                 (xc[i + 3] & 3) << 6);
+    if (nv % 4) {
+        uint8_t last = 0;
+        for (size_t i = nv - nv % 4; i < nv; i++)
+            last |= (uint8_t)((xc[i] & 3) << (2 * (i % 4)));
+        codes[nv / 4] = last;
     }
     free(x.codes);
     free(c->edges);
@@ -181,8 +185,8 @@ vv_coarse_set_isovalue(vv_coarse_surface *c, double isovalue, int threads) {
     free(c->centres);
     c->edges = x.edge_ids;
     c->codes = codes;
-    c->centres = cent;
-    c->n_centres = ncent;
+    c->centres = x.centres;
+    c->n_centres = x.n_centres;
     c->n_vertices = nv;
     c->n_triangles = m->n_triangles;
     c->triangles = m->triangles; /* taken over from the mesh */

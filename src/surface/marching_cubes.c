@@ -55,6 +55,9 @@ typedef struct mc_job {
     int quantize;
     uint32_t *edge_ids;
     uint8_t *codes;
+    int edges_only; /* see mc_extra */
+    float *centres; /* edges_only: centre vertex positions */
+    uint64_t *coff; /* edges_only: per row, its first centre vertex */
     vv_mesh *m;
     volatile int cancel;
     int failed;
@@ -414,6 +417,8 @@ emit_vertex(mc_job *J, uint64_t vi, int I, int Jy, int K, int axis, const vv_vox
     }
     if (J->edge_ids)
         J->edge_ids[vi] = (uint32_t)(3 * i0 + (size_t)axis);
+    if (J->edges_only)
+        return 0; /* the edge and the code are the vertex */
     double p[3] = {I, Jy, K};
     p[axis] += t;
     float *out = J->m->positions + 3 * vi;
@@ -453,7 +458,7 @@ static const int corner_xyz[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
 /* Writes centre vertex vi of the cell at voxel c0 = (I, Jy, K): the mean of the crossings
  * of the edges in mask, with the mean gradient. Returns 1 if its normal is 0. */
 static int
-emit_centre(mc_job *J, uint64_t vi, size_t c0, int I, int Jy, int K, unsigned mask) {
+emit_centre(mc_job *J, uint64_t vi, uint64_t ci, size_t c0, int I, int Jy, int K, unsigned mask) {
     double p[3] = {0, 0, 0}, g[3] = {0, 0, 0};
     int n = 0;
     for (int e = 0; e < 12; e++) {
@@ -480,7 +485,7 @@ emit_centre(mc_job *J, uint64_t vi, size_t c0, int I, int Jy, int K, unsigned ma
         n++;
     }
     const double P[3] = {I + p[0] / n, Jy + p[1] / n, K + p[2] / n};
-    float *out = J->m->positions + 3 * vi;
+    float *out = J->edges_only ? J->centres + 3 * ci : J->m->positions + 3 * vi;
     for (int r = 0; r < 3; r++)
         out[r] = (float)(J->M[r][0] * P[0] + J->M[r][1] * P[1] + J->M[r][2] * P[2] + J->M[r][3]);
     if (J->edge_ids)
@@ -559,6 +564,7 @@ generate_row_t(mc_job *J, int j, int k, const vv_voxel_type T) {
     const uint64_t *r[4] = {r0, r1, r2, row_bits(J, j + 1, k + 1)};
     const uint32_t *c1 = J->cnt + MC_CNT * (R + 1), *c2 = J->cnt + MC_CNT * (R + (size_t)n1);
     uint64_t vc = zoff + c[2]; /* centre vertices of this cell row */
+    uint64_t vcc = J->coff ? J->coff[R] : 0;
     const uint64_t R1 = R + 1, R2 = R + (size_t)n1, R3 = R2 + 1;
     /* first x, y, z vertex of the rows the cell row's edges belong to */
     const uint64_t x0 = xoff, x1 = J->voff[R1], x2 = J->voff[R2], x3 = J->voff[R3];
@@ -614,7 +620,7 @@ generate_row_t(mc_job *J, int j, int k, const vv_voxel_type T) {
             memcpy(ev, e, sizeof e);
             for (int q2 = 0; q2 < cf->n_centre; q2++) {
                 ev[12 + q2] = (uint32_t)vc;
-                zero_normals += emit_centre(J, vc++, rowbase + (size_t)(w * MC_WORD + b),
+                zero_normals += emit_centre(J, vc++, vcc++, rowbase + (size_t)(w * MC_WORD + b),
                                             I0 + w * MC_WORD + b, Jy, K, cf->centre_edges[q2]);
             }
             for (int t = 0; t < cf->n_tri; t++) {
@@ -762,6 +768,13 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
     J.normals = opt->compute_normals != 0;
     J.sv = opt->scalar_volume;
     J.quantize = x ? x->quantize : 0;
+    J.edges_only = x && x->quantize && x->edges_only;
+    if (J.edges_only) {
+        if (opt->n_cut_planes)
+            return vv_error_set(VV_ERR_INVALID, "isosurface: cut planes need vertex positions");
+        J.normals = 0;
+        J.sv = NULL;
+    }
     vv_mat4 M = vv_volume_index_to_world(v);
     for (int r = 0; r < 3; r++)
         for (int c = 0; c < 4; c++)
@@ -787,7 +800,8 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
     J.cnt = malloc(MC_CNT * rows * sizeof(uint32_t));
     J.voff = malloc((rows + 1) * sizeof(uint64_t));
     J.toff = malloc((rows + 1) * sizeof(uint64_t));
-    if (!J.bits || !J.cellmask || !J.cnt || !J.voff || !J.toff) {
+    J.coff = J.edges_only ? malloc((rows + 1) * sizeof(uint64_t)) : NULL;
+    if (!J.bits || !J.cellmask || !J.cnt || !J.voff || !J.toff || (J.edges_only && !J.coff)) {
         st = vv_error_set(VV_ERR_NOMEM, "isosurface: out of memory for %zu grid rows", rows);
         goto done;
     }
@@ -821,13 +835,16 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
     for (long r = 0; r < (long)rows; r++)
         count_row(&J, (int)(r % J.n[1]), (int)(r / J.n[1]));
     /* pass 3: prefix sums */
-    uint64_t nv = 0, ntri = 0;
+    uint64_t nv = 0, ntri = 0, ncent = 0;
     for (size_t r = 0; r < rows; r++) {
         J.voff[r] = nv;
         J.toff[r] = ntri;
+        if (J.coff)
+            J.coff[r] = ncent;
         const uint32_t *c = J.cnt + MC_CNT * r;
         nv += (uint64_t)c[0] + c[1] + c[2] + c[4];
         ntri += c[3];
+        ncent += c[4];
     }
     J.voff[rows] = nv;
     J.toff[rows] = ntri;
@@ -842,7 +859,8 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
         goto done;
     }
     if ((st = vv_mesh_new(&m)) != VV_OK ||
-        (st = vv_mesh_reserve(m, nv ? (size_t)nv : 1, ntri ? (size_t)ntri : 1)) != VV_OK ||
+        (st = vv_mesh_reserve(m, nv && !J.edges_only ? (size_t)nv : 1, ntri ? (size_t)ntri : 1)) !=
+            VV_OK ||
         (st = vv_mesh_enable_attributes(m, J.normals, J.sv != NULL)) != VV_OK) {
         vv_error_prefix(st, "isosurface");
         goto done;
@@ -861,8 +879,17 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
         }
         J.edge_ids = x->edge_ids;
         J.codes = x->codes;
+        if (J.edges_only) {
+            x->n_vertices = (size_t)nv;
+            x->n_centres = (size_t)ncent;
+            x->centres = J.centres = malloc((ncent ? (size_t)ncent : 1) * 3 * sizeof(float));
+            if (!J.centres) {
+                st = vv_error_set(VV_ERR_NOMEM, "isosurface: out of memory");
+                goto done;
+            }
+        }
     }
-    m->n_vertices = (size_t)nv;
+    m->n_vertices = J.edges_only ? 0 : (size_t)nv;
     m->n_triangles = (size_t)ntri;
     J.m = m;
     /* pass 4: generate */
@@ -897,13 +924,16 @@ done:
     free(J.cnt);
     free(J.voff);
     free(J.toff);
+    free(J.coff);
     if (st != VV_OK) {
         vv_mesh_free(m);
         if (x) {
             free(x->edge_ids);
             free(x->codes);
+            free(x->centres);
             x->edge_ids = NULL;
             x->codes = NULL;
+            x->centres = NULL;
         }
         return st;
     }

@@ -65,6 +65,13 @@ typedef struct mc_extra {
     int quantize;       /**< snap each crossing to (code + 0.5) / 4 along its edge */
     uint32_t *edge_ids; /**< out (malloc'ed): per vertex 3 * voxel index + axis (whole grid) */
     uint8_t *codes;     /**< out (malloc'ed): per vertex the 2-bit code (one byte each) */
+    /** 1 (with quantize): the edge vertices get no positions, the mesh has no vertices
+     * (n_vertices 0) and only its triangles are valid; the cell-centre vertices' positions
+     * go to centres, in vertex order. No normals, scalars or cut planes. */
+    int edges_only;
+    size_t n_vertices; /**< out with edges_only: the vertices the triangles index */
+    size_t n_centres;  /**< out with edges_only */
+    float *centres;    /**< out with edges_only (malloc'ed): 3 floats per centre vertex */
 } mc_extra;
 
 /** vv_isosurface_extract with extras (x may be NULL). */
