@@ -26,13 +26,15 @@
  */
 #include <float.h>
 #include <math.h>
-#include <omp.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "surface_internal.h"
 
 #define MC_WORD 64
+#define VV_MC_MAX_THREADS 256
 #define MC_CNT 5 /* counts per row */
 
 typedef struct mc_job {
@@ -685,6 +687,92 @@ fix_zero_normals(vv_mesh *m) {
     free(acc);
 }
 
+/* ---- threads -------------------------------------------------------------------- */
+
+/*
+ * The passes run on plain threads that block between passes (pthread_join), not
+ * on OpenMP: libgomp's threads spin-wait at every barrier and between parallel
+ * regions (GOMP_SPINCOUNT, 300 000 pause loops, several ms on current CPUs), and
+ * on a machine with more runnable threads than cores the spinning thread takes
+ * the core its late partner needs. On the project's loaded 2-core machine that
+ * made 2 threads twice as slow as 1. Rows are handed out dynamically, 16 at a
+ * time, from an atomic counter, so a descheduled thread delays the pass by at
+ * most its 16 rows.
+ */
+typedef struct mc_pass {
+    mc_job *J;
+    int which;          /* MC_PASS_* */
+    long n;             /* rows */
+    atomic_long next;   /* next row to hand out */
+    uint8_t **scratch;  /* per worker: classify's byte row */
+    long *zero_normals; /* per worker */
+    const vv_minmax_grid *grid;
+    const vv_progress *progress;
+} mc_pass;
+
+enum { MC_PASS_CLASSIFY, MC_PASS_COUNT, MC_PASS_GENERATE };
+#define MC_CHUNK 16
+
+static void
+pass_worker(mc_pass *P, int w) {
+    mc_job *J = P->J;
+    int tick = 0;
+    for (;;) {
+        long r0 = atomic_fetch_add_explicit(&P->next, MC_CHUNK, memory_order_relaxed);
+        if (r0 >= P->n || J->cancel)
+            break;
+        long r1 = r0 + MC_CHUNK < P->n ? r0 + MC_CHUNK : P->n;
+        for (long r = r0; r < r1; r++) {
+            int j = (int)(r % J->n[1]), k = (int)(r / J->n[1]);
+            if (P->which == MC_PASS_CLASSIFY)
+                classify_row(J, P->grid, j, k, P->scratch[w]);
+            else if (P->which == MC_PASS_COUNT)
+                count_row(J, j, k);
+            else
+                P->zero_normals[w] += generate_row(J, j, k);
+        }
+        /* the calling thread (worker 0) reports; a cancel stops every worker */
+        if (w == 0 && P->which == MC_PASS_GENERATE && P->progress && P->progress->fn &&
+            (++tick & 3) == 0 &&
+            vv_progress_report(P->progress, 0.4 + 0.5 * (double)r1 / (double)P->n))
+            J->cancel = 1;
+    }
+}
+
+typedef struct mc_worker_arg {
+    mc_pass *P;
+    int w;
+} mc_worker_arg;
+
+static void *
+pass_thread(void *a) {
+    mc_worker_arg *arg = a;
+    pass_worker(arg->P, arg->w);
+    return NULL;
+}
+
+/* Runs pass P on nt threads (the caller is worker 0); fewer if threads cannot be made. */
+static void
+run_pass(mc_pass *P, int nt) {
+    pthread_t tid[VV_MC_MAX_THREADS];
+    mc_worker_arg arg[VV_MC_MAX_THREADS];
+    atomic_store_explicit(&P->next, 0, memory_order_relaxed);
+    long max_useful = (P->n + MC_CHUNK - 1) / MC_CHUNK;
+    if (nt > max_useful)
+        nt = (int)max_useful;
+    int started = 0;
+    for (int w = 1; w < nt; w++) {
+        arg[w].P = P;
+        arg[w].w = w;
+        if (pthread_create(&tid[w], NULL, pass_thread, &arg[w]) != 0)
+            break;
+        started = w;
+    }
+    pass_worker(P, 0);
+    for (int w = 1; w <= started; w++)
+        pthread_join(tid[w], NULL);
+}
+
 /* ---- driver ------------------------------------------------------------------- */
 
 void
@@ -792,6 +880,8 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
         if ((uint64_t)nt > cap)
             nt = (int)cap;
     }
+    if (nt > VV_MC_MAX_THREADS)
+        nt = VV_MC_MAX_THREADS;
     const size_t rows = (size_t)J.n[1] * (size_t)J.n[2];
     vv_status st = VV_OK;
     vv_mesh *m = NULL;
@@ -808,32 +898,35 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
     for (int i = 0; i + 1 < J.n[0]; i++)
         J.cellmask[i / MC_WORD] |= 1ULL << (i % MC_WORD);
 
-        /* pass 1: classify */
-#pragma omp parallel num_threads(nt)
-    {
-        uint8_t *c = malloc((size_t)J.W * MC_WORD);
-        if (!c) {
-#pragma omp atomic write
-            J.failed = 1;
+    /* pass 1: classify */
+    mc_pass P;
+    memset(&P, 0, sizeof P);
+    P.J = &J;
+    P.n = (long)rows;
+    P.grid = grid;
+    P.progress = &opt->progress;
+    long zn[VV_MC_MAX_THREADS] = {0};
+    uint8_t *scratch[VV_MC_MAX_THREADS] = {NULL};
+    P.scratch = scratch;
+    P.zero_normals = zn;
+    for (int w = 0; w < nt; w++)
+        if (!(scratch[w] = malloc((size_t)J.W * MC_WORD))) {
+            for (int q = 0; q < w; q++)
+                free(scratch[q]);
+            st = vv_error_set(VV_ERR_NOMEM, "isosurface: out of memory");
+            goto done;
         }
-#pragma omp for schedule(dynamic, 16)
-        for (long r = 0; r < (long)rows; r++)
-            if (c)
-                classify_row(&J, grid, (int)(r % J.n[1]), (int)(r / J.n[1]), c);
-        free(c);
-    }
-    if (J.failed) {
-        st = vv_error_set(VV_ERR_NOMEM, "isosurface: out of memory");
-        goto done;
-    }
+    P.which = MC_PASS_CLASSIFY;
+    run_pass(&P, nt);
+    for (int w = 0; w < nt; w++)
+        free(scratch[w]);
     if (report(&opt->progress, 0.2)) {
         st = vv_error_set(VV_ERR_CANCELLED, "isosurface: cancelled");
         goto done;
     }
     /* pass 2: count */
-#pragma omp parallel for num_threads(nt) schedule(dynamic, 16)
-    for (long r = 0; r < (long)rows; r++)
-        count_row(&J, (int)(r % J.n[1]), (int)(r / J.n[1]));
+    P.which = MC_PASS_COUNT;
+    run_pass(&P, nt);
     /* pass 3: prefix sums */
     uint64_t nv = 0, ntri = 0, ncent = 0;
     for (size_t r = 0; r < rows; r++) {
@@ -893,17 +986,11 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
     m->n_triangles = (size_t)ntri;
     J.m = m;
     /* pass 4: generate */
+    P.which = MC_PASS_GENERATE;
+    run_pass(&P, nt);
     long zero_normals = 0;
-    int tick = 0;
-#pragma omp parallel for num_threads(nt) schedule(dynamic, 16) reduction(+ : zero_normals)
-    for (long r = 0; r < (long)rows; r++) {
-        if (J.cancel)
-            continue;
-        zero_normals += generate_row(&J, (int)(r % J.n[1]), (int)(r / J.n[1]));
-        if (opt->progress.fn && omp_get_thread_num() == 0 && (++tick & 63) == 0 &&
-            report(&opt->progress, 0.4 + 0.5 * (double)r / (double)rows))
-            J.cancel = 1;
-    }
+    for (int w = 0; w < nt; w++)
+        zero_normals += zn[w];
     if (J.cancel) {
         st = vv_error_set(VV_ERR_CANCELLED, "isosurface: cancelled");
         goto done;
