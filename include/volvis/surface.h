@@ -43,7 +43,7 @@ extern "C" {
 
 /** Options of vv_isosurface_extract; initialise with vv_isosurface_options_init. */
 typedef struct vv_isosurface_options {
-    int threads; /**< <= 0: vv_threads_get(), but at most one per 2^20 voxels of the region */
+    int threads; /**< <= 0: vv_threads_get(), but at most one per 2^18 voxels of the region */
     int compute_normals;        /**< 1 (default): per-vertex normals from the volume gradient */
     int roi_min[3], roi_max[3]; /**< voxel index region, inclusive; roi_max[0] < 0: whole volume */
     int n_cut_planes;           /**< world-space cut planes; keeps n·(x−p) >= 0 */
@@ -183,7 +183,7 @@ typedef struct vv_coarse_surface {
 vv_status vv_coarse_new(vv_coarse_surface **out, const vv_volume *v, int level);
 /**
  * Extracts the coarse surface at @p isovalue with at most @p threads threads
- * (<= 0: vv_threads_get()) and at most one per 2^20 voxels of the reduced
+ * (<= 0: vv_threads_get()) and at most one per 2^18 voxels of the reduced
  * grid. Errors: VV_ERR_INVALID, VV_ERR_LIMIT, VV_ERR_NOMEM.
  */
 vv_status vv_coarse_set_isovalue(vv_coarse_surface *c, double isovalue, int threads);

@@ -144,8 +144,8 @@ vv_coarse_set_isovalue(vv_coarse_surface *c, double isovalue, int threads) {
         return vv_error_set(VV_ERR_INVALID, "coarse surface: NULL argument");
     vv_isosurface_options o;
     vv_isosurface_options_init(&o);
-    /* a small grid: one thread per 2^20 voxels at most (see vv_isosurface_options) */
-    uint64_t cap = vv_volume_voxel_count(c->reduced) >> 20;
+    /* a small grid: one thread per 2^18 voxels at most (see vv_isosurface_options) */
+    uint64_t cap = vv_volume_voxel_count(c->reduced) >> 18;
     if (threads <= 0)
         threads = vv_threads_get();
     o.threads = (uint64_t)threads > cap ? (cap > 0 ? (int)cap : 1) : threads;

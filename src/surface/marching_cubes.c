@@ -872,10 +872,10 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
             J.G[r][c] = v->direction[3 * r + c] / v->spacing[c];
     int nt = opt->threads;
     if (nt <= 0) {
-        /* by default at most one thread per 2^20 voxels: on small grids the passes'
-         * barriers cost more than the threads save (and much more on a loaded machine) */
+        /* by default at most one thread per 2^18 voxels: on small grids starting the
+         * threads of the three passes costs more than they save */
         const uint64_t region_voxels = (uint64_t)J.n[0] * (uint64_t)J.n[1] * (uint64_t)J.n[2];
-        const uint64_t cap = region_voxels >> 20 > 0 ? region_voxels >> 20 : 1;
+        const uint64_t cap = region_voxels >> 18 > 0 ? region_voxels >> 18 : 1;
         nt = vv_threads_get();
         if ((uint64_t)nt > cap)
             nt = (int)cap;
