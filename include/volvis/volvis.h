@@ -11,6 +11,7 @@
 #include "math.h"
 #include "mesh.h"
 #include "model.h"
+#include "modeling.h"
 #include "render.h"
 #include "volume.h"
 
