@@ -1,6 +1,6 @@
 /*
  * volvis: the command-line tool. Dispatches a table of subcommands, one file
- * each (cmd_info.c, cmd_render.c, cmd_convert.c). See docs/cli.md.
+ * each (cmd_info.c, cmd_render.c, cmd_convert.c, cmd_voxelize.c). See docs/cli.md.
  */
 #include <stdio.h>
 #include <string.h>
@@ -11,6 +11,8 @@ static const cli_command commands[] = {
     {"info", "print a volume's header, value range and histogram", cli_info_main, cli_info_usage},
     {"render", "render a volume or a scene file to a PNG image", cli_render_main, cli_render_usage},
     {"convert", "convert any readable volume to NRRD or SLC", cli_convert_main, cli_convert_usage},
+    {"voxelize", "volume-sample a geometric model (scene or mesh) to NRRD or SLC",
+     cli_voxelize_main, cli_voxelize_usage},
 };
 #define N_COMMANDS ((int)(sizeof commands / sizeof commands[0]))
 

@@ -160,9 +160,9 @@ typedef enum vv_mesh_mode {
 } vv_mesh_mode;
 /**
  * A triangle mesh (borrowed; the shape takes its own reference). @p thickness
- * is the shell thickness in world units (<= 0: one voxel, the largest voxel
- * spacing of the output grid). Errors: VV_ERR_INVALID (no triangles),
- * VV_ERR_NOMEM.
+ * is the shell thickness in world units (<= 0: two voxels of the largest voxel
+ * spacing of the output grid; thinner shells alias in renderings). Errors: VV_ERR_INVALID (no
+ * triangles), VV_ERR_NOMEM.
  */
 vv_status vv_shape_mesh(vv_shape **out, vv_mesh *mesh, vv_mesh_mode mode, double thickness);
 /** A mesh loaded with vv_mesh_load (any format Assimp reads). Errors as vv_mesh_load. */

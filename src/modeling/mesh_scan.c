@@ -145,30 +145,330 @@ triangle_rows(const scan_ctx *c, size_t t, int a, size_t *cnt, crossing *out, si
     }
 }
 
+/* ---- closing holes for the parity test ---------------------------------- */
+
+typedef struct tri_list {
+    uint32_t *t; /* 3 per triangle */
+    size_t n, cap;
+    double *V; /* index coordinates, 3 per vertex */
+    size_t nv, capv;
+} tri_list;
+
+static int
+tl_grow(tri_list *L, size_t nt, size_t nv) {
+    if (nt > L->cap) {
+        size_t cap = nt + nt / 2 + 16;
+        uint32_t *t = realloc(L->t, cap * 3 * sizeof *t);
+        if (!t)
+            return 0;
+        L->t = t;
+        L->cap = cap;
+    }
+    if (nv > L->capv) {
+        size_t cap = nv + nv / 2 + 16;
+        double *v = realloc(L->V, cap * 3 * sizeof *v);
+        if (!v)
+            return 0;
+        L->V = v;
+        L->capv = cap;
+    }
+    return 1;
+}
+
+typedef struct dedge {
+    uint32_t lo, hi, from, to;
+} dedge;
+
+static int
+cmp_dedge(const void *a, const void *b) {
+    const dedge *x = a, *y = b;
+    if (x->lo != y->lo)
+        return x->lo < y->lo ? -1 : 1;
+    return (x->hi > y->hi) - (x->hi < y->hi);
+}
+
+/*
+ * Closes the holes of an open mesh for the parity test: the boundary edges
+ * (used by one triangle) are chained into loops and each loop is closed by
+ * a fan of triangles around its centroid, so every row crosses the closed
+ * surface an even number of times. A well-closed mesh is left alone.
+ */
+static vv_status
+close_holes(tri_list *L) {
+    size_t ne = 3 * L->n;
+    dedge *E = malloc((ne ? ne : 1) * sizeof *E);
+    if (!E)
+        return vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory");
+    for (size_t t = 0; t < L->n; t++)
+        for (int k = 0; k < 3; k++) {
+            uint32_t a = L->t[3 * t + k], b = L->t[3 * t + (k + 1) % 3];
+            E[3 * t + k] = (dedge){a < b ? a : b, a < b ? b : a, a, b};
+        }
+    qsort(E, ne, sizeof *E, cmp_dedge);
+    /* boundary edges: next[from] = to */
+    uint32_t *next = malloc((L->nv ? L->nv : 1) * sizeof *next);
+    if (!next) {
+        free(E);
+        return vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory");
+    }
+    memset(next, 0xff, L->nv * sizeof *next);
+    size_t nb = 0;
+    for (size_t i = 0; i < ne;) {
+        size_t j = i + 1;
+        while (j < ne && E[j].lo == E[i].lo && E[j].hi == E[i].hi)
+            j++;
+        if (j - i == 1 && E[i].lo != E[i].hi && next[E[i].from] == UINT32_MAX) {
+            next[E[i].from] = E[i].to;
+            nb++;
+        }
+        i = j;
+    }
+    free(E);
+    vv_status st = VV_OK;
+    size_t n0 = L->nv;
+    for (size_t v0 = 0; v0 < n0 && nb > 0 && st == VV_OK; v0++) {
+        if (next[v0] == UINT32_MAX)
+            continue;
+        /* walk the loop from v0, taking its edges out of next[] */
+        double c[3] = {0, 0, 0};
+        size_t len = 0;
+        for (uint32_t v = (uint32_t)v0; next[v] != UINT32_MAX && len <= nb; v = next[v], len++)
+            for (int k = 0; k < 3; k++)
+                c[k] += L->V[3 * (size_t)v + k];
+        if (!tl_grow(L, L->n + len, L->nv + 1)) {
+            st = vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory");
+            break;
+        }
+        uint32_t ci = (uint32_t)L->nv++;
+        for (int k = 0; k < 3; k++)
+            L->V[3 * (size_t)ci + k] = c[k] / (double)len;
+        uint32_t v = (uint32_t)v0;
+        for (size_t e = 0; e < len && next[v] != UINT32_MAX; e++) {
+            uint32_t w = next[v];
+            next[v] = UINT32_MAX;
+            uint32_t *t = L->t + 3 * L->n++;
+            t[0] = w;
+            t[1] = v;
+            t[2] = ci;
+            v = w;
+        }
+    }
+    free(next);
+    return st;
+}
+
+/* ---- exact distances for shells ------------------------------------------ */
+
+/* Squared distance from p to triangle abc (Ericson, Real-Time Collision
+ * Detection, 5.1.5). */
+static double
+point_triangle_d2(const double p[3], const double a[3], const double b[3], const double c[3]) {
+    double ab[3], ac[3], ap[3], q[3];
+    for (int k = 0; k < 3; k++) {
+        ab[k] = b[k] - a[k];
+        ac[k] = c[k] - a[k];
+        ap[k] = p[k] - a[k];
+    }
+#define DOT(u, v) ((u)[0] * (v)[0] + (u)[1] * (v)[1] + (u)[2] * (v)[2])
+    double d1 = DOT(ab, ap), d2 = DOT(ac, ap);
+    if (d1 <= 0 && d2 <= 0) {
+        for (int k = 0; k < 3; k++)
+            q[k] = a[k];
+        goto out;
+    }
+    double bp[3];
+    for (int k = 0; k < 3; k++)
+        bp[k] = p[k] - b[k];
+    double d3 = DOT(ab, bp), d4 = DOT(ac, bp);
+    if (d3 >= 0 && d4 <= d3) {
+        for (int k = 0; k < 3; k++)
+            q[k] = b[k];
+        goto out;
+    }
+    double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+        double v = d1 / (d1 - d3);
+        for (int k = 0; k < 3; k++)
+            q[k] = a[k] + v * ab[k];
+        goto out;
+    }
+    double cp[3];
+    for (int k = 0; k < 3; k++)
+        cp[k] = p[k] - c[k];
+    double d5 = DOT(ab, cp), d6 = DOT(ac, cp);
+    if (d6 >= 0 && d5 <= d6) {
+        for (int k = 0; k < 3; k++)
+            q[k] = c[k];
+        goto out;
+    }
+    double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+        double w = d2 / (d2 - d6);
+        for (int k = 0; k < 3; k++)
+            q[k] = a[k] + w * ac[k];
+        goto out;
+    }
+    double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+        double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        for (int k = 0; k < 3; k++)
+            q[k] = b[k] + w * (c[k] - b[k]);
+        goto out;
+    }
+    {
+        double den = 1.0 / (va + vb + vc), v = vb * den, w = vc * den;
+        for (int k = 0; k < 3; k++)
+            q[k] = a[k] + ab[k] * v + ac[k] * w;
+    }
+out:;
+    double d[3] = {p[0] - q[0], p[1] - q[1], p[2] - q[2]};
+    return DOT(d, d);
+#undef DOT
+}
+
+/* Unsigned distance (world units, clamped to band) of every voxel to the
+ * triangles: each slab of SLAB z layers is one task over the triangles
+ * whose expanded box meets it, so no two threads write the same voxel. */
+#define SLAB 4
+static vv_status
+shell_distance(const tri_list *L, const int dims[3], const double spacing[3], double band,
+               float *sd, int threads) {
+    size_t n = (size_t)dims[0] * dims[1] * dims[2];
+    for (size_t i = 0; i < n; i++)
+        sd[i] = (float)band;
+    int nslab = (dims[2] + SLAB - 1) / SLAB;
+    size_t *cnt = calloc((size_t)nslab + 1, sizeof *cnt), *pos = NULL;
+    uint32_t *bins = NULL;
+    double r[3];
+    for (int k = 0; k < 3; k++)
+        r[k] = band / spacing[k];
+    if (!cnt)
+        return vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory");
+    for (int pass = 0; pass < 2; pass++) {
+        for (size_t t = 0; t < L->n; t++) {
+            double lo = INFINITY, hi = -INFINITY;
+            for (int v = 0; v < 3; v++) {
+                double z = L->V[3 * (size_t)L->t[3 * t + v] + 2];
+                lo = fmin(lo, z);
+                hi = fmax(hi, z);
+            }
+            int k0 = (int)fmax(0, ceil(lo - r[2])), k1 = (int)fmin(dims[2] - 1, floor(hi + r[2]));
+            for (int s = k0 / SLAB; k0 <= k1 && s <= k1 / SLAB; s++) {
+                if (pass == 0)
+                    cnt[s]++;
+                else
+                    bins[pos[s]++] = (uint32_t)t;
+            }
+        }
+        if (pass == 0) {
+            size_t total = 0;
+            pos = malloc(((size_t)nslab + 1) * sizeof *pos);
+            for (int s = 0; pos && s <= nslab; s++) {
+                size_t c = s < nslab ? cnt[s] : 0;
+                pos[s] = cnt[s] = total;
+                total += c;
+            }
+            bins = malloc((total ? total : 1) * sizeof *bins);
+            if (!pos || !bins) {
+                free(cnt);
+                free(pos);
+                free(bins);
+                return vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory");
+            }
+        }
+    }
+    float b2 = (float)(band * band);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (int s = 0; s < nslab; s++) {
+        int z0 = s * SLAB, z1 = z0 + SLAB - 1 < dims[2] - 1 ? z0 + SLAB - 1 : dims[2] - 1;
+        for (size_t q = cnt[s]; q < pos[s]; q++) {
+            size_t t = bins[q];
+            double P[3][3], lo[3] = {INFINITY, INFINITY, INFINITY},
+                            hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+            for (int v = 0; v < 3; v++)
+                for (int k = 0; k < 3; k++) {
+                    double x = L->V[3 * (size_t)L->t[3 * t + v] + k];
+                    lo[k] = fmin(lo[k], x);
+                    hi[k] = fmax(hi[k], x);
+                    P[v][k] = x * spacing[k];
+                }
+            int i0[3], i1[3];
+            for (int k = 0; k < 3; k++) {
+                i0[k] = (int)fmax(0, ceil(lo[k] - r[k]));
+                i1[k] = (int)fmin(dims[k] - 1, floor(hi[k] + r[k]));
+            }
+            if (i0[2] < z0)
+                i0[2] = z0;
+            if (i1[2] > z1)
+                i1[2] = z1;
+            for (int z = i0[2]; z <= i1[2]; z++)
+                for (int y = i0[1]; y <= i1[1]; y++)
+                    for (int x = i0[0]; x <= i1[0]; x++) {
+                        double p[3] = {x * spacing[0], y * spacing[1], z * spacing[2]};
+                        double d2 = point_triangle_d2(p, P[0], P[1], P[2]);
+                        float *o = sd + ((size_t)z * dims[1] + y) * dims[0] + x;
+                        if (d2 < b2 && (float)d2 < *o * *o)
+                            *o = (float)sqrt(d2);
+                    }
+        }
+    }
+    free(cnt);
+    free(pos);
+    free(bins);
+    return VV_OK;
+}
+
 vv_status
-vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness, const int dims[3],
-             const double spacing[3], const double origin[3], double band, float *sd, int threads) {
+vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, int close, double thickness,
+             const int dims[3], const double spacing[3], const double origin[3], double band,
+             float *sd, int threads) {
     size_t nv = mesh->n_vertices;
-    double *V = malloc(nv * 3 * sizeof *V);
-    if (!V)
-        return vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory for %zu vertices", nv);
+    for (size_t t = 0; t < 3 * mesh->n_triangles; t++) {
+        if (mesh->triangles[t] >= nv)
+            return vv_error_set(VV_ERR_INVALID, "mesh scan: triangle %zu has vertex %u of %zu",
+                                t / 3, mesh->triangles[t], nv);
+    }
+    tri_list L = {0};
+    if (!tl_grow(&L, mesh->n_triangles, nv)) {
+        free(L.t);
+        free(L.V);
+        return vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory for %zu triangles",
+                            mesh->n_triangles);
+    }
+    memcpy(L.t, mesh->triangles, 3 * mesh->n_triangles * sizeof *L.t);
+    L.n = mesh->n_triangles;
+    L.nv = nv;
+    double *V = L.V;
     for (size_t i = 0; i < nv; i++) {
         vv_vec3 p = vv_mat4_mul_point(to_world, vv_mesh_vertex(mesh, i));
         V[3 * i] = (p.x - origin[0]) / spacing[0];
         V[3 * i + 1] = (p.y - origin[1]) / spacing[1];
         V[3 * i + 2] = (p.z - origin[2]) / spacing[2];
     }
-    for (size_t t = 0; t < 3 * mesh->n_triangles; t++) {
-        if (mesh->triangles[t] >= nv) {
-            free(V);
-            return vv_error_set(VV_ERR_INVALID, "mesh scan: triangle %zu has vertex %u of %zu",
-                                t / 3, mesh->triangles[t], nv);
-        }
-    }
-    scan_ctx c = {V, mesh->triangles, mesh->n_triangles, dims, spacing};
-    double bandw = solid ? band : band + 0.5 * thickness;
-    const float far = (float)bandw;
     vv_status st = VV_OK;
+    if (!solid) {
+        double bandw = band + 0.5 * thickness;
+        st = shell_distance(&L, dims, spacing, bandw, sd, threads);
+        free(L.t);
+        free(L.V);
+        if (st == VV_OK) {
+            long long nn = (long long)dims[0] * dims[1] * dims[2];
+            float h = (float)(0.5 * thickness);
+#pragma omp parallel for schedule(static) num_threads(threads)
+            for (long long i = 0; i < nn; i++)
+                sd[i] = sd[i] - h;
+        }
+        return st;
+    }
+    if (close && (st = close_holes(&L)) != VV_OK) {
+        free(L.t);
+        free(L.V);
+        return st;
+    }
+    V = L.V;
+    scan_ctx c = {V, L.t, L.n, dims, spacing};
+    double bandw = band;
+    const float far = (float)bandw;
     for (int a = 0; a < 3 && st == VV_OK; a++) {
         int b = (a + 1) % 3, cc = (a + 2) % 3;
         size_t nrows = (size_t)dims[b] * (size_t)dims[cc];
@@ -180,7 +480,7 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
             st = vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory");
             break;
         }
-        long long ntri = (long long)mesh->n_triangles;
+        long long ntri = (long long)L.n;
 #pragma omp parallel for schedule(dynamic, 1024) num_threads(threads)
         for (long long t = 0; t < ntri; t++)
             triangle_rows(&c, (size_t)t, a, cnt, NULL, NULL);
@@ -223,7 +523,7 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
                         inside = !inside;
                         k++;
                     }
-                    sd[base + (size_t)i * st_a] = (solid && inside) ? -far : far;
+                    sd[base + (size_t)i * st_a] = inside ? -far : far;
                 }
             }
             for (size_t k = 0; k < m; k++) {
@@ -244,14 +544,7 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
         free(cnt);
         free(pos);
     }
-    free(V);
-    if (st == VV_OK && !solid) {
-        size_t n = (size_t)dims[0] * dims[1] * dims[2];
-        float h = (float)(0.5 * thickness);
-        long long nn = (long long)n;
-#pragma omp parallel for schedule(static) num_threads(threads)
-        for (long long i = 0; i < nn; i++)
-            sd[i] = sd[i] - h;
-    }
+    free(L.t);
+    free(L.V);
     return st;
 }
