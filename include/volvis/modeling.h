@@ -215,7 +215,7 @@ void vv_voxelize_options_init(vv_voxelize_options *o);
  * distance to each primitive, combined through the tree per voxel (union =
  * max, intersection = min, difference = min(a, 1 - b)). Only voxels within
  * the filter radius of a primitive's surface are evaluated one by one:
- * the grid is walked in 8^3 subvolumes classified as inside, outside or
+ * the grid is walked in 4^3 subvolumes classified as inside, outside or
  * near the surface from a lower bound of the distance at the subvolume
  * centre; inside ones are filled, outside ones skipped, and a mesh is scan
  * converted along grid rows instead (ray parity for inside, plane distance

@@ -175,17 +175,11 @@ tl_grow(tri_list *L, size_t nt, size_t nv) {
     return 1;
 }
 
-typedef struct dedge {
-    uint32_t lo, hi, from, to;
-} dedge;
-
-static int
-cmp_dedge(const void *a, const void *b) {
-    const dedge *x = a, *y = b;
-    if (x->lo != y->lo)
-        return x->lo < y->lo ? -1 : 1;
-    return (x->hi > y->hi) - (x->hi < y->hi);
-}
+/* an undirected edge in an open-addressing table: key (lo << 32 | hi) + 1 */
+typedef struct edge_slot {
+    uint64_t key;
+    uint32_t from, to, count;
+} edge_slot;
 
 /*
  * Closes the holes of an open mesh for the parity test: the boundary edges
@@ -195,35 +189,36 @@ cmp_dedge(const void *a, const void *b) {
  */
 static vv_status
 close_holes(tri_list *L) {
-    size_t ne = 3 * L->n;
-    dedge *E = malloc((ne ? ne : 1) * sizeof *E);
-    if (!E)
+    size_t ne = 3 * L->n, cap = 16;
+    while (cap < 2 * ne)
+        cap <<= 1;
+    edge_slot *H = calloc(cap, sizeof *H);
+    uint32_t *next = malloc((L->nv ? L->nv : 1) * sizeof *next);
+    if (!H || !next) {
+        free(H);
+        free(next);
         return vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory");
+    }
     for (size_t t = 0; t < L->n; t++)
         for (int k = 0; k < 3; k++) {
             uint32_t a = L->t[3 * t + k], b = L->t[3 * t + (k + 1) % 3];
-            E[3 * t + k] = (dedge){a < b ? a : b, a < b ? b : a, a, b};
+            uint64_t key = ((uint64_t)(a < b ? a : b) << 32 | (a < b ? b : a)) + 1;
+            size_t h = (size_t)((key * 0x9E3779B97F4A7C15ull) >> 20) & (cap - 1);
+            while (H[h].key && H[h].key != key)
+                h = (h + 1) & (cap - 1);
+            if (!H[h].key)
+                H[h] = (edge_slot){key, a, b, 0};
+            H[h].count++;
         }
-    qsort(E, ne, sizeof *E, cmp_dedge);
-    /* boundary edges: next[from] = to */
-    uint32_t *next = malloc((L->nv ? L->nv : 1) * sizeof *next);
-    if (!next) {
-        free(E);
-        return vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory");
-    }
+    /* boundary edges (one triangle): next[from] = to */
     memset(next, 0xff, L->nv * sizeof *next);
     size_t nb = 0;
-    for (size_t i = 0; i < ne;) {
-        size_t j = i + 1;
-        while (j < ne && E[j].lo == E[i].lo && E[j].hi == E[i].hi)
-            j++;
-        if (j - i == 1 && E[i].lo != E[i].hi && next[E[i].from] == UINT32_MAX) {
-            next[E[i].from] = E[i].to;
+    for (size_t h = 0; h < cap; h++)
+        if (H[h].key && H[h].count == 1 && H[h].from != H[h].to && next[H[h].from] == UINT32_MAX) {
+            next[H[h].from] = H[h].to;
             nb++;
         }
-        i = j;
-    }
-    free(E);
+    free(H);
     vv_status st = VV_OK;
     size_t n0 = L->nv;
     for (size_t v0 = 0; v0 < n0 && nb > 0 && st == VV_OK; v0++) {
@@ -511,8 +506,19 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, int close, double
             size_t base = jb * stride[b] + jc * stride[cc], st_a = stride[a];
             crossing *x = xs + cnt[r];
             size_t m = cnt[r + 1] - cnt[r];
-            if (m > 1)
+            if (m > 24) {
                 qsort(x, m, sizeof *x, cmp_crossing);
+            } else {
+                for (size_t u = 1; u < m; u++) {
+                    crossing key = x[u];
+                    size_t w = u;
+                    while (w > 0 && cmp_crossing(&x[w - 1], &key) > 0) {
+                        x[w] = x[w - 1];
+                        w--;
+                    }
+                    x[w] = key;
+                }
+            }
             int na = dims[a];
             if (a == 0) {
                 /* first pass: every voxel of the row gets its side */

@@ -499,7 +499,7 @@ double
 vv_shape_sdf(const vv_shape *s, vv_vec3 q) {
     switch (s->kind) {
     case SHAPE_SPHERE:
-        return vv_vec3_length(q) - s->p[0];
+        return sqrt(q.x * q.x + q.y * q.y + q.z * q.z) - s->p[0];
     case SHAPE_ELLIPSOID: {
         /* first-order distance k0 (k0 - 1) / k1: exact zero set, accurate near it */
         double ax = q.x / s->p[0], ay = q.y / s->p[1], az = q.z / s->p[2];

@@ -2,7 +2,7 @@
  * Volume-sampled voxelization of a model tree (Wang and Kaufman, IEEE
  * Visualization '93; VolVis paper, section 3, Modeling).
  *
- * The grid is walked in subvolumes of 8^3 voxels. For each subvolume every
+ * The grid is walked in subvolumes of 4^3 voxels. For each subvolume every
  * node of the tree is classified as inside, outside or near its surface,
  * from a lower bound of the primitive's distance at the subvolume centre
  * (with the subvolume's half diagonal plus the filter radius as margin) and
@@ -20,7 +20,7 @@
 
 #include "modeling_internal.h"
 
-#define BRICK 8
+#define BRICK 4
 
 enum { CLS_OUT = 0, CLS_IN = 1, CLS_MIXED = 2 };
 
@@ -40,6 +40,9 @@ typedef struct vctx {
     int *kids;
     int n_kids, cap_kids;
     const vv_filter_table *table;
+    const float *tab;          /* table->density */
+    double tab_scale, tab_off; /* entry = d_world * tab_scale + tab_off */
+    int tab_last;
     double inv_h; /* voxels of the filter table per world unit */
     double rw;    /* filter radius, world units */
     int dims[3];
@@ -129,6 +132,13 @@ flatten(vctx *c, const vv_shape *s, vv_mat4 parent, int *index) {
     return VV_OK;
 }
 
+static inline vv_vec3
+affine(const vv_mat4 *M, vv_vec3 p) {
+    return (vv_vec3){M->m[0][0] * p.x + M->m[0][1] * p.y + M->m[0][2] * p.z + M->m[0][3],
+                     M->m[1][0] * p.x + M->m[1][1] * p.y + M->m[1][2] * p.z + M->m[1][3],
+                     M->m[2][0] * p.x + M->m[2][1] * p.y + M->m[2][2] * p.z + M->m[2][3]};
+}
+
 static int
 classify(const vctx *c, int idx, const double lo[3], const double hi[3], vv_vec3 centre, double hd,
          const int bijk[3], unsigned char *cls) {
@@ -143,7 +153,7 @@ classify(const vctx *c, int idx, const double lo[3], const double hi[3], vv_vec3
             hi[1] < f->wbox.min.y - m || lo[2] > f->wbox.max.z + m || hi[2] < f->wbox.min.z - m) {
             r = CLS_OUT;
         } else {
-            double b = f->sigma * vv_shape_sdf_bound(s, vv_mat4_mul_point(f->inv, centre));
+            double b = f->sigma * vv_shape_sdf_bound(s, affine(&f->inv, centre));
             r = b > hd + m ? CLS_OUT : (b < -(hd + m) ? CLS_IN : CLS_MIXED);
         }
     } else {
@@ -173,6 +183,19 @@ classify(const vctx *c, int idx, const double lo[3], const double hi[3], vv_vec3
     return r;
 }
 
+/* the filter table at signed world distance d (vv_filter_table_eval, inlined) */
+static inline double
+table_at(const vctx *c, double d) {
+    double x = d * c->tab_scale + c->tab_off;
+    if (!(x > 0.0))
+        return 1.0;
+    if (x >= c->tab_last)
+        return 0.0;
+    int i = (int)x;
+    double f = x - i;
+    return c->tab[i] + f * (c->tab[i + 1] - c->tab[i]);
+}
+
 static double
 density(const vctx *c, int idx, vv_vec3 p, size_t voxel, const unsigned char *cls) {
     if (cls[idx] != CLS_MIXED)
@@ -180,11 +203,9 @@ density(const vctx *c, int idx, vv_vec3 p, size_t voxel, const unsigned char *cl
     const fnode *f = &c->nodes[idx];
     const vv_shape *s = f->s;
     if (s->kind == SHAPE_MESH)
-        return vv_filter_table_eval(c->table, f->sd[voxel] * c->inv_h);
-    if (s->kind != SHAPE_CSG) {
-        double d = f->sigma * vv_shape_sdf(s, vv_mat4_mul_point(f->inv, p));
-        return vv_filter_table_eval(c->table, d * c->inv_h);
-    }
+        return table_at(c, f->sd[voxel]);
+    if (s->kind != SHAPE_CSG)
+        return table_at(c, f->sigma * vv_shape_sdf(s, affine(&f->inv, p)));
     const int *k = c->kids + f->first;
     double v = density(c, k[0], p, voxel, cls);
     for (int i = 1; i < f->count; i++) {
@@ -303,6 +324,7 @@ vv_voxelize(vv_volume **out, const vv_shape *shape, const vv_voxelize_options *o
                             vv_voxel_type_name(opt->type));
     vctx c;
     memset(&c, 0, sizeof c);
+    double vmin_all = 1.0, vmax_all = 0.0;
     vv_filter_table *table = NULL;
     vv_volume *vol = NULL;
     vv_status st = vv_filter_table_new(&table, opt->filter, opt->radius, 0);
@@ -321,6 +343,10 @@ vv_voxelize(vv_volume **out, const vv_shape *shape, const vv_voxelize_options *o
     double h = fmax(c.spacing[0], fmax(c.spacing[1], c.spacing[2]));
     c.inv_h = 1.0 / h;
     c.rw = opt->radius * h;
+    c.tab = table->density;
+    c.tab_last = table->n - 1;
+    c.tab_scale = 0.5 * (table->n - 1) / c.rw;
+    c.tab_off = 0.5 * (table->n - 1);
     for (int a = 0; a < 3; a++) {
         vol->spacing[a] = c.spacing[a];
         vol->origin[a] = c.origin[a];
@@ -389,10 +415,11 @@ vv_voxelize(vv_volume **out, const vv_shape *shape, const vv_voxelize_options *o
                                c.spacing[2] * c.spacing[2]);
         long long nb = (long long)nbricks, done_b = 0;
         int cancelled = 0;
+        double vmin = 1.0, vmax = 0.0;
         int nn = c.n_nodes;
         unsigned char *vox8 = opt->type == VV_U8 ? vol->data : NULL;
         float *vox32 = opt->type == VV_F32 ? vol->data : NULL;
-#pragma omp parallel num_threads(threads)
+#pragma omp parallel num_threads(threads) reduction(min : vmin) reduction(max : vmax)
         {
             unsigned char *cls = malloc((size_t)nn);
 #pragma omp for schedule(dynamic, 4)
@@ -415,6 +442,10 @@ vv_voxelize(vv_volume **out, const vv_shape *shape, const vv_voxelize_options *o
                 vv_vec3 centre = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]),
                                   0.5 * (lo[2] + hi[2])};
                 int r = classify(&c, root, lo, hi, centre, hd, bijk, cls);
+                if (r == CLS_OUT)
+                    vmin = 0.0;
+                else if (r == CLS_IN)
+                    vmax = 1.0;
                 if (r != CLS_OUT) {
                     for (int k = i0[2]; k < i1[2]; k++)
                         for (int j = i0[1]; j < i1[1]; j++) {
@@ -426,6 +457,8 @@ vv_voxelize(vv_volume **out, const vv_shape *shape, const vv_voxelize_options *o
                                                  c.origin[1] + j * c.spacing[1],
                                                  c.origin[2] + k * c.spacing[2]};
                                     d = density(&c, root, p, row + i, cls);
+                                    vmin = d < vmin ? d : vmin;
+                                    vmax = d > vmax ? d : vmax;
                                 }
                                 if (vox8)
                                     vox8[row + i] = (unsigned char)(d * 255.0 + 0.5);
@@ -451,6 +484,8 @@ vv_voxelize(vv_volume **out, const vv_shape *shape, const vv_voxelize_options *o
             }
             free(cls);
         }
+        vmin_all = vmin;
+        vmax_all = vmax;
         if (cancelled == 2)
             st = vv_error_set(VV_ERR_NOMEM, "voxelize: out of memory");
         else if (cancelled)
@@ -470,7 +505,12 @@ done:
         vv_volume_free(vol);
         return st;
     }
-    vv_volume_update_range(vol);
+    /* the range from the densities written (the skipped bricks are 0) */
+    if (vmin_all > vmax_all)
+        vmin_all = vmax_all = 0.0;
+    vol->range[0] = opt->type == VV_U8 ? floor(vmin_all * 255.0 + 0.5) : (float)vmin_all;
+    vol->range[1] = opt->type == VV_U8 ? floor(vmax_all * 255.0 + 0.5) : (float)vmax_all;
+    vol->modified++;
     *out = vol;
     return VV_OK;
 }
