@@ -26,6 +26,7 @@
 typedef struct crossing {
     float t;     /* crossing position along the row, index units */
     float slope; /* world distance to the triangle's plane per index step; 0: parity only */
+    int sign;    /* +1 or -1: the side the triangle faces along the row */
 } crossing;
 
 static int
@@ -33,7 +34,9 @@ cmp_crossing(const void *a, const void *b) {
     const crossing *x = a, *y = b;
     if (x->t != y->t)
         return x->t < y->t ? -1 : 1;
-    return (x->slope > y->slope) - (x->slope < y->slope);
+    if (x->slope != y->slope)
+        return x->slope < y->slope ? -1 : 1;
+    return (x->sign > y->sign) - (x->sign < y->sign);
 }
 
 /* Sign of the edge function of (a -> b) at p, with the SoS tie-break. The
@@ -141,11 +144,12 @@ triangle_rows(const scan_ctx *c, size_t t, int a, size_t *cnt, crossing *out, si
             k = pos[row]++;
             out[k].t = (float)tt;
             out[k].slope = slope;
+            out[k].sign = sgn;
         }
     }
 }
 
-/* ---- closing holes for the parity test ---------------------------------- */
+/* ---- triangles in index coordinates ----------------------------------- */
 
 typedef struct tri_list {
     uint32_t *t; /* 3 per triangle */
@@ -173,83 +177,6 @@ tl_grow(tri_list *L, size_t nt, size_t nv) {
         L->capv = cap;
     }
     return 1;
-}
-
-/* an undirected edge in an open-addressing table: key (lo << 32 | hi) + 1 */
-typedef struct edge_slot {
-    uint64_t key;
-    uint32_t from, to, count;
-} edge_slot;
-
-/*
- * Closes the holes of an open mesh for the parity test: the boundary edges
- * (used by one triangle) are chained into loops and each loop is closed by
- * a fan of triangles around its centroid, so every row crosses the closed
- * surface an even number of times. A well-closed mesh is left alone.
- */
-static vv_status
-close_holes(tri_list *L) {
-    size_t ne = 3 * L->n, cap = 16;
-    while (cap < 2 * ne)
-        cap <<= 1;
-    edge_slot *H = calloc(cap, sizeof *H);
-    uint32_t *next = malloc((L->nv ? L->nv : 1) * sizeof *next);
-    if (!H || !next) {
-        free(H);
-        free(next);
-        return vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory");
-    }
-    for (size_t t = 0; t < L->n; t++)
-        for (int k = 0; k < 3; k++) {
-            uint32_t a = L->t[3 * t + k], b = L->t[3 * t + (k + 1) % 3];
-            uint64_t key = ((uint64_t)(a < b ? a : b) << 32 | (a < b ? b : a)) + 1;
-            size_t h = (size_t)((key * 0x9E3779B97F4A7C15ull) >> 20) & (cap - 1);
-            while (H[h].key && H[h].key != key)
-                h = (h + 1) & (cap - 1);
-            if (!H[h].key)
-                H[h] = (edge_slot){key, a, b, 0};
-            H[h].count++;
-        }
-    /* boundary edges (one triangle): next[from] = to */
-    memset(next, 0xff, L->nv * sizeof *next);
-    size_t nb = 0;
-    for (size_t h = 0; h < cap; h++)
-        if (H[h].key && H[h].count == 1 && H[h].from != H[h].to && next[H[h].from] == UINT32_MAX) {
-            next[H[h].from] = H[h].to;
-            nb++;
-        }
-    free(H);
-    vv_status st = VV_OK;
-    size_t n0 = L->nv;
-    for (size_t v0 = 0; v0 < n0 && nb > 0 && st == VV_OK; v0++) {
-        if (next[v0] == UINT32_MAX)
-            continue;
-        /* walk the loop from v0, taking its edges out of next[] */
-        double c[3] = {0, 0, 0};
-        size_t len = 0;
-        for (uint32_t v = (uint32_t)v0; next[v] != UINT32_MAX && len <= nb; v = next[v], len++)
-            for (int k = 0; k < 3; k++)
-                c[k] += L->V[3 * (size_t)v + k];
-        if (!tl_grow(L, L->n + len, L->nv + 1)) {
-            st = vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory");
-            break;
-        }
-        uint32_t ci = (uint32_t)L->nv++;
-        for (int k = 0; k < 3; k++)
-            L->V[3 * (size_t)ci + k] = c[k] / (double)len;
-        uint32_t v = (uint32_t)v0;
-        for (size_t e = 0; e < len && next[v] != UINT32_MAX; e++) {
-            uint32_t w = next[v];
-            next[v] = UINT32_MAX;
-            uint32_t *t = L->t + 3 * L->n++;
-            t[0] = w;
-            t[1] = v;
-            t[2] = ci;
-            v = w;
-        }
-    }
-    free(next);
-    return st;
 }
 
 /* ---- exact distances for shells ------------------------------------------ */
@@ -414,9 +341,8 @@ shell_distance(const tri_list *L, const int dims[3], const double spacing[3], do
 }
 
 vv_status
-vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, int close, double thickness,
-             const int dims[3], const double spacing[3], const double origin[3], double band,
-             float *sd, int threads) {
+vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness, const int dims[3],
+             const double spacing[3], const double origin[3], double band, float *sd, int threads) {
     size_t nv = mesh->n_vertices;
     for (size_t t = 0; t < 3 * mesh->n_triangles; t++) {
         if (mesh->triangles[t] >= nv)
@@ -455,10 +381,11 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, int close, double
         }
         return st;
     }
-    if (close && (st = close_holes(&L)) != VV_OK) {
+    unsigned char *votes = malloc((size_t)dims[0] * dims[1] * dims[2]);
+    if (!votes) {
         free(L.t);
         free(L.V);
-        return st;
+        return vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory");
     }
     V = L.V;
     scan_ctx c = {V, L.t, L.n, dims, spacing};
@@ -520,16 +447,29 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, int close, double
                 }
             }
             int na = dims[a];
-            if (a == 0) {
-                /* first pass: every voxel of the row gets its side */
-                size_t k = 0;
-                int inside = 0;
-                for (int i = 0; i < na; i++) {
-                    while (k < m && x[k].t < (float)i) {
-                        inside = !inside;
-                        k++;
-                    }
-                    sd[base + (size_t)i * st_a] = inside ? -far : far;
+            /* parity along the row: one vote per axis. A row whose signed
+             * crossings do not sum to zero enters or leaves through a hole
+             * (or starts inside a solid cut by the grid): its vote is kept
+             * apart as untrusted. votes: bits 0-1 trusted inside votes,
+             * 2-3 trusted votes, 4-5 all inside votes. */
+            int sum = 0;
+            for (size_t q = 0; q < m; q++)
+                sum += x[q].sign;
+            unsigned char trusted = sum == 0 ? 4 : 0;
+            size_t q = 0;
+            int inside = 0;
+            for (int i = 0; i < na; i++) {
+                while (q < m && x[q].t < (float)i) {
+                    inside = !inside;
+                    q++;
+                }
+                size_t v = base + (size_t)i * st_a;
+                unsigned char add = (unsigned char)(trusted + (inside ? 16 + (trusted >> 2) : 0));
+                if (a == 0) {
+                    votes[v] = add;
+                    sd[v] = far;
+                } else {
+                    votes[v] = (unsigned char)(votes[v] + add);
                 }
             }
             for (size_t k = 0; k < m; k++) {
@@ -541,8 +481,8 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, int close, double
                 for (int i = i0; i <= i1; i++) {
                     float d = (float)(fabs(i - t) * s);
                     float *v = sd + base + (size_t)i * st_a;
-                    if (d < fabsf(*v))
-                        *v = *v < 0 ? -d : d;
+                    if (d < *v)
+                        *v = d;
                 }
             }
         }
@@ -550,6 +490,17 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, int close, double
         free(cnt);
         free(pos);
     }
+    if (st == VV_OK) {
+        long long nn = (long long)dims[0] * dims[1] * dims[2];
+#pragma omp parallel for schedule(static) num_threads(threads)
+        for (long long i = 0; i < nn; i++) {
+            int tin = votes[i] & 3, tn = (votes[i] >> 2) & 3, all = votes[i] >> 4;
+            int in = tn > 0 && 2 * tin != tn ? 2 * tin > tn : all >= 2;
+            if (in)
+                sd[i] = -sd[i];
+        }
+    }
+    free(votes);
     free(L.t);
     free(L.V);
     return st;

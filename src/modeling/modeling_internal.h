@@ -33,7 +33,6 @@ struct vv_shape {
     double pbox[4];   /* bounding box of pts: min x, min y, max x, max y */
     vv_mesh *mesh;
     vv_mesh_mode mesh_mode;
-    int close_holes; /* solid requested for a mesh that is not closed */
     double thickness;
     vv_csg_op op;
     int n_children;
@@ -60,14 +59,13 @@ vv_box vv_shape_local_box(const vv_shape *s);
  * distance per voxel (negative inside for solids; |d| - thickness/2 for
  * shells), accurate within @p band world units of the surface and clamped
  * to +-band beyond. sd has dims[0]*dims[1]*dims[2] floats. Solids: inside by
- * ray parity along x rows, distance to the planes of the triangles crossed
- * along the rows of all three axes; with @p close the boundary loops of an
- * open mesh are first closed by fans. Shells: exact point-triangle
- * distances.
+ * the majority of the ray parities along the x, y and z rows through the
+ * voxel, distance to the planes of the triangles crossed along those rows.
+ * Shells: exact point-triangle distances.
  */
-vv_status vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, int close,
-                       double thickness, const int dims[3], const double spacing[3],
-                       const double origin[3], double band, float *sd, int threads);
+vv_status vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
+                       const int dims[3], const double spacing[3], const double origin[3],
+                       double band, float *sd, int threads);
 
 /**
  * Reads a model node of a scene file: a primitive ({"type": "sphere", ...})

@@ -349,22 +349,18 @@ vv_shape_mesh(vv_shape **out, vv_mesh *mesh, vv_mesh_mode mode, double thickness
         return vv_error_set(VV_ERR_INVALID, "mesh shape: unknown mode %d", (int)mode);
     if (!isfinite(thickness))
         return vv_error_set(VV_ERR_INVALID, "mesh shape: thickness is not finite");
-    int closed = 0;
-    if (mode != VV_MESH_SHELL) {
+    if (mode == VV_MESH_AUTO) {
         vv_mesh_topology t;
         vv_status st = vv_mesh_topology_compute(mesh, &t);
         if (st != VV_OK)
             return vv_error_prefix(st, "mesh shape");
-        closed = t.closed;
-        if (mode == VV_MESH_AUTO)
-            mode = closed ? VV_MESH_SOLID : VV_MESH_SHELL;
+        mode = t.closed ? VV_MESH_SOLID : VV_MESH_SHELL;
     }
     vv_status st = shape_alloc(out, SHAPE_MESH, "mesh");
     if (st != VV_OK)
         return st;
     (*out)->mesh = vv_mesh_ref(mesh);
     (*out)->mesh_mode = mode;
-    (*out)->close_holes = mode == VV_MESH_SOLID && !closed;
     (*out)->thickness = thickness;
     return VV_OK;
 }

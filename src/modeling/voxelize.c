@@ -374,8 +374,8 @@ vv_voxelize(vv_volume **out, const vv_shape *shape, const vv_voxelize_options *o
         }
         int solid = f->s->mesh_mode == VV_MESH_SOLID;
         double th = f->s->thickness > 0 ? f->s->thickness : 2.0 * h;
-        st = vv_mesh_scan(f->s->mesh, f->inv, solid, f->s->close_holes, th, c.dims, c.spacing,
-                          c.origin, c.rw, f->sd, threads);
+        st = vv_mesh_scan(f->s->mesh, f->inv, solid, th, c.dims, c.spacing, c.origin, c.rw, f->sd,
+                          threads);
         if (st != VV_OK)
             break;
         float rw = (float)c.rw;
