@@ -155,7 +155,7 @@ vv_status vv_shape_helix(vv_shape **out, int n, const double *profile, double pi
 /** How a mesh is voxelized. */
 typedef enum vv_mesh_mode {
     VV_MESH_AUTO = 0,  /**< solid when the mesh is closed (vv_mesh_topology_compute), else shell */
-    VV_MESH_SOLID = 1, /**< inside by ray parity (even-odd), whatever the topology */
+    VV_MESH_SOLID = 1, /**< inside by ray parity, whatever the topology (holes: see vv_voxelize) */
     VV_MESH_SHELL = 2  /**< a shell of the given thickness around the triangles */
 } vv_mesh_mode;
 /**
@@ -218,8 +218,11 @@ void vv_voxelize_options_init(vv_voxelize_options *o);
  * the grid is walked in 4^3 subvolumes classified as inside, outside or
  * near the surface from a lower bound of the distance at the subvolume
  * centre; inside ones are filled, outside ones skipped, and a mesh is scan
- * converted along grid rows instead (ray parity for inside, plane distance
- * of the crossed triangles for the band).
+ * converted along grid rows instead: inside by the majority of the ray
+ * parities of the x, y and z rows through a voxel, a row abstaining when its
+ * signed crossings do not balance (it passes through a hole of an open
+ * mesh); the distance near the surface from the planes of the crossed
+ * triangles.
  *
  * Output: u8 (255 * density, surface at 127.5) or f32 (density, surface at
  * 0.5), data_origin VV_ORIGIN_FUZZY_VOXELIZED, range updated. OpenMP-parallel

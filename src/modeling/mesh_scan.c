@@ -8,9 +8,13 @@
  * lines) are broken by simulation of simplicity: the row is treated as
  * moved by (eps, eps^2), with each edge evaluated in one canonical vertex
  * order, so a row through a shared edge or vertex crosses exactly one of
- * the triangles around it. Inside/outside is the parity of the crossings
- * along the x rows (a closed mesh: Jordan's theorem; holes leak only along
- * the rows through them). The distance band uses the crossings of all three
+ * the triangles around it. Inside/outside is voted by the crossing
+ * parities of the x, y and z rows through the voxel. A row whose signed
+ * crossings (the side each triangle faces) do not sum to zero passes through
+ * a hole, or starts inside a solid cut by the grid (an isosurface of a
+ * cropped scan), and abstains; the trusted rows decide by majority, all
+ * three rows when none or a tie is trusted. A closed mesh gets Jordan's
+ * parity on every row. The distance band uses the crossings of all three
  * axes: a voxel near a crossing gets its distance to the crossed triangle's
  * plane, and keeps the smallest; every surface point has a normal component
  * of at least 1/sqrt(3) along some axis, so each voxel near the surface
