@@ -94,9 +94,6 @@ triangle_rows(const scan_ctx *c, size_t t, int a, size_t *cnt, crossing *out, si
         q[v][0] = P[v][b];
         q[v][1] = P[v][cc];
     }
-    double area = edge_value(q[0], q[1], q[2][0], q[2][1]);
-    if (area == 0.0 || !isfinite(area))
-        return;
     double lo_b = fmin(q[0][0], fmin(q[1][0], q[2][0]));
     double hi_b = fmax(q[0][0], fmax(q[1][0], q[2][0]));
     double lo_c = fmin(q[0][1], fmin(q[1][1], q[2][1]));
@@ -111,6 +108,9 @@ triangle_rows(const scan_ctx *c, size_t t, int a, size_t *cnt, crossing *out, si
     if (fc1 > c->dims[cc] - 1)
         fc1 = c->dims[cc] - 1;
     if (fb0 > fb1 || fc0 > fc1)
+        return;
+    double area = edge_value(q[0], q[1], q[2][0], q[2][1]);
+    if (area == 0.0 || !isfinite(area))
         return;
     int sgn = area > 0 ? 1 : -1;
     float slope = 0.0f;
@@ -395,9 +395,43 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
     scan_ctx c = {V, L.t, L.n, dims, spacing};
     double bandw = band;
     const float far = (float)bandw;
+    /* the triangles whose box holds a row of axis a get bit a: most
+     * triangles of a fine mesh lie between rows, and the two passes below
+     * visit only the candidates */
+    unsigned char *mask = malloc(L.n ? L.n : 1);
+    uint32_t *cand = malloc((L.n ? L.n : 1) * sizeof *cand);
+    if (!mask || !cand) {
+        free(mask);
+        free(cand);
+        free(votes);
+        free(L.t);
+        free(L.V);
+        return vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory");
+    }
+    {
+        long long ntri = (long long)L.n;
+#pragma omp parallel for schedule(static) num_threads(threads)
+        for (long long t = 0; t < ntri; t++) {
+            double lo[3], hi[3];
+            const double *p0 = V + 3 * (size_t)L.t[3 * t], *p1 = V + 3 * (size_t)L.t[3 * t + 1],
+                         *p2 = V + 3 * (size_t)L.t[3 * t + 2];
+            int ok[3];
+            for (int k = 0; k < 3; k++) {
+                lo[k] = fmax(0.0, ceil(fmin(p0[k], fmin(p1[k], p2[k]))));
+                hi[k] = fmin(dims[k] - 1.0, floor(fmax(p0[k], fmax(p1[k], p2[k]))));
+                ok[k] = lo[k] <= hi[k];
+            }
+            mask[t] = (unsigned char)((ok[1] && ok[2]) | ((ok[2] && ok[0]) << 1) |
+                                      ((ok[0] && ok[1]) << 2));
+        }
+    }
     for (int a = 0; a < 3 && st == VV_OK; a++) {
         int b = (a + 1) % 3, cc = (a + 2) % 3;
         size_t nrows = (size_t)dims[b] * (size_t)dims[cc];
+        size_t ncand = 0;
+        for (size_t t = 0; t < L.n; t++)
+            if (mask[t] >> a & 1)
+                cand[ncand++] = (uint32_t)t;
         size_t *cnt = calloc(nrows + 1, sizeof *cnt);
         size_t *pos = malloc((nrows + 1) * sizeof *pos);
         if (!cnt || !pos) {
@@ -406,10 +440,10 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
             st = vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory");
             break;
         }
-        long long ntri = (long long)L.n;
+        long long ntri = (long long)ncand;
 #pragma omp parallel for schedule(dynamic, 1024) num_threads(threads)
         for (long long t = 0; t < ntri; t++)
-            triangle_rows(&c, (size_t)t, a, cnt, NULL, NULL);
+            triangle_rows(&c, cand[t], a, cnt, NULL, NULL);
         size_t total = 0;
         for (size_t r = 0; r < nrows; r++) {
             pos[r] = total;
@@ -428,7 +462,7 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
             cnt[r] = pos[r];
 #pragma omp parallel for schedule(dynamic, 1024) num_threads(threads)
         for (long long t = 0; t < ntri; t++)
-            triangle_rows(&c, (size_t)t, a, NULL, xs, pos);
+            triangle_rows(&c, cand[t], a, NULL, xs, pos);
         size_t stride[3] = {1, (size_t)dims[0], (size_t)dims[0] * (size_t)dims[1]};
         long long nr = (long long)nrows;
 #pragma omp parallel for schedule(dynamic, 64) num_threads(threads)
@@ -504,6 +538,8 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
                 sd[i] = -sd[i];
         }
     }
+    free(mask);
+    free(cand);
     free(votes);
     free(L.t);
     free(L.V);
