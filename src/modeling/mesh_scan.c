@@ -425,6 +425,13 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
                                       ((ok[0] && ok[1]) << 2));
         }
     }
+    {
+        long long nn = (long long)dims[0] * dims[1] * dims[2];
+        memset(votes, 0, (size_t)nn);
+#pragma omp parallel for schedule(static) num_threads(threads)
+        for (long long i = 0; i < nn; i++)
+            sd[i] = far;
+    }
     for (int a = 0; a < 3 && st == VV_OK; a++) {
         int b = (a + 1) % 3, cc = (a + 2) % 3;
         size_t nrows = (size_t)dims[b] * (size_t)dims[cc];
@@ -489,26 +496,26 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
              * crossings do not sum to zero enters or leaves through a hole
              * (or starts inside a solid cut by the grid): its vote is kept
              * apart as untrusted. votes: bits 0-1 trusted inside votes,
-             * 2-3 trusted votes, 4-5 all inside votes. */
+             * 2-3 untrusted rows, 4-5 all inside votes. Only the inside
+             * runs of a row are visited (voxel i is inside when an odd
+             * number of crossings lie below it). */
             int sum = 0;
             for (size_t q = 0; q < m; q++)
                 sum += x[q].sign;
-            unsigned char trusted = sum == 0 ? 4 : 0;
-            size_t q = 0;
-            int inside = 0;
-            for (int i = 0; i < na; i++) {
-                while (q < m && x[q].t < (float)i) {
-                    inside = !inside;
-                    q++;
-                }
-                size_t v = base + (size_t)i * st_a;
-                unsigned char add = (unsigned char)(trusted + (inside ? 16 + (trusted >> 2) : 0));
-                if (a == 0) {
-                    votes[v] = add;
-                    sd[v] = far;
-                } else {
-                    votes[v] = (unsigned char)(votes[v] + add);
-                }
+            int trusted = sum == 0;
+            if (!trusted)
+                for (int i = 0; i < na; i++)
+                    votes[base + (size_t)i * st_a] += 4;
+            unsigned char add = (unsigned char)(16 + trusted);
+            for (size_t q = 0; q < m; q += 2) {
+                int i0 = (int)floorf(x[q].t) + 1;
+                int i1 = q + 1 < m ? (int)floorf(x[q + 1].t) : na - 1;
+                if (i0 < 0)
+                    i0 = 0;
+                if (i1 > na - 1)
+                    i1 = na - 1;
+                for (int i = i0; i <= i1; i++)
+                    votes[base + (size_t)i * st_a] += add;
             }
             for (size_t k = 0; k < m; k++) {
                 if (!(x[k].slope > 0))
@@ -532,7 +539,7 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
         long long nn = (long long)dims[0] * dims[1] * dims[2];
 #pragma omp parallel for schedule(static) num_threads(threads)
         for (long long i = 0; i < nn; i++) {
-            int tin = votes[i] & 3, tn = (votes[i] >> 2) & 3, all = votes[i] >> 4;
+            int tin = votes[i] & 3, tn = 3 - ((votes[i] >> 2) & 3), all = votes[i] >> 4;
             int in = tn > 0 && 2 * tin != tn ? 2 * tin > tn : all >= 2;
             if (in)
                 sd[i] = -sd[i];
