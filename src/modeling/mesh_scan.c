@@ -22,6 +22,7 @@
  * for the band).
  */
 #include <math.h>
+#include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -82,10 +83,55 @@ typedef struct scan_ctx {
     const double *spacing;
 } scan_ctx;
 
-/* Visits the rows along axis a that cross triangle t; with out == NULL it
- * counts into cnt, else it appends at pos. */
+/* Clamped to [lo, hi] (NaN gives lo), then floor or ceiling as int: the
+ * index ranges below without libm calls. */
+static inline double
+clampd(double x, double lo, double hi) {
+    return x >= lo ? (x <= hi ? x : hi) : lo;
+}
+static inline int
+ifloor(double x) {
+    int i = (int)x;
+    return i - (x < i);
+}
+static inline int
+iceil(double x) {
+    int i = (int)x;
+    return i + (x > i);
+}
+#define MIN3(a, b, c) ((a) < (b) ? ((a) < (c) ? (a) : (c)) : ((b) < (c) ? (b) : (c)))
+#define MAX3(a, b, c) ((a) > (b) ? ((a) > (c) ? (a) : (c)) : ((b) > (c) ? (b) : (c)))
+
+/* A crossing with its row, collected per thread. */
+typedef struct rowx {
+    size_t row;
+    crossing x;
+} rowx;
+
+typedef struct xbuf {
+    rowx *v;
+    size_t n, cap;
+    int oom;
+} xbuf;
+
 static void
-triangle_rows(const scan_ctx *c, size_t t, int a, size_t *cnt, crossing *out, size_t *pos) {
+xbuf_push(xbuf *b, size_t row, crossing x) {
+    if (b->n == b->cap) {
+        size_t cap = b->cap ? 2 * b->cap : 4096;
+        rowx *v = realloc(b->v, cap * sizeof *v);
+        if (!v) {
+            b->oom = 1;
+            return;
+        }
+        b->v = v;
+        b->cap = cap;
+    }
+    b->v[b->n++] = (rowx){row, x};
+}
+
+/* Appends the crossings of triangle t with the rows along axis a. */
+static void
+triangle_rows(const scan_ctx *c, size_t t, int a, xbuf *out) {
     int b = (a + 1) % 3, cc = (a + 2) % 3;
     const double *P[3];
     double q[3][2];
@@ -94,61 +140,49 @@ triangle_rows(const scan_ctx *c, size_t t, int a, size_t *cnt, crossing *out, si
         q[v][0] = P[v][b];
         q[v][1] = P[v][cc];
     }
-    double lo_b = fmin(q[0][0], fmin(q[1][0], q[2][0]));
-    double hi_b = fmax(q[0][0], fmax(q[1][0], q[2][0]));
-    double lo_c = fmin(q[0][1], fmin(q[1][1], q[2][1]));
-    double hi_c = fmax(q[0][1], fmax(q[1][1], q[2][1]));
-    double fb0 = ceil(lo_b), fb1 = floor(hi_b), fc0 = ceil(lo_c), fc1 = floor(hi_c);
-    if (fb0 < 0)
-        fb0 = 0;
-    if (fc0 < 0)
-        fc0 = 0;
-    if (fb1 > c->dims[b] - 1)
-        fb1 = c->dims[b] - 1;
-    if (fc1 > c->dims[cc] - 1)
-        fc1 = c->dims[cc] - 1;
-    if (fb0 > fb1 || fc0 > fc1)
+    int jb0 = iceil(clampd(MIN3(q[0][0], q[1][0], q[2][0]), -1.0, c->dims[b]));
+    int jb1 = ifloor(clampd(MAX3(q[0][0], q[1][0], q[2][0]), -1.0, c->dims[b]));
+    int jc0 = iceil(clampd(MIN3(q[0][1], q[1][1], q[2][1]), -1.0, c->dims[cc]));
+    int jc1 = ifloor(clampd(MAX3(q[0][1], q[1][1], q[2][1]), -1.0, c->dims[cc]));
+    if (jb0 < 0)
+        jb0 = 0;
+    if (jc0 < 0)
+        jc0 = 0;
+    if (jb1 > c->dims[b] - 1)
+        jb1 = c->dims[b] - 1;
+    if (jc1 > c->dims[cc] - 1)
+        jc1 = c->dims[cc] - 1;
+    if (jb0 > jb1 || jc0 > jc1)
         return;
     double area = edge_value(q[0], q[1], q[2][0], q[2][1]);
     if (area == 0.0 || !isfinite(area))
         return;
     int sgn = area > 0 ? 1 : -1;
-    float slope = 0.0f;
-    if (out) {
-        /* world normal: index edges scaled by the spacing */
-        double e1[3], e2[3];
-        for (int k = 0; k < 3; k++) {
-            e1[k] = (P[1][k] - P[0][k]) * c->spacing[k];
-            e2[k] = (P[2][k] - P[0][k]) * c->spacing[k];
-        }
-        double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                       e1[0] * e2[1] - e1[1] * e2[0]};
-        double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        double cosa = len > 0 ? fabs(n[a]) / len : 0.0;
-        if (cosa >= 0.5)
-            slope = (float)(c->spacing[a] * cosa);
-    }
-    for (int jc = (int)fc0; jc <= (int)fc1; jc++) {
-        for (int jb = (int)fb0; jb <= (int)fb1; jb++) {
+    float slope = -1.0f; /* computed at the first crossing */
+    for (int jc = jc0; jc <= jc1; jc++) {
+        for (int jb = jb0; jb <= jb1; jb++) {
             if (edge_sign(q[0], q[1], jb, jc) != sgn || edge_sign(q[1], q[2], jb, jc) != sgn ||
                 edge_sign(q[2], q[0], jb, jc) != sgn)
                 continue;
-            size_t row = (size_t)jc * (size_t)c->dims[b] + (size_t)jb;
-            if (!out) {
-#pragma omp atomic
-                cnt[row]++;
-                continue;
+            if (slope < 0) {
+                /* world normal: index edges scaled by the spacing */
+                double e1[3], e2[3];
+                for (int k = 0; k < 3; k++) {
+                    e1[k] = (P[1][k] - P[0][k]) * c->spacing[k];
+                    e2[k] = (P[2][k] - P[0][k]) * c->spacing[k];
+                }
+                double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                               e1[0] * e2[1] - e1[1] * e2[0]};
+                double len = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+                double cosa = len > 0 ? fabs(n[a]) / len : 0.0;
+                slope = cosa >= 0.5 ? (float)(c->spacing[a] * cosa) : 0.0f;
             }
             double l0 = edge_value(q[1], q[2], jb, jc) / area;
             double l1 = edge_value(q[2], q[0], jb, jc) / area;
             double l2 = 1.0 - l0 - l1;
             double tt = l0 * P[0][a] + l1 * P[1][a] + l2 * P[2][a];
-            size_t k;
-#pragma omp atomic capture
-            k = pos[row]++;
-            out[k].t = (float)tt;
-            out[k].slope = slope;
-            out[k].sign = sgn;
+            crossing x = {(float)tt, slope, sgn};
+            xbuf_push(out, (size_t)jc * (size_t)c->dims[b] + (size_t)jb, x);
         }
     }
 }
@@ -412,14 +446,13 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
         long long ntri = (long long)L.n;
 #pragma omp parallel for schedule(static) num_threads(threads)
         for (long long t = 0; t < ntri; t++) {
-            double lo[3], hi[3];
             const double *p0 = V + 3 * (size_t)L.t[3 * t], *p1 = V + 3 * (size_t)L.t[3 * t + 1],
                          *p2 = V + 3 * (size_t)L.t[3 * t + 2];
             int ok[3];
             for (int k = 0; k < 3; k++) {
-                lo[k] = fmax(0.0, ceil(fmin(p0[k], fmin(p1[k], p2[k]))));
-                hi[k] = fmin(dims[k] - 1.0, floor(fmax(p0[k], fmax(p1[k], p2[k]))));
-                ok[k] = lo[k] <= hi[k];
+                int lo = iceil(clampd(MIN3(p0[k], p1[k], p2[k]), -1.0, dims[k]));
+                int hi = ifloor(clampd(MAX3(p0[k], p1[k], p2[k]), -1.0, dims[k]));
+                ok[k] = (lo > 0 ? lo : 0) <= (hi < dims[k] - 1 ? hi : dims[k] - 1);
             }
             mask[t] = (unsigned char)((ok[1] && ok[2]) | ((ok[2] && ok[0]) << 1) |
                                       ((ok[0] && ok[1]) << 2));
@@ -448,28 +481,52 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
             break;
         }
         long long ntri = (long long)ncand;
-#pragma omp parallel for schedule(dynamic, 1024) num_threads(threads)
-        for (long long t = 0; t < ntri; t++)
-            triangle_rows(&c, cand[t], a, cnt, NULL, NULL);
+        int nth = threads > 0 ? threads : 1;
+        xbuf *bufs = calloc((size_t)nth, sizeof *bufs);
+        if (!bufs) {
+            free(cnt);
+            free(pos);
+            st = vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory");
+            break;
+        }
+#pragma omp parallel num_threads(nth)
+        {
+            xbuf *mine = &bufs[omp_get_thread_num() % nth];
+#pragma omp for schedule(dynamic, 1024)
+            for (long long t = 0; t < ntri; t++)
+                triangle_rows(&c, cand[t], a, mine);
+        }
+        /* crossings grouped by row (in thread order, sorted per row below) */
+        int oom = 0;
+        for (int th = 0; th < nth; th++) {
+            oom |= bufs[th].oom;
+            for (size_t i = 0; i < bufs[th].n; i++)
+                cnt[bufs[th].v[i].row]++;
+        }
         size_t total = 0;
         for (size_t r = 0; r < nrows; r++) {
             pos[r] = total;
             total += cnt[r];
         }
         pos[nrows] = total;
-        crossing *xs = malloc((total ? total : 1) * sizeof *xs);
+        crossing *xs = oom ? NULL : malloc((total ? total : 1) * sizeof *xs);
         if (!xs) {
+            for (int th = 0; th < nth; th++)
+                free(bufs[th].v);
+            free(bufs);
             free(cnt);
             free(pos);
-            st = vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory for %zu crossings", total);
+            st = vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory for the crossings");
             break;
         }
-        /* pos doubles as the fill cursor; cnt keeps the starts afterwards */
         for (size_t r = 0; r <= nrows; r++)
             cnt[r] = pos[r];
-#pragma omp parallel for schedule(dynamic, 1024) num_threads(threads)
-        for (long long t = 0; t < ntri; t++)
-            triangle_rows(&c, cand[t], a, NULL, xs, pos);
+        for (int th = 0; th < nth; th++) {
+            for (size_t i = 0; i < bufs[th].n; i++)
+                xs[pos[bufs[th].v[i].row]++] = bufs[th].v[i].x;
+            free(bufs[th].v);
+        }
+        free(bufs);
         size_t stride[3] = {1, (size_t)dims[0], (size_t)dims[0] * (size_t)dims[1]};
         long long nr = (long long)nrows;
 #pragma omp parallel for schedule(dynamic, 64) num_threads(threads)
