@@ -4,7 +4,7 @@
 #   build  compiler, CMake and the libraries (always included)
 #   demo   mricron-data (the real MRI head used by the quick-start demo)
 #   test   cmocka
-#   bench  VTK, numpy, Xvfb and Teem's tools, to measure the peers side by side
+#   bench  VTK, numpy, Xvfb, Teem's tools and the zfp CLI, to measure the peers side by side
 set -euo pipefail
 
 pkgs=(build-essential cmake pkg-config libteem-dev libnifti2-dev libjansson-dev
@@ -14,7 +14,7 @@ for what in "$@"; do
     build) ;;
     demo) pkgs+=(mricron-data) ;;
     test) pkgs+=(libcmocka-dev) ;;
-    bench) pkgs+=(python3-vtk9 python3-numpy xvfb libgl1-mesa-dri teem-apps) ;;
+    bench) pkgs+=(python3-vtk9 python3-numpy xvfb libgl1-mesa-dri teem-apps zfp) ;;
     *) echo "install-deps.sh: unknown group '$what' (build, demo, test, bench)" >&2; exit 2 ;;
   esac
 done

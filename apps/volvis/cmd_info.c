@@ -25,7 +25,10 @@ cli_info_usage(FILE *out) {
                  "Prints a volume's format, dimensions, voxel type, voxel spacing, origin,\n"
                  "direction (when not identity), unit, data origin, value range, mean,\n"
                  "percentiles (1/5/50/95/99) and a text histogram.\n"
-                 "Formats: SLC, NRRD, NIfTI-1/2, MetaImage, VTK legacy, raw (with --raw).\n"
+                 "Formats: SLC, NRRD, NIfTI-1/2, MetaImage, VTK legacy, raw (with --raw),\n"
+                 "and .vvc (compressed; also prints the subcube size, quality, compressed\n"
+                 "size, compression ratio and bits per voxel, then the statistics of the\n"
+                 "decompressed volume).\n"
                  "\n"
                  "Options:\n"
                  "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
@@ -277,21 +280,44 @@ cli_info_main(int argc, char **argv) {
 
     const char *path = a.pos[0];
     vv_volume *v;
-    if ((rc = cli_load_volume(path, raw_spec ? &raw : NULL, &v)))
+    vv_vvc_info vinfo;
+    const int is_vvc = !raw_spec && vv_vvc_detect(path);
+    if (is_vvc) {
+        /* a .vvc: its header, then the statistics of the decompressed volume */
+        vv_vvc *c = NULL;
+        vv_error_clear();
+        vv_status s2 = vv_vvc_load(&c, path);
+        if (s2 == VV_OK) {
+            vv_vvc_get_info(c, &vinfo);
+            s2 = vv_vvc_decompress(&v, c, 0, NULL);
+        }
+        vv_vvc_free(c);
+        if (s2 != VV_OK)
+            return cli_fail(s2, path);
+    } else if ((rc = cli_load_volume(path, raw_spec ? &raw : NULL, &v))) {
         return rc;
+    }
 
     stats st;
     if ((rc = compute_stats(v, &st))) {
         vv_volume_free(v);
         return rc;
     }
-    const char *format = raw_spec ? "raw" : vv_format_name(vv_format_detect(path));
+    const char *format = raw_spec ? "raw" : is_vvc ? "vvc" : vv_format_name(vv_format_detect(path));
     uint64_t count = vv_volume_voxel_count(v);
     const char *unit = vv_unit_name(v->unit);
     printf("file:         %s\n", path);
     printf("format:       %s\n", format);
     printf("dimensions:   %d x %d x %d (%llu voxels)\n", v->dims[0], v->dims[1], v->dims[2],
            (unsigned long long)count);
+    if (is_vvc) {
+        printf("vvc:          version %d, subcubes %d^3 (%d x %d x %d), quality %.2f, slope %g\n",
+               vinfo.version, vinfo.block, vinfo.subcubes[0], vinfo.subcubes[1], vinfo.subcubes[2],
+               vinfo.quality, vinfo.slope);
+        printf("compressed:   %llu bytes of %llu (ratio %.2f:1, %.4g bits per voxel)\n",
+               (unsigned long long)vinfo.file_bytes, (unsigned long long)vinfo.raw_bytes,
+               vinfo.ratio, vinfo.bits_per_voxel);
+    }
     printf("voxel type:   %s (%zu byte%s)\n", vv_voxel_type_name(v->type),
            vv_voxel_type_size(v->type), vv_voxel_type_size(v->type) == 1 ? "" : "s");
     printf("spacing:      %g x %g x %g%s%s\n", v->spacing[0], v->spacing[1], v->spacing[2],

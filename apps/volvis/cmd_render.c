@@ -28,6 +28,7 @@ static const cli_opt_spec render_opts[] = {
     {"quality", 0, "0|1|2"},
     {"set", 0, "KEY=VALUE"},
     {"alpha", 0, NULL},
+    {"ortho", 0, NULL},
     {"quiet", 'q', NULL},
 };
 #define N_RENDER_OPTS ((int)(sizeof render_opts / sizeof render_opts[0]))
@@ -72,8 +73,12 @@ cli_render_usage(FILE *out) {
             "  --quality Q      0 draft, 1 medium, 2 final (default 2)\n"
             "  --set KEY=VALUE  renderer-specific option (repeatable); raycast takes\n"
             "                   early_termination (0.99), gradient_budget_mb,\n"
-            "                   empty_space_skipping (1), simd (1); see docs/rendering.md\n"
+            "                   empty_space_skipping (1), simd (1); fourier takes vvc=FILE,\n"
+            "                   quality (exact), rate, block (16), attenuation (0);\n"
+            "                   see docs/rendering.md\n"
             "  --alpha          write RGBA (coverage in the alpha channel); default RGB\n"
+            "  --ortho          parallel projection (orthographic), the view framed on\n"
+            "                   the scene; needed by the fourier renderer\n"
             "  -q, --quiet      no progress bar and no 'wrote' line\n"
             "  -h, --help       show this help\n"
             "\n"
@@ -87,7 +92,9 @@ cli_render_usage(FILE *out) {
             "Examples:\n"
             "  volvis render ../shared/data/volumes/ct_head.nrrd --tf 100:1500 -o head.png\n"
             "  volvis render ../shared/data/volumes/neghip.slc --mode mip --azimuth 30 -o mip.png\n"
-            "  volvis render scene.json --size 1024x1024 --azimuth 45 -o scene.png\n");
+            "  volvis render scene.json --size 1024x1024 --azimuth 45 -o scene.png\n"
+            "  volvis render head.nrrd --renderer fourier --ortho --set vvc=head.vvc \\\n"
+            "      --mode xray -o fourier.png\n");
 }
 
 static int
@@ -169,7 +176,7 @@ typedef struct render_args {
     vv_raw_params raw;
     double gamma;
     int quality;
-    int alpha, quiet;
+    int alpha, quiet, ortho;
 } render_args;
 
 static int
@@ -271,6 +278,7 @@ parse_render_args(cli_args *a, render_args *r) {
     }
     r->alpha = cli_count(a, "alpha") > 0;
     r->quiet = cli_count(a, "quiet") > 0;
+    r->ortho = cli_count(a, "ortho") > 0;
     return 0;
 }
 
@@ -369,6 +377,13 @@ cli_render_main(int argc, char **argv) {
     if (rc) {
         vv_world_free(w);
         return rc;
+    }
+    if (r.ortho && w->view.projection != VV_PROJECTION_ORTHOGRAPHIC) {
+        /* the same direction, parallel rays, the scene framed */
+        w->view.projection = VV_PROJECTION_ORTHOGRAPHIC;
+        vv_view_frame_box(&w->view, vv_world_bounds(w));
+        if (r.zoom != 1)
+            w->view.ortho_height /= r.zoom;
     }
     if (r.has_step)
         for (int i = 0; i < w->n_objects; i++)

@@ -1,6 +1,7 @@
 /*
  * volvis: the command-line tool. Dispatches a table of subcommands, one file
- * each (cmd_info.c, cmd_render.c, cmd_convert.c, cmd_voxelize.c). See docs/cli.md.
+ * each (cmd_info.c, cmd_render.c, cmd_convert.c, cmd_compress.c, cmd_voxelize.c). See
+ * docs/cli.md.
  */
 #include <stdio.h>
 #include <string.h>
@@ -13,6 +14,10 @@ static const cli_command commands[] = {
     {"convert", "convert any readable volume to NRRD or SLC", cli_convert_main, cli_convert_usage},
     {"voxelize", "volume-sample a geometric model (scene or mesh) to NRRD or SLC",
      cli_voxelize_main, cli_voxelize_usage},
+    {"compress", "compress a volume to a .vvc file (Fourier-domain, JPEG-like)", cli_compress_main,
+     cli_compress_usage},
+    {"decompress", "decompress a .vvc file to NRRD or SLC", cli_decompress_main,
+     cli_decompress_usage},
 };
 #define N_COMMANDS ((int)(sizeof commands / sizeof commands[0]))
 

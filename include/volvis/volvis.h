@@ -5,6 +5,7 @@
 #ifndef VOLVIS_VOLVIS_H
 #define VOLVIS_VOLVIS_H
 
+#include "compress.h"
 #include "core.h"
 #include "image.h"
 #include "io.h"
@@ -13,6 +14,8 @@
 #include "model.h"
 #include "modeling.h"
 #include "render.h"
+#include "measure.h"
+#include "surface.h"
 #include "volume.h"
 
 #endif

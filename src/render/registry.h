@@ -7,4 +7,7 @@
 /** Direct volume ray casting (src/render/raycast). */
 extern const vv_renderer_ops vv_raycast_ops;
 
+/** Compression-domain Fourier projection (src/render/fourier). */
+extern const vv_renderer_ops vv_fourier_ops;
+
 #endif

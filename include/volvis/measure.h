@@ -1,0 +1,163 @@
+/*
+ * VolVis Measurement (VolVis paper, Avila et al., IEEE Visualization '94,
+ * section "Measurement"): histograms of a volume or a region, the volume
+ * and surface area of an isosurface (whole volume or a surface-tracked
+ * section) by voxel counting and by Marching Cubes, distances between
+ * points, and area, enclosed volume and distance of geometric surface
+ * models (meshes).
+ *
+ * Every length, area and volume is in world units (the volume's unit,
+ * vv_unit_name(v->unit); the spacing and direction matrix are applied) and
+ * accumulated in double. Inside means value >= isovalue, as in
+ * vv_isosurface_extract.
+ *
+ * Thread-safety: all functions read their inputs only and are reentrant.
+ */
+#ifndef VOLVIS_MEASURE_H
+#define VOLVIS_MEASURE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "core.h"
+#include "mesh.h"
+#include "model.h"
+#include "volume.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** A region of a volume: a voxel box and cut planes. */
+typedef struct vv_region {
+    int roi_min[3], roi_max[3]; /**< voxel index box, inclusive; roi_max[0] < 0: whole volume */
+    int n_cut_planes;           /**< world-space cut planes; a voxel counts when n·(x−p) >= 0 */
+    vv_cut_plane cut_planes[VV_MAX_CUT_PLANES];
+} vv_region;
+
+/** The whole volume, no cut planes. */
+void vv_region_init(vv_region *r);
+
+/* ---- histogram ------------------------------------------------------------ */
+
+/** A histogram of voxel values, from vv_measure_histogram. Owned by the caller. */
+typedef struct vv_histogram {
+    int nbins;        /**< bins over [lo, hi], each (hi - lo) / nbins wide */
+    double lo, hi;    /**< value range of the bins */
+    uint64_t *counts; /**< nbins counts; values outside [lo, hi] are not counted */
+    uint64_t total;   /**< voxels in the region (NaN excluded) */
+    uint64_t outside; /**< of those, values below lo or above hi */
+    uint64_t nan;     /**< NaN voxels in the region */
+    double min, max;  /**< of the voxels in the region (NaN when empty) */
+    double mean, sd;  /**< of the voxels in the region */
+} vv_histogram;
+
+/**
+ * Histogram of the voxels of @p v in @p region (NULL: whole volume) into
+ * @p nbins equal bins over [lo, hi]; lo >= hi (e.g. 0, 0) takes the
+ * region's own value range. A value equal to hi goes into the last bin.
+ * Parallel (OpenMP), deterministic. Errors: VV_ERR_INVALID (NULL, nbins
+ * outside 1..1048576, region outside the volume, non-finite lo/hi, zero
+ * cut-plane normal, empty region), VV_ERR_NOMEM.
+ */
+vv_status vv_measure_histogram(vv_histogram **out, const vv_volume *v, int nbins, double lo,
+                               double hi, const vv_region *region);
+/** Releases a histogram. Accepts NULL. */
+void vv_histogram_free(vv_histogram *h);
+/**
+ * Draws @p h as a bar chart into a PNG (cairo) of width x height pixels
+ * (each 200..8192): axes with ticks, tick labels, axis titles ("value"
+ * and "voxels", or @p xlabel), the title @p title (may be NULL) and the
+ * voxel count; log_scale draws log10(1 + count). Written atomically.
+ * Errors: VV_ERR_INVALID, VV_ERR_IO, VV_ERR_NOMEM.
+ */
+vv_status vv_histogram_plot_png(const vv_histogram *h, const char *path, int width, int height,
+                                const char *title, const char *xlabel, int log_scale);
+
+/* ---- isosurface volume and area ------------------------------------------- */
+
+typedef enum vv_measure_method {
+    /** Marching Cubes: area of the triangles; volume by the divergence theorem over the
+     * triangles plus the caps where the inside region meets the region's boundary (exact
+     * for the piecewise-linear surface, also when the volume boundary cuts it). */
+    VV_MEASURE_MC = 0,
+    /** Voxel counting: volume = voxels inside x voxel volume; area = exposed voxel faces,
+     * which overestimates a smooth surface (by 3/2 averaged over orientations). */
+    VV_MEASURE_VOXEL = 1
+} vv_measure_method;
+
+typedef struct vv_isosurface_measure_options {
+    vv_measure_method method; /**< default VV_MEASURE_MC */
+    /** 1: measure only the surface-tracked section: the 6-connected component of inside
+     * voxels (flood fill) containing the inside voxel nearest to seed. */
+    int has_seed;
+    double seed[3];   /**< voxel index coordinates (fractional allowed) */
+    vv_region region; /**< default whole volume; cut planes only with VV_MEASURE_VOXEL */
+    int threads;      /**< <= 0: vv_threads_get() */
+    vv_progress progress;
+} vv_isosurface_measure_options;
+
+/** Defaults: Marching Cubes, no seed, whole volume, default threads. */
+void vv_isosurface_measure_options_init(vv_isosurface_measure_options *o);
+
+typedef struct vv_isosurface_measure {
+    vv_measure_method method;
+    double isovalue;
+    double area;        /**< isosurface area, world units^2 (caps not included) */
+    double volume;      /**< volume of the inside region, world units^3 */
+    double cut_area;    /**< where the inside region meets the region's boundary
+                             (MC: the caps; voxel: boundary voxel faces), world units^2 */
+    uint64_t voxels;    /**< inside voxels counted (in the section when seeded) */
+    size_t n_triangles; /**< Marching Cubes triangles (0 for voxel counting) */
+    double area_bias;   /**< expected area ratio measured/true: 1.5 for voxel faces, 1 for MC */
+    int seed_voxel[3];  /**< the voxel the section grew from (when seeded) */
+    vv_unit unit;       /**< the volume's length unit */
+} vv_isosurface_measure;
+
+/**
+ * Measures the isosurface value == @p isovalue of @p v (see
+ * vv_measure_method). Errors: VV_ERR_INVALID (NULL, isovalue outside
+ * (range[0], range[1]] so that there is no surface, seed outside the volume
+ * or with no inside voxel within 2 voxels, bad region, fewer than 2 voxels
+ * on an axis for MC), VV_ERR_UNSUPPORTED (cut planes with MC),
+ * VV_ERR_NOMEM, VV_ERR_CANCELLED.
+ */
+vv_status vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, double isovalue,
+                                const vv_isosurface_measure_options *opt);
+
+/* ---- distances -------------------------------------------------------------- */
+
+/**
+ * Euclidean distance in world units between points @p a and @p b, each in
+ * world coordinates or, when its *_voxel flag is 1, in voxel index
+ * coordinates of @p v (mapped by vv_volume_index_to_world; fractional
+ * allowed). Errors: VV_ERR_INVALID (voxel coordinates without a volume,
+ * non-finite coordinates).
+ */
+vv_status vv_measure_distance(const vv_volume *v, vv_vec3 a, int a_voxel, vv_vec3 b, int b_voxel,
+                              double *out);
+
+/* ---- meshes ------------------------------------------------------------------- */
+
+/**
+ * Enclosed volume of a closed mesh (divergence theorem, positive for
+ * outward winding). Errors: VV_ERR_INVALID when the mesh is open or
+ * non-manifold (the message gives the boundary and non-manifold edge
+ * counts) or has no triangles, VV_ERR_NOMEM.
+ */
+vv_status vv_measure_mesh_volume(const vv_mesh *m, double *volume);
+
+/**
+ * Minimum distance between the surfaces of meshes @p a and @p b (0 when
+ * they intersect), with the closest points (pa, pb may be NULL): exact
+ * triangle-triangle distances with a bounding-volume hierarchy over b,
+ * parallel over a's triangles. Errors: VV_ERR_INVALID (NULL, empty mesh),
+ * VV_ERR_NOMEM.
+ */
+vv_status vv_measure_mesh_distance(const vv_mesh *a, const vv_mesh *b, int threads, double *dist,
+                                   vv_vec3 *pa, vv_vec3 *pb);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,1037 @@
+/*
+ * Compression-domain volume rendering by the Fourier projection-slice
+ * theorem, per subcube (Chiueh, He, Kaufman, Pfister et al., "Compression
+ * Domain Volume Rendering", 1994/1997; Malzbender, "Fourier Volume
+ * Rendering", ACM TOG 1993). docs/rendering.md describes the method.
+ *
+ * The spectra come from a .vvc (entropy decoding and dequantisation only:
+ * no inverse 3-D transform, no volume is rebuilt) or, without one, from the
+ * World's volume transformed subcube by subcube (exact, or compressed in
+ * memory at a quality or rate first). For a parallel view the ray direction
+ * in a volume's index space is d; its largest component picks the axis c
+ * the rays are parameterised by, and the projection of a subcube onto the
+ * plane x_c = const along d is an oblique (sheared) projection
+ *   g(P, Q) = sum over z of f(P + a z, Q + b z, z),  a = d_p / d_c, b = d_q / d_c,
+ * whose 2-D spectrum is the 3-D spectrum on the plane w = -(a u + b v).
+ * The slice is sampled on a 2M x 2M grid (the subcube zero-padded to twice
+ * its side in p and q, computed once per axis from the stored M^3
+ * coefficients by exact Dirichlet-kernel interpolation in frequency space:
+ * this keeps the sheared projection, up to 2M wide, free of wrap-around),
+ * and along w it is interpolated with the exact periodic-sinc (Dirichlet)
+ * kernel of the M-point DFT. A 2-D inverse FFT gives the subimage, which is
+ * resampled (Catmull-Rom) into the output image, and the subimages are
+ * composited front to back with an attenuation per subcube.
+ */
+#include <math.h>
+#include <omp.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "compress/vvc_internal.h"
+#include "render/registry.h"
+#include "volvis/render.h"
+
+#define FR_MAX_CACHE 8
+#define FR_LUT 4096 /* transfer-function table entries, as the ray caster */
+
+/* Spectra of one volume, kept between frames. */
+typedef struct fr_source {
+    vv_volume *vol; /* reference held; the key with modified and the parameters */
+    uint64_t modified;
+    int kind; /* 0 exact, 1 compressed in memory, 2 a .vvc file */
+    double quality, rate;
+    int block;
+    int M, H, nb[3], nsub;
+    float *spectra;   /* nsub * 2 * M * M * H, FFTW r2c layout, dequantised */
+    uint8_t *nonzero; /* subcube has a non-zero coefficient */
+    double offset, unit;
+    float *over[3]; /* per projection axis c: nsub * M * 2M * (M + 1) complex, or NULL */
+    double bits_per_voxel;
+    uint64_t last_used;
+} fr_source;
+
+typedef struct fr_state {
+    fr_source cache[FR_MAX_CACHE];
+    int n_cache;
+    uint64_t clock;
+    char *vvc_path; /* option vvc */
+    vv_vvc *vvc;    /* loaded from vvc_path */
+    double quality; /* < 0: exact spectra (no quantisation) */
+    double rate;    /* > 0: compress to this rate instead */
+    int block;
+    double attenuation;
+    fftwf_plan plan2d[3]; /* 2M x 2M c2r for M = 8, 16, 32 (made once, executed on new arrays) */
+} fr_state;
+
+/* ---------------------------------------------------------------------- */
+/* Options                                                                  */
+
+static vv_status
+fr_create(void **state) {
+    fr_state *st = calloc(1, sizeof *st);
+    if (!st)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    st->quality = -1;
+    st->rate = -1;
+    st->block = 16;
+    *state = st;
+    return VV_OK;
+}
+
+static void
+source_release(fr_source *s) {
+    vv_volume_free(s->vol);
+    fftwf_free(s->spectra);
+    free(s->nonzero);
+    for (int i = 0; i < 3; i++)
+        fftwf_free(s->over[i]);
+    memset(s, 0, sizeof *s);
+}
+
+static void
+fr_destroy(void *state) {
+    fr_state *st = state;
+    if (!st)
+        return;
+    for (int i = 0; i < st->n_cache; i++)
+        source_release(&st->cache[i]);
+    free(st->vvc_path);
+    vv_vvc_free(st->vvc);
+    vv_fftw_lock();
+    for (int i = 0; i < 3; i++)
+        if (st->plan2d[i])
+            fftwf_destroy_plan(st->plan2d[i]);
+    vv_fftw_unlock();
+    free(st);
+}
+
+static int
+parse_num(const char *text, double lo, double hi, double *out) {
+    char *end;
+    double v = strtod(text, &end);
+    if (end == text || *end || !(v >= lo && v <= hi))
+        return 0;
+    *out = v;
+    return 1;
+}
+
+static void
+drop_cache(fr_state *st) {
+    for (int i = 0; i < st->n_cache; i++)
+        source_release(&st->cache[i]);
+    st->n_cache = 0;
+}
+
+static vv_status
+fr_set_option(void *state, const char *key, const char *value) {
+    fr_state *st = state;
+    double v;
+    /* a new source of spectra: nothing cached from the old one is valid */
+    if (strcmp(key, "vvc") == 0 || strcmp(key, "quality") == 0 || strcmp(key, "rate") == 0 ||
+        strcmp(key, "block") == 0)
+        drop_cache(st);
+    if (strcmp(key, "vvc") == 0) {
+        vv_vvc *c = NULL;
+        if (*value) {
+            vv_status s = vv_vvc_load(&c, value);
+            if (s != VV_OK)
+                return s;
+        }
+        char *p = *value ? malloc(strlen(value) + 1) : NULL;
+        if (*value && !p) {
+            vv_vvc_free(c);
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        }
+        if (p)
+            strcpy(p, value);
+        free(st->vvc_path);
+        vv_vvc_free(st->vvc);
+        st->vvc_path = p;
+        st->vvc = c;
+        return VV_OK;
+    }
+    if (strcmp(key, "quality") == 0) {
+        if (strcmp(value, "exact") == 0) {
+            st->quality = -1;
+            return VV_OK;
+        }
+        if (!parse_num(value, 0, 100, &v))
+            return vv_error_set(VV_ERR_INVALID, "quality: expected 0..100 or 'exact', got '%s'",
+                                value);
+        st->quality = v;
+        st->rate = -1;
+        return VV_OK;
+    }
+    if (strcmp(key, "rate") == 0) {
+        if (!parse_num(value, 1e-6, 64, &v))
+            return vv_error_set(VV_ERR_INVALID,
+                                "rate: expected bits per voxel in (0, 64], got '%s'", value);
+        st->rate = v;
+        st->quality = -1;
+        return VV_OK;
+    }
+    if (strcmp(key, "block") == 0) {
+        if (!parse_num(value, 8, 32, &v) || (v != 8 && v != 16 && v != 32))
+            return vv_error_set(VV_ERR_INVALID, "block: expected 8, 16 or 32, got '%s'", value);
+        st->block = (int)v;
+        return VV_OK;
+    }
+    if (strcmp(key, "attenuation") == 0) {
+        if (!parse_num(value, 0, 1e6, &v))
+            return vv_error_set(VV_ERR_INVALID, "attenuation: expected a number >= 0, got '%s'",
+                                value);
+        st->attenuation = v;
+        return VV_OK;
+    }
+    return vv_error_set(
+        VV_ERR_INVALID,
+        "unknown option '%s' (fourier takes vvc, quality, rate, block, attenuation)", key);
+}
+
+/* ---------------------------------------------------------------------- */
+/* Spectra                                                                  */
+
+static vv_status
+source_fill(fr_state *st, fr_source *s, vv_volume *vol, int threads) {
+    vv_status r;
+    s->vol = vv_volume_ref(vol);
+    s->modified = vol->modified;
+    s->quality = st->quality;
+    s->rate = st->rate;
+    s->block = st->block;
+    vv_vvc *tmp = NULL;
+    const vv_vvc *c = NULL;
+    if (st->vvc) {
+        s->kind = 2;
+        c = st->vvc;
+        vv_vvc_info in;
+        vv_vvc_get_info(c, &in);
+        for (int i = 0; i < 3; i++)
+            if (in.dims[i] != vol->dims[i])
+                return vv_error_set(VV_ERR_INVALID,
+                                    "vvc %s holds %d x %d x %d voxels but the volume object has "
+                                    "%d x %d x %d",
+                                    st->vvc_path, in.dims[0], in.dims[1], in.dims[2], vol->dims[0],
+                                    vol->dims[1], vol->dims[2]);
+    } else if (st->quality >= 0 || st->rate > 0) {
+        s->kind = 1;
+        vv_vvc_params p;
+        vv_vvc_params_init(&p);
+        p.block = st->block;
+        p.threads = threads;
+        if (st->rate > 0) {
+            p.target = VV_VVC_RATE;
+            p.rate = st->rate;
+        } else {
+            p.quality = st->quality;
+        }
+        if ((r = vv_vvc_compress(&tmp, vol, &p)) != VV_OK)
+            return r;
+        c = tmp;
+    }
+    if (!c) {
+        s->kind = 0;
+        s->M = st->block;
+        if ((r = vv_vvc_spectra(vol, s->M, threads, &s->spectra, &s->offset, &s->unit, NULL)) !=
+            VV_OK)
+            return r;
+        s->bits_per_voxel = 32;
+    } else {
+        vv_vvc_info in;
+        vv_vvc_get_info(c, &in);
+        s->M = in.block;
+        s->offset = in.value_offset;
+        s->unit = in.value_unit;
+        s->bits_per_voxel = in.bits_per_voxel;
+        const int nsub = vv_vvc_subcube_count(c);
+        const size_t per = 2 * (size_t)s->M * s->M * (s->M / 2 + 1);
+        s->spectra = fftwf_malloc(sizeof(float) * per * (size_t)nsub);
+        if (!s->spectra) {
+            vv_vvc_free(tmp);
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        }
+        int failed = 0;
+        char msg[256] = "";
+#pragma omp parallel for num_threads(threads) schedule(dynamic, 8)
+        for (int k = 0; k < nsub; k++) {
+            if (failed)
+                continue;
+            /* entropy decoding and dequantisation: all the compressed data sees */
+            if (vv_vvc_decode_spectrum(c, k, s->spectra + per * (size_t)k) != VV_OK) {
+#pragma omp critical(fr_err)
+                {
+                    if (!failed)
+                        snprintf(msg, sizeof msg, "%s", vv_error_message());
+                    failed = 1;
+                }
+            }
+        }
+        vv_vvc_free(tmp);
+        if (failed)
+            return vv_error_set(VV_ERR_FORMAT, "%s", msg);
+    }
+    const int M = s->M;
+    s->H = M / 2 + 1;
+    for (int i = 0; i < 3; i++)
+        s->nb[i] = (vol->dims[i] + M - 1) / M;
+    s->nsub = s->nb[0] * s->nb[1] * s->nb[2];
+    s->nonzero = malloc((size_t)s->nsub);
+    if (!s->nonzero)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    const size_t per = 2 * (size_t)M * M * s->H;
+    for (int k = 0; k < s->nsub; k++) {
+        const float *sp = s->spectra + per * (size_t)k;
+        uint8_t nz = 0;
+        for (size_t i = 0; i < per && !nz; i++)
+            nz = sp[i] != 0;
+        s->nonzero[k] = nz;
+    }
+    return VV_OK;
+}
+
+static vv_status
+get_source(fr_state *st, vv_volume *vol, int threads, fr_source **out) {
+    st->clock++;
+    const int kind = st->vvc ? 2 : (st->quality >= 0 || st->rate > 0) ? 1 : 0;
+    for (int i = 0; i < st->n_cache; i++) {
+        fr_source *s = &st->cache[i];
+        if (s->vol == vol && s->modified == vol->modified && s->kind == kind &&
+            (kind == 2 ||
+             (s->quality == st->quality && s->rate == st->rate && s->block == st->block))) {
+            s->last_used = st->clock;
+            *out = s;
+            return VV_OK;
+        }
+    }
+    int slot = st->n_cache;
+    if (slot == FR_MAX_CACHE) {
+        slot = 0;
+        for (int i = 1; i < st->n_cache; i++)
+            if (st->cache[i].last_used < st->cache[slot].last_used)
+                slot = i;
+        source_release(&st->cache[slot]);
+    } else {
+        st->n_cache++;
+    }
+    fr_source *s = &st->cache[slot];
+    memset(s, 0, sizeof *s);
+    vv_status r = source_fill(st, s, vol, threads);
+    if (r != VV_OK) {
+        source_release(s);
+        st->cache[slot] = st->cache[st->n_cache - 1];
+        memset(&st->cache[st->n_cache - 1], 0, sizeof(fr_source));
+        st->n_cache--;
+        return r;
+    }
+    s->last_used = st->clock;
+    *out = s;
+    return VV_OK;
+}
+
+/* D(delta) = (1/M) sum_{x=0}^{M-1} e^{-2 pi i delta x / M}: evaluates the
+ * DTFT of M samples from their DFT, F(nu) = sum_k F[k] D(nu - k). */
+static void
+dirichlet(int M, double delta, double *re, double *im) {
+    const double s = sin(VV_PI * delta / M);
+    double mag;
+    if (fabs(s) < 1e-9) {
+        /* delta a multiple of M: every term is e^{-2 pi i m x} = 1 */
+        *re = 1;
+        *im = 0;
+        return;
+    }
+    mag = sin(VV_PI * delta) / (M * s);
+    const double ph = -VV_PI * delta * (M - 1) / M;
+    *re = mag * cos(ph);
+    *im = mag * sin(ph);
+}
+
+/* The spectrum of every subcube zero-padded to 2M along the axes p and q
+ * other than c, sampled at half-integer frequencies there and at the M
+ * integer frequencies along c:  U[uq][up][kc], up in 0..M (the other half
+ * is Hermitian), uq in 0..2M-1. Computed in frequency space alone. */
+static vv_status
+build_over(fr_source *s, int c, int threads) {
+    if (s->over[c])
+        return VV_OK;
+    const int M = s->M, H = s->H, M2 = 2 * M, W = M + 1;
+    const int p = (c + 1) % 3, q = (c + 2) % 3;
+    const size_t per_over = (size_t)M * M2 * W * 2;
+    const size_t per = 2 * (size_t)M * M * H;
+    float *over = fftwf_malloc(sizeof(float) * per_over * (size_t)s->nsub);
+    double *dodd = malloc(sizeof(double) * 2 * (size_t)M * M);
+    if (!over || !dodd) {
+        fftwf_free(over);
+        free(dodd);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory (%zu MB of oversampled spectra)",
+                            sizeof(float) * per_over * (size_t)s->nsub >> 20);
+    }
+    for (int j = 0; j < M; j++)
+        for (int k = 0; k < M; k++)
+            dirichlet(M, j + 0.5 - k, &dodd[2 * (j * M + k)], &dodd[2 * (j * M + k) + 1]);
+    int failed = 0;
+#pragma omp parallel num_threads(threads)
+    {
+        float *G = malloc(sizeof(float) * 2 * (size_t)M * M * M);  /* [kc][kq][kp] */
+        float *G1 = malloc(sizeof(float) * 2 * (size_t)M * M * W); /* [kc][kq][up] */
+        if (!G || !G1)
+            failed = 1;
+#pragma omp for schedule(dynamic, 4)
+        for (int sub = 0; sub < s->nsub; sub++) {
+            float *U = over + per_over * (size_t)sub;
+            if (failed)
+                continue;
+            if (!s->nonzero[sub]) {
+                memset(U, 0, sizeof(float) * per_over);
+                continue;
+            }
+            const float *S = s->spectra + per * (size_t)sub;
+            for (int kc = 0; kc < M; kc++)
+                for (int kq = 0; kq < M; kq++)
+                    for (int kp = 0; kp < M; kp++) {
+                        int k[3];
+                        k[c] = kc;
+                        k[p] = kp;
+                        k[q] = kq;
+                        float re, im;
+                        if (k[0] <= M / 2) {
+                            const float *e = S + 2 * ((size_t)(k[2] * M + k[1]) * H + k[0]);
+                            re = e[0];
+                            im = e[1];
+                        } else {
+                            const float *e =
+                                S + 2 * ((size_t)(((M - k[2]) % M) * M + (M - k[1]) % M) * H +
+                                         (M - k[0]));
+                            re = e[0];
+                            im = -e[1];
+                        }
+                        float *g = G + 2 * ((size_t)(kc * M + kq) * M + kp);
+                        g[0] = re;
+                        g[1] = im;
+                    }
+            /* along p: up even copies, up odd interpolates */
+            for (int line = 0; line < M * M; line++) {
+                const float *gl = G + 2 * (size_t)line * M;
+                float *ol = G1 + 2 * (size_t)line * W;
+                for (int up = 0; up < W; up++) {
+                    if (!(up & 1)) {
+                        ol[2 * up] = gl[2 * (up / 2)];
+                        ol[2 * up + 1] = gl[2 * (up / 2) + 1];
+                        continue;
+                    }
+                    const double *d = dodd + 2 * (size_t)(up / 2) * M;
+                    double re = 0, im = 0;
+                    for (int k = 0; k < M; k++) {
+                        re += gl[2 * k] * d[2 * k] - gl[2 * k + 1] * d[2 * k + 1];
+                        im += gl[2 * k] * d[2 * k + 1] + gl[2 * k + 1] * d[2 * k];
+                    }
+                    ol[2 * up] = (float)re;
+                    ol[2 * up + 1] = (float)im;
+                }
+            }
+            /* along q, stored [uq][up] then M real and M imaginary parts over kc,
+             * so that the slice reads kc contiguously */
+            for (int kc = 0; kc < M; kc++)
+                for (int uq = 0; uq < M2; uq++) {
+                    const double *d = dodd + 2 * (size_t)(uq / 2) * M;
+                    for (int up = 0; up < W; up++) {
+                        float *ue = U + 2 * (size_t)(uq * W + up) * M + kc;
+                        if (!(uq & 1)) {
+                            const float *g = G1 + 2 * ((size_t)(kc * M + uq / 2) * W + up);
+                            ue[0] = g[0];
+                            ue[M] = g[1];
+                            continue;
+                        }
+                        double re = 0, im = 0;
+                        for (int k = 0; k < M; k++) {
+                            const float *g = G1 + 2 * ((size_t)(kc * M + k) * W + up);
+                            re += g[0] * d[2 * k] - g[1] * d[2 * k + 1];
+                            im += g[0] * d[2 * k + 1] + g[1] * d[2 * k];
+                        }
+                        ue[0] = (float)re;
+                        ue[M] = (float)im;
+                    }
+                }
+        }
+        free(G);
+        free(G1);
+    }
+    free(dodd);
+    if (failed) {
+        fftwf_free(over);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    s->over[c] = over;
+    return VV_OK;
+}
+
+/* ---------------------------------------------------------------------- */
+/* One object                                                               */
+
+typedef struct fr_obj {
+    const vv_object *obj;
+    fr_source *src;
+    int c, p, q;
+    double a, b;      /* shear */
+    double lscale;    /* world length per unit of x_c along the ray */
+    double w2i[3][4]; /* world -> index */
+    double di[3];     /* view direction in index space */
+    /* index position of the ray through pixel (px, py): X0 + px * Xx + py * Xy */
+    double X0[3], Xx[3], Xy[3];
+} fr_obj;
+
+typedef struct fr_frame {
+    const vv_view *view;
+    vv_vec3 o00, ox, oy, dir; /* orthographic rays: origin o00 + px ox + py oy, direction dir */
+    int W, Hh;
+    double attenuation;
+} fr_frame;
+
+/* Catmull-Rom weights. */
+static inline void
+cubic_w(float t, float w[4]) {
+    const float t2 = t * t, t3 = t2 * t;
+    w[0] = -0.5f * t3 + t2 - 0.5f * t;
+    w[1] = 1.5f * t3 - 2.5f * t2 + 1.0f;
+    w[2] = -1.5f * t3 + 2.0f * t2 + 0.5f * t;
+    w[3] = 0.5f * t3 - 0.5f * t2;
+}
+
+/* Chord (in x_c units) of the ray (P + a z, Q + b z, z), local subcube coordinates,
+ * through the box lo..hi (per axis p, q, c in that order). */
+static inline double
+chord_local(double P, double Q, double a, double b, const double lo[3], const double hi[3]) {
+    double z0 = lo[2], z1 = hi[2];
+    const double base[2] = {P, Q}, slope[2] = {a, b};
+    for (int i = 0; i < 2; i++) {
+        if (slope[i] == 0) {
+            if (base[i] < lo[i] || base[i] > hi[i])
+                return 0;
+            continue;
+        }
+        double t0 = (lo[i] - base[i]) / slope[i], t1 = (hi[i] - base[i]) / slope[i];
+        if (t0 > t1) {
+            double t = t0;
+            t0 = t1;
+            t1 = t;
+        }
+        z0 = t0 > z0 ? t0 : z0;
+        z1 = t1 < z1 ? t1 : z1;
+    }
+    return z1 > z0 ? z1 - z0 : 0;
+}
+
+typedef struct sub_key {
+    double depth;
+    int index;
+} sub_key;
+
+static int
+cmp_sub(const void *x, const void *y) {
+    const sub_key *a = x, *b = y;
+    return a->depth < b->depth   ? -1
+           : a->depth > b->depth ? 1
+                                 : (a->index > b->index) - (a->index < b->index);
+}
+
+/* The projection of one object in the sheared plane x_c = 0 (index
+ * units): an nP x nQ grid at integer (P, Q), P = Pg0 + column, Q = Qg0 +
+ * row; C the (attenuated) line integral of coded values (world units), L
+ * the attenuated chord (with attenuation only). */
+typedef struct fr_sheared {
+    int nP, nQ, Pg0, Qg0;
+    float *C, *L;
+} fr_sheared;
+
+/* The slice: for each of the n points, the sum over kc of the oversampled
+ * spectrum times the frame's weights (both stored as M real then M
+ * imaginary parts per point). The hot loop of a frame: compiled for AVX2
+ * as well where the compiler can, picked at run time. */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+static void
+slice_points(const float *U, const float *wsl, int M, int n, float *slice) {
+    for (int e = 0; e < n; e++) {
+        const float *wr = wsl + 2 * (size_t)e * M, *wi = wr + M;
+        const float *ur = U + 2 * (size_t)e * M, *ui = ur + M;
+        float sre = 0, sim = 0;
+#pragma omp simd reduction(+ : sre, sim)
+        for (int kc = 0; kc < M; kc++) {
+            sre += ur[kc] * wr[kc] - ui[kc] * wi[kc];
+            sim += ur[kc] * wi[kc] + ui[kc] * wr[kc];
+        }
+        slice[2 * e] = sre;
+        slice[2 * e + 1] = sim;
+    }
+}
+
+/* The 2M x 2M inverse FFT, planned once per renderer (FFTW_MEASURE). */
+static fftwf_plan
+plan_for(fr_state *st, int M) {
+    const int slot = M == 8 ? 0 : M == 16 ? 1 : 2;
+    if (st->plan2d[slot])
+        return st->plan2d[slot];
+    const int M2 = 2 * M;
+    float *in = fftwf_malloc(sizeof(float) * 2 * (size_t)M2 * (M + 1));
+    float *out = fftwf_malloc(sizeof(float) * (size_t)M2 * M2);
+    if (in && out) {
+        vv_fftw_lock();
+        st->plan2d[slot] = fftwf_plan_dft_c2r_2d(M2, M2, (fftwf_complex *)in, out, FFTW_MEASURE);
+        vv_fftw_unlock();
+    }
+    fftwf_free(in);
+    fftwf_free(out);
+    return st->plan2d[slot];
+}
+
+static vv_status
+project_object(fr_state *st, const fr_frame *fr, fr_obj *ob, int threads,
+               const vv_progress *progress, fr_sheared *sh) {
+    fr_source *s = ob->src;
+    const int M = s->M, M2 = 2 * M, W = M + 1;
+    const int c = ob->c, p = ob->p, q = ob->q;
+    memset(sh, 0, sizeof *sh);
+    vv_status r = build_over(s, c, threads);
+    if (r != VV_OK)
+        return r;
+    const size_t per_over = (size_t)M * M2 * W * 2;
+    const double a = ob->a, b = ob->b;
+    const int att = fr->attenuation > 0;
+    const vv_volume *vol = ob->obj->volume;
+    const double vrange = vol->range[1] - vol->range[0] > 0 ? vol->range[1] - vol->range[0] : 1;
+    const double kappa = fr->attenuation / vrange; /* per value unit and world unit */
+    const int dims[3] = {vol->dims[0], vol->dims[1], vol->dims[2]};
+    const int nslab = s->nb[c];
+
+    /* front-to-back order of the subcubes (empty ones only matter for the
+     * chord under attenuation) */
+    sub_key *order = malloc(sizeof *order * (size_t)s->nsub);
+    if (!order)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    int n = 0;
+    const vv_mat4 i2w = vv_object_index_to_world(ob->obj);
+    for (int k = 0; k < s->nsub; k++) {
+        if (!s->nonzero[k] && !att)
+            continue;
+        const int bx = k % s->nb[0], by = (k / s->nb[0]) % s->nb[1], bz = k / (s->nb[0] * s->nb[1]);
+        vv_vec3 ctr = vv_mat4_mul_point(
+            i2w, vv_vec3_make((bx + 0.5) * M - 0.5, (by + 0.5) * M - 0.5, (bz + 0.5) * M - 0.5));
+        order[n].depth = vv_vec3_dot(ctr, fr->dir);
+        order[n].index = k;
+        n++;
+    }
+    qsort(order, (size_t)n, sizeof *order, cmp_sub);
+
+    /* Each subimage covers the window [P0, P0 + 2M) x [Q0, Q0 + 2M) of its
+     * own periodic grid, centred on the sheared data (width (M-1)(1+|a|) < 2M). */
+    const double span_p = (M - 1) * (1 + fabs(a)), span_q = (M - 1) * (1 + fabs(b));
+    const int P0 = (int)floor((a > 0 ? -a * (M - 1) : 0) - 0.5 * (M2 - 1 - span_p));
+    const int Q0 = (int)floor((b > 0 ? -b * (M - 1) : 0) - 0.5 * (M2 - 1 - span_q));
+    /* A subcube at (Pb, Qb, Zb) lands at global P = local P + Pb - a Zb: an
+     * integer part and a fraction that depends on the slab Zb only; the
+     * fraction is applied as a phase ramp, so subimages add on one grid. */
+    int pmin = INT32_MAX, pmax = INT32_MIN, qmin = INT32_MAX, qmax = INT32_MIN;
+    for (int sl = 0; sl < nslab; sl++) {
+        const int ip = (int)floor(-a * sl * M), iq = (int)floor(-b * sl * M);
+        pmin = ip < pmin ? ip : pmin;
+        pmax = ip > pmax ? ip : pmax;
+        qmin = iq < qmin ? iq : qmin;
+        qmax = iq > qmax ? iq : qmax;
+    }
+    sh->Pg0 = pmin + P0;
+    sh->Qg0 = qmin + Q0;
+    sh->nP = pmax - pmin + (s->nb[p] - 1) * M + M2;
+    sh->nQ = qmax - qmin + (s->nb[q] - 1) * M + M2;
+    const size_t nsh = (size_t)sh->nP * sh->nQ;
+    const double gscale = s->unit * ob->lscale / ((double)M2 * M2);
+
+    /* Dirichlet weights D(w - kc) of every slice point times the phase of
+     * the slab's fractional shift: the same for all subcubes of a slab
+     * (stored as M real then M imaginary parts). The Nyquist row and column
+     * (up or uq = M) stand for both +M/2 and -M/2, whose planes and phases
+     * differ: their weights are averaged. */
+    const size_t per_w = 2 * (size_t)M2 * W * M;
+    float *wtab = malloc(sizeof(float) * per_w * (size_t)nslab);
+    double *dw = malloc(sizeof(double) * 2 * 4 * (size_t)M);
+    if (!wtab || !dw) {
+        free(order);
+        free(wtab);
+        free(dw);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    for (int uq = 0; uq < M2; uq++)
+        for (int up = 0; up < W; up++) {
+            const double vq0 = uq < M ? uq * 0.5 : (uq - M2) * 0.5, vp0 = up * 0.5;
+            const int np = up == M ? 2 : 1, nq = uq == M ? 2 : 1;
+            double vps[4], vqs[4];
+            int ncomb = 0;
+            for (int i = 0; i < np; i++)
+                for (int j = 0; j < nq; j++, ncomb++) {
+                    vps[ncomb] = i ? -vp0 : vp0;
+                    vqs[ncomb] = j ? -vq0 : vq0;
+                    for (int kc = 0; kc < M; kc++)
+                        dirichlet(M, -(a * vps[ncomb] + b * vqs[ncomb]) - kc,
+                                  &dw[2 * (ncomb * M + kc)], &dw[2 * (ncomb * M + kc) + 1]);
+                }
+            for (int sl = 0; sl < nslab; sl++) {
+                const double fp = -a * sl * M - floor(-a * sl * M);
+                const double fq = -b * sl * M - floor(-b * sl * M);
+                float *wt = wtab + per_w * (size_t)sl + 2 * (size_t)(uq * W + up) * M;
+                for (int kc = 0; kc < M; kc++)
+                    wt[kc] = wt[M + kc] = 0;
+                for (int cb = 0; cb < ncomb; cb++) {
+                    /* h(m) = g(m - f): multiply by e^{-2 pi i (vp fp + vq fq) / M} */
+                    const double ph = -2 * VV_PI * (vps[cb] * fp + vqs[cb] * fq) / M;
+                    const double cr = cos(ph) / ncomb, ci = sin(ph) / ncomb;
+                    for (int kc = 0; kc < M; kc++) {
+                        const double dre = dw[2 * (cb * M + kc)], dim = dw[2 * (cb * M + kc) + 1];
+                        wt[kc] += (float)(dre * cr - dim * ci);
+                        wt[M + kc] += (float)(dre * ci + dim * cr);
+                    }
+                }
+            }
+        }
+    free(dw);
+
+    const int nthreads = threads < 1 ? 1 : threads;
+    const fftwf_plan plan = plan_for(st, M);
+    float *bufs = calloc((size_t)nthreads * (att ? 3 : 1) * nsh, sizeof(float));
+    if (!bufs || !plan) {
+        free(bufs);
+        free(order);
+        free(wtab);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    int failed = 0, cancelled = 0, next = 0;
+    long done = 0;
+#pragma omp parallel num_threads(nthreads)
+    {
+        const int tid = omp_get_thread_num(), nt = omp_get_num_threads();
+        float *C = bufs + (size_t)tid * (att ? 3 : 1) * nsh;
+        float *L = att ? C + nsh : NULL, *T = att ? C + 2 * nsh : NULL;
+        if (att)
+            for (size_t i = 0; i < nsh; i++)
+                T[i] = 1;
+        float *slice = fftwf_malloc(sizeof(float) * 2 * (size_t)M2 * W);
+        float *g = fftwf_malloc(sizeof(float) * (size_t)M2 * M2);
+        if (!slice || !g)
+            failed = 1;
+        /* with attenuation each thread composites a contiguous run of the
+         * ordered subcubes; without, the order does not matter */
+        const int lo = (int)((long)n * tid / nt), hi = (int)((long)n * (tid + 1) / nt);
+        for (int it = lo; !failed && !cancelled; it++) {
+            int oi = it;
+            if (!att) {
+#pragma omp atomic capture
+                oi = next++;
+                if (oi >= n)
+                    break;
+            } else if (it >= hi) {
+                break;
+            }
+            const int sub = order[oi].index;
+            const int bi[3] = {sub % s->nb[0], (sub / s->nb[0]) % s->nb[1],
+                               sub / (s->nb[0] * s->nb[1])};
+            const int sl = bi[c];
+            const int nz = s->nonzero[sub];
+            if (nz) {
+                /* the slice w = -(a u + b v) through the oversampled spectrum */
+                const float *U = s->over[c] + per_over * (size_t)sub;
+                const float *wsl = wtab + per_w * (size_t)sl;
+                slice_points(U, wsl, M, M2 * W, slice);
+                fftwf_execute_dft_c2r(plan, (fftwf_complex *)slice, g);
+            }
+            /* where the window lands on the global grid */
+            const int ipo = (int)floor(-a * sl * M), iqo = (int)floor(-b * sl * M);
+            const int gp0 = bi[p] * M + ipo + P0 - sh->Pg0, gq0 = bi[q] * M + iqo + Q0 - sh->Qg0;
+            /* the subcube's box inside the volume in local (p, q, c) coordinates,
+             * and the local position of global grid point (gp0, gq0) */
+            double blo[3], bhi[3];
+            const int axes[3] = {p, q, c}, offs[3] = {bi[p] * M, bi[q] * M, sl * M};
+            for (int i = 0; i < 3; i++) {
+                blo[i] = -0.5;
+                const double vhi = dims[axes[i]] - 0.5 - offs[i];
+                bhi[i] = M - 0.5 < vhi ? M - 0.5 : vhi;
+            }
+            const double fpo = -a * sl * M - ipo, fqo = -b * sl * M - iqo;
+            for (int mq = 0; mq < M2; mq++) {
+                const float *grow = g + (size_t)((Q0 + mq) & (M2 - 1)) * M2;
+                float *crow = C + (size_t)(gq0 + mq) * sh->nP + gp0;
+                if (!att) {
+                    if (nz)
+                        for (int mp = 0; mp < M2; mp++)
+                            crow[mp] += (float)gscale * grow[(P0 + mp) & (M2 - 1)];
+                    continue;
+                }
+                float *lrow = L + (size_t)(gq0 + mq) * sh->nP + gp0;
+                float *trow = T + (size_t)(gq0 + mq) * sh->nP + gp0;
+                for (int mp = 0; mp < M2; mp++) {
+                    /* local position of this ray on the subcube's plane x_c = 0 */
+                    const double Pl = P0 + mp - fpo, Ql = Q0 + mq - fqo;
+                    const double ch = chord_local(Pl, Ql, a, b, blo, bhi) * ob->lscale;
+                    if (ch <= 0)
+                        continue;
+                    const float v = nz ? (float)gscale * grow[(P0 + mp) & (M2 - 1)] : 0.0f;
+                    const float t = trow[mp];
+                    crow[mp] += t * v;
+                    lrow[mp] += t * (float)ch;
+                    const double tau = kappa * s->unit * (v > 0 ? v : 0);
+                    trow[mp] = t * (float)exp(-tau);
+                }
+            }
+            if (progress && progress->fn) {
+#pragma omp critical(fr_progress)
+                {
+                    done++;
+                    if (vv_progress_report(progress, (double)done / (n > 0 ? n : 1)))
+                        cancelled = 1;
+                }
+            }
+        }
+        fftwf_free(slice);
+        fftwf_free(g);
+    }
+    free(order);
+    free(wtab);
+    if (failed || cancelled) {
+        free(bufs);
+        return cancelled && !failed ? vv_error_set(VV_ERR_CANCELLED, "cancelled")
+                                    : vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    /* combine the threads' runs in order: (C1, L1, T1) then (C2, L2, T2) */
+    if (att) {
+        float *C = bufs, *L = bufs + nsh, *T = bufs + 2 * nsh;
+        for (int t = 1; t < nthreads; t++) {
+            const float *C2 = bufs + (size_t)t * 3 * nsh, *L2 = C2 + nsh, *T2 = C2 + 2 * nsh;
+            for (size_t i = 0; i < nsh; i++) {
+                C[i] += T[i] * C2[i];
+                L[i] += T[i] * L2[i];
+                T[i] *= T2[i];
+            }
+        }
+        sh->L = L;
+    } else {
+        for (int t = 1; t < nthreads; t++)
+            for (size_t i = 0; i < nsh; i++)
+                bufs[i] += bufs[(size_t)t * nsh + i];
+    }
+    sh->C = bufs; /* owns the block (L points into it) */
+    return VV_OK;
+}
+
+/* Catmull-Rom sample of a sheared image at global (P, Q); 0 outside. */
+static inline float
+sheared_sample(const fr_sheared *sh, const float *img, double P, double Q) {
+    const double x = P - sh->Pg0, y = Q - sh->Qg0;
+    const double fx = floor(x), fy = floor(y);
+    const int ix = (int)fx - 1, iy = (int)fy - 1;
+    if (ix < 0 || iy < 0 || ix + 3 >= sh->nP || iy + 3 >= sh->nQ)
+        return 0;
+    float wx[4], wy[4];
+    cubic_w((float)(x - fx), wx);
+    cubic_w((float)(y - fy), wy);
+    float v = 0;
+    for (int j = 0; j < 4; j++) {
+        const float *row = img + (size_t)(iy + j) * sh->nP + ix;
+        v += wy[j] * (wx[0] * row[0] + wx[1] * row[1] + wx[2] * row[2] + wx[3] * row[3]);
+    }
+    return v;
+}
+
+/* Slab test of a ray in index space against the box [lo, hi]^3 per axis. */
+static int
+box_hit(const double o[3], const double d[3], const double lo[3], const double hi[3], double *t0,
+        double *t1) {
+    double a = -INFINITY, b = INFINITY;
+    for (int i = 0; i < 3; i++) {
+        if (d[i] == 0) {
+            if (o[i] < lo[i] || o[i] > hi[i])
+                return 0;
+            continue;
+        }
+        double u = (lo[i] - o[i]) / d[i], v = (hi[i] - o[i]) / d[i];
+        if (u > v) {
+            double t = u;
+            u = v;
+            v = t;
+        }
+        a = u > a ? u : a;
+        b = v < b ? v : b;
+    }
+    *t0 = a;
+    *t1 = b;
+    return b >= a;
+}
+
+static vv_status
+fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+          vv_image *out) {
+    fr_state *st = state;
+    if (view->projection != VV_PROJECTION_ORTHOGRAPHIC)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "perspective projection is not supported: the projection-slice "
+                            "theorem needs parallel rays (use an orthographic view)");
+    if (w->n_cut_planes > 0)
+        return vv_error_set(VV_ERR_UNSUPPORTED, "cut planes are not supported");
+    const int threads = opt->threads > 0 ? opt->threads : vv_threads_get();
+    fr_frame fr;
+    memset(&fr, 0, sizeof fr);
+    fr.view = view;
+    fr.W = view->width;
+    fr.Hh = view->height;
+    fr.attenuation = st->attenuation;
+    vv_ray r00 = vv_view_ray(view, 0, 0), r10 = vv_view_ray(view, 1, 0),
+           r01 = vv_view_ray(view, 0, 1);
+    fr.o00 = r00.origin;
+    fr.ox = vv_vec3_sub(r10.origin, r00.origin);
+    fr.oy = vv_vec3_sub(r01.origin, r00.origin);
+    fr.dir = vv_vec3_normalize(r00.dir);
+    const size_t npix = (size_t)fr.W * fr.Hh;
+
+    float *P = calloc(3 * npix, sizeof(float)); /* projections combined by maximum */
+    float *PA = calloc(npix, sizeof(float));
+    float *dep = malloc(sizeof(float) * npix);
+    float *lut = malloc(sizeof(float) * 4 * FR_LUT);
+    vv_status s = VV_OK;
+    if (!P || !PA || !dep || !lut) {
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    for (size_t i = 0; i < npix; i++)
+        dep[i] = INFINITY;
+    for (int oi = 0; oi < w->n_objects; oi++) {
+        const vv_object *obj = w->objects[oi];
+        if (!obj || !obj->visible || obj->type != VV_OBJECT_VOLUME || !obj->volume)
+            continue;
+        if (obj->n_cut_planes > 0) {
+            s = vv_error_set(VV_ERR_UNSUPPORTED, "object '%s': cut planes are not supported",
+                             obj->name);
+            goto done;
+        }
+        fr_obj ob;
+        memset(&ob, 0, sizeof ob);
+        ob.obj = obj;
+        if ((s = get_source(st, obj->volume, threads, &ob.src)) != VV_OK)
+            goto done;
+        int ok;
+        const vv_mat4 w2i = vv_mat4_inverse(vv_object_index_to_world(obj), &ok);
+        if (!ok) {
+            s = vv_error_set(VV_ERR_INVALID, "object '%s': singular transform", obj->name);
+            goto done;
+        }
+        const vv_vec3 di = vv_mat4_mul_dir(w2i, fr.dir);
+        ob.di[0] = di.x;
+        ob.di[1] = di.y;
+        ob.di[2] = di.z;
+        ob.c = 0;
+        for (int i = 1; i < 3; i++)
+            if (fabs(ob.di[i]) > fabs(ob.di[ob.c]))
+                ob.c = i;
+        ob.p = (ob.c + 1) % 3;
+        ob.q = (ob.c + 2) % 3;
+        ob.a = ob.di[ob.p] / ob.di[ob.c];
+        ob.b = ob.di[ob.q] / ob.di[ob.c];
+        ob.lscale = 1.0 / fabs(ob.di[ob.c]); /* |index-to-world(di)| = 1 */
+        const vv_vec3 X0 = vv_mat4_mul_point(w2i, fr.o00);
+        const vv_vec3 Xx = vv_mat4_mul_dir(w2i, fr.ox), Xy = vv_mat4_mul_dir(w2i, fr.oy);
+        const double x0[3] = {X0.x, X0.y, X0.z}, xx[3] = {Xx.x, Xx.y, Xx.z},
+                     xy[3] = {Xy.x, Xy.y, Xy.z};
+        memcpy(ob.X0, x0, sizeof x0);
+        memcpy(ob.Xx, xx, sizeof xx);
+        memcpy(ob.Xy, xy, sizeof xy);
+        fr_sheared sh;
+        if ((s = project_object(st, &fr, &ob, threads, &opt->progress, &sh)) != VV_OK)
+            goto done;
+        /* pixel -> (P, Q) on the plane x_c = 0 */
+        const double Pp0 = ob.X0[ob.p] - ob.a * ob.X0[ob.c], Ppx = ob.Xx[ob.p] - ob.a * ob.Xx[ob.c],
+                     Ppy = ob.Xy[ob.p] - ob.a * ob.Xy[ob.c];
+        const double Qp0 = ob.X0[ob.q] - ob.b * ob.X0[ob.c], Qpx = ob.Xx[ob.q] - ob.b * ob.Xx[ob.c],
+                     Qpy = ob.Xy[ob.q] - ob.b * ob.Xy[ob.c];
+        /* the mean value along each ray, through the transfer function */
+        const vv_volume *vol = obj->volume;
+        const double blo[3] = {-0.5, -0.5, -0.5},
+                     bhi[3] = {vol->dims[0] - 0.5, vol->dims[1] - 0.5, vol->dims[2] - 0.5};
+        const double glo[3] = {0, 0, 0},
+                     ghi[3] = {vol->dims[0] - 1, vol->dims[1] - 1, vol->dims[2] - 1};
+        const int att = fr.attenuation > 0;
+        const double offset = ob.src->offset;
+        /* as the ray caster: FR_LUT entries over the value range, colour and
+         * opacity at the projected value, looked up by truncation */
+        double lut_lo = vol->range[0], lut_hi = vol->range[1];
+        if (!(lut_hi > lut_lo))
+            lut_hi = lut_lo + 1;
+        const double lut_scale = (FR_LUT - 1) / (lut_hi - lut_lo);
+        for (int k = 0; k < FR_LUT; k++) {
+            const double x = lut_lo + (lut_hi - lut_lo) * k / (FR_LUT - 1);
+            double a;
+            vv_vec3 col;
+            if (obj->segmentation == VV_SEG_THRESHOLD) {
+                a = x >= obj->threshold ? 1.0 : 0.0;
+                col = obj->material.color;
+            } else {
+                a = vv_tf_eval_opacity(&obj->tf, x);
+                col = vv_tf_eval_color(&obj->tf, x);
+            }
+            lut[4 * k] = (float)(a < 0 ? 0 : a > 1 ? 1 : a);
+            lut[4 * k + 1] = (float)col.x;
+            lut[4 * k + 2] = (float)col.y;
+            lut[4 * k + 3] = (float)col.z;
+        }
+#pragma omp parallel for num_threads(threads) schedule(static)
+        for (int py = 0; py < fr.Hh; py++)
+            for (int px = 0; px < fr.W; px++) {
+                const size_t i = (size_t)py * fr.W + px;
+                double o[3];
+                for (int k = 0; k < 3; k++)
+                    o[k] = ob.X0[k] + px * ob.Xx[k] + py * ob.Xy[k];
+                double t0, t1, u0, u1;
+                /* the samples of the spatial X-ray lie in the node-centred grid
+                 * box; each voxel's band-limited footprint reaches half a voxel
+                 * further, which is the length the integral is divided by */
+                if (!box_hit(o, ob.di, glo, ghi, &t0, &t1) ||
+                    !box_hit(o, ob.di, blo, bhi, &u0, &u1))
+                    continue;
+                const double Pq = Pp0 + Ppx * px + Ppy * py, Qq = Qp0 + Qpx * px + Qpy * py;
+                const double len = att ? sheared_sample(&sh, sh.L, Pq, Qq) : u1 - u0;
+                if (!(len > 0))
+                    continue;
+                const double mean = offset + sheared_sample(&sh, sh.C, Pq, Qq) / len;
+                /* the transfer-function table of the ray caster's projections */
+                double xi = (mean - lut_lo) * lut_scale;
+                xi = xi < 0 ? 0 : xi > FR_LUT - 1 ? FR_LUT - 1 : xi;
+                const float *e = lut + 4 * (int)xi;
+                const float a = e[0];
+                const float cv[3] = {e[1] * a, e[2] * a, e[3] * a};
+                for (int ch = 0; ch < 3; ch++)
+                    P[3 * i + ch] = cv[ch] > P[3 * i + ch] ? cv[ch] : P[3 * i + ch];
+                PA[i] = a > PA[i] ? a : PA[i];
+                dep[i] = (float)t0 < dep[i] ? (float)t0 : dep[i];
+            }
+        free(sh.C);
+    }
+    {
+        const float bg[3] = {(float)w->background.x, (float)w->background.y,
+                             (float)w->background.z};
+        for (size_t i = 0; i < npix; i++) {
+            for (int ch = 0; ch < 3; ch++)
+                out->rgba[4 * i + ch] = P[3 * i + ch] + (1 - PA[i]) * bg[ch];
+            out->rgba[4 * i + 3] = PA[i];
+            out->depth[i] = dep[i];
+        }
+    }
+done:
+    free(P);
+    free(PA);
+    free(dep);
+    free(lut);
+    return s;
+}
+
+const vv_renderer_ops vv_fourier_ops = {
+    "fourier",
+    "compression-domain X-ray projection by the Fourier projection-slice theorem (parallel views)",
+    fr_create,
+    fr_set_option,
+    fr_render,
+    fr_destroy};
