@@ -6,8 +6,9 @@
  * thick polygon, revolution, helix sweep, transforms); CSG identities;
  * closed and open meshes; bad input.
  *
- * Measures (measure_volume_k) are computed from the closed-form filter
- * integrals, independently of the library's tables.
+ * Measures: measure_volume_k from the closed-form filter integrals,
+ * independently of the library's tables, and Marching Cubes
+ * (vv_measure_isosurface at the 0.5 level).
  */
 #include "testutil.h"
 
@@ -103,6 +104,18 @@ measure_volume(const vv_volume *v) {
     return measure_volume_k(v, VV_FILTER_TENT, 1.5);
 }
 
+/* The 0.5-level volume and area by Marching Cubes (vv_measure_isosurface,
+ * the surface-extraction component: an independent measure). */
+static measure
+measure_mc(const vv_volume *v) {
+    vv_isosurface_measure_options mo;
+    vv_isosurface_measure_options_init(&mo);
+    vv_isosurface_measure r;
+    double iso = v->type == VV_U8 ? 127.5 : 0.5;
+    vt_ok(vv_measure_isosurface(&r, v, iso, &mo));
+    return (measure){r.volume, r.area};
+}
+
 static void
 opts_f32(vv_voxelize_options *o, vv_filter_kind k, double R) {
     vv_voxelize_options_init(o);
@@ -187,6 +200,18 @@ test_sphere_radii(void **state) {
         check_rel(what, m.volume, 4.0 / 3 * VT_PI * r * r * r, 0.01);
         snprintf(what, sizeof what, "sphere r=%g area", r);
         check_rel(what, m.area, 4 * VT_PI * r * r, 0.02);
+        measure mc = measure_mc(v);
+        print_message("sphere r=%g: volume %+.3f %%, area %+.3f %%; Marching Cubes volume "
+                      "%+.3f %%, area %+.3f %%\n",
+                      r, 100 * (m.volume / (4.0 / 3 * VT_PI * r * r * r) - 1),
+                      100 * (m.area / (4 * VT_PI * r * r) - 1),
+                      100 * (mc.volume / (4.0 / 3 * VT_PI * r * r * r) - 1),
+                      100 * (mc.area / (4 * VT_PI * r * r) - 1));
+        snprintf(what, sizeof what, "sphere r=%g Marching Cubes volume", r);
+        if (r >= 10) /* below, the chords of Marching Cubes cut off over 1 % */
+            check_rel(what, mc.volume, 4.0 / 3 * VT_PI * r * r * r, 0.01);
+        snprintf(what, sizeof what, "sphere r=%g Marching Cubes area", r);
+        check_rel(what, mc.area, 4 * VT_PI * r * r, 0.02);
         vv_volume_free(v);
         vv_shape_free(s);
     }
@@ -228,6 +253,11 @@ check_shape(vv_shape *s, double want_vol, double want_area, double h, const char
     if (want_area > 0) {
         snprintf(w, sizeof w, "%s area", what);
         check_rel(w, m.area, want_area, 0.02);
+        measure mc = measure_mc(v);
+        snprintf(w, sizeof w, "%s Marching Cubes volume", what);
+        check_rel(w, mc.volume, want_vol, 0.01);
+        snprintf(w, sizeof w, "%s Marching Cubes area", what);
+        check_rel(w, mc.area, want_area, 0.02);
     }
     vv_volume_free(v);
     vv_shape_free(s);
