@@ -398,8 +398,10 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
     L.n = mesh->n_triangles;
     L.nv = nv;
     double *V = L.V;
-    for (size_t i = 0; i < nv; i++) {
-        vv_vec3 p = vv_mat4_mul_point(to_world, vv_mesh_vertex(mesh, i));
+    long long nvl = (long long)nv;
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (long long i = 0; i < nvl; i++) {
+        vv_vec3 p = vv_mat4_mul_point(to_world, vv_mesh_vertex(mesh, (size_t)i));
         V[3 * i] = (p.x - origin[0]) / spacing[0];
         V[3 * i + 1] = (p.y - origin[1]) / spacing[1];
         V[3 * i + 2] = (p.z - origin[2]) / spacing[2];
