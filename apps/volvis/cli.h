@@ -145,6 +145,8 @@ typedef struct cli_progress {
     int draw;      /**< 1 when a bar is drawn (stderr is a terminal and not quiet) */
     int last_pct;  /**< last percentage drawn, -1 at the start */
     int drawn;     /**< 1 once something was drawn */
+    double start;  /**< cli_now() at cli_progress_begin, for the time-left estimate */
+    int last_left; /**< seconds left last drawn, -1 none */
     vv_progress p; /**< pass this to the library */
 } cli_progress;
 

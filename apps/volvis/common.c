@@ -146,15 +146,24 @@ progress_cb(void *user, double fraction) {
         if (fraction > 1)
             fraction = 1;
         int pct = (int)(fraction * 100.0 + 1e-9);
-        if (pct != pr->last_pct) {
+        /* time left from the rate so far, once a second has passed */
+        const double elapsed = cli_now() - pr->start;
+        int left = -1;
+        if (elapsed >= 1.0 && fraction > 0.01 && fraction < 1)
+            left = (int)(elapsed * (1 - fraction) / fraction + 0.5);
+        if (pct != pr->last_pct || left != pr->last_left) {
             char bar[BAR_WIDTH + 1];
             int fill = (int)(fraction * BAR_WIDTH + 1e-9);
             for (int i = 0; i < BAR_WIDTH; i++)
                 bar[i] = i < fill ? '#' : ' ';
             bar[BAR_WIDTH] = '\0';
-            fprintf(stderr, "\r[%s] %3d%%", bar, pct);
+            if (left >= 0)
+                fprintf(stderr, "\r[%s] %3d%%  ~%d s left   ", bar, pct, left);
+            else
+                fprintf(stderr, "\r[%s] %3d%%", bar, pct);
             fflush(stderr);
             pr->last_pct = pct;
+            pr->last_left = left;
             pr->drawn = 1;
         }
     }
@@ -165,6 +174,8 @@ void
 cli_progress_begin(cli_progress *pr, int quiet) {
     pr->draw = !quiet && isatty(STDERR_FILENO);
     pr->last_pct = -1;
+    pr->last_left = -1;
+    pr->start = cli_now();
     pr->drawn = 0;
     pr->p.fn = progress_cb;
     pr->p.user = pr;
@@ -179,7 +190,7 @@ cli_progress_begin(cli_progress *pr, int quiet) {
 void
 cli_progress_end(cli_progress *pr) {
     if (pr->drawn) {
-        fprintf(stderr, "\r%*s\r", BAR_WIDTH + 8, "");
+        fprintf(stderr, "\r%*s\r", BAR_WIDTH + 28, "");
         fflush(stderr);
     }
     pr->drawn = 0;

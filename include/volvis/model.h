@@ -376,8 +376,10 @@ vv_status vv_scene_load_progress(vv_world **out, const char *path, const vv_prog
 
 /**
  * Writes a World as a scene file, atomically. Volumes are referred to by
- * @p volume_files[i] for object i (relative to the scene file; may be NULL
- * when there are no objects). Every field is written (the volume's current
+ * @p volume_files[i] for object i (relative to the scene file); a mesh
+ * object by volume_files[i] when given, else by its geometry.source; the
+ * entries of other geometric objects are not read, and @p volume_files may
+ * be NULL when there are no volume objects. Every field is written (the volume's current
  * origin and spacing too), so vv_scene_load of the file reproduces the
  * World; the TF of a threshold-segmented object is not kept. Errors:
  * VV_ERR_IO, VV_ERR_INVALID.

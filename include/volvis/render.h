@@ -25,7 +25,8 @@ extern "C" {
 /** Options of one render call. */
 typedef struct vv_render_options {
     int threads;          /**< <= 0: vv_threads_get() */
-    int quality;          /**< 0 draft .. 2 final; methods may ignore it */
+    int quality;          /**< 0 draft .. 2 final; methods may ignore it (raytrace: 0 no
+                               shadow or secondary rays, 1 one ray a pixel, 2 supersampled) */
     vv_progress progress; /**< reports the fraction of image tiles done; may cancel */
 } vv_render_options;
 
@@ -57,7 +58,9 @@ void vv_renderer_free(vv_renderer *r);
 const char *vv_renderer_name(const vv_renderer *r);
 /**
  * Sets a method-specific option from text (for raycast: early_termination,
- * gradient_budget_mb, empty_space_skipping, simd; docs/rendering.md).
+ * gradient_budget_mb, empty_space_skipping, simd; for raytrace: shadows,
+ * max_depth, samples, jitter, seed, adaptive, adaptive_threshold, parc,
+ * shadow_grid, early_termination; docs/rendering.md).
  * Errors: VV_ERR_INVALID for an unknown key or a bad value, with a message.
  */
 vv_status vv_renderer_set_option(vv_renderer *r, const char *key, const char *value);

@@ -13,6 +13,7 @@
 #include "mesh.h"
 #include "model.h"
 #include "modeling.h"
+#include "raster.h"
 #include "render.h"
 #include "measure.h"
 #include "surface.h"

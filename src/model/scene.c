@@ -790,10 +790,36 @@ parse_tf(const sctx *c, json_t *tfj, const char *tp, vv_object *o) {
     return VV_OK;
 }
 
+/* The global-illumination terms of a material (volumetric ray tracing). */
+static vv_status
+parse_material_global(const sctx *c, json_t *m, const char *mp, vv_material *mat) {
+    vv_status st;
+    if ((st = get_number_in(c, m, mp, "reflectance", &mat->reflectance, NULL, 0, 0, 1, 0)) !=
+            VV_OK ||
+        (st = get_number_in(c, m, mp, "transparency", &mat->transparency, NULL, 0, 0, 1, 0)) !=
+            VV_OK ||
+        (st = get_number_in(c, m, mp, "ior", &mat->ior, NULL, 0, 1, INFINITY, 1)) != VV_OK)
+        return st;
+    return VV_OK;
+}
+
+/* The per-object shading-effect flags (every object type). */
+static vv_status
+parse_effect_flags(const sctx *c, json_t *e, const char *op, vv_object *o) {
+    vv_status st;
+    if ((st = get_bool(c, e, op, "casts_shadows", &o->casts_shadows)) != VV_OK ||
+        (st = get_bool(c, e, op, "receives_shadows", &o->receives_shadows)) != VV_OK ||
+        (st = get_bool(c, e, op, "visible_in_reflections", &o->visible_in_reflections)) != VV_OK ||
+        (st = get_bool(c, e, op, "reflects", &o->reflects)) != VV_OK)
+        return st;
+    return VV_OK;
+}
+
 static vv_status
 parse_material(const sctx *c, json_t *m, const char *mp, vv_material *mat) {
-    static const char *const keys[] = {"ambient",   "diffuse", "specular",
-                                       "shininess", "color",   NULL};
+    static const char *const keys[] = {"ambient",      "diffuse", "specular",
+                                       "shininess",    "color",   "reflectance",
+                                       "transparency", "ior",     NULL};
     vv_status st = check_keys(c, m, mp, keys);
     if (st != VV_OK)
         return st;
@@ -807,7 +833,7 @@ parse_material(const sctx *c, json_t *m, const char *mp, vv_material *mat) {
             VV_OK ||
         (st = get_color(c, m, mp, "color", &mat->color, NULL)) != VV_OK)
         return st;
-    return VV_OK;
+    return parse_material_global(c, m, mp, mat);
 }
 
 static const char *const mode_names[] = {"composite", "mip", "minip", "xray", "iso"};
@@ -923,7 +949,7 @@ parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
         path_key(kp, op, "transfer_function");
         if ((st = parse_tf(c, tfj, kp, o)) != VV_OK)
             return st;
-    } else {
+    } else if (o->volume) {
         /* the default TF depends on the mode, known only now */
         double iso_lo;
         vv_model_default_tf(o->volume, o->mode, &o->tf, &iso_lo);
@@ -961,6 +987,180 @@ name_from_file(char dst[VV_NAME_MAX], const char *file) {
         *dot = '\0';
 }
 
+/* ---- geometric objects (volumetric ray tracing) ---------------------------- */
+
+/* VV_OBJECT_VOLUME for "volume" and for names that are not geometric types. */
+static vv_object_type
+geometry_type(const char *name) {
+    static const vv_object_type types[] = {VV_OBJECT_PLANE, VV_OBJECT_POLYGON,  VV_OBJECT_SPHERE,
+                                           VV_OBJECT_BOX,   VV_OBJECT_CYLINDER, VV_OBJECT_MESH};
+    for (size_t i = 0; i < sizeof types / sizeof types[0]; i++)
+        if (strcmp(name, vv_object_type_name(types[i])) == 0)
+            return types[i];
+    return VV_OBJECT_VOLUME;
+}
+
+/* The shape keys of one geometric type. */
+static vv_status
+parse_shape(const sctx *c, json_t *e, const char *op, vv_object *o) {
+    vv_geometry *g = &o->geometry;
+    vv_status st;
+    char kp[PATH_MAX_LEN];
+    int has_a, has_b;
+    switch (o->type) {
+    case VV_OBJECT_PLANE:
+        if ((st = get_vec3(c, e, op, "point", &g->point, NULL)) != VV_OK ||
+            (st = get_nonzero_vec3(c, e, op, "normal", &g->normal, NULL)) != VV_OK)
+            return st;
+        g->normal = vv_vec3_normalize(g->normal);
+        return VV_OK;
+    case VV_OBJECT_SPHERE:
+        return (st = get_vec3(c, e, op, "center", &g->center, NULL)) != VV_OK
+                   ? st
+                   : get_number_in(c, e, op, "radius", &g->radius, NULL, 0, 1, INFINITY, 1);
+    case VV_OBJECT_BOX: {
+        vv_box b = g->box;
+        if ((st = get_vec3(c, e, op, "min", &b.min, &has_a)) != VV_OK ||
+            (st = get_vec3(c, e, op, "max", &b.max, &has_b)) != VV_OK)
+            return st;
+        if (!(b.min.x < b.max.x && b.min.y < b.max.y && b.min.z < b.max.z)) {
+            path_key(kp, op, "max");
+            return serr(c, kp, "each coordinate must be greater than in \"min\"");
+        }
+        g->box = b;
+        return VV_OK;
+    }
+    case VV_OBJECT_CYLINDER:
+        if ((st = get_vec3(c, e, op, "base", &g->base, NULL)) != VV_OK ||
+            (st = get_vec3(c, e, op, "top", &g->top, NULL)) != VV_OK ||
+            (st = get_number_in(c, e, op, "radius", &g->radius, NULL, 0, 1, INFINITY, 1)) !=
+                VV_OK ||
+            (st = get_bool(c, e, op, "capped", &g->capped)) != VV_OK)
+            return st;
+        if (!(vv_vec3_length(vv_vec3_sub(g->top, g->base)) > 0)) {
+            path_key(kp, op, "top");
+            return serr(c, kp, "the cylinder's top must differ from its base");
+        }
+        return VV_OK;
+    case VV_OBJECT_POLYGON: {
+        json_t *arr;
+        if ((st = get_array(c, e, op, "vertices", &arr)) != VV_OK)
+            return st;
+        if (!arr)
+            return missing(c, op, "vertices", "[[x, y, z], ...], at least 3, in one plane");
+        path_key(kp, op, "vertices");
+        size_t n = json_array_size(arr);
+        if (n < 3 || n > 100000)
+            return serr(c, kp, "expected 3 to 100000 vertices, got %zu", n);
+        vv_vec3 *v = malloc(n * sizeof *v);
+        if (!v)
+            return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
+        for (size_t i = 0; i < n; i++) {
+            char ip[PATH_MAX_LEN];
+            path_index(ip, kp, i);
+            if ((st = value_vec3(c, json_array_get(arr, i), ip, &v[i])) != VV_OK) {
+                free(v);
+                return st;
+            }
+        }
+        vv_error_clear();
+        st = vv_object_set_polygon(o, (int)n, v);
+        free(v);
+        if (st != VV_OK) {
+            int line, col;
+            scene_locate(c, kp, &line, &col);
+            return vv_error_prefix(VV_ERR_FORMAT, "%s:%d:%d: %s", c->path, line, col, kp);
+        }
+        return VV_OK;
+    }
+    case VV_OBJECT_MESH: {
+        const char *file = NULL;
+        if ((st = get_string(c, e, op, "file", &file)) != VV_OK)
+            return st;
+        if (!file)
+            return missing(c, op, "file",
+                           "the mesh file (OBJ, PLY, STL, ...), relative to the "
+                           "scene file");
+        path_key(kp, op, "file");
+        if (!file[0])
+            return serr(c, kp, "empty file name");
+        char *full = vv_path_join_dir(c->path, file);
+        if (!full)
+            return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
+        vv_mesh *m = NULL;
+        st = vv_mesh_load(&m, full);
+        free(full);
+        if (st == VV_OK) {
+            st = vv_object_set_mesh(o, m, file);
+            vv_mesh_free(m);
+        }
+        if (st != VV_OK) {
+            int line, col;
+            scene_locate(c, kp, &line, &col);
+            return vv_error_prefix(st, "%s:%d:%d: %s", c->path, line, col, kp);
+        }
+        return VV_OK;
+    }
+    default:
+        return serr(c, op, "not a geometric object");
+    }
+}
+
+/* A geometric object: its shape (in object coordinates), transform,
+ * material, visibility and shading-effect flags. */
+static vv_status
+parse_geometry_object(const sctx *c, json_t *e, const char *op, vv_world *w) {
+    static const char *const common[] = {"name",
+                                         "type",
+                                         "visible",
+                                         "position",
+                                         "rotation",
+                                         "orientation",
+                                         "scale",
+                                         "material",
+                                         "reflects",
+                                         "casts_shadows",
+                                         "receives_shadows",
+                                         "visible_in_reflections"};
+    static const char *const shape_keys[][5] = {
+        [VV_OBJECT_PLANE] = {"point", "normal", NULL},
+        [VV_OBJECT_POLYGON] = {"vertices", NULL},
+        [VV_OBJECT_SPHERE] = {"center", "radius", NULL},
+        [VV_OBJECT_BOX] = {"min", "max", NULL},
+        [VV_OBJECT_CYLINDER] = {"base", "top", "radius", "capped", NULL},
+        [VV_OBJECT_MESH] = {"file", NULL},
+    };
+    const vv_object_type type = geometry_type(json_string_value(json_object_get(e, "type")));
+    const char *keys[sizeof common / sizeof common[0] + 6];
+    size_t nk = 0;
+    for (size_t i = 0; i < sizeof common / sizeof common[0]; i++)
+        keys[nk++] = common[i];
+    for (size_t i = 0; shape_keys[type][i]; i++)
+        keys[nk++] = shape_keys[type][i];
+    keys[nk] = NULL;
+    vv_status st = check_keys(c, e, op, keys);
+    if (st != VV_OK)
+        return st;
+    const char *name = NULL;
+    char kp[PATH_MAX_LEN];
+    if ((st = get_string(c, e, op, "name", &name)) != VV_OK)
+        return st;
+    if (name && strlen(name) >= VV_NAME_MAX) {
+        path_key(kp, op, "name");
+        return serr(c, kp, "longer than %d bytes", VV_NAME_MAX - 1);
+    }
+    vv_object *o = NULL;
+    if ((st = vv_object_new_geometry(&o, type, name)) != VV_OK)
+        return vv_error_prefix(st, "%s: %s", c->path, op);
+    if ((st = parse_shape(c, e, op, o)) != VV_OK ||
+        (st = parse_object_fields(c, e, op, o)) != VV_OK ||
+        (st = parse_effect_flags(c, e, op, o)) != VV_OK) {
+        vv_object_free(o);
+        return st;
+    }
+    return vv_world_add_object(w, o);
+}
+
 /* ---- geometry objects (issue 3, Modeling) ---------------------------------
  * A "geometry" object holds a primitive or a CSG tree, read by the Modeling
  * component (src/modeling/shape_json.c) and volume-sampled here at load, so
@@ -975,13 +1175,35 @@ geometry_err(const sctx *c, vv_status st, const char *path) {
 }
 
 static vv_status
-parse_geometry_object(const sctx *c, json_t *e, const char *op, vv_world *w) {
-    static const char *const keys[] = {
-        "name",          "type",     "primitive",     "csg",     "resolution",
-        "voxel_spacing", "filter",   "filter_radius", "margin",  "voxel_type",
-        "mode",          "isovalue", "step",          "shading", "visible",
-        "position",      "rotation", "orientation",   "scale",   "transfer_function",
-        "segmentation",  "material", "cut_planes",    NULL};
+parse_voxelized_geometry(const sctx *c, json_t *e, const char *op, vv_world *w) {
+    static const char *const keys[] = {"name",
+                                       "type",
+                                       "primitive",
+                                       "csg",
+                                       "resolution",
+                                       "voxel_spacing",
+                                       "filter",
+                                       "filter_radius",
+                                       "margin",
+                                       "voxel_type",
+                                       "mode",
+                                       "isovalue",
+                                       "step",
+                                       "shading",
+                                       "visible",
+                                       "position",
+                                       "rotation",
+                                       "orientation",
+                                       "scale",
+                                       "transfer_function",
+                                       "segmentation",
+                                       "material",
+                                       "cut_planes",
+                                       "casts_shadows",
+                                       "receives_shadows",
+                                       "visible_in_reflections",
+                                       "reflects",
+                                       NULL};
     char kp[PATH_MAX_LEN], ep[PATH_MAX_LEN];
     const char *name = NULL;
     vv_status st = check_keys(c, e, op, keys);
@@ -1021,7 +1243,8 @@ parse_geometry_object(const sctx *c, json_t *e, const char *op, vv_world *w) {
     vv_volume_free(vol);
     if (st != VV_OK)
         return vv_error_prefix(st, "%s: %s", c->path, op);
-    if ((st = parse_object_fields(c, e, op, o)) != VV_OK) {
+    if ((st = parse_object_fields(c, e, op, o)) != VV_OK ||
+        (st = parse_effect_flags(c, e, op, o)) != VV_OK) {
         vv_object_free(o);
         return st;
     }
@@ -1036,18 +1259,40 @@ parse_geometry_object(const sctx *c, json_t *e, const char *op, vv_world *w) {
 
 static vv_status
 parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
-    static const char *const keys[] = {
-        "name",         "type",     "file",        "origin",  "spacing",
-        "mode",         "isovalue", "step",        "shading", "visible",
-        "position",     "rotation", "orientation", "scale",   "transfer_function",
-        "segmentation", "material", "cut_planes",  NULL};
+    static const char *const keys[] = {"name",
+                                       "type",
+                                       "file",
+                                       "origin",
+                                       "spacing",
+                                       "mode",
+                                       "isovalue",
+                                       "step",
+                                       "shading",
+                                       "visible",
+                                       "position",
+                                       "rotation",
+                                       "orientation",
+                                       "scale",
+                                       "transfer_function",
+                                       "segmentation",
+                                       "material",
+                                       "cut_planes",
+                                       "casts_shadows",
+                                       "receives_shadows",
+                                       "visible_in_reflections",
+                                       "reflects",
+                                       NULL};
     char op[PATH_MAX_LEN], kp[PATH_MAX_LEN];
     path_index(op, "objects", idx);
+    if (json_is_object(e)) {
+        json_t *tj = json_object_get(e, "type");
+        if (json_is_string(tj) && strcmp(json_string_value(tj), "geometry") == 0)
+            return parse_voxelized_geometry(c, e, op, w);
+        if (json_is_string(tj) && geometry_type(json_string_value(tj)) != VV_OBJECT_VOLUME)
+            return parse_geometry_object(c, e, op, w);
+    }
     if (!json_is_object(e))
         return serr(c, op, "expected an object, got %s", json_kind(e));
-    json_t *tj = json_object_get(e, "type");
-    if (json_is_string(tj) && strcmp(json_string_value(tj), "geometry") == 0)
-        return parse_geometry_object(c, e, op, w);
     vv_status st = check_keys(c, e, op, keys);
     if (st != VV_OK)
         return st;
@@ -1058,7 +1303,10 @@ parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
         return st;
     if (strcmp(type, "volume") != 0) {
         path_key(kp, op, "type");
-        return serr(c, kp, "unsupported object type \"%s\"; expected volume or geometry", type);
+        return serr(c, kp,
+                    "unsupported object type \"%s\"; expected volume, geometry, plane, polygon, "
+                    "sphere, box, cylinder or mesh",
+                    type);
     }
     if (name && strlen(name) >= VV_NAME_MAX) {
         path_key(kp, op, "name");
@@ -1110,6 +1358,8 @@ parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     if (st != VV_OK)
         return vv_error_prefix(st, "%s: %s", c->path, op);
     st = parse_object_fields(c, e, op, o);
+    if (st == VV_OK)
+        st = parse_effect_flags(c, e, op, o);
     if (st != VV_OK) {
         vv_object_free(o);
         return st;
@@ -1274,7 +1524,110 @@ put_cut_planes(FILE *f, const vv_cut_plane *p, int n, const char *indent) {
 }
 
 static void
+put_material_global(FILE *f, const vv_material *m) {
+    fputs(", \"reflectance\": ", f);
+    put_num(f, m->reflectance);
+    fputs(", \"transparency\": ", f);
+    put_num(f, m->transparency);
+    fputs(", \"ior\": ", f);
+    put_num(f, m->ior);
+}
+
+static void
+put_effect_flags(FILE *f, const vv_object *o) {
+    fprintf(f,
+            ",\n      \"casts_shadows\": %s, \"receives_shadows\": %s,"
+            "\n      \"visible_in_reflections\": %s, \"reflects\": %s",
+            o->casts_shadows ? "true" : "false", o->receives_shadows ? "true" : "false",
+            o->visible_in_reflections ? "true" : "false", o->reflects ? "true" : "false");
+}
+
+/* A geometric object; @p file names a mesh's file (else geometry.source). */
+static void
+put_geometry_object(FILE *f, const vv_object *o, const char *file) {
+    const vv_geometry *g = &o->geometry;
+    fputs("    {\n      \"name\": ", f);
+    put_str(f, o->name);
+    fprintf(f, ",\n      \"type\": \"%s\"", vv_object_type_name(o->type));
+    switch (o->type) {
+    case VV_OBJECT_PLANE:
+        fputs(",\n      \"point\": ", f);
+        put_vec3(f, g->point);
+        fputs(", \"normal\": ", f);
+        put_vec3(f, g->normal);
+        break;
+    case VV_OBJECT_POLYGON:
+        fputs(",\n      \"vertices\": [", f);
+        for (int i = 0; i < g->n_vertices; i++) {
+            fputs(i ? ", " : "", f);
+            put_vec3(f, g->vertices[i]);
+        }
+        fputc(']', f);
+        break;
+    case VV_OBJECT_SPHERE:
+        fputs(",\n      \"center\": ", f);
+        put_vec3(f, g->center);
+        fputs(", \"radius\": ", f);
+        put_num(f, g->radius);
+        break;
+    case VV_OBJECT_BOX:
+        fputs(",\n      \"min\": ", f);
+        put_vec3(f, g->box.min);
+        fputs(", \"max\": ", f);
+        put_vec3(f, g->box.max);
+        break;
+    case VV_OBJECT_CYLINDER:
+        fputs(",\n      \"base\": ", f);
+        put_vec3(f, g->base);
+        fputs(", \"top\": ", f);
+        put_vec3(f, g->top);
+        fputs(", \"radius\": ", f);
+        put_num(f, g->radius);
+        fprintf(f, ", \"capped\": %s", g->capped ? "true" : "false");
+        break;
+    case VV_OBJECT_MESH:
+        fputs(",\n      \"file\": ", f);
+        put_str(f, file && file[0] ? file : g->source ? g->source : "");
+        break;
+    default:
+        break;
+    }
+    fputs(",\n      \"position\": ", f);
+    put_vec3(f, o->position);
+    vv_quat q = vv_quat_normalize(o->orientation);
+    fputs(",\n      \"orientation\": [", f);
+    put_num(f, q.w);
+    fputs(", ", f);
+    put_num(f, q.x);
+    fputs(", ", f);
+    put_num(f, q.y);
+    fputs(", ", f);
+    put_num(f, q.z);
+    fputs("],\n      \"scale\": ", f);
+    put_vec3(f, o->scale);
+    fprintf(f, ",\n      \"visible\": %s", o->visible ? "true" : "false");
+    fputs(",\n      \"material\": {\"ambient\": ", f);
+    put_num(f, o->material.ambient);
+    fputs(", \"diffuse\": ", f);
+    put_num(f, o->material.diffuse);
+    fputs(", \"specular\": ", f);
+    put_num(f, o->material.specular);
+    fputs(", \"shininess\": ", f);
+    put_num(f, o->material.shininess);
+    fputs(", \"color\": ", f);
+    put_vec3(f, o->material.color);
+    put_material_global(f, &o->material);
+    fputc('}', f);
+    put_effect_flags(f, o);
+    fputs("\n    }", f);
+}
+
+static void
 put_object(FILE *f, const vv_object *o, const char *file) {
+    if (o->type != VV_OBJECT_VOLUME) {
+        put_geometry_object(f, o, file);
+        return;
+    }
     const vv_volume *v = o->volume;
     fputs("    {\n      \"name\": ", f);
     put_str(f, o->name);
@@ -1340,8 +1693,10 @@ put_object(FILE *f, const vv_object *o, const char *file) {
     put_num(f, o->material.shininess);
     fputs(", \"color\": ", f);
     put_vec3(f, o->material.color);
+    put_material_global(f, &o->material);
     fputs("},\n      \"cut_planes\": ", f);
     put_cut_planes(f, o->cut_planes, o->n_cut_planes, "      ");
+    put_effect_flags(f, o);
     fputs("\n    }", f);
 }
 
@@ -1351,11 +1706,21 @@ check_saveable(const vv_world *w, const char *const *volume_files) {
     if (v->width < 1 || v->width > IMAGE_MAX_SIDE || v->height < 1 || v->height > IMAGE_MAX_SIDE)
         return vv_error_set(VV_ERR_INVALID, "view size %dx%d outside 1..%d", v->width, v->height,
                             IMAGE_MAX_SIDE);
-    if (w->n_objects > 0 && !volume_files)
-        return vv_error_set(VV_ERR_INVALID, "no volume file names given for %d objects",
-                            w->n_objects);
+    int n_files = 0;
     for (int i = 0; i < w->n_objects; i++) {
-        if (!w->objects[i] || !w->objects[i]->volume)
+        const vv_object *o = w->objects[i];
+        if (!o)
+            return vv_error_set(VV_ERR_INVALID, "object %d is NULL", i);
+        if (o->type == VV_OBJECT_MESH && !o->geometry.source && !(volume_files && volume_files[i]))
+            return vv_error_set(VV_ERR_INVALID, "object %d: a mesh without a file name", i);
+        n_files += o->type == VV_OBJECT_VOLUME;
+    }
+    if (n_files > 0 && !volume_files)
+        return vv_error_set(VV_ERR_INVALID, "no volume file names given for %d objects", n_files);
+    for (int i = 0; i < w->n_objects; i++) {
+        if (w->objects[i]->type != VV_OBJECT_VOLUME)
+            continue;
+        if (!w->objects[i]->volume)
             return vv_error_set(VV_ERR_INVALID, "object %d has no volume", i);
         if (!volume_files[i] || !volume_files[i][0])
             return vv_error_set(VV_ERR_INVALID, "object %d: no volume file name", i);
@@ -1417,7 +1782,7 @@ vv_scene_save(const vv_world *w, const char *path, const char *const *volume_fil
     fputs(",\n  \"objects\": [", f);
     for (int i = 0; i < w->n_objects; i++) {
         fputs(i ? ",\n" : "\n", f);
-        put_object(f, w->objects[i], volume_files[i]);
+        put_object(f, w->objects[i], volume_files ? volume_files[i] : NULL);
     }
     fputs(w->n_objects ? "\n  ]\n}\n" : "]\n}\n", f);
     if (ferror(f)) {

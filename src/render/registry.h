@@ -6,6 +6,11 @@
 
 /** Direct volume ray casting (src/render/raycast). */
 extern const vv_renderer_ops vv_raycast_ops;
+/** Volumetric ray tracing with global effects (src/render/raytrace). */
+extern const vv_renderer_ops vv_raytrace_ops;
+
+/** Geometry rendering of isosurfaces and geometric objects (src/render/raster). */
+extern const vv_renderer_ops vv_surface_ops;
 
 /** Compression-domain Fourier projection (src/render/fourier). */
 extern const vv_renderer_ops vv_fourier_ops;

@@ -389,13 +389,192 @@ test_errors(void **state) {
     vt_err(vv_scene_load(NULL, path));
 }
 
+/* ---- geometric objects, global-illumination material terms, effect flags ---- */
+
+static const char *geometry_scene =
+    "{\n"
+    "  \"objects\": [\n"
+    "    {\"type\": \"volume\", \"file\": \"ct_head.nrrd\", \"casts_shadows\": false,\n"
+    "     \"receives_shadows\": false, \"visible_in_reflections\": false, \"reflects\": false,\n"
+    "     \"material\": {\"reflectance\": 0.25, \"transparency\": 0.5, \"ior\": 1.33}},\n"
+    "    {\"name\": \"floor\", \"type\": \"plane\", \"point\": [0, 0, -100],\n"
+    "     \"normal\": [0, 0, 2], \"material\": {\"reflectance\": 0.3}},\n"
+    "    {\"type\": \"polygon\", \"vertices\": [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]],\n"
+    "     \"receives_shadows\": false},\n"
+    "    {\"type\": \"sphere\", \"center\": [1, 2, 3], \"radius\": 4.5,\n"
+    "     \"material\": {\"transparency\": 0.9, \"ior\": 1.5, \"color\": [1, 0, 0]}},\n"
+    "    {\"type\": \"box\", \"min\": [-1, -2, -3], \"max\": [1, 2, 3], \"position\": [5, 0, 0],\n"
+    "     \"rotation\": {\"axis\": [0, 0, 1], \"angle\": 30}, \"scale\": 2},\n"
+    "    {\"type\": \"cylinder\", \"base\": [0, 0, 0], \"top\": [0, 0, 10], \"radius\": 2,\n"
+    "     \"capped\": false, \"visible\": false},\n"
+    "    {\"name\": \"tet\", \"type\": \"mesh\", \"file\": \"tet.obj\", \"casts_shadows\": false}\n"
+    "  ]\n"
+    "}\n";
+
+static void
+write_tetrahedron(void) {
+    vv_mesh *m = NULL;
+    vt_ok(vv_mesh_new(&m));
+    uint32_t v[4];
+    const double p[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    for (int i = 0; i < 4; i++)
+        vt_ok(vv_mesh_add_vertex(m, vv_vec3_make(p[i][0], p[i][1], p[i][2]), &v[i]));
+    vt_ok(vv_mesh_add_triangle(m, v[0], v[2], v[1]));
+    vt_ok(vv_mesh_add_triangle(m, v[0], v[1], v[3]));
+    vt_ok(vv_mesh_add_triangle(m, v[1], v[2], v[3]));
+    vt_ok(vv_mesh_add_triangle(m, v[2], v[0], v[3]));
+    char path[1200];
+    snprintf(path, sizeof path, "%s/tet.obj", g_dir);
+    vt_ok(vv_mesh_save(m, path));
+    vv_mesh_free(m);
+}
+
+static void
+compare_geometry(const vv_object *p, const vv_object *q) {
+    assert_string_equal(p->name, q->name);
+    assert_int_equal(p->type, q->type);
+    assert_memory_equal(&p->material, &q->material, sizeof p->material);
+    assert_int_equal(p->casts_shadows, q->casts_shadows);
+    assert_int_equal(p->receives_shadows, q->receives_shadows);
+    assert_int_equal(p->visible_in_reflections, q->visible_in_reflections);
+    assert_int_equal(p->reflects, q->reflects);
+    assert_int_equal(p->visible, q->visible);
+    if (p->type == VV_OBJECT_VOLUME)
+        return;
+    assert_near(vv_vec3_length(vv_vec3_sub(p->position, q->position)), 0, 0);
+    assert_near(fabs(vv_quat_mul(p->orientation, vv_quat_conjugate(q->orientation)).w), 1, 1e-12);
+    assert_near(vv_vec3_length(vv_vec3_sub(p->scale, q->scale)), 0, 0);
+    const vv_geometry *a = &p->geometry, *b = &q->geometry;
+    assert_near(vv_vec3_length(vv_vec3_sub(a->center, b->center)), 0, 0);
+    assert_near(a->radius, b->radius, 0);
+    assert_near(vv_vec3_length(vv_vec3_sub(a->point, b->point)), 0, 0);
+    assert_near(vv_vec3_length(vv_vec3_sub(a->normal, b->normal)), 0, 1e-15);
+    assert_near(vv_vec3_length(vv_vec3_sub(a->box.min, b->box.min)), 0, 0);
+    assert_near(vv_vec3_length(vv_vec3_sub(a->box.max, b->box.max)), 0, 0);
+    assert_near(vv_vec3_length(vv_vec3_sub(a->base, b->base)), 0, 0);
+    assert_near(vv_vec3_length(vv_vec3_sub(a->top, b->top)), 0, 0);
+    assert_int_equal(a->capped, b->capped);
+    assert_int_equal(a->n_vertices, b->n_vertices);
+    for (int i = 0; i < a->n_vertices; i++)
+        assert_near(vv_vec3_length(vv_vec3_sub(a->vertices[i], b->vertices[i])), 0, 0);
+    if (p->type == VV_OBJECT_MESH) {
+        assert_int_equal(a->mesh->n_triangles, b->mesh->n_triangles);
+        assert_int_equal(a->mesh->n_vertices, b->mesh->n_vertices);
+    }
+}
+
+static void
+test_geometry_objects(void **state) {
+    (void)state;
+    write_tetrahedron();
+    vv_world *a = NULL, *b = NULL;
+    vt_ok(vv_scene_load(&a, write_scene("geometry.json", geometry_scene)));
+    assert_int_equal(a->n_objects, 7);
+    const vv_object *v = a->objects[0];
+    assert_int_equal(v->type, VV_OBJECT_VOLUME);
+    assert_false(v->casts_shadows || v->receives_shadows || v->visible_in_reflections ||
+                 v->reflects);
+    assert_near(v->material.reflectance, 0.25, 0);
+    assert_near(v->material.transparency, 0.5, 0);
+    assert_near(v->material.ior, 1.33, 0);
+    const vv_object *pl = a->objects[1];
+    assert_int_equal(pl->type, VV_OBJECT_PLANE);
+    assert_string_equal(pl->name, "floor");
+    assert_near(pl->geometry.normal.z, 1, 1e-15); /* normalised */
+    assert_near(pl->geometry.point.z, -100, 0);
+    assert_near(pl->material.reflectance, 0.3, 0);
+    assert_near(pl->material.ior, 1, 0); /* defaults kept */
+    assert_true(pl->casts_shadows && pl->receives_shadows && pl->reflects);
+    const vv_object *po = a->objects[2];
+    assert_int_equal(po->type, VV_OBJECT_POLYGON);
+    assert_int_equal(po->geometry.n_vertices, 4);
+    assert_false(po->receives_shadows);
+    const vv_object *sp = a->objects[3];
+    assert_int_equal(sp->type, VV_OBJECT_SPHERE);
+    assert_near(sp->geometry.radius, 4.5, 0);
+    assert_near(sp->geometry.center.y, 2, 0);
+    assert_near(sp->material.ior, 1.5, 0);
+    const vv_object *bx = a->objects[4];
+    assert_int_equal(bx->type, VV_OBJECT_BOX);
+    assert_near(bx->geometry.box.max.z, 3, 0);
+    assert_near(bx->scale.x, 2, 0);
+    const vv_object *cy = a->objects[5];
+    assert_int_equal(cy->type, VV_OBJECT_CYLINDER);
+    assert_false(cy->geometry.capped);
+    assert_false(cy->visible);
+    const vv_object *me = a->objects[6];
+    assert_int_equal(me->type, VV_OBJECT_MESH);
+    assert_int_equal(me->geometry.mesh->n_triangles, 4);
+    assert_string_equal(me->geometry.source, "tet.obj");
+    /* round trip: volume files named, the mesh by its source */
+    const char *files[7] = {"ct_head.nrrd", NULL, NULL, NULL, NULL, NULL, NULL};
+    char out[1200];
+    snprintf(out, sizeof out, "%s/geometry_out.json", g_dir);
+    vt_ok(vv_scene_save(a, out, files));
+    vt_ok(vv_scene_load(&b, out));
+    assert_int_equal(b->n_objects, 7);
+    for (int i = 0; i < 7; i++)
+        compare_geometry(a->objects[i], b->objects[i]);
+    vv_world_free(b);
+    /* a world of geometry only needs no file names */
+    vv_world *g = NULL;
+    vt_ok(vv_world_new(&g));
+    vv_object *o = NULL;
+    vt_ok(vv_object_new_geometry(&o, VV_OBJECT_SPHERE, "ball"));
+    o->material.reflectance = 0.5;
+    o->reflects = 0;
+    vt_ok(vv_world_add_object(g, o));
+    vt_ok(vv_scene_save(g, out, NULL));
+    vt_ok(vv_scene_load(&b, out));
+    compare_geometry(g->objects[0], b->objects[0]);
+    vv_world_free(b);
+    /* a mesh without a source file cannot be saved */
+    vv_mesh *m = NULL;
+    vt_ok(vv_mesh_new(&m));
+    uint32_t i0, i1, i2;
+    vt_ok(vv_mesh_add_vertex(m, vv_vec3_make(0, 0, 0), &i0));
+    vt_ok(vv_mesh_add_vertex(m, vv_vec3_make(1, 0, 0), &i1));
+    vt_ok(vv_mesh_add_vertex(m, vv_vec3_make(0, 1, 0), &i2));
+    vt_ok(vv_mesh_add_triangle(m, i0, i1, i2));
+    vt_ok(vv_object_new_geometry(&o, VV_OBJECT_MESH, NULL));
+    vt_ok(vv_object_set_mesh(o, m, NULL));
+    vv_mesh_free(m);
+    vt_ok(vv_world_add_object(g, o));
+    vt_err(vv_scene_save(g, out, NULL));
+    vv_world_free(g);
+    vv_world_free(a);
+
+    /* errors name the position and the key */
+    expect_error("geo_type.json", "{\"objects\": [\n  {\"type\": \"cone\"}]}", 2, 4,
+                 "unsupported object type \"cone\"");
+    expect_error("geo_key.json",
+                 "{\"objects\": [\n  {\"type\": \"sphere\", \"normal\": [0, 0, 1]}]}", 2, 22,
+                 "normal: unknown key");
+    expect_error("geo_mat.json",
+                 "{\"objects\": [\n  {\"type\": \"box\", \"material\": {\"shine\": 3}}]}", 2, 32,
+                 "shine");
+    expect_error("geo_refl.json",
+                 "{\"objects\": [\n  {\"type\": \"box\", \"material\": {\"transparency\": -1}}]}",
+                 2, 32, "transparency");
+    expect_error("geo_flag.json",
+                 "{\"objects\": [\n  {\"type\": \"plane\", \"reflects\": \"yes\"}]}", 2, 21,
+                 "expected true or false");
+    expect_error(
+        "geo_poly.json",
+        "{\"objects\": [\n  {\"type\": \"polygon\", \"vertices\": [[0,0,0],[1,0,0],[0,1,0],"
+        "[0,0,1]]}]}",
+        2, 23, "vertices");
+    expect_error("geo_mesh.json",
+                 "{\"objects\": [\n  {\"type\": \"mesh\", \"file\": \"none.ply\"}]}", 2, 20,
+                 "none.ply");
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_example),
-        cmocka_unit_test(test_every_key),
-        cmocka_unit_test(test_round_trip),
-        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_example),          cmocka_unit_test(test_every_key),
+        cmocka_unit_test(test_round_trip),       cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_geometry_objects),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }

@@ -1,0 +1,256 @@
+/*
+ * bench_raster: the geometry renderer (`surface`) on the Marching Cubes
+ * isosurface of a volume, in the shared benchmark view of
+ * ../shared/BENCHMARKS.md (512^2, perspective fov 20 deg, eye at
+ * scale * 11 * normalize(1, -1.6, 1) around the centred volume, Phong ka 0.1
+ * kd 0.6 ks 0.3 n 30, white, one headlight), printed as
+ *   anchor=volvis op=<op> dataset=<file> value=<number> unit=<unit>
+ *
+ * ops: raster_triangles (the mesh drawn), raster_first_frame (extraction
+ * included), raster_frame (median of --runs frames with the surface
+ * cached: what an interactive viewer pays per frame), raster_frame_cpu (the
+ * median CPU time of those frames, all threads: steadier on a loaded
+ * machine), raster_frame_<shading>
+ * for flat and gouraud, raster_frame_wireframe, raster_tri_rate (triangles
+ * per second of raster_frame) and raster_iso_psnr (the frame against the
+ * ray caster's iso image of the same view, dB).
+ *
+ * usage: bench_raster VOLUME [--iso V] [--size N] [--runs N] [--threads N]
+ *                     [--outdir DIR] [--variants 0|1]
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#include "volvis/volvis.h"
+
+static double
+now(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int
+cmp_double(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+static const char *dataset;
+
+static void
+emit(const char *op, double value, const char *unit) {
+    printf("anchor=volvis op=%s dataset=%s value=%.6g unit=%s\n", op, dataset, value, unit);
+    fflush(stdout);
+}
+
+static void
+die(const char *what) {
+    fprintf(stderr, "bench_raster: %s: %s\n", what, vv_error_message());
+    exit(1);
+}
+
+static double
+cpu_now(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Median wall time of a frame; *cpu (may be NULL) the median CPU time of
+ * the process (all threads), which a loaded machine disturbs less. */
+static double
+median_frame(vv_renderer *r, const vv_world *w, const vv_render_options *opt, vv_image *img,
+             int runs, double *cpu) {
+    double *t = malloc(2 * (size_t)runs * sizeof *t);
+    if (!t)
+        die("memory");
+    for (int i = 0; i < runs; i++) {
+        double t0 = now(), c0 = cpu_now();
+        if (vv_renderer_render(r, w, &w->view, opt, img) != VV_OK)
+            die("render");
+        t[i] = now() - t0;
+        t[runs + i] = cpu_now() - c0;
+    }
+    qsort(t, (size_t)runs, sizeof *t, cmp_double);
+    qsort(t + runs, (size_t)runs, sizeof *t, cmp_double);
+    double m = t[runs / 2];
+    if (cpu)
+        *cpu = t[runs + runs / 2];
+    free(t);
+    return m;
+}
+
+static void
+save(const vv_image *img, const char *outdir, const char *stem, const char *what) {
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s_volvis_%s.png", outdir, stem, what);
+    if (vv_image_write_png(img, path, 1.0, 0) != VV_OK)
+        die("write png");
+    printf("# image %s\n", path);
+}
+
+int
+main(int argc, char **argv) {
+    double iso = NAN;
+    int size = 512, runs = 5, threads = 0, with_variants = 1;
+    const char *outdir = "bench_out", *path = NULL;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (a[0] != '-') {
+            path = a;
+            continue;
+        }
+        if (i + 1 >= argc) {
+            fprintf(stderr, "bench_raster: %s needs a value\n", a);
+            return 2;
+        }
+        const char *val = argv[++i];
+        if (!strcmp(a, "--iso"))
+            iso = atof(val);
+        else if (!strcmp(a, "--size"))
+            size = atoi(val);
+        else if (!strcmp(a, "--runs"))
+            runs = atoi(val);
+        else if (!strcmp(a, "--threads"))
+            threads = atoi(val);
+        else if (!strcmp(a, "--outdir"))
+            outdir = val;
+        else if (!strcmp(a, "--variants"))
+            with_variants = atoi(val);
+        else {
+            fprintf(stderr, "bench_raster: unknown option %s\n", a);
+            return 2;
+        }
+    }
+    if (!path || size < 1 || runs < 1) {
+        fprintf(stderr, "usage: bench_raster VOLUME [--iso V] [--size N] [--runs N] "
+                        "[--threads N] [--outdir DIR] [--variants 0|1]\n");
+        return 2;
+    }
+    dataset = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
+    mkdir(outdir, 0755);
+    if (threads > 0)
+        vv_threads_set(threads);
+    vv_volume *vol;
+    if (vv_volume_load(&vol, path, NULL) != VV_OK)
+        die(path);
+    if (isnan(iso))
+        iso = 0.5 * (vol->range[0] + vol->range[1]);
+    /* centred, identity direction: the peers' placement */
+    for (int a = 0; a < 3; a++)
+        vol->origin[a] = -(vol->dims[a] - 1) * vol->spacing[a] / 2.0;
+    for (int a = 0; a < 9; a++)
+        vol->direction[a] = a % 4 == 0;
+    vol->modified++;
+    char stem[256];
+    snprintf(stem, sizeof stem, "%s", dataset);
+    char *dot = strchr(stem, '.');
+    if (dot)
+        *dot = 0;
+
+    vv_world *w;
+    vv_object *obj;
+    if (vv_world_new(&w) != VV_OK || vv_object_new_volume(&obj, vol, "bench") != VV_OK ||
+        vv_world_add_object(w, obj) != VV_OK)
+        die("world");
+    vv_light head;
+    memset(&head, 0, sizeof head);
+    head.type = VV_LIGHT_DIRECTIONAL;
+    head.headlight = 1;
+    head.color = vv_vec3_make(1, 1, 1);
+    head.intensity = 1;
+    if (vv_world_add_light(w, &head) != VV_OK)
+        die("light");
+    double ext = 0;
+    for (int a = 0; a < 3; a++) {
+        double e = (vol->dims[a] - 1) * vol->spacing[a];
+        ext = e > ext ? e : ext;
+    }
+    vv_vec3 dir = vv_vec3_normalize(vv_vec3_make(1, -1.6, 1));
+    w->view.eye = vv_vec3_scale(dir, ext / 2 * 11);
+    w->view.at = vv_vec3_make(0, 0, 0);
+    w->view.up = vv_vec3_make(0, 0, 1);
+    w->view.fov = vv_deg_to_rad(20);
+    w->view.projection = VV_PROJECTION_PERSPECTIVE;
+    w->view.width = w->view.height = size;
+    w->background = vv_vec3_make(0, 0, 0);
+    w->ambient = vv_vec3_make(1, 1, 1);
+    obj->mode = VV_MODE_ISO;
+    obj->isovalue = iso;
+    obj->step = 0.5;
+    obj->material.ambient = 0.1;
+    obj->material.diffuse = 0.6;
+    obj->material.specular = 0.3;
+    obj->material.shininess = 30;
+    obj->material.color = vv_vec3_make(1, 1, 1);
+    obj->shading = 1;
+
+    vv_render_options opt;
+    vv_render_options_init(&opt);
+    opt.threads = threads;
+    vv_image *img, *ref;
+    if (vv_image_new(&img, size, size) != VV_OK || vv_image_new(&ref, size, size) != VV_OK)
+        die("image");
+
+    /* the mesh alone, for its size */
+    vv_isosurface_options io;
+    vv_isosurface_options_init(&io);
+    io.threads = threads;
+    vv_mesh *mesh;
+    double t0 = now();
+    if (vv_isosurface_extract(&mesh, vol, iso, &io) != VV_OK)
+        die("isosurface");
+    printf("# %s %dx%dx%d, iso %g: %zu triangles, %zu vertices (extracted in %.3f s), %d threads, "
+           "%dx%d\n",
+           dataset, vol->dims[0], vol->dims[1], vol->dims[2], iso, mesh->n_triangles,
+           mesh->n_vertices, now() - t0, vv_threads_get(), size, size);
+    emit("raster_triangles", (double)mesh->n_triangles, "triangles");
+
+    vv_renderer *r;
+    if (vv_renderer_new(&r, "surface") != VV_OK)
+        die("surface renderer");
+    t0 = now();
+    if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK)
+        die("render");
+    emit("raster_first_frame", now() - t0, "s");
+    double cpu = 0;
+    double tf = median_frame(r, w, &opt, img, runs, &cpu);
+    emit("raster_frame", tf, "s");
+    emit("raster_frame_cpu", cpu, "s");
+    emit("raster_tri_rate", (double)mesh->n_triangles / tf, "triangles/s");
+    save(img, outdir, stem, "raster_phong");
+
+    vv_renderer *rc;
+    if (vv_renderer_new(&rc, "raycast") != VV_OK ||
+        vv_renderer_render(rc, w, &w->view, &opt, ref) != VV_OK)
+        die("raycast");
+    emit("raster_iso_psnr", vv_image_psnr(img, ref), "dB");
+    save(ref, outdir, stem, "raster_raycast_iso");
+
+    const char *variants[3][2] = {{"shading", "flat"}, {"shading", "gouraud"}, {"wireframe", "1"}};
+    const char *names[3] = {"raster_frame_flat", "raster_frame_gouraud", "raster_frame_wireframe"};
+    for (int v = 0; v < 3 && with_variants; v++) {
+        vv_renderer *rv;
+        if (vv_renderer_new(&rv, "surface") != VV_OK ||
+            vv_renderer_set_option(rv, variants[v][0], variants[v][1]) != VV_OK ||
+            vv_renderer_render(rv, w, &w->view, &opt, img) != VV_OK)
+            die("render variant");
+        emit(names[v], median_frame(rv, w, &opt, img, runs, NULL), "s");
+        save(img, outdir, stem, names[v] + 7);
+        vv_renderer_free(rv);
+    }
+
+    vv_renderer_free(rc);
+    vv_renderer_free(r);
+    vv_mesh_free(mesh);
+    vv_image_free(img);
+    vv_image_free(ref);
+    vv_world_free(w);
+    vv_volume_free(vol);
+    return 0;
+}

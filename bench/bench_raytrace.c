@@ -1,0 +1,149 @@
+/*
+ * bench_raytrace: volumetric ray tracing of the mirror-and-head scene
+ * (examples/head_mirror.json: the CT head, a mirror in a frame, a
+ * reflective floor, two directional lights) at 512 x 512, one sample per
+ * pixel, shadow rays and one reflection (max_depth 1), printed as
+ *   anchor=volvis op=<op> dataset=<scene> value=<number> unit=<unit>
+ *
+ * ops: raytrace_frame (PARC on), raytrace_frame_noparc, raytrace_rays_per_s
+ * (primary rays, i.e. pixels, per second of raytrace_frame), raycast_frame
+ * (the plain ray caster on the same World and view: it shows the volume
+ * only), and the ratios raytrace_parc_speedup and raytrace_vs_raycast.
+ * Each time is the median of --runs renders after one warm-up render
+ * (caches built).
+ *
+ * usage: bench_raytrace [SCENE] [--size N] [--runs N] [--threads N]
+ *                       [--max-depth N] [--outdir DIR]
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "volvis/volvis.h"
+
+static double
+now(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int
+cmp_double(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+static const char *dataset;
+
+static void
+emit(const char *op, double value, const char *unit) {
+    printf("anchor=volvis op=%s dataset=%s value=%.6g unit=%s\n", op, dataset, value, unit);
+    fflush(stdout);
+}
+
+static void
+die(const char *what) {
+    fprintf(stderr, "bench_raytrace: %s: %s\n", what, vv_error_message());
+    exit(1);
+}
+
+/* Median render time of @p runs renders after a warm-up; keeps the image. */
+static double
+time_renders(vv_renderer *r, const vv_world *w, int quality, int threads, int runs, vv_image *img) {
+    vv_render_options opt;
+    vv_render_options_init(&opt);
+    opt.quality = quality;
+    opt.threads = threads;
+    if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK)
+        die("warm-up render");
+    double t[64];
+    for (int i = 0; i < runs; i++) {
+        double t0 = now();
+        if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK)
+            die("render");
+        t[i] = now() - t0;
+    }
+    qsort(t, (size_t)runs, sizeof t[0], cmp_double);
+    return t[runs / 2];
+}
+
+static void
+save(const vv_image *img, const char *outdir, const char *name) {
+    if (!outdir)
+        return;
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", outdir, name);
+    if (vv_image_write_png(img, path, 1.0, 0) != VV_OK)
+        die(path);
+}
+
+int
+main(int argc, char **argv) {
+    const char *scene = "examples/head_mirror.json", *outdir = NULL, *depth = "1";
+    int size = 512, runs = 3, threads = 2;
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--size") == 0 && i + 1 < argc)
+            size = atoi(argv[++i]);
+        else if (strcmp(argv[i], "--runs") == 0 && i + 1 < argc)
+            runs = atoi(argv[++i]);
+        else if (strcmp(argv[i], "--threads") == 0 && i + 1 < argc)
+            threads = atoi(argv[++i]);
+        else if (strcmp(argv[i], "--max-depth") == 0 && i + 1 < argc)
+            depth = argv[++i];
+        else if (strcmp(argv[i], "--outdir") == 0 && i + 1 < argc)
+            outdir = argv[++i];
+        else if (argv[i][0] != '-')
+            scene = argv[i];
+        else {
+            fprintf(stderr, "usage: bench_raytrace [SCENE] [--size N] [--runs N] [--threads N] "
+                            "[--max-depth N] [--outdir DIR]\n");
+            return 2;
+        }
+    }
+    if (size < 1 || size > 16384 || runs < 1 || runs > 64 || threads < 0) {
+        fprintf(stderr, "bench_raytrace: bad --size, --runs or --threads\n");
+        return 2;
+    }
+    const char *slash = strrchr(scene, '/');
+    dataset = slash ? slash + 1 : scene;
+    vv_world *w = NULL;
+    if (vv_scene_load(&w, scene) != VV_OK)
+        die(scene);
+    w->view.width = w->view.height = size;
+    vv_image *img = NULL;
+    if (vv_image_new(&img, size, size) != VV_OK)
+        die("image");
+
+    vv_renderer *rt = NULL, *rn = NULL, *rc = NULL;
+    if (vv_renderer_new(&rt, "raytrace") != VV_OK || vv_renderer_new(&rn, "raytrace") != VV_OK ||
+        vv_renderer_new(&rc, "raycast") != VV_OK)
+        die("renderer");
+    vv_renderer *both[2] = {rt, rn};
+    for (int i = 0; i < 2; i++)
+        if (vv_renderer_set_option(both[i], "samples", "1") != VV_OK ||
+            vv_renderer_set_option(both[i], "max_depth", depth) != VV_OK ||
+            vv_renderer_set_option(both[i], "parc", i ? "0" : "1") != VV_OK)
+            die("option");
+
+    /* interleaved, so that a slow phase of a shared machine hits both */
+    double t_rt = time_renders(rt, w, 1, threads, runs, img);
+    save(img, outdir, "raytrace.png");
+    double t_rc = time_renders(rc, w, 2, threads, runs, img);
+    save(img, outdir, "raycast.png");
+    double t_rn = time_renders(rn, w, 1, threads, runs, img);
+    save(img, outdir, "raytrace_noparc.png");
+    emit("raytrace_frame", t_rt, "s");
+    emit("raytrace_frame_noparc", t_rn, "s");
+    emit("raytrace_rays_per_s", (double)size * size / t_rt, "rays/s");
+    emit("raycast_frame", t_rc, "s");
+    emit("raytrace_parc_speedup", t_rn / t_rt, "x");
+    emit("raytrace_vs_raycast", t_rt / t_rc, "x");
+    vv_renderer_free(rt);
+    vv_renderer_free(rn);
+    vv_renderer_free(rc);
+    vv_image_free(img);
+    vv_world_free(w);
+    return 0;
+}

@@ -1,0 +1,764 @@
+/*
+ * The `surface` renderer: the geometry-based rendering method of the VolVis
+ * paper (section 5), drawn through the software rasterizer of raster.h.
+ *
+ * Volume objects are shown as their isosurface, extracted with Marching
+ * Cubes (vv_isosurface_extract) and cached until the isovalue or the
+ * volume's `modified` counter changes. Which isovalue: the object's
+ * isovalue in iso mode; its threshold under threshold segmentation; else
+ * (transfer-function modes) the lowest data value at which the opacity
+ * transfer function reaches half of its maximum over the volume's range,
+ * in the transfer function's colour there. Geometric objects (sphere, box,
+ * cylinder, polygon, plane, mesh) are tessellated each frame (a plane as a
+ * large finite square around the point nearest the view target) and drawn
+ * with their object transform and material. Global and local cut planes
+ * clip the triangles. docs/rendering.md describes the options.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "render/registry.h"
+#include "volvis/raster.h"
+#include "volvis/render.h"
+#include "volvis/surface.h"
+
+#define SF_MAX_CACHE 64
+#define SF_TF_SAMPLES 4096
+
+/* One extracted isosurface. */
+typedef struct sf_iso {
+    vv_volume *vol; /* reference held */
+    uint64_t modified;
+    double iso;
+    vv_mesh *mesh;
+    int closed; /* no inside voxel on the volume's faces: the surface is closed */
+    uint64_t last_frame;
+} sf_iso;
+
+/* Topology of a geometric mesh object, remembered by identity. */
+typedef struct sf_topo {
+    const vv_mesh *mesh;
+    size_t nv, nt;
+    int closed;
+    int positive; /* signed volume >= 0 */
+    uint64_t last_frame;
+} sf_topo;
+
+typedef enum sf_cull { SF_CULL_AUTO = 0, SF_CULL_BACK = 1, SF_CULL_NONE = 2 } sf_cull;
+
+typedef struct sf_state {
+    vv_raster *ras;
+    vv_raster_shading shading;
+    int wireframe;
+    sf_cull cull;
+    int segments;
+    int caps;
+    sf_iso cache[SF_MAX_CACHE];
+    int n_cache;
+    sf_topo topo[SF_MAX_CACHE];
+    int n_topo;
+    uint64_t frame;
+} sf_state;
+
+/* ---------------------------------------------------------------------- */
+/* Tessellation of the geometric objects (object coordinates, CCW outside)  */
+
+static vv_status
+add_vertex(vv_mesh *m, vv_vec3 p, vv_vec3 n) {
+    uint32_t i;
+    vv_status s = vv_mesh_add_vertex(m, p, &i);
+    if (s != VV_OK)
+        return s;
+    m->normals[3 * (size_t)i] = (float)n.x;
+    m->normals[3 * (size_t)i + 1] = (float)n.y;
+    m->normals[3 * (size_t)i + 2] = (float)n.z;
+    return VV_OK;
+}
+
+static vv_status
+new_mesh(vv_mesh **out, size_t nv, size_t nt) {
+    vv_status s = vv_mesh_new(out);
+    if (s == VV_OK)
+        s = vv_mesh_enable_attributes(*out, 1, 0);
+    if (s == VV_OK)
+        s = vv_mesh_reserve(*out, nv, nt);
+    if (s != VV_OK) {
+        vv_mesh_free(*out);
+        *out = NULL;
+    }
+    return s;
+}
+
+/* A unit vector perpendicular to @p e, and a second one with p1 x p2 = e. */
+static void
+perpendicular(vv_vec3 e, vv_vec3 *p1, vv_vec3 *p2) {
+    vv_vec3 a = fabs(e.x) < 0.9 ? vv_vec3_make(1, 0, 0) : vv_vec3_make(0, 1, 0);
+    *p1 = vv_vec3_normalize(vv_vec3_cross(a, e));
+    *p2 = vv_vec3_cross(e, *p1);
+}
+
+/* UV sphere: `seg` meridians, seg / 2 parallels bands, one vertex per pole. */
+static vv_status
+tess_sphere(vv_mesh **out, vv_vec3 c, double r, int seg) {
+    const int nlat = seg / 2 < 2 ? 2 : seg / 2;
+    vv_status s = new_mesh(out, (size_t)(nlat - 1) * (size_t)seg + 2, 2 * (size_t)nlat * seg);
+    vv_mesh *m = *out;
+    s = s == VV_OK ? add_vertex(m, vv_vec3_add(c, vv_vec3_make(0, 0, r)), vv_vec3_make(0, 0, 1))
+                   : s;
+    for (int i = 1; i < nlat && s == VV_OK; i++) {
+        const double th = VV_PI * i / nlat;
+        for (int j = 0; j < seg && s == VV_OK; j++) {
+            const double ph = 2 * VV_PI * j / seg;
+            vv_vec3 n = vv_vec3_make(sin(th) * cos(ph), sin(th) * sin(ph), cos(th));
+            s = add_vertex(m, vv_vec3_add(c, vv_vec3_scale(n, r)), n);
+        }
+    }
+    if (s == VV_OK)
+        s = add_vertex(m, vv_vec3_add(c, vv_vec3_make(0, 0, -r)), vv_vec3_make(0, 0, -1));
+    const uint32_t south = (uint32_t)((nlat - 1) * seg + 1);
+    for (int j = 0; j < seg && s == VV_OK; j++) {
+        const uint32_t j1 = (uint32_t)((j + 1) % seg);
+        s = vv_mesh_add_triangle(m, 0, 1 + (uint32_t)j, 1 + j1);
+        for (int i = 1; i + 1 < nlat && s == VV_OK; i++) {
+            const uint32_t a = 1 + (uint32_t)((i - 1) * seg + j),
+                           d = 1 + (uint32_t)((i - 1) * seg) + j1;
+            const uint32_t b = a + (uint32_t)seg, cc = d + (uint32_t)seg;
+            s = vv_mesh_add_triangle(m, a, b, cc);
+            if (s == VV_OK)
+                s = vv_mesh_add_triangle(m, a, cc, d);
+        }
+        if (s == VV_OK) {
+            const uint32_t base = 1 + (uint32_t)((nlat - 2) * seg);
+            s = vv_mesh_add_triangle(m, base + (uint32_t)j, south, base + j1);
+        }
+    }
+    return s;
+}
+
+static vv_status
+tess_box(vv_mesh **out, vv_box b) {
+    vv_status s = new_mesh(out, 24, 12);
+    vv_mesh *m = *out;
+    const double lo[3] = {b.min.x, b.min.y, b.min.z}, hi[3] = {b.max.x, b.max.y, b.max.z};
+    for (int a = 0; a < 3 && s == VV_OK; a++)
+        for (int sign = 0; sign < 2 && s == VV_OK; sign++) {
+            /* e_b x e_c = e_a: (u, v) = (b, c) on the + face, (c, b) on the - face */
+            const int ub = (a + 1) % 3, vc = (a + 2) % 3;
+            const int u = sign ? ub : vc, v = sign ? vc : ub;
+            double n[3] = {0, 0, 0};
+            n[a] = sign ? 1 : -1;
+            const uint32_t first = (uint32_t)m->n_vertices;
+            const int corner[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+            for (int k = 0; k < 4 && s == VV_OK; k++) {
+                double p[3];
+                p[a] = sign ? hi[a] : lo[a];
+                p[u] = corner[k][0] ? hi[u] : lo[u];
+                p[v] = corner[k][1] ? hi[v] : lo[v];
+                s = add_vertex(m, vv_vec3_make(p[0], p[1], p[2]), vv_vec3_make(n[0], n[1], n[2]));
+            }
+            if (s == VV_OK)
+                s = vv_mesh_add_triangle(m, first, first + 1, first + 2);
+            if (s == VV_OK)
+                s = vv_mesh_add_triangle(m, first, first + 2, first + 3);
+        }
+    return s;
+}
+
+static vv_status
+tess_cylinder(vv_mesh **out, vv_vec3 base, vv_vec3 top, double r, int capped, int seg) {
+    vv_vec3 d = vv_vec3_sub(top, base);
+    vv_vec3 e = vv_vec3_normalize(d), p1, p2;
+    perpendicular(e, &p1, &p2);
+    vv_status s = new_mesh(out, 4 * (size_t)seg + 2, 4 * (size_t)seg);
+    vv_mesh *m = *out;
+    /* side: bottom ring, top ring */
+    for (int ring = 0; ring < 2 && s == VV_OK; ring++)
+        for (int j = 0; j < seg && s == VV_OK; j++) {
+            const double ph = 2 * VV_PI * j / seg;
+            vv_vec3 n = vv_vec3_add(vv_vec3_scale(p1, cos(ph)), vv_vec3_scale(p2, sin(ph)));
+            s = add_vertex(m, vv_vec3_add(ring ? top : base, vv_vec3_scale(n, r)), n);
+        }
+    for (int j = 0; j < seg && s == VV_OK; j++) {
+        const uint32_t bl = (uint32_t)j, br = (uint32_t)((j + 1) % seg);
+        s = vv_mesh_add_triangle(m, bl, br, br + (uint32_t)seg);
+        if (s == VV_OK)
+            s = vv_mesh_add_triangle(m, bl, br + (uint32_t)seg, bl + (uint32_t)seg);
+    }
+    if (!capped)
+        return s;
+    for (int cap = 0; cap < 2 && s == VV_OK; cap++) {
+        vv_vec3 n = cap ? e : vv_vec3_scale(e, -1), c = cap ? top : base;
+        const uint32_t centre = (uint32_t)m->n_vertices;
+        s = add_vertex(m, c, n);
+        for (int j = 0; j < seg && s == VV_OK; j++) {
+            const double ph = 2 * VV_PI * j / seg;
+            vv_vec3 q = vv_vec3_add(vv_vec3_scale(p1, cos(ph)), vv_vec3_scale(p2, sin(ph)));
+            s = add_vertex(m, vv_vec3_add(c, vv_vec3_scale(q, r)), n);
+        }
+        for (int j = 0; j < seg && s == VV_OK; j++) {
+            const uint32_t a = centre + 1 + (uint32_t)j, b = centre + 1 + (uint32_t)((j + 1) % seg);
+            s = cap ? vv_mesh_add_triangle(m, centre, a, b) : vv_mesh_add_triangle(m, centre, b, a);
+        }
+    }
+    return s;
+}
+
+/* Polygon by ear clipping in the plane of its Newell normal; triangles keep
+ * the polygon's own winding. */
+static vv_status
+tess_polygon(vv_mesh **out, const vv_vec3 *v, int n) {
+    vv_vec3 nn = {0, 0, 0};
+    for (int i = 0; i < n; i++) {
+        vv_vec3 a = v[i], b = v[(i + 1) % n];
+        nn.x += (a.y - b.y) * (a.z + b.z);
+        nn.y += (a.z - b.z) * (a.x + b.x);
+        nn.z += (a.x - b.x) * (a.y + b.y);
+    }
+    nn = vv_vec3_normalize(nn);
+    vv_vec3 p1, p2;
+    perpendicular(nn, &p1, &p2);
+    vv_status s = new_mesh(out, (size_t)n, (size_t)n);
+    vv_mesh *m = *out;
+    for (int i = 0; i < n && s == VV_OK; i++)
+        s = add_vertex(m, v[i], nn);
+    int *idx = malloc((size_t)n * sizeof *idx);
+    double(*q)[2] = malloc((size_t)n * sizeof *q);
+    if (s == VV_OK && (!idx || !q))
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < n && s == VV_OK; i++) {
+        idx[i] = i;
+        q[i][0] = vv_vec3_dot(v[i], p1);
+        q[i][1] = vv_vec3_dot(v[i], p2);
+    }
+    /* counter-clockwise in (p1, p2) because p1 x p2 = the Newell normal */
+    int k = n;
+    while (k > 3 && s == VV_OK) {
+        int found = -1;
+        for (int i = 0; i < k && found < 0; i++) {
+            const int a = idx[(i + k - 1) % k], b = idx[i], c = idx[(i + 1) % k];
+            const double cr = (q[b][0] - q[a][0]) * (q[c][1] - q[a][1]) -
+                              (q[b][1] - q[a][1]) * (q[c][0] - q[a][0]);
+            if (cr <= 0)
+                continue; /* reflex */
+            int inside = 0;
+            for (int j = 0; j < k && !inside; j++) {
+                const int p = idx[j];
+                if (p == a || p == b || p == c)
+                    continue;
+                const double d1 = (q[b][0] - q[a][0]) * (q[p][1] - q[a][1]) -
+                                  (q[b][1] - q[a][1]) * (q[p][0] - q[a][0]);
+                const double d2 = (q[c][0] - q[b][0]) * (q[p][1] - q[b][1]) -
+                                  (q[c][1] - q[b][1]) * (q[p][0] - q[b][0]);
+                const double d3 = (q[a][0] - q[c][0]) * (q[p][1] - q[c][1]) -
+                                  (q[a][1] - q[c][1]) * (q[p][0] - q[c][0]);
+                inside = d1 >= 0 && d2 >= 0 && d3 >= 0;
+            }
+            if (!inside)
+                found = i;
+        }
+        if (found < 0)
+            found = 0; /* self-intersecting input: clip anyway */
+        const int a = idx[(found + k - 1) % k], b = idx[found], c = idx[(found + 1) % k];
+        s = vv_mesh_add_triangle(m, (uint32_t)a, (uint32_t)b, (uint32_t)c);
+        memmove(idx + found, idx + found + 1, (size_t)(k - found - 1) * sizeof *idx);
+        k--;
+    }
+    if (s == VV_OK)
+        s = vv_mesh_add_triangle(m, (uint32_t)idx[0], (uint32_t)idx[1], (uint32_t)idx[2]);
+    free(idx);
+    free(q);
+    return s;
+}
+
+/* An infinite plane as a 16 x 16 grid of quads, `half` on each side of the
+ * point @p c on it, facing @p n (world coordinates). */
+static vv_status
+tess_plane(vv_mesh **out, vv_vec3 c, vv_vec3 n, double half) {
+    enum { G = 16 };
+    vv_vec3 p1, p2;
+    perpendicular(n, &p1, &p2);
+    vv_status s = new_mesh(out, (G + 1) * (G + 1), 2 * G * G);
+    vv_mesh *m = *out;
+    for (int j = 0; j <= G && s == VV_OK; j++)
+        for (int i = 0; i <= G && s == VV_OK; i++) {
+            const double u = half * (2.0 * i / G - 1), v = half * (2.0 * j / G - 1);
+            s = add_vertex(
+                m, vv_vec3_add(c, vv_vec3_add(vv_vec3_scale(p1, u), vv_vec3_scale(p2, v))), n);
+        }
+    for (int j = 0; j < G && s == VV_OK; j++)
+        for (int i = 0; i < G && s == VV_OK; i++) {
+            const uint32_t a = (uint32_t)(j * (G + 1) + i);
+            s = vv_mesh_add_triangle(m, a, a + 1, a + G + 2);
+            if (s == VV_OK)
+                s = vv_mesh_add_triangle(m, a, a + G + 2, a + G + 1);
+        }
+    return s;
+}
+
+/* ---------------------------------------------------------------------- */
+/* Isosurfaces of volume objects                                            */
+
+static void
+iso_release(sf_iso *c) {
+    vv_volume_free(c->vol);
+    vv_mesh_free(c->mesh);
+    memset(c, 0, sizeof *c);
+}
+
+/* 1 when no voxel on the volume's six faces is inside (>= iso): Marching
+ * Cubes then gives a closed surface. */
+static int
+iso_closed(const vv_volume *v, double iso) {
+    const int nx = v->dims[0], ny = v->dims[1], nz = v->dims[2];
+    for (int k = 0; k < nz; k++)
+        for (int j = 0; j < ny; j++) {
+            const int interior = k > 0 && k < nz - 1 && j > 0 && j < ny - 1;
+            for (int i = 0; i < nx; i += interior && nx > 1 ? nx - 1 : 1)
+                if (vv_volume_get(v, i, j, k) >= iso)
+                    return 0;
+        }
+    return 1;
+}
+
+static vv_status
+iso_get(sf_state *st, vv_volume *vol, double iso, int threads, sf_iso **out) {
+    for (int i = 0; i < st->n_cache; i++) {
+        sf_iso *c = &st->cache[i];
+        if (c->vol == vol && c->iso == iso && c->modified == vol->modified) {
+            c->last_frame = st->frame;
+            *out = c;
+            return VV_OK;
+        }
+    }
+    int slot = st->n_cache;
+    if (slot == SF_MAX_CACHE) {
+        slot = 0;
+        for (int i = 1; i < st->n_cache; i++)
+            if (st->cache[i].last_frame < st->cache[slot].last_frame)
+                slot = i;
+        iso_release(&st->cache[slot]);
+    } else {
+        st->n_cache++;
+    }
+    sf_iso *c = &st->cache[slot];
+    memset(c, 0, sizeof *c);
+    vv_isosurface_options o;
+    vv_isosurface_options_init(&o);
+    o.threads = threads;
+    vv_status s = vv_isosurface_extract(&c->mesh, vol, iso, &o);
+    if (s != VV_OK) {
+        st->cache[slot] = st->cache[--st->n_cache];
+        return s;
+    }
+    c->vol = vv_volume_ref(vol);
+    c->modified = vol->modified;
+    c->iso = iso;
+    c->closed = iso_closed(vol, iso);
+    c->last_frame = st->frame;
+    *out = c;
+    return VV_OK;
+}
+
+/* The isovalue shown for a volume object (see the file comment); 0 when the
+ * transfer function is transparent over the whole range. */
+static int
+object_isovalue(const vv_object *obj, double *iso, vv_vec3 *color) {
+    *color = obj->material.color;
+    if (obj->mode == VV_MODE_ISO) {
+        *iso = obj->isovalue;
+        return 1;
+    }
+    if (obj->segmentation == VV_SEG_THRESHOLD) {
+        *iso = obj->threshold;
+        return 1;
+    }
+    const double lo = obj->volume->range[0], hi = obj->volume->range[1];
+    double amax = 0;
+    for (int i = 0; i < SF_TF_SAMPLES; i++) {
+        double a = vv_tf_eval_opacity(&obj->tf, lo + (hi - lo) * i / (SF_TF_SAMPLES - 1));
+        amax = a > amax ? a : amax;
+    }
+    if (!(amax > 0))
+        return 0;
+    double prev_x = lo, prev_a = vv_tf_eval_opacity(&obj->tf, lo);
+    for (int i = 0; i < SF_TF_SAMPLES; i++) {
+        const double x = lo + (hi - lo) * i / (SF_TF_SAMPLES - 1);
+        const double a = vv_tf_eval_opacity(&obj->tf, x);
+        if (a >= 0.5 * amax) {
+            *iso = i == 0 || a == prev_a
+                       ? x
+                       : prev_x + (x - prev_x) * (0.5 * amax - prev_a) / (a - prev_a);
+            *color = vv_tf_eval_color(&obj->tf, *iso);
+            return 1;
+        }
+        prev_x = x;
+        prev_a = a;
+    }
+    return 0;
+}
+
+/* The faces of a volume object's grid box [0, n - 1] as world half-spaces
+ * keeping the inside (axes of one voxel are left out). */
+static int
+volume_bounds(const vv_object *obj, vv_cut_plane out[6]) {
+    const vv_mat4 M = vv_object_index_to_world(obj);
+    int ok = 0;
+    const vv_mat4 NT = vv_mat4_transpose(vv_mat4_inverse(M, &ok));
+    if (!ok)
+        return 0;
+    int n = 0;
+    for (int a = 0; a < 3; a++) {
+        const int hi = obj->volume->dims[a] - 1;
+        if (hi < 1)
+            continue;
+        vv_vec3 e = vv_vec3_make(a == 0, a == 1, a == 2);
+        vv_vec3 nrm = vv_vec3_normalize(vv_mat4_mul_dir(NT, e));
+        vv_vec3 lo = vv_vec3_make(0, 0, 0), up = vv_vec3_scale(e, hi);
+        out[n].point = vv_mat4_mul_point(M, lo);
+        out[n++].normal = nrm;
+        out[n].point = vv_mat4_mul_point(M, up);
+        out[n++].normal = vv_vec3_scale(nrm, -1);
+    }
+    return n;
+}
+
+/* Topology of a mesh object's mesh, computed once per mesh. */
+static vv_status
+mesh_topo(sf_state *st, const vv_mesh *m, sf_topo **out) {
+    for (int i = 0; i < st->n_topo; i++) {
+        sf_topo *t = &st->topo[i];
+        if (t->mesh == m && t->nv == m->n_vertices && t->nt == m->n_triangles) {
+            t->last_frame = st->frame;
+            *out = t;
+            return VV_OK;
+        }
+    }
+    int slot = st->n_topo;
+    if (slot == SF_MAX_CACHE) {
+        slot = 0;
+        for (int i = 1; i < st->n_topo; i++)
+            if (st->topo[i].last_frame < st->topo[slot].last_frame)
+                slot = i;
+    } else {
+        st->n_topo++;
+    }
+    vv_mesh_topology tp;
+    vv_status s = vv_mesh_topology_compute(m, &tp);
+    if (s != VV_OK) {
+        st->topo[slot] = st->topo[--st->n_topo];
+        return s;
+    }
+    sf_topo *t = &st->topo[slot];
+    t->mesh = m;
+    t->nv = m->n_vertices;
+    t->nt = m->n_triangles;
+    t->closed = tp.closed && tp.oriented;
+    t->positive = vv_mesh_signed_volume(m) >= 0;
+    t->last_frame = st->frame;
+    *out = t;
+    return VV_OK;
+}
+
+/* ---------------------------------------------------------------------- */
+/* The renderer                                                             */
+
+static vv_status
+sf_create(void **state) {
+    sf_state *st = calloc(1, sizeof *st);
+    if (!st)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    st->shading = VV_RASTER_PHONG;
+    st->cull = SF_CULL_AUTO;
+    st->segments = 64;
+    st->caps = 1;
+    *state = st;
+    return VV_OK;
+}
+
+static void
+sf_destroy(void *state) {
+    sf_state *st = state;
+    if (!st)
+        return;
+    for (int i = 0; i < st->n_cache; i++)
+        iso_release(&st->cache[i]);
+    vv_raster_free(st->ras);
+    free(st);
+}
+
+static int
+parse_bool(const char *v, int *out) {
+    if (!strcmp(v, "1") || !strcmp(v, "on") || !strcmp(v, "true") || !strcmp(v, "yes"))
+        *out = 1;
+    else if (!strcmp(v, "0") || !strcmp(v, "off") || !strcmp(v, "false") || !strcmp(v, "no"))
+        *out = 0;
+    else
+        return 0;
+    return 1;
+}
+
+static vv_status
+sf_set_option(void *state, const char *key, const char *value) {
+    sf_state *st = state;
+    if (!strcmp(key, "shading")) {
+        if (!strcmp(value, "flat"))
+            st->shading = VV_RASTER_FLAT;
+        else if (!strcmp(value, "gouraud"))
+            st->shading = VV_RASTER_GOURAUD;
+        else if (!strcmp(value, "phong"))
+            st->shading = VV_RASTER_PHONG;
+        else
+            return vv_error_set(VV_ERR_INVALID,
+                                "option shading: '%s' is not flat, gouraud or phong", value);
+    } else if (!strcmp(key, "wireframe")) {
+        if (!parse_bool(value, &st->wireframe))
+            return vv_error_set(VV_ERR_INVALID, "option wireframe: '%s' is not 0 or 1", value);
+    } else if (!strcmp(key, "cull")) {
+        int b;
+        if (!strcmp(value, "auto"))
+            st->cull = SF_CULL_AUTO;
+        else if (!strcmp(value, "back") || (parse_bool(value, &b) && b))
+            st->cull = SF_CULL_BACK;
+        else if (!strcmp(value, "none") || parse_bool(value, &b))
+            st->cull = SF_CULL_NONE;
+        else
+            return vv_error_set(VV_ERR_INVALID, "option cull: '%s' is not auto, back or none",
+                                value);
+    } else if (!strcmp(key, "caps")) {
+        if (!parse_bool(value, &st->caps))
+            return vv_error_set(VV_ERR_INVALID, "option caps: '%s' is not 0 or 1", value);
+    } else if (!strcmp(key, "segments")) {
+        char *end = NULL;
+        long n = strtol(value, &end, 10);
+        if (!end || *end || end == value || n < 3 || n > 4096)
+            return vv_error_set(VV_ERR_INVALID,
+                                "option segments: '%s' is not an integer in 3..4096", value);
+        st->segments = (int)n;
+    } else {
+        return vv_error_set(VV_ERR_INVALID,
+                            "unknown option '%s' (shading, wireframe, cull, caps, segments)", key);
+    }
+    return VV_OK;
+}
+
+/* The geometric object's triangles in object coordinates (a plane: in world
+ * coordinates, *world set), and whether they enclose a volume. */
+static vv_status
+tessellate(const sf_state *st, const vv_object *obj, const vv_view *view, double scene,
+           vv_mesh **out, int *closed, int *world) {
+    const vv_geometry *g = &obj->geometry;
+    *closed = 0;
+    *world = 0;
+    switch (obj->type) {
+    case VV_OBJECT_SPHERE:
+        *closed = 1;
+        return tess_sphere(out, g->center, g->radius, st->segments);
+    case VV_OBJECT_BOX:
+        *closed = 1;
+        return tess_box(out, g->box);
+    case VV_OBJECT_CYLINDER:
+        *closed = g->capped;
+        return tess_cylinder(out, g->base, g->top, g->radius, g->capped, st->segments);
+    case VV_OBJECT_POLYGON:
+        if (g->n_vertices < 3 || !g->vertices)
+            return vv_error_set(VV_ERR_INVALID, "object '%s': polygon without vertices", obj->name);
+        return tess_polygon(out, g->vertices, g->n_vertices);
+    case VV_OBJECT_PLANE: {
+        vv_mat4 M = vv_object_matrix(obj);
+        int ok = 0;
+        vv_mat4 inv = vv_mat4_inverse(M, &ok);
+        if (!ok)
+            return vv_error_set(VV_ERR_INVALID, "object '%s': singular transform", obj->name);
+        vv_vec3 p = vv_mat4_mul_point(M, g->point);
+        vv_vec3 n = vv_vec3_normalize(vv_mat4_mul_dir(vv_mat4_transpose(inv), g->normal));
+        if (!(vv_vec3_length(n) > 0))
+            return vv_error_set(VV_ERR_INVALID, "object '%s': plane without a normal", obj->name);
+        /* centred on the point of the plane nearest the view target */
+        vv_vec3 c =
+            vv_vec3_sub(view->at, vv_vec3_scale(n, vv_vec3_dot(n, vv_vec3_sub(view->at, p))));
+        *world = 1;
+        return tess_plane(out, c, n, 1000 * scene);
+    }
+    default:
+        return vv_error_set(VV_ERR_INVALID, "object '%s': not a geometric object", obj->name);
+    }
+}
+
+static vv_status
+sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+          vv_image *out) {
+    sf_state *st = state;
+    st->frame++;
+    vv_status s = VV_OK;
+    if (!st->ras || out->width != view->width || out->height != view->height) {
+        vv_raster_free(st->ras);
+        st->ras = NULL;
+        s = vv_raster_new(&st->ras, view->width, view->height);
+        if (s != VV_OK)
+            return s;
+    }
+    vv_raster *ras = st->ras;
+    /* how big the scene is: clip distances and the size of plane squares */
+    vv_box b = vv_world_bounds(w);
+    vv_vec3 centre = vv_vec3_scale(vv_vec3_add(b.min, b.max), 0.5);
+    double radius = 0.5 * vv_vec3_length(vv_vec3_sub(b.max, b.min));
+    double dist = vv_vec3_length(vv_vec3_sub(centre, view->eye));
+    double atd = vv_vec3_length(vv_vec3_sub(view->at, view->eye));
+    double scene = radius > dist ? radius : dist;
+    scene = scene > atd ? scene : atd;
+    if (view->projection == VV_PROJECTION_ORTHOGRAPHIC) {
+        double half = 0.5 * view->ortho_height;
+        scene = scene > half ? scene : half;
+    }
+    if (!(scene > 0) || !isfinite(scene))
+        scene = 1;
+    /* planes are squares 1000 times larger than the scene or their distance
+     * from the eye, which puts their edges near the horizon */
+    for (int i = 0; i < w->n_objects; i++) {
+        const vv_object *obj = w->objects[i];
+        if (!obj->visible || obj->type != VV_OBJECT_PLANE)
+            continue;
+        vv_mat4 M = vv_object_matrix(obj);
+        int ok = 0;
+        vv_mat4 inv = vv_mat4_inverse(M, &ok);
+        vv_vec3 p = vv_mat4_mul_point(M, obj->geometry.point);
+        vv_vec3 n =
+            vv_vec3_normalize(vv_mat4_mul_dir(vv_mat4_transpose(inv), obj->geometry.normal));
+        double dp = fabs(vv_vec3_dot(n, vv_vec3_sub(view->eye, p)));
+        if (ok && isfinite(dp) && dp > scene)
+            scene = dp;
+    }
+    if (view->projection == VV_PROJECTION_ORTHOGRAPHIC)
+        s = vv_raster_set_view(ras, view, 0, 3000 * scene);
+    else
+        s = vv_raster_set_view(ras, view, 1e-5 * scene, INFINITY);
+    if (s != VV_OK)
+        return s;
+    vv_raster_set_threads(ras, opt->threads);
+    vv_raster_begin(ras, w->background);
+    s = vv_raster_set_lights(ras, w->lights, w->n_lights, w->ambient);
+    vv_raster_set_shading(ras, st->shading);
+    vv_raster_set_wireframe(ras, st->wireframe);
+
+    int n_vis = 0;
+    for (int i = 0; i < w->n_objects; i++)
+        n_vis += w->objects[i]->visible;
+    vv_mesh **temp = calloc((size_t)(n_vis ? n_vis : 1), sizeof *temp);
+    int n_temp = 0, done = 0;
+    if (!temp)
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < w->n_objects && s == VV_OK; i++) {
+        const vv_object *obj = w->objects[i];
+        if (!obj->visible)
+            continue;
+        vv_cut_plane planes[2 * VV_MAX_CUT_PLANES];
+        int np = 0;
+        for (int k = 0; k < w->n_cut_planes && k < VV_MAX_CUT_PLANES; k++)
+            planes[np++] = w->cut_planes[k];
+        for (int k = 0; k < obj->n_cut_planes && k < VV_MAX_CUT_PLANES; k++)
+            planes[np++] = obj->cut_planes[k];
+        s = vv_raster_set_cut_planes(ras, planes, np);
+        if (s != VV_OK)
+            break;
+        vv_material mat = obj->material;
+        vv_mat4 model = vv_object_matrix(obj);
+        const vv_mesh *mesh = NULL;
+        int closed = 0, positive = 1, solid = 0;
+        vv_cut_plane bounds[6];
+        int n_bounds = 0;
+        if (obj->type == VV_OBJECT_VOLUME) {
+            if (!obj->volume)
+                continue;
+            double iso;
+            if (!object_isovalue(obj, &iso, &mat.color))
+                continue;
+            sf_iso *c = NULL;
+            s = iso_get(st, obj->volume, iso, opt->threads, &c);
+            if (s != VV_OK) {
+                s = vv_error_prefix(s, "object '%s': isosurface %g", obj->name, iso);
+                break;
+            }
+            mesh = c->mesh;
+            closed = c->closed;
+            /* Marching Cubes leaves the surface open where it leaves the
+             * volume: the volume's faces bound the solid */
+            solid = 1;
+            n_bounds = volume_bounds(obj, bounds);
+        } else if (obj->type == VV_OBJECT_MESH) {
+            if (!obj->geometry.mesh)
+                continue;
+            mesh = obj->geometry.mesh;
+            sf_topo *t = NULL;
+            if (st->cull == SF_CULL_AUTO && np == 0) {
+                s = mesh_topo(st, mesh, &t);
+                if (s != VV_OK)
+                    break;
+                closed = t->closed;
+                positive = t->positive;
+            } else if (np > 0 && st->caps) {
+                s = mesh_topo(st, mesh, &t);
+                if (s != VV_OK)
+                    break;
+                solid = t->closed && t->positive;
+            }
+        } else {
+            int world = 0;
+            s = tessellate(st, obj, view, scene, &temp[n_temp], &closed, &world);
+            if (s != VV_OK) {
+                vv_mesh_free(temp[n_temp]);
+                temp[n_temp] = NULL;
+                break;
+            }
+            mesh = temp[n_temp++];
+            solid = closed;
+            if (world)
+                model = vv_mat4_identity();
+        }
+        vv_raster_cull cull = VV_RASTER_CULL_NONE;
+        if (st->cull == SF_CULL_BACK || (st->cull == SF_CULL_AUTO && closed && np == 0))
+            cull = positive ? VV_RASTER_CULL_BACK : VV_RASTER_CULL_FRONT;
+        vv_raster_set_cull(ras, cull);
+        s = vv_raster_set_capping(ras, st->caps && solid, bounds, n_bounds);
+        if (s != VV_OK)
+            break;
+        vv_raster_set_material(ras, &mat, obj->shading);
+        s = vv_raster_draw_mesh(ras, mesh, model);
+        if (s != VV_OK) {
+            s = vv_error_prefix(s, "object '%s'", obj->name);
+            break;
+        }
+        done++;
+        if (vv_progress_report(&opt->progress, (double)done / (n_vis + 1)))
+            s = vv_error_set(VV_ERR_CANCELLED, "cancelled");
+    }
+    if (s == VV_OK)
+        s = vv_raster_finish(ras, out, 0);
+    if (s == VV_OK && vv_progress_report(&opt->progress, 1.0))
+        s = vv_error_set(VV_ERR_CANCELLED, "cancelled");
+    for (int i = 0; i < n_temp; i++)
+        vv_mesh_free(temp[i]);
+    free(temp);
+    /* forget isosurfaces not shown in this frame */
+    for (int i = 0; i < st->n_cache;) {
+        if (st->cache[i].last_frame != st->frame) {
+            iso_release(&st->cache[i]);
+            st->cache[i] = st->cache[--st->n_cache];
+        } else {
+            i++;
+        }
+    }
+    for (int i = 0; i < st->n_topo;) {
+        if (st->topo[i].last_frame != st->frame)
+            st->topo[i] = st->topo[--st->n_topo];
+        else
+            i++;
+    }
+    return s;
+}
+
+const vv_renderer_ops vv_surface_ops = {
+    "surface", "geometry rendering: Marching Cubes isosurfaces and geometric objects, rasterized",
+    sf_create, sf_set_option,
+    sf_render, sf_destroy,
+};

@@ -1,0 +1,2309 @@
+/*
+ * Volumetric ray tracing (Sobierajski and Kaufman, "Volumetric Ray
+ * Tracing", Symposium on Volume Visualization 1994; the VolVis paper,
+ * section 5): classical ray tracing of scenes that mix volumes and
+ * geometric objects. The intensity arriving along a ray is
+ *
+ *     I(x, w) = I_v(x, x') + tau(x, x') * I_s(x', w)
+ *
+ * with x' the first surface hit (a geometric primitive or the isosurface of
+ * a volume in iso mode), I_s its shading (Phong with shadow rays, plus
+ * reflected and transmitted rays to a depth limit), I_v the volume samples
+ * composited front to back (each shaded with Phong and shadow rays) and tau
+ * what those volumes let through. Volumes in mip, minip or xray mode are
+ * projected over the part of the ray in front of the surface and shown over
+ * it, as the ray caster shows them over the background.
+ *
+ * Volumes follow the conventions of the ray caster (docs/rendering.md) so
+ * that with every global effect off both give the same image: samples at
+ * t = k * dt from the ray origin, the transfer function in a table with
+ * opacity corrected for the step, Phong with the reflection vector, two
+ * sided, the specular term weighted by the sample opacity, and the same cut
+ * planes. Subvolumes of 4^3 cells with min/max values (vv_minmax_grid, the
+ * PARC grid) tell every ray, primary or secondary, where a volume can
+ * contribute under its transfer function or isovalue: samples start and
+ * stop only there.
+ *
+ * Shadow rays from surfaces are traced exactly: transparent geometry
+ * multiplies by its transparency, composite volumes by exp(-sum sigma h)
+ * with sigma the extinction of the transfer function opacity, iso volumes
+ * block where the ray meets the surface, projection volumes by one minus the
+ * opacity of their projected value. A volume sample takes its shadow from a
+ * lazily filled grid of shadow rays (one grid point every 4 voxels, each ray
+ * starting 6 voxels towards the light so that a surface does not shadow
+ * itself), interpolated trilinearly; option shadow_grid=0 traces one exact
+ * shadow ray per sample instead. docs/rendering.md describes the method.
+ */
+#include <math.h>
+#include <omp.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "render/registry.h"
+#include "volvis/render.h"
+
+#define RT_BLOCK 4  /* PARC subvolume side in cells */
+#define RT_LUT 4096 /* transfer-function table entries */
+#define RT_TILE 16  /* image tile side in pixels */
+#define RT_MAX_OBJ 64
+#define RT_MAX_CACHE 64
+#define RT_SPEC 2048                  /* specular table entries */
+#define RT_SGRID 4                    /* shadow grid spacing, voxels */
+#define RT_MIN_WEIGHT (1.0f / 512.0f) /* secondary rays weighing less are not traced */
+#define RT_EPS 1e-6                   /* relative ray offset off surfaces */
+
+/* ---------------------------------------------------------------------- */
+/* Vector helpers, inline (the library's are in another translation unit
+ * and sit on the hot path of every intersection)                            */
+
+static inline vv_vec3
+v3(double x, double y, double z) {
+    vv_vec3 r = {x, y, z};
+    return r;
+}
+static inline vv_vec3
+v3add(vv_vec3 a, vv_vec3 b) {
+    return v3(a.x + b.x, a.y + b.y, a.z + b.z);
+}
+static inline vv_vec3
+v3sub(vv_vec3 a, vv_vec3 b) {
+    return v3(a.x - b.x, a.y - b.y, a.z - b.z);
+}
+static inline vv_vec3
+v3scale(vv_vec3 a, double k) {
+    return v3(a.x * k, a.y * k, a.z * k);
+}
+static inline double
+v3dot(vv_vec3 a, vv_vec3 b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+static inline vv_vec3
+v3cross(vv_vec3 a, vv_vec3 b) {
+    return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+static inline double
+v3len(vv_vec3 a) {
+    return sqrt(v3dot(a, a));
+}
+static inline vv_vec3
+v3norm(vv_vec3 a) {
+    double l = v3len(a);
+    return l > 0 ? v3scale(a, 1.0 / l) : a;
+}
+static inline vv_vec3
+ray_at(const vv_ray *r, double t) {
+    return v3add(r->origin, v3scale(r->dir, t));
+}
+
+/* ---------------------------------------------------------------------- */
+/* Per-volume cache                                                          */
+
+typedef struct rt_cache {
+    vv_volume *vol; /* reference held */
+    uint64_t modified;
+    int nx, ny, nz; /* cached grid (each >= 2; a 1-voxel axis is duplicated) */
+    size_t sy, sz;
+    float *val;       /* values as float */
+    int8_t (*nrm)[4]; /* unit gradients * 127 (index space), or NULL: on the fly */
+    vv_minmax_grid *mm;
+    uint64_t last_used;
+} rt_cache;
+
+typedef struct rt_state {
+    rt_cache cache[RT_MAX_CACHE];
+    int n_cache;
+    uint64_t clock;
+    int parc;         /* PARC skipping on primary and secondary rays */
+    int shadows;      /* shadow rays */
+    int max_depth;    /* reflection / refraction depth */
+    int samples;      /* supersamples per pixel side at quality 2 */
+    int jitter;       /* jittered supersampling */
+    int adaptive;     /* supersample only where neighbours differ */
+    double threshold; /* adaptive: channel difference that triggers supersampling */
+    uint64_t seed;    /* jitter seed */
+    double early_termination;
+    int shadow_grid; /* volume samples: cached shadow rays (1) or exact (0) */
+} rt_state;
+
+typedef struct rt_light {
+    int point;
+    double dir[3]; /* unit vector towards the light (directional) */
+    double pos[3];
+    float col[3]; /* colour * intensity */
+} rt_light;
+
+/* One volume object prepared for this render. */
+typedef struct rt_vobj {
+    const vv_object *obj;
+    rt_cache *c;
+    vv_render_mode mode;
+    double w2i[3][4], i2w[3][4];
+    float nrm[3][3];
+    int dims[3];
+    double vox; /* smallest world length of a voxel step */
+    float lut_lo, lut_scale;
+    float *lut;     /* RT_LUT x {alpha, r*alpha, g*alpha, b*alpha} (projections: alpha, r, g, b) */
+    float *ext;     /* RT_LUT extinction per world unit (composite) */
+    uint8_t *bvis;  /* PARC: the subvolume may contribute */
+    uint8_t *bdist; /* chessboard distance, in subvolumes, to the nearest that may (0: it may) */
+    int bx, by, bz;
+    float iso;
+    float spec[RT_SPEC + 1];
+    float amb[3];
+    float kd_col[VV_MAX_LIGHTS][3];
+    float ks_col[VV_MAX_LIGHTS][3];
+    float base[3];
+    int n_planes;
+    vv_plane planes[2 * VV_MAX_CUT_PLANES];
+    int gdim[3];                            /* shadow grid points per axis */
+    _Atomic uint32_t *sgrid[VV_MAX_LIGHTS]; /* point lights: bits of (T + 1), 0 = not traced */
+    float *sweep[VV_MAX_LIGHTS];            /* directional lights: swept transmittance */
+    float lidx[VV_MAX_LIGHTS][3];           /* index-space direction to the light per world unit */
+} rt_vobj;
+
+/* Bounding volume hierarchy over a mesh's triangles (object space). */
+typedef struct rt_bvh_node {
+    float lo[3], hi[3];
+    int left;       /* child index, or -1 for a leaf */
+    int first, cnt; /* leaf: triangles tri[first .. first + cnt) */
+} rt_bvh_node;
+
+typedef struct rt_bvh {
+    rt_bvh_node *nodes;
+    int n_nodes;
+    uint32_t *tri; /* triangle order */
+} rt_bvh;
+
+/* One geometric object prepared for this render. */
+typedef struct rt_gobj {
+    const vv_object *obj;
+    vv_object_type type;
+    double w2o[3][4]; /* world -> object */
+    double nrm[3][3]; /* object normal -> world normal (M^-T) */
+    vv_plane plane;   /* polygon: its plane (object space); axis dropped for 2-D test */
+    int drop;
+    rt_bvh bvh;
+    vv_box obox; /* object-space bounds (not for planes) */
+    float col[3];
+    float kr, kt; /* reflectance (0 when the object does not reflect), transparency */
+    double ior;
+    int closed; /* refracts (a solid); planes and polygons transmit straight */
+} rt_gobj;
+
+typedef struct rt_frame {
+    rt_state *st;
+    const vv_world *w;
+    rt_vobj *vobjs;
+    int n_vobj;
+    rt_gobj *gobjs;
+    int n_gobj;
+    float dt;
+    float bg[3];
+    float ambient[3];
+    rt_light lights[VV_MAX_LIGHTS];
+    int n_lights;
+    float et;
+    int shadows, max_depth;
+    double scene_size; /* for ray offsets */
+} rt_frame;
+
+/* A surface hit. */
+typedef struct rt_hit {
+    double t;
+    int gobj;  /* index into gobjs */
+    vv_vec3 n; /* world normal (unit, outward for solids) */
+} rt_hit;
+
+/* ---------------------------------------------------------------------- */
+/* Cache                                                                     */
+
+static void
+cache_release(rt_cache *c) {
+    vv_volume_free(c->vol);
+    free(c->val);
+    free(c->nrm);
+    vv_minmax_grid_free(c->mm);
+    memset(c, 0, sizeof *c);
+}
+
+static vv_status
+cache_build(rt_cache *c, vv_volume *vol) {
+    memset(c, 0, sizeof *c);
+    c->nx = vol->dims[0] < 2 ? 2 : vol->dims[0];
+    c->ny = vol->dims[1] < 2 ? 2 : vol->dims[1];
+    c->nz = vol->dims[2] < 2 ? 2 : vol->dims[2];
+    c->sy = (size_t)c->nx;
+    c->sz = (size_t)c->nx * (size_t)c->ny;
+    const size_t n = c->sz * (size_t)c->nz;
+    const int nx = c->nx, ny = c->ny, nz = c->nz;
+    c->val = malloc(n * sizeof *c->val);
+    if (n <= ((size_t)1 << 31))
+        c->nrm = malloc(n * sizeof *c->nrm);
+    if (!c->val) {
+        cache_release(c);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for %zu voxels", n);
+    }
+    vv_status s = vv_minmax_grid_build(&c->mm, vol, RT_BLOCK);
+    if (s != VV_OK) {
+        cache_release(c);
+        return s;
+    }
+#pragma omp parallel for schedule(static)
+    for (int k = 0; k < nz; k++)
+        for (int j = 0; j < ny; j++) {
+            int sj = j < vol->dims[1] ? j : vol->dims[1] - 1;
+            int sk = k < vol->dims[2] ? k : vol->dims[2] - 1;
+            size_t base = (size_t)k * c->sz + (size_t)j * c->sy;
+            for (int i = 0; i < nx; i++) {
+                double x = vv_volume_get(vol, i < vol->dims[0] ? i : vol->dims[0] - 1, sj, sk);
+                c->val[base + (size_t)i] = x == x ? (float)x : (float)vol->range[0];
+            }
+        }
+    if (c->nrm) {
+        /* central differences in index units, one-sided at the borders: the
+         * ray caster's gradients */
+#pragma omp parallel for schedule(static)
+        for (int k = 0; k < nz; k++)
+            for (int j = 0; j < ny; j++) {
+                size_t base = (size_t)k * c->sz + (size_t)j * c->sy;
+                int j0 = j > 0 ? j - 1 : j, j1 = j < ny - 1 ? j + 1 : j;
+                int k0 = k > 0 ? k - 1 : k, k1 = k < nz - 1 ? k + 1 : k;
+                for (int i = 0; i < nx; i++) {
+                    int i0 = i > 0 ? i - 1 : i, i1 = i < nx - 1 ? i + 1 : i;
+                    const float *v = c->val;
+                    float gx = (v[base + (size_t)i1] - v[base + (size_t)i0]) / (float)(i1 - i0);
+                    float gy = (v[(size_t)k * c->sz + (size_t)j1 * c->sy + (size_t)i] -
+                                v[(size_t)k * c->sz + (size_t)j0 * c->sy + (size_t)i]) /
+                               (float)(j1 - j0);
+                    float gz = (v[(size_t)k1 * c->sz + (size_t)j * c->sy + (size_t)i] -
+                                v[(size_t)k0 * c->sz + (size_t)j * c->sy + (size_t)i]) /
+                               (float)(k1 - k0);
+                    float g = sqrtf(gx * gx + gy * gy + gz * gz);
+                    int8_t *o = c->nrm[base + (size_t)i];
+                    if (g > 0) {
+                        float sc = 127.0f / g;
+                        o[0] = (int8_t)lrintf(gx * sc);
+                        o[1] = (int8_t)lrintf(gy * sc);
+                        o[2] = (int8_t)lrintf(gz * sc);
+                    } else {
+                        o[0] = o[1] = o[2] = 0;
+                    }
+                    o[3] = 0;
+                }
+            }
+    }
+    c->vol = vv_volume_ref(vol);
+    c->modified = vol->modified;
+    return VV_OK;
+}
+
+static vv_status
+cache_get(rt_state *st, vv_volume *vol, rt_cache **out) {
+    st->clock++;
+    for (int i = 0; i < st->n_cache; i++)
+        if (st->cache[i].vol == vol) {
+            if (st->cache[i].modified != vol->modified) {
+                cache_release(&st->cache[i]);
+                vv_status s = cache_build(&st->cache[i], vol);
+                if (s != VV_OK) {
+                    st->cache[i] = st->cache[--st->n_cache];
+                    return s;
+                }
+            }
+            st->cache[i].last_used = st->clock;
+            *out = &st->cache[i];
+            return VV_OK;
+        }
+    int slot = st->n_cache;
+    if (slot == RT_MAX_CACHE) {
+        slot = 0;
+        for (int i = 1; i < st->n_cache; i++)
+            if (st->cache[i].last_used < st->cache[slot].last_used)
+                slot = i;
+        cache_release(&st->cache[slot]);
+    } else {
+        st->n_cache++;
+    }
+    vv_status s = cache_build(&st->cache[slot], vol);
+    if (s != VV_OK) {
+        st->cache[slot] = st->cache[--st->n_cache];
+        return s;
+    }
+    st->cache[slot].last_used = st->clock;
+    *out = &st->cache[slot];
+    return VV_OK;
+}
+
+/* ---------------------------------------------------------------------- */
+/* Volume sampling                                                           */
+
+static inline size_t
+cell_of(const rt_cache *c, const float p[3], float f[3]) {
+    float x = p[0] < 0 ? 0 : p[0], y = p[1] < 0 ? 0 : p[1], z = p[2] < 0 ? 0 : p[2];
+    int i = (int)x, j = (int)y, k = (int)z;
+    i = i > c->nx - 2 ? c->nx - 2 : i;
+    j = j > c->ny - 2 ? c->ny - 2 : j;
+    k = k > c->nz - 2 ? c->nz - 2 : k;
+    f[0] = x - (float)i;
+    f[1] = y - (float)j;
+    f[2] = z - (float)k;
+    f[0] = f[0] > 1 ? 1 : f[0];
+    f[1] = f[1] > 1 ? 1 : f[1];
+    f[2] = f[2] > 1 ? 1 : f[2];
+    return (size_t)k * c->sz + (size_t)j * c->sy + (size_t)i;
+}
+
+static inline float
+lerpf(float a, float b, float t) {
+    return a + (b - a) * t;
+}
+
+static inline float
+sample_value(const rt_cache *c, const float p[3]) {
+    float f[3];
+    const size_t o = cell_of(c, p, f);
+    const float *v = c->val + o;
+    const size_t sy = c->sy, sz = c->sz;
+    float c00 = lerpf(v[0], v[1], f[0]);
+    float c10 = lerpf(v[sy], v[sy + 1], f[0]);
+    float c01 = lerpf(v[sz], v[sz + 1], f[0]);
+    float c11 = lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
+    return lerpf(lerpf(c00, c10, f[1]), lerpf(c01, c11, f[1]), f[2]);
+}
+
+/* Index-space gradient direction at p (not normalised). */
+static void
+sample_gradient(const rt_cache *c, const float p[3], float g[3]) {
+    if (c->nrm) {
+        float f[3];
+        const size_t o = cell_of(c, p, f);
+        const size_t off[8] = {o,         o + 1,         o + c->sy,         o + c->sy + 1,
+                               o + c->sz, o + c->sz + 1, o + c->sz + c->sy, o + c->sz + c->sy + 1};
+        for (int a = 0; a < 3; a++) {
+            float x0 = lerpf(c->nrm[off[0]][a], c->nrm[off[1]][a], f[0]);
+            float x1 = lerpf(c->nrm[off[2]][a], c->nrm[off[3]][a], f[0]);
+            float x2 = lerpf(c->nrm[off[4]][a], c->nrm[off[5]][a], f[0]);
+            float x3 = lerpf(c->nrm[off[6]][a], c->nrm[off[7]][a], f[0]);
+            g[a] = lerpf(lerpf(x0, x1, f[1]), lerpf(x2, x3, f[1]), f[2]);
+        }
+        return;
+    }
+    for (int a = 0; a < 3; a++) {
+        float pa[3] = {p[0], p[1], p[2]}, pb[3] = {p[0], p[1], p[2]};
+        pa[a] -= 0.5f;
+        pb[a] += 0.5f;
+        g[a] = sample_value(c, pb) - sample_value(c, pa);
+    }
+}
+
+static inline float
+lut_index_f(const rt_vobj *o, float v) {
+    float x = (v - o->lut_lo) * o->lut_scale;
+    return x < 0 ? 0 : x > RT_LUT - 1 ? RT_LUT - 1 : x;
+}
+
+/* A world ray mapped into a volume's index space and clipped to its grid
+ * box and cut planes. */
+typedef struct rt_vray {
+    float o[3], d[3]; /* index point at t = tb, index direction per world unit */
+    float inv[3];
+    double t0, t1, tb;
+} rt_vray;
+
+static int
+vray_setup(const rt_vobj *ob, const vv_ray *wr, double tmin, double tmax, rt_vray *r) {
+    double o[3], d[3];
+    for (int a = 0; a < 3; a++) {
+        o[a] = ob->w2i[a][0] * wr->origin.x + ob->w2i[a][1] * wr->origin.y +
+               ob->w2i[a][2] * wr->origin.z + ob->w2i[a][3];
+        d[a] = ob->w2i[a][0] * wr->dir.x + ob->w2i[a][1] * wr->dir.y + ob->w2i[a][2] * wr->dir.z;
+    }
+    double t0 = tmin, t1 = tmax;
+    for (int a = 0; a < 3; a++) {
+        double hi = ob->dims[a] - 1;
+        if (fabs(d[a]) < 1e-300) {
+            if (o[a] < 0 || o[a] > hi)
+                return 0;
+            continue;
+        }
+        double ta = (0 - o[a]) / d[a], tb = (hi - o[a]) / d[a];
+        if (ta > tb) {
+            double tt = ta;
+            ta = tb;
+            tb = tt;
+        }
+        t0 = ta > t0 ? ta : t0;
+        t1 = tb < t1 ? tb : t1;
+    }
+    for (int p = 0; p < ob->n_planes; p++)
+        if (!vv_plane_clip_ray(ob->planes[p], *wr, &t0, &t1))
+            return 0;
+    if (!(t0 <= t1))
+        return 0;
+    r->tb = t0;
+    for (int a = 0; a < 3; a++) {
+        r->o[a] = (float)(o[a] + t0 * d[a]);
+        r->d[a] = (float)d[a];
+        r->inv[a] = fabs(d[a]) < 1e-30 ? 0.0f : (float)(1.0 / d[a]);
+    }
+    r->t0 = t0;
+    r->t1 = t1;
+    return 1;
+}
+
+static inline void
+vray_point(const rt_vray *r, double t, float p[3]) {
+    float tf = (float)(t - r->tb);
+    p[0] = r->o[0] + tf * r->d[0];
+    p[1] = r->o[1] + tf * r->d[1];
+    p[2] = r->o[2] + tf * r->d[2];
+}
+
+static inline size_t
+block_of(const rt_vobj *ob, const float p[3]) {
+    int bi = (int)((p[0] > 0 ? p[0] : 0) * (1.0f / RT_BLOCK));
+    int bj = (int)((p[1] > 0 ? p[1] : 0) * (1.0f / RT_BLOCK));
+    int bk = (int)((p[2] > 0 ? p[2] : 0) * (1.0f / RT_BLOCK));
+    bi = bi >= ob->bx ? ob->bx - 1 : bi;
+    bj = bj >= ob->by ? ob->by - 1 : bj;
+    bk = bk >= ob->bz ? ob->bz - 1 : bk;
+    return ((size_t)bk * (size_t)ob->by + (size_t)bj) * (size_t)ob->bx + (size_t)bi;
+}
+
+/* World parameter where the ray leaves the subvolume containing p. */
+static inline double
+block_exit(const rt_vray *r, const float p[3], double t) {
+    float te = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        if (r->inv[a] == 0)
+            continue;
+        float b = (float)(int)((p[a] > 0 ? p[a] : 0) * (1.0f / RT_BLOCK));
+        float bound = (r->d[a] > 0 ? b + 1 : b) * (float)RT_BLOCK;
+        float ta = (bound - p[a]) * r->inv[a];
+        te = ta < te ? ta : te;
+    }
+    /* a rounding error must not stall the march */
+    return t + (te > 1e-6f ? te : 1e-6f);
+}
+
+/* World parameter where the ray leaves the cube of 2 dist - 1 subvolumes
+ * around the one containing p, all of which are empty (dist >= 1). */
+static inline double
+leap_exit(const rt_vobj *ob, const rt_vray *r, const float p[3], double t, int dist) {
+    float te = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        if (r->inv[a] == 0)
+            continue;
+        const int nb = a == 0 ? ob->bx : a == 1 ? ob->by : ob->bz;
+        int b = (int)((p[a] > 0 ? p[a] : 0) * (1.0f / RT_BLOCK));
+        b = b >= nb ? nb - 1 : b;
+        float bound = r->d[a] > 0 ? (float)(b + dist) * RT_BLOCK : (float)(b - dist + 1) * RT_BLOCK;
+        float ta = (bound - p[a]) * r->inv[a];
+        te = ta < te ? ta : te;
+    }
+    return t + (te > 1e-6f ? te : 1e-6f);
+}
+
+static inline double
+ceil_pos(double x) {
+    double i = floor(x);
+    return i < x ? i + 1 : i;
+}
+
+/* ---------------------------------------------------------------------- */
+/* Geometry                                                                  */
+
+static inline vv_vec3
+xf_point(const double m[3][4], vv_vec3 p) {
+    return v3(m[0][0] * p.x + m[0][1] * p.y + m[0][2] * p.z + m[0][3],
+              m[1][0] * p.x + m[1][1] * p.y + m[1][2] * p.z + m[1][3],
+              m[2][0] * p.x + m[2][1] * p.y + m[2][2] * p.z + m[2][3]);
+}
+
+static inline vv_vec3
+xf_dir(const double m[3][4], vv_vec3 d) {
+    return v3(m[0][0] * d.x + m[0][1] * d.y + m[0][2] * d.z,
+              m[1][0] * d.x + m[1][1] * d.y + m[1][2] * d.z,
+              m[2][0] * d.x + m[2][1] * d.y + m[2][2] * d.z);
+}
+
+static inline double
+v3get(vv_vec3 v, int a) {
+    return a == 0 ? v.x : a == 1 ? v.y : v.z;
+}
+
+/* Slab test of an object-space box; returns the entry and exit. */
+static int
+box_slabs(const float lo[3], const float hi[3], const double o[3], const double inv[3], double tmax,
+          double *tn) {
+    double t0 = 0, t1 = tmax;
+    for (int a = 0; a < 3; a++) {
+        double ta = (lo[a] - o[a]) * inv[a], tb = (hi[a] - o[a]) * inv[a];
+        if (ta > tb) {
+            double x = ta;
+            ta = tb;
+            tb = x;
+        }
+        t0 = ta > t0 ? ta : t0;
+        t1 = tb < t1 ? tb : t1;
+        if (t0 > t1)
+            return 0;
+    }
+    *tn = t0;
+    return 1;
+}
+
+/* Ray/triangle (Moeller-Trumbore); object space. */
+static int
+tri_hit(const float *P, const uint32_t *T, uint32_t ti, vv_vec3 o, vv_vec3 d, double tmin,
+        double tmax, double *t, vv_vec3 *n) {
+    const float *a = P + 3 * (size_t)T[3 * ti], *b = P + 3 * (size_t)T[3 * ti + 1],
+                *c = P + 3 * (size_t)T[3 * ti + 2];
+    vv_vec3 A = v3(a[0], a[1], a[2]);
+    vv_vec3 e1 = v3(b[0] - a[0], b[1] - a[1], b[2] - a[2]);
+    vv_vec3 e2 = v3(c[0] - a[0], c[1] - a[1], c[2] - a[2]);
+    vv_vec3 pv = v3cross(d, e2);
+    double det = v3dot(e1, pv);
+    if (fabs(det) < 1e-300)
+        return 0;
+    double id = 1.0 / det;
+    vv_vec3 tv = v3sub(o, A);
+    double u = v3dot(tv, pv) * id;
+    if (u < 0 || u > 1)
+        return 0;
+    vv_vec3 qv = v3cross(tv, e1);
+    double v = v3dot(d, qv) * id;
+    if (v < 0 || u + v > 1)
+        return 0;
+    double tt = v3dot(e2, qv) * id;
+    if (!(tt > tmin && tt < tmax))
+        return 0;
+    *t = tt;
+    *n = v3cross(e1, e2);
+    return 1;
+}
+
+static int
+bvh_hit(const rt_bvh *bvh, const vv_mesh *m, vv_vec3 o, vv_vec3 d, double tmin, double tmax,
+        double *t, vv_vec3 *n) {
+    if (!bvh->n_nodes)
+        return 0;
+    const double oo[3] = {o.x, o.y, o.z};
+    const double inv[3] = {1.0 / d.x, 1.0 / d.y, 1.0 / d.z};
+    int stack[128], sp = 0, hit = 0;
+    stack[sp++] = 0;
+    while (sp) {
+        const rt_bvh_node *nd = &bvh->nodes[stack[--sp]];
+        double tn;
+        if (!box_slabs(nd->lo, nd->hi, oo, inv, tmax, &tn))
+            continue;
+        if (nd->left < 0) {
+            for (int i = 0; i < nd->cnt; i++)
+                if (tri_hit(m->positions, m->triangles, bvh->tri[nd->first + i], o, d, tmin, tmax,
+                            t, n)) {
+                    tmax = *t;
+                    hit = 1;
+                }
+        } else if (sp < 126) {
+            stack[sp++] = nd->left;
+            stack[sp++] = nd->left + 1;
+        }
+    }
+    return hit;
+}
+
+static void
+bvh_bounds(const vv_mesh *m, const uint32_t *tri, int first, int cnt, rt_bvh_node *nd, float clo[3],
+           float chi[3]) {
+    for (int a = 0; a < 3; a++) {
+        nd->lo[a] = clo[a] = INFINITY;
+        nd->hi[a] = chi[a] = -INFINITY;
+    }
+    for (int i = first; i < first + cnt; i++)
+        for (int a = 0; a < 3; a++) {
+            float cen = 0;
+            for (int k = 0; k < 3; k++) {
+                float x = m->positions[3 * (size_t)m->triangles[3 * (size_t)tri[i] + k] + a];
+                nd->lo[a] = x < nd->lo[a] ? x : nd->lo[a];
+                nd->hi[a] = x > nd->hi[a] ? x : nd->hi[a];
+                cen += x / 3;
+            }
+            clo[a] = cen < clo[a] ? cen : clo[a];
+            chi[a] = cen > chi[a] ? cen : chi[a];
+        }
+}
+
+static float
+tri_centroid(const vv_mesh *m, uint32_t t, int a) {
+    float s = 0;
+    for (int k = 0; k < 3; k++)
+        s += m->positions[3 * (size_t)m->triangles[3 * (size_t)t + k] + a];
+    return s / 3;
+}
+
+/* Median split on the longest centroid axis, 4 triangles per leaf. Nodes
+ * are stored with siblings adjacent (left, left + 1). */
+static vv_status
+bvh_build(rt_bvh *bvh, const vv_mesh *m) {
+    memset(bvh, 0, sizeof *bvh);
+    if (m->n_triangles == 0)
+        return VV_OK;
+    if (m->n_triangles > (size_t)1 << 28)
+        return vv_error_set(VV_ERR_LIMIT, "mesh of %zu triangles is too large to ray trace",
+                            m->n_triangles);
+    const int n = (int)m->n_triangles;
+    bvh->tri = malloc((size_t)n * sizeof *bvh->tri);
+    bvh->nodes = malloc((size_t)(2 * n) * sizeof *bvh->nodes);
+    int *todo = malloc((size_t)(2 * n) * sizeof *todo);
+    if (!bvh->tri || !bvh->nodes || !todo) {
+        free(todo);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for a BVH of %d triangles", n);
+    }
+    for (int i = 0; i < n; i++)
+        bvh->tri[i] = (uint32_t)i;
+    bvh->n_nodes = 1;
+    bvh->nodes[0].first = 0;
+    bvh->nodes[0].cnt = n;
+    int nt = 0;
+    todo[nt++] = 0;
+    while (nt) {
+        rt_bvh_node *nd = &bvh->nodes[todo[--nt]];
+        float clo[3], chi[3];
+        bvh_bounds(m, bvh->tri, nd->first, nd->cnt, nd, clo, chi);
+        nd->left = -1;
+        if (nd->cnt <= 4)
+            continue;
+        int ax = 0;
+        for (int a = 1; a < 3; a++)
+            if (chi[a] - clo[a] > chi[ax] - clo[ax])
+                ax = a;
+        /* partial sort by centroid around the median (quickselect) */
+        int lo = nd->first, hi = nd->first + nd->cnt - 1, mid = nd->first + nd->cnt / 2;
+        while (lo < hi) {
+            float pv = tri_centroid(m, bvh->tri[(lo + hi) / 2], ax);
+            int i = lo, j = hi;
+            while (i <= j) {
+                while (tri_centroid(m, bvh->tri[i], ax) < pv)
+                    i++;
+                while (tri_centroid(m, bvh->tri[j], ax) > pv)
+                    j--;
+                if (i <= j) {
+                    uint32_t x = bvh->tri[i];
+                    bvh->tri[i] = bvh->tri[j];
+                    bvh->tri[j] = x;
+                    i++;
+                    j--;
+                }
+            }
+            if (mid <= j)
+                hi = j;
+            else if (mid >= i)
+                lo = i;
+            else
+                break;
+        }
+        int l = bvh->n_nodes;
+        bvh->n_nodes += 2;
+        rt_bvh_node *L = &bvh->nodes[l], *R = &bvh->nodes[l + 1];
+        L->first = nd->first;
+        L->cnt = mid - nd->first;
+        R->first = mid;
+        R->cnt = nd->first + nd->cnt - mid;
+        nd->left = l;
+        todo[nt++] = l;
+        todo[nt++] = l + 1;
+    }
+    free(todo);
+    return VV_OK;
+}
+
+/* Nearest hit of one geometric object in (tmin, tmax); world normal (not
+ * flipped towards the ray). */
+static int
+gobj_hit(const rt_gobj *g, const vv_ray *wr, double tmin, double tmax, double *t, vv_vec3 *nw) {
+    const vv_geometry *ge = &g->obj->geometry;
+    vv_vec3 o = xf_point(g->w2o, wr->origin), d = xf_dir(g->w2o, wr->dir);
+    vv_vec3 n = {0, 0, 1};
+    double th = INFINITY;
+    switch (g->type) {
+    case VV_OBJECT_PLANE: {
+        double dn = v3dot(ge->normal, d);
+        if (fabs(dn) < 1e-300)
+            return 0;
+        th = v3dot(ge->normal, v3sub(ge->point, o)) / dn;
+        n = ge->normal;
+        break;
+    }
+    case VV_OBJECT_POLYGON: {
+        double dn = v3dot(g->plane.n, d);
+        if (fabs(dn) < 1e-300)
+            return 0;
+        th = -vv_plane_distance(g->plane, o) / dn;
+        if (!(th > tmin && th < tmax))
+            return 0;
+        vv_vec3 p = v3add(o, v3scale(d, th));
+        const int u = g->drop == 0 ? 1 : 0, v = g->drop == 2 ? 1 : 2;
+        const double pu = v3get(p, u), pv = v3get(p, v);
+        int inside = 0;
+        for (int i = 0, j = ge->n_vertices - 1; i < ge->n_vertices; j = i++) {
+            double ui = v3get(ge->vertices[i], u), vi = v3get(ge->vertices[i], v);
+            double uj = v3get(ge->vertices[j], u), vj = v3get(ge->vertices[j], v);
+            if ((vi > pv) != (vj > pv) && pu < (uj - ui) * (pv - vi) / (vj - vi) + ui)
+                inside = !inside;
+        }
+        if (!inside)
+            return 0;
+        n = g->plane.n;
+        break;
+    }
+    case VV_OBJECT_SPHERE: {
+        vv_vec3 oc = v3sub(o, ge->center);
+        double a = v3dot(d, d), b = v3dot(oc, d), c = v3dot(oc, oc) - ge->radius * ge->radius;
+        double disc = b * b - a * c;
+        if (disc < 0)
+            return 0;
+        double sq = sqrt(disc);
+        double t0 = (-b - sq) / a, t1 = (-b + sq) / a;
+        th = t0 > tmin ? t0 : t1;
+        if (!(th > tmin && th < tmax))
+            return 0;
+        n = v3sub(v3add(o, v3scale(d, th)), ge->center);
+        break;
+    }
+    case VV_OBJECT_BOX: {
+        const double lo[3] = {ge->box.min.x, ge->box.min.y, ge->box.min.z};
+        const double hi[3] = {ge->box.max.x, ge->box.max.y, ge->box.max.z};
+        const double oo[3] = {o.x, o.y, o.z}, dd[3] = {d.x, d.y, d.z};
+        double t0 = -INFINITY, t1 = INFINITY;
+        int a0 = 0, a1 = 0;
+        double s0 = -1, s1 = 1;
+        for (int a = 0; a < 3; a++) {
+            if (fabs(dd[a]) < 1e-300) {
+                if (oo[a] < lo[a] || oo[a] > hi[a])
+                    return 0;
+                continue;
+            }
+            double ta = (lo[a] - oo[a]) / dd[a], tb = (hi[a] - oo[a]) / dd[a];
+            double sa = -1, sb = 1;
+            if (ta > tb) {
+                double x = ta;
+                ta = tb;
+                tb = x;
+                sa = 1;
+                sb = -1;
+            }
+            if (ta > t0) {
+                t0 = ta;
+                a0 = a;
+                s0 = sa;
+            }
+            if (tb < t1) {
+                t1 = tb;
+                a1 = a;
+                s1 = sb;
+            }
+        }
+        if (t0 > t1)
+            return 0;
+        int ax;
+        double sg;
+        if (t0 > tmin) {
+            th = t0;
+            ax = a0;
+            sg = s0;
+        } else {
+            th = t1;
+            ax = a1;
+            sg = s1;
+        }
+        n = v3(ax == 0 ? sg : 0, ax == 1 ? sg : 0, ax == 2 ? sg : 0);
+        break;
+    }
+    case VV_OBJECT_CYLINDER: {
+        vv_vec3 axis = v3sub(ge->top, ge->base);
+        double h = v3len(axis);
+        if (!(h > 0))
+            return 0;
+        vv_vec3 a = v3scale(axis, 1.0 / h);
+        vv_vec3 oc = v3sub(o, ge->base);
+        double da = v3dot(d, a), oa = v3dot(oc, a);
+        vv_vec3 dp = v3sub(d, v3scale(a, da)), op = v3sub(oc, v3scale(a, oa));
+        double A = v3dot(dp, dp), B = v3dot(op, dp), C = v3dot(op, op) - ge->radius * ge->radius;
+        if (A > 1e-300) {
+            double disc = B * B - A * C;
+            if (disc >= 0) {
+                double sq = sqrt(disc);
+                double ts[2] = {(-B - sq) / A, (-B + sq) / A};
+                for (int i = 0; i < 2; i++) {
+                    double z = oa + ts[i] * da;
+                    if (ts[i] > tmin && ts[i] < th && z >= 0 && z <= h) {
+                        th = ts[i];
+                        n = v3add(op, v3scale(dp, ts[i]));
+                    }
+                }
+            }
+        }
+        if (ge->capped && fabs(da) > 1e-300) {
+            for (int i = 0; i < 2; i++) {
+                double tc = ((i ? h : 0) - oa) / da;
+                if (!(tc > tmin && tc < th))
+                    continue;
+                vv_vec3 q = v3add(op, v3scale(dp, tc));
+                if (v3dot(q, q) <= ge->radius * ge->radius) {
+                    th = tc;
+                    n = i ? a : v3scale(a, -1);
+                }
+            }
+        }
+        break;
+    }
+    case VV_OBJECT_MESH: {
+        if (!ge->mesh || !bvh_hit(&g->bvh, ge->mesh, o, d, tmin, tmax, &th, &n))
+            return 0;
+        break;
+    }
+    default:
+        return 0;
+    }
+    if (!(th > tmin && th < tmax))
+        return 0;
+    *t = th;
+    vv_vec3 w = v3(g->nrm[0][0] * n.x + g->nrm[0][1] * n.y + g->nrm[0][2] * n.z,
+                   g->nrm[1][0] * n.x + g->nrm[1][1] * n.y + g->nrm[1][2] * n.z,
+                   g->nrm[2][0] * n.x + g->nrm[2][1] * n.y + g->nrm[2][2] * n.z);
+    *nw = v3norm(w);
+    return 1;
+}
+
+/* Nearest geometric hit among the objects a ray of this kind sees. */
+static int
+nearest_hit(const rt_frame *fr, const vv_ray *wr, double tmin, double tmax, int primary,
+            rt_hit *h) {
+    int found = 0;
+    for (int i = 0; i < fr->n_gobj; i++) {
+        const rt_gobj *g = &fr->gobjs[i];
+        if (!primary && !g->obj->visible_in_reflections)
+            continue;
+        double t;
+        vv_vec3 n;
+        if (gobj_hit(g, wr, tmin, tmax, &t, &n)) {
+            tmax = t;
+            h->t = t;
+            h->gobj = i;
+            h->n = n;
+            found = 1;
+        }
+    }
+    return found;
+}
+
+/* ---------------------------------------------------------------------- */
+/* Shadow rays                                                               */
+
+/* Transmittance of one volume along the world ray over (tmin, tmax). */
+static float
+volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double tmin,
+                     double tmax) {
+    rt_vray r;
+    if (!vray_setup(ob, wr, tmin, tmax, &r))
+        return 1.0f;
+    const rt_cache *c = ob->c;
+    const double dt = fr->dt;
+    if (ob->mode == VV_MODE_COMPOSITE) {
+        /* exp(-sum sigma h): each visible subvolume's piece of the ray is cut
+         * into equal parts no longer than dt, sampled at their midpoints */
+        double tau = 0;
+        double t = r.t0;
+        const double ds = 2 * ob->vox > dt ? 2 * ob->vox : dt; /* shadows are smooth */
+        while (t < r.t1) {
+            float p[3];
+            vray_point(&r, t, p);
+            const size_t b = block_of(ob, p);
+            double te = ob->bdist[b] ? leap_exit(ob, &r, p, t, ob->bdist[b]) : block_exit(&r, p, t);
+            te = te < r.t1 ? te : r.t1;
+            if (ob->bvis[b]) {
+                const double len = te - t;
+                int n = (int)ceil_pos(len / ds);
+                n = n < 1 ? 1 : n;
+                const double h = len / n;
+                for (int s = 0; s < n; s++) {
+                    float q[3];
+                    vray_point(&r, t + (s + 0.5) * h, q);
+                    tau += ob->ext[(int)lut_index_f(ob, sample_value(c, q))] * h;
+                }
+                if (tau > 7) /* T < 0.001 */
+                    return 0.0f;
+            }
+            t = te;
+        }
+        return (float)exp(-tau);
+    }
+    if (ob->mode == VV_MODE_ISO) {
+        /* blocked where the ray is inside the surface (value >= isovalue) */
+        double t = r.t0;
+        while (t <= r.t1) {
+            float p[3];
+            vray_point(&r, t, p);
+            const size_t b = block_of(ob, p);
+            double te = ob->bdist[b] ? leap_exit(ob, &r, p, t, ob->bdist[b]) : block_exit(&r, p, t);
+            if (ob->bvis[b]) {
+                double tl = te < r.t1 ? te : r.t1;
+                for (double ts = t; ts <= tl; ts += dt) {
+                    vray_point(&r, ts, p);
+                    if (sample_value(c, p) >= ob->iso)
+                        return 0.0f;
+                }
+                vray_point(&r, tl, p);
+                if (sample_value(c, p) >= ob->iso)
+                    return 0.0f;
+            }
+            t = te;
+        }
+        return 1.0f;
+    }
+    /* projections: one minus the opacity of the projected value */
+    const int mip = ob->mode == VV_MODE_MIP, minip = ob->mode == VV_MODE_MINIP;
+    float best = mip ? -INFINITY : INFINITY;
+    double sum = 0;
+    long cnt = 0;
+    for (double t = r.t0; t <= r.t1; t += dt) {
+        float p[3];
+        vray_point(&r, t, p);
+        float x = sample_value(c, p);
+        if (mip)
+            best = x > best ? x : best;
+        else if (minip)
+            best = x < best ? x : best;
+        sum += x;
+        cnt++;
+    }
+    if (!cnt)
+        return 1.0f;
+    float val = mip || minip ? best : (float)(sum / (double)cnt);
+    return 1.0f - ob->lut[4 * (int)lut_index_f(ob, val)];
+}
+
+/* Transmittance from world point p towards light l over [start, limit]
+ * world units from p (limit INFINITY: up to the light), past every object
+ * that casts shadows. */
+static float
+shadow_segment(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start, double limit) {
+    vv_ray r;
+    double tmax;
+    if (l->point) {
+        vv_vec3 d = v3sub(v3(l->pos[0], l->pos[1], l->pos[2]), p);
+        tmax = v3len(d);
+        if (!(tmax > 0))
+            return 1.0f;
+        r.dir = v3scale(d, 1.0 / tmax);
+    } else {
+        r.dir = v3(l->dir[0], l->dir[1], l->dir[2]);
+        tmax = INFINITY;
+    }
+    tmax = limit < tmax ? limit : tmax;
+    r.origin = p;
+    float T = 1.0f;
+    const double eps = RT_EPS * fr->scene_size;
+    for (int i = 0; i < fr->n_gobj && T > 0; i++) {
+        const rt_gobj *g = &fr->gobjs[i];
+        if (!g->obj->casts_shadows)
+            continue;
+        double t;
+        vv_vec3 n;
+        if (gobj_hit(g, &r, start > eps ? start : eps, tmax, &t, &n))
+            T *= g->kt;
+    }
+    for (int i = 0; i < fr->n_vobj && T > 0.001f; i++) {
+        const rt_vobj *ob = &fr->vobjs[i];
+        if (ob->obj->casts_shadows)
+            T *= volume_transmittance(fr, ob, &r, start, tmax);
+    }
+    return T;
+}
+
+static float
+shadow_ray(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start) {
+    return shadow_segment(fr, p, l, start, INFINITY);
+}
+
+static inline vv_vec3
+index_to_world(const rt_vobj *ob, const double q[3]) {
+    return v3(ob->i2w[0][0] * q[0] + ob->i2w[0][1] * q[1] + ob->i2w[0][2] * q[2] + ob->i2w[0][3],
+              ob->i2w[1][0] * q[0] + ob->i2w[1][1] * q[1] + ob->i2w[1][2] * q[2] + ob->i2w[1][3],
+              ob->i2w[2][0] * q[0] + ob->i2w[2][1] * q[1] + ob->i2w[2][2] * q[2] + ob->i2w[2][3]);
+}
+
+/* The shadow grid of a directional light, swept layer by layer from the
+ * light's side (a light volume): a grid point's transmittance is that of
+ * the point one layer towards the light (bilinear in that layer) times the
+ * transmittance of the segment between them (shadow_segment: this volume,
+ * the other volumes and geometry). The first layer, and points whose
+ * upstream point leaves the grid, trace a whole shadow ray. */
+static vv_status
+sweep_light(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
+    const rt_light *lt = &fr->lights[l];
+    double li[3];
+    for (int a = 0; a < 3; a++)
+        li[a] =
+            ob->w2i[a][0] * lt->dir[0] + ob->w2i[a][1] * lt->dir[1] + ob->w2i[a][2] * lt->dir[2];
+    int A = 0;
+    for (int a = 1; a < 3; a++)
+        if (fabs(li[a]) > fabs(li[A]))
+            A = a;
+    if (!(fabs(li[A]) > 0))
+        return VV_OK;
+    const int B = (A + 1) % 3, Cc = (A + 2) % 3;
+    const int *gd = ob->gdim;
+    const size_t ng = (size_t)gd[0] * (size_t)gd[1] * (size_t)gd[2];
+    float *T = malloc(ng * sizeof *T);
+    if (!T)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for a shadow grid");
+    const double G = RT_SGRID, seg = G / fabs(li[A]);
+    const int up = li[A] > 0 ? 1 : -1; /* the layer towards the light */
+    const int first = up > 0 ? gd[A] - 1 : 0;
+    const int nb = gd[B], nc = gd[Cc];
+    for (int n = 0; n < gd[A]; n++) {
+        const int la = first - up * n;
+#pragma omp parallel for schedule(dynamic, 16) num_threads(nt)
+        for (int bc = 0; bc < nb * nc; bc++) {
+            int id[3];
+            id[A] = la;
+            id[B] = bc % nb;
+            id[Cc] = bc / nb;
+            const double p[3] = {id[0] * G, id[1] * G, id[2] * G};
+            const vv_vec3 wp = index_to_world(ob, p);
+            float t = -1;
+            if (n > 0) {
+                const double qb = (p[B] + li[B] * seg) / G, qc = (p[Cc] + li[Cc] * seg) / G;
+                if (qb >= 0 && qb <= nb - 1 && qc >= 0 && qc <= nc - 1) {
+                    int ib = (int)qb, ic = (int)qc;
+                    ib = ib > nb - 2 ? nb - 2 : ib;
+                    ic = ic > nc - 2 ? nc - 2 : ic;
+                    const float fb = (float)(qb - ib), fc = (float)(qc - ic);
+                    float v[4];
+                    for (int k = 0; k < 4; k++) {
+                        int q[3];
+                        q[A] = la + up;
+                        q[B] = ib + (k & 1);
+                        q[Cc] = ic + (k >> 1);
+                        v[k] = T[((size_t)q[2] * (size_t)gd[1] + (size_t)q[1]) * (size_t)gd[0] +
+                                 (size_t)q[0]];
+                    }
+                    const float tq = lerpf(lerpf(v[0], v[1], fb), lerpf(v[2], v[3], fb), fc);
+                    t = tq > 0 ? tq * shadow_segment(fr, wp, lt, 0, seg) : 0.0f;
+                }
+            }
+            if (t < 0)
+                t = shadow_ray(fr, wp, lt, 0);
+            T[((size_t)id[2] * (size_t)gd[1] + (size_t)id[1]) * (size_t)gd[0] + (size_t)id[0]] = t;
+        }
+    }
+    ob->sweep[l] = T;
+    for (int a = 0; a < 3; a++)
+        ob->lidx[l][a] = (float)li[a];
+    return VV_OK;
+}
+
+/* Shadow of a volume sample at index point pi (world pw) for light l. */
+static float
+volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float pi[3],
+                     const float pw[3]) {
+    if (ob->sweep[l]) {
+        /* the swept grid, looked up 1.5 grid cells towards the light so that
+         * a surface does not shadow itself */
+        const float bias = (float)(1.5 * RT_SGRID * ob->vox);
+        float f[3];
+        int i0[3];
+        for (int a = 0; a < 3; a++) {
+            float x = (pi[a] + ob->lidx[l][a] * bias) * (1.0f / RT_SGRID);
+            x = x < 0 ? 0 : x > (float)(ob->gdim[a] - 1) ? (float)(ob->gdim[a] - 1) : x;
+            int i = (int)x;
+            i = i > ob->gdim[a] - 2 ? ob->gdim[a] - 2 : i;
+            i0[a] = i;
+            f[a] = x - (float)i;
+        }
+        const float *T = ob->sweep[l];
+        const size_t sy = (size_t)ob->gdim[0], sz = sy * (size_t)ob->gdim[1];
+        const float *v = T + (size_t)i0[2] * sz + (size_t)i0[1] * sy + (size_t)i0[0];
+        float x0 = lerpf(v[0], v[1], f[0]), x1 = lerpf(v[sy], v[sy + 1], f[0]);
+        float x2 = lerpf(v[sz], v[sz + 1], f[0]), x3 = lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
+        return lerpf(lerpf(x0, x1, f[1]), lerpf(x2, x3, f[1]), f[2]);
+    }
+    if (!ob->sgrid[l]) /* isosurfaces, or shadow_grid=0: an exact shadow ray */
+        return shadow_ray(fr, v3(pw[0], pw[1], pw[2]), &fr->lights[l], ob->vox);
+    _Atomic uint32_t *g = ob->sgrid[l];
+    float f[3];
+    int i0[3];
+    for (int a = 0; a < 3; a++) {
+        float x = pi[a] < 0 ? 0 : pi[a];
+        x *= 1.0f / RT_SGRID;
+        int i = (int)x;
+        i = i > ob->gdim[a] - 2 ? ob->gdim[a] - 2 : i;
+        i0[a] = i;
+        f[a] = x - (float)i;
+        f[a] = f[a] > 1 ? 1 : f[a];
+    }
+    float v[8];
+    for (int k = 0; k < 8; k++) {
+        int gi = i0[0] + (k & 1), gj = i0[1] + ((k >> 1) & 1), gk = i0[2] + ((k >> 2) & 1);
+        size_t idx =
+            ((size_t)gk * (size_t)ob->gdim[1] + (size_t)gj) * (size_t)ob->gdim[0] + (size_t)gi;
+        uint32_t bits = atomic_load_explicit(&g[idx], memory_order_relaxed);
+        float T;
+        if (bits) {
+            float x;
+            memcpy(&x, &bits, sizeof x);
+            T = x - 1.0f;
+        } else {
+            /* trace it: deterministic, so two threads racing store the same */
+            double q[3] = {(double)gi * RT_SGRID, (double)gj * RT_SGRID, (double)gk * RT_SGRID};
+            for (int a = 0; a < 3; a++)
+                q[a] = q[a] > ob->dims[a] - 1 ? ob->dims[a] - 1 : q[a];
+            vv_vec3 wp = v3(
+                ob->i2w[0][0] * q[0] + ob->i2w[0][1] * q[1] + ob->i2w[0][2] * q[2] + ob->i2w[0][3],
+                ob->i2w[1][0] * q[0] + ob->i2w[1][1] * q[1] + ob->i2w[1][2] * q[2] + ob->i2w[1][3],
+                ob->i2w[2][0] * q[0] + ob->i2w[2][1] * q[1] + ob->i2w[2][2] * q[2] + ob->i2w[2][3]);
+            T = shadow_ray(fr, wp, &fr->lights[l], 1.5 * RT_SGRID * ob->vox);
+            float x = T + 1.0f;
+            memcpy(&bits, &x, sizeof bits);
+            atomic_store_explicit(&g[idx], bits, memory_order_relaxed);
+        }
+        v[k] = T;
+    }
+    float x0 = lerpf(v[0], v[1], f[0]), x1 = lerpf(v[2], v[3], f[0]);
+    float x2 = lerpf(v[4], v[5], f[0]), x3 = lerpf(v[6], v[7], f[0]);
+    return lerpf(lerpf(x0, x1, f[1]), lerpf(x2, x3, f[1]), f[2]);
+}
+
+/* ---------------------------------------------------------------------- */
+/* Shading                                                                   */
+
+/* The ray caster's volume Phong (reflection vector, two-sided, specular
+ * weighted by the sample opacity), each light scaled by its shadow. */
+static void
+shade_volume(const rt_frame *fr, const rt_vobj *o, const float g[3], const float pi[3],
+             const float pw[3], const float v[3], const float col[3], float alpha, float out[3]) {
+    const float n0 = o->nrm[0][0] * g[0] + o->nrm[0][1] * g[1] + o->nrm[0][2] * g[2];
+    const float n1 = o->nrm[1][0] * g[0] + o->nrm[1][1] * g[1] + o->nrm[1][2] * g[2];
+    const float n2 = o->nrm[2][0] * g[0] + o->nrm[2][1] * g[1] + o->nrm[2][2] * g[2];
+    const float len2 = n0 * n0 + n1 * n1 + n2 * n2;
+    float d[3] = {o->amb[0], o->amb[1], o->amb[2]}, s[3] = {0, 0, 0};
+    const int shadows = fr->shadows && o->obj->receives_shadows;
+    if (len2 > 1e-12f) {
+        const float inv = 1.0f / sqrtf(len2);
+        const float nv = (n0 * v[0] + n1 * v[1] + n2 * v[2]) * inv;
+        for (int l = 0; l < fr->n_lights; l++) {
+            const rt_light *lt = &fr->lights[l];
+            float L0 = (float)lt->dir[0], L1 = (float)lt->dir[1], L2 = (float)lt->dir[2];
+            if (lt->point) {
+                L0 = (float)lt->pos[0] - pw[0];
+                L1 = (float)lt->pos[1] - pw[1];
+                L2 = (float)lt->pos[2] - pw[2];
+                const float ll = sqrtf(L0 * L0 + L1 * L1 + L2 * L2);
+                if (!(ll > 0))
+                    continue;
+                L0 /= ll;
+                L1 /= ll;
+                L2 /= ll;
+            }
+            float ndl = (n0 * L0 + n1 * L1 + n2 * L2) * inv;
+            const float ndv = ndl < 0 ? -nv : nv;
+            ndl = ndl < 0 ? -ndl : ndl;
+            const float rv = 2 * ndl * ndv - (L0 * v[0] + L1 * v[1] + L2 * v[2]);
+            float sp = rv > 0 ? o->spec[(int)(rv * RT_SPEC + 0.5f)] : 0;
+            float sh = shadows ? volume_sample_shadow(fr, o, l, pi, pw) : 1.0f;
+            for (int ch = 0; ch < 3; ch++) {
+                d[ch] += sh * ndl * o->kd_col[l][ch];
+                s[ch] += sh * sp * o->ks_col[l][ch];
+            }
+        }
+    }
+    for (int ch = 0; ch < 3; ch++)
+        out[ch] = d[ch] * col[ch] + alpha * s[ch];
+}
+
+static void trace(const rt_frame *fr, const vv_ray *wr, int depth, int primary, float weight,
+                  float out[3], float *alpha, float *tdepth);
+
+/* Local Phong of a surface point with shadows: one-sided, the normal n
+ * facing the viewer. */
+static void
+shade_surface_local(const rt_frame *fr, const vv_material *m, const float col[3], int receives,
+                    vv_vec3 p, vv_vec3 n, vv_vec3 v, float out[3]) {
+    float d[3], s[3] = {0, 0, 0};
+    for (int ch = 0; ch < 3; ch++)
+        d[ch] = (float)m->ambient * fr->ambient[ch];
+    const double eps = RT_EPS * fr->scene_size;
+    vv_vec3 po = v3add(p, v3scale(n, eps));
+    for (int l = 0; l < fr->n_lights; l++) {
+        const rt_light *lt = &fr->lights[l];
+        vv_vec3 L = v3(lt->dir[0], lt->dir[1], lt->dir[2]);
+        if (lt->point)
+            L = v3norm(v3sub(v3(lt->pos[0], lt->pos[1], lt->pos[2]), p));
+        double ndl = v3dot(n, L);
+        if (ndl <= 0)
+            continue;
+        float sh = fr->shadows && receives ? shadow_ray(fr, po, lt, 0) : 1.0f;
+        if (sh <= 0)
+            continue;
+        vv_vec3 R = v3sub(v3scale(n, 2 * ndl), L);
+        double rv = v3dot(R, v);
+        double sp = rv > 0 && m->specular > 0 ? pow(rv, m->shininess) : 0;
+        for (int ch = 0; ch < 3; ch++) {
+            d[ch] += sh * (float)(m->diffuse * ndl) * lt->col[ch];
+            s[ch] += sh * (float)(m->specular * sp) * lt->col[ch];
+        }
+    }
+    for (int ch = 0; ch < 3; ch++)
+        out[ch] = d[ch] * col[ch] + s[ch];
+}
+
+/* Reflected and transmitted light at a surface point, added to out with
+ * weights kr and kt. n: unit normal facing the incoming ray's origin side;
+ * outward: the object's outward normal (solids refract). */
+static void
+shade_secondary(const rt_frame *fr, const vv_ray *wr, vv_vec3 p, vv_vec3 n, vv_vec3 outward,
+                float kr, float kt, double ior, int solid, int depth, float weight, float out[3]) {
+    if (depth >= fr->max_depth)
+        return;
+    const double eps = RT_EPS * fr->scene_size;
+    const double dn = v3dot(wr->dir, n);
+    float tmp[3], a, dd;
+    if (kr > 0 && weight * kr >= RT_MIN_WEIGHT) {
+        vv_ray rr;
+        rr.dir = v3norm(v3sub(wr->dir, v3scale(n, 2 * dn)));
+        rr.origin = v3add(p, v3scale(n, eps));
+        trace(fr, &rr, depth + 1, 0, weight * kr, tmp, &a, &dd);
+        for (int ch = 0; ch < 3; ch++)
+            out[ch] += kr * tmp[ch];
+    }
+    if (kt > 0 && weight * kt >= RT_MIN_WEIGHT) {
+        vv_ray tr;
+        tr.dir = wr->dir;
+        if (solid && ior > 0 && ior != 1) {
+            /* Snell: entering when the ray meets the outward normal head on */
+            const int entering = v3dot(wr->dir, outward) < 0;
+            const double eta = entering ? 1.0 / ior : ior;
+            const double ci = -dn; /* cos of incidence, n faces the ray origin */
+            const double k = 1 - eta * eta * (1 - ci * ci);
+            if (k < 0) /* total internal reflection */
+                tr.dir = v3norm(v3sub(wr->dir, v3scale(n, 2 * dn)));
+            else
+                tr.dir = v3norm(v3add(v3scale(wr->dir, eta), v3scale(n, eta * ci - sqrt(k))));
+        }
+        const double side = v3dot(tr.dir, n) < 0 ? -1 : 1;
+        tr.origin = v3add(p, v3scale(n, side * eps));
+        trace(fr, &tr, depth + 1, 0, weight * kt, tmp, &a, &dd);
+        for (int ch = 0; ch < 3; ch++)
+            out[ch] += kt * tmp[ch];
+    }
+}
+
+/* I_s of a geometric hit. */
+static void
+shade_geometry(const rt_frame *fr, const vv_ray *wr, const rt_hit *h, int depth, float weight,
+               float out[3]) {
+    const rt_gobj *g = &fr->gobjs[h->gobj];
+    vv_vec3 p = ray_at(wr, h->t);
+    vv_vec3 n = h->n;
+    if (v3dot(n, wr->dir) > 0)
+        n = v3scale(n, -1);
+    vv_vec3 v = v3scale(wr->dir, -1);
+    float loc[3];
+    shade_surface_local(fr, &g->obj->material, g->col, g->obj->receives_shadows, p, n, v, loc);
+    float kl = 1 - g->kr - g->kt;
+    kl = kl < 0 ? 0 : kl;
+    for (int ch = 0; ch < 3; ch++)
+        out[ch] = kl * loc[ch];
+    shade_secondary(fr, wr, p, n, h->n, g->kr, g->kt, g->ior, g->closed, depth, weight, out);
+}
+
+/* ---------------------------------------------------------------------- */
+/* Ray tracing                                                               */
+
+/* Composites one classified sample (opacity and premultiplied colour e) at
+ * index point p, ray parameter t, under the accumulated C, A. */
+static inline void
+composite_sample(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, const float v[3],
+                 const float *e, const float p[3], double t, float C[3], float *A) {
+    const float w = 1 - *A;
+    if (ob->obj->shading) {
+        float g[3], pw[3], o3[3];
+        sample_gradient(ob->c, p, g);
+        pw[0] = (float)(wr->origin.x + t * wr->dir.x);
+        pw[1] = (float)(wr->origin.y + t * wr->dir.y);
+        pw[2] = (float)(wr->origin.z + t * wr->dir.z);
+        shade_volume(fr, ob, g, p, pw, v, e + 1, e[0], o3);
+        C[0] += w * o3[0];
+        C[1] += w * o3[1];
+        C[2] += w * o3[2];
+    } else {
+        C[0] += w * e[1];
+        C[1] += w * e[2];
+        C[2] += w * e[3];
+    }
+    *A += w * e[0];
+}
+
+/* The common case, one composite volume on the ray: subvolume by
+ * subvolume, leaping over empty ones, the same samples t = k dt as the
+ * general loop below. */
+static void
+march_one(const rt_frame *fr, const rt_vobj *ob, const rt_vray *r, const vv_ray *wr,
+          const float v[3], float C[3], float *Aout, float *dep) {
+    const double dt = fr->dt, inv_dt = 1.0 / fr->dt;
+    const rt_cache *c = ob->c;
+    float A = 0;
+    double k = ceil_pos(r->t0 * inv_dt);
+    const double kend = floor(r->t1 * inv_dt);
+    while (k <= kend) {
+        float p[3];
+        vray_point(r, k * dt, p);
+        const size_t b = block_of(ob, p);
+        if (!ob->bvis[b]) {
+            const double ks = ceil_pos(leap_exit(ob, r, p, k * dt, ob->bdist[b]) * inv_dt);
+            k = ks > k + 1 ? ks : k + 1;
+            continue;
+        }
+        double klast = floor(block_exit(r, p, k * dt) * inv_dt);
+        klast = klast < kend ? klast : kend;
+        klast = klast < k ? k : klast;
+        for (; k <= klast; k++) {
+            const double t = k * dt;
+            vray_point(r, t, p);
+            const float *e = ob->lut + 4 * (int)lut_index_f(ob, sample_value(c, p));
+            if (e[0] <= 0)
+                continue;
+            composite_sample(fr, ob, wr, v, e, p, t, C, &A);
+            if (*dep == INFINITY)
+                *dep = (float)t;
+            if (A >= fr->et) {
+                *Aout = A > 1 ? 1 : A;
+                return;
+            }
+        }
+    }
+    *Aout = A > 1 ? 1 : A;
+}
+
+/* Front-to-back compositing of the composite and iso volumes along the ray
+ * over [0, tlim] on the samples t = k dt (the ray caster's grid). An iso
+ * hit is a surface: shaded with shadows and reflections, it ends the ray. */
+static void
+march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int primary,
+              float weight, float C[3], float *Aout, float *dep) {
+    rt_vray rays[RT_MAX_OBJ];
+    int act[RT_MAX_OBJ];
+    int na = 0;
+    double tmin = INFINITY, tmax = -INFINITY;
+    for (int i = 0; i < fr->n_vobj; i++) {
+        const rt_vobj *ob = &fr->vobjs[i];
+        if (ob->mode != VV_MODE_COMPOSITE && ob->mode != VV_MODE_ISO)
+            continue;
+        if (!primary && !ob->obj->visible_in_reflections)
+            continue;
+        if (vray_setup(ob, wr, 0, tlim, &rays[na])) {
+            act[na] = i;
+            tmin = rays[na].t0 < tmin ? rays[na].t0 : tmin;
+            tmax = rays[na].t1 > tmax ? rays[na].t1 : tmax;
+            na++;
+        }
+    }
+    float A = 0;
+    if (na == 0) {
+        *Aout = 0;
+        return;
+    }
+    const double dt = fr->dt;
+    const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
+    if (na == 1 && fr->vobjs[act[0]].mode == VV_MODE_COMPOSITE) {
+        march_one(fr, &fr->vobjs[act[0]], &rays[0], wr, v, C, Aout, dep);
+        return;
+    }
+    float prev_v[RT_MAX_OBJ];
+    double prev_t[RT_MAX_OBJ];
+    int has_prev[RT_MAX_OBJ];
+    for (int i = 0; i < na; i++)
+        has_prev[i] = 0;
+    double k = ceil_pos(tmin / dt);
+    const double kend = floor(tmax / dt);
+    while (k <= kend) {
+        const double t = k * dt;
+        double next_k = k + 1;
+        double skip_to = INFINITY;
+        int sampled = 0;
+        for (int ai = 0; ai < na; ai++) {
+            const rt_vobj *ob = &fr->vobjs[act[ai]];
+            const rt_vray *r = &rays[ai];
+            if (t < r->t0 || t > r->t1) {
+                if (t < r->t0 && r->t0 < skip_to)
+                    skip_to = r->t0;
+                has_prev[ai] = 0;
+                continue;
+            }
+            float p[3];
+            vray_point(r, t, p);
+            const rt_cache *c = ob->c;
+            const size_t b = block_of(ob, p);
+            if (!ob->bvis[b]) {
+                double te = leap_exit(ob, r, p, t, ob->bdist[b]);
+                if (te < skip_to)
+                    skip_to = te;
+                if (ob->mode == VV_MODE_ISO) {
+                    double tx = te < r->t1 ? te : r->t1;
+                    float px[3];
+                    vray_point(r, tx, px);
+                    prev_v[ai] = sample_value(c, px);
+                    prev_t[ai] = tx;
+                    has_prev[ai] = 1;
+                }
+                continue;
+            }
+            sampled = 1;
+            const float val = sample_value(c, p);
+            if (ob->mode == VV_MODE_ISO) {
+                const float iso = ob->iso;
+                double th = -1;
+                if (!has_prev[ai]) {
+                    if (val >= iso && t - r->t0 < dt)
+                        th = t;
+                } else if ((prev_v[ai] < iso) != (val < iso)) {
+                    double ta = prev_t[ai], tb = t;
+                    float va = prev_v[ai];
+                    for (int it = 0; it < 10; it++) {
+                        double tm = 0.5 * (ta + tb);
+                        float pm[3];
+                        vray_point(r, tm, pm);
+                        float vm = sample_value(c, pm);
+                        if ((va < iso) == (vm < iso)) {
+                            ta = tm;
+                            va = vm;
+                        } else {
+                            tb = tm;
+                        }
+                    }
+                    th = 0.5 * (ta + tb);
+                }
+                prev_v[ai] = val;
+                prev_t[ai] = t;
+                has_prev[ai] = 1;
+                if (th >= 0) {
+                    float ph[3], g[3], pw[3], col[3];
+                    vray_point(r, th, ph);
+                    sample_gradient(c, ph, g);
+                    pw[0] = (float)(wr->origin.x + th * wr->dir.x);
+                    pw[1] = (float)(wr->origin.y + th * wr->dir.y);
+                    pw[2] = (float)(wr->origin.z + th * wr->dir.z);
+                    if (ob->obj->shading)
+                        shade_volume(fr, ob, g, ph, pw, v, ob->base, 1.0f, col);
+                    else
+                        memcpy(col, ob->base, sizeof col);
+                    const vv_material *m = &ob->obj->material;
+                    float kr = ob->obj->reflects ? (float)m->reflectance : 0.0f;
+                    float kt = (float)m->transparency;
+                    if ((kr > 0 || kt > 0) && fr->max_depth > depth) {
+                        /* the isosurface as a mirror or a window: world
+                         * normal from the gradient, facing the ray */
+                        vv_vec3 nw =
+                            v3(ob->nrm[0][0] * g[0] + ob->nrm[0][1] * g[1] + ob->nrm[0][2] * g[2],
+                               ob->nrm[1][0] * g[0] + ob->nrm[1][1] * g[1] + ob->nrm[1][2] * g[2],
+                               ob->nrm[2][0] * g[0] + ob->nrm[2][1] * g[1] + ob->nrm[2][2] * g[2]);
+                        nw = v3norm(nw);
+                        /* gradients point to higher values: inside; outward is minus */
+                        vv_vec3 outward = v3scale(nw, -1);
+                        vv_vec3 nf = v3dot(outward, wr->dir) > 0 ? nw : outward;
+                        float kl = 1 - kr - kt;
+                        kl = kl < 0 ? 0 : kl;
+                        for (int ch = 0; ch < 3; ch++)
+                            col[ch] *= kl;
+                        shade_secondary(fr, wr, ray_at(wr, th), nf, outward, kr, kt, m->ior, 1,
+                                        depth, weight * (1 - A), col);
+                    }
+                    const float w = 1 - A;
+                    C[0] += w * col[0];
+                    C[1] += w * col[1];
+                    C[2] += w * col[2];
+                    A = 1;
+                    if (th < *dep)
+                        *dep = (float)th;
+                }
+                continue;
+            }
+            const float *e = ob->lut + 4 * (int)lut_index_f(ob, val);
+            const float alpha = e[0];
+            if (alpha <= 0)
+                continue;
+            composite_sample(fr, ob, wr, v, e, p, t, C, &A);
+            if (*dep == INFINITY)
+                *dep = (float)t;
+        }
+        if (A >= fr->et)
+            break;
+        if (!sampled && skip_to < INFINITY) {
+            double ks = ceil_pos(skip_to / dt);
+            if (ks > next_k)
+                next_k = ks;
+        }
+        k = next_k;
+    }
+    *Aout = A > 1 ? 1 : A;
+}
+
+/* Maximum / minimum intensity projection or X-ray of one volume over the
+ * part of the ray in [0, tlim]. Returns 0 when the ray misses it. */
+static int
+project_volume(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double tlim, float *value,
+               float *depth) {
+    rt_vray r;
+    if (!vray_setup(ob, wr, 0, tlim, &r))
+        return 0;
+    const double dt = fr->dt;
+    const rt_cache *c = ob->c;
+    double k = ceil_pos(r.t0 / dt);
+    const double kend = floor(r.t1 / dt);
+    if (k > kend) {
+        float p[3];
+        double tm = 0.5 * (r.t0 + r.t1);
+        vray_point(&r, tm, p);
+        *value = sample_value(c, p);
+        *depth = (float)tm;
+        return 1;
+    }
+    if (ob->mode == VV_MODE_XRAY) {
+        double sum = 0;
+        long n = 0;
+        for (; k <= kend; k++) {
+            float p[3];
+            vray_point(&r, k * dt, p);
+            sum += sample_value(c, p);
+            n++;
+        }
+        *value = (float)(sum / (double)n);
+        *depth = (float)r.t0;
+        return 1;
+    }
+    const int mip = ob->mode == VV_MODE_MIP;
+    const int parc = fr->st->parc;
+    const float *bmin = c->mm->min, *bmax = c->mm->max;
+    float best = mip ? -INFINITY : INFINITY;
+    double tbest = r.t0;
+    while (k <= kend) {
+        float p[3];
+        vray_point(&r, k * dt, p);
+        const size_t b = block_of(ob, p);
+        const double te = block_exit(&r, p, k * dt);
+        if (parc && (mip ? bmax[b] <= best : bmin[b] >= best)) {
+            const double ks = ceil_pos(te / dt);
+            k = ks > k + 1 ? ks : k + 1;
+            continue;
+        }
+        double klast = floor(te / dt);
+        klast = klast < kend ? klast : kend;
+        klast = klast < k ? k : klast;
+        for (; k <= klast; k++) {
+            vray_point(&r, k * dt, p);
+            const float x = sample_value(c, p);
+            if (mip ? x > best : x < best) {
+                best = x;
+                tbest = k * dt;
+            }
+        }
+    }
+    *value = best;
+    *depth = (float)tbest;
+    return 1;
+}
+
+/* I(x, w) = I_v + tau I_s along one ray: out is the colour, *alpha the
+ * coverage (1 where a surface is hit), *tdepth the first visible hit. */
+static void
+trace(const rt_frame *fr, const vv_ray *wr, int depth, int primary, float weight, float out[3],
+      float *alpha, float *tdepth) {
+    rt_hit h;
+    /* secondary rays start off their surface already (offset along the normal) */
+    const int geo = nearest_hit(fr, wr, 0, INFINITY, primary, &h);
+    const double tlim = geo ? h.t : INFINITY;
+    float C[3] = {0, 0, 0}, A = 0, dep = INFINITY;
+    march_volumes(fr, wr, tlim, depth, primary, weight, C, &A, &dep);
+    float P[3] = {0, 0, 0}, PA = 0, pdepth = INFINITY;
+    for (int i = 0; i < fr->n_vobj; i++) {
+        const rt_vobj *ob = &fr->vobjs[i];
+        if (ob->mode == VV_MODE_COMPOSITE || ob->mode == VV_MODE_ISO)
+            continue;
+        if (!primary && !ob->obj->visible_in_reflections)
+            continue;
+        float val, d;
+        if (!project_volume(fr, ob, wr, tlim, &val, &d))
+            continue;
+        const float *e = ob->lut + 4 * (int)lut_index_f(ob, val);
+        for (int ch = 0; ch < 3; ch++) {
+            float cv = e[1 + ch] * e[0];
+            P[ch] = cv > P[ch] ? cv : P[ch];
+        }
+        PA = e[0] > PA ? e[0] : PA;
+        pdepth = d < pdepth ? d : pdepth;
+    }
+    const float rest = 1 - A;
+    const float A2 = A + rest * PA;
+    float behind[3] = {fr->bg[0], fr->bg[1], fr->bg[2]};
+    float balpha = 0;
+    if (geo && A < fr->et && A < 1) {
+        shade_geometry(fr, wr, &h, depth, weight * (1 - A2), behind);
+        balpha = 1;
+        dep = dep < h.t ? dep : (float)h.t;
+    }
+    for (int ch = 0; ch < 3; ch++)
+        out[ch] = C[ch] + rest * P[ch] + (1 - A2) * behind[ch];
+    *alpha = A2 + (1 - A2) * balpha;
+    *tdepth = dep < pdepth ? dep : pdepth;
+}
+
+/* ---------------------------------------------------------------------- */
+/* Frame set-up                                                             */
+
+static vv_status
+prepare_volume(rt_frame *fr, rt_vobj *ro, const vv_object *obj) {
+    const vv_world *w = fr->w;
+    memset(ro, 0, sizeof *ro);
+    ro->obj = obj;
+    ro->mode = obj->mode;
+    vv_status s = cache_get(fr->st, obj->volume, &ro->c);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "object '%s'", obj->name);
+    vv_mat4 i2w = vv_object_index_to_world(obj);
+    int ok = 0;
+    vv_mat4 w2i = vv_mat4_inverse(i2w, &ok);
+    if (!ok)
+        return vv_error_set(VV_ERR_INVALID, "object '%s': singular transform", obj->name);
+    for (int r = 0; r < 3; r++)
+        for (int cc = 0; cc < 4; cc++) {
+            ro->w2i[r][cc] = w2i.m[r][cc];
+            ro->i2w[r][cc] = i2w.m[r][cc];
+        }
+    for (int r = 0; r < 3; r++)
+        for (int cc = 0; cc < 3; cc++)
+            ro->nrm[r][cc] = (float)w2i.m[cc][r];
+    ro->vox = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        ro->dims[a] = obj->volume->dims[a] > 1 ? obj->volume->dims[a] : 2;
+        double l =
+            sqrt(i2w.m[0][a] * i2w.m[0][a] + i2w.m[1][a] * i2w.m[1][a] + i2w.m[2][a] * i2w.m[2][a]);
+        if (l > 0 && l < ro->vox)
+            ro->vox = l;
+    }
+    if (!(ro->vox < INFINITY))
+        return vv_error_set(VV_ERR_INVALID, "object '%s': zero voxel spacing", obj->name);
+    for (int i = 0; i <= RT_SPEC; i++)
+        ro->spec[i] = (float)pow((double)i / RT_SPEC, obj->material.shininess);
+    ro->base[0] = (float)obj->material.color.x;
+    ro->base[1] = (float)obj->material.color.y;
+    ro->base[2] = (float)obj->material.color.z;
+    ro->iso = (float)obj->isovalue;
+    for (int p = 0; p < w->n_cut_planes && ro->n_planes < 2 * VV_MAX_CUT_PLANES; p++)
+        ro->planes[ro->n_planes++] =
+            vv_plane_from_point_normal(w->cut_planes[p].point, w->cut_planes[p].normal);
+    for (int p = 0; p < obj->n_cut_planes && ro->n_planes < 2 * VV_MAX_CUT_PLANES; p++)
+        ro->planes[ro->n_planes++] =
+            vv_plane_from_point_normal(obj->cut_planes[p].point, obj->cut_planes[p].normal);
+    ro->bx = ro->c->mm->dims[0];
+    ro->by = ro->c->mm->dims[1];
+    ro->bz = ro->c->mm->dims[2];
+    return VV_OK;
+}
+
+/* The chessboard distance from each subvolume to the nearest one that may
+ * contribute, capped at 255, by two chamfer passes over the 26 neighbours
+ * (exact for this metric). A ray in a subvolume at distance d leaps to
+ * where it leaves the cube of 2d - 1 subvolumes around it, all empty. */
+static vv_status
+prepare_distance(rt_vobj *ro) {
+    const int nx = ro->bx, ny = ro->by, nz = ro->bz;
+    const size_t n = (size_t)nx * (size_t)ny * (size_t)nz;
+    uint8_t *d = malloc(n);
+    if (!d)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    for (size_t b = 0; b < n; b++)
+        d[b] = ro->bvis[b] ? 0 : 255;
+    for (int pass = 0; pass < 2; pass++) {
+        const int st = pass == 0 ? 1 : -1;
+        for (int k = pass == 0 ? 0 : nz - 1; k >= 0 && k < nz; k += st)
+            for (int j = pass == 0 ? 0 : ny - 1; j >= 0 && j < ny; j += st)
+                for (int i = pass == 0 ? 0 : nx - 1; i >= 0 && i < nx; i += st) {
+                    const size_t b = ((size_t)k * (size_t)ny + (size_t)j) * (size_t)nx + (size_t)i;
+                    int best = d[b];
+                    if (best == 0)
+                        continue;
+                    for (int dk = -1; dk <= 0; dk++)
+                        for (int dj = -1; dj <= 1; dj++)
+                            for (int di = -1; di <= 1; di++) {
+                                if (dk == 0 && (dj > 0 || (dj == 0 && di >= 0)))
+                                    continue;
+                                const int kk = k + st * dk, jj = j + st * dj, ii = i + st * di;
+                                if (kk < 0 || kk >= nz || jj < 0 || jj >= ny || ii < 0 || ii >= nx)
+                                    continue;
+                                const int v =
+                                    d[((size_t)kk * (size_t)ny + (size_t)jj) * (size_t)nx +
+                                      (size_t)ii] +
+                                    1;
+                                best = v < best ? v : best;
+                            }
+                    d[b] = (uint8_t)(best > 255 ? 255 : best);
+                }
+    }
+    ro->bdist = d;
+    return VV_OK;
+}
+
+/* TF table (opacity corrected for dt, colour premultiplied), extinction
+ * table, and the PARC flags: may a subvolume contribute? */
+static vv_status
+build_tables(rt_frame *fr, rt_vobj *ro) {
+    const vv_object *obj = ro->obj;
+    const rt_cache *c = ro->c;
+    const size_t nb = (size_t)ro->bx * (size_t)ro->by * (size_t)ro->bz;
+    ro->bvis = malloc(nb);
+    ro->lut = malloc(sizeof(float) * 4 * RT_LUT);
+    ro->ext = malloc(sizeof(float) * RT_LUT);
+    int *nz = malloc(sizeof(int) * (RT_LUT + 1));
+    if (!ro->bvis || !ro->lut || !ro->ext || !nz) {
+        free(nz);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    double lo = obj->volume->range[0], hi = obj->volume->range[1];
+    if (!(hi > lo))
+        hi = lo + 1;
+    ro->lut_lo = (float)lo;
+    ro->lut_scale = (float)((RT_LUT - 1) / (hi - lo));
+    const double unit = obj->tf.opacity_unit_distance > 0 ? obj->tf.opacity_unit_distance : 1.0;
+    nz[0] = 0;
+    for (int i = 0; i < RT_LUT; i++) {
+        double x = lo + (hi - lo) * i / (RT_LUT - 1);
+        double a;
+        vv_vec3 col;
+        if (obj->segmentation == VV_SEG_THRESHOLD) {
+            a = x >= obj->threshold ? 1.0 : 0.0;
+            col = obj->material.color;
+        } else {
+            a = vv_tf_eval_opacity(&obj->tf, x);
+            col = vv_tf_eval_color(&obj->tf, x);
+        }
+        a = a <= 0 ? 0 : a >= 1 ? 1 : a;
+        ro->ext[i] = a >= 1 ? 1e30f : (float)(-log1p(-a) / unit);
+        if (ro->mode == VV_MODE_COMPOSITE) {
+            double ac = a >= 1 ? 1 : 1.0 - pow(1.0 - a, fr->dt / unit);
+            ro->lut[4 * i + 0] = (float)ac;
+            ro->lut[4 * i + 1] = (float)(col.x * ac);
+            ro->lut[4 * i + 2] = (float)(col.y * ac);
+            ro->lut[4 * i + 3] = (float)(col.z * ac);
+        } else {
+            ro->lut[4 * i + 0] = (float)a;
+            ro->lut[4 * i + 1] = (float)col.x;
+            ro->lut[4 * i + 2] = (float)col.y;
+            ro->lut[4 * i + 3] = (float)col.z;
+        }
+        nz[i + 1] = nz[i] + (ro->lut[4 * i] > 0);
+    }
+    const float *bmin = c->mm->min, *bmax = c->mm->max;
+    for (size_t b = 0; b < nb; b++) {
+        if (!fr->st->parc)
+            ro->bvis[b] = 1;
+        else if (ro->mode == VV_MODE_ISO)
+            /* only subvolumes wholly below the isovalue are empty */
+            ro->bvis[b] = !(bmax[b] < ro->iso);
+        else {
+            int i0 = (int)lut_index_f(ro, bmin[b]), i1 = (int)lut_index_f(ro, bmax[b]);
+            ro->bvis[b] = nz[i1 + 1] - nz[i0] > 0;
+        }
+    }
+    free(nz);
+    vv_status s = prepare_distance(ro);
+    if (s != VV_OK)
+        return s;
+    if (fr->shadows && obj->receives_shadows && obj->shading && ro->mode == VV_MODE_COMPOSITE &&
+        fr->st->shadow_grid) {
+        size_t ng = 1;
+        for (int a = 0; a < 3; a++) {
+            ro->gdim[a] = (ro->dims[a] - 1 + RT_SGRID - 1) / RT_SGRID + 1;
+            ro->gdim[a] = ro->gdim[a] < 2 ? 2 : ro->gdim[a];
+            ng *= (size_t)ro->gdim[a];
+        }
+        for (int l = 0; l < fr->n_lights; l++) {
+            if (!fr->lights[l].point && fr->st->shadow_grid == 2)
+                continue; /* swept once all objects are ready (sweep_light) */
+            ro->sgrid[l] = calloc(ng, sizeof *ro->sgrid[l]);
+            if (!ro->sgrid[l])
+                return vv_error_set(VV_ERR_NOMEM, "out of memory for a shadow grid");
+        }
+    }
+    return VV_OK;
+}
+
+static vv_status
+prepare_geometry(rt_frame *fr, rt_gobj *g, const vv_object *obj) {
+    memset(g, 0, sizeof *g);
+    g->obj = obj;
+    g->type = obj->type;
+    vv_mat4 o2w = vv_object_matrix(obj);
+    int ok = 0;
+    vv_mat4 w2o = vv_mat4_inverse(o2w, &ok);
+    if (!ok)
+        return vv_error_set(VV_ERR_INVALID, "object '%s': singular transform", obj->name);
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 4; c++)
+            g->w2o[r][c] = w2o.m[r][c];
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++)
+            g->nrm[r][c] = w2o.m[c][r];
+    const vv_material *m = &obj->material;
+    g->col[0] = (float)m->color.x;
+    g->col[1] = (float)m->color.y;
+    g->col[2] = (float)m->color.z;
+    g->kr = obj->reflects ? (float)m->reflectance : 0.0f;
+    g->kt = (float)m->transparency;
+    g->ior = m->ior;
+    const vv_geometry *ge = &obj->geometry;
+    switch (obj->type) {
+    case VV_OBJECT_PLANE:
+        if (!(v3len(ge->normal) > 0))
+            return vv_error_set(VV_ERR_INVALID, "object '%s': plane with a zero normal", obj->name);
+        break;
+    case VV_OBJECT_POLYGON: {
+        if (ge->n_vertices < 3 || !ge->vertices)
+            return vv_error_set(VV_ERR_INVALID, "object '%s': polygon with %d vertices", obj->name,
+                                ge->n_vertices);
+        vv_vec3 nn = {0, 0, 0}; /* Newell's normal */
+        for (int i = 0; i < ge->n_vertices; i++) {
+            vv_vec3 a = ge->vertices[i], b = ge->vertices[(i + 1) % ge->n_vertices];
+            nn.x += (a.y - b.y) * (a.z + b.z);
+            nn.y += (a.z - b.z) * (a.x + b.x);
+            nn.z += (a.x - b.x) * (a.y + b.y);
+        }
+        if (!(v3len(nn) > 0))
+            return vv_error_set(VV_ERR_INVALID, "object '%s': degenerate polygon", obj->name);
+        g->plane = vv_plane_from_point_normal(ge->vertices[0], nn);
+        double ax = fabs(nn.x), ay = fabs(nn.y), az = fabs(nn.z);
+        g->drop = ax >= ay && ax >= az ? 0 : ay >= az ? 1 : 2;
+        break;
+    }
+    case VV_OBJECT_SPHERE:
+        if (!(ge->radius > 0))
+            return vv_error_set(VV_ERR_INVALID, "object '%s': sphere radius must be > 0",
+                                obj->name);
+        g->closed = 1;
+        break;
+    case VV_OBJECT_BOX:
+        if (!(ge->box.max.x >= ge->box.min.x && ge->box.max.y >= ge->box.min.y &&
+              ge->box.max.z >= ge->box.min.z))
+            return vv_error_set(VV_ERR_INVALID, "object '%s': box with min > max", obj->name);
+        g->closed = 1;
+        break;
+    case VV_OBJECT_CYLINDER:
+        if (!(ge->radius > 0) || !(v3len(v3sub(ge->top, ge->base)) > 0))
+            return vv_error_set(VV_ERR_INVALID,
+                                "object '%s': cylinder needs radius > 0 and base != top",
+                                obj->name);
+        g->closed = ge->capped;
+        break;
+    case VV_OBJECT_MESH: {
+        if (!ge->mesh)
+            return vv_error_set(VV_ERR_INVALID, "object '%s': mesh object without a mesh",
+                                obj->name);
+        vv_status s = bvh_build(&g->bvh, ge->mesh);
+        if (s != VV_OK)
+            return vv_error_prefix(s, "object '%s'", obj->name);
+        g->closed = 1;
+        break;
+    }
+    default:
+        return vv_error_set(VV_ERR_INVALID, "object '%s': unsupported type %d", obj->name,
+                            (int)obj->type);
+    }
+    (void)fr;
+    return VV_OK;
+}
+
+static void
+prepare_lights(rt_frame *fr, const vv_world *w, const vv_view *view) {
+    vv_vec3 fwd = v3norm(v3sub(view->at, view->eye));
+    fr->n_lights = 0;
+    for (int i = 0; i < w->n_lights && i < VV_MAX_LIGHTS; i++) {
+        const vv_light *l = &w->lights[i];
+        rt_light *o = &fr->lights[fr->n_lights++];
+        o->point = l->type == VV_LIGHT_POINT && !l->headlight;
+        vv_vec3 d = l->headlight ? fwd : v3norm(l->direction);
+        o->dir[0] = -d.x;
+        o->dir[1] = -d.y;
+        o->dir[2] = -d.z;
+        o->pos[0] = l->position.x;
+        o->pos[1] = l->position.y;
+        o->pos[2] = l->position.z;
+        o->col[0] = (float)(l->color.x * l->intensity);
+        o->col[1] = (float)(l->color.y * l->intensity);
+        o->col[2] = (float)(l->color.z * l->intensity);
+    }
+}
+
+static double
+object_step(const vv_object *obj) {
+    vv_mat4 m = vv_object_index_to_world(obj);
+    double best = INFINITY;
+    for (int cc = 0; cc < 3; cc++) {
+        double l =
+            sqrt(m.m[0][cc] * m.m[0][cc] + m.m[1][cc] * m.m[1][cc] + m.m[2][cc] * m.m[2][cc]);
+        if (l > 0 && l < best)
+            best = l;
+    }
+    return obj->step * best;
+}
+
+static void
+frame_release(rt_frame *fr) {
+    for (int i = 0; i < fr->n_vobj; i++) {
+        free(fr->vobjs[i].lut);
+        free(fr->vobjs[i].ext);
+        free(fr->vobjs[i].bvis);
+        free(fr->vobjs[i].bdist);
+        for (int l = 0; l < VV_MAX_LIGHTS; l++) {
+            free(fr->vobjs[i].sgrid[l]);
+            free(fr->vobjs[i].sweep[l]);
+        }
+    }
+    for (int i = 0; i < fr->n_gobj; i++) {
+        free(fr->gobjs[i].bvh.nodes);
+        free(fr->gobjs[i].bvh.tri);
+    }
+    free(fr->vobjs);
+    free(fr->gobjs);
+}
+
+/* ---------------------------------------------------------------------- */
+/* Pixels                                                                    */
+
+static inline uint64_t
+mix64(uint64_t x) {
+    x += 0x9E3779B97F4A7C15ull;
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    return x ^ (x >> 31);
+}
+
+static void
+trace_primary(const rt_frame *fr, const vv_view *view, double px, double py, float rgba[4],
+              float *depth) {
+    vv_ray wr = vv_view_ray(view, px, py);
+    trace(fr, &wr, 0, 1, 1.0f, rgba, &rgba[3], depth);
+}
+
+/* n x n supersamples of pixel (x, y), regular or jittered (seeded by the
+ * pixel, so images do not depend on threads). */
+static void
+supersample(const rt_frame *fr, const vv_view *view, int x, int y, int n, float rgba[4],
+            float *depth) {
+    float acc[4] = {0, 0, 0, 0};
+    float dmin = INFINITY;
+    for (int s = 0; s < n * n; s++) {
+        double ox = (s % n + 0.5) / n - 0.5, oy = (s / n + 0.5) / n - 0.5;
+        if (fr->st->jitter) {
+            uint64_t h =
+                mix64(fr->st->seed ^ mix64(((uint64_t)(uint32_t)y << 32) ^ (uint64_t)(uint32_t)x) ^
+                      (uint64_t)s * 0x632BE59BD9B4E019ull);
+            ox = (s % n + (double)(h >> 40) / 16777216.0) / n - 0.5;
+            oy = (s / n + (double)(h & 0xFFFFFF) / 16777216.0) / n - 0.5;
+        }
+        float c[4], d;
+        trace_primary(fr, view, x + ox, y + oy, c, &d);
+        for (int ch = 0; ch < 4; ch++)
+            acc[ch] += c[ch];
+        dmin = d < dmin ? d : dmin;
+    }
+    for (int ch = 0; ch < 4; ch++)
+        rgba[ch] = acc[ch] / (float)(n * n);
+    *depth = dmin;
+}
+
+/* ---------------------------------------------------------------------- */
+/* The renderer                                                             */
+
+typedef struct rt_progress {
+    const vv_progress *p;
+    atomic_int cancelled;
+    int done, total;
+} rt_progress;
+
+static void
+tile_done(rt_progress *pr) {
+    if (!pr->p->fn)
+        return;
+#pragma omp critical(vv_raytrace_progress)
+    {
+        pr->done++;
+        if (vv_progress_report(pr->p, (double)pr->done / pr->total))
+            atomic_store(&pr->cancelled, 1);
+    }
+}
+
+static vv_status
+rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+          vv_image *out) {
+    rt_state *st = state;
+    rt_frame fr;
+    memset(&fr, 0, sizeof fr);
+    fr.st = st;
+    fr.w = w;
+    fr.et = (float)st->early_termination;
+    fr.ambient[0] = (float)w->ambient.x;
+    fr.ambient[1] = (float)w->ambient.y;
+    fr.ambient[2] = (float)w->ambient.z;
+    fr.bg[0] = (float)w->background.x;
+    fr.bg[1] = (float)w->background.y;
+    fr.bg[2] = (float)w->background.z;
+    /* quality: 0 preview (no secondary rays, one sample), 1 one sample
+     * with shadows and reflections, 2 final (supersampling as set) */
+    fr.shadows = opt->quality >= 1 && st->shadows;
+    fr.max_depth = opt->quality >= 1 ? st->max_depth : 0;
+    const int nss = opt->quality >= 2 ? st->samples : 1;
+    prepare_lights(&fr, w, view);
+
+    int nv = 0, ng = 0;
+    for (int i = 0; i < w->n_objects; i++) {
+        const vv_object *o = w->objects[i];
+        if (!o || !o->visible)
+            continue;
+        if (o->type == VV_OBJECT_VOLUME)
+            nv += o->volume != NULL;
+        else
+            ng++;
+    }
+    if (nv > RT_MAX_OBJ || ng > RT_MAX_OBJ * 16)
+        return vv_error_set(VV_ERR_LIMIT, "%d volume and %d geometric objects; at most %d and %d",
+                            nv, ng, RT_MAX_OBJ, RT_MAX_OBJ * 16);
+    fr.vobjs = calloc(nv ? (size_t)nv : 1, sizeof *fr.vobjs);
+    fr.gobjs = calloc(ng ? (size_t)ng : 1, sizeof *fr.gobjs);
+    if (!fr.vobjs || !fr.gobjs) {
+        frame_release(&fr);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    vv_status s = VV_OK;
+    double dt = INFINITY;
+    vv_box bounds = vv_world_bounds(w);
+    for (int i = 0; i < w->n_objects && s == VV_OK; i++) {
+        const vv_object *o = w->objects[i];
+        if (!o || !o->visible)
+            continue;
+        if (o->type == VV_OBJECT_VOLUME) {
+            if (!o->volume)
+                continue;
+            if (!(o->step > 0)) {
+                s = vv_error_set(VV_ERR_INVALID, "object '%s': step must be > 0", o->name);
+                break;
+            }
+            s = prepare_volume(&fr, &fr.vobjs[fr.n_vobj++], o);
+            double sd = object_step(o);
+            dt = sd < dt ? sd : dt;
+        } else {
+            s = prepare_geometry(&fr, &fr.gobjs[fr.n_gobj++], o);
+        }
+    }
+    fr.dt = (float)(dt < INFINITY ? dt : 1.0);
+    double size = v3len(v3sub(bounds.max, bounds.min));
+    size += v3len(v3sub(view->eye, v3scale(v3add(bounds.max, bounds.min), 0.5)));
+    fr.scene_size = size > 0 && size < INFINITY ? size : 1.0;
+    for (int i = 0; i < fr.n_vobj && s == VV_OK; i++) {
+        rt_vobj *ro = &fr.vobjs[i];
+        for (int ch = 0; ch < 3; ch++) {
+            ro->amb[ch] = (float)ro->obj->material.ambient * fr.ambient[ch];
+            for (int l = 0; l < fr.n_lights; l++) {
+                ro->kd_col[l][ch] = (float)ro->obj->material.diffuse * fr.lights[l].col[ch];
+                ro->ks_col[l][ch] = (float)ro->obj->material.specular * fr.lights[l].col[ch];
+            }
+        }
+        s = build_tables(&fr, ro);
+    }
+    if (s != VV_OK) {
+        frame_release(&fr);
+        return s;
+    }
+
+    const int nt = opt->threads > 0 ? opt->threads : vv_threads_get();
+    /* shadow grids of directional lights, now that every object is ready */
+    for (int i = 0; i < fr.n_vobj && s == VV_OK; i++) {
+        rt_vobj *ro = &fr.vobjs[i];
+        if (ro->gdim[0] == 0)
+            continue;
+        for (int l = 0; l < fr.n_lights && s == VV_OK; l++)
+            if (!fr.lights[l].point && st->shadow_grid == 2)
+                s = sweep_light(&fr, ro, l, nt);
+    }
+    if (s != VV_OK) {
+        frame_release(&fr);
+        return s;
+    }
+    const int W = view->width, H = view->height;
+    const int tx = (W + RT_TILE - 1) / RT_TILE, ty = (H + RT_TILE - 1) / RT_TILE;
+    const int ntiles = tx * ty;
+    const int adaptive = nss > 1 && st->adaptive;
+    rt_progress pr;
+    pr.p = &opt->progress;
+    atomic_init(&pr.cancelled, 0);
+    pr.done = 0;
+    pr.total = adaptive ? 2 * ntiles : ntiles;
+    /* pass 1: one ray per pixel (or the full supersampling when not adaptive) */
+#pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
+    for (int tile = 0; tile < ntiles; tile++) {
+        if (atomic_load_explicit(&pr.cancelled, memory_order_relaxed))
+            continue;
+        int x0 = (tile % tx) * RT_TILE, y0 = (tile / tx) * RT_TILE;
+        int x1 = x0 + RT_TILE < W ? x0 + RT_TILE : W, y1 = y0 + RT_TILE < H ? y0 + RT_TILE : H;
+        for (int y = y0; y < y1; y++)
+            for (int x = x0; x < x1; x++) {
+                float *pix = out->rgba + 4 * ((size_t)y * (size_t)W + (size_t)x);
+                float *dp = out->depth + (size_t)y * (size_t)W + (size_t)x;
+                if (nss > 1 && !adaptive)
+                    supersample(&fr, view, x, y, nss, pix, dp);
+                else
+                    trace_primary(&fr, view, x, y, pix, dp);
+            }
+        tile_done(&pr);
+    }
+    /* pass 2 (adaptive): supersample pixels that differ from a neighbour */
+    if (adaptive && !atomic_load(&pr.cancelled)) {
+        const size_t np = (size_t)W * (size_t)H;
+        float *first = malloc(np * 4 * sizeof(float));
+        if (!first) {
+            frame_release(&fr);
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        }
+        memcpy(first, out->rgba, np * 4 * sizeof(float));
+        const float thr = (float)st->threshold;
+#pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
+        for (int tile = 0; tile < ntiles; tile++) {
+            if (atomic_load_explicit(&pr.cancelled, memory_order_relaxed))
+                continue;
+            int x0 = (tile % tx) * RT_TILE, y0 = (tile / tx) * RT_TILE;
+            int x1 = x0 + RT_TILE < W ? x0 + RT_TILE : W, y1 = y0 + RT_TILE < H ? y0 + RT_TILE : H;
+            for (int y = y0; y < y1; y++)
+                for (int x = x0; x < x1; x++) {
+                    const float *c = first + 4 * ((size_t)y * (size_t)W + (size_t)x);
+                    int differs = 0;
+                    const int nb[4][2] = {{x - 1, y}, {x + 1, y}, {x, y - 1}, {x, y + 1}};
+                    for (int k = 0; k < 4 && !differs; k++) {
+                        if (nb[k][0] < 0 || nb[k][0] >= W || nb[k][1] < 0 || nb[k][1] >= H)
+                            continue;
+                        const float *q =
+                            first + 4 * ((size_t)nb[k][1] * (size_t)W + (size_t)nb[k][0]);
+                        for (int ch = 0; ch < 4; ch++)
+                            differs |= fabsf(q[ch] - c[ch]) > thr;
+                    }
+                    if (differs)
+                        supersample(&fr, view, x, y, nss,
+                                    out->rgba + 4 * ((size_t)y * (size_t)W + (size_t)x),
+                                    out->depth + (size_t)y * (size_t)W + (size_t)x);
+                }
+            tile_done(&pr);
+        }
+        free(first);
+    }
+    frame_release(&fr);
+    if (atomic_load(&pr.cancelled))
+        return vv_error_set(VV_ERR_CANCELLED, "cancelled");
+    /* drop cached volumes the World no longer shows */
+    for (int i = 0; i < st->n_cache;) {
+        int used = 0;
+        for (int j = 0; j < w->n_objects; j++)
+            used |= w->objects[j] && w->objects[j]->volume == st->cache[i].vol;
+        if (!used) {
+            cache_release(&st->cache[i]);
+            st->cache[i] = st->cache[--st->n_cache];
+        } else {
+            i++;
+        }
+    }
+    return VV_OK;
+}
+
+static vv_status
+rt_create(void **state) {
+    rt_state *st = calloc(1, sizeof *st);
+    if (!st)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    st->parc = 1;
+    st->shadows = 1;
+    st->max_depth = 3;
+    st->samples = 2;
+    st->jitter = 0;
+    st->adaptive = 1;
+    st->threshold = 0.05;
+    st->seed = 1;
+    st->early_termination = 0.99;
+    st->shadow_grid = 1;
+    *state = st;
+    return VV_OK;
+}
+
+static vv_status
+rt_set_option(void *state, const char *key, const char *value) {
+    rt_state *st = state;
+    char *end = NULL;
+    double x = strtod(value, &end);
+    if (!end || *end || end == value || x != x)
+        return vv_error_set(VV_ERR_INVALID, "option %s: '%s' is not a number", key, value);
+    if (strcmp(key, "parc") == 0) {
+        st->parc = x != 0;
+    } else if (strcmp(key, "shadows") == 0) {
+        st->shadows = x != 0;
+    } else if (strcmp(key, "shadow_grid") == 0) {
+        if (x != 0 && x != 1 && x != 2)
+            return vv_error_set(VV_ERR_INVALID, "shadow_grid must be 0, 1 or 2");
+        st->shadow_grid = (int)x;
+    } else if (strcmp(key, "max_depth") == 0) {
+        if (!(x >= 0 && x <= 64) || x != floor(x))
+            return vv_error_set(VV_ERR_INVALID, "max_depth must be an integer in 0..64");
+        st->max_depth = (int)x;
+    } else if (strcmp(key, "samples") == 0) {
+        if (!(x >= 1 && x <= 16) || x != floor(x))
+            return vv_error_set(VV_ERR_INVALID,
+                                "samples (per pixel side) must be an integer in 1..16");
+        st->samples = (int)x;
+    } else if (strcmp(key, "jitter") == 0) {
+        st->jitter = x != 0;
+    } else if (strcmp(key, "adaptive") == 0) {
+        st->adaptive = x != 0;
+    } else if (strcmp(key, "adaptive_threshold") == 0) {
+        if (!(x >= 0))
+            return vv_error_set(VV_ERR_INVALID, "adaptive_threshold must be >= 0");
+        st->threshold = x;
+    } else if (strcmp(key, "seed") == 0) {
+        if (!(x >= 0 && x < 1.8e19))
+            return vv_error_set(VV_ERR_INVALID, "seed must be a non-negative integer");
+        st->seed = (uint64_t)x;
+    } else if (strcmp(key, "early_termination") == 0) {
+        if (!(x > 0 && x <= 1))
+            return vv_error_set(VV_ERR_INVALID, "early_termination must be in (0, 1]");
+        st->early_termination = x;
+    } else {
+        return vv_error_set(VV_ERR_INVALID,
+                            "unknown option '%s' (parc, shadows, shadow_grid, max_depth, samples, "
+                            "jitter, adaptive, adaptive_threshold, seed, early_termination)",
+                            key);
+    }
+    return VV_OK;
+}
+
+static void
+rt_destroy(void *state) {
+    rt_state *st = state;
+    if (!st)
+        return;
+    for (int i = 0; i < st->n_cache; i++)
+        cache_release(&st->cache[i]);
+    free(st);
+}
+
+const vv_renderer_ops vv_raytrace_ops = {
+    "raytrace", "volumetric ray tracing: volumes and geometry, shadows, mirrors, refraction, PARC",
+    rt_create,  rt_set_option,
+    rt_render,  rt_destroy,
+};
