@@ -555,6 +555,17 @@ test_meshes(void **state) {
     check_rel("knot1.off volume", mk.volume, fabs(vv_mesh_signed_volume(knot)), 0.02);
     check_rel("knot1.off area", mk.area, vv_mesh_area(knot), 0.05);
     vv_volume_free(v);
+    /* the same voxels whatever the thread count */
+    vv_volume *k1 = NULL, *k3 = NULL;
+    vv_voxelize_options_init(&o);
+    o.size = 96;
+    o.threads = 1;
+    vt_ok(vv_voxelize(&k1, s, &o));
+    o.threads = 3;
+    vt_ok(vv_voxelize(&k3, s, &o));
+    assert_memory_equal(k1->data, k3->data, vv_volume_voxel_count(k1));
+    vv_volume_free(k1);
+    vv_volume_free(k3);
     vv_shape_free(s);
     vv_mesh_free(knot);
 }
