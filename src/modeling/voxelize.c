@@ -82,8 +82,14 @@ sigma_min(vv_mat4 M) {
     return sqrt(emin > 0 ? emin : 0);
 }
 
+/* Deepest tree voxelized (the evaluation recurses once per level). */
+#define MAX_DEPTH 10000
+
 static vv_status
-flatten(vctx *c, const vv_shape *s, vv_mat4 parent, int *index) {
+flatten(vctx *c, const vv_shape *s, vv_mat4 parent, int *index, int depth) {
+    if (depth > MAX_DEPTH)
+        return vv_error_set(VV_ERR_LIMIT, "voxelize: the model tree is deeper than %d levels",
+                            MAX_DEPTH);
     if (c->n_nodes == c->cap_nodes) {
         int cap = c->cap_nodes ? 2 * c->cap_nodes : 16;
         fnode *n = realloc(c->nodes, (size_t)cap * sizeof *n);
@@ -123,8 +129,8 @@ flatten(vctx *c, const vv_shape *s, vv_mat4 parent, int *index) {
     c->nodes[me].first = first;
     c->nodes[me].count = s->n_children;
     for (int i = 0; i < s->n_children; i++) {
-        int ci;
-        vv_status st = flatten(c, s->children[i], Wc, &ci);
+        int ci = 0;
+        vv_status st = flatten(c, s->children[i], Wc, &ci, depth + 1);
         if (st != VV_OK)
             return st;
         c->kids[first + i] = ci;
@@ -334,7 +340,7 @@ vv_voxelize(vv_volume **out, const vv_shape *shape, const vv_voxelize_options *o
     int threads = opt->threads > 0 ? opt->threads : vv_threads_get();
     int root;
     if ((st = make_grid(&c, shape, opt)) != VV_OK ||
-        (st = flatten(&c, shape, vv_mat4_identity(), &root)) != VV_OK)
+        (st = flatten(&c, shape, vv_mat4_identity(), &root, 0)) != VV_OK)
         goto done;
     if ((st = vv_volume_new(&vol, c.dims, opt->type)) != VV_OK) {
         vv_error_prefix(st, "voxelize");

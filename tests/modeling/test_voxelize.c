@@ -631,6 +631,32 @@ test_bad_input(void **state) {
     o.spacing[0] = o.spacing[1] = o.spacing[2] = 1;
     vt_err(vv_voxelize(&v, s, &o));
     vv_shape_free(s);
+    /* a tree too deep to evaluate */
+    vt_ok(vv_shape_sphere(&s, 1));
+    for (int d = 0; d < 10001; d++)
+        vt_ok(vv_shape_csg(&s, VV_CSG_UNION, 1, &s));
+    vt_err(vv_voxelize(&v, s, NULL));
+    assert_non_null(strstr(vv_error_message(), "deeper"));
+    vv_shape_free(s);
+    /* a mesh with a vertex at NaN: no crash, the rest voxelizes */
+    vv_mesh *bad = NULL;
+    vt_ok(vv_mesh_new(&bad));
+    vt_ok(vv_mesh_add_vertex(bad, vv_vec3_make(0, 0, 0), NULL));
+    vt_ok(vv_mesh_add_vertex(bad, vv_vec3_make(10, 0, 0), NULL));
+    vt_ok(vv_mesh_add_vertex(bad, vv_vec3_make(0, 10, 0), NULL));
+    vt_ok(vv_mesh_add_vertex(bad, vv_vec3_make(NAN, 0, 5), NULL));
+    vt_ok(vv_mesh_add_triangle(bad, 0, 1, 2));
+    vt_ok(vv_mesh_add_triangle(bad, 0, 1, 3));
+    vt_ok(vv_shape_mesh(&s, bad, VV_MESH_SOLID, 0));
+    vv_voxelize_options_init(&o);
+    o.dims[0] = o.dims[1] = o.dims[2] = 16;
+    o.spacing[0] = o.spacing[1] = o.spacing[2] = 1;
+    o.origin[0] = o.origin[1] = o.origin[2] = -3;
+    vt_ok(vv_voxelize(&v, s, &o));
+    vv_volume_free(v);
+    v = NULL;
+    vv_shape_free(s);
+    vv_mesh_free(bad);
     /* an empty intersection */
     vt_ok(vv_shape_sphere(&kids[0], 1));
     vt_ok(vv_shape_sphere(&kids[1], 1));
