@@ -230,7 +230,7 @@ void vv_voxelize_options_init(vv_voxelize_options *o);
  *
  * Errors: VV_ERR_INVALID (bad options, an empty model, a non-invertible
  * transform), VV_ERR_LIMIT (a grid over the volume limits, e.g. 10^5 voxels
- * along an axis; a tree deeper than 10000 levels), VV_ERR_NOMEM,
+ * along an axis; a tree deeper than 1000 levels), VV_ERR_NOMEM,
  * VV_ERR_CANCELLED.
  */
 vv_status vv_voxelize(vv_volume **out, const vv_shape *shape, const vv_voxelize_options *opt);

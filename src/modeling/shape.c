@@ -415,16 +415,47 @@ vv_shape_csg(vv_shape **out, vv_csg_op op, int n, vv_shape **children) {
     return VV_OK;
 }
 
-void
-vv_shape_free(vv_shape *s) {
-    if (!s)
-        return;
-    for (int i = 0; i < s->n_children; i++)
-        vv_shape_free(s->children[i]);
+static void
+shape_free_one(vv_shape *s) {
     free(s->children);
     free(s->pts);
     vv_mesh_free(s->mesh);
     free(s);
+}
+
+void
+vv_shape_free(vv_shape *s) {
+    if (!s)
+        return;
+    /* without recursion, for trees of any depth: a node's children are
+     * pushed on a stack before the node goes; if the stack cannot grow,
+     * fall back to recursion */
+    size_t n = 0, cap = 64;
+    vv_shape **st = malloc(cap * sizeof *st);
+    if (!st) {
+        for (int i = 0; i < s->n_children; i++)
+            vv_shape_free(s->children[i]);
+        shape_free_one(s);
+        return;
+    }
+    st[n++] = s;
+    while (n) {
+        vv_shape *t = st[--n];
+        for (int i = 0; i < t->n_children; i++) {
+            if (n == cap) {
+                vv_shape **g = realloc(st, 2 * cap * sizeof *st);
+                if (!g) {
+                    vv_shape_free(t->children[i]);
+                    continue;
+                }
+                st = g;
+                cap *= 2;
+            }
+            st[n++] = t->children[i];
+        }
+        shape_free_one(t);
+    }
+    free(st);
 }
 
 void

@@ -252,7 +252,7 @@ transform(const jctx *c, json_t *o, const char *path, vv_mat4 *M) {
     return VV_OK;
 }
 
-static vv_status node(const jctx *c, json_t *o, const char *path, vv_shape **out);
+static vv_status node(const jctx *c, json_t *o, const char *path, vv_shape **out, int depth);
 
 static vv_status
 primitive(const jctx *c, json_t *o, const char *path, const char *type, vv_shape **out) {
@@ -389,8 +389,10 @@ primitive(const jctx *c, json_t *o, const char *path, const char *type, vv_shape
 }
 
 static vv_status
-node(const jctx *c, json_t *o, const char *path, vv_shape **out) {
+node(const jctx *c, json_t *o, const char *path, vv_shape **out, int depth) {
     *out = NULL;
+    if (depth > 1000)
+        return jfail(c, path, VV_ERR_LIMIT, "the model tree is deeper than 1000 levels");
     if (!json_is_object(o))
         return jfail(c, path, VV_ERR_FORMAT,
                      "expected a primitive {\"type\": ...} or an operation {\"op\": ...}, got %s",
@@ -458,7 +460,7 @@ node(const jctx *c, json_t *o, const char *path, vv_shape **out) {
             st = jfail(c, ip, VV_ERR_FORMAT, "child %zu of the %s is missing (null)", i + 1, ops);
             break;
         }
-        if ((st = node(c, e, ip, &kids[i])) != VV_OK)
+        if ((st = node(c, e, ip, &kids[i], depth + 1)) != VV_OK)
             break;
     }
     if (st != VV_OK) {
@@ -481,7 +483,7 @@ vv_shape_from_json(vv_shape **out, json_t *n, const char *path, const char *scen
     jctx c = {scene_path, err_path, cap};
     if (err_path && cap)
         err_path[0] = '\0';
-    return node(&c, n, path, out);
+    return node(&c, n, path, out, 0);
 }
 
 vv_status
@@ -637,7 +639,7 @@ model_from_scene(vv_shape **out, const char *path, vv_voxelize_options *opt) {
         }
         kpath(kp, op, prim ? "primitive" : "csg");
         vv_mat4 M;
-        if ((st = node(&c, prim ? prim : csg, kp, &parts[np])) != VV_OK ||
+        if ((st = node(&c, prim ? prim : csg, kp, &parts[np], 0)) != VV_OK ||
             (st = object_matrix(&c, o, op, &M)) != VV_OK)
             break;
         vv_shape_transform(parts[np++], M);

@@ -82,8 +82,45 @@ sigma_min(vv_mat4 M) {
     return sqrt(emin > 0 ? emin : 0);
 }
 
-/* Deepest tree voxelized (the evaluation recurses once per level). */
-#define MAX_DEPTH 10000
+/* Deepest tree voxelized (bounds and evaluation recurse once per level). */
+#define MAX_DEPTH 1000
+
+/* The depth of a tree, without recursion (a hostile tree may be deep);
+ * -1 when out of memory. */
+static int
+tree_depth(const vv_shape *root) {
+    typedef struct item {
+        const vv_shape *s;
+        int depth;
+    } item;
+    size_t n = 0, cap = 64;
+    item *st = malloc(cap * sizeof *st);
+    if (!st)
+        return -1;
+    st[n++] = (item){root, 0};
+    int deepest = 0;
+    while (n) {
+        item it = st[--n];
+        if (it.depth > deepest)
+            deepest = it.depth;
+        if (it.depth > MAX_DEPTH)
+            break;
+        for (int i = 0; i < it.s->n_children; i++) {
+            if (n == cap) {
+                item *g = realloc(st, 2 * cap * sizeof *st);
+                if (!g) {
+                    free(st);
+                    return -1;
+                }
+                st = g;
+                cap *= 2;
+            }
+            st[n++] = (item){it.s->children[i], it.depth + 1};
+        }
+    }
+    free(st);
+    return deepest;
+}
 
 static vv_status
 flatten(vctx *c, const vv_shape *s, vv_mat4 parent, int *index, int depth) {
@@ -337,6 +374,14 @@ vv_voxelize(vv_volume **out, const vv_shape *shape, const vv_voxelize_options *o
     if (st != VV_OK)
         return vv_error_prefix(st, "voxelize");
     c.table = table;
+    int depth = tree_depth(shape);
+    if (depth < 0 || depth > MAX_DEPTH) {
+        vv_filter_table_free(table);
+        return depth < 0
+                   ? vv_error_set(VV_ERR_NOMEM, "voxelize: out of memory")
+                   : vv_error_set(VV_ERR_LIMIT, "voxelize: the model tree is deeper than %d levels",
+                                  MAX_DEPTH);
+    }
     int threads = opt->threads > 0 ? opt->threads : vv_threads_get();
     int root;
     if ((st = make_grid(&c, shape, opt)) != VV_OK ||
