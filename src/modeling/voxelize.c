@@ -425,6 +425,34 @@ vv_voxelize(vv_volume **out, const vv_shape *shape, const vv_voxelize_options *o
         }
         int solid = f->s->mesh_mode == VV_MESH_SOLID;
         double th = f->s->thickness > 0 ? f->s->thickness : 2.0 * h;
+        if (c.n_nodes == 1) {
+            /* a lone mesh: densities straight from the distance grid, no
+             * subvolume classes needed */
+            st = vv_mesh_scan(f->s->mesh, f->inv, solid, th, c.dims, c.spacing, c.origin, c.rw,
+                              f->sd, threads);
+            if (st != VV_OK)
+                break;
+            unsigned char *o8 = opt->type == VV_U8 ? vol->data : NULL;
+            float *o32 = opt->type == VV_F32 ? vol->data : NULL;
+            double lo = 1.0, hi = 0.0;
+#pragma omp parallel for schedule(static) num_threads(threads) reduction(min                       \
+                                                                         : lo) reduction(max       \
+                                                                                         : hi)
+            for (long long v = 0; v < (long long)nvox; v++) {
+                double d = table_at(&c, f->sd[v]);
+                lo = d < lo ? d : lo;
+                hi = d > hi ? d : hi;
+                if (o8)
+                    o8[v] = (unsigned char)(d * 255.0 + 0.5);
+                else
+                    o32[v] = (float)d;
+            }
+            vmin_all = lo;
+            vmax_all = hi;
+            if (vv_progress_report(&opt->progress, 1.0))
+                st = vv_error_set(VV_ERR_CANCELLED, "voxelize: cancelled");
+            goto done;
+        }
         st = vv_mesh_scan(f->s->mesh, f->inv, solid, th, c.dims, c.spacing, c.origin, c.rw, f->sd,
                           threads);
         if (st != VV_OK)
