@@ -399,7 +399,7 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
     L.nv = nv;
     double *V = L.V;
     long long nvl = (long long)nv;
-#pragma omp parallel for schedule(static) num_threads(threads)
+#pragma omp parallel for schedule(dynamic, 32768) num_threads(threads)
     for (long long i = 0; i < nvl; i++) {
         vv_vec3 p = vv_mat4_mul_point(to_world, vv_mesh_vertex(mesh, (size_t)i));
         V[3 * i] = (p.x - origin[0]) / spacing[0];
@@ -415,7 +415,7 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
         if (st == VV_OK) {
             long long nn = (long long)dims[0] * dims[1] * dims[2];
             float h = (float)(0.5 * thickness);
-#pragma omp parallel for schedule(static) num_threads(threads)
+#pragma omp parallel for schedule(dynamic, 32768) num_threads(threads)
             for (long long i = 0; i < nn; i++)
                 sd[i] = sd[i] - h;
         }
@@ -446,7 +446,7 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
     }
     {
         long long ntri = (long long)L.n;
-#pragma omp parallel for schedule(static) num_threads(threads)
+#pragma omp parallel for schedule(dynamic, 32768) num_threads(threads)
         for (long long t = 0; t < ntri; t++) {
             const double *p0 = V + 3 * (size_t)L.t[3 * t], *p1 = V + 3 * (size_t)L.t[3 * t + 1],
                          *p2 = V + 3 * (size_t)L.t[3 * t + 2];
@@ -463,7 +463,7 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
     {
         long long nn = (long long)dims[0] * dims[1] * dims[2];
         memset(votes, 0, (size_t)nn);
-#pragma omp parallel for schedule(static) num_threads(threads)
+#pragma omp parallel for schedule(dynamic, 32768) num_threads(threads)
         for (long long i = 0; i < nn; i++)
             sd[i] = far;
     }
@@ -596,7 +596,7 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
     }
     if (st == VV_OK) {
         long long nn = (long long)dims[0] * dims[1] * dims[2];
-#pragma omp parallel for schedule(static) num_threads(threads)
+#pragma omp parallel for schedule(dynamic, 32768) num_threads(threads)
         for (long long i = 0; i < nn; i++) {
             int tin = votes[i] & 3, tn = 3 - ((votes[i] >> 2) & 3), all = votes[i] >> 4;
             int in = tn > 0 && 2 * tin != tn ? 2 * tin > tn : all >= 2;

@@ -435,9 +435,10 @@ vv_voxelize(vv_volume **out, const vv_shape *shape, const vv_voxelize_options *o
             unsigned char *o8 = opt->type == VV_U8 ? vol->data : NULL;
             float *o32 = opt->type == VV_F32 ? vol->data : NULL;
             double lo = 1.0, hi = 0.0;
-#pragma omp parallel for schedule(static) num_threads(threads) reduction(min                       \
-                                                                         : lo) reduction(max       \
-                                                                                         : hi)
+// clang-format off
+#pragma omp parallel for schedule(dynamic, 32768) num_threads(threads) \
+    reduction(min : lo) reduction(max : hi)
+            // clang-format on
             for (long long v = 0; v < (long long)nvox; v++) {
                 double d = table_at(&c, f->sd[v]);
                 lo = d < lo ? d : lo;
