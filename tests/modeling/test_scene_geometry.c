@@ -88,10 +88,12 @@ seen_progress(void *user, double f) {
 static void
 test_examples(void **state) {
     (void)state;
-    const char *ex[2] = {VV_SOURCE_DIR "/examples/nut_bolt.json",
-                         VV_SOURCE_DIR "/examples/wine_glasses.json"};
-    const char *png[2] = {"nut_bolt.png", "wine_glasses.png"};
-    for (int e = 0; e < 2; e++) {
+    const char *ex[3] = {VV_SOURCE_DIR "/examples/nut_bolt.json",
+                         VV_SOURCE_DIR "/examples/wine_glasses.json",
+                         VV_SOURCE_DIR "/examples/wine_glasses_table.json"};
+    const char *png[3] = {"nut_bolt.png", "wine_glasses.png", "wine_glasses_table.png"};
+    const char *renderer[3] = {"raycast", "raycast", "raytrace"};
+    for (int e = 0; e < 3; e++) {
         vv_world *w = NULL;
         double last = -1;
         vv_progress pr = {seen_progress, &last};
@@ -99,11 +101,13 @@ test_examples(void **state) {
         assert_float_equal(last, 1.0, 0);
         assert_true(w->n_objects >= 2);
         for (int i = 0; i < w->n_objects; i++) {
+            if (w->objects[i]->type != VV_OBJECT_VOLUME)
+                continue; /* the table of the ray-traced scene */
             assert_int_equal(w->objects[i]->volume->range[0], 0);
             assert_int_equal(w->objects[i]->volume->range[1], 255);
         }
         vv_renderer *r = NULL;
-        vt_ok(vv_renderer_new(&r, "raycast"));
+        vt_ok(vv_renderer_new(&r, renderer[e]));
         vv_image *img = NULL;
         vt_ok(vv_image_new(&img, w->view.width, w->view.height));
         vv_render_options ro;
