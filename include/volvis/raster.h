@@ -175,7 +175,8 @@ vv_status vv_raster_set_capping(vv_raster *r, int on, const vv_cut_plane *bounds
  * Draws the triangles of @p mesh placed by @p model (object to world) with
  * the current camera, lights, material and state. Per-vertex normals are
  * taken from the mesh (transformed by the inverse transpose of @p model);
- * a mesh without normals gets area-weighted vertex normals. The mesh is
+ * a mesh without normals gets area-weighted vertex normals. Triangles with
+ * a NaN or infinite vertex are skipped. The mesh is
  * borrowed: it must stay alive and unchanged until vv_raster_finish or the
  * next vv_raster_begin. Errors: VV_ERR_INVALID (NULL mesh, a triangle index
  * out of range, a singular model matrix), VV_ERR_LIMIT (more than 2^31

@@ -739,6 +739,38 @@ test_convert_rescale_and_strict(void **state) {
     vv_volume_free(v);
 }
 
+/* Scenes of volumes and geometric objects: the ray tracer renders them,
+ * --set passes its options, a bad option value is a usage error, and the
+ * ray caster renders the same scene (skipping the geometry). */
+static void
+test_render_raytrace_scene(void **state) {
+    (void)state;
+    const char *scene = VV_SOURCE_DIR "/examples/mip_floor_shadow.json";
+    const char *png = out_file("mip_floor.png");
+    unlink(png);
+    run_result r = run_cli("render", scene, "--renderer", "raytrace", "--size", "48x40", "--set",
+                           "samples=3", "--set", "jitter=1", "--quality", "2", "-o", png);
+    if (r.status != 0)
+        fail_msg("exit %d: %s", r.status, r.err);
+    assert_string_equal(r.err, "");
+    free_result(&r);
+    check_png(png, 48, 40);
+    const char *png2 = out_file("mip_floor_raycast.png");
+    unlink(png2);
+    r = run_cli("render", scene, "--size", "48x40", "-q", "-o", png2);
+    if (r.status != 0)
+        fail_msg("exit %d: %s", r.status, r.err);
+    free_result(&r);
+    check_png(png2, 48, 40);
+    const char *png3 = out_file("mip_floor_bad.png");
+    unlink(png3);
+    r = run_cli("render", scene, "--renderer", "raytrace", "--set", "max_depth=100", "-o", png3);
+    assert_int_equal(r.status, 2);
+    assert_contains(r.err, "max_depth");
+    free_result(&r);
+    assert_false(file_exists(png3));
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
@@ -750,6 +782,7 @@ main(void) {
         cmocka_unit_test(test_render_png),
         cmocka_unit_test(test_render_failure_keeps_output),
         cmocka_unit_test(test_render_scene),
+        cmocka_unit_test(test_render_raytrace_scene),
         cmocka_unit_test(test_convert_roundtrip),
         cmocka_unit_test(test_convert_rescale_and_strict),
     };

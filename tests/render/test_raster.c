@@ -986,6 +986,24 @@ test_bad_input(void **state) {
     vt_ok(vv_mesh_add_vertex(m, vv_vec3_make(0, 1, 0), NULL));
     vt_ok(vv_mesh_add_triangle(m, 0, 1, 2));
     vt_err(vv_raster_draw_mesh(r, m, vv_mat4_scale(vv_vec3_make(1, 0, 1))));
+    /* a vertex that is not a point: its triangles are skipped, others drawn */
+    {
+        vv_view ov = ortho_view(16, 16, 10);
+        vt_ok(vv_raster_set_view(r, &ov, 0, 100));
+        vv_mesh *q = NULL;
+        const double pq[12] = {-6, -6, 0, 6, -6, 0, 0, 6, 0, 0, 0, 0};
+        const uint32_t iq[6] = {0, 1, 2, 0, 1, 3};
+        q = mesh_from(pq, 4, iq, 2);
+        q->positions[9] = NAN;
+        q->positions[10] = INFINITY;
+        vv_raster_begin(r, vv_vec3_make(0, 0, 0));
+        vt_ok(vv_raster_draw_mesh(r, q, vv_mat4_identity()));
+        vv_image *qi = new_image(16, 16);
+        vt_ok(vv_raster_finish(r, qi, 0));
+        assert_true(count_covered(qi) > 30);
+        vv_image_free(qi);
+        vv_mesh_free(q);
+    }
     m->triangles[2] = 7;
     vt_err(vv_raster_draw_mesh(r, m, vv_mat4_identity()));
     vt_err(vv_raster_draw_mesh(r, NULL, vv_mat4_identity()));

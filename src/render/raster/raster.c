@@ -38,6 +38,8 @@
 #define RS_SWAPPED 8u       /* flags: vertices 1 and 2 were swapped (unclipped triangles) */
 #define RS_BACK 0x80000000u /* visibility id and prim flag: the triangle is seen from behind */
 #define RS_MAX_CAP (2 * VV_MAX_CUT_PLANES + 6)
+#define RS_OC_BAD 0x80000000u /* outcode of a vertex with a NaN or infinite coordinate */
+#define RS_OFF INT32_MIN      /* sxy marker of a vertex outside a clip plane */
 
 typedef struct rs_light {
     int point;
@@ -144,9 +146,10 @@ struct vv_raster {
     uint64_t next_base;
     size_t drawn;
     /* scratch of one draw */
-    float *clip;         /* 4 * n_vertices */
-    uint32_t *oc;        /* outcodes */
-    struct rs_svert *sv; /* screen positions of the vertices with no outcode */
+    float *clip;  /* 4 * n_vertices */
+    uint32_t *oc; /* outcodes */
+    int32_t *sxy; /* 2 * n_vertices: 1/256-pixel screen position, X = RS_OFF if outcode */
+    float *skw;   /* 2 * n_vertices: depth key and 1/w of the vertices with no outcode */
     size_t cap_scratch;
     rs_chunk *chunks;
     int n_chunks;
@@ -223,7 +226,8 @@ vv_raster_free(vv_raster *r) {
     free(r->chunks);
     free(r->clip);
     free(r->oc);
-    free(r->sv);
+    free(r->sxy);
+    free(r->skw);
     free(r->pix);
     free(r);
 }
@@ -236,6 +240,8 @@ vv_raster_set_threads(vv_raster *r, int n) {
 void
 vv_raster_begin(vv_raster *r, vv_vec3 background) {
     const size_t n = (size_t)r->w * (size_t)r->h;
+    const int nt = r->threads > 0 ? r->threads : vv_threads_get();
+#pragma omp parallel for schedule(static) num_threads(nt)
     for (size_t i = 0; i < n; i++) {
         r->pix[i].key = -INFINITY;
         r->pix[i].id = RS_NONE;
@@ -842,31 +848,40 @@ setup_chunk(const rs_setup *s, rs_chunk *ch, size_t t0, size_t t1) {
             ch->err = 2;
             return;
         }
-        const uint32_t o0 = r->oc[vi[0]], o1 = r->oc[vi[1]], o2 = r->oc[vi[2]];
-        if (o0 & o1 & o2)
-            continue;
-        const uint32_t any = o0 | o1 | o2;
-        if (any) {
+        const int32_t *A = r->sxy + 2 * (size_t)vi[0], *B = r->sxy + 2 * (size_t)vi[1],
+                      *C = r->sxy + 2 * (size_t)vi[2];
+        if (A[0] == RS_OFF || B[0] == RS_OFF || C[0] == RS_OFF) {
+            const uint32_t o0 = r->oc[vi[0]], o1 = r->oc[vi[1]], o2 = r->oc[vi[2]];
+            const uint32_t any = o0 | o1 | o2;
+            if ((o0 & o1 & o2) || (any & RS_OC_BAD))
+                continue; /* outside one plane, or a vertex that is not a finite point */
             clip_triangle(s, ch, vi, (uint32_t)t, any);
             continue;
         }
-        const rs_svert *a = &r->sv[vi[0]], *b = &r->sv[vi[1]], *c = &r->sv[vi[2]];
         if (!s->wire) {
             /* the common case of a fine mesh, without a call: no pixel
              * centre between the extreme x (or y) of the vertices */
-            int32_t lo = a->X < b->X ? a->X : b->X, hi = a->X > b->X ? a->X : b->X;
-            lo = c->X < lo ? c->X : lo;
-            hi = c->X > hi ? c->X : hi;
+            int32_t lo = A[0] < B[0] ? A[0] : B[0], hi = A[0] > B[0] ? A[0] : B[0];
+            lo = C[0] < lo ? C[0] : lo;
+            hi = C[0] > hi ? C[0] : hi;
             if (((lo - RS_SUB / 2 + RS_SUB - 1) >> 8) > ((hi - RS_SUB / 2) >> 8))
                 continue;
-            lo = a->Y < b->Y ? a->Y : b->Y;
-            hi = a->Y > b->Y ? a->Y : b->Y;
-            lo = c->Y < lo ? c->Y : lo;
-            hi = c->Y > hi ? c->Y : hi;
+            lo = A[1] < B[1] ? A[1] : B[1];
+            hi = A[1] > B[1] ? A[1] : B[1];
+            lo = C[1] < lo ? C[1] : lo;
+            hi = C[1] > hi ? C[1] : hi;
             if (((lo - RS_SUB / 2 + RS_SUB - 1) >> 8) > ((hi - RS_SUB / 2) >> 8))
                 continue;
         }
-        emit_triangle(s, ch, a, b, c, NULL, (uint32_t)t, 7u);
+        rs_svert v[3];
+        for (int k = 0; k < 3; k++) {
+            const size_t q = 2 * (size_t)vi[k];
+            v[k].X = r->sxy[q];
+            v[k].Y = r->sxy[q + 1];
+            v[k].key = r->skw[q];
+            v[k].iw = r->skw[q + 1];
+        }
+        emit_triangle(s, ch, &v[0], &v[1], &v[2], NULL, (uint32_t)t, 7u);
     }
     if (ch->err)
         return;
@@ -1050,18 +1065,22 @@ vv_raster_draw_mesh(vv_raster *r, const vv_mesh *mesh, vv_mat4 model) {
     if (nv > r->cap_scratch) {
         free(r->clip);
         free(r->oc);
-        free(r->sv);
+        free(r->sxy);
+        free(r->skw);
         r->clip = malloc(4 * nv * sizeof(float));
         r->oc = malloc(nv * sizeof(uint32_t));
-        r->sv = malloc(nv * sizeof *r->sv);
+        r->sxy = malloc(2 * nv * sizeof(int32_t));
+        r->skw = malloc(2 * nv * sizeof(float));
         r->cap_scratch = nv;
-        if (!r->clip || !r->oc || !r->sv) {
+        if (!r->clip || !r->oc || !r->sxy || !r->skw) {
             free(r->clip);
             free(r->oc);
-            free(r->sv);
+            free(r->sxy);
+            free(r->skw);
             r->clip = NULL;
             r->oc = NULL;
-            r->sv = NULL;
+            r->sxy = NULL;
+            r->skw = NULL;
             r->cap_scratch = 0;
             return vv_error_set(VV_ERR_NOMEM, "raster: out of memory for %zu vertices", nv);
         }
@@ -1126,11 +1145,20 @@ vv_raster_draw_mesh(vv_raster *r, const vv_mesh *mesh, vv_mat4 model) {
             const double *pl = r->oplanes[k];
             oc |= (uint32_t)(pl[0] * x + pl[1] * y + pl[2] * z + pl[3] < 0) << (6 + k);
         }
+        if (!(isfinite(c[0]) && isfinite(c[1]) && isfinite(c[2]) && isfinite(c[3])))
+            oc = RS_OC_BAD;
         r->oc[i] = oc;
         if (!oc) {
             /* from the stored floats, as the clipping path does */
             const double cf[4] = {co[0], co[1], co[2], co[3]};
-            project(r, cf, &r->sv[i]);
+            rs_svert sv;
+            project(r, cf, &sv);
+            r->sxy[2 * i] = sv.X;
+            r->sxy[2 * i + 1] = sv.Y;
+            r->skw[2 * i] = sv.key;
+            r->skw[2 * i + 1] = sv.iw;
+        } else {
+            r->sxy[2 * i] = RS_OFF;
         }
     }
     if (!has_normals) {

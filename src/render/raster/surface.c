@@ -719,7 +719,7 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         if (st->cull == SF_CULL_BACK || (st->cull == SF_CULL_AUTO && closed && np == 0))
             cull = positive ? VV_RASTER_CULL_BACK : VV_RASTER_CULL_FRONT;
         vv_raster_set_cull(ras, cull);
-        s = vv_raster_set_capping(ras, st->caps && solid, bounds, n_bounds);
+        s = vv_raster_set_capping(ras, st->caps && solid && !st->wireframe, bounds, n_bounds);
         if (s != VV_OK)
             break;
         vv_raster_set_material(ras, &mat, obj->shading);

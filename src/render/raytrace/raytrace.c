@@ -934,7 +934,7 @@ volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, do
                     vray_point(&r, t + (s + 0.5) * h, q);
                     tau += ob->ext[(int)lut_index_f(ob, sample_value(c, q))] * h;
                 }
-                if (tau > 7) /* T < 0.001 */
+                if (tau > 5.6) /* T < 0.0037, under one 8-bit level */
                     return 0.0f;
             }
             t = te;
@@ -1016,7 +1016,7 @@ shadow_segment(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start, d
         if (gobj_hit(g, &r, start > eps ? start : eps, tmax, &t, &n))
             T *= g->kt;
     }
-    for (int i = 0; i < fr->n_vobj && T > 0.001f; i++) {
+    for (int i = 0; i < fr->n_vobj && T > 0.0037f; i++) {
         const rt_vobj *ob = &fr->vobjs[i];
         if (ob->obj->casts_shadows)
             T *= volume_transmittance(fr, ob, &r, start, tmax);
