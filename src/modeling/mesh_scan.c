@@ -431,14 +431,12 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
     scan_ctx c = {V, L.t, L.n, dims, spacing};
     double bandw = band;
     const float far = (float)bandw;
-    /* the triangles whose box holds a row of axis a get bit a: most
-     * triangles of a fine mesh lie between rows, and the two passes below
-     * visit only the candidates */
-    unsigned char *mask = malloc(L.n ? L.n : 1);
-    uint32_t *cand = malloc((L.n ? L.n : 1) * sizeof *cand);
-    if (!mask || !cand) {
-        free(mask);
-        free(cand);
+    /* one pass over the triangles collects the crossings of all three axes,
+     * per thread (bufs[3 * thread + axis]); most triangles of a fine mesh lie
+     * between rows and leave at the box test */
+    int nth = threads > 0 ? threads : 1;
+    xbuf *bufs = calloc((size_t)nth * 3, sizeof *bufs);
+    if (!bufs) {
         free(votes);
         free(L.t);
         free(L.V);
@@ -446,18 +444,13 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
     }
     {
         long long ntri = (long long)L.n;
-#pragma omp parallel for schedule(dynamic, 32768) num_threads(threads)
-        for (long long t = 0; t < ntri; t++) {
-            const double *p0 = V + 3 * (size_t)L.t[3 * t], *p1 = V + 3 * (size_t)L.t[3 * t + 1],
-                         *p2 = V + 3 * (size_t)L.t[3 * t + 2];
-            int ok[3];
-            for (int k = 0; k < 3; k++) {
-                int lo = iceil(clampd(MIN3(p0[k], p1[k], p2[k]), -1.0, dims[k]));
-                int hi = ifloor(clampd(MAX3(p0[k], p1[k], p2[k]), -1.0, dims[k]));
-                ok[k] = (lo > 0 ? lo : 0) <= (hi < dims[k] - 1 ? hi : dims[k] - 1);
-            }
-            mask[t] = (unsigned char)((ok[1] && ok[2]) | ((ok[2] && ok[0]) << 1) |
-                                      ((ok[0] && ok[1]) << 2));
+#pragma omp parallel num_threads(nth)
+        {
+            xbuf *mine = &bufs[3 * (omp_get_thread_num() % nth)];
+#pragma omp for schedule(dynamic, 4096)
+            for (long long t = 0; t < ntri; t++)
+                for (int a = 0; a < 3; a++)
+                    triangle_rows(&c, (size_t)t, a, &mine[a]);
         }
     }
     {
@@ -470,10 +463,6 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
     for (int a = 0; a < 3 && st == VV_OK; a++) {
         int b = (a + 1) % 3, cc = (a + 2) % 3;
         size_t nrows = (size_t)dims[b] * (size_t)dims[cc];
-        size_t ncand = 0;
-        for (size_t t = 0; t < L.n; t++)
-            if (mask[t] >> a & 1)
-                cand[ncand++] = (uint32_t)t;
         size_t *cnt = calloc(nrows + 1, sizeof *cnt);
         size_t *pos = malloc((nrows + 1) * sizeof *pos);
         if (!cnt || !pos) {
@@ -482,28 +471,13 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
             st = vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory");
             break;
         }
-        long long ntri = (long long)ncand;
-        int nth = threads > 0 ? threads : 1;
-        xbuf *bufs = calloc((size_t)nth, sizeof *bufs);
-        if (!bufs) {
-            free(cnt);
-            free(pos);
-            st = vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory");
-            break;
-        }
-#pragma omp parallel num_threads(nth)
-        {
-            xbuf *mine = &bufs[omp_get_thread_num() % nth];
-#pragma omp for schedule(dynamic, 1024)
-            for (long long t = 0; t < ntri; t++)
-                triangle_rows(&c, cand[t], a, mine);
-        }
         /* crossings grouped by row (in thread order, sorted per row below) */
         int oom = 0;
         for (int th = 0; th < nth; th++) {
-            oom |= bufs[th].oom;
-            for (size_t i = 0; i < bufs[th].n; i++)
-                cnt[bufs[th].v[i].row]++;
+            const xbuf *B = &bufs[3 * th + a];
+            oom |= B->oom;
+            for (size_t i = 0; i < B->n; i++)
+                cnt[B->v[i].row]++;
         }
         size_t total = 0;
         for (size_t r = 0; r < nrows; r++) {
@@ -513,9 +487,6 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
         pos[nrows] = total;
         crossing *xs = oom ? NULL : malloc((total ? total : 1) * sizeof *xs);
         if (!xs) {
-            for (int th = 0; th < nth; th++)
-                free(bufs[th].v);
-            free(bufs);
             free(cnt);
             free(pos);
             st = vv_error_set(VV_ERR_NOMEM, "mesh scan: out of memory for the crossings");
@@ -524,11 +495,12 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
         for (size_t r = 0; r <= nrows; r++)
             cnt[r] = pos[r];
         for (int th = 0; th < nth; th++) {
-            for (size_t i = 0; i < bufs[th].n; i++)
-                xs[pos[bufs[th].v[i].row]++] = bufs[th].v[i].x;
-            free(bufs[th].v);
+            xbuf *B = &bufs[3 * th + a];
+            for (size_t i = 0; i < B->n; i++)
+                xs[pos[B->v[i].row]++] = B->v[i].x;
+            free(B->v);
+            B->v = NULL;
         }
-        free(bufs);
         size_t stride[3] = {1, (size_t)dims[0], (size_t)dims[0] * (size_t)dims[1]};
         long long nr = (long long)nrows;
 #pragma omp parallel for schedule(dynamic, 64) num_threads(threads)
@@ -604,8 +576,9 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
                 sd[i] = -sd[i];
         }
     }
-    free(mask);
-    free(cand);
+    for (int i = 0; i < 3 * nth; i++)
+        free(bufs[i].v);
+    free(bufs);
     free(votes);
     free(L.t);
     free(L.V);
