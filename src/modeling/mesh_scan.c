@@ -129,31 +129,17 @@ xbuf_push(xbuf *b, size_t row, crossing x) {
     b->v[b->n++] = (rowx){row, x};
 }
 
-/* Appends the crossings of triangle t with the rows along axis a. */
+/* Appends the crossings of the triangle P with the rows along axis a whose
+ * (b, c) indices lie in [jb0, jb1] x [jc0, jc1]. */
 static void
-triangle_rows(const scan_ctx *c, size_t t, int a, xbuf *out) {
+triangle_rows_axis(const scan_ctx *c, const double *const P[3], int a, int jb0, int jb1, int jc0,
+                   int jc1, xbuf *out) {
     int b = (a + 1) % 3, cc = (a + 2) % 3;
-    const double *P[3];
     double q[3][2];
     for (int v = 0; v < 3; v++) {
-        P[v] = c->V + 3 * (size_t)c->tri[3 * t + v];
         q[v][0] = P[v][b];
         q[v][1] = P[v][cc];
     }
-    int jb0 = iceil(clampd(MIN3(q[0][0], q[1][0], q[2][0]), -1.0, c->dims[b]));
-    int jb1 = ifloor(clampd(MAX3(q[0][0], q[1][0], q[2][0]), -1.0, c->dims[b]));
-    int jc0 = iceil(clampd(MIN3(q[0][1], q[1][1], q[2][1]), -1.0, c->dims[cc]));
-    int jc1 = ifloor(clampd(MAX3(q[0][1], q[1][1], q[2][1]), -1.0, c->dims[cc]));
-    if (jb0 < 0)
-        jb0 = 0;
-    if (jc0 < 0)
-        jc0 = 0;
-    if (jb1 > c->dims[b] - 1)
-        jb1 = c->dims[b] - 1;
-    if (jc1 > c->dims[cc] - 1)
-        jc1 = c->dims[cc] - 1;
-    if (jb0 > jb1 || jc0 > jc1)
-        return;
     double area = edge_value(q[0], q[1], q[2][0], q[2][1]);
     if (area == 0.0 || !isfinite(area))
         return;
@@ -184,6 +170,30 @@ triangle_rows(const scan_ctx *c, size_t t, int a, xbuf *out) {
             crossing x = {(float)tt, slope, sgn};
             xbuf_push(out, (size_t)jc * (size_t)c->dims[b] + (size_t)jb, x);
         }
+    }
+}
+
+/* Appends the crossings of triangle t with the rows along each axis. */
+static void
+triangle_rows(const scan_ctx *c, size_t t, xbuf out[3]) {
+    const double *P[3];
+    for (int v = 0; v < 3; v++)
+        P[v] = c->V + 3 * (size_t)c->tri[3 * t + v];
+    /* the rows a triangle can cross: index ranges of its box, per axis */
+    int lo[3], hi[3];
+    for (int k = 0; k < 3; k++) {
+        lo[k] = iceil(clampd(MIN3(P[0][k], P[1][k], P[2][k]), -1.0, c->dims[k]));
+        hi[k] = ifloor(clampd(MAX3(P[0][k], P[1][k], P[2][k]), -1.0, c->dims[k]));
+        if (lo[k] < 0)
+            lo[k] = 0;
+        if (hi[k] > c->dims[k] - 1)
+            hi[k] = c->dims[k] - 1;
+    }
+    for (int a = 0; a < 3; a++) {
+        int b = (a + 1) % 3, cc = (a + 2) % 3;
+        if (lo[b] > hi[b] || lo[cc] > hi[cc])
+            continue;
+        triangle_rows_axis(c, P, a, lo[b], hi[b], lo[cc], hi[cc], &out[a]);
     }
 }
 
@@ -449,8 +459,7 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
             xbuf *mine = &bufs[3 * (omp_get_thread_num() % nth)];
 #pragma omp for schedule(dynamic, 4096)
             for (long long t = 0; t < ntri; t++)
-                for (int a = 0; a < 3; a++)
-                    triangle_rows(&c, (size_t)t, a, &mine[a]);
+                triangle_rows(&c, (size_t)t, mine);
         }
     }
     {
