@@ -42,6 +42,8 @@ int cli_render_main(int argc, char **argv);
 void cli_render_usage(FILE *out);
 int cli_convert_main(int argc, char **argv);
 void cli_convert_usage(FILE *out);
+int cli_voxelize_main(int argc, char **argv);
+void cli_voxelize_usage(FILE *out);
 int cli_compress_main(int argc, char **argv);
 void cli_compress_usage(FILE *out);
 int cli_decompress_main(int argc, char **argv);

@@ -331,7 +331,10 @@ world_for_volume(const render_args *r, vv_world **out) {
 static int
 world_for_scene(const render_args *r, vv_world **out) {
     vv_error_clear();
-    vv_status s = vv_scene_load(out, r->input);
+    cli_progress pr; /* geometry objects are voxelized while loading */
+    cli_progress_begin(&pr, r->quiet);
+    vv_status s = vv_scene_load_progress(out, r->input, &pr.p);
+    cli_progress_end(&pr);
     if (s != VV_OK)
         return cli_fail(s, r->input);
     vv_world *w = *out;
