@@ -43,13 +43,11 @@
 #include <time.h>
 
 #include "render/registry.h"
+#include "render/volume_cache.h"
 #include "volvis/render.h"
 
-#define RT_BLOCK 4  /* PARC subvolume side in cells */
-#define RT_LUT 4096 /* transfer-function table entries */
-#define RT_TILE 16  /* image tile side in pixels */
+#define RT_TILE 16 /* image tile side in pixels */
 #define RT_MAX_OBJ 64
-#define RT_MAX_CACHE 64
 #define RT_SPEC 2048                  /* specular table entries */
 #define RT_SGRID 4                    /* shadow grid spacing, voxels */
 #define RT_MIN_WEIGHT (1.0f / 512.0f) /* secondary rays weighing less are not traced */
@@ -98,24 +96,8 @@ ray_at(const vv_ray *r, double t) {
     return v3add(r->origin, v3scale(r->dir, t));
 }
 
-/* ---------------------------------------------------------------------- */
-/* Per-volume cache                                                          */
-
-typedef struct rt_cache {
-    vv_volume *vol; /* reference held */
-    uint64_t modified;
-    int nx, ny, nz; /* cached grid (each >= 2; a 1-voxel axis is duplicated) */
-    size_t sy, sz;
-    float *val;       /* values as float */
-    int8_t (*nrm)[4]; /* unit gradients * 127 (index space), or NULL: on the fly */
-    vv_minmax_grid *mm;
-    uint64_t last_used;
-} rt_cache;
-
 typedef struct rt_state {
-    rt_cache cache[RT_MAX_CACHE];
-    int n_cache;
-    uint64_t clock;
+    vv_vcache_set vc; /* per-volume caches (src/render/volume_cache.h) */
     int parc;         /* PARC skipping on primary and secondary rays */
     int shadows;      /* shadow rays */
     int max_depth;    /* reflection / refraction depth */
@@ -138,18 +120,18 @@ typedef struct rt_light {
 /* One volume object prepared for this render. */
 typedef struct rt_vobj {
     const vv_object *obj;
-    rt_cache *c;
+    vv_vcache *c;
     vv_render_mode mode;
     double w2i[3][4], i2w[3][4];
     float nrm[3][3];
     int dims[3];
-    double vox; /* smallest world length of a voxel step */
-    float lut_lo, lut_scale;
-    float *lut;     /* RT_LUT x {alpha, r*alpha, g*alpha, b*alpha} (projections: alpha, r, g, b) */
-    float *ext;     /* RT_LUT extinction per world unit (composite) */
-    uint8_t *bvis;  /* PARC: the subvolume may contribute */
-    uint8_t *bdist; /* chessboard distance, in subvolumes, to the nearest that may (0: it may) */
-    int bx, by, bz;
+    double vox;             /* smallest world length of a voxel step */
+    vv_vtables tab;         /* TF table, extinction (composite), PARC flags and distances */
+    int owns_tables;        /* tab is this object's (else borrowed from the volume's cache) */
+    const float *lut, *ext; /* tab.lut, tab.ext */
+    const uint8_t *bvis;    /* tab.bvis: the subvolume may contribute */
+    const uint8_t *bdist;   /* tab.bdist: chessboard distance to the nearest that may */
+    int bx, by, bz;         /* subvolume grid */
     float iso;
     float spec[RT_SPEC + 1];
     float amb[3];
@@ -218,270 +200,28 @@ typedef struct rt_hit {
 } rt_hit;
 
 /* ---------------------------------------------------------------------- */
-/* Cache                                                                     */
+/* Volume rays (the caches and sampling are src/render/volume_cache.h)      */
 
-static void
-cache_release(rt_cache *c) {
-    vv_volume_free(c->vol);
-    free(c->val);
-    free(c->nrm);
-    vv_minmax_grid_free(c->mm);
-    memset(c, 0, sizeof *c);
-}
-
-static vv_status
-cache_build(rt_cache *c, vv_volume *vol) {
-    memset(c, 0, sizeof *c);
-    c->nx = vol->dims[0] < 2 ? 2 : vol->dims[0];
-    c->ny = vol->dims[1] < 2 ? 2 : vol->dims[1];
-    c->nz = vol->dims[2] < 2 ? 2 : vol->dims[2];
-    c->sy = (size_t)c->nx;
-    c->sz = (size_t)c->nx * (size_t)c->ny;
-    const size_t n = c->sz * (size_t)c->nz;
-    const int nx = c->nx, ny = c->ny, nz = c->nz;
-    c->val = malloc(n * sizeof *c->val);
-    if (n <= ((size_t)1 << 31))
-        c->nrm = malloc(n * sizeof *c->nrm);
-    if (!c->val) {
-        cache_release(c);
-        return vv_error_set(VV_ERR_NOMEM, "out of memory for %zu voxels", n);
-    }
-    vv_status s = vv_minmax_grid_build(&c->mm, vol, RT_BLOCK);
-    if (s != VV_OK) {
-        cache_release(c);
-        return s;
-    }
-#pragma omp parallel for schedule(static)
-    for (int k = 0; k < nz; k++)
-        for (int j = 0; j < ny; j++) {
-            int sj = j < vol->dims[1] ? j : vol->dims[1] - 1;
-            int sk = k < vol->dims[2] ? k : vol->dims[2] - 1;
-            size_t base = (size_t)k * c->sz + (size_t)j * c->sy;
-            for (int i = 0; i < nx; i++) {
-                double x = vv_volume_get(vol, i < vol->dims[0] ? i : vol->dims[0] - 1, sj, sk);
-                c->val[base + (size_t)i] = x == x ? (float)x : (float)vol->range[0];
-            }
-        }
-    if (c->nrm) {
-        /* central differences in index units, one-sided at the borders: the
-         * ray caster's gradients */
-#pragma omp parallel for schedule(static)
-        for (int k = 0; k < nz; k++)
-            for (int j = 0; j < ny; j++) {
-                size_t base = (size_t)k * c->sz + (size_t)j * c->sy;
-                int j0 = j > 0 ? j - 1 : j, j1 = j < ny - 1 ? j + 1 : j;
-                int k0 = k > 0 ? k - 1 : k, k1 = k < nz - 1 ? k + 1 : k;
-                for (int i = 0; i < nx; i++) {
-                    int i0 = i > 0 ? i - 1 : i, i1 = i < nx - 1 ? i + 1 : i;
-                    const float *v = c->val;
-                    float gx = (v[base + (size_t)i1] - v[base + (size_t)i0]) / (float)(i1 - i0);
-                    float gy = (v[(size_t)k * c->sz + (size_t)j1 * c->sy + (size_t)i] -
-                                v[(size_t)k * c->sz + (size_t)j0 * c->sy + (size_t)i]) /
-                               (float)(j1 - j0);
-                    float gz = (v[(size_t)k1 * c->sz + (size_t)j * c->sy + (size_t)i] -
-                                v[(size_t)k0 * c->sz + (size_t)j * c->sy + (size_t)i]) /
-                               (float)(k1 - k0);
-                    float g = sqrtf(gx * gx + gy * gy + gz * gz);
-                    int8_t *o = c->nrm[base + (size_t)i];
-                    if (g > 0) {
-                        float sc = 127.0f / g;
-                        o[0] = (int8_t)lrintf(gx * sc);
-                        o[1] = (int8_t)lrintf(gy * sc);
-                        o[2] = (int8_t)lrintf(gz * sc);
-                    } else {
-                        o[0] = o[1] = o[2] = 0;
-                    }
-                    o[3] = 0;
-                }
-            }
-    }
-    c->vol = vv_volume_ref(vol);
-    c->modified = vol->modified;
-    return VV_OK;
-}
-
-static vv_status
-cache_get(rt_state *st, vv_volume *vol, rt_cache **out) {
-    st->clock++;
-    for (int i = 0; i < st->n_cache; i++)
-        if (st->cache[i].vol == vol) {
-            if (st->cache[i].modified != vol->modified) {
-                cache_release(&st->cache[i]);
-                vv_status s = cache_build(&st->cache[i], vol);
-                if (s != VV_OK) {
-                    st->cache[i] = st->cache[--st->n_cache];
-                    return s;
-                }
-            }
-            st->cache[i].last_used = st->clock;
-            *out = &st->cache[i];
-            return VV_OK;
-        }
-    int slot = st->n_cache;
-    if (slot == RT_MAX_CACHE) {
-        slot = 0;
-        for (int i = 1; i < st->n_cache; i++)
-            if (st->cache[i].last_used < st->cache[slot].last_used)
-                slot = i;
-        cache_release(&st->cache[slot]);
-    } else {
-        st->n_cache++;
-    }
-    vv_status s = cache_build(&st->cache[slot], vol);
-    if (s != VV_OK) {
-        st->cache[slot] = st->cache[--st->n_cache];
-        return s;
-    }
-    st->cache[slot].last_used = st->clock;
-    *out = &st->cache[slot];
-    return VV_OK;
-}
-
-/* ---------------------------------------------------------------------- */
-/* Volume sampling                                                           */
-
-static inline size_t
-cell_of(const rt_cache *c, const float p[3], float f[3]) {
-    float x = p[0] < 0 ? 0 : p[0], y = p[1] < 0 ? 0 : p[1], z = p[2] < 0 ? 0 : p[2];
-    int i = (int)x, j = (int)y, k = (int)z;
-    i = i > c->nx - 2 ? c->nx - 2 : i;
-    j = j > c->ny - 2 ? c->ny - 2 : j;
-    k = k > c->nz - 2 ? c->nz - 2 : k;
-    f[0] = x - (float)i;
-    f[1] = y - (float)j;
-    f[2] = z - (float)k;
-    f[0] = f[0] > 1 ? 1 : f[0];
-    f[1] = f[1] > 1 ? 1 : f[1];
-    f[2] = f[2] > 1 ? 1 : f[2];
-    return (size_t)k * c->sz + (size_t)j * c->sy + (size_t)i;
-}
-
-static inline float
-lerpf(float a, float b, float t) {
-    return a + (b - a) * t;
-}
-
-static inline float
-sample_value(const rt_cache *c, const float p[3]) {
-    float f[3];
-    const size_t o = cell_of(c, p, f);
-    const float *v = c->val + o;
-    const size_t sy = c->sy, sz = c->sz;
-    float c00 = lerpf(v[0], v[1], f[0]);
-    float c10 = lerpf(v[sy], v[sy + 1], f[0]);
-    float c01 = lerpf(v[sz], v[sz + 1], f[0]);
-    float c11 = lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
-    return lerpf(lerpf(c00, c10, f[1]), lerpf(c01, c11, f[1]), f[2]);
-}
-
-/* Index-space gradient direction at p (not normalised). */
-static void
-sample_gradient(const rt_cache *c, const float p[3], float g[3]) {
-    if (c->nrm) {
-        float f[3];
-        const size_t o = cell_of(c, p, f);
-        const size_t off[8] = {o,         o + 1,         o + c->sy,         o + c->sy + 1,
-                               o + c->sz, o + c->sz + 1, o + c->sz + c->sy, o + c->sz + c->sy + 1};
-        for (int a = 0; a < 3; a++) {
-            float x0 = lerpf(c->nrm[off[0]][a], c->nrm[off[1]][a], f[0]);
-            float x1 = lerpf(c->nrm[off[2]][a], c->nrm[off[3]][a], f[0]);
-            float x2 = lerpf(c->nrm[off[4]][a], c->nrm[off[5]][a], f[0]);
-            float x3 = lerpf(c->nrm[off[6]][a], c->nrm[off[7]][a], f[0]);
-            g[a] = lerpf(lerpf(x0, x1, f[1]), lerpf(x2, x3, f[1]), f[2]);
-        }
-        return;
-    }
-    for (int a = 0; a < 3; a++) {
-        float pa[3] = {p[0], p[1], p[2]}, pb[3] = {p[0], p[1], p[2]};
-        pa[a] -= 0.5f;
-        pb[a] += 0.5f;
-        g[a] = sample_value(c, pb) - sample_value(c, pa);
-    }
+/* The world ray over [tmin, tmax] clipped to a volume in its index space. */
+static inline int
+vray_setup(const rt_vobj *ob, const vv_ray *wr, double tmin, double tmax, vv_vray *r) {
+    return vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, wr, tmin, tmax, r);
 }
 
 static inline float
 lut_index_f(const rt_vobj *o, float v) {
-    float x = (v - o->lut_lo) * o->lut_scale;
-    return x < 0 ? 0 : x > RT_LUT - 1 ? RT_LUT - 1 : x;
-}
-
-/* A world ray mapped into a volume's index space and clipped to its grid
- * box and cut planes. */
-typedef struct rt_vray {
-    float o[3], d[3]; /* index point at t = tb, index direction per world unit */
-    float inv[3];
-    double t0, t1, tb;
-} rt_vray;
-
-static int
-vray_setup(const rt_vobj *ob, const vv_ray *wr, double tmin, double tmax, rt_vray *r) {
-    double o[3], d[3];
-    for (int a = 0; a < 3; a++) {
-        o[a] = ob->w2i[a][0] * wr->origin.x + ob->w2i[a][1] * wr->origin.y +
-               ob->w2i[a][2] * wr->origin.z + ob->w2i[a][3];
-        d[a] = ob->w2i[a][0] * wr->dir.x + ob->w2i[a][1] * wr->dir.y + ob->w2i[a][2] * wr->dir.z;
-    }
-    double t0 = tmin, t1 = tmax;
-    for (int a = 0; a < 3; a++) {
-        double hi = ob->dims[a] - 1;
-        if (fabs(d[a]) < 1e-300) {
-            if (o[a] < 0 || o[a] > hi)
-                return 0;
-            continue;
-        }
-        double ta = (0 - o[a]) / d[a], tb = (hi - o[a]) / d[a];
-        if (ta > tb) {
-            double tt = ta;
-            ta = tb;
-            tb = tt;
-        }
-        t0 = ta > t0 ? ta : t0;
-        t1 = tb < t1 ? tb : t1;
-    }
-    for (int p = 0; p < ob->n_planes; p++)
-        if (!vv_plane_clip_ray(ob->planes[p], *wr, &t0, &t1))
-            return 0;
-    if (!(t0 <= t1))
-        return 0;
-    r->tb = t0;
-    for (int a = 0; a < 3; a++) {
-        r->o[a] = (float)(o[a] + t0 * d[a]);
-        r->d[a] = (float)d[a];
-        r->inv[a] = fabs(d[a]) < 1e-30 ? 0.0f : (float)(1.0 / d[a]);
-    }
-    r->t0 = t0;
-    r->t1 = t1;
-    return 1;
-}
-
-static inline void
-vray_point(const rt_vray *r, double t, float p[3]) {
-    float tf = (float)(t - r->tb);
-    p[0] = r->o[0] + tf * r->d[0];
-    p[1] = r->o[1] + tf * r->d[1];
-    p[2] = r->o[2] + tf * r->d[2];
-}
-
-static inline size_t
-block_of(const rt_vobj *ob, const float p[3]) {
-    int bi = (int)((p[0] > 0 ? p[0] : 0) * (1.0f / RT_BLOCK));
-    int bj = (int)((p[1] > 0 ? p[1] : 0) * (1.0f / RT_BLOCK));
-    int bk = (int)((p[2] > 0 ? p[2] : 0) * (1.0f / RT_BLOCK));
-    bi = bi >= ob->bx ? ob->bx - 1 : bi;
-    bj = bj >= ob->by ? ob->by - 1 : bj;
-    bk = bk >= ob->bz ? ob->bz - 1 : bk;
-    return ((size_t)bk * (size_t)ob->by + (size_t)bj) * (size_t)ob->bx + (size_t)bi;
+    return vv_vtables_index(&o->tab, v);
 }
 
 /* World parameter where the ray leaves the subvolume containing p. */
 static inline double
-block_exit(const rt_vray *r, const float p[3], double t) {
+block_exit(const vv_vray *r, const float p[3], double t) {
     float te = INFINITY;
     for (int a = 0; a < 3; a++) {
         if (r->inv[a] == 0)
             continue;
-        float b = (float)(int)((p[a] > 0 ? p[a] : 0) * (1.0f / RT_BLOCK));
-        float bound = (r->d[a] > 0 ? b + 1 : b) * (float)RT_BLOCK;
+        float b = (float)(int)((p[a] > 0 ? p[a] : 0) * (1.0f / VV_VC_BLOCK));
+        float bound = (r->d[a] > 0 ? b + 1 : b) * (float)VV_VC_BLOCK;
         float ta = (bound - p[a]) * r->inv[a];
         te = ta < te ? ta : te;
     }
@@ -492,25 +232,20 @@ block_exit(const rt_vray *r, const float p[3], double t) {
 /* World parameter where the ray leaves the cube of 2 dist - 1 subvolumes
  * around the one containing p, all of which are empty (dist >= 1). */
 static inline double
-leap_exit(const rt_vobj *ob, const rt_vray *r, const float p[3], double t, int dist) {
+leap_exit(const rt_vobj *ob, const vv_vray *r, const float p[3], double t, int dist) {
     float te = INFINITY;
     for (int a = 0; a < 3; a++) {
         if (r->inv[a] == 0)
             continue;
         const int nb = a == 0 ? ob->bx : a == 1 ? ob->by : ob->bz;
-        int b = (int)((p[a] > 0 ? p[a] : 0) * (1.0f / RT_BLOCK));
+        int b = (int)((p[a] > 0 ? p[a] : 0) * (1.0f / VV_VC_BLOCK));
         b = b >= nb ? nb - 1 : b;
-        float bound = r->d[a] > 0 ? (float)(b + dist) * RT_BLOCK : (float)(b - dist + 1) * RT_BLOCK;
+        float bound =
+            r->d[a] > 0 ? (float)(b + dist) * VV_VC_BLOCK : (float)(b - dist + 1) * VV_VC_BLOCK;
         float ta = (bound - p[a]) * r->inv[a];
         te = ta < te ? ta : te;
     }
     return t + (te > 1e-6f ? te : 1e-6f);
-}
-
-static inline double
-ceil_pos(double x) {
-    double i = floor(x);
-    return i < x ? i + 1 : i;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -907,10 +642,10 @@ nearest_hit(const rt_frame *fr, const vv_ray *wr, double tmin, double tmax, int 
 static float
 volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double tmin,
                      double tmax) {
-    rt_vray r;
+    vv_vray r;
     if (!vray_setup(ob, wr, tmin, tmax, &r))
         return 1.0f;
-    const rt_cache *c = ob->c;
+    const vv_vcache *c = ob->c;
     const double dt = fr->dt;
     if (ob->mode == VV_MODE_COMPOSITE) {
         /* exp(-sum sigma h): each visible subvolume's piece of the ray is cut
@@ -920,19 +655,19 @@ volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, do
         const double ds = 2 * ob->vox > dt ? 2 * ob->vox : dt; /* shadows are smooth */
         while (t < r.t1) {
             float p[3];
-            vray_point(&r, t, p);
-            const size_t b = block_of(ob, p);
+            vv_vray_point(&r, t, p);
+            const size_t b = vv_vcache_block(ob->c, p);
             double te = ob->bdist[b] ? leap_exit(ob, &r, p, t, ob->bdist[b]) : block_exit(&r, p, t);
             te = te < r.t1 ? te : r.t1;
             if (ob->bvis[b]) {
                 const double len = te - t;
-                int n = (int)ceil_pos(len / ds);
+                int n = (int)vv_ceil_pos(len / ds);
                 n = n < 1 ? 1 : n;
                 const double h = len / n;
                 for (int s = 0; s < n; s++) {
                     float q[3];
-                    vray_point(&r, t + (s + 0.5) * h, q);
-                    tau += ob->ext[(int)lut_index_f(ob, sample_value(c, q))] * h;
+                    vv_vray_point(&r, t + (s + 0.5) * h, q);
+                    tau += ob->ext[(int)lut_index_f(ob, vv_vcache_sample(c, q))] * h;
                 }
                 if (tau > 5.6) /* T < 0.0037, under one 8-bit level */
                     return 0.0f;
@@ -946,18 +681,18 @@ volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, do
         double t = r.t0;
         while (t <= r.t1) {
             float p[3];
-            vray_point(&r, t, p);
-            const size_t b = block_of(ob, p);
+            vv_vray_point(&r, t, p);
+            const size_t b = vv_vcache_block(ob->c, p);
             double te = ob->bdist[b] ? leap_exit(ob, &r, p, t, ob->bdist[b]) : block_exit(&r, p, t);
             if (ob->bvis[b]) {
                 double tl = te < r.t1 ? te : r.t1;
                 for (double ts = t; ts <= tl; ts += dt) {
-                    vray_point(&r, ts, p);
-                    if (sample_value(c, p) >= ob->iso)
+                    vv_vray_point(&r, ts, p);
+                    if (vv_vcache_sample(c, p) >= ob->iso)
                         return 0.0f;
                 }
-                vray_point(&r, tl, p);
-                if (sample_value(c, p) >= ob->iso)
+                vv_vray_point(&r, tl, p);
+                if (vv_vcache_sample(c, p) >= ob->iso)
                     return 0.0f;
             }
             t = te;
@@ -971,8 +706,8 @@ volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, do
     long cnt = 0;
     for (double t = r.t0; t <= r.t1; t += dt) {
         float p[3];
-        vray_point(&r, t, p);
-        float x = sample_value(c, p);
+        vv_vray_point(&r, t, p);
+        float x = vv_vcache_sample(c, p);
         if (mip)
             best = x > best ? x : best;
         else if (minip)
@@ -1092,7 +827,8 @@ sweep_light(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
                         v[k] = T[((size_t)q[2] * (size_t)gd[1] + (size_t)q[1]) * (size_t)gd[0] +
                                  (size_t)q[0]];
                     }
-                    const float tq = lerpf(lerpf(v[0], v[1], fb), lerpf(v[2], v[3], fb), fc);
+                    const float tq =
+                        vv_lerpf(vv_lerpf(v[0], v[1], fb), vv_lerpf(v[2], v[3], fb), fc);
                     t = tq > 0 ? tq * shadow_segment(fr, wp, lt, 0, seg) : 0.0f;
                 }
             }
@@ -1128,9 +864,10 @@ volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float p
         const float *T = ob->sweep[l];
         const size_t sy = (size_t)ob->gdim[0], sz = sy * (size_t)ob->gdim[1];
         const float *v = T + (size_t)i0[2] * sz + (size_t)i0[1] * sy + (size_t)i0[0];
-        float x0 = lerpf(v[0], v[1], f[0]), x1 = lerpf(v[sy], v[sy + 1], f[0]);
-        float x2 = lerpf(v[sz], v[sz + 1], f[0]), x3 = lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
-        return lerpf(lerpf(x0, x1, f[1]), lerpf(x2, x3, f[1]), f[2]);
+        float x0 = vv_lerpf(v[0], v[1], f[0]), x1 = vv_lerpf(v[sy], v[sy + 1], f[0]);
+        float x2 = vv_lerpf(v[sz], v[sz + 1], f[0]),
+              x3 = vv_lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
+        return vv_lerpf(vv_lerpf(x0, x1, f[1]), vv_lerpf(x2, x3, f[1]), f[2]);
     }
     if (!ob->sgrid[l]) /* isosurfaces, or shadow_grid=0: an exact shadow ray */
         return shadow_ray(fr, v3(pw[0], pw[1], pw[2]), &fr->lights[l], ob->vox);
@@ -1173,9 +910,9 @@ volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float p
         }
         v[k] = T;
     }
-    float x0 = lerpf(v[0], v[1], f[0]), x1 = lerpf(v[2], v[3], f[0]);
-    float x2 = lerpf(v[4], v[5], f[0]), x3 = lerpf(v[6], v[7], f[0]);
-    return lerpf(lerpf(x0, x1, f[1]), lerpf(x2, x3, f[1]), f[2]);
+    float x0 = vv_lerpf(v[0], v[1], f[0]), x1 = vv_lerpf(v[2], v[3], f[0]);
+    float x2 = vv_lerpf(v[4], v[5], f[0]), x3 = vv_lerpf(v[6], v[7], f[0]);
+    return vv_lerpf(vv_lerpf(x0, x1, f[1]), vv_lerpf(x2, x3, f[1]), f[2]);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -1332,7 +1069,7 @@ composite_sample(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, const 
     const float w = 1 - *A;
     if (ob->obj->shading) {
         float g[3], pw[3], o3[3];
-        sample_gradient(ob->c, p, g);
+        vv_vcache_gradient(ob->c, p, g);
         pw[0] = (float)(wr->origin.x + t * wr->dir.x);
         pw[1] = (float)(wr->origin.y + t * wr->dir.y);
         pw[2] = (float)(wr->origin.z + t * wr->dir.z);
@@ -1352,19 +1089,19 @@ composite_sample(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, const 
  * subvolume, leaping over empty ones, the same samples t = k dt as the
  * general loop below. */
 static void
-march_one(const rt_frame *fr, const rt_vobj *ob, const rt_vray *r, const vv_ray *wr,
+march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray *wr,
           const float v[3], float C[3], float *Aout, float *dep) {
     const double dt = fr->dt, inv_dt = 1.0 / fr->dt;
-    const rt_cache *c = ob->c;
+    const vv_vcache *c = ob->c;
     float A = 0;
-    double k = ceil_pos(r->t0 * inv_dt);
+    double k = vv_ceil_pos(r->t0 * inv_dt);
     const double kend = floor(r->t1 * inv_dt);
     while (k <= kend) {
         float p[3];
-        vray_point(r, k * dt, p);
-        const size_t b = block_of(ob, p);
+        vv_vray_point(r, k * dt, p);
+        const size_t b = vv_vcache_block(ob->c, p);
         if (!ob->bvis[b]) {
-            const double ks = ceil_pos(leap_exit(ob, r, p, k * dt, ob->bdist[b]) * inv_dt);
+            const double ks = vv_ceil_pos(leap_exit(ob, r, p, k * dt, ob->bdist[b]) * inv_dt);
             k = ks > k + 1 ? ks : k + 1;
             continue;
         }
@@ -1373,8 +1110,8 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const rt_vray *r, const vv_ray 
         klast = klast < k ? k : klast;
         for (; k <= klast; k++) {
             const double t = k * dt;
-            vray_point(r, t, p);
-            const float *e = ob->lut + 4 * (int)lut_index_f(ob, sample_value(c, p));
+            vv_vray_point(r, t, p);
+            const float *e = ob->lut + 4 * (int)lut_index_f(ob, vv_vcache_sample(c, p));
             if (e[0] <= 0)
                 continue;
             composite_sample(fr, ob, wr, v, e, p, t, C, &A);
@@ -1395,7 +1132,7 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const rt_vray *r, const vv_ray 
 static void
 march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int primary,
               float weight, float C[3], float *Aout, float *dep) {
-    rt_vray rays[RT_MAX_OBJ];
+    vv_vray rays[RT_MAX_OBJ];
     int act[RT_MAX_OBJ];
     int na = 0;
     double tmin = INFINITY, tmax = -INFINITY;
@@ -1428,7 +1165,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
     int has_prev[RT_MAX_OBJ];
     for (int i = 0; i < na; i++)
         has_prev[i] = 0;
-    double k = ceil_pos(tmin / dt);
+    double k = vv_ceil_pos(tmin / dt);
     const double kend = floor(tmax / dt);
     while (k <= kend) {
         const double t = k * dt;
@@ -1437,7 +1174,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
         int sampled = 0;
         for (int ai = 0; ai < na; ai++) {
             const rt_vobj *ob = &fr->vobjs[act[ai]];
-            const rt_vray *r = &rays[ai];
+            const vv_vray *r = &rays[ai];
             if (t < r->t0 || t > r->t1) {
                 if (t < r->t0 && r->t0 < skip_to)
                     skip_to = r->t0;
@@ -1445,9 +1182,9 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                 continue;
             }
             float p[3];
-            vray_point(r, t, p);
-            const rt_cache *c = ob->c;
-            const size_t b = block_of(ob, p);
+            vv_vray_point(r, t, p);
+            const vv_vcache *c = ob->c;
+            const size_t b = vv_vcache_block(ob->c, p);
             if (!ob->bvis[b]) {
                 double te = leap_exit(ob, r, p, t, ob->bdist[b]);
                 if (te < skip_to)
@@ -1455,15 +1192,15 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                 if (ob->mode == VV_MODE_ISO) {
                     double tx = te < r->t1 ? te : r->t1;
                     float px[3];
-                    vray_point(r, tx, px);
-                    prev_v[ai] = sample_value(c, px);
+                    vv_vray_point(r, tx, px);
+                    prev_v[ai] = vv_vcache_sample(c, px);
                     prev_t[ai] = tx;
                     has_prev[ai] = 1;
                 }
                 continue;
             }
             sampled = 1;
-            const float val = sample_value(c, p);
+            const float val = vv_vcache_sample(c, p);
             if (ob->mode == VV_MODE_ISO) {
                 const float iso = ob->iso;
                 double th = -1;
@@ -1476,8 +1213,8 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                     for (int it = 0; it < 10; it++) {
                         double tm = 0.5 * (ta + tb);
                         float pm[3];
-                        vray_point(r, tm, pm);
-                        float vm = sample_value(c, pm);
+                        vv_vray_point(r, tm, pm);
+                        float vm = vv_vcache_sample(c, pm);
                         if ((va < iso) == (vm < iso)) {
                             ta = tm;
                             va = vm;
@@ -1492,8 +1229,8 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                 has_prev[ai] = 1;
                 if (th >= 0) {
                     float ph[3], g[3], pw[3], col[3];
-                    vray_point(r, th, ph);
-                    sample_gradient(c, ph, g);
+                    vv_vray_point(r, th, ph);
+                    vv_vcache_gradient(c, ph, g);
                     pw[0] = (float)(wr->origin.x + th * wr->dir.x);
                     pw[1] = (float)(wr->origin.y + th * wr->dir.y);
                     pw[2] = (float)(wr->origin.z + th * wr->dir.z);
@@ -1543,7 +1280,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
         if (A >= fr->et)
             break;
         if (!sampled && skip_to < INFINITY) {
-            double ks = ceil_pos(skip_to / dt);
+            double ks = vv_ceil_pos(skip_to / dt);
             if (ks > next_k)
                 next_k = ks;
         }
@@ -1557,18 +1294,18 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
 static int
 project_volume(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double tlim, float *value,
                float *depth) {
-    rt_vray r;
+    vv_vray r;
     if (!vray_setup(ob, wr, 0, tlim, &r))
         return 0;
     const double dt = fr->dt;
-    const rt_cache *c = ob->c;
-    double k = ceil_pos(r.t0 / dt);
+    const vv_vcache *c = ob->c;
+    double k = vv_ceil_pos(r.t0 / dt);
     const double kend = floor(r.t1 / dt);
     if (k > kend) {
         float p[3];
         double tm = 0.5 * (r.t0 + r.t1);
-        vray_point(&r, tm, p);
-        *value = sample_value(c, p);
+        vv_vray_point(&r, tm, p);
+        *value = vv_vcache_sample(c, p);
         *depth = (float)tm;
         return 1;
     }
@@ -1577,8 +1314,8 @@ project_volume(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double t
         long n = 0;
         for (; k <= kend; k++) {
             float p[3];
-            vray_point(&r, k * dt, p);
-            sum += sample_value(c, p);
+            vv_vray_point(&r, k * dt, p);
+            sum += vv_vcache_sample(c, p);
             n++;
         }
         *value = (float)(sum / (double)n);
@@ -1587,16 +1324,16 @@ project_volume(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double t
     }
     const int mip = ob->mode == VV_MODE_MIP;
     const int parc = fr->st->parc;
-    const float *bmin = c->mm->min, *bmax = c->mm->max;
+    const float *bmin = c->bmin, *bmax = c->bmax;
     float best = mip ? -INFINITY : INFINITY;
     double tbest = r.t0;
     while (k <= kend) {
         float p[3];
-        vray_point(&r, k * dt, p);
-        const size_t b = block_of(ob, p);
+        vv_vray_point(&r, k * dt, p);
+        const size_t b = vv_vcache_block(ob->c, p);
         const double te = block_exit(&r, p, k * dt);
         if (parc && (mip ? bmax[b] <= best : bmin[b] >= best)) {
-            const double ks = ceil_pos(te / dt);
+            const double ks = vv_ceil_pos(te / dt);
             k = ks > k + 1 ? ks : k + 1;
             continue;
         }
@@ -1604,8 +1341,8 @@ project_volume(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double t
         klast = klast < kend ? klast : kend;
         klast = klast < k ? k : klast;
         for (; k <= klast; k++) {
-            vray_point(&r, k * dt, p);
-            const float x = sample_value(c, p);
+            vv_vray_point(&r, k * dt, p);
+            const float x = vv_vcache_sample(c, p);
             if (mip ? x > best : x < best) {
                 best = x;
                 tbest = k * dt;
@@ -1670,7 +1407,7 @@ prepare_volume(rt_frame *fr, rt_vobj *ro, const vv_object *obj) {
     memset(ro, 0, sizeof *ro);
     ro->obj = obj;
     ro->mode = obj->mode;
-    vv_status s = cache_get(fr->st, obj->volume, &ro->c);
+    vv_status s = vv_vcache_get(&fr->st->vc, obj->volume, &ro->c);
     if (s != VV_OK)
         return vv_error_prefix(s, "object '%s'", obj->name);
     vv_mat4 i2w = vv_object_index_to_world(obj);
@@ -1701,127 +1438,33 @@ prepare_volume(rt_frame *fr, rt_vobj *ro, const vv_object *obj) {
     ro->base[0] = (float)obj->material.color.x;
     ro->base[1] = (float)obj->material.color.y;
     ro->base[2] = (float)obj->material.color.z;
-    ro->iso = (float)obj->isovalue;
+    ro->iso = (float)(obj->isovalue - ro->c->qoff); /* stored units */
     for (int p = 0; p < w->n_cut_planes && ro->n_planes < 2 * VV_MAX_CUT_PLANES; p++)
         ro->planes[ro->n_planes++] =
             vv_plane_from_point_normal(w->cut_planes[p].point, w->cut_planes[p].normal);
     for (int p = 0; p < obj->n_cut_planes && ro->n_planes < 2 * VV_MAX_CUT_PLANES; p++)
         ro->planes[ro->n_planes++] =
             vv_plane_from_point_normal(obj->cut_planes[p].point, obj->cut_planes[p].normal);
-    ro->bx = ro->c->mm->dims[0];
-    ro->by = ro->c->mm->dims[1];
-    ro->bz = ro->c->mm->dims[2];
+    ro->bx = ro->c->bx;
+    ro->by = ro->c->by;
+    ro->bz = ro->c->bz;
     return VV_OK;
 }
 
-/* The chessboard distance from each subvolume to the nearest one that may
- * contribute, capped at 255, by two chamfer passes over the 26 neighbours
- * (exact for this metric). A ray in a subvolume at distance d leaps to
- * where it leaves the cube of 2d - 1 subvolumes around it, all empty. */
-static vv_status
-prepare_distance(rt_vobj *ro) {
-    const int nx = ro->bx, ny = ro->by, nz = ro->bz;
-    const size_t n = (size_t)nx * (size_t)ny * (size_t)nz;
-    uint8_t *d = malloc(n);
-    if (!d)
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    for (size_t b = 0; b < n; b++)
-        d[b] = ro->bvis[b] ? 0 : 255;
-    for (int pass = 0; pass < 2; pass++) {
-        const int st = pass == 0 ? 1 : -1;
-        for (int k = pass == 0 ? 0 : nz - 1; k >= 0 && k < nz; k += st)
-            for (int j = pass == 0 ? 0 : ny - 1; j >= 0 && j < ny; j += st)
-                for (int i = pass == 0 ? 0 : nx - 1; i >= 0 && i < nx; i += st) {
-                    const size_t b = ((size_t)k * (size_t)ny + (size_t)j) * (size_t)nx + (size_t)i;
-                    int best = d[b];
-                    if (best == 0)
-                        continue;
-                    for (int dk = -1; dk <= 0; dk++)
-                        for (int dj = -1; dj <= 1; dj++)
-                            for (int di = -1; di <= 1; di++) {
-                                if (dk == 0 && (dj > 0 || (dj == 0 && di >= 0)))
-                                    continue;
-                                const int kk = k + st * dk, jj = j + st * dj, ii = i + st * di;
-                                if (kk < 0 || kk >= nz || jj < 0 || jj >= ny || ii < 0 || ii >= nx)
-                                    continue;
-                                const int v =
-                                    d[((size_t)kk * (size_t)ny + (size_t)jj) * (size_t)nx +
-                                      (size_t)ii] +
-                                    1;
-                                best = v < best ? v : best;
-                            }
-                    d[b] = (uint8_t)(best > 255 ? 255 : best);
-                }
-    }
-    ro->bdist = d;
-    return VV_OK;
-}
-
-/* TF table (opacity corrected for dt, colour premultiplied), extinction
- * table, and the PARC flags: may a subvolume contribute? */
+/* The TF table (opacity corrected for dt, colour premultiplied), the
+ * extinction table and the PARC flags and distances (shared with the ray
+ * caster, src/render/volume_cache.h), and the shadow grids. */
 static vv_status
 build_tables(rt_frame *fr, rt_vobj *ro) {
     const vv_object *obj = ro->obj;
-    const rt_cache *c = ro->c;
-    const size_t nb = (size_t)ro->bx * (size_t)ro->by * (size_t)ro->bz;
-    ro->bvis = malloc(nb);
-    ro->lut = malloc(sizeof(float) * 4 * RT_LUT);
-    ro->ext = malloc(sizeof(float) * RT_LUT);
-    int *nz = malloc(sizeof(int) * (RT_LUT + 1));
-    if (!ro->bvis || !ro->lut || !ro->ext || !nz) {
-        free(nz);
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    }
-    double lo = obj->volume->range[0], hi = obj->volume->range[1];
-    if (!(hi > lo))
-        hi = lo + 1;
-    ro->lut_lo = (float)lo;
-    ro->lut_scale = (float)((RT_LUT - 1) / (hi - lo));
-    const double unit = obj->tf.opacity_unit_distance > 0 ? obj->tf.opacity_unit_distance : 1.0;
-    nz[0] = 0;
-    for (int i = 0; i < RT_LUT; i++) {
-        double x = lo + (hi - lo) * i / (RT_LUT - 1);
-        double a;
-        vv_vec3 col;
-        if (obj->segmentation == VV_SEG_THRESHOLD) {
-            a = x >= obj->threshold ? 1.0 : 0.0;
-            col = obj->material.color;
-        } else {
-            a = vv_tf_eval_opacity(&obj->tf, x);
-            col = vv_tf_eval_color(&obj->tf, x);
-        }
-        a = a <= 0 ? 0 : a >= 1 ? 1 : a;
-        ro->ext[i] = a >= 1 ? 1e30f : (float)(-log1p(-a) / unit);
-        if (ro->mode == VV_MODE_COMPOSITE) {
-            double ac = a >= 1 ? 1 : 1.0 - pow(1.0 - a, fr->dt / unit);
-            ro->lut[4 * i + 0] = (float)ac;
-            ro->lut[4 * i + 1] = (float)(col.x * ac);
-            ro->lut[4 * i + 2] = (float)(col.y * ac);
-            ro->lut[4 * i + 3] = (float)(col.z * ac);
-        } else {
-            ro->lut[4 * i + 0] = (float)a;
-            ro->lut[4 * i + 1] = (float)col.x;
-            ro->lut[4 * i + 2] = (float)col.y;
-            ro->lut[4 * i + 3] = (float)col.z;
-        }
-        nz[i + 1] = nz[i] + (ro->lut[4 * i] > 0);
-    }
-    const float *bmin = c->mm->min, *bmax = c->mm->max;
-    for (size_t b = 0; b < nb; b++) {
-        if (!fr->st->parc)
-            ro->bvis[b] = 1;
-        else if (ro->mode == VV_MODE_ISO)
-            /* only subvolumes wholly below the isovalue are empty */
-            ro->bvis[b] = !(bmax[b] < ro->iso);
-        else {
-            int i0 = (int)lut_index_f(ro, bmin[b]), i1 = (int)lut_index_f(ro, bmax[b]);
-            ro->bvis[b] = nz[i1 + 1] - nz[i0] > 0;
-        }
-    }
-    free(nz);
-    vv_status s = prepare_distance(ro);
+    vv_status s = vv_vtables_get(&fr->st->vc, ro->c, obj, ro->mode, fr->dt, ro->iso, fr->st->parc,
+                                 ro->mode == VV_MODE_COMPOSITE, &ro->tab, &ro->owns_tables);
     if (s != VV_OK)
         return s;
+    ro->lut = ro->tab.lut;
+    ro->ext = ro->tab.ext;
+    ro->bvis = ro->tab.bvis;
+    ro->bdist = ro->tab.bdist;
     if (fr->shadows && obj->receives_shadows && obj->shading && ro->mode == VV_MODE_COMPOSITE &&
         fr->st->shadow_grid) {
         size_t ng = 1;
@@ -1946,26 +1589,11 @@ prepare_lights(rt_frame *fr, const vv_world *w, const vv_view *view) {
     }
 }
 
-static double
-object_step(const vv_object *obj) {
-    vv_mat4 m = vv_object_index_to_world(obj);
-    double best = INFINITY;
-    for (int cc = 0; cc < 3; cc++) {
-        double l =
-            sqrt(m.m[0][cc] * m.m[0][cc] + m.m[1][cc] * m.m[1][cc] + m.m[2][cc] * m.m[2][cc]);
-        if (l > 0 && l < best)
-            best = l;
-    }
-    return obj->step * best;
-}
-
 static void
 frame_release(rt_frame *fr) {
     for (int i = 0; i < fr->n_vobj; i++) {
-        free(fr->vobjs[i].lut);
-        free(fr->vobjs[i].ext);
-        free(fr->vobjs[i].bvis);
-        free(fr->vobjs[i].bdist);
+        if (fr->vobjs[i].owns_tables)
+            vv_vtables_free(&fr->vobjs[i].tab);
         for (int l = 0; l < VV_MAX_LIGHTS; l++) {
             free(fr->vobjs[i].sgrid[l]);
             free(fr->vobjs[i].sweep[l]);
@@ -2053,6 +1681,7 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     memset(&fr, 0, sizeof fr);
     fr.st = st;
     fr.w = w;
+    st->vc.frame++;
     fr.et = (float)st->early_termination;
     fr.ambient[0] = (float)w->ambient.x;
     fr.ambient[1] = (float)w->ambient.y;
@@ -2101,7 +1730,7 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
                 break;
             }
             s = prepare_volume(&fr, &fr.vobjs[fr.n_vobj++], o);
-            double sd = object_step(o);
+            double sd = vv_vobject_step(o);
             dt = sd < dt ? sd : dt;
         } else {
             s = prepare_geometry(&fr, &fr.gobjs[fr.n_gobj++], o);
@@ -2210,17 +1839,7 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     if (atomic_load(&pr.cancelled))
         return vv_error_set(VV_ERR_CANCELLED, "cancelled");
     /* drop cached volumes the World no longer shows */
-    for (int i = 0; i < st->n_cache;) {
-        int used = 0;
-        for (int j = 0; j < w->n_objects; j++)
-            used |= w->objects[j] && w->objects[j]->volume == st->cache[i].vol;
-        if (!used) {
-            cache_release(&st->cache[i]);
-            st->cache[i] = st->cache[--st->n_cache];
-        } else {
-            i++;
-        }
-    }
+    vv_vcache_set_prune(&st->vc, w);
     return VV_OK;
 }
 
@@ -2239,6 +1858,7 @@ rt_create(void **state) {
     st->seed = 1;
     st->early_termination = 0.99;
     st->shadow_grid = 1;
+    vv_vcache_set_init(&st->vc);
     *state = st;
     return VV_OK;
 }
@@ -2297,8 +1917,7 @@ rt_destroy(void *state) {
     rt_state *st = state;
     if (!st)
         return;
-    for (int i = 0; i < st->n_cache; i++)
-        cache_release(&st->cache[i]);
+    vv_vcache_set_clear(&st->vc);
     free(st);
 }
 
