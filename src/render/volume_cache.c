@@ -482,3 +482,135 @@ vv_vray_setup(const double w2i[3][4], const int dims[3], const vv_plane *planes,
     r->t1 = t1;
     return 1;
 }
+
+/* ---------------------------------------------------------------------- */
+/* Objects, lights, projections                                             */
+
+int
+vv_vlights_prepare(vv_vlight out[VV_MAX_LIGHTS], const vv_world *w, const vv_view *view) {
+    vv_vec3 fwd = vv_vec3_normalize(vv_vec3_sub(view->at, view->eye));
+    int n = 0;
+    for (int i = 0; i < w->n_lights && i < VV_MAX_LIGHTS; i++) {
+        const vv_light *l = &w->lights[i];
+        vv_vlight *o = &out[n++];
+        o->point = l->type == VV_LIGHT_POINT && !l->headlight;
+        vv_vec3 d = l->headlight ? fwd : vv_vec3_normalize(l->direction);
+        /* towards the light = against the direction it travels */
+        o->dir[0] = (float)-d.x;
+        o->dir[1] = (float)-d.y;
+        o->dir[2] = (float)-d.z;
+        o->pos[0] = (float)l->position.x;
+        o->pos[1] = (float)l->position.y;
+        o->pos[2] = (float)l->position.z;
+        o->col[0] = (float)(l->color.x * l->intensity);
+        o->col[1] = (float)(l->color.y * l->intensity);
+        o->col[2] = (float)(l->color.z * l->intensity);
+    }
+    return n;
+}
+
+vv_status
+vv_vobject_prepare(const vv_object *obj, const vv_world *w, const float ambient[3],
+                   const vv_vlight *lights, int n_lights, double w2i[3][4], double i2w[3][4],
+                   int dims[3], vv_plane *planes, int *n_planes, vv_vshading *sh) {
+    vv_mat4 m = vv_object_index_to_world(obj);
+    int ok = 0;
+    vv_mat4 inv = vv_mat4_inverse(m, &ok);
+    if (!ok)
+        return vv_error_set(VV_ERR_INVALID, "object '%s': singular transform", obj->name);
+    for (int r = 0; r < 3; r++)
+        for (int cc = 0; cc < 4; cc++) {
+            w2i[r][cc] = inv.m[r][cc];
+            i2w[r][cc] = m.m[r][cc];
+        }
+    /* normals: world normal = (M^-1)^T g_index, M = linear part of i2w */
+    for (int r = 0; r < 3; r++)
+        for (int cc = 0; cc < 3; cc++)
+            sh->nrm[r][cc] = (float)inv.m[cc][r];
+    for (int a = 0; a < 3; a++)
+        /* a single-voxel axis (a 2-D image) is one voxel thick: the cache
+         * holds that slice twice */
+        dims[a] = obj->volume->dims[a] > 1 ? obj->volume->dims[a] : 2;
+    *n_planes = 0;
+    for (int p = 0; p < w->n_cut_planes && *n_planes < 2 * VV_MAX_CUT_PLANES; p++)
+        planes[(*n_planes)++] =
+            vv_plane_from_point_normal(w->cut_planes[p].point, w->cut_planes[p].normal);
+    for (int p = 0; p < obj->n_cut_planes && *n_planes < 2 * VV_MAX_CUT_PLANES; p++)
+        planes[(*n_planes)++] =
+            vv_plane_from_point_normal(obj->cut_planes[p].point, obj->cut_planes[p].normal);
+    const vv_material *mt = &obj->material;
+    for (int i = 0; i <= VV_VC_SPEC; i++)
+        sh->spec[i] = (float)pow((double)i / VV_VC_SPEC, mt->shininess);
+    sh->base[0] = (float)mt->color.x;
+    sh->base[1] = (float)mt->color.y;
+    sh->base[2] = (float)mt->color.z;
+    for (int ch = 0; ch < 3; ch++) {
+        sh->amb[ch] = (float)mt->ambient * ambient[ch];
+        for (int l = 0; l < n_lights; l++) {
+            sh->kd_col[l][ch] = (float)mt->diffuse * lights[l].col[ch];
+            sh->ks_col[l][ch] = (float)mt->specular * lights[l].col[ch];
+        }
+    }
+    return VV_OK;
+}
+
+void
+vv_vray_project(const vv_vcache *c, const vv_vray *r, vv_render_mode mode, double dt, int skipping,
+                float *value, float *depth) {
+    double k = vv_ceil_pos(r->t0 / dt);
+    const double kend = vv_floor_pos(r->t1 / dt);
+    if (k > kend) {
+        /* shorter than one step: one sample in the middle */
+        float p[3];
+        double tm = 0.5 * (r->t0 + r->t1);
+        vv_vray_point(r, tm, p);
+        *value = vv_vcache_sample(c, p);
+        *depth = (float)tm;
+        return;
+    }
+    if (mode == VV_MODE_XRAY) {
+        double sum = 0;
+        long n = 0;
+        for (; k <= kend; k++) {
+            float p[3], f[3];
+            vv_vray_point(r, k * dt, p);
+            const size_t o = vv_vcache_cell_in(c, p, f);
+            sum += vv_vcache_value_at(c, o, f);
+            n++;
+        }
+        *value = (float)(sum / (double)n);
+        *depth = (float)r->t0;
+        return;
+    }
+    const int mip = mode == VV_MODE_MIP;
+    float best = mip ? -INFINITY : INFINITY;
+    double tbest = r->t0;
+    while (k <= kend) {
+        float p[3];
+        vv_vray_point(r, k * dt, p);
+        const size_t b = vv_vcache_block(c, p);
+        const double te = vv_vray_cube_exit(r, p, k * dt, VV_VC_BLOCK);
+        /* a subvolume that cannot beat the current extreme is skipped whole
+         * (its samples could not change the result: the test is strict) */
+        if (skipping && (mip ? c->bmax[b] <= best : c->bmin[b] >= best)) {
+            const double ks = vv_ceil_pos(te / dt);
+            k = ks > k + 1 ? ks : k + 1;
+            continue;
+        }
+        double klast = vv_floor_pos(te / dt);
+        klast = klast < kend ? klast : kend;
+        klast = klast < k ? k : klast;
+        for (; k <= klast; k++) {
+            float f[3];
+            vv_vray_point(r, k * dt, p);
+            const size_t o = vv_vcache_cell_in(c, p, f);
+            const float x = vv_vcache_value_at(c, o, f);
+            if (mip ? x > best : x < best) {
+                best = x;
+                tbest = k * dt;
+            }
+        }
+    }
+    *value = best;
+    *depth = (float)tbest;
+}

@@ -344,4 +344,151 @@ vv_vcache_block(const vv_vcache *c, const float p[3]) {
     return ((size_t)bk * (size_t)c->by + (size_t)bj) * (size_t)c->bx + (size_t)bi;
 }
 
+/* ---------------------------------------------------------------------- */
+/* Volume objects, lights and shading                                       */
+
+#define VV_VC_SPEC 2048 /* specular table entries */
+
+/* A light prepared for volume shading. */
+typedef struct vv_vlight {
+    int point;
+    float dir[3]; /* unit vector towards the light (directional) */
+    float pos[3]; /* world position (point) */
+    float col[3]; /* colour * intensity */
+} vv_vlight;
+
+/* The lights of @p w (a headlight shines along the view direction of
+ * @p view); returns how many (at most VV_MAX_LIGHTS). */
+int vv_vlights_prepare(vv_vlight out[VV_MAX_LIGHTS], const vv_world *w, const vv_view *view);
+
+/* An object's shading constants. */
+typedef struct vv_vshading {
+    float nrm[3][3];                /* index-space gradient -> world normal (M^-T) */
+    float amb[3];                   /* ka * ambient light */
+    float kd_col[VV_MAX_LIGHTS][3]; /* kd * light colour */
+    float ks_col[VV_MAX_LIGHTS][3]; /* ks * light colour */
+    float base[3];                  /* material colour (iso, threshold) */
+    float spec[VV_VC_SPEC + 1];     /* x^shininess for x in [0, 1] */
+} vv_vshading;
+
+/* What both renderers derive alike from a volume object: world -> index
+ * and index -> world (affine rows), the grid box dims (a single-voxel axis
+ * counts as 2, the cache holds it twice), the global then local cut planes
+ * (at most 2 * VV_MAX_CUT_PLANES) and the shading constants under
+ * @p ambient and @p lights. Errors: VV_ERR_INVALID (singular transform). */
+vv_status vv_vobject_prepare(const vv_object *obj, const vv_world *w, const float ambient[3],
+                             const vv_vlight *lights, int n_lights, double w2i[3][4],
+                             double i2w[3][4], int dims[3], vv_plane *planes, int *n_planes,
+                             vv_vshading *sh);
+
+/* A light's transmittance for shading (shadows), or NULL: none. */
+typedef float (*vv_vshadow_fn)(const void *ctx, int light);
+
+/* Phong (reflection vector) with two-sided lighting. g: index-space
+ * gradient; pw: world position (read for point lights); v: unit vector
+ * towards the eye; col: colour times the sample's opacity, alpha: that
+ * opacity. out = (ka*ambient + kd*diffuse) * col + alpha * ks * specular:
+ * the highlight is emitted by the sample like its colour, so it too is
+ * weighted by the sample's opacity (otherwise it would grow as the step
+ * shrinks). With @p shadow, each light's terms are scaled by
+ * shadow(ctx, light). */
+static inline void
+vv_vshade(const vv_vshading *o, const vv_vlight *lights, int n_lights, const float g[3],
+          const float pw[3], const float v[3], const float col[3], float alpha,
+          vv_vshadow_fn shadow, const void *ctx, float out[3]) {
+    const float n0 = o->nrm[0][0] * g[0] + o->nrm[0][1] * g[1] + o->nrm[0][2] * g[2];
+    const float n1 = o->nrm[1][0] * g[0] + o->nrm[1][1] * g[1] + o->nrm[1][2] * g[2];
+    const float n2 = o->nrm[2][0] * g[0] + o->nrm[2][1] * g[1] + o->nrm[2][2] * g[2];
+    const float len2 = n0 * n0 + n1 * n1 + n2 * n2;
+    float d0 = o->amb[0], d1 = o->amb[1], d2 = o->amb[2];
+    float s0 = 0, s1 = 0, s2 = 0;
+    if (len2 > 1e-12f) {
+        const float inv = 1.0f / sqrtf(len2);
+        const float nv = (n0 * v[0] + n1 * v[1] + n2 * v[2]) * inv;
+        for (int l = 0; l < n_lights; l++) {
+            const vv_vlight *lt = &lights[l];
+            float L0 = lt->dir[0], L1 = lt->dir[1], L2 = lt->dir[2];
+            if (lt->point) {
+                L0 = lt->pos[0] - pw[0];
+                L1 = lt->pos[1] - pw[1];
+                L2 = lt->pos[2] - pw[2];
+                const float ll = sqrtf(L0 * L0 + L1 * L1 + L2 * L2);
+                if (!(ll > 0))
+                    continue;
+                L0 /= ll;
+                L1 /= ll;
+                L2 /= ll;
+            }
+            float ndl = (n0 * L0 + n1 * L1 + n2 * L2) * inv;
+            /* two-sided: a normal facing away from the light is flipped */
+            const float ndv = ndl < 0 ? -nv : nv;
+            ndl = ndl < 0 ? -ndl : ndl;
+            /* Phong: R.V with R the mirror of L about n */
+            const float rv = 2 * ndl * ndv - (L0 * v[0] + L1 * v[1] + L2 * v[2]);
+            float sp = rv > 0 ? o->spec[(int)(rv * VV_VC_SPEC + 0.5f)] : 0;
+            float wd = ndl;
+            if (shadow) {
+                const float sh = shadow(ctx, l);
+                wd = sh * ndl;
+                sp = sh * sp;
+            }
+            d0 += wd * o->kd_col[l][0];
+            d1 += wd * o->kd_col[l][1];
+            d2 += wd * o->kd_col[l][2];
+            s0 += sp * o->ks_col[l][0];
+            s1 += sp * o->ks_col[l][1];
+            s2 += sp * o->ks_col[l][2];
+        }
+    }
+    out[0] = d0 * col[0] + alpha * s0;
+    out[1] = d1 * col[1] + alpha * s1;
+    out[2] = d2 * col[2] + alpha * s2;
+}
+
+/* World parameter at which the ray leaves the cube of side @p size cells
+ * (aligned to multiples of size) containing p. */
+static inline double
+vv_vray_cube_exit(const vv_vray *r, const float p[3], double t, int size) {
+    float te = INFINITY;
+    const float inv_size = 1.0f / (float)size;
+    for (int a = 0; a < 3; a++) {
+        if (r->inv[a] == 0)
+            continue;
+        float b = (float)(int)(p[a] * inv_size); /* floor: p >= 0 up to rounding */
+        b = b < 0 ? 0 : b;
+        float bound = (r->d[a] > 0 ? b + 1 : b) * (float)size;
+        float ta = (bound - p[a]) * r->inv[a];
+        te = ta < te ? ta : te;
+    }
+    return t + te;
+}
+
+/* The isosurface crossing between ray parameters ta (value va, on one side
+ * of iso) and tb (on the other), by ten bisection steps. */
+static inline double
+vv_vray_iso_refine(const vv_vcache *c, const vv_vray *r, double ta, float va, double tb,
+                   float iso) {
+    for (int it = 0; it < 10; it++) {
+        double tm = 0.5 * (ta + tb);
+        float pm[3];
+        vv_vray_point(r, tm, pm);
+        float vm = vv_vcache_sample(c, pm);
+        if ((va < iso) == (vm < iso)) {
+            ta = tm;
+            va = vm;
+        } else {
+            tb = tm;
+        }
+    }
+    return 0.5 * (ta + tb);
+}
+
+/* Maximum (VV_MODE_MIP) or minimum (VV_MODE_MINIP) intensity projection or
+ * mean (VV_MODE_XRAY) of the samples t = k dt of the clipped ray r, one
+ * sample in the middle when it is shorter than a step; *depth: the
+ * parameter of the extreme (xray: the entry). With @p skipping, subvolumes
+ * that cannot beat the current extreme are skipped whole (same result). */
+void vv_vray_project(const vv_vcache *c, const vv_vray *r, vv_render_mode mode, double dt,
+                     int skipping, float *value, float *depth);
+
 #endif

@@ -47,7 +47,6 @@
 #define RC_TILE 16    /* image tile side in pixels */
 #define RC_MAX_OBJ 64 /* objects handled in one render (<= VV_VC_MAX) */
 #define RC_CHUNK 32   /* samples classified ahead of compositing */
-#define RC_SPEC 2048  /* specular table entries */
 
 typedef struct rc_state {
     vv_vcache_set vc;         /* per-volume caches (src/render/volume_cache.h) */
@@ -56,21 +55,13 @@ typedef struct rc_state {
     int simd;                 /* use AVX2 when the processor has it (for tests) */
 } rc_state;
 
-/* A light prepared for shading. */
-typedef struct rc_light {
-    int point;
-    float dir[3]; /* unit vector towards the light (directional) */
-    float pos[3]; /* world position (point) */
-    float col[3]; /* colour * intensity */
-} rc_light;
-
 /* One object prepared for this render. */
 typedef struct rc_obj {
     const vv_object *obj;
     vv_vcache *c;
     vv_render_mode mode;
     double w2i[3][4];        /* world -> index */
-    float nrm[3][3];         /* index-space gradient -> world normal (M^-T) */
+    double i2w[3][4];        /* index -> world */
     int dims[3];             /* the volume's real dims (box clip) */
     float lut_lo, lut_scale; /* value -> LUT index */
     float *lut;              /* VV_VC_LUT x {alpha, r*alpha, g*alpha, b*alpha} */
@@ -80,11 +71,7 @@ typedef struct rc_obj {
     vv_vtables tab;  /* the tables lut, bvis, bdist come from */
     int owns_tables; /* tab is this object's (else borrowed from the cache) */
     float iso;
-    float spec[RC_SPEC + 1];        /* x^shininess for x in [0, 1] */
-    float amb[3];                   /* ka * ambient light */
-    float kd_col[VV_MAX_LIGHTS][3]; /* kd * light colour */
-    float ks_col[VV_MAX_LIGHTS][3]; /* ks * light colour */
-    float base[3];                  /* material colour (iso, threshold) */
+    vv_vshading sh; /* shading constants */
     int shading;
     int n_planes;
     vv_plane planes[2 * VV_MAX_CUT_PLANES];
@@ -99,7 +86,7 @@ typedef struct rc_frame {
     float dt;
     float ambient[3];
     float bg[3];
-    rc_light lights[VV_MAX_LIGHTS];
+    vv_vlight lights[VV_MAX_LIGHTS];
     int n_lights;
     float et;         /* early termination */
     int point_lights; /* any point light (needs the world position of samples) */
@@ -111,56 +98,11 @@ typedef struct rc_frame {
 /* ---------------------------------------------------------------------- */
 /* Shading                                                                  */
 
-/* Phong (reflection vector) with two-sided lighting. g: index-space gradient; p: world
- * position; v: unit vector towards the eye; col: colour times the sample's
- * opacity, alpha: that opacity. out = (ka*ambient + kd*diffuse) * col +
- * alpha * ks * specular: the highlight is emitted by the sample like its
- * colour, so it too is weighted by the sample's opacity (otherwise it would
- * grow as the step shrinks). */
+/* Phong with two-sided lighting (vv_vshade), no shadows. */
 static inline void
 shade(const rc_frame *fr, const rc_obj *o, const float g[3], const float pw[3], const float v[3],
       const float col[3], float alpha, float out[3]) {
-    const float n0 = o->nrm[0][0] * g[0] + o->nrm[0][1] * g[1] + o->nrm[0][2] * g[2];
-    const float n1 = o->nrm[1][0] * g[0] + o->nrm[1][1] * g[1] + o->nrm[1][2] * g[2];
-    const float n2 = o->nrm[2][0] * g[0] + o->nrm[2][1] * g[1] + o->nrm[2][2] * g[2];
-    const float len2 = n0 * n0 + n1 * n1 + n2 * n2;
-    float d0 = o->amb[0], d1 = o->amb[1], d2 = o->amb[2];
-    float s0 = 0, s1 = 0, s2 = 0;
-    if (len2 > 1e-12f) {
-        const float inv = 1.0f / sqrtf(len2);
-        const float nv = (n0 * v[0] + n1 * v[1] + n2 * v[2]) * inv;
-        for (int l = 0; l < fr->n_lights; l++) {
-            const rc_light *lt = &fr->lights[l];
-            float L0 = lt->dir[0], L1 = lt->dir[1], L2 = lt->dir[2];
-            if (lt->point) {
-                L0 = lt->pos[0] - pw[0];
-                L1 = lt->pos[1] - pw[1];
-                L2 = lt->pos[2] - pw[2];
-                const float ll = sqrtf(L0 * L0 + L1 * L1 + L2 * L2);
-                if (!(ll > 0))
-                    continue;
-                L0 /= ll;
-                L1 /= ll;
-                L2 /= ll;
-            }
-            float ndl = (n0 * L0 + n1 * L1 + n2 * L2) * inv;
-            /* two-sided: a normal facing away from the light is flipped */
-            const float ndv = ndl < 0 ? -nv : nv;
-            ndl = ndl < 0 ? -ndl : ndl;
-            /* Phong: R.V with R the mirror of L about n */
-            const float rv = 2 * ndl * ndv - (L0 * v[0] + L1 * v[1] + L2 * v[2]);
-            const float sp = rv > 0 ? o->spec[(int)(rv * RC_SPEC + 0.5f)] : 0;
-            d0 += ndl * o->kd_col[l][0];
-            d1 += ndl * o->kd_col[l][1];
-            d2 += ndl * o->kd_col[l][2];
-            s0 += sp * o->ks_col[l][0];
-            s1 += sp * o->ks_col[l][1];
-            s2 += sp * o->ks_col[l][2];
-        }
-    }
-    out[0] = d0 * col[0] + alpha * s0;
-    out[1] = d1 * col[1] + alpha * s1;
-    out[2] = d2 * col[2] + alpha * s2;
+    vv_vshade(&o->sh, fr->lights, fr->n_lights, g, pw, v, col, alpha, NULL, NULL, out);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -170,24 +112,6 @@ shade(const rc_frame *fr, const rc_obj *o, const float g[3], const float pw[3], 
 static inline int
 ray_setup(const rc_obj *ob, const vv_ray *wr, vv_vray *r) {
     return vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, wr, 0, INFINITY, r);
-}
-
-/* World parameter at which the ray leaves the cube of side @p size cells
- * (aligned to multiples of size) containing p. */
-static inline double
-cube_exit(const vv_vray *r, const float p[3], double t, int size) {
-    float te = INFINITY;
-    const float inv_size = 1.0f / (float)size;
-    for (int a = 0; a < 3; a++) {
-        if (r->inv[a] == 0)
-            continue;
-        float b = (float)(int)(p[a] * inv_size); /* floor: p >= 0 up to rounding */
-        b = b < 0 ? 0 : b;
-        float bound = (r->d[a] > 0 ? b + 1 : b) * (float)size;
-        float ta = (bound - p[a]) * r->inv[a];
-        te = ta < te ? ta : te;
-    }
-    return t + te;
 }
 
 static inline float
@@ -390,7 +314,7 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
                 k = ks > k + 1 ? ks : k + 1;
                 continue;
             }
-            double te = cube_exit(&r, p, t, VV_VC_BLOCK);
+            double te = vv_vray_cube_exit(&r, p, t, VV_VC_BLOCK);
             /* march to the last sample inside this subvolume */
             double klast = vv_floor_pos(te * inv_dt);
             klast = klast < kend ? klast : kend;
@@ -492,7 +416,7 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
             const vv_vcache *c = ob->c;
             size_t b = vv_vcache_block(c, p);
             if (!ob->bvis[b]) {
-                double te = cube_exit(r, p, t, VV_VC_BLOCK);
+                double te = vv_vray_cube_exit(r, p, t, VV_VC_BLOCK);
                 if (te < skip_to)
                     skip_to = te;
                 if (ob->mode == VV_MODE_ISO) {
@@ -516,21 +440,7 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
                         th = t; /* entered already inside (cut face) */
                 } else if ((prev_v[ai] < iso) != (val < iso)) {
                     /* bisection between the previous sample and this one */
-                    double ta = prev_t[ai], tb = t;
-                    float va = prev_v[ai];
-                    for (int it = 0; it < 10; it++) {
-                        double tm = 0.5 * (ta + tb);
-                        float pm[3];
-                        vv_vray_point(r, tm, pm);
-                        float vm = vv_vcache_sample(c, pm);
-                        if ((va < iso) == (vm < iso)) {
-                            ta = tm;
-                            va = vm;
-                        } else {
-                            tb = tm;
-                        }
-                    }
-                    th = 0.5 * (ta + tb);
+                    th = vv_vray_iso_refine(c, r, prev_t[ai], prev_v[ai], t, iso);
                 }
                 prev_v[ai] = val;
                 prev_t[ai] = t;
@@ -543,9 +453,9 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
                     pw[1] = (float)(wr->origin.y + th * wr->dir.y);
                     pw[2] = (float)(wr->origin.z + th * wr->dir.z);
                     if (ob->shading)
-                        shade(fr, ob, g, pw, v, ob->base, 1.0f, col);
+                        shade(fr, ob, g, pw, v, ob->sh.base, 1.0f, col);
                     else
-                        memcpy(col, ob->base, sizeof col);
+                        memcpy(col, ob->sh.base, sizeof col);
                     float w = 1 - A;
                     C[0] += w * col[0];
                     C[1] += w * col[1];
@@ -584,73 +494,15 @@ done:
     res->depth = depth;
 }
 
-/* Maximum / minimum intensity projection and X-ray (mean) of one object.
- * Returns 0 when the ray misses the object. */
+/* Maximum / minimum intensity projection and X-ray (mean) of one object
+ * (vv_vray_project). Returns 0 when the ray misses the object. */
 static int
 trace_projection(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, float *value,
                  float *depth) {
     vv_vray r;
     if (!ray_setup(ob, wr, &r))
         return 0;
-    const double dt = fr->dt;
-    const vv_vcache *c = ob->c;
-    double k = vv_ceil_pos(r.t0 / dt);
-    const double kend = vv_floor_pos(r.t1 / dt);
-    if (k > kend) {
-        /* shorter than one step: one sample in the middle */
-        float p[3];
-        double tm = 0.5 * (r.t0 + r.t1);
-        vv_vray_point(&r, tm, p);
-        *value = vv_vcache_sample(c, p);
-        *depth = (float)tm;
-        return 1;
-    }
-    if (ob->mode == VV_MODE_XRAY) {
-        double sum = 0;
-        long n = 0;
-        for (; k <= kend; k++) {
-            float p[3], f[3];
-            vv_vray_point(&r, k * dt, p);
-            const size_t o = vv_vcache_cell_in(c, p, f);
-            sum += vv_vcache_value_at(c, o, f);
-            n++;
-        }
-        *value = (float)(sum / (double)n);
-        *depth = (float)r.t0;
-        return 1;
-    }
-    const int mip = ob->mode == VV_MODE_MIP;
-    const int skipping = fr->st->skipping;
-    float best = mip ? -INFINITY : INFINITY;
-    double tbest = r.t0;
-    while (k <= kend) {
-        float p[3];
-        vv_vray_point(&r, k * dt, p);
-        const size_t b = vv_vcache_block(c, p);
-        const double te = cube_exit(&r, p, k * dt, VV_VC_BLOCK);
-        /* a subvolume that cannot beat the current extreme is skipped whole
-         * (its samples could not change the result: the test is strict) */
-        if (skipping && (mip ? c->bmax[b] <= best : c->bmin[b] >= best)) {
-            const double ks = vv_ceil_pos(te / dt);
-            k = ks > k + 1 ? ks : k + 1;
-            continue;
-        }
-        double klast = vv_floor_pos(te / dt);
-        klast = klast < kend ? klast : kend;
-        klast = klast < k ? k : klast;
-        for (; k <= klast; k++) {
-            float f[3];
-            vv_vray_point(&r, k * dt, p);
-            const size_t o = vv_vcache_cell_in(c, p, f);
-            const float x = vv_vcache_value_at(c, o, f);
-            if (mip ? x > best : x < best) {
-                best = x;
-                tbest = k * dt;
-            }
-        }
-    }
-    *value = best;
-    *depth = (float)tbest;
+    vv_vray_project(ob->c, &r, ob->mode, fr->dt, fr->st->skipping, value, depth);
     return 1;
 }
 
@@ -666,35 +518,12 @@ prepare_object(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w
     vv_status s = vv_vcache_get(&st->vc, obj->volume, &ro->c);
     if (s != VV_OK)
         return vv_error_prefix(s, "object '%s'", obj->name);
-    vv_mat4 i2w = vv_object_index_to_world(obj);
-    int ok = 0;
-    vv_mat4 w2i = vv_mat4_inverse(i2w, &ok);
-    if (!ok)
-        return vv_error_set(VV_ERR_INVALID, "object '%s': singular transform", obj->name);
-    for (int r = 0; r < 3; r++)
-        for (int cc = 0; cc < 4; cc++)
-            ro->w2i[r][cc] = w2i.m[r][cc];
-    /* normals: world normal = (M^-1)^T g_index, M = linear part of i2w */
-    for (int r = 0; r < 3; r++)
-        for (int cc = 0; cc < 3; cc++)
-            ro->nrm[r][cc] = (float)w2i.m[cc][r];
-    for (int a = 0; a < 3; a++)
-        /* a single-voxel axis (a 2-D image) is one voxel thick: the cache
-         * holds that slice twice */
-        ro->dims[a] = obj->volume->dims[a] > 1 ? obj->volume->dims[a] : 2;
-    for (int i = 0; i <= RC_SPEC; i++)
-        ro->spec[i] = (float)pow((double)i / RC_SPEC, obj->material.shininess);
-    ro->base[0] = (float)obj->material.color.x;
-    ro->base[1] = (float)obj->material.color.y;
-    ro->base[2] = (float)obj->material.color.z;
+    s = vv_vobject_prepare(obj, w, fr->ambient, fr->lights, fr->n_lights, ro->w2i, ro->i2w,
+                           ro->dims, ro->planes, &ro->n_planes, &ro->sh);
+    if (s != VV_OK)
+        return s;
     ro->shading = obj->shading;
     ro->iso = (float)(obj->isovalue - ro->c->qoff);
-    for (int p = 0; p < w->n_cut_planes && ro->n_planes < 2 * VV_MAX_CUT_PLANES; p++)
-        ro->planes[ro->n_planes++] =
-            vv_plane_from_point_normal(w->cut_planes[p].point, w->cut_planes[p].normal);
-    for (int p = 0; p < obj->n_cut_planes && ro->n_planes < 2 * VV_MAX_CUT_PLANES; p++)
-        ro->planes[ro->n_planes++] =
-            vv_plane_from_point_normal(obj->cut_planes[p].point, obj->cut_planes[p].normal);
     return VV_OK;
 }
 
@@ -716,25 +545,9 @@ prepare_tables(rc_frame *fr, rc_obj *ro) {
 
 static void
 prepare_lights(rc_frame *fr, const vv_world *w, const vv_view *view) {
-    vv_vec3 fwd = vv_vec3_normalize(vv_vec3_sub(view->at, view->eye));
-    fr->n_lights = 0;
-    for (int i = 0; i < w->n_lights && i < VV_MAX_LIGHTS; i++) {
-        const vv_light *l = &w->lights[i];
-        rc_light *o = &fr->lights[fr->n_lights++];
-        o->point = l->type == VV_LIGHT_POINT && !l->headlight;
-        fr->point_lights |= o->point;
-        vv_vec3 d = l->headlight ? fwd : vv_vec3_normalize(l->direction);
-        /* towards the light = against the direction it travels */
-        o->dir[0] = (float)-d.x;
-        o->dir[1] = (float)-d.y;
-        o->dir[2] = (float)-d.z;
-        o->pos[0] = (float)l->position.x;
-        o->pos[1] = (float)l->position.y;
-        o->pos[2] = (float)l->position.z;
-        o->col[0] = (float)(l->color.x * l->intensity);
-        o->col[1] = (float)(l->color.y * l->intensity);
-        o->col[2] = (float)(l->color.z * l->intensity);
-    }
+    fr->n_lights = vv_vlights_prepare(fr->lights, w, view);
+    for (int l = 0; l < fr->n_lights; l++)
+        fr->point_lights |= fr->lights[l].point;
 }
 
 /* vv_view_ray is affine in the pixel position before the direction is
@@ -866,15 +679,7 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         }
     fr.dt = (float)(dt < INFINITY ? dt : 1.0);
     for (int i = 0; i < fr.n_obj && s == VV_OK; i++) {
-        rc_obj *ro = &objs[i];
-        for (int ch = 0; ch < 3; ch++) {
-            ro->amb[ch] = (float)ro->obj->material.ambient * fr.ambient[ch];
-            for (int l = 0; l < fr.n_lights; l++) {
-                ro->kd_col[l][ch] = (float)ro->obj->material.diffuse * fr.lights[l].col[ch];
-                ro->ks_col[l][ch] = (float)ro->obj->material.specular * fr.lights[l].col[ch];
-            }
-        }
-        s = prepare_tables(&fr, ro);
+        s = prepare_tables(&fr, &objs[i]);
     }
 
     if (s == VV_OK) {

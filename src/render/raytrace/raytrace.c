@@ -48,7 +48,6 @@
 
 #define RT_TILE 16 /* image tile side in pixels */
 #define RT_MAX_OBJ 64
-#define RT_SPEC 2048                  /* specular table entries */
 #define RT_SGRID 4                    /* shadow grid spacing, voxels */
 #define RT_MIN_WEIGHT (1.0f / 512.0f) /* secondary rays weighing less are not traced */
 #define RT_EPS 1e-6                   /* relative ray offset off surfaces */
@@ -123,7 +122,6 @@ typedef struct rt_vobj {
     vv_vcache *c;
     vv_render_mode mode;
     double w2i[3][4], i2w[3][4];
-    float nrm[3][3];
     int dims[3];
     double vox;             /* smallest world length of a voxel step */
     vv_vtables tab;         /* TF table, extinction (composite), PARC flags and distances */
@@ -133,11 +131,7 @@ typedef struct rt_vobj {
     const uint8_t *bdist;   /* tab.bdist: chessboard distance to the nearest that may */
     int bx, by, bz;         /* subvolume grid */
     float iso;
-    float spec[RT_SPEC + 1];
-    float amb[3];
-    float kd_col[VV_MAX_LIGHTS][3];
-    float ks_col[VV_MAX_LIGHTS][3];
-    float base[3];
+    vv_vshading sh; /* shading constants */
     int n_planes;
     vv_plane planes[2 * VV_MAX_CUT_PLANES];
     int gdim[3];                            /* shadow grid points per axis */
@@ -186,6 +180,7 @@ typedef struct rt_frame {
     float bg[3];
     float ambient[3];
     rt_light lights[VV_MAX_LIGHTS];
+    vv_vlight vlights[VV_MAX_LIGHTS]; /* the same, for volume shading */
     int n_lights;
     float et;
     int shadows, max_depth;
@@ -907,6 +902,8 @@ volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float p
             float x = T + 1.0f;
             memcpy(&bits, &x, sizeof bits);
             atomic_store_explicit(&g[idx], bits, memory_order_relaxed);
+            T = x - 1.0f; /* as the other threads will read it: images do not
+                           * depend on which thread traced a grid point */
         }
         v[k] = T;
     }
@@ -918,48 +915,29 @@ volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float p
 /* ---------------------------------------------------------------------- */
 /* Shading                                                                   */
 
-/* The ray caster's volume Phong (reflection vector, two-sided, specular
- * weighted by the sample opacity), each light scaled by its shadow. */
+/* Where a volume sample's shadow is looked up (vv_vshadow_fn). */
+typedef struct rt_shadow_ctx {
+    const rt_frame *fr;
+    const rt_vobj *ob;
+    const float *pi, *pw; /* index and world position */
+} rt_shadow_ctx;
+
+static float
+sample_shadow(const void *ctx, int l) {
+    const rt_shadow_ctx *c = ctx;
+    return volume_sample_shadow(c->fr, c->ob, l, c->pi, c->pw);
+}
+
+/* The ray caster's volume Phong (vv_vshade: reflection vector, two-sided,
+ * specular weighted by the sample opacity), each light scaled by its
+ * shadow. */
 static void
 shade_volume(const rt_frame *fr, const rt_vobj *o, const float g[3], const float pi[3],
              const float pw[3], const float v[3], const float col[3], float alpha, float out[3]) {
-    const float n0 = o->nrm[0][0] * g[0] + o->nrm[0][1] * g[1] + o->nrm[0][2] * g[2];
-    const float n1 = o->nrm[1][0] * g[0] + o->nrm[1][1] * g[1] + o->nrm[1][2] * g[2];
-    const float n2 = o->nrm[2][0] * g[0] + o->nrm[2][1] * g[1] + o->nrm[2][2] * g[2];
-    const float len2 = n0 * n0 + n1 * n1 + n2 * n2;
-    float d[3] = {o->amb[0], o->amb[1], o->amb[2]}, s[3] = {0, 0, 0};
     const int shadows = fr->shadows && o->obj->receives_shadows;
-    if (len2 > 1e-12f) {
-        const float inv = 1.0f / sqrtf(len2);
-        const float nv = (n0 * v[0] + n1 * v[1] + n2 * v[2]) * inv;
-        for (int l = 0; l < fr->n_lights; l++) {
-            const rt_light *lt = &fr->lights[l];
-            float L0 = (float)lt->dir[0], L1 = (float)lt->dir[1], L2 = (float)lt->dir[2];
-            if (lt->point) {
-                L0 = (float)lt->pos[0] - pw[0];
-                L1 = (float)lt->pos[1] - pw[1];
-                L2 = (float)lt->pos[2] - pw[2];
-                const float ll = sqrtf(L0 * L0 + L1 * L1 + L2 * L2);
-                if (!(ll > 0))
-                    continue;
-                L0 /= ll;
-                L1 /= ll;
-                L2 /= ll;
-            }
-            float ndl = (n0 * L0 + n1 * L1 + n2 * L2) * inv;
-            const float ndv = ndl < 0 ? -nv : nv;
-            ndl = ndl < 0 ? -ndl : ndl;
-            const float rv = 2 * ndl * ndv - (L0 * v[0] + L1 * v[1] + L2 * v[2]);
-            float sp = rv > 0 ? o->spec[(int)(rv * RT_SPEC + 0.5f)] : 0;
-            float sh = shadows ? volume_sample_shadow(fr, o, l, pi, pw) : 1.0f;
-            for (int ch = 0; ch < 3; ch++) {
-                d[ch] += sh * ndl * o->kd_col[l][ch];
-                s[ch] += sh * sp * o->ks_col[l][ch];
-            }
-        }
-    }
-    for (int ch = 0; ch < 3; ch++)
-        out[ch] = d[ch] * col[ch] + alpha * s[ch];
+    const rt_shadow_ctx ctx = {fr, o, pi, pw};
+    vv_vshade(&o->sh, fr->vlights, fr->n_lights, g, pw, v, col, alpha,
+              shadows ? sample_shadow : NULL, &ctx, out);
 }
 
 static void trace(const rt_frame *fr, const vv_ray *wr, int depth, int primary, float weight,
@@ -1208,21 +1186,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                     if (val >= iso && t - r->t0 < dt)
                         th = t;
                 } else if ((prev_v[ai] < iso) != (val < iso)) {
-                    double ta = prev_t[ai], tb = t;
-                    float va = prev_v[ai];
-                    for (int it = 0; it < 10; it++) {
-                        double tm = 0.5 * (ta + tb);
-                        float pm[3];
-                        vv_vray_point(r, tm, pm);
-                        float vm = vv_vcache_sample(c, pm);
-                        if ((va < iso) == (vm < iso)) {
-                            ta = tm;
-                            va = vm;
-                        } else {
-                            tb = tm;
-                        }
-                    }
-                    th = 0.5 * (ta + tb);
+                    th = vv_vray_iso_refine(c, r, prev_t[ai], prev_v[ai], t, iso);
                 }
                 prev_v[ai] = val;
                 prev_t[ai] = t;
@@ -1235,19 +1199,21 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                     pw[1] = (float)(wr->origin.y + th * wr->dir.y);
                     pw[2] = (float)(wr->origin.z + th * wr->dir.z);
                     if (ob->obj->shading)
-                        shade_volume(fr, ob, g, ph, pw, v, ob->base, 1.0f, col);
+                        shade_volume(fr, ob, g, ph, pw, v, ob->sh.base, 1.0f, col);
                     else
-                        memcpy(col, ob->base, sizeof col);
+                        memcpy(col, ob->sh.base, sizeof col);
                     const vv_material *m = &ob->obj->material;
                     float kr = ob->obj->reflects ? (float)m->reflectance : 0.0f;
                     float kt = (float)m->transparency;
                     if ((kr > 0 || kt > 0) && fr->max_depth > depth) {
                         /* the isosurface as a mirror or a window: world
                          * normal from the gradient, facing the ray */
-                        vv_vec3 nw =
-                            v3(ob->nrm[0][0] * g[0] + ob->nrm[0][1] * g[1] + ob->nrm[0][2] * g[2],
-                               ob->nrm[1][0] * g[0] + ob->nrm[1][1] * g[1] + ob->nrm[1][2] * g[2],
-                               ob->nrm[2][0] * g[0] + ob->nrm[2][1] * g[1] + ob->nrm[2][2] * g[2]);
+                        vv_vec3 nw = v3(ob->sh.nrm[0][0] * g[0] + ob->sh.nrm[0][1] * g[1] +
+                                            ob->sh.nrm[0][2] * g[2],
+                                        ob->sh.nrm[1][0] * g[0] + ob->sh.nrm[1][1] * g[1] +
+                                            ob->sh.nrm[1][2] * g[2],
+                                        ob->sh.nrm[2][0] * g[0] + ob->sh.nrm[2][1] * g[1] +
+                                            ob->sh.nrm[2][2] * g[2]);
                         nw = v3norm(nw);
                         /* gradients point to higher values: inside; outward is minus */
                         vv_vec3 outward = v3scale(nw, -1);
@@ -1290,67 +1256,15 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
 }
 
 /* Maximum / minimum intensity projection or X-ray of one volume over the
- * part of the ray in [0, tlim]. Returns 0 when the ray misses it. */
+ * part of the ray in [0, tlim] (vv_vray_project). Returns 0 when the ray
+ * misses it. */
 static int
 project_volume(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double tlim, float *value,
                float *depth) {
     vv_vray r;
     if (!vray_setup(ob, wr, 0, tlim, &r))
         return 0;
-    const double dt = fr->dt;
-    const vv_vcache *c = ob->c;
-    double k = vv_ceil_pos(r.t0 / dt);
-    const double kend = floor(r.t1 / dt);
-    if (k > kend) {
-        float p[3];
-        double tm = 0.5 * (r.t0 + r.t1);
-        vv_vray_point(&r, tm, p);
-        *value = vv_vcache_sample(c, p);
-        *depth = (float)tm;
-        return 1;
-    }
-    if (ob->mode == VV_MODE_XRAY) {
-        double sum = 0;
-        long n = 0;
-        for (; k <= kend; k++) {
-            float p[3];
-            vv_vray_point(&r, k * dt, p);
-            sum += vv_vcache_sample(c, p);
-            n++;
-        }
-        *value = (float)(sum / (double)n);
-        *depth = (float)r.t0;
-        return 1;
-    }
-    const int mip = ob->mode == VV_MODE_MIP;
-    const int parc = fr->st->parc;
-    const float *bmin = c->bmin, *bmax = c->bmax;
-    float best = mip ? -INFINITY : INFINITY;
-    double tbest = r.t0;
-    while (k <= kend) {
-        float p[3];
-        vv_vray_point(&r, k * dt, p);
-        const size_t b = vv_vcache_block(ob->c, p);
-        const double te = block_exit(&r, p, k * dt);
-        if (parc && (mip ? bmax[b] <= best : bmin[b] >= best)) {
-            const double ks = vv_ceil_pos(te / dt);
-            k = ks > k + 1 ? ks : k + 1;
-            continue;
-        }
-        double klast = floor(te / dt);
-        klast = klast < kend ? klast : kend;
-        klast = klast < k ? k : klast;
-        for (; k <= klast; k++) {
-            vv_vray_point(&r, k * dt, p);
-            const float x = vv_vcache_sample(c, p);
-            if (mip ? x > best : x < best) {
-                best = x;
-                tbest = k * dt;
-            }
-        }
-    }
-    *value = best;
-    *depth = (float)tbest;
+    vv_vray_project(ob->c, &r, ob->mode, fr->dt, fr->st->parc, value, depth);
     return 1;
 }
 
@@ -1410,41 +1324,20 @@ prepare_volume(rt_frame *fr, rt_vobj *ro, const vv_object *obj) {
     vv_status s = vv_vcache_get(&fr->st->vc, obj->volume, &ro->c);
     if (s != VV_OK)
         return vv_error_prefix(s, "object '%s'", obj->name);
-    vv_mat4 i2w = vv_object_index_to_world(obj);
-    int ok = 0;
-    vv_mat4 w2i = vv_mat4_inverse(i2w, &ok);
-    if (!ok)
-        return vv_error_set(VV_ERR_INVALID, "object '%s': singular transform", obj->name);
-    for (int r = 0; r < 3; r++)
-        for (int cc = 0; cc < 4; cc++) {
-            ro->w2i[r][cc] = w2i.m[r][cc];
-            ro->i2w[r][cc] = i2w.m[r][cc];
-        }
-    for (int r = 0; r < 3; r++)
-        for (int cc = 0; cc < 3; cc++)
-            ro->nrm[r][cc] = (float)w2i.m[cc][r];
+    s = vv_vobject_prepare(obj, w, fr->ambient, fr->vlights, fr->n_lights, ro->w2i, ro->i2w,
+                           ro->dims, ro->planes, &ro->n_planes, &ro->sh);
+    if (s != VV_OK)
+        return s;
     ro->vox = INFINITY;
     for (int a = 0; a < 3; a++) {
-        ro->dims[a] = obj->volume->dims[a] > 1 ? obj->volume->dims[a] : 2;
-        double l =
-            sqrt(i2w.m[0][a] * i2w.m[0][a] + i2w.m[1][a] * i2w.m[1][a] + i2w.m[2][a] * i2w.m[2][a]);
+        const double l = sqrt(ro->i2w[0][a] * ro->i2w[0][a] + ro->i2w[1][a] * ro->i2w[1][a] +
+                              ro->i2w[2][a] * ro->i2w[2][a]);
         if (l > 0 && l < ro->vox)
             ro->vox = l;
     }
     if (!(ro->vox < INFINITY))
         return vv_error_set(VV_ERR_INVALID, "object '%s': zero voxel spacing", obj->name);
-    for (int i = 0; i <= RT_SPEC; i++)
-        ro->spec[i] = (float)pow((double)i / RT_SPEC, obj->material.shininess);
-    ro->base[0] = (float)obj->material.color.x;
-    ro->base[1] = (float)obj->material.color.y;
-    ro->base[2] = (float)obj->material.color.z;
     ro->iso = (float)(obj->isovalue - ro->c->qoff); /* stored units */
-    for (int p = 0; p < w->n_cut_planes && ro->n_planes < 2 * VV_MAX_CUT_PLANES; p++)
-        ro->planes[ro->n_planes++] =
-            vv_plane_from_point_normal(w->cut_planes[p].point, w->cut_planes[p].normal);
-    for (int p = 0; p < obj->n_cut_planes && ro->n_planes < 2 * VV_MAX_CUT_PLANES; p++)
-        ro->planes[ro->n_planes++] =
-            vv_plane_from_point_normal(obj->cut_planes[p].point, obj->cut_planes[p].normal);
     ro->bx = ro->c->bx;
     ro->by = ro->c->by;
     ro->bz = ro->c->bz;
@@ -1571,10 +1464,10 @@ prepare_geometry(rt_frame *fr, rt_gobj *g, const vv_object *obj) {
 static void
 prepare_lights(rt_frame *fr, const vv_world *w, const vv_view *view) {
     vv_vec3 fwd = v3norm(v3sub(view->at, view->eye));
-    fr->n_lights = 0;
-    for (int i = 0; i < w->n_lights && i < VV_MAX_LIGHTS; i++) {
+    fr->n_lights = vv_vlights_prepare(fr->vlights, w, view);
+    for (int i = 0; i < fr->n_lights; i++) {
         const vv_light *l = &w->lights[i];
-        rt_light *o = &fr->lights[fr->n_lights++];
+        rt_light *o = &fr->lights[i];
         o->point = l->type == VV_LIGHT_POINT && !l->headlight;
         vv_vec3 d = l->headlight ? fwd : v3norm(l->direction);
         o->dir[0] = -d.x;
@@ -1741,15 +1634,7 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     size += v3len(v3sub(view->eye, v3scale(v3add(bounds.max, bounds.min), 0.5)));
     fr.scene_size = size > 0 && size < INFINITY ? size : 1.0;
     for (int i = 0; i < fr.n_vobj && s == VV_OK; i++) {
-        rt_vobj *ro = &fr.vobjs[i];
-        for (int ch = 0; ch < 3; ch++) {
-            ro->amb[ch] = (float)ro->obj->material.ambient * fr.ambient[ch];
-            for (int l = 0; l < fr.n_lights; l++) {
-                ro->kd_col[l][ch] = (float)ro->obj->material.diffuse * fr.lights[l].col[ch];
-                ro->ks_col[l][ch] = (float)ro->obj->material.specular * fr.lights[l].col[ch];
-            }
-        }
-        s = build_tables(&fr, ro);
+        s = build_tables(&fr, &fr.vobjs[i]);
     }
     if (s != VV_OK) {
         frame_release(&fr);
