@@ -49,6 +49,7 @@
 #define RT_TILE 16 /* image tile side in pixels */
 #define RT_MAX_OBJ 64
 #define RT_SGRID 4                    /* shadow grid spacing, voxels */
+#define RT_LGRID 2                    /* light volume spacing, voxels */
 #define RT_MIN_WEIGHT (1.0f / 512.0f) /* secondary rays weighing less are not traced */
 #define RT_EPS 1e-6                   /* relative ray offset off surfaces */
 
@@ -95,7 +96,27 @@ ray_at(const vv_ray *r, double t) {
     return v3add(r->origin, v3scale(r->dir, t));
 }
 
+#define RT_LV_CACHE 16 /* light volumes kept between frames */
+
+/* A light volume kept between frames (it does not depend on the view),
+ * with everything it depends on. */
+typedef struct rt_lv {
+    vv_volume *vol; /* reference held; NULL: free slot */
+    uint64_t modified;
+    double w2i[3][4];
+    double dir[3];
+    double dt;
+    int n_planes;
+    vv_plane planes[2 * VV_MAX_CUT_PLANES];
+    float lut_lo, lut_scale;
+    float ext[VV_VC_LUT];
+    float *T;
+    uint64_t used; /* frame that last used it */
+} rt_lv;
+
 typedef struct rt_state {
+    rt_lv lv[RT_LV_CACHE];
+    uint64_t frame;
     vv_vcache_set vc; /* per-volume caches (src/render/volume_cache.h) */
     int parc;         /* PARC skipping on primary and secondary rays */
     int shadows;      /* shadow rays */
@@ -106,7 +127,8 @@ typedef struct rt_state {
     double threshold; /* adaptive: channel difference that triggers supersampling */
     uint64_t seed;    /* jitter seed */
     double early_termination;
-    int shadow_grid; /* volume samples: cached shadow rays (1) or exact (0) */
+    int shadow_grid;   /* volume samples: cached shadow rays (1) or exact (0) */
+    int light_volumes; /* shadow rays of directional lights through volumes: light volumes */
 } rt_state;
 
 typedef struct rt_light {
@@ -138,6 +160,10 @@ typedef struct rt_vobj {
     _Atomic uint32_t *sgrid[VV_MAX_LIGHTS]; /* point lights: bits of (T + 1), 0 = not traced */
     float *sweep[VV_MAX_LIGHTS];            /* directional lights: swept transmittance */
     float lidx[VV_MAX_LIGHTS][3];           /* index-space direction to the light per world unit */
+    int ldim[3];                /* light volume points per axis (every RT_LGRID voxels) */
+    float *lvol[VV_MAX_LIGHTS]; /* directional lights: this volume's own transmittance
+                                   from each point towards the light (a light volume) */
+    unsigned lvol_owned;        /* bit l: lvol[l] is this frame's (else the state's cache) */
 } rt_vobj;
 
 /* Bounding volume hierarchy over a mesh's triangles (object space). */
@@ -633,15 +659,41 @@ nearest_hit(const rt_frame *fr, const vv_ray *wr, double tmin, double tmax, int 
 /* ---------------------------------------------------------------------- */
 /* Shadow rays                                                               */
 
-/* Transmittance of one volume along the world ray over (tmin, tmax). */
+/* This volume's own transmittance towards directional light l from index
+ * point p: its light volume, interpolated trilinearly. */
+static float
+light_volume_at(const rt_vobj *ob, int l, const float p[3]) {
+    float f[3];
+    int i0[3];
+    for (int a = 0; a < 3; a++) {
+        float x = p[a] * (1.0f / RT_LGRID);
+        x = x < 0 ? 0 : x > (float)(ob->ldim[a] - 1) ? (float)(ob->ldim[a] - 1) : x;
+        int i = (int)x;
+        i = i > ob->ldim[a] - 2 ? ob->ldim[a] - 2 : i;
+        i0[a] = i;
+        f[a] = x - (float)i;
+    }
+    const size_t sy = (size_t)ob->ldim[0], sz = sy * (size_t)ob->ldim[1];
+    const float *v = ob->lvol[l] + (size_t)i0[2] * sz + (size_t)i0[1] * sy + (size_t)i0[0];
+    float x0 = vv_lerpf(v[0], v[1], f[0]), x1 = vv_lerpf(v[sy], v[sy + 1], f[0]);
+    float x2 = vv_lerpf(v[sz], v[sz + 1], f[0]), x3 = vv_lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
+    return vv_lerpf(vv_lerpf(x0, x1, f[1]), vv_lerpf(x2, x3, f[1]), f[2]);
+}
+
+/* Transmittance of one volume along the world ray over (tmin, tmax).
+ * light >= 0: the ray is a whole shadow ray towards that directional
+ * light (tmax infinite), answered from the light volume where there is
+ * one. */
 static float
 volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double tmin,
-                     double tmax) {
+                     double tmax, int light) {
     vv_vray r;
     if (!vray_setup(ob, wr, tmin, tmax, &r))
         return 1.0f;
     const vv_vcache *c = ob->c;
     const double dt = fr->dt;
+    if (light >= 0 && ob->lvol[light])
+        return light_volume_at(ob, light, r.o); /* r.o: where the ray enters */
     if (ob->mode == VV_MODE_COMPOSITE) {
         /* exp(-sum sigma h): each visible subvolume's piece of the ray is cut
          * into equal parts no longer than dt, sampled at their midpoints */
@@ -733,6 +785,8 @@ shadow_segment(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start, d
         r.dir = v3(l->dir[0], l->dir[1], l->dir[2]);
         tmax = INFINITY;
     }
+    /* a whole shadow ray towards a directional light: light volumes answer it */
+    const int light = !l->point && limit == INFINITY ? (int)(l - fr->lights) : -1;
     tmax = limit < tmax ? limit : tmax;
     r.origin = p;
     float T = 1.0f;
@@ -749,7 +803,7 @@ shadow_segment(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start, d
     for (int i = 0; i < fr->n_vobj && T > 0.0037f; i++) {
         const rt_vobj *ob = &fr->vobjs[i];
         if (ob->obj->casts_shadows)
-            T *= volume_transmittance(fr, ob, &r, start, tmax);
+            T *= volume_transmittance(fr, ob, &r, start, tmax, light);
     }
     return T;
 }
@@ -766,6 +820,31 @@ index_to_world(const rt_vobj *ob, const double q[3]) {
               ob->i2w[2][0] * q[0] + ob->i2w[2][1] * q[1] + ob->i2w[2][2] * q[2] + ob->i2w[2][3]);
 }
 
+/* A composite volume's own transmittance over the segment of world length
+ * seg from index point p (world wp) along the index direction li (world
+ * direction ldir): one sample at its middle, exp(-sigma seg); 1 where the
+ * middle is outside the volume, cut away or in a subvolume that cannot
+ * contribute. */
+static float
+own_segment(const rt_vobj *ob, const double p[3], const double li[3], double seg, vv_vec3 wp,
+            vv_vec3 ldir) {
+    float q[3];
+    for (int a = 0; a < 3; a++) {
+        q[a] = (float)(p[a] + li[a] * seg * 0.5);
+        if (!(q[a] >= 0 && q[a] <= (float)(ob->dims[a] - 1)))
+            return 1.0f;
+    }
+    if (!ob->bvis[vv_vcache_block(ob->c, q)])
+        return 1.0f;
+    if (ob->n_planes) {
+        const vv_vec3 wm = v3add(wp, v3scale(ldir, 0.5 * seg));
+        for (int i = 0; i < ob->n_planes; i++)
+            if (vv_plane_distance(ob->planes[i], wm) < 0)
+                return 1.0f;
+    }
+    return expf(-ob->ext[(int)lut_index_f(ob, vv_vcache_sample(ob->c, q))] * (float)seg);
+}
+
 /* The shadow grid of a directional light, swept layer by layer from the
  * light's side (a light volume): a grid point's transmittance is that of
  * the point one layer towards the light (bilinear in that layer) times the
@@ -773,8 +852,10 @@ index_to_world(const rt_vobj *ob, const double q[3]) {
  * the other volumes and geometry). The first layer, and points whose
  * upstream point leaves the grid, trace a whole shadow ray. */
 static vv_status
-sweep_light(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
+sweep_grid(const rt_frame *fr, const rt_vobj *ob, int l, int nt, double G, const int *gd, int own,
+           float **out) {
     const rt_light *lt = &fr->lights[l];
+    *out = NULL;
     double li[3];
     for (int a = 0; a < 3; a++)
         li[a] =
@@ -786,12 +867,12 @@ sweep_light(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
     if (!(fabs(li[A]) > 0))
         return VV_OK;
     const int B = (A + 1) % 3, Cc = (A + 2) % 3;
-    const int *gd = ob->gdim;
+    const vv_vec3 ldir = v3(lt->dir[0], lt->dir[1], lt->dir[2]);
     const size_t ng = (size_t)gd[0] * (size_t)gd[1] * (size_t)gd[2];
     float *T = malloc(ng * sizeof *T);
     if (!T)
         return vv_error_set(VV_ERR_NOMEM, "out of memory for a shadow grid");
-    const double G = RT_SGRID, seg = G / fabs(li[A]);
+    const double seg = G / fabs(li[A]);
     const int up = li[A] > 0 ? 1 : -1; /* the layer towards the light */
     const int first = up > 0 ? gd[A] - 1 : 0;
     const int nb = gd[B], nc = gd[Cc];
@@ -824,17 +905,105 @@ sweep_light(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
                     }
                     const float tq =
                         vv_lerpf(vv_lerpf(v[0], v[1], fb), vv_lerpf(v[2], v[3], fb), fc);
-                    t = tq > 0 ? tq * shadow_segment(fr, wp, lt, 0, seg) : 0.0f;
+                    t = tq <= 0 ? 0.0f
+                        : own   ? tq * own_segment(ob, p, li, seg, wp, ldir)
+                                : tq * shadow_segment(fr, wp, lt, 0, seg);
                 }
             }
             if (t < 0)
-                t = shadow_ray(fr, wp, lt, 0);
+                t = own ? volume_transmittance(fr, ob, &(vv_ray){wp, ldir}, 0, INFINITY, -1)
+                        : shadow_ray(fr, wp, lt, 0);
             T[((size_t)id[2] * (size_t)gd[1] + (size_t)id[1]) * (size_t)gd[0] + (size_t)id[0]] = t;
         }
     }
-    ob->sweep[l] = T;
+    *out = T;
+    return VV_OK;
+}
+
+/* The shadow grid of directional light l for the volume's own samples
+ * (shadow_grid=2): swept through every object that casts shadows. */
+static vv_status
+sweep_light(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
+    vv_status s = sweep_grid(fr, ob, l, nt, RT_SGRID, ob->gdim, 0, &ob->sweep[l]);
     for (int a = 0; a < 3; a++)
-        ob->lidx[l][a] = (float)li[a];
+        ob->lidx[l][a] =
+            (float)(ob->w2i[a][0] * fr->lights[l].dir[0] + ob->w2i[a][1] * fr->lights[l].dir[1] +
+                    ob->w2i[a][2] * fr->lights[l].dir[2]);
+    return s;
+}
+
+/* The light volume of a composite volume for directional light l: its own
+ * transmittance towards the light from every point of a grid RT_LGRID
+ * voxels apart, swept layer by layer from the light's side. Whole shadow
+ * rays towards the light then cross the volume in one lookup where they
+ * enter it (light_volume_at). */
+static int
+lv_matches(const rt_lv *e, const rt_frame *fr, const rt_vobj *ob, int l) {
+    if (e->vol != ob->obj->volume || e->modified != ob->obj->volume->modified || e->dt != fr->dt ||
+        e->n_planes != ob->n_planes || e->lut_lo != ob->tab.lut_lo ||
+        e->lut_scale != ob->tab.lut_scale)
+        return 0;
+    for (int a = 0; a < 3; a++)
+        if (e->dir[a] != fr->lights[l].dir[a])
+            return 0;
+    return memcmp(e->w2i, ob->w2i, sizeof e->w2i) == 0 &&
+           memcmp(e->planes, ob->planes, (size_t)ob->n_planes * sizeof *ob->planes) == 0 &&
+           memcmp(e->ext, ob->ext, sizeof e->ext) == 0;
+}
+
+static void
+lv_release(rt_lv *e) {
+    vv_volume_free(e->vol);
+    free(e->T);
+    memset(e, 0, sizeof *e);
+}
+
+static vv_status
+build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
+    for (int a = 0; a < 3; a++) {
+        ob->ldim[a] = (ob->dims[a] - 1 + RT_LGRID - 1) / RT_LGRID + 1;
+        ob->ldim[a] = ob->ldim[a] < 2 ? 2 : ob->ldim[a];
+    }
+    rt_state *st = fr->st;
+    for (int i = 0; i < RT_LV_CACHE; i++)
+        if (st->lv[i].vol && lv_matches(&st->lv[i], fr, ob, l)) {
+            st->lv[i].used = st->frame;
+            ob->lvol[l] = st->lv[i].T;
+            return VV_OK;
+        }
+    vv_status s = sweep_grid(fr, ob, l, nt, RT_LGRID, ob->ldim, 1, &ob->lvol[l]);
+    if (s != VV_OK || !ob->lvol[l])
+        return s;
+    /* keep it: in a free slot, else in place of the least recently used one
+     * that this frame does not use */
+    int slot = -1;
+    for (int i = 0; i < RT_LV_CACHE; i++)
+        if (!st->lv[i].vol) {
+            slot = i;
+            break;
+        } else if (st->lv[i].used != st->frame &&
+                   (slot < 0 || st->lv[i].used < st->lv[slot].used)) {
+            slot = i;
+        }
+    if (slot < 0) {
+        ob->lvol_owned |= 1u << l;
+        return VV_OK;
+    }
+    rt_lv *e = &st->lv[slot];
+    lv_release(e);
+    e->vol = vv_volume_ref(ob->obj->volume);
+    e->modified = ob->obj->volume->modified;
+    memcpy(e->w2i, ob->w2i, sizeof e->w2i);
+    for (int a = 0; a < 3; a++)
+        e->dir[a] = fr->lights[l].dir[a];
+    e->dt = fr->dt;
+    e->n_planes = ob->n_planes;
+    memcpy(e->planes, ob->planes, (size_t)ob->n_planes * sizeof *ob->planes);
+    e->lut_lo = ob->tab.lut_lo;
+    e->lut_scale = ob->tab.lut_scale;
+    memcpy(e->ext, ob->ext, sizeof e->ext);
+    e->T = ob->lvol[l];
+    e->used = st->frame;
     return VV_OK;
 }
 
@@ -1490,6 +1659,8 @@ frame_release(rt_frame *fr) {
         for (int l = 0; l < VV_MAX_LIGHTS; l++) {
             free(fr->vobjs[i].sgrid[l]);
             free(fr->vobjs[i].sweep[l]);
+            if (fr->vobjs[i].lvol_owned & (1u << l))
+                free(fr->vobjs[i].lvol[l]);
         }
     }
     for (int i = 0; i < fr->n_gobj; i++) {
@@ -1575,6 +1746,7 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     fr.st = st;
     fr.w = w;
     st->vc.frame++;
+    st->frame++;
     fr.et = (float)st->early_termination;
     fr.ambient[0] = (float)w->ambient.x;
     fr.ambient[1] = (float)w->ambient.y;
@@ -1642,7 +1814,16 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     }
 
     const int nt = opt->threads > 0 ? opt->threads : vv_threads_get();
-    /* shadow grids of directional lights, now that every object is ready */
+    /* light volumes of directional lights through composite volumes that
+     * cast shadows, then the shadow grids, now that every object is ready */
+    for (int i = 0; i < fr.n_vobj && s == VV_OK && fr.shadows && st->light_volumes; i++) {
+        rt_vobj *ro = &fr.vobjs[i];
+        if (ro->mode != VV_MODE_COMPOSITE || !ro->obj->casts_shadows)
+            continue;
+        for (int l = 0; l < fr.n_lights && s == VV_OK; l++)
+            if (!fr.lights[l].point)
+                s = build_light_volume(&fr, ro, l, nt);
+    }
     for (int i = 0; i < fr.n_vobj && s == VV_OK; i++) {
         rt_vobj *ro = &fr.vobjs[i];
         if (ro->gdim[0] == 0)
@@ -1743,6 +1924,7 @@ rt_create(void **state) {
     st->seed = 1;
     st->early_termination = 0.99;
     st->shadow_grid = 1;
+    st->light_volumes = 1;
     vv_vcache_set_init(&st->vc);
     *state = st;
     return VV_OK;
@@ -1763,6 +1945,8 @@ rt_set_option(void *state, const char *key, const char *value) {
         if (x != 0 && x != 1 && x != 2)
             return vv_error_set(VV_ERR_INVALID, "shadow_grid must be 0, 1 or 2");
         st->shadow_grid = (int)x;
+    } else if (strcmp(key, "light_volumes") == 0) {
+        st->light_volumes = x != 0;
     } else if (strcmp(key, "max_depth") == 0) {
         if (!(x >= 0 && x <= 64) || x != floor(x))
             return vv_error_set(VV_ERR_INVALID, "max_depth must be an integer in 0..64");
@@ -1789,10 +1973,12 @@ rt_set_option(void *state, const char *key, const char *value) {
             return vv_error_set(VV_ERR_INVALID, "early_termination must be in (0, 1]");
         st->early_termination = x;
     } else {
-        return vv_error_set(VV_ERR_INVALID,
-                            "unknown option '%s' (parc, shadows, shadow_grid, max_depth, samples, "
-                            "jitter, adaptive, adaptive_threshold, seed, early_termination)",
-                            key);
+        return vv_error_set(
+            VV_ERR_INVALID,
+            "unknown option '%s' (parc, shadows, shadow_grid, light_volumes, max_depth, "
+            "samples, "
+            "jitter, adaptive, adaptive_threshold, seed, early_termination)",
+            key);
     }
     return VV_OK;
 }
@@ -1803,6 +1989,8 @@ rt_destroy(void *state) {
     if (!st)
         return;
     vv_vcache_set_clear(&st->vc);
+    for (int i = 0; i < RT_LV_CACHE; i++)
+        lv_release(&st->lv[i]);
     free(st);
 }
 
