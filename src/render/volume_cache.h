@@ -41,6 +41,12 @@
 /* cached volumes per renderer: >= the objects of one render, so none in use
  * is evicted */
 #define VV_VC_MAX 64
+#define VV_VC_CHUNK 32 /* samples classified at a time (vv_vray_classify) */
+#if defined(__x86_64__) && defined(__GNUC__)
+#define VV_VC_HAVE_AVX2 1
+#else
+#define VV_VC_HAVE_AVX2 0
+#endif
 
 /* What an object's tables depend on besides the volume. */
 typedef struct vv_vtables_key {
@@ -490,5 +496,17 @@ vv_vray_iso_refine(const vv_vcache *c, const vv_vray *r, double ta, float va, do
  * that cannot beat the current extreme are skipped whole (same result). */
 void vv_vray_project(const vv_vcache *c, const vv_vray *r, vv_render_mode mode, double dt,
                      int skipping, float *value, float *depth);
+
+/* Pass 1 of a composite kernel: for the samples k = kfirst .. kfirst + m - 1
+ * (m <= VV_VC_CHUNK) of ray r, the cell offset, the fractions and the
+ * table entry (4 * index), with no branches so that the independent
+ * samples overlap in the pipeline. With @p avx2 (vv_vc_have_avx2) and
+ * 16-bit values, eight samples at a time with AVX2 and FMA; the two differ
+ * only in the rounding of fused multiply-adds. */
+void vv_vray_classify(const vv_vcache *c, const vv_vtables *t, const vv_vray *r, double kfirst,
+                      double dt, int m, int avx2, size_t *cell, float *fx, float *fy, float *fz,
+                      int32_t *entry);
+/* The processor has AVX2 and FMA. */
+int vv_vc_have_avx2(void);
 
 #endif

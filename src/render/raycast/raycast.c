@@ -29,12 +29,6 @@
 #ifdef __SSE2__
 #include <emmintrin.h>
 #endif
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-#define RC_HAVE_AVX2 1
-#else
-#define RC_HAVE_AVX2 0
-#endif
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -46,7 +40,6 @@
 
 #define RC_TILE 16    /* image tile side in pixels */
 #define RC_MAX_OBJ 64 /* objects handled in one render (<= VV_VC_MAX) */
-#define RC_CHUNK 32   /* samples classified ahead of compositing */
 
 typedef struct rc_state {
     vv_vcache_set vc;         /* per-volume caches (src/render/volume_cache.h) */
@@ -90,7 +83,7 @@ typedef struct rc_frame {
     int n_lights;
     float et;         /* early termination */
     int point_lights; /* any point light (needs the world position of samples) */
-    int avx2;         /* the processor has AVX2 and FMA (for classify_chunk_avx2) */
+    int avx2;         /* the processor has AVX2 and FMA (vv_vray_classify) */
     /* primary rays: origin and unnormalised direction are affine in (px, py) */
     vv_vec3 o00, ox, oy, d00, dx, dy;
 } rc_frame;
@@ -155,114 +148,6 @@ composite_sample(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, const f
     *A += w * e[0];
 }
 
-/* Pass 1 of the composite kernel: for samples k = kfirst .. kfirst + m - 1
- * of ray r, the cell offset, the fractions and the TF table entry (4 *
- * index). Portable version; the AVX2 one below computes offsets in 32 bits
- * and is used only for grids of fewer than 2^30 voxels. */
-static void
-classify_chunk(const rc_obj *ob, const vv_vray *r, double kfirst, double dt, int m, size_t *cell,
-               float *fx, float *fy, float *fz, int32_t *entry) {
-    const vv_vcache *c = ob->c;
-    for (int s = 0; s < m; s++) {
-        float p[3], f[3];
-        vv_vray_point(r, (kfirst + s) * dt, p);
-        const size_t o = vv_vcache_cell_in(c, p, f);
-        cell[s] = o;
-        fx[s] = f[0];
-        fy[s] = f[1];
-        fz[s] = f[2];
-        entry[s] = 4 * (int)lut_index_f(ob, vv_vcache_value_at(c, o, f));
-    }
-}
-
-#if RC_HAVE_AVX2
-/* classify_chunk for 16-bit values, eight samples at a time with AVX2
- * gathers and FMA; chosen at run time when the processor has them. The
- * arithmetic differs from the portable version only in the rounding of
- * fused multiply-adds, and one render uses one version throughout. */
-__attribute__((target("avx2,fma"))) static void
-classify_chunk_avx2(const rc_obj *ob, const vv_vray *r, double kfirst, double dt, int m,
-                    size_t *cell, float *fx, float *fy, float *fz, int32_t *entry) {
-    const vv_vcache *c = ob->c;
-    float u[RC_CHUNK + 8];
-    for (int s = 0; s < m; s++)
-        u[s] = (float)((kfirst + s) * dt - r->tb);
-    for (int s = m; s < m + 8; s++)
-        u[s] = u[m - 1]; /* padding lanes repeat the last sample */
-    const __m256 ox = _mm256_set1_ps(r->o[0]), oy = _mm256_set1_ps(r->o[1]),
-                 oz = _mm256_set1_ps(r->o[2]);
-    const __m256 dx = _mm256_set1_ps(r->d[0]), dy = _mm256_set1_ps(r->d[1]),
-                 dz = _mm256_set1_ps(r->d[2]);
-    const __m256i zero = _mm256_setzero_si256();
-    const __m256i mx = _mm256_set1_epi32(c->nx - 2), my = _mm256_set1_epi32(c->ny - 2),
-                  mz = _mm256_set1_epi32(c->nz - 2);
-    const __m256i sy = _mm256_set1_epi32((int)c->sy), sz = _mm256_set1_epi32((int)c->sz);
-    const __m256i lo16 = _mm256_set1_epi32(0xFFFF);
-    const __m256 llo = _mm256_set1_ps(ob->lut_lo), lsc = _mm256_set1_ps(ob->lut_scale);
-    const __m256 lmax = _mm256_set1_ps((float)(VV_VC_LUT - 1)), fzero = _mm256_setzero_ps();
-    for (int s = 0; s < m; s += 8) {
-        const __m256 t = _mm256_loadu_ps(u + s);
-        const __m256 px = _mm256_fmadd_ps(t, dx, ox), py = _mm256_fmadd_ps(t, dy, oy),
-                     pz = _mm256_fmadd_ps(t, dz, oz);
-        __m256i i = _mm256_cvttps_epi32(px), j = _mm256_cvttps_epi32(py),
-                k = _mm256_cvttps_epi32(pz);
-        i = _mm256_max_epi32(_mm256_min_epi32(i, mx), zero);
-        j = _mm256_max_epi32(_mm256_min_epi32(j, my), zero);
-        k = _mm256_max_epi32(_mm256_min_epi32(k, mz), zero);
-        const __m256 wx = _mm256_sub_ps(px, _mm256_cvtepi32_ps(i));
-        const __m256 wy = _mm256_sub_ps(py, _mm256_cvtepi32_ps(j));
-        const __m256 wz = _mm256_sub_ps(pz, _mm256_cvtepi32_ps(k));
-        const __m256i o = _mm256_add_epi32(
-            _mm256_add_epi32(_mm256_mullo_epi32(k, sz), _mm256_mullo_epi32(j, sy)), i);
-        /* the x-pair (v[o], v[o + 1]) of each cell edge, by plain loads:
-         * hardware gathers are microcoded and slow on processors with the
-         * Gather Data Sampling mitigation */
-        int32_t oo[8], p00[8], p10[8], p01[8], p11[8];
-        _mm256_storeu_si256((__m256i *)(void *)oo, o);
-        const uint16_t *q = c->q16;
-        for (int l = 0; l < 8; l++) {
-            const uint16_t *v = q + oo[l];
-            memcpy(&p00[l], v, 4);
-            memcpy(&p10[l], v + c->sy, 4);
-            memcpy(&p01[l], v + c->sz, 4);
-            memcpy(&p11[l], v + c->sz + c->sy, 4);
-        }
-        const __m256i g00 = _mm256_loadu_si256((const __m256i *)(const void *)p00);
-        const __m256i g10 = _mm256_loadu_si256((const __m256i *)(const void *)p10);
-        const __m256i g01 = _mm256_loadu_si256((const __m256i *)(const void *)p01);
-        const __m256i g11 = _mm256_loadu_si256((const __m256i *)(const void *)p11);
-#define RC_PAIR_LERP(g)                                                                            \
-    _mm256_fmadd_ps(_mm256_sub_ps(_mm256_cvtepi32_ps(_mm256_srli_epi32(g, 16)),                    \
-                                  _mm256_cvtepi32_ps(_mm256_and_si256(g, lo16))),                  \
-                    wx, _mm256_cvtepi32_ps(_mm256_and_si256(g, lo16)))
-        const __m256 c00 = RC_PAIR_LERP(g00), c10 = RC_PAIR_LERP(g10);
-        const __m256 c01 = RC_PAIR_LERP(g01), c11 = RC_PAIR_LERP(g11);
-#undef RC_PAIR_LERP
-        const __m256 c0 = _mm256_fmadd_ps(_mm256_sub_ps(c10, c00), wy, c00);
-        const __m256 c1 = _mm256_fmadd_ps(_mm256_sub_ps(c11, c01), wy, c01);
-        const __m256 val = _mm256_fmadd_ps(_mm256_sub_ps(c1, c0), wz, c0);
-        __m256 li = _mm256_mul_ps(_mm256_sub_ps(val, llo), lsc);
-        li = _mm256_min_ps(_mm256_max_ps(li, fzero), lmax);
-        const __m256i e = _mm256_slli_epi32(_mm256_cvttps_epi32(li), 2);
-        int32_t ob8[8], eb8[8];
-        float xb[8], yb[8], zb[8];
-        _mm256_storeu_si256((__m256i *)(void *)ob8, o);
-        _mm256_storeu_si256((__m256i *)(void *)eb8, e);
-        _mm256_storeu_ps(xb, wx);
-        _mm256_storeu_ps(yb, wy);
-        _mm256_storeu_ps(zb, wz);
-        const int lanes = m - s < 8 ? m - s : 8;
-        for (int l = 0; l < lanes; l++) {
-            cell[s + l] = (size_t)ob8[l];
-            entry[s + l] = eb8[l];
-            fx[s + l] = xb[l];
-            fy[s + l] = yb[l];
-            fz[s + l] = zb[l];
-        }
-    }
-}
-#endif
-
 /* The common case, one volume in composite mode, without the bookkeeping
  * of the general loop: a two-level subvolume skip, then a tight march
  * through each visible subvolume. Produces the same samples (t = k dt) as
@@ -325,18 +210,13 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
              * table entry, with no branches, so that the independent samples
              * overlap in the pipeline; then shading and compositing of the
              * non-transparent ones only. */
-            for (int s0 = 0; s0 < n; s0 += RC_CHUNK) {
-                const int m = n - s0 < RC_CHUNK ? n - s0 : RC_CHUNK;
-                size_t cell[RC_CHUNK];
-                int32_t entry[RC_CHUNK];
-                float fx[RC_CHUNK], fy[RC_CHUNK], fz[RC_CHUNK];
+            for (int s0 = 0; s0 < n; s0 += VV_VC_CHUNK) {
+                const int m = n - s0 < VV_VC_CHUNK ? n - s0 : VV_VC_CHUNK;
+                size_t cell[VV_VC_CHUNK];
+                int32_t entry[VV_VC_CHUNK];
+                float fx[VV_VC_CHUNK], fy[VV_VC_CHUNK], fz[VV_VC_CHUNK];
                 const double kfirst = klast - (n - 1 - s0);
-#if RC_HAVE_AVX2
-                if (fr->avx2 && c->q16 && c->sz * (size_t)c->nz < ((size_t)1 << 30))
-                    classify_chunk_avx2(ob, &r, kfirst, dt, m, cell, fx, fy, fz, entry);
-                else
-#endif
-                    classify_chunk(ob, &r, kfirst, dt, m, cell, fx, fy, fz, entry);
+                vv_vray_classify(c, &ob->tab, &r, kfirst, dt, m, fr->avx2, cell, fx, fy, fz, entry);
                 for (int s = 0; s < m; s++) {
                     const float *e = ob->lut + entry[s];
                     const float alpha = e[0];
@@ -629,9 +509,7 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     memset(&fr, 0, sizeof fr);
     fr.st = st;
     st->vc.frame++;
-#if RC_HAVE_AVX2
-    fr.avx2 = st->simd && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-#endif
+    fr.avx2 = st->simd && vv_vc_have_avx2();
     fr.view = view;
     fr.et = (float)st->early_termination;
     fr.ambient[0] = (float)w->ambient.x;

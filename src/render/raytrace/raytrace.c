@@ -210,6 +210,7 @@ typedef struct rt_frame {
     int n_lights;
     float et;
     int shadows, max_depth;
+    int avx2;          /* the processor has AVX2 and FMA (vv_vray_classify) */
     double scene_size; /* for ray offsets */
 } rt_frame;
 
@@ -1209,14 +1210,19 @@ shade_geometry(const rt_frame *fr, const vv_ray *wr, const rt_hit *h, int depth,
 /* Ray tracing                                                               */
 
 /* Composites one classified sample (opacity and premultiplied colour e) at
- * index point p, ray parameter t, under the accumulated C, A. */
+ * index point p, ray parameter t, under the accumulated C, A; gin: the
+ * index-space gradient there, or NULL to compute it. */
 static inline void
 composite_sample(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, const float v[3],
-                 const float *e, const float p[3], double t, float C[3], float *A) {
+                 const float *e, const float p[3], double t, const float *gin, float C[3],
+                 float *A) {
     const float w = 1 - *A;
     if (ob->obj->shading) {
         float g[3], pw[3], o3[3];
-        vv_vcache_gradient(ob->c, p, g);
+        if (gin)
+            memcpy(g, gin, sizeof g);
+        else
+            vv_vcache_gradient(ob->c, p, g);
         pw[0] = (float)(wr->origin.x + t * wr->dir.x);
         pw[1] = (float)(wr->origin.y + t * wr->dir.y);
         pw[2] = (float)(wr->origin.z + t * wr->dir.z);
@@ -1234,12 +1240,14 @@ composite_sample(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, const 
 
 /* The common case, one composite volume on the ray: subvolume by
  * subvolume, leaping over empty ones, the same samples t = k dt as the
- * general loop below. */
+ * general loop below, classified a chunk at a time (vv_vray_classify, the
+ * ray caster's kernel) before the visible ones are shaded. */
 static void
 march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray *wr,
           const float v[3], float C[3], float *Aout, float *dep) {
     const double dt = fr->dt, inv_dt = 1.0 / fr->dt;
     const vv_vcache *c = ob->c;
+    const int shading = ob->obj->shading;
     float A = 0;
     double k = vv_ceil_pos(r->t0 * inv_dt);
     const double kend = floor(r->t1 * inv_dt);
@@ -1255,20 +1263,39 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
         double klast = floor(block_exit(r, p, k * dt) * inv_dt);
         klast = klast < kend ? klast : kend;
         klast = klast < k ? k : klast;
-        for (; k <= klast; k++) {
-            const double t = k * dt;
-            vv_vray_point(r, t, p);
-            const float *e = ob->lut + 4 * (int)lut_index_f(ob, vv_vcache_sample(c, p));
-            if (e[0] <= 0)
-                continue;
-            composite_sample(fr, ob, wr, v, e, p, t, C, &A);
-            if (*dep == INFINITY)
-                *dep = (float)t;
-            if (A >= fr->et) {
-                *Aout = A > 1 ? 1 : A;
-                return;
+        const int n = (int)(klast - k) + 1;
+        for (int s0 = 0; s0 < n; s0 += VV_VC_CHUNK) {
+            const int m = n - s0 < VV_VC_CHUNK ? n - s0 : VV_VC_CHUNK;
+            const double kfirst = k + s0;
+            size_t cell[VV_VC_CHUNK];
+            int32_t entry[VV_VC_CHUNK];
+            float fx[VV_VC_CHUNK], fy[VV_VC_CHUNK], fz[VV_VC_CHUNK];
+            vv_vray_classify(c, &ob->tab, r, kfirst, dt, m, fr->avx2, cell, fx, fy, fz, entry);
+            for (int s = 0; s < m; s++) {
+                const float *e = ob->lut + entry[s];
+                if (e[0] <= 0)
+                    continue;
+                const double t = (kfirst + s) * dt;
+                float g[3] = {0, 0, 0};
+                if (shading) {
+                    vv_vray_point(r, t, p);
+                    if (c->nrm) {
+                        const float f[3] = {fx[s], fy[s], fz[s]};
+                        vv_vcache_gradient_at(c, cell[s], f, g);
+                    } else {
+                        vv_vcache_gradient(c, p, g);
+                    }
+                }
+                composite_sample(fr, ob, wr, v, e, p, t, g, C, &A);
+                if (*dep == INFINITY)
+                    *dep = (float)t;
+                if (A >= fr->et) {
+                    *Aout = A > 1 ? 1 : A;
+                    return;
+                }
             }
         }
+        k = klast + 1;
     }
     *Aout = A > 1 ? 1 : A;
 }
@@ -1408,7 +1435,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
             const float alpha = e[0];
             if (alpha <= 0)
                 continue;
-            composite_sample(fr, ob, wr, v, e, p, t, C, &A);
+            composite_sample(fr, ob, wr, v, e, p, t, NULL, C, &A);
             if (*dep == INFINITY)
                 *dep = (float)t;
         }
@@ -1746,6 +1773,7 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     fr.st = st;
     fr.w = w;
     st->vc.frame++;
+    fr.avx2 = vv_vc_have_avx2();
     st->frame++;
     fr.et = (float)st->early_termination;
     fr.ambient[0] = (float)w->ambient.x;
