@@ -1934,6 +1934,10 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         return vv_error_set(VV_ERR_CANCELLED, "cancelled");
     /* drop cached volumes the World no longer shows */
     vv_vcache_set_prune(&st->vc, w);
+    /* light volumes this frame did not use: gone (they can be large) */
+    for (int i = 0; i < RT_LV_CACHE; i++)
+        if (st->lv[i].vol && st->lv[i].used != st->frame)
+            lv_release(&st->lv[i]);
     return VV_OK;
 }
 
