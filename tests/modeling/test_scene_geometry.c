@@ -14,8 +14,6 @@
 #include <string.h>
 #include <sys/wait.h>
 
-extern char **environ;
-
 #define VT_PI 3.14159265358979323846
 
 static const char *
@@ -185,32 +183,10 @@ test_bad_scenes(void **state) {
 
 static int
 run_cli(const char *const *args, char **err) {
-    const char *cli = getenv("VV_CLI");
-    if (!cli || !*cli)
-        cli = VV_BINARY_DIR "/volvis";
-    char *argv[32];
-    int n = 0;
-    argv[n++] = (char *)cli;
-    for (int i = 0; args[i]; i++)
-        argv[n++] = (char *)args[i];
-    argv[n] = NULL;
-    char err_path[1100];
-    snprintf(err_path, sizeof err_path, "%s/.stderr", vt_outdir("modeling_scene"));
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
-    posix_spawn_file_actions_addopen(&fa, 2, err_path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    pid_t pid;
-    int rc = posix_spawn(&pid, argv[0], &fa, NULL, argv, environ);
-    posix_spawn_file_actions_destroy(&fa);
-    if (rc != 0)
-        fail_msg("cannot run %s: %s", argv[0], strerror(rc));
-    int st;
-    while (waitpid(pid, &st, 0) < 0)
-        assert_int_equal(errno, EINTR);
-    size_t len;
-    *err = (char *)vt_read_file(err_path, &len);
-    return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+    vt_run_result r = vt_run_cli_v(vt_outdir("modeling_scene"), args);
+    free(r.out);
+    *err = r.err;
+    return r.status;
 }
 
 static void
