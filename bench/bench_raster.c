@@ -25,41 +25,11 @@
 #include <sys/stat.h>
 #include <time.h>
 
+#include "util.h"
 #include "volvis/volvis.h"
 
-static double
-now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int
-cmp_double(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
 static const char *dataset;
-
-static void
-emit(const char *op, double value, const char *unit) {
-    printf("anchor=volvis op=%s dataset=%s value=%.6g unit=%s\n", op, dataset, value, unit);
-    fflush(stdout);
-}
-
-static void
-die(const char *what) {
-    fprintf(stderr, "bench_raster: %s: %s\n", what, vv_error_message());
-    exit(1);
-}
-
-static double
-cpu_now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
+#define emit(op, value, unit) bench_emit(op, dataset, value, unit)
 
 /* Median wall time of a frame; *cpu (may be NULL) the median CPU time of
  * the process (all threads), which a loaded machine disturbs less. */
@@ -68,16 +38,16 @@ median_frame(vv_renderer *r, const vv_world *w, const vv_render_options *opt, vv
              int runs, double *cpu) {
     double *t = malloc(2 * (size_t)runs * sizeof *t);
     if (!t)
-        die("memory");
+        bench_die("bench_raster", "memory");
     for (int i = 0; i < runs; i++) {
-        double t0 = now(), c0 = cpu_now();
+        double t0 = bench_now(), c0 = bench_cpu_now();
         if (vv_renderer_render(r, w, &w->view, opt, img) != VV_OK)
-            die("render");
-        t[i] = now() - t0;
-        t[runs + i] = cpu_now() - c0;
+            bench_die("bench_raster", "render");
+        t[i] = bench_now() - t0;
+        t[runs + i] = bench_cpu_now() - c0;
     }
-    qsort(t, (size_t)runs, sizeof *t, cmp_double);
-    qsort(t + runs, (size_t)runs, sizeof *t, cmp_double);
+    qsort(t, (size_t)runs, sizeof *t, bench_cmp_double);
+    qsort(t + runs, (size_t)runs, sizeof *t, bench_cmp_double);
     double m = t[runs / 2];
     if (cpu)
         *cpu = t[runs + runs / 2];
@@ -90,7 +60,7 @@ save(const vv_image *img, const char *outdir, const char *stem, const char *what
     char path[4096];
     snprintf(path, sizeof path, "%s/%s_volvis_%s.png", outdir, stem, what);
     if (vv_image_write_png(img, path, 1.0, 0) != VV_OK)
-        die("write png");
+        bench_die("bench_raster", "write png");
     printf("# image %s\n", path);
 }
 
@@ -138,7 +108,7 @@ main(int argc, char **argv) {
         vv_threads_set(threads);
     vv_volume *vol;
     if (vv_volume_load(&vol, path, NULL) != VV_OK)
-        die(path);
+        bench_die("bench_raster", path);
     if (isnan(iso))
         iso = 0.5 * (vol->range[0] + vol->range[1]);
     /* centred, identity direction: the peers' placement */
@@ -157,7 +127,7 @@ main(int argc, char **argv) {
     vv_object *obj;
     if (vv_world_new(&w) != VV_OK || vv_object_new_volume(&obj, vol, "bench") != VV_OK ||
         vv_world_add_object(w, obj) != VV_OK)
-        die("world");
+        bench_die("bench_raster", "world");
     vv_light head;
     memset(&head, 0, sizeof head);
     head.type = VV_LIGHT_DIRECTIONAL;
@@ -165,7 +135,7 @@ main(int argc, char **argv) {
     head.color = vv_vec3_make(1, 1, 1);
     head.intensity = 1;
     if (vv_world_add_light(w, &head) != VV_OK)
-        die("light");
+        bench_die("bench_raster", "light");
     double ext = 0;
     for (int a = 0; a < 3; a++) {
         double e = (vol->dims[a] - 1) * vol->spacing[a];
@@ -195,29 +165,29 @@ main(int argc, char **argv) {
     opt.threads = threads;
     vv_image *img, *ref;
     if (vv_image_new(&img, size, size) != VV_OK || vv_image_new(&ref, size, size) != VV_OK)
-        die("image");
+        bench_die("bench_raster", "image");
 
     /* the mesh alone, for its size */
     vv_isosurface_options io;
     vv_isosurface_options_init(&io);
     io.threads = threads;
     vv_mesh *mesh;
-    double t0 = now();
+    double t0 = bench_now();
     if (vv_isosurface_extract(&mesh, vol, iso, &io) != VV_OK)
-        die("isosurface");
+        bench_die("bench_raster", "isosurface");
     printf("# %s %dx%dx%d, iso %g: %zu triangles, %zu vertices (extracted in %.3f s), %d threads, "
            "%dx%d\n",
            dataset, vol->dims[0], vol->dims[1], vol->dims[2], iso, mesh->n_triangles,
-           mesh->n_vertices, now() - t0, vv_threads_get(), size, size);
+           mesh->n_vertices, bench_now() - t0, vv_threads_get(), size, size);
     emit("raster_triangles", (double)mesh->n_triangles, "triangles");
 
     vv_renderer *r;
     if (vv_renderer_new(&r, "surface") != VV_OK)
-        die("surface renderer");
-    t0 = now();
+        bench_die("bench_raster", "surface renderer");
+    t0 = bench_now();
     if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK)
-        die("render");
-    emit("raster_first_frame", now() - t0, "s");
+        bench_die("bench_raster", "render");
+    emit("raster_first_frame", bench_now() - t0, "s");
     double cpu = 0;
     double tf = median_frame(r, w, &opt, img, runs, &cpu);
     emit("raster_frame", tf, "s");
@@ -228,7 +198,7 @@ main(int argc, char **argv) {
     vv_renderer *rc;
     if (vv_renderer_new(&rc, "raycast") != VV_OK ||
         vv_renderer_render(rc, w, &w->view, &opt, ref) != VV_OK)
-        die("raycast");
+        bench_die("bench_raster", "raycast");
     emit("raster_iso_psnr", vv_image_psnr(img, ref), "dB");
     save(ref, outdir, stem, "raster_raycast_iso");
 
@@ -239,7 +209,7 @@ main(int argc, char **argv) {
         if (vv_renderer_new(&rv, "surface") != VV_OK ||
             vv_renderer_set_option(rv, variants[v][0], variants[v][1]) != VV_OK ||
             vv_renderer_render(rv, w, &w->view, &opt, img) != VV_OK)
-            die("render variant");
+            bench_die("bench_raster", "render variant");
         emit(names[v], median_frame(rv, w, &opt, img, runs, NULL), "s");
         save(img, outdir, stem, names[v] + 7);
         vv_renderer_free(rv);

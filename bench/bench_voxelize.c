@@ -20,6 +20,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "util.h"
 #include "volvis/volvis.h"
 #if defined(__has_include)
 #if __has_include("volvis/surface.h")
@@ -27,31 +28,6 @@
 #define HAVE_SURFACE 1
 #endif
 #endif
-
-static double
-now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int
-cmp_double(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
-static void
-emit(const char *op, const char *dataset, double value, const char *unit) {
-    printf("anchor=volvis op=%s dataset=%s value=%.6g unit=%s\n", op, dataset, value, unit);
-    fflush(stdout);
-}
-
-static void
-die(const char *what) {
-    fprintf(stderr, "bench_voxelize: %s: %s\n", what, vv_error_message());
-    exit(1);
-}
 
 /* Voxels above the 0.5 level of a u8 density volume, times the voxel volume. */
 static double
@@ -69,17 +45,17 @@ time_voxelize(const vv_shape *s, const vv_voxelize_options *o, int runs, vv_volu
     double t[64];
     vv_volume *v = NULL;
     if (vv_voxelize(&v, s, o) != VV_OK) /* warm-up */
-        die("voxelize");
+        bench_die("bench_voxelize", "voxelize");
     vv_volume_free(v);
     for (int r = 0; r < runs; r++) {
-        double t0 = now();
+        double t0 = bench_now();
         if (vv_voxelize(&v, s, o) != VV_OK)
-            die("voxelize");
-        t[r] = now() - t0;
+            bench_die("bench_voxelize", "voxelize");
+        t[r] = bench_now() - t0;
         if (r + 1 < runs)
             vv_volume_free(v);
     }
-    qsort(t, (size_t)runs, sizeof *t, cmp_double);
+    qsort(t, (size_t)runs, sizeof *t, bench_cmp_double);
     *last = v;
     return t[runs / 2];
 }
@@ -120,17 +96,18 @@ main(int argc, char **argv) {
     if (!only || strcmp(only, "sphere") == 0) {
         vv_shape *s = NULL;
         if (vv_shape_sphere(&s, 124.0) != VV_OK)
-            die("sphere");
+            bench_die("bench_voxelize", "sphere");
         vv_voxelize_options_init(&o);
         o.dims[0] = o.dims[1] = o.dims[2] = 256;
         o.spacing[0] = o.spacing[1] = o.spacing[2] = 1.0;
         o.origin[0] = o.origin[1] = o.origin[2] = -127.5;
         double sec = time_voxelize(s, &o, runs, &v);
         double want = 4.0 / 3.0 * VV_PI * 124.0 * 124.0 * 124.0;
-        emit("voxelize_sphere_256", "sphere_r124", sec, "s");
-        emit("voxelize_sphere_256_voxel_rate", "sphere_r124", 256.0 * 256 * 256 / sec, "voxels/s");
-        emit("voxelize_sphere_256_volume_relerr", "sphere_r124", (level_volume(v) - want) / want,
-             "fraction");
+        bench_emit("voxelize_sphere_256", "sphere_r124", sec, "s");
+        bench_emit("voxelize_sphere_256_voxel_rate", "sphere_r124", 256.0 * 256 * 256 / sec,
+                   "voxels/s");
+        bench_emit("voxelize_sphere_256_volume_relerr", "sphere_r124",
+                   (level_volume(v) - want) / want, "fraction");
         vv_volume_free(v);
         vv_shape_free(s);
     }
@@ -140,20 +117,20 @@ main(int argc, char **argv) {
         snprintf(path, sizeof path, "%s/meshes/bunny.ply", data);
         vv_mesh *m = NULL;
         if (vv_mesh_load(&m, path) != VV_OK)
-            die(path);
+            bench_die("bench_voxelize", path);
         vv_shape *s = NULL;
         if (vv_shape_mesh(&s, m, VV_MESH_SOLID, 0) != VV_OK)
-            die("bunny shape");
+            bench_die("bench_voxelize", "bunny shape");
         vv_voxelize_options_init(&o);
         o.size = 256;
         double sec = time_voxelize(s, &o, runs, &v);
         double nvox = (double)vv_volume_voxel_count(v);
         printf("# bunny: %zu triangles, grid %d x %d x %d\n", m->n_triangles, v->dims[0],
                v->dims[1], v->dims[2]);
-        emit("voxelize_mesh_bunny_256", "bunny.ply", sec, "s");
-        emit("voxelize_mesh_bunny_256_voxel_rate", "bunny.ply", nvox / sec, "voxels/s");
+        bench_emit("voxelize_mesh_bunny_256", "bunny.ply", sec, "s");
+        bench_emit("voxelize_mesh_bunny_256_voxel_rate", "bunny.ply", nvox / sec, "voxels/s");
         double mv = fabs(vv_mesh_signed_volume(m));
-        emit("voxelize_mesh_bunny_256_volume", "bunny.ply", level_volume(v), "world^3");
+        bench_emit("voxelize_mesh_bunny_256_volume", "bunny.ply", level_volume(v), "world^3");
         printf("# bunny divergence volume (an open mesh: approximate) %.6g\n", mv);
         vv_volume_free(v);
         vv_shape_free(s);
@@ -166,13 +143,13 @@ main(int argc, char **argv) {
         snprintf(path, sizeof path, "%s/volumes/ct_head.nrrd", data);
         vv_volume *ct = NULL;
         if (vv_volume_load(&ct, path, NULL) != VV_OK)
-            die(path);
+            bench_die("bench_voxelize", path);
         vv_isosurface_options io;
         vv_isosurface_options_init(&io);
         io.compute_normals = 0;
         vv_mesh *m = NULL;
         if (vv_isosurface_extract(&m, ct, iso, &io) != VV_OK)
-            die("isosurface");
+            bench_die("bench_voxelize", "isosurface");
         vv_voxelize_options_init(&o);
         for (int a = 0; a < 3; a++) {
             o.dims[a] = ct->dims[a];
@@ -182,33 +159,34 @@ main(int argc, char **argv) {
         /* time the whole conversion: the shape (topology check) and the voxelization */
         double t[64];
         for (int r = -1; r < runs; r++) {
-            double t0 = now();
+            double t0 = bench_now();
             vv_shape *s = NULL;
             if (vv_shape_mesh(&s, m, VV_MESH_SOLID, 0) != VV_OK)
-                die("isosurface shape");
+                bench_die("bench_voxelize", "isosurface shape");
             if (vv_voxelize(&v, s, &o) != VV_OK)
-                die("voxelize isosurface");
-            double dt = now() - t0;
+                bench_die("bench_voxelize", "voxelize isosurface");
+            double dt = bench_now() - t0;
             if (r >= 0)
                 t[r] = dt;
             vv_shape_free(s);
             if (r + 1 < runs)
                 vv_volume_free(v);
         }
-        qsort(t, (size_t)runs, sizeof *t, cmp_double);
+        qsort(t, (size_t)runs, sizeof *t, bench_cmp_double);
         double sec = t[runs / 2];
         printf("# ct_head isosurface %g: %zu triangles, grid %d x %d x %d\n", iso, m->n_triangles,
                ct->dims[0], ct->dims[1], ct->dims[2]);
-        emit("voxelize_isosurface_ct_head", "ct_head.nrrd", sec, "s");
-        emit("voxelize_isosurface_ct_head_voxel_rate", "ct_head.nrrd",
-             (double)vv_volume_voxel_count(ct) / sec, "voxels/s");
-        emit("voxelize_isosurface_ct_head_volume", "ct_head.nrrd", level_volume(v), "world^3");
+        bench_emit("voxelize_isosurface_ct_head", "ct_head.nrrd", sec, "s");
+        bench_emit("voxelize_isosurface_ct_head_voxel_rate", "ct_head.nrrd",
+                   (double)vv_volume_voxel_count(ct) / sec, "voxels/s");
+        bench_emit("voxelize_isosurface_ct_head_volume", "ct_head.nrrd", level_volume(v),
+                   "world^3");
         /* voxel counting of the input at the isovalue, as the VTK script does */
         size_t cnt = 0, n = (size_t)vv_volume_voxel_count(ct);
         for (size_t i = 0; i < n; i++)
             cnt += ((const int16_t *)ct->data)[i] > iso;
-        emit("voxelcount_volume", "ct_head.nrrd",
-             (double)cnt * ct->spacing[0] * ct->spacing[1] * ct->spacing[2], "world^3");
+        bench_emit("voxelcount_volume", "ct_head.nrrd",
+                   (double)cnt * ct->spacing[0] * ct->spacing[1] * ct->spacing[2], "world^3");
         vv_volume_free(v);
         vv_mesh_free(m);
         vv_volume_free(ct);
