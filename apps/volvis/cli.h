@@ -124,6 +124,9 @@ int cli_parse_roi(const cli_args *a, const char *opt, const char *text, int lo[3
 /** A cut plane "PX,PY,PZ:NX,NY,NZ" (world point and normal; the normal's side is kept). */
 int cli_parse_plane(const cli_args *a, const char *opt, const char *text, vv_cut_plane *pl);
 
+/** 1 when @p s ends with @p suffix, ignoring ASCII case (file extensions). */
+int cli_ends_with(const char *s, const char *suffix);
+
 /* ---- errors ---------------------------------------------------------------- */
 
 /** Prints "volvis: <formatted>" as one line on stderr (newlines become "; "). */

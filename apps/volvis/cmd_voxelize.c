@@ -54,12 +54,6 @@ cli_voxelize_usage(FILE *out) {
             "  volvis voxelize ../shared/data/meshes/knot1.off -o knot.slc --filter gauss\n");
 }
 
-static int
-ends_with(const char *s, const char *suffix) {
-    size_t n = strlen(s), m = strlen(suffix);
-    return n >= m && strcasecmp(s + n - m, suffix) == 0;
-}
-
 int
 cli_voxelize_main(int argc, char **argv) {
     cli_args a;
@@ -78,9 +72,9 @@ cli_voxelize_main(int argc, char **argv) {
     if (!out)
         return cli_usage_error(&a, "missing -o OUT.(nrrd|slc)");
     vv_format format;
-    if (ends_with(out, ".slc"))
+    if (cli_ends_with(out, ".slc"))
         format = VV_FORMAT_SLC;
-    else if (ends_with(out, ".nrrd") || ends_with(out, ".nhdr"))
+    else if (cli_ends_with(out, ".nrrd") || cli_ends_with(out, ".nhdr"))
         format = VV_FORMAT_NRRD;
     else
         return cli_usage_error(&a, "cannot tell the output format from '%s'; use .nrrd or .slc",
@@ -112,7 +106,7 @@ cli_voxelize_main(int argc, char **argv) {
     vv_shape *shape = NULL;
     vv_status st;
     vv_error_clear();
-    int is_scene = ends_with(in, ".json");
+    int is_scene = cli_ends_with(in, ".json");
     if (is_scene)
         st = vv_model_load(&shape, in, &o);
     else
