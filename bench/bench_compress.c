@@ -32,40 +32,11 @@
 #include <sys/stat.h>
 #include <time.h>
 
+#include "util.h"
 #include "volvis/volvis.h"
 
-static double
-now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int
-cmp_double(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
-static double
-median(double *v, int n) {
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 static const char *dataset;
-
-static void
-emit(const char *op, double value, const char *unit) {
-    printf("anchor=volvis op=%s dataset=%s value=%.6g unit=%s\n", op, dataset, value, unit);
-    fflush(stdout);
-}
-
-static void
-die(const char *what) {
-    fprintf(stderr, "bench_compress: %s: %s\n", what, vv_error_message());
-    exit(1);
-}
+#define emit(op, value, unit) bench_emit(op, dataset, value, unit)
 
 /* "0.5" -> "0.5", 1 -> "1": the rate as bench_zfp.sh names it. */
 static void
@@ -211,12 +182,12 @@ static vv_image *
 render(vv_renderer *r, const vv_world *w, int threads) {
     vv_image *img = NULL;
     if (vv_image_new(&img, w->view.width, w->view.height) != VV_OK)
-        die("image");
+        bench_die("bench_compress", "image");
     vv_render_options o;
     vv_render_options_init(&o);
     o.threads = threads;
     if (vv_renderer_render(r, w, &w->view, &o, img) != VV_OK)
-        die(vv_renderer_name(r));
+        bench_die("bench_compress", vv_renderer_name(r));
     return img;
 }
 
@@ -275,7 +246,7 @@ main(int argc, char **argv) {
     dataset = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
     vv_volume *vol = NULL;
     if (vv_volume_load(&vol, path, NULL) != VV_OK)
-        die(path);
+        bench_die("bench_compress", path);
     const double mb =
         (double)vv_volume_voxel_count(vol) * (double)vv_voxel_type_size(vol->type) / 1e6;
     const double mvox = (double)vv_volume_voxel_count(vol) / 1e6;
@@ -293,16 +264,16 @@ main(int argc, char **argv) {
     so.elevation = vv_deg_to_rad(el);
     vv_world *w = NULL;
     if (vv_world_new_for_volume(&w, vol, &so) != VV_OK)
-        die("world");
+        bench_die("bench_compress", "world");
     w->view.projection = VV_PROJECTION_ORTHOGRAPHIC;
     vv_view_frame_box(&w->view, vv_world_bounds(w));
     vv_renderer *rc = NULL, *fo = NULL;
     if (vv_renderer_new(&rc, "raycast") != VV_OK || vv_renderer_new(&fo, "fourier") != VV_OK)
-        die("renderer");
+        bench_die("bench_compress", "renderer");
     char bs[16];
     snprintf(bs, sizeof bs, "%d", block);
     if (vv_renderer_set_option(fo, "block", bs) != VV_OK)
-        die("block");
+        bench_die("bench_compress", "block");
     {
         vv_image *probe = render(rc, w, threads);
         float m = 0;
@@ -317,25 +288,25 @@ main(int argc, char **argv) {
     }
     /* frames, interleaved pairs */
     double *tx = malloc(sizeof(double) * (size_t)runs), *tf = malloc(sizeof(double) * (size_t)runs);
-    double t0 = now();
+    double t0 = bench_now();
     vv_image *fimg = render(fo, w, threads);
-    emit("fourier_first_frame", now() - t0, "s");
+    emit("fourier_first_frame", bench_now() - t0, "s");
     vv_image_free(fimg);
     vv_image *ximg = NULL;
     fimg = NULL;
     for (int r = 0; r < runs; r++) {
         vv_image_free(ximg);
         vv_image_free(fimg);
-        t0 = now();
+        t0 = bench_now();
         ximg = render(rc, w, threads);
-        tx[r] = now() - t0;
-        t0 = now();
+        tx[r] = bench_now() - t0;
+        t0 = bench_now();
         fimg = render(fo, w, threads);
-        tf[r] = now() - t0;
+        tf[r] = bench_now() - t0;
         fprintf(stderr, "pair %d: xray %.4f s, fourier %.4f s, ratio %.1f\n", r, tx[r], tf[r],
                 tx[r] / tf[r]);
     }
-    const double mx = median(tx, runs), mf = median(tf, runs);
+    const double mx = bench_median(tx, runs), mf = bench_median(tf, runs);
     emit("xray_frame", mx, "s");
     emit("fourier_frame", mf, "s");
     emit("fourier_speedup", mx / mf, "x");
@@ -360,10 +331,10 @@ main(int argc, char **argv) {
         p.rate = rates[i];
         p.threads = threads;
         vv_vvc *c = NULL;
-        t0 = now();
+        t0 = bench_now();
         if (vv_vvc_compress(&c, vol, &p) != VV_OK)
-            die("compress");
-        const double tsearch = now() - t0;
+            bench_die("bench_compress", "compress");
+        const double tsearch = bench_now() - t0;
         vv_vvc_info info;
         vv_vvc_get_info(c, &info);
         vv_vvc_free(c);
@@ -374,21 +345,21 @@ main(int argc, char **argv) {
         const int n = runs < 16 ? runs : 16;
         vv_volume *dec = NULL;
         for (int r = 0; r < n; r++) {
-            t0 = now();
+            t0 = bench_now();
             if (vv_vvc_compress(&c, vol, &p) != VV_OK)
-                die("compress");
-            tc[r] = now() - t0;
+                bench_die("bench_compress", "compress");
+            tc[r] = bench_now() - t0;
             vv_volume_free(dec);
-            t0 = now();
+            t0 = bench_now();
             if (vv_vvc_decompress(&dec, c, threads, NULL) != VV_OK)
-                die("decompress");
-            td[r] = now() - t0;
+                bench_die("bench_compress", "decompress");
+            td[r] = bench_now() - t0;
             if (r + 1 < n)
                 vv_vvc_free(c);
         }
         double psnr, rmse, maxe;
         vv_volume_compare(vol, dec, &psnr, &rmse, &maxe);
-        const double mtc = median(tc, n), mtd = median(td, n);
+        const double mtc = bench_median(tc, n), mtd = bench_median(td, n);
 #define E(suffix, value, unit)                                                                     \
     do {                                                                                           \
         snprintf(op, sizeof op, "vvc_rate%s_%s", rn, suffix);                                      \
@@ -413,22 +384,22 @@ main(int argc, char **argv) {
         char fn[1200];
         snprintf(fn, sizeof fn, "%s/%s_rate%s.vvc", outdir, dataset, rn);
         if (vv_vvc_save(c, fn) != VV_OK)
-            die(fn);
+            bench_die("bench_compress", fn);
         vv_vvc_free(c);
         vv_volume_free(dec);
         vv_renderer *fr = NULL;
         if (vv_renderer_new(&fr, "fourier") != VV_OK || vv_renderer_set_option(fr, "vvc", fn))
-            die("fourier vvc");
+            bench_die("bench_compress", "fourier vvc");
         vv_image *img = render(fr, w, threads); /* decodes the file, oversamples */
         double tr[16];
         for (int r = 0; r < n; r++) {
             vv_image_free(img);
-            t0 = now();
+            t0 = bench_now();
             img = render(fr, w, threads);
-            tr[r] = now() - t0;
+            tr[r] = bench_now() - t0;
         }
         snprintf(op, sizeof op, "fourier_rate%s_frame", rn);
-        emit(op, median(tr, n), "s");
+        emit(op, bench_median(tr, n), "s");
         const double fp = vv_image_psnr(ximg, img);
         snprintf(op, sizeof op, "fourier_rate%s_psnr", rn);
         emit(op, fp, "dB");

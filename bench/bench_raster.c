@@ -25,28 +25,18 @@
 #include <sys/stat.h>
 
 #include "common/bench_scene.h"
+#include "util.h"
 #include "volvis/volvis.h"
 
 static const char *dataset;
-
-static void
-emit(const char *op, double value, const char *unit) {
-    printf("anchor=volvis op=%s dataset=%s value=%.6g unit=%s\n", op, dataset, value, unit);
-    fflush(stdout);
-}
-
-static void
-die(const char *what) {
-    fprintf(stderr, "bench_raster: %s: %s\n", what, vv_error_message());
-    exit(1);
-}
+#define emit(op, value, unit) bench_emit(op, dataset, value, unit)
 
 static void
 save(const vv_image *img, const char *outdir, const char *stem, const char *what) {
     char path[4096];
     snprintf(path, sizeof path, "%s/%s_volvis_%s.png", outdir, stem, what);
     if (vv_image_write_png(img, path, 1.0, 0) != VV_OK)
-        die("write png");
+        bench_die("bench_raster", "write png");
     printf("# image %s\n", path);
 }
 
@@ -94,7 +84,7 @@ main(int argc, char **argv) {
         vv_threads_set(threads);
     vv_volume *vol;
     if (vv_volume_load(&vol, path, NULL) != VV_OK)
-        die(path);
+        bench_die("bench_raster", path);
     if (isnan(iso))
         iso = 0.5 * (vol->range[0] + vol->range[1]);
     char stem[256];
@@ -105,39 +95,39 @@ main(int argc, char **argv) {
 
     vv_world *w;
     if (vvb_surface_world(&w, NULL, vol, iso, size) != VV_OK)
-        die("world");
+        bench_die("bench_raster", "world");
 
     vv_render_options opt;
     vv_render_options_init(&opt);
     opt.threads = threads;
     vv_image *img, *ref;
     if (vv_image_new(&img, size, size) != VV_OK || vv_image_new(&ref, size, size) != VV_OK)
-        die("image");
+        bench_die("bench_raster", "image");
 
     /* the mesh alone, for its size */
     vv_isosurface_options io;
     vv_isosurface_options_init(&io);
     io.threads = threads;
     vv_mesh *mesh;
-    double t0 = vvb_now();
+    double t0 = bench_now();
     if (vv_isosurface_extract(&mesh, vol, iso, &io) != VV_OK)
-        die("isosurface");
+        bench_die("bench_raster", "isosurface");
     printf("# %s %dx%dx%d, iso %g: %zu triangles, %zu vertices (extracted in %.3f s), %d threads, "
            "%dx%d\n",
            dataset, vol->dims[0], vol->dims[1], vol->dims[2], iso, mesh->n_triangles,
-           mesh->n_vertices, vvb_now() - t0, vv_threads_get(), size, size);
+           mesh->n_vertices, bench_now() - t0, vv_threads_get(), size, size);
     emit("raster_triangles", (double)mesh->n_triangles, "triangles");
 
     vv_renderer *r;
     if (vv_renderer_new(&r, "surface") != VV_OK)
-        die("surface renderer");
-    t0 = vvb_now();
+        bench_die("bench_raster", "surface renderer");
+    t0 = bench_now();
     if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK)
-        die("render");
-    emit("raster_first_frame", vvb_now() - t0, "s");
+        bench_die("bench_raster", "render");
+    emit("raster_first_frame", bench_now() - t0, "s");
     double cpu = 0, tf = 0;
     if (vvb_median_frame(&tf, &cpu, r, w, &opt, img, runs) != VV_OK)
-        die("render");
+        bench_die("bench_raster", "render");
     emit("raster_frame", tf, "s");
     emit("raster_frame_cpu", cpu, "s");
     emit("raster_tri_rate", (double)mesh->n_triangles / tf, "triangles/s");
@@ -146,7 +136,7 @@ main(int argc, char **argv) {
     vv_renderer *rc;
     if (vv_renderer_new(&rc, "raycast") != VV_OK ||
         vv_renderer_render(rc, w, &w->view, &opt, ref) != VV_OK)
-        die("raycast");
+        bench_die("bench_raster", "raycast");
     emit("raster_iso_psnr", vv_image_psnr(img, ref), "dB");
     save(ref, outdir, stem, "raster_raycast_iso");
 
@@ -157,10 +147,10 @@ main(int argc, char **argv) {
         if (vv_renderer_new(&rv, "surface") != VV_OK ||
             vv_renderer_set_option(rv, variants[v][0], variants[v][1]) != VV_OK ||
             vv_renderer_render(rv, w, &w->view, &opt, img) != VV_OK)
-            die("render variant");
+            bench_die("bench_raster", "render variant");
         double tv = 0;
         if (vvb_median_frame(&tv, NULL, rv, w, &opt, img, runs) != VV_OK)
-            die("render variant");
+            bench_die("bench_raster", "render variant");
         emit(names[v], tv, "s");
         save(img, outdir, stem, names[v] + 7);
         vv_renderer_free(rv);

@@ -16,34 +16,11 @@
 #include <sys/stat.h>
 #include <time.h>
 
+#include "util.h"
 #include "volvis/volvis.h"
 
-static double
-now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int
-cmp_double(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
 static const char *dataset;
-
-static void
-emit(const char *op, double value, const char *unit) {
-    printf("anchor=volvis op=%s dataset=%s value=%.6g unit=%s\n", op, dataset, value, unit);
-    fflush(stdout);
-}
-
-static void
-die(const char *what) {
-    fprintf(stderr, "bench_raycast: %s: %s\n", what, vv_error_message());
-    exit(1);
-}
+#define emit(op, value, unit) bench_emit(op, dataset, value, unit)
 
 typedef struct bench_cfg {
     double iso, tf_lo, tf_hi, step_vox, opacity;
@@ -105,7 +82,7 @@ save(const vv_image *img, const bench_cfg *cfg, const char *stem, const char *mo
     char path[4096];
     snprintf(path, sizeof path, "%s/%s_volvis_%s.png", cfg->outdir, stem, mode);
     if (vv_image_write_png(img, path, 1.0, 0) != VV_OK)
-        die("write png");
+        bench_die("bench_raycast", "write png");
     printf("# image %s\n", path);
 }
 
@@ -165,11 +142,11 @@ main(int argc, char **argv) {
     if (cfg.threads > 0)
         vv_threads_set(cfg.threads);
 
-    double t0 = now();
+    double t0 = bench_now();
     vv_volume *vol;
     if (vv_volume_load(&vol, path, NULL) != VV_OK)
-        die(path);
-    emit("load", now() - t0, "s");
+        bench_die("bench_raycast", path);
+    emit("load", bench_now() - t0, "s");
     /* the peers' defaults: iso (min+max)/2, ramp [min, max] */
     if (isnan(cfg.iso))
         cfg.iso = 0.5 * (vol->range[0] + vol->range[1]);
@@ -195,7 +172,7 @@ main(int argc, char **argv) {
     vv_object *obj;
     if (vv_world_new(&w) != VV_OK || vv_object_new_volume(&obj, vol, "bench") != VV_OK ||
         vv_world_add_object(w, obj) != VV_OK)
-        die("world");
+        bench_die("bench_raycast", "world");
     vv_light head;
     memset(&head, 0, sizeof head);
     head.type = VV_LIGHT_DIRECTIONAL;
@@ -206,7 +183,7 @@ main(int argc, char **argv) {
 
     vv_image *img;
     if (vv_image_new(&img, cfg.size, cfg.size) != VV_OK)
-        die("image");
+        bench_die("bench_raycast", "image");
     vv_render_options opt;
     vv_render_options_init(&opt);
     opt.threads = cfg.threads;
@@ -221,7 +198,7 @@ main(int argc, char **argv) {
         setup_world(w, obj, &cfg, modes[m].mode);
         vv_renderer *r;
         if (vv_renderer_new(&r, "raycast") != VV_OK)
-            die("renderer");
+            bench_die("bench_raycast", "renderer");
         for (int o = 0; o < cfg.n_options; o++) {
             char key[128];
             const char *eq = strchr(cfg.options[o], '=');
@@ -232,23 +209,23 @@ main(int argc, char **argv) {
             memcpy(key, cfg.options[o], (size_t)(eq - cfg.options[o]));
             key[eq - cfg.options[o]] = 0;
             if (vv_renderer_set_option(r, key, eq + 1) != VV_OK)
-                die("option");
+                bench_die("bench_raycast", "option");
         }
         /* first frame: a fresh renderer, so gradients and subvolumes are built */
-        double a = now();
+        double a = bench_now();
         if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK)
-            die("render");
-        double first = now() - a;
+            bench_die("bench_raycast", "render");
+        double first = bench_now() - a;
         double *times = malloc(sizeof(double) * (size_t)cfg.runs);
         if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK) /* warm-up */
-            die("render");
+            bench_die("bench_raycast", "render");
         for (int i = 0; i < cfg.runs; i++) {
-            a = now();
+            a = bench_now();
             if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK)
-                die("render");
-            times[i] = now() - a;
+                bench_die("bench_raycast", "render");
+            times[i] = bench_now() - a;
         }
-        qsort(times, (size_t)cfg.runs, sizeof(double), cmp_double);
+        qsort(times, (size_t)cfg.runs, sizeof(double), bench_cmp_double);
         double med = times[cfg.runs / 2];
         char op[64];
         snprintf(op, sizeof op, "dvr_%s_first_frame", modes[m].name);

@@ -20,34 +20,11 @@
 #include <string.h>
 #include <time.h>
 
+#include "util.h"
 #include "volvis/volvis.h"
 
-static double
-now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int
-cmp_double(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
 static const char *dataset;
-
-static void
-emit(const char *op, double value, const char *unit) {
-    printf("anchor=volvis op=%s dataset=%s value=%.6g unit=%s\n", op, dataset, value, unit);
-    fflush(stdout);
-}
-
-static void
-die(const char *what) {
-    fprintf(stderr, "bench_raytrace: %s: %s\n", what, vv_error_message());
-    exit(1);
-}
+#define emit(op, value, unit) bench_emit(op, dataset, value, unit)
 
 /* Median render time of @p runs renders after a warm-up; keeps the image. */
 static double
@@ -57,15 +34,15 @@ time_renders(vv_renderer *r, const vv_world *w, int quality, int threads, int ru
     opt.quality = quality;
     opt.threads = threads;
     if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK)
-        die("warm-up render");
+        bench_die("bench_raytrace", "warm-up render");
     double t[64];
     for (int i = 0; i < runs; i++) {
-        double t0 = now();
+        double t0 = bench_now();
         if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK)
-            die("render");
-        t[i] = now() - t0;
+            bench_die("bench_raytrace", "render");
+        t[i] = bench_now() - t0;
     }
-    qsort(t, (size_t)runs, sizeof t[0], cmp_double);
+    qsort(t, (size_t)runs, sizeof t[0], bench_cmp_double);
     return t[runs / 2];
 }
 
@@ -76,7 +53,7 @@ save(const vv_image *img, const char *outdir, const char *name) {
     char path[4096];
     snprintf(path, sizeof path, "%s/%s", outdir, name);
     if (vv_image_write_png(img, path, 1.0, 0) != VV_OK)
-        die(path);
+        bench_die("bench_raytrace", path);
 }
 
 int
@@ -110,22 +87,22 @@ main(int argc, char **argv) {
     dataset = slash ? slash + 1 : scene;
     vv_world *w = NULL;
     if (vv_scene_load(&w, scene) != VV_OK)
-        die(scene);
+        bench_die("bench_raytrace", scene);
     w->view.width = w->view.height = size;
     vv_image *img = NULL;
     if (vv_image_new(&img, size, size) != VV_OK)
-        die("image");
+        bench_die("bench_raytrace", "image");
 
     vv_renderer *rt = NULL, *rn = NULL, *rc = NULL;
     if (vv_renderer_new(&rt, "raytrace") != VV_OK || vv_renderer_new(&rn, "raytrace") != VV_OK ||
         vv_renderer_new(&rc, "raycast") != VV_OK)
-        die("renderer");
+        bench_die("bench_raytrace", "renderer");
     vv_renderer *both[2] = {rt, rn};
     for (int i = 0; i < 2; i++)
         if (vv_renderer_set_option(both[i], "samples", "1") != VV_OK ||
             vv_renderer_set_option(both[i], "max_depth", depth) != VV_OK ||
             vv_renderer_set_option(both[i], "parc", i ? "0" : "1") != VV_OK)
-            die("option");
+            bench_die("bench_raytrace", "option");
 
     /* interleaved, so that a slow phase of a shared machine hits both */
     double t_rt = time_renders(rt, w, 1, threads, runs, img);

@@ -35,21 +35,13 @@
 #include <string.h>
 
 #include "common/bench_scene.h"
+#include "util.h"
 #include "volvis/volvis.h"
 
 static const char *dataset;
 
-static void
-emit(const char *op, double value, const char *unit) {
-    printf("anchor=volvis op=%s dataset=%s value=%.6g unit=%s\n", op, dataset, value, unit);
-    fflush(stdout);
-}
-
-static void
-die(const char *what) {
-    fprintf(stderr, "bench_surface: %s: %s\n", what, vv_error_message());
-    exit(1);
-}
+#define emit(op, value, unit) bench_emit(op, dataset, value, unit)
+#define die(what) bench_die("bench_surface", what)
 
 #define MAX_RUNS 101
 
@@ -63,16 +55,16 @@ time_extract(const vv_volume *v, double iso, const vv_isosurface_options *o, int
         die("isosurface");
     vv_mesh_free(m);
     for (int r = 0; r < runs; r++) {
-        double t0 = vvb_now();
+        double t0 = bench_now();
         if (vv_isosurface_extract(&m, v, iso, o) != VV_OK)
             die("isosurface");
-        t[r] = vvb_now() - t0;
+        t[r] = bench_now() - t0;
         if (r + 1 < runs || !keep)
             vv_mesh_free(m);
         else
             *keep = m;
     }
-    return vvb_median(t, runs);
+    return bench_median(t, runs);
 }
 
 int
@@ -153,34 +145,34 @@ main(int argc, char **argv) {
         if (vv_measure_isosurface(&res, v, iso, &mo) != VV_OK)
             die("measure");
         for (int r = 0; r < runs; r++) {
-            double t0 = vvb_now();
+            double t0 = bench_now();
             if (vv_measure_isosurface(&res, v, iso, &mo) != VV_OK)
                 die("measure");
-            t[r] = vvb_now() - t0;
+            t[r] = bench_now() - t0;
         }
-        emit(method ? "measure_voxel_time" : "measure_mc_time", vvb_median(t, runs), "s");
+        emit(method ? "measure_voxel_time" : "measure_mc_time", bench_median(t, runs), "s");
         emit(method ? "measure_voxel_area" : "measure_mc_area", res.area, "world^2");
         emit(method ? "measure_voxel_volume" : "measure_mc_volume", res.volume, "world^3");
     }
 
     /* PARC: grid once, then rebuilds at alternating isovalues */
     vv_parc *p = NULL;
-    double t0 = vvb_now();
+    double t0 = bench_now();
     if (vv_parc_new(&p, v, level) != VV_OK)
         die("parc");
-    emit("parc_grid_time", vvb_now() - t0, "s");
+    emit("parc_grid_time", bench_now() - t0, "s");
     size_t faces = 0;
     for (int r = -1; r < runs; r++) {
-        double q0 = vvb_now();
+        double q0 = bench_now();
         vv_mesh *pm = NULL;
         if (vv_parc_set_isovalue(p, iso + (r & 1)) != VV_OK || vv_parc_mesh(p, &pm) != VV_OK)
             die("parc");
         if (r >= 0)
-            t[r] = vvb_now() - q0;
+            t[r] = bench_now() - q0;
         faces = pm->n_triangles / 2;
         vv_mesh_free(pm);
     }
-    emit("parc_build_time", vvb_median(t, runs), "s");
+    emit("parc_build_time", bench_median(t, runs), "s");
     emit("parc_boxes", (double)p->n_boxes, "boxes");
     emit("parc_faces", (double)faces, "quads");
     printf("# PARC level %d: %d-cell boxes, %d x %d x %d\n", level, p->block, p->dims[0],
@@ -189,18 +181,18 @@ main(int argc, char **argv) {
 
     /* coarse Marching Cubes at level 1 (every second voxel) */
     vv_coarse_surface *c = NULL;
-    t0 = vvb_now();
+    t0 = bench_now();
     if (vv_coarse_new(&c, v, 1) != VV_OK)
         die("coarse");
-    emit("coarse_grid_time", vvb_now() - t0, "s");
+    emit("coarse_grid_time", bench_now() - t0, "s");
     for (int r = -1; r < runs; r++) {
-        double q0 = vvb_now();
+        double q0 = bench_now();
         if (vv_coarse_set_isovalue(c, iso + (r & 1), threads) != VV_OK)
             die("coarse");
         if (r >= 0)
-            t[r] = vvb_now() - q0;
+            t[r] = bench_now() - q0;
     }
-    emit("coarse_mc_build_time", vvb_median(t, runs), "s");
+    emit("coarse_mc_build_time", bench_median(t, runs), "s");
     emit("coarse_mc_triangles", (double)c->n_triangles, "triangles");
     emit("coarse_mc_bytes", (double)vv_coarse_bytes(c), "bytes");
     vv_coarse_free(c);

@@ -1,10 +1,16 @@
 #include "testutil.h"
 
 #include <errno.h>
+#include <fcntl.h>
+#include <spawn.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+extern char **environ;
 
 const char *
 vt_data(const char *rel) {
@@ -63,4 +69,56 @@ vt_read_file(const char *path, size_t *n) {
     fclose(f);
     *n = (size_t)len;
     return buf;
+}
+
+const char *
+vt_path(const char *dir, const char *name) {
+    static _Thread_local char buf[8][1200];
+    static _Thread_local int slot;
+    slot = (slot + 1) % 8;
+    snprintf(buf[slot], sizeof buf[slot], "%s/%s", dir, name);
+    return buf[slot];
+}
+
+vt_run_result
+vt_run_cli_v(const char *dir, const char *const *args) {
+    char *argv[64];
+    int n = 0;
+    const char *cli = getenv("VV_CLI");
+    argv[n++] = (char *)(cli && *cli ? cli : VV_BINARY_DIR "/volvis");
+    for (int i = 0; args[i]; i++) {
+        assert_true(n < 63);
+        argv[n++] = (char *)args[i];
+    }
+    argv[n] = NULL;
+    /* own buffers: the caller's paths may sit in vt_path's rotating ones */
+    char out_path[1200], err_path[1200];
+    snprintf(out_path, sizeof out_path, "%s/.stdout", dir);
+    snprintf(err_path, sizeof err_path, "%s/.stderr", dir);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 1, out_path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&fa, 2, err_path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    pid_t pid;
+    int rc = posix_spawn(&pid, argv[0], &fa, NULL, argv, environ);
+    posix_spawn_file_actions_destroy(&fa);
+    if (rc != 0)
+        fail_msg("cannot run %s: %s (set VV_CLI)", argv[0], strerror(rc));
+    int st;
+    while (waitpid(pid, &st, 0) < 0)
+        assert_int_equal(errno, EINTR);
+    vt_run_result r;
+    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+    size_t len;
+    r.out = (char *)vt_read_file(out_path, &len);
+    r.err = (char *)vt_read_file(err_path, &len);
+    return r;
+}
+
+void
+vt_run_result_free(vt_run_result *r) {
+    free(r->out);
+    free(r->err);
+    r->out = r->err = NULL;
 }

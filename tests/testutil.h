@@ -38,6 +38,24 @@ unsigned char *vt_read_file(const char *path, size_t *n);
             fail_msg("%s -> %s: %s", #expr, vv_status_name(vt_s_), vv_error_message());            \
     } while (0)
 
+/** What a run of the volvis command-line tool did (vt_run_cli_v). */
+typedef struct vt_run_result {
+    int status; /**< exit status, or 128 + signal number */
+    char *out;  /**< stdout, NUL-terminated, malloc'ed */
+    char *err;  /**< stderr, likewise */
+} vt_run_result;
+
+/**
+ * Runs the CLI ($VV_CLI, set by CTest, else the build's volvis) with the
+ * NULL-terminated @p args (argv[0] is added) as a separate process, stdin
+ * from /dev/null, stdout and stderr captured through files in @p dir.
+ */
+vt_run_result vt_run_cli_v(const char *dir, const char *const *args);
+/** Frees the captured output. */
+void vt_run_result_free(vt_run_result *r);
+/** "@p dir/@p name" in one of 8 rotating buffers. */
+const char *vt_path(const char *dir, const char *name);
+
 /** Asserts |a - b| <= eps, printing both values on failure. */
 #define assert_near(a, b, eps)                                                                     \
     do {                                                                                           \

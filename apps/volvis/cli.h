@@ -42,6 +42,8 @@ int cli_render_main(int argc, char **argv);
 void cli_render_usage(FILE *out);
 int cli_convert_main(int argc, char **argv);
 void cli_convert_usage(FILE *out);
+int cli_voxelize_main(int argc, char **argv);
+void cli_voxelize_usage(FILE *out);
 int cli_compress_main(int argc, char **argv);
 void cli_compress_usage(FILE *out);
 int cli_decompress_main(int argc, char **argv);
@@ -121,6 +123,9 @@ int cli_parse_point(const cli_args *a, const char *opt, const char *text, double
 int cli_parse_roi(const cli_args *a, const char *opt, const char *text, int lo[3], int hi[3]);
 /** A cut plane "PX,PY,PZ:NX,NY,NZ" (world point and normal; the normal's side is kept). */
 int cli_parse_plane(const cli_args *a, const char *opt, const char *text, vv_cut_plane *pl);
+
+/** 1 when @p s ends with @p suffix, ignoring ASCII case (file extensions). */
+int cli_ends_with(const char *s, const char *suffix);
 
 /* ---- errors ---------------------------------------------------------------- */
 

@@ -67,12 +67,6 @@ cli_decompress_usage(FILE *out) {
                  "  volvis decompress head.vvc head.nrrd\n");
 }
 
-static int
-ends_with(const char *s, const char *suffix) {
-    size_t n = strlen(s), m = strlen(suffix);
-    return n >= m && strcasecmp(s + n - m, suffix) == 0;
-}
-
 int
 cli_compress_main(int argc, char **argv) {
     cli_args a;
@@ -193,9 +187,9 @@ cli_decompress_main(int argc, char **argv) {
     if ((s = cli_get(&a, "threads")) && (rc = cli_parse_int(&a, "threads", s, 0, 4096, &threads)))
         return rc;
     vv_format format;
-    if (ends_with(out, ".slc"))
+    if (cli_ends_with(out, ".slc"))
         format = VV_FORMAT_SLC;
-    else if (ends_with(out, ".nrrd") || ends_with(out, ".nhdr"))
+    else if (cli_ends_with(out, ".nrrd") || cli_ends_with(out, ".nhdr"))
         format = VV_FORMAT_NRRD;
     else
         return cli_usage_error(&a, "cannot tell the output format from '%s'; use .nrrd or .slc",

@@ -39,12 +39,6 @@ cli_convert_usage(FILE *out) {
                  "  volvis convert --raw 64x64x64:f32 field.raw field.nrrd\n");
 }
 
-static int
-ends_with(const char *s, const char *suffix) {
-    size_t n = strlen(s), m = strlen(suffix);
-    return n >= m && strcasecmp(s + n - m, suffix) == 0;
-}
-
 int
 cli_convert_main(int argc, char **argv) {
     cli_args a;
@@ -70,9 +64,9 @@ cli_convert_main(int argc, char **argv) {
             format = VV_FORMAT_SLC;
         else
             return cli_usage_error(&a, "--format: cannot write '%s' (nrrd or slc)", s);
-    } else if (ends_with(out, ".slc")) {
+    } else if (cli_ends_with(out, ".slc")) {
         format = VV_FORMAT_SLC;
-    } else if (ends_with(out, ".nrrd") || ends_with(out, ".nhdr")) {
+    } else if (cli_ends_with(out, ".nrrd") || cli_ends_with(out, ".nhdr")) {
         format = VV_FORMAT_NRRD;
     } else {
         return cli_usage_error(&a,

@@ -78,7 +78,7 @@ cli_render_usage(FILE *out) {
             "                   shadows (1), max_depth (3), samples (2: 2x2 a pixel at\n"
             "                   quality 2), jitter (0), seed (1), adaptive (1),\n"
             "                   adaptive_threshold (0.05), parc (1), shadow_grid (1),\n"
-            "                   early_termination (0.99); surface takes\n"
+            "                   light_volumes (1), early_termination (0.99); surface takes\n"
             "                   shading (flat|gouraud|phong), wireframe (0), cull\n"
             "                   (auto|back|none), caps (1), segments (64); fourier\n"
             "                   takes vvc=FILE, quality (exact), rate, block (16),\n"
@@ -331,7 +331,10 @@ world_for_volume(const render_args *r, vv_world **out) {
 static int
 world_for_scene(const render_args *r, vv_world **out) {
     vv_error_clear();
-    vv_status s = vv_scene_load(out, r->input);
+    cli_progress pr; /* geometry objects are voxelized while loading */
+    cli_progress_begin(&pr, r->quiet);
+    vv_status s = vv_scene_load_progress(out, r->input, &pr.p);
+    cli_progress_end(&pr);
     if (s != VV_OK)
         return cli_fail(s, r->input);
     vv_world *w = *out;

@@ -3,35 +3,10 @@
  */
 #include "bench_scene.h"
 
+#include "util.h"
+
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
-
-double
-vvb_now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-double
-vvb_cpu_now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int
-cmp_double(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
-
-double
-vvb_median(double *t, int n) {
-    qsort(t, (size_t)n, sizeof *t, cmp_double);
-    return n % 2 ? t[n / 2] : 0.5 * (t[n / 2 - 1] + t[n / 2]);
-}
 
 vv_status
 vvb_surface_world(vv_world **out, vv_object **out_obj, vv_volume *vol, double iso, int size) {
@@ -97,18 +72,18 @@ vvb_median_frame(double *wall, double *cpu, vv_renderer *r, const vv_world *w,
     if (!t)
         return vv_error_set(VV_ERR_NOMEM, "bench: out of memory");
     for (int i = 0; i < runs; i++) {
-        double t0 = vvb_now(), c0 = vvb_cpu_now();
+        double t0 = bench_now(), c0 = bench_cpu_now();
         vv_status s = vv_renderer_render(r, w, &w->view, opt, img);
         if (s != VV_OK) {
             free(t);
             return s;
         }
-        t[i] = vvb_now() - t0;
-        t[runs + i] = vvb_cpu_now() - c0;
+        t[i] = bench_now() - t0;
+        t[runs + i] = bench_cpu_now() - c0;
     }
-    *wall = vvb_median(t, runs);
+    *wall = bench_median(t, runs);
     if (cpu)
-        *cpu = vvb_median(t + runs, runs);
+        *cpu = bench_median(t + runs, runs);
     free(t);
     return VV_OK;
 }

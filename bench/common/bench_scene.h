@@ -1,22 +1,13 @@
 /*
  * Shared set-up of the benchmark programs: the geometry renderer's benchmark
  * scene (../shared/BENCHMARKS.md's view of a volume's isosurface) and frame
- * timing, used by bench_raster and bench_surface so both print the same
- * `raster_frame`.
+ * frame timing (clocks and medians: util.h), used by bench_raster and
+ * bench_surface so both print the same `raster_frame`.
  */
 #ifndef VOLVIS_BENCH_SCENE_H
 #define VOLVIS_BENCH_SCENE_H
 
 #include "volvis/volvis.h"
-
-/* Wall-clock seconds (CLOCK_MONOTONIC). */
-double vvb_now(void);
-
-/* CPU seconds of the process, all threads. */
-double vvb_cpu_now(void);
-
-/* Median of t[0..n) (sorts t in place); n >= 1. */
-double vvb_median(double *t, int n);
 
 /*
  * Builds the benchmark World around vol for the `surface` renderer: vol is

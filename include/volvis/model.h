@@ -367,6 +367,14 @@ vv_status vv_world_new_for_volume(vv_world **out, vv_volume *volume,
 vv_status vv_scene_load(vv_world **out, const char *path);
 
 /**
+ * vv_scene_load reporting the progress of voxelizing the "geometry" objects
+ * (each voxelization reports 0 to 1 in turn) to @p progress (may be NULL),
+ * which can cancel (VV_ERR_CANCELLED). Geometry objects are volume-sampled
+ * by the Modeling component (include/volvis/modeling.h) into volume objects.
+ */
+vv_status vv_scene_load_progress(vv_world **out, const char *path, const vv_progress *progress);
+
+/**
  * Writes a World as a scene file, atomically. Volumes are referred to by
  * @p volume_files[i] for object i (relative to the scene file); a mesh
  * object by volume_files[i] when given, else by its geometry.source; the

@@ -12,6 +12,7 @@
 #include "math.h"
 #include "mesh.h"
 #include "model.h"
+#include "modeling.h"
 #include "raster.h"
 #include "render.h"
 #include "measure.h"

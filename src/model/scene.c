@@ -19,8 +19,10 @@
 
 #include "core/internal.h"
 #include "model/model_internal.h"
+#include "modeling/modeling_internal.h"
 #include "volvis/io.h"
 #include "volvis/model.h"
+#include "volvis/modeling.h"
 
 #define SCENE_MAX_BYTES (16u << 20)
 #define PATH_MAX_LEN 256
@@ -30,6 +32,7 @@ typedef struct sctx {
     const char *path; /* scene file as given */
     const char *text;
     size_t len;
+    const vv_progress *progress; /* voxelization of geometry objects; may be NULL */
 } sctx;
 
 /* ---- locating a path in the raw text ---------------------------------- */
@@ -1158,6 +1161,102 @@ parse_geometry_object(const sctx *c, json_t *e, const char *op, vv_world *w) {
     return vv_world_add_object(w, o);
 }
 
+/* ---- geometry objects (issue 3, Modeling) ---------------------------------
+ * A "geometry" object holds a primitive or a CSG tree, read by the Modeling
+ * component (src/modeling/shape_json.c) and volume-sampled here at load, so
+ * it becomes a volume object that every volume renderer draws. */
+
+/* Adds "file:line:col: key.path" in front of a message set by Modeling. */
+static vv_status
+geometry_err(const sctx *c, vv_status st, const char *path) {
+    int line, col;
+    scene_locate(c, path, &line, &col);
+    return vv_error_prefix(st, "%s:%d:%d: %s", c->path, line, col, path);
+}
+
+static vv_status
+parse_voxelized_geometry(const sctx *c, json_t *e, const char *op, vv_world *w) {
+    static const char *const keys[] = {"name",
+                                       "type",
+                                       "primitive",
+                                       "csg",
+                                       "resolution",
+                                       "voxel_spacing",
+                                       "filter",
+                                       "filter_radius",
+                                       "margin",
+                                       "voxel_type",
+                                       "mode",
+                                       "isovalue",
+                                       "step",
+                                       "shading",
+                                       "visible",
+                                       "position",
+                                       "rotation",
+                                       "orientation",
+                                       "scale",
+                                       "transfer_function",
+                                       "segmentation",
+                                       "material",
+                                       "cut_planes",
+                                       "casts_shadows",
+                                       "receives_shadows",
+                                       "visible_in_reflections",
+                                       "reflects",
+                                       NULL};
+    char kp[PATH_MAX_LEN], ep[PATH_MAX_LEN];
+    const char *name = NULL;
+    vv_status st = check_keys(c, e, op, keys);
+    if (st != VV_OK || (st = get_string(c, e, op, "name", &name)) != VV_OK)
+        return st;
+    if (name && strlen(name) >= VV_NAME_MAX) {
+        path_key(kp, op, "name");
+        return serr(c, kp, "longer than %d bytes", VV_NAME_MAX - 1);
+    }
+    json_t *prim = json_object_get(e, "primitive"), *csg = json_object_get(e, "csg");
+    if (prim && csg) {
+        path_key(kp, op, "csg");
+        return serr(c, kp, "give either \"primitive\" or \"csg\", not both");
+    }
+    if (!prim && !csg)
+        return missing(c, op, "primitive",
+                       "a primitive {\"type\": ...} or a \"csg\" tree {\"op\": ...}");
+    path_key(kp, op, prim ? "primitive" : "csg");
+    if (csg && !json_object_get(csg, "op"))
+        return serr(c, kp, "expected a CSG operation {\"op\": ..., \"children\": [...]}");
+    vv_voxelize_options vo;
+    vv_voxelize_options_init(&vo);
+    if (c->progress)
+        vo.progress = *c->progress;
+    if ((st = vv_voxelize_options_from_json(&vo, e, op, ep, sizeof ep)) != VV_OK)
+        return geometry_err(c, st, ep);
+    vv_shape *shape = NULL;
+    if ((st = vv_shape_from_json(&shape, prim ? prim : csg, kp, c->path, ep, sizeof ep)) != VV_OK)
+        return geometry_err(c, st, ep[0] ? ep : kp);
+    vv_volume *vol = NULL;
+    st = vv_voxelize(&vol, shape, &vo);
+    vv_shape_free(shape);
+    if (st != VV_OK)
+        return geometry_err(c, st, kp);
+    vv_object *o = NULL;
+    st = vv_object_new_volume(&o, vol, name ? name : "geometry");
+    vv_volume_free(vol);
+    if (st != VV_OK)
+        return vv_error_prefix(st, "%s: %s", c->path, op);
+    if ((st = parse_object_fields(c, e, op, o)) != VV_OK ||
+        (st = parse_effect_flags(c, e, op, o)) != VV_OK) {
+        vv_object_free(o);
+        return st;
+    }
+    if (!json_object_get(e, "transfer_function") && !json_object_get(e, "segmentation")) {
+        /* densities: opaque from just below the surface level (half scale) */
+        double top = vo.type == VV_U8 ? 255.0 : 1.0;
+        vv_tf_set_ramp(&o->tf, 0.3 * top, 0.6 * top, 1.0, o->material.color,
+                       o->tf.opacity_unit_distance);
+    }
+    return vv_world_add_object(w, o);
+}
+
 static vv_status
 parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     static const char *const keys[] = {"name",
@@ -1187,6 +1286,8 @@ parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     path_index(op, "objects", idx);
     if (json_is_object(e)) {
         json_t *tj = json_object_get(e, "type");
+        if (json_is_string(tj) && strcmp(json_string_value(tj), "geometry") == 0)
+            return parse_voxelized_geometry(c, e, op, w);
         if (json_is_string(tj) && geometry_type(json_string_value(tj)) != VV_OBJECT_VOLUME)
             return parse_geometry_object(c, e, op, w);
     }
@@ -1203,8 +1304,8 @@ parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     if (strcmp(type, "volume") != 0) {
         path_key(kp, op, "type");
         return serr(c, kp,
-                    "unsupported object type \"%s\"; expected volume, plane, polygon, sphere, "
-                    "box, cylinder or mesh",
+                    "unsupported object type \"%s\"; expected volume, geometry, plane, polygon, "
+                    "sphere, box, cylinder or mesh",
                     type);
     }
     if (name && strlen(name) >= VV_NAME_MAX) {
@@ -1316,6 +1417,11 @@ parse_scene(const sctx *c, json_t *root, vv_world *w) {
 
 vv_status
 vv_scene_load(vv_world **out, const char *path) {
+    return vv_scene_load_progress(out, path, NULL);
+}
+
+vv_status
+vv_scene_load_progress(vv_world **out, const char *path, const vv_progress *progress) {
     if (!out)
         return vv_error_set(VV_ERR_INVALID, "scene: NULL output");
     *out = NULL;
@@ -1326,7 +1432,7 @@ vv_scene_load(vv_world **out, const char *path) {
     vv_status st = vv_read_file(path, SCENE_MAX_BYTES, &data, &size);
     if (st != VV_OK)
         return vv_error_prefix(st, "scene");
-    sctx c = {path, (const char *)data, (size_t)size};
+    sctx c = {path, (const char *)data, (size_t)size, progress};
     json_error_t jerr;
     json_t *root = json_loadb((const char *)data, (size_t)size,
                               JSON_REJECT_DUPLICATES | JSON_DECODE_INT_AS_REAL, &jerr);

@@ -18,91 +18,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-extern char **environ;
+typedef vt_run_result run_result;
 
-typedef struct run_result {
-    int status; /* exit status, or 128 + signal */
-    char *out;
-    char *err;
-} run_result;
-
-static char g_outdir[1024];
-
-static const char *
-cli_path(void) {
-    const char *p = getenv("VV_CLI");
-    return p && *p ? p : VV_BINARY_DIR "/volvis";
-}
-
-static const char *
-outdir(void) {
-    if (!g_outdir[0]) {
-        const char *base = getenv("VV_TEST_OUT");
-        if (base && *base) {
-            mkdir(base, 0755);
-            snprintf(g_outdir, sizeof g_outdir, "%s/cli", base);
-            mkdir(g_outdir, 0755);
-        } else {
-            snprintf(g_outdir, sizeof g_outdir, "%s", vt_outdir("cli"));
-        }
-    }
-    return g_outdir;
-}
-
-/* Path of a file in the output directory; 8 rotating buffers. */
-static const char *
-out_file(const char *name) {
-    static char buf[8][1200];
-    static int slot;
-    slot = (slot + 1) % 8;
-    snprintf(buf[slot], sizeof buf[slot], "%s/%s", outdir(), name);
-    return buf[slot];
-}
-
-static void
-free_result(run_result *r) {
-    free(r->out);
-    free(r->err);
-    r->out = r->err = NULL;
-}
-
-/* Runs the CLI with the NULL-terminated arguments that follow (argv[0] is added). */
-static run_result
-run_cli_v(const char *const *args) {
-    char *argv[64];
-    int n = 0;
-    argv[n++] = (char *)cli_path();
-    for (int i = 0; args[i]; i++) {
-        assert_true(n < 63);
-        argv[n++] = (char *)args[i];
-    }
-    argv[n] = NULL;
-
-    char out_path[1200], err_path[1200];
-    snprintf(out_path, sizeof out_path, "%s/.stdout", outdir());
-    snprintf(err_path, sizeof err_path, "%s/.stderr", outdir());
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&fa, 1, out_path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&fa, 2, err_path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    pid_t pid;
-    int rc = posix_spawn(&pid, argv[0], &fa, NULL, argv, environ);
-    posix_spawn_file_actions_destroy(&fa);
-    if (rc != 0)
-        fail_msg("cannot run %s: %s (set VV_CLI)", argv[0], strerror(rc));
-    int st;
-    while (waitpid(pid, &st, 0) < 0)
-        assert_int_equal(errno, EINTR);
-    run_result r;
-    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-    size_t len;
-    r.out = (char *)vt_read_file(out_path, &len);
-    r.err = (char *)vt_read_file(err_path, &len);
-    return r;
-}
-
-#define run_cli(...) run_cli_v((const char *const[]){__VA_ARGS__, NULL})
+/* Captured output and files of these tests go to build/.../test-out/cli. */
+#define outdir() vt_outdir("cli")
+#define out_file(name) vt_path(outdir(), name)
+#define free_result vt_run_result_free
+#define run_cli(...) vt_run_cli_v(outdir(), (const char *const[]){__VA_ARGS__, NULL})
 
 static int
 file_exists(const char *path) {
@@ -243,7 +165,7 @@ test_usage_errors(void **state) {
         {"convert", "--format", "tiff", nut, out_file("x.tif"), NULL},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
-        run_result r = run_cli_v(cases[i]);
+        run_result r = vt_run_cli_v(outdir(), cases[i]);
         if (r.status != 2)
             fail_msg("case %zu (%s %s ...): exit %d, want 2; stderr: %s", i, cases[i][0],
                      cases[i][1] ? cases[i][1] : "", r.status, r.err);
@@ -254,7 +176,7 @@ test_usage_errors(void **state) {
     assert_false(file_exists(png));
 
     /* no command at all */
-    run_result r = run_cli_v((const char *const[]){NULL});
+    run_result r = vt_run_cli_v(outdir(), (const char *const[]){NULL});
     assert_int_equal(r.status, 2);
     assert_one_error_line(&r);
     free_result(&r);
@@ -287,7 +209,7 @@ test_missing_file(void **state) {
         {"info", "--raw", "4x4x4:u8", missing, NULL},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
-        run_result r = run_cli_v(cases[i]);
+        run_result r = vt_run_cli_v(outdir(), cases[i]);
         assert_int_equal(r.status, 1);
         assert_one_error_line(&r);
         assert_contains(r.err, "no-such-volume.slc");

@@ -19,91 +19,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-extern char **environ;
+typedef vt_run_result run_result;
 
-typedef struct run_result {
-    int status; /* exit status, or 128 + signal */
-    char *out;
-    char *err;
-} run_result;
-
-static char g_outdir[1024];
-
-static const char *
-cli_path(void) {
-    const char *p = getenv("VV_CLI");
-    return p && *p ? p : VV_BINARY_DIR "/volvis";
-}
-
-static const char *
-outdir(void) {
-    if (!g_outdir[0]) {
-        const char *base = getenv("VV_TEST_OUT");
-        if (base && *base) {
-            mkdir(base, 0755);
-            snprintf(g_outdir, sizeof g_outdir, "%s/cli_surface", base);
-            mkdir(g_outdir, 0755);
-        } else {
-            snprintf(g_outdir, sizeof g_outdir, "%s", vt_outdir("cli_surface"));
-        }
-    }
-    return g_outdir;
-}
-
-/* Path of a file in the output directory; 8 rotating buffers. */
-static const char *
-out_file(const char *name) {
-    static char buf[8][1200];
-    static int slot;
-    slot = (slot + 1) % 8;
-    snprintf(buf[slot], sizeof buf[slot], "%s/%s", outdir(), name);
-    return buf[slot];
-}
-
-static void
-free_result(run_result *r) {
-    free(r->out);
-    free(r->err);
-    r->out = r->err = NULL;
-}
-
-/* Runs the CLI with the NULL-terminated arguments that follow (argv[0] is added). */
-static run_result
-run_cli_v(const char *const *args) {
-    char *argv[64];
-    int n = 0;
-    argv[n++] = (char *)cli_path();
-    for (int i = 0; args[i]; i++) {
-        assert_true(n < 63);
-        argv[n++] = (char *)args[i];
-    }
-    argv[n] = NULL;
-
-    char out_path[1200], err_path[1200];
-    snprintf(out_path, sizeof out_path, "%s/.stdout", outdir());
-    snprintf(err_path, sizeof err_path, "%s/.stderr", outdir());
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&fa, 1, out_path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&fa, 2, err_path, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    pid_t pid;
-    int rc = posix_spawn(&pid, argv[0], &fa, NULL, argv, environ);
-    posix_spawn_file_actions_destroy(&fa);
-    if (rc != 0)
-        fail_msg("cannot run %s: %s (set VV_CLI)", argv[0], strerror(rc));
-    int st;
-    while (waitpid(pid, &st, 0) < 0)
-        assert_int_equal(errno, EINTR);
-    run_result r;
-    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-    size_t len;
-    r.out = (char *)vt_read_file(out_path, &len);
-    r.err = (char *)vt_read_file(err_path, &len);
-    return r;
-}
-
-#define run_cli(...) run_cli_v((const char *const[]){__VA_ARGS__, NULL})
+/* Captured output and files of these tests go to build/.../test-out/cli_surface. */
+#define outdir() vt_outdir("cli_surface")
+#define out_file(name) vt_path(outdir(), name)
+#define free_result vt_run_result_free
+#define run_cli(...) vt_run_cli_v(outdir(), (const char *const[]){__VA_ARGS__, NULL})
 
 static int
 file_exists(const char *path) {
@@ -200,7 +122,7 @@ test_isosurface_errors(void **state) {
         if (cases[c].status == 1)
             args[n++] = out;
         args[n] = NULL;
-        run_result r = run_cli_v(args);
+        run_result r = vt_run_cli_v(outdir(), args);
         if (r.status != cases[c].status)
             fail_msg("case %zu: status %d, want %d; stderr: %s", c, r.status, cases[c].status,
                      r.err);
@@ -345,7 +267,7 @@ test_measure_sections_and_meshes(void **state) {
         {2, {"measure", ply, "--iso", "3", NULL}},                       /* iso on mesh */
     };
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
-        run_result q = run_cli_v(cases[c].args);
+        run_result q = vt_run_cli_v(outdir(), cases[c].args);
         if (q.status != cases[c].status)
             fail_msg("case %zu: status %d, want %d; stderr: %s", c, q.status, cases[c].status,
                      q.err);

@@ -15,63 +15,13 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-extern char **environ;
+typedef vt_run_result run_result;
 
-typedef struct run_result {
-    int status;
-    char *out, *err;
-} run_result;
-
-static const char *
-out_file(const char *name) {
-    static char buf[8][1200];
-    static int slot;
-    slot = (slot + 1) % 8;
-    snprintf(buf[slot], sizeof buf[slot], "%s/%s", vt_outdir("compress_cli"), name);
-    return buf[slot];
-}
-
-static run_result
-run_cli_v(const char *const *args) {
-    char *argv[64];
-    int n = 0;
-    const char *cli = getenv("VV_CLI");
-    argv[n++] = (char *)(cli && *cli ? cli : VV_BINARY_DIR "/volvis");
-    for (int i = 0; args[i]; i++)
-        argv[n++] = (char *)args[i];
-    argv[n] = NULL;
-    char op[1200], ep[1200];
-    /* not through out_file: its rotating buffers hold the caller's paths */
-    snprintf(op, sizeof op, "%s/.stdout", vt_outdir("compress_cli"));
-    snprintf(ep, sizeof ep, "%s/.stderr", vt_outdir("compress_cli"));
-    posix_spawn_file_actions_t fa;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&fa, 1, op, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&fa, 2, ep, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    pid_t pid;
-    int rc = posix_spawn(&pid, argv[0], &fa, NULL, argv, environ);
-    posix_spawn_file_actions_destroy(&fa);
-    if (rc != 0)
-        fail_msg("cannot run %s: %s", argv[0], strerror(rc));
-    int st;
-    while (waitpid(pid, &st, 0) < 0)
-        assert_int_equal(errno, EINTR);
-    run_result r;
-    r.status = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-    size_t len;
-    r.out = (char *)vt_read_file(op, &len);
-    r.err = (char *)vt_read_file(ep, &len);
-    return r;
-}
-
-#define run_cli(...) run_cli_v((const char *const[]){__VA_ARGS__, NULL})
-
-static void
-free_result(run_result *r) {
-    free(r->out);
-    free(r->err);
-}
+/* Captured output and files of these tests go to build/.../test-out/compress_cli. */
+#define outdir() vt_outdir("compress_cli")
+#define out_file(name) vt_path(outdir(), name)
+#define free_result vt_run_result_free
+#define run_cli(...) vt_run_cli_v(outdir(), (const char *const[]){__VA_ARGS__, NULL})
 
 #define assert_contains(hay, needle)                                                               \
     do {                                                                                           \

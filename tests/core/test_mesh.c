@@ -100,8 +100,10 @@ test_open_and_bad(void **state) {
     assert_int_equal(t.n_boundary_edges, 3);
     vt_err(vv_mesh_add_triangle(m, 0, 1, 999));
     vt_err(vv_mesh_save(m, "/tmp/x.xyz"));
-    vt_err(vv_mesh_load(&m, "/nonexistent/mesh.ply"));
     vv_mesh_free(m);
+    vv_mesh *none = NULL;
+    vt_err(vv_mesh_load(&none, "/nonexistent/mesh.ply"));
+    assert_null(none);
 
     char path[512];
     snprintf(path, sizeof path, "%s/garbage.ply", vt_outdir("mesh"));

@@ -612,32 +612,38 @@ test_parc_same_image(void **state) {
 }
 
 /* The shadow grid of volume samples (lazy shadow rays, or a swept light
- * volume) against one exact shadow ray per sample. */
+ * volume), and the light volumes that answer shadow rays of directional
+ * lights through volumes, against one exact shadow ray per sample and per
+ * surface point (light_volumes=0, shadow_grid=0). */
 static void
 test_shadow_grid_vs_exact(void **state) {
     (void)state;
     vv_world *w = NULL;
     vt_ok(vv_scene_load(&w, VV_SOURCE_DIR "/examples/head_mirror.json"));
     w->view.width = w->view.height = 96;
-    double psnr[3];
-    vv_image *img[3];
-    for (int g = 0; g < 3; g++) {
+    double psnr[4];
+    vv_image *img[4];
+    for (int g = 0; g < 4; g++) {
         char gs[8];
-        snprintf(gs, sizeof gs, "%d", g);
-        vv_renderer *r = new_tracer((const char *const[]){"samples", "1", "shadow_grid", gs, NULL});
+        snprintf(gs, sizeof gs, "%d", g % 3);
+        vv_renderer *r = new_tracer((const char *const[]){
+            "samples", "1", "shadow_grid", gs, "light_volumes", g == 0 ? "0" : "1", NULL});
         img[g] = render_q(r, w, &w->view, 1, 0);
         vv_renderer_free(r);
     }
     save(img[0], "shadow_exact.png");
     save(img[1], "shadow_grid.png");
     save(img[2], "shadow_sweep.png");
-    psnr[1] = vv_image_psnr(img[0], img[1]);
-    psnr[2] = vv_image_psnr(img[0], img[2]);
-    print_message("volume shadows vs exact shadow rays: grid %.2f dB, swept %.2f dB\n", psnr[1],
-                  psnr[2]);
+    save(img[3], "shadow_light_volumes.png");
+    for (int g = 1; g < 4; g++)
+        psnr[g] = vv_image_psnr(img[0], img[g]);
+    print_message("volume shadows vs exact shadow rays: grid %.2f dB, swept %.2f dB, light "
+                  "volumes with exact sample shadows %.2f dB\n",
+                  psnr[1], psnr[2], psnr[3]);
     assert_true(psnr[1] >= 30.0);
     assert_true(psnr[2] >= 30.0);
-    for (int g = 0; g < 3; g++)
+    assert_true(psnr[3] >= 35.0);
+    for (int g = 0; g < 4; g++)
         vv_image_free(img[g]);
     vv_world_free(w);
 }

@@ -11,7 +11,9 @@
  * (opacity corrected for the step) marks which subvolumes are visible, and
  * each subvolume gets its chessboard distance to the nearest visible one;
  * rays leap over empty cubes of subvolumes. These tables are kept between
- * frames while nothing they depend on changes.
+ * frames while nothing they depend on changes. The caches, tables, trilinear
+ * sampling and ray clipping are shared with the raytrace renderer
+ * (src/render/volume_cache.h).
  *
  * Rays are traced in each object's index space: the world ray (unit
  * direction, parameter t in world units) is mapped by the object's
@@ -27,110 +29,42 @@
 #ifdef __SSE2__
 #include <emmintrin.h>
 #endif
-#if defined(__x86_64__) && defined(__GNUC__)
-#include <immintrin.h>
-#define RC_HAVE_AVX2 1
-#else
-#define RC_HAVE_AVX2 0
-#endif
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
 #include "core/internal.h"
 #include "render/registry.h"
+#include "render/volume_cache.h"
 #include "volvis/render.h"
 
-#define RC_BLOCK 4  /* subvolume side in cells */
-#define RC_LUT 4096 /* transfer-function table entries */
-#define RC_TILE 16  /* image tile side in pixels */
-/* cached volumes per renderer: >= RC_MAX_OBJ, so none in use is evicted */
-#define RC_MAX_CACHE 64
-#define RC_MAX_OBJ 64 /* objects handled in one render */
-#define RC_CHUNK 32   /* samples classified ahead of compositing */
-#define RC_SPEC 2048  /* specular table entries */
-
-/* Everything derived from one volume that does not depend on the TF.
- * Values are stored as 16-bit offsets from range[0] when the data are
- * integers spanning at most 65535 (exact, and half the memory traffic of
- * float), else as float; all values inside the ray caster ("stored units")
- * are real value - qoff. Unit gradient directions are quantised to int8 in a
- * separate array, touched only where a sample is shaded. */
-/* What the per-object tables (TF lookup, subvolume visibility, distances)
- * depend on besides the volume: they are kept between frames and rebuilt
- * only when one of these changes. */
-typedef struct rc_tables_key {
-    vv_render_mode mode;
-    vv_segmentation segmentation;
-    double threshold, iso, dt;
-    vv_vec3 base;
-    int skipping;
-    vv_tf tf;
-} rc_tables_key;
-
-typedef struct rc_tables {
-    int valid;
-    rc_tables_key key;
-    float *lut;
-    uint8_t *bvis, *bdist;
-    uint64_t frame; /* the frame that last borrowed them */
-} rc_tables;
-
-typedef struct rc_cache {
-    vv_volume *vol; /* reference held */
-    uint64_t modified;
-    int nx, ny, nz;     /* cached grid (each >= 2; a 1-voxel axis is duplicated) */
-    size_t sy, sz;      /* strides in voxels */
-    uint16_t *q16;      /* values as uint16 (real = q + qoff), or NULL */
-    float *f32;         /* values as float (qoff = 0), or NULL */
-    double qoff;        /* offset of stored values */
-    int8_t (*nrm)[4];   /* unit gradients * 127 (index space), or NULL: on the fly */
-    int bx, by, bz;     /* subvolume grid */
-    float *bmin, *bmax; /* per subvolume, stored units */
-    rc_tables tables;   /* the last object tables built for this volume */
-    uint64_t last_used;
-} rc_cache;
+#define RC_TILE 16    /* image tile side in pixels */
+#define RC_MAX_OBJ 64 /* objects handled in one render (<= VV_VC_MAX) */
 
 typedef struct rc_state {
-    rc_cache cache[RC_MAX_CACHE];
-    int n_cache;
-    uint64_t clock;
-    uint64_t frame;           /* renders so far, to know which cached tables are in use */
+    vv_vcache_set vc;         /* per-volume caches (src/render/volume_cache.h) */
     double early_termination; /* accumulated opacity that ends a ray */
-    uint64_t gradient_budget; /* bytes allowed for cached gradients */
     int skipping;             /* empty-space skipping on/off (for tests) */
     int simd;                 /* use AVX2 when the processor has it (for tests) */
 } rc_state;
 
-/* A light prepared for shading. */
-typedef struct rc_light {
-    int point;
-    float dir[3]; /* unit vector towards the light (directional) */
-    float pos[3]; /* world position (point) */
-    float col[3]; /* colour * intensity */
-} rc_light;
-
 /* One object prepared for this render. */
 typedef struct rc_obj {
     const vv_object *obj;
-    rc_cache *c;
+    vv_vcache *c;
     vv_render_mode mode;
     double w2i[3][4];        /* world -> index */
-    float nrm[3][3];         /* index-space gradient -> world normal (M^-T) */
+    double i2w[3][4];        /* index -> world */
     int dims[3];             /* the volume's real dims (box clip) */
     float lut_lo, lut_scale; /* value -> LUT index */
-    float *lut;              /* RC_LUT x {alpha, r*alpha, g*alpha, b*alpha} */
+    float *lut;              /* VV_VC_LUT x {alpha, r*alpha, g*alpha, b*alpha} */
     uint8_t *bvis;           /* subvolume visible under the TF / isovalue */
     uint8_t
         *bdist; /* chessboard distance, in subvolumes, to the nearest visible one (0: visible) */
-    int owns_tables; /* lut, bvis, bdist are this object's (else borrowed from the cache) */
+    vv_vtables tab;  /* the tables lut, bvis, bdist come from */
+    int owns_tables; /* tab is this object's (else borrowed from the cache) */
     float iso;
-    float spec[RC_SPEC + 1];        /* x^shininess for x in [0, 1] */
-    float amb[3];                   /* ka * ambient light */
-    float kd_col[VV_MAX_LIGHTS][3]; /* kd * light colour */
-    float ks_col[VV_MAX_LIGHTS][3]; /* ks * light colour */
-    float base[3];                  /* material colour (iso, threshold) */
+    vv_vshading sh; /* shading constants */
     int shading;
     int n_planes;
     vv_plane planes[2 * VV_MAX_CUT_PLANES];
@@ -145,523 +79,38 @@ typedef struct rc_frame {
     float dt;
     float ambient[3];
     float bg[3];
-    rc_light lights[VV_MAX_LIGHTS];
+    vv_vlight lights[VV_MAX_LIGHTS];
     int n_lights;
     float et;         /* early termination */
     int point_lights; /* any point light (needs the world position of samples) */
-    int avx2;         /* the processor has AVX2 and FMA (for classify_chunk_avx2) */
+    int avx2;         /* the processor has AVX2 and FMA (vv_vray_classify) */
     /* primary rays: origin and unnormalised direction are affine in (px, py) */
     vv_vec3 o00, ox, oy, d00, dx, dy;
 } rc_frame;
 
 /* ---------------------------------------------------------------------- */
-/* Cache construction                                                       */
-
-static void
-cache_release(rc_cache *c) {
-    vv_volume_free(c->vol);
-    free(c->q16);
-    free(c->f32);
-    free(c->nrm);
-    free(c->bmin);
-    free(c->bmax);
-    free(c->tables.lut);
-    free(c->tables.bvis);
-    free(c->tables.bdist);
-    memset(c, 0, sizeof *c);
-}
-
-static inline float
-cache_value(const rc_cache *c, size_t idx) {
-    return c->q16 ? (float)c->q16[idx] : c->f32[idx];
-}
-
-static int
-is_integer_type(vv_voxel_type t) {
-    return t != VV_F32 && t != VV_F64;
-}
-
-/* Fills one row of stored values from the source volume (clamping indices
- * of duplicated axes). */
-static void
-fill_row(rc_cache *c, const vv_volume *vol, int j, int k, size_t base) {
-    int sj = j < vol->dims[1] ? j : vol->dims[1] - 1;
-    int sk = k < vol->dims[2] ? k : vol->dims[2] - 1;
-    const int snx = vol->dims[0];
-    for (int i = 0; i < c->nx; i++) {
-        const double x = vv_volume_get(vol, i < snx ? i : snx - 1, sj, sk);
-        if (c->q16)
-            c->q16[base + (size_t)i] = (uint16_t)(x - c->qoff);
-        else
-            c->f32[base + (size_t)i] = x == x ? (float)x : (float)vol->range[0]; /* NaN: minimum */
-    }
-}
-
-static vv_status
-cache_build(rc_state *st, rc_cache *c, vv_volume *vol) {
-    memset(c, 0, sizeof *c);
-    c->nx = vol->dims[0] < 2 ? 2 : vol->dims[0];
-    c->ny = vol->dims[1] < 2 ? 2 : vol->dims[1];
-    c->nz = vol->dims[2] < 2 ? 2 : vol->dims[2];
-    c->sy = (size_t)c->nx;
-    c->sz = (size_t)c->nx * (size_t)c->ny;
-    const size_t n = c->sz * (size_t)c->nz;
-    const int nx = c->nx, ny = c->ny, nz = c->nz;
-    if (is_integer_type(vol->type) && vol->range[1] - vol->range[0] <= 65535.0) {
-        c->qoff = vol->range[0];
-        c->q16 = malloc(n * sizeof *c->q16);
-    } else {
-        c->f32 = malloc(n * sizeof *c->f32);
-    }
-    c->bx = (nx - 2) / RC_BLOCK + 1;
-    c->by = (ny - 2) / RC_BLOCK + 1;
-    c->bz = (nz - 2) / RC_BLOCK + 1;
-    size_t nb = (size_t)c->bx * (size_t)c->by * (size_t)c->bz;
-    c->bmin = malloc(nb * sizeof(float));
-    c->bmax = malloc(nb * sizeof(float));
-    if ((!c->q16 && !c->f32) || !c->bmin || !c->bmax) {
-        cache_release(c);
-        return vv_error_set(VV_ERR_NOMEM, "out of memory for %zu voxels", n);
-    }
-#pragma omp parallel for schedule(static)
-    for (int k = 0; k < nz; k++)
-        for (int j = 0; j < ny; j++)
-            fill_row(c, vol, j, k, (size_t)k * c->sz + (size_t)j * c->sy);
-
-    if ((uint64_t)n * sizeof *c->nrm <= st->gradient_budget)
-        c->nrm = malloc(n * sizeof *c->nrm); /* NULL: gradients on the fly */
-    if (c->nrm) {
-        /* Central differences in index units; one-sided at the borders. */
-#pragma omp parallel for schedule(static)
-        for (int k = 0; k < nz; k++)
-            for (int j = 0; j < ny; j++) {
-                size_t base = (size_t)k * c->sz + (size_t)j * c->sy;
-                int j0 = j > 0 ? j - 1 : j, j1 = j < ny - 1 ? j + 1 : j;
-                int k0 = k > 0 ? k - 1 : k, k1 = k < nz - 1 ? k + 1 : k;
-                float fy = 1.0f / (float)(j1 - j0), fz = 1.0f / (float)(k1 - k0);
-                size_t by0 = (size_t)k * c->sz + (size_t)j0 * c->sy;
-                size_t by1 = (size_t)k * c->sz + (size_t)j1 * c->sy;
-                size_t bz0 = (size_t)k0 * c->sz + (size_t)j * c->sy;
-                size_t bz1 = (size_t)k1 * c->sz + (size_t)j * c->sy;
-                for (int i = 0; i < nx; i++) {
-                    int i0 = i > 0 ? i - 1 : i, i1 = i < nx - 1 ? i + 1 : i;
-                    float gx =
-                        (cache_value(c, base + (size_t)i1) - cache_value(c, base + (size_t)i0)) /
-                        (float)(i1 - i0);
-                    float gy =
-                        (cache_value(c, by1 + (size_t)i) - cache_value(c, by0 + (size_t)i)) * fy;
-                    float gz =
-                        (cache_value(c, bz1 + (size_t)i) - cache_value(c, bz0 + (size_t)i)) * fz;
-                    float g = sqrtf(gx * gx + gy * gy + gz * gz);
-                    int8_t *o = c->nrm[base + (size_t)i];
-                    if (g > 0) {
-                        float sc = 127.0f / g;
-                        o[0] = (int8_t)lrintf(gx * sc);
-                        o[1] = (int8_t)lrintf(gy * sc);
-                        o[2] = (int8_t)lrintf(gz * sc);
-                    } else {
-                        o[0] = o[1] = o[2] = 0;
-                    }
-                    o[3] = 0;
-                }
-            }
-    }
-
-#pragma omp parallel for schedule(static) collapse(2)
-    for (int bk = 0; bk < c->bz; bk++)
-        for (int bj = 0; bj < c->by; bj++)
-            for (int bi = 0; bi < c->bx; bi++) {
-                float lo = INFINITY, hi = -INFINITY;
-                int k1 = bk * RC_BLOCK + RC_BLOCK, j1 = bj * RC_BLOCK + RC_BLOCK,
-                    i1 = bi * RC_BLOCK + RC_BLOCK;
-                k1 = k1 > nz - 1 ? nz - 1 : k1;
-                j1 = j1 > ny - 1 ? ny - 1 : j1;
-                i1 = i1 > nx - 1 ? nx - 1 : i1;
-                for (int k = bk * RC_BLOCK; k <= k1; k++)
-                    for (int j = bj * RC_BLOCK; j <= j1; j++) {
-                        size_t base = (size_t)k * c->sz + (size_t)j * c->sy;
-                        for (int i = bi * RC_BLOCK; i <= i1; i++) {
-                            float x = cache_value(c, base + (size_t)i);
-                            lo = x < lo ? x : lo;
-                            hi = x > hi ? x : hi;
-                        }
-                    }
-                size_t b = ((size_t)bk * (size_t)c->by + (size_t)bj) * (size_t)c->bx + (size_t)bi;
-                c->bmin[b] = lo;
-                c->bmax[b] = hi;
-            }
-    c->vol = vv_volume_ref(vol);
-    c->modified = vol->modified;
-    return VV_OK;
-}
-
-static vv_status
-cache_get(rc_state *st, vv_volume *vol, rc_cache **out) {
-    st->clock++;
-    for (int i = 0; i < st->n_cache; i++)
-        if (st->cache[i].vol == vol) {
-            if (st->cache[i].modified == vol->modified) {
-                st->cache[i].last_used = st->clock;
-                *out = &st->cache[i];
-                return VV_OK;
-            }
-            cache_release(&st->cache[i]);
-            vv_status s = cache_build(st, &st->cache[i], vol);
-            if (s != VV_OK) {
-                st->cache[i] = st->cache[--st->n_cache];
-                return s;
-            }
-            st->cache[i].last_used = st->clock;
-            *out = &st->cache[i];
-            return VV_OK;
-        }
-    int slot = st->n_cache;
-    if (slot == RC_MAX_CACHE) {
-        slot = 0;
-        for (int i = 1; i < st->n_cache; i++)
-            if (st->cache[i].last_used < st->cache[slot].last_used)
-                slot = i;
-        cache_release(&st->cache[slot]);
-    } else {
-        st->n_cache++;
-    }
-    vv_status s = cache_build(st, &st->cache[slot], vol);
-    if (s != VV_OK) {
-        st->cache[slot] = st->cache[--st->n_cache];
-        return s;
-    }
-    st->cache[slot].last_used = st->clock;
-    *out = &st->cache[slot];
-    return VV_OK;
-}
-
-/* ---------------------------------------------------------------------- */
-/* Sampling                                                                 */
-
-/* Cell and fractions of index-space point p, clamped so that the cell's far
- * corner is inside the cached grid. */
-static inline size_t
-cell_of(const rc_cache *c, const float p[3], float f[3]) {
-    float x = p[0], y = p[1], z = p[2];
-    x = x < 0 ? 0 : x;
-    y = y < 0 ? 0 : y;
-    z = z < 0 ? 0 : z;
-    int i = (int)x, j = (int)y, k = (int)z;
-    if (i > c->nx - 2)
-        i = c->nx - 2;
-    if (j > c->ny - 2)
-        j = c->ny - 2;
-    if (k > c->nz - 2)
-        k = c->nz - 2;
-    f[0] = x - (float)i;
-    f[1] = y - (float)j;
-    f[2] = z - (float)k;
-    f[0] = f[0] > 1 ? 1 : f[0];
-    f[1] = f[1] > 1 ? 1 : f[1];
-    f[2] = f[2] > 1 ? 1 : f[2];
-    return (size_t)k * c->sz + (size_t)j * c->sy + (size_t)i;
-}
-
-/* cell_of for points inside the grid box (the clipped ray), up to float
- * rounding: no float clamps, only the integer clamps that keep every read
- * inside the grid. A point a rounding error outside extrapolates by that
- * error, which is harmless. */
-static inline size_t
-cell_in(const rc_cache *c, const float p[3], float f[3]) {
-    int i = (int)p[0], j = (int)p[1], k = (int)p[2];
-    i = i < c->nx - 2 ? i : c->nx - 2;
-    j = j < c->ny - 2 ? j : c->ny - 2;
-    k = k < c->nz - 2 ? k : c->nz - 2;
-    i = i > 0 ? i : 0;
-    j = j > 0 ? j : 0;
-    k = k > 0 ? k : 0;
-    f[0] = p[0] - (float)i;
-    f[1] = p[1] - (float)j;
-    f[2] = p[2] - (float)k;
-    return (size_t)k * c->sz + (size_t)j * c->sy + (size_t)i;
-}
-
-static inline float
-lerpf(float a, float b, float t) {
-    return a + (b - a) * t;
-}
-
-/* Trilinear value in the cell at offset o with fractions f. */
-static inline float
-value_at(const rc_cache *c, size_t o, const float f[3]) {
-    const size_t sy = c->sy, sz = c->sz;
-    float c00, c10, c01, c11;
-#ifdef __SSE2__
-    if (c->q16) {
-        /* the four x-pairs of the cell in one register, both corners of each
-         * pair lerped at once */
-        const uint16_t *v = c->q16 + o;
-        int32_t a0, a1, a2, a3;
-        memcpy(&a0, v, 4);
-        memcpy(&a1, v + sy, 4);
-        memcpy(&a2, v + sz, 4);
-        memcpy(&a3, v + sz + sy, 4);
-        const __m128i x = _mm_set_epi32(a3, a2, a1, a0);
-        const __m128 lo = _mm_cvtepi32_ps(_mm_and_si128(x, _mm_set1_epi32(0xFFFF)));
-        const __m128 hi = _mm_cvtepi32_ps(_mm_srli_epi32(x, 16));
-        const __m128 cx = _mm_add_ps(lo, _mm_mul_ps(_mm_sub_ps(hi, lo), _mm_set1_ps(f[0])));
-        /* cx = (c00, c10, c01, c11): lerp (c00, c01) towards (c10, c11) in y */
-        const __m128 y0 = _mm_shuffle_ps(cx, cx, _MM_SHUFFLE(2, 0, 2, 0));
-        const __m128 y1 = _mm_shuffle_ps(cx, cx, _MM_SHUFFLE(3, 1, 3, 1));
-        const __m128 cy = _mm_add_ps(y0, _mm_mul_ps(_mm_sub_ps(y1, y0), _mm_set1_ps(f[1])));
-        const float z0 = _mm_cvtss_f32(cy);
-        const float z1 = _mm_cvtss_f32(_mm_shuffle_ps(cy, cy, _MM_SHUFFLE(1, 1, 1, 1)));
-        return lerpf(z0, z1, f[2]);
-    }
-#endif
-    if (c->q16) {
-        const uint16_t *v = c->q16 + o;
-        c00 = lerpf(v[0], v[1], f[0]);
-        c10 = lerpf(v[sy], v[sy + 1], f[0]);
-        c01 = lerpf(v[sz], v[sz + 1], f[0]);
-        c11 = lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
-    } else {
-        const float *v = c->f32 + o;
-        c00 = lerpf(v[0], v[1], f[0]);
-        c10 = lerpf(v[sy], v[sy + 1], f[0]);
-        c01 = lerpf(v[sz], v[sz + 1], f[0]);
-        c11 = lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
-    }
-    return lerpf(lerpf(c00, c10, f[1]), lerpf(c01, c11, f[1]), f[2]);
-}
-
-static inline float
-sample_value(const rc_cache *c, const float p[3]) {
-    float f[3];
-    size_t o = cell_of(c, p, f);
-    return value_at(c, o, f);
-}
-
-typedef float rc_v4f __attribute__((vector_size(16)));
-
-/* The cached unit gradient of voxel idx as 4 floats (x, y, z, 0), times 127:
- * one 32-bit load, sign-extended in registers (compilers scalarise the
- * generic int8 -> float vector conversion). */
-static inline rc_v4f
-normal_at(const rc_cache *c, size_t idx) {
-#ifdef __SSE2__
-    int32_t word;
-    memcpy(&word, c->nrm[idx], sizeof word);
-    __m128i x = _mm_cvtsi32_si128(word);
-    x = _mm_unpacklo_epi8(x, x);
-    x = _mm_unpacklo_epi16(x, x);
-    x = _mm_srai_epi32(x, 24);
-    return (rc_v4f)_mm_cvtepi32_ps(x);
-#else
-    const int8_t *n = c->nrm[idx];
-    rc_v4f r = {n[0], n[1], n[2], 0};
-    return r;
-#endif
-}
-
-/* Index-space gradient direction (not normalised) in the cell at offset o
- * with fractions f: trilinear interpolation of the cached unit gradients,
- * the same lerp tree as value_at, four lanes at a time. Needs c->nrm. */
-static inline void
-gradient_at(const rc_cache *c, size_t o, const float f[3], float g[3]) {
-    const size_t sy = c->sy, sz = c->sz;
-    rc_v4f c00 = normal_at(c, o), c01 = normal_at(c, o + 1);
-    rc_v4f c10 = normal_at(c, o + sy), c11 = normal_at(c, o + sy + 1);
-    rc_v4f c20 = normal_at(c, o + sz), c21 = normal_at(c, o + sz + 1);
-    rc_v4f c30 = normal_at(c, o + sz + sy), c31 = normal_at(c, o + sz + sy + 1);
-    c00 += (c01 - c00) * f[0];
-    c10 += (c11 - c10) * f[0];
-    c20 += (c21 - c20) * f[0];
-    c30 += (c31 - c30) * f[0];
-    c00 += (c10 - c00) * f[1];
-    c20 += (c30 - c20) * f[1];
-    c00 += (c20 - c00) * f[2];
-    g[0] = c00[0];
-    g[1] = c00[1];
-    g[2] = c00[2];
-}
-
-/* Index-space gradient direction at p (not normalised): cached gradients
- * when there are, else central differences of trilinear samples half a
- * voxel apart. */
-static inline void
-sample_gradient(const rc_cache *c, const float p[3], float g[3]) {
-    if (c->nrm) {
-        float f[3];
-        size_t o = cell_of(c, p, f);
-        gradient_at(c, o, f, g);
-        return;
-    }
-    for (int a = 0; a < 3; a++) {
-        float pa[3] = {p[0], p[1], p[2]}, pb[3] = {p[0], p[1], p[2]};
-        pa[a] -= 0.5f;
-        pb[a] += 0.5f;
-        g[a] = sample_value(c, pb) - sample_value(c, pa);
-    }
-}
-
-/* ceil and floor of a non-negative double without libm: the x86-64
- * baseline (SSE2) has no rounding instruction, and these sit on the
- * traversal's hot path. Parameters here are sample indices, well inside
- * int64. */
-static inline double
-ceil_pos(double x) {
-    double i = (double)(int64_t)x;
-    return i < x ? i + 1 : i;
-}
-
-static inline double
-floor_pos(double x) {
-    return (double)(int64_t)x;
-}
-
-/* ---------------------------------------------------------------------- */
 /* Shading                                                                  */
 
-/* Phong (reflection vector) with two-sided lighting. g: index-space gradient; p: world
- * position; v: unit vector towards the eye; col: colour times the sample's
- * opacity, alpha: that opacity. out = (ka*ambient + kd*diffuse) * col +
- * alpha * ks * specular: the highlight is emitted by the sample like its
- * colour, so it too is weighted by the sample's opacity (otherwise it would
- * grow as the step shrinks). */
+/* Phong with two-sided lighting (vv_vshade), no shadows. */
 static inline void
 shade(const rc_frame *fr, const rc_obj *o, const float g[3], const float pw[3], const float v[3],
       const float col[3], float alpha, float out[3]) {
-    const float n0 = o->nrm[0][0] * g[0] + o->nrm[0][1] * g[1] + o->nrm[0][2] * g[2];
-    const float n1 = o->nrm[1][0] * g[0] + o->nrm[1][1] * g[1] + o->nrm[1][2] * g[2];
-    const float n2 = o->nrm[2][0] * g[0] + o->nrm[2][1] * g[1] + o->nrm[2][2] * g[2];
-    const float len2 = n0 * n0 + n1 * n1 + n2 * n2;
-    float d0 = o->amb[0], d1 = o->amb[1], d2 = o->amb[2];
-    float s0 = 0, s1 = 0, s2 = 0;
-    if (len2 > 1e-12f) {
-        const float inv = 1.0f / sqrtf(len2);
-        const float nv = (n0 * v[0] + n1 * v[1] + n2 * v[2]) * inv;
-        for (int l = 0; l < fr->n_lights; l++) {
-            const rc_light *lt = &fr->lights[l];
-            float L0 = lt->dir[0], L1 = lt->dir[1], L2 = lt->dir[2];
-            if (lt->point) {
-                L0 = lt->pos[0] - pw[0];
-                L1 = lt->pos[1] - pw[1];
-                L2 = lt->pos[2] - pw[2];
-                const float ll = sqrtf(L0 * L0 + L1 * L1 + L2 * L2);
-                if (!(ll > 0))
-                    continue;
-                L0 /= ll;
-                L1 /= ll;
-                L2 /= ll;
-            }
-            float ndl = (n0 * L0 + n1 * L1 + n2 * L2) * inv;
-            /* two-sided: a normal facing away from the light is flipped */
-            const float ndv = ndl < 0 ? -nv : nv;
-            ndl = ndl < 0 ? -ndl : ndl;
-            /* Phong: R.V with R the mirror of L about n */
-            const float rv = 2 * ndl * ndv - (L0 * v[0] + L1 * v[1] + L2 * v[2]);
-            const float sp = rv > 0 ? o->spec[(int)(rv * RC_SPEC + 0.5f)] : 0;
-            d0 += ndl * o->kd_col[l][0];
-            d1 += ndl * o->kd_col[l][1];
-            d2 += ndl * o->kd_col[l][2];
-            s0 += sp * o->ks_col[l][0];
-            s1 += sp * o->ks_col[l][1];
-            s2 += sp * o->ks_col[l][2];
-        }
-    }
-    out[0] = d0 * col[0] + alpha * s0;
-    out[1] = d1 * col[1] + alpha * s1;
-    out[2] = d2 * col[2] + alpha * s2;
+    vv_vshade(&o->sh, fr->lights, fr->n_lights, g, pw, v, col, alpha, NULL, NULL, out);
 }
 
 /* ---------------------------------------------------------------------- */
 /* Ray set-up per object                                                    */
 
-typedef struct rc_ray {
-    float o[3], d[3]; /* index space */
-    float inv[3];     /* 1/d, or 0 where d == 0 (axis never crossed) */
-    double t0, t1;    /* clipped interval, world units */
-    double tb;        /* o is the index point at t = tb (keeps float offsets small) */
-} rc_ray;
-
-static int
-ray_setup(const rc_obj *ob, const vv_ray *wr, rc_ray *r) {
-    double o[3], d[3];
-    for (int a = 0; a < 3; a++) {
-        o[a] = ob->w2i[a][0] * wr->origin.x + ob->w2i[a][1] * wr->origin.y +
-               ob->w2i[a][2] * wr->origin.z + ob->w2i[a][3];
-        d[a] = ob->w2i[a][0] * wr->dir.x + ob->w2i[a][1] * wr->dir.y + ob->w2i[a][2] * wr->dir.z;
-    }
-    double t0 = 0, t1 = INFINITY;
-    for (int a = 0; a < 3; a++) {
-        double hi = ob->dims[a] - 1;
-        if (fabs(d[a]) < 1e-300) {
-            if (o[a] < 0 || o[a] > hi)
-                return 0;
-            continue;
-        }
-        double ta = (0 - o[a]) / d[a], tb = (hi - o[a]) / d[a];
-        if (ta > tb) {
-            double tt = ta;
-            ta = tb;
-            tb = tt;
-        }
-        t0 = ta > t0 ? ta : t0;
-        t1 = tb < t1 ? tb : t1;
-    }
-    for (int p = 0; p < ob->n_planes; p++)
-        if (!vv_plane_clip_ray(ob->planes[p], *wr, &t0, &t1))
-            return 0;
-    if (!(t0 <= t1))
-        return 0;
-    r->tb = t0;
-    for (int a = 0; a < 3; a++) {
-        r->o[a] = (float)(o[a] + t0 * d[a]);
-        r->d[a] = (float)d[a];
-        r->inv[a] = fabs(d[a]) < 1e-30 ? 0.0f : (float)(1.0 / d[a]);
-    }
-    r->t0 = t0;
-    r->t1 = t1;
-    return 1;
-}
-
-/* The subvolume containing index point p, and whether it is visible. */
-static inline size_t
-block_of(const rc_cache *c, const float p[3]) {
-    int bi = (int)(p[0] * (1.0f / RC_BLOCK)), bj = (int)(p[1] * (1.0f / RC_BLOCK)),
-        bk = (int)(p[2] * (1.0f / RC_BLOCK));
-    bi = bi < 0 ? 0 : bi >= c->bx ? c->bx - 1 : bi;
-    bj = bj < 0 ? 0 : bj >= c->by ? c->by - 1 : bj;
-    bk = bk < 0 ? 0 : bk >= c->bz ? c->bz - 1 : bk;
-    return ((size_t)bk * (size_t)c->by + (size_t)bj) * (size_t)c->bx + (size_t)bi;
-}
-
-/* World parameter at which the ray leaves the cube of side @p size cells
- * (aligned to multiples of size) containing p. */
-static inline double
-cube_exit(const rc_ray *r, const float p[3], double t, int size) {
-    float te = INFINITY;
-    const float inv_size = 1.0f / (float)size;
-    for (int a = 0; a < 3; a++) {
-        if (r->inv[a] == 0)
-            continue;
-        float b = (float)(int)(p[a] * inv_size); /* floor: p >= 0 up to rounding */
-        b = b < 0 ? 0 : b;
-        float bound = (r->d[a] > 0 ? b + 1 : b) * (float)size;
-        float ta = (bound - p[a]) * r->inv[a];
-        te = ta < te ? ta : te;
-    }
-    return t + te;
-}
-
-static inline void
-ray_point(const rc_ray *r, double t, float p[3]) {
-    float tf = (float)(t - r->tb);
-    p[0] = r->o[0] + tf * r->d[0];
-    p[1] = r->o[1] + tf * r->d[1];
-    p[2] = r->o[2] + tf * r->d[2];
+/* The ray clipped to the object in its index space. */
+static inline int
+ray_setup(const rc_obj *ob, const vv_ray *wr, vv_vray *r) {
+    return vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, wr, 0, INFINITY, r);
 }
 
 static inline float
 lut_index_f(const rc_obj *o, float v) {
     float x = (v - o->lut_lo) * o->lut_scale;
-    return x < 0 ? 0 : x > RC_LUT - 1 ? RC_LUT - 1 : x;
+    return x < 0 ? 0 : x > VV_VC_LUT - 1 ? VV_VC_LUT - 1 : x;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -699,144 +148,36 @@ composite_sample(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, const f
     *A += w * e[0];
 }
 
-/* Pass 1 of the composite kernel: for samples k = kfirst .. kfirst + m - 1
- * of ray r, the cell offset, the fractions and the TF table entry (4 *
- * index). Portable version; the AVX2 one below computes offsets in 32 bits
- * and is used only for grids of fewer than 2^30 voxels. */
-static void
-classify_chunk(const rc_obj *ob, const rc_ray *r, double kfirst, double dt, int m, size_t *cell,
-               float *fx, float *fy, float *fz, int32_t *entry) {
-    const rc_cache *c = ob->c;
-    for (int s = 0; s < m; s++) {
-        float p[3], f[3];
-        ray_point(r, (kfirst + s) * dt, p);
-        const size_t o = cell_in(c, p, f);
-        cell[s] = o;
-        fx[s] = f[0];
-        fy[s] = f[1];
-        fz[s] = f[2];
-        entry[s] = 4 * (int)lut_index_f(ob, value_at(c, o, f));
-    }
-}
-
-#if RC_HAVE_AVX2
-/* classify_chunk for 16-bit values, eight samples at a time with AVX2
- * gathers and FMA; chosen at run time when the processor has them. The
- * arithmetic differs from the portable version only in the rounding of
- * fused multiply-adds, and one render uses one version throughout. */
-__attribute__((target("avx2,fma"))) static void
-classify_chunk_avx2(const rc_obj *ob, const rc_ray *r, double kfirst, double dt, int m,
-                    size_t *cell, float *fx, float *fy, float *fz, int32_t *entry) {
-    const rc_cache *c = ob->c;
-    float u[RC_CHUNK + 8];
-    for (int s = 0; s < m; s++)
-        u[s] = (float)((kfirst + s) * dt - r->tb);
-    for (int s = m; s < m + 8; s++)
-        u[s] = u[m - 1]; /* padding lanes repeat the last sample */
-    const __m256 ox = _mm256_set1_ps(r->o[0]), oy = _mm256_set1_ps(r->o[1]),
-                 oz = _mm256_set1_ps(r->o[2]);
-    const __m256 dx = _mm256_set1_ps(r->d[0]), dy = _mm256_set1_ps(r->d[1]),
-                 dz = _mm256_set1_ps(r->d[2]);
-    const __m256i zero = _mm256_setzero_si256();
-    const __m256i mx = _mm256_set1_epi32(c->nx - 2), my = _mm256_set1_epi32(c->ny - 2),
-                  mz = _mm256_set1_epi32(c->nz - 2);
-    const __m256i sy = _mm256_set1_epi32((int)c->sy), sz = _mm256_set1_epi32((int)c->sz);
-    const __m256i lo16 = _mm256_set1_epi32(0xFFFF);
-    const __m256 llo = _mm256_set1_ps(ob->lut_lo), lsc = _mm256_set1_ps(ob->lut_scale);
-    const __m256 lmax = _mm256_set1_ps((float)(RC_LUT - 1)), fzero = _mm256_setzero_ps();
-    for (int s = 0; s < m; s += 8) {
-        const __m256 t = _mm256_loadu_ps(u + s);
-        const __m256 px = _mm256_fmadd_ps(t, dx, ox), py = _mm256_fmadd_ps(t, dy, oy),
-                     pz = _mm256_fmadd_ps(t, dz, oz);
-        __m256i i = _mm256_cvttps_epi32(px), j = _mm256_cvttps_epi32(py),
-                k = _mm256_cvttps_epi32(pz);
-        i = _mm256_max_epi32(_mm256_min_epi32(i, mx), zero);
-        j = _mm256_max_epi32(_mm256_min_epi32(j, my), zero);
-        k = _mm256_max_epi32(_mm256_min_epi32(k, mz), zero);
-        const __m256 wx = _mm256_sub_ps(px, _mm256_cvtepi32_ps(i));
-        const __m256 wy = _mm256_sub_ps(py, _mm256_cvtepi32_ps(j));
-        const __m256 wz = _mm256_sub_ps(pz, _mm256_cvtepi32_ps(k));
-        const __m256i o = _mm256_add_epi32(
-            _mm256_add_epi32(_mm256_mullo_epi32(k, sz), _mm256_mullo_epi32(j, sy)), i);
-        /* the x-pair (v[o], v[o + 1]) of each cell edge, by plain loads:
-         * hardware gathers are microcoded and slow on processors with the
-         * Gather Data Sampling mitigation */
-        int32_t oo[8], p00[8], p10[8], p01[8], p11[8];
-        _mm256_storeu_si256((__m256i *)(void *)oo, o);
-        const uint16_t *q = c->q16;
-        for (int l = 0; l < 8; l++) {
-            const uint16_t *v = q + oo[l];
-            memcpy(&p00[l], v, 4);
-            memcpy(&p10[l], v + c->sy, 4);
-            memcpy(&p01[l], v + c->sz, 4);
-            memcpy(&p11[l], v + c->sz + c->sy, 4);
-        }
-        const __m256i g00 = _mm256_loadu_si256((const __m256i *)(const void *)p00);
-        const __m256i g10 = _mm256_loadu_si256((const __m256i *)(const void *)p10);
-        const __m256i g01 = _mm256_loadu_si256((const __m256i *)(const void *)p01);
-        const __m256i g11 = _mm256_loadu_si256((const __m256i *)(const void *)p11);
-#define RC_PAIR_LERP(g)                                                                            \
-    _mm256_fmadd_ps(_mm256_sub_ps(_mm256_cvtepi32_ps(_mm256_srli_epi32(g, 16)),                    \
-                                  _mm256_cvtepi32_ps(_mm256_and_si256(g, lo16))),                  \
-                    wx, _mm256_cvtepi32_ps(_mm256_and_si256(g, lo16)))
-        const __m256 c00 = RC_PAIR_LERP(g00), c10 = RC_PAIR_LERP(g10);
-        const __m256 c01 = RC_PAIR_LERP(g01), c11 = RC_PAIR_LERP(g11);
-#undef RC_PAIR_LERP
-        const __m256 c0 = _mm256_fmadd_ps(_mm256_sub_ps(c10, c00), wy, c00);
-        const __m256 c1 = _mm256_fmadd_ps(_mm256_sub_ps(c11, c01), wy, c01);
-        const __m256 val = _mm256_fmadd_ps(_mm256_sub_ps(c1, c0), wz, c0);
-        __m256 li = _mm256_mul_ps(_mm256_sub_ps(val, llo), lsc);
-        li = _mm256_min_ps(_mm256_max_ps(li, fzero), lmax);
-        const __m256i e = _mm256_slli_epi32(_mm256_cvttps_epi32(li), 2);
-        int32_t ob8[8], eb8[8];
-        float xb[8], yb[8], zb[8];
-        _mm256_storeu_si256((__m256i *)(void *)ob8, o);
-        _mm256_storeu_si256((__m256i *)(void *)eb8, e);
-        _mm256_storeu_ps(xb, wx);
-        _mm256_storeu_ps(yb, wy);
-        _mm256_storeu_ps(zb, wz);
-        const int lanes = m - s < 8 ? m - s : 8;
-        for (int l = 0; l < lanes; l++) {
-            cell[s + l] = (size_t)ob8[l];
-            entry[s + l] = eb8[l];
-            fx[s + l] = xb[l];
-            fy[s + l] = yb[l];
-            fz[s + l] = zb[l];
-        }
-    }
-}
-#endif
-
 /* The common case, one volume in composite mode, without the bookkeeping
  * of the general loop: a two-level subvolume skip, then a tight march
  * through each visible subvolume. Produces the same samples (t = k dt) as
  * trace_composite. */
 static void
 trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result *res) {
-    rc_ray r;
+    vv_vray r;
     float C[3] = {0, 0, 0}, A = 0;
     float depth = INFINITY;
     if (!ray_setup(ob, wr, &r))
         goto done;
-    const rc_cache *c = ob->c;
+    const vv_vcache *c = ob->c;
     const double dt = fr->dt, inv_dt = 1.0 / fr->dt;
     const float et = fr->et;
     const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
-    double k = ceil_pos(r.t0 * inv_dt);
-    const double kend = floor_pos(r.t1 * inv_dt);
+    double k = vv_ceil_pos(r.t0 * inv_dt);
+    const double kend = vv_floor_pos(r.t1 * inv_dt);
     const unsigned bxm = (unsigned)c->bx - 1, bym = (unsigned)c->by - 1, bzm = (unsigned)c->bz - 1;
     while (k <= kend) {
         double t = k * dt;
         float p[3];
-        ray_point(&r, t, p);
+        vv_vray_point(&r, t, p);
         {
             /* Without skipping every subvolume is marked visible and at
              * distance 0, so both cases run this same code and produce the
              * same samples. p >= 0 up to rounding: a negative index wraps and clamps high,
              * so clamp the float instead */
-            unsigned bi = (unsigned)(int)((p[0] > 0 ? p[0] : 0) * (1.0f / RC_BLOCK));
-            unsigned bj = (unsigned)(int)((p[1] > 0 ? p[1] : 0) * (1.0f / RC_BLOCK));
-            unsigned bk = (unsigned)(int)((p[2] > 0 ? p[2] : 0) * (1.0f / RC_BLOCK));
+            unsigned bi = (unsigned)(int)((p[0] > 0 ? p[0] : 0) * (1.0f / VV_VC_BLOCK));
+            unsigned bj = (unsigned)(int)((p[1] > 0 ? p[1] : 0) * (1.0f / VV_VC_BLOCK));
+            unsigned bk = (unsigned)(int)((p[2] > 0 ? p[2] : 0) * (1.0f / VV_VC_BLOCK));
             bi = bi > bxm ? bxm : bi;
             bj = bj > bym ? bym : bj;
             bk = bk > bzm ? bzm : bk;
@@ -849,18 +190,18 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
                 for (int a = 0; a < 3; a++) {
                     if (r.inv[a] == 0)
                         continue;
-                    float bound = r.d[a] > 0 ? (float)((int)bc[a] + dist) * RC_BLOCK
-                                             : (float)((int)bc[a] - dist + 1) * RC_BLOCK;
+                    float bound = r.d[a] > 0 ? (float)((int)bc[a] + dist) * VV_VC_BLOCK
+                                             : (float)((int)bc[a] - dist + 1) * VV_VC_BLOCK;
                     float ta = (bound - p[a]) * r.inv[a];
                     te = ta < te ? ta : te;
                 }
-                double ks = ceil_pos((t + te) * inv_dt);
+                double ks = vv_ceil_pos((t + te) * inv_dt);
                 k = ks > k + 1 ? ks : k + 1;
                 continue;
             }
-            double te = cube_exit(&r, p, t, RC_BLOCK);
+            double te = vv_vray_cube_exit(&r, p, t, VV_VC_BLOCK);
             /* march to the last sample inside this subvolume */
-            double klast = floor_pos(te * inv_dt);
+            double klast = vv_floor_pos(te * inv_dt);
             klast = klast < kend ? klast : kend;
             klast = klast < k ? k : klast;
             int n = (int)(klast - k) + 1;
@@ -869,18 +210,13 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
              * table entry, with no branches, so that the independent samples
              * overlap in the pipeline; then shading and compositing of the
              * non-transparent ones only. */
-            for (int s0 = 0; s0 < n; s0 += RC_CHUNK) {
-                const int m = n - s0 < RC_CHUNK ? n - s0 : RC_CHUNK;
-                size_t cell[RC_CHUNK];
-                int32_t entry[RC_CHUNK];
-                float fx[RC_CHUNK], fy[RC_CHUNK], fz[RC_CHUNK];
+            for (int s0 = 0; s0 < n; s0 += VV_VC_CHUNK) {
+                const int m = n - s0 < VV_VC_CHUNK ? n - s0 : VV_VC_CHUNK;
+                size_t cell[VV_VC_CHUNK];
+                int32_t entry[VV_VC_CHUNK];
+                float fx[VV_VC_CHUNK], fy[VV_VC_CHUNK], fz[VV_VC_CHUNK];
                 const double kfirst = klast - (n - 1 - s0);
-#if RC_HAVE_AVX2
-                if (fr->avx2 && c->q16 && c->sz * (size_t)c->nz < ((size_t)1 << 30))
-                    classify_chunk_avx2(ob, &r, kfirst, dt, m, cell, fx, fy, fz, entry);
-                else
-#endif
-                    classify_chunk(ob, &r, kfirst, dt, m, cell, fx, fy, fz, entry);
+                vv_vray_classify(c, &ob->tab, &r, kfirst, dt, m, fr->avx2, cell, fx, fy, fz, entry);
                 for (int s = 0; s < m; s++) {
                     const float *e = ob->lut + entry[s];
                     const float alpha = e[0];
@@ -890,10 +226,10 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
                     float g[3] = {0, 0, 0};
                     if (ob->shading && c->nrm) {
                         const float f[3] = {fx[s], fy[s], fz[s]};
-                        gradient_at(c, cell[s], f, g);
+                        vv_vcache_gradient_at(c, cell[s], f, g);
                     } else if (ob->shading) {
-                        ray_point(&r, t, p);
-                        sample_gradient(c, p, g);
+                        vv_vray_point(&r, t, p);
+                        vv_vcache_gradient(c, p, g);
                     }
                     composite_sample(fr, ob, wr, v, e, t, g, C, &A);
                     if (depth == INFINITY)
@@ -916,7 +252,7 @@ done:
 /* Front-to-back compositing of all composite and iso objects along one ray. */
 static void
 trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
-    rc_ray rays[RC_MAX_OBJ];
+    vv_vray rays[RC_MAX_OBJ];
     int act[RC_MAX_OBJ];
     int na = 0;
     double tmin = INFINITY, tmax = -INFINITY;
@@ -939,8 +275,8 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
     for (int i = 0; i < na; i++)
         has_prev[i] = 0;
 
-    double k = ceil_pos(tmin / dt);
-    const double kend = floor_pos(tmax / dt);
+    double k = vv_ceil_pos(tmin / dt);
+    const double kend = vv_floor_pos(tmax / dt);
     while (k <= kend) {
         const double t = k * dt;
         double next_k = k + 1;
@@ -948,7 +284,7 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
         int sampled = 0;
         for (int ai = 0; ai < na; ai++) {
             const rc_obj *ob = &fr->objs[act[ai]];
-            const rc_ray *r = &rays[act[ai]];
+            const vv_vray *r = &rays[act[ai]];
             if (t < r->t0 || t > r->t1) {
                 if (t < r->t0 && r->t0 < skip_to)
                     skip_to = r->t0;
@@ -956,26 +292,26 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
                 continue;
             }
             float p[3];
-            ray_point(r, t, p);
-            const rc_cache *c = ob->c;
-            size_t b = block_of(c, p);
+            vv_vray_point(r, t, p);
+            const vv_vcache *c = ob->c;
+            size_t b = vv_vcache_block(c, p);
             if (!ob->bvis[b]) {
-                double te = cube_exit(r, p, t, RC_BLOCK);
+                double te = vv_vray_cube_exit(r, p, t, VV_VC_BLOCK);
                 if (te < skip_to)
                     skip_to = te;
                 if (ob->mode == VV_MODE_ISO) {
                     /* restart the crossing search at the block exit */
                     double tx = te < r->t1 ? te : r->t1;
                     float px[3];
-                    ray_point(r, tx, px);
-                    prev_v[ai] = sample_value(c, px);
+                    vv_vray_point(r, tx, px);
+                    prev_v[ai] = vv_vcache_sample(c, px);
                     prev_t[ai] = tx;
                     has_prev[ai] = 1;
                 }
                 continue;
             }
             sampled = 1;
-            const float val = sample_value(c, p);
+            const float val = vv_vcache_sample(c, p);
             if (ob->mode == VV_MODE_ISO) {
                 float iso = ob->iso;
                 double th = -1;
@@ -984,36 +320,22 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
                         th = t; /* entered already inside (cut face) */
                 } else if ((prev_v[ai] < iso) != (val < iso)) {
                     /* bisection between the previous sample and this one */
-                    double ta = prev_t[ai], tb = t;
-                    float va = prev_v[ai];
-                    for (int it = 0; it < 10; it++) {
-                        double tm = 0.5 * (ta + tb);
-                        float pm[3];
-                        ray_point(r, tm, pm);
-                        float vm = sample_value(c, pm);
-                        if ((va < iso) == (vm < iso)) {
-                            ta = tm;
-                            va = vm;
-                        } else {
-                            tb = tm;
-                        }
-                    }
-                    th = 0.5 * (ta + tb);
+                    th = vv_vray_iso_refine(c, r, prev_t[ai], prev_v[ai], t, iso);
                 }
                 prev_v[ai] = val;
                 prev_t[ai] = t;
                 has_prev[ai] = 1;
                 if (th >= 0) {
                     float ph[3], g[3], pw[3], col[3];
-                    ray_point(r, th, ph);
-                    sample_gradient(c, ph, g);
+                    vv_vray_point(r, th, ph);
+                    vv_vcache_gradient(c, ph, g);
                     pw[0] = (float)(wr->origin.x + th * wr->dir.x);
                     pw[1] = (float)(wr->origin.y + th * wr->dir.y);
                     pw[2] = (float)(wr->origin.z + th * wr->dir.z);
                     if (ob->shading)
-                        shade(fr, ob, g, pw, v, ob->base, 1.0f, col);
+                        shade(fr, ob, g, pw, v, ob->sh.base, 1.0f, col);
                     else
-                        memcpy(col, ob->base, sizeof col);
+                        memcpy(col, ob->sh.base, sizeof col);
                     float w = 1 - A;
                     C[0] += w * col[0];
                     C[1] += w * col[1];
@@ -1030,7 +352,7 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
                 continue;
             float g[3] = {0, 0, 0};
             if (ob->shading)
-                sample_gradient(c, p, g);
+                vv_vcache_gradient(c, p, g);
             composite_sample(fr, ob, wr, v, e, t, g, C, &A);
             if (depth == INFINITY)
                 depth = (float)t;
@@ -1038,7 +360,7 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
         if (A >= fr->et)
             break;
         if (!sampled && skip_to < INFINITY) {
-            double ks = ceil_pos(skip_to / dt);
+            double ks = vv_ceil_pos(skip_to / dt);
             if (ks > next_k)
                 next_k = ks;
         }
@@ -1052,73 +374,15 @@ done:
     res->depth = depth;
 }
 
-/* Maximum / minimum intensity projection and X-ray (mean) of one object.
- * Returns 0 when the ray misses the object. */
+/* Maximum / minimum intensity projection and X-ray (mean) of one object
+ * (vv_vray_project). Returns 0 when the ray misses the object. */
 static int
 trace_projection(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, float *value,
                  float *depth) {
-    rc_ray r;
+    vv_vray r;
     if (!ray_setup(ob, wr, &r))
         return 0;
-    const double dt = fr->dt;
-    const rc_cache *c = ob->c;
-    double k = ceil_pos(r.t0 / dt);
-    const double kend = floor_pos(r.t1 / dt);
-    if (k > kend) {
-        /* shorter than one step: one sample in the middle */
-        float p[3];
-        double tm = 0.5 * (r.t0 + r.t1);
-        ray_point(&r, tm, p);
-        *value = sample_value(c, p);
-        *depth = (float)tm;
-        return 1;
-    }
-    if (ob->mode == VV_MODE_XRAY) {
-        double sum = 0;
-        long n = 0;
-        for (; k <= kend; k++) {
-            float p[3], f[3];
-            ray_point(&r, k * dt, p);
-            const size_t o = cell_in(c, p, f);
-            sum += value_at(c, o, f);
-            n++;
-        }
-        *value = (float)(sum / (double)n);
-        *depth = (float)r.t0;
-        return 1;
-    }
-    const int mip = ob->mode == VV_MODE_MIP;
-    const int skipping = fr->st->skipping;
-    float best = mip ? -INFINITY : INFINITY;
-    double tbest = r.t0;
-    while (k <= kend) {
-        float p[3];
-        ray_point(&r, k * dt, p);
-        const size_t b = block_of(c, p);
-        const double te = cube_exit(&r, p, k * dt, RC_BLOCK);
-        /* a subvolume that cannot beat the current extreme is skipped whole
-         * (its samples could not change the result: the test is strict) */
-        if (skipping && (mip ? c->bmax[b] <= best : c->bmin[b] >= best)) {
-            const double ks = ceil_pos(te / dt);
-            k = ks > k + 1 ? ks : k + 1;
-            continue;
-        }
-        double klast = floor_pos(te / dt);
-        klast = klast < kend ? klast : kend;
-        klast = klast < k ? k : klast;
-        for (; k <= klast; k++) {
-            float f[3];
-            ray_point(&r, k * dt, p);
-            const size_t o = cell_in(c, p, f);
-            const float x = value_at(c, o, f);
-            if (mip ? x > best : x < best) {
-                best = x;
-                tbest = k * dt;
-            }
-        }
-    }
-    *value = best;
-    *depth = (float)tbest;
+    vv_vray_project(ob->c, &r, ob->mode, fr->dt, fr->st->skipping, value, depth);
     return 1;
 }
 
@@ -1131,260 +395,39 @@ prepare_object(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w
     memset(ro, 0, sizeof *ro);
     ro->obj = obj;
     ro->mode = obj->mode;
-    vv_status s = cache_get(st, obj->volume, &ro->c);
+    vv_status s = vv_vcache_get(&st->vc, obj->volume, &ro->c);
     if (s != VV_OK)
         return vv_error_prefix(s, "object '%s'", obj->name);
-    vv_mat4 i2w = vv_object_index_to_world(obj);
-    int ok = 0;
-    vv_mat4 w2i = vv_mat4_inverse(i2w, &ok);
-    if (!ok)
-        return vv_error_set(VV_ERR_INVALID, "object '%s': singular transform", obj->name);
-    for (int r = 0; r < 3; r++)
-        for (int cc = 0; cc < 4; cc++)
-            ro->w2i[r][cc] = w2i.m[r][cc];
-    /* normals: world normal = (M^-1)^T g_index, M = linear part of i2w */
-    for (int r = 0; r < 3; r++)
-        for (int cc = 0; cc < 3; cc++)
-            ro->nrm[r][cc] = (float)w2i.m[cc][r];
-    for (int a = 0; a < 3; a++)
-        /* a single-voxel axis (a 2-D image) is one voxel thick: the cache
-         * holds that slice twice */
-        ro->dims[a] = obj->volume->dims[a] > 1 ? obj->volume->dims[a] : 2;
-    for (int i = 0; i <= RC_SPEC; i++)
-        ro->spec[i] = (float)pow((double)i / RC_SPEC, obj->material.shininess);
-    ro->base[0] = (float)obj->material.color.x;
-    ro->base[1] = (float)obj->material.color.y;
-    ro->base[2] = (float)obj->material.color.z;
+    s = vv_vobject_prepare(obj, w, fr->ambient, fr->lights, fr->n_lights, ro->w2i, ro->i2w,
+                           ro->dims, ro->planes, &ro->n_planes, &ro->sh);
+    if (s != VV_OK)
+        return s;
     ro->shading = obj->shading;
     ro->iso = (float)(obj->isovalue - ro->c->qoff);
-    for (int p = 0; p < w->n_cut_planes && ro->n_planes < 2 * VV_MAX_CUT_PLANES; p++)
-        ro->planes[ro->n_planes++] =
-            vv_plane_from_point_normal(w->cut_planes[p].point, w->cut_planes[p].normal);
-    for (int p = 0; p < obj->n_cut_planes && ro->n_planes < 2 * VV_MAX_CUT_PLANES; p++)
-        ro->planes[ro->n_planes++] =
-            vv_plane_from_point_normal(obj->cut_planes[p].point, obj->cut_planes[p].normal);
     return VV_OK;
 }
 
-/* Step in world units of an object: step * smallest voxel spacing in world. */
-static double
-object_step(const vv_object *obj) {
-    vv_mat4 m = vv_object_index_to_world(obj);
-    double best = INFINITY;
-    for (int cc = 0; cc < 3; cc++) {
-        double l =
-            sqrt(m.m[0][cc] * m.m[0][cc] + m.m[1][cc] * m.m[1][cc] + m.m[2][cc] * m.m[2][cc]);
-        if (l > 0 && l < best)
-            best = l;
-    }
-    return obj->step * best;
-}
-
-/* Empty-space leaping: the chessboard distance from each subvolume to the
- * nearest visible one, capped at 255, by two chamfer passes over the 26
- * neighbours (exact for the chessboard metric). A ray in a subvolume at
- * distance d can jump to where it leaves the cube of 2d - 1 subvolumes
- * around it, all of them empty. */
-static vv_status
-prepare_distance(rc_obj *ro) {
-    const rc_cache *c = ro->c;
-    const int nx = c->bx, ny = c->by, nz = c->bz;
-    const size_t n = (size_t)nx * (size_t)ny * (size_t)nz;
-    uint8_t *d = malloc(n);
-    if (!d)
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    for (size_t b = 0; b < n; b++)
-        d[b] = ro->bvis[b] ? 0 : 255;
-    for (int pass = 0; pass < 2; pass++) {
-        const int step = pass == 0 ? 1 : -1;
-        for (int k = pass == 0 ? 0 : nz - 1; k >= 0 && k < nz; k += step)
-            for (int j = pass == 0 ? 0 : ny - 1; j >= 0 && j < ny; j += step)
-                for (int i = pass == 0 ? 0 : nx - 1; i >= 0 && i < nx; i += step) {
-                    size_t b = ((size_t)k * (size_t)ny + (size_t)j) * (size_t)nx + (size_t)i;
-                    int best = d[b];
-                    if (best == 0)
-                        continue;
-                    /* the 13 neighbours already visited in this pass */
-                    for (int dk = -1; dk <= 0; dk++)
-                        for (int dj = -1; dj <= 1; dj++)
-                            for (int di = -1; di <= 1; di++) {
-                                if (dk == 0 && (dj > 0 || (dj == 0 && di >= 0)))
-                                    continue;
-                                int kk = k + step * dk, jj = j + step * dj, ii = i + step * di;
-                                if (kk < 0 || kk >= nz || jj < 0 || jj >= ny || ii < 0 || ii >= nx)
-                                    continue;
-                                int v = d[((size_t)kk * (size_t)ny + (size_t)jj) * (size_t)nx +
-                                          (size_t)ii] +
-                                        1;
-                                best = v < best ? v : best;
-                            }
-                    d[b] = (uint8_t)(best > 255 ? 255 : best);
-                }
-    }
-    ro->bdist = d;
-    return VV_OK;
-}
-
-/* Builds the TF table (opacity corrected for dt, colour premultiplied) and
- * the subvolume visibility flags. */
-static vv_status
-build_tables(rc_frame *fr, rc_obj *ro) {
-    const vv_object *obj = ro->obj;
-    const rc_cache *c = ro->c;
-    size_t nb = (size_t)c->bx * (size_t)c->by * (size_t)c->bz;
-    ro->bvis = malloc(nb);
-    if (!ro->bvis)
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    double lo = obj->volume->range[0], hi = obj->volume->range[1];
-    if (!(hi > lo))
-        hi = lo + 1;
-    ro->lut_lo = (float)(lo - c->qoff);
-    ro->lut_scale = (float)((RC_LUT - 1) / (hi - lo));
-    if (ro->mode == VV_MODE_ISO) {
-        for (size_t b = 0; b < nb; b++)
-            /* only subvolumes wholly below the isovalue are empty: one wholly
-             * above may hold the start of a ray that enters the surface
-             * through a cut plane or the box face */
-            ro->bvis[b] = !(c->bmax[b] < ro->iso) || !fr->st->skipping;
-        return prepare_distance(ro);
-    }
-    ro->lut = malloc(sizeof(float) * 4 * RC_LUT);
-    int *nz = malloc(sizeof(int) * (RC_LUT + 1));
-    if (!ro->lut || !nz) {
-        free(nz);
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    }
-    const double unit = obj->tf.opacity_unit_distance > 0 ? obj->tf.opacity_unit_distance : 1.0;
-    nz[0] = 0;
-    for (int i = 0; i < RC_LUT; i++) {
-        double x = lo + (hi - lo) * i / (RC_LUT - 1);
-        double a;
-        vv_vec3 col;
-        if (obj->segmentation == VV_SEG_THRESHOLD) {
-            a = x >= obj->threshold ? 1.0 : 0.0;
-            col = obj->material.color;
-        } else {
-            a = vv_tf_eval_opacity(&obj->tf, x);
-            col = vv_tf_eval_color(&obj->tf, x);
-        }
-        if (ro->mode == VV_MODE_COMPOSITE) {
-            a = a <= 0 ? 0 : a >= 1 ? 1 : 1.0 - pow(1.0 - a, fr->dt / unit);
-            ro->lut[4 * i + 0] = (float)a;
-            ro->lut[4 * i + 1] = (float)(col.x * a);
-            ro->lut[4 * i + 2] = (float)(col.y * a);
-            ro->lut[4 * i + 3] = (float)(col.z * a);
-        } else {
-            /* projections show the TF colour and opacity at the projected value */
-            a = a < 0 ? 0 : a > 1 ? 1 : a;
-            ro->lut[4 * i + 0] = (float)a;
-            ro->lut[4 * i + 1] = (float)col.x;
-            ro->lut[4 * i + 2] = (float)col.y;
-            ro->lut[4 * i + 3] = (float)col.z;
-        }
-        nz[i + 1] = nz[i] + (ro->lut[4 * i] > 0);
-    }
-    for (size_t b = 0; b < nb; b++) {
-        int i0 = (int)lut_index_f(ro, c->bmin[b]), i1 = (int)lut_index_f(ro, c->bmax[b]);
-        ro->bvis[b] = nz[i1 + 1] - nz[i0] > 0 || !fr->st->skipping;
-    }
-    free(nz);
-    return prepare_distance(ro);
-}
-
-static int
-tf_equal(const vv_tf *a, const vv_tf *b) {
-    if (a->n_opacity != b->n_opacity || a->n_color != b->n_color ||
-        a->opacity_unit_distance != b->opacity_unit_distance)
-        return 0;
-    for (int i = 0; i < a->n_opacity; i++)
-        if (a->opacity[i].value != b->opacity[i].value ||
-            a->opacity[i].opacity != b->opacity[i].opacity)
-            return 0;
-    for (int i = 0; i < a->n_color; i++)
-        if (a->color[i].value != b->color[i].value || a->color[i].color.x != b->color[i].color.x ||
-            a->color[i].color.y != b->color[i].color.y ||
-            a->color[i].color.z != b->color[i].color.z)
-            return 0;
-    return 1;
-}
-
-static int
-key_equal(const rc_tables_key *a, const rc_tables_key *b) {
-    return a->mode == b->mode && a->segmentation == b->segmentation &&
-           a->threshold == b->threshold && a->iso == b->iso && a->dt == b->dt &&
-           a->base.x == b->base.x && a->base.y == b->base.y && a->base.z == b->base.z &&
-           a->skipping == b->skipping && tf_equal(&a->tf, &b->tf);
-}
-
-/* The object's tables: borrowed from its volume's cache when nothing they
- * depend on changed since they were built (the common case between frames),
- * else built, and handed to the cache unless another object of this frame
- * still borrows the cached ones. */
+/* The object's tables (vv_vtables_get: borrowed from its volume's cache
+ * when nothing they depend on changed). */
 static vv_status
 prepare_tables(rc_frame *fr, rc_obj *ro) {
-    const vv_object *obj = ro->obj;
-    rc_cache *c = ro->c;
-    rc_tables_key key;
-    memset(&key, 0, sizeof key);
-    key.mode = ro->mode;
-    key.segmentation = obj->segmentation;
-    key.threshold = obj->threshold;
-    key.iso = ro->iso;
-    key.dt = fr->dt;
-    key.base = obj->material.color;
-    key.skipping = fr->st->skipping;
-    key.tf = obj->tf;
-    double lo = obj->volume->range[0], hi = obj->volume->range[1];
-    if (!(hi > lo))
-        hi = lo + 1;
-    if (c->tables.valid && key_equal(&c->tables.key, &key)) {
-        ro->lut_lo = (float)(lo - c->qoff);
-        ro->lut_scale = (float)((RC_LUT - 1) / (hi - lo));
-        ro->lut = c->tables.lut;
-        ro->bvis = c->tables.bvis;
-        ro->bdist = c->tables.bdist;
-        ro->owns_tables = 0;
-        c->tables.frame = fr->st->frame;
-        return VV_OK;
-    }
-    ro->owns_tables = 1;
-    vv_status s = build_tables(fr, ro);
-    if (s != VV_OK || (c->tables.valid && c->tables.frame == fr->st->frame))
+    vv_status s = vv_vtables_get(&fr->st->vc, ro->c, ro->obj, ro->mode, fr->dt, ro->iso,
+                                 fr->st->skipping, 0, &ro->tab, &ro->owns_tables);
+    if (s != VV_OK)
         return s;
-    free(c->tables.lut);
-    free(c->tables.bvis);
-    free(c->tables.bdist);
-    c->tables.valid = 1;
-    c->tables.key = key;
-    c->tables.lut = ro->lut;
-    c->tables.bvis = ro->bvis;
-    c->tables.bdist = ro->bdist;
-    c->tables.frame = fr->st->frame;
-    ro->owns_tables = 0;
+    ro->lut_lo = ro->tab.lut_lo;
+    ro->lut_scale = ro->tab.lut_scale;
+    ro->lut = ro->tab.lut;
+    ro->bvis = ro->tab.bvis;
+    ro->bdist = ro->tab.bdist;
     return VV_OK;
 }
 
 static void
 prepare_lights(rc_frame *fr, const vv_world *w, const vv_view *view) {
-    vv_vec3 fwd = vv_vec3_normalize(vv_vec3_sub(view->at, view->eye));
-    fr->n_lights = 0;
-    for (int i = 0; i < w->n_lights && i < VV_MAX_LIGHTS; i++) {
-        const vv_light *l = &w->lights[i];
-        rc_light *o = &fr->lights[fr->n_lights++];
-        o->point = l->type == VV_LIGHT_POINT && !l->headlight;
-        fr->point_lights |= o->point;
-        vv_vec3 d = l->headlight ? fwd : vv_vec3_normalize(l->direction);
-        /* towards the light = against the direction it travels */
-        o->dir[0] = (float)-d.x;
-        o->dir[1] = (float)-d.y;
-        o->dir[2] = (float)-d.z;
-        o->pos[0] = (float)l->position.x;
-        o->pos[1] = (float)l->position.y;
-        o->pos[2] = (float)l->position.z;
-        o->col[0] = (float)(l->color.x * l->intensity);
-        o->col[1] = (float)(l->color.y * l->intensity);
-        o->col[2] = (float)(l->color.z * l->intensity);
-    }
+    fr->n_lights = vv_vlights_prepare(fr->lights, w, view);
+    for (int l = 0; l < fr->n_lights; l++)
+        fr->point_lights |= fr->lights[l].point;
 }
 
 /* vv_view_ray is affine in the pixel position before the direction is
@@ -1465,10 +508,8 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     rc_frame fr;
     memset(&fr, 0, sizeof fr);
     fr.st = st;
-    st->frame++;
-#if RC_HAVE_AVX2
-    fr.avx2 = st->simd && __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-#endif
+    st->vc.frame++;
+    fr.avx2 = st->simd && vv_vc_have_avx2();
     fr.view = view;
     fr.et = (float)st->early_termination;
     fr.ambient[0] = (float)w->ambient.x;
@@ -1508,7 +549,7 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
             else
                 s = prepare_object(&fr, &objs[fr.n_obj++], ob, w);
             if (s == VV_OK) {
-                double sd = object_step(ob);
+                double sd = vv_vobject_step(ob);
                 dt = sd < dt ? sd : dt;
             }
             if (pass == 0)
@@ -1516,15 +557,7 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         }
     fr.dt = (float)(dt < INFINITY ? dt : 1.0);
     for (int i = 0; i < fr.n_obj && s == VV_OK; i++) {
-        rc_obj *ro = &objs[i];
-        for (int ch = 0; ch < 3; ch++) {
-            ro->amb[ch] = (float)ro->obj->material.ambient * fr.ambient[ch];
-            for (int l = 0; l < fr.n_lights; l++) {
-                ro->kd_col[l][ch] = (float)ro->obj->material.diffuse * fr.lights[l].col[ch];
-                ro->ks_col[l][ch] = (float)ro->obj->material.specular * fr.lights[l].col[ch];
-            }
-        }
-        s = prepare_tables(&fr, ro);
+        s = prepare_tables(&fr, &objs[i]);
     }
 
     if (s == VV_OK) {
@@ -1557,25 +590,12 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
             s = vv_error_set(VV_ERR_CANCELLED, "cancelled");
     }
     for (int i = 0; i < fr.n_obj; i++) {
-        if (objs[i].owns_tables) {
-            free(objs[i].lut);
-            free(objs[i].bvis);
-            free(objs[i].bdist);
-        }
+        if (objs[i].owns_tables)
+            vv_vtables_free(&objs[i].tab);
     }
     free(objs);
     /* drop cached volumes the World no longer shows */
-    for (int i = 0; i < st->n_cache;) {
-        int used = 0;
-        for (int j = 0; j < w->n_objects; j++)
-            used |= w->objects[j]->volume == st->cache[i].vol;
-        if (!used) {
-            cache_release(&st->cache[i]);
-            st->cache[i] = st->cache[--st->n_cache];
-        } else {
-            i++;
-        }
-    }
+    vv_vcache_set_prune(&st->vc, w);
     return s;
 }
 
@@ -1585,14 +605,7 @@ rc_create(void **state) {
     if (!st)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     st->early_termination = 0.99;
-    /* cached gradients take 4 bytes a voxel: allow them up to a quarter of
-     * physical memory (at most 8 GiB); beyond, gradients are computed on the
-     * fly from the values */
-    uint64_t budget = (uint64_t)8 << 30;
-    long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
-    if (pages > 0 && page > 0 && (uint64_t)pages * (uint64_t)page / 4 < budget)
-        budget = (uint64_t)pages * (uint64_t)page / 4;
-    st->gradient_budget = budget;
+    vv_vcache_set_init(&st->vc);
     st->skipping = 1;
     st->simd = 1;
     *state = st;
@@ -1613,10 +626,8 @@ rc_set_option(void *state, const char *key, const char *value) {
     } else if (strcmp(key, "gradient_budget_mb") == 0) {
         if (!(x >= 0))
             return vv_error_set(VV_ERR_INVALID, "gradient_budget_mb must be >= 0");
-        st->gradient_budget = (uint64_t)(x * 1048576.0);
-        for (int i = 0; i < st->n_cache; i++)
-            cache_release(&st->cache[i]);
-        st->n_cache = 0;
+        st->vc.gradient_budget = (uint64_t)(x * 1048576.0);
+        vv_vcache_set_clear(&st->vc);
     } else if (strcmp(key, "empty_space_skipping") == 0) {
         st->skipping = x != 0;
     } else if (strcmp(key, "simd") == 0) {
@@ -1635,8 +646,7 @@ rc_destroy(void *state) {
     rc_state *st = state;
     if (!st)
         return;
-    for (int i = 0; i < st->n_cache; i++)
-        cache_release(&st->cache[i]);
+    vv_vcache_set_clear(&st->vc);
     free(st);
 }
 

@@ -43,15 +43,13 @@
 #include <time.h>
 
 #include "render/registry.h"
+#include "render/volume_cache.h"
 #include "volvis/render.h"
 
-#define RT_BLOCK 4  /* PARC subvolume side in cells */
-#define RT_LUT 4096 /* transfer-function table entries */
-#define RT_TILE 16  /* image tile side in pixels */
+#define RT_TILE 16 /* image tile side in pixels */
 #define RT_MAX_OBJ 64
-#define RT_MAX_CACHE 64
-#define RT_SPEC 2048                  /* specular table entries */
 #define RT_SGRID 4                    /* shadow grid spacing, voxels */
+#define RT_LGRID 2                    /* light volume spacing, voxels */
 #define RT_MIN_WEIGHT (1.0f / 512.0f) /* secondary rays weighing less are not traced */
 #define RT_EPS 1e-6                   /* relative ray offset off surfaces */
 
@@ -98,24 +96,28 @@ ray_at(const vv_ray *r, double t) {
     return v3add(r->origin, v3scale(r->dir, t));
 }
 
-/* ---------------------------------------------------------------------- */
-/* Per-volume cache                                                          */
+#define RT_LV_CACHE 16 /* light volumes kept between frames */
 
-typedef struct rt_cache {
-    vv_volume *vol; /* reference held */
+/* A light volume kept between frames (it does not depend on the view),
+ * with everything it depends on. */
+typedef struct rt_lv {
+    vv_volume *vol; /* reference held; NULL: free slot */
     uint64_t modified;
-    int nx, ny, nz; /* cached grid (each >= 2; a 1-voxel axis is duplicated) */
-    size_t sy, sz;
-    float *val;       /* values as float */
-    int8_t (*nrm)[4]; /* unit gradients * 127 (index space), or NULL: on the fly */
-    vv_minmax_grid *mm;
-    uint64_t last_used;
-} rt_cache;
+    double w2i[3][4];
+    double dir[3];
+    double dt;
+    int n_planes;
+    vv_plane planes[2 * VV_MAX_CUT_PLANES];
+    float lut_lo, lut_scale;
+    float ext[VV_VC_LUT];
+    float *T;
+    uint64_t used; /* frame that last used it */
+} rt_lv;
 
 typedef struct rt_state {
-    rt_cache cache[RT_MAX_CACHE];
-    int n_cache;
-    uint64_t clock;
+    rt_lv lv[RT_LV_CACHE];
+    uint64_t frame;
+    vv_vcache_set vc; /* per-volume caches (src/render/volume_cache.h) */
     int parc;         /* PARC skipping on primary and secondary rays */
     int shadows;      /* shadow rays */
     int max_depth;    /* reflection / refraction depth */
@@ -125,7 +127,8 @@ typedef struct rt_state {
     double threshold; /* adaptive: channel difference that triggers supersampling */
     uint64_t seed;    /* jitter seed */
     double early_termination;
-    int shadow_grid; /* volume samples: cached shadow rays (1) or exact (0) */
+    int shadow_grid;   /* volume samples: cached shadow rays (1) or exact (0) */
+    int light_volumes; /* shadow rays of directional lights through volumes: light volumes */
 } rt_state;
 
 typedef struct rt_light {
@@ -138,30 +141,29 @@ typedef struct rt_light {
 /* One volume object prepared for this render. */
 typedef struct rt_vobj {
     const vv_object *obj;
-    rt_cache *c;
+    vv_vcache *c;
     vv_render_mode mode;
     double w2i[3][4], i2w[3][4];
-    float nrm[3][3];
     int dims[3];
-    double vox; /* smallest world length of a voxel step */
-    float lut_lo, lut_scale;
-    float *lut;     /* RT_LUT x {alpha, r*alpha, g*alpha, b*alpha} (projections: alpha, r, g, b) */
-    float *ext;     /* RT_LUT extinction per world unit (composite) */
-    uint8_t *bvis;  /* PARC: the subvolume may contribute */
-    uint8_t *bdist; /* chessboard distance, in subvolumes, to the nearest that may (0: it may) */
-    int bx, by, bz;
+    double vox;             /* smallest world length of a voxel step */
+    vv_vtables tab;         /* TF table, extinction (composite), PARC flags and distances */
+    int owns_tables;        /* tab is this object's (else borrowed from the volume's cache) */
+    const float *lut, *ext; /* tab.lut, tab.ext */
+    const uint8_t *bvis;    /* tab.bvis: the subvolume may contribute */
+    const uint8_t *bdist;   /* tab.bdist: chessboard distance to the nearest that may */
+    int bx, by, bz;         /* subvolume grid */
     float iso;
-    float spec[RT_SPEC + 1];
-    float amb[3];
-    float kd_col[VV_MAX_LIGHTS][3];
-    float ks_col[VV_MAX_LIGHTS][3];
-    float base[3];
+    vv_vshading sh; /* shading constants */
     int n_planes;
     vv_plane planes[2 * VV_MAX_CUT_PLANES];
     int gdim[3];                            /* shadow grid points per axis */
     _Atomic uint32_t *sgrid[VV_MAX_LIGHTS]; /* point lights: bits of (T + 1), 0 = not traced */
     float *sweep[VV_MAX_LIGHTS];            /* directional lights: swept transmittance */
     float lidx[VV_MAX_LIGHTS][3];           /* index-space direction to the light per world unit */
+    int ldim[3];                /* light volume points per axis (every RT_LGRID voxels) */
+    float *lvol[VV_MAX_LIGHTS]; /* directional lights: this volume's own transmittance
+                                   from each point towards the light (a light volume) */
+    unsigned lvol_owned;        /* bit l: lvol[l] is this frame's (else the state's cache) */
 } rt_vobj;
 
 /* Bounding volume hierarchy over a mesh's triangles (object space). */
@@ -204,9 +206,11 @@ typedef struct rt_frame {
     float bg[3];
     float ambient[3];
     rt_light lights[VV_MAX_LIGHTS];
+    vv_vlight vlights[VV_MAX_LIGHTS]; /* the same, for volume shading */
     int n_lights;
     float et;
     int shadows, max_depth;
+    int avx2;          /* the processor has AVX2 and FMA (vv_vray_classify) */
     double scene_size; /* for ray offsets */
 } rt_frame;
 
@@ -218,270 +222,28 @@ typedef struct rt_hit {
 } rt_hit;
 
 /* ---------------------------------------------------------------------- */
-/* Cache                                                                     */
+/* Volume rays (the caches and sampling are src/render/volume_cache.h)      */
 
-static void
-cache_release(rt_cache *c) {
-    vv_volume_free(c->vol);
-    free(c->val);
-    free(c->nrm);
-    vv_minmax_grid_free(c->mm);
-    memset(c, 0, sizeof *c);
-}
-
-static vv_status
-cache_build(rt_cache *c, vv_volume *vol) {
-    memset(c, 0, sizeof *c);
-    c->nx = vol->dims[0] < 2 ? 2 : vol->dims[0];
-    c->ny = vol->dims[1] < 2 ? 2 : vol->dims[1];
-    c->nz = vol->dims[2] < 2 ? 2 : vol->dims[2];
-    c->sy = (size_t)c->nx;
-    c->sz = (size_t)c->nx * (size_t)c->ny;
-    const size_t n = c->sz * (size_t)c->nz;
-    const int nx = c->nx, ny = c->ny, nz = c->nz;
-    c->val = malloc(n * sizeof *c->val);
-    if (n <= ((size_t)1 << 31))
-        c->nrm = malloc(n * sizeof *c->nrm);
-    if (!c->val) {
-        cache_release(c);
-        return vv_error_set(VV_ERR_NOMEM, "out of memory for %zu voxels", n);
-    }
-    vv_status s = vv_minmax_grid_build(&c->mm, vol, RT_BLOCK);
-    if (s != VV_OK) {
-        cache_release(c);
-        return s;
-    }
-#pragma omp parallel for schedule(static)
-    for (int k = 0; k < nz; k++)
-        for (int j = 0; j < ny; j++) {
-            int sj = j < vol->dims[1] ? j : vol->dims[1] - 1;
-            int sk = k < vol->dims[2] ? k : vol->dims[2] - 1;
-            size_t base = (size_t)k * c->sz + (size_t)j * c->sy;
-            for (int i = 0; i < nx; i++) {
-                double x = vv_volume_get(vol, i < vol->dims[0] ? i : vol->dims[0] - 1, sj, sk);
-                c->val[base + (size_t)i] = x == x ? (float)x : (float)vol->range[0];
-            }
-        }
-    if (c->nrm) {
-        /* central differences in index units, one-sided at the borders: the
-         * ray caster's gradients */
-#pragma omp parallel for schedule(static)
-        for (int k = 0; k < nz; k++)
-            for (int j = 0; j < ny; j++) {
-                size_t base = (size_t)k * c->sz + (size_t)j * c->sy;
-                int j0 = j > 0 ? j - 1 : j, j1 = j < ny - 1 ? j + 1 : j;
-                int k0 = k > 0 ? k - 1 : k, k1 = k < nz - 1 ? k + 1 : k;
-                for (int i = 0; i < nx; i++) {
-                    int i0 = i > 0 ? i - 1 : i, i1 = i < nx - 1 ? i + 1 : i;
-                    const float *v = c->val;
-                    float gx = (v[base + (size_t)i1] - v[base + (size_t)i0]) / (float)(i1 - i0);
-                    float gy = (v[(size_t)k * c->sz + (size_t)j1 * c->sy + (size_t)i] -
-                                v[(size_t)k * c->sz + (size_t)j0 * c->sy + (size_t)i]) /
-                               (float)(j1 - j0);
-                    float gz = (v[(size_t)k1 * c->sz + (size_t)j * c->sy + (size_t)i] -
-                                v[(size_t)k0 * c->sz + (size_t)j * c->sy + (size_t)i]) /
-                               (float)(k1 - k0);
-                    float g = sqrtf(gx * gx + gy * gy + gz * gz);
-                    int8_t *o = c->nrm[base + (size_t)i];
-                    if (g > 0) {
-                        float sc = 127.0f / g;
-                        o[0] = (int8_t)lrintf(gx * sc);
-                        o[1] = (int8_t)lrintf(gy * sc);
-                        o[2] = (int8_t)lrintf(gz * sc);
-                    } else {
-                        o[0] = o[1] = o[2] = 0;
-                    }
-                    o[3] = 0;
-                }
-            }
-    }
-    c->vol = vv_volume_ref(vol);
-    c->modified = vol->modified;
-    return VV_OK;
-}
-
-static vv_status
-cache_get(rt_state *st, vv_volume *vol, rt_cache **out) {
-    st->clock++;
-    for (int i = 0; i < st->n_cache; i++)
-        if (st->cache[i].vol == vol) {
-            if (st->cache[i].modified != vol->modified) {
-                cache_release(&st->cache[i]);
-                vv_status s = cache_build(&st->cache[i], vol);
-                if (s != VV_OK) {
-                    st->cache[i] = st->cache[--st->n_cache];
-                    return s;
-                }
-            }
-            st->cache[i].last_used = st->clock;
-            *out = &st->cache[i];
-            return VV_OK;
-        }
-    int slot = st->n_cache;
-    if (slot == RT_MAX_CACHE) {
-        slot = 0;
-        for (int i = 1; i < st->n_cache; i++)
-            if (st->cache[i].last_used < st->cache[slot].last_used)
-                slot = i;
-        cache_release(&st->cache[slot]);
-    } else {
-        st->n_cache++;
-    }
-    vv_status s = cache_build(&st->cache[slot], vol);
-    if (s != VV_OK) {
-        st->cache[slot] = st->cache[--st->n_cache];
-        return s;
-    }
-    st->cache[slot].last_used = st->clock;
-    *out = &st->cache[slot];
-    return VV_OK;
-}
-
-/* ---------------------------------------------------------------------- */
-/* Volume sampling                                                           */
-
-static inline size_t
-cell_of(const rt_cache *c, const float p[3], float f[3]) {
-    float x = p[0] < 0 ? 0 : p[0], y = p[1] < 0 ? 0 : p[1], z = p[2] < 0 ? 0 : p[2];
-    int i = (int)x, j = (int)y, k = (int)z;
-    i = i > c->nx - 2 ? c->nx - 2 : i;
-    j = j > c->ny - 2 ? c->ny - 2 : j;
-    k = k > c->nz - 2 ? c->nz - 2 : k;
-    f[0] = x - (float)i;
-    f[1] = y - (float)j;
-    f[2] = z - (float)k;
-    f[0] = f[0] > 1 ? 1 : f[0];
-    f[1] = f[1] > 1 ? 1 : f[1];
-    f[2] = f[2] > 1 ? 1 : f[2];
-    return (size_t)k * c->sz + (size_t)j * c->sy + (size_t)i;
-}
-
-static inline float
-lerpf(float a, float b, float t) {
-    return a + (b - a) * t;
-}
-
-static inline float
-sample_value(const rt_cache *c, const float p[3]) {
-    float f[3];
-    const size_t o = cell_of(c, p, f);
-    const float *v = c->val + o;
-    const size_t sy = c->sy, sz = c->sz;
-    float c00 = lerpf(v[0], v[1], f[0]);
-    float c10 = lerpf(v[sy], v[sy + 1], f[0]);
-    float c01 = lerpf(v[sz], v[sz + 1], f[0]);
-    float c11 = lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
-    return lerpf(lerpf(c00, c10, f[1]), lerpf(c01, c11, f[1]), f[2]);
-}
-
-/* Index-space gradient direction at p (not normalised). */
-static void
-sample_gradient(const rt_cache *c, const float p[3], float g[3]) {
-    if (c->nrm) {
-        float f[3];
-        const size_t o = cell_of(c, p, f);
-        const size_t off[8] = {o,         o + 1,         o + c->sy,         o + c->sy + 1,
-                               o + c->sz, o + c->sz + 1, o + c->sz + c->sy, o + c->sz + c->sy + 1};
-        for (int a = 0; a < 3; a++) {
-            float x0 = lerpf(c->nrm[off[0]][a], c->nrm[off[1]][a], f[0]);
-            float x1 = lerpf(c->nrm[off[2]][a], c->nrm[off[3]][a], f[0]);
-            float x2 = lerpf(c->nrm[off[4]][a], c->nrm[off[5]][a], f[0]);
-            float x3 = lerpf(c->nrm[off[6]][a], c->nrm[off[7]][a], f[0]);
-            g[a] = lerpf(lerpf(x0, x1, f[1]), lerpf(x2, x3, f[1]), f[2]);
-        }
-        return;
-    }
-    for (int a = 0; a < 3; a++) {
-        float pa[3] = {p[0], p[1], p[2]}, pb[3] = {p[0], p[1], p[2]};
-        pa[a] -= 0.5f;
-        pb[a] += 0.5f;
-        g[a] = sample_value(c, pb) - sample_value(c, pa);
-    }
+/* The world ray over [tmin, tmax] clipped to a volume in its index space. */
+static inline int
+vray_setup(const rt_vobj *ob, const vv_ray *wr, double tmin, double tmax, vv_vray *r) {
+    return vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, wr, tmin, tmax, r);
 }
 
 static inline float
 lut_index_f(const rt_vobj *o, float v) {
-    float x = (v - o->lut_lo) * o->lut_scale;
-    return x < 0 ? 0 : x > RT_LUT - 1 ? RT_LUT - 1 : x;
-}
-
-/* A world ray mapped into a volume's index space and clipped to its grid
- * box and cut planes. */
-typedef struct rt_vray {
-    float o[3], d[3]; /* index point at t = tb, index direction per world unit */
-    float inv[3];
-    double t0, t1, tb;
-} rt_vray;
-
-static int
-vray_setup(const rt_vobj *ob, const vv_ray *wr, double tmin, double tmax, rt_vray *r) {
-    double o[3], d[3];
-    for (int a = 0; a < 3; a++) {
-        o[a] = ob->w2i[a][0] * wr->origin.x + ob->w2i[a][1] * wr->origin.y +
-               ob->w2i[a][2] * wr->origin.z + ob->w2i[a][3];
-        d[a] = ob->w2i[a][0] * wr->dir.x + ob->w2i[a][1] * wr->dir.y + ob->w2i[a][2] * wr->dir.z;
-    }
-    double t0 = tmin, t1 = tmax;
-    for (int a = 0; a < 3; a++) {
-        double hi = ob->dims[a] - 1;
-        if (fabs(d[a]) < 1e-300) {
-            if (o[a] < 0 || o[a] > hi)
-                return 0;
-            continue;
-        }
-        double ta = (0 - o[a]) / d[a], tb = (hi - o[a]) / d[a];
-        if (ta > tb) {
-            double tt = ta;
-            ta = tb;
-            tb = tt;
-        }
-        t0 = ta > t0 ? ta : t0;
-        t1 = tb < t1 ? tb : t1;
-    }
-    for (int p = 0; p < ob->n_planes; p++)
-        if (!vv_plane_clip_ray(ob->planes[p], *wr, &t0, &t1))
-            return 0;
-    if (!(t0 <= t1))
-        return 0;
-    r->tb = t0;
-    for (int a = 0; a < 3; a++) {
-        r->o[a] = (float)(o[a] + t0 * d[a]);
-        r->d[a] = (float)d[a];
-        r->inv[a] = fabs(d[a]) < 1e-30 ? 0.0f : (float)(1.0 / d[a]);
-    }
-    r->t0 = t0;
-    r->t1 = t1;
-    return 1;
-}
-
-static inline void
-vray_point(const rt_vray *r, double t, float p[3]) {
-    float tf = (float)(t - r->tb);
-    p[0] = r->o[0] + tf * r->d[0];
-    p[1] = r->o[1] + tf * r->d[1];
-    p[2] = r->o[2] + tf * r->d[2];
-}
-
-static inline size_t
-block_of(const rt_vobj *ob, const float p[3]) {
-    int bi = (int)((p[0] > 0 ? p[0] : 0) * (1.0f / RT_BLOCK));
-    int bj = (int)((p[1] > 0 ? p[1] : 0) * (1.0f / RT_BLOCK));
-    int bk = (int)((p[2] > 0 ? p[2] : 0) * (1.0f / RT_BLOCK));
-    bi = bi >= ob->bx ? ob->bx - 1 : bi;
-    bj = bj >= ob->by ? ob->by - 1 : bj;
-    bk = bk >= ob->bz ? ob->bz - 1 : bk;
-    return ((size_t)bk * (size_t)ob->by + (size_t)bj) * (size_t)ob->bx + (size_t)bi;
+    return vv_vtables_index(&o->tab, v);
 }
 
 /* World parameter where the ray leaves the subvolume containing p. */
 static inline double
-block_exit(const rt_vray *r, const float p[3], double t) {
+block_exit(const vv_vray *r, const float p[3], double t) {
     float te = INFINITY;
     for (int a = 0; a < 3; a++) {
         if (r->inv[a] == 0)
             continue;
-        float b = (float)(int)((p[a] > 0 ? p[a] : 0) * (1.0f / RT_BLOCK));
-        float bound = (r->d[a] > 0 ? b + 1 : b) * (float)RT_BLOCK;
+        float b = (float)(int)((p[a] > 0 ? p[a] : 0) * (1.0f / VV_VC_BLOCK));
+        float bound = (r->d[a] > 0 ? b + 1 : b) * (float)VV_VC_BLOCK;
         float ta = (bound - p[a]) * r->inv[a];
         te = ta < te ? ta : te;
     }
@@ -492,25 +254,20 @@ block_exit(const rt_vray *r, const float p[3], double t) {
 /* World parameter where the ray leaves the cube of 2 dist - 1 subvolumes
  * around the one containing p, all of which are empty (dist >= 1). */
 static inline double
-leap_exit(const rt_vobj *ob, const rt_vray *r, const float p[3], double t, int dist) {
+leap_exit(const rt_vobj *ob, const vv_vray *r, const float p[3], double t, int dist) {
     float te = INFINITY;
     for (int a = 0; a < 3; a++) {
         if (r->inv[a] == 0)
             continue;
         const int nb = a == 0 ? ob->bx : a == 1 ? ob->by : ob->bz;
-        int b = (int)((p[a] > 0 ? p[a] : 0) * (1.0f / RT_BLOCK));
+        int b = (int)((p[a] > 0 ? p[a] : 0) * (1.0f / VV_VC_BLOCK));
         b = b >= nb ? nb - 1 : b;
-        float bound = r->d[a] > 0 ? (float)(b + dist) * RT_BLOCK : (float)(b - dist + 1) * RT_BLOCK;
+        float bound =
+            r->d[a] > 0 ? (float)(b + dist) * VV_VC_BLOCK : (float)(b - dist + 1) * VV_VC_BLOCK;
         float ta = (bound - p[a]) * r->inv[a];
         te = ta < te ? ta : te;
     }
     return t + (te > 1e-6f ? te : 1e-6f);
-}
-
-static inline double
-ceil_pos(double x) {
-    double i = floor(x);
-    return i < x ? i + 1 : i;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -903,15 +660,41 @@ nearest_hit(const rt_frame *fr, const vv_ray *wr, double tmin, double tmax, int 
 /* ---------------------------------------------------------------------- */
 /* Shadow rays                                                               */
 
-/* Transmittance of one volume along the world ray over (tmin, tmax). */
+/* This volume's own transmittance towards directional light l from index
+ * point p: its light volume, interpolated trilinearly. */
+static float
+light_volume_at(const rt_vobj *ob, int l, const float p[3]) {
+    float f[3];
+    int i0[3];
+    for (int a = 0; a < 3; a++) {
+        float x = p[a] * (1.0f / RT_LGRID);
+        x = x < 0 ? 0 : x > (float)(ob->ldim[a] - 1) ? (float)(ob->ldim[a] - 1) : x;
+        int i = (int)x;
+        i = i > ob->ldim[a] - 2 ? ob->ldim[a] - 2 : i;
+        i0[a] = i;
+        f[a] = x - (float)i;
+    }
+    const size_t sy = (size_t)ob->ldim[0], sz = sy * (size_t)ob->ldim[1];
+    const float *v = ob->lvol[l] + (size_t)i0[2] * sz + (size_t)i0[1] * sy + (size_t)i0[0];
+    float x0 = vv_lerpf(v[0], v[1], f[0]), x1 = vv_lerpf(v[sy], v[sy + 1], f[0]);
+    float x2 = vv_lerpf(v[sz], v[sz + 1], f[0]), x3 = vv_lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
+    return vv_lerpf(vv_lerpf(x0, x1, f[1]), vv_lerpf(x2, x3, f[1]), f[2]);
+}
+
+/* Transmittance of one volume along the world ray over (tmin, tmax).
+ * light >= 0: the ray is a whole shadow ray towards that directional
+ * light (tmax infinite), answered from the light volume where there is
+ * one. */
 static float
 volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double tmin,
-                     double tmax) {
-    rt_vray r;
+                     double tmax, int light) {
+    vv_vray r;
     if (!vray_setup(ob, wr, tmin, tmax, &r))
         return 1.0f;
-    const rt_cache *c = ob->c;
+    const vv_vcache *c = ob->c;
     const double dt = fr->dt;
+    if (light >= 0 && ob->lvol[light])
+        return light_volume_at(ob, light, r.o); /* r.o: where the ray enters */
     if (ob->mode == VV_MODE_COMPOSITE) {
         /* exp(-sum sigma h): each visible subvolume's piece of the ray is cut
          * into equal parts no longer than dt, sampled at their midpoints */
@@ -920,19 +703,19 @@ volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, do
         const double ds = 2 * ob->vox > dt ? 2 * ob->vox : dt; /* shadows are smooth */
         while (t < r.t1) {
             float p[3];
-            vray_point(&r, t, p);
-            const size_t b = block_of(ob, p);
+            vv_vray_point(&r, t, p);
+            const size_t b = vv_vcache_block(ob->c, p);
             double te = ob->bdist[b] ? leap_exit(ob, &r, p, t, ob->bdist[b]) : block_exit(&r, p, t);
             te = te < r.t1 ? te : r.t1;
             if (ob->bvis[b]) {
                 const double len = te - t;
-                int n = (int)ceil_pos(len / ds);
+                int n = (int)vv_ceil_pos(len / ds);
                 n = n < 1 ? 1 : n;
                 const double h = len / n;
                 for (int s = 0; s < n; s++) {
                     float q[3];
-                    vray_point(&r, t + (s + 0.5) * h, q);
-                    tau += ob->ext[(int)lut_index_f(ob, sample_value(c, q))] * h;
+                    vv_vray_point(&r, t + (s + 0.5) * h, q);
+                    tau += ob->ext[(int)lut_index_f(ob, vv_vcache_sample(c, q))] * h;
                 }
                 if (tau > 5.6) /* T < 0.0037, under one 8-bit level */
                     return 0.0f;
@@ -946,18 +729,18 @@ volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, do
         double t = r.t0;
         while (t <= r.t1) {
             float p[3];
-            vray_point(&r, t, p);
-            const size_t b = block_of(ob, p);
+            vv_vray_point(&r, t, p);
+            const size_t b = vv_vcache_block(ob->c, p);
             double te = ob->bdist[b] ? leap_exit(ob, &r, p, t, ob->bdist[b]) : block_exit(&r, p, t);
             if (ob->bvis[b]) {
                 double tl = te < r.t1 ? te : r.t1;
                 for (double ts = t; ts <= tl; ts += dt) {
-                    vray_point(&r, ts, p);
-                    if (sample_value(c, p) >= ob->iso)
+                    vv_vray_point(&r, ts, p);
+                    if (vv_vcache_sample(c, p) >= ob->iso)
                         return 0.0f;
                 }
-                vray_point(&r, tl, p);
-                if (sample_value(c, p) >= ob->iso)
+                vv_vray_point(&r, tl, p);
+                if (vv_vcache_sample(c, p) >= ob->iso)
                     return 0.0f;
             }
             t = te;
@@ -971,8 +754,8 @@ volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, do
     long cnt = 0;
     for (double t = r.t0; t <= r.t1; t += dt) {
         float p[3];
-        vray_point(&r, t, p);
-        float x = sample_value(c, p);
+        vv_vray_point(&r, t, p);
+        float x = vv_vcache_sample(c, p);
         if (mip)
             best = x > best ? x : best;
         else if (minip)
@@ -1003,6 +786,8 @@ shadow_segment(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start, d
         r.dir = v3(l->dir[0], l->dir[1], l->dir[2]);
         tmax = INFINITY;
     }
+    /* a whole shadow ray towards a directional light: light volumes answer it */
+    const int light = !l->point && limit == INFINITY ? (int)(l - fr->lights) : -1;
     tmax = limit < tmax ? limit : tmax;
     r.origin = p;
     float T = 1.0f;
@@ -1019,7 +804,7 @@ shadow_segment(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start, d
     for (int i = 0; i < fr->n_vobj && T > 0.0037f; i++) {
         const rt_vobj *ob = &fr->vobjs[i];
         if (ob->obj->casts_shadows)
-            T *= volume_transmittance(fr, ob, &r, start, tmax);
+            T *= volume_transmittance(fr, ob, &r, start, tmax, light);
     }
     return T;
 }
@@ -1036,6 +821,31 @@ index_to_world(const rt_vobj *ob, const double q[3]) {
               ob->i2w[2][0] * q[0] + ob->i2w[2][1] * q[1] + ob->i2w[2][2] * q[2] + ob->i2w[2][3]);
 }
 
+/* A composite volume's own transmittance over the segment of world length
+ * seg from index point p (world wp) along the index direction li (world
+ * direction ldir): one sample at its middle, exp(-sigma seg); 1 where the
+ * middle is outside the volume, cut away or in a subvolume that cannot
+ * contribute. */
+static float
+own_segment(const rt_vobj *ob, const double p[3], const double li[3], double seg, vv_vec3 wp,
+            vv_vec3 ldir) {
+    float q[3];
+    for (int a = 0; a < 3; a++) {
+        q[a] = (float)(p[a] + li[a] * seg * 0.5);
+        if (!(q[a] >= 0 && q[a] <= (float)(ob->dims[a] - 1)))
+            return 1.0f;
+    }
+    if (!ob->bvis[vv_vcache_block(ob->c, q)])
+        return 1.0f;
+    if (ob->n_planes) {
+        const vv_vec3 wm = v3add(wp, v3scale(ldir, 0.5 * seg));
+        for (int i = 0; i < ob->n_planes; i++)
+            if (vv_plane_distance(ob->planes[i], wm) < 0)
+                return 1.0f;
+    }
+    return expf(-ob->ext[(int)lut_index_f(ob, vv_vcache_sample(ob->c, q))] * (float)seg);
+}
+
 /* The shadow grid of a directional light, swept layer by layer from the
  * light's side (a light volume): a grid point's transmittance is that of
  * the point one layer towards the light (bilinear in that layer) times the
@@ -1043,8 +853,10 @@ index_to_world(const rt_vobj *ob, const double q[3]) {
  * the other volumes and geometry). The first layer, and points whose
  * upstream point leaves the grid, trace a whole shadow ray. */
 static vv_status
-sweep_light(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
+sweep_grid(const rt_frame *fr, const rt_vobj *ob, int l, int nt, double G, const int *gd, int own,
+           float **out) {
     const rt_light *lt = &fr->lights[l];
+    *out = NULL;
     double li[3];
     for (int a = 0; a < 3; a++)
         li[a] =
@@ -1056,12 +868,12 @@ sweep_light(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
     if (!(fabs(li[A]) > 0))
         return VV_OK;
     const int B = (A + 1) % 3, Cc = (A + 2) % 3;
-    const int *gd = ob->gdim;
+    const vv_vec3 ldir = v3(lt->dir[0], lt->dir[1], lt->dir[2]);
     const size_t ng = (size_t)gd[0] * (size_t)gd[1] * (size_t)gd[2];
     float *T = malloc(ng * sizeof *T);
     if (!T)
         return vv_error_set(VV_ERR_NOMEM, "out of memory for a shadow grid");
-    const double G = RT_SGRID, seg = G / fabs(li[A]);
+    const double seg = G / fabs(li[A]);
     const int up = li[A] > 0 ? 1 : -1; /* the layer towards the light */
     const int first = up > 0 ? gd[A] - 1 : 0;
     const int nb = gd[B], nc = gd[Cc];
@@ -1092,18 +904,107 @@ sweep_light(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
                         v[k] = T[((size_t)q[2] * (size_t)gd[1] + (size_t)q[1]) * (size_t)gd[0] +
                                  (size_t)q[0]];
                     }
-                    const float tq = lerpf(lerpf(v[0], v[1], fb), lerpf(v[2], v[3], fb), fc);
-                    t = tq > 0 ? tq * shadow_segment(fr, wp, lt, 0, seg) : 0.0f;
+                    const float tq =
+                        vv_lerpf(vv_lerpf(v[0], v[1], fb), vv_lerpf(v[2], v[3], fb), fc);
+                    t = tq <= 0 ? 0.0f
+                        : own   ? tq * own_segment(ob, p, li, seg, wp, ldir)
+                                : tq * shadow_segment(fr, wp, lt, 0, seg);
                 }
             }
             if (t < 0)
-                t = shadow_ray(fr, wp, lt, 0);
+                t = own ? volume_transmittance(fr, ob, &(vv_ray){wp, ldir}, 0, INFINITY, -1)
+                        : shadow_ray(fr, wp, lt, 0);
             T[((size_t)id[2] * (size_t)gd[1] + (size_t)id[1]) * (size_t)gd[0] + (size_t)id[0]] = t;
         }
     }
-    ob->sweep[l] = T;
+    *out = T;
+    return VV_OK;
+}
+
+/* The shadow grid of directional light l for the volume's own samples
+ * (shadow_grid=2): swept through every object that casts shadows. */
+static vv_status
+sweep_light(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
+    vv_status s = sweep_grid(fr, ob, l, nt, RT_SGRID, ob->gdim, 0, &ob->sweep[l]);
     for (int a = 0; a < 3; a++)
-        ob->lidx[l][a] = (float)li[a];
+        ob->lidx[l][a] =
+            (float)(ob->w2i[a][0] * fr->lights[l].dir[0] + ob->w2i[a][1] * fr->lights[l].dir[1] +
+                    ob->w2i[a][2] * fr->lights[l].dir[2]);
+    return s;
+}
+
+/* The light volume of a composite volume for directional light l: its own
+ * transmittance towards the light from every point of a grid RT_LGRID
+ * voxels apart, swept layer by layer from the light's side. Whole shadow
+ * rays towards the light then cross the volume in one lookup where they
+ * enter it (light_volume_at). */
+static int
+lv_matches(const rt_lv *e, const rt_frame *fr, const rt_vobj *ob, int l) {
+    if (e->vol != ob->obj->volume || e->modified != ob->obj->volume->modified || e->dt != fr->dt ||
+        e->n_planes != ob->n_planes || e->lut_lo != ob->tab.lut_lo ||
+        e->lut_scale != ob->tab.lut_scale)
+        return 0;
+    for (int a = 0; a < 3; a++)
+        if (e->dir[a] != fr->lights[l].dir[a])
+            return 0;
+    return memcmp(e->w2i, ob->w2i, sizeof e->w2i) == 0 &&
+           memcmp(e->planes, ob->planes, (size_t)ob->n_planes * sizeof *ob->planes) == 0 &&
+           memcmp(e->ext, ob->ext, sizeof e->ext) == 0;
+}
+
+static void
+lv_release(rt_lv *e) {
+    vv_volume_free(e->vol);
+    free(e->T);
+    memset(e, 0, sizeof *e);
+}
+
+static vv_status
+build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
+    for (int a = 0; a < 3; a++) {
+        ob->ldim[a] = (ob->dims[a] - 1 + RT_LGRID - 1) / RT_LGRID + 1;
+        ob->ldim[a] = ob->ldim[a] < 2 ? 2 : ob->ldim[a];
+    }
+    rt_state *st = fr->st;
+    for (int i = 0; i < RT_LV_CACHE; i++)
+        if (st->lv[i].vol && lv_matches(&st->lv[i], fr, ob, l)) {
+            st->lv[i].used = st->frame;
+            ob->lvol[l] = st->lv[i].T;
+            return VV_OK;
+        }
+    vv_status s = sweep_grid(fr, ob, l, nt, RT_LGRID, ob->ldim, 1, &ob->lvol[l]);
+    if (s != VV_OK || !ob->lvol[l])
+        return s;
+    /* keep it: in a free slot, else in place of the least recently used one
+     * that this frame does not use */
+    int slot = -1;
+    for (int i = 0; i < RT_LV_CACHE; i++)
+        if (!st->lv[i].vol) {
+            slot = i;
+            break;
+        } else if (st->lv[i].used != st->frame &&
+                   (slot < 0 || st->lv[i].used < st->lv[slot].used)) {
+            slot = i;
+        }
+    if (slot < 0) {
+        ob->lvol_owned |= 1u << l;
+        return VV_OK;
+    }
+    rt_lv *e = &st->lv[slot];
+    lv_release(e);
+    e->vol = vv_volume_ref(ob->obj->volume);
+    e->modified = ob->obj->volume->modified;
+    memcpy(e->w2i, ob->w2i, sizeof e->w2i);
+    for (int a = 0; a < 3; a++)
+        e->dir[a] = fr->lights[l].dir[a];
+    e->dt = fr->dt;
+    e->n_planes = ob->n_planes;
+    memcpy(e->planes, ob->planes, (size_t)ob->n_planes * sizeof *ob->planes);
+    e->lut_lo = ob->tab.lut_lo;
+    e->lut_scale = ob->tab.lut_scale;
+    memcpy(e->ext, ob->ext, sizeof e->ext);
+    e->T = ob->lvol[l];
+    e->used = st->frame;
     return VV_OK;
 }
 
@@ -1128,9 +1029,10 @@ volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float p
         const float *T = ob->sweep[l];
         const size_t sy = (size_t)ob->gdim[0], sz = sy * (size_t)ob->gdim[1];
         const float *v = T + (size_t)i0[2] * sz + (size_t)i0[1] * sy + (size_t)i0[0];
-        float x0 = lerpf(v[0], v[1], f[0]), x1 = lerpf(v[sy], v[sy + 1], f[0]);
-        float x2 = lerpf(v[sz], v[sz + 1], f[0]), x3 = lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
-        return lerpf(lerpf(x0, x1, f[1]), lerpf(x2, x3, f[1]), f[2]);
+        float x0 = vv_lerpf(v[0], v[1], f[0]), x1 = vv_lerpf(v[sy], v[sy + 1], f[0]);
+        float x2 = vv_lerpf(v[sz], v[sz + 1], f[0]),
+              x3 = vv_lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
+        return vv_lerpf(vv_lerpf(x0, x1, f[1]), vv_lerpf(x2, x3, f[1]), f[2]);
     }
     if (!ob->sgrid[l]) /* isosurfaces, or shadow_grid=0: an exact shadow ray */
         return shadow_ray(fr, v3(pw[0], pw[1], pw[2]), &fr->lights[l], ob->vox);
@@ -1170,59 +1072,42 @@ volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float p
             float x = T + 1.0f;
             memcpy(&bits, &x, sizeof bits);
             atomic_store_explicit(&g[idx], bits, memory_order_relaxed);
+            T = x - 1.0f; /* as the other threads will read it: images do not
+                           * depend on which thread traced a grid point */
         }
         v[k] = T;
     }
-    float x0 = lerpf(v[0], v[1], f[0]), x1 = lerpf(v[2], v[3], f[0]);
-    float x2 = lerpf(v[4], v[5], f[0]), x3 = lerpf(v[6], v[7], f[0]);
-    return lerpf(lerpf(x0, x1, f[1]), lerpf(x2, x3, f[1]), f[2]);
+    float x0 = vv_lerpf(v[0], v[1], f[0]), x1 = vv_lerpf(v[2], v[3], f[0]);
+    float x2 = vv_lerpf(v[4], v[5], f[0]), x3 = vv_lerpf(v[6], v[7], f[0]);
+    return vv_lerpf(vv_lerpf(x0, x1, f[1]), vv_lerpf(x2, x3, f[1]), f[2]);
 }
 
 /* ---------------------------------------------------------------------- */
 /* Shading                                                                   */
 
-/* The ray caster's volume Phong (reflection vector, two-sided, specular
- * weighted by the sample opacity), each light scaled by its shadow. */
+/* Where a volume sample's shadow is looked up (vv_vshadow_fn). */
+typedef struct rt_shadow_ctx {
+    const rt_frame *fr;
+    const rt_vobj *ob;
+    const float *pi, *pw; /* index and world position */
+} rt_shadow_ctx;
+
+static float
+sample_shadow(const void *ctx, int l) {
+    const rt_shadow_ctx *c = ctx;
+    return volume_sample_shadow(c->fr, c->ob, l, c->pi, c->pw);
+}
+
+/* The ray caster's volume Phong (vv_vshade: reflection vector, two-sided,
+ * specular weighted by the sample opacity), each light scaled by its
+ * shadow. */
 static void
 shade_volume(const rt_frame *fr, const rt_vobj *o, const float g[3], const float pi[3],
              const float pw[3], const float v[3], const float col[3], float alpha, float out[3]) {
-    const float n0 = o->nrm[0][0] * g[0] + o->nrm[0][1] * g[1] + o->nrm[0][2] * g[2];
-    const float n1 = o->nrm[1][0] * g[0] + o->nrm[1][1] * g[1] + o->nrm[1][2] * g[2];
-    const float n2 = o->nrm[2][0] * g[0] + o->nrm[2][1] * g[1] + o->nrm[2][2] * g[2];
-    const float len2 = n0 * n0 + n1 * n1 + n2 * n2;
-    float d[3] = {o->amb[0], o->amb[1], o->amb[2]}, s[3] = {0, 0, 0};
     const int shadows = fr->shadows && o->obj->receives_shadows;
-    if (len2 > 1e-12f) {
-        const float inv = 1.0f / sqrtf(len2);
-        const float nv = (n0 * v[0] + n1 * v[1] + n2 * v[2]) * inv;
-        for (int l = 0; l < fr->n_lights; l++) {
-            const rt_light *lt = &fr->lights[l];
-            float L0 = (float)lt->dir[0], L1 = (float)lt->dir[1], L2 = (float)lt->dir[2];
-            if (lt->point) {
-                L0 = (float)lt->pos[0] - pw[0];
-                L1 = (float)lt->pos[1] - pw[1];
-                L2 = (float)lt->pos[2] - pw[2];
-                const float ll = sqrtf(L0 * L0 + L1 * L1 + L2 * L2);
-                if (!(ll > 0))
-                    continue;
-                L0 /= ll;
-                L1 /= ll;
-                L2 /= ll;
-            }
-            float ndl = (n0 * L0 + n1 * L1 + n2 * L2) * inv;
-            const float ndv = ndl < 0 ? -nv : nv;
-            ndl = ndl < 0 ? -ndl : ndl;
-            const float rv = 2 * ndl * ndv - (L0 * v[0] + L1 * v[1] + L2 * v[2]);
-            float sp = rv > 0 ? o->spec[(int)(rv * RT_SPEC + 0.5f)] : 0;
-            float sh = shadows ? volume_sample_shadow(fr, o, l, pi, pw) : 1.0f;
-            for (int ch = 0; ch < 3; ch++) {
-                d[ch] += sh * ndl * o->kd_col[l][ch];
-                s[ch] += sh * sp * o->ks_col[l][ch];
-            }
-        }
-    }
-    for (int ch = 0; ch < 3; ch++)
-        out[ch] = d[ch] * col[ch] + alpha * s[ch];
+    const rt_shadow_ctx ctx = {fr, o, pi, pw};
+    vv_vshade(&o->sh, fr->vlights, fr->n_lights, g, pw, v, col, alpha,
+              shadows ? sample_shadow : NULL, &ctx, out);
 }
 
 static void trace(const rt_frame *fr, const vv_ray *wr, int depth, int primary, float weight,
@@ -1325,14 +1210,19 @@ shade_geometry(const rt_frame *fr, const vv_ray *wr, const rt_hit *h, int depth,
 /* Ray tracing                                                               */
 
 /* Composites one classified sample (opacity and premultiplied colour e) at
- * index point p, ray parameter t, under the accumulated C, A. */
+ * index point p, ray parameter t, under the accumulated C, A; gin: the
+ * index-space gradient there, or NULL to compute it. */
 static inline void
 composite_sample(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, const float v[3],
-                 const float *e, const float p[3], double t, float C[3], float *A) {
+                 const float *e, const float p[3], double t, const float *gin, float C[3],
+                 float *A) {
     const float w = 1 - *A;
     if (ob->obj->shading) {
         float g[3], pw[3], o3[3];
-        sample_gradient(ob->c, p, g);
+        if (gin)
+            memcpy(g, gin, sizeof g);
+        else
+            vv_vcache_gradient(ob->c, p, g);
         pw[0] = (float)(wr->origin.x + t * wr->dir.x);
         pw[1] = (float)(wr->origin.y + t * wr->dir.y);
         pw[2] = (float)(wr->origin.z + t * wr->dir.z);
@@ -1350,41 +1240,62 @@ composite_sample(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, const 
 
 /* The common case, one composite volume on the ray: subvolume by
  * subvolume, leaping over empty ones, the same samples t = k dt as the
- * general loop below. */
+ * general loop below, classified a chunk at a time (vv_vray_classify, the
+ * ray caster's kernel) before the visible ones are shaded. */
 static void
-march_one(const rt_frame *fr, const rt_vobj *ob, const rt_vray *r, const vv_ray *wr,
+march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray *wr,
           const float v[3], float C[3], float *Aout, float *dep) {
     const double dt = fr->dt, inv_dt = 1.0 / fr->dt;
-    const rt_cache *c = ob->c;
+    const vv_vcache *c = ob->c;
+    const int shading = ob->obj->shading;
     float A = 0;
-    double k = ceil_pos(r->t0 * inv_dt);
+    double k = vv_ceil_pos(r->t0 * inv_dt);
     const double kend = floor(r->t1 * inv_dt);
     while (k <= kend) {
         float p[3];
-        vray_point(r, k * dt, p);
-        const size_t b = block_of(ob, p);
+        vv_vray_point(r, k * dt, p);
+        const size_t b = vv_vcache_block(ob->c, p);
         if (!ob->bvis[b]) {
-            const double ks = ceil_pos(leap_exit(ob, r, p, k * dt, ob->bdist[b]) * inv_dt);
+            const double ks = vv_ceil_pos(leap_exit(ob, r, p, k * dt, ob->bdist[b]) * inv_dt);
             k = ks > k + 1 ? ks : k + 1;
             continue;
         }
         double klast = floor(block_exit(r, p, k * dt) * inv_dt);
         klast = klast < kend ? klast : kend;
         klast = klast < k ? k : klast;
-        for (; k <= klast; k++) {
-            const double t = k * dt;
-            vray_point(r, t, p);
-            const float *e = ob->lut + 4 * (int)lut_index_f(ob, sample_value(c, p));
-            if (e[0] <= 0)
-                continue;
-            composite_sample(fr, ob, wr, v, e, p, t, C, &A);
-            if (*dep == INFINITY)
-                *dep = (float)t;
-            if (A >= fr->et) {
-                *Aout = A > 1 ? 1 : A;
-                return;
+        const int n = (int)(klast - k) + 1;
+        for (int s0 = 0; s0 < n; s0 += VV_VC_CHUNK) {
+            const int m = n - s0 < VV_VC_CHUNK ? n - s0 : VV_VC_CHUNK;
+            const double kfirst = k + s0;
+            size_t cell[VV_VC_CHUNK];
+            int32_t entry[VV_VC_CHUNK];
+            float fx[VV_VC_CHUNK], fy[VV_VC_CHUNK], fz[VV_VC_CHUNK];
+            vv_vray_classify(c, &ob->tab, r, kfirst, dt, m, fr->avx2, cell, fx, fy, fz, entry);
+            for (int s = 0; s < m; s++) {
+                const float *e = ob->lut + entry[s];
+                if (e[0] <= 0)
+                    continue;
+                const double t = (kfirst + s) * dt;
+                float g[3] = {0, 0, 0};
+                if (shading) {
+                    vv_vray_point(r, t, p);
+                    if (c->nrm) {
+                        const float f[3] = {fx[s], fy[s], fz[s]};
+                        vv_vcache_gradient_at(c, cell[s], f, g);
+                    } else {
+                        vv_vcache_gradient(c, p, g);
+                    }
+                }
+                composite_sample(fr, ob, wr, v, e, p, t, g, C, &A);
+                if (*dep == INFINITY)
+                    *dep = (float)t;
+                if (A >= fr->et) {
+                    *Aout = A > 1 ? 1 : A;
+                    return;
+                }
             }
         }
+        k = klast + 1;
     }
     *Aout = A > 1 ? 1 : A;
 }
@@ -1395,7 +1306,7 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const rt_vray *r, const vv_ray 
 static void
 march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int primary,
               float weight, float C[3], float *Aout, float *dep) {
-    rt_vray rays[RT_MAX_OBJ];
+    vv_vray rays[RT_MAX_OBJ];
     int act[RT_MAX_OBJ];
     int na = 0;
     double tmin = INFINITY, tmax = -INFINITY;
@@ -1428,7 +1339,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
     int has_prev[RT_MAX_OBJ];
     for (int i = 0; i < na; i++)
         has_prev[i] = 0;
-    double k = ceil_pos(tmin / dt);
+    double k = vv_ceil_pos(tmin / dt);
     const double kend = floor(tmax / dt);
     while (k <= kend) {
         const double t = k * dt;
@@ -1437,7 +1348,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
         int sampled = 0;
         for (int ai = 0; ai < na; ai++) {
             const rt_vobj *ob = &fr->vobjs[act[ai]];
-            const rt_vray *r = &rays[ai];
+            const vv_vray *r = &rays[ai];
             if (t < r->t0 || t > r->t1) {
                 if (t < r->t0 && r->t0 < skip_to)
                     skip_to = r->t0;
@@ -1445,9 +1356,9 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                 continue;
             }
             float p[3];
-            vray_point(r, t, p);
-            const rt_cache *c = ob->c;
-            const size_t b = block_of(ob, p);
+            vv_vray_point(r, t, p);
+            const vv_vcache *c = ob->c;
+            const size_t b = vv_vcache_block(ob->c, p);
             if (!ob->bvis[b]) {
                 double te = leap_exit(ob, r, p, t, ob->bdist[b]);
                 if (te < skip_to)
@@ -1455,15 +1366,15 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                 if (ob->mode == VV_MODE_ISO) {
                     double tx = te < r->t1 ? te : r->t1;
                     float px[3];
-                    vray_point(r, tx, px);
-                    prev_v[ai] = sample_value(c, px);
+                    vv_vray_point(r, tx, px);
+                    prev_v[ai] = vv_vcache_sample(c, px);
                     prev_t[ai] = tx;
                     has_prev[ai] = 1;
                 }
                 continue;
             }
             sampled = 1;
-            const float val = sample_value(c, p);
+            const float val = vv_vcache_sample(c, p);
             if (ob->mode == VV_MODE_ISO) {
                 const float iso = ob->iso;
                 double th = -1;
@@ -1471,46 +1382,34 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                     if (val >= iso && t - r->t0 < dt)
                         th = t;
                 } else if ((prev_v[ai] < iso) != (val < iso)) {
-                    double ta = prev_t[ai], tb = t;
-                    float va = prev_v[ai];
-                    for (int it = 0; it < 10; it++) {
-                        double tm = 0.5 * (ta + tb);
-                        float pm[3];
-                        vray_point(r, tm, pm);
-                        float vm = sample_value(c, pm);
-                        if ((va < iso) == (vm < iso)) {
-                            ta = tm;
-                            va = vm;
-                        } else {
-                            tb = tm;
-                        }
-                    }
-                    th = 0.5 * (ta + tb);
+                    th = vv_vray_iso_refine(c, r, prev_t[ai], prev_v[ai], t, iso);
                 }
                 prev_v[ai] = val;
                 prev_t[ai] = t;
                 has_prev[ai] = 1;
                 if (th >= 0) {
                     float ph[3], g[3], pw[3], col[3];
-                    vray_point(r, th, ph);
-                    sample_gradient(c, ph, g);
+                    vv_vray_point(r, th, ph);
+                    vv_vcache_gradient(c, ph, g);
                     pw[0] = (float)(wr->origin.x + th * wr->dir.x);
                     pw[1] = (float)(wr->origin.y + th * wr->dir.y);
                     pw[2] = (float)(wr->origin.z + th * wr->dir.z);
                     if (ob->obj->shading)
-                        shade_volume(fr, ob, g, ph, pw, v, ob->base, 1.0f, col);
+                        shade_volume(fr, ob, g, ph, pw, v, ob->sh.base, 1.0f, col);
                     else
-                        memcpy(col, ob->base, sizeof col);
+                        memcpy(col, ob->sh.base, sizeof col);
                     const vv_material *m = &ob->obj->material;
                     float kr = ob->obj->reflects ? (float)m->reflectance : 0.0f;
                     float kt = (float)m->transparency;
                     if ((kr > 0 || kt > 0) && fr->max_depth > depth) {
                         /* the isosurface as a mirror or a window: world
                          * normal from the gradient, facing the ray */
-                        vv_vec3 nw =
-                            v3(ob->nrm[0][0] * g[0] + ob->nrm[0][1] * g[1] + ob->nrm[0][2] * g[2],
-                               ob->nrm[1][0] * g[0] + ob->nrm[1][1] * g[1] + ob->nrm[1][2] * g[2],
-                               ob->nrm[2][0] * g[0] + ob->nrm[2][1] * g[1] + ob->nrm[2][2] * g[2]);
+                        vv_vec3 nw = v3(ob->sh.nrm[0][0] * g[0] + ob->sh.nrm[0][1] * g[1] +
+                                            ob->sh.nrm[0][2] * g[2],
+                                        ob->sh.nrm[1][0] * g[0] + ob->sh.nrm[1][1] * g[1] +
+                                            ob->sh.nrm[1][2] * g[2],
+                                        ob->sh.nrm[2][0] * g[0] + ob->sh.nrm[2][1] * g[1] +
+                                            ob->sh.nrm[2][2] * g[2]);
                         nw = v3norm(nw);
                         /* gradients point to higher values: inside; outward is minus */
                         vv_vec3 outward = v3scale(nw, -1);
@@ -1536,14 +1435,14 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
             const float alpha = e[0];
             if (alpha <= 0)
                 continue;
-            composite_sample(fr, ob, wr, v, e, p, t, C, &A);
+            composite_sample(fr, ob, wr, v, e, p, t, NULL, C, &A);
             if (*dep == INFINITY)
                 *dep = (float)t;
         }
         if (A >= fr->et)
             break;
         if (!sampled && skip_to < INFINITY) {
-            double ks = ceil_pos(skip_to / dt);
+            double ks = vv_ceil_pos(skip_to / dt);
             if (ks > next_k)
                 next_k = ks;
         }
@@ -1553,67 +1452,15 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
 }
 
 /* Maximum / minimum intensity projection or X-ray of one volume over the
- * part of the ray in [0, tlim]. Returns 0 when the ray misses it. */
+ * part of the ray in [0, tlim] (vv_vray_project). Returns 0 when the ray
+ * misses it. */
 static int
 project_volume(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double tlim, float *value,
                float *depth) {
-    rt_vray r;
+    vv_vray r;
     if (!vray_setup(ob, wr, 0, tlim, &r))
         return 0;
-    const double dt = fr->dt;
-    const rt_cache *c = ob->c;
-    double k = ceil_pos(r.t0 / dt);
-    const double kend = floor(r.t1 / dt);
-    if (k > kend) {
-        float p[3];
-        double tm = 0.5 * (r.t0 + r.t1);
-        vray_point(&r, tm, p);
-        *value = sample_value(c, p);
-        *depth = (float)tm;
-        return 1;
-    }
-    if (ob->mode == VV_MODE_XRAY) {
-        double sum = 0;
-        long n = 0;
-        for (; k <= kend; k++) {
-            float p[3];
-            vray_point(&r, k * dt, p);
-            sum += sample_value(c, p);
-            n++;
-        }
-        *value = (float)(sum / (double)n);
-        *depth = (float)r.t0;
-        return 1;
-    }
-    const int mip = ob->mode == VV_MODE_MIP;
-    const int parc = fr->st->parc;
-    const float *bmin = c->mm->min, *bmax = c->mm->max;
-    float best = mip ? -INFINITY : INFINITY;
-    double tbest = r.t0;
-    while (k <= kend) {
-        float p[3];
-        vray_point(&r, k * dt, p);
-        const size_t b = block_of(ob, p);
-        const double te = block_exit(&r, p, k * dt);
-        if (parc && (mip ? bmax[b] <= best : bmin[b] >= best)) {
-            const double ks = ceil_pos(te / dt);
-            k = ks > k + 1 ? ks : k + 1;
-            continue;
-        }
-        double klast = floor(te / dt);
-        klast = klast < kend ? klast : kend;
-        klast = klast < k ? k : klast;
-        for (; k <= klast; k++) {
-            vray_point(&r, k * dt, p);
-            const float x = sample_value(c, p);
-            if (mip ? x > best : x < best) {
-                best = x;
-                tbest = k * dt;
-            }
-        }
-    }
-    *value = best;
-    *depth = (float)tbest;
+    vv_vray_project(ob->c, &r, ob->mode, fr->dt, fr->st->parc, value, depth);
     return 1;
 }
 
@@ -1670,158 +1517,43 @@ prepare_volume(rt_frame *fr, rt_vobj *ro, const vv_object *obj) {
     memset(ro, 0, sizeof *ro);
     ro->obj = obj;
     ro->mode = obj->mode;
-    vv_status s = cache_get(fr->st, obj->volume, &ro->c);
+    vv_status s = vv_vcache_get(&fr->st->vc, obj->volume, &ro->c);
     if (s != VV_OK)
         return vv_error_prefix(s, "object '%s'", obj->name);
-    vv_mat4 i2w = vv_object_index_to_world(obj);
-    int ok = 0;
-    vv_mat4 w2i = vv_mat4_inverse(i2w, &ok);
-    if (!ok)
-        return vv_error_set(VV_ERR_INVALID, "object '%s': singular transform", obj->name);
-    for (int r = 0; r < 3; r++)
-        for (int cc = 0; cc < 4; cc++) {
-            ro->w2i[r][cc] = w2i.m[r][cc];
-            ro->i2w[r][cc] = i2w.m[r][cc];
-        }
-    for (int r = 0; r < 3; r++)
-        for (int cc = 0; cc < 3; cc++)
-            ro->nrm[r][cc] = (float)w2i.m[cc][r];
+    s = vv_vobject_prepare(obj, w, fr->ambient, fr->vlights, fr->n_lights, ro->w2i, ro->i2w,
+                           ro->dims, ro->planes, &ro->n_planes, &ro->sh);
+    if (s != VV_OK)
+        return s;
     ro->vox = INFINITY;
     for (int a = 0; a < 3; a++) {
-        ro->dims[a] = obj->volume->dims[a] > 1 ? obj->volume->dims[a] : 2;
-        double l =
-            sqrt(i2w.m[0][a] * i2w.m[0][a] + i2w.m[1][a] * i2w.m[1][a] + i2w.m[2][a] * i2w.m[2][a]);
+        const double l = sqrt(ro->i2w[0][a] * ro->i2w[0][a] + ro->i2w[1][a] * ro->i2w[1][a] +
+                              ro->i2w[2][a] * ro->i2w[2][a]);
         if (l > 0 && l < ro->vox)
             ro->vox = l;
     }
     if (!(ro->vox < INFINITY))
         return vv_error_set(VV_ERR_INVALID, "object '%s': zero voxel spacing", obj->name);
-    for (int i = 0; i <= RT_SPEC; i++)
-        ro->spec[i] = (float)pow((double)i / RT_SPEC, obj->material.shininess);
-    ro->base[0] = (float)obj->material.color.x;
-    ro->base[1] = (float)obj->material.color.y;
-    ro->base[2] = (float)obj->material.color.z;
-    ro->iso = (float)obj->isovalue;
-    for (int p = 0; p < w->n_cut_planes && ro->n_planes < 2 * VV_MAX_CUT_PLANES; p++)
-        ro->planes[ro->n_planes++] =
-            vv_plane_from_point_normal(w->cut_planes[p].point, w->cut_planes[p].normal);
-    for (int p = 0; p < obj->n_cut_planes && ro->n_planes < 2 * VV_MAX_CUT_PLANES; p++)
-        ro->planes[ro->n_planes++] =
-            vv_plane_from_point_normal(obj->cut_planes[p].point, obj->cut_planes[p].normal);
-    ro->bx = ro->c->mm->dims[0];
-    ro->by = ro->c->mm->dims[1];
-    ro->bz = ro->c->mm->dims[2];
+    ro->iso = (float)(obj->isovalue - ro->c->qoff); /* stored units */
+    ro->bx = ro->c->bx;
+    ro->by = ro->c->by;
+    ro->bz = ro->c->bz;
     return VV_OK;
 }
 
-/* The chessboard distance from each subvolume to the nearest one that may
- * contribute, capped at 255, by two chamfer passes over the 26 neighbours
- * (exact for this metric). A ray in a subvolume at distance d leaps to
- * where it leaves the cube of 2d - 1 subvolumes around it, all empty. */
-static vv_status
-prepare_distance(rt_vobj *ro) {
-    const int nx = ro->bx, ny = ro->by, nz = ro->bz;
-    const size_t n = (size_t)nx * (size_t)ny * (size_t)nz;
-    uint8_t *d = malloc(n);
-    if (!d)
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    for (size_t b = 0; b < n; b++)
-        d[b] = ro->bvis[b] ? 0 : 255;
-    for (int pass = 0; pass < 2; pass++) {
-        const int st = pass == 0 ? 1 : -1;
-        for (int k = pass == 0 ? 0 : nz - 1; k >= 0 && k < nz; k += st)
-            for (int j = pass == 0 ? 0 : ny - 1; j >= 0 && j < ny; j += st)
-                for (int i = pass == 0 ? 0 : nx - 1; i >= 0 && i < nx; i += st) {
-                    const size_t b = ((size_t)k * (size_t)ny + (size_t)j) * (size_t)nx + (size_t)i;
-                    int best = d[b];
-                    if (best == 0)
-                        continue;
-                    for (int dk = -1; dk <= 0; dk++)
-                        for (int dj = -1; dj <= 1; dj++)
-                            for (int di = -1; di <= 1; di++) {
-                                if (dk == 0 && (dj > 0 || (dj == 0 && di >= 0)))
-                                    continue;
-                                const int kk = k + st * dk, jj = j + st * dj, ii = i + st * di;
-                                if (kk < 0 || kk >= nz || jj < 0 || jj >= ny || ii < 0 || ii >= nx)
-                                    continue;
-                                const int v =
-                                    d[((size_t)kk * (size_t)ny + (size_t)jj) * (size_t)nx +
-                                      (size_t)ii] +
-                                    1;
-                                best = v < best ? v : best;
-                            }
-                    d[b] = (uint8_t)(best > 255 ? 255 : best);
-                }
-    }
-    ro->bdist = d;
-    return VV_OK;
-}
-
-/* TF table (opacity corrected for dt, colour premultiplied), extinction
- * table, and the PARC flags: may a subvolume contribute? */
+/* The TF table (opacity corrected for dt, colour premultiplied), the
+ * extinction table and the PARC flags and distances (shared with the ray
+ * caster, src/render/volume_cache.h), and the shadow grids. */
 static vv_status
 build_tables(rt_frame *fr, rt_vobj *ro) {
     const vv_object *obj = ro->obj;
-    const rt_cache *c = ro->c;
-    const size_t nb = (size_t)ro->bx * (size_t)ro->by * (size_t)ro->bz;
-    ro->bvis = malloc(nb);
-    ro->lut = malloc(sizeof(float) * 4 * RT_LUT);
-    ro->ext = malloc(sizeof(float) * RT_LUT);
-    int *nz = malloc(sizeof(int) * (RT_LUT + 1));
-    if (!ro->bvis || !ro->lut || !ro->ext || !nz) {
-        free(nz);
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    }
-    double lo = obj->volume->range[0], hi = obj->volume->range[1];
-    if (!(hi > lo))
-        hi = lo + 1;
-    ro->lut_lo = (float)lo;
-    ro->lut_scale = (float)((RT_LUT - 1) / (hi - lo));
-    const double unit = obj->tf.opacity_unit_distance > 0 ? obj->tf.opacity_unit_distance : 1.0;
-    nz[0] = 0;
-    for (int i = 0; i < RT_LUT; i++) {
-        double x = lo + (hi - lo) * i / (RT_LUT - 1);
-        double a;
-        vv_vec3 col;
-        if (obj->segmentation == VV_SEG_THRESHOLD) {
-            a = x >= obj->threshold ? 1.0 : 0.0;
-            col = obj->material.color;
-        } else {
-            a = vv_tf_eval_opacity(&obj->tf, x);
-            col = vv_tf_eval_color(&obj->tf, x);
-        }
-        a = a <= 0 ? 0 : a >= 1 ? 1 : a;
-        ro->ext[i] = a >= 1 ? 1e30f : (float)(-log1p(-a) / unit);
-        if (ro->mode == VV_MODE_COMPOSITE) {
-            double ac = a >= 1 ? 1 : 1.0 - pow(1.0 - a, fr->dt / unit);
-            ro->lut[4 * i + 0] = (float)ac;
-            ro->lut[4 * i + 1] = (float)(col.x * ac);
-            ro->lut[4 * i + 2] = (float)(col.y * ac);
-            ro->lut[4 * i + 3] = (float)(col.z * ac);
-        } else {
-            ro->lut[4 * i + 0] = (float)a;
-            ro->lut[4 * i + 1] = (float)col.x;
-            ro->lut[4 * i + 2] = (float)col.y;
-            ro->lut[4 * i + 3] = (float)col.z;
-        }
-        nz[i + 1] = nz[i] + (ro->lut[4 * i] > 0);
-    }
-    const float *bmin = c->mm->min, *bmax = c->mm->max;
-    for (size_t b = 0; b < nb; b++) {
-        if (!fr->st->parc)
-            ro->bvis[b] = 1;
-        else if (ro->mode == VV_MODE_ISO)
-            /* only subvolumes wholly below the isovalue are empty */
-            ro->bvis[b] = !(bmax[b] < ro->iso);
-        else {
-            int i0 = (int)lut_index_f(ro, bmin[b]), i1 = (int)lut_index_f(ro, bmax[b]);
-            ro->bvis[b] = nz[i1 + 1] - nz[i0] > 0;
-        }
-    }
-    free(nz);
-    vv_status s = prepare_distance(ro);
+    vv_status s = vv_vtables_get(&fr->st->vc, ro->c, obj, ro->mode, fr->dt, ro->iso, fr->st->parc,
+                                 ro->mode == VV_MODE_COMPOSITE, &ro->tab, &ro->owns_tables);
     if (s != VV_OK)
         return s;
+    ro->lut = ro->tab.lut;
+    ro->ext = ro->tab.ext;
+    ro->bvis = ro->tab.bvis;
+    ro->bdist = ro->tab.bdist;
     if (fr->shadows && obj->receives_shadows && obj->shading && ro->mode == VV_MODE_COMPOSITE &&
         fr->st->shadow_grid) {
         size_t ng = 1;
@@ -1928,10 +1660,10 @@ prepare_geometry(rt_frame *fr, rt_gobj *g, const vv_object *obj) {
 static void
 prepare_lights(rt_frame *fr, const vv_world *w, const vv_view *view) {
     vv_vec3 fwd = v3norm(v3sub(view->at, view->eye));
-    fr->n_lights = 0;
-    for (int i = 0; i < w->n_lights && i < VV_MAX_LIGHTS; i++) {
+    fr->n_lights = vv_vlights_prepare(fr->vlights, w, view);
+    for (int i = 0; i < fr->n_lights; i++) {
         const vv_light *l = &w->lights[i];
-        rt_light *o = &fr->lights[fr->n_lights++];
+        rt_light *o = &fr->lights[i];
         o->point = l->type == VV_LIGHT_POINT && !l->headlight;
         vv_vec3 d = l->headlight ? fwd : v3norm(l->direction);
         o->dir[0] = -d.x;
@@ -1946,29 +1678,16 @@ prepare_lights(rt_frame *fr, const vv_world *w, const vv_view *view) {
     }
 }
 
-static double
-object_step(const vv_object *obj) {
-    vv_mat4 m = vv_object_index_to_world(obj);
-    double best = INFINITY;
-    for (int cc = 0; cc < 3; cc++) {
-        double l =
-            sqrt(m.m[0][cc] * m.m[0][cc] + m.m[1][cc] * m.m[1][cc] + m.m[2][cc] * m.m[2][cc]);
-        if (l > 0 && l < best)
-            best = l;
-    }
-    return obj->step * best;
-}
-
 static void
 frame_release(rt_frame *fr) {
     for (int i = 0; i < fr->n_vobj; i++) {
-        free(fr->vobjs[i].lut);
-        free(fr->vobjs[i].ext);
-        free(fr->vobjs[i].bvis);
-        free(fr->vobjs[i].bdist);
+        if (fr->vobjs[i].owns_tables)
+            vv_vtables_free(&fr->vobjs[i].tab);
         for (int l = 0; l < VV_MAX_LIGHTS; l++) {
             free(fr->vobjs[i].sgrid[l]);
             free(fr->vobjs[i].sweep[l]);
+            if (fr->vobjs[i].lvol_owned & (1u << l))
+                free(fr->vobjs[i].lvol[l]);
         }
     }
     for (int i = 0; i < fr->n_gobj; i++) {
@@ -2053,6 +1772,9 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     memset(&fr, 0, sizeof fr);
     fr.st = st;
     fr.w = w;
+    st->vc.frame++;
+    fr.avx2 = vv_vc_have_avx2();
+    st->frame++;
     fr.et = (float)st->early_termination;
     fr.ambient[0] = (float)w->ambient.x;
     fr.ambient[1] = (float)w->ambient.y;
@@ -2101,7 +1823,7 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
                 break;
             }
             s = prepare_volume(&fr, &fr.vobjs[fr.n_vobj++], o);
-            double sd = object_step(o);
+            double sd = vv_vobject_step(o);
             dt = sd < dt ? sd : dt;
         } else {
             s = prepare_geometry(&fr, &fr.gobjs[fr.n_gobj++], o);
@@ -2112,15 +1834,7 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     size += v3len(v3sub(view->eye, v3scale(v3add(bounds.max, bounds.min), 0.5)));
     fr.scene_size = size > 0 && size < INFINITY ? size : 1.0;
     for (int i = 0; i < fr.n_vobj && s == VV_OK; i++) {
-        rt_vobj *ro = &fr.vobjs[i];
-        for (int ch = 0; ch < 3; ch++) {
-            ro->amb[ch] = (float)ro->obj->material.ambient * fr.ambient[ch];
-            for (int l = 0; l < fr.n_lights; l++) {
-                ro->kd_col[l][ch] = (float)ro->obj->material.diffuse * fr.lights[l].col[ch];
-                ro->ks_col[l][ch] = (float)ro->obj->material.specular * fr.lights[l].col[ch];
-            }
-        }
-        s = build_tables(&fr, ro);
+        s = build_tables(&fr, &fr.vobjs[i]);
     }
     if (s != VV_OK) {
         frame_release(&fr);
@@ -2128,7 +1842,16 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     }
 
     const int nt = opt->threads > 0 ? opt->threads : vv_threads_get();
-    /* shadow grids of directional lights, now that every object is ready */
+    /* light volumes of directional lights through composite volumes that
+     * cast shadows, then the shadow grids, now that every object is ready */
+    for (int i = 0; i < fr.n_vobj && s == VV_OK && fr.shadows && st->light_volumes; i++) {
+        rt_vobj *ro = &fr.vobjs[i];
+        if (ro->mode != VV_MODE_COMPOSITE || !ro->obj->casts_shadows)
+            continue;
+        for (int l = 0; l < fr.n_lights && s == VV_OK; l++)
+            if (!fr.lights[l].point)
+                s = build_light_volume(&fr, ro, l, nt);
+    }
     for (int i = 0; i < fr.n_vobj && s == VV_OK; i++) {
         rt_vobj *ro = &fr.vobjs[i];
         if (ro->gdim[0] == 0)
@@ -2210,17 +1933,11 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     if (atomic_load(&pr.cancelled))
         return vv_error_set(VV_ERR_CANCELLED, "cancelled");
     /* drop cached volumes the World no longer shows */
-    for (int i = 0; i < st->n_cache;) {
-        int used = 0;
-        for (int j = 0; j < w->n_objects; j++)
-            used |= w->objects[j] && w->objects[j]->volume == st->cache[i].vol;
-        if (!used) {
-            cache_release(&st->cache[i]);
-            st->cache[i] = st->cache[--st->n_cache];
-        } else {
-            i++;
-        }
-    }
+    vv_vcache_set_prune(&st->vc, w);
+    /* light volumes this frame did not use: gone (they can be large) */
+    for (int i = 0; i < RT_LV_CACHE; i++)
+        if (st->lv[i].vol && st->lv[i].used != st->frame)
+            lv_release(&st->lv[i]);
     return VV_OK;
 }
 
@@ -2239,6 +1956,8 @@ rt_create(void **state) {
     st->seed = 1;
     st->early_termination = 0.99;
     st->shadow_grid = 1;
+    st->light_volumes = 1;
+    vv_vcache_set_init(&st->vc);
     *state = st;
     return VV_OK;
 }
@@ -2258,6 +1977,8 @@ rt_set_option(void *state, const char *key, const char *value) {
         if (x != 0 && x != 1 && x != 2)
             return vv_error_set(VV_ERR_INVALID, "shadow_grid must be 0, 1 or 2");
         st->shadow_grid = (int)x;
+    } else if (strcmp(key, "light_volumes") == 0) {
+        st->light_volumes = x != 0;
     } else if (strcmp(key, "max_depth") == 0) {
         if (!(x >= 0 && x <= 64) || x != floor(x))
             return vv_error_set(VV_ERR_INVALID, "max_depth must be an integer in 0..64");
@@ -2284,10 +2005,12 @@ rt_set_option(void *state, const char *key, const char *value) {
             return vv_error_set(VV_ERR_INVALID, "early_termination must be in (0, 1]");
         st->early_termination = x;
     } else {
-        return vv_error_set(VV_ERR_INVALID,
-                            "unknown option '%s' (parc, shadows, shadow_grid, max_depth, samples, "
-                            "jitter, adaptive, adaptive_threshold, seed, early_termination)",
-                            key);
+        return vv_error_set(
+            VV_ERR_INVALID,
+            "unknown option '%s' (parc, shadows, shadow_grid, light_volumes, max_depth, "
+            "samples, "
+            "jitter, adaptive, adaptive_threshold, seed, early_termination)",
+            key);
     }
     return VV_OK;
 }
@@ -2297,8 +2020,9 @@ rt_destroy(void *state) {
     rt_state *st = state;
     if (!st)
         return;
-    for (int i = 0; i < st->n_cache; i++)
-        cache_release(&st->cache[i]);
+    vv_vcache_set_clear(&st->vc);
+    for (int i = 0; i < RT_LV_CACHE; i++)
+        lv_release(&st->lv[i]);
     free(st);
 }
 

@@ -1,0 +1,753 @@
+/*
+ * Volume caches and per-object tables shared by the raycast and raytrace
+ * renderers (src/render/volume_cache.h describes them).
+ */
+#include "render/volume_cache.h"
+
+#include <stdlib.h>
+#include <unistd.h>
+#if VV_VC_HAVE_AVX2
+#include <immintrin.h>
+#endif
+
+#include "core/internal.h"
+
+/* ---------------------------------------------------------------------- */
+/* Cache construction                                                       */
+
+static void
+vtables_clear(vv_vtables *t) {
+    free(t->lut);
+    free(t->ext);
+    free(t->bvis);
+    free(t->bdist);
+    memset(t, 0, sizeof *t);
+}
+
+void
+vv_vtables_free(vv_vtables *t) {
+    if (t)
+        vtables_clear(t);
+}
+
+static void
+cache_release(vv_vcache *c) {
+    vv_volume_free(c->vol);
+    free(c->q16);
+    free(c->f32);
+    free(c->nrm);
+    free(c->bmin);
+    free(c->bmax);
+    vtables_clear(&c->tables);
+    memset(c, 0, sizeof *c);
+}
+
+static int
+is_integer_type(vv_voxel_type t) {
+    return t != VV_F32 && t != VV_F64;
+}
+
+/* Fills one row of stored values from the source volume (clamping indices
+ * of duplicated axes). */
+static void
+fill_row(vv_vcache *c, const vv_volume *vol, int j, int k, size_t base) {
+    int sj = j < vol->dims[1] ? j : vol->dims[1] - 1;
+    int sk = k < vol->dims[2] ? k : vol->dims[2] - 1;
+    const int snx = vol->dims[0];
+    for (int i = 0; i < c->nx; i++) {
+        const double x = vv_volume_get(vol, i < snx ? i : snx - 1, sj, sk);
+        if (c->q16)
+            c->q16[base + (size_t)i] = (uint16_t)(x - c->qoff);
+        else
+            c->f32[base + (size_t)i] = x == x ? (float)x : (float)vol->range[0]; /* NaN: minimum */
+    }
+}
+
+/* Unit gradients by central differences in index units, one-sided at the
+ * borders, quantised to int8. */
+static void
+fill_gradients(vv_vcache *c) {
+    const int nx = c->nx, ny = c->ny, nz = c->nz;
+#pragma omp parallel for schedule(static)
+    for (int k = 0; k < nz; k++)
+        for (int j = 0; j < ny; j++) {
+            size_t base = (size_t)k * c->sz + (size_t)j * c->sy;
+            int j0 = j > 0 ? j - 1 : j, j1 = j < ny - 1 ? j + 1 : j;
+            int k0 = k > 0 ? k - 1 : k, k1 = k < nz - 1 ? k + 1 : k;
+            float fy = 1.0f / (float)(j1 - j0), fz = 1.0f / (float)(k1 - k0);
+            size_t by0 = (size_t)k * c->sz + (size_t)j0 * c->sy;
+            size_t by1 = (size_t)k * c->sz + (size_t)j1 * c->sy;
+            size_t bz0 = (size_t)k0 * c->sz + (size_t)j * c->sy;
+            size_t bz1 = (size_t)k1 * c->sz + (size_t)j * c->sy;
+            for (int i = 0; i < nx; i++) {
+                int i0 = i > 0 ? i - 1 : i, i1 = i < nx - 1 ? i + 1 : i;
+                float gx = (vv_vcache_value(c, base + (size_t)i1) -
+                            vv_vcache_value(c, base + (size_t)i0)) /
+                           (float)(i1 - i0);
+                float gy =
+                    (vv_vcache_value(c, by1 + (size_t)i) - vv_vcache_value(c, by0 + (size_t)i)) *
+                    fy;
+                float gz =
+                    (vv_vcache_value(c, bz1 + (size_t)i) - vv_vcache_value(c, bz0 + (size_t)i)) *
+                    fz;
+                float g = sqrtf(gx * gx + gy * gy + gz * gz);
+                int8_t *o = c->nrm[base + (size_t)i];
+                if (g > 0) {
+                    float sc = 127.0f / g;
+                    o[0] = (int8_t)lrintf(gx * sc);
+                    o[1] = (int8_t)lrintf(gy * sc);
+                    o[2] = (int8_t)lrintf(gz * sc);
+                } else {
+                    o[0] = o[1] = o[2] = 0;
+                }
+                o[3] = 0;
+            }
+        }
+}
+
+/* Min and max of the stored values of every subvolume (its cells' corners). */
+static void
+fill_minmax(vv_vcache *c) {
+    const int nx = c->nx, ny = c->ny, nz = c->nz;
+#pragma omp parallel for schedule(static) collapse(2)
+    for (int bk = 0; bk < c->bz; bk++)
+        for (int bj = 0; bj < c->by; bj++)
+            for (int bi = 0; bi < c->bx; bi++) {
+                float lo = INFINITY, hi = -INFINITY;
+                int k1 = bk * VV_VC_BLOCK + VV_VC_BLOCK, j1 = bj * VV_VC_BLOCK + VV_VC_BLOCK,
+                    i1 = bi * VV_VC_BLOCK + VV_VC_BLOCK;
+                k1 = k1 > nz - 1 ? nz - 1 : k1;
+                j1 = j1 > ny - 1 ? ny - 1 : j1;
+                i1 = i1 > nx - 1 ? nx - 1 : i1;
+                for (int k = bk * VV_VC_BLOCK; k <= k1; k++)
+                    for (int j = bj * VV_VC_BLOCK; j <= j1; j++) {
+                        size_t base = (size_t)k * c->sz + (size_t)j * c->sy;
+                        for (int i = bi * VV_VC_BLOCK; i <= i1; i++) {
+                            float x = vv_vcache_value(c, base + (size_t)i);
+                            lo = x < lo ? x : lo;
+                            hi = x > hi ? x : hi;
+                        }
+                    }
+                size_t b = ((size_t)bk * (size_t)c->by + (size_t)bj) * (size_t)c->bx + (size_t)bi;
+                c->bmin[b] = lo;
+                c->bmax[b] = hi;
+            }
+}
+
+static vv_status
+cache_build(const vv_vcache_set *s, vv_vcache *c, vv_volume *vol) {
+    memset(c, 0, sizeof *c);
+    c->nx = vol->dims[0] < 2 ? 2 : vol->dims[0];
+    c->ny = vol->dims[1] < 2 ? 2 : vol->dims[1];
+    c->nz = vol->dims[2] < 2 ? 2 : vol->dims[2];
+    c->sy = (size_t)c->nx;
+    c->sz = (size_t)c->nx * (size_t)c->ny;
+    const size_t n = c->sz * (size_t)c->nz;
+    const int ny = c->ny, nz = c->nz;
+    if (is_integer_type(vol->type) && vol->range[1] - vol->range[0] <= 65535.0) {
+        c->qoff = vol->range[0];
+        c->q16 = malloc(n * sizeof *c->q16);
+    } else {
+        c->f32 = malloc(n * sizeof *c->f32);
+    }
+    c->bx = (c->nx - 2) / VV_VC_BLOCK + 1;
+    c->by = (c->ny - 2) / VV_VC_BLOCK + 1;
+    c->bz = (c->nz - 2) / VV_VC_BLOCK + 1;
+    size_t nb = (size_t)c->bx * (size_t)c->by * (size_t)c->bz;
+    c->bmin = malloc(nb * sizeof(float));
+    c->bmax = malloc(nb * sizeof(float));
+    if ((!c->q16 && !c->f32) || !c->bmin || !c->bmax) {
+        cache_release(c);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for %zu voxels", n);
+    }
+#pragma omp parallel for schedule(static)
+    for (int k = 0; k < nz; k++)
+        for (int j = 0; j < ny; j++)
+            fill_row(c, vol, j, k, (size_t)k * c->sz + (size_t)j * c->sy);
+    if ((uint64_t)n * sizeof *c->nrm <= s->gradient_budget)
+        c->nrm = malloc(n * sizeof *c->nrm); /* NULL: gradients on the fly */
+    if (c->nrm)
+        fill_gradients(c);
+    fill_minmax(c);
+    c->vol = vv_volume_ref(vol);
+    c->modified = vol->modified;
+    return VV_OK;
+}
+
+void
+vv_vcache_set_init(vv_vcache_set *s) {
+    memset(s, 0, sizeof *s);
+    /* cached gradients take 4 bytes a voxel: allow them up to a quarter of
+     * physical memory (at most 8 GiB); beyond, gradients are computed on the
+     * fly from the values */
+    uint64_t budget = (uint64_t)8 << 30;
+    long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+    if (pages > 0 && page > 0 && (uint64_t)pages * (uint64_t)page / 4 < budget)
+        budget = (uint64_t)pages * (uint64_t)page / 4;
+    s->gradient_budget = budget;
+}
+
+void
+vv_vcache_set_clear(vv_vcache_set *s) {
+    for (int i = 0; i < s->n; i++)
+        cache_release(&s->cache[i]);
+    s->n = 0;
+}
+
+void
+vv_vcache_set_prune(vv_vcache_set *s, const vv_world *w) {
+    for (int i = 0; i < s->n;) {
+        int used = 0;
+        for (int j = 0; j < w->n_objects; j++)
+            used |= w->objects[j] && w->objects[j]->volume == s->cache[i].vol;
+        if (!used) {
+            cache_release(&s->cache[i]);
+            s->cache[i] = s->cache[--s->n];
+        } else {
+            i++;
+        }
+    }
+}
+
+vv_status
+vv_vcache_get(vv_vcache_set *s, vv_volume *vol, vv_vcache **out) {
+    s->clock++;
+    for (int i = 0; i < s->n; i++)
+        if (s->cache[i].vol == vol) {
+            if (s->cache[i].modified != vol->modified) {
+                cache_release(&s->cache[i]);
+                vv_status st = cache_build(s, &s->cache[i], vol);
+                if (st != VV_OK) {
+                    s->cache[i] = s->cache[--s->n];
+                    return st;
+                }
+            }
+            s->cache[i].last_used = s->clock;
+            *out = &s->cache[i];
+            return VV_OK;
+        }
+    int slot = s->n;
+    if (slot == VV_VC_MAX) {
+        slot = 0;
+        for (int i = 1; i < s->n; i++)
+            if (s->cache[i].last_used < s->cache[slot].last_used)
+                slot = i;
+        cache_release(&s->cache[slot]);
+    } else {
+        s->n++;
+    }
+    vv_status st = cache_build(s, &s->cache[slot], vol);
+    if (st != VV_OK) {
+        s->cache[slot] = s->cache[--s->n];
+        return st;
+    }
+    s->cache[slot].last_used = s->clock;
+    *out = &s->cache[slot];
+    return VV_OK;
+}
+
+/* ---------------------------------------------------------------------- */
+/* Object tables                                                            */
+
+/* Empty-space leaping: the chessboard distance from each subvolume to the
+ * nearest visible one, capped at 255, by two chamfer passes over the 26
+ * neighbours (exact for the chessboard metric). A ray in a subvolume at
+ * distance d can jump to where it leaves the cube of 2d - 1 subvolumes
+ * around it, all of them empty. */
+static uint8_t *
+chessboard_distance(const uint8_t *vis, int nx, int ny, int nz) {
+    const size_t n = (size_t)nx * (size_t)ny * (size_t)nz;
+    uint8_t *d = malloc(n);
+    if (!d)
+        return NULL;
+    for (size_t b = 0; b < n; b++)
+        d[b] = vis[b] ? 0 : 255;
+    for (int pass = 0; pass < 2; pass++) {
+        const int step = pass == 0 ? 1 : -1;
+        for (int k = pass == 0 ? 0 : nz - 1; k >= 0 && k < nz; k += step)
+            for (int j = pass == 0 ? 0 : ny - 1; j >= 0 && j < ny; j += step)
+                for (int i = pass == 0 ? 0 : nx - 1; i >= 0 && i < nx; i += step) {
+                    size_t b = ((size_t)k * (size_t)ny + (size_t)j) * (size_t)nx + (size_t)i;
+                    int best = d[b];
+                    if (best == 0)
+                        continue;
+                    /* the 13 neighbours already visited in this pass */
+                    for (int dk = -1; dk <= 0; dk++)
+                        for (int dj = -1; dj <= 1; dj++)
+                            for (int di = -1; di <= 1; di++) {
+                                if (dk == 0 && (dj > 0 || (dj == 0 && di >= 0)))
+                                    continue;
+                                int kk = k + step * dk, jj = j + step * dj, ii = i + step * di;
+                                if (kk < 0 || kk >= nz || jj < 0 || jj >= ny || ii < 0 || ii >= nx)
+                                    continue;
+                                int v = d[((size_t)kk * (size_t)ny + (size_t)jj) * (size_t)nx +
+                                          (size_t)ii] +
+                                        1;
+                                best = v < best ? v : best;
+                            }
+                    d[b] = (uint8_t)(best > 255 ? 255 : best);
+                }
+    }
+    return d;
+}
+
+/* Builds the TF table (opacity corrected for dt, colour premultiplied),
+ * the extinction table when asked, the subvolume visibility flags and
+ * distances. */
+static vv_status
+build_tables(const vv_vcache *c, const vv_object *obj, const vv_vtables_key *key, vv_vtables *t) {
+    memset(t, 0, sizeof *t);
+    const size_t nb = (size_t)c->bx * (size_t)c->by * (size_t)c->bz;
+    double lo = obj->volume->range[0], hi = obj->volume->range[1];
+    if (!(hi > lo))
+        hi = lo + 1;
+    t->lut_lo = (float)(lo - c->qoff);
+    t->lut_scale = (float)((VV_VC_LUT - 1) / (hi - lo));
+    t->bvis = malloc(nb);
+    if (!t->bvis)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    if (key->mode == VV_MODE_ISO) {
+        for (size_t b = 0; b < nb; b++)
+            /* only subvolumes wholly below the isovalue are empty: one wholly
+             * above may hold the start of a ray that enters the surface
+             * through a cut plane or the box face */
+            t->bvis[b] = !(c->bmax[b] < (float)key->iso) || !key->skipping;
+    } else {
+        t->lut = malloc(sizeof(float) * 4 * VV_VC_LUT);
+        if (key->ext)
+            t->ext = malloc(sizeof(float) * VV_VC_LUT);
+        int *nz = malloc(sizeof(int) * (VV_VC_LUT + 1));
+        if (!t->lut || (key->ext && !t->ext) || !nz) {
+            free(nz);
+            vtables_clear(t);
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        }
+        const double unit = obj->tf.opacity_unit_distance > 0 ? obj->tf.opacity_unit_distance : 1.0;
+        nz[0] = 0;
+        for (int i = 0; i < VV_VC_LUT; i++) {
+            double x = lo + (hi - lo) * i / (VV_VC_LUT - 1);
+            double a;
+            vv_vec3 col;
+            if (obj->segmentation == VV_SEG_THRESHOLD) {
+                a = x >= obj->threshold ? 1.0 : 0.0;
+                col = obj->material.color;
+            } else {
+                a = vv_tf_eval_opacity(&obj->tf, x);
+                col = vv_tf_eval_color(&obj->tf, x);
+            }
+            a = a <= 0 ? 0 : a >= 1 ? 1 : a;
+            if (t->ext)
+                /* extinction: exp(-ext * unit) = 1 - a */
+                t->ext[i] = a >= 1 ? 1e30f : (float)(-log1p(-a) / unit);
+            if (key->mode == VV_MODE_COMPOSITE) {
+                a = a <= 0 ? 0 : a >= 1 ? 1 : 1.0 - pow(1.0 - a, key->dt / unit);
+                t->lut[4 * i + 0] = (float)a;
+                t->lut[4 * i + 1] = (float)(col.x * a);
+                t->lut[4 * i + 2] = (float)(col.y * a);
+                t->lut[4 * i + 3] = (float)(col.z * a);
+            } else {
+                /* projections show the TF colour and opacity at the projected value */
+                t->lut[4 * i + 0] = (float)a;
+                t->lut[4 * i + 1] = (float)col.x;
+                t->lut[4 * i + 2] = (float)col.y;
+                t->lut[4 * i + 3] = (float)col.z;
+            }
+            nz[i + 1] = nz[i] + (t->lut[4 * i] > 0);
+        }
+        for (size_t b = 0; b < nb; b++) {
+            int i0 = (int)vv_vtables_index(t, c->bmin[b]),
+                i1 = (int)vv_vtables_index(t, c->bmax[b]);
+            t->bvis[b] = nz[i1 + 1] - nz[i0] > 0 || !key->skipping;
+        }
+        free(nz);
+    }
+    t->bdist = chessboard_distance(t->bvis, c->bx, c->by, c->bz);
+    if (!t->bdist) {
+        vtables_clear(t);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    return VV_OK;
+}
+
+static int
+tf_equal(const vv_tf *a, const vv_tf *b) {
+    if (a->n_opacity != b->n_opacity || a->n_color != b->n_color ||
+        a->opacity_unit_distance != b->opacity_unit_distance)
+        return 0;
+    for (int i = 0; i < a->n_opacity; i++)
+        if (a->opacity[i].value != b->opacity[i].value ||
+            a->opacity[i].opacity != b->opacity[i].opacity)
+            return 0;
+    for (int i = 0; i < a->n_color; i++)
+        if (a->color[i].value != b->color[i].value || a->color[i].color.x != b->color[i].color.x ||
+            a->color[i].color.y != b->color[i].color.y ||
+            a->color[i].color.z != b->color[i].color.z)
+            return 0;
+    return 1;
+}
+
+static int
+key_equal(const vv_vtables_key *a, const vv_vtables_key *b) {
+    return a->mode == b->mode && a->segmentation == b->segmentation &&
+           a->threshold == b->threshold && a->iso == b->iso && a->dt == b->dt &&
+           a->base.x == b->base.x && a->base.y == b->base.y && a->base.z == b->base.z &&
+           a->skipping == b->skipping && a->ext == b->ext && tf_equal(&a->tf, &b->tf);
+}
+
+vv_status
+vv_vtables_get(vv_vcache_set *s, vv_vcache *c, const vv_object *obj, vv_render_mode mode, double dt,
+               float iso, int skipping, int ext, vv_vtables *out, int *owned) {
+    vv_vtables_key key;
+    memset(&key, 0, sizeof key);
+    key.mode = mode;
+    key.segmentation = obj->segmentation;
+    key.threshold = obj->threshold;
+    key.iso = iso;
+    key.dt = dt;
+    key.base = obj->material.color;
+    key.skipping = skipping;
+    key.ext = ext;
+    key.tf = obj->tf;
+    if (c->tables_valid && key_equal(&c->key, &key)) {
+        *out = c->tables;
+        *owned = 0;
+        c->tables_frame = s->frame;
+        return VV_OK;
+    }
+    *owned = 1;
+    vv_status st = build_tables(c, obj, &key, out);
+    /* keep them unless another object of this frame borrows the cached ones */
+    if (st != VV_OK || (c->tables_valid && c->tables_frame == s->frame))
+        return st;
+    vtables_clear(&c->tables);
+    c->tables_valid = 1;
+    c->key = key;
+    c->tables = *out;
+    c->tables_frame = s->frame;
+    *owned = 0;
+    return VV_OK;
+}
+
+/* ---------------------------------------------------------------------- */
+/* Rays                                                                     */
+
+double
+vv_vobject_step(const vv_object *obj) {
+    vv_mat4 m = vv_object_index_to_world(obj);
+    double best = INFINITY;
+    for (int cc = 0; cc < 3; cc++) {
+        double l =
+            sqrt(m.m[0][cc] * m.m[0][cc] + m.m[1][cc] * m.m[1][cc] + m.m[2][cc] * m.m[2][cc]);
+        if (l > 0 && l < best)
+            best = l;
+    }
+    return obj->step * best;
+}
+
+int
+vv_vray_setup(const double w2i[3][4], const int dims[3], const vv_plane *planes, int n_planes,
+              const vv_ray *wr, double tmin, double tmax, vv_vray *r) {
+    double o[3], d[3];
+    for (int a = 0; a < 3; a++) {
+        o[a] = w2i[a][0] * wr->origin.x + w2i[a][1] * wr->origin.y + w2i[a][2] * wr->origin.z +
+               w2i[a][3];
+        d[a] = w2i[a][0] * wr->dir.x + w2i[a][1] * wr->dir.y + w2i[a][2] * wr->dir.z;
+    }
+    double t0 = tmin, t1 = tmax;
+    for (int a = 0; a < 3; a++) {
+        double hi = dims[a] - 1;
+        if (fabs(d[a]) < 1e-300) {
+            if (o[a] < 0 || o[a] > hi)
+                return 0;
+            continue;
+        }
+        double ta = (0 - o[a]) / d[a], tb = (hi - o[a]) / d[a];
+        if (ta > tb) {
+            double tt = ta;
+            ta = tb;
+            tb = tt;
+        }
+        t0 = ta > t0 ? ta : t0;
+        t1 = tb < t1 ? tb : t1;
+    }
+    for (int p = 0; p < n_planes; p++)
+        if (!vv_plane_clip_ray(planes[p], *wr, &t0, &t1))
+            return 0;
+    if (!(t0 <= t1))
+        return 0;
+    r->tb = t0;
+    for (int a = 0; a < 3; a++) {
+        r->o[a] = (float)(o[a] + t0 * d[a]);
+        r->d[a] = (float)d[a];
+        r->inv[a] = fabs(d[a]) < 1e-30 ? 0.0f : (float)(1.0 / d[a]);
+    }
+    r->t0 = t0;
+    r->t1 = t1;
+    return 1;
+}
+
+/* ---------------------------------------------------------------------- */
+/* Objects, lights, projections                                             */
+
+int
+vv_vlights_prepare(vv_vlight out[VV_MAX_LIGHTS], const vv_world *w, const vv_view *view) {
+    vv_vec3 fwd = vv_vec3_normalize(vv_vec3_sub(view->at, view->eye));
+    int n = 0;
+    for (int i = 0; i < w->n_lights && i < VV_MAX_LIGHTS; i++) {
+        const vv_light *l = &w->lights[i];
+        vv_vlight *o = &out[n++];
+        o->point = l->type == VV_LIGHT_POINT && !l->headlight;
+        vv_vec3 d = l->headlight ? fwd : vv_vec3_normalize(l->direction);
+        /* towards the light = against the direction it travels */
+        o->dir[0] = (float)-d.x;
+        o->dir[1] = (float)-d.y;
+        o->dir[2] = (float)-d.z;
+        o->pos[0] = (float)l->position.x;
+        o->pos[1] = (float)l->position.y;
+        o->pos[2] = (float)l->position.z;
+        o->col[0] = (float)(l->color.x * l->intensity);
+        o->col[1] = (float)(l->color.y * l->intensity);
+        o->col[2] = (float)(l->color.z * l->intensity);
+    }
+    return n;
+}
+
+vv_status
+vv_vobject_prepare(const vv_object *obj, const vv_world *w, const float ambient[3],
+                   const vv_vlight *lights, int n_lights, double w2i[3][4], double i2w[3][4],
+                   int dims[3], vv_plane *planes, int *n_planes, vv_vshading *sh) {
+    vv_mat4 m = vv_object_index_to_world(obj);
+    int ok = 0;
+    vv_mat4 inv = vv_mat4_inverse(m, &ok);
+    if (!ok)
+        return vv_error_set(VV_ERR_INVALID, "object '%s': singular transform", obj->name);
+    for (int r = 0; r < 3; r++)
+        for (int cc = 0; cc < 4; cc++) {
+            w2i[r][cc] = inv.m[r][cc];
+            i2w[r][cc] = m.m[r][cc];
+        }
+    /* normals: world normal = (M^-1)^T g_index, M = linear part of i2w */
+    for (int r = 0; r < 3; r++)
+        for (int cc = 0; cc < 3; cc++)
+            sh->nrm[r][cc] = (float)inv.m[cc][r];
+    for (int a = 0; a < 3; a++)
+        /* a single-voxel axis (a 2-D image) is one voxel thick: the cache
+         * holds that slice twice */
+        dims[a] = obj->volume->dims[a] > 1 ? obj->volume->dims[a] : 2;
+    *n_planes = 0;
+    for (int p = 0; p < w->n_cut_planes && *n_planes < 2 * VV_MAX_CUT_PLANES; p++)
+        planes[(*n_planes)++] =
+            vv_plane_from_point_normal(w->cut_planes[p].point, w->cut_planes[p].normal);
+    for (int p = 0; p < obj->n_cut_planes && *n_planes < 2 * VV_MAX_CUT_PLANES; p++)
+        planes[(*n_planes)++] =
+            vv_plane_from_point_normal(obj->cut_planes[p].point, obj->cut_planes[p].normal);
+    const vv_material *mt = &obj->material;
+    for (int i = 0; i <= VV_VC_SPEC; i++)
+        sh->spec[i] = (float)pow((double)i / VV_VC_SPEC, mt->shininess);
+    sh->base[0] = (float)mt->color.x;
+    sh->base[1] = (float)mt->color.y;
+    sh->base[2] = (float)mt->color.z;
+    for (int ch = 0; ch < 3; ch++) {
+        sh->amb[ch] = (float)mt->ambient * ambient[ch];
+        for (int l = 0; l < n_lights; l++) {
+            sh->kd_col[l][ch] = (float)mt->diffuse * lights[l].col[ch];
+            sh->ks_col[l][ch] = (float)mt->specular * lights[l].col[ch];
+        }
+    }
+    return VV_OK;
+}
+
+void
+vv_vray_project(const vv_vcache *c, const vv_vray *r, vv_render_mode mode, double dt, int skipping,
+                float *value, float *depth) {
+    double k = vv_ceil_pos(r->t0 / dt);
+    const double kend = vv_floor_pos(r->t1 / dt);
+    if (k > kend) {
+        /* shorter than one step: one sample in the middle */
+        float p[3];
+        double tm = 0.5 * (r->t0 + r->t1);
+        vv_vray_point(r, tm, p);
+        *value = vv_vcache_sample(c, p);
+        *depth = (float)tm;
+        return;
+    }
+    if (mode == VV_MODE_XRAY) {
+        double sum = 0;
+        long n = 0;
+        for (; k <= kend; k++) {
+            float p[3], f[3];
+            vv_vray_point(r, k * dt, p);
+            const size_t o = vv_vcache_cell_in(c, p, f);
+            sum += vv_vcache_value_at(c, o, f);
+            n++;
+        }
+        *value = (float)(sum / (double)n);
+        *depth = (float)r->t0;
+        return;
+    }
+    const int mip = mode == VV_MODE_MIP;
+    float best = mip ? -INFINITY : INFINITY;
+    double tbest = r->t0;
+    while (k <= kend) {
+        float p[3];
+        vv_vray_point(r, k * dt, p);
+        const size_t b = vv_vcache_block(c, p);
+        const double te = vv_vray_cube_exit(r, p, k * dt, VV_VC_BLOCK);
+        /* a subvolume that cannot beat the current extreme is skipped whole
+         * (its samples could not change the result: the test is strict) */
+        if (skipping && (mip ? c->bmax[b] <= best : c->bmin[b] >= best)) {
+            const double ks = vv_ceil_pos(te / dt);
+            k = ks > k + 1 ? ks : k + 1;
+            continue;
+        }
+        double klast = vv_floor_pos(te / dt);
+        klast = klast < kend ? klast : kend;
+        klast = klast < k ? k : klast;
+        for (; k <= klast; k++) {
+            float f[3];
+            vv_vray_point(r, k * dt, p);
+            const size_t o = vv_vcache_cell_in(c, p, f);
+            const float x = vv_vcache_value_at(c, o, f);
+            if (mip ? x > best : x < best) {
+                best = x;
+                tbest = k * dt;
+            }
+        }
+    }
+    *value = best;
+    *depth = (float)tbest;
+}
+
+/* ---------------------------------------------------------------------- */
+/* Classification in chunks                                                 */
+
+/* Pass 1 of the composite kernel: for samples k = kfirst .. kfirst + m - 1
+ * of ray r, the cell offset, the fractions and the TF table entry (4 *
+ * index). Portable version; the AVX2 one below computes offsets in 32 bits
+ * and is used only for grids of fewer than 2^30 voxels. */
+static void
+classify_chunk(const vv_vcache *c, const vv_vtables *ob, const vv_vray *r, double kfirst, double dt,
+               int m, size_t *cell, float *fx, float *fy, float *fz, int32_t *entry) {
+    for (int s = 0; s < m; s++) {
+        float p[3], f[3];
+        vv_vray_point(r, (kfirst + s) * dt, p);
+        const size_t o = vv_vcache_cell_in(c, p, f);
+        cell[s] = o;
+        fx[s] = f[0];
+        fy[s] = f[1];
+        fz[s] = f[2];
+        entry[s] = 4 * (int)vv_vtables_index(ob, vv_vcache_value_at(c, o, f));
+    }
+}
+
+#if VV_VC_HAVE_AVX2
+/* classify_chunk for 16-bit values, eight samples at a time with AVX2
+ * gathers and FMA; chosen at run time when the processor has them. The
+ * arithmetic differs from the portable version only in the rounding of
+ * fused multiply-adds, and one render uses one version throughout. */
+__attribute__((target("avx2,fma"))) static void
+classify_chunk_avx2(const vv_vcache *c, const vv_vtables *ob, const vv_vray *r, double kfirst,
+                    double dt, int m, size_t *cell, float *fx, float *fy, float *fz,
+                    int32_t *entry) {
+    float u[VV_VC_CHUNK + 8];
+    for (int s = 0; s < m; s++)
+        u[s] = (float)((kfirst + s) * dt - r->tb);
+    for (int s = m; s < m + 8; s++)
+        u[s] = u[m - 1]; /* padding lanes repeat the last sample */
+    const __m256 ox = _mm256_set1_ps(r->o[0]), oy = _mm256_set1_ps(r->o[1]),
+                 oz = _mm256_set1_ps(r->o[2]);
+    const __m256 dx = _mm256_set1_ps(r->d[0]), dy = _mm256_set1_ps(r->d[1]),
+                 dz = _mm256_set1_ps(r->d[2]);
+    const __m256i zero = _mm256_setzero_si256();
+    const __m256i mx = _mm256_set1_epi32(c->nx - 2), my = _mm256_set1_epi32(c->ny - 2),
+                  mz = _mm256_set1_epi32(c->nz - 2);
+    const __m256i sy = _mm256_set1_epi32((int)c->sy), sz = _mm256_set1_epi32((int)c->sz);
+    const __m256i lo16 = _mm256_set1_epi32(0xFFFF);
+    const __m256 llo = _mm256_set1_ps(ob->lut_lo), lsc = _mm256_set1_ps(ob->lut_scale);
+    const __m256 lmax = _mm256_set1_ps((float)(VV_VC_LUT - 1)), fzero = _mm256_setzero_ps();
+    for (int s = 0; s < m; s += 8) {
+        const __m256 t = _mm256_loadu_ps(u + s);
+        const __m256 px = _mm256_fmadd_ps(t, dx, ox), py = _mm256_fmadd_ps(t, dy, oy),
+                     pz = _mm256_fmadd_ps(t, dz, oz);
+        __m256i i = _mm256_cvttps_epi32(px), j = _mm256_cvttps_epi32(py),
+                k = _mm256_cvttps_epi32(pz);
+        i = _mm256_max_epi32(_mm256_min_epi32(i, mx), zero);
+        j = _mm256_max_epi32(_mm256_min_epi32(j, my), zero);
+        k = _mm256_max_epi32(_mm256_min_epi32(k, mz), zero);
+        const __m256 wx = _mm256_sub_ps(px, _mm256_cvtepi32_ps(i));
+        const __m256 wy = _mm256_sub_ps(py, _mm256_cvtepi32_ps(j));
+        const __m256 wz = _mm256_sub_ps(pz, _mm256_cvtepi32_ps(k));
+        const __m256i o = _mm256_add_epi32(
+            _mm256_add_epi32(_mm256_mullo_epi32(k, sz), _mm256_mullo_epi32(j, sy)), i);
+        /* the x-pair (v[o], v[o + 1]) of each cell edge, by plain loads:
+         * hardware gathers are microcoded and slow on processors with the
+         * Gather Data Sampling mitigation */
+        int32_t oo[8], p00[8], p10[8], p01[8], p11[8];
+        _mm256_storeu_si256((__m256i *)(void *)oo, o);
+        const uint16_t *q = c->q16;
+        for (int l = 0; l < 8; l++) {
+            const uint16_t *v = q + oo[l];
+            memcpy(&p00[l], v, 4);
+            memcpy(&p10[l], v + c->sy, 4);
+            memcpy(&p01[l], v + c->sz, 4);
+            memcpy(&p11[l], v + c->sz + c->sy, 4);
+        }
+        const __m256i g00 = _mm256_loadu_si256((const __m256i *)(const void *)p00);
+        const __m256i g10 = _mm256_loadu_si256((const __m256i *)(const void *)p10);
+        const __m256i g01 = _mm256_loadu_si256((const __m256i *)(const void *)p01);
+        const __m256i g11 = _mm256_loadu_si256((const __m256i *)(const void *)p11);
+#define VV_PAIR_LERP(g)                                                                            \
+    _mm256_fmadd_ps(_mm256_sub_ps(_mm256_cvtepi32_ps(_mm256_srli_epi32(g, 16)),                    \
+                                  _mm256_cvtepi32_ps(_mm256_and_si256(g, lo16))),                  \
+                    wx, _mm256_cvtepi32_ps(_mm256_and_si256(g, lo16)))
+        const __m256 c00 = VV_PAIR_LERP(g00), c10 = VV_PAIR_LERP(g10);
+        const __m256 c01 = VV_PAIR_LERP(g01), c11 = VV_PAIR_LERP(g11);
+#undef VV_PAIR_LERP
+        const __m256 c0 = _mm256_fmadd_ps(_mm256_sub_ps(c10, c00), wy, c00);
+        const __m256 c1 = _mm256_fmadd_ps(_mm256_sub_ps(c11, c01), wy, c01);
+        const __m256 val = _mm256_fmadd_ps(_mm256_sub_ps(c1, c0), wz, c0);
+        __m256 li = _mm256_mul_ps(_mm256_sub_ps(val, llo), lsc);
+        li = _mm256_min_ps(_mm256_max_ps(li, fzero), lmax);
+        const __m256i e = _mm256_slli_epi32(_mm256_cvttps_epi32(li), 2);
+        int32_t ob8[8], eb8[8];
+        float xb[8], yb[8], zb[8];
+        _mm256_storeu_si256((__m256i *)(void *)ob8, o);
+        _mm256_storeu_si256((__m256i *)(void *)eb8, e);
+        _mm256_storeu_ps(xb, wx);
+        _mm256_storeu_ps(yb, wy);
+        _mm256_storeu_ps(zb, wz);
+        const int lanes = m - s < 8 ? m - s : 8;
+        for (int l = 0; l < lanes; l++) {
+            cell[s + l] = (size_t)ob8[l];
+            entry[s + l] = eb8[l];
+            fx[s + l] = xb[l];
+            fy[s + l] = yb[l];
+            fz[s + l] = zb[l];
+        }
+    }
+}
+#endif
+
+void
+vv_vray_classify(const vv_vcache *c, const vv_vtables *t, const vv_vray *r, double kfirst,
+                 double dt, int m, int avx2, size_t *cell, float *fx, float *fy, float *fz,
+                 int32_t *entry) {
+#if VV_VC_HAVE_AVX2
+    if (avx2 && c->q16 && c->sz * (size_t)c->nz < ((size_t)1 << 30)) {
+        classify_chunk_avx2(c, t, r, kfirst, dt, m, cell, fx, fy, fz, entry);
+        return;
+    }
+#else
+    (void)avx2;
+#endif
+    classify_chunk(c, t, r, kfirst, dt, m, cell, fx, fy, fz, entry);
+}
+
+int
+vv_vc_have_avx2(void) {
+#if VV_VC_HAVE_AVX2
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#else
+    return 0;
+#endif
+}

@@ -1,0 +1,512 @@
+/*
+ * Volume data shared by the ray-casting renderers (raycast, raytrace):
+ * internal, not part of the public API.
+ *
+ * Per volume, a cache holds the voxels as 16-bit offsets from the minimum
+ * when the data are integers spanning at most 65535 (exact, and half the
+ * memory traffic of float), else as float; all values inside the renderers
+ * ("stored units") are real value - qoff. The unit gradient direction of
+ * every voxel (central differences, computed once) is quantised to 3 x int8
+ * in a separate array, touched only where a sample is shaded, and every
+ * subvolume of 4^3 cells has the min/max of its stored values (the PARC
+ * grid of the VolVis paper's Navigator, section 4; computed from the stored
+ * values rather than with vv_minmax_grid_build so that it agrees exactly
+ * with the samples: NaN voxels are stored as the minimum, a single-voxel
+ * axis is held twice).
+ *
+ * Per object, tables (vv_vtables): the transfer function in a 4096-entry
+ * table with opacity corrected for the step, optionally the extinction per
+ * world unit, which subvolumes are visible under the transfer function or
+ * isovalue, and each subvolume's chessboard distance to the nearest visible
+ * one (empty-space leaping). The last tables built for a volume are kept in
+ * its cache between frames while nothing they depend on changes.
+ *
+ * Not thread-safe while building; the sampling functions below only read
+ * and may run on many threads. docs/rendering.md describes the method.
+ */
+#ifndef VV_RENDER_VOLUME_CACHE_H
+#define VV_RENDER_VOLUME_CACHE_H
+
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
+#include "volvis/render.h"
+
+#define VV_VC_BLOCK 4  /* subvolume side in cells */
+#define VV_VC_LUT 4096 /* transfer-function table entries */
+/* cached volumes per renderer: >= the objects of one render, so none in use
+ * is evicted */
+#define VV_VC_MAX 64
+#define VV_VC_CHUNK 32 /* samples classified at a time (vv_vray_classify) */
+#if defined(__x86_64__) && defined(__GNUC__)
+#define VV_VC_HAVE_AVX2 1
+#else
+#define VV_VC_HAVE_AVX2 0
+#endif
+
+/* What an object's tables depend on besides the volume. */
+typedef struct vv_vtables_key {
+    vv_render_mode mode;
+    vv_segmentation segmentation;
+    double threshold, iso, dt;
+    vv_vec3 base;
+    int skipping, ext;
+    vv_tf tf;
+} vv_vtables_key;
+
+/* An object's tables. lut: VV_VC_LUT x {alpha, r*alpha, g*alpha, b*alpha}
+ * with alpha corrected for the step (composite), or {alpha, r, g, b}
+ * (projections); NULL in iso mode. ext: VV_VC_LUT extinctions per world
+ * unit, -ln(1 - alpha) / opacity_unit_distance, or NULL when not asked
+ * for. bvis: per subvolume, visible; bdist: chessboard distance in
+ * subvolumes to the nearest visible one, at most 255 (0: visible). */
+typedef struct vv_vtables {
+    float lut_lo, lut_scale; /* stored value -> table index */
+    float *lut, *ext;
+    uint8_t *bvis, *bdist;
+} vv_vtables;
+
+/* Everything derived from one volume that does not depend on the TF. */
+typedef struct vv_vcache {
+    vv_volume *vol; /* reference held */
+    uint64_t modified;
+    int nx, ny, nz;     /* cached grid (each >= 2; a 1-voxel axis is duplicated) */
+    size_t sy, sz;      /* strides in voxels */
+    uint16_t *q16;      /* values as uint16 (real = q + qoff), or NULL */
+    float *f32;         /* values as float (qoff = 0), or NULL */
+    double qoff;        /* offset of stored values */
+    int8_t (*nrm)[4];   /* unit gradients * 127 (index space), or NULL: on the fly */
+    int bx, by, bz;     /* subvolume grid */
+    float *bmin, *bmax; /* per subvolume, stored units */
+    /* the last object tables built for this volume */
+    int tables_valid;
+    vv_vtables_key key;
+    vv_vtables tables;
+    uint64_t tables_frame; /* the frame that last borrowed them */
+    uint64_t last_used;
+} vv_vcache;
+
+/* The caches of one renderer. */
+typedef struct vv_vcache_set {
+    vv_vcache cache[VV_VC_MAX];
+    int n;
+    uint64_t clock;
+    uint64_t frame;           /* renders so far (vv_vcache_set_begin_frame) */
+    uint64_t gradient_budget; /* bytes allowed for one volume's cached gradients */
+} vv_vcache_set;
+
+/* Empty set; gradients allowed up to a quarter of physical memory, at most
+ * 8 GiB. */
+void vv_vcache_set_init(vv_vcache_set *s);
+/* Releases every cached volume (the set stays usable). */
+void vv_vcache_set_clear(vv_vcache_set *s);
+/* Drops the cached volumes that no object of @p w shows. */
+void vv_vcache_set_prune(vv_vcache_set *s, const vv_world *w);
+/* The cache of @p vol, built (or rebuilt when the volume was modified) on
+ * demand; the least recently used one is evicted when the set is full.
+ * Errors: VV_ERR_NOMEM. */
+vv_status vv_vcache_get(vv_vcache_set *s, vv_volume *vol, vv_vcache **out);
+
+/* The tables of object @p obj on cache @p c for step @p dt (world units)
+ * in @p mode; @p iso in stored units; @p skipping 0 marks every subvolume
+ * visible; @p ext 1 also builds the extinction table. Borrowed from the
+ * cache when nothing they depend on changed (*owned = 0: do not free), else
+ * built (*owned = 1 unless handed to the cache; free with
+ * vv_vtables_free). Errors: VV_ERR_NOMEM. */
+vv_status vv_vtables_get(vv_vcache_set *s, vv_vcache *c, const vv_object *obj, vv_render_mode mode,
+                         double dt, float iso, int skipping, int ext, vv_vtables *out, int *owned);
+void vv_vtables_free(vv_vtables *t);
+
+/* Step in world units of an object: step * smallest voxel spacing in world. */
+double vv_vobject_step(const vv_object *obj);
+
+/* A world ray (unit direction, parameter t in world units) mapped into a
+ * volume's index space and clipped to its grid box [0, dims - 1] and cut
+ * planes. */
+typedef struct vv_vray {
+    float o[3], d[3]; /* index point at t = tb, index direction per world unit */
+    float inv[3];     /* 1/d, or 0 where d == 0 (axis never crossed) */
+    double t0, t1;    /* clipped interval, world units */
+    double tb;        /* o is the index point at t = tb (keeps float offsets small) */
+} vv_vray;
+
+/* Clips @p wr, within [tmin, tmax], to the grid box of @p dims (index
+ * space through @p w2i, world to index) and the planes; returns 0 when
+ * nothing is left. */
+int vv_vray_setup(const double w2i[3][4], const int dims[3], const vv_plane *planes, int n_planes,
+                  const vv_ray *wr, double tmin, double tmax, vv_vray *r);
+
+static inline void
+vv_vray_point(const vv_vray *r, double t, float p[3]) {
+    float tf = (float)(t - r->tb);
+    p[0] = r->o[0] + tf * r->d[0];
+    p[1] = r->o[1] + tf * r->d[1];
+    p[2] = r->o[2] + tf * r->d[2];
+}
+
+/* ceil and floor of a non-negative double without libm: the x86-64
+ * baseline (SSE2) has no rounding instruction, and these sit on the
+ * traversal's hot path. Parameters are sample indices, well inside int64. */
+static inline double
+vv_ceil_pos(double x) {
+    double i = (double)(int64_t)x;
+    return i < x ? i + 1 : i;
+}
+
+static inline double
+vv_floor_pos(double x) {
+    return (double)(int64_t)x;
+}
+
+static inline float
+vv_lerpf(float a, float b, float t) {
+    return a + (b - a) * t;
+}
+
+static inline float
+vv_vcache_value(const vv_vcache *c, size_t idx) {
+    return c->q16 ? (float)c->q16[idx] : c->f32[idx];
+}
+
+/* Table index (as float) of stored value v. */
+static inline float
+vv_vtables_index(const vv_vtables *t, float v) {
+    float x = (v - t->lut_lo) * t->lut_scale;
+    return x < 0 ? 0 : x > VV_VC_LUT - 1 ? VV_VC_LUT - 1 : x;
+}
+
+/* Cell and fractions of index-space point p, clamped so that the cell's far
+ * corner is inside the cached grid. */
+static inline size_t
+vv_vcache_cell_of(const vv_vcache *c, const float p[3], float f[3]) {
+    float x = p[0], y = p[1], z = p[2];
+    x = x < 0 ? 0 : x;
+    y = y < 0 ? 0 : y;
+    z = z < 0 ? 0 : z;
+    int i = (int)x, j = (int)y, k = (int)z;
+    if (i > c->nx - 2)
+        i = c->nx - 2;
+    if (j > c->ny - 2)
+        j = c->ny - 2;
+    if (k > c->nz - 2)
+        k = c->nz - 2;
+    f[0] = x - (float)i;
+    f[1] = y - (float)j;
+    f[2] = z - (float)k;
+    f[0] = f[0] > 1 ? 1 : f[0];
+    f[1] = f[1] > 1 ? 1 : f[1];
+    f[2] = f[2] > 1 ? 1 : f[2];
+    return (size_t)k * c->sz + (size_t)j * c->sy + (size_t)i;
+}
+
+/* vv_vcache_cell_of for points inside the grid box (a clipped ray), up to
+ * float rounding: no float clamps, only the integer clamps that keep every
+ * read inside the grid. A point a rounding error outside extrapolates by
+ * that error, which is harmless. */
+static inline size_t
+vv_vcache_cell_in(const vv_vcache *c, const float p[3], float f[3]) {
+    int i = (int)p[0], j = (int)p[1], k = (int)p[2];
+    i = i < c->nx - 2 ? i : c->nx - 2;
+    j = j < c->ny - 2 ? j : c->ny - 2;
+    k = k < c->nz - 2 ? k : c->nz - 2;
+    i = i > 0 ? i : 0;
+    j = j > 0 ? j : 0;
+    k = k > 0 ? k : 0;
+    f[0] = p[0] - (float)i;
+    f[1] = p[1] - (float)j;
+    f[2] = p[2] - (float)k;
+    return (size_t)k * c->sz + (size_t)j * c->sy + (size_t)i;
+}
+
+/* Trilinear value in the cell at offset o with fractions f. */
+static inline float
+vv_vcache_value_at(const vv_vcache *c, size_t o, const float f[3]) {
+    const size_t sy = c->sy, sz = c->sz;
+    float c00, c10, c01, c11;
+#ifdef __SSE2__
+    if (c->q16) {
+        /* the four x-pairs of the cell in one register, both corners of each
+         * pair lerped at once */
+        const uint16_t *v = c->q16 + o;
+        int32_t a0, a1, a2, a3;
+        memcpy(&a0, v, 4);
+        memcpy(&a1, v + sy, 4);
+        memcpy(&a2, v + sz, 4);
+        memcpy(&a3, v + sz + sy, 4);
+        const __m128i x = _mm_set_epi32(a3, a2, a1, a0);
+        const __m128 lo = _mm_cvtepi32_ps(_mm_and_si128(x, _mm_set1_epi32(0xFFFF)));
+        const __m128 hi = _mm_cvtepi32_ps(_mm_srli_epi32(x, 16));
+        const __m128 cx = _mm_add_ps(lo, _mm_mul_ps(_mm_sub_ps(hi, lo), _mm_set1_ps(f[0])));
+        /* cx = (c00, c10, c01, c11): lerp (c00, c01) towards (c10, c11) in y */
+        const __m128 y0 = _mm_shuffle_ps(cx, cx, _MM_SHUFFLE(2, 0, 2, 0));
+        const __m128 y1 = _mm_shuffle_ps(cx, cx, _MM_SHUFFLE(3, 1, 3, 1));
+        const __m128 cy = _mm_add_ps(y0, _mm_mul_ps(_mm_sub_ps(y1, y0), _mm_set1_ps(f[1])));
+        const float z0 = _mm_cvtss_f32(cy);
+        const float z1 = _mm_cvtss_f32(_mm_shuffle_ps(cy, cy, _MM_SHUFFLE(1, 1, 1, 1)));
+        return vv_lerpf(z0, z1, f[2]);
+    }
+#endif
+    if (c->q16) {
+        const uint16_t *v = c->q16 + o;
+        c00 = vv_lerpf(v[0], v[1], f[0]);
+        c10 = vv_lerpf(v[sy], v[sy + 1], f[0]);
+        c01 = vv_lerpf(v[sz], v[sz + 1], f[0]);
+        c11 = vv_lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
+    } else {
+        const float *v = c->f32 + o;
+        c00 = vv_lerpf(v[0], v[1], f[0]);
+        c10 = vv_lerpf(v[sy], v[sy + 1], f[0]);
+        c01 = vv_lerpf(v[sz], v[sz + 1], f[0]);
+        c11 = vv_lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
+    }
+    return vv_lerpf(vv_lerpf(c00, c10, f[1]), vv_lerpf(c01, c11, f[1]), f[2]);
+}
+
+/* Trilinear value at index point p (clamped to the grid). */
+static inline float
+vv_vcache_sample(const vv_vcache *c, const float p[3]) {
+    float f[3];
+    size_t o = vv_vcache_cell_of(c, p, f);
+    return vv_vcache_value_at(c, o, f);
+}
+
+typedef float vv_v4f __attribute__((vector_size(16)));
+
+/* The cached unit gradient of voxel idx as 4 floats (x, y, z, 0), times 127:
+ * one 32-bit load, sign-extended in registers (compilers scalarise the
+ * generic int8 -> float vector conversion). */
+static inline vv_v4f
+vv_vcache_normal(const vv_vcache *c, size_t idx) {
+#ifdef __SSE2__
+    int32_t word;
+    memcpy(&word, c->nrm[idx], sizeof word);
+    __m128i x = _mm_cvtsi32_si128(word);
+    x = _mm_unpacklo_epi8(x, x);
+    x = _mm_unpacklo_epi16(x, x);
+    x = _mm_srai_epi32(x, 24);
+    return (vv_v4f)_mm_cvtepi32_ps(x);
+#else
+    const int8_t *n = c->nrm[idx];
+    vv_v4f r = {n[0], n[1], n[2], 0};
+    return r;
+#endif
+}
+
+/* Index-space gradient direction (not normalised) in the cell at offset o
+ * with fractions f: trilinear interpolation of the cached unit gradients,
+ * the same lerp tree as vv_vcache_value_at, four lanes at a time. Needs
+ * c->nrm. */
+static inline void
+vv_vcache_gradient_at(const vv_vcache *c, size_t o, const float f[3], float g[3]) {
+    const size_t sy = c->sy, sz = c->sz;
+    vv_v4f c00 = vv_vcache_normal(c, o), c01 = vv_vcache_normal(c, o + 1);
+    vv_v4f c10 = vv_vcache_normal(c, o + sy), c11 = vv_vcache_normal(c, o + sy + 1);
+    vv_v4f c20 = vv_vcache_normal(c, o + sz), c21 = vv_vcache_normal(c, o + sz + 1);
+    vv_v4f c30 = vv_vcache_normal(c, o + sz + sy), c31 = vv_vcache_normal(c, o + sz + sy + 1);
+    c00 += (c01 - c00) * f[0];
+    c10 += (c11 - c10) * f[0];
+    c20 += (c21 - c20) * f[0];
+    c30 += (c31 - c30) * f[0];
+    c00 += (c10 - c00) * f[1];
+    c20 += (c30 - c20) * f[1];
+    c00 += (c20 - c00) * f[2];
+    g[0] = c00[0];
+    g[1] = c00[1];
+    g[2] = c00[2];
+}
+
+/* Index-space gradient direction at p (not normalised): cached gradients
+ * when there are, else central differences of trilinear samples half a
+ * voxel apart. */
+static inline void
+vv_vcache_gradient(const vv_vcache *c, const float p[3], float g[3]) {
+    if (c->nrm) {
+        float f[3];
+        size_t o = vv_vcache_cell_of(c, p, f);
+        vv_vcache_gradient_at(c, o, f, g);
+        return;
+    }
+    for (int a = 0; a < 3; a++) {
+        float pa[3] = {p[0], p[1], p[2]}, pb[3] = {p[0], p[1], p[2]};
+        pa[a] -= 0.5f;
+        pb[a] += 0.5f;
+        g[a] = vv_vcache_sample(c, pb) - vv_vcache_sample(c, pa);
+    }
+}
+
+/* The subvolume containing index point p (clamped to the grid). */
+static inline size_t
+vv_vcache_block(const vv_vcache *c, const float p[3]) {
+    int bi = (int)((p[0] > 0 ? p[0] : 0) * (1.0f / VV_VC_BLOCK));
+    int bj = (int)((p[1] > 0 ? p[1] : 0) * (1.0f / VV_VC_BLOCK));
+    int bk = (int)((p[2] > 0 ? p[2] : 0) * (1.0f / VV_VC_BLOCK));
+    bi = bi >= c->bx ? c->bx - 1 : bi;
+    bj = bj >= c->by ? c->by - 1 : bj;
+    bk = bk >= c->bz ? c->bz - 1 : bk;
+    return ((size_t)bk * (size_t)c->by + (size_t)bj) * (size_t)c->bx + (size_t)bi;
+}
+
+/* ---------------------------------------------------------------------- */
+/* Volume objects, lights and shading                                       */
+
+#define VV_VC_SPEC 2048 /* specular table entries */
+
+/* A light prepared for volume shading. */
+typedef struct vv_vlight {
+    int point;
+    float dir[3]; /* unit vector towards the light (directional) */
+    float pos[3]; /* world position (point) */
+    float col[3]; /* colour * intensity */
+} vv_vlight;
+
+/* The lights of @p w (a headlight shines along the view direction of
+ * @p view); returns how many (at most VV_MAX_LIGHTS). */
+int vv_vlights_prepare(vv_vlight out[VV_MAX_LIGHTS], const vv_world *w, const vv_view *view);
+
+/* An object's shading constants. */
+typedef struct vv_vshading {
+    float nrm[3][3];                /* index-space gradient -> world normal (M^-T) */
+    float amb[3];                   /* ka * ambient light */
+    float kd_col[VV_MAX_LIGHTS][3]; /* kd * light colour */
+    float ks_col[VV_MAX_LIGHTS][3]; /* ks * light colour */
+    float base[3];                  /* material colour (iso, threshold) */
+    float spec[VV_VC_SPEC + 1];     /* x^shininess for x in [0, 1] */
+} vv_vshading;
+
+/* What both renderers derive alike from a volume object: world -> index
+ * and index -> world (affine rows), the grid box dims (a single-voxel axis
+ * counts as 2, the cache holds it twice), the global then local cut planes
+ * (at most 2 * VV_MAX_CUT_PLANES) and the shading constants under
+ * @p ambient and @p lights. Errors: VV_ERR_INVALID (singular transform). */
+vv_status vv_vobject_prepare(const vv_object *obj, const vv_world *w, const float ambient[3],
+                             const vv_vlight *lights, int n_lights, double w2i[3][4],
+                             double i2w[3][4], int dims[3], vv_plane *planes, int *n_planes,
+                             vv_vshading *sh);
+
+/* A light's transmittance for shading (shadows), or NULL: none. */
+typedef float (*vv_vshadow_fn)(const void *ctx, int light);
+
+/* Phong (reflection vector) with two-sided lighting. g: index-space
+ * gradient; pw: world position (read for point lights); v: unit vector
+ * towards the eye; col: colour times the sample's opacity, alpha: that
+ * opacity. out = (ka*ambient + kd*diffuse) * col + alpha * ks * specular:
+ * the highlight is emitted by the sample like its colour, so it too is
+ * weighted by the sample's opacity (otherwise it would grow as the step
+ * shrinks). With @p shadow, each light's terms are scaled by
+ * shadow(ctx, light). */
+static inline void
+vv_vshade(const vv_vshading *o, const vv_vlight *lights, int n_lights, const float g[3],
+          const float pw[3], const float v[3], const float col[3], float alpha,
+          vv_vshadow_fn shadow, const void *ctx, float out[3]) {
+    const float n0 = o->nrm[0][0] * g[0] + o->nrm[0][1] * g[1] + o->nrm[0][2] * g[2];
+    const float n1 = o->nrm[1][0] * g[0] + o->nrm[1][1] * g[1] + o->nrm[1][2] * g[2];
+    const float n2 = o->nrm[2][0] * g[0] + o->nrm[2][1] * g[1] + o->nrm[2][2] * g[2];
+    const float len2 = n0 * n0 + n1 * n1 + n2 * n2;
+    float d0 = o->amb[0], d1 = o->amb[1], d2 = o->amb[2];
+    float s0 = 0, s1 = 0, s2 = 0;
+    if (len2 > 1e-12f) {
+        const float inv = 1.0f / sqrtf(len2);
+        const float nv = (n0 * v[0] + n1 * v[1] + n2 * v[2]) * inv;
+        for (int l = 0; l < n_lights; l++) {
+            const vv_vlight *lt = &lights[l];
+            float L0 = lt->dir[0], L1 = lt->dir[1], L2 = lt->dir[2];
+            if (lt->point) {
+                L0 = lt->pos[0] - pw[0];
+                L1 = lt->pos[1] - pw[1];
+                L2 = lt->pos[2] - pw[2];
+                const float ll = sqrtf(L0 * L0 + L1 * L1 + L2 * L2);
+                if (!(ll > 0))
+                    continue;
+                L0 /= ll;
+                L1 /= ll;
+                L2 /= ll;
+            }
+            float ndl = (n0 * L0 + n1 * L1 + n2 * L2) * inv;
+            /* two-sided: a normal facing away from the light is flipped */
+            const float ndv = ndl < 0 ? -nv : nv;
+            ndl = ndl < 0 ? -ndl : ndl;
+            /* Phong: R.V with R the mirror of L about n */
+            const float rv = 2 * ndl * ndv - (L0 * v[0] + L1 * v[1] + L2 * v[2]);
+            float sp = rv > 0 ? o->spec[(int)(rv * VV_VC_SPEC + 0.5f)] : 0;
+            float wd = ndl;
+            if (shadow) {
+                const float sh = shadow(ctx, l);
+                wd = sh * ndl;
+                sp = sh * sp;
+            }
+            d0 += wd * o->kd_col[l][0];
+            d1 += wd * o->kd_col[l][1];
+            d2 += wd * o->kd_col[l][2];
+            s0 += sp * o->ks_col[l][0];
+            s1 += sp * o->ks_col[l][1];
+            s2 += sp * o->ks_col[l][2];
+        }
+    }
+    out[0] = d0 * col[0] + alpha * s0;
+    out[1] = d1 * col[1] + alpha * s1;
+    out[2] = d2 * col[2] + alpha * s2;
+}
+
+/* World parameter at which the ray leaves the cube of side @p size cells
+ * (aligned to multiples of size) containing p. */
+static inline double
+vv_vray_cube_exit(const vv_vray *r, const float p[3], double t, int size) {
+    float te = INFINITY;
+    const float inv_size = 1.0f / (float)size;
+    for (int a = 0; a < 3; a++) {
+        if (r->inv[a] == 0)
+            continue;
+        float b = (float)(int)(p[a] * inv_size); /* floor: p >= 0 up to rounding */
+        b = b < 0 ? 0 : b;
+        float bound = (r->d[a] > 0 ? b + 1 : b) * (float)size;
+        float ta = (bound - p[a]) * r->inv[a];
+        te = ta < te ? ta : te;
+    }
+    return t + te;
+}
+
+/* The isosurface crossing between ray parameters ta (value va, on one side
+ * of iso) and tb (on the other), by ten bisection steps. */
+static inline double
+vv_vray_iso_refine(const vv_vcache *c, const vv_vray *r, double ta, float va, double tb,
+                   float iso) {
+    for (int it = 0; it < 10; it++) {
+        double tm = 0.5 * (ta + tb);
+        float pm[3];
+        vv_vray_point(r, tm, pm);
+        float vm = vv_vcache_sample(c, pm);
+        if ((va < iso) == (vm < iso)) {
+            ta = tm;
+            va = vm;
+        } else {
+            tb = tm;
+        }
+    }
+    return 0.5 * (ta + tb);
+}
+
+/* Maximum (VV_MODE_MIP) or minimum (VV_MODE_MINIP) intensity projection or
+ * mean (VV_MODE_XRAY) of the samples t = k dt of the clipped ray r, one
+ * sample in the middle when it is shorter than a step; *depth: the
+ * parameter of the extreme (xray: the entry). With @p skipping, subvolumes
+ * that cannot beat the current extreme are skipped whole (same result). */
+void vv_vray_project(const vv_vcache *c, const vv_vray *r, vv_render_mode mode, double dt,
+                     int skipping, float *value, float *depth);
+
+/* Pass 1 of a composite kernel: for the samples k = kfirst .. kfirst + m - 1
+ * (m <= VV_VC_CHUNK) of ray r, the cell offset, the fractions and the
+ * table entry (4 * index), with no branches so that the independent
+ * samples overlap in the pipeline. With @p avx2 (vv_vc_have_avx2) and
+ * 16-bit values, eight samples at a time with AVX2 and FMA; the two differ
+ * only in the rounding of fused multiply-adds. */
+void vv_vray_classify(const vv_vcache *c, const vv_vtables *t, const vv_vray *r, double kfirst,
+                      double dt, int m, int avx2, size_t *cell, float *fx, float *fy, float *fz,
+                      int32_t *entry);
+/* The processor has AVX2 and FMA. */
+int vv_vc_have_avx2(void);
+
+#endif
