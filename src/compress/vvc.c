@@ -174,30 +174,6 @@ vv_vvc_value_scale(const vv_volume *v, double *offset, double *unit) {
 /* ---------------------------------------------------------------------- */
 /* Forward transform of every subcube                                       */
 
-/* Voxel n of a row starting at element `base`, as double. */
-static inline double
-voxel_at(const vv_volume *v, size_t idx) {
-    switch (v->type) {
-    case VV_U8:
-        return ((const uint8_t *)v->data)[idx];
-    case VV_I8:
-        return ((const int8_t *)v->data)[idx];
-    case VV_U16:
-        return ((const uint16_t *)v->data)[idx];
-    case VV_I16:
-        return ((const int16_t *)v->data)[idx];
-    case VV_U32:
-        return ((const uint32_t *)v->data)[idx];
-    case VV_I32:
-        return ((const int32_t *)v->data)[idx];
-    case VV_F32:
-        return ((const float *)v->data)[idx];
-    case VV_F64:
-        return ((const double *)v->data)[idx];
-    }
-    return 0;
-}
-
 /* Writes n values (rounded and clamped to the native type; NaN as 0) at element idx. */
 static void
 store_row(vv_volume *v, size_t idx, const float *vals, int n) {
@@ -299,7 +275,7 @@ vv_vvc_spectra(const vv_volume *v, int M, int threads, float **spectra, double *
                             ((size_t)k * v->dims[1] + (size_t)j) * v->dims[0] + (size_t)bx * M;
                         const int nx = v->dims[0] - bx * M < M ? v->dims[0] - bx * M : M;
                         for (; x < nx; x++) {
-                            const double d = voxel_at(v, base + (size_t)x);
+                            const double d = vv_voxel_at(v, base + (size_t)x);
                             row[x] = d == d ? (float)((d - off) * inv) : 0.0f;
                         }
                     }

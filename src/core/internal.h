@@ -8,6 +8,7 @@
 #include <stdio.h>
 
 #include "volvis/core.h"
+#include "volvis/volume.h"
 
 /**
  * An output file written atomically: the data goes to a temporary file
@@ -55,6 +56,33 @@ int vv_host_is_little_endian(void);
 
 /** Reverses the bytes of @p count elements of @p size bytes each, in place. */
 void vv_byteswap(void *data, uint64_t count, size_t size);
+
+/**
+ * Voxel @p idx (linear index, i fastest) of @p v in its native type, as
+ * double. For inner loops; vv_volume_get is the checked public form.
+ */
+static inline double
+vv_voxel_at(const vv_volume *v, size_t idx) {
+    switch (v->type) {
+    case VV_U8:
+        return ((const uint8_t *)v->data)[idx];
+    case VV_I8:
+        return ((const int8_t *)v->data)[idx];
+    case VV_U16:
+        return ((const uint16_t *)v->data)[idx];
+    case VV_I16:
+        return ((const int16_t *)v->data)[idx];
+    case VV_U32:
+        return ((const uint32_t *)v->data)[idx];
+    case VV_I32:
+        return ((const int32_t *)v->data)[idx];
+    case VV_F32:
+        return ((const float *)v->data)[idx];
+    case VV_F64:
+        return ((const double *)v->data)[idx];
+    }
+    return 0;
+}
 
 /** strdup that returns NULL on failure. */
 char *vv_strdup(const char *s);

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/internal.h"
 #include "volvis/volume.h"
 
 size_t
@@ -155,29 +156,6 @@ vv_volume_voxel_count(const vv_volume *v) {
     return (uint64_t)v->dims[0] * (uint64_t)v->dims[1] * (uint64_t)v->dims[2];
 }
 
-static inline double
-voxel_at(const vv_volume *v, size_t idx) {
-    switch (v->type) {
-    case VV_U8:
-        return ((const uint8_t *)v->data)[idx];
-    case VV_I8:
-        return ((const int8_t *)v->data)[idx];
-    case VV_U16:
-        return ((const uint16_t *)v->data)[idx];
-    case VV_I16:
-        return ((const int16_t *)v->data)[idx];
-    case VV_U32:
-        return ((const uint32_t *)v->data)[idx];
-    case VV_I32:
-        return ((const int32_t *)v->data)[idx];
-    case VV_F32:
-        return ((const float *)v->data)[idx];
-    case VV_F64:
-        return ((const double *)v->data)[idx];
-    }
-    return 0;
-}
-
 #define VV_RANGE_LOOP(T)                                                                           \
     do {                                                                                           \
         const T *p = (const T *)v->data;                                                           \
@@ -231,7 +209,7 @@ vv_volume_update_range(vv_volume *v) {
 double
 vv_volume_get(const vv_volume *v, int i, int j, int k) {
     size_t idx = ((size_t)k * (size_t)v->dims[1] + (size_t)j) * (size_t)v->dims[0] + (size_t)i;
-    return voxel_at(v, idx);
+    return vv_voxel_at(v, idx);
 }
 
 static double
@@ -393,7 +371,7 @@ vv_volume_histogram(const vv_volume *v, int nbins, double lo, double hi, uint64_
         uint64_t *mine = local + (size_t)omp_get_thread_num() * (size_t)nbins;
 #pragma omp for schedule(static)
         for (int64_t i = 0; i < (int64_t)n; i++) {
-            double x = voxel_at(v, (size_t)i);
+            double x = vv_voxel_at(v, (size_t)i);
             if (x != x)
                 continue;
             double b = (x - lo) * scale;
@@ -475,7 +453,7 @@ vv_minmax_grid_build(vv_minmax_grid **out, const vv_volume *v, int block) {
                     for (int j = lo[1]; j <= hi[1]; j++) {
                         size_t base = (size_t)k * sz + (size_t)j * sy;
                         for (int i = lo[0]; i <= hi[0]; i++) {
-                            float x = (float)voxel_at(v, base + (size_t)i);
+                            float x = (float)vv_voxel_at(v, base + (size_t)i);
                             mn = x < mn ? x : mn; /* NaN compares false: ignored */
                             mx = x > mx ? x : mx;
                         }

@@ -58,28 +58,6 @@ region_resolve(const vv_volume *v, const vv_region *r, region_box *out) {
     return VV_OK;
 }
 
-static inline double
-voxel(const vv_volume *v, size_t i) {
-    switch (v->type) {
-    case VV_U8:
-        return ((const uint8_t *)v->data)[i];
-    case VV_I8:
-        return ((const int8_t *)v->data)[i];
-    case VV_U16:
-        return ((const uint16_t *)v->data)[i];
-    case VV_I16:
-        return ((const int16_t *)v->data)[i];
-    case VV_U32:
-        return ((const uint32_t *)v->data)[i];
-    case VV_I32:
-        return ((const int32_t *)v->data)[i];
-    case VV_F32:
-        return ((const float *)v->data)[i];
-    default:
-        return ((const double *)v->data)[i];
-    }
-}
-
 void
 vv_histogram_free(vv_histogram *h) {
     if (!h)
@@ -115,7 +93,7 @@ vv_measure_histogram(vv_histogram **out, const vv_volume *v, int nbins, double l
             for (int i = rb.lo[0]; i <= rb.hi[0]; i++) {
                 if (rb.n_planes && !region_keeps(&rb, i, j, k))
                     continue;
-                double x = voxel(v, (size_t)k * sz + (size_t)j * sy + (size_t)i);
+                double x = vv_voxel_at(v, (size_t)k * sz + (size_t)j * sy + (size_t)i);
                 if (isnan(x)) {
                     nan++;
                     continue;
@@ -152,7 +130,7 @@ vv_measure_histogram(vv_histogram **out, const vv_volume *v, int nbins, double l
                 for (int i = rb.lo[0]; i <= rb.hi[0]; i++) {
                     if (rb.n_planes && !region_keeps(&rb, i, j, k))
                         continue;
-                    double x = voxel(v, (size_t)k * sz + (size_t)j * sy + (size_t)i);
+                    double x = vv_voxel_at(v, (size_t)k * sz + (size_t)j * sy + (size_t)i);
                     if (isnan(x))
                         continue;
                     if (x < lo || x > hi) {

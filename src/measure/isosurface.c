@@ -23,6 +23,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/internal.h"
 #include "measure_internal.h"
 #include "surface/surface_internal.h"
 
@@ -35,32 +36,9 @@ vv_isosurface_measure_options_init(vv_isosurface_measure_options *o) {
     vv_region_init(&o->region);
 }
 
-/* Voxel i (linear index) as double. */
-static inline double
-get(const vv_volume *v, size_t i) {
-    switch (v->type) {
-    case VV_U8:
-        return ((const uint8_t *)v->data)[i];
-    case VV_I8:
-        return ((const int8_t *)v->data)[i];
-    case VV_U16:
-        return ((const uint16_t *)v->data)[i];
-    case VV_I16:
-        return ((const int16_t *)v->data)[i];
-    case VV_U32:
-        return ((const uint32_t *)v->data)[i];
-    case VV_I32:
-        return ((const int32_t *)v->data)[i];
-    case VV_F32:
-        return ((const float *)v->data)[i];
-    default:
-        return ((const double *)v->data)[i];
-    }
-}
-
 static inline int
 inside(const vv_volume *v, size_t i, double iso) {
-    return get(v, i) >= iso;
+    return vv_voxel_at(v, i) >= iso;
 }
 
 #define COUNT_RUN(T)                                                                               \
@@ -617,7 +595,7 @@ masked_copy(const vv_volume *v, double isovalue, const region_box *rbp, const ui
             for (int i = 0; i < dims[0]; i++) {
                 int I = lo[0] + i, Jj = lo[1] + j, K = lo[2] + k;
                 const size_t src = (size_t)K * sz + (size_t)Jj * sy + (size_t)I;
-                double x = get(v, src);
+                double x = vv_voxel_at(v, src);
                 /* voxels the cut planes remove keep their values: the section's surface
                  * reaches across the planes unchanged and is clipped there */
                 int own = mask[src] || (rb.n_planes && !region_keeps(&rb, I, Jj, K));
