@@ -81,29 +81,6 @@ modification_name(vv_modification m) {
     }
 }
 
-static double
-voxel(const void *data, vv_voxel_type t, size_t i) {
-    switch (t) {
-    case VV_U8:
-        return ((const uint8_t *)data)[i];
-    case VV_I8:
-        return ((const int8_t *)data)[i];
-    case VV_U16:
-        return ((const uint16_t *)data)[i];
-    case VV_I16:
-        return ((const int16_t *)data)[i];
-    case VV_U32:
-        return ((const uint32_t *)data)[i];
-    case VV_I32:
-        return ((const int32_t *)data)[i];
-    case VV_F32:
-        return ((const float *)data)[i];
-    case VV_F64:
-        return ((const double *)data)[i];
-    }
-    return 0;
-}
-
 static int
 is_integer_type(vv_voxel_type t) {
     return t != VV_F32 && t != VV_F64;
@@ -127,7 +104,7 @@ compute_stats(const vv_volume *v, stats *st) {
     st->max = -INFINITY;
     double sum = 0;
     for (uint64_t i = 0; i < count; i++) {
-        double x = voxel(v->data, v->type, (size_t)i);
+        double x = vv_voxel_value(v->type, v->data, (size_t)i);
         if (!isfinite(x)) {
             st->nonfinite++;
             continue;
@@ -144,7 +121,7 @@ compute_stats(const vv_volume *v, stats *st) {
     st->mean = sum / (double)st->n;
     double ss = 0; /* second pass: numerically stable variance */
     for (uint64_t i = 0; i < count; i++) {
-        double x = voxel(v->data, v->type, (size_t)i);
+        double x = vv_voxel_value(v->type, v->data, (size_t)i);
         if (isfinite(x))
             ss += (x - st->mean) * (x - st->mean);
     }
@@ -160,7 +137,7 @@ compute_stats(const vv_volume *v, stats *st) {
     }
     double scale = span > 0 ? (double)nbins / span : 0;
     for (uint64_t i = 0; i < count; i++) {
-        double x = voxel(v->data, v->type, (size_t)i);
+        double x = vv_voxel_value(v->type, v->data, (size_t)i);
         if (!isfinite(x))
             continue;
         size_t b = exact ? (size_t)(x - st->min) : (size_t)((x - st->min) * scale);
@@ -214,7 +191,7 @@ print_histogram(const vv_volume *v, const stats *st, int nbins) {
     double width = is_integer_type(v->type) ? (hi - lo + 1) / nbins : (hi - lo) / nbins;
     uint64_t count = vv_volume_voxel_count(v), peak = 0;
     for (uint64_t i = 0; i < count; i++) {
-        double x = voxel(v->data, v->type, (size_t)i);
+        double x = vv_voxel_value(v->type, v->data, (size_t)i);
         if (!isfinite(x))
             continue;
         long b = (long)floor((x - lo) / width);

@@ -151,6 +151,33 @@ uint64_t vv_volume_voxel_count(const vv_volume *v);
 /** Recomputes range[] from the data and bumps `modified`. NaNs are ignored. */
 void vv_volume_update_range(vv_volume *v);
 
+/**
+ * Element @p i of voxel data of type @p t as double (for loops over
+ * vv_volume.data; no bounds check). Thread-safe.
+ */
+static inline double
+vv_voxel_value(vv_voxel_type t, const void *data, size_t i) {
+    switch (t) {
+    case VV_U8:
+        return ((const uint8_t *)data)[i];
+    case VV_I8:
+        return ((const int8_t *)data)[i];
+    case VV_U16:
+        return ((const uint16_t *)data)[i];
+    case VV_I16:
+        return ((const int16_t *)data)[i];
+    case VV_U32:
+        return ((const uint32_t *)data)[i];
+    case VV_I32:
+        return ((const int32_t *)data)[i];
+    case VV_F32:
+        return ((const float *)data)[i];
+    case VV_F64:
+        return ((const double *)data)[i];
+    }
+    return 0;
+}
+
 /** Value of voxel (i, j, k) as double; indices must be inside. */
 double vv_volume_get(const vv_volume *v, int i, int j, int k);
 

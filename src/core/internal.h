@@ -63,25 +63,7 @@ void vv_byteswap(void *data, uint64_t count, size_t size);
  */
 static inline double
 vv_voxel_at(const vv_volume *v, size_t idx) {
-    switch (v->type) {
-    case VV_U8:
-        return ((const uint8_t *)v->data)[idx];
-    case VV_I8:
-        return ((const int8_t *)v->data)[idx];
-    case VV_U16:
-        return ((const uint16_t *)v->data)[idx];
-    case VV_I16:
-        return ((const int16_t *)v->data)[idx];
-    case VV_U32:
-        return ((const uint32_t *)v->data)[idx];
-    case VV_I32:
-        return ((const int32_t *)v->data)[idx];
-    case VV_F32:
-        return ((const float *)v->data)[idx];
-    case VV_F64:
-        return ((const double *)v->data)[idx];
-    }
-    return 0;
+    return vv_voxel_value(v->type, v->data, idx);
 }
 
 /** strdup that returns NULL on failure. */

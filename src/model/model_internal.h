@@ -4,6 +4,8 @@
 #ifndef VOLVIS_MODEL_INTERNAL_H
 #define VOLVIS_MODEL_INTERNAL_H
 
+#include <jansson.h>
+
 #include "volvis/model.h"
 
 /** Smallest voxel spacing of @p v (1 if the spacing is not positive and finite). */
@@ -18,5 +20,8 @@ void vv_model_copy_name(char dst[VV_NAME_MAX], const char *src);
  * *iso_lo (a default isovalue). Never fails.
  */
 void vv_model_default_tf(const vv_volume *v, vv_render_mode mode, vv_tf *tf, double *iso_lo);
+
+/** What a JSON value is, for error messages: "an object", "a number", ... */
+const char *vv_model_json_kind(const json_t *v);
 
 #endif

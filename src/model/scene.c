@@ -279,8 +279,8 @@ serr(const sctx *c, const char *path, const char *fmt, ...) {
     return vv_error_set(VV_ERR_FORMAT, "%s:%d:%d: %s", c->path, line, col, msg);
 }
 
-static const char *
-json_kind(const json_t *v) {
+const char *
+vv_model_json_kind(const json_t *v) {
     switch (json_typeof(v)) {
     case JSON_OBJECT:
         return "an object";
@@ -294,9 +294,10 @@ json_kind(const json_t *v) {
     case JSON_TRUE:
     case JSON_FALSE:
         return "a boolean";
-    default:
-        return "null";
+    case JSON_NULL:
+        break;
     }
+    return "null";
 }
 
 /* dst = a + sep + b, truncated to PATH_MAX_LEN - 1 bytes (a truncated path
@@ -397,7 +398,7 @@ check_keys(const sctx *c, json_t *obj, const char *path, const char *const *allo
 static vv_status
 value_number(const sctx *c, json_t *v, const char *path, double *out) {
     if (!json_is_number(v))
-        return serr(c, path, "expected a number, got %s", json_kind(v));
+        return serr(c, path, "expected a number, got %s", vv_model_json_kind(v));
     double d = json_number_value(v);
     if (!isfinite(d))
         return serr(c, path, "number is not finite");
@@ -408,7 +409,7 @@ value_number(const sctx *c, json_t *v, const char *path, double *out) {
 static vv_status
 value_vec3(const sctx *c, json_t *v, const char *path, vv_vec3 *out) {
     if (!json_is_array(v) || json_array_size(v) != 3)
-        return serr(c, path, "expected an array of 3 numbers, got %s%s", json_kind(v),
+        return serr(c, path, "expected an array of 3 numbers, got %s%s", vv_model_json_kind(v),
                     json_is_array(v) ? " of another length" : "");
     double d[3];
     for (size_t i = 0; i < 3; i++) {
@@ -416,7 +417,7 @@ value_vec3(const sctx *c, json_t *v, const char *path, vv_vec3 *out) {
         if (!json_is_number(e)) {
             char ep[PATH_MAX_LEN];
             path_index(ep, path, i);
-            return serr(c, ep, "expected a number, got %s", json_kind(e));
+            return serr(c, ep, "expected a number, got %s", vv_model_json_kind(e));
         }
         d[i] = json_number_value(e);
     }
@@ -541,7 +542,7 @@ get_bool(const sctx *c, json_t *obj, const char *path, const char *key, int *out
     if (!v)
         return VV_OK;
     if (!json_is_boolean(v))
-        return serr(c, kp, "expected true or false, got %s", json_kind(v));
+        return serr(c, kp, "expected true or false, got %s", vv_model_json_kind(v));
     *out = json_is_true(v) ? 1 : 0;
     return VV_OK;
 }
@@ -553,7 +554,7 @@ get_string(const sctx *c, json_t *obj, const char *path, const char *key, const 
     if (!v)
         return VV_OK;
     if (!json_is_string(v))
-        return serr(c, kp, "expected a string, got %s", json_kind(v));
+        return serr(c, kp, "expected a string, got %s", vv_model_json_kind(v));
     *out = json_string_value(v);
     return VV_OK;
 }
@@ -569,7 +570,7 @@ get_container(const sctx *c, json_t *obj, const char *path, const char *key, jso
     if (!v)
         return VV_OK;
     if (json_typeof(v) != want)
-        return serr(c, kp, "expected %s, got %s", what, json_kind(v));
+        return serr(c, kp, "expected %s, got %s", what, vv_model_json_kind(v));
     *out = v;
     return VV_OK;
 }
@@ -601,7 +602,8 @@ parse_cut_planes(const sctx *c, json_t *arr, const char *path, vv_cut_plane *pla
         char ep[PATH_MAX_LEN];
         path_index(ep, path, i);
         if (!json_is_object(e))
-            return serr(c, ep, "expected an object {\"point\", \"normal\"}, got %s", json_kind(e));
+            return serr(c, ep, "expected an object {\"point\", \"normal\"}, got %s",
+                        vv_model_json_kind(e));
         if (i >= VV_MAX_CUT_PLANES)
             return serr(c, ep, "more than %d cut planes", VV_MAX_CUT_PLANES);
         vv_status st = check_keys(c, e, ep, keys);
@@ -675,7 +677,7 @@ parse_lights(const sctx *c, json_t *arr, vv_world *w) {
         char ep[PATH_MAX_LEN];
         path_index(ep, "lights", i);
         if (!json_is_object(e))
-            return serr(c, ep, "expected an object, got %s", json_kind(e));
+            return serr(c, ep, "expected an object, got %s", vv_model_json_kind(e));
         if (i >= VV_MAX_LIGHTS)
             return serr(c, ep, "more than %d lights", VV_MAX_LIGHTS);
         vv_status st = check_keys(c, e, ep, keys);
@@ -744,15 +746,15 @@ parse_tf_points(const sctx *c, json_t *tfj, const char *tp, vv_tf *tf, int opaci
         path_index(ep, ap, i);
         if (!json_is_array(e) || json_array_size(e) != 2)
             return serr(c, ep, "expected a pair [value, %s], got %s",
-                        opacity ? "opacity" : "[r, g, b]", json_kind(e));
+                        opacity ? "opacity" : "[r, g, b]", vv_model_json_kind(e));
         char vp[PATH_MAX_LEN], op[PATH_MAX_LEN];
         path_index(vp, ep, 0);
         path_index(op, ep, 1);
-        double value;
+        double value = 0.0;
         if ((st = value_number(c, json_array_get(e, 0), vp, &value)) != VV_OK)
             return st;
         if (opacity) {
-            double a;
+            double a = 0.0;
             if ((st = value_number(c, json_array_get(e, 1), op, &a)) != VV_OK)
                 return st;
             if (!(a >= 0.0 && a <= 1.0))
@@ -904,7 +906,7 @@ parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
         json_t *q = json_object_get(e, "orientation");
         path_key(kp, op, "orientation");
         if (!json_is_array(q) || json_array_size(q) != 4)
-            return serr(c, kp, "expected a quaternion [w, x, y, z], got %s", json_kind(q));
+            return serr(c, kp, "expected a quaternion [w, x, y, z], got %s", vv_model_json_kind(q));
         double d[4];
         for (size_t i = 0; i < 4; i++) {
             char ip[PATH_MAX_LEN];
@@ -1292,7 +1294,7 @@ parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
             return parse_geometry_object(c, e, op, w);
     }
     if (!json_is_object(e))
-        return serr(c, op, "expected an object, got %s", json_kind(e));
+        return serr(c, op, "expected an object, got %s", vv_model_json_kind(e));
     vv_status st = check_keys(c, e, op, keys);
     if (st != VV_OK)
         return st;
@@ -1371,7 +1373,8 @@ static vv_status
 parse_scene(const sctx *c, json_t *root, vv_world *w) {
     static const char *const keys[] = {"view", "lights", "shading", "objects", "cut_planes", NULL};
     if (!json_is_object(root))
-        return serr(c, "", "expected a JSON object at the top level, got %s", json_kind(root));
+        return serr(c, "", "expected a JSON object at the top level, got %s",
+                    vv_model_json_kind(root));
     vv_status st = check_keys(c, root, "", keys);
     if (st != VV_OK)
         return st;

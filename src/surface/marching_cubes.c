@@ -65,33 +65,9 @@ typedef struct mc_job {
     int failed;
 } mc_job;
 
-/* Voxel i of data of type t. The hot functions take t as a parameter and are inlined into
- * one copy per type (the dispatchers below), so the switch disappears from their loops. */
-static inline double
-valt(vv_voxel_type t, const void *data, size_t i) {
-    switch (t) {
-    case VV_U8:
-        return ((const uint8_t *)data)[i];
-    case VV_I8:
-        return ((const int8_t *)data)[i];
-    case VV_U16:
-        return ((const uint16_t *)data)[i];
-    case VV_I16:
-        return ((const int16_t *)data)[i];
-    case VV_U32:
-        return ((const uint32_t *)data)[i];
-    case VV_I32:
-        return ((const int32_t *)data)[i];
-    case VV_F32:
-        return ((const float *)data)[i];
-    default:
-        return ((const double *)data)[i];
-    }
-}
-
 static inline double
 val(const vv_volume *v, size_t i) {
-    return valt(v->type, v->data, i);
+    return vv_voxel_value(v->type, v->data, i);
 }
 
 #if defined(__GNUC__)
@@ -315,7 +291,7 @@ cell_config(const mc_job *J, int cs, size_t c0, const vv_voxel_type T) {
     const size_t off[8] = {0, 1, 1 + sy, sy, sz, 1 + sz, 1 + sy + sz, sy + sz};
     double w[8];
     for (int c = 0; c < 8; c++)
-        w[c] = valt(T, J->v->data, c0 + off[c]) - J->iso;
+        w[c] = vv_voxel_value(T, J->v->data, c0 + off[c]) - J->iso;
     int d = 0;
     for (int m = 0; m < na; m++) {
         const int *q = mc_face_corner[tb->amb_face[cs][m]];
@@ -391,11 +367,11 @@ gradient(const mc_job *J, int I, int Jy, int K, size_t idx, double g[3], const v
         if (n < 2)
             g[a] = 0;
         else if (p == 0)
-            g[a] = valt(T, d, idx + st[a]) - valt(T, d, idx);
+            g[a] = vv_voxel_value(T, d, idx + st[a]) - vv_voxel_value(T, d, idx);
         else if (p == n - 1)
-            g[a] = valt(T, d, idx) - valt(T, d, idx - st[a]);
+            g[a] = vv_voxel_value(T, d, idx) - vv_voxel_value(T, d, idx - st[a]);
         else
-            g[a] = 0.5 * (valt(T, d, idx + st[a]) - valt(T, d, idx - st[a]));
+            g[a] = 0.5 * (vv_voxel_value(T, d, idx + st[a]) - vv_voxel_value(T, d, idx - st[a]));
     }
 }
 
@@ -405,7 +381,7 @@ emit_vertex(mc_job *J, uint64_t vi, int I, int Jy, int K, int axis, const vv_vox
     const vv_volume *v = J->v;
     const size_t st[3] = {1, J->sy, J->sz};
     const size_t i0 = (size_t)K * J->sz + (size_t)Jy * J->sy + (size_t)I, i1 = i0 + st[axis];
-    const double a = valt(T, v->data, i0), b = valt(T, v->data, i1);
+    const double a = vv_voxel_value(T, v->data, i0), b = vv_voxel_value(T, v->data, i1);
     double t = (J->iso - a) / (b - a);
     if (!(t >= 0))
         t = 0; /* also NaN */
