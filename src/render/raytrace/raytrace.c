@@ -1009,9 +1009,18 @@ build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
 }
 
 /* Shadow of a volume sample at index point pi (world pw) for light l. */
+/* The last shadow-grid cell a ray's samples looked up, per light: its 8
+ * corner transmittances, so that the samples of one ray inside one cell
+ * (about 8 at a step of half a voxel) read the shared grid once. */
+typedef struct rt_scache {
+    const rt_vobj *ob;          /* the volume the cells belong to, NULL: none */
+    size_t cell[VV_MAX_LIGHTS]; /* grid index of the cell's first corner */
+    float v[VV_MAX_LIGHTS][8];  /* its corners' transmittances */
+} rt_scache;
+
 static float
 volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float pi[3],
-                     const float pw[3]) {
+                     const float pw[3], rt_scache *sc) {
     if (ob->sweep[l]) {
         /* the swept grid, looked up 1.5 grid cells towards the light so that
          * a surface does not shadow itself */
@@ -1048,7 +1057,23 @@ volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float p
         f[a] = x - (float)i;
         f[a] = f[a] > 1 ? 1 : f[a];
     }
-    float v[8];
+    const size_t base =
+        ((size_t)i0[2] * (size_t)ob->gdim[1] + (size_t)i0[1]) * (size_t)ob->gdim[0] + (size_t)i0[0];
+    float vloc[8], *v = vloc;
+    if (sc) {
+        if (sc->ob != ob) {
+            sc->ob = ob;
+            for (int k = 0; k < VV_MAX_LIGHTS; k++)
+                sc->cell[k] = SIZE_MAX;
+        }
+        v = sc->v[l];
+        if (sc->cell[l] == base) {
+            float x0 = vv_lerpf(v[0], v[1], f[0]), x1 = vv_lerpf(v[2], v[3], f[0]);
+            float x2 = vv_lerpf(v[4], v[5], f[0]), x3 = vv_lerpf(v[6], v[7], f[0]);
+            return vv_lerpf(vv_lerpf(x0, x1, f[1]), vv_lerpf(x2, x3, f[1]), f[2]);
+        }
+        sc->cell[l] = base;
+    }
     for (int k = 0; k < 8; k++) {
         int gi = i0[0] + (k & 1), gj = i0[1] + ((k >> 1) & 1), gk = i0[2] + ((k >> 2) & 1);
         size_t idx =
@@ -1090,12 +1115,13 @@ typedef struct rt_shadow_ctx {
     const rt_frame *fr;
     const rt_vobj *ob;
     const float *pi, *pw; /* index and world position */
+    rt_scache *sc;        /* the ray's last cells, or NULL */
 } rt_shadow_ctx;
 
 static float
 sample_shadow(const void *ctx, int l) {
     const rt_shadow_ctx *c = ctx;
-    return volume_sample_shadow(c->fr, c->ob, l, c->pi, c->pw);
+    return volume_sample_shadow(c->fr, c->ob, l, c->pi, c->pw, c->sc);
 }
 
 /* The ray caster's volume Phong (vv_vshade: reflection vector, two-sided,
@@ -1103,9 +1129,10 @@ sample_shadow(const void *ctx, int l) {
  * shadow. */
 static void
 shade_volume(const rt_frame *fr, const rt_vobj *o, const float g[3], const float pi[3],
-             const float pw[3], const float v[3], const float col[3], float alpha, float out[3]) {
+             const float pw[3], const float v[3], const float col[3], float alpha, rt_scache *sc,
+             float out[3]) {
     const int shadows = fr->shadows && o->obj->receives_shadows;
-    const rt_shadow_ctx ctx = {fr, o, pi, pw};
+    const rt_shadow_ctx ctx = {fr, o, pi, pw, sc};
     vv_vshade(&o->sh, fr->vlights, fr->n_lights, g, pw, v, col, alpha,
               shadows ? sample_shadow : NULL, &ctx, out);
 }
@@ -1214,8 +1241,8 @@ shade_geometry(const rt_frame *fr, const vv_ray *wr, const rt_hit *h, int depth,
  * index-space gradient there, or NULL to compute it. */
 static inline void
 composite_sample(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, const float v[3],
-                 const float *e, const float p[3], double t, const float *gin, float C[3],
-                 float *A) {
+                 const float *e, const float p[3], double t, const float *gin, rt_scache *sc,
+                 float C[3], float *A) {
     const float w = 1 - *A;
     if (ob->obj->shading) {
         float g[3], pw[3], o3[3];
@@ -1226,7 +1253,7 @@ composite_sample(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, const 
         pw[0] = (float)(wr->origin.x + t * wr->dir.x);
         pw[1] = (float)(wr->origin.y + t * wr->dir.y);
         pw[2] = (float)(wr->origin.z + t * wr->dir.z);
-        shade_volume(fr, ob, g, p, pw, v, e + 1, e[0], o3);
+        shade_volume(fr, ob, g, p, pw, v, e + 1, e[0], sc, o3);
         C[0] += w * o3[0];
         C[1] += w * o3[1];
         C[2] += w * o3[2];
@@ -1248,6 +1275,7 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
     const double dt = fr->dt, inv_dt = 1.0 / fr->dt;
     const vv_vcache *c = ob->c;
     const int shading = ob->obj->shading;
+    rt_scache sc = {NULL, {0}, {{0}}};
     float A = 0;
     double k = vv_ceil_pos(r->t0 * inv_dt);
     const double kend = floor(r->t1 * inv_dt);
@@ -1286,7 +1314,7 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
                         vv_vcache_gradient(c, p, g);
                     }
                 }
-                composite_sample(fr, ob, wr, v, e, p, t, g, C, &A);
+                composite_sample(fr, ob, wr, v, e, p, t, g, &sc, C, &A);
                 if (*dep == INFINITY)
                     *dep = (float)t;
                 if (A >= fr->et) {
@@ -1308,6 +1336,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
               float weight, float C[3], float *Aout, float *dep) {
     vv_vray rays[RT_MAX_OBJ];
     int act[RT_MAX_OBJ];
+    rt_scache sc = {NULL, {0}, {{0}}};
     int na = 0;
     double tmin = INFINITY, tmax = -INFINITY;
     for (int i = 0; i < fr->n_vobj; i++) {
@@ -1395,7 +1424,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                     pw[1] = (float)(wr->origin.y + th * wr->dir.y);
                     pw[2] = (float)(wr->origin.z + th * wr->dir.z);
                     if (ob->obj->shading)
-                        shade_volume(fr, ob, g, ph, pw, v, ob->sh.base, 1.0f, col);
+                        shade_volume(fr, ob, g, ph, pw, v, ob->sh.base, 1.0f, NULL, col);
                     else
                         memcpy(col, ob->sh.base, sizeof col);
                     const vv_material *m = &ob->obj->material;
@@ -1435,7 +1464,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
             const float alpha = e[0];
             if (alpha <= 0)
                 continue;
-            composite_sample(fr, ob, wr, v, e, p, t, NULL, C, &A);
+            composite_sample(fr, ob, wr, v, e, p, t, NULL, &sc, C, &A);
             if (*dep == INFINITY)
                 *dep = (float)t;
         }
