@@ -1118,7 +1118,7 @@ typedef struct rt_shadow_ctx {
     rt_scache *sc;        /* the ray's last cells, or NULL */
 } rt_shadow_ctx;
 
-static float
+static inline float
 sample_shadow(const void *ctx, int l) {
     const rt_shadow_ctx *c = ctx;
     return volume_sample_shadow(c->fr, c->ob, l, c->pi, c->pw, c->sc);
@@ -1133,8 +1133,12 @@ shade_volume(const rt_frame *fr, const rt_vobj *o, const float g[3], const float
              float out[3]) {
     const int shadows = fr->shadows && o->obj->receives_shadows;
     const rt_shadow_ctx ctx = {fr, o, pi, pw, sc};
-    vv_vshade(&o->sh, fr->vlights, fr->n_lights, g, pw, v, col, alpha,
-              shadows ? sample_shadow : NULL, &ctx, out);
+    /* two calls, so that the compiler inlines the shadow lookup */
+    if (shadows)
+        vv_vshade(&o->sh, fr->vlights, fr->n_lights, g, pw, v, col, alpha, sample_shadow, &ctx,
+                  out);
+    else
+        vv_vshade(&o->sh, fr->vlights, fr->n_lights, g, pw, v, col, alpha, NULL, NULL, out);
 }
 
 static void trace(const rt_frame *fr, const vv_ray *wr, int depth, int primary, float weight,
