@@ -1279,7 +1279,8 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
     const double dt = fr->dt, inv_dt = 1.0 / fr->dt;
     const vv_vcache *c = ob->c;
     const int shading = ob->obj->shading;
-    rt_scache sc = {NULL, {0}, {{0}}};
+    rt_scache sc;
+    sc.ob = NULL; /* the rest is filled when first used */
     float A = 0;
     double k = vv_ceil_pos(r->t0 * inv_dt);
     const double kend = floor(r->t1 * inv_dt);
@@ -1340,7 +1341,8 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
               float weight, float C[3], float *Aout, float *dep) {
     vv_vray rays[RT_MAX_OBJ];
     int act[RT_MAX_OBJ];
-    rt_scache sc = {NULL, {0}, {{0}}};
+    rt_scache sc;
+    sc.ob = NULL; /* the rest is filled when first used */
     int na = 0;
     double tmin = INFINITY, tmax = -INFINITY;
     for (int i = 0; i < fr->n_vobj; i++) {
