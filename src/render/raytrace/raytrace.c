@@ -480,10 +480,11 @@ bvh_build(rt_bvh *bvh, const vv_mesh *m) {
     return VV_OK;
 }
 
-/* Nearest hit of one geometric object in (tmin, tmax); world normal (not
- * flipped towards the ray). */
+/* Nearest hit of one geometric object in (tmin, tmax); its object-space
+ * normal in *no (not normalised, not flipped towards the ray; gobj_normal
+ * turns it into the world normal), or NULL when not needed. */
 static int
-gobj_hit(const rt_gobj *g, const vv_ray *wr, double tmin, double tmax, double *t, vv_vec3 *nw) {
+gobj_hit(const rt_gobj *g, const vv_ray *wr, double tmin, double tmax, double *t, vv_vec3 *no) {
     const vv_geometry *ge = &g->obj->geometry;
     vv_vec3 o = xf_point(g->w2o, wr->origin), d = xf_dir(g->w2o, wr->dir);
     vv_vec3 n = {0, 0, 1};
@@ -631,11 +632,18 @@ gobj_hit(const rt_gobj *g, const vv_ray *wr, double tmin, double tmax, double *t
     if (!(th > tmin && th < tmax))
         return 0;
     *t = th;
+    if (no)
+        *no = n;
+    return 1;
+}
+
+/* The world-space unit normal of object-space normal n of g. */
+static inline vv_vec3
+gobj_normal(const rt_gobj *g, vv_vec3 n) {
     vv_vec3 w = v3(g->nrm[0][0] * n.x + g->nrm[0][1] * n.y + g->nrm[0][2] * n.z,
                    g->nrm[1][0] * n.x + g->nrm[1][1] * n.y + g->nrm[1][2] * n.z,
                    g->nrm[2][0] * n.x + g->nrm[2][1] * n.y + g->nrm[2][2] * n.z);
-    *nw = v3norm(w);
-    return 1;
+    return v3norm(w);
 }
 
 /* Nearest geometric hit among the objects a ray of this kind sees. */
@@ -657,6 +665,8 @@ nearest_hit(const rt_frame *fr, const vv_ray *wr, double tmin, double tmax, int 
             found = 1;
         }
     }
+    if (found) /* the world normal of the nearest hit only */
+        h->n = gobj_normal(&fr->gobjs[h->gobj], h->n);
     return found;
 }
 
@@ -800,8 +810,7 @@ shadow_segment(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start, d
         if (!g->obj->casts_shadows)
             continue;
         double t;
-        vv_vec3 n;
-        if (gobj_hit(g, &r, start > eps ? start : eps, tmax, &t, &n))
+        if (gobj_hit(g, &r, start > eps ? start : eps, tmax, &t, NULL))
             T *= g->kt;
     }
     for (int i = 0; i < fr->n_vobj && T > 0.0037f; i++) {
