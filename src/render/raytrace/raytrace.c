@@ -192,7 +192,10 @@ typedef struct rt_gobj {
     float col[3];
     float kr, kt; /* reflectance (0 when the object does not reflect), transparency */
     double ior;
-    int closed; /* refracts (a solid); planes and polygons transmit straight */
+    int closed;  /* refracts (a solid); planes and polygons transmit straight */
+    int bounded; /* polygon, box: a world-space bounding sphere rejects rays early */
+    vv_vec3 bc;  /* its centre */
+    double br2;  /* its squared radius */
 } rt_gobj;
 
 typedef struct rt_frame {
@@ -485,6 +488,14 @@ bvh_build(rt_bvh *bvh, const vv_mesh *m) {
  * turns it into the world normal), or NULL when not needed. */
 static int
 gobj_hit(const rt_gobj *g, const vv_ray *wr, double tmin, double tmax, double *t, vv_vec3 *no) {
+    if (g->bounded) {
+        /* the ray (t >= 0) misses the bounding sphere: its origin is outside
+         * and the sphere lies behind it or off its line */
+        const vv_vec3 oc = v3sub(g->bc, wr->origin);
+        const double b = v3dot(oc, wr->dir), c = v3dot(oc, oc) - g->br2;
+        if (c > 0 && (b <= 0 || b * b < c * v3dot(wr->dir, wr->dir)))
+            return 0;
+    }
     const vv_geometry *ge = &g->obj->geometry;
     vv_vec3 o = xf_point(g->w2o, wr->origin), d = xf_dir(g->w2o, wr->dir);
     vv_vec3 n = {0, 0, 1};
@@ -1699,6 +1710,29 @@ prepare_geometry(rt_frame *fr, rt_gobj *g, const vv_object *obj) {
     default:
         return vv_error_set(VV_ERR_INVALID, "object '%s': unsupported type %d", obj->name,
                             (int)obj->type);
+    }
+    if (obj->type == VV_OBJECT_POLYGON || obj->type == VV_OBJECT_BOX) {
+        /* world-space bounding sphere of the object-space bounding box */
+        vv_vec3 lo = ge->box.min, hi = ge->box.max;
+        if (obj->type == VV_OBJECT_POLYGON) {
+            lo = hi = ge->vertices[0];
+            for (int i = 1; i < ge->n_vertices; i++) {
+                const vv_vec3 q = ge->vertices[i];
+                lo = v3(q.x < lo.x ? q.x : lo.x, q.y < lo.y ? q.y : lo.y, q.z < lo.z ? q.z : lo.z);
+                hi = v3(q.x > hi.x ? q.x : hi.x, q.y > hi.y ? q.y : hi.y, q.z > hi.z ? q.z : hi.z);
+            }
+        }
+        g->bc = vv_mat4_mul_point(o2w, v3scale(v3add(lo, hi), 0.5));
+        double r = 0;
+        for (int k = 0; k < 8; k++) {
+            const vv_vec3 q = v3(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
+            const double d = v3len(v3sub(vv_mat4_mul_point(o2w, q), g->bc));
+            r = d > r ? d : r;
+        }
+        r = r * (1 + 1e-6) + 1e-9; /* rounding margin: never reject a hit */
+        g->br2 = r * r;
+        g->bounded =
+            isfinite(g->br2) && isfinite(g->bc.x) && isfinite(g->bc.y) && isfinite(g->bc.z);
     }
     (void)fr;
     return VV_OK;
