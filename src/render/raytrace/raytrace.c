@@ -192,10 +192,11 @@ typedef struct rt_gobj {
     float col[3];
     float kr, kt; /* reflectance (0 when the object does not reflect), transparency */
     double ior;
-    int closed;  /* refracts (a solid); planes and polygons transmit straight */
-    int bounded; /* polygon, box: a world-space bounding sphere rejects rays early */
-    vv_vec3 bc;  /* its centre */
-    double br2;  /* its squared radius */
+    int closed;     /* refracts (a solid); planes and polygons transmit straight */
+    int bounded;    /* polygon, box: a world-space bounding sphere rejects rays early */
+    vv_vec3 bc;     /* its centre */
+    double br2;     /* its squared radius */
+    vv_vec3 pn, pp; /* plane: world-space normal (M^-T n) and point */
 } rt_gobj;
 
 typedef struct rt_frame {
@@ -497,6 +498,19 @@ gobj_hit(const rt_gobj *g, const vv_ray *wr, double tmin, double tmax, double *t
             return 0;
     }
     const vv_geometry *ge = &g->obj->geometry;
+    if (g->type == VV_OBJECT_PLANE) {
+        /* in world space: the plane's world normal and point, no transform */
+        const double dn = v3dot(g->pn, wr->dir);
+        if (fabs(dn) < 1e-300)
+            return 0;
+        const double tp = v3dot(g->pn, v3sub(g->pp, wr->origin)) / dn;
+        if (!(tp > tmin && tp < tmax))
+            return 0;
+        *t = tp;
+        if (no)
+            *no = ge->normal;
+        return 1;
+    }
     vv_vec3 o = xf_point(g->w2o, wr->origin), d = xf_dir(g->w2o, wr->dir);
     vv_vec3 n = {0, 0, 1};
     double th = INFINITY;
@@ -1659,6 +1673,12 @@ prepare_geometry(rt_frame *fr, rt_gobj *g, const vv_object *obj) {
     case VV_OBJECT_PLANE:
         if (!(v3len(ge->normal) > 0))
             return vv_error_set(VV_ERR_INVALID, "object '%s': plane with a zero normal", obj->name);
+        g->pp = vv_mat4_mul_point(o2w, ge->point);
+        g->pn = v3(
+            g->nrm[0][0] * ge->normal.x + g->nrm[0][1] * ge->normal.y + g->nrm[0][2] * ge->normal.z,
+            g->nrm[1][0] * ge->normal.x + g->nrm[1][1] * ge->normal.y + g->nrm[1][2] * ge->normal.z,
+            g->nrm[2][0] * ge->normal.x + g->nrm[2][1] * ge->normal.y +
+                g->nrm[2][2] * ge->normal.z);
         break;
     case VV_OBJECT_POLYGON: {
         if (ge->n_vertices < 3 || !ge->vertices)
