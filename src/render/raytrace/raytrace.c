@@ -192,7 +192,11 @@ typedef struct rt_gobj {
     float col[3];
     float kr, kt; /* reflectance (0 when the object does not reflect), transparency */
     double ior;
-    int closed; /* refracts (a solid); planes and polygons transmit straight */
+    int closed;     /* refracts (a solid); planes and polygons transmit straight */
+    int bounded;    /* polygon, box: a world-space bounding sphere rejects rays early */
+    vv_vec3 bc;     /* its centre */
+    double br2;     /* its squared radius */
+    vv_vec3 pn, pp; /* plane: world-space normal (M^-T n) and point */
 } rt_gobj;
 
 typedef struct rt_frame {
@@ -212,6 +216,9 @@ typedef struct rt_frame {
     int shadows, max_depth;
     int avx2;          /* the processor has AVX2 and FMA (vv_vray_classify) */
     double scene_size; /* for ray offsets */
+    /* primary rays, affine in the pixel position before normalisation (as
+     * the ray caster's): origin o00 + x ox + y oy, direction d00 + x dx + y dy */
+    vv_vec3 o00, ox, oy, d00, dx, dy;
 } rt_frame;
 
 /* A surface hit. */
@@ -477,11 +484,33 @@ bvh_build(rt_bvh *bvh, const vv_mesh *m) {
     return VV_OK;
 }
 
-/* Nearest hit of one geometric object in (tmin, tmax); world normal (not
- * flipped towards the ray). */
+/* Nearest hit of one geometric object in (tmin, tmax); its object-space
+ * normal in *no (not normalised, not flipped towards the ray; gobj_normal
+ * turns it into the world normal), or NULL when not needed. */
 static int
-gobj_hit(const rt_gobj *g, const vv_ray *wr, double tmin, double tmax, double *t, vv_vec3 *nw) {
+gobj_hit(const rt_gobj *g, const vv_ray *wr, double tmin, double tmax, double *t, vv_vec3 *no) {
+    if (g->bounded) {
+        /* the ray (t >= 0) misses the bounding sphere: its origin is outside
+         * and the sphere lies behind it or off its line */
+        const vv_vec3 oc = v3sub(g->bc, wr->origin);
+        const double b = v3dot(oc, wr->dir), c = v3dot(oc, oc) - g->br2;
+        if (c > 0 && (b <= 0 || b * b < c * v3dot(wr->dir, wr->dir)))
+            return 0;
+    }
     const vv_geometry *ge = &g->obj->geometry;
+    if (g->type == VV_OBJECT_PLANE) {
+        /* in world space: the plane's world normal and point, no transform */
+        const double dn = v3dot(g->pn, wr->dir);
+        if (fabs(dn) < 1e-300)
+            return 0;
+        const double tp = v3dot(g->pn, v3sub(g->pp, wr->origin)) / dn;
+        if (!(tp > tmin && tp < tmax))
+            return 0;
+        *t = tp;
+        if (no)
+            *no = ge->normal;
+        return 1;
+    }
     vv_vec3 o = xf_point(g->w2o, wr->origin), d = xf_dir(g->w2o, wr->dir);
     vv_vec3 n = {0, 0, 1};
     double th = INFINITY;
@@ -628,11 +657,18 @@ gobj_hit(const rt_gobj *g, const vv_ray *wr, double tmin, double tmax, double *t
     if (!(th > tmin && th < tmax))
         return 0;
     *t = th;
+    if (no)
+        *no = n;
+    return 1;
+}
+
+/* The world-space unit normal of object-space normal n of g. */
+static inline vv_vec3
+gobj_normal(const rt_gobj *g, vv_vec3 n) {
     vv_vec3 w = v3(g->nrm[0][0] * n.x + g->nrm[0][1] * n.y + g->nrm[0][2] * n.z,
                    g->nrm[1][0] * n.x + g->nrm[1][1] * n.y + g->nrm[1][2] * n.z,
                    g->nrm[2][0] * n.x + g->nrm[2][1] * n.y + g->nrm[2][2] * n.z);
-    *nw = v3norm(w);
-    return 1;
+    return v3norm(w);
 }
 
 /* Nearest geometric hit among the objects a ray of this kind sees. */
@@ -654,6 +690,8 @@ nearest_hit(const rt_frame *fr, const vv_ray *wr, double tmin, double tmax, int 
             found = 1;
         }
     }
+    if (found) /* the world normal of the nearest hit only */
+        h->n = gobj_normal(&fr->gobjs[h->gobj], h->n);
     return found;
 }
 
@@ -797,8 +835,7 @@ shadow_segment(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start, d
         if (!g->obj->casts_shadows)
             continue;
         double t;
-        vv_vec3 n;
-        if (gobj_hit(g, &r, start > eps ? start : eps, tmax, &t, &n))
+        if (gobj_hit(g, &r, start > eps ? start : eps, tmax, &t, NULL))
             T *= g->kt;
     }
     for (int i = 0; i < fr->n_vobj && T > 0.0037f; i++) {
@@ -1009,9 +1046,18 @@ build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
 }
 
 /* Shadow of a volume sample at index point pi (world pw) for light l. */
+/* The last shadow-grid cell a ray's samples looked up, per light: its 8
+ * corner transmittances, so that the samples of one ray inside one cell
+ * (about 8 at a step of half a voxel) read the shared grid once. */
+typedef struct rt_scache {
+    const rt_vobj *ob;          /* the volume the cells belong to, NULL: none */
+    size_t cell[VV_MAX_LIGHTS]; /* grid index of the cell's first corner */
+    float v[VV_MAX_LIGHTS][8];  /* its corners' transmittances */
+} rt_scache;
+
 static float
 volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float pi[3],
-                     const float pw[3]) {
+                     const float pw[3], rt_scache *sc) {
     if (ob->sweep[l]) {
         /* the swept grid, looked up 1.5 grid cells towards the light so that
          * a surface does not shadow itself */
@@ -1048,7 +1094,23 @@ volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float p
         f[a] = x - (float)i;
         f[a] = f[a] > 1 ? 1 : f[a];
     }
-    float v[8];
+    const size_t base =
+        ((size_t)i0[2] * (size_t)ob->gdim[1] + (size_t)i0[1]) * (size_t)ob->gdim[0] + (size_t)i0[0];
+    float vloc[8], *v = vloc;
+    if (sc) {
+        if (sc->ob != ob) {
+            sc->ob = ob;
+            for (int k = 0; k < VV_MAX_LIGHTS; k++)
+                sc->cell[k] = SIZE_MAX;
+        }
+        v = sc->v[l];
+        if (sc->cell[l] == base) {
+            float x0 = vv_lerpf(v[0], v[1], f[0]), x1 = vv_lerpf(v[2], v[3], f[0]);
+            float x2 = vv_lerpf(v[4], v[5], f[0]), x3 = vv_lerpf(v[6], v[7], f[0]);
+            return vv_lerpf(vv_lerpf(x0, x1, f[1]), vv_lerpf(x2, x3, f[1]), f[2]);
+        }
+        sc->cell[l] = base;
+    }
     for (int k = 0; k < 8; k++) {
         int gi = i0[0] + (k & 1), gj = i0[1] + ((k >> 1) & 1), gk = i0[2] + ((k >> 2) & 1);
         size_t idx =
@@ -1090,12 +1152,13 @@ typedef struct rt_shadow_ctx {
     const rt_frame *fr;
     const rt_vobj *ob;
     const float *pi, *pw; /* index and world position */
+    rt_scache *sc;        /* the ray's last cells, or NULL */
 } rt_shadow_ctx;
 
-static float
+static inline float
 sample_shadow(const void *ctx, int l) {
     const rt_shadow_ctx *c = ctx;
-    return volume_sample_shadow(c->fr, c->ob, l, c->pi, c->pw);
+    return volume_sample_shadow(c->fr, c->ob, l, c->pi, c->pw, c->sc);
 }
 
 /* The ray caster's volume Phong (vv_vshade: reflection vector, two-sided,
@@ -1103,11 +1166,16 @@ sample_shadow(const void *ctx, int l) {
  * shadow. */
 static void
 shade_volume(const rt_frame *fr, const rt_vobj *o, const float g[3], const float pi[3],
-             const float pw[3], const float v[3], const float col[3], float alpha, float out[3]) {
+             const float pw[3], const float v[3], const float col[3], float alpha, rt_scache *sc,
+             float out[3]) {
     const int shadows = fr->shadows && o->obj->receives_shadows;
-    const rt_shadow_ctx ctx = {fr, o, pi, pw};
-    vv_vshade(&o->sh, fr->vlights, fr->n_lights, g, pw, v, col, alpha,
-              shadows ? sample_shadow : NULL, &ctx, out);
+    const rt_shadow_ctx ctx = {fr, o, pi, pw, sc};
+    /* two calls, so that the compiler inlines the shadow lookup */
+    if (shadows)
+        vv_vshade(&o->sh, fr->vlights, fr->n_lights, g, pw, v, col, alpha, sample_shadow, &ctx,
+                  out);
+    else
+        vv_vshade(&o->sh, fr->vlights, fr->n_lights, g, pw, v, col, alpha, NULL, NULL, out);
 }
 
 static void trace(const rt_frame *fr, const vv_ray *wr, int depth, int primary, float weight,
@@ -1214,8 +1282,8 @@ shade_geometry(const rt_frame *fr, const vv_ray *wr, const rt_hit *h, int depth,
  * index-space gradient there, or NULL to compute it. */
 static inline void
 composite_sample(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, const float v[3],
-                 const float *e, const float p[3], double t, const float *gin, float C[3],
-                 float *A) {
+                 const float *e, const float p[3], double t, const float *gin, rt_scache *sc,
+                 float C[3], float *A) {
     const float w = 1 - *A;
     if (ob->obj->shading) {
         float g[3], pw[3], o3[3];
@@ -1226,7 +1294,7 @@ composite_sample(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, const 
         pw[0] = (float)(wr->origin.x + t * wr->dir.x);
         pw[1] = (float)(wr->origin.y + t * wr->dir.y);
         pw[2] = (float)(wr->origin.z + t * wr->dir.z);
-        shade_volume(fr, ob, g, p, pw, v, e + 1, e[0], o3);
+        shade_volume(fr, ob, g, p, pw, v, e + 1, e[0], sc, o3);
         C[0] += w * o3[0];
         C[1] += w * o3[1];
         C[2] += w * o3[2];
@@ -1248,6 +1316,8 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
     const double dt = fr->dt, inv_dt = 1.0 / fr->dt;
     const vv_vcache *c = ob->c;
     const int shading = ob->obj->shading;
+    rt_scache sc;
+    sc.ob = NULL; /* the rest is filled when first used */
     float A = 0;
     double k = vv_ceil_pos(r->t0 * inv_dt);
     const double kend = floor(r->t1 * inv_dt);
@@ -1286,7 +1356,7 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
                         vv_vcache_gradient(c, p, g);
                     }
                 }
-                composite_sample(fr, ob, wr, v, e, p, t, g, C, &A);
+                composite_sample(fr, ob, wr, v, e, p, t, g, &sc, C, &A);
                 if (*dep == INFINITY)
                     *dep = (float)t;
                 if (A >= fr->et) {
@@ -1308,6 +1378,8 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
               float weight, float C[3], float *Aout, float *dep) {
     vv_vray rays[RT_MAX_OBJ];
     int act[RT_MAX_OBJ];
+    rt_scache sc;
+    sc.ob = NULL; /* the rest is filled when first used */
     int na = 0;
     double tmin = INFINITY, tmax = -INFINITY;
     for (int i = 0; i < fr->n_vobj; i++) {
@@ -1395,7 +1467,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                     pw[1] = (float)(wr->origin.y + th * wr->dir.y);
                     pw[2] = (float)(wr->origin.z + th * wr->dir.z);
                     if (ob->obj->shading)
-                        shade_volume(fr, ob, g, ph, pw, v, ob->sh.base, 1.0f, col);
+                        shade_volume(fr, ob, g, ph, pw, v, ob->sh.base, 1.0f, NULL, col);
                     else
                         memcpy(col, ob->sh.base, sizeof col);
                     const vv_material *m = &ob->obj->material;
@@ -1435,7 +1507,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
             const float alpha = e[0];
             if (alpha <= 0)
                 continue;
-            composite_sample(fr, ob, wr, v, e, p, t, NULL, C, &A);
+            composite_sample(fr, ob, wr, v, e, p, t, NULL, &sc, C, &A);
             if (*dep == INFINITY)
                 *dep = (float)t;
         }
@@ -1601,6 +1673,12 @@ prepare_geometry(rt_frame *fr, rt_gobj *g, const vv_object *obj) {
     case VV_OBJECT_PLANE:
         if (!(v3len(ge->normal) > 0))
             return vv_error_set(VV_ERR_INVALID, "object '%s': plane with a zero normal", obj->name);
+        g->pp = vv_mat4_mul_point(o2w, ge->point);
+        g->pn = v3(
+            g->nrm[0][0] * ge->normal.x + g->nrm[0][1] * ge->normal.y + g->nrm[0][2] * ge->normal.z,
+            g->nrm[1][0] * ge->normal.x + g->nrm[1][1] * ge->normal.y + g->nrm[1][2] * ge->normal.z,
+            g->nrm[2][0] * ge->normal.x + g->nrm[2][1] * ge->normal.y +
+                g->nrm[2][2] * ge->normal.z);
         break;
     case VV_OBJECT_POLYGON: {
         if (ge->n_vertices < 3 || !ge->vertices)
@@ -1652,6 +1730,29 @@ prepare_geometry(rt_frame *fr, rt_gobj *g, const vv_object *obj) {
     default:
         return vv_error_set(VV_ERR_INVALID, "object '%s': unsupported type %d", obj->name,
                             (int)obj->type);
+    }
+    if (obj->type == VV_OBJECT_POLYGON || obj->type == VV_OBJECT_BOX) {
+        /* world-space bounding sphere of the object-space bounding box */
+        vv_vec3 lo = ge->box.min, hi = ge->box.max;
+        if (obj->type == VV_OBJECT_POLYGON) {
+            lo = hi = ge->vertices[0];
+            for (int i = 1; i < ge->n_vertices; i++) {
+                const vv_vec3 q = ge->vertices[i];
+                lo = v3(q.x < lo.x ? q.x : lo.x, q.y < lo.y ? q.y : lo.y, q.z < lo.z ? q.z : lo.z);
+                hi = v3(q.x > hi.x ? q.x : hi.x, q.y > hi.y ? q.y : hi.y, q.z > hi.z ? q.z : hi.z);
+            }
+        }
+        g->bc = vv_mat4_mul_point(o2w, v3scale(v3add(lo, hi), 0.5));
+        double r = 0;
+        for (int k = 0; k < 8; k++) {
+            const vv_vec3 q = v3(k & 1 ? hi.x : lo.x, k & 2 ? hi.y : lo.y, k & 4 ? hi.z : lo.z);
+            const double d = v3len(v3sub(vv_mat4_mul_point(o2w, q), g->bc));
+            r = d > r ? d : r;
+        }
+        r = r * (1 + 1e-6) + 1e-9; /* rounding margin: never reject a hit */
+        g->br2 = r * r;
+        g->bounded =
+            isfinite(g->br2) && isfinite(g->bc.x) && isfinite(g->bc.y) && isfinite(g->bc.z);
     }
     (void)fr;
     return VV_OK;
@@ -1709,10 +1810,45 @@ mix64(uint64_t x) {
     return x ^ (x >> 31);
 }
 
+/* vv_view_ray is affine in the pixel position before the direction is
+ * normalised (the ray caster's prepare_rays): take the affine form from
+ * three rays so that a primary ray costs a few multiply-adds instead of a
+ * camera set-up. */
+static void
+prepare_rays(rt_frame *fr, const vv_view *view) {
+    vv_vec3 f = v3norm(v3sub(view->at, view->eye));
+    vv_ray r00 = vv_view_ray(view, 0, 0), r10 = vv_view_ray(view, 1, 0),
+           r01 = vv_view_ray(view, 0, 1);
+    vv_ray *rs[3] = {&r00, &r10, &r01};
+    for (int i = 0; i < 3; i++) {
+        double df = v3dot(rs[i]->dir, f);
+        if (view->projection != VV_PROJECTION_ORTHOGRAPHIC && df > 0)
+            rs[i]->dir = v3scale(rs[i]->dir, 1.0 / df);
+    }
+    fr->o00 = r00.origin;
+    fr->ox = v3sub(r10.origin, r00.origin);
+    fr->oy = v3sub(r01.origin, r00.origin);
+    fr->d00 = r00.dir;
+    fr->dx = v3sub(r10.dir, r00.dir);
+    fr->dy = v3sub(r01.dir, r00.dir);
+}
+
 static void
 trace_primary(const rt_frame *fr, const vv_view *view, double px, double py, float rgba[4],
               float *depth) {
-    vv_ray wr = vv_view_ray(view, px, py);
+    (void)view;
+    vv_ray wr;
+    /* the ray caster's arithmetic, so that without effects the images agree */
+    wr.origin.x = fr->o00.x + px * fr->ox.x + py * fr->oy.x;
+    wr.origin.y = fr->o00.y + px * fr->ox.y + py * fr->oy.y;
+    wr.origin.z = fr->o00.z + px * fr->ox.z + py * fr->oy.z;
+    const double dx = fr->d00.x + px * fr->dx.x + py * fr->dy.x;
+    const double dy = fr->d00.y + px * fr->dx.y + py * fr->dy.y;
+    const double dz = fr->d00.z + px * fr->dx.z + py * fr->dy.z;
+    const double inv = 1.0 / sqrt(dx * dx + dy * dy + dz * dz);
+    wr.dir.x = dx * inv;
+    wr.dir.y = dy * inv;
+    wr.dir.z = dz * inv;
     trace(fr, &wr, 0, 1, 1.0f, rgba, &rgba[3], depth);
 }
 
@@ -1788,6 +1924,7 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     fr.max_depth = opt->quality >= 1 ? st->max_depth : 0;
     const int nss = opt->quality >= 2 ? st->samples : 1;
     prepare_lights(&fr, w, view);
+    prepare_rays(&fr, view);
 
     int nv = 0, ng = 0;
     for (int i = 0; i < w->n_objects; i++) {
