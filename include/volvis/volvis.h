@@ -10,12 +10,12 @@
 #include "image.h"
 #include "io.h"
 #include "math.h"
+#include "measure.h"
 #include "mesh.h"
 #include "model.h"
 #include "modeling.h"
 #include "raster.h"
 #include "render.h"
-#include "measure.h"
 #include "surface.h"
 #include "volume.h"
 
