@@ -38,6 +38,13 @@ unsigned char *vt_read_file(const char *path, size_t *n);
             fail_msg("%s -> %s: %s", #expr, vv_status_name(vt_s_), vv_error_message());            \
     } while (0)
 
+/**
+ * A sphere of radius @p r centred on the origin: an octahedron subdivided
+ * @p levels times (8 * 4^levels triangles), vertices pushed onto the sphere;
+ * closed, shared vertices, counter-clockwise from outside. Caller frees.
+ */
+vv_mesh *vt_sphere_mesh(double r, int levels);
+
 /** What a run of the volvis command-line tool did (vt_run_cli_v). */
 typedef struct vt_run_result {
     int status; /**< exit status, or 128 + signal number */

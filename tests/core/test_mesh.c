@@ -11,54 +11,10 @@
 
 #define VT_PI 3.14159265358979323846
 
-/* An octahedron-subdivided sphere of radius r: closed, oriented outwards. */
-static vv_mesh *
-make_sphere(double r, int levels) {
-    vv_mesh *m = NULL;
-    vt_ok(vv_mesh_new(&m));
-    const vv_vec3 p[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-    for (int i = 0; i < 6; i++)
-        vt_ok(vv_mesh_add_vertex(m, vv_vec3_scale(p[i], r), NULL));
-    const uint32_t f[8][3] = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4},
-                              {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
-    for (int i = 0; i < 8; i++)
-        vt_ok(vv_mesh_add_triangle(m, f[i][0], f[i][1], f[i][2]));
-    for (int l = 0; l < levels; l++) {
-        /* split each triangle in four; edge midpoints shared through a table */
-        size_t nt = m->n_triangles, nv = m->n_vertices;
-        uint32_t *mid = malloc(nv * nv * sizeof *mid);
-        assert_non_null(mid);
-        memset(mid, 0xff, nv * nv * sizeof *mid);
-        uint32_t *old = malloc(nt * 3 * sizeof *old);
-        assert_non_null(old);
-        memcpy(old, m->triangles, nt * 3 * sizeof *old);
-        m->n_triangles = 0;
-        for (size_t t = 0; t < nt; t++) {
-            uint32_t v[3] = {old[3 * t], old[3 * t + 1], old[3 * t + 2]}, e[3];
-            for (int k = 0; k < 3; k++) {
-                uint32_t a = v[k], b = v[(k + 1) % 3];
-                uint32_t *slot = &mid[(size_t)(a < b ? a : b) * nv + (a < b ? b : a)];
-                if (*slot == UINT32_MAX) {
-                    vv_vec3 c = vv_vec3_add(vv_mesh_vertex(m, a), vv_mesh_vertex(m, b));
-                    vt_ok(vv_mesh_add_vertex(m, vv_vec3_scale(vv_vec3_normalize(c), r), slot));
-                }
-                e[k] = *slot;
-            }
-            vt_ok(vv_mesh_add_triangle(m, v[0], e[0], e[2]));
-            vt_ok(vv_mesh_add_triangle(m, e[0], v[1], e[1]));
-            vt_ok(vv_mesh_add_triangle(m, e[2], e[1], v[2]));
-            vt_ok(vv_mesh_add_triangle(m, e[0], e[1], e[2]));
-        }
-        free(mid);
-        free(old);
-    }
-    return m;
-}
-
 static void
 test_sphere_measures(void **state) {
     (void)state;
-    vv_mesh *m = make_sphere(10.0, 5);
+    vv_mesh *m = vt_sphere_mesh(10.0, 5);
     assert_int_equal(m->n_triangles, 8 * 1024);
     double a = vv_mesh_area(m), v = vv_mesh_signed_volume(m);
     /* inscribed polyhedron: a little below the sphere, converging as 4^-levels */
@@ -92,7 +48,7 @@ test_sphere_measures(void **state) {
 static void
 test_open_and_bad(void **state) {
     (void)state;
-    vv_mesh *m = make_sphere(1.0, 1);
+    vv_mesh *m = vt_sphere_mesh(1.0, 1);
     m->n_triangles--; /* punch a hole */
     vv_mesh_topology t;
     vt_ok(vv_mesh_topology_compute(m, &t));
@@ -117,7 +73,7 @@ test_open_and_bad(void **state) {
 static void
 test_round_trip(void **state) {
     (void)state;
-    vv_mesh *m = make_sphere(5.0, 3);
+    vv_mesh *m = vt_sphere_mesh(5.0, 3);
     vt_ok(vv_mesh_compute_normals(m));
     const char *ext[] = {"ply", "obj", "stl"};
     for (int i = 0; i < 3; i++) {

@@ -421,9 +421,9 @@ bvh_build(rt_bvh *bvh, const vv_mesh *m) {
     const int n = (int)m->n_triangles;
     bvh->tri = malloc((size_t)n * sizeof *bvh->tri);
     bvh->nodes = malloc((size_t)(2 * n) * sizeof *bvh->nodes);
-    int *todo = malloc((size_t)(2 * n) * sizeof *todo);
-    if (!bvh->tri || !bvh->nodes || !todo) {
-        free(todo);
+    int *stack = malloc((size_t)(2 * n) * sizeof *stack);
+    if (!bvh->tri || !bvh->nodes || !stack) {
+        free(stack);
         return vv_error_set(VV_ERR_NOMEM, "out of memory for a BVH of %d triangles", n);
     }
     for (int i = 0; i < n; i++)
@@ -432,9 +432,9 @@ bvh_build(rt_bvh *bvh, const vv_mesh *m) {
     bvh->nodes[0].first = 0;
     bvh->nodes[0].cnt = n;
     int nt = 0;
-    todo[nt++] = 0;
+    stack[nt++] = 0;
     while (nt) {
-        rt_bvh_node *nd = &bvh->nodes[todo[--nt]];
+        rt_bvh_node *nd = &bvh->nodes[stack[--nt]];
         float clo[3], chi[3];
         bvh_bounds(m, bvh->tri, nd->first, nd->cnt, nd, clo, chi);
         nd->left = -1;
@@ -477,10 +477,10 @@ bvh_build(rt_bvh *bvh, const vv_mesh *m) {
         R->first = mid;
         R->cnt = nd->first + nd->cnt - mid;
         nd->left = l;
-        todo[nt++] = l;
-        todo[nt++] = l + 1;
+        stack[nt++] = l;
+        stack[nt++] = l + 1;
     }
-    free(todo);
+    free(stack);
     return VV_OK;
 }
 
