@@ -1108,22 +1108,55 @@ parse_shape(const sctx *c, json_t *e, const char *op, vv_object *o) {
     }
 }
 
+/* Checks the keys of object @p e: "name" and "type", the kind's own keys
+ * @p own (NULL-terminated), the keys of volume-like objects (mode,
+ * segmentation, cut planes) when @p volume_like, and the transform,
+ * material, visibility and shading-effect keys every object takes. */
+static vv_status
+check_object_keys(const sctx *c, json_t *e, const char *op, const char *const *own,
+                  int volume_like) {
+    static const char *const head[] = {"name", "type", NULL};
+    static const char *const volume_head[] = {"mode", "isovalue", "step", "shading", NULL};
+    static const char *const place[] = {"visible",     "position", "rotation",
+                                        "orientation", "scale",    NULL};
+    static const char *const volume_mid[] = {"transfer_function", "segmentation", NULL};
+    static const char *const mat[] = {"material", NULL};
+    static const char *const volume_tail[] = {"cut_planes", NULL};
+    static const char *const flags[] = {"casts_shadows", "receives_shadows",
+                                        "visible_in_reflections", "reflects", NULL};
+    const char *const *parts[] = {head,
+                                  own,
+                                  volume_like ? volume_head : NULL,
+                                  place,
+                                  volume_like ? volume_mid : NULL,
+                                  mat,
+                                  volume_like ? volume_tail : NULL,
+                                  flags};
+    const char *keys[64];
+    size_t n = 0;
+    for (size_t p = 0; p < sizeof parts / sizeof parts[0]; p++)
+        for (size_t i = 0; parts[p] && parts[p][i] && n + 1 < sizeof keys / sizeof keys[0]; i++)
+            keys[n++] = parts[p][i];
+    keys[n] = NULL;
+    return check_keys(c, e, op, keys);
+}
+
+/* The optional "name" of object @p e, at most VV_NAME_MAX - 1 bytes. */
+static vv_status
+get_object_name(const sctx *c, json_t *e, const char *op, const char **name) {
+    vv_status st = get_string(c, e, op, "name", name);
+    if (st == VV_OK && *name && strlen(*name) >= VV_NAME_MAX) {
+        char kp[PATH_MAX_LEN];
+        path_key(kp, op, "name");
+        return serr(c, kp, "longer than %d bytes", VV_NAME_MAX - 1);
+    }
+    return st;
+}
+
 /* A geometric object: its shape (in object coordinates), transform,
  * material, visibility and shading-effect flags. */
 static vv_status
 parse_geometry_object(const sctx *c, json_t *e, const char *op, vv_world *w) {
-    static const char *const common[] = {"name",
-                                         "type",
-                                         "visible",
-                                         "position",
-                                         "rotation",
-                                         "orientation",
-                                         "scale",
-                                         "material",
-                                         "reflects",
-                                         "casts_shadows",
-                                         "receives_shadows",
-                                         "visible_in_reflections"};
     static const char *const shape_keys[][5] = {
         [VV_OBJECT_PLANE] = {"point", "normal", NULL},
         [VV_OBJECT_POLYGON] = {"vertices", NULL},
@@ -1133,24 +1166,10 @@ parse_geometry_object(const sctx *c, json_t *e, const char *op, vv_world *w) {
         [VV_OBJECT_MESH] = {"file", NULL},
     };
     const vv_object_type type = geometry_type(json_string_value(json_object_get(e, "type")));
-    const char *keys[sizeof common / sizeof common[0] + 6];
-    size_t nk = 0;
-    for (size_t i = 0; i < sizeof common / sizeof common[0]; i++)
-        keys[nk++] = common[i];
-    for (size_t i = 0; shape_keys[type][i]; i++)
-        keys[nk++] = shape_keys[type][i];
-    keys[nk] = NULL;
-    vv_status st = check_keys(c, e, op, keys);
-    if (st != VV_OK)
-        return st;
     const char *name = NULL;
-    char kp[PATH_MAX_LEN];
-    if ((st = get_string(c, e, op, "name", &name)) != VV_OK)
+    vv_status st = check_object_keys(c, e, op, shape_keys[type], 0);
+    if (st != VV_OK || (st = get_object_name(c, e, op, &name)) != VV_OK)
         return st;
-    if (name && strlen(name) >= VV_NAME_MAX) {
-        path_key(kp, op, "name");
-        return serr(c, kp, "longer than %d bytes", VV_NAME_MAX - 1);
-    }
     vv_object *o = NULL;
     if ((st = vv_object_new_geometry(&o, type, name)) != VV_OK)
         return vv_error_prefix(st, "%s: %s", c->path, op);
@@ -1178,43 +1197,14 @@ geometry_err(const sctx *c, vv_status st, const char *path) {
 
 static vv_status
 parse_voxelized_geometry(const sctx *c, json_t *e, const char *op, vv_world *w) {
-    static const char *const keys[] = {"name",
-                                       "type",
-                                       "primitive",
-                                       "csg",
-                                       "resolution",
-                                       "voxel_spacing",
-                                       "filter",
-                                       "filter_radius",
-                                       "margin",
-                                       "voxel_type",
-                                       "mode",
-                                       "isovalue",
-                                       "step",
-                                       "shading",
-                                       "visible",
-                                       "position",
-                                       "rotation",
-                                       "orientation",
-                                       "scale",
-                                       "transfer_function",
-                                       "segmentation",
-                                       "material",
-                                       "cut_planes",
-                                       "casts_shadows",
-                                       "receives_shadows",
-                                       "visible_in_reflections",
-                                       "reflects",
-                                       NULL};
+    static const char *const own[] = {"primitive",     "csg",        "resolution",
+                                      "voxel_spacing", "filter",     "filter_radius",
+                                      "margin",        "voxel_type", NULL};
     char kp[PATH_MAX_LEN], ep[PATH_MAX_LEN];
     const char *name = NULL;
-    vv_status st = check_keys(c, e, op, keys);
-    if (st != VV_OK || (st = get_string(c, e, op, "name", &name)) != VV_OK)
+    vv_status st = check_object_keys(c, e, op, own, 1);
+    if (st != VV_OK || (st = get_object_name(c, e, op, &name)) != VV_OK)
         return st;
-    if (name && strlen(name) >= VV_NAME_MAX) {
-        path_key(kp, op, "name");
-        return serr(c, kp, "longer than %d bytes", VV_NAME_MAX - 1);
-    }
     json_t *prim = json_object_get(e, "primitive"), *csg = json_object_get(e, "csg");
     if (prim && csg) {
         path_key(kp, op, "csg");
@@ -1261,29 +1251,7 @@ parse_voxelized_geometry(const sctx *c, json_t *e, const char *op, vv_world *w) 
 
 static vv_status
 parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
-    static const char *const keys[] = {"name",
-                                       "type",
-                                       "file",
-                                       "origin",
-                                       "spacing",
-                                       "mode",
-                                       "isovalue",
-                                       "step",
-                                       "shading",
-                                       "visible",
-                                       "position",
-                                       "rotation",
-                                       "orientation",
-                                       "scale",
-                                       "transfer_function",
-                                       "segmentation",
-                                       "material",
-                                       "cut_planes",
-                                       "casts_shadows",
-                                       "receives_shadows",
-                                       "visible_in_reflections",
-                                       "reflects",
-                                       NULL};
+    static const char *const own[] = {"file", "origin", "spacing", NULL};
     char op[PATH_MAX_LEN], kp[PATH_MAX_LEN];
     path_index(op, "objects", idx);
     if (json_is_object(e)) {
@@ -1295,12 +1263,12 @@ parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     }
     if (!json_is_object(e))
         return serr(c, op, "expected an object, got %s", vv_model_json_kind(e));
-    vv_status st = check_keys(c, e, op, keys);
+    vv_status st = check_object_keys(c, e, op, own, 1);
     if (st != VV_OK)
         return st;
     const char *type = "volume", *name = NULL, *file = NULL;
     if ((st = get_string(c, e, op, "type", &type)) != VV_OK ||
-        (st = get_string(c, e, op, "name", &name)) != VV_OK ||
+        (st = get_object_name(c, e, op, &name)) != VV_OK ||
         (st = get_string(c, e, op, "file", &file)) != VV_OK)
         return st;
     if (strcmp(type, "volume") != 0) {
@@ -1309,10 +1277,6 @@ parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
                     "unsupported object type \"%s\"; expected volume, geometry, plane, polygon, "
                     "sphere, box, cylinder or mesh",
                     type);
-    }
-    if (name && strlen(name) >= VV_NAME_MAX) {
-        path_key(kp, op, "name");
-        return serr(c, kp, "longer than %d bytes", VV_NAME_MAX - 1);
     }
     if (!file)
         return missing(c, op, "file", "the volume file, relative to the scene file");
