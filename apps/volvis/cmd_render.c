@@ -37,6 +37,25 @@ static const char *const mode_names[] = {"composite", "mip", "minip", "xray", "i
 static const vv_render_mode mode_values[] = {VV_MODE_COMPOSITE, VV_MODE_MIP, VV_MODE_MINIP,
                                              VV_MODE_XRAY, VV_MODE_ISO};
 
+/* Prints @p prefix and @p text word-wrapped to @p width columns, every line
+ * indented by @p indent spaces. */
+static void
+print_wrapped(FILE *out, const char *prefix, const char *text, int indent, int width) {
+    int col = fprintf(out, "%*s%s", indent, "", prefix);
+    for (const char *w = text; *w;) {
+        size_t n = strcspn(w, " ");
+        if (col > indent && col + 1 + (int)n > width)
+            col = fprintf(out, "\n%*s", indent, "") - 1;
+        else if (w != text)
+            col += fprintf(out, " ");
+        col += fprintf(out, "%.*s", (int)n, w);
+        w += n;
+        while (*w == ' ')
+            w++;
+    }
+    fputc('\n', out);
+}
+
 void
 cli_render_usage(FILE *out) {
     fprintf(out,
@@ -70,19 +89,9 @@ cli_render_usage(FILE *out) {
             "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
             "                   read INPUT as raw voxels (see 'volvis info --help')\n"
             "  --gamma G        8-bit conversion v^(1/G) (default 1: values unchanged)\n"
-            "  --quality Q      0 draft, 1 medium, 2 final (default 2); raytrace: 0 no\n"
-            "                   shadow or secondary rays, 1 one ray a pixel, 2 supersampled\n"
-            "  --set KEY=VALUE  renderer-specific option (repeatable); raycast takes\n"
-            "                   early_termination (0.99), gradient_budget_mb,\n"
-            "                   empty_space_skipping (1), simd (1); raytrace takes\n"
-            "                   shadows (1), max_depth (3), samples (2: 2x2 a pixel at\n"
-            "                   quality 2), jitter (0), seed (1), adaptive (1),\n"
-            "                   adaptive_threshold (0.05), parc (1), shadow_grid (1),\n"
-            "                   light_volumes (1), early_termination (0.99); surface takes\n"
-            "                   shading (flat|gouraud|phong), wireframe (0), cull\n"
-            "                   (auto|back|none), caps (1), segments (64); fourier\n"
-            "                   takes vvc=FILE, quality (exact), rate, block (16),\n"
-            "                   attenuation (0); see docs/rendering.md\n"
+            "  --quality Q      0 draft, 1 medium, 2 final (default 2; per renderer below)\n"
+            "  --set KEY=VALUE  renderer-specific option (repeatable), listed with each\n"
+            "                   renderer below; see docs/rendering.md\n"
             "  --alpha          write RGBA (coverage in the alpha channel); default RGB\n"
             "  --ortho          parallel projection (orthographic), the view framed on\n"
             "                   the scene; needed by the fourier renderer\n"
@@ -92,8 +101,11 @@ cli_render_usage(FILE *out) {
             "Renderers:\n",
             VV_IMAGE_MAX_SIDE);
     const vv_renderer_ops *const *reg = vv_renderer_registry();
-    for (int i = 0; reg && reg[i]; i++)
+    for (int i = 0; reg && reg[i]; i++) {
         fprintf(out, "  %-16s %s\n", reg[i]->name, reg[i]->description ? reg[i]->description : "");
+        if (reg[i]->options)
+            print_wrapped(out, "options: ", reg[i]->options, 19, 79);
+    }
     fprintf(out,
             "\n"
             "Examples:\n"

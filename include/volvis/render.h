@@ -43,6 +43,12 @@ typedef struct vv_renderer_ops {
     vv_status (*render)(void *state, const vv_world *world, const vv_view *view,
                         const vv_render_options *opt, vv_image *out);
     void (*destroy)(void *state);
+    /**
+     * The method's --set options with their defaults, and what --quality
+     * means to it, as plain text for --help ("key (default), ..."); may be
+     * NULL.
+     */
+    const char *options;
 } vv_renderer_ops;
 
 typedef struct vv_renderer vv_renderer;

@@ -1093,4 +1093,5 @@ const vv_renderer_ops vv_fourier_ops = {
     fr_create,
     fr_set_option,
     fr_render,
-    fr_destroy};
+    fr_destroy,
+    "vvc=FILE, quality (exact), rate, block (16), attenuation (0); needs --ortho"};

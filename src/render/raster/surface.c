@@ -758,7 +758,12 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
 }
 
 const vv_renderer_ops vv_surface_ops = {
-    "surface", "geometry rendering: Marching Cubes isosurfaces and geometric objects, rasterized",
-    sf_create, sf_set_option,
-    sf_render, sf_destroy,
+    "surface",
+    "geometry rendering: Marching Cubes isosurfaces and geometric objects, rasterized",
+    sf_create,
+    sf_set_option,
+    sf_render,
+    sf_destroy,
+    "shading (flat|gouraud|phong; phong), wireframe (0), cull (auto|back|none; auto), caps (1), "
+    "segments (64)",
 };

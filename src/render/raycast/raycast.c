@@ -651,7 +651,11 @@ rc_destroy(void *state) {
 }
 
 const vv_renderer_ops vv_raycast_ops = {
-    "raycast", "direct volume ray casting: composite, mip, minip, xray, iso; subvolume skipping",
-    rc_create, rc_set_option,
-    rc_render, rc_destroy,
+    "raycast",
+    "direct volume ray casting: composite, mip, minip, xray, iso; subvolume skipping",
+    rc_create,
+    rc_set_option,
+    rc_render,
+    rc_destroy,
+    "early_termination (0.99), gradient_budget_mb, empty_space_skipping (1), simd (1)",
 };

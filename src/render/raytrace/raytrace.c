@@ -2164,7 +2164,14 @@ rt_destroy(void *state) {
 }
 
 const vv_renderer_ops vv_raytrace_ops = {
-    "raytrace", "volumetric ray tracing: volumes and geometry, shadows, mirrors, refraction, PARC",
-    rt_create,  rt_set_option,
-    rt_render,  rt_destroy,
+    "raytrace",
+    "volumetric ray tracing: volumes and geometry, shadows, mirrors, refraction, PARC",
+    rt_create,
+    rt_set_option,
+    rt_render,
+    rt_destroy,
+    "shadows (1), max_depth (3), samples (2: 2x2 a pixel at quality 2), jitter (0), seed (1), "
+    "adaptive (1), adaptive_threshold (0.05), parc (1), shadow_grid (1), light_volumes (1), "
+    "early_termination (0.99); --quality 0: no shadow or secondary rays, 1: one ray a pixel, "
+    "2: supersampled",
 };
