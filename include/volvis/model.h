@@ -280,6 +280,14 @@ vv_status vv_object_set_polygon(vv_object *obj, int n, const vv_vec3 *vertices);
 vv_status vv_object_set_mesh(vv_object *obj, vv_mesh *mesh, const char *source);
 /** Releases an object, its reference to the volume and its geometry. Accepts NULL. */
 void vv_object_free(vv_object *obj);
+/**
+ * A copy of @p obj: every field copied, the polygon vertices and mesh source
+ * duplicated, one more reference taken on the volume and the mesh (voxels
+ * and triangles are shared, not copied: they are never changed in place by
+ * the World's editors, so a copy is cheap). Thread-safe for concurrent
+ * readers of @p obj. Errors: VV_ERR_INVALID (NULL), VV_ERR_NOMEM.
+ */
+vv_status vv_object_clone(vv_object **out, const vv_object *obj);
 /** Object-to-world matrix T(position) * R(orientation) * S(scale). */
 vv_mat4 vv_object_matrix(const vv_object *obj);
 /** Index-to-world matrix of the object's volume: object matrix * volume index-to-world. */
@@ -320,6 +328,24 @@ vv_status vv_world_add_object(vv_world *w, vv_object *obj);
 vv_status vv_world_add_light(vv_world *w, const vv_light *light);
 /** Appends a global cut plane. Errors: VV_ERR_LIMIT, VV_ERR_INVALID (zero normal). */
 vv_status vv_world_add_cut_plane(vv_world *w, vv_vec3 point, vv_vec3 normal);
+/**
+ * A snapshot of @p w: the view, lights, cut planes, global shading and a
+ * vv_object_clone of every object. Renderers may read the snapshot on other
+ * threads while @p w goes on being edited (the Navigator and the GUI render
+ * snapshots, DESIGN.md "Interaction"). Errors: VV_ERR_INVALID, VV_ERR_NOMEM.
+ */
+vv_status vv_world_clone(vv_world **out, const vv_world *w);
+/**
+ * Removes object @p index and returns it (the caller owns it), keeping the
+ * order of the others. Errors: VV_ERR_INVALID (index out of range).
+ */
+vv_status vv_world_take_object(vv_world *w, int index, vv_object **out);
+/**
+ * Inserts @p obj at @p index (0..n_objects), shifting the rest; the World
+ * takes ownership (also on failure it frees obj). Errors: VV_ERR_INVALID,
+ * VV_ERR_NOMEM, VV_ERR_LIMIT.
+ */
+vv_status vv_world_insert_object(vv_world *w, int index, vv_object *obj);
 /** Bounding box of all visible bounded objects (an empty box at the origin if none). */
 vv_box vv_world_bounds(const vv_world *w);
 

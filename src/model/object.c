@@ -213,6 +213,41 @@ vv_object_free(vv_object *obj) {
     free(obj);
 }
 
+vv_status
+vv_object_clone(vv_object **out, const vv_object *obj) {
+    if (!out || !obj)
+        return vv_error_set(VV_ERR_INVALID, "object clone: NULL %s", out ? "object" : "output");
+    *out = NULL;
+    vv_object *c = malloc(sizeof *c);
+    if (!c)
+        return vv_error_set(VV_ERR_NOMEM, "object clone: out of memory");
+    *c = *obj;
+    c->geometry.vertices = NULL;
+    c->geometry.source = NULL;
+    if (obj->geometry.vertices && obj->geometry.n_vertices > 0) {
+        size_t n = (size_t)obj->geometry.n_vertices * sizeof *c->geometry.vertices;
+        c->geometry.vertices = malloc(n);
+        if (!c->geometry.vertices)
+            goto nomem;
+        memcpy(c->geometry.vertices, obj->geometry.vertices, n);
+    }
+    if (obj->geometry.source) {
+        c->geometry.source = vv_strdup(obj->geometry.source);
+        if (!c->geometry.source)
+            goto nomem;
+    }
+    if (c->volume)
+        vv_volume_ref(c->volume);
+    if (c->geometry.mesh)
+        vv_mesh_ref(c->geometry.mesh);
+    *out = c;
+    return VV_OK;
+nomem:
+    free(c->geometry.vertices);
+    free(c);
+    return vv_error_set(VV_ERR_NOMEM, "object clone: out of memory");
+}
+
 vv_mat4
 vv_object_matrix(const vv_object *obj) {
     if (!obj)

@@ -65,6 +65,63 @@ vv_world_add_object(vv_world *w, vv_object *obj) {
 }
 
 vv_status
+vv_world_clone(vv_world **out, const vv_world *w) {
+    if (!out || !w)
+        return vv_error_set(VV_ERR_INVALID, "world clone: NULL %s", out ? "world" : "output");
+    *out = NULL;
+    vv_world *c = malloc(sizeof *c);
+    if (!c)
+        return vv_error_set(VV_ERR_NOMEM, "world clone: out of memory");
+    *c = *w;
+    c->n_objects = 0;
+    c->cap_objects = w->n_objects;
+    c->objects = NULL;
+    if (w->n_objects > 0) {
+        c->objects = malloc((size_t)w->n_objects * sizeof *c->objects);
+        if (!c->objects) {
+            free(c);
+            return vv_error_set(VV_ERR_NOMEM, "world clone: out of memory");
+        }
+    }
+    for (int i = 0; i < w->n_objects; i++) {
+        vv_status st = vv_object_clone(&c->objects[i], w->objects[i]);
+        if (st != VV_OK) {
+            vv_world_free(c);
+            return st;
+        }
+        c->n_objects = i + 1;
+    }
+    *out = c;
+    return VV_OK;
+}
+
+vv_status
+vv_world_take_object(vv_world *w, int index, vv_object **out) {
+    if (!w || !out || index < 0 || index >= w->n_objects)
+        return vv_error_set(VV_ERR_INVALID, "world: no object %d", index);
+    *out = w->objects[index];
+    memmove(&w->objects[index], &w->objects[index + 1],
+            (size_t)(w->n_objects - index - 1) * sizeof *w->objects);
+    w->n_objects--;
+    return VV_OK;
+}
+
+vv_status
+vv_world_insert_object(vv_world *w, int index, vv_object *obj) {
+    if (!w || !obj || index < 0 || index > w->n_objects) {
+        vv_object_free(obj);
+        return vv_error_set(VV_ERR_INVALID, "world: cannot insert an object at %d", index);
+    }
+    vv_status st = vv_world_add_object(w, obj);
+    if (st != VV_OK)
+        return st;
+    memmove(&w->objects[index + 1], &w->objects[index],
+            (size_t)(w->n_objects - 1 - index) * sizeof *w->objects);
+    w->objects[index] = obj;
+    return VV_OK;
+}
+
+vv_status
 vv_world_add_light(vv_world *w, const vv_light *light) {
     if (!w || !light)
         return vv_error_set(VV_ERR_INVALID, "world: NULL %s", w ? "light" : "world");

@@ -125,12 +125,65 @@ test_world(void **state) {
     vv_object_free(NULL);
 }
 
+/* A clone is independent of its source (edits do not leak either way) and shares the voxels. */
+static void
+test_world_clone(void **state) {
+    (void)state;
+    vv_world *w = NULL;
+    vt_ok(vv_world_new(&w));
+    vv_volume *v = small_volume();
+    vv_object *o = NULL;
+    vt_ok(vv_object_new_volume(&o, v, "head"));
+    vt_ok(vv_world_add_object(w, o));
+    vv_object *p = NULL;
+    vt_ok(vv_object_new_geometry(&p, VV_OBJECT_POLYGON, "tri"));
+    vv_vec3 tri[3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    vt_ok(vv_object_set_polygon(p, 3, tri));
+    vt_ok(vv_world_add_object(w, p));
+    vt_ok(vv_world_add_cut_plane(w, vv_vec3_make(1, 2, 3), vv_vec3_make(0, 0, 1)));
+
+    vv_world *c = NULL;
+    vt_ok(vv_world_clone(&c, w));
+    assert_int_equal(c->n_objects, 2);
+    assert_ptr_not_equal(c->objects[0], w->objects[0]);
+    assert_ptr_equal(c->objects[0]->volume, v);
+    assert_int_equal(v->refcount, 3);
+    assert_ptr_not_equal(c->objects[1]->geometry.vertices, w->objects[1]->geometry.vertices);
+    assert_near(c->objects[1]->geometry.vertices[1].x, 1, 0);
+    assert_int_equal(c->n_cut_planes, 1);
+    assert_string_equal(c->objects[0]->name, "head");
+
+    w->objects[0]->tf.opacity[0].opacity = 0.25;
+    w->objects[1]->geometry.vertices[1].x = 7;
+    w->view.fov = 1.0;
+    assert_true(c->objects[0]->tf.opacity[0].opacity != 0.25);
+    assert_near(c->objects[1]->geometry.vertices[1].x, 1, 0);
+    assert_true(c->view.fov != 1.0);
+
+    /* take and insert keep the order */
+    vv_object *t = NULL;
+    vt_ok(vv_world_take_object(c, 0, &t));
+    assert_int_equal(c->n_objects, 1);
+    assert_string_equal(c->objects[0]->name, "tri");
+    vt_ok(vv_world_insert_object(c, 0, t));
+    assert_string_equal(c->objects[0]->name, "head");
+    assert_string_equal(c->objects[1]->name, "tri");
+    vt_err(vv_world_take_object(c, 2, &t));
+    vt_err(vv_world_insert_object(c, 5, NULL));
+
+    vv_world_free(c);
+    assert_int_equal(v->refcount, 2);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_object_defaults),
         cmocka_unit_test(test_object_matrix),
         cmocka_unit_test(test_world),
+        cmocka_unit_test(test_world_clone),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
