@@ -79,6 +79,17 @@ vv_status vv_renderer_set_option(vv_renderer *r, const char *key, const char *va
 vv_status vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
                              const vv_render_options *opt, vv_image *out);
 
+/**
+ * The surface a surface-drawing method shows for a volume object: in iso
+ * mode its isovalue (colour material.color); threshold-segmented, its
+ * threshold; else the lowest value at which the transfer function's opacity
+ * reaches half its maximum over the volume's range, coloured by the transfer
+ * function there. Returns 0 (and leaves @p iso unset) when the transfer
+ * function is transparent over the whole range. Used by the `surface`
+ * renderer and the Navigator's previews so they show the same surface.
+ */
+int vv_object_surface_value(const vv_object *obj, double *iso, vv_vec3 *color);
+
 #ifdef __cplusplus
 }
 #endif

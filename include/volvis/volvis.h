@@ -14,6 +14,7 @@
 #include "mesh.h"
 #include "model.h"
 #include "modeling.h"
+#include "navigator.h"
 #include "raster.h"
 #include "render.h"
 #include "surface.h"

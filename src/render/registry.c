@@ -87,3 +87,42 @@ vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
     vv_status s = r->ops->render(r->state, world, view, opt, out);
     return s == VV_OK ? s : vv_error_prefix(s, "%s", r->ops->name);
 }
+
+/* Samples of the transfer function searched for its surface value. */
+#define VV_SURFACE_TF_SAMPLES 4096
+
+int
+vv_object_surface_value(const vv_object *obj, double *iso, vv_vec3 *color) {
+    *color = obj->material.color;
+    if (obj->mode == VV_MODE_ISO) {
+        *iso = obj->isovalue;
+        return 1;
+    }
+    if (obj->segmentation == VV_SEG_THRESHOLD) {
+        *iso = obj->threshold;
+        return 1;
+    }
+    const double lo = obj->volume->range[0], hi = obj->volume->range[1];
+    double amax = 0;
+    for (int i = 0; i < VV_SURFACE_TF_SAMPLES; i++) {
+        double a = vv_tf_eval_opacity(&obj->tf, lo + (hi - lo) * i / (VV_SURFACE_TF_SAMPLES - 1));
+        amax = a > amax ? a : amax;
+    }
+    if (!(amax > 0))
+        return 0;
+    double prev_x = lo, prev_a = vv_tf_eval_opacity(&obj->tf, lo);
+    for (int i = 0; i < VV_SURFACE_TF_SAMPLES; i++) {
+        const double x = lo + (hi - lo) * i / (VV_SURFACE_TF_SAMPLES - 1);
+        const double a = vv_tf_eval_opacity(&obj->tf, x);
+        if (a >= 0.5 * amax) {
+            *iso = i == 0 || a == prev_a
+                       ? x
+                       : prev_x + (x - prev_x) * (0.5 * amax - prev_a) / (a - prev_a);
+            *color = vv_tf_eval_color(&obj->tf, *iso);
+            return 1;
+        }
+        prev_x = x;
+        prev_a = a;
+    }
+    return 0;
+}

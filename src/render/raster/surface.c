@@ -24,7 +24,6 @@
 #include "volvis/surface.h"
 
 #define SF_MAX_CACHE 64
-#define SF_TF_SAMPLES 4096
 
 /* One extracted isosurface. */
 typedef struct sf_iso {
@@ -360,44 +359,6 @@ iso_get(sf_state *st, vv_volume *vol, double iso, int threads, sf_iso **out) {
     return VV_OK;
 }
 
-/* The isovalue shown for a volume object (see the file comment); 0 when the
- * transfer function is transparent over the whole range. */
-static int
-object_isovalue(const vv_object *obj, double *iso, vv_vec3 *color) {
-    *color = obj->material.color;
-    if (obj->mode == VV_MODE_ISO) {
-        *iso = obj->isovalue;
-        return 1;
-    }
-    if (obj->segmentation == VV_SEG_THRESHOLD) {
-        *iso = obj->threshold;
-        return 1;
-    }
-    const double lo = obj->volume->range[0], hi = obj->volume->range[1];
-    double amax = 0;
-    for (int i = 0; i < SF_TF_SAMPLES; i++) {
-        double a = vv_tf_eval_opacity(&obj->tf, lo + (hi - lo) * i / (SF_TF_SAMPLES - 1));
-        amax = a > amax ? a : amax;
-    }
-    if (!(amax > 0))
-        return 0;
-    double prev_x = lo, prev_a = vv_tf_eval_opacity(&obj->tf, lo);
-    for (int i = 0; i < SF_TF_SAMPLES; i++) {
-        const double x = lo + (hi - lo) * i / (SF_TF_SAMPLES - 1);
-        const double a = vv_tf_eval_opacity(&obj->tf, x);
-        if (a >= 0.5 * amax) {
-            *iso = i == 0 || a == prev_a
-                       ? x
-                       : prev_x + (x - prev_x) * (0.5 * amax - prev_a) / (a - prev_a);
-            *color = vv_tf_eval_color(&obj->tf, *iso);
-            return 1;
-        }
-        prev_x = x;
-        prev_a = a;
-    }
-    return 0;
-}
-
 /* The faces of a volume object's grid box [0, n - 1] as world half-spaces
  * keeping the inside (axes of one voxel are left out). */
 static int
@@ -671,7 +632,7 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
             if (!obj->volume)
                 continue;
             double iso;
-            if (!object_isovalue(obj, &iso, &mat.color))
+            if (!vv_object_surface_value(obj, &iso, &mat.color))
                 continue;
             sf_iso *c = NULL;
             s = iso_get(st, obj->volume, iso, opt->threads, &c);
