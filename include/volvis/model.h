@@ -197,7 +197,9 @@ typedef struct vv_geometry {
     int n_vertices;    /**< polygon: number of vertices, >= 3 */
     vv_vec3 *vertices; /**< polygon: owned, planar, in order (either winding) */
     vv_mesh *mesh;     /**< mesh: one reference held */
-    char *source;      /**< mesh: file it came from (owned, may be NULL), for scene saving */
+    char *source;      /**< mesh or volume: file it came from (owned, may be NULL), for scene
+                            saving (vv_scene_load sets it for volumes; vv_scene_save uses it
+                            when no file name is given) */
 } vv_geometry;
 
 typedef enum vv_render_mode {
@@ -407,7 +409,9 @@ vv_status vv_scene_load_progress(vv_world **out, const char *path, const vv_prog
  * entries of other geometric objects are not read, and @p volume_files may
  * be NULL when there are no volume objects. Every field is written (the volume's current
  * origin and spacing too), so vv_scene_load of the file reproduces the
- * World; the TF of a threshold-segmented object is not kept. Errors:
+ * World; the TF of a threshold-segmented object is not kept. A volume
+ * object with no entry in @p volume_files is referred to by its
+ * geometry.source. Errors:
  * VV_ERR_IO, VV_ERR_INVALID.
  */
 vv_status vv_scene_save(const vv_world *w, const char *path, const char *const *volume_files);

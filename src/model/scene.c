@@ -1298,8 +1298,8 @@ parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
         return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
     vv_volume *vol = NULL;
     st = vv_volume_load(&vol, full, NULL);
-    free(full);
     if (st != VV_OK) {
+        free(full);
         int line, col;
         path_key(kp, op, "file");
         scene_locate(c, kp, &line, &col);
@@ -1321,8 +1321,11 @@ parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     vv_object *o = NULL;
     st = vv_object_new_volume(&o, vol, name ? name : defname);
     vv_volume_free(vol);
-    if (st != VV_OK)
+    if (st != VV_OK) {
+        free(full);
         return vv_error_prefix(st, "%s: %s", c->path, op);
+    }
+    o->geometry.source = full; /* kept for saving the scene again */
     st = parse_object_fields(c, e, op, o);
     if (st == VV_OK)
         st = parse_effect_flags(c, e, op, o);
@@ -1599,7 +1602,7 @@ put_object(FILE *f, const vv_object *o, const char *file) {
     fputs("    {\n      \"name\": ", f);
     put_str(f, o->name);
     fputs(",\n      \"type\": \"volume\",\n      \"file\": ", f);
-    put_str(f, file);
+    put_str(f, file && file[0] ? file : o->geometry.source ? o->geometry.source : "");
     fputs(",\n      \"origin\": ", f);
     put_vec3(f, vv_vec3_make(v->origin[0], v->origin[1], v->origin[2]));
     fputs(",\n      \"spacing\": ", f);
@@ -1673,23 +1676,21 @@ check_saveable(const vv_world *w, const char *const *volume_files) {
     if (v->width < 1 || v->width > IMAGE_MAX_SIDE || v->height < 1 || v->height > IMAGE_MAX_SIDE)
         return vv_error_set(VV_ERR_INVALID, "view size %dx%d outside 1..%d", v->width, v->height,
                             IMAGE_MAX_SIDE);
-    int n_files = 0;
     for (int i = 0; i < w->n_objects; i++) {
         const vv_object *o = w->objects[i];
         if (!o)
             return vv_error_set(VV_ERR_INVALID, "object %d is NULL", i);
         if (o->type == VV_OBJECT_MESH && !o->geometry.source && !(volume_files && volume_files[i]))
             return vv_error_set(VV_ERR_INVALID, "object %d: a mesh without a file name", i);
-        n_files += o->type == VV_OBJECT_VOLUME;
     }
-    if (n_files > 0 && !volume_files)
-        return vv_error_set(VV_ERR_INVALID, "no volume file names given for %d objects", n_files);
     for (int i = 0; i < w->n_objects; i++) {
         if (w->objects[i]->type != VV_OBJECT_VOLUME)
             continue;
         if (!w->objects[i]->volume)
             return vv_error_set(VV_ERR_INVALID, "object %d has no volume", i);
-        if (!volume_files[i] || !volume_files[i][0])
+        const char *file =
+            volume_files && volume_files[i] ? volume_files[i] : w->objects[i]->geometry.source;
+        if (!file || !file[0])
             return vv_error_set(VV_ERR_INVALID, "object %d: no volume file name", i);
     }
     return VV_OK;
