@@ -1,0 +1,55 @@
+/*
+ * volvis-gui: the VolVis desktop application (GTK 4). A thin client of
+ * libvolvis: everything it does goes through the public API, so the library
+ * and the CLI can reproduce whatever it shows. See docs/gui.md.
+ */
+#include <stdio.h>
+#include <string.h>
+
+#include <volvis/volvis.h>
+
+#include "vv-application.h"
+#include "vv-scene-view.h"
+
+static void
+usage(FILE *out) {
+    fprintf(out,
+            "usage: volvis-gui [FILE...]\n"
+            "       volvis-gui --help | --version\n"
+            "\n"
+            "VolVis %s: the desktop application. Opens volumes (NRRD, NIfTI, MetaImage,\n"
+            "VTK, SLC, ...), meshes (OBJ, PLY, STL, OFF, ...) and scene files (.json).\n"
+            "\n"
+            "Pages: Manipulation (objects, Object Control, Navigator), Rendering,\n"
+            "Measurement, Modeling. Drag in the view: rotate (Shift: pan, Ctrl: zoom,\n"
+            "Alt: the selected object; right button: pan); wheel: zoom.\n"
+            "Keys: Ctrl+O open, Ctrl+S save session, Ctrl+Z undo, Ctrl+Shift+Z redo,\n"
+            "Ctrl+R render, Ctrl+Q quit.\n"
+            "\n"
+            "Environment: VOLVIS_FRAME_LOG=FILE appends a line per frame shown\n"
+            "(docs/gui.md).\n",
+            vv_version());
+}
+
+int
+main(int argc, char **argv) {
+    vv_scene_view_set_start_time(g_get_monotonic_time());
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            usage(stdout);
+            return 0;
+        }
+        if (!strcmp(argv[i], "--version") || !strcmp(argv[i], "-V")) {
+            printf("volvis-gui %s\n", vv_version());
+            return 0;
+        }
+        if (argv[i][0] == '-' && argv[i][1] != '\0' && strcmp(argv[i], "--")) {
+            fprintf(stderr, "volvis-gui: unknown option '%s' (see --help)\n", argv[i]);
+            return 2;
+        }
+    }
+    VvApplication *app = vv_application_new();
+    int status = g_application_run(G_APPLICATION(app), argc, argv);
+    g_object_unref(app);
+    return status;
+}

@@ -1,0 +1,95 @@
+/* VvApplication: start-up, files from the command line, quit (vv-application.h). */
+#include "vv-application.h"
+
+#include "vv-window.h"
+
+struct _VvApplication {
+    GtkApplication parent;
+};
+
+G_DEFINE_TYPE(VvApplication, vv_application, GTK_TYPE_APPLICATION)
+
+static void
+quit_now(void *user) {
+    g_application_quit(G_APPLICATION(user));
+}
+
+static void
+act_quit(GSimpleAction *a, GVariant *p, gpointer user) {
+    (void)a;
+    (void)p;
+    GtkApplication *app = user;
+    GtkWindow *w = gtk_application_get_active_window(app);
+    if (w && VV_IS_WINDOW(w))
+        vv_window_confirm_close(VV_WINDOW(w), quit_now, app);
+    else
+        g_application_quit(G_APPLICATION(app));
+}
+
+static void
+vv_application_startup(GApplication *app) {
+    G_APPLICATION_CLASS(vv_application_parent_class)->startup(app);
+    static const GActionEntry entries[] = {{"quit", act_quit, NULL, NULL, NULL, {0}}};
+    g_action_map_add_action_entries(G_ACTION_MAP(app), entries, 1, app);
+    static const struct {
+        const char *action;
+        const char *accels[3];
+    } keys[] = {
+        {"app.quit", {"<Control>q", NULL}},
+        {"win.open", {"<Control>o", NULL}},
+        {"win.save", {"<Control>s", NULL}},
+        {"win.save-as", {"<Control><Shift>s", NULL}},
+        {"win.undo", {"<Control>z", NULL}},
+        {"win.redo", {"<Control><Shift>z", "<Control>y", NULL}},
+        {"win.render", {"<Control>r", NULL}},
+        {"win.delete-object", {"Delete", NULL}},
+        {"win.view-reset", {"<Control>0", NULL}},
+    };
+    for (size_t i = 0; i < G_N_ELEMENTS(keys); i++)
+        gtk_application_set_accels_for_action(GTK_APPLICATION(app), keys[i].action,
+                                              keys[i].accels);
+}
+
+static VvWindow *
+new_window(GApplication *app) {
+    VvWindow *w = vv_window_new(GTK_APPLICATION(app));
+    gtk_window_set_default_size(GTK_WINDOW(w), 960, 640);
+    gtk_window_present(GTK_WINDOW(w));
+    return w;
+}
+
+static void
+vv_application_activate(GApplication *app) {
+    new_window(app);
+}
+
+static void
+vv_application_open(GApplication *app, GFile **files, int n, const char *hint) {
+    (void)hint;
+    VvWindow *w = new_window(app);
+    for (int i = 0; i < n; i++) {
+        char *p = g_file_get_path(files[i]);
+        if (p)
+            vv_window_open(w, p);
+        g_free(p);
+    }
+}
+
+static void
+vv_application_class_init(VvApplicationClass *klass) {
+    G_APPLICATION_CLASS(klass)->startup = vv_application_startup;
+    G_APPLICATION_CLASS(klass)->activate = vv_application_activate;
+    G_APPLICATION_CLASS(klass)->open = vv_application_open;
+}
+
+static void
+vv_application_init(VvApplication *app) {
+    (void)app;
+}
+
+VvApplication *
+vv_application_new(void) {
+    /* NON_UNIQUE: every start is its own process (tests run several at once) */
+    return g_object_new(VV_TYPE_APPLICATION, "application-id", "org.volvis.VolVis", "flags",
+                        G_APPLICATION_HANDLES_OPEN | G_APPLICATION_NON_UNIQUE, NULL);
+}

@@ -1,0 +1,74 @@
+/*
+ * VvDocument: the World a VolVis window edits, with its undo stack, the file
+ * each volume came from, the selection and the session's file name.
+ *
+ * Every edit of the World goes through vv_document_begin_edit (an undo step)
+ * and vv_document_changed (the "changed" signal, so views re-render). The
+ * World is read by the UI thread; renderers read snapshots of it
+ * (vv_document_snapshot), never the World itself. UI thread only.
+ */
+#ifndef VV_DOCUMENT_H
+#define VV_DOCUMENT_H
+
+#include <gtk/gtk.h>
+#include <volvis/volvis.h>
+
+G_BEGIN_DECLS
+
+#define VV_TYPE_DOCUMENT (vv_document_get_type())
+G_DECLARE_FINAL_TYPE(VvDocument, vv_document, VV, DOCUMENT, GObject)
+
+/** The error domain of the GUI: messages are the library's error trace. */
+#define VV_GUI_ERROR (vv_gui_error_quark())
+GQuark vv_gui_error_quark(void);
+
+/** An empty World (vv_world_new). */
+VvDocument *vv_document_new(void);
+/** The World being edited (owned by the document; valid until the next undo, redo or open). */
+vv_world *vv_document_world(VvDocument *doc);
+/** A snapshot of the World for a renderer (caller frees with vv_world_free), or NULL. */
+vv_world *vv_document_snapshot(VvDocument *doc);
+
+/** Records an undo step called @p label before the World is changed, and marks it unsaved. */
+void vv_document_begin_edit(VvDocument *doc, const char *label);
+/** Emits "changed": the World was changed (live, during a drag too). */
+void vv_document_changed(VvDocument *doc);
+gboolean vv_document_undo(VvDocument *doc);
+gboolean vv_document_redo(VvDocument *doc);
+gboolean vv_document_can_undo(VvDocument *doc);
+gboolean vv_document_can_redo(VvDocument *doc);
+
+/**
+ * Opens a volume (any format vv_volume_load reads), a mesh (any format
+ * Assimp reads: .obj .ply .stl .off ...) or a scene file (.json). The first
+ * volume into an empty World gets the default scene of `volvis render FILE`;
+ * later ones are added beside it; a scene replaces the World. One undo step.
+ * On failure the World is unchanged and @p error holds the library's message
+ * naming the file.
+ */
+gboolean vv_document_open(VvDocument *doc, const char *path, GError **error);
+/**
+ * Saves the World as a scene file that `volvis render` renders to the same
+ * image. Volumes that came from files are referred to by path; volumes made
+ * in the session (Modeling) are written as NRRD beside the scene. The write
+ * is atomic. On failure @p error holds the message.
+ */
+gboolean vv_document_save(VvDocument *doc, const char *path, GError **error);
+/** The scene file the session was opened from or saved to, or NULL. */
+const char *vv_document_path(VvDocument *doc);
+/** TRUE when the World has changed since it was opened or saved. */
+gboolean vv_document_dirty(VvDocument *doc);
+
+/** Adds @p obj (the World takes it), remembering @p source (may be NULL); one undo step. */
+void vv_document_add_object(VvDocument *doc, vv_object *obj, const char *source);
+/** Deletes object @p index; one undo step. */
+void vv_document_delete_object(VvDocument *doc, int index);
+/** Index of the selected object, or -1. */
+int vv_document_selected(VvDocument *doc);
+/** The selected object, or NULL. */
+vv_object *vv_document_selected_object(VvDocument *doc);
+/** Selects object @p index (-1: none) and emits "selection-changed". */
+void vv_document_select(VvDocument *doc, int index);
+
+G_END_DECLS
+#endif

@@ -1,0 +1,677 @@
+/* VvSceneView: the scene view and the Navigator (vv-scene-view.h). */
+#include "vv-scene-view.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+/* Seconds a preview frame may take so the view holds 30 frames a second,
+ * leaving time for showing it. */
+#define PREVIEW_BUDGET (1.0 / 30.0 - 0.006)
+
+static gint64 start_us;
+
+void
+vv_scene_view_set_start_time(gint64 us) {
+    start_us = us;
+}
+
+/* ---- the worker --------------------------------------------------------- */
+
+/* One request: a snapshot and the representations to draw in turn. */
+typedef struct job {
+    guint64 gen;
+    vv_world *world;
+    int n_kinds;
+    vv_preview_kind kinds[3];
+    gboolean refine; /* cancelled by any newer state */
+    gint64 posted_us;
+} job;
+
+/* One finished frame, posted to the UI thread. */
+typedef struct frame {
+    VvSceneView *view; /* a reference is held */
+    guint64 gen;
+    vv_preview_kind kind;
+    gboolean refine;
+    int width, height;
+    GBytes *pixels; /* RGBA8 */
+    double render_ms;
+    gint64 posted_us;
+    char error[512];
+} frame;
+
+struct _VvSceneView {
+    GtkWidget parent;
+    VvDocument *doc;
+    gulong changed_id;
+
+    /* worker */
+    GThread *thread;
+    GMutex lock;
+    GCond cond;
+    job *pending; /* newest request not yet taken */
+    gboolean quit;
+    guint64 cancel_below; /* refinement of a generation below this stops (atomic) */
+    vv_preview *preview; /* worker only */
+    char preview_renderer[32];
+    vv_preview_policy policy; /* under lock: written by the worker, read by the UI */
+
+    /* UI */
+    guint64 gen;       /* of the World's current state */
+    guint64 shown_gen; /* of the frame on screen */
+    int shown_kind;
+    GdkTexture *texture;
+    gboolean texture_logged;
+    double shown_render_ms;
+    gint64 shown_latency_us;
+    guint refine_source;
+    int refine_delay_ms;
+    gboolean moving;
+    VvNavTarget target;
+    int light;
+    double drag_last_x, drag_last_y;
+    int drag_button;
+    GdkModifierType drag_mods;
+    double full_ms;
+    FILE *frame_log;
+    char last_error[512];
+
+    /* flight */
+    gboolean flight;
+    double yaw_rate, pitch_rate, roll_rate, throttle;
+    guint tick_id;
+    gint64 last_tick_us;
+};
+
+G_DEFINE_TYPE(VvSceneView, vv_scene_view, GTK_TYPE_WIDGET)
+
+static void
+job_free(job *j) {
+    if (!j)
+        return;
+    vv_world_free(j->world);
+    g_free(j);
+}
+
+static void
+frame_free(frame *f) {
+    g_object_unref(f->view);
+    if (f->pixels)
+        g_bytes_unref(f->pixels);
+    g_free(f);
+}
+
+typedef struct cancel_ctx {
+    VvSceneView *view;
+    guint64 gen;
+} cancel_ctx;
+
+static int
+cancel_cb(void *user, double fraction) {
+    (void)fraction;
+    cancel_ctx *c = user;
+    guint64 below = __atomic_load_n(&c->view->cancel_below, __ATOMIC_RELAXED);
+    return c->gen < below || __atomic_load_n(&c->view->quit, __ATOMIC_RELAXED) ? 1 : 0;
+}
+
+static gboolean show_frame(gpointer data);
+
+/* Draws one representation of a job; NULL when cancelled. */
+static frame *
+render_one(VvSceneView *self, const job *j, vv_preview_kind kind) {
+    frame *f = g_new0(frame, 1);
+    f->view = g_object_ref(self);
+    f->gen = j->gen;
+    f->kind = kind;
+    f->refine = j->refine;
+    f->posted_us = j->posted_us;
+    const vv_world *w = j->world;
+    const char *rname = w->render.renderer[0] ? w->render.renderer : "raycast";
+    vv_status s = VV_OK;
+    vv_error_clear();
+    if (!self->preview || strcmp(rname, self->preview_renderer) != 0) {
+        vv_preview_free(self->preview);
+        self->preview = NULL;
+        s = vv_preview_new(&self->preview, rname);
+        if (s == VV_OK)
+            g_strlcpy(self->preview_renderer, rname, sizeof self->preview_renderer);
+    }
+    vv_image *img = NULL;
+    int iw = 1, ih = 1;
+    vv_preview_size(kind, w->view.width, w->view.height, &iw, &ih);
+    if (s == VV_OK && kind == VV_PREVIEW_FULL) {
+        vv_renderer *r = vv_preview_final_renderer(self->preview);
+        for (int i = 0; i < w->render.n_options && s == VV_OK; i++)
+            s = vv_renderer_set_option(r, w->render.option_keys[i], w->render.option_values[i]);
+    }
+    if (s == VV_OK)
+        s = vv_image_new(&img, iw, ih);
+    cancel_ctx cc = {self, j->gen};
+    vv_render_options ro;
+    vv_render_options_init(&ro);
+    ro.quality = w->render.quality >= 0 ? w->render.quality : 2;
+    ro.progress.fn = cancel_cb;
+    ro.progress.user = &cc;
+    gint64 t0 = g_get_monotonic_time();
+    if (s == VV_OK)
+        s = vv_preview_render(self->preview, w, &w->view, kind, &ro, img);
+    double secs = (g_get_monotonic_time() - t0) * 1e-6;
+    if (s == VV_ERR_CANCELLED) {
+        vv_image_free(img);
+        frame_free(f);
+        return NULL;
+    }
+    f->render_ms = secs * 1e3;
+    if (s != VV_OK) {
+        g_strlcpy(f->error, vv_error_message(), sizeof f->error);
+        vv_image_free(img);
+        return f;
+    }
+    g_mutex_lock(&self->lock);
+    vv_preview_policy_record(&self->policy, kind, secs);
+    g_mutex_unlock(&self->lock);
+    size_t n = (size_t)iw * ih * 4;
+    guint8 *px = g_malloc(n);
+    vv_image_to_8bit(img, 4, 1.0, px);
+    /* opaque: the background is composited in (as `volvis render` writes RGB) */
+    for (size_t i = 3; i < n; i += 4)
+        px[i] = 255;
+    f->pixels = g_bytes_new_take(px, n);
+    f->width = iw;
+    f->height = ih;
+    vv_image_free(img);
+    return f;
+}
+
+static gpointer
+worker_main(gpointer data) {
+    VvSceneView *self = data;
+    for (;;) {
+        g_mutex_lock(&self->lock);
+        while (!self->pending && !self->quit)
+            g_cond_wait(&self->cond, &self->lock);
+        if (self->quit) {
+            g_mutex_unlock(&self->lock);
+            break;
+        }
+        job *j = self->pending;
+        self->pending = NULL;
+        g_mutex_unlock(&self->lock);
+        for (int k = 0; k < j->n_kinds; k++) {
+            if (j->refine && cancel_cb(&(cancel_ctx){self, j->gen}, 0))
+                break;
+            frame *f = render_one(self, j, j->kinds[k]);
+            if (!f)
+                break;
+            g_idle_add_full(G_PRIORITY_HIGH_IDLE, show_frame, f, NULL);
+            /* a newer request pre-empts the rest of a refinement */
+            g_mutex_lock(&self->lock);
+            gboolean newer = self->pending != NULL;
+            g_mutex_unlock(&self->lock);
+            if (newer)
+                break;
+        }
+        job_free(j);
+    }
+    vv_preview_free(self->preview);
+    self->preview = NULL;
+    return NULL;
+}
+
+static void
+post_job(VvSceneView *self, job *j) {
+    g_mutex_lock(&self->lock);
+    job_free(self->pending);
+    self->pending = j;
+    g_cond_signal(&self->cond);
+    g_mutex_unlock(&self->lock);
+}
+
+/* ---- UI side ------------------------------------------------------------ */
+
+static gboolean
+show_frame(gpointer data) {
+    frame *f = data;
+    VvSceneView *self = f->view;
+    if (!self->doc) { /* disposed */
+        frame_free(f);
+        return G_SOURCE_REMOVE;
+    }
+    /* never a frame older than the one on screen, and never a refinement
+     * of a state that has changed since */
+    if (f->gen < self->shown_gen || (f->refine && f->gen != self->gen)) {
+        frame_free(f);
+        return G_SOURCE_REMOVE;
+    }
+    if (f->error[0]) {
+        if (strcmp(f->error, self->last_error) != 0) {
+            g_strlcpy(self->last_error, f->error, sizeof self->last_error);
+            g_warning("volvis-gui: render: %s", f->error);
+        }
+        frame_free(f);
+        return G_SOURCE_REMOVE;
+    }
+    self->last_error[0] = '\0';
+    /* at the same state, a better representation replaces a worse one only */
+    if (f->gen == self->shown_gen && self->texture && (int)f->kind < self->shown_kind) {
+        frame_free(f);
+        return G_SOURCE_REMOVE;
+    }
+    g_clear_object(&self->texture);
+    self->texture =
+        gdk_memory_texture_new(f->width, f->height, GDK_MEMORY_R8G8B8A8, f->pixels, 4 * f->width);
+    self->texture_logged = FALSE;
+    self->shown_gen = f->gen;
+    self->shown_kind = f->kind;
+    self->shown_render_ms = f->render_ms;
+    self->shown_latency_us = g_get_monotonic_time() - f->posted_us;
+    if (f->kind == VV_PREVIEW_FULL)
+        self->full_ms = f->render_ms;
+    gtk_widget_queue_draw(GTK_WIDGET(self));
+    frame_free(f);
+    return G_SOURCE_REMOVE;
+}
+
+static job *
+new_job(VvSceneView *self, gboolean refine) {
+    vv_world *w = vv_document_snapshot(self->doc);
+    if (!w)
+        return NULL;
+    job *j = g_new0(job, 1);
+    j->gen = self->gen;
+    j->world = w;
+    j->refine = refine;
+    j->posted_us = g_get_monotonic_time();
+    return j;
+}
+
+static gboolean
+refine_cb(gpointer data) {
+    VvSceneView *self = data;
+    self->refine_source = 0;
+    self->moving = FALSE;
+    job *j = new_job(self, TRUE);
+    if (!j)
+        return G_SOURCE_REMOVE;
+    /* 1/2 first when the frame on screen is coarser, then the full frame */
+    if (self->shown_kind < VV_PREVIEW_RAYCAST_2 || self->shown_gen != self->gen)
+        j->kinds[j->n_kinds++] = VV_PREVIEW_RAYCAST_2;
+    j->kinds[j->n_kinds++] = VV_PREVIEW_FULL;
+    post_job(self, j);
+    return G_SOURCE_REMOVE;
+}
+
+/* The World changed: draw a preview now and refine after the delay. */
+static void
+state_changed(VvSceneView *self) {
+    self->gen++;
+    __atomic_store_n(&self->cancel_below, self->gen, __ATOMIC_RELAXED);
+    self->moving = TRUE;
+    g_mutex_lock(&self->lock);
+    vv_preview_kind k = vv_preview_policy_choose(&self->policy, PREVIEW_BUDGET);
+    g_mutex_unlock(&self->lock);
+    job *j = new_job(self, FALSE);
+    if (j) {
+        j->kinds[j->n_kinds++] = k;
+        post_job(self, j);
+    }
+    if (self->refine_source)
+        g_source_remove(self->refine_source);
+    self->refine_source = g_timeout_add(self->refine_delay_ms, refine_cb, self);
+}
+
+static void
+doc_changed(VvDocument *doc, gpointer user) {
+    (void)doc;
+    state_changed(VV_SCENE_VIEW(user));
+}
+
+void
+vv_scene_view_refresh(VvSceneView *self) {
+    state_changed(self);
+}
+
+/* ---- drawing -------------------------------------------------------------- */
+
+static void
+log_frame(VvSceneView *self) {
+    if (!self->frame_log || self->texture_logged || !self->texture)
+        return;
+    self->texture_logged = TRUE;
+    double ms = (g_get_monotonic_time() - start_us) * 1e-3;
+    fprintf(self->frame_log, "%.3f %s %dx%d %.3f %.3f\n", ms,
+            vv_preview_kind_name((vv_preview_kind)self->shown_kind),
+            gdk_texture_get_width(self->texture), gdk_texture_get_height(self->texture),
+            self->shown_render_ms, self->shown_latency_us * 1e-3);
+    fflush(self->frame_log);
+}
+
+static void
+vv_scene_view_snapshot(GtkWidget *widget, GtkSnapshot *snapshot) {
+    VvSceneView *self = VV_SCENE_VIEW(widget);
+    int ww = gtk_widget_get_width(widget), wh = gtk_widget_get_height(widget);
+    const vv_world *w = vv_document_world(self->doc);
+    vv_vec3 bg = w->background;
+    GdkRGBA bgc = {(float)bg.x, (float)bg.y, (float)bg.z, 1};
+    gtk_snapshot_append_color(snapshot, &bgc, &GRAPHENE_RECT_INIT(0, 0, ww, wh));
+    if (!self->texture)
+        return;
+    /* the view's image size, centred; scaled down only when the widget is smaller */
+    double vw = w->view.width, vh = w->view.height;
+    double s = fmin(1.0, fmin(ww / vw, wh / vh));
+    double dw = vw * s, dh = vh * s;
+    graphene_rect_t r = GRAPHENE_RECT_INIT((float)floor((ww - dw) / 2), (float)floor((wh - dh) / 2),
+                                           (float)dw, (float)dh);
+    gtk_snapshot_append_texture(snapshot, self->texture, &r);
+    log_frame(self);
+}
+
+static void
+vv_scene_view_measure(GtkWidget *widget, GtkOrientation o, int for_size, int *min, int *nat,
+                      int *min_base, int *nat_base) {
+    (void)for_size;
+    VvSceneView *self = VV_SCENE_VIEW(widget);
+    const vv_world *w = vv_document_world(self->doc);
+    *min = 64;
+    *nat = o == GTK_ORIENTATION_HORIZONTAL ? w->view.width : w->view.height;
+    *min_base = *nat_base = -1;
+}
+
+/* ---- input ------------------------------------------------------------------ */
+
+static void
+begin_interaction(VvSceneView *self, const char *label) {
+    vv_document_begin_edit(self->doc, label);
+}
+
+static void
+apply_motion(VvSceneView *self, double dx, double dy) {
+    vv_world *w = vv_document_world(self->doc);
+    /* widget pixels to view pixels (the image may be shown scaled down) */
+    int ww = gtk_widget_get_width(GTK_WIDGET(self)), wh = gtk_widget_get_height(GTK_WIDGET(self));
+    double s = fmin(1.0, fmin((double)ww / w->view.width, (double)wh / w->view.height));
+    if (s > 0) {
+        dx /= s;
+        dy /= s;
+    }
+    gboolean pan = self->drag_button == 3 || self->drag_button == 2 ||
+                   (self->drag_mods & GDK_SHIFT_MASK);
+    gboolean zoom = (self->drag_mods & GDK_CONTROL_MASK) != 0;
+    VvNavTarget target = self->target;
+    if (self->drag_mods & GDK_ALT_MASK)
+        target = VV_NAV_OBJECT;
+    vv_object *obj = vv_document_selected_object(self->doc);
+    if (target == VV_NAV_OBJECT && obj) {
+        if (zoom)
+            vv_nav_object_scale(obj, exp(-dy / 200.0));
+        else if (pan)
+            vv_nav_object_translate(obj, &w->view, dx, dy);
+        else
+            vv_nav_object_rotate(obj, &w->view, dx, dy);
+    } else if (target == VV_NAV_LIGHT && self->light >= 0 && self->light < w->n_lights) {
+        vv_nav_light_drag(&w->lights[self->light], &w->view, dx, dy);
+    } else if (zoom) {
+        vv_nav_view_zoom(&w->view, exp(-dy / 200.0));
+    } else if (pan) {
+        vv_nav_view_pan(&w->view, dx, dy);
+    } else {
+        vv_nav_view_rotate(&w->view, dx, dy);
+    }
+    vv_document_changed(self->doc);
+}
+
+static void
+drag_begin(GtkGestureDrag *g, double x, double y, gpointer user) {
+    VvSceneView *self = user;
+    self->drag_last_x = 0;
+    self->drag_last_y = 0;
+    self->drag_button = (int)gtk_gesture_single_get_current_button(GTK_GESTURE_SINGLE(g));
+    self->drag_mods = gtk_event_controller_get_current_event_state(GTK_EVENT_CONTROLLER(g));
+    (void)x;
+    (void)y;
+    gtk_widget_grab_focus(GTK_WIDGET(self));
+    begin_interaction(self, self->target == VV_NAV_OBJECT  ? "move object"
+                            : self->target == VV_NAV_LIGHT ? "move light"
+                                                           : "move view");
+}
+
+static void
+drag_update(GtkGestureDrag *g, double ox, double oy, gpointer user) {
+    (void)g;
+    VvSceneView *self = user;
+    double dx = ox - self->drag_last_x, dy = oy - self->drag_last_y;
+    self->drag_last_x = ox;
+    self->drag_last_y = oy;
+    if (dx != 0 || dy != 0)
+        apply_motion(self, dx, dy);
+}
+
+static gboolean
+scroll_cb(GtkEventControllerScroll *c, double dx, double dy, gpointer user) {
+    (void)c;
+    (void)dx;
+    VvSceneView *self = user;
+    if (!isfinite(dy) || dy == 0)
+        return FALSE;
+    begin_interaction(self, "zoom");
+    vv_world *w = vv_document_world(self->doc);
+    vv_nav_view_zoom(&w->view, pow(1.1, -dy));
+    vv_document_changed(self->doc);
+    return TRUE;
+}
+
+static gboolean
+tick_cb(GtkWidget *widget, GdkFrameClock *clock, gpointer user) {
+    (void)widget;
+    VvSceneView *self = user;
+    gint64 now = gdk_frame_clock_get_frame_time(clock);
+    double dt = self->last_tick_us ? (now - self->last_tick_us) * 1e-6 : 0.0;
+    self->last_tick_us = now;
+    if (self->yaw_rate == 0 && self->pitch_rate == 0 && self->roll_rate == 0 &&
+        self->throttle == 0) {
+        self->tick_id = 0;
+        self->last_tick_us = 0;
+        return G_SOURCE_REMOVE;
+    }
+    vv_world *w = vv_document_world(self->doc);
+    /* throttle in scene sizes a second */
+    vv_box b = vv_world_bounds(w);
+    double size = vv_vec3_length(vv_vec3_sub(b.max, b.min));
+    if (!(size > 0))
+        size = 1;
+    vv_nav_view_fly(&w->view, self->yaw_rate, self->pitch_rate, self->roll_rate,
+                    self->throttle * 0.25 * size, dt);
+    vv_document_changed(self->doc);
+    return G_SOURCE_CONTINUE;
+}
+
+static gboolean
+flight_key(VvSceneView *self, guint key, gboolean down) {
+    double rate = down ? 0.6 : 0.0; /* radians a second */
+    switch (key) {
+    case GDK_KEY_Left:
+        self->yaw_rate = rate;
+        break;
+    case GDK_KEY_Right:
+        self->yaw_rate = -rate;
+        break;
+    case GDK_KEY_Up:
+        self->pitch_rate = rate;
+        break;
+    case GDK_KEY_Down:
+        self->pitch_rate = -rate;
+        break;
+    case GDK_KEY_q:
+        self->roll_rate = -rate;
+        break;
+    case GDK_KEY_e:
+        self->roll_rate = rate;
+        break;
+    case GDK_KEY_w:
+        self->throttle = down ? 1.0 : 0.0;
+        break;
+    case GDK_KEY_s:
+        self->throttle = down ? -1.0 : 0.0;
+        break;
+    default:
+        return FALSE;
+    }
+    if (down && !self->tick_id) {
+        begin_interaction(self, "fly");
+        self->last_tick_us = 0;
+        self->tick_id = gtk_widget_add_tick_callback(GTK_WIDGET(self), tick_cb, self, NULL);
+    }
+    return TRUE;
+}
+
+static gboolean
+key_pressed(GtkEventControllerKey *c, guint key, guint code, GdkModifierType mods, gpointer user) {
+    (void)c;
+    (void)code;
+    VvSceneView *self = user;
+    if (!self->flight || (mods & (GDK_CONTROL_MASK | GDK_ALT_MASK)))
+        return FALSE;
+    return flight_key(self, key, TRUE);
+}
+
+static void
+key_released(GtkEventControllerKey *c, guint key, guint code, GdkModifierType mods, gpointer user) {
+    (void)c;
+    (void)code;
+    (void)mods;
+    VvSceneView *self = user;
+    if (self->flight)
+        flight_key(self, key, FALSE);
+}
+
+/* ---- life cycle ---------------------------------------------------------- */
+
+static void
+vv_scene_view_dispose(GObject *o) {
+    VvSceneView *self = VV_SCENE_VIEW(o);
+    if (self->thread) {
+        g_mutex_lock(&self->lock);
+        self->quit = TRUE;
+        __atomic_store_n(&self->cancel_below, G_MAXUINT64, __ATOMIC_RELAXED);
+        g_cond_signal(&self->cond);
+        g_mutex_unlock(&self->lock);
+        g_thread_join(self->thread);
+        self->thread = NULL;
+        job_free(self->pending);
+        self->pending = NULL;
+    }
+    if (self->refine_source) {
+        g_source_remove(self->refine_source);
+        self->refine_source = 0;
+    }
+    if (self->doc) {
+        g_signal_handler_disconnect(self->doc, self->changed_id);
+        g_clear_object(&self->doc);
+    }
+    g_clear_object(&self->texture);
+    if (self->frame_log) {
+        fclose(self->frame_log);
+        self->frame_log = NULL;
+    }
+    G_OBJECT_CLASS(vv_scene_view_parent_class)->dispose(o);
+}
+
+static void
+vv_scene_view_finalize(GObject *o) {
+    VvSceneView *self = VV_SCENE_VIEW(o);
+    g_mutex_clear(&self->lock);
+    g_cond_clear(&self->cond);
+    G_OBJECT_CLASS(vv_scene_view_parent_class)->finalize(o);
+}
+
+static void
+vv_scene_view_class_init(VvSceneViewClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vv_scene_view_dispose;
+    G_OBJECT_CLASS(klass)->finalize = vv_scene_view_finalize;
+    GTK_WIDGET_CLASS(klass)->snapshot = vv_scene_view_snapshot;
+    GTK_WIDGET_CLASS(klass)->measure = vv_scene_view_measure;
+}
+
+static void
+vv_scene_view_init(VvSceneView *self) {
+    g_mutex_init(&self->lock);
+    g_cond_init(&self->cond);
+    vv_preview_policy_init(&self->policy);
+    self->refine_delay_ms = 100;
+    self->shown_kind = -1;
+    gtk_widget_set_focusable(GTK_WIDGET(self), TRUE);
+    gtk_widget_set_hexpand(GTK_WIDGET(self), TRUE);
+    gtk_widget_set_vexpand(GTK_WIDGET(self), TRUE);
+    const char *log = g_getenv("VOLVIS_FRAME_LOG");
+    if (log && *log) {
+        self->frame_log = fopen(log, "a");
+        if (!self->frame_log)
+            g_warning("volvis-gui: VOLVIS_FRAME_LOG: cannot open %s", log);
+    }
+    /* left drag: rotate (Shift: pan, Ctrl: zoom); middle or right drag: pan */
+    for (int button = 1; button <= 3; button++) {
+        GtkGesture *drag = gtk_gesture_drag_new();
+        gtk_gesture_single_set_button(GTK_GESTURE_SINGLE(drag), (guint)button);
+        g_signal_connect(drag, "drag-begin", G_CALLBACK(drag_begin), self);
+        g_signal_connect(drag, "drag-update", G_CALLBACK(drag_update), self);
+        gtk_widget_add_controller(GTK_WIDGET(self), GTK_EVENT_CONTROLLER(drag));
+    }
+    GtkEventController *scroll = gtk_event_controller_scroll_new(
+        GTK_EVENT_CONTROLLER_SCROLL_VERTICAL | GTK_EVENT_CONTROLLER_SCROLL_DISCRETE);
+    g_signal_connect(scroll, "scroll", G_CALLBACK(scroll_cb), self);
+    gtk_widget_add_controller(GTK_WIDGET(self), scroll);
+    GtkEventController *keys = gtk_event_controller_key_new();
+    g_signal_connect(keys, "key-pressed", G_CALLBACK(key_pressed), self);
+    g_signal_connect(keys, "key-released", G_CALLBACK(key_released), self);
+    gtk_widget_add_controller(GTK_WIDGET(self), keys);
+}
+
+VvSceneView *
+vv_scene_view_new(VvDocument *doc) {
+    VvSceneView *self = g_object_new(VV_TYPE_SCENE_VIEW, NULL);
+    self->doc = g_object_ref(doc);
+    self->changed_id = g_signal_connect(doc, "changed", G_CALLBACK(doc_changed), self);
+    self->thread = g_thread_new("volvis-render", worker_main, self);
+    state_changed(self);
+    return self;
+}
+
+void
+vv_scene_view_set_target(VvSceneView *self, VvNavTarget target) {
+    self->target = target;
+}
+
+void
+vv_scene_view_set_light(VvSceneView *self, int index) {
+    self->light = index;
+}
+
+void
+vv_scene_view_set_preview(VvSceneView *self, int kind) {
+    g_mutex_lock(&self->lock);
+    self->policy.forced = kind >= 0 && kind < VV_PREVIEW_COUNT ? kind : -1;
+    g_mutex_unlock(&self->lock);
+}
+
+void
+vv_scene_view_set_refine_delay(VvSceneView *self, int ms) {
+    self->refine_delay_ms = ms < 0 ? 0 : ms > 2000 ? 2000 : ms;
+}
+
+void
+vv_scene_view_set_flight(VvSceneView *self, gboolean on) {
+    self->flight = on;
+    if (!on)
+        self->yaw_rate = self->pitch_rate = self->roll_rate = self->throttle = 0;
+}
+
+double
+vv_scene_view_full_ms(VvSceneView *self) {
+    return self->full_ms;
+}
+
+const char *
+vv_scene_view_shown(VvSceneView *self) {
+    return self->shown_kind < 0 ? "" : vv_preview_kind_name((vv_preview_kind)self->shown_kind);
+}

@@ -1,0 +1,56 @@
+/*
+ * VvSceneView: the window's scene view and the Navigator (VolVis paper,
+ * section 4). It shows the document's World, turns mouse, scroll and key
+ * input into view, object and light manipulation, and keeps the frame rate
+ * by drawing reduced-resolution previews while things move
+ * (vv_preview_policy), refining to the selected renderer at full quality
+ * when input stops.
+ *
+ * Rendering runs on a worker thread on a snapshot of the World; the UI
+ * thread only posts work and shows finished frames. A frame for a state
+ * older than the one on screen is never shown, and refinement for an old
+ * state is cancelled as soon as new input arrives.
+ *
+ * With VOLVIS_FRAME_LOG=FILE set, one line is appended per frame put on
+ * screen: "<ms since start> <representation> <W>x<H> <render ms> <latency ms>"
+ * (docs/gui.md). UI thread only, except where noted.
+ */
+#ifndef VV_SCENE_VIEW_H
+#define VV_SCENE_VIEW_H
+
+#include "vv-document.h"
+
+G_BEGIN_DECLS
+
+#define VV_TYPE_SCENE_VIEW (vv_scene_view_get_type())
+G_DECLARE_FINAL_TYPE(VvSceneView, vv_scene_view, VV, SCENE_VIEW, GtkWidget)
+
+/** What a drag moves. */
+typedef enum VvNavTarget {
+    VV_NAV_VIEW = 0,   /**< the camera (trackball, pan, zoom) */
+    VV_NAV_OBJECT = 1, /**< the selected object */
+    VV_NAV_LIGHT = 2   /**< the selected light */
+} VvNavTarget;
+
+VvSceneView *vv_scene_view_new(VvDocument *doc);
+void vv_scene_view_set_target(VvSceneView *view, VvNavTarget target);
+/** The light a VV_NAV_LIGHT drag moves. */
+void vv_scene_view_set_light(VvSceneView *view, int index);
+/** Forces a representation while moving (a vv_preview_kind), or -1 for automatic. */
+void vv_scene_view_set_preview(VvSceneView *view, int kind);
+/** Delay in milliseconds after the last input before refinement starts (0..2000). */
+void vv_scene_view_set_refine_delay(VvSceneView *view, int ms);
+/** Flight-simulator keys (arrows: yaw and pitch, Q/E: roll, W/S: throttle) on or off. */
+void vv_scene_view_set_flight(VvSceneView *view, gboolean on);
+/** Milliseconds the last full-quality frame took to render (0 before the first). */
+double vv_scene_view_full_ms(VvSceneView *view);
+/** Representation name of the frame on screen ("" before the first). */
+const char *vv_scene_view_shown(VvSceneView *view);
+/** Re-renders now (the World changed outside a drag). */
+void vv_scene_view_refresh(VvSceneView *view);
+
+/** Microseconds of g_get_monotonic_time() at which the process started (for the frame log). */
+void vv_scene_view_set_start_time(gint64 us);
+
+G_END_DECLS
+#endif
