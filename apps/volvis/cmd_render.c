@@ -392,29 +392,16 @@ world_for_scene(const render_args *r, vv_world **out) {
     return 0;
 }
 
-/* Whether --set gave option @p key. */
-static int
-set_given(const cli_args *a, const char *key) {
-    size_t kl = strlen(key);
-    for (int i = 0; i < a->n_seen; i++) {
-        const char *kv = a->seen[i].value;
-        if (strcmp(a->specs[a->seen[i].opt].name, "set") == 0 && strncmp(kv, key, kl) == 0 &&
-            kv[kl] == '=')
-            return 1;
-    }
-    return 0;
-}
-
 /*
  * The renderer, quality and options to render @p w with: the scene's render
  * section (w->render; never set for a volume file) gives the defaults, the
  * command line overrides. The scene's options belong to the scene's renderer
  * (raycast when it names none), so they are dropped when --renderer names
- * another; --set then adds to or overrides them, in order.
+ * another. The --set options are applied after these (apply_options), so
+ * they add to or override them.
  */
 static int
-resolve_render_settings(const cli_args *a, const render_args *r, const vv_world *w,
-                        vv_render_settings *out) {
+resolve_render_settings(const render_args *r, const vv_world *w, vv_render_settings *out) {
     const vv_render_settings *sc = &w->render;
     const char *scene_renderer = sc->renderer[0] ? sc->renderer : "raycast";
     vv_render_settings_init(out);
@@ -431,20 +418,40 @@ resolve_render_settings(const cli_args *a, const render_args *r, const vv_world 
             if (vv_render_settings_set_option(out, sc->option_keys[i], sc->option_values[i]) !=
                 VV_OK)
                 return cli_fail(VV_ERR_INVALID, r->input);
+    return 0;
+}
+
+/* Passes the scene's options in @p rs, then the --set options in order, to
+ * @p ren. A scene option the renderer refuses is bad input naming the scene,
+ * a --set option a usage error. */
+static int
+apply_options(const cli_args *a, const render_args *r, const vv_render_settings *rs,
+              vv_renderer *ren) {
+    for (int i = 0; i < rs->n_options; i++) {
+        vv_error_clear();
+        if (vv_renderer_set_option(ren, rs->option_keys[i], rs->option_values[i]) != VV_OK) {
+            const char *m = vv_error_message();
+            cli_error("%s: render.options.%s: %s", r->input, rs->option_keys[i],
+                      m && *m ? m : "the renderer does not accept it");
+            return CLI_EXIT_FAIL;
+        }
+    }
     for (int i = 0; i < a->n_seen; i++) {
         if (strcmp(a->specs[a->seen[i].opt].name, "set") != 0)
             continue;
-        char key[VV_RENDER_OPTION_KEY_MAX];
+        char key[256];
         const char *kv = a->seen[i].value;
         size_t klen = (size_t)(strchr(kv, '=') - kv);
         if (klen >= sizeof key)
-            return cli_usage_error(a, "--set: key too long in '%s' (at most %zu bytes)", kv,
-                                   sizeof key - 1);
+            return cli_usage_error(a, "--set: key too long in '%s'", kv);
         memcpy(key, kv, klen);
         key[klen] = '\0';
         vv_error_clear();
-        if (vv_render_settings_set_option(out, key, kv + klen + 1) != VV_OK)
-            return cli_usage_error(a, "--set %s: %s", kv, vv_error_message());
+        if (vv_renderer_set_option(ren, key, kv + klen + 1) != VV_OK) {
+            const char *m = vv_error_message();
+            return cli_usage_error(a, "--set %s: %s", kv,
+                                   m && *m ? m : "the renderer does not accept it");
+        }
     }
     return 0;
 }
@@ -488,30 +495,15 @@ cli_render_main(int argc, char **argv) {
     vv_image *img = NULL;
     vv_status s;
     vv_render_settings rs;
-    if ((rc = resolve_render_settings(&a, &r, w, &rs)))
+    if ((rc = resolve_render_settings(&r, w, &rs)))
         goto done;
     vv_error_clear();
     if ((s = vv_renderer_new(&ren, rs.renderer)) != VV_OK) {
         rc = cli_fail(s, NULL);
         goto done;
     }
-    for (int i = 0; i < rs.n_options; i++) {
-        const char *key = rs.option_keys[i], *value = rs.option_values[i];
-        vv_error_clear();
-        if ((s = vv_renderer_set_option(ren, key, value)) != VV_OK) {
-            const char *m = vv_error_message();
-            if (!m || !*m)
-                m = "the renderer does not accept it";
-            /* an option from the command line is a usage error, one from the scene bad input */
-            if (set_given(&a, key)) {
-                rc = cli_usage_error(&a, "--set %s=%s: %s", key, value, m);
-            } else {
-                cli_error("%s: render.options.%s: %s", r.input, key, m);
-                rc = CLI_EXIT_FAIL;
-            }
-            goto done;
-        }
-    }
+    if ((rc = apply_options(&a, &r, &rs, ren)))
+        goto done;
     if ((s = vv_image_new(&img, w->view.width, w->view.height)) != VV_OK) {
         rc = cli_fail(s, NULL);
         goto done;
