@@ -65,8 +65,9 @@ cli_render_usage(FILE *out) {
             "or ends in .json) or a volume file (SLC, NRRD, NIfTI, MetaImage, VTK, raw),\n"
             "which is shown centred, seen from the front, with a headlight and a\n"
             "transfer function from its histogram. With a scene file the options below\n"
-            "override the scene's values only where given. Prints the output path, the\n"
-            "image size and the render time.\n"
+            "override the scene's values only where given; a scene's \"render\" section\n"
+            "(renderer, quality, options) gives the defaults of --renderer, --quality\n"
+            "and --set. Prints the output path, the image size and the render time.\n"
             "\n"
             "Options:\n"
             "  -o, --output OUT.png  output PNG (required); written atomically\n"
@@ -83,15 +84,19 @@ cli_render_usage(FILE *out) {
             "  --elevation DEG  orbit the camera towards the up axis, degrees (default 0)\n"
             "  --zoom F         > 1 moves the camera closer, < 1 farther (default 1)\n"
             "  --threads N      threads, 0 = all cores (default 0)\n"
-            "  --renderer NAME  rendering method (default raycast), one of the list below\n"
+            "  --renderer NAME  rendering method (default raycast or the scene's), one of\n"
+            "                   the list below; naming another renderer than the scene's\n"
+            "                   drops the scene's renderer options\n"
             "  --step S         sample step in units of the smallest voxel spacing\n"
             "                   (default 0.5 or the scene's)\n"
             "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
             "                   read INPUT as raw voxels (see 'volvis info --help')\n"
             "  --gamma G        8-bit conversion v^(1/G) (default 1: values unchanged)\n"
-            "  --quality Q      0 draft, 1 medium, 2 final (default 2; per renderer below)\n"
+            "  --quality Q      0 draft, 1 medium, 2 final (default 2 or the scene's; per\n"
+            "                   renderer below)\n"
             "  --set KEY=VALUE  renderer-specific option (repeatable), listed with each\n"
-            "                   renderer below; see docs/rendering.md\n"
+            "                   renderer below; adds to or overrides the scene's options;\n"
+            "                   see docs/rendering.md\n"
             "  --alpha          write RGBA (coverage in the alpha channel); default RGB\n"
             "  --ortho          parallel projection (orthographic), the view framed on\n"
             "                   the scene; needed by the fourier renderer\n"
@@ -136,6 +141,18 @@ renderer_known(const char *name) {
         if (reg[i]->name && strcmp(reg[i]->name, name) == 0)
             return 1;
     return 0;
+}
+
+/* The registered renderers' names, comma-separated, in @p buf. */
+static const char *
+renderer_names(char *buf, size_t cap) {
+    buf[0] = '\0';
+    const vv_renderer_ops *const *reg = vv_renderer_registry();
+    for (int i = 0; reg && reg[i]; i++) {
+        size_t n = strlen(buf);
+        snprintf(buf + n, cap - n, "%s%s", i ? ", " : "", reg[i]->name);
+    }
+    return buf[0] ? buf : "none";
 }
 
 /* A scene file: extension .json, or content that starts with '{' after whitespace. */
@@ -197,7 +214,7 @@ typedef struct render_args {
     int has_raw;
     vv_raw_params raw;
     double gamma;
-    int quality;
+    int has_quality, quality;
     int alpha, quiet, ortho;
 } render_args;
 
@@ -206,7 +223,7 @@ parse_render_args(cli_args *a, render_args *r) {
     int rc;
     const char *s;
     memset(r, 0, sizeof *r);
-    r->renderer = "raycast";
+    r->renderer = NULL; /* not given: the scene's, else raycast */
     r->zoom = 1;
     r->gamma = 1;
     r->quality = 2;
@@ -275,19 +292,17 @@ parse_render_args(cli_args *a, render_args *r) {
         if ((rc = cli_parse_double(a, "gamma", s, 0.01, 100, &r->gamma)))
             return rc;
     }
-    if ((s = cli_get(a, "quality")) && (rc = cli_parse_int(a, "quality", s, 0, 2, &r->quality)))
-        return rc;
+    if ((s = cli_get(a, "quality"))) {
+        if ((rc = cli_parse_int(a, "quality", s, 0, 2, &r->quality)))
+            return rc;
+        r->has_quality = 1;
+    }
     if ((s = cli_get(a, "renderer"))) {
         r->renderer = s;
         if (!renderer_known(s)) {
-            char names[512] = "";
-            const vv_renderer_ops *const *reg = vv_renderer_registry();
-            for (int i = 0; reg && reg[i]; i++) {
-                size_t n = strlen(names);
-                snprintf(names + n, sizeof names - n, "%s%s", i ? ", " : "", reg[i]->name);
-            }
+            char names[512];
             return cli_usage_error(a, "--renderer: unknown renderer '%s' (available: %s)", s,
-                                   names[0] ? names : "none");
+                                   renderer_names(names, sizeof names));
         }
     }
     for (int i = 0; i < a->n_seen; i++) {
@@ -377,6 +392,70 @@ world_for_scene(const render_args *r, vv_world **out) {
     return 0;
 }
 
+/*
+ * The renderer, quality and options to render @p w with: the scene's render
+ * section (w->render; never set for a volume file) gives the defaults, the
+ * command line overrides. The scene's options belong to the scene's renderer
+ * (raycast when it names none), so they are dropped when --renderer names
+ * another. The --set options are applied after these (apply_options), so
+ * they add to or override them.
+ */
+static int
+resolve_render_settings(const render_args *r, const vv_world *w, vv_render_settings *out) {
+    const vv_render_settings *sc = &w->render;
+    const char *scene_renderer = sc->renderer[0] ? sc->renderer : "raycast";
+    vv_render_settings_init(out);
+    snprintf(out->renderer, sizeof out->renderer, "%s", r->renderer ? r->renderer : scene_renderer);
+    if (!r->renderer && !renderer_known(out->renderer)) {
+        char names[512];
+        cli_error("%s: render.renderer: unknown renderer '%s' (available: %s)", r->input,
+                  out->renderer, renderer_names(names, sizeof names));
+        return CLI_EXIT_FAIL;
+    }
+    out->quality = r->has_quality ? r->quality : (sc->quality >= 0 ? sc->quality : 2);
+    if (strcmp(out->renderer, scene_renderer) == 0)
+        for (int i = 0; i < sc->n_options && i < VV_MAX_RENDER_OPTIONS; i++)
+            if (vv_render_settings_set_option(out, sc->option_keys[i], sc->option_values[i]) !=
+                VV_OK)
+                return cli_fail(VV_ERR_INVALID, r->input);
+    return 0;
+}
+
+/* Passes the scene's options in @p rs, then the --set options in order, to
+ * @p ren. A scene option the renderer refuses is bad input naming the scene,
+ * a --set option a usage error. */
+static int
+apply_options(const cli_args *a, const render_args *r, const vv_render_settings *rs,
+              vv_renderer *ren) {
+    for (int i = 0; i < rs->n_options; i++) {
+        vv_error_clear();
+        if (vv_renderer_set_option(ren, rs->option_keys[i], rs->option_values[i]) != VV_OK) {
+            const char *m = vv_error_message();
+            cli_error("%s: render.options.%s: %s", r->input, rs->option_keys[i],
+                      m && *m ? m : "the renderer does not accept it");
+            return CLI_EXIT_FAIL;
+        }
+    }
+    for (int i = 0; i < a->n_seen; i++) {
+        if (strcmp(a->specs[a->seen[i].opt].name, "set") != 0)
+            continue;
+        char key[256];
+        const char *kv = a->seen[i].value;
+        size_t klen = (size_t)(strchr(kv, '=') - kv);
+        if (klen >= sizeof key)
+            return cli_usage_error(a, "--set: key too long in '%s'", kv);
+        memcpy(key, kv, klen);
+        key[klen] = '\0';
+        vv_error_clear();
+        if (vv_renderer_set_option(ren, key, kv + klen + 1) != VV_OK) {
+            const char *m = vv_error_message();
+            return cli_usage_error(a, "--set %s: %s", kv,
+                                   m && *m ? m : "the renderer does not accept it");
+        }
+    }
+    return 0;
+}
+
 int
 cli_render_main(int argc, char **argv) {
     cli_args a;
@@ -415,31 +494,16 @@ cli_render_main(int argc, char **argv) {
     vv_renderer *ren = NULL;
     vv_image *img = NULL;
     vv_status s;
+    vv_render_settings rs;
+    if ((rc = resolve_render_settings(&r, w, &rs)))
+        goto done;
     vv_error_clear();
-    if ((s = vv_renderer_new(&ren, r.renderer)) != VV_OK) {
+    if ((s = vv_renderer_new(&ren, rs.renderer)) != VV_OK) {
         rc = cli_fail(s, NULL);
         goto done;
     }
-    for (int i = 0; i < a.n_seen; i++) {
-        if (strcmp(a.specs[a.seen[i].opt].name, "set") != 0)
-            continue;
-        char key[256];
-        const char *kv = a.seen[i].value;
-        size_t klen = (size_t)(strchr(kv, '=') - kv);
-        if (klen >= sizeof key) {
-            rc = cli_usage_error(&a, "--set: key too long in '%s'", kv);
-            goto done;
-        }
-        memcpy(key, kv, klen);
-        key[klen] = '\0';
-        vv_error_clear();
-        if ((s = vv_renderer_set_option(ren, key, kv + klen + 1)) != VV_OK) {
-            const char *m = vv_error_message();
-            rc = cli_usage_error(&a, "--set %s: %s", kv,
-                                 m && *m ? m : "the renderer does not accept it");
-            goto done;
-        }
-    }
+    if ((rc = apply_options(&a, &r, &rs, ren)))
+        goto done;
     if ((s = vv_image_new(&img, w->view.width, w->view.height)) != VV_OK) {
         rc = cli_fail(s, NULL);
         goto done;
@@ -450,7 +514,7 @@ cli_render_main(int argc, char **argv) {
     vv_render_options ro;
     vv_render_options_init(&ro);
     ro.threads = r.threads;
-    ro.quality = r.quality;
+    ro.quality = rs.quality;
     cli_progress pr;
     cli_progress_begin(&pr, r.quiet);
     ro.progress = pr.p;

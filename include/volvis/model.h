@@ -27,6 +27,10 @@ extern "C" {
 #define VV_MAX_CUT_PLANES 8
 #define VV_MAX_LIGHTS 16
 #define VV_NAME_MAX 64
+#define VV_MAX_RENDER_OPTIONS 32
+#define VV_RENDER_NAME_MAX 32          /**< bytes of a renderer name, with its NUL */
+#define VV_RENDER_OPTION_KEY_MAX 32    /**< bytes of an option key, with its NUL */
+#define VV_RENDER_OPTION_VALUE_MAX 256 /**< bytes of an option value, with its NUL */
 
 /* ---- transfer function ---------------------------------------------- */
 
@@ -301,6 +305,41 @@ vv_mat4 vv_object_index_to_world(const vv_object *obj);
  */
 vv_box vv_object_world_box(const vv_object *obj);
 
+/* ---- render settings ------------------------------------------------- */
+
+/**
+ * How a World wants to be rendered: the renderer, its quality level and its
+ * --set options, kept with the World so that a saved scene renders as it
+ * was shown (scene file section "render", docs/scene-format.md). Plain data:
+ * copying the struct copies the settings. The model layer does not know the
+ * renderers, so names, keys and values are not checked against them here;
+ * the CLI and the GUI pass them to vv_renderer_new and
+ * vv_renderer_set_option, which do.
+ */
+typedef struct vv_render_settings {
+    char renderer[VV_RENDER_NAME_MAX]; /**< "" = not set (the default, raycast) */
+    int quality;                       /**< 0..2; -1 = not set (the renderer's default) */
+    int n_options;                     /**< 0..VV_MAX_RENDER_OPTIONS */
+    /** Option keys, distinct, in the order first set; for the renderer named above. */
+    char option_keys[VV_MAX_RENDER_OPTIONS][VV_RENDER_OPTION_KEY_MAX];
+    /** Option values as text ("1"/"0" for booleans, numbers as %.17g). */
+    char option_values[VV_MAX_RENDER_OPTIONS][VV_RENDER_OPTION_VALUE_MAX];
+} vv_render_settings;
+
+/** Sets @p rs to "nothing set": renderer "", quality -1, no options. */
+void vv_render_settings_init(vv_render_settings *rs);
+/**
+ * Sets option @p key to @p value (both copied): replaces the value of an
+ * existing key, else appends the key. Errors: VV_ERR_INVALID (NULL
+ * argument, empty key, key of VV_RENDER_OPTION_KEY_MAX bytes or more, value
+ * of VV_RENDER_OPTION_VALUE_MAX bytes or more), VV_ERR_LIMIT (a new key
+ * beyond VV_MAX_RENDER_OPTIONS). On error @p rs is unchanged. Not
+ * thread-safe for concurrent writers of @p rs.
+ */
+vv_status vv_render_settings_set_option(vv_render_settings *rs, const char *key, const char *value);
+/** The value of option @p key, or NULL when it is not set (borrowed from @p rs). */
+const char *vv_render_settings_get_option(const vv_render_settings *rs, const char *key);
+
 /* ---- world ------------------------------------------------------------ */
 
 typedef struct vv_world {
@@ -314,12 +353,14 @@ typedef struct vv_world {
     vv_cut_plane cut_planes[VV_MAX_CUT_PLANES]; /**< global */
     vv_vec3 ambient;                            /**< global ambient light colour */
     vv_vec3 background;                         /**< background colour */
+    vv_render_settings render;                  /**< how to render it; may be not set */
 } vv_world;
 
 /**
  * An empty World: a 512x512 perspective view with fov 30° from eye
  * (0, -1000, 0) looking at the origin with up +z (ortho_height 500), no
- * objects, no lights, no cut planes, ambient (1,1,1), black background.
+ * objects, no lights, no cut planes, ambient (1,1,1), black background,
+ * render settings not set (vv_render_settings_init).
  */
 vv_status vv_world_new(vv_world **out);
 /** Releases a World and every object it owns. Accepts NULL. */
@@ -331,10 +372,11 @@ vv_status vv_world_add_light(vv_world *w, const vv_light *light);
 /** Appends a global cut plane. Errors: VV_ERR_LIMIT, VV_ERR_INVALID (zero normal). */
 vv_status vv_world_add_cut_plane(vv_world *w, vv_vec3 point, vv_vec3 normal);
 /**
- * A snapshot of @p w: the view, lights, cut planes, global shading and a
- * vv_object_clone of every object. Renderers may read the snapshot on other
- * threads while @p w goes on being edited (the Navigator and the GUI render
- * snapshots, DESIGN.md "Interaction"). Errors: VV_ERR_INVALID, VV_ERR_NOMEM.
+ * A snapshot of @p w: the view, lights, cut planes, global shading, render
+ * settings (copied by value) and a vv_object_clone of every object.
+ * Renderers may read the snapshot on other threads while @p w goes on being
+ * edited (the Navigator and the GUI render snapshots, DESIGN.md
+ * "Interaction"). Errors: VV_ERR_INVALID, VV_ERR_NOMEM.
  */
 vv_status vv_world_clone(vv_world **out, const vv_world *w);
 /**
@@ -408,10 +450,10 @@ vv_status vv_scene_load_progress(vv_world **out, const char *path, const vv_prog
  * object by volume_files[i] when given, else by its geometry.source; the
  * entries of other geometric objects are not read, and @p volume_files may
  * be NULL when there are no volume objects. Every field is written (the volume's current
- * origin and spacing too), so vv_scene_load of the file reproduces the
- * World; the TF of a threshold-segmented object is not kept. A volume
- * object with no entry in @p volume_files is referred to by its
- * geometry.source. Errors:
+ * origin and spacing too; the "render" section when any render setting is
+ * set), so vv_scene_load of the file reproduces the World; the TF of a
+ * threshold-segmented object is not kept. A volume object with no entry in
+ * @p volume_files is referred to by its geometry.source. Errors:
  * VV_ERR_IO, VV_ERR_INVALID.
  */
 vv_status vv_scene_save(const vv_world *w, const char *path, const char *const *volume_files);

@@ -1336,17 +1336,105 @@ parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     return vv_world_add_object(w, o);
 }
 
+/* An option value as the text a renderer's set-option reads: strings as they
+ * are, booleans "1"/"0", numbers with as few digits as read back the same
+ * double (%.15g, else %.17g). */
+static vv_status
+render_option_text(const sctx *c, json_t *v, const char *kp, char *buf, size_t cap) {
+    switch (json_typeof(v)) {
+    case JSON_STRING: {
+        size_t n = json_string_length(v);
+        if (n >= cap)
+            return serr(c, kp, "value is %zu bytes; at most %zu", n, cap - 1);
+        if (strlen(json_string_value(v)) != n)
+            return serr(c, kp, "value contains a NUL character");
+        memcpy(buf, json_string_value(v), n + 1);
+        return VV_OK;
+    }
+    case JSON_TRUE:
+    case JSON_FALSE:
+        snprintf(buf, cap, "%s", json_is_true(v) ? "1" : "0");
+        return VV_OK;
+    case JSON_INTEGER:
+    case JSON_REAL: {
+        double d = 0.0;
+        vv_status st = value_number(c, v, kp, &d);
+        if (st != VV_OK)
+            return st;
+        snprintf(buf, cap, "%.15g", d);
+        if (strtod(buf, NULL) != d)
+            snprintf(buf, cap, "%.17g", d);
+        return VV_OK;
+    }
+    default:
+        break;
+    }
+    return serr(c, kp, "expected a string, a number or a boolean, got %s", vv_model_json_kind(v));
+}
+
+/* The optional "render" section: renderer, quality and renderer options.
+ * Renderer names and option keys are not checked here (the model does not
+ * know the renderers); vv_renderer_new and vv_renderer_set_option do. */
+static vv_status
+parse_render(const sctx *c, json_t *r, vv_render_settings *rs) {
+    static const char *const keys[] = {"renderer", "quality", "options", NULL};
+    const char *path = "render";
+    const char *name = NULL;
+    json_t *opts = NULL;
+    int quality = rs->quality;
+    vv_status st;
+    if ((st = check_keys(c, r, path, keys)) != VV_OK ||
+        (st = get_string(c, r, path, "renderer", &name)) != VV_OK ||
+        (st = get_int_in(c, r, path, "quality", &quality, 0, 2)) != VV_OK ||
+        (st = get_object(c, r, path, "options", &opts)) != VV_OK)
+        return st;
+    if (name) {
+        size_t n = strlen(name);
+        if (n == 0)
+            return serr(c, "render.renderer", "the renderer name is empty");
+        if (n >= sizeof rs->renderer)
+            return serr(c, "render.renderer", "renderer name \"%.40s\" is %zu bytes; at most %zu",
+                        name, n, sizeof rs->renderer - 1);
+        memcpy(rs->renderer, name, n + 1);
+    }
+    rs->quality = quality;
+    if (!opts)
+        return VV_OK;
+    const char *key;
+    json_t *v;
+    json_object_foreach(opts, key, v) {
+        char kp[PATH_MAX_LEN];
+        path_key(kp, "render.options", key);
+        size_t kl = strlen(key);
+        if (kl == 0)
+            return serr(c, kp, "the option name is empty");
+        if (kl >= VV_RENDER_OPTION_KEY_MAX)
+            return serr(c, kp, "option name is %zu bytes; at most %d", kl,
+                        VV_RENDER_OPTION_KEY_MAX - 1);
+        if (rs->n_options >= VV_MAX_RENDER_OPTIONS)
+            return serr(c, kp, "more than %d options", VV_MAX_RENDER_OPTIONS);
+        char text[VV_RENDER_OPTION_VALUE_MAX];
+        if ((st = render_option_text(c, v, kp, text, sizeof text)) != VV_OK)
+            return st;
+        if ((st = vv_render_settings_set_option(rs, key, text)) != VV_OK)
+            return serr(c, kp, "%s", vv_error_message());
+    }
+    return VV_OK;
+}
+
 static vv_status
 parse_scene(const sctx *c, json_t *root, vv_world *w) {
-    static const char *const keys[] = {"view", "lights", "shading", "objects", "cut_planes", NULL};
+    static const char *const keys[] = {"view",       "lights", "shading", "objects",
+                                       "cut_planes", "render", NULL};
     if (!json_is_object(root))
         return serr(c, "", "expected a JSON object at the top level, got %s",
                     vv_model_json_kind(root));
     vv_status st = check_keys(c, root, "", keys);
     if (st != VV_OK)
         return st;
-    json_t *view, *lights, *shading, *objects, *cuts;
+    json_t *view, *lights, *shading, *objects, *cuts, *render;
     if ((st = get_object(c, root, "", "view", &view)) != VV_OK ||
+        (st = get_object(c, root, "", "render", &render)) != VV_OK ||
         (st = get_array(c, root, "", "lights", &lights)) != VV_OK ||
         (st = get_object(c, root, "", "shading", &shading)) != VV_OK ||
         (st = get_array(c, root, "", "objects", &objects)) != VV_OK ||
@@ -1369,6 +1457,8 @@ parse_scene(const sctx *c, json_t *root, vv_world *w) {
         if (has_bg)
             w->background = bg;
     }
+    if (render && (st = parse_render(c, render, &w->render)) != VV_OK)
+        return st;
     if (lights && (st = parse_lights(c, lights, w)) != VV_OK)
         return st;
     if (cuts &&
@@ -1670,9 +1760,69 @@ put_object(FILE *f, const vv_object *o, const char *file) {
     fputs("\n    }", f);
 }
 
+static int
+render_settings_any(const vv_render_settings *rs) {
+    return rs->renderer[0] || rs->quality >= 0 || rs->n_options > 0;
+}
+
+static void
+put_render(FILE *f, const vv_render_settings *rs) {
+    const char *sep = "";
+    fputs(",\n  \"render\": {", f);
+    if (rs->renderer[0]) {
+        fputs("\"renderer\": ", f);
+        put_str(f, rs->renderer);
+        sep = ", ";
+    }
+    if (rs->quality >= 0) {
+        fprintf(f, "%s\"quality\": %d", sep, rs->quality);
+        sep = ", ";
+    }
+    if (rs->n_options > 0) {
+        fprintf(f, "%s\"options\": {", sep);
+        for (int i = 0; i < rs->n_options; i++) {
+            fputs(i ? ",\n    " : "\n    ", f);
+            put_str(f, rs->option_keys[i]);
+            fputs(": ", f);
+            put_str(f, rs->option_values[i]);
+        }
+        fputs("\n  }", f);
+    }
+    fputc('}', f);
+}
+
+/* The render settings must read back as they are: terminated strings,
+ * distinct non-empty keys, a quality the loader accepts. */
+static vv_status
+check_render_settings(const vv_render_settings *rs) {
+    if (!memchr(rs->renderer, '\0', sizeof rs->renderer))
+        return vv_error_set(VV_ERR_INVALID, "render settings: renderer name not terminated");
+    if (rs->quality < -1 || rs->quality > 2)
+        return vv_error_set(VV_ERR_INVALID, "render settings: quality %d outside -1..2",
+                            rs->quality);
+    if (rs->n_options < 0 || rs->n_options > VV_MAX_RENDER_OPTIONS)
+        return vv_error_set(VV_ERR_INVALID, "render settings: %d options outside 0..%d",
+                            rs->n_options, VV_MAX_RENDER_OPTIONS);
+    for (int i = 0; i < rs->n_options; i++) {
+        if (!memchr(rs->option_keys[i], '\0', sizeof rs->option_keys[i]) ||
+            !memchr(rs->option_values[i], '\0', sizeof rs->option_values[i]))
+            return vv_error_set(VV_ERR_INVALID, "render settings: option %d not terminated", i);
+        if (!rs->option_keys[i][0])
+            return vv_error_set(VV_ERR_INVALID, "render settings: option %d has an empty key", i);
+        for (int j = 0; j < i; j++)
+            if (strcmp(rs->option_keys[i], rs->option_keys[j]) == 0)
+                return vv_error_set(VV_ERR_INVALID, "render settings: option %s given twice",
+                                    rs->option_keys[i]);
+    }
+    return VV_OK;
+}
+
 static vv_status
 check_saveable(const vv_world *w, const char *const *volume_files) {
     const vv_view *v = &w->view;
+    vv_status st = check_render_settings(&w->render);
+    if (st != VV_OK)
+        return st;
     if (v->width < 1 || v->width > IMAGE_MAX_SIDE || v->height < 1 || v->height > IMAGE_MAX_SIDE)
         return vv_error_set(VV_ERR_INVALID, "view size %dx%d outside 1..%d", v->width, v->height,
                             IMAGE_MAX_SIDE);
@@ -1745,7 +1895,10 @@ vv_scene_save(const vv_world *w, const char *path, const char *const *volume_fil
     fputs(w->n_lights ? "\n  ],\n" : "],\n", f);
     fputs("  \"shading\": {\"ambient\": ", f);
     put_vec3(f, w->ambient);
-    fputs("},\n  \"cut_planes\": ", f);
+    fputc('}', f);
+    if (render_settings_any(&w->render))
+        put_render(f, &w->render);
+    fputs(",\n  \"cut_planes\": ", f);
     put_cut_planes(f, w->cut_planes, w->n_cut_planes, "  ");
     fputs(",\n  \"objects\": [", f);
     for (int i = 0; i < w->n_objects; i++) {

@@ -8,6 +8,57 @@
 
 #include "volvis/model.h"
 
+void
+vv_render_settings_init(vv_render_settings *rs) {
+    if (!rs)
+        return;
+    memset(rs, 0, sizeof *rs);
+    rs->quality = -1;
+}
+
+vv_status
+vv_render_settings_set_option(vv_render_settings *rs, const char *key, const char *value) {
+    if (!rs || !key || !value)
+        return vv_error_set(VV_ERR_INVALID, "render settings: NULL %s",
+                            !rs ? "settings" : (!key ? "key" : "value"));
+    size_t kl = strlen(key), vl = strlen(value);
+    if (kl == 0)
+        return vv_error_set(VV_ERR_INVALID, "render settings: empty option key");
+    if (kl >= VV_RENDER_OPTION_KEY_MAX)
+        return vv_error_set(VV_ERR_INVALID,
+                            "render settings: option key \"%.40s...\" is %zu bytes; at most %d",
+                            key, kl, VV_RENDER_OPTION_KEY_MAX - 1);
+    if (vl >= VV_RENDER_OPTION_VALUE_MAX)
+        return vv_error_set(VV_ERR_INVALID,
+                            "render settings: option %s: value is %zu bytes; at most %d", key, vl,
+                            VV_RENDER_OPTION_VALUE_MAX - 1);
+    int n = rs->n_options < 0 ? 0 : rs->n_options;
+    if (n > VV_MAX_RENDER_OPTIONS)
+        n = VV_MAX_RENDER_OPTIONS;
+    int i = 0;
+    while (i < n && strcmp(rs->option_keys[i], key) != 0)
+        i++;
+    if (i == n) {
+        if (n >= VV_MAX_RENDER_OPTIONS)
+            return vv_error_set(VV_ERR_LIMIT, "render settings: more than %d options (adding %s)",
+                                VV_MAX_RENDER_OPTIONS, key);
+        memcpy(rs->option_keys[i], key, kl + 1);
+        rs->n_options = n + 1;
+    }
+    memcpy(rs->option_values[i], value, vl + 1);
+    return VV_OK;
+}
+
+const char *
+vv_render_settings_get_option(const vv_render_settings *rs, const char *key) {
+    if (!rs || !key)
+        return NULL;
+    for (int i = 0; i < rs->n_options && i < VV_MAX_RENDER_OPTIONS; i++)
+        if (strcmp(rs->option_keys[i], key) == 0)
+            return rs->option_values[i];
+    return NULL;
+}
+
 vv_status
 vv_world_new(vv_world **out) {
     if (!out)
@@ -26,6 +77,7 @@ vv_world_new(vv_world **out) {
     w->view.height = 512;
     w->ambient = vv_vec3_make(1, 1, 1);
     w->background = vv_vec3_make(0, 0, 0);
+    vv_render_settings_init(&w->render);
     *out = w;
     return VV_OK;
 }

@@ -492,22 +492,29 @@ test_render_failure_keeps_output(void **state) {
 }
 
 /* Writes a scene file showing neghip.slc (66^3, grid 0..65) from -y, @p w x @p h. */
+/* The neghip scene; @p extra (may be "") is inserted as top-level keys after the view. */
 static void
-write_scene(const char *path, const char *leading, int w, int h) {
-    char text[2048];
+write_scene_with(const char *path, const char *leading, int w, int h, const char *extra) {
+    char text[4096];
     int n =
         snprintf(text, sizeof text,
                  "%s{\n"
                  "  \"view\": {\"eye\": [32.5, -180, 32.5], \"at\": [32.5, 32.5, 32.5],\n"
                  "           \"up\": [0, 0, 1], \"fov\": 30, \"width\": %d, \"height\": %d},\n"
+                 "%s"
                  "  \"lights\": [{\"type\": \"directional\", \"direction\": [0, 1, 0]}],\n"
                  "  \"objects\": [{\"file\": \"%s\", \"mode\": \"composite\",\n"
                  "    \"transfer_function\": {\"opacity\": [[20, 0], [120, 0.8]],\n"
                  "                          \"color\": [[20, [1, 0.5, 0.2]], [120, [1, 1, 1]]]}}]\n"
                  "}\n",
-                 leading, w, h, vt_data("volumes/neghip.slc"));
+                 leading, w, h, extra, vt_data("volumes/neghip.slc"));
     assert_true(n > 0 && (size_t)n < sizeof text);
     vt_write_file(path, text, (size_t)n);
+}
+
+static void
+write_scene(const char *path, const char *leading, int w, int h) {
+    write_scene_with(path, leading, w, h, "");
 }
 
 static void
@@ -661,6 +668,98 @@ test_convert_rescale_and_strict(void **state) {
     vv_volume_free(v);
 }
 
+/* Renders with the CLI (exit 0 expected) and reads the PNG back. */
+static vv_image *
+render_image(const char *const *args) {
+    run_result r = vt_run_cli_v(outdir(), args);
+    if (r.status != 0)
+        fail_msg("exit %d: %s", r.status, r.err);
+    free_result(&r);
+    const char *png = NULL;
+    for (int i = 0; args[i]; i++)
+        if (strcmp(args[i], "-o") == 0)
+            png = args[i + 1];
+    assert_non_null(png);
+    vv_image *img = NULL;
+    vt_ok(vv_image_read_png(&img, png));
+    return img;
+}
+
+static int
+same_pixels(const vv_image *a, const vv_image *b) {
+    return a->width == b->width && a->height == b->height &&
+           memcmp(a->rgba, b->rgba, (size_t)a->width * (size_t)a->height * 4 * sizeof(float)) == 0;
+}
+
+/* A scene's "render" section gives the renderer, quality and options: the
+ * same pixels as the plain scene with them on the command line; --renderer
+ * naming another renderer drops the scene's options, --set overrides them,
+ * and an option the renderer refuses is an error naming the scene. */
+static void
+test_render_scene_settings(void **state) {
+    (void)state;
+    const char *with = out_file("settings.json"), *plain = out_file("settings-plain.json");
+    write_scene_with(
+        with, "", 64, 64,
+        "  \"render\": {\"renderer\": \"surface\", \"options\": {\"wireframe\": 1}},\n");
+    write_scene(plain, "", 64, 64);
+    const char *p1 = out_file("settings-scene.png"), *p2 = out_file("settings-cli.png");
+    const char *p3 = out_file("settings-solid.png"), *p4 = out_file("settings-override.png");
+    const char *p5 = out_file("settings-raycast.png"), *p6 = out_file("settings-raycast-plain.png");
+    unlink(p1);
+    vv_image *a = render_image((const char *const[]){"render", with, "-q", "-o", p1, NULL});
+    vv_image *b = render_image((const char *const[]){"render", plain, "-q", "--renderer", "surface",
+                                                     "--set", "wireframe=1", "-o", p2, NULL});
+    vv_image *c = render_image(
+        (const char *const[]){"render", plain, "-q", "--renderer", "surface", "-o", p3, NULL});
+    vv_image *d = render_image(
+        (const char *const[]){"render", with, "-q", "--set", "wireframe=0", "-o", p4, NULL});
+    /* raycast does not know "wireframe": the scene's options are dropped */
+    vv_image *e = render_image(
+        (const char *const[]){"render", with, "-q", "--renderer", "raycast", "-o", p5, NULL});
+    vv_image *f = render_image((const char *const[]){"render", plain, "-q", "-o", p6, NULL});
+    assert_int_equal(a->width, 64);
+    assert_int_equal(a->height, 64);
+    if (!same_pixels(a, b))
+        fail_msg("the scene's render section and the command line give different images");
+    if (same_pixels(a, c)) /* the option matters, so the test above can fail */
+        fail_msg("wireframe=1 draws the same image as wireframe=0");
+    if (!same_pixels(c, d))
+        fail_msg("--set wireframe=0 did not override the scene's wireframe");
+    if (!same_pixels(e, f))
+        fail_msg("--renderer raycast on the scene differs from the plain scene");
+    if (same_pixels(a, f))
+        fail_msg("the scene's renderer was not used");
+    vv_image_free(a);
+    vv_image_free(b);
+    vv_image_free(c);
+    vv_image_free(d);
+    vv_image_free(e);
+    vv_image_free(f);
+
+    /* an option the scene's renderer refuses: exit 1, one line naming the scene and the key */
+    const char *bad = out_file("settings-bad.json"), *pb = out_file("settings-bad.png");
+    write_scene_with(
+        bad, "", 16, 16,
+        "  \"render\": {\"renderer\": \"surface\", \"options\": {\"wirefrmae\": 1}},\n");
+    unlink(pb);
+    run_result r = run_cli("render", bad, "-q", "-o", pb);
+    assert_int_equal(r.status, 1);
+    assert_one_error_line(&r);
+    assert_contains(r.err, "settings-bad.json");
+    assert_contains(r.err, "render.options.wirefrmae");
+    free_result(&r);
+    assert_false(file_exists(pb));
+    /* an unknown renderer in the scene */
+    write_scene_with(bad, "", 16, 16, "  \"render\": {\"renderer\": \"nosuch\"},\n");
+    r = run_cli("render", bad, "-q", "-o", pb);
+    assert_int_equal(r.status, 1);
+    assert_one_error_line(&r);
+    assert_contains(r.err, "render.renderer: unknown renderer 'nosuch'");
+    free_result(&r);
+    assert_false(file_exists(pb));
+}
+
 /* Scenes of volumes and geometric objects: the ray tracer renders them,
  * --set passes its options, a bad option value is a usage error, and the
  * ray caster renders the same scene (skipping the geometry). */
@@ -705,6 +804,7 @@ main(void) {
         cmocka_unit_test(test_render_failure_keeps_output),
         cmocka_unit_test(test_render_scene),
         cmocka_unit_test(test_render_raytrace_scene),
+        cmocka_unit_test(test_render_scene_settings),
         cmocka_unit_test(test_convert_roundtrip),
         cmocka_unit_test(test_convert_rescale_and_strict),
     };

@@ -259,6 +259,13 @@ compare_worlds(const vv_world *a, const vv_world *b) {
         assert_memory_equal(&p->material, &q->material, sizeof p->material);
         assert_int_equal(p->n_cut_planes, q->n_cut_planes);
     }
+    assert_string_equal(a->render.renderer, b->render.renderer);
+    assert_int_equal(a->render.quality, b->render.quality);
+    assert_int_equal(a->render.n_options, b->render.n_options);
+    for (int i = 0; i < a->render.n_options; i++) {
+        assert_string_equal(a->render.option_keys[i], b->render.option_keys[i]);
+        assert_string_equal(a->render.option_values[i], b->render.option_values[i]);
+    }
 }
 
 static void
@@ -569,12 +576,146 @@ test_geometry_objects(void **state) {
                  "none.ply");
 }
 
+/* The "render" section: values of every JSON kind read as text, a round
+ * trip, the clone, the option helper, and bad values with line:column. */
+static void
+test_render_settings(void **state) {
+    (void)state;
+    static const char *text =
+        "{\n"
+        "  \"view\": {\"width\": 64, \"height\": 48},\n"
+        "  \"render\": {\n"
+        "    \"renderer\": \"raytrace\",\n"
+        "    \"quality\": 1,\n"
+        "    \"options\": {\"shadows\": true, \"soft\": false, \"max_depth\": 4,\n"
+        "                \"eps\": 0.1, \"third\": 0.33333333333333331, \"shading\": "
+        "\"gou\\\"raud\"}\n"
+        "  }\n"
+        "}\n";
+    vv_world *a = NULL, *b = NULL, *c = NULL;
+    vt_ok(vv_scene_load(&a, write_scene("render.json", text)));
+    assert_string_equal(a->render.renderer, "raytrace");
+    assert_int_equal(a->render.quality, 1);
+    assert_int_equal(a->render.n_options, 6);
+    assert_string_equal(vv_render_settings_get_option(&a->render, "shadows"), "1");
+    assert_string_equal(vv_render_settings_get_option(&a->render, "soft"), "0");
+    assert_string_equal(vv_render_settings_get_option(&a->render, "max_depth"), "4");
+    assert_string_equal(vv_render_settings_get_option(&a->render, "eps"), "0.1");
+    /* a number is kept exactly: strtod of its text is the same double */
+    const char *third = vv_render_settings_get_option(&a->render, "third");
+    assert_non_null(third);
+    assert_true(strtod(third, NULL) == 1.0 / 3.0);
+    assert_string_equal(vv_render_settings_get_option(&a->render, "shading"), "gou\"raud");
+    assert_null(vv_render_settings_get_option(&a->render, "nope"));
+
+    /* save then load gives the same settings; a clone copies them */
+    char out[1200];
+    snprintf(out, sizeof out, "%s/render_out.json", g_dir);
+    vt_ok(vv_scene_save(a, out, NULL));
+    vt_ok(vv_scene_load(&b, out));
+    compare_worlds(a, b);
+    vt_ok(vv_world_clone(&c, a));
+    compare_worlds(a, c);
+    vv_world_free(b);
+    vv_world_free(c);
+
+    /* only the quality set: the section has just that */
+    vv_render_settings_init(&a->render);
+    a->render.quality = 0;
+    vt_ok(vv_scene_save(a, out, NULL));
+    vt_ok(vv_scene_load(&b, out));
+    assert_string_equal(b->render.renderer, "");
+    assert_int_equal(b->render.quality, 0);
+    assert_int_equal(b->render.n_options, 0);
+    vv_world_free(b);
+    vv_world_free(a);
+
+    /* a new World has nothing set, and saving it writes no "render" section */
+    vt_ok(vv_world_new(&a));
+    assert_string_equal(a->render.renderer, "");
+    assert_int_equal(a->render.quality, -1);
+    assert_int_equal(a->render.n_options, 0);
+    vt_ok(vv_scene_save(a, out, NULL));
+    size_t n = 0;
+    char *saved = (char *)vt_read_file(out, &n);
+    assert_non_null(saved);
+    assert_null(strstr(saved, "render"));
+    free(saved);
+    /* settings that would not read back are refused */
+    a->render.quality = 3;
+    vt_err(vv_scene_save(a, out, NULL));
+    vv_world_free(a);
+
+    /* the helper: replace, append, limits; a failure changes nothing */
+    vv_render_settings rs;
+    vv_render_settings_init(&rs);
+    vt_ok(vv_render_settings_set_option(&rs, "k", "1"));
+    vt_ok(vv_render_settings_set_option(&rs, "k", "2"));
+    assert_int_equal(rs.n_options, 1);
+    assert_string_equal(vv_render_settings_get_option(&rs, "k"), "2");
+    char longkey[VV_RENDER_OPTION_KEY_MAX + 1], longval[VV_RENDER_OPTION_VALUE_MAX + 1];
+    /* VV_RENDER_OPTION_KEY_MAX (VALUE_MAX) characters: no room for the NUL */
+    memset(longkey, 'k', VV_RENDER_OPTION_KEY_MAX);
+    longkey[VV_RENDER_OPTION_KEY_MAX] = '\0';
+    memset(longval, 'v', VV_RENDER_OPTION_VALUE_MAX);
+    longval[VV_RENDER_OPTION_VALUE_MAX] = '\0';
+    assert_int_equal(vv_render_settings_set_option(&rs, longkey, "1"), VV_ERR_INVALID);
+    longkey[VV_RENDER_OPTION_KEY_MAX - 1] = '\0'; /* the longest allowed */
+    vt_ok(vv_render_settings_set_option(&rs, longkey, "1"));
+    assert_int_equal(vv_render_settings_set_option(&rs, "k", longval), VV_ERR_INVALID);
+    assert_string_equal(vv_render_settings_get_option(&rs, "k"), "2");
+    assert_int_equal(vv_render_settings_set_option(&rs, "", "1"), VV_ERR_INVALID);
+    for (int i = rs.n_options; i < VV_MAX_RENDER_OPTIONS; i++) {
+        char key[16];
+        snprintf(key, sizeof key, "o%d", i);
+        vt_ok(vv_render_settings_set_option(&rs, key, "x"));
+    }
+    assert_int_equal(vv_render_settings_set_option(&rs, "one_more", "x"), VV_ERR_LIMIT);
+    vt_ok(vv_render_settings_set_option(&rs, "k", "3")); /* replacing still works when full */
+    assert_int_equal(rs.n_options, VV_MAX_RENDER_OPTIONS);
+
+    /* bad values: clear errors at the offending key */
+    expect_error("r_key.json", "{\n  \"render\": {\"renderer\": \"splat\",\n    \"option\": {}}}",
+                 3, 5, "render.option: unknown key (did you mean options?)");
+    expect_error("r_quality.json", "{\"render\": {\n  \"quality\": 3}}", 2, 3,
+                 "render.quality: 3 is outside 0..2");
+    expect_error("r_quality2.json", "{\"render\": {\n  \"quality\": 1.5}}", 2, 3,
+                 "render.quality: expected an integer");
+    expect_error("r_empty.json", "{\"render\": {\n  \"renderer\": \"\"}}", 2, 3,
+                 "render.renderer: the renderer name is empty");
+    expect_error("r_long.json",
+                 "{\"render\": {\n  \"renderer\": \"a_renderer_name_of_32_bytes_long\"}}", 2, 3,
+                 "render.renderer: renderer name \"a_renderer_name_of_32_bytes_long\" is 32 bytes");
+    expect_error("r_name_type.json", "{\"render\": {\n  \"renderer\": 7}}", 2, 3,
+                 "render.renderer: expected a string, got a number");
+    expect_error("r_opts.json", "{\"render\": {\n  \"options\": [1]}}", 2, 3,
+                 "render.options: expected an object, got an array");
+    expect_error("r_null.json", "{\"render\": {\"options\": {\n  \"a\": 1,\n  \"b\": null}}}", 3, 3,
+                 "render.options.b: expected a string, a number or a boolean, got null");
+    expect_error("r_arr.json", "{\"render\": {\"options\": {\n  \"a\": [1]}}}", 2, 3,
+                 "render.options.a: expected a string, a number or a boolean, got an array");
+    expect_error("r_section.json", "{\"view\": {},\n \"render\": \"raytrace\"}", 2, 2,
+                 "render: expected an object, got a string");
+    char big[2048];
+    int k = snprintf(big, sizeof big, "{\"render\": {\"options\": {\n  \"v\": \"");
+    memset(big + k, 'x', VV_RENDER_OPTION_VALUE_MAX);
+    snprintf(big + k + VV_RENDER_OPTION_VALUE_MAX,
+             sizeof big - (size_t)k - VV_RENDER_OPTION_VALUE_MAX, "\"}}}");
+    expect_error("r_value.json", big, 2, 3, "render.options.v: value is 256 bytes; at most 255");
+    k = snprintf(big, sizeof big, "{\"render\": {\"options\": {");
+    for (int i = 0; i <= VV_MAX_RENDER_OPTIONS; i++)
+        k += snprintf(big + k, sizeof big - (size_t)k, "%s\n  \"o%d\": %d", i ? "," : "", i, i);
+    snprintf(big + k, sizeof big - (size_t)k, "}}}");
+    expect_error("r_many.json", big, VV_MAX_RENDER_OPTIONS + 2, 3,
+                 "render.options.o32: more than 32 options");
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_example),          cmocka_unit_test(test_every_key),
         cmocka_unit_test(test_round_trip),       cmocka_unit_test(test_errors),
-        cmocka_unit_test(test_geometry_objects),
+        cmocka_unit_test(test_geometry_objects), cmocka_unit_test(test_render_settings),
     };
     return cmocka_run_group_tests(tests, setup, NULL);
 }
