@@ -46,14 +46,13 @@ vv_application_startup(GApplication *app) {
         {"win.view-reset", {"<Control>0", NULL}},
     };
     for (size_t i = 0; i < G_N_ELEMENTS(keys); i++)
-        gtk_application_set_accels_for_action(GTK_APPLICATION(app), keys[i].action,
-                                              keys[i].accels);
+        gtk_application_set_accels_for_action(GTK_APPLICATION(app), keys[i].action, keys[i].accels);
 }
 
 static VvWindow *
 new_window(GApplication *app) {
     VvWindow *w = vv_window_new(GTK_APPLICATION(app));
-    gtk_window_set_default_size(GTK_WINDOW(w), 960, 640);
+    gtk_window_set_default_size(GTK_WINDOW(w), 1100, 720);
     gtk_window_present(GTK_WINDOW(w));
     return w;
 }

@@ -20,7 +20,7 @@ G_DEFINE_TYPE(VvDocument, vv_document, G_TYPE_OBJECT)
 enum { SIGNAL_CHANGED, SIGNAL_SELECTION_CHANGED, N_SIGNALS };
 static guint signals[N_SIGNALS];
 
-G_DEFINE_QUARK(vv-gui-error-quark, vv_gui_error)
+G_DEFINE_QUARK(vv - gui - error - quark, vv_gui_error)
 
 static void
 set_error(GError **error, const char *fallback) {
@@ -134,8 +134,12 @@ remember_source(vv_object *o, const char *path) {
     if (!o || !path)
         return;
     free(o->geometry.source);
+    /* malloc'ed: the library frees it with free() */
     char *abs = g_canonicalize_filename(path, NULL);
-    o->geometry.source = strdup(abs);
+    size_t n = strlen(abs) + 1;
+    o->geometry.source = malloc(n);
+    if (o->geometry.source)
+        memcpy(o->geometry.source, abs, n);
     g_free(abs);
 }
 
@@ -148,8 +152,8 @@ has_suffix(const char *path, const char *const *suffixes) {
     return FALSE;
 }
 
-static const char *const mesh_suffixes[] = {".obj", ".ply", ".stl", ".off", ".dae", ".3ds",
-                                            ".fbx", ".gltf", ".glb", NULL};
+static const char *const mesh_suffixes[] = {".obj", ".ply", ".stl",  ".off", ".dae",
+                                            ".3ds", ".fbx", ".gltf", ".glb", NULL};
 
 /* A scene replaces the World; its volumes' files are the scene's. */
 static gboolean

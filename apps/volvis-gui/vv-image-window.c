@@ -9,8 +9,8 @@ struct _VvImageWindow {
     vv_world *world;
     vv_image *image;
     GThread *thread;
-    int cancel;          /* atomic */
-    double fraction;     /* atomic-ish: written by the worker, read by a timer */
+    int cancel;      /* atomic */
+    double fraction; /* atomic-ish: written by the worker, read by a timer */
     gint64 start_us;
     guint timer;
     vv_status status;

@@ -53,7 +53,7 @@ struct _VvSceneView {
     job *pending; /* newest request not yet taken */
     gboolean quit;
     guint64 cancel_below; /* refinement of a generation below this stops (atomic) */
-    vv_preview *preview; /* worker only */
+    vv_preview *preview;  /* worker only */
     char preview_renderer[32];
     vv_preview_policy policy; /* under lock: written by the worker, read by the UI */
 
@@ -230,6 +230,28 @@ post_job(VvSceneView *self, job *j) {
 
 /* ---- UI side ------------------------------------------------------------ */
 
+/* With VOLVIS_FRAME_DIR set, the pixels of each full-quality frame put on
+ * screen are written to DIR/full.png (atomically), for tests that compare
+ * them with `volvis render` of the saved session. */
+static void
+save_shown(VvSceneView *self, const frame *f) {
+    (void)self;
+    const char *dir = g_getenv("VOLVIS_FRAME_DIR");
+    if (!dir || !*dir)
+        return;
+    vv_image *img = NULL;
+    if (vv_image_new(&img, f->width, f->height) != VV_OK)
+        return;
+    const guint8 *px = g_bytes_get_data(f->pixels, NULL);
+    for (size_t i = 0; i < (size_t)f->width * f->height * 4; i++)
+        img->rgba[i] = px[i] / 255.0f;
+    char *path = g_build_filename(dir, "full.png", NULL);
+    if (vv_image_write_png(img, path, 1.0, 0) != VV_OK)
+        g_warning("volvis-gui: VOLVIS_FRAME_DIR: %s", vv_error_message());
+    g_free(path);
+    vv_image_free(img);
+}
+
 static gboolean
 show_frame(gpointer data) {
     frame *f = data;
@@ -266,8 +288,10 @@ show_frame(gpointer data) {
     self->shown_kind = f->kind;
     self->shown_render_ms = f->render_ms;
     self->shown_latency_us = g_get_monotonic_time() - f->posted_us;
-    if (f->kind == VV_PREVIEW_FULL)
+    if (f->kind == VV_PREVIEW_FULL) {
         self->full_ms = f->render_ms;
+        save_shown(self, f);
+    }
     gtk_widget_queue_draw(GTK_WIDGET(self));
     frame_free(f);
     return G_SOURCE_REMOVE;
@@ -395,8 +419,8 @@ apply_motion(VvSceneView *self, double dx, double dy) {
         dx /= s;
         dy /= s;
     }
-    gboolean pan = self->drag_button == 3 || self->drag_button == 2 ||
-                   (self->drag_mods & GDK_SHIFT_MASK);
+    gboolean pan =
+        self->drag_button == 3 || self->drag_button == 2 || (self->drag_mods & GDK_SHIFT_MASK);
     gboolean zoom = (self->drag_mods & GDK_CONTROL_MASK) != 0;
     VvNavTarget target = self->target;
     if (self->drag_mods & GDK_ALT_MASK)

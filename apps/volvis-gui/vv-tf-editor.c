@@ -6,8 +6,8 @@
 
 #include "vvg-models.h"
 
-#define STRIP 14.0  /* height of the colour strip, pixels */
-#define RADIUS 6.0  /* pick radius of a point, pixels */
+#define STRIP 14.0 /* height of the colour strip, pixels */
+#define RADIUS 6.0 /* pick radius of a point, pixels */
 #define HIST_BINS 256
 
 struct _VvTfEditor {
@@ -33,8 +33,7 @@ volume_object(VvTfEditor *ed) {
 
 static vvg_tf_axes
 axes(VvTfEditor *ed, const vv_object *o) {
-    vvg_tf_axes a = {o->volume->range[0], o->volume->range[1],
-                     gtk_widget_get_width(GTK_WIDGET(ed)),
+    vvg_tf_axes a = {o->volume->range[0], o->volume->range[1], gtk_widget_get_width(GTK_WIDGET(ed)),
                      gtk_widget_get_height(GTK_WIDGET(ed)) - STRIP};
     if (!(a.vmax > a.vmin))
         a.vmax = a.vmin + 1;

@@ -114,8 +114,9 @@ vec_of(const GdkRGBA *c) {
 
 static void
 show_error(VvWindow *win, const char *what, const char *message) {
-    GtkWidget *d = gtk_message_dialog_new(GTK_WINDOW(win), GTK_DIALOG_MODAL | GTK_DIALOG_DESTROY_WITH_PARENT,
-                                          GTK_MESSAGE_ERROR, GTK_BUTTONS_CLOSE, "%s", what);
+    GtkWidget *d =
+        gtk_message_dialog_new(GTK_WINDOW(win), GTK_DIALOG_MODAL | GTK_DIALOG_DESTROY_WITH_PARENT,
+                               GTK_MESSAGE_ERROR, GTK_BUTTONS_CLOSE, "%s", what);
     gtk_message_dialog_format_secondary_text(GTK_MESSAGE_DIALOG(d), "%s", message);
     gtk_window_set_title(GTK_WINDOW(d), "VolVis: error");
     g_signal_connect(d, "response", G_CALLBACK(gtk_window_destroy), NULL);
@@ -139,7 +140,7 @@ fill_object_control(VvWindow *win) {
         set_spin(win->isovalue, o->isovalue);
         set_spin(win->step, o->step);
         GdkRGBA c = rgba(o->material.color);
-        gtk_color_button_set_rgba(GTK_COLOR_BUTTON(win->color), &c);
+        gtk_color_chooser_set_rgba(GTK_COLOR_CHOOSER(win->color), &c);
         set_spin(win->ambient, o->material.ambient);
         set_spin(win->diffuse, o->material.diffuse);
         set_spin(win->specular, o->material.specular);
@@ -166,12 +167,12 @@ fill_object_control(VvWindow *win) {
         gtk_drop_down_set_selected(GTK_DROP_DOWN(win->light_type),
                                    w->lights[li].headlight ? 2u : (guint)w->lights[li].type);
         GdkRGBA c = rgba(w->lights[li].color);
-        gtk_color_button_set_rgba(GTK_COLOR_BUTTON(win->light_color), &c);
+        gtk_color_chooser_set_rgba(GTK_COLOR_CHOOSER(win->light_color), &c);
         set_spin(win->light_intensity, w->lights[li].intensity);
     }
     GdkRGBA a = rgba(w->ambient), b = rgba(w->background);
-    gtk_color_button_set_rgba(GTK_COLOR_BUTTON(win->ambient_color), &a);
-    gtk_color_button_set_rgba(GTK_COLOR_BUTTON(win->background_color), &b);
+    gtk_color_chooser_set_rgba(GTK_COLOR_CHOOSER(win->ambient_color), &a);
+    gtk_color_chooser_set_rgba(GTK_COLOR_CHOOSER(win->background_color), &b);
     set_spin(win->view_width, w->view.width);
     set_spin(win->view_height, w->view.height);
     set_spin(win->view_fov, vv_rad_to_deg(w->view.fov));
@@ -429,9 +430,8 @@ static void
 act_open(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    GtkFileChooserNative *d = gtk_file_chooser_native_new("Open volume, mesh or scene", user,
-                                                          GTK_FILE_CHOOSER_ACTION_OPEN, "_Open",
-                                                          "_Cancel");
+    GtkFileChooserNative *d = gtk_file_chooser_native_new(
+        "Open volume, mesh or scene", user, GTK_FILE_CHOOSER_ACTION_OPEN, "_Open", "_Cancel");
     gtk_file_chooser_set_select_multiple(GTK_FILE_CHOOSER(d), TRUE);
     g_signal_connect(d, "response", G_CALLBACK(open_response), user);
     gtk_native_dialog_show(GTK_NATIVE_DIALOG(d));
@@ -597,7 +597,8 @@ act_remove_light(GSimpleAction *a, GVariant *p, gpointer user) {
     if (li >= w->n_lights)
         return;
     vv_document_begin_edit(win->doc, "remove light");
-    memmove(&w->lights[li], &w->lights[li + 1], (size_t)(w->n_lights - li - 1) * sizeof w->lights[0]);
+    memmove(&w->lights[li], &w->lights[li + 1],
+            (size_t)(w->n_lights - li - 1) * sizeof w->lights[0]);
     w->n_lights--;
     vv_document_changed(win->doc);
     fill_object_control(win);
@@ -605,8 +606,10 @@ act_remove_light(GSimpleAction *a, GVariant *p, gpointer user) {
 
 static void
 cut_apply(VvWindow *win) {
-    vv_vec3 pt = vv_vec3_make(spin_value(win->cut_px), spin_value(win->cut_py), spin_value(win->cut_pz));
-    vv_vec3 n = vv_vec3_make(spin_value(win->cut_nx), spin_value(win->cut_ny), spin_value(win->cut_nz));
+    vv_vec3 pt =
+        vv_vec3_make(spin_value(win->cut_px), spin_value(win->cut_py), spin_value(win->cut_pz));
+    vv_vec3 n =
+        vv_vec3_make(spin_value(win->cut_nx), spin_value(win->cut_ny), spin_value(win->cut_nz));
     if (!(vv_vec3_length(n) > 0)) {
         show_error(win, "Cannot add the cut plane", "the normal is zero");
         return;
@@ -808,7 +811,8 @@ hist_draw(GtkDrawingArea *area, cairo_t *cr, int W, int H, gpointer user) {
     for (int i = 0; i < win->hist->nbins; i++) {
         double c = lg ? log10(1.0 + (double)win->hist->counts[i]) : (double)win->hist->counts[i];
         double h = c / mx * (H - 4);
-        cairo_rectangle(cr, (double)i * W / win->hist->nbins, H - h, (double)W / win->hist->nbins, h);
+        cairo_rectangle(cr, (double)i * W / win->hist->nbins, H - h, (double)W / win->hist->nbins,
+                        h);
     }
     cairo_fill(cr);
 }
@@ -831,9 +835,9 @@ act_histogram(GSimpleAction *a, GVariant *p, gpointer user) {
         return;
     }
     char t[256];
-    snprintf(t, sizeof t, "histogram of %s: %llu voxels, min %g, max %g, mean %g, sd %g\n",
-             o->name, (unsigned long long)win->hist->total, win->hist->min, win->hist->max,
-             win->hist->mean, win->hist->sd);
+    snprintf(t, sizeof t, "histogram of %s: %llu voxels, min %g, max %g, mean %g, sd %g\n", o->name,
+             (unsigned long long)win->hist->total, win->hist->min, win->hist->max, win->hist->mean,
+             win->hist->sd);
     measure_print(win, t);
     gtk_widget_queue_draw(win->histogram);
 }
@@ -935,8 +939,10 @@ act_distance(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
     VvWindow *win = user;
-    vv_vec3 pa = vv_vec3_make(spin_value(win->pa[0]), spin_value(win->pa[1]), spin_value(win->pa[2]));
-    vv_vec3 pb = vv_vec3_make(spin_value(win->pb[0]), spin_value(win->pb[1]), spin_value(win->pb[2]));
+    vv_vec3 pa =
+        vv_vec3_make(spin_value(win->pa[0]), spin_value(win->pa[1]), spin_value(win->pa[2]));
+    vv_vec3 pb =
+        vv_vec3_make(spin_value(win->pb[0]), spin_value(win->pb[1]), spin_value(win->pb[2]));
     char t[256];
     snprintf(t, sizeof t, "distance (%g, %g, %g) - (%g, %g, %g): %.6g world units\n", pa.x, pa.y,
              pa.z, pb.x, pb.y, pb.z, vv_vec3_length(vv_vec3_sub(pa, pb)));
@@ -1155,9 +1161,9 @@ manipulation_page(VvWindow *win) {
     static const char *const targets[] = {"view", "selected object", "selected light", NULL};
     GtkWidget *t = row(g, "drag moves", dropdown(targets));
     g_signal_connect(t, "notify::selected", G_CALLBACK(target_changed), win);
-    static const char *const previews[] = {"automatic",   "bounding boxes", "PARC boxes",
-                                           "coarse MC",   "ray cast 1/4",   "ray cast 1/2",
-                                           "full quality", NULL};
+    static const char *const previews[] = {
+        "automatic",    "bounding boxes", "PARC boxes",   "coarse MC",
+        "ray cast 1/4", "ray cast 1/2",   "full quality", NULL};
     GtkWidget *pv = row(g, "preview", dropdown(previews));
     g_signal_connect(pv, "notify::selected", G_CALLBACK(preview_changed), win);
     GtkWidget *dl = row(g, "refine after (ms)", spin(0, 2000, 10, 0));

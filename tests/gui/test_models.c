@@ -1,0 +1,89 @@
+/* The GUI's display-free models: the undo stack and transfer-function editing. */
+#include "testutil.h"
+#include "vvg-models.h"
+
+static vv_world *
+world_with_sphere(void) {
+    vv_world *w = NULL;
+    vt_ok(vv_world_new(&w));
+    vv_object *o = NULL;
+    vt_ok(vv_object_new_geometry(&o, VV_OBJECT_SPHERE, "s"));
+    vt_ok(vv_world_add_object(w, o));
+    return w;
+}
+
+/* Undo restores each earlier World exactly; redo re-applies; a new edit clears redo. */
+static void
+test_undo(void **state) {
+    (void)state;
+    vvg_undo *u = NULL;
+    vt_ok(vvg_undo_new(&u, 3));
+    vv_world *w = world_with_sphere();
+    assert_false(vvg_undo_can_undo(u));
+    for (int i = 1; i <= 4; i++) {
+        vt_ok(vvg_undo_push(u, w, "move"));
+        w->objects[0]->position.x = i;
+    }
+    assert_string_equal(vvg_undo_label(u, 0), "move");
+    /* the limit of 3 keeps the last three steps */
+    for (int i = 3; i >= 1; i--) {
+        vt_ok(vvg_undo_undo(u, &w));
+        assert_near(w->objects[0]->position.x, i, 0);
+    }
+    assert_false(vvg_undo_can_undo(u));
+    vt_err(vvg_undo_undo(u, &w));
+    vt_ok(vvg_undo_redo(u, &w));
+    assert_near(w->objects[0]->position.x, 2, 0);
+    vt_ok(vvg_undo_push(u, w, "colour"));
+    w->objects[0]->material.color.x = 0.5;
+    assert_false(vvg_undo_can_redo(u));
+    vt_ok(vvg_undo_undo(u, &w));
+    assert_near(w->objects[0]->material.color.x, 1, 0);
+    assert_near(w->objects[0]->position.x, 2, 0);
+    vv_world_free(w);
+    vvg_undo_free(u);
+}
+
+static void
+test_tf_editing(void **state) {
+    (void)state;
+    vv_tf tf;
+    vv_tf_init(&tf);
+    vvg_tf_axes a = {0, 1000, 500, 100};
+    assert_near(vvg_tf_x(&a, 500), 250, 1e-12);
+    assert_near(vvg_tf_opacity(&a, 25), 0.75, 1e-12);
+    int i = vvg_tf_add_point(&tf, &a, 100, 100); /* value 200, opacity 0 */
+    int j = vvg_tf_add_point(&tf, &a, 400, 0);   /* value 800, opacity 1 */
+    assert_int_equal(i, 0);
+    assert_int_equal(j, 1);
+    assert_near(vv_tf_eval_opacity(&tf, 500), 0.5, 1e-12);
+    assert_int_equal(vvg_tf_hit(&tf, &a, 402, 3, 6), 1);
+    assert_int_equal(vvg_tf_hit(&tf, &a, 250, 50, 6), -1);
+    /* a point cannot pass its neighbour: order and indices stay valid */
+    vvg_tf_move_point(&tf, 1, &a, 10, 50);
+    assert_near(tf.opacity[1].value, 200, 1e-12);
+    assert_near(tf.opacity[1].opacity, 0.5, 1e-12);
+    vvg_tf_move_point(&tf, 1, &a, 1e9, -1e9); /* clamped into the area */
+    assert_near(tf.opacity[1].value, 1000, 1e-12);
+    assert_near(tf.opacity[1].opacity, 1, 1e-12);
+    vvg_tf_move_point(&tf, 1, &a, NAN, 3); /* ignored */
+    assert_near(tf.opacity[1].value, 1000, 1e-12);
+    vvg_tf_delete_point(&tf, 0);
+    vvg_tf_delete_point(&tf, 7);
+    assert_int_equal(tf.n_opacity, 1);
+    int c = vvg_tf_add_color(&tf, &a, 250, vv_vec3_make(1, 0, 0));
+    assert_int_equal(vvg_tf_hit_color(&tf, &a, 252, 4), c);
+    vvg_tf_move_color(&tf, c, &a, 0);
+    assert_near(tf.color[0].value, 0, 1e-12);
+    vvg_tf_delete_color(&tf, c);
+    assert_int_equal(tf.n_color, 0);
+}
+
+int
+main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_undo),
+        cmocka_unit_test(test_tf_editing),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
