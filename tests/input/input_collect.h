@@ -12,7 +12,7 @@ typedef struct collect {
     int n, cap;
 } collect;
 
-static void
+static inline void
 collect_fn(void *user, const vv_input_action *a) {
     collect *c = user;
     if (c->n == c->cap) {
@@ -23,7 +23,7 @@ collect_fn(void *user, const vv_input_action *a) {
 }
 
 /* Index of the first action of @p kind at or after @p from, -1 none. */
-static int
+static inline int
 collect_find(const collect *c, vv_input_action_kind kind, int from) {
     for (int i = from; i < c->n; i++)
         if (c->a[i].kind == kind)
@@ -31,7 +31,7 @@ collect_find(const collect *c, vv_input_action_kind kind, int from) {
     return -1;
 }
 
-static int
+static inline int
 collect_count(const collect *c, vv_input_action_kind kind) {
     int n = 0;
     for (int i = 0; i < c->n; i++)
@@ -39,13 +39,13 @@ collect_count(const collect *c, vv_input_action_kind kind) {
     return n;
 }
 
-static void
+static inline void
 collect_free(collect *c) {
     free(c->a);
     memset(c, 0, sizeof *c);
 }
 
-static vv_input_raw_event
+static inline vv_input_raw_event
 raw(int dev, double t, vv_input_raw_kind kind, int code, double v0, double v1) {
     vv_input_raw_event e;
     memset(&e, 0, sizeof e);
