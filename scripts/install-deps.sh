@@ -8,7 +8,8 @@
 set -euo pipefail
 
 pkgs=(build-essential cmake pkg-config libteem-dev libnifti2-dev libjansson-dev
-      libpng-dev zlib1g-dev libassimp-dev libfftw3-dev libcairo2-dev libgtk-4-dev)
+      libpng-dev zlib1g-dev libassimp-dev libfftw3-dev libcairo2-dev libgtk-4-dev
+      libspnav-dev libsdl2-dev)
 for what in "$@"; do
   case "$what" in
     build) ;;

@@ -52,6 +52,8 @@ int cli_measure_main(int argc, char **argv);
 void cli_measure_usage(FILE *out);
 int cli_isosurface_main(int argc, char **argv);
 void cli_isosurface_usage(FILE *out);
+int cli_devices_main(int argc, char **argv);
+void cli_devices_usage(FILE *out);
 
 /* ---- option parsing ------------------------------------------------------ */
 

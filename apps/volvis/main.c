@@ -1,7 +1,7 @@
 /*
  * volvis: the command-line tool. Dispatches a table of subcommands, one file
  * each (cmd_info.c, cmd_render.c, cmd_convert.c, cmd_compress.c,
- * cmd_isosurface.c, cmd_measure.c, cmd_voxelize.c). See docs/cli.md.
+ * cmd_isosurface.c, cmd_measure.c, cmd_voxelize.c, cmd_devices.c). See docs/cli.md.
  */
 #include <stdio.h>
 #include <string.h>
@@ -22,6 +22,8 @@ static const cli_command commands[] = {
      cli_isosurface_main, cli_isosurface_usage},
     {"measure", "isosurface area and volume, histograms, distances; mesh area and volume",
      cli_measure_main, cli_measure_usage},
+    {"devices", "list input devices, their information base and assignments; replay, record",
+     cli_devices_main, cli_devices_usage},
 };
 #define N_COMMANDS ((int)(sizeof commands / sizeof commands[0]))
 

@@ -8,6 +8,7 @@
 #include "compress.h"
 #include "core.h"
 #include "image.h"
+#include "input.h"
 #include "io.h"
 #include "math.h"
 #include "measure.h"
