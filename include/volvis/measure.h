@@ -74,7 +74,6 @@ void vv_histogram_free(vv_histogram *h);
 vv_status vv_histogram_plot_png(const vv_histogram *h, const char *path, int width, int height,
                                 const char *title, const char *xlabel, int log_scale);
 
-
 /* ---- joint histogram of value x gradient magnitude ------------------------ */
 
 /**
@@ -88,16 +87,16 @@ vv_status vv_histogram_plot_png(const vv_histogram *h, const char *path, int wid
  * scale is the caller's (the GUI's) choice.
  */
 typedef struct vv_histogram2d {
-    int nbins_value;         /**< bins along the value axis */
-    int nbins_gradient;      /**< bins along the gradient-magnitude axis */
+    int nbins_value;                 /**< bins along the value axis */
+    int nbins_gradient;              /**< bins along the gradient-magnitude axis */
     double value_lo, value_hi;       /**< value range of the bins */
     double gradient_lo, gradient_hi; /**< gradient-magnitude range (gradient_lo is 0) */
     /** nbins_gradient rows of nbins_value counts: counts[g * nbins_value + v],
      * row 0 the smallest gradient magnitudes */
     uint64_t *counts;
-    uint64_t total;        /**< voxels counted (NaN values and gradients excluded) */
-    uint64_t outside;      /**< of all non-NaN voxels, those outside both ranges' box */
-    double gradient_max;   /**< largest gradient magnitude of the volume */
+    uint64_t total;      /**< voxels counted (NaN values and gradients excluded) */
+    uint64_t outside;    /**< of all non-NaN voxels, those outside both ranges' box */
+    double gradient_max; /**< largest gradient magnitude of the volume */
 } vv_histogram2d;
 
 /**

@@ -80,7 +80,6 @@ vv_vec3 vv_tf_eval_color(const vv_tf *tf, double value);
 void vv_tf_set_ramp(vv_tf *tf, double lo, double hi, double max_opacity, vv_vec3 color,
                     double unit_distance);
 
-
 /**
  * Transfer-function presets. @p name is one of vv_tf_preset_names():
  * "ct-bone" (bone opaque and ivory, everything below about 150 HU
@@ -230,8 +229,8 @@ typedef enum vv_texture_projection {
 typedef struct vv_texture_map {
     vv_texture_image *image; /**< one reference held; NULL: no texture */
     vv_texture_projection projection;
-    vv_vec3 center; /**< object coordinates */
-    vv_vec3 axis;   /**< unit */
+    vv_vec3 center;  /**< object coordinates */
+    vv_vec3 axis;    /**< unit */
     double scale[2]; /**< repeats per unit of s and t (planar: per world unit), != 0 */
 } vv_texture_map;
 
@@ -425,7 +424,8 @@ typedef enum vv_render_mode {
 typedef enum vv_segmentation {
     VV_SEG_TRANSFER_FUNCTION = 0, /**< opacity and colour from tf */
     VV_SEG_THRESHOLD = 1,         /**< opaque in material.color where value >= threshold */
-    VV_SEG_TRANSFER_FUNCTION_2D = 2 /**< opacity and colour from tf2d (value x gradient magnitude) */
+    VV_SEG_TRANSFER_FUNCTION_2D =
+        2 /**< opacity and colour from tf2d (value x gradient magnitude) */
 } vv_segmentation;
 
 /**
@@ -447,10 +447,10 @@ typedef struct vv_object {
     vv_vec3 scale;
     vv_material material;
     vv_segmentation segmentation;
-    double threshold; /**< VV_SEG_THRESHOLD */
-    vv_tf tf;         /**< VV_SEG_TRANSFER_FUNCTION; also the grey ramp of mip/minip/xray */
-    vv_tf2d tf2d;     /**< VV_SEG_TRANSFER_FUNCTION_2D (composite mode; other modes use tf) */
-    vv_texture_map texture;         /**< image texture: geometry and isosurfaces (iso mode) */
+    double threshold;       /**< VV_SEG_THRESHOLD */
+    vv_tf tf;               /**< VV_SEG_TRANSFER_FUNCTION; also the grey ramp of mip/minip/xray */
+    vv_tf2d tf2d;           /**< VV_SEG_TRANSFER_FUNCTION_2D (composite mode; other modes use tf) */
+    vv_texture_map texture; /**< image texture: geometry and isosurfaces (iso mode) */
     vv_solid_texture solid_texture; /**< solid texture: composited volume samples */
     vv_render_mode mode;
     double isovalue; /**< VV_MODE_ISO */

@@ -792,7 +792,6 @@ parse_tf(const sctx *c, json_t *tfj, const char *tp, vv_object *o) {
     return VV_OK;
 }
 
-
 /* An optional [a, b] pair of numbers. */
 static vv_status
 get_pair(const sctx *c, json_t *obj, const char *path, const char *key, double out[2],
@@ -899,8 +898,8 @@ parse_tf2d(const sctx *c, json_t *tj, const char *tp, vv_object *o) {
             return st;
         tf.n_widgets++;
     }
-    if ((st = get_number_in(c, tj, tp, "opacity_unit_distance", &tf.opacity_unit_distance, NULL,
-                            0, 1, INFINITY, 1)) != VV_OK)
+    if ((st = get_number_in(c, tj, tp, "opacity_unit_distance", &tf.opacity_unit_distance, NULL, 0,
+                            1, INFINITY, 1)) != VV_OK)
         return st;
     o->tf2d = tf;
     return VV_OK;
@@ -964,8 +963,8 @@ parse_texture(const sctx *c, json_t *tj, const char *tp, vv_object *o) {
 
 static vv_status
 parse_solid_texture(const sctx *c, json_t *tj, const char *tp, vv_object *o) {
-    static const char *const keys[] = {"procedural", "volume", "period", "center",    "axis",
-                                       "turbulence", "seed",   "color0", "color1",    NULL};
+    static const char *const keys[] = {"procedural", "volume", "period", "center", "axis",
+                                       "turbulence", "seed",   "color0", "color1", NULL};
     vv_status st = check_keys(c, tj, tp, keys);
     if (st != VV_OK)
         return st;
@@ -992,8 +991,9 @@ parse_solid_texture(const sctx *c, json_t *tj, const char *tp, vv_object *o) {
     s.seed = (unsigned)seed;
     s.axis = vv_vec3_normalize(s.axis);
     if ((proc != NULL) == (file != NULL))
-        return serr(c, tp, "give exactly one of \"procedural\" (checker3d, wood, marble) and "
-                           "\"volume\" (a volume file)");
+        return serr(c, tp,
+                    "give exactly one of \"procedural\" (checker3d, wood, marble) and "
+                    "\"volume\" (a volume file)");
     if (proc) {
         path_key(kp, tp, "procedural");
         if (strcmp(proc, "checker3d") == 0)
@@ -1003,8 +1003,9 @@ parse_solid_texture(const sctx *c, json_t *tj, const char *tp, vv_object *o) {
         else if (strcmp(proc, "marble") == 0)
             s.kind = VV_SOLID_TEXTURE_MARBLE;
         else
-            return serr(c, kp, "unknown procedural texture \"%s\"; expected checker3d, wood or "
-                               "marble",
+            return serr(c, kp,
+                        "unknown procedural texture \"%s\"; expected checker3d, wood or "
+                        "marble",
                         proc);
     } else {
         path_key(kp, tp, "volume");
@@ -1180,7 +1181,8 @@ parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
         seg_name = json_string_value(segv);
     } else if ((st = get_object(c, e, op, "segmentation", &seg)) != VV_OK) {
         path_key(kp, op, "segmentation");
-        return serr(c, kp, "expected {\"threshold\": value}, \"transfer_function\" or \"tf2d\", got %s",
+        return serr(c, kp,
+                    "expected {\"threshold\": value}, \"transfer_function\" or \"tf2d\", got %s",
                     vv_model_json_kind(segv));
     }
     if ((st = get_object(c, e, op, "transfer_function", &tfj)) != VV_OK ||
@@ -1787,7 +1789,6 @@ put_effect_flags(FILE *f, const vv_object *o) {
             o->visible_in_reflections ? "true" : "false", o->reflects ? "true" : "false");
 }
 
-
 static void
 put_pair(FILE *f, const double p[2]) {
     fputc('[', f);
@@ -1836,8 +1837,8 @@ put_textures(FILE *f, const vv_object *o) {
     if (m->image) {
         fputs(",\n      \"texture\": {\"image\": ", f);
         put_str(f, m->image->source ? m->image->source : "");
-        fprintf(f, ", \"projection\": \"%s\", \"center\": ",
-                vv_texture_projection_name(m->projection));
+        fprintf(
+            f, ", \"projection\": \"%s\", \"center\": ", vv_texture_projection_name(m->projection));
         put_vec3(f, m->center);
         fputs(", \"axis\": ", f);
         put_vec3(f, m->axis);

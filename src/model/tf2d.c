@@ -56,11 +56,11 @@ vv_status
 vv_tf2d_widget_check(const vv_tf2d_widget *w) {
     if (!w)
         return vv_error_set(VV_ERR_INVALID, "2-D transfer function: NULL widget");
-    const double p[] = {w->value[0], w->value[1], w->gradient[0], w->gradient[1], w->ramp,
-                        w->gradient_ramp, w->center, w->width, w->opacity};
-    static const char *const names[] = {"value[0]", "value[1]", "gradient[0]",
-                                        "gradient[1]", "ramp", "gradient_ramp",
-                                        "center", "width", "opacity"};
+    const double p[] = {w->value[0],      w->value[1], w->gradient[0], w->gradient[1], w->ramp,
+                        w->gradient_ramp, w->center,   w->width,       w->opacity};
+    static const char *const names[] = {"value[0]",    "value[1]", "gradient[0]",
+                                        "gradient[1]", "ramp",     "gradient_ramp",
+                                        "center",      "width",    "opacity"};
     for (size_t i = 0; i < sizeof p / sizeof p[0]; i++)
         if (!isfinite(p[i]))
             return vv_error_set(VV_ERR_INVALID, "2-D transfer function widget: %s is not finite",

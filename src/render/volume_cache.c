@@ -499,9 +499,9 @@ tf2d_equal(const vv_tf2d *a, const vv_tf2d *b) {
         const vv_tf2d_widget *x = &a->widgets[i], *y = &b->widgets[i];
         if (x->shape != y->shape || x->value[0] != y->value[0] || x->value[1] != y->value[1] ||
             x->gradient[0] != y->gradient[0] || x->gradient[1] != y->gradient[1] ||
-            x->ramp != y->ramp || x->gradient_ramp != y->gradient_ramp ||
-            x->center != y->center || x->width != y->width || x->color.x != y->color.x ||
-            x->color.y != y->color.y || x->color.z != y->color.z || x->opacity != y->opacity)
+            x->ramp != y->ramp || x->gradient_ramp != y->gradient_ramp || x->center != y->center ||
+            x->width != y->width || x->color.x != y->color.x || x->color.y != y->color.y ||
+            x->color.z != y->color.z || x->opacity != y->opacity)
             return 0;
     }
     return 1;

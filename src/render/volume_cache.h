@@ -41,7 +41,7 @@
 /* cached volumes per renderer: >= the objects of one render, so none in use
  * is evicted */
 #define VV_VC_MAX 64
-#define VV_VC_CHUNK 32 /* samples classified at a time (vv_vray_classify) */
+#define VV_VC_CHUNK 32    /* samples classified at a time (vv_vray_classify) */
 #define VV_VC_LUT2_V 1024 /* 2-D transfer-function table: value bins */
 #define VV_VC_LUT2_G 128  /* 2-D transfer-function table: gradient-magnitude bins */
 #if defined(__x86_64__) && defined(__GNUC__)
@@ -376,9 +376,9 @@ vv_vcache_gmag(const vv_vcache *c, const float p[3]) {
  * function (t->lut2d) and a solid texture. */
 typedef struct vv_vextra {
     const float *lut2d;
-    float lut_lo, lut_scale; /* stored value -> table index (as the 1-D table) */
-    float lut2_scale;        /* table index -> value bin */
-    float g_scale;           /* gradient magnitude -> gradient bin */
+    float lut_lo, lut_scale;       /* stored value -> table index (as the 1-D table) */
+    float lut2_scale;              /* table index -> value bin */
+    float g_scale;                 /* gradient magnitude -> gradient bin */
     const vv_solid_texture *solid; /* NULL: none */
     double i2o[3][4];              /* index -> the volume's own world coordinates */
 } vv_vextra;
@@ -392,8 +392,8 @@ int vv_vextra_prepare(vv_vextra *x, const vv_object *obj, vv_render_mode mode, c
  * and 1-D entry e under the extras: the 2-D table entry in place of e,
  * then the colour times the solid texture. Returns e itself or @p buf. */
 static inline const float *
-vv_vextra_apply(const vv_vextra *x, const vv_vcache *c, const float p[3], float val,
-                const float *e, float buf[4]) {
+vv_vextra_apply(const vv_vextra *x, const vv_vcache *c, const float p[3], float val, const float *e,
+                float buf[4]) {
     if (x->lut2d) {
         float li = (val - x->lut_lo) * x->lut_scale;
         li = li < 0 ? 0 : li > VV_VC_LUT - 1 ? VV_VC_LUT - 1 : li;

@@ -154,7 +154,7 @@ test_presets(void **state) {
     assert_near(vv_tf_eval_opacity(&tf, -1000), 0, 0); /* air */
     assert_near(vv_tf_eval_opacity(&tf, 1500), 1, 0);  /* cortical bone */
     vt_ok(vv_tf_preset(&tf, "ct-soft-tissue", hu));
-    assert_true(vv_tf_eval_opacity(&tf, 40) > 0.05);  /* soft tissue */
+    assert_true(vv_tf_eval_opacity(&tf, 40) > 0.05); /* soft tissue */
     assert_near(vv_tf_eval_opacity(&tf, -1000), 0, 0);
     /* CT stored unsigned: HU + 1024 */
     vv_volume *u = ramp_volume(VV_U16, 0, 4095);

@@ -370,10 +370,8 @@ test_ct_head_images(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_tf2d_rectangle_equals_1d),
-        cmocka_unit_test(test_tf2d_boundary_only),
-        cmocka_unit_test(test_texture_sphere_spherical),
-        cmocka_unit_test(test_solid_checker_cube),
+        cmocka_unit_test(test_tf2d_rectangle_equals_1d), cmocka_unit_test(test_tf2d_boundary_only),
+        cmocka_unit_test(test_texture_sphere_spherical), cmocka_unit_test(test_solid_checker_cube),
         cmocka_unit_test(test_ct_head_images),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
