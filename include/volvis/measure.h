@@ -74,6 +74,53 @@ void vv_histogram_free(vv_histogram *h);
 vv_status vv_histogram_plot_png(const vv_histogram *h, const char *path, int width, int height,
                                 const char *title, const char *xlabel, int log_scale);
 
+/* ---- joint histogram of value x gradient magnitude ------------------------ */
+
+/**
+ * A joint histogram of data value and gradient magnitude, for editing 2-D
+ * transfer functions (Kniss, Kindlmann and Hansen 2002; vv_tf2d). Owned by
+ * the caller. Gradient magnitudes are in data units per world unit of the
+ * volume's own coordinates (spacing and direction applied): central
+ * differences in index space (one-sided at the faces) mapped by the
+ * inverse transpose of the volume's index-to-world matrix, as the ray
+ * caster and ray tracer compute them for vv_tf2d. Counts are linear; a log
+ * scale is the caller's (the GUI's) choice.
+ */
+typedef struct vv_histogram2d {
+    int nbins_value;                 /**< bins along the value axis */
+    int nbins_gradient;              /**< bins along the gradient-magnitude axis */
+    double value_lo, value_hi;       /**< value range of the bins */
+    double gradient_lo, gradient_hi; /**< gradient-magnitude range (gradient_lo is 0) */
+    /** nbins_gradient rows of nbins_value counts: counts[g * nbins_value + v],
+     * row 0 the smallest gradient magnitudes */
+    uint64_t *counts;
+    uint64_t total;      /**< voxels counted (NaN values and gradients excluded) */
+    uint64_t outside;    /**< of all non-NaN voxels, those outside both ranges' box */
+    double gradient_max; /**< largest gradient magnitude of the volume */
+} vv_histogram2d;
+
+/**
+ * Joint histogram of the voxels of @p v: @p nbins_value x @p nbins_gradient
+ * equal bins over [value_lo, value_hi] x [0, gradient_hi]. value_lo >=
+ * value_hi takes the volume's range; gradient_hi <= 0 takes the largest
+ * gradient magnitude. A value equal to a range's upper end goes into the
+ * last bin. Deterministic; parallel (OpenMP). Errors: VV_ERR_INVALID (NULL,
+ * bins outside 1..65536, non-finite ranges), VV_ERR_NOMEM.
+ */
+vv_status vv_histogram2d_compute(vv_histogram2d **out, const vv_volume *v, int nbins_value,
+                                 int nbins_gradient, double value_lo, double value_hi,
+                                 double gradient_hi);
+/** Releases a joint histogram. Accepts NULL. */
+void vv_histogram2d_free(vv_histogram2d *h);
+/**
+ * Gradient magnitude of voxel (i, j, k) of @p v as vv_histogram2d_compute
+ * defines it; @p g2w is the 3x3 inverse transpose of the linear part of the
+ * volume's index-to-world matrix (vv_histogram2d_gradient_matrix).
+ */
+double vv_histogram2d_gradient_at(const vv_volume *v, const double g2w[3][3], int i, int j, int k);
+/** The index-gradient to world-gradient matrix of @p v. Returns 0 when singular. */
+int vv_histogram2d_gradient_matrix(const vv_volume *v, double g2w[3][3]);
+
 /* ---- isosurface volume and area ------------------------------------------- */
 
 typedef enum vv_measure_method {

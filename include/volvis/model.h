@@ -15,6 +15,7 @@
 #define VOLVIS_MODEL_H
 
 #include "core.h"
+#include "image.h"
 #include "math.h"
 #include "mesh.h"
 #include "volume.h"
@@ -31,6 +32,7 @@ extern "C" {
 #define VV_RENDER_NAME_MAX 32          /**< bytes of a renderer name, with its NUL */
 #define VV_RENDER_OPTION_KEY_MAX 32    /**< bytes of an option key, with its NUL */
 #define VV_RENDER_OPTION_VALUE_MAX 256 /**< bytes of an option value, with its NUL */
+#define VV_TF2D_MAX_WIDGETS 16
 
 /* ---- transfer function ---------------------------------------------- */
 
@@ -81,6 +83,217 @@ vv_vec3 vv_tf_eval_color(const vv_tf *tf, double value);
  */
 void vv_tf_set_ramp(vv_tf *tf, double lo, double hi, double max_opacity, vv_vec3 color,
                     double unit_distance);
+
+/**
+ * Transfer-function presets. @p name is one of vv_tf_preset_names():
+ * "ct-bone" (bone opaque and ivory, everything below about 150 HU
+ * transparent), "ct-soft-tissue" (skin and soft tissue faint and reddish,
+ * bone opaque), "mr" (a grey ramp from the 50th to the 99th percentile of
+ * the volume's values, for MR and other data without absolute units).
+ *
+ * CT presets are written in Hounsfield units and placed on the volume's
+ * values thus: a volume whose minimum is below -200 is taken as HU; one
+ * whose values lie in [-200, 65535] with a maximum of at least 1200 (CT
+ * stored unsigned, e.g. 0..4095) as HU + 1024; any other range (8-bit CT)
+ * as [-1024, 3071] HU stretched linearly over the volume's range.
+ * @p v may be NULL only for the CT presets (then HU). The TF's
+ * opacity_unit_distance is the smallest voxel spacing of @p v (1 without
+ * a volume). Errors: VV_ERR_INVALID (unknown name, with the list; NULL
+ * tf; "mr" without a volume).
+ */
+vv_status vv_tf_preset(vv_tf *tf, const char *name, const vv_volume *v);
+/** The names vv_tf_preset accepts, NULL-terminated; static storage. */
+const char *const *vv_tf_preset_names(void);
+
+/* ---- 2-D transfer function (value x gradient magnitude) ------------------ */
+
+/**
+ * Widget shapes of a 2-D transfer function (Kniss, Kindlmann and Hansen,
+ * "Multidimensional transfer functions for interactive volume rendering",
+ * IEEE TVCG 2002).
+ */
+typedef enum vv_tf2d_shape {
+    /** value[0..1] x gradient[0..1], with soft edges `ramp` (value) and
+     * `gradient_ramp` (gradient magnitude) inside the box */
+    VV_TF2D_RECTANGLE = 0,
+    /** Kniss's triangle: apex at (center, gradient magnitude 0), widening
+     * linearly to `width` (the full base width, data units) at gradient
+     * magnitude gradient[1]; cut below gradient[0]. Opacity falls linearly
+     * from the centre line (value = center) to 0 at the slanted edges. */
+    VV_TF2D_TRIANGLE = 1
+} vv_tf2d_shape;
+
+/**
+ * One widget. Data values in the volume's units; gradient magnitudes in
+ * data units per world unit of the volume's own coordinates (voxel spacing
+ * and direction applied, the object transform not), by central differences
+ * (vv_histogram2d_compute uses the same definition).
+ */
+typedef struct vv_tf2d_widget {
+    vv_tf2d_shape shape;
+    double value[2];      /**< rectangle: value range, value[0] <= value[1] */
+    double gradient[2];   /**< gradient-magnitude range, 0 <= gradient[0] <= gradient[1] */
+    double ramp;          /**< rectangle: soft edge (data units) inside each value edge, >= 0 */
+    double gradient_ramp; /**< rectangle: soft edge inside each gradient edge, >= 0 */
+    double center;        /**< triangle: apex value */
+    double width;         /**< triangle: base width at gradient[1], data units, > 0 */
+    vv_vec3 color;        /**< RGB in [0, 1] */
+    double opacity;       /**< peak opacity in [0, 1], per opacity_unit_distance */
+} vv_tf2d_widget;
+
+/**
+ * A 2-D transfer function: up to VV_TF2D_MAX_WIDGETS widgets. Where widgets
+ * overlap they combine as independent absorbers: opacity = 1 - prod(1 -
+ * a_i), colour = sum(a_i c_i) / sum(a_i) (opacity-weighted mean), so the
+ * order of widgets does not matter. Outside every widget the opacity is 0.
+ * Opacity is per opacity_unit_distance of ray length, as in vv_tf.
+ */
+typedef struct vv_tf2d {
+    int n_widgets;
+    vv_tf2d_widget widgets[VV_TF2D_MAX_WIDGETS];
+    double opacity_unit_distance; /**< world units, > 0 */
+} vv_tf2d;
+
+/** No widgets (transparent everywhere), unit distance 1. */
+void vv_tf2d_init(vv_tf2d *tf);
+/** A rectangle widget value [v0, v1] x gradient [g0, g1], hard edges. */
+void vv_tf2d_widget_init_rectangle(vv_tf2d_widget *w, double v0, double v1, double g0, double g1,
+                                   vv_vec3 color, double opacity);
+/** A triangle widget: apex value @p center, base @p width at gradient magnitude @p g1. */
+void vv_tf2d_widget_init_triangle(vv_tf2d_widget *w, double center, double width, double g1,
+                                  vv_vec3 color, double opacity);
+/**
+ * Checks a widget: finite parameters, ordered ranges, ramps >= 0, triangle
+ * width > 0 and gradient[1] > 0, colour and opacity in [0, 1]. Errors:
+ * VV_ERR_INVALID naming the bad parameter.
+ */
+vv_status vv_tf2d_widget_check(const vv_tf2d_widget *w);
+/** Appends a copy of @p w after vv_tf2d_widget_check. Errors: VV_ERR_INVALID, VV_ERR_LIMIT. */
+vv_status vv_tf2d_add_widget(vv_tf2d *tf, const vv_tf2d_widget *w);
+/** Opacity in [0, 1] of one widget at (value, gradient magnitude), its colour aside. */
+double vv_tf2d_widget_opacity(const vv_tf2d_widget *w, double value, double gradient);
+/**
+ * Opacity (per unit distance) and colour at (value, gradient magnitude)
+ * under the combination rule above; colour white where the opacity is 0.
+ * NaN inputs give opacity 0. Either output may be NULL.
+ */
+void vv_tf2d_eval(const vv_tf2d *tf, double value, double gradient, double *opacity,
+                  vv_vec3 *color);
+/** The largest gradient[1] of the widgets (0 without widgets). */
+double vv_tf2d_gradient_max(const vv_tf2d *tf);
+
+/* ---- textures (object colour and texture, VolVis paper section 4) -------- */
+
+/**
+ * A 2-D image used as a texture, shared by reference between objects and
+ * World snapshots (vv_object_clone). Immutable once made; ref and free are
+ * atomic, so snapshots on other threads may hold it.
+ */
+typedef struct vv_texture_image {
+    vv_image *image; /**< owned; colour = rgb, alpha ignored */
+    char *source;    /**< file name for scene saving (owned, may be NULL) */
+    int refcount;    /**< internal; use vv_texture_image_ref / _free */
+} vv_texture_image;
+
+/**
+ * Loads a PNG (vv_image_read_png) from @p path; @p source (may be NULL:
+ * @p path) is the name kept for scene saving. Errors: those of
+ * vv_image_read_png, VV_ERR_NOMEM.
+ */
+vv_status vv_texture_image_load(vv_texture_image **out, const char *path, const char *source);
+/** Wraps @p image (ownership taken, also on failure) with refcount 1. */
+vv_status vv_texture_image_new(vv_texture_image **out, vv_image *image, const char *source);
+/** Takes one more reference; returns @p t. */
+vv_texture_image *vv_texture_image_ref(vv_texture_image *t);
+/** Drops one reference, freeing on the last. Accepts NULL. */
+void vv_texture_image_free(vv_texture_image *t);
+/**
+ * Bilinear colour at texture coordinates (u, v), repeat wrap: u = 0 is the
+ * left edge of the image, v = 0 its top edge (row 0), one repeat per unit.
+ */
+vv_vec3 vv_texture_image_sample(const vv_texture_image *t, double u, double v);
+
+/** How object points map to texture coordinates. */
+typedef enum vv_texture_projection {
+    VV_TEXTURE_PLANAR = 0,      /**< (s, t) = (d.U, d.V), world units */
+    VV_TEXTURE_CYLINDRICAL = 1, /**< s = angle about the axis / 2pi, t = d.W (world units) */
+    VV_TEXTURE_SPHERICAL = 2    /**< s = angle about the axis / 2pi, t = polar angle from +W / pi */
+} vv_texture_projection;
+
+/**
+ * An image texture on an object. In object coordinates (a geometric
+ * object's shape coordinates; a volume's own world coordinates, before the
+ * object transform), d = point - center and the frame is W = axis, U =
+ * the unit part of X (or Y when W is within 25 degrees of X) perpendicular to W,
+ * V = W x U; the angle is atan2(d.V, d.U) in [0, 2pi). Texture
+ * coordinates (u, v) = (scale[0] s, scale[1] t), looked up with
+ * vv_texture_image_sample; the texture colour multiplies the material
+ * colour.
+ */
+typedef struct vv_texture_map {
+    vv_texture_image *image; /**< one reference held; NULL: no texture */
+    vv_texture_projection projection;
+    vv_vec3 center;  /**< object coordinates */
+    vv_vec3 axis;    /**< unit */
+    double scale[2]; /**< repeats per unit of s and t (planar: per world unit), != 0 */
+} vv_texture_map;
+
+/** No image, planar, centre 0, axis +z, scale (1, 1). */
+void vv_texture_map_init(vv_texture_map *m);
+/** Texture coordinates (u, v) of object point @p q (before wrapping). */
+void vv_texture_map_uv(const vv_texture_map *m, vv_vec3 q, double *u, double *v);
+/** Texture colour at object point @p q; white when there is no image. */
+vv_vec3 vv_texture_map_eval(const vv_texture_map *m, vv_vec3 q);
+/** Name of a projection ("planar", ...); never NULL. */
+const char *vv_texture_projection_name(vv_texture_projection p);
+/** Projection from its name. Errors: VV_ERR_INVALID. */
+vv_status vv_texture_projection_parse(const char *name, vv_texture_projection *out);
+
+/** What a solid (3-D) texture is. */
+typedef enum vv_solid_texture_kind {
+    VV_SOLID_TEXTURE_NONE = 0,
+    VV_SOLID_TEXTURE_CHECKER = 1, /**< cubes of side `period`: color0 where floor(x/p) + floor(y/p)
+                                       + floor(z/p) (d = point - center) is even, else color1 */
+    VV_SOLID_TEXTURE_WOOD = 2,    /**< rings about the axis through center, `period` apart,
+                                       distorted by `turbulence` times seeded noise */
+    VV_SOLID_TEXTURE_MARBLE = 3,  /**< veins: sin along the axis plus turbulence, `period` apart */
+    VV_SOLID_TEXTURE_VOLUME = 4   /**< a second volume sampled at the point (its own world
+                                       coordinates), normalised through its range to f in [0, 1]:
+                                       colour = color0 + f (color1 - color0); 0 outside it */
+} vv_solid_texture_kind;
+
+/**
+ * A solid texture: a colour at every object point (a volume's own world
+ * coordinates) that multiplies the colour of composited volume samples
+ * (the transfer function's colour). Procedural patterns mix color0 and
+ * color1 by a weight f in [0, 1]; noise is a deterministic value noise of
+ * @p seed (the same image on every run and thread count).
+ */
+typedef struct vv_solid_texture {
+    vv_solid_texture_kind kind;
+    vv_vec3 color0, color1; /**< RGB in [0, 1] */
+    double period;          /**< world units, > 0 */
+    vv_vec3 center;         /**< object coordinates */
+    vv_vec3 axis;           /**< unit: wood's trunk axis, marble's vein direction */
+    double turbulence;      /**< noise amplitude, in periods, >= 0 */
+    unsigned seed;
+    vv_volume *volume; /**< VV_SOLID_TEXTURE_VOLUME: one reference held */
+    char *source;      /**< the volume's file name for scene saving (owned, may be NULL) */
+} vv_solid_texture;
+
+/** Kind none, colours black and white, period 1, centre 0, axis +z, turbulence 0, seed 1. */
+void vv_solid_texture_init(vv_solid_texture *s);
+/** Colour at object point @p q (white for kind none). Thread-safe. */
+vv_vec3 vv_solid_texture_eval(const vv_solid_texture *s, vv_vec3 q);
+/** Name of a kind ("none", "checker3d", "wood", "marble", "volume"); never NULL. */
+const char *vv_solid_texture_kind_name(vv_solid_texture_kind k);
+/**
+ * Sets @p s to sample @p volume (the texture takes its own reference;
+ * @p source may be NULL). Errors: VV_ERR_INVALID, VV_ERR_NOMEM.
+ */
+vv_status vv_solid_texture_set_volume(vv_solid_texture *s, vv_volume *volume, const char *source);
+/** Releases what @p s holds (volume reference, source) and re-initialises it. */
+void vv_solid_texture_clear(vv_solid_texture *s);
 
 /* ---- lights, cut planes, material, view -------------------------------- */
 
@@ -216,7 +429,9 @@ typedef enum vv_render_mode {
 
 typedef enum vv_segmentation {
     VV_SEG_TRANSFER_FUNCTION = 0, /**< opacity and colour from tf */
-    VV_SEG_THRESHOLD = 1          /**< opaque in material.color where value >= threshold */
+    VV_SEG_THRESHOLD = 1,         /**< opaque in material.color where value >= threshold */
+    VV_SEG_TRANSFER_FUNCTION_2D =
+        2 /**< opacity and colour from tf2d (value x gradient magnitude) */
 } vv_segmentation;
 
 /**
@@ -238,8 +453,11 @@ typedef struct vv_object {
     vv_vec3 scale;
     vv_material material;
     vv_segmentation segmentation;
-    double threshold; /**< VV_SEG_THRESHOLD */
-    vv_tf tf;         /**< VV_SEG_TRANSFER_FUNCTION; also the grey ramp of mip/minip/xray */
+    double threshold;       /**< VV_SEG_THRESHOLD */
+    vv_tf tf;               /**< VV_SEG_TRANSFER_FUNCTION; also the grey ramp of mip/minip/xray */
+    vv_tf2d tf2d;           /**< VV_SEG_TRANSFER_FUNCTION_2D (composite mode; other modes use tf) */
+    vv_texture_map texture; /**< image texture: geometry and isosurfaces (iso mode) */
+    vv_solid_texture solid_texture; /**< solid texture: composited volume samples */
     vv_render_mode mode;
     double isovalue; /**< VV_MODE_ISO */
     double step;     /**< sample step in units of the smallest voxel spacing, > 0 */
@@ -284,16 +502,22 @@ vv_status vv_object_set_polygon(vv_object *obj, int n, const vv_vec3 *vertices);
  * VV_ERR_INVALID (not a mesh object, empty mesh), VV_ERR_NOMEM.
  */
 vv_status vv_object_set_mesh(vv_object *obj, vv_mesh *mesh, const char *source);
-/** Releases an object, its reference to the volume and its geometry. Accepts NULL. */
+/** Releases an object, its references (volume, mesh, textures) and its geometry. Accepts NULL. */
 void vv_object_free(vv_object *obj);
 /**
  * A copy of @p obj: every field copied, the polygon vertices and mesh source
- * duplicated, one more reference taken on the volume and the mesh (voxels
- * and triangles are shared, not copied: they are never changed in place by
+ * duplicated, one more reference taken on the volume, the mesh, the texture
+ * image and the solid texture's volume (its source duplicated) (voxels,
+ * triangles and texels are shared, not copied: they are never changed in place by
  * the World's editors, so a copy is cheap). Thread-safe for concurrent
  * readers of @p obj. Errors: VV_ERR_INVALID (NULL), VV_ERR_NOMEM.
  */
 vv_status vv_object_clone(vv_object **out, const vv_object *obj);
+/**
+ * Sets an object's image texture: @p image (may be NULL: none) gets a
+ * reference; the old one is released. Projection parameters are kept.
+ */
+void vv_object_set_texture_image(vv_object *obj, vv_texture_image *image);
 /** Object-to-world matrix T(position) * R(orientation) * S(scale). */
 vv_mat4 vv_object_matrix(const vv_object *obj);
 /** Index-to-world matrix of the object's volume: object matrix * volume index-to-world. */

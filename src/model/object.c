@@ -57,6 +57,9 @@ object_defaults(vv_object *o) {
     o->visible_in_reflections = 1;
     o->reflects = 1;
     o->n_cut_planes = 0;
+    vv_tf2d_init(&o->tf2d);
+    vv_texture_map_init(&o->texture);
+    vv_solid_texture_init(&o->solid_texture);
 }
 
 const char *
@@ -106,6 +109,7 @@ vv_object_new_volume(vv_object **out, vv_volume *volume, const char *name) {
         hi = lo + 1.0;
     o->threshold = 0.5 * (lo + hi);
     vv_tf_set_ramp(&o->tf, lo, hi, 1.0, vv_vec3_make(1, 1, 1), vv_model_min_spacing(volume));
+    o->tf2d.opacity_unit_distance = vv_model_min_spacing(volume);
     o->isovalue = 0.5 * (lo + hi);
     *out = o;
     return VV_OK;
@@ -210,6 +214,9 @@ vv_object_free(vv_object *obj) {
     free(obj->geometry.vertices);
     vv_mesh_free(obj->geometry.mesh);
     free(obj->geometry.source);
+    vv_texture_image_free(obj->texture.image);
+    vv_volume_free(obj->solid_texture.volume);
+    free(obj->solid_texture.source);
     free(obj);
 }
 
@@ -224,6 +231,7 @@ vv_object_clone(vv_object **out, const vv_object *obj) {
     *c = *obj;
     c->geometry.vertices = NULL;
     c->geometry.source = NULL;
+    c->solid_texture.source = NULL;
     if (obj->geometry.vertices && obj->geometry.n_vertices > 0) {
         size_t n = (size_t)obj->geometry.n_vertices * sizeof *c->geometry.vertices;
         c->geometry.vertices = malloc(n);
@@ -236,14 +244,23 @@ vv_object_clone(vv_object **out, const vv_object *obj) {
         if (!c->geometry.source)
             goto nomem;
     }
+    if (obj->solid_texture.source) {
+        c->solid_texture.source = vv_strdup(obj->solid_texture.source);
+        if (!c->solid_texture.source)
+            goto nomem;
+    }
     if (c->volume)
         vv_volume_ref(c->volume);
     if (c->geometry.mesh)
         vv_mesh_ref(c->geometry.mesh);
+    vv_texture_image_ref(c->texture.image);
+    if (c->solid_texture.volume)
+        vv_volume_ref(c->solid_texture.volume);
     *out = c;
     return VV_OK;
 nomem:
     free(c->geometry.vertices);
+    free(c->geometry.source);
     free(c);
     return vv_error_set(VV_ERR_NOMEM, "object clone: out of memory");
 }

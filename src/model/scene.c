@@ -792,6 +792,243 @@ parse_tf(const sctx *c, json_t *tfj, const char *tp, vv_object *o) {
     return VV_OK;
 }
 
+/* An optional [a, b] pair of numbers. */
+static vv_status
+get_pair(const sctx *c, json_t *obj, const char *path, const char *key, double out[2],
+         int *present) {
+    char kp[PATH_MAX_LEN];
+    json_t *v = field(obj, key, kp, path, present);
+    if (!v)
+        return VV_OK;
+    if (!json_is_array(v) || json_array_size(v) != 2)
+        return serr(c, kp, "expected an array of 2 numbers, got %s%s", vv_model_json_kind(v),
+                    json_is_array(v) ? " of another length" : "");
+    for (size_t i = 0; i < 2; i++) {
+        char ip[PATH_MAX_LEN];
+        path_index(ip, kp, i);
+        vv_status st = value_number(c, json_array_get(v, i), ip, &out[i]);
+        if (st != VV_OK)
+            return st;
+    }
+    return VV_OK;
+}
+
+static vv_status
+parse_tf2d_widget(const sctx *c, json_t *e, const char *wp, vv_tf2d_widget *w) {
+    static const char *const rkeys[] = {"shape",         "value", "gradient", "ramp",
+                                        "gradient_ramp", "color", "opacity",  NULL};
+    static const char *const tkeys[] = {"shape", "center",  "width", "gradient",
+                                        "color", "opacity", NULL};
+    if (!json_is_object(e))
+        return serr(c, wp, "expected a widget object, got %s", vv_model_json_kind(e));
+    const char *shape = NULL;
+    vv_status st = get_string(c, e, wp, "shape", &shape);
+    if (st != VV_OK)
+        return st;
+    if (!shape)
+        return missing(c, wp, "shape", "\"rectangle\" or \"triangle\"");
+    char kp[PATH_MAX_LEN];
+    int has_a, has_b, has_c;
+    if (strcmp(shape, "rectangle") == 0) {
+        vv_tf2d_widget_init_rectangle(w, 0, 0, 0, 0, vv_vec3_make(1, 1, 1), 1.0);
+        if ((st = check_keys(c, e, wp, rkeys)) != VV_OK ||
+            (st = get_pair(c, e, wp, "value", w->value, &has_a)) != VV_OK ||
+            (st = get_pair(c, e, wp, "gradient", w->gradient, &has_b)) != VV_OK ||
+            (st = get_number(c, e, wp, "ramp", &w->ramp, NULL)) != VV_OK ||
+            (st = get_number(c, e, wp, "gradient_ramp", &w->gradient_ramp, NULL)) != VV_OK)
+            return st;
+        if (!has_a)
+            return missing(c, wp, "value", "[lo, hi] data values");
+        if (!has_b)
+            return missing(c, wp, "gradient", "[lo, hi] gradient magnitudes");
+        w->center = 0.5 * (w->value[0] + w->value[1]);
+        w->width = w->value[1] - w->value[0];
+    } else if (strcmp(shape, "triangle") == 0) {
+        vv_tf2d_widget_init_triangle(w, 0, 1, 1, vv_vec3_make(1, 1, 1), 1.0);
+        if ((st = check_keys(c, e, wp, tkeys)) != VV_OK ||
+            (st = get_number(c, e, wp, "center", &w->center, &has_a)) != VV_OK ||
+            (st = get_number(c, e, wp, "width", &w->width, &has_b)) != VV_OK ||
+            (st = get_pair(c, e, wp, "gradient", w->gradient, &has_c)) != VV_OK)
+            return st;
+        if (!has_a)
+            return missing(c, wp, "center", "the apex data value");
+        if (!has_b)
+            return missing(c, wp, "width", "the base width at gradient[1], data units");
+        if (!has_c)
+            return missing(c, wp, "gradient", "[lo, hi] gradient magnitudes");
+        w->value[0] = w->center - 0.5 * w->width;
+        w->value[1] = w->center + 0.5 * w->width;
+    } else {
+        path_key(kp, wp, "shape");
+        return serr(c, kp, "unknown widget shape \"%s\"; expected rectangle or triangle", shape);
+    }
+    if ((st = get_color(c, e, wp, "color", &w->color, NULL)) != VV_OK ||
+        (st = get_number(c, e, wp, "opacity", &w->opacity, NULL)) != VV_OK)
+        return st;
+    vv_error_clear();
+    if (vv_tf2d_widget_check(w) != VV_OK)
+        return serr(c, wp, "%s", vv_error_message());
+    return VV_OK;
+}
+
+static vv_status
+parse_tf2d(const sctx *c, json_t *tj, const char *tp, vv_object *o) {
+    static const char *const keys[] = {"widgets", "opacity_unit_distance", NULL};
+    vv_status st = check_keys(c, tj, tp, keys);
+    if (st != VV_OK)
+        return st;
+    json_t *arr;
+    if ((st = get_array(c, tj, tp, "widgets", &arr)) != VV_OK)
+        return st;
+    if (!arr)
+        return missing(c, tp, "widgets", "[{\"shape\": ...}, ...]");
+    char ap[PATH_MAX_LEN];
+    path_key(ap, tp, "widgets");
+    if (json_array_size(arr) > VV_TF2D_MAX_WIDGETS)
+        return serr(c, ap, "more than %d widgets", VV_TF2D_MAX_WIDGETS);
+    vv_tf2d tf;
+    vv_tf2d_init(&tf);
+    tf.opacity_unit_distance = o->volume ? vv_model_min_spacing(o->volume) : 1.0;
+    size_t i;
+    json_t *e;
+    json_array_foreach(arr, i, e) {
+        char wp[PATH_MAX_LEN];
+        path_index(wp, ap, i);
+        if ((st = parse_tf2d_widget(c, e, wp, &tf.widgets[tf.n_widgets])) != VV_OK)
+            return st;
+        tf.n_widgets++;
+    }
+    if ((st = get_number_in(c, tj, tp, "opacity_unit_distance", &tf.opacity_unit_distance, NULL, 0,
+                            1, INFINITY, 1)) != VV_OK)
+        return st;
+    o->tf2d = tf;
+    return VV_OK;
+}
+
+/* A file named relative to the scene file, for error messages at its key. */
+static vv_status
+file_err(const sctx *c, vv_status st, const char *kp) {
+    int line, col;
+    scene_locate(c, kp, &line, &col);
+    return vv_error_prefix(st, "%s:%d:%d: %s", c->path, line, col, kp);
+}
+
+static vv_status
+parse_texture(const sctx *c, json_t *tj, const char *tp, vv_object *o) {
+    static const char *const keys[] = {"image", "projection", "center", "axis", "scale", NULL};
+    vv_status st = check_keys(c, tj, tp, keys);
+    if (st != VV_OK)
+        return st;
+    const char *file = NULL, *proj = NULL;
+    vv_texture_map m;
+    vv_texture_map_init(&m);
+    double sc[2] = {1, 1};
+    char kp[PATH_MAX_LEN];
+    if ((st = get_string(c, tj, tp, "image", &file)) != VV_OK ||
+        (st = get_string(c, tj, tp, "projection", &proj)) != VV_OK ||
+        (st = get_vec3(c, tj, tp, "center", &m.center, NULL)) != VV_OK ||
+        (st = get_nonzero_vec3(c, tj, tp, "axis", &m.axis, NULL)) != VV_OK ||
+        (st = get_pair(c, tj, tp, "scale", sc, NULL)) != VV_OK)
+        return st;
+    if (!file)
+        return missing(c, tp, "image", "a PNG file, relative to the scene file");
+    if (proj && vv_texture_projection_parse(proj, &m.projection) != VV_OK) {
+        path_key(kp, tp, "projection");
+        return serr(c, kp, "unknown projection \"%s\"; expected planar, cylindrical or spherical",
+                    proj);
+    }
+    if (!(sc[0] != 0 && sc[1] != 0)) {
+        path_key(kp, tp, "scale");
+        return serr(c, kp, "scale factors must not be 0");
+    }
+    m.axis = vv_vec3_normalize(m.axis);
+    m.scale[0] = sc[0];
+    m.scale[1] = sc[1];
+    path_key(kp, tp, "image");
+    if (!file[0])
+        return serr(c, kp, "empty file name");
+    char *full = vv_path_join_dir(c->path, file);
+    if (!full)
+        return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
+    vv_texture_image *img = NULL;
+    st = vv_texture_image_load(&img, full, file);
+    free(full);
+    if (st != VV_OK)
+        return file_err(c, st, kp);
+    m.image = img; /* the reference from loading moves into the object */
+    vv_texture_image_free(o->texture.image);
+    o->texture = m;
+    return VV_OK;
+}
+
+static vv_status
+parse_solid_texture(const sctx *c, json_t *tj, const char *tp, vv_object *o) {
+    static const char *const keys[] = {"procedural", "volume", "period", "center", "axis",
+                                       "turbulence", "seed",   "color0", "color1", NULL};
+    vv_status st = check_keys(c, tj, tp, keys);
+    if (st != VV_OK)
+        return st;
+    const char *proc = NULL, *file = NULL;
+    char kp[PATH_MAX_LEN];
+    vv_solid_texture s;
+    vv_solid_texture_init(&s);
+    double seed = 1;
+    if ((st = get_string(c, tj, tp, "procedural", &proc)) != VV_OK ||
+        (st = get_string(c, tj, tp, "volume", &file)) != VV_OK ||
+        (st = get_number_in(c, tj, tp, "period", &s.period, NULL, 0, 1, INFINITY, 1)) != VV_OK ||
+        (st = get_vec3(c, tj, tp, "center", &s.center, NULL)) != VV_OK ||
+        (st = get_nonzero_vec3(c, tj, tp, "axis", &s.axis, NULL)) != VV_OK ||
+        (st = get_number_in(c, tj, tp, "turbulence", &s.turbulence, NULL, 0, 0, INFINITY, 1)) !=
+            VV_OK ||
+        (st = get_number_in(c, tj, tp, "seed", &seed, NULL, 0, 0, 4294967295.0, 0)) != VV_OK ||
+        (st = get_color(c, tj, tp, "color0", &s.color0, NULL)) != VV_OK ||
+        (st = get_color(c, tj, tp, "color1", &s.color1, NULL)) != VV_OK)
+        return st;
+    if (seed != floor(seed)) {
+        path_key(kp, tp, "seed");
+        return serr(c, kp, "expected an integer, got %g", seed);
+    }
+    s.seed = (unsigned)seed;
+    s.axis = vv_vec3_normalize(s.axis);
+    if ((proc != NULL) == (file != NULL))
+        return serr(c, tp,
+                    "give exactly one of \"procedural\" (checker3d, wood, marble) and "
+                    "\"volume\" (a volume file)");
+    if (proc) {
+        path_key(kp, tp, "procedural");
+        if (strcmp(proc, "checker3d") == 0)
+            s.kind = VV_SOLID_TEXTURE_CHECKER;
+        else if (strcmp(proc, "wood") == 0)
+            s.kind = VV_SOLID_TEXTURE_WOOD;
+        else if (strcmp(proc, "marble") == 0)
+            s.kind = VV_SOLID_TEXTURE_MARBLE;
+        else
+            return serr(c, kp,
+                        "unknown procedural texture \"%s\"; expected checker3d, wood or "
+                        "marble",
+                        proc);
+    } else {
+        path_key(kp, tp, "volume");
+        if (!file[0])
+            return serr(c, kp, "empty file name");
+        char *full = vv_path_join_dir(c->path, file);
+        if (!full)
+            return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
+        vv_volume *vol = NULL;
+        st = vv_volume_load(&vol, full, NULL);
+        free(full);
+        if (st != VV_OK)
+            return file_err(c, st, kp);
+        st = vv_solid_texture_set_volume(&s, vol, file);
+        vv_volume_free(vol);
+        if (st != VV_OK)
+            return st;
+    }
+    vv_solid_texture_clear(&o->solid_texture);
+    o->solid_texture = s;
+    return VV_OK;
+}
+
 /* The global-illumination terms of a material (volumetric ray tracing). */
 static vv_status
 parse_material_global(const sctx *c, json_t *m, const char *mp, vv_material *mat) {
@@ -936,13 +1173,55 @@ parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
         o->scale = s;
     }
 
-    /* segmentation: a transfer function or a threshold */
-    json_t *tfj, *seg, *mat, *cuts;
+    /* segmentation: a transfer function (1-D or 2-D) or a threshold */
+    json_t *tfj, *seg = NULL, *mat, *cuts, *tf2j, *texj, *soj;
+    const char *seg_name = NULL;
+    json_t *segv = json_object_get(e, "segmentation");
+    if (segv && json_is_string(segv)) {
+        seg_name = json_string_value(segv);
+    } else if ((st = get_object(c, e, op, "segmentation", &seg)) != VV_OK) {
+        path_key(kp, op, "segmentation");
+        return serr(c, kp,
+                    "expected {\"threshold\": value}, \"transfer_function\" or \"tf2d\", got %s",
+                    vv_model_json_kind(segv));
+    }
     if ((st = get_object(c, e, op, "transfer_function", &tfj)) != VV_OK ||
-        (st = get_object(c, e, op, "segmentation", &seg)) != VV_OK ||
+        (st = get_object(c, e, op, "tf2d", &tf2j)) != VV_OK ||
+        (st = get_object(c, e, op, "texture", &texj)) != VV_OK ||
+        (st = get_object(c, e, op, "solid_texture", &soj)) != VV_OK ||
         (st = get_object(c, e, op, "material", &mat)) != VV_OK ||
         (st = get_array(c, e, op, "cut_planes", &cuts)) != VV_OK)
         return st;
+    if (seg_name) {
+        path_key(kp, op, "segmentation");
+        if (strcmp(seg_name, "tf2d") == 0) {
+            if (!tf2j)
+                return serr(c, kp, "segmentation \"tf2d\" needs a \"tf2d\" object");
+            o->segmentation = VV_SEG_TRANSFER_FUNCTION_2D;
+        } else if (strcmp(seg_name, "transfer_function") == 0) {
+            o->segmentation = VV_SEG_TRANSFER_FUNCTION;
+        } else {
+            return serr(c, kp,
+                        "unknown segmentation \"%s\"; expected \"transfer_function\", \"tf2d\" "
+                        "or {\"threshold\": value}",
+                        seg_name);
+        }
+    }
+    if (tf2j) {
+        path_key(kp, op, "tf2d");
+        if ((st = parse_tf2d(c, tf2j, kp, o)) != VV_OK)
+            return st;
+    }
+    if (texj) {
+        path_key(kp, op, "texture");
+        if ((st = parse_texture(c, texj, kp, o)) != VV_OK)
+            return st;
+    }
+    if (soj) {
+        path_key(kp, op, "solid_texture");
+        if ((st = parse_solid_texture(c, soj, kp, o)) != VV_OK)
+            return st;
+    }
     if (tfj && seg) {
         path_key(kp, op, "segmentation");
         return serr(c, kp, "give either \"transfer_function\" or \"segmentation\", not both");
@@ -1119,8 +1398,9 @@ check_object_keys(const sctx *c, json_t *e, const char *op, const char *const *o
     static const char *const volume_head[] = {"mode", "isovalue", "step", "shading", NULL};
     static const char *const place[] = {"visible",     "position", "rotation",
                                         "orientation", "scale",    NULL};
-    static const char *const volume_mid[] = {"transfer_function", "segmentation", NULL};
-    static const char *const mat[] = {"material", NULL};
+    static const char *const volume_mid[] = {"transfer_function", "segmentation", "tf2d",
+                                             "solid_texture", NULL};
+    static const char *const mat[] = {"material", "texture", NULL};
     static const char *const volume_tail[] = {"cut_planes", NULL};
     static const char *const flags[] = {"casts_shadows", "receives_shadows",
                                         "visible_in_reflections", "reflects", NULL};
@@ -1602,6 +1882,88 @@ put_effect_flags(FILE *f, const vv_object *o) {
             o->visible_in_reflections ? "true" : "false", o->reflects ? "true" : "false");
 }
 
+static void
+put_pair(FILE *f, const double p[2]) {
+    fputc('[', f);
+    put_num(f, p[0]);
+    fputs(", ", f);
+    put_num(f, p[1]);
+    fputc(']', f);
+}
+
+static void
+put_tf2d(FILE *f, const vv_tf2d *tf) {
+    fputs(",\n      \"tf2d\": {\n        \"widgets\": [", f);
+    for (int i = 0; i < tf->n_widgets; i++) {
+        const vv_tf2d_widget *w = &tf->widgets[i];
+        fputs(i ? ",\n          {" : "\n          {", f);
+        if (w->shape == VV_TF2D_TRIANGLE) {
+            fputs("\"shape\": \"triangle\", \"center\": ", f);
+            put_num(f, w->center);
+            fputs(", \"width\": ", f);
+            put_num(f, w->width);
+        } else {
+            fputs("\"shape\": \"rectangle\", \"value\": ", f);
+            put_pair(f, w->value);
+            fputs(", \"ramp\": ", f);
+            put_num(f, w->ramp);
+            fputs(", \"gradient_ramp\": ", f);
+            put_num(f, w->gradient_ramp);
+        }
+        fputs(", \"gradient\": ", f);
+        put_pair(f, w->gradient);
+        fputs(", \"color\": ", f);
+        put_vec3(f, w->color);
+        fputs(", \"opacity\": ", f);
+        put_num(f, w->opacity);
+        fputc('}', f);
+    }
+    fputs(tf->n_widgets ? "\n        ],\n" : "],\n", f);
+    fputs("        \"opacity_unit_distance\": ", f);
+    put_num(f, tf->opacity_unit_distance);
+    fputs("\n      }", f);
+}
+
+static void
+put_textures(FILE *f, const vv_object *o) {
+    const vv_texture_map *m = &o->texture;
+    if (m->image) {
+        fputs(",\n      \"texture\": {\"image\": ", f);
+        put_str(f, m->image->source ? m->image->source : "");
+        fprintf(
+            f, ", \"projection\": \"%s\", \"center\": ", vv_texture_projection_name(m->projection));
+        put_vec3(f, m->center);
+        fputs(", \"axis\": ", f);
+        put_vec3(f, m->axis);
+        fputs(", \"scale\": ", f);
+        put_pair(f, m->scale);
+        fputc('}', f);
+    }
+    const vv_solid_texture *s = &o->solid_texture;
+    if (s->kind == VV_SOLID_TEXTURE_NONE)
+        return;
+    fputs(",\n      \"solid_texture\": {", f);
+    if (s->kind == VV_SOLID_TEXTURE_VOLUME) {
+        fputs("\"volume\": ", f);
+        put_str(f, s->source ? s->source : "");
+    } else {
+        fprintf(f, "\"procedural\": \"%s\"", vv_solid_texture_kind_name(s->kind));
+    }
+    fputs(", \"period\": ", f);
+    put_num(f, s->period);
+    fputs(", \"center\": ", f);
+    put_vec3(f, s->center);
+    fputs(", \"axis\": ", f);
+    put_vec3(f, s->axis);
+    fputs(", \"turbulence\": ", f);
+    put_num(f, s->turbulence);
+    fprintf(f, ", \"seed\": %u, \"color0\": ", s->seed);
+    put_vec3(f, s->color0);
+    fputs(", \"color1\": ", f);
+    put_vec3(f, s->color1);
+    fputc('}', f);
+}
+
 /* A geometric object; @p file names a mesh's file (else geometry.source). */
 static void
 put_geometry_object(FILE *f, const vv_object *o, const char *file) {
@@ -1678,6 +2040,7 @@ put_geometry_object(FILE *f, const vv_object *o, const char *file) {
     put_vec3(f, o->material.color);
     put_material_global(f, &o->material);
     fputc('}', f);
+    put_textures(f, o);
     put_effect_flags(f, o);
     fputs("\n    }", f);
 }
@@ -1742,7 +2105,11 @@ put_object(FILE *f, const vv_object *o, const char *file) {
         fputs("],\n        \"opacity_unit_distance\": ", f);
         put_num(f, o->tf.opacity_unit_distance);
         fputs("\n      }", f);
+        if (o->segmentation == VV_SEG_TRANSFER_FUNCTION_2D)
+            fputs(",\n      \"segmentation\": \"tf2d\"", f);
     }
+    if (o->segmentation == VV_SEG_TRANSFER_FUNCTION_2D || o->tf2d.n_widgets > 0)
+        put_tf2d(f, &o->tf2d);
     fputs(",\n      \"material\": {\"ambient\": ", f);
     put_num(f, o->material.ambient);
     fputs(", \"diffuse\": ", f);
@@ -1754,7 +2121,9 @@ put_object(FILE *f, const vv_object *o, const char *file) {
     fputs(", \"color\": ", f);
     put_vec3(f, o->material.color);
     put_material_global(f, &o->material);
-    fputs("},\n      \"cut_planes\": ", f);
+    fputc('}', f);
+    put_textures(f, o);
+    fputs(",\n      \"cut_planes\": ", f);
     put_cut_planes(f, o->cut_planes, o->n_cut_planes, "      ");
     put_effect_flags(f, o);
     fputs("\n    }", f);
@@ -1832,6 +2201,12 @@ check_saveable(const vv_world *w, const char *const *volume_files) {
             return vv_error_set(VV_ERR_INVALID, "object %d is NULL", i);
         if (o->type == VV_OBJECT_MESH && !o->geometry.source && !(volume_files && volume_files[i]))
             return vv_error_set(VV_ERR_INVALID, "object %d: a mesh without a file name", i);
+        if (o->texture.image && !o->texture.image->source)
+            return vv_error_set(VV_ERR_INVALID, "object %d: a texture image without a file name",
+                                i);
+        if (o->solid_texture.kind == VV_SOLID_TEXTURE_VOLUME && !o->solid_texture.source)
+            return vv_error_set(VV_ERR_INVALID,
+                                "object %d: a solid-texture volume without a file name", i);
     }
     for (int i = 0; i < w->n_objects; i++) {
         if (w->objects[i]->type != VV_OBJECT_VOLUME)

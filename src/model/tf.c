@@ -168,3 +168,111 @@ vv_tf_set_ramp(vv_tf *tf, double lo, double hi, double max_opacity, vv_vec3 colo
     tf->color[1].color = color;
     tf->n_color = 2;
 }
+
+/* ---- presets -------------------------------------------------------------- */
+
+static const char *const preset_names[] = {"ct-bone", "ct-soft-tissue", "mr", NULL};
+
+const char *const *
+vv_tf_preset_names(void) {
+    return preset_names;
+}
+
+/* Maps Hounsfield units onto the volume's values (vv_tf_preset). */
+typedef struct hu_map {
+    double scale, offset; /* value = scale * HU + offset */
+} hu_map;
+
+static hu_map
+hu_map_of(const vv_volume *v) {
+    hu_map m = {1.0, 0.0};
+    if (!v)
+        return m;
+    double lo = v->range[0], hi = v->range[1];
+    if (!isfinite(lo) || !isfinite(hi) || lo < -200.0)
+        return m; /* Hounsfield units */
+    if (hi >= 1200.0 && hi <= 65535.0) {
+        m.offset = 1024.0; /* stored unsigned: HU + 1024 */
+        return m;
+    }
+    if (!(hi > lo))
+        hi = lo + 1.0;
+    /* [-1024, 3071] HU stretched over the range */
+    m.scale = (hi - lo) / 4095.0;
+    m.offset = lo + 1024.0 * m.scale;
+    return m;
+}
+
+typedef struct preset_point {
+    double x;
+    double a;
+    double r, g, b;
+} preset_point;
+
+static vv_status
+preset_fill(vv_tf *tf, const preset_point *p, int n, hu_map m) {
+    for (int i = 0; i < n; i++) {
+        double x = m.scale * p[i].x + m.offset;
+        vv_status st = vv_tf_add_opacity(tf, x, p[i].a);
+        if (st == VV_OK)
+            st = vv_tf_add_color(tf, x, vv_vec3_make(p[i].r, p[i].g, p[i].b));
+        if (st != VV_OK)
+            return st;
+    }
+    return VV_OK;
+}
+
+vv_status
+vv_tf_preset(vv_tf *tf, const char *name, const vv_volume *v) {
+    if (!tf || !name)
+        return vv_error_set(VV_ERR_INVALID, "transfer function preset: NULL %s",
+                            tf ? "name" : "transfer function");
+    double unit = 1.0;
+    if (v) {
+        unit = v->spacing[0];
+        unit = v->spacing[1] < unit ? v->spacing[1] : unit;
+        unit = v->spacing[2] < unit ? v->spacing[2] : unit;
+        if (!(unit > 0.0) || !isfinite(unit))
+            unit = 1.0;
+    }
+    vv_tf out;
+    vv_tf_init(&out);
+    out.opacity_unit_distance = unit;
+    vv_status st;
+    if (strcmp(name, "ct-bone") == 0) {
+        static const preset_point p[] = {{-1024, 0, 0, 0, 0},
+                                         {150, 0, 0.55, 0.25, 0.15},
+                                         {300, 0.25, 0.85, 0.65, 0.45},
+                                         {600, 0.8, 0.95, 0.9, 0.8},
+                                         {1500, 1, 1, 1, 0.95}};
+        st = preset_fill(&out, p, 5, hu_map_of(v));
+    } else if (strcmp(name, "ct-soft-tissue") == 0) {
+        static const preset_point p[] = {
+            {-1024, 0, 0, 0, 0},           {-600, 0, 0.4, 0.15, 0.1},
+            {-400, 0.03, 0.7, 0.35, 0.25}, {-100, 0.03, 0.85, 0.55, 0.45},
+            {40, 0.12, 0.9, 0.45, 0.4},    {150, 0.12, 0.9, 0.6, 0.5},
+            {300, 0.6, 0.95, 0.9, 0.8},    {1000, 0.95, 1, 1, 0.95}};
+        st = preset_fill(&out, p, 8, hu_map_of(v));
+    } else if (strcmp(name, "mr") == 0) {
+        if (!v)
+            return vv_error_set(VV_ERR_INVALID, "transfer function preset mr: needs a volume");
+        double lo = vv_volume_quantile(v, 0.5), hi = vv_volume_quantile(v, 0.99);
+        if (!isfinite(lo) || !isfinite(hi) || !(hi > lo)) {
+            lo = v->range[0];
+            hi = v->range[1] > lo ? v->range[1] : lo + 1.0;
+        }
+        const preset_point p[] = {{lo, 0, 0.3, 0.3, 0.3},
+                                  {lo + 0.5 * (hi - lo), 0.3, 0.8, 0.75, 0.7},
+                                  {hi, 0.8, 1, 0.95, 0.9}};
+        st = preset_fill(&out, p, 3, (hu_map){1.0, 0.0});
+    } else {
+        return vv_error_set(VV_ERR_INVALID,
+                            "transfer function preset \"%s\" is unknown; expected ct-bone, "
+                            "ct-soft-tissue or mr",
+                            name);
+    }
+    if (st != VV_OK)
+        return vv_error_prefix(st, "transfer function preset %s", name);
+    *tf = out;
+    return VV_OK;
+}

@@ -21,6 +21,7 @@ vtables_clear(vv_vtables *t) {
     free(t->ext);
     free(t->bvis);
     free(t->bdist);
+    free(t->lut2d);
     memset(t, 0, sizeof *t);
 }
 
@@ -36,6 +37,7 @@ cache_release(vv_vcache *c) {
     free(c->q16);
     free(c->f32);
     free(c->nrm);
+    free(c->gmag);
     free(c->bmin);
     free(c->bmax);
     vtables_clear(&c->tables);
@@ -103,6 +105,55 @@ fill_gradients(vv_vcache *c) {
                 o[3] = 0;
             }
         }
+}
+
+vv_status
+vv_vcache_need_gmag(vv_vcache *c) {
+    if (c->gmag)
+        return VV_OK;
+    vv_mat4 m = vv_volume_index_to_world(c->vol);
+    int ok = 0;
+    vv_mat4 inv = vv_mat4_inverse(m, &ok);
+    if (!ok)
+        return vv_error_set(VV_ERR_INVALID, "singular index-to-world matrix");
+    float g2w[3][3];
+    for (int r = 0; r < 3; r++)
+        for (int cc = 0; cc < 3; cc++)
+            g2w[r][cc] = (float)inv.m[cc][r];
+    const size_t n = c->sz * (size_t)c->nz;
+    float *gm = malloc(n * sizeof *gm);
+    if (!gm)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for gradient magnitudes of %zu voxels", n);
+    /* the volume's own dims: a duplicated single-voxel axis has no gradient */
+    const int dims[3] = {c->vol->dims[0], c->vol->dims[1], c->vol->dims[2]};
+    const int nx = c->nx, ny = c->ny, nz = c->nz;
+#pragma omp parallel for schedule(static)
+    for (int k = 0; k < nz; k++)
+        for (int j = 0; j < ny; j++)
+            for (int i = 0; i < nx; i++) {
+                const int idx[3] = {i, j, k};
+                const size_t st[3] = {1, c->sy, c->sz};
+                const size_t at = (size_t)k * c->sz + (size_t)j * c->sy + (size_t)i;
+                float g[3];
+                for (int a = 0; a < 3; a++) {
+                    const int lo = idx[a] > 0 ? idx[a] - 1 : idx[a];
+                    const int hi = idx[a] < dims[a] - 1 ? idx[a] + 1 : idx[a];
+                    if (hi <= lo || idx[a] >= dims[a]) {
+                        g[a] = 0;
+                        continue;
+                    }
+                    const size_t base = at - (size_t)idx[a] * st[a];
+                    g[a] = (vv_vcache_value(c, base + (size_t)hi * st[a]) -
+                            vv_vcache_value(c, base + (size_t)lo * st[a])) /
+                           (float)(hi - lo);
+                }
+                float w[3];
+                for (int r = 0; r < 3; r++)
+                    w[r] = g2w[r][0] * g[0] + g2w[r][1] * g[1] + g2w[r][2] * g[2];
+                gm[at] = sqrtf(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+            }
+    c->gmag = gm;
+    return VV_OK;
 }
 
 /* Min and max of the stored values of every subvolume (its cells' corners). */
@@ -291,6 +342,36 @@ chessboard_distance(const uint8_t *vis, int nx, int ny, int nz) {
     return d;
 }
 
+/* The 2-D table of vv_vtables (opacity corrected for dt, colour
+ * premultiplied) over value [lo, hi] (real units) and gradient magnitude. */
+static vv_status
+build_lut2d(const vv_tf2d *tf, double lo, double hi, double dt, vv_vtables *t) {
+    t->lut2d = malloc(sizeof(float) * 4 * VV_VC_LUT2_V * VV_VC_LUT2_G);
+    if (!t->lut2d)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    double gmax = vv_tf2d_gradient_max(tf);
+    if (!(gmax > 0))
+        gmax = 1;
+    /* bin LUT2_G - 2 is gmax, the last one beyond every widget */
+    const double gstep = gmax / (VV_VC_LUT2_G - 2);
+    t->g_scale = (float)(1.0 / gstep);
+    const double unit = tf->opacity_unit_distance > 0 ? tf->opacity_unit_distance : 1.0;
+    for (int g = 0; g < VV_VC_LUT2_G; g++)
+        for (int v = 0; v < VV_VC_LUT2_V; v++) {
+            const double x = lo + (hi - lo) * v / (VV_VC_LUT2_V - 1);
+            double a;
+            vv_vec3 col;
+            vv_tf2d_eval(tf, x, g * gstep, &a, &col);
+            a = a <= 0 ? 0 : a >= 1 ? 1 : 1.0 - pow(1.0 - a, dt / unit);
+            float *e = t->lut2d + 4 * ((size_t)g * VV_VC_LUT2_V + (size_t)v);
+            e[0] = (float)a;
+            e[1] = (float)(col.x * a);
+            e[2] = (float)(col.y * a);
+            e[3] = (float)(col.z * a);
+        }
+    return VV_OK;
+}
+
 /* Builds the TF table (opacity corrected for dt, colour premultiplied),
  * the extinction table when asked, the subvolume visibility flags and
  * distances. */
@@ -323,8 +404,32 @@ build_tables(const vv_vcache *c, const vv_object *obj, const vv_vtables_key *key
             return vv_error_set(VV_ERR_NOMEM, "out of memory");
         }
         const double unit = obj->tf.opacity_unit_distance > 0 ? obj->tf.opacity_unit_distance : 1.0;
+        if (key->segmentation == VV_SEG_TRANSFER_FUNCTION_2D && key->mode == VV_MODE_COMPOSITE) {
+            vv_status st = build_lut2d(&key->tf2d, lo, hi, key->dt, t);
+            if (st != VV_OK) {
+                free(nz);
+                vtables_clear(t);
+                return st;
+            }
+        }
         nz[0] = 0;
-        for (int i = 0; i < VV_VC_LUT; i++) {
+        for (int i = 0; i < VV_VC_LUT && t->lut2d; i++) {
+            /* the largest opacity over the gradient magnitudes of this value */
+            const int vb = (int)((float)i * ((float)(VV_VC_LUT2_V - 1) / (VV_VC_LUT - 1)) + 0.5f);
+            const float *best = t->lut2d + 4 * (size_t)vb;
+            for (int g = 1; g < VV_VC_LUT2_G; g++) {
+                const float *e = t->lut2d + 4 * ((size_t)g * VV_VC_LUT2_V + (size_t)vb);
+                best = e[0] > best[0] ? e : best;
+            }
+            memcpy(t->lut + 4 * i, best, 4 * sizeof(float));
+            if (t->ext) {
+                /* back from the step-corrected opacity to the extinction */
+                const double a = best[0];
+                t->ext[i] = a >= 1 ? 1e30f : (float)(-log1p(-a) / key->dt);
+            }
+            nz[i + 1] = nz[i] + (best[0] > 0);
+        }
+        for (int i = 0; i < VV_VC_LUT && !t->lut2d; i++) {
             double x = lo + (hi - lo) * i / (VV_VC_LUT - 1);
             double a;
             vv_vec3 col;
@@ -387,11 +492,28 @@ tf_equal(const vv_tf *a, const vv_tf *b) {
 }
 
 static int
+tf2d_equal(const vv_tf2d *a, const vv_tf2d *b) {
+    if (a->n_widgets != b->n_widgets || a->opacity_unit_distance != b->opacity_unit_distance)
+        return 0;
+    for (int i = 0; i < a->n_widgets; i++) {
+        const vv_tf2d_widget *x = &a->widgets[i], *y = &b->widgets[i];
+        if (x->shape != y->shape || x->value[0] != y->value[0] || x->value[1] != y->value[1] ||
+            x->gradient[0] != y->gradient[0] || x->gradient[1] != y->gradient[1] ||
+            x->ramp != y->ramp || x->gradient_ramp != y->gradient_ramp || x->center != y->center ||
+            x->width != y->width || x->color.x != y->color.x || x->color.y != y->color.y ||
+            x->color.z != y->color.z || x->opacity != y->opacity)
+            return 0;
+    }
+    return 1;
+}
+
+static int
 key_equal(const vv_vtables_key *a, const vv_vtables_key *b) {
     return a->mode == b->mode && a->segmentation == b->segmentation &&
            a->threshold == b->threshold && a->iso == b->iso && a->dt == b->dt &&
            a->base.x == b->base.x && a->base.y == b->base.y && a->base.z == b->base.z &&
-           a->skipping == b->skipping && a->ext == b->ext && tf_equal(&a->tf, &b->tf);
+           a->skipping == b->skipping && a->ext == b->ext && tf_equal(&a->tf, &b->tf) &&
+           tf2d_equal(&a->tf2d, &b->tf2d);
 }
 
 vv_status
@@ -408,6 +530,12 @@ vv_vtables_get(vv_vcache_set *s, vv_vcache *c, const vv_object *obj, vv_render_m
     key.skipping = skipping;
     key.ext = ext;
     key.tf = obj->tf;
+    if (obj->segmentation == VV_SEG_TRANSFER_FUNCTION_2D && mode == VV_MODE_COMPOSITE) {
+        vv_status sg = vv_vcache_need_gmag(c);
+        if (sg != VV_OK)
+            return sg;
+        key.tf2d = obj->tf2d;
+    }
     if (c->tables_valid && key_equal(&c->key, &key)) {
         *out = c->tables;
         *owned = 0;
@@ -426,6 +554,23 @@ vv_vtables_get(vv_vcache_set *s, vv_vcache *c, const vv_object *obj, vv_render_m
     c->tables_frame = s->frame;
     *owned = 0;
     return VV_OK;
+}
+
+int
+vv_vextra_prepare(vv_vextra *x, const vv_object *obj, vv_render_mode mode, const vv_vtables *t) {
+    memset(x, 0, sizeof *x);
+    x->lut_lo = t->lut_lo;
+    x->lut_scale = t->lut_scale;
+    x->lut2_scale = (float)(VV_VC_LUT2_V - 1) / (float)(VV_VC_LUT - 1);
+    x->g_scale = t->g_scale;
+    x->lut2d = mode == VV_MODE_COMPOSITE ? t->lut2d : NULL;
+    if (mode == VV_MODE_COMPOSITE && obj->solid_texture.kind != VV_SOLID_TEXTURE_NONE)
+        x->solid = &obj->solid_texture;
+    vv_mat4 m = vv_volume_index_to_world(obj->volume);
+    for (int r = 0; r < 3; r++)
+        for (int cc = 0; cc < 4; cc++)
+            x->i2o[r][cc] = m.m[r][cc];
+    return x->lut2d != NULL || x->solid != NULL;
 }
 
 /* ---------------------------------------------------------------------- */

@@ -41,7 +41,9 @@
 /* cached volumes per renderer: >= the objects of one render, so none in use
  * is evicted */
 #define VV_VC_MAX 64
-#define VV_VC_CHUNK 32 /* samples classified at a time (vv_vray_classify) */
+#define VV_VC_CHUNK 32    /* samples classified at a time (vv_vray_classify) */
+#define VV_VC_LUT2_V 1024 /* 2-D transfer-function table: value bins */
+#define VV_VC_LUT2_G 128  /* 2-D transfer-function table: gradient-magnitude bins */
 #if defined(__x86_64__) && defined(__GNUC__)
 #define VV_VC_HAVE_AVX2 1
 #else
@@ -56,6 +58,7 @@ typedef struct vv_vtables_key {
     vv_vec3 base;
     int skipping, ext;
     vv_tf tf;
+    vv_tf2d tf2d; /* VV_SEG_TRANSFER_FUNCTION_2D in composite mode */
 } vv_vtables_key;
 
 /* An object's tables. lut: VV_VC_LUT x {alpha, r*alpha, g*alpha, b*alpha}
@@ -64,10 +67,20 @@ typedef struct vv_vtables_key {
  * unit, -ln(1 - alpha) / opacity_unit_distance, or NULL when not asked
  * for. bvis: per subvolume, visible; bdist: chessboard distance in
  * subvolumes to the nearest visible one, at most 255 (0: visible). */
+/* lut2d (2-D transfer function, composite mode only; else NULL):
+ * VV_VC_LUT2_G rows (gradient magnitude) of VV_VC_LUT2_V entries (value) of
+ * {alpha, r*alpha, g*alpha, b*alpha}; value bin = nearest of table index *
+ * (LUT2_V - 1) / (LUT - 1); gradient bin = nearest of gm * g_scale, the
+ * last bin lying beyond every widget (transparent). lut (and ext) then hold,
+ * per value, the entry of the largest opacity over all gradient
+ * magnitudes: the subvolume flags, shadows and light volumes use that
+ * conservative bound. */
 typedef struct vv_vtables {
     float lut_lo, lut_scale; /* stored value -> table index */
     float *lut, *ext;
     uint8_t *bvis, *bdist;
+    float *lut2d;
+    float g_scale; /* gradient magnitude (data units per volume world unit) -> bin */
 } vv_vtables;
 
 /* Everything derived from one volume that does not depend on the TF. */
@@ -80,6 +93,7 @@ typedef struct vv_vcache {
     float *f32;         /* values as float (qoff = 0), or NULL */
     double qoff;        /* offset of stored values */
     int8_t (*nrm)[4];   /* unit gradients * 127 (index space), or NULL: on the fly */
+    float *gmag;        /* gradient magnitudes per voxel (vv_vcache_need_gmag), or NULL */
     int bx, by, bz;     /* subvolume grid */
     float *bmin, *bmax; /* per subvolume, stored units */
     /* the last object tables built for this volume */
@@ -120,6 +134,13 @@ vv_status vv_vcache_get(vv_vcache_set *s, vv_volume *vol, vv_vcache **out);
 vv_status vv_vtables_get(vv_vcache_set *s, vv_vcache *c, const vv_object *obj, vv_render_mode mode,
                          double dt, float iso, int skipping, int ext, vv_vtables *out, int *owned);
 void vv_vtables_free(vv_vtables *t);
+
+/* Builds c->gmag once: the gradient magnitude of every cached voxel, in
+ * data units per world unit of the volume's own coordinates (central
+ * differences, one-sided at the faces, mapped by the inverse transpose of
+ * the volume's index-to-world matrix; vv_histogram2d_compute's definition).
+ * Errors: VV_ERR_NOMEM, VV_ERR_INVALID (singular matrix). */
+vv_status vv_vcache_need_gmag(vv_vcache *c);
 
 /* Step in world units of an object: step * smallest voxel spacing in world. */
 double vv_vobject_step(const vv_object *obj);
@@ -336,6 +357,76 @@ vv_vcache_gradient(const vv_vcache *c, const float p[3], float g[3]) {
         pb[a] += 0.5f;
         g[a] = vv_vcache_sample(c, pb) - vv_vcache_sample(c, pa);
     }
+}
+
+/* Trilinear gradient magnitude at index point p (needs c->gmag). */
+static inline float
+vv_vcache_gmag(const vv_vcache *c, const float p[3]) {
+    float f[3];
+    const size_t o = vv_vcache_cell_of(c, p, f);
+    const float *v = c->gmag + o;
+    const size_t sy = c->sy, sz = c->sz;
+    const float c00 = vv_lerpf(v[0], v[1], f[0]), c10 = vv_lerpf(v[sy], v[sy + 1], f[0]);
+    const float c01 = vv_lerpf(v[sz], v[sz + 1], f[0]);
+    const float c11 = vv_lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
+    return vv_lerpf(vv_lerpf(c00, c10, f[1]), vv_lerpf(c01, c11, f[1]), f[2]);
+}
+
+/* An object's per-sample extras beyond the 1-D table: a 2-D transfer
+ * function (t->lut2d) and a solid texture. */
+typedef struct vv_vextra {
+    const float *lut2d;
+    float lut_lo, lut_scale;       /* stored value -> table index (as the 1-D table) */
+    float lut2_scale;              /* table index -> value bin */
+    float g_scale;                 /* gradient magnitude -> gradient bin */
+    const vv_solid_texture *solid; /* NULL: none */
+    double i2o[3][4];              /* index -> the volume's own world coordinates */
+} vv_vextra;
+
+/* Fills @p x for object @p obj in @p mode with tables @p t; returns 1 when
+ * the object has extras (the fast single-volume kernels do not handle
+ * them). */
+int vv_vextra_prepare(vv_vextra *x, const vv_object *obj, vv_render_mode mode, const vv_vtables *t);
+
+/* The classified sample at index point p with value val (stored units)
+ * and 1-D entry e under the extras: the 2-D table entry in place of e,
+ * then the colour times the solid texture. Returns e itself or @p buf. */
+static inline const float *
+vv_vextra_apply(const vv_vextra *x, const vv_vcache *c, const float p[3], float val, const float *e,
+                float buf[4]) {
+    if (x->lut2d) {
+        float li = (val - x->lut_lo) * x->lut_scale;
+        li = li < 0 ? 0 : li > VV_VC_LUT - 1 ? VV_VC_LUT - 1 : li;
+        const int vb = (int)(li * x->lut2_scale + 0.5f);
+        int gb = (int)(vv_vcache_gmag(c, p) * x->g_scale + 0.5f);
+        gb = gb < 0 ? 0 : gb > VV_VC_LUT2_G - 1 ? VV_VC_LUT2_G - 1 : gb;
+        e = x->lut2d + 4 * ((size_t)gb * VV_VC_LUT2_V + (size_t)vb);
+    }
+    if (x->solid && e[0] > 0) {
+        const double q[3] = {p[0], p[1], p[2]};
+        vv_vec3 o;
+        o.x = x->i2o[0][0] * q[0] + x->i2o[0][1] * q[1] + x->i2o[0][2] * q[2] + x->i2o[0][3];
+        o.y = x->i2o[1][0] * q[0] + x->i2o[1][1] * q[1] + x->i2o[1][2] * q[2] + x->i2o[1][3];
+        o.z = x->i2o[2][0] * q[0] + x->i2o[2][1] * q[1] + x->i2o[2][2] * q[2] + x->i2o[2][3];
+        const vv_vec3 col = vv_solid_texture_eval(x->solid, o);
+        buf[0] = e[0];
+        buf[1] = e[1] * (float)col.x;
+        buf[2] = e[2] * (float)col.y;
+        buf[3] = e[3] * (float)col.z;
+        return buf;
+    }
+    return e;
+}
+
+/* The index point p of an object in its volume's own world coordinates
+ * (object coordinates, where textures are defined). */
+static inline vv_vec3
+vv_vextra_object_point(const vv_vextra *x, const float p[3]) {
+    vv_vec3 o;
+    o.x = x->i2o[0][0] * p[0] + x->i2o[0][1] * p[1] + x->i2o[0][2] * p[2] + x->i2o[0][3];
+    o.y = x->i2o[1][0] * p[0] + x->i2o[1][1] * p[1] + x->i2o[1][2] * p[2] + x->i2o[1][3];
+    o.z = x->i2o[2][0] * p[0] + x->i2o[2][1] * p[1] + x->i2o[2][2] * p[2] + x->i2o[2][3];
+    return o;
 }
 
 /* The subvolume containing index point p (clamped to the grid). */

@@ -68,6 +68,9 @@ typedef struct rc_obj {
     int shading;
     int n_planes;
     vv_plane planes[2 * VV_MAX_CUT_PLANES];
+    vv_vextra x;  /* 2-D transfer function and solid texture */
+    int extras;   /* x has something: the general kernel handles the object */
+    int textured; /* iso mode: an image texture modulates the base colour */
 } rc_obj;
 
 typedef struct rc_frame {
@@ -332,10 +335,18 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
                     pw[0] = (float)(wr->origin.x + th * wr->dir.x);
                     pw[1] = (float)(wr->origin.y + th * wr->dir.y);
                     pw[2] = (float)(wr->origin.z + th * wr->dir.z);
+                    float base[3] = {ob->sh.base[0], ob->sh.base[1], ob->sh.base[2]};
+                    if (ob->textured) {
+                        const vv_vec3 tc = vv_texture_map_eval(&ob->obj->texture,
+                                                               vv_vextra_object_point(&ob->x, ph));
+                        base[0] *= (float)tc.x;
+                        base[1] *= (float)tc.y;
+                        base[2] *= (float)tc.z;
+                    }
                     if (ob->shading)
-                        shade(fr, ob, g, pw, v, ob->sh.base, 1.0f, col);
+                        shade(fr, ob, g, pw, v, base, 1.0f, col);
                     else
-                        memcpy(col, ob->sh.base, sizeof col);
+                        memcpy(col, base, sizeof col);
                     float w = 1 - A;
                     C[0] += w * col[0];
                     C[1] += w * col[1];
@@ -347,8 +358,10 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
                 continue;
             }
             const float *e = ob->lut + 4 * (int)lut_index_f(ob, val);
-            const float alpha = e[0];
-            if (alpha <= 0)
+            if (e[0] <= 0)
+                continue;
+            float ebuf[4];
+            if (ob->extras && (e = vv_vextra_apply(&ob->x, c, p, val, e, ebuf))[0] <= 0)
                 continue;
             float g[3] = {0, 0, 0};
             if (ob->shading)
@@ -420,6 +433,8 @@ prepare_tables(rc_frame *fr, rc_obj *ro) {
     ro->lut = ro->tab.lut;
     ro->bvis = ro->tab.bvis;
     ro->bdist = ro->tab.bdist;
+    ro->extras = vv_vextra_prepare(&ro->x, ro->obj, ro->mode, &ro->tab);
+    ro->textured = ro->mode == VV_MODE_ISO && ro->obj->texture.image != NULL;
     return VV_OK;
 }
 
@@ -471,7 +486,7 @@ render_pixel(const rc_frame *fr, int x, int y, vv_image *out) {
     wr.dir.y = dy * inv;
     wr.dir.z = dz * inv;
     rc_result res = {{0, 0, 0}, 0, INFINITY};
-    if (fr->n_comp == 1 && fr->objs[0].mode == VV_MODE_COMPOSITE)
+    if (fr->n_comp == 1 && fr->objs[0].mode == VV_MODE_COMPOSITE && !fr->objs[0].extras)
         trace_composite_one(fr, &fr->objs[0], &wr, &res);
     else if (fr->n_comp > 0)
         trace_composite(fr, &wr, &res);

@@ -164,6 +164,9 @@ typedef struct rt_vobj {
     float *lvol[VV_MAX_LIGHTS]; /* directional lights: this volume's own transmittance
                                    from each point towards the light (a light volume) */
     unsigned lvol_owned;        /* bit l: lvol[l] is this frame's (else the state's cache) */
+    vv_vextra x;                /* 2-D transfer function and solid texture */
+    int extras;                 /* x has something: the general loop handles the object */
+    int textured;               /* iso mode: an image texture modulates the base colour */
 } rt_vobj;
 
 /* Bounding volume hierarchy over a mesh's triangles (object space). */
@@ -1265,8 +1268,15 @@ shade_geometry(const rt_frame *fr, const vv_ray *wr, const rt_hit *h, int depth,
     if (v3dot(n, wr->dir) > 0)
         n = v3scale(n, -1);
     vv_vec3 v = v3scale(wr->dir, -1);
-    float loc[3];
-    shade_surface_local(fr, &g->obj->material, g->col, g->obj->receives_shadows, p, n, v, loc);
+    float loc[3], col[3] = {g->col[0], g->col[1], g->col[2]};
+    if (g->obj->texture.image) {
+        /* the texture is defined on the object's own coordinates */
+        const vv_vec3 tc = vv_texture_map_eval(&g->obj->texture, xf_point(g->w2o, p));
+        col[0] *= (float)tc.x;
+        col[1] *= (float)tc.y;
+        col[2] *= (float)tc.z;
+    }
+    shade_surface_local(fr, &g->obj->material, col, g->obj->receives_shadows, p, n, v, loc);
     float kl = 1 - g->kr - g->kt;
     kl = kl < 0 ? 0 : kl;
     for (int ch = 0; ch < 3; ch++)
@@ -1402,7 +1412,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
     }
     const double dt = fr->dt;
     const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
-    if (na == 1 && fr->vobjs[act[0]].mode == VV_MODE_COMPOSITE) {
+    if (na == 1 && fr->vobjs[act[0]].mode == VV_MODE_COMPOSITE && !fr->vobjs[act[0]].extras) {
         march_one(fr, &fr->vobjs[act[0]], &rays[0], wr, v, C, Aout, dep);
         return;
     }
@@ -1466,10 +1476,18 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                     pw[0] = (float)(wr->origin.x + th * wr->dir.x);
                     pw[1] = (float)(wr->origin.y + th * wr->dir.y);
                     pw[2] = (float)(wr->origin.z + th * wr->dir.z);
+                    float base[3] = {ob->sh.base[0], ob->sh.base[1], ob->sh.base[2]};
+                    if (ob->textured) {
+                        const vv_vec3 tc = vv_texture_map_eval(&ob->obj->texture,
+                                                               vv_vextra_object_point(&ob->x, ph));
+                        base[0] *= (float)tc.x;
+                        base[1] *= (float)tc.y;
+                        base[2] *= (float)tc.z;
+                    }
                     if (ob->obj->shading)
-                        shade_volume(fr, ob, g, ph, pw, v, ob->sh.base, 1.0f, NULL, col);
+                        shade_volume(fr, ob, g, ph, pw, v, base, 1.0f, NULL, col);
                     else
-                        memcpy(col, ob->sh.base, sizeof col);
+                        memcpy(col, base, sizeof col);
                     const vv_material *m = &ob->obj->material;
                     float kr = ob->obj->reflects ? (float)m->reflectance : 0.0f;
                     float kt = (float)m->transparency;
@@ -1504,8 +1522,10 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                 continue;
             }
             const float *e = ob->lut + 4 * (int)lut_index_f(ob, val);
-            const float alpha = e[0];
-            if (alpha <= 0)
+            if (e[0] <= 0)
+                continue;
+            float ebuf[4];
+            if (ob->extras && (e = vv_vextra_apply(&ob->x, c, p, val, e, ebuf))[0] <= 0)
                 continue;
             composite_sample(fr, ob, wr, v, e, p, t, NULL, &sc, C, &A);
             if (*dep == INFINITY)
@@ -1626,6 +1646,8 @@ build_tables(rt_frame *fr, rt_vobj *ro) {
     ro->ext = ro->tab.ext;
     ro->bvis = ro->tab.bvis;
     ro->bdist = ro->tab.bdist;
+    ro->extras = vv_vextra_prepare(&ro->x, obj, ro->mode, &ro->tab);
+    ro->textured = ro->mode == VV_MODE_ISO && obj->texture.image != NULL;
     if (fr->shadows && obj->receives_shadows && obj->shading && ro->mode == VV_MODE_COMPOSITE &&
         fr->st->shadow_grid) {
         size_t ng = 1;
