@@ -167,11 +167,16 @@ typedef struct vv_preview_policy {
     double seconds[VV_PREVIEW_COUNT]; /**< expected seconds a frame, < 0 when unknown */
     int forced;                       /**< >= 0: always this kind while moving; -1 automatic */
     int allowed[VV_PREVIEW_COUNT];    /**< 0 excludes a kind from the automatic choice */
+    int seen[VV_PREVIEW_COUNT];       /**< frames recorded; the first (cache building) is not
+                                           counted in seconds */
 } vv_preview_policy;
 
 /** Nothing measured, automatic choice, every representation but the full one allowed. */
 void vv_preview_policy_init(vv_preview_policy *pol);
-/** Learns that a frame of @p kind took @p seconds (ignored when not finite or < 0). */
+/**
+ * Learns that a frame of @p kind took @p seconds (ignored when not finite or
+ * < 0, and for the first frame of each kind, which builds caches).
+ */
 void vv_preview_policy_record(vv_preview_policy *pol, vv_preview_kind kind, double seconds);
 /** The representation to draw while moving within @p budget seconds a frame. */
 vv_preview_kind vv_preview_policy_choose(const vv_preview_policy *pol, double budget);

@@ -346,6 +346,7 @@ vv_preview_policy_init(vv_preview_policy *pol) {
     for (int i = 0; i < VV_PREVIEW_COUNT; i++) {
         pol->seconds[i] = -1.0;
         pol->allowed[i] = i != VV_PREVIEW_FULL;
+        pol->seen[i] = 0;
     }
     pol->forced = -1;
 }
@@ -354,6 +355,10 @@ void
 vv_preview_policy_record(vv_preview_policy *pol, vv_preview_kind kind, double seconds) {
     if (!pol || (int)kind < 0 || (int)kind >= VV_PREVIEW_COUNT || !isfinite(seconds) ||
         seconds < 0.0)
+        return;
+    /* the first frame of a representation builds its caches (gradients,
+     * subvolume min/max, reduced grids) and says nothing about the next */
+    if (pol->seen[kind]++ == 0)
         return;
     double *s = &pol->seconds[kind];
     /* an exponential average that follows a slower machine within a few frames */

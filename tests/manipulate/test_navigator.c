@@ -159,6 +159,9 @@ test_policy(void **state) {
     vv_preview_policy pol;
     vv_preview_policy_init(&pol);
     assert_int_equal(vv_preview_policy_choose(&pol, 0.03), VV_PREVIEW_RAYCAST_4);
+    for (int k = 0; k < VV_PREVIEW_COUNT; k++) /* warm-up frames are not counted */
+        vv_preview_policy_record(&pol, (vv_preview_kind)k, 10.0);
+    assert_int_equal(vv_preview_policy_choose(&pol, 0.03), VV_PREVIEW_RAYCAST_4);
     vv_preview_policy_record(&pol, VV_PREVIEW_RAYCAST_4, 0.004);
     /* 1/2 expected at 4x: 16 ms fits */
     assert_int_equal(vv_preview_policy_choose(&pol, 0.03), VV_PREVIEW_RAYCAST_2);
