@@ -290,8 +290,10 @@ vv_document_save(VvDocument *doc, const char *path, GError **error) {
         set_error(error, "cannot write the scene");
         return FALSE;
     }
+    /* @p path may be doc->path itself (Save): canonicalize before freeing */
+    char *saved = g_canonicalize_filename(path, NULL);
     g_free(doc->path);
-    doc->path = g_canonicalize_filename(path, NULL);
+    doc->path = saved;
     doc->dirty = FALSE;
     return TRUE;
 }
