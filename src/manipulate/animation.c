@@ -779,6 +779,8 @@ vv_status
 vv_anim_track_eval(const vv_anim_track *t, double time, double value[4], vv_tf *tf) {
     if (!t || t->n_keys < 1)
         return vv_error_set(VV_ERR_INVALID, "animation: %s: no keys", t ? t->property : "track");
+    if (!isfinite(time))
+        return vv_error_set(VV_ERR_INVALID, "animation: %s: time is not finite", t->property);
     int n = t->n_keys, nc = vv_anim_kind_components(t->kind);
     if (t->kind == VV_ANIM_TF && !tf)
         return vv_error_set(VV_ERR_INVALID, "animation: %s: no tf to evaluate into", t->property);
@@ -800,7 +802,7 @@ vv_anim_track_eval(const vv_anim_track *t, double time, double value[4], vv_tf *
         i = lo;
     }
     const vv_anim_key *k0 = &t->keys[i];
-    if (i == n - 1 || time == k0->time || t->interp == VV_INTERP_STEP) {
+    if (i == n - 1 || time <= k0->time || t->interp == VV_INTERP_STEP) {
         if (t->kind == VV_ANIM_TF)
             *tf = *k0->tf;
         else
