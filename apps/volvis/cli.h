@@ -54,6 +54,8 @@ int cli_isosurface_main(int argc, char **argv);
 void cli_isosurface_usage(FILE *out);
 int cli_devices_main(int argc, char **argv);
 void cli_devices_usage(FILE *out);
+int cli_animate_main(int argc, char **argv);
+void cli_animate_usage(FILE *out);
 
 /* ---- option parsing ------------------------------------------------------ */
 
@@ -143,6 +145,71 @@ int cli_usage_error(const cli_args *a, const char *fmt, ...) VV_PRINTF(2, 3);
  * returns CLI_EXIT_FAIL, or CLI_EXIT_CANCEL for VV_ERR_CANCELLED.
  */
 int cli_fail(vv_status s, const char *path);
+
+/* ---- rendering options shared by render and animate (render_setup.c) ---- */
+
+/** The option specs of `volvis render`, for an initializer list. */
+#define CLI_RENDER_OPT_SPECS                                                                       \
+    {"output", 'o', "OUT"}, {"mode", 0, "composite|mip|minip|xray|iso"}, {"iso", 0, "V"},          \
+        {"tf", 0, "LO:HI"}, {"size", 0, "WxH"}, {"azimuth", 0, "DEG"}, {"elevation", 0, "DEG"},    \
+        {"zoom", 0, "F"}, {"threads", 0, "N"}, {"renderer", 0, "NAME"}, {"step", 0, "S"},          \
+        {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"}, {"gamma", 0, "G"},                   \
+        {"quality", 0, "0|1|2"}, {"set", 0, "KEY=VALUE"}, {"alpha", 0, NULL}, {"ortho", 0, NULL},  \
+    {                                                                                              \
+        "quiet", 'q', NULL                                                                         \
+    }
+
+/** The rendering options as parsed (angles in degrees). */
+typedef struct cli_render_args {
+    const char *input, *output;
+    const char *renderer; /**< --renderer, or NULL: the scene's, else raycast */
+    int input_optional;   /**< set by the caller before cli_render_parse: INPUT may be absent */
+    int has_mode;
+    vv_render_mode mode;
+    int has_iso;
+    double iso;
+    int has_tf;
+    double tf_lo, tf_hi;
+    int has_size, width, height;
+    double azimuth, elevation, zoom; /**< degrees for the angles */
+    int has_view;                    /**< azimuth, elevation or zoom given */
+    int threads;
+    int has_step;
+    double step;
+    int has_raw;
+    vv_raw_params raw;
+    double gamma;
+    int has_quality, quality; /**< --quality given, and its value */
+    int alpha, quiet, ortho;
+} cli_render_args;
+
+/** Parses the shared options of @p a (one INPUT, -o); 0 or a usage error. */
+int cli_render_parse(cli_args *a, cli_render_args *r);
+/**
+ * The World for r->input (a scene file or a volume) with the overrides of
+ * the options (mode, iso, tf, size, step) but not yet turned: see
+ * cli_render_turn. 0 or CLI_EXIT_FAIL after printing the error.
+ */
+int cli_render_world(const cli_render_args *r, vv_world **out);
+/** The view turn of --azimuth, --elevation, --zoom (vv_anim_view_turn), then cli_render_ortho. */
+void cli_render_turn(const cli_render_args *r, vv_world *w);
+/** --ortho: parallel projection framed on the World (the height divided by --zoom). */
+void cli_render_ortho(const cli_render_args *r, vv_world *w);
+/**
+ * Creates the renderer for @p w and sets its options: the World's render
+ * settings (a scene's "render" section) give the defaults, the command line
+ * overrides: --renderer replaces the scene's renderer (and, naming another
+ * one, drops the scene's options, which belong to the other), --quality the
+ * scene's quality, and every --set is applied after the scene's options.
+ * *@p quality gets the quality to render at. 0 or an error exit status
+ * after printing.
+ */
+int cli_render_renderer(const cli_args *a, const cli_render_args *r, const vv_world *w,
+                        vv_renderer **out, int *quality);
+/** The --help lines of the shared options (from --mode to --quiet). */
+void cli_render_print_options(FILE *out);
+/** The registry's renderers with their --set options, for --help. */
+void cli_render_print_renderers(FILE *out);
 
 /* ---- input ------------------------------------------------------------------ */
 

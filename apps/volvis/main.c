@@ -1,7 +1,8 @@
 /*
  * volvis: the command-line tool. Dispatches a table of subcommands, one file
  * each (cmd_info.c, cmd_render.c, cmd_convert.c, cmd_compress.c,
- * cmd_isosurface.c, cmd_measure.c, cmd_voxelize.c, cmd_devices.c). See docs/cli.md.
+ * cmd_isosurface.c, cmd_measure.c, cmd_voxelize.c, cmd_devices.c, cmd_animate.c). See
+ * docs/cli.md.
  */
 #include <stdio.h>
 #include <string.h>
@@ -11,6 +12,8 @@
 static const cli_command commands[] = {
     {"info", "print a volume's header, value range and histogram", cli_info_main, cli_info_usage},
     {"render", "render a volume or a scene file to a PNG image", cli_render_main, cli_render_usage},
+    {"animate", "render an animation (orbit, keyframes, flight path) to PNGs, MP4 or WebM",
+     cli_animate_main, cli_animate_usage},
     {"convert", "convert any readable volume to NRRD or SLC", cli_convert_main, cli_convert_usage},
     {"voxelize", "volume-sample a geometric model (scene or mesh) to NRRD or SLC",
      cli_voxelize_main, cli_voxelize_usage},

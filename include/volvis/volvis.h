@@ -5,6 +5,7 @@
 #ifndef VOLVIS_VOLVIS_H
 #define VOLVIS_VOLVIS_H
 
+#include "animate.h"
 #include "compress.h"
 #include "core.h"
 #include "image.h"
@@ -19,6 +20,7 @@
 #include "raster.h"
 #include "render.h"
 #include "surface.h"
+#include "video.h"
 #include "volume.h"
 
 #endif

@@ -261,6 +261,12 @@ scene_locate(const sctx *c, const char *path, int *line, int *col) {
     *col = 1;
 }
 
+void
+vv_model_json_locate(const char *text, size_t len, const char *path, int *line, int *col) {
+    sctx c = {NULL, text, len, NULL};
+    scene_locate(&c, path, line, col);
+}
+
 /* ---- error reporting ---------------------------------------------------- */
 
 static vv_status serr(const sctx *c, const char *path, const char *fmt, ...) VV_PRINTF(3, 4);

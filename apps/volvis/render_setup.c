@@ -1,0 +1,422 @@
+/*
+ * What `volvis render` and `volvis animate` share: the rendering options
+ * (parsing and --help text), building the World from a volume or a scene
+ * file with those options, the view turn (--azimuth, --elevation, --zoom,
+ * --ortho) and creating the renderer with its --set options. Both commands
+ * go through these functions, so frame k of `volvis animate --orbit` is the
+ * still `volvis render --azimuth` draws.
+ */
+#include <ctype.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "cli.h"
+
+static const char *const mode_names[] = {"composite", "mip", "minip", "xray", "iso"};
+static const vv_render_mode mode_values[] = {VV_MODE_COMPOSITE, VV_MODE_MIP, VV_MODE_MINIP,
+                                             VV_MODE_XRAY, VV_MODE_ISO};
+
+/* Prints @p prefix and @p text word-wrapped to @p width columns, every line
+ * indented by @p indent spaces. */
+static void
+print_wrapped(FILE *out, const char *prefix, const char *text, int indent, int width) {
+    int col = fprintf(out, "%*s%s", indent, "", prefix);
+    for (const char *w = text; *w;) {
+        size_t n = strcspn(w, " ");
+        if (col > indent && col + 1 + (int)n > width)
+            col = fprintf(out, "\n%*s", indent, "") - 1;
+        else if (w != text)
+            col += fprintf(out, " ");
+        col += fprintf(out, "%.*s", (int)n, w);
+        w += n;
+        while (*w == ' ')
+            w++;
+    }
+    fputc('\n', out);
+}
+
+static int
+parse_mode(const cli_args *a, const char *text, vv_render_mode *out) {
+    for (size_t i = 0; i < sizeof mode_names / sizeof mode_names[0]; i++)
+        if (strcmp(text, mode_names[i]) == 0) {
+            *out = mode_values[i];
+            return 0;
+        }
+    return cli_usage_error(a, "--mode: unknown mode '%s' (composite, mip, minip, xray, iso)", text);
+}
+
+static int
+renderer_known(const char *name) {
+    const vv_renderer_ops *const *reg = vv_renderer_registry();
+    for (int i = 0; reg && reg[i]; i++)
+        if (reg[i]->name && strcmp(reg[i]->name, name) == 0)
+            return 1;
+    return 0;
+}
+
+/* A scene file: extension .json, or content that starts with '{' after whitespace. */
+static int
+is_scene_file(const char *path) {
+    size_t n = strlen(path);
+    if (n >= 5 && strcasecmp(path + n - 5, ".json") == 0)
+        return 1;
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return 0;
+    int c;
+    long k = 0;
+    while ((c = fgetc(f)) != EOF && isspace(c) && k++ < 65536)
+        ;
+    fclose(f);
+    return c == '{';
+}
+
+/* Maps every point of @p tf linearly from the extent of its opacity points onto [lo, hi]. */
+static void
+stretch_tf(vv_tf *tf, double lo, double hi) {
+    double a = 0, b = 0;
+    if (tf->n_opacity >= 2) {
+        a = tf->opacity[0].value;
+        b = tf->opacity[tf->n_opacity - 1].value;
+    }
+    if (!(b > a)) {
+        double peak = 0;
+        for (int i = 0; i < tf->n_opacity; i++)
+            if (tf->opacity[i].opacity > peak)
+                peak = tf->opacity[i].opacity;
+        vv_vec3 color = tf->n_color ? tf->color[tf->n_color - 1].color : vv_vec3_make(1, 1, 1);
+        double unit = tf->opacity_unit_distance > 0 ? tf->opacity_unit_distance : 1;
+        vv_tf_set_ramp(tf, lo, hi, peak > 0 ? peak : 1, color, unit);
+        return;
+    }
+    double s = (hi - lo) / (b - a);
+    for (int i = 0; i < tf->n_opacity; i++)
+        tf->opacity[i].value = lo + (tf->opacity[i].value - a) * s;
+    for (int i = 0; i < tf->n_color; i++)
+        tf->color[i].value = lo + (tf->color[i].value - a) * s;
+}
+
+int
+cli_render_parse(cli_args *a, cli_render_args *r) {
+    int rc;
+    const char *s;
+    int input_optional = r->input_optional;
+    memset(r, 0, sizeof *r);
+    r->input_optional = input_optional;
+    r->renderer = NULL; /* not given: the scene's, else raycast */
+    r->zoom = 1;
+    r->gamma = 1;
+    r->quality = 2;
+    if (a->n_pos == 0 && !r->input_optional)
+        return cli_usage_error(a, "missing INPUT");
+    if (a->n_pos > 1)
+        return cli_usage_error(a, "expected one INPUT, got %d arguments", a->n_pos);
+    r->input = a->n_pos ? a->pos[0] : NULL;
+    r->output = cli_get(a, "output");
+    if (!r->output || !*r->output)
+        return cli_usage_error(a, "missing -o %s",
+                               strcmp(a->cmd, "render") == 0 ? "OUT.png" : "OUT");
+    if ((s = cli_get(a, "mode"))) {
+        if ((rc = parse_mode(a, s, &r->mode)))
+            return rc;
+        r->has_mode = 1;
+    }
+    if ((s = cli_get(a, "iso"))) {
+        if ((rc = cli_parse_double(a, "iso", s, -HUGE_VAL, HUGE_VAL, &r->iso)))
+            return rc;
+        r->has_iso = 1;
+        if (!r->has_mode) {
+            r->has_mode = 1;
+            r->mode = VV_MODE_ISO;
+        }
+    }
+    if ((s = cli_get(a, "tf"))) {
+        if ((rc = cli_parse_range(a, "tf", s, &r->tf_lo, &r->tf_hi)))
+            return rc;
+        r->has_tf = 1;
+    }
+    if ((s = cli_get(a, "size"))) {
+        if ((rc = cli_parse_size(a, "size", s, &r->width, &r->height)))
+            return rc;
+        r->has_size = 1;
+    }
+    if ((s = cli_get(a, "azimuth"))) {
+        if ((rc = cli_parse_double(a, "azimuth", s, -1e6, 1e6, &r->azimuth)))
+            return rc;
+        r->has_view = 1;
+    }
+    if ((s = cli_get(a, "elevation"))) {
+        if ((rc = cli_parse_double(a, "elevation", s, -1e6, 1e6, &r->elevation)))
+            return rc;
+        r->has_view = 1;
+    }
+    if ((s = cli_get(a, "zoom"))) {
+        if ((rc = cli_parse_double(a, "zoom", s, 1e-6, 1e6, &r->zoom)))
+            return rc;
+        r->has_view = 1;
+    }
+    if ((s = cli_get(a, "threads")) && (rc = cli_parse_int(a, "threads", s, 0, 4096, &r->threads)))
+        return rc;
+    if ((s = cli_get(a, "step"))) {
+        if ((rc = cli_parse_double(a, "step", s, 1e-4, 1e4, &r->step)))
+            return rc;
+        if (!(r->step > 0))
+            return cli_usage_error(a, "--step: must be > 0, got '%s'", s);
+        r->has_step = 1;
+    }
+    if ((s = cli_get(a, "raw"))) {
+        if ((rc = cli_parse_raw(a, "raw", s, &r->raw)))
+            return rc;
+        r->has_raw = 1;
+    }
+    if ((s = cli_get(a, "gamma"))) {
+        if ((rc = cli_parse_double(a, "gamma", s, 0.01, 100, &r->gamma)))
+            return rc;
+    }
+    if ((s = cli_get(a, "quality"))) {
+        if ((rc = cli_parse_int(a, "quality", s, 0, 2, &r->quality)))
+            return rc;
+        r->has_quality = 1;
+    }
+    if ((s = cli_get(a, "renderer"))) {
+        r->renderer = s;
+        if (!renderer_known(s)) {
+            char names[512] = "";
+            const vv_renderer_ops *const *reg = vv_renderer_registry();
+            for (int i = 0; reg && reg[i]; i++) {
+                size_t n = strlen(names);
+                snprintf(names + n, sizeof names - n, "%s%s", i ? ", " : "", reg[i]->name);
+            }
+            return cli_usage_error(a, "--renderer: unknown renderer '%s' (available: %s)", s,
+                                   names[0] ? names : "none");
+        }
+    }
+    for (int i = 0; i < a->n_seen; i++) {
+        if (strcmp(a->specs[a->seen[i].opt].name, "set") != 0)
+            continue;
+        const char *kv = a->seen[i].value;
+        const char *eq = strchr(kv, '=');
+        if (!eq || eq == kv)
+            return cli_usage_error(a, "--set: expected KEY=VALUE, got '%s'", kv);
+    }
+    r->alpha = cli_count(a, "alpha") > 0;
+    r->quiet = cli_count(a, "quiet") > 0;
+    r->ortho = cli_count(a, "ortho") > 0;
+    return 0;
+}
+
+/* Builds the World for a volume file. */
+static int
+world_for_volume(const cli_render_args *r, vv_world **out) {
+    vv_volume *v;
+    int rc = cli_load_volume(r->input, r->has_raw ? &r->raw : NULL, &v);
+    if (rc)
+        return rc;
+    vv_default_scene_options o;
+    vv_default_scene_options_init(&o);
+    if (r->has_mode)
+        o.mode = r->mode;
+    if (r->has_tf) {
+        o.has_tf_range = 1;
+        o.tf_lo = r->tf_lo;
+        o.tf_hi = r->tf_hi;
+    }
+    if (r->has_iso) {
+        o.has_isovalue = 1;
+        o.isovalue = r->iso;
+    }
+    if (r->has_size) {
+        o.width = r->width;
+        o.height = r->height;
+    }
+    /* the view turn (--azimuth, --elevation, --zoom) is cli_render_turn's */
+    vv_error_clear();
+    vv_status s = vv_world_new_for_volume(out, v, &o);
+    vv_volume_free(v); /* the World holds its own reference */
+    if (s != VV_OK)
+        return cli_fail(s, r->input);
+    return 0;
+}
+
+/* Loads a scene file and applies the overrides given on the command line. */
+static int
+world_for_scene(const cli_render_args *r, vv_world **out) {
+    vv_error_clear();
+    cli_progress pr; /* geometry objects are voxelized while loading */
+    cli_progress_begin(&pr, r->quiet);
+    vv_status s = vv_scene_load_progress(out, r->input, &pr.p);
+    cli_progress_end(&pr);
+    if (s != VV_OK)
+        return cli_fail(s, r->input);
+    vv_world *w = *out;
+    for (int i = 0; i < w->n_objects; i++) {
+        vv_object *obj = w->objects[i];
+        if (!obj || obj->type != VV_OBJECT_VOLUME)
+            continue;
+        if (r->has_mode)
+            obj->mode = r->mode;
+        if (r->has_iso)
+            obj->isovalue = r->iso;
+        if (r->has_tf) {
+            obj->segmentation = VV_SEG_TRANSFER_FUNCTION;
+            stretch_tf(&obj->tf, r->tf_lo, r->tf_hi);
+        }
+    }
+    if (r->has_size) {
+        w->view.width = r->width;
+        w->view.height = r->height;
+    }
+    return 0;
+}
+int
+cli_render_world(const cli_render_args *r, vv_world **out) {
+    *out = NULL;
+    int rc = cli_check_readable(r->input);
+    if (rc)
+        return rc;
+    int scene = !r->has_raw && is_scene_file(r->input);
+    rc = scene ? world_for_scene(r, out) : world_for_volume(r, out);
+    if (rc) {
+        vv_world_free(*out);
+        *out = NULL;
+        return rc;
+    }
+    if (r->has_step)
+        for (int i = 0; i < (*out)->n_objects; i++)
+            if ((*out)->objects[i])
+                (*out)->objects[i]->step = r->step;
+    return 0;
+}
+
+void
+cli_render_ortho(const cli_render_args *r, vv_world *w) {
+    if (r->ortho && w->view.projection != VV_PROJECTION_ORTHOGRAPHIC) {
+        /* the same direction, parallel rays, the scene framed */
+        w->view.projection = VV_PROJECTION_ORTHOGRAPHIC;
+        vv_view_frame_box(&w->view, vv_world_bounds(w));
+        if (r->zoom != 1)
+            w->view.ortho_height /= r->zoom;
+    }
+}
+
+void
+cli_render_turn(const cli_render_args *r, vv_world *w) {
+    vv_anim_view_turn(&w->view, vv_deg_to_rad(r->azimuth), vv_deg_to_rad(r->elevation), r->zoom);
+    cli_render_ortho(r, w);
+}
+
+/* The registered renderers' names, comma-separated, in @p buf. */
+static const char *
+renderer_names(char *buf, size_t cap) {
+    buf[0] = '\0';
+    const vv_renderer_ops *const *reg = vv_renderer_registry();
+    for (int i = 0; reg && reg[i]; i++) {
+        size_t n = strlen(buf);
+        snprintf(buf + n, cap - n, "%s%s", i ? ", " : "", reg[i]->name);
+    }
+    return buf[0] ? buf : "none";
+}
+
+int
+cli_render_renderer(const cli_args *a, const cli_render_args *r, const vv_world *w,
+                    vv_renderer **out, int *quality) {
+    *out = NULL;
+    const vv_render_settings *sc = &w->render;
+    const char *scene_renderer = sc->renderer[0] ? sc->renderer : "raycast";
+    const char *name = r->renderer ? r->renderer : scene_renderer;
+    if (!r->renderer && !renderer_known(name)) {
+        char names[512];
+        cli_error("%s: render.renderer: unknown renderer '%s' (available: %s)", r->input, name,
+                  renderer_names(names, sizeof names));
+        return CLI_EXIT_FAIL;
+    }
+    *quality = r->has_quality ? r->quality : (sc->quality >= 0 ? sc->quality : 2);
+    vv_renderer *ren = NULL;
+    vv_error_clear();
+    vv_status s = vv_renderer_new(&ren, name);
+    if (s != VV_OK)
+        return cli_fail(s, NULL);
+    /* the scene's options belong to the scene's renderer */
+    if (strcmp(name, scene_renderer) == 0)
+        for (int i = 0; i < sc->n_options; i++) {
+            vv_error_clear();
+            if (vv_renderer_set_option(ren, sc->option_keys[i], sc->option_values[i]) != VV_OK) {
+                const char *m = vv_error_message();
+                cli_error("%s: render.options.%s: %s", r->input, sc->option_keys[i],
+                          m && *m ? m : "the renderer does not accept it");
+                vv_renderer_free(ren);
+                return CLI_EXIT_FAIL;
+            }
+        }
+    for (int i = 0; i < a->n_seen; i++) {
+        if (strcmp(a->specs[a->seen[i].opt].name, "set") != 0)
+            continue;
+        char key[256];
+        const char *kv = a->seen[i].value;
+        size_t klen = (size_t)(strchr(kv, '=') - kv);
+        if (klen >= sizeof key) {
+            vv_renderer_free(ren);
+            return cli_usage_error(a, "--set: key too long in '%s'", kv);
+        }
+        memcpy(key, kv, klen);
+        key[klen] = '\0';
+        vv_error_clear();
+        if ((s = vv_renderer_set_option(ren, key, kv + klen + 1)) != VV_OK) {
+            const char *m = vv_error_message();
+            int rc = cli_usage_error(a, "--set %s: %s", kv,
+                                     m && *m ? m : "the renderer does not accept it");
+            vv_renderer_free(ren);
+            return rc;
+        }
+    }
+    *out = ren;
+    return 0;
+}
+
+void
+cli_render_print_options(FILE *out) {
+    fprintf(out,
+            "  --mode MODE      composite (default), mip (maximum intensity projection),\n"
+            "                   minip (minimum intensity projection), xray (average\n"
+            "                   along the ray) or iso (shaded isosurface); for a scene,\n"
+            "                   applies to every volume object (geometric objects have none)\n"
+            "  --iso V          isovalue for --mode iso (alone it implies --mode iso)\n"
+            "  --tf LO:HI       transfer function ramp from LO (transparent) to HI (opaque)\n"
+            "                   in data values (default: from the histogram); for a scene,\n"
+            "                   the scene's transfer functions are stretched onto [LO, HI]\n"
+            "  --size WxH       image size in pixels, 1..%d (default 512x512 or the scene's)\n"
+            "  --azimuth DEG    orbit the camera about the up axis, degrees (default 0)\n"
+            "  --elevation DEG  orbit the camera towards the up axis, degrees (default 0)\n"
+            "  --zoom F         > 1 moves the camera closer, < 1 farther (default 1)\n"
+            "  --threads N      threads, 0 = all cores (default 0)\n"
+            "  --renderer NAME  rendering method (default raycast or the scene's), one of\n"
+            "                   the list below; naming another renderer than the scene's\n"
+            "                   drops the scene's renderer options\n"
+            "  --step S         sample step in units of the smallest voxel spacing\n"
+            "                   (default 0.5 or the scene's)\n"
+            "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
+            "                   read INPUT as raw voxels (see 'volvis info --help')\n"
+            "  --gamma G        8-bit conversion v^(1/G) (default 1: values unchanged)\n"
+            "  --quality Q      0 draft, 1 medium, 2 final (default 2 or the scene's; per\n"
+            "                   renderer below)\n"
+            "  --set KEY=VALUE  renderer-specific option (repeatable), listed with each\n"
+            "                   renderer below; adds to or overrides the scene's options;\n"
+            "                   see docs/rendering.md\n"
+            "  --alpha          write RGBA (coverage in the alpha channel); default RGB\n"
+            "  --ortho          parallel projection (orthographic), the view framed on\n"
+            "                   the scene; needed by the fourier renderer\n"
+            "  -q, --quiet      no progress bar and no 'wrote' line\n",
+            VV_IMAGE_MAX_SIDE);
+}
+
+void
+cli_render_print_renderers(FILE *out) {
+    const vv_renderer_ops *const *reg = vv_renderer_registry();
+    for (int i = 0; reg && reg[i]; i++) {
+        fprintf(out, "  %-16s %s\n", reg[i]->name, reg[i]->description ? reg[i]->description : "");
+        if (reg[i]->options)
+            print_wrapped(out, "options: ", reg[i]->options, 19, 79);
+    }
+}

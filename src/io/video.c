@@ -1,0 +1,400 @@
+/*
+ * Video files through FFmpeg: libavcodec encodes (libx264 for MP4,
+ * libvpx-vp9 for WebM), libswscale converts RGB to yuv420p (BT.601, limited
+ * range, the colour space tagged in the stream) and libavformat writes the
+ * container. The stream goes to a temporary file beside the target that is
+ * renamed over it when complete (include/volvis/video.h).
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <unistd.h>
+
+#include "core/internal.h"
+#include "volvis/video.h"
+
+void
+vv_video_options_init(vv_video_options *o) {
+    o->fps = 30;
+    o->crf = -1;
+    o->threads = 1;
+}
+
+static int
+ends_with(const char *s, const char *suffix) {
+    size_t n = strlen(s), m = strlen(suffix);
+    return n >= m && strcasecmp(s + n - m, suffix) == 0;
+}
+
+int
+vv_video_codec_for_path(const char *path, vv_video_codec *codec) {
+    if (!path)
+        return 0;
+    if (ends_with(path, ".mp4") || ends_with(path, ".m4v") || ends_with(path, ".mov")) {
+        *codec = VV_VIDEO_H264;
+        return 1;
+    }
+    if (ends_with(path, ".webm")) {
+        *codec = VV_VIDEO_VP9;
+        return 1;
+    }
+    return 0;
+}
+
+#ifndef VV_HAVE_FFMPEG
+
+struct vv_video_writer {
+    int unused;
+};
+
+int
+vv_video_codec_available(vv_video_codec codec) {
+    (void)codec;
+    return 0;
+}
+
+vv_status
+vv_video_writer_open(vv_video_writer **out, const char *path, int width, int height,
+                     const vv_video_options *opt) {
+    (void)width;
+    (void)height;
+    (void)opt;
+    *out = NULL;
+    return vv_error_set(VV_ERR_UNSUPPORTED, "video: %s: this build has no FFmpeg (libavcodec)",
+                        path ? path : "(null)");
+}
+
+vv_status
+vv_video_writer_add(vv_video_writer *w, const uint8_t *rgb) {
+    (void)w;
+    (void)rgb;
+    return vv_error_set(VV_ERR_UNSUPPORTED, "video: this build has no FFmpeg");
+}
+
+int
+vv_video_writer_frames(const vv_video_writer *w) {
+    (void)w;
+    return 0;
+}
+
+vv_status
+vv_video_writer_finish(vv_video_writer *w) {
+    (void)w;
+    return vv_error_set(VV_ERR_UNSUPPORTED, "video: this build has no FFmpeg");
+}
+
+void
+vv_video_writer_abort(vv_video_writer *w) {
+    (void)w;
+}
+
+#else
+
+#include <libavcodec/avcodec.h>
+#include <libavformat/avformat.h>
+#include <libavutil/imgutils.h>
+#include <libavutil/opt.h>
+#include <libswscale/swscale.h>
+#include <pthread.h>
+
+static pthread_once_t g_quiet_once = PTHREAD_ONCE_INIT;
+
+/* The library never prints: FFmpeg's own log (codec banners, statistics) is
+ * silenced; failures come back as statuses with av_strerror's text. */
+static void
+quiet_ffmpeg(void) {
+    av_log_set_level(AV_LOG_QUIET);
+}
+
+struct vv_video_writer {
+    char *path, *tmp_path;
+    int width, height; /* input size */
+    int ew, eh;        /* encoded size (even) */
+    AVFormatContext *oc;
+    AVCodecContext *cc;
+    AVStream *st;
+    AVFrame *frame;
+    AVPacket *pkt;
+    struct SwsContext *sws;
+    uint8_t *pad; /* ew * eh * 3 when the size is odd */
+    int64_t next_pts;
+    int header_written;
+};
+
+static const char *
+encoder_name(vv_video_codec codec) {
+    return codec == VV_VIDEO_VP9 ? "libvpx-vp9" : "libx264";
+}
+
+int
+vv_video_codec_available(vv_video_codec codec) {
+    return avcodec_find_encoder_by_name(encoder_name(codec)) != NULL;
+}
+
+static vv_status
+av_fail(vv_video_writer *w, const char *what, int err) {
+    char buf[AV_ERROR_MAX_STRING_SIZE] = "";
+    av_strerror(err, buf, sizeof buf);
+    return vv_error_set(VV_ERR_IO, "video: %s: %s: %s", w->path, what, buf);
+}
+
+static void
+writer_release(vv_video_writer *w, int remove_tmp) {
+    if (!w)
+        return;
+    if (w->oc) {
+        if (w->oc->pb)
+            avio_closep(&w->oc->pb);
+        avformat_free_context(w->oc);
+    }
+    avcodec_free_context(&w->cc);
+    av_frame_free(&w->frame);
+    av_packet_free(&w->pkt);
+    sws_freeContext(w->sws);
+    if (remove_tmp && w->tmp_path)
+        unlink(w->tmp_path);
+    free(w->pad);
+    free(w->path);
+    free(w->tmp_path);
+    free(w);
+}
+
+void
+vv_video_writer_abort(vv_video_writer *w) {
+    writer_release(w, 1);
+}
+
+vv_status
+vv_video_writer_open(vv_video_writer **out, const char *path, int width, int height,
+                     const vv_video_options *opt) {
+    *out = NULL;
+    vv_video_options dflt;
+    if (!opt) {
+        vv_video_options_init(&dflt);
+        opt = &dflt;
+    }
+    vv_video_codec codec;
+    if (!path || !vv_video_codec_for_path(path, &codec))
+        return vv_error_set(VV_ERR_INVALID, "video: %s: not a video file name (.mp4 or .webm)",
+                            path ? path : "(null)");
+    if (width < 2 || height < 2 || width > 16384 || height > 16384)
+        return vv_error_set(VV_ERR_INVALID, "video: %s: size %dx%d is outside 2..16384", path,
+                            width, height);
+    if (!(opt->fps > 0 && opt->fps <= 1000))
+        return vv_error_set(VV_ERR_INVALID, "video: %s: frame rate %g is outside (0, 1000]", path,
+                            opt->fps);
+    int crf_max = codec == VV_VIDEO_VP9 ? 63 : 51;
+    if (opt->crf > crf_max)
+        return vv_error_set(VV_ERR_INVALID, "video: %s: crf %d is over %d for %s", path, opt->crf,
+                            crf_max, encoder_name(codec));
+    pthread_once(&g_quiet_once, quiet_ffmpeg);
+    const AVCodec *enc = avcodec_find_encoder_by_name(encoder_name(codec));
+    if (!enc)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "video: %s: the %s encoder is not in this FFmpeg (libavcodec)", path,
+                            encoder_name(codec));
+
+    vv_video_writer *w = calloc(1, sizeof *w);
+    if (!w)
+        return vv_error_set(VV_ERR_NOMEM, "video: out of memory");
+    /* the temporary file gets the usual permissions (umask), as every output */
+    vv_atomic_file af;
+    vv_status s0 = vv_atomic_file_open(&af, path);
+    if (s0 != VV_OK) {
+        free(w);
+        return vv_error_prefix(s0, "video");
+    }
+    fclose(af.fp);
+    w->path = af.path;
+    w->tmp_path = af.tmp_path;
+    w->width = width;
+    w->height = height;
+    w->ew = (width + 1) & ~1;
+    w->eh = (height + 1) & ~1;
+
+    vv_status s = VV_OK;
+    int err;
+    const char *fmt = codec == VV_VIDEO_VP9 ? "webm" : "mp4";
+    if ((err = avformat_alloc_output_context2(&w->oc, NULL, fmt, w->tmp_path)) < 0 || !w->oc) {
+        s = av_fail(w, "cannot create the container", err);
+        goto fail;
+    }
+    w->cc = avcodec_alloc_context3(enc);
+    w->frame = av_frame_alloc();
+    w->pkt = av_packet_alloc();
+    if (!w->cc || !w->frame || !w->pkt) {
+        s = vv_error_set(VV_ERR_NOMEM, "video: out of memory");
+        goto fail;
+    }
+    AVRational rate = av_d2q(opt->fps, 100000);
+    w->cc->width = w->ew;
+    w->cc->height = w->eh;
+    w->cc->pix_fmt = AV_PIX_FMT_YUV420P;
+    w->cc->time_base = av_inv_q(rate);
+    w->cc->framerate = rate;
+    w->cc->thread_count = opt->threads > 0 ? opt->threads : 1;
+    w->cc->color_range = AVCOL_RANGE_MPEG;
+    w->cc->colorspace = AVCOL_SPC_SMPTE170M;
+    w->cc->color_primaries = AVCOL_PRI_SMPTE170M;
+    w->cc->color_trc = AVCOL_TRC_SMPTE170M;
+    int crf = opt->crf >= 0 ? opt->crf : (codec == VV_VIDEO_VP9 ? 31 : 20);
+    if (codec == VV_VIDEO_H264) {
+        av_opt_set(w->cc->priv_data, "preset", "veryfast", 0);
+        av_opt_set_int(w->cc->priv_data, "crf", crf, 0);
+    } else {
+        w->cc->bit_rate = 0; /* constant quality */
+        av_opt_set_int(w->cc->priv_data, "crf", crf, 0);
+        av_opt_set(w->cc->priv_data, "deadline", "good", 0);
+        av_opt_set_int(w->cc->priv_data, "cpu-used", 4, 0);
+        av_opt_set_int(w->cc->priv_data, "row-mt", 1, 0);
+    }
+    if (w->oc->oformat->flags & AVFMT_GLOBALHEADER)
+        w->cc->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
+    if ((err = avcodec_open2(w->cc, enc, NULL)) < 0) {
+        s = av_fail(w, "cannot open the encoder", err);
+        if (s == VV_ERR_IO)
+            s = VV_ERR_UNSUPPORTED;
+        goto fail;
+    }
+    w->st = avformat_new_stream(w->oc, NULL);
+    if (!w->st) {
+        s = vv_error_set(VV_ERR_NOMEM, "video: out of memory");
+        goto fail;
+    }
+    w->st->time_base = w->cc->time_base;
+    w->st->avg_frame_rate = rate;
+    w->st->r_frame_rate = rate;
+    if ((err = avcodec_parameters_from_context(w->st->codecpar, w->cc)) < 0) {
+        s = av_fail(w, "cannot set the stream parameters", err);
+        goto fail;
+    }
+    if ((err = avio_open(&w->oc->pb, w->tmp_path, AVIO_FLAG_WRITE)) < 0) {
+        s = av_fail(w, "cannot open the temporary file", err);
+        goto fail;
+    }
+    if ((err = avformat_write_header(w->oc, NULL)) < 0) {
+        s = av_fail(w, "cannot write the header", err);
+        goto fail;
+    }
+    w->header_written = 1;
+    w->frame->format = AV_PIX_FMT_YUV420P;
+    w->frame->width = w->ew;
+    w->frame->height = w->eh;
+    if ((err = av_frame_get_buffer(w->frame, 0)) < 0) {
+        s = av_fail(w, "cannot allocate a frame", err);
+        goto fail;
+    }
+    w->sws = sws_getContext(w->ew, w->eh, AV_PIX_FMT_RGB24, w->ew, w->eh, AV_PIX_FMT_YUV420P,
+                            SWS_BICUBIC | SWS_ACCURATE_RND | SWS_FULL_CHR_H_INP, NULL, NULL, NULL);
+    if (!w->sws) {
+        s = vv_error_set(VV_ERR_NOMEM, "video: %s: cannot create the colour converter", path);
+        goto fail;
+    }
+    if (w->ew != width || w->eh != height) {
+        w->pad = malloc((size_t)w->ew * (size_t)w->eh * 3);
+        if (!w->pad) {
+            s = vv_error_set(VV_ERR_NOMEM, "video: out of memory");
+            goto fail;
+        }
+    }
+    *out = w;
+    return VV_OK;
+fail:
+    writer_release(w, 1);
+    return s;
+}
+
+/* Sends @p frame (NULL: flush) and writes every packet the encoder has ready. */
+static vv_status
+encode(vv_video_writer *w, AVFrame *frame) {
+    int err = avcodec_send_frame(w->cc, frame);
+    if (err < 0)
+        return av_fail(w, "encoder refused a frame", err);
+    for (;;) {
+        err = avcodec_receive_packet(w->cc, w->pkt);
+        if (err == AVERROR(EAGAIN) || err == AVERROR_EOF)
+            return VV_OK;
+        if (err < 0)
+            return av_fail(w, "encoding failed", err);
+        /* every frame lasts 1 / fps: without a duration MP4 loses the last frame */
+        w->pkt->duration = 1;
+        av_packet_rescale_ts(w->pkt, w->cc->time_base, w->st->time_base);
+        w->pkt->stream_index = w->st->index;
+        err = av_interleaved_write_frame(w->oc, w->pkt);
+        av_packet_unref(w->pkt);
+        if (err < 0)
+            return av_fail(w, "cannot write a packet", err);
+    }
+}
+
+vv_status
+vv_video_writer_add(vv_video_writer *w, const uint8_t *rgb) {
+    if (!w || !rgb)
+        return vv_error_set(VV_ERR_INVALID, "video: no writer or no pixels");
+    const uint8_t *src = rgb;
+    if (w->pad) {
+        size_t ins = (size_t)w->width * 3, outs = (size_t)w->ew * 3;
+        for (int y = 0; y < w->eh; y++) {
+            int sy = y < w->height ? y : w->height - 1;
+            uint8_t *d = w->pad + (size_t)y * outs;
+            memcpy(d, rgb + (size_t)sy * ins, ins);
+            if (w->ew > w->width)
+                memcpy(d + ins, d + ins - 3, 3);
+        }
+        src = w->pad;
+    }
+    int err = av_frame_make_writable(w->frame);
+    if (err < 0)
+        return av_fail(w, "frame not writable", err);
+    const uint8_t *planes[1] = {src};
+    int strides[1] = {w->ew * 3};
+    sws_scale(w->sws, planes, strides, 0, w->eh, w->frame->data, w->frame->linesize);
+    w->frame->pts = w->next_pts++;
+    return encode(w, w->frame);
+}
+
+int
+vv_video_writer_frames(const vv_video_writer *w) {
+    return w ? (int)w->next_pts : 0;
+}
+
+vv_status
+vv_video_writer_finish(vv_video_writer *w) {
+    if (!w)
+        return vv_error_set(VV_ERR_INVALID, "video: no writer");
+    vv_status s;
+    if (w->next_pts == 0) {
+        s = vv_error_set(VV_ERR_INVALID, "video: %s: no frames", w->path);
+        writer_release(w, 1);
+        return s;
+    }
+    if ((s = encode(w, NULL)) != VV_OK) {
+        writer_release(w, 1);
+        return s;
+    }
+    int err = av_write_trailer(w->oc);
+    if (err < 0) {
+        s = av_fail(w, "cannot write the trailer", err);
+        writer_release(w, 1);
+        return s;
+    }
+    err = avio_closep(&w->oc->pb);
+    if (err < 0) {
+        s = av_fail(w, "cannot close the file", err);
+        writer_release(w, 1);
+        return s;
+    }
+    if (rename(w->tmp_path, w->path) != 0) {
+        s = vv_error_set(VV_ERR_IO, "video: %s: cannot rename the temporary file into place: %s",
+                         w->path, strerror(errno));
+        writer_release(w, 1);
+        return s;
+    }
+    writer_release(w, 0);
+    return VV_OK;
+}
+
+#endif
