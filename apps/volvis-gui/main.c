@@ -34,6 +34,11 @@ usage(FILE *out) {
 int
 main(int argc, char **argv) {
     vv_scene_view_set_start_time(g_get_monotonic_time());
+    /* The renderers' OpenMP threads share the cores with the UI thread and
+     * the display server: threads that spin while they wait for work take
+     * the time the UI needs to show frames. Unless the user says otherwise,
+     * they sleep instead. */
+    g_setenv("OMP_WAIT_POLICY", "PASSIVE", FALSE);
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
             usage(stdout);

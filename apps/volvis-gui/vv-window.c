@@ -8,6 +8,7 @@
 #include "vv-image-window.h"
 #include "vv-scene-view.h"
 #include "vv-tf-editor.h"
+#include "vv-tf2d-editor.h"
 
 struct _VvWindow {
     GtkApplicationWindow parent;
@@ -19,6 +20,9 @@ struct _VvWindow {
     GtkWidget *object_list;
     GtkWidget *seg_mode, *threshold, *render_mode, *isovalue, *step;
     VvTfEditor *tf_editor;
+    VvTf2dEditor *tf2d_editor;
+    GtkWidget *preset, *w2d_color, *w2d_opacity;
+    GtkWidget *tex_file, *tex_projection, *tex_scale, *solid_kind, *solid_period;
     GtkWidget *color, *ambient, *diffuse, *specular, *shininess, *reflectance, *transparency;
     GtkWidget *shading, *casts, *receives, *in_reflections, *reflects;
     GtkWidget *cut_scope, *cut_px, *cut_py, *cut_pz, *cut_nx, *cut_ny, *cut_nz;
@@ -147,6 +151,16 @@ fill_object_control(VvWindow *win) {
         set_spin(win->shininess, o->material.shininess);
         set_spin(win->reflectance, o->material.reflectance);
         set_spin(win->transparency, o->material.transparency);
+        gtk_drop_down_set_selected(GTK_DROP_DOWN(win->preset), 0);
+        gtk_editable_set_text(
+            GTK_EDITABLE(win->tex_file),
+            o->texture.image && o->texture.image->source ? o->texture.image->source : "");
+        gtk_drop_down_set_selected(GTK_DROP_DOWN(win->tex_projection), o->texture.projection);
+        set_spin(win->tex_scale, o->texture.scale[0]);
+        gtk_drop_down_set_selected(
+            GTK_DROP_DOWN(win->solid_kind),
+            o->solid_texture.kind <= VV_SOLID_TEXTURE_MARBLE ? (guint)o->solid_texture.kind : 0u);
+        set_spin(win->solid_period, o->solid_texture.period);
         gtk_check_button_set_active(GTK_CHECK_BUTTON(win->shading), o->shading);
         gtk_check_button_set_active(GTK_CHECK_BUTTON(win->casts), o->casts_shadows);
         gtk_check_button_set_active(GTK_CHECK_BUTTON(win->receives), o->receives_shadows);
@@ -1139,6 +1153,122 @@ tf_color_set(GtkColorButton *b, gpointer user) {
     vv_tf_editor_set_color(win->tf_editor, &c);
 }
 
+static void
+preset_chosen(GObject *o, GParamSpec *p, gpointer user) {
+    (void)p;
+    VvWindow *win = user;
+    guint i = gtk_drop_down_get_selected(GTK_DROP_DOWN(o));
+    vv_object *obj = vv_document_selected_object(win->doc);
+    if (win->updating || i == 0 || !obj || !obj->volume)
+        return;
+    const char *name = vv_tf_preset_names()[i - 1];
+    vv_document_begin_edit(win->doc, "transfer-function preset");
+    vv_error_clear();
+    if (vv_tf_preset(&obj->tf, name, obj->volume) != VV_OK)
+        show_error(win, "Cannot apply the preset", vv_error_message());
+    obj->segmentation = VV_SEG_TRANSFER_FUNCTION;
+    vv_document_changed(win->doc);
+    fill_object_control(win);
+}
+
+static void
+add_rectangle(GtkButton *b, gpointer user) {
+    (void)b;
+    VvWindow *win = user;
+    vv_tf2d_editor_add(win->tf2d_editor, VV_TF2D_RECTANGLE);
+    fill_object_control(win);
+}
+
+static void
+add_triangle(GtkButton *b, gpointer user) {
+    (void)b;
+    VvWindow *win = user;
+    vv_tf2d_editor_add(win->tf2d_editor, VV_TF2D_TRIANGLE);
+    fill_object_control(win);
+}
+
+static void
+w2d_style(GtkColorButton *b, gpointer user) {
+    (void)b;
+    VvWindow *win = user;
+    if (win->updating)
+        return;
+    GdkRGBA c;
+    gtk_color_chooser_get_rgba(GTK_COLOR_CHOOSER(win->w2d_color), &c);
+    vv_tf2d_editor_set_style(win->tf2d_editor, &c, spin_value(win->w2d_opacity));
+}
+
+static void
+w2d_style_spin(GtkSpinButton *s, gpointer user) {
+    (void)s;
+    w2d_style(NULL, user);
+}
+
+/* Applies the texture widgets to the selected object (one undo step). */
+static void
+texture_update(VvWindow *win, gboolean load_image) {
+    vv_object *o = vv_document_selected_object(win->doc);
+    if (win->updating || !o)
+        return;
+    vv_texture_image *img = NULL;
+    const char *path = gtk_editable_get_text(GTK_EDITABLE(win->tex_file));
+    if (load_image && path[0]) {
+        vv_error_clear();
+        if (vv_texture_image_load(&img, path, path) != VV_OK) {
+            show_error(win, "Cannot load the texture", vv_error_message());
+            return;
+        }
+    }
+    vv_document_begin_edit(win->doc, "texture");
+    if (load_image)
+        vv_object_set_texture_image(o, img); /* NULL removes it */
+    vv_texture_image_free(img);
+    o->texture.projection =
+        (vv_texture_projection)gtk_drop_down_get_selected(GTK_DROP_DOWN(win->tex_projection));
+    o->texture.scale[0] = o->texture.scale[1] = spin_value(win->tex_scale);
+    guint k = gtk_drop_down_get_selected(GTK_DROP_DOWN(win->solid_kind));
+    if (o->solid_texture.kind == VV_SOLID_TEXTURE_VOLUME && k != VV_SOLID_TEXTURE_VOLUME)
+        vv_solid_texture_clear(&o->solid_texture);
+    o->solid_texture.kind = (vv_solid_texture_kind)k;
+    o->solid_texture.period = spin_value(win->solid_period);
+    if (o->solid_texture.kind != VV_SOLID_TEXTURE_NONE) {
+        /* light and dark wood-like colours unless the scene set its own */
+        vv_vec3 c0 = o->solid_texture.color0, c1 = o->solid_texture.color1;
+        if (c0.x == 0 && c0.y == 0 && c0.z == 0 && c1.x == 1 && c1.y == 1 && c1.z == 1) {
+            o->solid_texture.color0 = vv_vec3_make(0.95, 0.8, 0.6);
+            o->solid_texture.color1 = vv_vec3_make(0.55, 0.35, 0.2);
+        }
+        if (o->volume) { /* centred on the volume */
+            vv_object tmp = *o;
+            tmp.position = vv_vec3_make(0, 0, 0);
+            tmp.orientation = vv_quat_identity();
+            tmp.scale = vv_vec3_make(1, 1, 1);
+            vv_box b = vv_object_world_box(&tmp);
+            o->solid_texture.center = vv_vec3_scale(vv_vec3_add(b.min, b.max), 0.5);
+        }
+    }
+    vv_document_changed(win->doc);
+}
+
+static void
+texture_apply(GtkEntry *e, gpointer user) {
+    (void)e;
+    texture_update(user, TRUE);
+}
+
+static void
+texture_changed(GObject *o, GParamSpec *p, gpointer user) {
+    (void)o;
+    (void)p;
+    texture_update(user, FALSE);
+}
+
+static void
+texture_spin(GtkSpinButton *s, gpointer user) {
+    (void)s;
+    texture_update(user, FALSE);
+}
+
 static GtkWidget *
 manipulation_page(VvWindow *win) {
     GtkWidget *box = page_box();
@@ -1175,7 +1305,8 @@ manipulation_page(VvWindow *win) {
 
     /* segmentation */
     g = section(box, "Segmentation");
-    static const char *const segs[] = {"transfer function", "threshold", NULL};
+    static const char *const segs[] = {"transfer function", "threshold", "2-D transfer function",
+                                       NULL};
     win->seg_mode = row(g, "by", wire_drop(win, dropdown(segs)));
     win->threshold = row(g, "threshold", wire_spin(win, spin(-1e9, 1e9, 1, 2)));
     static const char *const modes[] = {"composite", "MIP", "MinIP", "X-ray", "isosurface", NULL};
@@ -1194,6 +1325,31 @@ manipulation_page(VvWindow *win) {
     gtk_box_append(GTK_BOX(tb), gtk_label_new("new colour"));
     gtk_box_append(GTK_BOX(tb), tc);
     gtk_box_append(GTK_BOX(box), tb);
+    g = section(box, "Presets");
+    GtkStringList *pn = gtk_string_list_new(NULL);
+    gtk_string_list_append(pn, "(choose)");
+    for (const char *const *n = vv_tf_preset_names(); *n; n++)
+        gtk_string_list_append(pn, *n);
+    win->preset = row(g, "transfer function", gtk_drop_down_new(G_LIST_MODEL(pn), NULL));
+    g_signal_connect(win->preset, "notify::selected", G_CALLBACK(preset_chosen), win);
+
+    /* 2-D transfer function over value x gradient magnitude */
+    g = section(box, "2-D transfer function (value × gradient magnitude)");
+    win->tf2d_editor = vv_tf2d_editor_new(win->doc);
+    gtk_grid_attach(GTK_GRID(g), GTK_WIDGET(win->tf2d_editor), 0, 0, 2, 1);
+    GtkWidget *wb = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 4);
+    GtkWidget *add_r = gtk_button_new_with_label("Add rectangle");
+    GtkWidget *add_t = gtk_button_new_with_label("Add triangle");
+    g_signal_connect(add_r, "clicked", G_CALLBACK(add_rectangle), win);
+    g_signal_connect(add_t, "clicked", G_CALLBACK(add_triangle), win);
+    gtk_box_append(GTK_BOX(wb), add_r);
+    gtk_box_append(GTK_BOX(wb), add_t);
+    gtk_grid_attach(GTK_GRID(g), wb, 0, 1, 2, 1);
+    win->w2d_color = row(g, "widget colour", gtk_color_button_new());
+    win->w2d_opacity = row(g, "widget opacity", spin(0, 1, 0.05, 2));
+    set_spin(win->w2d_opacity, 0.5);
+    g_signal_connect(win->w2d_color, "color-set", G_CALLBACK(w2d_style), win);
+    g_signal_connect(win->w2d_opacity, "value-changed", G_CALLBACK(w2d_style_spin), win);
 
     /* material */
     g = section(box, "Colour and material");
@@ -1204,6 +1360,24 @@ manipulation_page(VvWindow *win) {
     win->shininess = row(g, "shininess", wire_spin(win, spin(1, 256, 1, 0)));
     win->reflectance = row(g, "reflectance", wire_spin(win, spin(0, 1, 0.05, 2)));
     win->transparency = row(g, "transparency", wire_spin(win, spin(0, 1, 0.05, 2)));
+
+    /* textures */
+    g = section(box, "Texture");
+    win->tex_file = row(g, "image (PNG)", gtk_entry_new());
+    gtk_entry_set_placeholder_text(GTK_ENTRY(win->tex_file), "path, Enter to apply; empty: none");
+    g_signal_connect(win->tex_file, "activate", G_CALLBACK(texture_apply), win);
+    static const char *const projections[] = {"planar", "cylindrical", "spherical", NULL};
+    win->tex_projection = row(g, "projection", dropdown(projections));
+    win->tex_scale = row(g, "repeats", spin(0.01, 1000, 0.5, 2));
+    set_spin(win->tex_scale, 1);
+    g_signal_connect(win->tex_projection, "notify::selected", G_CALLBACK(texture_changed), win);
+    g_signal_connect(win->tex_scale, "value-changed", G_CALLBACK(texture_spin), win);
+    static const char *const solids[] = {"none", "checker", "wood", "marble", NULL};
+    win->solid_kind = row(g, "solid texture", dropdown(solids));
+    win->solid_period = row(g, "period (world units)", spin(0.01, 1e5, 1, 2));
+    set_spin(win->solid_period, 10);
+    g_signal_connect(win->solid_kind, "notify::selected", G_CALLBACK(texture_changed), win);
+    g_signal_connect(win->solid_period, "value-changed", G_CALLBACK(texture_spin), win);
 
     /* shading */
     g = section(box, "Shading");
