@@ -150,7 +150,9 @@ vv_renderer *vv_preview_final_renderer(vv_preview *p);
  * the `surface` renderer with the object's transform, material, cut planes
  * and the World's lights. The final representation is exactly what
  * vv_renderer_render of the final renderer gives (the same image `volvis
- * render` writes for the same World). Errors: those of the renderers,
+ * render` writes for the same World). The first reduced ray cast of a
+ * volume is drawn without shading (its gradients are not cached yet), so
+ * that a first image appears at once. Errors: those of the renderers,
  * VV_ERR_CANCELLED.
  */
 vv_status vv_preview_render(vv_preview *p, const vv_world *world, const vv_view *view,

@@ -66,7 +66,11 @@ typedef struct pv_surface {
 
 struct vv_preview {
     vv_renderer *final;
-    vv_renderer *raycast;
+    vv_renderer *raycast; /* the final renderer itself when that is the ray caster */
+    /* volumes the ray caster has drawn shaded (its gradients are cached) */
+    const vv_volume *warm[PV_CACHE];
+    uint64_t warm_modified[PV_CACHE];
+    int n_warm;
     vv_renderer *surface;
     pv_surface cache[PV_CACHE];
     uint64_t clock;
@@ -90,7 +94,10 @@ vv_preview_new(vv_preview **out, const char *final_renderer) {
     if (!p)
         return vv_error_set(VV_ERR_NOMEM, "preview: out of memory");
     vv_status s = vv_renderer_new(&p->final, final_renderer ? final_renderer : "raycast");
-    if (s == VV_OK)
+    /* one ray caster for previews and the final frame: one gradient cache */
+    if (s == VV_OK && !strcmp(vv_renderer_name(p->final), "raycast"))
+        p->raycast = p->final;
+    else if (s == VV_OK)
         s = vv_renderer_new(&p->raycast, "raycast");
     if (s == VV_OK)
         s = vv_renderer_new(&p->surface, "surface");
@@ -108,8 +115,9 @@ vv_preview_free(vv_preview *p) {
         return;
     for (int i = 0; i < PV_CACHE; i++)
         surface_clear(&p->cache[i]);
+    if (p->raycast != p->final)
+        vv_renderer_free(p->raycast);
     vv_renderer_free(p->final);
-    vv_renderer_free(p->raycast);
     vv_renderer_free(p->surface);
     free(p);
 }
@@ -296,9 +304,25 @@ render_reduced(vv_preview *p, const vv_world *world, const vv_view *view, int di
     vv_status s = vv_world_clone(&w, world);
     if (s != VV_OK)
         return s;
-    for (int i = 0; i < w->n_objects; i++)
-        if (w->objects[i]->type == VV_OBJECT_VOLUME)
-            w->objects[i]->step *= divisor;
+    for (int i = 0; i < w->n_objects; i++) {
+        vv_object *o = w->objects[i];
+        if (o->type != VV_OBJECT_VOLUME || !o->volume)
+            continue;
+        o->step *= divisor;
+        /* The first shaded frame of a volume builds its gradient cache
+         * (about half a second for 256^3): the first preview of a volume is
+         * drawn unshaded so that something is on screen at once; shading
+         * starts with the next frame. */
+        int warm = 0;
+        for (int k = 0; k < p->n_warm; k++)
+            warm |= p->warm[k] == o->volume && p->warm_modified[k] == o->volume->modified;
+        if (!warm && o->shading) {
+            o->shading = 0;
+            int k = p->n_warm < PV_CACHE ? p->n_warm++ : (int)(p->clock++ % PV_CACHE);
+            p->warm[k] = o->volume; /* compared only, never dereferenced */
+            p->warm_modified[k] = o->volume->modified;
+        }
+    }
     vv_view v = *view;
     v.width = out->width;
     v.height = out->height;
