@@ -4,7 +4,7 @@
  * rotated a little between frames as during a drag. The first frame of each
  * representation (cache building) is reported apart.
  *
- * usage: bench_preview VOLUME [--size N] [--runs N] [--renderer NAME]
+ * usage: bench_preview VOLUME [--size N] [--runs N] [--renderer NAME] [--only KIND]
  * prints anchor=volvis op=preview_<kind>_ms dataset=VOLUME value=... unit=ms
  */
 #include <stdio.h>
@@ -22,6 +22,7 @@ main(int argc, char **argv) {
     }
     int size = 512, runs = 15;
     const char *renderer = "raycast";
+    int only = -1;
     for (int i = 2; i + 1 < argc; i += 2) {
         if (!strcmp(argv[i], "--size"))
             size = atoi(argv[i + 1]);
@@ -29,6 +30,14 @@ main(int argc, char **argv) {
             runs = atoi(argv[i + 1]);
         else if (!strcmp(argv[i], "--renderer"))
             renderer = argv[i + 1];
+        else if (!strcmp(argv[i], "--only")) {
+            vv_preview_kind k;
+            if (vv_preview_kind_parse(argv[i + 1], &k) != VV_OK) {
+                fprintf(stderr, "bench_preview: %s\n", vv_error_message());
+                return 2;
+            }
+            only = (int)k;
+        }
     }
     if (runs < 1 || runs > 1000 || size < 16 || size > 4096) {
         fprintf(stderr, "bench_preview: bad --size or --runs\n");
@@ -49,6 +58,8 @@ main(int argc, char **argv) {
     vv_volume_free(v);
     double *t = malloc(sizeof *t * (size_t)runs);
     for (int k = 0; k < VV_PREVIEW_COUNT; k++) {
+        if (only >= 0 && k != only)
+            continue;
         int iw, ih;
         vv_preview_size((vv_preview_kind)k, size, size, &iw, &ih);
         vv_image *img = NULL;

@@ -44,6 +44,10 @@ vv_application_startup(GApplication *app) {
         {"win.render", {"<Control>r", NULL}},
         {"win.delete-object", {"Delete", NULL}},
         {"win.view-reset", {"<Control>0", NULL}},
+        {"win.drag-target::view", {"<Alt>1", NULL}},
+        {"win.drag-target::object", {"<Alt>2", NULL}},
+        {"win.drag-target::light", {"<Alt>3", NULL}},
+        {"win.drag-target::cut", {"<Alt>4", NULL}},
     };
     for (size_t i = 0; i < G_N_ELEMENTS(keys); i++)
         gtk_application_set_accels_for_action(GTK_APPLICATION(app), keys[i].action, keys[i].accels);

@@ -36,6 +36,8 @@ typedef struct frame {
     gboolean refine;
     int width, height;
     GBytes *pixels; /* RGBA8 */
+    float *depth;   /* full frames: depth per pixel (vv_image), for picking */
+    vv_view camera; /* the view it was rendered with */
     double render_ms;
     gint64 posted_us;
     char error[512];
@@ -64,6 +66,11 @@ struct _VvSceneView {
     GdkTexture *texture;
     gboolean texture_logged;
     double shown_render_ms;
+    float *shown_depth; /* of the full frame on screen, or NULL */
+    vv_view shown_view;
+    VvPickFunc pick_fn;
+    gpointer pick_user;
+    gboolean dragged;
     gint64 shown_latency_us;
     guint refine_source;
     int refine_delay_ms;
@@ -99,6 +106,7 @@ frame_free(frame *f) {
     g_object_unref(f->view);
     if (f->pixels)
         g_bytes_unref(f->pixels);
+    g_free(f->depth);
     g_free(f);
 }
 
@@ -180,6 +188,9 @@ render_one(VvSceneView *self, const job *j, vv_preview_kind kind) {
     f->pixels = g_bytes_new_take(px, n);
     f->width = iw;
     f->height = ih;
+    f->camera = w->view;
+    if (kind == VV_PREVIEW_FULL)
+        f->depth = g_memdup2(img->depth, sizeof(float) * (size_t)iw * ih);
     vv_image_free(img);
     return f;
 }
@@ -288,9 +299,14 @@ show_frame(gpointer data) {
     self->shown_kind = f->kind;
     self->shown_render_ms = f->render_ms;
     self->shown_latency_us = g_get_monotonic_time() - f->posted_us;
+    g_free(self->shown_depth);
+    self->shown_depth = NULL;
+    self->shown_view = f->camera;
     if (f->kind == VV_PREVIEW_FULL) {
         self->full_ms = f->render_ms;
         save_shown(self, f);
+        self->shown_depth = f->depth;
+        f->depth = NULL;
     }
     gtk_widget_queue_draw(GTK_WIDGET(self));
     frame_free(f);
@@ -356,6 +372,139 @@ vv_scene_view_refresh(VvSceneView *self) {
     state_changed(self);
 }
 
+/* ---- geometry of the view on screen ---------------------------------------- */
+
+/* Where the image is drawn: its top-left corner and scale (<= 1) in the widget. */
+static void
+image_rect(VvSceneView *self, double *x0, double *y0, double *scale) {
+    const vv_world *w = vv_document_world(self->doc);
+    int ww = gtk_widget_get_width(GTK_WIDGET(self)), wh = gtk_widget_get_height(GTK_WIDGET(self));
+    double vw = w->view.width, vh = w->view.height;
+    double s = fmin(1.0, fmin(ww / vw, wh / vh));
+    *scale = s > 0 ? s : 1;
+    *x0 = floor((ww - vw * s) / 2);
+    *y0 = floor((wh - vh * s) / 2);
+}
+
+/* Image pixel coordinates of world point @p p seen through @p v (the
+ * inverse of vv_view_ray); FALSE behind the eye. */
+static gboolean
+project(const vv_view *v, vv_vec3 p, double *px, double *py) {
+    vv_vec3 f = vv_vec3_normalize(vv_vec3_sub(v->at, v->eye));
+    vv_vec3 r = vv_vec3_normalize(vv_vec3_cross(f, v->up));
+    vv_vec3 u = vv_vec3_cross(r, f);
+    vv_vec3 d = vv_vec3_sub(p, v->eye);
+    double aspect = (double)v->width / v->height, x, y;
+    if (v->projection == VV_PROJECTION_ORTHOGRAPHIC) {
+        double hh = 0.5 * v->ortho_height;
+        x = vv_vec3_dot(d, r) / (hh * aspect);
+        y = vv_vec3_dot(d, u) / hh;
+    } else {
+        double z = vv_vec3_dot(d, f);
+        if (!(z > 1e-9))
+            return FALSE;
+        double t = tan(0.5 * v->fov);
+        x = vv_vec3_dot(d, r) / (z * t * aspect);
+        y = vv_vec3_dot(d, u) / (z * t);
+    }
+    *px = (x + 1) / 2 * v->width - 0.5;
+    *py = (1 - y) / 2 * v->height - 0.5;
+    return isfinite(*px) && isfinite(*py);
+}
+
+gboolean
+vv_scene_view_pick(VvSceneView *self, double x, double y, vv_vec3 *world) {
+    if (!self->shown_depth || self->shown_gen != self->gen || !self->texture)
+        return FALSE;
+    double x0, y0, s;
+    image_rect(self, &x0, &y0, &s);
+    const vv_view *v = &self->shown_view;
+    int px = (int)floor((x - x0) / s), py = (int)floor((y - y0) / s);
+    if (px < 0 || py < 0 || px >= v->width || py >= v->height)
+        return FALSE;
+    float d = self->shown_depth[(size_t)py * v->width + px];
+    if (!isfinite(d))
+        return FALSE;
+    vv_ray ray = vv_view_ray(v, px, py);
+    *world = vv_ray_at(ray, d);
+    return TRUE;
+}
+
+void
+vv_scene_view_pick_next(VvSceneView *self, VvPickFunc fn, gpointer user) {
+    self->pick_fn = fn;
+    self->pick_user = user;
+    gtk_widget_set_cursor_from_name(GTK_WIDGET(self), fn ? "crosshair" : NULL);
+}
+
+/* The cut plane a VV_NAV_CUT drag moves: the selected object's last local
+ * one, else the World's last global one; NULL when there is none. */
+static vv_cut_plane *
+target_plane(VvSceneView *self) {
+    vv_world *w = vv_document_world(self->doc);
+    vv_object *o = vv_document_selected_object(self->doc);
+    if (o && o->n_cut_planes > 0)
+        return &o->cut_planes[o->n_cut_planes - 1];
+    if (w->n_cut_planes > 0)
+        return &w->cut_planes[w->n_cut_planes - 1];
+    return NULL;
+}
+
+/* The handles of the plane or light being moved, drawn over the image. */
+static void
+draw_handles(VvSceneView *self, GtkSnapshot *snapshot) {
+    if (self->target != VV_NAV_CUT && self->target != VV_NAV_LIGHT)
+        return;
+    const vv_world *w = vv_document_world(self->doc);
+    const vv_view *v = &w->view;
+    double x0, y0, s;
+    image_rect(self, &x0, &y0, &s);
+    int ww = gtk_widget_get_width(GTK_WIDGET(self)), wh = gtk_widget_get_height(GTK_WIDGET(self));
+    cairo_t *cr = gtk_snapshot_append_cairo(snapshot, &GRAPHENE_RECT_INIT(0, 0, ww, wh));
+    cairo_set_line_width(cr, 2);
+    double dist = vv_vec3_length(vv_vec3_sub(v->at, v->eye));
+    double ax, ay, bx, by;
+    if (self->target == VV_NAV_CUT) {
+        vv_cut_plane *pl = target_plane(self);
+        if (pl && project(v, pl->point, &ax, &ay) &&
+            project(v, vv_vec3_add(pl->point, vv_vec3_scale(pl->normal, 0.15 * dist)), &bx, &by)) {
+            cairo_set_source_rgb(cr, 0.2, 0.9, 1.0);
+            cairo_arc(cr, x0 + s * ax, y0 + s * ay, 7, 0, 2 * G_PI);
+            cairo_stroke(cr);
+            cairo_move_to(cr, x0 + s * ax, y0 + s * ay);
+            cairo_line_to(cr, x0 + s * bx, y0 + s * by);
+            cairo_stroke(cr);
+            cairo_arc(cr, x0 + s * bx, y0 + s * by, 3.5, 0, 2 * G_PI);
+            cairo_fill(cr);
+        }
+    } else if (self->light >= 0 && self->light < w->n_lights) {
+        const vv_light *l = &w->lights[self->light];
+        cairo_set_source_rgb(cr, 1.0, 0.85, 0.2);
+        if (l->type == VV_LIGHT_POINT && project(v, l->position, &ax, &ay)) {
+            double cx = x0 + s * ax, cy = y0 + s * ay;
+            cairo_arc(cr, cx, cy, 6, 0, 2 * G_PI);
+            cairo_fill(cr);
+            for (int k = 0; k < 8; k++) {
+                double a = k * G_PI / 4;
+                cairo_move_to(cr, cx + 9 * cos(a), cy + 9 * sin(a));
+                cairo_line_to(cr, cx + 14 * cos(a), cy + 14 * sin(a));
+            }
+            cairo_stroke(cr);
+        } else if (l->type == VV_LIGHT_DIRECTIONAL && !l->headlight &&
+                   project(v, vv_vec3_sub(v->at, vv_vec3_scale(l->direction, 0.3 * dist)), &ax,
+                           &ay) &&
+                   project(v, v->at, &bx, &by)) {
+            /* an arrow from where the light comes from towards the look-at point */
+            cairo_move_to(cr, x0 + s * ax, y0 + s * ay);
+            cairo_line_to(cr, x0 + s * bx, y0 + s * by);
+            cairo_stroke(cr);
+            cairo_arc(cr, x0 + s * ax, y0 + s * ay, 6, 0, 2 * G_PI);
+            cairo_fill(cr);
+        }
+    }
+    cairo_destroy(cr);
+}
+
 /* ---- drawing -------------------------------------------------------------- */
 
 static void
@@ -382,12 +531,12 @@ vv_scene_view_snapshot(GtkWidget *widget, GtkSnapshot *snapshot) {
     if (!self->texture)
         return;
     /* the view's image size, centred; scaled down only when the widget is smaller */
-    double vw = w->view.width, vh = w->view.height;
-    double s = fmin(1.0, fmin(ww / vw, wh / vh));
-    double dw = vw * s, dh = vh * s;
-    graphene_rect_t r = GRAPHENE_RECT_INIT((float)floor((ww - dw) / 2), (float)floor((wh - dh) / 2),
-                                           (float)dw, (float)dh);
+    double x0, y0, sc;
+    image_rect(self, &x0, &y0, &sc);
+    graphene_rect_t r = GRAPHENE_RECT_INIT((float)x0, (float)y0, (float)(w->view.width * sc),
+                                           (float)(w->view.height * sc));
     gtk_snapshot_append_texture(snapshot, self->texture, &r);
+    draw_handles(self, snapshot);
     log_frame(self);
 }
 
@@ -413,12 +562,10 @@ static void
 apply_motion(VvSceneView *self, double dx, double dy) {
     vv_world *w = vv_document_world(self->doc);
     /* widget pixels to view pixels (the image may be shown scaled down) */
-    int ww = gtk_widget_get_width(GTK_WIDGET(self)), wh = gtk_widget_get_height(GTK_WIDGET(self));
-    double s = fmin(1.0, fmin((double)ww / w->view.width, (double)wh / w->view.height));
-    if (s > 0) {
-        dx /= s;
-        dy /= s;
-    }
+    double x0, y0, s;
+    image_rect(self, &x0, &y0, &s);
+    dx /= s;
+    dy /= s;
     gboolean pan =
         self->drag_button == 3 || self->drag_button == 2 || (self->drag_mods & GDK_SHIFT_MASK);
     gboolean zoom = (self->drag_mods & GDK_CONTROL_MASK) != 0;
@@ -433,6 +580,31 @@ apply_motion(VvSceneView *self, double dx, double dy) {
             vv_nav_object_translate(obj, &w->view, dx, dy);
         else
             vv_nav_object_rotate(obj, &w->view, dx, dy);
+    } else if (target == VV_NAV_CUT) {
+        vv_cut_plane *pl = target_plane(self);
+        if (!pl)
+            return;
+        if (self->drag_mods & GDK_SHIFT_MASK) {
+            /* turn the normal as the trackball turns a direction */
+            vv_light tmp = {VV_LIGHT_DIRECTIONAL, 0, pl->normal, pl->point, {1, 1, 1}, 1};
+            vv_nav_light_drag(&tmp, &w->view, dx, dy);
+            pl->normal = tmp.direction;
+        } else {
+            /* along the normal, by the mouse motion along the normal's image direction */
+            double dist = vv_vec3_length(vv_vec3_sub(w->view.at, w->view.eye));
+            double ax, ay, bx, by;
+            vv_vec3 tip = vv_vec3_add(pl->point, vv_vec3_scale(pl->normal, 0.15 * dist));
+            if (project(&w->view, pl->point, &ax, &ay) && project(&w->view, tip, &bx, &by)) {
+                double lx = bx - ax, ly = by - ay, len = hypot(lx, ly);
+                if (len > 1e-6) {
+                    double along = (dx * lx + dy * ly) / len; /* pixels */
+                    vv_vec3 np = vv_vec3_add(pl->point,
+                                             vv_vec3_scale(pl->normal, along * 0.15 * dist / len));
+                    if (isfinite(np.x) && isfinite(np.y) && isfinite(np.z))
+                        pl->point = np;
+                }
+            }
+        }
     } else if (target == VV_NAV_LIGHT && self->light >= 0 && self->light < w->n_lights) {
         vv_nav_light_drag(&w->lights[self->light], &w->view, dx, dy);
     } else if (zoom) {
@@ -454,10 +626,24 @@ drag_begin(GtkGestureDrag *g, double x, double y, gpointer user) {
     self->drag_mods = gtk_event_controller_get_current_event_state(GTK_EVENT_CONTROLLER(g));
     (void)x;
     (void)y;
+    self->dragged = FALSE;
     gtk_widget_grab_focus(GTK_WIDGET(self));
-    begin_interaction(self, self->target == VV_NAV_OBJECT  ? "move object"
-                            : self->target == VV_NAV_LIGHT ? "move light"
-                                                           : "move view");
+}
+
+static void
+drag_end(GtkGestureDrag *g, double ox, double oy, gpointer user) {
+    VvSceneView *self = user;
+    if (self->dragged || !self->pick_fn || fabs(ox) > 3 || fabs(oy) > 3)
+        return;
+    double sx, sy;
+    gtk_gesture_drag_get_start_point(g, &sx, &sy);
+    vv_vec3 p;
+    if (!vv_scene_view_pick(self, sx, sy, &p))
+        return; /* stays armed: nothing under the pointer yet */
+    VvPickFunc fn = self->pick_fn;
+    gpointer u = self->pick_user;
+    vv_scene_view_pick_next(self, NULL, NULL);
+    fn(u, p);
 }
 
 static void
@@ -467,8 +653,16 @@ drag_update(GtkGestureDrag *g, double ox, double oy, gpointer user) {
     double dx = ox - self->drag_last_x, dy = oy - self->drag_last_y;
     self->drag_last_x = ox;
     self->drag_last_y = oy;
-    if (dx != 0 || dy != 0)
-        apply_motion(self, dx, dy);
+    if (dx == 0 && dy == 0)
+        return;
+    if (!self->dragged) {
+        self->dragged = TRUE;
+        begin_interaction(self, self->target == VV_NAV_OBJECT  ? "move object"
+                                : self->target == VV_NAV_LIGHT ? "move light"
+                                : self->target == VV_NAV_CUT   ? "move cut plane"
+                                                               : "move view");
+    }
+    apply_motion(self, dx, dy);
 }
 
 static gboolean
@@ -594,6 +788,8 @@ vv_scene_view_dispose(GObject *o) {
         g_clear_object(&self->doc);
     }
     g_clear_object(&self->texture);
+    g_free(self->shown_depth);
+    self->shown_depth = NULL;
     if (self->frame_log) {
         fclose(self->frame_log);
         self->frame_log = NULL;
@@ -639,6 +835,7 @@ vv_scene_view_init(VvSceneView *self) {
         gtk_gesture_single_set_button(GTK_GESTURE_SINGLE(drag), (guint)button);
         g_signal_connect(drag, "drag-begin", G_CALLBACK(drag_begin), self);
         g_signal_connect(drag, "drag-update", G_CALLBACK(drag_update), self);
+        g_signal_connect(drag, "drag-end", G_CALLBACK(drag_end), self);
         gtk_widget_add_controller(GTK_WIDGET(self), GTK_EVENT_CONTROLLER(drag));
     }
     GtkEventController *scroll = gtk_event_controller_scroll_new(
@@ -664,11 +861,13 @@ vv_scene_view_new(VvDocument *doc) {
 void
 vv_scene_view_set_target(VvSceneView *self, VvNavTarget target) {
     self->target = target;
+    gtk_widget_queue_draw(GTK_WIDGET(self));
 }
 
 void
 vv_scene_view_set_light(VvSceneView *self, int index) {
     self->light = index;
+    gtk_widget_queue_draw(GTK_WIDGET(self));
 }
 
 void

@@ -29,7 +29,10 @@ G_DECLARE_FINAL_TYPE(VvSceneView, vv_scene_view, VV, SCENE_VIEW, GtkWidget)
 typedef enum VvNavTarget {
     VV_NAV_VIEW = 0,   /**< the camera (trackball, pan, zoom) */
     VV_NAV_OBJECT = 1, /**< the selected object */
-    VV_NAV_LIGHT = 2   /**< the selected light */
+    VV_NAV_LIGHT = 2,  /**< the selected light */
+    VV_NAV_CUT = 3     /**< the last cut plane (the selected object's local one if it has
+                            one, else the last global one): a drag moves it along its normal,
+                            Shift+drag turns the normal */
 } VvNavTarget;
 
 VvSceneView *vv_scene_view_new(VvDocument *doc);
@@ -48,6 +51,18 @@ double vv_scene_view_full_ms(VvSceneView *view);
 const char *vv_scene_view_shown(VvSceneView *view);
 /** Re-renders now (the World changed outside a drag). */
 void vv_scene_view_refresh(VvSceneView *view);
+
+/**
+ * The world point under widget position (x, y) on the frame on screen: the
+ * first visible surface along the pixel's ray, from the depth of the last
+ * full-quality frame. FALSE when nothing is there or the frame on screen is
+ * not a full-quality one of the current state.
+ */
+gboolean vv_scene_view_pick(VvSceneView *view, double x, double y, vv_vec3 *world);
+/** Called with the picked world point by the next click in the view (instead of a drag). */
+typedef void (*VvPickFunc)(gpointer user, vv_vec3 world);
+/** Arms a one-shot pick: the next click in the view calls @p fn (NULL disarms). */
+void vv_scene_view_pick_next(VvSceneView *view, VvPickFunc fn, gpointer user);
 
 /** Microseconds of g_get_monotonic_time() at which the process started (for the frame log). */
 void vv_scene_view_set_start_time(gint64 us);

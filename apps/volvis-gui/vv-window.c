@@ -17,7 +17,7 @@ struct _VvWindow {
     gboolean updating; /* set while widgets are filled from the World */
 
     /* Manipulation */
-    GtkWidget *object_list;
+    GtkWidget *object_list, *nav_target;
     GtkWidget *seg_mode, *threshold, *render_mode, *isovalue, *step;
     VvTfEditor *tf_editor;
     VvTf2dEditor *tf2d_editor;
@@ -948,6 +948,65 @@ act_measure(GSimpleAction *a, GVariant *p, gpointer user) {
     g_object_unref(task);
 }
 
+/* Picking in the view: the next click sets the seed voxel or a point. */
+static void
+picked_seed(gpointer user, vv_vec3 p) {
+    VvWindow *win = user;
+    vv_object *o = vv_document_selected_object(win->doc);
+    if (!o || !o->volume)
+        return;
+    int ok = 0;
+    vv_mat4 inv = vv_mat4_inverse(vv_object_index_to_world(o), &ok);
+    if (!ok)
+        return;
+    vv_vec3 ijk = vv_mat4_mul_point(inv, p);
+    set_spin(win->seed_i, round(ijk.x));
+    set_spin(win->seed_j, round(ijk.y));
+    set_spin(win->seed_k, round(ijk.z));
+    gtk_check_button_set_active(GTK_CHECK_BUTTON(win->measure_seed), TRUE);
+    char t[160];
+    snprintf(t, sizeof t, "picked voxel (%.0f, %.0f, %.0f) at world (%g, %g, %g)\n", round(ijk.x),
+             round(ijk.y), round(ijk.z), p.x, p.y, p.z);
+    measure_print(win, t);
+}
+
+static void
+picked_a(gpointer user, vv_vec3 p) {
+    VvWindow *win = user;
+    set_spin(win->pa[0], p.x);
+    set_spin(win->pa[1], p.y);
+    set_spin(win->pa[2], p.z);
+}
+
+static void
+picked_b(gpointer user, vv_vec3 p) {
+    VvWindow *win = user;
+    set_spin(win->pb[0], p.x);
+    set_spin(win->pb[1], p.y);
+    set_spin(win->pb[2], p.z);
+}
+
+static void
+act_pick_seed(GSimpleAction *a, GVariant *p, gpointer user) {
+    (void)a;
+    (void)p;
+    vv_scene_view_pick_next(VV_WINDOW(user)->scene, picked_seed, user);
+}
+
+static void
+act_pick_a(GSimpleAction *a, GVariant *p, gpointer user) {
+    (void)a;
+    (void)p;
+    vv_scene_view_pick_next(VV_WINDOW(user)->scene, picked_a, user);
+}
+
+static void
+act_pick_b(GSimpleAction *a, GVariant *p, gpointer user) {
+    (void)a;
+    (void)p;
+    vv_scene_view_pick_next(VV_WINDOW(user)->scene, picked_b, user);
+}
+
 static void
 act_distance(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
@@ -1288,8 +1347,10 @@ manipulation_page(VvWindow *win) {
 
     /* Navigator */
     g = section(box, "Navigator");
-    static const char *const targets[] = {"view", "selected object", "selected light", NULL};
+    static const char *const targets[] = {"view", "selected object", "selected light", "cut plane",
+                                          NULL};
     GtkWidget *t = row(g, "drag moves", dropdown(targets));
+    win->nav_target = t;
     g_signal_connect(t, "notify::selected", G_CALLBACK(target_changed), win);
     static const char *const previews[] = {
         "automatic",    "bounding boxes", "PARC boxes",   "coarse MC",
@@ -1481,6 +1542,7 @@ measurement_page(VvWindow *win) {
     win->seed_i = row(g, "i", spin(0, 1e5, 1, 0));
     win->seed_j = row(g, "j", spin(0, 1e5, 1, 0));
     win->seed_k = row(g, "k", spin(0, 1e5, 1, 0));
+    gtk_box_append(GTK_BOX(box), action_button("Pick the seed voxel in the view", "win.pick-seed"));
     gtk_box_append(GTK_BOX(box), action_button("Measure", "win.measure"));
     g = section(box, "Distance (world units)");
     const char *ax[] = {"A x", "A y", "A z", "B x", "B y", "B z"};
@@ -1488,6 +1550,10 @@ measurement_page(VvWindow *win) {
         win->pa[i] = row(g, ax[i], spin(-1e6, 1e6, 1, 3));
     for (int i = 0; i < 3; i++)
         win->pb[i] = row(g, ax[3 + i], spin(-1e6, 1e6, 1, 3));
+    GtkWidget *pb = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 4);
+    gtk_box_append(GTK_BOX(pb), action_button("Pick A", "win.pick-a"));
+    gtk_box_append(GTK_BOX(pb), action_button("Pick B", "win.pick-b"));
+    gtk_box_append(GTK_BOX(box), pb);
     gtk_box_append(GTK_BOX(box), action_button("Distance", "win.distance"));
     section(box, "Results (select and copy)");
     win->measure_text = gtk_text_view_new();
@@ -1551,6 +1617,16 @@ vv_window_class_init(VvWindowClass *klass) {
     G_OBJECT_CLASS(klass)->dispose = vv_window_dispose;
 }
 
+/* What a drag in the view moves (Alt+1..4): the dropdown follows. */
+static void
+act_drag_target(GSimpleAction *a, GVariant *p, gpointer user) {
+    (void)a;
+    VvWindow *win = user;
+    const char *t = g_variant_get_string(p, NULL);
+    guint k = !strcmp(t, "object") ? 1u : !strcmp(t, "light") ? 2u : !strcmp(t, "cut") ? 3u : 0u;
+    gtk_drop_down_set_selected(GTK_DROP_DOWN(win->nav_target), k);
+}
+
 static const GActionEntry win_actions[] = {
     {"open", act_open, NULL, NULL, NULL, {0}},
     {"save", act_save, NULL, NULL, NULL, {0}},
@@ -1570,6 +1646,10 @@ static const GActionEntry win_actions[] = {
     {"histogram", act_histogram, NULL, NULL, NULL, {0}},
     {"measure", act_measure, NULL, NULL, NULL, {0}},
     {"distance", act_distance, NULL, NULL, NULL, {0}},
+    {"pick-seed", act_pick_seed, NULL, NULL, NULL, {0}},
+    {"drag-target", act_drag_target, "s", NULL, NULL, {0}},
+    {"pick-a", act_pick_a, NULL, NULL, NULL, {0}},
+    {"pick-b", act_pick_b, NULL, NULL, NULL, {0}},
     {"voxelize", act_voxelize, NULL, NULL, NULL, {0}},
 };
 

@@ -18,6 +18,7 @@ cat > "$OUT/session.json" <<JSON
   "view": {"eye": [0, 600, 0], "at": [0, 0, 0], "up": [0, 0, 1], "fov": 25,
            "width": 512, "height": 512, "background": [0, 0, 0]},
   "lights": [{"type": "directional", "direction": [0, -1, 0], "color": [1, 1, 1], "intensity": 1.0}],
+  "cut_planes": [{"point": [0, 0, 50], "normal": [0, 0, -1]}],
   "objects": [{
     "name": "head", "type": "volume", "file": "$DATA/ct_head.nrrd",
     "origin": [-122.0, -122.0, -80.25], "mode": "composite", "step": 0.5,
@@ -106,6 +107,35 @@ sleep 1
 "$CLI" render "$OUT/session.json" -q -o "$OUT/cli_saved.png"
 same "$OUT/cli_saved.png" "$OUT/full_tf.png" || fail "the CLI render of the saved session differs from the GUI ($(psnr "$OUT/cli_saved.png" "$OUT/full_tf.png") dB)"
 echo "saved session: the CLI gives the GUI's pixels"
+
+# a drag on the light (Alt+3) moves the highlight; a drag on the cut-plane
+# handle (Alt+4) moves the plane; the saved session still gives the GUI's pixels
+drag_in_view() { # x0 y0 dx dy
+  xdotool mousemove "$1" "$2" mousedown 1
+  for k in 1 2 3 4 5 6 7 8; do xdotool mousemove $(($1 + $3 * k / 8)) $(($2 + $4 * k / 8)); sleep 0.03; done
+  xdotool mouseup 1
+}
+n=$(nfull)
+xdotool key alt+3
+drag_in_view 300 360 120 0
+wait_full "$n" "the light drag"
+import -window root "$OUT/light.png"
+same "$OUT/full.png" "$OUT/full_tf.png" && fail "dragging the light did not change the image"
+cp "$OUT/full.png" "$OUT/full_light.png"
+echo "light drag: PSNR $(psnr "$OUT/full_light.png" "$OUT/full_tf.png") against before"
+n=$(nfull)
+xdotool key alt+4
+drag_in_view 300 200 0 60
+wait_full "$n" "the cut-plane drag"
+import -window root "$OUT/cut.png"
+same "$OUT/full.png" "$OUT/full_light.png" && fail "dragging the cut plane did not change the image"
+cp "$OUT/full.png" "$OUT/full_cut.png"
+xdotool key alt+1
+xdotool key ctrl+s
+sleep 1
+"$CLI" render "$OUT/session.json" -q -o "$OUT/cli_saved2.png"
+same "$OUT/cli_saved2.png" "$OUT/full_cut.png" || fail "after the light and cut-plane drags the CLI differs from the GUI"
+echo "light and cut-plane drags: saved and rendered by the CLI to the GUI's pixels"
 
 # Ctrl+Q with nothing unsaved exits 0
 xdotool key ctrl+q
