@@ -113,14 +113,20 @@ frame_free(frame *f) {
 typedef struct cancel_ctx {
     VvSceneView *view;
     guint64 gen;
+    gboolean refine;
 } cancel_ctx;
 
+/* A refinement stops as soon as the state changes; a preview is always
+ * finished (while input streams in, every preview would be outdated before
+ * it is done, and none would ever be shown); both stop when the view goes. */
 static int
 cancel_cb(void *user, double fraction) {
     (void)fraction;
     cancel_ctx *c = user;
+    if (__atomic_load_n(&c->view->quit, __ATOMIC_RELAXED))
+        return 1;
     guint64 below = __atomic_load_n(&c->view->cancel_below, __ATOMIC_RELAXED);
-    return c->gen < below || __atomic_load_n(&c->view->quit, __ATOMIC_RELAXED) ? 1 : 0;
+    return c->refine && c->gen < below;
 }
 
 static gboolean show_frame(gpointer data);
@@ -155,7 +161,7 @@ render_one(VvSceneView *self, const job *j, vv_preview_kind kind) {
     }
     if (s == VV_OK)
         s = vv_image_new(&img, iw, ih);
-    cancel_ctx cc = {self, j->gen};
+    cancel_ctx cc = {self, j->gen, j->refine};
     vv_render_options ro;
     vv_render_options_init(&ro);
     ro.quality = w->render.quality >= 0 ? w->render.quality : 2;
@@ -176,9 +182,11 @@ render_one(VvSceneView *self, const job *j, vv_preview_kind kind) {
         vv_image_free(img);
         return f;
     }
-    g_mutex_lock(&self->lock);
-    vv_preview_policy_record(&self->policy, kind, secs);
-    g_mutex_unlock(&self->lock);
+    if (!vv_preview_last_warmup(self->preview)) {
+        g_mutex_lock(&self->lock);
+        vv_preview_policy_record(&self->policy, kind, secs);
+        g_mutex_unlock(&self->lock);
+    }
     size_t n = (size_t)iw * ih * 4;
     guint8 *px = g_malloc(n);
     vv_image_to_8bit(img, 4, 1.0, px);
@@ -210,12 +218,14 @@ worker_main(gpointer data) {
         self->pending = NULL;
         g_mutex_unlock(&self->lock);
         for (int k = 0; k < j->n_kinds; k++) {
-            if (j->refine && cancel_cb(&(cancel_ctx){self, j->gen}, 0))
+            if (cancel_cb(&(cancel_ctx){self, j->gen, j->refine}, 0))
                 break;
             frame *f = render_one(self, j, j->kinds[k]);
             if (!f)
                 break;
-            g_idle_add_full(G_PRIORITY_HIGH_IDLE, show_frame, f, NULL);
+            /* at the priority of input events: a stream of motion events
+             * must not hold back the frames they cause */
+            g_idle_add_full(G_PRIORITY_DEFAULT, show_frame, f, NULL);
             /* a newer request pre-empts the rest of a refinement */
             g_mutex_lock(&self->lock);
             gboolean newer = self->pending != NULL;

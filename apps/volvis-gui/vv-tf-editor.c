@@ -13,6 +13,8 @@
 struct _VvTfEditor {
     GtkWidget parent;
     VvDocument *doc;
+    vv_tf drawn; /* the function last drawn, to skip redraws of unchanged ones */
+    const vv_object *drawn_object;
     gboolean log;
     GdkRGBA color;
     int drag_point; /* opacity point being dragged, or -1 */
@@ -60,10 +62,12 @@ vv_tf_editor_snapshot(GtkWidget *w, GtkSnapshot *snapshot) {
     cairo_set_source_rgb(cr, 0.12, 0.12, 0.14);
     cairo_paint(cr);
     vv_object *o = volume_object(ed);
+    ed->drawn_object = o;
     if (!o) {
         cairo_destroy(cr);
         return;
     }
+    ed->drawn = o->tf;
     update_histogram(ed, o->volume);
     vvg_tf_axes a = axes(ed, o);
     /* histogram: the largest bin but the first (background) sets the scale */
@@ -185,6 +189,12 @@ drag_update(GtkGestureDrag *g, double ox, double oy, gpointer user) {
 static void
 doc_changed(VvDocument *doc, gpointer user) {
     (void)doc;
+    VvTfEditor *ed = VV_TF_EDITOR(user);
+    /* the World changes on every motion event of a drag in the view: redraw
+     * only when this object's function did */
+    vv_object *o = volume_object(ed);
+    if (o && o == ed->drawn_object && memcmp(&o->tf, &ed->drawn, sizeof ed->drawn) == 0)
+        return;
     gtk_widget_queue_draw(GTK_WIDGET(user));
 }
 

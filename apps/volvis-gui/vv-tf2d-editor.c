@@ -11,6 +11,8 @@
 struct _VvTf2dEditor {
     GtkWidget parent;
     VvDocument *doc;
+    vv_tf2d drawn; /* the function last drawn, to skip redraws of unchanged ones */
+    const vv_object *drawn_object;
     int selected;
     gboolean resize;
     double x0, y0;        /* drag start, pixels */
@@ -109,10 +111,12 @@ vv_tf2d_editor_snapshot(GtkWidget *widget, GtkSnapshot *snapshot) {
     cairo_set_source_rgb(cr, 0.12, 0.12, 0.14);
     cairo_paint(cr);
     vv_object *o = volume_object(ed);
+    ed->drawn_object = o;
     if (!o) {
         cairo_destroy(cr);
         return;
     }
+    ed->drawn = o->tf2d;
     update_histogram(ed, o->volume);
     cairo_save(cr);
     cairo_scale(cr, W / HIST_V, H / HIST_G);
@@ -268,6 +272,12 @@ vv_tf2d_editor_selected(VvTf2dEditor *ed) {
 static void
 doc_changed(VvDocument *doc, gpointer user) {
     (void)doc;
+    VvTf2dEditor *ed = VV_TF2D_EDITOR(user);
+    /* the World changes on every motion event of a drag in the view: redraw
+     * only when this object's function did */
+    vv_object *o = volume_object(ed);
+    if (o && o == ed->drawn_object && memcmp(&o->tf2d, &ed->drawn, sizeof ed->drawn) == 0)
+        return;
     gtk_widget_queue_draw(GTK_WIDGET(user));
 }
 

@@ -213,7 +213,9 @@ update_title(VvWindow *win) {
     const char *p = vv_document_path(win->doc);
     g_autofree char *base = p ? g_path_get_basename(p) : g_strdup("untitled");
     char *t = g_strdup_printf("VolVis — %s%s", base, vv_document_dirty(win->doc) ? " *" : "");
-    gtk_window_set_title(GTK_WINDOW(win), t);
+    /* called for every change, also during drags: the X server is told only of new titles */
+    if (g_strcmp0(t, gtk_window_get_title(GTK_WINDOW(win))) != 0)
+        gtk_window_set_title(GTK_WINDOW(win), t);
     g_free(t);
     GAction *a = g_action_map_lookup_action(G_ACTION_MAP(win), "undo");
     g_simple_action_set_enabled(G_SIMPLE_ACTION(a), vv_document_can_undo(win->doc));

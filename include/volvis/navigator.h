@@ -133,6 +133,12 @@ typedef struct vv_preview vv_preview;
  * (unknown renderer), VV_ERR_NOMEM.
  */
 vv_status vv_preview_new(vv_preview **out, const char *final_renderer);
+/**
+ * 1 when the last vv_preview_render built caches (a volume's first ray cast,
+ * first shaded ray cast, first full frame, or a new PARC or coarse grid), so
+ * that its time is not what the next frame will take.
+ */
+int vv_preview_last_warmup(const vv_preview *p);
 /** Releases a preview, its renderers and its cached surfaces. Accepts NULL. */
 void vv_preview_free(vv_preview *p);
 /** The final renderer (to set its options with vv_renderer_set_option); owned by @p p. */
@@ -159,29 +165,34 @@ vv_status vv_preview_render(vv_preview *p, const vv_world *world, const vv_view 
                             vv_preview_kind kind, const vv_render_options *opt, vv_image *out);
 
 /**
- * The frame-rate policy. Times are learnt per representation (an average of
- * the last frames, per pixel of the view); vv_preview_policy_choose picks the
- * best representation whose expected time fits @p budget seconds, falling
- * back to the cheapest. Until a representation is measured, a guess from the
- * nearest measured one is used.
+ * The frame-rate policy. Times are learnt per representation (an
+ * exponential average of its last frames); vv_preview_policy_choose picks
+ * the best representation whose expected time fits the budget. The 1/2 ray
+ * cast is expected to take 4 times the 1/4 one until it is measured.
  */
 typedef struct vv_preview_policy {
     double seconds[VV_PREVIEW_COUNT]; /**< expected seconds a frame, < 0 when unknown */
     int forced;                       /**< >= 0: always this kind while moving; -1 automatic */
     int allowed[VV_PREVIEW_COUNT];    /**< 0 excludes a kind from the automatic choice */
-    int seen[VV_PREVIEW_COUNT];       /**< frames recorded; the first (cache building) is not
-                                           counted in seconds */
+    unsigned choices;                 /**< automatic choices made (every 24th probes a better
+                                           representation again) */
 } vv_preview_policy;
 
 /** Nothing measured, automatic choice, every representation but the full one allowed. */
 void vv_preview_policy_init(vv_preview_policy *pol);
 /**
  * Learns that a frame of @p kind took @p seconds (ignored when not finite or
- * < 0, and for the first frame of each kind, which builds caches).
+ * < 0). Frames that built caches (vv_preview_last_warmup) should not be
+ * recorded: their time says nothing about the next frame.
  */
 void vv_preview_policy_record(vv_preview_policy *pol, vv_preview_kind kind, double seconds);
-/** The representation to draw while moving within @p budget seconds a frame. */
-vv_preview_kind vv_preview_policy_choose(const vv_preview_policy *pol, double budget);
+/**
+ * The representation to draw while moving within @p budget seconds a frame:
+ * the best allowed one whose expected time fits, where one not measured yet
+ * is tried before a worse one is chosen; every 24th choice is the next
+ * better one, so that estimates follow the machine's load.
+ */
+vv_preview_kind vv_preview_policy_choose(vv_preview_policy *pol, double budget);
 
 #ifdef __cplusplus
 }

@@ -67,10 +67,14 @@ typedef struct pv_surface {
 struct vv_preview {
     vv_renderer *final;
     vv_renderer *raycast; /* the final renderer itself when that is the ray caster */
-    /* volumes the ray caster has drawn shaded (its gradients are cached) */
-    const vv_volume *warm[PV_CACHE];
+    /* How far the renderers' caches are built for a volume: 1 after its first
+     * ray cast (subvolume min/max, tables), 2 after its first shaded one
+     * (gradients), 3 after its first full frame (the final renderer's). */
+    const vv_volume *warm[PV_CACHE]; /* compared only, never dereferenced */
     uint64_t warm_modified[PV_CACHE];
+    int warm_level[PV_CACHE];
     int n_warm;
+    int warmup; /* the last frame built caches */
     vv_renderer *surface;
     pv_surface cache[PV_CACHE];
     uint64_t clock;
@@ -168,6 +172,7 @@ surface_mesh(vv_preview *p, const vv_volume *v, vv_preview_kind kind, double iso
     }
     vv_status s = VV_OK;
     if (!hit) {
+        p->warmup = 1;
         surface_clear(victim);
         hit = victim;
         if (kind == VV_PREVIEW_BOXES)
@@ -296,6 +301,24 @@ render_surfaces(vv_preview *p, const vv_world *world, const vv_view *view, vv_pr
     return s;
 }
 
+/* The warm-up level of @p v (an entry is made at 0 when there is none). */
+static int *
+warm_entry(vv_preview *p, const vv_volume *v) {
+    for (int k = 0; k < p->n_warm; k++)
+        if (p->warm[k] == v && p->warm_modified[k] == v->modified)
+            return &p->warm_level[k];
+    int k = p->n_warm < PV_CACHE ? p->n_warm++ : (int)(p->clock++ % PV_CACHE);
+    p->warm[k] = v;
+    p->warm_modified[k] = v->modified;
+    p->warm_level[k] = 0;
+    return &p->warm_level[k];
+}
+
+int
+vv_preview_last_warmup(const vv_preview *p) {
+    return p ? p->warmup : 0;
+}
+
 /* The ray caster at 1/divisor resolution and divisor x the sample step. */
 static vv_status
 render_reduced(vv_preview *p, const vv_world *world, const vv_view *view, int divisor,
@@ -309,18 +332,18 @@ render_reduced(vv_preview *p, const vv_world *world, const vv_view *view, int di
         if (o->type != VV_OBJECT_VOLUME || !o->volume)
             continue;
         o->step *= divisor;
-        /* The first shaded frame of a volume builds its gradient cache
-         * (about half a second for 256^3): the first preview of a volume is
-         * drawn unshaded so that something is on screen at once; shading
-         * starts with the next frame. */
-        int warm = 0;
-        for (int k = 0; k < p->n_warm; k++)
-            warm |= p->warm[k] == o->volume && p->warm_modified[k] == o->volume->modified;
-        if (!warm && o->shading) {
+        /* The first frame of a volume builds the ray caster's cache and the
+         * first shaded one its gradients (about half a second each for
+         * 256^3): the first preview is drawn unshaded so that something is
+         * on screen at once; shading starts with the next frame. */
+        int *level = warm_entry(p, o->volume);
+        if (*level < 1) {
+            p->warmup = 1;
+            *level = o->shading ? 1 : 2;
             o->shading = 0;
-            int k = p->n_warm < PV_CACHE ? p->n_warm++ : (int)(p->clock++ % PV_CACHE);
-            p->warm[k] = o->volume; /* compared only, never dereferenced */
-            p->warm_modified[k] = o->volume->modified;
+        } else if (*level < 2 && o->shading) {
+            p->warmup = 1;
+            *level = 2;
         }
     }
     vv_view v = *view;
@@ -346,8 +369,21 @@ vv_preview_render(vv_preview *p, const vv_world *world, const vv_view *view, vv_
     vv_render_options_init(&o);
     if (opt)
         o = *opt;
-    if (kind == VV_PREVIEW_FULL)
+    p->warmup = 0;
+    if (kind == VV_PREVIEW_FULL) {
+        /* the final renderer's first frame of a volume builds its caches */
+        for (int i = 0; i < world->n_objects; i++) {
+            const vv_object *ob = world->objects[i];
+            if (ob->type != VV_OBJECT_VOLUME || !ob->volume || !ob->visible)
+                continue;
+            int *level = warm_entry(p, ob->volume);
+            if (*level < 3) {
+                p->warmup = 1;
+                *level = 3;
+            }
+        }
         return vv_renderer_render(p->final, world, view, &o, out);
+    }
     o.quality = 0;
     switch (kind) {
     case VV_PREVIEW_RAYCAST_4:
@@ -370,19 +406,15 @@ vv_preview_policy_init(vv_preview_policy *pol) {
     for (int i = 0; i < VV_PREVIEW_COUNT; i++) {
         pol->seconds[i] = -1.0;
         pol->allowed[i] = i != VV_PREVIEW_FULL;
-        pol->seen[i] = 0;
     }
     pol->forced = -1;
+    pol->choices = 0;
 }
 
 void
 vv_preview_policy_record(vv_preview_policy *pol, vv_preview_kind kind, double seconds) {
     if (!pol || (int)kind < 0 || (int)kind >= VV_PREVIEW_COUNT || !isfinite(seconds) ||
         seconds < 0.0)
-        return;
-    /* the first frame of a representation builds its caches (gradients,
-     * subvolume min/max, reduced grids) and says nothing about the next */
-    if (pol->seen[kind]++ == 0)
         return;
     double *s = &pol->seconds[kind];
     /* an exponential average that follows a slower machine within a few frames */
@@ -394,8 +426,9 @@ static double
 expected(const vv_preview_policy *pol, int k) {
     if (pol->seconds[k] >= 0.0)
         return pol->seconds[k];
-    if (k == VV_PREVIEW_RAYCAST_2 && pol->seconds[VV_PREVIEW_RAYCAST_4] >= 0.0)
-        return 4.0 * pol->seconds[VV_PREVIEW_RAYCAST_4];
+    if (k == VV_PREVIEW_RAYCAST_2) /* 4x the pixels of 1/4; not tried before 1/4 */
+        return pol->seconds[VV_PREVIEW_RAYCAST_4] >= 0.0 ? 4.0 * pol->seconds[VV_PREVIEW_RAYCAST_4]
+                                                         : INFINITY;
     if (k == VV_PREVIEW_RAYCAST_4 && pol->seconds[VV_PREVIEW_RAYCAST_2] >= 0.0)
         return 0.25 * pol->seconds[VV_PREVIEW_RAYCAST_2];
     if (k == VV_PREVIEW_RAYCAST_4 && pol->seconds[VV_PREVIEW_FULL] >= 0.0)
@@ -404,26 +437,31 @@ expected(const vv_preview_policy *pol, int k) {
 }
 
 vv_preview_kind
-vv_preview_policy_choose(const vv_preview_policy *pol, double budget) {
+vv_preview_policy_choose(vv_preview_policy *pol, double budget) {
     if (pol->forced >= 0 && pol->forced < VV_PREVIEW_COUNT)
         return (vv_preview_kind)pol->forced;
+    /* the best representation that fits; an unknown one is tried (its time
+     * is learnt) before anything worse is settled for */
     int best = -1;
-    for (int k = 0; k < VV_PREVIEW_COUNT; k++) {
+    for (int k = VV_PREVIEW_COUNT - 1; k >= 0 && best < 0; k--) {
         if (!pol->allowed[k])
             continue;
         double e = expected(pol, k);
-        /* the 1/4 ray cast is tried when nothing is known about it: it is
-         * the cheapest image of the volume itself */
-        if ((e >= 0.0 && e <= budget) || (e < 0.0 && k == VV_PREVIEW_RAYCAST_4))
-            best = k;
-        else if (e < 0.0 && k < VV_PREVIEW_RAYCAST_4 && best < 0)
+        if (e < 0.0 || e <= budget)
             best = k;
     }
-    if (best < 0) {
-        for (int k = 0; k < VV_PREVIEW_COUNT; k++)
+    if (best < 0) { /* nothing fits: the cheapest allowed */
+        for (int k = 0; k < VV_PREVIEW_COUNT && best < 0; k++)
+            if (pol->allowed[k])
+                best = k;
+        if (best < 0)
+            return VV_PREVIEW_BBOX;
+    }
+    /* now and then the next better one is tried again, so that the choice
+     * follows a machine that has become less busy */
+    if (++pol->choices % 24 == 0)
+        for (int k = best + 1; k < VV_PREVIEW_COUNT; k++)
             if (pol->allowed[k])
                 return (vv_preview_kind)k;
-        return VV_PREVIEW_BBOX;
-    }
     return (vv_preview_kind)best;
 }

@@ -159,9 +159,6 @@ test_policy(void **state) {
     vv_preview_policy pol;
     vv_preview_policy_init(&pol);
     assert_int_equal(vv_preview_policy_choose(&pol, 0.03), VV_PREVIEW_RAYCAST_4);
-    for (int k = 0; k < VV_PREVIEW_COUNT; k++) /* warm-up frames are not counted */
-        vv_preview_policy_record(&pol, (vv_preview_kind)k, 10.0);
-    assert_int_equal(vv_preview_policy_choose(&pol, 0.03), VV_PREVIEW_RAYCAST_4);
     vv_preview_policy_record(&pol, VV_PREVIEW_RAYCAST_4, 0.004);
     /* 1/2 expected at 4x: 16 ms fits */
     assert_int_equal(vv_preview_policy_choose(&pol, 0.03), VV_PREVIEW_RAYCAST_2);
@@ -250,6 +247,26 @@ test_preview_render(void **state) {
     assert_true(cov[VV_PREVIEW_BOXES] < 2 * cov[VV_PREVIEW_FULL]);
     assert_true(cov[VV_PREVIEW_FULL] > 0.05);
     assert_true(cov[VV_PREVIEW_BBOX] > 0.0); /* edges of the box */
+    /* cache-building frames are flagged: the 1/4 ray cast was drawn first
+     * unshaded, its second (shaded) frame built the gradients; now warm */
+    {
+        int iw, ih;
+        vv_preview_size(VV_PREVIEW_RAYCAST_4, 96, 96, &iw, &ih);
+        vv_image *img = NULL;
+        vt_ok(vv_image_new(&img, iw, ih));
+        vt_ok(vv_preview_render(p, w, &w->view, VV_PREVIEW_RAYCAST_4, NULL, img));
+        assert_int_equal(vv_preview_last_warmup(p), 0);
+        vv_image_free(img);
+        vv_preview *q = NULL;
+        vt_ok(vv_preview_new(&q, "raycast"));
+        vt_ok(vv_image_new(&img, iw, ih));
+        for (int r = 0; r < 3; r++) {
+            vt_ok(vv_preview_render(q, w, &w->view, VV_PREVIEW_RAYCAST_4, NULL, img));
+            assert_int_equal(vv_preview_last_warmup(q), r < 2);
+        }
+        vv_image_free(img);
+        vv_preview_free(q);
+    }
     vv_image *wrong = NULL;
     vt_ok(vv_image_new(&wrong, 96, 96));
     vt_err(vv_preview_render(p, w, &w->view, VV_PREVIEW_RAYCAST_2, NULL, wrong));
