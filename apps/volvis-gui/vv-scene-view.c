@@ -523,10 +523,10 @@ log_frame(VvSceneView *self) {
         return;
     self->texture_logged = TRUE;
     double ms = (g_get_monotonic_time() - start_us) * 1e-3;
-    fprintf(self->frame_log, "%.3f %s %dx%d %.3f %.3f\n", ms,
+    fprintf(self->frame_log, "%.3f %s %dx%d %.3f %.3f %lu\n", ms,
             vv_preview_kind_name((vv_preview_kind)self->shown_kind),
             gdk_texture_get_width(self->texture), gdk_texture_get_height(self->texture),
-            self->shown_render_ms, self->shown_latency_us * 1e-3);
+            self->shown_render_ms, self->shown_latency_us * 1e-3, (unsigned long)self->shown_gen);
     fflush(self->frame_log);
 }
 

@@ -12,7 +12,8 @@
  * state is cancelled as soon as new input arrives.
  *
  * With VOLVIS_FRAME_LOG=FILE set, one line is appended per frame put on
- * screen: "<ms since start> <representation> <W>x<H> <render ms> <latency ms>"
+ * screen: "<ms since start> <representation> <W>x<H> <render ms> <latency ms>
+ * <state>", the state being the number of World changes the frame shows
  * (docs/gui.md). UI thread only, except where noted.
  */
 #ifndef VV_SCENE_VIEW_H
