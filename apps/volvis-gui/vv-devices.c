@@ -207,8 +207,10 @@ command(VvDevices *self, const char *name) {
     for (char *p = action; *p; p++)
         if (*p == '.')
             *p = '-';
-    if (self->window && g_action_map_lookup_action(G_ACTION_MAP(self->window), action)) {
-        g_action_group_activate_action(G_ACTION_GROUP(self->window), action, NULL);
+    GAction *a =
+        self->window ? g_action_map_lookup_action(G_ACTION_MAP(self->window), action) : NULL;
+    if (a && !g_action_get_parameter_type(a)) { /* a command carries no parameter */
+        g_action_activate(a, NULL);
         return;
     }
     if (!g_hash_table_contains(self->warned, name)) {
