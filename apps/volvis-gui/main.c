@@ -21,13 +21,19 @@ usage(FILE *out) {
             "VTK, SLC, ...), meshes (OBJ, PLY, STL, OFF, ...) and scene files (.json).\n"
             "\n"
             "Pages: Manipulation (objects, Object Control, Navigator), Rendering,\n"
-            "Measurement, Modeling. Drag in the view: rotate (Shift: pan, Ctrl: zoom,\n"
+            "Measurement, Modeling, Input devices (3-D mouse, game controllers, network\n"
+            "socket, replay, record). Drag in the view: rotate (Shift: pan, Ctrl: zoom,\n"
             "Alt: the selected object; right button: pan); wheel: zoom.\n"
             "Keys: Ctrl+O open, Ctrl+S save session, Ctrl+Z undo, Ctrl+Shift+Z redo,\n"
             "Ctrl+R render, Ctrl+Q quit.\n"
             "\n"
-            "Environment: VOLVIS_FRAME_LOG=FILE appends a line per frame shown\n"
-            "(docs/gui.md).\n",
+            "Environment (docs/gui.md):\n"
+            "  VOLVIS_FRAME_LOG=FILE     append a line per frame shown\n"
+            "  VOLVIS_FRAME_DIR=DIR      write each full-quality frame to DIR/full.png\n"
+            "  VOLVIS_INPUT_SOCKET=PATH  listen for input devices on a Unix socket at start\n"
+            "                            (protocol: docs/input.md)\n"
+            "  VOLVIS_INPUT_REPLAY=FILE  replay a recording of input devices at start\n"
+            "  VOLVIS_DEVICE_DIR=DIR     more device information-base files\n",
             vv_version());
 }
 
