@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# CTest entry: runs gui_session.sh inside a private Xvfb (xvfb-run -a).
+# CTest entry: runs gui_session.sh (or the session script named by
+# VV_GUI_SCRIPT, e.g. animator_session.sh) inside a private Xvfb (xvfb-run -a).
 set -euo pipefail
 dir=$(dirname "$0")
 mkdir -p "$3"
@@ -7,4 +8,4 @@ mkdir -p "$3"
 # LeakSanitizer reports as leaks; the GUI session checks behaviour, the unit
 # tests check the library's leaks.
 export ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0"
-exec xvfb-run -a -s "-screen 0 1280x800x24" bash "$dir/gui_session.sh" "$@"
+exec xvfb-run -a -s "-screen 0 1280x800x24" bash "$dir/${VV_GUI_SCRIPT:-gui_session.sh}" "$@"

@@ -1,0 +1,170 @@
+#!/usr/bin/env bash
+# The Animator page of the real volvis-gui under Xvfb, driven by real X input
+# from xdotool (run by test_gui.sh inside xvfb-run). On a small scene (the
+# neghip volume, 128x128 view): the page opens from its side-bar entry; an
+# orbit is added with the default values; Play shows new frames while it
+# runs and Stop gives back the first image bit for bit, with no unsaved
+# change; a final render to the default output (animation.mp4 in the
+# current folder) has the frame count set on the page; a PNG sequence has
+# frame k equal to `volvis render --azimuth 360*k/N` bit for bit; Cancel
+# stops a long render early; Ctrl+Q exits 0.
+set -euo pipefail
+GUI=$1 CLI=$2 OUT=$3
+DATA=$(cd ../shared/data/volumes && pwd)
+HERE=$(cd "$(dirname "$0")" && pwd)
+export GDK_BACKEND=x11 NO_AT_BRIDGE=1 VOLVIS_FRAME_LOG=$OUT/frames.log VOLVIS_FRAME_DIR=$OUT
+rm -rf "$OUT"/*.png "$OUT"/frames.log "$OUT"/*.json "$OUT"/*.mp4 "$OUT"/png "$OUT"/cancel
+pid=
+fail() {
+    echo "FAIL: $*" >&2
+    [ -n "$pid" ] && kill "$pid" 2>/dev/null
+    exit 1
+}
+cat > "$OUT/session.json" <<JSON
+{
+  "view": {"eye": [0, -220, 0], "at": [0, 0, 0], "up": [0, 0, 1], "fov": 30,
+           "width": 128, "height": 128, "background": [0, 0, 0]},
+  "lights": [{"type": "directional", "direction": [0, 1, 0], "color": [1, 1, 1], "intensity": 1.0}],
+  "objects": [{
+    "name": "neghip", "type": "volume", "file": "$DATA/neghip.slc",
+    "origin": [-32.5, -32.5, -32.5], "mode": "composite", "step": 0.5,
+    "transfer_function": {
+      "opacity": [[20, 0.0], [60, 0.3], [255, 0.8]],
+      "color": [[20, [0.2, 0.4, 1.0]], [120, [1, 0.8, 0.3]], [255, [1, 1, 1]]],
+      "opacity_unit_distance": 1.0}
+  }]
+}
+JSON
+nlines() { local c; c=$(wc -l < "$OUT/frames.log" 2>/dev/null) || true; echo "${c:-0}"; }
+nfull() { local c; c=$(grep -c " full " "$OUT/frames.log" 2>/dev/null) || true; echo "${c:-0}"; }
+wait_full() { # wait for more than $1 full frames
+    for _ in $(seq 1 300); do
+        [ "$(nfull)" -gt "$1" ] && { sleep 0.3; return 0; }
+        sleep 0.1
+    done
+    fail "no full-quality frame after $2"
+}
+same() { [ "$(compare -metric AE "$1" "$2" null: 2>&1 || true)" = "0" ]; }
+shot() { import -window root "$OUT/$1"; }
+click() { xdotool mousemove "$1" "$2" click 1; sleep 0.3; }
+# types $3 into the entry at $1,$2 in place of its text
+enter() {
+    click "$1" "$2"
+    xdotool key ctrl+a
+    xdotool type --delay 5 "$3"
+    sleep 0.2
+}
+
+# the default output of the page is animation.mp4 in the current folder
+(cd "$OUT" && exec "$GUI" "$OUT/session.json") > "$OUT/gui.log" 2>&1 &
+pid=$!
+wait_full 0 "opening"
+wid=$(xdotool search --sync --name '^VolVis — ' | head -1)
+xdotool windowmove "$wid" 0 0 windowsize "$wid" 1100 720
+sleep 0.5
+shot open.png
+cp "$OUT/full.png" "$OUT/full0.png"
+
+# the Animator's side-bar entry: try the entries from the last one up until
+# the page's timeline is on screen
+found=
+while read -r x y; do
+    click "$x" "$y"
+    sleep 0.3
+    shot page.png
+    if box=$(python3 "$HERE/locate.py" timeline "$OUT/page.png"); then
+        found="$x $y"
+        break
+    fi
+done < <(python3 "$HERE/locate.py" sidebar "$OUT/open.png" | tac)
+[ -n "$found" ] || fail "no side-bar entry shows the Animator page"
+read -r L T R B <<< "$box"
+W=$((R - L))
+echo "Animator page: side-bar entry at $found, timeline at $L,$T-$R,$B"
+# the controls, from the timeline (rows of equal-width buttons span it)
+play_x=$((L + W / 6)) stop_x=$((L + W / 2)) ctl_y=$((B + 21))
+frames_x=$((L + W / 2)) frames_y=$((B + 116))
+output_x=$((L + W * 6 / 10)) output_y=$((B + 209))
+render_x=$((L + W / 4)) cancel_x=$((L + W * 3 / 4)) render_y=$((B + 294))
+addseq_x=$((L + W / 2)) addseq_y=$((B + 551))
+
+# an orbit with the default values: 360 degrees over the animation's 60 frames
+click "$addseq_x" "$addseq_y"
+shot orbit.png
+
+# Play: new frames (Navigator previews) while it runs, no undo step
+n=$(nlines)
+click "$play_x" "$ctl_y"
+sleep 2
+shot playing.png
+played=$(($(nlines) - n))
+previews=$(tail -n "$played" "$OUT/frames.log" | grep -vc " full ") || true
+echo "Play: $played frames in 2 s ($previews previews)"
+[ "$played" -ge 10 ] || fail "Play showed $played frames in 2 s"
+[ "$previews" -ge 5 ] || fail "Play showed $previews preview frames in 2 s"
+# Stop: the World as it was at Play, exactly
+n=$(nfull)
+click "$stop_x" "$ctl_y"
+wait_full "$n" "Stop"
+for _ in $(seq 1 50); do
+    same "$OUT/full.png" "$OUT/full0.png" && break
+    sleep 0.2
+done
+same "$OUT/full.png" "$OUT/full0.png" || fail "Stop did not restore the first image"
+xdotool search --name '^VolVis — session.json$' > /dev/null || fail "Play/Stop left an unsaved change"
+echo "Stop: the first image again, bit for bit; nothing unsaved"
+
+# the final render to the default output, 8 frames
+enter "$frames_x" "$frames_y" 8
+xdotool key Return
+sleep 0.3
+click "$render_x" "$render_y"
+for _ in $(seq 1 600); do [ -f "$OUT/animation.mp4" ] && break; sleep 0.1; done
+[ -f "$OUT/animation.mp4" ] || fail "no animation.mp4 from Render"
+sleep 0.5
+shot rendered.png
+nf=$(ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames \
+    -of csv=p=0 "$OUT/animation.mp4")
+[ "$nf" = 8 ] || fail "animation.mp4 has $nf frames, not 8"
+"$CLI" render "$OUT/session.json" --azimuth 135 -q -o "$OUT/cli_135.png"
+ffmpeg -v error -y -i "$OUT/animation.mp4" -vf 'select=eq(n\,3)' -vframes 1 "$OUT/mp4_3.png"
+p=$(compare -metric PSNR "$OUT/mp4_3.png" "$OUT/cli_135.png" null: 2>&1 || true)
+awk -v p="$p" 'BEGIN { exit !(p == "inf" || p > 30) }' ||
+    fail "frame 3 of animation.mp4: PSNR $p against volvis render --azimuth 135"
+echo "Render: animation.mp4 with 8 frames, frame 3 at $p dB against volvis render --azimuth 135"
+
+# a PNG sequence: frame k is `volvis render --azimuth 360*k/8`
+mkdir -p "$OUT/png"
+enter "$output_x" "$output_y" "$OUT/png/f_%03d.png"
+click "$render_x" "$render_y"
+for _ in $(seq 1 600); do [ -f "$OUT/png/f_007.png" ] && break; sleep 0.1; done
+[ -f "$OUT/png/f_007.png" ] || fail "no PNG sequence from Render"
+[ "$(ls "$OUT/png" | grep -c '^f_...\.png$')" = 8 ] || fail "the PNG sequence has not 8 frames"
+same "$OUT/png/f_003.png" "$OUT/cli_135.png" || fail "frame 3 differs from volvis render --azimuth 135"
+same "$OUT/png/f_000.png" "$OUT/full0.png" || fail "frame 0 differs from the GUI's first image"
+echo "Render: PNG frame 3 = volvis render --azimuth 135, frame 0 = the GUI's image"
+
+# Cancel stops a long render early
+mkdir -p "$OUT/cancel"
+enter "$frames_x" "$frames_y" 3000
+xdotool key Return
+enter "$output_x" "$output_y" "$OUT/cancel/f_%04d.png"
+click "$render_x" "$render_y"
+sleep 1
+click "$cancel_x" "$render_y"
+sleep 1
+shot cancelled.png
+c1=$(ls "$OUT/cancel" | wc -l)
+sleep 1
+c2=$(ls "$OUT/cancel" | wc -l)
+[ "$c1" -ge 1 ] && [ "$c1" -lt 3000 ] && [ "$c1" = "$c2" ] ||
+    fail "Cancel: $c1 then $c2 frames of 3000"
+echo "Cancel: stopped after $c1 of 3000 frames"
+
+# Ctrl+Q exits 0 (the session has no unsaved change)
+xdotool key ctrl+q
+st=0
+wait "$pid" || st=$?
+pid=
+[ "$st" = 0 ] || fail "Ctrl+Q: exit status $st"
+echo "1 passed, 0 failed"
