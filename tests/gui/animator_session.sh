@@ -6,14 +6,15 @@
 # runs and Stop gives back the first image bit for bit, with no unsaved
 # change; a final render to the default output (animation.mp4 in the
 # current folder) has the frame count set on the page; a PNG sequence has
-# frame k equal to `volvis render --azimuth 360*k/N` bit for bit; Cancel
-# stops a long render early; Ctrl+Q exits 0.
+# frame k equal to `volvis render --azimuth 360*k/N` bit for bit; Save…
+# writes a file that `volvis animate` renders to the same frames, and New
+# then Open… bring it back; Cancel stops a long render early; Ctrl+Q exits 0.
 set -euo pipefail
 GUI=$1 CLI=$2 OUT=$3
 DATA=$(cd ../shared/data/volumes && pwd)
 HERE=$(cd "$(dirname "$0")" && pwd)
 export GDK_BACKEND=x11 NO_AT_BRIDGE=1 VOLVIS_FRAME_LOG=$OUT/frames.log VOLVIS_FRAME_DIR=$OUT
-rm -rf "$OUT"/*.png "$OUT"/frames.log "$OUT"/*.json "$OUT"/*.mp4 "$OUT"/png "$OUT"/cancel
+rm -rf "$OUT"/*.png "$OUT"/frames.log "$OUT"/*.json "$OUT"/*.mp4 "$OUT"/png "$OUT"/png2 "$OUT"/cli_png "$OUT"/cancel
 pid=
 fail() {
     echo "FAIL: $*" >&2
@@ -82,15 +83,24 @@ read -r L T R B <<< "$box"
 W=$((R - L))
 echo "Animator page: side-bar entry at $found, timeline at $L,$T-$R,$B"
 # the controls, from the timeline (rows of equal-width buttons span it)
-play_x=$((L + W / 6)) stop_x=$((L + W / 2)) ctl_y=$((B + 21))
-frames_x=$((L + W / 2)) frames_y=$((B + 116))
-output_x=$((L + W * 6 / 10)) output_y=$((B + 209))
-render_x=$((L + W / 4)) cancel_x=$((L + W * 3 / 4)) render_y=$((B + 294))
-addseq_x=$((L + W / 2)) addseq_y=$((B + 551))
+new_x=$((L + W / 6)) open_x=$((L + W / 2)) save_x=$((L + W * 5 / 6)) file_y=$((T - 21))
+play_x=$((L + W / 6)) stop_x=$((L + W / 2)) ctl_y=$((B + 22))
+frames_x=$((L + W / 2)) frames_y=$((B + 137))
+output_x=$((L + W * 6 / 10)) output_y=$((B + 230))
+render_x=$((L + W / 4)) cancel_x=$((L + W * 3 / 4)) render_y=$((B + 315))
+addseq_x=$((L + W / 2)) addseq_y=$((B + 572))
+
+# sequences are drawn as green lanes on the timeline
+lanes() {
+    shot lanes.png
+    python3 "$HERE/locate.py" count 115,191,115 "$OUT/lanes.png" "$L" "$T" "$R" "$B"
+}
+[ "$(lanes)" = 0 ] || fail "the new animation is not empty"
 
 # an orbit with the default values: 360 degrees over the animation's 60 frames
 click "$addseq_x" "$addseq_y"
 shot orbit.png
+[ "$(lanes)" -gt 100 ] || fail "Add sequence: no sequence on the timeline"
 
 # Play: new frames (Navigator previews) while it runs, no undo step
 n=$(nlines)
@@ -143,6 +153,45 @@ for _ in $(seq 1 600); do [ -f "$OUT/png/f_007.png" ] && break; sleep 0.1; done
 same "$OUT/png/f_003.png" "$OUT/cli_135.png" || fail "frame 3 differs from volvis render --azimuth 135"
 same "$OUT/png/f_000.png" "$OUT/full0.png" || fail "frame 0 differs from the GUI's first image"
 echo "Render: PNG frame 3 = volvis render --azimuth 135, frame 0 = the GUI's image"
+
+# Save…: an animation file naming the session's scene beside it, which
+# `volvis animate` renders to the GUI's frames
+click "$save_x" "$file_y"
+xdotool search --sync --name '^Save animation' > /dev/null
+sleep 0.5
+shot save_dialog.png
+xdotool key ctrl+a
+xdotool type --delay 5 "$OUT/saved.json"
+xdotool key Return
+for _ in $(seq 1 50); do [ -f "$OUT/saved.json" ] && break; sleep 0.1; done
+[ -f "$OUT/saved.json" ] || fail "Save… wrote no animation file"
+grep -q '"scene": "session.json"' "$OUT/saved.json" || fail "the saved animation does not name session.json"
+mkdir -p "$OUT/cli_png"
+"$CLI" animate --animation "$OUT/saved.json" -q -o "$OUT/cli_png/f_%03d.png"
+for k in 0 1 2 3 4 5 6 7; do
+    same "$OUT/cli_png/f_00$k.png" "$OUT/png/f_00$k.png" || fail "volvis animate of the saved file: frame $k differs"
+done
+echo "Save…: volvis animate of the saved animation gives the GUI's 8 frames"
+
+# New empties the animation; Open… brings the saved one back
+click "$new_x" "$file_y"
+[ "$(lanes)" = 0 ] || fail "New did not empty the animation"
+click "$open_x" "$file_y"
+xdotool search --sync --name '^Open animation' > /dev/null
+sleep 0.5
+xdotool type --delay 5 "$OUT/saved.json"
+sleep 0.3
+xdotool key Return
+for _ in $(seq 1 25); do [ "$(lanes)" -gt 100 ] && break; sleep 0.2; done
+[ "$(lanes)" -gt 100 ] || fail "Open…: no sequence on the timeline"
+mkdir -p "$OUT/png2"
+enter "$output_x" "$output_y" "$OUT/png2/f_%03d.png"
+click "$render_x" "$render_y"
+for _ in $(seq 1 600); do [ -f "$OUT/png2/f_007.png" ] && break; sleep 0.1; done
+shot reopened.png
+[ "$(ls "$OUT/png2" | grep -c '^f_...\.png$')" = 8 ] || fail "no 8 frames after New and Open…"
+same "$OUT/png2/f_005.png" "$OUT/png/f_005.png" || fail "the reopened animation renders differently"
+echo "New, Open…: the reopened animation renders the same frames"
 
 # Cancel stops a long render early
 mkdir -p "$OUT/cancel"

@@ -6,6 +6,8 @@
                                 TIMELINE_R/G/B in apps/volvis-gui/vv-animator-page.c)
   locate.py sidebar SHOT.png    prints "X Y" per page entry of the side bar,
                                 top to bottom (the centre of each line of text)
+  locate.py count R,G,B SHOT.png [X0 Y0 X1 Y1]
+                                prints how many pixels (in the box) have that colour
 
 Exits 1 when nothing is found.
 """
@@ -62,7 +64,16 @@ def sidebar(img):
 
 
 def main():
-    what, path = sys.argv[1], sys.argv[2]
+    what = sys.argv[1]
+    if what == "count":
+        rgb = tuple(int(c) for c in sys.argv[2].split(","))
+        img = load(sys.argv[3])
+        w, h, _ = img
+        x0, y0, x1, y1 = (int(v) for v in sys.argv[4:8]) if len(sys.argv) >= 8 else (0, 0, w, h)
+        print(sum(1 for y in range(max(y0, 0), min(y1, h)) for x in range(max(x0, 0), min(x1, w))
+                  if px(img, x, y) == rgb))
+        return
+    path = sys.argv[2]
     img = load(path)
     if what == "timeline":
         box = timeline(img)
