@@ -148,15 +148,6 @@ line_label(void) {
     return l;
 }
 
-static GtkWidget *
-wrap_label(void) {
-    GtkWidget *l = gtk_label_new("");
-    gtk_label_set_xalign(GTK_LABEL(l), 0);
-    gtk_label_set_wrap(GTK_LABEL(l), TRUE);
-    gtk_label_set_selectable(GTK_LABEL(l), TRUE);
-    return l;
-}
-
 static GtkWindow *
 parent_window(VvAnimatorPage *self) {
     GtkRoot *root = gtk_widget_get_root(GTK_WIDGET(self));
@@ -193,12 +184,17 @@ dup_malloc(const char *s) {
     return d;
 }
 
-/* The page's one-line status (what was opened, saved or recorded); the
- * tooltip holds the whole text when the line is cut. */
+/* A one-line label's text; the tooltip holds the whole text when the line is cut. */
+static void
+set_label_tip(GtkWidget *label, const char *text) {
+    gtk_label_set_text(GTK_LABEL(label), text);
+    gtk_widget_set_tooltip_text(label, text[0] ? text : NULL);
+}
+
+/* The page's status line: what was opened, saved or recorded. */
 static void
 set_status(VvAnimatorPage *self, const char *text) {
-    gtk_label_set_text(GTK_LABEL(self->anim_status), text);
-    gtk_widget_set_tooltip_text(self->anim_status, text[0] ? text : NULL);
+    set_label_tip(self->anim_status, text);
 }
 
 /* ---- the animation and its summary ---------------------------------------------- */
@@ -275,8 +271,8 @@ update_time_label(VvAnimatorPage *self) {
     const vv_animation *a = self->playing ? self->playing : self->anim;
     int n = vv_animation_frame_count(a);
     double t = head_time(self);
-    int f = (int)floor(t * a->fps + 1e-9);
-    f = f < 0 ? 0 : f >= n ? n - 1 : f;
+    double fd = floor(t * a->fps + 1e-9);
+    int f = fd < 0 ? 0 : fd >= n - 1 ? n - 1 : (int)fd;
     char text[160];
     snprintf(text, sizeof text, "%st = %.2f s of %.2f s, frame %d of %d",
              self->playing ? "playing: " : "", t, a->duration, f, n);
@@ -412,7 +408,7 @@ timeline_draw(GtkDrawingArea *area, cairo_t *cr, int W, int H, gpointer user) {
     for (int i = 0; i < a->n_sequences; i++, y += lh)
         cairo_rectangle(cr, 0, y, W, fmax(1, lh - 1));
     cairo_fill(cr);
-    cairo_set_source_rgb(cr, 0.95, 0.82, 0.30);
+    cairo_set_source_rgb(cr, 242 / 255.0, 209 / 255.0, 77 / 255.0);
     for (int i = 0; i < a->n_tracks; i++, y += lh)
         for (int k = 0; k < a->tracks[i].n_keys; k++) {
             double x = a->tracks[i].keys[k].time / dur * (W - 1);
@@ -1005,17 +1001,17 @@ render_done(gpointer data) {
         gtk_progress_bar_set_text(GTK_PROGRESS_BAR(self->progress), text);
         snprintf(text, sizeof text, "wrote %s: %d frames (%d rendered, %d kept from before)",
                  j->output, st->frames, st->rendered, st->reused);
-        gtk_label_set_text(GTK_LABEL(self->render_status), text);
+        set_label_tip(self->render_status, text);
     } else if (j->status == VV_ERR_CANCELLED) {
         gtk_progress_bar_set_text(GTK_PROGRESS_BAR(self->progress), "cancelled");
         snprintf(text, sizeof text,
                  "cancelled after %d of %d frames; Render again resumes (finished frames are "
                  "kept)",
                  st->rendered + st->reused, st->frames);
-        gtk_label_set_text(GTK_LABEL(self->render_status), text);
+        set_label_tip(self->render_status, text);
     } else {
         gtk_progress_bar_set_text(GTK_PROGRESS_BAR(self->progress), "failed");
-        gtk_label_set_text(GTK_LABEL(self->render_status), j->error);
+        set_label_tip(self->render_status, j->error);
         show_error(self, "Cannot render the animation", j->error);
     }
     job_free(j);
@@ -1054,7 +1050,7 @@ render_clicked(GtkButton *b, gpointer user) {
     self->job = j;
     gtk_progress_bar_set_fraction(GTK_PROGRESS_BAR(self->progress), 0);
     gtk_progress_bar_set_text(GTK_PROGRESS_BAR(self->progress), "starting");
-    gtk_label_set_text(GTK_LABEL(self->render_status), "");
+    set_label_tip(self->render_status, "");
     self->render_timer = g_timeout_add(100, render_tick, self);
     j->thread = g_thread_new("volvis-animate", render_main, j);
     update_sensitivity(self);
@@ -1150,7 +1146,8 @@ build(VvAnimatorPage *self) {
     self->progress = gtk_progress_bar_new();
     gtk_progress_bar_set_show_text(GTK_PROGRESS_BAR(self->progress), TRUE);
     gtk_box_append(GTK_BOX(box), self->progress);
-    self->render_status = wrap_label();
+    self->render_status = line_label();
+    gtk_label_set_ellipsize(GTK_LABEL(self->render_status), PANGO_ELLIPSIZE_MIDDLE);
     gtk_box_append(GTK_BOX(box), self->render_status);
 
     /* sequences without keyframes */
@@ -1220,9 +1217,10 @@ vv_animator_page_dispose(GObject *o) {
         self->render_timer = 0;
     }
     stop_recording(self, FALSE);
-    stop_playback(self, TRUE);
     if (self->doc) {
         g_signal_handler_disconnect(self->doc, self->changed_id);
+        /* the World as it was at Play, should the page go while playing */
+        stop_playback(self, TRUE);
         g_clear_object(&self->doc);
     }
     G_OBJECT_CLASS(vv_animator_page_parent_class)->dispose(o);

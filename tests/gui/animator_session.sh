@@ -8,13 +8,15 @@
 # current folder) has the frame count set on the page; a PNG sequence has
 # frame k equal to `volvis render --azimuth 360*k/N` bit for bit; Save…
 # writes a file that `volvis animate` renders to the same frames, and New
-# then Open… bring it back; Cancel stops a long render early; Ctrl+Q exits 0.
+# then Open… bring it back; camera keys before and after a drag, and a
+# recorded flight of that drag, go from the first view (exactly) to the
+# dragged one; Cancel stops a long render early; Ctrl+Q exits 0.
 set -euo pipefail
 GUI=$1 CLI=$2 OUT=$3
 DATA=$(cd ../shared/data/volumes && pwd)
 HERE=$(cd "$(dirname "$0")" && pwd)
 export GDK_BACKEND=x11 NO_AT_BRIDGE=1 VOLVIS_FRAME_LOG=$OUT/frames.log VOLVIS_FRAME_DIR=$OUT
-rm -rf "$OUT"/*.png "$OUT"/frames.log "$OUT"/*.json "$OUT"/*.mp4 "$OUT"/png "$OUT"/png2 "$OUT"/cli_png "$OUT"/cancel
+rm -rf "$OUT"/*.png "$OUT"/frames.log "$OUT"/*.json "$OUT"/*.mp4 "$OUT"/png "$OUT"/png2 "$OUT"/cli_png "$OUT"/cancel "$OUT"/keys "$OUT"/flight
 pid=
 fail() {
     echo "FAIL: $*" >&2
@@ -46,6 +48,33 @@ wait_full() { # wait for more than $1 full frames
     fail "no full-quality frame after $2"
 }
 same() { [ "$(compare -metric AE "$1" "$2" null: 2>&1 || true)" = "0" ]; }
+psnr() { compare -metric PSNR "$1" "$2" null: 2>&1 || true; }
+# a drag of 96 pixels to the left in the scene view: 180 degrees a view
+# height of 128 pixels, azimuth 135 (as gui_session.sh checks)
+drag_left() {
+    xdotool mousemove 300 400 mousedown 1
+    for x in $(seq 292 -8 204); do xdotool mousemove "$x" 400; sleep 0.02; done
+    xdotool mouseup 1
+}
+# renders to the PNG pattern $1 (folder made) and waits until no frame comes for 1.5 s
+render_png() {
+    mkdir -p "$(dirname "$1")"
+    enter "$output_x" "$output_y" "$1"
+    click "$render_x" "$render_y"
+    local last=-1 n stable=0
+    for _ in $(seq 1 300); do
+        n=$(ls "$(dirname "$1")" | grep -c '\.png$') || true
+        if [ "$n" = "$last" ] && [ "$n" -gt 0 ]; then
+            stable=$((stable + 1))
+            [ "$stable" -ge 8 ] && return 0
+        else
+            stable=0
+        fi
+        last=$n
+        sleep 0.2
+    done
+    fail "the render to $1 did not finish"
+}
 shot() { import -window root "$OUT/$1"; }
 click() { xdotool mousemove "$1" "$2" click 1; sleep 0.3; }
 # types $3 into the entry at $1,$2 in place of its text
@@ -61,7 +90,7 @@ enter() {
 pid=$!
 wait_full 0 "opening"
 wid=$(xdotool search --sync --name '^VolVis — ' | head -1)
-xdotool windowmove "$wid" 0 0 windowsize "$wid" 1100 720
+xdotool windowmove "$wid" 0 0 windowsize "$wid" 1100 800
 sleep 0.5
 shot open.png
 cp "$OUT/full.png" "$OUT/full0.png"
@@ -89,6 +118,7 @@ frames_x=$((L + W / 2)) frames_y=$((B + 137))
 output_x=$((L + W * 6 / 10)) output_y=$((B + 230))
 render_x=$((L + W / 4)) cancel_x=$((L + W * 3 / 4)) render_y=$((B + 315))
 addseq_x=$((L + W / 2)) addseq_y=$((B + 572))
+record_x=$((L + W * 5 / 6)) addkey_x=$((L + W / 2)) addkey_y=$((B + 676))
 
 # sequences are drawn as green lanes on the timeline
 lanes() {
@@ -193,6 +223,40 @@ shot reopened.png
 same "$OUT/png2/f_005.png" "$OUT/png/f_005.png" || fail "the reopened animation renders differently"
 echo "New, Open…: the reopened animation renders the same frames"
 
+# camera keys: one at 0 s from the view, one at 1 s after a drag; frame 0 is
+# the first view exactly and frame 30 (1 s at 30 fps) the dragged view
+click "$new_x" "$file_y"
+click "$addkey_x" "$addkey_y"
+drag_left
+sleep 0.3
+click "$addkey_x" "$addkey_y"
+xdotool key ctrl+z
+shot keys.png
+[ "$(python3 "$HERE/locate.py" count 242,209,77 "$OUT/keys.png" "$L" "$T" "$R" "$B")" -gt 10 ] ||
+    fail "Add camera key: no keys on the timeline"
+render_png "$OUT/keys/f_%03d.png"
+[ "$(ls "$OUT/keys" | wc -l)" = 31 ] || fail "camera keys at 0 and 1 s: $(ls "$OUT/keys" | wc -l) frames, not 31"
+same "$OUT/keys/f_000.png" "$OUT/full0.png" || fail "camera keys: frame 0 is not the first view"
+p=$(psnr "$OUT/keys/f_030.png" "$OUT/cli_135.png")
+awk -v p="$p" 'BEGIN { exit !(p == "inf" || p > 40) }' ||
+    fail "camera keys: frame 30 at PSNR $p against volvis render --azimuth 135"
+echo "Add camera key: 31 frames from the first view (exactly) to the dragged one ($p dB)"
+
+# a recorded flight: the same drag, recorded at 30 Hz, becomes the animation
+click "$record_x" "$ctl_y"
+drag_left
+sleep 0.5
+click "$record_x" "$ctl_y"
+xdotool key ctrl+z
+render_png "$OUT/flight/f_%03d.png"
+nf=$(ls "$OUT/flight" | wc -l)
+last=$(ls "$OUT/flight" | tail -1)
+same "$OUT/flight/f_000.png" "$OUT/full0.png" || fail "flight: frame 0 is not the first view"
+p=$(psnr "$OUT/flight/$last" "$OUT/cli_135.png")
+awk -v p="$p" 'BEGIN { exit !(p == "inf" || p > 40) }' ||
+    fail "flight: the last frame at PSNR $p against volvis render --azimuth 135"
+echo "Record flight: $nf frames from the first view (exactly) to the dragged one ($p dB)"
+
 # Cancel stops a long render early
 mkdir -p "$OUT/cancel"
 enter "$frames_x" "$frames_y" 3000
@@ -210,7 +274,9 @@ c2=$(ls "$OUT/cancel" | wc -l)
     fail "Cancel: $c1 then $c2 frames of 3000"
 echo "Cancel: stopped after $c1 of 3000 frames"
 
-# Ctrl+Q exits 0 (the session has no unsaved change)
+# Ctrl+Q exits 0 (saved first: the drags were edits, undone)
+xdotool key ctrl+s
+sleep 0.5
 xdotool key ctrl+q
 st=0
 wait "$pid" || st=$?
