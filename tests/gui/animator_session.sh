@@ -187,7 +187,7 @@ echo "Render: PNG frame 3 = volvis render --azimuth 135, frame 0 = the GUI's ima
 # Save…: an animation file naming the session's scene beside it, which
 # `volvis animate` renders to the GUI's frames
 click "$save_x" "$file_y"
-xdotool search --sync --name '^Save animation' > /dev/null
+timeout 10 xdotool search --sync --name '^Save animation' > /dev/null || fail "Save… shows no dialog"
 sleep 0.5
 shot save_dialog.png
 xdotool key ctrl+a
@@ -207,7 +207,7 @@ echo "Save…: volvis animate of the saved animation gives the GUI's 8 frames"
 click "$new_x" "$file_y"
 [ "$(lanes)" = 0 ] || fail "New did not empty the animation"
 click "$open_x" "$file_y"
-xdotool search --sync --name '^Open animation' > /dev/null
+timeout 10 xdotool search --sync --name '^Open animation' > /dev/null || fail "Open… shows no dialog"
 sleep 0.5
 xdotool type --delay 5 "$OUT/saved.json"
 sleep 0.3
