@@ -9,6 +9,7 @@
 struct _VvDocument {
     GObject parent;
     vv_world *world;
+    vv_world *kept; /* the World while a transient one is shown, else NULL */
     vvg_undo *undo;
     char *path;
     gboolean dirty;
@@ -32,6 +33,7 @@ static void
 vv_document_finalize(GObject *o) {
     VvDocument *doc = VV_DOCUMENT(o);
     vv_world_free(doc->world);
+    vv_world_free(doc->kept);
     vvg_undo_free(doc->undo);
     g_free(doc->path);
     G_OBJECT_CLASS(vv_document_parent_class)->finalize(o);
@@ -72,8 +74,36 @@ vv_document_snapshot(VvDocument *doc) {
     return w;
 }
 
+static void
+clamp_selection(VvDocument *doc) {
+    if (doc->selected >= doc->world->n_objects)
+        doc->selected = doc->world->n_objects - 1;
+    if (doc->selected < 0 && doc->world->n_objects > 0)
+        doc->selected = 0;
+}
+
+/* Drops the World kept aside: the transient World shown becomes the World. */
+static void
+keep_transient(VvDocument *doc) {
+    vv_world_free(doc->kept);
+    doc->kept = NULL;
+}
+
+/* Puts the World kept aside back, without a signal. */
+static void
+restore_kept(VvDocument *doc) {
+    if (!doc->kept)
+        return;
+    vv_world_free(doc->world);
+    doc->world = doc->kept;
+    doc->kept = NULL;
+    clamp_selection(doc);
+}
+
 void
 vv_document_begin_edit(VvDocument *doc, const char *label) {
+    /* callers may hold pointers into the World shown: the edit changes it */
+    keep_transient(doc);
     if (vvg_undo_push(doc->undo, doc->world, label) != VV_OK)
         g_warning("volvis-gui: no undo step for '%s': %s", label, vv_error_message());
     doc->dirty = TRUE;
@@ -85,14 +115,6 @@ vv_document_changed(VvDocument *doc) {
 }
 
 static void
-clamp_selection(VvDocument *doc) {
-    if (doc->selected >= doc->world->n_objects)
-        doc->selected = doc->world->n_objects - 1;
-    if (doc->selected < 0 && doc->world->n_objects > 0)
-        doc->selected = 0;
-}
-
-static void
 world_replaced(VvDocument *doc) {
     clamp_selection(doc);
     g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
@@ -101,8 +123,13 @@ world_replaced(VvDocument *doc) {
 
 gboolean
 vv_document_undo(VvDocument *doc) {
-    if (vvg_undo_undo(doc->undo, &doc->world) != VV_OK)
+    gboolean restored = doc->kept != NULL;
+    restore_kept(doc);
+    if (vvg_undo_undo(doc->undo, &doc->world) != VV_OK) {
+        if (restored)
+            g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
         return FALSE;
+    }
     doc->dirty = TRUE;
     world_replaced(doc);
     return TRUE;
@@ -110,8 +137,13 @@ vv_document_undo(VvDocument *doc) {
 
 gboolean
 vv_document_redo(VvDocument *doc) {
-    if (vvg_undo_redo(doc->undo, &doc->world) != VV_OK)
+    gboolean restored = doc->kept != NULL;
+    restore_kept(doc);
+    if (vvg_undo_redo(doc->undo, &doc->world) != VV_OK) {
+        if (restored)
+            g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
         return FALSE;
+    }
     doc->dirty = TRUE;
     world_replaced(doc);
     return TRUE;
@@ -262,7 +294,7 @@ vv_document_dirty(VvDocument *doc) {
 
 gboolean
 vv_document_save(VvDocument *doc, const char *path, GError **error) {
-    vv_world *w = doc->world;
+    vv_world *w = doc->kept ? doc->kept : doc->world; /* never a transient World */
     g_autofree char *dir = g_path_get_dirname(path);
     g_autofree char *stem = g_path_get_basename(path);
     char *dot = strrchr(stem, '.');
@@ -342,4 +374,34 @@ vv_document_select(VvDocument *doc, int index) {
         index = -1;
     doc->selected = index;
     g_signal_emit(doc, signals[SIGNAL_SELECTION_CHANGED], 0);
+}
+
+void
+vv_document_show_transient(VvDocument *doc, vv_world *world) {
+    if (!world)
+        return;
+    if (doc->kept)
+        vv_world_free(doc->world);
+    else
+        doc->kept = doc->world;
+    doc->world = world;
+    clamp_selection(doc);
+    g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
+}
+
+void
+vv_document_end_transient(VvDocument *doc, gboolean restore) {
+    if (!doc->kept)
+        return;
+    if (!restore) {
+        keep_transient(doc);
+        return;
+    }
+    restore_kept(doc);
+    g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
+}
+
+gboolean
+vv_document_transient(VvDocument *doc) {
+    return doc->kept != NULL;
 }

@@ -70,5 +70,26 @@ vv_object *vv_document_selected_object(VvDocument *doc);
 /** Selects object @p index (-1: none) and emits "selection-changed". */
 void vv_document_select(VvDocument *doc, int index);
 
+/**
+ * Shows @p world (taken) in place of the World for a while, with no undo step
+ * and without marking the session unsaved, and emits "changed": the
+ * Animator's Play puts each evaluated frame here so that the views draw it.
+ * The first call keeps the World aside; later calls replace the previous
+ * transient World. Meanwhile vv_document_world returns the transient World
+ * (a pointer valid until the next call, as after an undo). Any edit
+ * (vv_document_begin_edit) ends it keeping the World shown, which the edit
+ * then changes; undo and redo end it putting the kept World back first;
+ * saving writes the kept World. The selection index is kept.
+ */
+void vv_document_show_transient(VvDocument *doc, vv_world *world);
+/**
+ * Ends a transient World: @p restore puts the World kept aside back exactly
+ * as it was and emits "changed"; otherwise the transient World becomes the
+ * World. Does nothing when no transient World is shown.
+ */
+void vv_document_end_transient(VvDocument *doc, gboolean restore);
+/** TRUE while a transient World is shown (vv_document_show_transient). */
+gboolean vv_document_transient(VvDocument *doc);
+
 G_END_DECLS
 #endif

@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "vv-animator-page.h"
 #include "vv-devices-page.h"
 #include "vv-image-window.h"
 #include "vv-scene-view.h"
@@ -1668,6 +1669,7 @@ vv_window_init(VvWindow *win) {
     gtk_stack_add_titled(GTK_STACK(stack), measurement_page(win), "measurement", "Measurement");
     gtk_stack_add_titled(GTK_STACK(stack), modeling_page(win), "modeling", "Modeling");
     gtk_stack_add_titled(GTK_STACK(stack), vv_devices_page_new(win), "devices", "Input devices");
+    gtk_stack_add_titled(GTK_STACK(stack), vv_animator_page_new(win->doc), "animator", "Animator");
     GtkWidget *switcher = gtk_stack_sidebar_new();
     gtk_stack_sidebar_set_stack(GTK_STACK_SIDEBAR(switcher), GTK_STACK(stack));
     GtkWidget *side = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 0);

@@ -1,0 +1,142 @@
+/* VvDocument's transient Worlds (the Animator's Play), without a display:
+ * no undo steps and nothing unsaved; ending one puts back the very World
+ * kept aside; an edit keeps the World shown; undo restores first; saving
+ * writes the kept World. */
+#include "testutil.h"
+#include "vv-document.h"
+
+static int changed;
+
+static void
+on_changed(VvDocument *doc, gpointer user) {
+    (void)doc;
+    (void)user;
+    changed++;
+}
+
+/* A document with one sphere at x = 0 (one undo step: adding it). */
+static VvDocument *
+doc_with_sphere(void) {
+    VvDocument *doc = vv_document_new();
+    vv_object *o = NULL;
+    vt_ok(vv_object_new_geometry(&o, VV_OBJECT_SPHERE, "s"));
+    vv_document_add_object(doc, o, NULL);
+    g_signal_connect(doc, "changed", G_CALLBACK(on_changed), NULL);
+    changed = 0;
+    return doc;
+}
+
+/* A frame of an animation: the World with the eye and the sphere moved. */
+static vv_world *
+frame(VvDocument *doc, double x) {
+    vv_world *w = vv_document_snapshot(doc);
+    assert_non_null(w);
+    w->view.eye.x = x;
+    w->objects[0]->position.x = x;
+    return w;
+}
+
+static void
+test_restore(void **state) {
+    (void)state;
+    VvDocument *doc = doc_with_sphere();
+    vv_world *kept = vv_document_world(doc);
+    vv_vec3 eye = kept->view.eye;
+    vv_world *f1 = frame(doc, 11);
+    vv_document_show_transient(doc, f1);
+    assert_ptr_equal(vv_document_world(doc), f1);
+    assert_true(vv_document_transient(doc));
+    vv_world *f2 = frame(doc, 22);
+    vv_document_show_transient(doc, f2); /* frees f1 */
+    assert_ptr_equal(vv_document_world(doc), f2);
+    assert_int_equal(changed, 2);
+    vv_document_end_transient(doc, TRUE);
+    /* the very World kept aside, unchanged */
+    assert_ptr_equal(vv_document_world(doc), kept);
+    assert_false(vv_document_transient(doc));
+    assert_near(kept->view.eye.x, eye.x, 0);
+    assert_near(kept->objects[0]->position.x, 0, 0);
+    assert_int_equal(changed, 3);
+    vv_document_end_transient(doc, TRUE); /* nothing shown: nothing happens */
+    assert_int_equal(changed, 3);
+    /* no undo step was added: one undo empties the World */
+    assert_true(vv_document_undo(doc));
+    assert_int_equal(vv_document_world(doc)->n_objects, 0);
+    assert_false(vv_document_can_undo(doc));
+    g_object_unref(doc);
+}
+
+static void
+test_edit_keeps_the_frame(void **state) {
+    (void)state;
+    VvDocument *doc = doc_with_sphere();
+    vv_world *f = frame(doc, 7);
+    vv_document_show_transient(doc, f);
+    /* an edit during Play: the World shown is the one it changes */
+    vv_document_begin_edit(doc, "move");
+    assert_false(vv_document_transient(doc));
+    assert_ptr_equal(vv_document_world(doc), f);
+    f->objects[0]->position.x = 8;
+    vv_document_changed(doc);
+    vv_document_end_transient(doc, TRUE); /* too late: nothing to restore */
+    assert_ptr_equal(vv_document_world(doc), f);
+    /* undo goes back to the frame that was shown, then to before it */
+    assert_true(vv_document_undo(doc));
+    assert_near(vv_document_world(doc)->objects[0]->position.x, 7, 0);
+    assert_true(vv_document_undo(doc));
+    assert_int_equal(vv_document_world(doc)->n_objects, 0);
+    g_object_unref(doc);
+}
+
+static void
+test_undo_restores_first(void **state) {
+    (void)state;
+    VvDocument *doc = doc_with_sphere();
+    vv_document_begin_edit(doc, "move");
+    vv_document_world(doc)->objects[0]->position.x = 1;
+    vv_document_changed(doc);
+    vv_document_show_transient(doc, frame(doc, 5));
+    /* undo is of the kept World's last edit: x 1 -> 0 */
+    assert_true(vv_document_undo(doc));
+    assert_false(vv_document_transient(doc));
+    assert_near(vv_document_world(doc)->objects[0]->position.x, 0, 0);
+    assert_near(vv_document_world(doc)->view.eye.x, 0, 0);
+    /* redo brings x = 1 back, not the frame */
+    assert_true(vv_document_redo(doc));
+    assert_near(vv_document_world(doc)->objects[0]->position.x, 1, 0);
+    g_object_unref(doc);
+}
+
+static void
+test_save_writes_the_kept_world(void **state) {
+    (void)state;
+    VvDocument *doc = doc_with_sphere();
+    const char *path = vt_path(vt_outdir("gui_document"), "transient.json");
+    double eye_x = vv_document_world(doc)->view.eye.x;
+    vv_world *f = frame(doc, 99);
+    vv_document_show_transient(doc, f);
+    GError *err = NULL;
+    assert_true(vv_document_save(doc, path, &err));
+    assert_false(vv_document_dirty(doc));
+    assert_ptr_equal(vv_document_world(doc), f); /* still shown */
+    vv_world *saved = NULL;
+    vt_ok(vv_scene_load(&saved, path));
+    assert_near(saved->view.eye.x, eye_x, 1e-9);
+    assert_near(saved->objects[0]->position.x, 0, 1e-9);
+    vv_world_free(saved);
+    /* showing frames leaves the session saved */
+    vv_document_end_transient(doc, TRUE);
+    assert_false(vv_document_dirty(doc));
+    g_object_unref(doc);
+}
+
+int
+main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_restore),
+        cmocka_unit_test(test_edit_keeps_the_frame),
+        cmocka_unit_test(test_undo_restores_first),
+        cmocka_unit_test(test_save_writes_the_kept_world),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
