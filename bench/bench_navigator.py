@@ -8,7 +8,7 @@ Prints, per case (ray caster, ray tracer, and with --big a 512^3 volume):
   anchor=volvis op=navigator_drag_max_gap_ms ...
   anchor=volvis op=navigator_refine_ms ...           (last input to the full frame)
   anchor=volvis op=navigator_full_render_ms ...      (the full frame's own render time)
-  anchor=volvis op=navigator_gui_overhead_ms ...     (median latency - render time, previews)
+  anchor=volvis op=navigator_gui_overhead_ms ...     (median, renderer's end to paint, drag)
 Targets (issue 11): fps >= 30, max gap <= 100 ms, refine <= 150 ms + one full render.
 """
 import argparse, json, os, statistics, subprocess, sys, tempfile, time
@@ -52,14 +52,17 @@ def run_case(gui, scene, name, log_dir, drag_s=5.0):
         except subprocess.TimeoutExpired:
             p.kill()
     frames = [l.split() for l in lines]
-    frames = [(float(f[0]), f[1], f[2], float(f[3]), float(f[4])) for f in frames if len(f) >= 5]
+    frames = [(float(f[0]), f[1], f[2], float(f[3]), float(f[4]), int(f[5]), float(f[6]))
+              for f in frames if len(f) >= 7]
     previews = [f for f in frames if f[1] != "full"]
     if len(previews) < 2:
         raise SystemExit(f"{name}: only {len(previews)} preview frames during the drag")
-    # the drag: from the first preview frame to the last one before the final full frame
+    # the drag: from the first frame after the press to the first frame of the
+    # final state (the last input's); after it come the refinement steps
     last_full = max(i for i, f in enumerate(frames) if f[1] == "full")
-    drag = [f for f in frames[:last_full] if f[1] != "full" or True]
-    drag = frames[: last_full]
+    final_state = frames[last_full][5]
+    end_i = min(i for i, f in enumerate(frames) if f[5] == final_state)
+    drag = frames[: end_i + 1]
     t = [f[0] for f in drag]
     gaps = [b - a for a, b in zip(t, t[1:])]
     # frames per second over each second of the drag; the median of those
@@ -71,10 +74,10 @@ def run_case(gui, scene, name, log_dir, drag_s=5.0):
         s += 1000
     fps = statistics.median(per_s) if per_s else len(t) / max(1e-3, (end - start) / 1000)
     last = drag[-1]
-    last_input = last[0] - last[4]  # the last preview's request was posted at the last input
+    last_input = last[0] - last[4]  # the final state's first frame was asked for at the last input
     full = frames[last_full]
     refine = full[0] - last_input
-    overhead = statistics.median([f[4] - f[3] for f in previews])
+    overhead = statistics.median([f[6] for f in drag])
     kinds = {}
     for f in drag:
         kinds[f[1]] = kinds.get(f[1], 0) + 1

@@ -40,6 +40,7 @@ typedef struct frame {
     vv_view camera; /* the view it was rendered with */
     double render_ms;
     gint64 posted_us;
+    gint64 rendered_us; /* when the renderer finished */
     char error[512];
 } frame;
 
@@ -52,7 +53,8 @@ struct _VvSceneView {
     GThread *thread;
     GMutex lock;
     GCond cond;
-    job *pending; /* newest request not yet taken */
+    job *pending;         /* newest request not yet taken */
+    vv_world *last_world; /* the last refined state, for warm_previews (under lock) */
     gboolean quit;
     guint64 cancel_below; /* refinement of a generation below this stops (atomic) */
     vv_preview *preview;  /* worker only */
@@ -72,6 +74,7 @@ struct _VvSceneView {
     gpointer pick_user;
     gboolean dragged;
     gint64 shown_latency_us;
+    gint64 shown_rendered_us; /* when the renderer finished the frame on screen */
     guint refine_source;
     int refine_delay_ms;
     gboolean moving;
@@ -170,7 +173,9 @@ render_one(VvSceneView *self, const job *j, vv_preview_kind kind) {
     gint64 t0 = g_get_monotonic_time();
     if (s == VV_OK)
         s = vv_preview_render(self->preview, w, &w->view, kind, &ro, img);
-    double secs = (g_get_monotonic_time() - t0) * 1e-6;
+    gint64 t1 = g_get_monotonic_time();
+    f->rendered_us = t1;
+    double secs = (t1 - t0) * 1e-6;
     if (s == VV_ERR_CANCELLED) {
         vv_image_free(img);
         frame_free(f);
@@ -203,6 +208,41 @@ render_one(VvSceneView *self, const job *j, vv_preview_kind kind) {
     return f;
 }
 
+/* After a refinement, while nothing else is asked for, the reduced surfaces
+ * (PARC boxes, coarse Marching Cubes) of the state on screen are built and
+ * timed off screen, so that the first drag does not stall on building them
+ * and the policy knows their times. */
+static void
+warm_previews(VvSceneView *self) {
+    static const vv_preview_kind kinds[] = {VV_PREVIEW_COARSE_MC, VV_PREVIEW_BOXES};
+    for (size_t i = 0; i < G_N_ELEMENTS(kinds); i++) {
+        g_mutex_lock(&self->lock);
+        gboolean busy = self->pending != NULL || self->quit;
+        gboolean known = self->policy.seconds[kinds[i]] >= 0;
+        vv_world *w = busy || known ? NULL : self->last_world;
+        if (w)
+            self->last_world = NULL;
+        g_mutex_unlock(&self->lock);
+        if (!w)
+            return;
+        job j = {0};
+        j.world = w;
+        j.gen = 0;
+        /* twice: the first builds, the second is timed and learnt */
+        for (int r = 0; r < 2; r++) {
+            frame *f = render_one(self, &j, kinds[i]);
+            if (f)
+                frame_free(f);
+        }
+        g_mutex_lock(&self->lock);
+        if (!self->last_world)
+            self->last_world = w;
+        else
+            vv_world_free(w);
+        g_mutex_unlock(&self->lock);
+    }
+}
+
 static gpointer
 worker_main(gpointer data) {
     VvSceneView *self = data;
@@ -233,7 +273,17 @@ worker_main(gpointer data) {
             if (newer)
                 break;
         }
+        gboolean refined = j->refine;
+        if (refined) {
+            g_mutex_lock(&self->lock);
+            vv_world_free(self->last_world);
+            self->last_world = j->world; /* kept for warm_previews */
+            j->world = NULL;
+            g_mutex_unlock(&self->lock);
+        }
         job_free(j);
+        if (refined)
+            warm_previews(self);
     }
     vv_preview_free(self->preview);
     self->preview = NULL;
@@ -309,6 +359,7 @@ show_frame(gpointer data) {
     self->shown_kind = f->kind;
     self->shown_render_ms = f->render_ms;
     self->shown_latency_us = g_get_monotonic_time() - f->posted_us;
+    self->shown_rendered_us = f->rendered_us;
     g_free(self->shown_depth);
     self->shown_depth = NULL;
     self->shown_view = f->camera;
@@ -344,8 +395,10 @@ refine_cb(gpointer data) {
     job *j = new_job(self, TRUE);
     if (!j)
         return G_SOURCE_REMOVE;
-    /* 1/2 first when the frame on screen is coarser, then the full frame */
-    if (self->shown_kind < VV_PREVIEW_RAYCAST_2 || self->shown_gen != self->gen)
+    /* 1/2 first when the frame on screen is coarser and the full frame is
+     * slow (or not known yet), then the full frame */
+    if ((self->shown_kind < VV_PREVIEW_RAYCAST_2 || self->shown_gen != self->gen) &&
+        (self->full_ms <= 0 || self->full_ms > 300))
         j->kinds[j->n_kinds++] = VV_PREVIEW_RAYCAST_2;
     j->kinds[j->n_kinds++] = VV_PREVIEW_FULL;
     post_job(self, j);
@@ -522,11 +575,14 @@ log_frame(VvSceneView *self) {
     if (!self->frame_log || self->texture_logged || !self->texture)
         return;
     self->texture_logged = TRUE;
-    double ms = (g_get_monotonic_time() - start_us) * 1e-3;
-    fprintf(self->frame_log, "%.3f %s %dx%d %.3f %.3f %lu\n", ms,
+    gint64 now = g_get_monotonic_time();
+    double ms = (now - start_us) * 1e-3;
+    /* the GUI's own time a frame: from the renderer's end to this paint */
+    fprintf(self->frame_log, "%.3f %s %dx%d %.3f %.3f %lu %.3f\n", ms,
             vv_preview_kind_name((vv_preview_kind)self->shown_kind),
             gdk_texture_get_width(self->texture), gdk_texture_get_height(self->texture),
-            self->shown_render_ms, self->shown_latency_us * 1e-3, (unsigned long)self->shown_gen);
+            self->shown_render_ms, self->shown_latency_us * 1e-3, (unsigned long)self->shown_gen,
+            (now - self->shown_rendered_us) * 1e-3);
     fflush(self->frame_log);
 }
 
@@ -788,6 +844,8 @@ vv_scene_view_dispose(GObject *o) {
         self->thread = NULL;
         job_free(self->pending);
         self->pending = NULL;
+        vv_world_free(self->last_world);
+        self->last_world = NULL;
     }
     if (self->refine_source) {
         g_source_remove(self->refine_source);

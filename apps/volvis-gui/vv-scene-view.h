@@ -13,7 +13,8 @@
  *
  * With VOLVIS_FRAME_LOG=FILE set, one line is appended per frame put on
  * screen: "<ms since start> <representation> <W>x<H> <render ms> <latency ms>
- * <state>", the state being the number of World changes the frame shows
+ * <state> <gui ms>": the state is the number of World changes the frame
+ * shows, the GUI time runs from the renderer's end to the paint
  * (docs/gui.md). UI thread only, except where noted.
  */
 #ifndef VV_SCENE_VIEW_H

@@ -190,7 +190,8 @@ void vv_preview_policy_record(vv_preview_policy *pol, vv_preview_kind kind, doub
  * The representation to draw while moving within @p budget seconds a frame:
  * the best allowed one whose expected time fits, where one not measured yet
  * is tried before a worse one is chosen; every 24th choice is the next
- * better one, so that estimates follow the machine's load.
+ * better one when it is expected within 1.5 times the budget, so that
+ * estimates follow the machine's load.
  */
 vv_preview_kind vv_preview_policy_choose(vv_preview_policy *pol, double budget);
 

@@ -461,7 +461,12 @@ vv_preview_policy_choose(vv_preview_policy *pol, double budget) {
      * follows a machine that has become less busy */
     if (++pol->choices % 24 == 0)
         for (int k = best + 1; k < VV_PREVIEW_COUNT; k++)
-            if (pol->allowed[k])
-                return (vv_preview_kind)k;
+            if (pol->allowed[k]) {
+                /* only one that could fit: a probe must not stall the view */
+                double e = expected(pol, k);
+                if (e <= 1.5 * budget)
+                    return (vv_preview_kind)k;
+                break;
+            }
     return (vv_preview_kind)best;
 }
