@@ -41,7 +41,10 @@ struct _VvWindow {
     vv_histogram *hist;
 
     /* Modeling */
-    GtkWidget *prim_kind, *prim_size, *prim_res, *model_progress;
+    GtkWidget *prim_kind, *prim_size, *prim_res, *model_progress, *prim_mesh, *prim_pos[3];
+    GtkWidget *prim_axis, *prim_angle, *csg_a, *csg_b, *csg_op;
+    GHashTable *recipes;      /* vv_volume * -> model_recipe * of the objects made here */
+    GPtrArray *model_volumes; /* the volumes listed in csg_a and csg_b, in order */
 };
 
 G_DEFINE_TYPE(VvWindow, vv_window, GTK_TYPE_APPLICATION_WINDOW)
@@ -90,6 +93,8 @@ static GtkWidget *
 spin(double lo, double hi, double step, int digits) {
     GtkWidget *s = gtk_spin_button_new_with_range(lo, hi, step);
     gtk_spin_button_set_digits(GTK_SPIN_BUTTON(s), (guint)digits);
+    /* GTK starts at the lower bound; 0 (or the bound nearest it) is the neutral value */
+    gtk_spin_button_set_value(GTK_SPIN_BUTTON(s), lo > 0 ? lo : hi < 0 ? hi : 0);
     return s;
 }
 
@@ -1028,14 +1033,121 @@ act_distance(GSimpleAction *a, GVariant *p, gpointer user) {
 
 /* ---- Modeling page ------------------------------------------------------------ */
 
-typedef struct model_job {
-    int kind;
+/*
+ * How an object of the Modeling page was made, so that CSG can rebuild both
+ * operands as shapes (vv_shape_csg takes its children): a primitive or a mesh
+ * file with its placement, or a CSG of two recipes. Kept per volume made
+ * (the volume's address; the object may be renamed, moved in the list or
+ * copied by undo, and keeps its volume).
+ */
+typedef struct model_recipe {
+    int kind; /* index of prim_names; PRIM_MESH: a mesh file; PRIM_CSG: op of a and b */
     double size;
+    char *mesh;
+    vv_vec3 position;
+    int axis;     /* 0 x, 1 y, 2 z */
+    double angle; /* degrees */
+    vv_csg_op op;
+    struct model_recipe *a, *b;
+} model_recipe;
+
+static const char *const prim_names[] = {"sphere", "box",       "torus", "cylinder",
+                                         "cone",   "mesh file", NULL};
+#define PRIM_MESH 5
+#define PRIM_CSG 6
+
+static void
+recipe_free(gpointer p) {
+    model_recipe *r = p;
+    if (!r)
+        return;
+    g_free(r->mesh);
+    recipe_free(r->a);
+    recipe_free(r->b);
+    g_free(r);
+}
+
+static model_recipe *
+recipe_copy(const model_recipe *r) {
+    if (!r)
+        return NULL;
+    model_recipe *c = g_new(model_recipe, 1);
+    *c = *r;
+    c->mesh = g_strdup(r->mesh);
+    c->a = recipe_copy(r->a);
+    c->b = recipe_copy(r->b);
+    return c;
+}
+
+/* A fresh shape tree for @p r (caller frees). */
+static vv_status
+recipe_shape(const model_recipe *r, vv_shape **out) {
+    *out = NULL;
+    vv_status st;
+    double h = r->size / 2;
+    switch (r->kind) {
+    case 0:
+        st = vv_shape_sphere(out, h);
+        break;
+    case 1:
+        st = vv_shape_box(out, vv_vec3_make(r->size, r->size, r->size), 0.1 * h);
+        break;
+    case 2:
+        st = vv_shape_torus(out, 0.7 * h, 0.25 * h);
+        break;
+    case 3:
+        st = vv_shape_cylinder(out, 0.5 * h, r->size);
+        break;
+    case 4:
+        st = vv_shape_cone(out, 0.6 * h, 0, r->size);
+        break;
+    case PRIM_MESH:
+        st = vv_shape_mesh_load(out, r->mesh, VV_MESH_AUTO, 0);
+        break;
+    default: {
+        vv_shape *kids[2] = {NULL, NULL};
+        st = recipe_shape(r->a, &kids[0]);
+        if (st == VV_OK)
+            st = recipe_shape(r->b, &kids[1]);
+        if (st != VV_OK) {
+            vv_shape_free(kids[0]);
+            vv_shape_free(kids[1]);
+            return st;
+        }
+        return vv_shape_csg(out, r->op, 2, kids);
+    }
+    }
+    if (st != VV_OK)
+        return st;
+    vv_vec3 ax = vv_vec3_make(r->axis == 0, r->axis == 1, r->axis == 2);
+    vv_shape_transform(*out, vv_mat4_mul(vv_mat4_translate(r->position),
+                                         vv_mat4_rotate(ax, vv_deg_to_rad(r->angle))));
+    return VV_OK;
+}
+
+static char *
+recipe_name(const model_recipe *r) {
+    if (r->kind == PRIM_CSG)
+        return g_strdup_printf("%s", vv_csg_op_name(r->op));
+    if (r->kind == PRIM_MESH) {
+        char *b = g_path_get_basename(r->mesh);
+        char *dot = strrchr(b, '.');
+        if (dot && dot != b)
+            *dot = '\0';
+        return b;
+    }
+    return g_strdup(prim_names[r->kind]);
+}
+
+typedef struct model_job {
+    model_recipe *recipe;
     int res;
     vv_volume *result;
     vv_status status;
     char error[512];
-    double fraction;
+    double fraction; /* atomic */
+    VvWindow *win;
+    const vv_volume *operands[2]; /* CSG: the volumes of A and B (compared only) */
 } model_job;
 
 static int
@@ -1053,24 +1165,7 @@ model_thread(GTask *task, gpointer src, gpointer data, GCancellable *c) {
     model_job *j = data;
     vv_shape *sh = NULL;
     vv_error_clear();
-    double r = j->size / 2;
-    switch (j->kind) {
-    case 0:
-        j->status = vv_shape_sphere(&sh, r);
-        break;
-    case 1:
-        j->status = vv_shape_box(&sh, vv_vec3_make(j->size, j->size, j->size), 0.1 * r);
-        break;
-    case 2:
-        j->status = vv_shape_torus(&sh, 0.7 * r, 0.25 * r);
-        break;
-    case 3:
-        j->status = vv_shape_cylinder(&sh, 0.5 * r, j->size);
-        break;
-    default:
-        j->status = vv_shape_cone(&sh, 0.6 * r, 0, j->size);
-        break;
-    }
+    j->status = recipe_shape(j->recipe, &sh);
     if (j->status == VV_OK) {
         vv_voxelize_options o;
         vv_voxelize_options_init(&o);
@@ -1088,15 +1183,25 @@ static void
 model_job_free(gpointer p) {
     model_job *j = p;
     vv_volume_free(j->result);
+    recipe_free(j->recipe);
     g_free(j);
 }
 
-static const char *const prim_names[] = {"sphere", "box", "torus", "cylinder", "cone", NULL};
+static gboolean
+model_tick(gpointer user) {
+    model_job *j = user;
+    double f;
+    __atomic_load(&j->fraction, &f, __ATOMIC_RELAXED);
+    gtk_progress_bar_set_fraction(GTK_PROGRESS_BAR(j->win->model_progress), f);
+    return G_SOURCE_CONTINUE;
+}
+
+static void rebuild_model_lists(VvWindow *win);
 
 static void
 model_done(GObject *src, GAsyncResult *res, gpointer user) {
-    (void)user;
     VvWindow *win = VV_WINDOW(src);
+    g_source_remove(GPOINTER_TO_UINT(user));
     model_job *j = g_task_get_task_data(G_TASK(res));
     gtk_progress_bar_set_fraction(GTK_PROGRESS_BAR(win->model_progress), 1);
     if (j->status != VV_OK) {
@@ -1104,16 +1209,28 @@ model_done(GObject *src, GAsyncResult *res, gpointer user) {
         return;
     }
     vv_object *o = NULL;
-    if (vv_object_new_volume(&o, j->result, prim_names[j->kind]) != VV_OK) {
+    char *name = recipe_name(j->recipe);
+    vv_status st = vv_object_new_volume(&o, j->result, name);
+    g_free(name);
+    if (st != VV_OK) {
         show_error(win, "Voxelization failed", vv_error_message());
         return;
     }
     /* the density surface (127.5 of 255) as an opaque isosurface */
     o->mode = VV_MODE_ISO;
     o->isovalue = 127.5;
+    if (!g_hash_table_contains(win->recipes, j->result))
+        g_hash_table_insert(win->recipes, vv_volume_ref(j->result), recipe_copy(j->recipe));
     vv_world *w = vv_document_world(win->doc);
     gboolean first = w->n_objects == 0;
     vv_document_add_object(win->doc, o, NULL);
+    /* a CSG result stands in for its operands: they are hidden (same undo step) */
+    for (int i = 0; i < w->n_objects; i++)
+        if (w->objects[i]->volume &&
+            (w->objects[i]->volume == j->operands[0] || w->objects[i]->volume == j->operands[1]))
+            w->objects[i]->visible = 0;
+    if (j->operands[0])
+        vv_document_changed(win->doc);
     if (first) {
         if (w->n_lights == 0) {
             vv_light l = {VV_LIGHT_DIRECTIONAL, 1, {0, 1, 0}, {0, 0, 0}, {1, 1, 1}, 1.0};
@@ -1122,6 +1239,22 @@ model_done(GObject *src, GAsyncResult *res, gpointer user) {
         vv_view_frame_box(&w->view, vv_world_bounds(w));
         vv_document_changed(win->doc);
     }
+    rebuild_model_lists(win);
+}
+
+static model_job *
+start_model(VvWindow *win, model_recipe *r) {
+    model_job *j = g_new0(model_job, 1);
+    j->recipe = r;
+    j->res = (int)spin_value(win->prim_res);
+    j->win = win;
+    gtk_progress_bar_set_fraction(GTK_PROGRESS_BAR(win->model_progress), 0);
+    guint tick = g_timeout_add(100, model_tick, j);
+    GTask *task = g_task_new(win, NULL, model_done, GUINT_TO_POINTER(tick));
+    g_task_set_task_data(task, j, model_job_free);
+    g_task_run_in_thread(task, model_thread);
+    g_object_unref(task);
+    return j;
 }
 
 static void
@@ -1129,15 +1262,68 @@ act_voxelize(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
     VvWindow *win = user;
-    model_job *j = g_new0(model_job, 1);
-    j->kind = (int)gtk_drop_down_get_selected(GTK_DROP_DOWN(win->prim_kind));
-    j->size = spin_value(win->prim_size);
-    j->res = (int)spin_value(win->prim_res);
-    gtk_progress_bar_set_fraction(GTK_PROGRESS_BAR(win->model_progress), 0);
-    GTask *task = g_task_new(win, NULL, model_done, NULL);
-    g_task_set_task_data(task, j, model_job_free);
-    g_task_run_in_thread(task, model_thread);
-    g_object_unref(task);
+    model_recipe *r = g_new0(model_recipe, 1);
+    r->kind = (int)gtk_drop_down_get_selected(GTK_DROP_DOWN(win->prim_kind));
+    r->size = spin_value(win->prim_size);
+    if (r->kind == PRIM_MESH) {
+        const char *m = gtk_editable_get_text(GTK_EDITABLE(win->prim_mesh));
+        if (!m[0]) {
+            g_free(r);
+            show_error(win, "No mesh file", "enter the mesh file to voxelize");
+            return;
+        }
+        r->mesh = g_strdup(m);
+    }
+    r->position = vv_vec3_make(spin_value(win->prim_pos[0]), spin_value(win->prim_pos[1]),
+                               spin_value(win->prim_pos[2]));
+    r->axis = (int)gtk_drop_down_get_selected(GTK_DROP_DOWN(win->prim_axis));
+    r->angle = spin_value(win->prim_angle);
+    start_model(win, r);
+}
+
+/* The objects made on this page (their recipes), in World order, into the CSG lists. */
+static void
+rebuild_model_lists(VvWindow *win) {
+    GtkStringList *names = gtk_string_list_new(NULL);
+    g_ptr_array_set_size(win->model_volumes, 0);
+    vv_world *w = vv_document_world(win->doc);
+    for (int i = 0; i < w->n_objects; i++) {
+        vv_object *o = w->objects[i];
+        if (o->volume && g_hash_table_contains(win->recipes, o->volume)) {
+            gtk_string_list_append(names, o->name);
+            g_ptr_array_add(win->model_volumes, o->volume);
+        }
+    }
+    gtk_drop_down_set_model(GTK_DROP_DOWN(win->csg_a), G_LIST_MODEL(names));
+    gtk_drop_down_set_model(GTK_DROP_DOWN(win->csg_b), G_LIST_MODEL(names));
+    if (g_list_model_get_n_items(G_LIST_MODEL(names)) > 1)
+        gtk_drop_down_set_selected(GTK_DROP_DOWN(win->csg_b), 1);
+    g_object_unref(names);
+}
+
+static void
+act_csg(GSimpleAction *a, GVariant *p, gpointer user) {
+    (void)a;
+    (void)p;
+    VvWindow *win = user;
+    guint ia = gtk_drop_down_get_selected(GTK_DROP_DOWN(win->csg_a));
+    guint ib = gtk_drop_down_get_selected(GTK_DROP_DOWN(win->csg_b));
+    if (ia >= win->model_volumes->len || ib >= win->model_volumes->len) {
+        show_error(win, "No CSG", "make two objects on this page first");
+        return;
+    }
+    const model_recipe *ra = g_hash_table_lookup(win->recipes, win->model_volumes->pdata[ia]);
+    const model_recipe *rb = g_hash_table_lookup(win->recipes, win->model_volumes->pdata[ib]);
+    if (!ra || !rb)
+        return;
+    model_recipe *r = g_new0(model_recipe, 1);
+    r->kind = PRIM_CSG;
+    r->op = (vv_csg_op)gtk_drop_down_get_selected(GTK_DROP_DOWN(win->csg_op));
+    r->a = recipe_copy(ra);
+    r->b = recipe_copy(rb);
+    model_job *j = start_model(win, r);
+    j->operands[0] = win->model_volumes->pdata[ia];
+    j->operands[1] = win->model_volumes->pdata[ib];
 }
 
 /* ---- pages -------------------------------------------------------------------- */
@@ -1568,16 +1754,44 @@ measurement_page(VvWindow *win) {
     return scrolled(box);
 }
 
+static void
+model_doc_changed(VvDocument *doc, gpointer user) {
+    (void)doc;
+    VvWindow *win = user;
+    /* names and objects change with renames, deletes and undo */
+    vv_world *w = vv_document_world(win->doc);
+    guint n = 0;
+    for (int i = 0; i < w->n_objects; i++)
+        n += w->objects[i]->volume && g_hash_table_contains(win->recipes, w->objects[i]->volume);
+    if (n != win->model_volumes->len)
+        rebuild_model_lists(win);
+}
+
 static GtkWidget *
 modeling_page(VvWindow *win) {
     GtkWidget *box = page_box();
-    GtkWidget *g = section(box, "Voxelized primitive (volume sampling)");
-    win->prim_kind = row(g, "primitive", dropdown(prim_names));
+    GtkWidget *g = section(box, "Voxelized primitive or mesh (volume sampling)");
+    win->prim_kind = row(g, "model", dropdown(prim_names));
     win->prim_size = row(g, "size (world units)", spin(0.1, 1e5, 1, 2));
     set_spin(win->prim_size, 100);
+    win->prim_mesh = row(g, "mesh file", gtk_entry_new());
+    gtk_entry_set_placeholder_text(GTK_ENTRY(win->prim_mesh), "OBJ, PLY, STL, OFF, ...");
+    const char *axes[] = {"position x", "position y", "position z"};
+    for (int i = 0; i < 3; i++)
+        win->prim_pos[i] = row(g, axes[i], spin(-1e5, 1e5, 1, 2));
+    static const char *const rot_axes[] = {"x", "y", "z", NULL};
+    win->prim_axis = row(g, "rotation axis", dropdown(rot_axes));
+    gtk_drop_down_set_selected(GTK_DROP_DOWN(win->prim_axis), 2);
+    win->prim_angle = row(g, "rotation (°)", spin(-360, 360, 5, 1));
     win->prim_res = row(g, "voxels on the longest axis", spin(8, 1024, 8, 0));
     set_spin(win->prim_res, 128);
     gtk_box_append(GTK_BOX(box), action_button("Add", "win.voxelize"));
+    g = section(box, "CSG of two objects made here");
+    win->csg_a = row(g, "A", gtk_drop_down_new(NULL, NULL));
+    static const char *const ops[] = {"union", "intersection", "difference (A - B)", NULL};
+    win->csg_op = row(g, "operation", dropdown(ops));
+    win->csg_b = row(g, "B", gtk_drop_down_new(NULL, NULL));
+    gtk_box_append(GTK_BOX(box), action_button("Combine", "win.csg"));
     win->model_progress = gtk_progress_bar_new();
     gtk_box_append(GTK_BOX(box), win->model_progress);
     return scrolled(box);
@@ -1613,6 +1827,8 @@ vv_window_dispose(GObject *o) {
     }
     vv_histogram_free(win->hist);
     win->hist = NULL;
+    g_clear_pointer(&win->recipes, g_hash_table_destroy);
+    g_clear_pointer(&win->model_volumes, g_ptr_array_unref);
     G_OBJECT_CLASS(vv_window_parent_class)->dispose(o);
 }
 
@@ -1655,11 +1871,16 @@ static const GActionEntry win_actions[] = {
     {"pick-a", act_pick_a, NULL, NULL, NULL, {0}},
     {"pick-b", act_pick_b, NULL, NULL, NULL, {0}},
     {"voxelize", act_voxelize, NULL, NULL, NULL, {0}},
+    {"csg", act_csg, NULL, NULL, NULL, {0}},
 };
 
 static void
 vv_window_init(VvWindow *win) {
     win->doc = vv_document_new();
+    /* a reference is held on each key so that an address is never reused */
+    win->recipes = g_hash_table_new_full(g_direct_hash, g_direct_equal,
+                                         (GDestroyNotify)vv_volume_free, recipe_free);
+    win->model_volumes = g_ptr_array_new();
     g_action_map_add_action_entries(G_ACTION_MAP(win), win_actions, G_N_ELEMENTS(win_actions), win);
     win->scene = vv_scene_view_new(win->doc);
 
@@ -1690,6 +1911,7 @@ vv_window_init(VvWindow *win) {
 
     g_signal_connect(win->doc, "changed", G_CALLBACK(doc_changed), win);
     g_signal_connect(win->doc, "selection-changed", G_CALLBACK(selection_changed), win);
+    g_signal_connect(win->doc, "changed", G_CALLBACK(model_doc_changed), win);
     rebuild_object_list(win);
     fill_object_control(win);
     rebuild_options(win);
