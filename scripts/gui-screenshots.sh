@@ -32,18 +32,25 @@ wid=$(xdotool search --sync --name '^VolVis — ' | head -1)
 xdotool windowmove "$wid" 0 0 windowsize "$wid" 1100 720
 sleep 1
 shot() { import -window "$wid" "$out/gui_$1.png"; echo "wrote $out/gui_$1.png"; }
-page() { xdotool mousemove 693 "$1" click 1; sleep 0.7; }
+import -window "$wid" "$tmp/open.png"
+mapfile -t entries < <(python3 tests/gui/locate.py sidebar "$tmp/open.png")
+page() { xdotool mousemove ${entries[$1]} click 1; sleep 0.7; }
 shot manipulation
-# the 2-D transfer function: scroll the side bar down, add a triangle widget
-xdotool mousemove 712 400
+# the 2-D transfer function and textures: scroll the side bar down (over the labels)
+read -r ex _ <<< "${entries[0]}"
+xdotool mousemove $((ex + 130)) 400
 for _ in $(seq 1 12); do xdotool click 5; sleep 0.05; done
 sleep 0.5
 shot manipulation_tf2d
-page 61
+page 1
 shot rendering
-page 99
+page 2
 shot measurement
-page 137
+page 3
 shot modeling
+page 4
+shot devices
+page 5
+shot animator
 kill "$pid"
 wait "$pid" 2>/dev/null || true
