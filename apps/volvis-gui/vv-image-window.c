@@ -230,8 +230,13 @@ vv_image_window_init(VvImageWindow *win) {
 VvImageWindow *
 vv_image_window_new(GtkWindow *parent, vv_world *world) {
     VvImageWindow *win = g_object_new(VV_TYPE_IMAGE_WINDOW, NULL);
-    if (parent)
+    if (parent) {
         gtk_window_set_transient_for(GTK_WINDOW(win), parent);
+        /* one of the application's windows: its shortcuts (Ctrl+Q) work here too */
+        GtkApplication *app = gtk_window_get_application(parent);
+        if (app)
+            gtk_window_set_application(GTK_WINDOW(win), app);
+    }
     win->world = world;
     gtk_window_set_default_size(GTK_WINDOW(win), world->view.width, world->view.height + 60);
     win->start_us = g_get_monotonic_time();

@@ -137,11 +137,22 @@ sleep 1
 same "$OUT/cli_saved2.png" "$OUT/full_cut.png" || fail "after the light and cut-plane drags the CLI differs from the GUI"
 echo "light and cut-plane drags: saved and rendered by the CLI to the GUI's pixels"
 
-# Ctrl+Q with nothing unsaved exits 0
+# a final render in its own window (Ctrl+R), and quitting while it runs:
+# the render is cancelled and the application exits 0 at once
+xdotool key ctrl+r
+xdotool search --sync --name 'VolVis — render' > /dev/null
+sleep 1.5
+import -window root "$OUT/render_window.png"
+xdotool key ctrl+r # a second one, quit while it renders
+sleep 0.05
+t0=$(date +%s.%N)
 xdotool key ctrl+q
 st=0
 wait "$pid" || st=$?
-[ "$st" = 0 ] || fail "Ctrl+Q: exit status $st"
+t1=$(date +%s.%N)
+[ "$st" = 0 ] || fail "Ctrl+Q during a render: exit status $st"
+awk -v a="$t0" -v b="$t1" 'BEGIN { exit !(b - a < 5) }' || fail "quitting during a render took $(awk -v a="$t0" -v b="$t1" 'BEGIN { print b - a }') s"
+echo "quit during a final render: exit 0"
 
 # a bad file: an error dialog, the application keeps running, the World empty
 printf 'NRRD0004\ntype: short\ndimension: 3\nsizes: 100000 100000 100000\nencoding: raw\n\n' > "$OUT/bad.nrrd"
