@@ -133,6 +133,7 @@ cancel_cb(void *user, double fraction) {
 }
 
 static gboolean show_frame(gpointer data);
+static gboolean tick_cb(GtkWidget *widget, GdkFrameClock *clock, gpointer user);
 
 /* Draws one representation of a job; NULL when cancelled. */
 static frame *
@@ -699,6 +700,8 @@ drag_begin(GtkGestureDrag *g, double x, double y, gpointer user) {
 static void
 drag_end(GtkGestureDrag *g, double ox, double oy, gpointer user) {
     VvSceneView *self = user;
+    if (self->flight && self->drag_button == 1) /* the mouse stick is let go */
+        self->yaw_rate = self->pitch_rate = 0;
     if (self->dragged || !self->pick_fn || fabs(ox) > 3 || fabs(oy) > 3)
         return;
     double sx, sy;
@@ -721,6 +724,24 @@ drag_update(GtkGestureDrag *g, double ox, double oy, gpointer user) {
     self->drag_last_y = oy;
     if (dx == 0 && dy == 0)
         return;
+    if (self->flight && self->drag_button == 1 &&
+        !(self->drag_mods & (GDK_SHIFT_MASK | GDK_CONTROL_MASK | GDK_ALT_MASK))) {
+        /* flight with the mouse: the drag is a stick, its offset from the
+         * press sets the yaw and pitch rates (a quarter turn a second at
+         * 200 pixels) until the button is released */
+        double k = (VV_PI / 2) / 200.0;
+        self->yaw_rate = CLAMP(-ox * k, -VV_PI, VV_PI);
+        self->pitch_rate = CLAMP(-oy * k, -VV_PI, VV_PI);
+        if (!self->dragged) {
+            self->dragged = TRUE;
+            begin_interaction(self, "fly");
+        }
+        if (!self->tick_id) {
+            self->last_tick_us = 0;
+            self->tick_id = gtk_widget_add_tick_callback(GTK_WIDGET(self), tick_cb, self, NULL);
+        }
+        return;
+    }
     if (!self->dragged) {
         self->dragged = TRUE;
         begin_interaction(self, self->target == VV_NAV_OBJECT  ? "move object"

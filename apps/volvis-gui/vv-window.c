@@ -31,6 +31,8 @@ struct _VvWindow {
     GtkWidget *light_index, *light_type, *light_color, *light_intensity;
     GtkWidget *ambient_color, *background_color;
     GtkWidget *view_width, *view_height, *view_fov, *view_projection;
+    GtkWidget *eye[3], *at[3], *obj_pos[3], *obj_scale;
+    guint placement_source;
 
     /* Rendering */
     GtkWidget *renderer, *quality, *options_box;
@@ -137,6 +139,7 @@ show_error(VvWindow *win, const char *what, const char *message) {
 /* ---- filling the widgets from the World ----------------------------------- */
 
 static void rebuild_object_list(VvWindow *win);
+static void fill_placement(VvWindow *win);
 static void rebuild_options(VvWindow *win);
 
 static void
@@ -194,6 +197,7 @@ fill_object_control(VvWindow *win) {
     GdkRGBA a = rgba(w->ambient), b = rgba(w->background);
     gtk_color_chooser_set_rgba(GTK_COLOR_CHOOSER(win->ambient_color), &a);
     gtk_color_chooser_set_rgba(GTK_COLOR_CHOOSER(win->background_color), &b);
+    fill_placement(win);
     set_spin(win->view_width, w->view.width);
     set_spin(win->view_height, w->view.height);
     set_spin(win->view_fov, vv_rad_to_deg(w->view.fov));
@@ -204,6 +208,56 @@ fill_object_control(VvWindow *win) {
             gtk_drop_down_set_selected(GTK_DROP_DOWN(win->renderer), i);
     set_spin(win->quality, w->render.quality >= 0 ? w->render.quality : 2);
     win->updating = FALSE;
+}
+
+/* The numbers the Navigator changes (eye, look-at point, object placement),
+ * refreshed on every change of the World so that they are never stale. */
+static void
+fill_placement(VvWindow *win) {
+    gboolean was = win->updating;
+    win->updating = TRUE;
+    vv_world *w = vv_document_world(win->doc);
+    double ev[3] = {w->view.eye.x, w->view.eye.y, w->view.eye.z};
+    double av[3] = {w->view.at.x, w->view.at.y, w->view.at.z};
+    for (int i = 0; i < 3; i++) {
+        set_spin(win->eye[i], ev[i]);
+        set_spin(win->at[i], av[i]);
+    }
+    vv_object *o = vv_document_selected_object(win->doc);
+    if (o) {
+        double pv[3] = {o->position.x, o->position.y, o->position.z};
+        for (int i = 0; i < 3; i++)
+            set_spin(win->obj_pos[i], pv[i]);
+        set_spin(win->obj_scale, o->scale.x);
+    }
+    win->updating = was;
+}
+
+/* Typed eye, look-at point or object placement: one undo step. */
+static void
+on_placement(GtkSpinButton *sb, gpointer user) {
+    (void)sb;
+    VvWindow *win = user;
+    if (win->updating)
+        return;
+    vv_world *w = vv_document_world(win->doc);
+    vv_document_begin_edit(win->doc, "placement");
+    vv_view nv = w->view;
+    nv.eye =
+        vv_vec3_make(spin_value(win->eye[0]), spin_value(win->eye[1]), spin_value(win->eye[2]));
+    nv.at = vv_vec3_make(spin_value(win->at[0]), spin_value(win->at[1]), spin_value(win->at[2]));
+    if (vv_nav_view_valid(&nv)) /* an eye on the look-at point is refused */
+        w->view = nv;
+    vv_object *o = vv_document_selected_object(win->doc);
+    if (o) {
+        o->position = vv_vec3_make(spin_value(win->obj_pos[0]), spin_value(win->obj_pos[1]),
+                                   spin_value(win->obj_pos[2]));
+        /* a uniform scale typed here; a non-uniform one (from a scene) keeps its ratios */
+        double sc = spin_value(win->obj_scale);
+        if (sc > 0 && o->scale.x != 0 && fabs(sc - o->scale.x) > 1e-12)
+            o->scale = vv_vec3_scale(o->scale, sc / o->scale.x);
+    }
+    vv_document_changed(win->doc);
 }
 
 static void
@@ -230,10 +284,23 @@ update_title(VvWindow *win) {
     g_simple_action_set_enabled(G_SIMPLE_ACTION(a), vv_document_can_redo(win->doc));
 }
 
+static gboolean
+placement_due(gpointer user) {
+    VvWindow *win = user;
+    win->placement_source = 0;
+    fill_placement(win);
+    return G_SOURCE_REMOVE;
+}
+
 static void
 doc_changed(VvDocument *doc, gpointer user) {
     (void)doc;
-    update_title(user);
+    VvWindow *win = user;
+    update_title(win);
+    /* during a drag the World changes a hundred times a second: the numbers
+     * follow ten times a second, which costs the view no frames */
+    if (!win->placement_source)
+        win->placement_source = g_timeout_add(100, placement_due, win);
 }
 
 /* ---- edits from the Object Control widgets -------------------------------- */
@@ -284,6 +351,14 @@ apply_edit(VvWindow *win, const char *label) {
     w->ambient = vec_of(&c);
     gtk_color_chooser_get_rgba(GTK_COLOR_CHOOSER(win->background_color), &c);
     w->background = vec_of(&c);
+    vv_view nv = w->view;
+    nv.eye =
+        vv_vec3_make(spin_value(win->eye[0]), spin_value(win->eye[1]), spin_value(win->eye[2]));
+    nv.at = vv_vec3_make(spin_value(win->at[0]), spin_value(win->at[1]), spin_value(win->at[2]));
+    if (vv_nav_view_valid(&nv)) { /* an eye on the look-at point is refused */
+        w->view.eye = nv.eye;
+        w->view.at = nv.at;
+    }
     w->view.width = (int)spin_value(win->view_width);
     w->view.height = (int)spin_value(win->view_height);
     w->view.fov = vv_deg_to_rad(spin_value(win->view_fov));
@@ -1518,6 +1593,48 @@ texture_spin(GtkSpinButton *s, gpointer user) {
     texture_update(user, FALSE);
 }
 
+/* The menu: the same named actions as the shortcuts, pages and devices. */
+static GtkWidget *
+main_menu_button(void) {
+    static const struct {
+        const char *section, *label, *action;
+    } items[] = {
+        {"File", "Open…", "win.open"},
+        {"File", "Save session", "win.save"},
+        {"File", "Save session as…", "win.save-as"},
+        {"File", "Quit", "app.quit"},
+        {"Edit", "Undo", "win.undo"},
+        {"Edit", "Redo", "win.redo"},
+        {"Edit", "Delete object", "win.delete-object"},
+        {"View", "Front", "win.view-front"},
+        {"View", "Side", "win.view-side"},
+        {"View", "Top", "win.view-top"},
+        {"View", "Reset", "win.view-reset"},
+        {"Render", "Render…", "win.render"},
+    };
+    GMenu *menu = g_menu_new();
+    GMenu *sec = NULL;
+    const char *cur = NULL;
+    for (size_t i = 0; i < G_N_ELEMENTS(items); i++) {
+        if (!cur || strcmp(cur, items[i].section)) {
+            if (sec) {
+                g_menu_append_section(menu, cur, G_MENU_MODEL(sec));
+                g_object_unref(sec);
+            }
+            sec = g_menu_new();
+            cur = items[i].section;
+        }
+        g_menu_append(sec, items[i].label, items[i].action);
+    }
+    g_menu_append_section(menu, cur, G_MENU_MODEL(sec));
+    g_object_unref(sec);
+    GtkWidget *b = gtk_menu_button_new();
+    gtk_menu_button_set_label(GTK_MENU_BUTTON(b), "Menu");
+    gtk_menu_button_set_menu_model(GTK_MENU_BUTTON(b), G_MENU_MODEL(menu));
+    g_object_unref(menu);
+    return b;
+}
+
 static GtkWidget *
 manipulation_page(VvWindow *win) {
     GtkWidget *box = page_box();
@@ -1533,6 +1650,7 @@ manipulation_page(VvWindow *win) {
     GtkWidget *ob = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 4);
     gtk_box_append(GTK_BOX(ob), action_button("Open…", "win.open"));
     gtk_box_append(GTK_BOX(ob), action_button("Delete", "win.delete-object"));
+    gtk_box_append(GTK_BOX(ob), main_menu_button());
     gtk_box_append(GTK_BOX(box), ob);
 
     /* Navigator */
@@ -1601,6 +1719,16 @@ manipulation_page(VvWindow *win) {
     set_spin(win->w2d_opacity, 0.5);
     g_signal_connect(win->w2d_color, "color-set", G_CALLBACK(w2d_style), win);
     g_signal_connect(win->w2d_opacity, "value-changed", G_CALLBACK(w2d_style_spin), win);
+
+    /* placement, numerically (the Navigator moves it too) */
+    g = section(box, "Placement of the object (world units)");
+    const char *posn[] = {"position x", "position y", "position z"};
+    for (int i = 0; i < 3; i++) {
+        win->obj_pos[i] = row(g, posn[i], spin(-1e6, 1e6, 1, 3));
+        g_signal_connect(win->obj_pos[i], "value-changed", G_CALLBACK(on_placement), win);
+    }
+    win->obj_scale = row(g, "scale", spin(1e-3, 1e3, 0.1, 3));
+    g_signal_connect(win->obj_scale, "value-changed", G_CALLBACK(on_placement), win);
 
     /* material */
     g = section(box, "Colour and material");
@@ -1675,6 +1803,15 @@ manipulation_page(VvWindow *win) {
 
     /* view */
     g = section(box, "View");
+    const char *en[] = {"eye x", "eye y", "eye z"}, *an[] = {"look at x", "look at y", "look at z"};
+    for (int i = 0; i < 3; i++) {
+        win->eye[i] = row(g, en[i], spin(-1e7, 1e7, 1, 3));
+        g_signal_connect(win->eye[i], "value-changed", G_CALLBACK(on_placement), win);
+    }
+    for (int i = 0; i < 3; i++) {
+        win->at[i] = row(g, an[i], spin(-1e7, 1e7, 1, 3));
+        g_signal_connect(win->at[i], "value-changed", G_CALLBACK(on_placement), win);
+    }
     win->view_width = row(g, "image width", wire_spin(win, spin(16, 4096, 16, 0)));
     win->view_height = row(g, "image height", wire_spin(win, spin(16, 4096, 16, 0)));
     win->view_fov = row(g, "field of view (°)", wire_spin(win, spin(1, 170, 1, 1)));
@@ -1827,6 +1964,10 @@ vv_window_dispose(GObject *o) {
     }
     vv_histogram_free(win->hist);
     win->hist = NULL;
+    if (win->placement_source) {
+        g_source_remove(win->placement_source);
+        win->placement_source = 0;
+    }
     g_clear_pointer(&win->recipes, g_hash_table_destroy);
     g_clear_pointer(&win->model_volumes, g_ptr_array_unref);
     G_OBJECT_CLASS(vv_window_parent_class)->dispose(o);
