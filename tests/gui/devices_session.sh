@@ -211,16 +211,16 @@ import sys
 with open(sys.argv[1], "w") as f:
     f.write("volvis-input 1\ndevice 1 spaceball replayed-puck\n")
     f.write("0 motion6 1 0 0 0 0 0 0 0 16\n")
-    for i in range(30):  # from 1 s on: half a second of tilt
-        f.write("%.17g motion6 1 0 0 0 0 -350 0 0 16\n" % (1 + i / 60))
-    f.write("1.5 motion6 1 0 0 0 0 0 0 0 16\n")
+    for i in range(30):  # from 3 s on (a slow start under the sanitizers): half a second of tilt
+        f.write("%.17g motion6 1 0 0 0 0 -350 0 0 16\n" % (3 + i / 60))
+    f.write("3.5 motion6 1 0 0 0 0 0 0 0 16\n")
 PY
 cp "$OUT/scene.json" "$OUT/session.json"
 rm -f "$OUT/frames.log"
 VOLVIS_INPUT_REPLAY=$OUT/turn.vvin "$GUI" "$OUT/session.json" > "$OUT/gui_replay.log" 2>&1 &
 pid=$!
 xdotool search --sync --name '^VolVis — ' > /dev/null
-sleep 2
+sleep 4.5
 wait_settled 0 "the replay"
 d=$(ae "$OUT/full.png" "$OUT/full0.png")
 awk -v d="$d" 'BEGIN { exit !(d > 1000) }' || fail "the replay did not turn the view ($d pixels differ)"

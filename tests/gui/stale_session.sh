@@ -13,7 +13,7 @@ cat > "$OUT/slow.json" <<JSON
 {
   "view": {"eye": [0, 600, 0], "at": [0, 0, 0], "up": [0, 0, 1], "fov": 25, "width": 256, "height": 256},
   "lights": [{"type": "directional", "direction": [0, -1, 0]}],
-  "render": {"renderer": "raytrace", "quality": 2, "options": {"samples": 16}},
+  "render": {"renderer": "raytrace", "quality": 2, "options": {"samples": 4}},
   "objects": [{"name": "head", "type": "volume", "file": "$DATA/ct_head.nrrd",
                "origin": [-122.0, -122.0, -80.25]}]
 }
@@ -30,7 +30,7 @@ xdotool mousemove 300 360 mousedown 1
 for x in $(seq 296 -4 240); do xdotool mousemove "$x" 360; sleep 0.02; done
 xdotool mouseup 1
 # the new state's final frame
-for _ in $(seq 1 600); do
+for _ in $(seq 1 1800); do
   awk -v b="$before" '$2 == "full" && $6 > b { f = 1 } END { exit !f }' "$OUT/frames.log" && break
   sleep 0.1
 done
