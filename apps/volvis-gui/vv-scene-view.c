@@ -1,9 +1,15 @@
 /* VvSceneView: the scene view and the Navigator (vv-scene-view.h). */
+#define _GNU_SOURCE /* syscall(SYS_gettid) for the render thread's priority */
 #include "vv-scene-view.h"
 
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#ifdef __linux__
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+#endif
 
 /* Seconds a preview frame may take so the view holds 30 frames a second,
  * leaving time for showing it. */
@@ -247,6 +253,13 @@ warm_previews(VvSceneView *self) {
 static gpointer
 worker_main(gpointer data) {
     VvSceneView *self = data;
+#ifdef __linux__
+    /* The renderer's threads (OpenMP's, created from this one, inherit it)
+     * yield to the UI thread and the display server, which have a frame to
+     * show: on 2 cores they would otherwise wait for a time slice. */
+    if (setpriority(PRIO_PROCESS, (id_t)syscall(SYS_gettid), 4) != 0)
+        g_debug("volvis-gui: the render thread keeps its priority");
+#endif
     for (;;) {
         g_mutex_lock(&self->lock);
         while (!self->pending && !self->quit)
@@ -398,8 +411,13 @@ refine_cb(gpointer data) {
         return G_SOURCE_REMOVE;
     /* 1/2 first when the frame on screen is coarser and the full frame is
      * slow (or not known yet), then the full frame */
+    g_mutex_lock(&self->lock);
+    double half = self->policy.seconds[VV_PREVIEW_RAYCAST_2];
+    g_mutex_unlock(&self->lock);
+    /* (the first time, or when the final frame is slow and the 1/2 step
+     * quick: it must not delay the final frame by more than a few frames) */
     if ((self->shown_kind < VV_PREVIEW_RAYCAST_2 || self->shown_gen != self->gen) &&
-        (self->full_ms <= 0 || self->full_ms > 300))
+        (self->full_ms <= 0 || (self->full_ms > 300 && half >= 0 && half <= 0.04)))
         j->kinds[j->n_kinds++] = VV_PREVIEW_RAYCAST_2;
     j->kinds[j->n_kinds++] = VV_PREVIEW_FULL;
     post_job(self, j);
