@@ -242,7 +242,7 @@ vv_video_writer_open(vv_video_writer **out, const char *path, int width, int hei
     w->cc->color_trc = AVCOL_TRC_SMPTE170M;
     int crf = opt->crf >= 0 ? opt->crf : (codec == VV_VIDEO_VP9 ? 31 : 20);
     if (codec == VV_VIDEO_H264) {
-        av_opt_set(w->cc->priv_data, "preset", "veryfast", 0);
+        av_opt_set(w->cc->priv_data, "preset", "superfast", 0);
         av_opt_set_int(w->cc->priv_data, "crf", crf, 0);
     } else {
         w->cc->bit_rate = 0; /* constant quality */

@@ -11,6 +11,11 @@
  * back into the encoder instead of rendering them, and the folder is removed
  * once the video is in place.
  */
+#ifdef __linux__
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+#endif
 #include <errno.h>
 #include <math.h>
 #include <pthread.h>
@@ -171,6 +176,12 @@ run_job(worker *w, const job *j) {
 static void *
 worker_main(void *arg) {
     worker *w = arg;
+#ifdef __linux__
+    /* Storing and encoding yield to the renderer's threads: the renderer is
+     * the critical path, the encoder only has to keep up over the run. */
+    if (setpriority(PRIO_PROCESS, (id_t)syscall(SYS_gettid), 4) != 0)
+        (void)0; /* keeps the normal priority */
+#endif
     pthread_mutex_lock(&w->mu);
     for (;;) {
         while (!w->has_job && !w->quit)
