@@ -39,7 +39,7 @@ shot manipulation
 # the 2-D transfer function and textures: scroll the side bar down (over the labels)
 read -r ex _ <<< "${entries[0]}"
 xdotool mousemove $((ex + 130)) 400
-for _ in $(seq 1 12); do xdotool click 5; sleep 0.05; done
+for _ in $(seq 1 8); do xdotool click 5; sleep 0.05; done
 sleep 0.5
 shot manipulation_tf2d
 page 1
