@@ -1,5 +1,6 @@
 /* VvAnimatorPage: the Animator page (vv-animator-page.h). */
 #include "vv-animator-page.h"
+#include "vvg-widgets.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -73,52 +74,6 @@ G_DEFINE_TYPE(VvAnimatorPage, vv_animator_page, GTK_TYPE_BOX)
 
 /* ---- small helpers --------------------------------------------------------- */
 
-static GtkWidget *
-section(GtkWidget *box, const char *title) {
-    GtkWidget *l = gtk_label_new(NULL);
-    char *m = g_markup_printf_escaped("<b>%s</b>", title);
-    gtk_label_set_markup(GTK_LABEL(l), m);
-    g_free(m);
-    gtk_label_set_xalign(GTK_LABEL(l), 0);
-    gtk_widget_set_margin_top(l, 8);
-    gtk_box_append(GTK_BOX(box), l);
-    GtkWidget *grid = gtk_grid_new();
-    gtk_grid_set_row_spacing(GTK_GRID(grid), 3);
-    gtk_grid_set_column_spacing(GTK_GRID(grid), 6);
-    gtk_box_append(GTK_BOX(box), grid);
-    return grid;
-}
-
-static int
-grid_rows(GtkWidget *grid) {
-    int n = 0;
-    for (GtkWidget *c = gtk_widget_get_first_child(grid); c; c = gtk_widget_get_next_sibling(c)) {
-        int r;
-        gtk_grid_query_child(GTK_GRID(grid), c, NULL, &r, NULL, NULL);
-        n = r + 1 > n ? r + 1 : n;
-    }
-    return n;
-}
-
-static GtkWidget *
-row(GtkWidget *grid, const char *label, GtkWidget *w) {
-    int r = grid_rows(grid);
-    GtkWidget *l = gtk_label_new(label);
-    gtk_label_set_xalign(GTK_LABEL(l), 0);
-    gtk_grid_attach(GTK_GRID(grid), l, 0, r, 1, 1);
-    gtk_widget_set_hexpand(w, TRUE);
-    gtk_grid_attach(GTK_GRID(grid), w, 1, r, 1, 1);
-    return w;
-}
-
-static GtkWidget *
-spin(double lo, double hi, double step, int digits, double value) {
-    GtkWidget *s = gtk_spin_button_new_with_range(lo, hi, step);
-    gtk_spin_button_set_digits(GTK_SPIN_BUTTON(s), (guint)digits);
-    gtk_spin_button_set_value(GTK_SPIN_BUTTON(s), value);
-    return s;
-}
-
 static double
 spin_value(GtkWidget *s) {
     return gtk_spin_button_get_value(GTK_SPIN_BUTTON(s));
@@ -159,14 +114,7 @@ parent_window(VvAnimatorPage *self) {
 
 static void
 show_error(VvAnimatorPage *self, const char *what, const char *message) {
-    GtkWidget *d = gtk_message_dialog_new(parent_window(self),
-                                          GTK_DIALOG_MODAL | GTK_DIALOG_DESTROY_WITH_PARENT,
-                                          GTK_MESSAGE_ERROR, GTK_BUTTONS_CLOSE, "%s", what);
-    gtk_message_dialog_format_secondary_text(GTK_MESSAGE_DIALOG(d), "%s",
-                                             message && *message ? message : "unknown error");
-    gtk_window_set_title(GTK_WINDOW(d), "VolVis: error");
-    g_signal_connect(d, "response", G_CALLBACK(gtk_window_destroy), NULL);
-    gtk_widget_show(d);
+    vvg_show_error(GTK_WIDGET(self), what, message);
 }
 
 /* A copy of the library's message before anything else can replace it. */
@@ -1118,17 +1066,17 @@ build(VvAnimatorPage *self) {
     gtk_grid_set_row_spacing(GTK_GRID(g), 3);
     gtk_grid_set_column_spacing(GTK_GRID(g), 6);
     gtk_box_append(GTK_BOX(box), g);
-    self->fps = row(g, "frames per second", spin(0.01, 1000, 1, 2, 30));
+    self->fps = vvg_row(g, "frames per second", vvg_spin(0.01, 1000, 1, 2, 30));
     g_signal_connect(self->fps, "value-changed", G_CALLBACK(fps_changed), self);
-    self->frames = row(g, "frames", spin(1, 1000000, 1, 0, 60));
+    self->frames = vvg_row(g, "frames", vvg_spin(1, 1000000, 1, 0, 60));
     g_signal_connect(self->frames, "value-changed", G_CALLBACK(frames_changed), self);
     self->loop = gtk_check_button_new_with_label("loop Play");
     gtk_check_button_set_active(GTK_CHECK_BUTTON(self->loop), TRUE);
-    gtk_grid_attach(GTK_GRID(g), self->loop, 0, grid_rows(g), 2, 1);
+    gtk_grid_attach(GTK_GRID(g), self->loop, 0, vvg_grid_rows(g), 2, 1);
 
     /* final render */
-    g = section(box, "Final render");
-    self->output = row(g, "output", gtk_entry_new());
+    g = vvg_section(box, "Final render");
+    self->output = vvg_row(g, "output", gtk_entry_new());
     gtk_widget_set_tooltip_text(self->output,
                                 "NAME.mp4 (H.264), NAME.webm (VP9), a PNG pattern such as "
                                 "frames/f_%04d.png, or an existing folder");
@@ -1138,7 +1086,7 @@ build(VvAnimatorPage *self) {
     self->resume = gtk_check_button_new_with_label("resume: keep the finished frames of an "
                                                    "interrupted render");
     gtk_check_button_set_active(GTK_CHECK_BUTTON(self->resume), TRUE);
-    gtk_grid_attach(GTK_GRID(g), self->resume, 0, grid_rows(g), 2, 1);
+    gtk_grid_attach(GTK_GRID(g), self->resume, 0, vvg_grid_rows(g), 2, 1);
     self->render_info = line_label();
     gtk_box_append(GTK_BOX(box), self->render_info);
     r = button_row(box);
@@ -1154,39 +1102,39 @@ build(VvAnimatorPage *self) {
     gtk_box_append(GTK_BOX(box), self->render_status);
 
     /* sequences without keyframes */
-    g = section(box, "Sequence without keyframes (over the whole animation)");
-    self->seq_type = row(g, "sequence", gtk_drop_down_new_from_strings(seq_names));
+    g = vvg_section(box, "Sequence without keyframes (over the whole animation)");
+    self->seq_type = vvg_row(g, "sequence", gtk_drop_down_new_from_strings(seq_names));
     g_signal_connect(self->seq_type, "notify::selected", G_CALLBACK(seq_type_changed), self);
     self->seq_stack = gtk_stack_new();
     gtk_box_append(GTK_BOX(box), self->seq_stack);
     g = stack_grid(self->seq_stack, "orbit");
-    self->orbit_degrees = row(g, "degrees", spin(-1e5, 1e5, 15, 1, 360));
-    self->orbit_elevation = row(g, "elevation (°)", spin(-89, 89, 5, 1, 0));
+    self->orbit_degrees = vvg_row(g, "degrees", vvg_spin(-1e5, 1e5, 15, 1, 360));
+    self->orbit_elevation = vvg_row(g, "elevation (°)", vvg_spin(-89, 89, 5, 1, 0));
     g = stack_grid(self->seq_stack, "rotate");
     static const char *const axes3[] = {"x", "y", "z", NULL};
-    self->rot_axis = row(g, "axis", gtk_drop_down_new_from_strings(axes3));
+    self->rot_axis = vvg_row(g, "axis", gtk_drop_down_new_from_strings(axes3));
     gtk_drop_down_set_selected(GTK_DROP_DOWN(self->rot_axis), 2);
-    self->rot_degrees = row(g, "degrees", spin(-1e5, 1e5, 15, 1, 360));
+    self->rot_degrees = vvg_row(g, "degrees", vvg_spin(-1e5, 1e5, 15, 1, 360));
     g = stack_grid(self->seq_stack, "fly");
     static const char *const xyz[] = {"offset x", "offset y", "offset z"};
     for (int i = 0; i < 3; i++)
-        self->fly[i] = row(g, xyz[i], spin(-1e7, 1e7, 10, 2, 0));
+        self->fly[i] = vvg_row(g, xyz[i], vvg_spin(-1e7, 1e7, 10, 2, 0));
     g = stack_grid(self->seq_stack, "sweep");
     static const char *const axes6[] = {"x", "y", "z", "-x", "-y", "-z", NULL};
-    self->sweep_axis = row(g, "across the World along", gtk_drop_down_new_from_strings(axes6));
+    self->sweep_axis = vvg_row(g, "across the World along", gtk_drop_down_new_from_strings(axes6));
     r = button_row(box);
     add_button(r, gtk_button_new_with_label("Add sequence"), G_CALLBACK(add_sequence_clicked),
                self);
 
     /* camera keys */
-    g = section(box, "Camera keyframes");
-    self->key_time = row(g, "time (s)", spin(0, 1e5, 0.1, 2, 0));
+    g = vvg_section(box, "Camera keyframes");
+    self->key_time = vvg_row(g, "time (s)", vvg_spin(0, 1e5, 0.1, 2, 0));
     g_signal_connect_swapped(self->key_time, "value-changed", G_CALLBACK(update_time_label), self);
     r = button_row(box);
     add_button(r, gtk_button_new_with_label("Add camera key"), G_CALLBACK(add_key_clicked), self);
 
     /* the animation: last, as it grows */
-    section(box, "Tracks and sequences of the animation");
+    vvg_section(box, "Tracks and sequences of the animation");
     self->list = gtk_list_box_new();
     GtkWidget *frame = gtk_frame_new(NULL);
     gtk_frame_set_child(GTK_FRAME(frame), self->list);

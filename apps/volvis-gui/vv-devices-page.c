@@ -1,5 +1,6 @@
 /* VvDevicesPage: the "Input devices" page (vv-devices-page.h). */
 #include "vv-devices-page.h"
+#include "vvg-widgets.h"
 
 #include <string.h>
 
@@ -32,15 +33,7 @@ static const char *const method_names[] = {"direct mapping", "dominant axis", "s
 /* A dialog with the library's message; also on stderr, for scripts and tests. */
 static void
 show_error(VvDevicesPage *self, const char *what, const char *message) {
-    g_printerr("volvis-gui: %s: %s\n", what, message);
-    GtkRoot *root = gtk_widget_get_root(GTK_WIDGET(self));
-    GtkWidget *d = gtk_message_dialog_new(GTK_IS_WINDOW(root) ? GTK_WINDOW(root) : NULL,
-                                          GTK_DIALOG_MODAL | GTK_DIALOG_DESTROY_WITH_PARENT,
-                                          GTK_MESSAGE_ERROR, GTK_BUTTONS_CLOSE, "%s", what);
-    gtk_message_dialog_format_secondary_text(GTK_MESSAGE_DIALOG(d), "%s", message);
-    gtk_window_set_title(GTK_WINDOW(d), "VolVis: error");
-    g_signal_connect(d, "response", G_CALLBACK(gtk_window_destroy), NULL);
-    gtk_widget_show(d);
+    vvg_show_error(GTK_WIDGET(self), what, message);
 }
 
 /* Shows *err (cleared) under @p what when @p ok is FALSE; returns ok. A

@@ -1,5 +1,6 @@
 /* VvWindow: the main window, its component pages and actions (vv-window.h). */
 #include "vv-window.h"
+#include "vvg-widgets.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -53,51 +54,10 @@ G_DEFINE_TYPE(VvWindow, vv_window, GTK_TYPE_APPLICATION_WINDOW)
 
 /* ---- small widget helpers ------------------------------------------------ */
 
-static GtkWidget *
-section(GtkWidget *box, const char *title) {
-    GtkWidget *l = gtk_label_new(NULL);
-    char *m = g_markup_printf_escaped("<b>%s</b>", title);
-    gtk_label_set_markup(GTK_LABEL(l), m);
-    g_free(m);
-    gtk_label_set_xalign(GTK_LABEL(l), 0);
-    gtk_widget_set_margin_top(l, 8);
-    gtk_box_append(GTK_BOX(box), l);
-    GtkWidget *grid = gtk_grid_new();
-    gtk_grid_set_row_spacing(GTK_GRID(grid), 3);
-    gtk_grid_set_column_spacing(GTK_GRID(grid), 6);
-    gtk_box_append(GTK_BOX(box), grid);
-    return grid;
-}
-
-static int
-grid_rows(GtkWidget *grid) {
-    int n = 0;
-    for (GtkWidget *c = gtk_widget_get_first_child(grid); c; c = gtk_widget_get_next_sibling(c)) {
-        int row;
-        gtk_grid_query_child(GTK_GRID(grid), c, NULL, &row, NULL, NULL);
-        n = row + 1 > n ? row + 1 : n;
-    }
-    return n;
-}
-
-static GtkWidget *
-row(GtkWidget *grid, const char *label, GtkWidget *w) {
-    int r = grid_rows(grid);
-    GtkWidget *l = gtk_label_new(label);
-    gtk_label_set_xalign(GTK_LABEL(l), 0);
-    gtk_grid_attach(GTK_GRID(grid), l, 0, r, 1, 1);
-    gtk_widget_set_hexpand(w, TRUE);
-    gtk_grid_attach(GTK_GRID(grid), w, 1, r, 1, 1);
-    return w;
-}
-
+/* A spin button at 0, or at the bound nearest 0 (GTK starts at the lower bound). */
 static GtkWidget *
 spin(double lo, double hi, double step, int digits) {
-    GtkWidget *s = gtk_spin_button_new_with_range(lo, hi, step);
-    gtk_spin_button_set_digits(GTK_SPIN_BUTTON(s), (guint)digits);
-    /* GTK starts at the lower bound; 0 (or the bound nearest it) is the neutral value */
-    gtk_spin_button_set_value(GTK_SPIN_BUTTON(s), lo > 0 ? lo : hi < 0 ? hi : 0);
-    return s;
+    return vvg_spin(lo, hi, step, digits, lo > 0 ? lo : hi < 0 ? hi : 0);
 }
 
 static GtkWidget *
@@ -127,13 +87,7 @@ vec_of(const GdkRGBA *c) {
 
 static void
 show_error(VvWindow *win, const char *what, const char *message) {
-    GtkWidget *d =
-        gtk_message_dialog_new(GTK_WINDOW(win), GTK_DIALOG_MODAL | GTK_DIALOG_DESTROY_WITH_PARENT,
-                               GTK_MESSAGE_ERROR, GTK_BUTTONS_CLOSE, "%s", what);
-    gtk_message_dialog_format_secondary_text(GTK_MESSAGE_DIALOG(d), "%s", message);
-    gtk_window_set_title(GTK_WINDOW(d), "VolVis: error");
-    g_signal_connect(d, "response", G_CALLBACK(gtk_window_destroy), NULL);
-    gtk_widget_show(d);
+    vvg_show_error(GTK_WIDGET(win), what, message);
 }
 
 /* ---- filling the widgets from the World ----------------------------------- */
@@ -848,7 +802,7 @@ rebuild_options(VvWindow *win) {
                 gtk_editable_set_text(GTK_EDITABLE(e), w->render.option_values[j]);
         g_object_set_data_full(G_OBJECT(e), "key", g_strdup(keys[i]), g_free);
         g_signal_connect(e, "activate", G_CALLBACK(option_changed), win);
-        row(win->options_box, keys[i], e);
+        vvg_row(win->options_box, keys[i], e);
     }
 }
 
@@ -1654,34 +1608,34 @@ manipulation_page(VvWindow *win) {
     gtk_box_append(GTK_BOX(box), ob);
 
     /* Navigator */
-    g = section(box, "Navigator");
+    g = vvg_section(box, "Navigator");
     static const char *const targets[] = {"view", "selected object", "selected light", "cut plane",
                                           NULL};
-    GtkWidget *t = row(g, "drag moves", dropdown(targets));
+    GtkWidget *t = vvg_row(g, "drag moves", dropdown(targets));
     win->nav_target = t;
     g_signal_connect(t, "notify::selected", G_CALLBACK(target_changed), win);
     static const char *const previews[] = {
         "automatic",    "bounding boxes", "PARC boxes",   "coarse MC",
         "ray cast 1/4", "ray cast 1/2",   "full quality", NULL};
-    GtkWidget *pv = row(g, "preview", dropdown(previews));
+    GtkWidget *pv = vvg_row(g, "preview", dropdown(previews));
     g_signal_connect(pv, "notify::selected", G_CALLBACK(preview_changed), win);
-    GtkWidget *dl = row(g, "refine after (ms)", spin(0, 2000, 10, 0));
+    GtkWidget *dl = vvg_row(g, "refine after (ms)", spin(0, 2000, 10, 0));
     set_spin(dl, 100);
     g_signal_connect(dl, "value-changed", G_CALLBACK(delay_changed), win);
     GtkWidget *fl = gtk_check_button_new_with_label("flight simulator keys (arrows, Q/E, W/S)");
     g_signal_connect(fl, "toggled", G_CALLBACK(flight_toggled), win);
-    gtk_grid_attach(GTK_GRID(g), fl, 0, grid_rows(g), 2, 1);
+    gtk_grid_attach(GTK_GRID(g), fl, 0, vvg_grid_rows(g), 2, 1);
 
     /* segmentation */
-    g = section(box, "Segmentation");
+    g = vvg_section(box, "Segmentation");
     static const char *const segs[] = {"transfer function", "threshold", "2-D transfer function",
                                        NULL};
-    win->seg_mode = row(g, "by", wire_drop(win, dropdown(segs)));
-    win->threshold = row(g, "threshold", wire_spin(win, spin(-1e9, 1e9, 1, 2)));
+    win->seg_mode = vvg_row(g, "by", wire_drop(win, dropdown(segs)));
+    win->threshold = vvg_row(g, "threshold", wire_spin(win, spin(-1e9, 1e9, 1, 2)));
     static const char *const modes[] = {"composite", "MIP", "MinIP", "X-ray", "isosurface", NULL};
-    win->render_mode = row(g, "mode", wire_drop(win, dropdown(modes)));
-    win->isovalue = row(g, "isovalue", wire_spin(win, spin(-1e9, 1e9, 1, 2)));
-    win->step = row(g, "sample step", wire_spin(win, spin(0.05, 8, 0.05, 2)));
+    win->render_mode = vvg_row(g, "mode", wire_drop(win, dropdown(modes)));
+    win->isovalue = vvg_row(g, "isovalue", wire_spin(win, spin(-1e9, 1e9, 1, 2)));
+    win->step = vvg_row(g, "sample step", wire_spin(win, spin(0.05, 8, 0.05, 2)));
     win->tf_editor = vv_tf_editor_new(win->doc);
     gtk_box_append(GTK_BOX(box), GTK_WIDGET(win->tf_editor));
     GtkWidget *tb = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 4);
@@ -1694,16 +1648,16 @@ manipulation_page(VvWindow *win) {
     gtk_box_append(GTK_BOX(tb), gtk_label_new("new colour"));
     gtk_box_append(GTK_BOX(tb), tc);
     gtk_box_append(GTK_BOX(box), tb);
-    g = section(box, "Presets");
+    g = vvg_section(box, "Presets");
     GtkStringList *pn = gtk_string_list_new(NULL);
     gtk_string_list_append(pn, "(choose)");
     for (const char *const *n = vv_tf_preset_names(); *n; n++)
         gtk_string_list_append(pn, *n);
-    win->preset = row(g, "transfer function", gtk_drop_down_new(G_LIST_MODEL(pn), NULL));
+    win->preset = vvg_row(g, "transfer function", gtk_drop_down_new(G_LIST_MODEL(pn), NULL));
     g_signal_connect(win->preset, "notify::selected", G_CALLBACK(preset_chosen), win);
 
     /* 2-D transfer function over value x gradient magnitude */
-    g = section(box, "2-D transfer function (value × gradient magnitude)");
+    g = vvg_section(box, "2-D transfer function (value × gradient magnitude)");
     win->tf2d_editor = vv_tf2d_editor_new(win->doc);
     gtk_grid_attach(GTK_GRID(g), GTK_WIDGET(win->tf2d_editor), 0, 0, 2, 1);
     GtkWidget *wb = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 4);
@@ -1714,52 +1668,52 @@ manipulation_page(VvWindow *win) {
     gtk_box_append(GTK_BOX(wb), add_r);
     gtk_box_append(GTK_BOX(wb), add_t);
     gtk_grid_attach(GTK_GRID(g), wb, 0, 1, 2, 1);
-    win->w2d_color = row(g, "widget colour", gtk_color_button_new());
-    win->w2d_opacity = row(g, "widget opacity", spin(0, 1, 0.05, 2));
+    win->w2d_color = vvg_row(g, "widget colour", gtk_color_button_new());
+    win->w2d_opacity = vvg_row(g, "widget opacity", spin(0, 1, 0.05, 2));
     set_spin(win->w2d_opacity, 0.5);
     g_signal_connect(win->w2d_color, "color-set", G_CALLBACK(w2d_style), win);
     g_signal_connect(win->w2d_opacity, "value-changed", G_CALLBACK(w2d_style_spin), win);
 
     /* placement, numerically (the Navigator moves it too) */
-    g = section(box, "Placement of the object (world units)");
+    g = vvg_section(box, "Placement of the object (world units)");
     const char *posn[] = {"position x", "position y", "position z"};
     for (int i = 0; i < 3; i++) {
-        win->obj_pos[i] = row(g, posn[i], spin(-1e6, 1e6, 1, 3));
+        win->obj_pos[i] = vvg_row(g, posn[i], spin(-1e6, 1e6, 1, 3));
         g_signal_connect(win->obj_pos[i], "value-changed", G_CALLBACK(on_placement), win);
     }
-    win->obj_scale = row(g, "scale", spin(1e-3, 1e3, 0.1, 3));
+    win->obj_scale = vvg_row(g, "scale", spin(1e-3, 1e3, 0.1, 3));
     g_signal_connect(win->obj_scale, "value-changed", G_CALLBACK(on_placement), win);
 
     /* material */
-    g = section(box, "Colour and material");
-    win->color = row(g, "colour", wire_color(win));
-    win->ambient = row(g, "ambient", wire_spin(win, spin(0, 1, 0.05, 2)));
-    win->diffuse = row(g, "diffuse", wire_spin(win, spin(0, 1, 0.05, 2)));
-    win->specular = row(g, "specular", wire_spin(win, spin(0, 1, 0.05, 2)));
-    win->shininess = row(g, "shininess", wire_spin(win, spin(1, 256, 1, 0)));
-    win->reflectance = row(g, "reflectance", wire_spin(win, spin(0, 1, 0.05, 2)));
-    win->transparency = row(g, "transparency", wire_spin(win, spin(0, 1, 0.05, 2)));
+    g = vvg_section(box, "Colour and material");
+    win->color = vvg_row(g, "colour", wire_color(win));
+    win->ambient = vvg_row(g, "ambient", wire_spin(win, spin(0, 1, 0.05, 2)));
+    win->diffuse = vvg_row(g, "diffuse", wire_spin(win, spin(0, 1, 0.05, 2)));
+    win->specular = vvg_row(g, "specular", wire_spin(win, spin(0, 1, 0.05, 2)));
+    win->shininess = vvg_row(g, "shininess", wire_spin(win, spin(1, 256, 1, 0)));
+    win->reflectance = vvg_row(g, "reflectance", wire_spin(win, spin(0, 1, 0.05, 2)));
+    win->transparency = vvg_row(g, "transparency", wire_spin(win, spin(0, 1, 0.05, 2)));
 
     /* textures */
-    g = section(box, "Texture");
-    win->tex_file = row(g, "image (PNG)", gtk_entry_new());
+    g = vvg_section(box, "Texture");
+    win->tex_file = vvg_row(g, "image (PNG)", gtk_entry_new());
     gtk_entry_set_placeholder_text(GTK_ENTRY(win->tex_file), "path, Enter to apply; empty: none");
     g_signal_connect(win->tex_file, "activate", G_CALLBACK(texture_apply), win);
     static const char *const projections[] = {"planar", "cylindrical", "spherical", NULL};
-    win->tex_projection = row(g, "projection", dropdown(projections));
-    win->tex_scale = row(g, "repeats", spin(0.01, 1000, 0.5, 2));
+    win->tex_projection = vvg_row(g, "projection", dropdown(projections));
+    win->tex_scale = vvg_row(g, "repeats", spin(0.01, 1000, 0.5, 2));
     set_spin(win->tex_scale, 1);
     g_signal_connect(win->tex_projection, "notify::selected", G_CALLBACK(texture_changed), win);
     g_signal_connect(win->tex_scale, "value-changed", G_CALLBACK(texture_spin), win);
     static const char *const solids[] = {"none", "checker", "wood", "marble", NULL};
-    win->solid_kind = row(g, "solid texture", dropdown(solids));
-    win->solid_period = row(g, "period (world units)", spin(0.01, 1e5, 1, 2));
+    win->solid_kind = vvg_row(g, "solid texture", dropdown(solids));
+    win->solid_period = vvg_row(g, "period (world units)", spin(0.01, 1e5, 1, 2));
     set_spin(win->solid_period, 10);
     g_signal_connect(win->solid_kind, "notify::selected", G_CALLBACK(texture_changed), win);
     g_signal_connect(win->solid_period, "value-changed", G_CALLBACK(texture_spin), win);
 
     /* shading */
-    g = section(box, "Shading");
+    g = vvg_section(box, "Shading");
     win->shading = wire_check(win, "Phong shading from gradients");
     win->casts = wire_check(win, "casts shadows");
     win->receives = wire_check(win, "receives shadows");
@@ -1771,15 +1725,15 @@ manipulation_page(VvWindow *win) {
         gtk_grid_attach(GTK_GRID(g), checks[i], 0, i, 2, 1);
 
     /* cut planes */
-    g = section(box, "Cut planes");
+    g = vvg_section(box, "Cut planes");
     static const char *const scopes[] = {"global", "selected object", NULL};
-    win->cut_scope = row(g, "scope", dropdown(scopes));
-    win->cut_px = row(g, "point x", spin(-1e6, 1e6, 1, 2));
-    win->cut_py = row(g, "point y", spin(-1e6, 1e6, 1, 2));
-    win->cut_pz = row(g, "point z", spin(-1e6, 1e6, 1, 2));
-    win->cut_nx = row(g, "normal x", spin(-1, 1, 0.1, 3));
-    win->cut_ny = row(g, "normal y", spin(-1, 1, 0.1, 3));
-    win->cut_nz = row(g, "normal z", spin(-1, 1, 0.1, 3));
+    win->cut_scope = vvg_row(g, "scope", dropdown(scopes));
+    win->cut_px = vvg_row(g, "point x", spin(-1e6, 1e6, 1, 2));
+    win->cut_py = vvg_row(g, "point y", spin(-1e6, 1e6, 1, 2));
+    win->cut_pz = vvg_row(g, "point z", spin(-1e6, 1e6, 1, 2));
+    win->cut_nx = vvg_row(g, "normal x", spin(-1, 1, 0.1, 3));
+    win->cut_ny = vvg_row(g, "normal y", spin(-1, 1, 0.1, 3));
+    win->cut_nz = vvg_row(g, "normal z", spin(-1, 1, 0.1, 3));
     set_spin(win->cut_nz, 1);
     GtkWidget *cb = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 4);
     gtk_box_append(GTK_BOX(cb), action_button("Add cut plane", "win.add-cut-plane"));
@@ -1787,36 +1741,36 @@ manipulation_page(VvWindow *win) {
     gtk_box_append(GTK_BOX(box), cb);
 
     /* lights */
-    g = section(box, "Lights");
-    win->light_index = row(g, "light", spin(0, 0, 1, 0));
+    g = vvg_section(box, "Lights");
+    win->light_index = vvg_row(g, "light", spin(0, 0, 1, 0));
     g_signal_connect(win->light_index, "value-changed", G_CALLBACK(light_index_changed), win);
     static const char *const ltypes[] = {"directional", "point", "headlight", NULL};
-    win->light_type = row(g, "type", wire_drop(win, dropdown(ltypes)));
-    win->light_color = row(g, "colour", wire_color(win));
-    win->light_intensity = row(g, "intensity", wire_spin(win, spin(0, 10, 0.1, 2)));
-    win->ambient_color = row(g, "ambient light", wire_color(win));
-    win->background_color = row(g, "background", wire_color(win));
+    win->light_type = vvg_row(g, "type", wire_drop(win, dropdown(ltypes)));
+    win->light_color = vvg_row(g, "colour", wire_color(win));
+    win->light_intensity = vvg_row(g, "intensity", wire_spin(win, spin(0, 10, 0.1, 2)));
+    win->ambient_color = vvg_row(g, "ambient light", wire_color(win));
+    win->background_color = vvg_row(g, "background", wire_color(win));
     GtkWidget *lb = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 4);
     gtk_box_append(GTK_BOX(lb), action_button("Add light", "win.add-light"));
     gtk_box_append(GTK_BOX(lb), action_button("Remove light", "win.remove-light"));
     gtk_box_append(GTK_BOX(box), lb);
 
     /* view */
-    g = section(box, "View");
+    g = vvg_section(box, "View");
     const char *en[] = {"eye x", "eye y", "eye z"}, *an[] = {"look at x", "look at y", "look at z"};
     for (int i = 0; i < 3; i++) {
-        win->eye[i] = row(g, en[i], spin(-1e7, 1e7, 1, 3));
+        win->eye[i] = vvg_row(g, en[i], spin(-1e7, 1e7, 1, 3));
         g_signal_connect(win->eye[i], "value-changed", G_CALLBACK(on_placement), win);
     }
     for (int i = 0; i < 3; i++) {
-        win->at[i] = row(g, an[i], spin(-1e7, 1e7, 1, 3));
+        win->at[i] = vvg_row(g, an[i], spin(-1e7, 1e7, 1, 3));
         g_signal_connect(win->at[i], "value-changed", G_CALLBACK(on_placement), win);
     }
-    win->view_width = row(g, "image width", wire_spin(win, spin(16, 4096, 16, 0)));
-    win->view_height = row(g, "image height", wire_spin(win, spin(16, 4096, 16, 0)));
-    win->view_fov = row(g, "field of view (°)", wire_spin(win, spin(1, 170, 1, 1)));
+    win->view_width = vvg_row(g, "image width", wire_spin(win, spin(16, 4096, 16, 0)));
+    win->view_height = vvg_row(g, "image height", wire_spin(win, spin(16, 4096, 16, 0)));
+    win->view_fov = vvg_row(g, "field of view (°)", wire_spin(win, spin(1, 170, 1, 1)));
     static const char *const projs[] = {"perspective", "orthographic", NULL};
-    win->view_projection = row(g, "projection", wire_drop(win, dropdown(projs)));
+    win->view_projection = vvg_row(g, "projection", wire_drop(win, dropdown(projs)));
     GtkWidget *vb = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 4);
     gtk_box_append(GTK_BOX(vb), action_button("Front", "win.view-front"));
     gtk_box_append(GTK_BOX(vb), action_button("Side", "win.view-side"));
@@ -1829,15 +1783,15 @@ manipulation_page(VvWindow *win) {
 static GtkWidget *
 rendering_page(VvWindow *win) {
     GtkWidget *box = page_box();
-    GtkWidget *g = section(box, "Renderer");
+    GtkWidget *g = vvg_section(box, "Renderer");
     GtkStringList *names = gtk_string_list_new(NULL);
     for (const vv_renderer_ops *const *r = vv_renderer_registry(); *r; r++)
         gtk_string_list_append(names, (*r)->name);
-    win->renderer = row(g, "method", gtk_drop_down_new(G_LIST_MODEL(names), NULL));
+    win->renderer = vvg_row(g, "method", gtk_drop_down_new(G_LIST_MODEL(names), NULL));
     g_signal_connect(win->renderer, "notify::selected", G_CALLBACK(renderer_changed), win);
-    win->quality = row(g, "quality", spin(0, 2, 1, 0));
+    win->quality = vvg_row(g, "quality", spin(0, 2, 1, 0));
     g_signal_connect(win->quality, "value-changed", G_CALLBACK(quality_changed), win);
-    win->options_box = section(box, "Options (Enter to apply; empty: default)");
+    win->options_box = vvg_section(box, "Options (Enter to apply; empty: default)");
     gtk_box_append(GTK_BOX(box), action_button("Render…", "win.render"));
     return scrolled(box);
 }
@@ -1851,7 +1805,7 @@ hist_log_toggled(GtkCheckButton *b, gpointer user) {
 static GtkWidget *
 measurement_page(VvWindow *win) {
     GtkWidget *box = page_box();
-    section(box, "Histogram");
+    vvg_section(box, "Histogram");
     win->histogram = gtk_drawing_area_new();
     gtk_widget_set_size_request(win->histogram, 280, 120);
     gtk_drawing_area_set_draw_func(GTK_DRAWING_AREA(win->histogram), hist_draw, win, NULL);
@@ -1860,29 +1814,29 @@ measurement_page(VvWindow *win) {
     g_signal_connect(win->hist_log, "toggled", G_CALLBACK(hist_log_toggled), win);
     gtk_box_append(GTK_BOX(box), win->hist_log);
     gtk_box_append(GTK_BOX(box), action_button("Histogram", "win.histogram"));
-    GtkWidget *g = section(box, "Isosurface area and volume");
-    win->measure_iso = row(g, "isovalue", spin(-1e9, 1e9, 1, 2));
+    GtkWidget *g = vvg_section(box, "Isosurface area and volume");
+    win->measure_iso = vvg_row(g, "isovalue", spin(-1e9, 1e9, 1, 2));
     static const char *const methods[] = {"marching cubes", "voxel counting", NULL};
-    win->measure_method = row(g, "method", dropdown(methods));
+    win->measure_method = vvg_row(g, "method", dropdown(methods));
     win->measure_seed = gtk_check_button_new_with_label("surface-tracked from voxel");
-    gtk_grid_attach(GTK_GRID(g), win->measure_seed, 0, grid_rows(g), 2, 1);
-    win->seed_i = row(g, "i", spin(0, 1e5, 1, 0));
-    win->seed_j = row(g, "j", spin(0, 1e5, 1, 0));
-    win->seed_k = row(g, "k", spin(0, 1e5, 1, 0));
+    gtk_grid_attach(GTK_GRID(g), win->measure_seed, 0, vvg_grid_rows(g), 2, 1);
+    win->seed_i = vvg_row(g, "i", spin(0, 1e5, 1, 0));
+    win->seed_j = vvg_row(g, "j", spin(0, 1e5, 1, 0));
+    win->seed_k = vvg_row(g, "k", spin(0, 1e5, 1, 0));
     gtk_box_append(GTK_BOX(box), action_button("Pick the seed voxel in the view", "win.pick-seed"));
     gtk_box_append(GTK_BOX(box), action_button("Measure", "win.measure"));
-    g = section(box, "Distance (world units)");
+    g = vvg_section(box, "Distance (world units)");
     const char *ax[] = {"A x", "A y", "A z", "B x", "B y", "B z"};
     for (int i = 0; i < 3; i++)
-        win->pa[i] = row(g, ax[i], spin(-1e6, 1e6, 1, 3));
+        win->pa[i] = vvg_row(g, ax[i], spin(-1e6, 1e6, 1, 3));
     for (int i = 0; i < 3; i++)
-        win->pb[i] = row(g, ax[3 + i], spin(-1e6, 1e6, 1, 3));
+        win->pb[i] = vvg_row(g, ax[3 + i], spin(-1e6, 1e6, 1, 3));
     GtkWidget *pb = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 4);
     gtk_box_append(GTK_BOX(pb), action_button("Pick A", "win.pick-a"));
     gtk_box_append(GTK_BOX(pb), action_button("Pick B", "win.pick-b"));
     gtk_box_append(GTK_BOX(box), pb);
     gtk_box_append(GTK_BOX(box), action_button("Distance", "win.distance"));
-    section(box, "Results (select and copy)");
+    vvg_section(box, "Results (select and copy)");
     win->measure_text = gtk_text_view_new();
     gtk_text_view_set_editable(GTK_TEXT_VIEW(win->measure_text), FALSE);
     gtk_text_view_set_wrap_mode(GTK_TEXT_VIEW(win->measure_text), GTK_WRAP_WORD_CHAR);
@@ -1907,27 +1861,27 @@ model_doc_changed(VvDocument *doc, gpointer user) {
 static GtkWidget *
 modeling_page(VvWindow *win) {
     GtkWidget *box = page_box();
-    GtkWidget *g = section(box, "Voxelized primitive or mesh (volume sampling)");
-    win->prim_kind = row(g, "model", dropdown(prim_names));
-    win->prim_size = row(g, "size (world units)", spin(0.1, 1e5, 1, 2));
+    GtkWidget *g = vvg_section(box, "Voxelized primitive or mesh (volume sampling)");
+    win->prim_kind = vvg_row(g, "model", dropdown(prim_names));
+    win->prim_size = vvg_row(g, "size (world units)", spin(0.1, 1e5, 1, 2));
     set_spin(win->prim_size, 100);
-    win->prim_mesh = row(g, "mesh file", gtk_entry_new());
+    win->prim_mesh = vvg_row(g, "mesh file", gtk_entry_new());
     gtk_entry_set_placeholder_text(GTK_ENTRY(win->prim_mesh), "OBJ, PLY, STL, OFF, ...");
     const char *axes[] = {"position x", "position y", "position z"};
     for (int i = 0; i < 3; i++)
-        win->prim_pos[i] = row(g, axes[i], spin(-1e5, 1e5, 1, 2));
+        win->prim_pos[i] = vvg_row(g, axes[i], spin(-1e5, 1e5, 1, 2));
     static const char *const rot_axes[] = {"x", "y", "z", NULL};
-    win->prim_axis = row(g, "rotation axis", dropdown(rot_axes));
+    win->prim_axis = vvg_row(g, "rotation axis", dropdown(rot_axes));
     gtk_drop_down_set_selected(GTK_DROP_DOWN(win->prim_axis), 2);
-    win->prim_angle = row(g, "rotation (°)", spin(-360, 360, 5, 1));
-    win->prim_res = row(g, "voxels on the longest axis", spin(8, 1024, 8, 0));
+    win->prim_angle = vvg_row(g, "rotation (°)", spin(-360, 360, 5, 1));
+    win->prim_res = vvg_row(g, "voxels on the longest axis", spin(8, 1024, 8, 0));
     set_spin(win->prim_res, 128);
     gtk_box_append(GTK_BOX(box), action_button("Add", "win.voxelize"));
-    g = section(box, "CSG of two objects made here");
-    win->csg_a = row(g, "A", gtk_drop_down_new(NULL, NULL));
+    g = vvg_section(box, "CSG of two objects made here");
+    win->csg_a = vvg_row(g, "A", gtk_drop_down_new(NULL, NULL));
     static const char *const ops[] = {"union", "intersection", "difference (A - B)", NULL};
-    win->csg_op = row(g, "operation", dropdown(ops));
-    win->csg_b = row(g, "B", gtk_drop_down_new(NULL, NULL));
+    win->csg_op = vvg_row(g, "operation", dropdown(ops));
+    win->csg_b = vvg_row(g, "B", gtk_drop_down_new(NULL, NULL));
     gtk_box_append(GTK_BOX(box), action_button("Combine", "win.csg"));
     win->model_progress = gtk_progress_bar_new();
     gtk_box_append(GTK_BOX(box), win->model_progress);
