@@ -430,6 +430,13 @@ state_changed(VvSceneView *self) {
     self->gen++;
     __atomic_store_n(&self->cancel_below, self->gen, __ATOMIC_RELAXED);
     self->moving = TRUE;
+    if (vv_document_world(self->doc)->n_objects == 0) {
+        /* nothing to render: the background alone */
+        g_clear_object(&self->texture);
+        self->shown_gen = self->gen;
+        gtk_widget_queue_draw(GTK_WIDGET(self));
+        return;
+    }
     g_mutex_lock(&self->lock);
     vv_preview_kind k = vv_preview_policy_choose(&self->policy, PREVIEW_BUDGET);
     g_mutex_unlock(&self->lock);

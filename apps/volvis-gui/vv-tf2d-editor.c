@@ -21,6 +21,7 @@ struct _VvTf2dEditor {
     uint64_t hist_modified;
     double gmax;           /* gradient-magnitude range shown: [0, gmax] */
     cairo_surface_t *hist; /* HIST_V x HIST_G grey image, row 0 the largest gradient */
+    guint hist_idle;       /* the joint histogram is waited for */
 };
 
 G_DEFINE_TYPE(VvTf2dEditor, vv_tf2d_editor, GTK_TYPE_WIDGET)
@@ -31,18 +32,16 @@ volume_object(VvTf2dEditor *ed) {
     return o && o->type == VV_OBJECT_VOLUME && o->volume ? o : NULL;
 }
 
+/* Draws the joint histogram @p h (log counts) into the editor's image. */
 static void
-update_histogram(VvTf2dEditor *ed, const vv_volume *v) {
-    if (ed->hist && ed->hist_volume == v && ed->hist_modified == v->modified)
-        return;
+set_histogram(VvTf2dEditor *ed, const vv_volume *v, const vv_histogram2d *h) {
     if (ed->hist)
         cairo_surface_destroy(ed->hist);
     ed->hist = cairo_image_surface_create(CAIRO_FORMAT_RGB24, HIST_V, HIST_G);
     ed->hist_volume = v;
     ed->hist_modified = v->modified;
     ed->gmax = 1;
-    vv_histogram2d *h = NULL;
-    if (vv_histogram2d_compute(&h, v, HIST_V, HIST_G, 0, 0, 0) != VV_OK)
+    if (!h)
         return;
     ed->gmax = h->gradient_hi > 0 ? h->gradient_hi : 1;
     double mx = 1;
@@ -59,7 +58,54 @@ update_histogram(VvTf2dEditor *ed, const vv_volume *v) {
             *p = grey << 16 | grey << 8 | grey;
         }
     cairo_surface_mark_dirty(ed->hist);
+}
+
+static void
+update_histogram(VvTf2dEditor *ed, const vv_volume *v) {
+    if (ed->hist && ed->hist_volume == v && ed->hist_modified == v->modified)
+        return;
+    vv_histogram2d *h = NULL;
+    if (vv_histogram2d_compute(&h, v, HIST_V, HIST_G, 0, 0, 0) != VV_OK)
+        h = NULL;
+    set_histogram(ed, v, h);
     vv_histogram2d_free(h);
+}
+
+/* The joint histogram (a gradient per voxel) is computed on a worker
+ * thread: the UI never waits for it. */
+typedef struct hist_job {
+    vv_volume *volume; /* a reference is held */
+    vv_histogram2d *h;
+} hist_job;
+
+static void
+hist_job_free(gpointer p) {
+    hist_job *j = p;
+    vv_volume_free(j->volume);
+    vv_histogram2d_free(j->h);
+    g_free(j);
+}
+
+static void
+hist_thread(GTask *task, gpointer src, gpointer data, GCancellable *c) {
+    (void)task;
+    (void)src;
+    (void)c;
+    hist_job *j = data;
+    if (vv_histogram2d_compute(&j->h, j->volume, HIST_V, HIST_G, 0, 0, 0) != VV_OK)
+        j->h = NULL;
+}
+
+static void
+hist_done(GObject *src, GAsyncResult *res, gpointer user) {
+    (void)user;
+    VvTf2dEditor *ed = VV_TF2D_EDITOR(src);
+    hist_job *j = g_task_get_task_data(G_TASK(res));
+    ed->hist_idle = 0;
+    if (!ed->doc)
+        return; /* disposed */
+    set_histogram(ed, j->volume, j->h);
+    gtk_widget_queue_draw(GTK_WIDGET(ed));
 }
 
 /* Widget coordinates <-> data value and gradient magnitude. */
@@ -117,7 +163,21 @@ vv_tf2d_editor_snapshot(GtkWidget *widget, GtkSnapshot *snapshot) {
         return;
     }
     ed->drawn = o->tf2d;
-    update_histogram(ed, o->volume);
+    if (!ed->hist || ed->hist_volume != o->volume || ed->hist_modified != o->volume->modified) {
+        /* the joint histogram (gradients of every voxel) is made when the
+         * UI is idle, after the view's first frames, not while it opens */
+        if (!ed->hist_idle) {
+            ed->hist_idle = 1;
+            hist_job *j = g_new0(hist_job, 1);
+            j->volume = vv_volume_ref(o->volume);
+            GTask *task = g_task_new(ed, NULL, hist_done, NULL);
+            g_task_set_task_data(task, j, hist_job_free);
+            g_task_run_in_thread(task, hist_thread);
+            g_object_unref(task);
+        }
+        cairo_destroy(cr);
+        return;
+    }
     cairo_save(cr);
     cairo_scale(cr, W / HIST_V, H / HIST_G);
     cairo_set_source_surface(cr, ed->hist, 0, 0);
