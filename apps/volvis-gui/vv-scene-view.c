@@ -227,6 +227,13 @@ warm_previews(VvSceneView *self) {
         gboolean busy = self->pending != NULL || self->quit;
         gboolean known = self->policy.seconds[kinds[i]] >= 0;
         vv_world *w = busy || known ? NULL : self->last_world;
+        /* a large volume's reduced surfaces take seconds to build, which a
+         * drag starting meanwhile would wait for: they are left out */
+        for (int o = 0; w && o < w->n_objects; o++) {
+            const vv_volume *v = w->objects[o]->volume;
+            if (v && (double)v->dims[0] * v->dims[1] * v->dims[2] > 64e6)
+                w = NULL;
+        }
         if (w)
             self->last_world = NULL;
         g_mutex_unlock(&self->lock);

@@ -188,8 +188,9 @@ void vv_preview_policy_init(vv_preview_policy *pol);
 void vv_preview_policy_record(vv_preview_policy *pol, vv_preview_kind kind, double seconds);
 /**
  * The representation to draw while moving within @p budget seconds a frame:
- * the best allowed one whose expected time fits, where one not measured yet
- * is tried before a worse one is chosen; every 24th choice is the next
+ * the best allowed one whose expected time fits; of those not measured yet
+ * only the 1/4 ray cast (and bounding boxes) are tried, since the others
+ * build surfaces first (measure them off screen); every 24th choice is the next
  * better one when it is expected within 1.5 times the budget, so that
  * estimates follow the machine's load.
  */

@@ -440,14 +440,17 @@ vv_preview_kind
 vv_preview_policy_choose(vv_preview_policy *pol, double budget) {
     if (pol->forced >= 0 && pol->forced < VV_PREVIEW_COUNT)
         return (vv_preview_kind)pol->forced;
-    /* the best representation that fits; an unknown one is tried (its time
-     * is learnt) before anything worse is settled for */
+    /* the best representation that fits. Of those not measured yet only the
+     * 1/4 ray cast is tried while moving: the surfaces of the others may
+     * take long to build (their times are learnt off screen, after a
+     * refinement), and bounding boxes cost nothing to build. */
     int best = -1;
     for (int k = VV_PREVIEW_COUNT - 1; k >= 0 && best < 0; k--) {
         if (!pol->allowed[k])
             continue;
         double e = expected(pol, k);
-        if (e < 0.0 || e <= budget)
+        if ((e < 0.0 && (k == VV_PREVIEW_RAYCAST_4 || k == VV_PREVIEW_BBOX)) ||
+            (e >= 0.0 && e <= budget))
             best = k;
     }
     if (best < 0) { /* nothing fits: the cheapest allowed */
@@ -464,7 +467,7 @@ vv_preview_policy_choose(vv_preview_policy *pol, double budget) {
             if (pol->allowed[k]) {
                 /* only one that could fit: a probe must not stall the view */
                 double e = expected(pol, k);
-                if (e <= 1.5 * budget)
+                if ((e >= 0.0 && e <= 1.5 * budget) || (e < 0.0 && k == VV_PREVIEW_RAYCAST_4))
                     return (vv_preview_kind)k;
                 break;
             }
