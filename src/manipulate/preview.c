@@ -43,7 +43,11 @@ divide_up(int n, int d) {
 
 void
 vv_preview_size(vv_preview_kind k, int width, int height, int *w, int *h) {
-    int d = k == VV_PREVIEW_RAYCAST_4 ? 4 : k == VV_PREVIEW_RAYCAST_2 ? 2 : 1;
+    /* bounding boxes are lines: half the resolution shows them as well and
+     * halves the cost of every frame's hand-over to the display */
+    int d = k == VV_PREVIEW_RAYCAST_4                           ? 4
+            : k == VV_PREVIEW_RAYCAST_2 || k == VV_PREVIEW_BBOX ? 2
+                                                                : 1;
     *w = divide_up(width, d);
     *h = divide_up(height, d);
 }
@@ -288,6 +292,10 @@ render_surfaces(vv_preview *p, const vv_world *world, const vv_view *view, vv_pr
         if (s == VV_OK && o)
             s = vv_world_add_object(w, o);
     }
+    vv_view v = *view; /* at the representation's resolution */
+    v.width = out->width;
+    v.height = out->height;
+    w->view = v;
     if (s == VV_OK) {
         const char *shading = kind == VV_PREVIEW_BOXES ? "flat" : "phong";
         s = vv_renderer_set_option(p->surface, "shading", shading);
@@ -295,7 +303,7 @@ render_surfaces(vv_preview *p, const vv_world *world, const vv_view *view, vv_pr
             s = vv_renderer_set_option(p->surface, "wireframe",
                                        kind == VV_PREVIEW_BBOX ? "1" : "0");
         if (s == VV_OK)
-            s = vv_renderer_render(p->surface, w, view, opt, out);
+            s = vv_renderer_render(p->surface, w, &v, opt, out);
     }
     vv_world_free(w);
     return s;

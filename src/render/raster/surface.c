@@ -48,6 +48,7 @@ typedef enum sf_cull { SF_CULL_AUTO = 0, SF_CULL_BACK = 1, SF_CULL_NONE = 2 } sf
 
 typedef struct sf_state {
     vv_raster *ras;
+    int ras_width, ras_height; /* the context's size */
     vv_raster_shading shading;
     int wireframe;
     sf_cull cull;
@@ -552,12 +553,16 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     sf_state *st = state;
     st->frame++;
     vv_status s = VV_OK;
-    if (!st->ras || out->width != view->width || out->height != view->height) {
+    /* a new context when the image size changes (the Navigator's previews
+     * draw at several sizes with one renderer) */
+    if (!st->ras || st->ras_width != view->width || st->ras_height != view->height) {
         vv_raster_free(st->ras);
         st->ras = NULL;
         s = vv_raster_new(&st->ras, view->width, view->height);
         if (s != VV_OK)
             return s;
+        st->ras_width = view->width;
+        st->ras_height = view->height;
     }
     vv_raster *ras = st->ras;
     /* how big the scene is: clip distances and the size of plane squares */
