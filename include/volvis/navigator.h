@@ -102,7 +102,7 @@ void vv_nav_light_drag(vv_light *light, const vv_view *view, double dx, double d
 
 /** The representations a frame can be drawn with, cheapest first. */
 typedef enum vv_preview_kind {
-    VV_PREVIEW_BBOX = 0,      /**< bounding boxes of the objects, wireframe, 1/2 resolution */
+    VV_PREVIEW_BBOX = 0,      /**< bounding boxes of the objects, wireframe */
     VV_PREVIEW_BOXES = 1,     /**< PARC subvolume boxes (paper, section 4, first method) */
     VV_PREVIEW_COARSE_MC = 2, /**< coarse Marching Cubes, four edge positions (second method) */
     VV_PREVIEW_RAYCAST_4 = 3, /**< the ray caster at 1/4 resolution, step x 4, shown scaled up */
@@ -121,8 +121,7 @@ vv_status vv_preview_kind_parse(const char *name, vv_preview_kind *out);
 
 /**
  * Image size in pixels of representation @p k for a @p width x @p height
- * view (1/4 for the 1/4 ray cast, 1/2 for the 1/2 ray cast and bounding
- * boxes, rounded up, at least 1).
+ * view (1/4 and 1/2 rounded up, at least 1).
  */
 void vv_preview_size(vv_preview_kind k, int width, int height, int *w, int *h);
 

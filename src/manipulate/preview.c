@@ -43,11 +43,7 @@ divide_up(int n, int d) {
 
 void
 vv_preview_size(vv_preview_kind k, int width, int height, int *w, int *h) {
-    /* bounding boxes are lines: half the resolution shows them as well and
-     * halves the cost of every frame's hand-over to the display */
-    int d = k == VV_PREVIEW_RAYCAST_4                           ? 4
-            : k == VV_PREVIEW_RAYCAST_2 || k == VV_PREVIEW_BBOX ? 2
-                                                                : 1;
+    int d = k == VV_PREVIEW_RAYCAST_4 ? 4 : k == VV_PREVIEW_RAYCAST_2 ? 2 : 1;
     *w = divide_up(width, d);
     *h = divide_up(height, d);
 }
