@@ -886,14 +886,12 @@ render_main(gpointer data) {
     vv_renderer *r = NULL;
     vv_error_clear();
     /* the World's renderer with its options and quality, as `volvis animate` */
-    vv_status s = vv_renderer_new(&r, w->render.renderer[0] ? w->render.renderer : "raycast");
-    for (int i = 0; s == VV_OK && i < w->render.n_options; i++)
-        s = vv_renderer_set_option(r, w->render.option_keys[i], w->render.option_values[i]);
+    vv_status s = vv_renderer_new_from_settings(&r, &w->render);
     if (s == VV_OK) {
         vv_anim_render_options o;
         vv_anim_render_options_init(&o);
         o.output = j->output;
-        o.render.quality = w->render.quality >= 0 ? w->render.quality : 2;
+        o.render.quality = vv_render_settings_quality(&w->render);
         o.resume = j->resume;
         o.progress.fn = render_progress;
         o.progress.user = j;

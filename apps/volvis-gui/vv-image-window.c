@@ -36,15 +36,13 @@ render_main(gpointer data) {
     const vv_world *w = win->world;
     vv_renderer *r = NULL;
     vv_error_clear();
-    vv_status s = vv_renderer_new(&r, w->render.renderer[0] ? w->render.renderer : "raycast");
-    for (int i = 0; s == VV_OK && i < w->render.n_options; i++)
-        s = vv_renderer_set_option(r, w->render.option_keys[i], w->render.option_values[i]);
+    vv_status s = vv_renderer_new_from_settings(&r, &w->render);
     if (s == VV_OK)
         s = vv_image_new(&win->image, w->view.width, w->view.height);
     if (s == VV_OK) {
         vv_render_options ro;
         vv_render_options_init(&ro);
-        ro.quality = w->render.quality >= 0 ? w->render.quality : 2;
+        ro.quality = vv_render_settings_quality(&w->render);
         ro.progress.fn = progress_cb;
         ro.progress.user = win;
         s = vv_renderer_render(r, w, &w->view, &ro, win->image);

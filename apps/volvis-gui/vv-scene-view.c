@@ -151,7 +151,7 @@ render_one(VvSceneView *self, const job *j, vv_preview_kind kind) {
     f->refine = j->refine;
     f->posted_us = j->posted_us;
     const vv_world *w = j->world;
-    const char *rname = w->render.renderer[0] ? w->render.renderer : "raycast";
+    const char *rname = vv_render_settings_renderer(&w->render);
     vv_status s = VV_OK;
     vv_error_clear();
     if (!self->preview || strcmp(rname, self->preview_renderer) != 0) {
@@ -165,16 +165,14 @@ render_one(VvSceneView *self, const job *j, vv_preview_kind kind) {
     int iw = 1, ih = 1;
     vv_preview_size(kind, w->view.width, w->view.height, &iw, &ih);
     if (s == VV_OK && kind == VV_PREVIEW_FULL) {
-        vv_renderer *r = vv_preview_final_renderer(self->preview);
-        for (int i = 0; i < w->render.n_options && s == VV_OK; i++)
-            s = vv_renderer_set_option(r, w->render.option_keys[i], w->render.option_values[i]);
+        s = vv_renderer_apply_settings(vv_preview_final_renderer(self->preview), &w->render);
     }
     if (s == VV_OK)
         s = vv_image_new(&img, iw, ih);
     cancel_ctx cc = {self, j->gen, j->refine};
     vv_render_options ro;
     vv_render_options_init(&ro);
-    ro.quality = w->render.quality >= 0 ? w->render.quality : 2;
+    ro.quality = vv_render_settings_quality(&w->render);
     ro.progress.fn = cancel_cb;
     ro.progress.user = &cc;
     gint64 t0 = g_get_monotonic_time();

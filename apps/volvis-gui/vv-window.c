@@ -158,9 +158,9 @@ fill_object_control(VvWindow *win) {
     gtk_drop_down_set_selected(GTK_DROP_DOWN(win->view_projection), w->view.projection);
     const vv_renderer_ops *const *reg = vv_renderer_registry();
     for (guint i = 0; reg[i]; i++)
-        if (!strcmp(reg[i]->name, w->render.renderer[0] ? w->render.renderer : "raycast"))
+        if (!strcmp(reg[i]->name, vv_render_settings_renderer(&w->render)))
             gtk_drop_down_set_selected(GTK_DROP_DOWN(win->renderer), i);
-    set_spin(win->quality, w->render.quality >= 0 ? w->render.quality : 2);
+    set_spin(win->quality, vv_render_settings_quality(&w->render));
     win->updating = FALSE;
 }
 
@@ -756,7 +756,7 @@ option_changed(GtkEntry *e, gpointer user) {
     vv_world *w = vv_document_world(win->doc);
     /* check the value with the renderer itself before taking it */
     vv_renderer *r = NULL;
-    if (vv_renderer_new(&r, w->render.renderer[0] ? w->render.renderer : "raycast") == VV_OK) {
+    if (vv_renderer_new(&r, vv_render_settings_renderer(&w->render)) == VV_OK) {
         vv_error_clear();
         if (text[0] && vv_renderer_set_option(r, key, text) != VV_OK) {
             show_error(win, "Bad renderer option", vv_error_message());

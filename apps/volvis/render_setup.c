@@ -324,7 +324,7 @@ cli_render_renderer(const cli_args *a, const cli_render_args *r, const vv_world 
                     vv_renderer **out, int *quality) {
     *out = NULL;
     const vv_render_settings *sc = &w->render;
-    const char *scene_renderer = sc->renderer[0] ? sc->renderer : "raycast";
+    const char *scene_renderer = vv_render_settings_renderer(sc);
     const char *name = r->renderer ? r->renderer : scene_renderer;
     if (!r->renderer && !renderer_known(name)) {
         char names[512];
@@ -332,7 +332,7 @@ cli_render_renderer(const cli_args *a, const cli_render_args *r, const vv_world 
                   renderer_names(names, sizeof names));
         return CLI_EXIT_FAIL;
     }
-    *quality = r->has_quality ? r->quality : (sc->quality >= 0 ? sc->quality : 2);
+    *quality = r->has_quality ? r->quality : vv_render_settings_quality(sc);
     vv_renderer *ren = NULL;
     vv_error_clear();
     vv_status s = vv_renderer_new(&ren, name);

@@ -80,6 +80,27 @@ vv_status vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_vie
                              const vv_render_options *opt, vv_image *out);
 
 /**
+ * The renderer a World's render settings name (vv_render_settings, in
+ * model.h): their renderer, or "raycast" when none is set. Never NULL; the
+ * pointer is into @p rs or static.
+ */
+const char *vv_render_settings_renderer(const vv_render_settings *rs);
+/** Their quality level, or 2 (final) when none is set. */
+int vv_render_settings_quality(const vv_render_settings *rs);
+/**
+ * Passes every option of @p rs to @p r in order (vv_renderer_set_option),
+ * so a renderer draws what `volvis render` of the saved scene draws.
+ * Errors: VV_ERR_INVALID for an option the renderer refuses, with its key.
+ */
+vv_status vv_renderer_apply_settings(vv_renderer *r, const vv_render_settings *rs);
+/**
+ * A new renderer as @p rs asks for it: vv_renderer_new of
+ * vv_render_settings_renderer, then vv_renderer_apply_settings. On failure
+ * *out is NULL. Errors: those of both.
+ */
+vv_status vv_renderer_new_from_settings(vv_renderer **out, const vv_render_settings *rs);
+
+/**
  * The surface a surface-drawing method shows for a volume object: in iso
  * mode its isovalue (colour material.color); threshold-segmented, its
  * threshold; else the lowest value at which the transfer function's opacity

@@ -126,3 +126,40 @@ vv_object_surface_value(const vv_object *obj, double *iso, vv_vec3 *color) {
     }
     return 0;
 }
+
+const char *
+vv_render_settings_renderer(const vv_render_settings *rs) {
+    return rs && rs->renderer[0] ? rs->renderer : "raycast";
+}
+
+int
+vv_render_settings_quality(const vv_render_settings *rs) {
+    return rs && rs->quality >= 0 ? rs->quality : 2;
+}
+
+vv_status
+vv_renderer_apply_settings(vv_renderer *r, const vv_render_settings *rs) {
+    for (int i = 0; rs && i < rs->n_options; i++) {
+        vv_status s = vv_renderer_set_option(r, rs->option_keys[i], rs->option_values[i]);
+        if (s != VV_OK)
+            return vv_error_prefix(s, "render option %s", rs->option_keys[i]);
+    }
+    return VV_OK;
+}
+
+vv_status
+vv_renderer_new_from_settings(vv_renderer **out, const vv_render_settings *rs) {
+    if (!out)
+        return vv_error_set(VV_ERR_INVALID, "renderer: NULL output");
+    *out = NULL;
+    vv_renderer *r = NULL;
+    vv_status s = vv_renderer_new(&r, vv_render_settings_renderer(rs));
+    if (s == VV_OK)
+        s = vv_renderer_apply_settings(r, rs);
+    if (s != VV_OK) {
+        vv_renderer_free(r);
+        return s;
+    }
+    *out = r;
+    return VV_OK;
+}
