@@ -15,6 +15,7 @@
 #define VOLVIS_MODEL_H
 
 #include "core.h"
+#include "grid.h"
 #include "image.h"
 #include "math.h"
 #include "mesh.h"
@@ -393,7 +394,8 @@ typedef enum vv_object_type {
     VV_OBJECT_SPHERE = 3,   /**< geometry.center, geometry.radius */
     VV_OBJECT_BOX = 4,      /**< axis-aligned in object space: geometry.box */
     VV_OBJECT_CYLINDER = 5, /**< axis geometry.base to geometry.top, radius; capped */
-    VV_OBJECT_MESH = 6      /**< geometry.mesh (a triangle mesh) */
+    VV_OBJECT_MESH = 6,     /**< geometry.mesh (a triangle mesh) */
+    VV_OBJECT_GRID = 7      /**< an irregular grid (grid.h): grid, field, component, time */
 } vv_object_type;
 
 /** Name of an object type as in scene files ("volume", "sphere", ...). Never NULL. */
@@ -469,6 +471,10 @@ typedef struct vv_object {
     int reflects;               /**< 1: spawns reflected rays when material.reflectance > 0 */
     int n_cut_planes;
     vv_cut_plane cut_planes[VV_MAX_CUT_PLANES]; /**< local, in world coordinates */
+    vv_grid *grid;                              /**< VV_OBJECT_GRID: one reference held */
+    char field[VV_GRID_FIELD_NAME_MAX];         /**< grid: field shown ("" = the first) */
+    int component;                              /**< grid: vector component, -1 = magnitude */
+    int time;                                   /**< grid: time step (vv_grid_find_field) */
 } vv_object;
 
 /**
@@ -502,6 +508,19 @@ vv_status vv_object_set_polygon(vv_object *obj, int n, const vv_vec3 *vertices);
  * VV_ERR_INVALID (not a mesh object, empty mesh), VV_ERR_NOMEM.
  */
 vv_status vv_object_set_mesh(vv_object *obj, vv_mesh *mesh, const char *source);
+/**
+ * A new grid object showing field @p field (NULL: the first; time step 0,
+ * magnitude of vectors) of @p grid (the object takes its own reference),
+ * with the defaults of vv_object_new_volume: TF a white ramp over the
+ * field's range with opacity_unit_distance 1/100 of the largest bounding-box
+ * extent. Errors: VV_ERR_INVALID (NULL grid, unknown field), VV_ERR_NOMEM.
+ */
+vv_status vv_object_new_grid(vv_object **out, vv_grid *grid, const char *field, const char *name);
+/**
+ * The index of the field a grid object shows (its field at its time step),
+ * or -1 with an error message naming the field.
+ */
+int vv_object_grid_field(const vv_object *obj);
 /** Releases an object, its references (volume, mesh, textures) and its geometry. Accepts NULL. */
 void vv_object_free(vv_object *obj);
 /**

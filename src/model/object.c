@@ -3,6 +3,7 @@
  * local shading and cut planes (the paper's "object", section 3).
  */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -79,6 +80,8 @@ vv_object_type_name(vv_object_type t) {
         return "cylinder";
     case VV_OBJECT_MESH:
         return "mesh";
+    case VV_OBJECT_GRID:
+        return "grid";
     }
     return "unknown";
 }
@@ -113,6 +116,69 @@ vv_object_new_volume(vv_object **out, vv_volume *volume, const char *name) {
     o->isovalue = 0.5 * (lo + hi);
     *out = o;
     return VV_OK;
+}
+
+vv_status
+vv_object_new_grid(vv_object **out, vv_grid *grid, const char *field, const char *name) {
+    if (!out)
+        return vv_error_set(VV_ERR_INVALID, "object: NULL output");
+    *out = NULL;
+    if (!grid)
+        return vv_error_set(VV_ERR_INVALID, "object: NULL grid");
+    vv_object *o = calloc(1, sizeof *o);
+    if (!o)
+        return vv_error_set(VV_ERR_NOMEM, "object: out of memory");
+    vv_model_copy_name(o->name, name ? name : "grid");
+    o->type = VV_OBJECT_GRID;
+    o->grid = vv_grid_ref(grid);
+    object_defaults(o);
+    o->component = -1;
+    if (field)
+        snprintf(o->field, sizeof o->field, "%s", field);
+    int f = vv_object_grid_field(o);
+    if (f < 0 && grid->n_fields > 0) {
+        vv_object_free(o);
+        return VV_ERR_INVALID;
+    }
+    double lo = f >= 0 ? grid->fields[f].range[0] : 0, hi = f >= 0 ? grid->fields[f].range[1] : 1;
+    if (!isfinite(lo) || !isfinite(hi)) {
+        lo = 0.0;
+        hi = 1.0;
+    }
+    if (!(hi > lo))
+        hi = lo + 1.0;
+    vv_box b = vv_grid_bounds(grid);
+    double ext = fmax(b.max.x - b.min.x, fmax(b.max.y - b.min.y, b.max.z - b.min.z));
+    if (!(ext > 0))
+        ext = 1;
+    o->threshold = 0.5 * (lo + hi);
+    vv_tf_set_ramp(&o->tf, lo, hi, 1.0, vv_vec3_make(1, 1, 1), ext / 100);
+    o->tf2d.opacity_unit_distance = ext / 100;
+    o->isovalue = 0.5 * (lo + hi);
+    *out = o;
+    return VV_OK;
+}
+
+int
+vv_object_grid_field(const vv_object *obj) {
+    if (!obj || !obj->grid) {
+        vv_error_set(VV_ERR_INVALID, "object: not a grid object");
+        return -1;
+    }
+    int f = vv_grid_find_field(obj->grid, obj->field[0] ? obj->field : NULL, obj->time);
+    if (f < 0) {
+        char known[256] = "";
+        size_t len = 0;
+        for (int i = 0; i < obj->grid->n_fields && len < 200; i++) {
+            int w = snprintf(known + len, sizeof known - len, "%s%s", i ? ", " : "",
+                             obj->grid->fields[i].name);
+            len += w > 0 ? (size_t)w : 0;
+        }
+        vv_error_set(VV_ERR_INVALID, "grid object '%s': no field '%s' at time %d (fields: %s)",
+                     obj->name, obj->field[0] ? obj->field : "(first)", obj->time,
+                     known[0] ? known : "none");
+    }
+    return f;
 }
 
 vv_status
@@ -211,6 +277,7 @@ vv_object_free(vv_object *obj) {
     if (!obj)
         return;
     vv_volume_free(obj->volume);
+    vv_grid_free(obj->grid);
     free(obj->geometry.vertices);
     vv_mesh_free(obj->geometry.mesh);
     free(obj->geometry.source);
@@ -251,6 +318,8 @@ vv_object_clone(vv_object **out, const vv_object *obj) {
     }
     if (c->volume)
         vv_volume_ref(c->volume);
+    if (c->grid)
+        vv_grid_ref(c->grid);
     if (c->geometry.mesh)
         vv_mesh_ref(c->geometry.mesh);
     vv_texture_image_ref(c->texture.image);
@@ -328,6 +397,11 @@ geometry_bounds(const vv_object *obj, vv_box *b) {
         if (!g->mesh || g->mesh->n_vertices == 0)
             return 0;
         *b = vv_mesh_bounds(g->mesh);
+        return 1;
+    case VV_OBJECT_GRID:
+        if (!obj->grid || obj->grid->n_points == 0)
+            return 0;
+        *b = vv_grid_bounds(obj->grid);
         return 1;
     case VV_OBJECT_PLANE:
     case VV_OBJECT_VOLUME:

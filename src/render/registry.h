@@ -15,4 +15,7 @@ extern const vv_renderer_ops vv_surface_ops;
 /** Compression-domain Fourier projection (src/render/fourier). */
 extern const vv_renderer_ops vv_fourier_ops;
 
+/** Cell-by-cell ray casting of irregular grids (src/render/irregular). */
+extern const vv_renderer_ops vv_irregular_ops;
+
 #endif
