@@ -9,7 +9,7 @@ set -euo pipefail
 
 pkgs=(build-essential cmake pkg-config libteem-dev libnifti2-dev libjansson-dev
       libpng-dev zlib1g-dev libassimp-dev libfftw3-dev libcairo2-dev libgtk-4-dev
-      libspnav-dev libsdl2-dev libavformat-dev libavcodec-dev libswscale-dev libavutil-dev)
+      libspnav-dev libsdl2-dev libxml2-dev libnetcdf-dev libavformat-dev libavcodec-dev libswscale-dev libavutil-dev)
 for what in "$@"; do
   case "$what" in
     build) ;;

@@ -1,0 +1,618 @@
+/*
+ * VTK XML UnstructuredGrid (.vtu) files, parsed with libxml2: data arrays
+ * inline (ascii or base64 "binary") or appended (raw or base64), zlib
+ * compressed or not, UInt32 or UInt64 headers, either byte order ("VTK
+ * File Formats", XML file formats).
+ *
+ * Hostile files: entity declarations (the "billion laughs" XML bomb) are
+ * refused before parsing, libxml2 runs without network access and entity
+ * substitution, every array's decoded and decompressed size is checked
+ * against what the header says before anything is allocated for it, and
+ * truncated base64 or compressed blocks are errors.
+ */
+#include <libxml/parser.h>
+#include <libxml/tree.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <zlib.h>
+
+#include "core/internal.h"
+#include "io/grid_io_internal.h"
+#include "volvis/grid.h"
+
+#define VTU_FILE_MAX (4ull << 30)
+
+typedef struct vtu {
+    const char *path;
+    int big_endian;
+    int header64;
+    int zlib;
+    const unsigned char *appended; /* after the '_' */
+    size_t appended_len;
+    int appended_base64;
+} vtu;
+
+static int
+b64_value(unsigned char ch) {
+    if (ch >= 'A' && ch <= 'Z')
+        return ch - 'A';
+    if (ch >= 'a' && ch <= 'z')
+        return ch - 'a' + 26;
+    if (ch >= '0' && ch <= '9')
+        return ch - '0' + 52;
+    if (ch == '+')
+        return 62;
+    if (ch == '/')
+        return 63;
+    return -1;
+}
+
+/* Decodes base64 characters from *p (whitespace skipped) until @p n bytes
+ * are out or a group ends with padding or the text ends. Returns the bytes
+ * decoded; *p moves past the groups used. */
+static size_t
+b64_decode(const unsigned char **p, const unsigned char *end, unsigned char *out, size_t n) {
+    size_t k = 0;
+    while (k < n) {
+        int v[4], m = 0;
+        const unsigned char *q = *p;
+        while (m < 4 && q < end) {
+            const unsigned char ch = *q++;
+            if (ch == ' ' || ch == '\n' || ch == '\r' || ch == '\t')
+                continue;
+            if (ch == '=') {
+                v[m++] = -2;
+                continue;
+            }
+            const int x = b64_value(ch);
+            if (x < 0) {
+                q--;
+                break;
+            }
+            v[m++] = x;
+        }
+        if (m < 4)
+            return k; /* truncated group */
+        *p = q;
+        const int pad = (v[2] == -2) + (v[3] == -2);
+        if (v[0] < 0 || v[1] < 0 || (v[2] == -2 && v[3] != -2))
+            return k;
+        const uint32_t w = (uint32_t)v[0] << 18 | (uint32_t)v[1] << 12 |
+                           (uint32_t)(v[2] < 0 ? 0 : v[2]) << 6 | (uint32_t)(v[3] < 0 ? 0 : v[3]);
+        const unsigned char b[3] = {(unsigned char)(w >> 16), (unsigned char)(w >> 8),
+                                    (unsigned char)w};
+        for (int i = 0; i < 3 - pad && k < n; i++)
+            out[k++] = b[i];
+        if (pad)
+            return k;
+    }
+    return k;
+}
+
+static uint64_t
+header_word(const vtu *v, const unsigned char *p) {
+    return (uint64_t)vv_gtype_get(p, v->header64 ? VV_GT_U64 : VV_GT_U32, v->big_endian);
+}
+
+/* The raw bytes of one binary array (after its header), @p expect bytes
+ * long, from text or appended data starting at @p p. base64: characters;
+ * else raw bytes. Allocates *out. */
+static vv_status
+binary_array(const vtu *v, const unsigned char *p, const unsigned char *end, int base64,
+             size_t expect, const char *name, unsigned char **out) {
+    *out = NULL;
+    const size_t ws = v->header64 ? 8 : 4;
+    unsigned char hdr[8 * 4];
+    if (!v->zlib) {
+        size_t nbytes;
+        if (base64) {
+            const unsigned char *q = p;
+            if (b64_decode(&q, end, hdr, ws) != ws)
+                return vv_error_set(VV_ERR_FORMAT, "%s: array %s: truncated base64 header", v->path,
+                                    name);
+            nbytes = (size_t)header_word(v, hdr);
+            if (nbytes != expect)
+                return vv_error_set(VV_ERR_FORMAT, "%s: array %s: %zu bytes, expected %zu", v->path,
+                                    name, nbytes, expect);
+            unsigned char *buf = malloc(expect ? expect : 1);
+            if (!buf)
+                return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", v->path);
+            /* header and data encoded separately (VTK) or together */
+            size_t got;
+            if (ws % 3 != 0 && memchr(p, '=', (size_t)(q - p))) {
+                got = b64_decode(&q, end, buf, expect);
+            } else {
+                const unsigned char *q2 = p;
+                unsigned char *all = malloc(ws + expect);
+                if (!all) {
+                    free(buf);
+                    return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", v->path);
+                }
+                got = b64_decode(&q2, end, all, ws + expect);
+                got = got >= ws ? got - ws : 0;
+                memcpy(buf, all + ws, got);
+                free(all);
+            }
+            if (got != expect) {
+                free(buf);
+                return vv_error_set(VV_ERR_FORMAT,
+                                    "%s: array %s: truncated base64 data (%zu of %zu bytes)",
+                                    v->path, name, got, expect);
+            }
+            *out = buf;
+            return VV_OK;
+        }
+        if ((size_t)(end - p) < ws)
+            return vv_error_set(VV_ERR_FORMAT, "%s: array %s: truncated", v->path, name);
+        nbytes = (size_t)header_word(v, p);
+        if (nbytes != expect || expect > (size_t)(end - p) - ws)
+            return vv_error_set(VV_ERR_FORMAT, "%s: array %s: %zu bytes (expected %zu, %zu left)",
+                                v->path, name, nbytes, expect, (size_t)(end - p) - ws);
+        unsigned char *buf = malloc(expect ? expect : 1);
+        if (!buf)
+            return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", v->path);
+        memcpy(buf, p + ws, expect);
+        *out = buf;
+        return VV_OK;
+    }
+    /* compressed: [blocks, block size, last block size, compressed sizes...] */
+    const unsigned char *q = p;
+    unsigned char first[24];
+    size_t nb;
+    if (base64) {
+        const unsigned char *q1 = p;
+        if (b64_decode(&q1, end, first, 3 * ws) != 3 * ws)
+            return vv_error_set(VV_ERR_FORMAT, "%s: array %s: truncated base64 header", v->path,
+                                name);
+    } else {
+        if ((size_t)(end - p) < 3 * ws)
+            return vv_error_set(VV_ERR_FORMAT, "%s: array %s: truncated header", v->path, name);
+        memcpy(first, p, 3 * ws);
+    }
+    nb = (size_t)header_word(v, first);
+    const size_t bs = (size_t)header_word(v, first + ws);
+    size_t last = (size_t)header_word(v, first + 2 * ws);
+    if (last == 0)
+        last = bs;
+    const size_t total = nb == 0 ? 0 : (nb - 1) * bs + last;
+    if (nb > (1u << 24) || bs == 0 || total != expect)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: array %s: compressed header says %zu blocks of %zu bytes "
+                            "(%zu in all), expected %zu",
+                            v->path, name, nb, bs, total, expect);
+    const size_t hsize = (3 + nb) * ws;
+    unsigned char *h = malloc(hsize);
+    if (!h)
+        return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", v->path);
+    if (base64) {
+        if (b64_decode(&q, end, h, hsize) != hsize) {
+            free(h);
+            return vv_error_set(VV_ERR_FORMAT, "%s: array %s: truncated base64 header", v->path,
+                                name);
+        }
+    } else {
+        if ((size_t)(end - q) < hsize) {
+            free(h);
+            return vv_error_set(VV_ERR_FORMAT, "%s: array %s: truncated header", v->path, name);
+        }
+        q += hsize;
+        memcpy(h, p, hsize);
+    }
+    size_t csum = 0;
+    for (size_t i = 0; i < nb; i++) {
+        const uint64_t cs = header_word(v, h + (3 + i) * ws);
+        if (cs > (size_t)(end - q) * (base64 ? 1 : 1) + 16) {
+            free(h);
+            return vv_error_set(VV_ERR_FORMAT,
+                                "%s: array %s: block %zu of %llu bytes overruns "
+                                "the file",
+                                v->path, name, i, (unsigned long long)cs);
+        }
+        csum += (size_t)cs;
+    }
+    unsigned char *cbuf = NULL;
+    const unsigned char *cdata;
+    if (base64) {
+        if (csum > (size_t)(end - q)) {
+            free(h);
+            return vv_error_set(VV_ERR_FORMAT, "%s: array %s: truncated base64 data", v->path,
+                                name);
+        }
+        cbuf = malloc(csum ? csum : 1);
+        if (!cbuf) {
+            free(h);
+            return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", v->path);
+        }
+        if (b64_decode(&q, end, cbuf, csum) != csum) {
+            free(h);
+            free(cbuf);
+            return vv_error_set(VV_ERR_FORMAT, "%s: array %s: truncated base64 data", v->path,
+                                name);
+        }
+        cdata = cbuf;
+    } else {
+        if (csum > (size_t)(end - q)) {
+            free(h);
+            return vv_error_set(VV_ERR_FORMAT, "%s: array %s: truncated compressed data", v->path,
+                                name);
+        }
+        cdata = q;
+    }
+    unsigned char *buf = malloc(expect ? expect : 1);
+    if (!buf) {
+        free(h);
+        free(cbuf);
+        return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", v->path);
+    }
+    size_t off = 0, coff = 0;
+    for (size_t i = 0; i < nb; i++) {
+        const size_t cs = (size_t)header_word(v, h + (3 + i) * ws);
+        uLongf dl = (uLongf)(i + 1 == nb ? last : bs);
+        const uLongf want = dl;
+        const int zr = uncompress(buf + off, &dl, cdata + coff, (uLong)cs);
+        if (zr != Z_OK || dl != want) {
+            free(h);
+            free(cbuf);
+            free(buf);
+            return vv_error_set(VV_ERR_FORMAT, "%s: array %s: block %zu does not inflate (zlib %d)",
+                                v->path, name, i, zr);
+        }
+        off += dl;
+        coff += cs;
+    }
+    free(h);
+    free(cbuf);
+    *out = buf;
+    return VV_OK;
+}
+
+static char *
+prop(xmlNode *n, const char *name) {
+    return (char *)xmlGetProp(n, (const xmlChar *)name);
+}
+
+static int
+is_elem(xmlNode *n, const char *name) {
+    return n->type == XML_ELEMENT_NODE && !strcmp((const char *)n->name, name);
+}
+
+/* Reads a DataArray of n tuples x ncomp (ncomp 0: whatever it declares,
+ * returned in *ncomp_out) into doubles. */
+static vv_status
+data_array(const vtu *v, xmlNode *da, size_t n, int ncomp, int *ncomp_out, double **out) {
+    *out = NULL;
+    char *type = prop(da, "type"), *fmt = prop(da, "format"), *nc = prop(da, "NumberOfComponents"),
+         *name = prop(da, "Name"), *offs = prop(da, "offset");
+    vv_status s = VV_OK;
+    const char *nm = name ? name : "(unnamed)";
+    vv_gtype t;
+    int comps = nc ? atoi(nc) : 1;
+    unsigned char *raw = NULL;
+    double *vals = NULL;
+    if (!type || !vv_gtype_parse(type, &t)) {
+        s = vv_error_set(VV_ERR_FORMAT, "%s: DataArray %s: type \"%s\"", v->path, nm,
+                         type ? type : "");
+        goto done;
+    }
+    if (comps < 1 || comps > 9 || (ncomp > 0 && comps != ncomp)) {
+        s = vv_error_set(VV_ERR_FORMAT, "%s: DataArray %s: %d components", v->path, nm, comps);
+        goto done;
+    }
+    const size_t nv = n * (size_t)comps, sz = vv_gtype_size(t);
+    if (nv > (size_t)VV_GRID_MAX_CELLS * 8) {
+        s = vv_error_set(VV_ERR_LIMIT, "%s: DataArray %s: %zu values", v->path, nm, nv);
+        goto done;
+    }
+    vals = malloc((nv ? nv : 1) * sizeof *vals);
+    if (!vals) {
+        s = vv_error_set(VV_ERR_NOMEM, "%s: out of memory", v->path);
+        goto done;
+    }
+    if (fmt && !strcmp(fmt, "ascii")) {
+        xmlChar *text = xmlNodeGetContent(da);
+        vv_gcur c;
+        vv_gcur_init(&c, text ? text : (const xmlChar *)"", text ? strlen((char *)text) : 0,
+                     v->path);
+        s = vv_gcur_values(&c, 0, 0, t, nv, vals, nm);
+        xmlFree(text);
+        goto done;
+    }
+    if (fmt && !strcmp(fmt, "binary")) {
+        xmlChar *text = xmlNodeGetContent(da);
+        const unsigned char *p = text ? text : (const unsigned char *)"";
+        const unsigned char *e = p + strlen((const char *)p);
+        while (p < e && (*p == ' ' || *p == '\n' || *p == '\r' || *p == '\t'))
+            p++;
+        s = binary_array(v, p, e, 1, nv * sz, nm, &raw);
+        xmlFree(text);
+    } else if (fmt && !strcmp(fmt, "appended")) {
+        char *end;
+        const unsigned long long off = offs ? strtoull(offs, &end, 10) : 0;
+        if (!offs || *end || !v->appended || off > v->appended_len) {
+            s = vv_error_set(VV_ERR_FORMAT,
+                             "%s: DataArray %s: appended offset \"%s\" is not in "
+                             "the appended data",
+                             v->path, nm, offs ? offs : "");
+            goto done;
+        }
+        s = binary_array(v, v->appended + off, v->appended + v->appended_len, v->appended_base64,
+                         nv * sz, nm, &raw);
+    } else {
+        s = vv_error_set(VV_ERR_FORMAT, "%s: DataArray %s: format \"%s\"", v->path, nm,
+                         fmt ? fmt : "");
+    }
+    if (s == VV_OK)
+        for (size_t i = 0; i < nv; i++)
+            vals[i] = vv_gtype_get(raw + i * sz, t, v->big_endian);
+done:
+    free(raw);
+    if (ncomp_out)
+        *ncomp_out = comps;
+    xmlFree(type);
+    xmlFree(fmt);
+    xmlFree(nc);
+    xmlFree(name);
+    xmlFree(offs);
+    if (s != VV_OK) {
+        free(vals);
+        return s;
+    }
+    *out = vals;
+    return VV_OK;
+}
+
+static xmlNode *
+child(xmlNode *n, const char *name) {
+    for (xmlNode *c = n ? n->children : NULL; c; c = c->next)
+        if (is_elem(c, name))
+            return c;
+    return NULL;
+}
+
+static xmlNode *
+named_array(xmlNode *parent, const char *name) {
+    for (xmlNode *c = parent ? parent->children : NULL; c; c = c->next)
+        if (is_elem(c, "DataArray")) {
+            char *nm = prop(c, "Name");
+            const int hit = nm && !strcmp(nm, name);
+            xmlFree(nm);
+            if (hit)
+                return c;
+        }
+    return NULL;
+}
+
+static size_t
+size_prop(xmlNode *n, const char *name, int *ok) {
+    char *s = prop(n, name);
+    char *end = NULL;
+    long long v = s ? strtoll(s, &end, 10) : -1;
+    *ok = s && end && !*end && v >= 0;
+    xmlFree(s);
+    return *ok ? (size_t)v : 0;
+}
+
+static void
+silent(void *ctx, const char *msg, ...) {
+    (void)ctx;
+    (void)msg;
+}
+
+vv_status
+vv_grid_read_vtu(vv_grid **out, const char *path) {
+    *out = NULL;
+    unsigned char *data = NULL;
+    uint64_t size = 0;
+    vv_status s = vv_read_file(path, VTU_FILE_MAX, &data, &size);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "%s", path);
+    vtu v = {path, 0, 0, 0, NULL, 0, 0};
+    /* entity declarations are refused: no XML bomb reaches the parser */
+    const size_t scan = size < 65536 ? (size_t)size : 65536;
+    for (size_t i = 0; i + 8 <= scan; i++)
+        if (!memcmp(data + i, "<!ENTITY", 8) || !memcmp(data + i, "<!DOCTYPE", 9)) {
+            free(data);
+            return vv_error_set(VV_ERR_FORMAT,
+                                "%s: DOCTYPE or entity declarations are not allowed in a .vtu "
+                                "file (possible XML bomb)",
+                                path);
+        }
+    /* cut the appended data out of what libxml2 parses (raw bytes are not XML) */
+    size_t xml_len = (size_t)size;
+    unsigned char *ad = NULL;
+    {
+        const char *tag = "<AppendedData";
+        for (size_t i = 0; i + 13 <= (size_t)size; i++)
+            if (!memcmp(data + i, tag, 13)) {
+                ad = data + i;
+                break;
+            }
+    }
+    unsigned char *xml = data;
+    if (ad) {
+        unsigned char *gt = memchr(ad, '>', (size_t)(data + size - ad));
+        unsigned char *us = gt ? memchr(gt, '_', (size_t)(data + size - gt)) : NULL;
+        /* the closing tag, searched from the end (raw data may hold anything) */
+        unsigned char *close = NULL;
+        for (unsigned char *q = data + size - 15; us && q > us; q--)
+            if (!memcmp(q, "</AppendedData>", 15)) {
+                close = q;
+                break;
+            }
+        if (!gt || !us || !close) {
+            free(data);
+            return vv_error_set(VV_ERR_FORMAT, "%s: AppendedData without '_' or its end tag", path);
+        }
+        v.appended = us + 1;
+        v.appended_len = (size_t)(close - us - 1);
+        xml = malloc((size_t)size + 1);
+        if (!xml) {
+            free(data);
+            return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", path);
+        }
+        const size_t head = (size_t)(gt + 1 - data), tail = (size_t)(data + size - close);
+        memcpy(xml, data, head);
+        memcpy(xml + head, close, tail);
+        xml_len = head + tail;
+        /* the encoding attribute of AppendedData */
+        char enc[16] = "";
+        for (const unsigned char *e = ad; e + 10 < gt; e++)
+            if (!memcmp(e, "encoding=\"", 10)) {
+                sscanf((const char *)e + 10, "%15[^\"]", enc);
+                break;
+            }
+        v.appended_base64 = !strcmp(enc, "base64");
+        if (!v.appended_base64 && strcmp(enc, "raw")) {
+            free(xml);
+            free(data);
+            return vv_error_set(VV_ERR_FORMAT, "%s: AppendedData encoding \"%s\"", path, enc);
+        }
+    }
+    xmlSetGenericErrorFunc(NULL, silent);
+    xmlDoc *doc =
+        xmlReadMemory((const char *)xml, (int)(xml_len < (size_t)INT32_MAX ? xml_len : 0), path,
+                      NULL, XML_PARSE_NONET | XML_PARSE_NOERROR | XML_PARSE_NOWARNING);
+    vv_grid *g = NULL;
+    double *pts = NULL, *conn = NULL, *offs = NULL, *types = NULL, *vals = NULL;
+    if (!doc) {
+        const xmlError *xe = xmlGetLastError();
+        char msg[160] = "parse error";
+        if (xe && xe->message)
+            snprintf(msg, sizeof msg, "%s", xe->message);
+        msg[strcspn(msg, "\r\n")] = '\0'; /* one line */
+        s = vv_error_set(VV_ERR_FORMAT, "%s: not well-formed XML (line %d: %s)", path,
+                         xe ? xe->line : 0, msg);
+        goto done;
+    }
+    xmlNode *root = xmlDocGetRootElement(doc);
+    if (!root || !is_elem(root, "VTKFile")) {
+        s = vv_error_set(VV_ERR_FORMAT, "%s: the root element is not VTKFile", path);
+        goto done;
+    }
+    {
+        char *ty = prop(root, "type"), *bo = prop(root, "byte_order"),
+             *ht = prop(root, "header_type"), *cp = prop(root, "compressor");
+        int ok = ty && !strcmp(ty, "UnstructuredGrid");
+        v.big_endian = bo && !strcmp(bo, "BigEndian");
+        v.header64 = ht && !strcmp(ht, "UInt64");
+        v.zlib = cp && !strcmp(cp, "vtkZLibDataCompressor");
+        const int bad_cp = cp && !v.zlib;
+        if (!ok || bad_cp)
+            s = vv_error_set(bad_cp ? VV_ERR_UNSUPPORTED : VV_ERR_FORMAT,
+                             "%s: %s \"%s\" (UnstructuredGrid with zlib or no compression)", path,
+                             bad_cp ? "compressor" : "type", bad_cp ? cp : (ty ? ty : ""));
+        xmlFree(ty);
+        xmlFree(bo);
+        xmlFree(ht);
+        xmlFree(cp);
+        if (s != VV_OK)
+            goto done;
+    }
+    xmlNode *ug = child(root, "UnstructuredGrid");
+    xmlNode *piece = child(ug, "Piece");
+    if (!piece) {
+        s = vv_error_set(VV_ERR_FORMAT, "%s: no UnstructuredGrid/Piece", path);
+        goto done;
+    }
+    for (xmlNode *c = piece->next; c; c = c->next)
+        if (is_elem(c, "Piece")) {
+            s = vv_error_set(VV_ERR_UNSUPPORTED, "%s: several pieces are not supported", path);
+            goto done;
+        }
+    int ok1, ok2;
+    const size_t np = size_prop(piece, "NumberOfPoints", &ok1),
+                 nc = size_prop(piece, "NumberOfCells", &ok2);
+    if (!ok1 || !ok2) {
+        s = vv_error_set(VV_ERR_FORMAT, "%s: Piece without NumberOfPoints / NumberOfCells", path);
+        goto done;
+    }
+    if (np > VV_GRID_MAX_POINTS || nc > VV_GRID_MAX_CELLS) {
+        s = vv_error_set(VV_ERR_LIMIT, "%s: %zu points and %zu cells are over the limits", path, np,
+                         nc);
+        goto done;
+    }
+    /* sizes can not exceed what the file holds (a compressed byte holds at most ~1000) */
+    if ((np + nc) > (size_t)size * 1032 + 64) {
+        s = vv_error_set(VV_ERR_FORMAT, "%s: %zu points and %zu cells cannot fit in %llu bytes",
+                         path, np, nc, (unsigned long long)size);
+        goto done;
+    }
+    xmlNode *pa = child(child(piece, "Points"), "DataArray");
+    xmlNode *cells = child(piece, "Cells");
+    xmlNode *ca = named_array(cells, "connectivity"), *oa = named_array(cells, "offsets"),
+            *ta = named_array(cells, "types");
+    if (!pa || !ca || !oa || !ta) {
+        s = vv_error_set(VV_ERR_FORMAT,
+                         "%s: Points or Cells (connectivity, offsets, types) missing", path);
+        goto done;
+    }
+    if ((s = data_array(&v, pa, np, 3, NULL, &pts)) != VV_OK ||
+        (s = data_array(&v, oa, nc, 1, NULL, &offs)) != VV_OK ||
+        (s = data_array(&v, ta, nc, 1, NULL, &types)) != VV_OK)
+        goto done;
+    const size_t nconn = nc ? (size_t)(offs[nc - 1] >= 0 ? offs[nc - 1] : 0) : 0;
+    if (nc && (!(offs[nc - 1] >= 0) || offs[nc - 1] > (double)nc * 64)) {
+        s = vv_error_set(VV_ERR_FORMAT, "%s: cell offsets end at %g", path, offs[nc - 1]);
+        goto done;
+    }
+    if ((s = data_array(&v, ca, nconn, 1, NULL, &conn)) != VV_OK)
+        goto done;
+    if ((s = vv_grid_new(&g, VV_GRID_UNSTRUCTURED)) != VV_OK ||
+        (s = vv_grid_alloc(g, np, nc, nconn)) != VV_OK)
+        goto done;
+    memcpy(g->points, pts, 3 * np * sizeof *pts);
+    for (size_t i = 0; i < nconn; i++) {
+        if (!(conn[i] >= 0) || conn[i] >= (double)np) {
+            s = vv_error_set(VV_ERR_FORMAT, "%s: connectivity[%zu] = %g but there are %zu points",
+                             path, i, conn[i], np);
+            goto done;
+        }
+        g->connectivity[i] = (uint32_t)conn[i];
+    }
+    for (size_t i = 0; i < nc; i++) {
+        const double o = offs[i], prev = i ? offs[i - 1] : 0;
+        if (!(o >= prev) || o > (double)nconn) {
+            s = vv_error_set(VV_ERR_FORMAT, "%s: cell %zu: offset %g after %g", path, i, o, prev);
+            goto done;
+        }
+        g->cell_offsets[i + 1] = (size_t)o;
+        g->cell_types[i] = (uint8_t)(types[i] >= 0 && types[i] < 256 ? types[i] : 255);
+    }
+    for (int sec = 0; sec < 2; sec++) {
+        xmlNode *pd = child(piece, sec ? "CellData" : "PointData");
+        for (xmlNode *c = pd ? pd->children : NULL; c; c = c->next) {
+            if (!is_elem(c, "DataArray"))
+                continue;
+            int ncomp = 1;
+            char *nm = prop(c, "Name");
+            s = data_array(&v, c, sec ? nc : np, 0, &ncomp, &vals);
+            vv_grid_field *f = NULL;
+            if (s == VV_OK)
+                s = vv_grid_add_field(g, nm ? nm : "field", sec, ncomp, &f);
+            xmlFree(nm);
+            if (s != VV_OK)
+                goto done;
+            for (size_t i = 0; i < f->n_tuples * (size_t)ncomp; i++)
+                f->values[i] = (float)vals[i];
+            free(vals);
+            vals = NULL;
+        }
+    }
+done:
+    if (doc)
+        xmlFreeDoc(doc);
+    if (xml != data)
+        free(xml);
+    free(data);
+    free(pts);
+    free(conn);
+    free(offs);
+    free(types);
+    free(vals);
+    if (s != VV_OK) {
+        vv_grid_free(g);
+        return s;
+    }
+    return vv_grid_finish(g, path, out);
+}
