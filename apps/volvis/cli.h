@@ -155,7 +155,7 @@ int cli_fail(vv_status s, const char *path);
         {"zoom", 0, "F"}, {"threads", 0, "N"}, {"renderer", 0, "NAME"}, {"step", 0, "S"},          \
         {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"}, {"gamma", 0, "G"},                   \
         {"quality", 0, "0|1|2"}, {"set", 0, "KEY=VALUE"}, {"alpha", 0, NULL}, {"ortho", 0, NULL},  \
-    {                                                                                              \
+        {"field", 0, "NAME"}, {"time", 0, "T"}, {                                                  \
         "quiet", 'q', NULL                                                                         \
     }
 
@@ -180,6 +180,8 @@ typedef struct cli_render_args {
     vv_raw_params raw;
     double gamma;
     int has_quality, quality; /**< --quality given, and its value */
+    const char *field;        /**< --field: a grid's field (NULL: the first scalar field) */
+    int has_time, time;       /**< --time given, and a grid's time step */
     int alpha, quiet, ortho;
 } cli_render_args;
 

@@ -29,6 +29,9 @@ cli_info_usage(FILE *out) {
                  "and .vvc (compressed; also prints the subcube size, quality, compressed\n"
                  "size, compression ratio and bits per voxel, then the statistics of the\n"
                  "decompressed volume).\n"
+                 "For an irregular grid (VTK UNSTRUCTURED_GRID, .vtu, OpenDX, PLOT3D,\n"
+                 "NetCDF): its kind, point and cell counts by cell type, blocks or axes,\n"
+                 "bounds, and each field with its range and missing values.\n"
                  "\n"
                  "Options:\n"
                  "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
@@ -41,6 +44,57 @@ cli_info_usage(FILE *out) {
                  "Example:\n"
                  "  volvis info ../shared/data/volumes/nut.slc\n"
                  "  volvis info --raw 256x256x128:u16:be:0.9x0.9x2 scan.raw\n");
+}
+
+/* An irregular grid: kind, counts of points and cells by type, bounds, fields. */
+static int
+info_grid(const char *path) {
+    vv_grid *g = NULL;
+    vv_error_clear();
+    vv_status s = vv_grid_load(&g, path);
+    if (s != VV_OK)
+        return cli_fail(s, NULL);
+    printf("file:        %s\n", path);
+    printf("grid:        %s\n", vv_grid_kind_name(g->kind));
+    printf("points:      %zu\n", g->n_points);
+    printf("cells:       %zu\n", g->n_cells);
+    static const int types[] = {VV_CELL_TETRA,   VV_CELL_HEXAHEDRON, VV_CELL_WEDGE,
+                                VV_CELL_PYRAMID, VV_CELL_TRIANGLE,   VV_CELL_QUAD,
+                                VV_CELL_POLYGON, VV_CELL_LINE,       VV_CELL_VERTEX};
+    for (size_t t = 0; t < sizeof types / sizeof types[0]; t++) {
+        size_t n = 0;
+        for (size_t c = 0; c < g->n_cells; c++)
+            n += g->cell_types[c] == types[t];
+        if (n)
+            printf("  %-11s %zu\n", vv_cell_type_name(types[t]), n);
+    }
+    for (int b = 0; b < g->n_blocks; b++)
+        printf("block %d:     %d x %d x %d points\n", b, g->block_dims[b][0], g->block_dims[b][1],
+               g->block_dims[b][2]);
+    if (g->kind == VV_GRID_SPHERICAL) {
+        static const char *ax[3] = {"r", "theta", "phi"};
+        for (int a = 0; a < 3; a++)
+            printf("axis %-6s  %d values, %g .. %g\n", ax[a], g->sph_dims[a], g->sph_axes[a][0],
+                   g->sph_axes[a][g->sph_dims[a] - 1]);
+    }
+    vv_box b = vv_grid_bounds(g);
+    printf("bounds:      [%g, %g] x [%g, %g] x [%g, %g]\n", b.min.x, b.max.x, b.min.y, b.max.y,
+           b.min.z, b.max.z);
+    printf("fields:      %d\n", g->n_fields);
+    for (int i = 0; i < g->n_fields; i++) {
+        const vv_grid_field *f = &g->fields[i];
+        size_t missing = 0;
+        for (size_t k = 0; k < f->n_tuples; k++)
+            missing += vv_grid_field_missing(f, k);
+        printf("  %-16s %s, %d component%s, range %g .. %g%s", f->name,
+               f->cell_data ? "cell data" : "point data", f->n_components,
+               f->n_components > 1 ? "s (range of the magnitude)" : "", f->range[0], f->range[1],
+               missing ? "" : "\n");
+        if (missing)
+            printf(", %zu missing\n", missing);
+    }
+    vv_grid_free(g);
+    return CLI_EXIT_OK;
 }
 
 static const char *
@@ -256,6 +310,11 @@ cli_info_main(int argc, char **argv) {
         return rc;
 
     const char *path = a.pos[0];
+    if (!raw_spec && vv_grid_file_detect(path, NULL)) {
+        if ((rc = cli_check_readable(path)))
+            return rc;
+        return info_grid(path);
+    }
     vv_volume *v;
     vv_vvc_info vinfo;
     const int is_vvc = !raw_spec && vv_vvc_detect(path);

@@ -159,6 +159,12 @@ cli_render_parse(cli_args *a, cli_render_args *r) {
     }
     if ((s = cli_get(a, "threads")) && (rc = cli_parse_int(a, "threads", s, 0, 4096, &r->threads)))
         return rc;
+    r->field = cli_get(a, "field");
+    if ((s = cli_get(a, "time"))) {
+        if ((rc = cli_parse_int(a, "time", s, 0, 1000000, &r->time)))
+            return rc;
+        r->has_time = 1;
+    }
     if ((s = cli_get(a, "step"))) {
         if ((rc = cli_parse_double(a, "step", s, 1e-4, 1e4, &r->step)))
             return rc;
@@ -204,6 +210,39 @@ cli_render_parse(cli_args *a, cli_render_args *r) {
     r->alpha = cli_count(a, "alpha") > 0;
     r->quiet = cli_count(a, "quiet") > 0;
     r->ortho = cli_count(a, "ortho") > 0;
+    return 0;
+}
+
+/* Builds the World for a grid file (vv_world_new_for_grid). */
+static int
+world_for_grid(const cli_render_args *r, vv_world **out) {
+    vv_grid *g = NULL;
+    vv_error_clear();
+    vv_status s = vv_grid_load(&g, r->input);
+    if (s != VV_OK)
+        return cli_fail(s, NULL);
+    vv_default_scene_options o;
+    vv_default_scene_options_init(&o);
+    if (r->has_mode)
+        o.mode = r->mode;
+    if (r->has_tf) {
+        o.has_tf_range = 1;
+        o.tf_lo = r->tf_lo;
+        o.tf_hi = r->tf_hi;
+    }
+    if (r->has_iso) {
+        o.has_isovalue = 1;
+        o.isovalue = r->iso;
+    }
+    if (r->has_size) {
+        o.width = r->width;
+        o.height = r->height;
+    }
+    vv_error_clear();
+    s = vv_world_new_for_grid(out, g, r->field, r->time, &o);
+    vv_grid_free(g);
+    if (s != VV_OK)
+        return cli_fail(s, r->input);
     return 0;
 }
 
@@ -253,8 +292,12 @@ world_for_scene(const cli_render_args *r, vv_world **out) {
     vv_world *w = *out;
     for (int i = 0; i < w->n_objects; i++) {
         vv_object *obj = w->objects[i];
-        if (!obj || obj->type != VV_OBJECT_VOLUME)
+        if (!obj || (obj->type != VV_OBJECT_VOLUME && obj->type != VV_OBJECT_GRID))
             continue;
+        if (obj->type == VV_OBJECT_GRID && r->field)
+            snprintf(obj->field, sizeof obj->field, "%s", r->field);
+        if (obj->type == VV_OBJECT_GRID && r->has_time)
+            obj->time = r->time;
         if (r->has_mode)
             obj->mode = r->mode;
         if (r->has_iso)
@@ -277,7 +320,8 @@ cli_render_world(const cli_render_args *r, vv_world **out) {
     if (rc)
         return rc;
     int scene = !r->has_raw && is_scene_file(r->input);
-    rc = scene ? world_for_scene(r, out) : world_for_volume(r, out);
+    const int grid = !scene && !r->has_raw && vv_grid_file_detect(r->input, NULL);
+    rc = scene ? world_for_scene(r, out) : grid ? world_for_grid(r, out) : world_for_volume(r, out);
     if (rc) {
         vv_world_free(*out);
         *out = NULL;
@@ -407,6 +451,9 @@ cli_render_print_options(FILE *out) {
             "  --alpha          write RGBA (coverage in the alpha channel); default RGB\n"
             "  --ortho          parallel projection (orthographic), the view framed on\n"
             "                   the scene; needed by the fourier renderer\n"
+            "  --field NAME     a grid's field to show (default: its first scalar field;\n"
+            "                   vectors by magnitude); for a scene, every grid object's\n"
+            "  --time T         a grid's time step: field NAME<T> (blow.vtk: thickness3)\n"
             "  -q, --quiet      no progress bar and no 'wrote' line\n",
             VV_IMAGE_MAX_SIDE);
 }

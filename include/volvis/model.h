@@ -668,6 +668,23 @@ vv_status vv_world_new_for_volume(vv_world **out, vv_volume *volume,
                                   const vv_default_scene_options *opt);
 
 /**
+ * A World showing one irregular grid, the grid counterpart of
+ * vv_world_new_for_volume: a grid object (vv_object_new_grid) showing
+ * @p field (NULL: the first scalar field, else the first field) at time
+ * step @p time, centred on the origin, the same view, headlight and
+ * background; mode, size, angles and zoom from @p opt (may be NULL). Its
+ * transfer function is a white ramp from opacity 0 at 10% of the field's
+ * range to 0.5 at its top (or opt's range) per 1/20 of the grid's largest
+ * extent; the isovalue is the middle of the range. The World's render
+ * settings name the "irregular" renderer for a grid with 3-D cells and the
+ * "surface" renderer for a grid of surface cells only (blow.vtk), which
+ * shows the surface coloured by the field. Errors: VV_ERR_INVALID (bad
+ * options, unknown field), VV_ERR_NOMEM.
+ */
+vv_status vv_world_new_for_grid(vv_world **out, vv_grid *grid, const char *field, int time,
+                                const vv_default_scene_options *opt);
+
+/**
  * Loads a scene file (JSON, docs/scene-format.md; at most 16 MiB). Volume
  * files are resolved relative to the scene file and loaded with
  * vv_volume_load. Unknown keys are errors. On failure *out is NULL. Errors:

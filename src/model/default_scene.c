@@ -5,6 +5,7 @@
  * documented in docs/scene-format.md, "Default scene".
  */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -335,6 +336,122 @@ vv_world_new_for_volume(vv_world **out, vv_volume *volume, const vv_default_scen
     /* a view of the same extent if the user switches to orthographic */
     v->ortho_height = 2.0 * vv_vec3_length(off) / opt->zoom * tan(0.5 * v->fov);
 
+    vv_light light;
+    memset(&light, 0, sizeof light);
+    light.type = VV_LIGHT_DIRECTIONAL;
+    light.headlight = 1;
+    light.direction = vv_vec3_normalize(vv_vec3_sub(v->at, v->eye));
+    light.color = vv_vec3_make(1, 1, 1);
+    light.intensity = 1.0;
+    (void)vv_world_add_light(w, &light);
+    w->ambient = vv_vec3_make(1, 1, 1);
+    w->background = vv_vec3_make(0, 0, 0);
+    *out = w;
+    return VV_OK;
+}
+
+vv_status
+vv_world_new_for_grid(vv_world **out, vv_grid *grid, const char *field, int time,
+                      const vv_default_scene_options *opt) {
+    if (!out)
+        return vv_error_set(VV_ERR_INVALID, "default scene: NULL output");
+    *out = NULL;
+    vv_default_scene_options defaults;
+    if (!opt) {
+        vv_default_scene_options_init(&defaults);
+        opt = &defaults;
+    }
+    if (!grid)
+        return vv_error_set(VV_ERR_INVALID, "default scene: NULL grid");
+    if (opt->mode < VV_MODE_COMPOSITE || opt->mode > VV_MODE_ISO)
+        return vv_error_set(VV_ERR_INVALID, "default scene: unknown mode %d", (int)opt->mode);
+    if (opt->width < 1 || opt->width > 32768 || opt->height < 1 || opt->height > 32768)
+        return vv_error_set(VV_ERR_INVALID, "default scene: image size %dx%d outside 1..32768",
+                            opt->width, opt->height);
+    if (!(opt->zoom > 0.0) || !isfinite(opt->zoom) || !isfinite(opt->azimuth) ||
+        !isfinite(opt->elevation))
+        return vv_error_set(VV_ERR_INVALID, "default scene: bad zoom or angles");
+    if (opt->has_tf_range &&
+        (!isfinite(opt->tf_lo) || !isfinite(opt->tf_hi) || !(opt->tf_hi > opt->tf_lo)))
+        return vv_error_set(VV_ERR_INVALID, "default scene: transfer function range %g..%g",
+                            opt->tf_lo, opt->tf_hi);
+    /* the first scalar field unless one is named */
+    char fname[VV_GRID_FIELD_NAME_MAX] = "";
+    if (field) {
+        snprintf(fname, sizeof fname, "%s", field);
+    } else {
+        for (int i = 0; i < grid->n_fields && !fname[0]; i++)
+            if (grid->fields[i].n_components == 1) {
+                snprintf(fname, sizeof fname, "%s", grid->fields[i].name);
+                /* a time series "name<digits>": the series' name */
+                size_t n = strlen(fname);
+                while (n > 0 && fname[n - 1] >= '0' && fname[n - 1] <= '9')
+                    n--;
+                if (n > 0 && n < strlen(fname) && time >= 0) {
+                    char base[VV_GRID_FIELD_NAME_MAX];
+                    snprintf(base, sizeof base, "%.*s", (int)n, fname);
+                    if (vv_grid_find_field(grid, base, time) >= 0)
+                        snprintf(fname, sizeof fname, "%s", base);
+                }
+            }
+    }
+    vv_world *w;
+    vv_status st = vv_world_new(&w);
+    if (st != VV_OK)
+        return st;
+    vv_object *o;
+    st = vv_object_new_grid(&o, grid, fname[0] ? fname : NULL, "grid");
+    if (st == VV_OK) {
+        o->time = time;
+        const int f = vv_object_grid_field(o);
+        if (f < 0 && grid->n_fields > 0) {
+            vv_object_free(o);
+            st = VV_ERR_INVALID;
+        } else {
+            double lo = f >= 0 ? grid->fields[f].range[0] : 0;
+            double hi = f >= 0 ? grid->fields[f].range[1] : 1;
+            if (!(hi > lo))
+                hi = lo + 1;
+            vv_box b = vv_grid_bounds(grid);
+            double ext = fmax(b.max.x - b.min.x, fmax(b.max.y - b.min.y, b.max.z - b.min.z));
+            ext = ext > 0 ? ext : 1;
+            o->mode = opt->mode;
+            double tlo = lo + 0.1 * (hi - lo), thi = hi;
+            if (opt->has_tf_range) {
+                tlo = opt->tf_lo;
+                thi = opt->tf_hi;
+            }
+            if (is_projection_mode(opt->mode))
+                grey_tf(&o->tf, opt->has_tf_range ? tlo : lo, thi, ext / 20);
+            else
+                vv_tf_set_ramp(&o->tf, tlo, thi, 0.5, vv_vec3_make(1, 1, 1), ext / 20);
+            o->isovalue = opt->has_isovalue ? opt->isovalue : 0.5 * (lo + hi);
+            o->threshold = o->isovalue;
+            vv_vec3 c = vv_vec3_scale(vv_vec3_add(b.min, b.max), 0.5);
+            o->position = vv_vec3_scale(c, -1.0);
+            st = vv_world_add_object(w, o);
+        }
+    }
+    if (st != VV_OK) {
+        vv_world_free(w);
+        return vv_error_prefix(st, "default scene");
+    }
+    size_t n3 = 0, ns = 0;
+    vv_grid_count_cells(grid, &n3, &ns);
+    snprintf(w->render.renderer, sizeof w->render.renderer, "%s", n3 > 0 ? "irregular" : "surface");
+    vv_view *v = &w->view;
+    v->width = opt->width;
+    v->height = opt->height;
+    v->projection = VV_PROJECTION_PERSPECTIVE;
+    v->fov = vv_deg_to_rad(30.0);
+    v->eye = vv_vec3_make(0, -1, 0);
+    v->at = vv_vec3_make(0, 0, 0);
+    v->up = vv_vec3_make(0, 0, 1);
+    vv_view_frame_box(v, vv_world_bounds(w));
+    vv_view_orbit(v, opt->azimuth, opt->elevation);
+    vv_vec3 off = vv_vec3_sub(v->eye, v->at);
+    v->eye = vv_vec3_add(v->at, vv_vec3_scale(off, 1.0 / opt->zoom));
+    v->ortho_height = 2.0 * vv_vec3_length(off) / opt->zoom * tan(0.5 * v->fov);
     vv_light light;
     memset(&light, 0, sizeof light);
     light.type = VV_LIGHT_DIRECTIONAL;

@@ -1535,6 +1535,71 @@ parse_voxelized_geometry(const sctx *c, json_t *e, const char *op, vv_world *w) 
     return vv_world_add_object(w, o);
 }
 
+/* An irregular grid object: {"type": "grid", "file": ..., "field": ...,
+ * "component": -1, "time": 0} with the volume objects' keys. */
+static vv_status
+parse_grid_object(const sctx *c, json_t *e, const char *op, vv_world *w) {
+    static const char *const own[] = {"file", "field", "component", "time", NULL};
+    char kp[PATH_MAX_LEN];
+    vv_status st = check_object_keys(c, e, op, own, 1);
+    const char *name = NULL, *file = NULL, *field = NULL;
+    int component = -1, time = 0;
+    if (st != VV_OK || (st = get_object_name(c, e, op, &name)) != VV_OK ||
+        (st = get_string(c, e, op, "file", &file)) != VV_OK ||
+        (st = get_string(c, e, op, "field", &field)) != VV_OK ||
+        (st = get_int_in(c, e, op, "component", &component, -1, 8)) != VV_OK ||
+        (st = get_int_in(c, e, op, "time", &time, 0, 1000000)) != VV_OK)
+        return st;
+    if (!file)
+        return missing(c, op, "file",
+                       "the grid file (VTK, .vtu, OpenDX, PLOT3D, NetCDF), relative to the "
+                       "scene file");
+    path_key(kp, op, "file");
+    if (!file[0])
+        return serr(c, kp, "empty file name");
+    char *full = vv_path_join_dir(c->path, file);
+    if (!full)
+        return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
+    vv_grid *g = NULL;
+    st = vv_grid_load(&g, full);
+    vv_object *o = NULL;
+    if (st == VV_OK) {
+        char defname[VV_NAME_MAX];
+        name_from_file(defname, file);
+        st = vv_object_new_grid(&o, g, NULL, name ? name : defname);
+        vv_grid_free(g);
+    }
+    if (st != VV_OK) {
+        free(full);
+        int line, col;
+        scene_locate(c, kp, &line, &col);
+        return vv_error_prefix(st, "%s:%d:%d: %s", c->path, line, col, kp);
+    }
+    o->geometry.source = full;
+    o->component = component;
+    o->time = time;
+    if (field)
+        snprintf(o->field, sizeof o->field, "%s", field);
+    if (vv_object_grid_field(o) < 0 && o->grid->n_fields > 0) {
+        path_key(kp, op, field ? "field" : "time");
+        char msg[512];
+        snprintf(msg, sizeof msg, "%s", vv_error_message());
+        vv_object_free(o);
+        return serr(c, kp, "%s", msg);
+    }
+    /* the TF default follows the chosen field */
+    const int f = vv_object_grid_field(o);
+    if (f >= 0 && o->grid->fields[f].range[1] > o->grid->fields[f].range[0])
+        vv_tf_set_ramp(&o->tf, o->grid->fields[f].range[0], o->grid->fields[f].range[1], 1.0,
+                       vv_vec3_make(1, 1, 1), o->tf.opacity_unit_distance);
+    if ((st = parse_object_fields(c, e, op, o)) != VV_OK ||
+        (st = parse_effect_flags(c, e, op, o)) != VV_OK) {
+        vv_object_free(o);
+        return st;
+    }
+    return vv_world_add_object(w, o);
+}
+
 static vv_status
 parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     static const char *const own[] = {"file", "origin", "spacing", NULL};
@@ -1544,6 +1609,8 @@ parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
         json_t *tj = json_object_get(e, "type");
         if (json_is_string(tj) && strcmp(json_string_value(tj), "geometry") == 0)
             return parse_voxelized_geometry(c, e, op, w);
+        if (json_is_string(tj) && strcmp(json_string_value(tj), "grid") == 0)
+            return parse_grid_object(c, e, op, w);
         if (json_is_string(tj) && geometry_type(json_string_value(tj)) != VV_OBJECT_VOLUME)
             return parse_geometry_object(c, e, op, w);
     }
@@ -1560,8 +1627,8 @@ parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     if (strcmp(type, "volume") != 0) {
         path_key(kp, op, "type");
         return serr(c, kp,
-                    "unsupported object type \"%s\"; expected volume, geometry, plane, polygon, "
-                    "sphere, box, cylinder or mesh",
+                    "unsupported object type \"%s\"; expected volume, grid, geometry, plane, "
+                    "polygon, sphere, box, cylinder or mesh",
                     type);
     }
     if (!file)
@@ -2053,19 +2120,29 @@ put_geometry_object(FILE *f, const vv_object *o, const char *file) {
 
 static void
 put_object(FILE *f, const vv_object *o, const char *file) {
-    if (o->type != VV_OBJECT_VOLUME) {
+    if (o->type != VV_OBJECT_VOLUME && o->type != VV_OBJECT_GRID) {
         put_geometry_object(f, o, file);
         return;
     }
-    const vv_volume *v = o->volume;
     fputs("    {\n      \"name\": ", f);
     put_str(f, o->name);
-    fputs(",\n      \"type\": \"volume\",\n      \"file\": ", f);
-    put_str(f, file && file[0] ? file : o->geometry.source ? o->geometry.source : "");
-    fputs(",\n      \"origin\": ", f);
-    put_vec3(f, vv_vec3_make(v->origin[0], v->origin[1], v->origin[2]));
-    fputs(",\n      \"spacing\": ", f);
-    put_vec3(f, vv_vec3_make(v->spacing[0], v->spacing[1], v->spacing[2]));
+    if (o->type == VV_OBJECT_GRID) {
+        fputs(",\n      \"type\": \"grid\",\n      \"file\": ", f);
+        put_str(f, file && file[0] ? file : o->geometry.source ? o->geometry.source : "");
+        if (o->field[0]) {
+            fputs(",\n      \"field\": ", f);
+            put_str(f, o->field);
+        }
+        fprintf(f, ",\n      \"component\": %d,\n      \"time\": %d", o->component, o->time);
+    } else {
+        const vv_volume *v = o->volume;
+        fputs(",\n      \"type\": \"volume\",\n      \"file\": ", f);
+        put_str(f, file && file[0] ? file : o->geometry.source ? o->geometry.source : "");
+        fputs(",\n      \"origin\": ", f);
+        put_vec3(f, vv_vec3_make(v->origin[0], v->origin[1], v->origin[2]));
+        fputs(",\n      \"spacing\": ", f);
+        put_vec3(f, vv_vec3_make(v->spacing[0], v->spacing[1], v->spacing[2]));
+    }
     fputs(",\n      \"position\": ", f);
     put_vec3(f, o->position);
     vv_quat q = vv_quat_normalize(o->orientation);
