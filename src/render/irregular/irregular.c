@@ -60,6 +60,7 @@ typedef struct ir_mesh {
     size_t n_faces;
     ir_bvh_node *nodes;
     size_t n_nodes;
+    double eps; /* ray-parameter tolerance of a re-entry: 1e-9 of the bounding-box diagonal */
     uint64_t last_used;
 } ir_mesh;
 
@@ -222,6 +223,10 @@ mesh_build(ir_mesh *im, const vv_grid *g, int field, int component) {
         bvh_split(&b, 0, 0, nb);
     im->n_nodes = b.n_nodes;
     free(cen);
+    {
+        const vv_box bb = vv_grid_bounds(g);
+        im->eps = 1e-9 * (vv_vec3_length(vv_vec3_sub(bb.max, bb.min)) + 1e-300);
+    }
     im->grid = vv_grid_ref((vv_grid *)g);
     im->field = field;
     im->component = component;
@@ -460,11 +465,19 @@ world_point(const ir_ray *wr, double t, float pw[3]) {
         pw[a] = (float)(wr->o[a] + t * wr->d[a]);
 }
 
+/* The prefix integrals at the end of the last segment, reused at the start
+ * of the next one (the value is continuous across a shared face). */
+typedef struct ir_pre {
+    int valid;
+    double s, T, K[3];
+} ir_pre;
+
 /* One cell segment [t0, t1] of tetrahedron t, with barycentric weights b0
  * and b1 at its ends and values s0, s1 there. */
 static void
 segment(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, const uint32_t *t, double t0,
-        double t1, const double b0[4], const double b1[4], double s0, double s1, ir_acc *acc) {
+        double t1, const double b0[4], const double b1[4], double s0, double s1, ir_acc *acc,
+        ir_pre *pre) {
     const double L = t1 - t0;
     switch (ob->mode) {
     case VV_MODE_MIP:
@@ -523,11 +536,20 @@ segment(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, const uint32_t *
         break;
     }
     /* composite */
+    double Ta, Tb, Ka[3], Kb[3];
+    if (pre->valid && pre->s == s0) {
+        Ta = pre->T;
+        memcpy(Ka, pre->K, sizeof Ka);
+    } else {
+        prefix_eval(ob, s0, &Ta, Ka);
+    }
+    prefix_eval(ob, s1, &Tb, Kb);
+    pre->valid = 1;
+    pre->s = s1;
+    pre->T = Tb;
+    memcpy(pre->K, Kb, sizeof Kb);
     if (!(L > 0))
         return;
-    double Ta, Tb, Ka[3], Kb[3];
-    prefix_eval(ob, s0, &Ta, Ka);
-    prefix_eval(ob, s1, &Tb, Kb);
     const double dsv = s1 - s0;
     double tau_all;
     if (fabs(dsv) * ob->vscale > 1e-3) {
@@ -547,7 +569,12 @@ segment(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, const uint32_t *
         const double va = s0 + ua * dsv, vb = s0 + ub * dsv, l = L / n;
         double tau, E[3];
         double Tn, Kn[3];
-        prefix_eval(ob, vb, &Tn, Kn);
+        if (k + 1 == n) {
+            Tn = Tb;
+            memcpy(Kn, Kb, sizeof Kn);
+        } else {
+            prefix_eval(ob, vb, &Tn, Kn);
+        }
         if (fabs(vb - va) * ob->vscale > 1e-3) {
             tau = l * (Tn - Tp) / (vb - va);
             for (int c = 0; c < 3; c++)
@@ -563,11 +590,22 @@ segment(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, const uint32_t *
         memcpy(Kp, Kn, sizeof Kp);
         if (!(tau > 1e-9))
             continue;
-        /* the emission-weighted colour of the piece, attenuated over it */
+        /* The emission-weighted mean colour of the piece, attenuated over
+         * it, plus the first-order term of the colour's change along the
+         * piece (its front part is seen through less of the piece):
+         * c(u) = cbar + dc (u - 1/2) with constant extinction integrates to
+         * cbar alpha + dc ((alpha / tau - (1 - alpha)) - alpha / 2). */
         const double alpha = -expm1(-tau);
+        const double corr =
+            tau > 1e-4 ? alpha / tau - (1 - alpha) - 0.5 * alpha : tau * (-1.0 / 12 + tau / 24);
+        double ca[3], cb[3];
+        ext_at(ob, va, ca);
+        ext_at(ob, vb, cb);
         float col[3], out[3];
-        for (int c = 0; c < 3; c++)
-            col[c] = (float)(E[c] / tau * alpha);
+        for (int c = 0; c < 3; c++) {
+            const double cv = E[c] / tau * alpha + (cb[c] - ca[c]) * corr;
+            col[c] = (float)(cv > 0 ? cv : 0);
+        }
         if (ob->shading) {
             const double um = 0.5 * (ua + ub);
             double b[4];
@@ -595,24 +633,25 @@ segment(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, const uint32_t *
     }
 }
 
-/* Side of the ray against the edge from point a to point b (global
- * indices), computed from the lower index to the higher. */
+/* Canonical side of the ray against the edge between points a and b
+ * (relative to the ray origin), from the lower global index to the higher. */
 static inline double
-edge_side(const ir_ray *r, double q[4][3], const uint32_t *t, int i, int j) {
-    int lo = i, hi = j;
-    double sign = 1;
-    if (t[i] > t[j]) {
-        lo = j;
-        hi = i;
-        sign = -1;
+edge_canon(const ir_ray *r, const double *a, const double *b, uint32_t ga, uint32_t gb) {
+    if (ga > gb) {
+        const double *x = a;
+        a = b;
+        b = x;
     }
-    const double *a = q[lo], *b = q[hi];
     const double cx = a[1] * b[2] - a[2] * b[1], cy = a[2] * b[0] - a[0] * b[2],
                  cz = a[0] * b[1] - a[1] * b[0];
-    return sign * (r->d[0] * cx + r->d[1] * cy + r->d[2] * cz);
+    const double v = r->d[0] * cx + r->d[1] * cy + r->d[2] * cz;
+    return ga > gb ? -v : v;
 }
 
-/* Walks one object along the ray, clipped to [tc0, tc1]. */
+/* Walks one object along the ray, clipped to [tc0, tc1]. The points
+ * (relative to the ray origin) and edge sides of the three points a
+ * tetrahedron shares with the one before are carried over, so each step
+ * fetches one point and computes three edge sides. */
 static void
 trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0, double tc1,
              ir_acc *acc) {
@@ -627,33 +666,64 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
             r.d[a] += ob->w2o[a][c] * wr->d[c];
         }
     }
+    /* A ray exactly along grid edges (the pole axis of a spherical grid, a
+     * lattice line seen head on) meets cells only in their edges: shift
+     * every ray by 1e-7 of the grid's size, in a fixed direction with
+     * irrational ratios, so that such alignments do not occur. */
+    {
+        static const double jitter[3] = {0.5772156649, 0.3183098862, 0.7071067812};
+        for (int a = 0; a < 3; a++)
+            r.o[a] += 100 * im->eps * jitter[a];
+    }
     r.dd = r.d[0] * r.d[0] + r.d[1] * r.d[1] + r.d[2] * r.d[2];
     for (int a = 0; a < 3; a++)
         r.inv[a] = (float)(1.0 / r.d[a]);
-    double tsearch = 0;
+    /* Entering again after leaving through a boundary face at tsearch: a
+     * face up to eps before it counts (the two sides of a gap computed
+     * apart), unless the last entry made no progress, when only faces
+     * strictly behind it do: the ray parameter always grows, so the walk
+     * ends. */
+    double tsearch = -INFINITY;
+    int strict = 0, entries = 0;
     int32_t skip = -1;
     long steps = 0;
     const long max_steps = (long)m->n_tets + 1024;
     const int cell_data = m->tval != NULL;
-    while (!acc->done && steps < max_steps) {
+    ir_pre pre = {0, 0, 0, {0, 0, 0}};
+    (void)tc0;
+    while (!acc->done && steps < max_steps && entries++ < 100000) {
         double t_in, w3[3];
-        const int32_t f = bvh_enter(im, &r, tsearch, tc1, skip, &t_in, w3);
+        const double from = strict                ? nextafter(tsearch, INFINITY)
+                            : tsearch > -INFINITY ? tsearch - im->eps
+                                                  : 0;
+        const int32_t f = bvh_enter(im, &r, from, tc1, skip, &t_in, w3);
         if (f < 0)
             break;
         skip = f;
+        const double t_entry = t_in > tsearch ? t_in : tsearch;
+        t_in = t_entry;
         int32_t cur = f >> 2;
         int face_in = f & 3;
         double b_in[4] = {0, 0, 0, 0};
         for (int i = 0; i < 3; i++)
             b_in[vv_tet_face[face_in][i]] = w3[i];
         double t_prev = t_in;
+        double s_prev = 0;
+        int have_s = 0;
+        pre.valid = 0;
+        /* the first tetrahedron: all four points and six edges */
+        const uint32_t *t = m->tet + 4 * (size_t)cur;
+        double q[4][3], es[4][4];
+        for (int i = 0; i < 4; i++)
+            for (int a = 0; a < 3; a++)
+                q[i][a] = m->p[3 * (size_t)t[i] + (size_t)a] - r.o[a];
+        for (int i = 0; i < 4; i++)
+            for (int j = i + 1; j < 4; j++) {
+                es[i][j] = edge_canon(&r, q[i], q[j], t[i], t[j]);
+                es[j][i] = -es[i][j];
+            }
         for (;;) {
             steps++;
-            const uint32_t *t = m->tet + 4 * (size_t)cur;
-            double q[4][3];
-            for (int i = 0; i < 4; i++)
-                for (int a = 0; a < 3; a++)
-                    q[i][a] = m->p[3 * (size_t)t[i] + (size_t)a] - r.o[a];
             /* exit face: all three oriented edge sides >= 0 */
             int exit = -1;
             double we[3] = {0, 0, 0}, best_min = -INFINITY;
@@ -661,9 +731,7 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
                 if (fi == face_in)
                     continue;
                 const int *fv = vv_tet_face[fi];
-                const double sab = edge_side(&r, q, t, fv[0], fv[1]);
-                const double sbc = edge_side(&r, q, t, fv[1], fv[2]);
-                const double sca = edge_side(&r, q, t, fv[2], fv[0]);
+                const double sab = es[fv[0]][fv[1]], sbc = es[fv[1]][fv[2]], sca = es[fv[2]][fv[0]];
                 double mn = sab < sbc ? sab : sbc;
                 mn = sca < mn ? sca : mn;
                 if (mn >= 0 && sab + sbc + sca > 0) {
@@ -688,30 +756,36 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
             }
             double b_out[4] = {0, 0, 0, 0};
             double pt[3] = {0, 0, 0};
+            const double inv_ws = 1.0 / ws;
             for (int i = 0; i < 3; i++) {
                 const int vi = vv_tet_face[exit][i];
-                b_out[vi] = we[i] / ws;
+                b_out[vi] = we[i] * inv_ws;
                 for (int a = 0; a < 3; a++)
                     pt[a] += b_out[vi] * q[vi][a];
             }
             double t_out = (pt[0] * r.d[0] + pt[1] * r.d[1] + pt[2] * r.d[2]) / r.dd;
             t_out = t_out > t_prev ? t_out : t_prev;
             /* the segment, clipped to the cut planes */
-            if (t_out > tc0 && t_prev < tc1) {
-                double s0, s1;
-                if (cell_data) {
-                    s0 = s1 = m->tval[cur];
+            double s0, s1;
+            if (cell_data) {
+                s0 = s1 = m->tval[cur];
+            } else {
+                s1 = 0;
+                for (int i = 0; i < 4; i++)
+                    s1 += b_out[i] * m->val[t[i]];
+                if (have_s) {
+                    s0 = s_prev; /* continuous across the shared face */
                 } else {
-                    s0 = s1 = 0;
-                    for (int i = 0; i < 4; i++) {
+                    s0 = 0;
+                    for (int i = 0; i < 4; i++)
                         s0 += b_in[i] * m->val[t[i]];
-                        s1 += b_out[i] * m->val[t[i]];
-                    }
                 }
-                double a0 = t_prev, a1 = t_out, c0[4], c1[4];
-                memcpy(c0, b_in, sizeof c0);
-                memcpy(c1, b_out, sizeof c1);
-                if (a0 < tc0 || a1 > tc1) {
+            }
+            s_prev = s1;
+            have_s = 1;
+            if (t_out > tc0 && t_prev < tc1) {
+                if (t_prev < tc0 || t_out > tc1) {
+                    double a0 = t_prev, a1 = t_out, c0[4], c1[4];
                     const double len = a1 - a0;
                     const double u0 = a0 < tc0 && len > 0 ? (tc0 - a0) / len : 0;
                     const double u1 = a1 > tc1 && len > 0 ? (tc1 - a0) / len : 1;
@@ -719,35 +793,66 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
                         c0[i] = b_in[i] + u0 * (b_out[i] - b_in[i]);
                         c1[i] = b_in[i] + u1 * (b_out[i] - b_in[i]);
                     }
-                    const double ns0 = s0 + u0 * (s1 - s0), ns1 = s0 + u1 * (s1 - s0);
-                    s0 = ns0;
-                    s1 = ns1;
-                    a1 = a0 + u1 * len;
-                    a0 = a0 + u0 * len;
+                    pre.valid = 0;
+                    segment(fr, ob, wr, t, a0 + u0 * len, a0 + u1 * len, c0, c1,
+                            s0 + u0 * (s1 - s0), s0 + u1 * (s1 - s0), acc, &pre);
+                    pre.valid = 0;
+                } else {
+                    segment(fr, ob, wr, t, t_prev, t_out, b_in, b_out, s0, s1, acc, &pre);
                 }
-                segment(fr, ob, wr, t, a0, a1, c0, c1, s0, s1, acc);
                 if (acc->done)
                     return;
+            } else {
+                pre.valid = 0;
             }
             if (t_out >= tc1)
                 return;
             const int32_t nb = m->nb[4 * (size_t)cur + (size_t)exit];
             if (nb < 0 || steps >= max_steps) {
+                strict = !(t_out > t_entry);
                 tsearch = t_out;
-                skip = -1;
                 break;
             }
-            /* carry the exit weights over to the neighbour's local points */
+            /* the neighbour: carry the shared points, their edges and weights */
             const int32_t ncur = nb >> 2;
+            const int nface = nb & 3;
             const uint32_t *nt = m->tet + 4 * (size_t)ncur;
-            double nbw[4] = {0, 0, 0, 0};
-            for (int i = 0; i < 4; i++)
-                for (int k = 0; k < 4; k++)
-                    if (nt[k] == t[i])
-                        nbw[k] = b_out[i];
+            int map[4];
+            double nq[4][3], nes[4][4], nbw[4];
+            for (int k = 0; k < 4; k++) {
+                map[k] = -1;
+                nbw[k] = 0;
+                if (k == nface)
+                    continue;
+                for (int i = 0; i < 4; i++)
+                    if (nt[k] == t[i]) {
+                        map[k] = i;
+                        break;
+                    }
+                if (map[k] < 0) { /* cannot happen with consistent adjacency */
+                    map[k] = 0;
+                }
+                memcpy(nq[k], q[map[k]], sizeof nq[k]);
+                nbw[k] = b_out[map[k]];
+            }
+            for (int a = 0; a < 3; a++)
+                nq[nface][a] = m->p[3 * (size_t)nt[nface] + (size_t)a] - r.o[a];
+            for (int k = 0; k < 4; k++) {
+                nes[k][k] = 0;
+                for (int l = k + 1; l < 4; l++) {
+                    if (k == nface || l == nface)
+                        nes[k][l] = edge_canon(&r, nq[k], nq[l], nt[k], nt[l]);
+                    else
+                        nes[k][l] = es[map[k]][map[l]];
+                    nes[l][k] = -nes[k][l];
+                }
+            }
+            memcpy(q, nq, sizeof q);
+            memcpy(es, nes, sizeof es);
             memcpy(b_in, nbw, sizeof b_in);
             cur = ncur;
-            face_in = nb & 3;
+            t = nt;
+            face_in = nface;
             t_prev = t_out;
         }
     }
