@@ -425,6 +425,17 @@ vv_world_new_for_grid(vv_world **out, vv_grid *grid, const char *field, int time
                 grey_tf(&o->tf, opt->has_tf_range ? tlo : lo, thi, ext / 20);
             else
                 vv_tf_set_ramp(&o->tf, tlo, thi, 0.5, vv_vec3_make(1, 1, 1), ext / 20);
+            size_t n3d = 0;
+            vv_grid_count_cells(grid, &n3d, NULL);
+            if (n3d == 0) {
+                /* a surface coloured by its field: blue, green, red over the range */
+                vv_tf_init(&o->tf);
+                o->tf.opacity_unit_distance = ext / 20;
+                (void)vv_tf_add_opacity(&o->tf, lo, 1);
+                (void)vv_tf_add_color(&o->tf, lo, vv_vec3_make(0.1, 0.2, 0.9));
+                (void)vv_tf_add_color(&o->tf, 0.5 * (lo + hi), vv_vec3_make(0.2, 0.8, 0.2));
+                (void)vv_tf_add_color(&o->tf, hi, vv_vec3_make(0.9, 0.15, 0.1));
+            }
             o->isovalue = opt->has_isovalue ? opt->isovalue : 0.5 * (lo + hi);
             o->threshold = o->isovalue;
             vv_vec3 c = vv_vec3_scale(vv_vec3_add(b.min, b.max), 0.5);

@@ -102,7 +102,19 @@ vv_object_surface_value(const vv_object *obj, double *iso, vv_vec3 *color) {
         *iso = obj->threshold;
         return 1;
     }
-    const double lo = obj->volume->range[0], hi = obj->volume->range[1];
+    double lo = 0, hi = 1;
+    if (obj->type == VV_OBJECT_GRID) {
+        const int f = obj->grid ? vv_object_grid_field(obj) : -1;
+        if (f < 0)
+            return 0;
+        lo = obj->grid->fields[f].range[0];
+        hi = obj->grid->fields[f].range[1];
+    } else if (obj->volume) {
+        lo = obj->volume->range[0];
+        hi = obj->volume->range[1];
+    } else {
+        return 0;
+    }
     double amax = 0;
     for (int i = 0; i < VV_SURFACE_TF_SAMPLES; i++) {
         double a = vv_tf_eval_opacity(&obj->tf, lo + (hi - lo) * i / (VV_SURFACE_TF_SAMPLES - 1));

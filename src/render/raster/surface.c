@@ -547,6 +547,97 @@ tessellate(const sf_state *st, const vv_object *obj, const vv_view *view, double
     }
 }
 
+/* Colour bands of a grid surface coloured by its field. */
+#define SF_BANDS 32
+
+/* A grid object's surface: the Marching Tetrahedra isosurface of its field
+ * (src/surface/marching_tets.c) at the object's surface value, or, for a
+ * grid of surface cells only (blow.vtk), those cells displaced by the
+ * "displacement" field of its time step and coloured by its field
+ * (*banded 1). *out NULL with VV_ERR_INVALID: nothing to show. */
+static vv_status
+grid_surface(const vv_object *obj, vv_mesh **out, int *banded, vv_vec3 *color) {
+    *out = NULL;
+    *banded = 0;
+    const vv_grid *g = obj->grid;
+    const int f = vv_object_grid_field(obj);
+    if (f < 0)
+        return VV_ERR_INVALID;
+    size_t n3 = 0, ns = 0;
+    vv_grid_count_cells(g, &n3, &ns);
+    if (n3 == 0) {
+        const int d = vv_grid_find_field(g, "displacement", obj->time);
+        const int disp =
+            d >= 0 && g->fields[d].n_components == 3 && !g->fields[d].cell_data ? d : -1;
+        *banded = 1;
+        return vv_grid_surface_mesh(g, f, disp, out);
+    }
+    double iso;
+    if (!vv_object_surface_value(obj, &iso, color))
+        return vv_error_set(VV_ERR_INVALID, "transparent");
+    return vv_grid_isosurface(g, f, g->fields[f].n_components > 1 ? obj->component : -1, iso, out);
+}
+
+/* Draws @p mesh in SF_BANDS colour bands of its scalars, each in the
+ * object's transfer-function colour at the band's middle. The band meshes
+ * are appended to @p keep (at most SF_BANDS): the raster reads them until
+ * vv_raster_finish. */
+static vv_status
+draw_banded(vv_raster *ras, const vv_mesh *mesh, vv_mat4 model, const vv_object *obj,
+            vv_material mat, vv_mesh **keep, int *n_keep) {
+    const vv_tf *tf = &obj->tf;
+    double lo = 0, hi = 1;
+    const int f = vv_object_grid_field(obj);
+    if (tf->n_color >= 2) {
+        lo = tf->color[0].value;
+        hi = tf->color[tf->n_color - 1].value;
+    } else if (f >= 0) {
+        lo = obj->grid->fields[f].range[0];
+        hi = obj->grid->fields[f].range[1];
+    }
+    if (!(hi > lo))
+        hi = lo + 1;
+    int *band = malloc((mesh->n_triangles ? mesh->n_triangles : 1) * sizeof *band);
+    if (!band)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    for (size_t t = 0; t < mesh->n_triangles; t++) {
+        double v = 0;
+        for (int k = 0; k < 3; k++)
+            v += mesh->scalars ? mesh->scalars[mesh->triangles[3 * t + (size_t)k]] : lo;
+        int b = (int)((v / 3 - lo) / (hi - lo) * SF_BANDS);
+        band[t] = b < 0 ? 0 : b >= SF_BANDS ? SF_BANDS - 1 : b;
+    }
+    vv_status s = VV_OK;
+    for (int b = 0; b < SF_BANDS && s == VV_OK; b++) {
+        vv_mesh *sub = NULL;
+        if ((s = vv_mesh_new(&sub)) != VV_OK)
+            break;
+        s = vv_mesh_enable_attributes(sub, mesh->normals != NULL, 0);
+        for (size_t t = 0; t < mesh->n_triangles && s == VV_OK; t++) {
+            if (band[t] != b)
+                continue;
+            uint32_t idx[3];
+            for (int k = 0; k < 3 && s == VV_OK; k++) {
+                const uint32_t v = mesh->triangles[3 * t + (size_t)k];
+                s = vv_mesh_add_vertex(sub, vv_mesh_vertex(mesh, v), &idx[k]);
+                if (s == VV_OK && mesh->normals)
+                    memcpy(sub->normals + 3 * (size_t)idx[k], mesh->normals + 3 * (size_t)v,
+                           3 * sizeof(float));
+            }
+            if (s == VV_OK)
+                s = vv_mesh_add_triangle(sub, idx[0], idx[1], idx[2]);
+        }
+        if (s == VV_OK && sub->n_triangles > 0) {
+            mat.color = vv_tf_eval_color(tf, lo + (hi - lo) * (b + 0.5) / SF_BANDS);
+            vv_raster_set_material(ras, &mat, obj->shading);
+            s = vv_raster_draw_mesh(ras, sub, model);
+        }
+        keep[(*n_keep)++] = sub;
+    }
+    free(band);
+    return s;
+}
+
 static vv_status
 sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
           vv_image *out) {
@@ -611,8 +702,12 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     for (int i = 0; i < w->n_objects; i++)
         n_vis += w->objects[i]->visible;
     vv_mesh **temp = calloc((size_t)(n_vis ? n_vis : 1), sizeof *temp);
-    int n_temp = 0, done = 0;
-    if (!temp)
+    int n_temp = 0, done = 0, n_bands = 0, n_grids = 0;
+    for (int i = 0; i < w->n_objects; i++)
+        n_grids += w->objects[i]->visible && w->objects[i]->type == VV_OBJECT_GRID;
+    /* colour bands of grid surfaces, kept until the raster is finished */
+    vv_mesh **bands = calloc((size_t)(n_grids ? n_grids : 1) * SF_BANDS, sizeof *bands);
+    if (!temp || !bands)
         s = vv_error_set(VV_ERR_NOMEM, "out of memory");
     for (int i = 0; i < w->n_objects && s == VV_OK; i++) {
         const vv_object *obj = w->objects[i];
@@ -651,6 +746,33 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
              * volume: the volume's faces bound the solid */
             solid = 1;
             n_bounds = volume_bounds(obj, bounds);
+        } else if (obj->type == VV_OBJECT_GRID) {
+            if (!obj->grid)
+                continue;
+            int banded = 0;
+            s = grid_surface(obj, &temp[n_temp], &banded, &mat.color);
+            if (s == VV_ERR_INVALID && !temp[n_temp]) {
+                s = VV_OK; /* nothing to show (transparent TF, no surface) */
+                vv_error_clear();
+                continue;
+            }
+            if (s != VV_OK) {
+                s = vv_error_prefix(s, "object '%s'", obj->name);
+                break;
+            }
+            mesh = temp[n_temp++];
+            if (banded) {
+                vv_raster_set_cull(ras, VV_RASTER_CULL_NONE);
+                s = vv_raster_set_capping(ras, 0, bounds, 0);
+                if (s == VV_OK)
+                    s = draw_banded(ras, mesh, model, obj, mat, bands, &n_bands);
+                if (s != VV_OK)
+                    break;
+                done++;
+                if (vv_progress_report(&opt->progress, (double)done / (n_vis + 1)))
+                    s = vv_error_set(VV_ERR_CANCELLED, "cancelled");
+                continue;
+            }
         } else if (obj->type == VV_OBJECT_MESH) {
             if (!obj->geometry.mesh)
                 continue;
@@ -705,6 +827,9 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     for (int i = 0; i < n_temp; i++)
         vv_mesh_free(temp[i]);
     free(temp);
+    for (int i = 0; i < n_bands; i++)
+        vv_mesh_free(bands[i]);
+    free(bands);
     /* forget isosurfaces not shown in this frame */
     for (int i = 0; i < st->n_cache;) {
         if (st->cache[i].last_frame != st->frame) {
