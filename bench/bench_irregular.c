@@ -57,11 +57,22 @@ view_for_bounds(vv_world *w, vv_box b, int size) {
     w->ambient = vv_vec3_make(1, 1, 1);
 }
 
+/* The peers' ramp. VTK's unstructured integrators read the opacity a of
+ * the transfer function as the attenuation a / unit per world unit, where
+ * VolVis reads it as 1 - (1 - a)^(d / unit), an attenuation of
+ * -ln(1 - a) / unit: the VolVis ramp is written with 128 points of
+ * 1 - exp(-a) so that both integrate the same attenuation. */
 static void
 set_tf(vv_object *o, double lo, double hi, const tf_default *d, vv_box b) {
     const double ext = fmax(b.max.x - b.min.x, fmax(b.max.y - b.min.y, b.max.z - b.min.z));
-    vv_tf_set_ramp(&o->tf, lo + d->lo * (hi - lo), lo + d->hi * (hi - lo), 0.5,
-                   vv_vec3_make(1, 1, 1), d->unit * ext);
+    const double a = lo + d->lo * (hi - lo), z = lo + d->hi * (hi - lo);
+    vv_tf_init(&o->tf);
+    o->tf.opacity_unit_distance = d->unit * ext;
+    for (int i = 0; i <= 128; i++) {
+        const double x = a + (z - a) * i / 128.0;
+        vv_tf_add_opacity(&o->tf, x, 1 - exp(-0.5 * i / 128.0));
+    }
+    vv_tf_add_color(&o->tf, lo, vv_vec3_make(1, 1, 1));
     o->shading = 0;
 }
 

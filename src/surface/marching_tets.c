@@ -67,6 +67,11 @@ edge_vertex(edge_map *e, vv_mesh *mesh, const vv_tetmesh *m, uint32_t a, uint32_
         a = b;
         b = x;
     }
+    /* a crossing on a point is that point's vertex, whatever the edge */
+    if ((double)m->val[a] == iso)
+        b = a;
+    else if ((double)m->val[b] == iso)
+        a = b;
     const uint64_t key = (uint64_t)a << 32 | b;
     if (2 * (e->n + 1) > e->cap) {
         vv_status s = edge_map_grow(e);
