@@ -48,7 +48,8 @@
 typedef struct ir_bvh_node {
     float lo[3], hi[3];
     int32_t left;  /* inner: left child (right = left + 1); leaf: first face */
-    int32_t count; /* leaf: faces; inner: 0 */
+    int16_t count; /* leaf: faces; inner: 0 */
+    int16_t axis;  /* inner: the split axis (the left child holds the lower centroids) */
 } ir_bvh_node;
 
 /* A grid field prepared for rendering: tetrahedra, adjacency, BVH. */
@@ -83,10 +84,11 @@ typedef struct ir_obj {
     double iso;
     /* pre-integration tables over [vlo, vhi] */
     double vlo, vhi, vscale;
-    double *T;  /* IR_BINS prefix integrals of extinction over the value */
-    double *K;  /* 3 * IR_BINS prefix integrals of extinction times colour */
-    float *ext; /* IR_BINS extinction per world unit */
-    float *col; /* 3 * IR_BINS colour */
+    double *T;       /* IR_BINS prefix integrals of extinction over the value */
+    double *K;       /* 3 * IR_BINS prefix integrals of extinction times colour */
+    float *ext;      /* IR_BINS extinction per world unit */
+    float *col;      /* 3 * IR_BINS colour */
+    int const_color; /* one colour over the table: no colour-change term */
 } ir_obj;
 
 typedef struct ir_frame {
@@ -151,7 +153,8 @@ bvh_split(bvh_build *b, size_t node, size_t first, size_t count) {
             axis = a;
     if (count <= IR_BVH_LEAF || !(chi[axis] > clo[axis])) {
         n->left = (int32_t)first;
-        n->count = (int32_t)count;
+        n->count = (int16_t)count;
+        n->axis = 0;
         return;
     }
     /* partition about the middle of the centroid box */
@@ -179,6 +182,7 @@ bvh_split(bvh_build *b, size_t node, size_t first, size_t count) {
     b->n_nodes += 2;
     n->left = (int32_t)left;
     n->count = 0;
+    n->axis = (int16_t)axis;
     bvh_split(b, left, first, nl);
     bvh_split(b, left + 1, first + nl, count - nl);
 }
@@ -287,8 +291,10 @@ bvh_enter(const ir_mesh *im, const ir_ray *r, double tmin, double tmax, int32_t 
             continue;
         if (n->count == 0) {
             if (sp + 2 <= 128) {
-                stack[sp++] = n->left + 1;
-                stack[sp++] = n->left;
+                /* the nearer child first, so the hit found shrinks the search */
+                const int far_first = r->d[n->axis] < 0;
+                stack[sp++] = n->left + (far_first ? 0 : 1);
+                stack[sp++] = n->left + (far_first ? 1 : 0);
             }
             continue;
         }
@@ -375,6 +381,11 @@ tables_build(ir_obj *ob) {
         ob->col[3 * i + 1] = (float)c.y;
         ob->col[3 * i + 2] = (float)c.z;
     }
+    ob->const_color = 1;
+    for (int i = 1; i < IR_BINS && ob->const_color; i++)
+        for (int c = 0; c < 3; c++)
+            if (ob->col[3 * i + c] != ob->col[c])
+                ob->const_color = 0;
     ob->T[0] = 0;
     ob->K[0] = ob->K[1] = ob->K[2] = 0;
     for (int i = 1; i < IR_BINS; i++) {
@@ -595,16 +606,25 @@ segment(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, const uint32_t *
          * piece (its front part is seen through less of the piece):
          * c(u) = cbar + dc (u - 1/2) with constant extinction integrates to
          * cbar alpha + dc ((alpha / tau - (1 - alpha)) - alpha / 2). */
-        const double alpha = -expm1(-tau);
-        const double corr =
-            tau > 1e-4 ? alpha / tau - (1 - alpha) - 0.5 * alpha : tau * (-1.0 / 12 + tau / 24);
-        double ca[3], cb[3];
-        ext_at(ob, va, ca);
-        ext_at(ob, vb, cb);
+        /* 1 - e^-tau: its Taylor series to tau^5 (error below 1e-7) for
+         * the thin pieces most segments are */
+        const double alpha =
+            tau < 0.1 ? tau * (1 - tau * (0.5 - tau * (1.0 / 6 - tau * (1.0 / 24 - tau / 120))))
+                      : -expm1(-tau);
         float col[3], out[3];
-        for (int c = 0; c < 3; c++) {
-            const double cv = E[c] / tau * alpha + (cb[c] - ca[c]) * corr;
-            col[c] = (float)(cv > 0 ? cv : 0);
+        if (ob->const_color) {
+            for (int c = 0; c < 3; c++)
+                col[c] = (float)(E[c] / tau * alpha);
+        } else {
+            const double corr =
+                tau > 1e-4 ? alpha / tau - (1 - alpha) - 0.5 * alpha : tau * (-1.0 / 12 + tau / 24);
+            double ca[3], cb[3];
+            ext_at(ob, va, ca);
+            ext_at(ob, vb, cb);
+            for (int c = 0; c < 3; c++) {
+                const double cv = E[c] / tau * alpha + (cb[c] - ca[c]) * corr;
+                col[c] = (float)(cv > 0 ? cv : 0);
+            }
         }
         if (ob->shading) {
             const double um = 0.5 * (ua + ub);
