@@ -133,10 +133,10 @@ void vv_grid_field_update_range(vv_grid_field *f);
 int vv_grid_field_missing(const vv_grid_field *f, size_t i);
 
 /**
- * The field called @p name at time step @p time: the field named exactly
- * "name" when @p time is 0 and it exists, else "name<time>" (blow.vtk's
- * thickness0, thickness1, ...). NULL @p name: the first field. Returns its
- * index or -1.
+ * The field called @p name at time step @p time: "name<time>" when it
+ * exists and @p time > 0 (blow.vtk's thickness0, thickness1, ...), else
+ * the field named exactly "name" (a field without time steps), else, for
+ * time 0, "name0". NULL @p name: the first field. Returns its index or -1.
  */
 int vv_grid_find_field(const vv_grid *g, const char *name, int time);
 

@@ -224,13 +224,18 @@ int
 vv_grid_find_field(const vv_grid *g, const char *name, int time) {
     if (!name || !name[0])
         return g->n_fields > 0 ? 0 : -1;
-    if (time == 0)
-        for (int i = 0; i < g->n_fields; i++)
-            if (strcmp(g->fields[i].name, name) == 0)
-                return i;
     char buf[VV_GRID_FIELD_NAME_MAX + 16];
     snprintf(buf, sizeof buf, "%s%d", name, time);
-    for (int i = 0; i < g->n_fields; i++)
+    int exact = -1;
+    for (int i = 0; i < g->n_fields; i++) {
+        if (time > 0 && strcmp(g->fields[i].name, buf) == 0)
+            return i;
+        if (exact < 0 && strcmp(g->fields[i].name, name) == 0)
+            exact = i;
+    }
+    if (exact >= 0)
+        return exact; /* a field without time steps */
+    for (int i = 0; time == 0 && i < g->n_fields; i++)
         if (strcmp(g->fields[i].name, buf) == 0)
             return i;
     return -1;

@@ -387,6 +387,59 @@ test_ring(void **state) {
     vv_grid_free(g);
 }
 
+/* Every file of ../shared/data/grids renders non-blank with its default
+ * scene (the irregular renderer for 3-D grids, the surface renderer for
+ * blow.vtk's surface cells), in composite and MIP. */
+static void
+test_all_files_render(void **state) {
+    (void)state;
+    static const char *files[] = {"hyper.dx",    "fire_ug.vtu", "bluntfinxyz.bin",
+                                  "combxyz.bin", "blow.vtk",    "levitus_climatology.cdf"};
+    FILE *probe = fopen(vt_data("grids/hyper.dx"), "rb");
+    if (!probe)
+        skip();
+    fclose(probe);
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        char rel[128];
+        snprintf(rel, sizeof rel, "grids/%s", files[i]);
+        vv_grid *g = NULL;
+        vv_status s = vv_grid_load(&g, vt_data(rel));
+        if (s == VV_ERR_UNSUPPORTED)
+            continue; /* NetCDF not built in */
+        vt_ok(s);
+        vv_renderer *r = NULL;
+        for (int mode = 0; mode < 2; mode++) {
+            vv_default_scene_options so;
+            vv_default_scene_options_init(&so);
+            so.width = so.height = 64;
+            so.mode = mode ? VV_MODE_MIP : VV_MODE_COMPOSITE;
+            so.azimuth = vv_deg_to_rad(30);
+            so.elevation = vv_deg_to_rad(20);
+            vv_world *w = NULL;
+            vt_ok(vv_world_new_for_grid(&w, g, NULL, 5, &so));
+            /* one renderer for both modes: the tetrahedra are built once */
+            if (!r)
+                vt_ok(vv_renderer_new(&r, vv_render_settings_renderer(&w->render)));
+            vv_image *img = NULL;
+            vt_ok(vv_image_new(&img, 64, 64));
+            vt_ok(vv_renderer_render(r, w, &w->view, NULL, img));
+            long lit = 0;
+            for (int p = 0; p < 64 * 64; p++)
+                lit += img->rgba[4 * p] + img->rgba[4 * p + 1] + img->rgba[4 * p + 2] > 0.05f;
+            char name[128];
+            snprintf(name, sizeof name, "%s_%s.png", files[i], mode ? "mip" : "composite");
+            save(img, name);
+            printf("%s %s (%s): %ld of 4096 pixels lit\n", files[i], mode ? "mip" : "composite",
+                   vv_render_settings_renderer(&w->render), lit);
+            assert_true(lit > 100);
+            vv_image_free(img);
+            vv_world_free(w);
+        }
+        vv_renderer_free(r);
+        vv_grid_free(g);
+    }
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
@@ -397,6 +450,7 @@ main(void) {
         cmocka_unit_test(test_single_tet_preintegration),
         cmocka_unit_test(test_two_blocks_and_degenerate),
         cmocka_unit_test(test_ring),
+        cmocka_unit_test(test_all_files_render),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
