@@ -52,28 +52,42 @@ typedef struct ir_bvh_node {
     int16_t axis;  /* inner: the split axis (the left child holds the lower centroids) */
 } ir_bvh_node;
 
+/* Entering faces and their BVH: the mesh's boundary faces, or those of
+ * the tetrahedra a transfer function leaves visible. */
+typedef struct ir_layer {
+    int32_t *faces; /* 4 * tet + face, in BVH order */
+    size_t n_faces;
+    ir_bvh_node *nodes;
+    size_t n_nodes;
+} ir_layer;
+
 /* A grid field prepared for rendering: tetrahedra, adjacency, BVH. */
 typedef struct ir_mesh {
     const vv_grid *grid; /* key (a reference is held) */
     int field, component;
     vv_tetmesh m;
-    int32_t *faces; /* boundary faces (4 * tet + face) in BVH order */
-    size_t n_faces;
-    ir_bvh_node *nodes;
-    size_t n_nodes;
-    double eps; /* ray-parameter tolerance of a re-entry: 1e-9 of the bounding-box diagonal */
+    ir_layer all; /* the boundary of the mesh */
+    double eps;   /* ray-parameter tolerance of a re-entry: 1e-9 of the bounding-box diagonal */
     uint64_t last_used;
+    /* empty-space skipping for composite: the tetrahedra the transfer
+     * function (hashed into vis_key) makes visible, and their boundary */
+    uint8_t *vis;
+    uint64_t vis_key;
+    ir_layer vis_layer;
 } ir_mesh;
 
 typedef struct ir_state {
     ir_mesh cache[IR_MAX_OBJ];
     uint64_t frame;
     double early_termination;
+    int skipping; /* empty-space skipping in composite (option, for tests) */
 } ir_state;
 
 typedef struct ir_obj {
     const vv_object *obj;
     const ir_mesh *mesh;
+    const ir_layer *layer; /* entering faces: the mesh's, or the visible part's */
+    const uint8_t *vis;    /* visible tetrahedra (composite), or NULL: all */
     vv_render_mode mode;
     double w2o[3][4]; /* world -> object (grid coordinates) */
     double o2w[3][4];
@@ -187,6 +201,52 @@ bvh_split(bvh_build *b, size_t node, size_t first, size_t count) {
     bvh_split(b, left + 1, first + nl, count - nl);
 }
 
+static void
+layer_clear(ir_layer *L) {
+    free(L->faces);
+    free(L->nodes);
+    memset(L, 0, sizeof *L);
+}
+
+/* The layer of the faces through which rays enter: boundary faces, or with
+ * @p vis the faces of visible tetrahedra whose neighbour is missing or
+ * invisible. */
+static vv_status
+layer_build(ir_layer *L, const vv_tetmesh *m, const uint8_t *vis) {
+    memset(L, 0, sizeof *L);
+    size_t nb = 0;
+    for (size_t f = 0; f < 4 * m->n_tets; f++)
+        nb += vis ? vis[f >> 2] && (m->nb[f] < 0 || !vis[(size_t)m->nb[f] >> 2]) : m->nb[f] < 0;
+    L->faces = malloc((nb ? nb : 1) * sizeof *L->faces);
+    float *cen = malloc(3 * (nb ? nb : 1) * sizeof *cen);
+    L->nodes = malloc(2 * (nb ? nb : 1) * sizeof *L->nodes);
+    if (!L->faces || !cen || !L->nodes) {
+        free(cen);
+        layer_clear(L);
+        return vv_error_set(VV_ERR_NOMEM, "irregular: out of memory for the boundary BVH");
+    }
+    size_t k = 0;
+    for (size_t f = 0; f < 4 * m->n_tets; f++) {
+        const int in =
+            vis ? vis[f >> 2] && (m->nb[f] < 0 || !vis[(size_t)m->nb[f] >> 2]) : m->nb[f] < 0;
+        if (!in)
+            continue;
+        L->faces[k] = (int32_t)f;
+        const double *p[3];
+        face_points(m, (int32_t)f, p);
+        for (int a = 0; a < 3; a++)
+            cen[3 * k + (size_t)a] = (float)((p[0][a] + p[1][a] + p[2][a]) / 3);
+        k++;
+    }
+    L->n_faces = nb;
+    bvh_build b = {m, L->faces, cen, L->nodes, 1};
+    if (nb)
+        bvh_split(&b, 0, 0, nb);
+    L->n_nodes = b.n_nodes;
+    free(cen);
+    return VV_OK;
+}
+
 static vv_status
 mesh_build(ir_mesh *im, const vv_grid *g, int field, int component) {
     memset(im, 0, sizeof *im);
@@ -198,35 +258,10 @@ mesh_build(ir_mesh *im, const vv_grid *g, int field, int component) {
     free(sc);
     if (s != VV_OK)
         return s;
-    size_t nb = 0;
-    for (size_t f = 0; f < 4 * im->m.n_tets; f++)
-        nb += im->m.nb[f] < 0;
-    im->faces = malloc((nb ? nb : 1) * sizeof *im->faces);
-    float *cen = malloc(3 * (nb ? nb : 1) * sizeof *cen);
-    im->nodes = malloc(2 * (nb ? nb : 1) * sizeof *im->nodes);
-    if (!im->faces || !cen || !im->nodes) {
-        free(cen);
+    if ((s = layer_build(&im->all, &im->m, NULL)) != VV_OK) {
         vv_tetmesh_clear(&im->m);
-        free(im->faces);
-        free(im->nodes);
-        return vv_error_set(VV_ERR_NOMEM, "irregular: out of memory for the boundary BVH");
+        return s;
     }
-    size_t k = 0;
-    for (size_t f = 0; f < 4 * im->m.n_tets; f++)
-        if (im->m.nb[f] < 0) {
-            im->faces[k] = (int32_t)f;
-            const double *p[3];
-            face_points(&im->m, (int32_t)f, p);
-            for (int a = 0; a < 3; a++)
-                cen[3 * k + (size_t)a] = (float)((p[0][a] + p[1][a] + p[2][a]) / 3);
-            k++;
-        }
-    im->n_faces = nb;
-    bvh_build b = {&im->m, im->faces, cen, im->nodes, 1};
-    if (nb)
-        bvh_split(&b, 0, 0, nb);
-    im->n_nodes = b.n_nodes;
-    free(cen);
     {
         const vv_box bb = vv_grid_bounds(g);
         im->eps = 1e-9 * (vv_vec3_length(vv_vec3_sub(bb.max, bb.min)) + 1e-300);
@@ -240,8 +275,9 @@ mesh_build(ir_mesh *im, const vv_grid *g, int field, int component) {
 static void
 mesh_clear(ir_mesh *im) {
     vv_tetmesh_clear(&im->m);
-    free(im->faces);
-    free(im->nodes);
+    layer_clear(&im->all);
+    layer_clear(&im->vis_layer);
+    free(im->vis);
     vv_grid_free((vv_grid *)im->grid);
     memset(im, 0, sizeof *im);
 }
@@ -276,9 +312,9 @@ box_hit(const ir_bvh_node *n, const ir_ray *r, double tmin, double tmax) {
  * in [tmin, tmax], other than @p skip; returns the face or -1, with t and
  * the barycentric weights of its three points. */
 static int32_t
-bvh_enter(const ir_mesh *im, const ir_ray *r, double tmin, double tmax, int32_t skip, double *t_hit,
-          double w[3]) {
-    if (!im->n_faces)
+bvh_enter(const ir_mesh *im, const ir_layer *L, const ir_ray *r, double tmin, double tmax,
+          int32_t skip, double *t_hit, double w[3]) {
+    if (!L->n_faces)
         return -1;
     int32_t best = -1;
     double bt = tmax;
@@ -286,7 +322,7 @@ bvh_enter(const ir_mesh *im, const ir_ray *r, double tmin, double tmax, int32_t 
     int sp = 0;
     stack[sp++] = 0;
     while (sp > 0) {
-        const ir_bvh_node *n = &im->nodes[stack[--sp]];
+        const ir_bvh_node *n = &L->nodes[stack[--sp]];
         if (!box_hit(n, r, tmin, bt))
             continue;
         if (n->count == 0) {
@@ -299,7 +335,7 @@ bvh_enter(const ir_mesh *im, const ir_ray *r, double tmin, double tmax, int32_t 
             continue;
         }
         for (int32_t i = n->left; i < n->left + n->count; i++) {
-            const int32_t f = im->faces[i];
+            const int32_t f = L->faces[i];
             if (f == skip)
                 continue;
             const double *p[3];
@@ -716,7 +752,7 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
         const double from = strict                ? nextafter(tsearch, INFINITY)
                             : tsearch > -INFINITY ? tsearch - im->eps
                                                   : 0;
-        const int32_t f = bvh_enter(im, &r, from, tc1, skip, &t_in, w3);
+        const int32_t f = bvh_enter(im, ob->layer, &r, from, tc1, skip, &t_in, w3);
         if (f < 0)
             break;
         skip = f;
@@ -828,7 +864,7 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
             if (t_out >= tc1)
                 return;
             const int32_t nb = m->nb[4 * (size_t)cur + (size_t)exit];
-            if (nb < 0 || steps >= max_steps) {
+            if (nb < 0 || (ob->vis && !ob->vis[nb >> 2]) || steps >= max_steps) {
                 strict = !(t_out > t_entry);
                 tsearch = t_out;
                 break;
@@ -973,6 +1009,63 @@ mesh_get(ir_state *st, const vv_grid *g, int field, int component, const ir_mesh
     return VV_OK;
 }
 
+/* Empty-space skipping for composite (the role the subvolume min/max grid
+ * plays in the ray caster): the tetrahedra whose value range meets a
+ * non-zero opacity, and the boundary of that visible part as the layer
+ * rays enter through, so they jump over transparent cells instead of
+ * walking through them. Kept in the mesh while the transfer function's
+ * table (hashed) stays the same. */
+static vv_status
+vis_prepare(ir_mesh *im, ir_obj *ob) {
+    uint64_t key = 1469598103934665603ull;
+    const unsigned char *bytes = (const unsigned char *)ob->ext;
+    for (size_t i = 0; i < IR_BINS * sizeof *ob->ext; i++)
+        key = (key ^ bytes[i]) * 1099511628211ull;
+    key ^= (uint64_t)(ob->vlo * 1e6) * 31 + (uint64_t)(ob->vhi * 1e6);
+    if (im->vis && im->vis_key == key)
+        return VV_OK;
+    free(im->vis);
+    layer_clear(&im->vis_layer);
+    im->vis = NULL;
+    const vv_tetmesh *m = &im->m;
+    int *nz = malloc((IR_BINS + 1) * sizeof *nz);
+    uint8_t *vis = malloc(m->n_tets ? m->n_tets : 1);
+    if (!nz || !vis) {
+        free(nz);
+        free(vis);
+        return vv_error_set(VV_ERR_NOMEM, "irregular: out of memory");
+    }
+    nz[0] = 0;
+    for (int i = 0; i < IR_BINS; i++)
+        nz[i + 1] = nz[i] + (ob->ext[i] > 0);
+    for (size_t t = 0; t < m->n_tets; t++) {
+        double lo, hi;
+        if (m->tval) {
+            lo = hi = m->tval[t];
+        } else {
+            lo = hi = m->val[m->tet[4 * t]];
+            for (int k = 1; k < 4; k++) {
+                const double v = m->val[m->tet[4 * t + (size_t)k]];
+                lo = v < lo ? v : lo;
+                hi = v > hi ? v : hi;
+            }
+        }
+        double x0 = floor((lo - ob->vlo) * ob->vscale), x1 = ceil((hi - ob->vlo) * ob->vscale);
+        x0 = x0 < 0 ? 0 : x0 > IR_BINS - 1 ? IR_BINS - 1 : x0;
+        x1 = x1 < 0 ? 0 : x1 > IR_BINS - 1 ? IR_BINS - 1 : x1;
+        vis[t] = nz[(int)x1 + 1] - nz[(int)x0] > 0;
+    }
+    free(nz);
+    vv_status s = layer_build(&im->vis_layer, m, vis);
+    if (s != VV_OK) {
+        free(vis);
+        return s;
+    }
+    im->vis = vis;
+    im->vis_key = key;
+    return VV_OK;
+}
+
 static vv_status
 prepare_object(ir_frame *fr, ir_obj *ob, const vv_object *obj, const vv_world *w,
                const float ambient[3]) {
@@ -1026,7 +1119,19 @@ prepare_object(ir_frame *fr, ir_obj *ob, const vv_object *obj, const vv_world *w
         ob->mode = VV_MODE_ISO; /* a threshold shows the surface where it is reached */
         ob->iso = obj->threshold;
     }
-    return tables_build(ob);
+    vv_status ts = tables_build(ob);
+    if (ts != VV_OK)
+        return ts;
+    ob->layer = &ob->mesh->all;
+    ob->vis = NULL;
+    if (ob->mode == VV_MODE_COMPOSITE && fr->st->skipping) {
+        ir_mesh *im = (ir_mesh *)ob->mesh; /* the state's own cache */
+        if ((ts = vis_prepare(im, ob)) != VV_OK)
+            return ts;
+        ob->layer = &im->vis_layer;
+        ob->vis = im->vis;
+    }
+    return VV_OK;
 }
 
 static void
@@ -1111,6 +1216,7 @@ ir_create(void **state) {
     if (!st)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     st->early_termination = 0.99;
+    st->skipping = 1;
     *state = st;
     return VV_OK;
 }
@@ -1128,7 +1234,12 @@ ir_set_option(void *state, const char *key, const char *value) {
         st->early_termination = x;
         return VV_OK;
     }
-    return vv_error_set(VV_ERR_INVALID, "unknown option '%s' (early_termination)", key);
+    if (strcmp(key, "empty_space_skipping") == 0) {
+        st->skipping = x != 0;
+        return VV_OK;
+    }
+    return vv_error_set(VV_ERR_INVALID,
+                        "unknown option '%s' (early_termination, empty_space_skipping)", key);
 }
 
 static void
@@ -1149,5 +1260,5 @@ const vv_renderer_ops vv_irregular_ops = {
     ir_set_option,
     ir_render,
     ir_destroy,
-    "early_termination (0.99)",
+    "early_termination (0.99), empty_space_skipping (1)",
 };
