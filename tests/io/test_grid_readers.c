@@ -12,6 +12,13 @@
 
 #include "testutil.h"
 
+#if defined(__has_include)
+#if __has_include(<netcdf.h>)
+#include <netcdf.h>
+#define HAVE_NETCDF_H 1
+#endif
+#endif
+
 static int
 have_data(void) {
     FILE *f = fopen(vt_data("grids/hyper.dx"), "rb");
@@ -551,14 +558,50 @@ test_bad_input(void **state) {
                  "position");
 }
 
+/* A NetCDF variable whose dimensions have no coordinate variables. */
+static void
+test_netcdf_without_coordinates(void **state) {
+    (void)state;
+#ifdef HAVE_NETCDF_H
+    const char *p = vt_path(vt_outdir("grid_readers"), "nocoords.nc");
+    int nc, d[3], v;
+    assert_int_equal(nc_create(p, NC_CLOBBER, &nc), NC_NOERR);
+    nc_def_dim(nc, "z", 2, &d[0]);
+    nc_def_dim(nc, "y", 3, &d[1]);
+    nc_def_dim(nc, "x", 4, &d[2]);
+    nc_def_var(nc, "T", NC_FLOAT, 3, d, &v);
+    nc_enddef(nc);
+    float vals[24] = {0};
+    nc_put_var_float(nc, v, vals);
+    nc_close(nc);
+    vv_grid *g = NULL;
+    vv_error_clear();
+    vv_status s = vv_grid_load(&g, p);
+    if (s == VV_ERR_UNSUPPORTED)
+        skip();
+    assert_true(s < 0);
+    assert_null(g);
+    printf("  nocoords.nc: %s\n", vv_error_message());
+    assert_non_null(strstr(vv_error_message(), "no coordinate variable"));
+#else
+    skip();
+#endif
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_hyper_dx),        cmocka_unit_test(test_fire_vtu),
-        cmocka_unit_test(test_blow_vtk),        cmocka_unit_test(test_plot3d),
-        cmocka_unit_test(test_levitus),         cmocka_unit_test(test_vtk_ascii_binary),
-        cmocka_unit_test(test_vtu_variants),    cmocka_unit_test(test_dx_text),
-        cmocka_unit_test(test_plot3d_variants), cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_hyper_dx),
+        cmocka_unit_test(test_fire_vtu),
+        cmocka_unit_test(test_blow_vtk),
+        cmocka_unit_test(test_plot3d),
+        cmocka_unit_test(test_levitus),
+        cmocka_unit_test(test_vtk_ascii_binary),
+        cmocka_unit_test(test_vtu_variants),
+        cmocka_unit_test(test_dx_text),
+        cmocka_unit_test(test_plot3d_variants),
+        cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_netcdf_without_coordinates),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
