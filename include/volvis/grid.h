@@ -118,7 +118,8 @@ const char *vv_grid_kind_name(vv_grid_kind k);
 vv_status vv_grid_alloc(vv_grid *g, size_t n_points, size_t n_cells, size_t n_conn);
 
 /**
- * Adds a field (values zero) and returns it in @p out (owned by the grid).
+ * Adds a field (values zero) and returns it in @p out (owned by the grid;
+ * valid until the next field is added, which may move the array).
  * @p name is truncated to VV_GRID_FIELD_NAME_MAX - 1 bytes. Errors:
  * VV_ERR_LIMIT (too many fields), VV_ERR_INVALID (components outside 1..9),
  * VV_ERR_NOMEM.

@@ -9,7 +9,7 @@
  * says so. The grid is curvilinear: each block's hexahedra are stored with
  * its dimensions; the solution adds the point fields density, momentum
  * (a vector), energy, and the derived velocity magnitude and pressure
- * (gamma 1.4).
+ * (gamma 1.4); points blanked by IBLANK 0 are missing there.
  */
 #include <math.h>
 #include <stdio.h>
@@ -150,12 +150,19 @@ vv_grid_read_plot3d(vv_grid **out, const char *xyz_path, const char *q_path) {
     memset(&Q, 0, sizeof Q);
     vv_grid *g = NULL;
     double *xyz = NULL;
+    unsigned char *blank = NULL; /* IBLANK == 0 per point */
     if ((s = p3d_layout_find(d, (size_t)size, xyz_path, 0, &L)) != VV_OK)
         goto done;
     if ((s = vv_grid_new(&g, VV_GRID_CURVILINEAR)) != VV_OK)
         goto done;
     const int ps = L.dbl ? 8 : 4;
-    size_t o = L.data_off;
+    size_t o = L.data_off, total_points = 0;
+    for (int b = 0; b < L.nb; b++)
+        total_points += (size_t)L.dims[b][0] * (size_t)L.dims[b][1] * (size_t)L.dims[b][2];
+    if (L.iblank && !(blank = calloc(total_points ? total_points : 1, 1))) {
+        s = vv_error_set(VV_ERR_NOMEM, "%s: out of memory", xyz_path);
+        goto done;
+    }
     for (int b = 0; b < L.nb; b++) {
         const size_t n = (size_t)L.dims[b][0] * (size_t)L.dims[b][1] * (size_t)L.dims[b][2];
         xyz = malloc(3 * n * sizeof *xyz);
@@ -167,6 +174,10 @@ vv_grid_read_plot3d(vv_grid **out, const char *xyz_path, const char *q_path) {
         for (size_t i = 0; i < n; i++)
             for (int a = 0; a < 3; a++)
                 xyz[3 * i + (size_t)a] = p3d_val(d + o + ((size_t)a * n + i) * (size_t)ps, &L);
+        /* IBLANK 0: a blanked point (a hole, or overlapped by another block) */
+        for (size_t i = 0; L.iblank && i < n; i++)
+            blank[g->n_points + i] =
+                vv_gtype_get(d + o + 3 * n * (size_t)ps + 4 * i, VV_GT_I32, L.big_endian) == 0;
         o += 3 * n * (size_t)ps + (L.iblank ? 4 * n : 0) + (L.markers ? 4 : 0);
         if (L.dims[b][0] < 2 || L.dims[b][1] < 2 || L.dims[b][2] < 2) {
             s = vv_error_set(VV_ERR_UNSUPPORTED,
@@ -199,9 +210,13 @@ vv_grid_read_plot3d(vv_grid **out, const char *xyz_path, const char *q_path) {
                                       "pressure"};
         vv_grid_field *f[5];
         const int nc[5] = {1, 3, 1, 1, 1};
+        const int base = g->n_fields;
         for (int k = 0; k < 5; k++)
             if ((s = vv_grid_add_field(g, names[k], 0, nc[k], &f[k])) != VV_OK)
                 goto done;
+        /* adding a field may move the others: take the pointers now */
+        for (int k = 0; k < 5; k++)
+            f[k] = &g->fields[base + k];
         const int qs = Q.dbl ? 8 : 4;
         size_t qo = Q.data_off, p0 = 0;
         for (int b = 0; b < Q.nb; b++) {
@@ -228,9 +243,16 @@ vv_grid_read_plot3d(vv_grid **out, const char *xyz_path, const char *q_path) {
             qo += 5 * n * (size_t)qs + (Q.markers ? 4 : 0);
             p0 += n;
         }
+        /* blanked points carry no data: missing, transparent */
+        for (size_t p = 0; blank && p < g->n_points; p++)
+            if (blank[p])
+                for (int k = 0; k < 5; k++)
+                    for (int c = 0; c < f[k]->n_components; c++)
+                        f[k]->values[p * (size_t)f[k]->n_components + (size_t)c] = NAN;
     }
 done:
     free(xyz);
+    free(blank);
     free(L.dims);
     free(Q.dims);
     free(d);

@@ -788,7 +788,8 @@ parse_tf(const sctx *c, json_t *tfj, const char *tp, vv_object *o) {
         return missing(c, tp, "opacity", "[[value, opacity], ...]");
     vv_tf tf;
     vv_tf_init(&tf);
-    tf.opacity_unit_distance = vv_model_min_spacing(o->volume);
+    tf.opacity_unit_distance =
+        o->volume ? vv_model_min_spacing(o->volume) : o->tf.opacity_unit_distance;
     if ((st = parse_tf_points(c, tfj, tp, &tf, 1)) != VV_OK ||
         (st = parse_tf_points(c, tfj, tp, &tf, 0)) != VV_OK ||
         (st = get_number_in(c, tfj, tp, "opacity_unit_distance", &tf.opacity_unit_distance, NULL, 0,

@@ -477,6 +477,36 @@ test_plot3d_variants(void **state) {
     assert_int_equal(g->n_cells, 1 + 2);
     assert_near(g->points[3 * 8], 10, 0);
     vv_grid_free(g);
+    /* single block, big-endian, no markers, IBLANK (point 3 blanked), with a solution */
+    {
+        unsigned char b2[1024];
+        size_t m = 0;
+        for (int a = 0; a < 3; a++, m += 4)
+            put_be32(b2 + m, 2);
+        for (int a = 0; a < 3; a++)
+            for (int i = 0; i < 8; i++, m += 4)
+                put_bef(b2 + m, (float)((i >> a) & 1));
+        for (int i = 0; i < 8; i++, m += 4)
+            put_be32(b2 + m, i == 3 ? 0 : 1);
+        const char *xp = vt_path(vt_outdir("grid_readers"), "blank.xyz");
+        vt_write_file(xp, b2, m);
+        m = 0;
+        for (int a = 0; a < 3; a++, m += 4)
+            put_be32(b2 + m, 2);
+        for (int k = 0; k < 4; k++, m += 4)
+            put_bef(b2 + m, 0.5f); /* fsmach, alpha, re, time */
+        for (int k = 0; k < 5; k++)
+            for (int i = 0; i < 8; i++, m += 4)
+                put_bef(b2 + m, k == 0 ? 1.0f + (float)i : 0.0f);
+        vt_write_file(vt_path(vt_outdir("grid_readers"), "blank.q"), b2, m);
+        vt_ok(vv_grid_load(&g, xp));
+        assert_int_equal(g->n_points, 8);
+        const vv_grid_field *den = &g->fields[vv_grid_find_field(g, "density", 0)];
+        assert_true(vv_grid_field_missing(den, 3));
+        assert_false(vv_grid_field_missing(den, 2));
+        assert_near(den->values[7], 8, 0);
+        vv_grid_free(g);
+    }
     /* a size that no layout explains */
     vt_write_file(p, buf, n - 6);
     vt_err(vv_grid_load(&g, p));
@@ -558,6 +588,50 @@ test_bad_input(void **state) {
                  "position");
 }
 
+/* A grid object in a scene file: loaded, saved, loaded back the same;
+ * a bad field is an error with the scene position. */
+static void
+test_scene_grid_object(void **state) {
+    (void)state;
+    const char *dir = vt_outdir("grid_readers");
+    write_text("scene_two.vtk", two_tets_vtk);
+    const char *scene = "{\"objects\": [{\"type\": \"grid\", \"file\": \"scene_two.vtk\", "
+                        "\"field\": \"c\", \"mode\": \"mip\", \"position\": [1, 2, 3],\n"
+                        "\"cut_planes\": [{\"point\": [0, 0, 0.5], \"normal\": [0, 0, 1]}]}],\n"
+                        "\"render\": {\"renderer\": \"irregular\"}}\n";
+    const char *sp = write_text("grid_scene.json", scene);
+    vv_world *w = NULL;
+    vt_ok(vv_scene_load(&w, sp));
+    assert_int_equal(w->n_objects, 1);
+    vv_object *o = w->objects[0];
+    assert_int_equal(o->type, VV_OBJECT_GRID);
+    assert_string_equal(o->field, "c");
+    assert_int_equal(o->mode, VV_MODE_MIP);
+    assert_int_equal(o->n_cut_planes, 1);
+    assert_int_equal(vv_object_grid_field(o), 1);
+    const char *sp2 = vt_path(dir, "grid_scene_saved.json");
+    vt_ok(vv_scene_save(w, sp2, NULL));
+    vv_world *w2 = NULL;
+    vt_ok(vv_scene_load(&w2, sp2));
+    assert_int_equal(w2->objects[0]->type, VV_OBJECT_GRID);
+    assert_string_equal(w2->objects[0]->field, "c");
+    assert_int_equal(w2->objects[0]->mode, VV_MODE_MIP);
+    assert_near(w2->objects[0]->position.z, 3, 1e-12);
+    assert_int_equal(w2->objects[0]->tf.n_opacity, o->tf.n_opacity);
+    /* the world box of the grid object follows its transform */
+    vv_box b = vv_world_bounds(w2);
+    assert_near(b.max.x, 2, 1e-12);
+    vv_world_free(w2);
+    vv_world_free(w);
+    /* an unknown field */
+    const char *bad =
+        write_text("grid_scene_bad.json", "{\"objects\": [{\"type\": \"grid\", \"file\": "
+                                          "\"scene_two.vtk\", \"field\": \"nope\"}]}\n");
+    vt_err(vv_scene_load(&w, bad));
+    printf("  grid_scene_bad.json: %s\n", vv_error_message());
+    assert_non_null(strstr(vv_error_message(), "nope"));
+}
+
 /* A NetCDF variable whose dimensions have no coordinate variables. */
 static void
 test_netcdf_without_coordinates(void **state) {
@@ -602,6 +676,7 @@ main(void) {
         cmocka_unit_test(test_plot3d_variants),
         cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_netcdf_without_coordinates),
+        cmocka_unit_test(test_scene_grid_object),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

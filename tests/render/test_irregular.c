@@ -76,6 +76,22 @@ check_neghip(vv_render_mode mode, int shading, double min_psnr, const char *tag)
     vt_ok(vv_world_add_object(w, go));
     vv_image *img = render_with("irregular", w, 2);
     const double psnr = vv_image_psnr(ref, img);
+    if (mode == VV_MODE_COMPOSITE) {
+        /* empty-space skipping changes nothing but the time */
+        vv_renderer *r = NULL;
+        vt_ok(vv_renderer_new(&r, "irregular"));
+        vt_ok(vv_renderer_set_option(r, "empty_space_skipping", "0"));
+        vv_image *full = NULL;
+        vt_ok(vv_image_new(&full, w->view.width, w->view.height));
+        vt_ok(vv_renderer_render(r, w, &w->view, NULL, full));
+        double maxd = 0;
+        for (size_t i = 0; i < 4 * (size_t)w->view.width * (size_t)w->view.height; i++)
+            maxd = fmax(maxd, fabs(full->rgba[i] - img->rgba[i]));
+        printf("neghip composite: skipping on/off differ by at most %g\n", maxd);
+        assert_true(maxd < 1e-4);
+        vv_image_free(full);
+        vv_renderer_free(r);
+    }
     char name[64];
     snprintf(name, sizeof name, "neghip_%s_raycast.png", tag);
     save(ref, name);
