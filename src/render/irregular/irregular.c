@@ -440,6 +440,22 @@ tables_build(ir_obj *ob) {
 static inline void
 prefix_eval(const ir_obj *ob, double v, double *T, double K[3]) {
     double x = (v - ob->vlo) * ob->vscale;
+    if (ob->const_color) {
+        /* one colour: K = c T, only T is integrated */
+        if (x <= 0) {
+            *T = (v - ob->vlo) * ob->ext[0];
+        } else if (x >= IR_BINS - 1) {
+            *T = ob->T[IR_BINS - 1] + (v - ob->vhi) * ob->ext[IR_BINS - 1];
+        } else {
+            const int i = (int)x;
+            const double f = x - i, e0 = ob->ext[i], e1 = ob->ext[i + 1];
+            *T = ob->T[i] + f * (e0 + 0.5 * f * (e1 - e0)) / ob->vscale;
+        }
+        K[0] = *T * ob->col[0];
+        K[1] = *T * ob->col[1];
+        K[2] = *T * ob->col[2];
+        return;
+    }
     if (x <= 0) {
         const double dv = v - ob->vlo;
         *T = dv * ob->ext[0];
