@@ -1951,7 +1951,7 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     int nv = 0, ng = 0;
     for (int i = 0; i < w->n_objects; i++) {
         const vv_object *o = w->objects[i];
-        if (!o || !o->visible)
+        if (!o || !o->visible || o->type == VV_OBJECT_GRID) /* grids: the irregular renderer */
             continue;
         if (o->type == VV_OBJECT_VOLUME)
             nv += o->volume != NULL;
@@ -1972,7 +1972,7 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     vv_box bounds = vv_world_bounds(w);
     for (int i = 0; i < w->n_objects && s == VV_OK; i++) {
         const vv_object *o = w->objects[i];
-        if (!o || !o->visible)
+        if (!o || !o->visible || o->type == VV_OBJECT_GRID)
             continue;
         if (o->type == VV_OBJECT_VOLUME) {
             if (!o->volume)
