@@ -679,8 +679,9 @@ dx_quoted_or_number(vv_gcur *c, char *buf, size_t cap, int *id) {
         c->p++;
         size_t n = 0;
         while (c->p < c->end && *c->p != '"' && *c->p != '\n') {
+            /* binary junk never reaches an error message */
             if (n + 1 < cap)
-                buf[n++] = (char)*c->p;
+                buf[n++] = (char)(*c->p >= 0x20 && *c->p <= 0x7e ? *c->p : '?');
             c->p++;
         }
         if (c->p < c->end && *c->p == '"')

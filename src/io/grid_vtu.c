@@ -481,6 +481,9 @@ vv_grid_read_vtu(vv_grid **out, const char *path) {
         if (xe && xe->message)
             snprintf(msg, sizeof msg, "%s", xe->message);
         msg[strcspn(msg, "\r\n")] = '\0'; /* one line */
+        for (char *q = msg; *q; q++)      /* of printable ASCII: libxml2 quotes the bad bytes */
+            if ((unsigned char)*q < 0x20 || (unsigned char)*q > 0x7e)
+                *q = '?';
         s = vv_error_set(VV_ERR_FORMAT, "%s: not well-formed XML (line %d: %s)", path,
                          xe ? xe->line : 0, msg);
         goto done;

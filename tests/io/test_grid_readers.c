@@ -574,6 +574,18 @@ test_bad_input(void **state) {
     /* not well-formed XML */
     expect_error("broken.vtu", "<VTKFile type=\"UnstructuredGrid\"><UnstructuredGrid><Piece",
                  "XML");
+    /* binary junk in a DX attribute stays out of the message */
+    expect_error("junk.dx",
+                 "object 1 class array type float rank 1 shape 3 items 4 data follows\n"
+                 "0 0 0 1 0 0 0 1 0 0 0 1\n"
+                 "object 2 class array type int rank 1 shape 4 items 1 data follows\n"
+                 "0 1 2 3\n"
+                 "attribute \"element type\" string \"tetra\x99\x01hedra\"\n"
+                 "object \"s\" class field\n"
+                 "component \"positions\" value 1\n"
+                 "component \"connections\" value 2\n"
+                 "end\n",
+                 "tetra??hedra");
     /* DX connections to missing positions */
     expect_error("bad.dx",
                  "object 1 class array type float rank 1 shape 3 items 2 data follows\n"
