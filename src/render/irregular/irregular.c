@@ -785,10 +785,12 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
         pre.valid = 0;
         /* the first tetrahedron: all four points and six edges */
         const uint32_t *t = m->tet + 4 * (size_t)cur;
-        double q[4][3], es[4][4];
+        double q[4][3], es[4][4], qv[4] = {0, 0, 0, 0}; /* points, edge sides, values */
         for (int i = 0; i < 4; i++)
             for (int a = 0; a < 3; a++)
                 q[i][a] = m->p[3 * (size_t)t[i] + (size_t)a] - r.o[a];
+        for (int i = 0; i < 4 && !cell_data; i++)
+            qv[i] = m->val[t[i]];
         for (int i = 0; i < 4; i++)
             for (int j = i + 1; j < 4; j++) {
                 es[i][j] = edge_canon(&r, q[i], q[j], t[i], t[j]);
@@ -844,13 +846,13 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
             } else {
                 s1 = 0;
                 for (int i = 0; i < 4; i++)
-                    s1 += b_out[i] * m->val[t[i]];
+                    s1 += b_out[i] * qv[i];
                 if (have_s) {
                     s0 = s_prev; /* continuous across the shared face */
                 } else {
                     s0 = 0;
                     for (int i = 0; i < 4; i++)
-                        s0 += b_in[i] * m->val[t[i]];
+                        s0 += b_in[i] * qv[i];
                 }
             }
             s_prev = s1;
@@ -890,7 +892,7 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
             const int nface = nb & 3;
             const uint32_t *nt = m->tet + 4 * (size_t)ncur;
             int map[4];
-            double nq[4][3], nes[4][4], nbw[4];
+            double nq[4][3], nes[4][4], nbw[4], nqv[4];
             for (int k = 0; k < 4; k++) {
                 map[k] = -1;
                 nbw[k] = 0;
@@ -905,10 +907,12 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
                     map[k] = 0;
                 }
                 memcpy(nq[k], q[map[k]], sizeof nq[k]);
+                nqv[k] = qv[map[k]];
                 nbw[k] = b_out[map[k]];
             }
             for (int a = 0; a < 3; a++)
                 nq[nface][a] = m->p[3 * (size_t)nt[nface] + (size_t)a] - r.o[a];
+            nqv[nface] = cell_data ? 0 : m->val[nt[nface]];
             for (int k = 0; k < 4; k++) {
                 nes[k][k] = 0;
                 for (int l = k + 1; l < 4; l++) {
@@ -920,6 +924,7 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
                 }
             }
             memcpy(q, nq, sizeof q);
+            memcpy(qv, nqv, sizeof qv);
             memcpy(es, nes, sizeof es);
             memcpy(b_in, nbw, sizeof b_in);
             cur = ncur;
