@@ -614,22 +614,27 @@ segment(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, const uint32_t *
     if (!(L > 0))
         return;
     const double dsv = s1 - s0;
+    const int ramp = fabs(dsv) * ob->vscale > 1e-3; /* else a constant value */
+    /* L / (s1 - s0): every piece of the segment has the same ratio of
+     * length to value change, so one division serves them all */
+    const double l_ds = ramp ? L / dsv : 0;
     double tau_all;
-    if (fabs(dsv) * ob->vscale > 1e-3) {
-        tau_all = L * (Tb - Ta) / dsv;
+    if (ramp) {
+        tau_all = l_ds * (Tb - Ta);
     } else {
         double c[3];
         tau_all = L * ext_at(ob, 0.5 * (s0 + s1), c);
     }
     if (!(tau_all > 1e-7))
         return;
-    int n = 1 + (int)(tau_all / IR_PIECE_TAU);
+    int n = 1 + (int)(tau_all * (1.0 / IR_PIECE_TAU));
     n = n > IR_MAX_PIECES ? IR_MAX_PIECES : n;
+    const double inv_n = 1.0 / n;
     const float v[3] = {(float)-wr->d[0], (float)-wr->d[1], (float)-wr->d[2]};
     double Tp = Ta, Kp[3] = {Ka[0], Ka[1], Ka[2]};
     for (int k = 0; k < n; k++) {
-        const double ua = (double)k / n, ub = (double)(k + 1) / n;
-        const double va = s0 + ua * dsv, vb = s0 + ub * dsv, l = L / n;
+        const double ua = k * inv_n, ub = (k + 1) * inv_n;
+        const double va = s0 + ua * dsv, vb = s0 + ub * dsv, l = L * inv_n;
         double tau, E[3];
         double Tn, Kn[3];
         if (k + 1 == n) {
@@ -638,10 +643,10 @@ segment(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, const uint32_t *
         } else {
             prefix_eval(ob, vb, &Tn, Kn);
         }
-        if (fabs(vb - va) * ob->vscale > 1e-3) {
-            tau = l * (Tn - Tp) / (vb - va);
+        if (ramp) {
+            tau = l_ds * (Tn - Tp);
             for (int c = 0; c < 3; c++)
-                E[c] = l * (Kn[c] - Kp[c]) / (vb - va);
+                E[c] = l_ds * (Kn[c] - Kp[c]);
         } else {
             double cc[3];
             const double e = ext_at(ob, 0.5 * (va + vb), cc);
@@ -666,7 +671,7 @@ segment(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, const uint32_t *
         float col[3], out[3];
         if (ob->const_color) {
             for (int c = 0; c < 3; c++)
-                col[c] = (float)(E[c] / tau * alpha);
+                col[c] = (float)(ob->col[c] * alpha);
         } else {
             const double corr =
                 tau > 1e-4 ? alpha / tau - (1 - alpha) - 0.5 * alpha : tau * (-1.0 / 12 + tau / 24);
