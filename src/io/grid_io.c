@@ -365,6 +365,80 @@ vtk_field(vv_gcur *c, vv_grid *g, int binary, const char *name, int cell_data, i
     return s;
 }
 
+/* The cells of a VTK 5.1 legacy file, after "CELLS n_offsets n_conn
+ * OFFSETS": OFFSETS type, n_offsets values, CONNECTIVITY type, n_conn
+ * values. */
+static vv_status
+vtk51_cells(vv_gcur *c, vv_grid *g, int binary, size_t n_off, size_t n_conn, size_t n_points) {
+    char ty[64], kw[64];
+    vv_gtype t;
+    if (n_off < 1)
+        return vv_error_set(VV_ERR_FORMAT, "%s: CELLS: no offsets", c->path);
+    vv_status s = vv_gcur_need(c, ty, sizeof ty, "OFFSETS type");
+    if (s != VV_OK)
+        return s;
+    if (!vv_gtype_parse(ty, &t))
+        return vv_error_set(VV_ERR_FORMAT, "%s: OFFSETS: unknown type \"%s\"", c->path, ty);
+    if (n_off > vv_gcur_left(c) || n_conn > vv_gcur_left(c))
+        return vv_error_set(VV_ERR_FORMAT, "%s: CELLS %zu %zu: more than the %zu bytes left",
+                            c->path, n_off, n_conn, vv_gcur_left(c));
+    double *pts = g->points;
+    g->points = NULL;
+    g->n_points = 0;
+    s = vv_grid_alloc(g, 0, n_off - 1, n_conn);
+    free(g->points);
+    g->points = pts;
+    g->n_points = n_points;
+    if (s != VV_OK)
+        return s;
+    double *tmp = malloc((n_off > n_conn ? n_off : n_conn ? n_conn : 1) * sizeof *tmp);
+    if (!tmp)
+        return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
+    if (binary)
+        vv_gcur_skip_line(c);
+    if ((s = vv_gcur_values(c, binary, 1, t, n_off, tmp, "OFFSETS")) != VV_OK)
+        goto done;
+    for (size_t i = 0; i < n_off; i++) {
+        const double prev = i ? tmp[i - 1] : 0;
+        if (!(tmp[i] >= prev) || tmp[i] > (double)n_conn || (i == 0 && tmp[0] != 0)) {
+            s = vv_error_set(VV_ERR_FORMAT, "%s: OFFSETS[%zu] = %g out of order or past %zu",
+                             c->path, i, tmp[i], n_conn);
+            goto done;
+        }
+        if (i)
+            g->cell_offsets[i] = (size_t)tmp[i];
+    }
+    if (g->cell_offsets[n_off - 1] != n_conn) {
+        s = vv_error_set(VV_ERR_FORMAT, "%s: OFFSETS end at %zu, not %zu", c->path,
+                         g->cell_offsets[n_off - 1], n_conn);
+        goto done;
+    }
+    if ((s = vv_gcur_need(c, kw, sizeof kw, "CONNECTIVITY")) != VV_OK ||
+        (s = vv_gcur_need(c, ty, sizeof ty, "CONNECTIVITY type")) != VV_OK)
+        goto done;
+    if (strcasecmp(kw, "CONNECTIVITY") || !vv_gtype_parse(ty, &t)) {
+        s = vv_error_set(VV_ERR_FORMAT, "%s: expected CONNECTIVITY <type>, got \"%s %s\"", c->path,
+                         kw, ty);
+        goto done;
+    }
+    if (binary)
+        vv_gcur_skip_line(c);
+    if ((s = vv_gcur_values(c, binary, 1, t, n_conn, tmp, "CONNECTIVITY")) != VV_OK)
+        goto done;
+    for (size_t i = 0; i < n_conn; i++) {
+        if (!(tmp[i] >= 0) || tmp[i] >= (double)n_points) {
+            s = vv_error_set(VV_ERR_FORMAT,
+                             "%s: CONNECTIVITY[%zu] uses point %g but there are %zu points",
+                             c->path, i, tmp[i], n_points);
+            goto done;
+        }
+        g->connectivity[i] = (uint32_t)tmp[i];
+    }
+done:
+    free(tmp);
+    return s;
+}
+
 vv_status
 vv_grid_read_vtk(vv_grid **out, const char *path) {
     *out = NULL;
@@ -439,6 +513,19 @@ vv_grid_read_vtk(vv_grid **out, const char *path) {
             if (!have_points) {
                 s = vv_error_set(VV_ERR_FORMAT, "%s: CELLS before POINTS", path);
                 goto done;
+            }
+            {
+                /* VTK 5.1: CELLS n_offsets n_connectivity, then OFFSETS and CONNECTIVITY */
+                const unsigned char *save = c.p;
+                char kw[64];
+                if (vv_gcur_token(&c, kw, sizeof kw) && !strcasecmp(kw, "OFFSETS")) {
+                    if ((s = vtk51_cells(&c, g, binary, n_cells, n_ints, n_points)) != VV_OK)
+                        goto done;
+                    n_cells = n_cells ? n_cells - 1 : 0;
+                    have_cells = 1;
+                    continue;
+                }
+                c.p = save;
             }
             if (n_ints > vv_gcur_left(&c) || n_ints < n_cells) {
                 s = vv_error_set(VV_ERR_FORMAT,

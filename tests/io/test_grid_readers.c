@@ -255,6 +255,31 @@ test_vtk_ascii_binary(void **state) {
     vt_ok(vv_grid_load(&g, p));
     check_two_tets(g);
     vv_grid_free(g);
+    /* VTK 5.1: OFFSETS and CONNECTIVITY */
+    const char *v51 = "# vtk DataFile Version 5.1\n"
+                      "two tetrahedra\n"
+                      "ASCII\n"
+                      "DATASET UNSTRUCTURED_GRID\n"
+                      "POINTS 5 float\n"
+                      "0 0 0  1 0 0  0 1 0  0 0 1  1 1 1\n"
+                      "CELLS 3 8\n"
+                      "OFFSETS vtktypeint64\n"
+                      "0 4 8\n"
+                      "CONNECTIVITY vtktypeint64\n"
+                      "0 1 2 3 1 2 3 4\n"
+                      "CELL_TYPES 2\n"
+                      "10 10\n"
+                      "POINT_DATA 5\n"
+                      "SCALARS s float 1\n"
+                      "LOOKUP_TABLE default\n"
+                      "0 1 2 3 4\n"
+                      "CELL_DATA 2\n"
+                      "SCALARS c double\n"
+                      "LOOKUP_TABLE default\n"
+                      "5 6\n";
+    vt_ok(vv_grid_load(&g, write_text("two51.vtk", v51)));
+    check_two_tets(g);
+    vv_grid_free(g);
     /* truncated binary */
     vt_write_file(p, buf, n - 30);
     vt_err(vv_grid_load(&g, p));
