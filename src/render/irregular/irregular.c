@@ -48,8 +48,8 @@
 typedef struct ir_bvh_node {
     float lo[3], hi[3];
     int32_t left;  /* inner: left child (right = left + 1); leaf: first face */
-    int16_t count; /* leaf: faces; inner: 0 */
-    int16_t axis;  /* inner: the split axis (the left child holds the lower centroids) */
+    int32_t count; /* leaf: faces; inner: 0 */
+    int32_t axis;  /* inner: the split axis (the left child holds the lower centroids) */
 } ir_bvh_node;
 
 /* Entering faces and their BVH: the mesh's boundary faces, or those of
@@ -123,7 +123,8 @@ typedef struct ir_frame {
 typedef struct bvh_build {
     const vv_tetmesh *m;
     int32_t *faces;
-    float *cen; /* 3 per face */
+    float *cen;  /* 3 per face */
+    float *fbox; /* 6 per face: its box, rounded outwards so float boxes never cut it */
     ir_bvh_node *nodes;
     size_t n_nodes;
 } bvh_build;
@@ -145,16 +146,11 @@ bvh_split(bvh_build *b, size_t node, size_t first, size_t count) {
     }
     float clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t i = first; i < first + count; i++) {
-        const double *p[3];
-        face_points(b->m, b->faces[i], p);
-        for (int k = 0; k < 3; k++)
-            for (int a = 0; a < 3; a++) {
-                /* round outwards so float boxes never cut a face */
-                const float lo = nextafterf((float)p[k][a], -INFINITY);
-                const float hi = nextafterf((float)p[k][a], INFINITY);
-                n->lo[a] = lo < n->lo[a] ? lo : n->lo[a];
-                n->hi[a] = hi > n->hi[a] ? hi : n->hi[a];
-            }
+        const float *fb = b->fbox + 6 * i;
+        for (int a = 0; a < 3; a++) {
+            n->lo[a] = fb[a] < n->lo[a] ? fb[a] : n->lo[a];
+            n->hi[a] = fb[3 + a] > n->hi[a] ? fb[3 + a] : n->hi[a];
+        }
         for (int a = 0; a < 3; a++) {
             const float c = b->cen[3 * i + (size_t)a];
             clo[a] = c < clo[a] ? c : clo[a];
@@ -165,16 +161,17 @@ bvh_split(bvh_build *b, size_t node, size_t first, size_t count) {
     for (int a = 1; a < 3; a++)
         if (chi[a] - clo[a] > chi[axis] - clo[axis])
             axis = a;
-    if (count <= IR_BVH_LEAF || !(chi[axis] > clo[axis])) {
+    if (count <= IR_BVH_LEAF) {
         n->left = (int32_t)first;
-        n->count = (int16_t)count;
+        n->count = (int32_t)count;
         n->axis = 0;
         return;
     }
-    /* partition about the middle of the centroid box */
+    /* partition about the middle of the centroid box (halves when the
+     * centroids coincide) */
     const float mid = 0.5f * (clo[axis] + chi[axis]);
     size_t i = first, j = first + count;
-    while (i < j) {
+    while (chi[axis] > clo[axis] && i < j) {
         if (b->cen[3 * i + (size_t)axis] < mid) {
             i++;
         } else {
@@ -187,6 +184,11 @@ bvh_split(bvh_build *b, size_t node, size_t first, size_t count) {
                 b->cen[3 * i + (size_t)a] = b->cen[3 * j + (size_t)a];
                 b->cen[3 * j + (size_t)a] = tc;
             }
+            for (int a = 0; a < 6; a++) {
+                float tb = b->fbox[6 * i + (size_t)a];
+                b->fbox[6 * i + (size_t)a] = b->fbox[6 * j + (size_t)a];
+                b->fbox[6 * j + (size_t)a] = tb;
+            }
         }
     }
     size_t nl = i - first;
@@ -196,7 +198,7 @@ bvh_split(bvh_build *b, size_t node, size_t first, size_t count) {
     b->n_nodes += 2;
     n->left = (int32_t)left;
     n->count = 0;
-    n->axis = (int16_t)axis;
+    n->axis = axis;
     bvh_split(b, left, first, nl);
     bvh_split(b, left + 1, first + nl, count - nl);
 }
@@ -219,9 +221,11 @@ layer_build(ir_layer *L, const vv_tetmesh *m, const uint8_t *vis) {
         nb += vis ? vis[f >> 2] && (m->nb[f] < 0 || !vis[(size_t)m->nb[f] >> 2]) : m->nb[f] < 0;
     L->faces = malloc((nb ? nb : 1) * sizeof *L->faces);
     float *cen = malloc(3 * (nb ? nb : 1) * sizeof *cen);
+    float *fbox = malloc(6 * (nb ? nb : 1) * sizeof *fbox);
     L->nodes = malloc(2 * (nb ? nb : 1) * sizeof *L->nodes);
-    if (!L->faces || !cen || !L->nodes) {
+    if (!L->faces || !cen || !fbox || !L->nodes) {
         free(cen);
+        free(fbox);
         layer_clear(L);
         return vv_error_set(VV_ERR_NOMEM, "irregular: out of memory for the boundary BVH");
     }
@@ -234,16 +238,22 @@ layer_build(ir_layer *L, const vv_tetmesh *m, const uint8_t *vis) {
         L->faces[k] = (int32_t)f;
         const double *p[3];
         face_points(m, (int32_t)f, p);
-        for (int a = 0; a < 3; a++)
+        for (int a = 0; a < 3; a++) {
             cen[3 * k + (size_t)a] = (float)((p[0][a] + p[1][a] + p[2][a]) / 3);
+            const double lo = fmin(p[0][a], fmin(p[1][a], p[2][a]));
+            const double hi = fmax(p[0][a], fmax(p[1][a], p[2][a]));
+            fbox[6 * k + (size_t)a] = nextafterf((float)lo, -INFINITY);
+            fbox[6 * k + 3 + (size_t)a] = nextafterf((float)hi, INFINITY);
+        }
         k++;
     }
     L->n_faces = nb;
-    bvh_build b = {m, L->faces, cen, L->nodes, 1};
+    bvh_build b = {m, L->faces, cen, fbox, L->nodes, 1};
     if (nb)
         bvh_split(&b, 0, 0, nb);
     L->n_nodes = b.n_nodes;
     free(cen);
+    free(fbox);
     return VV_OK;
 }
 
