@@ -343,6 +343,27 @@ test_two_blocks_and_degenerate(void **state) {
     one_ray(go, vv_vec3_make(1.5, 0.3, 0.45), vv_vec3_make(1, 0, 0), px);
     printf("two blocks composite alpha: %.6f (exact %.6f)\n", px[3], 1 - pow(0.8, 3));
     assert_near(px[3], 1 - pow(0.8, 3), 1e-5);
+    /* an eye inside the first block (perspective): only what lies in
+     * front of it counts, 0.5 of block A, then B and C */
+    {
+        vt_ok(vv_object_new_grid(&go, g, "v", "blocks"));
+        go->mode = VV_MODE_XRAY;
+        identity_tf(&go->tf);
+        vv_world *w = NULL;
+        vt_ok(vv_world_new(&w));
+        w->view.projection = VV_PROJECTION_PERSPECTIVE;
+        w->view.width = w->view.height = 1;
+        w->view.eye = vv_vec3_make(0.5, 0.3, 0.45);
+        w->view.at = vv_vec3_make(2, 0.3, 0.45);
+        w->view.up = vv_vec3_make(0, 0, 1);
+        vt_ok(vv_world_add_object(w, go));
+        vv_image *img = render_with("irregular", w, 1);
+        printf("eye inside: X-ray %.6f (exact %.6f)\n", img->rgba[0],
+               (0.5 * 0.25 + 0.75 + 0.75) / 2.5);
+        assert_near(img->rgba[0], (0.5 * 0.25 + 0.75 + 0.75) / 2.5, 1e-5);
+        vv_image_free(img);
+        vv_world_free(w);
+    }
     /* MIP: the largest value behind the gap */
     vt_ok(vv_object_new_grid(&go, g, "v", "blocks"));
     go->mode = VV_MODE_MIP;

@@ -780,9 +780,12 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
     (void)tc0;
     while (!acc->done && steps < max_steps && entries++ < 100000) {
         double t_in, w3[3];
+        /* The first search starts behind the ray's origin: an eye inside
+         * the grid (flying through it) sees the cells around it; what lies
+         * before tc0 (>= 0) is walked through but not integrated. */
         const double from = strict                ? nextafter(tsearch, INFINITY)
                             : tsearch > -INFINITY ? tsearch - im->eps
-                                                  : 0;
+                                                  : -INFINITY;
         const int32_t f = bvh_enter(im, ob->layer, &r, from, tc1, skip, &t_in, w3);
         if (f < 0)
             break;
