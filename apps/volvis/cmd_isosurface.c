@@ -18,9 +18,58 @@ static const cli_opt_spec iso_opts[] = {
     {"no-normals", 0, NULL},
     {"threads", 0, "N"},
     {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
+    {"field", 0, "NAME"},
     {"quiet", 'q', NULL},
 };
 #define N_ISO_OPTS ((int)(sizeof iso_opts / sizeof iso_opts[0]))
+
+/* Marching Tetrahedra of a grid file's field (its first scalar field by default). */
+static int
+isosurface_grid(const char *in, const char *out, double iso, const char *field, int normals,
+                int quiet) {
+    vv_grid *g = NULL;
+    vv_error_clear();
+    vv_status st = vv_grid_load(&g, in);
+    if (st != VV_OK)
+        return cli_fail(st, NULL);
+    int f = -1;
+    for (int i = 0; i < g->n_fields && f < 0; i++)
+        if (field ? !strcmp(g->fields[i].name, field) : g->fields[i].n_components == 1)
+            f = i;
+    if (f < 0) {
+        cli_error("%s: no field %s", in, field ? field : "of one component");
+        vv_grid_free(g);
+        return CLI_EXIT_FAIL;
+    }
+    vv_mesh *m = NULL;
+    st = vv_grid_isosurface(g, f, -1, iso, &m);
+    if (st == VV_OK && m->n_triangles == 0) {
+        cli_error("%s: no triangles at isovalue %g of field %s (range %g .. %g)", in, iso,
+                  g->fields[f].name, g->fields[f].range[0], g->fields[f].range[1]);
+        vv_mesh_free(m);
+        vv_grid_free(g);
+        return CLI_EXIT_FAIL;
+    }
+    if (st == VV_OK && !normals && m->normals) {
+        free(m->normals);
+        m->normals = NULL;
+    }
+    if (st == VV_OK)
+        st = vv_mesh_save(m, out);
+    if (st != VV_OK) {
+        int rc = cli_fail(st, st == VV_ERR_IO ? out : in);
+        vv_mesh_free(m);
+        vv_grid_free(g);
+        return rc;
+    }
+    if (!quiet)
+        printf("wrote %s (Marching Tetrahedra of %s at %g: %zu vertices, %zu triangles, area "
+               "%.6g units^2)\n",
+               out, g->fields[f].name, iso, m->n_vertices, m->n_triangles, vv_mesh_area(m));
+    vv_mesh_free(m);
+    vv_grid_free(g);
+    return CLI_EXIT_OK;
+}
 
 void
 cli_isosurface_usage(FILE *out) {
@@ -38,6 +87,9 @@ cli_isosurface_usage(FILE *out) {
         "  --parc L     the outer faces of the PARC subvolumes (boxes) that hold part of\n"
         "               the surface; the longest axis is split into 2^L boxes (L = 0..16)\n"
         "Prints what was written (vertices, triangles, area in world units).\n"
+        "INPUT may be an irregular grid (VTK UNSTRUCTURED_GRID, .vtu, OpenDX, PLOT3D,\n"
+        "NetCDF): its field (--field NAME, default the first scalar field) is\n"
+        "triangulated by Marching Tetrahedra over its cells.\n"
         "\n"
         "Options:\n"
         "  --iso V        the isovalue; voxels >= V are inside (required; must lie in\n"
@@ -47,6 +99,7 @@ cli_isosurface_usage(FILE *out) {
         "  --cut PX,PY,PZ:NX,NY,NZ   clip to the side of the plane the normal points to\n"
         "                 (world coordinates; repeatable, up to 8; Marching Cubes)\n"
         "  --no-normals   write no normals\n"
+        "  --field NAME   a grid's field (grids only)\n"
         "  --threads N    threads (default: all cores)\n"
         "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
         "                 read INPUT as raw voxels (see 'volvis info --help')\n"
@@ -115,6 +168,12 @@ cli_isosurface_main(int argc, char **argv) {
     const char *raw_spec = cli_get(&a, "raw");
     if (raw_spec && (rc = cli_parse_raw(&a, "raw", raw_spec, &raw)))
         return rc;
+    if (!raw_spec && vv_grid_file_detect(in, NULL)) {
+        /* an irregular grid: Marching Tetrahedra of its field */
+        if (coarse >= 0 || parc >= 0 || o.roi_max[0] >= 0 || o.n_cut_planes)
+            return cli_usage_error(&a, "--coarse, --parc, --roi and --cut apply to volumes only");
+        return isosurface_grid(in, out, iso, cli_get(&a, "field"), o.compute_normals, quiet);
+    }
     vv_volume *v;
     if ((rc = cli_load_volume(in, raw_spec ? &raw : NULL, &v)))
         return rc;
