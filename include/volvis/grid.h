@@ -156,6 +156,22 @@ vv_status vv_grid_field_scalars(const vv_grid *g, int field, int component, floa
  */
 vv_status vv_grid_validate(const vv_grid *g);
 
+/**
+ * Face adjacency of the grid's 3-D cells. The faces of a cell are numbered
+ * in VTK's order (tetra 4: opposite points 0..3; hexahedron 6: -z, +z, -y,
+ * +x, +y, -x of its corner numbering; wedge 5: the two triangles, then the
+ * three quadrilaterals; pyramid 5: the base, then the four triangles).
+ * @p offsets (n_cells + 1, malloc'ed) indexes @p neighbours (malloc'ed): the
+ * faces of cell c are neighbours[offsets[c] .. offsets[c + 1]), each the
+ * index of the cell across that face, or -1 on the boundary (cells that are
+ * not 3-D have no faces). Faces match by their set of points.
+ * @p n_boundary (may be NULL) gets the number of boundary faces. Errors:
+ * VV_ERR_FORMAT (a face shared by three or more cells: overlapping cells),
+ * VV_ERR_NOMEM. O(F log F) for F faces.
+ */
+vv_status vv_grid_face_adjacency(const vv_grid *g, size_t **offsets, int64_t **neighbours,
+                                 size_t *n_boundary);
+
 /** Bounding box of the points (an empty box at the origin with no points). */
 vv_box vv_grid_bounds(const vv_grid *g);
 

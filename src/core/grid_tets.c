@@ -355,3 +355,116 @@ vv_tetmesh_build(vv_tetmesh *m, const vv_grid *g, const float *scalars, int cell
         vv_tetmesh_clear(m);
     return st;
 }
+
+/* ---------------------------------------------------------------------- */
+/* Face adjacency of the cells                                              */
+
+typedef struct face_rec {
+    uint32_t key[4]; /* sorted point indices; a triangle's fourth is UINT32_MAX */
+    size_t slot;     /* index into neighbours */
+    size_t cell;
+} face_rec;
+
+static int
+face_cmp(const void *a, const void *b) {
+    const face_rec *x = a, *y = b;
+    for (int i = 0; i < 4; i++)
+        if (x->key[i] != y->key[i])
+            return x->key[i] < y->key[i] ? -1 : 1;
+    return 0;
+}
+
+static const int tet_faces_vtk[4][4] = {{1, 2, 3, -1}, {0, 3, 2, -1}, {0, 1, 3, -1}, {0, 2, 1, -1}};
+
+static int
+cell_faces(int type, const int (**faces)[4]) {
+    switch (type) {
+    case VV_CELL_TETRA:
+        *faces = tet_faces_vtk;
+        return 4;
+    case VV_CELL_HEXAHEDRON:
+        *faces = hex_faces;
+        return 6;
+    case VV_CELL_WEDGE:
+        *faces = wedge_faces;
+        return 5;
+    case VV_CELL_PYRAMID:
+        *faces = pyramid_faces;
+        return 5;
+    default:
+        return 0;
+    }
+}
+
+vv_status
+vv_grid_face_adjacency(const vv_grid *g, size_t **offsets, int64_t **neighbours,
+                       size_t *n_boundary) {
+    *offsets = NULL;
+    *neighbours = NULL;
+    size_t *off = malloc((g->n_cells + 1) * sizeof *off);
+    if (!off)
+        return vv_error_set(VV_ERR_NOMEM, "grid adjacency: out of memory");
+    off[0] = 0;
+    for (size_t c = 0; c < g->n_cells; c++) {
+        const int(*faces)[4];
+        off[c + 1] = off[c] + (size_t)cell_faces(g->cell_types[c], &faces);
+    }
+    const size_t nf = off[g->n_cells];
+    int64_t *nb = malloc((nf ? nf : 1) * sizeof *nb);
+    face_rec *rec = malloc((nf ? nf : 1) * sizeof *rec);
+    if (!nb || !rec) {
+        free(off);
+        free(nb);
+        free(rec);
+        return vv_error_set(VV_ERR_NOMEM, "grid adjacency: out of memory for %zu faces", nf);
+    }
+    for (size_t c = 0; c < g->n_cells; c++) {
+        const int(*faces)[4];
+        const int n = cell_faces(g->cell_types[c], &faces);
+        const uint32_t *pts = g->connectivity + g->cell_offsets[c];
+        for (int k = 0; k < n; k++) {
+            face_rec *r = &rec[off[c] + (size_t)k];
+            for (int i = 0; i < 4; i++)
+                r->key[i] = faces[k][i] < 0 ? UINT32_MAX : pts[faces[k][i]];
+            /* sort the four keys */
+            for (int i = 1; i < 4; i++)
+                for (int j = i; j > 0 && r->key[j] < r->key[j - 1]; j--) {
+                    const uint32_t x = r->key[j];
+                    r->key[j] = r->key[j - 1];
+                    r->key[j - 1] = x;
+                }
+            r->slot = off[c] + (size_t)k;
+            r->cell = c;
+            nb[r->slot] = -1;
+        }
+    }
+    qsort(rec, nf, sizeof *rec, face_cmp);
+    size_t boundary = 0;
+    for (size_t i = 0; i < nf;) {
+        size_t j = i + 1;
+        while (j < nf && face_cmp(&rec[i], &rec[j]) == 0)
+            j++;
+        if (j - i > 2) {
+            const size_t c0 = rec[i].cell, c1 = rec[i + 1].cell, c2 = rec[i + 2].cell;
+            free(off);
+            free(nb);
+            free(rec);
+            return vv_error_set(VV_ERR_FORMAT,
+                                "grid: cells %zu, %zu and %zu share a face (overlapping cells)", c0,
+                                c1, c2);
+        }
+        if (j - i == 2) {
+            nb[rec[i].slot] = (int64_t)rec[i + 1].cell;
+            nb[rec[i + 1].slot] = (int64_t)rec[i].cell;
+        } else {
+            boundary++;
+        }
+        i = j;
+    }
+    free(rec);
+    *offsets = off;
+    *neighbours = nb;
+    if (n_boundary)
+        *n_boundary = boundary;
+    return VV_OK;
+}

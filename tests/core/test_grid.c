@@ -96,6 +96,17 @@ test_tetmesh_adjacency(void **state) {
     vv_tetmesh m;
     vt_ok(vv_tetmesh_build(&m, g, v, 0, 1, 1));
     assert_int_equal(m.n_tets, 2);
+    {
+        size_t *off = NULL, nbound = 0;
+        int64_t *nbr = NULL;
+        vt_ok(vv_grid_face_adjacency(g, &off, &nbr, &nbound));
+        assert_int_equal(nbound, 6);
+        assert_int_equal(nbr[0], 1);     /* tetra 0's face 0 is (1, 2, 3) */
+        assert_int_equal(nbr[4 + 0], 0); /* tetra 1 = (4, 1, 2, 3): face 0 is the same */
+        assert_int_equal(nbr[1], -1);
+        free(off);
+        free(nbr);
+    }
     size_t boundary = 0;
     for (size_t f = 0; f < 8; f++)
         boundary += m.nb[f] < 0;
@@ -160,6 +171,10 @@ test_nonmanifold(void **state) {
     vv_tetmesh m;
     vt_err(vv_tetmesh_build(&m, g, v, 0, 1, 0));
     assert_non_null(strstr(vv_error_message(), "three"));
+    size_t *off = NULL;
+    int64_t *nbr = NULL;
+    vt_err(vv_grid_face_adjacency(g, &off, &nbr, NULL));
+    assert_null(off);
     vv_grid_free(g);
 }
 
@@ -220,6 +235,18 @@ test_mixed_cells(void **state) {
         boundary += m.nb[f] < 0;
     assert_int_equal(boundary, 8 + 2 + 4 + 4);
     vv_tetmesh_clear(&m);
+    /* cell adjacency: the hexahedron's +z face meets the wedge, its +x face the pyramid */
+    size_t *off = NULL, nbound = 0;
+    int64_t *nbr = NULL;
+    vt_ok(vv_grid_face_adjacency(g, &off, &nbr, &nbound));
+    assert_int_equal(off[3], 6 + 5 + 5);
+    assert_int_equal(nbound, 6 + 5 + 5 - 4);
+    assert_int_equal(nbr[1], 1);      /* hexahedron face 1 (+z) */
+    assert_int_equal(nbr[3], 2);      /* hexahedron face 3 (+x) */
+    assert_int_equal(nbr[off[2]], 0); /* the pyramid's base */
+    assert_int_equal(nbr[0], -1);
+    free(off);
+    free(nbr);
     vv_grid_free(g);
 }
 
