@@ -10,10 +10,12 @@ time with a temporary folder.
       Hounsfield units) as a CT series of one file per slice with pydicom:
       stored as unsigned 12-bit values HU + 1024 with Rescale Intercept -1024
       and Slope 1, Pixel Spacing and slice positions from the NRRD spacing,
-      explicit VR little endian. --first/--count pick slices, --crop keeps the
-      first N rows and columns, --oblique rotates Image Orientation (Patient)
-      and the positions by DEG degrees about the patient's A-P axis (the
-      pixels stay as they are: the same voxels, a rotated frame).
+      explicit VR little endian. Image Orientation (Patient) -1\0\0\0\-1\0 and
+      positions from (120, 130, -80) up +z, which read as RAS are the identity
+      direction at (-120, -130, -80). --first/--count pick slices, --crop
+      keeps the first N rows and columns, --oblique rotates the orientation and
+      the positions by DEG degrees about the patient's A-P axis (the pixels
+      stay as they are: the same voxels, a rotated frame).
       The files carry a made-up patient name and ID (VOLVIS^TEST, VV-PHI-0001)
       so that tests can check that they are never printed by default.
 
@@ -107,13 +109,20 @@ def write_series(out, sizes, spacings, slice_bytes, nslices, args, scale=(1.0, 1
     study = generate_uid()
     series = generate_uid()
     frame = generate_uid()
+    # The NRRD's rows run from the back of the head to the face and its
+    # slices from the neck up: in DICOM's LPS frame the row direction is -x,
+    # the column direction -y (anterior) and the normal +z (superior), which
+    # is RAS's identity. --oblique turns this frame about the A-P (y) axis.
     a = math.radians(args.oblique)
-    # rotation about the patient's y (A-P) axis
-    row = [math.cos(a), 0.0, -math.sin(a)]
-    col = [0.0, 1.0, 0.0]
-    nrm = [row[1] * col[2] - row[2] * col[1], row[2] * col[0] - row[0] * col[2],
-           row[0] * col[1] - row[1] * col[0]]
-    origin = [-120.0, -130.0, -80.0]
+
+    def turn(v):
+        return [math.cos(a) * v[0] + math.sin(a) * v[2], v[1],
+                -math.sin(a) * v[0] + math.cos(a) * v[2]]
+
+    row = turn([-1.0, 0.0, 0.0])
+    col = [0.0, -1.0, 0.0]
+    nrm = turn([0.0, 0.0, 1.0])
+    origin = [120.0, 130.0, -80.0]
     dz = spacings[2]
     for k in range(nslices):
         z = (args.first + k) * dz

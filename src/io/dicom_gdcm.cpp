@@ -94,8 +94,7 @@ frame_positions(const gdcm::DataSet &ds, int frames) {
     const gdcm::Tag per_frame(0x5200, 0x9230), plane_pos(0x0020, 0x9113);
     if (!ds.FindDataElement(per_frame))
         return nullptr;
-    gdcm::SmartPointer<gdcm::SequenceOfItems> sq =
-        ds.GetDataElement(per_frame).GetValueAsSQ();
+    gdcm::SmartPointer<gdcm::SequenceOfItems> sq = ds.GetDataElement(per_frame).GetValueAsSQ();
     if (!sq || (int)sq->GetNumberOfItems() != frames)
         return nullptr;
     double *pos = static_cast<double *>(std::malloc(sizeof(double) * 3 * (size_t)frames));
@@ -183,8 +182,8 @@ vv_dcm_read_header(const char *path, vv_dcm_file *f, char *err, size_t errlen) {
         }
         f->cols = (int)std::min<unsigned int>(dims[0], 1u << 30);
         f->rows = (int)std::min<unsigned int>(dims[1], 1u << 30);
-        f->frames = dims.size() > 2 && dims[2] > 0 ? (int)std::min<unsigned int>(dims[2], 1u << 30)
-                                                   : 1;
+        f->frames =
+            dims.size() > 2 && dims[2] > 0 ? (int)std::min<unsigned int>(dims[2], 1u << 30) : 1;
         f->samples = pf.GetSamplesPerPixel();
         f->bits_allocated = pf.GetBitsAllocated();
         f->bits_stored = pf.GetBitsStored();
@@ -255,8 +254,8 @@ vv_dcm_read_pixels(const char *path, void *dst, size_t bytes, char *err, size_t 
         unsigned long len = img.GetBufferLength();
         if (len != bytes) {
             char m[160];
-            std::snprintf(m, sizeof m, "decoded pixel data is %lu bytes, the header says %zu",
-                          len, bytes);
+            std::snprintf(m, sizeof m, "decoded pixel data is %lu bytes, the header says %zu", len,
+                          bytes);
             set_err(err, errlen, m);
             return -1;
         }
@@ -264,7 +263,8 @@ vv_dcm_read_pixels(const char *path, void *dst, size_t bytes, char *err, size_t 
         const gdcm::ByteValue *bv = pd.GetByteValue();
         if (bv && img.GetTransferSyntax().IsEncapsulated() == false && bv->GetLength() < bytes) {
             char m[160];
-            std::snprintf(m, sizeof m, "pixel data holds %lu bytes, the image needs %zu (truncated)",
+            std::snprintf(m, sizeof m,
+                          "pixel data holds %lu bytes, the image needs %zu (truncated)",
                           (unsigned long)bv->GetLength(), bytes);
             set_err(err, errlen, m);
             return -1;
@@ -305,7 +305,8 @@ vv_dcm_dicomdir_files(const char *path, char ***files, int *n, char *err, size_t
         size_t slash = dir.find_last_of('/');
         dir = slash == std::string::npos ? std::string(".") : dir.substr(0, slash);
         if (ds.FindDataElement(records)) {
-            gdcm::SmartPointer<gdcm::SequenceOfItems> sq = ds.GetDataElement(records).GetValueAsSQ();
+            gdcm::SmartPointer<gdcm::SequenceOfItems> sq =
+                ds.GetDataElement(records).GetValueAsSQ();
             for (size_t i = 1; sq && i <= sq->GetNumberOfItems(); i++) {
                 const gdcm::DataSet &item = sq->GetItem(i).GetNestedDataSet();
                 std::string ref = get_str(item, 0x0004, 0x1500);
