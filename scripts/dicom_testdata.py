@@ -128,8 +128,9 @@ def write_series(out, sizes, spacings, slice_bytes, nslices, args, scale=(1.0, 1
         z = (args.first + k) * dz
         pos = [origin[i] + z * nrm[i] for i in range(3)]
         name = os.path.join(out, "slice%04d.dcm" % (k + 1))
+        instance = nslices - k if getattr(args, "reverse_instances", False) else args.first + k + 1
         ds = base_dataset(name, study, series, frame, args.series_number, args.description,
-                          args.first + k + 1)
+                          instance)
         ds.Rows = ny
         ds.Columns = nx
         ds.PixelSpacing = ["%.8g" % spacings[1], "%.8g" % spacings[0]]
@@ -208,6 +209,8 @@ def main():
     c.add_argument("--oblique", type=float, default=0.0)
     c.add_argument("--series-number", type=int, default=1)
     c.add_argument("--description", default="Head CT")
+    c.add_argument("--reverse-instances", action="store_true",
+                   help="Instance Number counts down while the positions go up")
     c.set_defaults(func=cmd_ct)
     k = sub.add_parser("compress")
     k.add_argument("src")

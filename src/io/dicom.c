@@ -434,9 +434,16 @@ order_slices(const scan *sc, slice_ref *refs, int nz, const vv_dcm_file *f0, vv_
                                         "%s: Image Orientation (Patient) differs from %s's (a "
                                         "series of several orientations)",
                                         f->path, f0->path);
-            const double *p = f->frame_ipp ? f->frame_ipp + 3 * refs[z].frame : f->ipp;
-            memcpy(refs[z].p, p, sizeof refs[z].p);
-            refs[z].d = dot(nrm, p);
+            if (f->frame_ipp) {
+                memcpy(refs[z].p, f->frame_ipp + 3 * refs[z].frame, sizeof refs[z].p);
+            } else {
+                /* frames without positions (RT dose, ultrasound): stacked
+                 * along the normal at GDCM's frame spacing */
+                double step = f->frame_spacing > 0 ? f->frame_spacing : 1;
+                for (int i = 0; i < 3; i++)
+                    refs[z].p[i] = f->ipp[i] + refs[z].frame * step * nrm[i];
+            }
+            refs[z].d = dot(nrm, refs[z].p);
         }
     } else {
         for (int z = 0; z < nz; z++)
@@ -662,6 +669,53 @@ convert_frame(const vv_dcm_file *f, const unsigned char *src, int frame, int ch,
     }
 }
 
+/*
+ * 0 when the uncompressed Pixel Data of @p path cannot hold @p need bytes,
+ * with the bytes there in *@p have; 1 otherwise (also when it cannot tell).
+ * The element is looked for in the first 64 KiB as its tag (7FE0,0010) in
+ * either byte order followed by an explicit OB/OW length or an implicit one
+ * of at least @p need bytes: a sanity check on sizes, the parsing is GDCM's.
+ */
+static int
+native_pixels_fit(const char *path, uint64_t need, uint64_t *have) {
+    struct stat st;
+    if (stat(path, &st) != 0)
+        return 1;
+    uint64_t size = (uint64_t)st.st_size;
+    if (size < need) {
+        *have = size;
+        return 0;
+    }
+    FILE *fp = fopen(path, "rb");
+    if (!fp)
+        return 1;
+    unsigned char buf[65536];
+    size_t n = fread(buf, 1, sizeof buf, fp);
+    fclose(fp);
+    for (size_t i = 0; i + 12 <= n; i++) {
+        int le = buf[i] == 0xe0 && buf[i + 1] == 0x7f && buf[i + 2] == 0x10 && buf[i + 3] == 0;
+        int be = buf[i] == 0x7f && buf[i + 1] == 0xe0 && buf[i + 2] == 0 && buf[i + 3] == 0x10;
+        if (!le && !be)
+            continue;
+        const unsigned char *p = buf + i + 4;
+        uint64_t len, start;
+        if ((p[0] == 'O' && (p[1] == 'W' || p[1] == 'B')) && p[2] == 0 && p[3] == 0) {
+            p += 4;
+            start = i + 12;
+        } else {
+            start = i + 8;
+        }
+        len =
+            le ? (uint64_t)p[0] | (uint64_t)p[1] << 8 | (uint64_t)p[2] << 16 | (uint64_t)p[3] << 24
+               : (uint64_t)p[3] | (uint64_t)p[2] << 8 | (uint64_t)p[1] << 16 | (uint64_t)p[0] << 24;
+        if (len == 0xffffffffu || len < need)
+            continue;
+        *have = size > start ? size - start : 0;
+        return size >= start + need;
+    }
+    return 1;
+}
+
 static vv_status
 read_series(vv_volume **out, const scan *sc, int si, int channel) {
     int a = sc->start[si], b = sc->start[si + 1];
@@ -703,6 +757,21 @@ read_series(vv_volume **out, const scan *sc, int si, int channel) {
     /* the decoded size of each file, checked before any allocation */
     uint64_t frame_bytes =
         (uint64_t)f0->rows * (uint64_t)f0->cols * (uint64_t)f0->samples * (f0->bits_allocated / 8);
+    /* uncompressed pixel data must fit in the file: a cheap check for
+     * truncated files and absurd sizes before anything is allocated (GDCM
+     * reads a short Pixel Data element without complaint, zero-filled) */
+    for (int i = a; i < b; i++) {
+        const vv_dcm_file *f = &sc->f[sc->order[i]];
+        if (f->encapsulated)
+            continue;
+        uint64_t need = frame_bytes * (uint64_t)f->frames, have = 0;
+        if (!native_pixels_fit(f->path, need, &have))
+            return vv_error_set(VV_ERR_FORMAT,
+                                "%s: truncated pixel data: %d x %d x %d pixels of %d bits need "
+                                "%llu bytes, the file holds %llu",
+                                f->path, f->cols, f->rows, f->frames, f->bits_allocated,
+                                (unsigned long long)need, (unsigned long long)have);
+    }
     slice_ref *refs = calloc((size_t)nz, sizeof *refs);
     if (!refs)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");

@@ -24,6 +24,8 @@ typedef struct vv_dcm_file {
     int series_number, instance_number;
     int rows, cols, frames, samples, planar;
     int bits_allocated, bits_stored, pixel_rep;
+    int encapsulated;       /**< compressed transfer syntax (pixel data size unknown) */
+    long long pixel_offset; /**< where the Pixel Data element starts in the file, -1 unknown */
     int has_ipp, has_iop, has_spacing;
     double ipp[3], iop[6];   /**< Image Position / Orientation (Patient), LPS */
     double pixel_spacing[2]; /**< DICOM order: between rows, between columns */

@@ -25,8 +25,10 @@
 #include <gdcmMediaStorage.h>
 #include <gdcmPixelFormat.h>
 #include <gdcmReader.h>
+#include <gdcmSequenceOfFragments.h>
 #include <gdcmSequenceOfItems.h>
 #include <gdcmTag.h>
+#include <gdcmTrace.h>
 
 namespace {
 
@@ -128,6 +130,31 @@ enhanced_orientation(const gdcm::File &file, double iop[6]) {
     return 1;
 }
 
+/* JPEG, JPEG-LS and JPEG 2000 streams end with the marker FF D9 (EOI/EOC);
+ * libjpeg decodes a stream cut short without an error, filling the rest, so
+ * the last fragment's end is checked here. 1 also for other syntaxes. */
+bool
+jpeg_streams_end(const gdcm::Image &img) {
+    const gdcm::TransferSyntax &ts = img.GetTransferSyntax();
+    if (!ts.IsEncapsulated() || ts == gdcm::TransferSyntax::RLELossless)
+        return true;
+    const gdcm::SequenceOfFragments *sf = img.GetDataElement().GetSequenceOfFragments();
+    if (!sf || sf->GetNumberOfFragments() == 0)
+        return true;
+    const gdcm::ByteValue *bv = sf->GetFragment(sf->GetNumberOfFragments() - 1).GetByteValue();
+    if (!bv || !bv->GetPointer())
+        return false;
+    const unsigned char *p = reinterpret_cast<const unsigned char *>(bv->GetPointer());
+    size_t n = bv->GetLength();
+    while (n > 0 && p[n - 1] == 0) /* even-length padding */
+        n--;
+    /* some writers pad with a few more bytes (0xFF) after the marker */
+    for (size_t k = 0; k < 8 && n >= 2 + k; k++)
+        if (p[n - 2 - k] == 0xff && p[n - 1 - k] == 0xd9)
+            return true;
+    return false;
+}
+
 std::once_flag init_once;
 
 } // namespace
@@ -137,6 +164,10 @@ vv_dcm_init(void) {
     std::call_once(init_once, [] {
         try {
             gdcm::Global::GetInstance(); /* dictionaries */
+            /* GDCM's warnings go to stderr; our errors carry the reasons */
+            gdcm::Trace::SetWarning(false);
+            gdcm::Trace::SetDebug(false);
+            gdcm::Trace::SetError(false);
         } catch (...) {
         }
     });
@@ -189,6 +220,10 @@ vv_dcm_read_header(const char *path, vv_dcm_file *f, char *err, size_t errlen) {
         f->bits_stored = pf.GetBitsStored();
         f->pixel_rep = pf.GetPixelRepresentation();
         f->planar = (int)gdcm::ImageHelper::GetPlanarConfigurationValue(file);
+        const gdcm::TransferSyntax &ts = file.GetHeader().GetDataSetTransferSyntax();
+        f->encapsulated =
+            ts.IsEncapsulated() || ts == gdcm::TransferSyntax::DeflatedExplicitVRLittleEndian;
+        f->pixel_offset = f->encapsulated ? -1 : (long long)r.GetStreamCurrentPosition();
 
         f->has_ipp = get_nums(ds, 0x0020, 0x0032, f->ipp, 3) == 3;
         f->has_iop = get_nums(ds, 0x0020, 0x0037, f->iop, 6) == 6;
@@ -267,6 +302,13 @@ vv_dcm_read_pixels(const char *path, void *dst, size_t bytes, char *err, size_t 
                           "pixel data holds %lu bytes, the image needs %zu (truncated)",
                           (unsigned long)bv->GetLength(), bytes);
             set_err(err, errlen, m);
+            return -1;
+        }
+        if (!jpeg_streams_end(img)) {
+            std::string ts = gdcm::TransferSyntax::GetTSString(img.GetTransferSyntax());
+            std::string m = "corrupt compressed pixel data (" + ts +
+                            "): the stream stops before its end-of-image marker (truncated)";
+            set_err(err, errlen, m.c_str());
             return -1;
         }
         if (!img.GetBuffer(static_cast<char *>(dst))) {
