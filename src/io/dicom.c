@@ -670,25 +670,28 @@ convert_frame(const vv_dcm_file *f, const unsigned char *src, int frame, int ch,
 }
 
 /*
- * 0 when the uncompressed Pixel Data of @p path cannot hold @p need bytes,
- * with the bytes there in *@p have; 1 otherwise (also when it cannot tell).
- * The element is looked for in the first 64 KiB as its tag (7FE0,0010) in
- * either byte order followed by an explicit OB/OW length or an implicit one
- * of at least @p need bytes: a sanity check on sizes, the parsing is GDCM's.
+ * Where the uncompressed Pixel Data value of @p f starts. Returns 1 with
+ * *@p start when it was found and agrees with GDCM (the element's end is
+ * where GDCM's reading of the file ended), 0 when the file is too short for
+ * @p need bytes (*@p have gets the bytes there), 2 when it cannot tell. The
+ * element is looked for in the first 64 KiB as its tag (7FE0,0010), either
+ * byte order, with an explicit OB/OW or an implicit length of at least
+ * @p need: a check of sizes and an offset for reading native voxels
+ * straight into the volume; the parsing is GDCM's.
  */
 static int
-native_pixels_fit(const char *path, uint64_t need, uint64_t *have) {
+native_pixels(const vv_dcm_file *f, uint64_t need, uint64_t *start_out, uint64_t *have) {
     struct stat st;
-    if (stat(path, &st) != 0)
-        return 1;
+    if (stat(f->path, &st) != 0)
+        return 2;
     uint64_t size = (uint64_t)st.st_size;
     if (size < need) {
         *have = size;
         return 0;
     }
-    FILE *fp = fopen(path, "rb");
+    FILE *fp = fopen(f->path, "rb");
     if (!fp)
-        return 1;
+        return 2;
     unsigned char buf[65536];
     size_t n = fread(buf, 1, sizeof buf, fp);
     fclose(fp);
@@ -710,10 +713,64 @@ native_pixels_fit(const char *path, uint64_t need, uint64_t *have) {
                : (uint64_t)p[3] | (uint64_t)p[2] << 8 | (uint64_t)p[1] << 16 | (uint64_t)p[0] << 24;
         if (len == 0xffffffffu || len < need)
             continue;
-        *have = size > start ? size - start : 0;
-        return size >= start + need;
+        if (size < start + need) {
+            *have = size > start ? size - start : 0;
+            return 0;
+        }
+        *start_out = start;
+        return f->pixel_end >= 0 && (uint64_t)f->pixel_end == start + len ? 1 : 2;
     }
-    return 1;
+    return 2;
+}
+
+/* Min and max of @p n voxels of type @p t at @p p (NaN skipped), folded into lo/hi. */
+static void
+slice_range(vv_voxel_type t, const void *p, size_t n, double *lo, double *hi) {
+#define VV_DCM_RANGE(T)                                                                            \
+    do {                                                                                           \
+        const T *q = p;                                                                            \
+        T a = q[0], b = q[0];                                                                      \
+        for (size_t i = 1; i < n; i++) {                                                           \
+            a = q[i] < a ? q[i] : a;                                                               \
+            b = q[i] > b ? q[i] : b;                                                               \
+        }                                                                                          \
+        if ((double)a < *lo)                                                                       \
+            *lo = (double)a;                                                                       \
+        if ((double)b > *hi)                                                                       \
+            *hi = (double)b;                                                                       \
+    } while (0)
+    switch (t) {
+    case VV_U8:
+        VV_DCM_RANGE(uint8_t);
+        break;
+    case VV_I8:
+        VV_DCM_RANGE(int8_t);
+        break;
+    case VV_U16:
+        VV_DCM_RANGE(uint16_t);
+        break;
+    case VV_I16:
+        VV_DCM_RANGE(int16_t);
+        break;
+    case VV_U32:
+        VV_DCM_RANGE(uint32_t);
+        break;
+    case VV_I32:
+        VV_DCM_RANGE(int32_t);
+        break;
+    case VV_F32:
+    case VV_F64: {
+        for (size_t i = 0; i < n; i++) {
+            double x = vv_voxel_value(t, p, i);
+            if (x < *lo)
+                *lo = x;
+            if (x > *hi)
+                *hi = x;
+        }
+        break;
+    }
+    }
+#undef VV_DCM_RANGE
 }
 
 static vv_status
@@ -759,22 +816,34 @@ read_series(vv_volume **out, const scan *sc, int si, int channel) {
         (uint64_t)f0->rows * (uint64_t)f0->cols * (uint64_t)f0->samples * (f0->bits_allocated / 8);
     /* uncompressed pixel data must fit in the file: a cheap check for
      * truncated files and absurd sizes before anything is allocated (GDCM
-     * reads a short Pixel Data element without complaint, zero-filled) */
+     * reads a short Pixel Data element without complaint, zero-filled); where
+     * the value starts, for reading native voxels straight into the volume */
+    uint64_t *direct = calloc((size_t)(b - a), sizeof *direct); /* start + 1, 0: via GDCM */
+    if (!direct)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
     for (int i = a; i < b; i++) {
         const vv_dcm_file *f = &sc->f[sc->order[i]];
         if (f->encapsulated)
             continue;
-        uint64_t need = frame_bytes * (uint64_t)f->frames, have = 0;
-        if (!native_pixels_fit(f->path, need, &have))
+        uint64_t need = frame_bytes * (uint64_t)f->frames, have = 0, start = 0;
+        int r = native_pixels(f, need, &start, &have);
+        if (r == 0) {
+            free(direct);
             return vv_error_set(VV_ERR_FORMAT,
                                 "%s: truncated pixel data: %d x %d x %d pixels of %d bits need "
                                 "%llu bytes, the file holds %llu",
                                 f->path, f->cols, f->rows, f->frames, f->bits_allocated,
                                 (unsigned long long)need, (unsigned long long)have);
+        }
+        if (r == 1 && f->native_le && f->frames == 1 && f->samples == 1 &&
+            vv_host_is_little_endian())
+            direct[i - a] = start + 1;
     }
     slice_ref *refs = calloc((size_t)nz, sizeof *refs);
-    if (!refs)
+    if (!refs) {
+        free(direct);
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
     long z = 0;
     for (int i = a; i < b; i++) {
         const vv_dcm_file *f = &sc->f[sc->order[i]];
@@ -791,38 +860,76 @@ read_series(vv_volume **out, const scan *sc, int si, int channel) {
         s = order_slices(sc, refs, (int)nz, f0, v);
     if (s != VV_OK) {
         free(refs);
+        free(direct);
         vv_volume_free(v);
         return s;
     }
     size_t slice_bytes = (size_t)f0->rows * f0->cols * vv_voxel_type_size(t);
+    size_t np = (size_t)f0->rows * f0->cols;
+    int same_size = vv_voxel_type_size(t) * 8 == (size_t)f0->bits_allocated;
+    /* the slot of each file's first frame */
+    long *slot = malloc((size_t)(b - a) * sizeof *slot);
+    if (!slot) {
+        free(refs);
+        free(direct);
+        vv_volume_free(v);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    for (int i = 0; i < b - a; i++)
+        slot[i] = -1;
+    for (long k = 0; k < nz; k++)
+        for (int i = a; i < b; i++)
+            if (sc->order[i] == refs[k].file && refs[k].frame == 0)
+                slot[i - a] = k;
     int failed = -1;
     char err[256] = "";
+    double lo = INFINITY, hi = -INFINITY;
     vv_dcm_init();
 #pragma omp parallel
     {
         unsigned char *buf = NULL;
         size_t cap = 0;
+        double tlo = INFINITY, thi = -INFINITY;
 #pragma omp for schedule(dynamic, 2)
         for (int i = a; i < b; i++) {
             const vv_dcm_file *f = &sc->f[sc->order[i]];
             size_t need = (size_t)(frame_bytes * (uint64_t)f->frames);
             char e[256] = "";
             int bad = 0;
-            if (need > cap) {
-                free(buf);
-                buf = malloc(need);
-                cap = buf ? need : 0;
-            }
-            if (!buf) {
-                snprintf(e, sizeof e, "out of memory for %zu bytes", need);
-                bad = 1;
-            } else if (vv_dcm_read_pixels(f->path, buf, need, e, sizeof e) != 0) {
-                bad = 1;
+            if (direct[i - a] && same_size && slot[i - a] >= 0) {
+                /* native little-endian voxels: read in place, rescale in place */
+                unsigned char *dst = (unsigned char *)v->data + (size_t)slot[i - a] * slice_bytes;
+                FILE *fp = fopen(f->path, "rb");
+                if (!fp || fseeko(fp, (off_t)(direct[i - a] - 1), SEEK_SET) != 0 ||
+                    fread(dst, 1, need, fp) != need) {
+                    snprintf(e, sizeof e, "cannot read the pixel data: %s",
+                             fp ? "file truncated" : strerror(errno));
+                    bad = 1;
+                } else {
+                    convert_frame(f, dst, 0, 0, t, dst);
+                    slice_range(t, dst, np, &tlo, &thi);
+                }
+                if (fp)
+                    fclose(fp);
             } else {
-                for (long k = 0; k < nz; k++)
-                    if (refs[k].file == sc->order[i])
-                        convert_frame(f, buf, refs[k].frame, ch, t,
-                                      (unsigned char *)v->data + (size_t)k * slice_bytes);
+                if (need > cap) {
+                    free(buf);
+                    buf = malloc(need);
+                    cap = buf ? need : 0;
+                }
+                if (!buf) {
+                    snprintf(e, sizeof e, "out of memory for %zu bytes", need);
+                    bad = 1;
+                } else if (vv_dcm_read_pixels(f->path, buf, need, e, sizeof e) != 0) {
+                    bad = 1;
+                } else {
+                    for (long k = 0; k < nz; k++)
+                        if (refs[k].file == sc->order[i]) {
+                            unsigned char *dst = (unsigned char *)v->data + (size_t)k * slice_bytes;
+                            convert_frame(f, buf, refs[k].frame, ch, t, dst);
+                            slice_range(t, dst, np, &tlo, &thi);
+                        }
+                }
             }
             if (bad) {
 #pragma omp critical(vv_dicom_err)
@@ -833,8 +940,15 @@ read_series(vv_volume **out, const scan *sc, int si, int channel) {
             }
         }
         free(buf);
+#pragma omp critical(vv_dicom_range)
+        {
+            lo = fmin(lo, tlo);
+            hi = fmax(hi, thi);
+        }
     }
+    free(slot);
     free(refs);
+    free(direct);
     if (failed >= 0) {
         vv_volume_free(v);
         return vv_error_set(VV_ERR_FORMAT, "%s: %s", sc->f[sc->order[failed]].path, err);
@@ -846,7 +960,10 @@ read_series(vv_volume **out, const scan *sc, int si, int channel) {
     else
         v->data_origin = VV_ORIGIN_OTHER;
     v->modification = VV_MOD_ORIGINAL;
-    vv_volume_update_range(v);
+    /* the range gathered slice by slice (NaN never compares less or more) */
+    v->range[0] = lo <= hi ? lo : 0;
+    v->range[1] = lo <= hi ? hi : 0;
+    v->modified++;
     *out = v;
     return VV_OK;
 }

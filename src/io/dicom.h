@@ -24,8 +24,10 @@ typedef struct vv_dcm_file {
     int series_number, instance_number;
     int rows, cols, frames, samples, planar;
     int bits_allocated, bits_stored, pixel_rep;
-    int encapsulated;       /**< compressed transfer syntax (pixel data size unknown) */
-    long long pixel_offset; /**< where the Pixel Data element starts in the file, -1 unknown */
+    int encapsulated;    /**< compressed transfer syntax (pixel data size unknown) */
+    int native_le;       /**< explicit or implicit VR little endian (not deflated) */
+    long long pixel_end; /**< native syntaxes: where GDCM's reading ended after the
+                              Pixel Data element, -1 unknown */
     int has_ipp, has_iop, has_spacing;
     double ipp[3], iop[6];   /**< Image Position / Orientation (Patient), LPS */
     double pixel_spacing[2]; /**< DICOM order: between rows, between columns */

@@ -223,7 +223,9 @@ vv_dcm_read_header(const char *path, vv_dcm_file *f, char *err, size_t errlen) {
         const gdcm::TransferSyntax &ts = file.GetHeader().GetDataSetTransferSyntax();
         f->encapsulated =
             ts.IsEncapsulated() || ts == gdcm::TransferSyntax::DeflatedExplicitVRLittleEndian;
-        f->pixel_offset = f->encapsulated ? -1 : (long long)r.GetStreamCurrentPosition();
+        f->native_le = ts == gdcm::TransferSyntax::ExplicitVRLittleEndian ||
+                       ts == gdcm::TransferSyntax::ImplicitVRLittleEndian;
+        f->pixel_end = f->encapsulated ? -1 : (long long)r.GetStreamCurrentPosition();
 
         f->has_ipp = get_nums(ds, 0x0020, 0x0032, f->ipp, 3) == 3;
         f->has_iop = get_nums(ds, 0x0020, 0x0037, f->iop, 6) == 6;

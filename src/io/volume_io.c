@@ -364,7 +364,10 @@ vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
     if (!*out)
         return vv_error_set(VV_ERR_FORMAT, "%s: %s: reader returned no volume", vv_format_name(f),
                             vv_path_basename(path));
-    vv_volume_update_range(*out);
+    /* every reader computes range[]; a reader that left it unset gets it here
+     * (a second pass over a large volume costs as much as a fast reader) */
+    if ((*out)->range[0] == 0 && (*out)->range[1] == 0)
+        vv_volume_update_range(*out);
     return VV_OK;
 }
 
