@@ -19,6 +19,12 @@ time with a temporary folder.
       The files carry a made-up patient name and ID (VOLVIS^TEST, VV-PHI-0001)
       so that tests can check that they are never printed by default.
 
+  dicom_testdata.py oblique NRRD OUT [--angle DEG] [--size N] [--slices N]
+      An oblique slab through the middle of the same head, its frame turned
+      by DEG degrees about the A-P axis, the pixels resampled (nearest
+      neighbour) from the upright volume: read correctly, the anatomy stays
+      upright in the patient frame.
+
   dicom_testdata.py compress IN OUT SYNTAX...
       Copies every file of IN into OUT/SYNTAX/ through gdcmconv for each
       SYNTAX: jpeg (lossless), jpegls, j2k, rle, deflated, implicit.
@@ -163,6 +169,55 @@ def cmd_ct(args):
     write_series(args.out, [min(crop, nx), min(crop, ny), nz], spacings, slice_bytes, count, args)
 
 
+def cmd_oblique(args):
+    """An oblique slab resampled (nearest neighbour) from the upright head, so
+    that the anatomy stays upright in the patient frame."""
+    sizes, spacings, values = read_nrrd(args.nrrd)
+    nx, ny, nz = sizes
+    psx, psy, dz = spacings
+    o0 = [120.0, 130.0, -80.0]
+    r0, c0, n0 = [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0]
+    a = math.radians(args.angle)
+
+    def turn(v):
+        return [math.cos(a) * v[0] + math.sin(a) * v[2], v[1],
+                -math.sin(a) * v[0] + math.cos(a) * v[2]]
+
+    r, c, n = turn(r0), c0, turn(n0)
+    pc = [o0[i] + (nx - 1) / 2 * psx * r0[i] + (ny - 1) / 2 * psy * c0[i] +
+          (nz - 1) / 2 * dz * n0[i] for i in range(3)]
+    m, q, s = args.size, args.slices, psx
+    org = [pc[i] - (m - 1) / 2 * s * r[i] - (m - 1) / 2 * s * c[i] - (q - 1) / 2 * dz * n[i]
+           for i in range(3)]
+    os.makedirs(args.out, exist_ok=True)
+    study, series, frame = generate_uid(), generate_uid(), generate_uid()
+    for k in range(q):
+        out = array.array("H")
+        for j in range(m):
+            for i in range(m):
+                p = [org[t] + i * s * r[t] + j * s * c[t] + k * dz * n[t] for t in range(3)]
+                d = [p[t] - o0[t] for t in range(3)]
+                ii = math.floor(sum(d[t] * r0[t] for t in range(3)) / psx + 0.5)
+                jj = math.floor(sum(d[t] * c0[t] for t in range(3)) / psy + 0.5)
+                kk = math.floor(sum(d[t] * n0[t] for t in range(3)) / dz + 0.5)
+                v = -1024
+                if 0 <= ii < nx and 0 <= jj < ny and 0 <= kk < nz:
+                    v = values[(kk * ny + jj) * nx + ii]
+                out.append(max(0, min(4095, v + 1024)))
+        if sys.byteorder == "big":
+            out.byteswap()
+        name = os.path.join(args.out, "obl%04d.dcm" % (k + 1))
+        ds = base_dataset(name, study, series, frame, 1, "Oblique head", k + 1)
+        ds.Rows = m
+        ds.Columns = m
+        ds.PixelSpacing = ["%.8g" % s, "%.8g" % s]
+        ds.SliceThickness = "%.8g" % dz
+        ds.ImagePositionPatient = ["%.6f" % (org[t] + k * dz * n[t]) for t in range(3)]
+        ds.ImageOrientationPatient = ["%.8f" % x for x in r + c]
+        ds.PixelData = out.tobytes()
+        ds.save_as(name, write_like_original=False)
+
+
 def cmd_compress(args):
     flags = {"jpeg": ["--jpeg"], "jpegls": ["--jpegls"], "j2k": ["--j2k"], "rle": ["--rle"],
              "deflated": ["--deflated"], "implicit": ["--implicit"]}
@@ -212,6 +267,13 @@ def main():
     c.add_argument("--reverse-instances", action="store_true",
                    help="Instance Number counts down while the positions go up")
     c.set_defaults(func=cmd_ct)
+    o = sub.add_parser("oblique")
+    o.add_argument("nrrd")
+    o.add_argument("out")
+    o.add_argument("--angle", type=float, default=30.0)
+    o.add_argument("--size", type=int, default=96)
+    o.add_argument("--slices", type=int, default=24)
+    o.set_defaults(func=cmd_oblique)
     k = sub.add_parser("compress")
     k.add_argument("src")
     k.add_argument("out")

@@ -623,7 +623,7 @@ convert_frame(const vv_dcm_file *f, const unsigned char *src, int frame, int ch,
     /* the common case: 16-bit samples, integer output */
     if (ba == 16 && step == 1 && (t == VV_I16 || t == VV_U16) && slope == 1) {
         const unsigned char *s = src + 2 * base;
-        int16_t off = (int16_t)inter;
+        int32_t off = (int32_t)inter;
         uint16_t mask = (uint16_t)((1u << bs) - 1);
         int sign = f->pixel_rep;
         uint16_t sbit = (uint16_t)(1u << (bs - 1));

@@ -87,6 +87,8 @@ setup(void **state) {
               "--reverse-instances",
               PYTHON, script, nrrd, g_dir);
     rc |= run("%s %s ct %s %s/small --first 50 --count 6 --crop 96", PYTHON, script, nrrd, g_dir);
+    rc |= run("%s %s oblique %s %s/oblr --angle 30 --size 96 --slices 24", PYTHON, script, nrrd,
+              g_dir);
     rc |= run("%s %s ct %s %s/mixed --first 50 --count 6 --crop 96 && %s %s ct %s %s/mixed2 "
               "--first 10 --count 3 --crop 32 --series-number 7 --description Scout",
               PYTHON, script, nrrd, g_dir, PYTHON, script, nrrd, g_dir);
@@ -271,6 +273,44 @@ test_oblique(void **state) {
     assert_near(v->origin[2], origin_lps[2], 1e-3);
     vv_volume_free(ct);
     vv_volume_free(v);
+}
+
+/* An oblique slab resampled from the upright head: read with its rotated
+ * orientation, every voxel lands where the same anatomy is in the upright
+ * series, i.e. it renders upright (a tilted box around an upright head). */
+static void
+test_oblique_upright(void **state) {
+    (void)state;
+    NEED_DATA();
+    vv_volume *obl = NULL, *ct = NULL;
+    vt_ok(vv_volume_load(&obl, tmp("oblr"), NULL));
+    vt_ok(vv_volume_load(&ct, tmp("ct"), NULL));
+    assert_int_equal(obl->dims[0], 96);
+    assert_int_equal(obl->dims[2], 24);
+    assert_true(fabs(obl->direction[2]) > 0.4); /* really oblique */
+    vv_mat4 to_world = vv_volume_index_to_world(obl);
+    vv_mat4 to_index = vv_volume_world_to_index(ct);
+    long n = 0, same = 0, tissue = 0;
+    for (int k = 0; k < obl->dims[2]; k++)
+        for (int j = 0; j < obl->dims[1]; j += 3)
+            for (int i = 0; i < obl->dims[0]; i += 3) {
+                vv_vec3 w = vv_mat4_mul_point(to_world, vv_vec3_make(i, j, k));
+                vv_vec3 x = vv_mat4_mul_point(to_index, w);
+                int ii = (int)floor(x.x + 0.5), jj = (int)floor(x.y + 0.5),
+                    kk = (int)floor(x.z + 0.5);
+                if (ii < 0 || jj < 0 || kk < 0 || ii >= 256 || jj >= 256 || kk >= 108)
+                    continue;
+                double a = vv_volume_get(obl, i, j, k), b = vv_volume_get(ct, ii, jj, kk);
+                n++;
+                same += a == b;
+                tissue += b > -500;
+            }
+    assert_true(n > 5000);
+    assert_true(tissue > n / 4); /* the slab goes through the head */
+    if ((double)same < 0.99 * (double)n)
+        fail_msg("only %ld of %ld oblique voxels match the upright head there", same, n);
+    vv_volume_free(ct);
+    vv_volume_free(obl);
 }
 
 static void
@@ -519,13 +559,10 @@ test_bad_input(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_ct_series),
-        cmocka_unit_test(test_shuffled_renamed),
-        cmocka_unit_test(test_missing_slice),
-        cmocka_unit_test(test_oblique),
-        cmocka_unit_test(test_compressions),
-        cmocka_unit_test(test_pydicom_files),
-        cmocka_unit_test(test_mixed_series_and_cli),
+        cmocka_unit_test(test_ct_series),       cmocka_unit_test(test_shuffled_renamed),
+        cmocka_unit_test(test_missing_slice),   cmocka_unit_test(test_oblique),
+        cmocka_unit_test(test_oblique_upright), cmocka_unit_test(test_compressions),
+        cmocka_unit_test(test_pydicom_files),   cmocka_unit_test(test_mixed_series_and_cli),
         cmocka_unit_test(test_bad_input),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
