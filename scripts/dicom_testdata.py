@@ -25,6 +25,12 @@ time with a temporary folder.
       neighbour) from the upright volume: read correctly, the anatomy stays
       upright in the patient frame.
 
+  dicom_testdata.py multiframe NRRD OUT.dcm [--first K] [--count N] [--crop N]
+      Slices K..K+N-1 of the head as one Enhanced CT file (multi-frame): pixel
+      spacing, orientation and rescale in the Shared Functional Groups, one
+      Plane Position per frame in the Per-frame Functional Groups, the frames
+      stored in a scrambled order (the reader sorts them by position).
+
   dicom_testdata.py compress IN OUT SYNTAX...
       Copies every file of IN into OUT/SYNTAX/ through gdcmconv for each
       SYNTAX: jpeg (lossless), jpegls, j2k, rle, deflated, implicit.
@@ -218,6 +224,78 @@ def cmd_oblique(args):
         ds.save_as(name, write_like_original=False)
 
 
+def cmd_multiframe(args):
+    """Slices of the head as one Enhanced CT file: geometry and rescale in
+    the functional groups, frames stored in a scrambled order."""
+    from pydicom.dataset import Dataset
+    from pydicom.sequence import Sequence
+    sizes, spacings, values = read_nrrd(args.nrrd)
+    nx, ny, nz = sizes
+    m = min(args.crop, nx, ny)
+    dz = spacings[2]
+    order = [(k * 5 + 3) % args.count for k in range(args.count)]  # 5 is prime to count
+    if len(set(order)) != args.count:
+        order = list(range(args.count))[::-1]
+    meta = FileMetaDataset()
+    meta.MediaStorageSOPClassUID = "1.2.840.10008.5.1.4.1.1.2.1"
+    meta.MediaStorageSOPInstanceUID = generate_uid()
+    meta.TransferSyntaxUID = ExplicitVRLittleEndian
+    ds = FileDataset(args.out, {}, file_meta=meta, preamble=b"\0" * 128)
+    ds.is_little_endian = True
+    ds.is_implicit_VR = False
+    ds.SOPClassUID = meta.MediaStorageSOPClassUID
+    ds.SOPInstanceUID = meta.MediaStorageSOPInstanceUID
+    ds.PatientName = "VOLVIS^TEST"
+    ds.PatientID = "VV-PHI-0001"
+    ds.StudyInstanceUID = generate_uid()
+    ds.SeriesInstanceUID = generate_uid()
+    ds.FrameOfReferenceUID = generate_uid()
+    ds.Modality = "CT"
+    ds.SeriesNumber = 1
+    ds.InstanceNumber = 1
+    ds.SeriesDescription = "Enhanced head"
+    ds.SamplesPerPixel = 1
+    ds.PhotometricInterpretation = "MONOCHROME2"
+    ds.BitsAllocated = 16
+    ds.BitsStored = 12
+    ds.HighBit = 11
+    ds.PixelRepresentation = 0
+    ds.Rows = m
+    ds.Columns = m
+    ds.NumberOfFrames = args.count
+    shared = Dataset()
+    pm = Dataset()
+    pm.PixelSpacing = ["%.8g" % spacings[1], "%.8g" % spacings[0]]
+    pm.SliceThickness = "%.8g" % dz
+    shared.PixelMeasuresSequence = Sequence([pm])
+    po = Dataset()
+    po.ImageOrientationPatient = ["-1", "0", "0", "0", "-1", "0"]
+    shared.PlaneOrientationSequence = Sequence([po])
+    pv = Dataset()
+    pv.RescaleIntercept = "-1024"
+    pv.RescaleSlope = "1"
+    pv.RescaleType = "HU"
+    shared.PixelValueTransformationSequence = Sequence([pv])
+    ds.SharedFunctionalGroupsSequence = Sequence([shared])
+    frames = []
+    pixels = array.array("H")
+    for k in order:
+        z = args.first + k
+        fg = Dataset()
+        pp = Dataset()
+        pp.ImagePositionPatient = ["120", "130", "%.6f" % (-80.0 + z * dz)]
+        fg.PlanePositionSequence = Sequence([pp])
+        frames.append(fg)
+        for j in range(m):
+            base = (z * ny + j) * nx
+            pixels.extend(max(0, min(4095, v + 1024)) for v in values[base:base + m])
+    ds.PerFrameFunctionalGroupsSequence = Sequence(frames)
+    if sys.byteorder == "big":
+        pixels.byteswap()
+    ds.PixelData = pixels.tobytes()
+    ds.save_as(args.out, write_like_original=False)
+
+
 def cmd_compress(args):
     flags = {"jpeg": ["--jpeg"], "jpegls": ["--jpegls"], "j2k": ["--j2k"], "rle": ["--rle"],
              "deflated": ["--deflated"], "implicit": ["--implicit"]}
@@ -274,6 +352,13 @@ def main():
     o.add_argument("--size", type=int, default=96)
     o.add_argument("--slices", type=int, default=24)
     o.set_defaults(func=cmd_oblique)
+    f = sub.add_parser("multiframe")
+    f.add_argument("nrrd")
+    f.add_argument("out")
+    f.add_argument("--first", type=int, default=40)
+    f.add_argument("--count", type=int, default=8)
+    f.add_argument("--crop", type=int, default=64)
+    f.set_defaults(func=cmd_multiframe)
     k = sub.add_parser("compress")
     k.add_argument("src")
     k.add_argument("out")

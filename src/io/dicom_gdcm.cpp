@@ -119,6 +119,32 @@ frame_positions(const gdcm::DataSet &ds, int frames) {
     return pos;
 }
 
+/* Up to @p n numbers of element (g, e) inside the functional-group macro
+ * @p macro of an enhanced file: the Shared Functional Groups first, else the
+ * first frame's Per-frame Functional Groups. */
+int
+group_nums(const gdcm::DataSet &ds, const gdcm::Tag &macro, uint16_t g, uint16_t e, double *out,
+           int n) {
+    static const gdcm::Tag groups[2] = {gdcm::Tag(0x5200, 0x9229), gdcm::Tag(0x5200, 0x9230)};
+    for (const gdcm::Tag &gt : groups) {
+        if (!ds.FindDataElement(gt))
+            continue;
+        gdcm::SmartPointer<gdcm::SequenceOfItems> sq = ds.GetDataElement(gt).GetValueAsSQ();
+        if (!sq || sq->GetNumberOfItems() < 1)
+            continue;
+        const gdcm::DataSet &item = sq->GetItem(1).GetNestedDataSet();
+        if (!item.FindDataElement(macro))
+            continue;
+        gdcm::SmartPointer<gdcm::SequenceOfItems> m = item.GetDataElement(macro).GetValueAsSQ();
+        if (!m || m->GetNumberOfItems() < 1)
+            continue;
+        int k = get_nums(m->GetItem(1).GetNestedDataSet(), g, e, out, n);
+        if (k > 0)
+            return k;
+    }
+    return 0;
+}
+
 /* Image Orientation (Patient) of an enhanced file (shared functional groups). */
 int
 enhanced_orientation(const gdcm::File &file, double iop[6]) {
@@ -241,7 +267,21 @@ vv_dcm_read_header(const char *path, vv_dcm_file *f, char *err, size_t errlen) {
             /* enhanced objects keep geometry and rescale in functional groups */
             f->frame_ipp = frame_positions(ds, f->frames);
             if (!f->has_iop)
+                f->has_iop =
+                    group_nums(ds, gdcm::Tag(0x0020, 0x9116), 0x0020, 0x0037, f->iop, 6) == 6;
+            if (!f->has_iop)
                 f->has_iop = enhanced_orientation(file, f->iop);
+            if (!f->has_spacing)
+                f->has_spacing = group_nums(ds, gdcm::Tag(0x0028, 0x9110), 0x0028, 0x0030,
+                                            f->pixel_spacing, 2) == 2;
+            if (!has_slope && !has_inter) {
+                has_slope = group_nums(ds, gdcm::Tag(0x0028, 0x9145), 0x0028, 0x1053, rs, 1);
+                has_inter = group_nums(ds, gdcm::Tag(0x0028, 0x9145), 0x0028, 0x1052, ri, 1);
+                if (has_slope || has_inter) {
+                    f->slope = has_slope && rs[0] != 0 ? rs[0] : 1;
+                    f->intercept = has_inter ? ri[0] : 0;
+                }
+            }
             std::vector<double> sp = gdcm::ImageHelper::GetSpacingValue(file);
             if (!f->has_spacing && sp.size() >= 2) {
                 f->pixel_spacing[0] = sp[1];

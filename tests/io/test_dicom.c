@@ -87,6 +87,8 @@ setup(void **state) {
               "--reverse-instances",
               PYTHON, script, nrrd, g_dir);
     rc |= run("%s %s ct %s %s/small --first 50 --count 6 --crop 96", PYTHON, script, nrrd, g_dir);
+    rc |= run("%s %s multiframe %s %s/enhanced.dcm --first 40 --count 8 --crop 64", PYTHON, script,
+              nrrd, g_dir);
     rc |= run("%s %s oblique %s %s/oblr --angle 30 --size 96 --slices 24", PYTHON, script, nrrd,
               g_dir);
     rc |= run("%s %s ct %s %s/mixed --first 50 --count 6 --crop 96 && %s %s ct %s %s/mixed2 "
@@ -311,6 +313,33 @@ test_oblique_upright(void **state) {
         fail_msg("only %ld of %ld oblique voxels match the upright head there", same, n);
     vv_volume_free(ct);
     vv_volume_free(obl);
+}
+
+/* One Enhanced CT file: geometry and rescale from the functional groups,
+ * frames stored scrambled and sorted by their Plane Position. */
+static void
+test_enhanced_multiframe(void **state) {
+    (void)state;
+    NEED_DATA();
+    vv_volume *v = NULL, *ct = NULL;
+    vt_ok(vv_volume_load(&v, tmp("enhanced.dcm"), NULL));
+    vt_ok(vv_volume_load(&ct, tmp("ct"), NULL));
+    assert_int_equal(v->dims[0], 64);
+    assert_int_equal(v->dims[1], 64);
+    assert_int_equal(v->dims[2], 8);
+    assert_int_equal(v->type, VV_I16);
+    assert_near(v->spacing[0], 0.9570312, 1e-6);
+    assert_near(v->spacing[2], 1.5, 1e-6);
+    assert_near(v->origin[2], -80 + 40 * 1.5, 1e-4);
+    for (int i = 0; i < 9; i++)
+        assert_near(v->direction[i], (i % 4) == 0, 1e-9);
+    for (int k = 0; k < 8; k++)
+        for (int j = 0; j < 64; j++)
+            for (int i = 0; i < 64; i++)
+                if (vv_volume_get(v, i, j, k) != vv_volume_get(ct, i, j, 40 + k))
+                    fail_msg("voxel (%d, %d, %d) differs from the series", i, j, k);
+    vv_volume_free(ct);
+    vv_volume_free(v);
 }
 
 static void
@@ -559,10 +588,15 @@ test_bad_input(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_ct_series),       cmocka_unit_test(test_shuffled_renamed),
-        cmocka_unit_test(test_missing_slice),   cmocka_unit_test(test_oblique),
-        cmocka_unit_test(test_oblique_upright), cmocka_unit_test(test_compressions),
-        cmocka_unit_test(test_pydicom_files),   cmocka_unit_test(test_mixed_series_and_cli),
+        cmocka_unit_test(test_ct_series),
+        cmocka_unit_test(test_shuffled_renamed),
+        cmocka_unit_test(test_missing_slice),
+        cmocka_unit_test(test_oblique),
+        cmocka_unit_test(test_oblique_upright),
+        cmocka_unit_test(test_enhanced_multiframe),
+        cmocka_unit_test(test_compressions),
+        cmocka_unit_test(test_pydicom_files),
+        cmocka_unit_test(test_mixed_series_and_cli),
         cmocka_unit_test(test_bad_input),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
