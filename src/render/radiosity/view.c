@@ -36,8 +36,10 @@ rad_prepare_render(vv_radiosity *r) {
             free(is_el);
             return vv_error_set(VV_ERR_NOMEM, "radiosity: out of memory for the render grid");
         }
+        /* opacity of one render step (half a voxel) */
+        rv->step = 0.5 * rv->h;
         for (size_t i = 0; i < nv; i++)
-            rv->rc[8 * i] = rv->sigma[i];
+            rv->rc[8 * i] = (float)(1 - exp(-rv->sigma[i] * rv->step));
         for (int i = 0; i < r->n_elems; i++) {
             const rad_elem *e = &r->elems[i];
             if (e->kind != RAD_VOXEL || e->obj != rv->obj || !(e->area > 0))
@@ -93,7 +95,6 @@ rad_prepare_render(vv_radiosity *r) {
                                 *bm = *bm > s ? *bm : s;
                             }
                 }
-        rv->step = 0.5 * rv->h;
     }
     return VV_OK;
 }
@@ -103,28 +104,60 @@ f3v(const float *p) {
     return vv_vec3_make(p[0], p[1], p[2]);
 }
 
+/* Slab test with the reciprocal direction; inline for the per-pixel loops. */
+static inline int
+slab(const float *mn, const float *mx, const double *o, const double *inv, double tmax,
+     double *t0) {
+    double a = 0, b = tmax;
+    for (int k = 0; k < 3; k++) {
+        double u = (mn[k] - o[k]) * inv[k], v = (mx[k] - o[k]) * inv[k];
+        if (u > v) {
+            double t = u;
+            u = v;
+            v = t;
+        }
+        a = u > a ? u : a;
+        b = v < b ? v : b;
+        if (a > b)
+            return 0;
+    }
+    *t0 = a;
+    return 1;
+}
+
 /* Ray-triangle (Moller-Trumbore); returns t or -1. */
-static double
-tri_t(const float *tri, vv_vec3 o, vv_vec3 d) {
-    vv_vec3 a = f3v(tri), e1 = vv_vec3_sub(f3v(tri + 3), a), e2 = vv_vec3_sub(f3v(tri + 6), a);
-    vv_vec3 p = vv_vec3_cross(d, e2);
-    double det = vv_vec3_dot(e1, p);
+static inline double
+tri_t(const float *tri, const double *o, const double *d) {
+    double e1[3], e2[3], p[3], s[3], q[3];
+    for (int k = 0; k < 3; k++) {
+        e1[k] = tri[3 + k] - tri[k];
+        e2[k] = tri[6 + k] - tri[k];
+        s[k] = o[k] - tri[k];
+    }
+    p[0] = d[1] * e2[2] - d[2] * e2[1];
+    p[1] = d[2] * e2[0] - d[0] * e2[2];
+    p[2] = d[0] * e2[1] - d[1] * e2[0];
+    double det = e1[0] * p[0] + e1[1] * p[1] + e1[2] * p[2];
     if (fabs(det) < 1e-300)
         return -1;
     double inv = 1 / det;
-    vv_vec3 s = vv_vec3_sub(o, a);
-    double u = vv_vec3_dot(s, p) * inv;
+    double u = (s[0] * p[0] + s[1] * p[1] + s[2] * p[2]) * inv;
     if (u < 0 || u > 1)
         return -1;
-    vv_vec3 q = vv_vec3_cross(s, e1);
-    double v = vv_vec3_dot(d, q) * inv;
+    q[0] = s[1] * e1[2] - s[2] * e1[1];
+    q[1] = s[2] * e1[0] - s[0] * e1[2];
+    q[2] = s[0] * e1[1] - s[1] * e1[0];
+    double v = (d[0] * q[0] + d[1] * q[1] + d[2] * q[2]) * inv;
     if (v < 0 || u + v > 1)
         return -1;
-    return vv_vec3_dot(e2, q) * inv;
+    return (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) * inv;
 }
 
+/* The nearest patch along the ray (front-to-back traversal of the trees). */
 static int
-first_patch(const vv_radiosity *r, vv_vec3 o, vv_vec3 d, double *thit) {
+first_patch(const vv_radiosity *r, vv_vec3 ov, vv_vec3 dv, double *thit) {
+    const double o[3] = {ov.x, ov.y, ov.z}, d[3] = {dv.x, dv.y, dv.z};
+    const double inv[3] = {1 / d[0], 1 / d[1], 1 / d[2]};
     int best = -1;
     double tb = INFINITY;
     int stack[128];
@@ -135,10 +168,8 @@ first_patch(const vv_radiosity *r, vv_vec3 o, vv_vec3 d, double *thit) {
         stack[sp++] = r->roots[ri];
         while (sp) {
             const rad_node *nd = &r->nodes[stack[--sp]];
-            vv_box b = {f3v(nd->bmin), f3v(nd->bmax)};
-            vv_ray ray = {o, d};
-            double a, bb;
-            if (!vv_box_intersect_ray(b, ray, &a, &bb) || bb < 0 || a > tb)
+            double a;
+            if (!slab(nd->bmin, nd->bmax, o, inv, tb, &a))
                 continue;
             if (nd->child[0] < 0) {
                 double t = tri_t(r->elems[nd->lo].tri, o, d);
@@ -149,13 +180,94 @@ first_patch(const vv_radiosity *r, vv_vec3 o, vv_vec3 d, double *thit) {
                 continue;
             }
             if (sp + 2 <= 128) {
-                stack[sp++] = nd->child[0];
-                stack[sp++] = nd->child[1];
+                /* the nearer child last, so it is taken first */
+                const rad_node *c0 = &r->nodes[nd->child[0]], *c1 = &r->nodes[nd->child[1]];
+                double d0 =
+                    (c0->c[0] - o[0]) * d[0] + (c0->c[1] - o[1]) * d[1] + (c0->c[2] - o[2]) * d[2];
+                double d1 =
+                    (c1->c[0] - o[0]) * d[0] + (c1->c[1] - o[1]) * d[1] + (c1->c[2] - o[2]) * d[2];
+                int n0 = d0 <= d1 ? nd->child[0] : nd->child[1];
+                stack[sp++] = n0 == nd->child[0] ? nd->child[1] : nd->child[0];
+                stack[sp++] = n0;
             }
         }
     }
     *thit = tb;
     return best;
+}
+
+/* The patch seen at each pixel centre, by rasterizing every patch into an
+ * id buffer with depth (cheaper than a ray per pixel through the trees).
+ * Returns 0 when a patch crosses the eye plane (the caller then traces
+ * rays); ids[] is -1 where no patch is seen. */
+static int
+raster_patches(const vv_radiosity *r, const vv_view *view, int *ids, float *zb) {
+    const int W = view->width, H = view->height;
+    vv_vec3 f = vv_vec3_normalize(vv_vec3_sub(view->at, view->eye));
+    vv_vec3 rt = vv_vec3_cross(f, view->up);
+    if (!(vv_vec3_length(rt) > 1e-9) || !(vv_vec3_length(f) > 0))
+        return 0;
+    rt = vv_vec3_normalize(rt);
+    vv_vec3 up = vv_vec3_cross(rt, f);
+    const double aspect = (double)W / H;
+    const int ortho = view->projection == VV_PROJECTION_ORTHOGRAPHIC;
+    const double tf = tan(0.5 * view->fov);
+    const double hh = 0.5 * view->ortho_height, hw = hh * aspect;
+    for (size_t i = 0; i < (size_t)W * H; i++) {
+        ids[i] = -1;
+        zb[i] = INFINITY;
+    }
+    for (int ei = 0; ei < r->n_elems; ei++) {
+        const rad_elem *e = &r->elems[ei];
+        if (e->kind != RAD_PATCH)
+            continue;
+        double sx[3], sy[3], sz[3];
+        for (int k = 0; k < 3; k++) {
+            vv_vec3 rel = vv_vec3_sub(f3v(e->tri + 3 * k), view->eye);
+            double zc = vv_vec3_dot(rel, f);
+            double x, y;
+            if (ortho) {
+                x = vv_vec3_dot(rel, rt) / hw;
+                y = vv_vec3_dot(rel, up) / hh;
+            } else {
+                if (!(zc > 1e-6))
+                    return 0;
+                x = vv_vec3_dot(rel, rt) / (zc * tf * aspect);
+                y = vv_vec3_dot(rel, up) / (zc * tf);
+            }
+            sx[k] = 0.5 * (x + 1) * W - 0.5;
+            sy[k] = 0.5 * (1 - y) * H - 0.5;
+            sz[k] = ortho ? zc : 1 / zc; /* 1/z is linear on screen */
+        }
+        double area = (sx[1] - sx[0]) * (sy[2] - sy[0]) - (sx[2] - sx[0]) * (sy[1] - sy[0]);
+        if (!(fabs(area) > 1e-12))
+            continue;
+        int x0 = (int)ceil(fmin(sx[0], fmin(sx[1], sx[2])) - 1e-9);
+        int x1 = (int)floor(fmax(sx[0], fmax(sx[1], sx[2])) + 1e-9);
+        int y0 = (int)ceil(fmin(sy[0], fmin(sy[1], sy[2])) - 1e-9);
+        int y1 = (int)floor(fmax(sy[0], fmax(sy[1], sy[2])) + 1e-9);
+        x0 = x0 < 0 ? 0 : x0;
+        y0 = y0 < 0 ? 0 : y0;
+        x1 = x1 >= W ? W - 1 : x1;
+        y1 = y1 >= H ? H - 1 : y1;
+        const double ia = 1 / area, eps = 1e-7;
+        for (int y = y0; y <= y1; y++)
+            for (int x = x0; x <= x1; x++) {
+                double b0 = ((sx[1] - x) * (sy[2] - y) - (sx[2] - x) * (sy[1] - y)) * ia;
+                double b1 = ((sx[2] - x) * (sy[0] - y) - (sx[0] - x) * (sy[2] - y)) * ia;
+                double b2 = 1 - b0 - b1;
+                if (b0 < -eps || b1 < -eps || b2 < -eps)
+                    continue;
+                double z = b0 * sz[0] + b1 * sz[1] + b2 * sz[2];
+                z = ortho ? z : 1 / z;
+                size_t id = (size_t)y * W + x;
+                if (z < zb[id]) {
+                    zb[id] = (float)z;
+                    ids[id] = ei;
+                }
+            }
+    }
+    return 1;
 }
 
 /* Composites one volume's radiosity along o + t d, t in [t0, t1], into
@@ -210,9 +322,11 @@ march(const rad_vol *rv, vv_vec3 o, vv_vec3 d, double t0, double t1, double col[
             double c11 = p[oz + oy + c] + fx * (p[oz + oy + ox + c] - p[oz + oy + c]);
             double c0 = c00 + fy * (c10 - c00), c1 = c01 + fy * (c11 - c01);
             v[c] = c0 + fz * (c1 - c0);
+            if (c == 0 && !(v[0] > 0))
+                break; /* transparent here: no colour needed */
         }
         if (v[0] > 0) {
-            double a = 1 - exp(-v[0] * step);
+            double a = v[0];
             double nl = sqrt(v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
             nl = nl > 1 ? 1 : nl;
             /* a diffuse voxel is a piece of surface: the same radiance from
@@ -243,12 +357,38 @@ vv_radiosity_view_frame(const vv_radiosity *r, const vv_world *world, const vv_v
     vv_vec3 bg = world ? world->background : vv_vec3_make(0, 0, 0);
     int nt = threads > 0 ? threads : vv_threads_get();
     const int W = view->width, H = view->height;
+    int has_patches = 0;
+    for (int i = 0; i < r->n_roots; i++)
+        has_patches |= r->nodes[r->roots[i]].kind == RAD_PATCH;
+    int *ids = NULL;
+    float *zb = NULL;
+    if (has_patches) {
+        ids = malloc((size_t)W * H * sizeof *ids);
+        zb = malloc((size_t)W * H * sizeof *zb);
+        if (!ids || !zb || !raster_patches(r, view, ids, zb)) {
+            free(ids);
+            ids = NULL; /* trace rays instead */
+        }
+        free(zb);
+    }
 #pragma omp parallel for schedule(dynamic, 4) num_threads(nt)
     for (int y = 0; y < H; y++) {
         for (int x = 0; x < W; x++) {
             vv_ray ray = vv_view_ray(view, x, y);
-            double tp;
-            int pe = first_patch(r, ray.origin, ray.dir, &tp);
+            double tp = INFINITY;
+            int pe = -1;
+            if (ids) {
+                pe = ids[(size_t)y * W + x];
+                if (pe >= 0) {
+                    const rad_elem *e = &r->elems[pe];
+                    vv_vec3 n = f3v(e->n);
+                    double dn = vv_vec3_dot(n, ray.dir);
+                    tp = fabs(dn) > 1e-12 ? vv_vec3_dot(n, vv_vec3_sub(f3v(e->p), ray.origin)) / dn
+                                          : vv_vec3_length(vv_vec3_sub(f3v(e->p), ray.origin));
+                }
+            } else if (has_patches) {
+                pe = first_patch(r, ray.origin, ray.dir, &tp);
+            }
             double col[3] = {0, 0, 0}, T = 1, depth = pe >= 0 ? tp : INFINITY;
             /* volumes front to back by entry (overlapping volumes are taken one after another) */
             int order[8], n = 0;
@@ -266,7 +406,7 @@ vv_radiosity_view_frame(const vv_radiosity *r, const vv_world *world, const vv_v
                 ent[i] = a;
                 order[i] = v;
             }
-            for (int i = 0; i < n && T > 0.004; i++) {
+            for (int i = 0; i < n && T > 0.01; i++) {
                 const rad_vol *rv = &r->vols[order[i]];
                 double a, b;
                 vv_box_intersect_ray(rv->wbox, ray, &a, &b);
@@ -294,6 +434,7 @@ vv_radiosity_view_frame(const vv_radiosity *r, const vv_world *world, const vv_v
             out->depth[(size_t)y * W + x] = alpha > 0 ? (float)depth : INFINITY;
         }
     }
+    free(ids);
     return VV_OK;
 }
 
