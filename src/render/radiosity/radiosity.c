@@ -406,6 +406,13 @@ elem_box(const rad_elem *e, float *mn, float *mx) {
 }
 
 static int
+normal_class(const float *n) {
+    int a = fabsf(n[0]) >= fabsf(n[1]) ? (fabsf(n[0]) >= fabsf(n[2]) ? 0 : 2)
+                                       : (fabsf(n[1]) >= fabsf(n[2]) ? 1 : 2);
+    return 2 * a + (n[a] < 0);
+}
+
+static int
 build_tree(builder *b, int lo, int hi) {
     if (b->n_nodes == b->cap_nodes) {
         int cap = b->cap_nodes ? 2 * b->cap_nodes : 1024;
@@ -462,6 +469,40 @@ build_tree(builder *b, int lo, int hi) {
     b->nodes[id] = nd;
     if (hi - lo == 1)
         return id;
+    if (nd.kind == RAD_PATCH) {
+        /* patches facing different ways are not clustered before those
+         * facing one way: a cluster's emission is modelled about its
+         * normals, which works for one orientation class (6 classes by the
+         * dominant axis and sign of the normal) */
+        int kmin = 6, kmax = -1;
+        for (int i = lo; i < hi; i++) {
+            int k = normal_class(b->e[i].n);
+            kmin = k < kmin ? k : kmin;
+            kmax = k > kmax ? k : kmax;
+        }
+        if (kmin != kmax) {
+            int mid = (kmin + kmax) / 2, i = lo, j = hi - 1;
+            while (i <= j) {
+                if (normal_class(b->e[i].n) <= mid) {
+                    i++;
+                } else {
+                    rad_elem t = b->e[i];
+                    b->e[i] = b->e[j];
+                    b->e[j] = t;
+                    j--;
+                }
+            }
+            int c0 = build_tree(b, lo, i);
+            if (c0 < 0)
+                return -1;
+            int c1 = build_tree(b, i, hi);
+            if (c1 < 0)
+                return -1;
+            b->nodes[id].child[0] = c0;
+            b->nodes[id].child[1] = c1;
+            return id;
+        }
+    }
     int ax = 0;
     for (int a = 1; a < 3; a++)
         if (cmax[a] - cmin[a] > cmax[ax] - cmin[ax])
@@ -538,6 +579,29 @@ point_form_factor(vv_vec3 n, vv_vec3 a, vv_vec3 b, vv_vec3 c) {
         sum += th * vv_vec3_dot(n, g) / gl;
     }
     return fabs(sum) / (2 * RAD_PI);
+}
+
+/* The centroids of the 16 triangles of two midpoint subdivisions of tri. */
+static int
+sub_points(const float *tri, vv_vec3 *out) {
+    vv_vec3 A = f3(tri), B = f3(tri + 3), C = f3(tri + 6);
+    int n = 0;
+    /* barycentric centroids of the level-2 subdivision: a 4 x 4 grid of
+     * upward and downward triangles */
+    for (int i = 0; i < 4; i++)
+        for (int j = 0; i + j < 4; j++) {
+            /* upward triangle (i, j) */
+            double u = (i + 1.0 / 3) / 4, v = (j + 1.0 / 3) / 4;
+            out[n++] = vv_vec3_add(A, vv_vec3_add(vv_vec3_scale(vv_vec3_sub(B, A), u),
+                                                  vv_vec3_scale(vv_vec3_sub(C, A), v)));
+            if (i + j < 3) {
+                u = (i + 2.0 / 3) / 4;
+                v = (j + 2.0 / 3) / 4;
+                out[n++] = vv_vec3_add(A, vv_vec3_add(vv_vec3_scale(vv_vec3_sub(B, A), u),
+                                                      vv_vec3_scale(vv_vec3_sub(C, A), v)));
+            }
+        }
+    return n;
 }
 
 /* Ray parameter range [t0, t1] of a box; 0 on a miss. */
@@ -701,7 +765,7 @@ typedef struct deposit {
 
 typedef struct solver {
     vv_radiosity *r;
-    float *u; /* per node: unshot isotropic rgb, directional rgb, moment vector (9 floats) */
+    float *u; /* per node: RAD_U floats of unshot power (unshot_moments) */
     deposit *dep;
     size_t n_dep, cap_dep;
     double eps_power;
@@ -715,40 +779,60 @@ is_leaf(const rad_node *n) {
     return n->child[0] < 0;
 }
 
+/* Per node: unshot power of its isotropic voxels (rgb), and of its
+ * directional (Lambertian) emitters projected on the six half-axes: an
+ * emitter of power U about unit normal n adds U n_a^2 to half-axis (a,
+ * sign n_a), so the cluster's intensity sum_a U_a max(0, +-w_a) / pi keeps
+ * the power exactly and the direction of axis-aligned emitters exactly. */
+#define RAD_U 21
+
+static void
+cube_add(float *u, const float *n, const float *p, float sign) {
+    for (int a = 0; a < 3; a++) {
+        float na = n[a] * sign, wgt = na * na;
+        if (!(wgt > 0))
+            continue;
+        float *cube = &u[3 + 3 * (2 * a + (na < 0))];
+        for (int c = 0; c < 3; c++)
+            cube[c] += wgt * p[c];
+    }
+}
+
 /* Unshot power moments of node id's subtree (post-order). */
 static void
 unshot_moments(solver *sv, int id) {
     const vv_radiosity *r = sv->r;
     const rad_node *nd = &r->nodes[id];
-    float *u = &sv->u[9 * (size_t)id];
-    memset(u, 0, 9 * sizeof *u);
+    float *u = &sv->u[RAD_U * (size_t)id];
+    memset(u, 0, RAD_U * sizeof *u);
     if (!is_leaf(nd)) {
         for (int c = 0; c < 2; c++) {
             unshot_moments(sv, nd->child[c]);
-            const float *uc = &sv->u[9 * (size_t)nd->child[c]];
-            for (int k = 0; k < 9; k++)
+            const float *uc = &sv->u[RAD_U * (size_t)nd->child[c]];
+            for (int k = 0; k < RAD_U; k++)
                 u[k] += uc[k];
         }
         return;
     }
     const rad_elem *e = &r->elems[nd->lo];
     if (e->kind == RAD_PATCH) {
-        float s0 = e->unshot[0][0] + e->unshot[0][1] + e->unshot[0][2];
-        float s1 = e->unshot[1][0] + e->unshot[1][1] + e->unshot[1][2];
-        for (int c = 0; c < 3; c++) {
-            u[3 + c] = e->unshot[0][c] + e->unshot[1][c];
-            u[6 + c] = (s0 - s1) * e->n[c];
-        }
+        cube_add(u, e->n, e->unshot[0], 1);
+        cube_add(u, e->n, e->unshot[1], -1);
     } else if (e->n[0] != 0 || e->n[1] != 0 || e->n[2] != 0) {
-        float s0 = e->unshot[0][0] + e->unshot[0][1] + e->unshot[0][2];
-        for (int c = 0; c < 3; c++) {
-            u[3 + c] = e->unshot[0][c];
-            u[6 + c] = s0 * e->n[c];
-        }
+        cube_add(u, e->n, e->unshot[0], 1);
     } else {
         for (int c = 0; c < 3; c++)
             u[c] = e->unshot[0][c];
     }
+}
+
+static double
+unshot_sum(const solver *sv, int id) {
+    const float *u = &sv->u[RAD_U * (size_t)id];
+    double s = 0;
+    for (int k = 0; k < RAD_U; k++)
+        s += u[k];
+    return s;
 }
 
 /* Radiant intensity of shooter node id towards unit direction w. */
@@ -769,17 +853,16 @@ node_intensity(const solver *sv, int id, vv_vec3 w, double I[3]) {
         }
         return;
     }
-    const float *u = &sv->u[9 * (size_t)id];
-    double sd = (double)u[3] + u[4] + u[5];
-    vv_vec3 m = vv_vec3_make(u[6], u[7], u[8]);
-    double ml = vv_vec3_length(m);
-    ml = ml < sd ? ml : sd;
-    double dirpart = sd > 0 ? (ml * fmax(0, ml > 0 ? vv_vec3_dot(m, w) / vv_vec3_length(m) : 0) +
-                               0.25 * (sd - ml)) /
-                                  RAD_PI
-                            : 0;
-    for (int c = 0; c < 3; c++)
-        I[c] = u[c] / (4 * RAD_PI) + (sd > 0 ? u[3 + c] / sd * dirpart : 0);
+    const float *u = &sv->u[RAD_U * (size_t)id];
+    const double wa[3] = {w.x, w.y, w.z};
+    for (int c = 0; c < 3; c++) {
+        double v = u[c] / (4 * RAD_PI);
+        for (int a = 0; a < 3; a++) {
+            v += u[3 + 3 * (2 * a) + c] * fmax(0, wa[a]) / RAD_PI;
+            v += u[3 + 3 * (2 * a + 1) + c] * fmax(0, -wa[a]) / RAD_PI;
+        }
+        I[c] = v;
+    }
 }
 
 /* Estimated capacity (cross-section) of a receiver node for light travelling w. */
@@ -957,8 +1040,25 @@ transfer(solver *sv, const shooter *sh, int S, int R, double T_known) {
                 vv_vec3 sn = f3(se->n);
                 int diffuse = se->n[0] != 0 || se->n[1] != 0 || se->n[2] != 0;
                 if (se->kind == RAD_PATCH) {
-                    double F0 = point_form_factor(sn, a, b, cc) * T;
-                    double F1 = point_form_factor(vv_vec3_scale(sn, -1), a, b, cc) * T;
+                    /* near patches: the form factor averaged over 16 points
+                     * of the shooter (it grows fast towards a shared edge) */
+                    double F0 = 0, F1 = 0;
+                    vv_vec3 pts[16];
+                    int np = 1;
+                    pts[0] = xs;
+                    double reach = 3 * ((double)se->half + e->half);
+                    if (vv_vec3_dot(vv_vec3_sub(f3(e->p), xs), vv_vec3_sub(f3(e->p), xs)) <
+                        reach * reach)
+                        np = sub_points(se->tri, pts);
+                    for (int k = 0; k < np; k++) {
+                        vv_vec3 ak = vv_vec3_sub(f3(e->tri), pts[k]),
+                                bk = vv_vec3_sub(f3(e->tri + 3), pts[k]),
+                                ck = vv_vec3_sub(f3(e->tri + 6), pts[k]);
+                        F0 += point_form_factor(sn, ak, bk, ck) / np;
+                        F1 += point_form_factor(vv_vec3_scale(sn, -1), ak, bk, ck) / np;
+                    }
+                    F0 *= T;
+                    F1 *= T;
                     for (int c = 0; c < 3; c++)
                         P[c] = se->unshot[0][c] * F0 + se->unshot[1][c] * F1;
                 } else if (diffuse) {
@@ -980,6 +1080,8 @@ transfer(solver *sv, const shooter *sh, int S, int R, double T_known) {
         node_intensity(sv, S, w, I);
     else
         memcpy(I, sh->I, sizeof I);
+    /* each element of R takes its share by its own direction and distance
+     * from the shooter (the shooter's intensity is that of the cluster) */
     double caps = 0;
     for (int i = Rn->lo; i < Rn->hi; i++) {
         int side;
@@ -987,18 +1089,37 @@ transfer(solver *sv, const shooter *sh, int S, int R, double T_known) {
     }
     if (!(caps > 0))
         return;
-    /* flux density; the disc term keeps adjacent elements finite */
-    double den = sh->kind == SH_DIRECTIONAL ? 1 : dist * dist + caps / RAD_PI;
-    double fl[3];
-    for (int c = 0; c < 3; c++)
-        fl[c] = I[c] * T / den;
     for (int i = Rn->lo; i < Rn->hi; i++) {
+        const rad_elem *e = &r->elems[i];
+        vv_vec3 we = w;
+        double den = 1;
+        if (sh->kind != SH_DIRECTIONAL) {
+            vv_vec3 d = vv_vec3_sub(f3(e->p), xs);
+            double l2 = vv_vec3_dot(d, d);
+            if (!(l2 > 0))
+                continue;
+            we = vv_vec3_scale(d, 1 / sqrt(l2));
+            den = l2;
+        }
         int side;
-        double cp = elem_capacity(&r->elems[i], w, &side);
+        double cp = elem_capacity(e, we, &side);
         if (!(cp > 0))
             continue;
+        double Ie[3];
+        if (sh->kind == SH_CLUSTER)
+            node_intensity(sv, S, we, Ie);
+        else
+            memcpy(Ie, I, sizeof Ie);
+        double g;
+        if (sh->kind == SH_DIRECTIONAL)
+            g = cp;
+        else if (e->kind == RAD_PATCH) /* the patch's solid angle, exactly */
+            g = solid_angle(vv_vec3_sub(f3(e->tri), xs), vv_vec3_sub(f3(e->tri + 3), xs),
+                            vv_vec3_sub(f3(e->tri + 6), xs));
+        else
+            g = cp / (den + cp / RAD_PI); /* keeps adjacent voxels finite */
         for (int c = 0; c < 3; c++)
-            P[c] = fl[c] * cp;
+            P[c] = Ie[c] * T * g;
         add_deposit(sv, i, side, P);
     }
 }
@@ -1028,8 +1149,7 @@ refine(solver *sv, const shooter *sh, int S, int R) {
             }
             return;
         }
-        const float *u = &sv->u[9 * (size_t)S];
-        if (!(u[0] + u[1] + u[2] + u[3] + u[4] + u[5] > 0))
+        if (!(unshot_sum(sv, S) > 0))
             return;
     }
     int s_leaf = !Sn || is_leaf(Sn), r_leaf = is_leaf(Rn);
@@ -1050,12 +1170,17 @@ refine(solver *sv, const shooter *sh, int S, int R) {
             memcpy(I, sh->I, sizeof I);
         double rs = Sn ? Sn->r : 0;
         double den = sh->kind == SH_DIRECTIONAL ? 1 : dist * dist + cap / RAD_PI;
-        double est = maxc(I) / den * cap * Rn->rho_max;
+        /* error of the receiver's radiosity (reflectance) and, for black
+         * receivers, of the power they absorb */
+        double est = maxc(I) / den * cap * (0.1 + 0.9 * Rn->rho_max);
         int near = sh->kind != SH_DIRECTIONAL && (rs + Rn->r) > sv->r->opt.near * dist;
         int big =
             (Rn->hi - Rn->lo) > sv->max_cluster || (Sn && (Sn->hi - Sn->lo) > sv->max_cluster);
-        /* near pairs count ten times: the point estimate is poor there */
-        if (!big && !((near ? 10 * est : est) > sv->eps_power)) {
+        /* near pairs of patches always subdivide (the form factor of a
+         * cluster from its centre is poor there, towards shared edges
+         * most); other near pairs count a hundred times */
+        int must = big || (near && Rn->kind == RAD_PATCH && (!Sn || Sn->kind == RAD_PATCH));
+        if (!must && !((near ? 100 * est : est) > sv->eps_power)) {
             transfer(sv, sh, S, R, -1);
             return;
         }
@@ -1395,7 +1520,7 @@ vv_radiosity_solve(vv_radiosity **out, const vv_world *w, const vv_radiosity_opt
     /* shooting candidates: a cut through the hierarchies, about 256 clusters */
     cands = malloc(((size_t)r->n_elems + 1) * sizeof *cands);
     cand_unshot = calloc((size_t)r->n_elems + 1, sizeof *cand_unshot);
-    sv.u = calloc(9 * ((size_t)r->n_nodes + 1), sizeof *sv.u);
+    sv.u = calloc(RAD_U * ((size_t)r->n_nodes + 1), sizeof *sv.u);
     if (!cands || !cand_unshot || !sv.u) {
         s = vv_error_set(VV_ERR_NOMEM, "out of memory");
         goto fail;
