@@ -277,9 +277,11 @@ build_volume(builder *b, rad_vol *rv, const vv_object *obj, int obj_index,
     rv->sigma = malloc(nv * sizeof *rv->sigma);
     float *alpha = malloc(nv * sizeof *alpha);
     float *col = malloc(3 * nv * sizeof *col);
-    if (!rv->sigma || !alpha || !col) {
+    float *val = malloc(nv * sizeof *val);
+    if (!rv->sigma || !alpha || !col || !val) {
         free(alpha);
         free(col);
+        free(val);
         return vv_error_set(VV_ERR_NOMEM, "out of memory for a %d x %d x %d radiosity grid",
                             rv->n[0], rv->n[1], rv->n[2]);
     }
@@ -292,6 +294,7 @@ build_volume(builder *b, rad_vol *rv, const vv_object *obj, int obj_index,
     if (!lut) {
         free(alpha);
         free(col);
+        free(val);
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     }
     const double lo = v->range[0], hi = v->range[1] > v->range[0] ? v->range[1] : v->range[0] + 1;
@@ -318,6 +321,7 @@ build_volume(builder *b, rad_vol *rv, const vv_object *obj, int obj_index,
             for (int i = 0; i < rv->n[0]; i++) {
                 size_t id = ((size_t)k * rv->n[1] + j) * rv->n[0] + i;
                 double x = vv_volume_sample_index(v, i * sidx[0], j * sidx[1], k * sidx[2]);
+                val[id] = (float)x;
                 int li = isfinite(x) ? (int)lrint((x - lo) / (hi - lo) * (lut_n - 1)) : 0;
                 li = li < 0 ? 0 : li >= lut_n ? lut_n - 1 : li;
                 const float *L = &lut[4 * li];
@@ -344,13 +348,26 @@ build_volume(builder *b, rad_vol *rv, const vv_object *obj, int obj_index,
                 const int ii[3] = {i, j, k}, nn[3] = {nx, ny, nz};
                 const size_t st[3] = {1, (size_t)nx, (size_t)nx * ny};
                 int exposed = 0;
-                double grad[3];
+                double grad[3], gv[3];
                 for (int ax = 0; ax < 3; ax++) {
-                    double am = ii[ax] > 0 ? alpha[id - st[ax]] : 0;
-                    double ap = ii[ax] + 1 < nn[ax] ? alpha[id + st[ax]] : 0;
+                    int hm = ii[ax] > 0, hp = ii[ax] + 1 < nn[ax];
+                    double am = hm ? alpha[id - st[ax]] : 0;
+                    double ap = hp ? alpha[id + st[ax]] : 0;
                     if (nn[ax] > 1 && (am < 0.99 || ap < 0.99))
                         exposed = 1;
                     grad[ax] = nn[ax] > 1 ? 0.5 * (ap - am) : 0;
+                    /* the data's gradient: smoother than the opacity's */
+                    double vm = val[id - (hm ? st[ax] : 0)], vp = val[id + (hp ? st[ax] : 0)];
+                    gv[ax] = hm + hp ? (vp - vm) / (hm + hp) : 0;
+                }
+                {
+                    double dg = gv[0] * grad[0] + gv[1] * grad[1] + gv[2] * grad[2];
+                    double lv = sqrt(gv[0] * gv[0] + gv[1] * gv[1] + gv[2] * gv[2]);
+                    if (lv > 0 && dg != 0)
+                        for (int ax = 0; ax < 3; ax++)
+                            gv[ax] = (dg > 0 ? 1 : -1) * gv[ax];
+                    else
+                        memcpy(gv, grad, sizeof gv);
                 }
                 if (!exposed)
                     continue;
@@ -368,7 +385,7 @@ build_volume(builder *b, rad_vol *rv, const vv_object *obj, int obj_index,
                 e->area = (float)(h * h * a);
                 double gl = sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]);
                 if (opt->diffuse_voxels && gl > 0.05) {
-                    vv_vec3 gw = vv_mat4_mul_dir(nrm_m, vv_vec3_make(grad[0], grad[1], grad[2]));
+                    vv_vec3 gw = vv_mat4_mul_dir(nrm_m, vv_vec3_make(gv[0], gv[1], gv[2]));
                     set3(e->n, vv_vec3_scale(vv_vec3_normalize(gw), -1));
                 }
                 int diffuse = e->n[0] != 0 || e->n[1] != 0 || e->n[2] != 0;
@@ -383,6 +400,7 @@ build_volume(builder *b, rad_vol *rv, const vv_object *obj, int obj_index,
             }
     free(alpha);
     free(col);
+    free(val);
     return s;
 }
 
@@ -625,44 +643,36 @@ grid_tau(const rad_vol *rv, vv_vec3 o, vv_vec3 d, double t0, double t1) {
     t1 = t1 < b ? t1 : b;
     if (!(t1 > t0))
         return 0;
+    /* trilinear extinction sampled every half voxel: the staircase of
+     * nearest-voxel sums would shadow a voxel surface in rings */
     vv_vec3 go = vv_mat4_mul_point(rv->w2g, o), gd = vv_mat4_mul_dir(rv->w2g, d);
-    double q[3] = {go.x + gd.x * t0, go.y + gd.y * t0, go.z + gd.z * t0};
-    double dd[3] = {gd.x, gd.y, gd.z};
-    int cell[3], stp[3];
-    double tnext[3], tdelta[3];
-    for (int ax = 0; ax < 3; ax++) {
-        double x = q[ax] + 0.5;
-        int c = (int)floor(x);
-        c = c < 0 ? 0 : c >= rv->n[ax] ? rv->n[ax] - 1 : c;
-        cell[ax] = c;
-        if (dd[ax] > 1e-300) {
-            stp[ax] = 1;
-            tdelta[ax] = 1 / dd[ax];
-            tnext[ax] = t0 + (c + 1 - x) / dd[ax];
-        } else if (dd[ax] < -1e-300) {
-            stp[ax] = -1;
-            tdelta[ax] = -1 / dd[ax];
-            tnext[ax] = t0 + (c - x) / dd[ax];
-        } else {
-            stp[ax] = 0;
-            tdelta[ax] = INFINITY;
-            tnext[ax] = INFINITY;
-        }
-    }
-    double tau = 0, t = t0;
-    const size_t sx = 1, sy = (size_t)rv->n[0], sz = (size_t)rv->n[0] * rv->n[1];
-    while (t < t1) {
-        int ax =
-            tnext[0] < tnext[1] ? (tnext[0] < tnext[2] ? 0 : 2) : (tnext[1] < tnext[2] ? 1 : 2);
-        double te = tnext[ax] < t1 ? tnext[ax] : t1;
-        tau += rv->sigma[cell[0] * sx + cell[1] * sy + cell[2] * sz] * (te - t);
+    double glen = vv_vec3_length(gd);
+    if (!(glen > 0))
+        return 0;
+    const double dt = 0.5 / glen; /* world length of half a voxel */
+    const int nx = rv->n[0], ny = rv->n[1], nz = rv->n[2];
+    const size_t sy = (size_t)nx, sz = (size_t)nx * ny;
+    double tau = 0;
+    for (double t = t0 + 0.5 * dt; t < t1; t += dt) {
+        double x = go.x + gd.x * t, y = go.y + gd.y * t, z = go.z + gd.z * t;
+        x = x < 0 ? 0 : x > nx - 1 ? nx - 1 : x;
+        y = y < 0 ? 0 : y > ny - 1 ? ny - 1 : y;
+        z = z < 0 ? 0 : z > nz - 1 ? nz - 1 : z;
+        int i = (int)x, j = (int)y, k = (int)z;
+        i = i >= nx - 1 ? (nx > 1 ? nx - 2 : 0) : i;
+        j = j >= ny - 1 ? (ny > 1 ? ny - 2 : 0) : j;
+        k = k >= nz - 1 ? (nz > 1 ? nz - 2 : 0) : k;
+        double fx = nx > 1 ? x - i : 0, fy = ny > 1 ? y - j : 0, fz = nz > 1 ? z - k : 0;
+        size_t ox = nx > 1 ? 1 : 0, oy = ny > 1 ? sy : 0, oz = nz > 1 ? sz : 0;
+        const float *p = &rv->sigma[i + j * sy + k * sz];
+        double c00 = p[0] + fx * (p[ox] - p[0]), c10 = p[oy] + fx * (p[oy + ox] - p[oy]);
+        double c01 = p[oz] + fx * (p[oz + ox] - p[oz]);
+        double c11 = p[oz + oy] + fx * (p[oz + oy + ox] - p[oz + oy]);
+        double c0 = c00 + fy * (c10 - c00), c1 = c01 + fy * (c11 - c01);
+        double len = t + dt > t1 ? t1 - t + 0.5 * dt : dt;
+        tau += (c0 + fz * (c1 - c0)) * (len < dt ? len : dt);
         if (tau > RAD_TAU_MAX)
             return tau;
-        t = te;
-        cell[ax] += stp[ax];
-        if (cell[ax] < 0 || cell[ax] >= rv->n[ax])
-            break;
-        tnext[ax] += tdelta[ax];
     }
     return tau;
 }
@@ -911,6 +921,13 @@ add_deposit(solver *sv, int e, int side, const double p[3]) {
         d->p[c] = (float)p[c];
 }
 
+/* How far a visibility ray stays from a voxel node: one voxel; three for a
+ * single diffuse voxel, a piece of surface whose own capacity already
+ * counts its slant (the shell around it would shadow it twice at grazing
+ * angles, and it is one-sided, so light through a thin wall from behind
+ * finds no capacity). */
+static double voxel_margin(const vv_radiosity *r, const rad_node *n);
+
 /* Size of the voxel grid of object obj (0 for patches). */
 static double
 voxel_size(const vv_radiosity *r, int obj) {
@@ -918,6 +935,17 @@ voxel_size(const vv_radiosity *r, int obj) {
         if (r->vols[i].obj == obj)
             return r->vols[i].h;
     return 0;
+}
+
+static double
+voxel_margin(const vv_radiosity *r, const rad_node *n) {
+    double h = voxel_size(r, n->obj);
+    if (n->child[0] < 0) {
+        const rad_elem *e = &r->elems[n->lo];
+        if (e->n[0] != 0 || e->n[1] != 0 || e->n[2] != 0)
+            return 3 * h;
+    }
+    return h;
 }
 
 /* Where the shooter sends from (*xs). */
@@ -945,7 +973,7 @@ ray_visibility(const solver *sv, const shooter *sh, int S, const rad_node *R, vv
             b = 0;
         b = b > 0 ? b : 0;
         if (R->kind == RAD_VOXEL)
-            b += voxel_size(r, R->obj);
+            b += voxel_margin(r, R);
         return transmittance(r, p, d, b, sv->far_t);
     }
     vv_vec3 d = vv_vec3_sub(p, xs);
@@ -960,14 +988,14 @@ ray_visibility(const solver *sv, const shooter *sh, int S, const rad_node *R, vv
             t0 = b;
         t0 += 1e-4 * L; /* not the shooter's own plane */
         if (Sn->kind == RAD_VOXEL)
-            t0 += voxel_size(r, Sn->obj);
+            t0 += voxel_margin(r, Sn);
     }
     double t1 = L;
     if (box_ray(R->bmin, R->bmax, xs, d, &a, &b))
         t1 = a < L ? a : L;
     t1 -= 1e-4 * L; /* not the receiver's own plane */
     if (R->kind == RAD_VOXEL)
-        t1 -= voxel_size(r, R->obj);
+        t1 -= voxel_margin(r, R);
     if (!(t1 > t0))
         return 1;
     return transmittance(r, xs, d, t0, t1);
@@ -1181,8 +1209,15 @@ refine(solver *sv, const shooter *sh, int S, int R) {
          * most); other near pairs count a hundred times */
         int must = big || (near && Rn->kind == RAD_PATCH && (!Sn || Sn->kind == RAD_PATCH));
         if (!must && !((near ? 100 * est : est) > sv->eps_power)) {
-            transfer(sv, sh, S, R, -1);
-            return;
+            /* direct light: a partly shadowed cluster subdivides unless its
+             * share is negligible (sharp shadows and terminators) */
+            double T = -1, spread = 0;
+            if (sh->kind != SH_CLUSTER && !r_leaf)
+                T = visibility(sv, sh, S, Rn, &spread);
+            if (!(spread > 0.1 && est > 1e-3 * sv->eps_power)) {
+                transfer(sv, sh, S, R, T);
+                return;
+            }
         }
         if (!r_leaf) {
             /* nothing of R is visible: no need to look inside */
