@@ -53,6 +53,7 @@ typedef struct rad_vol {
     int bs, bn[3];    /* empty-space blocks: side, count per axis */
     float *bmax;      /* largest sigma per block */
     double step;      /* render step, world units */
+    vv_box rbox;      /* world box of the voxels that are not empty (rendering) */
 } rad_vol;
 
 struct vv_radiosity {

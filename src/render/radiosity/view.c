@@ -38,8 +38,29 @@ rad_prepare_render(vv_radiosity *r) {
         }
         /* opacity of one render step (half a voxel) */
         rv->step = 0.5 * rv->h;
-        for (size_t i = 0; i < nv; i++)
-            rv->rc[8 * i] = (float)(1 - exp(-rv->sigma[i] * rv->step));
+        int lo[3] = {nx, ny, nz}, hi[3] = {-1, -1, -1};
+        for (int k = 0; k < nz; k++)
+            for (int j = 0; j < ny; j++)
+                for (int i = 0; i < nx; i++) {
+                    size_t id = ((size_t)k * ny + j) * nx + i;
+                    rv->rc[8 * id] = (float)(1 - exp(-rv->sigma[id] * rv->step));
+                    if (rv->sigma[id] > 0) {
+                        const int p[3] = {i, j, k};
+                        for (int a = 0; a < 3; a++) {
+                            lo[a] = p[a] < lo[a] ? p[a] : lo[a];
+                            hi[a] = p[a] > hi[a] ? p[a] : hi[a];
+                        }
+                    }
+                }
+        if (hi[0] < 0) {
+            rv->rbox.min = vv_vec3_make(1, 1, 1); /* empty: a box no ray meets */
+            rv->rbox.max = vv_vec3_make(-1, -1, -1);
+        } else {
+            /* one voxel more: samples interpolate from their neighbours */
+            vv_box gb = {vv_vec3_make(lo[0] - 1, lo[1] - 1, lo[2] - 1),
+                         vv_vec3_make(hi[0] + 1, hi[1] + 1, hi[2] + 1)};
+            rv->rbox = vv_box_transform(gb, rv->g2w);
+        }
         for (int i = 0; i < r->n_elems; i++) {
             const rad_elem *e = &r->elems[i];
             if (e->kind != RAD_VOXEL || e->obj != rv->obj || !(e->area > 0))
@@ -395,7 +416,8 @@ vv_radiosity_view_frame(const vv_radiosity *r, const vv_world *world, const vv_v
             double ent[8];
             for (int v = 0; v < r->n_vols && n < 8; v++) {
                 double a, b;
-                if (!vv_box_intersect_ray(r->vols[v].wbox, ray, &a, &b) || b < 0 || a > tp)
+                if (r->vols[v].rbox.min.x > r->vols[v].rbox.max.x ||
+                    !vv_box_intersect_ray(r->vols[v].rbox, ray, &a, &b) || b < 0 || a > tp)
                     continue;
                 int i = n++;
                 while (i > 0 && ent[i - 1] > a) {
@@ -409,7 +431,7 @@ vv_radiosity_view_frame(const vv_radiosity *r, const vv_world *world, const vv_v
             for (int i = 0; i < n && T > 0.01; i++) {
                 const rad_vol *rv = &r->vols[order[i]];
                 double a, b;
-                vv_box_intersect_ray(rv->wbox, ray, &a, &b);
+                vv_box_intersect_ray(rv->rbox, ray, &a, &b);
                 a = a > 0 ? a : 0;
                 b = b < tp ? b : tp;
                 double dd = march(rv, ray.origin, ray.dir, a, b, col, &T);
