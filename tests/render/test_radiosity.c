@@ -267,6 +267,20 @@ test_energy(void **state) {
         assert_near(st.power_absorbed[c] + st.power_escaped[c] + st.power_unshot[c], st.power_in[c],
                     1e-6 * st.power_in[c]);
     vv_radiosity_free(r);
+    /* the same on a coarser radiosity grid than the volume (10 for 20) */
+    o.grid = 10;
+    vt_ok(vv_radiosity_solve(&r, w, &o, NULL));
+    vv_radiosity_stats sc;
+    vv_radiosity_get_stats(r, &sc);
+    printf("# grid 10: %d voxel elements (%d at 20), absorbed %.6g\n", sc.n_voxels, st.n_voxels,
+           sum3(sc.power_absorbed));
+    assert_true(sc.converged);
+    assert_true(sc.n_voxels > 0 && 3 * sc.n_voxels < st.n_voxels);
+    assert_near(sum3(sc.power_absorbed) / sum3(st.power_absorbed), 1, 0.1);
+    for (int c = 0; c < 3; c++)
+        assert_near(sc.power_absorbed[c] + sc.power_escaped[c] + sc.power_unshot[c], sc.power_in[c],
+                    1e-6 * sc.power_in[c]);
+    vv_radiosity_free(r);
     vv_world_free(w);
 }
 
