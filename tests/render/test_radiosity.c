@@ -5,16 +5,14 @@
  * closed form; a closed box that emits and reflects uniformly (the
  * "furnace") against B = E / (1 - rho); power conservation in a closed box
  * with no absorption, and power in = absorbed + escaped + unshot with it.
- * Independent method: a Monte Carlo path tracer written here renders a
- * small scene of two polygons under a point light; the radiosity image
- * agrees within its noise. Hierarchy: the paper's Figure 6 scene (a
- * voxelized sphere above a red polygon) at a small scale, hierarchical
- * against element-to-element (levels 1): the images within 30 dB with
- * fewer interactions (the 10^4 reduction at 128^3 is measured by
- * bench/bench_radiosity). Colour bleeding: a green polygon turns the
- * sphere's lower half green and its upper half far less. Bad input, the
- * renderer's cache, progress and cancel. Images go to
- * build/test-out/radiosity.
+ * Independent method: Monte Carlo path tracers written here render a
+ * small scene of two polygons under a point light, and a cube of uniform
+ * fog beside one; the radiosity images agree within their noise. Hierarchy: the paper's Figure 6
+ * scene (a voxelized sphere above a red polygon) at a small scale, hierarchical against
+ * element-to-element (levels 1): the images within 30 dB with fewer interactions (the 10^4
+ * reduction at 128^3 is measured by bench/bench_radiosity). Colour bleeding: a green polygon turns
+ * the sphere's lower half green and its upper half far less. Bad input, the renderer's cache,
+ * progress and cancel. Images go to build/test-out/radiosity.
  */
 #include "testutil.h"
 
@@ -438,6 +436,116 @@ test_monte_carlo(void **state) {
     vv_world_free(w);
 }
 
+/* The same for a participating medium: a cube of uniform fog (isotropic
+ * scattering, albedo 0.8, optical depth 2 across) beside a point light,
+ * path traced with free flights and next-event estimation. */
+static double
+fog_tau(vv_vec3 o, vv_vec3 d, double tmax, vv_box b, double sigma) {
+    vv_ray r = {o, d};
+    double a, e;
+    if (!vv_box_intersect_ray(b, r, &a, &e))
+        return 0;
+    a = a > 0 ? a : 0;
+    e = e < tmax ? e : tmax;
+    return e > a ? sigma * (e - a) : 0;
+}
+
+static void
+test_monte_carlo_fog(void **state) {
+    (void)state;
+    const int n = 12;
+    const double sigma = 2, albedo = 0.8, I = 6;
+    const vv_vec3 light = {1.6, -0.6, 1.5};
+    vv_world *w = new_world();
+    vv_volume *v = NULL;
+    const int dims[3] = {n, n, n};
+    vt_ok(vv_volume_new(&v, dims, VV_U8));
+    const double sp = 1.0 / n;
+    for (int a = 0; a < 3; a++) {
+        v->spacing[a] = sp;
+        v->origin[a] = 0.5 * sp; /* cells fill [0, 1]^3 */
+    }
+    memset(v->data, 200, (size_t)n * n * n);
+    vv_volume_update_range(v);
+    vv_object *o = NULL;
+    vt_ok(vv_object_new_volume(&o, v, "fog"));
+    vv_volume_free(v);
+    vv_tf_init(&o->tf);
+    o->tf.opacity_unit_distance = 1;
+    vt_ok(vv_tf_add_opacity(&o->tf, 0, 1 - exp(-sigma)));
+    o->material.diffuse = albedo;
+    vt_ok(vv_world_add_object(w, o));
+    add_point_light(w, light, I);
+    vv_radiosity_options ro;
+    vv_radiosity_options_init(&ro);
+    ro.diffuse_voxels = 0;
+    ro.tolerance = 1e-4;
+    vv_radiosity *r = NULL;
+    vt_ok(vv_radiosity_solve(&r, w, &ro, NULL));
+    const int S = 40;
+    vv_view view = make_view(vv_vec3_make(0.5, -2.6, 1.4), vv_vec3_make(0.5, 0.5, 0.5), 35, S);
+    vv_image *ra = NULL, *mc = NULL;
+    vt_ok(vv_image_new(&ra, S, S));
+    vt_ok(vv_image_new(&mc, S, S));
+    vt_ok(vv_radiosity_view_frame(r, w, &view, 0, ra));
+    const vv_box box = {{0, 0, 0}, {1, 1, 1}};
+    const int paths = 300;
+    for (int y = 0; y < S; y++)
+        for (int x = 0; x < S; x++) {
+            uint64_t rng = 0x2545F4914F6CDD1Dull ^ (uint64_t)(y * S + x + 1) * 2654435761ull;
+            vv_ray ray = vv_view_ray(&view, x, y);
+            double acc = 0, hit = 0;
+            for (int k = 0; k < paths; k++) {
+                vv_vec3 p = ray.origin, d = ray.dir;
+                double wgt = 1;
+                for (int depth = 0; depth < 40; depth++) {
+                    vv_ray rr = {p, d};
+                    double a, e;
+                    if (!vv_box_intersect_ray(box, rr, &a, &e) || e <= 0)
+                        break;
+                    a = a > 0 ? a : 0;
+                    double t = a - log(1 - mc_rand(&rng)) / sigma;
+                    if (t >= e)
+                        break; /* flew through */
+                    if (depth == 0)
+                        hit = 1;
+                    p = vv_vec3_add(p, vv_vec3_scale(d, t));
+                    wgt *= albedo;
+                    /* next event: the light, attenuated to the box's edge */
+                    vv_vec3 l = vv_vec3_sub(light, p);
+                    double ll = vv_vec3_length(l);
+                    l = vv_vec3_scale(l, 1 / ll);
+                    acc += wgt * I / (ll * ll) * exp(-fog_tau(p, l, ll, box, sigma)) / (4 * RT_PI);
+                    /* isotropic scattering */
+                    double cz = 1 - 2 * mc_rand(&rng), ph = 2 * RT_PI * mc_rand(&rng);
+                    double sz = sqrt(1 - cz * cz);
+                    d = vv_vec3_make(sz * cos(ph), sz * sin(ph), cz);
+                }
+            }
+            float *px = &mc->rgba[4 * (y * S + x)];
+            for (int c = 0; c < 3; c++)
+                px[c] = (float)(RT_PI * acc / paths); /* display units: pi x radiance */
+            px[3] = (float)hit;
+        }
+    save(ra, "fog_radiosity.png");
+    save(mc, "fog_path_traced.png");
+    double psnr = vv_image_psnr(ra, mc), peak = 0, mr = 0, mm = 0;
+    for (int i = 0; i < S * S; i++) {
+        peak = fmax(peak, mc->rgba[4 * i]);
+        mr += ra->rgba[4 * i];
+        mm += mc->rgba[4 * i];
+    }
+    printf("# fog cube: Monte Carlo (%d paths a pixel) vs radiosity: PSNR %.2f dB, peak %.2f, "
+           "mean radiosity / path traced %.4f\n",
+           paths, psnr, peak, mr / mm);
+    assert_true(peak > 0.3);
+    assert_true(psnr >= 30);
+    vv_image_free(ra);
+    vv_image_free(mc);
+    vv_radiosity_free(r);
+    vv_world_free(w);
+}
+
 /* ---------------------------------------------------------------------- */
 /* Figure 6 at a small scale (20^3): hierarchy and colour bleeding                   */
 
@@ -729,6 +837,7 @@ main(void) {
         cmocka_unit_test_setup_teardown(test_furnace, setup_timer, teardown_timer),
         cmocka_unit_test_setup_teardown(test_energy, setup_timer, teardown_timer),
         cmocka_unit_test_setup_teardown(test_monte_carlo, setup_timer, teardown_timer),
+        cmocka_unit_test_setup_teardown(test_monte_carlo_fog, setup_timer, teardown_timer),
         cmocka_unit_test_setup_teardown(test_hierarchy, setup_timer, teardown_timer),
         cmocka_unit_test_setup_teardown(test_colour_bleeding, setup_timer, teardown_timer),
         cmocka_unit_test_setup_teardown(test_bad_input, setup_timer, teardown_timer),

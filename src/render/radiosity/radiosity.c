@@ -383,6 +383,7 @@ build_volume(builder *b, rad_vol *rv, const vv_object *obj, int obj_index,
                 set3(e->p, vv_mat4_mul_point(g2w, vv_vec3_make(i, j, k)));
                 e->half = (float)(0.5 * h * sqrt(3.0));
                 e->area = (float)(h * h * a);
+                e->tau = (float)(rv->sigma[id] * h);
                 double gl = sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]);
                 if (opt->diffuse_voxels && gl > 0.05) {
                     vv_vec3 gw = vv_mat4_mul_dir(nrm_m, vv_vec3_make(gv[0], gv[1], gv[2]));
@@ -477,6 +478,7 @@ build_tree(builder *b, int lo, int hi) {
         }
         for (int c = 0; c < 3; c++)
             nd.rho_max = fmaxf(nd.rho_max, e->rho[c]);
+        nd.thick = fmaxf(nd.thick, e->tau);
     }
     float d2 = 0;
     for (int a = 0; a < 3; a++) {
@@ -484,6 +486,11 @@ build_tree(builder *b, int lo, int hi) {
         d2 += (nd.bmax[a] - nd.bmin[a]) * (nd.bmax[a] - nd.bmin[a]);
     }
     nd.r = 0.5f * sqrtf(d2);
+    if (nd.kind == RAD_VOXEL && hi - lo > 1) {
+        /* voxels across the cluster times the densest one's optical depth */
+        float h = 2 * b->e[lo].half / sqrtf(3.0f);
+        nd.thick *= h > 0 ? 2 * nd.r / h : 1;
+    }
     b->nodes[id] = nd;
     if (hi - lo == 1)
         return id;
@@ -921,9 +928,10 @@ add_deposit(solver *sv, int e, int side, const double p[3]) {
         d->p[c] = (float)p[c];
 }
 
-/* How far a visibility ray stays from a voxel node: one voxel; three for a
- * single diffuse voxel, a piece of surface whose own capacity already
- * counts its slant (the shell around it would shadow it twice at grazing
+/* How far a visibility ray stays from a voxel node: none for isotropic
+ * (fog-like) voxels, whose capacity counts their own attenuation; one voxel
+ * for a cluster of mostly surface voxels; three for a single diffuse voxel, a piece of surface
+ * whose own capacity already counts its slant (the shell around it would shadow it twice at grazing
  * angles, and it is one-sided, so light through a thin wall from behind
  * finds no capacity). */
 static double voxel_margin(const vv_radiosity *r, const rad_node *n);
@@ -942,10 +950,9 @@ voxel_margin(const vv_radiosity *r, const rad_node *n) {
     double h = voxel_size(r, n->obj);
     if (n->child[0] < 0) {
         const rad_elem *e = &r->elems[n->lo];
-        if (e->n[0] != 0 || e->n[1] != 0 || e->n[2] != 0)
-            return 3 * h;
+        return e->n[0] != 0 || e->n[1] != 0 || e->n[2] != 0 ? 3 * h : 0;
     }
-    return h;
+    return n->s_dif > n->s_iso ? h : 0;
 }
 
 /* Where the shooter sends from (*xs). */
@@ -1208,6 +1215,12 @@ refine(solver *sv, const shooter *sh, int S, int R) {
          * cluster from its centre is poor there, towards shared edges
          * most); other near pairs count a hundred times */
         int must = big || (near && Rn->kind == RAD_PATCH && (!Sn || Sn->kind == RAD_PATCH));
+        /* optically thick clusters of fog-like voxels count like near ones:
+         * their inner voxels are shadowed by the outer ones, which the
+         * cluster's single visibility ray does not see */
+        if ((!r_leaf && Rn->kind == RAD_VOXEL && Rn->s_iso > Rn->s_dif && Rn->thick > 1) ||
+            (Sn && !s_leaf && Sn->kind == RAD_VOXEL && Sn->s_iso > Sn->s_dif && Sn->thick > 1))
+            near = 1;
         if (!must && !((near ? 100 * est : est) > sv->eps_power)) {
             /* direct light: a partly shadowed cluster subdivides unless its
              * share is negligible (sharp shadows and terminators) */

@@ -16,6 +16,7 @@ typedef struct rad_elem {
     float area;   /* patch area; voxel cross-section h^2 (1 - exp(-sigma h)) */
     float rho[3]; /* reflectance / scattering albedo */
     float half;   /* half the voxel size, or the patch's circumradius */
+    float tau;    /* voxel: optical depth across it (sigma h); patch: 0 */
     float tri[9]; /* patch vertices */
     int kind;     /* RAD_PATCH, RAD_VOXEL */
     int obj;      /* object index in the World */
@@ -38,6 +39,7 @@ typedef struct rad_node {
     float s_dif, m_dif[3]; /* diffuse voxels: sum of xs, sum of xs n */
     float s_pat, m_pat[3]; /* patches: sum of area, sum of area n */
     float rho_max;         /* largest reflectance of its elements */
+    float thick;           /* largest optical depth across it (voxels: tau x size / h) */
 } rad_node;
 
 /* A volume object's radiosity grid. */

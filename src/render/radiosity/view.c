@@ -56,9 +56,14 @@ rad_prepare_render(vv_radiosity *r) {
             rv->rbox.min = vv_vec3_make(1, 1, 1); /* empty: a box no ray meets */
             rv->rbox.max = vv_vec3_make(-1, -1, -1);
         } else {
-            /* one voxel more: samples interpolate from their neighbours */
-            vv_box gb = {vv_vec3_make(lo[0] - 1, lo[1] - 1, lo[2] - 1),
-                         vv_vec3_make(hi[0] + 1, hi[1] + 1, hi[2] + 1)};
+            /* one voxel more (samples interpolate from their neighbours),
+             * within the cells of the grid */
+            double gl[3], gh[3];
+            for (int a = 0; a < 3; a++) {
+                gl[a] = lo[a] - 1 > -0.5 ? lo[a] - 1 : -0.5;
+                gh[a] = hi[a] + 1 < rv->n[a] - 0.5 ? hi[a] + 1 : rv->n[a] - 0.5;
+            }
+            vv_box gb = {vv_vec3_make(gl[0], gl[1], gl[2]), vv_vec3_make(gh[0], gh[1], gh[2])};
             rv->rbox = vv_box_transform(gb, rv->g2w);
         }
         for (int i = 0; i < r->n_elems; i++) {
