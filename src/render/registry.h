@@ -12,6 +12,9 @@ extern const vv_renderer_ops vv_raytrace_ops;
 /** Geometry rendering of isosurfaces and geometric objects (src/render/raster). */
 extern const vv_renderer_ops vv_surface_ops;
 
+/** Volumetric radiosity (src/render/radiosity). */
+extern const vv_renderer_ops vv_radiosity_ops;
+
 /** Compression-domain Fourier projection (src/render/fourier). */
 extern const vv_renderer_ops vv_fourier_ops;
 
