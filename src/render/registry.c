@@ -11,8 +11,8 @@ struct vv_renderer {
 };
 
 /* Every rendering method built in, in the order --help lists them. */
-static const vv_renderer_ops *const registry[] = {
-    &vv_raycast_ops, &vv_raytrace_ops, &vv_splat_ops, &vv_surface_ops, &vv_fourier_ops, NULL};
+static const vv_renderer_ops *const registry[] = {&vv_raycast_ops, &vv_raytrace_ops, &vv_splat_ops,
+                                                  &vv_surface_ops, &vv_fourier_ops,  NULL};
 
 const vv_renderer_ops *const *
 vv_renderer_registry(void) {

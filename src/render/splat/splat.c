@@ -62,6 +62,9 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
 
 #include "core/internal.h"
 #include "render/registry.h"
@@ -69,13 +72,12 @@
 #include "render/volume_cache.h"
 #include "volvis/render.h"
 
-#define SP_MAX_OBJ 64     /* objects handled in one render (<= VV_VC_MAX) */
-#define SP_FP_LUT 4096    /* footprint table entries over q = r^2 in [0, rho^2] */
-#define SP_Z_LUT 1024     /* slab-integral table entries */
-#define SP_TILE 8         /* occlusion map tile side in pixels */
-#define SP_LISTS 16       /* voxel lists kept between renders */
-#define SP_CH 5           /* channels of a sheet pixel */
-#define SP_WMIN 0.02f     /* least sum of weights that is a sample (1 inside) */
+#define SP_MAX_OBJ 64 /* objects handled in one render (<= VV_VC_MAX) */
+#define SP_Z_LUT 1024 /* slab-integral table entries */
+#define SP_TILE 8     /* occlusion map tile side in pixels */
+#define SP_LISTS 16   /* voxel lists kept between renders */
+#define SP_CH 5       /* channels of a sheet pixel */
+#define SP_WMIN 0.02f /* least sum of weights that is a sample (1 inside) */
 #define SP_MAX_SHEETS 65536
 
 /* One cached voxel list: the voxels worth splatting of one volume under one
@@ -128,11 +130,11 @@ typedef struct sp_obj {
     /* eye space: X, Y (image right, down) and depth z of an index point are
      * rows . (i, j, k, 1) */
     double ex[4], ey[4], ez[4];
-    double cxx, cxy, cyy; /* footprint covariance in eye units^2 (slice or whole) */
-    double bx, by;        /* slice centre shift per unit depth offset */
-    double rz;            /* depth half-extent of the kernel support */
-    double vol_det;       /* |det| of the index-to-world map: a voxel's world volume */
-    double rworld;        /* support radius bound in world units (cut planes) */
+    double cxx, cxy, cyy;             /* footprint covariance in eye units^2 (slice or whole) */
+    double bx, by;                    /* slice centre shift per unit depth offset */
+    double rz;                        /* depth half-extent of the kernel support */
+    double vol_det;                   /* |det| of the index-to-world map: a voxel's world volume */
+    double rworld;                    /* support radius bound in world units (cut planes) */
     float wz[SP_Z_LUT], dz[SP_Z_LUT]; /* slab mass and mean offset by d */
     double z_lo, z_scale;             /* d -> table position */
     int ns;                           /* sheets a kernel can touch */
@@ -145,9 +147,9 @@ typedef struct sp_obj {
     int *start;      /* nsheets + 1 offsets into sorted */
     int kbase, nsheets;
     /* per band: lists */
-    int **bstart;     /* [band] -> nsheets + 1 offsets into bidx */
-    uint32_t **bidx;  /* [band] -> indices into sorted */
-    int is_comp;      /* composite (sheets, classified) */
+    int **bstart;    /* [band] -> nsheets + 1 offsets into bidx */
+    uint32_t **bidx; /* [band] -> indices into sorted */
+    int is_comp;     /* composite (sheets, classified) */
 } sp_obj;
 
 typedef struct sp_frame {
@@ -167,8 +169,7 @@ typedef struct sp_frame {
     double pcx, pcy;      /* persp: pixel of the forward axis, negated */
     vv_vec3 o00, ox, oy, d00, dx, dy;
     double znear;
-    float fp_lut[SP_FP_LUT];
-    float fp_qs; /* q -> table index */
+    float fp_scale; /* 1 / (2 pi (1 - exp(-rho^2 / 2))): the truncated Gaussian's normalisation */
     int band_h, n_bands;
     int kmin, kmax; /* sheets of the composite objects */
     atomic_int cancelled;
@@ -227,22 +228,83 @@ fp_setup(double xx, double xy, double yy, double s, double ewa, double rho2, sp_
     fp->norm = (float)(1.0 / sqrt(det));
 }
 
-/* Adds footprint fp centred at (cx, cy) (pixel-centre coordinates), weight
- * scale w, into the band buffer (rows y0 .. y1 - 1, width W, SP_CH channels
- * a pixel): channel 0 += weight, channel 1 + ch += weight * val[ch] for ch
- * < nv. Grows the dirty rectangle. */
+/* exp(x) for x in [-40, 0], relative error below 3e-7: x log2(e) =
+ * i + f with i an integer and |f| <= 1/2, 2^i from the exponent bits and
+ * 2^f by its Taylor polynomial of degree 5. */
+static inline float
+exp_neg(float x) {
+    const float t = x * 1.44269504f + 64.5f;
+    const int i = (int)t; /* t > 0: floor */
+    const float f = t - (float)i - 0.5f;
+    float p = 1.3333558e-3f;
+    p = p * f + 9.6181291e-3f;
+    p = p * f + 5.5504109e-2f;
+    p = p * f + 2.4022651e-1f;
+    p = p * f + 6.9314718e-1f;
+    p = p * f + 1.0f;
+    const int32_t bits = (i - 64 + 127) << 23;
+    float sc;
+    memcpy(&sc, &bits, sizeof sc);
+    return p * sc;
+}
+
+#ifdef __SSE2__
+/* exp_neg of four lanes, the same arithmetic. */
+static inline __m128
+exp_neg_ps(__m128 x) {
+    const __m128 t = _mm_add_ps(_mm_mul_ps(x, _mm_set1_ps(1.44269504f)), _mm_set1_ps(64.5f));
+    const __m128i i = _mm_cvttps_epi32(t);
+    const __m128 f = _mm_sub_ps(_mm_sub_ps(t, _mm_cvtepi32_ps(i)), _mm_set1_ps(0.5f));
+    __m128 p = _mm_set1_ps(1.3333558e-3f);
+    p = _mm_add_ps(_mm_mul_ps(p, f), _mm_set1_ps(9.6181291e-3f));
+    p = _mm_add_ps(_mm_mul_ps(p, f), _mm_set1_ps(5.5504109e-2f));
+    p = _mm_add_ps(_mm_mul_ps(p, f), _mm_set1_ps(2.4022651e-1f));
+    p = _mm_add_ps(_mm_mul_ps(p, f), _mm_set1_ps(6.9314718e-1f));
+    p = _mm_add_ps(_mm_mul_ps(p, f), _mm_set1_ps(1.0f));
+    const __m128i e = _mm_slli_epi32(_mm_add_epi32(i, _mm_set1_epi32(127 - 64)), 23);
+    return _mm_mul_ps(p, _mm_castsi128_ps(e));
+}
+#endif
+
+/* wrow[x] = w exp(-q / 2), q = (a dx + bq) dx + cq, dx = dx0 + x, for x <
+ * len (rounded up to 4: wrow has room). */
 static inline void
-fp_splat(const sp_frame *fr, float *buf, int W, int y0, int y1, float cx, float cy,
-         const sp_fp *fp, float w, const float *val, int nv, int rect[4]) {
-    const float rho2 = (float)fr->rho2;
+fp_row_weights(float *wrow, int len, float a, float bq, float cq, float dx0, float w) {
+#ifdef __SSE2__
+    const __m128 va = _mm_set1_ps(a), vb = _mm_set1_ps(bq), vc = _mm_set1_ps(cq);
+    const __m128 vw = _mm_set1_ps(w), nh = _mm_set1_ps(-0.5f), zero = _mm_setzero_ps();
+    __m128 dx = _mm_add_ps(_mm_set1_ps(dx0), _mm_set_ps(3, 2, 1, 0));
+    const __m128 four = _mm_set1_ps(4);
+    for (int x = 0; x < len; x += 4) {
+        __m128 q = _mm_add_ps(_mm_mul_ps(_mm_add_ps(_mm_mul_ps(va, dx), vb), dx), vc);
+        q = _mm_max_ps(q, zero);
+        _mm_storeu_ps(wrow + x, _mm_mul_ps(vw, exp_neg_ps(_mm_mul_ps(nh, q))));
+        dx = _mm_add_ps(dx, four);
+    }
+#else
+    for (int x = 0; x < len; x++) {
+        const float dx = dx0 + (float)x;
+        float q = (a * dx + bq) * dx + cq;
+        q = q < 0 ? 0 : q;
+        wrow[x] = w * exp_neg(-0.5f * q);
+    }
+#endif
+}
+
+/* Adds footprint fp centred at (cx, cy) (pixel-centre coordinates), weight
+ * scale w (times the normalised Gaussian), into the band's sheet planes
+ * (rows y0 .. y1 - 1, width W; plane 0 += weight, plane 1 + ch += weight *
+ * val[ch] for ch < NV). Grows the dirty rectangle. */
+static inline void
+fp_splat_nv(float *buf, size_t plane, float *wrow, int W, int y0, int y1, float rho2, float cx,
+            float cy, const sp_fp *fp, float w, const float *val, const int NV, int rect[4]) {
     int ya = (int)ceilf(cy - fp->hy), yb = (int)floorf(cy + fp->hy);
     ya = ya < y0 ? y0 : ya;
     yb = yb > y1 - 1 ? y1 - 1 : yb;
-    const float ia = 1.0f / fp->a, qs = fr->fp_qs;
-    const float *lut = fr->fp_lut;
+    const float ia = 1.0f / fp->a, a = fp->a;
     for (int y = ya; y <= yb; y++) {
         const float dy = (float)y - cy;
-        const float disc = fp->b * fp->b * dy * dy - fp->a * (fp->c * dy * dy - rho2);
+        const float disc = fp->b * fp->b * dy * dy - a * (fp->c * dy * dy - rho2);
         if (disc <= 0)
             continue;
         const float half = sqrtf(disc) * ia, xm = cx - fp->b * dy * ia;
@@ -255,20 +317,62 @@ fp_splat(const sp_frame *fr, float *buf, int W, int y0, int y1, float cx, float 
         rect[1] = xb > rect[1] ? xb : rect[1];
         rect[2] = y < rect[2] ? y : rect[2];
         rect[3] = y > rect[3] ? y : rect[3];
-        float *row = buf + (size_t)(y - y0) * (size_t)W * SP_CH;
-        const float bq = 2 * fp->b * dy, cq = fp->c * dy * dy;
-        for (int x = xa; x <= xb; x++) {
-            const float dx = (float)x - cx;
-            float q = (fp->a * dx + bq) * dx + cq;
-            int ti = (int)(q * qs + 0.5f);
-            ti = ti > SP_FP_LUT - 1 ? SP_FP_LUT - 1 : ti < 0 ? 0 : ti;
-            const float wt = w * lut[ti];
-            float *p = row + (size_t)x * SP_CH;
-            p[0] += wt;
-            for (int ch = 0; ch < nv; ch++)
-                p[1 + ch] += wt * val[ch];
+        const int len = xb - xa + 1;
+        const float bq = 2 * fp->b * dy, cq = fp->c * dy * dy, dx0 = (float)xa - cx;
+        fp_row_weights(wrow, len, a, bq, cq, dx0, w);
+        float *p0 = buf + (size_t)(y - y0) * (size_t)W + (size_t)xa;
+#pragma omp simd
+        for (int x = 0; x < len; x++)
+            p0[x] += wrow[x];
+        for (int ch = 0; ch < NV; ch++) {
+            float *pc = p0 + (size_t)(ch + 1) * plane;
+            const float v = val[ch];
+#pragma omp simd
+            for (int x = 0; x < len; x++)
+                pc[x] += wrow[x] * v;
         }
     }
+}
+
+/* The sum over the whole pixel grid (unclipped) of exp(-q / 2) for
+ * footprint fp centred at (cx, cy): X-ray footprints are divided by it so
+ * that each one's pixels sum exactly to its kernel's integral whatever its
+ * size and sub-pixel position (energy conservation). */
+static double
+fp_discrete_sum(float *wrow, int W, float rho2, float cx, float cy, const sp_fp *fp) {
+    const int ya = (int)ceilf(cy - fp->hy), yb = (int)floorf(cy + fp->hy);
+    const float ia = 1.0f / fp->a, a = fp->a;
+    double sum = 0;
+    for (int y = ya; y <= yb; y++) {
+        const float dy = (float)y - cy;
+        const float disc = fp->b * fp->b * dy * dy - a * (fp->c * dy * dy - rho2);
+        if (disc <= 0)
+            continue;
+        const float half = sqrtf(disc) * ia, xm = cx - fp->b * dy * ia;
+        const int xa = (int)ceilf(xm - half), xb = (int)floorf(xm + half);
+        const float bq = 2 * fp->b * dy, cq = fp->c * dy * dy;
+        for (int x0 = xa; x0 <= xb; x0 += W) {
+            const int len = xb - x0 + 1 < W ? xb - x0 + 1 : W;
+            fp_row_weights(wrow, len, a, bq, cq, (float)x0 - cx, 1.0f);
+            float rs = 0;
+            for (int x = 0; x < len; x++)
+                rs += wrow[x];
+            sum += rs;
+        }
+    }
+    return sum;
+}
+
+static void
+fp_splat1(float *buf, size_t plane, float *wrow, int W, int y0, int y1, float rho2, float cx,
+          float cy, const sp_fp *fp, float w, const float *val, int rect[4]) {
+    fp_splat_nv(buf, plane, wrow, W, y0, y1, rho2, cx, cy, fp, w, val, 1, rect);
+}
+
+static void
+fp_splat4(float *buf, size_t plane, float *wrow, int W, int y0, int y1, float rho2, float cx,
+          float cy, const sp_fp *fp, float w, const float *val, int rect[4]) {
+    fp_splat_nv(buf, plane, wrow, W, y0, y1, rho2, cx, cy, fp, w, val, 4, rect);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -464,7 +568,7 @@ get_list(sp_state *st, sp_obj *ob, int oct, int *built) {
                             continue;
                         if (pre &&
                             ob->tab.lut[4 * (int)vv_vtables_index(
-                                                 &ob->tab, vv_vcache_value(c, row + (size_t)i))] <=
+                                                &ob->tab, vv_vcache_value(c, row + (size_t)i))] <=
                                 0)
                             continue;
                     }
@@ -777,17 +881,18 @@ object_free(sp_obj *ob, int nbands) {
 /* Per-pixel data of one band. */
 typedef struct sp_band {
     int y0, y1, W, n;
-    float *buf;        /* n x SP_CH */
-    float *C, *A, *D;  /* colour (3 a pixel), opacity, depth (ray parameter) */
+    float *buf;         /* SP_CH planes of n */
+    float *wrow;        /* one row of footprint weights */
+    float *C, *A, *D;   /* colour (3 a pixel), opacity, depth (ray parameter) */
     float *P, *PA, *PD; /* projections: colour (3), opacity, depth */
-    int *k0, *k1;      /* per object (n_obj x n): sheets inside the pixel's ray */
-    float *cosv;       /* forward . ray direction */
-    float *vdir;       /* towards the eye, 3 a pixel */
-    float *rdir;       /* ray direction (3) and origin (3) a pixel, for world points */
-    uint8_t *done;     /* pixel needs nothing more (occlusion map) */
-    uint16_t *tcount;  /* finished pixels per tile */
-    uint16_t *tcap;    /* pixels per tile */
-    int tw, th;        /* tiles across, down */
+    int *k0, *k1;       /* per object (n_obj x n): sheets inside the pixel's ray */
+    float *cosv;        /* forward . ray direction */
+    float *vdir;        /* towards the eye, 3 a pixel */
+    float *rdir;        /* ray direction (3) and origin (3) a pixel, for world points */
+    uint8_t *done;      /* pixel needs nothing more (occlusion map) */
+    uint16_t *tcount;   /* finished pixels per tile */
+    uint16_t *tcap;     /* pixels per tile */
+    int tw, th;         /* tiles across, down */
 } sp_band;
 
 static inline void
@@ -837,7 +942,8 @@ band_init(const sp_frame *fr, sp_band *bd, int band) {
     const int no = fr->n_obj ? fr->n_obj : 1;
     bd->tw = (bd->W + SP_TILE - 1) / SP_TILE;
     bd->th = (bd->y1 - bd->y0 + SP_TILE - 1) / SP_TILE;
-    bd->buf = calloc((size_t)n * SP_CH, sizeof(float));
+    bd->buf = calloc((size_t)n * SP_CH + (size_t)bd->W + 8, sizeof(float));
+    bd->wrow = bd->buf ? bd->buf + (size_t)n * SP_CH : NULL;
     bd->C = malloc((size_t)n * 10 * sizeof(float));
     bd->k0 = malloc((size_t)n * 2 * (size_t)no * sizeof(int));
     bd->cosv = malloc((size_t)n * 10 * sizeof(float));
@@ -859,8 +965,8 @@ band_init(const sp_frame *fr, sp_band *bd, int band) {
     for (int ty = 0; ty < bd->th; ty++)
         for (int tx = 0; tx < bd->tw; tx++) {
             const int w = bd->W - tx * SP_TILE < SP_TILE ? bd->W - tx * SP_TILE : SP_TILE;
-            const int h = bd->y1 - bd->y0 - ty * SP_TILE < SP_TILE ? bd->y1 - bd->y0 - ty * SP_TILE
-                                                                  : SP_TILE;
+            const int h =
+                bd->y1 - bd->y0 - ty * SP_TILE < SP_TILE ? bd->y1 - bd->y0 - ty * SP_TILE : SP_TILE;
             bd->tcap[ty * bd->tw + tx] = (uint16_t)(w * h);
         }
     for (int i = 0; i < n; i++) {
@@ -1022,8 +1128,18 @@ band_splat_sheet(sp_frame *fr, sp_band *bd, const sp_obj *ob, int band, int k, i
             }
         }
         (*nfp)++;
-        fp_splat(fr, bd->buf, bd->W, bd->y0, bd->y1, (float)cx, (float)cy, &fp,
-                 (float)(w * s * s * fp.norm), val, nv, rect);
+        float wt = (float)(w * s * s * fp.norm) * fr->fp_scale;
+        if (ob->mode == VV_MODE_XRAY) {
+            const double sum =
+                fp_discrete_sum(bd->wrow, bd->W, (float)fr->rho2, (float)cx, (float)cy, &fp);
+            wt = sum > 0 ? (float)(w * s * s / sum) : 0;
+        }
+        if (nv == 1)
+            fp_splat1(bd->buf, (size_t)bd->n, bd->wrow, bd->W, bd->y0, bd->y1, (float)fr->rho2,
+                      (float)cx, (float)cy, &fp, wt, val, rect);
+        else
+            fp_splat4(bd->buf, (size_t)bd->n, bd->wrow, bd->W, bd->y0, bd->y1, (float)fr->rho2,
+                      (float)cx, (float)cy, &fp, wt, val, rect);
     }
 }
 
@@ -1040,13 +1156,15 @@ band_composite_sheet(sp_frame *fr, sp_band *bd, const sp_obj *ob, int o, int k, 
         const int yl = y - bd->y0;
         for (int x = rect[0]; x <= rect[1]; x++) {
             const int pi = yl * bd->W + x;
-            float *p = bd->buf + (size_t)pi * SP_CH;
+            float *p = bd->buf + (size_t)pi;
             const float w = p[0];
             if (w == 0)
                 continue;
-            float sv[5];
-            memcpy(sv, p, sizeof sv);
-            memset(p, 0, SP_CH * sizeof(float));
+            float sv[SP_CH];
+            for (int ch = 0; ch < SP_CH; ch++) {
+                sv[ch] = p[(size_t)ch * (size_t)n];
+                p[(size_t)ch * (size_t)n] = 0;
+            }
             if (bd->done[pi])
                 continue;
             if (k > k1[pi]) {
@@ -1125,9 +1243,9 @@ band_project_sheet(sp_frame *fr, sp_band *bd, const sp_obj *ob, int o, int k, co
         const int yl = y - bd->y0;
         for (int x = rect[0]; x <= rect[1]; x++) {
             const int pi = yl * bd->W + x;
-            float *p = bd->buf + (size_t)pi * SP_CH;
-            const float w = p[0], wv = p[1];
-            p[0] = p[1] = 0;
+            float *p = bd->buf + (size_t)pi;
+            const float w = p[0], wv = p[n];
+            p[0] = p[n] = 0;
             if (ob->mode == VV_MODE_XRAY && fr->xray)
                 fr->xray[(size_t)y * (size_t)bd->W + (size_t)x] += wv;
             if (w == 0 || k < k0[pi] || k > k1[pi])
@@ -1401,17 +1519,14 @@ sp_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     if (!(rate > 0))
         rate = opt->quality >= 2 ? 1.0 : opt->quality == 1 ? 1.5 : 2.0;
     if (opt->quality <= 0)
-        radius = radius * 0.75 > 1.0 ? radius * 0.75 : (radius < 1.0 ? radius : 1.0);
+        radius = radius < 1.0 ? radius : 1.0;
     else if (opt->quality == 1)
-        radius = radius * 0.875 > 1.0 ? radius * 0.875 : (radius < 1.0 ? radius : 1.0);
+        radius = radius * 0.85 > 1.0 ? radius * 0.85 : (radius < 1.0 ? radius : 1.0);
     fr->rho2 = (radius / st->sigma) * (radius / st->sigma);
     if (fr->rho2 > 64.0)
         fr->rho2 = 64.0; /* the Gaussian is below 1e-14 beyond 8 sigma */
     const double rho2 = fr->rho2;
-    fr->fp_qs = (float)((SP_FP_LUT - 1) / rho2);
-    const double mass2 = 1.0 - exp(-0.5 * rho2);
-    for (int i = 0; i < SP_FP_LUT; i++)
-        fr->fp_lut[i] = (float)(exp(-0.5 * i / fr->fp_qs) / (2 * VV_PI * mass2));
+    fr->fp_scale = (float)(1.0 / (2 * VV_PI * (1.0 - exp(-0.5 * rho2))));
 
     int nvis = 0;
     for (int i = 0; i < w->n_objects; i++)
@@ -1467,8 +1582,8 @@ sp_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         if (st->axis) {
             double best = -1;
             for (int a = 0; a < 3; a++) {
-                const double g = ob->w2i[a][0] * fr->f.x + ob->w2i[a][1] * fr->f.y +
-                                 ob->w2i[a][2] * fr->f.z;
+                const double g =
+                    ob->w2i[a][0] * fr->f.x + ob->w2i[a][1] * fr->f.y + ob->w2i[a][2] * fr->f.z;
                 if (fabs(g) > best) {
                     best = fabs(g);
                     ob->axis_a = a;
@@ -1558,7 +1673,7 @@ sp_create(void **state) {
     if (!st)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     vv_vcache_set_init(&st->vc);
-    st->radius = 1.6;
+    st->radius = 1.2;
     st->sigma = 0.55;
     st->ewa_var = 0.25;
     st->early_termination = 0.99;
@@ -1678,8 +1793,8 @@ const vv_renderer_ops vv_splat_ops = {
     sp_set_option,
     sp_render,
     sp_destroy,
-    "radius (1.6 voxels), sigma (0.55 voxels), ewa_variance (0.25 pixel^2), classification "
+    "radius (1.2 voxels), sigma (0.55 voxels), ewa_variance (0.25 pixel^2), classification "
     "(post|pre), sheet_spacing (0: 1, 1.5, 2 steps at quality 2, 1, 0), early_termination (0.99), "
-    "empty_space_skipping (1), occlusion_culling (1), gradient_budget_mb; quality 0/1 also "
-    "shrink the radius to 3/4 and 7/8",
+    "empty_space_skipping (1), occlusion_culling (1), gradient_budget_mb; quality 1 also "
+    "shrinks the radius to 0.85 of it, quality 0 to 1 voxel (neither below 1 unless set so)",
 };
