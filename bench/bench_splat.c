@@ -10,14 +10,15 @@
  * Each frame is rendered once to warm the caches (gradients, tables, voxel
  * lists), then timed --runs times; the median is reported.
  *
- * Ops: raycast_frame and splat_frame (s), splat_speedup (ray-cast time /
+ * Ops: raycast_frame and splat_frame (s), the same in CPU seconds of all
+ * threads (raycast_frame_cpu, splat_frame_cpu), splat_speedup (ray-cast time /
  * splat time), splats_per_s_per_thread (voxels of the lists splatted per
  * second and thread), footprints_per_s_per_thread (kernel slices
  * rasterised), splat_fraction_listed (voxels not skipped as empty / all),
  * splat_fraction_culled (footprints skipped by the occlusion map / those
  * considered).
  *
- * usage: bench_splat [--size N] [--threads N] [--runs N] [--outdir DIR]
+ * usage: bench_splat [--size N] [--threads N] [--runs N] [--quality Q] [--outdir DIR]
  *                    [--only nut_bolt|neghip|ct_head] [--option KEY=VALUE]...
  * Run from the repository root (reads ../shared/data and examples/).
  */
@@ -31,27 +32,33 @@
 #include "volvis/volvis.h"
 
 typedef struct cfg {
-    int size, threads, runs;
+    int size, threads, runs, quality;
     const char *outdir, *only;
     const char *options[8];
     int n_options;
 } cfg;
 
+/* Median wall-clock seconds of a frame; *cpu: median CPU seconds (all
+ * threads), steadier than the wall clock on a loaded machine. */
 static double
-time_frame(vv_renderer *r, const vv_world *w, const cfg *c, vv_image *img, const char *what) {
+time_frame(vv_renderer *r, const vv_world *w, const cfg *c, vv_image *img, const char *what,
+           double *cpu) {
     vv_render_options opt;
     vv_render_options_init(&opt);
     opt.threads = c->threads;
+    opt.quality = c->quality;
     if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK) /* warm */
         bench_die("bench_splat", what);
-    double *t = malloc(sizeof(double) * (size_t)c->runs);
+    double *t = malloc(sizeof(double) * 2 * (size_t)c->runs), *u = t + c->runs;
     for (int i = 0; i < c->runs; i++) {
-        const double t0 = bench_now();
+        const double t0 = bench_now(), c0 = bench_cpu_now();
         if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK)
             bench_die("bench_splat", what);
         t[i] = bench_now() - t0;
+        u[i] = bench_cpu_now() - c0;
     }
     const double med = bench_median(t, c->runs);
+    *cpu = bench_median(u, c->runs);
     free(t);
     return med;
 }
@@ -75,12 +82,15 @@ run(const char *name, vv_world *w, const cfg *c) {
     vv_image *a = NULL, *b = NULL;
     if (vv_image_new(&a, c->size, c->size) != VV_OK || vv_image_new(&b, c->size, c->size) != VV_OK)
         bench_die("bench_splat", "image");
-    const double tr = time_frame(rc, w, c, a, "raycast");
-    const double ts = time_frame(sp, w, c, b, "splat");
+    double cr, cs;
+    const double tr = time_frame(rc, w, c, a, "raycast", &cr);
+    const double ts = time_frame(sp, w, c, b, "splat", &cs);
     const vv_splat_stats *st = vv_splat_stats_get(sp);
     const int nt = c->threads > 0 ? c->threads : vv_threads_get();
     bench_emit("raycast_frame", name, tr, "s");
     bench_emit("splat_frame", name, ts, "s");
+    bench_emit("raycast_frame_cpu", name, cr, "s");
+    bench_emit("splat_frame_cpu", name, cs, "s");
     bench_emit("splat_speedup", name, tr / ts, "x");
     bench_emit("splats_per_s_per_thread", name, (double)st->listed / ts / nt, "voxels/s");
     bench_emit("footprints_per_s_per_thread", name, (double)st->footprints / ts / nt,
@@ -201,7 +211,7 @@ bench_ct_head(const cfg *c) {
 
 int
 main(int argc, char **argv) {
-    cfg c = {512, 2, 5, NULL, NULL, {0}, 0};
+    cfg c = {512, 2, 5, 2, NULL, NULL, {0}, 0};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
         if (!val) {
@@ -214,6 +224,8 @@ main(int argc, char **argv) {
             c.threads = atoi(val);
         else if (!strcmp(a, "--runs"))
             c.runs = atoi(val);
+        else if (!strcmp(a, "--quality"))
+            c.quality = atoi(val);
         else if (!strcmp(a, "--outdir"))
             c.outdir = val;
         else if (!strcmp(a, "--only"))
@@ -221,8 +233,9 @@ main(int argc, char **argv) {
         else if (!strcmp(a, "--option") && c.n_options < 8)
             c.options[c.n_options++] = val;
         else {
-            fprintf(stderr, "usage: bench_splat [--size N] [--threads N] [--runs N] [--outdir DIR] "
-                            "[--only nut_bolt|neghip|ct_head] [--option KEY=VALUE]...\n");
+            fprintf(stderr, "usage: bench_splat [--size N] [--threads N] [--runs N] [--quality Q] "
+                            "[--outdir DIR] [--only nut_bolt|neghip|ct_head] "
+                            "[--option KEY=VALUE]...\n");
             return 2;
         }
         i++;
@@ -232,8 +245,8 @@ main(int argc, char **argv) {
         return 2;
     }
     vv_threads_set(c.threads);
-    printf("# bench_splat: %d x %d, %d threads, median of %d runs\n", c.size, c.size, c.threads,
-           c.runs);
+    printf("# bench_splat: %d x %d, %d threads, quality %d (both renderers), median of %d runs\n",
+           c.size, c.size, c.threads, c.quality, c.runs);
     if (!c.only || !strcmp(c.only, "nut_bolt"))
         bench_nut_bolt(&c);
     if (!c.only || !strcmp(c.only, "neghip"))

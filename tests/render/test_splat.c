@@ -461,6 +461,10 @@ test_threads_lists_culling(void **state) {
     vv_volume *v = NULL;
     vt_ok(vv_volume_load(&v, vt_data("volumes/neghip.slc"), NULL));
     vv_world *w = scene_for(v, 96, 30, 20);
+    /* opaque enough that the occlusion map has work */
+    vv_tf_init(&w->objects[0]->tf);
+    vv_tf_add_opacity(&w->objects[0]->tf, 30, 0.0);
+    vv_tf_add_opacity(&w->objects[0]->tf, 60, 1.0);
     vv_renderer *sp = new_r("splat");
     vv_image *a = render_q(sp, w, &w->view, 1, 2);
     const vv_splat_stats st1 = *vv_splat_stats_get(sp);

@@ -291,20 +291,76 @@ fp_row_weights(float *wrow, int len, float a, float bq, float cq, float dx0, flo
 #endif
 }
 
+/* Adds one row of a footprint to the sheet planes: for x < len, with
+ * weight w exp(-q / 2), q = (a dx + bq) dx + cq, dx = dx0 + x, plane 0 at
+ * p0[x] += weight and plane 1 + ch (stride ps) += weight * val[ch]. Four
+ * pixels at a time; lanes past len add 0 (the planes have slack). */
+static inline void
+fp_row_accum(float *p0, size_t ps, int len, float a, float bq, float cq, float dx0, float w,
+             const float *val, const int NV) {
+#ifdef __SSE2__
+    const __m128 va = _mm_set1_ps(a), vb = _mm_set1_ps(bq), vc = _mm_set1_ps(cq);
+    const __m128 vw = _mm_set1_ps(w), nh = _mm_set1_ps(-0.5f), zero = _mm_setzero_ps();
+    __m128 dx = _mm_add_ps(_mm_set1_ps(dx0), _mm_set_ps(3, 2, 1, 0));
+    __m128i lane = _mm_set_epi32(3, 2, 1, 0);
+    const __m128i vlen = _mm_set1_epi32(len), four_i = _mm_set1_epi32(4);
+    const __m128 four = _mm_set1_ps(4);
+    __m128 vv[4];
+    for (int ch = 0; ch < NV; ch++)
+        vv[ch] = _mm_set1_ps(val[ch]);
+    for (int x = 0; x < len; x += 4) {
+        __m128 q = _mm_add_ps(_mm_mul_ps(_mm_add_ps(_mm_mul_ps(va, dx), vb), dx), vc);
+        q = _mm_max_ps(q, zero);
+        const __m128 m = _mm_castsi128_ps(_mm_cmplt_epi32(lane, vlen));
+        const __m128 wt = _mm_and_ps(m, _mm_mul_ps(vw, exp_neg_ps(_mm_mul_ps(nh, q))));
+        float *p = p0 + x;
+        _mm_storeu_ps(p, _mm_add_ps(_mm_loadu_ps(p), wt));
+        for (int ch = 0; ch < NV; ch++) {
+            float *pc = p + (size_t)(ch + 1) * ps;
+            _mm_storeu_ps(pc, _mm_add_ps(_mm_loadu_ps(pc), _mm_mul_ps(wt, vv[ch])));
+        }
+        dx = _mm_add_ps(dx, four);
+        lane = _mm_add_epi32(lane, four_i);
+    }
+#else
+    for (int x = 0; x < len; x++) {
+        const float dx = dx0 + (float)x;
+        float q = (a * dx + bq) * dx + cq;
+        q = q < 0 ? 0 : q;
+        const float wt = w * exp_neg(-0.5f * q);
+        p0[x] += wt;
+        for (int ch = 0; ch < NV; ch++)
+            p0[x + (size_t)(ch + 1) * ps] += wt * val[ch];
+    }
+#endif
+}
+
 /* Adds footprint fp centred at (cx, cy) (pixel-centre coordinates), weight
  * scale w (times the normalised Gaussian), into the band's sheet planes
- * (rows y0 .. y1 - 1, width W; plane 0 += weight, plane 1 + ch += weight *
- * val[ch] for ch < NV). Grows the dirty rectangle. */
+ * (rows y0 .. y1 - 1, width W, plane stride ps; plane 0 += weight, plane
+ * 1 + ch += weight * val[ch] for ch < NV). Grows the dirty rectangle by the
+ * footprint's bounding box. */
 static inline void
-fp_splat_nv(float *buf, size_t plane, float *wrow, int W, int y0, int y1, float rho2, float cx,
-            float cy, const sp_fp *fp, float w, const float *val, const int NV, int rect[4]) {
+fp_splat_nv(float *buf, size_t ps, int W, int y0, int y1, float rho2, float cx, float cy,
+            const sp_fp *fp, float w, const float *val, const int NV, int rect[4]) {
     int ya = (int)ceilf(cy - fp->hy), yb = (int)floorf(cy + fp->hy);
     ya = ya < y0 ? y0 : ya;
     yb = yb > y1 - 1 ? y1 - 1 : yb;
-    const float ia = 1.0f / fp->a, a = fp->a;
+    if (ya > yb)
+        return;
+    int bxa = (int)ceilf(cx - fp->hx), bxb = (int)floorf(cx + fp->hx);
+    bxa = bxa < 0 ? 0 : bxa;
+    bxb = bxb > W - 1 ? W - 1 : bxb;
+    if (bxa > bxb)
+        return;
+    rect[0] = bxa < rect[0] ? bxa : rect[0];
+    rect[1] = bxb > rect[1] ? bxb : rect[1];
+    rect[2] = ya < rect[2] ? ya : rect[2];
+    rect[3] = yb > rect[3] ? yb : rect[3];
+    const float ia = 1.0f / fp->a, a = fp->a, bb = fp->b * fp->b;
     for (int y = ya; y <= yb; y++) {
         const float dy = (float)y - cy;
-        const float disc = fp->b * fp->b * dy * dy - a * (fp->c * dy * dy - rho2);
+        const float disc = bb * dy * dy - a * (fp->c * dy * dy - rho2);
         if (disc <= 0)
             continue;
         const float half = sqrtf(disc) * ia, xm = cx - fp->b * dy * ia;
@@ -313,24 +369,8 @@ fp_splat_nv(float *buf, size_t plane, float *wrow, int W, int y0, int y1, float 
         xb = xb > W - 1 ? W - 1 : xb;
         if (xa > xb)
             continue;
-        rect[0] = xa < rect[0] ? xa : rect[0];
-        rect[1] = xb > rect[1] ? xb : rect[1];
-        rect[2] = y < rect[2] ? y : rect[2];
-        rect[3] = y > rect[3] ? y : rect[3];
-        const int len = xb - xa + 1;
-        const float bq = 2 * fp->b * dy, cq = fp->c * dy * dy, dx0 = (float)xa - cx;
-        fp_row_weights(wrow, len, a, bq, cq, dx0, w);
-        float *p0 = buf + (size_t)(y - y0) * (size_t)W + (size_t)xa;
-#pragma omp simd
-        for (int x = 0; x < len; x++)
-            p0[x] += wrow[x];
-        for (int ch = 0; ch < NV; ch++) {
-            float *pc = p0 + (size_t)(ch + 1) * plane;
-            const float v = val[ch];
-#pragma omp simd
-            for (int x = 0; x < len; x++)
-                pc[x] += wrow[x] * v;
-        }
+        fp_row_accum(buf + (size_t)(y - y0) * (size_t)W + (size_t)xa, ps, xb - xa + 1, a,
+                     2 * fp->b * dy, fp->c * dy * dy, (float)xa - cx, w, val, NV);
     }
 }
 
@@ -364,15 +404,15 @@ fp_discrete_sum(float *wrow, int W, float rho2, float cx, float cy, const sp_fp 
 }
 
 static void
-fp_splat1(float *buf, size_t plane, float *wrow, int W, int y0, int y1, float rho2, float cx,
-          float cy, const sp_fp *fp, float w, const float *val, int rect[4]) {
-    fp_splat_nv(buf, plane, wrow, W, y0, y1, rho2, cx, cy, fp, w, val, 1, rect);
+fp_splat1(float *buf, size_t ps, int W, int y0, int y1, float rho2, float cx, float cy,
+          const sp_fp *fp, float w, const float *val, int rect[4]) {
+    fp_splat_nv(buf, ps, W, y0, y1, rho2, cx, cy, fp, w, val, 1, rect);
 }
 
 static void
-fp_splat4(float *buf, size_t plane, float *wrow, int W, int y0, int y1, float rho2, float cx,
-          float cy, const sp_fp *fp, float w, const float *val, int rect[4]) {
-    fp_splat_nv(buf, plane, wrow, W, y0, y1, rho2, cx, cy, fp, w, val, 4, rect);
+fp_splat4(float *buf, size_t ps, int W, int y0, int y1, float rho2, float cx, float cy,
+          const sp_fp *fp, float w, const float *val, int rect[4]) {
+    fp_splat_nv(buf, ps, W, y0, y1, rho2, cx, cy, fp, w, val, 4, rect);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -511,18 +551,17 @@ hash_bytes(uint64_t h, const void *p, size_t n) {
 static vv_status
 get_list(sp_state *st, sp_obj *ob, int oct, int *built) {
     const vv_vcache *c = ob->c;
-    const size_t nb = (size_t)c->bx * (size_t)c->by * (size_t)c->bz;
     const int comp = ob->mode == VV_MODE_COMPOSITE;
     const int skip = st->skipping && comp;
-    const int dil = (int)ceil(2 * st->radius / VV_VC_BLOCK);
+    const int pre = skip && st->pre;
+    /* the kernel's reach in voxels (the footprint's truncation is a
+     * cylinder: up to sqrt 2 radius from the centre) */
+    const int reach = (int)ceil(1.4142136 * st->radius);
     uint64_t h = 1469598103934665603ULL;
     h = hash_bytes(h, &skip, sizeof skip);
     h = hash_bytes(h, &st->pre, sizeof st->pre);
-    h = hash_bytes(h, &dil, sizeof dil);
+    h = hash_bytes(h, &reach, sizeof reach);
     if (skip)
-        h = hash_bytes(h, ob->tab.bdist, nb);
-    const int pre = skip && st->pre;
-    if (pre)
         for (int i = 0; i < VV_VC_LUT; i++) {
             const int vis = ob->tab.lut[4 * i] > 0;
             h = hash_bytes(h, &vis, sizeof vis);
@@ -546,32 +585,94 @@ get_list(sp_state *st, sp_obj *ob, int oct, int *built) {
     free(L->vox);
     memset(L, 0, sizeof *L);
     const int nx = c->nx, ny = c->ny, nz = c->nz;
+    const size_t nvox = c->sz * (size_t)nz;
+    /* empty-voxel skipping: a voxel is needed when the values within
+     * 2 reach of it (every sample it reaches, and every voxel those samples
+     * blend) span a visible table entry; pre-classified, when its own value
+     * is visible */
+    uint8_t *need = NULL;
+    if (skip && !pre) {
+        int *nzc = malloc(sizeof(int) * (VV_VC_LUT + 1));
+        uint16_t *mn = malloc(nvox * sizeof *mn), *mx = malloc(nvox * sizeof *mx);
+        need = malloc(nvox);
+        if (!nzc || !mn || !mx || !need) {
+            free(nzc);
+            free(mn);
+            free(mx);
+            free(need);
+            return vv_error_set(VV_ERR_NOMEM, "out of memory for the voxel list of %zu voxels",
+                                nvox);
+        }
+        nzc[0] = 0;
+        for (int i = 0; i < VV_VC_LUT; i++)
+            nzc[i + 1] = nzc[i] + (ob->tab.lut[4 * i] > 0);
+#pragma omp parallel for schedule(static)
+        for (size_t v = 0; v < nvox; v++)
+            mn[v] = mx[v] = (uint16_t)vv_vtables_index(&ob->tab, vv_vcache_value(c, v));
+        /* separable running min / max over 2 reach + 1 voxels per axis */
+        const int R = 2 * reach;
+        const int len[3] = {nx, ny, nz};
+        const size_t stride[3] = {1, c->sy, c->sz};
+        for (int a = 0; a < 3; a++) {
+            const int L_ = len[a];
+            const size_t st_ = stride[a];
+            const size_t lines = nvox / (size_t)L_;
+#pragma omp parallel
+            {
+                uint16_t *bmn = malloc((size_t)L_ * sizeof *bmn), *bmx = malloc((size_t)L_ * 2);
+#pragma omp for schedule(static)
+                for (size_t line = 0; line < lines; line++) {
+                    if (!bmn || !bmx)
+                        continue;
+                    /* the line's first voxel: line enumerates the other two axes */
+                    size_t base;
+                    if (a == 0)
+                        base = line * c->sy;
+                    else if (a == 1)
+                        base = (line / (size_t)nx) * c->sz + line % (size_t)nx;
+                    else
+                        base = line;
+                    for (int t = 0; t < L_; t++) {
+                        bmn[t] = mn[base + (size_t)t * st_];
+                        bmx[t] = mx[base + (size_t)t * st_];
+                    }
+                    for (int t = 0; t < L_; t++) {
+                        const int t0 = t - R < 0 ? 0 : t - R, t1 = t + R > L_ - 1 ? L_ - 1 : t + R;
+                        uint16_t lo = bmn[t0], hi = bmx[t0];
+                        for (int u = t0 + 1; u <= t1; u++) {
+                            lo = bmn[u] < lo ? bmn[u] : lo;
+                            hi = bmx[u] > hi ? bmx[u] : hi;
+                        }
+                        mn[base + (size_t)t * st_] = lo;
+                        mx[base + (size_t)t * st_] = hi;
+                    }
+                }
+                free(bmn);
+                free(bmx);
+            }
+        }
+#pragma omp parallel for schedule(static)
+        for (size_t v = 0; v < nvox; v++)
+            need[v] = nzc[mx[v] + 1] - nzc[mn[v]] > 0;
+        free(nzc);
+        free(mn);
+        free(mx);
+    }
     size_t n = 0;
     for (int pass = 0; pass < 2; pass++) {
         for (int kk = 0; kk < nz; kk++) {
             const int k = oct & 4 ? nz - 1 - kk : kk;
-            int bk = k / VV_VC_BLOCK;
-            bk = bk >= c->bz ? c->bz - 1 : bk;
             for (int jj = 0; jj < ny; jj++) {
                 const int j = oct & 2 ? ny - 1 - jj : jj;
-                int bj = j / VV_VC_BLOCK;
-                bj = bj >= c->by ? c->by - 1 : bj;
                 const size_t row = (size_t)k * c->sz + (size_t)j * c->sy;
                 for (int ii = 0; ii < nx; ii++) {
                     const int i = oct & 1 ? nx - 1 - ii : ii;
-                    if (skip) {
-                        int bi = i / VV_VC_BLOCK;
-                        bi = bi >= c->bx ? c->bx - 1 : bi;
-                        const size_t b =
-                            ((size_t)bk * (size_t)c->by + (size_t)bj) * (size_t)c->bx + (size_t)bi;
-                        if (ob->tab.bdist[b] > dil)
-                            continue;
-                        if (pre &&
-                            ob->tab.lut[4 * (int)vv_vtables_index(
-                                                &ob->tab, vv_vcache_value(c, row + (size_t)i))] <=
-                                0)
-                            continue;
-                    }
+                    if (need && !need[row + (size_t)i])
+                        continue;
+                    if (pre &&
+                        ob->tab.lut[4 * (int)vv_vtables_index(
+                                             &ob->tab, vv_vcache_value(c, row + (size_t)i))] <= 0)
+                        continue;
                     if (pass == 1)
                         L->vox[n] = (uint64_t)i | (uint64_t)j << 21 | (uint64_t)k << 42;
                     n++;
@@ -580,11 +681,14 @@ get_list(sp_state *st, sp_obj *ob, int oct, int *built) {
         }
         if (pass == 0) {
             L->vox = malloc((n ? n : 1) * sizeof *L->vox);
-            if (!L->vox)
+            if (!L->vox) {
+                free(need);
                 return vv_error_set(VV_ERR_NOMEM, "out of memory for a list of %zu voxels", n);
+            }
             n = 0;
         }
     }
+    free(need);
     L->n = n;
     L->vol = vv_volume_ref(c->vol);
     L->modified = c->vol->modified;
@@ -883,6 +987,7 @@ typedef struct sp_band {
     int y0, y1, W, n;
     float *buf;         /* SP_CH planes of n */
     float *wrow;        /* one row of footprint weights */
+    size_t ps;          /* plane stride: n plus slack for 4-wide rows */
     float *C, *A, *D;   /* colour (3 a pixel), opacity, depth (ray parameter) */
     float *P, *PA, *PD; /* projections: colour (3), opacity, depth */
     int *k0, *k1;       /* per object (n_obj x n): sheets inside the pixel's ray */
@@ -904,11 +1009,15 @@ mark_done(sp_band *bd, int x, int yl) {
     bd->tcount[(yl / SP_TILE) * bd->tw + x / SP_TILE]++;
 }
 
-/* The footprint's bounding box covers only finished tiles. */
+/* The box [x0, x1] x [y0, y1] (pixels) covers only finished tiles. */
 static inline int
-occluded(const sp_band *bd, float cx, float cy, const sp_fp *fp) {
-    int xa = (int)(cx - fp->hx), xb = (int)(cx + fp->hx) + 1;
-    int ya = (int)(cy - fp->hy) - bd->y0, yb = (int)(cy + fp->hy) + 1 - bd->y0;
+occluded_box(const sp_band *bd, double x0, double x1, double y0, double y1) {
+    x0 = x0 < -1 ? -1 : x0;
+    y0 = y0 < -1 ? -1 : y0;
+    x1 = x1 > bd->W ? bd->W : x1;
+    y1 = y1 > bd->y1 ? bd->y1 : y1;
+    int xa = (int)x0, xb = (int)x1 + 1;
+    int ya = (int)y0 - bd->y0, yb = (int)y1 + 1 - bd->y0;
     xa = xa < 0 ? 0 : xa;
     xb = xb > bd->W - 1 ? bd->W - 1 : xb;
     ya = ya < 0 ? 0 : ya;
@@ -942,8 +1051,9 @@ band_init(const sp_frame *fr, sp_band *bd, int band) {
     const int no = fr->n_obj ? fr->n_obj : 1;
     bd->tw = (bd->W + SP_TILE - 1) / SP_TILE;
     bd->th = (bd->y1 - bd->y0 + SP_TILE - 1) / SP_TILE;
-    bd->buf = calloc((size_t)n * SP_CH + (size_t)bd->W + 8, sizeof(float));
-    bd->wrow = bd->buf ? bd->buf + (size_t)n * SP_CH : NULL;
+    bd->ps = (size_t)n + 8;
+    bd->buf = calloc(bd->ps * SP_CH + (size_t)bd->W + 8, sizeof(float));
+    bd->wrow = bd->buf ? bd->buf + bd->ps * SP_CH : NULL;
     bd->C = malloc((size_t)n * 10 * sizeof(float));
     bd->k0 = malloc((size_t)n * 2 * (size_t)no * sizeof(int));
     bd->cosv = malloc((size_t)n * 10 * sizeof(float));
@@ -1042,7 +1152,7 @@ band_init(const sp_frame *fr, sp_band *bd, int band) {
  * Axis variant and X-ray: whole footprints of the voxels of bucket k. */
 static void
 band_splat_sheet(sp_frame *fr, sp_band *bd, const sp_obj *ob, int band, int k, int rect[4],
-                 int cull, uint64_t *nfp, uint64_t *nculled) {
+                 int cull, uint8_t *dead, uint64_t *nfp, uint64_t *nculled) {
     const int whole = fr->st->axis || ob->mode == VV_MODE_XRAY;
     const int s1 = k - ob->kbase;
     int s0 = whole ? s1 : s1 - ob->ns + 1;
@@ -1068,12 +1178,17 @@ band_splat_sheet(sp_frame *fr, sp_band *bd, const sp_obj *ob, int band, int k, i
     const int nv = ob->is_comp ? (fr->st->pre ? 4 : shaded ? 4 : 1) : 1;
     const double wbase = whole ? ob->vol_det : ob->vol_det / fr->dts;
     const int s_end = s1 < ob->nsheets - 1 ? s1 : ob->nsheets - 1;
+    const double dlo = ob->z_lo, dhi = ob->z_lo + (SP_Z_LUT - 1) / ob->z_scale;
     for (int q = bs[s0]; q < bs[s_end + 1]; q++) {
+        if (dead && dead[q])
+            continue;
         const uint32_t v = bidx[q];
         int i, j, kk;
         unpack(ob->sorted[v], &i, &j, &kk);
-        const double X = lin4(ob->ex, i, j, kk), Y = lin4(ob->ey, i, j, kk),
-                     zc = lin4(ob->ez, i, j, kk);
+        const double zc = lin4(ob->ez, i, j, kk);
+        if (!whole && !(zk - zc >= dlo && zk - zc <= dhi))
+            continue;
+        const double X = lin4(ob->ex, i, j, kk), Y = lin4(ob->ey, i, j, kk);
         double w, cxe = X, cye = Y, zp = zk;
         if (whole) {
             w = wbase;
@@ -1105,8 +1220,27 @@ band_splat_sheet(sp_frame *fr, sp_band *bd, const sp_obj *ob, int band, int k, i
         if (cy + fp.hy < bd->y0 || cy - fp.hy > bd->y1 - 1 || cx + fp.hx < 0 ||
             cx - fp.hx > bd->W - 1)
             continue;
-        if (cull && occluded(bd, (float)cx, (float)cy, &fp)) {
+        if (cull && occluded_box(bd, cx - fp.hx, cx + fp.hx, cy - fp.hy, cy + fp.hy)) {
             (*nculled)++;
+            if (dead && !whole) {
+                /* the voxel's later slices shift by at most |b| 2 rz (and
+                 * in perspective move with depth): if that whole box is
+                 * finished too, the voxel is done in this band */
+                const double ex = fabs(ob->bx) * (2 * ob->rz + fr->dts) * s + 1;
+                const double ey = fabs(ob->by) * (2 * ob->rz + fr->dts) * s + 1;
+                double x0 = cx - fp.hx - ex, x1 = cx + fp.hx + ex;
+                double y0 = cy - fp.hy - ey, y1 = cy + fp.hy + ey;
+                if (fr->persp) {
+                    double cx2, cy2;
+                    to_pixel(fr, X, Y, zc + ob->rz + fr->dts, &cx2, &cy2);
+                    x0 = cx2 - fp.hx - ex < x0 ? cx2 - fp.hx - ex : x0;
+                    x1 = cx2 + fp.hx + ex > x1 ? cx2 + fp.hx + ex : x1;
+                    y0 = cy2 - fp.hy - ey < y0 ? cy2 - fp.hy - ey : y0;
+                    y1 = cy2 + fp.hy + ey > y1 ? cy2 + fp.hy + ey : y1;
+                }
+                if (occluded_box(bd, x0, x1, y0, y1))
+                    dead[q] = 1;
+            }
             continue;
         }
         float val[4];
@@ -1135,11 +1269,11 @@ band_splat_sheet(sp_frame *fr, sp_band *bd, const sp_obj *ob, int band, int k, i
             wt = sum > 0 ? (float)(w * s * s / sum) : 0;
         }
         if (nv == 1)
-            fp_splat1(bd->buf, (size_t)bd->n, bd->wrow, bd->W, bd->y0, bd->y1, (float)fr->rho2,
-                      (float)cx, (float)cy, &fp, wt, val, rect);
+            fp_splat1(bd->buf, bd->ps, bd->W, bd->y0, bd->y1, (float)fr->rho2, (float)cx, (float)cy,
+                      &fp, wt, val, rect);
         else
-            fp_splat4(bd->buf, (size_t)bd->n, bd->wrow, bd->W, bd->y0, bd->y1, (float)fr->rho2,
-                      (float)cx, (float)cy, &fp, wt, val, rect);
+            fp_splat4(bd->buf, bd->ps, bd->W, bd->y0, bd->y1, (float)fr->rho2, (float)cx, (float)cy,
+                      &fp, wt, val, rect);
     }
 }
 
@@ -1162,8 +1296,8 @@ band_composite_sheet(sp_frame *fr, sp_band *bd, const sp_obj *ob, int o, int k, 
                 continue;
             float sv[SP_CH];
             for (int ch = 0; ch < SP_CH; ch++) {
-                sv[ch] = p[(size_t)ch * (size_t)n];
-                p[(size_t)ch * (size_t)n] = 0;
+                sv[ch] = p[(size_t)ch * bd->ps];
+                p[(size_t)ch * bd->ps] = 0;
             }
             if (bd->done[pi])
                 continue;
@@ -1244,8 +1378,8 @@ band_project_sheet(sp_frame *fr, sp_band *bd, const sp_obj *ob, int o, int k, co
         for (int x = rect[0]; x <= rect[1]; x++) {
             const int pi = yl * bd->W + x;
             float *p = bd->buf + (size_t)pi;
-            const float w = p[0], wv = p[n];
-            p[0] = p[n] = 0;
+            const float w = p[0], wv = p[bd->ps];
+            p[0] = p[bd->ps] = 0;
             if (ob->mode == VV_MODE_XRAY && fr->xray)
                 fr->xray[(size_t)y * (size_t)bd->W + (size_t)x] += wv;
             if (w == 0 || k < k0[pi] || k > k1[pi])
@@ -1295,6 +1429,15 @@ render_band(sp_frame *fr, int band, vv_image *out) {
                     kmax = e > kmax ? e : kmax;
                 }
         }
+        /* per object, the band's voxels found finished (occlusion) */
+        uint8_t *dead[SP_MAX_OBJ] = {0};
+        int dead_ok = cull;
+        for (int o = 0; o < fr->n_comp && dead_ok; o++) {
+            const sp_obj *ob = &fr->objs[o];
+            const size_t m = ob->nsheets ? (size_t)ob->bstart[band][ob->nsheets] : 0;
+            dead[o] = calloc(m ? m : 1, 1);
+            dead_ok = dead[o] != NULL;
+        }
         int alldone = 0;
         for (int k = kmin; k <= kmax && !alldone; k++) {
             if (atomic_load_explicit(&fr->cancelled, memory_order_relaxed))
@@ -1302,7 +1445,8 @@ render_band(sp_frame *fr, int band, vv_image *out) {
             for (int o = 0; o < fr->n_comp; o++) {
                 const sp_obj *ob = &fr->objs[o];
                 int rect[4] = {INT32_MAX, INT32_MIN, INT32_MAX, INT32_MIN};
-                band_splat_sheet(fr, &bd, ob, band, k, rect, cull, &nfp, &ncull);
+                band_splat_sheet(fr, &bd, ob, band, k, rect, cull, dead_ok ? dead[o] : NULL, &nfp,
+                                 &ncull);
                 if (rect[0] <= rect[1]) {
                     band_composite_sheet(fr, &bd, ob, o, k, rect);
                     nsheets++;
@@ -1313,6 +1457,8 @@ render_band(sp_frame *fr, int band, vv_image *out) {
             for (int t = 0; t < bd.tw * bd.th && alldone; t++)
                 alldone = bd.tcount[t] == bd.tcap[t];
         }
+        for (int o = 0; o < fr->n_comp; o++)
+            free(dead[o]);
     }
     /* projection objects, combined by their maximum like the ray caster */
     float *best = NULL, *bdepth = NULL;
@@ -1334,7 +1480,7 @@ render_band(sp_frame *fr, int band, vv_image *out) {
         if (ob->mode == VV_MODE_XRAY) {
             int rect[4] = {INT32_MAX, INT32_MIN, INT32_MAX, INT32_MIN};
             for (int k = ob->kbase; k < ob->kbase + ob->nsheets; k++)
-                band_splat_sheet(fr, &bd, ob, band, k, rect, 0, &nfp, &ncull);
+                band_splat_sheet(fr, &bd, ob, band, k, rect, 0, NULL, &nfp, &ncull);
             if (rect[0] <= rect[1]) {
                 /* every pixel of the object has k0 <= 0 <= k1 for X-ray:
                  * pass a sheet index inside */
@@ -1352,7 +1498,7 @@ render_band(sp_frame *fr, int band, vv_image *out) {
                 if (atomic_load_explicit(&fr->cancelled, memory_order_relaxed))
                     break;
                 int rect[4] = {INT32_MAX, INT32_MIN, INT32_MAX, INT32_MIN};
-                band_splat_sheet(fr, &bd, ob, band, k, rect, 0, &nfp, &ncull);
+                band_splat_sheet(fr, &bd, ob, band, k, rect, 0, NULL, &nfp, &ncull);
                 if (rect[0] <= rect[1]) {
                     band_project_sheet(fr, &bd, ob, o, k, rect, best, bdepth);
                     nsheets++;
