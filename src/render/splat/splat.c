@@ -144,6 +144,8 @@ typedef struct sp_obj {
     /* per render, bucket-sorted by first sheet */
     uint64_t *sorted;
     float (*pre)[4]; /* pre-classified: alpha, colour * alpha (shaded) */
+    float (*v4)[4];  /* post-classified and shaded: value, gradient (in sorted order) */
+    float *v1;       /* otherwise: value (in sorted order) */
     int *start;      /* nsheets + 1 offsets into sorted */
     int kbase, nsheets;
     /* per band: lists */
@@ -671,7 +673,7 @@ get_list(sp_state *st, sp_obj *ob, int oct, int *built) {
                         continue;
                     if (pre &&
                         ob->tab.lut[4 * (int)vv_vtables_index(
-                                             &ob->tab, vv_vcache_value(c, row + (size_t)i))] <= 0)
+                                            &ob->tab, vv_vcache_value(c, row + (size_t)i))] <= 0)
                         continue;
                     if (pass == 1)
                         L->vox[n] = (uint64_t)i | (uint64_t)j << 21 | (uint64_t)k << 42;
@@ -891,6 +893,42 @@ object_buckets(sp_frame *fr, sp_obj *ob) {
         if (k0s[v] != INT32_MIN)
             ob->sorted[fill[k0s[v] - kmin]++] = L->vox[v];
     free(k0s);
+    /* the voxels' values (and gradients) in splatting order: read once per
+     * slice, they are then a stream instead of scattered loads */
+    if (!ob->pre) {
+        const int shaded = ob->shading && ob->is_comp;
+        if (shaded)
+            ob->v4 = malloc((m ? m : 1) * sizeof *ob->v4);
+        else
+            ob->v1 = malloc((m ? m : 1) * sizeof *ob->v1);
+        if (!ob->v4 && !ob->v1) {
+            free(fill);
+            free(brange);
+            return vv_error_set(VV_ERR_NOMEM, "out of memory for %zu splats", m);
+        }
+        const vv_vcache *c = ob->c;
+#pragma omp parallel for schedule(static)
+        for (size_t v = 0; v < m; v++) {
+            int i, j, k;
+            unpack(ob->sorted[v], &i, &j, &k);
+            const size_t idx = (size_t)k * c->sz + (size_t)j * c->sy + (size_t)i;
+            const float val = vv_vcache_value(c, idx);
+            if (!shaded) {
+                ob->v1[v] = val;
+                continue;
+            }
+            ob->v4[v][0] = val;
+            if (c->nrm) {
+                const vv_v4f g = vv_vcache_normal(c, idx);
+                ob->v4[v][1] = g[0];
+                ob->v4[v][2] = g[1];
+                ob->v4[v][3] = g[2];
+            } else {
+                const float p[3] = {(float)i, (float)j, (float)k};
+                vv_vcache_gradient(c, p, &ob->v4[v][1]);
+            }
+        }
+    }
     /* band of every voxel, then per band a counting sort by sheet */
     int *bcount = calloc((size_t)nbands * ((size_t)ns + 1), sizeof *bcount);
     if (!bcount) {
@@ -970,6 +1008,8 @@ object_free(sp_obj *ob, int nbands) {
         vv_vtables_free(&ob->tab);
     free(ob->sorted);
     free(ob->pre);
+    free(ob->v4);
+    free(ob->v1);
     free(ob->start);
     for (int b = 0; ob->bstart && b < nbands; b++)
         free(ob->bstart[b]);
@@ -1161,7 +1201,6 @@ band_splat_sheet(sp_frame *fr, sp_band *bd, const sp_obj *ob, int band, int k, i
         return;
     const int *bs = ob->bstart[band];
     const uint32_t *bidx = ob->bidx[band];
-    const vv_vcache *c = ob->c;
     const double zk = k * fr->dts;
     sp_fp fp;
     double s = 1;
@@ -1244,23 +1283,12 @@ band_splat_sheet(sp_frame *fr, sp_band *bd, const sp_obj *ob, int band, int k, i
             continue;
         }
         float val[4];
-        const size_t idx = (size_t)kk * c->sz + (size_t)j * c->sy + (size_t)i;
-        if (ob->pre && ob->is_comp) {
+        if (ob->pre && ob->is_comp)
             memcpy(val, ob->pre[v], sizeof val);
-        } else {
-            val[0] = vv_vcache_value(c, idx);
-            if (shaded) {
-                if (c->nrm) {
-                    const vv_v4f g = vv_vcache_normal(c, idx);
-                    val[1] = g[0];
-                    val[2] = g[1];
-                    val[3] = g[2];
-                } else {
-                    const float p[3] = {(float)i, (float)j, (float)kk};
-                    vv_vcache_gradient(c, p, val + 1);
-                }
-            }
-        }
+        else if (shaded)
+            memcpy(val, ob->v4[v], sizeof val);
+        else
+            val[0] = ob->v1[v];
         (*nfp)++;
         float wt = (float)(w * s * s * fp.norm) * fr->fp_scale;
         if (ob->mode == VV_MODE_XRAY) {
