@@ -34,6 +34,41 @@ test_agree_transform_cut(void **state) {
         fail_msg("transformed, cut neghip: composite %.2f dB (>= 28), MIP %.2f dB (>= 35)", pc, pm);
 }
 
+/* Two volumes overlapping on screen and in depth: their samples are
+ * composited together, sheet by sheet, like the ray caster's. */
+static void
+test_agree_two_objects(void **state) {
+    (void)state;
+    vv_volume *v = marschner_lobb(40);
+    vv_world *w = scene_for(v, 96, 25, 15);
+    vv_object *a = w->objects[0];
+    vv_tf_init(&a->tf);
+    vv_tf_add_opacity(&a->tf, 0.45, 0.0);
+    vv_tf_add_opacity(&a->tf, 0.7, 0.6);
+    vv_tf_add_color(&a->tf, 0, vv_vec3_make(1, 0.5, 0.2));
+    vv_tf_add_color(&a->tf, 1, vv_vec3_make(1, 0.9, 0.6));
+    a->shading = 1;
+    vv_object *b = NULL;
+    vt_ok(vv_object_new_volume(&b, v, "second"));
+    b->mode = VV_MODE_COMPOSITE;
+    b->shading = 1;
+    b->material = a->material;
+    b->tf = a->tf;
+    vv_tf_init(&b->tf);
+    vv_tf_add_opacity(&b->tf, 0.3, 0.0);
+    vv_tf_add_opacity(&b->tf, 0.6, 0.5);
+    vv_tf_add_color(&b->tf, 0, vv_vec3_make(0.2, 0.5, 1));
+    vv_tf_add_color(&b->tf, 1, vv_vec3_make(0.6, 0.9, 1));
+    b->position = vv_vec3_add(a->position, vv_vec3_make(0.9, 0.4, 0.5));
+    b->orientation = vv_quat_from_axis_angle(vv_vec3_make(0, 0, 1), vv_deg_to_rad(30));
+    vt_ok(vv_world_add_object(w, b));
+    const double p = agreement(w, VV_MODE_COMPOSITE, "two_objects");
+    vv_world_free(w);
+    vv_volume_free(v);
+    if (!(p >= 28))
+        fail_msg("two overlapping objects: composite PSNR %.2f dB < 28", p);
+}
+
 /* ---------------------------------------------------------------------- */
 /* Energy: X-ray footprints integrate to the voxels' sum                    */
 
@@ -502,6 +537,7 @@ main(int argc, char **argv) {
         cmocka_set_test_filter(argv[1]);
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_agree_transform_cut),
+        cmocka_unit_test(test_agree_two_objects),
         cmocka_unit_test(test_xray_energy),
         cmocka_unit_test(test_no_popping),
         cmocka_unit_test(test_ewa_checkerboard),

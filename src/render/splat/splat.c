@@ -1031,6 +1031,7 @@ typedef struct sp_band {
     float *C, *A, *D;   /* colour (3 a pixel), opacity, depth (ray parameter) */
     float *P, *PA, *PD; /* projections: colour (3), opacity, depth */
     int *k0, *k1;       /* per object (n_obj x n): sheets inside the pixel's ray */
+    int *kend;          /* the last sheet of any composite object on the pixel's ray */
     float *cosv;        /* forward . ray direction */
     float *vdir;        /* towards the eye, 3 a pixel */
     float *rdir;        /* ray direction (3) and origin (3) a pixel, for world points */
@@ -1095,7 +1096,7 @@ band_init(const sp_frame *fr, sp_band *bd, int band) {
     bd->buf = calloc(bd->ps * SP_CH + (size_t)bd->W + 8, sizeof(float));
     bd->wrow = bd->buf ? bd->buf + bd->ps * SP_CH : NULL;
     bd->C = malloc((size_t)n * 10 * sizeof(float));
-    bd->k0 = malloc((size_t)n * 2 * (size_t)no * sizeof(int));
+    bd->k0 = malloc((size_t)n * (2 * (size_t)no + 1) * sizeof(int));
     bd->cosv = malloc((size_t)n * 10 * sizeof(float));
     bd->done = calloc((size_t)n, 1);
     bd->tcount = calloc((size_t)bd->tw * (size_t)bd->th * 2, sizeof(uint16_t));
@@ -1109,6 +1110,7 @@ band_init(const sp_frame *fr, sp_band *bd, int band) {
     bd->PA = bd->P + 3 * (size_t)n;
     bd->PD = bd->PA + n;
     bd->k1 = bd->k0 + (size_t)n * (size_t)no;
+    bd->kend = bd->k1 + (size_t)n * (size_t)no;
     bd->vdir = bd->cosv + n;
     bd->rdir = bd->vdir + 3 * (size_t)n;
     bd->tcap = bd->tcount + (size_t)bd->tw * (size_t)bd->th;
@@ -1155,7 +1157,7 @@ band_init(const sp_frame *fr, sp_band *bd, int band) {
             rd[3] = (float)wr.origin.x;
             rd[4] = (float)wr.origin.y;
             rd[5] = (float)wr.origin.z;
-            int any = 0;
+            int any = 0, kend = INT32_MIN;
             for (int o = 0; o < fr->n_obj; o++) {
                 const sp_obj *ob = &fr->objs[o];
                 vv_vray r;
@@ -1180,7 +1182,10 @@ band_init(const sp_frame *fr, sp_band *bd, int band) {
                 }
                 bd->k0[(size_t)o * (size_t)n + (size_t)pi] = k0;
                 bd->k1[(size_t)o * (size_t)n + (size_t)pi] = k1;
+                if (ob->is_comp && k0 <= k1 && k1 > kend)
+                    kend = k1;
             }
+            bd->kend[pi] = kend;
             if (!any)
                 mark_done(bd, x, yl);
         }
@@ -1330,7 +1335,9 @@ band_composite_sheet(sp_frame *fr, sp_band *bd, const sp_obj *ob, int o, int k, 
             if (bd->done[pi])
                 continue;
             if (k > k1[pi]) {
-                mark_done(bd, x, yl);
+                /* finished once past every composite object's exit */
+                if (k > bd->kend[pi])
+                    mark_done(bd, x, yl);
                 continue;
             }
             if (k < k0[pi])
