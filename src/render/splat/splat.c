@@ -45,8 +45,10 @@
  * (src/render/volume_cache.h), corrected per pixel for the slant of
  * perspective rays.
  *
- * Cost: voxels of subvolumes that cannot be visible under the transfer
- * function (min/max grid, dilated by the kernel) are not listed; the lists
+ * Cost: a voxel is listed only when its subvolume lies within the kernel's
+ * reach of a subvolume visible under the transfer function (the min/max
+ * grid of the ray caster's tables) and the values within twice the reach
+ * of it span a visible table entry (separable min/max filters); the lists
  * are built in the traversal order of the view-direction octant and kept
  * between renders while the octant, transfer function and volume do not
  * change; each render bucket-sorts them by sheet. The image is cut into
@@ -660,6 +662,8 @@ get_list(sp_state *st, sp_obj *ob, int oct, int *built) {
         free(mn);
         free(mx);
     }
+    /* subvolumes (of VV_VC_BLOCK cells) within reach of a visible one */
+    const int bdil = 1 + (reach + 1 + VV_VC_BLOCK - 1) / VV_VC_BLOCK;
     size_t n = 0;
     for (int pass = 0; pass < 2; pass++) {
         for (int kk = 0; kk < nz; kk++) {
@@ -669,8 +673,18 @@ get_list(sp_state *st, sp_obj *ob, int oct, int *built) {
                 const size_t row = (size_t)k * c->sz + (size_t)j * c->sy;
                 for (int ii = 0; ii < nx; ii++) {
                     const int i = oct & 1 ? nx - 1 - ii : ii;
-                    if (need && !need[row + (size_t)i])
-                        continue;
+                    if (need) {
+                        /* the subvolume grid first: far from every visible
+                         * subvolume, no sample the voxel reaches can show */
+                        int bi = i / VV_VC_BLOCK, bj = j / VV_VC_BLOCK, bk = k / VV_VC_BLOCK;
+                        bi = bi >= c->bx ? c->bx - 1 : bi;
+                        bj = bj >= c->by ? c->by - 1 : bj;
+                        bk = bk >= c->bz ? c->bz - 1 : bk;
+                        const size_t b =
+                            ((size_t)bk * (size_t)c->by + (size_t)bj) * (size_t)c->bx + (size_t)bi;
+                        if (ob->tab.bdist[b] > bdil || !need[row + (size_t)i])
+                            continue;
+                    }
                     if (pre &&
                         ob->tab.lut[4 * (int)vv_vtables_index(
                                             &ob->tab, vv_vcache_value(c, row + (size_t)i))] <= 0)
