@@ -9,8 +9,11 @@
  * sigma^2 A A^T with A the index-to-eye linear map. Its footprint (Westover,
  * "Footprint evaluation for volume rendering", SIGGRAPH 1990) is the
  * kernel integrated along the view direction: a 2-D Gaussian, an ellipse,
- * evaluated through a radial footprint table after mapping the ellipse to
- * a circle.
+ * evaluated as a function of the squared radius after mapping the ellipse
+ * to a circle (the radial footprint table, here an exact exponential
+ * computed four pixels at a time, which is as fast and has no table
+ * resolution error); each footprint is cut off at the kernel radius and
+ * normalised over its disc.
  *
  * Composite, MIP and MinIP use image-aligned sheet buffers (Mueller and
  * Crawfis, "Eliminating popping artifacts in sheet buffer-based splatting",
