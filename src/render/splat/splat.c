@@ -10,9 +10,9 @@
  * "Footprint evaluation for volume rendering", SIGGRAPH 1990) is the
  * kernel integrated along the view direction: a 2-D Gaussian, an ellipse,
  * evaluated as a function of the squared radius after mapping the ellipse
- * to a circle (the radial footprint table, here an exact exponential
- * computed four pixels at a time, which is as fast and has no table
- * resolution error); each footprint is cut off at the kernel radius and
+ * to a circle (Westover's radial footprint table; for a Gaussian the
+ * integral is closed-form, so the exponential itself is computed, four
+ * pixels at a time); each footprint is cut off at the kernel radius and
  * normalised over its disc.
  *
  * Composite, MIP and MinIP use image-aligned sheet buffers (Mueller and
