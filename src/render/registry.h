@@ -18,4 +18,10 @@ extern const vv_renderer_ops vv_radiosity_ops;
 /** Compression-domain Fourier projection (src/render/fourier). */
 extern const vv_renderer_ops vv_fourier_ops;
 
+/** Object-order volume rendering by splatting (src/render/splat). */
+extern const vv_renderer_ops vv_splat_ops;
+
+/** The method state behind @p r (what its create returned); borrowed. */
+void *vv_renderer_state(const vv_renderer *r);
+
 #endif

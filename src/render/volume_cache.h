@@ -1,5 +1,5 @@
 /*
- * Volume data shared by the ray-casting renderers (raycast, raytrace):
+ * Volume data shared by the volume renderers (raycast, raytrace, splat):
  * internal, not part of the public API.
  *
  * Per volume, a cache holds the voxels as 16-bit offsets from the minimum
