@@ -4,7 +4,8 @@
 #   build  compiler, CMake and the libraries (always included)
 #   demo   mricron-data (the real MRI head used by the quick-start demo)
 #   test   cmocka, ffmpeg (ffprobe checks the videos); Xvfb, xdotool and ImageMagick for the GUI tests;
-#          pydicom (writes the DICOM test series, and its test files) and gdcmconv (compresses them)
+#          pydicom (writes the DICOM test series, and its test files), nibabel (its Siemens MR
+#          slices) and gdcmconv (compresses them)
 #   bench  VTK, numpy, pydicom, Xvfb, Teem's tools and the zfp CLI, to measure the peers side by side
 set -euo pipefail
 
@@ -16,7 +17,7 @@ for what in "$@"; do
   case "$what" in
     build) ;;
     demo) pkgs+=(mricron-data) ;;
-    test) pkgs+=(libcmocka-dev ffmpeg xvfb xauth xdotool imagemagick python3-pydicom libgdcm-tools) ;;
+    test) pkgs+=(libcmocka-dev ffmpeg xvfb xauth xdotool imagemagick python3-pydicom python3-nibabel libgdcm-tools) ;;
     bench) pkgs+=(python3-vtk9 python3-numpy python3-pydicom xvfb libgl1-mesa-dri teem-apps zfp) ;;
     *) echo "install-deps.sh: unknown group '$what' (build, demo, test, bench)" >&2; exit 2 ;;
   esac

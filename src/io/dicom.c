@@ -951,7 +951,11 @@ read_series(vv_volume **out, const scan *sc, int si, int channel) {
     free(direct);
     if (failed >= 0) {
         vv_volume_free(v);
-        return vv_error_set(VV_ERR_FORMAT, "%s: %s", sc->f[sc->order[failed]].path, err);
+        const char *fp = sc->f[sc->order[failed]].path;
+        /* the decoder's message may already begin with the file's name */
+        if (strncmp(err, fp, strlen(fp)) == 0)
+            return vv_error_set(VV_ERR_FORMAT, "%s", err);
+        return vv_error_set(VV_ERR_FORMAT, "%s: %s", fp, err);
     }
     if (!strcasecmp(f0->modality, "CT"))
         v->data_origin = VV_ORIGIN_CT;
@@ -981,6 +985,16 @@ read_scanned(vv_volume **out, scan *sc, int series, int channel) {
     return read_series(out, sc, series ? series - 1 : 0, channel);
 }
 
+/* Prefixes "dicom: PATH" to the error of @p s, or only "dicom" when the
+ * message already begins with PATH (a single file names itself). */
+static vv_status
+prefix_path(vv_status s, const char *path) {
+    const char *msg = vv_error_message();
+    if (msg && strncmp(msg, path, strlen(path)) == 0)
+        return vv_error_prefix(s, "dicom");
+    return vv_error_prefix(s, "dicom: %s", path);
+}
+
 vv_status
 vv_dicom_read(vv_volume **out, const char *path, int series, int channel) {
     if (!out || !path)
@@ -992,7 +1006,7 @@ vv_dicom_read(vv_volume **out, const char *path, int series, int channel) {
         s = read_scanned(out, &sc, series, channel);
     scan_free(&sc);
     if (s != VV_OK)
-        return vv_error_prefix(s, "dicom: %s", path);
+        return prefix_path(s, path);
     return VV_OK;
 }
 

@@ -17,6 +17,7 @@
 
 #define PYTHON "/usr/bin/python3"
 #define PYDICOM_FILES "/usr/lib/python3/dist-packages/pydicom/data/test_files"
+#define NIBABEL_FILES "/usr/lib/python3/dist-packages/nibabel/nicom/tests/data"
 
 static char g_dir[256]; /* the temporary folder, "" when the data could not be made */
 static int g_have_gdcmconv;
@@ -385,6 +386,50 @@ load_file(const char *name) {
     return v;
 }
 
+/* nibabel's real Siemens MR slices (python3-nibabel): sizes and values as
+ * pydicom reads them, and its pixel-less file is a one-line error naming
+ * the file. */
+static void
+test_nibabel_files(void **state) {
+    (void)state;
+    if (access(NIBABEL_FILES "/0.dcm", R_OK) != 0) {
+        fprintf(stderr, "skipped: python3-nibabel's DICOM test files are not installed\n");
+        skip();
+        return;
+    }
+    static const struct {
+        const char *name;
+        int nx, ny;
+        double lo, hi;
+    } files[] = {{"0.dcm", 256, 256, 0, 4095},
+                 {"1.dcm", 256, 256, 0, 4095},
+                 {"slicethickness_empty_string.dcm", 384, 384, 0, 594},
+                 /* slope 2, intercept -4096 over zero pixels */
+                 {"decimal_rescale.dcm", 128, 96, -4096, -4096}};
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        char p[512];
+        snprintf(p, sizeof p, "%s/%s", NIBABEL_FILES, files[i].name);
+        vv_volume *v = NULL;
+        vv_error_clear();
+        if (vv_dicom_read(&v, p, 0, -1) != VV_OK)
+            fail_msg("%s: %s", files[i].name, vv_error_message());
+        assert_int_equal(v->dims[0], files[i].nx);
+        assert_int_equal(v->dims[1], files[i].ny);
+        assert_int_equal(v->dims[2], 1);
+        assert_float_equal(v->range[0], files[i].lo, 1e-9);
+        assert_float_equal(v->range[1], files[i].hi, 1e-9);
+        vv_volume_free(v);
+    }
+    vv_volume *v = NULL;
+    vv_error_clear();
+    assert_int_not_equal(vv_dicom_read(&v, NIBABEL_FILES "/csa_slice_norm.dcm", 0, -1), VV_OK);
+    assert_null(v);
+    const char *msg = vv_error_message();
+    assert_non_null(strstr(msg, "csa_slice_norm.dcm: truncated pixel data"));
+    /* the file is named once, not twice */
+    assert_null(strstr(strstr(msg, "csa_slice_norm.dcm") + 1, "csa_slice_norm.dcm"));
+}
+
 /* pydicom's files: the MR in every codec and byte order equals the plain one. */
 static void
 test_pydicom_files(void **state) {
@@ -588,15 +633,11 @@ test_bad_input(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_ct_series),
-        cmocka_unit_test(test_shuffled_renamed),
-        cmocka_unit_test(test_missing_slice),
-        cmocka_unit_test(test_oblique),
-        cmocka_unit_test(test_oblique_upright),
-        cmocka_unit_test(test_enhanced_multiframe),
-        cmocka_unit_test(test_compressions),
-        cmocka_unit_test(test_pydicom_files),
-        cmocka_unit_test(test_mixed_series_and_cli),
+        cmocka_unit_test(test_ct_series),       cmocka_unit_test(test_shuffled_renamed),
+        cmocka_unit_test(test_missing_slice),   cmocka_unit_test(test_oblique),
+        cmocka_unit_test(test_oblique_upright), cmocka_unit_test(test_enhanced_multiframe),
+        cmocka_unit_test(test_compressions),    cmocka_unit_test(test_pydicom_files),
+        cmocka_unit_test(test_nibabel_files),   cmocka_unit_test(test_mixed_series_and_cli),
         cmocka_unit_test(test_bad_input),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
