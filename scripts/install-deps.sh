@@ -3,19 +3,22 @@
 # Safe to run again. Usage: scripts/install-deps.sh [build|demo|test|bench]...
 #   build  compiler, CMake and the libraries (always included)
 #   demo   mricron-data (the real MRI head used by the quick-start demo)
-#   test   cmocka, ffmpeg (ffprobe checks the videos); Xvfb, xdotool and ImageMagick for the GUI tests
-#   bench  VTK, numpy, Xvfb, Teem's tools and the zfp CLI, to measure the peers side by side
+#   test   cmocka, ffmpeg (ffprobe checks the videos); Xvfb, xdotool and ImageMagick for the GUI tests;
+#          pydicom (writes the DICOM test series, and its test files), nibabel (its Siemens MR
+#          slices) and gdcmconv (compresses them)
+#   bench  VTK, numpy, pydicom, Xvfb, Teem's tools and the zfp CLI, to measure the peers side by side
 set -euo pipefail
 
 pkgs=(build-essential cmake pkg-config libteem-dev libnifti2-dev libjansson-dev
       libpng-dev zlib1g-dev libassimp-dev libfftw3-dev libcairo2-dev libgtk-4-dev
-      libspnav-dev libsdl2-dev libxml2-dev libnetcdf-dev libavformat-dev libavcodec-dev libswscale-dev libavutil-dev)
+      libspnav-dev libsdl2-dev libxml2-dev libnetcdf-dev libavformat-dev libavcodec-dev
+      libswscale-dev libavutil-dev libtiff-dev libgdcm-dev)
 for what in "$@"; do
   case "$what" in
     build) ;;
     demo) pkgs+=(mricron-data) ;;
-    test) pkgs+=(libcmocka-dev ffmpeg xvfb xauth xdotool imagemagick) ;;
-    bench) pkgs+=(python3-vtk9 python3-numpy xvfb libgl1-mesa-dri teem-apps zfp) ;;
+    test) pkgs+=(libcmocka-dev ffmpeg xvfb xauth xdotool imagemagick python3-pydicom python3-nibabel libgdcm-tools) ;;
+    bench) pkgs+=(python3-vtk9 python3-numpy python3-pydicom xvfb libgl1-mesa-dri teem-apps zfp) ;;
     *) echo "install-deps.sh: unknown group '$what' (build, demo, test, bench)" >&2; exit 2 ;;
   esac
 done

@@ -155,7 +155,7 @@ int cli_fail(vv_status s, const char *path);
         {"zoom", 0, "F"}, {"threads", 0, "N"}, {"renderer", 0, "NAME"}, {"step", 0, "S"},          \
         {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"}, {"gamma", 0, "G"},                   \
         {"quality", 0, "0|1|2"}, {"set", 0, "KEY=VALUE"}, {"alpha", 0, NULL}, {"ortho", 0, NULL},  \
-        {"field", 0, "NAME"}, {"time", 0, "T"}, {                                                  \
+        {"field", 0, "NAME"}, {"time", 0, "T"}, {"series", 0, "N"}, {"channel", 0, "C"}, {         \
         "quiet", 'q', NULL                                                                         \
     }
 
@@ -178,6 +178,8 @@ typedef struct cli_render_args {
     double step;
     int has_raw;
     vv_raw_params raw;
+    int series;  /**< --series N (DICOM), 0: the only series */
+    int channel; /**< --channel C (TIFF, DICOM), -1: channel 0 */
     double gamma;
     int has_quality, quality; /**< --quality given, and its value */
     const char *field;        /**< --field: a grid's field (NULL: the first scalar field) */
@@ -220,12 +222,23 @@ void cli_render_print_renderers(FILE *out);
  * reason" and returns CLI_EXIT_FAIL otherwise, 0 when fine.
  */
 int cli_check_readable(const char *path);
+/** Like cli_check_readable, also accepting a readable folder (DICOM series, TIFF stacks). */
+int cli_check_readable_input(const char *path);
+
+/**
+ * Parses --series N (1..) and --channel C (0..) of @p a when given into
+ * *@p series (else 0) and *@p channel (else -1). 0 or a usage error.
+ */
+int cli_parse_series_channel(const cli_args *a, int *series, int *channel);
 
 /**
  * Loads a volume: as raw when @p raw is non-NULL, else any detected format.
  * Returns 0, or CLI_EXIT_FAIL after printing the error.
  */
 int cli_load_volume(const char *path, const vv_raw_params *raw, vv_volume **out);
+/** cli_load_volume with a DICOM series (1.., 0: the only one) and a channel (-1: 0). */
+int cli_load_volume_sc(const char *path, const vv_raw_params *raw, int series, int channel,
+                       vv_volume **out);
 
 /* ---- progress ----------------------------------------------------------------- */
 

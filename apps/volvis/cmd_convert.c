@@ -10,6 +10,8 @@ static const cli_opt_spec convert_opts[] = {
     {"format", 0, "nrrd|slc"},
     {"strict", 0, NULL},
     {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
+    {"series", 0, "N"},
+    {"channel", 0, "C"},
     {"quiet", 'q', NULL},
 };
 #define N_CONVERT_OPTS ((int)(sizeof convert_opts / sizeof convert_opts[0]))
@@ -18,18 +20,22 @@ void
 cli_convert_usage(FILE *out) {
     fprintf(out, "usage: volvis convert [OPTIONS] IN OUT\n"
                  "\n"
-                 "Converts any readable volume (SLC, NRRD, NIfTI, MetaImage, VTK, raw) to\n"
+                 "Converts any readable volume (SLC, NRRD, NIfTI, MetaImage, VTK, TIFF,\n"
+                 "DICOM, raw) to\n"
                  "NRRD (.nrrd, .nhdr; gzip-compressed, keeps the voxel type, spacing and\n"
                  "origin) or SLC (.slc; VolVis's own 8-bit format). SLC holds 8-bit data only:\n"
                  "other voxel types are rescaled from the value range to 0..255, with a note\n"
                  "on stderr. The output is written atomically: on failure an existing OUT is\n"
-                 "left untouched. Prints what was written.\n"
+                 "left untouched. Prints what was written. No patient identifier of a DICOM\n"
+                 "series is written (a volume keeps none).\n"
                  "\n"
                  "Options:\n"
                  "  --format nrrd|slc  output format (default: from OUT's extension)\n"
                  "  --strict           refuse to rescale to 8 bits for SLC (exit 1 instead)\n"
                  "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
                  "                     read IN as raw voxels (see 'volvis info --help')\n"
+                 "  --series N         DICOM: series N as 'volvis info' lists them\n"
+                 "  --channel C        TIFF and DICOM: channel C, from 0 (default 0)\n"
                  "  -q, --quiet        no 'wrote' line and no rescaling note\n"
                  "  -h, --help         show this help\n"
                  "\n"
@@ -82,7 +88,10 @@ cli_convert_main(int argc, char **argv) {
         return rc;
 
     vv_volume *v;
-    if ((rc = cli_load_volume(in, raw_spec ? &raw : NULL, &v)))
+    int series = 0, channel = -1;
+    if ((rc = cli_parse_series_channel(&a, &series, &channel)))
+        return rc;
+    if ((rc = cli_load_volume_sc(in, raw_spec ? &raw : NULL, series, channel, &v)))
         return rc;
     int rescale = format == VV_FORMAT_SLC && v->type != VV_U8;
     if (rescale && strict) {

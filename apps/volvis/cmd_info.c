@@ -15,20 +15,27 @@
 static const cli_opt_spec info_opts[] = {
     {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
     {"bins", 0, "N"},
+    {"series", 0, "N"},
+    {"channel", 0, "C"},
+    {"show-phi", 0, NULL},
 };
 #define N_INFO_OPTS ((int)(sizeof info_opts / sizeof info_opts[0]))
 
 void
 cli_info_usage(FILE *out) {
-    fprintf(out, "usage: volvis info [OPTIONS] FILE\n"
+    fprintf(out, "usage: volvis info [OPTIONS] FILE|FOLDER\n"
                  "\n"
                  "Prints a volume's format, dimensions, voxel type, voxel spacing, origin,\n"
                  "direction (when not identity), unit, data origin, value range, mean,\n"
                  "percentiles (1/5/50/95/99) and a text histogram.\n"
-                 "Formats: SLC, NRRD, NIfTI-1/2, MetaImage, VTK legacy, raw (with --raw),\n"
-                 "and .vvc (compressed; also prints the subcube size, quality, compressed\n"
-                 "size, compression ratio and bits per voxel, then the statistics of the\n"
-                 "decompressed volume).\n"
+                 "Formats: SLC, NRRD, NIfTI-1/2, MetaImage, VTK legacy, TIFF stacks (a\n"
+                 "multi-page file or a folder of pages), DICOM (a folder, a DICOMDIR or a\n"
+                 "file), raw (with --raw), and .vvc (compressed; also prints the subcube\n"
+                 "size, quality, compressed size, compression ratio and bits per voxel,\n"
+                 "then the statistics of the decompressed volume).\n"
+                 "For DICOM, first lists the series found (number, modality, description,\n"
+                 "size, files); the volume follows when there is one series or --series\n"
+                 "picks one. Patient names and IDs are printed only with --show-phi.\n"
                  "For an irregular grid (VTK UNSTRUCTURED_GRID, .vtu, OpenDX, PLOT3D,\n"
                  "NetCDF): its kind, point and cell counts by cell type, blocks or axes,\n"
                  "bounds, and each field with its range and missing values.\n"
@@ -39,11 +46,40 @@ cli_info_usage(FILE *out) {
                  "                  i16 u32 i32 f32 f64), byte order (default le), voxel\n"
                  "                  spacing (default 1x1x1) and header bytes to skip (default 0)\n"
                  "  --bins N        histogram bins, 1..256 (default 16)\n"
+                 "  --series N      DICOM: describe series N as listed\n"
+                 "  --channel C     TIFF and DICOM: channel C, from 0 (default 0)\n"
+                 "  --show-phi      DICOM: also print the patient's name and ID and the\n"
+                 "                  study (protected health information)\n"
                  "  -h, --help      show this help\n"
                  "\n"
                  "Example:\n"
                  "  volvis info ../shared/data/volumes/nut.slc\n"
-                 "  volvis info --raw 256x256x128:u16:be:0.9x0.9x2 scan.raw\n");
+                 "  volvis info --raw 256x256x128:u16:be:0.9x0.9x2 scan.raw\n"
+                 "  volvis info --series 2 ~/scans/CT_folder\n");
+}
+
+/* Lists the DICOM series of @p path; *@p n_out gets their count. */
+static int
+list_dicom(const char *path, int show_phi, int *n_out) {
+    vv_dicom_series *ser = NULL;
+    int n = 0;
+    vv_error_clear();
+    vv_status s = vv_dicom_list(&ser, &n, path);
+    if (s != VV_OK)
+        return cli_fail(s, path);
+    printf("dicom:        %d series in %s\n", n, path);
+    for (int i = 0; i < n; i++) {
+        const vv_dicom_series *d = &ser[i];
+        printf("series %d:     #%d %s \"%s\" %d x %d x %d (%d file%s)\n", i + 1, d->number,
+               d->modality[0] ? d->modality : "?", d->description, d->dims[0], d->dims[1],
+               d->dims[2], d->n_files, d->n_files == 1 ? "" : "s");
+        if (show_phi)
+            printf("              patient \"%s\" id \"%s\" study \"%s\" %s\n", d->patient_name,
+                   d->patient_id, d->study_description, d->study_date);
+    }
+    free(ser);
+    *n_out = n;
+    return 0;
 }
 
 /* An irregular grid: kind, counts of points and cells by type, bounds, fields. */
@@ -308,12 +344,22 @@ cli_info_main(int argc, char **argv) {
     const char *raw_spec = cli_get(&a, "raw");
     if (raw_spec && (rc = cli_parse_raw(&a, "raw", raw_spec, &raw)))
         return rc;
+    int series = 0, channel = -1;
+    if ((rc = cli_parse_series_channel(&a, &series, &channel)))
+        return rc;
 
     const char *path = a.pos[0];
-    if (!raw_spec && vv_grid_file_detect(path, NULL)) {
-        if ((rc = cli_check_readable(path)))
-            return rc;
+    if (!raw_spec && (rc = cli_check_readable_input(path)))
+        return rc;
+    if (!raw_spec && vv_grid_file_detect(path, NULL))
         return info_grid(path);
+    if (!raw_spec && vv_format_detect(path) == VV_FORMAT_DICOM) {
+        int n_series = 0;
+        if ((rc = list_dicom(path, cli_count(&a, "show-phi") > 0, &n_series)))
+            return rc;
+        if (n_series > 1 && series == 0)
+            return CLI_EXIT_OK; /* the list is the answer; --series N for one */
+        printf("\n");
     }
     vv_volume *v;
     vv_vvc_info vinfo;
@@ -330,7 +376,7 @@ cli_info_main(int argc, char **argv) {
         vv_vvc_free(c);
         if (s2 != VV_OK)
             return cli_fail(s2, path);
-    } else if ((rc = cli_load_volume(path, raw_spec ? &raw : NULL, &v))) {
+    } else if ((rc = cli_load_volume_sc(path, raw_spec ? &raw : NULL, series, channel, &v))) {
         return rc;
     }
 

@@ -97,13 +97,47 @@ cli_check_readable(const char *path) {
 }
 
 int
+cli_check_readable_input(const char *path) {
+    struct stat st;
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+        if (access(path, R_OK | X_OK) != 0) {
+            cli_error("%s: %s", path, strerror(errno));
+            return CLI_EXIT_FAIL;
+        }
+        return 0;
+    }
+    return cli_check_readable(path);
+}
+
+int
+cli_parse_series_channel(const cli_args *a, int *series, int *channel) {
+    int rc;
+    const char *s;
+    *series = 0;
+    *channel = -1;
+    if ((s = cli_get(a, "series")) && (rc = cli_parse_int(a, "series", s, 1, 1000000, series)))
+        return rc;
+    if ((s = cli_get(a, "channel")) && (rc = cli_parse_int(a, "channel", s, 0, 1000000, channel)))
+        return rc;
+    return 0;
+}
+
+int
 cli_load_volume(const char *path, const vv_raw_params *raw, vv_volume **out) {
+    return cli_load_volume_sc(path, raw, 0, -1, out);
+}
+
+int
+cli_load_volume_sc(const char *path, const vv_raw_params *raw, int series, int channel,
+                   vv_volume **out) {
     *out = NULL;
-    int rc = cli_check_readable(path);
+    int rc = raw ? cli_check_readable(path) : cli_check_readable_input(path);
     if (rc)
         return rc;
     vv_load_options opt;
     vv_load_options_init(&opt);
+    opt.series = series;
+    opt.channel = channel;
     if (raw) {
         opt.format = VV_FORMAT_RAW;
         opt.has_raw = 1;

@@ -177,6 +177,8 @@ cli_render_parse(cli_args *a, cli_render_args *r) {
             return rc;
         r->has_raw = 1;
     }
+    if ((rc = cli_parse_series_channel(a, &r->series, &r->channel)))
+        return rc;
     if ((s = cli_get(a, "gamma"))) {
         if ((rc = cli_parse_double(a, "gamma", s, 0.01, 100, &r->gamma)))
             return rc;
@@ -250,7 +252,7 @@ world_for_grid(const cli_render_args *r, vv_world **out) {
 static int
 world_for_volume(const cli_render_args *r, vv_world **out) {
     vv_volume *v;
-    int rc = cli_load_volume(r->input, r->has_raw ? &r->raw : NULL, &v);
+    int rc = cli_load_volume_sc(r->input, r->has_raw ? &r->raw : NULL, r->series, r->channel, &v);
     if (rc)
         return rc;
     vv_default_scene_options o;
@@ -316,7 +318,7 @@ world_for_scene(const cli_render_args *r, vv_world **out) {
 int
 cli_render_world(const cli_render_args *r, vv_world **out) {
     *out = NULL;
-    int rc = cli_check_readable(r->input);
+    int rc = cli_check_readable_input(r->input);
     if (rc)
         return rc;
     int scene = !r->has_raw && is_scene_file(r->input);
@@ -442,6 +444,9 @@ cli_render_print_options(FILE *out) {
             "                   (default 0.5 or the scene's)\n"
             "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
             "                   read INPUT as raw voxels (see 'volvis info --help')\n"
+            "  --series N       DICOM: series N of INPUT as 'volvis info' lists them (a\n"
+            "                   folder with one series needs none)\n"
+            "  --channel C      TIFF and DICOM: channel C, from 0 (default 0)\n"
             "  --gamma G        8-bit conversion v^(1/G) (default 1: values unchanged)\n"
             "  --quality Q      0 draft, 1 medium, 2 final (default 2 or the scene's; per\n"
             "                   renderer below)\n"

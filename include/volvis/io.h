@@ -4,7 +4,10 @@
  * Formats: SLC (VolVis's own, read and write, plain and run-length
  * compressed), NRRD (Teem's nrrd library; read and write), NIfTI-1/NIfTI-2
  * (nifti_clib; .nii, .nii.gz, .hdr/.img), MetaImage (.mhd/.mha), VTK legacy
- * STRUCTURED_POINTS (binary and ASCII) and raw files described by the caller.
+ * STRUCTURED_POINTS (binary and ASCII), TIFF stacks (libtiff; multi-page
+ * files and folders of pages, OME-TIFF and ImageJ metadata), DICOM series
+ * (GDCM; folders, DICOMDIR, lists of files; read only) and raw files described
+ * by the caller.
  * File formats are documented in docs/formats.md.
  *
  * Every reader checks header sizes with vv_volume_check_size() before
@@ -36,6 +39,8 @@ typedef enum vv_format {
     VV_FORMAT_MHD,
     VV_FORMAT_VTK,
     VV_FORMAT_RAW,
+    VV_FORMAT_TIFF,
+    VV_FORMAT_DICOM,
     VV_FORMAT_UNKNOWN
 } vv_format;
 
@@ -47,9 +52,12 @@ vv_status vv_format_parse(const char *name, vv_format *out);
 /**
  * Detects the format of @p path: magic numbers first (SLC "11111", "NRRD000",
  * NIfTI sizeof_hdr 348/540 also gzip-compressed, "# vtk DataFile",
- * MetaImage keys), the extension as a hint when the content is ambiguous.
- * Returns VV_FORMAT_UNKNOWN when nothing matches (and for raw files, which
- * have no signature).
+ * MetaImage keys, TIFF "II*"/"MM*" and BigTIFF "II+"/"MM+", DICOM "DICM" at
+ * byte 128 or a file GDCM can read), the extension as a hint when the content
+ * is ambiguous. A folder is VV_FORMAT_DICOM when it holds a DICOMDIR or a
+ * DICOM file, else VV_FORMAT_TIFF when it holds a .tif/.tiff file. Returns
+ * VV_FORMAT_UNKNOWN when nothing matches (and for raw files, which have no
+ * signature).
  */
 vv_format vv_format_detect(const char *path);
 
@@ -71,9 +79,21 @@ typedef struct vv_load_options {
     vv_format format; /**< VV_FORMAT_AUTO to detect */
     int has_raw;      /**< 1: raw is valid (required for VV_FORMAT_RAW) */
     vv_raw_params raw;
+    /**
+     * DICOM: which series, numbered from 1 in vv_dicom_list's order; 0 (the
+     * default): the only series, an error naming the count when there are
+     * several.
+     */
+    int series;
+    /**
+     * TIFF and DICOM: which channel (sample or OME/ImageJ channel), from 0;
+     * -1 (the default): channel 0.
+     */
+    int channel;
 } vv_load_options;
 
-/** Format VV_FORMAT_AUTO, no raw parameters (has_raw 0, raw as vv_raw_params_init). */
+/** Format VV_FORMAT_AUTO, no raw parameters (has_raw 0, raw as vv_raw_params_init),
+ * series 0, channel -1. */
 void vv_load_options_init(vv_load_options *o);
 
 /**
@@ -114,6 +134,72 @@ vv_status vv_vtk_read(vv_volume **out, const char *path);
  * header_skip + the volume's bytes; VV_ERR_FORMAT names both sizes otherwise.
  */
 vv_status vv_raw_read(vv_volume **out, const char *path, const vv_raw_params *params);
+
+/**
+ * A TIFF stack: @p path is a multi-page TIFF (also BigTIFF) or a folder whose
+ * .tif/.tiff files (sorted by name, digit runs compared as numbers) are the
+ * pages in order. Pages must agree in size and sample type: 8/16/32-bit
+ * integers (signed or not) and 32/64-bit floats, striped or tiled, any
+ * compression libtiff decodes (none, LZW, deflate, PackBits, ...). OME-TIFF
+ * (PhysicalSizeX/Y/Z, SizeZ/SizeC/SizeT, DimensionOrder) and ImageJ
+ * hyperstacks (images/channels/slices/frames, spacing, unit, X/YResolution)
+ * give the spacing and the channel layout; the volume is the first time
+ * point of channel @p channel (-1: 0), which also picks a sample of a
+ * multi-sample (RGB) page. Errors name the file, the page and the strip or
+ * tile: VV_ERR_IO, VV_ERR_FORMAT, VV_ERR_LIMIT (sizes are checked before
+ * allocation), VV_ERR_UNSUPPORTED, VV_ERR_INVALID (channel out of range).
+ */
+vv_status vv_tiff_read(vv_volume **out, const char *path, int channel);
+
+/** One DICOM image series found by vv_dicom_list. Strings are NUL-terminated. */
+typedef struct vv_dicom_series {
+    char uid[72];               /**< Series Instance UID */
+    char description[72];       /**< Series Description (0008,103E) */
+    char modality[20];          /**< Modality (0008,0060): CT, MR, ... */
+    int number;                 /**< Series Number (0020,0011), 0 when absent */
+    int dims[3];                /**< columns, rows, slices (files x frames) */
+    int n_files;                /**< image files in the series */
+    char first_file[1024];      /**< one file of the series (for messages) */
+    char study_description[72]; /**< Study Description (0008,1030) */
+    char study_date[20];        /**< Study Date (0008,0020), YYYYMMDD */
+    char patient_name[72];      /**< PHI: Patient's Name (0010,0010); print only when asked */
+    char patient_id[72];        /**< PHI: Patient ID (0010,0020); print only when asked */
+} vv_dicom_series;
+
+/**
+ * Lists the image series of @p path: a folder (searched recursively, files
+ * that are not DICOM or hold no image skipped), a DICOMDIR, or one DICOM
+ * file. Series are ordered by Series Number, then UID. *@p out is a new array
+ * of *@p n entries (free() it). Errors: VV_ERR_IO, VV_ERR_FORMAT ("no DICOM
+ * images"), VV_ERR_UNSUPPORTED (built without GDCM), VV_ERR_NOMEM.
+ */
+vv_status vv_dicom_list(vv_dicom_series **out, int *n, const char *path);
+
+/**
+ * Reads series @p series (1-based as listed by vv_dicom_list; 0: the only
+ * one) of @p path into a volume. Slices are sorted by Image Position
+ * (Patient) along the slice normal (cross product of Image Orientation
+ * (Patient)'s row and column directions); the slice spacing is the distance
+ * between positions, and uneven spacing, a missing slice or two slices at one
+ * position are errors naming the files and the gap. Rescale Slope and
+ * Intercept are applied (CT in Hounsfield units): the volume is i16/u16/i32
+ * when every slope is 1 and every intercept an integer and the rescaled range
+ * fits, else f32. Multi-frame files (enhanced CT/MR, one file per series)
+ * take their frame positions from the per-frame functional groups. Geometry:
+ * direction columns are the row direction, the column direction and the
+ * slice normal, origin the first slice's position, both converted from
+ * DICOM's LPS to RAS (x and y negated) with space VV_SPACE_RAS, unit mm.
+ * Compressed transfer syntaxes (JPEG baseline/extended/lossless, JPEG-LS,
+ * JPEG 2000, RLE, deflate) are decoded by GDCM. @p channel picks a sample of
+ * multi-sample (RGB) images (-1: 0). No patient identifier is kept.
+ * Errors name the file: VV_ERR_IO, VV_ERR_FORMAT, VV_ERR_LIMIT,
+ * VV_ERR_UNSUPPORTED, VV_ERR_INVALID (series out of range).
+ */
+vv_status vv_dicom_read(vv_volume **out, const char *path, int series, int channel);
+
+/** Like vv_dicom_read for an explicit list of @p n DICOM files. */
+vv_status vv_dicom_read_files(vv_volume **out, const char *const *files, int n, int series,
+                              int channel);
 
 #ifdef __cplusplus
 }

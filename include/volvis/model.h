@@ -330,6 +330,10 @@ typedef struct vv_material {
     double reflectance;  /**< fraction of light mirrored, [0, 1]; 0 by default */
     double transparency; /**< fraction of light transmitted, [0, 1]; 0 by default */
     double ior;          /**< index of refraction of a transparent object, > 0; 1 by default */
+    /** Light emitted (radiosity): a surface's radiant exitance from each side, display
+        units (a patch of emission e shows as e); a volume's opaque regions show it. RGB,
+        each >= 0; 0 by default. Only the radiosity renderer uses it. */
+    vv_vec3 emission;
 } vv_material;
 
 typedef enum vv_projection {

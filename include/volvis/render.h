@@ -66,7 +66,8 @@ const char *vv_renderer_name(const vv_renderer *r);
  * Sets a method-specific option from text (for raycast: early_termination,
  * gradient_budget_mb, empty_space_skipping, simd; for raytrace: shadows,
  * max_depth, samples, jitter, seed, adaptive, adaptive_threshold, parc,
- * shadow_grid, early_termination; docs/rendering.md).
+ * shadow_grid, early_termination; for radiosity: tolerance, error, near,
+ * patch_size, grid, diffuse_voxels, max_shots, levels; docs/rendering.md).
  * Errors: VV_ERR_INVALID for an unknown key or a bad value, with a message.
  */
 vv_status vv_renderer_set_option(vv_renderer *r, const char *key, const char *value);

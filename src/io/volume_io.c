@@ -2,20 +2,23 @@
  * Format names, detection and the generic load/save entry points.
  */
 #include <ctype.h>
+#include <dirent.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 
 #include <zlib.h>
 
 #include "core/internal.h"
+#include "io/dicom.h"
 #include "volvis/io.h"
 
-static const char *const format_names[] = {"auto", "slc", "nrrd", "nifti",
-                                           "mhd",  "vtk", "raw",  "unknown"};
+static const char *const format_names[] = {"auto", "slc", "nrrd", "nifti", "mhd",
+                                           "vtk",  "raw", "tiff", "dicom", "unknown"};
 
 const char *
 vv_format_name(vv_format f) {
@@ -29,11 +32,9 @@ vv_format_parse(const char *name, vv_format *out) {
     static const struct {
         const char *name;
         vv_format f;
-    } aliases[] = {{"nhdr", VV_FORMAT_NRRD},
-                   {"nii", VV_FORMAT_NIFTI},
-                   {"mha", VV_FORMAT_MHD},
-                   {"metaimage", VV_FORMAT_MHD},
-                   {"hdr", VV_FORMAT_NIFTI}};
+    } aliases[] = {{"nhdr", VV_FORMAT_NRRD},     {"nii", VV_FORMAT_NIFTI}, {"mha", VV_FORMAT_MHD},
+                   {"metaimage", VV_FORMAT_MHD}, {"hdr", VV_FORMAT_NIFTI}, {"tif", VV_FORMAT_TIFF},
+                   {"dcm", VV_FORMAT_DICOM}};
     if (!name || !out)
         return vv_error_set(VV_ERR_INVALID, "format: NULL argument");
     for (int f = VV_FORMAT_AUTO; f < VV_FORMAT_UNKNOWN; f++) {
@@ -48,9 +49,11 @@ vv_format_parse(const char *name, vv_format *out) {
             return VV_OK;
         }
     }
-    return vv_error_set(VV_ERR_INVALID,
-                        "unknown format \"%s\" (expected auto, slc, nrrd, nifti, mhd, vtk or raw)",
-                        name);
+    return vv_error_set(
+        VV_ERR_INVALID,
+        "unknown format \"%s\" (expected auto, slc, nrrd, nifti, mhd, vtk, raw, tiff or "
+        "dicom)",
+        name);
 }
 
 /* Lower-case extension after the last '.' of the base name ("" when none). */
@@ -161,7 +164,54 @@ detect_buffer(const unsigned char *h, size_t n, const char *path) {
         return VV_FORMAT_NIFTI;
     if (is_metaimage(h, n))
         return VV_FORMAT_MHD;
+    if (n >= 4 && (!memcmp(h, "II*\0", 4) || !memcmp(h, "MM\0*", 4) || !memcmp(h, "II+\0", 4) ||
+                   !memcmp(h, "MM\0+", 4)))
+        return VV_FORMAT_TIFF;
+    if (n >= 132 && !memcmp(h + 128, "DICM", 4))
+        return VV_FORMAT_DICOM;
     return VV_FORMAT_UNKNOWN;
+}
+
+/* A folder: DICOM when it holds a DICOMDIR or a DICOM file (looked for among
+ * its first entries and one level of subfolders), else TIFF when it holds a
+ * .tif/.tiff file. */
+static vv_format
+detect_folder(const char *path, int depth) {
+    DIR *d = opendir(path);
+    if (!d)
+        return VV_FORMAT_UNKNOWN;
+    int tiff = 0, dicom = 0, looked = 0;
+    struct dirent *e;
+    while (!dicom && looked < 4096 && (e = readdir(d))) {
+        if (e->d_name[0] == '.')
+            continue;
+        size_t len = strlen(path) + strlen(e->d_name) + 2;
+        char *p = malloc(len);
+        if (!p)
+            break;
+        snprintf(p, len, "%s/%s", path, e->d_name);
+        struct stat st;
+        if (stat(p, &st) == 0) {
+            if (S_ISDIR(st.st_mode)) {
+                if (depth < 1 && detect_folder(p, depth + 1) == VV_FORMAT_DICOM)
+                    dicom = 1;
+            } else if (S_ISREG(st.st_mode)) {
+                looked++;
+                if (!strcasecmp(e->d_name, "DICOMDIR")) {
+                    dicom = 1;
+                } else {
+                    vv_format f = vv_format_detect(p);
+                    if (f == VV_FORMAT_DICOM)
+                        dicom = 1;
+                    else if (f == VV_FORMAT_TIFF)
+                        tiff = 1;
+                }
+            }
+        }
+        free(p);
+    }
+    closedir(d);
+    return dicom ? VV_FORMAT_DICOM : tiff ? VV_FORMAT_TIFF : VV_FORMAT_UNKNOWN;
 }
 
 /* Reads up to HEAD_BYTES of @p path, gunzipped when it starts with 1f 8b. */
@@ -192,6 +242,9 @@ vv_format
 vv_format_detect(const char *path) {
     if (!path)
         return VV_FORMAT_UNKNOWN;
+    struct stat st;
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode))
+        return detect_folder(path, 0);
     unsigned char h[HEAD_BYTES];
     int gz, err;
     size_t n = read_head(path, h, &gz, &err);
@@ -205,6 +258,9 @@ vv_format_detect(const char *path) {
     vv_format f = detect_buffer(h, n, path);
     if (f != VV_FORMAT_UNKNOWN || err)
         return f;
+    /* DICOM without the 128-byte preamble (old ACR-NEMA style files) */
+    if (n > 0 && vv_dicom_sniff(path))
+        return VV_FORMAT_DICOM;
     /* the image half of a .hdr/.img pair: look at the header beside it */
     if (has_ext(path, "img")) {
         size_t len = strlen(path);
@@ -229,6 +285,8 @@ vv_load_options_init(vv_load_options *o) {
     o->format = VV_FORMAT_AUTO;
     o->has_raw = 0;
     vv_raw_params_init(&o->raw);
+    o->series = 0;
+    o->channel = -1;
 }
 
 vv_status
@@ -241,12 +299,24 @@ vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
         return vv_error_set(VV_ERR_INVALID,
                             "load: %s: raw format needs the dimensions and voxel type",
                             vv_path_basename(path));
-    FILE *fp = fopen(path, "rb");
-    if (!fp) {
+    struct stat st;
+    if (stat(path, &st) != 0) {
         int e = errno;
         return vv_error_set(VV_ERR_IO, "cannot open %s: %s", path, strerror(e));
     }
-    fclose(fp);
+    int is_dir = S_ISDIR(st.st_mode);
+    if (!is_dir) {
+        FILE *fp = fopen(path, "rb");
+        if (!fp) {
+            int e = errno;
+            return vv_error_set(VV_ERR_IO, "cannot open %s: %s", path, strerror(e));
+        }
+        fclose(fp);
+    }
+    if (is_dir && f != VV_FORMAT_AUTO && f != VV_FORMAT_TIFF && f != VV_FORMAT_DICOM)
+        return vv_error_set(
+            VV_ERR_INVALID,
+            "load: %s is a folder (only DICOM and TIFF stacks are read from folders)", path);
     if (f == VV_FORMAT_AUTO) {
         f = vv_format_detect(path);
         if (f == VV_FORMAT_UNKNOWN && opt && opt->has_raw)
@@ -272,10 +342,18 @@ vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
     case VV_FORMAT_RAW:
         s = vv_raw_read(out, path, &opt->raw);
         break;
+    case VV_FORMAT_TIFF:
+        s = vv_tiff_read(out, path, opt ? opt->channel : -1);
+        break;
+    case VV_FORMAT_DICOM:
+        s = vv_dicom_read(out, path, opt ? opt->series : 0, opt ? opt->channel : -1);
+        break;
     default:
+        if (is_dir)
+            return vv_error_set(VV_ERR_FORMAT, "%s: no DICOM or TIFF files in the folder", path);
         return vv_error_set(VV_ERR_FORMAT,
-                            "cannot tell the format of %s (not SLC, NRRD, NIfTI, MetaImage or VTK "
-                            "legacy; use --raw for raw data)",
+                            "cannot tell the format of %s (not SLC, NRRD, NIfTI, MetaImage, VTK "
+                            "legacy, TIFF or DICOM; use --raw for raw data)",
                             path);
     }
     if (s != VV_OK) {
@@ -286,7 +364,10 @@ vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
     if (!*out)
         return vv_error_set(VV_ERR_FORMAT, "%s: %s: reader returned no volume", vv_format_name(f),
                             vv_path_basename(path));
-    vv_volume_update_range(*out);
+    /* every reader computes range[]; a reader that left it unset gets it here
+     * (a second pass over a large volume costs as much as a fast reader) */
+    if ((*out)->range[0] == 0 && (*out)->range[1] == 0)
+        vv_volume_update_range(*out);
     return VV_OK;
 }
 

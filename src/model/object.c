@@ -48,6 +48,7 @@ object_defaults(vv_object *o) {
     o->material.reflectance = 0.0;
     o->material.transparency = 0.0;
     o->material.ior = 1.0;
+    o->material.emission = vv_vec3_make(0, 0, 0);
     o->segmentation = VV_SEG_TRANSFER_FUNCTION;
     o->mode = VV_MODE_COMPOSITE;
     o->step = 0.5;

@@ -1046,6 +1046,20 @@ parse_material_global(const sctx *c, json_t *m, const char *mp, vv_material *mat
             VV_OK ||
         (st = get_number_in(c, m, mp, "ior", &mat->ior, NULL, 0, 1, INFINITY, 1)) != VV_OK)
         return st;
+    /* radiosity: light emitted, each component >= 0 (may exceed 1) */
+    int here = 0;
+    vv_vec3 em = mat->emission;
+    if ((st = get_vec3(c, m, mp, "emission", &em, &here)) != VV_OK)
+        return st;
+    if (here) {
+        if (!(isfinite(em.x) && isfinite(em.y) && isfinite(em.z) && em.x >= 0 && em.y >= 0 &&
+              em.z >= 0)) {
+            char kp[PATH_MAX_LEN];
+            path_key(kp, mp, "emission");
+            return serr(c, kp, "expected three finite numbers >= 0");
+        }
+        mat->emission = em;
+    }
     return VV_OK;
 }
 
@@ -1063,9 +1077,9 @@ parse_effect_flags(const sctx *c, json_t *e, const char *op, vv_object *o) {
 
 static vv_status
 parse_material(const sctx *c, json_t *m, const char *mp, vv_material *mat) {
-    static const char *const keys[] = {"ambient",      "diffuse", "specular",
-                                       "shininess",    "color",   "reflectance",
-                                       "transparency", "ior",     NULL};
+    static const char *const keys[] = {"ambient",  "diffuse",     "specular",     "shininess",
+                                       "color",    "reflectance", "transparency", "ior",
+                                       "emission", NULL};
     vv_status st = check_keys(c, m, mp, keys);
     if (st != VV_OK)
         return st;
@@ -1945,6 +1959,10 @@ put_material_global(FILE *f, const vv_material *m) {
     put_num(f, m->transparency);
     fputs(", \"ior\": ", f);
     put_num(f, m->ior);
+    if (m->emission.x != 0 || m->emission.y != 0 || m->emission.z != 0) {
+        fputs(", \"emission\": ", f);
+        put_vec3(f, m->emission);
+    }
 }
 
 static void

@@ -12,7 +12,8 @@ struct vv_renderer {
 
 /* Every rendering method built in, in the order --help lists them. */
 static const vv_renderer_ops *const registry[] = {
-    &vv_raycast_ops, &vv_raytrace_ops, &vv_surface_ops, &vv_fourier_ops, &vv_irregular_ops, NULL};
+    &vv_raycast_ops, &vv_raytrace_ops, &vv_radiosity_ops, &vv_splat_ops,
+    &vv_surface_ops, &vv_fourier_ops,  &vv_irregular_ops, NULL};
 
 const vv_renderer_ops *const *
 vv_renderer_registry(void) {
@@ -63,6 +64,11 @@ vv_renderer_free(vv_renderer *r) {
 const char *
 vv_renderer_name(const vv_renderer *r) {
     return r->ops->name;
+}
+
+void *
+vv_renderer_state(const vv_renderer *r) {
+    return r->state;
 }
 
 vv_status

@@ -12,10 +12,19 @@ extern const vv_renderer_ops vv_raytrace_ops;
 /** Geometry rendering of isosurfaces and geometric objects (src/render/raster). */
 extern const vv_renderer_ops vv_surface_ops;
 
+/** Volumetric radiosity (src/render/radiosity). */
+extern const vv_renderer_ops vv_radiosity_ops;
+
 /** Compression-domain Fourier projection (src/render/fourier). */
 extern const vv_renderer_ops vv_fourier_ops;
 
 /** Cell-by-cell ray casting of irregular grids (src/render/irregular). */
 extern const vv_renderer_ops vv_irregular_ops;
+
+/** Object-order volume rendering by splatting (src/render/splat). */
+extern const vv_renderer_ops vv_splat_ops;
+
+/** The method state behind @p r (what its create returned); borrowed. */
+void *vv_renderer_state(const vv_renderer *r);
 
 #endif

@@ -21,6 +21,7 @@ vtables_clear(vv_vtables *t) {
     free(t->ext);
     free(t->bvis);
     free(t->bdist);
+    free(t->pdist);
     free(t->lut2d);
     memset(t, 0, sizeof *t);
 }
@@ -34,12 +35,15 @@ vv_vtables_free(vv_vtables *t) {
 static void
 cache_release(vv_vcache *c) {
     vv_volume_free(c->vol);
-    free(c->q16);
+    if (!c->q16_borrowed)
+        free(c->q16);
     free(c->f32);
     free(c->nrm);
     free(c->gmag);
     free(c->bmin);
     free(c->bmax);
+    free(c->gmin);
+    free(c->gmax);
     vtables_clear(&c->tables);
     memset(c, 0, sizeof *c);
 }
@@ -93,7 +97,7 @@ fill_gradients(vv_vcache *c) {
                     (vv_vcache_value(c, bz1 + (size_t)i) - vv_vcache_value(c, bz0 + (size_t)i)) *
                     fz;
                 float g = sqrtf(gx * gx + gy * gy + gz * gz);
-                int8_t *o = c->nrm[base + (size_t)i];
+                int8_t *o = c->nrm + 3 * (base + (size_t)i);
                 if (g > 0) {
                     float sc = 127.0f / g;
                     o[0] = (int8_t)lrintf(gx * sc);
@@ -102,7 +106,6 @@ fill_gradients(vv_vcache *c) {
                 } else {
                     o[0] = o[1] = o[2] = 0;
                 }
-                o[3] = 0;
             }
         }
 }
@@ -183,6 +186,24 @@ fill_minmax(vv_vcache *c) {
                 c->bmin[b] = lo;
                 c->bmax[b] = hi;
             }
+    /* the groups of subvolumes: the pyramid's second level */
+    for (int gk = 0; gk < c->gz; gk++)
+        for (int gj = 0; gj < c->gy; gj++)
+            for (int gi = 0; gi < c->gx; gi++) {
+                float lo = INFINITY, hi = -INFINITY;
+                for (int bk = gk * VV_VC_GROUP; bk < (gk + 1) * VV_VC_GROUP && bk < c->bz; bk++)
+                    for (int bj = gj * VV_VC_GROUP; bj < (gj + 1) * VV_VC_GROUP && bj < c->by; bj++)
+                        for (int bi = gi * VV_VC_GROUP; bi < (gi + 1) * VV_VC_GROUP && bi < c->bx;
+                             bi++) {
+                            size_t b = ((size_t)bk * (size_t)c->by + (size_t)bj) * (size_t)c->bx +
+                                       (size_t)bi;
+                            lo = c->bmin[b] < lo ? c->bmin[b] : lo;
+                            hi = c->bmax[b] > hi ? c->bmax[b] : hi;
+                        }
+                size_t g = ((size_t)gk * (size_t)c->gy + (size_t)gj) * (size_t)c->gx + (size_t)gi;
+                c->gmin[g] = lo;
+                c->gmax[g] = hi;
+            }
 }
 
 static vv_status
@@ -195,7 +216,13 @@ cache_build(const vv_vcache_set *s, vv_vcache *c, vv_volume *vol) {
     c->sz = (size_t)c->nx * (size_t)c->ny;
     const size_t n = c->sz * (size_t)c->nz;
     const int ny = c->ny, nz = c->nz;
-    if (is_integer_type(vol->type) && vol->range[1] - vol->range[0] <= 65535.0) {
+    const int whole = c->nx == vol->dims[0] && c->ny == vol->dims[1] && c->nz == vol->dims[2];
+    if (vol->type == VV_U16 && whole) {
+        /* the volume's own array serves: no copy (memory: issue 14) */
+        c->qoff = 0;
+        c->q16 = vol->data;
+        c->q16_borrowed = 1;
+    } else if (is_integer_type(vol->type) && vol->range[1] - vol->range[0] <= 65535.0) {
         c->qoff = vol->range[0];
         c->q16 = malloc(n * sizeof *c->q16);
     } else {
@@ -207,18 +234,23 @@ cache_build(const vv_vcache_set *s, vv_vcache *c, vv_volume *vol) {
     size_t nb = (size_t)c->bx * (size_t)c->by * (size_t)c->bz;
     c->bmin = malloc(nb * sizeof(float));
     c->bmax = malloc(nb * sizeof(float));
-    if ((!c->q16 && !c->f32) || !c->bmin || !c->bmax) {
+    c->gx = (c->bx + VV_VC_GROUP - 1) / VV_VC_GROUP;
+    c->gy = (c->by + VV_VC_GROUP - 1) / VV_VC_GROUP;
+    c->gz = (c->bz + VV_VC_GROUP - 1) / VV_VC_GROUP;
+    size_t ng = (size_t)c->gx * (size_t)c->gy * (size_t)c->gz;
+    c->gmin = malloc(ng * sizeof(float));
+    c->gmax = malloc(ng * sizeof(float));
+    if ((!c->q16 && !c->f32) || !c->bmin || !c->bmax || !c->gmin || !c->gmax) {
         cache_release(c);
         return vv_error_set(VV_ERR_NOMEM, "out of memory for %zu voxels", n);
     }
+    if (!c->q16_borrowed) {
 #pragma omp parallel for schedule(static)
-    for (int k = 0; k < nz; k++)
-        for (int j = 0; j < ny; j++)
-            fill_row(c, vol, j, k, (size_t)k * c->sz + (size_t)j * c->sy);
-    if ((uint64_t)n * sizeof *c->nrm <= s->gradient_budget)
-        c->nrm = malloc(n * sizeof *c->nrm); /* NULL: gradients on the fly */
-    if (c->nrm)
-        fill_gradients(c);
+        for (int k = 0; k < nz; k++)
+            for (int j = 0; j < ny; j++)
+                fill_row(c, vol, j, k, (size_t)k * c->sz + (size_t)j * c->sy);
+    }
+    (void)s;
     fill_minmax(c);
     c->vol = vv_volume_ref(vol);
     c->modified = vol->modified;
@@ -226,9 +258,23 @@ cache_build(const vv_vcache_set *s, vv_vcache *c, vv_volume *vol) {
 }
 
 void
+vv_vcache_need_normals(const vv_vcache_set *s, vv_vcache *c) {
+    if (c->nrm || c->nrm_tried)
+        return;
+    c->nrm_tried = 1;
+    const size_t n = c->sz * (size_t)c->nz;
+    if ((uint64_t)n * 3 <= s->gradient_budget)
+        c->nrm = malloc(n * 3 + 1); /* NULL: gradients on the fly */
+    if (c->nrm) {
+        c->nrm[n * 3] = 0; /* the padding byte vv_vcache_normal reads past the last voxel */
+        fill_gradients(c);
+    }
+}
+
+void
 vv_vcache_set_init(vv_vcache_set *s) {
     memset(s, 0, sizeof *s);
-    /* cached gradients take 4 bytes a voxel: allow them up to a quarter of
+    /* cached gradients take 3 bytes a voxel: allow them up to a quarter of
      * physical memory (at most 8 GiB); beyond, gradients are computed on the
      * fly from the values */
     uint64_t budget = (uint64_t)8 << 30;
@@ -471,6 +517,23 @@ build_tables(const vv_vcache *c, const vv_object *obj, const vv_vtables_key *key
         vtables_clear(t);
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     }
+    if (t->lut && (key->mode == VV_MODE_MIP || key->mode == VV_MODE_MINIP)) {
+        vv_vtables_flat_ends(t, &t->plo, &t->phi);
+        /* a subvolume all of whose values classify like the starting bound
+         * cannot change the projection: leap through it */
+        uint8_t *pv = malloc(nb);
+        if (pv) {
+            const int mip = key->mode == VV_MODE_MIP;
+            for (size_t b = 0; b < nb; b++)
+                pv[b] = (mip ? c->bmax[b] > t->plo : c->bmin[b] < t->phi) || !key->skipping;
+            t->pdist = chessboard_distance(pv, c->bx, c->by, c->bz);
+            free(pv);
+        }
+        if (!t->pdist) {
+            vtables_clear(t);
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        }
+    }
     return VV_OK;
 }
 
@@ -702,9 +765,176 @@ vv_vobject_prepare(const vv_object *obj, const vv_world *w, const float ambient[
     return VV_OK;
 }
 
-void
-vv_vray_project(const vv_vcache *c, const vv_vray *r, vv_render_mode mode, double dt, int skipping,
-                float *value, float *depth) {
+#if VV_VC_HAVE_AVX2
+/* The trilinear values of samples k = kfirst .. kfirst + m - 1 (m <=
+ * VV_VC_CHUNK) of ray r through 16-bit values, eight at a time with AVX2,
+ * in exactly the arithmetic of vv_vray_point, vv_vcache_cell_in and
+ * vv_vcache_value_at (separate multiplies and adds, no fused ones), so the
+ * values are bit-identical to the scalar path's. */
+/* Eight x-pairs of 16-bit values (low and high halves of each 32-bit
+ * lane) lerped by wx: a + (b - a) * wx. */
+__attribute__((target("avx2"))) static inline __m256
+pair_lerp_avx2(const int32_t pairs[8], __m256 wx) {
+    const __m256i g = _mm256_loadu_si256((const __m256i *)(const void *)pairs);
+    const __m256 a = _mm256_cvtepi32_ps(_mm256_and_si256(g, _mm256_set1_epi32(0xFFFF)));
+    const __m256 b = _mm256_cvtepi32_ps(_mm256_srli_epi32(g, 16));
+    return _mm256_add_ps(a, _mm256_mul_ps(_mm256_sub_ps(b, a), wx));
+}
+
+__attribute__((target("avx2"))) static void
+values_chunk_avx2(const vv_vcache *c, const vv_vray *r, double kfirst, double dt, int m,
+                  float *val) {
+    float u[VV_VC_CHUNK + 8];
+    for (int s = 0; s < m; s++)
+        u[s] = (float)((kfirst + s) * dt - r->tb);
+    for (int s = m; s < m + 8; s++)
+        u[s] = u[m - 1];
+    const __m256 ox = _mm256_set1_ps(r->o[0]), oy = _mm256_set1_ps(r->o[1]),
+                 oz = _mm256_set1_ps(r->o[2]);
+    const __m256 dx = _mm256_set1_ps(r->d[0]), dy = _mm256_set1_ps(r->d[1]),
+                 dz = _mm256_set1_ps(r->d[2]);
+    const __m256i zero = _mm256_setzero_si256();
+    const __m256i mx = _mm256_set1_epi32(c->nx - 2), my = _mm256_set1_epi32(c->ny - 2),
+                  mz = _mm256_set1_epi32(c->nz - 2);
+    const __m256i sy = _mm256_set1_epi32((int)c->sy), sz = _mm256_set1_epi32((int)c->sz);
+    float out[VV_VC_CHUNK + 8];
+    for (int s = 0; s < m; s += 8) {
+        const __m256 t = _mm256_loadu_ps(u + s);
+        const __m256 px = _mm256_add_ps(ox, _mm256_mul_ps(t, dx));
+        const __m256 py = _mm256_add_ps(oy, _mm256_mul_ps(t, dy));
+        const __m256 pz = _mm256_add_ps(oz, _mm256_mul_ps(t, dz));
+        __m256i i = _mm256_cvttps_epi32(px), j = _mm256_cvttps_epi32(py),
+                k = _mm256_cvttps_epi32(pz);
+        i = _mm256_max_epi32(_mm256_min_epi32(i, mx), zero);
+        j = _mm256_max_epi32(_mm256_min_epi32(j, my), zero);
+        k = _mm256_max_epi32(_mm256_min_epi32(k, mz), zero);
+        const __m256 wx = _mm256_sub_ps(px, _mm256_cvtepi32_ps(i));
+        const __m256 wy = _mm256_sub_ps(py, _mm256_cvtepi32_ps(j));
+        const __m256 wz = _mm256_sub_ps(pz, _mm256_cvtepi32_ps(k));
+        const __m256i o = _mm256_add_epi32(
+            _mm256_add_epi32(_mm256_mullo_epi32(k, sz), _mm256_mullo_epi32(j, sy)), i);
+        int32_t oo[8], p00[8], p10[8], p01[8], p11[8];
+        _mm256_storeu_si256((__m256i *)(void *)oo, o);
+        const uint16_t *q = c->q16;
+        for (int l = 0; l < 8; l++) {
+            const uint16_t *v = q + oo[l];
+            memcpy(&p00[l], v, 4);
+            memcpy(&p10[l], v + c->sy, 4);
+            memcpy(&p01[l], v + c->sz, 4);
+            memcpy(&p11[l], v + c->sz + c->sy, 4);
+        }
+        const __m256 c00 = pair_lerp_avx2(p00, wx), c10 = pair_lerp_avx2(p10, wx);
+        const __m256 c01 = pair_lerp_avx2(p01, wx), c11 = pair_lerp_avx2(p11, wx);
+        const __m256 c0 = _mm256_add_ps(c00, _mm256_mul_ps(_mm256_sub_ps(c10, c00), wy));
+        const __m256 c1 = _mm256_add_ps(c01, _mm256_mul_ps(_mm256_sub_ps(c11, c01), wy));
+        _mm256_storeu_ps(out + s, _mm256_add_ps(c0, _mm256_mul_ps(_mm256_sub_ps(c1, c0), wz)));
+    }
+    memcpy(val, out, (size_t)m * sizeof *val);
+}
+#endif
+
+/* The maximum of sg * value over the samples k .. kend of r that exceed
+ * @p floor0 (floor0 itself when none does, at parameter t0), stopping once
+ * it reaches @p stop; *tbest: the parameter of its first sample. */
+static float
+project_from(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, double dt, double k,
+             double kend, float sg, float floor0, float stop, int skipping, int avx2,
+             double *tbest_out) {
+    const float *bext = sg > 0 ? c->bmax : c->bmin, *gext = sg > 0 ? c->gmax : c->gmin;
+    float best = floor0;
+    double tbest = r->t0;
+    const int gsize = VV_VC_BLOCK * VV_VC_GROUP;
+    while (k <= kend && best < stop) {
+        float p[3];
+        vv_vray_point(r, k * dt, p);
+        if (skipping && pdist) {
+            /* leave the cube of 2 dist - 1 subvolumes around p that hold
+             * nothing beyond the starting bound */
+            int bc[3];
+            for (int a = 0; a < 3; a++) {
+                bc[a] = (int)((p[a] > 0 ? p[a] : 0) * (1.0f / VV_VC_BLOCK));
+                const int bn = a == 0 ? c->bx : a == 1 ? c->by : c->bz;
+                bc[a] = bc[a] >= bn ? bn - 1 : bc[a];
+            }
+            const int dist = pdist[((size_t)bc[2] * (size_t)c->by + (size_t)bc[1]) * (size_t)c->bx +
+                                   (size_t)bc[0]];
+            if (dist) {
+                float te = INFINITY;
+                for (int a = 0; a < 3; a++) {
+                    if (r->inv[a] == 0)
+                        continue;
+                    const float bound = r->d[a] > 0 ? (float)(bc[a] + dist) * VV_VC_BLOCK
+                                                    : (float)(bc[a] - dist + 1) * VV_VC_BLOCK;
+                    const float ta = (bound - p[a]) * r->inv[a];
+                    te = ta < te ? ta : te;
+                }
+                const double ks = vv_ceil_pos((k * dt + te) / dt);
+                k = ks > k + 1 ? ks : k + 1;
+                continue;
+            }
+        }
+        if (skipping) {
+            /* a group, then a subvolume, that cannot beat the current
+             * extreme is skipped whole (the test is strict, so its samples
+             * could not change the result) */
+            int gi = (int)((p[0] > 0 ? p[0] : 0) * (1.0f / gsize));
+            int gj = (int)((p[1] > 0 ? p[1] : 0) * (1.0f / gsize));
+            int gk = (int)((p[2] > 0 ? p[2] : 0) * (1.0f / gsize));
+            gi = gi >= c->gx ? c->gx - 1 : gi;
+            gj = gj >= c->gy ? c->gy - 1 : gj;
+            gk = gk >= c->gz ? c->gz - 1 : gk;
+            const size_t g = ((size_t)gk * (size_t)c->gy + (size_t)gj) * (size_t)c->gx + (size_t)gi;
+            int size = 0;
+            if (sg * gext[g] <= best)
+                size = gsize;
+            else if (sg * bext[vv_vcache_block(c, p)] <= best)
+                size = VV_VC_BLOCK;
+            if (size) {
+                const double ks = vv_ceil_pos(vv_vray_cube_exit(r, p, k * dt, size) / dt);
+                k = ks > k + 1 ? ks : k + 1;
+                continue;
+            }
+        }
+        const double te = vv_vray_cube_exit(r, p, k * dt, VV_VC_BLOCK);
+        double klast = vv_floor_pos(te / dt);
+        klast = klast < kend ? klast : kend;
+        klast = klast < k ? k : klast;
+#if VV_VC_HAVE_AVX2
+        if (avx2) {
+            while (k <= klast) {
+                const int m = klast - k + 1 < VV_VC_CHUNK ? (int)(klast - k + 1) : VV_VC_CHUNK;
+                float val[VV_VC_CHUNK];
+                values_chunk_avx2(c, r, k, dt, m, val);
+                for (int s = 0; s < m; s++) {
+                    const float x = sg * val[s];
+                    if (x > best) {
+                        best = x;
+                        tbest = (k + s) * dt;
+                    }
+                }
+                k += m;
+            }
+            continue;
+        }
+#endif
+        for (; k <= klast; k++) {
+            float f[3];
+            vv_vray_point(r, k * dt, p);
+            const size_t o = vv_vcache_cell_in(c, p, f);
+            const float x = sg * vv_vcache_value_at(c, o, f);
+            if (x > best) {
+                best = x;
+                tbest = k * dt;
+            }
+        }
+    }
+    *tbest_out = tbest;
+    return best;
+}
+
+static void
+project(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, vv_render_mode mode, double dt,
+        int skipping, int avx2, float lo, float hi, float *value, float *depth) {
     double k = vv_ceil_pos(r->t0 / dt);
     const double kend = vv_floor_pos(r->t1 / dt);
     if (k > kend) {
@@ -731,36 +961,48 @@ vv_vray_project(const vv_vcache *c, const vv_vray *r, vv_render_mode mode, doubl
         return;
     }
     const int mip = mode == VV_MODE_MIP;
-    float best = mip ? -INFINITY : INFINITY;
-    double tbest = r->t0;
-    while (k <= kend) {
-        float p[3];
-        vv_vray_point(r, k * dt, p);
-        const size_t b = vv_vcache_block(c, p);
-        const double te = vv_vray_cube_exit(r, p, k * dt, VV_VC_BLOCK);
-        /* a subvolume that cannot beat the current extreme is skipped whole
-         * (its samples could not change the result: the test is strict) */
-        if (skipping && (mip ? c->bmax[b] <= best : c->bmin[b] >= best)) {
-            const double ks = vv_ceil_pos(te / dt);
-            k = ks > k + 1 ? ks : k + 1;
-            continue;
-        }
-        double klast = vv_floor_pos(te / dt);
-        klast = klast < kend ? klast : kend;
-        klast = klast < k ? k : klast;
-        for (; k <= klast; k++) {
-            float f[3];
-            vv_vray_point(r, k * dt, p);
-            const size_t o = vv_vcache_cell_in(c, p, f);
-            const float x = vv_vcache_value_at(c, o, f);
-            if (mip ? x > best : x < best) {
-                best = x;
-                tbest = k * dt;
-            }
-        }
-    }
-    *value = best;
+    /* work on the maximum of +-value, so MinIP is MIP of the negation */
+    const float sg = mip ? 1.0f : -1.0f;
+    const float floor0 = mip ? lo : -hi; /* what nothing below can change */
+    const float stop = mip ? hi : -lo;   /* what nothing above can change */
+    double tbest;
+    const float best =
+        project_from(c, pdist, r, dt, k, kend, sg, floor0, stop, skipping,
+                     avx2 && c->q16 && c->sz * (size_t)c->nz < ((size_t)1 << 30), &tbest);
+    *value = sg * best;
     *depth = (float)tbest;
+}
+
+void
+vv_vray_project(const vv_vcache *c, const vv_vray *r, vv_render_mode mode, double dt, int skipping,
+                float lo, float hi, float *value, float *depth) {
+    project(c, NULL, r, mode, dt, skipping, 0, lo, hi, value, depth);
+}
+
+void
+vv_vray_project_tables(const vv_vcache *c, const vv_vtables *t, const vv_vray *r,
+                       vv_render_mode mode, double dt, int skipping, int avx2, float *value,
+                       float *depth) {
+    if (t->pdist)
+        project(c, t->pdist, r, mode, dt, skipping, avx2, t->plo, t->phi, value, depth);
+    else
+        project(c, NULL, r, mode, dt, skipping, avx2, -INFINITY, INFINITY, value, depth);
+}
+
+void
+vv_vtables_flat_ends(const vv_vtables *t, float *lo, float *hi) {
+    const float *e = t->lut;
+    int i0 = 0;
+    while (i0 + 1 < VV_VC_LUT && memcmp(e + 4 * (i0 + 1), e, 4 * sizeof *e) == 0)
+        i0++;
+    int j0 = VV_VC_LUT - 1;
+    while (j0 > 0 && memcmp(e + 4 * (j0 - 1), e + 4 * (VV_VC_LUT - 1), 4 * sizeof *e) == 0)
+        j0--;
+    /* value v has entry (int)((v - lut_lo) * lut_scale), clamped: below
+     * lut_lo + (i0 + 1) / lut_scale it is at most i0; the bounds keep one
+     * entry of margin for rounding */
+    *lo = i0 > 0 ? t->lut_lo + (float)i0 / t->lut_scale : -INFINITY;
+    *hi = j0 < VV_VC_LUT - 2 ? t->lut_lo + (float)(j0 + 1) / t->lut_scale : INFINITY;
 }
 
 /* ---------------------------------------------------------------------- */

@@ -1,5 +1,5 @@
 /*
- * Volume data shared by the ray-casting renderers (raycast, raytrace):
+ * Volume data shared by the volume renderers (raycast, raytrace, splat):
  * internal, not part of the public API.
  *
  * Per volume, a cache holds the voxels as 16-bit offsets from the minimum
@@ -37,6 +37,7 @@
 #include "volvis/render.h"
 
 #define VV_VC_BLOCK 4  /* subvolume side in cells */
+#define VV_VC_GROUP 4  /* subvolumes per side of a group (the pyramid's second level) */
 #define VV_VC_LUT 4096 /* transfer-function table entries */
 /* cached volumes per renderer: >= the objects of one render, so none in use
  * is evicted */
@@ -79,6 +80,12 @@ typedef struct vv_vtables {
     float lut_lo, lut_scale; /* stored value -> table index */
     float *lut, *ext;
     uint8_t *bvis, *bdist;
+    /* MIP and MinIP: the table's flat ends (vv_vtables_flat_ends) and, per
+     * subvolume, the chessboard distance to the nearest one holding a value
+     * beyond the flat end the projection starts from (vv_vray_project); 0
+     * and NULL in other modes */
+    float plo, phi;
+    uint8_t *pdist;
     float *lut2d;
     float g_scale; /* gradient magnitude (data units per volume world unit) -> bin */
 } vv_vtables;
@@ -90,12 +97,20 @@ typedef struct vv_vcache {
     int nx, ny, nz;     /* cached grid (each >= 2; a 1-voxel axis is duplicated) */
     size_t sy, sz;      /* strides in voxels */
     uint16_t *q16;      /* values as uint16 (real = q + qoff), or NULL */
+    int q16_borrowed;   /* q16 is the volume's own u16 array (qoff 0), not a copy */
     float *f32;         /* values as float (qoff = 0), or NULL */
     double qoff;        /* offset of stored values */
-    int8_t (*nrm)[4];   /* unit gradients * 127 (index space), or NULL: on the fly */
+    int8_t *nrm;        /* unit gradients * 127 (index space), 3 bytes a voxel and one
+                           byte of padding at the end, or NULL: on the fly */
+    int nrm_tried;      /* vv_vcache_need_normals ran (nrm NULL: over the budget) */
     float *gmag;        /* gradient magnitudes per voxel (vv_vcache_need_gmag), or NULL */
     int bx, by, bz;     /* subvolume grid */
     float *bmin, *bmax; /* per subvolume, stored units */
+    /* the next level of the min/max pyramid: per group of VV_VC_GROUP^3
+     * subvolumes (cubes of VV_VC_BLOCK * VV_VC_GROUP cells), the min/max of
+     * its subvolumes' */
+    int gx, gy, gz;
+    float *gmin, *gmax;
     /* the last object tables built for this volume */
     int tables_valid;
     vv_vtables_key key;
@@ -134,6 +149,12 @@ vv_status vv_vcache_get(vv_vcache_set *s, vv_volume *vol, vv_vcache **out);
 vv_status vv_vtables_get(vv_vcache_set *s, vv_vcache *c, const vv_object *obj, vv_render_mode mode,
                          double dt, float iso, int skipping, int ext, vv_vtables *out, int *owned);
 void vv_vtables_free(vv_vtables *t);
+
+/* Builds c->nrm once, when a shaded object first needs it and it fits
+ * @p s's gradient budget (else, or without memory, it stays NULL and
+ * gradients are computed at each sample: slower, never wrong). A volume
+ * shown only as MIP, MinIP or X-ray never pays for it. */
+void vv_vcache_need_normals(const vv_vcache_set *s, vv_vcache *c);
 
 /* Builds c->gmag once: the gradient magnitude of every cached voxel, in
  * data units per world unit of the volume's own coordinates (central
@@ -297,21 +318,23 @@ vv_vcache_sample(const vv_vcache *c, const float p[3]) {
 
 typedef float vv_v4f __attribute__((vector_size(16)));
 
-/* The cached unit gradient of voxel idx as 4 floats (x, y, z, 0), times 127:
- * one 32-bit load, sign-extended in registers (compilers scalarise the
- * generic int8 -> float vector conversion). */
+/* The cached unit gradient of voxel idx as 4 floats (x, y, z, w), times
+ * 127; w is the next voxel's x and must be ignored: one 32-bit load (the
+ * array has a byte of padding for the last voxel), sign-extended in
+ * registers (compilers scalarise the generic int8 -> float vector
+ * conversion). */
 static inline vv_v4f
 vv_vcache_normal(const vv_vcache *c, size_t idx) {
 #ifdef __SSE2__
     int32_t word;
-    memcpy(&word, c->nrm[idx], sizeof word);
+    memcpy(&word, c->nrm + 3 * idx, sizeof word);
     __m128i x = _mm_cvtsi32_si128(word);
     x = _mm_unpacklo_epi8(x, x);
     x = _mm_unpacklo_epi16(x, x);
     x = _mm_srai_epi32(x, 24);
     return (vv_v4f)_mm_cvtepi32_ps(x);
 #else
-    const int8_t *n = c->nrm[idx];
+    const int8_t *n = c->nrm + 3 * idx;
     vv_v4f r = {n[0], n[1], n[2], 0};
     return r;
 #endif
@@ -583,10 +606,33 @@ vv_vray_iso_refine(const vv_vcache *c, const vv_vray *r, double ta, float va, do
 /* Maximum (VV_MODE_MIP) or minimum (VV_MODE_MINIP) intensity projection or
  * mean (VV_MODE_XRAY) of the samples t = k dt of the clipped ray r, one
  * sample in the middle when it is shorter than a step; *depth: the
- * parameter of the extreme (xray: the entry). With @p skipping, subvolumes
- * that cannot beat the current extreme are skipped whole (same result). */
+ * parameter of the extreme (xray: the entry). With @p skipping, groups of
+ * subvolumes, then subvolumes, that cannot beat the current extreme are
+ * skipped whole (same result).
+ *
+ * @p lo and @p hi (stored units; -INFINITY and INFINITY for none) say what
+ * the caller's classification cannot tell apart: every value <= lo maps to
+ * the same colour, and every value >= hi. MIP then starts its maximum at lo
+ * (a ray whose maximum is at most lo returns lo and depth t0) and stops once
+ * it reaches hi; MinIP starts at hi and stops at lo. The value returned
+ * always classifies exactly as the true extreme does; only the depth may
+ * name an earlier sample of the same colour. */
 void vv_vray_project(const vv_vcache *c, const vv_vray *r, vv_render_mode mode, double dt,
-                     int skipping, float *value, float *depth);
+                     int skipping, float lo, float hi, float *value, float *depth);
+/* vv_vray_project with the bounds of tables @p t (plo, phi) and, with
+ * @p skipping, their distances pdist to leap through subvolumes that hold
+ * nothing beyond the starting bound. With @p avx2 (vv_vc_have_avx2) and
+ * 16-bit values, MIP and MinIP interpolate eight samples at a time, with
+ * the same arithmetic (the same values) as the scalar path. */
+void vv_vray_project_tables(const vv_vcache *c, const vv_vtables *t, const vv_vray *r,
+                            vv_render_mode mode, double dt, int skipping, int avx2, float *value,
+                            float *depth);
+
+/* The bounds @p lo, @p hi of vv_vray_project for a projection table @p t
+ * ({alpha, r, g, b} entries): the largest stored value below which every
+ * entry equals the first, and the smallest above which every entry equals
+ * the last (with a margin of one entry for rounding). */
+void vv_vtables_flat_ends(const vv_vtables *t, float *lo, float *hi);
 
 /* Pass 1 of a composite kernel: for the samples k = kfirst .. kfirst + m - 1
  * (m <= VV_VC_CHUNK) of ray r, the cell offset, the fractions and the

@@ -54,7 +54,11 @@ test_format_names(void **state) {
     vv_format g;
     vt_ok(vv_format_parse("NRRD", &g));
     assert_int_equal(g, VV_FORMAT_NRRD);
-    assert_int_equal(vv_format_parse("tiff", &g), VV_ERR_INVALID);
+    vt_ok(vv_format_parse("tif", &g));
+    assert_int_equal(g, VV_FORMAT_TIFF);
+    vt_ok(vv_format_parse("DICOM", &g));
+    assert_int_equal(g, VV_FORMAT_DICOM);
+    assert_int_equal(vv_format_parse("gif", &g), VV_ERR_INVALID);
 }
 
 static void

@@ -315,7 +315,8 @@ test_early_termination(void **state) {
  * or mean) through a grey ramp from range[0] (black) to range[1] (white),
  * opacity 1, within one step of the 4096-entry table. */
 static vv_image *
-check_projection(vv_render_mode mode, vv_voxel_type type, int skipping, double step) {
+check_projection_ramp(vv_render_mode mode, vv_voxel_type type, int skipping, double step, double r0,
+                      double r1) {
     const int n = 32, d = 24;
     vv_volume *v = new_volume(n, n, d, type, 1, 1, 1);
     uint64_t seed = 0x9e3779b97f4a7c15ULL + (uint64_t)mode;
@@ -333,10 +334,12 @@ check_projection(vv_render_mode mode, vv_voxel_type type, int skipping, double s
     vv_world *w = new_world();
     vv_object *o = add_object(w, v, mode);
     o->step = step;
+    /* the grey ramp over [a, b], flat outside it when r0 > 0 or r1 < 1 */
+    const double a = lo + r0 * (hi - lo), b = lo + r1 * (hi - lo);
     vv_tf_init(&o->tf);
     vt_ok(vv_tf_add_opacity(&o->tf, lo, 1.0));
-    vt_ok(vv_tf_add_color(&o->tf, lo, vv_vec3_make(0, 0, 0)));
-    vt_ok(vv_tf_add_color(&o->tf, hi, vv_vec3_make(1, 1, 1)));
+    vt_ok(vv_tf_add_color(&o->tf, a, vv_vec3_make(0, 0, 0)));
+    vt_ok(vv_tf_add_color(&o->tf, b, vv_vec3_make(1, 1, 1)));
     vv_view view = ortho_z(0.5 * (n - 1), 0.5 * (n - 1), 64.0, n, n, n);
     vv_renderer *r = new_raycaster();
     vt_ok(vv_renderer_set_option(r, "empty_space_skipping", skipping ? "1" : "0"));
@@ -355,11 +358,13 @@ check_projection(vv_render_mode mode, vv_voxel_type type, int skipping, double s
                 else
                     acc += val / d;
             }
-            const double grey = (acc - lo) / (hi - lo);
+            double grey = (acc - a) / (b - a);
+            grey = grey < 0 ? 0 : grey > 1 ? 1 : grey;
             const float *p = px(img, x, y);
             /* the table index is floor((v - lo) * 4095 / (hi - lo)) */
             double err = grey - p[0];
-            if (!(err > -1e-5 && err < 1.0 / 4095 + 1e-5))
+            const double tol = (hi - lo) / (b - a) / 4095;
+            if (!(err > -1e-5 && err < tol + 1e-5))
                 fail_msg("mode %d skipping %d pixel (%d, %d): expected %.6f (value %.3f), got "
                          "%.6f",
                          (int)mode, skipping, x, y, grey, acc, (double)p[0]);
@@ -367,12 +372,18 @@ check_projection(vv_render_mode mode, vv_voxel_type type, int skipping, double s
             assert_float_equal(p[3], 1.0, 0);
             worst = fabs(err) > worst ? fabs(err) : worst;
         }
-    print_message("projection mode %d type %s skipping %d step %.2f: worst grey error %.2e\n",
-                  (int)mode, vv_voxel_type_name(type), skipping, step, worst);
+    print_message("projection mode %d type %s skipping %d step %.2f ramp [%.1f, %.1f]: worst "
+                  "grey error %.2e\n",
+                  (int)mode, vv_voxel_type_name(type), skipping, step, r0, r1, worst);
     vv_renderer_free(r);
     vv_world_free(w);
     vv_volume_free(v);
     return img;
+}
+
+static vv_image *
+check_projection(vv_render_mode mode, vv_voxel_type type, int skipping, double step) {
+    return check_projection_ramp(mode, type, skipping, step, 0, 1);
 }
 
 /* Renders with skipping on and off; both must be right and identical. */
@@ -384,6 +395,28 @@ check_projection_both(vv_render_mode mode, vv_voxel_type type, double step) {
         fail_msg("mode %d: skipping on/off differ by up to %.3g", (int)mode, max_abs_diff(on, off));
     vv_image_free(on);
     vv_image_free(off);
+}
+
+/* Transfer functions flat below and above a ramp (MIP: 30 % to 97 % of the
+ * range, where the column maxima of the random volume lie; MinIP: 3 % to
+ * 70 %): MIP and MinIP start at one flat end and stop at the other
+ * (vv_vray_project's bounds); the colours must still be those of the true
+ * extremes. */
+static void
+test_projection_flat_ends(void **state) {
+    (void)state;
+    const vv_render_mode modes[2] = {VV_MODE_MIP, VV_MODE_MINIP};
+    const vv_voxel_type types[2] = {VV_F32, VV_U16};
+    for (int m = 0; m < 2; m++)
+        for (int t = 0; t < 2; t++) {
+            const double r0 = m == 0 ? 0.3 : 0.03, r1 = m == 0 ? 0.97 : 0.7;
+            vv_image *on = check_projection_ramp(modes[m], types[t], 1, 0.5, r0, r1);
+            vv_image *off = check_projection_ramp(modes[m], types[t], 0, 0.5, r0, r1);
+            if (!images_identical(on, off))
+                fail_msg("mode %d: skipping on/off differ", (int)modes[m]);
+            vv_image_free(on);
+            vv_image_free(off);
+        }
 }
 
 static void
@@ -1102,6 +1135,7 @@ main(void) {
         cmocka_unit_test(test_slab_sample_count),
         cmocka_unit_test(test_early_termination),
         cmocka_unit_test(test_mip_columns),
+        cmocka_unit_test(test_projection_flat_ends),
         cmocka_unit_test(test_minip_columns),
         cmocka_unit_test(test_xray_columns),
         cmocka_unit_test(test_iso_sphere_silhouette),

@@ -395,7 +395,9 @@ trace_projection(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, float *
     vv_vray r;
     if (!ray_setup(ob, wr, &r))
         return 0;
-    vv_vray_project(ob->c, &r, ob->mode, fr->dt, fr->st->skipping, value, depth);
+    /* MIP and MinIP need not tell apart values the table shows alike */
+    vv_vray_project_tables(ob->c, &ob->tab, &r, ob->mode, fr->dt, fr->st->skipping, fr->avx2, value,
+                           depth);
     return 1;
 }
 
@@ -416,6 +418,8 @@ prepare_object(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w
     if (s != VV_OK)
         return s;
     ro->shading = obj->shading;
+    if (ro->mode == VV_MODE_COMPOSITE || ro->mode == VV_MODE_ISO)
+        vv_vcache_need_normals(&st->vc, ro->c);
     ro->iso = (float)(obj->isovalue - ro->c->qoff);
     return VV_OK;
 }

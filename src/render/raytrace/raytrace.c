@@ -1552,7 +1552,7 @@ project_volume(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double t
     vv_vray r;
     if (!vray_setup(ob, wr, 0, tlim, &r))
         return 0;
-    vv_vray_project(ob->c, &r, ob->mode, fr->dt, fr->st->parc, value, depth);
+    vv_vray_project(ob->c, &r, ob->mode, fr->dt, fr->st->parc, -INFINITY, INFINITY, value, depth);
     return 1;
 }
 
@@ -1612,6 +1612,8 @@ prepare_volume(rt_frame *fr, rt_vobj *ro, const vv_object *obj) {
     vv_status s = vv_vcache_get(&fr->st->vc, obj->volume, &ro->c);
     if (s != VV_OK)
         return vv_error_prefix(s, "object '%s'", obj->name);
+    if (ro->mode == VV_MODE_COMPOSITE || ro->mode == VV_MODE_ISO)
+        vv_vcache_need_normals(&fr->st->vc, ro->c);
     s = vv_vobject_prepare(obj, w, fr->ambient, fr->vlights, fr->n_lights, ro->w2i, ro->i2w,
                            ro->dims, ro->planes, &ro->n_planes, &ro->sh);
     if (s != VV_OK)

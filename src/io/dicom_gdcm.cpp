@@ -1,0 +1,433 @@
+/*
+ * The GDCM side of the DICOM reader: header values, decoded pixel data and
+ * DICOMDIR records behind the C interface of dicom.h. Only GDCM parses DICOM;
+ * this file turns its objects into plain numbers and strings. No C++
+ * exception leaves it.
+ */
+#include "io/dicom.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <mutex>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <gdcmAttribute.h>
+#include <gdcmDataSet.h>
+#include <gdcmFile.h>
+#include <gdcmGlobal.h>
+#include <gdcmImage.h>
+#include <gdcmImageHelper.h>
+#include <gdcmImageReader.h>
+#include <gdcmMediaStorage.h>
+#include <gdcmPixelFormat.h>
+#include <gdcmReader.h>
+#include <gdcmSequenceOfFragments.h>
+#include <gdcmSequenceOfItems.h>
+#include <gdcmTag.h>
+#include <gdcmTrace.h>
+
+namespace {
+
+void
+set_err(char *err, size_t len, const char *msg) {
+    if (err && len)
+        std::snprintf(err, len, "%s", msg);
+}
+
+/* The value of a string element, trailing spaces and NULs removed. */
+std::string
+get_str(const gdcm::DataSet &ds, uint16_t g, uint16_t e) {
+    gdcm::Tag t(g, e);
+    if (!ds.FindDataElement(t))
+        return std::string();
+    const gdcm::DataElement &de = ds.GetDataElement(t);
+    const gdcm::ByteValue *bv = de.GetByteValue();
+    if (!bv || !bv->GetPointer())
+        return std::string();
+    std::string s(bv->GetPointer(), bv->GetLength());
+    while (!s.empty() && (s.back() == ' ' || s.back() == '\0'))
+        s.pop_back();
+    size_t a = 0;
+    while (a < s.size() && s[a] == ' ')
+        a++;
+    return s.substr(a);
+}
+
+void
+copy_str(char *dst, size_t cap, const std::string &s) {
+    std::snprintf(dst, cap, "%s", s.c_str());
+    /* keep listings on one line */
+    for (char *p = dst; *p; p++)
+        if (*p == '\n' || *p == '\r' || *p == '\t')
+            *p = ' ';
+}
+
+/* Up to @p n backslash-separated numbers of a DS/IS element; how many were read. */
+int
+get_nums(const gdcm::DataSet &ds, uint16_t g, uint16_t e, double *out, int n) {
+    std::string s = get_str(ds, g, e);
+    if (s.empty())
+        return 0;
+    int k = 0;
+    const char *p = s.c_str();
+    while (k < n && *p) {
+        char *end = nullptr;
+        double v = std::strtod(p, &end);
+        if (end == p)
+            break;
+        out[k++] = v;
+        p = end;
+        while (*p == ' ')
+            p++;
+        if (*p != '\\')
+            break;
+        p++;
+    }
+    return k;
+}
+
+/* Frame positions from the Per-frame Functional Groups of an enhanced file. */
+double *
+frame_positions(const gdcm::DataSet &ds, int frames) {
+    const gdcm::Tag per_frame(0x5200, 0x9230), plane_pos(0x0020, 0x9113);
+    if (!ds.FindDataElement(per_frame))
+        return nullptr;
+    gdcm::SmartPointer<gdcm::SequenceOfItems> sq = ds.GetDataElement(per_frame).GetValueAsSQ();
+    if (!sq || (int)sq->GetNumberOfItems() != frames)
+        return nullptr;
+    double *pos = static_cast<double *>(std::malloc(sizeof(double) * 3 * (size_t)frames));
+    if (!pos)
+        return nullptr;
+    for (int i = 0; i < frames; i++) {
+        const gdcm::DataSet &item = sq->GetItem((size_t)i + 1).GetNestedDataSet();
+        if (!item.FindDataElement(plane_pos)) {
+            std::free(pos);
+            return nullptr;
+        }
+        gdcm::SmartPointer<gdcm::SequenceOfItems> pp =
+            item.GetDataElement(plane_pos).GetValueAsSQ();
+        if (!pp || pp->GetNumberOfItems() < 1 ||
+            get_nums(pp->GetItem(1).GetNestedDataSet(), 0x0020, 0x0032, pos + 3 * i, 3) != 3) {
+            std::free(pos);
+            return nullptr;
+        }
+    }
+    return pos;
+}
+
+/* Up to @p n numbers of element (g, e) inside the functional-group macro
+ * @p macro of an enhanced file: the Shared Functional Groups first, else the
+ * first frame's Per-frame Functional Groups. */
+int
+group_nums(const gdcm::DataSet &ds, const gdcm::Tag &macro, uint16_t g, uint16_t e, double *out,
+           int n) {
+    static const gdcm::Tag groups[2] = {gdcm::Tag(0x5200, 0x9229), gdcm::Tag(0x5200, 0x9230)};
+    for (const gdcm::Tag &gt : groups) {
+        if (!ds.FindDataElement(gt))
+            continue;
+        gdcm::SmartPointer<gdcm::SequenceOfItems> sq = ds.GetDataElement(gt).GetValueAsSQ();
+        if (!sq || sq->GetNumberOfItems() < 1)
+            continue;
+        const gdcm::DataSet &item = sq->GetItem(1).GetNestedDataSet();
+        if (!item.FindDataElement(macro))
+            continue;
+        gdcm::SmartPointer<gdcm::SequenceOfItems> m = item.GetDataElement(macro).GetValueAsSQ();
+        if (!m || m->GetNumberOfItems() < 1)
+            continue;
+        int k = get_nums(m->GetItem(1).GetNestedDataSet(), g, e, out, n);
+        if (k > 0)
+            return k;
+    }
+    return 0;
+}
+
+/* Image Orientation (Patient) of an enhanced file (shared functional groups). */
+int
+enhanced_orientation(const gdcm::File &file, double iop[6]) {
+    std::vector<double> d = gdcm::ImageHelper::GetDirectionCosinesValue(file);
+    if (d.size() != 6)
+        return 0;
+    for (int i = 0; i < 6; i++)
+        iop[i] = d[(size_t)i];
+    return 1;
+}
+
+/* JPEG, JPEG-LS and JPEG 2000 streams end with the marker FF D9 (EOI/EOC);
+ * libjpeg decodes a stream cut short without an error, filling the rest, so
+ * the last fragment's end is checked here. 1 also for other syntaxes. */
+bool
+jpeg_streams_end(const gdcm::Image &img) {
+    const gdcm::TransferSyntax &ts = img.GetTransferSyntax();
+    if (!ts.IsEncapsulated() || ts == gdcm::TransferSyntax::RLELossless)
+        return true;
+    const gdcm::SequenceOfFragments *sf = img.GetDataElement().GetSequenceOfFragments();
+    if (!sf || sf->GetNumberOfFragments() == 0)
+        return true;
+    const gdcm::ByteValue *bv = sf->GetFragment(sf->GetNumberOfFragments() - 1).GetByteValue();
+    if (!bv || !bv->GetPointer())
+        return false;
+    const unsigned char *p = reinterpret_cast<const unsigned char *>(bv->GetPointer());
+    size_t n = bv->GetLength();
+    while (n > 0 && p[n - 1] == 0) /* even-length padding */
+        n--;
+    /* some writers pad with a few more bytes (0xFF) after the marker */
+    for (size_t k = 0; k < 8 && n >= 2 + k; k++)
+        if (p[n - 2 - k] == 0xff && p[n - 1 - k] == 0xd9)
+            return true;
+    return false;
+}
+
+std::once_flag init_once;
+
+} // namespace
+
+extern "C" void
+vv_dcm_init(void) {
+    std::call_once(init_once, [] {
+        try {
+            gdcm::Global::GetInstance(); /* dictionaries */
+            /* GDCM's warnings go to stderr; our errors carry the reasons */
+            gdcm::Trace::SetWarning(false);
+            gdcm::Trace::SetDebug(false);
+            gdcm::Trace::SetError(false);
+        } catch (...) {
+        }
+    });
+}
+
+extern "C" int
+vv_dcm_read_header(const char *path, vv_dcm_file *f, char *err, size_t errlen) {
+    char *keep = f->path;
+    std::memset(f, 0, sizeof *f);
+    f->path = keep;
+    try {
+        vv_dcm_init();
+        gdcm::Reader r;
+        r.SetFileName(path);
+        if (!r.CanRead())
+            return 0;
+        std::set<gdcm::Tag> skip;
+        if (!r.ReadUpToTag(gdcm::Tag(0x7fe0, 0x0010), skip)) {
+            set_err(err, errlen, "cannot parse the DICOM header (truncated or corrupt)");
+            return -1;
+        }
+        const gdcm::File &file = r.GetFile();
+        const gdcm::DataSet &ds = file.GetDataSet();
+        if (!ds.FindDataElement(gdcm::Tag(0x0028, 0x0010)) ||
+            !ds.FindDataElement(gdcm::Tag(0x0028, 0x0011)))
+            return 0; /* no image: a report, a structure set, a DICOMDIR */
+        copy_str(f->series_uid, sizeof f->series_uid, get_str(ds, 0x0020, 0x000e));
+        copy_str(f->series_desc, sizeof f->series_desc, get_str(ds, 0x0008, 0x103e));
+        copy_str(f->modality, sizeof f->modality, get_str(ds, 0x0008, 0x0060));
+        copy_str(f->study_desc, sizeof f->study_desc, get_str(ds, 0x0008, 0x1030));
+        copy_str(f->study_date, sizeof f->study_date, get_str(ds, 0x0008, 0x0020));
+        copy_str(f->patient_name, sizeof f->patient_name, get_str(ds, 0x0010, 0x0010));
+        copy_str(f->patient_id, sizeof f->patient_id, get_str(ds, 0x0010, 0x0020));
+        double num[6];
+        f->series_number = get_nums(ds, 0x0020, 0x0011, num, 1) == 1 ? (int)num[0] : 0;
+        f->instance_number = get_nums(ds, 0x0020, 0x0013, num, 1) == 1 ? (int)num[0] : 0;
+
+        std::vector<unsigned int> dims = gdcm::ImageHelper::GetDimensionsValue(file);
+        gdcm::PixelFormat pf = gdcm::ImageHelper::GetPixelFormatValue(file);
+        if (dims.size() < 2) {
+            set_err(err, errlen, "no image dimensions");
+            return -1;
+        }
+        f->cols = (int)std::min<unsigned int>(dims[0], 1u << 30);
+        f->rows = (int)std::min<unsigned int>(dims[1], 1u << 30);
+        f->frames =
+            dims.size() > 2 && dims[2] > 0 ? (int)std::min<unsigned int>(dims[2], 1u << 30) : 1;
+        f->samples = pf.GetSamplesPerPixel();
+        f->bits_allocated = pf.GetBitsAllocated();
+        f->bits_stored = pf.GetBitsStored();
+        f->pixel_rep = pf.GetPixelRepresentation();
+        f->planar = (int)gdcm::ImageHelper::GetPlanarConfigurationValue(file);
+        const gdcm::TransferSyntax &ts = file.GetHeader().GetDataSetTransferSyntax();
+        f->encapsulated =
+            ts.IsEncapsulated() || ts == gdcm::TransferSyntax::DeflatedExplicitVRLittleEndian;
+        f->native_le = ts == gdcm::TransferSyntax::ExplicitVRLittleEndian ||
+                       ts == gdcm::TransferSyntax::ImplicitVRLittleEndian;
+        f->pixel_end = f->encapsulated ? -1 : (long long)r.GetStreamCurrentPosition();
+
+        f->has_ipp = get_nums(ds, 0x0020, 0x0032, f->ipp, 3) == 3;
+        f->has_iop = get_nums(ds, 0x0020, 0x0037, f->iop, 6) == 6;
+        f->has_spacing = get_nums(ds, 0x0028, 0x0030, f->pixel_spacing, 2) == 2;
+        if (!f->has_spacing)
+            f->has_spacing = get_nums(ds, 0x0018, 0x1164, f->pixel_spacing, 2) == 2;
+        double rs[1], ri[1];
+        int has_slope = get_nums(ds, 0x0028, 0x1053, rs, 1) == 1;
+        int has_inter = get_nums(ds, 0x0028, 0x1052, ri, 1) == 1;
+        f->slope = has_slope && rs[0] != 0 ? rs[0] : 1;
+        f->intercept = has_inter ? ri[0] : 0;
+        if (f->frames > 1) {
+            /* enhanced objects keep geometry and rescale in functional groups */
+            f->frame_ipp = frame_positions(ds, f->frames);
+            if (!f->has_iop)
+                f->has_iop =
+                    group_nums(ds, gdcm::Tag(0x0020, 0x9116), 0x0020, 0x0037, f->iop, 6) == 6;
+            if (!f->has_iop)
+                f->has_iop = enhanced_orientation(file, f->iop);
+            if (!f->has_spacing)
+                f->has_spacing = group_nums(ds, gdcm::Tag(0x0028, 0x9110), 0x0028, 0x0030,
+                                            f->pixel_spacing, 2) == 2;
+            if (!has_slope && !has_inter) {
+                has_slope = group_nums(ds, gdcm::Tag(0x0028, 0x9145), 0x0028, 0x1053, rs, 1);
+                has_inter = group_nums(ds, gdcm::Tag(0x0028, 0x9145), 0x0028, 0x1052, ri, 1);
+                if (has_slope || has_inter) {
+                    f->slope = has_slope && rs[0] != 0 ? rs[0] : 1;
+                    f->intercept = has_inter ? ri[0] : 0;
+                }
+            }
+            std::vector<double> sp = gdcm::ImageHelper::GetSpacingValue(file);
+            if (!f->has_spacing && sp.size() >= 2) {
+                f->pixel_spacing[0] = sp[1];
+                f->pixel_spacing[1] = sp[0];
+                f->has_spacing = sp[0] > 0 && sp[1] > 0;
+            }
+            if (sp.size() >= 3)
+                f->frame_spacing = sp[2];
+            if (!f->has_ipp) {
+                std::vector<double> o = gdcm::ImageHelper::GetOriginValue(file);
+                if (o.size() == 3 && f->frame_ipp) {
+                    for (int i = 0; i < 3; i++)
+                        f->ipp[i] = o[(size_t)i];
+                    f->has_ipp = 1;
+                }
+            }
+            if (!has_slope && !has_inter) {
+                std::vector<double> is = gdcm::ImageHelper::GetRescaleInterceptSlopeValue(file);
+                if (is.size() == 2 && is[1] != 0) {
+                    f->intercept = is[0];
+                    f->slope = is[1];
+                }
+            }
+        }
+        return 1;
+    } catch (const std::exception &e) {
+        set_err(err, errlen, e.what());
+    } catch (...) {
+        set_err(err, errlen, "GDCM failed on the header");
+    }
+    std::free(f->frame_ipp);
+    f->frame_ipp = nullptr;
+    return -1;
+}
+
+extern "C" int
+vv_dcm_read_pixels(const char *path, void *dst, size_t bytes, char *err, size_t errlen) {
+    try {
+        vv_dcm_init();
+        gdcm::ImageReader r;
+        r.SetFileName(path);
+        if (!r.Read()) {
+            set_err(err, errlen, "cannot read the pixel data (truncated or corrupt)");
+            return -1;
+        }
+        const gdcm::Image &img = r.GetImage();
+        unsigned long len = img.GetBufferLength();
+        if (len != bytes) {
+            char m[160];
+            std::snprintf(m, sizeof m, "decoded pixel data is %lu bytes, the header says %zu", len,
+                          bytes);
+            set_err(err, errlen, m);
+            return -1;
+        }
+        const gdcm::DataElement &pd = img.GetDataElement();
+        const gdcm::ByteValue *bv = pd.GetByteValue();
+        if (bv && img.GetTransferSyntax().IsEncapsulated() == false && bv->GetLength() < bytes) {
+            char m[160];
+            std::snprintf(m, sizeof m,
+                          "pixel data holds %lu bytes, the image needs %zu (truncated)",
+                          (unsigned long)bv->GetLength(), bytes);
+            set_err(err, errlen, m);
+            return -1;
+        }
+        if (!jpeg_streams_end(img)) {
+            std::string ts = gdcm::TransferSyntax::GetTSString(img.GetTransferSyntax());
+            std::string m = "corrupt compressed pixel data (" + ts +
+                            "): the stream stops before its end-of-image marker (truncated)";
+            set_err(err, errlen, m.c_str());
+            return -1;
+        }
+        if (!img.GetBuffer(static_cast<char *>(dst))) {
+            std::string ts = gdcm::TransferSyntax::GetTSString(img.GetTransferSyntax());
+            std::string m = "cannot decode the pixel data (" + ts + "; corrupt or unsupported)";
+            set_err(err, errlen, m.c_str());
+            return -1;
+        }
+        return 0;
+    } catch (const std::exception &e) {
+        set_err(err, errlen, e.what());
+    } catch (...) {
+        set_err(err, errlen, "GDCM failed on the pixel data");
+    }
+    return -1;
+}
+
+extern "C" int
+vv_dcm_dicomdir_files(const char *path, char ***files, int *n, char *err, size_t errlen) {
+    *files = nullptr;
+    *n = 0;
+    try {
+        vv_dcm_init();
+        gdcm::Reader r;
+        r.SetFileName(path);
+        if (!r.CanRead() || !r.Read())
+            return 0;
+        gdcm::MediaStorage ms;
+        ms.SetFromFile(r.GetFile());
+        if (ms != gdcm::MediaStorage::MediaStorageDirectoryStorage)
+            return 0;
+        const gdcm::DataSet &ds = r.GetFile().GetDataSet();
+        const gdcm::Tag records(0x0004, 0x1220);
+        std::vector<std::string> out;
+        std::string dir(path);
+        size_t slash = dir.find_last_of('/');
+        dir = slash == std::string::npos ? std::string(".") : dir.substr(0, slash);
+        if (ds.FindDataElement(records)) {
+            gdcm::SmartPointer<gdcm::SequenceOfItems> sq =
+                ds.GetDataElement(records).GetValueAsSQ();
+            for (size_t i = 1; sq && i <= sq->GetNumberOfItems(); i++) {
+                const gdcm::DataSet &item = sq->GetItem(i).GetNestedDataSet();
+                std::string ref = get_str(item, 0x0004, 0x1500);
+                if (ref.empty())
+                    continue;
+                for (char &c : ref)
+                    if (c == '\\')
+                        c = '/';
+                out.push_back(dir + "/" + ref);
+            }
+        }
+        if (out.empty()) {
+            set_err(err, errlen, "the DICOMDIR references no files");
+            return -1;
+        }
+        char **v = static_cast<char **>(std::calloc(out.size(), sizeof(char *)));
+        if (!v) {
+            set_err(err, errlen, "out of memory");
+            return -1;
+        }
+        for (size_t i = 0; i < out.size(); i++) {
+            v[i] = strdup(out[i].c_str());
+            if (!v[i]) {
+                for (size_t j = 0; j < i; j++)
+                    std::free(v[j]);
+                std::free(v);
+                set_err(err, errlen, "out of memory");
+                return -1;
+            }
+        }
+        *files = v;
+        *n = (int)out.size();
+        return 1;
+    } catch (const std::exception &e) {
+        set_err(err, errlen, e.what());
+    } catch (...) {
+        set_err(err, errlen, "GDCM failed on the DICOMDIR");
+    }
+    return -1;
+}

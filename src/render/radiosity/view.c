@@ -1,0 +1,651 @@
+/*
+ * Volumetric radiosity: the view-dependent image of a solution (ray casting
+ * that composites voxel radiosities and shows patch radiosities) and the
+ * `radiosity` renderer, which keeps the solution while only the view
+ * changes. See include/volvis/radiosity.h.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "render/radiosity/radiosity_internal.h"
+#include "render/registry.h"
+
+#define RAD_BLOCK 8
+
+vv_status rad_prepare_render(vv_radiosity *r);
+
+/* Per voxel: sigma, display radiance (power / (4 capacity)), diffuse normal;
+ * opaque voxels that are not elements take the mean of their element
+ * neighbours so the colour does not darken towards buried voxels. */
+vv_status
+rad_prepare_render(vv_radiosity *r) {
+    for (int vi = 0; vi < r->n_vols; vi++) {
+        rad_vol *rv = &r->vols[vi];
+        const int nx = rv->n[0], ny = rv->n[1], nz = rv->n[2];
+        const size_t nv = (size_t)nx * ny * nz;
+        rv->rc = calloc(8 * nv, sizeof *rv->rc);
+        uint8_t *is_el = calloc(nv, 1);
+        rv->bs = RAD_BLOCK;
+        for (int a = 0; a < 3; a++)
+            rv->bn[a] = (rv->n[a] + RAD_BLOCK - 1) / RAD_BLOCK;
+        size_t nb = (size_t)rv->bn[0] * rv->bn[1] * rv->bn[2];
+        rv->bmax = calloc(nb, sizeof *rv->bmax);
+        if (!rv->rc || !is_el || !rv->bmax) {
+            free(is_el);
+            return vv_error_set(VV_ERR_NOMEM, "radiosity: out of memory for the render grid");
+        }
+        /* opacity of one render step (half a voxel) */
+        rv->step = 0.5 * rv->h;
+        int lo[3] = {nx, ny, nz}, hi[3] = {-1, -1, -1};
+        for (int k = 0; k < nz; k++)
+            for (int j = 0; j < ny; j++)
+                for (int i = 0; i < nx; i++) {
+                    size_t id = ((size_t)k * ny + j) * nx + i;
+                    rv->rc[8 * id] = (float)(1 - exp(-rv->sigma[id] * rv->step));
+                    if (rv->sigma[id] > 0) {
+                        const int p[3] = {i, j, k};
+                        for (int a = 0; a < 3; a++) {
+                            lo[a] = p[a] < lo[a] ? p[a] : lo[a];
+                            hi[a] = p[a] > hi[a] ? p[a] : hi[a];
+                        }
+                    }
+                }
+        if (hi[0] < 0) {
+            rv->rbox.min = vv_vec3_make(1, 1, 1); /* empty: a box no ray meets */
+            rv->rbox.max = vv_vec3_make(-1, -1, -1);
+        } else {
+            /* one voxel more (samples interpolate from their neighbours),
+             * within the cells of the grid */
+            double gl[3], gh[3];
+            for (int a = 0; a < 3; a++) {
+                gl[a] = lo[a] - 1 > -0.5 ? lo[a] - 1 : -0.5;
+                gh[a] = hi[a] + 1 < rv->n[a] - 0.5 ? hi[a] + 1 : rv->n[a] - 0.5;
+            }
+            vv_box gb = {vv_vec3_make(gl[0], gl[1], gl[2]), vv_vec3_make(gh[0], gh[1], gh[2])};
+            rv->rbox = vv_box_transform(gb, rv->g2w);
+        }
+        for (int i = 0; i < r->n_elems; i++) {
+            const rad_elem *e = &r->elems[i];
+            if (e->kind != RAD_VOXEL || e->obj != rv->obj || !(e->area > 0))
+                continue;
+            float *d = &rv->rc[8 * (size_t)e->vox];
+            for (int c = 0; c < 3; c++) {
+                d[1 + c] = e->total[0][c] / (4 * e->area);
+                d[4 + c] = e->n[c];
+            }
+            is_el[e->vox] = 1;
+        }
+#pragma omp parallel for schedule(static)
+        for (int k = 0; k < nz; k++)
+            for (int j = 0; j < ny; j++)
+                for (int i = 0; i < nx; i++) {
+                    size_t id = ((size_t)k * ny + j) * nx + i;
+                    if (is_el[id])
+                        continue;
+                    double acc[6] = {0, 0, 0, 0, 0, 0};
+                    int cnt = 0;
+                    for (int dk = -1; dk <= 1; dk++)
+                        for (int dj = -1; dj <= 1; dj++)
+                            for (int di = -1; di <= 1; di++) {
+                                int x = i + di, y = j + dj, z = k + dk;
+                                if (x < 0 || y < 0 || z < 0 || x >= nx || y >= ny || z >= nz)
+                                    continue;
+                                size_t n = ((size_t)z * ny + y) * nx + x;
+                                if (!is_el[n])
+                                    continue;
+                                for (int c = 0; c < 6; c++)
+                                    acc[c] += rv->rc[8 * n + 1 + c];
+                                cnt++;
+                            }
+                    if (cnt)
+                        for (int c = 0; c < 6; c++)
+                            rv->rc[8 * id + 1 + c] = (float)(acc[c] / cnt);
+                }
+        free(is_el);
+        for (int k = 0; k < nz; k++)
+            for (int j = 0; j < ny; j++)
+                for (int i = 0; i < nx; i++) {
+                    float s = rv->sigma[((size_t)k * ny + j) * nx + i];
+                    /* a block holds the samples that interpolate from its voxels */
+                    for (int dk = -1; dk <= 0; dk++)
+                        for (int dj = -1; dj <= 0; dj++)
+                            for (int di = -1; di <= 0; di++) {
+                                int bx = (i + di) / RAD_BLOCK, by = (j + dj) / RAD_BLOCK,
+                                    bz = (k + dk) / RAD_BLOCK;
+                                if (i + di < 0 || j + dj < 0 || k + dk < 0)
+                                    continue;
+                                float *bm =
+                                    &rv->bmax[((size_t)bz * rv->bn[1] + by) * rv->bn[0] + bx];
+                                *bm = *bm > s ? *bm : s;
+                            }
+                }
+    }
+    return VV_OK;
+}
+
+static vv_vec3
+f3v(const float *p) {
+    return vv_vec3_make(p[0], p[1], p[2]);
+}
+
+/* Slab test with the reciprocal direction; inline for the per-pixel loops. */
+static inline int
+slab(const float *mn, const float *mx, const double *o, const double *inv, double tmax,
+     double *t0) {
+    double a = 0, b = tmax;
+    for (int k = 0; k < 3; k++) {
+        double u = (mn[k] - o[k]) * inv[k], v = (mx[k] - o[k]) * inv[k];
+        if (u > v) {
+            double t = u;
+            u = v;
+            v = t;
+        }
+        a = u > a ? u : a;
+        b = v < b ? v : b;
+        if (a > b)
+            return 0;
+    }
+    *t0 = a;
+    return 1;
+}
+
+/* Ray-triangle (Moller-Trumbore); returns t or -1. */
+static inline double
+tri_t(const float *tri, const double *o, const double *d) {
+    double e1[3], e2[3], p[3], s[3], q[3];
+    for (int k = 0; k < 3; k++) {
+        e1[k] = tri[3 + k] - tri[k];
+        e2[k] = tri[6 + k] - tri[k];
+        s[k] = o[k] - tri[k];
+    }
+    p[0] = d[1] * e2[2] - d[2] * e2[1];
+    p[1] = d[2] * e2[0] - d[0] * e2[2];
+    p[2] = d[0] * e2[1] - d[1] * e2[0];
+    double det = e1[0] * p[0] + e1[1] * p[1] + e1[2] * p[2];
+    if (fabs(det) < 1e-300)
+        return -1;
+    double inv = 1 / det;
+    double u = (s[0] * p[0] + s[1] * p[1] + s[2] * p[2]) * inv;
+    if (u < 0 || u > 1)
+        return -1;
+    q[0] = s[1] * e1[2] - s[2] * e1[1];
+    q[1] = s[2] * e1[0] - s[0] * e1[2];
+    q[2] = s[0] * e1[1] - s[1] * e1[0];
+    double v = (d[0] * q[0] + d[1] * q[1] + d[2] * q[2]) * inv;
+    if (v < 0 || u + v > 1)
+        return -1;
+    return (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) * inv;
+}
+
+/* The nearest patch along the ray (front-to-back traversal of the trees). */
+static int
+first_patch(const vv_radiosity *r, vv_vec3 ov, vv_vec3 dv, double *thit) {
+    const double o[3] = {ov.x, ov.y, ov.z}, d[3] = {dv.x, dv.y, dv.z};
+    const double inv[3] = {1 / d[0], 1 / d[1], 1 / d[2]};
+    int best = -1;
+    double tb = INFINITY;
+    int stack[128];
+    for (int ri = 0; ri < r->n_roots; ri++) {
+        if (r->nodes[r->roots[ri]].kind != RAD_PATCH)
+            continue;
+        int sp = 0;
+        stack[sp++] = r->roots[ri];
+        while (sp) {
+            const rad_node *nd = &r->nodes[stack[--sp]];
+            double a;
+            if (!slab(nd->bmin, nd->bmax, o, inv, tb, &a))
+                continue;
+            if (nd->child[0] < 0) {
+                double t = tri_t(r->elems[nd->lo].tri, o, d);
+                if (t > 0 && t < tb) {
+                    tb = t;
+                    best = nd->lo;
+                }
+                continue;
+            }
+            if (sp + 2 <= 128) {
+                /* the nearer child last, so it is taken first */
+                const rad_node *c0 = &r->nodes[nd->child[0]], *c1 = &r->nodes[nd->child[1]];
+                double d0 =
+                    (c0->c[0] - o[0]) * d[0] + (c0->c[1] - o[1]) * d[1] + (c0->c[2] - o[2]) * d[2];
+                double d1 =
+                    (c1->c[0] - o[0]) * d[0] + (c1->c[1] - o[1]) * d[1] + (c1->c[2] - o[2]) * d[2];
+                int n0 = d0 <= d1 ? nd->child[0] : nd->child[1];
+                stack[sp++] = n0 == nd->child[0] ? nd->child[1] : nd->child[0];
+                stack[sp++] = n0;
+            }
+        }
+    }
+    *thit = tb;
+    return best;
+}
+
+/* The patch seen at each pixel centre, by rasterizing every patch into an
+ * id buffer with depth (cheaper than a ray per pixel through the trees).
+ * Returns 0 when a patch crosses the eye plane (the caller then traces
+ * rays); ids[] is -1 where no patch is seen. */
+static int
+raster_patches(const vv_radiosity *r, const vv_view *view, int *ids, float *zb) {
+    const int W = view->width, H = view->height;
+    vv_vec3 f = vv_vec3_normalize(vv_vec3_sub(view->at, view->eye));
+    vv_vec3 rt = vv_vec3_cross(f, view->up);
+    if (!(vv_vec3_length(rt) > 1e-9) || !(vv_vec3_length(f) > 0))
+        return 0;
+    rt = vv_vec3_normalize(rt);
+    vv_vec3 up = vv_vec3_cross(rt, f);
+    const double aspect = (double)W / H;
+    const int ortho = view->projection == VV_PROJECTION_ORTHOGRAPHIC;
+    const double tf = tan(0.5 * view->fov);
+    const double hh = 0.5 * view->ortho_height, hw = hh * aspect;
+    for (size_t i = 0; i < (size_t)W * H; i++) {
+        ids[i] = -1;
+        zb[i] = INFINITY;
+    }
+    for (int ei = 0; ei < r->n_elems; ei++) {
+        const rad_elem *e = &r->elems[ei];
+        if (e->kind != RAD_PATCH)
+            continue;
+        double sx[3], sy[3], sz[3];
+        for (int k = 0; k < 3; k++) {
+            vv_vec3 rel = vv_vec3_sub(f3v(e->tri + 3 * k), view->eye);
+            double zc = vv_vec3_dot(rel, f);
+            double x, y;
+            if (ortho) {
+                x = vv_vec3_dot(rel, rt) / hw;
+                y = vv_vec3_dot(rel, up) / hh;
+            } else {
+                if (!(zc > 1e-6))
+                    return 0;
+                x = vv_vec3_dot(rel, rt) / (zc * tf * aspect);
+                y = vv_vec3_dot(rel, up) / (zc * tf);
+            }
+            sx[k] = 0.5 * (x + 1) * W - 0.5;
+            sy[k] = 0.5 * (1 - y) * H - 0.5;
+            sz[k] = ortho ? zc : 1 / zc; /* 1/z is linear on screen */
+        }
+        double area = (sx[1] - sx[0]) * (sy[2] - sy[0]) - (sx[2] - sx[0]) * (sy[1] - sy[0]);
+        if (!(fabs(area) > 1e-12))
+            continue;
+        int x0 = (int)ceil(fmin(sx[0], fmin(sx[1], sx[2])) - 1e-9);
+        int x1 = (int)floor(fmax(sx[0], fmax(sx[1], sx[2])) + 1e-9);
+        int y0 = (int)ceil(fmin(sy[0], fmin(sy[1], sy[2])) - 1e-9);
+        int y1 = (int)floor(fmax(sy[0], fmax(sy[1], sy[2])) + 1e-9);
+        x0 = x0 < 0 ? 0 : x0;
+        y0 = y0 < 0 ? 0 : y0;
+        x1 = x1 >= W ? W - 1 : x1;
+        y1 = y1 >= H ? H - 1 : y1;
+        const double ia = 1 / area, eps = 1e-7;
+        for (int y = y0; y <= y1; y++)
+            for (int x = x0; x <= x1; x++) {
+                double b0 = ((sx[1] - x) * (sy[2] - y) - (sx[2] - x) * (sy[1] - y)) * ia;
+                double b1 = ((sx[2] - x) * (sy[0] - y) - (sx[0] - x) * (sy[2] - y)) * ia;
+                double b2 = 1 - b0 - b1;
+                if (b0 < -eps || b1 < -eps || b2 < -eps)
+                    continue;
+                double z = b0 * sz[0] + b1 * sz[1] + b2 * sz[2];
+                z = ortho ? z : 1 / z;
+                size_t id = (size_t)y * W + x;
+                if (z < zb[id]) {
+                    zb[id] = (float)z;
+                    ids[id] = ei;
+                }
+            }
+    }
+    return 1;
+}
+
+/* Composites one volume's radiosity along o + t d, t in [t0, t1], into
+ * (col, *T); returns the t where the opacity first passed 1/2 (or INFINITY). */
+static double
+march(const rad_vol *rv, vv_vec3 o, vv_vec3 d, double t0, double t1, double col[3], double *T) {
+    vv_vec3 go = vv_mat4_mul_point(rv->w2g, o), gd = vv_mat4_mul_dir(rv->w2g, d);
+    const double step = rv->step;
+    const int nx = rv->n[0], ny = rv->n[1], nz = rv->n[2];
+    const size_t sy = (size_t)nx, sz = (size_t)nx * ny;
+    const double hx = nx - 1, hy = ny - 1, hz = nz - 1;
+    double depth = INFINITY;
+    double t = t0 + 0.5 * step;
+    const double w[3] = {-d.x, -d.y, -d.z};
+    while (t<t1 && * T> 0.004) {
+        double q[3] = {go.x + gd.x * t, go.y + gd.y * t, go.z + gd.z * t};
+        /* empty block: jump to its far side */
+        int bi[3];
+        for (int a = 0; a < 3; a++) {
+            double x = q[a] < 0 ? 0 : q[a];
+            bi[a] = (int)(x / RAD_BLOCK);
+            bi[a] = bi[a] >= rv->bn[a] ? rv->bn[a] - 1 : bi[a];
+        }
+        if (rv->bmax[((size_t)bi[2] * rv->bn[1] + bi[1]) * rv->bn[0] + bi[0]] <= 0) {
+            double te = INFINITY;
+            const double dq[3] = {gd.x, gd.y, gd.z};
+            for (int a = 0; a < 3; a++) {
+                if (dq[a] > 1e-12)
+                    te = fmin(te, ((bi[a] + 1) * RAD_BLOCK - q[a]) / dq[a]);
+                else if (dq[a] < -1e-12)
+                    te = fmin(te, (bi[a] * RAD_BLOCK - q[a]) / dq[a]);
+            }
+            double adv = te > 0 && isfinite(te) ? ceil(te / step) * step : step;
+            t += adv > step ? adv : step;
+            continue;
+        }
+        double x = q[0] < 0 ? 0 : q[0] > hx ? hx : q[0];
+        double y = q[1] < 0 ? 0 : q[1] > hy ? hy : q[1];
+        double z = q[2] < 0 ? 0 : q[2] > hz ? hz : q[2];
+        int i = (int)x, j = (int)y, k = (int)z;
+        i = i >= nx - 1 ? (nx > 1 ? nx - 2 : 0) : i;
+        j = j >= ny - 1 ? (ny > 1 ? ny - 2 : 0) : j;
+        k = k >= nz - 1 ? (nz > 1 ? nz - 2 : 0) : k;
+        double fx = nx > 1 ? x - i : 0, fy = ny > 1 ? y - j : 0, fz = nz > 1 ? z - k : 0;
+        size_t ox = nx > 1 ? 8 : 0, oy = ny > 1 ? 8 * sy : 0, oz = nz > 1 ? 8 * sz : 0;
+        const float *p = &rv->rc[8 * (i + j * sy + k * sz)];
+        double v[7];
+        for (int c = 0; c < 7; c++) {
+            double c00 = p[c] + fx * (p[ox + c] - p[c]);
+            double c10 = p[oy + c] + fx * (p[oy + ox + c] - p[oy + c]);
+            double c01 = p[oz + c] + fx * (p[oz + ox + c] - p[oz + c]);
+            double c11 = p[oz + oy + c] + fx * (p[oz + oy + ox + c] - p[oz + oy + c]);
+            double c0 = c00 + fy * (c10 - c00), c1 = c01 + fy * (c11 - c01);
+            v[c] = c0 + fz * (c1 - c0);
+            if (c == 0 && !(v[0] > 0))
+                break; /* transparent here: no colour needed */
+        }
+        if (v[0] > 0) {
+            double a = v[0];
+            double nl = sqrt(v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
+            nl = nl > 1 ? 1 : nl;
+            /* a diffuse voxel is a piece of surface: the same radiance from
+             * every direction in front of it, none behind */
+            double cn = nl > 0 ? (v[4] * w[0] + v[5] * w[1] + v[6] * w[2]) / nl : 0;
+            double front = 0.5 + 2 * cn;
+            front = front < 0 ? 0 : front > 1 ? 1 : front;
+            double f = (1 - nl) + 4 * nl * front;
+            for (int c = 0; c < 3; c++)
+                col[c] += *T * a * v[1 + c] * f;
+            *T *= 1 - a;
+            if (*T < 0.5 && !isfinite(depth))
+                depth = t;
+        }
+        t += step;
+    }
+    return depth;
+}
+
+vv_status
+vv_radiosity_view_frame(const vv_radiosity *r, const vv_world *world, const vv_view *view,
+                        int threads, vv_image *out) {
+    if (!r || !view || !out)
+        return vv_error_set(VV_ERR_INVALID, "radiosity: NULL solution, view or image");
+    if (out->width != view->width || out->height != view->height)
+        return vv_error_set(VV_ERR_INVALID, "radiosity: image is %d x %d but the view is %d x %d",
+                            out->width, out->height, view->width, view->height);
+    vv_vec3 bg = world ? world->background : vv_vec3_make(0, 0, 0);
+    int nt = threads > 0 ? threads : vv_threads_get();
+    const int W = view->width, H = view->height;
+    int has_patches = 0;
+    for (int i = 0; i < r->n_roots; i++)
+        has_patches |= r->nodes[r->roots[i]].kind == RAD_PATCH;
+    int *ids = NULL;
+    float *zb = NULL;
+    if (has_patches) {
+        ids = malloc((size_t)W * H * sizeof *ids);
+        zb = malloc((size_t)W * H * sizeof *zb);
+        if (!ids || !zb || !raster_patches(r, view, ids, zb)) {
+            free(ids);
+            ids = NULL; /* trace rays instead */
+        }
+        free(zb);
+    }
+#pragma omp parallel for schedule(dynamic, 4) num_threads(nt)
+    for (int y = 0; y < H; y++) {
+        for (int x = 0; x < W; x++) {
+            vv_ray ray = vv_view_ray(view, x, y);
+            double tp = INFINITY;
+            int pe = -1;
+            if (ids) {
+                pe = ids[(size_t)y * W + x];
+                if (pe >= 0) {
+                    const rad_elem *e = &r->elems[pe];
+                    vv_vec3 n = f3v(e->n);
+                    double dn = vv_vec3_dot(n, ray.dir);
+                    tp = fabs(dn) > 1e-12 ? vv_vec3_dot(n, vv_vec3_sub(f3v(e->p), ray.origin)) / dn
+                                          : vv_vec3_length(vv_vec3_sub(f3v(e->p), ray.origin));
+                }
+            } else if (has_patches) {
+                pe = first_patch(r, ray.origin, ray.dir, &tp);
+            }
+            double col[3] = {0, 0, 0}, T = 1, depth = pe >= 0 ? tp : INFINITY;
+            /* volumes front to back by entry (overlapping volumes are taken one after another) */
+            int order[8], n = 0;
+            double ent[8];
+            for (int v = 0; v < r->n_vols && n < 8; v++) {
+                double a, b;
+                if (r->vols[v].rbox.min.x > r->vols[v].rbox.max.x ||
+                    !vv_box_intersect_ray(r->vols[v].rbox, ray, &a, &b) || b < 0 || a > tp)
+                    continue;
+                int i = n++;
+                while (i > 0 && ent[i - 1] > a) {
+                    ent[i] = ent[i - 1];
+                    order[i] = order[i - 1];
+                    i--;
+                }
+                ent[i] = a;
+                order[i] = v;
+            }
+            for (int i = 0; i < n && T > 0.01; i++) {
+                const rad_vol *rv = &r->vols[order[i]];
+                double a, b;
+                vv_box_intersect_ray(rv->rbox, ray, &a, &b);
+                a = a > 0 ? a : 0;
+                b = b < tp ? b : tp;
+                double dd = march(rv, ray.origin, ray.dir, a, b, col, &T);
+                depth = dd < depth ? dd : depth;
+            }
+            double alpha = 1 - T;
+            if (pe >= 0) {
+                const rad_elem *e = &r->elems[pe];
+                int side = vv_vec3_dot(f3v(e->n), ray.dir) > 0;
+                for (int c = 0; c < 3; c++)
+                    col[c] += T * e->total[side][c] / e->area;
+                alpha = 1;
+            } else {
+                col[0] += T * bg.x;
+                col[1] += T * bg.y;
+                col[2] += T * bg.z;
+            }
+            float *px = &out->rgba[4 * ((size_t)y * W + x)];
+            for (int c = 0; c < 3; c++)
+                px[c] = (float)col[c];
+            px[3] = (float)alpha;
+            out->depth[(size_t)y * W + x] = alpha > 0 ? (float)depth : INFINITY;
+        }
+    }
+    free(ids);
+    return VV_OK;
+}
+
+/* ---------------------------------------------------------------------- */
+/* the renderer: the solution is kept while the World's content is the same */
+
+typedef struct rad_state {
+    vv_radiosity_options opt;
+    vv_radiosity *sol;
+    uint64_t key;
+} rad_state;
+
+static void
+hash_bytes(uint64_t *h, const void *p, size_t n) {
+    const unsigned char *b = p;
+    for (size_t i = 0; i < n; i++) {
+        *h ^= b[i];
+        *h *= 1099511628211ull;
+    }
+}
+
+#define HASH(h, v) hash_bytes((h), &(v), sizeof(v))
+
+/* A key of everything the solution depends on (not the view). */
+static uint64_t
+world_key(const vv_world *w, const vv_radiosity_options *o) {
+    uint64_t h = 1469598103934665603ull;
+    HASH(&h, o->tolerance);
+    HASH(&h, o->error);
+    HASH(&h, o->near);
+    HASH(&h, o->patch_size);
+    HASH(&h, o->grid);
+    HASH(&h, o->diffuse_voxels);
+    HASH(&h, o->max_shots);
+    HASH(&h, o->levels);
+    for (int i = 0; i < w->n_lights; i++) {
+        const vv_light *l = &w->lights[i];
+        if (l->headlight)
+            continue;
+        HASH(&h, l->type);
+        HASH(&h, l->direction);
+        HASH(&h, l->position);
+        HASH(&h, l->color);
+        HASH(&h, l->intensity);
+    }
+    for (int i = 0; i < w->n_objects; i++) {
+        const vv_object *ob = w->objects[i];
+        HASH(&h, ob->type);
+        HASH(&h, ob->visible);
+        if (!ob->visible)
+            continue;
+        HASH(&h, ob->position);
+        HASH(&h, ob->orientation);
+        HASH(&h, ob->scale);
+        HASH(&h, ob->material.diffuse);
+        HASH(&h, ob->material.color);
+        HASH(&h, ob->material.emission);
+        HASH(&h, ob->segmentation);
+        HASH(&h, ob->threshold);
+        HASH(&h, ob->tf.n_opacity);
+        hash_bytes(&h, ob->tf.opacity, (size_t)ob->tf.n_opacity * sizeof ob->tf.opacity[0]);
+        HASH(&h, ob->tf.n_color);
+        hash_bytes(&h, ob->tf.color, (size_t)ob->tf.n_color * sizeof ob->tf.color[0]);
+        HASH(&h, ob->tf.opacity_unit_distance);
+        const vv_geometry *g = &ob->geometry;
+        HASH(&h, g->center);
+        HASH(&h, g->radius);
+        HASH(&h, g->box);
+        HASH(&h, g->base);
+        HASH(&h, g->top);
+        HASH(&h, g->capped);
+        HASH(&h, g->n_vertices);
+        if (g->vertices)
+            hash_bytes(&h, g->vertices, (size_t)g->n_vertices * sizeof *g->vertices);
+        uintptr_t mp = (uintptr_t)g->mesh, vp = (uintptr_t)ob->volume;
+        HASH(&h, mp);
+        HASH(&h, vp);
+        if (ob->volume)
+            HASH(&h, ob->volume->modified);
+    }
+    return h;
+}
+
+static vv_status
+rad_create(void **state) {
+    rad_state *st = calloc(1, sizeof *st);
+    if (!st)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    vv_radiosity_options_init(&st->opt);
+    *state = st;
+    return VV_OK;
+}
+
+static vv_status
+parse_double(const char *key, const char *value, double *out) {
+    char *end = NULL;
+    double v = strtod(value, &end);
+    if (!end || end == value || *end || !isfinite(v))
+        return vv_error_set(VV_ERR_INVALID, "option %s: '%s' is not a number", key, value);
+    *out = v;
+    return VV_OK;
+}
+
+static vv_status
+parse_int(const char *key, const char *value, int lo, int hi, int *out) {
+    char *end = NULL;
+    long v = strtol(value, &end, 10);
+    if (!end || end == value || *end || v < lo || v > hi)
+        return vv_error_set(VV_ERR_INVALID, "option %s: '%s' is not an integer in %d..%d", key,
+                            value, lo, hi);
+    *out = (int)v;
+    return VV_OK;
+}
+
+static vv_status
+rad_set_option(void *state, const char *key, const char *value) {
+    rad_state *st = state;
+    vv_radiosity_options o = st->opt;
+    vv_status s;
+    if (!strcmp(key, "tolerance"))
+        s = parse_double(key, value, &o.tolerance);
+    else if (!strcmp(key, "error"))
+        s = parse_double(key, value, &o.error);
+    else if (!strcmp(key, "near"))
+        s = parse_double(key, value, &o.near);
+    else if (!strcmp(key, "patch_size"))
+        s = parse_double(key, value, &o.patch_size);
+    else if (!strcmp(key, "grid"))
+        s = parse_int(key, value, 2, 1024, &o.grid);
+    else if (!strcmp(key, "diffuse_voxels"))
+        s = parse_int(key, value, 0, 1, &o.diffuse_voxels);
+    else if (!strcmp(key, "max_shots"))
+        s = parse_int(key, value, 1, 100000000, &o.max_shots);
+    else if (!strcmp(key, "levels"))
+        s = parse_int(key, value, 0, 30, &o.levels);
+    else
+        return vv_error_set(VV_ERR_INVALID,
+                            "unknown option '%s' (tolerance, error, near, patch_size, grid, "
+                            "diffuse_voxels, max_shots, levels)",
+                            key);
+    if (s != VV_OK)
+        return s;
+    if (!(o.tolerance > 0 && o.tolerance < 1) || !(o.error >= 0) || !(o.near > 0))
+        return vv_error_set(VV_ERR_INVALID, "option %s: '%s' is out of range", key, value);
+    st->opt = o;
+    return VV_OK;
+}
+
+static vv_status
+rad_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+           vv_image *out) {
+    rad_state *st = state;
+    uint64_t key = world_key(w, &st->opt);
+    if (!st->sol || key != st->key) {
+        vv_radiosity_free(st->sol);
+        st->sol = NULL;
+        vv_status s = vv_radiosity_solve(&st->sol, w, &st->opt, &opt->progress);
+        if (s != VV_OK)
+            return s;
+        st->key = key;
+    }
+    return vv_radiosity_view_frame(st->sol, w, view, opt->threads, out);
+}
+
+static void
+rad_destroy(void *state) {
+    rad_state *st = state;
+    if (!st)
+        return;
+    vv_radiosity_free(st->sol);
+    free(st);
+}
+
+const vv_renderer_ops vv_radiosity_ops = {
+    .name = "radiosity",
+    .description = "volumetric radiosity: diffuse interreflection between volumes and surfaces",
+    .create = rad_create,
+    .set_option = rad_set_option,
+    .render = rad_render,
+    .destroy = rad_destroy,
+    .options = "tolerance (0.001: unshot power left, fraction of the power in), error (1e-4: "
+               "hierarchical refinement bound, fraction of the power in; 0 = element to "
+               "element), near (0.5), patch_size (0 = World diagonal / 48, world units), grid "
+               "(128 voxels along a volume's longest axis), diffuse_voxels (1), max_shots "
+               "(20000), levels (0 = all); quality is ignored. The solution is kept while only "
+               "the view changes.",
+};
