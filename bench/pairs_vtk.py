@@ -62,6 +62,7 @@ def run(cmd, cwd=None):
 
 def main():
     a = parse_args()
+    a.volume = os.path.abspath(a.volume)
     out_dir = os.path.join(ROOT, "build/bench-out")
     os.makedirs(out_dir, exist_ok=True)
     if not a.volume.endswith(".nrrd"):
