@@ -19,7 +19,8 @@
 
 #define RAD_PI 3.14159265358979323846
 #define RAD_MAX_ELEMS (8 << 20)
-#define RAD_TAU_MAX 12.0 /* transmittance below exp(-12) is taken as 0 */
+#define RAD_VOXEL_OFF 3.0 /* rays to or from a surface voxel start this many voxels off it */
+#define RAD_TAU_MAX 12.0  /* transmittance below exp(-12) is taken as 0 */
 
 /* ---------------------------------------------------------------------- */
 /* small vector helpers (float storage, double arithmetic)                  */
@@ -965,7 +966,8 @@ add_deposit(solver *sv, int e, int side, const double p[3]) {
  * for a cluster of mostly surface voxels; three for a single diffuse voxel, a piece of surface
  * whose own capacity already counts its slant (the shell around it would shadow it twice at grazing
  * angles, and it is one-sided, so light through a thin wall from behind
- * finds no capacity). */
+ * finds no capacity). ray_visibility moves a single diffuse voxel's end of
+ * the ray off the surface along its normal instead (see there). */
 static double voxel_margin(const vv_radiosity *r, const rad_node *n);
 
 /* Size of the voxel grid of object obj (0 for patches). */
@@ -1010,18 +1012,20 @@ static double
 ray_visibility(const solver *sv, const shooter *sh, int S, const rad_node *R, vv_vec3 xs,
                vv_vec3 p) {
     const vv_radiosity *r = sv->r;
-    /* a diffuse voxel is a piece of surface: its ray leaves from two voxels
-     * off the surface along its normal, outside the shell of its neighbours
+    /* a diffuse voxel is a piece of surface: its ray leaves from
+     * RAD_VOXEL_OFF voxels off the surface along its normal, outside the shell of its neighbours
      * (stopping short along the ray instead would not leave the shell at
      * grazing angles, and the staircase of the voxel surface would shadow
      * it in speckles and rings near the terminator) */
     int r_off = R->kind == RAD_VOXEL && is_leaf(R) && elem_diffuse(&r->elems[R->lo]);
     if (r_off)
-        p = vv_vec3_add(p, vv_vec3_scale(f3(r->elems[R->lo].n), 3 * voxel_size(r, R->obj)));
+        p = vv_vec3_add(
+            p, vv_vec3_scale(f3(r->elems[R->lo].n), RAD_VOXEL_OFF * voxel_size(r, R->obj)));
     if (sh->kind == SH_CLUSTER) {
         const rad_node *Sn = &r->nodes[S];
         if (Sn->kind == RAD_VOXEL && is_leaf(Sn) && elem_diffuse(&r->elems[Sn->lo]))
-            xs = vv_vec3_add(xs, vv_vec3_scale(f3(r->elems[Sn->lo].n), 2 * voxel_size(r, Sn->obj)));
+            xs = vv_vec3_add(
+                xs, vv_vec3_scale(f3(r->elems[Sn->lo].n), RAD_VOXEL_OFF * voxel_size(r, Sn->obj)));
     }
     if (sh->kind == SH_DIRECTIONAL) {
         vv_vec3 d = vv_vec3_scale(sh->dir, -1);
@@ -1523,7 +1527,7 @@ split_patch(split_ctx *sc, const rad_elem *e, vv_vec3 a, vv_vec3 bb, vv_vec3 c, 
             tmin = t < tmin ? t : tmin;
             tmax = t > tmax ? t : tmax;
         }
-        split = tmax - tmin > 0.05;
+        split = tmax - tmin > 0.3;
     }
     if (split) {
         vv_vec3 ab = vv_vec3_scale(vv_vec3_add(a, bb), 0.5);
