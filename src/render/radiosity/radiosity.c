@@ -1070,8 +1070,24 @@ ray_visibility(const solver *sv, const shooter *sh, int S, const rad_node *R, vv
 static double
 visibility(const solver *sv, const shooter *sh, int S, const rad_node *R, double *spread) {
     vv_vec3 xs = sh->kind == SH_DIRECTIONAL ? f3(R->c) : shooter_point(sv, sh, S);
-    double t = ray_visibility(sv, sh, S, R, xs, f3(R->c));
     *spread = 0;
+    if (is_leaf(R) && R->kind == RAD_PATCH && sh->kind != SH_CLUSTER) {
+        /* a patch under a light: the mean of rays to the centroids of its
+         * four midpoint triangles, so a shadow edge across it is shaded by
+         * the part that is lit (not all or nothing) */
+        const float *tri = sv->r->elems[R->lo].tri;
+        vv_vec3 A = f3(tri), B = f3(tri + 3), C = f3(tri + 6);
+        const vv_vec3 q[4] = {
+            vv_vec3_scale(vv_vec3_add(A, vv_vec3_add(B, C)), 1.0 / 3),
+            vv_vec3_add(vv_vec3_scale(A, 4.0 / 6), vv_vec3_scale(vv_vec3_add(B, C), 1.0 / 6)),
+            vv_vec3_add(vv_vec3_scale(B, 4.0 / 6), vv_vec3_scale(vv_vec3_add(A, C), 1.0 / 6)),
+            vv_vec3_add(vv_vec3_scale(C, 4.0 / 6), vv_vec3_scale(vv_vec3_add(A, B), 1.0 / 6))};
+        double sum = 0;
+        for (int k = 0; k < 4; k++)
+            sum += ray_visibility(sv, sh, S, R, sh->kind == SH_DIRECTIONAL ? q[k] : xs, q[k]);
+        return sum / 4;
+    }
+    double t = ray_visibility(sv, sh, S, R, xs, f3(R->c));
     if (is_leaf(R))
         return t;
     double tmin = t, tmax = t, sum = t;
@@ -1484,7 +1500,7 @@ vv_radiosity_patch_at(const vv_radiosity *r, int index, vv_vec3 p, vv_vec3 side_
 /* ---------------------------------------------------------------------- */
 /* shadow boundaries                                                         */
 
-#define RAD_SHADOW_DEPTH 4 /* patches split down to 1/16 of their size */
+#define RAD_SHADOW_DEPTH 3 /* patches split down to 1/8 of their size */
 
 /* Transmittance from light l to point p (through the current trees). */
 static double
@@ -1504,6 +1520,7 @@ typedef struct split_ctx {
     const vv_radiosity *r;
     const vv_world *w;
     double far_t;
+    double min_edge2; /* no split of patches with a shorter longest edge (squared) */
     builder *b;
 } split_ctx;
 
@@ -1513,7 +1530,11 @@ static vv_status
 split_patch(split_ctx *sc, const rad_elem *e, vv_vec3 a, vv_vec3 bb, vv_vec3 c, int depth) {
     vv_vec3 cen = vv_vec3_scale(vv_vec3_add(a, vv_vec3_add(bb, c)), 1.0 / 3);
     int split = 0;
-    for (int li = 0; li < sc->w->n_lights && !split && depth < RAD_SHADOW_DEPTH; li++) {
+    double e0 = vv_vec3_dot(vv_vec3_sub(bb, a), vv_vec3_sub(bb, a));
+    double e1 = vv_vec3_dot(vv_vec3_sub(c, bb), vv_vec3_sub(c, bb));
+    double e2 = vv_vec3_dot(vv_vec3_sub(a, c), vv_vec3_sub(a, c));
+    int small = fmax(e0, fmax(e1, e2)) < sc->min_edge2;
+    for (int li = 0; li < sc->w->n_lights && !split && !small && depth < RAD_SHADOW_DEPTH; li++) {
         const vv_light *l = &sc->w->lights[li];
         if (l->headlight || !(l->intensity > 0))
             continue;
@@ -1581,7 +1602,13 @@ shadow_split(vv_radiosity *r, const vv_world *w, double far_t, int *obj_lo) {
         return VV_OK;
     builder nb;
     memset(&nb, 0, sizeof nb);
-    split_ctx sc = {r, w, far_t, &nb};
+    /* a shadow edge is no sharper than the voxels of the volumes that cast
+     * it: patches are not split into ones smaller than the finest voxel */
+    double hmin = INFINITY;
+    for (int i = 0; i < r->n_vols; i++)
+        hmin = r->vols[i].h < hmin ? r->vols[i].h : hmin;
+    double me = isfinite(hmin) ? 2 * hmin : 0;
+    split_ctx sc = {r, w, far_t, me * me, &nb};
     vv_status s = VV_OK;
     int *lo = malloc(((size_t)w->n_objects + 1) * sizeof *lo);
     if (!lo)
