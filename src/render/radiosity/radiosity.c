@@ -10,6 +10,7 @@
  * than the power shot, so the solver never creates energy.
  */
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,7 +19,8 @@
 
 #define RAD_PI 3.14159265358979323846
 #define RAD_MAX_ELEMS (8 << 20)
-#define RAD_TAU_MAX 12.0 /* transmittance below exp(-12) is taken as 0 */
+#define RAD_VOXEL_OFF 3.0 /* rays to or from a surface voxel start this many voxels off it */
+#define RAD_TAU_MAX 12.0  /* transmittance below exp(-12) is taken as 0 */
 
 /* ---------------------------------------------------------------------- */
 /* small vector helpers (float storage, double arithmetic)                  */
@@ -356,13 +358,39 @@ build_volume(builder *b, rad_vol *rv, const vv_object *obj, int obj_index,
                     if (nn[ax] > 1 && (am < 0.99 || ap < 0.99))
                         exposed = 1;
                     grad[ax] = nn[ax] > 1 ? 0.5 * (ap - am) : 0;
-                    /* the data's gradient: smoother than the opacity's */
-                    double vm = val[id - (hm ? st[ax] : 0)], vp = val[id + (hp ? st[ax] : 0)];
-                    gv[ax] = hm + hp ? (vp - vm) / (hm + hp) : 0;
                 }
+                /* the data's gradient, smoother than the opacity's: a 3-D
+                 * Sobel operator (central differences smoothed 1 2 1 across),
+                 * whose normals of a voxelized surface err by far less than
+                 * those of central differences (these showed as rings of
+                 * the light's cosine near the terminator) */
+                for (int ax = 0; ax < 3; ax++) {
+                    int hm = ii[ax] > 0, hp = ii[ax] + 1 < nn[ax];
+                    if (!(hm + hp)) {
+                        gv[ax] = 0;
+                        continue;
+                    }
+                    const int a1 = (ax + 1) % 3, a2 = (ax + 2) % 3;
+                    double sum = 0, wsum = 0;
+                    for (int u = -1; u <= 1; u++) {
+                        if (ii[a1] + u < 0 || ii[a1] + u >= nn[a1])
+                            continue;
+                        for (int q = -1; q <= 1; q++) {
+                            if (ii[a2] + q < 0 || ii[a2] + q >= nn[a2])
+                                continue;
+                            double wgt = (u ? 1 : 2) * (q ? 1 : 2);
+                            size_t c0 = id + u * (ptrdiff_t)st[a1] + q * (ptrdiff_t)st[a2];
+                            double vm = val[c0 - (hm ? st[ax] : 0)],
+                                   vp = val[c0 + (hp ? st[ax] : 0)];
+                            sum += wgt * (vp - vm) / (hm + hp);
+                            wsum += wgt;
+                        }
+                    }
+                    gv[ax] = sum / wsum;
+                }
+                double dg = gv[0] * grad[0] + gv[1] * grad[1] + gv[2] * grad[2];
+                double lv = sqrt(gv[0] * gv[0] + gv[1] * gv[1] + gv[2] * gv[2]);
                 {
-                    double dg = gv[0] * grad[0] + gv[1] * grad[1] + gv[2] * grad[2];
-                    double lv = sqrt(gv[0] * gv[0] + gv[1] * gv[1] + gv[2] * gv[2]);
                     if (lv > 0 && dg != 0)
                         for (int ax = 0; ax < 3; ax++)
                             gv[ax] = (dg > 0 ? 1 : -1) * gv[ax];
@@ -385,7 +413,12 @@ build_volume(builder *b, rad_vol *rv, const vv_object *obj, int obj_index,
                 e->area = (float)(h * h * a);
                 e->tau = (float)(rv->sigma[id] * h);
                 double gl = sqrt(grad[0] * grad[0] + grad[1] * grad[1] + grad[2] * grad[2]);
-                if (opt->diffuse_voxels && gl > 0.05) {
+                /* an opaque voxel just under a nearly opaque one is as much
+                 * a piece of the surface (its alpha gradient is small, the
+                 * data's is not): as an isotropic voxel it would take its
+                 * light through its neighbour and show as a dark speckle */
+                if (opt->diffuse_voxels &&
+                    (gl > 0.05 || (a > 0.5 && dg != 0 && lv > 0.05 * (hi - lo)))) {
                     vv_vec3 gw = vv_mat4_mul_dir(nrm_m, vv_vec3_make(gv[0], gv[1], gv[2]));
                     set3(e->n, vv_vec3_scale(vv_vec3_normalize(gw), -1));
                 }
@@ -933,7 +966,8 @@ add_deposit(solver *sv, int e, int side, const double p[3]) {
  * for a cluster of mostly surface voxels; three for a single diffuse voxel, a piece of surface
  * whose own capacity already counts its slant (the shell around it would shadow it twice at grazing
  * angles, and it is one-sided, so light through a thin wall from behind
- * finds no capacity). */
+ * finds no capacity). ray_visibility moves a single diffuse voxel's end of
+ * the ray off the surface along its normal instead (see there). */
 static double voxel_margin(const vv_radiosity *r, const rad_node *n);
 
 /* Size of the voxel grid of object obj (0 for patches). */
@@ -955,6 +989,11 @@ voxel_margin(const vv_radiosity *r, const rad_node *n) {
     return n->s_dif > n->s_iso ? h : 0;
 }
 
+static int
+elem_diffuse(const rad_elem *e) {
+    return e->kind == RAD_VOXEL && (e->n[0] != 0 || e->n[1] != 0 || e->n[2] != 0);
+}
+
 /* Where the shooter sends from (*xs). */
 static vv_vec3
 shooter_point(const solver *sv, const shooter *sh, int S) {
@@ -973,8 +1012,25 @@ static double
 ray_visibility(const solver *sv, const shooter *sh, int S, const rad_node *R, vv_vec3 xs,
                vv_vec3 p) {
     const vv_radiosity *r = sv->r;
+    /* a diffuse voxel is a piece of surface: its ray leaves from
+     * RAD_VOXEL_OFF voxels off the surface along its normal, outside the shell of its neighbours
+     * (stopping short along the ray instead would not leave the shell at
+     * grazing angles, and the staircase of the voxel surface would shadow
+     * it in speckles and rings near the terminator) */
+    int r_off = R->kind == RAD_VOXEL && is_leaf(R) && elem_diffuse(&r->elems[R->lo]);
+    if (r_off)
+        p = vv_vec3_add(
+            p, vv_vec3_scale(f3(r->elems[R->lo].n), RAD_VOXEL_OFF * voxel_size(r, R->obj)));
+    if (sh->kind == SH_CLUSTER) {
+        const rad_node *Sn = &r->nodes[S];
+        if (Sn->kind == RAD_VOXEL && is_leaf(Sn) && elem_diffuse(&r->elems[Sn->lo]))
+            xs = vv_vec3_add(
+                xs, vv_vec3_scale(f3(r->elems[Sn->lo].n), RAD_VOXEL_OFF * voxel_size(r, Sn->obj)));
+    }
     if (sh->kind == SH_DIRECTIONAL) {
         vv_vec3 d = vv_vec3_scale(sh->dir, -1);
+        if (r_off)
+            return transmittance(r, p, d, 0, sv->far_t);
         double a, b;
         if (!box_ray(R->bmin, R->bmax, p, d, &a, &b))
             b = 0;
@@ -994,14 +1050,14 @@ ray_visibility(const solver *sv, const shooter *sh, int S, const rad_node *R, vv
         if (!is_leaf(Sn) && box_ray(Sn->bmin, Sn->bmax, xs, d, &a, &b))
             t0 = b;
         t0 += 1e-4 * L; /* not the shooter's own plane */
-        if (Sn->kind == RAD_VOXEL)
+        if (Sn->kind == RAD_VOXEL && !(is_leaf(Sn) && elem_diffuse(&r->elems[Sn->lo])))
             t0 += voxel_margin(r, Sn);
     }
     double t1 = L;
-    if (box_ray(R->bmin, R->bmax, xs, d, &a, &b))
+    if (!r_off && box_ray(R->bmin, R->bmax, xs, d, &a, &b))
         t1 = a < L ? a : L;
     t1 -= 1e-4 * L; /* not the receiver's own plane */
-    if (R->kind == RAD_VOXEL)
+    if (R->kind == RAD_VOXEL && !r_off)
         t1 -= voxel_margin(r, R);
     if (!(t1 > t0))
         return 1;
@@ -1014,8 +1070,24 @@ ray_visibility(const solver *sv, const shooter *sh, int S, const rad_node *R, vv
 static double
 visibility(const solver *sv, const shooter *sh, int S, const rad_node *R, double *spread) {
     vv_vec3 xs = sh->kind == SH_DIRECTIONAL ? f3(R->c) : shooter_point(sv, sh, S);
-    double t = ray_visibility(sv, sh, S, R, xs, f3(R->c));
     *spread = 0;
+    if (is_leaf(R) && R->kind == RAD_PATCH && sh->kind != SH_CLUSTER) {
+        /* a patch under a light: the mean of rays to the centroids of its
+         * four midpoint triangles, so a shadow edge across it is shaded by
+         * the part that is lit (not all or nothing) */
+        const float *tri = sv->r->elems[R->lo].tri;
+        vv_vec3 A = f3(tri), B = f3(tri + 3), C = f3(tri + 6);
+        const vv_vec3 q[4] = {
+            vv_vec3_scale(vv_vec3_add(A, vv_vec3_add(B, C)), 1.0 / 3),
+            vv_vec3_add(vv_vec3_scale(A, 4.0 / 6), vv_vec3_scale(vv_vec3_add(B, C), 1.0 / 6)),
+            vv_vec3_add(vv_vec3_scale(B, 4.0 / 6), vv_vec3_scale(vv_vec3_add(A, C), 1.0 / 6)),
+            vv_vec3_add(vv_vec3_scale(C, 4.0 / 6), vv_vec3_scale(vv_vec3_add(A, B), 1.0 / 6))};
+        double sum = 0;
+        for (int k = 0; k < 4; k++)
+            sum += ray_visibility(sv, sh, S, R, sh->kind == SH_DIRECTIONAL ? q[k] : xs, q[k]);
+        return sum / 4;
+    }
+    double t = ray_visibility(sv, sh, S, R, xs, f3(R->c));
     if (is_leaf(R))
         return t;
     double tmin = t, tmax = t, sum = t;
@@ -1215,6 +1287,11 @@ refine(solver *sv, const shooter *sh, int S, int R) {
          * cluster from its centre is poor there, towards shared edges
          * most); other near pairs count a hundred times */
         int must = big || (near && Rn->kind == RAD_PATCH && (!Sn || Sn->kind == RAD_PATCH));
+        /* direct light on surface voxels goes to each voxel: one ray per
+         * cluster cannot tell a voxel surface's self-shadowing near the
+         * terminator (speckles) */
+        if (!Sn && Rn->kind == RAD_VOXEL && Rn->s_dif > Rn->s_iso)
+            must = 1;
         /* optically thick clusters of fog-like voxels count like near ones:
          * their inner voxels are shadowed by the outer ones, which the
          * cluster's single visibility ray does not see */
@@ -1227,12 +1304,18 @@ refine(solver *sv, const shooter *sh, int S, int R) {
             double T = -1, spread = 0;
             if (sh->kind != SH_CLUSTER && !r_leaf)
                 T = visibility(sv, sh, S, Rn, &spread);
-            if (!(spread > 0.1 && est > 1e-3 * sv->eps_power)) {
+            /* a patch cluster in a light's partial or full shadow is looked
+             * into: its five rays cannot tell a partly lit cluster from a
+             * shadowed one (the shadow would take the clusters' shape) */
+            int shaded = !Sn && !r_leaf && Rn->kind == RAD_PATCH && T < 1 - 1e-6;
+            if (!(spread > 0.1 && est > 1e-3 * sv->eps_power) && !shaded) {
                 transfer(sv, sh, S, R, T);
                 return;
             }
         }
-        if (!r_leaf) {
+        /* (not for direct light on patches or surface voxels, whose
+         * clusters may be lit where none of the five rays is) */
+        if (!r_leaf && !(!Sn && (Rn->kind == RAD_PATCH || Rn->s_dif > Rn->s_iso))) {
             /* nothing of R is visible: no need to look inside */
             double spread;
             double T = visibility(sv, sh, S, Rn, &spread);
@@ -1414,6 +1497,166 @@ vv_radiosity_patch_at(const vv_radiosity *r, int index, vv_vec3 p, vv_vec3 side_
     return VV_OK;
 }
 
+/* ---------------------------------------------------------------------- */
+/* shadow boundaries                                                         */
+
+#define RAD_SHADOW_DEPTH 3 /* patches split down to 1/8 of their size */
+
+/* Transmittance from light l to point p (through the current trees). */
+static double
+light_visibility(const vv_radiosity *r, const vv_light *l, vv_vec3 p, double far_t) {
+    if (l->type == VV_LIGHT_POINT) {
+        vv_vec3 d = vv_vec3_sub(p, l->position);
+        double L = vv_vec3_length(d);
+        if (!(L > 0))
+            return 1;
+        return transmittance(r, l->position, vv_vec3_scale(d, 1 / L), 0, L * (1 - 1e-4));
+    }
+    vv_vec3 d = vv_vec3_scale(vv_vec3_normalize(l->direction), -1);
+    return transmittance(r, p, d, 1e-4 * far_t, far_t);
+}
+
+typedef struct split_ctx {
+    const vv_radiosity *r;
+    const vv_world *w;
+    double far_t;
+    double min_edge2; /* no split of patches with a shorter longest edge (squared) */
+    builder *b;
+} split_ctx;
+
+/* Adds patch e (a copy of element tri a b c of parent e) to the builder,
+ * split in four while a light's visibility changes across it. */
+static vv_status
+split_patch(split_ctx *sc, const rad_elem *e, vv_vec3 a, vv_vec3 bb, vv_vec3 c, int depth) {
+    vv_vec3 cen = vv_vec3_scale(vv_vec3_add(a, vv_vec3_add(bb, c)), 1.0 / 3);
+    int split = 0;
+    double e0 = vv_vec3_dot(vv_vec3_sub(bb, a), vv_vec3_sub(bb, a));
+    double e1 = vv_vec3_dot(vv_vec3_sub(c, bb), vv_vec3_sub(c, bb));
+    double e2 = vv_vec3_dot(vv_vec3_sub(a, c), vv_vec3_sub(a, c));
+    int small = fmax(e0, fmax(e1, e2)) < sc->min_edge2;
+    for (int li = 0; li < sc->w->n_lights && !split && !small && depth < RAD_SHADOW_DEPTH; li++) {
+        const vv_light *l = &sc->w->lights[li];
+        if (l->headlight || !(l->intensity > 0))
+            continue;
+        /* the corners (a hair inside) and the centre */
+        const vv_vec3 q[4] = {cen, vv_vec3_add(a, vv_vec3_scale(vv_vec3_sub(cen, a), 1e-3)),
+                              vv_vec3_add(bb, vv_vec3_scale(vv_vec3_sub(cen, bb), 1e-3)),
+                              vv_vec3_add(c, vv_vec3_scale(vv_vec3_sub(cen, c), 1e-3))};
+        double tmin = 1, tmax = 0;
+        for (int k = 0; k < 4; k++) {
+            double t = light_visibility(sc->r, l, q[k], sc->far_t);
+            tmin = t < tmin ? t : tmin;
+            tmax = t > tmax ? t : tmax;
+        }
+        split = tmax - tmin > 0.3;
+    }
+    if (split) {
+        vv_vec3 ab = vv_vec3_scale(vv_vec3_add(a, bb), 0.5);
+        vv_vec3 bc = vv_vec3_scale(vv_vec3_add(bb, c), 0.5);
+        vv_vec3 ca = vv_vec3_scale(vv_vec3_add(c, a), 0.5);
+        vv_status s;
+        if ((s = split_patch(sc, e, a, ab, ca, depth + 1)) != VV_OK ||
+            (s = split_patch(sc, e, ab, bb, bc, depth + 1)) != VV_OK ||
+            (s = split_patch(sc, e, ca, bc, c, depth + 1)) != VV_OK ||
+            (s = split_patch(sc, e, ab, bc, ca, depth + 1)) != VV_OK)
+            return s;
+        return VV_OK;
+    }
+    rad_elem *d = new_elem(sc->b);
+    if (!d)
+        return vv_error_set(VV_ERR_LIMIT, "more than %d elements or out of memory", RAD_MAX_ELEMS);
+    *d = *e;
+    if (depth == 0)
+        return VV_OK;
+    double area = 0.5 * vv_vec3_length(vv_vec3_cross(vv_vec3_sub(bb, a), vv_vec3_sub(c, a)));
+    double f = e->area > 0 ? area / e->area : 0;
+    set3(d->p, cen);
+    set3(d->tri, a);
+    set3(d->tri + 3, bb);
+    set3(d->tri + 6, c);
+    d->area = (float)area;
+    d->half =
+        (float)fmax(vv_vec3_length(vv_vec3_sub(a, cen)), fmax(vv_vec3_length(vv_vec3_sub(bb, cen)),
+                                                              vv_vec3_length(vv_vec3_sub(c, cen))));
+    for (int k = 0; k < 3; k++)
+        for (int sd = 0; sd < 2; sd++) {
+            d->unshot[sd][k] = (float)(e->unshot[sd][k] * f);
+            d->total[sd][k] = (float)(e->total[sd][k] * f);
+        }
+    return VV_OK;
+}
+
+/* Splits the patches across which a light's visibility changes (its shadow
+ * boundaries: a patch is lit from its centre or not, so the shadow edge
+ * would be the patches' staircase), then rebuilds the trees. obj_lo: the
+ * first element of each object, updated. */
+static vv_status
+shadow_split(vv_radiosity *r, const vv_world *w, double far_t, int *obj_lo) {
+    int lights = 0;
+    for (int i = 0; i < w->n_lights; i++)
+        lights += !w->lights[i].headlight && w->lights[i].intensity > 0;
+    int patches = 0;
+    for (int i = 0; i < r->n_elems; i++)
+        patches += r->elems[i].kind == RAD_PATCH;
+    if (!lights || !patches)
+        return VV_OK;
+    builder nb;
+    memset(&nb, 0, sizeof nb);
+    /* a shadow edge is no sharper than the voxels of the volumes that cast
+     * it: patches are not split into ones smaller than the finest voxel */
+    double hmin = INFINITY;
+    for (int i = 0; i < r->n_vols; i++)
+        hmin = r->vols[i].h < hmin ? r->vols[i].h : hmin;
+    double me = isfinite(hmin) ? 2 * hmin : 0;
+    split_ctx sc = {r, w, far_t, me * me, &nb};
+    vv_status s = VV_OK;
+    int *lo = malloc(((size_t)w->n_objects + 1) * sizeof *lo);
+    if (!lo)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    for (int o = 0; o < w->n_objects && s == VV_OK; o++) {
+        lo[o] = nb.n;
+        for (int i = obj_lo[o]; i < obj_lo[o + 1] && s == VV_OK; i++) {
+            const rad_elem *e = &r->elems[i];
+            if (e->kind == RAD_PATCH) {
+                s = split_patch(&sc, e, f3(e->tri), f3(e->tri + 3), f3(e->tri + 6), 0);
+            } else {
+                rad_elem *d = new_elem(&nb);
+                if (!d)
+                    s = vv_error_set(VV_ERR_LIMIT, "more than %d elements or out of memory",
+                                     RAD_MAX_ELEMS);
+                else
+                    *d = *e;
+            }
+        }
+    }
+    lo[w->n_objects] = nb.n;
+    r->n_roots = 0;
+    for (int o = 0; o < w->n_objects && s == VV_OK; o++) {
+        if (lo[o + 1] == lo[o])
+            continue;
+        int root = build_tree(&nb, lo[o], lo[o + 1]);
+        if (root < 0)
+            s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+        else
+            r->roots[r->n_roots++] = root;
+    }
+    if (s != VV_OK) {
+        free(nb.e);
+        free(nb.nodes);
+        free(lo);
+        return s;
+    }
+    free(r->elems);
+    free(r->nodes);
+    r->elems = nb.e;
+    r->n_elems = nb.n;
+    r->nodes = nb.nodes;
+    r->n_nodes = nb.n_nodes;
+    memcpy(obj_lo, lo, ((size_t)w->n_objects + 1) * sizeof *lo);
+    free(lo);
+    return VV_OK;
+}
+
 vv_status rad_prepare_render(vv_radiosity *r);
 
 vv_status
@@ -1549,6 +1792,8 @@ vv_radiosity_solve(vv_radiosity **out, const vv_world *w, const vv_radiosity_opt
     r->n_nodes = b.n_nodes;
     b.e = NULL;
     b.nodes = NULL;
+    if ((s = shadow_split(r, w, 4 * diag + 1e-9, obj_lo)) != VV_OK)
+        goto fail;
     r->stats.n_nodes = r->n_nodes;
     int n_emitters = 0;
     for (int i = 0; i < r->n_elems; i++) {
