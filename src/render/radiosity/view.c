@@ -386,6 +386,24 @@ vv_radiosity_view_frame(const vv_radiosity *r, const vv_world *world, const vv_v
     int has_patches = 0;
     for (int i = 0; i < r->n_roots; i++)
         has_patches |= r->nodes[r->roots[i]].kind == RAD_PATCH;
+    /* vv_view_ray is affine in the pixel position before its direction is
+     * normalised (perspective: scaled to unit depth along the view axis):
+     * three rays give every pixel's for a few multiply-adds */
+    vv_ray r00 = vv_view_ray(view, 0, 0), r10 = vv_view_ray(view, 1, 0),
+           r01 = vv_view_ray(view, 0, 1);
+    {
+        const vv_vec3 f = vv_vec3_normalize(vv_vec3_sub(view->at, view->eye));
+        vv_ray *rs[3] = {&r00, &r10, &r01};
+        for (int i = 0; i < 3; i++) {
+            const double df = vv_vec3_dot(rs[i]->dir, f);
+            if (view->projection != VV_PROJECTION_ORTHOGRAPHIC && df > 0)
+                rs[i]->dir = vv_vec3_scale(rs[i]->dir, 1.0 / df);
+        }
+    }
+    const vv_vec3 o00 = r00.origin, ox = vv_vec3_sub(r10.origin, r00.origin),
+                  oy = vv_vec3_sub(r01.origin, r00.origin);
+    const vv_vec3 d00 = r00.dir, dx = vv_vec3_sub(r10.dir, r00.dir),
+                  dy = vv_vec3_sub(r01.dir, r00.dir);
     int *ids = NULL;
     float *zb = NULL;
     if (has_patches) {
@@ -400,7 +418,18 @@ vv_radiosity_view_frame(const vv_radiosity *r, const vv_world *world, const vv_v
 #pragma omp parallel for schedule(dynamic, 4) num_threads(nt)
     for (int y = 0; y < H; y++) {
         for (int x = 0; x < W; x++) {
-            vv_ray ray = vv_view_ray(view, x, y);
+            vv_ray ray;
+            ray.origin.x = o00.x + x * ox.x + y * oy.x;
+            ray.origin.y = o00.y + x * ox.y + y * oy.y;
+            ray.origin.z = o00.z + x * ox.z + y * oy.z;
+            {
+                const double ddx = d00.x + x * dx.x + y * dy.x, ddy = d00.y + x * dx.y + y * dy.y,
+                             ddz = d00.z + x * dx.z + y * dy.z;
+                const double inv = 1.0 / sqrt(ddx * ddx + ddy * ddy + ddz * ddz);
+                ray.dir.x = ddx * inv;
+                ray.dir.y = ddy * inv;
+                ray.dir.z = ddz * inv;
+            }
             double tp = INFINITY;
             int pe = -1;
             if (ids) {
