@@ -241,6 +241,32 @@ vv_model_default_tf(const vv_volume *v, vv_render_mode mode, vv_tf *tf, double *
         *iso_lo = lo;
 }
 
+/* The default scenes' common end: the view (already pointed along its
+ * axis) framed on the World's bounds, orbited and zoomed as @p opt asks,
+ * with the orthographic height of the same extent; a white headlight,
+ * white ambient light, black background. */
+static void
+finish_default_view(vv_world *w, const vv_default_scene_options *opt) {
+    vv_view *v = &w->view;
+    vv_view_frame_box(v, vv_world_bounds(w));
+    vv_view_orbit(v, opt->azimuth, opt->elevation);
+    vv_vec3 off = vv_vec3_sub(v->eye, v->at);
+    v->eye = vv_vec3_add(v->at, vv_vec3_scale(off, 1.0 / opt->zoom));
+    /* a view of the same extent if the user switches to orthographic */
+    v->ortho_height = 2.0 * vv_vec3_length(off) / opt->zoom * tan(0.5 * v->fov);
+
+    vv_light light;
+    memset(&light, 0, sizeof light);
+    light.type = VV_LIGHT_DIRECTIONAL;
+    light.headlight = 1;
+    light.direction = vv_vec3_normalize(vv_vec3_sub(v->at, v->eye));
+    light.color = vv_vec3_make(1, 1, 1);
+    light.intensity = 1.0;
+    (void)vv_world_add_light(w, &light);
+    w->ambient = vv_vec3_make(1, 1, 1);
+    w->background = vv_vec3_make(0, 0, 0);
+}
+
 vv_status
 vv_world_new_for_volume(vv_world **out, vv_volume *volume, const vv_default_scene_options *opt) {
     if (!out)
@@ -328,24 +354,7 @@ vv_world_new_for_volume(vv_world **out, vv_volume *volume, const vv_default_scen
                 v->up = vv_vec3_make(d[1], d[4], d[7]);
             break;
         }
-    vv_box wb = vv_world_bounds(w);
-    vv_view_frame_box(v, wb);
-    vv_view_orbit(v, opt->azimuth, opt->elevation);
-    vv_vec3 off = vv_vec3_sub(v->eye, v->at);
-    v->eye = vv_vec3_add(v->at, vv_vec3_scale(off, 1.0 / opt->zoom));
-    /* a view of the same extent if the user switches to orthographic */
-    v->ortho_height = 2.0 * vv_vec3_length(off) / opt->zoom * tan(0.5 * v->fov);
-
-    vv_light light;
-    memset(&light, 0, sizeof light);
-    light.type = VV_LIGHT_DIRECTIONAL;
-    light.headlight = 1;
-    light.direction = vv_vec3_normalize(vv_vec3_sub(v->at, v->eye));
-    light.color = vv_vec3_make(1, 1, 1);
-    light.intensity = 1.0;
-    (void)vv_world_add_light(w, &light);
-    w->ambient = vv_vec3_make(1, 1, 1);
-    w->background = vv_vec3_make(0, 0, 0);
+    finish_default_view(w, opt);
     *out = w;
     return VV_OK;
 }
@@ -458,21 +467,7 @@ vv_world_new_for_grid(vv_world **out, vv_grid *grid, const char *field, int time
     v->eye = vv_vec3_make(0, -1, 0);
     v->at = vv_vec3_make(0, 0, 0);
     v->up = vv_vec3_make(0, 0, 1);
-    vv_view_frame_box(v, vv_world_bounds(w));
-    vv_view_orbit(v, opt->azimuth, opt->elevation);
-    vv_vec3 off = vv_vec3_sub(v->eye, v->at);
-    v->eye = vv_vec3_add(v->at, vv_vec3_scale(off, 1.0 / opt->zoom));
-    v->ortho_height = 2.0 * vv_vec3_length(off) / opt->zoom * tan(0.5 * v->fov);
-    vv_light light;
-    memset(&light, 0, sizeof light);
-    light.type = VV_LIGHT_DIRECTIONAL;
-    light.headlight = 1;
-    light.direction = vv_vec3_normalize(vv_vec3_sub(v->at, v->eye));
-    light.color = vv_vec3_make(1, 1, 1);
-    light.intensity = 1.0;
-    (void)vv_world_add_light(w, &light);
-    w->ambient = vv_vec3_make(1, 1, 1);
-    w->background = vv_vec3_make(0, 0, 0);
+    finish_default_view(w, opt);
     *out = w;
     return VV_OK;
 }

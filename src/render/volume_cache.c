@@ -771,6 +771,39 @@ vv_vobject_prepare(const vv_object *obj, const vv_world *w, const float ambient[
  * in exactly the arithmetic of vv_vray_point, vv_vcache_cell_in and
  * vv_vcache_value_at (separate multiplies and adds, no fused ones), so the
  * values are bit-identical to the scalar path's. */
+/* The cells of eight index points (px, py, pz) inside the grid box, as
+ * vv_vcache_cell_in computes them: their offsets (returned), fractions
+ * (*wx, *wy, *wz) and the four x-pairs (v[o], v[o + 1]) of each cell's
+ * edges, 16-bit values packed in 32-bit lanes, read by plain loads
+ * (hardware gathers are microcoded and slow on processors with the Gather
+ * Data Sampling mitigation). Needs c->q16. */
+__attribute__((target("avx2"))) static inline __m256i
+cell_pairs_avx2(const vv_vcache *c, __m256 px, __m256 py, __m256 pz, __m256 *wx, __m256 *wy,
+                __m256 *wz, int32_t p00[8], int32_t p10[8], int32_t p01[8], int32_t p11[8]) {
+    const __m256i zero = _mm256_setzero_si256();
+    __m256i i = _mm256_cvttps_epi32(px), j = _mm256_cvttps_epi32(py), k = _mm256_cvttps_epi32(pz);
+    i = _mm256_max_epi32(_mm256_min_epi32(i, _mm256_set1_epi32(c->nx - 2)), zero);
+    j = _mm256_max_epi32(_mm256_min_epi32(j, _mm256_set1_epi32(c->ny - 2)), zero);
+    k = _mm256_max_epi32(_mm256_min_epi32(k, _mm256_set1_epi32(c->nz - 2)), zero);
+    *wx = _mm256_sub_ps(px, _mm256_cvtepi32_ps(i));
+    *wy = _mm256_sub_ps(py, _mm256_cvtepi32_ps(j));
+    *wz = _mm256_sub_ps(pz, _mm256_cvtepi32_ps(k));
+    const __m256i o =
+        _mm256_add_epi32(_mm256_add_epi32(_mm256_mullo_epi32(k, _mm256_set1_epi32((int)c->sz)),
+                                          _mm256_mullo_epi32(j, _mm256_set1_epi32((int)c->sy))),
+                         i);
+    int32_t oo[8];
+    _mm256_storeu_si256((__m256i *)(void *)oo, o);
+    for (int l = 0; l < 8; l++) {
+        const uint16_t *v = c->q16 + oo[l];
+        memcpy(&p00[l], v, 4);
+        memcpy(&p10[l], v + c->sy, 4);
+        memcpy(&p01[l], v + c->sz, 4);
+        memcpy(&p11[l], v + c->sz + c->sy, 4);
+    }
+    return o;
+}
+
 /* Eight x-pairs of 16-bit values (low and high halves of each 32-bit
  * lane) lerped by wx: a + (b - a) * wx. */
 __attribute__((target("avx2"))) static inline __m256
@@ -793,36 +826,15 @@ values_chunk_avx2(const vv_vcache *c, const vv_vray *r, double kfirst, double dt
                  oz = _mm256_set1_ps(r->o[2]);
     const __m256 dx = _mm256_set1_ps(r->d[0]), dy = _mm256_set1_ps(r->d[1]),
                  dz = _mm256_set1_ps(r->d[2]);
-    const __m256i zero = _mm256_setzero_si256();
-    const __m256i mx = _mm256_set1_epi32(c->nx - 2), my = _mm256_set1_epi32(c->ny - 2),
-                  mz = _mm256_set1_epi32(c->nz - 2);
-    const __m256i sy = _mm256_set1_epi32((int)c->sy), sz = _mm256_set1_epi32((int)c->sz);
     float out[VV_VC_CHUNK + 8];
     for (int s = 0; s < m; s += 8) {
         const __m256 t = _mm256_loadu_ps(u + s);
         const __m256 px = _mm256_add_ps(ox, _mm256_mul_ps(t, dx));
         const __m256 py = _mm256_add_ps(oy, _mm256_mul_ps(t, dy));
         const __m256 pz = _mm256_add_ps(oz, _mm256_mul_ps(t, dz));
-        __m256i i = _mm256_cvttps_epi32(px), j = _mm256_cvttps_epi32(py),
-                k = _mm256_cvttps_epi32(pz);
-        i = _mm256_max_epi32(_mm256_min_epi32(i, mx), zero);
-        j = _mm256_max_epi32(_mm256_min_epi32(j, my), zero);
-        k = _mm256_max_epi32(_mm256_min_epi32(k, mz), zero);
-        const __m256 wx = _mm256_sub_ps(px, _mm256_cvtepi32_ps(i));
-        const __m256 wy = _mm256_sub_ps(py, _mm256_cvtepi32_ps(j));
-        const __m256 wz = _mm256_sub_ps(pz, _mm256_cvtepi32_ps(k));
-        const __m256i o = _mm256_add_epi32(
-            _mm256_add_epi32(_mm256_mullo_epi32(k, sz), _mm256_mullo_epi32(j, sy)), i);
-        int32_t oo[8], p00[8], p10[8], p01[8], p11[8];
-        _mm256_storeu_si256((__m256i *)(void *)oo, o);
-        const uint16_t *q = c->q16;
-        for (int l = 0; l < 8; l++) {
-            const uint16_t *v = q + oo[l];
-            memcpy(&p00[l], v, 4);
-            memcpy(&p10[l], v + c->sy, 4);
-            memcpy(&p01[l], v + c->sz, 4);
-            memcpy(&p11[l], v + c->sz + c->sy, 4);
-        }
+        __m256 wx, wy, wz;
+        int32_t p00[8], p10[8], p01[8], p11[8];
+        (void)cell_pairs_avx2(c, px, py, pz, &wx, &wy, &wz, p00, p10, p01, p11);
         const __m256 c00 = pair_lerp_avx2(p00, wx), c10 = pair_lerp_avx2(p10, wx);
         const __m256 c01 = pair_lerp_avx2(p01, wx), c11 = pair_lerp_avx2(p11, wx);
         const __m256 c0 = _mm256_add_ps(c00, _mm256_mul_ps(_mm256_sub_ps(c10, c00), wy));
@@ -1045,10 +1057,6 @@ classify_chunk_avx2(const vv_vcache *c, const vv_vtables *ob, const vv_vray *r, 
                  oz = _mm256_set1_ps(r->o[2]);
     const __m256 dx = _mm256_set1_ps(r->d[0]), dy = _mm256_set1_ps(r->d[1]),
                  dz = _mm256_set1_ps(r->d[2]);
-    const __m256i zero = _mm256_setzero_si256();
-    const __m256i mx = _mm256_set1_epi32(c->nx - 2), my = _mm256_set1_epi32(c->ny - 2),
-                  mz = _mm256_set1_epi32(c->nz - 2);
-    const __m256i sy = _mm256_set1_epi32((int)c->sy), sz = _mm256_set1_epi32((int)c->sz);
     const __m256i lo16 = _mm256_set1_epi32(0xFFFF);
     const __m256 llo = _mm256_set1_ps(ob->lut_lo), lsc = _mm256_set1_ps(ob->lut_scale);
     const __m256 lmax = _mm256_set1_ps((float)(VV_VC_LUT - 1)), fzero = _mm256_setzero_ps();
@@ -1056,29 +1064,9 @@ classify_chunk_avx2(const vv_vcache *c, const vv_vtables *ob, const vv_vray *r, 
         const __m256 t = _mm256_loadu_ps(u + s);
         const __m256 px = _mm256_fmadd_ps(t, dx, ox), py = _mm256_fmadd_ps(t, dy, oy),
                      pz = _mm256_fmadd_ps(t, dz, oz);
-        __m256i i = _mm256_cvttps_epi32(px), j = _mm256_cvttps_epi32(py),
-                k = _mm256_cvttps_epi32(pz);
-        i = _mm256_max_epi32(_mm256_min_epi32(i, mx), zero);
-        j = _mm256_max_epi32(_mm256_min_epi32(j, my), zero);
-        k = _mm256_max_epi32(_mm256_min_epi32(k, mz), zero);
-        const __m256 wx = _mm256_sub_ps(px, _mm256_cvtepi32_ps(i));
-        const __m256 wy = _mm256_sub_ps(py, _mm256_cvtepi32_ps(j));
-        const __m256 wz = _mm256_sub_ps(pz, _mm256_cvtepi32_ps(k));
-        const __m256i o = _mm256_add_epi32(
-            _mm256_add_epi32(_mm256_mullo_epi32(k, sz), _mm256_mullo_epi32(j, sy)), i);
-        /* the x-pair (v[o], v[o + 1]) of each cell edge, by plain loads:
-         * hardware gathers are microcoded and slow on processors with the
-         * Gather Data Sampling mitigation */
-        int32_t oo[8], p00[8], p10[8], p01[8], p11[8];
-        _mm256_storeu_si256((__m256i *)(void *)oo, o);
-        const uint16_t *q = c->q16;
-        for (int l = 0; l < 8; l++) {
-            const uint16_t *v = q + oo[l];
-            memcpy(&p00[l], v, 4);
-            memcpy(&p10[l], v + c->sy, 4);
-            memcpy(&p01[l], v + c->sz, 4);
-            memcpy(&p11[l], v + c->sz + c->sy, 4);
-        }
+        __m256 wx, wy, wz;
+        int32_t p00[8], p10[8], p01[8], p11[8];
+        const __m256i o = cell_pairs_avx2(c, px, py, pz, &wx, &wy, &wz, p00, p10, p01, p11);
         const __m256i g00 = _mm256_loadu_si256((const __m256i *)(const void *)p00);
         const __m256i g10 = _mm256_loadu_si256((const __m256i *)(const void *)p10);
         const __m256i g01 = _mm256_loadu_si256((const __m256i *)(const void *)p01);
