@@ -112,7 +112,7 @@ main(int argc, char **argv) {
         vv_shape_free(s);
     }
 
-    /* the Stanford bunny at 256 voxels (open: a solid by the row votes) */
+    /* the Stanford bunny at 256 voxels (open: a solid by the winding number) */
     if (!only || strcmp(only, "bunny") == 0) {
         snprintf(path, sizeof path, "%s/meshes/bunny.ply", data);
         vv_mesh *m = NULL;

@@ -152,10 +152,28 @@ vv_status vv_shape_extrusion(vv_shape **out, int n, const double *polygon, doubl
 vv_status vv_shape_helix(vv_shape **out, int n, const double *profile, double pitch, double z0,
                          double z1);
 
-/** How a mesh is voxelized. */
+/**
+ * VV_MESH_AUTO fills an open mesh as a solid when the caps closing its holes
+ * (fans over its boundary loops) have at most this fraction of its area: a
+ * scanned solid with a few holes; above it, the mesh is a surface meant as a
+ * shell.
+ */
+#define VV_MESH_AUTO_HOLE_AREA 0.05
+
+/**
+ * How a mesh is voxelized. Solids are classified by the generalized winding
+ * number w (Jacobson, Kavan and Sorkine-Hornung, SIGGRAPH 2013): a voxel is
+ * inside where |w| > 1/2. Before that, each connected component is oriented
+ * consistently (its majority orientation kept, so a flipped patch is turned
+ * back); holes are closed smoothly by the w = 1/2 level; self-intersecting
+ * and overlapping parts count once; a component facing inwards still counts.
+ * On a closed, consistently oriented mesh without self-intersections this is
+ * Jordan's parity, voxel for voxel.
+ */
 typedef enum vv_mesh_mode {
-    VV_MESH_AUTO = 0,  /**< solid when the mesh is closed (vv_mesh_topology_compute), else shell */
-    VV_MESH_SOLID = 1, /**< inside by ray parity, whatever the topology (holes: see vv_voxelize) */
+    VV_MESH_AUTO = 0,  /**< solid when closed or when its holes are small (VV_MESH_AUTO_HOLE_AREA),
+                            else shell */
+    VV_MESH_SOLID = 1, /**< solid by the winding number, whatever the topology */
     VV_MESH_SHELL = 2  /**< a shell of the given thickness around the triangles */
 } vv_mesh_mode;
 /**

@@ -354,7 +354,23 @@ vv_shape_mesh(vv_shape **out, vv_mesh *mesh, vv_mesh_mode mode, double thickness
         vv_status st = vv_mesh_topology_compute(mesh, &t);
         if (st != VV_OK)
             return vv_error_prefix(st, "mesh shape");
-        mode = t.closed ? VV_MESH_SOLID : VV_MESH_SHELL;
+        mode = VV_MESH_SOLID;
+        if (!t.closed) {
+            /* a solid with a few holes, or a surface meant as a shell: by the
+             * area of the caps that would close it */
+            vv_mesh_holes h;
+            for (size_t i = 0; i < 3 * mesh->n_triangles; i++)
+                if (mesh->triangles[i] >= mesh->n_vertices)
+                    return vv_error_set(VV_ERR_INVALID,
+                                        "mesh shape: triangle %zu has vertex %u of %zu", i / 3,
+                                        mesh->triangles[i], mesh->n_vertices);
+            st = vv_mesh_holes_find(mesh, &h);
+            if (st != VV_OK)
+                return vv_error_prefix(st, "mesh shape");
+            if (!(h.cap_area <= VV_MESH_AUTO_HOLE_AREA * h.mesh_area))
+                mode = VV_MESH_SHELL;
+            vv_mesh_holes_free(&h);
+        }
     }
     vv_status st = shape_alloc(out, SHAPE_MESH, "mesh");
     if (st != VV_OK)

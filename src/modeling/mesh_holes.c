@@ -1,0 +1,414 @@
+/*
+ * The closed completion of an imperfect triangle mesh, for classifying
+ * voxels by the generalized winding number (Jacobson, Kavan and
+ * Sorkine-Hornung, "Robust Inside-Outside Segmentation using Generalized
+ * Winding Numbers", SIGGRAPH 2013).
+ *
+ * The winding number of a mesh M at p is the sum of the signed solid angles
+ * of its triangles over 4 pi. Cap every boundary loop of M with a fan S and
+ * the union M + S is closed (every directed edge cancelled), so its winding
+ * number is an integer that a ray from p counts exactly by signed
+ * crossings. Hence w_M(p) = crossings_{M+S}(p) - Omega_S(p) / (4 pi): the
+ * scan converter counts the crossings along its rows, and only the caps'
+ * solid angles are summed directly, near the holes (see mesh_scan.c). This
+ * file finds the caps: vertices are welded by position, triangles are
+ * oriented consistently across their manifold edges (the majority of each
+ * connected component keeps its orientation, so a flipped patch is turned
+ * back), and the boundary 1-chain left is split into closed loops.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "modeling_internal.h"
+
+typedef struct edge_rec {
+    uint64_t key; /* lo << 32 | hi, welded vertex ids */
+    uint32_t tri;
+    uint32_t fwd; /* 1 when the triangle goes lo -> hi */
+} edge_rec;
+
+static int
+edge_cmp(const void *a, const void *b) {
+    const edge_rec *x = a, *y = b;
+    if (x->key != y->key)
+        return x->key < y->key ? -1 : 1;
+    return (x->tri > y->tri) - (x->tri < y->tri);
+}
+
+static int
+pos_cmp_r(const float *P, uint32_t a, uint32_t b) {
+    int c = memcmp(P + 3 * (size_t)a, P + 3 * (size_t)b, 3 * sizeof *P);
+    if (c)
+        return c;
+    return (a > b) - (a < b);
+}
+
+/* Sorts ids[0..n) by position bits, then index (a merge sort: no global
+ * qsort context, so the function is reentrant). */
+static void
+sort_by_position(const float *P, uint32_t *ids, uint32_t *tmp, size_t n) {
+    for (size_t w = 1; w < n; w *= 2) {
+        for (size_t lo = 0; lo < n; lo += 2 * w) {
+            size_t mid = lo + w < n ? lo + w : n, hi = lo + 2 * w < n ? lo + 2 * w : n;
+            size_t i = lo, j = mid, k = lo;
+            while (i < mid && j < hi)
+                tmp[k++] = pos_cmp_r(P, ids[i], ids[j]) <= 0 ? ids[i++] : ids[j++];
+            while (i < mid)
+                tmp[k++] = ids[i++];
+            while (j < hi)
+                tmp[k++] = ids[j++];
+        }
+        memcpy(ids, tmp, n * sizeof *ids);
+    }
+}
+
+static double
+tri_area(const float *P, uint32_t a, uint32_t b, uint32_t c) {
+    const float *A = P + 3 * (size_t)a, *B = P + 3 * (size_t)b, *C = P + 3 * (size_t)c;
+    double u[3], v[3];
+    for (int k = 0; k < 3; k++) {
+        u[k] = (double)B[k] - A[k];
+        v[k] = (double)C[k] - A[k];
+    }
+    double n0 = u[1] * v[2] - u[2] * v[1], n1 = u[2] * v[0] - u[0] * v[2],
+           n2 = u[0] * v[1] - u[1] * v[0];
+    return 0.5 * sqrt(n0 * n0 + n1 * n1 + n2 * n2);
+}
+
+void
+vv_mesh_holes_free(vv_mesh_holes *h) {
+    if (!h)
+        return;
+    free(h->tri);
+    free(h->loop_start);
+    free(h->loop_v);
+    memset(h, 0, sizeof *h);
+}
+
+vv_status
+vv_mesh_holes_find(const vv_mesh *m, vv_mesh_holes *out) {
+    memset(out, 0, sizeof *out);
+    size_t nv = m->n_vertices, nt = m->n_triangles;
+    if (nt > UINT32_MAX / 3 || nv > UINT32_MAX)
+        return vv_error_set(VV_ERR_INVALID, "mesh holes: %zu triangles is too many", nt);
+    const float *P = m->positions;
+    uint32_t *weld = malloc((nv ? nv : 1) * sizeof *weld);
+    uint32_t *ids = malloc((nv ? nv : 1) * sizeof *ids);
+    uint32_t *tmp = malloc((nv ? nv : 1) * sizeof *tmp);
+    edge_rec *E = malloc((nt ? 3 * nt : 1) * sizeof *E);
+    out->tri = malloc((nt ? 3 * nt : 1) * sizeof *out->tri);
+    unsigned char *flip = calloc(nt ? nt : 1, 1);
+    if (!weld || !ids || !tmp || !E || !out->tri || !flip) {
+        free(weld);
+        free(ids);
+        free(tmp);
+        free(E);
+        free(flip);
+        vv_mesh_holes_free(out);
+        return vv_error_set(VV_ERR_NOMEM, "mesh holes: out of memory for %zu triangles", nt);
+    }
+    out->n_tri = nt;
+    memcpy(out->tri, m->triangles, 3 * nt * sizeof *out->tri);
+    /* weld: every vertex maps to the first vertex at its exact position */
+    for (size_t i = 0; i < nv; i++)
+        ids[i] = (uint32_t)i;
+    sort_by_position(P, ids, tmp, nv);
+    for (size_t i = 0; i < nv;) {
+        size_t j = i;
+        while (j < nv && memcmp(P + 3 * (size_t)ids[i], P + 3 * (size_t)ids[j], 3 * sizeof *P) == 0)
+            weld[ids[j++]] = ids[i];
+        i = j;
+    }
+    free(ids);
+    free(tmp);
+    /* the edges of the non-degenerate triangles, grouped */
+    size_t ne = 0;
+    for (size_t t = 0; t < nt; t++) {
+        uint32_t w[3];
+        for (int k = 0; k < 3; k++)
+            w[k] = m->triangles[3 * t + k] < nv ? weld[m->triangles[3 * t + k]] : UINT32_MAX;
+        if (w[0] == UINT32_MAX || w[1] == UINT32_MAX || w[2] == UINT32_MAX || w[0] == w[1] ||
+            w[1] == w[2] || w[0] == w[2])
+            continue;
+        out->mesh_area += tri_area(P, w[0], w[1], w[2]);
+        for (int k = 0; k < 3; k++) {
+            uint32_t a = w[k], b = w[(k + 1) % 3];
+            uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
+            E[ne++] = (edge_rec){(uint64_t)lo << 32 | hi, (uint32_t)t, a < b};
+        }
+    }
+    /* grouped by key: a counting sort on the low vertex, then insertion
+     * sorts of the few edges per vertex */
+    {
+        size_t *start = calloc(nv + 1, sizeof *start);
+        edge_rec *S = malloc((ne ? ne : 1) * sizeof *S);
+        if (!start || !S) {
+            free(start);
+            free(S);
+            free(weld);
+            free(E);
+            free(flip);
+            vv_mesh_holes_free(out);
+            return vv_error_set(VV_ERR_NOMEM, "mesh holes: out of memory for the edges");
+        }
+        for (size_t i = 0; i < ne; i++)
+            start[(E[i].key >> 32) + 1]++;
+        for (size_t v = 0; v < nv; v++)
+            start[v + 1] += start[v];
+        for (size_t i = 0; i < ne; i++)
+            S[start[E[i].key >> 32]++] = E[i];
+        free(E);
+        E = S;
+        for (size_t v = nv; v > 0; v--)
+            start[v] = start[v - 1];
+        start[0] = 0;
+        for (size_t v = 0; v < nv; v++)
+            for (size_t i = start[v] + 1; i < start[v + 1]; i++) {
+                edge_rec key = E[i];
+                size_t j = i;
+                while (j > start[v] && edge_cmp(&E[j - 1], &key) > 0) {
+                    E[j] = E[j - 1];
+                    j--;
+                }
+                E[j] = key;
+            }
+        free(start);
+    }
+    /* manifold adjacency (edges of exactly two triangles), as CSR */
+    uint32_t *deg = calloc(nt + 1, sizeof *deg);
+    size_t n_adj = 0;
+    for (size_t i = 0; i < ne;) {
+        size_t j = i;
+        while (j < ne && E[j].key == E[i].key)
+            j++;
+        if (j - i == 2 && E[i].tri != E[i + 1].tri)
+            n_adj++;
+        i = j;
+    }
+    uint32_t *adj = malloc((n_adj ? 2 * n_adj : 1) * sizeof *adj);
+    uint32_t *queue = malloc((nt ? nt : 1) * sizeof *queue);
+    uint32_t *comp = malloc((nt ? nt : 1) * sizeof *comp);
+    if (!deg || !adj || !queue || !comp) {
+        free(deg);
+        free(adj);
+        free(queue);
+        free(comp);
+        free(weld);
+        free(E);
+        free(flip);
+        vv_mesh_holes_free(out);
+        return vv_error_set(VV_ERR_NOMEM, "mesh holes: out of memory for the adjacency");
+    }
+    for (size_t i = 0; i < ne;) {
+        size_t j = i;
+        while (j < ne && E[j].key == E[i].key)
+            j++;
+        if (j - i == 2 && E[i].tri != E[i + 1].tri) {
+            deg[E[i].tri + 1]++;
+            deg[E[i + 1].tri + 1]++;
+        }
+        i = j;
+    }
+    for (size_t t = 0; t < nt; t++)
+        deg[t + 1] += deg[t];
+    uint32_t *fill = calloc(nt ? nt : 1, sizeof *fill);
+    if (!fill) {
+        free(deg);
+        free(adj);
+        free(queue);
+        free(comp);
+        free(weld);
+        free(E);
+        free(flip);
+        vv_mesh_holes_free(out);
+        return vv_error_set(VV_ERR_NOMEM, "mesh holes: out of memory for the adjacency");
+    }
+    /* adj entries: neighbour << 1 | (both traverse the edge the same way) */
+    for (size_t i = 0; i < ne;) {
+        size_t j = i;
+        while (j < ne && E[j].key == E[i].key)
+            j++;
+        if (j - i == 2 && E[i].tri != E[i + 1].tri) {
+            uint32_t t0 = E[i].tri, t1 = E[i + 1].tri, same = E[i].fwd == E[i + 1].fwd;
+            adj[deg[t0] + fill[t0]++] = t1 << 1 | same;
+            adj[deg[t1] + fill[t1]++] = t0 << 1 | same;
+        }
+        i = j;
+    }
+    free(fill);
+    /* orient each component by breadth-first search; the majority keeps its
+     * orientation */
+    for (size_t t = 0; t < nt; t++)
+        comp[t] = UINT32_MAX;
+    for (size_t s = 0; s < nt; s++) {
+        if (comp[s] != UINT32_MAX)
+            continue;
+        size_t head = 0, tail = 0, flipped = 0;
+        queue[tail++] = (uint32_t)s;
+        comp[s] = (uint32_t)s;
+        while (head < tail) {
+            uint32_t t = queue[head++];
+            flipped += flip[t];
+            for (uint32_t k = deg[t]; k < deg[t + 1]; k++) {
+                uint32_t u = adj[k] >> 1, same = adj[k] & 1;
+                if (comp[u] != UINT32_MAX)
+                    continue; /* a non-orientable loop keeps the first choice */
+                comp[u] = (uint32_t)s;
+                flip[u] = (unsigned char)(flip[t] ^ same);
+                queue[tail++] = u;
+            }
+        }
+        if (2 * flipped > tail)
+            for (size_t q = 0; q < tail; q++)
+                flip[queue[q]] ^= 1;
+    }
+    for (size_t t = 0; t < nt; t++) {
+        if (!flip[t])
+            continue;
+        out->n_flipped++;
+        uint32_t x = out->tri[3 * t + 1];
+        out->tri[3 * t + 1] = out->tri[3 * t + 2];
+        out->tri[3 * t + 2] = x;
+    }
+    free(deg);
+    free(adj);
+    free(queue);
+    free(comp);
+    /* the boundary 1-chain: per edge, the traversals lo -> hi minus hi -> lo */
+    size_t nb = 0;
+    for (size_t i = 0; i < ne;) {
+        size_t j = i;
+        long net = 0;
+        for (; j < ne && E[j].key == E[i].key; j++)
+            net += (E[j].fwd ^ flip[E[j].tri]) ? 1 : -1;
+        nb += (size_t)labs(net);
+        i = j;
+    }
+    uint32_t(*be)[2] = malloc((nb ? nb : 1) * sizeof *be);
+    uint32_t *out_start = calloc(nv + 1, sizeof *out_start);
+    uint32_t *order = malloc((nb ? nb : 1) * sizeof *order);
+    unsigned char *used = calloc(nb ? nb : 1, 1);
+    out->loop_v = malloc((nb ? nb : 1) * sizeof *out->loop_v);
+    out->loop_start = malloc((nb + 1) * sizeof *out->loop_start);
+    if (!be || !out_start || !order || !used || !out->loop_v || !out->loop_start) {
+        free(be);
+        free(out_start);
+        free(order);
+        free(used);
+        free(weld);
+        free(E);
+        free(flip);
+        vv_mesh_holes_free(out);
+        return vv_error_set(VV_ERR_NOMEM, "mesh holes: out of memory for the boundary");
+    }
+    size_t k = 0;
+    for (size_t i = 0; i < ne;) {
+        size_t j = i;
+        long net = 0;
+        for (; j < ne && E[j].key == E[i].key; j++)
+            net += (E[j].fwd ^ flip[E[j].tri]) ? 1 : -1;
+        uint32_t lo = (uint32_t)(E[i].key >> 32), hi = (uint32_t)E[i].key;
+        for (long r = 0; r < labs(net); r++) {
+            be[k][0] = net > 0 ? lo : hi;
+            be[k][1] = net > 0 ? hi : lo;
+            out_start[be[k][0] + 1]++;
+            k++;
+        }
+        i = j;
+    }
+    free(E);
+    free(flip);
+    for (size_t v = 0; v < nv; v++)
+        out_start[v + 1] += out_start[v];
+    {
+        uint32_t *cur = calloc(nv ? nv : 1, sizeof *cur);
+        if (!cur) {
+            free(be);
+            free(out_start);
+            free(order);
+            free(used);
+            free(weld);
+            vv_mesh_holes_free(out);
+            return vv_error_set(VV_ERR_NOMEM, "mesh holes: out of memory for the boundary");
+        }
+        for (size_t e = 0; e < nb; e++)
+            order[out_start[be[e][0]] + cur[be[e][0]]++] = (uint32_t)e;
+        /* the next unused out-edge of each vertex */
+        for (size_t v = 0; v < nv; v++)
+            cur[v] = out_start[v];
+        /* closed walks: every vertex of a boundary chain has as many edges in
+         * as out, so a walk from an edge returns to its start */
+        size_t nl = 0, nvl = 0;
+        for (size_t e0 = 0; e0 < nb; e0++) {
+            if (used[e0])
+                continue;
+            out->loop_start[nl] = nvl;
+            uint32_t start = be[e0][0], e = (uint32_t)e0;
+            for (;;) {
+                used[e] = 1;
+                out->loop_v[nvl++] = be[e][0];
+                uint32_t v = be[e][1];
+                if (v == start)
+                    break;
+                while (cur[v] < out_start[v + 1] && used[order[cur[v]]])
+                    cur[v]++;
+                if (cur[v] == out_start[v + 1])
+                    break; /* cannot happen for a boundary chain; closed by the fan */
+                e = order[cur[v]++];
+            }
+            nl++;
+        }
+        out->loop_start[nl] = nvl;
+        out->n_loops = nl;
+        free(cur);
+    }
+    free(be);
+    free(out_start);
+    free(order);
+    free(used);
+    free(weld);
+    /* the caps' area: fans from each loop's centroid */
+    for (size_t l = 0; l < out->n_loops; l++) {
+        double c[3];
+        vv_mesh_loop_centroid(m, out, l, c);
+        size_t a = out->loop_start[l], b = out->loop_start[l + 1];
+        for (size_t i = a; i < b; i++) {
+            const float *p = P + 3 * (size_t)out->loop_v[i];
+            const float *q = P + 3 * (size_t)out->loop_v[i + 1 < b ? i + 1 : a];
+            double u[3], v[3];
+            for (int d = 0; d < 3; d++) {
+                u[d] = p[d] - c[d];
+                v[d] = q[d] - c[d];
+            }
+            double n0 = u[1] * v[2] - u[2] * v[1], n1 = u[2] * v[0] - u[0] * v[2],
+                   n2 = u[0] * v[1] - u[1] * v[0];
+            out->cap_area += 0.5 * sqrt(n0 * n0 + n1 * n1 + n2 * n2);
+        }
+    }
+    return VV_OK;
+}
+
+void
+vv_mesh_loop_centroid(const vv_mesh *m, const vv_mesh_holes *h, size_t l, double c[3]) {
+    size_t a = h->loop_start[l], b = h->loop_start[l + 1];
+    c[0] = c[1] = c[2] = 0;
+    for (size_t i = a; i < b; i++)
+        for (int d = 0; d < 3; d++)
+            c[d] += m->positions[3 * (size_t)h->loop_v[i] + d];
+    for (int d = 0; d < 3; d++)
+        c[d] /= (double)(b - a);
+}
+
+double
+vv_solid_angle(const double a[3], const double b[3], const double c[3]) {
+    double la = sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    double lb = sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+    double lc = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    double det = a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+                 a[2] * (b[0] * c[1] - b[1] * c[0]);
+    double ab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    double ac = a[0] * c[0] + a[1] * c[1] + a[2] * c[2];
+    double bc = b[0] * c[0] + b[1] * c[1] + b[2] * c[2];
+    return 2.0 * atan2(det, la * lb * lc + ab * lc + ac * lb + bc * la);
+}
