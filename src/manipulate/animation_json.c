@@ -2,7 +2,7 @@
  * Animation files: JSON read and written with Jansson (schema in
  * docs/animation-format.md). Schema errors are placed at the line and column
  * of the offending key with the scene loader's locator
- * (vv_model_json_locate), so every message reads
+ * (vv_json_locate), so every message reads
  * "FILE:LINE:COL: tracks[0].keys[2].time: ...".
  */
 #include <jansson.h>
@@ -13,8 +13,8 @@
 #include <string.h>
 
 #include "core/internal.h"
+#include "core/json_internal.h"
 #include "manipulate/anim_internal.h"
-#include "model/model_internal.h"
 #include "volvis/animate.h"
 
 #define ANIM_MAX_BYTES (16u << 20)
@@ -48,7 +48,7 @@ aerr(const actx *c, const char *jpath, const char *fmt, ...) {
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
     int line = 1, col = 1;
-    vv_model_json_locate(c->text, c->len, jpath, &line, &col);
+    vv_json_locate(c->text, c->len, jpath, &line, &col);
     if (jpath && jpath[0])
         return vv_error_set(VV_ERR_FORMAT, "%s:%d:%d: %s: %s", c->path, line, col, jpath, msg);
     return vv_error_set(VV_ERR_FORMAT, "%s:%d:%d: %s", c->path, line, col, msg);
@@ -78,7 +78,7 @@ check_keys(const actx *c, json_t *obj, const char *jpath, const char *const *all
 static vv_status
 get_num(const actx *c, json_t *v, const char *jp, double *out) {
     if (!json_is_number(v))
-        return aerr(c, jp, "expected a number, got %s", vv_model_json_kind(v));
+        return aerr(c, jp, "expected a number, got %s", vv_json_kind(v));
     double d = json_number_value(v);
     if (!isfinite(d))
         return aerr(c, jp, "number is not finite");
@@ -89,7 +89,7 @@ get_num(const actx *c, json_t *v, const char *jp, double *out) {
 static vv_status
 get_vec(const actx *c, json_t *v, const char *jp, int n, double *out) {
     if (!json_is_array(v) || json_array_size(v) != (size_t)n)
-        return aerr(c, jp, "expected an array of %d numbers, got %s%s", n, vv_model_json_kind(v),
+        return aerr(c, jp, "expected an array of %d numbers, got %s%s", n, vv_json_kind(v),
                     json_is_array(v) ? " of another length" : "");
     for (int i = 0; i < n; i++) {
         char ep[JP_MAX];
@@ -138,7 +138,7 @@ parse_tf(const actx *c, json_t *v, const char *jp, vv_tf *tf) {
         return aerr(c, jp,
                     "expected a transfer function {\"opacity\": [[value, opacity], ...], "
                     "\"color\": [[value, [r, g, b]], ...]}, got %s",
-                    vv_model_json_kind(v));
+                    vv_json_kind(v));
     vv_status s = check_keys(c, v, jp, keys);
     if (s != VV_OK)
         return s;
@@ -154,7 +154,7 @@ parse_tf(const actx *c, json_t *v, const char *jp, vv_tf *tf) {
             continue;
         }
         if (!json_is_array(arr))
-            return aerr(c, ap, "expected an array, got %s", vv_model_json_kind(arr));
+            return aerr(c, ap, "expected an array, got %s", vv_json_kind(arr));
         if (json_array_size(arr) > VV_TF_MAX_POINTS)
             return aerr(c, ap, "more than %d points", VV_TF_MAX_POINTS);
         size_t i;
@@ -251,7 +251,7 @@ static vv_status
 parse_track(const actx *c, json_t *tj, const char *jp, vv_animation *a) {
     static const char *const keys[] = {"property", "interpolation", "closed", "keys", NULL};
     if (!json_is_object(tj))
-        return aerr(c, jp, "expected a track object, got %s", vv_model_json_kind(tj));
+        return aerr(c, jp, "expected a track object, got %s", vv_json_kind(tj));
     vv_status s = check_keys(c, tj, jp, keys);
     if (s != VV_OK)
         return s;
@@ -261,7 +261,7 @@ parse_track(const actx *c, json_t *tj, const char *jp, vv_animation *a) {
     if (!pj)
         return aerr(c, jp, "missing key 'property' (e.g. \"view.eye\")");
     if (!json_is_string(pj))
-        return aerr(c, kp, "expected a string, got %s", vv_model_json_kind(pj));
+        return aerr(c, kp, "expected a string, got %s", vv_json_kind(pj));
     int idx;
     vv_error_clear();
     if ((s = vv_animation_add_track(a, json_string_value(pj), &idx)) != VV_OK) {
@@ -290,7 +290,7 @@ parse_track(const actx *c, json_t *tj, const char *jp, vv_animation *a) {
     if (cj) {
         jpf(kp, "%s.closed", jp);
         if (!json_is_boolean(cj))
-            return aerr(c, kp, "expected true or false, got %s", vv_model_json_kind(cj));
+            return aerr(c, kp, "expected true or false, got %s", vv_json_kind(cj));
         t->closed = json_is_true(cj);
     }
     json_t *kj = json_object_get(tj, "keys");
@@ -298,7 +298,7 @@ parse_track(const actx *c, json_t *tj, const char *jp, vv_animation *a) {
     if (!kj)
         return aerr(c, jp, "missing key 'keys' (track %s)", t->property);
     if (!json_is_array(kj))
-        return aerr(c, kp, "expected an array of keys, got %s", vv_model_json_kind(kj));
+        return aerr(c, kp, "expected an array of keys, got %s", vv_json_kind(kj));
     if (json_array_size(kj) == 0)
         return aerr(c, kp, "no keys: track %s needs at least one", t->property);
     size_t i;
@@ -313,7 +313,7 @@ parse_track(const actx *c, json_t *tj, const char *jp, vv_animation *a) {
         jpf(ep, "%s[%zu]", kp, i);
         if (!json_is_object(e)) {
             s = aerr(c, ep, "expected a key {\"time\": ..., \"value\": ...}, got %s",
-                     vv_model_json_kind(e));
+                     vv_json_kind(e));
             break;
         }
         if ((s = check_keys(c, e, ep, kkeys)) != VV_OK)
@@ -393,7 +393,7 @@ parse_sequence(const actx *c, json_t *sj, const char *jp, vv_animation *a) {
                                        "zoom",  "object",  "axis",     "offset",
                                        "point", "normal",  "distance", NULL};
     if (!json_is_object(sj))
-        return aerr(c, jp, "expected a sequence object, got %s", vv_model_json_kind(sj));
+        return aerr(c, jp, "expected a sequence object, got %s", vv_json_kind(sj));
     vv_status s = check_keys(c, sj, jp, keys);
     if (s != VV_OK)
         return s;
@@ -439,7 +439,7 @@ parse_root(const actx *c, json_t *root, vv_animation *a) {
     static const char *const keys[] = {"volvis_animation", "scene",     "fps", "duration",
                                        "tracks",           "sequences", NULL};
     if (!json_is_object(root))
-        return aerr(c, "", "expected an object at the top, got %s", vv_model_json_kind(root));
+        return aerr(c, "", "expected an object at the top, got %s", vv_json_kind(root));
     vv_status s = check_keys(c, root, "", keys);
     if (s != VV_OK)
         return s;
@@ -449,7 +449,7 @@ parse_root(const actx *c, json_t *root, vv_animation *a) {
     json_t *sc = json_object_get(root, "scene");
     if (sc) {
         if (!json_is_string(sc))
-            return aerr(c, "scene", "expected a file name, got %s", vv_model_json_kind(sc));
+            return aerr(c, "scene", "expected a file name, got %s", vv_json_kind(sc));
         if (!(a->scene = vv_strdup(json_string_value(sc))))
             return vv_error_set(VV_ERR_NOMEM, "animation: out of memory");
     }
@@ -462,9 +462,9 @@ parse_root(const actx *c, json_t *root, vv_animation *a) {
     }
     json_t *tracks = json_object_get(root, "tracks"), *seqs = json_object_get(root, "sequences");
     if (tracks && !json_is_array(tracks))
-        return aerr(c, "tracks", "expected an array, got %s", vv_model_json_kind(tracks));
+        return aerr(c, "tracks", "expected an array, got %s", vv_json_kind(tracks));
     if (seqs && !json_is_array(seqs))
-        return aerr(c, "sequences", "expected an array, got %s", vv_model_json_kind(seqs));
+        return aerr(c, "sequences", "expected an array, got %s", vv_json_kind(seqs));
     size_t i;
     json_t *e;
     if (tracks)

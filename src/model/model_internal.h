@@ -4,8 +4,6 @@
 #ifndef VOLVIS_MODEL_INTERNAL_H
 #define VOLVIS_MODEL_INTERNAL_H
 
-#include <jansson.h>
-
 #include "volvis/model.h"
 
 /** Smallest voxel spacing of @p v (1 if the spacing is not positive and finite). */
@@ -20,17 +18,5 @@ void vv_model_copy_name(char dst[VV_NAME_MAX], const char *src);
  * *iso_lo (a default isovalue). Never fails.
  */
 void vv_model_default_tf(const vv_volume *v, vv_render_mode mode, vv_tf *tf, double *iso_lo);
-
-/** What a JSON value is, for error messages: "an object", "a number", ... */
-const char *vv_model_json_kind(const json_t *v);
-
-/**
- * Line and column (1-based) of the value at @p path ("tracks[2].keys[0].time")
- * in the JSON text @p text of @p len bytes: where its key starts, or for an
- * array element where its value starts; the nearest ancestor's position when
- * the path cannot be found. Used to place schema errors (scene and animation
- * files) after Jansson has parsed the text.
- */
-void vv_model_json_locate(const char *text, size_t len, const char *path, int *line, int *col);
 
 #endif

@@ -3,12 +3,8 @@
  * Jansson. Scene loading is the one place where the model calls io
  * (vv_volume_load): a scene file names its volume files.
  *
- * Error positions: Jansson reports line:column for syntax errors but keeps
- * no positions for values, so a schema error is located by a second, lazy
- * pass over the raw text (scan_locate) that walks to the offending path
- * ("objects[0].transfer_function") and reports where its key (or, for an
- * array element, its value) starts. This pass runs only when there is an
- * error to report.
+ * Error positions: a schema error is located in the raw text by its path
+ * (vv_json_locate, src/core/json_text.c).
  */
 #include <jansson.h>
 #include <math.h>
@@ -18,6 +14,7 @@
 #include <string.h>
 
 #include "core/internal.h"
+#include "core/json_internal.h"
 #include "model/model_internal.h"
 #include "modeling/modeling_internal.h"
 #include "volvis/io.h"
@@ -35,236 +32,11 @@ typedef struct sctx {
     const vv_progress *progress; /* voxelization of geometry objects; may be NULL */
 } sctx;
 
-/* ---- locating a path in the raw text ---------------------------------- */
-
-typedef struct scan {
-    const char *s;
-    size_t n, i;
-    int line, col;
-    const char *target;
-    int found, fline, fcol;
-} scan;
-
-static int
-sc_peek(const scan *sc) {
-    return sc->i < sc->n ? (unsigned char)sc->s[sc->i] : -1;
-}
-
-static void
-sc_adv(scan *sc) {
-    if (sc->i >= sc->n)
-        return;
-    unsigned char ch = (unsigned char)sc->s[sc->i++];
-    if (ch == '\n') {
-        sc->line++;
-        sc->col = 1;
-    } else if ((ch & 0xC0) != 0x80) {
-        /* columns count characters: UTF-8 continuation bytes add nothing */
-        sc->col++;
-    }
-}
-
-static void
-sc_ws(scan *sc) {
-    for (;;) {
-        int ch = sc_peek(sc);
-        if (ch == ' ' || ch == '\t' || ch == '\n' || ch == '\r')
-            sc_adv(sc);
-        else
-            return;
-    }
-}
-
-/* Consumes a string at the cursor, copying its (roughly decoded) text. */
-static void
-sc_string(scan *sc, char *buf, size_t cap) {
-    size_t k = 0;
-    sc_adv(sc); /* opening quote */
-    while (sc->i < sc->n) {
-        int ch = sc_peek(sc);
-        if (ch == '"') {
-            sc_adv(sc);
-            break;
-        }
-        if (ch == '\\') {
-            sc_adv(sc);
-            ch = sc_peek(sc);
-            if (ch < 0)
-                break;
-        }
-        if (buf && k + 1 < cap)
-            buf[k++] = (char)ch;
-        sc_adv(sc);
-    }
-    if (buf && cap)
-        buf[k] = '\0';
-}
-
-/* Skips one value without recursion. */
-static void
-sc_skip(scan *sc) {
-    int depth = 0;
-    do {
-        sc_ws(sc);
-        int ch = sc_peek(sc);
-        if (ch < 0)
-            return;
-        if (ch == '"') {
-            sc_string(sc, NULL, 0);
-        } else if (ch == '{' || ch == '[') {
-            depth++;
-            sc_adv(sc);
-        } else if (ch == '}' || ch == ']') {
-            depth--;
-            sc_adv(sc);
-        } else if (ch == ',' || ch == ':') {
-            sc_adv(sc);
-        } else {
-            while (sc->i < sc->n) {
-                ch = sc_peek(sc);
-                if (ch == ',' || ch == ']' || ch == '}' || ch == ' ' || ch == '\n' || ch == '\t' ||
-                    ch == '\r')
-                    break;
-                sc_adv(sc);
-            }
-        }
-    } while (depth > 0 && sc->i < sc->n);
-}
-
-static int
-path_is_prefix(const char *path, const char *target) {
-    size_t l = strlen(path);
-    if (l == 0)
-        return 1;
-    return strncmp(path, target, l) == 0 && (target[l] == '.' || target[l] == '[');
-}
-
-static void
-sc_found(scan *sc) {
-    sc->found = 1;
-    sc->fline = sc->line;
-    sc->fcol = sc->col;
-}
-
-/* Walks the value at the cursor whose path is @p path, descending only
- * towards the target; the recursion depth is the target's depth. */
-static void
-sc_value(scan *sc, const char *path) {
-    sc_ws(sc);
-    if (strcmp(path, sc->target) == 0) {
-        sc_found(sc);
-        return;
-    }
-    int ch = sc_peek(sc);
-    if (!path_is_prefix(path, sc->target) || (ch != '{' && ch != '[')) {
-        sc_skip(sc);
-        return;
-    }
-    char child[2 * PATH_MAX_LEN + 32];
-    if (ch == '{') {
-        sc_adv(sc);
-        for (;;) {
-            sc_ws(sc);
-            ch = sc_peek(sc);
-            if (ch != '"') {
-                if (ch == '}')
-                    sc_adv(sc);
-                return;
-            }
-            int kl = sc->line, kc = sc->col;
-            char key[PATH_MAX_LEN];
-            sc_string(sc, key, sizeof key);
-            if (path[0])
-                snprintf(child, sizeof child, "%s.%s", path, key);
-            else
-                snprintf(child, sizeof child, "%s", key);
-            sc_ws(sc);
-            if (sc_peek(sc) == ':')
-                sc_adv(sc);
-            if (strcmp(child, sc->target) == 0) {
-                sc->found = 1;
-                sc->fline = kl;
-                sc->fcol = kc;
-                return;
-            }
-            sc_value(sc, child);
-            if (sc->found)
-                return;
-            sc_ws(sc);
-            if (sc_peek(sc) == ',')
-                sc_adv(sc);
-            else {
-                if (sc_peek(sc) == '}')
-                    sc_adv(sc);
-                return;
-            }
-        }
-    } else {
-        sc_adv(sc);
-        for (int idx = 0;; idx++) {
-            sc_ws(sc);
-            ch = sc_peek(sc);
-            if (ch < 0 || ch == ']') {
-                sc_adv(sc);
-                return;
-            }
-            snprintf(child, sizeof child, "%s[%d]", path, idx);
-            sc_value(sc, child);
-            if (sc->found)
-                return;
-            sc_ws(sc);
-            if (sc_peek(sc) == ',')
-                sc_adv(sc);
-            else {
-                if (sc_peek(sc) == ']')
-                    sc_adv(sc);
-                return;
-            }
-        }
-    }
-}
-
-/* Strips the last ".key" or "[i]" of a path in place; 0 when nothing is left. */
-static int
-path_parent(char *p) {
-    size_t l = strlen(p);
-    if (l == 0)
-        return 0;
-    while (l > 0 && p[l - 1] != '.' && p[l - 1] != '[')
-        l--;
-    if (l == 0) {
-        p[0] = '\0';
-        return 1;
-    }
-    p[l - 1] = '\0';
-    return 1;
-}
-
 /* Line and column of @p path in the scene text (its nearest ancestor's when
  * the path itself cannot be found). */
 static void
 scene_locate(const sctx *c, const char *path, int *line, int *col) {
-    char p[PATH_MAX_LEN];
-    snprintf(p, sizeof p, "%s", path ? path : "");
-    for (;;) {
-        scan sc = {c->text, c->len, 0, 1, 1, p, 0, 1, 1};
-        sc_value(&sc, "");
-        if (sc.found) {
-            *line = sc.fline;
-            *col = sc.fcol;
-            return;
-        }
-        if (!path_parent(p))
-            break;
-    }
-    *line = 1;
-    *col = 1;
-}
-
-void
-vv_model_json_locate(const char *text, size_t len, const char *path, int *line, int *col) {
-    sctx c = {NULL, text, len, NULL};
-    scene_locate(&c, path, line, col);
+    vv_json_locate(c->text, c->len, path, line, col);
 }
 
 /* ---- error reporting ---------------------------------------------------- */
@@ -283,27 +55,6 @@ serr(const sctx *c, const char *path, const char *fmt, ...) {
     if (path && path[0])
         return vv_error_set(VV_ERR_FORMAT, "%s:%d:%d: %s: %s", c->path, line, col, path, msg);
     return vv_error_set(VV_ERR_FORMAT, "%s:%d:%d: %s", c->path, line, col, msg);
-}
-
-const char *
-vv_model_json_kind(const json_t *v) {
-    switch (json_typeof(v)) {
-    case JSON_OBJECT:
-        return "an object";
-    case JSON_ARRAY:
-        return "an array";
-    case JSON_STRING:
-        return "a string";
-    case JSON_INTEGER:
-    case JSON_REAL:
-        return "a number";
-    case JSON_TRUE:
-    case JSON_FALSE:
-        return "a boolean";
-    case JSON_NULL:
-        break;
-    }
-    return "null";
 }
 
 /* dst = a + sep + b, truncated to PATH_MAX_LEN - 1 bytes (a truncated path
@@ -404,7 +155,7 @@ check_keys(const sctx *c, json_t *obj, const char *path, const char *const *allo
 static vv_status
 value_number(const sctx *c, json_t *v, const char *path, double *out) {
     if (!json_is_number(v))
-        return serr(c, path, "expected a number, got %s", vv_model_json_kind(v));
+        return serr(c, path, "expected a number, got %s", vv_json_kind(v));
     double d = json_number_value(v);
     if (!isfinite(d))
         return serr(c, path, "number is not finite");
@@ -415,7 +166,7 @@ value_number(const sctx *c, json_t *v, const char *path, double *out) {
 static vv_status
 value_vec3(const sctx *c, json_t *v, const char *path, vv_vec3 *out) {
     if (!json_is_array(v) || json_array_size(v) != 3)
-        return serr(c, path, "expected an array of 3 numbers, got %s%s", vv_model_json_kind(v),
+        return serr(c, path, "expected an array of 3 numbers, got %s%s", vv_json_kind(v),
                     json_is_array(v) ? " of another length" : "");
     double d[3];
     for (size_t i = 0; i < 3; i++) {
@@ -423,7 +174,7 @@ value_vec3(const sctx *c, json_t *v, const char *path, vv_vec3 *out) {
         if (!json_is_number(e)) {
             char ep[PATH_MAX_LEN];
             path_index(ep, path, i);
-            return serr(c, ep, "expected a number, got %s", vv_model_json_kind(e));
+            return serr(c, ep, "expected a number, got %s", vv_json_kind(e));
         }
         d[i] = json_number_value(e);
     }
@@ -548,7 +299,7 @@ get_bool(const sctx *c, json_t *obj, const char *path, const char *key, int *out
     if (!v)
         return VV_OK;
     if (!json_is_boolean(v))
-        return serr(c, kp, "expected true or false, got %s", vv_model_json_kind(v));
+        return serr(c, kp, "expected true or false, got %s", vv_json_kind(v));
     *out = json_is_true(v) ? 1 : 0;
     return VV_OK;
 }
@@ -560,7 +311,7 @@ get_string(const sctx *c, json_t *obj, const char *path, const char *key, const 
     if (!v)
         return VV_OK;
     if (!json_is_string(v))
-        return serr(c, kp, "expected a string, got %s", vv_model_json_kind(v));
+        return serr(c, kp, "expected a string, got %s", vv_json_kind(v));
     *out = json_string_value(v);
     return VV_OK;
 }
@@ -576,7 +327,7 @@ get_container(const sctx *c, json_t *obj, const char *path, const char *key, jso
     if (!v)
         return VV_OK;
     if (json_typeof(v) != want)
-        return serr(c, kp, "expected %s, got %s", what, vv_model_json_kind(v));
+        return serr(c, kp, "expected %s, got %s", what, vv_json_kind(v));
     *out = v;
     return VV_OK;
 }
@@ -609,7 +360,7 @@ parse_cut_planes(const sctx *c, json_t *arr, const char *path, vv_cut_plane *pla
         path_index(ep, path, i);
         if (!json_is_object(e))
             return serr(c, ep, "expected an object {\"point\", \"normal\"}, got %s",
-                        vv_model_json_kind(e));
+                        vv_json_kind(e));
         if (i >= VV_MAX_CUT_PLANES)
             return serr(c, ep, "more than %d cut planes", VV_MAX_CUT_PLANES);
         vv_status st = check_keys(c, e, ep, keys);
@@ -683,7 +434,7 @@ parse_lights(const sctx *c, json_t *arr, vv_world *w) {
         char ep[PATH_MAX_LEN];
         path_index(ep, "lights", i);
         if (!json_is_object(e))
-            return serr(c, ep, "expected an object, got %s", vv_model_json_kind(e));
+            return serr(c, ep, "expected an object, got %s", vv_json_kind(e));
         if (i >= VV_MAX_LIGHTS)
             return serr(c, ep, "more than %d lights", VV_MAX_LIGHTS);
         vv_status st = check_keys(c, e, ep, keys);
@@ -752,7 +503,7 @@ parse_tf_points(const sctx *c, json_t *tfj, const char *tp, vv_tf *tf, int opaci
         path_index(ep, ap, i);
         if (!json_is_array(e) || json_array_size(e) != 2)
             return serr(c, ep, "expected a pair [value, %s], got %s",
-                        opacity ? "opacity" : "[r, g, b]", vv_model_json_kind(e));
+                        opacity ? "opacity" : "[r, g, b]", vv_json_kind(e));
         char vp[PATH_MAX_LEN], op[PATH_MAX_LEN];
         path_index(vp, ep, 0);
         path_index(op, ep, 1);
@@ -808,7 +559,7 @@ get_pair(const sctx *c, json_t *obj, const char *path, const char *key, double o
     if (!v)
         return VV_OK;
     if (!json_is_array(v) || json_array_size(v) != 2)
-        return serr(c, kp, "expected an array of 2 numbers, got %s%s", vv_model_json_kind(v),
+        return serr(c, kp, "expected an array of 2 numbers, got %s%s", vv_json_kind(v),
                     json_is_array(v) ? " of another length" : "");
     for (size_t i = 0; i < 2; i++) {
         char ip[PATH_MAX_LEN];
@@ -827,7 +578,7 @@ parse_tf2d_widget(const sctx *c, json_t *e, const char *wp, vv_tf2d_widget *w) {
     static const char *const tkeys[] = {"shape", "center",  "width", "gradient",
                                         "color", "opacity", NULL};
     if (!json_is_object(e))
-        return serr(c, wp, "expected a widget object, got %s", vv_model_json_kind(e));
+        return serr(c, wp, "expected a widget object, got %s", vv_json_kind(e));
     const char *shape = NULL;
     vv_status st = get_string(c, e, wp, "shape", &shape);
     if (st != VV_OK)
@@ -1164,7 +915,7 @@ parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
         json_t *q = json_object_get(e, "orientation");
         path_key(kp, op, "orientation");
         if (!json_is_array(q) || json_array_size(q) != 4)
-            return serr(c, kp, "expected a quaternion [w, x, y, z], got %s", vv_model_json_kind(q));
+            return serr(c, kp, "expected a quaternion [w, x, y, z], got %s", vv_json_kind(q));
         double d[4];
         for (size_t i = 0; i < 4; i++) {
             char ip[PATH_MAX_LEN];
@@ -1204,7 +955,7 @@ parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
         path_key(kp, op, "segmentation");
         return serr(c, kp,
                     "expected {\"threshold\": value}, \"transfer_function\" or \"tf2d\", got %s",
-                    vv_model_json_kind(segv));
+                    vv_json_kind(segv));
     }
     if ((st = get_object(c, e, op, "transfer_function", &tfj)) != VV_OK ||
         (st = get_object(c, e, op, "tf2d", &tf2j)) != VV_OK ||
@@ -1630,7 +1381,7 @@ parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
             return parse_geometry_object(c, e, op, w);
     }
     if (!json_is_object(e))
-        return serr(c, op, "expected an object, got %s", vv_model_json_kind(e));
+        return serr(c, op, "expected an object, got %s", vv_json_kind(e));
     vv_status st = check_object_keys(c, e, op, own, 1);
     if (st != VV_OK)
         return st;
@@ -1737,7 +1488,7 @@ render_option_text(const sctx *c, json_t *v, const char *kp, char *buf, size_t c
     default:
         break;
     }
-    return serr(c, kp, "expected a string, a number or a boolean, got %s", vv_model_json_kind(v));
+    return serr(c, kp, "expected a string, a number or a boolean, got %s", vv_json_kind(v));
 }
 
 /* The optional "render" section: renderer, quality and renderer options.
@@ -1795,8 +1546,7 @@ parse_scene(const sctx *c, json_t *root, vv_world *w) {
     static const char *const keys[] = {"view",       "lights", "shading", "objects",
                                        "cut_planes", "render", NULL};
     if (!json_is_object(root))
-        return serr(c, "", "expected a JSON object at the top level, got %s",
-                    vv_model_json_kind(root));
+        return serr(c, "", "expected a JSON object at the top level, got %s", vv_json_kind(root));
     vv_status st = check_keys(c, root, "", keys);
     if (st != VV_OK)
         return st;

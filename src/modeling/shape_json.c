@@ -12,7 +12,7 @@
 #include <string.h>
 
 #include "../core/internal.h"
-#include "model/model_internal.h"
+#include "core/json_internal.h"
 #include "modeling_internal.h"
 
 #define JPATH 256
@@ -99,7 +99,7 @@ num(const jctx *c, json_t *o, const char *path, const char *key, double *out, in
         return jfail(c, path, VV_ERR_FORMAT, "missing \"%s\"", key);
     }
     if (!json_is_number(v))
-        return jfail(c, kp, VV_ERR_FORMAT, "expected a number, got %s", vv_model_json_kind(v));
+        return jfail(c, kp, VV_ERR_FORMAT, "expected a number, got %s", vv_json_kind(v));
     *out = json_number_value(v);
     if (!isfinite(*out))
         return jfail(c, kp, VV_ERR_FORMAT, "expected a finite number");
@@ -110,13 +110,13 @@ static vv_status
 vec_at(const jctx *c, json_t *v, const char *kp, double *out, size_t n) {
     if (!json_is_array(v) || json_array_size(v) != n)
         return jfail(c, kp, VV_ERR_FORMAT, "expected an array of %zu numbers, got %s", n,
-                     vv_model_json_kind(v));
+                     vv_json_kind(v));
     for (size_t i = 0; i < n; i++) {
         json_t *e = json_array_get(v, i);
         if (!json_is_number(e)) {
             char ip[JPATH];
             ipath(ip, kp, i);
-            return jfail(c, ip, VV_ERR_FORMAT, "expected a number, got %s", vv_model_json_kind(e));
+            return jfail(c, ip, VV_ERR_FORMAT, "expected a number, got %s", vv_json_kind(e));
         }
         out[i] = json_number_value(e);
     }
@@ -150,7 +150,7 @@ points(const jctx *c, json_t *o, const char *path, const char *key, int dim, dou
         return jfail(c, path, VV_ERR_FORMAT, "missing \"%s\" (an array of %d-D points)", key, dim);
     if (!json_is_array(v) || json_array_size(v) < 3)
         return jfail(c, kp, VV_ERR_FORMAT, "expected an array of at least 3 points, got %s",
-                     json_is_array(v) ? "fewer" : vv_model_json_kind(v));
+                     json_is_array(v) ? "fewer" : vv_json_kind(v));
     size_t m = json_array_size(v);
     if (m > (1u << 20))
         return jfail(c, kp, VV_ERR_LIMIT, "%zu points is over the limit of 2^20", m);
@@ -197,7 +197,7 @@ transform(const jctx *c, json_t *o, const char *path, vv_mat4 *M) {
             if (!json_is_object(r))
                 return jfail(c, ep, VV_ERR_FORMAT,
                              "expected {\"axis\": [x, y, z], \"angle\": degrees}, got %s",
-                             vv_model_json_kind(r));
+                             vv_json_kind(r));
             static const char *const rk[] = {"axis", "angle", NULL};
             vv_vec3 axis;
             double ang;
@@ -329,8 +329,7 @@ primitive(const jctx *c, json_t *o, const char *path, const char *type, vv_shape
         if (!f)
             return jfail(c, path, VV_ERR_FORMAT, "missing \"file\" (the mesh file)");
         if (!json_is_string(f) || !json_string_value(f)[0])
-            return jfail(c, fp, VV_ERR_FORMAT, "expected a file name, got %s",
-                         vv_model_json_kind(f));
+            return jfail(c, fp, VV_ERR_FORMAT, "expected a file name, got %s", vv_json_kind(f));
         vv_mesh_mode mode = VV_MESH_AUTO;
         if (m) {
             const char *ms = json_is_string(m) ? json_string_value(m) : "";
@@ -379,7 +378,7 @@ node(const jctx *c, json_t *o, const char *path, vv_shape **out, int depth) {
     if (!json_is_object(o))
         return jfail(c, path, VV_ERR_FORMAT,
                      "expected a primitive {\"type\": ...} or an operation {\"op\": ...}, got %s",
-                     vv_model_json_kind(o));
+                     vv_json_kind(o));
     json_t *type = json_object_get(o, "type"), *op = json_object_get(o, "op");
     vv_status st;
     vv_mat4 M;
@@ -392,7 +391,7 @@ node(const jctx *c, json_t *o, const char *path, vv_shape **out, int depth) {
         kpath(tp, path, "type");
         if (!json_is_string(type))
             return jfail(c, tp, VV_ERR_FORMAT, "expected a primitive name, got %s",
-                         vv_model_json_kind(type));
+                         vv_json_kind(type));
         if ((st = transform(c, o, path, &M)) != VV_OK ||
             (st = primitive(c, o, path, json_string_value(type), out)) != VV_OK)
             return st;
@@ -426,7 +425,7 @@ node(const jctx *c, json_t *o, const char *path, vv_shape **out, int depth) {
         return jfail(c, path, VV_ERR_FORMAT, "missing \"children\" of the %s", ops);
     if (!json_is_array(ch) || json_array_size(ch) == 0)
         return jfail(c, cp, VV_ERR_FORMAT, "expected a non-empty array of children, got %s",
-                     json_is_array(ch) ? "an empty array" : vv_model_json_kind(ch));
+                     json_is_array(ch) ? "an empty array" : vv_json_kind(ch));
     if (cop == VV_CSG_DIFFERENCE && json_array_size(ch) < 2)
         return jfail(c, cp, VV_ERR_FORMAT,
                      "a difference needs two or more children (the first minus the others)");
@@ -559,7 +558,7 @@ object_matrix(const jctx *c, json_t *o, const char *path, vv_mat4 *M) {
         double ang;
         if (!json_is_object(rot))
             return jfail(c, kp, VV_ERR_FORMAT, "expected {\"axis\", \"angle\"}, got %s",
-                         vv_model_json_kind(rot));
+                         vv_json_kind(rot));
         if ((st = vec3(c, rot, kp, "axis", &axis, NULL)) != VV_OK ||
             (st = num(c, rot, kp, "angle", &ang, NULL)) != VV_OK)
             return st;
