@@ -1,0 +1,103 @@
+/*
+ * What the files of the scene reader and writer share (not installed): the
+ * parse context, the error reporting and the typed field readers
+ * (scene_fields.c), the object sections (scene_objects.c).
+ */
+#ifndef VOLVIS_SCENE_INTERNAL_H
+#define VOLVIS_SCENE_INTERNAL_H
+
+#include <jansson.h>
+#include <stddef.h>
+
+#include "core/internal.h"
+#include "volvis/model.h"
+
+#define SCENE_MAX_BYTES (16u << 20)
+#define PATH_MAX_LEN 256
+#define IMAGE_MAX_SIDE 32768
+
+/** A scene file being read. */
+typedef struct sctx {
+    const char *path; /* scene file as given */
+    const char *text;
+    size_t len;
+    const vv_progress *progress; /* voxelization of geometry objects; may be NULL */
+} sctx;
+
+/** The render modes' names in scene files, by vv_render_mode. */
+extern const char *const vv_scene_mode_names[5];
+
+/* Line and column of @p path in the scene text (its nearest ancestor's when
+ * the path itself cannot be found). */
+void vv_scene_locate(const sctx *c, const char *path, int *line, int *col);
+
+/* Sets and returns a VV_ERR_FORMAT error "FILE:LINE:COL: PATH: message",
+ * placed at @p path in the scene text. */
+vv_status vv_scene_serr(const sctx *c, const char *path, const char *fmt, ...) VV_PRINTF(3, 4);
+
+/* dst = parent.key (PATH_MAX_LEN bytes; truncated paths only place errors less precisely). */
+void vv_scene_path_key(char *dst, const char *parent, const char *key);
+
+/* dst = parent[i] (PATH_MAX_LEN bytes). */
+void vv_scene_path_index(char *dst, const char *parent, size_t i);
+
+/* Every key of @p obj must be in the NULL-terminated @p allowed list. */
+vv_status vv_scene_check_keys(const sctx *c, json_t *obj, const char *path,
+                              const char *const *allowed);
+
+/* A finite number, a 3-vector, an RGB colour in [0, 1]: value readers. */
+vv_status vv_scene_value_number(const sctx *c, json_t *v, const char *path, double *out);
+
+vv_status vv_scene_value_vec3(const sctx *c, json_t *v, const char *path, vv_vec3 *out);
+
+vv_status vv_scene_value_color(const sctx *c, json_t *v, const char *path, vv_vec3 *out);
+
+/* Field getters: *present (may be NULL) says whether the key was there; a
+ * missing key leaves *out unchanged and is not an error. */
+json_t *vv_scene_field(json_t *obj, const char *key, char *kp, const char *path, int *present);
+
+vv_status vv_scene_get_number(const sctx *c, json_t *obj, const char *path, const char *key,
+                              double *out, int *present);
+
+/* A number in a range; open ends when lo_open / hi_open. */
+vv_status vv_scene_get_number_in(const sctx *c, json_t *obj, const char *path, const char *key,
+                                 double *out, int *present, double lo, int lo_open, double hi,
+                                 int hi_open);
+
+vv_status vv_scene_get_int_in(const sctx *c, json_t *obj, const char *path, const char *key,
+                              int *out, int lo, int hi);
+
+vv_status vv_scene_get_vec3(const sctx *c, json_t *obj, const char *path, const char *key,
+                            vv_vec3 *out, int *present);
+
+vv_status vv_scene_get_nonzero_vec3(const sctx *c, json_t *obj, const char *path, const char *key,
+                                    vv_vec3 *out, int *present);
+
+vv_status vv_scene_get_color(const sctx *c, json_t *obj, const char *path, const char *key,
+                             vv_vec3 *out, int *present);
+
+/* A boolean field (absent: *out unchanged). */
+vv_status vv_scene_get_bool(const sctx *c, json_t *obj, const char *path, const char *key,
+                            int *out);
+
+/* A string field (absent: *out unchanged); borrowed from the JSON tree. */
+vv_status vv_scene_get_string(const sctx *c, json_t *obj, const char *path, const char *key,
+                              const char **out);
+
+vv_status vv_scene_get_object(const sctx *c, json_t *obj, const char *path, const char *key,
+                              json_t **out);
+
+vv_status vv_scene_get_array(const sctx *c, json_t *obj, const char *path, const char *key,
+                             json_t **out);
+
+/* The error for a required @p key missing from the object at @p path. */
+vv_status vv_scene_missing(const sctx *c, const char *path, const char *key, const char *what);
+
+/* Cut planes (scene.c): at most VV_MAX_CUT_PLANES into @p planes, their count in *n. */
+vv_status vv_scene_parse_cut_planes(const sctx *c, json_t *arr, const char *path,
+                                    vv_cut_plane *planes, int *n);
+
+/* Object @p idx of the "objects" array, added to @p w (scene_objects.c). */
+vv_status vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w);
+
+#endif
