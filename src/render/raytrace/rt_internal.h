@@ -1,0 +1,326 @@
+/*
+ * What the files of the volumetric ray tracer share (not installed): the
+ * frame's objects, lights and acceleration structures, and the inline vector,
+ * transform and volume-ray helpers of the hot path. raytrace.c holds the
+ * method's description.
+ */
+#ifndef VOLVIS_RT_INTERNAL_H
+#define VOLVIS_RT_INTERNAL_H
+
+#include <math.h>
+#include <stdatomic.h>
+#include <stdint.h>
+
+#include "render/registry.h"
+#include "render/volume_cache.h"
+#include "volvis/render.h"
+
+#define RT_TILE 16 /* image tile side in pixels */
+#define RT_MAX_OBJ 64
+#define RT_SGRID 4                    /* shadow grid spacing, voxels */
+#define RT_LGRID 2                    /* light volume spacing, voxels */
+#define RT_MIN_WEIGHT (1.0f / 512.0f) /* secondary rays weighing less are not traced */
+#define RT_EPS 1e-6                   /* relative ray offset off surfaces */
+
+/* ---------------------------------------------------------------------- */
+/* Vector helpers, inline (the library's are in another translation unit
+ * and sit on the hot path of every intersection)                            */
+
+static inline vv_vec3
+v3(double x, double y, double z) {
+    vv_vec3 r = {x, y, z};
+    return r;
+}
+static inline vv_vec3
+v3add(vv_vec3 a, vv_vec3 b) {
+    return v3(a.x + b.x, a.y + b.y, a.z + b.z);
+}
+static inline vv_vec3
+v3sub(vv_vec3 a, vv_vec3 b) {
+    return v3(a.x - b.x, a.y - b.y, a.z - b.z);
+}
+static inline vv_vec3
+v3scale(vv_vec3 a, double k) {
+    return v3(a.x * k, a.y * k, a.z * k);
+}
+static inline double
+v3dot(vv_vec3 a, vv_vec3 b) {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+static inline vv_vec3
+v3cross(vv_vec3 a, vv_vec3 b) {
+    return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+static inline double
+v3len(vv_vec3 a) {
+    return sqrt(v3dot(a, a));
+}
+static inline vv_vec3
+v3norm(vv_vec3 a) {
+    double l = v3len(a);
+    return l > 0 ? v3scale(a, 1.0 / l) : a;
+}
+static inline vv_vec3
+ray_at(const vv_ray *r, double t) {
+    return v3add(r->origin, v3scale(r->dir, t));
+}
+
+#define RT_LV_CACHE 16 /* light volumes kept between frames */
+
+/* A light volume kept between frames (it does not depend on the view),
+ * with everything it depends on. */
+typedef struct rt_lv {
+    vv_volume *vol; /* reference held; NULL: free slot */
+    uint64_t modified;
+    double w2i[3][4];
+    double dir[3];
+    double dt;
+    int n_planes;
+    vv_plane planes[2 * VV_MAX_CUT_PLANES];
+    float lut_lo, lut_scale;
+    float ext[VV_VC_LUT];
+    float *T;
+    uint64_t used; /* frame that last used it */
+} rt_lv;
+
+typedef struct rt_state {
+    rt_lv lv[RT_LV_CACHE];
+    uint64_t frame;
+    vv_vcache_set vc; /* per-volume caches (src/render/volume_cache.h) */
+    int parc;         /* PARC skipping on primary and secondary rays */
+    int shadows;      /* shadow rays */
+    int max_depth;    /* reflection / refraction depth */
+    int samples;      /* supersamples per pixel side at quality 2 */
+    int jitter;       /* jittered supersampling */
+    int adaptive;     /* supersample only where neighbours differ */
+    double threshold; /* adaptive: channel difference that triggers supersampling */
+    uint64_t seed;    /* jitter seed */
+    double early_termination;
+    int shadow_grid;   /* volume samples: cached shadow rays (1) or exact (0) */
+    int light_volumes; /* shadow rays of directional lights through volumes: light volumes */
+} rt_state;
+
+typedef struct rt_light {
+    int point;
+    double dir[3]; /* unit vector towards the light (directional) */
+    double pos[3];
+    float col[3]; /* colour * intensity */
+} rt_light;
+
+/* One volume object prepared for this render. */
+typedef struct rt_vobj {
+    const vv_object *obj;
+    vv_vcache *c;
+    vv_render_mode mode;
+    double w2i[3][4], i2w[3][4];
+    int dims[3];
+    double vox;             /* smallest world length of a voxel step */
+    vv_vtables tab;         /* TF table, extinction (composite), PARC flags and distances */
+    int owns_tables;        /* tab is this object's (else borrowed from the volume's cache) */
+    const float *lut, *ext; /* tab.lut, tab.ext */
+    const uint8_t *bvis;    /* tab.bvis: the subvolume may contribute */
+    const uint8_t *bdist;   /* tab.bdist: chessboard distance to the nearest that may */
+    int bx, by, bz;         /* subvolume grid */
+    float iso;
+    vv_vshading sh; /* shading constants */
+    int n_planes;
+    vv_plane planes[2 * VV_MAX_CUT_PLANES];
+    int gdim[3];                            /* shadow grid points per axis */
+    _Atomic uint32_t *sgrid[VV_MAX_LIGHTS]; /* point lights: bits of (T + 1), 0 = not traced */
+    float *sweep[VV_MAX_LIGHTS];            /* directional lights: swept transmittance */
+    float lidx[VV_MAX_LIGHTS][3];           /* index-space direction to the light per world unit */
+    int ldim[3];                /* light volume points per axis (every RT_LGRID voxels) */
+    float *lvol[VV_MAX_LIGHTS]; /* directional lights: this volume's own transmittance
+                                   from each point towards the light (a light volume) */
+    unsigned lvol_owned;        /* bit l: lvol[l] is this frame's (else the state's cache) */
+    vv_vextra x;                /* 2-D transfer function and solid texture */
+    int extras;                 /* x has something: the general loop handles the object */
+    int textured;               /* iso mode: an image texture modulates the base colour */
+} rt_vobj;
+
+/* Bounding volume hierarchy over a mesh's triangles (object space). */
+typedef struct rt_bvh_node {
+    float lo[3], hi[3];
+    int left;       /* child index, or -1 for a leaf */
+    int first, cnt; /* leaf: triangles tri[first .. first + cnt) */
+} rt_bvh_node;
+
+typedef struct rt_bvh {
+    rt_bvh_node *nodes;
+    int n_nodes;
+    uint32_t *tri; /* triangle order */
+} rt_bvh;
+
+/* One geometric object prepared for this render. */
+typedef struct rt_gobj {
+    const vv_object *obj;
+    vv_object_type type;
+    double w2o[3][4]; /* world -> object */
+    double nrm[3][3]; /* object normal -> world normal (M^-T) */
+    vv_plane plane;   /* polygon: its plane (object space); axis dropped for 2-D test */
+    int drop;
+    rt_bvh bvh;
+    vv_box obox; /* object-space bounds (not for planes) */
+    float col[3];
+    float kr, kt; /* reflectance (0 when the object does not reflect), transparency */
+    double ior;
+    int closed;     /* refracts (a solid); planes and polygons transmit straight */
+    int bounded;    /* polygon, box: a world-space bounding sphere rejects rays early */
+    vv_vec3 bc;     /* its centre */
+    double br2;     /* its squared radius */
+    vv_vec3 pn, pp; /* plane: world-space normal (M^-T n) and point */
+} rt_gobj;
+
+typedef struct rt_frame {
+    rt_state *st;
+    const vv_world *w;
+    rt_vobj *vobjs;
+    int n_vobj;
+    rt_gobj *gobjs;
+    int n_gobj;
+    float dt;
+    float bg[3];
+    float ambient[3];
+    rt_light lights[VV_MAX_LIGHTS];
+    vv_vlight vlights[VV_MAX_LIGHTS]; /* the same, for volume shading */
+    int n_lights;
+    float et;
+    int shadows, max_depth;
+    int avx2;          /* the processor has AVX2 and FMA (vv_vray_classify) */
+    double scene_size; /* for ray offsets */
+    /* primary rays, affine in the pixel position before normalisation (as
+     * the ray caster's): origin o00 + x ox + y oy, direction d00 + x dx + y dy */
+    vv_vec3 o00, ox, oy, d00, dx, dy;
+} rt_frame;
+
+/* A surface hit. */
+typedef struct rt_hit {
+    double t;
+    int gobj;  /* index into gobjs */
+    vv_vec3 n; /* world normal (unit, outward for solids) */
+} rt_hit;
+
+/* The last shadow-grid cell a ray's samples looked up, per light: its 8
+ * corner transmittances, so that the samples of one ray inside one cell
+ * (about 8 at a step of half a voxel) read the shared grid once. */
+typedef struct rt_scache {
+    const rt_vobj *ob;          /* the volume the cells belong to, NULL: none */
+    size_t cell[VV_MAX_LIGHTS]; /* grid index of the cell's first corner */
+    float v[VV_MAX_LIGHTS][8];  /* its corners' transmittances */
+} rt_scache;
+
+/* ---------------------------------------------------------------------- */
+/* Volume rays (the caches and sampling are src/render/volume_cache.h)      */
+
+/* The world ray over [tmin, tmax] clipped to a volume in its index space. */
+static inline int
+vray_setup(const rt_vobj *ob, const vv_ray *wr, double tmin, double tmax, vv_vray *r) {
+    return vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, wr, tmin, tmax, r);
+}
+
+static inline float
+lut_index_f(const rt_vobj *o, float v) {
+    return vv_vtables_index(&o->tab, v);
+}
+
+/* World parameter where the ray leaves the subvolume containing p. */
+static inline double
+block_exit(const vv_vray *r, const float p[3], double t) {
+    float te = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        if (r->inv[a] == 0)
+            continue;
+        float b = (float)(int)((p[a] > 0 ? p[a] : 0) * (1.0f / VV_VC_BLOCK));
+        float bound = (r->d[a] > 0 ? b + 1 : b) * (float)VV_VC_BLOCK;
+        float ta = (bound - p[a]) * r->inv[a];
+        te = ta < te ? ta : te;
+    }
+    /* a rounding error must not stall the march */
+    return t + (te > 1e-6f ? te : 1e-6f);
+}
+
+/* World parameter where the ray leaves the cube of 2 dist - 1 subvolumes
+ * around the one containing p, all of which are empty (dist >= 1). */
+static inline double
+leap_exit(const rt_vobj *ob, const vv_vray *r, const float p[3], double t, int dist) {
+    float te = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        if (r->inv[a] == 0)
+            continue;
+        const int nb = a == 0 ? ob->bx : a == 1 ? ob->by : ob->bz;
+        int b = (int)((p[a] > 0 ? p[a] : 0) * (1.0f / VV_VC_BLOCK));
+        b = b >= nb ? nb - 1 : b;
+        float bound =
+            r->d[a] > 0 ? (float)(b + dist) * VV_VC_BLOCK : (float)(b - dist + 1) * VV_VC_BLOCK;
+        float ta = (bound - p[a]) * r->inv[a];
+        te = ta < te ? ta : te;
+    }
+    return t + (te > 1e-6f ? te : 1e-6f);
+}
+
+/* Object <-> world transforms of points and directions (3 x 4 affine). */
+static inline vv_vec3
+xf_point(const double m[3][4], vv_vec3 p) {
+    return v3(m[0][0] * p.x + m[0][1] * p.y + m[0][2] * p.z + m[0][3],
+              m[1][0] * p.x + m[1][1] * p.y + m[1][2] * p.z + m[1][3],
+              m[2][0] * p.x + m[2][1] * p.y + m[2][2] * p.z + m[2][3]);
+}
+
+static inline vv_vec3
+xf_dir(const double m[3][4], vv_vec3 d) {
+    return v3(m[0][0] * d.x + m[0][1] * d.y + m[0][2] * d.z,
+              m[1][0] * d.x + m[1][1] * d.y + m[1][2] * d.z,
+              m[2][0] * d.x + m[2][1] * d.y + m[2][2] * d.z);
+}
+
+/* Median split on the longest centroid axis, 4 triangles per leaf. Nodes
+ * are stored with siblings adjacent (left, left + 1). */
+vv_status rt_bvh_build(rt_bvh *bvh, const vv_mesh *m);
+
+/* Nearest hit of one geometric object in (tmin, tmax); its object-space
+ * normal in *no (not normalised, not flipped towards the ray; gobj_normal
+ * turns it into the world normal), or NULL when not needed. */
+int rt_gobj_hit(const rt_gobj *g, const vv_ray *wr, double tmin, double tmax, double *t,
+                vv_vec3 *no);
+
+/* Nearest geometric hit among the objects a ray of this kind sees. */
+int rt_nearest_hit(const rt_frame *fr, const vv_ray *wr, double tmin, double tmax, int primary,
+                   rt_hit *h);
+
+/* The shadow grid of directional light l for the volume's own samples
+ * (shadow_grid=2): swept through every object that casts shadows. */
+vv_status rt_sweep_light(const rt_frame *fr, rt_vobj *ob, int l, int nt);
+
+/* Empties a light-volume cache slot: its volume reference and transmittances. */
+void rt_lv_release(rt_lv *e);
+
+/* The light volume of directional light l for volume ob: transmittances
+ * towards the light every RT_LGRID voxels (ob->lvol[l]), from the renderer
+ * state's cache when the volume, light and transfer function match, else
+ * swept with nt threads and cached (least recently used slot replaced). */
+vv_status rt_build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt);
+
+/* The ray caster's volume Phong (vv_vshade: reflection vector, two-sided,
+ * specular weighted by the sample opacity), each light scaled by its
+ * shadow. */
+void rt_shade_volume(const rt_frame *fr, const rt_vobj *o, const float g[3], const float pi[3],
+                     const float pw[3], const float v[3], const float col[3], float alpha,
+                     rt_scache *sc, float out[3]);
+
+/* Reflected and transmitted light at a surface point, added to out with
+ * weights kr and kt. n: unit normal facing the incoming ray's origin side;
+ * outward: the object's outward normal (solids refract). */
+void rt_shade_secondary(const rt_frame *fr, const vv_ray *wr, vv_vec3 p, vv_vec3 n, vv_vec3 outward,
+                        float kr, float kt, double ior, int solid, int depth, float weight,
+                        float out[3]);
+
+/* I_s of a geometric hit. */
+void rt_shade_geometry(const rt_frame *fr, const vv_ray *wr, const rt_hit *h, int depth,
+                       float weight, float out[3]);
+
+/* I(x, w) = I_v + tau I_s along one ray: out is the colour, *alpha the
+ * coverage (1 where a surface is hit), *tdepth the first visible hit. */
+void rt_trace(const rt_frame *fr, const vv_ray *wr, int depth, int primary, float weight,
+              float out[3], float *alpha, float *tdepth);
+
+#endif

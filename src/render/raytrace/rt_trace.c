@@ -1,0 +1,333 @@
+/*
+ * Volumetric ray tracing, the rays: volume samples composited front to
+ * back, the first surface hit, reflected and transmitted rays to the depth
+ * limit.
+ */
+#include <math.h>
+#include <omp.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "render/raytrace/rt_internal.h"
+#include "render/registry.h"
+#include "render/volume_cache.h"
+#include "volvis/render.h"
+
+/* ---------------------------------------------------------------------- */
+/* Ray tracing                                                               */
+
+/* Composites one classified sample (opacity and premultiplied colour e) at
+ * index point p, ray parameter t, under the accumulated C, A; gin: the
+ * index-space gradient there, or NULL to compute it. */
+static inline void
+composite_sample(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, const float v[3],
+                 const float *e, const float p[3], double t, const float *gin, rt_scache *sc,
+                 float C[3], float *A) {
+    const float w = 1 - *A;
+    if (ob->obj->shading) {
+        float g[3], pw[3], o3[3];
+        if (gin)
+            memcpy(g, gin, sizeof g);
+        else
+            vv_vcache_gradient(ob->c, p, g);
+        pw[0] = (float)(wr->origin.x + t * wr->dir.x);
+        pw[1] = (float)(wr->origin.y + t * wr->dir.y);
+        pw[2] = (float)(wr->origin.z + t * wr->dir.z);
+        rt_shade_volume(fr, ob, g, p, pw, v, e + 1, e[0], sc, o3);
+        C[0] += w * o3[0];
+        C[1] += w * o3[1];
+        C[2] += w * o3[2];
+    } else {
+        C[0] += w * e[1];
+        C[1] += w * e[2];
+        C[2] += w * e[3];
+    }
+    *A += w * e[0];
+}
+
+/* The common case, one composite volume on the ray: subvolume by
+ * subvolume, leaping over empty ones, the same samples t = k dt as the
+ * general loop below, classified a chunk at a time (vv_vray_classify, the
+ * ray caster's kernel) before the visible ones are shaded. */
+static void
+march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray *wr,
+          const float v[3], float C[3], float *Aout, float *dep) {
+    const double dt = fr->dt, inv_dt = 1.0 / fr->dt;
+    const vv_vcache *c = ob->c;
+    const int shading = ob->obj->shading;
+    rt_scache sc;
+    sc.ob = NULL; /* the rest is filled when first used */
+    float A = 0;
+    double k = vv_ceil_pos(r->t0 * inv_dt);
+    const double kend = floor(r->t1 * inv_dt);
+    while (k <= kend) {
+        float p[3];
+        vv_vray_point(r, k * dt, p);
+        const size_t b = vv_vcache_block(ob->c, p);
+        if (!ob->bvis[b]) {
+            const double ks = vv_ceil_pos(leap_exit(ob, r, p, k * dt, ob->bdist[b]) * inv_dt);
+            k = ks > k + 1 ? ks : k + 1;
+            continue;
+        }
+        double klast = floor(block_exit(r, p, k * dt) * inv_dt);
+        klast = klast < kend ? klast : kend;
+        klast = klast < k ? k : klast;
+        const int n = (int)(klast - k) + 1;
+        for (int s0 = 0; s0 < n; s0 += VV_VC_CHUNK) {
+            const int m = n - s0 < VV_VC_CHUNK ? n - s0 : VV_VC_CHUNK;
+            const double kfirst = k + s0;
+            size_t cell[VV_VC_CHUNK];
+            int32_t entry[VV_VC_CHUNK];
+            float fx[VV_VC_CHUNK], fy[VV_VC_CHUNK], fz[VV_VC_CHUNK];
+            vv_vray_classify(c, &ob->tab, r, kfirst, dt, m, fr->avx2, cell, fx, fy, fz, entry);
+            for (int s = 0; s < m; s++) {
+                const float *e = ob->lut + entry[s];
+                if (e[0] <= 0)
+                    continue;
+                const double t = (kfirst + s) * dt;
+                float g[3] = {0, 0, 0};
+                if (shading) {
+                    vv_vray_point(r, t, p);
+                    if (c->nrm) {
+                        const float f[3] = {fx[s], fy[s], fz[s]};
+                        vv_vcache_gradient_at(c, cell[s], f, g);
+                    } else {
+                        vv_vcache_gradient(c, p, g);
+                    }
+                }
+                composite_sample(fr, ob, wr, v, e, p, t, g, &sc, C, &A);
+                if (*dep == INFINITY)
+                    *dep = (float)t;
+                if (A >= fr->et) {
+                    *Aout = A > 1 ? 1 : A;
+                    return;
+                }
+            }
+        }
+        k = klast + 1;
+    }
+    *Aout = A > 1 ? 1 : A;
+}
+
+/* Front-to-back compositing of the composite and iso volumes along the ray
+ * over [0, tlim] on the samples t = k dt (the ray caster's grid). An iso
+ * hit is a surface: shaded with shadows and reflections, it ends the ray. */
+static void
+march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int primary,
+              float weight, float C[3], float *Aout, float *dep) {
+    vv_vray rays[RT_MAX_OBJ];
+    int act[RT_MAX_OBJ];
+    rt_scache sc;
+    sc.ob = NULL; /* the rest is filled when first used */
+    int na = 0;
+    double tmin = INFINITY, tmax = -INFINITY;
+    for (int i = 0; i < fr->n_vobj; i++) {
+        const rt_vobj *ob = &fr->vobjs[i];
+        if (ob->mode != VV_MODE_COMPOSITE && ob->mode != VV_MODE_ISO)
+            continue;
+        if (!primary && !ob->obj->visible_in_reflections)
+            continue;
+        if (vray_setup(ob, wr, 0, tlim, &rays[na])) {
+            act[na] = i;
+            tmin = rays[na].t0 < tmin ? rays[na].t0 : tmin;
+            tmax = rays[na].t1 > tmax ? rays[na].t1 : tmax;
+            na++;
+        }
+    }
+    float A = 0;
+    if (na == 0) {
+        *Aout = 0;
+        return;
+    }
+    const double dt = fr->dt;
+    const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
+    if (na == 1 && fr->vobjs[act[0]].mode == VV_MODE_COMPOSITE && !fr->vobjs[act[0]].extras) {
+        march_one(fr, &fr->vobjs[act[0]], &rays[0], wr, v, C, Aout, dep);
+        return;
+    }
+    float prev_v[RT_MAX_OBJ];
+    double prev_t[RT_MAX_OBJ];
+    int has_prev[RT_MAX_OBJ];
+    for (int i = 0; i < na; i++)
+        has_prev[i] = 0;
+    double k = vv_ceil_pos(tmin / dt);
+    const double kend = floor(tmax / dt);
+    while (k <= kend) {
+        const double t = k * dt;
+        double next_k = k + 1;
+        double skip_to = INFINITY;
+        int sampled = 0;
+        for (int ai = 0; ai < na; ai++) {
+            const rt_vobj *ob = &fr->vobjs[act[ai]];
+            const vv_vray *r = &rays[ai];
+            if (t < r->t0 || t > r->t1) {
+                if (t < r->t0 && r->t0 < skip_to)
+                    skip_to = r->t0;
+                has_prev[ai] = 0;
+                continue;
+            }
+            float p[3];
+            vv_vray_point(r, t, p);
+            const vv_vcache *c = ob->c;
+            const size_t b = vv_vcache_block(ob->c, p);
+            if (!ob->bvis[b]) {
+                double te = leap_exit(ob, r, p, t, ob->bdist[b]);
+                if (te < skip_to)
+                    skip_to = te;
+                if (ob->mode == VV_MODE_ISO) {
+                    double tx = te < r->t1 ? te : r->t1;
+                    float px[3];
+                    vv_vray_point(r, tx, px);
+                    prev_v[ai] = vv_vcache_sample(c, px);
+                    prev_t[ai] = tx;
+                    has_prev[ai] = 1;
+                }
+                continue;
+            }
+            sampled = 1;
+            const float val = vv_vcache_sample(c, p);
+            if (ob->mode == VV_MODE_ISO) {
+                const float iso = ob->iso;
+                double th = -1;
+                if (!has_prev[ai]) {
+                    if (val >= iso && t - r->t0 < dt)
+                        th = t;
+                } else if ((prev_v[ai] < iso) != (val < iso)) {
+                    th = vv_vray_iso_refine(c, r, prev_t[ai], prev_v[ai], t, iso);
+                }
+                prev_v[ai] = val;
+                prev_t[ai] = t;
+                has_prev[ai] = 1;
+                if (th >= 0) {
+                    float ph[3], g[3], pw[3], col[3];
+                    vv_vray_point(r, th, ph);
+                    vv_vcache_gradient(c, ph, g);
+                    pw[0] = (float)(wr->origin.x + th * wr->dir.x);
+                    pw[1] = (float)(wr->origin.y + th * wr->dir.y);
+                    pw[2] = (float)(wr->origin.z + th * wr->dir.z);
+                    float base[3] = {ob->sh.base[0], ob->sh.base[1], ob->sh.base[2]};
+                    if (ob->textured) {
+                        const vv_vec3 tc = vv_texture_map_eval(&ob->obj->texture,
+                                                               vv_vextra_object_point(&ob->x, ph));
+                        base[0] *= (float)tc.x;
+                        base[1] *= (float)tc.y;
+                        base[2] *= (float)tc.z;
+                    }
+                    if (ob->obj->shading)
+                        rt_shade_volume(fr, ob, g, ph, pw, v, base, 1.0f, NULL, col);
+                    else
+                        memcpy(col, base, sizeof col);
+                    const vv_material *m = &ob->obj->material;
+                    float kr = ob->obj->reflects ? (float)m->reflectance : 0.0f;
+                    float kt = (float)m->transparency;
+                    if ((kr > 0 || kt > 0) && fr->max_depth > depth) {
+                        /* the isosurface as a mirror or a window: world
+                         * normal from the gradient, facing the ray */
+                        vv_vec3 nw = v3(ob->sh.nrm[0][0] * g[0] + ob->sh.nrm[0][1] * g[1] +
+                                            ob->sh.nrm[0][2] * g[2],
+                                        ob->sh.nrm[1][0] * g[0] + ob->sh.nrm[1][1] * g[1] +
+                                            ob->sh.nrm[1][2] * g[2],
+                                        ob->sh.nrm[2][0] * g[0] + ob->sh.nrm[2][1] * g[1] +
+                                            ob->sh.nrm[2][2] * g[2]);
+                        nw = v3norm(nw);
+                        /* gradients point to higher values: inside; outward is minus */
+                        vv_vec3 outward = v3scale(nw, -1);
+                        vv_vec3 nf = v3dot(outward, wr->dir) > 0 ? nw : outward;
+                        float kl = 1 - kr - kt;
+                        kl = kl < 0 ? 0 : kl;
+                        for (int ch = 0; ch < 3; ch++)
+                            col[ch] *= kl;
+                        rt_shade_secondary(fr, wr, ray_at(wr, th), nf, outward, kr, kt, m->ior, 1,
+                                           depth, weight * (1 - A), col);
+                    }
+                    const float w = 1 - A;
+                    C[0] += w * col[0];
+                    C[1] += w * col[1];
+                    C[2] += w * col[2];
+                    A = 1;
+                    if (th < *dep)
+                        *dep = (float)th;
+                }
+                continue;
+            }
+            const float *e = ob->lut + 4 * (int)lut_index_f(ob, val);
+            if (e[0] <= 0)
+                continue;
+            float ebuf[4];
+            if (ob->extras && (e = vv_vextra_apply(&ob->x, c, p, val, e, ebuf))[0] <= 0)
+                continue;
+            composite_sample(fr, ob, wr, v, e, p, t, NULL, &sc, C, &A);
+            if (*dep == INFINITY)
+                *dep = (float)t;
+        }
+        if (A >= fr->et)
+            break;
+        if (!sampled && skip_to < INFINITY) {
+            double ks = vv_ceil_pos(skip_to / dt);
+            if (ks > next_k)
+                next_k = ks;
+        }
+        k = next_k;
+    }
+    *Aout = A > 1 ? 1 : A;
+}
+
+/* Maximum / minimum intensity projection or X-ray of one volume over the
+ * part of the ray in [0, tlim] (vv_vray_project). Returns 0 when the ray
+ * misses it. */
+static int
+project_volume(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double tlim, float *value,
+               float *depth) {
+    vv_vray r;
+    if (!vray_setup(ob, wr, 0, tlim, &r))
+        return 0;
+    vv_vray_project(ob->c, &r, ob->mode, fr->dt, fr->st->parc, -INFINITY, INFINITY, value, depth);
+    return 1;
+}
+
+/* I(x, w) = I_v + tau I_s along one ray: out is the colour, *alpha the
+ * coverage (1 where a surface is hit), *tdepth the first visible hit. */
+void
+rt_trace(const rt_frame *fr, const vv_ray *wr, int depth, int primary, float weight, float out[3],
+         float *alpha, float *tdepth) {
+    rt_hit h;
+    /* secondary rays start off their surface already (offset along the normal) */
+    const int geo = rt_nearest_hit(fr, wr, 0, INFINITY, primary, &h);
+    const double tlim = geo ? h.t : INFINITY;
+    float C[3] = {0, 0, 0}, A = 0, dep = INFINITY;
+    march_volumes(fr, wr, tlim, depth, primary, weight, C, &A, &dep);
+    float P[3] = {0, 0, 0}, PA = 0, pdepth = INFINITY;
+    for (int i = 0; i < fr->n_vobj; i++) {
+        const rt_vobj *ob = &fr->vobjs[i];
+        if (ob->mode == VV_MODE_COMPOSITE || ob->mode == VV_MODE_ISO)
+            continue;
+        if (!primary && !ob->obj->visible_in_reflections)
+            continue;
+        float val, d;
+        if (!project_volume(fr, ob, wr, tlim, &val, &d))
+            continue;
+        const float *e = ob->lut + 4 * (int)lut_index_f(ob, val);
+        for (int ch = 0; ch < 3; ch++) {
+            float cv = e[1 + ch] * e[0];
+            P[ch] = cv > P[ch] ? cv : P[ch];
+        }
+        PA = e[0] > PA ? e[0] : PA;
+        pdepth = d < pdepth ? d : pdepth;
+    }
+    const float rest = 1 - A;
+    const float A2 = A + rest * PA;
+    float behind[3] = {fr->bg[0], fr->bg[1], fr->bg[2]};
+    float balpha = 0;
+    if (geo && A < fr->et && A < 1) {
+        rt_shade_geometry(fr, wr, &h, depth, weight * (1 - A2), behind);
+        balpha = 1;
+        dep = dep < h.t ? dep : (float)h.t;
+    }
+    for (int ch = 0; ch < 3; ch++)
+        out[ch] = C[ch] + rest * P[ch] + (1 - A2) * behind[ch];
+    *alpha = A2 + (1 - A2) * balpha;
+    *tdepth = dep < pdepth ? dep : pdepth;
+}
