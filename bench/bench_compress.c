@@ -199,7 +199,7 @@ main(int argc, char **argv) {
                         "[--azimuth DEG] [--elevation DEG]\n");
         return 2;
     }
-    const char *path = argv[1], *zfp = NULL, *outdir = "bench-out";
+    const char *path = argv[1], *zfp = NULL, *outdir = "build/bench-out";
     int runs = 5, threads = 0, size = 512, block = 16;
     double az = 30, el = 20;
     double rates[MAX_RATES] = {0.5, 1, 2, 4};
@@ -242,7 +242,7 @@ main(int argc, char **argv) {
         }
     }
     runs = runs < 1 ? 1 : runs;
-    mkdir(outdir, 0755);
+    bench_mkdirs(outdir);
     dataset = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
     vv_volume *vol = NULL;
     if (vv_volume_load(&vol, path, NULL) != VV_OK)

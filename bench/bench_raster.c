@@ -44,7 +44,7 @@ int
 main(int argc, char **argv) {
     double iso = NAN;
     int size = 512, runs = 5, threads = 0, with_variants = 1;
-    const char *outdir = "bench_out", *path = NULL;
+    const char *outdir = "build/bench-out", *path = NULL;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         if (a[0] != '-') {
@@ -79,7 +79,7 @@ main(int argc, char **argv) {
         return 2;
     }
     dataset = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
-    mkdir(outdir, 0755);
+    bench_mkdirs(outdir);
     if (threads > 0)
         vv_threads_set(threads);
     vv_volume *vol;

@@ -88,7 +88,7 @@ save(const vv_image *img, const bench_cfg *cfg, const char *stem, const char *mo
 
 int
 main(int argc, char **argv) {
-    bench_cfg cfg = {NAN,    NAN, NAN, 0.5, 0.5, 512, 5, 0, "bench_out", "composite,mip,iso",
+    bench_cfg cfg = {NAN,    NAN, NAN, 0.5, 0.5, 512, 5, 0, "build/bench-out", "composite,mip,iso",
                      {NULL}, 0};
     const char *path = NULL;
     for (int i = 1; i < argc; i++) {
@@ -138,7 +138,7 @@ main(int argc, char **argv) {
         return 2;
     }
     dataset = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
-    mkdir(cfg.outdir, 0755);
+    bench_mkdirs(cfg.outdir);
     if (cfg.threads > 0)
         vv_threads_set(cfg.threads);
 

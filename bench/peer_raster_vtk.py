@@ -29,7 +29,7 @@ ap.add_argument("--iso", type=float, required=True)
 ap.add_argument("--size", type=int, default=512)
 ap.add_argument("--runs", type=int, default=5)
 ap.add_argument("--threads", type=int, default=2)
-ap.add_argument("--outdir", default="bench_out")
+ap.add_argument("--outdir", default="build/bench-out")
 args = ap.parse_args()
 
 os.environ["LP_NUM_THREADS"] = str(args.threads)
