@@ -4,6 +4,7 @@
  * cmd_isosurface.c, cmd_measure.c, cmd_voxelize.c, cmd_devices.c, cmd_animate.c). See
  * docs/cli.md.
  */
+#include <signal.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -59,6 +60,9 @@ usage(FILE *out) {
 
 int
 main(int argc, char **argv) {
+    /* a file size limit (ulimit -f) makes a write fail with EFBIG, reported
+     * like a full disk, instead of killing the process */
+    signal(SIGXFSZ, SIG_IGN);
     if (argc < 2)
         return cli_usage_error(NULL, "missing command");
     const char *cmd = argv[1];

@@ -1,4 +1,5 @@
 /* Atomic output files, whole-file reads, paths, byte order. */
+#define _GNU_SOURCE /* O_TMPFILE, AT_EMPTY_PATH */
 #include <errno.h>
 #include <fcntl.h>
 #include <stdio.h>
@@ -19,9 +20,30 @@ vv_strdup(const char *s) {
     return d;
 }
 
+static vv_status
+atomic_open_failed(vv_atomic_file *af, const char *path, int err) {
+    vv_status s = vv_error_set(VV_ERR_IO, "%s: cannot create: %s", path, strerror(err));
+    free(af->path);
+    free(af->tmp_path);
+    memset(af, 0, sizeof *af);
+    af->fd = -1;
+    return s;
+}
+
+/* A name beside @p path for the temporary file: "<path>.tmp-XXXXXX". */
+static void
+tmp_name(const vv_atomic_file *af, size_t cap, int attempt) {
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    unsigned r = (unsigned)getpid() * 2654435761u ^ (unsigned)ts.tv_nsec ^
+                 (unsigned)(uintptr_t)af * 40503u ^ ((unsigned)attempt << 20);
+    snprintf(af->tmp_path, cap, "%s.tmp-%06x", af->path, r & 0xFFFFFFu);
+}
+
 vv_status
 vv_atomic_file_open(vv_atomic_file *af, const char *path) {
     memset(af, 0, sizeof *af);
+    af->fd = -1;
     size_t n = strlen(path);
     af->path = vv_strdup(path);
     af->tmp_path = malloc(n + 16);
@@ -29,53 +51,102 @@ vv_atomic_file_open(vv_atomic_file *af, const char *path) {
         free(af->path);
         free(af->tmp_path);
         memset(af, 0, sizeof *af);
+        af->fd = -1;
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     }
-    /* open(O_CREAT | O_EXCL, 0666) rather than mkstemp: the kernel applies the
-     * umask, so the file gets the usual permissions without touching the
-     * process-wide umask (not thread-safe). The name only needs to be unique
-     * beside the target; collisions are retried. */
+    af->tmp_path[0] = '\0';
+    /* First choice: an unnamed file in the target's folder (O_TMPFILE), given
+     * a name only at commit, so a process killed mid-write leaves nothing
+     * behind. Where the file system cannot (EOPNOTSUPP, EISDIR on old
+     * kernels), a named temporary beside the target. Both get the usual
+     * permissions: 0666 less the umask, applied by the kernel. */
     int fd = -1;
+#ifdef O_TMPFILE
+    {
+        const char *slash = strrchr(path, '/');
+        char *dir = slash ? vv_strdup(path) : NULL;
+        if (slash && !dir) {
+            free(af->path);
+            free(af->tmp_path);
+            memset(af, 0, sizeof *af);
+            af->fd = -1;
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        }
+        if (dir)
+            dir[slash == path ? 1 : (size_t)(slash - path)] = '\0';
+        fd = open(dir ? dir : ".", O_TMPFILE | O_WRONLY | O_CLOEXEC, 0666);
+        free(dir);
+        if (fd >= 0)
+            af->anonymous = 1;
+        else if (errno == ENOENT || errno == ENOTDIR || errno == EACCES || errno == EROFS ||
+                 errno == ENOSPC || errno == EDQUOT)
+            return atomic_open_failed(af, path, errno);
+    }
+#endif
     for (int attempt = 0; attempt < 100 && fd < 0; attempt++) {
-        struct timespec ts;
-        clock_gettime(CLOCK_REALTIME, &ts);
-        unsigned r = (unsigned)getpid() * 2654435761u ^ (unsigned)ts.tv_nsec ^
-                     (unsigned)(uintptr_t)af * 40503u ^ ((unsigned)attempt << 20);
-        snprintf(af->tmp_path, n + 16, "%s.tmp-%06x", path, r & 0xFFFFFFu);
+        tmp_name(af, n + 16, attempt);
         fd = open(af->tmp_path, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
         if (fd < 0 && errno != EEXIST)
             break;
     }
-    if (fd < 0) {
-        vv_status s = vv_error_set(VV_ERR_IO, "%s: cannot create: %s", path, strerror(errno));
-        free(af->path);
-        free(af->tmp_path);
-        memset(af, 0, sizeof *af);
-        return s;
-    }
+    if (fd < 0)
+        return atomic_open_failed(af, path, errno);
     af->fp = fdopen(fd, "wb");
     if (!af->fp) {
+        int err = errno;
         close(fd);
-        unlink(af->tmp_path);
+        if (!af->anonymous)
+            unlink(af->tmp_path);
         free(af->path);
         free(af->tmp_path);
         memset(af, 0, sizeof *af);
-        return vv_error_set(VV_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+        af->fd = -1;
+        return vv_error_set(VV_ERR_IO, "%s: cannot open: %s", path, strerror(err));
     }
+    af->fd = fd;
     return VV_OK;
+}
+
+/* Gives the unnamed file a temporary name beside the target, for rename. */
+static int
+link_anonymous(vv_atomic_file *af) {
+    size_t cap = strlen(af->path) + 16;
+    char proc[64];
+    snprintf(proc, sizeof proc, "/proc/self/fd/%d", af->fd);
+    for (int attempt = 0; attempt < 100; attempt++) {
+        tmp_name(af, cap, attempt);
+        if (linkat(AT_FDCWD, proc, AT_FDCWD, af->tmp_path, AT_SYMLINK_FOLLOW) == 0)
+            return 0;
+        if (errno == EEXIST)
+            continue;
+        /* no /proc: linking the descriptor itself needs CAP_DAC_READ_SEARCH */
+        if (linkat(af->fd, "", AT_FDCWD, af->tmp_path, AT_EMPTY_PATH) == 0)
+            return 0;
+        if (errno != EEXIST)
+            return -1;
+    }
+    return -1;
 }
 
 vv_status
 vv_atomic_file_commit(vv_atomic_file *af) {
     if (!af->fp)
         return vv_error_set(VV_ERR_IO, "atomic file not open");
-    int bad = ferror(af->fp) || fflush(af->fp) != 0 || fsync(fileno(af->fp)) != 0;
+    int bad = ferror(af->fp) || fflush(af->fp) != 0 || fsync(af->fd) != 0;
     int err = errno;
+    if (!bad && af->anonymous && link_anonymous(af) != 0) {
+        vv_status s = vv_error_set(VV_ERR_IO, "%s: cannot name the written file: %s", af->path,
+                                   strerror(errno));
+        vv_atomic_file_abort(af);
+        return s;
+    }
+    af->anonymous = 0; /* from here on it has a name to remove on failure */
     if (fclose(af->fp) != 0 && !bad) {
         bad = 1;
         err = errno;
     }
     af->fp = NULL;
+    af->fd = -1;
     if (bad) {
         vv_status s = vv_error_set(VV_ERR_IO, "%s: write failed: %s", af->path, strerror(err));
         vv_atomic_file_abort(af);
@@ -90,6 +161,7 @@ vv_atomic_file_commit(vv_atomic_file *af) {
     free(af->path);
     free(af->tmp_path);
     memset(af, 0, sizeof *af);
+    af->fd = -1;
     return VV_OK;
 }
 
@@ -97,11 +169,12 @@ void
 vv_atomic_file_abort(vv_atomic_file *af) {
     if (af->fp)
         fclose(af->fp);
-    if (af->tmp_path)
+    if (af->tmp_path && !af->anonymous && af->tmp_path[0])
         unlink(af->tmp_path);
     free(af->path);
     free(af->tmp_path);
     memset(af, 0, sizeof *af);
+    af->fd = -1;
 }
 
 vv_status

@@ -11,13 +11,18 @@
 #include "volvis/volume.h"
 
 /**
- * An output file written atomically: the data goes to a temporary file
- * beside the target ("<path>.tmp-XXXXXX"), renamed over the target only by
- * vv_atomic_file_commit. On any failure call vv_atomic_file_abort, which
- * removes the temporary file and leaves the target untouched.
+ * An output file written atomically: the data goes to an unnamed file in
+ * the target's folder (O_TMPFILE; where the file system cannot, a temporary
+ * file beside it, "<path>.tmp-XXXXXX"), linked and renamed over the target
+ * only by vv_atomic_file_commit after fsync. On any failure call
+ * vv_atomic_file_abort: the target is untouched and no temporary file is
+ * left; a process killed mid-write leaves none either (but for the named
+ * fallback). Write through fp, or through fd (then fp must stay unused).
  */
 typedef struct vv_atomic_file {
     FILE *fp;
+    int fd;        /**< fp's descriptor, -1 when closed */
+    int anonymous; /**< no name yet (O_TMPFILE) */
     char *path;
     char *tmp_path;
 } vv_atomic_file;

@@ -8,6 +8,7 @@
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -193,32 +194,31 @@ vv_mesh_save(const vv_mesh *m, const char *path) {
         }
     }
     vv_status s = VV_OK;
-    char *tmp = NULL;
     if (!ok) {
         s = vv_error_set(VV_ERR_NOMEM, "mesh: %s: out of memory", name);
     } else {
-        /* Assimp writes the file itself: export to a temporary name beside
-         * the target (same extension, so nothing is renamed by the exporter)
-         * and rename only on success. */
-        size_t n = strlen(path) + 32;
-        tmp = malloc(n);
-        if (!tmp) {
-            s = vv_error_set(VV_ERR_NOMEM, "mesh: %s: out of memory", name);
+        /* exported to memory and written through an atomic file, so a full
+         * disk or a killed process never leaves a partial mesh (Assimp's own
+         * file writer does not check its writes) */
+        const struct aiExportDataBlob *blob = aiExportSceneToBlob(&sc, fmt, 0);
+        if (!blob) {
+            const char *why = aiGetErrorString();
+            s = vv_error_set(VV_ERR_IO, "mesh: %s: %s", name,
+                             why && *why ? why : "the exporter failed");
         } else {
-            const char *dot = strrchr(path, '.');
-            snprintf(tmp, n, "%.*s.tmp-%ld%s", (int)(dot - path), path, (long)getpid(), dot);
-            if (aiExportScene(&sc, fmt, tmp, 0) != aiReturn_SUCCESS) {
-                const char *why = aiGetErrorString();
-                s = vv_error_set(VV_ERR_IO, "mesh: %s: %s", name,
-                                 why && *why ? why : "the exporter failed");
-                remove(tmp);
-            } else if (rename(tmp, path) != 0) {
-                s = vv_error_set(VV_ERR_IO, "mesh: %s: cannot rename the written file", name);
-                remove(tmp);
+            vv_atomic_file af;
+            s = vv_atomic_file_open(&af, path);
+            if (s != VV_OK) {
+                s = vv_error_prefix(s, "mesh");
+            } else if (fwrite(blob->data, 1, blob->size, af.fp) != blob->size) {
+                s = vv_error_set(VV_ERR_IO, "mesh: %s: write failed: %s", name, strerror(errno));
+                vv_atomic_file_abort(&af);
+            } else if ((s = vv_atomic_file_commit(&af)) != VV_OK) {
+                s = vv_error_prefix(s, "mesh");
             }
+            aiReleaseExportBlob(blob);
         }
     }
-    free(tmp);
     free(am.mVertices);
     free(am.mNormals);
     free(am.mFaces);

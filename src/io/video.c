@@ -2,8 +2,9 @@
  * Video files through FFmpeg: libavcodec encodes (libx264 for MP4,
  * libvpx-vp9 for WebM), libswscale converts RGB to yuv420p (BT.601, limited
  * range, the colour space tagged in the stream) and libavformat writes the
- * container. The stream goes to a temporary file beside the target that is
- * renamed over it when complete (include/volvis/video.h).
+ * container. The stream goes through a custom AVIO into an atomic file
+ * (vv_atomic_file: unnamed until complete, then renamed over the target;
+ * include/volvis/video.h).
  */
 #include <errno.h>
 #include <math.h>
@@ -11,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "core/internal.h"
@@ -110,7 +112,9 @@ quiet_ffmpeg(void) {
 }
 
 struct vv_video_writer {
-    char *path, *tmp_path;
+    vv_atomic_file af; /* the output, written through af.fd by the AVIO below */
+    const char *path;  /* af.path */
+    int write_err;     /* errno of a failed write or seek, 0: none */
     int width, height; /* input size */
     int ew, eh;        /* encoded size (even) */
     AVFormatContext *oc;
@@ -141,24 +145,66 @@ av_fail(vv_video_writer *w, const char *what, int err) {
     return vv_error_set(VV_ERR_IO, "video: %s: %s: %s", w->path, what, buf);
 }
 
+/* FFmpeg's output goes through the atomic file's descriptor (custom AVIO),
+ * so nothing but vv_atomic_file names the file. */
+static int
+io_write(void *opaque, uint8_t *buf, int n) {
+    vv_video_writer *w = opaque;
+    int left = n;
+    while (left > 0) {
+        ssize_t k = write(w->af.fd, buf, (size_t)left);
+        if (k < 0) {
+            if (errno == EINTR)
+                continue;
+            w->write_err = errno;
+            return AVERROR(errno);
+        }
+        buf += k;
+        left -= (int)k;
+    }
+    return n;
+}
+
+static int64_t
+io_seek(void *opaque, int64_t offset, int whence) {
+    vv_video_writer *w = opaque;
+    if (whence & AVSEEK_SIZE) {
+        struct stat st;
+        if (fstat(w->af.fd, &st) != 0)
+            return AVERROR(errno);
+        return st.st_size;
+    }
+    off_t r = lseek(w->af.fd, (off_t)offset, whence & ~AVSEEK_FORCE);
+    if (r < 0) {
+        w->write_err = errno;
+        return AVERROR(errno);
+    }
+    return r;
+}
+
+static void
+io_free(vv_video_writer *w) {
+    if (w->oc && w->oc->pb) {
+        av_freep(&w->oc->pb->buffer);
+        avio_context_free(&w->oc->pb);
+    }
+}
+
 static void
 writer_release(vv_video_writer *w, int remove_tmp) {
     if (!w)
         return;
     if (w->oc) {
-        if (w->oc->pb)
-            avio_closep(&w->oc->pb);
+        io_free(w);
         avformat_free_context(w->oc);
     }
     avcodec_free_context(&w->cc);
     av_frame_free(&w->frame);
     av_packet_free(&w->pkt);
     sws_freeContext(w->sws);
-    if (remove_tmp && w->tmp_path)
-        unlink(w->tmp_path);
+    if (remove_tmp)
+        vv_atomic_file_abort(&w->af);
     free(w->pad);
-    free(w->path);
-    free(w->tmp_path);
     free(w);
 }
 
@@ -201,15 +247,12 @@ vv_video_writer_open(vv_video_writer **out, const char *path, int width, int hei
     if (!w)
         return vv_error_set(VV_ERR_NOMEM, "video: out of memory");
     /* the temporary file gets the usual permissions (umask), as every output */
-    vv_atomic_file af;
-    vv_status s0 = vv_atomic_file_open(&af, path);
+    vv_status s0 = vv_atomic_file_open(&w->af, path);
     if (s0 != VV_OK) {
         free(w);
         return vv_error_prefix(s0, "video");
     }
-    fclose(af.fp);
-    w->path = af.path;
-    w->tmp_path = af.tmp_path;
+    w->path = w->af.path;
     w->width = width;
     w->height = height;
     w->ew = (width + 1) & ~1;
@@ -218,7 +261,7 @@ vv_video_writer_open(vv_video_writer **out, const char *path, int width, int hei
     vv_status s = VV_OK;
     int err;
     const char *fmt = codec == VV_VIDEO_VP9 ? "webm" : "mp4";
-    if ((err = avformat_alloc_output_context2(&w->oc, NULL, fmt, w->tmp_path)) < 0 || !w->oc) {
+    if ((err = avformat_alloc_output_context2(&w->oc, NULL, fmt, w->path)) < 0 || !w->oc) {
         s = av_fail(w, "cannot create the container", err);
         goto fail;
     }
@@ -271,9 +314,15 @@ vv_video_writer_open(vv_video_writer **out, const char *path, int width, int hei
         s = av_fail(w, "cannot set the stream parameters", err);
         goto fail;
     }
-    if ((err = avio_open(&w->oc->pb, w->tmp_path, AVIO_FLAG_WRITE)) < 0) {
-        s = av_fail(w, "cannot open the temporary file", err);
-        goto fail;
+    {
+        unsigned char *buf = av_malloc(1 << 16);
+        w->oc->pb = buf ? avio_alloc_context(buf, 1 << 16, 1, w, NULL, io_write, io_seek) : NULL;
+        if (!w->oc->pb) {
+            av_free(buf);
+            s = vv_error_set(VV_ERR_NOMEM, "video: out of memory");
+            goto fail;
+        }
+        w->oc->flags |= AVFMT_FLAG_CUSTOM_IO;
     }
     if ((err = avformat_write_header(w->oc, NULL)) < 0) {
         s = av_fail(w, "cannot write the header", err);
@@ -381,20 +430,19 @@ vv_video_writer_finish(vv_video_writer *w) {
         writer_release(w, 1);
         return s;
     }
-    err = avio_closep(&w->oc->pb);
-    if (err < 0) {
-        s = av_fail(w, "cannot close the file", err);
+    avio_flush(w->oc->pb);
+    if (w->write_err || w->oc->pb->error < 0) {
+        s = vv_error_set(VV_ERR_IO, "video: %s: write failed: %s", w->path,
+                         strerror(w->write_err ? w->write_err : EIO));
         writer_release(w, 1);
         return s;
     }
-    if (rename(w->tmp_path, w->path) != 0) {
-        s = vv_error_set(VV_ERR_IO, "video: %s: cannot rename the temporary file into place: %s",
-                         w->path, strerror(errno));
-        writer_release(w, 1);
-        return s;
-    }
+    io_free(w);
+    s = vv_atomic_file_commit(&w->af);
+    if (s != VV_OK)
+        s = vv_error_prefix(s, "video");
     writer_release(w, 0);
-    return VV_OK;
+    return s;
 }
 
 #endif

@@ -9,7 +9,8 @@
  * width * height * 3 bytes, written atomically: cheap to write, unlike a PNG,
  * so keeping them costs the render almost nothing); a resumed run reads them
  * back into the encoder instead of rendering them, and the folder is removed
- * once the video is in place.
+ * once the video is in place (a failed run keeps it only when it holds
+ * frames).
  */
 #ifdef __linux__
 #include <sys/resource.h>
@@ -458,6 +459,10 @@ done:
         pthread_cond_destroy(&w.cv);
     }
     vv_video_writer_abort(video); /* no partial video: the temporary goes */
+    /* a failed run keeps its finished frames for --resume; a work folder
+     * with none (a full disk at the first frame) is not left behind */
+    if (s != VV_OK && work)
+        rmdir(work);
     vv_image_free(img);
     vv_image_free(img2);
     free(rgb[0]);
