@@ -86,6 +86,24 @@ vv_mesh_holes_free(vv_mesh_holes *h) {
     memset(h, 0, sizeof *h);
 }
 
+/* The end of the group of equal keys that starts at E[i]. */
+static size_t
+group_end(const edge_rec *E, size_t ne, size_t i) {
+    size_t j = i;
+    while (j < ne && E[j].key == E[i].key)
+        j++;
+    return j;
+}
+
+/* The traversals lo -> hi minus hi -> lo of the edge group E[i .. j). */
+static long
+edge_net(const edge_rec *E, size_t i, size_t j, const unsigned char *flip) {
+    long net = 0;
+    for (; i < j; i++)
+        net += (E[i].fwd ^ flip[E[i].tri]) ? 1 : -1;
+    return net;
+}
+
 vv_status
 vv_mesh_holes_find(const vv_mesh *m, vv_mesh_holes *out) {
     memset(out, 0, sizeof *out);
@@ -93,21 +111,21 @@ vv_mesh_holes_find(const vv_mesh *m, vv_mesh_holes *out) {
     if (nt > UINT32_MAX / 3 || nv > UINT32_MAX)
         return vv_error_set(VV_ERR_INVALID, "mesh holes: %zu triangles is too many", nt);
     const float *P = m->positions;
-    uint32_t *weld = malloc((nv ? nv : 1) * sizeof *weld);
-    uint32_t *ids = malloc((nv ? nv : 1) * sizeof *ids);
-    uint32_t *tmp = malloc((nv ? nv : 1) * sizeof *tmp);
-    edge_rec *E = malloc((nt ? 3 * nt : 1) * sizeof *E);
-    out->tri = malloc((nt ? 3 * nt : 1) * sizeof *out->tri);
-    unsigned char *flip = calloc(nt ? nt : 1, 1);
-    if (!weld || !ids || !tmp || !E || !out->tri || !flip) {
-        free(weld);
-        free(ids);
-        free(tmp);
-        free(E);
-        free(flip);
-        vv_mesh_holes_free(out);
-        return vv_error_set(VV_ERR_NOMEM, "mesh holes: out of memory for %zu triangles", nt);
-    }
+    vv_status st = VV_OK;
+    /* scratch, freed at the end */
+    uint32_t *weld = NULL, *ids = NULL, *tmp = NULL, *deg = NULL, *adj = NULL, *queue = NULL,
+             *comp = NULL, *fill = NULL, *out_start = NULL, *order = NULL, *cur = NULL;
+    size_t *start = NULL;
+    edge_rec *E = NULL, *S = NULL;
+    unsigned char *flip = NULL, *used = NULL;
+    uint32_t(*be)[2] = NULL;
+#define ALLOC(p, n) ((p) = malloc(((n) > 0 ? (n) : 1) * sizeof *(p)))
+#define CALLOC(p, n) ((p) = calloc((n) > 0 ? (n) : 1, sizeof *(p)))
+    if (!ALLOC(weld, nv) || !ALLOC(ids, nv) || !ALLOC(tmp, nv) || !ALLOC(E, 3 * nt) ||
+        !ALLOC(out->tri, 3 * nt) || !CALLOC(flip, nt) || !CALLOC(start, nv + 1) ||
+        !ALLOC(S, 3 * nt) || !CALLOC(deg, nt + 1) || !ALLOC(queue, nt) || !ALLOC(comp, nt) ||
+        !CALLOC(fill, nt))
+        goto nomem;
     out->n_tri = nt;
     memcpy(out->tri, m->triangles, 3 * nt * sizeof *out->tri);
     /* weld: every vertex maps to the first vertex at its exact position */
@@ -120,9 +138,7 @@ vv_mesh_holes_find(const vv_mesh *m, vv_mesh_holes *out) {
             weld[ids[j++]] = ids[i];
         i = j;
     }
-    free(ids);
-    free(tmp);
-    /* the edges of the non-degenerate triangles, grouped */
+    /* the edges of the non-degenerate triangles */
     size_t ne = 0;
     for (size_t t = 0; t < nt; t++) {
         uint32_t w[3];
@@ -140,103 +156,46 @@ vv_mesh_holes_find(const vv_mesh *m, vv_mesh_holes *out) {
     }
     /* grouped by key: a counting sort on the low vertex, then insertion
      * sorts of the few edges per vertex */
-    {
-        size_t *start = calloc(nv + 1, sizeof *start);
-        edge_rec *S = malloc((ne ? ne : 1) * sizeof *S);
-        if (!start || !S) {
-            free(start);
-            free(S);
-            free(weld);
-            free(E);
-            free(flip);
-            vv_mesh_holes_free(out);
-            return vv_error_set(VV_ERR_NOMEM, "mesh holes: out of memory for the edges");
-        }
-        for (size_t i = 0; i < ne; i++)
-            start[(E[i].key >> 32) + 1]++;
-        for (size_t v = 0; v < nv; v++)
-            start[v + 1] += start[v];
-        for (size_t i = 0; i < ne; i++)
-            S[start[E[i].key >> 32]++] = E[i];
-        free(E);
-        E = S;
-        for (size_t v = nv; v > 0; v--)
-            start[v] = start[v - 1];
-        start[0] = 0;
-        for (size_t v = 0; v < nv; v++)
-            for (size_t i = start[v] + 1; i < start[v + 1]; i++) {
-                edge_rec key = E[i];
-                size_t j = i;
-                while (j > start[v] && edge_cmp(&E[j - 1], &key) > 0) {
-                    E[j] = E[j - 1];
-                    j--;
-                }
-                E[j] = key;
+    for (size_t i = 0; i < ne; i++)
+        start[(E[i].key >> 32) + 1]++;
+    for (size_t v = 0; v < nv; v++)
+        start[v + 1] += start[v];
+    for (size_t i = 0; i < ne; i++)
+        S[start[E[i].key >> 32]++] = E[i];
+    for (size_t v = nv; v > 0; v--)
+        start[v] = start[v - 1];
+    start[0] = 0;
+    for (size_t v = 0; v < nv; v++)
+        for (size_t i = start[v] + 1; i < start[v + 1]; i++) {
+            edge_rec key = S[i];
+            size_t j = i;
+            while (j > start[v] && edge_cmp(&S[j - 1], &key) > 0) {
+                S[j] = S[j - 1];
+                j--;
             }
-        free(start);
-    }
-    /* manifold adjacency (edges of exactly two triangles), as CSR */
-    uint32_t *deg = calloc(nt + 1, sizeof *deg);
-    size_t n_adj = 0;
-    for (size_t i = 0; i < ne;) {
-        size_t j = i;
-        while (j < ne && E[j].key == E[i].key)
-            j++;
-        if (j - i == 2 && E[i].tri != E[i + 1].tri)
-            n_adj++;
-        i = j;
-    }
-    uint32_t *adj = malloc((n_adj ? 2 * n_adj : 1) * sizeof *adj);
-    uint32_t *queue = malloc((nt ? nt : 1) * sizeof *queue);
-    uint32_t *comp = malloc((nt ? nt : 1) * sizeof *comp);
-    if (!deg || !adj || !queue || !comp) {
-        free(deg);
-        free(adj);
-        free(queue);
-        free(comp);
-        free(weld);
-        free(E);
-        free(flip);
-        vv_mesh_holes_free(out);
-        return vv_error_set(VV_ERR_NOMEM, "mesh holes: out of memory for the adjacency");
-    }
-    for (size_t i = 0; i < ne;) {
-        size_t j = i;
-        while (j < ne && E[j].key == E[i].key)
-            j++;
-        if (j - i == 2 && E[i].tri != E[i + 1].tri) {
-            deg[E[i].tri + 1]++;
-            deg[E[i + 1].tri + 1]++;
+            S[j] = key;
         }
-        i = j;
+    /* manifold adjacency (edges of exactly two triangles) as CSR; entries
+     * neighbour << 1 | (both traverse the edge the same way) */
+    for (size_t i = 0, j; i < ne; i = j) {
+        j = group_end(S, ne, i);
+        if (j - i == 2 && S[i].tri != S[i + 1].tri) {
+            deg[S[i].tri + 1]++;
+            deg[S[i + 1].tri + 1]++;
+        }
     }
     for (size_t t = 0; t < nt; t++)
         deg[t + 1] += deg[t];
-    uint32_t *fill = calloc(nt ? nt : 1, sizeof *fill);
-    if (!fill) {
-        free(deg);
-        free(adj);
-        free(queue);
-        free(comp);
-        free(weld);
-        free(E);
-        free(flip);
-        vv_mesh_holes_free(out);
-        return vv_error_set(VV_ERR_NOMEM, "mesh holes: out of memory for the adjacency");
-    }
-    /* adj entries: neighbour << 1 | (both traverse the edge the same way) */
-    for (size_t i = 0; i < ne;) {
-        size_t j = i;
-        while (j < ne && E[j].key == E[i].key)
-            j++;
-        if (j - i == 2 && E[i].tri != E[i + 1].tri) {
-            uint32_t t0 = E[i].tri, t1 = E[i + 1].tri, same = E[i].fwd == E[i + 1].fwd;
+    if (!ALLOC(adj, deg[nt]))
+        goto nomem;
+    for (size_t i = 0, j; i < ne; i = j) {
+        j = group_end(S, ne, i);
+        if (j - i == 2 && S[i].tri != S[i + 1].tri) {
+            uint32_t t0 = S[i].tri, t1 = S[i + 1].tri, same = S[i].fwd == S[i + 1].fwd;
             adj[deg[t0] + fill[t0]++] = t1 << 1 | same;
             adj[deg[t1] + fill[t1]++] = t0 << 1 | same;
         }
-        i = j;
     }
-    free(fill);
     /* orient each component by breadth-first search; the majority keeps its
      * orientation */
     for (size_t t = 0; t < nt; t++)
@@ -271,103 +230,56 @@ vv_mesh_holes_find(const vv_mesh *m, vv_mesh_holes *out) {
         out->tri[3 * t + 1] = out->tri[3 * t + 2];
         out->tri[3 * t + 2] = x;
     }
-    free(deg);
-    free(adj);
-    free(queue);
-    free(comp);
-    /* the boundary 1-chain: per edge, the traversals lo -> hi minus hi -> lo */
+    /* the boundary 1-chain, as directed edges (from, to) */
     size_t nb = 0;
-    for (size_t i = 0; i < ne;) {
-        size_t j = i;
-        long net = 0;
-        for (; j < ne && E[j].key == E[i].key; j++)
-            net += (E[j].fwd ^ flip[E[j].tri]) ? 1 : -1;
-        nb += (size_t)labs(net);
-        i = j;
+    for (size_t i = 0, j; i < ne; i = j) {
+        j = group_end(S, ne, i);
+        nb += (size_t)labs(edge_net(S, i, j, flip));
     }
-    uint32_t(*be)[2] = malloc((nb ? nb : 1) * sizeof *be);
-    uint32_t *out_start = calloc(nv + 1, sizeof *out_start);
-    uint32_t *order = malloc((nb ? nb : 1) * sizeof *order);
-    unsigned char *used = calloc(nb ? nb : 1, 1);
-    out->loop_v = malloc((nb ? nb : 1) * sizeof *out->loop_v);
-    out->loop_start = malloc((nb + 1) * sizeof *out->loop_start);
-    if (!be || !out_start || !order || !used || !out->loop_v || !out->loop_start) {
-        free(be);
-        free(out_start);
-        free(order);
-        free(used);
-        free(weld);
-        free(E);
-        free(flip);
-        vv_mesh_holes_free(out);
-        return vv_error_set(VV_ERR_NOMEM, "mesh holes: out of memory for the boundary");
-    }
+    if (!ALLOC(be, nb) || !CALLOC(out_start, nv + 1) || !ALLOC(order, nb) || !CALLOC(used, nb) ||
+        !ALLOC(out->loop_v, nb) || !ALLOC(out->loop_start, nb + 1) || !CALLOC(cur, nv))
+        goto nomem;
     size_t k = 0;
-    for (size_t i = 0; i < ne;) {
-        size_t j = i;
-        long net = 0;
-        for (; j < ne && E[j].key == E[i].key; j++)
-            net += (E[j].fwd ^ flip[E[j].tri]) ? 1 : -1;
-        uint32_t lo = (uint32_t)(E[i].key >> 32), hi = (uint32_t)E[i].key;
-        for (long r = 0; r < labs(net); r++) {
+    for (size_t i = 0, j; i < ne; i = j) {
+        j = group_end(S, ne, i);
+        long net = edge_net(S, i, j, flip);
+        uint32_t lo = (uint32_t)(S[i].key >> 32), hi = (uint32_t)S[i].key;
+        for (long r = 0; r < labs(net); r++, k++) {
             be[k][0] = net > 0 ? lo : hi;
             be[k][1] = net > 0 ? hi : lo;
             out_start[be[k][0] + 1]++;
-            k++;
         }
-        i = j;
     }
-    free(E);
-    free(flip);
     for (size_t v = 0; v < nv; v++)
         out_start[v + 1] += out_start[v];
-    {
-        uint32_t *cur = calloc(nv ? nv : 1, sizeof *cur);
-        if (!cur) {
-            free(be);
-            free(out_start);
-            free(order);
-            free(used);
-            free(weld);
-            vv_mesh_holes_free(out);
-            return vv_error_set(VV_ERR_NOMEM, "mesh holes: out of memory for the boundary");
-        }
-        for (size_t e = 0; e < nb; e++)
-            order[out_start[be[e][0]] + cur[be[e][0]]++] = (uint32_t)e;
-        /* the next unused out-edge of each vertex */
-        for (size_t v = 0; v < nv; v++)
-            cur[v] = out_start[v];
-        /* closed walks: every vertex of a boundary chain has as many edges in
-         * as out, so a walk from an edge returns to its start */
-        size_t nl = 0, nvl = 0;
-        for (size_t e0 = 0; e0 < nb; e0++) {
-            if (used[e0])
-                continue;
-            out->loop_start[nl] = nvl;
-            uint32_t start = be[e0][0], e = (uint32_t)e0;
-            for (;;) {
-                used[e] = 1;
-                out->loop_v[nvl++] = be[e][0];
-                uint32_t v = be[e][1];
-                if (v == start)
-                    break;
-                while (cur[v] < out_start[v + 1] && used[order[cur[v]]])
-                    cur[v]++;
-                if (cur[v] == out_start[v + 1])
-                    break; /* cannot happen for a boundary chain; closed by the fan */
-                e = order[cur[v]++];
-            }
-            nl++;
-        }
+    for (size_t e = 0; e < nb; e++)
+        order[out_start[be[e][0]] + cur[be[e][0]]++] = (uint32_t)e;
+    for (size_t v = 0; v < nv; v++)
+        cur[v] = out_start[v]; /* the next unused out-edge of each vertex */
+    /* closed walks: every vertex of a boundary chain has as many edges in as
+     * out, so a walk from an edge returns to its start */
+    size_t nl = 0, nvl = 0;
+    for (size_t e0 = 0; e0 < nb; e0++) {
+        if (used[e0])
+            continue;
         out->loop_start[nl] = nvl;
-        out->n_loops = nl;
-        free(cur);
+        uint32_t first = be[e0][0], e = (uint32_t)e0;
+        for (;;) {
+            used[e] = 1;
+            out->loop_v[nvl++] = be[e][0];
+            uint32_t v = be[e][1];
+            if (v == first)
+                break;
+            while (cur[v] < out_start[v + 1] && used[order[cur[v]]])
+                cur[v]++;
+            if (cur[v] == out_start[v + 1])
+                break; /* cannot happen for a boundary chain; closed by the fan */
+            e = order[cur[v]++];
+        }
+        nl++;
     }
-    free(be);
-    free(out_start);
-    free(order);
-    free(used);
-    free(weld);
+    out->loop_start[nl] = nvl;
+    out->n_loops = nl;
     /* the caps' area: fans from each loop's centroid */
     for (size_t l = 0; l < out->n_loops; l++) {
         double c[3];
@@ -386,7 +298,31 @@ vv_mesh_holes_find(const vv_mesh *m, vv_mesh_holes *out) {
             out->cap_area += 0.5 * sqrt(n0 * n0 + n1 * n1 + n2 * n2);
         }
     }
-    return VV_OK;
+    goto done;
+nomem:
+    st = vv_error_set(VV_ERR_NOMEM, "mesh holes: out of memory for %zu triangles", nt);
+    vv_mesh_holes_free(out);
+done:
+#undef ALLOC
+#undef CALLOC
+    free(weld);
+    free(ids);
+    free(tmp);
+    free(deg);
+    free(adj);
+    free(queue);
+    free(comp);
+    free(fill);
+    free(out_start);
+    free(order);
+    free(cur);
+    free(start);
+    free(E);
+    free(S);
+    free(flip);
+    free(used);
+    free(be);
+    return st;
 }
 
 void

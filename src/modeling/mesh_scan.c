@@ -433,13 +433,14 @@ typedef struct cap_info {
 } cap_info;
 
 /* Half the solid angle of cap k's fan at p (d = c - p, ld = |d|): the
- * Van Oosterom-Strackee sum over the fan triangles (c, next, this). */
+ * Van Oosterom-Strackee sum over the fan triangles (c, next, this) from
+ * triangle i on. */
 static double
-fan_half_omega(const cap_info *k, const double p[3], const double d[3], double ld) {
+fan_half_omega_from(const cap_info *k, size_t i, const double p[3], const double d[3], double ld) {
     const double *X = k->X, *Y = k->Y, *Z = k->Z;
     size_t n = k->i1 - k->i0;
     double o = 0.0;
-    for (size_t i = 0; i < n; i++) {
+    for (; i < n; i++) {
         double ax = X[i] - p[0], ay = Y[i] - p[1], az = Z[i] - p[2];
         double bx = X[i + 1] - p[0], by = Y[i + 1] - p[1], bz = Z[i + 1] - p[2];
         double al = sqrt(ax * ax + ay * ay + az * az), bl = sqrt(bx * bx + by * by + bz * bz);
@@ -452,7 +453,7 @@ fan_half_omega(const cap_info *k, const double p[3], const double d[3], double l
     return o;
 }
 
-/* fan_half_omega, four fan triangles at a time (AVX2 and FMA). */
+/* fan_half_omega_from(k, 0, ...), four fan triangles at a time (AVX2 and FMA). */
 __attribute__((target("avx2,fma"))) static double
 fan_half_omega_avx2(const cap_info *k, const double p[3], const double d[3], double ld) {
     const double *X = k->X, *Y = k->Y, *Z = k->Z;
@@ -502,18 +503,8 @@ fan_half_omega_avx2(const cap_info *k, const double p[3], const double d[3], dou
     }
     double lanes[4];
     _mm256_storeu_pd(lanes, acc);
-    double o = (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]);
-    for (; i < n; i++) {
-        double ax = X[i] - p[0], ay = Y[i] - p[1], az = Z[i] - p[2];
-        double bx = X[i + 1] - p[0], by = Y[i + 1] - p[1], bz = Z[i + 1] - p[2];
-        double al = sqrt(ax * ax + ay * ay + az * az), bl = sqrt(bx * bx + by * by + bz * bz);
-        double det =
-            d[0] * (by * az - bz * ay) - d[1] * (bx * az - bz * ax) + d[2] * (bx * ay - by * ax);
-        double db = d[0] * bx + d[1] * by + d[2] * bz, da = d[0] * ax + d[1] * ay + d[2] * az;
-        double ba = bx * ax + by * ay + bz * az;
-        o += atan2_as(det, ld * bl * al + db * al + da * bl + ba * ld);
-    }
-    return o;
+    /* the last n mod 4 triangles */
+    return (lanes[0] + lanes[1]) + (lanes[2] + lanes[3]) + fan_half_omega_from(k, i, p, d, ld);
 }
 
 /* Solid angle of cap k's fan at p: exact near it, the dipole term
@@ -528,7 +519,7 @@ cap_omega(const cap_info *k, int avx2, const double p[3]) {
     if (r2 >= 4.0 * k->R * k->R)
         return (k->A[0] * d[0] + k->A[1] * d[1] + k->A[2] * d[2]) / (r2 * sqrt(r2));
     double ld = sqrt(r2);
-    return 2.0 * (avx2 ? fan_half_omega_avx2(k, p, d, ld) : fan_half_omega(k, p, d, ld));
+    return 2.0 * (avx2 ? fan_half_omega_avx2(k, p, d, ld) : fan_half_omega_from(k, 0, p, d, ld));
 }
 
 /* The median of a voxel's three row counts: they agree on a closed
