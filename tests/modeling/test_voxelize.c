@@ -748,7 +748,7 @@ test_winding_number(void **state) {
     vv_volume *v = vox(s, &o);
     const float *rho = v->data;
     size_t checked = 0, hole_fill = 0;
-    for (size_t i = 0; i < vv_volume_voxel_count(v); i += 5) {
+    for (size_t i = 0; i < vv_volume_voxel_count(v); i += 9) {
         if (rho[i] != 0.0f && rho[i] != 1.0f)
             continue; /* near a triangle */
         int x = (int)(i % (size_t)v->dims[0]),
