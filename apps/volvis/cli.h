@@ -56,6 +56,8 @@ int cli_devices_main(int argc, char **argv);
 void cli_devices_usage(FILE *out);
 int cli_animate_main(int argc, char **argv);
 void cli_animate_usage(FILE *out);
+int cli_filter_main(int argc, char **argv);
+void cli_filter_usage(FILE *out);
 
 /* ---- option parsing ------------------------------------------------------ */
 

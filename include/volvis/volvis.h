@@ -7,6 +7,7 @@
 
 #include "animate.h"
 #include "compress.h"
+#include "filter.h"
 #include "core.h"
 #include "grid.h"
 #include "image.h"
