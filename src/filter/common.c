@@ -406,14 +406,27 @@ typedef struct mask_ctx {
     size_t n0;
 } mask_ctx;
 
+#define MASK_CASE(T, CT)                                                                           \
+    case T: {                                                                                      \
+        const CT *s_ = (const CT *)C->in->data;                                                    \
+        for (size_t q = q0; q < q1; q++)                                                           \
+            C->m[q] = (uint8_t)(s_[q] != 0 && s_[q] == s_[q]);                                     \
+    } break;
+
 static void
 mask_body(void *cp, long r0, long r1, int w) {
     (void)w;
     mask_ctx *C = cp;
-    for (long row = r0; row < r1; row++) {
-        size_t off = (size_t)row * C->n0;
-        for (size_t i = 0; i < C->n0; i++)
-            C->m[off + i] = (uint8_t)vf_nonzero(vv_voxel_value(C->in->type, C->in->data, off + i));
+    size_t q0 = (size_t)r0 * C->n0, q1 = (size_t)r1 * C->n0;
+    switch (C->in->type) {
+        MASK_CASE(VV_U8, uint8_t)
+        MASK_CASE(VV_I8, int8_t)
+        MASK_CASE(VV_U16, uint16_t)
+        MASK_CASE(VV_I16, int16_t)
+        MASK_CASE(VV_U32, uint32_t)
+        MASK_CASE(VV_I32, int32_t)
+        MASK_CASE(VV_F32, float)
+        MASK_CASE(VV_F64, double)
     }
 }
 

@@ -99,8 +99,8 @@ vv_status vf_mask_u8(const vv_volume *in, const vv_filter_options *o, uint8_t **
 
 /**
  * Connected components of a u8 mask (non-zero = foreground). Labels 1..count
- * in raster order of first voxels; @p labels (dims voxels of u32) receives
- * them; sizes (count + 1, malloc'ed) as in vv_filter_components.
+ * in raster order of first voxels; @p labels (dims voxels of u32, zeroed by
+ * the caller) receives them; sizes (count + 1, malloc'ed) as in vv_filter_components.
  */
 vv_status vf_label_mask(const uint8_t *mask, const int dims[3], int connectivity,
                         const vv_filter_options *o, double p0, double p1, uint32_t *labels,

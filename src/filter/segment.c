@@ -144,6 +144,34 @@ typedef struct cc_ctx {
     uint32_t *run_label;
 } cc_ctx;
 
+/* Index of the first non-zero byte of m[i..n-1] (n if none), skipping zero
+ * 8-byte words: masks are mostly background. */
+static inline int
+next_set(const uint8_t *m, int i, int n) {
+    while (i < n && ((uintptr_t)(m + i) & 7))
+        if (m[i])
+            return i;
+        else
+            i++;
+    while (i + 8 <= n) {
+        uint64_t w;
+        memcpy(&w, m + i, 8);
+        if (w)
+            break;
+        i += 8;
+    }
+    while (i < n && !m[i])
+        i++;
+    return i;
+}
+
+static inline int
+next_clear(const uint8_t *m, int i, int n) {
+    while (i < n && m[i])
+        i++;
+    return i;
+}
+
 static void
 cc_count(void *cp, long r0, long r1, int w) {
     (void)w;
@@ -152,8 +180,11 @@ cc_count(void *cp, long r0, long r1, int w) {
     for (long r = r0; r < r1; r++) {
         const uint8_t *m = C->mask + (size_t)r * n0;
         size_t c = 0;
-        for (int i = 0; i < n0; i++)
-            c += m[i] && (i == 0 || !m[i - 1]);
+        int i = 0;
+        while ((i = next_set(m, i, n0)) < n0) {
+            c++;
+            i = next_clear(m, i, n0);
+        }
         C->rowstart[r + 1] = c;
     }
 }
@@ -167,14 +198,9 @@ cc_fill(void *cp, long r0, long r1, int w) {
         const uint8_t *m = C->mask + (size_t)r * n0;
         size_t q = C->rowstart[r];
         int i = 0;
-        while (i < n0) {
-            while (i < n0 && !m[i])
-                i++;
-            if (i >= n0)
-                break;
+        while ((i = next_set(m, i, n0)) < n0) {
             int s = i;
-            while (i < n0 && m[i])
-                i++;
+            i = next_clear(m, i, n0);
             C->rs[q] = s;
             C->re[q] = i;
             C->parent[q] = q;
@@ -254,8 +280,7 @@ cc_write(void *cp, long r0, long r1, int w) {
     cc_ctx *C = cp;
     const int n0 = C->n[0];
     for (long r = r0; r < r1; r++) {
-        uint32_t *d = C->labels + (size_t)r * n0;
-        memset(d, 0, (size_t)n0 * sizeof *d);
+        uint32_t *d = C->labels + (size_t)r * n0; /* zeroed by the caller */
         for (size_t q = C->rowstart[r]; q < C->rowstart[r + 1]; q++)
             for (int i = C->rs[q]; i < C->re[q]; i++)
                 d[i] = C->run_label[q];
@@ -394,7 +419,8 @@ vv_filter_components(const vv_volume *in, int connectivity, vv_voxel_type label_
     vv_volume *v = NULL;
     uint32_t *lab = NULL;
     uint64_t *sz = NULL, nlab = 0;
-    if ((s = vf_mask_u8(in, o, &mask)) != VV_OK)
+    /* a u8 volume is its own mask (non-zero = foreground) */
+    if (in->type != VV_U8 && (s = vf_mask_u8(in, o, &mask)) != VV_OK)
         return s;
     if ((s = vf_new_like(in, in->dims, label_type, &v)) != VV_OK) {
         free(mask);
@@ -402,10 +428,11 @@ vv_filter_components(const vv_volume *in, int connectivity, vv_voxel_type label_
     }
     if (label_type == VV_U32)
         lab = v->data;
-    else if (!(lab = malloc((size_t)vv_volume_voxel_count(in) * sizeof *lab)))
+    else if (!(lab = calloc((size_t)vv_volume_voxel_count(in), sizeof *lab)))
         s = vv_error_set(VV_ERR_NOMEM, "components: out of memory");
     if (s == VV_OK)
-        s = vf_label_mask(mask, in->dims, connectivity, o, 0, 0.95, lab, &sz, &nlab);
+        s = vf_label_mask(mask ? mask : in->data, in->dims, connectivity, o, 0, 0.95, lab, &sz,
+                          &nlab);
     free(mask);
     uint64_t maxl = label_type == VV_U8 ? 255 : label_type == VV_U16 ? 65535 : UINT32_MAX;
     if (s == VV_OK && nlab > maxl)
@@ -463,7 +490,7 @@ label_and_keep(const vv_volume *in, const uint8_t *mask, int connectivity,
                                  uint8_t *keep),
                void *u, const uint8_t *also, vv_volume **out) {
     size_t nv = (size_t)vv_volume_voxel_count(in);
-    uint32_t *lab = malloc(nv * sizeof *lab);
+    uint32_t *lab = calloc(nv, sizeof *lab);
     uint64_t *sz = NULL, nlab = 0;
     uint8_t *keep = NULL;
     vv_volume *v = NULL;

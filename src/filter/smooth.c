@@ -132,6 +132,69 @@ vv_filter_gaussian(const vv_volume *in, const double sigma[3], const vv_filter_o
 MEDIAN_IMPL(median_rows_f, float)
 MEDIAN_IMPL(median_rows_d, double)
 
+/*
+ * Radius 1 without NaN (the common case): vectorised along i. The nine
+ * values of each column (the 3 x 3 rows at one i) are sorted by an odd-even
+ * transposition network run on whole rows at once; the median of the 27
+ * values in three sorted columns A, B, C is their 14th smallest, which is
+ * min over a + b + c = 14 of max(A[a-1], B[b-1], C[c-1]) (a split takes a, b,
+ * c smallest elements of each; its largest bounds the 14th from above, and
+ * the true split attains it). Only copies, min and max: the result is exact.
+ */
+static void
+median3_fast(const float *const rows[9], int n0, float *s /* 9 x (n0 + 2) */, float *best) {
+    const int W = n0 + 2;
+    for (int q = 0; q < 9; q++) {
+        float *d = s + (size_t)q * W;
+        const float *src = rows[q];
+        d[0] = src[vf_reflect(-1, n0)];
+        memcpy(d + 1, src, (size_t)n0 * sizeof *d);
+        d[n0 + 1] = src[vf_reflect(n0, n0)];
+    }
+    for (int round = 0; round < 9; round++)
+        for (int q = round & 1; q + 1 < 9; q += 2) {
+            float *x = s + (size_t)q * W, *y = x + W;
+            for (int c = 0; c < W; c++) {
+                float a = x[c], b = y[c];
+                x[c] = a < b ? a : b;
+                y[c] = a < b ? b : a;
+            }
+        }
+    for (int i = 0; i < n0; i++)
+        best[i] = INFINITY;
+    for (int a = 0; a <= 9; a++)
+        for (int b = 0; b <= 9; b++) {
+            int c = 14 - a - b;
+            if (c < 0 || c > 9)
+                continue;
+            const float *A = a ? s + (size_t)(a - 1) * W : NULL;
+            const float *B = b ? s + (size_t)(b - 1) * W + 1 : NULL;
+            const float *C = c ? s + (size_t)(c - 1) * W + 2 : NULL;
+            /* a + b + c = 14 > 9 + 0: at most one of them is empty */
+            if (!A)
+                for (int i = 0; i < n0; i++) {
+                    float m = B[i] > C[i] ? B[i] : C[i];
+                    best[i] = m < best[i] ? m : best[i];
+                }
+            else if (!B)
+                for (int i = 0; i < n0; i++) {
+                    float m = A[i] > C[i] ? A[i] : C[i];
+                    best[i] = m < best[i] ? m : best[i];
+                }
+            else if (!C)
+                for (int i = 0; i < n0; i++) {
+                    float m = A[i] > B[i] ? A[i] : B[i];
+                    best[i] = m < best[i] ? m : best[i];
+                }
+            else
+                for (int i = 0; i < n0; i++) {
+                    float m = A[i] > B[i] ? A[i] : B[i];
+                    m = m > C[i] ? m : C[i];
+                    best[i] = m < best[i] ? m : best[i];
+                }
+        }
+}
+
 typedef struct median_ctx {
     const vv_volume *in;
     vv_volume *out;
@@ -139,12 +202,58 @@ typedef struct median_ctx {
     void *rowbuf[VF_MAX_THREADS], *cols[VF_MAX_THREADS];
     int *ncol[VF_MAX_THREADS];
     double *outrow[VF_MAX_THREADS];
+    float *fast_rows[VF_MAX_THREADS]; /* radius 1: 9 loaded rows, 9 sorted columns, best */
 } median_ctx;
+
+static int
+has_nan(const float *x, int n) {
+    int bad = 0;
+    for (int i = 0; i < n; i++)
+        bad |= x[i] != x[i];
+    return bad;
+}
+
+/* Radius 1, float-exact types: the vectorised kernel, rows with a NaN
+ * neighbourhood through the general one. */
+static void
+median_fast_rows(median_ctx *C, long r0, long r1, int w) {
+    const vv_volume *in = C->in;
+    const int n0 = in->dims[0], n1 = in->dims[1], n2 = in->dims[2];
+    float *rowsbuf = C->fast_rows[w], *s = rowsbuf + (size_t)9 * n0,
+          *best = s + (size_t)9 * (n0 + 2);
+    for (long row = r0; row < r1; row++) {
+        int j = (int)(row % n1), k = (int)(row / n1);
+        const float *rows[9];
+        int q = 0, nan = 0;
+        for (int dk = -1; dk <= 1; dk++)
+            for (int dj = -1; dj <= 1; dj++, q++) {
+                size_t srow = (size_t)vf_reflect((long)k + dk, n2) * n1 +
+                              (size_t)vf_reflect((long)j + dj, n1);
+                float *dst = rowsbuf + (size_t)q * n0;
+                vf_load_f(in->type, in->data, srow * n0, (size_t)n0, dst);
+                if (in->type == VV_F32)
+                    nan |= has_nan(dst, n0);
+                rows[q] = dst;
+            }
+        if (nan) {
+            median_rows_f(in->data, in->type, in->dims, 1, row, row + 1, C->rowbuf[w], C->cols[w],
+                          C->ncol[w], C->out->data, C->outrow[w], vf_load_f);
+            continue;
+        }
+        median3_fast(rows, n0, s, best);
+        double *o = C->outrow[w];
+        for (int i = 0; i < n0; i++)
+            o[i] = best[i];
+        vf_store_d(in->type, C->out->data, (size_t)row * n0, (size_t)n0, o);
+    }
+}
 
 static void
 median_body(void *cp, long r0, long r1, int w) {
     median_ctx *C = cp;
-    if (C->wide)
+    if (C->fast_rows[w])
+        median_fast_rows(C, r0, r1, w);
+    else if (C->wide)
         median_rows_d(C->in->data, C->in->type, C->in->dims, C->r, r0, r1, C->rowbuf[w], C->cols[w],
                       C->ncol[w], C->out->data, C->outrow[w], vf_load_d);
     else
@@ -180,7 +289,12 @@ vv_filter_median(const vv_volume *in, int radius, const vv_filter_options *o, vv
         C.cols[w] = malloc(W * side * side * es);
         C.ncol[w] = malloc(W * sizeof(int));
         C.outrow[w] = malloc((size_t)in->dims[0] * sizeof(double));
-        if (!C.rowbuf[w] || !C.cols[w] || !C.ncol[w] || !C.outrow[w])
+        if (radius == 1 && !C.wide)
+            C.fast_rows[w] = malloc(
+                ((size_t)9 * in->dims[0] + (size_t)9 * (in->dims[0] + 2) + (size_t)in->dims[0]) *
+                sizeof(float));
+        if (!C.rowbuf[w] || !C.cols[w] || !C.ncol[w] || !C.outrow[w] ||
+            (radius == 1 && !C.wide && !C.fast_rows[w]))
             s = vv_error_set(VV_ERR_NOMEM, "median: out of memory");
     }
     if (s == VV_OK)
@@ -190,6 +304,7 @@ vv_filter_median(const vv_volume *in, int radius, const vv_filter_options *o, vv
         free(C.cols[w]);
         free(C.ncol[w]);
         free(C.outrow[w]);
+        free(C.fast_rows[w]);
     }
     if (s != VV_OK) {
         vv_volume_free(v);
