@@ -339,6 +339,14 @@ void vv_filter_chain_free(vv_filter_chain *c);
  */
 vv_status vv_filter_chain_add(vv_filter_chain *c, const char *name, const char *arg);
 
+/**
+ * A chain from command-line text: "--gaussian 1.5 --median 1 --fill-holes"
+ * (words separated by white space; a word starting with "--" names a
+ * filter, the next word is its argument unless the filter takes none). An
+ * empty text gives an empty chain. Errors: VV_ERR_INVALID naming the word.
+ */
+vv_status vv_filter_chain_parse(const char *text, vv_filter_chain **out);
+
 /** Number of steps. */
 int vv_filter_chain_length(const vv_filter_chain *c);
 
@@ -358,9 +366,9 @@ vv_status vv_filter_chain_apply(const vv_filter_chain *c, const vv_volume *in,
                                 const vv_filter_options *o, vv_volume **out);
 
 /**
- * Loads the volume file @p path, sets its origin and voxel spacing to
- * @p origin and @p spacing where given (NULL: the file's), and applies
- * @p chain (NULL or empty: none), keeping the result in a small
+ * Loads the volume file @p path, applies @p chain (NULL or empty: none),
+ * then sets the result's origin and voxel spacing to @p origin and
+ * @p spacing where given (NULL: as loaded and filtered), keeping the result in a small
  * process-wide cache (8 entries, least recently used dropped) keyed by the
  * path, the file's size and modification time, the overrides and the chain
  * text, so loading a scene again (the GUI's reload, an animation's frames)

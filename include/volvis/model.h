@@ -423,6 +423,8 @@ typedef struct vv_geometry {
     char *source;      /**< mesh or volume: file it came from (owned, may be NULL), for scene
                             saving (vv_scene_load sets it for volumes; vv_scene_save uses it
                             when no file name is given) */
+    char *filters;     /**< volume: the filter chain applied at load, as command-line text
+                            ("--gaussian 1 --median 1"; owned, may be NULL), for scene saving */
 } vv_geometry;
 
 typedef enum vv_render_mode {

@@ -561,6 +561,57 @@ vv_filter_chain_add(vv_filter_chain *c, const char *name, const char *arg) {
     return VV_OK;
 }
 
+vv_status
+vv_filter_chain_parse(const char *text, vv_filter_chain **out) {
+    if (!text || !out)
+        return vv_error_set(VV_ERR_INVALID, "filter chain: NULL argument");
+    vv_filter_chain *c;
+    vv_status s = vv_filter_chain_new(&c);
+    if (s != VV_OK)
+        return s;
+    char *buf = vv_strdup(text);
+    if (!buf) {
+        vv_filter_chain_free(c);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    char *save = NULL, *w = strtok_r(buf, " \t\r\n", &save);
+    while (w && s == VV_OK) {
+        if (strncmp(w, "--", 2) != 0) {
+            s = vv_error_set(VV_ERR_INVALID, "filter chain: \"%s\" is not a filter (--NAME)", w);
+            break;
+        }
+        int id = find_filter(w);
+        if (id < 0) {
+            s = vv_error_set(VV_ERR_INVALID, "unknown filter \"%s\"", w + 2);
+            break;
+        }
+        char *arg = NULL;
+        if (infos[id].metavar[0]) {
+            arg = strtok_r(NULL, " \t\r\n", &save);
+            if (arg && strncmp(arg, "--", 2) == 0 && id != F_COMPONENTS) {
+                s = vv_error_set(VV_ERR_INVALID, "--%s needs an argument %s", infos[id].name,
+                                 infos[id].metavar);
+                break;
+            }
+            if (arg && strncmp(arg, "--", 2) == 0) {
+                /* --components without its optional argument */
+                s = vv_filter_chain_add(c, w, NULL);
+                w = arg;
+                continue;
+            }
+        }
+        s = vv_filter_chain_add(c, w, arg);
+        w = strtok_r(NULL, " \t\r\n", &save);
+    }
+    free(buf);
+    if (s != VV_OK) {
+        vv_filter_chain_free(c);
+        return s;
+    }
+    *out = c;
+    return VV_OK;
+}
+
 const char *
 vv_filter_chain_text(const vv_filter_chain *c) {
     return c && c->text ? c->text : "";
@@ -753,12 +804,6 @@ vv_filter_load_cached(const char *path, const double *origin, const double *spac
         free(key);
         return s;
     }
-    for (int a = 0; a < 3; a++) {
-        if (origin)
-            v->origin[a] = origin[a];
-        if (spacing)
-            v->spacing[a] = spacing[a];
-    }
     if (chain && chain->n > 0) {
         s = vv_filter_chain_apply(chain, v, o, &f);
         vv_volume_free(v);
@@ -768,6 +813,13 @@ vv_filter_load_cached(const char *path, const double *origin, const double *spac
         }
     } else {
         f = v;
+    }
+    /* f is ours alone until it goes into the cache */
+    for (int a = 0; a < 3; a++) {
+        if (origin)
+            f->origin[a] = origin[a];
+        if (spacing)
+            f->spacing[a] = spacing[a];
     }
     if (key) {
         pthread_mutex_lock(&cache_lock);

@@ -18,6 +18,7 @@
 #include <string.h>
 
 #include "core/internal.h"
+#include "filter/filter_scene.h"
 #include "model/model_internal.h"
 #include "modeling/modeling_internal.h"
 #include "volvis/io.h"
@@ -1617,7 +1618,7 @@ parse_grid_object(const sctx *c, json_t *e, const char *op, vv_world *w) {
 
 static vv_status
 parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
-    static const char *const own[] = {"file", "origin", "spacing", NULL};
+    static const char *const own[] = {"file", "origin", "spacing", "filters", NULL};
     char op[PATH_MAX_LEN], kp[PATH_MAX_LEN];
     path_index(op, "objects", idx);
     if (json_is_object(e)) {
@@ -1665,21 +1666,42 @@ parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     if (!full)
         return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
     vv_volume *vol = NULL;
-    st = vv_volume_load(&vol, full, NULL);
+    /* "filters": a filter chain applied at load (src/filter), the result cached */
+    json_t *fj = json_object_get(e, "filters");
+    vv_filter_chain *chain = NULL;
+    if (fj) {
+        int bad;
+        path_key(kp, op, "filters");
+        if ((st = vf_chain_from_json(fj, &chain, &bad)) != VV_OK) {
+            char msg[512], ip[PATH_MAX_LEN];
+            snprintf(msg, sizeof msg, "%s", vv_error_message());
+            free(full);
+            if (bad >= 0)
+                path_index(ip, kp, (size_t)bad);
+            return serr(c, bad >= 0 ? ip : kp, "%s", msg);
+        }
+        double o3[3] = {origin.x, origin.y, origin.z}, s3[3] = {spacing.x, spacing.y, spacing.z};
+        st = vv_filter_load_cached(full, has_origin ? o3 : NULL, has_spacing ? s3 : NULL, chain,
+                                   NULL, &vol);
+    } else {
+        st = vv_volume_load(&vol, full, NULL);
+    }
     if (st != VV_OK) {
+        vv_filter_chain_free(chain);
         free(full);
         int line, col;
-        path_key(kp, op, "file");
+        path_key(kp, op, fj ? "filters" : "file");
         scene_locate(c, kp, &line, &col);
         return vv_error_prefix(st, "%s:%d:%d: %s", c->path, line, col, kp);
     }
-    /* the volume is freshly loaded and ours alone, so overriding is safe */
-    if (has_origin) {
+    /* the volume is freshly loaded and ours alone, so overriding is safe (a
+     * filtered one is shared with the cache and already has them) */
+    if (has_origin && !fj) {
         vol->origin[0] = origin.x;
         vol->origin[1] = origin.y;
         vol->origin[2] = origin.z;
     }
-    if (has_spacing) {
+    if (has_spacing && !fj) {
         vol->spacing[0] = spacing.x;
         vol->spacing[1] = spacing.y;
         vol->spacing[2] = spacing.z;
@@ -1690,10 +1712,18 @@ parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     st = vv_object_new_volume(&o, vol, name ? name : defname);
     vv_volume_free(vol);
     if (st != VV_OK) {
+        vv_filter_chain_free(chain);
         free(full);
         return vv_error_prefix(st, "%s: %s", c->path, op);
     }
     o->geometry.source = full; /* kept for saving the scene again */
+    if (chain && vv_filter_chain_length(chain) > 0 &&
+        !(o->geometry.filters = vv_strdup(vv_filter_chain_text(chain)))) {
+        vv_filter_chain_free(chain);
+        vv_object_free(o);
+        return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
+    }
+    vv_filter_chain_free(chain);
     st = parse_object_fields(c, e, op, o);
     if (st == VV_OK)
         st = parse_effect_flags(c, e, op, o);
@@ -2161,6 +2191,10 @@ put_object(FILE *f, const vv_object *o, const char *file) {
         put_vec3(f, vv_vec3_make(v->origin[0], v->origin[1], v->origin[2]));
         fputs(",\n      \"spacing\": ", f);
         put_vec3(f, vv_vec3_make(v->spacing[0], v->spacing[1], v->spacing[2]));
+        if (o->geometry.filters) {
+            fputs(",\n      \"filters\": ", f);
+            put_str(f, o->geometry.filters);
+        }
     }
     fputs(",\n      \"position\": ", f);
     put_vec3(f, o->position);
