@@ -1222,10 +1222,12 @@ parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
             o->segmentation = VV_SEG_TRANSFER_FUNCTION_2D;
         } else if (strcmp(seg_name, "transfer_function") == 0) {
             o->segmentation = VV_SEG_TRANSFER_FUNCTION;
+        } else if (strcmp(seg_name, "labels") == 0) {
+            o->segmentation = VV_SEG_LABELS;
         } else {
             return serr(c, kp,
-                        "unknown segmentation \"%s\"; expected \"transfer_function\", \"tf2d\" "
-                        "or {\"threshold\": value}",
+                        "unknown segmentation \"%s\"; expected \"transfer_function\", \"tf2d\", "
+                        "\"labels\" or {\"threshold\": value}",
                         seg_name);
         }
     }
@@ -2243,6 +2245,8 @@ put_object(FILE *f, const vv_object *o, const char *file) {
         fputs("\n      }", f);
         if (o->segmentation == VV_SEG_TRANSFER_FUNCTION_2D)
             fputs(",\n      \"segmentation\": \"tf2d\"", f);
+        if (o->segmentation == VV_SEG_LABELS)
+            fputs(",\n      \"segmentation\": \"labels\"", f);
     }
     if (o->segmentation == VV_SEG_TRANSFER_FUNCTION_2D || o->tf2d.n_widgets > 0)
         put_tf2d(f, &o->tf2d);
