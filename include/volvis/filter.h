@@ -152,7 +152,8 @@ vv_status vv_filter_resample_spacing(const vv_volume *in, const double spacing[3
  * Crops to the voxel box lo..hi (inclusive, inside the volume, lo <= hi).
  * The origin moves to voxel lo's world position. Output: the input's type.
  */
-vv_status vv_filter_crop(const vv_volume *in, const int lo[3], const int hi[3], vv_volume **out);
+vv_status vv_filter_crop(const vv_volume *in, const int lo[3], const int hi[3],
+                         const vv_filter_options *o, vv_volume **out);
 
 /**
  * Pads with @p before[a] and @p after[a] voxels (each >= 0) of @p value
@@ -160,21 +161,23 @@ vv_status vv_filter_crop(const vv_volume *in, const int lo[3], const int hi[3], 
  * so the old voxels stay where they were in the world. Output: input type.
  */
 vv_status vv_filter_pad(const vv_volume *in, const int before[3], const int after[3], double value,
-                        vv_volume **out);
+                        const vv_filter_options *o, vv_volume **out);
 
 /**
  * Mirrors the voxel order along @p axis (0, 1, 2) without moving the data in
  * the world: the origin becomes the old last voxel's position and the
  * axis's direction column is negated. Output: input type.
  */
-vv_status vv_filter_flip(const vv_volume *in, int axis, vv_volume **out);
+vv_status vv_filter_flip(const vv_volume *in, int axis, const vv_filter_options *o,
+                         vv_volume **out);
 
 /**
  * Reorders the axes: output axis a is input axis perm[a] (a permutation of
  * 0, 1, 2); dims, spacing and direction columns follow, so voxels keep
  * their world positions. Output: input type.
  */
-vv_status vv_filter_permute(const vv_volume *in, const int perm[3], vv_volume **out);
+vv_status vv_filter_permute(const vv_volume *in, const int perm[3], const vv_filter_options *o,
+                            vv_volume **out);
 
 /**
  * Converts to voxel type @p type. @p rescale 0: values are rounded (integer

@@ -650,13 +650,13 @@ apply_step(const step *st, const vv_volume *in, const vv_filter_options *o, vv_v
     case F_RESIZE:
         return vv_filter_resample(in, st->n, st->kernel, o, out);
     case F_CROP:
-        return vv_filter_crop(in, st->n, st->n + 3, out);
+        return vv_filter_crop(in, st->n, st->n + 3, o, out);
     case F_PAD:
-        return vv_filter_pad(in, st->n, st->n, st->d[0], out);
+        return vv_filter_pad(in, st->n, st->n, st->d[0], o, out);
     case F_FLIP:
-        return vv_filter_flip(in, st->n[0], out);
+        return vv_filter_flip(in, st->n[0], o, out);
     case F_PERMUTE:
-        return vv_filter_permute(in, st->n, out);
+        return vv_filter_permute(in, st->n, o, out);
     case F_CAST:
         return vv_filter_cast(in, st->type, st->rescale, o, out);
     case F_GRADIENT:

@@ -334,8 +334,75 @@ index_offset(const vv_volume *v, const double d[3], double w[3]) {
     }
 }
 
+/*
+ * Crop, pad, flip and permute are one index map: output axis b reads input
+ * axis src[b] at off[b] + sgn[b] * index; outside the input it is the fill
+ * value (pad). Rows are copied in parallel, whole when they map to a
+ * contiguous input row.
+ */
+typedef struct reshape {
+    const vv_volume *in;
+    vv_volume *out;
+    int src[3], off[3], sgn[3];
+    unsigned char fill[8];
+} reshape;
+
+static void
+reshape_body(void *cp, long r0, long r1, int w) {
+    (void)w;
+    reshape *R = cp;
+    const int *n = R->in->dims, *m = R->out->dims;
+    const size_t es = vv_voxel_type_size(R->in->type);
+    const size_t st[3] = {1, (size_t)n[0], (size_t)n[0] * n[1]};
+    const unsigned char *in = R->in->data;
+    for (long r = r0; r < r1; r++) {
+        int idx[3] = {0, (int)(r % m[1]), (int)(r / m[1])};
+        unsigned char *d = (unsigned char *)R->out->data + (size_t)r * m[0] * es;
+        /* the input coordinates of this row's first voxel, rows j and k fixed */
+        long c[3];
+        int inside = 1;
+        for (int b = 1; b < 3; b++) {
+            c[R->src[b]] = R->off[b] + (long)R->sgn[b] * idx[b];
+            inside &= c[R->src[b]] >= 0 && c[R->src[b]] < n[R->src[b]];
+        }
+        const int a0 = R->src[0];
+        for (int i = 0; i < m[0]; i++) {
+            c[a0] = R->off[0] + (long)R->sgn[0] * i;
+            if (!inside || c[a0] < 0 || c[a0] >= n[a0]) {
+                memcpy(d + (size_t)i * es, R->fill, es);
+                continue;
+            }
+            if (a0 == 0 && R->sgn[0] == 1) {
+                /* a run of the input row: copy what lies inside at once */
+                int last = (int)(n[0] - 1 - R->off[0]);
+                int i1 = last < m[0] - 1 ? last : m[0] - 1;
+                size_t q = (size_t)c[0] + (size_t)c[1] * st[1] + (size_t)c[2] * st[2];
+                memcpy(d + (size_t)i * es, in + q * es, (size_t)(i1 - i + 1) * es);
+                i = i1;
+                continue;
+            }
+            size_t q = (size_t)c[0] + (size_t)c[1] * st[1] + (size_t)c[2] * st[2];
+            memcpy(d + (size_t)i * es, in + q * es, es);
+        }
+    }
+}
+
+static vv_status
+reshape_run(reshape *R, const vv_filter_options *o) {
+    vv_status s =
+        vf_parallel(o, (long)R->out->dims[1] * R->out->dims[2], 32, reshape_body, R, 0, 1);
+    if (s != VV_OK) {
+        vv_volume_free(R->out);
+        R->out = NULL;
+        return s;
+    }
+    vv_volume_update_range(R->out);
+    return VV_OK;
+}
+
 vv_status
-vv_filter_crop(const vv_volume *in, const int lo[3], const int hi[3], vv_volume **out) {
+vv_filter_crop(const vv_volume *in, const int lo[3], const int hi[3], const vv_filter_options *o,
+               vv_volume **out) {
     vv_status s = vf_check_io(in, out, "crop");
     if (s != VV_OK)
         return s;
@@ -349,29 +416,22 @@ vv_filter_crop(const vv_volume *in, const int lo[3], const int hi[3], vv_volume 
                                 hi[a], "xyz"[a], in -> dims[a] - 1);
         dims[a] = hi[a] - lo[a] + 1;
     }
-    vv_volume *v;
-    if ((s = vf_new_like(in, dims, in->type, &v)) != VV_OK)
+    reshape R = {.in = in, .src = {0, 1, 2}, .off = {lo[0], lo[1], lo[2]}, .sgn = {1, 1, 1}};
+    if ((s = vf_new_like(in, dims, in->type, &R.out)) != VV_OK)
         return s;
-    size_t es = vv_voxel_type_size(in->type);
-    for (int k = 0; k < dims[2]; k++)
-        for (int j = 0; j < dims[1]; j++)
-            memcpy((char *)v->data + ((size_t)k * dims[1] + j) * dims[0] * es,
-                   (const char *)in->data +
-                       (((size_t)(k + lo[2]) * in->dims[1] + (j + lo[1])) * in->dims[0] + lo[0]) *
-                           es,
-                   (size_t)dims[0] * es);
     double d[3] = {lo[0], lo[1], lo[2]}, w[3];
     index_offset(in, d, w);
     for (int a = 0; a < 3; a++)
-        v->origin[a] += w[a];
-    vv_volume_update_range(v);
-    *out = v;
+        R.out->origin[a] += w[a];
+    if ((s = reshape_run(&R, o)) != VV_OK)
+        return s;
+    *out = R.out;
     return VV_OK;
 }
 
 vv_status
 vv_filter_pad(const vv_volume *in, const int before[3], const int after[3], double value,
-              vv_volume **out) {
+              const vv_filter_options *o, vv_volume **out) {
     vv_status s = vf_check_io(in, out, "pad");
     if (s != VV_OK)
         return s;
@@ -389,70 +449,49 @@ vv_filter_pad(const vv_volume *in, const int before[3], const int after[3], doub
     }
     if ((s = vv_volume_check_size(dims, in->type, NULL)) != VV_OK)
         return vv_error_prefix(s, "pad");
-    vv_volume *v;
-    if ((s = vf_new_like(in, dims, in->type, &v)) != VV_OK)
+    reshape R = {
+        .in = in, .src = {0, 1, 2}, .off = {-before[0], -before[1], -before[2]}, .sgn = {1, 1, 1}};
+    vf_store_d(in->type, R.fill, 0, 1, &value); /* converted: rounded and clamped */
+    if ((s = vf_new_like(in, dims, in->type, &R.out)) != VV_OK)
         return s;
-    size_t es = vv_voxel_type_size(in->type);
-    /* fill with the value in the native type, then copy the old rows in */
-    unsigned char cell[8];
-    vf_store_d(in->type, cell, 0, 1, &value);
-    size_t nv = (size_t)vv_volume_voxel_count(v);
-    for (size_t q = 0; q < nv; q++)
-        memcpy((char *)v->data + q * es, cell, es);
-    for (int k = 0; k < in->dims[2]; k++)
-        for (int j = 0; j < in->dims[1]; j++)
-            memcpy(
-                (char *)v->data +
-                    (((size_t)(k + before[2]) * dims[1] + (j + before[1])) * dims[0] + before[0]) *
-                        es,
-                (const char *)in->data + ((size_t)k * in->dims[1] + j) * in->dims[0] * es,
-                (size_t)in->dims[0] * es);
     double d[3] = {-before[0], -before[1], -before[2]}, w[3];
     index_offset(in, d, w);
     for (int a = 0; a < 3; a++)
-        v->origin[a] += w[a];
-    vv_volume_update_range(v);
-    *out = v;
+        R.out->origin[a] += w[a];
+    if ((s = reshape_run(&R, o)) != VV_OK)
+        return s;
+    *out = R.out;
     return VV_OK;
 }
 
 vv_status
-vv_filter_flip(const vv_volume *in, int axis, vv_volume **out) {
+vv_filter_flip(const vv_volume *in, int axis, const vv_filter_options *o, vv_volume **out) {
     vv_status s = vf_check_io(in, out, "flip");
     if (s != VV_OK)
         return s;
     if (axis < 0 || axis > 2)
         return vv_error_set(VV_ERR_INVALID, "flip: axis %d: must be 0, 1 or 2 (x, y, z)", axis);
-    vv_volume *v;
-    if ((s = vf_new_like(in, in->dims, in->type, &v)) != VV_OK)
+    reshape R = {.in = in, .src = {0, 1, 2}, .sgn = {1, 1, 1}};
+    R.off[axis] = in->dims[axis] - 1;
+    R.sgn[axis] = -1;
+    if ((s = vf_new_like(in, in->dims, in->type, &R.out)) != VV_OK)
         return s;
-    const int *n = in->dims;
-    size_t es = vv_voxel_type_size(in->type);
-    for (int k = 0; k < n[2]; k++)
-        for (int j = 0; j < n[1]; j++) {
-            int sk = axis == 2 ? n[2] - 1 - k : k, sj = axis == 1 ? n[1] - 1 - j : j;
-            const char *src = (const char *)in->data + ((size_t)sk * n[1] + sj) * n[0] * es;
-            char *dst = (char *)v->data + ((size_t)k * n[1] + j) * n[0] * es;
-            if (axis == 0)
-                for (int i = 0; i < n[0]; i++)
-                    memcpy(dst + (size_t)i * es, src + (size_t)(n[0] - 1 - i) * es, es);
-            else
-                memcpy(dst, src, (size_t)n[0] * es);
-        }
     double d[3] = {0, 0, 0}, w[3];
-    d[axis] = n[axis] - 1;
+    d[axis] = in->dims[axis] - 1;
     index_offset(in, d, w);
     for (int a = 0; a < 3; a++) {
-        v->origin[a] += w[a];
-        v->direction[3 * a + axis] = -in->direction[3 * a + axis];
+        R.out->origin[a] += w[a];
+        R.out->direction[3 * a + axis] = -in->direction[3 * a + axis];
     }
-    vv_volume_update_range(v);
-    *out = v;
+    if ((s = reshape_run(&R, o)) != VV_OK)
+        return s;
+    *out = R.out;
     return VV_OK;
 }
 
 vv_status
-vv_filter_permute(const vv_volume *in, const int perm[3], vv_volume **out) {
+vv_filter_permute(const vv_volume *in, const int perm[3], const vv_filter_options *o,
+                  vv_volume **out) {
     vv_status s = vf_check_io(in, out, "permute");
     if (s != VV_OK)
         return s;
@@ -463,28 +502,17 @@ vv_filter_permute(const vv_volume *in, const int perm[3], vv_volume **out) {
     int dims[3];
     for (int a = 0; a < 3; a++)
         dims[a] = in->dims[perm[a]];
-    vv_volume *v;
-    if ((s = vf_new_like(in, dims, in->type, &v)) != VV_OK)
+    reshape R = {.in = in, .src = {perm[0], perm[1], perm[2]}, .sgn = {1, 1, 1}};
+    if ((s = vf_new_like(in, dims, in->type, &R.out)) != VV_OK)
         return s;
     for (int a = 0; a < 3; a++) {
-        v->spacing[a] = in->spacing[perm[a]];
+        R.out->spacing[a] = in->spacing[perm[a]];
         for (int r = 0; r < 3; r++)
-            v->direction[3 * r + a] = in->direction[3 * r + perm[a]];
+            R.out->direction[3 * r + a] = in->direction[3 * r + perm[a]];
     }
-    size_t es = vv_voxel_type_size(in->type);
-    size_t st[3] = {1, (size_t)in->dims[0], (size_t)in->dims[0] * in->dims[1]};
-    size_t q = 0;
-    int idx[3];
-    for (idx[2] = 0; idx[2] < dims[2]; idx[2]++)
-        for (idx[1] = 0; idx[1] < dims[1]; idx[1]++)
-            for (idx[0] = 0; idx[0] < dims[0]; idx[0]++, q++) {
-                size_t src = 0;
-                for (int a = 0; a < 3; a++)
-                    src += (size_t)idx[a] * st[perm[a]];
-                memcpy((char *)v->data + q * es, (const char *)in->data + src * es, es);
-            }
-    vv_volume_update_range(v);
-    *out = v;
+    if ((s = reshape_run(&R, o)) != VV_OK)
+        return s;
+    *out = R.out;
     return VV_OK;
 }
 

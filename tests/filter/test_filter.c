@@ -240,6 +240,11 @@ test_thread_counts(void **state) {
         {"resample", "0.5x0.5x0.5:bspline"},
         {"resize", "50x13x30:nearest"},
         {"cast", "u8:rescale"},
+        {"crop", "3,2,1:30,20,19"},
+        {"pad", "2,3,1:-7"},
+        {"flip", "x"},
+        {"flip", "z"},
+        {"permute", "zxy"},
         {"gradient", "0"},
         {"gradient", "1.2"},
         {"laplacian", "1.0"},
@@ -320,14 +325,14 @@ test_geometry(void **state) {
                 vv_volume_set(v, i, j, k, i + 10 * j + 100 * k);
     vv_volume_update_range(v);
     vv_volume *c, *p, *f, *m;
-    vt_ok(vv_filter_crop(v, (int[]){2, 1, 3}, (int[]){5, 4, 4}, &c));
+    vt_ok(vv_filter_crop(v, (int[]){2, 1, 3}, (int[]){5, 4, 4}, NULL, &c));
     assert_int_equal(c->dims[0], 4);
     assert_int_equal(vv_volume_get(c, 0, 0, 0), vv_volume_get(v, 2, 1, 3));
     vv_vec3 a = world(c, 1, 2, 1), b = world(v, 3, 3, 4);
     assert_near(a.x, b.x, 1e-9);
     assert_near(a.y, b.y, 1e-9);
     assert_near(a.z, b.z, 1e-9);
-    vt_ok(vv_filter_pad(v, (int[]){2, 1, 0}, (int[]){2, 1, 0}, 7, &p));
+    vt_ok(vv_filter_pad(v, (int[]){2, 1, 0}, (int[]){2, 1, 0}, 7, NULL, &p));
     assert_int_equal(p->dims[0], 11);
     assert_int_equal(vv_volume_get(p, 0, 0, 0), 7);
     assert_int_equal(vv_volume_get(p, 2, 1, 0), 0);
@@ -336,7 +341,7 @@ test_geometry(void **state) {
     assert_near(a.y, b.y, 1e-9);
     assert_near(a.z, b.z, 1e-9);
     for (int axis = 0; axis < 3; axis++) {
-        vt_ok(vv_filter_flip(v, axis, &f));
+        vt_ok(vv_filter_flip(v, axis, NULL, &f));
         int idx[3] = {1, 2, 3}, fi[3] = {1, 2, 3};
         fi[axis] = v->dims[axis] - 1 - idx[axis];
         assert_int_equal(vv_volume_get(f, fi[0], fi[1], fi[2]),
@@ -348,7 +353,7 @@ test_geometry(void **state) {
         assert_near(a.z, b.z, 1e-9);
         vv_volume_free(f);
     }
-    vt_ok(vv_filter_permute(v, (int[]){2, 0, 1}, &m));
+    vt_ok(vv_filter_permute(v, (int[]){2, 0, 1}, NULL, &m));
     assert_int_equal(m->dims[0], 5);
     assert_int_equal(m->dims[1], 7);
     assert_int_equal(vv_volume_get(m, 3, 1, 2), vv_volume_get(v, 1, 2, 3));
@@ -408,11 +413,11 @@ test_bad_input(void **state) {
     vt_err(vv_filter_components(v, 5, VV_U32, NULL, &o, NULL, NULL));
     vt_err(vv_filter_components(v, 6, VV_F32, NULL, &o, NULL, NULL));
     vt_err(vv_filter_largest(v, 0, 6, NULL, &o));
-    vt_err(vv_filter_crop(v, (int[]){0, 0, 0}, (int[]){6, 4, 3}, &o));
-    vt_err(vv_filter_crop(v, (int[]){3, 0, 0}, (int[]){2, 4, 3}, &o));
-    vt_err(vv_filter_pad(v, (int[]){-1, 0, 0}, (int[]){0, 0, 0}, 0, &o));
-    vt_err(vv_filter_flip(v, 3, &o));
-    vt_err(vv_filter_permute(v, (int[]){0, 0, 1}, &o));
+    vt_err(vv_filter_crop(v, (int[]){0, 0, 0}, (int[]){6, 4, 3}, NULL, &o));
+    vt_err(vv_filter_crop(v, (int[]){3, 0, 0}, (int[]){2, 4, 3}, NULL, &o));
+    vt_err(vv_filter_pad(v, (int[]){-1, 0, 0}, (int[]){0, 0, 0}, 0, NULL, &o));
+    vt_err(vv_filter_flip(v, 3, NULL, &o));
+    vt_err(vv_filter_permute(v, (int[]){0, 0, 1}, NULL, &o));
     vt_err(vv_filter_resample(v, (int[]){0, 4, 4}, VV_KERNEL_LINEAR, NULL, &o));
     vt_err(vv_filter_resample_spacing(v, (double[]){1e-9, 1, 1}, VV_KERNEL_LINEAR, NULL, &o));
     assert_null(o);
