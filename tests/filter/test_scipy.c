@@ -159,7 +159,7 @@ test_morphology(void **state) {
         for (int op = 0; op < 4; op++) {
             vv_volume *o;
             vt_ok(vv_filter_morphology(m, (vv_morphology)op, r, NULL, &o));
-            char p[8];
+            char p[16];
             snprintf(p, sizeof p, "%d", r);
             void *ref = scipy_ref(names[op], m, p, n);
             assert_memory_equal(o->data, ref, n);
@@ -196,7 +196,7 @@ test_labels(void **state) {
         vv_filter_options_init(&o);
         o.threads = 3;
         vt_ok(vv_filter_components(m, conns[c], VV_U32, &o, &l, &sizes, &count));
-        char p[8];
+        char p[16];
         snprintf(p, sizeof p, "%d", conns[c]);
         uint32_t *ref = scipy_ref("label", m, p, n * 4);
         assert_memory_equal(l->data, ref, n * 4);
