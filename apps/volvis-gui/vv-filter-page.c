@@ -96,6 +96,8 @@ filter_done(GObject *src, GAsyncResult *res, gpointer user) {
     filter_job *j = g_task_get_task_data(G_TASK(res));
     VvFilterPage *page = j->page;
     page->task = NULL;
+    if (!page->doc)
+        return; /* the page went away (window closed) while the filter ran */
     set_running(page, FALSE);
     char t[768];
     if (j->status != VV_OK) {
