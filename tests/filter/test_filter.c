@@ -213,6 +213,38 @@ test_region_grow(void **state) {
     vv_volume_free(v);
 }
 
+/* Frangi vesselness: high on the axis of a bright tube, low on a bright
+ * plate and a blob of the same profile, zero for a dark tube unless asked. */
+static void
+test_vesselness(void **state) {
+    (void)state;
+    vv_volume *v = vol(48, 40, 40, VV_F32, 1, 1, 1);
+    for (int k = 0; k < 40; k++)
+        for (int j = 0; j < 40; j++)
+            for (int i = 0; i < 48; i++) {
+                double tube = exp(-((j - 10) * (j - 10) + (k - 10) * (k - 10)) / 8.0);
+                double plate = exp(-(k - 30) * (k - 30) / 8.0) * (j >= 20);
+                double blob =
+                    exp(-((i - 36) * (i - 36) + (j - 10) * (j - 10) + (k - 22) * (k - 22)) / 8.0);
+                vv_volume_set(v, i, j, k, 100 * (tube * (i < 28) + plate + blob));
+            }
+    vv_volume *o;
+    vt_ok(vv_filter_vesselness(v, (double[]){1.5, 2.0, 3.0}, 3, 0.5, 0.5, 0, 1, NULL, &o));
+    double on_tube = vv_volume_get(o, 14, 10, 10), plate = vv_volume_get(o, 24, 30, 30),
+           blob = vv_volume_get(o, 36, 10, 22), bg = vv_volume_get(o, 24, 30, 12);
+    print_message("vesselness: tube %.3f plate %.3f blob %.3f background %.3f\n", on_tube, plate,
+                  blob, bg);
+    assert_true(on_tube > 0.3);
+    /* a blob: Ra = Rb = 1, exp(-1 / 2 beta^2) = 0.135 of the tube at most */
+    assert_true(plate < 0.05 * on_tube && blob < 0.2 * on_tube && bg < 0.01);
+    vv_volume_free(o);
+    /* dark vessels: the bright tube gives nothing */
+    vt_ok(vv_filter_vesselness(v, (double[]){2.0}, 1, 0.5, 0.5, 0, 0, NULL, &o));
+    assert_true(vv_volume_get(o, 14, 10, 10) < 0.01);
+    vv_volume_free(o);
+    vv_volume_free(v);
+}
+
 static uint64_t rng = 0x9E3779B97F4A7C15ull;
 static double
 rnd(void) {
@@ -552,6 +584,7 @@ main(void) {
         cmocka_unit_test(test_label_overflow),
         cmocka_unit_test(test_nan),
         cmocka_unit_test(test_morphology_shapes),
+        cmocka_unit_test(test_vesselness),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
