@@ -1683,8 +1683,12 @@ parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
             return serr(c, bad >= 0 ? ip : kp, "%s", msg);
         }
         double o3[3] = {origin.x, origin.y, origin.z}, s3[3] = {spacing.x, spacing.y, spacing.z};
+        vv_filter_options fo;
+        vv_filter_options_init(&fo);
+        if (c->progress)
+            fo.progress = *c->progress; /* and its cancel */
         st = vv_filter_load_cached(full, has_origin ? o3 : NULL, has_spacing ? s3 : NULL, chain,
-                                   NULL, &vol);
+                                   &fo, &vol);
     } else {
         st = vv_volume_load(&vol, full, NULL);
     }
