@@ -108,7 +108,9 @@ vf_parallel(const vv_filter_options *o, long n, long chunk, vf_body body, void *
         pthread_join(tid[w], NULL);
     if (atomic_load(&L.cancel))
         return vv_error_set(VV_ERR_CANCELLED, "filter: cancelled");
-    return VV_OK;
+    /* the end of every loop is reported, whoever ran its last chunks, so a
+     * cancel is seen at the latest when the loop ends */
+    return vf_report(o, p1);
 }
 
 vv_status
