@@ -7,8 +7,8 @@
 
 #include "animate.h"
 #include "compress.h"
-#include "filter.h"
 #include "core.h"
+#include "filter.h"
 #include "grid.h"
 #include "image.h"
 #include "input.h"
