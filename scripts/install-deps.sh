@@ -17,7 +17,7 @@ for what in "$@"; do
   case "$what" in
     build) ;;
     demo) pkgs+=(mricron-data) ;;
-    test) pkgs+=(libcmocka-dev ffmpeg xvfb xauth xdotool imagemagick python3-pydicom python3-nibabel libgdcm-tools) ;;
+    test) pkgs+=(libcmocka-dev ffmpeg xvfb xauth xdotool imagemagick python3-pydicom python3-nibabel libgdcm-tools python3-scipy teem-apps) ;;
     bench) pkgs+=(python3-vtk9 python3-numpy python3-pydicom xvfb libgl1-mesa-dri teem-apps zfp) ;;
     *) echo "install-deps.sh: unknown group '$what' (build, demo, test, bench)" >&2; exit 2 ;;
   esac

@@ -8,6 +8,7 @@
 
 #include "vv-animator-page.h"
 #include "vv-devices-page.h"
+#include "vv-filter-page.h"
 #include "vv-image-window.h"
 #include "vv-scene-view.h"
 #include "vv-tf-editor.h"
@@ -1628,8 +1629,9 @@ manipulation_page(VvWindow *win) {
 
     /* segmentation */
     g = vvg_section(box, "Segmentation");
+    /* in vv_segmentation's order; "labels": a label volume (Filtering) */
     static const char *const segs[] = {"transfer function", "threshold", "2-D transfer function",
-                                       NULL};
+                                       "labels", NULL};
     win->seg_mode = vvg_row(g, "by", wire_drop(win, dropdown(segs)));
     win->threshold = vvg_row(g, "threshold", wire_spin(win, spin(-1e9, 1e9, 1, 2)));
     static const char *const modes[] = {"composite", "MIP", "MinIP", "X-ray", "isosurface", NULL};
@@ -1986,6 +1988,7 @@ vv_window_init(VvWindow *win) {
     gtk_stack_add_titled(GTK_STACK(stack), modeling_page(win), "modeling", "Modeling");
     gtk_stack_add_titled(GTK_STACK(stack), vv_devices_page_new(win), "devices", "Input devices");
     gtk_stack_add_titled(GTK_STACK(stack), vv_animator_page_new(win->doc), "animator", "Animator");
+    gtk_stack_add_titled(GTK_STACK(stack), vv_filter_page_new(win->doc), "filtering", "Filtering");
     GtkWidget *switcher = gtk_stack_sidebar_new();
     gtk_stack_sidebar_set_stack(GTK_STACK_SIDEBAR(switcher), GTK_STACK(stack));
     GtkWidget *side = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 0);

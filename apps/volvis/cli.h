@@ -56,6 +56,8 @@ int cli_devices_main(int argc, char **argv);
 void cli_devices_usage(FILE *out);
 int cli_animate_main(int argc, char **argv);
 void cli_animate_usage(FILE *out);
+int cli_filter_main(int argc, char **argv);
+void cli_filter_usage(FILE *out);
 
 /* ---- option parsing ------------------------------------------------------ */
 
@@ -155,7 +157,8 @@ int cli_fail(vv_status s, const char *path);
         {"zoom", 0, "F"}, {"threads", 0, "N"}, {"renderer", 0, "NAME"}, {"step", 0, "S"},          \
         {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"}, {"gamma", 0, "G"},                   \
         {"quality", 0, "0|1|2"}, {"set", 0, "KEY=VALUE"}, {"alpha", 0, NULL}, {"ortho", 0, NULL},  \
-        {"field", 0, "NAME"}, {"time", 0, "T"}, {"series", 0, "N"}, {"channel", 0, "C"}, {         \
+        {"labels", 0, NULL}, {"field", 0, "NAME"}, {"time", 0, "T"}, {"series", 0, "N"},           \
+        {"channel", 0, "C"}, {                                                                     \
         "quiet", 'q', NULL                                                                         \
     }
 
@@ -185,6 +188,7 @@ typedef struct cli_render_args {
     const char *field;        /**< --field: a grid's field (NULL: the first scalar field) */
     int has_time, time;       /**< --time given, and a grid's time step */
     int alpha, quiet, ortho;
+    int labels; /**< --labels: volumes are label volumes (VV_SEG_LABELS) */
 } cli_render_args;
 
 /** Parses the shared options of @p a (one INPUT, -o); 0 or a usage error. */

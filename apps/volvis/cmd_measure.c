@@ -29,6 +29,7 @@ static const cli_opt_spec measure_opts[] = {
     {"cut", 0, "PX,PY,PZ:NX,NY,NZ"},
     {"to", 0, "MESH"},
     {"volume", 0, NULL},
+    {"labels", 0, NULL},
     {"json", 0, NULL},
     {"threads", 0, "N"},
     {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
@@ -60,6 +61,8 @@ cli_measure_usage(FILE *out) {
             "  --range LO:HI    histogram range (default: the values' range)\n"
             "  --plot OUT.png   also draw the histogram as a PNG bar chart with axes\n"
             "  --log            logarithmic count axis in the plot\n"
+            "  --labels         INPUT is a label volume (volvis filter --components): for\n"
+            "                   each label its voxels, volume, centroid and bounding box\n"
             "  --roi I0,J0,K0:I1,J1,K1  restrict to this voxel box (inclusive)\n"
             "  --cut PX,PY,PZ:NX,NY,NZ  keep the side of this world plane the normal points to\n"
             "                   (repeatable, up to 8; histogram and both --method)\n"
@@ -134,6 +137,53 @@ json_num(double x) {
 static const char *
 unit_of(vv_unit u) {
     return u == VV_UNIT_UNKNOWN ? "units" : vv_unit_name(u);
+}
+
+/* --labels: one line (or JSON object) per label of a label volume. */
+static int
+measure_labels(const char *in, const vv_raw_params *raw, int json) {
+    vv_volume *v;
+    int rc = cli_load_volume(in, raw, &v);
+    if (rc)
+        return rc;
+    vv_label_stats *s = NULL;
+    int n = 0;
+    vv_error_clear();
+    vv_status st = vv_measure_labels(v, &s, &n);
+    if (st != VV_OK) {
+        vv_volume_free(v);
+        return cli_fail(st, in);
+    }
+    const char *u = v->unit == VV_UNIT_UNKNOWN ? "units" : vv_unit_name(v->unit);
+    if (json) {
+        printf("{\"file\": ");
+        json_str(in);
+        printf(", \"unit\": \"%s\", \"labels\": [", u);
+        for (int i = 0; i < n; i++)
+            printf("%s\n  {\"label\": %u, \"voxels\": %llu, \"volume\": %.10g, \"centroid\": "
+                   "[%.10g, %.10g, %.10g], \"box_min\": [%d, %d, %d], \"box_max\": [%d, %d, %d]}",
+                   i ? "," : "", s[i].label, (unsigned long long)s[i].voxels, s[i].volume,
+                   s[i].centroid.x, s[i].centroid.y, s[i].centroid.z, s[i].box_min[0],
+                   s[i].box_min[1], s[i].box_min[2], s[i].box_max[0], s[i].box_max[1],
+                   s[i].box_max[2]);
+        printf("]}\n");
+    } else {
+        printf("labels:       %d in %s\n", n, in);
+        printf("%8s %10s %14s  %-32s %s\n", "label", "voxels", "volume", "centroid", "voxel box");
+        for (int i = 0; i < n; i++) {
+            char c[64];
+            snprintf(c, sizeof c, "%.4g, %.4g, %.4g", s[i].centroid.x, s[i].centroid.y,
+                     s[i].centroid.z);
+            printf("%8u %10llu %14.6g  %-32s %d,%d,%d:%d,%d,%d\n", s[i].label,
+                   (unsigned long long)s[i].voxels, s[i].volume, c, s[i].box_min[0],
+                   s[i].box_min[1], s[i].box_min[2], s[i].box_max[0], s[i].box_max[1],
+                   s[i].box_max[2]);
+        }
+        printf("(volumes in %s^3, centroids in world coordinates)\n", u);
+    }
+    free(s);
+    vv_volume_free(v);
+    return CLI_EXIT_OK;
 }
 
 typedef struct measure_req {
@@ -620,6 +670,19 @@ cli_measure_main(int argc, char **argv) {
     }
     if (r.to || r.want_volume) {
         rc = cli_usage_error(&a, "--to and --volume measure meshes (.ply .obj .stl .off)");
+        goto done;
+    }
+    if (cli_count(&a, "labels") > 0) {
+        if (r.has_iso || r.histogram || r.has_distance) {
+            rc = cli_usage_error(&a, "--labels measures the labels alone (not with --iso, "
+                                     "--histogram or --distance)");
+            goto done;
+        }
+        vv_raw_params lraw;
+        const char *lraw_spec = cli_get(&a, "raw");
+        if (lraw_spec && (rc = cli_parse_raw(&a, "raw", lraw_spec, &lraw)))
+            goto done;
+        rc = measure_labels(in, lraw_spec ? &lraw : NULL, r.json);
         goto done;
     }
     if (!r.has_iso && !r.histogram && !r.has_distance) {

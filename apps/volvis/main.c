@@ -1,7 +1,7 @@
 /*
  * volvis: the command-line tool. Dispatches a table of subcommands, one file
  * each (cmd_info.c, cmd_render.c, cmd_convert.c, cmd_compress.c,
- * cmd_isosurface.c, cmd_measure.c, cmd_voxelize.c, cmd_devices.c, cmd_animate.c). See
+ * cmd_isosurface.c, cmd_measure.c, cmd_voxelize.c, cmd_filter.c, cmd_devices.c, cmd_animate.c). See
  * docs/cli.md.
  */
 #include <signal.h>
@@ -15,6 +15,8 @@ static const cli_command commands[] = {
     {"render", "render a volume or a scene file to a PNG image", cli_render_main, cli_render_usage},
     {"animate", "render an animation (orbit, keyframes, flight path) to PNGs, MP4 or WebM",
      cli_animate_main, cli_animate_usage},
+    {"filter", "smooth, resample, differentiate or segment a volume (filters in order)",
+     cli_filter_main, cli_filter_usage},
     {"convert", "convert any readable volume to NRRD or SLC", cli_convert_main, cli_convert_usage},
     {"voxelize", "volume-sample a geometric model (scene or mesh) to NRRD or SLC",
      cli_voxelize_main, cli_voxelize_usage},

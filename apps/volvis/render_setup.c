@@ -212,6 +212,7 @@ cli_render_parse(cli_args *a, cli_render_args *r) {
     r->alpha = cli_count(a, "alpha") > 0;
     r->quiet = cli_count(a, "quiet") > 0;
     r->ortho = cli_count(a, "ortho") > 0;
+    r->labels = cli_count(a, "labels") > 0;
     return 0;
 }
 
@@ -333,6 +334,10 @@ cli_render_world(const cli_render_args *r, vv_world **out) {
         for (int i = 0; i < (*out)->n_objects; i++)
             if ((*out)->objects[i])
                 (*out)->objects[i]->step = r->step;
+    if (r->labels)
+        for (int i = 0; i < (*out)->n_objects; i++)
+            if ((*out)->objects[i] && (*out)->objects[i]->type == VV_OBJECT_VOLUME)
+                (*out)->objects[i]->segmentation = VV_SEG_LABELS;
     return 0;
 }
 
@@ -456,6 +461,8 @@ cli_render_print_options(FILE *out) {
             "  --alpha          write RGBA (coverage in the alpha channel); default RGB\n"
             "  --ortho          parallel projection (orthographic), the view framed on\n"
             "                   the scene; needed by the fourier renderer\n"
+            "  --labels         the volumes are label volumes (volvis filter --components):\n"
+            "                   each label in its own colour, label 0 transparent\n"
             "  --field NAME     a grid's field to show (default: its first scalar field;\n"
             "                   vectors by magnitude); for a scene, every grid object's\n"
             "  --time T         a grid's time step: field NAME<T> (blow.vtk: thickness3)\n"

@@ -234,6 +234,29 @@ vv_status vv_measure_mesh_volume(const vv_mesh *m, double *volume);
 vv_status vv_measure_mesh_distance(const vv_mesh *a, const vv_mesh *b, int threads, double *dist,
                                    vv_vec3 *pa, vv_vec3 *pb);
 
+/* ---- label volumes -------------------------------------------------------- */
+
+/** What vv_measure_labels reports for one label. */
+typedef struct vv_label_stats {
+    uint32_t label;             /**< 1.. */
+    uint64_t voxels;            /**< voxels with this label */
+    double volume;              /**< voxels times the voxel volume, world units cubed */
+    vv_vec3 centroid;           /**< mean world position of its voxels */
+    int box_min[3], box_max[3]; /**< voxel index bounding box, inclusive */
+} vv_label_stats;
+
+/**
+ * Per-label measurement of a label volume (vv_filter_components; Filtering
+ * component): for every label >= 1 present, its voxel count, volume,
+ * centroid and bounding box. *@p out receives a malloc'ed array of *@p n
+ * entries in ascending label order (NULL when there are none); the caller
+ * frees it. Voxel values must be whole numbers (any type); 0 and negative
+ * values are background. Errors: VV_ERR_INVALID (NULL, a non-integer or NaN
+ * value, with its voxel), VV_ERR_LIMIT (a label above 2^24), VV_ERR_NOMEM.
+ * Reentrant.
+ */
+vv_status vv_measure_labels(const vv_volume *labels, vv_label_stats **out, int *n);
+
 #ifdef __cplusplus
 }
 #endif

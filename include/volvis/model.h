@@ -78,6 +78,14 @@ vv_status vv_tf_add_color(vv_tf *tf, double value, vv_vec3 color);
 double vv_tf_eval_opacity(const vv_tf *tf, double value);
 /** Colour at @p value (piecewise-linear; white when there are no points). */
 vv_vec3 vv_tf_eval_color(const vv_tf *tf, double value);
+
+/**
+ * The colour of label @p label in a label volume (a categorical transfer
+ * function): hues a golden-ratio turn apart (neighbouring labels far apart
+ * on the colour wheel), saturation 0.65, value 0.95; label 0 is black.
+ * RGB in [0, 1]. Thread-safe.
+ */
+vv_vec3 vv_label_color(uint32_t label);
 /**
  * Replaces the TF with a ramp: opacity 0 at lo rising linearly to
  * @p max_opacity at hi, colour @p color throughout.
@@ -423,6 +431,8 @@ typedef struct vv_geometry {
     char *source;      /**< mesh or volume: file it came from (owned, may be NULL), for scene
                             saving (vv_scene_load sets it for volumes; vv_scene_save uses it
                             when no file name is given) */
+    char *filters;     /**< volume: the filter chain applied at load, as command-line text
+                            ("--gaussian 1 --median 1"; owned, may be NULL), for scene saving */
 } vv_geometry;
 
 typedef enum vv_render_mode {
@@ -437,7 +447,9 @@ typedef enum vv_segmentation {
     VV_SEG_TRANSFER_FUNCTION = 0, /**< opacity and colour from tf */
     VV_SEG_THRESHOLD = 1,         /**< opaque in material.color where value >= threshold */
     VV_SEG_TRANSFER_FUNCTION_2D =
-        2 /**< opacity and colour from tf2d (value x gradient magnitude) */
+        2 /**< opacity and colour from tf2d (value x gradient magnitude) */,
+    VV_SEG_LABELS = 3 /**< a label volume (vv_filter_components): label 0 transparent, every
+                           other label opaque in vv_label_color(label) */
 } vv_segmentation;
 
 /**

@@ -8,6 +8,7 @@
 #include "animate.h"
 #include "compress.h"
 #include "core.h"
+#include "filter.h"
 #include "grid.h"
 #include "image.h"
 #include "input.h"

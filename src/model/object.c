@@ -282,6 +282,7 @@ vv_object_free(vv_object *obj) {
     free(obj->geometry.vertices);
     vv_mesh_free(obj->geometry.mesh);
     free(obj->geometry.source);
+    free(obj->geometry.filters);
     vv_texture_image_free(obj->texture.image);
     vv_volume_free(obj->solid_texture.volume);
     free(obj->solid_texture.source);
@@ -299,6 +300,7 @@ vv_object_clone(vv_object **out, const vv_object *obj) {
     *c = *obj;
     c->geometry.vertices = NULL;
     c->geometry.source = NULL;
+    c->geometry.filters = NULL;
     c->solid_texture.source = NULL;
     if (obj->geometry.vertices && obj->geometry.n_vertices > 0) {
         size_t n = (size_t)obj->geometry.n_vertices * sizeof *c->geometry.vertices;
@@ -317,6 +319,11 @@ vv_object_clone(vv_object **out, const vv_object *obj) {
         if (!c->solid_texture.source)
             goto nomem;
     }
+    if (obj->geometry.filters) {
+        c->geometry.filters = vv_strdup(obj->geometry.filters);
+        if (!c->geometry.filters)
+            goto nomem;
+    }
     if (c->volume)
         vv_volume_ref(c->volume);
     if (c->grid)
@@ -331,6 +338,8 @@ vv_object_clone(vv_object **out, const vv_object *obj) {
 nomem:
     free(c->geometry.vertices);
     free(c->geometry.source);
+    free(c->solid_texture.source);
+    free(c->geometry.filters);
     free(c);
     return vv_error_set(VV_ERR_NOMEM, "object clone: out of memory");
 }

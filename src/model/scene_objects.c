@@ -12,6 +12,7 @@
 
 #include "core/internal.h"
 #include "core/json_internal.h"
+#include "filter/filter_scene.h"
 #include "model/model_internal.h"
 #include "model/scene_internal.h"
 #include "modeling/modeling_internal.h"
@@ -513,12 +514,13 @@ parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
             o->segmentation = VV_SEG_TRANSFER_FUNCTION_2D;
         } else if (strcmp(seg_name, "transfer_function") == 0) {
             o->segmentation = VV_SEG_TRANSFER_FUNCTION;
+        } else if (strcmp(seg_name, "labels") == 0) {
+            o->segmentation = VV_SEG_LABELS;
         } else {
-            return vv_scene_serr(
-                c, kp,
-                "unknown segmentation \"%s\"; expected \"transfer_function\", \"tf2d\" "
-                "or {\"threshold\": value}",
-                seg_name);
+            return vv_scene_serr(c, kp,
+                                 "unknown segmentation \"%s\"; expected \"transfer_function\", "
+                                 "\"tf2d\", \"labels\" or {\"threshold\": value}",
+                                 seg_name);
         }
     }
     if (tf2j) {
@@ -915,7 +917,7 @@ parse_grid_object(const sctx *c, json_t *e, const char *op, vv_world *w) {
 
 vv_status
 vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
-    static const char *const own[] = {"file", "origin", "spacing", NULL};
+    static const char *const own[] = {"file", "origin", "spacing", "filters", NULL};
     char op[PATH_MAX_LEN], kp[PATH_MAX_LEN];
     vv_scene_path_index(op, "objects", idx);
     if (json_is_object(e)) {
@@ -964,21 +966,46 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     if (!full)
         return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
     vv_volume *vol = NULL;
-    st = vv_volume_load(&vol, full, NULL);
+    /* "filters": a filter chain applied at load (src/filter), the result cached */
+    json_t *fj = json_object_get(e, "filters");
+    vv_filter_chain *chain = NULL;
+    if (fj) {
+        int bad;
+        vv_scene_path_key(kp, op, "filters");
+        if ((st = vf_chain_from_json(fj, &chain, &bad)) != VV_OK) {
+            char msg[512], ip[PATH_MAX_LEN];
+            snprintf(msg, sizeof msg, "%s", vv_error_message());
+            free(full);
+            if (bad >= 0)
+                vv_scene_path_index(ip, kp, (size_t)bad);
+            return vv_scene_serr(c, bad >= 0 ? ip : kp, "%s", msg);
+        }
+        double o3[3] = {origin.x, origin.y, origin.z}, s3[3] = {spacing.x, spacing.y, spacing.z};
+        vv_filter_options fo;
+        vv_filter_options_init(&fo);
+        if (c->progress)
+            fo.progress = *c->progress; /* and its cancel */
+        st = vv_filter_load_cached(full, has_origin ? o3 : NULL, has_spacing ? s3 : NULL, chain,
+                                   &fo, &vol);
+    } else {
+        st = vv_volume_load(&vol, full, NULL);
+    }
     if (st != VV_OK) {
+        vv_filter_chain_free(chain);
         free(full);
         int line, col;
-        vv_scene_path_key(kp, op, "file");
+        vv_scene_path_key(kp, op, fj ? "filters" : "file");
         vv_scene_locate(c, kp, &line, &col);
         return vv_error_prefix(st, "%s:%d:%d: %s", c->path, line, col, kp);
     }
-    /* the volume is freshly loaded and ours alone, so overriding is safe */
-    if (has_origin) {
+    /* the volume is freshly loaded and ours alone, so overriding is safe (a
+     * filtered one is shared with the cache and already has them) */
+    if (has_origin && !fj) {
         vol->origin[0] = origin.x;
         vol->origin[1] = origin.y;
         vol->origin[2] = origin.z;
     }
-    if (has_spacing) {
+    if (has_spacing && !fj) {
         vol->spacing[0] = spacing.x;
         vol->spacing[1] = spacing.y;
         vol->spacing[2] = spacing.z;
@@ -989,10 +1016,18 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     st = vv_object_new_volume(&o, vol, name ? name : defname);
     vv_volume_free(vol);
     if (st != VV_OK) {
+        vv_filter_chain_free(chain);
         free(full);
         return vv_error_prefix(st, "%s: %s", c->path, op);
     }
     o->geometry.source = full; /* kept for saving the scene again */
+    if (chain && vv_filter_chain_length(chain) > 0 &&
+        !(o->geometry.filters = vv_strdup(vv_filter_chain_text(chain)))) {
+        vv_filter_chain_free(chain);
+        vv_object_free(o);
+        return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
+    }
+    vv_filter_chain_free(chain);
     st = parse_object_fields(c, e, op, o);
     if (st == VV_OK)
         st = parse_effect_flags(c, e, op, o);

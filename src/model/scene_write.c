@@ -18,6 +18,7 @@
 #include "volvis/model.h"
 #include "volvis/modeling.h"
 
+#include "filter/filter_scene.h"
 /* ---- writing ------------------------------------------------------------- */
 
 static void
@@ -295,6 +296,10 @@ put_object(FILE *f, const vv_object *o, const char *file) {
         put_vec3(f, vv_vec3_make(v->origin[0], v->origin[1], v->origin[2]));
         fputs(",\n      \"spacing\": ", f);
         put_vec3(f, vv_vec3_make(v->spacing[0], v->spacing[1], v->spacing[2]));
+        if (o->geometry.filters) {
+            fputs(",\n      \"filters\": ", f);
+            put_str(f, o->geometry.filters);
+        }
     }
     fputs(",\n      \"position\": ", f);
     put_vec3(f, o->position);
@@ -343,6 +348,8 @@ put_object(FILE *f, const vv_object *o, const char *file) {
         fputs("\n      }", f);
         if (o->segmentation == VV_SEG_TRANSFER_FUNCTION_2D)
             fputs(",\n      \"segmentation\": \"tf2d\"", f);
+        if (o->segmentation == VV_SEG_LABELS)
+            fputs(",\n      \"segmentation\": \"labels\"", f);
     }
     if (o->segmentation == VV_SEG_TRANSFER_FUNCTION_2D || o->tf2d.n_widgets > 0)
         put_tf2d(f, &o->tf2d);

@@ -114,6 +114,30 @@ vv_tf_eval_opacity(const vv_tf *tf, double value) {
 }
 
 vv_vec3
+vv_label_color(uint32_t label) {
+    if (label == 0)
+        return vv_vec3_make(0, 0, 0);
+    double h = fmod(0.1 + 0.6180339887498949 * (double)(label - 1), 1.0) * 6.0;
+    double s = 0.65, v = 0.95;
+    int sector = (int)h;
+    double f = h - sector, p = v * (1 - s), q = v * (1 - s * f), t = v * (1 - s * (1 - f));
+    switch (sector % 6) {
+    case 0:
+        return vv_vec3_make(v, t, p);
+    case 1:
+        return vv_vec3_make(q, v, p);
+    case 2:
+        return vv_vec3_make(p, v, t);
+    case 3:
+        return vv_vec3_make(p, q, v);
+    case 4:
+        return vv_vec3_make(t, p, v);
+    default:
+        return vv_vec3_make(v, p, q);
+    }
+}
+
+vv_vec3
 vv_tf_eval_color(const vv_tf *tf, double value) {
     if (!tf || tf->n_color <= 0)
         return vv_vec3_make(1.0, 1.0, 1.0);

@@ -108,6 +108,10 @@ vv_object_surface_value(const vv_object *obj, double *iso, vv_vec3 *color) {
         *iso = obj->threshold;
         return 1;
     }
+    if (obj->segmentation == VV_SEG_LABELS) {
+        *iso = 0.5; /* between the background and the first label */
+        return 1;
+    }
     double lo = 0, hi = 1;
     if (obj->type == VV_OBJECT_GRID) {
         const int f = obj->grid ? vv_object_grid_field(obj) : -1;

@@ -482,6 +482,14 @@ build_tables(const vv_vcache *c, const vv_object *obj, const vv_vtables_key *key
             if (obj->segmentation == VV_SEG_THRESHOLD) {
                 a = x >= obj->threshold ? 1.0 : 0.0;
                 col = obj->material.color;
+            } else if (obj->segmentation == VV_SEG_LABELS) {
+                /* a categorical transfer function: opaque where the interpolated
+                 * label is >= 1/2 (the surface against the background); the
+                 * colour is the nearest label's (vv_vextra_label) in composite
+                 * mode, the rounded value's in the projections */
+                double l = floor(x + 0.5);
+                a = l >= 1 ? 1.0 : 0.0;
+                col = vv_label_color(l >= 1 && l < 4294967296.0 ? (uint32_t)l : 0);
             } else {
                 a = vv_tf_eval_opacity(&obj->tf, x);
                 col = vv_tf_eval_color(&obj->tf, x);
@@ -629,11 +637,13 @@ vv_vextra_prepare(vv_vextra *x, const vv_object *obj, vv_render_mode mode, const
     x->lut2d = mode == VV_MODE_COMPOSITE ? t->lut2d : NULL;
     if (mode == VV_MODE_COMPOSITE && obj->solid_texture.kind != VV_SOLID_TEXTURE_NONE)
         x->solid = &obj->solid_texture;
+    if (mode == VV_MODE_COMPOSITE && obj->segmentation == VV_SEG_LABELS && obj->volume)
+        x->labels = obj->volume;
     vv_mat4 m = vv_volume_index_to_world(obj->volume);
     for (int r = 0; r < 3; r++)
         for (int cc = 0; cc < 4; cc++)
             x->i2o[r][cc] = m.m[r][cc];
-    return x->lut2d != NULL || x->solid != NULL;
+    return x->lut2d != NULL || x->solid != NULL || x->labels != NULL;
 }
 
 /* ---------------------------------------------------------------------- */

@@ -403,8 +403,43 @@ typedef struct vv_vextra {
     float lut2_scale;              /* table index -> value bin */
     float g_scale;                 /* gradient magnitude -> gradient bin */
     const vv_solid_texture *solid; /* NULL: none */
+    const vv_volume *labels;       /* a label volume (VV_SEG_LABELS) to colour by, or NULL */
     double i2o[3][4];              /* index -> the volume's own world coordinates */
 } vv_vextra;
+
+/* The label of a label volume at index point p: of the cell's 8 corner
+ * voxels with a non-zero label, the one of largest trilinear weight (the
+ * nearest), so colours do not blend across labels; 0 when all are 0. */
+static inline uint32_t
+vv_vextra_label(const vv_volume *v, const float p[3]) {
+    int i0[3];
+    float f[3];
+    for (int a = 0; a < 3; a++) {
+        float q = p[a] < 0 ? 0 : p[a] > (float)(v->dims[a] - 1) ? (float)(v->dims[a] - 1) : p[a];
+        i0[a] = (int)q;
+        if (i0[a] > v->dims[a] - 2)
+            i0[a] = v->dims[a] > 1 ? v->dims[a] - 2 : 0;
+        f[a] = q - (float)i0[a];
+    }
+    uint32_t best = 0;
+    float bw = -1;
+    for (int c = 0; c < 8; c++) {
+        int d[3] = {c & 1, (c >> 1) & 1, (c >> 2) & 1};
+        int ix[3];
+        float w = 1;
+        for (int a = 0; a < 3; a++) {
+            ix[a] = i0[a] + d[a] < v->dims[a] ? i0[a] + d[a] : v->dims[a] - 1;
+            w *= d[a] ? f[a] : 1 - f[a];
+        }
+        double l = vv_voxel_value(
+            v->type, v->data, ((size_t)ix[2] * v->dims[1] + (size_t)ix[1]) * v->dims[0] + ix[0]);
+        if (l >= 1 && w > bw) {
+            bw = w;
+            best = l < 4294967296.0 ? (uint32_t)(l + 0.5) : 0;
+        }
+    }
+    return best;
+}
 
 /* Fills @p x for object @p obj in @p mode with tables @p t; returns 1 when
  * the object has extras (the fast single-volume kernels do not handle
@@ -436,6 +471,14 @@ vv_vextra_apply(const vv_vextra *x, const vv_vcache *c, const float p[3], float 
         buf[1] = e[1] * (float)col.x;
         buf[2] = e[2] * (float)col.y;
         buf[3] = e[3] * (float)col.z;
+        return buf;
+    }
+    if (x->labels && e[0] > 0) {
+        const vv_vec3 col = vv_label_color(vv_vextra_label(x->labels, p));
+        buf[0] = e[0];
+        buf[1] = e[0] * (float)col.x;
+        buf[2] = e[0] * (float)col.y;
+        buf[3] = e[0] * (float)col.z;
         return buf;
     }
     return e;
