@@ -1,5 +1,5 @@
 /*
- * Tests of the .vvc codec (src/compress/vvc.c).
+ * Tests of the .vvc codec (src/compress/vvc_*.c).
  *
  * Round trips at the finest quantisation (integer data decode exactly, float
  * data within half a grey level), every header field kept, PSNR rising with
