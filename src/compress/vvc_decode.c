@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "compress/rangecoder.h"
 #include "compress/vvc_internal.h"
 #include "core/internal.h"
 
@@ -55,6 +56,39 @@ store_row(vv_volume *v, size_t idx, const float *vals, int n) {
 #undef VVC_STORE
 }
 
+void
+vvc_dequantise(const vvc_scan *sc, const float *step_abs, const int64_t *q, float *spectrum) {
+    memset(spectrum, 0, sizeof(float) * 2 * (size_t)sc->M * sc->M * sc->H);
+    for (int e = 0; e < sc->N; e++)
+        spectrum[sc->entry[e]] = (float)((double)q[e] * (double)step_abs[e]);
+    for (int m = 0; m < sc->nmirror; m++) {
+        const int from = sc->mirror[2 * m], to = sc->mirror[2 * m + 1];
+        spectrum[2 * to] = spectrum[2 * from];
+        spectrum[2 * to + 1] = -spectrum[2 * from + 1];
+    }
+}
+
+vv_status
+vvc_decode_q(const vv_vvc *c, int index, int64_t *q, vvc_corr **cr, int *ncr) {
+    if (cr) {
+        *cr = NULL;
+        *ncr = 0;
+    }
+    if (c->info.version == 1)
+        return vvc_decode_ints(c, index, q);
+    vv_rc_dec d;
+    vv_rc_dec_init(&d, c->bytes + c->data_start + c->offsets[index],
+                   c->bytes + c->data_start + c->offsets[index + 1]);
+    int r = vvc2_decode_block(&c->scan, &c->model, c->p0, &d, q);
+    if (r == 0 && cr && c->info.corr_step > 0)
+        r = vvc2_decode_corrections(&c->model, c->p0, &d, c->scan.N, cr, ncr);
+    if (r == -2)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    if (r != 0)
+        return vv_error_set(VV_ERR_FORMAT, "subcube %d: bit stream does not decode", index);
+    return VV_OK;
+}
+
 vv_status
 vv_vvc_decode_spectrum(const vv_vvc *c, int index, float *spectrum) {
     if (index < 0 || index >= c->nsub)
@@ -64,19 +98,12 @@ vv_vvc_decode_spectrum(const vv_vvc *c, int index, float *spectrum) {
     int64_t *q = malloc(sizeof *q * (size_t)sc->N);
     if (!q)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    vv_status s = vvc_decode_ints(c, index, q);
+    vv_status s = vvc_decode_q(c, index, q, NULL, NULL);
     if (s != VV_OK) {
         free(q);
         return vv_error_prefix(s, "vvc");
     }
-    memset(spectrum, 0, sizeof(float) * 2 * (size_t)sc->M * sc->M * sc->H);
-    for (int e = 0; e < sc->N; e++)
-        spectrum[sc->entry[e]] = (float)((double)q[e] * (double)c->step_abs[e]);
-    for (int m = 0; m < sc->nmirror; m++) {
-        const int from = sc->mirror[2 * m], to = sc->mirror[2 * m + 1];
-        spectrum[2 * to] = spectrum[2 * from];
-        spectrum[2 * to + 1] = -spectrum[2 * from + 1];
-    }
+    vvc_dequantise(sc, c->step_abs, q, spectrum);
     free(q);
     return VV_OK;
 }
@@ -101,15 +128,34 @@ ensure_plan(const vv_vvc *cc) {
     return s;
 }
 
-/* Inverse transform of one subcube (spectrum is destroyed) into values. */
-static void
-subcube_values(const vv_vvc *c, float *spectrum, float *values) {
-    fftwf_execute_dft_c2r(c->c2r, (fftwf_complex *)spectrum, values);
-    const int N = c->scan.N;
-    const float scale = (float)(c->info.value_unit / N);
-    const float off = (float)c->info.value_offset;
+void
+vvc_values(fftwf_plan c2r, int N, double unit, double offset, float *spectrum, float *values) {
+    fftwf_execute_dft_c2r(c2r, (fftwf_complex *)spectrum, values);
+    const float scale = (float)(unit / N);
+    const float off = (float)offset;
     for (int i = 0; i < N; i++)
         values[i] = off + scale * values[i];
+}
+
+void
+vvc_apply_corrections(float *values, const vvc_corr *cr, int n, double corr_step) {
+    for (int i = 0; i < n; i++)
+        values[cr[i].pos] = (float)((double)values[cr[i].pos] + (double)cr[i].k * corr_step);
+}
+
+/* One subcube decoded to values, corrections included (spectrum is scratch). */
+static vv_status
+subcube_decode(const vv_vvc *c, int index, int64_t *q, float *spectrum, float *values) {
+    vvc_corr *cr = NULL;
+    int ncr = 0;
+    vv_status s = vvc_decode_q(c, index, q, &cr, &ncr);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "vvc");
+    vvc_dequantise(&c->scan, c->step_abs, q, spectrum);
+    vvc_values(c->c2r, c->scan.N, c->info.value_unit, c->info.value_offset, spectrum, values);
+    vvc_apply_corrections(values, cr, ncr, c->info.corr_step);
+    free(cr);
+    return VV_OK;
 }
 
 vv_status
@@ -118,19 +164,23 @@ vv_vvc_decode_subcube(const vv_vvc *c, int index, float *values) {
     if (s != VV_OK)
         return s;
     const int M = c->M;
+    if (index < 0 || index >= c->nsub)
+        return vv_error_set(VV_ERR_INVALID, "vvc: subcube %d out of range (0..%d)", index,
+                            c->nsub - 1);
     float *sp = fftwf_malloc(sizeof(float) * 2 * (size_t)M * M * (M / 2 + 1));
     float *vals = fftwf_malloc(sizeof(float) * (size_t)M * M * M);
-    if (!sp || !vals) {
+    int64_t *q = malloc(sizeof *q * (size_t)c->scan.N);
+    if (!sp || !vals || !q) {
         fftwf_free(sp);
         fftwf_free(vals);
+        free(q);
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     }
-    if ((s = vv_vvc_decode_spectrum(c, index, sp)) == VV_OK) {
-        subcube_values(c, sp, vals);
+    if ((s = subcube_decode(c, index, q, sp, vals)) == VV_OK)
         memcpy(values, vals, sizeof(float) * (size_t)M * M * M);
-    }
     fftwf_free(sp);
     fftwf_free(vals);
+    free(q);
     return s;
 }
 
@@ -162,15 +212,16 @@ vv_vvc_decompress(vv_volume **out, const vv_vvc *c, int threads, const vv_progre
     {
         float *sp = fftwf_malloc(sizeof(float) * 2 * (size_t)M * M * (M / 2 + 1));
         float *vals = fftwf_malloc(sizeof(float) * (size_t)M * M * M);
+        int64_t *q = malloc(sizeof *q * (size_t)c->scan.N);
 #pragma omp for schedule(dynamic, 4)
         for (int k = 0; k < c->nsub; k++) {
             if (failed || cancelled)
                 continue;
-            if (!sp || !vals) {
+            if (!sp || !vals || !q) {
                 failed = 1;
                 continue;
             }
-            if (vv_vvc_decode_spectrum(c, k, sp) != VV_OK) {
+            if (subcube_decode(c, k, q, sp, vals) != VV_OK) {
 #pragma omp critical(vvc_err)
                 {
                     if (!failed)
@@ -179,7 +230,6 @@ vv_vvc_decompress(vv_volume **out, const vv_vvc *c, int threads, const vv_progre
                 }
                 continue;
             }
-            subcube_values(c, sp, vals);
             const int bx = k % nb[0], by = (k / nb[0]) % nb[1], bz = k / (nb[0] * nb[1]);
             const int nx = v->dims[0] - bx * M < M ? v->dims[0] - bx * M : M;
             for (int z = 0; z < M; z++) {
@@ -206,6 +256,7 @@ vv_vvc_decompress(vv_volume **out, const vv_vvc *c, int threads, const vv_progre
         }
         fftwf_free(sp);
         fftwf_free(vals);
+        free(q);
     }
     if (failed || cancelled) {
         vv_volume_free(v);

@@ -8,6 +8,7 @@
 #include <string.h>
 #include <zlib.h>
 
+#include "compress/rangecoder.h"
 #include "compress/vvc_internal.h"
 #include "core/internal.h"
 
@@ -25,6 +26,7 @@ vv_vvc_free(vv_vvc *c) {
     free(c->qtab);
     free(c->step_abs);
     free(c->offsets);
+    free(c->p0);
     free(c);
 }
 
@@ -158,27 +160,45 @@ vvc_tables_bytes(int M, const vv_huff_table *dc, const vv_huff_table *ac) {
     return 4 + 4 * H * H * H + 16 + 2 * (size_t)dc->nvals + 16 + 2 * (size_t)ac->nvals + 4;
 }
 
+vv_status
+vvc2_pack_codes(const vvc2_model *m, const uint8_t *code, uint8_t **z, size_t *zlen) {
+    uLongf n = compressBound((uLong)m->nctx);
+    *z = malloc(n);
+    if (!*z || compress2(*z, &n, code, (uLong)m->nctx, 9) != Z_OK) {
+        free(*z);
+        *z = NULL;
+        return vv_error_set(VV_ERR_NOMEM, "out of memory (deflating the context table)");
+    }
+    *zlen = n;
+    return VV_OK;
+}
+
+size_t
+vvc2_tables_bytes(size_t zlen) {
+    return 4 + 4 + zlen + 4;
+}
+
 /* ---------------------------------------------------------------------- */
 /* Writing                                                                  */
 
 vv_status
-vvc_write_file(const vv_volume *v, int M, double quality, double slope, double offset, double unit,
-               const float *qtab, const vv_huff_table *t, const vv_bitwriter *streams, int nsub,
+vvc_write_file(const vv_volume *v, const vvc_file_desc *fd, const vvc_streams *st,
                unsigned char **bytes, size_t *size) {
-    const int H = M / 2 + 1;
+    const int M = fd->M, H = M / 2 + 1, nsub = st->n;
     bytebuf bb = {0}, *b = &bb;
     uint64_t data_len = 0;
     for (int k = 0; k < nsub; k++)
-        data_len += streams[k].len;
+        data_len += st->len[k];
     const int off_bytes = data_len < (1ull << 32) ? 4 : 8;
-    const uint64_t tables_size = vvc_tables_bytes(M, &t[0], &t[1]);
+    const uint64_t tables_size = fd->version == 1 ? vvc_tables_bytes(M, &fd->huff[0], &fd->huff[1])
+                                                  : vvc2_tables_bytes(fd->pzlen);
     const uint64_t index_size = (uint64_t)nsub * (uint64_t)off_bytes + 4;
     const uint64_t data_size = data_len + 4;
 
     /* header */
     bb_put(b, VVC_MAGIC, 8);
-    bb_u32(b, VV_VVC_VERSION);
-    bb_u32(b, VVC_HEADER_BYTES);
+    bb_u32(b, (uint32_t)fd->version);
+    bb_u32(b, fd->version == 1 ? VVC_HEADER_BYTES : VVC_HEADER_BYTES_V2);
     for (int i = 0; i < 3; i++)
         bb_u32(b, (uint32_t)v->dims[i]);
     bb_u8(b, (unsigned)v->type);
@@ -197,26 +217,40 @@ vvc_write_file(const vv_volume *v, int M, double quality, double slope, double o
         bb_f64(b, v->direction[i]);
     bb_f64(b, v->range[0]);
     bb_f64(b, v->range[1]);
-    bb_f64(b, offset);
-    bb_f64(b, unit);
-    bb_f64(b, quality);
-    bb_f64(b, slope);
+    bb_f64(b, fd->offset);
+    bb_f64(b, fd->unit);
+    bb_f64(b, fd->quality);
+    bb_f64(b, fd->slope);
     for (int i = 0; i < 3; i++)
         bb_u32(b, (uint32_t)((v->dims[i] + M - 1) / M));
     bb_u64(b, tables_size);
     bb_u64(b, index_size);
     bb_u64(b, data_size);
     bb_crc(b, 0);
+    if (fd->version >= 2) {
+        /* the extension of version 2, after the CRC of the version 1 layout so
+         * that a version 1 reader gets as far as the version number */
+        bb_f64(b, fd->max_error);
+        bb_f64(b, fd->corr_step);
+        bb_crc(b, VVC_HEADER_BYTES);
+    }
     /* tables */
     size_t from = b->len;
-    bb_u32(b, (uint32_t)(H * H * H));
-    for (int i = 0; i < H * H * H; i++)
-        bb_f32(b, qtab[i]);
-    for (int k = 0; k < 2; k++) {
-        for (int l = 1; l <= VV_HUFF_MAX_LEN; l++)
-            bb_u8(b, t[k].bits[l]);
-        for (int i = 0; i < t[k].nvals; i++)
-            bb_u16(b, t[k].vals[i]);
+    if (fd->version == 1) {
+        bb_u32(b, (uint32_t)(H * H * H));
+        for (int i = 0; i < H * H * H; i++)
+            bb_f32(b, fd->qtab[i]);
+        for (int k = 0; k < 2; k++) {
+            for (int l = 1; l <= VV_HUFF_MAX_LEN; l++)
+                bb_u8(b, fd->huff[k].bits[l]);
+            for (int i = 0; i < fd->huff[k].nvals; i++)
+                bb_u16(b, fd->huff[k].vals[i]);
+        }
+    } else {
+        /* version 2: the quantisation table follows from the quality and slope */
+        bb_u32(b, (uint32_t)fd->model->nctx);
+        bb_u32(b, (uint32_t)fd->pzlen);
+        bb_put(b, fd->pz, fd->pzlen);
     }
     bb_crc(b, from);
     /* index */
@@ -227,13 +261,13 @@ vvc_write_file(const vv_volume *v, int M, double quality, double slope, double o
             bb_u32(b, (uint32_t)off);
         else
             bb_u64(b, off);
-        off += streams[k].len;
+        off += st->len[k];
     }
     bb_crc(b, from);
     /* data */
     from = b->len;
     for (int k = 0; k < nsub; k++)
-        bb_put(b, streams[k].buf, streams[k].len);
+        bb_put(b, st->buf[k], st->len[k]);
     bb_crc(b, from);
     if (b->failed) {
         free(b->p);
@@ -291,15 +325,30 @@ vvc_parse(vv_vvc *c, const char *name) {
     const uint32_t version = rd_u32(b + 8);
     if (rd_u32(b + VVC_HEADER_BYTES - 4) != vvc_crc(b, VVC_HEADER_BYTES - 4))
         return vv_error_set(VV_ERR_FORMAT, "header CRC-32 mismatch (corrupt file)");
-    if (version != VV_VVC_VERSION)
-        return vv_error_set(VV_ERR_FORMAT, "format version %u (this build reads version %d)",
+    if (version < 1 || version > VV_VVC_VERSION)
+        return vv_error_set(VV_ERR_FORMAT, "format version %u (this build reads versions 1 to %d)",
                             version, VV_VVC_VERSION);
-    if (rd_u32(b + 12) != VVC_HEADER_BYTES)
-        return vv_error_set(VV_ERR_FORMAT, "header size %u (expected %d)", rd_u32(b + 12),
-                            VVC_HEADER_BYTES);
+    const uint32_t hbytes = version == 1 ? VVC_HEADER_BYTES : VVC_HEADER_BYTES_V2;
+    if (rd_u32(b + 12) != hbytes)
+        return vv_error_set(VV_ERR_FORMAT, "header size %u (expected %u for version %u)",
+                            rd_u32(b + 12), hbytes, version);
+    if (size < hbytes)
+        return vv_error_set(VV_ERR_FORMAT, "truncated header (%llu of %u bytes)",
+                            (unsigned long long)size, hbytes);
+    if (hbytes > VVC_HEADER_BYTES &&
+        rd_u32(b + hbytes - 4) != vvc_crc(b + VVC_HEADER_BYTES, hbytes - VVC_HEADER_BYTES - 4))
+        return vv_error_set(VV_ERR_FORMAT, "header extension CRC-32 mismatch (corrupt file)");
     vv_vvc_info *in = &c->info;
     memset(in, 0, sizeof *in);
     in->version = (int)version;
+    if (version >= 2) {
+        in->max_error = rd_f64(b + VVC_HEADER_BYTES);
+        in->corr_step = rd_f64(b + VVC_HEADER_BYTES + 8);
+        if (!(in->max_error >= 0) || !(in->corr_step >= 0) || !isfinite(in->max_error) ||
+            !isfinite(in->corr_step) || (in->corr_step > 0) != (in->max_error > 0))
+            return vv_error_set(VV_ERR_FORMAT, "bad error bound %g or correction step %g",
+                                in->max_error, in->corr_step);
+    }
     for (int i = 0; i < 3; i++) {
         uint32_t d = rd_u32(b + 16 + 4 * i);
         if (d < 1 || d > VV_VOLUME_MAX_DIM)
@@ -345,7 +394,7 @@ vvc_parse(vv_vvc *c, const char *name) {
     }
     p += 12;
     const uint64_t tables_size = rd_u64(p), index_size = rd_u64(p + 8), data_size = rd_u64(p + 16);
-    const uint64_t rest = size - VVC_HEADER_BYTES;
+    const uint64_t rest = size - hbytes;
     if (tables_size > rest || index_size > rest - tables_size ||
         data_size != rest - tables_size - index_size)
         return vv_error_set(VV_ERR_FORMAT,
@@ -363,36 +412,67 @@ vvc_parse(vv_vvc *c, const char *name) {
         8.0 * (double)size / ((double)in->dims[0] * (double)in->dims[1] * (double)in->dims[2]);
 
     /* tables */
-    const unsigned char *t0 = b + VVC_HEADER_BYTES;
+    const unsigned char *t0 = b + hbytes;
     if (tables_size < 8 || rd_u32(t0 + tables_size - 4) != vvc_crc(t0, tables_size - 4))
         return vv_error_set(VV_ERR_FORMAT, "tables CRC-32 mismatch (corrupt file)");
     const int H = M / 2 + 1;
-    if (rd_u32(t0) != (uint32_t)(H * H * H) || tables_size < 4 + 4ull * H * H * H + 4)
-        return vv_error_set(VV_ERR_FORMAT, "quantisation table size %u (expected %d)", rd_u32(t0),
-                            H * H * H);
     if ((s = vvc_scan_init(&c->scan, M)) != VV_OK)
         return s;
     c->qtab = malloc(sizeof(float) * (size_t)H * H * H);
     c->step_abs = malloc(sizeof(float) * (size_t)c->scan.N);
     if (!c->qtab || !c->step_abs)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    for (int i = 0; i < H * H * H; i++) {
-        float q = rd_f32(t0 + 4 + 4 * (size_t)i);
-        if (!(q > 0) || !(q < 1e30f))
-            return vv_error_set(VV_ERR_FORMAT, "quantisation step %d is %g", i, (double)q);
-        c->qtab[i] = q;
+    const unsigned char *hp = t0, *hend = t0 + tables_size - 4;
+    if (version == 1) {
+        if (rd_u32(t0) != (uint32_t)(H * H * H) || tables_size < 4 + 4ull * H * H * H + 4)
+            return vv_error_set(VV_ERR_FORMAT, "quantisation table size %u (expected %d)",
+                                rd_u32(t0), H * H * H);
+        for (int i = 0; i < H * H * H; i++)
+            c->qtab[i] = rd_f32(t0 + 4 + 4 * (size_t)i);
+        hp = t0 + 4 + 4 * (size_t)H * H * H;
+    } else {
+        /* the table follows from the quality and the slope */
+        if (!(in->quality > -1000 && in->quality <= 1000) || !(in->slope >= 0 && in->slope <= 100))
+            return vv_error_set(VV_ERR_FORMAT, "quality %g or slope %g out of range", in->quality,
+                                in->slope);
+        vvc_make_table(c->qtab, M, in->quality, in->slope);
     }
+    for (int i = 0; i < H * H * H; i++)
+        if (!(c->qtab[i] > 0) || !(c->qtab[i] < 1e30f))
+            return vv_error_set(VV_ERR_FORMAT, "quantisation step %d is %g", i, (double)c->qtab[i]);
     vvc_make_step_abs(&c->scan, c->qtab, c->step_abs);
-    const unsigned char *hp = t0 + 4 + 4 * (size_t)H * H * H, *hend = t0 + tables_size - 4;
-    if ((s = parse_huff(&hp, hend, &c->dct, VVC_DC_SYMS, "DC")) != VV_OK ||
-        (s = parse_huff(&hp, hend, &c->act, VVC_AC_SYMS, "AC")) != VV_OK)
-        return s;
-    if (hp != hend)
-        return vv_error_set(VV_ERR_FORMAT, "%lld stray bytes after the Huffman tables",
-                            (long long)(hend - hp));
-    if ((s = vv_huff_make_dec(&c->dct, &c->dc)) != VV_OK ||
-        (s = vv_huff_make_dec(&c->act, &c->ac)) != VV_OK)
-        return s;
+    if (version == 1) {
+        if ((s = parse_huff(&hp, hend, &c->dct, VVC_DC_SYMS, "DC")) != VV_OK ||
+            (s = parse_huff(&hp, hend, &c->act, VVC_AC_SYMS, "AC")) != VV_OK)
+            return s;
+        if (hp != hend)
+            return vv_error_set(VV_ERR_FORMAT, "%lld stray bytes after the Huffman tables",
+                                (long long)(hend - hp));
+        if ((s = vv_huff_make_dec(&c->dct, &c->dc)) != VV_OK ||
+            (s = vv_huff_make_dec(&c->act, &c->ac)) != VV_OK)
+            return s;
+    } else {
+        vvc2_model_init(&c->model, c->scan.nb);
+        if (hend - hp < 8 || rd_u32(hp) != (uint32_t)c->model.nctx ||
+            (uint64_t)(hend - hp) != 8 + (uint64_t)rd_u32(hp + 4))
+            return vv_error_set(VV_ERR_FORMAT, "context table of %lld bytes (expected %d contexts)",
+                                (long long)(hend - hp), c->model.nctx);
+        uint8_t *code = malloc((size_t)c->model.nctx);
+        if (!code || !(c->p0 = malloc(sizeof *c->p0 * (size_t)c->model.nctx))) {
+            free(code);
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        }
+        uLongf n = (uLongf)c->model.nctx;
+        const int zr = uncompress(code, &n, hp + 8, (uLong)rd_u32(hp + 4));
+        if (zr != Z_OK || n != (uLongf)c->model.nctx) {
+            free(code);
+            return vv_error_set(VV_ERR_FORMAT, "context table does not inflate to %d bytes",
+                                c->model.nctx);
+        }
+        for (int i = 0; i < c->model.nctx; i++)
+            c->p0[i] = (uint16_t)vvc2_prob_of_code(code[i]);
+        free(code);
+    }
 
     /* index */
     const unsigned char *i0 = t0 + tables_size;

@@ -30,6 +30,9 @@ vvc_scan_free(vvc_scan *s) {
     free(s->entry);
     free(s->fold);
     free(s->mirror);
+    free(s->band);
+    free(s->nbr);
+    free(s->band_end);
     memset(s, 0, sizeof *s);
 }
 
@@ -80,16 +83,62 @@ vvc_scan_init(vvc_scan *s, int M) {
                 }
             }
     qsort(keys, (size_t)n, sizeof *keys, cmp_scan_key);
+    s->nb = 3 * (M / 2) + 1;
+    s->band = malloc((size_t)s->N);
+    s->nbr = malloc(sizeof(int32_t) * VVC_NBR * (size_t)s->N);
+    s->band_end = malloc(sizeof(int32_t) * (size_t)(s->nb + 1));
+    int32_t *pos = malloc(sizeof(int32_t) * 2 * (size_t)M * M * H);
+    if (n != s->N || !s->band || !s->nbr || !s->band_end || !pos) {
+        free(keys);
+        free(pos);
+        vvc_scan_free(s);
+        return n != s->N ? vv_error_set(VV_ERR_INVALID,
+                                        "internal: scan has %d entries, expected %d", n, M * M * M)
+                         : vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    for (int i = 0; i < 2 * M * M * H; i++)
+        pos[i] = -1;
     for (int i = 0; i < n; i++) {
         s->entry[i] = keys[i].entry;
         s->fold[i] = keys[i].fold;
+        s->band[i] = (uint8_t)keys[i].sum;
+        pos[keys[i].entry] = i;
     }
     free(keys);
-    if (n != s->N) {
-        vvc_scan_free(s);
-        return vv_error_set(VV_ERR_INVALID, "internal: scan has %d entries, expected %d", n,
-                            M * M * M);
+    /* a Hermitian duplicate stands for the coefficient it mirrors (same magnitudes) */
+    for (int m = 0; m < s->nmirror; m++)
+        for (int p = 0; p < 2; p++)
+            pos[2 * s->mirror[2 * m + 1] + p] = pos[2 * s->mirror[2 * m] + p];
+    for (int b = 0, i = 0; b <= s->nb; b++) {
+        while (i < n && s->band[i] <= b)
+            i++;
+        s->band_end[b] = i; /* first position past band b */
     }
+    /* the three neighbours one step lower in folded frequency, same part */
+    for (int i = 0; i < n; i++) {
+        const int e = s->entry[i], c = e >> 1, p = e & 1;
+        const int kx = c % H, ky = (c / H) % M, kz = c / (H * M);
+        const int lower[3][3] = {{kx - 1, ky, kz},
+                                 {kx,
+                                  ky == 0       ? -1
+                                  : ky <= M / 2 ? ky - 1
+                                                : (ky + 1) % M,
+                                  kz},
+                                 {kx, ky,
+                                  kz == 0       ? -1
+                                  : kz <= M / 2 ? kz - 1
+                                                : (kz + 1) % M}};
+        for (int a = 0; a < 3; a++) {
+            int32_t q = -1;
+            if (lower[a][0] >= 0 && lower[a][1] >= 0 && lower[a][2] >= 0)
+                q = pos[2 * ((lower[a][2] * M + lower[a][1]) * H + lower[a][0]) + p];
+            s->nbr[VVC_NBR * i + a] = q >= 0 && q < i ? q : -1;
+        }
+        /* the real part of the same coefficient, coded just before its imaginary part */
+        const int32_t re = p == 1 ? pos[e - 1] : -1;
+        s->nbr[VVC_NBR * i + 3] = re >= 0 && re < i ? re : -1;
+    }
+    free(pos);
     return VV_OK;
 }
 
@@ -147,5 +196,17 @@ vvc_quantise(const vvc_scan *sc, const float *sp, const double *inv_step, int64_
     for (int e = 0; e < sc->N; e++) {
         const double x = (double)sp[e] * inv_step[e];
         q[e] = (int64_t)(x + copysign(0.5, x));
+    }
+}
+
+void
+vvc_quantise_dz(const vvc_scan *sc, const float *sp, const double *inv_step, double theta,
+                int64_t *q) {
+    /* magnitudes rounded down past theta (< 0.5: a dead zone around zero), except the DC term */
+    const double x0 = (double)sp[0] * inv_step[0];
+    q[0] = (int64_t)(x0 + copysign(0.5, x0));
+    for (int e = 1; e < sc->N; e++) {
+        const double x = (double)sp[e] * inv_step[e];
+        q[e] = (int64_t)(x + copysign(theta, x));
     }
 }
