@@ -34,14 +34,27 @@ vvc2_model_init(vvc2_model *m, int nb) {
     m->nctx = m->o_corr + 3 * VVC2_EG_CTX;
 }
 
+static inline uint64_t
+mag(int64_t v) {
+    return v < 0 ? (uint64_t)-v : (uint64_t)v;
+}
+
+/* q holds N + 1 numbers, q[N] = 0 (the neighbour that is not there) */
 static inline int
 activity(const vvc_scan *sc, const int64_t *q, int e) {
+    static const uint8_t cls[9] = {0, 1, 2, 3, 3, 4, 4, 4, 4};
     const int32_t *n = sc->nbr + VVC_NBR * e;
-    uint64_t s = 0;
-    for (int a = 0; a < VVC_NBR; a++)
-        if (n[a] >= 0)
-            s += (uint64_t)(q[n[a]] < 0 ? -q[n[a]] : q[n[a]]);
-    return s == 0 ? 0 : s == 1 ? 1 : s == 2 ? 2 : s <= 4 ? 3 : s <= 8 ? 4 : 5;
+    const uint64_t s = mag(q[n[0]]) + mag(q[n[1]]) + mag(q[n[2]]) + mag(q[n[3]]);
+    return s <= 8 ? cls[s] : 5;
+}
+
+/* Position classes 4 b / L of the bands b < L, and Exp-Golomb groups 4 b / nb. */
+static inline void
+band_classes(const vvc2_model *m, int L, uint8_t *lc, uint8_t *eg) {
+    for (int b = 0; b < L; b++) {
+        lc[b] = (uint8_t)(b * VVC2_LC / L);
+        eg[b] = (uint8_t)(b * VVC2_EG_GROUPS / m->nb);
+    }
 }
 
 /* Where bits go: counted per context, or coded. */
@@ -99,18 +112,20 @@ code_block(const vvc_scan *sc, const vvc2_model *m, const int64_t *q, sink *s) {
         node = 2 * node + bit;
     }
     const int end = L > 0 ? sc->band_end[L - 1] : 0;
+    uint8_t lc[64], eg[64];
+    band_classes(m, L, lc, eg);
     for (int e = 0; e < end; e++) {
         const int b = sc->band[e], ctx = b * VVC2_ACT + activity(sc, q, e);
         const int64_t v = q[e];
-        put_bit(s, m->o_sig + ctx * VVC2_LC + b * VVC2_LC / L, v != 0);
+        put_bit(s, m->o_sig + ctx * VVC2_LC + lc[b], v != 0);
         if (!v)
             continue;
-        const uint64_t a = v < 0 ? (uint64_t)(-v) : (uint64_t)v;
+        const uint64_t a = mag(v);
         put_bit(s, m->o_g1 + ctx, a > 1);
         if (a > 1) {
             put_bit(s, m->o_g2 + ctx, a > 2);
             if (a > 2)
-                put_eg(s, m->o_eg + (b * VVC2_EG_GROUPS / m->nb) * VVC2_EG_CTX, a - 3);
+                put_eg(s, m->o_eg + eg[b] * VVC2_EG_CTX, a - 3);
         }
         put_raw(s, v < 0, 1);
     }
@@ -183,16 +198,18 @@ vvc2_decode_block(const vvc_scan *sc, const vvc2_model *m, const uint16_t *p0, v
     if (L > m->nb)
         return -1;
     const int end = L > 0 ? sc->band_end[L - 1] : 0;
+    uint8_t lc[64], eg[64];
+    band_classes(m, L, lc, eg);
     for (int e = 0; e < end; e++) {
         const int b = sc->band[e], ctx = b * VVC2_ACT + activity(sc, q, e);
-        if (!vv_rc_dec_bit(d, p0[m->o_sig + ctx * VVC2_LC + b * VVC2_LC / L]))
+        if (!vv_rc_dec_bit(d, p0[m->o_sig + ctx * VVC2_LC + lc[b]]))
             continue;
         uint64_t a = 1;
         if (vv_rc_dec_bit(d, p0[m->o_g1 + ctx])) {
             a = 2;
             if (vv_rc_dec_bit(d, p0[m->o_g2 + ctx])) {
                 uint64_t r;
-                if (get_eg(d, p0, m->o_eg + (b * VVC2_EG_GROUPS / m->nb) * VVC2_EG_CTX, &r))
+                if (get_eg(d, p0, m->o_eg + eg[b] * VVC2_EG_CTX, &r))
                     return -1;
                 a = 3 + r;
             }
@@ -287,14 +304,14 @@ vvc2_costs(const vvc2_model *m, const uint16_t *p0, float *cost) {
     }
 }
 
-/* Bits of a nonzero magnitude a in context ctx of band b (sign included). */
+/* Bits of a nonzero magnitude a in context ctx, Exp-Golomb group g (sign included). */
 static inline float
-mag_bits(const vvc2_model *m, const float *cost, int ctx, int b, uint64_t a) {
+mag_bits(const vvc2_model *m, const float *cost, int ctx, int g, uint64_t a) {
     float bits = cost[2 * (m->o_g1 + ctx) + (a > 1)] + 1.0f;
     if (a > 1) {
         bits += cost[2 * (m->o_g2 + ctx) + (a > 2)];
         if (a > 2) {
-            const int c0 = m->o_eg + (b * VVC2_EG_GROUPS / m->nb) * VVC2_EG_CTX;
+            const int c0 = m->o_eg + g * VVC2_EG_CTX;
             const int nbits = 63 - __builtin_clzll(a - 2);
             for (int j = 0; j < nbits; j++)
                 bits += cost[2 * (c0 + (j < VVC2_EG_CTX - 1 ? j : VVC2_EG_CTX - 1)) + 1];
@@ -318,22 +335,24 @@ vvc2_rdoq_block(const vvc_scan *sc, const vvc2_model *m, const float *cost, cons
     }
     const int L = last + 1;
     const int end = L > 0 ? sc->band_end[L - 1] : 0;
+    uint8_t lc[64], eg[64];
+    band_classes(m, L, lc, eg);
     for (int e = 1; e < end; e++) {
         if (!q[e])
             continue;
         const double x = fabs((double)sp[e] * inv_step[e]);
-        const uint64_t a0 = (uint64_t)(q[e] < 0 ? -q[e] : q[e]);
+        const uint64_t a0 = mag(q[e]);
         const int b = sc->band[e], ctx = b * VVC2_ACT + activity(sc, q, e);
-        const int sctx = m->o_sig + ctx * VVC2_LC + b * VVC2_LC / L;
+        const int sctx = m->o_sig + ctx * VVC2_LC + lc[b];
         const double w = weight[e];
         /* candidates a0, a0 - 1 and 0 */
         double best = w * (x - (double)a0) * (x - (double)a0) +
-                      lambda * (cost[2 * sctx + 1] + mag_bits(m, cost, ctx, b, a0));
+                      lambda * (cost[2 * sctx + 1] + mag_bits(m, cost, ctx, eg[b], a0));
         uint64_t ba = a0;
         if (a0 > 1) {
             const double d = x - (double)(a0 - 1);
             const double j =
-                w * d * d + lambda * (cost[2 * sctx + 1] + mag_bits(m, cost, ctx, b, a0 - 1));
+                w * d * d + lambda * (cost[2 * sctx + 1] + mag_bits(m, cost, ctx, eg[b], a0 - 1));
             if (j < best) {
                 best = j;
                 ba = a0 - 1;

@@ -57,10 +57,21 @@ store_row(vv_volume *v, size_t idx, const float *vals, int n) {
 }
 
 void
-vvc_dequantise(const vvc_scan *sc, const float *step_abs, const int64_t *q, float *spectrum) {
+vvc_dequantise(const vvc_scan *sc, const float *step_abs, const float *recon, const int64_t *q,
+               float *spectrum) {
     memset(spectrum, 0, sizeof(float) * 2 * (size_t)sc->M * sc->M * sc->H);
-    for (int e = 0; e < sc->N; e++)
-        spectrum[sc->entry[e]] = (float)((double)q[e] * (double)step_abs[e]);
+    if (!recon) {
+        for (int e = 0; e < sc->N; e++)
+            spectrum[sc->entry[e]] = (float)((double)q[e] * (double)step_abs[e]);
+    } else {
+        for (int e = 0; e < sc->N; e++) {
+            const int64_t v = q[e];
+            if (!v)
+                continue;
+            const double d = recon[2 * sc->band[e] + (v > 1 || v < -1)];
+            spectrum[sc->entry[e]] = (float)(((double)v + (v > 0 ? d : -d)) * (double)step_abs[e]);
+        }
+    }
     for (int m = 0; m < sc->nmirror; m++) {
         const int from = sc->mirror[2 * m], to = sc->mirror[2 * m + 1];
         spectrum[2 * to] = spectrum[2 * from];
@@ -95,7 +106,7 @@ vv_vvc_decode_spectrum(const vv_vvc *c, int index, float *spectrum) {
         return vv_error_set(VV_ERR_INVALID, "vvc: subcube %d out of range (0..%d)", index,
                             c->nsub - 1);
     const vvc_scan *sc = &c->scan;
-    int64_t *q = malloc(sizeof *q * (size_t)sc->N);
+    int64_t *q = calloc((size_t)sc->N + 1, sizeof *q); /* q[N] = 0: see vvc_scan.nbr */
     if (!q)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     vv_status s = vvc_decode_q(c, index, q, NULL, NULL);
@@ -103,7 +114,7 @@ vv_vvc_decode_spectrum(const vv_vvc *c, int index, float *spectrum) {
         free(q);
         return vv_error_prefix(s, "vvc");
     }
-    vvc_dequantise(sc, c->step_abs, q, spectrum);
+    vvc_dequantise(sc, c->step_abs, c->recon, q, spectrum);
     free(q);
     return VV_OK;
 }
@@ -151,7 +162,7 @@ subcube_decode(const vv_vvc *c, int index, int64_t *q, float *spectrum, float *v
     vv_status s = vvc_decode_q(c, index, q, &cr, &ncr);
     if (s != VV_OK)
         return vv_error_prefix(s, "vvc");
-    vvc_dequantise(&c->scan, c->step_abs, q, spectrum);
+    vvc_dequantise(&c->scan, c->step_abs, c->recon, q, spectrum);
     vvc_values(c->c2r, c->scan.N, c->info.value_unit, c->info.value_offset, spectrum, values);
     vvc_apply_corrections(values, cr, ncr, c->info.corr_step);
     free(cr);
@@ -169,7 +180,7 @@ vv_vvc_decode_subcube(const vv_vvc *c, int index, float *values) {
                             c->nsub - 1);
     float *sp = fftwf_malloc(sizeof(float) * 2 * (size_t)M * M * (M / 2 + 1));
     float *vals = fftwf_malloc(sizeof(float) * (size_t)M * M * M);
-    int64_t *q = malloc(sizeof *q * (size_t)c->scan.N);
+    int64_t *q = calloc((size_t)c->scan.N + 1, sizeof *q);
     if (!sp || !vals || !q) {
         fftwf_free(sp);
         fftwf_free(vals);
@@ -212,7 +223,7 @@ vv_vvc_decompress(vv_volume **out, const vv_vvc *c, int threads, const vv_progre
     {
         float *sp = fftwf_malloc(sizeof(float) * 2 * (size_t)M * M * (M / 2 + 1));
         float *vals = fftwf_malloc(sizeof(float) * (size_t)M * M * M);
-        int64_t *q = malloc(sizeof *q * (size_t)c->scan.N);
+        int64_t *q = calloc((size_t)c->scan.N + 1, sizeof *q);
 #pragma omp for schedule(dynamic, 4)
         for (int k = 0; k < c->nsub; k++) {
             if (failed || cancelled)

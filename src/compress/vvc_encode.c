@@ -57,7 +57,7 @@ gather_stats(const enc *en, const float *step_abs, uint64_t *dcf, uint64_t *acf,
     {
         uint64_t ldc[VVC_DC_SYMS] = {0};
         uint64_t *lac = calloc(VVC_AC_SYMS, sizeof *lac);
-        int64_t *q = malloc(sizeof *q * (size_t)en->sc->N);
+        int64_t *q = calloc((size_t)en->sc->N + 1, sizeof *q);
         sym_counter c = {ldc, lac, 0, NULL, NULL, NULL};
 #pragma omp for schedule(dynamic, 8)
         for (int s = 0; s < en->nsub; s++) {
@@ -163,7 +163,7 @@ encode_file(const enc *en, const vv_volume *v, int M, double quality, double slo
     long done_n = 0;
 #pragma omp parallel num_threads(en->threads)
     {
-        int64_t *q = malloc(sizeof *q * (size_t)sc->N);
+        int64_t *q = calloc((size_t)sc->N + 1, sizeof *q); /* q[N] = 0: see vvc_scan.nbr */
 #pragma omp for schedule(dynamic, 8)
         for (int k = 0; k < en->nsub; k++) {
             if (!q || cancelled) {
@@ -209,7 +209,8 @@ encode_file(const enc *en, const vv_volume *v, int M, double quality, double slo
             bufs[k] = streams[k].buf;
             lens[k] = streams[k].len;
         }
-        const vvc_file_desc fd = {1, M, quality, slope, offset, unit, 0, 0, qtab, t, NULL, NULL, 0};
+        const vvc_file_desc fd = {1, M,    quality, slope, offset, unit, 0,
+                                  0, qtab, t,       NULL,  NULL,   0,    NULL};
         const vvc_streams st = {en->nsub, bufs, lens};
         s = vvc_write_file(v, &fd, &st, bytes, size);
         free(bufs);
@@ -247,7 +248,7 @@ v2_quantise(const enc *en, const vvc2_model *m, int k, const double *inv, const 
 
 static vv_status
 count_v2(const enc *en, const vvc2_model *m, const float *step_abs, const float *cost,
-         const float *weight, uint64_t *counts, uint64_t *bypass) {
+         const float *weight, int stride, uint64_t *counts, uint64_t *bypass) {
     memset(counts, 0, sizeof(uint64_t) * 2 * (size_t)m->nctx);
     *bypass = 0;
     double *inv = malloc(sizeof(double) * (size_t)en->sc->N);
@@ -259,10 +260,10 @@ count_v2(const enc *en, const vvc2_model *m, const float *step_abs, const float 
 #pragma omp parallel num_threads(en->threads)
     {
         uint64_t *lc = calloc(2 * (size_t)m->nctx, sizeof *lc);
-        int64_t *q = malloc(sizeof *q * (size_t)en->sc->N);
+        int64_t *q = calloc((size_t)en->sc->N + 1, sizeof *q);
         uint64_t lb = 0;
 #pragma omp for schedule(dynamic, 8)
-        for (int s = 0; s < en->nsub; s++) {
+        for (int s = 0; s < en->nsub; s += stride) {
             if (!lc || !q)
                 continue;
             v2_quantise(en, m, s, inv, cost, weight, q);
@@ -292,7 +293,8 @@ count_v2(const enc *en, const vvc2_model *m, const float *step_abs, const float 
 static vv_status
 v2_statistics(const enc *en, const vvc2_model *m, const float *step_abs, uint64_t *counts,
               uint64_t *bypass, uint8_t *code, uint16_t *p0, float *cost, float *weight) {
-    vv_status s = count_v2(en, m, step_abs, NULL, NULL, counts, bypass);
+    /* the first pass only steers the RDO decisions: every 4th subcube is enough */
+    vv_status s = count_v2(en, m, step_abs, NULL, NULL, en->lambda > 0 ? 4 : 1, counts, bypass);
     vvc2_probabilities(m, counts, code, p0);
     if (s != VV_OK || !(en->lambda > 0))
         return s;
@@ -302,7 +304,7 @@ v2_statistics(const enc *en, const vvc2_model *m, const float *step_abs, uint64_
         smin = step_abs[e] < smin ? step_abs[e] : smin;
     for (int e = 0; e < en->sc->N; e++)
         weight[e] = (step_abs[e] / smin) * (step_abs[e] / smin);
-    s = count_v2(en, m, step_abs, cost, weight, counts, bypass);
+    s = count_v2(en, m, step_abs, cost, weight, 1, counts, bypass);
     vvc2_probabilities(m, counts, code, p0);
     return s;
 }
@@ -313,7 +315,7 @@ static uint64_t
 v2_file_bytes(const enc *en, size_t zlen, double bits) {
     const uint64_t data = (uint64_t)ceil(bits / 8.0) + 5 * (uint64_t)en->nsub + 4;
     const uint64_t index = (uint64_t)en->nsub * (data - 4 < (1ull << 32) ? 4 : 8) + 4;
-    return VVC_HEADER_BYTES_V2 + vvc2_tables_bytes(zlen) + index + data;
+    return VVC_HEADER_BYTES_V2 + vvc2_tables_bytes(zlen, en->sc->nb) + index + data;
 }
 
 /* Estimated size of a version 2 file at @p quality. */
@@ -352,6 +354,32 @@ size_v2(const enc *en, double quality, double slope, uint64_t *file_bytes) {
     free(cost);
     free(weight);
     return s;
+}
+
+/* Adds one subcube's rounding residuals |x| - |q| (in steps) per band and
+ * magnitude class (|q| = 1, > 1) to sum and n. */
+static inline void
+recon_add(const enc *en, int k, const double *inv, const int64_t *q, double *sum, uint64_t *n) {
+    const float *sp = en->spectra + (size_t)k * en->per;
+    for (int e = 1; e < en->sc->N; e++) {
+        const int64_t v = q[e];
+        if (!v)
+            continue;
+        const int i = 2 * en->sc->band[e] + (v > 1 || v < -1);
+        sum[i] += fabs((double)sp[e] * inv[e]) - (double)(v < 0 ? -v : v);
+        n[i]++;
+    }
+}
+
+/* The reconstruction offsets: the mean residual of each class (the
+ * least-squares offset), clamped to [-0.5, 0.5], in f32 as stored. */
+static void
+recon_finish(int nb, const double *sum, const uint64_t *n, float *recon) {
+    for (int i = 0; i < 2 * nb; i++) {
+        double d = n[i] ? sum[i] / (double)n[i] : 0;
+        d = d < -0.5 ? -0.5 : d > 0.5 ? 0.5 : d;
+        recon[i] = (float)d;
+    }
 }
 
 /* Final value of a decoded voxel in the native type (as store_row in vvc_decode.c). */
@@ -437,6 +465,9 @@ encode_v2(const enc *en, double quality, double slope, double max_error, double 
     float *weight = malloc(sizeof(float) * (size_t)N);
     uint8_t *code = malloc((size_t)m.nctx), *pz = NULL;
     size_t pzlen = 0;
+    double *rsum = calloc(2 * (size_t)sc->nb, sizeof *rsum);
+    uint64_t *rn = calloc(2 * (size_t)sc->nb, sizeof *rn);
+    float *recon = malloc(sizeof *recon * 2 * (size_t)sc->nb);
     vv_rc_enc *rc = calloc((size_t)en->nsub, sizeof *rc);
     vvc_corr **corr = max_error > 0 ? calloc((size_t)en->nsub, sizeof *corr) : NULL;
     int *ncorr = max_error > 0 ? calloc((size_t)en->nsub, sizeof *ncorr) : NULL;
@@ -444,8 +475,8 @@ encode_v2(const enc *en, double quality, double slope, double max_error, double 
     size_t *lens = malloc(sizeof *lens * (size_t)en->nsub);
     fftwf_plan c2r = NULL;
     vv_status s = VV_OK;
-    if (!qtab || !step_abs || !counts || !p0 || !inv || !cost || !weight || !code || !rc || !bufs ||
-        !lens || (max_error > 0 && (!corr || !ncorr))) {
+    if (!qtab || !step_abs || !counts || !p0 || !inv || !cost || !weight || !code || !rsum || !rn ||
+        !recon || !rc || !bufs || !lens || (max_error > 0 && (!corr || !ncorr))) {
         s = vv_error_set(VV_ERR_NOMEM, "out of memory");
         goto done;
     }
@@ -475,10 +506,37 @@ encode_v2(const enc *en, double quality, double slope, double max_error, double 
     int failed = 0, cancelled = 0;
     long done_n = 0;
     if (max_error > 0) {
+        /* the reconstruction offsets first: the corrections depend on them */
+#pragma omp parallel num_threads(en->threads)
+        {
+            int64_t *q = calloc((size_t)N + 1, sizeof *q);
+            double *ls = calloc(2 * (size_t)sc->nb, sizeof *ls);
+            uint64_t *ln = calloc(2 * (size_t)sc->nb, sizeof *ln);
+#pragma omp for schedule(dynamic, 8)
+            for (int k = 0; k < en->nsub; k++) {
+                if (!q || !ls || !ln) {
+                    failed = 1;
+                    continue;
+                }
+                v2_quantise(en, &m, k, inv, rdo, weight, q);
+                recon_add(en, k, inv, q, ls, ln);
+            }
+#pragma omp critical(vvc_stats)
+            if (ls && ln) {
+                for (int i = 0; i < 2 * sc->nb; i++) {
+                    rsum[i] += ls[i];
+                    rn[i] += ln[i];
+                }
+            }
+            free(q);
+            free(ls);
+            free(ln);
+        }
+        recon_finish(sc->nb, rsum, rn, recon);
         /* the corrections, decoded as the decoder will, then their statistics */
 #pragma omp parallel num_threads(en->threads)
         {
-            int64_t *q = malloc(sizeof *q * (size_t)N);
+            int64_t *q = calloc((size_t)N + 1, sizeof *q);
             float *sp = fftwf_malloc(sizeof(float) * 2 * (size_t)M * M * H);
             float *vals = fftwf_malloc(sizeof(float) * (size_t)N);
             vvc_corr *tmp = malloc(sizeof *tmp * (size_t)N);
@@ -491,7 +549,7 @@ encode_v2(const enc *en, double quality, double slope, double max_error, double 
                     continue;
                 }
                 v2_quantise(en, &m, k, inv, rdo, weight, q);
-                vvc_dequantise(sc, step_abs, q, sp);
+                vvc_dequantise(sc, step_abs, recon, q, sp);
                 vvc_values(c2r, N, en->unit, en->offset, sp, vals);
                 const int n = find_corrections(en, k, vals, bound, corr_step, tmp);
                 ncorr[k] = n;
@@ -523,17 +581,22 @@ encode_v2(const enc *en, double quality, double slope, double max_error, double 
     vvc2_probabilities(&m, counts, code, p0);
     if ((s = vvc2_pack_codes(&m, code, &pz, &pzlen)) != VV_OK)
         goto done;
+    const int want_recon = !(max_error > 0); /* else computed above */
 #pragma omp parallel num_threads(en->threads)
     {
-        int64_t *q = malloc(sizeof *q * (size_t)N);
+        int64_t *q = calloc((size_t)N + 1, sizeof *q);
+        double *ls = calloc(2 * (size_t)sc->nb, sizeof *ls);
+        uint64_t *ln = calloc(2 * (size_t)sc->nb, sizeof *ln);
 #pragma omp for schedule(dynamic, 8)
         for (int k = 0; k < en->nsub; k++) {
-            if (!q || cancelled) {
-                failed |= !q;
+            if (!q || !ls || !ln || cancelled) {
+                failed |= !q || !ls || !ln;
                 continue;
             }
             vv_rc_enc_init(&rc[k]);
             v2_quantise(en, &m, k, inv, rdo, weight, q);
+            if (want_recon)
+                recon_add(en, k, inv, q, ls, ln);
             vvc2_encode_block(sc, &m, q, p0, &rc[k]);
             if (max_error > 0)
                 vvc2_code_corrections(&m, corr[k], ncorr[k], NULL, NULL, p0, &rc[k]);
@@ -549,8 +612,19 @@ encode_v2(const enc *en, double quality, double slope, double max_error, double 
                 }
             }
         }
+#pragma omp critical(vvc_stats)
+        if (want_recon && ls && ln) {
+            for (int i = 0; i < 2 * sc->nb; i++) {
+                rsum[i] += ls[i];
+                rn[i] += ln[i];
+            }
+        }
         free(q);
+        free(ls);
+        free(ln);
     }
+    if (want_recon)
+        recon_finish(sc->nb, rsum, rn, recon);
     if (failed || cancelled) {
         s = failed ? vv_error_set(VV_ERR_NOMEM, "out of memory")
                    : vv_error_set(VV_ERR_CANCELLED, "cancelled");
@@ -562,7 +636,7 @@ encode_v2(const enc *en, double quality, double slope, double max_error, double 
     }
     {
         const vvc_file_desc fd = {2,         M,    quality, slope, en->offset, en->unit, max_error,
-                                  corr_step, qtab, NULL,    &m,    pz,         pzlen};
+                                  corr_step, qtab, NULL,    &m,    pz,         pzlen,    recon};
         const vvc_streams st = {en->nsub, bufs, lens};
         s = vvc_write_file(en->v, &fd, &st, bytes, size);
     }
@@ -592,6 +666,9 @@ done:
     free(weight);
     free(code);
     free(pz);
+    free(rsum);
+    free(rn);
+    free(recon);
     return s;
 }
 

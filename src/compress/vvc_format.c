@@ -27,6 +27,7 @@ vv_vvc_free(vv_vvc *c) {
     free(c->step_abs);
     free(c->offsets);
     free(c->p0);
+    free(c->recon);
     free(c);
 }
 
@@ -174,8 +175,8 @@ vvc2_pack_codes(const vvc2_model *m, const uint8_t *code, uint8_t **z, size_t *z
 }
 
 size_t
-vvc2_tables_bytes(size_t zlen) {
-    return 4 + 4 + zlen + 4;
+vvc2_tables_bytes(size_t zlen, int nb) {
+    return 4 + 4 + zlen + 4 + 8 * (size_t)nb + 4;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -191,7 +192,7 @@ vvc_write_file(const vv_volume *v, const vvc_file_desc *fd, const vvc_streams *s
         data_len += st->len[k];
     const int off_bytes = data_len < (1ull << 32) ? 4 : 8;
     const uint64_t tables_size = fd->version == 1 ? vvc_tables_bytes(M, &fd->huff[0], &fd->huff[1])
-                                                  : vvc2_tables_bytes(fd->pzlen);
+                                                  : vvc2_tables_bytes(fd->pzlen, fd->model->nb);
     const uint64_t index_size = (uint64_t)nsub * (uint64_t)off_bytes + 4;
     const uint64_t data_size = data_len + 4;
 
@@ -251,6 +252,9 @@ vvc_write_file(const vv_volume *v, const vvc_file_desc *fd, const vvc_streams *s
         bb_u32(b, (uint32_t)fd->model->nctx);
         bb_u32(b, (uint32_t)fd->pzlen);
         bb_put(b, fd->pz, fd->pzlen);
+        bb_u32(b, (uint32_t)(2 * fd->model->nb));
+        for (int i = 0; i < 2 * fd->model->nb; i++)
+            bb_f32(b, fd->recon[i]);
     }
     bb_crc(b, from);
     /* index */
@@ -453,10 +457,23 @@ vvc_parse(vv_vvc *c, const char *name) {
             return s;
     } else {
         vvc2_model_init(&c->model, c->scan.nb);
+        const int nr = 2 * c->model.nb;
         if (hend - hp < 8 || rd_u32(hp) != (uint32_t)c->model.nctx ||
-            (uint64_t)(hend - hp) != 8 + (uint64_t)rd_u32(hp + 4))
+            (uint64_t)(hend - hp) != 8 + (uint64_t)rd_u32(hp + 4) + 4 + 4 * (uint64_t)nr)
             return vv_error_set(VV_ERR_FORMAT, "context table of %lld bytes (expected %d contexts)",
                                 (long long)(hend - hp), c->model.nctx);
+        const unsigned char *rp = hp + 8 + rd_u32(hp + 4);
+        if (rd_u32(rp) != (uint32_t)nr)
+            return vv_error_set(VV_ERR_FORMAT, "%u reconstruction offsets (expected %d)",
+                                rd_u32(rp), nr);
+        if (!(c->recon = malloc(sizeof *c->recon * (size_t)nr)))
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        for (int i = 0; i < nr; i++) {
+            c->recon[i] = rd_f32(rp + 4 + 4 * (size_t)i);
+            if (!(c->recon[i] >= -0.5f && c->recon[i] <= 0.5f))
+                return vv_error_set(VV_ERR_FORMAT, "reconstruction offset %d is %g", i,
+                                    (double)c->recon[i]);
+        }
         uint8_t *code = malloc((size_t)c->model.nctx);
         if (!code || !(c->p0 = malloc(sizeof *c->p0 * (size_t)c->model.nctx))) {
             free(code);

@@ -57,7 +57,8 @@ typedef struct vvc_scan {
     int nmirror;
     int nb;            /* frequency bands: fx + fy + fz in 0 .. 3 M/2 */
     uint8_t *band;     /* N: band of each scan position (non-decreasing) */
-    int32_t *nbr;      /* VVC_NBR N: scan positions of the context neighbours (-1: none) */
+    int32_t *nbr;      /* VVC_NBR N: scan positions of the context neighbours (none: N, so
+                          arrays of quantised numbers hold N + 1 entries, the last 0) */
     int32_t *band_end; /* nb + 1: first scan position past band b */
 } vvc_scan;
 
@@ -152,7 +153,8 @@ struct vv_vvc {
     vv_huff_table dct, act; /* version 1 */
     vv_huff_dec dc, ac;
     vvc2_model model;              /* version 2 */
-    uint16_t *p0;                  /* model.nctx probabilities */
+    uint16_t *p0;     /* model.nctx probabilities */
+    float *recon;     /* 2 nb reconstruction offsets (steps) by band and |q| = 1, > 1 */
     uint64_t data_start, data_len; /* bit streams (without the CRC) */
     uint64_t *offsets;             /* nsub + 1 */
     fftwf_plan c2r;                /* for vv_vvc_decode_subcube */
@@ -178,7 +180,10 @@ vv_status vvc_decode_ints(const vv_vvc *c, int index, int64_t *q);
 /* ---- decoding (vvc_decode.c) -------------------------------------------- */
 
 /** The r2c spectrum (FFTW layout, duplicates filled) of N integers in scan order. */
-void vvc_dequantise(const vvc_scan *sc, const float *step_abs, const int64_t *q, float *spectrum);
+/** With @p recon (version 2; NULL: version 1) a nonzero q stands for (q + sign(q) * recon[2 band +
+ * (|q| > 1)]) steps. */
+void vvc_dequantise(const vvc_scan *sc, const float *step_abs, const float *recon, const int64_t *q,
+                    float *spectrum);
 /** Inverse DFT (c2r plan of side M, N = M^3) and value scaling; @p spectrum is destroyed. */
 void vvc_values(fftwf_plan c2r, int N, double unit, double offset, float *spectrum, float *values);
 /** values[pos] += k * corr_step for each correction. */
@@ -197,7 +202,7 @@ size_t vvc_tables_bytes(int M, const vv_huff_table *dc, const vv_huff_table *ac)
 /** Deflates the context bytes (malloc'ed *z, *zlen bytes). Errors: VV_ERR_NOMEM. */
 vv_status vvc2_pack_codes(const vvc2_model *m, const uint8_t *code, uint8_t **z, size_t *zlen);
 /** Bytes of the version 2 tables section with zlen bytes of deflated context bytes. */
-size_t vvc2_tables_bytes(size_t zlen);
+size_t vvc2_tables_bytes(size_t zlen, int nb);
 
 /** What the header and tables of a file hold. */
 typedef struct vvc_file_desc {
@@ -209,6 +214,7 @@ typedef struct vvc_file_desc {
     const vvc2_model *model;     /* version 2: the contexts, ... */
     const uint8_t *pz;           /* ... their deflated probability bytes */
     size_t pzlen;
+    const float *recon; /* ... and 2 nb reconstruction offsets */
 } vvc_file_desc;
 
 /** The subcube bit streams of a file. */

@@ -132,11 +132,11 @@ vvc_scan_init(vvc_scan *s, int M) {
             int32_t q = -1;
             if (lower[a][0] >= 0 && lower[a][1] >= 0 && lower[a][2] >= 0)
                 q = pos[2 * ((lower[a][2] * M + lower[a][1]) * H + lower[a][0]) + p];
-            s->nbr[VVC_NBR * i + a] = q >= 0 && q < i ? q : -1;
+            s->nbr[VVC_NBR * i + a] = q >= 0 && q < i ? q : s->N;
         }
         /* the real part of the same coefficient, coded just before its imaginary part */
         const int32_t re = p == 1 ? pos[e - 1] : -1;
-        s->nbr[VVC_NBR * i + 3] = re >= 0 && re < i ? re : -1;
+        s->nbr[VVC_NBR * i + 3] = re >= 0 && re < i ? re : s->N;
     }
     free(pos);
     return VV_OK;
