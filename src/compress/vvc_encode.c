@@ -246,9 +246,38 @@ v2_quantise(const enc *en, const vvc2_model *m, int k, const double *inv, const 
         vvc_quantise_dz(en->sc, sp, inv, en->theta, q);
 }
 
+/* Adds one subcube's rounding residuals |x| - |q| (in steps) per band and
+ * magnitude class (|q| = 1, > 1) to sum and n. */
+static inline void
+recon_add(const enc *en, int k, const double *inv, const int64_t *q, double *sum, uint64_t *n) {
+    const float *sp = en->spectra + (size_t)k * en->per;
+    for (int e = 1; e < en->sc->N; e++) {
+        const int64_t v = q[e];
+        if (!v)
+            continue;
+        const int i = 2 * en->sc->band[e] + (v > 1 || v < -1);
+        sum[i] += fabs((double)sp[e] * inv[e]) - (double)(v < 0 ? -v : v);
+        n[i]++;
+    }
+}
+
+/* The reconstruction offsets: the mean residual of each class (the
+ * least-squares offset), clamped to [-0.5, 0.5], in f32 as stored. */
+static void
+recon_finish(int nb, const double *sum, const uint64_t *n, float *recon) {
+    for (int i = 0; i < 2 * nb; i++) {
+        double d = n[i] ? sum[i] / (double)n[i] : 0;
+        d = d < -0.5 ? -0.5 : d > 0.5 ? 0.5 : d;
+        recon[i] = (float)d;
+    }
+}
+
+/* Context counts (and, with rsum, the sums for the reconstruction offsets) of
+ * every stride-th subcube. */
 static vv_status
 count_v2(const enc *en, const vvc2_model *m, const float *step_abs, const float *cost,
-         const float *weight, int stride, uint64_t *counts, uint64_t *bypass) {
+         const float *weight, int stride, uint64_t *counts, uint64_t *bypass, double *rsum,
+         uint64_t *rn) {
     memset(counts, 0, sizeof(uint64_t) * 2 * (size_t)m->nctx);
     *bypass = 0;
     double *inv = malloc(sizeof(double) * (size_t)en->sc->N);
@@ -257,30 +286,45 @@ count_v2(const enc *en, const vvc2_model *m, const float *step_abs, const float 
     for (int e = 0; e < en->sc->N; e++)
         inv[e] = 1.0 / (double)step_abs[e];
     int failed = 0;
+    const int nr = 2 * en->sc->nb;
+    if (rsum) {
+        memset(rsum, 0, sizeof *rsum * (size_t)nr);
+        memset(rn, 0, sizeof *rn * (size_t)nr);
+    }
 #pragma omp parallel num_threads(en->threads)
     {
         uint64_t *lc = calloc(2 * (size_t)m->nctx, sizeof *lc);
         int64_t *q = calloc((size_t)en->sc->N + 1, sizeof *q);
+        double *ls = calloc((size_t)nr, sizeof *ls);
+        uint64_t *ln = calloc((size_t)nr, sizeof *ln);
         uint64_t lb = 0;
 #pragma omp for schedule(dynamic, 8)
         for (int s = 0; s < en->nsub; s += stride) {
-            if (!lc || !q)
+            if (!lc || !q || !ls || !ln)
                 continue;
             v2_quantise(en, m, s, inv, cost, weight, q);
             vvc2_count_block(en->sc, m, q, lc, &lb);
+            if (rsum)
+                recon_add(en, s, inv, q, ls, ln);
         }
 #pragma omp critical(vvc_stats)
         {
-            if (!lc || !q) {
+            if (!lc || !q || !ls || !ln) {
                 failed = 1;
             } else {
                 for (int i = 0; i < 2 * m->nctx; i++)
                     counts[i] += lc[i];
                 *bypass += lb;
+                for (int i = 0; rsum && i < nr; i++) {
+                    rsum[i] += ls[i];
+                    rn[i] += ln[i];
+                }
             }
         }
         free(lc);
         free(q);
+        free(ls);
+        free(ln);
     }
     free(inv);
     return failed ? vv_error_set(VV_ERR_NOMEM, "out of memory") : VV_OK;
@@ -292,9 +336,12 @@ count_v2(const enc *en, const vvc2_model *m, const float *step_abs, const float 
  * filled) and whose counts give the final probabilities. */
 static vv_status
 v2_statistics(const enc *en, const vvc2_model *m, const float *step_abs, uint64_t *counts,
-              uint64_t *bypass, uint8_t *code, uint16_t *p0, float *cost, float *weight) {
+              uint64_t *bypass, uint8_t *code, uint16_t *p0, float *cost, float *weight,
+              double *rsum, uint64_t *rn) {
     /* the first pass only steers the RDO decisions: every 4th subcube is enough */
-    vv_status s = count_v2(en, m, step_abs, NULL, NULL, en->lambda > 0 ? 4 : 1, counts, bypass);
+    const int rdo = en->lambda > 0;
+    vv_status s =
+        count_v2(en, m, step_abs, NULL, NULL, rdo ? 4 : 1, counts, bypass, rdo ? NULL : rsum, rn);
     vvc2_probabilities(m, counts, code, p0);
     if (s != VV_OK || !(en->lambda > 0))
         return s;
@@ -304,7 +351,7 @@ v2_statistics(const enc *en, const vvc2_model *m, const float *step_abs, uint64_
         smin = step_abs[e] < smin ? step_abs[e] : smin;
     for (int e = 0; e < en->sc->N; e++)
         weight[e] = (step_abs[e] / smin) * (step_abs[e] / smin);
-    s = count_v2(en, m, step_abs, cost, weight, 1, counts, bypass);
+    s = count_v2(en, m, step_abs, cost, weight, 1, counts, bypass, rsum, rn);
     vvc2_probabilities(m, counts, code, p0);
     return s;
 }
@@ -339,7 +386,7 @@ size_v2(const enc *en, double quality, double slope, uint64_t *file_bytes) {
     if (s == VV_OK) {
         vvc_make_table(qtab, M, quality, slope);
         vvc_make_step_abs(en->sc, qtab, step_abs);
-        s = v2_statistics(en, &m, step_abs, counts, &bypass, code, p0, cost, weight);
+        s = v2_statistics(en, &m, step_abs, counts, &bypass, code, p0, cost, weight, NULL, NULL);
     }
     if (s == VV_OK)
         s = vvc2_pack_codes(&m, code, &z, &zlen);
@@ -354,32 +401,6 @@ size_v2(const enc *en, double quality, double slope, uint64_t *file_bytes) {
     free(cost);
     free(weight);
     return s;
-}
-
-/* Adds one subcube's rounding residuals |x| - |q| (in steps) per band and
- * magnitude class (|q| = 1, > 1) to sum and n. */
-static inline void
-recon_add(const enc *en, int k, const double *inv, const int64_t *q, double *sum, uint64_t *n) {
-    const float *sp = en->spectra + (size_t)k * en->per;
-    for (int e = 1; e < en->sc->N; e++) {
-        const int64_t v = q[e];
-        if (!v)
-            continue;
-        const int i = 2 * en->sc->band[e] + (v > 1 || v < -1);
-        sum[i] += fabs((double)sp[e] * inv[e]) - (double)(v < 0 ? -v : v);
-        n[i]++;
-    }
-}
-
-/* The reconstruction offsets: the mean residual of each class (the
- * least-squares offset), clamped to [-0.5, 0.5], in f32 as stored. */
-static void
-recon_finish(int nb, const double *sum, const uint64_t *n, float *recon) {
-    for (int i = 0; i < 2 * nb; i++) {
-        double d = n[i] ? sum[i] / (double)n[i] : 0;
-        d = d < -0.5 ? -0.5 : d > 0.5 ? 0.5 : d;
-        recon[i] = (float)d;
-    }
 }
 
 /* Final value of a decoded voxel in the native type (as store_row in vvc_decode.c). */
@@ -485,8 +506,10 @@ encode_v2(const enc *en, double quality, double slope, double max_error, double 
     for (int i = 0; i < N; i++)
         inv[i] = 1.0 / (double)step_abs[i];
     uint64_t bypass;
-    if ((s = v2_statistics(en, &m, step_abs, counts, &bypass, code, p0, cost, weight)) != VV_OK)
+    if ((s = v2_statistics(en, &m, step_abs, counts, &bypass, code, p0, cost, weight, rsum, rn)) !=
+        VV_OK)
         goto done;
+    recon_finish(sc->nb, rsum, rn, recon);
     const float *rdo = en->lambda > 0 ? cost : NULL;
     if (max_error > 0) {
         /* the plan the decoder makes (vvc_decode.c), so that the values match bit for bit */
@@ -506,33 +529,6 @@ encode_v2(const enc *en, double quality, double slope, double max_error, double 
     int failed = 0, cancelled = 0;
     long done_n = 0;
     if (max_error > 0) {
-        /* the reconstruction offsets first: the corrections depend on them */
-#pragma omp parallel num_threads(en->threads)
-        {
-            int64_t *q = calloc((size_t)N + 1, sizeof *q);
-            double *ls = calloc(2 * (size_t)sc->nb, sizeof *ls);
-            uint64_t *ln = calloc(2 * (size_t)sc->nb, sizeof *ln);
-#pragma omp for schedule(dynamic, 8)
-            for (int k = 0; k < en->nsub; k++) {
-                if (!q || !ls || !ln) {
-                    failed = 1;
-                    continue;
-                }
-                v2_quantise(en, &m, k, inv, rdo, weight, q);
-                recon_add(en, k, inv, q, ls, ln);
-            }
-#pragma omp critical(vvc_stats)
-            if (ls && ln) {
-                for (int i = 0; i < 2 * sc->nb; i++) {
-                    rsum[i] += ls[i];
-                    rn[i] += ln[i];
-                }
-            }
-            free(q);
-            free(ls);
-            free(ln);
-        }
-        recon_finish(sc->nb, rsum, rn, recon);
         /* the corrections, decoded as the decoder will, then their statistics */
 #pragma omp parallel num_threads(en->threads)
         {
@@ -581,22 +577,17 @@ encode_v2(const enc *en, double quality, double slope, double max_error, double 
     vvc2_probabilities(&m, counts, code, p0);
     if ((s = vvc2_pack_codes(&m, code, &pz, &pzlen)) != VV_OK)
         goto done;
-    const int want_recon = !(max_error > 0); /* else computed above */
 #pragma omp parallel num_threads(en->threads)
     {
         int64_t *q = calloc((size_t)N + 1, sizeof *q);
-        double *ls = calloc(2 * (size_t)sc->nb, sizeof *ls);
-        uint64_t *ln = calloc(2 * (size_t)sc->nb, sizeof *ln);
 #pragma omp for schedule(dynamic, 8)
         for (int k = 0; k < en->nsub; k++) {
-            if (!q || !ls || !ln || cancelled) {
-                failed |= !q || !ls || !ln;
+            if (!q || cancelled) {
+                failed |= !q;
                 continue;
             }
             vv_rc_enc_init(&rc[k]);
             v2_quantise(en, &m, k, inv, rdo, weight, q);
-            if (want_recon)
-                recon_add(en, k, inv, q, ls, ln);
             vvc2_encode_block(sc, &m, q, p0, &rc[k]);
             if (max_error > 0)
                 vvc2_code_corrections(&m, corr[k], ncorr[k], NULL, NULL, p0, &rc[k]);
@@ -612,19 +603,8 @@ encode_v2(const enc *en, double quality, double slope, double max_error, double 
                 }
             }
         }
-#pragma omp critical(vvc_stats)
-        if (want_recon && ls && ln) {
-            for (int i = 0; i < 2 * sc->nb; i++) {
-                rsum[i] += ls[i];
-                rn[i] += ln[i];
-            }
-        }
         free(q);
-        free(ls);
-        free(ln);
     }
-    if (want_recon)
-        recon_finish(sc->nb, rsum, rn, recon);
     if (failed || cancelled) {
         s = failed ? vv_error_set(VV_ERR_NOMEM, "out of memory")
                    : vv_error_set(VV_ERR_CANCELLED, "cancelled");
