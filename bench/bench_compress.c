@@ -19,10 +19,16 @@
  * compressed file against the spatial X-ray; all-zero subcubes, such as
  * quantised air, are skipped, so these frames are faster). With --zfp FILE (bench_zfp.sh output) a
  * cairo plot of both rate-distortion curves is written to OUTDIR/rate_distortion.png.
+ * With --max-errors E1,E2,... the error-bound mode per bound E:
+ * vvc_maxerrE_{bits_per_voxel,psnr,maxerr,compress_*,decompress_*} (compare
+ * with bench/zfp_accuracy.sh, zfp's fixed-accuracy mode). --format 1 codes
+ * the legacy format. fourier_memory_mb / fourier_memory_ratio: the growth of
+ * the resident set over the first fourier frame (spectra, oversampled
+ * spectra for the viewing axis, scratch) in MB and per MB of the volume.
  *
  * usage: bench_compress VOLUME [--runs N] [--threads N] [--size N] [--block M]
- *                       [--rates 0.5,1,2,4] [--zfp ZFP.txt] [--outdir DIR]
- *                       [--azimuth DEG] [--elevation DEG]
+ *                       [--rates 0.5,1,2,4] [--max-errors 1,10] [--format 1|2]
+ *                       [--zfp ZFP.txt] [--outdir DIR] [--azimuth DEG] [--elevation DEG]
  */
 #include <cairo.h>
 #include <math.h>
@@ -31,12 +37,40 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "util.h"
 #include "volvis/volvis.h"
 
 static const char *dataset;
 #define emit(op, value, unit) bench_emit(op, dataset, value, unit)
+
+/* Resident set size in MB (/proc/self/statm). */
+static double
+rss_mb(void) {
+    FILE *f = fopen("/proc/self/statm", "r");
+    long pages = 0, res = 0;
+    if (f) {
+        if (fscanf(f, "%ld %ld", &pages, &res) != 2)
+            res = 0;
+        fclose(f);
+    }
+    return (double)res * (double)sysconf(_SC_PAGESIZE) / 1e6;
+}
+
+/* Parses "a,b,c" into at most max numbers. */
+static int
+parse_list(const char *v, double *out, int max) {
+    int n = 0;
+    for (const char *p = v; *p && n < max;) {
+        char *end;
+        out[n++] = strtod(p, &end);
+        if (end == p)
+            break;
+        p = *end == ',' ? end + 1 : end;
+    }
+    return n;
+}
 
 /* "0.5" -> "0.5", 1 -> "1": the rate as bench_zfp.sh names it. */
 static void
@@ -195,15 +229,16 @@ int
 main(int argc, char **argv) {
     if (argc < 2) {
         fprintf(stderr, "usage: bench_compress VOLUME [--runs N] [--threads N] [--size N] "
-                        "[--block M] [--rates 0.5,1,2,4] [--zfp ZFP.txt] [--outdir DIR] "
+                        "[--block M] [--rates 0.5,1,2,4] [--max-errors 1,10] [--format 1|2] "
+                        "[--zfp ZFP.txt] [--outdir DIR] "
                         "[--azimuth DEG] [--elevation DEG]\n");
         return 2;
     }
     const char *path = argv[1], *zfp = NULL, *outdir = "build/bench-out";
     int runs = 5, threads = 0, size = 512, block = 16;
     double az = 30, el = 20;
-    double rates[MAX_RATES] = {0.5, 1, 2, 4};
-    int nrates = 4;
+    double rates[MAX_RATES] = {0.5, 1, 2, 4}, maxerrs[MAX_RATES];
+    int nrates = 4, nmaxerrs = 0, format = 0;
     for (int i = 2; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!v) {
@@ -227,16 +262,13 @@ main(int argc, char **argv) {
             az = atof(v);
         else if (!strcmp(a, "--elevation"))
             el = atof(v);
-        else if (!strcmp(a, "--rates")) {
-            nrates = 0;
-            for (const char *p = v; *p && nrates < MAX_RATES;) {
-                char *end;
-                rates[nrates++] = strtod(p, &end);
-                p = *end == ',' ? end + 1 : end;
-                if (end == p && *p)
-                    break;
-            }
-        } else {
+        else if (!strcmp(a, "--rates"))
+            nrates = parse_list(v, rates, MAX_RATES);
+        else if (!strcmp(a, "--max-errors"))
+            nmaxerrs = parse_list(v, maxerrs, MAX_RATES);
+        else if (!strcmp(a, "--format"))
+            format = atoi(v);
+        else {
             fprintf(stderr, "bench_compress: unknown option %s\n", a);
             return 2;
         }
@@ -288,9 +320,12 @@ main(int argc, char **argv) {
     }
     /* frames, interleaved pairs */
     double *tx = malloc(sizeof(double) * (size_t)runs), *tf = malloc(sizeof(double) * (size_t)runs);
+    const double rss0 = rss_mb();
     double t0 = bench_now();
     vv_image *fimg = render(fo, w, threads);
     emit("fourier_first_frame", bench_now() - t0, "s");
+    emit("fourier_memory_mb", rss_mb() - rss0, "MB");
+    emit("fourier_memory_ratio", (rss_mb() - rss0) / mb, "x volume");
     vv_image_free(fimg);
     vv_image *ximg = NULL;
     fimg = NULL;
@@ -330,6 +365,7 @@ main(int argc, char **argv) {
         p.target = VV_VVC_RATE;
         p.rate = rates[i];
         p.threads = threads;
+        p.version = format;
         vv_vvc *c = NULL;
         t0 = bench_now();
         if (vv_vvc_compress(&c, vol, &p) != VV_OK)
@@ -409,6 +445,55 @@ main(int argc, char **argv) {
         fc.psnr[fc.n++] = fp;
         vv_image_free(img);
         vv_renderer_free(fr);
+    }
+    /* the error-bound mode */
+    for (int i = 0; i < nmaxerrs; i++) {
+        char en[32], op[96];
+        snprintf(en, sizeof en, "%g", maxerrs[i]);
+        vv_vvc_params p;
+        vv_vvc_params_init(&p);
+        p.block = block;
+        p.target = VV_VVC_MAX_ERROR;
+        p.max_error = maxerrs[i];
+        p.threads = threads;
+        double tc[16], td[16];
+        const int n = runs < 16 ? runs : 16;
+        vv_vvc *c = NULL;
+        vv_volume *dec = NULL;
+        for (int r = 0; r < n; r++) {
+            vv_vvc_free(c);
+            t0 = bench_now();
+            if (vv_vvc_compress(&c, vol, &p) != VV_OK)
+                bench_die("bench_compress", "compress (max error)");
+            tc[r] = bench_now() - t0;
+            vv_volume_free(dec);
+            t0 = bench_now();
+            if (vv_vvc_decompress(&dec, c, threads, NULL) != VV_OK)
+                bench_die("bench_compress", "decompress");
+            td[r] = bench_now() - t0;
+        }
+        vv_vvc_info info;
+        vv_vvc_get_info(c, &info);
+        double psnr, rmse, maxe;
+        vv_volume_compare(vol, dec, &psnr, &rmse, &maxe);
+        const double mtc = bench_median(tc, n), mtd = bench_median(td, n);
+#define E(suffix, value, unit)                                                                     \
+    do {                                                                                           \
+        snprintf(op, sizeof op, "vvc_maxerr%s_%s", en, suffix);                                    \
+        emit(op, value, unit);                                                                     \
+    } while (0)
+        E("bits_per_voxel", info.bits_per_voxel, "bits/voxel");
+        E("psnr", psnr, "dB");
+        E("maxerr", maxe, "value");
+        E("compress_wall", mtc, "s");
+        E("decompress_wall", mtd, "s");
+        E("compress_throughput", mb / mtc, "MB/s");
+        E("decompress_throughput", mb / mtd, "MB/s");
+        E("compress_mvoxels", mvox / mtc, "Mvoxel/s");
+        E("decompress_mvoxels", mvox / mtd, "Mvoxel/s");
+#undef E
+        vv_vvc_free(c);
+        vv_volume_free(dec);
     }
     if (zfp) {
         curve zc;

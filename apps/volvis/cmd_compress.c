@@ -10,20 +10,24 @@
 #include "cli.h"
 
 static const cli_opt_spec compress_opts[] = {
-    {"quality", 0, "Q"}, {"rate", 0, "BITS"},  {"block", 0, "8|16|32"},
-    {"slope", 0, "S"},   {"threads", 0, "N"},  {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
-    {"check", 0, NULL},  {"quiet", 'q', NULL},
+    {"quality", 0, "Q"},     {"rate", 0, "BITS"},
+    {"max-error", 0, "E"},   {"format", 0, "1|2"},
+    {"block", 0, "8|16|32"}, {"slope", 0, "S"},
+    {"threads", 0, "N"},     {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
+    {"check", 0, NULL},      {"quiet", 'q', NULL},
 };
 #define N_COMPRESS_OPTS ((int)(sizeof compress_opts / sizeof compress_opts[0]))
 
 void
 cli_compress_usage(FILE *out) {
-    fprintf(out, "usage: volvis compress [OPTIONS] IN OUT.vvc (--quality Q | --rate BITS)\n"
+    fprintf(out, "usage: volvis compress [OPTIONS] IN OUT.vvc (--quality Q | --rate BITS |\n"
+                 "                                               --max-error E)\n"
                  "\n"
-                 "Compresses any readable volume to a .vvc file: a 3-D generalisation of\n"
-                 "baseline JPEG with a discrete Fourier transform per M^3 subcube, a\n"
-                 "frequency-dependent quantisation table, zig-zag order, zero run-length and\n"
-                 "Huffman coding (docs/file-formats.md). The `fourier` renderer renders\n"
+                 "Compresses any readable volume to a .vvc file: a discrete Fourier\n"
+                 "transform per M^3 subcube, a frequency-dependent quantisation table,\n"
+                 "rate-distortion optimised quantisation and context-modelled arithmetic\n"
+                 "coding (format 2; format 1 is the baseline-JPEG-like Huffman coding of\n"
+                 "earlier versions; docs/file-formats.md). The `fourier` renderer renders\n"
                  "straight from it (volvis render --renderer fourier --set vvc=OUT.vvc).\n"
                  "Prints the size, the compression ratio, the bits per voxel, the quality\n"
                  "used and the time; with --check also the PSNR (peak = value range) and\n"
@@ -35,6 +39,11 @@ cli_compress_usage(FILE *out) {
                  "                  precision)\n"
                  "  --rate BITS     target file size in bits per voxel (> 0): the quality\n"
                  "                  is searched so that the file is at most that\n"
+                 "  --max-error E   every decoded voxel within E of the original (> 0, in\n"
+                 "                  the volume's values; voxel corrections where the\n"
+                 "                  transform coding alone is off by more)\n"
+                 "  --format 1|2    file format version (default 2; 1: the legacy Huffman\n"
+                 "                  coding, readable by older builds, no --max-error)\n"
                  "  --block M       subcube side 8, 16 or 32 (default 16)\n"
                  "  --slope S       frequency dependence of the quantisation table, >= 0\n"
                  "                  (default 0.5; 0: flat)\n"
@@ -83,15 +92,30 @@ cli_compress_main(int argc, char **argv) {
         return cli_usage_error(&a, "expected IN and OUT.vvc, got %d arguments", a.n_pos);
     vv_vvc_params p;
     vv_vvc_params_init(&p);
-    const char *q = cli_get(&a, "quality"), *r = cli_get(&a, "rate"), *s;
-    if ((q != NULL) == (r != NULL))
-        return cli_usage_error(&a, "give exactly one of --quality Q and --rate BITS");
+    const char *q = cli_get(&a, "quality"), *r = cli_get(&a, "rate"),
+               *me = cli_get(&a, "max-error"), *s;
+    if ((q != NULL) + (r != NULL) + (me != NULL) != 1)
+        return cli_usage_error(&a,
+                               "give exactly one of --quality Q, --rate BITS and --max-error E");
     if (q && (rc = cli_parse_double(&a, "quality", q, 0, 100, &p.quality)))
         return rc;
     if (r) {
         if ((rc = cli_parse_double(&a, "rate", r, 1e-6, 64, &p.rate)))
             return rc;
         p.target = VV_VVC_RATE;
+    }
+    if (me) {
+        if ((rc = cli_parse_double(&a, "max-error", me, 0, 1e300, &p.max_error)))
+            return rc;
+        if (!(p.max_error > 0))
+            return cli_usage_error(&a, "--max-error: expected a bound > 0, got '%s'", me);
+        p.target = VV_VVC_MAX_ERROR;
+    }
+    if ((s = cli_get(&a, "format"))) {
+        if ((rc = cli_parse_int(&a, "format", s, 1, 2, &p.version)))
+            return rc;
+        if (p.version == 1 && me)
+            return cli_usage_error(&a, "--max-error needs format 2");
     }
     if ((s = cli_get(&a, "block"))) {
         if ((rc = cli_parse_int(&a, "block", s, 8, 32, &p.block)))
@@ -138,6 +162,8 @@ cli_compress_main(int argc, char **argv) {
                "%d, %.2f s)\n",
                out, (unsigned long long)info.file_bytes, info.ratio, info.bits_per_voxel,
                info.quality, info.block, t1 - t0);
+        if (me)
+            printf("error bound %g on every voxel (format %d)\n", info.max_error, info.version);
         if (r && info.bits_per_voxel > p.rate * 1.0001)
             printf("note: the rate of %g bits per voxel is out of reach; the smallest file "
                    "(quality 0) has %.4g\n",

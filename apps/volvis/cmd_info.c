@@ -399,6 +399,9 @@ cli_info_main(int argc, char **argv) {
         printf("compressed:   %llu bytes of %llu (ratio %.2f:1, %.4g bits per voxel)\n",
                (unsigned long long)vinfo.file_bytes, (unsigned long long)vinfo.raw_bytes,
                vinfo.ratio, vinfo.bits_per_voxel);
+        if (vinfo.max_error > 0)
+            printf("error bound:  %g on every voxel (corrections in steps of %g)\n",
+                   vinfo.max_error, vinfo.corr_step);
     }
     printf("voxel type:   %s (%zu byte%s)\n", vv_voxel_type_name(v->type),
            vv_voxel_type_size(v->type), vv_voxel_type_size(v->type) == 1 ? "" : "s");

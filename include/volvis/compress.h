@@ -53,13 +53,14 @@
 extern "C" {
 #endif
 
-/** Current .vvc format version (written; the only one read). */
-#define VV_VVC_VERSION 1
+/** Current .vvc format version (written by default); versions 1 and 2 are read. */
+#define VV_VVC_VERSION 2
 
 /** What the quality setting aims at. */
 typedef enum vv_vvc_target {
     VV_VVC_QUALITY = 0, /**< a quality factor in [0, 100] */
-    VV_VVC_RATE = 1     /**< a file size in bits per voxel, reached by searching the quality */
+    VV_VVC_RATE = 1,    /**< a file size in bits per voxel, reached by searching the quality */
+    VV_VVC_MAX_ERROR = 2 /**< |x - decoded x| <= max_error for every voxel (version 2 only) */
 } vv_vvc_target;
 
 /** Parameters of vv_vvc_compress. */
@@ -69,11 +70,13 @@ typedef struct vv_vvc_params {
     double quality;       /**< [0, 100] for VV_VVC_QUALITY */
     double rate;          /**< bits per voxel (> 0) for VV_VVC_RATE, whole file included */
     double slope;         /**< frequency dependence of the table, >= 0 (0: flat) */
+    double max_error;     /**< the bound (value units, > 0) for VV_VVC_MAX_ERROR */
+    int version;          /**< format to write: 0 = VV_VVC_VERSION, 1 = legacy (Huffman) */
     int threads;          /**< <= 0: vv_threads_get() */
     vv_progress progress; /**< fraction of the work done; may cancel */
 } vv_vvc_params;
 
-/** Block 16, quality 75, rate 1, slope 0.5, threads 0, no progress. */
+/** Block 16, quality 75, rate 1, slope 0.5, max_error 1, version 0, threads 0, no progress. */
 void vv_vvc_params_init(vv_vvc_params *p);
 
 /** A compressed volume held in memory (see the file comment). */
@@ -96,6 +99,8 @@ typedef struct vv_vvc_info {
     int subcubes[3];       /**< subcubes along i, j, k (dims rounded up to M) */
     double quality;        /**< quality the file was coded with */
     double slope;          /**< table slope the file was coded with */
+    double max_error;      /**< guaranteed bound of |x - decoded x| (0: none; version 2) */
+    double corr_step;      /**< value step of the voxel corrections (0: none; version 2) */
     uint64_t file_bytes;   /**< size of the whole file */
     uint64_t data_bytes;   /**< bytes of subcube bit streams */
     uint64_t raw_bytes;    /**< dims product * voxel size (the uncompressed data) */

@@ -74,6 +74,27 @@ test_compress_decompress_info(void **state) {
     assert_true(info.bits_per_voxel <= 1 && info.block == 8);
     vv_vvc_free(c);
 
+    /* an error bound, shown by info; the legacy format on request */
+    r = run_cli("compress", in, vvc, "--max-error", "3", "--check");
+    if (r.status != 0)
+        fail_msg("exit %d: %s", r.status, r.err);
+    assert_contains(r.out, "error bound 3 on every voxel");
+    assert_contains(r.out, "maximum error 3");
+    free_result(&r);
+    r = run_cli("info", vvc);
+    assert_int_equal(r.status, 0);
+    assert_contains(r.out, "version 2");
+    assert_contains(r.out, "error bound:  3 on every voxel");
+    free_result(&r);
+    const char *v1 = out_file("neghip_v1.vvc");
+    r = run_cli("compress", in, v1, "--quality", "60", "--format", "1", "-q");
+    assert_int_equal(r.status, 0);
+    free_result(&r);
+    r = run_cli("info", v1);
+    assert_int_equal(r.status, 0);
+    assert_contains(r.out, "version 1");
+    free_result(&r);
+
     /* render straight from it, parallel view */
     const char *png = out_file("fourier.png");
     char set[1300];
@@ -87,10 +108,16 @@ test_compress_decompress_info(void **state) {
     vt_ok(vv_image_read_png(&img, png));
     assert_int_equal(img->width, 64);
     vv_image_free(img);
-    /* a perspective view is refused with one line */
-    r = run_cli("render", in, "--renderer", "fourier", "-o", out_file("no.png"));
+    /* an X-ray in a perspective view is refused with one line */
+    r = run_cli("render", in, "--renderer", "fourier", "--mode", "xray", "-o", out_file("no.png"));
     assert_int_equal(r.status, 1);
     assert_contains(r.err, "perspective");
+    free_result(&r);
+    /* other modes (here the default, composite) go to the ray caster on the decoded volume */
+    r = run_cli("render", in, "--renderer", "fourier", "--set", set, "--size", "48x48", "-o",
+                out_file("composite_from_vvc.png"));
+    if (r.status != 0)
+        fail_msg("exit %d: %s", r.status, r.err);
     free_result(&r);
 }
 
@@ -105,6 +132,20 @@ test_errors(void **state) {
     assert_int_equal(r.status, 2);
     free_result(&r);
     r = run_cli("compress", in, out_file("x.vvc"), "--quality", "50", "--block", "12");
+    assert_int_equal(r.status, 2);
+    free_result(&r);
+    /* bad rates and bounds: one line, usage exit */
+    const char *bad_values[][2] = {
+        {"--rate", "0"},       {"--rate", "-1"},       {"--rate", "nan"},      {"--max-error", "0"},
+        {"--max-error", "-2"}, {"--max-error", "nan"}, {"--max-error", "inf"}, {"--format", "3"}};
+    for (int i = 0; i < 8; i++) {
+        r = run_cli("compress", in, out_file("x.vvc"), bad_values[i][0], bad_values[i][1]);
+        if (r.status != 2)
+            fail_msg("%s %s: exit %d", bad_values[i][0], bad_values[i][1], r.status);
+        assert_true(r.err[0] != '\0');
+        free_result(&r);
+    }
+    r = run_cli("compress", in, out_file("x.vvc"), "--max-error", "1", "--format", "1");
     assert_int_equal(r.status, 2);
     free_result(&r);
     /* a corrupt file: exit 1, one line, nothing written */

@@ -1,5 +1,5 @@
 /*
- * Tests of the .vvc codec (src/compress/vvc.c).
+ * Tests of the .vvc codec (src/compress/vvc_*.c).
  *
  * Round trips at the finest quantisation (integer data decode exactly, float
  * data within half a grey level), every header field kept, PSNR rising with
@@ -201,7 +201,7 @@ test_subcubes_decode_alone(void **state) {
                     if (i >= v->dims[0] || j >= v->dims[1] || k >= v->dims[2])
                         continue;
                     /* the full decode rounds and clamps to u8 */
-                    double e = nearbyint(vals[(z * M + y) * M + x]);
+                    double e = floor(vals[(z * M + y) * M + x] + 0.5); /* as the decoder */
                     e = e < 0 ? 0 : e > 255 ? 255 : e;
                     if (e != vv_volume_get(d, i, j, k))
                         fail_msg("subcube %d voxel (%d,%d,%d): alone %g, full %g", s, i, j, k, e,
@@ -325,15 +325,26 @@ wr32(unsigned char *p, uint32_t v) {
 }
 
 static void
-test_corruption(void **state) {
-    (void)state;
+corruption_run(int version) {
     vv_volume *v = synthetic(19, 11, 9, VV_I16, 3000);
-    vv_vvc *c = compress_q(v, 8, 50);
+    vv_vvc_params p;
+    vv_vvc_params_init(&p);
+    p.block = 8;
+    p.quality = 50;
+    p.version = version;
+    if (version == 2) { /* with voxel corrections too */
+        p.target = VV_VVC_MAX_ERROR;
+        p.max_error = 40;
+    }
+    vv_vvc *c = NULL;
+    vt_ok(vv_vvc_compress(&c, v, &p));
     size_t n;
     const unsigned char *orig = vv_vvc_bytes(c, &n);
     unsigned char *buf = malloc(n);
     assert_non_null(buf);
-    printf("fuzzing a %zu-byte file\n", n);
+    printf("fuzzing a %zu-byte version %d file\n", n, version);
+    const size_t hb = rd32(orig + 12); /* header bytes: 244 (version 1) or 264 */
+    assert_int_equal(hb, version == 1 ? 244 : 264);
     /* every byte flipped: the CRCs catch each one */
     for (size_t i = 0; i < n; i++) {
         memcpy(buf, orig, n);
@@ -358,7 +369,7 @@ test_corruption(void **state) {
     /* hostile: scrambled bit streams behind valid CRCs decode or fail, never crash */
     const uint64_t tables = (uint64_t)rd32(orig + 216) | (uint64_t)rd32(orig + 220) << 32;
     const uint64_t index = (uint64_t)rd32(orig + 224) | (uint64_t)rd32(orig + 228) << 32;
-    const size_t d0 = 244 + (size_t)tables + (size_t)index;
+    const size_t d0 = hb + (size_t)tables + (size_t)index;
     uint64_t seed = 7;
     int failures = 0;
     for (int trial = 0; trial < 300; trial++) {
@@ -381,15 +392,306 @@ test_corruption(void **state) {
     }
     printf("scrambled streams: %d of 300 refused\n", failures);
     assert_true(failures > 0);
-    /* hostile tables behind a valid CRC: a Huffman table that over-fills the code space */
     memcpy(buf, orig, n);
-    const size_t h0 = 244 + 4 + 4 * 5 * 5 * 5; /* DC table bits[1..16] */
-    buf[h0] = 2;                               /* 2 codes of length 1 ... */
-    buf[h0 + 1] = 3;                           /* ... and 3 of length 2: 2*2 + 3 > 4 */
-    wr32(buf + 244 + tables - 4, (uint32_t)crc32(0, buf + 244, (uInt)(tables - 4)));
+    const size_t h0 = hb + 4 + 4 * 5 * 5 * 5; /* after the quantisation table */
+    if (version == 1) {
+        /* hostile tables behind a valid CRC: a Huffman table that over-fills the code space */
+        buf[h0] = 2;     /* 2 codes of length 1 ... */
+        buf[h0 + 1] = 3; /* ... and 3 of length 2: 2*2 + 3 > 4 */
+    } else {
+        /* a context probability of 0 (a certain 1 bit) */
+        buf[h0 + 4 + 10] = 0;
+        buf[h0 + 4 + 11] = 0;
+    }
+    wr32(buf + hb + tables - 4, (uint32_t)crc32(0, buf + hb, (uInt)(tables - 4)));
     assert_true(refused(buf, n));
     free(buf);
     vv_vvc_free(c);
+    vv_volume_free(v);
+}
+
+static void
+test_corruption(void **state) {
+    (void)state;
+    corruption_run(1);
+    corruption_run(2);
+}
+
+/* The legacy format: a version 1 file written by the encoder of the
+ * previous release (tests/data, 5.4 KB) decodes to the same voxels, and the
+ * legacy encoder (params.version = 1) still writes the same bytes. */
+static vv_volume *
+legacy_volume(void) {
+    vv_volume *v = NULL;
+    const int dims[3] = {21, 18, 13};
+    vt_ok(vv_volume_new(&v, dims, VV_U16));
+    uint64_t seed = 7;
+    for (int k = 0; k < 13; k++)
+        for (int j = 0; j < 18; j++)
+            for (int i = 0; i < 21; i++)
+                vv_volume_set(
+                    v, i, j, k,
+                    floor(1000 * (0.5 + 0.3 * sin(i * 0.3) * cos(j * 0.2) + 0.1 * sin(k * 0.5)) +
+                          50 * rnd(&seed)));
+    vv_volume_update_range(v);
+    return v;
+}
+
+static void
+test_legacy_version(void **state) {
+    (void)state;
+    vv_vvc *c = NULL;
+    vt_ok(vv_vvc_load(&c, VV_SOURCE_DIR "/tests/data/vvc_v1_u16_21x18x13.vvc"));
+    vv_vvc_info info;
+    vv_vvc_get_info(c, &info);
+    assert_int_equal(info.version, 1);
+    vv_volume *d = NULL;
+    vt_ok(vv_vvc_decompress(&d, c, 2, NULL));
+    /* CRC-32 of the voxels the previous release decoded from this file */
+    assert_int_equal(crc32(0, d->data, 21 * 18 * 13 * 2), 0xe5794c72u);
+    vv_volume_free(d);
+    vv_vvc_free(c);
+    vv_volume *v = legacy_volume();
+    vv_vvc_params p;
+    vv_vvc_params_init(&p);
+    p.block = 8;
+    p.quality = 60;
+    p.threads = 1;
+    p.version = 1;
+    vt_ok(vv_vvc_compress(&c, v, &p));
+    size_t n;
+    const unsigned char *b = vv_vvc_bytes(c, &n);
+    assert_int_equal(n, 5386);
+    assert_int_equal(crc32(0, b, (uInt)n), 0x261c4413u);
+    vv_vvc_free(c);
+    vv_volume_free(v);
+}
+
+/* The version check: a version 2 file keeps the version 1 header CRC in
+ * place, so a version 1 reader (which checks the CRC of bytes 0..239, then
+ * the version) says "format version 2"; a version 3 file is refused here. */
+static void
+test_version_check(void **state) {
+    (void)state;
+    vv_volume *v = synthetic(12, 10, 9, VV_U8, 200);
+    vv_vvc *c = compress_q(v, 8, 60);
+    size_t n;
+    const unsigned char *b = vv_vvc_bytes(c, &n);
+    assert_int_equal(rd32(b + 8), 2);
+    assert_int_equal(rd32(b + 240), (uint32_t)crc32(0, b, 240));
+    unsigned char *buf = malloc(n);
+    assert_non_null(buf);
+    memcpy(buf, b, n);
+    wr32(buf + 8, 3);
+    wr32(buf + 240, (uint32_t)crc32(0, buf, 240));
+    vv_vvc *c3 = NULL;
+    assert_int_equal(vv_vvc_from_memory(&c3, buf, n, "v3.vvc"), VV_ERR_FORMAT);
+    assert_non_null(strstr(vv_error_message(), "format version 3"));
+    free(buf);
+    vv_vvc_free(c);
+    vv_volume_free(v);
+}
+
+/* Marschner-Lobb test signal on [-1, 1]^3 (f_M = 6, alpha = 0.25), float. */
+static vv_volume *
+marschner_lobb(int n) {
+    vv_volume *v = NULL;
+    const int dims[3] = {n, n, n};
+    vt_ok(vv_volume_new(&v, dims, VV_F32));
+    for (int k = 0; k < n; k++)
+        for (int j = 0; j < n; j++)
+            for (int i = 0; i < n; i++) {
+                const double x = 2.0 * i / (n - 1) - 1, y = 2.0 * j / (n - 1) - 1,
+                             z = 2.0 * k / (n - 1) - 1;
+                const double r = sqrt(x * x + y * y);
+                const double pr = cos(2 * VV_PI * 6 * cos(VV_PI * r / 2));
+                vv_volume_set(v, i, j, k, (1 - sin(VV_PI * z / 2) + 0.25 * (1 + pr)) / 2.5);
+            }
+    vv_volume_update_range(v);
+    return v;
+}
+
+static vv_volume *
+noise_volume(vv_voxel_type t, double amp, uint64_t seed) {
+    vv_volume *v = NULL;
+    const int dims[3] = {23, 17, 11};
+    vt_ok(vv_volume_new(&v, dims, t));
+    for (size_t i = 0; i < vv_volume_voxel_count(v); i++)
+        vv_volume_set(v, (int)(i % 23), (int)(i / 23 % 17), (int)(i / (23 * 17)),
+                      t == VV_F32 ? amp * rnd(&seed)
+                                  : floor(amp * rnd(&seed)) - (t == VV_I16 ? amp / 2 : 0));
+    vv_volume_update_range(v);
+    return v;
+}
+
+static vv_volume *
+constant_volume(vv_voxel_type t, double value) {
+    vv_volume *v = NULL;
+    const int dims[3] = {19, 9, 20};
+    vt_ok(vv_volume_new(&v, dims, t));
+    for (size_t i = 0; i < vv_volume_voxel_count(v); i++)
+        vv_volume_set(v, (int)(i % 19), (int)(i / 19 % 9), (int)(i / (19 * 9)), value);
+    vv_volume_update_range(v);
+    return v;
+}
+
+/* The error bound on every voxel, full decode and subcube by subcube. */
+static void
+check_bound(const vv_volume *v, double e, int block, const char *what) {
+    vv_vvc_params p;
+    vv_vvc_params_init(&p);
+    p.target = VV_VVC_MAX_ERROR;
+    p.max_error = e;
+    p.block = block;
+    vv_vvc *c = NULL;
+    vt_ok(vv_vvc_compress(&c, v, &p));
+    vv_volume *d = NULL;
+    vt_ok(vv_vvc_decompress(&d, c, 0, NULL));
+    double maxe, psnr;
+    vt_ok(vv_volume_compare(v, d, &psnr, NULL, &maxe));
+    vv_vvc_info info;
+    vv_vvc_get_info(c, &info);
+    printf("%-22s E %-8g block %2d: max error %-10.4g %.3f bits per voxel, PSNR %.2f\n", what, e,
+           block, maxe, info.bits_per_voxel, psnr);
+    if (!(maxe <= e))
+        fail_msg("%s: max error %g over the bound %g", what, maxe, e);
+    assert_true(info.max_error > 0 && info.max_error <= e);
+    /* decoded alone, each subcube carries its corrections */
+    const int M = info.block;
+    float *vals = malloc(sizeof(float) * (size_t)M * M * M);
+    assert_non_null(vals);
+    for (int s = 0; s < vv_vvc_subcube_count(c); s += 3) {
+        vt_ok(vv_vvc_decode_subcube(c, s, vals));
+        const int bx = s % info.subcubes[0], by = (s / info.subcubes[0]) % info.subcubes[1],
+                  bz = s / (info.subcubes[0] * info.subcubes[1]);
+        for (int z = 0; z < M && bz * M + z < v->dims[2]; z++)
+            for (int y = 0; y < M && by * M + y < v->dims[1]; y++)
+                for (int x = 0; x < M && bx * M + x < v->dims[0]; x++) {
+                    double a = vals[(z * M + y) * M + x];
+                    if (v->type == VV_U8)
+                        a = fmin(255, fmax(0, floor(a + 0.5)));
+                    else if (v->type == VV_U16)
+                        a = fmin(65535, fmax(0, floor(a + 0.5)));
+                    else if (v->type == VV_I16)
+                        a = fmin(32767, fmax(-32768, floor(a + 0.5)));
+                    if (fabs(a - vv_volume_get(v, bx * M + x, by * M + y, bz * M + z)) > e)
+                        fail_msg("%s: subcube %d voxel off by more than %g", what, s, e);
+                }
+    }
+    free(vals);
+    vv_volume_free(d);
+    vv_vvc_free(c);
+}
+
+static void
+test_error_bound(void **state) {
+    (void)state;
+    vv_volume *v = synthetic(29, 21, 18, VV_U16, 4000);
+    const double es[] = {0.4, 3, 400, 1e9};
+    for (int i = 0; i < 4; i++)
+        check_bound(v, es[i], 8, "smooth u16");
+    vv_volume_free(v);
+    v = synthetic(20, 19, 17, VV_F32, 3.0);
+    check_bound(v, 1e-4, 16, "smooth f32");
+    check_bound(v, 0.05, 8, "smooth f32");
+    vv_volume_free(v);
+    v = marschner_lobb(41);
+    check_bound(v, 1e-3, 16, "Marschner-Lobb f32");
+    check_bound(v, 0.02, 16, "Marschner-Lobb f32");
+    vv_volume_free(v);
+    v = noise_volume(VV_U8, 256, 3);
+    check_bound(v, 1, 8, "noise u8");
+    check_bound(v, 10, 16, "noise u8");
+    vv_volume_free(v);
+    v = noise_volume(VV_I16, 60000, 5);
+    check_bound(v, 2, 8, "noise i16");
+    vv_volume_free(v);
+    v = noise_volume(VV_F32, 1.0, 9);
+    check_bound(v, 1e-5, 8, "noise f32");
+    vv_volume_free(v);
+    v = constant_volume(VV_U16, 1234);
+    check_bound(v, 0.5, 8, "constant u16");
+    vv_volume_free(v);
+    v = constant_volume(VV_F32, -7.25);
+    check_bound(v, 1e-5, 16, "constant f32");
+    vv_volume_free(v);
+    v = constant_volume(VV_F64, 0);
+    check_bound(v, 1e-30, 8, "constant zero f64");
+    vv_volume_free(v);
+    vt_ok(vv_volume_load(&v, vt_data("volumes/neghip.slc"), NULL));
+    check_bound(v, 3, 16, "neghip u8");
+    vv_volume_free(v);
+}
+
+static void
+test_bad_error_bounds(void **state) {
+    (void)state;
+    vv_volume *v = synthetic(9, 9, 9, VV_F32, 1000);
+    vv_vvc_params p;
+    vv_vvc *c = NULL;
+    const double bad[] = {0, -1, NAN, INFINITY, 1e-9};
+    for (int i = 0; i < 5; i++) {
+        vv_vvc_params_init(&p);
+        p.target = VV_VVC_MAX_ERROR;
+        p.max_error = bad[i];
+        assert_int_equal(vv_vvc_compress(&c, v, &p), VV_ERR_INVALID);
+        assert_null(c);
+        printf("max error %g: %s\n", bad[i], vv_error_message());
+    }
+    /* 1e-9 on values up to 1000 is below single precision */
+    assert_non_null(strstr(vv_error_message(), "single precision"));
+    vv_vvc_params_init(&p);
+    p.target = VV_VVC_MAX_ERROR;
+    p.max_error = 1;
+    p.version = 1;
+    assert_int_equal(vv_vvc_compress(&c, v, &p), VV_ERR_INVALID);
+    const double bad_rates[] = {0, -2, NAN, INFINITY};
+    for (int i = 0; i < 4; i++) {
+        vv_vvc_params_init(&p);
+        p.target = VV_VVC_RATE;
+        p.rate = bad_rates[i];
+        assert_int_equal(vv_vvc_compress(&c, v, &p), VV_ERR_INVALID);
+    }
+    vv_vvc_params_init(&p);
+    p.version = 3;
+    assert_int_equal(vv_vvc_compress(&c, v, &p), VV_ERR_INVALID);
+    vv_volume_free(v);
+}
+
+/* Round trips at every rate of both versions: the file within the rate,
+ * every subcube decoding, the PSNR rising with the rate. */
+static void
+test_rates_both_versions(void **state) {
+    (void)state;
+    vv_volume *v = marschner_lobb(40);
+    for (int ver = 1; ver <= 2; ver++) {
+        double last = 0;
+        const double rates[] = {1, 2, 4, 8};
+        for (int i = 0; i < 4; i++) {
+            vv_vvc_params p;
+            vv_vvc_params_init(&p);
+            p.target = VV_VVC_RATE;
+            p.rate = rates[i];
+            p.version = ver;
+            vv_vvc *c = NULL;
+            vt_ok(vv_vvc_compress(&c, v, &p));
+            vv_vvc_info info;
+            vv_vvc_get_info(c, &info);
+            vv_volume *d = NULL;
+            vt_ok(vv_vvc_decompress(&d, c, 0, NULL));
+            double psnr;
+            vt_ok(vv_volume_compare(v, d, &psnr, NULL, NULL));
+            printf("Marschner-Lobb 40^3 f32, version %d, rate %g: %.4f bits per voxel, PSNR "
+                   "%.2f dB\n",
+                   ver, rates[i], info.bits_per_voxel, psnr);
+            assert_int_equal(info.version, ver);
+            assert_true(info.bits_per_voxel <= rates[i]);
+            assert_true(psnr > last);
+            last = psnr;
+            vv_volume_free(d);
+            vv_vvc_free(c);
+        }
+    }
     vv_volume_free(v);
 }
 
@@ -404,6 +706,11 @@ main(void) {
         cmocka_unit_test(test_file_round_trip),
         cmocka_unit_test(test_bad_parameters),
         cmocka_unit_test(test_corruption),
+        cmocka_unit_test(test_legacy_version),
+        cmocka_unit_test(test_version_check),
+        cmocka_unit_test(test_error_bound),
+        cmocka_unit_test(test_bad_error_bounds),
+        cmocka_unit_test(test_rates_both_versions),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

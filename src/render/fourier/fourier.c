@@ -62,6 +62,8 @@ typedef struct fr_source {
     fr_coef *over[3]; /* per projection axis c: nsub * M * 2M * (M + 1) complex, or NULL */
     double bits_per_voxel;
     uint64_t last_used;
+    vv_vvc *own;        /* kind 1: the volume compressed in memory */
+    vv_volume *decoded; /* the decoded volume (modes the frequency domain cannot do), or NULL */
 } fr_source;
 
 typedef struct fr_state {
@@ -74,6 +76,7 @@ typedef struct fr_state {
     double rate;    /* > 0: compress to this rate instead */
     int block;
     double attenuation;
+    vv_renderer *raycast; /* for the modes other than xray, on the decoded volume */
     fftwf_plan plan2d[3]; /* 2M x 2M c2r for M = 8, 16, 32 (made once, executed on new arrays) */
 } fr_state;
 
@@ -99,6 +102,8 @@ source_release(fr_source *s) {
     free(s->nonzero);
     for (int i = 0; i < 3; i++)
         fftwf_free(s->over[i]);
+    vv_vvc_free(s->own);
+    vv_volume_free(s->decoded);
     memset(s, 0, sizeof *s);
 }
 
@@ -109,6 +114,7 @@ fr_destroy(void *state) {
         return;
     for (int i = 0; i < st->n_cache; i++)
         source_release(&st->cache[i]);
+    vv_renderer_free(st->raycast);
     free(st->vvc_path);
     vv_vvc_free(st->vvc);
     vv_fftw_lock();
@@ -281,7 +287,7 @@ source_fill(fr_state *st, fr_source *s, vv_volume *vol, int threads) {
                 }
             }
         }
-        vv_vvc_free(tmp);
+        s->own = tmp; /* kept for a decode (modes other than xray) */
         if (failed)
             return vv_error_set(VV_ERR_FORMAT, "%s", msg);
     }
@@ -920,10 +926,66 @@ box_hit(const double o[3], const double d[3], const double inv[3], const double 
     return b >= a;
 }
 
+/* The modes other than xray are not linear along the ray (maximum, minimum,
+ * compositing through a transfer function, the first isosurface crossing),
+ * so no slice of the spectrum gives them: the frame is rendered by the ray
+ * caster from the decoded volume (entropy decoding, dequantisation and one
+ * inverse DFT per subcube, with the voxel corrections of an error-bounded
+ * file; cached with the spectra) -- from the uncompressed volume when no
+ * compression is asked for. */
+static vv_status
+render_decoded(fr_state *st, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+               vv_image *out) {
+    const int threads = opt->threads > 0 ? opt->threads : vv_threads_get();
+    vv_status s = VV_OK;
+    if (!st->raycast && (s = vv_renderer_new(&st->raycast, "raycast")) != VV_OK)
+        return s;
+    vv_object **objs = calloc((size_t)(w->n_objects > 0 ? w->n_objects : 1), sizeof *objs);
+    vv_object *copies = calloc((size_t)(w->n_objects > 0 ? w->n_objects : 1), sizeof *copies);
+    if (!objs || !copies) {
+        free(objs);
+        free(copies);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    for (int i = 0; i < w->n_objects && s == VV_OK; i++) {
+        const vv_object *obj = w->objects[i];
+        objs[i] = w->objects[i];
+        if (!obj || obj->type != VV_OBJECT_VOLUME || !obj->volume || !obj->visible)
+            continue;
+        if (!st->vvc && !(st->quality >= 0 || st->rate > 0))
+            continue; /* exact: the volume itself */
+        fr_source *src;
+        if ((s = get_source(st, obj->volume, threads, &src)) != VV_OK)
+            break;
+        if (!src->decoded) {
+            const vv_vvc *c = src->kind == 2 ? st->vvc : src->own;
+            if ((s = vv_vvc_decompress(&src->decoded, c, threads, NULL)) != VV_OK)
+                break;
+        }
+        copies[i] = *obj; /* a shallow copy: nothing in it is released */
+        copies[i].volume = src->decoded;
+        objs[i] = &copies[i];
+    }
+    if (s == VV_OK) {
+        vv_world tmp = *w;
+        tmp.objects = objs;
+        s = vv_renderer_render(st->raycast, &tmp, view, opt, out);
+    }
+    free(objs);
+    free(copies);
+    return s;
+}
+
 static vv_status
 fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
           vv_image *out) {
     fr_state *st = state;
+    for (int i = 0; i < w->n_objects; i++) {
+        const vv_object *obj = w->objects[i];
+        if (obj && obj->visible && obj->type == VV_OBJECT_VOLUME && obj->volume &&
+            obj->mode != VV_MODE_XRAY)
+            return render_decoded(st, w, view, opt, out);
+    }
     if (view->projection != VV_PROJECTION_ORTHOGRAPHIC)
         return vv_error_set(VV_ERR_UNSUPPORTED,
                             "perspective projection is not supported: the projection-slice "
@@ -1089,7 +1151,8 @@ done:
 
 const vv_renderer_ops vv_fourier_ops = {
     "fourier",
-    "compression-domain X-ray projection by the Fourier projection-slice theorem (parallel views)",
+    "compression-domain X-ray projection by the Fourier projection-slice theorem (parallel "
+    "views); other modes: the ray caster on the decoded volume",
     fr_create,
     fr_set_option,
     fr_render,
