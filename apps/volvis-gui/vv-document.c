@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "volvis/filter.h"
 #include "vvg-models.h"
 
 struct _VvDocument {
@@ -14,6 +15,7 @@ struct _VvDocument {
     char *path;
     gboolean dirty;
     int selected;
+    vv_filter_cache *filtered; /* filtered volumes of scene objects, kept across reopenings */
 };
 
 G_DEFINE_TYPE(VvDocument, vv_document, G_TYPE_OBJECT)
@@ -35,6 +37,7 @@ vv_document_finalize(GObject *o) {
     vv_world_free(doc->world);
     vv_world_free(doc->kept);
     vvg_undo_free(doc->undo);
+    vv_filter_cache_free(doc->filtered);
     g_free(doc->path);
     G_OBJECT_CLASS(vv_document_parent_class)->finalize(o);
 }
@@ -51,7 +54,8 @@ vv_document_class_init(VvDocumentClass *klass) {
 
 static void
 vv_document_init(VvDocument *doc) {
-    if (vv_world_new(&doc->world) != VV_OK || vvg_undo_new(&doc->undo, 200) != VV_OK)
+    if (vv_world_new(&doc->world) != VV_OK || vvg_undo_new(&doc->undo, 200) != VV_OK ||
+        vv_filter_cache_new(&doc->filtered, 8) != VV_OK)
         g_error("volvis-gui: out of memory");
     doc->selected = -1;
 }
@@ -192,7 +196,7 @@ static gboolean
 open_scene(VvDocument *doc, const char *path, GError **error) {
     vv_world *w = NULL;
     vv_error_clear();
-    if (vv_scene_load(&w, path) != VV_OK) {
+    if (vv_scene_load_cached(&w, path, NULL, doc->filtered) != VV_OK) {
         set_error(error, "cannot read the scene");
         return FALSE;
     }

@@ -369,23 +369,32 @@ vv_status vv_filter_chain_apply(const vv_filter_chain *c, const vv_volume *in,
                                 const vv_filter_options *o, vv_volume **out);
 
 /**
+ * A cache of loaded, filtered volumes (vv_filter_load_cached), owned by its
+ * creator (the GUI's document holds one, so reopening a scene does not
+ * filter again). Thread-safe: locked inside.
+ */
+typedef struct vv_filter_cache vv_filter_cache;
+
+/** A cache of @p capacity volumes (1..64; least recently used dropped). Errors: VV_ERR_INVALID,
+ * VV_ERR_NOMEM. */
+vv_status vv_filter_cache_new(vv_filter_cache **out, int capacity);
+/** Frees the cache and its references to the volumes (NULL: nothing). */
+void vv_filter_cache_free(vv_filter_cache *cache);
+
+/**
  * Loads the volume file @p path, applies @p chain (NULL or empty: none),
  * then sets the result's origin and voxel spacing to @p origin and
- * @p spacing where given (NULL: as loaded and filtered), keeping the result in a small
- * process-wide cache (8 entries, least recently used dropped) keyed by the
- * path, the file's size and modification time, the overrides and the chain
- * text, so loading a scene again (the GUI's reload, an animation's frames)
- * does not filter again. *@p out is a new reference to a volume the cache
- * shares: treat it as read-only. Thread-safe (the cache is locked; two
- * threads missing at once both filter, the first result is kept). Errors:
- * those of vv_volume_load and vv_filter_chain_apply.
+ * @p spacing where given (NULL: as loaded and filtered). With a @p cache
+ * (may be NULL), the result is kept there keyed by the path, the file's
+ * size and modification time, the overrides and the chain text, and found
+ * again instead of filtering again; *@p out is then a new reference to a
+ * volume the cache shares: treat it as read-only. Thread-safe (two threads
+ * missing at once both filter, the first result is kept). Errors: those of
+ * vv_volume_load and vv_filter_chain_apply.
  */
-vv_status vv_filter_load_cached(const char *path, const double *origin, const double *spacing,
-                                const vv_filter_chain *chain, const vv_filter_options *o,
-                                vv_volume **out);
-
-/** Empties the cache of vv_filter_load_cached (frees its volumes). */
-void vv_filter_cache_clear(void);
+vv_status vv_filter_load_cached(vv_filter_cache *cache, const char *path, const double *origin,
+                                const double *spacing, const vv_filter_chain *chain,
+                                const vv_filter_options *o, vv_volume **out);
 
 #ifdef __cplusplus
 }

@@ -720,6 +720,17 @@ vv_status vv_scene_load(vv_world **out, const char *path);
  */
 vv_status vv_scene_load_progress(vv_world **out, const char *path, const vv_progress *progress);
 
+struct vv_filter_cache;
+/**
+ * vv_scene_load_progress keeping the volumes of objects with a "filters"
+ * chain in @p cache (include/volvis/filter.h; may be NULL: filtered again at
+ * every load), so loading the scene again does not filter again. Those
+ * volumes are shared with the cache: the World treats them as read-only
+ * (objects copy a volume before editing it).
+ */
+vv_status vv_scene_load_cached(vv_world **out, const char *path, const vv_progress *progress,
+                               struct vv_filter_cache *cache);
+
 /**
  * Writes a World as a scene file, atomically. Volumes are referred to by
  * @p volume_files[i] for object i (relative to the scene file); a mesh

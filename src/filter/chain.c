@@ -740,39 +740,63 @@ vv_filter_chain_apply(const vv_filter_chain *c, const vv_volume *in, const vv_fi
 
 /* ---- cache of filtered volumes --------------------------------------------------------- */
 
-#define CACHE_N 8
-
 typedef struct cache_entry {
     char *key;
     vv_volume *vol;
     uint64_t used;
 } cache_entry;
 
-/* The one piece of process-wide state of the filter component: loaded,
- * filtered volumes are immutable and keyed by everything they depend on. */
-static pthread_mutex_t cache_lock = PTHREAD_MUTEX_INITIALIZER;
-static cache_entry cache[CACHE_N];
-static uint64_t cache_tick;
+/* Loaded, filtered volumes are immutable and keyed by everything they
+ * depend on. */
+struct vv_filter_cache {
+    pthread_mutex_t lock;
+    int n;
+    cache_entry *e;
+    uint64_t tick;
+};
+
+vv_status
+vv_filter_cache_new(vv_filter_cache **out, int capacity) {
+    if (!out)
+        return vv_error_set(VV_ERR_INVALID, "filter cache: NULL output");
+    *out = NULL;
+    if (capacity < 1 || capacity > 64)
+        return vv_error_set(VV_ERR_INVALID, "filter cache: capacity %d is not in 1..64", capacity);
+    vv_filter_cache *c = calloc(1, sizeof *c);
+    if (c)
+        c->e = calloc((size_t)capacity, sizeof *c->e);
+    if (!c || !c->e) {
+        free(c);
+        return vv_error_set(VV_ERR_NOMEM, "filter cache: out of memory");
+    }
+    pthread_mutex_init(&c->lock, NULL);
+    c->n = capacity;
+    *out = c;
+    return VV_OK;
+}
 
 void
-vv_filter_cache_clear(void) {
-    pthread_mutex_lock(&cache_lock);
-    for (int i = 0; i < CACHE_N; i++) {
-        free(cache[i].key);
-        vv_volume_free(cache[i].vol);
-        memset(&cache[i], 0, sizeof cache[i]);
+vv_filter_cache_free(vv_filter_cache *c) {
+    if (!c)
+        return;
+    for (int i = 0; i < c->n; i++) {
+        free(c->e[i].key);
+        vv_volume_free(c->e[i].vol);
     }
-    pthread_mutex_unlock(&cache_lock);
+    pthread_mutex_destroy(&c->lock);
+    free(c->e);
+    free(c);
 }
 
 vv_status
-vv_filter_load_cached(const char *path, const double *origin, const double *spacing,
-                      const vv_filter_chain *chain, const vv_filter_options *o, vv_volume **out) {
+vv_filter_load_cached(vv_filter_cache *cache, const char *path, const double *origin,
+                      const double *spacing, const vv_filter_chain *chain,
+                      const vv_filter_options *o, vv_volume **out) {
     if (!path || !out)
         return vv_error_set(VV_ERR_INVALID, "filter: NULL argument");
     struct stat sb;
     char *key = NULL;
-    if (stat(path, &sb) == 0) {
+    if (cache && stat(path, &sb) == 0) {
         const char *ct = vv_filter_chain_text(chain);
         size_t n = strlen(path) + strlen(ct) + 256;
         key = malloc(n);
@@ -787,16 +811,16 @@ vv_filter_load_cached(const char *path, const double *origin, const double *spac
             m += snprintf(key + m, n - (size_t)m, "s %.17g %.17g %.17g\n", spacing[0], spacing[1],
                           spacing[2]);
         snprintf(key + m, n - (size_t)m, "%s", ct);
-        pthread_mutex_lock(&cache_lock);
-        for (int i = 0; i < CACHE_N; i++)
-            if (cache[i].key && strcmp(cache[i].key, key) == 0) {
-                cache[i].used = ++cache_tick;
-                *out = vv_volume_ref(cache[i].vol);
-                pthread_mutex_unlock(&cache_lock);
+        pthread_mutex_lock(&cache->lock);
+        for (int i = 0; i < cache->n; i++)
+            if (cache->e[i].key && strcmp(cache->e[i].key, key) == 0) {
+                cache->e[i].used = ++cache->tick;
+                *out = vv_volume_ref(cache->e[i].vol);
+                pthread_mutex_unlock(&cache->lock);
                 free(key);
                 return VV_OK;
             }
-        pthread_mutex_unlock(&cache_lock);
+        pthread_mutex_unlock(&cache->lock);
     }
     vv_volume *v = NULL, *f = NULL;
     vv_status s = vv_volume_load(&v, path, NULL);
@@ -822,22 +846,22 @@ vv_filter_load_cached(const char *path, const double *origin, const double *spac
             f->spacing[a] = spacing[a];
     }
     if (key) {
-        pthread_mutex_lock(&cache_lock);
+        pthread_mutex_lock(&cache->lock);
         int slot = 0;
-        for (int i = 0; i < CACHE_N; i++) {
-            if (!cache[i].key) {
+        for (int i = 0; i < cache->n; i++) {
+            if (!cache->e[i].key) {
                 slot = i;
                 break;
             }
-            if (cache[i].used < cache[slot].used)
+            if (cache->e[i].used < cache->e[slot].used)
                 slot = i;
         }
-        free(cache[slot].key);
-        vv_volume_free(cache[slot].vol);
-        cache[slot].key = key;
-        cache[slot].vol = vv_volume_ref(f);
-        cache[slot].used = ++cache_tick;
-        pthread_mutex_unlock(&cache_lock);
+        free(cache->e[slot].key);
+        vv_volume_free(cache->e[slot].vol);
+        cache->e[slot].key = key;
+        cache->e[slot].vol = vv_volume_ref(f);
+        cache->e[slot].used = ++cache->tick;
+        pthread_mutex_unlock(&cache->lock);
     }
     *out = f;
     return VV_OK;

@@ -313,6 +313,12 @@ vv_scene_load(vv_world **out, const char *path) {
 
 vv_status
 vv_scene_load_progress(vv_world **out, const char *path, const vv_progress *progress) {
+    return vv_scene_load_cached(out, path, progress, NULL);
+}
+
+vv_status
+vv_scene_load_cached(vv_world **out, const char *path, const vv_progress *progress,
+                     struct vv_filter_cache *cache) {
     if (!out)
         return vv_error_set(VV_ERR_INVALID, "scene: NULL output");
     *out = NULL;
@@ -323,7 +329,7 @@ vv_scene_load_progress(vv_world **out, const char *path, const vv_progress *prog
     vv_status st = vv_read_file(path, SCENE_MAX_BYTES, &data, &size);
     if (st != VV_OK)
         return vv_error_prefix(st, "scene");
-    sctx c = {path, (const char *)data, (size_t)size, progress};
+    sctx c = {path, (const char *)data, (size_t)size, progress, cache};
     json_error_t jerr;
     json_t *root = json_loadb((const char *)data, (size_t)size,
                               JSON_REJECT_DUPLICATES | JSON_DECODE_INT_AS_REAL, &jerr);

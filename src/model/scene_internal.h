@@ -21,7 +21,8 @@ typedef struct sctx {
     const char *path; /* scene file as given */
     const char *text;
     size_t len;
-    const vv_progress *progress; /* voxelization of geometry objects; may be NULL */
+    const vv_progress *progress;    /* voxelization of geometry objects; may be NULL */
+    struct vv_filter_cache *fcache; /* filtered volumes kept between loads; may be NULL */
 } sctx;
 
 /** The render modes' names in scene files, by vv_render_mode. */

@@ -985,8 +985,8 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
         vv_filter_options_init(&fo);
         if (c->progress)
             fo.progress = *c->progress; /* and its cancel */
-        st = vv_filter_load_cached(full, has_origin ? o3 : NULL, has_spacing ? s3 : NULL, chain,
-                                   &fo, &vol);
+        st = vv_filter_load_cached(c->fcache, full, has_origin ? o3 : NULL, has_spacing ? s3 : NULL,
+                                   chain, &fo, &vol);
     } else {
         st = vv_volume_load(&vol, full, NULL);
     }

@@ -149,7 +149,6 @@ test_scene_labels(void **state) {
     vv_world_free(w);
     vv_world_free(w2);
     vv_volume_free(v);
-    vv_filter_cache_clear();
 }
 
 int

@@ -42,17 +42,26 @@ static void
 test_filters_at_load(void **state) {
     (void)state;
     write_volume();
-    vv_filter_cache_clear();
+    vv_filter_cache *cache = NULL;
+    vt_ok(vv_filter_cache_new(&cache, 8));
     vv_world *a, *b, *c;
-    vt_ok(vv_scene_load(&a, write_scene("a.json", "\"--threshold 500: --dilate 1\"")));
-    vt_ok(vv_scene_load(&b, write_scene("b.json", "[{\"threshold\": \"500:\"}, {\"dilate\": 1}]")));
+    vt_ok(vv_scene_load_cached(&a, write_scene("a.json", "\"--threshold 500: --dilate 1\""), NULL,
+                               cache));
+    vt_ok(vv_scene_load_cached(
+        &b, write_scene("b.json", "[{\"threshold\": \"500:\"}, {\"dilate\": 1}]"), NULL, cache));
     const vv_volume *va = a->objects[0]->volume, *vb = b->objects[0]->volume;
     assert_int_equal(va->type, VV_U8);
     assert_int_equal(vv_volume_get(va, 8, 7, 6), 1);
     assert_int_equal(vv_volume_get(va, 8, 7, 10), 1); /* dilated: radius 4 -> 4 */
     assert_int_equal(vv_volume_get(va, 0, 0, 0), 0);
-    /* the same chain and file: one cached volume shared by both */
+    /* the same chain and file: one cached volume shared by both; without
+     * the cache, filtered again */
     assert_ptr_equal(va, vb);
+    vv_world *d = NULL;
+    vt_ok(vv_scene_load(&d, write_scene("a.json", "\"--threshold 500: --dilate 1\"")));
+    assert_ptr_not_equal(d->objects[0]->volume, va);
+    assert_memory_equal(d->objects[0]->volume->data, va->data, 16 * 14 * 12);
+    vv_world_free(d);
     assert_near(va->origin[1], 2, 0);
     assert_string_equal(a->objects[0]->geometry.filters, "--threshold 500: --dilate 1");
     /* saved and loaded again: the chain is kept */
@@ -74,7 +83,7 @@ test_filters_at_load(void **state) {
     assert_near(c->objects[0]->volume->spacing[0], 0.25, 1e-12);
     vv_world_free(a);
     vv_world_free(c);
-    vv_filter_cache_clear();
+    vv_filter_cache_free(cache);
 }
 
 static void
@@ -94,7 +103,6 @@ test_filter_errors(void **state) {
     vt_err(vv_scene_load(&w, write_scene("e4.json", "\"--grow 99,0,0:0:10\"")));
     assert_non_null(strstr(vv_error_message(), "outside the volume"));
     assert_null(w);
-    vv_filter_cache_clear();
 }
 
 int
