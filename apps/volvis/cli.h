@@ -135,6 +135,10 @@ int cli_ends_with(const char *s, const char *suffix);
 
 /** Prints "volvis: <formatted>" as one line on stderr (newlines become "; "). */
 void cli_error(const char *fmt, ...) VV_PRINTF(1, 2);
+/** The last error line cli_error (or a usage error) wrote, without "volvis: ". */
+const char *cli_last_error(void);
+/** 1: error lines are kept for cli_last_error but not printed (MPI ranks > 0). */
+void cli_errors_quiet(int quiet);
 
 /** Prints a usage error "volvis: CMD: <formatted> (see 'volvis CMD --help')"; returns 2. */
 int cli_usage_error(const cli_args *a, const char *fmt, ...) VV_PRINTF(2, 3);
@@ -155,7 +159,8 @@ int cli_fail(vv_status s, const char *path);
         {"zoom", 0, "F"}, {"threads", 0, "N"}, {"renderer", 0, "NAME"}, {"step", 0, "S"},          \
         {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"}, {"gamma", 0, "G"},                   \
         {"quality", 0, "0|1|2"}, {"set", 0, "KEY=VALUE"}, {"alpha", 0, NULL}, {"ortho", 0, NULL},  \
-        {"field", 0, "NAME"}, {"time", 0, "T"}, {"series", 0, "N"}, {"channel", 0, "C"}, {         \
+        {"field", 0, "NAME"}, {"time", 0, "T"}, {"series", 0, "N"}, {"channel", 0, "C"},           \
+        {"compositing", 0, "binary-swap|radix-k[:K]"}, {                                           \
         "quiet", 'q', NULL                                                                         \
     }
 
@@ -185,9 +190,17 @@ typedef struct cli_render_args {
     const char *field;        /**< --field: a grid's field (NULL: the first scalar field) */
     int has_time, time;       /**< --time given, and a grid's time step */
     int alpha, quiet, ortho;
+    /* under mpirun: --compositing (vv_parallel_options) */
+    int compositing, radix;
 } cli_render_args;
 
 /** Parses the shared options of @p a (one INPUT, -o); 0 or a usage error. */
+/**
+ * Under mpirun (vv_parallel_launched): `volvis render` of one frame over all
+ * ranks (docs/parallel.md); rank 0 writes and prints. Returns the exit code,
+ * the same on every rank.
+ */
+int cli_render_parallel(cli_args *a, cli_render_args *r);
 int cli_render_parse(cli_args *a, cli_render_args *r);
 /**
  * The World for r->input (a scene file or a volume) with the overrides of

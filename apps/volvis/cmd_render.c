@@ -61,6 +61,8 @@ cli_render_main(int argc, char **argv) {
     memset(&r, 0, sizeof r);
     if ((rc = cli_render_parse(&a, &r)))
         return rc;
+    if (vv_parallel_launched())
+        return cli_render_parallel(&a, &r);
     vv_world *w = NULL;
     if ((rc = cli_render_world(&r, &w)))
         return rc;

@@ -159,6 +159,18 @@ cli_render_parse(cli_args *a, cli_render_args *r) {
     }
     if ((s = cli_get(a, "threads")) && (rc = cli_parse_int(a, "threads", s, 0, 4096, &r->threads)))
         return rc;
+    r->radix = 4;
+    if ((s = cli_get(a, "compositing"))) {
+        if (strcmp(s, "binary-swap") == 0) {
+            r->compositing = VV_COMPOSITING_BINARY_SWAP;
+        } else if (strncmp(s, "radix-k", 7) == 0 && (s[7] == 0 || s[7] == ':')) {
+            r->compositing = VV_COMPOSITING_RADIX_K;
+            if (s[7] == ':' && (rc = cli_parse_int(a, "compositing", s + 8, 2, 4096, &r->radix)))
+                return rc;
+        } else {
+            return cli_usage_error(a, "--compositing: '%s' is not binary-swap or radix-k[:K]", s);
+        }
+    }
     r->field = cli_get(a, "field");
     if ((s = cli_get(a, "time"))) {
         if ((rc = cli_parse_int(a, "time", s, 0, 1000000, &r->time)))
@@ -459,6 +471,10 @@ cli_render_print_options(FILE *out) {
             "  --field NAME     a grid's field to show (default: its first scalar field;\n"
             "                   vectors by magnitude); for a scene, every grid object's\n"
             "  --time T         a grid's time step: field NAME<T> (blow.vtk: thickness3)\n"
+            "  --compositing binary-swap|radix-k[:K]\n"
+            "                   under mpirun -np N: how the ranks' partial images are\n"
+            "                   composited (default binary-swap; radix-k: groups of at\n"
+            "                   most K ranks a round, default 4); docs/parallel.md\n"
             "  -q, --quiet      no progress bar and no 'wrote' line\n",
             VV_IMAGE_MAX_SIDE);
 }

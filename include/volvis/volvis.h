@@ -18,6 +18,7 @@
 #include "model.h"
 #include "modeling.h"
 #include "navigator.h"
+#include "parallel.h"
 #include "radiosity.h"
 #include "raster.h"
 #include "render.h"

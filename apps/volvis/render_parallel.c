@@ -1,0 +1,144 @@
+/*
+ * `volvis render` under mpirun -np N: every rank builds the World from the
+ * same command line, checks that it agrees with rank 0 on the command line
+ * and the input file, and renders its brick; the partial images are
+ * composited (binary swap or radix-k) and rank 0 writes the PNG and prints
+ * the `wrote` line, which names the number of ranks. A failure on any rank
+ * (an unreadable file, a bad option) stops every rank with that rank's
+ * error, printed once by rank 0. docs/parallel.md.
+ */
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+
+/* The bytes every rank must agree on: the command line, then the input
+ * file (its first 64 MiB and its size). */
+static vv_status
+check_same_input(const cli_args *a, const cli_render_args *r) {
+    size_t cap = 1 << 16, n = 0;
+    char *buf = malloc(cap);
+    if (!buf)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < a->n_seen; i++) {
+        const char *k = a->specs[a->seen[i].opt].name, *v = a->seen[i].value;
+        n += (size_t)snprintf(buf + n, cap - n, "--%s=%s;", k, v ? v : "");
+        if (n >= cap - 1)
+            break;
+    }
+    vv_status s = vv_parallel_check_same(buf, n < cap ? n : cap, "the command line");
+    free(buf);
+    if (s != VV_OK || !r->input)
+        return s;
+    FILE *f = fopen(r->input, "rb");
+    const size_t limit = (size_t)64 << 20;
+    unsigned char *data = malloc(limit + 16);
+    size_t got = 0;
+    if (f && data) {
+        got = fread(data, 1, limit, f);
+        fseek(f, 0, SEEK_END);
+        long size = ftell(f);
+        memcpy(data + got, &size, sizeof size);
+        got += sizeof size;
+    }
+    if (f)
+        fclose(f);
+    char what[1100];
+    snprintf(what, sizeof what, "the input file %s", r->input);
+    s = vv_parallel_check_same(data, data ? got : 0, what);
+    free(data);
+    return s;
+}
+
+/* A local failure rc (0: none) made collective: every rank returns the
+ * same exit code; rank 0 prints the first failing rank's error unless it
+ * printed its own. */
+static int
+agree(int rc) {
+    vv_status local = VV_OK;
+    if (rc) {
+        const char *m = cli_last_error();
+        local = vv_error_set(VV_ERR_INVALID, "%s", m && *m ? m : "failed");
+    }
+    vv_status s = vv_parallel_agree(local);
+    if (s == VV_OK)
+        return 0;
+    if (!rc)
+        cli_fail(s, NULL);
+    return rc ? rc : CLI_EXIT_FAIL;
+}
+
+int
+cli_render_parallel(cli_args *a, cli_render_args *r) {
+    int rank = 0, size = 1, rc;
+    vv_world *w = NULL;
+    vv_renderer *ren = NULL;
+    vv_parallel *par = NULL;
+    vv_image *img = NULL;
+    vv_status s = vv_parallel_init(NULL, NULL, &rank, &size);
+    if (s != VV_OK)
+        return cli_fail(s, NULL);
+    vv_error_clear();
+    s = check_same_input(a, r);
+    if (s != VV_OK) {
+        /* every rank has the error already */
+        rc = cli_fail(s, NULL);
+        goto done;
+    }
+    rc = agree(cli_render_world(r, &w));
+    if (rc)
+        goto done;
+    cli_render_turn(r, w);
+    int quality = 2;
+    rc = cli_render_renderer(a, r, w, &ren, &quality);
+    if (!rc && strcmp(vv_renderer_name(ren), "raycast") != 0) {
+        cli_error("render: under mpirun the renderer is raycast (sort-last compositing of "
+                  "bricks), not %s",
+                  vv_renderer_name(ren));
+        rc = CLI_EXIT_FAIL;
+    }
+    vv_parallel_options po;
+    vv_parallel_options_init(&po);
+    po.method = (vv_compositing)r->compositing;
+    po.radix = r->radix;
+    if (!rc && (s = vv_parallel_new(&par, ren, &po)) != VV_OK)
+        rc = cli_fail(s, NULL);
+    if (!rc && rank == 0 && (s = vv_image_new(&img, w->view.width, w->view.height)) != VV_OK)
+        rc = cli_fail(s, NULL);
+    if ((rc = agree(rc)))
+        goto done;
+    if (r->threads > 0)
+        vv_threads_set(r->threads);
+    vv_render_options ro;
+    vv_render_options_init(&ro);
+    ro.threads = r->threads;
+    ro.quality = quality;
+    double t0 = cli_now();
+    vv_error_clear();
+    vv_parallel_stats st;
+    s = vv_parallel_render(par, w, &w->view, &ro, img, &st);
+    double seconds = cli_now() - t0;
+    if (s != VV_OK) {
+        /* already agreed: the same error on every rank, printed by rank 0 */
+        rc = cli_fail(s, NULL);
+        goto done;
+    }
+    if (rank == 0) {
+        vv_error_clear();
+        if ((s = vv_image_write_png(img, r->output, r->gamma, r->alpha)) != VV_OK)
+            rc = cli_fail(s, r->output);
+    }
+    if ((rc = agree(rc)))
+        goto done;
+    if (!r->quiet)
+        printf("wrote %s (%dx%d, %.2f s on %d rank%s)\n", r->output, w->view.width, w->view.height,
+               seconds, size, size == 1 ? "" : "s");
+    rc = CLI_EXIT_OK;
+done:
+    vv_image_free(img);
+    vv_parallel_free(par);
+    vv_renderer_free(ren);
+    vv_world_free(w);
+    return rc;
+}
