@@ -79,6 +79,9 @@ cli_render_parallel(cli_args *a, cli_render_args *r) {
     vv_status s = vv_parallel_init(NULL, NULL, &rank, &size);
     if (s != VV_OK)
         return cli_fail(s, NULL);
+    rc = agree(cli_render_world(r, &w));
+    if (rc)
+        goto done;
     vv_error_clear();
     s = check_same_input(a, r);
     if (s != VV_OK) {
@@ -86,9 +89,6 @@ cli_render_parallel(cli_args *a, cli_render_args *r) {
         rc = cli_fail(s, NULL);
         goto done;
     }
-    rc = agree(cli_render_world(r, &w));
-    if (rc)
-        goto done;
     cli_render_turn(r, w);
     int quality = 2;
     rc = cli_render_renderer(a, r, w, &ren, &quality);

@@ -61,9 +61,9 @@ struct vv_parallel {
 
 /* One cut of the decomposition tree on a rank's path. */
 typedef struct par_level {
-    int k;    /* children */
-    int axis; /* cut along this index axis */
-    int *pos; /* k + 1 bounds in voxel indices: child c is [pos[c], pos[c + 1]] */
+    int k;           /* children */
+    int n_nodes;     /* k - 1 cuts in two, preorder (cut_tree) */
+    int *axis, *pos; /* per cut: the index axis and the voxel index of the plane */
 } par_level;
 
 /* The decomposition as seen by one rank. */
@@ -219,8 +219,10 @@ vv_parallel_free(vv_parallel *p) {
 
 static void
 plan_free(par_plan *pl) {
-    for (int j = 0; j <= PAR_MAX_LEVELS; j++)
+    for (int j = 0; j <= PAR_MAX_LEVELS; j++) {
         free(pl->lev[j].pos);
+        free(pl->lev[j].axis);
+    }
 }
 
 /* The rounds: binary swap over the largest power of two, or radix-k. */
@@ -289,50 +291,76 @@ node_weight(const par_plan *pl, int core, int j, int d) {
     return w;
 }
 
-/* Cuts box [lo, hi] into k slabs with the weights @p wt; fills lev. */
+/* Cuts box [lo, hi] (voxel indices) for children c0 .. c1 - 1 with weights
+ * wt: a k-d tree of cuts in two (children c0 .. cm - 1 below, cm .. c1 - 1
+ * above, cm the middle), each along the longest axis that has a multiple of
+ * PAR_ALIGN strictly inside, at the multiple nearest the weighted position.
+ * Nodes go to lev in preorder; the box of child @p want goes to out_lo,
+ * out_hi. */
 static vv_status
-cut(int lo[3], int hi[3], int k, const int *wt, par_level *lev) {
+cut_tree(const int lo[3], const int hi[3], int c0, int c1, const int *wt, par_level *lev, int want,
+         int out_lo[3], int out_hi[3]) {
+    if (c1 - c0 < 2) {
+        if (c0 == want) {
+            memcpy(out_lo, lo, sizeof(int) * 3);
+            memcpy(out_hi, hi, sizeof(int) * 3);
+        }
+        return VV_OK;
+    }
+    const int cm = c0 + (c1 - c0) / 2;
     int best = -1, best_len = -1;
     for (int a = 0; a < 3; a++) {
-        /* multiples of PAR_ALIGN strictly inside (lo, hi) */
         const int first = lo[a] / PAR_ALIGN + 1, last = (hi[a] - 1) / PAR_ALIGN;
-        const int count = last >= first ? last - first + 1 : 0;
-        if (count >= k - 1 && hi[a] - lo[a] > best_len) {
+        if (last >= first && hi[a] - lo[a] > best_len) {
             best = a;
             best_len = hi[a] - lo[a];
         }
     }
     if (best < 0)
         return vv_error_set(VV_ERR_LIMIT,
-                            "parallel: the box %d..%d x %d..%d x %d..%d cannot be cut in %d "
+                            "parallel: the box %d..%d x %d..%d x %d..%d cannot be cut again "
                             "(bricks are cut at multiples of %d voxels): too many ranks for "
                             "this volume",
-                            lo[0], hi[0], lo[1], hi[1], lo[2], hi[2], k, PAR_ALIGN);
+                            lo[0], hi[0], lo[1], hi[1], lo[2], hi[2], PAR_ALIGN);
     const int a = best;
-    lev->k = k;
-    lev->axis = a;
-    lev->pos = malloc(sizeof(int) * (size_t)(k + 1));
-    if (!lev->pos)
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    const int first = lo[a] / PAR_ALIGN + 1, last = (hi[a] - 1) / PAR_ALIGN;
-    const int count = last - first + 1;
-    int total = 0;
-    for (int c = 0; c < k; c++)
-        total += wt[c];
-    lev->pos[0] = lo[a];
-    lev->pos[k] = hi[a];
-    int acc = 0, prev = -1;
-    for (int c = 1; c < k; c++) {
-        acc += wt[c - 1];
-        const double ideal = lo[a] + (double)(hi[a] - lo[a]) * acc / total;
-        int idx = (int)floor(ideal / PAR_ALIGN + 0.5) - first; /* index among the multiples */
-        if (idx <= prev)
-            idx = prev + 1;
-        if (idx > count - (k - c))
-            idx = count - (k - c);
-        lev->pos[c] = (first + idx) * PAR_ALIGN;
-        prev = idx;
+    int wl = 0, wa = 0;
+    for (int c = c0; c < c1; c++) {
+        wa += wt[c];
+        wl += c < cm ? wt[c] : 0;
     }
+    const double ideal = lo[a] + (double)(hi[a] - lo[a]) * wl / (wa > 0 ? wa : 1);
+    const int first = lo[a] / PAR_ALIGN + 1, last = (hi[a] - 1) / PAR_ALIGN;
+    int m = (int)floor(ideal / PAR_ALIGN + 0.5);
+    m = m < first ? first : m > last ? last : m;
+    const int node = lev->n_nodes++;
+    lev->axis[node] = a;
+    lev->pos[node] = m * PAR_ALIGN;
+    int l[3], h[3];
+    memcpy(l, lo, sizeof l);
+    memcpy(h, hi, sizeof h);
+    h[a] = m * PAR_ALIGN;
+    vv_status s = cut_tree(l, h, c0, cm, wt, lev, want, out_lo, out_hi);
+    if (s != VV_OK)
+        return s;
+    memcpy(h, hi, sizeof h);
+    l[a] = m * PAR_ALIGN;
+    return cut_tree(l, h, cm, c1, wt, lev, want, out_lo, out_hi);
+}
+
+static vv_status
+cut(int lo[3], int hi[3], int k, const int *wt, par_level *lev, int want) {
+    lev->k = k;
+    lev->n_nodes = 0;
+    lev->axis = malloc(sizeof(int) * (size_t)k);
+    lev->pos = malloc(sizeof(int) * (size_t)k);
+    if (!lev->axis || !lev->pos)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    int ol[3], oh[3];
+    vv_status s = cut_tree(lo, hi, 0, k, wt, lev, want, ol, oh);
+    if (s != VV_OK)
+        return s;
+    memcpy(lo, ol, sizeof ol);
+    memcpy(hi, oh, sizeof oh);
     return VV_OK;
 }
 
@@ -351,50 +379,49 @@ plan_build(par_plan *pl, int rank, int size, const int dims[3], const vv_paralle
             return vv_error_set(VV_ERR_LIMIT, "parallel: %d ranks in one round", pl->k[j]);
         for (int d = 0; d < pl->k[j]; d++)
             wt[d] = node_weight(pl, pl->core, j, d);
-        vv_status s = cut(lo, hi, pl->k[j], wt, &pl->lev[j]);
+        vv_status s = cut(lo, hi, pl->k[j], wt, &pl->lev[j], digit(pl, pl->core, j));
         if (s != VV_OK)
             return s;
-        const int d = digit(pl, pl->core, j), a = pl->lev[j].axis;
-        lo[a] = pl->lev[j].pos[d];
-        hi[a] = pl->lev[j].pos[d + 1];
     }
     if (pl->core < pl->extras) {
         const int wt[2] = {1, 1};
-        vv_status s = cut(lo, hi, 2, wt, &pl->lev[pl->m]);
+        vv_status s = cut(lo, hi, 2, wt, &pl->lev[pl->m], pl->is_extra);
         if (s != VV_OK)
             return s;
         pl->has_fold = 1;
-        const int a = pl->lev[pl->m].axis, d = pl->is_extra;
-        lo[a] = pl->lev[pl->m].pos[d];
-        hi[a] = pl->lev[pl->m].pos[d + 1];
     }
     memcpy(pl->lo, lo, sizeof lo);
     memcpy(pl->hi, hi, sizeof hi);
     return VV_OK;
 }
 
-/* Front-to-back order of the children of a cut for eye E (perspective) or
+/* Front-to-back order of children c0 .. c1 - 1 under cut node n of @p lev
+ * (preorder: the lower half's cm - c0 - 1 nodes follow n, then the upper
+ * half's) for eye E (perspective: the half holding the eye first) or view
  * direction D (orthographic), whole-volume index space. */
+static void
+order_tree(const par_level *lev, int n, int c0, int c1, int ortho, const double E[3],
+           const double D[3], int *order, int *count) {
+    if (c1 - c0 < 2) {
+        order[(*count)++] = c0;
+        return;
+    }
+    const int cm = c0 + (c1 - c0) / 2, a = lev->axis[n];
+    const int low_first = ortho ? D[a] >= 0 : E[a] < lev->pos[n];
+    if (low_first) {
+        order_tree(lev, n + 1, c0, cm, ortho, E, D, order, count);
+        order_tree(lev, n + (cm - c0), cm, c1, ortho, E, D, order, count);
+    } else {
+        order_tree(lev, n + (cm - c0), cm, c1, ortho, E, D, order, count);
+        order_tree(lev, n + 1, c0, cm, ortho, E, D, order, count);
+    }
+}
+
 static void
 visibility_order(const par_level *lev, int ortho, const double E[3], const double D[3],
                  int *order) {
-    const int k = lev->k, a = lev->axis;
-    if (ortho) {
-        for (int c = 0; c < k; c++)
-            order[c] = D[a] >= 0 ? c : k - 1 - c;
-        return;
-    }
-    int ce = 0;
-    while (ce < k - 1 && E[a] >= lev->pos[ce + 1])
-        ce++;
-    int n = 0, up = ce + 1, down = ce - 1;
-    order[n++] = ce;
-    while (up < k || down >= 0) {
-        if (up < k)
-            order[n++] = up++;
-        if (down >= 0)
-            order[n++] = down--;
-    }
+    int count = 0;
+    order_tree(lev, 0, 0, lev->k, ortho, E, D, order, &count);
 }
 
 /* ---------------------------------------------------------------------- */
