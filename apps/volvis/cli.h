@@ -201,6 +201,15 @@ typedef struct cli_render_args {
  * the same on every rank.
  */
 int cli_render_parallel(cli_args *a, cli_render_args *r);
+/**
+ * Under mpirun: `volvis animate` with every frame rendered over all ranks;
+ * rank 0 runs vv_animation_render with @p o (writes, resumes), the others
+ * render the frames it announces. *st: rank 0's status. Returns the exit
+ * code, the same on every rank.
+ */
+int cli_animate_parallel(const cli_render_args *r, const vv_animation *anim, const vv_world *w,
+                         vv_renderer *ren, vv_anim_render_options *o, vv_anim_render_stats *stats,
+                         vv_status *st);
 int cli_render_parse(cli_args *a, cli_render_args *r);
 /**
  * The World for r->input (a scene file or a volume) with the overrides of

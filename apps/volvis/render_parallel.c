@@ -5,7 +5,8 @@
  * composited (binary swap or radix-k) and rank 0 writes the PNG and prints
  * the `wrote` line, which names the number of ranks. A failure on any rank
  * (an unreadable file, a bad option) stops every rank with that rank's
- * error, printed once by rank 0. docs/parallel.md.
+ * error, printed once by rank 0. `volvis animate` under mpirun renders each
+ * frame the same way (cli_animate_parallel). docs/parallel.md.
  */
 #include <stdint.h>
 #include <stdlib.h>
@@ -141,4 +142,76 @@ done:
     vv_renderer_free(ren);
     vv_world_free(w);
     return rc;
+}
+
+/* What rank 0's Animator hands to the frame renderer. */
+typedef struct anim_ctx {
+    vv_parallel *par;
+} anim_ctx;
+
+/* Rank 0: announce frame k to the other ranks, then render it with them. */
+static vv_status
+render_frame0(void *user, int frame, const vv_world *w, const vv_view *view,
+              const vv_render_options *ro, vv_image *out) {
+    anim_ctx *c = user;
+    int k = frame;
+    vv_status s = vv_parallel_broadcast(&k, sizeof k);
+    if (s != VV_OK)
+        return s;
+    return vv_parallel_render(c->par, w, view, ro, out, NULL);
+}
+
+int
+cli_animate_parallel(const cli_render_args *r, const vv_animation *anim, const vv_world *w,
+                     vv_renderer *ren, vv_anim_render_options *o, vv_anim_render_stats *stats,
+                     vv_status *st) {
+    int rank = 0, size = 1;
+    vv_parallel *par = NULL;
+    vv_status s = vv_parallel_init(NULL, NULL, &rank, &size);
+    int rc = 0;
+    if (s == VV_OK && strcmp(vv_renderer_name(ren), "raycast") != 0) {
+        cli_error("animate: under mpirun the renderer is raycast (sort-last compositing of "
+                  "bricks), not %s",
+                  vv_renderer_name(ren));
+        rc = CLI_EXIT_FAIL;
+    }
+    vv_parallel_options po;
+    vv_parallel_options_init(&po);
+    po.method = (vv_compositing)r->compositing;
+    po.radix = r->radix;
+    if (!rc && (s = vv_parallel_new(&par, ren, &po)) != VV_OK)
+        rc = cli_fail(s, NULL);
+    if ((rc = agree(rc))) {
+        vv_parallel_free(par);
+        return rc;
+    }
+    vv_status mine = VV_OK;
+    if (rank == 0) {
+        anim_ctx c = {par};
+        o->render_frame = render_frame0;
+        o->render_frame_user = &c;
+        mine = vv_animation_render(anim, w, ren, o, stats);
+        int done = -1;
+        vv_parallel_broadcast(&done, sizeof done);
+    } else {
+        /* render what rank 0 announces until it says -1 */
+        for (;;) {
+            int k = -1;
+            if (vv_parallel_broadcast(&k, sizeof k) != VV_OK || k < 0)
+                break;
+            vv_world *snap = NULL;
+            vv_status es = vv_animation_eval_frame(anim, w, k, &snap);
+            vv_render_options ro = o->render;
+            ro.progress.fn = NULL;
+            /* a failure is agreed inside: rank 0 stops and says -1 */
+            vv_parallel_render(par, es == VV_OK ? snap : w, es == VV_OK ? &snap->view : &w->view,
+                               &ro, NULL, NULL);
+            vv_world_free(snap);
+        }
+    }
+    *st = mine;
+    if (mine != VV_OK)
+        rc = cli_fail(mine, NULL);
+    vv_parallel_free(par);
+    return agree(rc);
 }

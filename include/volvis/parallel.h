@@ -66,6 +66,12 @@ vv_status vv_parallel_agree(vv_status s);
  */
 vv_status vv_parallel_check_same(const void *data, size_t n, const char *what);
 
+/**
+ * Collective: copies @p n bytes at @p data from rank 0 to every rank.
+ * Errors: VV_ERR_IO (MPI failed).
+ */
+vv_status vv_parallel_broadcast(void *data, size_t n);
+
 /** Compositing methods. */
 typedef enum vv_compositing {
     VV_COMPOSITING_BINARY_SWAP = 0,

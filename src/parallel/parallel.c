@@ -155,6 +155,14 @@ vv_parallel_check_same(const void *data, size_t n, const char *what) {
     return VV_OK;
 }
 
+vv_status
+vv_parallel_broadcast(void *data, size_t n) {
+    if (n > (size_t)0x7fffffff)
+        return vv_error_set(VV_ERR_LIMIT, "parallel: broadcast of %zu bytes", n);
+    int rc = MPI_Bcast(data, (int)n, MPI_BYTE, 0, MPI_COMM_WORLD);
+    return rc == MPI_SUCCESS ? VV_OK : vv_error_set(VV_ERR_IO, "parallel: MPI_Bcast failed");
+}
+
 void
 vv_parallel_options_init(vv_parallel_options *o) {
     memset(o, 0, sizeof *o);

@@ -44,6 +44,13 @@ vv_parallel_check_same(const void *data, size_t n, const char *what) {
     return VV_OK;
 }
 
+vv_status
+vv_parallel_broadcast(void *data, size_t n) {
+    (void)data;
+    (void)n;
+    return VV_OK;
+}
+
 void
 vv_parallel_options_init(vv_parallel_options *o) {
     memset(o, 0, sizeof *o);

@@ -1,15 +1,11 @@
 /*
  * Distributed rendering over MPI (src/parallel), run through mpirun:
- * - mpi_compare (tests/parallel/mpi_compare.c) on 1, 2, 3, 4 and 7 ranks
- *   (the CT head on 3 and 7 only, to keep the test short):
- *   the distributed image equals the one-process image (MIP and MinIP bit
- *   for bit, composite >= 50 dB), by binary swap and radix-k, with the cuts
- *   through the objects; a rank that cannot render fails every rank;
- * - `volvis render` under mpirun: rank 0 writes the PNG and prints "on 3
- *   ranks"; a rank that cannot read the input and ranks that read different
- *   scene files stop every rank with one clear error and no output.
- * Every run has a time limit (timeout), so a hang fails instead of blocking.
- * Skipped when the build has no MPI.
+ * mpi_compare (tests/parallel/mpi_compare.c) on 1, 2, 3, 4 and 7 ranks (the
+ * CT head on 3 and 7 only, to keep the test short): the distributed image
+ * equals the one-process image (MIP and MinIP bit for bit, composite >= 50
+ * dB), by binary swap and radix-k, with the cuts through the objects; a rank
+ * that cannot render fails every rank. Every run has a time limit (timeout),
+ * so a hang fails instead of blocking. Skipped when the build has no MPI.
  */
 #include "testutil.h"
 
@@ -18,8 +14,6 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
-
-#define outdir() vt_outdir("parallel")
 
 /* Runs a shell command line, output (stdout and stderr) into *out. */
 static int
@@ -42,12 +36,6 @@ run(const char *cmd, char **out) {
     int st = pclose(p);
     *out = buf;
     return WIFEXITED(st) ? WEXITSTATUS(st) : 128;
-}
-
-static const char *
-cli(void) {
-    const char *c = getenv("VV_CLI");
-    return c && *c ? c : VV_BINARY_DIR "/volvis";
 }
 
 static int
@@ -89,99 +77,10 @@ test_compare(void **state) {
 #endif
 }
 
-static void
-test_cli(void **state) {
-    (void)state;
-    if (!have_mpi())
-        skip();
-#ifdef VV_MPI_COMPARE
-    const char *dir = outdir();
-    /* two scene folders with a scene of the same name and different content,
-     * and a wrapper that runs rank 2 in another folder than the others */
-    char a[1200], b[1200], path[1300], wrap[1300];
-    snprintf(a, sizeof a, "%s/a", dir);
-    snprintf(b, sizeof b, "%s/b", dir);
-    mkdir(a, 0755);
-    mkdir(b, 0755);
-    char scene[1400];
-    snprintf(scene, sizeof scene,
-             "{\"objects\": [{\"file\": \"%s\"}], \"view\": {\"width\": 64, \"height\": 48}}\n",
-             vt_data("volumes/neghip.slc"));
-    snprintf(path, sizeof path, "%s/s.json", a);
-    vt_write_file(path, scene, strlen(scene));
-    snprintf(scene, sizeof scene,
-             "{\"objects\": [{\"file\": \"%s\", \"mode\": \"mip\"}], \"view\": {\"width\": 64, "
-             "\"height\": 48}}\n",
-             vt_data("volumes/neghip.slc"));
-    snprintf(path, sizeof path, "%s/s.json", b);
-    vt_write_file(path, scene, strlen(scene));
-    snprintf(wrap, sizeof wrap, "%s/wrap.sh", dir);
-    const char *w = "#!/bin/sh\n"
-                    "if [ \"$OMPI_COMM_WORLD_RANK\" = 2 ]; then cd \"$2\"; else cd \"$1\"; fi\n"
-                    "shift 2\nexec \"$@\"\n";
-    vt_write_file(wrap, w, strlen(w));
-    chmod(wrap, 0755);
-    struct stat st;
-    if (stat(vt_data("volumes/neghip.slc"), &st) != 0)
-        skip();
-
-    char cmd[8192], *out = NULL, png[1300];
-    /* the same scene everywhere: rank 0 writes and names the rank count */
-    snprintf(png, sizeof png, "%s/three.png", dir);
-    remove(png);
-    snprintf(cmd, sizeof cmd, MPIRUN " -np 3 %s %s %s %s render s.json -o %s 2>&1", wrap, a, a,
-             cli(), png);
-    int rc = run(cmd, &out);
-    if (rc != 0)
-        fail_msg("%s\n%s", cmd, out);
-    assert_non_null(strstr(out, "on 3 ranks)"));
-    /* one wrote line: the other ranks print nothing */
-    assert_non_null(strstr(out, "wrote"));
-    assert_null(strstr(strstr(out, "wrote") + 5, "wrote"));
-    assert_int_equal(stat(png, &st), 0);
-    free(out);
-
-    /* rank 2 reads another scene file of the same name */
-    snprintf(png, sizeof png, "%s/disagree.png", dir);
-    remove(png);
-    snprintf(cmd, sizeof cmd, MPIRUN " -np 4 %s %s %s %s render s.json -o %s 2>&1", wrap, a, b,
-             cli(), png);
-    rc = run(cmd, &out);
-    assert_int_not_equal(rc, 0);
-    assert_int_not_equal(rc, 124); /* not the time limit */
-    assert_non_null(strstr(out, "volvis: ranks disagree on the input file s.json"));
-    assert_int_not_equal(stat(png, &st), 0);
-    free(out);
-
-    /* rank 2 cannot read its input: every rank stops with rank 2's error */
-    snprintf(png, sizeof png, "%s/missing.png", dir);
-    remove(png);
-    snprintf(cmd, sizeof cmd, MPIRUN " -np 4 %s %s /nonexistent %s render s.json -o %s 2>&1", wrap,
-             a, cli(), png);
-    rc = run(cmd, &out);
-    assert_int_not_equal(rc, 0);
-    assert_int_not_equal(rc, 124);
-    assert_non_null(strstr(out, "volvis: rank 2: s.json: No such file or directory"));
-    assert_int_not_equal(stat(png, &st), 0);
-    free(out);
-
-    /* another renderer than raycast is refused on every rank */
-    snprintf(cmd, sizeof cmd,
-             MPIRUN " -np 2 %s %s %s %s render s.json --renderer splat -o %s/splat.png 2>&1", wrap,
-             a, a, cli(), dir);
-    rc = run(cmd, &out);
-    assert_int_not_equal(rc, 0);
-    assert_int_not_equal(rc, 124);
-    assert_non_null(strstr(out, "under mpirun the renderer is raycast"));
-    free(out);
-#endif
-}
-
 int
 main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_compare),
-        cmocka_unit_test(test_cli),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
