@@ -19,6 +19,7 @@
 #include "modeling.h"
 #include "navigator.h"
 #include "parallel.h"
+#include "bricks.h"
 #include "radiosity.h"
 #include "raster.h"
 #include "render.h"

@@ -721,6 +721,18 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         }
     }
 
+    int rx0 = 0, ry0 = 0, rx1 = view->width, ry1 = view->height;
+    if (s == VV_OK && st->brick_on && st->brick.x1 > st->brick.x0) {
+        /* only the brick's rectangle is traced; the rest stays empty */
+        const size_t np = (size_t)view->width * (size_t)view->height;
+        memset(out->rgba, 0, sizeof(float) * 4 * np);
+        for (size_t i = 0; i < np; i++)
+            out->depth[i] = INFINITY;
+        rx0 = st->brick.x0 > 0 ? st->brick.x0 : 0;
+        ry0 = st->brick.y0 > 0 ? st->brick.y0 : 0;
+        rx1 = st->brick.x1 < view->width ? st->brick.x1 : view->width;
+        ry1 = st->brick.y1 < view->height ? st->brick.y1 : view->height;
+    }
     if (s == VV_OK) {
         const int tx = (view->width + RC_TILE - 1) / RC_TILE;
         const int ty = (view->height + RC_TILE - 1) / RC_TILE;
@@ -735,6 +747,10 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
             int x0 = (tile % tx) * RC_TILE, y0 = (tile / tx) * RC_TILE;
             int x1 = x0 + RC_TILE < view->width ? x0 + RC_TILE : view->width;
             int y1 = y0 + RC_TILE < view->height ? y0 + RC_TILE : view->height;
+            x0 = x0 > rx0 ? x0 : rx0;
+            y0 = y0 > ry0 ? y0 : ry0;
+            x1 = x1 < rx1 ? x1 : rx1;
+            y1 = y1 < ry1 ? y1 : ry1;
             for (int y = y0; y < y1; y++)
                 for (int x = x0; x < x1; x++)
                     render_pixel(&fr, x, y, out);
@@ -821,6 +837,79 @@ vv_raycast_set_brick(vv_renderer *r, const vv_raycast_brick *b) {
     if (b)
         st->brick = *b;
     return VV_OK;
+}
+
+/* Solves the 3x3 system with columns c0, c1, c2 for rhs (Cramer); 0 when
+ * singular. */
+static int
+solve3(vv_vec3 c0, vv_vec3 c1, vv_vec3 c2, vv_vec3 rhs, double x[3]) {
+    const double det = vv_vec3_dot(c0, vv_vec3_cross(c1, c2));
+    if (!(fabs(det) > 1e-300))
+        return 0;
+    x[0] = vv_vec3_dot(rhs, vv_vec3_cross(c1, c2)) / det;
+    x[1] = vv_vec3_dot(c0, vv_vec3_cross(rhs, c2)) / det;
+    x[2] = vv_vec3_dot(c0, vv_vec3_cross(c1, rhs)) / det;
+    return 1;
+}
+
+void
+vv_raycast_brick_rect(vv_raycast_brick *b, const vv_object *obj, const vv_view *view,
+                      const int lo[3], const int hi[3]) {
+    b->x0 = b->y0 = 0;
+    b->x1 = b->y1 = 0; /* whole image until proven smaller */
+    /* primary rays are affine in the pixel position (prepare_rays): origin
+     * O00 + px OX + py OY, direction along D00 + px DX + py DY */
+    const vv_ray r00 = vv_view_ray(view, 0, 0), r10 = vv_view_ray(view, 1, 0),
+                 r01 = vv_view_ray(view, 0, 1);
+    const int ortho = view->projection == VV_PROJECTION_ORTHOGRAPHIC;
+    const vv_vec3 f = vv_vec3_normalize(vv_vec3_sub(view->at, view->eye));
+    vv_vec3 d[3] = {r00.dir, r10.dir, r01.dir};
+    if (!ortho)
+        for (int i = 0; i < 3; i++) {
+            const double df = vv_vec3_dot(d[i], f);
+            if (!(df > 0))
+                return;
+            d[i] = vv_vec3_scale(d[i], 1.0 / df);
+        }
+    const vv_vec3 DX = vv_vec3_sub(d[1], d[0]), DY = vv_vec3_sub(d[2], d[0]);
+    const vv_vec3 OX = vv_vec3_sub(r10.origin, r00.origin),
+                  OY = vv_vec3_sub(r01.origin, r00.origin);
+    const vv_mat4 m = vv_object_index_to_world(obj);
+    double xmin = INFINITY, xmax = -INFINITY, ymin = INFINITY, ymax = -INFINITY;
+    for (int c = 0; c < 8; c++) {
+        const vv_vec3 pi =
+            vv_vec3_make(c & 1 ? hi[0] : lo[0], c & 2 ? hi[1] : lo[1], c & 4 ? hi[2] : lo[2]);
+        const vv_vec3 pw = vv_mat4_mul_point(m, pi);
+        double x[3];
+        if (ortho) {
+            if (!solve3(OX, OY, f, vv_vec3_sub(pw, r00.origin), x))
+                return;
+        } else {
+            if (!solve3(DX, DY, d[0], vv_vec3_sub(pw, r00.origin), x) || !(x[2] > 1e-9))
+                return; /* behind the eye: every pixel may see it */
+            x[0] /= x[2];
+            x[1] /= x[2];
+        }
+        xmin = x[0] < xmin ? x[0] : xmin;
+        xmax = x[0] > xmax ? x[0] : xmax;
+        ymin = x[1] < ymin ? x[1] : ymin;
+        ymax = x[1] > ymax ? x[1] : ymax;
+    }
+    if (!(xmax - xmin < 1e7 && ymax - ymin < 1e7))
+        return;
+    /* pixel px's ray is at px: the pixels within two of the projection */
+    const double X0 = floor(xmin) - 2, X1 = ceil(xmax) + 3, Y0 = floor(ymin) - 2,
+                 Y1 = ceil(ymax) + 3;
+    b->x0 = X0 < 0 ? 0 : X0 > view->width ? view->width : (int)X0;
+    b->x1 = X1 < 0 ? 0 : X1 > view->width ? view->width : (int)X1;
+    b->y0 = Y0 < 0 ? 0 : Y0 > view->height ? view->height : (int)Y0;
+    b->y1 = Y1 < 0 ? 0 : Y1 > view->height ? view->height : (int)Y1;
+    if (b->x1 <= b->x0 || b->y1 <= b->y0) {
+        /* off screen: an empty rectangle that is not "whole image" */
+        b->x0 = 0;
+        b->x1 = 1;
+        b->y0 = b->y1 = 0;
+    }
 }
 
 vv_status

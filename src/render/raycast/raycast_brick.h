@@ -21,7 +21,19 @@ typedef struct vv_raycast_brick {
     int gdims[3];        /* dims of the whole volume */
     int off[3];          /* whole-volume index of the brick's voxel (0, 0, 0); multiples of 16 */
     double lo[3], hi[3]; /* samples owned: lo <= p < hi, whole-volume index units (+-INFINITY) */
+    /* pixels x0 <= x < x1, y0 <= y < y1 that can see the brick (the rest of
+     * the image is left empty); x1 <= x0: the whole image */
+    int x0, y0, x1, y1;
 } vv_raycast_brick;
+
+/*
+ * The pixel rectangle that can see the index box lo .. hi (voxel indices,
+ * the whole volume's) of object @p obj through @p view, two pixels wider on
+ * each side; the whole image when the box reaches behind the eye. Fills
+ * b->x0 .. b->y1.
+ */
+void vv_raycast_brick_rect(vv_raycast_brick *b, const vv_object *obj, const vv_view *view,
+                           const int lo[3], const int hi[3]);
 
 /*
  * Puts raycast renderer @p r in brick mode (@p b copied) or back to whole
