@@ -15,6 +15,7 @@
 #ifndef VOLVIS_CLI_H
 #define VOLVIS_CLI_H
 
+#include <stdint.h>
 #include <stdio.h>
 
 #include "volvis/volvis.h"
@@ -160,7 +161,7 @@ int cli_fail(vv_status s, const char *path);
         {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"}, {"gamma", 0, "G"},                   \
         {"quality", 0, "0|1|2"}, {"set", 0, "KEY=VALUE"}, {"alpha", 0, NULL}, {"ortho", 0, NULL},  \
         {"field", 0, "NAME"}, {"time", 0, "T"}, {"series", 0, "N"}, {"channel", 0, "C"},           \
-        {"compositing", 0, "binary-swap|radix-k[:K]"}, {                                           \
+        {"compositing", 0, "binary-swap|radix-k[:K]"}, {"memory-limit", 0, "BYTES[K|M|G]"}, {      \
         "quiet", 'q', NULL                                                                         \
     }
 
@@ -192,6 +193,7 @@ typedef struct cli_render_args {
     int alpha, quiet, ortho;
     /* under mpirun: --compositing (vv_parallel_options) */
     int compositing, radix;
+    uint64_t memory_limit; /**< --memory-limit in bytes (0: not given): out of core */
 } cli_render_args;
 
 /** Parses the shared options of @p a (one INPUT, -o); 0 or a usage error. */
@@ -211,6 +213,12 @@ int cli_animate_parallel(const cli_render_args *r, const vv_animation *anim, con
                          vv_renderer *ren, vv_anim_render_options *o, vv_anim_render_stats *stats,
                          vv_status *st);
 int cli_render_parse(cli_args *a, cli_render_args *r);
+/** The World for an already loaded volume @p v (the defaults of a volume file, with @p r's
+ * options); 0 or an exit code. */
+int cli_render_world_volume(const cli_render_args *r, vv_volume *v, vv_world **out);
+/** `volvis render` of a volume larger than memory (--memory-limit, or a .vvb INPUT):
+ * brick by brick (include/volvis/bricks.h). Returns the exit code. */
+int cli_render_out_of_core(cli_args *a, cli_render_args *r);
 /**
  * The World for r->input (a scene file or a volume) with the overrides of
  * the options (mode, iso, tf, size, step) but not yet turned: see

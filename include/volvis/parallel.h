@@ -72,6 +72,12 @@ vv_status vv_parallel_check_same(const void *data, size_t n, const char *what);
  */
 vv_status vv_parallel_broadcast(void *data, size_t n);
 
+/**
+ * Collective: *out on rank 0 = the largest *value over the ranks (others:
+ * unchanged). Errors: VV_ERR_IO.
+ */
+vv_status vv_parallel_max(const double *value, double *out);
+
 /** Compositing methods. */
 typedef enum vv_compositing {
     VV_COMPOSITING_BINARY_SWAP = 0,

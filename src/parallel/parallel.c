@@ -163,6 +163,19 @@ vv_parallel_broadcast(void *data, size_t n) {
     return rc == MPI_SUCCESS ? VV_OK : vv_error_set(VV_ERR_IO, "parallel: MPI_Bcast failed");
 }
 
+vv_status
+vv_parallel_max(const double *value, double *out) {
+    double in = *value, r = in;
+    int rc = MPI_Reduce(&in, &r, 1, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
+    if (rc != MPI_SUCCESS)
+        return vv_error_set(VV_ERR_IO, "parallel: MPI_Reduce failed");
+    int rank = 0;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    if (rank == 0)
+        *out = r;
+    return VV_OK;
+}
+
 void
 vv_parallel_options_init(vv_parallel_options *o) {
     memset(o, 0, sizeof *o);

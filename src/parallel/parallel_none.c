@@ -51,6 +51,12 @@ vv_parallel_broadcast(void *data, size_t n) {
     return VV_OK;
 }
 
+vv_status
+vv_parallel_max(const double *value, double *out) {
+    *out = *value;
+    return VV_OK;
+}
+
 void
 vv_parallel_options_init(vv_parallel_options *o) {
     memset(o, 0, sizeof *o);

@@ -100,16 +100,30 @@ vv_bricked_render(vv_bricked *b, vv_renderer *ren, const vv_world *w, int object
     vv_bricked_grid(b, nb);
     const int n = vv_bricked_count(b);
 
+    /* the World the ray caster sees: the object with each brick in turn,
+     * first with the bricked volume's header (its geometry: the object's
+     * own volume may be a coarse proxy, vv_bricked_proxy) */
+    vv_world *bw = NULL;
+    vv_status s = vv_world_clone(&bw, w);
+    if (s != VV_OK)
+        return s;
+    vv_object *bo = bw->objects[object];
+    vv_volume_free(bo->volume);
+    bo->volume = vv_volume_ref((vv_volume *)hdr);
     /* the eye and view direction in the volume's index space */
     int ok = 0;
-    const vv_mat4 w2i = vv_mat4_inverse(vv_object_index_to_world(obj), &ok);
-    if (!ok)
+    const vv_mat4 w2i = vv_mat4_inverse(vv_object_index_to_world(bo), &ok);
+    if (!ok) {
+        vv_world_free(bw);
         return vv_error_set(VV_ERR_INVALID, "bricks: object '%s': singular transform", obj->name);
+    }
     ooc_order ord;
     memset(&ord, 0, sizeof ord);
     ord.list = malloc(sizeof(int) * (size_t)n);
-    if (!ord.list)
+    if (!ord.list) {
+        vv_world_free(bw);
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
     ord.nb = nb;
     ord.ortho = view->projection == VV_PROJECTION_ORTHOGRAPHIC;
     const vv_vec3 e = vv_mat4_mul_point(w2i, view->eye);
@@ -122,12 +136,8 @@ vv_bricked_render(vv_bricked *b, vv_renderer *ren, const vv_world *w, int object
     const int zero[3] = {0, 0, 0};
     order_bricks(&ord, zero, nb);
 
-    /* the World the ray caster sees: the object with each brick in turn */
-    vv_world *bw = NULL;
     vv_image *part = NULL;
-    vv_status s = vv_world_clone(&bw, w);
-    if (s == VV_OK)
-        s = vv_image_new(&part, view->width, view->height);
+    s = vv_image_new(&part, view->width, view->height);
     const size_t np = (size_t)view->width * (size_t)view->height;
     memset(out->rgba, 0, sizeof(float) * 4 * np);
     for (size_t i = 0; i < np; i++)
@@ -147,7 +157,7 @@ vv_bricked_render(vv_bricked *b, vv_renderer *ren, const vv_world *w, int object
         }
         vv_raycast_brick rb;
         memset(&rb, 0, sizeof rb);
-        vv_raycast_brick_rect(&rb, obj, view, in.slo, in.shi);
+        vv_raycast_brick_rect(&rb, bo, view, in.slo, in.shi);
         if (rb.x1 > rb.x0 && rb.y1 <= rb.y0)
             continue; /* off screen */
         for (int a = 0; a < 3; a++) {
@@ -160,7 +170,6 @@ vv_bricked_render(vv_bricked *b, vv_renderer *ren, const vv_world *w, int object
         vv_volume *bv = NULL;
         if ((s = vv_bricked_load(b, idx, &bv)) != VV_OK)
             break;
-        vv_object *bo = bw->objects[object];
         vv_volume_free(bo->volume);
         bo->volume = bv;
         if ((s = vv_raycast_set_brick(ren, &rb)) != VV_OK)
