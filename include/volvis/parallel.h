@@ -99,11 +99,13 @@ void vv_parallel_options_init(vv_parallel_options *o);
 typedef struct vv_parallel_stats {
     int ranks;
     double render;                /**< this rank's brick render */
+    double render_cpu;            /**< CPU seconds of this rank's brick render, all its threads */
     double wait;                  /**< barrier (with options.barrier) */
     double composite;             /**< compositing rounds (including the fold) */
     double gather;                /**< gather to rank 0 */
     double max_render;            /**< the largest render time over the ranks (rank 0 only) */
     double max_composite;         /**< the largest compositing time over the ranks (rank 0 only) */
+    double max_render_cpu;        /**< the largest render_cpu over the ranks (rank 0 only) */
     size_t brick_voxels;          /**< voxels this rank keeps, ghosts included */
     int brick_lo[3], brick_hi[3]; /**< this rank's box, voxel indices (inclusive) */
 } vv_parallel_stats;

@@ -349,6 +349,33 @@ set_budget(vv_bricked *b, uint64_t limit) {
     return VV_OK;
 }
 
+/* Row j of slice 0 of @p v as doubles. */
+static void
+get_row(const vv_volume *v, int j, double *row) {
+    const size_t n = (size_t)v->dims[0], base = (size_t)j * n;
+    switch (v->type) {
+    case VV_U8:
+        for (size_t i = 0; i < n; i++)
+            row[i] = ((const uint8_t *)v->data)[base + i];
+        return;
+    case VV_U16:
+        for (size_t i = 0; i < n; i++)
+            row[i] = ((const uint16_t *)v->data)[base + i];
+        return;
+    case VV_I16:
+        for (size_t i = 0; i < n; i++)
+            row[i] = ((const int16_t *)v->data)[base + i];
+        return;
+    case VV_F32:
+        for (size_t i = 0; i < n; i++)
+            row[i] = ((const float *)v->data)[base + i];
+        return;
+    default:
+        for (size_t i = 0; i < n; i++)
+            row[i] = vv_volume_get(v, (int)i, j, 0);
+    }
+}
+
 /* Raw layout: one streaming pass, a slice at a time, for the value range
  * and every brick's min/max over the voxels it reads. */
 static vv_status
@@ -377,47 +404,82 @@ scan_raw(vv_bricked *b) {
     tmp.dims[2] = 1;
     tmp.type = t;
     tmp.data = buf;
+    /* per axis, the bricks whose read box holds index x: at most two */
+    int *cand[3];
+    for (int a = 0; a < 3; a++) {
+        cand[a] = malloc(sizeof(int) * 2 * (size_t)d[a]);
+        if (!cand[a]) {
+            for (int q = 0; q < a; q++)
+                free(cand[q]);
+            free(buf);
+            free(row);
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        }
+        for (int x = 0; x < d[a]; x++) {
+            int n = 0;
+            cand[a][2 * x] = cand[a][2 * x + 1] = -1;
+            for (int c = x / VV_BRICK_CELLS - 1; c <= x / VV_BRICK_CELLS && n < 2; c++) {
+                if (c < 0 || c >= b->nb[a])
+                    continue;
+                const int blo = c * VV_BRICK_CELLS, last = d[a] - 1;
+                const int bhi = blo + VV_BRICK_CELLS < last ? blo + VV_BRICK_CELLS : last;
+                const int slo = blo > 0 ? blo - 1 : 0, shi = bhi < last ? bhi + 1 : last;
+                if (x >= slo && x <= shi)
+                    cand[a][2 * x + n++] = c;
+            }
+            /* the last brick of an axis may reach the end from further back */
+            const int c2 = x / VV_BRICK_CELLS + 1;
+            if (n < 2 && c2 < b->nb[a] && x >= c2 * VV_BRICK_CELLS - 1)
+                cand[a][2 * x + n++] = c2;
+        }
+    }
+    double *bmn = malloc(sizeof(double) * (size_t)b->nb[0]);
+    double *bmx = malloc(sizeof(double) * (size_t)b->nb[0]);
+    if (!bmn || !bmx)
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
     for (int k = 0; k < d[2] && s == VV_OK; k++) {
         s = read_at(b, buf, slice * vs, b->data_off + (uint64_t)k * slice * vs, "scan");
         if (s != VV_OK)
             break;
         if (b->swap && vs > 1)
             swap_bytes(buf, slice, vs);
-        /* the z and y bricks whose read box holds this slice / row */
-        const int bk1 = k / VV_BRICK_CELLS < b->nb[2] ? k / VV_BRICK_CELLS : b->nb[2] - 1;
         for (int j = 0; j < d[1]; j++) {
-            for (int i = 0; i < d[0]; i++)
-                row[i] = vv_volume_get(&tmp, i, j, 0);
-            const int bj1 = j / VV_BRICK_CELLS < b->nb[1] ? j / VV_BRICK_CELLS : b->nb[1] - 1;
+            get_row(&tmp, j, row);
             for (int bi = 0; bi < b->nb[0]; bi++) {
-                vv_brick_info in;
-                brick_boxes(b, bi, &in);
-                double mn = INFINITY, mx = -INFINITY;
-                for (int i = in.slo[0]; i <= in.shi[0]; i++) {
-                    const double x = row[i];
-                    if (x == x) {
-                        mn = x < mn ? x : mn;
-                        mx = x > mx ? x : mx;
-                    }
+                bmn[bi] = INFINITY;
+                bmx[bi] = -INFINITY;
+            }
+            for (int i = 0; i < d[0]; i++) {
+                const double x = row[i];
+                if (x != x)
+                    continue;
+                for (int q = 0; q < 2; q++) {
+                    const int bi = cand[0][2 * i + q];
+                    if (bi < 0)
+                        break;
+                    bmn[bi] = x < bmn[bi] ? x : bmn[bi];
+                    bmx[bi] = x > bmx[bi] ? x : bmx[bi];
                 }
-                lo = mn < lo ? mn : lo;
-                hi = mx > hi ? mx : hi;
-                for (int bk = bk1 - 1; bk <= bk1 + 1; bk++)
-                    for (int bj = bj1 - 1; bj <= bj1 + 1; bj++) {
-                        if (bk < 0 || bk >= b->nb[2] || bj < 0 || bj >= b->nb[1])
+            }
+            for (int bi = 0; bi < b->nb[0]; bi++) {
+                lo = bmn[bi] < lo ? bmn[bi] : lo;
+                hi = bmx[bi] > hi ? bmx[bi] : hi;
+                for (int qk = 0; qk < 2; qk++)
+                    for (int qj = 0; qj < 2; qj++) {
+                        const int bk = cand[2][2 * k + qk], bj = cand[1][2 * j + qj];
+                        if (bk < 0 || bj < 0)
                             continue;
-                        const int idx = (bk * b->nb[1] + bj) * b->nb[0] + bi;
-                        brick_entry *e = &b->e[idx];
-                        vv_brick_info bin;
-                        brick_boxes(b, idx, &bin);
-                        if (k < bin.slo[2] || k > bin.shi[2] || j < bin.slo[1] || j > bin.shi[1])
-                            continue;
-                        e->vmin = mn < e->vmin ? mn : e->vmin;
-                        e->vmax = mx > e->vmax ? mx : e->vmax;
+                        brick_entry *e = &b->e[(bk * b->nb[1] + bj) * b->nb[0] + bi];
+                        e->vmin = bmn[bi] < e->vmin ? bmn[bi] : e->vmin;
+                        e->vmax = bmx[bi] > e->vmax ? bmx[bi] : e->vmax;
                     }
             }
         }
     }
+    free(bmn);
+    free(bmx);
+    for (int a = 0; a < 3; a++)
+        free(cand[a]);
     free(buf);
     free(row);
     if (s != VV_OK)

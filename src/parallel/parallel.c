@@ -36,6 +36,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "core/internal.h"
 #include "render/raycast/raycast_brick.h"
@@ -711,9 +712,13 @@ render_part(vv_parallel *p, const vv_world *w, const vv_view *view, const vv_ren
     if (s == VV_OK)
         s = vv_raycast_set_brick(p->ren, &p->rb);
     double t0 = MPI_Wtime();
+    struct timespec c0, c1;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
     if (s == VV_OK)
         s = vv_renderer_render(p->ren, bw, view, opt, img);
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
     st->render = MPI_Wtime() - t0;
+    st->render_cpu = (double)(c1.tv_sec - c0.tv_sec) + 1e-9 * (double)(c1.tv_nsec - c0.tv_nsec);
     vv_world_free(bw);
     float *buf = NULL;
     if (s == VV_OK) {
@@ -811,10 +816,11 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
             s = mpi_fail(rc, "gather");
     }
     st.gather = MPI_Wtime() - t2;
-    double mx[2] = {st.render, st.composite}, gmx[2] = {0, 0};
-    MPI_Reduce(mx, gmx, 2, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
+    double mx[3] = {st.render, st.composite, st.render_cpu}, gmx[3] = {0, 0, 0};
+    MPI_Reduce(mx, gmx, 3, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
     st.max_render = gmx[0];
     st.max_composite = gmx[1];
+    st.max_render_cpu = gmx[2];
     if (s == VV_OK && p->rank == 0) {
         const float bg[3] = {(float)w->background.x, (float)w->background.y,
                              (float)w->background.z};
