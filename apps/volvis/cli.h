@@ -219,6 +219,9 @@ int cli_render_world_volume(const cli_render_args *r, vv_volume *v, vv_world **o
 /** `volvis render` of a volume larger than memory (--memory-limit, or a .vvb INPUT):
  * brick by brick (include/volvis/bricks.h). Returns the exit code. */
 int cli_render_out_of_core(cli_args *a, cli_render_args *r);
+/** A World built from a coarse proxy of @p whole (vv_bricked_proxy): its default transfer
+ * function's opacity unit (the smallest voxel spacing) set to @p whole's. */
+void cli_proxy_opacity_unit(vv_world *w, const vv_volume *whole, const vv_volume *proxy);
 /**
  * The World for r->input (a scene file or a volume) with the overrides of
  * the options (mode, iso, tf, size, step) but not yet turned: see

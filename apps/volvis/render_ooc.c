@@ -11,6 +11,20 @@
 
 #include "cli.h"
 
+void
+cli_proxy_opacity_unit(vv_world *w, const vv_volume *whole, const vv_volume *proxy) {
+    /* the default transfer function's opacity is per smallest voxel spacing:
+     * the volume's, not the proxy's */
+    double ph = INFINITY, pp = INFINITY;
+    for (int k = 0; k < 3; k++) {
+        ph = whole->spacing[k] < ph ? whole->spacing[k] : ph;
+        pp = proxy->spacing[k] < pp ? proxy->spacing[k] : pp;
+    }
+    for (int i = 0; i < w->n_objects; i++)
+        if (fabs(w->objects[i]->tf.opacity_unit_distance - pp) <= 1e-12 * pp)
+            w->objects[i]->tf.opacity_unit_distance = ph;
+}
+
 int
 cli_render_out_of_core(cli_args *a, cli_render_args *r) {
     if (vv_parallel_launched()) {
@@ -49,19 +63,7 @@ cli_render_out_of_core(cli_args *a, cli_render_args *r) {
     }
     if ((rc = cli_render_world_volume(r, proxy, &w)))
         goto done;
-    {
-        /* the default transfer function's opacity is per smallest voxel
-         * spacing: the volume's, not the proxy's */
-        const vv_volume *h = vv_bricked_header(b);
-        double ph = INFINITY, pp = INFINITY;
-        for (int k = 0; k < 3; k++) {
-            ph = h->spacing[k] < ph ? h->spacing[k] : ph;
-            pp = proxy->spacing[k] < pp ? proxy->spacing[k] : pp;
-        }
-        for (int i = 0; i < w->n_objects; i++)
-            if (fabs(w->objects[i]->tf.opacity_unit_distance - pp) <= 1e-12 * pp)
-                w->objects[i]->tf.opacity_unit_distance = ph;
-    }
+    cli_proxy_opacity_unit(w, vv_bricked_header(b), proxy);
     cli_render_turn(r, w);
     int quality = 2;
     if ((rc = cli_render_renderer(a, r, w, &ren, &quality)))

@@ -15,7 +15,8 @@
 #include "cli.h"
 
 /* The bytes every rank must agree on: the command line, then the input
- * file (its first 64 MiB and its size). */
+ * file (its first 64 KiB and its size: a scene file whole, a volume file's
+ * header, not its voxels, which the ranks read by bricks). */
 static vv_status
 check_same_input(const cli_args *a, const cli_render_args *r) {
     size_t cap = 1 << 16, n = 0;
@@ -33,7 +34,7 @@ check_same_input(const cli_args *a, const cli_render_args *r) {
     if (s != VV_OK || !r->input)
         return s;
     FILE *f = fopen(r->input, "rb");
-    const size_t limit = (size_t)64 << 20;
+    const size_t limit = (size_t)64 << 10;
     unsigned char *data = malloc(limit + 16);
     size_t got = 0;
     if (f && data) {
@@ -70,6 +71,67 @@ agree(int rc) {
     return rc ? rc : CLI_EXIT_FAIL;
 }
 
+/* A volume readable by bricks (.vvb, --raw, uncompressed NRRD): opened
+ * header-only on every rank (*out NULL when not such a file); the status
+ * of the attempt, VV_ERR_UNSUPPORTED when not tried. */
+static vv_status
+open_source(const cli_render_args *r, vv_bricked **out) {
+    *out = NULL;
+    if (cli_ends_with(r->input, ".json"))
+        return VV_ERR_UNSUPPORTED;
+    if (!r->has_raw && !cli_ends_with(r->input, ".vvb") &&
+        vv_format_detect(r->input) != VV_FORMAT_NRRD)
+        return VV_ERR_UNSUPPORTED;
+    vv_error_clear();
+    return vv_bricked_open_header(out, r->input, r->has_raw ? &r->raw : NULL, 0);
+}
+
+/* Rank 0's coarse proxy of the source, on every rank. */
+static vv_status
+shared_proxy(vv_bricked *b, int rank, vv_volume **out) {
+    *out = NULL;
+    vv_volume *p = NULL;
+    int meta[5] = {0, 0, 0, 0, 0}; /* dims, type, ok */
+    double geo[16];
+    if (rank == 0) {
+        vv_status s = vv_bricked_proxy(b, 128, &p);
+        if (s == VV_OK) {
+            memcpy(meta, p->dims, sizeof p->dims);
+            meta[3] = (int)p->type;
+            meta[4] = 1;
+            memcpy(geo, p->spacing, 3 * sizeof(double));
+            memcpy(geo + 3, p->origin, 3 * sizeof(double));
+            memcpy(geo + 6, p->direction, 9 * sizeof(double));
+            geo[15] = 0;
+        }
+    }
+    vv_status s = vv_parallel_broadcast(meta, sizeof meta);
+    if (s == VV_OK)
+        s = vv_parallel_broadcast(geo, sizeof geo);
+    if (s == VV_OK && !meta[4])
+        s = vv_error_set(VV_ERR_IO, "rank 0 could not read the volume's proxy");
+    if (s == VV_OK && rank != 0) {
+        s = vv_volume_new(&p, meta, (vv_voxel_type)meta[3]);
+        if (s == VV_OK) {
+            memcpy(p->spacing, geo, 3 * sizeof(double));
+            memcpy(p->origin, geo + 3, 3 * sizeof(double));
+            memcpy(p->direction, geo + 6, 9 * sizeof(double));
+            p->unit = vv_bricked_header(b)->unit;
+            p->space = vv_bricked_header(b)->space;
+        }
+    }
+    if (s == VV_OK)
+        s = vv_parallel_broadcast(p->data, (size_t)meta[0] * meta[1] * meta[2] *
+                                               vv_voxel_type_size((vv_voxel_type)meta[3]));
+    if (s != VV_OK) {
+        vv_volume_free(p);
+        return s;
+    }
+    vv_volume_update_range(p);
+    *out = p;
+    return VV_OK;
+}
+
 int
 cli_render_parallel(cli_args *a, cli_render_args *r) {
     int rank = 0, size = 1, rc;
@@ -77,10 +139,42 @@ cli_render_parallel(cli_args *a, cli_render_args *r) {
     vv_renderer *ren = NULL;
     vv_parallel *par = NULL;
     vv_image *img = NULL;
+    vv_bricked *src = NULL;
+    vv_volume *proxy = NULL;
     vv_status s = vv_parallel_init(NULL, NULL, &rank, &size);
     if (s != VV_OK)
         return cli_fail(s, NULL);
-    rc = agree(cli_render_world(r, &w));
+    /* a volume readable by bricks: each rank reads only its own box; the
+     * World's defaults come from rank 0's coarse proxy */
+    const vv_status os = open_source(r, &src);
+    char why[2048];
+    snprintf(why, sizeof why, "%s", vv_error_message());
+    const int have = os == VV_OK;
+    const int all = vv_parallel_agree(have ? VV_OK : VV_ERR_UNSUPPORTED) == VV_OK;
+    const int none = vv_parallel_agree(have ? VV_ERR_UNSUPPORTED : VV_OK) == VV_OK;
+    vv_error_clear();
+    if (!all && !none) {
+        /* some ranks can read the volume by bricks and others not: the
+         * first failing rank's error, on every rank */
+        vv_status e = VV_OK;
+        if (!have)
+            e = vv_error_set(os == VV_ERR_UNSUPPORTED ? VV_ERR_INVALID : os, "%s",
+                             why[0] ? why : "cannot read the volume by bricks");
+        s = vv_parallel_agree(e);
+        rc = cli_fail(s, NULL);
+        goto done;
+    }
+    if (!all) {
+        vv_bricked_free(src);
+        src = NULL;
+        rc = agree(cli_render_world(r, &w));
+    } else {
+        s = shared_proxy(src, rank, &proxy);
+        rc = s != VV_OK ? cli_fail(s, r->input) : cli_render_world_volume(r, proxy, &w);
+        if (!rc)
+            cli_proxy_opacity_unit(w, vv_bricked_header(src), proxy);
+        rc = agree(rc);
+    }
     if (rc)
         goto done;
     vv_error_clear();
@@ -105,6 +199,8 @@ cli_render_parallel(cli_args *a, cli_render_args *r) {
     po.radix = r->radix;
     if (!rc && (s = vv_parallel_new(&par, ren, &po)) != VV_OK)
         rc = cli_fail(s, NULL);
+    if (!rc && src)
+        vv_parallel_set_source(par, src);
     if (!rc && rank == 0 && (s = vv_image_new(&img, w->view.width, w->view.height)) != VV_OK)
         rc = cli_fail(s, NULL);
     if ((rc = agree(rc)))
@@ -141,6 +237,8 @@ done:
     vv_parallel_free(par);
     vv_renderer_free(ren);
     vv_world_free(w);
+    vv_volume_free(proxy);
+    vv_bricked_free(src);
     return rc;
 }
 

@@ -60,6 +60,30 @@ typedef struct vv_bricked_stats {
  */
 vv_status vv_bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw,
                           uint64_t memory_limit);
+/**
+ * Opens like vv_bricked_open without the streaming pass over a raw or NRRD
+ * file: the header only (a .vvb: header and index, as vv_bricked_open). The
+ * value range (vv_bricked_header) and the bricks' min/max are then unknown
+ * (0 and never skipped) until the caller sets the range; for reading boxes
+ * (vv_bricked_read_box) by the ranks of a distributed render, which learn
+ * the range from their own boxes. Errors: as vv_bricked_open.
+ */
+vv_status vv_bricked_open_header(vv_bricked **out, const char *path, const vv_raw_params *raw,
+                                 uint64_t memory_limit);
+
+/**
+ * Reads the voxels lo .. hi (inclusive, within the volume) into a new
+ * volume with the bricked volume's geometry and range (its voxel (0, 0, 0)
+ * is voxel lo): raw layouts one pread a row, a .vvb from the bricks that
+ * overlap the box (each read once, not cached). Errors: VV_ERR_INVALID (a
+ * box outside the volume), VV_ERR_IO, VV_ERR_FORMAT (short file),
+ * VV_ERR_NOMEM.
+ */
+vv_status vv_bricked_read_box(vv_bricked *b, const int lo[3], const int hi[3], vv_volume **out);
+
+/** Sets the value range (after vv_bricked_open_header). */
+void vv_bricked_set_range(vv_bricked *b, double lo, double hi);
+
 /** Closes the file and frees the cache. Accepts NULL. */
 void vv_bricked_free(vv_bricked *b);
 

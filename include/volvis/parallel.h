@@ -127,6 +127,18 @@ vv_renderer *vv_parallel_renderer(vv_parallel *p);
 void vv_parallel_free(vv_parallel *p);
 
 /**
+ * Makes each rank read its brick from @p source (borrowed: keep it open
+ * until vv_parallel_free; NULL: cut it from the World's volume again)
+ * instead of cutting it from the object's volume, which may then be a
+ * coarse proxy (vv_bricked_proxy) giving only the object's defaults: every
+ * rank reads only its own box (and its ghost voxels) from the file. Opened
+ * with vv_bricked_open_header, the value range is learnt from the ranks'
+ * bricks at the first render (a reduction over the ranks). Not collective.
+ */
+struct vv_bricked;
+vv_status vv_parallel_set_source(vv_parallel *p, struct vv_bricked *source);
+
+/**
  * Collective: renders @p w (one visible volume object, composite, mip or
  * minip; the same World on every rank) through @p view. Each rank cuts its
  * brick from the object's volume (kept between frames while the volume is

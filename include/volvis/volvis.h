@@ -6,6 +6,7 @@
 #define VOLVIS_VOLVIS_H
 
 #include "animate.h"
+#include "bricks.h"
 #include "compress.h"
 #include "core.h"
 #include "grid.h"
@@ -19,7 +20,6 @@
 #include "modeling.h"
 #include "navigator.h"
 #include "parallel.h"
-#include "bricks.h"
 #include "radiosity.h"
 #include "raster.h"
 #include "render.h"

@@ -221,7 +221,11 @@ read_box(vv_bricked *b, int index, const vv_brick_info *in, vv_volume *v) {
     const size_t vs = vv_voxel_type_size(b->header->type);
     const uint64_t n = box_voxels(in->slo, in->shi);
     char what[96];
-    snprintf(what, sizeof what, "brick %d", index);
+    if (index >= 0)
+        snprintf(what, sizeof what, "brick %d", index);
+    else
+        snprintf(what, sizeof what, "box %d..%d x %d..%d x %d..%d", in->slo[0], in->shi[0],
+                 in->slo[1], in->shi[1], in->slo[2], in->shi[2]);
     vv_status s = VV_OK;
     if (b->vvb) {
         s = read_at(b, v->data, (size_t)(n * vs), b->e[index].offset, what);
@@ -504,7 +508,7 @@ open_data(vv_bricked *b, const char *path) {
 }
 
 static vv_status
-open_raw_layout(vv_bricked *b) {
+open_raw_layout(vv_bricked *b, int scan) {
     vv_status s = open_data(b, b->data_path);
     if (s != VV_OK)
         return s;
@@ -518,7 +522,13 @@ open_raw_layout(vv_bricked *b) {
                             (unsigned long long)b->data_off, (unsigned long long)b->file_size);
     if ((s = alloc_bricks(b)) != VV_OK)
         return s;
-    return scan_raw(b);
+    if (scan)
+        return scan_raw(b);
+    for (int i = 0; i < b->n; i++) {
+        b->e[i].vmin = -INFINITY;
+        b->e[i].vmax = INFINITY;
+    }
+    return VV_OK;
 }
 
 static vv_status
@@ -638,9 +648,9 @@ ends_with(const char *s, const char *suffix) {
     return n >= m && strcasecmp(s + n - m, suffix) == 0;
 }
 
-vv_status
-vv_bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw,
-                uint64_t memory_limit) {
+static vv_status
+bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw, uint64_t memory_limit,
+             int scan) {
     *out = NULL;
     vv_bricked *b = calloc(1, sizeof *b);
     if (!b)
@@ -660,7 +670,7 @@ vv_bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw,
                 memcpy(b->header->origin, raw->origin, sizeof raw->origin);
                 b->data_off = raw->header_skip;
                 b->swap = (raw->big_endian ? 1 : 0) == vv_host_is_little_endian();
-                s = open_raw_layout(b);
+                s = open_raw_layout(b, scan);
             }
         }
     } else if (s == VV_OK && ends_with(path, ".vvb")) {
@@ -673,7 +683,7 @@ vv_bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw,
         s = vv_nrrd_raw_layout(path, &b->header, &b->data_path, &b->data_off, &big);
         if (s == VV_OK) {
             b->swap = big == vv_host_is_little_endian();
-            s = open_raw_layout(b);
+            s = open_raw_layout(b, scan);
         }
     }
     if (s == VV_OK)
@@ -683,6 +693,100 @@ vv_bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw,
         return vv_error_prefix(s, "bricks: %s", vv_path_basename(path));
     }
     *out = b;
+    return VV_OK;
+}
+
+vv_status
+vv_bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw,
+                uint64_t memory_limit) {
+    return bricked_open(out, path, raw, memory_limit, 1);
+}
+
+vv_status
+vv_bricked_open_header(vv_bricked **out, const char *path, const vv_raw_params *raw,
+                       uint64_t memory_limit) {
+    return bricked_open(out, path, raw, memory_limit, 0);
+}
+
+void
+vv_bricked_set_range(vv_bricked *b, double lo, double hi) {
+    b->header->range[0] = lo;
+    b->header->range[1] = hi;
+}
+
+vv_status
+vv_bricked_read_box(vv_bricked *b, const int lo[3], const int hi[3], vv_volume **out) {
+    *out = NULL;
+    const int *d = b->header->dims;
+    int dims[3];
+    for (int a = 0; a < 3; a++) {
+        if (lo[a] < 0 || hi[a] >= d[a] || lo[a] > hi[a])
+            return vv_error_set(VV_ERR_INVALID, "bricks: box %d..%d outside 0..%d on axis %d",
+                                lo[a], hi[a], d[a] - 1, a);
+        dims[a] = hi[a] - lo[a] + 1;
+    }
+    vv_volume *v = NULL;
+    vv_status s = vv_volume_new(&v, dims, b->header->type);
+    if (s != VV_OK)
+        return s;
+    const size_t vs = vv_voxel_type_size(b->header->type);
+    if (!b->vvb) {
+        vv_brick_info in;
+        memcpy(in.slo, lo, sizeof in.slo);
+        memcpy(in.shi, hi, sizeof in.shi);
+        s = read_box(b, -1, &in, v);
+    } else {
+        /* every brick overlapping the box, read whole, its overlap copied */
+        for (int i = 0; i < b->n && s == VV_OK; i++) {
+            vv_brick_info in;
+            brick_boxes(b, i, &in);
+            int ol[3], oh[3], ok = 1;
+            for (int a = 0; a < 3; a++) {
+                ol[a] = in.slo[a] > lo[a] ? in.slo[a] : lo[a];
+                oh[a] = in.shi[a] < hi[a] ? in.shi[a] : hi[a];
+                ok &= ol[a] <= oh[a];
+            }
+            if (!ok)
+                continue;
+            const int bd[3] = {in.shi[0] - in.slo[0] + 1, in.shi[1] - in.slo[1] + 1,
+                               in.shi[2] - in.slo[2] + 1};
+            char *buf = malloc((size_t)b->e[i].bytes);
+            if (!buf) {
+                s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+                break;
+            }
+            char what[64];
+            snprintf(what, sizeof what, "brick %d", i);
+            s = read_at(b, buf, (size_t)b->e[i].bytes, b->e[i].offset, what);
+            if (s == VV_OK && b->swap && vs > 1)
+                swap_bytes(buf, (size_t)(b->e[i].bytes / vs), vs);
+            const size_t row = (size_t)(oh[0] - ol[0] + 1) * vs;
+            for (int k = ol[2]; s == VV_OK && k <= oh[2]; k++)
+                for (int j = ol[1]; j <= oh[1]; j++)
+                    memcpy(
+                        (char *)v->data +
+                            (((size_t)(k - lo[2]) * dims[1] + (size_t)(j - lo[1])) * dims[0] +
+                             (size_t)(ol[0] - lo[0])) *
+                                vs,
+                        buf + (((size_t)(k - in.slo[2]) * bd[1] + (size_t)(j - in.slo[1])) * bd[0] +
+                               (size_t)(ol[0] - in.slo[0])) *
+                                  vs,
+                        row);
+            free(buf);
+        }
+    }
+    if (s != VV_OK) {
+        vv_volume_free(v);
+        return vv_error_prefix(s, "bricks: %s", vv_path_basename(b->path));
+    }
+    memcpy(v->spacing, b->header->spacing, sizeof v->spacing);
+    memcpy(v->origin, b->header->origin, sizeof v->origin);
+    memcpy(v->direction, b->header->direction, sizeof v->direction);
+    v->range[0] = b->header->range[0];
+    v->range[1] = b->header->range[1];
+    v->unit = b->header->unit;
+    v->space = b->header->space;
+    *out = v;
     return VV_OK;
 }
 

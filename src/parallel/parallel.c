@@ -40,6 +40,7 @@
 
 #include "core/internal.h"
 #include "render/raycast/raycast_brick.h"
+#include "volvis/bricks.h"
 #include "volvis/parallel.h"
 
 #define PAR_ALIGN 16 /* brick faces: multiples of this many voxels */
@@ -53,7 +54,9 @@ struct vv_parallel {
     int owns_ren;
     int rank, size;
     /* the brick kept between frames */
-    const vv_volume *src;
+    vv_bricked *source; /* read bricks from here (vv_parallel_set_source), or NULL */
+    int range_done;     /* the source's value range is known (agreed over the ranks) */
+    const void *src;
     uint64_t src_modified;
     vv_volume *brick;
     vv_raycast_brick rb;
@@ -600,56 +603,80 @@ composite(const par_plan *pl, float *img, size_t P, int mode, int ortho, const d
 
 static vv_status
 make_brick(vv_parallel *p, const vv_volume *v, const par_plan *pl) {
-    int same = p->brick && p->src == v && p->src_modified == v->modified;
+    const vv_volume *g = p->source ? vv_bricked_header(p->source) : v;
+    const void *key = p->source ? (const void *)p->source : (const void *)v;
+    const uint64_t mod = p->source ? 0 : v->modified;
+    int same = p->brick && p->src == key && p->src_modified == mod;
     for (int a = 0; a < 3 && same; a++)
         same = p->box_lo[a] == pl->lo[a] && p->box_hi[a] == pl->hi[a];
     if (same)
         return VV_OK;
     vv_volume_free(p->brick);
     p->brick = NULL;
+    /* the box, one ghost voxel beyond each face (within the volume) */
     int off[3], end[3], dims[3];
     for (int a = 0; a < 3; a++) {
-        off[a] = pl->lo[a] > 0 ? pl->lo[a] - PAR_ALIGN : 0;
-        end[a] = pl->hi[a] + 1 < v->dims[a] - 1 ? pl->hi[a] + 1 : v->dims[a] - 1;
+        off[a] = pl->lo[a] > 0 ? pl->lo[a] - 1 : 0;
+        end[a] = pl->hi[a] + 1 < g->dims[a] - 1 ? pl->hi[a] + 1 : g->dims[a] - 1;
         if (end[a] < off[a])
             end[a] = off[a];
         dims[a] = end[a] - off[a] + 1;
     }
     vv_volume *b = NULL;
-    vv_status s = vv_volume_new(&b, dims, v->type);
-    if (s != VV_OK)
-        return vv_error_prefix(s, "parallel: brick of %dx%dx%d voxels", dims[0], dims[1], dims[2]);
-    const size_t vs = vv_voxel_type_size(v->type);
-    const size_t row = vs * (size_t)dims[0];
-    for (int k = 0; k < dims[2]; k++)
-        for (int j = 0; j < dims[1]; j++) {
-            const size_t src = (((size_t)(k + off[2]) * (size_t)v->dims[1] + (size_t)(j + off[1])) *
-                                    (size_t)v->dims[0] +
-                                (size_t)off[0]) *
-                               vs;
-            const size_t dst = ((size_t)k * (size_t)dims[1] + (size_t)j) * row;
-            memcpy((char *)b->data + dst, (const char *)v->data + src, row);
-        }
-    /* the whole volume's frame and range: the brick's voxel (0, 0, 0) is
-     * the whole volume's voxel off (raycast_brick.h) */
-    memcpy(b->spacing, v->spacing, sizeof b->spacing);
-    memcpy(b->origin, v->origin, sizeof b->origin);
-    memcpy(b->direction, v->direction, sizeof b->direction);
-    b->range[0] = v->range[0];
-    b->range[1] = v->range[1];
-    b->unit = v->unit;
-    b->space = v->space;
+    vv_status s;
+    if (p->source) {
+        /* only this rank's box is read from the file */
+        if ((s = vv_bricked_read_box(p->source, off, end, &b)) != VV_OK)
+            return vv_error_prefix(s, "parallel: brick %d..%d x %d..%d x %d..%d", off[0], end[0],
+                                   off[1], end[1], off[2], end[2]);
+    } else {
+        s = vv_volume_new(&b, dims, v->type);
+        if (s != VV_OK)
+            return vv_error_prefix(s, "parallel: brick of %dx%dx%d voxels", dims[0], dims[1],
+                                   dims[2]);
+        const size_t vs = vv_voxel_type_size(v->type);
+        const size_t row = vs * (size_t)dims[0];
+        for (int k = 0; k < dims[2]; k++)
+            for (int j = 0; j < dims[1]; j++) {
+                const size_t src =
+                    (((size_t)(k + off[2]) * (size_t)v->dims[1] + (size_t)(j + off[1])) *
+                         (size_t)v->dims[0] +
+                     (size_t)off[0]) *
+                    vs;
+                const size_t dst = ((size_t)k * (size_t)dims[1] + (size_t)j) * row;
+                memcpy((char *)b->data + dst, (const char *)v->data + src, row);
+            }
+        /* the whole volume's frame and range: the brick's voxel (0, 0, 0) is
+         * the whole volume's voxel off (raycast_brick.h) */
+        memcpy(b->spacing, v->spacing, sizeof b->spacing);
+        memcpy(b->origin, v->origin, sizeof b->origin);
+        memcpy(b->direction, v->direction, sizeof b->direction);
+        b->range[0] = v->range[0];
+        b->range[1] = v->range[1];
+        b->unit = v->unit;
+        b->space = v->space;
+    }
     p->brick = b;
-    p->src = v;
-    p->src_modified = v->modified;
+    p->src = key;
+    p->src_modified = mod;
     memcpy(p->box_lo, pl->lo, sizeof p->box_lo);
     memcpy(p->box_hi, pl->hi, sizeof p->box_hi);
     for (int a = 0; a < 3; a++) {
-        p->rb.gdims[a] = v->dims[a];
+        p->rb.gdims[a] = g->dims[a];
         p->rb.off[a] = off[a];
         p->rb.lo[a] = pl->lo[a] > 0 ? pl->lo[a] : -INFINITY;
-        p->rb.hi[a] = pl->hi[a] < v->dims[a] - 1 ? pl->hi[a] : INFINITY;
+        p->rb.hi[a] = pl->hi[a] < g->dims[a] - 1 ? pl->hi[a] : INFINITY;
     }
+    return VV_OK;
+}
+
+vv_status
+vv_parallel_set_source(vv_parallel *p, vv_bricked *source) {
+    p->source = source;
+    p->range_done = 0;
+    vv_volume_free(p->brick);
+    p->brick = NULL;
+    p->src = NULL;
     return VV_OK;
 }
 
@@ -688,18 +715,40 @@ find_object(const vv_world *w) {
 
 /* This rank's part: plan, brick, partial image (P records in *img_out). */
 static vv_status
-render_part(vv_parallel *p, const vv_world *w, const vv_view *view, const vv_render_options *opt,
-            par_plan *pl, int *obj_index, float **img_out, vv_parallel_stats *st) {
-    const int oi = find_object(w);
-    if (oi < 0)
-        return VV_ERR_UNSUPPORTED;
+render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *view,
+            const vv_render_options *opt, par_plan *pl, int *obj_index, float **img_out,
+            vv_parallel_stats *st, int *agreed) {
+    /* collective: every rank calls this once a frame, whatever failed */
+    vv_status s = pre;
+    const int oi = s == VV_OK ? find_object(w) : -1;
+    if (s == VV_OK && oi < 0)
+        s = VV_ERR_UNSUPPORTED;
     *obj_index = oi;
-    const vv_object *obj = w->objects[oi];
-    vv_status s = plan_build(pl, p->rank, p->size, obj->volume->dims, &p->opt);
+    const vv_object *obj = oi >= 0 ? w->objects[oi] : NULL;
+    if (s == VV_OK) {
+        const int *dims = p->source ? vv_bricked_header(p->source)->dims : obj->volume->dims;
+        s = plan_build(pl, p->rank, p->size, dims, &p->opt);
+    }
     if (s == VV_OK)
         s = make_brick(p, obj->volume, pl);
+    /* every rank learns of a failure to cut or read a brick here */
+    s = vv_parallel_agree(s);
+    *agreed = s != VV_OK; /* the same on every rank */
     if (s != VV_OK)
         return s;
+    if (p->source && !p->range_done) {
+        /* the value range of the whole volume: the union of the bricks' */
+        vv_volume_update_range(p->brick);
+        double mn = p->brick->range[0], mx = -p->brick->range[1], gmn = mn, gmx = mx;
+        MPI_Allreduce(&mn, &gmn, 1, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+        MPI_Allreduce(&mx, &gmx, 1, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
+        vv_bricked_set_range(p->source, gmn, -gmx);
+        p->range_done = 1;
+    }
+    if (p->source) {
+        p->brick->range[0] = vv_bricked_header(p->source)->range[0];
+        p->brick->range[1] = vv_bricked_header(p->source)->range[1];
+    }
     vv_world *bw = NULL;
     s = vv_world_clone(&bw, w);
     if (s != VV_OK)
@@ -759,10 +808,11 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
     if (p->rank == 0 && (!out || out->width != view->width || out->height != view->height))
         s = vv_error_set(VV_ERR_INVALID, "parallel: the output image is not %dx%d", view->width,
                          view->height);
-    if (s == VV_OK)
-        s = render_part(p, w, view, opt, &pl, &oi, &img, &st);
+    int agreed = 0;
+    s = render_part(p, s, w, view, opt, &pl, &oi, &img, &st, &agreed);
     /* every rank learns of any failure here, before the exchanges */
-    s = vv_parallel_agree(s);
+    if (!agreed)
+        s = vv_parallel_agree(s);
     if (s != VV_OK) {
         free(img);
         plan_free(&pl);

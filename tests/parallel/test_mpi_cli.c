@@ -1,8 +1,10 @@
 /*
  * The CLI under mpirun (src/parallel, apps/volvis/render_parallel.c):
  * `volvis render` on 3 ranks: rank 0 writes the PNG and prints "on 3
- * ranks"; `volvis animate` likewise, frame by frame, and resumes; a rank that
- * cannot read the input and ranks that read different scene files stop every
+ * ranks"; `volvis animate` likewise, frame by frame, and resumes; a .vvb read
+ * by bricks (each rank its own box) gives the one-process MIP image; a rank that
+ * cannot read the input (or its .vvb is cut short) and ranks that read different scene
+ * files stop every
  * rank with one clear error and no output; another renderer is refused.
  * Every run has a time limit (timeout), so a hang fails instead of blocking.
  * Skipped when the build has no MPI.
@@ -156,6 +158,56 @@ test_cli(void **state) {
     for (int i = 0; i < 3; i++) {
         snprintf(png, sizeof png, "%s/frame_%04d.png", frames, i);
         assert_int_equal(stat(png, &st), 0);
+    }
+
+    /* a .vvb: every rank reads only its own box; MIP equals one process's
+     * image; a copy cut short in rank 2's folder stops every rank with rank
+     * 2's error */
+    {
+        char vvb[1300], cut[1300], one[1400], three[1400];
+        snprintf(vvb, sizeof vvb, "%s/v.vvb", a);
+        snprintf(cut, sizeof cut, "%s/v.vvb", b);
+        snprintf(one, sizeof one, "%s/vvb1.png", dir);
+        snprintf(three, sizeof three, "%s/vvb3.png", dir);
+        vv_volume *v = NULL;
+        vt_ok(vv_volume_load(&v, vt_data("volumes/neghip.slc"), NULL));
+        vt_ok(vv_volume_write_vvb(v, vvb, 1));
+        vv_volume_free(v);
+        size_t len;
+        unsigned char *bytes = vt_read_file(vvb, &len);
+        vt_write_file(cut, bytes, len - 1000);
+        free(bytes);
+        snprintf(cmd, sizeof cmd, "%s render %s --mode mip --size 64x48 -q -o %s 2>&1", cli(), vvb,
+                 one);
+        rc = run(cmd, &out);
+        if (rc != 0)
+            fail_msg("%s\n%s", cmd, out);
+        free(out);
+        snprintf(cmd, sizeof cmd,
+                 MPIRUN " -np 3 %s %s %s %s render v.vvb --mode mip --size 64x48 -o %s 2>&1", wrap,
+                 a, a, cli(), three);
+        rc = run(cmd, &out);
+        if (rc != 0)
+            fail_msg("%s\n%s", cmd, out);
+        assert_non_null(strstr(out, "on 3 ranks)"));
+        free(out);
+        size_t n1, n3;
+        unsigned char *p1 = vt_read_file(one, &n1), *p3 = vt_read_file(three, &n3);
+        assert_int_equal(n1, n3);
+        assert_memory_equal(p1, p3, n1);
+        free(p1);
+        free(p3);
+        snprintf(png, sizeof png, "%s/cut.png", dir);
+        remove(png);
+        snprintf(cmd, sizeof cmd, MPIRUN " -np 4 %s %s %s %s render v.vvb -o %s 2>&1", wrap, a, b,
+                 cli(), png);
+        rc = run(cmd, &out);
+        assert_int_not_equal(rc, 0);
+        assert_int_not_equal(rc, 124);
+        assert_non_null(strstr(out, "volvis: rank 2: bricks: v.vvb: "));
+        assert_non_null(strstr(out, "past the end of the file"));
+        assert_int_not_equal(stat(png, &st), 0);
+        free(out);
     }
 
     /* another renderer than raycast is refused on every rank */
