@@ -2,14 +2,18 @@
 # Out-of-core target (issue 20, docs/parallel.md): a 2048^3 u8 volume (8 GiB)
 # generated into a temporary folder, rendered at 512^2 with a 1 GiB memory
 # limit by bench_ooc, the whole run inside a cgroup (v1) memory limit of
-# 1.5 GiB so that going over is caught from outside (the kernel would
+# 1.5 GiB (by default) so that going over is caught from outside (the kernel would
 # reclaim the page cache, then kill the process). The folder is deleted
 # after. Needs about 8.5 GiB of free disk, root (cgroup), and a long run
 # (the generation and the streaming scan each read or write 8 GiB).
-# usage: bench/ooc_2048.sh [BUILD_DIR] [SIDE]   (from the repo root; SIDE default 2048)
+# usage: bench/ooc_2048.sh [BUILD_DIR] [SIDE] [LIMIT_MIB] [CGROUP_MIB] [FRAMES]
+#   (from the repo root; defaults 2048, 1024, 1536, 4: the issue's target)
 set -euo pipefail
 build=${1:-build/release}
 side=${2:-2048}
+limit=${3:-1024}
+cgmib=${4:-1536}
+frames=${5:-4}
 bin=$(readlink -f "$build/bench/bench_ooc")
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/vv_ooc.XXXXXX")
 cg=/sys/fs/cgroup/memory/vv_ooc_$$
@@ -30,8 +34,8 @@ echo "# $(date -u +%FT%TZ) load: $(cut -d' ' -f1-3 /proc/loadavg); ${side}^3 u8 
 "$bin" --generate "$side" "$tmp/big.raw"
 echo "# generated: $(du -m "$tmp/big.raw" | cut -f1) MiB; load: $(cut -d' ' -f1-3 /proc/loadavg)"
 mkdir "$cg"
-echo $((1536 * 1024 * 1024)) > "$cg/memory.limit_in_bytes"
+echo $((cgmib * 1024 * 1024)) > "$cg/memory.limit_in_bytes"
 # the bench in the cgroup; its page cache is charged there too
 sh -c "echo \$\$ > $cg/cgroup.procs && exec $bin $tmp/big.raw --raw ${side}x${side}x${side}:u8 \
-  --memory-limit 1024 --size 512 --frames 4 --tf 60:255 --dataset synthetic_${side}_u8"
-echo "# cgroup: peak $(( $(cat "$cg/memory.max_usage_in_bytes") / 1048576 )) MiB of 1536, failcnt $(cat "$cg/memory.failcnt"); load: $(cut -d' ' -f1-3 /proc/loadavg)"
+  --memory-limit $limit --size 512 --frames $frames --tf 60:255 --dataset synthetic_${side}_u8"
+echo "# cgroup: peak $(( $(cat "$cg/memory.max_usage_in_bytes") / 1048576 )) MiB of $cgmib, failcnt $(cat "$cg/memory.failcnt"); load: $(cut -d' ' -f1-3 /proc/loadavg)"
