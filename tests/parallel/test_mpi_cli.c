@@ -57,7 +57,12 @@ have_mpi(void) {
 #endif
 }
 
-#define MPIRUN "timeout 300 " VV_MPIEXEC " --allow-run-as-root --oversubscribe"
+/* under ASan, the ranks' leak check skips Open MPI's own allocations
+ * (tests/parallel/mpi_lsan.supp); harmless otherwise */
+#define MPIRUN                                                                                     \
+    "timeout 300 " VV_MPIEXEC " --allow-run-as-root --oversubscribe"                               \
+    " -x ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:fast_unwind_on_malloc=0"                     \
+    " -x LSAN_OPTIONS=suppressions=" VV_SOURCE_DIR "/tests/parallel/mpi_lsan.supp"
 
 static void
 test_cli(void **state) {
