@@ -23,12 +23,12 @@
  * binary swap; radix-k with k = n is direct send. After the last round each
  * core rank holds 1/R of the image, gathered to rank 0.
  *
- * Bricks. A rank keeps the voxels of its box, one voxel more above and down
- * to the multiple of 16 below (gradients by central differences and
- * trilinear samples at the box faces then read the same voxels as in the
- * whole volume, and the raycaster's subvolume grids line up with the whole
- * volume's), as a volume with the whole volume's geometry and value range
- * (src/render/raycast/raycast_brick.h).
+ * Bricks. A rank keeps the voxels of its box and one ghost voxel beyond each
+ * face (gradients by central differences and trilinear samples at the box
+ * faces then read the same voxels as in the whole volume), as a volume with
+ * the whole volume's geometry and value range
+ * (src/render/raycast/raycast_brick.h), cut from the World's volume or read
+ * from a bricked source (vv_parallel_set_source: only the box is read).
  */
 #include <math.h>
 #include <mpi.h>

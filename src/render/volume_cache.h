@@ -178,8 +178,8 @@ typedef struct vv_vray {
      * vv_vray_setup): a brick of a larger volume (src/parallel) sets up the
      * ray in the whole volume's index space, so its samples are those of
      * the whole volume bit for bit, and reads them from a cache that starts
-     * at voxel off (a multiple of VV_VC_BLOCK * VV_VC_GROUP; the subtraction
-     * of an integer below the point is exact) */
+     * at voxel off (the subtraction of an integer below the point is exact,
+     * and the brick's own subvolume grids are consistent in its frame) */
     float off[3];
 } vv_vray;
 

@@ -19,7 +19,7 @@
 
 typedef struct vv_raycast_brick {
     int gdims[3];        /* dims of the whole volume */
-    int off[3];          /* whole-volume index of the brick's voxel (0, 0, 0); multiples of 16 */
+    int off[3];          /* whole-volume index of the brick's voxel (0, 0, 0) */
     double lo[3], hi[3]; /* samples owned: lo <= p < hi, whole-volume index units (+-INFINITY) */
     /* pixels x0 <= x < x1, y0 <= y < y1 that can see the brick (the rest of
      * the image is left empty); x1 <= x0: the whole image */
