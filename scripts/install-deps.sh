@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages VolVis needs, only those that are missing.
 # Safe to run again. Usage: scripts/install-deps.sh [build|demo|test|bench]...
-#   build  compiler, CMake and the libraries (always included)
+#   build  compiler, CMake and the libraries (always included; Open MPI for src/parallel)
 #   demo   mricron-data (the real MRI head used by the quick-start demo)
 #   test   cmocka, ffmpeg (ffprobe checks the videos); Xvfb, xdotool and ImageMagick for the GUI tests;
 #          pydicom (writes the DICOM test series, and its test files), nibabel (its Siemens MR
@@ -12,7 +12,7 @@ set -euo pipefail
 pkgs=(build-essential cmake pkg-config libteem-dev libnifti2-dev libjansson-dev
       libpng-dev zlib1g-dev libassimp-dev libfftw3-dev libcairo2-dev libgtk-4-dev
       libspnav-dev libsdl2-dev libxml2-dev libnetcdf-dev libavformat-dev libavcodec-dev
-      libswscale-dev libavutil-dev libtiff-dev libgdcm-dev)
+      libswscale-dev libavutil-dev libtiff-dev libgdcm-dev libopenmpi-dev openmpi-bin)
 for what in "$@"; do
   case "$what" in
     build) ;;

@@ -15,6 +15,7 @@
 #ifndef VOLVIS_CLI_H
 #define VOLVIS_CLI_H
 
+#include <stdint.h>
 #include <stdio.h>
 
 #include "volvis/volvis.h"
@@ -137,6 +138,10 @@ int cli_ends_with(const char *s, const char *suffix);
 
 /** Prints "volvis: <formatted>" as one line on stderr (newlines become "; "). */
 void cli_error(const char *fmt, ...) VV_PRINTF(1, 2);
+/** The last error line cli_error (or a usage error) wrote, without "volvis: ". */
+const char *cli_last_error(void);
+/** 1: error lines are kept for cli_last_error but not printed (MPI ranks > 0). */
+void cli_errors_quiet(int quiet);
 
 /** Prints a usage error "volvis: CMD: <formatted> (see 'volvis CMD --help')"; returns 2. */
 int cli_usage_error(const cli_args *a, const char *fmt, ...) VV_PRINTF(2, 3);
@@ -158,7 +163,8 @@ int cli_fail(vv_status s, const char *path);
         {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"}, {"gamma", 0, "G"},                   \
         {"quality", 0, "0|1|2"}, {"set", 0, "KEY=VALUE"}, {"alpha", 0, NULL}, {"ortho", 0, NULL},  \
         {"labels", 0, NULL}, {"field", 0, "NAME"}, {"time", 0, "T"}, {"series", 0, "N"},           \
-        {"channel", 0, "C"}, {                                                                     \
+        {"channel", 0, "C"}, {"compositing", 0, "binary-swap|radix-k[:K]"},                        \
+        {"memory-limit", 0, "BYTES[K|M|G]"}, {                                                     \
         "quiet", 'q', NULL                                                                         \
     }
 
@@ -189,10 +195,37 @@ typedef struct cli_render_args {
     int has_time, time;       /**< --time given, and a grid's time step */
     int alpha, quiet, ortho;
     int labels; /**< --labels: volumes are label volumes (VV_SEG_LABELS) */
+    /* under mpirun: --compositing (vv_parallel_options) */
+    int compositing, radix;
+    uint64_t memory_limit; /**< --memory-limit in bytes (0: not given): out of core */
 } cli_render_args;
 
 /** Parses the shared options of @p a (one INPUT, -o); 0 or a usage error. */
+/**
+ * Under mpirun (vv_parallel_launched): `volvis render` of one frame over all
+ * ranks (docs/parallel.md); rank 0 writes and prints. Returns the exit code,
+ * the same on every rank.
+ */
+int cli_render_parallel(cli_args *a, cli_render_args *r);
+/**
+ * Under mpirun: `volvis animate` with every frame rendered over all ranks;
+ * rank 0 runs vv_animation_render with @p o (writes, resumes), the others
+ * render the frames it announces. *st: rank 0's status. Returns the exit
+ * code, the same on every rank.
+ */
+int cli_animate_parallel(const cli_render_args *r, const vv_animation *anim, const vv_world *w,
+                         vv_renderer *ren, vv_anim_render_options *o, vv_anim_render_stats *stats,
+                         vv_status *st);
 int cli_render_parse(cli_args *a, cli_render_args *r);
+/** The World for an already loaded volume @p v (the defaults of a volume file, with @p r's
+ * options); 0 or an exit code. */
+int cli_render_world_volume(const cli_render_args *r, vv_volume *v, vv_world **out);
+/** `volvis render` of a volume larger than memory (--memory-limit, or a .vvb INPUT):
+ * brick by brick (include/volvis/bricks.h). Returns the exit code. */
+int cli_render_out_of_core(cli_args *a, cli_render_args *r);
+/** A World built from a coarse proxy of @p whole (vv_bricked_proxy): its default transfer
+ * function's opacity unit (the smallest voxel spacing) set to @p whole's. */
+void cli_proxy_opacity_unit(vv_world *w, const vv_volume *whole, const vv_volume *proxy);
 /**
  * The World for r->input (a scene file or a volume) with the overrides of
  * the options (mode, iso, tf, size, step) but not yet turned: see

@@ -329,6 +329,22 @@ cli_animate_main(int argc, char **argv) {
     o.progress = pr.p;
     vv_anim_render_stats stats;
     vv_error_clear();
+    if (vv_parallel_launched()) {
+        /* under mpirun: rank 0 runs the Animator, the others render with it */
+        int mrank = 0, msize = 1;
+        vv_parallel_init(NULL, NULL, &mrank, &msize);
+        rc = cli_animate_parallel(&r, anim, w, ren, &o, &stats, &st);
+        cli_progress_end(&pr);
+        if (rc || mrank != 0)
+            goto done;
+        if (!r.quiet)
+            printf("wrote %s (%d frames at %g fps, %dx%d; %d rendered, %d reused; %.2f s on %d "
+                   "rank%s)\n",
+                   r.output, stats.frames, anim->fps, w->view.width, w->view.height, stats.rendered,
+                   stats.reused, stats.total_s, msize, msize == 1 ? "" : "s");
+        rc = CLI_EXIT_OK;
+        goto done;
+    }
     st = vv_animation_render(anim, w, ren, &o, &stats);
     cli_progress_end(&pr);
     if (st != VV_OK) {

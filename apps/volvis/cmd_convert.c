@@ -7,7 +7,8 @@
 #include "cli.h"
 
 static const cli_opt_spec convert_opts[] = {
-    {"format", 0, "nrrd|slc"},
+    {"format", 0, "nrrd|slc|vvb"},
+    {"no-coarse", 0, NULL},
     {"strict", 0, NULL},
     {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
     {"series", 0, "N"},
@@ -29,8 +30,16 @@ cli_convert_usage(FILE *out) {
                  "left untouched. Prints what was written. No patient identifier of a DICOM\n"
                  "series is written (a volume keeps none).\n"
                  "\n"
+                 "OUT.vvb is VolVis's bricked format for volumes larger than memory\n"
+                 "(docs/file-formats.md; rendered with 'volvis render --memory-limit'):\n"
+                 "raw input (--raw) and uncompressed NRRD are read a brick at a time by\n"
+                 "pread, so memory stays bounded by a brick; other formats are read whole\n"
+                 "first. Each brick gets a coarse level (every 4th voxel) unless\n"
+                 "--no-coarse.\n"
+                 "\n"
                  "Options:\n"
-                 "  --format nrrd|slc  output format (default: from OUT's extension)\n"
+                 "  --format nrrd|slc|vvb  output format (default: from OUT's extension)\n"
+                 "  --no-coarse        .vvb: no coarse level per brick\n"
                  "  --strict           refuse to rescale to 8 bits for SLC (exit 1 instead)\n"
                  "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
                  "                     read IN as raw voxels (see 'volvis info --help')\n"
@@ -42,7 +51,50 @@ cli_convert_usage(FILE *out) {
                  "Examples:\n"
                  "  volvis convert ../shared/data/volumes/nut.slc nut.nrrd\n"
                  "  volvis convert ../shared/data/volumes/ct_head.nrrd head.slc\n"
-                 "  volvis convert --raw 64x64x64:f32 field.raw field.nrrd\n");
+                 "  volvis convert --raw 64x64x64:f32 field.raw field.nrrd\n"
+                 "  volvis convert --raw 2048x2048x2048:u8 big.raw big.vvb\n");
+}
+
+/* IN to OUT.vvb: by bricks when IN is raw or uncompressed NRRD, else read
+ * whole first. */
+static int
+convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int series, int channel,
+            int coarse, int quiet) {
+    vv_bricked *b = NULL;
+    vv_error_clear();
+    vv_status s = VV_ERR_FORMAT;
+    if (raw || vv_format_detect(in) == VV_FORMAT_NRRD)
+        s = vv_bricked_open(&b, in, raw, 0);
+    int dims[3];
+    const char *type;
+    if (s == VV_OK) {
+        cli_progress pr;
+        cli_progress_begin(&pr, quiet);
+        s = vv_bricked_write_vvb(b, out, coarse, &pr.p);
+        cli_progress_end(&pr);
+        memcpy(dims, vv_bricked_header(b)->dims, sizeof dims);
+        type = vv_voxel_type_name(vv_bricked_header(b)->type);
+        vv_bricked_free(b);
+        if (s != VV_OK)
+            return cli_fail(s, out);
+    } else {
+        /* not readable by bricks (compressed NRRD, other formats): whole */
+        vv_volume *v = NULL;
+        int rc = cli_load_volume_sc(in, raw, series, channel, &v);
+        if (rc)
+            return rc;
+        vv_error_clear();
+        s = vv_volume_write_vvb(v, out, coarse);
+        memcpy(dims, v->dims, sizeof dims);
+        type = vv_voxel_type_name(v->type);
+        vv_volume_free(v);
+        if (s != VV_OK)
+            return cli_fail(s, out);
+    }
+    if (!quiet)
+        printf("wrote %s (vvb, %d x %d x %d, %s, bricks of %d^3 cells)\n", out, dims[0], dims[1],
+               dims[2], type, VV_BRICK_CELLS);
+    return CLI_EXIT_OK;
 }
 
 int
@@ -68,8 +120,12 @@ cli_convert_main(int argc, char **argv) {
             format = VV_FORMAT_NRRD;
         else if (strcmp(s, "slc") == 0)
             format = VV_FORMAT_SLC;
+        else if (strcmp(s, "vvb") == 0)
+            format = VV_FORMAT_AUTO; /* .vvb: below */
         else
-            return cli_usage_error(&a, "--format: cannot write '%s' (nrrd or slc)", s);
+            return cli_usage_error(&a, "--format: cannot write '%s' (nrrd, slc or vvb)", s);
+    } else if (cli_ends_with(out, ".vvb")) {
+        format = VV_FORMAT_AUTO;
     } else if (cli_ends_with(out, ".slc")) {
         format = VV_FORMAT_SLC;
     } else if (cli_ends_with(out, ".nrrd") || cli_ends_with(out, ".nhdr")) {
@@ -91,6 +147,9 @@ cli_convert_main(int argc, char **argv) {
     int series = 0, channel = -1;
     if ((rc = cli_parse_series_channel(&a, &series, &channel)))
         return rc;
+    if (format == VV_FORMAT_AUTO)
+        return convert_vvb(in, out, raw_spec ? &raw : NULL, series, channel,
+                           cli_count(&a, "no-coarse") == 0, quiet);
     if ((rc = cli_load_volume_sc(in, raw_spec ? &raw : NULL, series, channel, &v)))
         return rc;
     int rescale = format == VV_FORMAT_SLC && v->type != VV_U8;

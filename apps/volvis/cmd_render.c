@@ -61,6 +61,11 @@ cli_render_main(int argc, char **argv) {
     memset(&r, 0, sizeof r);
     if ((rc = cli_render_parse(&a, &r)))
         return rc;
+    /* under mpirun a .vvb is read by bricks, each rank its own box */
+    if (r.memory_limit > 0 || (cli_ends_with(r.input, ".vvb") && !vv_parallel_launched()))
+        return cli_render_out_of_core(&a, &r);
+    if (vv_parallel_launched())
+        return cli_render_parallel(&a, &r);
     vv_world *w = NULL;
     if ((rc = cli_render_world(&r, &w)))
         return rc;

@@ -13,6 +13,21 @@
 
 #include "cli.h"
 
+/* The last error line (without "volvis: "), and whether error lines are
+ * kept only (the ranks other than 0 under mpirun print nothing). */
+static char last_error[4096];
+static int errors_quiet;
+
+const char *
+cli_last_error(void) {
+    return last_error;
+}
+
+void
+cli_errors_quiet(int quiet) {
+    errors_quiet = quiet;
+}
+
 /* Writes "volvis: " + message + "\n" as one line: embedded newlines become "; ". */
 static void
 print_line(const char *msg) {
@@ -29,6 +44,9 @@ print_line(const char *msg) {
         }
     }
     buf[n] = '\0';
+    snprintf(last_error, sizeof last_error, "%s", buf);
+    if (errors_quiet)
+        return;
     fprintf(stderr, "volvis: %s\n", buf);
     fflush(stderr);
 }

@@ -89,10 +89,24 @@ main(int argc, char **argv) {
             return cli_usage_error(NULL, "unknown option '%s' before the command", cmd);
         return cli_usage_error(NULL, "unknown command '%s'", cmd);
     }
+    /* under mpirun: every rank runs the command; only rank 0 prints */
+    const int mpi = vv_parallel_launched();
+    if (mpi) {
+        int rank = 0, size = 1;
+        if (vv_parallel_init(&argc, &argv, &rank, &size) != VV_OK)
+            return cli_fail(VV_ERR_IO, NULL);
+        if (rank > 0) {
+            cli_errors_quiet(1);
+            if (!freopen("/dev/null", "w", stdout))
+                return CLI_EXIT_FAIL;
+        }
+    }
     int rc = c->run(argc - 1, argv + 1);
     if (fflush(stdout) != 0 && rc == CLI_EXIT_OK) {
         cli_error("cannot write to standard output");
         rc = CLI_EXIT_FAIL;
     }
+    if (mpi)
+        vv_parallel_finalize();
     return rc;
 }

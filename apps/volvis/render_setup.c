@@ -159,6 +159,32 @@ cli_render_parse(cli_args *a, cli_render_args *r) {
     }
     if ((s = cli_get(a, "threads")) && (rc = cli_parse_int(a, "threads", s, 0, 4096, &r->threads)))
         return rc;
+    r->radix = 4;
+    if ((s = cli_get(a, "compositing"))) {
+        if (strcmp(s, "binary-swap") == 0) {
+            r->compositing = VV_COMPOSITING_BINARY_SWAP;
+        } else if (strncmp(s, "radix-k", 7) == 0 && (s[7] == 0 || s[7] == ':')) {
+            r->compositing = VV_COMPOSITING_RADIX_K;
+            if (s[7] == ':' && (rc = cli_parse_int(a, "compositing", s + 8, 2, 4096, &r->radix)))
+                return rc;
+        } else {
+            return cli_usage_error(a, "--compositing: '%s' is not binary-swap or radix-k[:K]", s);
+        }
+    }
+    if ((s = cli_get(a, "memory-limit"))) {
+        char *end = NULL;
+        const double x = strtod(s, &end);
+        double mul = 1;
+        if (end && (*end == 'K' || *end == 'k'))
+            mul = 1024.0, end++;
+        else if (end && (*end == 'M' || *end == 'm'))
+            mul = 1048576.0, end++;
+        else if (end && (*end == 'G' || *end == 'g'))
+            mul = 1073741824.0, end++;
+        if (!end || end == s || *end || !(x > 0) || x * mul > 1e18)
+            return cli_usage_error(a, "--memory-limit: '%s' is not a size (e.g. 512M, 1G)", s);
+        r->memory_limit = (uint64_t)(x * mul);
+    }
     r->field = cli_get(a, "field");
     if ((s = cli_get(a, "time"))) {
         if ((rc = cli_parse_int(a, "time", s, 0, 1000000, &r->time)))
@@ -256,6 +282,13 @@ world_for_volume(const cli_render_args *r, vv_world **out) {
     int rc = cli_load_volume_sc(r->input, r->has_raw ? &r->raw : NULL, r->series, r->channel, &v);
     if (rc)
         return rc;
+    rc = cli_render_world_volume(r, v, out);
+    vv_volume_free(v); /* the World holds its own reference */
+    return rc;
+}
+
+int
+cli_render_world_volume(const cli_render_args *r, vv_volume *v, vv_world **out) {
     vv_default_scene_options o;
     vv_default_scene_options_init(&o);
     if (r->has_mode)
@@ -276,9 +309,11 @@ world_for_volume(const cli_render_args *r, vv_world **out) {
     /* the view turn (--azimuth, --elevation, --zoom) is cli_render_turn's */
     vv_error_clear();
     vv_status s = vv_world_new_for_volume(out, v, &o);
-    vv_volume_free(v); /* the World holds its own reference */
     if (s != VV_OK)
         return cli_fail(s, r->input);
+    if (r->has_step)
+        for (int i = 0; i < (*out)->n_objects; i++)
+            (*out)->objects[i]->step = r->step;
     return 0;
 }
 
@@ -466,6 +501,14 @@ cli_render_print_options(FILE *out) {
             "  --field NAME     a grid's field to show (default: its first scalar field;\n"
             "                   vectors by magnitude); for a scene, every grid object's\n"
             "  --time T         a grid's time step: field NAME<T> (blow.vtk: thickness3)\n"
+            "  --memory-limit SIZE  render a volume larger than memory brick by brick\n"
+            "                   within SIZE bytes (K, M, G suffixes): raw (--raw),\n"
+            "                   uncompressed NRRD or .vvb ('volvis convert IN OUT.vvb');\n"
+            "                   a .vvb INPUT is always rendered so (default 1G)\n"
+            "  --compositing binary-swap|radix-k[:K]\n"
+            "                   under mpirun -np N: how the ranks' partial images are\n"
+            "                   composited (default binary-swap; radix-k: groups of at\n"
+            "                   most K ranks a round, default 4); docs/parallel.md\n"
             "  -q, --quiet      no progress bar and no 'wrote' line\n",
             VV_IMAGE_MAX_SIDE);
 }

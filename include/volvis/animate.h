@@ -317,6 +317,14 @@ typedef struct vv_anim_render_options {
      * frames are not shown again). The image is borrowed for the call. */
     void (*on_frame)(void *user, int frame, const vv_image *img, int reused);
     void *on_frame_user;
+    /**
+     * Renders frame @p frame (its World snapshot @p w and view) into @p out
+     * in place of vv_renderer_render (NULL: the renderer); the distributed
+     * `volvis animate` under mpirun renders through it (vv_parallel_render).
+     */
+    vv_status (*render_frame)(void *user, int frame, const vv_world *w, const vv_view *view,
+                              const vv_render_options *ro, vv_image *out);
+    void *render_frame_user;
 } vv_anim_render_options;
 
 /** output NULL, default render options, gamma 1, RGB, resume on, default video options. */

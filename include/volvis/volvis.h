@@ -6,6 +6,7 @@
 #define VOLVIS_VOLVIS_H
 
 #include "animate.h"
+#include "bricks.h"
 #include "compress.h"
 #include "core.h"
 #include "filter.h"
@@ -19,6 +20,7 @@
 #include "model.h"
 #include "modeling.h"
 #include "navigator.h"
+#include "parallel.h"
 #include "radiosity.h"
 #include "raster.h"
 #include "render.h"

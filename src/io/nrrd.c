@@ -36,6 +36,7 @@
 
 #include <teem/nrrd.h>
 
+#include "core/bricks_internal.h"
 #include "core/internal.h"
 #include "volvis/io.h"
 
@@ -507,6 +508,157 @@ vv_nrrd_write(const vv_volume *v, const char *path, int gzip) {
         return vv_error_prefix(s, "nrrd: %s", vv_path_basename(path));
     }
     s = vv_atomic_file_commit(&af);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "nrrd: %s", vv_path_basename(path));
+    return VV_OK;
+}
+
+/* ---- raw layout for bricked reading (src/core/bricks.c) --------------- */
+
+/* The byte offset just past the header's blank line ("\n\n" or "\r\n\r\n"). */
+static vv_status
+attached_offset(const char *path, uint64_t *off) {
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return vv_error_set(VV_ERR_IO, "cannot open: %s", strerror(errno));
+    int prev = 0, c;
+    uint64_t pos = 0;
+    vv_status s = vv_error_set(VV_ERR_FORMAT, "no blank line after the header");
+    while ((c = fgetc(f)) != EOF && pos < ((uint64_t)1 << 24)) {
+        pos++;
+        if (c == '\r')
+            continue;
+        if (c == '\n' && prev == '\n') {
+            *off = pos;
+            s = VV_OK;
+            break;
+        }
+        prev = c;
+    }
+    fclose(f);
+    if (s == VV_OK)
+        vv_error_clear();
+    return s;
+}
+
+static vv_status
+raw_layout_locked(const char *path, vv_volume **header, char **data_path, uint64_t *offset,
+                  int *big_endian) {
+    vv_status s = VV_OK;
+    Nrrd *n = nrrdNew();
+    NrrdIoState *nio = nrrdIoStateNew();
+    vv_volume *v = NULL;
+    if (!n || !nio) {
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    nio->skipData = AIR_TRUE;
+    if (nrrdLoad(n, path, nio)) {
+        s = teem_error(VV_ERR_FORMAT, "cannot read header");
+        goto done;
+    }
+    int dims[3];
+    vv_voxel_type type;
+    if ((s = header_dims(n, dims, &type)) != VV_OK)
+        goto done;
+    if (n->type == nrrdTypeLLong || n->type == nrrdTypeULLong) {
+        s = vv_error_set(VV_ERR_FORMAT, "64-bit integers need conversion: convert it to .vvb "
+                                        "first (volvis convert IN OUT.vvb)");
+        goto done;
+    }
+    if (nio->encoding != nrrdEncodingRaw) {
+        s = vv_error_set(VV_ERR_FORMAT,
+                         "encoding %s is not raw: it cannot be read by bricks; convert it "
+                         "to .vvb first (volvis convert IN OUT.vvb)",
+                         nio->encoding ? nio->encoding->name : "?");
+        goto done;
+    }
+    if (nio->lineSkip != 0 || nio->dataFSkip) {
+        s = vv_error_set(VV_ERR_FORMAT, "line skips are not supported for bricked reading");
+        goto done;
+    }
+    const unsigned int nfiles = nio->dataFNArr ? nio->dataFNArr->len : 0;
+    if (nfiles > 1 || nio->dataFNFormat) {
+        s = vv_error_set(VV_ERR_FORMAT,
+                         "%u data files: convert it to .vvb first (volvis convert IN OUT.vvb)",
+                         nfiles);
+        goto done;
+    }
+    char *dp = NULL;
+    if (nfiles == 1 && strcmp(nio->dataFN[0], "-") != 0) {
+        const char *fn = nio->dataFN[0];
+        if (fn[0] == '/' || !nio->path || !nio->path[0]) {
+            dp = strdup(fn);
+        } else {
+            dp = malloc(strlen(nio->path) + strlen(fn) + 2);
+            if (dp)
+                sprintf(dp, "%s/%s", nio->path, fn);
+        }
+    } else {
+        dp = strdup(path);
+    }
+    if (!dp) {
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+        goto done;
+    }
+    const uint64_t bytes =
+        (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2] * vv_voxel_type_size(type);
+    uint64_t off = 0;
+    if (nfiles == 1 && strcmp(nio->dataFN[0], "-") != 0) {
+        if (nio->byteSkip >= 0) {
+            off = (uint64_t)nio->byteSkip;
+        } else {
+            FILE *f = fopen(dp, "rb");
+            long long size = -1;
+            if (f && fseeko(f, 0, SEEK_END) == 0)
+                size = (long long)ftello(f);
+            if (f)
+                fclose(f);
+            if (size < 0 || (uint64_t)size < bytes) {
+                free(dp);
+                s = vv_error_set(VV_ERR_FORMAT, "data file shorter than the data");
+                goto done;
+            }
+            off = (uint64_t)size - bytes;
+        }
+    } else {
+        if ((s = attached_offset(path, &off)) != VV_OK) {
+            free(dp);
+            goto done;
+        }
+        off += nio->byteSkip > 0 ? (uint64_t)nio->byteSkip : 0;
+    }
+    const int one[3] = {1, 1, 1};
+    if ((s = vv_volume_new(&v, one, type)) != VV_OK || (s = set_geometry(v, n)) != VV_OK) {
+        free(dp);
+        goto done;
+    }
+    memcpy(v->dims, dims, sizeof v->dims);
+    *header = v;
+    v = NULL;
+    *data_path = dp;
+    *offset = off;
+    *big_endian = nio->endian == airEndianBig;
+done:
+    vv_volume_free(v);
+    if (n)
+        nrrdNuke(n);
+    if (nio)
+        nrrdIoStateNix(nio);
+    return s;
+}
+
+vv_status
+vv_nrrd_raw_layout(const char *path, vv_volume **header, char **data_path, uint64_t *offset,
+                   int *big_endian) {
+    *header = NULL;
+    *data_path = NULL;
+    vv_status s = check_magic(path);
+    if (s == VV_OK) {
+        pthread_mutex_lock(&teem_lock);
+        s = raw_layout_locked(path, header, data_path, offset, big_endian);
+        pthread_mutex_unlock(&teem_lock);
+    }
     if (s != VV_OK)
         return vv_error_prefix(s, "nrrd: %s", vv_path_basename(path));
     return VV_OK;

@@ -407,7 +407,9 @@ vv_animation_render(const vv_animation *a, const vv_world *base, vv_renderer *re
             ro.progress.fn = on_render_progress;
             ro.progress.user = &fp;
             double t0 = now_s();
-            s = vv_renderer_render(renderer, snap, &snap->view, &ro, cur);
+            s = opt->render_frame
+                    ? opt->render_frame(opt->render_frame_user, k, snap, &snap->view, &ro, cur)
+                    : vv_renderer_render(renderer, snap, &snap->view, &ro, cur);
             if (stats)
                 stats->render_s += now_s() - t0;
             vv_world_free(snap);

@@ -698,6 +698,7 @@ vv_vray_setup(const double w2i[3][4], const int dims[3], const vv_plane *planes,
         r->o[a] = (float)(o[a] + t0 * d[a]);
         r->d[a] = (float)d[a];
         r->inv[a] = fabs(d[a]) < 1e-30 ? 0.0f : (float)(1.0 / d[a]);
+        r->off[a] = 0;
     }
     r->t0 = t0;
     r->t1 = t1;
@@ -836,12 +837,14 @@ values_chunk_avx2(const vv_vcache *c, const vv_vray *r, double kfirst, double dt
                  oz = _mm256_set1_ps(r->o[2]);
     const __m256 dx = _mm256_set1_ps(r->d[0]), dy = _mm256_set1_ps(r->d[1]),
                  dz = _mm256_set1_ps(r->d[2]);
+    const __m256 offx = _mm256_set1_ps(r->off[0]), offy = _mm256_set1_ps(r->off[1]),
+                 offz = _mm256_set1_ps(r->off[2]);
     float out[VV_VC_CHUNK + 8];
     for (int s = 0; s < m; s += 8) {
         const __m256 t = _mm256_loadu_ps(u + s);
-        const __m256 px = _mm256_add_ps(ox, _mm256_mul_ps(t, dx));
-        const __m256 py = _mm256_add_ps(oy, _mm256_mul_ps(t, dy));
-        const __m256 pz = _mm256_add_ps(oz, _mm256_mul_ps(t, dz));
+        const __m256 px = _mm256_sub_ps(_mm256_add_ps(ox, _mm256_mul_ps(t, dx)), offx);
+        const __m256 py = _mm256_sub_ps(_mm256_add_ps(oy, _mm256_mul_ps(t, dy)), offy);
+        const __m256 pz = _mm256_sub_ps(_mm256_add_ps(oz, _mm256_mul_ps(t, dz)), offz);
         __m256 wx, wy, wz;
         int32_t p00[8], p10[8], p01[8], p11[8];
         (void)cell_pairs_avx2(c, px, py, pz, &wx, &wy, &wz, p00, p10, p01, p11);
@@ -1067,13 +1070,16 @@ classify_chunk_avx2(const vv_vcache *c, const vv_vtables *ob, const vv_vray *r, 
                  oz = _mm256_set1_ps(r->o[2]);
     const __m256 dx = _mm256_set1_ps(r->d[0]), dy = _mm256_set1_ps(r->d[1]),
                  dz = _mm256_set1_ps(r->d[2]);
+    const __m256 offx = _mm256_set1_ps(r->off[0]), offy = _mm256_set1_ps(r->off[1]),
+                 offz = _mm256_set1_ps(r->off[2]);
     const __m256i lo16 = _mm256_set1_epi32(0xFFFF);
     const __m256 llo = _mm256_set1_ps(ob->lut_lo), lsc = _mm256_set1_ps(ob->lut_scale);
     const __m256 lmax = _mm256_set1_ps((float)(VV_VC_LUT - 1)), fzero = _mm256_setzero_ps();
     for (int s = 0; s < m; s += 8) {
         const __m256 t = _mm256_loadu_ps(u + s);
-        const __m256 px = _mm256_fmadd_ps(t, dx, ox), py = _mm256_fmadd_ps(t, dy, oy),
-                     pz = _mm256_fmadd_ps(t, dz, oz);
+        const __m256 px = _mm256_sub_ps(_mm256_fmadd_ps(t, dx, ox), offx),
+                     py = _mm256_sub_ps(_mm256_fmadd_ps(t, dy, oy), offy),
+                     pz = _mm256_sub_ps(_mm256_fmadd_ps(t, dz, oz), offz);
         __m256 wx, wy, wz;
         int32_t p00[8], p10[8], p01[8], p11[8];
         const __m256i o = cell_pairs_avx2(c, px, py, pz, &wx, &wy, &wz, p00, p10, p01, p11);

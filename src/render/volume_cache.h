@@ -174,6 +174,13 @@ typedef struct vv_vray {
     float inv[3];     /* 1/d, or 0 where d == 0 (axis never crossed) */
     double t0, t1;    /* clipped interval, world units */
     double tb;        /* o is the index point at t = tb (keeps float offsets small) */
+    /* subtracted from every point after it is computed (0 after
+     * vv_vray_setup): a brick of a larger volume (src/parallel) sets up the
+     * ray in the whole volume's index space, so its samples are those of
+     * the whole volume bit for bit, and reads them from a cache that starts
+     * at voxel off (the subtraction of an integer below the point is exact,
+     * and the brick's own subvolume grids are consistent in its frame) */
+    float off[3];
 } vv_vray;
 
 /* Clips @p wr, within [tmin, tmax], to the grid box of @p dims (index
@@ -185,9 +192,9 @@ int vv_vray_setup(const double w2i[3][4], const int dims[3], const vv_plane *pla
 static inline void
 vv_vray_point(const vv_vray *r, double t, float p[3]) {
     float tf = (float)(t - r->tb);
-    p[0] = r->o[0] + tf * r->d[0];
-    p[1] = r->o[1] + tf * r->d[1];
-    p[2] = r->o[2] + tf * r->d[2];
+    p[0] = (r->o[0] + tf * r->d[0]) - r->off[0];
+    p[1] = (r->o[1] + tf * r->d[1]) - r->off[1];
+    p[2] = (r->o[2] + tf * r->d[2]) - r->off[2];
 }
 
 /* ceil and floor of a non-negative double without libm: the x86-64

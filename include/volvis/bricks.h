@@ -1,0 +1,147 @@
+/*
+ * VolVis out-of-core volumes: a volume larger than memory, cut into bricks
+ * that are read on demand into a cache with a memory budget, least recently
+ * used first out (src/core/bricks.c), and rendered brick by brick by the ray
+ * caster in front-to-back order (src/render/raycast/raycast_ooc.c).
+ *
+ * Bricks are 64^3 cells with a one-voxel ghost border (each brick is read
+ * with the voxels one beyond its faces, so that trilinear samples and
+ * central-difference gradients at its faces are those of the whole volume).
+ * Sources: the bricked format .vvb of our own (docs/file-formats.md: a
+ * header, an index with each brick's offset, size and min/max, each brick's
+ * voxels with their ghosts in one piece, and an optional coarse level per
+ * brick), raw files and NRRD files with raw encoding, all read with pread:
+ * a brick costs one read in a .vvb and one read a row of voxels otherwise.
+ * Opening a raw or NRRD file streams it once, a slice at a time, for the
+ * value range and the bricks' min/max (a .vvb has them in its index).
+ *
+ * Thread-safety: one vv_bricked must not be used from two threads at once.
+ */
+#ifndef VOLVIS_BRICKS_H
+#define VOLVIS_BRICKS_H
+
+#include <stdint.h>
+
+#include "core.h"
+#include "image.h"
+#include "io.h"
+#include "model.h"
+#include "render.h"
+#include "volume.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define VV_BRICK_CELLS 64 /**< brick side in cells (the last brick of an axis may be shorter) */
+
+typedef struct vv_bricked vv_bricked;
+
+/** What a bricked volume did since it was opened. */
+typedef struct vv_bricked_stats {
+    uint64_t loads;      /**< bricks read from the file */
+    uint64_t hits;       /**< bricks found in the cache */
+    uint64_t evictions;  /**< bricks dropped to stay within the budget */
+    uint64_t skipped;    /**< bricks not read because their min/max is transparent */
+    uint64_t bytes_read; /**< bytes read by pread, header, index and scans included */
+    uint64_t peak_bytes; /**< largest cache size, bytes of voxels */
+    int max_loads;       /**< the most times one brick was read */
+} vv_bricked_stats;
+
+/**
+ * Opens @p path as a bricked volume: a .vvb file; a raw file when @p raw is
+ * not NULL; else an uncompressed (raw-encoded) NRRD file, attached or
+ * detached. @p memory_limit (bytes, 0: 1 GiB) bounds the voxels held: the
+ * cached bricks and the working set of the brick being rendered. Errors:
+ * VV_ERR_IO, VV_ERR_FORMAT (bad header or index: a brick past the end of
+ * the file, a size that does not match its box; a compressed NRRD, which
+ * must be converted first), VV_ERR_LIMIT (a memory limit smaller than one
+ * brick and its working set), VV_ERR_NOMEM.
+ */
+vv_status vv_bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw,
+                          uint64_t memory_limit);
+/**
+ * Opens like vv_bricked_open without the streaming pass over a raw or NRRD
+ * file: the header only (a .vvb: header and index, as vv_bricked_open). The
+ * value range (vv_bricked_header) and the bricks' min/max are then unknown
+ * (0 and never skipped) until the caller sets the range; for reading boxes
+ * (vv_bricked_read_box) by the ranks of a distributed render, which learn
+ * the range from their own boxes. Errors: as vv_bricked_open.
+ */
+vv_status vv_bricked_open_header(vv_bricked **out, const char *path, const vv_raw_params *raw,
+                                 uint64_t memory_limit);
+
+/**
+ * Reads the voxels lo .. hi (inclusive, within the volume) into a new
+ * volume with the bricked volume's geometry and range (its voxel (0, 0, 0)
+ * is voxel lo): raw layouts one pread a row, a .vvb from the bricks that
+ * overlap the box (each read once, not cached). Errors: VV_ERR_INVALID (a
+ * box outside the volume), VV_ERR_IO, VV_ERR_FORMAT (short file),
+ * VV_ERR_NOMEM.
+ */
+vv_status vv_bricked_read_box(vv_bricked *b, const int lo[3], const int hi[3], vv_volume **out);
+
+/** Sets the value range (after vv_bricked_open_header). */
+void vv_bricked_set_range(vv_bricked *b, double lo, double hi);
+
+/** Closes the file and frees the cache. Accepts NULL. */
+void vv_bricked_free(vv_bricked *b);
+
+/**
+ * The volume's header as a volume of one voxel holding its geometry: dims,
+ * type, spacing, origin, direction, range, unit (dims are the bricked
+ * volume's; data holds one voxel only: never read it). Borrowed.
+ */
+const vv_volume *vv_bricked_header(const vv_bricked *b);
+
+/** Bricks along each axis. */
+void vv_bricked_grid(const vv_bricked *b, int nb[3]);
+
+/**
+ * A coarse whole volume for previews and defaults (view framing, transfer
+ * function from its histogram): every f-th voxel along each axis, f the
+ * smallest that keeps every axis within @p max_side voxels, with the
+ * spacing scaled so that it spans the same world box. A .vvb with coarse
+ * levels is read from them; otherwise rows of voxels are read with pread.
+ * Errors: VV_ERR_IO, VV_ERR_NOMEM.
+ */
+vv_status vv_bricked_proxy(vv_bricked *b, int max_side, vv_volume **out);
+
+/** Its counts since opening. */
+void vv_bricked_stats_get(const vv_bricked *b, vv_bricked_stats *s);
+
+/**
+ * Writes @p src (a bricked volume opened from any source) as a .vvb file at
+ * @p path, written to a temporary file beside it and renamed; with
+ * @p coarse, each brick also gets its coarse level (every 4th voxel). Reads
+ * one brick at a time: memory is bounded by a brick, not the volume.
+ * Errors: VV_ERR_IO, VV_ERR_NOMEM.
+ */
+vv_status vv_bricked_write_vvb(vv_bricked *src, const char *path, int coarse,
+                               const vv_progress *progress);
+
+/**
+ * Writes the in-memory volume @p v as a .vvb file (for formats that cannot
+ * be read by bricks: compressed NRRD, SLC, NIfTI, ...). Errors: VV_ERR_IO.
+ */
+vv_status vv_volume_write_vvb(const vv_volume *v, const char *path, int coarse);
+
+/**
+ * Renders object @p object of @p w (a volume object in composite, mip or
+ * minip mode; its volume is ignored and only its transform, transfer
+ * function and shading are used) with the volume of @p b, brick by brick in
+ * front-to-back order through @p view, with raycast renderer @p ren (its
+ * options apply). Bricks whose min/max the transfer function makes
+ * transparent are skipped unread (composite mode); every other brick is
+ * read at most once a frame. The image is the in-memory render's up to
+ * compositing rounding (bit for bit for mip and minip). Errors:
+ * VV_ERR_UNSUPPORTED (mode, other visible objects), VV_ERR_INVALID, those of
+ * reading and rendering.
+ */
+vv_status vv_bricked_render(vv_bricked *b, vv_renderer *ren, const vv_world *w, int object,
+                            const vv_view *view, const vv_render_options *opt, vv_image *out);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,1093 @@
+/*
+ * Bricked volumes read on demand (include/volvis/bricks.h): the .vvb format
+ * (docs/file-formats.md), raw and raw-encoded NRRD files read by pread, and
+ * a least-recently-used cache of bricks within a memory budget.
+ *
+ * .vvb layout, little-endian: a 256-byte header ("VOLVISB1", header size,
+ * brick side in cells, dims, voxel type, coarse flag, unit, space, spacing,
+ * origin, direction, value range, index offset, brick count), then the
+ * index, 48 bytes a brick (i fastest): data offset and size, min and max
+ * (float64), coarse level offset and size; then the bricks, each the voxels
+ * of its box with one ghost voxel beyond each face (clipped to the volume),
+ * i fastest, and its coarse level (every 4th voxel of its cells, from lo).
+ */
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "core/bricks_internal.h"
+#include "core/internal.h"
+
+#define VVB_MAGIC "VOLVISB1"
+#define VVB_HEADER 256
+#define VVB_RECORD 48
+#define VVB_COARSE 4 /* coarse level: every 4th voxel */
+
+typedef struct brick_entry {
+    uint64_t offset, bytes;               /* .vvb: the brick's voxels in the file */
+    uint64_t coarse_offset, coarse_bytes; /* .vvb: its coarse level (0 bytes: none) */
+    double vmin, vmax;
+    vv_volume *vol; /* cached, or NULL */
+    uint64_t last_used;
+    int loads;
+} brick_entry;
+
+struct vv_bricked {
+    char *path;      /* as opened */
+    char *data_path; /* the file holding the voxels */
+    int fd;
+    int vvb;            /* 1: .vvb, else raw layout (raw or NRRD) */
+    uint64_t data_off;  /* raw layout: offset of voxel (0, 0, 0) */
+    int swap;           /* voxels need byte swapping */
+    uint64_t file_size; /* of data_path */
+    vv_volume *header;  /* one voxel, the geometry and range; dims the volume's */
+    int nb[3];
+    int n;
+    brick_entry *e;
+    int has_coarse;
+    uint64_t limit, capacity, held, clock;
+    vv_bricked_stats st;
+};
+
+/* ---- little-endian fields ------------------------------------------------ */
+
+static void
+put_u32(unsigned char *p, uint32_t v) {
+    for (int i = 0; i < 4; i++)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+static void
+put_u64(unsigned char *p, uint64_t v) {
+    for (int i = 0; i < 8; i++)
+        p[i] = (unsigned char)(v >> (8 * i));
+}
+static void
+put_f64(unsigned char *p, double d) {
+    uint64_t v;
+    memcpy(&v, &d, 8);
+    put_u64(p, v);
+}
+static uint32_t
+get_u32(const unsigned char *p) {
+    uint32_t v = 0;
+    for (int i = 0; i < 4; i++)
+        v |= (uint32_t)p[i] << (8 * i);
+    return v;
+}
+static uint64_t
+get_u64(const unsigned char *p) {
+    uint64_t v = 0;
+    for (int i = 0; i < 8; i++)
+        v |= (uint64_t)p[i] << (8 * i);
+    return v;
+}
+static double
+get_f64(const unsigned char *p) {
+    uint64_t v = get_u64(p);
+    double d;
+    memcpy(&d, &v, 8);
+    return d;
+}
+
+static void
+swap_bytes(void *data, size_t count, size_t vs) {
+    unsigned char *b = data;
+    for (size_t i = 0; i < count; i++, b += vs)
+        for (size_t k = 0; k < vs / 2; k++) {
+            unsigned char t = b[k];
+            b[k] = b[vs - 1 - k];
+            b[vs - 1 - k] = t;
+        }
+}
+
+/* pread of exactly n bytes at off. */
+static vv_status
+read_at(vv_bricked *b, void *buf, size_t n, uint64_t off, const char *what) {
+    size_t done = 0;
+    while (done < n) {
+        ssize_t r = pread(b->fd, (char *)buf + done, n - done, (off_t)(off + done));
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r < 0)
+            return vv_error_set(VV_ERR_IO, "%s: %s: %s", vv_path_basename(b->data_path), what,
+                                strerror(errno));
+        if (r == 0)
+            return vv_error_set(VV_ERR_FORMAT,
+                                "%s: %s: the file ends at byte %llu (reading %zu bytes at %llu)",
+                                vv_path_basename(b->data_path), what,
+                                (unsigned long long)(off + done), n, (unsigned long long)off);
+        done += (size_t)r;
+    }
+    b->st.bytes_read += n;
+    return VV_OK;
+}
+
+/* ---- geometry -------------------------------------------------------------- */
+
+static void
+brick_boxes(const vv_bricked *b, int index, vv_brick_info *in) {
+    int c[3] = {index % b->nb[0], (index / b->nb[0]) % b->nb[1], index / (b->nb[0] * b->nb[1])};
+    for (int a = 0; a < 3; a++) {
+        const int last = b->header->dims[a] - 1;
+        in->lo[a] = c[a] * VV_BRICK_CELLS;
+        in->hi[a] = in->lo[a] + VV_BRICK_CELLS < last ? in->lo[a] + VV_BRICK_CELLS : last;
+        in->slo[a] = in->lo[a] > 0 ? in->lo[a] - 1 : 0;
+        in->shi[a] = in->hi[a] < last ? in->hi[a] + 1 : last;
+    }
+}
+
+static uint64_t
+box_voxels(const int lo[3], const int hi[3]) {
+    return (uint64_t)(hi[0] - lo[0] + 1) * (uint64_t)(hi[1] - lo[1] + 1) *
+           (uint64_t)(hi[2] - lo[2] + 1);
+}
+
+/* Coarse level of a brick: every VVB_COARSE-th voxel from lo to hi. */
+static void
+coarse_dims(const vv_brick_info *in, int cd[3]) {
+    for (int a = 0; a < 3; a++)
+        cd[a] = (in->hi[a] - in->lo[a]) / VVB_COARSE + 1;
+}
+
+/* The bytes one brick holds while rendered: its voxels, the ray caster's
+ * 16-bit or float copy and cached gradients (src/render/volume_cache.h). */
+static uint64_t
+working_set(const vv_bricked *b, uint64_t voxels) {
+    const uint64_t vs = vv_voxel_type_size(b->header->type);
+    return voxels * (vs + 4 + 4);
+}
+
+int
+vv_bricked_count(const vv_bricked *b) {
+    return b->n;
+}
+
+void
+vv_bricked_info(const vv_bricked *b, int index, vv_brick_info *info) {
+    brick_boxes(b, index, info);
+    info->vmin = (float)b->e[index].vmin;
+    info->vmax = (float)b->e[index].vmax;
+}
+
+void
+vv_bricked_note_skip(vv_bricked *b) {
+    b->st.skipped++;
+}
+
+const vv_volume *
+vv_bricked_header(const vv_bricked *b) {
+    return b->header;
+}
+
+void
+vv_bricked_grid(const vv_bricked *b, int nb[3]) {
+    memcpy(nb, b->nb, sizeof b->nb);
+}
+
+void
+vv_bricked_stats_get(const vv_bricked *b, vv_bricked_stats *s) {
+    *s = b->st;
+    s->max_loads = 0;
+    for (int i = 0; i < b->n; i++)
+        s->max_loads = b->e[i].loads > s->max_loads ? b->e[i].loads : s->max_loads;
+}
+
+void
+vv_bricked_free(vv_bricked *b) {
+    if (!b)
+        return;
+    for (int i = 0; b->e && i < b->n; i++)
+        vv_volume_free(b->e[i].vol);
+    free(b->e);
+    if (b->fd >= 0)
+        close(b->fd);
+    vv_volume_free(b->header);
+    free(b->path);
+    free(b->data_path);
+    free(b);
+}
+
+/* ---- reading a brick ------------------------------------------------------- */
+
+/* The voxels of box slo..shi into v (dims the box's). */
+static vv_status
+read_box(vv_bricked *b, int index, const vv_brick_info *in, vv_volume *v) {
+    const size_t vs = vv_voxel_type_size(b->header->type);
+    const uint64_t n = box_voxels(in->slo, in->shi);
+    char what[96];
+    if (index >= 0)
+        snprintf(what, sizeof what, "brick %d", index);
+    else
+        snprintf(what, sizeof what, "box %d..%d x %d..%d x %d..%d", in->slo[0], in->shi[0],
+                 in->slo[1], in->shi[1], in->slo[2], in->shi[2]);
+    vv_status s = VV_OK;
+    if (b->vvb) {
+        s = read_at(b, v->data, (size_t)(n * vs), b->e[index].offset, what);
+    } else {
+        const int *d = b->header->dims;
+        const size_t row = (size_t)(in->shi[0] - in->slo[0] + 1) * vs;
+        char *dst = v->data;
+        for (int k = in->slo[2]; k <= in->shi[2] && s == VV_OK; k++)
+            for (int j = in->slo[1]; j <= in->shi[1] && s == VV_OK; j++) {
+                const uint64_t off =
+                    b->data_off + (((uint64_t)k * (uint64_t)d[1] + (uint64_t)j) * (uint64_t)d[0] +
+                                   (uint64_t)in->slo[0]) *
+                                      vs;
+                s = read_at(b, dst, row, off, what);
+                dst += row;
+            }
+    }
+    if (s == VV_OK && b->swap && vs > 1)
+        swap_bytes(v->data, (size_t)n, vs);
+    return s;
+}
+
+/* Drops least recently used bricks until @p need more bytes fit. */
+static void
+make_room(vv_bricked *b, uint64_t need) {
+    while (b->held + need > b->capacity) {
+        int victim = -1;
+        for (int i = 0; i < b->n; i++)
+            if (b->e[i].vol && (victim < 0 || b->e[i].last_used < b->e[victim].last_used))
+                victim = i;
+        if (victim < 0)
+            return;
+        vv_brick_info in;
+        brick_boxes(b, victim, &in);
+        b->held -= box_voxels(in.slo, in.shi) * vv_voxel_type_size(b->header->type);
+        vv_volume_free(b->e[victim].vol);
+        b->e[victim].vol = NULL;
+        b->st.evictions++;
+    }
+}
+
+vv_status
+vv_bricked_load(vv_bricked *b, int index, vv_volume **out) {
+    *out = NULL;
+    if (index < 0 || index >= b->n)
+        return vv_error_set(VV_ERR_INVALID, "bricks: no brick %d", index);
+    brick_entry *e = &b->e[index];
+    e->last_used = ++b->clock;
+    if (e->vol) {
+        b->st.hits++;
+        *out = vv_volume_ref(e->vol);
+        return VV_OK;
+    }
+    vv_brick_info in;
+    brick_boxes(b, index, &in);
+    const uint64_t bytes = box_voxels(in.slo, in.shi) * vv_voxel_type_size(b->header->type);
+    make_room(b, bytes);
+    int dims[3];
+    for (int a = 0; a < 3; a++)
+        dims[a] = in.shi[a] - in.slo[a] + 1;
+    vv_volume *v = NULL;
+    vv_status s = vv_volume_new(&v, dims, b->header->type);
+    if (s == VV_OK)
+        s = read_box(b, index, &in, v);
+    if (s != VV_OK) {
+        vv_volume_free(v);
+        return vv_error_prefix(s, "bricks: %s", vv_path_basename(b->path));
+    }
+    /* the whole volume's frame and range (raycast_brick.h) */
+    memcpy(v->spacing, b->header->spacing, sizeof v->spacing);
+    memcpy(v->origin, b->header->origin, sizeof v->origin);
+    memcpy(v->direction, b->header->direction, sizeof v->direction);
+    v->range[0] = b->header->range[0];
+    v->range[1] = b->header->range[1];
+    v->unit = b->header->unit;
+    v->space = b->header->space;
+    e->vol = v;
+    e->loads++;
+    b->st.loads++;
+    b->held += bytes;
+    if (b->held > b->st.peak_bytes)
+        b->st.peak_bytes = b->held;
+    *out = vv_volume_ref(v);
+    return VV_OK;
+}
+
+/* ---- opening ---------------------------------------------------------------- */
+
+static vv_status
+alloc_bricks(vv_bricked *b) {
+    for (int a = 0; a < 3; a++) {
+        const int cells = b->header->dims[a] > 1 ? b->header->dims[a] - 1 : 1;
+        b->nb[a] = (cells + VV_BRICK_CELLS - 1) / VV_BRICK_CELLS;
+    }
+    const uint64_t n = (uint64_t)b->nb[0] * (uint64_t)b->nb[1] * (uint64_t)b->nb[2];
+    if (n > (uint64_t)1 << 26)
+        return vv_error_set(VV_ERR_LIMIT, "bricks: %llu bricks", (unsigned long long)n);
+    b->n = (int)n;
+    b->e = calloc((size_t)n, sizeof *b->e);
+    if (!b->e)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    return VV_OK;
+}
+
+/* The budget: the largest brick's working set is reserved, the rest caches. */
+static vv_status
+set_budget(vv_bricked *b, uint64_t limit) {
+    b->limit = limit ? limit : (uint64_t)1 << 30;
+    uint64_t biggest = 0;
+    for (int i = 0; i < b->n; i++) {
+        vv_brick_info in;
+        brick_boxes(b, i, &in);
+        const uint64_t v = box_voxels(in.slo, in.shi);
+        biggest = v > biggest ? v : biggest;
+    }
+    const uint64_t vs = vv_voxel_type_size(b->header->type);
+    const uint64_t need = biggest * vs + working_set(b, biggest);
+    if (b->limit < need)
+        return vv_error_set(VV_ERR_LIMIT,
+                            "bricks: memory limit of %llu bytes is smaller than one brick (%llu "
+                            "bytes of voxels and %llu to render it)",
+                            (unsigned long long)b->limit, (unsigned long long)(biggest * vs),
+                            (unsigned long long)working_set(b, biggest));
+    b->capacity = b->limit - working_set(b, biggest);
+    return VV_OK;
+}
+
+/* Row j of slice 0 of @p v as doubles. */
+static void
+get_row(const vv_volume *v, int j, double *row) {
+    const size_t n = (size_t)v->dims[0], base = (size_t)j * n;
+    switch (v->type) {
+    case VV_U8:
+        for (size_t i = 0; i < n; i++)
+            row[i] = ((const uint8_t *)v->data)[base + i];
+        return;
+    case VV_U16:
+        for (size_t i = 0; i < n; i++)
+            row[i] = ((const uint16_t *)v->data)[base + i];
+        return;
+    case VV_I16:
+        for (size_t i = 0; i < n; i++)
+            row[i] = ((const int16_t *)v->data)[base + i];
+        return;
+    case VV_F32:
+        for (size_t i = 0; i < n; i++)
+            row[i] = ((const float *)v->data)[base + i];
+        return;
+    default:
+        for (size_t i = 0; i < n; i++)
+            row[i] = vv_volume_get(v, (int)i, j, 0);
+    }
+}
+
+/* Raw layout: one streaming pass, a slice at a time, for the value range
+ * and every brick's min/max over the voxels it reads. */
+static vv_status
+scan_raw(vv_bricked *b) {
+    const int *d = b->header->dims;
+    const vv_voxel_type t = b->header->type;
+    const size_t vs = vv_voxel_type_size(t);
+    const size_t slice = (size_t)d[0] * (size_t)d[1];
+    void *buf = malloc(slice * vs);
+    double *row = malloc(sizeof(double) * (size_t)d[0]);
+    if (!buf || !row) {
+        free(buf);
+        free(row);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    for (int i = 0; i < b->n; i++) {
+        b->e[i].vmin = INFINITY;
+        b->e[i].vmax = -INFINITY;
+    }
+    double lo = INFINITY, hi = -INFINITY;
+    vv_status s = VV_OK;
+    vv_volume tmp;
+    memset(&tmp, 0, sizeof tmp);
+    tmp.dims[0] = d[0];
+    tmp.dims[1] = d[1];
+    tmp.dims[2] = 1;
+    tmp.type = t;
+    tmp.data = buf;
+    /* per axis, the bricks whose read box holds index x: at most two */
+    int *cand[3];
+    for (int a = 0; a < 3; a++) {
+        cand[a] = malloc(sizeof(int) * 2 * (size_t)d[a]);
+        if (!cand[a]) {
+            for (int q = 0; q < a; q++)
+                free(cand[q]);
+            free(buf);
+            free(row);
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        }
+        for (int x = 0; x < d[a]; x++) {
+            int n = 0;
+            cand[a][2 * x] = cand[a][2 * x + 1] = -1;
+            for (int c = x / VV_BRICK_CELLS - 1; c <= x / VV_BRICK_CELLS && n < 2; c++) {
+                if (c < 0 || c >= b->nb[a])
+                    continue;
+                const int blo = c * VV_BRICK_CELLS, last = d[a] - 1;
+                const int bhi = blo + VV_BRICK_CELLS < last ? blo + VV_BRICK_CELLS : last;
+                const int slo = blo > 0 ? blo - 1 : 0, shi = bhi < last ? bhi + 1 : last;
+                if (x >= slo && x <= shi)
+                    cand[a][2 * x + n++] = c;
+            }
+            /* the last brick of an axis may reach the end from further back */
+            const int c2 = x / VV_BRICK_CELLS + 1;
+            if (n < 2 && c2 < b->nb[a] && x >= c2 * VV_BRICK_CELLS - 1)
+                cand[a][2 * x + n++] = c2;
+        }
+    }
+    double *bmn = malloc(sizeof(double) * (size_t)b->nb[0]);
+    double *bmx = malloc(sizeof(double) * (size_t)b->nb[0]);
+    if (!bmn || !bmx)
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+    for (int k = 0; k < d[2] && s == VV_OK; k++) {
+        s = read_at(b, buf, slice * vs, b->data_off + (uint64_t)k * slice * vs, "scan");
+        if (s != VV_OK)
+            break;
+        if (b->swap && vs > 1)
+            swap_bytes(buf, slice, vs);
+        for (int j = 0; j < d[1]; j++) {
+            get_row(&tmp, j, row);
+            for (int bi = 0; bi < b->nb[0]; bi++) {
+                bmn[bi] = INFINITY;
+                bmx[bi] = -INFINITY;
+            }
+            for (int i = 0; i < d[0]; i++) {
+                const double x = row[i];
+                if (x != x)
+                    continue;
+                for (int q = 0; q < 2; q++) {
+                    const int bi = cand[0][2 * i + q];
+                    if (bi < 0)
+                        break;
+                    bmn[bi] = x < bmn[bi] ? x : bmn[bi];
+                    bmx[bi] = x > bmx[bi] ? x : bmx[bi];
+                }
+            }
+            for (int bi = 0; bi < b->nb[0]; bi++) {
+                lo = bmn[bi] < lo ? bmn[bi] : lo;
+                hi = bmx[bi] > hi ? bmx[bi] : hi;
+                for (int qk = 0; qk < 2; qk++)
+                    for (int qj = 0; qj < 2; qj++) {
+                        const int bk = cand[2][2 * k + qk], bj = cand[1][2 * j + qj];
+                        if (bk < 0 || bj < 0)
+                            continue;
+                        brick_entry *e = &b->e[(bk * b->nb[1] + bj) * b->nb[0] + bi];
+                        e->vmin = bmn[bi] < e->vmin ? bmn[bi] : e->vmin;
+                        e->vmax = bmx[bi] > e->vmax ? bmx[bi] : e->vmax;
+                    }
+            }
+        }
+    }
+    free(bmn);
+    free(bmx);
+    for (int a = 0; a < 3; a++)
+        free(cand[a]);
+    free(buf);
+    free(row);
+    if (s != VV_OK)
+        return s;
+    if (!(lo <= hi))
+        lo = hi = 0;
+    b->header->range[0] = lo;
+    b->header->range[1] = hi;
+    return VV_OK;
+}
+
+static vv_status
+open_data(vv_bricked *b, const char *path) {
+    b->fd = open(path, O_RDONLY);
+    if (b->fd < 0)
+        return vv_error_set(VV_ERR_IO, "%s: %s", vv_path_basename(path), strerror(errno));
+    struct stat st;
+    if (fstat(b->fd, &st) != 0)
+        return vv_error_set(VV_ERR_IO, "%s: %s", vv_path_basename(path), strerror(errno));
+    b->file_size = (uint64_t)st.st_size;
+    return VV_OK;
+}
+
+static vv_status
+open_raw_layout(vv_bricked *b, int scan) {
+    vv_status s = open_data(b, b->data_path);
+    if (s != VV_OK)
+        return s;
+    const uint64_t bytes = (uint64_t)b->header->dims[0] * (uint64_t)b->header->dims[1] *
+                           (uint64_t)b->header->dims[2] * vv_voxel_type_size(b->header->type);
+    if (b->data_off > b->file_size || b->file_size - b->data_off < bytes)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: %llu bytes of voxels from offset %llu run past the end of the "
+                            "file (%llu bytes)",
+                            vv_path_basename(b->data_path), (unsigned long long)bytes,
+                            (unsigned long long)b->data_off, (unsigned long long)b->file_size);
+    if ((s = alloc_bricks(b)) != VV_OK)
+        return s;
+    if (scan)
+        return scan_raw(b);
+    for (int i = 0; i < b->n; i++) {
+        b->e[i].vmin = -INFINITY;
+        b->e[i].vmax = INFINITY;
+    }
+    return VV_OK;
+}
+
+static vv_status
+open_vvb(vv_bricked *b) {
+    vv_status s = open_data(b, b->data_path);
+    if (s != VV_OK)
+        return s;
+    unsigned char h[VVB_HEADER];
+    if (b->file_size < VVB_HEADER)
+        return vv_error_set(VV_ERR_FORMAT, "file of %llu bytes is shorter than the header",
+                            (unsigned long long)b->file_size);
+    if ((s = read_at(b, h, VVB_HEADER, 0, "header")) != VV_OK)
+        return s;
+    if (memcmp(h, VVB_MAGIC, 8) != 0)
+        return vv_error_set(VV_ERR_FORMAT, "not a .vvb file (no \"%s\" magic)", VVB_MAGIC);
+    const uint32_t hsize = get_u32(h + 8), cells = get_u32(h + 12);
+    int dims[3];
+    for (int a = 0; a < 3; a++)
+        dims[a] = (int)get_u32(h + 16 + 4 * a);
+    const uint32_t type = get_u32(h + 28);
+    if (hsize != VVB_HEADER || cells != VV_BRICK_CELLS)
+        return vv_error_set(VV_ERR_FORMAT, "header size %u, brick side %u (expected %d, %d)", hsize,
+                            cells, VVB_HEADER, VV_BRICK_CELLS);
+    if (type > VV_F64)
+        return vv_error_set(VV_ERR_FORMAT, "voxel type %u", type);
+    uint64_t vbytes;
+    if ((s = vv_volume_check_size(dims, (vv_voxel_type)type, &vbytes)) != VV_OK)
+        return s;
+    const int one[3] = {1, 1, 1};
+    if ((s = vv_volume_new(&b->header, one, (vv_voxel_type)type)) != VV_OK)
+        return s;
+    vv_volume *v = b->header;
+    memcpy(v->dims, dims, sizeof dims);
+    b->has_coarse = get_u32(h + 32) != 0;
+    v->unit = (vv_unit)get_u32(h + 36);
+    v->space = (vv_space)get_u32(h + 40);
+    for (int a = 0; a < 3; a++) {
+        v->spacing[a] = get_f64(h + 48 + 8 * a);
+        v->origin[a] = get_f64(h + 72 + 8 * a);
+    }
+    for (int a = 0; a < 9; a++)
+        v->direction[a] = get_f64(h + 96 + 8 * a);
+    v->range[0] = get_f64(h + 168);
+    v->range[1] = get_f64(h + 176);
+    for (int a = 0; a < 3; a++)
+        if (!(v->spacing[a] > 0) || !isfinite(v->spacing[a]) || !isfinite(v->origin[a]))
+            return vv_error_set(VV_ERR_FORMAT, "bad spacing or origin on axis %d", a);
+    if (!(v->range[0] <= v->range[1]))
+        return vv_error_set(VV_ERR_FORMAT, "bad value range %g..%g", v->range[0], v->range[1]);
+    const uint64_t index_off = get_u64(h + 184), count = get_u64(h + 192);
+    if ((s = alloc_bricks(b)) != VV_OK)
+        return s;
+    if (count != (uint64_t)b->n)
+        return vv_error_set(VV_ERR_FORMAT, "index of %llu bricks; %dx%dx%d voxels need %d",
+                            (unsigned long long)count, dims[0], dims[1], dims[2], b->n);
+    const uint64_t ibytes = count * VVB_RECORD;
+    if (index_off < VVB_HEADER || index_off > b->file_size || b->file_size - index_off < ibytes)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "index of %llu bytes at offset %llu runs past the end of the file "
+                            "(%llu bytes)",
+                            (unsigned long long)ibytes, (unsigned long long)index_off,
+                            (unsigned long long)b->file_size);
+    unsigned char *idx = malloc((size_t)ibytes);
+    if (!idx)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    s = read_at(b, idx, (size_t)ibytes, index_off, "index");
+    const size_t vs = vv_voxel_type_size(v->type);
+    for (int i = 0; i < b->n && s == VV_OK; i++) {
+        const unsigned char *r = idx + (size_t)i * VVB_RECORD;
+        brick_entry *e = &b->e[i];
+        e->offset = get_u64(r);
+        e->bytes = get_u64(r + 8);
+        e->vmin = get_f64(r + 16);
+        e->vmax = get_f64(r + 24);
+        e->coarse_offset = get_u64(r + 32);
+        e->coarse_bytes = get_u64(r + 40);
+        vv_brick_info in;
+        brick_boxes(b, i, &in);
+        const uint64_t want = box_voxels(in.slo, in.shi) * vs;
+        int cd[3];
+        coarse_dims(&in, cd);
+        const uint64_t cwant = b->has_coarse ? (uint64_t)cd[0] * cd[1] * cd[2] * vs : 0;
+        if (e->bytes != want)
+            s = vv_error_set(VV_ERR_FORMAT,
+                             "index: brick %d (%d,%d,%d) has %llu bytes; its box %d..%d x "
+                             "%d..%d x %d..%d needs %llu",
+                             i, in.lo[0] / VV_BRICK_CELLS, in.lo[1] / VV_BRICK_CELLS,
+                             in.lo[2] / VV_BRICK_CELLS, (unsigned long long)e->bytes, in.slo[0],
+                             in.shi[0], in.slo[1], in.shi[1], in.slo[2], in.shi[2],
+                             (unsigned long long)want);
+        else if (e->offset < VVB_HEADER || e->offset > b->file_size ||
+                 b->file_size - e->offset < e->bytes)
+            s = vv_error_set(VV_ERR_FORMAT,
+                             "index: brick %d: %llu bytes at offset %llu run past the end of "
+                             "the file (%llu bytes)",
+                             i, (unsigned long long)e->bytes, (unsigned long long)e->offset,
+                             (unsigned long long)b->file_size);
+        else if (e->coarse_bytes != cwant ||
+                 (cwant && (e->coarse_offset > b->file_size ||
+                            b->file_size - e->coarse_offset < e->coarse_bytes)))
+            s = vv_error_set(VV_ERR_FORMAT,
+                             "index: brick %d: coarse level of %llu bytes at offset %llu (expected "
+                             "%llu bytes within the file)",
+                             i, (unsigned long long)e->coarse_bytes,
+                             (unsigned long long)e->coarse_offset, (unsigned long long)cwant);
+        else if (!(e->vmin <= e->vmax))
+            s = vv_error_set(VV_ERR_FORMAT, "index: brick %d: min %g > max %g", i, e->vmin,
+                             e->vmax);
+    }
+    free(idx);
+    return s;
+}
+
+static int
+ends_with(const char *s, const char *suffix) {
+    const size_t n = strlen(s), m = strlen(suffix);
+    return n >= m && strcasecmp(s + n - m, suffix) == 0;
+}
+
+static vv_status
+bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw, uint64_t memory_limit,
+             int scan) {
+    *out = NULL;
+    vv_bricked *b = calloc(1, sizeof *b);
+    if (!b)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    b->fd = -1;
+    b->path = strdup(path);
+    vv_status s = b->path ? VV_OK : vv_error_set(VV_ERR_NOMEM, "out of memory");
+    if (s == VV_OK && raw) {
+        const int one[3] = {1, 1, 1};
+        b->data_path = strdup(path);
+        s = b->data_path ? vv_volume_new(&b->header, one, raw->type)
+                         : vv_error_set(VV_ERR_NOMEM, "out of memory");
+        if (s == VV_OK) {
+            if ((s = vv_volume_check_size(raw->dims, raw->type, NULL)) == VV_OK) {
+                memcpy(b->header->dims, raw->dims, sizeof raw->dims);
+                memcpy(b->header->spacing, raw->spacing, sizeof raw->spacing);
+                memcpy(b->header->origin, raw->origin, sizeof raw->origin);
+                b->data_off = raw->header_skip;
+                b->swap = (raw->big_endian ? 1 : 0) == vv_host_is_little_endian();
+                s = open_raw_layout(b, scan);
+            }
+        }
+    } else if (s == VV_OK && ends_with(path, ".vvb")) {
+        b->vvb = 1;
+        b->data_path = strdup(path);
+        s = b->data_path ? open_vvb(b) : vv_error_set(VV_ERR_NOMEM, "out of memory");
+        b->swap = !vv_host_is_little_endian();
+    } else if (s == VV_OK) {
+        int big = 0;
+        s = vv_nrrd_raw_layout(path, &b->header, &b->data_path, &b->data_off, &big);
+        if (s == VV_OK) {
+            b->swap = big == vv_host_is_little_endian();
+            s = open_raw_layout(b, scan);
+        }
+    }
+    if (s == VV_OK)
+        s = set_budget(b, memory_limit);
+    if (s != VV_OK) {
+        vv_bricked_free(b);
+        return vv_error_prefix(s, "bricks: %s", vv_path_basename(path));
+    }
+    *out = b;
+    return VV_OK;
+}
+
+vv_status
+vv_bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw,
+                uint64_t memory_limit) {
+    return bricked_open(out, path, raw, memory_limit, 1);
+}
+
+vv_status
+vv_bricked_open_header(vv_bricked **out, const char *path, const vv_raw_params *raw,
+                       uint64_t memory_limit) {
+    return bricked_open(out, path, raw, memory_limit, 0);
+}
+
+void
+vv_bricked_set_range(vv_bricked *b, double lo, double hi) {
+    b->header->range[0] = lo;
+    b->header->range[1] = hi;
+}
+
+vv_status
+vv_bricked_read_box(vv_bricked *b, const int lo[3], const int hi[3], vv_volume **out) {
+    *out = NULL;
+    const int *d = b->header->dims;
+    int dims[3];
+    for (int a = 0; a < 3; a++) {
+        if (lo[a] < 0 || hi[a] >= d[a] || lo[a] > hi[a])
+            return vv_error_set(VV_ERR_INVALID, "bricks: box %d..%d outside 0..%d on axis %d",
+                                lo[a], hi[a], d[a] - 1, a);
+        dims[a] = hi[a] - lo[a] + 1;
+    }
+    vv_volume *v = NULL;
+    vv_status s = vv_volume_new(&v, dims, b->header->type);
+    if (s != VV_OK)
+        return s;
+    const size_t vs = vv_voxel_type_size(b->header->type);
+    if (!b->vvb) {
+        vv_brick_info in;
+        memcpy(in.slo, lo, sizeof in.slo);
+        memcpy(in.shi, hi, sizeof in.shi);
+        s = read_box(b, -1, &in, v);
+    } else {
+        /* every brick overlapping the box, read whole, its overlap copied */
+        for (int i = 0; i < b->n && s == VV_OK; i++) {
+            vv_brick_info in;
+            brick_boxes(b, i, &in);
+            int ol[3], oh[3], ok = 1;
+            for (int a = 0; a < 3; a++) {
+                ol[a] = in.slo[a] > lo[a] ? in.slo[a] : lo[a];
+                oh[a] = in.shi[a] < hi[a] ? in.shi[a] : hi[a];
+                ok &= ol[a] <= oh[a];
+            }
+            if (!ok)
+                continue;
+            const int bd[3] = {in.shi[0] - in.slo[0] + 1, in.shi[1] - in.slo[1] + 1,
+                               in.shi[2] - in.slo[2] + 1};
+            char *buf = malloc((size_t)b->e[i].bytes);
+            if (!buf) {
+                s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+                break;
+            }
+            char what[64];
+            snprintf(what, sizeof what, "brick %d", i);
+            s = read_at(b, buf, (size_t)b->e[i].bytes, b->e[i].offset, what);
+            if (s == VV_OK && b->swap && vs > 1)
+                swap_bytes(buf, (size_t)(b->e[i].bytes / vs), vs);
+            const size_t row = (size_t)(oh[0] - ol[0] + 1) * vs;
+            for (int k = ol[2]; s == VV_OK && k <= oh[2]; k++)
+                for (int j = ol[1]; j <= oh[1]; j++)
+                    memcpy(
+                        (char *)v->data +
+                            (((size_t)(k - lo[2]) * dims[1] + (size_t)(j - lo[1])) * dims[0] +
+                             (size_t)(ol[0] - lo[0])) *
+                                vs,
+                        buf + (((size_t)(k - in.slo[2]) * bd[1] + (size_t)(j - in.slo[1])) * bd[0] +
+                               (size_t)(ol[0] - in.slo[0])) *
+                                  vs,
+                        row);
+            free(buf);
+        }
+    }
+    if (s != VV_OK) {
+        vv_volume_free(v);
+        return vv_error_prefix(s, "bricks: %s", vv_path_basename(b->path));
+    }
+    memcpy(v->spacing, b->header->spacing, sizeof v->spacing);
+    memcpy(v->origin, b->header->origin, sizeof v->origin);
+    memcpy(v->direction, b->header->direction, sizeof v->direction);
+    v->range[0] = b->header->range[0];
+    v->range[1] = b->header->range[1];
+    v->unit = b->header->unit;
+    v->space = b->header->space;
+    *out = v;
+    return VV_OK;
+}
+
+/* ---- the coarse whole volume ---------------------------------------------- */
+
+vv_status
+vv_bricked_proxy(vv_bricked *b, int max_side, vv_volume **out) {
+    *out = NULL;
+    const int *d = b->header->dims;
+    int f = 1;
+    while ((d[0] - 1) / f + 1 > max_side || (d[1] - 1) / f + 1 > max_side ||
+           (d[2] - 1) / f + 1 > max_side)
+        f++;
+    /* coarse levels hold every 4th voxel from each brick's corner */
+    if (b->vvb && b->has_coarse && f > 1)
+        f = (f + VVB_COARSE - 1) / VVB_COARSE * VVB_COARSE;
+    int pd[3];
+    for (int a = 0; a < 3; a++)
+        pd[a] = (d[a] - 1) / f + 1;
+    vv_volume *p = NULL;
+    vv_status s = vv_volume_new(&p, pd, b->header->type);
+    if (s != VV_OK)
+        return s;
+    const size_t vs = vv_voxel_type_size(b->header->type);
+    for (int a = 0; a < 3; a++) {
+        p->spacing[a] = pd[a] > 1 ? b->header->spacing[a] * (double)(d[a] - 1) / (pd[a] - 1)
+                                  : b->header->spacing[a];
+        p->origin[a] = b->header->origin[a];
+    }
+    memcpy(p->direction, b->header->direction, sizeof p->direction);
+    p->unit = b->header->unit;
+    p->space = b->header->space;
+    char *dst = p->data;
+    if (b->vvb && b->has_coarse && f > 1) {
+        const int m = f / VVB_COARSE;
+        for (int i = 0; i < b->n && s == VV_OK; i++) {
+            vv_brick_info in;
+            brick_boxes(b, i, &in);
+            int cd[3];
+            coarse_dims(&in, cd);
+            char *cbuf = malloc((size_t)b->e[i].coarse_bytes);
+            if (!cbuf) {
+                s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+                break;
+            }
+            s = read_at(b, cbuf, (size_t)b->e[i].coarse_bytes, b->e[i].coarse_offset, "coarse");
+            if (s == VV_OK && b->swap && vs > 1)
+                swap_bytes(cbuf, (size_t)(b->e[i].coarse_bytes / vs), vs);
+            for (int k = 0; s == VV_OK && k < cd[2]; k += m)
+                for (int j = 0; j < cd[1]; j += m)
+                    for (int ii = 0; ii < cd[0]; ii += m) {
+                        const int g[3] = {(in.lo[0] + VVB_COARSE * ii) / f,
+                                          (in.lo[1] + VVB_COARSE * j) / f,
+                                          (in.lo[2] + VVB_COARSE * k) / f};
+                        if (g[0] >= pd[0] || g[1] >= pd[1] || g[2] >= pd[2])
+                            continue;
+                        memcpy(dst + (((size_t)g[2] * pd[1] + g[1]) * pd[0] + g[0]) * vs,
+                               cbuf + (((size_t)k * cd[1] + j) * cd[0] + ii) * vs, vs);
+                    }
+            free(cbuf);
+        }
+    } else {
+        /* rows of voxels by pread, every f-th */
+        char *row = malloc((size_t)d[0] * vs);
+        if (!row)
+            s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+        for (int k = 0; k < pd[2] && s == VV_OK; k++)
+            for (int j = 0; j < pd[1] && s == VV_OK; j++) {
+                if (b->vvb) {
+                    /* a .vvb without coarse levels: voxel by voxel from the bricks */
+                    for (int i = 0; i < pd[0] && s == VV_OK; i++) {
+                        const int g[3] = {i * f, j * f, k * f};
+                        int c[3];
+                        for (int a = 0; a < 3; a++) {
+                            c[a] = g[a] / VV_BRICK_CELLS;
+                            c[a] = c[a] < b->nb[a] ? c[a] : b->nb[a] - 1;
+                        }
+                        const int idx = (c[2] * b->nb[1] + c[1]) * b->nb[0] + c[0];
+                        vv_brick_info in;
+                        brick_boxes(b, idx, &in);
+                        const uint64_t off =
+                            b->e[idx].offset +
+                            ((((uint64_t)(g[2] - in.slo[2]) * (in.shi[1] - in.slo[1] + 1)) +
+                              (uint64_t)(g[1] - in.slo[1])) *
+                                 (in.shi[0] - in.slo[0] + 1) +
+                             (uint64_t)(g[0] - in.slo[0])) *
+                                vs;
+                        s = read_at(b, dst + (((size_t)k * pd[1] + j) * pd[0] + i) * vs, vs, off,
+                                    "proxy");
+                    }
+                    continue;
+                }
+                const uint64_t off =
+                    b->data_off +
+                    ((uint64_t)k * f * (uint64_t)d[1] + (uint64_t)j * f) * (uint64_t)d[0] * vs;
+                s = read_at(b, row, (size_t)d[0] * vs, off, "proxy");
+                for (int i = 0; i < pd[0] && s == VV_OK; i++)
+                    memcpy(dst + (((size_t)k * pd[1] + j) * pd[0] + i) * vs,
+                           row + (size_t)i * f * vs, vs);
+            }
+        free(row);
+        if (s == VV_OK && b->swap && vs > 1)
+            swap_bytes(p->data, (size_t)pd[0] * pd[1] * pd[2], vs);
+    }
+    if (s != VV_OK) {
+        vv_volume_free(p);
+        return s;
+    }
+    vv_volume_update_range(p);
+    *out = p;
+    return VV_OK;
+}
+
+/* ---- writing .vvb --------------------------------------------------------- */
+
+/* Where a brick's voxels come from while writing. */
+typedef vv_status (*brick_source)(void *ctx, int index, const vv_brick_info *in, void *buf);
+
+static vv_status
+write_vvb(const char *path, const vv_volume *hdr, const int nb[3], int n, int coarse,
+          brick_source src, void *ctx, const vv_progress *progress) {
+    const size_t vs = vv_voxel_type_size(hdr->type);
+    char *tmp = malloc(strlen(path) + 16);
+    if (!tmp)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    sprintf(tmp, "%s.tmp%d", path, (int)getpid());
+    FILE *f = fopen(tmp, "wb");
+    if (!f) {
+        vv_status s = vv_error_set(VV_ERR_IO, "%s: %s", path, strerror(errno));
+        free(tmp);
+        return s;
+    }
+    unsigned char *index = calloc((size_t)n, VVB_RECORD);
+    vv_bricked geo;
+    memset(&geo, 0, sizeof geo);
+    geo.header = (vv_volume *)hdr;
+    memcpy(geo.nb, nb, sizeof geo.nb);
+    vv_status s = index ? VV_OK : vv_error_set(VV_ERR_NOMEM, "out of memory");
+    uint64_t pos = VVB_HEADER + (uint64_t)n * VVB_RECORD;
+    double lo = INFINITY, hi = -INFINITY;
+    void *buf = NULL, *cbuf = NULL;
+    if (s == VV_OK && fseeko(f, (off_t)pos, SEEK_SET) != 0)
+        s = vv_error_set(VV_ERR_IO, "%s: %s", path, strerror(errno));
+    for (int i = 0; i < n && s == VV_OK; i++) {
+        vv_brick_info in;
+        brick_boxes(&geo, i, &in);
+        const uint64_t nv = box_voxels(in.slo, in.shi);
+        free(buf);
+        buf = malloc((size_t)(nv * vs));
+        if (!buf) {
+            s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+            break;
+        }
+        if ((s = src(ctx, i, &in, buf)) != VV_OK)
+            break;
+        vv_volume tmpv;
+        memset(&tmpv, 0, sizeof tmpv);
+        tmpv.type = hdr->type;
+        tmpv.data = buf;
+        tmpv.dims[0] = in.shi[0] - in.slo[0] + 1;
+        tmpv.dims[1] = in.shi[1] - in.slo[1] + 1;
+        tmpv.dims[2] = in.shi[2] - in.slo[2] + 1;
+        double mn = INFINITY, mx = -INFINITY;
+        for (int k = 0; k < tmpv.dims[2]; k++)
+            for (int j = 0; j < tmpv.dims[1]; j++)
+                for (int ii = 0; ii < tmpv.dims[0]; ii++) {
+                    const double x = vv_volume_get(&tmpv, ii, j, k);
+                    if (x == x) {
+                        mn = x < mn ? x : mn;
+                        mx = x > mx ? x : mx;
+                    }
+                }
+        if (!(mn <= mx))
+            mn = mx = 0;
+        lo = mn < lo ? mn : lo;
+        hi = mx > hi ? mx : hi;
+        unsigned char *r = index + (size_t)i * VVB_RECORD;
+        put_u64(r, pos);
+        put_u64(r + 8, nv * vs);
+        put_f64(r + 16, mn);
+        put_f64(r + 24, mx);
+        if (!vv_host_is_little_endian())
+            swap_bytes(buf, (size_t)nv, vs);
+        if (fwrite(buf, vs, (size_t)nv, f) != (size_t)nv) {
+            s = vv_error_set(VV_ERR_IO, "%s: write failed: %s", path, strerror(errno));
+            break;
+        }
+        pos += nv * vs;
+        if (coarse) {
+            int cd[3];
+            coarse_dims(&in, cd);
+            const size_t cn = (size_t)cd[0] * cd[1] * cd[2];
+            free(cbuf);
+            cbuf = malloc(cn * vs);
+            if (!cbuf) {
+                s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+                break;
+            }
+            for (int k = 0; k < cd[2]; k++)
+                for (int j = 0; j < cd[1]; j++)
+                    for (int ii = 0; ii < cd[0]; ii++) {
+                        const size_t sx = (size_t)(in.lo[0] + VVB_COARSE * ii - in.slo[0]);
+                        const size_t sy = (size_t)(in.lo[1] + VVB_COARSE * j - in.slo[1]);
+                        const size_t sz = (size_t)(in.lo[2] + VVB_COARSE * k - in.slo[2]);
+                        memcpy((char *)cbuf + (((size_t)k * cd[1] + j) * cd[0] + ii) * vs,
+                               (char *)buf + ((sz * tmpv.dims[1] + sy) * tmpv.dims[0] + sx) * vs,
+                               vs);
+                    }
+            put_u64(r + 32, pos);
+            put_u64(r + 40, cn * vs);
+            if (fwrite(cbuf, vs, cn, f) != cn) {
+                s = vv_error_set(VV_ERR_IO, "%s: write failed: %s", path, strerror(errno));
+                break;
+            }
+            pos += cn * vs;
+        }
+        if (progress && vv_progress_report(progress, (double)(i + 1) / n))
+            s = vv_error_set(VV_ERR_CANCELLED, "cancelled");
+    }
+    free(buf);
+    free(cbuf);
+    if (s == VV_OK) {
+        unsigned char h[VVB_HEADER];
+        memset(h, 0, sizeof h);
+        memcpy(h, VVB_MAGIC, 8);
+        put_u32(h + 8, VVB_HEADER);
+        put_u32(h + 12, VV_BRICK_CELLS);
+        for (int a = 0; a < 3; a++)
+            put_u32(h + 16 + 4 * a, (uint32_t)hdr->dims[a]);
+        put_u32(h + 28, (uint32_t)hdr->type);
+        put_u32(h + 32, coarse ? 1 : 0);
+        put_u32(h + 36, (uint32_t)hdr->unit);
+        put_u32(h + 40, (uint32_t)hdr->space);
+        for (int a = 0; a < 3; a++) {
+            put_f64(h + 48 + 8 * a, hdr->spacing[a]);
+            put_f64(h + 72 + 8 * a, hdr->origin[a]);
+        }
+        for (int a = 0; a < 9; a++)
+            put_f64(h + 96 + 8 * a, hdr->direction[a]);
+        if (!(lo <= hi))
+            lo = hi = 0;
+        put_f64(h + 168, lo);
+        put_f64(h + 176, hi);
+        put_u64(h + 184, VVB_HEADER);
+        put_u64(h + 192, (uint64_t)n);
+        if (fseeko(f, 0, SEEK_SET) != 0 || fwrite(h, 1, sizeof h, f) != sizeof h ||
+            fwrite(index, VVB_RECORD, (size_t)n, f) != (size_t)n)
+            s = vv_error_set(VV_ERR_IO, "%s: write failed: %s", path, strerror(errno));
+    }
+    free(index);
+    if (fclose(f) != 0 && s == VV_OK)
+        s = vv_error_set(VV_ERR_IO, "%s: write failed: %s", path, strerror(errno));
+    if (s == VV_OK && rename(tmp, path) != 0)
+        s = vv_error_set(VV_ERR_IO, "%s: %s", path, strerror(errno));
+    if (s != VV_OK)
+        remove(tmp);
+    free(tmp);
+    return s;
+}
+
+static vv_status
+source_bricked(void *ctx, int index, const vv_brick_info *in, void *buf) {
+    vv_bricked *b = ctx;
+    vv_volume v;
+    memset(&v, 0, sizeof v);
+    v.data = buf;
+    v.type = b->header->type;
+    return read_box(b, index, in, &v);
+}
+
+vv_status
+vv_bricked_write_vvb(vv_bricked *src, const char *path, int coarse, const vv_progress *progress) {
+    return write_vvb(path, src->header, src->nb, src->n, coarse, source_bricked, src, progress);
+}
+
+static vv_status
+source_memory(void *ctx, int index, const vv_brick_info *in, void *buf) {
+    (void)index;
+    const vv_volume *v = ctx;
+    const size_t vs = vv_voxel_type_size(v->type);
+    const size_t row = (size_t)(in->shi[0] - in->slo[0] + 1) * vs;
+    char *dst = buf;
+    for (int k = in->slo[2]; k <= in->shi[2]; k++)
+        for (int j = in->slo[1]; j <= in->shi[1]; j++) {
+            memcpy(dst,
+                   (const char *)v->data +
+                       (((size_t)k * v->dims[1] + j) * v->dims[0] + in->slo[0]) * vs,
+                   row);
+            dst += row;
+        }
+    return VV_OK;
+}
+
+vv_status
+vv_volume_write_vvb(const vv_volume *v, const char *path, int coarse) {
+    vv_bricked geo;
+    memset(&geo, 0, sizeof geo);
+    geo.header = (vv_volume *)v;
+    vv_status s = alloc_bricks(&geo);
+    if (s != VV_OK)
+        return s;
+    free(geo.e);
+    return write_vvb(path, v, geo.nb, geo.n, coarse, source_memory, (void *)v, NULL);
+}

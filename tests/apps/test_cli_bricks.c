@@ -1,0 +1,106 @@
+/*
+ * The CLI out of core: `volvis convert IN OUT.vvb` (by bricks from an
+ * uncompressed NRRD, whole from other formats), `volvis render OUT.vvb`
+ * and `volvis render --memory-limit` (the same image as in memory with the
+ * same transfer function; the `wrote` line counts the bricks read), and its
+ * errors: a memory limit smaller than one brick, a bad size, a scene file.
+ */
+#include "testutil.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#define outdir() vt_outdir("cli_bricks")
+#define run_cli(...) vt_run_cli_v(outdir(), (const char *const[]){__VA_ARGS__, NULL})
+
+static void
+test_convert_render(void **state) {
+    (void)state;
+    struct stat st;
+    const char *nut = vt_data("volumes/nut.slc");
+    if (stat(nut, &st) != 0)
+        skip();
+    char vvb[1200], nrrd[1200], vvb2[1200], mem[1200], ooc[1200], ooc2[1200];
+    snprintf(vvb, sizeof vvb, "%s/nut.vvb", outdir());
+    snprintf(nrrd, sizeof nrrd, "%s/nut_raw.nrrd", outdir());
+    snprintf(vvb2, sizeof vvb2, "%s/nut2.vvb", outdir());
+    snprintf(mem, sizeof mem, "%s/mem.png", outdir());
+    snprintf(ooc, sizeof ooc, "%s/ooc.png", outdir());
+    snprintf(ooc2, sizeof ooc2, "%s/ooc2.png", outdir());
+    /* SLC: read whole, written by bricks */
+    vt_run_result r = run_cli("convert", nut, vvb);
+    assert_int_equal(r.status, 0);
+    assert_non_null(strstr(r.out, "(vvb, "));
+    vt_run_result_free(&r);
+    /* an uncompressed NRRD: converted brick by brick */
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_load(&v, nut, NULL));
+    vt_ok(vv_nrrd_write(v, nrrd, 0));
+    vv_volume_free(v);
+    r = run_cli("convert", nrrd, vvb2);
+    assert_int_equal(r.status, 0);
+    vt_run_result_free(&r);
+    r = run_cli("render", nut, "--tf", "40:200", "--size", "96x80", "--mode", "mip", "-o", mem);
+    assert_int_equal(r.status, 0);
+    vt_run_result_free(&r);
+    r = run_cli("render", vvb, "--tf", "40:200", "--size", "96x80", "--mode", "mip", "-o", ooc);
+    assert_int_equal(r.status, 0);
+    assert_non_null(strstr(r.out, "out of core: "));
+    vt_run_result_free(&r);
+    r = run_cli("render", nrrd, "--memory-limit", "8M", "--tf", "40:200", "--size", "96x80",
+                "--mode", "mip", "-o", ooc2);
+    assert_int_equal(r.status, 0);
+    vt_run_result_free(&r);
+    /* MIP out of core is the in-memory image, bit for bit */
+    size_t n1, n2, n3;
+    unsigned char *a = vt_read_file(mem, &n1), *b = vt_read_file(ooc, &n2),
+                  *c = vt_read_file(ooc2, &n3);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(a, b, n1);
+    assert_int_equal(n1, n3);
+    assert_memory_equal(a, c, n1);
+    free(a);
+    free(b);
+    free(c);
+}
+
+static void
+test_errors(void **state) {
+    (void)state;
+    struct stat st;
+    const char *nut = vt_data("volumes/nut.slc");
+    if (stat(nut, &st) != 0)
+        skip();
+    char vvb[1200], png[1200];
+    snprintf(vvb, sizeof vvb, "%s/nut_e.vvb", outdir());
+    snprintf(png, sizeof png, "%s/never.png", outdir());
+    vt_run_result r = run_cli("convert", "-q", nut, vvb);
+    assert_int_equal(r.status, 0);
+    vt_run_result_free(&r);
+    remove(png);
+    r = run_cli("render", vvb, "--memory-limit", "64K", "-o", png);
+    assert_int_equal(r.status, 1);
+    assert_non_null(strstr(r.err, "smaller than one brick"));
+    vt_run_result_free(&r);
+    r = run_cli("render", vvb, "--memory-limit", "lots", "-o", png);
+    assert_int_equal(r.status, 2);
+    assert_non_null(strstr(r.err, "--memory-limit"));
+    vt_run_result_free(&r);
+    /* a gzip NRRD cannot be read by bricks */
+    r = run_cli("render", vt_data("volumes/ct_head.nrrd"), "--memory-limit", "8M", "-o", png);
+    assert_int_equal(r.status, 1);
+    assert_non_null(strstr(r.err, "convert it to .vvb first"));
+    vt_run_result_free(&r);
+    assert_int_not_equal(stat(png, &st), 0);
+}
+
+int
+main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_convert_render),
+        cmocka_unit_test(test_errors),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,283 @@
+/*
+ * Out-of-core volumes (src/core/bricks.c, src/render/raycast/raycast_ooc.c):
+ * - the CT head written as .vvb (with coarse levels), raw and raw-encoded
+ *   NRRD, opened as bricked volumes with a 4 MB memory budget and rendered
+ *   brick by brick: composite >= 50 dB against the in-memory render, MIP
+ *   and MinIP bit for bit; each brick read at most once a frame (counted),
+ *   bricks outside the transfer function skipped unread, the cache within
+ *   its budget;
+ * - the proxy (coarse whole volume) spans the same world box;
+ * - a small synthetic volume: .vvb round trip voxel for voxel;
+ * - bad input: a .vvb whose index sends a brick past the end of the file,
+ *   a wrong brick count, a truncated file, a memory limit smaller than one
+ *   brick: clear errors.
+ */
+#include "testutil.h"
+
+#include "core/bricks_internal.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#define outdir() vt_outdir("bricks")
+
+static double
+psnr(const vv_image *a, const vv_image *b, int *identical) {
+    const size_t n = 4 * (size_t)a->width * (size_t)a->height;
+    double se = 0;
+    *identical = memcmp(a->rgba, b->rgba, n * sizeof(float)) == 0;
+    for (size_t i = 0; i < n; i++) {
+        const double e = (double)a->rgba[i] - (double)b->rgba[i];
+        se += e * e;
+    }
+    return se > 0 ? 10 * log10(1.0 / (se / (double)n)) : INFINITY;
+}
+
+static vv_world *
+head_world(vv_volume *v, vv_render_mode mode, double az) {
+    vv_default_scene_options o;
+    vv_default_scene_options_init(&o);
+    o.mode = mode;
+    o.width = 96;
+    o.height = 88;
+    o.azimuth = az;
+    o.elevation = 0.3;
+    o.has_tf_range = 1;
+    o.tf_lo = 100;
+    o.tf_hi = 1500;
+    vv_world *w = NULL;
+    vt_ok(vv_world_new_for_volume(&w, v, &o));
+    return w;
+}
+
+/* Renders the head out of core from @p path and compares with memory. */
+static void
+check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const char *what,
+             int full) {
+    vv_bricked *b = NULL;
+    vt_ok(vv_bricked_open(&b, path, raw, 4 << 20));
+    const vv_volume *h = vv_bricked_header(b);
+    for (int a = 0; a < 3; a++)
+        assert_int_equal(h->dims[a], head->dims[a]);
+    assert_true(h->range[0] == head->range[0] && h->range[1] == head->range[1]);
+    int nb[3];
+    vv_bricked_grid(b, nb);
+    const int nbricks = nb[0] * nb[1] * nb[2];
+    const vv_render_mode modes[3] = {VV_MODE_COMPOSITE, VV_MODE_MIP, VV_MODE_MINIP};
+    int frames = 0;
+    /* full: every mode from two views; else composite and mip from one */
+    for (int m = 0; m < (full ? 3 : 2); m++)
+        for (int view = 0; view < (full ? 2 : 1); view++) {
+            vv_world *w = head_world(head, modes[m], view ? 2.5 : 0.6);
+            vv_renderer *mem = NULL, *ooc = NULL;
+            vt_ok(vv_renderer_new(&mem, "raycast"));
+            vt_ok(vv_renderer_new(&ooc, "raycast"));
+            vv_image *ref = NULL, *img = NULL;
+            vt_ok(vv_image_new(&ref, w->view.width, w->view.height));
+            vt_ok(vv_image_new(&img, w->view.width, w->view.height));
+            vt_ok(vv_renderer_render(mem, w, &w->view, NULL, ref));
+            vv_bricked_stats before;
+            vv_bricked_stats_get(b, &before);
+            vt_ok(vv_bricked_render(b, ooc, w, 0, &w->view, NULL, img));
+            frames++;
+            vv_bricked_stats after;
+            vv_bricked_stats_get(b, &after);
+            int same = 0;
+            const double db = psnr(ref, img, &same);
+            printf("%s %s view %d: %s %.1f dB; read %llu bricks, %llu from the cache, %llu "
+                   "skipped (of %d)\n",
+                   what,
+                   m == 0   ? "composite"
+                   : m == 1 ? "mip"
+                            : "minip",
+                   view, same ? "bit-identical" : "differs", db,
+                   (unsigned long long)(after.loads - before.loads),
+                   (unsigned long long)(after.hits - before.hits),
+                   (unsigned long long)(after.skipped - before.skipped), nbricks);
+            if (m == 0) {
+                assert_true(db >= 50);
+                /* the air around the head is transparent under 100..1500 */
+                assert_true(after.skipped > before.skipped);
+            } else {
+                assert_true(same);
+            }
+            /* every brick at most once a frame */
+            assert_true(after.loads - before.loads + after.hits - before.hits <= (uint64_t)nbricks);
+            vv_image_free(ref);
+            vv_image_free(img);
+            vv_renderer_free(mem);
+            vv_renderer_free(ooc);
+            vv_world_free(w);
+        }
+    vv_bricked_stats st;
+    vv_bricked_stats_get(b, &st);
+    assert_true(st.max_loads <= frames);
+    assert_true(st.evictions > 0); /* 4 MB does not hold the head's 14 MB */
+    assert_true(st.peak_bytes <= (uint64_t)4 << 20);
+    /* the proxy spans the same world box */
+    vv_volume *p = NULL;
+    vt_ok(vv_bricked_proxy(b, 64, &p));
+    for (int a = 0; a < 3; a++) {
+        assert_true(p->dims[a] <= 64);
+        assert_near((p->dims[a] - 1) * p->spacing[a], (head->dims[a] - 1) * head->spacing[a], 1e-9);
+    }
+    vv_volume_free(p);
+    vv_bricked_free(b);
+}
+
+static void
+test_ct_head(void **state) {
+    (void)state;
+    vv_volume *head = NULL;
+    if (vv_volume_load(&head, vt_data("volumes/ct_head.nrrd"), NULL) != VV_OK)
+        skip();
+    const char *dir = outdir();
+    char vvb[1200], raw[1200], nrrd[1200];
+    snprintf(vvb, sizeof vvb, "%s/head.vvb", dir);
+    snprintf(raw, sizeof raw, "%s/head.raw", dir);
+    snprintf(nrrd, sizeof nrrd, "%s/head_raw.nrrd", dir);
+    vt_ok(vv_volume_write_vvb(head, vvb, 1));
+    vt_ok(vv_nrrd_write(head, nrrd, 0));
+    FILE *f = fopen(raw, "wb");
+    assert_non_null(f);
+    const size_t n = (size_t)head->dims[0] * head->dims[1] * head->dims[2];
+    assert_int_equal(fwrite(head->data, 2, n, f), n);
+    fclose(f);
+    check_source(head, vvb, NULL, "vvb", 1);
+    vv_raw_params rp;
+    vv_raw_params_init(&rp);
+    memcpy(rp.dims, head->dims, sizeof rp.dims);
+    memcpy(rp.spacing, head->spacing, sizeof rp.spacing);
+    memcpy(rp.origin, head->origin, sizeof rp.origin);
+    rp.type = head->type;
+    check_source(head, raw, &rp, "raw", 0);
+    check_source(head, nrrd, NULL, "nrrd", 0);
+
+    /* a memory limit smaller than one brick */
+    vv_bricked *b = NULL;
+    assert_int_equal(vv_bricked_open(&b, vvb, NULL, 100000), VV_ERR_LIMIT);
+    assert_null(b);
+    assert_non_null(strstr(vv_error_message(), "smaller than one brick"));
+    /* a gzip NRRD cannot be read by bricks */
+    assert_int_equal(vv_bricked_open(&b, vt_data("volumes/ct_head.nrrd"), NULL, 0), VV_ERR_FORMAT);
+    assert_non_null(strstr(vv_error_message(), "convert it to .vvb first"));
+    vv_volume_free(head);
+}
+
+static vv_volume *
+synthetic(void) {
+    const int dims[3] = {70, 131, 9};
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_new(&v, dims, VV_U8));
+    uint8_t *d = v->data;
+    for (size_t i = 0; i < (size_t)dims[0] * dims[1] * dims[2]; i++)
+        d[i] = (uint8_t)(i * 2654435761u >> 24);
+    vv_volume_update_range(v);
+    return v;
+}
+
+static void
+test_round_trip(void **state) {
+    (void)state;
+    vv_volume *v = synthetic();
+    char path[1200];
+    snprintf(path, sizeof path, "%s/syn.vvb", outdir());
+    vt_ok(vv_volume_write_vvb(v, path, 0));
+    vv_bricked *b = NULL;
+    vt_ok(vv_bricked_open(&b, path, NULL, 0));
+    int nb[3];
+    vv_bricked_grid(b, nb);
+    assert_int_equal(nb[0], 2);
+    assert_int_equal(nb[1], 3);
+    assert_int_equal(nb[2], 1);
+    /* every brick holds the voxels of its box with the ghosts */
+    for (int i = 0; i < nb[0] * nb[1] * nb[2]; i++) {
+        vv_volume *bv = NULL;
+        vt_ok(vv_bricked_load(b, i, &bv));
+        const int bi = i % nb[0], bj = (i / nb[0]) % nb[1];
+        const int x0 = bi ? bi * 64 - 1 : 0, y0 = bj ? bj * 64 - 1 : 0;
+        for (int k = 0; k < bv->dims[2]; k++)
+            for (int j = 0; j < bv->dims[1]; j++)
+                for (int x = 0; x < bv->dims[0]; x++)
+                    assert_true(vv_volume_get(bv, x, j, k) == vv_volume_get(v, x0 + x, y0 + j, k));
+        vv_volume_free(bv);
+    }
+    /* no coarse levels: the proxy reads voxels from the bricks */
+    vv_volume *p = NULL;
+    vt_ok(vv_bricked_proxy(b, 40, &p));
+    assert_int_equal(p->dims[1], 33); /* every 4th of 131 */
+    assert_true(vv_volume_get(p, 5, 7, 2) == vv_volume_get(v, 20, 28, 8));
+    vv_volume_free(p);
+    vv_bricked_free(b);
+    vv_volume_free(v);
+}
+
+/* Patches @p n bytes at @p off of a copy of @p src written to @p dst. */
+static void
+patched(const char *src, const char *dst, long off, const void *bytes, size_t n, long truncate) {
+    size_t len;
+    unsigned char *d = vt_read_file(src, &len);
+    if (off >= 0)
+        memcpy(d + off, bytes, n);
+    vt_write_file(dst, d, truncate >= 0 ? (size_t)truncate : len);
+    free(d);
+}
+
+static void
+test_bad_vvb(void **state) {
+    (void)state;
+    vv_volume *v = synthetic();
+    char good[1200], bad[1200];
+    snprintf(good, sizeof good, "%s/good.vvb", outdir());
+    snprintf(bad, sizeof bad, "%s/bad.vvb", outdir());
+    vt_ok(vv_volume_write_vvb(v, good, 1));
+    vv_bricked *b = NULL;
+    /* brick 3's offset past the end of the file (index at 256, 48 bytes a brick) */
+    const unsigned char far[8] = {0, 0, 0, 0, 0, 1, 0, 0};
+    patched(good, bad, 256 + 3 * 48, far, 8, -1);
+    assert_int_equal(vv_bricked_open(&b, bad, NULL, 0), VV_ERR_FORMAT);
+    assert_null(b);
+    printf("%s\n", vv_error_message());
+    assert_non_null(strstr(vv_error_message(), "brick 3"));
+    assert_non_null(strstr(vv_error_message(), "past the end of the file"));
+    /* a brick size that does not match its box */
+    const unsigned char size[8] = {5, 0, 0, 0, 0, 0, 0, 0};
+    patched(good, bad, 256 + 1 * 48 + 8, size, 8, -1);
+    assert_int_equal(vv_bricked_open(&b, bad, NULL, 0), VV_ERR_FORMAT);
+    assert_non_null(strstr(vv_error_message(), "brick 1"));
+    /* a brick count that does not match the dims */
+    const unsigned char count[8] = {7, 0, 0, 0, 0, 0, 0, 0};
+    patched(good, bad, 192, count, 8, -1);
+    assert_int_equal(vv_bricked_open(&b, bad, NULL, 0), VV_ERR_FORMAT);
+    assert_non_null(strstr(vv_error_message(), "index of 7 bricks"));
+    /* truncated: the last bricks are gone */
+    patched(good, bad, -1, NULL, 0, 2000);
+    assert_int_equal(vv_bricked_open(&b, bad, NULL, 0), VV_ERR_FORMAT);
+    assert_non_null(strstr(vv_error_message(), "past the end of the file"));
+    /* not a .vvb at all */
+    patched(good, bad, 0, "NOTAVVB!", 8, -1);
+    assert_int_equal(vv_bricked_open(&b, bad, NULL, 0), VV_ERR_FORMAT);
+    assert_non_null(strstr(vv_error_message(), "magic"));
+    /* a raw file shorter than its dims */
+    vv_raw_params rp;
+    vv_raw_params_init(&rp);
+    rp.dims[0] = rp.dims[1] = rp.dims[2] = 100;
+    rp.type = VV_U8;
+    assert_int_equal(vv_bricked_open(&b, good, &rp, 0), VV_ERR_FORMAT);
+    assert_non_null(strstr(vv_error_message(), "past the end of the file"));
+    vv_volume_free(v);
+}
+
+int
+main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_ct_head),
+        cmocka_unit_test(test_round_trip),
+        cmocka_unit_test(test_bad_vvb),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
