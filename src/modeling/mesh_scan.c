@@ -967,10 +967,15 @@ vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness,
         free(pos);
     }
     if (st == VV_OK) {
+        /* the decision of every 12-bit word, looked up (4 KB) */
+        unsigned char inside[4096];
+        for (unsigned v = 0; v < 4096; v++)
+            inside[v] = (unsigned char)(votes ? votes_inside((uint16_t)v)
+                                              : winding_median((uint16_t)v) != 0);
         long long nn = (long long)nvox;
 #pragma omp parallel for schedule(dynamic, 32768) num_threads(threads)
         for (long long i = 0; i < nn; i++)
-            if (votes ? votes_inside(wn[i]) : winding_median(wn[i]) != 0)
+            if (inside[wn[i] & 4095])
                 sd[i] = -sd[i];
     }
     /* near the holes, the caps' solid angles move |w| across 1/2 */
