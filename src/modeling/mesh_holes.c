@@ -36,30 +36,40 @@ edge_cmp(const void *a, const void *b) {
     return (x->tri > y->tri) - (x->tri < y->tri);
 }
 
-static int
-pos_cmp_r(const float *P, uint32_t a, uint32_t b) {
-    int c = memcmp(P + 3 * (size_t)a, P + 3 * (size_t)b, 3 * sizeof *P);
-    if (c)
-        return c;
-    return (a > b) - (a < b);
+/* Hash of a vertex position's bits (FNV-1a over its 12 bytes, then mixed). */
+static inline uint64_t
+pos_hash(const float *p) {
+    uint32_t w[3];
+    memcpy(w, p, sizeof w);
+    uint64_t h = 1469598103934665603ull;
+    for (int k = 0; k < 3; k++)
+        h = (h ^ w[k]) * 1099511628211ull;
+    return h ^ (h >> 29);
 }
 
-/* Sorts ids[0..n) by position bits, then index (a merge sort: no global
- * qsort context, so the function is reentrant). */
+/* weld[v] = the first vertex at v's exact position (bits: -0 and 0 differ,
+ * NaNs weld only to the same NaN), through an open-addressing table of
+ * @p cap slots (a power of two above 2 nv). */
 static void
-sort_by_position(const float *P, uint32_t *ids, uint32_t *tmp, size_t n) {
-    for (size_t w = 1; w < n; w *= 2) {
-        for (size_t lo = 0; lo < n; lo += 2 * w) {
-            size_t mid = lo + w < n ? lo + w : n, hi = lo + 2 * w < n ? lo + 2 * w : n;
-            size_t i = lo, j = mid, k = lo;
-            while (i < mid && j < hi)
-                tmp[k++] = pos_cmp_r(P, ids[i], ids[j]) <= 0 ? ids[i++] : ids[j++];
-            while (i < mid)
-                tmp[k++] = ids[i++];
-            while (j < hi)
-                tmp[k++] = ids[j++];
+weld_by_position(const float *P, size_t nv, uint32_t *table, size_t cap, uint32_t *weld) {
+    for (size_t i = 0; i < cap; i++)
+        table[i] = UINT32_MAX;
+    for (size_t v = 0; v < nv; v++) {
+        const float *p = P + 3 * v;
+        size_t h = (size_t)pos_hash(p) & (cap - 1);
+        for (;;) {
+            uint32_t u = table[h];
+            if (u == UINT32_MAX) {
+                table[h] = (uint32_t)v;
+                weld[v] = (uint32_t)v;
+                break;
+            }
+            if (memcmp(P + 3 * (size_t)u, p, 3 * sizeof *p) == 0) {
+                weld[v] = u;
+                break;
+            }
+            h = (h + 1) & (cap - 1);
         }
-        memcpy(ids, tmp, n * sizeof *ids);
     }
 }
 
@@ -113,31 +123,24 @@ vv_mesh_holes_find(const vv_mesh *m, vv_mesh_holes *out) {
     const float *P = m->positions;
     vv_status st = VV_OK;
     /* scratch, freed at the end */
-    uint32_t *weld = NULL, *ids = NULL, *tmp = NULL, *deg = NULL, *adj = NULL, *queue = NULL,
-             *comp = NULL, *fill = NULL, *out_start = NULL, *order = NULL, *cur = NULL;
+    uint32_t *weld = NULL, *ids = NULL, *deg = NULL, *adj = NULL, *queue = NULL, *comp = NULL,
+             *fill = NULL, *out_start = NULL, *order = NULL, *cur = NULL;
     size_t *start = NULL;
     edge_rec *E = NULL, *S = NULL;
     unsigned char *flip = NULL, *used = NULL;
     uint32_t(*be)[2] = NULL;
 #define ALLOC(p, n) ((p) = malloc(((n) > 0 ? (n) : 1) * sizeof *(p)))
 #define CALLOC(p, n) ((p) = calloc((n) > 0 ? (n) : 1, sizeof *(p)))
-    if (!ALLOC(weld, nv) || !ALLOC(ids, nv) || !ALLOC(tmp, nv) || !ALLOC(E, 3 * nt) ||
-        !ALLOC(out->tri, 3 * nt) || !CALLOC(flip, nt) || !CALLOC(start, nv + 1) ||
-        !ALLOC(S, 3 * nt) || !CALLOC(deg, nt + 1) || !ALLOC(queue, nt) || !ALLOC(comp, nt) ||
-        !CALLOC(fill, nt))
+    size_t cap = 16;
+    while (cap < 2 * nv)
+        cap *= 2;
+    if (!ALLOC(weld, nv) || !ALLOC(ids, cap) || !ALLOC(E, 3 * nt) || !ALLOC(out->tri, 3 * nt) ||
+        !CALLOC(flip, nt) || !CALLOC(start, nv + 1) || !ALLOC(S, 3 * nt))
         goto nomem;
     out->n_tri = nt;
     memcpy(out->tri, m->triangles, 3 * nt * sizeof *out->tri);
     /* weld: every vertex maps to the first vertex at its exact position */
-    for (size_t i = 0; i < nv; i++)
-        ids[i] = (uint32_t)i;
-    sort_by_position(P, ids, tmp, nv);
-    for (size_t i = 0; i < nv;) {
-        size_t j = i;
-        while (j < nv && memcmp(P + 3 * (size_t)ids[i], P + 3 * (size_t)ids[j], 3 * sizeof *P) == 0)
-            weld[ids[j++]] = ids[i];
-        i = j;
-    }
+    weld_by_position(P, nv, ids, cap, weld);
     /* the edges of the non-degenerate triangles */
     size_t ne = 0;
     for (size_t t = 0; t < nt; t++) {
@@ -175,60 +178,72 @@ vv_mesh_holes_find(const vv_mesh *m, vv_mesh_holes *out) {
             }
             S[j] = key;
         }
-    /* manifold adjacency (edges of exactly two triangles) as CSR; entries
-     * neighbour << 1 | (both traverse the edge the same way) */
+    /* a mesh whose two-triangle edges are all traversed both ways is
+     * consistently oriented already (marching cubes output, clean models):
+     * nothing to turn */
+    size_t misoriented = 0;
     for (size_t i = 0, j; i < ne; i = j) {
         j = group_end(S, ne, i);
-        if (j - i == 2 && S[i].tri != S[i + 1].tri) {
-            deg[S[i].tri + 1]++;
-            deg[S[i + 1].tri + 1]++;
-        }
+        misoriented += j - i == 2 && S[i].tri != S[i + 1].tri && S[i].fwd == S[i + 1].fwd;
     }
-    for (size_t t = 0; t < nt; t++)
-        deg[t + 1] += deg[t];
-    if (!ALLOC(adj, deg[nt]))
-        goto nomem;
-    for (size_t i = 0, j; i < ne; i = j) {
-        j = group_end(S, ne, i);
-        if (j - i == 2 && S[i].tri != S[i + 1].tri) {
-            uint32_t t0 = S[i].tri, t1 = S[i + 1].tri, same = S[i].fwd == S[i + 1].fwd;
-            adj[deg[t0] + fill[t0]++] = t1 << 1 | same;
-            adj[deg[t1] + fill[t1]++] = t0 << 1 | same;
-        }
-    }
-    /* orient each component by breadth-first search; the majority keeps its
-     * orientation */
-    for (size_t t = 0; t < nt; t++)
-        comp[t] = UINT32_MAX;
-    for (size_t s = 0; s < nt; s++) {
-        if (comp[s] != UINT32_MAX)
-            continue;
-        size_t head = 0, tail = 0, flipped = 0;
-        queue[tail++] = (uint32_t)s;
-        comp[s] = (uint32_t)s;
-        while (head < tail) {
-            uint32_t t = queue[head++];
-            flipped += flip[t];
-            for (uint32_t k = deg[t]; k < deg[t + 1]; k++) {
-                uint32_t u = adj[k] >> 1, same = adj[k] & 1;
-                if (comp[u] != UINT32_MAX)
-                    continue; /* a non-orientable loop keeps the first choice */
-                comp[u] = (uint32_t)s;
-                flip[u] = (unsigned char)(flip[t] ^ same);
-                queue[tail++] = u;
+    if (misoriented > 0) {
+        if (!CALLOC(deg, nt + 1) || !ALLOC(queue, nt) || !ALLOC(comp, nt) || !CALLOC(fill, nt))
+            goto nomem;
+        /* manifold adjacency (edges of exactly two triangles) as CSR; entries
+         * neighbour << 1 | (both traverse the edge the same way) */
+        for (size_t i = 0, j; i < ne; i = j) {
+            j = group_end(S, ne, i);
+            if (j - i == 2 && S[i].tri != S[i + 1].tri) {
+                deg[S[i].tri + 1]++;
+                deg[S[i + 1].tri + 1]++;
             }
         }
-        if (2 * flipped > tail)
-            for (size_t q = 0; q < tail; q++)
-                flip[queue[q]] ^= 1;
-    }
-    for (size_t t = 0; t < nt; t++) {
-        if (!flip[t])
-            continue;
-        out->n_flipped++;
-        uint32_t x = out->tri[3 * t + 1];
-        out->tri[3 * t + 1] = out->tri[3 * t + 2];
-        out->tri[3 * t + 2] = x;
+        for (size_t t = 0; t < nt; t++)
+            deg[t + 1] += deg[t];
+        if (!ALLOC(adj, deg[nt]))
+            goto nomem;
+        for (size_t i = 0, j; i < ne; i = j) {
+            j = group_end(S, ne, i);
+            if (j - i == 2 && S[i].tri != S[i + 1].tri) {
+                uint32_t t0 = S[i].tri, t1 = S[i + 1].tri, same = S[i].fwd == S[i + 1].fwd;
+                adj[deg[t0] + fill[t0]++] = t1 << 1 | same;
+                adj[deg[t1] + fill[t1]++] = t0 << 1 | same;
+            }
+        }
+        /* orient each component by breadth-first search; the majority keeps its
+         * orientation */
+        for (size_t t = 0; t < nt; t++)
+            comp[t] = UINT32_MAX;
+        for (size_t s = 0; s < nt; s++) {
+            if (comp[s] != UINT32_MAX)
+                continue;
+            size_t head = 0, tail = 0, flipped = 0;
+            queue[tail++] = (uint32_t)s;
+            comp[s] = (uint32_t)s;
+            while (head < tail) {
+                uint32_t t = queue[head++];
+                flipped += flip[t];
+                for (uint32_t k = deg[t]; k < deg[t + 1]; k++) {
+                    uint32_t u = adj[k] >> 1, same = adj[k] & 1;
+                    if (comp[u] != UINT32_MAX)
+                        continue; /* a non-orientable loop keeps the first choice */
+                    comp[u] = (uint32_t)s;
+                    flip[u] = (unsigned char)(flip[t] ^ same);
+                    queue[tail++] = u;
+                }
+            }
+            if (2 * flipped > tail)
+                for (size_t q = 0; q < tail; q++)
+                    flip[queue[q]] ^= 1;
+        }
+        for (size_t t = 0; t < nt; t++) {
+            if (!flip[t])
+                continue;
+            out->n_flipped++;
+            uint32_t x = out->tri[3 * t + 1];
+            out->tri[3 * t + 1] = out->tri[3 * t + 2];
+            out->tri[3 * t + 2] = x;
+        }
     }
     /* the boundary 1-chain, as directed edges (from, to) */
     size_t nb = 0;
@@ -307,7 +322,6 @@ done:
 #undef CALLOC
     free(weld);
     free(ids);
-    free(tmp);
     free(deg);
     free(adj);
     free(queue);
