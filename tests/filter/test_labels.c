@@ -86,41 +86,46 @@ test_measure_labels(void **state) {
         fail_msg("expected \"%s\" in:\n%s", line, r.out);
     vt_run_result_free(&r);
 
-    /* the ray caster: both label colours, and no third one where they touch */
-    const char *png = vt_path(outdir(), "labels.png");
-    r = run_cli("render", path, "-o", png, "--labels", "--size", "160x160", "--renderer", "raycast",
-                "-q");
-    if (r.status != 0)
-        fail_msg("render: %s", r.err);
-    vt_run_result_free(&r);
-    vv_image *im;
-    vt_ok(vv_image_read_png(&im, png));
-    vv_vec3 c1 = vv_label_color(1), c2 = vv_label_color(2);
-    int lit = 0, near1 = 0, near2 = 0;
-    for (int p = 0; p < im->width * im->height; p++) {
-        const float *px = im->rgba + 4 * p;
-        double sum = px[0] + px[1] + px[2];
-        if (sum < 0.15)
-            continue;
-        lit++;
-        /* chromaticity against each label's */
-        double d1 = 0, d2 = 0, s1 = c1.x + c1.y + c1.z, s2 = c2.x + c2.y + c2.z;
-        double pc[3] = {px[0] / sum, px[1] / sum, px[2] / sum};
-        double l1c[3] = {c1.x / s1, c1.y / s1, c1.z / s1},
-               l2c[3] = {c2.x / s2, c2.y / s2, c2.z / s2};
-        for (int a = 0; a < 3; a++) {
-            d1 += (pc[a] - l1c[a]) * (pc[a] - l1c[a]);
-            d2 += (pc[a] - l2c[a]) * (pc[a] - l2c[a]);
+    /* the ray caster, the ray tracer and splatting: both label colours, and
+     * no third one where they touch */
+    const char *const renderers[] = {"raycast", "raytrace", "splat"};
+    for (int ri = 0; ri < 3; ri++) {
+        const char *png = vt_path(outdir(), "labels.png");
+        r = run_cli("render", path, "-o", png, "--labels", "--size", "160x160", "--renderer",
+                    renderers[ri], "-q");
+        if (r.status != 0)
+            fail_msg("render (%s): %s", renderers[ri], r.err);
+        vt_run_result_free(&r);
+        vv_image *im;
+        vt_ok(vv_image_read_png(&im, png));
+        vv_vec3 c1 = vv_label_color(1), c2 = vv_label_color(2);
+        int lit = 0, near1 = 0, near2 = 0;
+        for (int p = 0; p < im->width * im->height; p++) {
+            const float *px = im->rgba + 4 * p;
+            double sum = px[0] + px[1] + px[2];
+            if (sum < 0.15)
+                continue;
+            lit++;
+            /* chromaticity against each label's */
+            double d1 = 0, d2 = 0, s1 = c1.x + c1.y + c1.z, s2 = c2.x + c2.y + c2.z;
+            double pc[3] = {px[0] / sum, px[1] / sum, px[2] / sum};
+            double l1c[3] = {c1.x / s1, c1.y / s1, c1.z / s1},
+                   l2c[3] = {c2.x / s2, c2.y / s2, c2.z / s2};
+            for (int k = 0; k < 3; k++) {
+                d1 += (pc[k] - l1c[k]) * (pc[k] - l1c[k]);
+                d2 += (pc[k] - l2c[k]) * (pc[k] - l2c[k]);
+            }
+            near1 += d1 < 0.01;
+            near2 += d2 < 0.01;
         }
-        near1 += d1 < 0.01;
-        near2 += d2 < 0.01;
+        print_message("labels render (%s): %d lit pixels, %d of label 1's colour, %d of label "
+                      "2's\n",
+                      renderers[ri], lit, near1, near2);
+        assert_true(lit > 1000);
+        assert_true(near1 > lit / 5 && near2 > lit / 5);
+        assert_true(near1 + near2 > lit * 9 / 10);
+        vv_image_free(im);
     }
-    print_message("labels render: %d lit pixels, %d of label 1's colour, %d of label 2's\n", lit,
-                  near1, near2);
-    assert_true(lit > 1000);
-    assert_true(near1 > lit / 5 && near2 > lit / 5);
-    assert_true(near1 + near2 > lit * 9 / 10);
-    vv_image_free(im);
     vv_volume_free(l2);
     vv_volume_free(m1);
     vv_volume_free(m2);

@@ -130,6 +130,8 @@ typedef struct sp_obj {
     int n_planes;
     vv_vshading sh;
     int shading;
+    int labels;  /* a label volume in composite: colour by label (vv_label_color) */
+    int pre_cls; /* pre-classified: the option, or always for a label volume */
     vv_vtables tab;
     int owns_tables;
     /* eye space: X, Y (image right, down) and depth z of an index point are
@@ -560,13 +562,13 @@ get_list(sp_state *st, sp_obj *ob, int oct, int *built) {
     const vv_vcache *c = ob->c;
     const int comp = ob->mode == VV_MODE_COMPOSITE;
     const int skip = st->skipping && comp;
-    const int pre = skip && st->pre;
+    const int pre = skip && ob->pre_cls;
     /* the kernel's reach in voxels (the footprint's truncation is a
      * cylinder: up to sqrt 2 radius from the centre) */
     const int reach = (int)ceil(1.4142136 * st->radius);
     uint64_t h = 1469598103934665603ULL;
     h = hash_bytes(h, &skip, sizeof skip);
-    h = hash_bytes(h, &st->pre, sizeof st->pre);
+    h = hash_bytes(h, &ob->pre_cls, sizeof ob->pre_cls);
     h = hash_bytes(h, &reach, sizeof reach);
     if (skip)
         for (int i = 0; i < VV_VC_LUT; i++) {
@@ -782,13 +784,34 @@ object_fp(const sp_frame *fr, const sp_obj *ob, double z, sp_fp *fp) {
     fp_setup(ob->cxx, ob->cxy, ob->cyy, pix_scale(fr, z), fr->st->ewa_var, fr->rho2, fp);
 }
 
+/* A label volume's table entry @p e for value @p v: its opacity, the colour
+ * of the label v rounds to (premultiplied, into @p buf). A voxel holds its
+ * label exactly (pre-classification); a reconstructed value between two
+ * labels takes the nearer (post-classification). */
+static inline const float *
+label_entry(const float *e, float v, float buf[4]) {
+    if (!(e[0] > 0))
+        return e;
+    const double r = floor((double)v + 0.5);
+    const vv_vec3 col = vv_label_color(r >= 1 && r < 4294967296.0 ? (uint32_t)r : 0);
+    buf[0] = e[0];
+    buf[1] = e[0] * (float)col.x;
+    buf[2] = e[0] * (float)col.y;
+    buf[3] = e[0] * (float)col.z;
+    return buf;
+}
+
 /* Pre-classification of one voxel: opacity for the sheet spacing and shaded
  * colour times opacity. */
 static void
 preclassify(const sp_frame *fr, const sp_obj *ob, int i, int j, int k, float out[4]) {
     const vv_vcache *c = ob->c;
     const size_t idx = (size_t)k * c->sz + (size_t)j * c->sy + (size_t)i;
-    const float *e = ob->tab.lut + 4 * (int)vv_vtables_index(&ob->tab, vv_vcache_value(c, idx));
+    const float val = vv_vcache_value(c, idx);
+    const float *e = ob->tab.lut + 4 * (int)vv_vtables_index(&ob->tab, val);
+    float lab[4];
+    if (ob->labels)
+        e = label_entry(e, val, lab);
     out[0] = e[0];
     if (!ob->shading || e[0] <= 0) {
         out[1] = e[1];
@@ -897,9 +920,9 @@ object_buckets(sp_frame *fr, sp_obj *ob) {
     ob->sorted = malloc((m ? m : 1) * sizeof *ob->sorted);
     int *fill = malloc(((size_t)ns + 1) * sizeof *fill);
     int16_t(*brange)[2] = malloc((m ? m : 1) * sizeof *brange);
-    if (fr->st->pre && ob->is_comp)
+    if (ob->pre_cls && ob->is_comp)
         ob->pre = malloc((m ? m : 1) * sizeof *ob->pre);
-    if (!ob->sorted || !fill || !brange || (fr->st->pre && ob->is_comp && !ob->pre)) {
+    if (!ob->sorted || !fill || !brange || (ob->pre_cls && ob->is_comp && !ob->pre)) {
         free(k0s);
         free(fill);
         free(brange);
@@ -1235,8 +1258,8 @@ band_splat_sheet(sp_frame *fr, sp_band *bd, const sp_obj *ob, int band, int k, i
         object_fp(fr, ob, 1, &fp);
         s = pix_scale(fr, 1);
     }
-    const int shaded = ob->shading && ob->is_comp && !fr->st->pre;
-    const int nv = ob->is_comp ? (fr->st->pre ? 4 : shaded ? 4 : 1) : 1;
+    const int shaded = ob->shading && ob->is_comp && !ob->pre_cls;
+    const int nv = ob->is_comp ? (ob->pre_cls ? 4 : shaded ? 4 : 1) : 1;
     const double wbase = whole ? ob->vol_det : ob->vol_det / fr->dts;
     const int s_end = s1 < ob->nsheets - 1 ? s1 : ob->nsheets - 1;
     const double dlo = ob->z_lo, dhi = ob->z_lo + (SP_Z_LUT - 1) / ob->z_scale;
@@ -1334,7 +1357,7 @@ band_composite_sheet(sp_frame *fr, sp_band *bd, const sp_obj *ob, int o, int k, 
     const int n = bd->n;
     const int *k0 = bd->k0 + (size_t)o * (size_t)n, *k1 = bd->k1 + (size_t)o * (size_t)n;
     const float et = fr->et;
-    const int pre = fr->st->pre;
+    const int pre = ob->pre_cls;
     const double zk = k * fr->dts;
     for (int y = rect[2]; y <= rect[3]; y++) {
         const int yl = y - bd->y0;
@@ -1371,6 +1394,8 @@ band_composite_sheet(sp_frame *fr, sp_band *bd, const sp_obj *ob, int o, int k, 
                 if (w < SP_WMIN)
                     continue;
                 e = ob->tab.lut + 4 * (int)vv_vtables_index(&ob->tab, sv[1] / w);
+                if (ob->labels)
+                    e = label_entry(e, sv[1] / w, e4);
             }
             float alpha = e[0];
             if (alpha <= 0)
@@ -1673,6 +1698,10 @@ prepare_object(sp_frame *fr, sp_obj *ob, const vv_object *obj, const vv_world *w
         return vv_error_set(VV_ERR_LIMIT, "object '%s': more than 2^21 voxels along an axis",
                             obj->name);
     ob->is_comp = obj->mode == VV_MODE_COMPOSITE;
+    ob->labels = ob->is_comp && obj->segmentation == VV_SEG_LABELS;
+    /* a label volume is classified per voxel: a value reconstructed
+     * between a label and the background (0) is no label */
+    ob->pre_cls = fr->st->pre || ob->labels;
     vv_status s = vv_vcache_get(&st->vc, obj->volume, &ob->c);
     if (s != VV_OK)
         return vv_error_prefix(s, "object '%s'", obj->name);
