@@ -86,10 +86,10 @@ test_measure_labels(void **state) {
         fail_msg("expected \"%s\" in:\n%s", line, r.out);
     vt_run_result_free(&r);
 
-    /* the ray caster, the ray tracer and splatting: both label colours, and
-     * no third one where they touch */
-    const char *const renderers[] = {"raycast", "raytrace", "splat"};
-    for (int ri = 0; ri < 3; ri++) {
+    /* the ray caster, the ray tracer, splatting and the surface renderer:
+     * both label colours, and no third one where they touch */
+    const char *const renderers[] = {"raycast", "raytrace", "splat", "surface"};
+    for (int ri = 0; ri < 4; ri++) {
         const char *png = vt_path(outdir(), "labels.png");
         r = run_cli("render", path, "-o", png, "--labels", "--size", "160x160", "--renderer",
                     renderers[ri], "-q");

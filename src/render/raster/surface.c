@@ -19,6 +19,7 @@
 #include <string.h>
 
 #include "render/registry.h"
+#include "render/volume_cache.h"
 #include "volvis/raster.h"
 #include "volvis/render.h"
 #include "volvis/surface.h"
@@ -578,6 +579,104 @@ grid_surface(const vv_object *obj, vv_mesh **out, int *banded, vv_vec3 *color) {
     return vv_grid_isosurface(g, f, g->fields[f].n_components > 1 ? obj->component : -1, iso, out);
 }
 
+/* Meshes drawn for a frame and kept until vv_raster_finish (it reads them). */
+typedef struct sf_keep {
+    vv_mesh **m;
+    int n, cap;
+} sf_keep;
+
+static vv_status
+keep_push(sf_keep *k, vv_mesh *m) {
+    if (k->n == k->cap) {
+        int cap = k->cap ? 2 * k->cap : 16;
+        vv_mesh **nm = realloc(k->m, (size_t)cap * sizeof *nm);
+        if (!nm) {
+            vv_mesh_free(m);
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        }
+        k->m = nm;
+        k->cap = cap;
+    }
+    k->m[k->n++] = m;
+    return VV_OK;
+}
+
+typedef struct tri_label {
+    uint32_t label, tri;
+} tri_label;
+
+static int
+cmp_tri_label(const void *a, const void *b) {
+    const tri_label *x = a, *y = b;
+    if (x->label != y->label)
+        return x->label < y->label ? -1 : 1;
+    return (x->tri > y->tri) - (x->tri < y->tri);
+}
+
+/* Draws the boundary surface @p mesh of label volume @p vol (world
+ * coordinates of the volume) with each triangle in the colour of its label
+ * (vv_label_color): the label of the labelled voxel nearest the triangle's
+ * centroid (of its cell's eight corners, the non-zero one of largest
+ * trilinear weight, as the ray caster colours). One draw per label present,
+ * the meshes appended to @p keep. */
+static vv_status
+draw_labels(vv_raster *ras, const vv_mesh *mesh, vv_mat4 model, const vv_object *obj,
+            vv_material mat, sf_keep *keep) {
+    const vv_volume *vol = obj->volume;
+    const vv_mat4 w2i = vv_volume_world_to_index(vol);
+    size_t nt = mesh->n_triangles;
+    tri_label *tl = malloc((nt ? nt : 1) * sizeof *tl);
+    if (!tl)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    for (size_t t = 0; t < nt; t++) {
+        vv_vec3 c = vv_vec3_make(0, 0, 0);
+        for (int k = 0; k < 3; k++)
+            c = vv_vec3_add(c, vv_mesh_vertex(mesh, mesh->triangles[3 * t + (size_t)k]));
+        vv_vec3 q = vv_mat4_mul_point(w2i, vv_vec3_scale(c, 1.0 / 3.0));
+        const float p[3] = {(float)q.x, (float)q.y, (float)q.z};
+        tl[t] = (tri_label){vv_vextra_label(vol, p), (uint32_t)t};
+    }
+    qsort(tl, nt, sizeof *tl, cmp_tri_label);
+    vv_status s = VV_OK;
+    for (size_t i = 0; i < nt && s == VV_OK;) {
+        size_t j = i;
+        while (j < nt && tl[j].label == tl[i].label)
+            j++;
+        vv_mesh *sub = NULL;
+        if ((s = vv_mesh_new(&sub)) != VV_OK)
+            break;
+        s = vv_mesh_reserve(sub, 3 * (j - i), j - i);
+        if (s == VV_OK)
+            s = vv_mesh_enable_attributes(sub, mesh->normals != NULL, 0);
+        for (size_t u = i; u < j && s == VV_OK; u++) {
+            uint32_t idx[3];
+            for (int k = 0; k < 3 && s == VV_OK; k++) {
+                const uint32_t v = mesh->triangles[3 * (size_t)tl[u].tri + (size_t)k];
+                s = vv_mesh_add_vertex(sub, vv_mesh_vertex(mesh, v), &idx[k]);
+                if (s == VV_OK && mesh->normals)
+                    memcpy(sub->normals + 3 * (size_t)idx[k], mesh->normals + 3 * (size_t)v,
+                           3 * sizeof(float));
+            }
+            if (s == VV_OK)
+                s = vv_mesh_add_triangle(sub, idx[0], idx[1], idx[2]);
+        }
+        if (s != VV_OK) {
+            vv_mesh_free(sub);
+            break;
+        }
+        if (tl[i].label != 0)
+            mat.color = vv_label_color(tl[i].label);
+        vv_raster_set_material(ras, &mat, obj->shading);
+        s = vv_raster_draw_mesh(ras, sub, model);
+        vv_status ks = keep_push(keep, sub);
+        if (s == VV_OK)
+            s = ks;
+        i = j;
+    }
+    free(tl);
+    return s;
+}
+
 /* Draws @p mesh in SF_BANDS colour bands of its scalars, each in the
  * object's transfer-function colour at the band's middle. The band meshes
  * are appended to @p keep (at most SF_BANDS): the raster reads them until
@@ -707,6 +806,7 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         n_grids += w->objects[i]->visible && w->objects[i]->type == VV_OBJECT_GRID;
     /* colour bands of grid surfaces, kept until the raster is finished */
     vv_mesh **bands = calloc((size_t)(n_grids ? n_grids : 1) * SF_BANDS, sizeof *bands);
+    sf_keep labels = {NULL, 0, 0}; /* per-label meshes of label volumes */
     if (!temp || !bands)
         s = vv_error_set(VV_ERR_NOMEM, "out of memory");
     for (int i = 0; i < w->n_objects && s == VV_OK; i++) {
@@ -810,8 +910,12 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         s = vv_raster_set_capping(ras, st->caps && solid && !st->wireframe, bounds, n_bounds);
         if (s != VV_OK)
             break;
-        vv_raster_set_material(ras, &mat, obj->shading);
-        s = vv_raster_draw_mesh(ras, mesh, model);
+        if (obj->type == VV_OBJECT_VOLUME && obj->segmentation == VV_SEG_LABELS) {
+            s = draw_labels(ras, mesh, model, obj, mat, &labels);
+        } else {
+            vv_raster_set_material(ras, &mat, obj->shading);
+            s = vv_raster_draw_mesh(ras, mesh, model);
+        }
         if (s != VV_OK) {
             s = vv_error_prefix(s, "object '%s'", obj->name);
             break;
@@ -830,6 +934,9 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     for (int i = 0; i < n_bands; i++)
         vv_mesh_free(bands[i]);
     free(bands);
+    for (int i = 0; i < labels.n; i++)
+        vv_mesh_free(labels.m[i]);
+    free(labels.m);
     /* forget isosurfaces not shown in this frame */
     for (int i = 0; i < st->n_cache;) {
         if (st->cache[i].last_frame != st->frame) {
