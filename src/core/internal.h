@@ -51,6 +51,18 @@ const char *vv_path_basename(const char *path);
  */
 char *vv_path_join_dir(const char *base_file, const char *rel);
 
+/**
+ * The detached-data policy (docs/formats.md, "Detached data files"): resolves
+ * the data file name @p rel that the header file @p header names. Refused
+ * (VV_ERR_FORMAT, the message names @p rel and why): an empty name, an
+ * absolute path, a ".." component, a name that resolves (through symbolic
+ * links) outside the header's folder, and anything but a regular file (a
+ * folder, a device such as /dev/zero, a FIFO). A missing file is VV_ERR_IO.
+ * On success *out is the joined path (malloc'ed) and *size the file's size
+ * (either may be NULL).
+ */
+vv_status vv_detached_path(const char *header, const char *rel, char **out, uint64_t *size);
+
 /** 1 when the host is little-endian. */
 int vv_host_is_little_endian(void);
 

@@ -8,6 +8,10 @@
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <ctype.h>
+#include <pthread.h>
+#include <setjmp.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,6 +23,184 @@
 
 /* Mesh files larger than this are refused before Assimp reads them. */
 #define MESH_MAX_FILE_BYTES ((uint64_t)8 << 30)
+
+/* ---- OFF validation ------------------------------------------------------ */
+
+/* The next line of @p t (from *pos) that is neither blank nor a comment,
+ * NUL-terminated in place (comments cut); NULL at the end. */
+static char *
+off_next_line(char *t, size_t n, size_t *pos) {
+    while (*pos < n) {
+        char *line = t + *pos;
+        char *nl = memchr(line, '\n', n - *pos);
+        size_t len = nl ? (size_t)(nl - line) : n - *pos;
+        *pos += len + (nl ? 1 : 0);
+        line[len] = '\0';
+        char *hash = strchr(line, '#');
+        if (hash)
+            *hash = '\0';
+        char *c = line;
+        while (isspace((unsigned char)*c))
+            c++;
+        if (*c)
+            return c;
+    }
+    return NULL;
+}
+
+/*
+ * Checks an OFF file before Assimp reads it (Debian's Assimp is built with
+ * assertions, and its OFF loader asserts on a header without faces or a face
+ * without indices): the header keyword ([ST][C][N][4]OFF, text only), the
+ * vertex and face counts (at least 3 and 1, no more than the file's size
+ * allows), every vertex line (3 numbers), every face (3 or more indices,
+ * each a vertex).
+ */
+static vv_status
+off_validate(const char *path, uint64_t size) {
+    unsigned char *data = NULL;
+    uint64_t n = 0;
+    vv_status s = vv_read_file(path, size + 1, &data, &n);
+    if (s != VV_OK)
+        return s;
+    char *t = (char *)data;
+    if (memchr(t, '\0', (size_t)n)) {
+        free(data);
+        return vv_error_set(VV_ERR_UNSUPPORTED, "OFF: binary OFF is not supported");
+    }
+    size_t pos = 0;
+    char *line = off_next_line(t, (size_t)n, &pos);
+    char kw[32] = "";
+    char *rest = line;
+    if (line) {
+        size_t k = strspn(line, "STCN4nOF");
+        if (k < sizeof kw) {
+            memcpy(kw, line, k);
+            kw[k] = '\0';
+        }
+        rest = line + k;
+    }
+    size_t kl = strlen(kw);
+    if (kl < 3 || strcmp(kw + kl - 3, "OFF") != 0) {
+        free(data);
+        return vv_error_set(VV_ERR_FORMAT, "OFF: no OFF keyword on the first line");
+    }
+    while (isspace((unsigned char)*rest))
+        rest++;
+    if (!strncmp(rest, "BINARY", 6)) {
+        free(data);
+        return vv_error_set(VV_ERR_UNSUPPORTED, "OFF: binary OFF is not supported");
+    }
+    if (!*rest)
+        rest = off_next_line(t, (size_t)n, &pos);
+    long long nv = -1, nf = -1;
+    if (!rest || sscanf(rest, "%lld %lld", &nv, &nf) != 2) {
+        free(data);
+        return vv_error_set(VV_ERR_FORMAT, "OFF: the header has no vertex and face counts");
+    }
+    if (nv < 3 || nf < 1 || (uint64_t)nv > n / 6 || (uint64_t)nf > n / 6) {
+        free(data);
+        return vv_error_set(VV_ERR_FORMAT,
+                            "OFF: %lld vertices and %lld faces (at least 3 and 1, and no more "
+                            "than a file of %llu bytes holds)",
+                            nv, nf, (unsigned long long)n);
+    }
+    for (long long i = 0; i < nv; i++) {
+        double x, y, z;
+        line = off_next_line(t, (size_t)n, &pos);
+        if (!line || sscanf(line, "%lf %lf %lf", &x, &y, &z) != 3) {
+            free(data);
+            return vv_error_set(VV_ERR_FORMAT, "OFF: vertex %lld: expected 3 numbers", i);
+        }
+    }
+    for (long long i = 0; i < nf; i++) {
+        line = off_next_line(t, (size_t)n, &pos);
+        char *c = line, *e = NULL;
+        long long k = line ? strtoll(c, &e, 10) : -1;
+        if (!line || e == c || k < 3 || k > nv) {
+            free(data);
+            return vv_error_set(VV_ERR_FORMAT,
+                                "OFF: face %lld: %s (a face has 3 or more vertex indices)", i,
+                                line ? "too few indices" : "missing");
+        }
+        c = e;
+        for (long long j = 0; j < k; j++) {
+            long long idx = strtoll(c, &e, 10);
+            if (e == c || idx < 0 || idx >= nv) {
+                free(data);
+                return vv_error_set(VV_ERR_FORMAT, "OFF: face %lld: index %lld %s (%lld vertices)",
+                                    i, j, e == c ? "is missing" : "is out of range", nv);
+            }
+            c = e;
+        }
+    }
+    free(data);
+    return VV_OK;
+}
+
+/* 1 when @p path is an OFF file by name or by its first bytes. */
+static int
+is_off(const char *path) {
+    size_t n = strlen(path);
+    if (n >= 4 && !strcasecmp(path + n - 4, ".off"))
+        return 1;
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return 0;
+    char b[8] = {0};
+    size_t got = fread(b, 1, sizeof b - 1, f);
+    fclose(f);
+    b[got] = '\0';
+    size_t k = strspn(b, "STCN4n");
+    return !strncmp(b + k, "OFF", 3);
+}
+
+/* ---- the Assimp call, guarded against its assertions ------------------- */
+
+/* Debian builds Assimp with its assertions on, and a failed one calls
+ * abort(). An import runs under import_lock with a SIGABRT handler that jumps
+ * back to vv_mesh_load (only for an abort raised on the importing thread), so
+ * a library assertion is an error, not the end of the process. What Assimp
+ * had allocated for that import is lost (a small leak, on a malformed file
+ * only). */
+static pthread_mutex_t import_lock = PTHREAD_MUTEX_INITIALIZER;
+static sigjmp_buf import_jmp;
+static pthread_t import_thread;
+static volatile sig_atomic_t importing;
+
+static void
+on_abort(int sig) {
+    if (importing && pthread_equal(pthread_self(), import_thread)) {
+        importing = 0;
+        siglongjmp(import_jmp, 1);
+    }
+    signal(sig, SIG_DFL);
+    raise(sig);
+}
+
+static const struct aiScene *
+guarded_import(const char *path, unsigned flags, struct aiPropertyStore *props, int *aborted) {
+    const struct aiScene *volatile sc = NULL;
+    struct sigaction sa, old;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_abort;
+    sigemptyset(&sa.sa_mask);
+    *aborted = 0;
+    pthread_mutex_lock(&import_lock);
+    import_thread = pthread_self();
+    sigaction(SIGABRT, &sa, &old);
+    if (sigsetjmp(import_jmp, 1) == 0) {
+        importing = 1;
+        sc = aiImportFileExWithProperties(path, flags, NULL, props);
+        importing = 0;
+    } else {
+        *aborted = 1;
+        sc = NULL;
+    }
+    sigaction(SIGABRT, &old, NULL);
+    pthread_mutex_unlock(&import_lock);
+    return sc;
+}
 
 vv_status
 vv_mesh_load(vv_mesh **out, const char *path) {
@@ -37,6 +219,8 @@ vv_mesh_load(vv_mesh **out, const char *path) {
                             (unsigned long long)size, (unsigned long long)MESH_MAX_FILE_BYTES);
     if (size == 0)
         return vv_error_set(VV_ERR_FORMAT, "mesh: %s: empty file", name);
+    if (is_off(path) && (s = off_validate(path, size)) != VV_OK)
+        return vv_error_prefix(s, "mesh: %s", name);
 
     /* Drop every attribute but positions before joining vertices, so facet
      * normals (STL) or texture seams do not split a closed surface; normals
@@ -55,8 +239,13 @@ vv_mesh_load(vv_mesh **out, const char *path) {
     unsigned flags = aiProcess_RemoveComponent | aiProcess_Triangulate |
                      aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices |
                      aiProcess_SortByPType | aiProcess_FindDegenerates;
-    const struct aiScene *sc = aiImportFileExWithProperties(path, flags, NULL, props);
+    int aborted = 0;
+    const struct aiScene *sc = guarded_import(path, flags, props, &aborted);
     aiReleasePropertyStore(props);
+    if (aborted)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "mesh: %s: Assimp stopped on an internal assertion (malformed file)",
+                            name);
     if (!sc) {
         const char *why = aiGetErrorString();
         return vv_error_set(VV_ERR_FORMAT, "mesh: %s: %s", name, why && *why ? why : "unreadable");
