@@ -155,6 +155,155 @@ is_off(const char *path) {
     return !strncmp(b + k, "OFF", 3);
 }
 
+/* ---- STL validation ------------------------------------------------------ */
+
+/* A token of an ASCII STL: where it starts and its length. */
+typedef struct stl_tok {
+    const char *p;
+    size_t n;
+} stl_tok;
+
+/* The next whitespace-separated token of @p t from *pos; n is 0 at the end. */
+static stl_tok
+stl_token(const char *t, size_t n, size_t *pos) {
+    stl_tok k = {NULL, 0};
+    while (*pos < n && isspace((unsigned char)t[*pos]))
+        (*pos)++;
+    k.p = t + *pos;
+    while (*pos < n && !isspace((unsigned char)t[*pos]))
+        (*pos)++;
+    k.n = (size_t)(t + *pos - k.p);
+    return k;
+}
+
+static int
+stl_is(stl_tok k, const char *word) {
+    return k.n == strlen(word) && !memcmp(k.p, word, k.n);
+}
+
+static int
+stl_expect(const char *t, size_t n, size_t *pos, const char *word) {
+    return stl_is(stl_token(t, n, pos), word);
+}
+
+static int
+stl_numbers(const char *t, size_t n, size_t *pos, int k) {
+    for (int i = 0; i < k; i++) {
+        stl_tok tok = stl_token(t, n, pos);
+        char buf[64], *e = NULL;
+        if (tok.n == 0 || tok.n >= sizeof buf)
+            return 0;
+        memcpy(buf, tok.p, tok.n);
+        buf[tok.n] = '\0';
+        strtod(buf, &e);
+        if (e == buf || *e)
+            return 0;
+    }
+    return 1;
+}
+
+/* Moves *pos to the end of the current line. */
+static void
+stl_skip_line(const char *t, size_t n, size_t *pos) {
+    while (*pos < n && t[*pos] != '\n')
+        (*pos)++;
+}
+
+/*
+ * Checks an STL file before Assimp reads it (Assimp 5.2 leaks the mesh and
+ * node it was building when an ASCII STL is malformed): a binary STL must
+ * hold the 50 bytes of each of its (at least one) triangles; an ASCII one
+ * ("solid" first, and not the size of a binary one) must be a sequence of
+ * "facet normal n n n / outer loop / vertex x y z (three times) / endloop /
+ * endfacet" blocks, each solid closed by "endsolid".
+ */
+static vv_status
+stl_validate(const char *path, uint64_t size) {
+    unsigned char *data = NULL;
+    uint64_t n = 0;
+    vv_status s = vv_read_file(path, size + 1, &data, &n);
+    if (s != VV_OK)
+        return s;
+    uint32_t count = 0;
+    if (n >= 84)
+        count = (uint32_t)data[80] | (uint32_t)data[81] << 8 | (uint32_t)data[82] << 16 |
+                (uint32_t)data[83] << 24;
+    int binary = n < 5 || memcmp(data, "solid", 5) != 0 ||
+                 (n >= 84 && (uint64_t)84 + (uint64_t)50 * count == n);
+    if (binary) {
+        if (n < 84 || count == 0 || (uint64_t)84 + (uint64_t)50 * count > n)
+            s = vv_error_set(VV_ERR_FORMAT,
+                             "STL: a binary file of %llu bytes cannot hold its %u triangles",
+                             (unsigned long long)n, count);
+        free(data);
+        return s;
+    }
+    const char *t = (const char *)data;
+    size_t pos = 0, tn = (size_t)n;
+    long facets = 0;
+    stl_tok tok = stl_token(t, tn, &pos);
+    while (tok.n && s == VV_OK) {
+        if (!stl_is(tok, "solid")) {
+            s = vv_error_set(VV_ERR_FORMAT, "STL: expected 'solid', got '%.*s'",
+                             (int)(tok.n < 32 ? tok.n : 32), tok.p);
+            break;
+        }
+        stl_skip_line(t, tn, &pos); /* the name */
+        for (;;) {
+            tok = stl_token(t, tn, &pos);
+            if (!tok.n) {
+                s = vv_error_set(VV_ERR_FORMAT, "STL: no 'endsolid' after facet %ld", facets);
+                break;
+            }
+            if (stl_is(tok, "endsolid")) {
+                stl_skip_line(t, tn, &pos);
+                break;
+            }
+            if (!stl_is(tok, "facet") || !stl_expect(t, tn, &pos, "normal") ||
+                !stl_numbers(t, tn, &pos, 3) || !stl_expect(t, tn, &pos, "outer") ||
+                !stl_expect(t, tn, &pos, "loop")) {
+                s = vv_error_set(VV_ERR_FORMAT,
+                                 "STL: facet %ld: expected 'facet normal N N N outer loop'",
+                                 facets);
+                break;
+            }
+            for (int v = 0; v < 3 && s == VV_OK; v++)
+                if (!stl_expect(t, tn, &pos, "vertex") || !stl_numbers(t, tn, &pos, 3))
+                    s = vv_error_set(VV_ERR_FORMAT,
+                                     "STL: facet %ld: vertex %d: expected 'vertex X Y Z'", facets,
+                                     v);
+            if (s == VV_OK &&
+                (!stl_expect(t, tn, &pos, "endloop") || !stl_expect(t, tn, &pos, "endfacet")))
+                s = vv_error_set(VV_ERR_FORMAT, "STL: facet %ld: expected 'endloop endfacet'",
+                                 facets);
+            if (s != VV_OK)
+                break;
+            facets++;
+        }
+        if (s == VV_OK)
+            tok = stl_token(t, tn, &pos);
+    }
+    if (s == VV_OK && facets == 0)
+        s = vv_error_set(VV_ERR_FORMAT, "STL: no facets");
+    free(data);
+    return s;
+}
+
+/* 1 when @p path is an STL file by name or starts with "solid". */
+static int
+is_stl(const char *path) {
+    size_t n = strlen(path);
+    if (n >= 4 && !strcasecmp(path + n - 4, ".stl"))
+        return 1;
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return 0;
+    char b[6] = {0};
+    size_t got = fread(b, 1, 5, f);
+    fclose(f);
+    return got == 5 && !memcmp(b, "solid", 5);
+}
+
 /* ---- the Assimp call, guarded against its assertions ------------------- */
 
 /* Debian builds Assimp with its assertions on, and a failed one calls
@@ -220,6 +369,8 @@ vv_mesh_load(vv_mesh **out, const char *path) {
     if (size == 0)
         return vv_error_set(VV_ERR_FORMAT, "mesh: %s: empty file", name);
     if (is_off(path) && (s = off_validate(path, size)) != VV_OK)
+        return vv_error_prefix(s, "mesh: %s", name);
+    if (is_stl(path) && (s = stl_validate(path, size)) != VV_OK)
         return vv_error_prefix(s, "mesh: %s", name);
 
     /* Drop every attribute but positions before joining vertices, so facet

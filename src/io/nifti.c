@@ -302,6 +302,24 @@ file_gzipped(const char *path, uint64_t *size) {
  */
 static vv_status
 check_raw_header(const char *path) {
+    /* nifti_clib takes x.img (.img.gz) for its header x.hdr (.hdr.gz) */
+    char hdr[4096];
+    size_t plen = strlen(path);
+    if (plen < sizeof hdr) {
+        const char *ext = plen >= 7 && !strcmp(path + plen - 7, ".img.gz") ? ".img.gz"
+                          : plen >= 4 && !strcmp(path + plen - 4, ".img")  ? ".img"
+                                                                           : NULL;
+        if (ext) {
+            memcpy(hdr, path, plen + 1);
+            memcpy(hdr + plen - strlen(ext), ".hdr", 4);
+            struct stat st;
+            if (stat(hdr, &st) != 0) /* the other compression */
+                snprintf(hdr + plen - strlen(ext), sizeof hdr - (plen - strlen(ext)), "%s",
+                         strlen(ext) == 4 ? ".hdr.gz" : ".hdr");
+            if (stat(hdr, &st) == 0)
+                path = hdr;
+        }
+    }
     gzFile gz = gzopen(path, "rb");
     if (!gz)
         return vv_error_set(VV_ERR_IO, "cannot open: %s", strerror(errno));
@@ -348,6 +366,12 @@ check_raw_header(const char *path) {
     if (count > UINT64_MAX / (uint64_t)(bitpix / 8))
         return vv_error_set(VV_ERR_LIMIT, "the data size overflows");
     uint64_t need = count * (uint64_t)(bitpix / 8);
+    if (need > VV_VOLUME_MAX_BYTES)
+        return vv_error_set(VV_ERR_LIMIT, "%llu bytes of voxels (limit %llu)",
+                            (unsigned long long)need, (unsigned long long)VV_VOLUME_MAX_BYTES);
+    vv_status sb = vv_memory_budget_check(need, "NIfTI voxel data");
+    if (sb != VV_OK)
+        return sb;
 
     /* where the image data are: this file (magic "n+1"/"n+2"), else the
      * .img beside a .hdr (plain or gzip-compressed) */
