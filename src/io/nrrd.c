@@ -464,10 +464,12 @@ scan_header(const char *path, header_scan *hs) {
             v = line + 10;
         else if (!strncmp(line, "datafile:", 9))
             v = line + 9;
-        if (!v)
-            continue;
+        if (!v || *v == '=')
+            continue; /* another field, or a "data file:=" key/value pair */
         while (*v == ' ' || *v == '\t')
             v++;
+        for (char *e = line + len; e > v && (e[-1] == ' ' || e[-1] == '\t');)
+            *--e = '\0';
         if (!strncmp(v, "LIST", 4) && (v[4] == '\0' || v[4] == ' ' || v[4] == '\t'))
             in_list = 1;
         else if (strchr(v, '%') && strchr(v, ' '))
