@@ -529,6 +529,36 @@ test_vvc_index_past_end(void **state) {
     free(d);
 }
 
+/* ---- what the fuzzers found: a VTK grid's cell counts, a DICOM length --- */
+
+static void
+test_fuzz_findings(void **state) {
+    (void)state;
+    /* CELLS 2 4: the first cell claims all four ints, leaving none for the
+     * second cell's count (wrote past the connectivity array) */
+    write_text(tpath("cells.vtk"), "# vtk DataFile Version 3.0\nx\nASCII\n"
+                                   "DATASET UNSTRUCTURED_GRID\nPOINTS 4 float\n"
+                                   "0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 2 4\n3 0 1 2\n"
+                                   "CELL_TYPES 2\n10\n10\n");
+    vv_grid *g = NULL;
+    vv_error_clear();
+    expect_error(vv_grid_load(&g, tpath("cells.vtk")), VV_ERR_FORMAT, "cell 0 has 3 points");
+    assert_null(g);
+    /* a 1.2 KB DICOM file one of whose lengths says 775 MB: GDCM allocated
+     * it (0.9 GB, 6 s) before noticing the file ends */
+    char dcm[1024];
+    snprintf(dcm, sizeof dcm, "%s/tests/fuzz/corpus/dicom/timeout-huge-length", VV_SOURCE_DIR);
+    vv_volume *v = NULL;
+    double t0 = now_s();
+    vv_error_clear();
+    vv_status s = vv_dicom_read(&v, dcm, 0, -1);
+    if (s == VV_ERR_UNSUPPORTED)
+        return; /* built without GDCM */
+    expect_error(s, VV_ERR_FORMAT, "claims 774909494 bytes");
+    if (now_s() - t0 > 3)
+        fail_msg("refusing the file took %.1f s", now_s() - t0);
+}
+
 /* ---- Teem's memory on failed loads --------------------------------------- */
 
 static void
@@ -617,6 +647,7 @@ main(void) {
         cmocka_unit_test(test_off_malformed),
         cmocka_unit_test(test_scene_self),
         cmocka_unit_test(test_vvc_index_past_end),
+        cmocka_unit_test(test_fuzz_findings),
         cmocka_unit_test(test_teem_failed_loads_free),
         cmocka_unit_test(test_cli_budget_and_info),
     };
