@@ -258,7 +258,7 @@ check_lengths(const char *path, char *err, size_t errlen) {
         } else if (explicit_vr) {
             if (!std::isupper(b[4]) || !std::isupper(b[5])) {
                 /* not a VR: GDCM falls back to reading it as implicit VR, so
-                 * the four bytes are a length; check that one, then stop */
+                 * the four bytes are a length; check that one */
                 len = u32(b + 4);
                 if (len != 0xffffffffu && pos + 8 + (uint64_t)len > size) {
                     std::snprintf(err, errlen,
@@ -266,8 +266,12 @@ check_lengths(const char *path, char *err, size_t errlen) {
                                   "in the file",
                                   group, elem, len, (unsigned long long)(size - pos - 8));
                     rc = -1;
+                    break;
                 }
-                break;
+                /* and as a buggy explicit element with a 16-bit length,
+                 * GDCM's other fallback: go on from there */
+                pos += 8 + u16(b + 6);
+                continue;
             }
             static const char *const long_vrs[] = {"OB", "OW", "OF", "SQ", "UT", "UN", "OD",
                                                    "OL", "UC", "UR", "OV", "SV", "UV"};
