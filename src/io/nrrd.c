@@ -470,9 +470,22 @@ scan_header(const char *path, header_scan *hs) {
             v++;
         for (char *e = line + len; e > v && (e[-1] == ' ' || e[-1] == '\t');)
             *--e = '\0';
-        if (!strncmp(v, "LIST", 4) && (v[4] == '\0' || v[4] == ' ' || v[4] == '\t'))
+        if (!strncmp(v, "LIST", 4) && (v[4] == '\0' || v[4] == ' ' || v[4] == '\t')) {
+            /* the rest of the file names the data files: count them before
+             * checking any (a million names cost a million checks) */
+            long names = 0;
+            for (size_t i = pos; i < got; i++)
+                if (text[i] == '\n' && i > pos && text[i - 1] != '\n')
+                    names++;
+            if (got > pos && text[got - 1] != '\n')
+                names++;
+            if (names > NRRD_MAX_FILES || fsize > got) {
+                s = vv_error_set(VV_ERR_LIMIT, "the data file LIST names %s%ld files (at most %d)",
+                                 fsize > got ? "more than " : "", names, NRRD_MAX_FILES);
+                break;
+            }
             in_list = 1;
-        else if (strchr(v, '%') && strchr(v, ' '))
+        } else if (strchr(v, '%') && strchr(v, ' '))
             s = scan_pattern(path, v, hs);
         else
             s = scan_data_file(path, v, hs);
