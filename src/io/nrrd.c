@@ -429,6 +429,14 @@ scan_header(const char *path, header_scan *hs) {
         free(text);
         return vv_error_set(VV_ERR_FORMAT, "not a NRRD file (no \"NRRD000x\" magic)");
     }
+    /* the whole magic line, as Teem accepts it (it leaks a line buffer on
+     * any other first line) */
+    if (got < 9 || text[7] < '1' || text[7] > '5' ||
+        !(text[8] == '\n' || (text[8] == '\r' && got > 9 && text[9] == '\n'))) {
+        free(text);
+        return vv_error_set(VV_ERR_FORMAT,
+                            "the first line is not a NRRD magic (NRRD0001 to NRRD0005)");
+    }
     int in_list = 0, ended = 0;
     size_t pos = 0;
     while (s == VV_OK && pos < got) {

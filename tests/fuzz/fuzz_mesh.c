@@ -21,6 +21,19 @@ LLVMFuzzerInitialize(int *argc, char ***argv) {
     return 0;
 }
 
+/*
+ * Assimp 5.2 leaks the aiMesh / aiNode it was building when many of its
+ * loaders (PLY, OBJ, ...) throw on a malformed file (about 1.4 KB per failed
+ * load). That is Assimp's bug, not fixable from here for every format (OFF
+ * and STL are validated before Assimp sees them, src/io/mesh.c), so those
+ * leaks are suppressed to let the fuzzer look for crashes.
+ */
+const char *__lsan_default_suppressions(void);
+const char *
+__lsan_default_suppressions(void) {
+    return "leak:libassimp.so\n";
+}
+
 static int
 starts(const uint8_t *d, size_t n, const char *p) {
     size_t k = strlen(p);
