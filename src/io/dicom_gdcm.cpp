@@ -291,6 +291,15 @@ check_lengths(const char *path, char *err, size_t errlen) {
         } else {
             len = u32(b + 4);
         }
+        if (len == 0xffffffffu && in_meta) {
+            /* GDCM asserts (and aborts) on an undefined length in the meta group */
+            std::snprintf(err, errlen,
+                          "element (%04x,%04x) of the file meta information has an "
+                          "undefined length",
+                          group, elem);
+            rc = -1;
+            break;
+        }
         if (len == 0xffffffffu) {
             if (!sq && group != 0xfffe) {
                 if (group != 0x7fe0 || elem != 0x0010)
