@@ -14,6 +14,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 secs="${1:-30}"
 shift || true
+bash scripts/install-deps.sh fuzz >/dev/null
 if [ "${FUZZ_BUILD:-1}" != 0 ]; then
   cmake --preset fuzz >/dev/null
   cmake --build --preset fuzz -j"${FUZZ_JOBS:-2}" --target fuzz_all >build/fuzz-build.log 2>&1 ||
