@@ -260,6 +260,15 @@ check_lengths(const char *path, char *err, size_t errlen) {
                 /* not a VR: GDCM falls back to reading it as implicit VR, so
                  * the four bytes are a length; check that one */
                 len = u32(b + 4);
+                if (in_meta && len == 0xffffffffu) {
+                    /* GDCM asserts on it as on an explicit one */
+                    std::snprintf(err, errlen,
+                                  "element (%04x,%04x) of the file meta information has an "
+                                  "undefined length",
+                                  group, elem);
+                    rc = -1;
+                    break;
+                }
                 if (len != 0xffffffffu && pos + 8 + (uint64_t)len > size) {
                     std::snprintf(err, errlen,
                                   "element (%04x,%04x) claims %u bytes, but only %llu are left "

@@ -304,6 +304,86 @@ is_stl(const char *path) {
     return got == 5 && !memcmp(b, "solid", 5);
 }
 
+/* ---- PLY header validation ------------------------------------------------ */
+
+/*
+ * Checks a PLY header before Assimp reads it (its PLY loader loops forever
+ * on some malformed headers): "ply", a "format" line, then only "format",
+ * "comment", "obj_info", "element NAME COUNT" and "property ..." lines up to
+ * "end_header", all within the first 64 KiB.
+ */
+static vv_status
+ply_validate(const char *path) {
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return vv_error_set(VV_ERR_IO, "cannot open");
+    char line[1024];
+    int n = 0, have_format = 0;
+    long read = 0;
+    vv_status s = VV_ERR_FORMAT; /* until end_header is seen */
+    int decided = 0;
+    while (read < 65536 && fgets(line, sizeof line, f)) {
+        size_t len = strlen(line);
+        read += (long)len;
+        while (len > 0 && (line[len - 1] == '\n' || line[len - 1] == '\r' || line[len - 1] == ' '))
+            line[--len] = '\0';
+        if (n++ == 0) {
+            if (strcmp(line, "ply") != 0) {
+                s = vv_error_set(VV_ERR_FORMAT, "PLY: the first line is not 'ply'");
+                decided = 1;
+                break;
+            }
+            continue;
+        }
+        if (!strcmp(line, "end_header")) {
+            s = have_format ? VV_OK
+                            : vv_error_set(VV_ERR_FORMAT, "PLY: no format line in the header");
+            decided = 1;
+            break;
+        }
+        long long count;
+        char name[256];
+        if (!strncmp(line, "format ", 7)) {
+            const char *fm = line + 7;
+            if (strncmp(fm, "ascii ", 6) && strncmp(fm, "binary_little_endian ", 21) &&
+                strncmp(fm, "binary_big_endian ", 18)) {
+                s = vv_error_set(VV_ERR_FORMAT, "PLY: unknown format '%.60s'", fm);
+                decided = 1;
+                break;
+            }
+            have_format = 1;
+        } else if (!strncmp(line, "element ", 8)) {
+            if (sscanf(line + 8, "%255s %lld", name, &count) != 2 || count < 0) {
+                s = vv_error_set(VV_ERR_FORMAT, "PLY: header line %d: bad element line", n);
+                decided = 1;
+                break;
+            }
+        } else if (strncmp(line, "property ", 9) && strncmp(line, "comment", 7) &&
+                   strncmp(line, "obj_info", 8) && line[0] != '\0') {
+            s = vv_error_set(VV_ERR_FORMAT, "PLY: header line %d: unknown keyword in '%.40s'", n,
+                             line);
+            decided = 1;
+            break;
+        }
+    }
+    fclose(f);
+    if (!decided)
+        s = vv_error_set(VV_ERR_FORMAT, "PLY: no end_header line in the first 64 KiB");
+    return s;
+}
+
+/* 1 when @p path starts with "ply" and a line end. */
+static int
+is_ply(const char *path) {
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return 0;
+    char b[5] = {0};
+    size_t got = fread(b, 1, 4, f);
+    fclose(f);
+    return got >= 4 && !memcmp(b, "ply", 3) && (b[3] == '\n' || b[3] == '\r');
+}
+
 /* ---- the Assimp call, guarded against its assertions ------------------- */
 
 /* Debian builds Assimp with its assertions on, and a failed one calls
@@ -371,6 +451,8 @@ vv_mesh_load(vv_mesh **out, const char *path) {
     if (is_off(path) && (s = off_validate(path, size)) != VV_OK)
         return vv_error_prefix(s, "mesh: %s", name);
     if (is_stl(path) && (s = stl_validate(path, size)) != VV_OK)
+        return vv_error_prefix(s, "mesh: %s", name);
+    if (is_ply(path) && (s = ply_validate(path)) != VV_OK)
         return vv_error_prefix(s, "mesh: %s", name);
 
     /* Drop every attribute but positions before joining vertices, so facet

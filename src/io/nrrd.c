@@ -438,6 +438,10 @@ scan_header(const char *path, header_scan *hs) {
                             "the first line is not a NRRD magic (NRRD0001 to NRRD0005)");
     }
     int in_list = 0, ended = 0;
+    /* the fields Teem requires; it leaks the data file names it has read
+     * when one is missing */
+    static const char *const required[4] = {"type:", "dimension:", "sizes:", "encoding:"};
+    int seen[4] = {0, 0, 0, 0};
     size_t pos = 0;
     while (s == VV_OK && pos < got) {
         char *line = text + pos;
@@ -467,6 +471,9 @@ scan_header(const char *path, header_scan *hs) {
             ended = 1; /* the blank line: attached data follow */
             break;
         }
+        for (int r = 0; r < 4; r++)
+            if (!strncmp(line, required[r], strlen(required[r])))
+                seen[r] = 1;
         const char *v = NULL;
         if (!strncmp(line, "data file:", 10))
             v = line + 10;
@@ -499,6 +506,10 @@ scan_header(const char *path, header_scan *hs) {
             s = scan_data_file(path, v, hs);
     }
     (void)ended;
+    for (int r = 0; r < 4 && s == VV_OK; r++)
+        if (!seen[r])
+            s = vv_error_set(VV_ERR_FORMAT, "the header has no \"%.*s\" field",
+                             (int)strlen(required[r]) - 1, required[r]);
     hs->data_start = pos;
     if (s == VV_OK && hs->n_files == 0)
         hs->data_bytes = fsize > pos ? fsize - pos : 0;
