@@ -323,6 +323,8 @@ header_scan_free(header_scan *hs) {
  * files) is refused before Teem parses it, which takes time quadratic in
  * the number of lines. */
 #define NRRD_MAX_HEADER ((size_t)4 << 20)
+/* The longest header line (a field) given to Teem. */
+#define NRRD_MAX_LINE 1000
 /* At most this many detached data files (one per slice of the largest volume). */
 #define NRRD_MAX_FILES VV_VOLUME_MAX_DIM
 
@@ -470,6 +472,17 @@ scan_header(const char *path, header_scan *hs) {
         if (len == 0) {
             ended = 1; /* the blank line: attached data follow */
             break;
+        }
+        /* Teem formats its message about a bad line into a fixed buffer
+         * (1 KB) and aborts on a longer one: refuse long lines first
+         * (comments, key/value pairs and "content" are copied safely) */
+        if (len > NRRD_MAX_LINE && line[0] != '#' && strncmp(line, "content:", 8) != 0) {
+            const char *kv = strstr(line, ":="), *fd = strstr(line, ": ");
+            if (!kv || (fd && fd < kv)) {
+                s = vv_error_set(VV_ERR_FORMAT, "a header line of %zu bytes (at most %d)", len,
+                                 NRRD_MAX_LINE);
+                break;
+            }
         }
         for (int r = 0; r < 4; r++)
             if (!strncmp(line, required[r], strlen(required[r])))

@@ -180,6 +180,18 @@ test_nrrd_detached_policy(void **state) {
     expect_error(load_nhdr("pat.nhdr", "x%s%n 1 2 1"), VV_ERR_FORMAT, "integer conversion");
     expect_error(load_nhdr("pat2.nhdr", "x%d 1 1000000 1"), VV_ERR_LIMIT, "1000000 files");
 
+    /* a header line longer than Teem's 1 KB message buffer (it aborted) */
+    char longline[3001];
+    memset(longline, 'x', 3000);
+    longline[3000] = '\0';
+    write_text(tpath("longline.nrrd"),
+               "NRRD0004\nfoo: %s\ntype: uchar\ndimension: 3\nsizes: 2 2 2\nencoding: raw\n\n"
+               "abcdefgh",
+               longline);
+    vv_volume *lv = NULL;
+    vv_error_clear();
+    expect_error(vv_nrrd_read(&lv, tpath("longline.nrrd")), VV_ERR_FORMAT, "header line");
+
     /* the header itself on a device */
     vv_volume *v = NULL;
     vv_error_clear();
