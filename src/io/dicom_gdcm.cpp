@@ -400,6 +400,15 @@ vv_dcm_read_header(const char *path, vv_dcm_file *f, char *err, size_t errlen) {
             dims.size() > 2 && dims[2] > 0 ? (int)std::min<unsigned int>(dims[2], 1u << 30) : 1;
         f->samples = pf.GetSamplesPerPixel();
         f->bits_allocated = pf.GetBitsAllocated();
+        /* PixelFormat::GetBitsStored asserts Bits Stored <= Bits Allocated
+         * (an abort where assertions are on): check the whole format first */
+        if (!pf.IsValid()) {
+            std::snprintf(err, errlen,
+                          "invalid pixel format (Bits Allocated %d, Bits Stored, High Bit or "
+                          "Samples per Pixel out of range)",
+                          f->bits_allocated);
+            return -1;
+        }
         f->bits_stored = pf.GetBitsStored();
         f->pixel_rep = pf.GetPixelRepresentation();
         f->planar = (int)gdcm::ImageHelper::GetPlanarConfigurationValue(file);

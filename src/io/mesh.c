@@ -372,16 +372,19 @@ ply_validate(const char *path) {
     return s;
 }
 
-/* 1 when @p path starts with "ply" and a line end. */
+/* 1 when @p path ends in .ply or starts with "ply". */
 static int
 is_ply(const char *path) {
+    size_t n = strlen(path);
+    if (n >= 4 && !strcasecmp(path + n - 4, ".ply"))
+        return 1;
     FILE *f = fopen(path, "rb");
     if (!f)
         return 0;
     char b[5] = {0};
     size_t got = fread(b, 1, 4, f);
     fclose(f);
-    return got >= 4 && !memcmp(b, "ply", 3) && (b[3] == '\n' || b[3] == '\r');
+    return got >= 3 && !memcmp(b, "ply", 3); /* Assimp takes it for PLY on these three bytes */
 }
 
 /* ---- the Assimp call, guarded against its assertions ------------------- */
