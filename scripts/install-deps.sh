@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages VolVis needs, only those that are missing.
-# Safe to run again. Usage: scripts/install-deps.sh [build|demo|test|bench]...
+# Safe to run again. Usage: scripts/install-deps.sh [build|demo|test|fuzz|bench]...
 #   build  compiler, CMake and the libraries (always included; Open MPI for src/parallel)
 #   demo   mricron-data (the real MRI head used by the quick-start demo)
 #   test   cmocka, ffmpeg (ffprobe checks the videos); Xvfb, xdotool and ImageMagick for the GUI tests;
 #          pydicom (writes the DICOM test series, and its test files), nibabel (its Siemens MR
-#          slices) and gdcmconv (compresses them)
+#          slices) and gdcmconv (compresses them); SciPy and Teem's unu (the filters' references)
+#   fuzz   clang-14, libFuzzer and LLVM's OpenMP (the fuzz and tsan presets); Teem's tools,
+#          ImageMagick, gdcm tools, VTK, numpy, pydicom (tests/fuzz/make_corpus.sh)
 #   bench  VTK, numpy, pydicom, Xvfb, Teem's tools and the zfp CLI, to measure the peers side by side
 set -euo pipefail
 
@@ -18,8 +20,9 @@ for what in "$@"; do
     build) ;;
     demo) pkgs+=(mricron-data) ;;
     test) pkgs+=(libcmocka-dev ffmpeg xvfb xauth xdotool imagemagick python3-pydicom python3-nibabel libgdcm-tools python3-scipy teem-apps) ;;
+    fuzz) pkgs+=(clang-14 libfuzzer-14-dev libomp-14-dev teem-apps imagemagick libgdcm-tools python3-vtk9 python3-numpy python3-pydicom) ;;
     bench) pkgs+=(python3-vtk9 python3-numpy python3-pydicom xvfb libgl1-mesa-dri teem-apps zfp) ;;
-    *) echo "install-deps.sh: unknown group '$what' (build, demo, test, bench)" >&2; exit 2 ;;
+    *) echo "install-deps.sh: unknown group '$what' (build, demo, test, fuzz, bench)" >&2; exit 2 ;;
   esac
 done
 

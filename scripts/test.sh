@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Quick start 2: install what is missing, build the release and the asan
-# (AddressSanitizer + UndefinedBehaviorSanitizer) presets, and run the whole
-# test suite on both.
+# (AddressSanitizer + UndefinedBehaviorSanitizer) presets, run the whole
+# test suite on both, then every fuzz harness for 30 s on its corpus
+# (scripts/fuzz.sh: the fuzz preset, clang + libFuzzer; every input ever
+# found is replayed first).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh build demo test
@@ -25,4 +27,6 @@ for preset in release asan; do
   echo "== $preset: test" >&2
   ctest --preset "$preset" -j"$jobs" || status=1
 done
+echo "== fuzz: every harness for 30 s" >&2
+bash scripts/fuzz.sh 30 || status=1
 exit $status

@@ -18,6 +18,7 @@ static const cli_opt_spec info_opts[] = {
     {"series", 0, "N"},
     {"channel", 0, "C"},
     {"show-phi", 0, NULL},
+    {"stats", 0, NULL},
 };
 #define N_INFO_OPTS ((int)(sizeof info_opts / sizeof info_opts[0]))
 
@@ -30,9 +31,9 @@ cli_info_usage(FILE *out) {
                  "percentiles (1/5/50/95/99) and a text histogram.\n"
                  "Formats: SLC, NRRD, NIfTI-1/2, MetaImage, VTK legacy, TIFF stacks (a\n"
                  "multi-page file or a folder of pages), DICOM (a folder, a DICOMDIR or a\n"
-                 "file), raw (with --raw), and .vvc (compressed; also prints the subcube\n"
-                 "size, quality, compressed size, compression ratio and bits per voxel,\n"
-                 "then the statistics of the decompressed volume).\n"
+                 "file), raw (with --raw), and .vvc (compressed: its header alone, with the\n"
+                 "subcube size, quality, compressed size, compression ratio and bits per\n"
+                 "voxel; the volume is decoded for statistics only with --stats).\n"
                  "For DICOM, first lists the series found (number, modality, description,\n"
                  "size, files); the volume follows when there is one series or --series\n"
                  "picks one. Patient names and IDs are printed only with --show-phi.\n"
@@ -50,6 +51,8 @@ cli_info_usage(FILE *out) {
                  "  --channel C     TIFF and DICOM: channel C, from 0 (default 0)\n"
                  "  --show-phi      DICOM: also print the patient's name and ID and the\n"
                  "                  study (protected health information)\n"
+                 "  --stats         .vvc: decode the volume and print its statistics\n"
+                 "                  (within the memory budget, see 'volvis --help')\n"
                  "  -h, --help      show this help\n"
                  "\n"
                  "Example:\n"
@@ -322,6 +325,42 @@ is_identity(const double d[9]) {
     return 1;
 }
 
+/* Prints a .vvc's header (vv_vvc_get_info) without decoding the volume. */
+static int
+info_vvc_header(const char *path, const vv_vvc_info *vi) {
+    const char *unit = vv_unit_name(vi->unit);
+    printf("file:         %s\n", path);
+    printf("format:       vvc\n");
+    printf("dimensions:   %d x %d x %d (%llu voxels)\n", vi->dims[0], vi->dims[1], vi->dims[2],
+           (unsigned long long)vi->dims[0] * (unsigned long long)vi->dims[1] *
+               (unsigned long long)vi->dims[2]);
+    printf("vvc:          version %d, subcubes %d^3 (%d x %d x %d), quality %.2f, slope %g\n",
+           vi->version, vi->block, vi->subcubes[0], vi->subcubes[1], vi->subcubes[2], vi->quality,
+           vi->slope);
+    printf("compressed:   %llu bytes of %llu (ratio %.2f:1, %.4g bits per voxel)\n",
+           (unsigned long long)vi->file_bytes, (unsigned long long)vi->raw_bytes, vi->ratio,
+           vi->bits_per_voxel);
+    if (vi->max_error > 0)
+        printf("error bound:  %g on every voxel (corrections in steps of %g)\n", vi->max_error,
+               vi->corr_step);
+    printf("voxel type:   %s (%zu byte%s)\n", vv_voxel_type_name(vi->type),
+           vv_voxel_type_size(vi->type), vv_voxel_type_size(vi->type) == 1 ? "" : "s");
+    printf("spacing:      %g x %g x %g%s%s\n", vi->spacing[0], vi->spacing[1], vi->spacing[2],
+           vi->unit == VV_UNIT_UNKNOWN ? "" : " ", vi->unit == VV_UNIT_UNKNOWN ? "" : unit);
+    printf("origin:       %g %g %g\n", vi->origin[0], vi->origin[1], vi->origin[2]);
+    if (!is_identity(vi->direction))
+        printf("direction:    [%g %g %g; %g %g %g; %g %g %g] (columns: i, j, k axes)\n",
+               vi->direction[0], vi->direction[1], vi->direction[2], vi->direction[3],
+               vi->direction[4], vi->direction[5], vi->direction[6], vi->direction[7],
+               vi->direction[8]);
+    printf("unit:         %s\n", unit);
+    printf("data origin:  %s\n", data_origin_name(vi->data_origin));
+    printf("modification: %s\n", modification_name(vi->modification));
+    printf("range:        %g .. %g (recorded by the encoder)\n", vi->range[0], vi->range[1]);
+    printf("statistics:   not computed (header only; --stats decodes the volume)\n");
+    return CLI_EXIT_OK;
+}
+
 int
 cli_info_main(int argc, char **argv) {
     cli_args a;
@@ -371,6 +410,11 @@ cli_info_main(int argc, char **argv) {
         vv_status s2 = vv_vvc_load(&c, path);
         if (s2 == VV_OK) {
             vv_vvc_get_info(c, &vinfo);
+            if (!cli_count(&a, "stats")) {
+                /* the header only: a small file may decode to gigabytes */
+                vv_vvc_free(c);
+                return info_vvc_header(path, &vinfo);
+            }
             s2 = vv_vvc_decompress(&v, c, 0, NULL);
         }
         vv_vvc_free(c);

@@ -5,6 +5,7 @@
  * docs/cli.md.
  */
 #include <signal.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -56,8 +57,47 @@ usage(FILE *out) {
         fprintf(out, "  %-10s %s\n", commands[i].name, commands[i].summary);
     fprintf(out, "  %-10s %s\n", "help", "show this help, or 'help COMMAND' for a command's");
     fprintf(out, "\n"
+                 "Global option (any command, anywhere on the line):\n"
+                 "  --max-memory SIZE  memory budget of one volume, grid or mesh read or\n"
+                 "                     decoded (e.g. 512M, 8G; default: half of the available\n"
+                 "                     memory, or $VOLVIS_MAX_MEMORY). A file whose header\n"
+                 "                     asks for more is refused before anything is allocated.\n"
+                 "\n"
                  "Exit status: 0 success, 1 bad input (file, format or render error),\n"
                  "2 bad usage, 130 interrupted. Errors are one line on stderr.\n");
+}
+
+/* Takes "--max-memory SIZE" / "--max-memory=SIZE" out of argv and sets the
+ * library's memory budget. Returns 0, or the exit status of a usage error. */
+static int
+take_max_memory(int *argc, char **argv) {
+    int out = 1;
+    for (int i = 1; i < *argc; i++) {
+        const char *val = NULL;
+        if (!strcmp(argv[i], "--")) {
+            while (i < *argc)
+                argv[out++] = argv[i++];
+            break;
+        }
+        if (!strcmp(argv[i], "--max-memory")) {
+            if (i + 1 >= *argc)
+                return cli_usage_error(NULL, "--max-memory needs a size (e.g. 512M, 8G)");
+            val = argv[++i];
+        } else if (!strncmp(argv[i], "--max-memory=", 13)) {
+            val = argv[i] + 13;
+        }
+        if (!val) {
+            argv[out++] = argv[i];
+            continue;
+        }
+        uint64_t bytes = 0;
+        if (vv_memory_size_parse(val, &bytes) != VV_OK || bytes == 0)
+            return cli_usage_error(NULL, "--max-memory: '%s' is not a size (e.g. 512M, 8G)", val);
+        vv_memory_budget_set(bytes);
+    }
+    *argc = out;
+    argv[out] = NULL;
+    return 0;
 }
 
 int
@@ -65,6 +105,9 @@ main(int argc, char **argv) {
     /* a file size limit (ulimit -f) makes a write fail with EFBIG, reported
      * like a full disk, instead of killing the process */
     signal(SIGXFSZ, SIG_IGN);
+    int mrc = take_max_memory(&argc, argv);
+    if (mrc)
+        return mrc;
     if (argc < 2)
         return cli_usage_error(NULL, "missing command");
     const char *cmd = argv[1];

@@ -89,6 +89,37 @@ void vv_threads_set(int n);
 /** The number of threads a parallel loop would use now. */
 int vv_threads_get(void);
 
+/**
+ * The memory budget: the most bytes one reader or decoder may allocate for
+ * one object (a volume, a decoded .vvc, a grid, a mesh). Readers check the
+ * size a header promises against it before allocating or inflating anything
+ * and fail with VV_ERR_LIMIT ("... is over the memory budget of N bytes"),
+ * so a small hostile file cannot make the process allocate gigabytes.
+ * @p bytes 0 restores the default: the environment variable
+ * VOLVIS_MAX_MEMORY when set (a size as vv_memory_size_parse reads it), else
+ * half of the machine's available memory (MemAvailable in /proc/meminfo,
+ * read once; 4 GiB when unknown), and never less than 64 MiB.
+ * Thread-safety: an atomic global; set it before starting work.
+ */
+void vv_memory_budget_set(uint64_t bytes);
+
+/** The budget in bytes now (the default computed on first use). */
+uint64_t vv_memory_budget_get(void);
+
+/**
+ * VV_OK when @p bytes fit the budget, else VV_ERR_LIMIT with a message
+ * naming @p what (e.g. "volume of 512 x 512 x 512 f32"), the size and the
+ * budget.
+ */
+vv_status vv_memory_budget_check(uint64_t bytes, const char *what);
+
+/**
+ * Parses a size: a number of bytes with an optional suffix K, M, G or T
+ * (powers of 1024; "KiB", "MB", "GiB" accepted too), e.g. "512M", "8G".
+ * Errors: VV_ERR_INVALID naming the text.
+ */
+vv_status vv_memory_size_parse(const char *text, uint64_t *out);
+
 /** Library version string, "MAJOR.MINOR.PATCH". */
 const char *vv_version(void);
 

@@ -126,7 +126,8 @@ vv_status vv_voxel_type_parse(const char *name, vv_voxel_type *out);
 /**
  * Checks that a volume of @p dims voxels of type @p t is within the limits
  * above (each dimension in [1, VV_VOLUME_MAX_DIM], no overflow, total voxels
- * and bytes within VV_VOLUME_MAX_*). On success stores the byte count in
+ * and bytes within VV_VOLUME_MAX_*, bytes within the memory budget of
+ * vv_memory_budget_get()). On success stores the byte count in
  * *bytes (may be NULL). Errors: VV_ERR_LIMIT with a message giving the size.
  * Readers call this on header values before allocating anything.
  */

@@ -250,6 +250,70 @@ vv_path_join_dir(const char *base_file, const char *rel) {
     return out;
 }
 
+vv_status
+vv_detached_path(const char *header, const char *rel, char **out, uint64_t *size) {
+    if (out)
+        *out = NULL;
+    if (!rel[0])
+        return vv_error_set(VV_ERR_FORMAT, "empty data file name");
+    if (rel[0] == '/')
+        return vv_error_set(VV_ERR_FORMAT,
+                            "data file '%s' refused: an absolute path (data files are named "
+                            "relative to the header's folder)",
+                            rel);
+    for (const char *c = rel; *c;) {
+        size_t n = strcspn(c, "/");
+        if (n == 2 && c[0] == '.' && c[1] == '.')
+            return vv_error_set(VV_ERR_FORMAT,
+                                "data file '%s' refused: '..' leaves the header's folder", rel);
+        c += n;
+        while (*c == '/')
+            c++;
+    }
+    char *path = vv_path_join_dir(header, rel);
+    if (!path)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        int e = errno;
+        free(path);
+        return vv_error_set(VV_ERR_IO, "cannot open data file '%s': %s", rel, strerror(e));
+    }
+    if (!S_ISREG(st.st_mode)) {
+        free(path);
+        return vv_error_set(VV_ERR_FORMAT, "data file '%s' refused: %s, not a regular file", rel,
+                            S_ISDIR(st.st_mode)                          ? "a folder"
+                            : S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) ? "a device"
+                            : S_ISFIFO(st.st_mode)                       ? "a FIFO"
+                                                                         : "a special file");
+    }
+    /* a symbolic link may still lead out of the folder: compare the real paths */
+    const char *slash = strrchr(header, '/');
+    char *dir = slash ? strndup(header, (size_t)(slash - header) + 1) : vv_strdup(".");
+    char *rdir = dir ? realpath(dir, NULL) : NULL;
+    char *rfile = realpath(path, NULL);
+    int inside = 0;
+    if (rdir && rfile) {
+        size_t n = strlen(rdir);
+        inside = strncmp(rfile, rdir, n) == 0 && (rfile[n] == '/' || (n == 1 && rdir[0] == '/'));
+    }
+    free(dir);
+    free(rdir);
+    free(rfile);
+    if (!inside) {
+        free(path);
+        return vv_error_set(VV_ERR_FORMAT,
+                            "data file '%s' refused: it resolves outside the header's folder", rel);
+    }
+    if (size)
+        *size = (uint64_t)st.st_size;
+    if (out)
+        *out = path;
+    else
+        free(path);
+    return VV_OK;
+}
+
 int
 vv_host_is_little_endian(void) {
     const uint16_t one = 1;

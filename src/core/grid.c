@@ -126,6 +126,11 @@ vv_grid_alloc(vv_grid *g, size_t n_points, size_t n_cells, size_t n_conn) {
     if (n_conn > (size_t)VV_GRID_MAX_CELLS * 8u)
         return vv_error_set(VV_ERR_LIMIT, "grid: %zu point indices in cells (at most %zu)", n_conn,
                             (size_t)VV_GRID_MAX_CELLS * 8u);
+    uint64_t bytes = (uint64_t)n_points * 3 * sizeof *g->points + (uint64_t)n_cells * 9 +
+                     (uint64_t)n_conn * sizeof *g->connectivity;
+    vv_status sb = vv_memory_budget_check(bytes, "grid");
+    if (sb != VV_OK)
+        return sb;
     free(g->points);
     free(g->cell_types);
     free(g->cell_offsets);

@@ -27,6 +27,16 @@ typedef struct vv_atomic_file {
     char *tmp_path;
 } vv_atomic_file;
 
+/**
+ * Runs fn(ctx) so that an abort() raised on this thread during the call (a
+ * library's failed assertion: Assimp and GDCM are built with them) returns
+ * 1 instead of ending the process; 0 when fn returned. Guarded calls on
+ * several threads run concurrently; SIGABRT elsewhere keeps its previous
+ * disposition. What the library allocated in an interrupted call is lost.
+ * src/core/guard.c.
+ */
+int vv_call_guarded(void (*fn)(void *ctx), void *ctx);
+
 /** Opens the temporary file. Errors: VV_ERR_IO (with path and strerror), VV_ERR_NOMEM. */
 vv_status vv_atomic_file_open(vv_atomic_file *af, const char *path);
 /** Flushes, closes and renames. Errors: VV_ERR_IO (the temporary is removed). */
@@ -55,6 +65,18 @@ const char *vv_path_basename(const char *path);
  * Returns a malloc'ed string or NULL on allocation failure.
  */
 char *vv_path_join_dir(const char *base_file, const char *rel);
+
+/**
+ * The detached-data policy (docs/formats.md, "Detached data files"): resolves
+ * the data file name @p rel that the header file @p header names. Refused
+ * (VV_ERR_FORMAT, the message names @p rel and why): an empty name, an
+ * absolute path, a ".." component, a name that resolves (through symbolic
+ * links) outside the header's folder, and anything but a regular file (a
+ * folder, a device such as /dev/zero, a FIFO). A missing file is VV_ERR_IO.
+ * On success *out is the joined path (malloc'ed) and *size the file's size
+ * (either may be NULL).
+ */
+vv_status vv_detached_path(const char *header, const char *rel, char **out, uint64_t *size);
 
 /** 1 when the host is little-endian. */
 int vv_host_is_little_endian(void);

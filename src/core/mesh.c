@@ -60,7 +60,12 @@ vv_mesh_reserve(vv_mesh *m, size_t n_vertices, size_t n_triangles) {
     if (n_vertices > VV_MESH_MAX_ELEMENTS || n_triangles > VV_MESH_MAX_ELEMENTS)
         return vv_error_set(VV_ERR_LIMIT, "mesh: %zu vertices, %zu triangles (at most %zu each)",
                             n_vertices, n_triangles, (size_t)VV_MESH_MAX_ELEMENTS);
-    vv_status s;
+    /* positions and normals (and scalars) per vertex, three indices per triangle */
+    vv_status s = vv_memory_budget_check((uint64_t)n_vertices * 7 * sizeof(float) +
+                                             (uint64_t)n_triangles * 3 * sizeof(uint32_t),
+                                         "mesh");
+    if (s != VV_OK)
+        return s;
     if (n_vertices > m->cap_vertices) {
         if ((s = grow((void **)&m->positions, n_vertices, 3 * sizeof(float))) != VV_OK)
             return s;

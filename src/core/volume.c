@@ -2,6 +2,7 @@
 #include <math.h>
 #include <omp.h>
 #include <stdatomic.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -100,6 +101,12 @@ vv_volume_check_size(const int dims[3], vv_voxel_type t, uint64_t *bytes) {
                             "volume size %d x %d x %d %s = %llu bytes is over the limit of %llu",
                             dims[0], dims[1], dims[2], vv_voxel_type_name(t), (unsigned long long)b,
                             (unsigned long long)VV_VOLUME_MAX_BYTES);
+    char what[96];
+    snprintf(what, sizeof what, "volume of %d x %d x %d %s", dims[0], dims[1], dims[2],
+             vv_voxel_type_name(t));
+    vv_status s = vv_memory_budget_check(b, what);
+    if (s != VV_OK)
+        return s;
     if (bytes)
         *bytes = b;
     return VV_OK;

@@ -6,6 +6,8 @@
  */
 #include "io/dicom.h"
 
+#include <cctype>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -183,6 +185,159 @@ jpeg_streams_end(const gdcm::Image &img) {
 
 std::once_flag init_once;
 
+/*
+ * Walks the data elements of @p path and checks that no defined value
+ * length runs past the end of the file. GDCM allocates an element's value
+ * from its length before reading it, so a 1 KB file whose length field says
+ * 900 MB made it allocate (and zero) 900 MB. Explicit and implicit VR, little
+ * and big endian, nested sequences and items, encapsulated pixel data
+ * (fragments skipped); a deflated data set is not walked. Returns 0, or -1
+ * with the reason in @p err. Anything the walk cannot follow (an unknown
+ * VR) ends it quietly: GDCM then decides.
+ */
+int
+check_lengths(const char *path, char *err, size_t errlen) {
+    std::FILE *fp = std::fopen(path, "rb");
+    if (!fp)
+        return 0; /* GDCM says why */
+    std::fseek(fp, 0, SEEK_END);
+    long fsz = std::ftell(fp);
+    std::fseek(fp, 0, SEEK_SET);
+    if (fsz <= 0) {
+        std::fclose(fp);
+        return 0;
+    }
+    const uint64_t size = (uint64_t)fsz;
+    unsigned char b[12];
+    uint64_t pos = 0;
+    if (size >= 132 && std::fread(b, 1, 4, fp) == 4 && std::fseek(fp, 128, SEEK_SET) == 0 &&
+        std::fread(b, 1, 4, fp) == 4 && !std::memcmp(b, "DICM", 4))
+        pos = 132;
+    int explicit_vr = 1, big = 0, in_meta = pos == 132, fragments = 0, rc = 0;
+    char ts[72] = "";
+    for (long count = 0; count < 4000000 && pos + 8 <= size; count++) {
+        if (std::fseek(fp, (long)pos, SEEK_SET) != 0 || std::fread(b, 1, 8, fp) != 8)
+            break;
+        auto u16 = [&](const unsigned char *q) {
+            return big ? (unsigned)(q[0] << 8 | q[1]) : (unsigned)(q[1] << 8 | q[0]);
+        };
+        auto u32 = [&](const unsigned char *q) {
+            return big ? (uint32_t)q[0] << 24 | (uint32_t)q[1] << 16 | (uint32_t)q[2] << 8 | q[3]
+                       : (uint32_t)q[3] << 24 | (uint32_t)q[2] << 16 | (uint32_t)q[1] << 8 | q[0];
+        };
+        /* leaving the meta group: switch to the data set's transfer syntax */
+        unsigned group = (unsigned)(b[1] << 8 | b[0]);
+        if (in_meta && group != 0x0002) {
+            in_meta = 0;
+            if (!std::strcmp(ts, "1.2.840.10008.1.2"))
+                explicit_vr = 0;
+            else if (!std::strcmp(ts, "1.2.840.10008.1.2.2"))
+                big = 1;
+            else if (!std::strncmp(ts, "1.2.840.10008.1.2.1.99", 22))
+                break; /* deflated: GDCM inflates it */
+        }
+        if (!in_meta && pos == 0) {
+            /* no preamble: explicit when bytes 4-5 look like a VR */
+            explicit_vr = std::isupper(b[4]) && std::isupper(b[5]);
+        }
+        group = u16(b);
+        unsigned elem = u16(b + 2);
+        uint64_t hdr = 8;
+        uint32_t len;
+        int sq = 0;
+        if (group == 0xfffe) {
+            len = u32(b + 4); /* items and delimiters: no VR */
+            if (elem == 0xe0dd) {
+                fragments = 0;
+                len = 0;
+            } else if (elem == 0xe00d) {
+                len = 0;
+            } else if (!fragments) {
+                sq = 1; /* an item of a sequence: walk into it */
+            }
+        } else if (explicit_vr) {
+            if (!std::isupper(b[4]) || !std::isupper(b[5])) {
+                /* not a VR: GDCM falls back to reading it as implicit VR, so
+                 * the four bytes are a length; check that one */
+                len = u32(b + 4);
+                if (in_meta && len == 0xffffffffu) {
+                    /* GDCM asserts on it as on an explicit one */
+                    std::snprintf(err, errlen,
+                                  "element (%04x,%04x) of the file meta information has an "
+                                  "undefined length",
+                                  group, elem);
+                    rc = -1;
+                    break;
+                }
+                if (len != 0xffffffffu && pos + 8 + (uint64_t)len > size) {
+                    std::snprintf(err, errlen,
+                                  "element (%04x,%04x) claims %u bytes, but only %llu are left "
+                                  "in the file",
+                                  group, elem, len, (unsigned long long)(size - pos - 8));
+                    rc = -1;
+                    break;
+                }
+                /* and as a buggy explicit element with a 16-bit length,
+                 * GDCM's other fallback: go on from there */
+                pos += 8 + u16(b + 6);
+                continue;
+            }
+            static const char *const long_vrs[] = {"OB", "OW", "OF", "SQ", "UT", "UN", "OD",
+                                                   "OL", "UC", "UR", "OV", "SV", "UV"};
+            int is_long = 0;
+            for (const char *v : long_vrs)
+                if (b[4] == (unsigned char)v[0] && b[5] == (unsigned char)v[1])
+                    is_long = 1;
+            sq = b[4] == 'S' && b[5] == 'Q';
+            if (is_long) {
+                if (pos + 12 > size || std::fread(b + 8, 1, 4, fp) != 4)
+                    break;
+                len = u32(b + 8);
+                hdr = 12;
+            } else {
+                len = u16(b + 6);
+            }
+        } else {
+            len = u32(b + 4);
+        }
+        if (len == 0xffffffffu && in_meta) {
+            /* GDCM asserts (and aborts) on an undefined length in the meta group */
+            std::snprintf(err, errlen,
+                          "element (%04x,%04x) of the file meta information has an "
+                          "undefined length",
+                          group, elem);
+            rc = -1;
+            break;
+        }
+        if (len == 0xffffffffu) {
+            if (!sq && group != 0xfffe) {
+                if (group != 0x7fe0 || elem != 0x0010)
+                    break;     /* an implicit-VR sequence (UN or implicit): not followed */
+                fragments = 1; /* encapsulated pixel data: items are fragments */
+            }
+            pos += hdr;
+            continue;
+        }
+        if (pos + hdr + len > size) {
+            std::snprintf(err, errlen,
+                          "element (%04x,%04x) claims %u bytes, but only %llu are left in the file",
+                          group, elem, len, (unsigned long long)(size - pos - hdr));
+            rc = -1;
+            break;
+        }
+        if (in_meta && group == 0x0002 && elem == 0x0010 && len < sizeof ts) {
+            if (std::fread(ts, 1, len, fp) != len)
+                break;
+            ts[len] = '\0';
+            for (size_t i = len; i > 0 && (ts[i - 1] == ' ' || ts[i - 1] == '\0'); i--)
+                ts[i - 1] = '\0';
+        }
+        pos += hdr + (sq ? 0 : len); /* a defined-length sequence or item: its elements next */
+    }
+    std::fclose(fp);
+    return rc;
+}
+
 } // namespace
 
 extern "C" void
@@ -206,6 +361,8 @@ vv_dcm_read_header(const char *path, vv_dcm_file *f, char *err, size_t errlen) {
     f->path = keep;
     try {
         vv_dcm_init();
+        if (check_lengths(path, err, errlen) != 0)
+            return -1;
         gdcm::Reader r;
         r.SetFileName(path);
         if (!r.CanRead())
@@ -243,6 +400,15 @@ vv_dcm_read_header(const char *path, vv_dcm_file *f, char *err, size_t errlen) {
             dims.size() > 2 && dims[2] > 0 ? (int)std::min<unsigned int>(dims[2], 1u << 30) : 1;
         f->samples = pf.GetSamplesPerPixel();
         f->bits_allocated = pf.GetBitsAllocated();
+        /* PixelFormat::GetBitsStored asserts Bits Stored <= Bits Allocated
+         * (an abort where assertions are on): check the whole format first */
+        if (!pf.IsValid()) {
+            std::snprintf(err, errlen,
+                          "invalid pixel format (Bits Allocated %d, Bits Stored, High Bit or "
+                          "Samples per Pixel out of range)",
+                          f->bits_allocated);
+            return -1;
+        }
         f->bits_stored = pf.GetBitsStored();
         f->pixel_rep = pf.GetPixelRepresentation();
         f->planar = (int)gdcm::ImageHelper::GetPlanarConfigurationValue(file);
@@ -321,6 +487,8 @@ extern "C" int
 vv_dcm_read_pixels(const char *path, void *dst, size_t bytes, char *err, size_t errlen) {
     try {
         vv_dcm_init();
+        if (check_lengths(path, err, errlen) != 0)
+            return -1;
         gdcm::ImageReader r;
         r.SetFileName(path);
         if (!r.Read()) {
@@ -374,6 +542,8 @@ vv_dcm_dicomdir_files(const char *path, char ***files, int *n, char *err, size_t
     *n = 0;
     try {
         vv_dcm_init();
+        if (check_lengths(path, err, errlen) != 0)
+            return -1;
         gdcm::Reader r;
         r.SetFileName(path);
         if (!r.CanRead() || !r.Read())

@@ -556,7 +556,8 @@ vv_grid_read_vtk(vv_grid **out, const char *path) {
             size_t k = 0, o = 0;
             for (size_t i = 0; i < n_cells; i++) {
                 const double cnt = tmp[k++];
-                if (!(cnt >= 1) || cnt > (double)(n_ints - k)) {
+                /* the ints left, less one count for each cell still to come */
+                if (!(cnt >= 1) || cnt > (double)(n_ints - k - (n_cells - 1 - i))) {
                     s = vv_error_set(VV_ERR_FORMAT, "%s: CELLS: cell %zu has %g points", path, i,
                                      cnt);
                     goto done;

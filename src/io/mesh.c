@@ -8,6 +8,7 @@
 #include <assimp/config.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <ctype.h>
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -20,6 +21,394 @@
 
 /* Mesh files larger than this are refused before Assimp reads them. */
 #define MESH_MAX_FILE_BYTES ((uint64_t)8 << 30)
+
+/* ---- OFF validation ------------------------------------------------------ */
+
+/* The next line of @p t (from *pos) that is neither blank nor a comment,
+ * NUL-terminated in place (comments cut); NULL at the end. */
+static char *
+off_next_line(char *t, size_t n, size_t *pos) {
+    while (*pos < n) {
+        char *line = t + *pos;
+        char *nl = memchr(line, '\n', n - *pos);
+        size_t len = nl ? (size_t)(nl - line) : n - *pos;
+        *pos += len + (nl ? 1 : 0);
+        line[len] = '\0';
+        char *hash = strchr(line, '#');
+        if (hash)
+            *hash = '\0';
+        char *c = line;
+        while (isspace((unsigned char)*c))
+            c++;
+        if (*c)
+            return c;
+    }
+    return NULL;
+}
+
+/*
+ * Checks an OFF file before Assimp reads it (Debian's Assimp is built with
+ * assertions, and its OFF loader asserts on a header without faces or a face
+ * without indices): the header keyword ([ST][C][N][4]OFF, text only), the
+ * vertex and face counts (at least 3 and 1, no more than the file's size
+ * allows), every vertex line (3 numbers), every face (3 or more indices,
+ * each a vertex).
+ */
+static vv_status
+off_validate(const char *path, uint64_t size) {
+    unsigned char *data = NULL;
+    uint64_t n = 0;
+    vv_status s = vv_read_file(path, size + 1, &data, &n);
+    if (s != VV_OK)
+        return s;
+    char *t = (char *)data;
+    if (memchr(t, '\0', (size_t)n)) {
+        free(data);
+        return vv_error_set(VV_ERR_UNSUPPORTED, "OFF: binary OFF is not supported");
+    }
+    size_t pos = 0;
+    char *line = off_next_line(t, (size_t)n, &pos);
+    char kw[32] = "";
+    char *rest = line;
+    if (line) {
+        size_t k = strspn(line, "STCN4nOF");
+        if (k < sizeof kw) {
+            memcpy(kw, line, k);
+            kw[k] = '\0';
+        }
+        rest = line + k;
+    }
+    size_t kl = strlen(kw);
+    if (kl < 3 || strcmp(kw + kl - 3, "OFF") != 0) {
+        free(data);
+        return vv_error_set(VV_ERR_FORMAT, "OFF: no OFF keyword on the first line");
+    }
+    while (isspace((unsigned char)*rest))
+        rest++;
+    if (!strncmp(rest, "BINARY", 6)) {
+        free(data);
+        return vv_error_set(VV_ERR_UNSUPPORTED, "OFF: binary OFF is not supported");
+    }
+    if (!*rest)
+        rest = off_next_line(t, (size_t)n, &pos);
+    long long nv = -1, nf = -1;
+    if (!rest || sscanf(rest, "%lld %lld", &nv, &nf) != 2) {
+        free(data);
+        return vv_error_set(VV_ERR_FORMAT, "OFF: the header has no vertex and face counts");
+    }
+    if (nv < 3 || nf < 1 || (uint64_t)nv > n / 6 || (uint64_t)nf > n / 6) {
+        free(data);
+        return vv_error_set(VV_ERR_FORMAT,
+                            "OFF: %lld vertices and %lld faces (at least 3 and 1, and no more "
+                            "than a file of %llu bytes holds)",
+                            nv, nf, (unsigned long long)n);
+    }
+    for (long long i = 0; i < nv; i++) {
+        double x, y, z;
+        line = off_next_line(t, (size_t)n, &pos);
+        if (!line || sscanf(line, "%lf %lf %lf", &x, &y, &z) != 3) {
+            free(data);
+            return vv_error_set(VV_ERR_FORMAT, "OFF: vertex %lld: expected 3 numbers", i);
+        }
+    }
+    for (long long i = 0; i < nf; i++) {
+        line = off_next_line(t, (size_t)n, &pos);
+        char *c = line, *e = NULL;
+        long long k = line ? strtoll(c, &e, 10) : -1;
+        if (!line || e == c || k < 3 || k > nv) {
+            free(data);
+            return vv_error_set(VV_ERR_FORMAT,
+                                "OFF: face %lld: %s (a face has 3 or more vertex indices)", i,
+                                line ? "too few indices" : "missing");
+        }
+        c = e;
+        for (long long j = 0; j < k; j++) {
+            long long idx = strtoll(c, &e, 10);
+            if (e == c || idx < 0 || idx >= nv) {
+                free(data);
+                return vv_error_set(VV_ERR_FORMAT, "OFF: face %lld: index %lld %s (%lld vertices)",
+                                    i, j, e == c ? "is missing" : "is out of range", nv);
+            }
+            c = e;
+        }
+    }
+    free(data);
+    return VV_OK;
+}
+
+/* 1 when @p path is an OFF file by name or by its first bytes. */
+static int
+is_off(const char *path) {
+    size_t n = strlen(path);
+    if (n >= 4 && !strcasecmp(path + n - 4, ".off"))
+        return 1;
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return 0;
+    char b[8] = {0};
+    size_t got = fread(b, 1, sizeof b - 1, f);
+    fclose(f);
+    b[got] = '\0';
+    size_t k = strspn(b, "STCN4n");
+    return !strncmp(b + k, "OFF", 3);
+}
+
+/* ---- STL validation ------------------------------------------------------ */
+
+/* A token of an ASCII STL: where it starts and its length. */
+typedef struct stl_tok {
+    const char *p;
+    size_t n;
+} stl_tok;
+
+/* The next whitespace-separated token of @p t from *pos; n is 0 at the end. */
+static stl_tok
+stl_token(const char *t, size_t n, size_t *pos) {
+    stl_tok k = {NULL, 0};
+    while (*pos < n && isspace((unsigned char)t[*pos]))
+        (*pos)++;
+    k.p = t + *pos;
+    while (*pos < n && !isspace((unsigned char)t[*pos]))
+        (*pos)++;
+    k.n = (size_t)(t + *pos - k.p);
+    return k;
+}
+
+static int
+stl_is(stl_tok k, const char *word) {
+    return k.n == strlen(word) && !memcmp(k.p, word, k.n);
+}
+
+static int
+stl_expect(const char *t, size_t n, size_t *pos, const char *word) {
+    return stl_is(stl_token(t, n, pos), word);
+}
+
+static int
+stl_numbers(const char *t, size_t n, size_t *pos, int k) {
+    for (int i = 0; i < k; i++) {
+        stl_tok tok = stl_token(t, n, pos);
+        char buf[64], *e = NULL;
+        if (tok.n == 0 || tok.n >= sizeof buf)
+            return 0;
+        memcpy(buf, tok.p, tok.n);
+        buf[tok.n] = '\0';
+        strtod(buf, &e);
+        if (e == buf || *e)
+            return 0;
+    }
+    return 1;
+}
+
+/* Moves *pos to the end of the current line. */
+static void
+stl_skip_line(const char *t, size_t n, size_t *pos) {
+    while (*pos < n && t[*pos] != '\n')
+        (*pos)++;
+}
+
+/*
+ * Checks an STL file before Assimp reads it (Assimp 5.2 leaks the mesh and
+ * node it was building when an ASCII STL is malformed): a binary STL must
+ * hold the 50 bytes of each of its (at least one) triangles; an ASCII one
+ * ("solid" first, and not the size of a binary one) must be a sequence of
+ * "facet normal n n n / outer loop / vertex x y z (three times) / endloop /
+ * endfacet" blocks, each solid closed by "endsolid".
+ */
+static vv_status
+stl_validate(const char *path, uint64_t size) {
+    unsigned char *data = NULL;
+    uint64_t n = 0;
+    vv_status s = vv_read_file(path, size + 1, &data, &n);
+    if (s != VV_OK)
+        return s;
+    uint32_t count = 0;
+    if (n >= 84)
+        count = (uint32_t)data[80] | (uint32_t)data[81] << 8 | (uint32_t)data[82] << 16 |
+                (uint32_t)data[83] << 24;
+    int binary = n < 5 || memcmp(data, "solid", 5) != 0 ||
+                 (n >= 84 && (uint64_t)84 + (uint64_t)50 * count == n);
+    if (binary) {
+        if (n < 84 || count == 0 || (uint64_t)84 + (uint64_t)50 * count > n)
+            s = vv_error_set(VV_ERR_FORMAT,
+                             "STL: a binary file of %llu bytes cannot hold its %u triangles",
+                             (unsigned long long)n, count);
+        free(data);
+        return s;
+    }
+    const char *t = (const char *)data;
+    size_t pos = 0, tn = (size_t)n;
+    long facets = 0;
+    stl_tok tok = stl_token(t, tn, &pos);
+    while (tok.n && s == VV_OK) {
+        if (!stl_is(tok, "solid")) {
+            s = vv_error_set(VV_ERR_FORMAT, "STL: expected 'solid', got '%.*s'",
+                             (int)(tok.n < 32 ? tok.n : 32), tok.p);
+            break;
+        }
+        stl_skip_line(t, tn, &pos); /* the name */
+        for (;;) {
+            tok = stl_token(t, tn, &pos);
+            if (!tok.n) {
+                s = vv_error_set(VV_ERR_FORMAT, "STL: no 'endsolid' after facet %ld", facets);
+                break;
+            }
+            if (stl_is(tok, "endsolid")) {
+                stl_skip_line(t, tn, &pos);
+                break;
+            }
+            if (!stl_is(tok, "facet") || !stl_expect(t, tn, &pos, "normal") ||
+                !stl_numbers(t, tn, &pos, 3) || !stl_expect(t, tn, &pos, "outer") ||
+                !stl_expect(t, tn, &pos, "loop")) {
+                s = vv_error_set(VV_ERR_FORMAT,
+                                 "STL: facet %ld: expected 'facet normal N N N outer loop'",
+                                 facets);
+                break;
+            }
+            for (int v = 0; v < 3 && s == VV_OK; v++)
+                if (!stl_expect(t, tn, &pos, "vertex") || !stl_numbers(t, tn, &pos, 3))
+                    s = vv_error_set(VV_ERR_FORMAT,
+                                     "STL: facet %ld: vertex %d: expected 'vertex X Y Z'", facets,
+                                     v);
+            if (s == VV_OK &&
+                (!stl_expect(t, tn, &pos, "endloop") || !stl_expect(t, tn, &pos, "endfacet")))
+                s = vv_error_set(VV_ERR_FORMAT, "STL: facet %ld: expected 'endloop endfacet'",
+                                 facets);
+            if (s != VV_OK)
+                break;
+            facets++;
+        }
+        if (s == VV_OK)
+            tok = stl_token(t, tn, &pos);
+    }
+    if (s == VV_OK && facets == 0)
+        s = vv_error_set(VV_ERR_FORMAT, "STL: no facets");
+    free(data);
+    return s;
+}
+
+/* 1 when @p path is an STL file by name or starts with "solid". */
+static int
+is_stl(const char *path) {
+    size_t n = strlen(path);
+    if (n >= 4 && !strcasecmp(path + n - 4, ".stl"))
+        return 1;
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return 0;
+    char b[6] = {0};
+    size_t got = fread(b, 1, 5, f);
+    fclose(f);
+    return got == 5 && !memcmp(b, "solid", 5);
+}
+
+/* ---- PLY header validation ------------------------------------------------ */
+
+/*
+ * Checks a PLY header before Assimp reads it (its PLY loader loops forever
+ * on some malformed headers): "ply", a "format" line, then only "format",
+ * "comment", "obj_info", "element NAME COUNT" and "property ..." lines up to
+ * "end_header", all within the first 64 KiB.
+ */
+static vv_status
+ply_validate(const char *path) {
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return vv_error_set(VV_ERR_IO, "cannot open");
+    char line[1024];
+    int n = 0, have_format = 0;
+    long read = 0;
+    vv_status s = VV_ERR_FORMAT; /* until end_header is seen */
+    int decided = 0;
+    while (read < 65536 && fgets(line, sizeof line, f)) {
+        size_t len = strlen(line);
+        read += (long)len;
+        while (len > 0 && (line[len - 1] == '\n' || line[len - 1] == '\r' || line[len - 1] == ' '))
+            line[--len] = '\0';
+        if (n++ == 0) {
+            if (strcmp(line, "ply") != 0) {
+                s = vv_error_set(VV_ERR_FORMAT, "PLY: the first line is not 'ply'");
+                decided = 1;
+                break;
+            }
+            continue;
+        }
+        if (!strcmp(line, "end_header")) {
+            s = have_format ? VV_OK
+                            : vv_error_set(VV_ERR_FORMAT, "PLY: no format line in the header");
+            decided = 1;
+            break;
+        }
+        long long count;
+        char name[256];
+        if (!strncmp(line, "format ", 7)) {
+            const char *fm = line + 7;
+            if (strncmp(fm, "ascii ", 6) && strncmp(fm, "binary_little_endian ", 21) &&
+                strncmp(fm, "binary_big_endian ", 18)) {
+                s = vv_error_set(VV_ERR_FORMAT, "PLY: unknown format '%.60s'", fm);
+                decided = 1;
+                break;
+            }
+            have_format = 1;
+        } else if (!strncmp(line, "element ", 8)) {
+            if (sscanf(line + 8, "%255s %lld", name, &count) != 2 || count < 0) {
+                s = vv_error_set(VV_ERR_FORMAT, "PLY: header line %d: bad element line", n);
+                decided = 1;
+                break;
+            }
+        } else if (strncmp(line, "property ", 9) && strncmp(line, "comment", 7) &&
+                   strncmp(line, "obj_info", 8) && line[0] != '\0') {
+            s = vv_error_set(VV_ERR_FORMAT, "PLY: header line %d: unknown keyword in '%.40s'", n,
+                             line);
+            decided = 1;
+            break;
+        }
+    }
+    fclose(f);
+    if (!decided)
+        s = vv_error_set(VV_ERR_FORMAT, "PLY: no end_header line in the first 64 KiB");
+    return s;
+}
+
+/* 1 when @p path ends in .ply or starts with "ply". */
+static int
+is_ply(const char *path) {
+    size_t n = strlen(path);
+    if (n >= 4 && !strcasecmp(path + n - 4, ".ply"))
+        return 1;
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return 0;
+    char b[5] = {0};
+    size_t got = fread(b, 1, 4, f);
+    fclose(f);
+    return got >= 3 && !memcmp(b, "ply", 3); /* Assimp takes it for PLY on these three bytes */
+}
+
+/* ---- the Assimp call, guarded against its assertions ------------------- */
+
+/* Debian builds Assimp with its assertions on, and a failed one calls
+ * abort(): an import runs under vv_call_guarded, so a library assertion is
+ * an error, not the end of the process. */
+typedef struct import_call {
+    const char *path;
+    unsigned flags;
+    struct aiPropertyStore *props;
+    const struct aiScene *scene;
+} import_call;
+
+static void
+run_import(void *ctx) {
+    import_call *c = ctx;
+    c->scene = aiImportFileExWithProperties(c->path, c->flags, NULL, c->props);
+}
+
+static const struct aiScene *
+guarded_import(const char *path, unsigned flags, struct aiPropertyStore *props, int *aborted) {
+    import_call c = {path, flags, props, NULL};
+    *aborted = vv_call_guarded(run_import, &c);
+    return *aborted ? NULL : c.scene;
+}
 
 vv_status
 vv_mesh_load(vv_mesh **out, const char *path) {
@@ -38,6 +427,12 @@ vv_mesh_load(vv_mesh **out, const char *path) {
                             (unsigned long long)size, (unsigned long long)MESH_MAX_FILE_BYTES);
     if (size == 0)
         return vv_error_set(VV_ERR_FORMAT, "mesh: %s: empty file", name);
+    if (is_off(path) && (s = off_validate(path, size)) != VV_OK)
+        return vv_error_prefix(s, "mesh: %s", name);
+    if (is_stl(path) && (s = stl_validate(path, size)) != VV_OK)
+        return vv_error_prefix(s, "mesh: %s", name);
+    if (is_ply(path) && (s = ply_validate(path)) != VV_OK)
+        return vv_error_prefix(s, "mesh: %s", name);
 
     /* Drop every attribute but positions before joining vertices, so facet
      * normals (STL) or texture seams do not split a closed surface; normals
@@ -56,8 +451,13 @@ vv_mesh_load(vv_mesh **out, const char *path) {
     unsigned flags = aiProcess_RemoveComponent | aiProcess_Triangulate |
                      aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices |
                      aiProcess_SortByPType | aiProcess_FindDegenerates;
-    const struct aiScene *sc = aiImportFileExWithProperties(path, flags, NULL, props);
+    int aborted = 0;
+    const struct aiScene *sc = guarded_import(path, flags, props, &aborted);
     aiReleasePropertyStore(props);
+    if (aborted)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "mesh: %s: Assimp stopped on an internal assertion (malformed file)",
+                            name);
     if (!sc) {
         const char *why = aiGetErrorString();
         return vv_error_set(VV_ERR_FORMAT, "mesh: %s: %s", name, why && *why ? why : "unreadable");

@@ -481,9 +481,14 @@ mhd_read_data(vv_volume **out, mhd_header *h, const char *hdr_path, const int di
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     for (int i = 0; i < npaths; i++) {
         const char *rel = local ? vv_path_basename(hdr_path) : h->nlist ? h->list[i] : h->data_file;
-        paths[i] = local ? vv_strdup(hdr_path) : vv_path_join_dir(hdr_path, rel);
-        if (!paths[i]) {
-            s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+        if (local) {
+            paths[i] = vv_strdup(hdr_path);
+            if (!paths[i]) {
+                s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+                goto done;
+            }
+        } else if ((s = vv_detached_path(hdr_path, rel, &paths[i], NULL)) != VV_OK) {
+            /* the detached-data policy: inside the header's folder, regular files */
             goto done;
         }
     }

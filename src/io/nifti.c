@@ -27,6 +27,8 @@
 #include <string.h>
 
 #include <nifti/nifti2_io.h>
+#include <sys/stat.h>
+#include <zlib.h>
 
 #include "core/internal.h"
 #include "volvis/io.h"
@@ -236,8 +238,191 @@ convert_data(vv_volume **out, const nifti_image *nim, const int dims[3], vv_voxe
     return VV_OK;
 }
 
+/* Reads the @p size-byte integer at @p p in the byte order given by @p swap. */
+static int64_t
+raw_int(const unsigned char *p, int size, int swap) {
+    unsigned char b[8];
+    for (int i = 0; i < size; i++)
+        b[i] = swap ? p[size - 1 - i] : p[i];
+    if (!vv_host_is_little_endian())
+        for (int i = 0; i < size / 2; i++) {
+            unsigned char t = b[i];
+            b[i] = b[size - 1 - i];
+            b[size - 1 - i] = t;
+        }
+    if (size == 2) {
+        int16_t v;
+        memcpy(&v, b, 2);
+        return v;
+    }
+    if (size == 4) {
+        int32_t v;
+        memcpy(&v, b, 4);
+        return v;
+    }
+    int64_t v;
+    memcpy(&v, b, 8);
+    return v;
+}
+
+static double
+raw_float(const unsigned char *p, int swap) {
+    uint32_t u = (uint32_t)raw_int(p, 4, swap);
+    float f;
+    memcpy(&f, &u, 4);
+    return f;
+}
+
+/* 1 when @p path starts with the gzip magic; *size gets its size. */
+static int
+file_gzipped(const char *path, uint64_t *size) {
+    struct stat st;
+    *size = 0;
+    if (stat(path, &st) != 0 || !S_ISREG(st.st_mode))
+        return 0;
+    *size = (uint64_t)st.st_size;
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return 0;
+    unsigned char m[2] = {0, 0};
+    size_t got = fread(m, 1, 2, f);
+    fclose(f);
+    return got == 2 && m[0] == 0x1f && m[1] == 0x8b;
+}
+
+/*
+ * Checks the raw header's fields before nifti_clib sees the file (it trusts
+ * them: an absurd dim[0] or dimension overflows inside it): sizeof_hdr 348
+ * (NIfTI-1, Analyze) or 540 (NIfTI-2) in either byte order, a whole header,
+ * dim[0] in 1..7, every used dim[i] in 1..VV_VOLUME_MAX_DIM, bitpix a
+ * positive multiple of 8, a finite vox_offset; then that the image data can
+ * hold what the header promises (uncompressed: the bytes themselves; gzip:
+ * 1/1032 of them, deflate's largest ratio), so a small file never makes the
+ * library allocate or inflate gigabytes.
+ */
+static vv_status
+check_raw_header(const char *path) {
+    /* nifti_clib takes x.img (.img.gz) for its header x.hdr (.hdr.gz) */
+    char hdr[4096];
+    size_t plen = strlen(path);
+    if (plen < sizeof hdr) {
+        const char *ext = plen >= 7 && !strcmp(path + plen - 7, ".img.gz") ? ".img.gz"
+                          : plen >= 4 && !strcmp(path + plen - 4, ".img")  ? ".img"
+                                                                           : NULL;
+        if (ext) {
+            memcpy(hdr, path, plen + 1);
+            memcpy(hdr + plen - strlen(ext), ".hdr", 4);
+            struct stat st;
+            if (stat(hdr, &st) != 0) /* the other compression */
+                snprintf(hdr + plen - strlen(ext), sizeof hdr - (plen - strlen(ext)), "%s",
+                         strlen(ext) == 4 ? ".hdr.gz" : ".hdr");
+            if (stat(hdr, &st) == 0)
+                path = hdr;
+        }
+    }
+    gzFile gz = gzopen(path, "rb");
+    if (!gz)
+        return vv_error_set(VV_ERR_IO, "cannot open: %s", strerror(errno));
+    unsigned char h[540];
+    int n = gzread(gz, h, sizeof h);
+    gzclose(gz);
+    if (n < 4)
+        return vv_error_set(VV_ERR_FORMAT, "%d bytes: too short for a NIfTI header", n < 0 ? 0 : n);
+    int swap = 0, v2 = 0;
+    int64_t hs = raw_int(h, 4, 0);
+    if (hs != 348 && hs != 540) {
+        swap = 1;
+        hs = raw_int(h, 4, 1);
+    }
+    if (hs != 348 && hs != 540)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "sizeof_hdr is %lld (348 for NIfTI-1 and Analyze, 540 for NIfTI-2)",
+                            (long long)raw_int(h, 4, 0));
+    v2 = hs == 540;
+    if (n < hs)
+        return vv_error_set(VV_ERR_FORMAT, "header truncated (%d of %lld bytes)", n, (long long)hs);
+    int64_t dim[8];
+    for (int i = 0; i < 8; i++)
+        dim[i] = v2 ? raw_int(h + 16 + 8 * i, 8, swap) : raw_int(h + 40 + 2 * i, 2, swap);
+    if (dim[0] < 1 || dim[0] > 7)
+        return vv_error_set(VV_ERR_FORMAT, "dim[0] is %lld (must be 1 to 7)", (long long)dim[0]);
+    uint64_t count = 1;
+    for (int i = 1; i <= dim[0]; i++) {
+        if (dim[i] < 1 || dim[i] > VV_VOLUME_MAX_DIM)
+            return vv_error_set(dim[i] < 1 ? VV_ERR_FORMAT : VV_ERR_LIMIT,
+                                "dim[%d] is %lld (must be 1 to %d)", i, (long long)dim[i],
+                                VV_VOLUME_MAX_DIM);
+        if (count > UINT64_MAX / (uint64_t)dim[i])
+            return vv_error_set(VV_ERR_LIMIT, "the dimensions' product overflows");
+        count *= (uint64_t)dim[i];
+    }
+    int64_t bitpix = v2 ? raw_int(h + 14, 2, swap) : raw_int(h + 72, 2, swap);
+    if (bitpix < 8 || bitpix % 8 != 0)
+        return vv_error_set(VV_ERR_FORMAT, "bitpix is %lld (a multiple of 8 expected)",
+                            (long long)bitpix);
+    double off = v2 ? (double)raw_int(h + 168, 8, swap) : raw_float(h + 108, swap);
+    if (!isfinite(off) || off < 0 || off > 1e15)
+        return vv_error_set(VV_ERR_FORMAT, "vox_offset %g is out of range", off);
+    if (count > UINT64_MAX / (uint64_t)(bitpix / 8))
+        return vv_error_set(VV_ERR_LIMIT, "the data size overflows");
+    uint64_t need = count * (uint64_t)(bitpix / 8);
+    if (need > VV_VOLUME_MAX_BYTES)
+        return vv_error_set(VV_ERR_LIMIT, "%llu bytes of voxels (limit %llu)",
+                            (unsigned long long)need, (unsigned long long)VV_VOLUME_MAX_BYTES);
+    vv_status sb = vv_memory_budget_check(need, "NIfTI voxel data");
+    if (sb != VV_OK)
+        return sb;
+
+    /* where the image data are: this file (magic "n+1"/"n+2"), else the
+     * .img beside a .hdr (plain or gzip-compressed) */
+    const unsigned char *magic = v2 ? h + 4 : h + 344;
+    int single = magic[0] == 'n' && magic[1] == '+' && (magic[2] == '1' || magic[2] == '2');
+    char img[4096];
+    const char *data = NULL;
+    uint64_t start = 0;
+    if (single) {
+        data = path;
+        start = (uint64_t)off;
+    } else {
+        size_t len = strlen(path);
+        const char *ext = len >= 7 && !strcmp(path + len - 7, ".hdr.gz") ? ".hdr.gz"
+                          : len >= 4 && !strcmp(path + len - 4, ".hdr")  ? ".hdr"
+                                                                         : NULL;
+        if (ext && len < sizeof img) {
+            memcpy(img, path, len + 1);
+            memcpy(img + len - strlen(ext), ".img", 4);
+            struct stat st;
+            if (stat(img, &st) != 0) /* nifti_clib also tries the other compression */
+                snprintf(img + len - strlen(ext), sizeof img - (len - strlen(ext)), "%s",
+                         strlen(ext) == 4 ? ".img.gz" : ".img");
+            data = img;
+            start = (uint64_t)off;
+        }
+    }
+    uint64_t size = 0;
+    if (data) {
+        int gzipped = file_gzipped(data, &size);
+        uint64_t have = gzipped        ? (size > UINT64_MAX / 1032 ? UINT64_MAX : size * 1032)
+                        : size > start ? size - start
+                                       : 0;
+        uint64_t want = gzipped ? need + start : need;
+        if (size > 0 && have < want)
+            return vv_error_set(
+                VV_ERR_FORMAT,
+                "%s%s holds %llu bytes, too few for the %llu bytes of voxels the "
+                "header promises",
+                gzipped ? "compressed " : "", data == path ? "the file" : "the image",
+                (unsigned long long)(size > start && !gzipped ? size - start : size),
+                (unsigned long long)need);
+    }
+    return VV_OK;
+}
+
 static vv_status
 read_locked(vv_volume **out, const char *path) {
+    vv_status s0 = check_raw_header(path);
+    if (s0 != VV_OK)
+        return s0;
     nifti_set_debug_level(0);
     nifti_image *nim = nifti_image_read(path, 0);
     if (!nim)

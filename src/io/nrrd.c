@@ -35,6 +35,7 @@
 #include <string.h>
 
 #include <teem/nrrd.h>
+#include <zlib.h>
 
 #include "core/bricks_internal.h"
 #include "core/internal.h"
@@ -297,24 +298,369 @@ copy_data(vv_volume *v, const Nrrd *n) {
     return VV_OK;
 }
 
+/*
+ * What the header text says about where the data are, found by scan_header
+ * before Teem reads anything: the bytes available to the data (attached: the
+ * file after the header; detached: the data files' sizes) for the check of
+ * the promised size.
+ */
+typedef struct header_scan {
+    uint64_t data_bytes; /* bytes available to the data */
+    int n_files;         /* detached data files (0: attached) */
+    char **files;        /* their paths (n_files, malloc'ed) */
+    uint64_t data_start; /* attached: where the data start (after the blank line) */
+} header_scan;
+
+static void
+header_scan_free(header_scan *hs) {
+    for (int i = 0; i < hs->n_files; i++)
+        free(hs->files[i]);
+    free(hs->files);
+    hs->files = NULL;
+    hs->n_files = 0;
+}
+
+/* The header text is read whole; a longer one (a list of a million data
+ * files) is refused before Teem parses it, which takes time quadratic in
+ * the number of lines. */
+#define NRRD_MAX_HEADER ((size_t)4 << 20)
+/* The longest header line (a field) given to Teem. */
+#define NRRD_MAX_LINE 1000
+/* At most this many detached data files (one per slice of the largest volume). */
+#define NRRD_MAX_FILES VV_VOLUME_MAX_DIM
+
+/* Checks one detached data file name against the policy (vv_detached_path). */
 static vv_status
-check_magic(const char *path) {
+scan_data_file(const char *header, const char *name, header_scan *hs) {
+    if (hs->n_files >= NRRD_MAX_FILES)
+        return vv_error_set(VV_ERR_LIMIT, "more than %d data files", NRRD_MAX_FILES);
+    uint64_t size = 0;
+    char *resolved = NULL;
+    vv_status s = vv_detached_path(header, name, &resolved, &size);
+    if (s != VV_OK)
+        return s;
+    if ((hs->n_files & (hs->n_files - 1)) == 0) { /* grow at powers of two */
+        char **nf = realloc(hs->files, sizeof *nf * (size_t)(hs->n_files ? 2 * hs->n_files : 1));
+        if (!nf) {
+            free(resolved);
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        }
+        hs->files = nf;
+    }
+    hs->files[hs->n_files++] = resolved;
+    hs->data_bytes += size;
+    return VV_OK;
+}
+
+/* A "data file" pattern "FORMAT MIN MAX STEP [SUBDIM]": FORMAT must hold one
+ * integer conversion (%d, %03d, ...) and nothing else for printf. */
+static vv_status
+scan_pattern(const char *header, const char *value, header_scan *hs) {
+    char fmt[512];
+    long long lo, hi, step;
+    int used = 0;
+    if (sscanf(value, "%511s %lld %lld %lld %n", fmt, &lo, &hi, &step, &used) < 4)
+        return vv_error_set(VV_ERR_FORMAT, "data file pattern '%s': expected FORMAT MIN MAX STEP",
+                            value);
+    int conv = 0;
+    for (const char *c = fmt; *c; c++) {
+        if (*c != '%')
+            continue;
+        if (c[1] == '%') {
+            c++;
+            continue;
+        }
+        c++;
+        while (*c >= '0' && *c <= '9')
+            c++;
+        if (*c != 'd' && *c != 'u')
+            return vv_error_set(VV_ERR_FORMAT,
+                                "data file pattern '%s': only integer conversions (%%d, %%03d) are "
+                                "allowed",
+                                fmt);
+        conv++;
+    }
+    if (conv != 1)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "data file pattern '%s': needs exactly one integer conversion", fmt);
+    if (step == 0 || (step > 0 ? hi < lo : hi > lo) || lo < INT_MIN || lo > INT_MAX ||
+        hi < INT_MIN || hi > INT_MAX || step < INT_MIN || step > INT_MAX)
+        return vv_error_set(VV_ERR_FORMAT, "data file pattern: bad range %lld %lld %lld", lo, hi,
+                            step);
+    long long count = (hi - lo) / step + 1;
+    if (count > NRRD_MAX_FILES)
+        return vv_error_set(VV_ERR_LIMIT, "data file pattern names %lld files (at most %d)", count,
+                            NRRD_MAX_FILES);
+    for (long long i = 0; i < count; i++) {
+        char name[600];
+        snprintf(name, sizeof name, fmt, (int)(lo + i * step));
+        vv_status s = scan_data_file(header, name, hs);
+        if (s != VV_OK)
+            return s;
+    }
+    return VV_OK;
+}
+
+/*
+ * Reads the header text of @p path (which must be a regular file starting
+ * with the NRRD magic) and applies the detached-data policy to every data
+ * file it names (a single file, a LIST or a pattern), before Teem opens
+ * any: see docs/formats.md, "Detached data files".
+ */
+static vv_status
+scan_header(const char *path, header_scan *hs) {
+    memset(hs, 0, sizeof *hs);
+    FILE *f = NULL;
+    uint64_t fsize = 0;
+    vv_status s = vv_open_regular(path, &f, &fsize);
+    if (s != VV_OK)
+        return s;
+    size_t cap = fsize < NRRD_MAX_HEADER ? (size_t)fsize : NRRD_MAX_HEADER;
+    char *text = malloc(cap + 1);
+    if (!text) {
+        fclose(f);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    size_t got = fread(text, 1, cap, f);
+    fclose(f);
+    text[got] = '\0';
+    if (got == 0) {
+        free(text);
+        return vv_error_set(VV_ERR_FORMAT, "empty file");
+    }
+    if (got < 7 || memcmp(text, "NRRD000", 7) != 0) {
+        free(text);
+        return vv_error_set(VV_ERR_FORMAT, "not a NRRD file (no \"NRRD000x\" magic)");
+    }
+    /* the whole magic line, as Teem accepts it (it leaks a line buffer on
+     * any other first line) */
+    if (got < 9 || text[7] < '1' || text[7] > '5' ||
+        !(text[8] == '\n' || (text[8] == '\r' && got > 9 && text[9] == '\n'))) {
+        free(text);
+        return vv_error_set(VV_ERR_FORMAT,
+                            "the first line is not a NRRD magic (NRRD0001 to NRRD0005)");
+    }
+    int in_list = 0, ended = 0;
+    /* the fields Teem requires; it leaks the data file names it has read
+     * when one is missing */
+    static const char *const required[4] = {"type:", "dimension:", "sizes:", "encoding:"};
+    int seen[4] = {0, 0, 0, 0};
+    size_t pos = 0;
+    while (s == VV_OK && pos < got) {
+        char *line = text + pos;
+        char *nl = memchr(line, '\n', got - pos);
+        if (!nl && got == cap && fsize > cap) {
+            s = vv_error_set(VV_ERR_LIMIT, "header longer than %zu bytes", NRRD_MAX_HEADER);
+            break;
+        }
+        size_t len = nl ? (size_t)(nl - line) : got - pos;
+        pos += len + (nl ? 1 : 0);
+        if (len > 0 && line[len - 1] == '\r')
+            len--;
+        if (memchr(line, '\0', len)) {
+            if (in_list)
+                s = vv_error_set(VV_ERR_FORMAT, "a data file name holds a NUL byte");
+            else
+                ended = 1; /* binary data right after a header without a blank line */
+            break;
+        }
+        line[len] = '\0';
+        if (in_list) {
+            if (len > 0)
+                s = scan_data_file(path, line, hs);
+            continue;
+        }
+        if (len == 0) {
+            ended = 1; /* the blank line: attached data follow */
+            break;
+        }
+        /* Teem formats its message about a bad line into a fixed buffer
+         * (1 KB) and aborts on a longer one: refuse long lines first
+         * (comments, key/value pairs and "content" are copied safely) */
+        if (len > NRRD_MAX_LINE && line[0] != '#' && strncmp(line, "content:", 8) != 0) {
+            const char *kv = strstr(line, ":="), *fd = strstr(line, ": ");
+            if (!kv || (fd && fd < kv)) {
+                s = vv_error_set(VV_ERR_FORMAT, "a header line of %zu bytes (at most %d)", len,
+                                 NRRD_MAX_LINE);
+                break;
+            }
+        }
+        for (int r = 0; r < 4; r++)
+            if (!strncmp(line, required[r], strlen(required[r])))
+                seen[r] = 1;
+        const char *v = NULL;
+        if (!strncmp(line, "data file:", 10))
+            v = line + 10;
+        else if (!strncmp(line, "datafile:", 9))
+            v = line + 9;
+        if (!v || *v == '=')
+            continue; /* another field, or a "data file:=" key/value pair */
+        while (*v == ' ' || *v == '\t')
+            v++;
+        for (char *e = line + len; e > v && (e[-1] == ' ' || e[-1] == '\t');)
+            *--e = '\0';
+        if (!strncmp(v, "LIST", 4) && (v[4] == '\0' || v[4] == ' ' || v[4] == '\t')) {
+            /* the rest of the file names the data files: count them before
+             * checking any (a million names cost a million checks) */
+            long names = 0;
+            for (size_t i = pos; i < got; i++)
+                if (text[i] == '\n' && i > pos && text[i - 1] != '\n')
+                    names++;
+            if (got > pos && text[got - 1] != '\n')
+                names++;
+            if (names > NRRD_MAX_FILES || fsize > got) {
+                s = vv_error_set(VV_ERR_LIMIT, "the data file LIST names %s%ld files (at most %d)",
+                                 fsize > got ? "more than " : "", names, NRRD_MAX_FILES);
+                break;
+            }
+            in_list = 1;
+        } else if (strchr(v, '%') && strchr(v, ' '))
+            s = scan_pattern(path, v, hs);
+        else
+            s = scan_data_file(path, v, hs);
+    }
+    (void)ended;
+    for (int r = 0; r < 4 && s == VV_OK; r++)
+        if (!seen[r])
+            s = vv_error_set(VV_ERR_FORMAT, "the header has no \"%.*s\" field",
+                             (int)strlen(required[r]) - 1, required[r]);
+    hs->data_start = pos;
+    if (s == VV_OK && hs->n_files == 0)
+        hs->data_bytes = fsize > pos ? fsize - pos : 0;
+    free(text);
+    if (s != VV_OK)
+        header_scan_free(hs);
+    return s;
+}
+
+/*
+ * Inflates the gzip stream of @p path from @p offset, discarding the output,
+ * until @p need bytes came out: VV_OK when they do, else VV_ERR_FORMAT.
+ * Teem 1.12 leaks its gzip state (about 56 KB) on a truncated or corrupt
+ * stream, so such a stream is refused here before Teem reads it; and
+ * nothing inflates past what the header promises.
+ */
+static vv_status
+check_gzip_stream(const char *path, uint64_t offset, uint64_t need) {
     FILE *f = fopen(path, "rb");
     if (!f)
-        return vv_error_set(VV_ERR_IO, "cannot open: %s", strerror(errno));
-    char buf[8] = {0};
-    size_t got = fread(buf, 1, 7, f);
+        return vv_error_set(VV_ERR_IO, "cannot open %s: %s", vv_path_basename(path),
+                            strerror(errno));
+    if (fseeko(f, (off_t)offset, SEEK_SET) != 0) {
+        fclose(f);
+        return vv_error_set(VV_ERR_IO, "%s: cannot seek", vv_path_basename(path));
+    }
+    z_stream zs;
+    memset(&zs, 0, sizeof zs);
+    if (inflateInit2(&zs, 15 + 16) != Z_OK) {
+        fclose(f);
+        return vv_error_set(VV_ERR_NOMEM, "zlib: cannot initialise");
+    }
+    unsigned char in[16384], out[65536];
+    uint64_t got = 0;
+    int rc = Z_OK;
+    while (got < need && rc == Z_OK) {
+        if (zs.avail_in == 0) {
+            size_t n = fread(in, 1, sizeof in, f);
+            if (n == 0)
+                break;
+            zs.next_in = in;
+            zs.avail_in = (uInt)n;
+        }
+        uint64_t want = need - got < sizeof out ? need - got : sizeof out;
+        zs.next_out = out;
+        zs.avail_out = (uInt)want;
+        rc = inflate(&zs, Z_NO_FLUSH);
+        got += want - zs.avail_out;
+        if (rc == Z_BUF_ERROR)
+            rc = Z_OK; /* more input needed */
+    }
+    /* Teem checks the gzip trailer (CRC-32 and length) when the stream ends
+     * right after the promised bytes, and leaks on a mismatch: see whether
+     * the stream goes on (then the trailer is never read) or ends well */
+    while (got == need && rc == Z_OK) {
+        if (zs.avail_in == 0) {
+            size_t n = fread(in, 1, sizeof in, f);
+            if (n == 0)
+                break;
+            zs.next_in = in;
+            zs.avail_in = (uInt)n;
+        }
+        zs.next_out = out;
+        zs.avail_out = 1;
+        rc = inflate(&zs, Z_NO_FLUSH);
+        if (zs.avail_out == 0)
+            break; /* more data follow: Teem stops before the trailer */
+        if (rc == Z_BUF_ERROR)
+            rc = Z_OK;
+    }
+    inflateEnd(&zs);
     fclose(f);
-    if (got == 0)
-        return vv_error_set(VV_ERR_FORMAT, "empty file");
-    if (got < 7 || memcmp(buf, "NRRD000", 7) != 0)
-        return vv_error_set(VV_ERR_FORMAT, "not a NRRD file (no \"NRRD000x\" magic)");
+    if (got == need && rc != Z_OK && rc != Z_STREAM_END)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "gzip data of %s: a corrupt stream or trailer after the promised %llu "
+                            "bytes",
+                            vv_path_basename(path), (unsigned long long)need);
+    if (got < need)
+        return vv_error_set(
+            VV_ERR_FORMAT, "gzip data of %s end%s after %llu of the %llu bytes the header promises",
+            vv_path_basename(path), rc == Z_OK || rc == Z_STREAM_END ? "" : " (corrupt)",
+            (unsigned long long)got, (unsigned long long)need);
+    return VV_OK;
+}
+
+/*
+ * Checks that the data available can hold what the header promises before
+ * Teem allocates: a raw encoding needs the bytes themselves, gzip at least
+ * 1/1032 of them (deflate's largest ratio), hex two characters a byte and
+ * ascii two a value. bzip2 has no such bound (the memory budget holds).
+ */
+static vv_status
+check_promise(const char *path, const NrrdIoState *nio, const header_scan *hs, uint64_t count,
+              size_t esize) {
+    uint64_t need = count * esize, have = hs->data_bytes;
+    const char *what = NULL;
+    int ok = 1;
+    if (nio->encoding == nrrdEncodingRaw) {
+        ok = have >= need;
+        what = "raw";
+    } else if (nio->encoding == nrrdEncodingGzip) {
+        ok = have >= need / 1032;
+        what = "gzip";
+    } else if (nio->encoding == nrrdEncodingHex) {
+        ok = have / 2 >= need;
+        what = "hex";
+    } else if (nio->encoding == nrrdEncodingAscii) {
+        ok = have / 2 + 1 >= count;
+        what = "ascii";
+    }
+    if (!ok)
+        return vv_error_set(
+            VV_ERR_FORMAT,
+            "%s data of %llu bytes cannot hold the %llu samples the header promises "
+            "(%llu bytes)",
+            what, (unsigned long long)have, (unsigned long long)count, (unsigned long long)need);
+    /* a gzip stream without skipped lines starts right at the data: it must
+     * inflate to the promised size (each file its share) */
+    if (nio->encoding == nrrdEncodingGzip && nio->lineSkip == 0) {
+        /* Teem skips byteSkip bytes of the inflated stream of each file */
+        uint64_t skip = nio->byteSkip > 0 ? (uint64_t)nio->byteSkip : 0;
+        if (hs->n_files == 0)
+            return check_gzip_stream(path, hs->data_start, need + skip);
+        if (need % (uint64_t)hs->n_files == 0)
+            for (int i = 0; i < hs->n_files; i++) {
+                vv_status s =
+                    check_gzip_stream(hs->files[i], 0, need / (uint64_t)hs->n_files + skip);
+                if (s != VV_OK)
+                    return s;
+            }
+    }
     return VV_OK;
 }
 
 /* The body of vv_nrrd_read, under teem_lock. */
 static vv_status
-read_locked(vv_volume **out, const char *path) {
+read_locked(vv_volume **out, const char *path, const header_scan *hs) {
     vv_status s = VV_OK;
     vv_volume *v = NULL;
     int dims[3];
@@ -333,6 +679,10 @@ read_locked(vv_volume **out, const char *path) {
         goto done;
     }
     s = header_dims(n, dims, &type);
+    if (s != VV_OK)
+        goto done;
+    s = check_promise(path, nio, hs, (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2],
+                      nrrdTypeSize[n->type]);
     if (s != VV_OK)
         goto done;
     nrrdNuke(n);
@@ -391,11 +741,13 @@ vv_nrrd_read(vv_volume **out, const char *path) {
         return vv_error_set(VV_ERR_INVALID, "nrrd: NULL argument");
     }
     *out = NULL;
-    vv_status s = check_magic(path);
+    header_scan hs;
+    vv_status s = scan_header(path, &hs);
     if (s == VV_OK) {
         pthread_mutex_lock(&teem_lock);
-        s = read_locked(out, path);
+        s = read_locked(out, path, &hs);
         pthread_mutex_unlock(&teem_lock);
+        header_scan_free(&hs);
     }
     if (s != VV_OK)
         return vv_error_prefix(s, "nrrd: %s", vv_path_basename(path));
@@ -653,8 +1005,11 @@ vv_nrrd_raw_layout(const char *path, vv_volume **header, char **data_path, uint6
                    int *big_endian) {
     *header = NULL;
     *data_path = NULL;
-    vv_status s = check_magic(path);
+    /* the same header checks and detached-data policy as vv_nrrd_read */
+    header_scan hs;
+    vv_status s = scan_header(path, &hs);
     if (s == VV_OK) {
+        header_scan_free(&hs);
         pthread_mutex_lock(&teem_lock);
         s = raw_layout_locked(path, header, data_path, offset, big_endian);
         pthread_mutex_unlock(&teem_lock);

@@ -62,6 +62,9 @@ expect_size(int a, int b, int c, vv_voxel_type t, uint64_t want) {
 static void
 test_check_size(void **state) {
     (void)state;
+    /* the fixed limits alone: no memory budget (it is tested in
+     * tests/io/test_hardening.c) */
+    vv_memory_budget_set(UINT64_MAX);
     expect_limit(0, 1, 1, VV_U8, "0 x 1 x 1");
     expect_limit(1, 0, 1, VV_U8, "1 x 0 x 1");
     expect_limit(1, 1, 0, VV_U8, "1 x 1 x 0");
@@ -97,6 +100,7 @@ test_check_size(void **state) {
     assert_int_equal(vv_volume_new(&v, bad, VV_F64), VV_ERR_LIMIT);
     assert_null(v);
     assert_true(vv_error_message()[0] != '\0');
+    vv_memory_budget_set(0);
 }
 
 /* ---- lifetime ---- */

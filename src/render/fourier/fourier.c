@@ -416,7 +416,7 @@ build_over(fr_source *s, int c, int threads) {
     for (int j = 0; j < M; j++)
         for (int k = 0; k < M; k++)
             dirichlet(M, j + 0.5 - k, &dodd[2 * (j * M + k)], &dodd[2 * (j * M + k) + 1]);
-    int failed = 0;
+    _Atomic int failed = 0; /* set by one thread, read by all */
 #pragma omp parallel num_threads(threads)
     {
         float *G = malloc(sizeof(float) * 2 * (size_t)M * M * M);  /* [kc][kq][kp] */
@@ -768,7 +768,8 @@ project_object(fr_state *st, const fr_frame *fr, fr_obj *ob, int threads,
         free(wtab);
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     }
-    int failed = 0, cancelled = 0;
+    /* atomic: set by one thread, read by the others in their loop test */
+    _Atomic int failed = 0, cancelled = 0;
     long done = 0;
 #pragma omp parallel num_threads(nthreads)
     {

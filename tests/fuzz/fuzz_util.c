@@ -1,0 +1,88 @@
+/* Shared helpers of the libFuzzer harnesses: see fuzz_util.h. */
+#include "fuzz_util.h"
+
+#include <dirent.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "volvis/volvis.h"
+
+static char tmpdir[256];
+
+static void
+cleanup(void) {
+    if (!tmpdir[0])
+        return;
+    DIR *d = opendir(tmpdir);
+    if (d) {
+        struct dirent *e;
+        char p[512];
+        while ((e = readdir(d)) != NULL) {
+            if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
+                continue;
+            snprintf(p, sizeof p, "%s/%s", tmpdir, e->d_name);
+            unlink(p);
+        }
+        closedir(d);
+    }
+    rmdir(tmpdir);
+}
+
+void
+fuzz_init(void) {
+    if (tmpdir[0])
+        return;
+    vv_memory_budget_set(FUZZ_MEMORY_BUDGET);
+    vv_threads_set(1);
+    const char *base = getenv("TMPDIR");
+    snprintf(tmpdir, sizeof tmpdir, "%s/vvfuzz-XXXXXX", base && *base ? base : "/tmp");
+    if (!mkdtemp(tmpdir)) {
+        perror("fuzz: mkdtemp");
+        abort();
+    }
+    atexit(cleanup);
+}
+
+const char *
+fuzz_dir(void) {
+    fuzz_init();
+    return tmpdir;
+}
+
+const char *
+fuzz_write(const char *name, const uint8_t *data, size_t size) {
+    static char paths[8][512];
+    static int slot;
+    fuzz_init();
+    char *p = paths[slot];
+    slot = (slot + 1) % 8;
+    snprintf(p, 512, "%s/%s", tmpdir, name);
+    FILE *f = fopen(p, "wb");
+    if (!f || (size && fwrite(data, 1, size, f) != size) || fclose(f) != 0) {
+        perror("fuzz: writing the input");
+        abort();
+    }
+    return p;
+}
+
+void
+fuzz_split(const uint8_t *data, size_t size, const char *sep, const uint8_t **a, size_t *na,
+           const uint8_t **b, size_t *nb) {
+    size_t ls = strlen(sep);
+    *a = data;
+    *na = size;
+    *b = data + size;
+    *nb = 0;
+    if (size < ls)
+        return;
+    for (size_t i = 0; i + ls <= size; i++) {
+        if (memcmp(data + i, sep, ls) == 0) {
+            *na = i;
+            *b = data + i + ls;
+            *nb = size - i - ls;
+            return;
+        }
+    }
+}

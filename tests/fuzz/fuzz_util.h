@@ -1,0 +1,43 @@
+/*
+ * Shared helpers of the libFuzzer harnesses (tests/fuzz/fuzz_<format>.c).
+ *
+ * Most readers take a path, so the input is written to a file in a private
+ * temporary folder (one per process, removed at exit) and the reader is
+ * called on it. The library's memory budget is set low (FUZZ_MEMORY_BUDGET)
+ * so that a header that claims a huge volume is refused with VV_ERR_LIMIT
+ * instead of allocating: libFuzzer's -rss_limit_mb (2 GB by default) and
+ * -malloc_limit_mb then catch any allocation that escapes the budget.
+ *
+ * Thread-safety: none; each harness is single-threaded (vv_threads_set(1)).
+ */
+#ifndef VV_FUZZ_UTIL_H
+#define VV_FUZZ_UTIL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+/** Memory budget of the library under the fuzzer: 256 MiB. */
+#define FUZZ_MEMORY_BUDGET ((uint64_t)256 << 20)
+
+/** Sets the budget, one thread, and makes the private temporary folder. */
+void fuzz_init(void);
+
+/**
+ * Writes @p size bytes to "<tmpdir>/<name>" (replacing it) and returns the
+ * path (static storage, valid until the next call with the same name slot).
+ * Aborts on an I/O error (the fuzzer's machine, not the input, is at fault).
+ */
+const char *fuzz_write(const char *name, const uint8_t *data, size_t size);
+
+/** The private temporary folder. */
+const char *fuzz_dir(void);
+
+/**
+ * Splits @p data at the first occurrence of @p sep (a line such as
+ * "\n--DATA--\n"): the part before goes to *a, the part after to *b; when
+ * absent, the whole input is *a and *b is empty.
+ */
+void fuzz_split(const uint8_t *data, size_t size, const char *sep, const uint8_t **a, size_t *na,
+                const uint8_t **b, size_t *nb);
+
+#endif
