@@ -58,8 +58,8 @@ extern "C" {
 
 /** What the quality setting aims at. */
 typedef enum vv_vvc_target {
-    VV_VVC_QUALITY = 0, /**< a quality factor in [0, 100] */
-    VV_VVC_RATE = 1,    /**< a file size in bits per voxel, reached by searching the quality */
+    VV_VVC_QUALITY = 0,  /**< a quality factor in [0, 100] */
+    VV_VVC_RATE = 1,     /**< a file size in bits per voxel, reached by searching the quality */
     VV_VVC_MAX_ERROR = 2 /**< |x - decoded x| <= max_error for every voxel (version 2 only) */
 } vv_vvc_target;
 

@@ -152,7 +152,7 @@ struct vv_vvc {
     float *step_abs;        /* N: steps of the unnormalised coefficients in scan order */
     vv_huff_table dct, act; /* version 1 */
     vv_huff_dec dc, ac;
-    vvc2_model model;              /* version 2 */
+    vvc2_model model; /* version 2 */
     uint16_t *p0;     /* model.nctx probabilities */
     float *recon;     /* 2 nb reconstruction offsets (steps) by band and |q| = 1, > 1 */
     uint64_t data_start, data_len; /* bit streams (without the CRC) */
