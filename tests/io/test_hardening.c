@@ -22,6 +22,24 @@
 #include <unistd.h>
 #include <zlib.h>
 
+/*
+ * A GDCM call interrupted by its own failed assertion (the abort guard,
+ * src/core/guard.c) loses what GDCM had allocated for it: suppress exactly
+ * GDCM's allocations (and the file buffer of its stream) for
+ * LeakSanitizer. Full stacks are needed to see the GDCM frames.
+ */
+const char *__lsan_default_suppressions(void);
+const char *__asan_default_options(void);
+const char *
+__lsan_default_suppressions(void) {
+    return "leak:libgdcmDSED.so\nleak:libgdcmMSFF.so\nleak:libgdcmCommon.so\n"
+           "leak:_M_allocate_internal_buffer\n";
+}
+const char *
+__asan_default_options(void) {
+    return "fast_unwind_on_malloc=0";
+}
+
 static char g_dir[256];
 
 static const char *
