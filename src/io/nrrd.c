@@ -33,6 +33,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include <teem/nrrd.h>
 #include <zlib.h>
@@ -466,6 +467,16 @@ scan_header(const char *path, header_scan *hs) {
         }
         line[len] = '\0';
         if (in_list) {
+            /* Teem formats a bad name into its error message past the end
+             * of its line buffer when the name holds a control character
+             * (found by fuzzing) */
+            for (size_t k = 0; k < len && s == VV_OK; k++)
+                if ((unsigned char)line[k] < 0x20 && line[k] != '\t')
+                    s = vv_error_set(VV_ERR_FORMAT,
+                                     "a data file name holds the control character 0x%02x",
+                                     (unsigned)(unsigned char)line[k]);
+            if (s != VV_OK)
+                break;
             if (len > 0)
                 s = scan_data_file(path, line, hs);
             continue;
@@ -485,13 +496,14 @@ scan_header(const char *path, header_scan *hs) {
                 break;
             }
         }
+        /* Teem reads field names whatever their case ("Data File:") */
         for (int r = 0; r < 4; r++)
-            if (!strncmp(line, required[r], strlen(required[r])))
+            if (!strncasecmp(line, required[r], strlen(required[r])))
                 seen[r] = 1;
         const char *v = NULL;
-        if (!strncmp(line, "data file:", 10))
+        if (!strncasecmp(line, "data file:", 10))
             v = line + 10;
-        else if (!strncmp(line, "datafile:", 9))
+        else if (!strncasecmp(line, "datafile:", 9))
             v = line + 9;
         if (!v || *v == '=')
             continue; /* another field, or a "data file:=" key/value pair */

@@ -29,9 +29,17 @@ LLVMFuzzerInitialize(int *argc, char ***argv) {
  * leaks are suppressed to let the fuzzer look for crashes.
  */
 const char *__lsan_default_suppressions(void);
+const char *__asan_default_options(void);
 const char *
 __lsan_default_suppressions(void) {
     return "leak:libassimp.so\n";
+}
+/* full stacks on malloc, so that a leak's libassimp frames are seen (a
+ * std::string Assimp leaks shows only libstdc++ frames with the fast
+ * unwinder) */
+const char *
+__asan_default_options(void) {
+    return "fast_unwind_on_malloc=0";
 }
 
 static int

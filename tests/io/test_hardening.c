@@ -182,6 +182,26 @@ test_nrrd_detached_policy(void **state) {
     vt_ok(load_nhdr("ok.nhdr", "data.raw"));
     vt_ok(load_nhdr("ok_sub.nhdr", "sub/d.raw"));
     expect_error(load_nhdr("passwd.nhdr", "/etc/passwd"), VV_ERR_FORMAT, "absolute path");
+    /* Teem reads field names in any case: so does the policy (found by
+     * fuzzing: "Data file: LIST" with a control character in a name) */
+    write_text(tpath("case.nhdr"),
+               "NRRD0004\nType: uchar\nDimension: 3\nSizes: 2 2 2\n"
+               "Encoding: raw\nData File: %s\n",
+               "/etc/passwd");
+    {
+        vv_volume *cv = NULL;
+        vv_error_clear();
+        expect_error(vv_nrrd_read(&cv, tpath("case.nhdr")), VV_ERR_FORMAT, "absolute path");
+        assert_null(cv);
+    }
+    write_text(tpath("ctl.nhdr"), "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\n"
+                                  "encoding: raw\nDATA FILE: LIST\na.raw\001b.raw\n");
+    {
+        vv_volume *cv = NULL;
+        vv_error_clear();
+        expect_error(vv_nrrd_read(&cv, tpath("ctl.nhdr")), VV_ERR_FORMAT, "control character");
+        assert_null(cv);
+    }
     expect_error(load_nhdr("dir.nhdr", "sub"), VV_ERR_FORMAT, "a folder");
     expect_error(load_nhdr("up.nhdr", "../../../../../../etc/passwd"), VV_ERR_FORMAT, "'..'");
     expect_error(load_nhdr("up2.nhdr", "sub/../data.raw"), VV_ERR_FORMAT, "'..'");
