@@ -12,15 +12,6 @@
 #include "volvis/volvis.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
-int LLVMFuzzerInitialize(int *argc, char ***argv);
-
-int
-LLVMFuzzerInitialize(int *argc, char ***argv) {
-    (void)argc;
-    (void)argv;
-    fuzz_init();
-    return 0;
-}
 
 static int
 starts(const uint8_t *d, size_t n, const char *p) {

@@ -11,15 +11,6 @@
 #include "volvis/volvis.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
-int LLVMFuzzerInitialize(int *argc, char ***argv);
-
-int
-LLVMFuzzerInitialize(int *argc, char ***argv) {
-    (void)argc;
-    (void)argv;
-    fuzz_init();
-    return 0;
-}
 
 /*
  * Assimp 5.2 leaks the aiMesh / aiNode it was building when many of its

@@ -86,3 +86,25 @@ fuzz_split(const uint8_t *data, size_t size, const char *sep, const uint8_t **a,
         }
     }
 }
+
+int
+LLVMFuzzerInitialize(int *argc, char ***argv) {
+    (void)argc;
+    (void)argv;
+    fuzz_init();
+    return 0;
+}
+
+void
+fuzz_check_volume(vv_volume *v) {
+    if (!v)
+        return;
+    uint64_t n = vv_volume_voxel_count(v);
+    if (n == 0 || !v->data)
+        __builtin_trap();
+    /* touch the first and last voxel: ASan checks the buffer holds them */
+    volatile unsigned char sink = ((unsigned char *)v->data)[0];
+    sink = ((unsigned char *)v->data)[n * vv_voxel_type_size(v->type) - 1];
+    (void)sink;
+    vv_volume_free(v);
+}

@@ -29,6 +29,17 @@ void fuzz_init(void);
  */
 const char *fuzz_write(const char *name, const uint8_t *data, size_t size);
 
+/** libFuzzer's start-up hook, shared by every harness: fuzz_init(). */
+int LLVMFuzzerInitialize(int *argc, char ***argv);
+
+struct vv_volume;
+/**
+ * Checks a volume a reader returned (NULL: nothing): it has voxels and its
+ * buffer holds them all (the first and last voxel are read, so ASan sees an
+ * undersized buffer); then frees it. Traps on an inconsistent volume.
+ */
+void fuzz_check_volume(struct vv_volume *v);
+
 /** The private temporary folder. */
 const char *fuzz_dir(void);
 
