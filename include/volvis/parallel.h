@@ -124,6 +124,10 @@ typedef struct vv_parallel vv_parallel;
 vv_status vv_parallel_new(vv_parallel **out, vv_renderer *ren, const vv_parallel_options *opt);
 /** The raycast renderer it uses; borrowed. */
 vv_renderer *vv_parallel_renderer(vv_parallel *p);
+/**
+ * Frees the context, its bricks and images, and the renderer it created
+ * (not one passed to vv_parallel_new). NULL: nothing. Not collective.
+ */
 void vv_parallel_free(vv_parallel *p);
 
 /**
