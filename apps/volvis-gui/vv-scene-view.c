@@ -480,32 +480,6 @@ image_rect(VvSceneView *self, double *x0, double *y0, double *scale) {
     *y0 = floor((wh - vh * s) / 2);
 }
 
-/* Image pixel coordinates of world point @p p seen through @p v (the
- * inverse of vv_view_ray); FALSE behind the eye. */
-static gboolean
-project(const vv_view *v, vv_vec3 p, double *px, double *py) {
-    vv_vec3 f = vv_vec3_normalize(vv_vec3_sub(v->at, v->eye));
-    vv_vec3 r = vv_vec3_normalize(vv_vec3_cross(f, v->up));
-    vv_vec3 u = vv_vec3_cross(r, f);
-    vv_vec3 d = vv_vec3_sub(p, v->eye);
-    double aspect = (double)v->width / v->height, x, y;
-    if (v->projection == VV_PROJECTION_ORTHOGRAPHIC) {
-        double hh = 0.5 * v->ortho_height;
-        x = vv_vec3_dot(d, r) / (hh * aspect);
-        y = vv_vec3_dot(d, u) / hh;
-    } else {
-        double z = vv_vec3_dot(d, f);
-        if (!(z > 1e-9))
-            return FALSE;
-        double t = tan(0.5 * v->fov);
-        x = vv_vec3_dot(d, r) / (z * t * aspect);
-        y = vv_vec3_dot(d, u) / (z * t);
-    }
-    *px = (x + 1) / 2 * v->width - 0.5;
-    *py = (1 - y) / 2 * v->height - 0.5;
-    return isfinite(*px) && isfinite(*py);
-}
-
 gboolean
 vv_scene_view_pick(VvSceneView *self, double x, double y, vv_vec3 *world) {
     if (!self->shown_depth || self->shown_gen != self->gen || !self->texture)
@@ -532,16 +506,23 @@ vv_scene_view_pick_next(VvSceneView *self, VvPickFunc fn, gpointer user) {
 }
 
 /* The cut plane a VV_NAV_CUT drag moves: the selected object's last local
- * one, else the World's last global one; NULL when there is none. */
+ * one, else the World's last global one; NULL when there is none. With
+ * @p t, also its vv_nav_apply target. */
 static vv_cut_plane *
-target_plane(VvSceneView *self) {
+target_plane(VvSceneView *self, vv_nav_target *t) {
     vv_world *w = vv_document_world(self->doc);
     vv_object *o = vv_document_selected_object(self->doc);
-    if (o && o->n_cut_planes > 0)
-        return &o->cut_planes[o->n_cut_planes - 1];
-    if (w->n_cut_planes > 0)
-        return &w->cut_planes[w->n_cut_planes - 1];
-    return NULL;
+    vv_nav_target nt = {VV_NAV_TARGET_CUT, -1, -1};
+    vv_cut_plane *pl = NULL;
+    if (o && o->n_cut_planes > 0) {
+        nt.index = vv_document_selected(self->doc);
+        pl = &o->cut_planes[o->n_cut_planes - 1];
+    } else if (w->n_cut_planes > 0) {
+        pl = &w->cut_planes[w->n_cut_planes - 1];
+    }
+    if (pl && t)
+        *t = nt;
+    return pl;
 }
 
 /* The handles of the plane or light being moved, drawn over the image. */
@@ -559,9 +540,10 @@ draw_handles(VvSceneView *self, GtkSnapshot *snapshot) {
     double dist = vv_vec3_length(vv_vec3_sub(v->at, v->eye));
     double ax, ay, bx, by;
     if (self->target == VV_NAV_CUT) {
-        vv_cut_plane *pl = target_plane(self);
-        if (pl && project(v, pl->point, &ax, &ay) &&
-            project(v, vv_vec3_add(pl->point, vv_vec3_scale(pl->normal, 0.15 * dist)), &bx, &by)) {
+        vv_cut_plane *pl = target_plane(self, NULL);
+        if (pl && vv_nav_view_project(v, pl->point, &ax, &ay) &&
+            vv_nav_view_project(v, vv_vec3_add(pl->point, vv_vec3_scale(pl->normal, 0.15 * dist)),
+                                &bx, &by)) {
             cairo_set_source_rgb(cr, 0.2, 0.9, 1.0);
             cairo_arc(cr, x0 + s * ax, y0 + s * ay, 7, 0, 2 * G_PI);
             cairo_stroke(cr);
@@ -574,7 +556,7 @@ draw_handles(VvSceneView *self, GtkSnapshot *snapshot) {
     } else if (self->light >= 0 && self->light < w->n_lights) {
         const vv_light *l = &w->lights[self->light];
         cairo_set_source_rgb(cr, 1.0, 0.85, 0.2);
-        if (l->type == VV_LIGHT_POINT && project(v, l->position, &ax, &ay)) {
+        if (l->type == VV_LIGHT_POINT && vv_nav_view_project(v, l->position, &ax, &ay)) {
             double cx = x0 + s * ax, cy = y0 + s * ay;
             cairo_arc(cr, cx, cy, 6, 0, 2 * G_PI);
             cairo_fill(cr);
@@ -585,9 +567,9 @@ draw_handles(VvSceneView *self, GtkSnapshot *snapshot) {
             }
             cairo_stroke(cr);
         } else if (l->type == VV_LIGHT_DIRECTIONAL && !l->headlight &&
-                   project(v, vv_vec3_sub(v->at, vv_vec3_scale(l->direction, 0.3 * dist)), &ax,
-                           &ay) &&
-                   project(v, v->at, &bx, &by)) {
+                   vv_nav_view_project(
+                       v, vv_vec3_sub(v->at, vv_vec3_scale(l->direction, 0.3 * dist)), &ax, &ay) &&
+                   vv_nav_view_project(v, v->at, &bx, &by)) {
             /* an arrow from where the light comes from towards the look-at point */
             cairo_move_to(cr, x0 + s * ax, y0 + s * ay);
             cairo_line_to(cr, x0 + s * bx, y0 + s * by);
@@ -655,6 +637,10 @@ begin_interaction(VvSceneView *self, const char *label) {
     vv_document_begin_edit(self->doc, label);
 }
 
+/* A drag of (dx, dy) widget pixels, through the Navigator (vv_nav_apply):
+ * left drag rotates, Shift or the middle or right button pans, Ctrl zooms
+ * (an object scales); Alt moves the selected object. A cut plane slides
+ * along its normal, Shift turns it. */
 static void
 apply_motion(VvSceneView *self, double dx, double dy) {
     vv_world *w = vv_document_world(self->doc);
@@ -663,54 +649,35 @@ apply_motion(VvSceneView *self, double dx, double dy) {
     image_rect(self, &x0, &y0, &s);
     dx /= s;
     dy /= s;
-    gboolean pan =
-        self->drag_button == 3 || self->drag_button == 2 || (self->drag_mods & GDK_SHIFT_MASK);
+    gboolean shift = (self->drag_mods & GDK_SHIFT_MASK) != 0;
+    gboolean pan = self->drag_button == 3 || self->drag_button == 2 || shift;
     gboolean zoom = (self->drag_mods & GDK_CONTROL_MASK) != 0;
     VvNavTarget target = self->target;
     if (self->drag_mods & GDK_ALT_MASK)
         target = VV_NAV_OBJECT;
-    vv_object *obj = vv_document_selected_object(self->doc);
-    if (target == VV_NAV_OBJECT && obj) {
-        if (zoom)
-            vv_nav_object_scale(obj, exp(-dy / 200.0));
-        else if (pan)
-            vv_nav_object_translate(obj, &w->view, dx, dy);
-        else
-            vv_nav_object_rotate(obj, &w->view, dx, dy);
+    vv_nav_target t = {VV_NAV_TARGET_VIEW, 0, -1};
+    vv_nav_motion m = {.kind = zoom  ? VV_NAV_ZOOM
+                               : pan ? VV_NAV_PAN
+                                     : VV_NAV_ROTATE,
+                       .dx = dx,
+                       .dy = dy,
+                       .factor = exp(-dy / 200.0)};
+    if (target == VV_NAV_OBJECT && vv_document_selected(self->doc) >= 0) {
+        t.kind = VV_NAV_TARGET_OBJECT;
+        t.index = vv_document_selected(self->doc);
     } else if (target == VV_NAV_CUT) {
-        vv_cut_plane *pl = target_plane(self);
-        if (!pl)
+        if (!target_plane(self, &t))
             return;
-        if (self->drag_mods & GDK_SHIFT_MASK) {
-            /* turn the normal as the trackball turns a direction */
-            vv_light tmp = {VV_LIGHT_DIRECTIONAL, 0, pl->normal, pl->point, {1, 1, 1}, 1};
-            vv_nav_light_drag(&tmp, &w->view, dx, dy);
-            pl->normal = tmp.direction;
-        } else {
-            /* along the normal, by the mouse motion along the normal's image direction */
-            double dist = vv_vec3_length(vv_vec3_sub(w->view.at, w->view.eye));
-            double ax, ay, bx, by;
-            vv_vec3 tip = vv_vec3_add(pl->point, vv_vec3_scale(pl->normal, 0.15 * dist));
-            if (project(&w->view, pl->point, &ax, &ay) && project(&w->view, tip, &bx, &by)) {
-                double lx = bx - ax, ly = by - ay, len = hypot(lx, ly);
-                if (len > 1e-6) {
-                    double along = (dx * lx + dy * ly) / len; /* pixels */
-                    vv_vec3 np = vv_vec3_add(pl->point,
-                                             vv_vec3_scale(pl->normal, along * 0.15 * dist / len));
-                    if (isfinite(np.x) && isfinite(np.y) && isfinite(np.z))
-                        pl->point = np;
-                }
-            }
-        }
-    } else if (target == VV_NAV_LIGHT && self->light >= 0 && self->light < w->n_lights) {
-        vv_nav_light_drag(&w->lights[self->light], &w->view, dx, dy);
-    } else if (zoom) {
-        vv_nav_view_zoom(&w->view, exp(-dy / 200.0));
-    } else if (pan) {
-        vv_nav_view_pan(&w->view, dx, dy);
-    } else {
-        vv_nav_view_rotate(&w->view, dx, dy);
+        m.kind = shift ? VV_NAV_ROTATE : VV_NAV_PAN;
+    } else if (target == VV_NAV_LIGHT) {
+        if (self->light < 0 || self->light >= w->n_lights)
+            return;
+        t.kind = VV_NAV_TARGET_LIGHT;
+        t.index = self->light;
+        m.kind = VV_NAV_ROTATE; /* a light follows any drag */
     }
+    if (vv_nav_apply(w, &t, &m) != VV_OK)
+        return;
     vv_document_changed(self->doc);
 }
 
@@ -790,9 +757,10 @@ scroll_cb(GtkEventControllerScroll *c, double dx, double dy, gpointer user) {
     if (!isfinite(dy) || dy == 0)
         return FALSE;
     begin_interaction(self, "zoom");
-    vv_world *w = vv_document_world(self->doc);
-    vv_nav_view_zoom(&w->view, pow(1.1, -dy));
-    vv_document_changed(self->doc);
+    vv_nav_motion m = {.kind = VV_NAV_ZOOM, .factor = pow(1.1, -dy)};
+    vv_nav_target t = {VV_NAV_TARGET_VIEW, 0, -1};
+    if (vv_nav_apply(vv_document_world(self->doc), &t, &m) == VV_OK)
+        vv_document_changed(self->doc);
     return TRUE;
 }
 
@@ -815,9 +783,15 @@ tick_cb(GtkWidget *widget, GdkFrameClock *clock, gpointer user) {
     double size = vv_vec3_length(vv_vec3_sub(b.max, b.min));
     if (!(size > 0))
         size = 1;
-    vv_nav_view_fly(&w->view, self->yaw_rate, self->pitch_rate, self->roll_rate,
-                    self->throttle * 0.25 * size, dt);
-    vv_document_changed(self->doc);
+    vv_nav_motion m = {.kind = VV_NAV_FLY,
+                       .yaw = self->yaw_rate,
+                       .pitch = self->pitch_rate,
+                       .roll = self->roll_rate,
+                       .speed = self->throttle * 0.25 * size,
+                       .dt = dt};
+    vv_nav_target t = {VV_NAV_TARGET_VIEW, 0, -1};
+    if (vv_nav_apply(w, &t, &m) == VV_OK)
+        vv_document_changed(self->doc);
     return G_SOURCE_CONTINUE;
 }
 

@@ -28,6 +28,17 @@ vvg_grid_rows(GtkWidget *grid) {
     return n;
 }
 
+void
+vvg_label_for(GtkWidget *w, GtkWidget *label) {
+    gtk_accessible_update_relation(GTK_ACCESSIBLE(w), GTK_ACCESSIBLE_RELATION_LABELLED_BY, label,
+                                   NULL, -1);
+}
+
+void
+vvg_name(GtkWidget *w, const char *name) {
+    gtk_accessible_update_property(GTK_ACCESSIBLE(w), GTK_ACCESSIBLE_PROPERTY_LABEL, name, -1);
+}
+
 GtkWidget *
 vvg_row(GtkWidget *grid, const char *label, GtkWidget *w) {
     int r = vvg_grid_rows(grid);
@@ -36,6 +47,7 @@ vvg_row(GtkWidget *grid, const char *label, GtkWidget *w) {
     gtk_grid_attach(GTK_GRID(grid), l, 0, r, 1, 1);
     gtk_widget_set_hexpand(w, TRUE);
     gtk_grid_attach(GTK_GRID(grid), w, 1, r, 1, 1);
+    vvg_label_for(w, l);
     return w;
 }
 
@@ -44,6 +56,56 @@ vvg_spin(double lo, double hi, double step, int digits, double value) {
     GtkWidget *s = gtk_spin_button_new_with_range(lo, hi, step);
     gtk_spin_button_set_digits(GTK_SPIN_BUTTON(s), (guint)digits);
     gtk_spin_button_set_value(GTK_SPIN_BUTTON(s), value);
+    return s;
+}
+
+GtkWidget *
+vvg_spin0(double lo, double hi, double step, int digits) {
+    return vvg_spin(lo, hi, step, digits, lo > 0 ? lo : hi < 0 ? hi : 0);
+}
+
+double
+vvg_spin_value(GtkWidget *s) {
+    return gtk_spin_button_get_value(GTK_SPIN_BUTTON(s));
+}
+
+void
+vvg_set_spin(GtkWidget *s, double v) {
+    gtk_spin_button_set_value(GTK_SPIN_BUTTON(s), v);
+}
+
+GdkRGBA
+vvg_rgba(vv_vec3 c) {
+    return (GdkRGBA){(float)c.x, (float)c.y, (float)c.z, 1};
+}
+
+vv_vec3
+vvg_vec3(const GdkRGBA *c) {
+    return vv_vec3_make(c->red, c->green, c->blue);
+}
+
+GtkWidget *
+vvg_action_button(const char *label, const char *action) {
+    GtkWidget *b = gtk_button_new_with_label(label);
+    gtk_actionable_set_action_name(GTK_ACTIONABLE(b), action);
+    return b;
+}
+
+GtkWidget *
+vvg_page_box(void) {
+    GtkWidget *b = gtk_box_new(GTK_ORIENTATION_VERTICAL, 4);
+    gtk_widget_set_margin_start(b, 8);
+    gtk_widget_set_margin_end(b, 8);
+    gtk_widget_set_margin_bottom(b, 8);
+    return b;
+}
+
+GtkWidget *
+vvg_scrolled(GtkWidget *child) {
+    GtkWidget *s = gtk_scrolled_window_new();
+    gtk_scrolled_window_set_policy(GTK_SCROLLED_WINDOW(s), GTK_POLICY_NEVER, GTK_POLICY_AUTOMATIC);
+    gtk_scrolled_window_set_child(GTK_SCROLLED_WINDOW(s), child);
+    gtk_widget_set_vexpand(s, TRUE);
     return s;
 }
 
