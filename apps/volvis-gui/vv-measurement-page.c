@@ -9,6 +9,8 @@ struct _VvMeasurementPage {
     GtkBox parent;
     VvDocument *doc;
     VvSceneView *scene; /* borrowed */
+    VvMarks *marks;
+    GtkWidget *hist_result, *iso_result, *dist_result, *iso_button;
     GtkWidget *measure_iso, *measure_method, *measure_seed, *seed_i, *seed_j, *seed_k;
     GtkWidget *pa[3], *pb[3], *measure_text, *histogram, *hist_log;
     vv_histogram *hist;
@@ -16,12 +18,30 @@ struct _VvMeasurementPage {
 
 G_DEFINE_TYPE(VvMeasurementPage, vv_measurement_page, GTK_TYPE_BOX)
 
+/* A result: under its button (@p where, may be NULL) and appended to the
+ * page's log, where all results can be selected and copied. */
 static void
-measure_print(VvMeasurementPage *self, const char *text) {
+measure_print(VvMeasurementPage *self, GtkWidget *where, const char *text) {
     GtkTextBuffer *b = gtk_text_view_get_buffer(GTK_TEXT_VIEW(self->measure_text));
     GtkTextIter end;
     gtk_text_buffer_get_end_iter(b, &end);
     gtk_text_buffer_insert(b, &end, text, -1);
+    if (where) {
+        g_autofree char *line = g_strstrip(g_strdup(text));
+        gtk_label_set_text(GTK_LABEL(where), line);
+        gtk_widget_set_visible(where, TRUE);
+    }
+}
+
+static void
+copy_results(GtkButton *b, gpointer user) {
+    (void)b;
+    VvMeasurementPage *self = user;
+    GtkTextBuffer *buf = gtk_text_view_get_buffer(GTK_TEXT_VIEW(self->measure_text));
+    GtkTextIter s0, s1;
+    gtk_text_buffer_get_bounds(buf, &s0, &s1);
+    g_autofree char *all = gtk_text_buffer_get_text(buf, &s0, &s1, FALSE);
+    gdk_clipboard_set_text(gtk_widget_get_clipboard(GTK_WIDGET(self)), all);
 }
 
 static void
@@ -69,12 +89,15 @@ act_histogram(GSimpleAction *a, GVariant *p, gpointer user) {
     snprintf(t, sizeof t, "histogram of %s: %llu voxels, min %g, max %g, mean %g, sd %g\n", o->name,
              (unsigned long long)self->hist->total, self->hist->min, self->hist->max,
              self->hist->mean, self->hist->sd);
-    measure_print(self, t);
+    measure_print(self, self->hist_result, t);
     gtk_widget_queue_draw(self->histogram);
 }
 
 typedef struct measure_job {
     vv_volume *volume;
+    vv_mat4 placed; /* the object's transform: the region mesh into the World */
+    vv_mesh *region;
+    const char *units;
     double iso;
     vv_isosurface_measure_options opt;
     vv_isosurface_measure result;
@@ -91,6 +114,17 @@ measure_thread(GTask *task, gpointer src, gpointer data, GCancellable *c) {
     measure_job *j = data;
     vv_error_clear();
     j->status = vv_measure_isosurface(&j->result, j->volume, j->iso, &j->opt);
+    /* the surface-tracked section is drawn in the views */
+    if (j->status == VV_OK && j->opt.has_seed && j->opt.method == VV_MEASURE_MC &&
+        vv_measure_isosurface_mesh(&j->region, j->volume, j->iso, &j->opt) == VV_OK) {
+        for (size_t i = 0; i < j->region->n_vertices; i++) {
+            float *q = j->region->positions + 3 * i;
+            vv_vec3 w = vv_mat4_mul_point(j->placed, vv_vec3_make(q[0], q[1], q[2]));
+            q[0] = (float)w.x;
+            q[1] = (float)w.y;
+            q[2] = (float)w.z;
+        }
+    }
     if (j->status != VV_OK)
         g_strlcpy(j->error, vv_error_message(), sizeof j->error);
 }
@@ -99,6 +133,7 @@ static void
 measure_job_free(gpointer p) {
     measure_job *j = p;
     vv_volume_free(j->volume);
+    vv_mesh_free(j->region);
     g_free(j);
 }
 
@@ -107,19 +142,22 @@ measure_done(GObject *src, GAsyncResult *res, gpointer user) {
     (void)user;
     VvMeasurementPage *self = VV_MEASUREMENT_PAGE(src);
     measure_job *j = g_task_get_task_data(G_TASK(res));
+    gtk_widget_set_sensitive(self->iso_button, TRUE);
     if (j->status != VV_OK) {
+        gtk_label_set_text(GTK_LABEL(self->iso_result), "failed");
         vvg_show_error(GTK_WIDGET(self), "Measurement failed", j->error);
         return;
     }
-    const char *u = vv_unit_name(j->result.unit);
+    const char *u = j->units;
     char t[512];
     snprintf(t, sizeof t,
-             "%s isovalue %g (%s%s): area %.6g %s^2, volume %.6g %s^3, %llu voxels, %zu "
+             "%s isovalue %g (%s%s): area %.6g %s², volume %.6g %s³, %llu voxels, %zu "
              "triangles\n",
              j->name, j->iso, j->result.method == VV_MEASURE_MC ? "marching cubes" : "voxel count",
              j->opt.has_seed ? ", surface-tracked" : "", j->result.area, u, j->result.volume, u,
              (unsigned long long)j->result.voxels, j->result.n_triangles);
-    measure_print(self, t);
+    measure_print(self, self->iso_result, t);
+    vv_marks_set_region(self->marks, j->region);
 }
 
 static void
@@ -137,16 +175,21 @@ act_measure(GSimpleAction *a, GVariant *p, gpointer user) {
         vv_error_clear();
         vv_status s = vv_measure_mesh_volume(o->geometry.mesh, &vol);
         char t[256];
-        snprintf(t, sizeof t, "%s mesh: area %.6g, volume %s%.6g\n", o->name,
+        snprintf(t, sizeof t, "%s mesh: area %.6g units², volume %s%.6g units³\n", o->name,
                  vv_mesh_area(o->geometry.mesh), s == VV_OK ? "" : "(open mesh) ",
                  s == VV_OK ? vol : NAN);
-        measure_print(self, t);
+        measure_print(self, self->iso_result, t);
         return;
     }
     if (!o->volume)
         return;
     measure_job *j = g_new0(measure_job, 1);
     j->volume = vv_volume_ref(o->volume);
+    j->placed = vv_object_matrix(o);
+    j->units = vvg_unit_label(o->volume);
+    gtk_label_set_text(GTK_LABEL(self->iso_result), "measuring…");
+    gtk_widget_set_visible(self->iso_result, TRUE);
+    gtk_widget_set_sensitive(self->iso_button, FALSE);
     j->iso = vvg_spin_value(self->measure_iso);
     g_strlcpy(j->name, o->name, sizeof j->name);
     vv_isosurface_measure_options_init(&j->opt);
@@ -181,10 +224,11 @@ picked_seed(gpointer user, vv_vec3 p) {
     vvg_set_spin(self->seed_j, round(ijk.y));
     vvg_set_spin(self->seed_k, round(ijk.z));
     gtk_check_button_set_active(GTK_CHECK_BUTTON(self->measure_seed), TRUE);
-    char t[160];
-    snprintf(t, sizeof t, "picked voxel (%.0f, %.0f, %.0f) at world (%g, %g, %g)\n", round(ijk.x),
-             round(ijk.y), round(ijk.z), p.x, p.y, p.z);
-    measure_print(self, t);
+    vv_marks_set_point(self->marks, VV_MARK_SEED, p);
+    char t[200];
+    snprintf(t, sizeof t, "picked voxel (%.0f, %.0f, %.0f) at (%g, %g, %g) %s\n", round(ijk.x),
+             round(ijk.y), round(ijk.z), p.x, p.y, p.z, vvg_unit_label(o->volume));
+    measure_print(self, self->iso_result, t);
 }
 
 static void
@@ -193,6 +237,7 @@ picked_a(gpointer user, vv_vec3 p) {
     vvg_set_spin(self->pa[0], p.x);
     vvg_set_spin(self->pa[1], p.y);
     vvg_set_spin(self->pa[2], p.z);
+    vv_marks_set_point(self->marks, VV_MARK_A, p);
 }
 
 static void
@@ -201,6 +246,7 @@ picked_b(gpointer user, vv_vec3 p) {
     vvg_set_spin(self->pb[0], p.x);
     vvg_set_spin(self->pb[1], p.y);
     vvg_set_spin(self->pb[2], p.z);
+    vv_marks_set_point(self->marks, VV_MARK_B, p);
 }
 
 static void
@@ -233,10 +279,13 @@ act_distance(GSimpleAction *a, GVariant *p, gpointer user) {
                               vvg_spin_value(self->pa[2]));
     vv_vec3 pb = vv_vec3_make(vvg_spin_value(self->pb[0]), vvg_spin_value(self->pb[1]),
                               vvg_spin_value(self->pb[2]));
+    vv_object *o = vv_document_selected_object(self->doc);
     char t[256];
-    snprintf(t, sizeof t, "distance (%g, %g, %g) - (%g, %g, %g): %.6g world units\n", pa.x, pa.y,
-             pa.z, pb.x, pb.y, pb.z, vv_vec3_length(vv_vec3_sub(pa, pb)));
-    measure_print(self, t);
+    snprintf(t, sizeof t, "distance (%g, %g, %g) - (%g, %g, %g): %.6g %s\n", pa.x, pa.y, pa.z, pb.x,
+             pb.y, pb.z, vv_vec3_length(vv_vec3_sub(pa, pb)), vvg_unit_label(o ? o->volume : NULL));
+    measure_print(self, self->dist_result, t);
+    vv_marks_set_point(self->marks, VV_MARK_A, pa);
+    vv_marks_set_point(self->marks, VV_MARK_B, pb);
 }
 
 static void
@@ -263,6 +312,7 @@ vv_measurement_page_dispose(GObject *o) {
         g_signal_handlers_disconnect_by_data(self->doc, self);
         g_clear_object(&self->doc);
     }
+    g_clear_object(&self->marks);
     vv_histogram_free(self->hist);
     self->hist = NULL;
     G_OBJECT_CLASS(vv_measurement_page_parent_class)->dispose(o);
@@ -282,6 +332,20 @@ vv_measurement_page_init(VvMeasurementPage *self) {
     gtk_widget_set_margin_bottom(GTK_WIDGET(self), 8);
 }
 
+/* A selectable result line under a button, named for assistive technologies. */
+static GtkWidget *
+result_label(GtkWidget *box, const char *name) {
+    GtkWidget *l = gtk_label_new("");
+    gtk_label_set_selectable(GTK_LABEL(l), TRUE);
+    gtk_label_set_wrap(GTK_LABEL(l), TRUE);
+    gtk_label_set_xalign(GTK_LABEL(l), 0);
+    gtk_widget_add_css_class(l, "monospace");
+    vvg_name(l, name);
+    gtk_widget_set_visible(l, FALSE);
+    gtk_box_append(GTK_BOX(box), l);
+    return l;
+}
+
 static void
 build_isosurface(VvMeasurementPage *self) {
     GtkWidget *box = GTK_WIDGET(self);
@@ -296,7 +360,9 @@ build_isosurface(VvMeasurementPage *self) {
     self->seed_k = vvg_row(g, "k", vvg_spin0(0, 1e5, 1, 0));
     gtk_box_append(GTK_BOX(box),
                    vvg_action_button("Pick the seed voxel in the view", "win.pick-seed"));
-    gtk_box_append(GTK_BOX(box), vvg_action_button("Measure", "win.measure"));
+    self->iso_button = vvg_action_button("Measure", "win.measure");
+    gtk_box_append(GTK_BOX(box), self->iso_button);
+    self->iso_result = result_label(box, "isosurface result");
 }
 
 static void
@@ -313,13 +379,15 @@ build_distance(VvMeasurementPage *self) {
     gtk_box_append(GTK_BOX(pb), vvg_action_button("Pick B", "win.pick-b"));
     gtk_box_append(GTK_BOX(box), pb);
     gtk_box_append(GTK_BOX(box), vvg_action_button("Distance", "win.distance"));
+    self->dist_result = result_label(box, "distance result");
 }
 
 GtkWidget *
-vv_measurement_page_new(VvDocument *doc, VvSceneView *scene, GActionMap *actions) {
+vv_measurement_page_new(VvDocument *doc, VvSceneView *scene, VvMarks *marks, GActionMap *actions) {
     VvMeasurementPage *self = g_object_new(VV_TYPE_MEASUREMENT_PAGE, NULL);
     self->doc = g_object_ref(doc);
     self->scene = scene;
+    self->marks = g_object_ref(marks);
     const GActionEntry entries[] = {
         {"histogram", act_histogram, NULL, NULL, NULL, {0}},
         {"measure", act_measure, NULL, NULL, NULL, {0}},
@@ -339,14 +407,23 @@ vv_measurement_page_new(VvDocument *doc, VvSceneView *scene, GActionMap *actions
     g_signal_connect(self->hist_log, "toggled", G_CALLBACK(hist_log_toggled), self);
     gtk_box_append(GTK_BOX(box), self->hist_log);
     gtk_box_append(GTK_BOX(box), vvg_action_button("Histogram", "win.histogram"));
+    self->hist_result = result_label(box, "histogram result");
     build_isosurface(self);
     build_distance(self);
-    vvg_section(box, "Results (select and copy)");
+    GtkWidget *title = gtk_label_new(NULL);
+    gtk_label_set_markup(GTK_LABEL(title), "<b>All results (select and copy)</b>");
+    gtk_label_set_xalign(GTK_LABEL(title), 0);
+    gtk_widget_set_margin_top(title, 8);
+    gtk_box_append(GTK_BOX(box), title);
     self->measure_text = gtk_text_view_new();
+    vvg_label_for(self->measure_text, title);
     gtk_text_view_set_editable(GTK_TEXT_VIEW(self->measure_text), FALSE);
     gtk_text_view_set_wrap_mode(GTK_TEXT_VIEW(self->measure_text), GTK_WRAP_WORD_CHAR);
     gtk_widget_set_size_request(self->measure_text, -1, 160);
     gtk_box_append(GTK_BOX(box), self->measure_text);
+    GtkWidget *copy = gtk_button_new_with_label("Copy all results");
+    g_signal_connect(copy, "clicked", G_CALLBACK(copy_results), self);
+    gtk_box_append(GTK_BOX(box), copy);
     g_signal_connect(doc, "selection-changed", G_CALLBACK(selection_changed), self);
     selection_changed(doc, self);
     return box;

@@ -58,9 +58,9 @@ vv_navigator_panel_new(VvSceneView *scene) {
                                           NULL};
     self->target = vvg_row(g, "drag moves", gtk_drop_down_new_from_strings(targets));
     g_signal_connect(self->target, "notify::selected", G_CALLBACK(target_changed), self);
-    static const char *const previews[] = {
-        "automatic",    "bounding boxes", "PARC boxes",   "coarse MC",
-        "ray cast 1/4", "ray cast 1/2",   "full quality", NULL};
+    static const char *const previews[] = {"automatic",    "bounding boxes", "PARC boxes",
+                                           "coarse MC",    "ray cast 1/8",   "ray cast 1/4",
+                                           "ray cast 1/2", "full quality",   NULL};
     GtkWidget *pv = vvg_row(g, "preview", gtk_drop_down_new_from_strings(previews));
     g_signal_connect(pv, "notify::selected", G_CALLBACK(preview_changed), self);
     GtkWidget *dl = vvg_row(g, "refine after (ms)", vvg_spin(0, 2000, 10, 0, 100));

@@ -9,7 +9,7 @@ struct _VvObjectPanel {
     VvDocument *doc;
     gboolean updating; /* set while widgets are filled from the World */
     guint placement_source;
-    GtkWidget *obj_pos[3], *obj_scale;
+    GtkWidget *obj_pos[3], *obj_scale, *up_axis;
     GtkWidget *color, *ambient, *diffuse, *specular, *shininess, *reflectance, *transparency;
     GtkWidget *tex_file, *tex_projection, *tex_scale, *solid_kind, *solid_period;
     GtkWidget *shading, *casts, *receives, *in_reflections, *reflects;
@@ -28,6 +28,14 @@ fill_placement(VvObjectPanel *self) {
         for (int i = 0; i < 3; i++)
             vvg_set_spin(self->obj_pos[i], pv[i]);
         vvg_set_spin(self->obj_scale, o->scale.x);
+        /* the up axis: as stored, turned from Y-up, or some other turn */
+        vv_quat q = vv_quat_normalize(o->orientation);
+        vv_quat y_up = vv_quat_from_axis_angle(vv_vec3_make(1, 0, 0), VV_PI / 2);
+        double dz = fabs(fabs(q.w) - 1);
+        double dy = 1 - fabs(q.w * y_up.w + q.x * y_up.x + q.y * y_up.y + q.z * y_up.z);
+        gtk_drop_down_set_selected(GTK_DROP_DOWN(self->up_axis), dz < 1e-9   ? 0u
+                                                                 : dy < 1e-9 ? 1u
+                                                                             : 2u);
     }
     self->updating = was;
 }
@@ -76,11 +84,19 @@ on_placement(GtkSpinButton *sb, gpointer user) {
     vv_document_begin_edit(self->doc, "placement");
     o->position = vv_vec3_make(vvg_spin_value(self->obj_pos[0]), vvg_spin_value(self->obj_pos[1]),
                                vvg_spin_value(self->obj_pos[2]));
-    /* a uniform scale typed here; a non-uniform one (from a scene) keeps its ratios */
+    /* a uniform scale typed here (a non-uniform one from a scene keeps its
+     * ratios), about the object's centre, which stays where it was */
     double sc = vvg_spin_value(self->obj_scale);
-    if (sc > 0 && o->scale.x != 0 && fabs(sc - o->scale.x) > 1e-12)
+    if (sc > 0 && o->scale.x != 0 && fabs(sc - o->scale.x) > 1e-12) {
+        vv_box b = vv_object_world_box(o);
+        vv_vec3 c0 = vv_vec3_scale(vv_vec3_add(b.min, b.max), 0.5);
         o->scale = vv_vec3_scale(o->scale, sc / o->scale.x);
+        b = vv_object_world_box(o);
+        vv_vec3 c1 = vv_vec3_scale(vv_vec3_add(b.min, b.max), 0.5);
+        o->position = vv_vec3_add(o->position, vv_vec3_sub(c0, c1));
+    }
     vv_document_changed(self->doc);
+    fill_placement(self);
 }
 
 /* The material and shading widgets applied to the selected object: one undo step. */
@@ -104,6 +120,28 @@ apply(VvObjectPanel *self, const char *label) {
     o->receives_shadows = gtk_check_button_get_active(GTK_CHECK_BUTTON(self->receives));
     o->visible_in_reflections = gtk_check_button_get_active(GTK_CHECK_BUTTON(self->in_reflections));
     o->reflects = gtk_check_button_get_active(GTK_CHECK_BUTTON(self->reflects));
+    vv_document_changed(self->doc);
+}
+
+/* Z up (the object as stored) or Y up (its Y turned to the World's Z, the
+ * convention of OBJ, PLY and glTF exporters): one undo step. */
+static void
+up_axis_changed(GObject *d, GParamSpec *p, gpointer user) {
+    (void)p;
+    VvObjectPanel *self = user;
+    vv_object *o = vv_document_selected_object(self->doc);
+    guint k = gtk_drop_down_get_selected(GTK_DROP_DOWN(d));
+    if (self->updating || !o || k > 1)
+        return;
+    vv_document_begin_edit(self->doc, "up axis");
+    vv_box before = vv_object_world_box(o);
+    o->orientation =
+        k == 1 ? vv_quat_from_axis_angle(vv_vec3_make(1, 0, 0), VV_PI / 2) : vv_quat_identity();
+    /* turned about its box centre, which stays where it was */
+    vv_box after = vv_object_world_box(o);
+    vv_vec3 shift = vv_vec3_scale(
+        vv_vec3_sub(vv_vec3_add(before.min, before.max), vv_vec3_add(after.min, after.max)), 0.5);
+    o->position = vv_vec3_add(o->position, shift);
     vv_document_changed(self->doc);
 }
 
@@ -295,6 +333,9 @@ vv_object_panel_new(VvDocument *doc) {
     }
     self->obj_scale = vvg_row(g, "scale", vvg_spin0(1e-3, 1e3, 0.1, 3));
     g_signal_connect(self->obj_scale, "value-changed", G_CALLBACK(on_placement), self);
+    static const char *const ups[] = {"Z (as stored)", "Y (OBJ, PLY, glTF)", "other", NULL};
+    self->up_axis = vvg_row(g, "up axis", gtk_drop_down_new_from_strings(ups));
+    g_signal_connect(self->up_axis, "notify::selected", G_CALLBACK(up_axis_changed), self);
     build_material(self);
     build_texture(self);
     g = vvg_section(GTK_WIDGET(self), "Shading");

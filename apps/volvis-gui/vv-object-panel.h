@@ -1,7 +1,9 @@
 /*
  * VvObjectPanel: Object Control for the selected object (VolVis paper,
  * section 4): its placement (position and uniform scale, world units; the
- * Navigator moves it too and the numbers follow), colour and material
+ * Navigator moves it too and the numbers follow; the scale pivots on the
+ * object's centre; the up axis, Z as stored or Y turned to Z for meshes from
+ * Y-up exporters), colour and material
  * (ambient, diffuse, specular, shininess, reflectance, transparency),
  * textures (a PNG image with planar, cylindrical or spherical projection;
  * a checker, wood or marble solid texture) and the shading flags of the

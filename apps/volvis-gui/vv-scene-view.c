@@ -1,6 +1,8 @@
 /* VvSceneView: the scene view and the Navigator (vv-scene-view.h). */
 #define _GNU_SOURCE /* syscall(SYS_gettid) for the render thread's priority */
 #include "vv-scene-view.h"
+#include "vv-scene-overlay.h"
+#include "vvg-widgets.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -11,9 +13,10 @@
 #include <unistd.h>
 #endif
 
-/* Seconds a preview frame may take so the view holds 30 frames a second,
- * leaving time for showing it. */
-#define PREVIEW_BUDGET (1.0 / 30.0 - 0.006)
+/* Seconds a preview frame may take so the view holds 24 frames a second
+ * (the target is 20, with room for the load of a shared machine), leaving
+ * time for showing it. */
+#define PREVIEW_BUDGET (1.0 / 24.0 - 0.006)
 
 static gint64 start_us;
 
@@ -53,6 +56,7 @@ typedef struct frame {
 struct _VvSceneView {
     GtkWidget parent;
     VvDocument *doc;
+    VvMarks *marks;
     gulong changed_id;
 
     /* worker */
@@ -223,7 +227,9 @@ warm_previews(VvSceneView *self) {
     for (size_t i = 0; i < G_N_ELEMENTS(kinds); i++) {
         g_mutex_lock(&self->lock);
         gboolean busy = self->pending != NULL || self->quit;
-        gboolean known = self->policy.seconds[kinds[i]] >= 0;
+        /* surfaces are drawn only when even the 1/8 ray cast is too slow */
+        double cast = self->policy.seconds[VV_PREVIEW_RAYCAST_8];
+        gboolean known = self->policy.seconds[kinds[i]] >= 0 || cast < 0 || cast <= PREVIEW_BUDGET;
         vv_world *w = busy || known ? NULL : self->last_world;
         /* a large volume's reduced surfaces take seconds to build, which a
          * drag starting meanwhile would wait for: they are left out */
@@ -430,8 +436,11 @@ refine_cb(gpointer data) {
 }
 
 /* The World changed: draw a preview now and refine after the delay. */
+static gboolean sync_size(VvSceneView *self);
+
 static void
 state_changed(VvSceneView *self) {
+    sync_size(self);
     self->gen++;
     __atomic_store_n(&self->cancel_below, self->gen, __ATOMIC_RELAXED);
     self->moving = TRUE;
@@ -525,62 +534,6 @@ target_plane(VvSceneView *self, vv_nav_target *t) {
     return pl;
 }
 
-/* The handles of the plane or light being moved, drawn over the image. */
-static void
-draw_handles(VvSceneView *self, GtkSnapshot *snapshot) {
-    if (self->target != VV_NAV_CUT && self->target != VV_NAV_LIGHT)
-        return;
-    const vv_world *w = vv_document_world(self->doc);
-    const vv_view *v = &w->view;
-    double x0, y0, s;
-    image_rect(self, &x0, &y0, &s);
-    int ww = gtk_widget_get_width(GTK_WIDGET(self)), wh = gtk_widget_get_height(GTK_WIDGET(self));
-    cairo_t *cr = gtk_snapshot_append_cairo(snapshot, &GRAPHENE_RECT_INIT(0, 0, ww, wh));
-    cairo_set_line_width(cr, 2);
-    double dist = vv_vec3_length(vv_vec3_sub(v->at, v->eye));
-    double ax, ay, bx, by;
-    if (self->target == VV_NAV_CUT) {
-        vv_cut_plane *pl = target_plane(self, NULL);
-        if (pl && vv_nav_view_project(v, pl->point, &ax, &ay) &&
-            vv_nav_view_project(v, vv_vec3_add(pl->point, vv_vec3_scale(pl->normal, 0.15 * dist)),
-                                &bx, &by)) {
-            cairo_set_source_rgb(cr, 0.2, 0.9, 1.0);
-            cairo_arc(cr, x0 + s * ax, y0 + s * ay, 7, 0, 2 * G_PI);
-            cairo_stroke(cr);
-            cairo_move_to(cr, x0 + s * ax, y0 + s * ay);
-            cairo_line_to(cr, x0 + s * bx, y0 + s * by);
-            cairo_stroke(cr);
-            cairo_arc(cr, x0 + s * bx, y0 + s * by, 3.5, 0, 2 * G_PI);
-            cairo_fill(cr);
-        }
-    } else if (self->light >= 0 && self->light < w->n_lights) {
-        const vv_light *l = &w->lights[self->light];
-        cairo_set_source_rgb(cr, 1.0, 0.85, 0.2);
-        if (l->type == VV_LIGHT_POINT && vv_nav_view_project(v, l->position, &ax, &ay)) {
-            double cx = x0 + s * ax, cy = y0 + s * ay;
-            cairo_arc(cr, cx, cy, 6, 0, 2 * G_PI);
-            cairo_fill(cr);
-            for (int k = 0; k < 8; k++) {
-                double a = k * G_PI / 4;
-                cairo_move_to(cr, cx + 9 * cos(a), cy + 9 * sin(a));
-                cairo_line_to(cr, cx + 14 * cos(a), cy + 14 * sin(a));
-            }
-            cairo_stroke(cr);
-        } else if (l->type == VV_LIGHT_DIRECTIONAL && !l->headlight &&
-                   vv_nav_view_project(
-                       v, vv_vec3_sub(v->at, vv_vec3_scale(l->direction, 0.3 * dist)), &ax, &ay) &&
-                   vv_nav_view_project(v, v->at, &bx, &by)) {
-            /* an arrow from where the light comes from towards the look-at point */
-            cairo_move_to(cr, x0 + s * ax, y0 + s * ay);
-            cairo_line_to(cr, x0 + s * bx, y0 + s * by);
-            cairo_stroke(cr);
-            cairo_arc(cr, x0 + s * ax, y0 + s * ay, 6, 0, 2 * G_PI);
-            cairo_fill(cr);
-        }
-    }
-    cairo_destroy(cr);
-}
-
 /* ---- drawing -------------------------------------------------------------- */
 
 static void
@@ -599,6 +552,36 @@ log_frame(VvSceneView *self) {
     fflush(self->frame_log);
 }
 
+/* The anatomical frame and unit of the selected volume (else the first). */
+static void
+volume_frame(VvSceneView *self, vv_space *space, const char **units) {
+    const vv_world *w = vv_document_world(self->doc);
+    const vv_object *o = vv_document_selected_object(self->doc);
+    for (int i = 0; (!o || !o->volume) && i < w->n_objects; i++)
+        o = w->objects[i];
+    *space = o && o->volume ? o->volume->space : VV_SPACE_UNKNOWN;
+    *units = vvg_unit_label(o ? o->volume : NULL);
+}
+
+static void
+draw_overlays(VvSceneView *self, GtkSnapshot *snapshot, int ww, int wh) {
+    VvSceneOverlay ov;
+    memset(&ov, 0, sizeof ov);
+    ov.world = vv_document_world(self->doc);
+    ov.view = &ov.world->view;
+    image_rect(self, &ov.x0, &ov.y0, &ov.scale);
+    ov.width = ww;
+    ov.height = wh;
+    ov.target = self->target;
+    ov.moving_plane = self->target == VV_NAV_CUT ? target_plane(self, NULL) : NULL;
+    ov.light = self->light;
+    ov.marks = self->marks;
+    volume_frame(self, &ov.space, &ov.units);
+    cairo_t *cr = gtk_snapshot_append_cairo(snapshot, &GRAPHENE_RECT_INIT(0, 0, ww, wh));
+    vv_scene_overlay_draw(cr, &ov);
+    cairo_destroy(cr);
+}
+
 static void
 vv_scene_view_snapshot(GtkWidget *widget, GtkSnapshot *snapshot) {
     VvSceneView *self = VV_SCENE_VIEW(widget);
@@ -607,26 +590,51 @@ vv_scene_view_snapshot(GtkWidget *widget, GtkSnapshot *snapshot) {
     vv_vec3 bg = w->background;
     GdkRGBA bgc = {(float)bg.x, (float)bg.y, (float)bg.z, 1};
     gtk_snapshot_append_color(snapshot, &bgc, &GRAPHENE_RECT_INIT(0, 0, ww, wh));
-    if (!self->texture)
+    if (!self->texture || w->n_objects == 0)
         return;
-    /* the view's image size, centred; scaled down only when the widget is smaller */
+    /* the view's image: the widget's size (times its scale), centred */
     double x0, y0, sc;
     image_rect(self, &x0, &y0, &sc);
     graphene_rect_t r = GRAPHENE_RECT_INIT((float)x0, (float)y0, (float)(w->view.width * sc),
                                            (float)(w->view.height * sc));
     gtk_snapshot_append_texture(snapshot, self->texture, &r);
-    draw_handles(self, snapshot);
+    draw_overlays(self, snapshot, ww, wh);
     log_frame(self);
+}
+
+/* The view renders at the widget's size in device pixels: the World's view
+ * follows it (no undo step, the session stays saved; a saved session
+ * renders through the CLI at this size). TRUE when it changed. */
+static gboolean
+sync_size(VvSceneView *self) {
+    int scale = gtk_widget_get_scale_factor(GTK_WIDGET(self));
+    int w = gtk_widget_get_width(GTK_WIDGET(self)) * scale;
+    int h = gtk_widget_get_height(GTK_WIDGET(self)) * scale;
+    if (w < 16 || h < 16)
+        return FALSE;
+    const vv_view *v = &vv_document_world(self->doc)->view;
+    if (v->width == w && v->height == h)
+        return FALSE;
+    vv_document_set_view_size(self->doc, w, h);
+    return TRUE;
+}
+
+static void
+vv_scene_view_size_allocate(GtkWidget *widget, int width, int height, int baseline) {
+    GTK_WIDGET_CLASS(vv_scene_view_parent_class)->size_allocate(widget, width, height, baseline);
+    VvSceneView *self = VV_SCENE_VIEW(widget);
+    if (self->doc && sync_size(self))
+        state_changed(self);
 }
 
 static void
 vv_scene_view_measure(GtkWidget *widget, GtkOrientation o, int for_size, int *min, int *nat,
                       int *min_base, int *nat_base) {
+    (void)widget;
     (void)for_size;
-    VvSceneView *self = VV_SCENE_VIEW(widget);
-    const vv_world *w = vv_document_world(self->doc);
-    *min = 64;
-    *nat = o == GTK_ORIENTATION_HORIZONTAL ? w->view.width : w->view.height;
+    /* small: the view takes what the window gives it */
+    *min = 96;
+    *nat = o == GTK_ORIENTATION_HORIZONTAL ? 320 : 240;
     *min_base = *nat_base = -1;
 }
 
@@ -880,6 +888,10 @@ vv_scene_view_dispose(GObject *o) {
         g_signal_handler_disconnect(self->doc, self->changed_id);
         g_clear_object(&self->doc);
     }
+    if (self->marks) {
+        g_signal_handlers_disconnect_by_data(self->marks, self);
+        g_clear_object(&self->marks);
+    }
     g_clear_object(&self->texture);
     g_free(self->shown_depth);
     self->shown_depth = NULL;
@@ -904,6 +916,7 @@ vv_scene_view_class_init(VvSceneViewClass *klass) {
     G_OBJECT_CLASS(klass)->finalize = vv_scene_view_finalize;
     GTK_WIDGET_CLASS(klass)->snapshot = vv_scene_view_snapshot;
     GTK_WIDGET_CLASS(klass)->measure = vv_scene_view_measure;
+    GTK_WIDGET_CLASS(klass)->size_allocate = vv_scene_view_size_allocate;
 }
 
 static void
@@ -941,10 +954,18 @@ vv_scene_view_init(VvSceneView *self) {
     gtk_widget_add_controller(GTK_WIDGET(self), keys);
 }
 
+static void
+marks_changed(VvMarks *m, gpointer user) {
+    (void)m;
+    gtk_widget_queue_draw(GTK_WIDGET(user));
+}
+
 VvSceneView *
-vv_scene_view_new(VvDocument *doc) {
+vv_scene_view_new(VvDocument *doc, VvMarks *marks) {
     VvSceneView *self = g_object_new(VV_TYPE_SCENE_VIEW, NULL);
     self->doc = g_object_ref(doc);
+    self->marks = g_object_ref(marks);
+    g_signal_connect(marks, "changed", G_CALLBACK(marks_changed), self);
     self->changed_id = g_signal_connect(doc, "changed", G_CALLBACK(doc_changed), self);
     self->thread = g_thread_new("volvis-render", worker_main, self);
     state_changed(self);

@@ -21,6 +21,7 @@
 #define VV_SCENE_VIEW_H
 
 #include "vv-document.h"
+#include "vv-marks.h"
 
 G_BEGIN_DECLS
 
@@ -37,7 +38,8 @@ typedef enum VvNavTarget {
                             Shift+drag turns the normal */
 } VvNavTarget;
 
-VvSceneView *vv_scene_view_new(VvDocument *doc);
+/** The view of @p doc with the marks of @p marks drawn over it (references are held). */
+VvSceneView *vv_scene_view_new(VvDocument *doc, VvMarks *marks);
 void vv_scene_view_set_target(VvSceneView *view, VvNavTarget target);
 /** The light a VV_NAV_LIGHT drag moves. */
 void vv_scene_view_set_light(VvSceneView *view, int index);

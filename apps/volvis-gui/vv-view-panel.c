@@ -8,7 +8,7 @@ struct _VvViewPanel {
     gboolean updating;
     guint placement_source;
     GtkWidget *eye[3], *at[3];
-    GtkWidget *width, *height, *fov, *projection;
+    GtkWidget *fov, *projection;
 };
 
 G_DEFINE_TYPE(VvViewPanel, vv_view_panel, GTK_TYPE_BOX)
@@ -24,8 +24,6 @@ fill(VvViewPanel *self) {
         vvg_set_spin(self->eye[i], ev[i]);
         vvg_set_spin(self->at[i], av[i]);
     }
-    vvg_set_spin(self->width, v->width);
-    vvg_set_spin(self->height, v->height);
     vvg_set_spin(self->fov, vv_rad_to_deg(v->fov));
     gtk_drop_down_set_selected(GTK_DROP_DOWN(self->projection), v->projection);
     self->updating = was;
@@ -43,8 +41,6 @@ apply(VvViewPanel *self) {
                           vvg_spin_value(self->eye[2]));
     nv.at = vv_vec3_make(vvg_spin_value(self->at[0]), vvg_spin_value(self->at[1]),
                          vvg_spin_value(self->at[2]));
-    nv.width = (int)vvg_spin_value(self->width);
-    nv.height = (int)vvg_spin_value(self->height);
     nv.fov = vv_deg_to_rad(vvg_spin_value(self->fov));
     nv.projection = (vv_projection)gtk_drop_down_get_selected(GTK_DROP_DOWN(self->projection));
     if (vv_nav_view_valid(&nv)) /* an eye on the look-at point is refused */
@@ -124,8 +120,6 @@ vv_view_panel_new(VvDocument *doc) {
         self->eye[i] = vvg_row(g, en[i], wire_spin(self, vvg_spin0(-1e7, 1e7, 1, 3)));
     for (int i = 0; i < 3; i++)
         self->at[i] = vvg_row(g, an[i], wire_spin(self, vvg_spin0(-1e7, 1e7, 1, 3)));
-    self->width = vvg_row(g, "image width", wire_spin(self, vvg_spin0(16, 4096, 16, 0)));
-    self->height = vvg_row(g, "image height", wire_spin(self, vvg_spin0(16, 4096, 16, 0)));
     self->fov = vvg_row(g, "field of view (°)", wire_spin(self, vvg_spin0(1, 170, 1, 1)));
     static const char *const projs[] = {"perspective", "orthographic", NULL};
     self->projection = vvg_row(g, "projection", gtk_drop_down_new_from_strings(projs));
@@ -134,7 +128,7 @@ vv_view_panel_new(VvDocument *doc) {
     gtk_box_append(GTK_BOX(vb), vvg_action_button("Front", "win.view-front"));
     gtk_box_append(GTK_BOX(vb), vvg_action_button("Side", "win.view-side"));
     gtk_box_append(GTK_BOX(vb), vvg_action_button("Top", "win.view-top"));
-    gtk_box_append(GTK_BOX(vb), vvg_action_button("Reset", "win.view-reset"));
+    gtk_box_append(GTK_BOX(vb), vvg_action_button("Frame all", "win.frame-all"));
     gtk_box_append(GTK_BOX(self), vb);
     g_signal_connect(doc, "changed", G_CALLBACK(doc_changed), self);
     fill(self);

@@ -1,9 +1,10 @@
 /*
  * VvViewPanel: the World's view typed as numbers (the Navigator moves it
  * too, and the numbers follow ten times a second): eye and look-at point
- * (world units), image size (pixels), field of view (degrees) and
- * projection; buttons for the front, side and top presets and Reset
- * (the window's actions). Every edit is one undo step. UI thread only.
+ * (world units), field of view (degrees) and projection; buttons for the
+ * front, side and top presets and Frame all (the window's actions). The
+ * image size is the scene view's own (it fills the window); a final render
+ * takes any size in its window. Every edit is one undo step. UI thread only.
  */
 #ifndef VV_VIEW_PANEL_H
 #define VV_VIEW_PANEL_H

@@ -2,29 +2,43 @@
 #include "vv-window.h"
 #include "vvg-widgets.h"
 
+#include <math.h>
 #include <string.h>
 
 #include "vv-animator-page.h"
 #include "vv-cut-panel.h"
 #include "vv-devices-page.h"
+#include "vv-dicom-dialog.h"
 #include "vv-filter-page.h"
 #include "vv-image-window.h"
 #include "vv-lights-panel.h"
+#include "vv-marks.h"
 #include "vv-measurement-page.h"
 #include "vv-modeling-page.h"
 #include "vv-navigator-panel.h"
 #include "vv-object-list.h"
 #include "vv-object-panel.h"
+#include "vv-raw-dialog.h"
 #include "vv-rendering-page.h"
 #include "vv-scene-view.h"
+#include "vv-start-page.h"
 #include "vv-tf-panel.h"
+#include "vv-view-area.h"
 #include "vv-view-panel.h"
 
 struct _VvWindow {
     GtkApplicationWindow parent;
     VvDocument *doc;
     VvSceneView *scene;
+    VvMarks *marks;
     GtkWidget *navigator; /* VvNavigatorPanel */
+    GtkWidget *area;      /* VvViewArea */
+    GtkWidget *pages;     /* the side bar's GtkStack */
+    /* a close or quit waiting for Save (As) to finish */
+    void (*after_save)(void *user);
+    void *after_save_user;
+    gboolean closing;         /* the close was confirmed: let the window go */
+    const void *marks_volume; /* the volume the slice cursor belongs to (compared only) */
 };
 
 G_DEFINE_TYPE(VvWindow, vv_window, GTK_TYPE_APPLICATION_WINDOW)
@@ -55,19 +69,87 @@ doc_changed(VvDocument *doc, gpointer user) {
     update_title(user);
 }
 
-/* ---- actions ---------------------------------------------------------------- */
+/* A new volume selected: the slice views start again from its centre. */
+static void
+selection_changed(VvDocument *doc, gpointer user) {
+    (void)doc;
+    VvWindow *win = user;
+    vv_object *o = vv_document_selected_object(win->doc);
+    if (o && o->volume && o->volume != win->marks_volume) {
+        win->marks_volume = o->volume;
+        vv_marks_reset(win->marks);
+    }
+}
+
+/* ---- opening ------------------------------------------------------------------ */
+
+static void
+raw_error_response(GtkDialog *d, int response, gpointer user) {
+    char *path = g_object_get_data(G_OBJECT(d), "path");
+    if (response == GTK_RESPONSE_ACCEPT && path)
+        vv_raw_dialog_present(GTK_WINDOW(user), vv_window_document(user), path);
+    gtk_window_destroy(GTK_WINDOW(d));
+}
+
+/* A file of no known format: the error, and the raw-import dialog on offer
+ * (the library's hint names the CLI's --raw, which means nothing here). */
+static void
+offer_raw_import(VvWindow *win, const char *path, const char *message) {
+    g_autofree char *base = g_path_get_basename(path);
+    g_autofree char *msg = g_strdup(message);
+    char *hint = strstr(msg, "; use --raw for raw data");
+    if (hint)
+        strcpy(hint, ")");
+    g_printerr("volvis-gui: Cannot open %s: %s\n", base, msg);
+    GtkWidget *d = gtk_message_dialog_new(GTK_WINDOW(win), GTK_DIALOG_MODAL, GTK_MESSAGE_ERROR,
+                                          GTK_BUTTONS_NONE, "Cannot open %s", base);
+    gtk_message_dialog_format_secondary_text(
+        GTK_MESSAGE_DIALOG(d), "%s\n\nIf it holds raw voxels, import it and describe them.", msg);
+    gtk_window_set_title(GTK_WINDOW(d), "VolVis: error");
+    gtk_dialog_add_button(GTK_DIALOG(d), "_Close", GTK_RESPONSE_CLOSE);
+    gtk_dialog_add_button(GTK_DIALOG(d), "_Import as raw…", GTK_RESPONSE_ACCEPT);
+    g_object_set_data_full(G_OBJECT(d), "path", g_strdup(path), g_free);
+    g_signal_connect(d, "response", G_CALLBACK(raw_error_response), win);
+    gtk_widget_show(d);
+}
 
 void
 vv_window_open(VvWindow *win, const char *path) {
     GError *err = NULL;
     if (!vv_document_open(win->doc, path, &err)) {
-        g_autofree char *base = g_path_get_basename(path);
-        char *what = g_strdup_printf("Cannot open %s", base);
-        show_error(win, what, err->message);
-        g_free(what);
+        if (strstr(err->message, "use --raw for raw data")) {
+            offer_raw_import(win, path, err->message);
+        } else {
+            g_autofree char *base = g_path_get_basename(path);
+            char *what = g_strdup_printf("Cannot open %s", base);
+            show_error(win, what, err->message);
+            g_free(what);
+        }
         g_error_free(err);
+    } else {
+        vv_start_page_add_recent(path);
     }
     update_title(win);
+}
+
+static void
+act_open_file(GSimpleAction *a, GVariant *p, gpointer user) {
+    (void)a;
+    vv_window_open(user, g_variant_get_string(p, NULL));
+}
+
+static void
+act_import_raw(GSimpleAction *a, GVariant *p, gpointer user) {
+    (void)a;
+    (void)p;
+    vv_raw_dialog_present(GTK_WINDOW(user), VV_WINDOW(user)->doc, NULL);
+}
+
+static void
+act_browse_dicom(GSimpleAction *a, GVariant *p, gpointer user) {
+    (void)a;
+    (void)p;
+    vv_dicom_dialog_present(GTK_WINDOW(user), VV_WINDOW(user)->doc);
 }
 
 static void
@@ -99,14 +181,26 @@ act_open(GSimpleAction *a, GVariant *p, gpointer user) {
     gtk_native_dialog_show(GTK_NATIVE_DIALOG(d));
 }
 
-static void
+static gboolean
 save_to(VvWindow *win, const char *path) {
     GError *err = NULL;
-    if (!vv_document_save(win->doc, path, &err)) {
+    gboolean ok = vv_document_save(win->doc, path, &err);
+    if (!ok) {
         show_error(win, "Cannot save the session", err->message);
         g_error_free(err);
+    } else {
+        vv_start_page_add_recent(path);
     }
     update_title(win);
+    /* a close or quit waiting for this save goes on now, or not at all */
+    if (win->after_save) {
+        void (*done)(void *) = win->after_save;
+        void *u = win->after_save_user;
+        win->after_save = NULL;
+        if (ok)
+            done(u);
+    }
+    return ok;
 }
 
 static void
@@ -124,6 +218,8 @@ save_response(GtkNativeDialog *d, int response, gpointer user) {
         }
         g_free(p);
         g_object_unref(f);
+    } else {
+        VV_WINDOW(user)->after_save = NULL; /* a close waiting for the save is cancelled */
     }
     g_object_unref(d);
 }
@@ -226,72 +322,144 @@ act_view_reset(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)p;
     VvWindow *win = user;
     vv_world *w = vv_document_world(win->doc);
-    vv_vec3 f = vv_vec3_normalize(vv_vec3_sub(w->view.at, w->view.eye));
-    vv_document_begin_edit(win->doc, "reset view");
+    vv_document_begin_edit(win->doc, "frame all");
     vv_view_frame_box(&w->view, vv_world_bounds(w));
-    (void)f;
     vv_document_changed(win->doc);
 }
 
-/* The menu: the same named actions as the shortcuts, pages and devices. */
-static GtkWidget *
-main_menu_button(void) {
-    static const struct {
-        const char *section, *label, *action;
-    } items[] = {
-        {"File", "Open…", "win.open"},
-        {"File", "Save session", "win.save"},
-        {"File", "Save session as…", "win.save-as"},
-        {"File", "Quit", "app.quit"},
-        {"Edit", "Undo", "win.undo"},
-        {"Edit", "Redo", "win.redo"},
-        {"Edit", "Delete object", "win.delete-object"},
-        {"View", "Front", "win.view-front"},
-        {"View", "Side", "win.view-side"},
-        {"View", "Top", "win.view-top"},
-        {"View", "Reset", "win.view-reset"},
-        {"Render", "Render…", "win.render"},
-    };
-    GMenu *menu = g_menu_new();
-    GMenu *sec = NULL;
-    const char *cur = NULL;
-    for (size_t i = 0; i < G_N_ELEMENTS(items); i++) {
-        if (!cur || strcmp(cur, items[i].section)) {
-            if (sec) {
-                g_menu_append_section(menu, cur, G_MENU_MODEL(sec));
-                g_object_unref(sec);
-            }
-            sec = g_menu_new();
-            cur = items[i].section;
-        }
-        g_menu_append(sec, items[i].label, items[i].action);
-    }
-    g_menu_append_section(menu, cur, G_MENU_MODEL(sec));
-    g_object_unref(sec);
-    GtkWidget *b = gtk_menu_button_new();
-    gtk_menu_button_set_label(GTK_MENU_BUTTON(b), "Menu");
-    gtk_menu_button_set_menu_model(GTK_MENU_BUTTON(b), G_MENU_MODEL(menu));
-    g_object_unref(menu);
-    return b;
+static void
+act_frame_all(GSimpleAction *a, GVariant *p, gpointer user) {
+    act_view_reset(a, p, user);
 }
 
-/* The Manipulation page: the object list, the Navigator, Object Control
- * (segmentation and transfer functions; placement, material, textures and
- * shading), cut planes, lights and the view. */
-static GtkWidget *
-manipulation_page(VvWindow *win) {
-    GtkWidget *box = vvg_page_box();
-    GtkWidget *list = vv_object_list_new(win->doc);
-    vv_object_list_add_button(VV_OBJECT_LIST(list), main_menu_button());
-    gtk_box_append(GTK_BOX(box), list);
-    win->navigator = vv_navigator_panel_new(win->scene);
-    gtk_box_append(GTK_BOX(box), win->navigator);
-    gtk_box_append(GTK_BOX(box), vv_tf_panel_new(win->doc));
-    gtk_box_append(GTK_BOX(box), vv_object_panel_new(win->doc));
-    gtk_box_append(GTK_BOX(box), vv_cut_panel_new(win->doc, G_ACTION_MAP(win)));
-    gtk_box_append(GTK_BOX(box), vv_lights_panel_new(win->doc, win->scene, G_ACTION_MAP(win)));
-    gtk_box_append(GTK_BOX(box), vv_view_panel_new(win->doc));
-    return vvg_scrolled(box);
+/* What a drag in the view moves (Alt+1..4): the dropdown follows. */
+static void
+act_drag_target(GSimpleAction *a, GVariant *p, gpointer user) {
+    (void)a;
+    VvWindow *win = user;
+    const char *t = g_variant_get_string(p, NULL);
+    guint k = !strcmp(t, "object") ? 1u : !strcmp(t, "light") ? 2u : !strcmp(t, "cut") ? 3u : 0u;
+    vv_navigator_panel_set_target(VV_NAVIGATOR_PANEL(win->navigator), (VvNavTarget)k);
+}
+
+/* 1-up or 4-up (a stateful action: the header bar's toggles and the menu follow). */
+static void
+act_layout(GSimpleAction *a, GVariant *p, gpointer user) {
+    VvWindow *win = user;
+    const char *s = g_variant_get_string(p, NULL);
+    vv_view_area_set_layout(VV_VIEW_AREA(win->area), !strcmp(s, "4") ? 4 : 1);
+    g_simple_action_set_state(a, p);
+}
+
+/* ---- closing ------------------------------------------------------------------- */
+
+typedef struct close_ctx {
+    VvWindow *win;
+    void (*done)(void *user);
+    void *user;
+} close_ctx;
+
+static void
+close_response(GtkDialog *d, int response, gpointer data) {
+    close_ctx *c = data;
+    gtk_window_destroy(GTK_WINDOW(d));
+    if (response == GTK_RESPONSE_REJECT) { /* close without saving */
+        c->done(c->user);
+    } else if (response == GTK_RESPONSE_ACCEPT) { /* save first, then close */
+        c->win->after_save = c->done;
+        c->win->after_save_user = c->user;
+        g_action_group_activate_action(G_ACTION_GROUP(c->win), "save", NULL);
+    }
+    g_free(c);
+}
+
+void
+vv_window_confirm_close(VvWindow *win, void (*done)(void *user), void *user) {
+    if (!vv_document_dirty(win->doc)) {
+        done(user);
+        return;
+    }
+    const char *p = vv_document_path(win->doc);
+    g_autofree char *base = p ? g_path_get_basename(p) : g_strdup("the session");
+    GtkWidget *d = gtk_message_dialog_new(GTK_WINDOW(win), GTK_DIALOG_MODAL, GTK_MESSAGE_QUESTION,
+                                          GTK_BUTTONS_NONE, "Save the changes to %s?", base);
+    gtk_message_dialog_format_secondary_text(GTK_MESSAGE_DIALOG(d),
+                                             "Your changes are lost if you close without saving.");
+    gtk_window_set_title(GTK_WINDOW(d), "VolVis: unsaved changes");
+    gtk_dialog_add_button(GTK_DIALOG(d), "_Cancel", GTK_RESPONSE_CANCEL);
+    gtk_dialog_add_button(GTK_DIALOG(d), "Close _without saving", GTK_RESPONSE_REJECT);
+    gtk_dialog_add_button(GTK_DIALOG(d), "_Save", GTK_RESPONSE_ACCEPT);
+    gtk_dialog_set_default_response(GTK_DIALOG(d), GTK_RESPONSE_ACCEPT);
+    close_ctx *c = g_new(close_ctx, 1);
+    c->win = win;
+    c->done = done;
+    c->user = user;
+    g_signal_connect(d, "response", G_CALLBACK(close_response), c);
+    gtk_widget_show(d);
+}
+
+static void
+close_now(void *user) {
+    VvWindow *win = user;
+    win->closing = TRUE;
+    gtk_window_close(GTK_WINDOW(win));
+}
+
+static gboolean
+close_request(GtkWindow *w, gpointer user) {
+    (void)user;
+    VvWindow *win = VV_WINDOW(w);
+    if (win->closing || !vv_document_dirty(win->doc))
+        return FALSE;
+    vv_window_confirm_close(win, close_now, win);
+    return TRUE; /* the dialog decides */
+}
+
+static void
+act_close(GSimpleAction *a, GVariant *p, gpointer user) {
+    (void)a;
+    (void)p;
+    gtk_window_close(GTK_WINDOW(user));
+}
+
+/* ---- the wheel -------------------------------------------------------------------- */
+
+/*
+ * A spin button, slider or drop-down takes the wheel only when it has the
+ * keyboard focus: otherwise the wheel scrolls the side bar it is in, as a
+ * user scrolling down the page expects (the wheel over a spin button used
+ * to change "position y" and shrink "scale" on the way). Runs in the
+ * capture phase, before the widget under the pointer sees the event.
+ */
+static gboolean
+wheel_capture(GtkEventControllerScroll *c, double dx, double dy, gpointer user) {
+    (void)dx;
+    VvWindow *win = user;
+    GdkEvent *ev = gtk_event_controller_get_current_event(GTK_EVENT_CONTROLLER(c));
+    double x, y;
+    if (!ev || !gdk_event_get_position(ev, &x, &y))
+        return FALSE;
+    double nx, ny;
+    gtk_native_get_surface_transform(GTK_NATIVE(win), &nx, &ny);
+    GtkWidget *w = gtk_widget_pick(GTK_WIDGET(win), x - nx, y - ny, GTK_PICK_DEFAULT);
+    GtkWidget *value = NULL;
+    for (GtkWidget *p = w; p && !value; p = gtk_widget_get_parent(p))
+        if (GTK_IS_SPIN_BUTTON(p) || GTK_IS_RANGE(p) || GTK_IS_DROP_DOWN(p))
+            value = p;
+    if (!value)
+        return FALSE;
+    GtkRoot *root = gtk_widget_get_root(value);
+    GtkWidget *focus = root ? gtk_root_get_focus(root) : NULL;
+    if (focus && (focus == value || gtk_widget_is_ancestor(focus, value)))
+        return FALSE; /* focused: the value takes the wheel */
+    GtkWidget *sw = gtk_widget_get_ancestor(value, GTK_TYPE_SCROLLED_WINDOW);
+    if (sw) {
+        GtkAdjustment *adj = gtk_scrolled_window_get_vadjustment(GTK_SCROLLED_WINDOW(sw));
+        double page = gtk_adjustment_get_page_size(adj);
+        /* a notch scrolls as GtkScrolledWindow scrolls it: page^(2/3) */
+        gtk_adjustment_set_value(adj, gtk_adjustment_get_value(adj) + dy * pow(page, 2.0 / 3.0));
+    }
+    return TRUE;
 }
 
 /* ---- drag and drop -------------------------------------------------------------- */
@@ -313,6 +481,137 @@ drop_cb(GtkDropTarget *t, const GValue *value, double x, double y, gpointer user
     return TRUE;
 }
 
+/* ---- layout ------------------------------------------------------------------------ */
+
+/* The application menu: the same named actions as the shortcuts, pages and devices. */
+static GMenuModel *
+main_menu(void) {
+    static const struct {
+        const char *section, *label, *action;
+    } items[] = {
+        {"File", "Open…", "win.open"},
+        {"File", "Import raw…", "win.import-raw"},
+        {"File", "Browse DICOM…", "win.browse-dicom"},
+        {"File", "Save session", "win.save"},
+        {"File", "Save session as…", "win.save-as"},
+        {"File", "Close window", "win.close"},
+        {"File", "Quit", "app.quit"},
+        {"Edit", "Undo", "win.undo"},
+        {"Edit", "Redo", "win.redo"},
+        {"Edit", "Delete object", "win.delete-object"},
+        {"View", "Frame all", "win.frame-all"},
+        {"View", "Front", "win.view-front"},
+        {"View", "Side", "win.view-side"},
+        {"View", "Top", "win.view-top"},
+        {"View", "One view", "win.layout::1"},
+        {"View", "Four views (3-D and slices)", "win.layout::4"},
+        {"Render", "Render…", "win.render"},
+    };
+    GMenu *menu = g_menu_new();
+    GMenu *sec = NULL;
+    const char *cur = NULL;
+    for (size_t i = 0; i < G_N_ELEMENTS(items); i++) {
+        if (!cur || strcmp(cur, items[i].section)) {
+            if (sec) {
+                g_menu_append_section(menu, cur, G_MENU_MODEL(sec));
+                g_object_unref(sec);
+            }
+            sec = g_menu_new();
+            cur = items[i].section;
+        }
+        g_menu_append(sec, items[i].label, items[i].action);
+    }
+    g_menu_append_section(menu, cur, G_MENU_MODEL(sec));
+    g_object_unref(sec);
+    return G_MENU_MODEL(menu);
+}
+
+static GtkWidget *
+header_button(const char *label, const char *action, const char *tip) {
+    GtkWidget *b = gtk_button_new_with_mnemonic(label);
+    gtk_actionable_set_action_name(GTK_ACTIONABLE(b), action);
+    gtk_widget_set_tooltip_text(b, tip);
+    return b;
+}
+
+/* The header bar: Open, Save, Undo, Redo; the layout; the application menu. */
+static GtkWidget *
+header_bar(void) {
+    GtkWidget *hb = gtk_header_bar_new();
+    gtk_header_bar_pack_start(GTK_HEADER_BAR(hb), header_button("_Open…", "win.open", "Ctrl+O"));
+    gtk_header_bar_pack_start(GTK_HEADER_BAR(hb), header_button("_Save", "win.save", "Ctrl+S"));
+    gtk_header_bar_pack_start(GTK_HEADER_BAR(hb), header_button("_Undo", "win.undo", "Ctrl+Z"));
+    gtk_header_bar_pack_start(GTK_HEADER_BAR(hb),
+                              header_button("_Redo", "win.redo", "Ctrl+Shift+Z"));
+    GtkWidget *menu = gtk_menu_button_new();
+    gtk_menu_button_set_label(GTK_MENU_BUTTON(menu), "Menu");
+    GMenuModel *m = main_menu();
+    gtk_menu_button_set_menu_model(GTK_MENU_BUTTON(menu), m);
+    g_object_unref(m);
+    gtk_menu_button_set_primary(GTK_MENU_BUTTON(menu), TRUE);
+    gtk_header_bar_pack_end(GTK_HEADER_BAR(hb), menu);
+    GtkWidget *layout = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 0);
+    gtk_widget_add_css_class(layout, "linked");
+    GtkWidget *one = gtk_toggle_button_new_with_label("1 view");
+    GtkWidget *four = gtk_toggle_button_new_with_label("4 views");
+    gtk_actionable_set_detailed_action_name(GTK_ACTIONABLE(one), "win.layout::1");
+    gtk_actionable_set_detailed_action_name(GTK_ACTIONABLE(four), "win.layout::4");
+    gtk_widget_set_tooltip_text(four, "the 3-D view with axial, coronal and sagittal slices");
+    gtk_box_append(GTK_BOX(layout), one);
+    gtk_box_append(GTK_BOX(layout), four);
+    gtk_header_bar_pack_end(GTK_HEADER_BAR(hb), layout);
+    return hb;
+}
+
+static void
+add_page(VvWindow *win, GtkWidget *content, const char *name, const char *title) {
+    gtk_stack_add_titled(GTK_STACK(win->pages), content, name, title);
+}
+
+static GtkWidget *
+two(GtkWidget *a, GtkWidget *b) {
+    GtkWidget *box = vvg_page_box();
+    gtk_box_append(GTK_BOX(box), a);
+    gtk_box_append(GTK_BOX(box), b);
+    return vvg_scrolled(box);
+}
+
+static GtkWidget *
+one(GtkWidget *a) {
+    GtkWidget *box = vvg_page_box();
+    gtk_box_append(GTK_BOX(box), a);
+    return vvg_scrolled(box);
+}
+
+/* The side bar: one page per component, each scrolling on its own. */
+static GtkWidget *
+side_bar(VvWindow *win) {
+    GActionMap *am = G_ACTION_MAP(win);
+    win->pages = gtk_stack_new();
+    add_page(win, two(vv_object_list_new(win->doc), vv_object_panel_new(win->doc)), "objects",
+             "Objects");
+    add_page(win, one(vv_tf_panel_new(win->doc)), "transfer", "Transfer function");
+    win->navigator = vv_navigator_panel_new(win->scene);
+    add_page(win, two(win->navigator, vv_view_panel_new(win->doc)), "view", "View");
+    add_page(win, one(vv_lights_panel_new(win->doc, win->scene, am)), "lights", "Lights");
+    add_page(win, one(vv_cut_panel_new(win->doc, am)), "cut", "Cut planes");
+    add_page(win, vvg_scrolled(vv_rendering_page_new(win->doc)), "rendering", "Rendering");
+    add_page(win, vvg_scrolled(vv_measurement_page_new(win->doc, win->scene, win->marks, am)),
+             "measurement", "Measurement");
+    add_page(win, vvg_scrolled(vv_modeling_page_new(win->doc, am)), "modeling", "Modeling");
+    add_page(win, vv_filter_page_new(win->doc), "filtering", "Filtering");
+    add_page(win, vv_animator_page_new(win->doc), "animator", "Animator");
+    add_page(win, vv_devices_page_new(win), "devices", "Input devices");
+    GtkWidget *switcher = gtk_stack_sidebar_new();
+    gtk_stack_sidebar_set_stack(GTK_STACK_SIDEBAR(switcher), GTK_STACK(win->pages));
+    GtkWidget *side = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 0);
+    gtk_box_append(GTK_BOX(side), switcher);
+    gtk_widget_set_size_request(win->pages, 360, -1);
+    gtk_widget_set_hexpand(win->pages, FALSE);
+    gtk_box_append(GTK_BOX(side), win->pages);
+    return side;
+}
+
 /* ---- life cycle --------------------------------------------------------------------- */
 
 static void
@@ -322,6 +621,7 @@ vv_window_dispose(GObject *o) {
         g_signal_handlers_disconnect_by_data(win->doc, win);
         g_clear_object(&win->doc);
     }
+    g_clear_object(&win->marks);
     G_OBJECT_CLASS(vv_window_parent_class)->dispose(o);
 }
 
@@ -330,20 +630,14 @@ vv_window_class_init(VvWindowClass *klass) {
     G_OBJECT_CLASS(klass)->dispose = vv_window_dispose;
 }
 
-/* What a drag in the view moves (Alt+1..4): the dropdown follows. */
-static void
-act_drag_target(GSimpleAction *a, GVariant *p, gpointer user) {
-    (void)a;
-    VvWindow *win = user;
-    const char *t = g_variant_get_string(p, NULL);
-    guint k = !strcmp(t, "object") ? 1u : !strcmp(t, "light") ? 2u : !strcmp(t, "cut") ? 3u : 0u;
-    vv_navigator_panel_set_target(VV_NAVIGATOR_PANEL(win->navigator), (VvNavTarget)k);
-}
-
 static const GActionEntry win_actions[] = {
     {"open", act_open, NULL, NULL, NULL, {0}},
+    {"open-file", act_open_file, "s", NULL, NULL, {0}},
+    {"import-raw", act_import_raw, NULL, NULL, NULL, {0}},
+    {"browse-dicom", act_browse_dicom, NULL, NULL, NULL, {0}},
     {"save", act_save, NULL, NULL, NULL, {0}},
     {"save-as", act_save_as, NULL, NULL, NULL, {0}},
+    {"close", act_close, NULL, NULL, NULL, {0}},
     {"undo", act_undo, NULL, NULL, NULL, {0}},
     {"redo", act_redo, NULL, NULL, NULL, {0}},
     {"delete-object", act_delete, NULL, NULL, NULL, {0}},
@@ -352,47 +646,40 @@ static const GActionEntry win_actions[] = {
     {"view-side", act_view_side, NULL, NULL, NULL, {0}},
     {"view-top", act_view_top, NULL, NULL, NULL, {0}},
     {"view-reset", act_view_reset, NULL, NULL, NULL, {0}},
+    {"frame-all", act_frame_all, NULL, NULL, NULL, {0}},
     {"drag-target", act_drag_target, "s", NULL, NULL, {0}},
+    {"layout", NULL, "s", "'1'", act_layout, {0}},
 };
 
 static void
 vv_window_init(VvWindow *win) {
     win->doc = vv_document_new();
+    win->marks = vv_marks_new();
     g_action_map_add_action_entries(G_ACTION_MAP(win), win_actions, G_N_ELEMENTS(win_actions), win);
-    win->scene = vv_scene_view_new(win->doc);
-
-    GtkWidget *stack = gtk_stack_new();
-    GActionMap *am = G_ACTION_MAP(win);
-    gtk_stack_add_titled(GTK_STACK(stack), manipulation_page(win), "manipulation", "Manipulation");
-    gtk_stack_add_titled(GTK_STACK(stack), vvg_scrolled(vv_rendering_page_new(win->doc)),
-                         "rendering", "Rendering");
-    gtk_stack_add_titled(GTK_STACK(stack),
-                         vvg_scrolled(vv_measurement_page_new(win->doc, win->scene, am)),
-                         "measurement", "Measurement");
-    gtk_stack_add_titled(GTK_STACK(stack), vvg_scrolled(vv_modeling_page_new(win->doc, am)),
-                         "modeling", "Modeling");
-    gtk_stack_add_titled(GTK_STACK(stack), vv_devices_page_new(win), "devices", "Input devices");
-    gtk_stack_add_titled(GTK_STACK(stack), vv_animator_page_new(win->doc), "animator", "Animator");
-    gtk_stack_add_titled(GTK_STACK(stack), vv_filter_page_new(win->doc), "filtering", "Filtering");
-    GtkWidget *switcher = gtk_stack_sidebar_new();
-    gtk_stack_sidebar_set_stack(GTK_STACK_SIDEBAR(switcher), GTK_STACK(stack));
-    GtkWidget *side = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 0);
-    gtk_box_append(GTK_BOX(side), switcher);
-    gtk_widget_set_size_request(stack, 340, -1);
-    gtk_box_append(GTK_BOX(side), stack);
+    win->scene = vv_scene_view_new(win->doc, win->marks);
+    win->area = vv_view_area_new(win->doc, win->scene, win->marks);
+    gtk_window_set_titlebar(GTK_WINDOW(win), header_bar());
 
     GtkWidget *paned = gtk_paned_new(GTK_ORIENTATION_HORIZONTAL);
-    gtk_paned_set_start_child(GTK_PANED(paned), GTK_WIDGET(win->scene));
-    gtk_paned_set_end_child(GTK_PANED(paned), side);
+    gtk_paned_set_start_child(GTK_PANED(paned), win->area);
+    gtk_paned_set_end_child(GTK_PANED(paned), side_bar(win));
     gtk_paned_set_resize_end_child(GTK_PANED(paned), FALSE);
     gtk_paned_set_shrink_end_child(GTK_PANED(paned), FALSE);
+    gtk_paned_set_shrink_start_child(GTK_PANED(paned), FALSE);
     gtk_window_set_child(GTK_WINDOW(win), paned);
 
     GtkDropTarget *drop = gtk_drop_target_new(GDK_TYPE_FILE_LIST, GDK_ACTION_COPY);
     g_signal_connect(drop, "drop", G_CALLBACK(drop_cb), win);
     gtk_widget_add_controller(GTK_WIDGET(win), GTK_EVENT_CONTROLLER(drop));
+    GtkEventController *wheel = gtk_event_controller_scroll_new(
+        GTK_EVENT_CONTROLLER_SCROLL_VERTICAL | GTK_EVENT_CONTROLLER_SCROLL_DISCRETE);
+    gtk_event_controller_set_propagation_phase(wheel, GTK_PHASE_CAPTURE);
+    g_signal_connect(wheel, "scroll", G_CALLBACK(wheel_capture), win);
+    gtk_widget_add_controller(GTK_WIDGET(win), wheel);
+    g_signal_connect(win, "close-request", G_CALLBACK(close_request), NULL);
 
     g_signal_connect(win->doc, "changed", G_CALLBACK(doc_changed), win);
+    g_signal_connect(win->doc, "selection-changed", G_CALLBACK(selection_changed), win);
     update_title(win);
 }
 
@@ -406,34 +693,7 @@ vv_window_document(VvWindow *win) {
     return win->doc;
 }
 
-typedef struct close_ctx {
-    void (*done)(void *user);
-    void *user;
-} close_ctx;
-
-static void
-close_response(GtkDialog *d, int response, gpointer data) {
-    close_ctx *c = data;
-    gtk_window_destroy(GTK_WINDOW(d));
-    if (response == GTK_RESPONSE_ACCEPT)
-        c->done(c->user);
-    g_free(c);
-}
-
-void
-vv_window_confirm_close(VvWindow *win, void (*done)(void *user), void *user) {
-    if (!vv_document_dirty(win->doc)) {
-        done(user);
-        return;
-    }
-    GtkWidget *d = gtk_message_dialog_new(GTK_WINDOW(win), GTK_DIALOG_MODAL, GTK_MESSAGE_QUESTION,
-                                          GTK_BUTTONS_NONE, "Discard unsaved changes?");
-    gtk_window_set_title(GTK_WINDOW(d), "VolVis: unsaved changes");
-    gtk_dialog_add_button(GTK_DIALOG(d), "_Cancel", GTK_RESPONSE_CANCEL);
-    gtk_dialog_add_button(GTK_DIALOG(d), "_Discard", GTK_RESPONSE_ACCEPT);
-    close_ctx *c = g_new(close_ctx, 1);
-    c->done = done;
-    c->user = user;
-    g_signal_connect(d, "response", G_CALLBACK(close_response), c);
-    gtk_widget_show(d);
+VvSceneView *
+vv_window_scene_view(VvWindow *win) {
+    return win->scene;
 }

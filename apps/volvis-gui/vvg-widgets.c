@@ -91,6 +91,17 @@ vvg_action_button(const char *label, const char *action) {
     return b;
 }
 
+const char *
+vvg_unit_label(const vv_volume *v) {
+    if (!v)
+        return "units";
+    if (v->unit != VV_UNIT_UNKNOWN)
+        return vv_unit_name(v->unit);
+    if (v->spacing[0] == 1 && v->spacing[1] == 1 && v->spacing[2] == 1)
+        return "voxel units";
+    return "units";
+}
+
 GtkWidget *
 vvg_page_box(void) {
     GtkWidget *b = gtk_box_new(GTK_ORIENTATION_VERTICAL, 4);
@@ -98,6 +109,20 @@ vvg_page_box(void) {
     gtk_widget_set_margin_end(b, 8);
     gtk_widget_set_margin_bottom(b, 8);
     return b;
+}
+
+void
+vvg_close_on_escape(GtkWindow *window) {
+    GtkEventController *sc = gtk_shortcut_controller_new();
+    gtk_shortcut_controller_set_scope(GTK_SHORTCUT_CONTROLLER(sc), GTK_SHORTCUT_SCOPE_LOCAL);
+    GtkShortcutAction *close = gtk_named_action_new("window.close");
+    gtk_shortcut_controller_add_shortcut(
+        GTK_SHORTCUT_CONTROLLER(sc),
+        gtk_shortcut_new(
+            gtk_alternative_trigger_new(gtk_shortcut_trigger_parse_string("Escape"),
+                                        gtk_shortcut_trigger_parse_string("<Control>w")),
+            close));
+    gtk_widget_add_controller(GTK_WIDGET(window), sc);
 }
 
 GtkWidget *

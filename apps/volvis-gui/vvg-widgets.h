@@ -38,8 +38,17 @@ GdkRGBA vvg_rgba(vv_vec3 c);
 vv_vec3 vvg_vec3(const GdkRGBA *c);
 /** A button labelled @p label that activates the action @p action ("win.open"). */
 GtkWidget *vvg_action_button(const char *label, const char *action);
+/**
+ * The name of a volume's length unit for people: "mm" and the like when
+ * the file gives one; "voxel units" when it gives neither unit nor spacing
+ * (all spacings 1); "units" when it gives spacing without a unit. Never
+ * "unknown". Static storage.
+ */
+const char *vvg_unit_label(const vv_volume *v);
 /** A vertical box with the side bar's margins, for a page's content. */
 GtkWidget *vvg_page_box(void);
+/** Escape and Ctrl+W close @p window (as its Close button does). */
+void vvg_close_on_escape(GtkWindow *window);
 /** @p child in a vertically scrolling window that expands (a side-bar page). */
 GtkWidget *vvg_scrolled(GtkWidget *child);
 /**

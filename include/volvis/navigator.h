@@ -184,15 +184,16 @@ typedef enum vv_preview_kind {
     VV_PREVIEW_BBOX = 0,      /**< bounding boxes of the objects, wireframe */
     VV_PREVIEW_BOXES = 1,     /**< PARC subvolume boxes (paper, section 4, first method) */
     VV_PREVIEW_COARSE_MC = 2, /**< coarse Marching Cubes, four edge positions (second method) */
-    VV_PREVIEW_RAYCAST_4 = 3, /**< the ray caster at 1/4 resolution, step x 4, shown scaled up */
-    VV_PREVIEW_RAYCAST_2 = 4, /**< the ray caster at 1/2 resolution, step x 2 */
-    VV_PREVIEW_FULL = 5       /**< the selected renderer at full resolution and quality */
+    VV_PREVIEW_RAYCAST_8 = 3, /**< the ray caster at 1/8 resolution, step x 4, shown scaled up */
+    VV_PREVIEW_RAYCAST_4 = 4, /**< the ray caster at 1/4 resolution, step x 4, shown scaled up */
+    VV_PREVIEW_RAYCAST_2 = 5, /**< the ray caster at 1/2 resolution, step x 2 */
+    VV_PREVIEW_FULL = 6       /**< the selected renderer at full resolution and quality */
 } vv_preview_kind;
-#define VV_PREVIEW_COUNT 6
+#define VV_PREVIEW_COUNT 7
 
 /**
  * Name of a representation as in the frame log: "bbox", "boxes", "coarse_mc",
- * "raycast_1/4", "raycast_1/2", "full". Never NULL.
+ * "raycast_1/8", "raycast_1/4", "raycast_1/2", "full". Never NULL.
  */
 const char *vv_preview_kind_name(vv_preview_kind k);
 /** Parses a name of vv_preview_kind_name. Errors: VV_ERR_INVALID. */
@@ -200,7 +201,7 @@ vv_status vv_preview_kind_parse(const char *name, vv_preview_kind *out);
 
 /**
  * Image size in pixels of representation @p k for a @p width x @p height
- * view (1/4 and 1/2 rounded up, at least 1).
+ * view (1/8, 1/4 and 1/2 rounded up, at least 1).
  */
 void vv_preview_size(vv_preview_kind k, int width, int height, int *w, int *h);
 
@@ -246,8 +247,11 @@ vv_status vv_preview_render(vv_preview *p, const vv_world *world, const vv_view 
 /**
  * The frame-rate policy. Times are learnt per representation (an
  * exponential average of its last frames); vv_preview_policy_choose picks
- * the best representation whose expected time fits the budget. The 1/2 ray
- * cast is expected to take 4 times the 1/4 one until it is measured.
+ * a ray cast of the data whenever one fits: the finest of 1/2, 1/4 and 1/8
+ * resolution whose expected time fits the budget; surfaces (coarse
+ * Marching Cubes, PARC boxes) or bounding boxes only when even the 1/8 cast
+ * has been measured over it. Until measured, each ray cast is expected to
+ * take 4 times the next coarser one.
  */
 typedef struct vv_preview_policy {
     double seconds[VV_PREVIEW_COUNT]; /**< expected seconds a frame, < 0 when unknown */
@@ -266,12 +270,15 @@ void vv_preview_policy_init(vv_preview_policy *pol);
  */
 void vv_preview_policy_record(vv_preview_policy *pol, vv_preview_kind kind, double seconds);
 /**
- * The representation to draw while moving within @p budget seconds a frame:
- * the best allowed one whose expected time fits; of those not measured yet
- * only the 1/4 ray cast (and bounding boxes) are tried, since the others
- * build surfaces first (measure them off screen); every 24th choice is the next
- * better one when it is expected within 1.5 times the budget, so that
- * estimates follow the machine's load.
+ * The representation to draw while moving within @p budget seconds a frame
+ * (issue 28: interaction shows the data, never boxes, where a reduced ray
+ * cast can keep the rate): the finest allowed ray cast whose expected time
+ * fits; with nothing measured, the 1/8 cast. When the 1/8 cast is measured
+ * over the budget, the best allowed surface representation that fits,
+ * else the cheapest allowed. Every 24th choice is the next finer ray cast
+ * when it is expected within 1.5 times the budget (the 1/8 cast, tried
+ * again from surfaces, within 4 times), so that estimates follow the
+ * machine's load.
  */
 vv_preview_kind vv_preview_policy_choose(vv_preview_policy *pol, double budget);
 
