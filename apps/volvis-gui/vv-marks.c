@@ -11,6 +11,7 @@ struct _VvMarks {
     gboolean has_point[VV_MARK_COUNT];
     vv_vec3 point[VV_MARK_COUNT];
     vv_mesh *region;
+    int cut_object, cut_plane;
 };
 
 G_DEFINE_TYPE(VvMarks, vv_marks, G_TYPE_OBJECT)
@@ -33,7 +34,7 @@ vv_marks_class_init(VvMarksClass *klass) {
 
 static void
 vv_marks_init(VvMarks *m) {
-    (void)m;
+    m->cut_object = m->cut_plane = -1;
 }
 
 VvMarks *
@@ -123,5 +124,20 @@ vv_marks_set_region(VvMarks *m, vv_mesh *mesh) {
         vv_mesh_ref(mesh);
     vv_mesh_free(m->region);
     m->region = mesh;
+    changed(m);
+}
+
+void
+vv_marks_cut_plane(VvMarks *m, int *object, int *plane) {
+    *object = m->cut_object;
+    *plane = m->cut_plane;
+}
+
+void
+vv_marks_set_cut_plane(VvMarks *m, int object, int plane) {
+    if (m->cut_object == object && m->cut_plane == plane)
+        return;
+    m->cut_object = object;
+    m->cut_plane = plane;
     changed(m);
 }

@@ -32,6 +32,12 @@ void vv_marks_reset(VvMarks *m);
 gboolean vv_marks_window(VvMarks *m, double *window, double *level);
 void vv_marks_set_window(VvMarks *m, double window, double level);
 
+/**
+ * The cut plane chosen in the Cut planes list (object -1: global), which
+ * the oblique slice view shows and a cut-plane drag moves; *plane -1: none.
+ */
+void vv_marks_cut_plane(VvMarks *m, int *object, int *plane);
+void vv_marks_set_cut_plane(VvMarks *m, int object, int plane);
 /** Measurement point @p which (world), or FALSE when it is not set. */
 gboolean vv_marks_point(VvMarks *m, VvMark which, vv_vec3 *out);
 void vv_marks_set_point(VvMarks *m, VvMark which, vv_vec3 p);

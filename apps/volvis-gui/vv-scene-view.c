@@ -90,6 +90,7 @@ struct _VvSceneView {
     gboolean moving;
     VvNavTarget target;
     int light;
+    int cut_object, cut_plane; /* vv_scene_view_set_cut_plane */
     double drag_last_x, drag_last_y;
     int drag_button;
     GdkModifierType drag_mods;
@@ -523,7 +524,13 @@ target_plane(VvSceneView *self, vv_nav_target *t) {
     vv_object *o = vv_document_selected_object(self->doc);
     vv_nav_target nt = {VV_NAV_TARGET_CUT, -1, -1};
     vv_cut_plane *pl = NULL;
-    if (o && o->n_cut_planes > 0) {
+    int co = self->cut_object, cp = self->cut_plane;
+    if (cp >= 0 && co < w->n_objects &&
+        cp < (co < 0 ? w->n_cut_planes : w->objects[co]->n_cut_planes)) {
+        nt.index = co;
+        nt.plane = cp;
+        pl = co < 0 ? &w->cut_planes[cp] : &w->objects[co]->cut_planes[cp];
+    } else if (o && o->n_cut_planes > 0) {
         nt.index = vv_document_selected(self->doc);
         pl = &o->cut_planes[o->n_cut_planes - 1];
     } else if (w->n_cut_planes > 0) {
@@ -926,6 +933,7 @@ vv_scene_view_init(VvSceneView *self) {
     vv_preview_policy_init(&self->policy);
     self->refine_delay_ms = 100;
     self->shown_kind = -1;
+    self->cut_plane = -1;
     gtk_widget_set_focusable(GTK_WIDGET(self), TRUE);
     gtk_widget_set_hexpand(GTK_WIDGET(self), TRUE);
     gtk_widget_set_vexpand(GTK_WIDGET(self), TRUE);
@@ -975,6 +983,15 @@ vv_scene_view_new(VvDocument *doc, VvMarks *marks) {
 void
 vv_scene_view_set_target(VvSceneView *self, VvNavTarget target) {
     self->target = target;
+    gtk_widget_queue_draw(GTK_WIDGET(self));
+}
+
+void
+vv_scene_view_set_cut_plane(VvSceneView *self, int object, int plane) {
+    self->cut_object = object;
+    self->cut_plane = plane;
+    if (self->marks)
+        vv_marks_set_cut_plane(self->marks, object, plane);
     gtk_widget_queue_draw(GTK_WIDGET(self));
 }
 

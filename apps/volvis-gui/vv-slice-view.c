@@ -57,12 +57,18 @@ box_centre(const vv_object *o) {
     return vv_vec3_scale(vv_vec3_add(b.min, b.max), 0.5);
 }
 
-/* The cut plane an oblique view follows: the selected object's last local
- * one, else the World's last global one. */
+/* The cut plane an oblique view follows: the one chosen in the Cut planes
+ * list, else the selected object's last local one, else the World's last
+ * global one. */
 static const vv_cut_plane *
 oblique_plane(VvSliceView *self) {
     vv_world *w = vv_document_world(self->doc);
     vv_object *o = vv_document_selected_object(self->doc);
+    int co, cp;
+    vv_marks_cut_plane(self->marks, &co, &cp); /* the one chosen in the Cut planes list */
+    if (cp >= 0 && co < w->n_objects &&
+        cp < (co < 0 ? w->n_cut_planes : w->objects[co]->n_cut_planes))
+        return co < 0 ? &w->cut_planes[cp] : &w->objects[co]->cut_planes[cp];
     if (o && o->n_cut_planes > 0)
         return &o->cut_planes[o->n_cut_planes - 1];
     return w->n_cut_planes > 0 ? &w->cut_planes[w->n_cut_planes - 1] : NULL;

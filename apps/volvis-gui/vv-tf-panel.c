@@ -2,6 +2,7 @@
 #include "vv-tf-panel.h"
 #include "vvg-widgets.h"
 
+#include "vv-preset-gallery.h"
 #include "vv-tf-editor.h"
 #include "vv-tf2d-editor.h"
 
@@ -12,7 +13,7 @@ struct _VvTfPanel {
     GtkWidget *seg_mode, *threshold, *render_mode, *isovalue, *step;
     VvTfEditor *tf_editor;
     VvTf2dEditor *tf2d_editor;
-    GtkWidget *preset, *w2d_color, *w2d_opacity;
+    GtkWidget *w2d_color, *w2d_opacity;
 };
 
 G_DEFINE_TYPE(VvTfPanel, vv_tf_panel, GTK_TYPE_BOX)
@@ -32,7 +33,6 @@ fill(VvTfPanel *self) {
         gtk_drop_down_set_selected(GTK_DROP_DOWN(self->render_mode), o->mode);
         vvg_set_spin(self->isovalue, o->isovalue);
         vvg_set_spin(self->step, o->step);
-        gtk_drop_down_set_selected(GTK_DROP_DOWN(self->preset), 0);
     }
     self->updating = FALSE;
 }
@@ -77,24 +77,6 @@ tf_color_set(GtkColorButton *b, gpointer user) {
     GdkRGBA c;
     gtk_color_chooser_get_rgba(GTK_COLOR_CHOOSER(b), &c);
     vv_tf_editor_set_color(self->tf_editor, &c);
-}
-
-static void
-preset_chosen(GObject *o, GParamSpec *p, gpointer user) {
-    (void)p;
-    VvTfPanel *self = user;
-    guint i = gtk_drop_down_get_selected(GTK_DROP_DOWN(o));
-    vv_object *obj = vv_document_selected_object(self->doc);
-    if (self->updating || i == 0 || !obj || !obj->volume)
-        return;
-    const char *name = vv_tf_preset_names()[i - 1];
-    vv_document_begin_edit(self->doc, "transfer-function preset");
-    vv_error_clear();
-    if (vv_tf_preset(&obj->tf, name, obj->volume) != VV_OK)
-        vvg_show_error(GTK_WIDGET(self), "Cannot apply the preset", vv_error_message());
-    obj->segmentation = VV_SEG_TRANSFER_FUNCTION;
-    vv_document_changed(self->doc);
-    fill(self);
 }
 
 static void
@@ -188,13 +170,8 @@ build_tf(VvTfPanel *self) {
     gtk_box_append(GTK_BOX(tb), tl);
     gtk_box_append(GTK_BOX(tb), tc);
     gtk_box_append(GTK_BOX(box), tb);
-    GtkWidget *g = vvg_section(box, "Presets");
-    GtkStringList *pn = gtk_string_list_new(NULL);
-    gtk_string_list_append(pn, "(choose)");
-    for (const char *const *n = vv_tf_preset_names(); *n; n++)
-        gtk_string_list_append(pn, *n);
-    self->preset = vvg_row(g, "transfer function", gtk_drop_down_new(G_LIST_MODEL(pn), NULL));
-    g_signal_connect(self->preset, "notify::selected", G_CALLBACK(preset_chosen), self);
+    vvg_section(box, "Presets (thumbnails of this volume)");
+    gtk_box_append(GTK_BOX(box), vv_preset_gallery_new(self->doc));
 }
 
 /* The 2-D transfer function over value x gradient magnitude. */

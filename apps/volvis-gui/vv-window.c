@@ -594,7 +594,7 @@ side_bar(VvWindow *win) {
     win->navigator = vv_navigator_panel_new(win->scene);
     add_page(win, two(win->navigator, vv_view_panel_new(win->doc)), "view", "View");
     add_page(win, one(vv_lights_panel_new(win->doc, win->scene, am)), "lights", "Lights");
-    add_page(win, one(vv_cut_panel_new(win->doc, am)), "cut", "Cut planes");
+    add_page(win, one(vv_cut_panel_new(win->doc, win->scene, am)), "cut", "Cut planes");
     add_page(win, vvg_scrolled(vv_rendering_page_new(win->doc)), "rendering", "Rendering");
     add_page(win, vvg_scrolled(vv_measurement_page_new(win->doc, win->scene, win->marks, am)),
              "measurement", "Measurement");
