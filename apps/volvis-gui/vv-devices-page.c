@@ -408,8 +408,12 @@ path_row(GtkWidget *box, const char *text, gboolean save, const char *button, GC
     GtkWidget *e = gtk_entry_new();
     gtk_editable_set_text(GTK_EDITABLE(e), text ? text : "");
     gtk_widget_set_hexpand(e, TRUE);
+    g_autofree char *ename = g_strdup_printf("%s file", button);
+    vvg_name(e, ename);
     gtk_box_append(GTK_BOX(r), e);
     GtkWidget *ch = gtk_button_new_with_label("…");
+    g_autofree char *chname = g_strdup_printf("choose the %s file", button);
+    vvg_name(ch, chname);
     gtk_widget_set_tooltip_text(ch, "choose a file");
     g_object_set_data(G_OBJECT(ch), "save", GINT_TO_POINTER(save));
     g_signal_connect(ch, "clicked", G_CALLBACK(choose_clicked), e);
@@ -617,6 +621,7 @@ vv_devices_page_new(VvWindow *win) {
     heading(box, "Network socket");
     char *sock = vv_devices_default_socket_path();
     self->socket_entry = gtk_entry_new();
+    vvg_name(self->socket_entry, "socket path");
     gtk_editable_set_text(GTK_EDITABLE(self->socket_entry), sock);
     g_free(sock);
     gtk_widget_set_hexpand(self->socket_entry, TRUE);

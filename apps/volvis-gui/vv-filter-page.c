@@ -304,6 +304,7 @@ vv_filter_page_new(VvDocument *doc) {
 
     vvg_section(box, "Filter chain, applied in order to the selected volume");
     page->chain = gtk_entry_new();
+    vvg_name(page->chain, "filter chain");
     gtk_entry_set_placeholder_text(GTK_ENTRY(page->chain),
                                    "--gaussian 1.5 --threshold 300: --largest 1");
     g_signal_connect_swapped(page->chain, "activate", G_CALLBACK(apply_clicked), page);

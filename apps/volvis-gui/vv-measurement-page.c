@@ -400,6 +400,7 @@ vv_measurement_page_new(VvDocument *doc, VvSceneView *scene, VvMarks *marks, GAc
     GtkWidget *box = GTK_WIDGET(self);
     vvg_section(box, "Histogram");
     self->histogram = gtk_drawing_area_new();
+    vvg_name(self->histogram, "histogram");
     gtk_widget_set_size_request(self->histogram, 280, 120);
     gtk_drawing_area_set_draw_func(GTK_DRAWING_AREA(self->histogram), hist_draw, self, NULL);
     gtk_box_append(GTK_BOX(box), self->histogram);

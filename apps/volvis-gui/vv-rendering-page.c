@@ -28,6 +28,16 @@ parse_options(const char *text, char keys[][32], char defs[][64], int max) {
         size_t kl = (size_t)(p - k);
         if (kl == 0 || kl >= 32)
             break;
+        /* prose after the options ("--quality 0: no shadow rays, 1: ...")
+         * is no option: a key is a lower-case identifier */
+        gboolean ident = g_ascii_islower(k[0]);
+        for (size_t c = 1; c < kl; c++)
+            ident = ident && (g_ascii_islower(k[c]) || g_ascii_isdigit(k[c]) || k[c] == '_');
+        if (!ident) {
+            while (*p && *p != ',')
+                p++;
+            continue;
+        }
         memcpy(keys[n], k, kl);
         keys[n][kl] = '\0';
         defs[n][0] = '\0';

@@ -17,6 +17,8 @@
  * (the target is 20, with room for the load of a shared machine), leaving
  * time for showing it. */
 #define PREVIEW_BUDGET (1.0 / 24.0 - 0.006)
+/* Volumes of at most this many voxels (256^3) are never drawn as boxes. */
+#define SURFACES_ABOVE_VOXELS (256.0 * 256.0 * 256.0)
 
 static gint64 start_us;
 
@@ -228,9 +230,10 @@ warm_previews(VvSceneView *self) {
     for (size_t i = 0; i < G_N_ELEMENTS(kinds); i++) {
         g_mutex_lock(&self->lock);
         gboolean busy = self->pending != NULL || self->quit;
-        /* surfaces are drawn only when even the 1/8 ray cast is too slow */
+        /* surfaces are drawn only for large volumes whose 1/8 ray cast is too slow */
         double cast = self->policy.seconds[VV_PREVIEW_RAYCAST_8];
-        gboolean known = self->policy.seconds[kinds[i]] >= 0 || cast < 0 || cast <= PREVIEW_BUDGET;
+        gboolean known = self->policy.seconds[kinds[i]] >= 0 || cast < 0 ||
+                         cast <= PREVIEW_BUDGET || !self->policy.allowed[kinds[i]];
         vv_world *w = busy || known ? NULL : self->last_world;
         /* a large volume's reduced surfaces take seconds to build, which a
          * drag starting meanwhile would wait for: they are left out */
@@ -452,7 +455,18 @@ state_changed(VvSceneView *self) {
         gtk_widget_queue_draw(GTK_WIDGET(self));
         return;
     }
+    /* volumes up to 256^3 are always cast (at 1/8 size at worst): boxes and
+     * surfaces only stand in for larger ones whose 1/8 cast misses the budget */
+    const vv_world *wd = vv_document_world(self->doc);
+    double voxels = 0;
+    for (int i = 0; i < wd->n_objects; i++) {
+        const vv_volume *v = wd->objects[i]->volume;
+        if (v && wd->objects[i]->visible)
+            voxels = fmax(voxels, (double)v->dims[0] * v->dims[1] * v->dims[2]);
+    }
     g_mutex_lock(&self->lock);
+    for (int k = VV_PREVIEW_BBOX; k <= VV_PREVIEW_COARSE_MC; k++)
+        self->policy.allowed[k] = voxels > SURFACES_ABOVE_VOXELS;
     vv_preview_kind k = vv_preview_policy_choose(&self->policy, PREVIEW_BUDGET);
     g_mutex_unlock(&self->lock);
     job *j = new_job(self, FALSE);
@@ -935,6 +949,7 @@ vv_scene_view_init(VvSceneView *self) {
     self->shown_kind = -1;
     self->cut_plane = -1;
     gtk_widget_set_focusable(GTK_WIDGET(self), TRUE);
+    vvg_name(GTK_WIDGET(self), "3-D view");
     gtk_widget_set_hexpand(GTK_WIDGET(self), TRUE);
     gtk_widget_set_vexpand(GTK_WIDGET(self), TRUE);
     const char *log = g_getenv("VOLVIS_FRAME_LOG");

@@ -26,6 +26,8 @@ struct _VvSliceView {
     gboolean have_plane;
     double sample_ms;
 
+    FILE *log; /* VOLVIS_SLICE_LOG: a line per resampling */
+
     /* input */
     int drag_button;
     gboolean drag_wl;
@@ -120,6 +122,13 @@ update_samples(VvSliceView *self, const vv_object *obj, const vv_slice_plane *p)
         return;
     }
     self->sample_ms = (g_get_monotonic_time() - t0) * 1e-3;
+    if (self->log) {
+        vv_vec3 nrm = vv_slice_plane_normal(p);
+        fprintf(self->log, "%.3f %s %dx%d %.3f %.6g\n", g_get_monotonic_time() * 1e-3,
+                vv_slice_axis_name(self->axis), p->width, p->height, self->sample_ms,
+                vv_vec3_dot(nrm, p->center));
+        fflush(self->log);
+    }
     self->plane = *p;
     self->placed = m;
     self->volume = obj->volume;
@@ -435,6 +444,7 @@ vv_slice_view_dispose(GObject *o) {
     }
     g_clear_pointer(&self->surface, cairo_surface_destroy);
     g_clear_pointer(&self->values, g_free);
+    g_clear_pointer(&self->log, fclose);
     G_OBJECT_CLASS(vv_slice_view_parent_class)->dispose(o);
 }
 
@@ -474,6 +484,9 @@ vv_slice_view_init(VvSliceView *self) {
         GTK_EVENT_CONTROLLER_SCROLL_VERTICAL | GTK_EVENT_CONTROLLER_SCROLL_DISCRETE);
     g_signal_connect(scroll, "scroll", G_CALLBACK(scroll_cb), self);
     gtk_widget_add_controller(self->canvas, scroll);
+    const char *log = g_getenv("VOLVIS_SLICE_LOG");
+    if (log && *log && !(self->log = fopen(log, "a")))
+        g_warning("volvis-gui: VOLVIS_SLICE_LOG: cannot open %s", log);
 }
 
 static void

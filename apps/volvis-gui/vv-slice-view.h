@@ -14,7 +14,9 @@
  * through slices one voxel at a time. The edges are labelled with the
  * anatomical directions (R/L, A/P, S/I) or the World's axes. Measurement
  * points and the surface-tracked region are drawn where they cut the
- * slice. UI thread only.
+ * slice. With VOLVIS_SLICE_LOG=FILE set, a line is appended each time a
+ * view samples its slice again: "<monotonic ms> <axis> <W>x<H> <sample ms>
+ * <position along the normal>" (bench/bench_gui.py reads it). UI thread only.
  */
 #ifndef VV_SLICE_VIEW_H
 #define VV_SLICE_VIEW_H

@@ -166,6 +166,7 @@ build_tf(VvTfPanel *self) {
     g_signal_connect(tc, "color-set", G_CALLBACK(tf_color_set), self);
     GtkWidget *tl = gtk_label_new("new colour");
     vvg_label_for(tc, tl);
+    vvg_label_for(gtk_widget_get_first_child(tc), tl);
     gtk_box_append(GTK_BOX(tb), lg);
     gtk_box_append(GTK_BOX(tb), tl);
     gtk_box_append(GTK_BOX(tb), tc);

@@ -422,46 +422,6 @@ act_close(GSimpleAction *a, GVariant *p, gpointer user) {
     gtk_window_close(GTK_WINDOW(user));
 }
 
-/* ---- the wheel -------------------------------------------------------------------- */
-
-/*
- * A spin button, slider or drop-down takes the wheel only when it has the
- * keyboard focus: otherwise the wheel scrolls the side bar it is in, as a
- * user scrolling down the page expects (the wheel over a spin button used
- * to change "position y" and shrink "scale" on the way). Runs in the
- * capture phase, before the widget under the pointer sees the event.
- */
-static gboolean
-wheel_capture(GtkEventControllerScroll *c, double dx, double dy, gpointer user) {
-    (void)dx;
-    VvWindow *win = user;
-    GdkEvent *ev = gtk_event_controller_get_current_event(GTK_EVENT_CONTROLLER(c));
-    double x, y;
-    if (!ev || !gdk_event_get_position(ev, &x, &y))
-        return FALSE;
-    double nx, ny;
-    gtk_native_get_surface_transform(GTK_NATIVE(win), &nx, &ny);
-    GtkWidget *w = gtk_widget_pick(GTK_WIDGET(win), x - nx, y - ny, GTK_PICK_DEFAULT);
-    GtkWidget *value = NULL;
-    for (GtkWidget *p = w; p && !value; p = gtk_widget_get_parent(p))
-        if (GTK_IS_SPIN_BUTTON(p) || GTK_IS_RANGE(p) || GTK_IS_DROP_DOWN(p))
-            value = p;
-    if (!value)
-        return FALSE;
-    GtkRoot *root = gtk_widget_get_root(value);
-    GtkWidget *focus = root ? gtk_root_get_focus(root) : NULL;
-    if (focus && (focus == value || gtk_widget_is_ancestor(focus, value)))
-        return FALSE; /* focused: the value takes the wheel */
-    GtkWidget *sw = gtk_widget_get_ancestor(value, GTK_TYPE_SCROLLED_WINDOW);
-    if (sw) {
-        GtkAdjustment *adj = gtk_scrolled_window_get_vadjustment(GTK_SCROLLED_WINDOW(sw));
-        double page = gtk_adjustment_get_page_size(adj);
-        /* a notch scrolls as GtkScrolledWindow scrolls it: page^(2/3) */
-        gtk_adjustment_set_value(adj, gtk_adjustment_get_value(adj) + dy * pow(page, 2.0 / 3.0));
-    }
-    return TRUE;
-}
-
 /* ---- drag and drop -------------------------------------------------------------- */
 
 static gboolean
@@ -528,7 +488,8 @@ main_menu(void) {
 
 static GtkWidget *
 header_button(const char *label, const char *action, const char *tip) {
-    GtkWidget *b = gtk_button_new_with_mnemonic(label);
+    /* no mnemonic: GTK 4.8 would name the button "_Save Save" for screen readers */
+    GtkWidget *b = gtk_button_new_with_label(label);
     gtk_actionable_set_action_name(GTK_ACTIONABLE(b), action);
     gtk_widget_set_tooltip_text(b, tip);
     return b;
@@ -538,17 +499,18 @@ header_button(const char *label, const char *action, const char *tip) {
 static GtkWidget *
 header_bar(void) {
     GtkWidget *hb = gtk_header_bar_new();
-    gtk_header_bar_pack_start(GTK_HEADER_BAR(hb), header_button("_Open…", "win.open", "Ctrl+O"));
-    gtk_header_bar_pack_start(GTK_HEADER_BAR(hb), header_button("_Save", "win.save", "Ctrl+S"));
-    gtk_header_bar_pack_start(GTK_HEADER_BAR(hb), header_button("_Undo", "win.undo", "Ctrl+Z"));
+    gtk_header_bar_pack_start(GTK_HEADER_BAR(hb), header_button("Open…", "win.open", "Ctrl+O"));
+    gtk_header_bar_pack_start(GTK_HEADER_BAR(hb), header_button("Save", "win.save", "Ctrl+S"));
+    gtk_header_bar_pack_start(GTK_HEADER_BAR(hb), header_button("Undo", "win.undo", "Ctrl+Z"));
     gtk_header_bar_pack_start(GTK_HEADER_BAR(hb),
-                              header_button("_Redo", "win.redo", "Ctrl+Shift+Z"));
+                              header_button("Redo", "win.redo", "Ctrl+Shift+Z"));
     GtkWidget *menu = gtk_menu_button_new();
     gtk_menu_button_set_label(GTK_MENU_BUTTON(menu), "Menu");
     GMenuModel *m = main_menu();
     gtk_menu_button_set_menu_model(GTK_MENU_BUTTON(menu), m);
     g_object_unref(m);
     gtk_menu_button_set_primary(GTK_MENU_BUTTON(menu), TRUE);
+
     gtk_header_bar_pack_end(GTK_HEADER_BAR(hb), menu);
     GtkWidget *layout = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 0);
     gtk_widget_add_css_class(layout, "linked");
@@ -566,6 +528,9 @@ header_bar(void) {
 static void
 add_page(VvWindow *win, GtkWidget *content, const char *name, const char *title) {
     gtk_stack_add_titled(GTK_STACK(win->pages), content, name, title);
+    /* "Objects page": tests and screen readers find a page's widgets under it */
+    g_autofree char *a11y = g_strdup_printf("%s page", title);
+    vvg_name(content, a11y);
 }
 
 static GtkWidget *
@@ -671,11 +636,8 @@ vv_window_init(VvWindow *win) {
     GtkDropTarget *drop = gtk_drop_target_new(GDK_TYPE_FILE_LIST, GDK_ACTION_COPY);
     g_signal_connect(drop, "drop", G_CALLBACK(drop_cb), win);
     gtk_widget_add_controller(GTK_WIDGET(win), GTK_EVENT_CONTROLLER(drop));
-    GtkEventController *wheel = gtk_event_controller_scroll_new(
-        GTK_EVENT_CONTROLLER_SCROLL_VERTICAL | GTK_EVENT_CONTROLLER_SCROLL_DISCRETE);
-    gtk_event_controller_set_propagation_phase(wheel, GTK_PHASE_CAPTURE);
-    g_signal_connect(wheel, "scroll", G_CALLBACK(wheel_capture), win);
-    gtk_widget_add_controller(GTK_WIDGET(win), wheel);
+    /* the values of every page take the wheel only when focused */
+    vvg_wheel_when_focused_all(paned);
     g_signal_connect(win, "close-request", G_CALLBACK(close_request), NULL);
 
     g_signal_connect(win->doc, "changed", G_CALLBACK(doc_changed), win);

@@ -47,6 +47,16 @@ GtkWidget *vvg_action_button(const char *label, const char *action);
 const char *vvg_unit_label(const vv_volume *v);
 /** A vertical box with the side bar's margins, for a page's content. */
 GtkWidget *vvg_page_box(void);
+/**
+ * @p w (a spin button, slider or drop-down) takes the mouse wheel only when
+ * it has the keyboard focus; otherwise the wheel scrolls the side bar it is
+ * in, as a user scrolling down a page expects (the wheel over a spin button
+ * used to change "position y" and shrink "scale" on the way). vvg_spin and
+ * vvg_row apply it to what they make.
+ */
+void vvg_wheel_when_focused(GtkWidget *w);
+/** vvg_wheel_when_focused for every spin button, slider and drop-down under @p root. */
+void vvg_wheel_when_focused_all(GtkWidget *root);
 /** Escape and Ctrl+W close @p window (as its Close button does). */
 void vvg_close_on_escape(GtkWindow *window);
 /** @p child in a vertically scrolling window that expands (a side-bar page). */

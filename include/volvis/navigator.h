@@ -250,7 +250,7 @@ vv_status vv_preview_render(vv_preview *p, const vv_world *world, const vv_view 
  * a ray cast of the data whenever one fits: the finest of 1/2, 1/4 and 1/8
  * resolution whose expected time fits the budget; surfaces (coarse
  * Marching Cubes, PARC boxes) or bounding boxes only when even the 1/8 cast
- * has been measured over it. Until measured, each ray cast is expected to
+ * has been measured over it and they are much quicker. Until measured, each ray cast is expected to
  * take 4 times the next coarser one.
  */
 typedef struct vv_preview_policy {
@@ -274,8 +274,11 @@ void vv_preview_policy_record(vv_preview_policy *pol, vv_preview_kind kind, doub
  * (issue 28: interaction shows the data, never boxes, where a reduced ray
  * cast can keep the rate): the finest allowed ray cast whose expected time
  * fits; with nothing measured, the 1/8 cast. When the 1/8 cast is measured
- * over the budget, the best allowed surface representation that fits,
- * else the cheapest allowed. Every 24th choice is the next finer ray cast
+ * over the budget, the best allowed surface representation that fits and
+ * takes less than half the 1/8 cast's time (a load that slows everything
+ * gains nothing from boxes); bounding boxes, not yet measured, only when the
+ * 1/8 cast takes more than 4 times the budget (data too large to cast);
+ * otherwise still the 1/8 cast. Every 24th choice is the next finer ray cast
  * when it is expected within 1.5 times the budget (the 1/8 cast, tried
  * again from surfaces, within 4 times), so that estimates follow the
  * machine's load.

@@ -471,13 +471,22 @@ vv_preview_policy_choose(vv_preview_policy *pol, double budget) {
     /* nothing known yet: the 1/8 cast, the cheapest view of the data */
     if (best < 0 && pol->allowed[VV_PREVIEW_RAYCAST_8] && expected(pol, VV_PREVIEW_RAYCAST_8) < 0.0)
         best = VV_PREVIEW_RAYCAST_8;
-    /* the data cannot be cast within the budget: surfaces that fit (their
-     * times are learnt off screen, after a refinement), else bounding boxes */
+    /* the data cannot be cast within the budget: a surface that fits and
+     * is at least twice as quick as the 1/8 cast (under a passing load
+     * every representation is slow, and boxes would show nothing gained);
+     * bounding boxes unmeasured only for data whose 1/8 cast takes more than
+     * 4 times the budget; else the 1/8 cast, slow as it is */
+    double e8 = expected(pol, VV_PREVIEW_RAYCAST_8);
     for (int k = VV_PREVIEW_COARSE_MC; k >= VV_PREVIEW_BBOX && best < 0; k--) {
         double e = expected(pol, k);
-        if (pol->allowed[k] && ((e >= 0.0 && e <= budget) || (e < 0.0 && k == VV_PREVIEW_BBOX)))
+        if (pol->allowed[k] && e >= 0.0 && e <= budget && (e8 < 0.0 || e < 0.5 * e8))
             best = k;
     }
+    if (best < 0 && pol->allowed[VV_PREVIEW_BBOX] && e8 > 4.0 * budget &&
+        expected(pol, VV_PREVIEW_BBOX) < 0.0)
+        best = VV_PREVIEW_BBOX;
+    if (best < 0 && pol->allowed[VV_PREVIEW_RAYCAST_8])
+        best = VV_PREVIEW_RAYCAST_8;
     if (best < 0) { /* nothing fits: the cheapest allowed */
         for (int k = 0; k < VV_PREVIEW_COUNT && best < 0; k++)
             if (pol->allowed[k])
