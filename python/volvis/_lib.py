@@ -108,9 +108,9 @@ class _Reporter:
         return False
 
     def close(self, ok):
+        if ok and self.active:
+            self.update(1.0)
         if self.bar is not None and self.own_bar:
-            if ok:
-                self.update(1.0)
             self.bar.close()
 
 
@@ -155,6 +155,8 @@ def call_long(fn, progress=None, desc="volvis"):
                 break
             except KeyboardInterrupt:
                 continue
+    if not interrupted:
+        reporter.update(lib.vvpy_progress_fraction(state))
     reporter.close(st == 0 and not interrupted)
     if interrupted:
         raise KeyboardInterrupt

@@ -9,7 +9,7 @@ import numpy as np
 from ._lib import check, cstr, ffi, lib
 from .errors import InvalidError
 
-__all__ = ["png_bytes", "show", "Viewer"]
+__all__ = ["png_bytes", "read_png", "show", "Viewer"]
 
 
 def _to_image(arr):
@@ -186,3 +186,15 @@ def show(world, renderer=None, size=None, interactive=None, **options):
     except ImportError:
         pass
     return img
+
+
+def read_png(path):
+    """Reads an 8- or 16-bit PNG (vv_image_read_png) as an (h, w, 4) uint8
+    array (RGBA; A = 255 when the file has none). Errors: FileError,
+    FormatError, LimitError."""
+    img = ffi.new("vv_image **")
+    check(lib.vv_image_read_png(img, cstr(path)))
+    img = ffi.gc(img[0], lib.vv_image_free)
+    a = np.empty((img.height, img.width, 4), np.uint8)
+    lib.vv_image_to_8bit(img, 4, 1.0, ffi.from_buffer("uint8_t[]", a))
+    return a

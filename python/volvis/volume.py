@@ -120,9 +120,9 @@ def _histogram_from(h):
 class _ArrayHolder:
     """Keeps a Volume alive behind a numpy view of its library-owned voxels."""
 
-    def __init__(self, owner, address, shape, dtype):
+    def __init__(self, owner, address, shape, dtype, readonly=True):
         self.owner = owner
-        self.__array_interface__ = {"data": (address, True), "shape": shape,
+        self.__array_interface__ = {"data": (address, readonly), "shape": shape,
                                     "typestr": dtype.str, "version": 3}
 
 
@@ -232,9 +232,7 @@ class Volume:
         p = self._ptr
         shape = (p.dims[2], p.dims[1], p.dims[0])
         addr = int(ffi.cast("uintptr_t", p.data))
-        a = np.asarray(_ArrayHolder(self, addr, shape, self.dtype))
-        a.flags.writeable = writeable
-        return a
+        return np.asarray(_ArrayHolder(self, addr, shape, self.dtype, readonly=not writeable))
 
     # ---- voxels -----------------------------------------------------------
     @property

@@ -1033,9 +1033,13 @@ class World:
                                % type(obj).__name__)
         if obj._world is not None:
             raise InvalidError("World.add: object %r is already in a World" % obj.name)
-        raw = ffi.gc(obj._c, None)
-        check(lib.vv_world_insert_object(self._c, int(index), raw))
+        raw = ffi.cast("vv_object *", obj._c)
+        ffi.gc(obj._c, None)  # the World owns it now (and frees it on failure)
         obj._c = raw
+        st = lib.vv_world_insert_object(self._c, int(index), raw)
+        if st != 0:
+            obj._c = ffi.NULL
+            check(st)
         obj._world = self
         self._proxies[int(ffi.cast("uintptr_t", raw))] = obj
         return obj
