@@ -92,8 +92,8 @@ class Viewer:
                                            description="azimuth")
         self.elevation = widgets.FloatSlider(value=0, min=-89, max=89, step=1,
                                              description="elevation")
-        self.zoom = widgets.FloatLogSlider(value=1, base=2, min=-2, max=3, step=0.05,
-                                           description="zoom")
+        self.zoom = widgets.FloatSlider(value=1, min=0.25, max=8, step=0.05,
+                                        description="zoom")
         self.status = widgets.Label(value="")
         for s in (self.azimuth, self.elevation, self.zoom):
             s.observe(self._moved, names="value")
