@@ -24,7 +24,8 @@ from .mesh import Grid, Mesh, load_grid, load_mesh
 from .components import (Compressed, Measurement, Shape, compress, decompress, filter,
                          filters, isosurface, measure, voxelize)
 from .animation import Animation, orbit, render_movie
-from .notebook import read_png, show
+from . import notebook
+from .notebook import read_png, save_png, show
 
 __version__ = _ffi.string(_lib_c.vv_version()).decode()
 
@@ -50,5 +51,5 @@ __all__ = [
     "Mesh", "load_mesh", "Grid", "load_grid",
     "filter", "filters", "isosurface", "measure", "Measurement", "voxelize", "Shape", "compress",
     "decompress", "Compressed",
-    "Animation", "orbit", "render_movie", "show", "read_png", "set_threads", "get_threads",
+    "Animation", "orbit", "render_movie", "show", "read_png", "save_png", "set_threads", "get_threads",
 ]

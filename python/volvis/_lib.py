@@ -14,6 +14,7 @@ KeyboardInterrupt is delivered) the call runs in the calling thread unless a
 progress report was asked for.
 """
 import concurrent.futures
+import os
 import threading
 
 from ._volvis import ffi, lib
@@ -74,7 +75,10 @@ class _Reporter:
             return
         if progress is True:
             try:
-                from tqdm.auto import tqdm
+                if os.environ.get("VOLVIS_WIDGETS", "1") == "0":
+                    from tqdm import tqdm  # text bar: no notebook widget
+                else:
+                    from tqdm.auto import tqdm
             except ImportError:
                 return
             self.bar = tqdm(total=100, desc=desc, unit="%",

@@ -9,7 +9,7 @@ import numpy as np
 from ._lib import check, cstr, ffi, lib
 from .errors import InvalidError
 
-__all__ = ["png_bytes", "read_png", "show", "Viewer"]
+__all__ = ["png_bytes", "read_png", "save_png", "show", "Viewer"]
 
 
 def _to_image(arr):
@@ -156,15 +156,18 @@ def show(world, renderer=None, size=None, interactive=None, **options):
     notebook. With ipywidgets in a Jupyter kernel: an interactive
     :class:`Viewer` (sliders orbit and zoom the view; previews while moving,
     refinement when input stops). Elsewhere, or with ``interactive=False``:
-    the rendered image, displayed inline when IPython is present. Returns
-    the Viewer or the image."""
+    the rendered image, displayed inline when IPython is present. The
+    environment variable VOLVIS_WIDGETS=0 asks for the static image (for
+    headless runs such as ``jupyter nbconvert --execute``, whose client
+    cannot open the widgets of Debian's ipywidgets 6). Returns the Viewer or
+    the image."""
     from .render import render
     from .volume import Volume
     from .world import World
     if not isinstance(world, World):
         world = World.for_volume(world if isinstance(world, Volume) else Volume(world))
     if interactive is None:
-        interactive = _in_kernel()
+        interactive = _in_kernel() and os.environ.get("VOLVIS_WIDGETS", "1") != "0"
     if interactive:
         try:
             import ipywidgets  # noqa: F401
@@ -198,3 +201,13 @@ def read_png(path):
     a = np.empty((img.height, img.width, 4), np.uint8)
     lib.vv_image_to_8bit(img, 4, 1.0, ffi.from_buffer("uint8_t[]", a))
     return a
+
+
+def save_png(image, path, alpha=None):
+    """Writes an (h, w, 3|4) image array as a PNG, atomically
+    (vv_image_write_png); alpha None keeps the array's channels."""
+    a = np.asarray(image)
+    img = _to_image(a)
+    if alpha is None:
+        alpha = a.shape[2] == 4
+    check(lib.vv_image_write_png(img, cstr(path), 1.0, 1 if alpha else 0))
