@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import volvis
-from conftest import SANITIZER
+
 
 
 def sphere_volume(n=48, r=16.0, spacing=1.0):
@@ -108,7 +108,6 @@ def test_mesh_from_arrays_and_files(tmp_path):
         volvis.Mesh(verts, [[0, 1, 9]])
 
 
-@pytest.mark.skipif(SANITIZER, reason="the video encoder is slow under the sanitizers")
 def test_animation_frames_equal_turned_stills(tmp_path, ct_head):
     world = volvis.World.for_volume(ct_head, size=(64, 64))
     anim = volvis.orbit(degrees=90, frames=3, fps=3)

@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from conftest import ROOT, SANITIZER
+from conftest import ROOT
 
 import volvis
 
@@ -22,8 +22,6 @@ def env():
     return e
 
 
-@pytest.mark.skipif(SANITIZER, reason="the Jupyter kernel is a separate interpreter without "
-                    "the sanitizer runtime preloaded")
 def test_notebook_executes(tmp_path):
     exe = shutil.which("jupyter-nbconvert") or shutil.which("jupyter")
     assert exe, "jupyter-nbconvert (Debian's jupyter-nbconvert) is not installed"
