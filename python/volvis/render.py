@@ -7,7 +7,6 @@ lists its options). :func:`render` draws a World or a Volume into a numpy
 array; a :class:`Renderer` keeps its per-volume caches (gradients,
 subvolume min/max) between frames, as the library's renderers do.
 """
-import math
 import threading
 
 import numpy as np
