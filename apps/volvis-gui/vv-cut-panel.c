@@ -357,8 +357,7 @@ vv_cut_panel_class_init(VvCutPanelClass *klass) {
 
 static void
 vv_cut_panel_init(VvCutPanel *self) {
-    gtk_orientable_set_orientation(GTK_ORIENTABLE(self), GTK_ORIENTATION_VERTICAL);
-    gtk_box_set_spacing(GTK_BOX(self), 4);
+    vvg_vbox_init(GTK_WIDGET(self));
     self->sel_plane = -1;
     self->sel_object = -1;
 }

@@ -145,8 +145,7 @@ vv_lights_panel_class_init(VvLightsPanelClass *klass) {
 
 static void
 vv_lights_panel_init(VvLightsPanel *self) {
-    gtk_orientable_set_orientation(GTK_ORIENTABLE(self), GTK_ORIENTATION_VERTICAL);
-    gtk_box_set_spacing(GTK_BOX(self), 4);
+    vvg_vbox_init(GTK_WIDGET(self));
 }
 
 static GtkWidget *

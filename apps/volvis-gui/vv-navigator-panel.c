@@ -45,8 +45,7 @@ vv_navigator_panel_class_init(VvNavigatorPanelClass *klass) {
 
 static void
 vv_navigator_panel_init(VvNavigatorPanel *self) {
-    gtk_orientable_set_orientation(GTK_ORIENTABLE(self), GTK_ORIENTATION_VERTICAL);
-    gtk_box_set_spacing(GTK_BOX(self), 4);
+    vvg_vbox_init(GTK_WIDGET(self));
 }
 
 GtkWidget *

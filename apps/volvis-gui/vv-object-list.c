@@ -108,8 +108,7 @@ vv_object_list_class_init(VvObjectListClass *klass) {
 
 static void
 vv_object_list_init(VvObjectList *self) {
-    gtk_orientable_set_orientation(GTK_ORIENTABLE(self), GTK_ORIENTATION_VERTICAL);
-    gtk_box_set_spacing(GTK_BOX(self), 4);
+    vvg_vbox_init(GTK_WIDGET(self));
     GtkWidget *l = gtk_label_new(NULL);
     gtk_label_set_markup(GTK_LABEL(l), "<b>Objects</b>");
     gtk_label_set_xalign(GTK_LABEL(l), 0);

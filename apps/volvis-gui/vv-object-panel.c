@@ -273,8 +273,7 @@ vv_object_panel_class_init(VvObjectPanelClass *klass) {
 
 static void
 vv_object_panel_init(VvObjectPanel *self) {
-    gtk_orientable_set_orientation(GTK_ORIENTABLE(self), GTK_ORIENTATION_VERTICAL);
-    gtk_box_set_spacing(GTK_BOX(self), 4);
+    vvg_vbox_init(GTK_WIDGET(self));
 }
 
 static GtkWidget *

@@ -301,8 +301,7 @@ vv_preset_gallery_class_init(VvPresetGalleryClass *klass) {
 
 static void
 vv_preset_gallery_init(VvPresetGallery *self) {
-    gtk_orientable_set_orientation(GTK_ORIENTABLE(self), GTK_ORIENTATION_VERTICAL);
-    gtk_box_set_spacing(GTK_BOX(self), 4);
+    vvg_vbox_init(GTK_WIDGET(self));
     self->active = -2;
     self->tfs = g_new0(vv_tf, MAX_PRESETS);
     g_signal_connect(self, "map", G_CALLBACK(mapped), NULL);

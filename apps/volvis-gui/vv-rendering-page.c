@@ -192,8 +192,7 @@ vv_rendering_page_class_init(VvRenderingPageClass *klass) {
 
 static void
 vv_rendering_page_init(VvRenderingPage *self) {
-    gtk_orientable_set_orientation(GTK_ORIENTABLE(self), GTK_ORIENTATION_VERTICAL);
-    gtk_box_set_spacing(GTK_BOX(self), 4);
+    vvg_vbox_init(GTK_WIDGET(self));
     gtk_widget_set_margin_start(GTK_WIDGET(self), 8);
     gtk_widget_set_margin_end(GTK_WIDGET(self), 8);
     gtk_widget_set_margin_bottom(GTK_WIDGET(self), 8);

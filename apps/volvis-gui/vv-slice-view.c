@@ -497,6 +497,8 @@ set_names(VvSliceView *self) {
     g_autofree char *readout = g_strdup_printf("%s readout", n);
     vvg_name(self->canvas, view);
     vvg_name(self->orientation, orient);
+    if (gtk_widget_get_first_child(self->orientation)) /* the button that takes the focus */
+        vvg_name(gtk_widget_get_first_child(self->orientation), orient);
     vvg_name(self->readout, readout);
 }
 

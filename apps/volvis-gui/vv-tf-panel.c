@@ -135,8 +135,7 @@ vv_tf_panel_class_init(VvTfPanelClass *klass) {
 
 static void
 vv_tf_panel_init(VvTfPanel *self) {
-    gtk_orientable_set_orientation(GTK_ORIENTABLE(self), GTK_ORIENTATION_VERTICAL);
-    gtk_box_set_spacing(GTK_BOX(self), 4);
+    vvg_vbox_init(GTK_WIDGET(self));
 }
 
 static GtkWidget *

@@ -100,8 +100,7 @@ vv_view_panel_class_init(VvViewPanelClass *klass) {
 
 static void
 vv_view_panel_init(VvViewPanel *self) {
-    gtk_orientable_set_orientation(GTK_ORIENTABLE(self), GTK_ORIENTATION_VERTICAL);
-    gtk_box_set_spacing(GTK_BOX(self), 4);
+    vvg_vbox_init(GTK_WIDGET(self));
 }
 
 static GtkWidget *

@@ -510,6 +510,7 @@ header_bar(void) {
     gtk_menu_button_set_menu_model(GTK_MENU_BUTTON(menu), m);
     g_object_unref(m);
     gtk_menu_button_set_primary(GTK_MENU_BUTTON(menu), TRUE);
+    vvg_name(menu, "Menu");
 
     gtk_header_bar_pack_end(GTK_HEADER_BAR(hb), menu);
     GtkWidget *layout = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 0);

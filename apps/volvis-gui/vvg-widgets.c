@@ -57,8 +57,8 @@ void
 vvg_wheel_when_focused(GtkWidget *w) {
     if (g_object_get_data(G_OBJECT(w), "vvg-wheel"))
         return;
-    GtkEventController *c = gtk_event_controller_scroll_new(
-        GTK_EVENT_CONTROLLER_SCROLL_VERTICAL | GTK_EVENT_CONTROLLER_SCROLL_DISCRETE);
+    GtkEventController *c = gtk_event_controller_scroll_new(GTK_EVENT_CONTROLLER_SCROLL_VERTICAL |
+                                                            GTK_EVENT_CONTROLLER_SCROLL_DISCRETE);
     gtk_event_controller_set_propagation_phase(c, GTK_PHASE_CAPTURE);
     g_signal_connect(c, "scroll", G_CALLBACK(wheel_capture), NULL);
     gtk_widget_add_controller(w, c);
@@ -154,6 +154,12 @@ vvg_unit_label(const vv_volume *v) {
     if (v->spacing[0] == 1 && v->spacing[1] == 1 && v->spacing[2] == 1)
         return "voxel units";
     return "units";
+}
+
+void
+vvg_vbox_init(GtkWidget *box) {
+    gtk_orientable_set_orientation(GTK_ORIENTABLE(box), GTK_ORIENTATION_VERTICAL);
+    gtk_box_set_spacing(GTK_BOX(box), 4);
 }
 
 GtkWidget *

@@ -45,6 +45,8 @@ GtkWidget *vvg_action_button(const char *label, const char *action);
  * "unknown". Static storage.
  */
 const char *vvg_unit_label(const vv_volume *v);
+/** Makes @p box (a GtkBox subclass being initialised) vertical with a spacing of 4. */
+void vvg_vbox_init(GtkWidget *box);
 /** A vertical box with the side bar's margins, for a page's content. */
 GtkWidget *vvg_page_box(void);
 /**

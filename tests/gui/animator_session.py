@@ -25,6 +25,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from atspi import Session, ae, check, psnr, run  # noqa: E402
 
 GUI, CLI, OUT = sys.argv[1:4]
+os.makedirs(OUT, exist_ok=True)
 LANE = (115, 191, 115)  # sequences on the timeline (vv-animator-page.c)
 KEY = (242, 209, 77)    # keys
 

@@ -126,6 +126,9 @@ class Session:
         self.wid = self.xdo("search", "--sync", "--name", "^VolVis — ").split()[0]
         self.xdo("windowmove", self.wid, "0", "0", "windowsize", self.wid,
                  str(self.window_size[0]), str(self.window_size[1]))
+        # no window manager gives it the keyboard: the keys of a second launch
+        # would go nowhere
+        self.xdo("windowfocus", self.wid)
         self._app = None
         self.app()
         return self.app_proc
@@ -278,6 +281,20 @@ class Session:
                 raise Failure(f"no {role or 'widget'} named {name!r} on screen")
             time.sleep(0.2)
 
+    def find_label(self, pred, root=None, timeout=10):
+        """A label on screen whose name or text satisfies @p pred."""
+        t0 = time.time()
+        while True:
+            for o in self.find_all(role="label", root=root, visible=True):
+                try:
+                    if pred(o.name or "") or pred(self.text(o)):
+                        return o
+                except Exception:
+                    continue
+            if time.time() - t0 > timeout:
+                raise Failure("no such label on screen")
+            time.sleep(0.3)
+
     def value(self, o):
         return o.queryValue().currentValue
 
@@ -295,12 +312,29 @@ class Session:
     def click(self, o, button=1, at=None):
         x, y, w, h = self.extents(o)
         px, py = (x + w // 2, y + h // 2) if at is None else (x + int(at[0] * w), y + int(at[1] * h))
+        self.xdo("mousemove", str(px + 2), str(py + 1))
         self.xdo("mousemove", str(px), str(py), "click", str(button))
         time.sleep(0.3)
 
+    def wait_for(self, cond, what, timeout=10):
+        """Polls @p cond() until it is true (the GUI may lag under load)."""
+        t0 = time.time()
+        while not cond():
+            if time.time() - t0 > timeout:
+                raise Failure(what)
+            time.sleep(0.2)
+
     def wheel(self, o, down=1, up=0):
         cx, cy = self.center(o)
+        # a motion from outside onto the widget first: GTK sends the wheel to
+        # the widget it last saw the pointer enter
+        x, y, w, h = self.extents(o)
+        self.xdo("mousemove", str(max(0, x - 8)), str(max(0, y - 8)))
+        time.sleep(0.1)
+        self.xdo("mousemove", str(cx + 3), str(cy + 3))
+        time.sleep(0.1)
         self.xdo("mousemove", str(cx), str(cy))
+        time.sleep(0.1)
         time.sleep(0.1)
         for _ in range(down):
             self.xdo("click", "5")
@@ -347,6 +381,17 @@ class Session:
         time.sleep(0.3)
         check(self.shown(combo) == item, f"{combo.name}: chose {self.shown(combo)!r}, not {item!r}")
 
+    def save_as(self, path):
+        """Ctrl+Shift+S, the path typed into the file chooser, Return."""
+        self.key("ctrl+shift+s")
+        self.xdo("search", "--sync", "--name", "Save session")
+        time.sleep(0.5)
+        self.key("ctrl+a")
+        self.type(path)
+        self.key("Return")
+        time.sleep(1.5)
+        check(os.path.exists(path), f"Save as wrote no {path}")
+
     def set_spin(self, o, value):
         """Types a value into a spin button: click, select all, type, Enter."""
         self.click(o)
@@ -354,10 +399,16 @@ class Session:
         self.type(str(value))
         self.key("Return")
 
-    def page(self, title):
+    def page(self, title, timeout=10):
         """Shows the side-bar page @p title (a row of the stack sidebar)."""
-        rows = [o for o in self.find_all(title) if o.getRoleName() in ("label", "list item")]
-        rows = [o for o in rows if self.on_screen(o)]
+        sidebar = self.find("Sidebar", "list", visible=False, timeout=timeout)
+        t0 = time.time()
+        while True:
+            rows = [o for o in self.find_all(title, root=sidebar)
+                    if o.getRoleName() in ("label", "list item") and self.on_screen(o)]
+            if rows or time.time() - t0 > timeout:
+                break
+            time.sleep(0.3)
         check(rows, f"no side-bar page {title!r}")
         self.click(rows[0])
         time.sleep(0.5)

@@ -34,6 +34,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from atspi import Failure, Session, ae, check, run, skip  # noqa: E402
 
 GUI, CLI, OUT, N = sys.argv[1], sys.argv[2], sys.argv[3], int(sys.argv[4])
+os.makedirs(OUT, exist_ok=True)
 DATA = os.path.abspath("../shared/data")
 HEAD_TF = {"opacity": [[-600, 0.0], [-300, 0.015], [-150, 0.0], [250, 0.0], [500, 0.3],
                        [1500, 0.8]],
@@ -171,14 +172,7 @@ def defect_4():
         s.wait_full(0, "opening", timeout=300)
         time.sleep(2)
         session = os.path.join(OUT, "session.json")
-        s.key("ctrl+shift+s")
-        s.xdo("search", "--sync", "--name", "Save session")
-        time.sleep(0.5)
-        s.key("ctrl+a")
-        s.type(session)
-        s.key("Return")
-        time.sleep(1.5)
-        check(os.path.exists(session), "Save as wrote no session")
+        s.save_as(session)
         scene = json.load(open(session))
         objs = scene["objects"]
         check(len(objs) == 2, f"{len(objs)} objects")
@@ -198,7 +192,7 @@ def defect_4():
         subprocess.run([CLI, "render", hidden, "-q", "-o", without], check=True, timeout=900)
         d = ae(withm, without)
         W, H = scene["view"]["width"], scene["view"]["height"]
-        check(d > 0.005 * W * H, f"the mesh covers {d} pixels of {W * H}: not shown")
+        check(d > 0.001 * W * H, f"the mesh covers {d} pixels of {W * H}: not shown")
         print(f"volume and mesh: raytrace, the mesh covers {d:.0f} pixels, framed together")
 
 
@@ -240,7 +234,7 @@ def defect_6():
         for want in ("ct-bone", "ct-lung", "ct-vessels", "mr-t1-brain", "mr-t2-brain", "mip",
                      "fire", "microscopy-green", "microscopy-magenta"):
             check(want in names, f"no preset {want}")
-        active = s.find(lambda n: n.startswith("Active preset:"), "label")
+        active = s.find_label(lambda n: n.startswith("Active preset:"))
         check("none" in s.text(active), f"active before a preset: {s.text(active)!r}")
         s.click(s.find("ct-bone", "push button"))
         time.sleep(0.5)
@@ -260,8 +254,8 @@ def defect_6():
         print(f"ct-bone's thumbnail: mean {mean:.3f}")
         # the editor's readout under the pointer
         editor = s.find("transfer function editor")
-        readout = s.find(lambda n: n.startswith("point at the editor") or n.startswith("value "),
-                         "label")
+        readout = s.find_label(lambda n: n.startswith("point at the editor") or
+                               n.startswith("value "))
         ex, ey, ew, eh = s.extents(editor)
         s.xdo("mousemove", str(ex + ew // 2), str(ey + eh // 3))
         time.sleep(0.4)
@@ -475,7 +469,7 @@ def defect_11():
             time.sleep(1)
             if how == "Close":
                 win = s.find("VolVis — render", "frame", visible=False)
-                s.click(s.find("Close", "push button", root=win))
+                s.click(s.find("Close", "push button", root=win, visible=False))
             else:
                 s.key(how)
             time.sleep(1)

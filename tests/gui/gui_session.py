@@ -26,6 +26,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from atspi import Session, ae, check, psnr, run  # noqa: E402
 
 GUI, CLI, OUT = sys.argv[1:4]
+os.makedirs(OUT, exist_ok=True)
 DATA = os.path.abspath("../shared/data/volumes")
 
 

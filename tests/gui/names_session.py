@@ -17,6 +17,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from atspi import Session, check, run  # noqa: E402
 
 GUI, CLI, OUT = sys.argv[1:4]
+os.makedirs(OUT, exist_ok=True)
 CONTROLS = {"spin button", "check box", "combo box", "push button", "toggle button", "text",
             "slider", "radio button"}
 PAGES = ["Objects", "Transfer function", "View", "Lights", "Cut planes", "Rendering",
@@ -57,20 +58,13 @@ def main():
         time.sleep(1)
         for axis in ("axial", "coronal", "sagittal"):
             s.find(f"orientation of the {axis} view", "combo box")
-            s.find(lambda n, a=axis: n.startswith(f"{a}:"), "label")
+            s.find_label(lambda n, a=axis: n.startswith(f"{a}:"))
         # the header bar and the whole window
         n, b = unnamed(s, s.app())
         bad += [f"window: {x}" for x in b]
         # the raw-import dialog and the DICOM browser
-        for action, title in (("Import raw…", "VolVis — import raw"),
-                              ("Browse DICOM…", "VolVis — DICOM")):
-            s.click(s.find("Menu", "toggle button") if s.find_all("Menu", "toggle button")
-                    else s.find("Menu"))
-            time.sleep(0.5)
-            items = [o for o in s.find_all(action) if o.getRoleName() in ("menu item", "label",
-                                                                            "push button")]
-            check(items, f"no {action} in the menu")
-            s.click(items[0])
+        for keys, title in (("ctrl+i", "VolVis — import raw"), ("ctrl+d", "VolVis — DICOM")):
+            s.key(keys)  # File → Import raw…, Browse DICOM…
             s.xdo("search", "--sync", "--name", title)
             time.sleep(0.8)
             n, b = unnamed(s, s.app())

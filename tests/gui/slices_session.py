@@ -21,12 +21,13 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from atspi import Session, check, run  # noqa: E402
 
 GUI, CLI, OUT = sys.argv[1:4]
+os.makedirs(OUT, exist_ok=True)
 NUM = r"(-?[0-9.]+(?:e[-+]?[0-9]+)?)"
 READ = re.compile(rf"value {NUM} at voxel \({NUM}, {NUM}, {NUM}\), \({NUM}, {NUM}, {NUM}\)")
 
 
 def readout(s, axis):
-    t = s.text(s.find(lambda n: n.startswith(f"{axis}:"), "label"))
+    t = s.text(s.find_label(lambda n: n.startswith(f"{axis}:")))
     m = READ.search(t)
     check(m, f"{axis} readout {t!r}")
     return [float(x) for x in m.groups()], t
@@ -47,13 +48,7 @@ def main():
             check(all(abs(a - b) <= 1e-4 * (1 + abs(a)) for a, b in zip(o[4:], (x, y, z))),
                   f"the {other} view's cursor {o[4:]} is not the axial one's {(x, y, z)}")
         session = os.path.join(OUT, "session.json")
-        s.key("ctrl+shift+s")
-        s.xdo("search", "--sync", "--name", "Save session")
-        time.sleep(0.5)
-        s.key("ctrl+a")
-        s.type(session)
-        s.key("Return")
-        time.sleep(1.5)
+        s.save_as(session)
         r = subprocess.run([CLI, "slice", session, "--probe", f"{x!r},{y!r},{z!r}"],
                            capture_output=True, text=True)
         check(r.returncode == 0, f"volvis slice --probe: {r.stderr}")
@@ -62,6 +57,7 @@ def main():
         print(f"cursor {text!r}; volvis slice --probe: {cli}")
         # the wheel: one slice a notch
         s.wheel(axial, down=3)
+        s.wait_for(lambda: abs(readout(s, "axial")[0][3] - k) > 2.5, "the wheel did not scroll")
         (v2, i2, j2, k2, *_), _ = readout(s, "axial")
         check(abs(abs(k2 - k) - 3) < 1e-6 and abs(i2 - i) < 1e-6 and abs(j2 - j) < 1e-6,
               f"three notches: voxel ({i}, {j}, {k}) -> ({i2}, {j2}, {k2})")
@@ -88,7 +84,7 @@ def main():
         s.choose(orient, ["axial", "coronal", "sagittal", "oblique (cut plane)"],
                  "oblique (cut plane)")
         time.sleep(1)
-        t = s.text(s.find(lambda n: n.startswith("oblique:"), "label"))
+        t = s.text(s.find_label(lambda n: n.startswith("oblique:")))
         check(t.startswith("oblique: value"), f"oblique readout {t!r}")
         s.screenshot("four_up.png")
         # the CLI writes the axial slice of the saved session

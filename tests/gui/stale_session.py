@@ -16,6 +16,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from atspi import Session, check, run  # noqa: E402
 
 GUI, CLI, OUT = sys.argv[1:4]
+os.makedirs(OUT, exist_ok=True)
 
 
 def main():
