@@ -152,15 +152,19 @@ class Session:
 
     def quit(self, expect=0, timeout=20):
         """Ctrl+Q; the exit status must be @p expect."""
+        self.focus_main()
         self.key("ctrl+q")
         return self.wait_exit(expect, timeout)
 
     def quit_discard(self):
         """Ctrl+Q with unsaved changes: the dialog asks; Close without saving; exit 0."""
+        self.focus_main()
         self.key("ctrl+q")
         self.xdo("search", "--sync", "--name", "VolVis: unsaved changes")
         time.sleep(0.5)
-        self.click(self.find(lambda n: n.endswith("Close without saving"), "push button"))
+        dialog = self.find("VolVis: unsaved changes", visible=False)
+        self.click(self.find(lambda n: n.endswith("Close without saving"), "push button",
+                             root=dialog, visible=False))
         return self.wait_exit(0)
 
     def wait_exit(self, expect=0, timeout=20):
@@ -177,6 +181,12 @@ class Session:
         r = subprocess.run(["xdotool"] + list(args), env=self.env, capture_output=True,
                            text=True, timeout=60)
         return r.stdout
+
+    def focus_main(self):
+        """Gives the main window the keyboard (without a window manager, a
+        closed window leaves the focus nowhere)."""
+        self.xdo("windowfocus", self.wid)
+        time.sleep(0.2)
 
     def key(self, *keys):
         self.xdo("key", "--clearmodifiers", *keys)
@@ -382,7 +392,11 @@ class Session:
         check(self.shown(combo) == item, f"{combo.name}: chose {self.shown(combo)!r}, not {item!r}")
 
     def save_as(self, path):
-        """Ctrl+Shift+S, the path typed into the file chooser, Return."""
+        """Ctrl+Shift+S, the path typed into the file chooser, Return (an old
+        file there is removed first: the chooser would ask to replace it)."""
+        if os.path.exists(path):
+            os.remove(path)
+        self.focus_main()
         self.key("ctrl+shift+s")
         self.xdo("search", "--sync", "--name", "Save session")
         time.sleep(0.5)
@@ -391,6 +405,7 @@ class Session:
         self.key("Return")
         time.sleep(1.5)
         check(os.path.exists(path), f"Save as wrote no {path}")
+        self.focus_main()
 
     def set_spin(self, o, value):
         """Types a value into a spin button: click, select all, type, Enter."""

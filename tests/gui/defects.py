@@ -464,6 +464,7 @@ def defect_11():
         check(not s.title().endswith("*"), f"a file just opened is unsaved: {s.title()!r}")
         # the render window: Close, Escape and Ctrl+W
         for how in ("Close", "Escape", "ctrl+w"):
+            s.focus_main()
             s.key("ctrl+r")
             s.xdo("search", "--sync", "--name", "VolVis — render")
             time.sleep(1)
@@ -477,6 +478,7 @@ def defect_11():
             check(not left, f"{how} did not close the render window")
         check(s.app_proc.poll() is None, "closing the render window ended the application")
         # an edit, then Ctrl+Q: the dialog offers Save, which saves and quits
+        s.focus_main()
         s.page("Objects")
         s.set_spin(s.find("position x", "spin button"), 10)
         time.sleep(0.3)
@@ -484,7 +486,8 @@ def defect_11():
         s.key("ctrl+q")
         s.xdo("search", "--sync", "--name", "VolVis: unsaved changes")
         time.sleep(0.5)
-        save = s.find(lambda n: n.endswith("Save"), "push button")
+        dialog = s.find("VolVis: unsaved changes", visible=False)
+        save = s.find(lambda n: n.endswith("Save"), "push button", root=dialog, visible=False)
         s.click(save)
         s.wait_exit(0)
         check(abs(json.load(open(path))["objects"][0]["position"][0] - 10) < 1e-9,

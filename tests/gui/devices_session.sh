@@ -187,8 +187,15 @@ cp "$OUT/scene.json" "$OUT/session.json"
 rm -f "$OUT/frames.log"
 VOLVIS_INPUT_REPLAY=$OUT/turn.vvin "$GUI" "$OUT/session.json" > "$OUT/gui_replay.log" 2>&1 &
 pid=$!
-xdotool search --sync --name '^VolVis — ' > /dev/null
-sleep 4.5
+# the same window size as the first run: the view renders at the window's size
+wid=$(xdotool search --sync --name '^VolVis — ' | head -1)
+xdotool windowmove "$wid" 0 0 windowsize "$wid" 1100 720
+# the motion comes 3 s after the replay starts, which is after the window is
+# up: under load, well after the first frames
+for _ in $(seq 1 300); do
+  [ "$(awk '$6 > m { m = $6 } END { print m + 0 }' "$OUT/frames.log" 2>/dev/null)" -gt 4 ] && break
+  sleep 0.1
+done
 wait_settled 0 "the replay"
 d=$(ae "$OUT/full.png" "$OUT/full0.png")
 awk -v d="$d" 'BEGIN { exit !(d > 1000) }' || fail "the replay did not turn the view ($d pixels differ)"

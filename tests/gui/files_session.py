@@ -44,7 +44,8 @@ def main():
     if not os.path.isdir(dicom):
         for series, first in ((1, 40), (2, 60)):
             r = subprocess.run(["/usr/bin/python3", "scripts/dicom_testdata.py", "ct", HEAD,
-                                dicom, "--first", str(first), "--count", "4", "--crop", "64",
+                                os.path.join(dicom, f"s{series}"), "--first", str(first),
+                                "--count", "4", "--crop", "64",
                                 "--series-number", str(series)], capture_output=True, text=True)
             if r.returncode != 0:
                 skip(f"no DICOM test data (pydicom?): {r.stderr.strip()[-200:]}")
@@ -80,6 +81,7 @@ def main():
         check(probe and float(probe[1]) == 100 * 5 + 10 * 3 + 7, f"probe {probe}")
         print("raw: described, checked, previewed, imported and saved as NRRD")
         # DICOM: patients hidden unless asked
+        s.focus_main()
         s.key("ctrl+d")
         s.xdo("search", "--sync", "--name", "VolVis — DICOM")
         time.sleep(0.5)
