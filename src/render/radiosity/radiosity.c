@@ -15,6 +15,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/geom.h"
+#include "model/geometry.h"
 #include "render/radiosity/radiosity_internal.h"
 
 #define RAD_PI 3.14159265358979323846
@@ -140,100 +142,28 @@ add_triangle(patch_ctx *pc, vv_vec3 a, vv_vec3 bb, vv_vec3 c, int depth) {
     return VV_OK;
 }
 
-/* Adds the quad a b c d (in order) as two triangles. */
-static vv_status
-add_quad(patch_ctx *pc, vv_vec3 a, vv_vec3 b, vv_vec3 c, vv_vec3 d) {
-    vv_status s = add_triangle(pc, a, b, c, 0);
-    return s == VV_OK ? add_triangle(pc, a, c, d, 0) : s;
-}
-
-static vv_vec3
-sphere_point(vv_vec3 c, double r, double th, double ph) {
-    return vv_vec3_make(c.x + r * sin(th) * cos(ph), c.y + r * sin(th) * sin(ph),
-                        c.z + r * cos(th));
-}
-
-/* The geometric object's triangles (world coordinates), subdivided. */
+/* The geometric object's triangles (its geometry-type record's
+ * tessellation, 32 segments around a circle), in world coordinates,
+ * subdivided into patches. Planes are unbounded (the caller skips them);
+ * grids and volumes have no record. */
 static vv_status
 tessellate(patch_ctx *pc, const vv_object *obj) {
-    const vv_geometry *g = &obj->geometry;
-    vv_mat4 M = vv_object_matrix(obj);
-    vv_status s = VV_OK;
-#define W(p) vv_mat4_mul_point(M, (p))
-    switch (obj->type) {
-    case VV_OBJECT_POLYGON:
-        for (int i = 1; s == VV_OK && i + 1 < g->n_vertices; i++)
-            s = add_triangle(pc, W(g->vertices[0]), W(g->vertices[i]), W(g->vertices[i + 1]), 0);
-        break;
-    case VV_OBJECT_BOX: {
-        vv_vec3 p[8];
-        for (int i = 0; i < 8; i++)
-            p[i] = W(vv_vec3_make(i & 1 ? g->box.max.x : g->box.min.x,
-                                  i & 2 ? g->box.max.y : g->box.min.y,
-                                  i & 4 ? g->box.max.z : g->box.min.z));
-        static const int f[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
-                                    {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
-        for (int i = 0; s == VV_OK && i < 6; i++)
-            s = add_quad(pc, p[f[i][0]], p[f[i][1]], p[f[i][2]], p[f[i][3]]);
-        break;
+    const vv_geom_type *gt = vv_geom_type_get(obj->type);
+    if (!gt)
+        return VV_OK;
+    const vv_geom_tess opt = {.segments = 32};
+    vv_mesh *m = NULL;
+    vv_status s = gt->tessellate(&obj->geometry, &opt, &m);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "object '%s'", obj->name);
+    const vv_mat4 M = vv_object_matrix(obj);
+    for (size_t t = 0; s == VV_OK && t < m->n_triangles; t++) {
+        const uint32_t *ix = &m->triangles[3 * t];
+        s = add_triangle(pc, vv_mat4_mul_point(M, vv_mesh_vertex(m, ix[0])),
+                         vv_mat4_mul_point(M, vv_mesh_vertex(m, ix[1])),
+                         vv_mat4_mul_point(M, vv_mesh_vertex(m, ix[2])), 0);
     }
-    case VV_OBJECT_SPHERE: {
-        const int nt = 16, np = 32;
-        for (int i = 0; s == VV_OK && i < nt; i++) {
-            double t0 = RAD_PI * i / nt, t1 = RAD_PI * (i + 1) / nt;
-            for (int j = 0; s == VV_OK && j < np; j++) {
-                double p0 = 2 * RAD_PI * j / np, p1 = 2 * RAD_PI * (j + 1) / np;
-                vv_vec3 a = W(sphere_point(g->center, g->radius, t0, p0));
-                vv_vec3 b = W(sphere_point(g->center, g->radius, t1, p0));
-                vv_vec3 c = W(sphere_point(g->center, g->radius, t1, p1));
-                vv_vec3 d = W(sphere_point(g->center, g->radius, t0, p1));
-                if (i == 0)
-                    s = add_triangle(pc, a, b, c, 0);
-                else if (i == nt - 1)
-                    s = add_triangle(pc, a, b, d, 0);
-                else
-                    s = add_quad(pc, a, b, c, d);
-            }
-        }
-        break;
-    }
-    case VV_OBJECT_CYLINDER: {
-        const int np = 32;
-        vv_vec3 ax = vv_vec3_sub(g->top, g->base);
-        vv_vec3 u =
-            fabs(ax.x) < 0.9 * vv_vec3_length(ax) ? vv_vec3_make(1, 0, 0) : vv_vec3_make(0, 1, 0);
-        u = vv_vec3_normalize(vv_vec3_cross(ax, u));
-        vv_vec3 v = vv_vec3_normalize(vv_vec3_cross(ax, u));
-        for (int j = 0; s == VV_OK && j < np; j++) {
-            double p0 = 2 * RAD_PI * j / np, p1 = 2 * RAD_PI * (j + 1) / np;
-            vv_vec3 r0 = vv_vec3_add(vv_vec3_scale(u, g->radius * cos(p0)),
-                                     vv_vec3_scale(v, g->radius * sin(p0)));
-            vv_vec3 r1 = vv_vec3_add(vv_vec3_scale(u, g->radius * cos(p1)),
-                                     vv_vec3_scale(v, g->radius * sin(p1)));
-            vv_vec3 a = W(vv_vec3_add(g->base, r0)), b = W(vv_vec3_add(g->base, r1));
-            vv_vec3 c = W(vv_vec3_add(g->top, r1)), d = W(vv_vec3_add(g->top, r0));
-            s = add_quad(pc, a, b, c, d);
-            if (s == VV_OK && g->capped) {
-                s = add_triangle(pc, W(g->base), b, a, 0);
-                if (s == VV_OK)
-                    s = add_triangle(pc, W(g->top), d, c, 0);
-            }
-        }
-        break;
-    }
-    case VV_OBJECT_MESH: {
-        const vv_mesh *m = g->mesh;
-        for (size_t t = 0; m && s == VV_OK && t < m->n_triangles; t++) {
-            const uint32_t *ix = &m->triangles[3 * t];
-            s = add_triangle(pc, W(vv_mesh_vertex(m, ix[0])), W(vv_mesh_vertex(m, ix[1])),
-                             W(vv_mesh_vertex(m, ix[2])), 0);
-        }
-        break;
-    }
-    default:
-        break;
-    }
-#undef W
+    vv_mesh_free(m);
     return s;
 }
 
@@ -665,9 +595,11 @@ sub_points(const float *tri, vv_vec3 *out) {
 /* Ray parameter range [t0, t1] of a box; 0 on a miss. */
 static int
 box_ray(const float *mn, const float *mx, vv_vec3 o, vv_vec3 d, double *t0, double *t1) {
-    vv_box b = {vv_vec3_make(mn[0], mn[1], mn[2]), vv_vec3_make(mx[0], mx[1], mx[2])};
-    vv_ray r = {o, d};
-    return vv_box_intersect_ray(b, r, t0, t1);
+    const double lo[3] = {mn[0], mn[1], mn[2]}, hi[3] = {mx[0], mx[1], mx[2]};
+    const double oo[3] = {o.x, o.y, o.z}, dd[3] = {d.x, d.y, d.z};
+    *t0 = -INFINITY;
+    *t1 = INFINITY;
+    return vv_slab(lo, hi, oo, dd, t0, t1);
 }
 
 /* Optical depth along the ray o + t d, t in [t0, t1] (d unit, world),
@@ -717,36 +649,9 @@ grid_tau(const rad_vol *rv, vv_vec3 o, vv_vec3 d, double t0, double t1) {
     return tau;
 }
 
-/* Ray-triangle (Moller-Trumbore); returns t or -1. */
-static double
-tri_hit(const float *tri, vv_vec3 o, vv_vec3 d, double *bu, double *bv) {
-    vv_vec3 a = f3(tri), e1 = vv_vec3_sub(f3(tri + 3), a), e2 = vv_vec3_sub(f3(tri + 6), a);
-    vv_vec3 p = vv_vec3_cross(d, e2);
-    double det = vv_vec3_dot(e1, p);
-    if (fabs(det) < 1e-300)
-        return -1;
-    double inv = 1 / det;
-    vv_vec3 s = vv_vec3_sub(o, a);
-    double u = vv_vec3_dot(s, p) * inv;
-    if (u < 0 || u > 1)
-        return -1;
-    vv_vec3 q = vv_vec3_cross(s, e1);
-    double v = vv_vec3_dot(d, q) * inv;
-    if (v < 0 || u + v > 1)
-        return -1;
-    if (bu)
-        *bu = u;
-    if (bv)
-        *bv = v;
-    return vv_vec3_dot(e2, q) * inv;
-}
-
-/* Nearest patch hit of the ray in (t0, t1) through the trees of the patch
- * objects; returns the element index or -1, *t the hit. any: stop at the
- * first hit. */
-static int
-patch_hit(const vv_radiosity *r, vv_vec3 o, vv_vec3 d, double t0, double t1, int any,
-          double *thit) {
+int
+rad_patch_hit(const vv_radiosity *r, vv_vec3 o, vv_vec3 d, double t0, double t1, int any,
+              double *thit) {
     int best = -1;
     double tb = t1;
     int stack[128];
@@ -762,8 +667,11 @@ patch_hit(const vv_radiosity *r, vv_vec3 o, vv_vec3 d, double t0, double t1, int
             if (!box_ray(nd->bmin, nd->bmax, o, d, &a, &b) || b < t0 || a > tb)
                 continue;
             if (nd->child[0] < 0) {
-                double t = tri_hit(r->elems[nd->lo].tri, o, d, NULL, NULL);
-                if (t > t0 && t < tb) {
+                const float *tri = r->elems[nd->lo].tri;
+                double t, u, v;
+                if (vv_ray_triangle3(o, d, vv_v3_f(tri), vv_v3_f(tri + 3), vv_v3_f(tri + 6), &t, &u,
+                                     &v) &&
+                    t > t0 && t < tb) {
                     tb = t;
                     best = nd->lo;
                     if (any) {
@@ -774,8 +682,13 @@ patch_hit(const vv_radiosity *r, vv_vec3 o, vv_vec3 d, double t0, double t1, int
                 continue;
             }
             if (sp + 2 <= 128) {
-                stack[sp++] = nd->child[0];
-                stack[sp++] = nd->child[1];
+                /* the nearer child last, so it is taken first */
+                const rad_node *c0 = &r->nodes[nd->child[0]], *c1 = &r->nodes[nd->child[1]];
+                const double d0 = vv_v3_dot(vv_v3_sub(vv_v3_f(c0->c), o), d);
+                const double d1 = vv_v3_dot(vv_v3_sub(vv_v3_f(c1->c), o), d);
+                const int n0 = d0 <= d1 ? nd->child[0] : nd->child[1];
+                stack[sp++] = n0 == nd->child[0] ? nd->child[1] : nd->child[0];
+                stack[sp++] = n0;
             }
         }
     }
@@ -789,7 +702,7 @@ transmittance(const vv_radiosity *r, vv_vec3 o, vv_vec3 d, double t0, double t1)
     if (!(t1 > t0))
         return 1;
     double th;
-    if (patch_hit(r, o, d, t0, t1, 1, &th) >= 0)
+    if (rad_patch_hit(r, o, d, t0, t1, 1, &th) >= 0)
         return 0;
     double tau = 0;
     for (int i = 0; i < r->n_vols && tau <= RAD_TAU_MAX; i++)

@@ -71,4 +71,13 @@ struct vv_radiosity {
     vv_radiosity_stats stats;
 };
 
+/**
+ * The nearest patch the ray o + t d (d unit, world) hits with t0 < t < t1,
+ * through the patch objects' trees, nearer child first: its element index,
+ * or -1; *thit the hit (t1 when none). any: return at the first hit found
+ * (a shadow ray).
+ */
+int rad_patch_hit(const vv_radiosity *r, vv_vec3 o, vv_vec3 d, double t0, double t1, int any,
+                  double *thit);
+
 #endif
