@@ -26,15 +26,14 @@
  */
 #include <float.h>
 #include <math.h>
-#include <pthread.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/parallel_for.h"
 #include "surface_internal.h"
 
 #define MC_WORD 64
-#define VV_MC_MAX_THREADS 256
+#define VV_MC_MAX_THREADS VV_PARALLEL_MAX_THREADS
 #define MC_CNT 5 /* counts per row */
 
 typedef struct mc_job {
@@ -61,7 +60,6 @@ typedef struct mc_job {
     float *centres; /* edges_only: centre vertex positions */
     uint64_t *coff; /* edges_only: per row, its first centre vertex */
     vv_mesh *m;
-    volatile int cancel;
     int failed;
 } mc_job;
 
@@ -666,87 +664,44 @@ fix_zero_normals(vv_mesh *m) {
 /* ---- threads -------------------------------------------------------------------- */
 
 /*
- * The passes run on plain threads that block between passes (pthread_join), not
- * on OpenMP: libgomp's threads spin-wait at every barrier and between parallel
- * regions (GOMP_SPINCOUNT, 300 000 pause loops, several ms on current CPUs), and
- * on a machine with more runnable threads than cores the spinning thread takes
- * the core its late partner needs. On the project's loaded 2-core machine that
- * made 2 threads twice as slow as 1. Rows are handed out dynamically, 16 at a
- * time, from an atomic counter, so a descheduled thread delays the pass by at
- * most its 16 rows.
+ * Each pass is one vv_parallel_for (core/parallel_for.h) over the grid rows,
+ * handed out 16 at a time, so a descheduled thread delays a pass by at most
+ * its 16 rows.
  */
 typedef struct mc_pass {
     mc_job *J;
     int which;          /* MC_PASS_* */
-    long n;             /* rows */
-    atomic_long next;   /* next row to hand out */
     uint8_t **scratch;  /* per worker: classify's byte row */
     long *zero_normals; /* per worker */
     const vv_minmax_grid *grid;
-    const vv_progress *progress;
 } mc_pass;
 
 enum { MC_PASS_CLASSIFY, MC_PASS_COUNT, MC_PASS_GENERATE };
 #define MC_CHUNK 16
 
 static void
-pass_worker(mc_pass *P, int w) {
+pass_rows(void *ctx, long r0, long r1, int w) {
+    mc_pass *P = ctx;
     mc_job *J = P->J;
-    int tick = 0;
-    for (;;) {
-        long r0 = atomic_fetch_add_explicit(&P->next, MC_CHUNK, memory_order_relaxed);
-        if (r0 >= P->n || J->cancel)
-            break;
-        long r1 = r0 + MC_CHUNK < P->n ? r0 + MC_CHUNK : P->n;
-        for (long r = r0; r < r1; r++) {
-            int j = (int)(r % J->n[1]), k = (int)(r / J->n[1]);
-            if (P->which == MC_PASS_CLASSIFY)
-                classify_row(J, P->grid, j, k, P->scratch[w]);
-            else if (P->which == MC_PASS_COUNT)
-                count_row(J, j, k);
-            else
-                P->zero_normals[w] += generate_row(J, j, k);
-        }
-        /* the calling thread (worker 0) reports; a cancel stops every worker */
-        if (w == 0 && P->which == MC_PASS_GENERATE && P->progress && P->progress->fn &&
-            (++tick & 3) == 0 &&
-            vv_progress_report(P->progress, 0.4 + 0.5 * (double)r1 / (double)P->n))
-            J->cancel = 1;
+    for (long r = r0; r < r1; r++) {
+        int j = (int)(r % J->n[1]), k = (int)(r / J->n[1]);
+        if (P->which == MC_PASS_CLASSIFY)
+            classify_row(J, P->grid, j, k, P->scratch[w]);
+        else if (P->which == MC_PASS_COUNT)
+            count_row(J, j, k);
+        else
+            P->zero_normals[w] += generate_row(J, j, k);
     }
 }
 
-typedef struct mc_worker_arg {
-    mc_pass *P;
-    int w;
-} mc_worker_arg;
-
-static void *
-pass_thread(void *a) {
-    mc_worker_arg *arg = a;
-    pass_worker(arg->P, arg->w);
-    return NULL;
-}
-
-/* Runs pass P on nt threads (the caller is worker 0); fewer if threads cannot be made. */
-static void
-run_pass(mc_pass *P, int nt) {
-    pthread_t tid[VV_MC_MAX_THREADS];
-    mc_worker_arg arg[VV_MC_MAX_THREADS];
-    atomic_store_explicit(&P->next, 0, memory_order_relaxed);
-    long max_useful = (P->n + MC_CHUNK - 1) / MC_CHUNK;
-    if (nt > max_useful)
-        nt = (int)max_useful;
-    int started = 0;
-    for (int w = 1; w < nt; w++) {
-        arg[w].P = P;
-        arg[w].w = w;
-        if (pthread_create(&tid[w], NULL, pass_thread, &arg[w]) != 0)
-            break;
-        started = w;
-    }
-    pass_worker(P, 0);
-    for (int w = 1; w <= started; w++)
-        pthread_join(tid[w], NULL);
+/* Runs pass P over @p rows on nt threads; the generate pass reports progress
+ * 0.4 .. 0.9 every 4 chunks of the calling thread. VV_ERR_CANCELLED on a
+ * cancel. */
+static vv_status
+run_pass(mc_pass *P, long rows, int nt, const vv_progress *progress) {
+    const vv_parallel_progress pr = {progress, 0.4, 0.9, 4};
+    return vv_parallel_for(rows, MC_CHUNK, nt, pass_rows, P,
+                           P->which == MC_PASS_GENERATE ? &pr : NULL);
 }
 
 /* ---- driver ------------------------------------------------------------------- */
@@ -878,9 +833,7 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
     mc_pass P;
     memset(&P, 0, sizeof P);
     P.J = &J;
-    P.n = (long)rows;
     P.grid = grid;
-    P.progress = &opt->progress;
     long zn[VV_MC_MAX_THREADS] = {0};
     uint8_t *scratch[VV_MC_MAX_THREADS] = {NULL};
     P.scratch = scratch;
@@ -893,7 +846,7 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
             goto done;
         }
     P.which = MC_PASS_CLASSIFY;
-    run_pass(&P, nt);
+    run_pass(&P, (long)rows, nt, NULL);
     for (int w = 0; w < nt; w++)
         free(scratch[w]);
     if (report(&opt->progress, 0.2)) {
@@ -902,7 +855,7 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
     }
     /* pass 2: count */
     P.which = MC_PASS_COUNT;
-    run_pass(&P, nt);
+    run_pass(&P, (long)rows, nt, NULL);
     /* pass 3: prefix sums */
     uint64_t nv = 0, ntri = 0, ncent = 0;
     for (size_t r = 0; r < rows; r++) {
@@ -963,14 +916,13 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
     J.m = m;
     /* pass 4: generate */
     P.which = MC_PASS_GENERATE;
-    run_pass(&P, nt);
-    long zero_normals = 0;
-    for (int w = 0; w < nt; w++)
-        zero_normals += zn[w];
-    if (J.cancel) {
+    if (run_pass(&P, (long)rows, nt, &opt->progress) != VV_OK) {
         st = vv_error_set(VV_ERR_CANCELLED, "isosurface: cancelled");
         goto done;
     }
+    long zero_normals = 0;
+    for (int w = 0; w < nt; w++)
+        zero_normals += zn[w];
     if (J.normals && zero_normals > 0)
         fix_zero_normals(m);
     for (int p = 0; p < opt->n_cut_planes; p++) {
