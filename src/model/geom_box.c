@@ -111,10 +111,7 @@ box_distance(const vv_geometry *g, const void *prep, vv_vec3 q) {
     (void)prep;
     const vv_vec3 c = vv_v3_scale(vv_v3_add(g->box.min, g->box.max), 0.5);
     const vv_vec3 h = vv_v3_scale(vv_v3_sub(g->box.max, g->box.min), 0.5);
-    const double qx = fabs(q.x - c.x) - h.x, qy = fabs(q.y - c.y) - h.y, qz = fabs(q.z - c.z) - h.z;
-    const double ox = qx > 0 ? qx : 0, oy = qy > 0 ? qy : 0, oz = qz > 0 ? qz : 0;
-    const double in = fmax(qx, fmax(qy, qz));
-    return sqrt(ox * ox + oy * oy + oz * oz) + (in < 0 ? in : 0);
+    return vv_geom_box_distance(vv_v3_sub(q, c), h, 0);
 }
 
 const vv_geom_type vv_geom_box = {

@@ -95,7 +95,7 @@ sphere_intersect(const vv_geometry *g, const void *prep, vv_vec3 o, vv_vec3 d, d
 static double
 sphere_distance(const vv_geometry *g, const void *prep, vv_vec3 q) {
     (void)prep;
-    return vv_v3_len(vv_v3_sub(q, g->center)) - g->radius;
+    return vv_geom_sphere_distance(vv_v3_sub(q, g->center), g->radius);
 }
 
 const vv_geom_type vv_geom_sphere = {

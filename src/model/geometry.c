@@ -101,3 +101,18 @@ vv_geom_prism_distance(double a, double b) {
     double in = a > b ? a : b;
     return (in < 0 ? in : 0) + sqrt(oa * oa + ob * ob);
 }
+
+double
+vv_geom_box_distance(vv_vec3 q, vv_vec3 half, double rounding) {
+    const double r = rounding;
+    const double qx = fabs(q.x) - half.x + r, qy = fabs(q.y) - half.y + r,
+                 qz = fabs(q.z) - half.z + r;
+    const double ox = qx > 0 ? qx : 0, oy = qy > 0 ? qy : 0, oz = qz > 0 ? qz : 0;
+    const double in = fmax(qx, fmax(qy, qz));
+    return sqrt(ox * ox + oy * oy + oz * oz) + (in < 0 ? in : 0) - r;
+}
+
+double
+vv_geom_sphere_distance(vv_vec3 q, double r) {
+    return vv_v3_len(q) - r;
+}

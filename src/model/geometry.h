@@ -120,8 +120,14 @@ vv_status vv_geom_mesh_vertex(vv_mesh *m, vv_vec3 p, vv_vec3 n);
 void vv_geom_perpendicular(vv_vec3 e, vv_vec3 *p1, vv_vec3 *p2);
 /** Newell's normal of a closed polygon (not normalised; its length is twice the area). */
 vv_vec3 vv_geom_newell(const vv_vec3 *v, int n);
+/* Exact signed distances shared by the records and Modeling's primitives. */
 /** Distance combining a 2-D signed distance a and a slab's signed distance b,
  * exact for a prism (capped cylinder, extrusion). */
 double vv_geom_prism_distance(double a, double b);
+/** From @p q (relative to the centre) to the sphere of radius @p r. */
+double vv_geom_sphere_distance(vv_vec3 q, double r);
+/** From @p q (relative to the centre) to the box of half sizes @p half with
+ * edges rounded by @p rounding (0: sharp; at most the smallest half size). */
+double vv_geom_box_distance(vv_vec3 q, vv_vec3 half, double rounding);
 
 #endif

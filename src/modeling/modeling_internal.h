@@ -8,6 +8,7 @@
 
 #include <jansson.h>
 
+#include "volvis/model.h"
 #include "volvis/modeling.h"
 
 typedef enum shape_kind {
@@ -19,6 +20,7 @@ typedef enum shape_kind {
     SHAPE_EXTRUSION,  /* also the thick planar polygon (with a frame) */
     SHAPE_HELIX,
     SHAPE_MESH,
+    SHAPE_OBJECT, /* a World object's geometry, through its geometry-type record */
     SHAPE_CSG
 } shape_kind;
 
@@ -37,6 +39,9 @@ struct vv_shape {
     vv_csg_op op;
     int n_children;
     vv_shape **children;
+    vv_object *obj;                  /* SHAPE_OBJECT: a copy of the object (owned) */
+    const struct vv_geom_type *geom; /* its record (src/model/geometry.h) */
+    void *prep;                      /* what geom->prepare built, or NULL */
 };
 
 /**
