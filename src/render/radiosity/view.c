@@ -14,8 +14,6 @@
 
 #define RAD_BLOCK 8
 
-vv_status rad_prepare_render(vv_radiosity *r);
-
 /* Per voxel: sigma, display radiance (power / (4 capacity)), diffuse normal;
  * opaque voxels that are not elements take the mean of their element
  * neighbours so the colour does not darken towards buried voxels. */
