@@ -726,28 +726,67 @@ vv_isosurface_extract(vv_mesh **out, const vv_volume *v, double isovalue,
     return vv_isosurface_extract_ex(out, v, isovalue, opt, NULL);
 }
 
-vv_status
-vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
-                         const vv_isosurface_options *opt, mc_extra *x) {
-    if (out)
-        *out = NULL;
-    if (!out || !v || !v->data)
-        return vv_error_set(VV_ERR_INVALID, "isosurface: NULL argument");
-    if (!isfinite(isovalue))
-        return vv_error_set(VV_ERR_INVALID, "isosurface: isovalue %g is not finite", isovalue);
-    vv_isosurface_options defaults;
-    if (!opt) {
-        vv_isosurface_options_init(&defaults);
-        opt = &defaults;
+/* Pass 3: each row's first vertex, triangle and centre vertex from the
+ * counts of pass 2; the totals. */
+static void
+prefix_sums(mc_job *J, size_t rows, uint64_t *nv_out, uint64_t *ntri_out, uint64_t *ncent_out) {
+    uint64_t nv = 0, ntri = 0, ncent = 0;
+    for (size_t r = 0; r < rows; r++) {
+        J->voff[r] = nv;
+        J->toff[r] = ntri;
+        if (J->coff)
+            J->coff[r] = ncent;
+        const uint32_t *c = J->cnt + MC_CNT * r;
+        nv += (uint64_t)c[0] + c[1] + c[2] + c[4];
+        ntri += c[3];
+        ncent += c[4];
     }
+    J->voff[rows] = nv;
+    J->toff[rows] = ntri;
+    *nv_out = nv;
+    *ntri_out = ntri;
+    *ncent_out = ncent;
+}
+
+/* The extras of a coarse surface (mc_extra): edge ids, quantised codes and,
+ * with edges only, the centre vertices. */
+static vv_status
+extra_alloc(mc_job *J, mc_extra *x, uint64_t nv, uint64_t ncent) {
+    x->edge_ids = malloc((nv ? (size_t)nv : 1) * sizeof(uint32_t));
+    x->codes = x->quantize ? malloc(nv ? (size_t)nv : 1) : NULL;
+    if (!x->edge_ids || (x->quantize && !x->codes)) {
+        return vv_error_set(VV_ERR_NOMEM, "isosurface: out of memory");
+    }
+    if (3 * (uint64_t)vv_volume_voxel_count(J->v) > UINT32_MAX) {
+        return vv_error_set(VV_ERR_LIMIT, "isosurface: edge ids need %llu voxels < 2^32 / 3",
+                            (unsigned long long)vv_volume_voxel_count(J->v));
+    }
+    J->edge_ids = x->edge_ids;
+    J->codes = x->codes;
+    if (J->edges_only) {
+        x->n_vertices = (size_t)nv;
+        x->n_centres = (size_t)ncent;
+        x->centres = J->centres = malloc((ncent ? (size_t)ncent : 1) * 3 * sizeof(float));
+        if (!J->centres) {
+            return vv_error_set(VV_ERR_NOMEM, "isosurface: out of memory");
+        }
+    }
+    return VV_OK;
+}
+
+/* The job of one extraction: the region, the checks of the options (errors
+ * as vv_isosurface_extract), the strides and transforms; *grid_out the
+ * min/max grid when it is this volume's and exact. */
+static vv_status
+job_init(mc_job *J, const vv_volume *v, double isovalue, const vv_isosurface_options *opt,
+         const mc_extra *x, const vv_minmax_grid **grid_out) {
     const mc_tables *tb = mc_tables_get();
     if (!tb)
         return vv_error_set(VV_ERR_INVALID, "isosurface: internal error building the case tables");
-    mc_job J;
-    memset(&J, 0, sizeof J);
-    J.v = v;
-    J.iso = isovalue;
-    J.tb = tb;
+    memset(J, 0, sizeof *J);
+    J->v = v;
+    J->iso = isovalue;
+    J->tb = tb;
     for (int a = 0; a < 3; a++) {
         int lo = 0, hi = v->dims[a] - 1;
         if (opt->roi_max[0] >= 0) {
@@ -759,8 +798,8 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
                                     "outside the volume's 0..%d",
                                     lo, hi, "ijk"[a], v -> dims[a] - 1);
         }
-        J.lo[a] = lo;
-        J.n[a] = hi - lo + 1;
+        J->lo[a] = lo;
+        J->n[a] = hi - lo + 1;
     }
     if (opt->n_cut_planes < 0 || opt->n_cut_planes > VV_MAX_CUT_PLANES)
         return vv_error_set(VV_ERR_INVALID, "isosurface: %d cut planes (0..%d)", opt->n_cut_planes,
@@ -781,26 +820,49 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
                  grid->dims[1] != (v->dims[1] > 1 ? (v->dims[1] - 2) / grid->block + 1 : 1) ||
                  grid->dims[2] != (v->dims[2] > 1 ? (v->dims[2] - 2) / grid->block + 1 : 1)))
         grid = NULL; /* not this volume's grid, or values not exact in float: read voxels */
-    J.sy = (size_t)v->dims[0];
-    J.sz = J.sy * (size_t)v->dims[1];
-    J.W = (J.n[0] + MC_WORD - 1) / MC_WORD;
-    J.normals = opt->compute_normals != 0;
-    J.sv = opt->scalar_volume;
-    J.quantize = x ? x->quantize : 0;
-    J.edges_only = x && x->quantize && x->edges_only;
-    if (J.edges_only) {
+    *grid_out = grid;
+    J->sy = (size_t)v->dims[0];
+    J->sz = J->sy * (size_t)v->dims[1];
+    J->W = (J->n[0] + MC_WORD - 1) / MC_WORD;
+    J->normals = opt->compute_normals != 0;
+    J->sv = opt->scalar_volume;
+    J->quantize = x ? x->quantize : 0;
+    J->edges_only = x && x->quantize && x->edges_only;
+    if (J->edges_only) {
         if (opt->n_cut_planes)
             return vv_error_set(VV_ERR_INVALID, "isosurface: cut planes need vertex positions");
-        J.normals = 0;
-        J.sv = NULL;
+        J->normals = 0;
+        J->sv = NULL;
     }
     vv_mat4 M = vv_volume_index_to_world(v);
     for (int r = 0; r < 3; r++)
         for (int c = 0; c < 4; c++)
-            J.M[r][c] = M.m[r][c];
+            J->M[r][c] = M.m[r][c];
     for (int r = 0; r < 3; r++)
         for (int c = 0; c < 3; c++)
-            J.G[r][c] = v->direction[3 * r + c] / v->spacing[c];
+            J->G[r][c] = v->direction[3 * r + c] / v->spacing[c];
+    return VV_OK;
+}
+
+vv_status
+vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
+                         const vv_isosurface_options *opt, mc_extra *x) {
+    if (out)
+        *out = NULL;
+    if (!out || !v || !v->data)
+        return vv_error_set(VV_ERR_INVALID, "isosurface: NULL argument");
+    if (!isfinite(isovalue))
+        return vv_error_set(VV_ERR_INVALID, "isosurface: isovalue %g is not finite", isovalue);
+    vv_isosurface_options defaults;
+    if (!opt) {
+        vv_isosurface_options_init(&defaults);
+        opt = &defaults;
+    }
+    mc_job J;
+    const vv_minmax_grid *grid = NULL;
+    vv_status jst = job_init(&J, v, isovalue, opt, x, &grid);
+    if (jst != VV_OK)
+        return jst;
     int nt = opt->threads;
     if (nt <= 0) {
         /* by default at most one thread per 2^18 voxels: on small grids starting the
@@ -857,19 +919,8 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
     P.which = MC_PASS_COUNT;
     run_pass(&P, (long)rows, nt, NULL);
     /* pass 3: prefix sums */
-    uint64_t nv = 0, ntri = 0, ncent = 0;
-    for (size_t r = 0; r < rows; r++) {
-        J.voff[r] = nv;
-        J.toff[r] = ntri;
-        if (J.coff)
-            J.coff[r] = ncent;
-        const uint32_t *c = J.cnt + MC_CNT * r;
-        nv += (uint64_t)c[0] + c[1] + c[2] + c[4];
-        ntri += c[3];
-        ncent += c[4];
-    }
-    J.voff[rows] = nv;
-    J.toff[rows] = ntri;
+    uint64_t nv, ntri, ncent;
+    prefix_sums(&J, rows, &nv, &ntri, &ncent);
     if (nv > VV_MESH_MAX_ELEMENTS || ntri > VV_MESH_MAX_ELEMENTS || nv > UINT32_MAX) {
         st = vv_error_set(
             VV_ERR_LIMIT, "isosurface: %llu vertices and %llu triangles (at most %zu each)",
@@ -887,30 +938,8 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
         vv_error_prefix(st, "isosurface");
         goto done;
     }
-    if (x) {
-        x->edge_ids = malloc((nv ? (size_t)nv : 1) * sizeof(uint32_t));
-        x->codes = x->quantize ? malloc(nv ? (size_t)nv : 1) : NULL;
-        if (!x->edge_ids || (x->quantize && !x->codes)) {
-            st = vv_error_set(VV_ERR_NOMEM, "isosurface: out of memory");
-            goto done;
-        }
-        if (3 * (uint64_t)vv_volume_voxel_count(v) > UINT32_MAX) {
-            st = vv_error_set(VV_ERR_LIMIT, "isosurface: edge ids need %llu voxels < 2^32 / 3",
-                              (unsigned long long)vv_volume_voxel_count(v));
-            goto done;
-        }
-        J.edge_ids = x->edge_ids;
-        J.codes = x->codes;
-        if (J.edges_only) {
-            x->n_vertices = (size_t)nv;
-            x->n_centres = (size_t)ncent;
-            x->centres = J.centres = malloc((ncent ? (size_t)ncent : 1) * 3 * sizeof(float));
-            if (!J.centres) {
-                st = vv_error_set(VV_ERR_NOMEM, "isosurface: out of memory");
-                goto done;
-            }
-        }
-    }
+    if (x && (st = extra_alloc(&J, x, nv, ncent)) != VV_OK)
+        goto done;
     m->n_vertices = J.edges_only ? 0 : (size_t)nv;
     m->n_triangles = (size_t)ntri;
     J.m = m;
