@@ -13,15 +13,6 @@
 
 #include "core/bvh.h"
 
-static double
-rnd(uint64_t *s, double lo, double hi) {
-    uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    z ^= z >> 31;
-    return lo + (hi - lo) * (double)(z >> 11) / 9007199254740992.0;
-}
-
 /* Walks the tree: every item in exactly one leaf, each node's box holding
  * its children's and its items' boxes; returns the depth. */
 static int
@@ -74,11 +65,11 @@ static void
 random_triangles(uint64_t *seed, size_t n, float *pos, uint32_t *tri) {
     for (size_t t = 0; t < n; t++) {
         /* small triangles scattered in [-1, 1]^3 */
-        const double cx = rnd(seed, -1, 1), cy = rnd(seed, -1, 1), cz = rnd(seed, -1, 1);
+        const double cx = vt_rnd(seed, -1, 1), cy = vt_rnd(seed, -1, 1), cz = vt_rnd(seed, -1, 1);
         for (int k = 0; k < 3; k++) {
-            pos[9 * t + 3 * k] = (float)(cx + rnd(seed, -0.08, 0.08));
-            pos[9 * t + 3 * k + 1] = (float)(cy + rnd(seed, -0.08, 0.08));
-            pos[9 * t + 3 * k + 2] = (float)(cz + rnd(seed, -0.08, 0.08));
+            pos[9 * t + 3 * k] = (float)(cx + vt_rnd(seed, -0.08, 0.08));
+            pos[9 * t + 3 * k + 1] = (float)(cy + vt_rnd(seed, -0.08, 0.08));
+            pos[9 * t + 3 * k + 2] = (float)(cz + vt_rnd(seed, -0.08, 0.08));
             tri[3 * t + k] = (uint32_t)(3 * t + k);
         }
     }
@@ -141,8 +132,9 @@ test_ray_vs_brute_force(void **state) {
     long leaves = 0;
     for (int r = 0; r < 4000; r++) {
         tri_ctx c = {pos, tri, {0, 0, 0}, {0, 0, 0}, INFINITY, UINT32_MAX, 0};
-        c.o = vv_v3(rnd(&seed, -3, 3), rnd(&seed, -3, 3), rnd(&seed, -3, 3));
-        c.d = vv_v3_sub(vv_v3(rnd(&seed, -1, 1), rnd(&seed, -1, 1), rnd(&seed, -1, 1)), c.o);
+        c.o = vv_v3(vt_rnd(&seed, -3, 3), vt_rnd(&seed, -3, 3), vt_rnd(&seed, -3, 3));
+        c.d =
+            vv_v3_sub(vv_v3(vt_rnd(&seed, -1, 1), vt_rnd(&seed, -1, 1), vt_rnd(&seed, -1, 1)), c.o);
         if (r % 10 == 0)
             c.d.z = 0; /* axis-parallel components: infinite reciprocals */
         const double o[3] = {c.o.x, c.o.y, c.o.z}, inv[3] = {1 / c.d.x, 1 / c.d.y, 1 / c.d.z};
@@ -202,7 +194,7 @@ test_boxes_vs_brute_force(void **state) {
     uint64_t seed = 9;
     for (size_t i = 0; i < n; i++)
         for (int a = 0; a < 3; a++) {
-            const double c = rnd(&seed, -1, 1), h = rnd(&seed, 0, 0.05);
+            const double c = vt_rnd(&seed, -1, 1), h = vt_rnd(&seed, 0, 0.05);
             box[6 * i + a] = (float)(c - h);
             box[6 * i + 3 + a] = (float)(c + h);
         }
@@ -210,8 +202,9 @@ test_boxes_vs_brute_force(void **state) {
     vt_ok(vv_bvh_build(&b, n, box, NULL));
     check_tree(&b, box, n);
     for (int r = 0; r < 500; r++) {
-        const double o[3] = {rnd(&seed, -2, 2), rnd(&seed, -2, 2), rnd(&seed, -2, 2)};
-        const double d[3] = {rnd(&seed, -1, 1), rnd(&seed, -1, 1), r % 5 ? rnd(&seed, -1, 1) : 0};
+        const double o[3] = {vt_rnd(&seed, -2, 2), vt_rnd(&seed, -2, 2), vt_rnd(&seed, -2, 2)};
+        const double d[3] = {vt_rnd(&seed, -1, 1), vt_rnd(&seed, -1, 1),
+                             r % 5 ? vt_rnd(&seed, -1, 1) : 0};
         const double inv[3] = {1 / d[0], 1 / d[1], 1 / d[2]};
         memset(hit, 0, n);
         box_ctx c = {box, o, inv, hit};
@@ -262,16 +255,17 @@ test_query_vs_brute_force(void **state) {
     uint64_t seed = 17;
     for (size_t i = 0; i < n; i++)
         for (int a = 0; a < 3; a++) {
-            const double c = rnd(&seed, -1, 1), h = rnd(&seed, 0, 0.02);
+            const double c = vt_rnd(&seed, -1, 1), h = vt_rnd(&seed, 0, 0.02);
             box[6 * i + a] = (float)(c - h);
             box[6 * i + 3 + a] = (float)(c + h);
         }
     vv_bvh b;
     vt_ok(vv_bvh_build(&b, n, box, NULL));
     for (int q = 0; q < 500; q++) {
-        near_ctx c = {box,
-                      vv_v3(rnd(&seed, -1.5, 1.5), rnd(&seed, -1.5, 1.5), rnd(&seed, -1.5, 1.5)),
-                      INFINITY, UINT32_MAX};
+        near_ctx c = {
+            box,
+            vv_v3(vt_rnd(&seed, -1.5, 1.5), vt_rnd(&seed, -1.5, 1.5), vt_rnd(&seed, -1.5, 1.5)),
+            INFINITY, UINT32_MAX};
         vv_bvh_query(&b, near_box, near_leaf, &c);
         double best = INFINITY;
         uint32_t item = UINT32_MAX;

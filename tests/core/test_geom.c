@@ -11,19 +11,9 @@
 
 #include "core/geom.h"
 
-/* Deterministic uniform numbers in [lo, hi) (splitmix64). */
-static double
-rnd(uint64_t *s, double lo, double hi) {
-    uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    z ^= z >> 31;
-    return lo + (hi - lo) * (double)(z >> 11) / 9007199254740992.0;
-}
-
 static vv_vec3
 rnd_vec(uint64_t *s, double lo, double hi) {
-    double x = rnd(s, lo, hi), y = rnd(s, lo, hi), z = rnd(s, lo, hi);
+    double x = vt_rnd(s, lo, hi), y = vt_rnd(s, lo, hi), z = vt_rnd(s, lo, hi);
     return vv_v3(x, y, z);
 }
 
@@ -248,9 +238,9 @@ test_ray_triangle_shared_edges(void **state) {
     int tested = 0, leaks = 0;
     for (int i = 0; i < 3000; i++) {
         /* a target on an edge (i % 3 == 0), at a vertex (== 1), inside a face */
-        const int f = (int)rnd(&seed, 0, 8);
+        const int f = (int)vt_rnd(&seed, 0, 8);
         const vv_vec3 a = P[F[f][0]], b = P[F[f][1]], c = P[F[f][2]];
-        double s = rnd(&seed, 0, 1), w = rnd(&seed, 0, 1 - s);
+        double s = vt_rnd(&seed, 0, 1), w = vt_rnd(&seed, 0, 1 - s);
         vv_vec3 target = i % 3 == 0   ? vv_v3_add(vv_v3_scale(a, 1 - s), vv_v3_scale(b, s))
                          : i % 3 == 1 ? c
                                       : vv_v3_add(vv_v3_scale(a, 1 - s - w),

@@ -16,15 +16,6 @@
 #include "core/geom.h"
 #include "model/geometry.h"
 
-static double
-rnd(uint64_t *s, double lo, double hi) {
-    uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
-    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
-    z ^= z >> 31;
-    return lo + (hi - lo) * (double)(z >> 11) / 9007199254740992.0;
-}
-
 /* An L-shaped (non-convex) hexagon in a tilted plane, and a convex quad. */
 static const vv_vec3 L_SHAPE[6] = {{0, 0, 0},   {2, 0, 0.4}, {2, 1, 0.9},
                                    {1, 1, 0.7}, {1, 2, 1.2}, {0, 2, 1.0}};
@@ -290,19 +281,19 @@ test_intersect_vs_tessellation(void **state) {
         const double R = vv_v3_len(vv_v3_sub(b.max, b.min));
         int hits = 0, grazing = 0, mismatch = 0;
         for (int r = 0; r < 1500; r++) {
-            vv_vec3 target = vv_v3(rnd(&seed, b.min.x, b.max.x), rnd(&seed, b.min.y, b.max.y),
-                                   rnd(&seed, b.min.z, b.max.z));
+            vv_vec3 target = vv_v3(vt_rnd(&seed, b.min.x, b.max.x), vt_rnd(&seed, b.min.y, b.max.y),
+                                   vt_rnd(&seed, b.min.z, b.max.z));
             if (s[i].type == VV_OBJECT_PLANE) {
                 /* on the plane, within 2 of the square's centre (half side 3) */
                 const vv_vec3 n = s[i].g.normal;
                 vv_vec3 p1, p2;
                 vv_geom_perpendicular(n, &p1, &p2);
                 const vv_vec3 q = vv_v3_scale(n, vv_v3_dot(n, s[i].g.point));
-                target = vv_v3_add(q, vv_v3_add(vv_v3_scale(p1, rnd(&seed, -2, 2)),
-                                                vv_v3_scale(p2, rnd(&seed, -2, 2))));
+                target = vv_v3_add(q, vv_v3_add(vv_v3_scale(p1, vt_rnd(&seed, -2, 2)),
+                                                vv_v3_scale(p2, vt_rnd(&seed, -2, 2))));
             }
             vv_vec3 dir =
-                vv_v3_norm(vv_v3(rnd(&seed, -1, 1), rnd(&seed, -1, 1), rnd(&seed, -1, 1)));
+                vv_v3_norm(vv_v3(vt_rnd(&seed, -1, 1), vt_rnd(&seed, -1, 1), vt_rnd(&seed, -1, 1)));
             const vv_vec3 o = vv_v3_add(c, vv_v3_scale(dir, 2 * R));
             const vv_vec3 d = vv_v3_sub(target, o);
             double th = INFINITY;
