@@ -1,4 +1,4 @@
-/* The bounding volume hierarchy: object-median build (see core/bvh.h). */
+/* The bounding volume hierarchy: middle splits, medians where they fail (see core/bvh.h). */
 #include "core/bvh.h"
 
 #include <math.h>
@@ -48,8 +48,29 @@ select_median(bvh_build *b, int64_t lo, int64_t hi, int64_t mid, int axis) {
     }
 }
 
+/* Splits items[first .. first + count) at the middle of their centroids'
+ * box along @p axis (a spatial split: it follows the shapes, and the
+ * traversals of the ray tracers visit fewer boxes than behind a median
+ * split); returns the first item of the upper side. */
+static size_t
+split_middle(bvh_build *b, size_t first, size_t count, int axis, float lo, float hi) {
+    const float m = 0.5f * (lo + hi);
+    size_t i = first, j = first + count;
+    while (i < j) {
+        if (key(b, b->items[i], axis) < m) {
+            i++;
+        } else {
+            j--;
+            const uint32_t t = b->items[i];
+            b->items[i] = b->items[j];
+            b->items[j] = t;
+        }
+    }
+    return i;
+}
+
 static void
-split(bvh_build *b, size_t node, size_t first, size_t count) {
+split(bvh_build *b, size_t node, size_t first, size_t count, int depth) {
     vv_bvh_node *n = &b->nodes[node];
     float clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int a = 0; a < 3; a++) {
@@ -76,16 +97,22 @@ split(bvh_build *b, size_t node, size_t first, size_t count) {
     for (int a = 1; a < 3; a++)
         if (chi[a] - clo[a] > chi[axis] - clo[axis])
             axis = a;
-    const size_t mid = first + count / 2;
-    select_median(b, (int64_t)first, (int64_t)(first + count - 1), (int64_t)mid, axis);
+    size_t mid = depth < VV_BVH_SPATIAL_DEPTH
+                     ? split_middle(b, first, count, axis, clo[axis], chi[axis])
+                     : first;
+    if (mid == first || mid == first + count) {
+        /* all on one side (or too deep): the median, which halves */
+        mid = first + count / 2;
+        select_median(b, (int64_t)first, (int64_t)(first + count - 1), (int64_t)mid, axis);
+    }
     const size_t left = b->n_nodes;
     b->n_nodes += 2;
     n->left = (int32_t)left;
     n->count = 0;
     n->axis = axis;
-    /* depth <= 31 (count halves at each level): recursion is bounded */
-    split(b, left, first, mid - first);
-    split(b, left + 1, mid, first + count - mid);
+    /* depth below VV_BVH_SPATIAL_DEPTH + 31 (medians halve): recursion is bounded */
+    split(b, left, first, mid - first, depth + 1);
+    split(b, left + 1, mid, first + count - mid, depth + 1);
 }
 
 vv_status
@@ -118,7 +145,7 @@ vv_bvh_build(vv_bvh *bvh, size_t n, const float *boxes, const float *centroids) 
     for (size_t i = 0; i < n; i++)
         bvh->items[i] = (uint32_t)i;
     bvh_build b = {boxes, centroids, bvh->items, bvh->nodes, 1};
-    split(&b, 0, 0, n);
+    split(&b, 0, 0, n, 0);
     bvh->n_nodes = b.n_nodes;
     bvh->n_items = n;
     free(cen);

@@ -10,14 +10,15 @@
  * boxes a ray crosses, nearest child first, and vv_bvh_query the boxes a
  * user's predicate accepts (a distance bound, an overlap).
  *
- * Build (the object median of Kay and Kajiya's hierarchies, SIGGRAPH 1986;
- * "equal counts" in Pharr, Jakob and Humphreys, Physically Based Rendering,
- * 3rd ed., section 4.3.1): each node splits its items at the median of their
- * centroids along the longest axis of the centroids' box (quickselect), so
- * the tree is balanced, its depth at
- * most ceil(log2(n / VV_BVH_LEAF)) + 1, and a traversal stack of
- * VV_BVH_STACK entries is never exceeded. Leaves hold at most VV_BVH_LEAF
- * items. Deterministic: the same boxes in the same order give the same tree.
+ * Build: each node splits its items at the middle of their centroids' box
+ * along its longest axis (the spatial median: splits follow the shapes, so
+ * a ray visits fewer boxes than behind object medians), and at the median
+ * centroid (quickselect; Kay and Kajiya's object median, SIGGRAPH 1986)
+ * where the middle leaves one side empty or below depth
+ * VV_BVH_SPATIAL_DEPTH. Medians halve, so the depth stays below
+ * VV_BVH_SPATIAL_DEPTH + 31 and a traversal stack of VV_BVH_STACK entries
+ * is never exceeded. Leaves hold at most VV_BVH_LEAF items. Deterministic:
+ * the same boxes in the same order give the same tree.
  *
  * Layout: nodes[0] is the root; an inner node's children are nodes[left]
  * and nodes[left + 1], the first holding the lower centroids along `axis`;
@@ -38,8 +39,10 @@
 
 /** Most items in a leaf. */
 #define VV_BVH_LEAF 4
-/** Traversal stack: enough for any tree vv_bvh_build makes (depth <= 31). */
-#define VV_BVH_STACK 64
+/** Levels split at the middle before medians take over. */
+#define VV_BVH_SPATIAL_DEPTH 48
+/** Traversal stack: enough for any tree vv_bvh_build makes (depth < 48 + 31). */
+#define VV_BVH_STACK 96
 
 typedef struct vv_bvh_node {
     float lo[3], hi[3]; /**< box of the node's items */
@@ -74,6 +77,17 @@ vv_status vv_bvh_build(vv_bvh *bvh, size_t n, const float *boxes, const float *c
  */
 vv_status vv_bvh_build_triangles(vv_bvh *bvh, const float *positions, const uint32_t *tri,
                                  size_t n_tri);
+
+/**
+ * Where a leaf's items start in the leaf order: a user that stores its
+ * per-item data in leaf order (data[k] for item items[k], after the build)
+ * finds a leaf's data at data + vv_bvh_leaf_offset(bvh, items), saving an
+ * indirection per item in the leaf test.
+ */
+static inline size_t
+vv_bvh_leaf_offset(const vv_bvh *bvh, const uint32_t *items) {
+    return (size_t)(items - bvh->items);
+}
 
 /** Frees the hierarchy and empties @p bvh. Accepts an empty or zeroed struct. */
 void vv_bvh_clear(vv_bvh *bvh);

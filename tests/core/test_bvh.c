@@ -13,6 +13,8 @@
 
 #include "core/bvh.h"
 
+static int last_depth; /* of the last tree check_tree walked */
+
 /* Walks the tree: every item in exactly one leaf, each node's box holding
  * its children's and its items' boxes; returns the depth. */
 static int
@@ -53,12 +55,10 @@ check_tree(const vv_bvh *b, const float *boxes, size_t n) {
     for (size_t i = 0; i < n; i++)
         assert_int_equal(seen[i], 1);
     free(seen);
-    /* balanced: ceil(log2(n / leaf)) + 1 levels at most */
-    int bound = 1;
-    while (((size_t)VV_BVH_LEAF << (bound - 1)) < n)
-        bound++;
-    assert_true(depth <= bound);
+    /* within the traversal stack */
+    assert_true(depth < VV_BVH_STACK);
     assert_true(b->n_nodes <= (n ? 2 * n - 1 : 0));
+    last_depth = depth;
 }
 
 static void
@@ -291,8 +291,8 @@ test_degenerate(void **state) {
     vv_bvh b;
     vt_ok(vv_bvh_build(&b, 0, NULL, NULL));
     assert_int_equal(b.n_nodes, 0);
-    const double o[3] = {0, 0, 0}, inv[3] = {1, 1, 1};
-    assert_int_equal(vv_bvh_ray(&b, o, inv, 0, INFINITY, leaf_boxes, NULL), 0);
+    const double o0[3] = {0, 0, 0}, inv0[3] = {1, 1, 1};
+    assert_int_equal(vv_bvh_ray(&b, o0, inv0, 0, INFINITY, leaf_boxes, NULL), 0);
     vv_bvh_clear(&b);
     const float one[6] = {0, 0, 0, 1, 1, 1};
     vt_ok(vv_bvh_build(&b, 1, one, NULL));
@@ -306,6 +306,33 @@ test_degenerate(void **state) {
         box[i] = i % 6 < 3 ? 0.0f : 1.0f;
     vt_ok(vv_bvh_build(&b, n, box, NULL));
     check_tree(&b, box, n);
+    /* every centroid at one point: medians, a balanced tree */
+    int bound = 1;
+    while (((size_t)VV_BVH_LEAF << (bound - 1)) < n)
+        bound++;
+    assert_true(last_depth <= bound);
+    vv_bvh_clear(&b);
+    /* centroids spaced geometrically: each middle split peels off one item,
+     * so medians take over at VV_BVH_SPATIAL_DEPTH and the depth stays
+     * bounded; rays still find every box */
+    for (size_t i = 0; i < n; i++) {
+        const float x = (float)pow(1.08, (double)i);
+        for (int a = 0; a < 3; a++) {
+            box[6 * i + a] = a ? 0.0f : x;
+            box[6 * i + 3 + a] = a ? 1.0f : x * 1.01f;
+        }
+    }
+    vt_ok(vv_bvh_build(&b, n, box, NULL));
+    check_tree(&b, box, n);
+    assert_true(last_depth > VV_BVH_SPATIAL_DEPTH / 2 && last_depth < VV_BVH_SPATIAL_DEPTH + 12);
+    uint8_t *hit = calloc(n, 1);
+    assert_non_null(hit);
+    const double o[3] = {0, 0.5, 0.5}, inv[3] = {1, INFINITY, INFINITY};
+    box_ctx c = {box, o, inv, hit};
+    vv_bvh_ray(&b, o, inv, 0, INFINITY, leaf_boxes, &c);
+    for (size_t i = 0; i < n; i++)
+        assert_int_equal(hit[i], 1);
+    free(hit);
     vv_bvh_clear(&b);
     free(box);
     vt_err(vv_bvh_build(&b, (size_t)1 << 40, NULL, NULL));

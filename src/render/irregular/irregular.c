@@ -50,7 +50,7 @@
  * mesh's boundary faces, or those of the tetrahedra a transfer function
  * leaves visible. */
 typedef struct ir_layer {
-    int32_t *faces; /* 4 * tet + face; the hierarchy's items index this */
+    int32_t *faces; /* 4 * tet + face, in the hierarchy's leaf order */
     size_t n_faces;
     vv_bvh bvh;
 } ir_layer;
@@ -174,6 +174,16 @@ layer_build(ir_layer *L, const vv_tetmesh *m, const uint8_t *vis) {
         layer_clear(L);
         return vv_error_prefix(s, "irregular");
     }
+    /* the faces in leaf order: a leaf's faces are contiguous */
+    int32_t *ordered = malloc((nb ? nb : 1) * sizeof *ordered);
+    if (!ordered) {
+        layer_clear(L);
+        return vv_error_set(VV_ERR_NOMEM, "irregular: out of memory for the boundary BVH");
+    }
+    for (size_t i = 0; i < nb; i++)
+        ordered[i] = L->faces[L->bvh.items[i]];
+    free(L->faces);
+    L->faces = ordered;
     return VV_OK;
 }
 
@@ -234,8 +244,9 @@ static int
 enter_leaf(void *ctx, const uint32_t *items, int count, double *bt) {
     ir_enter *e = ctx;
     const vv_vec3 o = vv_v3_d(e->r->o), d = vv_v3_d(e->r->d);
+    const int32_t *faces = e->L->faces + vv_bvh_leaf_offset(&e->L->bvh, items);
     for (int i = 0; i < count; i++) {
-        const int32_t f = e->L->faces[items[i]];
+        const int32_t f = faces[i];
         if (f == e->skip)
             continue;
         const double *p[3];
