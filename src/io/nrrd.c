@@ -38,7 +38,7 @@
 #include <teem/nrrd.h>
 #include <zlib.h>
 
-#include "core/bricks_internal.h"
+#include "io/bricked_internal.h"
 #include "core/internal.h"
 #include "volvis/io.h"
 

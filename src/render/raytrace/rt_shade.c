@@ -162,7 +162,7 @@ shadow_segment(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start, d
     }
     for (int i = 0; i < fr->n_vobj && T > 0.0037f; i++) {
         const rt_vobj *ob = &fr->vobjs[i];
-        if (ob->obj->casts_shadows)
+        if (ob->obj->casts_shadows && !ob->region)
             T *= volume_transmittance(fr, ob, &r, start, tmax, light);
     }
     return T;

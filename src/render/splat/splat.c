@@ -1920,67 +1920,36 @@ lists_clear(sp_state *st) {
 }
 
 static vv_status
-sp_set_option(void *state, const char *key, const char *value) {
+sp_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
     sp_state *st = state;
+    const char *key = spec->key;
     if (strcmp(key, "classification") == 0) {
-        if (strcmp(value, "post") == 0)
-            st->pre = 0;
-        else if (strcmp(value, "pre") == 0)
-            st->pre = 1;
-        else
-            return vv_error_set(VV_ERR_INVALID, "classification must be post or pre, not '%s'",
-                                value);
-        return VV_OK;
-    }
-    if (strcmp(key, "sheets") == 0) {
-        if (strcmp(value, "image") == 0)
-            st->axis = 0;
-        else if (strcmp(value, "axis") == 0)
-            st->axis = 1;
-        else
-            return vv_error_set(VV_ERR_INVALID, "sheets must be image or axis, not '%s'", value);
-        return VV_OK;
-    }
-    char *end = NULL;
-    const double x = strtod(value, &end);
-    if (!end || *end || end == value || x != x)
-        return vv_error_set(VV_ERR_INVALID, "option %s: '%s' is not a number", key, value);
-    if (strcmp(key, "radius") == 0) {
-        if (!(x > 0 && x <= 8))
-            return vv_error_set(VV_ERR_INVALID, "radius must be in (0, 8] voxels, not %g", x);
-        st->radius = x;
+        st->pre = v->word == 1;
+    } else if (strcmp(key, "sheets") == 0) {
+        st->axis = v->word == 1;
+    } else if (strcmp(key, "radius") == 0) {
+        st->radius = v->r;
     } else if (strcmp(key, "sigma") == 0) {
-        if (!(x > 0 && x <= 4))
-            return vv_error_set(VV_ERR_INVALID, "sigma must be in (0, 4] voxels, not %g", x);
-        st->sigma = x;
+        st->sigma = v->r;
     } else if (strcmp(key, "ewa_variance") == 0) {
-        if (!(x >= 0 && x <= 16))
-            return vv_error_set(VV_ERR_INVALID, "ewa_variance must be in [0, 16] pixel^2");
-        st->ewa_var = x;
+        st->ewa_var = v->r;
     } else if (strcmp(key, "early_termination") == 0) {
-        if (!(x > 0 && x <= 1))
-            return vv_error_set(VV_ERR_INVALID, "early_termination must be in (0, 1]");
-        st->early_termination = x;
+        st->early_termination = v->r;
     } else if (strcmp(key, "sheet_spacing") == 0) {
-        if (!(x == 0 || (x >= 0.25 && x <= 8)))
+        if (!(v->r == 0 || v->r >= 0.25))
             return vv_error_set(VV_ERR_INVALID,
                                 "sheet_spacing must be 0 (by quality) or in [0.25, 8] steps");
-        st->rate = x;
+        st->rate = v->r;
     } else if (strcmp(key, "empty_space_skipping") == 0) {
-        st->skipping = x != 0;
+        st->skipping = v->b;
     } else if (strcmp(key, "occlusion_culling") == 0) {
-        st->occlusion = x != 0;
+        st->occlusion = v->b;
     } else if (strcmp(key, "gradient_budget_mb") == 0) {
-        if (!(x >= 0))
-            return vv_error_set(VV_ERR_INVALID, "gradient_budget_mb must be >= 0");
-        st->vc.gradient_budget = (uint64_t)(x * 1048576.0);
+        if (v->word >= 0)
+            vv_vcache_set_default_budget(&st->vc);
+        else
+            st->vc.gradient_budget = (uint64_t)(v->r * 1048576.0);
         vv_vcache_set_clear(&st->vc);
-    } else {
-        return vv_error_set(VV_ERR_INVALID,
-                            "unknown option '%s' (radius, sigma, ewa_variance, classification, "
-                            "sheet_spacing, early_termination, empty_space_skipping, "
-                            "occlusion_culling, gradient_budget_mb, sheets)",
-                            key);
     }
     return VV_OK;
 }
@@ -2012,16 +1981,51 @@ vv_splat_xray_integral(const vv_renderer *r) {
     return st->xray;
 }
 
+static const char *const sp_classification[] = {"post", "pre", NULL};
+static const char *const sp_sheets[] = {"image", "axis", NULL};
+static const char *const sp_auto[] = {"auto", NULL};
+
+static const vv_option_spec sp_options[] = {
+    {"radius", VV_OPTION_REAL, "1.2", 0, 8, VV_OPTION_MIN_OPEN, NULL,
+     "kernel cut-off, voxels (quality 1 shrinks it to 0.85 of it, quality 0 to 1 voxel)"},
+    {"sigma", VV_OPTION_REAL, "0.55", 0, 4, VV_OPTION_MIN_OPEN, NULL, "Gaussian sigma, voxels"},
+    {"ewa_variance", VV_OPTION_REAL, "0.25", 0, 16, 0, NULL,
+     "least footprint variance, pixel^2 (0: no EWA antialiasing)"},
+    {"classification", VV_OPTION_ENUM, "post", 0, 0, 0, sp_classification,
+     "post: classify sheet samples; pre: classify and shade voxels, splat colours (faster, "
+     "blurrier)"},
+    {"sheet_spacing", VV_OPTION_REAL, "0", 0, 8, 0, NULL,
+     "sheet spacing in ray-caster steps, 0 or in [0.25, 8] (0: 1, 1.5, 2 at quality 2, 1, 0)"},
+    {"early_termination", VV_OPTION_REAL, "0.99", 0, 1, VV_OPTION_MIN_OPEN, NULL,
+     "opacity at which a pixel is finished"},
+    {"empty_space_skipping", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
+     "list only voxels that can be visible (0 lists every voxel; same image)"},
+    {"occlusion_culling", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
+     "skip footprints on finished pixels (0 splats every footprint; same image)"},
+    {"gradient_budget_mb", VV_OPTION_REAL, "auto", 0, INFINITY, 0, sp_auto,
+     "MiB allowed for cached gradients (auto: a quarter of RAM, at most 8192)"},
+    {"sheets", VV_OPTION_ENUM, "image", 0, 0, 0, sp_sheets,
+     "image-aligned sheets; axis: Westover's axis-aligned sheets (for the popping test)"},
+};
+
 const vv_renderer_ops vv_splat_ops = {
-    "splat",
-    "splatting (object order): Gaussian footprints, image-aligned sheets, EWA; composite, mip, "
-    "minip, xray",
-    sp_create,
-    sp_set_option,
-    sp_render,
-    sp_destroy,
-    "radius (1.2 voxels), sigma (0.55 voxels), ewa_variance (0.25 pixel^2), classification "
-    "(post|pre), sheet_spacing (0: 1, 1.5, 2 steps at quality 2, 1, 0), early_termination (0.99), "
-    "empty_space_skipping (1), occlusion_culling (1), gradient_budget_mb; quality 1 also "
-    "shrinks the radius to 0.85 of it, quality 0 to 1 voxel (neither below 1 unless set so)",
+    .version = VV_RENDERER_OPS_VERSION,
+    .info =
+        {
+            .name = "splat",
+            .description = "splatting (object order): Gaussian footprints, image-aligned "
+                           "sheets, EWA; composite, mip, minip, xray",
+            .draws = VV_DRAWS(VV_OBJECT_VOLUME),
+            .modes = VV_MODES_ALL & ~VV_MODE_BIT(VV_MODE_ISO),
+            .caps = VV_RENDERER_QUALITY,
+            .quality = "sheets 1, 1.5, 2 ray-caster steps apart at quality 2, 1, 0 (unless "
+                       "sheet_spacing is set); quality 1 and 0 also shrink the kernel",
+            .options = sp_options,
+            .n_options = VV_OPTIONS_COUNT(sp_options),
+        },
+    .create = sp_create,
+    .destroy = sp_destroy,
+    .set_option = sp_set_option,
+    .render = sp_render,
+    .render_region = NULL,
 };
