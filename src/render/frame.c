@@ -49,6 +49,7 @@ vv_frame_run(const vv_frame_job *job, const vv_render_options *opt) {
     if (W <= 0 || H <= 0)
         return VV_OK;
     const int ts = job->tile > 0 ? job->tile : VV_FRAME_TILE;
+    const int th = job->tile_h > 0 ? job->tile_h : ts;
     int rx0 = 0, ry0 = 0, rx1 = W, ry1 = H;
     if (job->x1 > job->x0) {
         rx0 = job->x0 > 0 ? job->x0 : 0;
@@ -56,7 +57,7 @@ vv_frame_run(const vv_frame_job *job, const vv_render_options *opt) {
         rx1 = job->x1 < W ? job->x1 : W;
         ry1 = job->y1 < H ? job->y1 : H;
     }
-    const int tx = (W + ts - 1) / ts, ty = (H + ts - 1) / ts;
+    const int tx = (W + ts - 1) / ts, ty = (H + th - 1) / th;
     const int ntiles = tx * ty;
     const int nt = opt->threads > 0 ? opt->threads : vv_threads_get();
     const double p0 = job->progress_from, p1 = job->progress_to > 0 ? job->progress_to : 1.0;
@@ -82,9 +83,9 @@ vv_frame_run(const vv_frame_job *job, const vv_render_options *opt) {
             continue;
         vv_frame_tile t;
         t.x0 = (tile % tx) * ts;
-        t.y0 = (tile / tx) * ts;
+        t.y0 = (tile / tx) * th;
         t.x1 = t.x0 + ts < W ? t.x0 + ts : W;
-        t.y1 = t.y0 + ts < H ? t.y0 + ts : H;
+        t.y1 = t.y0 + th < H ? t.y0 + th : H;
         t.x0 = t.x0 > rx0 ? t.x0 : rx0;
         t.y0 = t.y0 > ry0 ? t.y0 : ry0;
         t.x1 = t.x1 < rx1 ? t.x1 : rx1;
@@ -92,6 +93,7 @@ vv_frame_run(const vv_frame_job *job, const vv_render_options *opt) {
         t.index = tile;
         t.thread = omp_get_thread_num();
         t.scratch = scratch ? scratch + stride * (size_t)t.thread : NULL;
+        t.run = &stop;
         if (t.x1 > t.x0 && t.y1 > t.y0) {
             vv_status s = job->fn(job->user, &t);
             if (s != VV_OK) {
@@ -121,6 +123,11 @@ vv_frame_run(const vv_frame_job *job, const vv_render_options *opt) {
     if (atomic_load(&stop))
         return vv_error_set(VV_ERR_CANCELLED, "cancelled");
     return VV_OK;
+}
+
+int
+vv_frame_cancelled(const vv_frame_tile *t) {
+    return atomic_load_explicit((const atomic_int *)t->run, memory_order_relaxed) != 0;
 }
 
 /* ---- camera rays ------------------------------------------------------------------ */

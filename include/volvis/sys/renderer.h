@@ -216,7 +216,14 @@ typedef struct vv_frame_tile {
     int thread;         /**< 0 .. threads - 1 */
     void *scratch;      /**< this thread's scratch (vv_frame_job.scratch_bytes, 64-byte
                              aligned, zeroed once per run), or NULL */
+    const void *run;    /**< the run (vv_frame_cancelled) */
 } vv_frame_tile;
+
+/**
+ * 1 once the run of tile @p t is cancelled or another tile failed: a long
+ * tile may stop early (its pixels are discarded with the frame).
+ */
+int vv_frame_cancelled(const vv_frame_tile *t);
 
 /**
  * The work of a tile: fill the pixels of @p t (only those). Runs on worker
@@ -230,7 +237,8 @@ typedef vv_status (*vv_frame_tile_fn)(void *user, const vv_frame_tile *t);
 /** One pass over the image's tiles. */
 typedef struct vv_frame_job {
     int width, height;     /**< image size */
-    int tile;              /**< tile side, pixels; <= 0: VV_FRAME_TILE */
+    int tile;              /**< tile width (side), pixels; <= 0: VV_FRAME_TILE */
+    int tile_h;            /**< tile height; <= 0: square tiles (bands of rows: tile = width) */
     int x0, y0, x1, y1;    /**< only these pixels (tiles clipped to them); x1 <= x0: all */
     size_t scratch_bytes;  /**< per-thread scratch, 0: none */
     vv_frame_tile_fn fn;   /**< the tile's work */
