@@ -44,7 +44,7 @@ void vv_render_options_init(vv_render_options *o);
 
 /** The type of a renderer option's value. */
 typedef enum vv_option_type {
-    VV_OPTION_BOOL = 0,   /**< "1"/"0" (also "true"/"false", "on"/"off", "yes"/"no") */
+    VV_OPTION_BOOL = 0,   /**< "1" or "0" */
     VV_OPTION_INT = 1,    /**< a decimal integer within [min, max] */
     VV_OPTION_REAL = 2,   /**< a decimal number within [min, max] (ends open when flagged) */
     VV_OPTION_ENUM = 3,   /**< one of `words` */

@@ -156,23 +156,14 @@ vv_option_parse(const vv_option_spec *spec, const char *text, vv_option_value *o
             return vv_error_set(VV_ERR_INVALID, "%s: value of %zu bytes (at most %d)", spec->key,
                                 strlen(text), VV_RENDER_OPTION_VALUE_MAX - 1);
         return VV_OK;
-    case VV_OPTION_BOOL: {
-        static const char *const yes[] = {"1", "true", "on", "yes"};
-        static const char *const no[] = {"0", "false", "off", "no"};
-        for (int i = 0; i < 4; i++) {
-            if (strcmp(text, yes[i]) == 0) {
-                out->b = 1;
-                out->i = 1;
-                out->r = 1;
-                return VV_OK;
-            }
-            if (strcmp(text, no[i]) == 0) {
-                out->r = 0;
-                return VV_OK;
-            }
+    case VV_OPTION_BOOL:
+        if (strcmp(text, "1") == 0 || strcmp(text, "0") == 0) {
+            out->b = text[0] == '1';
+            out->i = out->b;
+            out->r = out->b;
+            return VV_OK;
         }
         return bad_value(spec, text);
-    }
     case VV_OPTION_INT: {
         char *end = NULL;
         errno = 0;

@@ -564,6 +564,10 @@ rt_render_region(void *state, const vv_world *w, const vv_view *view, const vv_r
                             "object '%s': regions are rendered in composite, mip or minip mode "
                             "(xray and iso do not split)",
                             obj->name);
+    if (obj->solid_texture.kind != VV_SOLID_TEXTURE_NONE)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "object '%s': solid textures are not rendered by regions",
+                            obj->name);
     vv_object part = *obj; /* shallow: nothing in it is released */
     part.volume = (vv_volume *)region->voxels;
     out->op = obj->mode == VV_MODE_MIP     ? VV_REGION_MAX
