@@ -556,6 +556,10 @@ cli_render_print_renderers(FILE *out) {
 void
 cli_render_note_left_out(const vv_renderer *ren, const vv_world *w) {
     const vv_renderer_info *in = vv_renderer_get_info(ren);
+    if (vv_renderer_check_world(in, w) != VV_OK) {
+        vv_error_clear(); /* the render says why */
+        return;
+    }
     char names[1024] = "";
     int n = 0;
     for (int i = 0; i < w->n_objects; i++) {

@@ -289,17 +289,18 @@ vv_renderer_check_world(const vv_renderer_info *info, const vv_world *w) {
                                 mode_name(o->mode), info->name, drawn_by(o, who, sizeof who));
         drawn++;
     }
-    if (drawn == 0 && left > 0) {
-        char more[64] = "";
-        if (left > 1)
-            snprintf(more, sizeof more, " (and %d other object%s %s draws none of)", left - 1,
-                     left > 2 ? "s" : "", info->name);
+    if (drawn == 0 && left == 1)
         return vv_error_set(VV_ERR_UNSUPPORTED,
-                            "object '%s' is a %s object, which %s does not draw%s; it is drawn "
-                            "by %s",
+                            "object '%s' is a %s object, which %s does not draw; it is drawn by %s",
                             first_left->name, vv_object_type_name(first_left->type), info->name,
-                            more, drawn_by(first_left, who, sizeof who));
-    }
+                            drawn_by(first_left, who, sizeof who));
+    if (drawn == 0 && left > 1)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "none of the World's %d visible objects is drawn by %s ('%s' is a "
+                            "%s object, drawn by %s)",
+                            left, info->name, first_left->name,
+                            vv_object_type_name(first_left->type),
+                            drawn_by(first_left, who, sizeof who));
     return VV_OK;
 }
 

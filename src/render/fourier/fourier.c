@@ -611,6 +611,10 @@ plan_for(fr_state *st, int M) {
     return st->plan2d[slot];
 }
 
+/* Over 150 lines on purpose: one subcube's slice extraction, inverse FFT
+ * and shear-warp accumulation share the thread's buffers, its FFTW plan and
+ * the progress bookkeeping inside one OpenMP region; split into functions
+ * they would pass a dozen pointers per subcube (the frame's hot loop). */
 static vv_status
 project_object(fr_state *st, const fr_frame *fr, fr_obj *ob, int threads,
                const vv_progress *progress, fr_sheared *sh) {
@@ -945,6 +949,66 @@ render_decoded(fr_state *st, const vv_world *w, const vv_view *view, const vv_re
     return s;
 }
 
+/* The object's projection geometry: the view direction in its index space,
+ * the major axis c and the shear (a, b) of the other two, and the pixel
+ * rays' origins in index space. Errors: VV_ERR_INVALID (singular). */
+static vv_status
+object_setup(const fr_frame *fr, fr_obj *ob, const vv_object *obj) {
+    int ok;
+    const vv_mat4 w2i = vv_mat4_inverse(vv_object_index_to_world(obj), &ok);
+    if (!ok)
+        return vv_error_set(VV_ERR_INVALID, "object '%s': singular transform", obj->name);
+    const vv_vec3 di = vv_mat4_mul_dir(w2i, fr->dir);
+    ob->di[0] = di.x;
+    ob->di[1] = di.y;
+    ob->di[2] = di.z;
+    ob->c = 0;
+    for (int i = 1; i < 3; i++)
+        if (fabs(ob->di[i]) > fabs(ob->di[ob->c]))
+            ob->c = i;
+    ob->p = (ob->c + 1) % 3;
+    ob->q = (ob->c + 2) % 3;
+    ob->a = ob->di[ob->p] / ob->di[ob->c];
+    ob->b = ob->di[ob->q] / ob->di[ob->c];
+    ob->lscale = 1.0 / fabs(ob->di[ob->c]); /* |index-to-world(di)| = 1 */
+    const vv_vec3 X0 = vv_mat4_mul_point(w2i, fr->o00);
+    const vv_vec3 Xx = vv_mat4_mul_dir(w2i, fr->ox), Xy = vv_mat4_mul_dir(w2i, fr->oy);
+    const double x0[3] = {X0.x, X0.y, X0.z}, xx[3] = {Xx.x, Xx.y, Xx.z}, xy[3] = {Xy.x, Xy.y, Xy.z};
+    memcpy(ob->X0, x0, sizeof x0);
+    memcpy(ob->Xx, xx, sizeof xx);
+    memcpy(ob->Xy, xy, sizeof xy);
+    return VV_OK;
+}
+
+/* As the ray caster: FR_LUT entries {opacity, colour} over the volume's
+ * value range, looked up by truncation at (value - *lo) * *scale. */
+static void
+build_lut(const vv_object *obj, float *lut, double *lo_out, double *scale_out) {
+    const vv_volume *vol = obj->volume;
+    double lut_lo = vol->range[0], lut_hi = vol->range[1];
+    if (!(lut_hi > lut_lo))
+        lut_hi = lut_lo + 1;
+    const double lut_scale = (FR_LUT - 1) / (lut_hi - lut_lo);
+    for (int k = 0; k < FR_LUT; k++) {
+        const double x = lut_lo + (lut_hi - lut_lo) * k / (FR_LUT - 1);
+        double a;
+        vv_vec3 col;
+        if (obj->segmentation == VV_SEG_THRESHOLD) {
+            a = x >= obj->threshold ? 1.0 : 0.0;
+            col = obj->material.color;
+        } else {
+            a = vv_tf_eval_opacity(&obj->tf, x);
+            col = vv_tf_eval_color(&obj->tf, x);
+        }
+        lut[4 * k] = (float)(a < 0 ? 0 : a > 1 ? 1 : a);
+        lut[4 * k + 1] = (float)col.x;
+        lut[4 * k + 2] = (float)col.y;
+        lut[4 * k + 3] = (float)col.z;
+    }
+    *lo_out = lut_lo;
+    *scale_out = lut_scale;
+}
+
 static vv_status
 fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
           vv_image *out) {
@@ -1001,32 +1065,8 @@ fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         ob.obj = obj;
         if ((s = get_source(st, obj->volume, threads, &ob.src)) != VV_OK)
             goto done;
-        int ok;
-        const vv_mat4 w2i = vv_mat4_inverse(vv_object_index_to_world(obj), &ok);
-        if (!ok) {
-            s = vv_error_set(VV_ERR_INVALID, "object '%s': singular transform", obj->name);
+        if ((s = object_setup(&fr, &ob, obj)) != VV_OK)
             goto done;
-        }
-        const vv_vec3 di = vv_mat4_mul_dir(w2i, fr.dir);
-        ob.di[0] = di.x;
-        ob.di[1] = di.y;
-        ob.di[2] = di.z;
-        ob.c = 0;
-        for (int i = 1; i < 3; i++)
-            if (fabs(ob.di[i]) > fabs(ob.di[ob.c]))
-                ob.c = i;
-        ob.p = (ob.c + 1) % 3;
-        ob.q = (ob.c + 2) % 3;
-        ob.a = ob.di[ob.p] / ob.di[ob.c];
-        ob.b = ob.di[ob.q] / ob.di[ob.c];
-        ob.lscale = 1.0 / fabs(ob.di[ob.c]); /* |index-to-world(di)| = 1 */
-        const vv_vec3 X0 = vv_mat4_mul_point(w2i, fr.o00);
-        const vv_vec3 Xx = vv_mat4_mul_dir(w2i, fr.ox), Xy = vv_mat4_mul_dir(w2i, fr.oy);
-        const double x0[3] = {X0.x, X0.y, X0.z}, xx[3] = {Xx.x, Xx.y, Xx.z},
-                     xy[3] = {Xy.x, Xy.y, Xy.z};
-        memcpy(ob.X0, x0, sizeof x0);
-        memcpy(ob.Xx, xx, sizeof xx);
-        memcpy(ob.Xy, xy, sizeof xy);
         fr_sheared sh;
         if ((s = project_object(st, &fr, &ob, threads, &opt->progress, &sh)) != VV_OK)
             goto done;
@@ -1046,28 +1086,8 @@ fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         double dinv[3];
         for (int k = 0; k < 3; k++)
             dinv[k] = ob.di[k] != 0 ? 1.0 / ob.di[k] : 0;
-        /* as the ray caster: FR_LUT entries over the value range, colour and
-         * opacity at the projected value, looked up by truncation */
-        double lut_lo = vol->range[0], lut_hi = vol->range[1];
-        if (!(lut_hi > lut_lo))
-            lut_hi = lut_lo + 1;
-        const double lut_scale = (FR_LUT - 1) / (lut_hi - lut_lo);
-        for (int k = 0; k < FR_LUT; k++) {
-            const double x = lut_lo + (lut_hi - lut_lo) * k / (FR_LUT - 1);
-            double a;
-            vv_vec3 col;
-            if (obj->segmentation == VV_SEG_THRESHOLD) {
-                a = x >= obj->threshold ? 1.0 : 0.0;
-                col = obj->material.color;
-            } else {
-                a = vv_tf_eval_opacity(&obj->tf, x);
-                col = vv_tf_eval_color(&obj->tf, x);
-            }
-            lut[4 * k] = (float)(a < 0 ? 0 : a > 1 ? 1 : a);
-            lut[4 * k + 1] = (float)col.x;
-            lut[4 * k + 2] = (float)col.y;
-            lut[4 * k + 3] = (float)col.z;
-        }
+        double lut_lo, lut_scale;
+        build_lut(obj, lut, &lut_lo, &lut_scale);
 #pragma omp parallel for num_threads(threads) schedule(static)
         for (int py = 0; py < fr.Hh; py++)
             for (int px = 0; px < fr.W; px++) {

@@ -544,6 +544,10 @@ typedef struct ir_pre {
     double s, T, K[3];
 } ir_pre;
 
+/* Over 150 lines on purpose: the per-segment integration of every mode
+ * (pre-integrated composite with shading, projections, iso crossings) on
+ * the hot path of each cell a ray crosses; its cases share the segment's
+ * values and weights, kept in registers. */
 /* One cell segment [t0, t1] of tetrahedron t, with barycentric weights b0
  * and b1 at its ends and values s0, s1 there. */
 static void
@@ -734,6 +738,10 @@ edge_canon(const ir_ray *r, const double *a, const double *b, uint32_t ga, uint3
     return ga > gb ? -v : v;
 }
 
+/* Over 150 lines on purpose: the cell-to-cell walk of one ray, whose
+ * carried state (the shared face's points and edge sides, the entry
+ * record, the restart after a gap) is what makes each step cost one point
+ * and three edge sides; splitting it would spill that state per cell. */
 /* Walks one object along the ray, clipped to [tc0, tc1]. The points
  * (relative to the ray origin) and edge sides of the three points a
  * tetrahedron shares with the one before are carried over, so each step

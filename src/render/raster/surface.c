@@ -703,6 +703,45 @@ draw_banded(vv_raster *ras, const vv_mesh *mesh, vv_mat4 model, const vv_object 
     return s;
 }
 
+/* How big the scene is, for the clip distances and the size of plane
+ * squares: its bounds, the eye's distance to them and to the target, and
+ * to every plane (planes are squares 1000 times larger than that, which
+ * puts their edges near the horizon). */
+static double
+scene_size(const vv_world *w, const vv_view *view) {
+    vv_box b = vv_world_bounds(w);
+    vv_vec3 centre = vv_vec3_scale(vv_vec3_add(b.min, b.max), 0.5);
+    double radius = 0.5 * vv_vec3_length(vv_vec3_sub(b.max, b.min));
+    double dist = vv_vec3_length(vv_vec3_sub(centre, view->eye));
+    double atd = vv_vec3_length(vv_vec3_sub(view->at, view->eye));
+    double scene = radius > dist ? radius : dist;
+    scene = scene > atd ? scene : atd;
+    if (view->projection == VV_PROJECTION_ORTHOGRAPHIC) {
+        double half = 0.5 * view->ortho_height;
+        scene = scene > half ? scene : half;
+    }
+    if (!(scene > 0) || !isfinite(scene))
+        scene = 1;
+    for (int i = 0; i < w->n_objects; i++) {
+        const vv_object *obj = w->objects[i];
+        if (!obj->visible || obj->type != VV_OBJECT_PLANE)
+            continue;
+        vv_mat4 M = vv_object_matrix(obj);
+        int ok = 0;
+        vv_mat4 inv = vv_mat4_inverse(M, &ok);
+        vv_vec3 p = vv_mat4_mul_point(M, obj->geometry.point);
+        vv_vec3 n =
+            vv_vec3_normalize(vv_mat4_mul_dir(vv_mat4_transpose(inv), obj->geometry.normal));
+        double dp = fabs(vv_vec3_dot(n, vv_vec3_sub(view->eye, p)));
+        if (ok && isfinite(dp) && dp > scene)
+            scene = dp;
+    }
+    return scene;
+}
+
+/* Over 150 lines: the loop over the World's objects turns each kind into
+ * meshes (isosurfaces, grid surfaces, tessellated primitives) and draws
+ * them; the geometry-type table of issue 27 replaces its per-kind part. */
 static vv_status
 sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
           vv_image *out) {
@@ -721,36 +760,7 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         st->ras_height = view->height;
     }
     vv_raster *ras = st->ras;
-    /* how big the scene is: clip distances and the size of plane squares */
-    vv_box b = vv_world_bounds(w);
-    vv_vec3 centre = vv_vec3_scale(vv_vec3_add(b.min, b.max), 0.5);
-    double radius = 0.5 * vv_vec3_length(vv_vec3_sub(b.max, b.min));
-    double dist = vv_vec3_length(vv_vec3_sub(centre, view->eye));
-    double atd = vv_vec3_length(vv_vec3_sub(view->at, view->eye));
-    double scene = radius > dist ? radius : dist;
-    scene = scene > atd ? scene : atd;
-    if (view->projection == VV_PROJECTION_ORTHOGRAPHIC) {
-        double half = 0.5 * view->ortho_height;
-        scene = scene > half ? scene : half;
-    }
-    if (!(scene > 0) || !isfinite(scene))
-        scene = 1;
-    /* planes are squares 1000 times larger than the scene or their distance
-     * from the eye, which puts their edges near the horizon */
-    for (int i = 0; i < w->n_objects; i++) {
-        const vv_object *obj = w->objects[i];
-        if (!obj->visible || obj->type != VV_OBJECT_PLANE)
-            continue;
-        vv_mat4 M = vv_object_matrix(obj);
-        int ok = 0;
-        vv_mat4 inv = vv_mat4_inverse(M, &ok);
-        vv_vec3 p = vv_mat4_mul_point(M, obj->geometry.point);
-        vv_vec3 n =
-            vv_vec3_normalize(vv_mat4_mul_dir(vv_mat4_transpose(inv), obj->geometry.normal));
-        double dp = fabs(vv_vec3_dot(n, vv_vec3_sub(view->eye, p)));
-        if (ok && isfinite(dp) && dp > scene)
-            scene = dp;
-    }
+    const double scene = scene_size(w, view);
     if (view->projection == VV_PROJECTION_ORTHOGRAPHIC)
         s = vv_raster_set_view(ras, view, 0, 3000 * scene);
     else

@@ -112,6 +112,9 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
     *Aout = A > 1 ? 1 : A;
 }
 
+/* Over 150 lines on purpose: the multi-volume march keeps per-object ray
+ * state (iso crossings, leaps) in arrays on the stack across the samples of
+ * one ray, the ray caster's trace_composite for the ray tracer. */
 /* Front-to-back compositing of the composite and iso volumes along the ray
  * over [0, tlim] on the samples t = k dt (the ray caster's grid). An iso
  * hit is a surface: shaded with shadows and reflections, it ends the ray. */
