@@ -751,9 +751,9 @@ rebuild_options(VvWindow *win) {
         char what[256];
         GtkWidget *e = gtk_entry_new();
         gtk_entry_set_placeholder_text(GTK_ENTRY(e), o->def[0] ? o->def : "default");
-        char *tip = g_strdup_printf("%s (%s; default %s)", o->doc,
-                                    vv_option_describe(o, what, sizeof what),
-                                    o->def[0] ? o->def : "none");
+        char *tip =
+            g_strdup_printf("%s (%s; default %s)", o->doc, vv_option_describe(o, what, sizeof what),
+                            o->def[0] ? o->def : "none");
         gtk_widget_set_tooltip_text(e, tip);
         g_free(tip);
         for (int j = 0; j < w->render.n_options; j++)

@@ -537,7 +537,8 @@ cli_render_print_renderers(FILE *out) {
         const vv_renderer_info *in = vv_renderer_info_at(i);
         char kinds[256], modes[128], line[1024], what[256];
         fprintf(out, "  %-16s %s\n", in->name, in->description);
-        snprintf(line, sizeof line, "draws %s (%s)%s", cli_renderer_kinds(in->draws, kinds, sizeof kinds),
+        snprintf(line, sizeof line, "draws %s (%s)%s",
+                 cli_renderer_kinds(in->draws, kinds, sizeof kinds),
                  cli_renderer_modes(in->modes, modes, sizeof modes),
                  (in->caps & VV_RENDERER_REGION) ? "; renders regions (--memory-limit, mpirun)"
                                                  : "");
@@ -546,8 +547,7 @@ cli_render_print_renderers(FILE *out) {
         for (int k = 0; k < in->n_options; k++) {
             const vv_option_spec *o = &in->options[k];
             snprintf(line, sizeof line, "%s=%s (default %s): %s", o->key,
-                     vv_option_describe(o, what, sizeof what), o->def[0] ? o->def : "none",
-                     o->doc);
+                     vv_option_describe(o, what, sizeof what), o->def[0] ? o->def : "none", o->doc);
             print_wrapped(out, "--set ", line, 19, 79);
         }
     }
@@ -576,7 +576,8 @@ cli_render_note_left_out(const vv_renderer *ren, const vv_world *w) {
     }
     if (!n)
         return;
-    fprintf(stderr, "volvis: note: %s leaves out %s%s: it does not draw those kinds ('volvis "
-                    "renderers' lists what each renderer draws)\n",
+    fprintf(stderr,
+            "volvis: note: %s leaves out %s%s: it does not draw those kinds ('volvis "
+            "renderers' lists what each renderer draws)\n",
             in->name, names, n > 4 ? " and more" : "");
 }

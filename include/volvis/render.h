@@ -63,13 +63,13 @@ typedef enum vv_option_type {
  * (tests/render/test_registry.c checks every table).
  */
 typedef struct vv_option_spec {
-    const char *key;           /**< [a-z0-9_]+ */
-    vv_option_type type;       /**< value type */
-    const char *def;           /**< default, as text; never NULL ("" for an empty string) */
-    double min, max;           /**< INT, REAL: the inclusive range (flags make ends open) */
-    unsigned flags;            /**< VV_OPTION_MIN_OPEN, VV_OPTION_MAX_OPEN */
-    const char *const *words;  /**< NULL-terminated (see above), or NULL */
-    const char *doc;           /**< one line: meaning and unit */
+    const char *key;          /**< [a-z0-9_]+ */
+    vv_option_type type;      /**< value type */
+    const char *def;          /**< default, as text; never NULL ("" for an empty string) */
+    double min, max;          /**< INT, REAL: the inclusive range (flags make ends open) */
+    unsigned flags;           /**< VV_OPTION_MIN_OPEN, VV_OPTION_MAX_OPEN */
+    const char *const *words; /**< NULL-terminated (see above), or NULL */
+    const char *doc;          /**< one line: meaning and unit */
 } vv_option_spec;
 
 /** A validated option value (vv_option_parse). */
@@ -119,8 +119,9 @@ const char *vv_option_type_name(vv_option_type t);
 #define VV_RENDERER_QUALITY 2u     /**< the quality level changes the image */
 #define VV_RENDERER_PREVIEW 4u     /**< draws the Navigator's reduced-resolution previews */
 #define VV_RENDERER_PROGRESSIVE 8u /**< reserved: draws from resident data and refines */
-#define VV_RENDERER_GLOBAL 16u     /**< pixels depend on objects off their primary ray
-                                        (shadows, reflections, interreflection) */
+#define VV_RENDERER_GLOBAL                                                                         \
+    16u /**< pixels depend on objects off their primary ray                                        \
+             (shadows, reflections, interreflection) */
 
 /**
  * What a rendering method is, draws and takes. Immutable, owned by the

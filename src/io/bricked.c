@@ -21,8 +21,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "io/bricked_internal.h"
 #include "core/internal.h"
+#include "io/bricked_internal.h"
 
 #define VVB_MAGIC "VOLVISB1"
 #define VVB_HEADER 256

@@ -27,7 +27,7 @@
  * face (gradients by central differences and trilinear samples at the box
  * faces then read the same voxels as in the whole volume), as a volume with
  * the whole volume's geometry and value range
- * (src/render/raycast/raycast_brick.h), cut from the World's volume or read
+ * (a region's voxels, include/volvis/sys/renderer.h), cut from the World's volume or read
  * from a bricked source (vv_parallel_set_source: only the box is read).
  */
 #include <math.h>
@@ -489,8 +489,8 @@ mpi_fail(int rc, const char *what) {
 /* The compositing rounds on buffer img (P records; on return this rank's
  * final range holds the whole composite). */
 static vv_status
-composite(const par_plan *pl, float *img, size_t P, vv_region_op mode, int ortho,
-          const double E[3], const double D[3]) {
+composite(const par_plan *pl, float *img, size_t P, vv_region_op mode, int ortho, const double E[3],
+          const double D[3]) {
     const int tag = 4242;
     if (pl->has_fold) {
         /* binary swap with a count that is not a power of two: the extra

@@ -123,9 +123,8 @@ check_args(vv_renderer *r, const vv_world *w, int object, const vv_brick_source 
 }
 
 vv_status
-vv_renderer_render_bricks(vv_renderer *r, const vv_world *w, int object,
-                          const vv_brick_source *src, const vv_view *view,
-                          const vv_render_options *opt, vv_image *out) {
+vv_renderer_render_bricks(vv_renderer *r, const vv_world *w, int object, const vv_brick_source *src,
+                          const vv_view *view, const vv_render_options *opt, vv_image *out) {
     vv_status s = check_args(r, w, object, src, view, out);
     if (s != VV_OK)
         return s;

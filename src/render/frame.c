@@ -34,6 +34,16 @@ vv_frame_job_init(vv_frame_job *job, int width, int height, vv_frame_tile_fn fn,
     job->progress_to = 1;
 }
 
+void
+vv_frame_job_region(vv_frame_job *job, const vv_render_region *rg) {
+    if (!rg || rg->x1 <= rg->x0)
+        return;
+    job->x0 = rg->x0;
+    job->y0 = rg->y0;
+    job->x1 = rg->x1;
+    job->y1 = rg->y1;
+}
+
 #define FRAME_SCRATCH_ALIGN 64
 
 vv_status
@@ -157,6 +167,28 @@ vv_camera_rays_init(vv_camera_rays *c, const vv_view *view) {
 
 /* ---- region images ------------------------------------------------------------------ */
 
+vv_status
+vv_render_region_check(const vv_world *w, const vv_render_region *rg, vv_region_op *op) {
+    const vv_object *obj = w->objects[rg->object];
+    for (int i = 0; i < w->n_objects; i++)
+        if (i != rg->object && w->objects[i]->visible)
+            return vv_error_set(VV_ERR_UNSUPPORTED,
+                                "object '%s': a region render draws one object, not '%s' too",
+                                obj->name, w->objects[i]->name);
+    if (obj->mode != VV_MODE_COMPOSITE && obj->mode != VV_MODE_MIP && obj->mode != VV_MODE_MINIP)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "object '%s': regions are rendered in composite, mip or minip mode "
+                            "(xray and iso do not split)",
+                            obj->name);
+    if (obj->solid_texture.kind != VV_SOLID_TEXTURE_NONE)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "object '%s': solid textures are not rendered by regions", obj->name);
+    *op = obj->mode == VV_MODE_MIP     ? VV_REGION_MAX
+          : obj->mode == VV_MODE_MINIP ? VV_REGION_MIN
+                                       : VV_REGION_OVER;
+    return VV_OK;
+}
+
 void
 vv_region_image_clear(vv_region_image *img) {
     const size_t n = (size_t)img->image->width * (size_t)img->image->height;
@@ -205,7 +237,8 @@ solve3(vv_vec3 c0, vv_vec3 c1, vv_vec3 c2, vv_vec3 rhs, double x[3]) {
 }
 
 void
-vv_region_rect(vv_render_region *b, vv_mat4 m, const vv_view *view, const int lo[3], const int hi[3]) {
+vv_region_rect(vv_render_region *b, vv_mat4 m, const vv_view *view, const int lo[3],
+               const int hi[3]) {
     b->x0 = b->y0 = 0;
     b->x1 = b->y1 = 0; /* whole image until proven smaller */
     vv_camera_rays c;

@@ -106,8 +106,9 @@ vv_option_describe(const vv_option_spec *spec, char *buf, size_t cap) {
             append(buf, cap, (spec->flags & VV_OPTION_MIN_OPEN) ? "real > %.17g" : "real >= %.17g",
                    NULL, spec->min);
         } else {
-            append(buf, cap, (spec->flags & VV_OPTION_MIN_OPEN) ? "real in (%.17g" : "real in [%.17g",
-                   NULL, spec->min);
+            append(buf, cap,
+                   (spec->flags & VV_OPTION_MIN_OPEN) ? "real in (%.17g" : "real in [%.17g", NULL,
+                   spec->min);
             append(buf, cap, (spec->flags & VV_OPTION_MAX_OPEN) ? ", %.17g)" : ", %.17g]", NULL,
                    spec->max);
         }
@@ -168,8 +169,7 @@ vv_option_parse(const vv_option_spec *spec, const char *text, vv_option_value *o
         char *end = NULL;
         errno = 0;
         const long long v = strtoll(text, &end, 10);
-        if (!end || end == text || *end || errno || (double)v < spec->min ||
-            (double)v > spec->max)
+        if (!end || end == text || *end || errno || (double)v < spec->min || (double)v > spec->max)
             return bad_value(spec, text);
         out->i = v;
         out->r = (double)v;
@@ -442,8 +442,7 @@ vv_renderer_render_region(vv_renderer *r, const vv_world *world, const vv_view *
                             name);
     if (out->image->width != view->width || out->image->height != view->height)
         return vv_error_set(VV_ERR_INVALID, "%s: region image is %d x %d but the view is %d x %d",
-                            name, out->image->width, out->image->height, view->width,
-                            view->height);
+                            name, out->image->width, out->image->height, view->width, view->height);
     if (region->object < 0 || region->object >= world->n_objects || !region->voxels)
         return vv_error_set(VV_ERR_INVALID, "%s: region of object %d without voxels", name,
                             region->object);

@@ -72,23 +72,6 @@ test_convert_render(void **state) {
     free(c);
 }
 
-/* PSNR of two 8-bit PNGs of one size (INFINITY when identical). */
-static double
-png_psnr(const char *a, const char *b) {
-    vv_image *x = NULL, *y = NULL;
-    vt_ok(vv_image_read_png(&x, a));
-    vt_ok(vv_image_read_png(&y, b));
-    assert_int_equal(x->width, y->width);
-    assert_int_equal(x->height, y->height);
-    const size_t n = 4 * (size_t)x->width * (size_t)x->height;
-    double se = 0;
-    for (size_t i = 0; i < n; i++)
-        se += ((double)x->rgba[i] - y->rgba[i]) * ((double)x->rgba[i] - y->rgba[i]);
-    vv_image_free(x);
-    vv_image_free(y);
-    return se > 0 ? 10 * log10(1.0 / (se / (double)n)) : INFINITY;
-}
-
 /* In memory and out of core (--memory-limit) with @p renderer at quality 1
  * and the extra options; returns the PSNR of the two PNGs. */
 static double
@@ -107,7 +90,7 @@ mem_vs_ooc(const char *input, const char *vvb, const char *renderer, const char 
         fail_msg("%s", r.err);
     assert_non_null(strstr(r.out, "out of core: "));
     vt_run_result_free(&r);
-    const double db = png_psnr(mem, ooc);
+    const double db = vt_png_psnr(mem, ooc);
     printf("%s %s %s (%s): %.1f dB out of core against in memory\n", input, renderer, mode, set,
            db);
     return db;

@@ -170,8 +170,8 @@ main(int argc, char **argv) {
         run_case("synthetic", syn, modes[m], 30, 20, 0, VV_COMPOSITING_BINARY_SWAP, 4);
         run_case("synthetic", syn, modes[m], 30, 20, 0, VV_COMPOSITING_RADIX_K, 4);
         run_case("synthetic", syn, modes[m], 110, -35, 1, VV_COMPOSITING_RADIX_K, 2);
-        run_case_with("raytrace", "synthetic", syn, modes[m], 30, 20, 0,
-                      VV_COMPOSITING_BINARY_SWAP, 4);
+        run_case_with("raytrace", "synthetic", syn, modes[m], 30, 20, 0, VV_COMPOSITING_BINARY_SWAP,
+                      4);
     }
     if (argc > 1) {
         char path[4096];

@@ -138,8 +138,8 @@ test_validation(void **state) {
     (void)state;
     /* open and closed ends */
     expect_invalid("raycast", "early_termination", "0", "is not real in (0, 1]");
-    vt_ok(vv_renderer_info_check_option(vv_renderer_info_find("raycast"), "early_termination",
-                                        "1"));
+    vt_ok(
+        vv_renderer_info_check_option(vv_renderer_info_find("raycast"), "early_termination", "1"));
     expect_invalid("raycast", "early_termination", "1.0001", "(0, 1]");
     expect_invalid("raycast", "early_termination", "nan", "early_termination: 'nan'");
     expect_invalid("raycast", "early_termination", "0.5x", "'0.5x'");
@@ -273,7 +273,7 @@ test_world_checks(void **state) {
 
 typedef struct paint {
     vv_image *img;
-    int *count; /* per pixel */
+    int *count;  /* per pixel */
     int fail_at; /* tile index that fails, or -1 */
 } paint;
 

@@ -62,10 +62,10 @@ typedef enum vv_region_op {
  * and sample points t = k dt of the whole volume), from the voxels given.
  */
 typedef struct vv_render_region {
-    int object;      /**< index of the volume object in the World */
-    int dims[3];     /**< the whole volume's dims */
-    double lo[3];    /**< owned samples: lo <= p (index units; -INFINITY: open) */
-    double hi[3];    /**< owned samples: p < hi (+INFINITY: open) */
+    int object;   /**< index of the volume object in the World */
+    int dims[3];  /**< the whole volume's dims */
+    double lo[3]; /**< owned samples: lo <= p (index units; -INFINITY: open) */
+    double hi[3]; /**< owned samples: p < hi (+INFINITY: open) */
     /**
      * The region's voxels: the box plus at least one voxel beyond each
      * owned face (within the volume), so that trilinear samples and
@@ -138,6 +138,14 @@ void vv_region_image_combine(vv_region_image *front, const vv_region_image *back
  */
 void vv_region_image_finish(vv_region_image *img, vv_vec3 background);
 
+/**
+ * The checks every region method starts with: @p rg->object is the World's
+ * only visible object, in composite, mip or minip mode, without a solid
+ * texture; *op receives how its partial images combine (over, max, min).
+ * Errors: VV_ERR_UNSUPPORTED naming the object.
+ */
+vv_status vv_render_region_check(const vv_world *w, const vv_render_region *rg, vv_region_op *op);
+
 /** Clears @p img to "nothing seen": colour 0, depth INFINITY, key NAN. */
 void vv_region_image_clear(vv_region_image *img);
 
@@ -147,8 +155,8 @@ void vv_region_image_clear(vv_region_image *img);
  * whole image (x1 <= x0) when the box reaches behind the eye; an empty
  * rectangle (x1 > x0, y1 <= y0) when it is off screen. Fills rg->x0 .. y1.
  */
-void vv_region_rect(vv_render_region *rg, vv_mat4 index_to_world, const vv_view *view, const int lo[3],
-                    const int hi[3]);
+void vv_region_rect(vv_render_region *rg, vv_mat4 index_to_world, const vv_view *view,
+                    const int lo[3], const int hi[3]);
 
 /* ---- the table a method fills in ---------------------------------------------- */
 
@@ -236,19 +244,22 @@ typedef vv_status (*vv_frame_tile_fn)(void *user, const vv_frame_tile *t);
 
 /** One pass over the image's tiles. */
 typedef struct vv_frame_job {
-    int width, height;     /**< image size */
-    int tile;              /**< tile width (side), pixels; <= 0: VV_FRAME_TILE */
-    int tile_h;            /**< tile height; <= 0: square tiles (bands of rows: tile = width) */
-    int x0, y0, x1, y1;    /**< only these pixels (tiles clipped to them); x1 <= x0: all */
-    size_t scratch_bytes;  /**< per-thread scratch, 0: none */
-    vv_frame_tile_fn fn;   /**< the tile's work */
-    void *user;            /**< its payload */
-    double progress_from;  /**< the run reports progress from here ... */
-    double progress_to;    /**< ... to here (0 and 0: 0 to 1) */
+    int width, height;    /**< image size */
+    int tile;             /**< tile width (side), pixels; <= 0: VV_FRAME_TILE */
+    int tile_h;           /**< tile height; <= 0: square tiles (bands of rows: tile = width) */
+    int x0, y0, x1, y1;   /**< only these pixels (tiles clipped to them); x1 <= x0: all */
+    size_t scratch_bytes; /**< per-thread scratch, 0: none */
+    vv_frame_tile_fn fn;  /**< the tile's work */
+    void *user;           /**< its payload */
+    double progress_from; /**< the run reports progress from here ... */
+    double progress_to;   /**< ... to here (0 and 0: 0 to 1) */
 } vv_frame_job;
 
 /** A whole image, 16-pixel tiles, progress 0 to 1. */
 void vv_frame_job_init(vv_frame_job *job, int width, int height, vv_frame_tile_fn fn, void *user);
+
+/** Limits @p job to the pixel rectangle of region @p rg (none when it has none). */
+void vv_frame_job_region(vv_frame_job *job, const vv_render_region *rg);
 
 /**
  * Runs @p job: tiles row-major, taken dynamically by opt->threads OpenMP

@@ -88,9 +88,9 @@ typedef struct rc_frame {
     float bg[3];
     vv_vlight lights[VV_MAX_LIGHTS];
     int n_lights;
-    float et;         /* early termination */
-    int point_lights; /* any point light (needs the world position of samples) */
-    int avx2;         /* the processor has AVX2 and FMA (vv_vray_classify) */
+    float et;           /* early termination */
+    int point_lights;   /* any point light (needs the world position of samples) */
+    int avx2;           /* the processor has AVX2 and FMA (vv_vray_classify) */
     vv_camera_rays cam; /* primary rays */
     vv_image *out;      /* the image being written */
     float *key;         /* region renders of projections: the key per pixel, else NULL */
@@ -583,13 +583,7 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
         fr.key = region && fr.n_comp == 0 ? key : NULL;
         vv_frame_job job;
         vv_frame_job_init(&job, view->width, view->height, render_tile, &fr);
-        if (region && region->x1 > region->x0) {
-            /* only the region's rectangle is traced; the rest stays empty */
-            job.x0 = region->x0;
-            job.y0 = region->y0;
-            job.x1 = region->x1;
-            job.y1 = region->y1;
-        }
+        vv_frame_job_region(&job, region); /* the rest stays empty */
         s = vv_frame_run(&job, opt);
     }
     for (int i = 0; i < fr.n_obj; i++) {
@@ -613,32 +607,19 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
  * range), rays in the whole volume's index box, and only the region's
  * samples taken. */
 static vv_status
-rc_render_region(void *state, const vv_world *w, const vv_view *view, const vv_render_region *region,
-                 const vv_render_options *opt, vv_region_image *out) {
+rc_render_region(void *state, const vv_world *w, const vv_view *view,
+                 const vv_render_region *region, const vv_render_options *opt,
+                 vv_region_image *out) {
     const vv_object *obj = w->objects[region->object];
-    for (int i = 0; i < w->n_objects; i++)
-        if (i != region->object && w->objects[i]->visible)
-            return vv_error_set(VV_ERR_UNSUPPORTED,
-                                "object '%s': a region render draws one object, not '%s' too",
-                                obj->name, w->objects[i]->name);
-    if (obj->mode != VV_MODE_COMPOSITE && obj->mode != VV_MODE_MIP && obj->mode != VV_MODE_MINIP)
-        return vv_error_set(VV_ERR_UNSUPPORTED,
-                            "object '%s': regions are rendered in composite, mip or minip mode "
-                            "(xray and iso do not split)",
-                            obj->name);
-    if (obj->solid_texture.kind != VV_SOLID_TEXTURE_NONE)
-        return vv_error_set(VV_ERR_UNSUPPORTED,
-                            "object '%s': solid textures are not rendered by regions",
-                            obj->name);
+    vv_status s = vv_render_region_check(w, region, &out->op);
+    if (s != VV_OK)
+        return s;
     vv_object copy = *obj; /* shallow: nothing in it is released */
     copy.volume = (vv_volume *)region->voxels;
     vv_object *objs[1] = {&copy};
     vv_world tmp = *w;
     tmp.objects = objs;
     tmp.n_objects = 1;
-    out->op = obj->mode == VV_MODE_MIP     ? VV_REGION_MAX
-              : obj->mode == VV_MODE_MINIP ? VV_REGION_MIN
-                                           : VV_REGION_OVER;
     return render_frame(state, &tmp, view, opt, region, out->image, out->key);
 }
 

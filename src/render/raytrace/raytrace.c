@@ -281,8 +281,7 @@ mix64(uint64_t x) {
 }
 
 static void
-trace_primary(const rt_frame *fr, double px, double py, float rgba[4], float *depth,
-              float *key) {
+trace_primary(const rt_frame *fr, double px, double py, float rgba[4], float *depth, float *key) {
     /* the ray caster's arithmetic, so that without effects the images agree */
     const vv_ray wr = vv_camera_ray(&fr->cam, px, py);
     rt_trace_key(fr, &wr, 0, 1, 1.0f, rgba, &rgba[3], depth, key);
@@ -504,12 +503,7 @@ render_frame(rt_state *st, const vv_world *w, const vv_view *view, const vv_rend
     }
     vv_frame_job job;
     vv_frame_job_init(&job, view->width, view->height, pass_first, &fr);
-    if (region && region->x1 > region->x0) {
-        job.x0 = region->x0;
-        job.y0 = region->y0;
-        job.x1 = region->x1;
-        job.y1 = region->y1;
-    }
+    vv_frame_job_region(&job, region);
     job.progress_to = fr.adaptive ? 0.5 : 1.0;
     s = vv_frame_run(&job, opt);
     if (s == VV_OK && fr.adaptive) {
@@ -551,28 +545,15 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
  * does not have) and its context, the World's own volume of the object,
  * casting the shadows. */
 static vv_status
-rt_render_region(void *state, const vv_world *w, const vv_view *view, const vv_render_region *region,
-                 const vv_render_options *opt, vv_region_image *out) {
+rt_render_region(void *state, const vv_world *w, const vv_view *view,
+                 const vv_render_region *region, const vv_render_options *opt,
+                 vv_region_image *out) {
     const vv_object *obj = w->objects[region->object];
-    for (int i = 0; i < w->n_objects; i++)
-        if (i != region->object && w->objects[i]->visible)
-            return vv_error_set(VV_ERR_UNSUPPORTED,
-                                "object '%s': a region render draws one object, not '%s' too",
-                                obj->name, w->objects[i]->name);
-    if (obj->mode != VV_MODE_COMPOSITE && obj->mode != VV_MODE_MIP && obj->mode != VV_MODE_MINIP)
-        return vv_error_set(VV_ERR_UNSUPPORTED,
-                            "object '%s': regions are rendered in composite, mip or minip mode "
-                            "(xray and iso do not split)",
-                            obj->name);
-    if (obj->solid_texture.kind != VV_SOLID_TEXTURE_NONE)
-        return vv_error_set(VV_ERR_UNSUPPORTED,
-                            "object '%s': solid textures are not rendered by regions",
-                            obj->name);
+    vv_status s = vv_render_region_check(w, region, &out->op);
+    if (s != VV_OK)
+        return s;
     vv_object part = *obj; /* shallow: nothing in it is released */
     part.volume = (vv_volume *)region->voxels;
-    out->op = obj->mode == VV_MODE_MIP     ? VV_REGION_MAX
-              : obj->mode == VV_MODE_MINIP ? VV_REGION_MIN
-                                           : VV_REGION_OVER;
     return render_frame(state, w, view, opt, region, &part, out->image,
                         obj->mode == VV_MODE_COMPOSITE ? NULL : out->key);
 }

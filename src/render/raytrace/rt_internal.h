@@ -141,9 +141,9 @@ typedef struct rt_vobj {
      * shadow; its context (the World's own volume of the object: the whole
      * one, or a coarse proxy) casts the shadows and is invisible to rays. */
     const vv_render_region *region; /* the region part: its region, else NULL */
-    int context;             /* the context: shadows only */
-    double region_dt;        /* the step the region's samples are counted with */
-    int inv_form;            /* vv_vray_clip_region's form for this object's kernel */
+    int context;                    /* the context: shadows only */
+    double region_dt;               /* the step the region's samples are counted with */
+    int inv_form;                   /* vv_vray_clip_region's form for this object's kernel */
 } rt_vobj;
 
 /* Bounding volume hierarchy over a mesh's triangles (object space). */
@@ -194,15 +194,15 @@ typedef struct rt_frame {
     int n_lights;
     float et;
     int shadows, max_depth;
-    int avx2;          /* the processor has AVX2 and FMA (vv_vray_classify) */
-    double scene_size; /* for ray offsets */
+    int avx2;           /* the processor has AVX2 and FMA (vv_vray_classify) */
+    double scene_size;  /* for ray offsets */
     vv_camera_rays cam; /* primary rays (the ray caster's arithmetic) */
     /* the pass being run by the frame runner */
     const vv_view *view;
     vv_image *out;
-    float *key;        /* region renders of projections: the key per pixel, else NULL */
-    int nss;           /* supersamples per pixel side */
-    int adaptive;      /* pass 1 traces pixel centres, pass 2 supersamples where they differ */
+    float *key;         /* region renders of projections: the key per pixel, else NULL */
+    int nss;            /* supersamples per pixel side */
+    int adaptive;       /* pass 1 traces pixel centres, pass 2 supersamples where they differ */
     const float *first; /* pass 2: the image of pass 1 */
 } rt_frame;
 

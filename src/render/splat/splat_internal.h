@@ -125,7 +125,7 @@ typedef struct sp_frame {
     float fp_scale; /* 1 / (2 pi (1 - exp(-rho^2 / 2))): the truncated Gaussian's normalisation */
     int band_h, n_bands;
     int kmin, kmax; /* sheets of the composite objects */
-    vv_image *out; /* the image being written */
+    vv_image *out;  /* the image being written */
     const vv_render_options *opt;
     float *xray; /* image of line integrals (X-ray objects), or NULL */
     uint64_t footprints, culled, sheets;
