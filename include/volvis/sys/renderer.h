@@ -18,6 +18,13 @@
  * detail later; a tile's work gets its rectangle and a per-thread scratch,
  * so a kernel may trace a packet of rays (8 with AVX2) per call instead of
  * one; channels are a property of the object, not of this interface.
+ *
+ * Thread-safety: the registry and its tables are immutable. A method's
+ * state serves one render (or region render) at a time (render.h); within
+ * it, vv_frame_run calls the tile function on several threads at once, so
+ * a tile writes only its own pixels and reads what the frame prepared.
+ * Errors follow the library's convention (vv_status and the thread-local
+ * trace; a tile's message is carried back to the caller's thread).
  */
 #ifndef VOLVIS_SYS_RENDERER_H
 #define VOLVIS_SYS_RENDERER_H
