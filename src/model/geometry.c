@@ -31,6 +31,20 @@ vv_geom_type_get(vv_object_type type) {
     return NULL;
 }
 
+vv_status
+vv_geom_object_type(const vv_object *obj, const vv_geom_type **out) {
+    *out = NULL;
+    const vv_geom_type *gt = vv_geom_type_get(obj->type);
+    if (!gt)
+        return vv_error_set(VV_ERR_INVALID, "object '%s': a %s is not a geometric shape", obj->name,
+                            vv_object_type_name(obj->type));
+    vv_status s = gt->check(&obj->geometry);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "object '%s'", obj->name);
+    *out = gt;
+    return VV_OK;
+}
+
 const vv_geom_type *const *
 vv_geom_types(int *n) {
     if (n)

@@ -107,6 +107,14 @@ typedef struct vv_geom_type {
 /** The record of a geometric object type; NULL for volumes and grids. */
 const vv_geom_type *vv_geom_type_get(vv_object_type type);
 
+/**
+ * The record of a geometric object whose shape passes the record's check:
+ * *out. Errors: VV_ERR_INVALID "object 'NAME': a TYPE is not a geometric
+ * shape" (a volume or grid), or the check's message prefixed with
+ * "object 'NAME'".
+ */
+vv_status vv_geom_object_type(const vv_object *obj, const vv_geom_type **out);
+
 /** The records, in vv_object_type order (for tests and listings); *n their number. */
 const vv_geom_type *const *vv_geom_types(int *n);
 

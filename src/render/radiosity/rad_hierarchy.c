@@ -42,6 +42,40 @@ normal_class(const float *n) {
     return 2 * a + (n[a] < 0);
 }
 
+/* Reorders b->e[lo, hi) so that the elements below @p mid come first: with
+ * axis >= 0 their centroid's coordinate on that axis, with axis -1 their
+ * normal's class; returns the first of the others. */
+static int
+partition(builder *b, int lo, int hi, int axis, float mid) {
+    int i = lo, j = hi - 1;
+    while (i <= j) {
+        const rad_elem *e = &b->e[i];
+        if (axis >= 0 ? e->p[axis] < mid : normal_class(e->n) <= (int)mid) {
+            i++;
+        } else {
+            rad_elem t = b->e[i];
+            b->e[i] = b->e[j];
+            b->e[j] = t;
+            j--;
+        }
+    }
+    return i;
+}
+
+/* The subtrees of node @p id over [lo, m) and [m, hi); id, or -1. */
+static int
+children(builder *b, int id, int lo, int m, int hi) {
+    int c0 = rad_build_tree(b, lo, m);
+    if (c0 < 0)
+        return -1;
+    int c1 = rad_build_tree(b, m, hi);
+    if (c1 < 0)
+        return -1;
+    b->nodes[id].child[0] = c0;
+    b->nodes[id].child[1] = c1;
+    return id;
+}
+
 int
 rad_build_tree(builder *b, int lo, int hi) {
     if (b->n_nodes == b->cap_nodes) {
@@ -117,56 +151,18 @@ rad_build_tree(builder *b, int lo, int hi) {
             kmax = k > kmax ? k : kmax;
         }
         if (kmin != kmax) {
-            int mid = (kmin + kmax) / 2, i = lo, j = hi - 1;
-            while (i <= j) {
-                if (normal_class(b->e[i].n) <= mid) {
-                    i++;
-                } else {
-                    rad_elem t = b->e[i];
-                    b->e[i] = b->e[j];
-                    b->e[j] = t;
-                    j--;
-                }
-            }
-            int c0 = rad_build_tree(b, lo, i);
-            if (c0 < 0)
-                return -1;
-            int c1 = rad_build_tree(b, i, hi);
-            if (c1 < 0)
-                return -1;
-            b->nodes[id].child[0] = c0;
-            b->nodes[id].child[1] = c1;
-            return id;
+            const int i = partition(b, lo, hi, -1, (kmin + kmax) / 2);
+            return children(b, id, lo, i, hi);
         }
     }
     int ax = 0;
     for (int a = 1; a < 3; a++)
         if (cmax[a] - cmin[a] > cmax[ax] - cmin[ax])
             ax = a;
-    float mid = 0.5f * (cmin[ax] + cmax[ax]);
-    int i = lo, j = hi - 1;
-    while (i <= j) {
-        if (b->e[i].p[ax] < mid) {
-            i++;
-        } else {
-            rad_elem t = b->e[i];
-            b->e[i] = b->e[j];
-            b->e[j] = t;
-            j--;
-        }
-    }
-    int m = i;
+    int m = partition(b, lo, hi, ax, 0.5f * (cmin[ax] + cmax[ax]));
     if (m == lo || m == hi) /* every centroid at one point */
         m = lo + (hi - lo) / 2;
-    int c0 = rad_build_tree(b, lo, m);
-    if (c0 < 0)
-        return -1;
-    int c1 = rad_build_tree(b, m, hi);
-    if (c1 < 0)
-        return -1;
-    b->nodes[id].child[0] = c0;
-    b->nodes[id].child[1] = c1;
-    return id;
+    return children(b, id, lo, m, hi);
 }
 
 /* ---------------------------------------------------------------------- */

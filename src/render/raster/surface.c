@@ -243,11 +243,12 @@ sf_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v)
 static vv_status
 tessellate(const sf_state *st, const vv_object *obj, const vv_view *view, double scene,
            vv_mesh **out, int *closed, int *world) {
-    const vv_geom_type *gt = vv_geom_type_get(obj->type);
+    const vv_geom_type *gt;
     *closed = 0;
     *world = 0;
-    if (!gt)
-        return vv_error_set(VV_ERR_INVALID, "object '%s': not a geometric object", obj->name);
+    vv_status s = vv_geom_object_type(obj, &gt);
+    if (s != VV_OK)
+        return s;
     vv_geom_tess opt = {.segments = st->segments};
     vv_geometry wg;
     const vv_geometry *g = &obj->geometry;
@@ -262,14 +263,12 @@ tessellate(const sf_state *st, const vv_object *obj, const vv_view *view, double
         memset(&wg, 0, sizeof wg);
         wg.point = vv_mat4_mul_point(M, g->point);
         wg.normal = vv_vec3_normalize(vv_mat4_mul_dir(vv_mat4_transpose(inv), g->normal));
-        if (!(vv_vec3_length(wg.normal) > 0))
-            return vv_error_set(VV_ERR_INVALID, "object '%s': plane without a normal", obj->name);
         opt.center = view->at;
         opt.half = 1000 * scene;
         g = &wg;
         *world = 1;
     }
-    vv_status s = gt->tessellate(g, &opt, out);
+    s = gt->tessellate(g, &opt, out);
     if (s != VV_OK)
         return vv_error_prefix(s, "object '%s'", obj->name);
     *closed = gt->solid(g);

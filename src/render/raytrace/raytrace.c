@@ -139,14 +139,10 @@ prepare_geometry(rt_frame *fr, rt_gobj *g, const vv_object *obj) {
     g->kt = (float)m->transparency;
     g->ior = m->ior;
     const vv_geometry *ge = &obj->geometry;
-    g->geom = vv_geom_type_get(obj->type);
-    if (!g->geom)
-        return vv_error_set(VV_ERR_INVALID, "object '%s': unsupported type %d", obj->name,
-                            (int)obj->type);
-    vv_status s = g->geom->check(ge);
-    if (s == VV_OK && g->geom->prepare)
-        s = g->geom->prepare(ge, &g->prep);
+    vv_status s = vv_geom_object_type(obj, &g->geom);
     if (s != VV_OK)
+        return s;
+    if (g->geom->prepare && (s = g->geom->prepare(ge, &g->prep)) != VV_OK)
         return vv_error_prefix(s, "object '%s'", obj->name);
     g->closed = g->geom->solid(ge);
     if (obj->type == VV_OBJECT_PLANE) {
