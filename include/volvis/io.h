@@ -25,6 +25,7 @@
 #include <stdint.h>
 
 #include "core.h"
+#include "model.h"
 #include "volume.h"
 
 #ifdef __cplusplus
@@ -111,6 +112,15 @@ vv_status vv_volume_load(vv_volume **out, const char *path, const vv_load_option
  * @p strict, in which case VV_ERR_UNSUPPORTED is returned.
  */
 vv_status vv_volume_save(const vv_volume *v, const char *path, vv_format format, int strict);
+
+/* ---- images ------------------------------------------------------------- */
+
+/**
+ * Loads a PNG (vv_image_read_png) from @p path; @p source (may be NULL:
+ * @p path) is the name kept for scene saving. Errors: those of
+ * vv_image_read_png, VV_ERR_NOMEM.
+ */
+vv_status vv_texture_image_load(vv_texture_image **out, const char *path, const char *source);
 
 /* ---- per-format entry points (same contracts as above) ---------------- */
 

@@ -24,8 +24,8 @@
 #include <string.h>
 
 #include "core/internal.h"
-#include "measure_internal.h"
-#include "surface/surface_internal.h"
+#include "measure/measure_internal.h"
+#include "volvis/surface.h"
 
 void
 vv_isosurface_measure_options_init(vv_isosurface_measure_options *o) {

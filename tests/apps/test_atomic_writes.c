@@ -22,6 +22,7 @@
 
 #include "core/internal.h"
 #include "volvis/model.h"
+#include "volvis/scene.h"
 
 static const char *
 outdir(void) {
