@@ -808,5 +808,5 @@ main(void) {
         cmocka_unit_test(test_convert_roundtrip),
         cmocka_unit_test(test_convert_rescale_and_strict),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -21,7 +21,7 @@ test_convert_render(void **state) {
     struct stat st;
     const char *nut = vt_data("volumes/nut.slc");
     if (stat(nut, &st) != 0)
-        skip();
+        vt_skip("../shared/data/volumes/nut.slc is missing");
     char vvb[1200], nrrd[1200], vvb2[1200], mem[1200], ooc[1200], ooc2[1200];
     snprintf(vvb, sizeof vvb, "%s/nut.vvb", outdir());
     snprintf(nrrd, sizeof nrrd, "%s/nut_raw.nrrd", outdir());
@@ -72,7 +72,7 @@ test_errors(void **state) {
     struct stat st;
     const char *nut = vt_data("volumes/nut.slc");
     if (stat(nut, &st) != 0)
-        skip();
+        vt_skip("../shared/data/volumes/nut.slc is missing");
     char vvb[1200], png[1200];
     snprintf(vvb, sizeof vvb, "%s/nut_e.vvb", outdir());
     snprintf(png, sizeof png, "%s/never.png", outdir());
@@ -102,5 +102,5 @@ main(void) {
         cmocka_unit_test(test_convert_render),
         cmocka_unit_test(test_errors),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -46,7 +46,7 @@ static void
 test_hyper_dx(void **state) {
     (void)state;
     if (!have_data())
-        skip();
+        vt_skip("../shared/data/grids is missing");
     vv_grid *g = load("grids/hyper.dx");
     assert_int_equal(g->kind, VV_GRID_UNSTRUCTURED);
     assert_int_equal(g->n_points, 8000);
@@ -66,7 +66,7 @@ static void
 test_fire_vtu(void **state) {
     (void)state;
     if (!have_data())
-        skip();
+        vt_skip("../shared/data/grids is missing");
     vv_grid *g = load("grids/fire_ug.vtu");
     assert_int_equal(g->n_points, 12323);
     assert_int_equal(g->n_cells, 10462);
@@ -85,7 +85,7 @@ static void
 test_blow_vtk(void **state) {
     (void)state;
     if (!have_data())
-        skip();
+        vt_skip("../shared/data/grids is missing");
     vv_grid *g = load("grids/blow.vtk");
     assert_int_equal(g->n_points, 687);
     assert_int_equal(g->n_cells, 1057);
@@ -105,7 +105,7 @@ static void
 test_plot3d(void **state) {
     (void)state;
     if (!have_data())
-        skip();
+        vt_skip("../shared/data/grids is missing");
     vv_grid *g = load("grids/bluntfinxyz.bin");
     assert_int_equal(g->kind, VV_GRID_CURVILINEAR);
     assert_int_equal(g->n_blocks, 1);
@@ -134,11 +134,11 @@ static void
 test_levitus(void **state) {
     (void)state;
     if (!have_data())
-        skip();
+        vt_skip("../shared/data/grids is missing");
     vv_grid *g = NULL;
     vv_status s = vv_grid_load(&g, vt_data("grids/levitus_climatology.cdf"));
     if (s == VV_ERR_UNSUPPORTED)
-        skip(); /* built without NetCDF */
+        vt_skip("the build has no NetCDF (libnetcdf-dev)");
     vt_ok(s);
     assert_int_equal(g->kind, VV_GRID_SPHERICAL);
     assert_int_equal(g->sph_dims[0], 21); /* depth edges */
@@ -689,13 +689,13 @@ test_netcdf_without_coordinates(void **state) {
     vv_error_clear();
     vv_status s = vv_grid_load(&g, p);
     if (s == VV_ERR_UNSUPPORTED)
-        skip();
+        vt_skip("the build has no NetCDF (libnetcdf-dev)");
     assert_true(s < 0);
     assert_null(g);
     printf("  nocoords.nc: %s\n", vv_error_message());
     assert_non_null(strstr(vv_error_message(), "no coordinate variable"));
 #else
-    skip();
+    vt_skip("the test program was built without NetCDF (libnetcdf-dev)");
 #endif
 }
 
@@ -715,5 +715,5 @@ main(void) {
         cmocka_unit_test(test_netcdf_without_coordinates),
         cmocka_unit_test(test_scene_grid_object),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

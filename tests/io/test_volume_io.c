@@ -288,5 +288,5 @@ main(void) {
         cmocka_unit_test(test_load_errors),     cmocka_unit_test(test_load_raw),
         cmocka_unit_test(test_save_reload),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -763,5 +763,5 @@ main(void) {
         cmocka_unit_test(test_geometry_objects), cmocka_unit_test(test_render_settings),
         cmocka_unit_test(test_writer_text),
     };
-    return cmocka_run_group_tests(tests, setup, NULL);
+    return vt_run_tests(tests, setup, NULL);
 }
