@@ -33,6 +33,7 @@
 #include "core/internal.h"
 #include "io/dicom.h"
 #include "volvis/io.h"
+#include "volvis/sys/format.h"
 
 int
 vv_dicom_sniff(const char *path) {
@@ -1082,3 +1083,70 @@ vv_dicom_read_files(vv_volume **out, const char *const *files, int n, int series
 }
 
 #endif
+
+/* ---- the format record ------------------------------------------------------ */
+
+/* A folder holding a DICOMDIR or a DICOM file, among its first 4096 files
+ * and, at @p depth 0, in its subfolders. */
+static int
+dicom_folder(const char *path, int depth) {
+    DIR *d = opendir(path);
+    if (!d)
+        return 0;
+    int dicom = 0, looked = 0;
+    struct dirent *e;
+    while (!dicom && looked < 4096 && (e = readdir(d))) {
+        if (e->d_name[0] == '.')
+            continue;
+        size_t len = strlen(path) + strlen(e->d_name) + 2;
+        char *p = malloc(len);
+        if (!p)
+            break;
+        snprintf(p, len, "%s/%s", path, e->d_name);
+        struct stat st;
+        if (stat(p, &st) == 0) {
+            if (S_ISDIR(st.st_mode)) {
+                dicom = depth < 1 && dicom_folder(p, depth + 1);
+            } else if (S_ISREG(st.st_mode)) {
+                looked++;
+                dicom =
+                    !strcasecmp(e->d_name, "DICOMDIR") || vv_format_detect(p) == VV_FORMAT_DICOM;
+            }
+        }
+        free(p);
+    }
+    closedir(d);
+    return dicom;
+}
+
+/* "DICM" after the 128-byte preamble, a folder of DICOM files; at @p deep
+ * 1 a file without the preamble (old ACR-NEMA style) whose first element
+ * reads as DICOM. */
+static int
+dicom_looks_like(const vv_format_probe *p, int deep) {
+    if (p->is_dir)
+        return !deep && dicom_folder(p->path, 0);
+    if (!deep)
+        return p->n >= 132 && !memcmp(p->head + 128, "DICM", 4);
+    return p->n > 0 && vv_dicom_sniff(p->path);
+}
+
+static vv_status
+dicom_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
+    return vv_dicom_read(out, path, opt->series, opt->channel);
+}
+
+static const char *const dicom_extensions[] = {"dcm", NULL};
+static const char *const dicom_aliases[] = {"dcm", NULL};
+
+const vv_volume_format vv_volume_format_dicom = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "dicom",
+    .title = "DICOM",
+    .extensions = dicom_extensions,
+    .aliases = dicom_aliases,
+    .doc = "DICOM series through GDCM: folders, DICOMDIR, multi-frame, compressed syntaxes",
+    .flags = VV_FORMAT_FLAG_THIRD_PARTY | VV_FORMAT_FLAG_FOLDER,
+    .looks_like = dicom_looks_like,
+    .read = dicom_read_record,
+};

@@ -21,6 +21,7 @@
 
 #include "io/grid_io_internal.h"
 #include "volvis/grid.h"
+#include "volvis/sys/format.h"
 
 #ifdef VV_HAVE_NETCDF
 #include <netcdf.h>
@@ -292,3 +293,31 @@ vv_grid_read_netcdf(vv_grid **out, const char *path) {
 }
 
 #endif
+
+/* ---- the format record ------------------------------------------------------ */
+
+/* NetCDF classic ("CDF" and version 1, 2 or 5), or NetCDF-4 (an HDF5 file)
+ * named .nc or .cdf. */
+static int
+netcdf_looks_like(const vv_format_probe *p, int deep) {
+    const unsigned char *h = p->head;
+    if (deep || p->n < 4)
+        return 0;
+    if (!memcmp(h, "CDF", 3) && (h[3] == 1 || h[3] == 2 || h[3] == 5))
+        return 1;
+    return p->n >= 8 && !memcmp(h, "\x89HDF\r\n\x1a\n", 8) &&
+           (vv_format_path_has_ext(p->path, "nc") || vv_format_path_has_ext(p->path, "cdf"));
+}
+
+static const char *const netcdf_extensions[] = {"nc", "cdf", NULL};
+
+const vv_grid_format_record vv_grid_format_netcdf = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "netcdf",
+    .title = "NetCDF",
+    .extensions = netcdf_extensions,
+    .doc = "NetCDF (CF conventions) through libnetcdf: cells on longitude, latitude, depth",
+    .flags = VV_FORMAT_FLAG_THIRD_PARTY,
+    .looks_like = netcdf_looks_like,
+    .read = vv_grid_read_netcdf,
+};

@@ -20,6 +20,7 @@
 #include "core/internal.h"
 #include "io/grid_io_internal.h"
 #include "volvis/grid.h"
+#include "volvis/sys/format.h"
 
 #define VTU_FILE_MAX (4ull << 30)
 
@@ -619,3 +620,23 @@ done:
     }
     return vv_grid_finish(g, path, out);
 }
+
+/* ---- the format record ------------------------------------------------------ */
+
+static int
+vtu_looks_like(const vv_format_probe *p, int deep) {
+    return !deep && strstr(p->text, "<VTKFile") && strstr(p->text, "UnstructuredGrid");
+}
+
+static const char *const vtu_extensions[] = {"vtu", NULL};
+
+const vv_grid_format_record vv_grid_format_vtu = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "vtu",
+    .title = ".vtu",
+    .extensions = vtu_extensions,
+    .doc = "VTK XML UnstructuredGrid through libxml2: inline or appended, base64, zlib",
+    .flags = VV_FORMAT_FLAG_THIRD_PARTY,
+    .looks_like = vtu_looks_like,
+    .read = vv_grid_read_vtu,
+};

@@ -37,6 +37,7 @@
 
 #include "core/internal.h"
 #include "volvis/io.h"
+#include "volvis/sys/format.h"
 
 /* The first message libtiff reported for one open file. */
 typedef struct tiff_msg {
@@ -652,3 +653,64 @@ vv_tiff_read(vv_volume **out, const char *path, int channel) {
     free_list(files, n);
     return s;
 }
+
+/* ---- the format record ------------------------------------------------------ */
+
+/* A folder holding a TIFF file (among its first 4096 files). */
+static int
+tiff_folder(const char *path) {
+    DIR *d = opendir(path);
+    if (!d)
+        return 0;
+    int found = 0, looked = 0;
+    struct dirent *e;
+    while (!found && looked < 4096 && (e = readdir(d))) {
+        if (e->d_name[0] == '.')
+            continue;
+        size_t len = strlen(path) + strlen(e->d_name) + 2;
+        char *p = malloc(len);
+        if (!p)
+            break;
+        snprintf(p, len, "%s/%s", path, e->d_name);
+        struct stat st;
+        if (stat(p, &st) == 0 && S_ISREG(st.st_mode)) {
+            looked++;
+            found = vv_format_detect(p) == VV_FORMAT_TIFF;
+        }
+        free(p);
+    }
+    closedir(d);
+    return found;
+}
+
+/* TIFF and BigTIFF in either byte order; a folder of TIFF pages only at
+ * @p deep 1, so that a folder with a DICOM file in it is DICOM. */
+static int
+tiff_looks_like(const vv_format_probe *p, int deep) {
+    if (p->is_dir)
+        return deep && tiff_folder(p->path);
+    const unsigned char *h = p->head;
+    return !deep && p->n >= 4 &&
+           (!memcmp(h, "II*\0", 4) || !memcmp(h, "MM\0*", 4) || !memcmp(h, "II+\0", 4) ||
+            !memcmp(h, "MM\0+", 4));
+}
+
+static vv_status
+tiff_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
+    return vv_tiff_read(out, path, opt->channel);
+}
+
+static const char *const tiff_extensions[] = {"tif", "tiff", NULL};
+static const char *const tiff_aliases[] = {"tif", NULL};
+
+const vv_volume_format vv_volume_format_tiff = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "tiff",
+    .title = "TIFF",
+    .extensions = tiff_extensions,
+    .aliases = tiff_aliases,
+    .doc = "TIFF through libtiff: pages or a folder of pages, BigTIFF, OME-TIFF, ImageJ",
+    .flags = VV_FORMAT_FLAG_THIRD_PARTY | VV_FORMAT_FLAG_FOLDER,
+    .looks_like = tiff_looks_like,
+    .read = tiff_read_record,
+};

@@ -15,6 +15,7 @@
 
 #include "core/internal.h"
 #include "volvis/io.h"
+#include "volvis/sys/format.h"
 
 #define VTK_LINE_MAX 1024
 #define VTK_TOKEN_MAX 256
@@ -359,3 +360,33 @@ vv_vtk_read(vv_volume **out, const char *path) {
         return vv_error_prefix(s, "vtk: %s", name);
     return VV_OK;
 }
+
+/* ---- the format record ------------------------------------------------------ */
+
+static int
+vtk_looks_like(const vv_format_probe *p, int deep) {
+    if (deep || p->is_dir)
+        return 0;
+    size_t i = 0;
+    while (i < p->n && isspace(p->head[i]))
+        i++;
+    return p->n - i >= 14 && !memcmp(p->head + i, "# vtk DataFile", 14);
+}
+
+static vv_status
+vtk_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
+    (void)opt;
+    return vv_vtk_read(out, path);
+}
+
+static const char *const vtk_extensions[] = {"vtk", NULL};
+
+const vv_volume_format vv_volume_format_vtk = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "vtk",
+    .title = "VTK legacy",
+    .extensions = vtk_extensions,
+    .doc = "VTK legacy STRUCTURED_POINTS, binary or ASCII: the first SCALARS array",
+    .looks_like = vtk_looks_like,
+    .read = vtk_read_record,
+};

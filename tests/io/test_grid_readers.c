@@ -11,6 +11,7 @@
 #include <zlib.h>
 
 #include "testutil.h"
+#include "volvis/sys/format.h"
 
 #if defined(__has_include)
 #if __has_include(<netcdf.h>)
@@ -699,9 +700,50 @@ test_netcdf_without_coordinates(void **state) {
 #endif
 }
 
+/* The grid format table: complete records in the order of vv_grid_format,
+ * and every shared grid file detected as its format (volume files not). */
+static void
+test_format_table(void **state) {
+    (void)state;
+    int n = 0;
+    const vv_grid_format_record *const *t = vv_grid_format_table(&n);
+    assert_int_equal(n, VV_GRID_FORMAT_NETCDF);
+    static const char *const names[] = {"vtk", "vtu", "dx", "plot3d", "netcdf"};
+    for (int i = 0; i < n; i++) {
+        assert_int_equal(t[i]->version, VV_FORMAT_RECORD_VERSION);
+        assert_string_equal(t[i]->name, names[i]);
+        assert_non_null(t[i]->title);
+        assert_true(strlen(t[i]->doc) > 20);
+        assert_non_null(t[i]->looks_like);
+        assert_non_null(t[i]->read);
+    }
+    if (!have_data())
+        vt_skip("../shared/data/grids is missing");
+    static const struct {
+        const char *file;
+        vv_grid_format f;
+    } files[] = {{"grids/hyper.dx", VV_GRID_FORMAT_DX},
+                 {"grids/fire_ug.vtu", VV_GRID_FORMAT_VTU},
+                 {"grids/bluntfinxyz.bin", VV_GRID_FORMAT_PLOT3D},
+                 {"grids/combxyz.bin", VV_GRID_FORMAT_PLOT3D},
+                 {"grids/blow.vtk", VV_GRID_FORMAT_VTK},
+                 {"grids/levitus_climatology.cdf", VV_GRID_FORMAT_NETCDF}};
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        vv_grid_format f = VV_GRID_FORMAT_AUTO;
+        if (!vv_grid_file_detect(vt_data(files[i].file), &f) || f != files[i].f)
+            fail_msg("%s detected as %d, expected %d", files[i].file, (int)f, (int)files[i].f);
+    }
+    vv_grid_format f = VV_GRID_FORMAT_VTK;
+    assert_false(vv_grid_file_detect(vt_data("volumes/ironProt.vtk"), &f)); /* structured points */
+    assert_int_equal(f, VV_GRID_FORMAT_AUTO);
+    assert_false(vv_grid_file_detect(vt_data("volumes/nut.slc"), NULL));
+    assert_false(vv_grid_file_detect(vt_data("grids"), NULL)); /* a folder */
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_format_table),
         cmocka_unit_test(test_hyper_dx),
         cmocka_unit_test(test_fire_vtu),
         cmocka_unit_test(test_blow_vtk),
