@@ -399,30 +399,12 @@ parse_mode(const sctx *c, const char *op, const char *s, vv_render_mode *out) {
                          s);
 }
 
-/* Object fields other than the volume source (file, origin, spacing). */
-vv_status
-vv_scene_parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
+/* "rotation" (axis-angle, degrees) or "orientation" (a quaternion), not both. */
+static vv_status
+parse_orientation(const sctx *c, json_t *e, const char *op, vv_object *o) {
     vv_status st;
     char kp[PATH_MAX_LEN];
-    const char *mode = NULL;
-    int has_iso, has_rot, has_ori;
-    if ((st = vv_scene_get_string(c, e, op, "mode", &mode)) != VV_OK)
-        return st;
-    if (mode && (st = parse_mode(c, op, mode, &o->mode)) != VV_OK)
-        return st;
-    if ((st = vv_scene_get_number(c, e, op, "isovalue", &o->isovalue, &has_iso)) != VV_OK ||
-        (st = vv_scene_get_number_in(c, e, op, "step", &o->step, NULL, 0, 1, INFINITY, 1)) !=
-            VV_OK ||
-        (st = vv_scene_get_bool(c, e, op, "shading", &o->shading)) != VV_OK ||
-        (st = vv_scene_get_bool(c, e, op, "visible", &o->visible)) != VV_OK ||
-        (st = vv_scene_get_vec3(c, e, op, "position", &o->position, NULL)) != VV_OK)
-        return st;
-    if (o->mode == VV_MODE_ISO && !has_iso) {
-        vv_scene_path_key(kp, op, "mode");
-        return vv_scene_serr(c, kp, "mode \"iso\" needs an \"isovalue\"");
-    }
-
-    /* rotation (axis-angle, degrees) or orientation (quaternion) */
+    int has_rot, has_ori;
     json_t *rot;
     if ((st = vv_scene_get_object(c, e, op, "rotation", &rot)) != VV_OK)
         return st;
@@ -470,7 +452,14 @@ vv_scene_parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object
         o->orientation = (vv_quat){d[0] / n, d[1] / n, d[2] / n, d[3] / n};
     }
 
-    /* scale: a number (uniform) or [sx, sy, sz], all > 0 */
+    return VV_OK;
+}
+
+/* "scale": a number (uniform) or [sx, sy, sz], all > 0. */
+static vv_status
+parse_scale(const sctx *c, json_t *e, const char *op, vv_object *o) {
+    vv_status st;
+    char kp[PATH_MAX_LEN];
     json_t *sc = json_object_get(e, "scale");
     if (sc) {
         vv_scene_path_key(kp, op, "scale");
@@ -486,7 +475,15 @@ vv_scene_parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object
         o->scale = s;
     }
 
-    /* segmentation: a transfer function (1-D or 2-D) or a threshold */
+    return VV_OK;
+}
+
+/* The segmentation (a 1-D or 2-D transfer function, a threshold, labels),
+ * the textures, the material and the local cut planes. */
+static vv_status
+parse_segmentation(const sctx *c, json_t *e, const char *op, vv_object *o) {
+    vv_status st;
+    char kp[PATH_MAX_LEN];
     json_t *tfj, *seg = NULL, *mat, *cuts, *tf2j, *texj, *soj;
     const char *seg_name = NULL;
     json_t *segv = json_object_get(e, "segmentation");
@@ -574,4 +571,31 @@ vv_scene_parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object
             return st;
     }
     return VV_OK;
+}
+
+/* Object fields other than the volume source (file, origin, spacing). */
+vv_status
+vv_scene_parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
+    vv_status st;
+    char kp[PATH_MAX_LEN];
+    const char *mode = NULL;
+    int has_iso;
+    if ((st = vv_scene_get_string(c, e, op, "mode", &mode)) != VV_OK)
+        return st;
+    if (mode && (st = parse_mode(c, op, mode, &o->mode)) != VV_OK)
+        return st;
+    if ((st = vv_scene_get_number(c, e, op, "isovalue", &o->isovalue, &has_iso)) != VV_OK ||
+        (st = vv_scene_get_number_in(c, e, op, "step", &o->step, NULL, 0, 1, INFINITY, 1)) !=
+            VV_OK ||
+        (st = vv_scene_get_bool(c, e, op, "shading", &o->shading)) != VV_OK ||
+        (st = vv_scene_get_bool(c, e, op, "visible", &o->visible)) != VV_OK ||
+        (st = vv_scene_get_vec3(c, e, op, "position", &o->position, NULL)) != VV_OK)
+        return st;
+    if (o->mode == VV_MODE_ISO && !has_iso) {
+        vv_scene_path_key(kp, op, "mode");
+        return vv_scene_serr(c, kp, "mode \"iso\" needs an \"isovalue\"");
+    }
+    if ((st = parse_orientation(c, e, op, o)) != VV_OK || (st = parse_scale(c, e, op, o)) != VV_OK)
+        return st;
+    return parse_segmentation(c, e, op, o);
 }
