@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages VolVis needs, only those that are missing.
 # Safe to run again. Usage: scripts/install-deps.sh [build|demo|test|fuzz|bench]...
-#   build  compiler, CMake and the libraries (always included; Open MPI for src/parallel)
+#   build  compiler, CMake and the libraries (always included; Open MPI for src/parallel;
+#          python3-dev, python3-cffi and python3-numpy for the Python package)
 #   demo   mricron-data (the real MRI head used by the quick-start demo)
 #   test   cmocka, ffmpeg (ffprobe checks the videos); Xvfb, xdotool and ImageMagick for the GUI tests;
+#          pytest, tqdm, ipywidgets, ipykernel and nbconvert (the Python package's tests and notebook);
 #          pydicom (writes the DICOM test series, and its test files), nibabel (its Siemens MR
 #          slices) and gdcmconv (compresses them); SciPy and Teem's unu (the filters' references)
 #   fuzz   clang-14, libFuzzer and LLVM's OpenMP (the fuzz and tsan presets); Teem's tools,
@@ -14,12 +16,14 @@ set -euo pipefail
 pkgs=(build-essential cmake pkg-config libteem-dev libnifti2-dev libjansson-dev
       libpng-dev zlib1g-dev libassimp-dev libfftw3-dev libcairo2-dev libgtk-4-dev
       libspnav-dev libsdl2-dev libxml2-dev libnetcdf-dev libavformat-dev libavcodec-dev
-      libswscale-dev libavutil-dev libtiff-dev libgdcm-dev libopenmpi-dev openmpi-bin)
+      libswscale-dev libavutil-dev libtiff-dev libgdcm-dev libopenmpi-dev openmpi-bin
+      python3-dev python3-cffi python3-numpy)
 for what in "$@"; do
   case "$what" in
     build) ;;
     demo) pkgs+=(mricron-data) ;;
-    test) pkgs+=(libcmocka-dev ffmpeg xvfb xauth xdotool imagemagick python3-pydicom python3-nibabel libgdcm-tools python3-scipy teem-apps) ;;
+    test) pkgs+=(libcmocka-dev ffmpeg xvfb xauth xdotool imagemagick python3-pydicom python3-nibabel libgdcm-tools python3-scipy teem-apps
+                 python3-pytest python3-tqdm python3-ipywidgets python3-ipykernel jupyter-nbconvert) ;;
     fuzz) pkgs+=(clang-14 libfuzzer-14-dev libomp-14-dev teem-apps imagemagick libgdcm-tools python3-vtk9 python3-numpy python3-pydicom) ;;
     bench) pkgs+=(python3-vtk9 python3-numpy python3-pydicom xvfb libgl1-mesa-dri teem-apps zfp) ;;
     *) echo "install-deps.sh: unknown group '$what' (build, demo, test, fuzz, bench)" >&2; exit 2 ;;

@@ -10,4 +10,7 @@ input=/usr/share/mricron/templates/ch2.nii.gz
 mkdir -p out
 ./build/release/volvis info "$input"
 ./build/release/volvis render "$input" -o out/ch2.png --size 512x512 --azimuth 30 --elevation 15
+# the library and the Python package, so /usr/bin/python3 -c "import volvis" works (docs/python.md)
+cmake --install build/release --prefix /usr/local >/dev/null
+ldconfig 2>/dev/null || true
 echo "output: $(pwd)/out/ch2.png"

@@ -101,6 +101,10 @@ typedef struct vv_volume {
     vv_space space;    /**< anatomical frame of world coordinates, if known */
     uint64_t modified; /**< bumped on each change, for caches */
     int refcount;      /**< use vv_volume_ref / vv_volume_free */
+    /** Who releases data at the last vv_volume_free: NULL (the library's own
+        allocation, free()), else a callback (vv_volume_wrap). */
+    void (*release)(void *user, void *data);
+    void *release_user; /**< passed to release */
 } vv_volume;
 
 /**
@@ -140,10 +144,31 @@ vv_status vv_volume_check_size(const int dims[3], vv_voxel_type t, uint64_t *byt
  */
 vv_status vv_volume_new(vv_volume **out, const int dims[3], vv_voxel_type t);
 
+/**
+ * A volume over voxels the caller owns (no copy): @p data holds
+ * dims[0]*dims[1]*dims[2] voxels of type @p t, i fastest, and must stay valid
+ * and unmoved until the volume's last reference is dropped, when
+ * @p release(@p user, @p data) is called (release may be NULL: the caller
+ * frees the memory some other way after the last vv_volume_free). Geometry
+ * and metadata are the defaults of vv_volume_new; range[] is computed
+ * (vv_volume_update_range). The library only reads the voxels; whoever
+ * changes them calls vv_volume_update_range afterwards so that caches see
+ * the change. Used by the Python package to share a numpy array's memory.
+ * The release callback may run on any thread that drops the last reference
+ * (a renderer's cache, a World). Errors: VV_ERR_INVALID (NULL data),
+ * VV_ERR_LIMIT (see vv_volume_check_size), VV_ERR_NOMEM; on failure release
+ * is not called.
+ */
+vv_status vv_volume_wrap(vv_volume **out, const int dims[3], vv_voxel_type t, void *data,
+                         void (*release)(void *user, void *data), void *user);
+
 /** Adds a reference; returns @p v. */
 vv_volume *vv_volume_ref(vv_volume *v);
 
-/** Drops a reference; frees at zero. Accepts NULL. */
+/**
+ * Drops a reference; frees at zero (the voxels by free(), or by the release
+ * callback of a vv_volume_wrap volume). Accepts NULL.
+ */
 void vv_volume_free(vv_volume *v);
 
 /** Number of voxels. */

@@ -141,6 +141,42 @@ vv_volume_new(vv_volume **out, const int dims[3], vv_voxel_type t) {
     return VV_OK;
 }
 
+/* The release of a wrapped volume whose caller frees the voxels itself. */
+static void
+release_nothing(void *user, void *data) {
+    (void)user;
+    (void)data;
+}
+
+vv_status
+vv_volume_wrap(vv_volume **out, const int dims[3], vv_voxel_type t, void *data,
+               void (*release)(void *user, void *data), void *user) {
+    *out = NULL;
+    if (!data)
+        return vv_error_set(VV_ERR_INVALID, "vv_volume_wrap: no voxel data");
+    vv_status s = vv_volume_check_size(dims, t, NULL);
+    if (s != VV_OK)
+        return s;
+    vv_volume *v = calloc(1, sizeof *v);
+    if (!v)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    memcpy(v->dims, dims, sizeof v->dims);
+    for (int a = 0; a < 3; a++)
+        v->spacing[a] = 1.0;
+    v->direction[0] = v->direction[4] = v->direction[8] = 1.0;
+    v->type = t;
+    v->data = data;
+    v->unit = VV_UNIT_UNKNOWN;
+    v->data_origin = VV_ORIGIN_OTHER;
+    v->modification = VV_MOD_ORIGINAL;
+    v->refcount = 1;
+    v->release = release ? release : release_nothing;
+    v->release_user = user;
+    vv_volume_update_range(v);
+    *out = v;
+    return VV_OK;
+}
+
 vv_volume *
 vv_volume_ref(vv_volume *v) {
     if (v)
@@ -154,7 +190,10 @@ vv_volume_free(vv_volume *v) {
         return;
     if (atomic_fetch_sub_explicit((_Atomic int *)&v->refcount, 1, memory_order_acq_rel) > 1)
         return;
-    free(v->data);
+    if (v->release)
+        v->release(v->release_user, v->data);
+    else
+        free(v->data);
     free(v);
 }
 

@@ -1,0 +1,243 @@
+"""Rendering: the renderer registry, persistent renderers and
+``volvis.render``.
+
+Every rendering method of the library is listed in ``volvis.renderers``
+(a mapping name -> :class:`RendererInfo`; ``help(volvis.renderers["raytrace"])``
+lists its options). :func:`render` draws a World or a Volume into a numpy
+array; a :class:`Renderer` keeps its per-volume caches (gradients,
+subvolume min/max) between frames, as the library's renderers do.
+"""
+import threading
+
+import numpy as np
+
+from . import _lib
+from ._lib import check, cstr, ffi, lib, pystr
+from .errors import InvalidError
+from .volume import Volume, _sync_shared
+from .world import World, mode_code
+
+__all__ = ["Renderer", "RendererInfo", "renderers", "render", "Image", "option_text"]
+
+
+def option_text(value):
+    """A renderer option value as the library takes it: booleans "1"/"0",
+    numbers with as few digits as read back the same double (as scene files
+    store them), strings as they are."""
+    if isinstance(value, (bool, np.bool_)):
+        return "1" if value else "0"
+    if isinstance(value, (int, np.integer)):
+        return str(int(value))
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        s = "%.15g" % v
+        return s if float(s) == v else "%.17g" % v
+    if isinstance(value, str):
+        return value
+    if hasattr(value, "__fspath__"):
+        return value.__fspath__()
+    raise InvalidError("renderer option: cannot pass a %s as text" % type(value).__name__)
+
+
+class RendererInfo:
+    """A rendering method of the registry: ``name``, ``description`` and
+    ``options`` (the method's option text, as ``volvis render --help`` prints
+    it). Calling it makes a :class:`Renderer`."""
+
+    def __init__(self, ops):
+        self.name = pystr(ops.name)
+        self.description = pystr(ops.description)
+        self.options = pystr(ops.options) if ops.options != ffi.NULL else ""
+        self.__doc__ = "%s: %s\n\nOptions (volvis.render(..., KEY=VALUE) or Renderer(%r, " \
+            "KEY=VALUE)):\n\n%s\n" % (self.name, self.description, self.name,
+                                       self.options or "(none)")
+
+    def __call__(self, **options):
+        return Renderer(self.name, **options)
+
+    def __repr__(self):
+        return "<volvis renderer %r: %s>" % (self.name, self.description)
+
+
+class _Registry(dict):
+    """name -> RendererInfo of every method built into the library."""
+
+    def __repr__(self):
+        return "volvis.renderers(%s)" % ", ".join(self)
+
+
+def _registry():
+    reg = _Registry()
+    ops = lib.vv_renderer_registry()
+    i = 0
+    while ops[i] != ffi.NULL:
+        info = RendererInfo(ops[i])
+        reg[info.name] = info
+        i += 1
+    return reg
+
+
+#: Every rendering method of the library, name -> RendererInfo.
+renderers = _registry()
+
+
+class Image(np.ndarray):
+    """A rendered image: a numpy array of shape (h, w, 4) (uint8 or float32
+    RGBA, row 0 at the top) that Jupyter shows inline (``_repr_png_``)."""
+
+    def _repr_png_(self):
+        if self.ndim != 3 or self.shape[2] not in (3, 4):
+            return None
+        from .notebook import png_bytes
+        return png_bytes(np.asarray(self))
+
+
+class Renderer:
+    """A renderer of the library (vv_renderer) that keeps its caches between
+    renders: ``Renderer("raycast", early_termination=0.99)``.
+
+    Options are the method's (``help(volvis.renderers[name])``), set with
+    vv_renderer_set_option; an unknown key or a bad value raises
+    :class:`volvis.InvalidError` with the library's message. One Renderer
+    must not render from two threads at once; use one per thread."""
+
+    def __init__(self, name="raycast", **options):
+        out = ffi.new("vv_renderer **")
+        check(lib.vv_renderer_new(out, cstr(name)))
+        self._c = ffi.gc(out[0], lib.vv_renderer_free)
+        self._lock = threading.Lock()
+        self.set(**options)
+
+    @classmethod
+    def _own(cls, ptr):
+        r = cls.__new__(cls)
+        r._c = ffi.gc(ptr, lib.vv_renderer_free)
+        r._lock = threading.Lock()
+        return r
+
+    @property
+    def name(self):
+        """The method's registry name."""
+        return pystr(lib.vv_renderer_name(self._c))
+
+    def set(self, **options):
+        """Sets options (vv_renderer_set_option). Returns self."""
+        for k, v in options.items():
+            check(lib.vv_renderer_set_option(self._c, cstr(k), cstr(option_text(v))))
+        return self
+
+    def render(self, scene, **kw):
+        """Renders like :func:`render` with this renderer (its options set
+        before stay; ``**kw`` as there)."""
+        return render(scene, renderer=self, **kw)
+
+    def __repr__(self):
+        return "<volvis.Renderer %r>" % self.name
+
+
+def _apply_mode(world, mode):
+    code = mode_code(mode)
+    for i in range(world._c.n_objects):
+        o = world._c.objects[i]
+        if o.type in (lib.VV_OBJECT_VOLUME, lib.VV_OBJECT_GRID):
+            o.mode = code
+
+
+def render(scene, renderer=None, mode=None, size=None, quality=None, view=None, dtype=np.uint8,
+           depth=False, gamma=1.0, alpha=True, threads=0, progress=None, **options):
+    """Renders a World or a Volume and returns the image as a numpy array.
+
+    scene: a :class:`World`, a :class:`Volume` or a numpy array (shown in
+    the default scene of ``volvis render FILE``, World.for_volume).
+    renderer: a registry name (``volvis.renderers``), a :class:`Renderer`
+    (keeps its caches between calls), or None: the World's render settings,
+    else "raycast". mode: "composite", "mip", "minip", "xray" or "iso" for
+    every volume and grid object (on a snapshot; the World is unchanged).
+    size: (width, height) in pixels, default the view's. quality: 0 draft ..
+    2 final (default the World's, else 2). view: a :class:`View` in place of
+    the World's. options: renderer options (KEY=VALUE, after the World's).
+
+    Returns an :class:`Image` (a numpy array) of shape (h, w, 4): uint8 RGBA
+    (``round(255 * v^(1/gamma))``; ``alpha=False``: (h, w, 3) RGB) for
+    ``dtype=np.uint8``, or the library's float32 RGBA for
+    ``dtype=np.float32``; with ``depth=True`` a pair (image, depth), depth a
+    float32 (h, w) array of world distances from the eye (inf where nothing
+    was hit). Row 0 is the top.
+
+    The library renders with the GIL released, on ``threads`` threads (0:
+    all cores). progress: None, True (a tqdm bar when tqdm is installed), a
+    callable f(fraction) (returning True cancels: CancelledError) or a tqdm
+    bar. Ctrl+C cancels the render and raises KeyboardInterrupt. A numpy
+    array a volume shares is checked for writes first (see Volume).
+    Errors: InvalidError (unknown renderer or option, bad size), NoMemoryError,
+    and the renderer's own errors, with the library's message."""
+    dtype = np.dtype(dtype)
+    if dtype not in (np.dtype(np.uint8), np.dtype(np.float32)):
+        raise InvalidError("render: dtype must be uint8 or float32, got %s" % dtype)
+    if isinstance(scene, World):
+        world = scene
+    elif isinstance(scene, (Volume, np.ndarray)):
+        world = World.for_volume(scene, mode=mode or "composite", size=size)
+        mode = None
+    else:
+        raise InvalidError("render: expected a World, a Volume or an array, got %s"
+                           % type(scene).__name__)
+    if mode is not None:
+        world = world.clone()
+        _apply_mode(world, mode)
+    wc = world._c
+    for i in range(wc.n_objects):
+        o = wc.objects[i]
+        if o.volume != ffi.NULL:
+            _sync_shared(o.volume)
+        if o.solid_texture.volume != ffi.NULL:
+            _sync_shared(o.solid_texture.volume)
+    rs = ffi.addressof(wc, "render")
+    if renderer is None:
+        renderer = pystr(lib.vv_render_settings_renderer(rs))
+    if isinstance(renderer, Renderer):
+        r = renderer
+        if options:
+            r.set(**options)
+    else:
+        r = Renderer(renderer)
+        if pystr(lib.vv_render_settings_renderer(rs)) == r.name:
+            check(lib.vv_renderer_apply_settings(r._c, rs))
+        r.set(**options)
+    vc = ffi.new("vv_view *", (view._c[0] if view is not None else wc.view))
+    if size is not None:
+        w, h = int(size[0]), int(size[1])
+        if not (1 <= w <= lib.VV_IMAGE_MAX_SIDE and 1 <= h <= lib.VV_IMAGE_MAX_SIDE):
+            raise InvalidError("render: size %dx%d is outside 1..%d" % (w, h,
+                                                                        lib.VV_IMAGE_MAX_SIDE))
+        vc.width, vc.height = w, h
+    img = ffi.new("vv_image **")
+    check(lib.vv_image_new(img, vc.width, vc.height))
+    img = ffi.gc(img[0], lib.vv_image_free)
+    ro = ffi.new("vv_render_options *")
+    lib.vv_render_options_init(ro)
+    ro.threads = int(threads)
+    ro.quality = lib.vv_render_settings_quality(rs) if quality is None else int(quality)
+    if not 0 <= ro.quality <= 2:
+        raise InvalidError("render: quality %d is outside 0..2" % ro.quality)
+
+    def run(prog):
+        ro.progress = prog
+        return lib.vv_renderer_render(r._c, wc, vc, ro, img)
+
+    with r._lock:
+        _lib.call_long(run, progress, desc="render")
+    hgt, wid = vc.height, vc.width
+    if dtype == np.uint8:
+        ch = 4 if alpha else 3
+        out = np.empty((hgt, wid, ch), dtype=np.uint8)
+        lib.vv_image_to_8bit(img, ch, float(gamma), ffi.from_buffer("uint8_t[]", out))
+    else:
+        out = np.frombuffer(ffi.buffer(img.rgba, 16 * wid * hgt),
+                            dtype=np.float32).reshape(hgt, wid, 4).copy()
+    out = out.view(Image)
+    if depth:
+        d = np.frombuffer(ffi.buffer(img.depth, 4 * wid * hgt),
+                          dtype=np.float32).reshape(hgt, wid).copy()
+        return out, d
+    return out

@@ -1,0 +1,63 @@
+"""Shared fixtures of the Python package's tests (tests/python).
+
+Run by CTest (test_python) with PYTHONPATH=build/<preset>/python; by hand:
+PYTHONPATH=build/release/python /usr/bin/python3 -m pytest tests/python
+"""
+import os
+import pathlib
+import shutil
+import sys
+
+import numpy as np
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+DATA = ROOT.parent / "shared" / "data"
+if not DATA.exists():
+    DATA = ROOT / ".." / "shared" / "data"
+
+if not any(pathlib.Path(p, "volvis").exists() for p in sys.path if p):
+    for preset in ("release", "asan", "debug"):
+        cand = ROOT / "build" / preset / "python"
+        if (cand / "volvis").exists():
+            sys.path.insert(0, str(cand))
+            break
+
+import volvis  # noqa: E402
+
+SANITIZER = bool(os.environ.get("VV_SANITIZER"))
+
+
+def cli():
+    """The volvis CLI of this build (VV_CLI from CTest, else the tree's)."""
+    env = os.environ.get("VV_CLI")
+    if env and os.path.exists(env):
+        return env
+    for preset in ("release", "asan", "debug"):
+        p = ROOT / "build" / preset / "volvis"
+        if p.exists():
+            return str(p)
+    return shutil.which("volvis")
+
+
+@pytest.fixture
+def out_dir(tmp_path):
+    return tmp_path
+
+
+@pytest.fixture(scope="session")
+def ct_head():
+    return volvis.open(DATA / "volumes" / "ct_head.nrrd")
+
+
+def data(*parts):
+    return DATA.joinpath(*parts)
+
+
+def read_png(path):
+    return volvis.read_png(path)
+
+
+@pytest.fixture
+def rng():
+    return np.random.default_rng(1234)
