@@ -11,7 +11,7 @@ a function by hand; a call cannot).
     apps, python -> scene -> manipulate, parallel -> render, modeling, filter,
     measure, surface, compress, input, io, sandbox -> model -> core
 
-Rules (docs/architecture.md, "Layers"):
+Rules (docs/architecture.md, "Layers"; python/ and apps/ are programs):
 
 1. A file may include a public header (include/volvis/...) of its own
    component, of a sibling (same layer) or of any lower layer. Never of a
@@ -105,7 +105,8 @@ PENDING_CALLS = {
         "frame: the Fourier renderer through compress's published API",
 }
 
-INCLUDE_RE = re.compile(r'^[ \t]*#[ \t]*include[ \t]*"([^"]+)"', re.M)
+# "header", and <volvis/header> (the installed spelling, which the GUI uses)
+INCLUDE_RE = re.compile(r'^[ \t]*#[ \t]*include[ \t]*(?:"([^"]+)"|<(volvis/[^>]+)>)', re.M)
 SOURCE_EXT = (".c", ".h", ".cpp")
 
 
@@ -177,7 +178,7 @@ def check_one(rel, inc, target):
 
 def scan(root):
     files = []
-    for top in ("src", "apps", os.path.join("include", "volvis")):
+    for top in ("src", "apps", "python", os.path.join("include", "volvis")):
         for d, _, names in os.walk(os.path.join(root, top)):
             for n in names:
                 if n.endswith(SOURCE_EXT):
@@ -188,7 +189,7 @@ def scan(root):
         with open(os.path.join(root, rel), encoding="utf-8", errors="replace") as f:
             text = f.read()
         for m in INCLUDE_RE.finditer(text):
-            inc = m.group(1)
+            inc = m.group(1) or m.group(2)
             target = resolve(root, rel, inc)
             if target is None:
                 continue  # a generated header (vv_version.h) or a system one in quotes

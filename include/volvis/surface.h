@@ -213,8 +213,9 @@ void vv_coarse_free(vv_coarse_surface *c);
 double vv_mc_face_inside_area(const vv_volume *v, double isovalue, int axis, int pos,
                               const int lo[3], const int hi[3]);
 
-/** Receives one polygon of @p n (3..6) points in index coordinates (see below). */
-typedef void (*vv_mc_face_polygon_fn)(void *ctx, int n, const double (*pts)[3]);
+/** Receives one polygon of @p n (3..6) points in index coordinates (see
+ *  below): @p pts holds 3 * @p n doubles, x, y, z of each point in turn. */
+typedef void (*vv_mc_face_polygon_fn)(void *ctx, int n, const double *pts);
 
 /**
  * vv_mc_face_inside_area, and when @p emit is not NULL also the inside part
