@@ -137,8 +137,6 @@ int cli_ends_with(const char *s, const char *suffix);
 /** Prints the volume formats (and with @p grids the grid formats) of the
  *  format tables, one entry each with what it reads and writes. */
 void cli_print_formats(FILE *out, int grids);
-/** The format that writes the extension of @p path, or VV_FORMAT_UNKNOWN. */
-vv_format cli_output_format(const char *path);
 /** The names (or with @p extensions the ".ext"s) of the formats that write,
  *  joined by @p sep, into @p buf. */
 void cli_writable_formats(char *buf, size_t cap, const char *sep, int extensions);

@@ -138,7 +138,7 @@ cli_convert_main(int argc, char **argv) {
             return cli_usage_error(&a, "--format: cannot write '%s' (%s or vvb)", s, names);
     } else if (cli_ends_with(out, ".vvb")) {
         format = VV_FORMAT_AUTO;
-    } else if ((format = cli_output_format(out)) == VV_FORMAT_UNKNOWN) {
+    } else if ((format = vv_format_from_extension(out)) == VV_FORMAT_UNKNOWN) {
         cli_writable_formats(names, sizeof names, "|", 0);
         return cli_usage_error(&a,
                                "cannot tell the output format from '%s'; use --format "

@@ -296,17 +296,6 @@ cli_print_formats(FILE *out, int grids) {
     }
 }
 
-vv_format
-cli_output_format(const char *path) {
-    int n = 0;
-    const vv_volume_format *const *t = vv_volume_format_table(&n);
-    for (int i = 0; i < n; i++)
-        for (const char *const *e = t[i]->extensions; t[i]->write && e && *e; e++)
-            if (vv_format_path_has_ext(path, *e))
-                return (vv_format)(i + 1);
-    return VV_FORMAT_UNKNOWN;
-}
-
 void
 cli_writable_formats(char *buf, size_t cap, const char *sep, int extensions) {
     int n = 0, k = 0;

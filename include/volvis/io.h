@@ -118,6 +118,13 @@ void vv_load_options_init(vv_load_options *o);
  */
 vv_status vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt);
 
+/**
+ * The format that writes files with the extension of @p path (.slc, .nrrd,
+ * .nhdr: the extensions of the formats with a writer, case-insensitive), or
+ * VV_FORMAT_UNKNOWN.
+ */
+vv_format vv_format_from_extension(const char *path);
+
 /** Options for vv_volume_save_with. */
 typedef struct vv_save_options {
     vv_format format; /**< VV_FORMAT_AUTO: from the extension */

@@ -1133,37 +1133,16 @@ vv_dicom_read_files(vv_volume **out, const char *const *files, int n, int series
 
 /* ---- the format record ------------------------------------------------------ */
 
-/* A folder holding a DICOMDIR or a DICOM file, among its first 4096 files
- * and, at @p depth 0, in its subfolders. */
+/* A DICOMDIR or a DICOM file in a folder, or (at depth 0) in a subfolder:
+ * @p ctx points at the depth. */
 static int
-dicom_folder(const char *path, int depth) {
-    DIR *d = opendir(path);
-    if (!d)
-        return 0;
-    int dicom = 0, looked = 0;
-    struct dirent *e;
-    while (!dicom && looked < 4096 && (e = readdir(d))) {
-        if (e->d_name[0] == '.')
-            continue;
-        size_t len = strlen(path) + strlen(e->d_name) + 2;
-        char *p = malloc(len);
-        if (!p)
-            break;
-        snprintf(p, len, "%s/%s", path, e->d_name);
-        struct stat st;
-        if (stat(p, &st) == 0) {
-            if (S_ISDIR(st.st_mode)) {
-                dicom = depth < 1 && dicom_folder(p, depth + 1);
-            } else if (S_ISREG(st.st_mode)) {
-                looked++;
-                dicom =
-                    !strcasecmp(e->d_name, "DICOMDIR") || vv_format_detect(p) == VV_FORMAT_DICOM;
-            }
-        }
-        free(p);
+dicom_entry(const char *entry, const char *name, int is_dir, void *ctx) {
+    const int depth = *(const int *)ctx;
+    if (is_dir) {
+        int deeper = depth + 1;
+        return depth < 1 && vv_format_folder_any(entry, dicom_entry, &deeper);
     }
-    closedir(d);
-    return dicom;
+    return !strcasecmp(name, "DICOMDIR") || vv_format_detect(entry) == VV_FORMAT_DICOM;
 }
 
 /* "DICM" after the 128-byte preamble, a folder of DICOM files; at @p deep
@@ -1172,7 +1151,7 @@ dicom_folder(const char *path, int depth) {
 static int
 dicom_looks_like(const vv_format_probe *p, int deep) {
     if (p->is_dir)
-        return !deep && dicom_folder(p->path, 0);
+        return !deep && vv_format_folder_any(p->path, dicom_entry, &(int){0});
     if (!deep)
         return p->n >= 132 && !memcmp(p->head + 128, "DICM", 4);
     return p->n > 0 && vv_dicom_sniff(p->path);

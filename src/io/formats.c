@@ -6,8 +6,10 @@
  * (volume_io.c) and the lists in --help all read this table.
  */
 #include <ctype.h>
+#include <dirent.h>
 #include <errno.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 #include <sys/stat.h>
@@ -133,6 +135,38 @@ vv_format_probe_fill(vv_format_probe *p, const char *path, unsigned char *buf, c
         text[i] = buf[i] ? (char)buf[i] : ' ';
     text[n] = '\0';
     return err;
+}
+
+int
+vv_format_folder_any(const char *path,
+                     int (*match)(const char *entry, const char *name, int is_dir, void *ctx),
+                     void *ctx) {
+    DIR *d = opendir(path);
+    if (!d)
+        return 0;
+    int found = 0, looked = 0;
+    struct dirent *e;
+    while (!found && looked < 4096 && (e = readdir(d))) {
+        if (e->d_name[0] == '.')
+            continue;
+        size_t len = strlen(path) + strlen(e->d_name) + 2;
+        char *p = malloc(len);
+        if (!p)
+            break;
+        snprintf(p, len, "%s/%s", path, e->d_name);
+        struct stat st;
+        if (stat(p, &st) == 0) {
+            if (S_ISDIR(st.st_mode)) {
+                found = match(p, e->d_name, 1, ctx);
+            } else if (S_ISREG(st.st_mode)) {
+                looked++;
+                found = match(p, e->d_name, 0, ctx);
+            }
+        }
+        free(p);
+    }
+    closedir(d);
+    return found;
 }
 
 /* The first format, in table order, whose looks_like says yes at @p deep;

@@ -656,31 +656,12 @@ vv_tiff_read(vv_volume **out, const char *path, int channel) {
 
 /* ---- the format record ------------------------------------------------------ */
 
-/* A folder holding a TIFF file (among its first 4096 files). */
+/* A TIFF file in a folder. */
 static int
-tiff_folder(const char *path) {
-    DIR *d = opendir(path);
-    if (!d)
-        return 0;
-    int found = 0, looked = 0;
-    struct dirent *e;
-    while (!found && looked < 4096 && (e = readdir(d))) {
-        if (e->d_name[0] == '.')
-            continue;
-        size_t len = strlen(path) + strlen(e->d_name) + 2;
-        char *p = malloc(len);
-        if (!p)
-            break;
-        snprintf(p, len, "%s/%s", path, e->d_name);
-        struct stat st;
-        if (stat(p, &st) == 0 && S_ISREG(st.st_mode)) {
-            looked++;
-            found = vv_format_detect(p) == VV_FORMAT_TIFF;
-        }
-        free(p);
-    }
-    closedir(d);
-    return found;
+tiff_entry(const char *entry, const char *name, int is_dir, void *ctx) {
+    (void)name;
+    (void)ctx;
+    return !is_dir && vv_format_detect(entry) == VV_FORMAT_TIFF;
 }
 
 /* TIFF and BigTIFF in either byte order; a folder of TIFF pages only at
@@ -688,7 +669,7 @@ tiff_folder(const char *path) {
 static int
 tiff_looks_like(const vv_format_probe *p, int deep) {
     if (p->is_dir)
-        return deep && tiff_folder(p->path);
+        return deep && vv_format_folder_any(p->path, tiff_entry, NULL);
     const unsigned char *h = p->head;
     return !deep && p->n >= 4 &&
            (!memcmp(h, "II*\0", 4) || !memcmp(h, "MM\0*", 4) || !memcmp(h, "II+\0", 4) ||

@@ -149,9 +149,8 @@ vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
     return VV_OK;
 }
 
-/* The writable format whose extension @p path has, or VV_FORMAT_UNKNOWN. */
-static vv_format
-format_from_extension(const char *path) {
+vv_format
+vv_format_from_extension(const char *path) {
     int n;
     const vv_volume_format *const *t = vv_volume_format_table(&n);
     for (int i = 0; i < n; i++)
@@ -190,7 +189,7 @@ vv_volume_save_with(const vv_volume *v, const char *path, const vv_save_options 
     if (opt)
         o = *opt;
     if (o.format == VV_FORMAT_AUTO) {
-        o.format = format_from_extension(path);
+        o.format = vv_format_from_extension(path);
         if (o.format == VV_FORMAT_UNKNOWN) {
             char list[256];
             writable_extensions(list, sizeof list);

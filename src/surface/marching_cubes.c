@@ -771,6 +771,11 @@ vv_isosurface_extract(vv_mesh **out, const vv_volume *v, double isovalue,
     return vv_isosurface_extract_ex(out, v, isovalue, opt, NULL);
 }
 
+/* Kept whole (231 lines) for now: four passes (classify, count, prefix
+ * sums, generate) share one set of per-slab buffers and one cleanup, and
+ * the thread set-up they run under is what issue 27's geometry work
+ * replaces with core's vv_parallel_for; the passes become functions with
+ * that change rather than twice. */
 vv_status
 vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
                          const vv_isosurface_options *opt, mc_extra *x) {

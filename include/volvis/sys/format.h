@@ -139,6 +139,16 @@ int vv_format_probe_fill(vv_format_probe *p, const char *path, unsigned char *bu
 /** 1 when @p path ends in ".@p ext" (case-insensitive; @p ext may hold dots). */
 int vv_format_path_has_ext(const char *path, const char *ext);
 
+/**
+ * For the folder tests of looks_like: calls @p match with each entry of
+ * folder @p path (its path, its name, 1 for a folder), hidden entries
+ * skipped and at most 4096 files looked at, until it returns 1. Returns 1
+ * when an entry matched, 0 otherwise (also when the folder cannot be read).
+ */
+int vv_format_folder_any(const char *path,
+                         int (*match)(const char *entry, const char *name, int is_dir, void *ctx),
+                         void *ctx);
+
 #ifdef __cplusplus
 }
 #endif
