@@ -201,3 +201,19 @@ vt_sphere_mesh(double r, int levels) {
     }
     return m;
 }
+
+double
+vt_png_psnr(const char *a, const char *b) {
+    vv_image *x = NULL, *y = NULL;
+    vt_ok(vv_image_read_png(&x, a));
+    vt_ok(vv_image_read_png(&y, b));
+    assert_int_equal(x->width, y->width);
+    assert_int_equal(x->height, y->height);
+    const size_t n = 4 * (size_t)x->width * (size_t)x->height;
+    double se = 0;
+    for (size_t i = 0; i < n; i++)
+        se += ((double)x->rgba[i] - y->rgba[i]) * ((double)x->rgba[i] - y->rgba[i]);
+    vv_image_free(x);
+    vv_image_free(y);
+    return se > 0 ? 10 * log10(1.0 / (se / (double)n)) : INFINITY;
+}

@@ -97,6 +97,10 @@ void vt_run_result_free(vt_run_result *r);
 /** "@p dir/@p name" in one of 8 rotating buffers. */
 const char *vt_path(const char *dir, const char *name);
 
+/** PSNR in dB of two PNG files of one size over their RGBA channels in
+ * [0, 1] (INFINITY when identical); asserts both read and match in size. */
+double vt_png_psnr(const char *a, const char *b);
+
 /** Asserts |a - b| <= eps, printing both values on failure. */
 #define assert_near(a, b, eps)                                                                     \
     do {                                                                                           \

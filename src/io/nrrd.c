@@ -38,8 +38,8 @@
 #include <teem/nrrd.h>
 #include <zlib.h>
 
-#include "core/bricks_internal.h"
 #include "core/internal.h"
+#include "io/bricked_internal.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 
@@ -878,7 +878,7 @@ vv_nrrd_write(const vv_volume *v, const char *path, int gzip) {
     return VV_OK;
 }
 
-/* ---- raw layout for bricked reading (src/core/bricks.c) --------------- */
+/* ---- raw layout for bricked reading (src/io/bricked.c) ----------------- */
 
 /* The byte offset just past the header's blank line ("\n\n" or "\r\n\r\n"). */
 static vv_status

@@ -94,12 +94,18 @@ test_help(void **state) {
         assert_contains(r.out, "--threads");
         assert_contains(r.out, "--zoom");
         assert_contains(r.out, "--elevation");
-        /* the renderer registry is listed */
-        const vv_renderer_ops *const *reg = vv_renderer_registry();
-        assert_non_null(reg);
-        assert_non_null(reg[0]);
-        for (int i = 0; reg[i]; i++)
-            assert_contains(r.out, reg[i]->name);
+        /* the renderer registry is listed, with every option of every
+         * renderer's table and its default */
+        assert_true(vv_renderer_count() > 0);
+        for (int i = 0; i < vv_renderer_count(); i++) {
+            const vv_renderer_info *in = vv_renderer_info_at(i);
+            assert_contains(r.out, in->name);
+            for (int k = 0; k < in->n_options; k++) {
+                char opt[160];
+                snprintf(opt, sizeof opt, "--set %s=", in->options[k].key);
+                assert_contains(r.out, opt);
+            }
+        }
         free_result(&r);
     }
     const char *globals[] = {"--help", "help", "-h"};

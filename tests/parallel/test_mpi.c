@@ -79,8 +79,13 @@ test_compare(void **state) {
             fail_msg("mpi_compare on %d ranks: exit %d\n%s", counts[i], rc, out);
         /* every case ran and passed */
         assert_null(strstr(out, "FAIL"));
-        assert_non_null(strstr(out, "ok synthetic mip binary-swap"));
-        assert_non_null(strstr(out, "ok synthetic composite radix-k"));
+        assert_non_null(strstr(out, "ok raycast synthetic mip binary-swap"));
+        assert_non_null(strstr(out, "ok raycast synthetic composite radix-k"));
+        /* the ray tracer through the same region contract */
+        assert_non_null(strstr(out, "ok raytrace synthetic composite binary-swap"));
+        assert_non_null(strstr(out, "ok raytrace synthetic mip binary-swap"));
+        if (data && (counts[i] == 3 || counts[i] == 7))
+            assert_non_null(strstr(out, "ok raytrace ct_head composite binary-swap"));
         if (counts[i] > 1)
             assert_non_null(strstr(out, "ok failure on rank 1"));
         free(out);

@@ -28,8 +28,6 @@
  * path length, isosurfaces the exact crossing of the linear field.
  */
 #include <math.h>
-#include <omp.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -37,8 +35,8 @@
 #include "render/registry.h"
 #include "render/volume_cache.h"
 #include "volvis/render.h"
+#include "volvis/sys/renderer.h"
 
-#define IR_TILE 16
 #define IR_MAX_OBJ 16
 #define IR_BINS 4096     /* pre-integration table entries */
 #define IR_PIECE_TAU 0.1 /* optical depth of one piece of a cell segment */
@@ -107,6 +105,7 @@ typedef struct ir_obj {
 
 typedef struct ir_frame {
     ir_state *st;
+    vv_image *out; /* the image being written */
     ir_obj *objs;
     int n_obj;
     const vv_view *view;
@@ -545,6 +544,10 @@ typedef struct ir_pre {
     double s, T, K[3];
 } ir_pre;
 
+/* Over 150 lines on purpose: the per-segment integration of every mode
+ * (pre-integrated composite with shading, projections, iso crossings) on
+ * the hot path of each cell a ray crosses; its cases share the segment's
+ * values and weights, kept in registers. */
 /* One cell segment [t0, t1] of tetrahedron t, with barycentric weights b0
  * and b1 at its ends and values s0, s1 there. */
 static void
@@ -735,6 +738,10 @@ edge_canon(const ir_ray *r, const double *a, const double *b, uint32_t ga, uint3
     return ga > gb ? -v : v;
 }
 
+/* Over 150 lines on purpose: the cell-to-cell walk of one ray, whose
+ * carried state (the shared face's points and edge sides, the entry
+ * record, the restart after a gap) is what makes each step cost one point
+ * and three edge sides; splitting it would spill that state per cell. */
 /* Walks one object along the ray, clipped to [tc0, tc1]. The points
  * (relative to the ray origin) and edge sides of the three points a
  * tetrahedron shares with the one before are carried over, so each step
@@ -1182,6 +1189,15 @@ obj_clear(ir_obj *ob) {
 }
 
 static vv_status
+render_tile(void *user, const vv_frame_tile *t) {
+    const ir_frame *fr = user;
+    for (int y = t->y0; y < t->y1; y++)
+        for (int x = t->x0; x < t->x1; x++)
+            render_pixel(fr, x, y, fr->out);
+    return VV_OK;
+}
+
+static vv_status
 ir_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
           vv_image *out) {
     ir_state *st = state;
@@ -1216,33 +1232,10 @@ ir_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         fr.n_obj++;
     }
     if (s == VV_OK) {
-        const int tx = (view->width + IR_TILE - 1) / IR_TILE;
-        const int ty = (view->height + IR_TILE - 1) / IR_TILE;
-        const int ntiles = tx * ty;
-        const int nt = opt->threads > 0 ? opt->threads : vv_threads_get();
-        atomic_int cancelled = 0;
-        int done = 0;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
-        for (int tile = 0; tile < ntiles; tile++) {
-            if (atomic_load_explicit(&cancelled, memory_order_relaxed))
-                continue;
-            const int x0 = (tile % tx) * IR_TILE, y0 = (tile / tx) * IR_TILE;
-            const int x1 = x0 + IR_TILE < view->width ? x0 + IR_TILE : view->width;
-            const int y1 = y0 + IR_TILE < view->height ? y0 + IR_TILE : view->height;
-            for (int y = y0; y < y1; y++)
-                for (int x = x0; x < x1; x++)
-                    render_pixel(&fr, x, y, out);
-            if (opt->progress.fn) {
-#pragma omp critical(vv_irregular_progress)
-                {
-                    done++;
-                    if (vv_progress_report(&opt->progress, (double)done / ntiles))
-                        atomic_store(&cancelled, 1);
-                }
-            }
-        }
-        if (atomic_load(&cancelled))
-            s = vv_error_set(VV_ERR_CANCELLED, "cancelled");
+        fr.out = out;
+        vv_frame_job job;
+        vv_frame_job_init(&job, view->width, view->height, render_tile, &fr);
+        s = vv_frame_run(&job, opt);
     }
     for (int i = 0; i < fr.n_obj; i++)
         obj_clear(&objs[i]);
@@ -1261,24 +1254,13 @@ ir_create(void **state) {
 }
 
 static vv_status
-ir_set_option(void *state, const char *key, const char *value) {
+ir_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
     ir_state *st = state;
-    char *end = NULL;
-    const double x = strtod(value, &end);
-    if (!end || *end || end == value || x != x)
-        return vv_error_set(VV_ERR_INVALID, "option %s: '%s' is not a number", key, value);
-    if (strcmp(key, "early_termination") == 0) {
-        if (!(x > 0 && x <= 1))
-            return vv_error_set(VV_ERR_INVALID, "early_termination must be in (0, 1]");
-        st->early_termination = x;
-        return VV_OK;
-    }
-    if (strcmp(key, "empty_space_skipping") == 0) {
-        st->skipping = x != 0;
-        return VV_OK;
-    }
-    return vv_error_set(VV_ERR_INVALID,
-                        "unknown option '%s' (early_termination, empty_space_skipping)", key);
+    if (strcmp(spec->key, "early_termination") == 0)
+        st->early_termination = v->r;
+    else if (strcmp(spec->key, "empty_space_skipping") == 0)
+        st->skipping = v->b;
+    return VV_OK;
 }
 
 static void
@@ -1291,13 +1273,30 @@ ir_destroy(void *state) {
     free(st);
 }
 
+static const vv_option_spec ir_options[] = {
+    {"early_termination", VV_OPTION_REAL, "0.99", 0, 1, VV_OPTION_MIN_OPEN, NULL,
+     "accumulated opacity that ends a composite ray"},
+    {"empty_space_skipping", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
+     "skip tetrahedra the transfer function hides (0 for tests; same image)"},
+};
+
 const vv_renderer_ops vv_irregular_ops = {
-    "irregular",
-    "cell-by-cell ray casting of irregular grids (grid objects): composite (pre-integrated), "
-    "mip, minip, xray, iso",
-    ir_create,
-    ir_set_option,
-    ir_render,
-    ir_destroy,
-    "early_termination (0.99), empty_space_skipping (1)",
+    .version = VV_RENDERER_OPS_VERSION,
+    .info =
+        {
+            .name = "irregular",
+            .description = "cell-by-cell ray casting of irregular grids (grid objects): "
+                           "composite (pre-integrated), mip, minip, xray, iso",
+            .draws = VV_DRAWS(VV_OBJECT_GRID),
+            .modes = VV_MODES_ALL,
+            .caps = 0,
+            .quality = "ignored: one ray a pixel, every cell crossed",
+            .options = ir_options,
+            .n_options = VV_OPTIONS_COUNT(ir_options),
+        },
+    .create = ir_create,
+    .destroy = ir_destroy,
+    .set_option = ir_set_option,
+    .render = ir_render,
+    .render_region = NULL,
 };

@@ -450,57 +450,23 @@ sf_destroy(void *state) {
     free(st);
 }
 
-static int
-parse_bool(const char *v, int *out) {
-    if (!strcmp(v, "1") || !strcmp(v, "on") || !strcmp(v, "true") || !strcmp(v, "yes"))
-        *out = 1;
-    else if (!strcmp(v, "0") || !strcmp(v, "off") || !strcmp(v, "false") || !strcmp(v, "no"))
-        *out = 0;
-    else
-        return 0;
-    return 1;
-}
-
 static vv_status
-sf_set_option(void *state, const char *key, const char *value) {
+sf_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
     sf_state *st = state;
+    const char *key = spec->key;
     if (!strcmp(key, "shading")) {
-        if (!strcmp(value, "flat"))
-            st->shading = VV_RASTER_FLAT;
-        else if (!strcmp(value, "gouraud"))
-            st->shading = VV_RASTER_GOURAUD;
-        else if (!strcmp(value, "phong"))
-            st->shading = VV_RASTER_PHONG;
-        else
-            return vv_error_set(VV_ERR_INVALID,
-                                "option shading: '%s' is not flat, gouraud or phong", value);
+        static const vv_raster_shading shadings[] = {VV_RASTER_FLAT, VV_RASTER_GOURAUD,
+                                                     VV_RASTER_PHONG};
+        st->shading = shadings[v->word];
     } else if (!strcmp(key, "wireframe")) {
-        if (!parse_bool(value, &st->wireframe))
-            return vv_error_set(VV_ERR_INVALID, "option wireframe: '%s' is not 0 or 1", value);
+        st->wireframe = v->b;
     } else if (!strcmp(key, "cull")) {
-        int b;
-        if (!strcmp(value, "auto"))
-            st->cull = SF_CULL_AUTO;
-        else if (!strcmp(value, "back") || (parse_bool(value, &b) && b))
-            st->cull = SF_CULL_BACK;
-        else if (!strcmp(value, "none") || parse_bool(value, &b))
-            st->cull = SF_CULL_NONE;
-        else
-            return vv_error_set(VV_ERR_INVALID, "option cull: '%s' is not auto, back or none",
-                                value);
+        static const sf_cull culls[] = {SF_CULL_AUTO, SF_CULL_BACK, SF_CULL_NONE};
+        st->cull = culls[v->word];
     } else if (!strcmp(key, "caps")) {
-        if (!parse_bool(value, &st->caps))
-            return vv_error_set(VV_ERR_INVALID, "option caps: '%s' is not 0 or 1", value);
+        st->caps = v->b;
     } else if (!strcmp(key, "segments")) {
-        char *end = NULL;
-        long n = strtol(value, &end, 10);
-        if (!end || *end || end == value || n < 3 || n > 4096)
-            return vv_error_set(VV_ERR_INVALID,
-                                "option segments: '%s' is not an integer in 3..4096", value);
-        st->segments = (int)n;
-    } else {
-        return vv_error_set(VV_ERR_INVALID,
-                            "unknown option '%s' (shading, wireframe, cull, caps, segments)", key);
+        st->segments = (int)v->i;
     }
     return VV_OK;
 }
@@ -737,6 +703,45 @@ draw_banded(vv_raster *ras, const vv_mesh *mesh, vv_mat4 model, const vv_object 
     return s;
 }
 
+/* How big the scene is, for the clip distances and the size of plane
+ * squares: its bounds, the eye's distance to them and to the target, and
+ * to every plane (planes are squares 1000 times larger than that, which
+ * puts their edges near the horizon). */
+static double
+scene_size(const vv_world *w, const vv_view *view) {
+    vv_box b = vv_world_bounds(w);
+    vv_vec3 centre = vv_vec3_scale(vv_vec3_add(b.min, b.max), 0.5);
+    double radius = 0.5 * vv_vec3_length(vv_vec3_sub(b.max, b.min));
+    double dist = vv_vec3_length(vv_vec3_sub(centre, view->eye));
+    double atd = vv_vec3_length(vv_vec3_sub(view->at, view->eye));
+    double scene = radius > dist ? radius : dist;
+    scene = scene > atd ? scene : atd;
+    if (view->projection == VV_PROJECTION_ORTHOGRAPHIC) {
+        double half = 0.5 * view->ortho_height;
+        scene = scene > half ? scene : half;
+    }
+    if (!(scene > 0) || !isfinite(scene))
+        scene = 1;
+    for (int i = 0; i < w->n_objects; i++) {
+        const vv_object *obj = w->objects[i];
+        if (!obj->visible || obj->type != VV_OBJECT_PLANE)
+            continue;
+        vv_mat4 M = vv_object_matrix(obj);
+        int ok = 0;
+        vv_mat4 inv = vv_mat4_inverse(M, &ok);
+        vv_vec3 p = vv_mat4_mul_point(M, obj->geometry.point);
+        vv_vec3 n =
+            vv_vec3_normalize(vv_mat4_mul_dir(vv_mat4_transpose(inv), obj->geometry.normal));
+        double dp = fabs(vv_vec3_dot(n, vv_vec3_sub(view->eye, p)));
+        if (ok && isfinite(dp) && dp > scene)
+            scene = dp;
+    }
+    return scene;
+}
+
+/* Over 150 lines: the loop over the World's objects turns each kind into
+ * meshes (isosurfaces, grid surfaces, tessellated primitives) and draws
+ * them; the geometry-type table of issue 27 replaces its per-kind part. */
 static vv_status
 sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
           vv_image *out) {
@@ -755,36 +760,7 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         st->ras_height = view->height;
     }
     vv_raster *ras = st->ras;
-    /* how big the scene is: clip distances and the size of plane squares */
-    vv_box b = vv_world_bounds(w);
-    vv_vec3 centre = vv_vec3_scale(vv_vec3_add(b.min, b.max), 0.5);
-    double radius = 0.5 * vv_vec3_length(vv_vec3_sub(b.max, b.min));
-    double dist = vv_vec3_length(vv_vec3_sub(centre, view->eye));
-    double atd = vv_vec3_length(vv_vec3_sub(view->at, view->eye));
-    double scene = radius > dist ? radius : dist;
-    scene = scene > atd ? scene : atd;
-    if (view->projection == VV_PROJECTION_ORTHOGRAPHIC) {
-        double half = 0.5 * view->ortho_height;
-        scene = scene > half ? scene : half;
-    }
-    if (!(scene > 0) || !isfinite(scene))
-        scene = 1;
-    /* planes are squares 1000 times larger than the scene or their distance
-     * from the eye, which puts their edges near the horizon */
-    for (int i = 0; i < w->n_objects; i++) {
-        const vv_object *obj = w->objects[i];
-        if (!obj->visible || obj->type != VV_OBJECT_PLANE)
-            continue;
-        vv_mat4 M = vv_object_matrix(obj);
-        int ok = 0;
-        vv_mat4 inv = vv_mat4_inverse(M, &ok);
-        vv_vec3 p = vv_mat4_mul_point(M, obj->geometry.point);
-        vv_vec3 n =
-            vv_vec3_normalize(vv_mat4_mul_dir(vv_mat4_transpose(inv), obj->geometry.normal));
-        double dp = fabs(vv_vec3_dot(n, vv_vec3_sub(view->eye, p)));
-        if (ok && isfinite(dp) && dp > scene)
-            scene = dp;
-    }
+    const double scene = scene_size(w, view);
     if (view->projection == VV_PROJECTION_ORTHOGRAPHIC)
         s = vv_raster_set_view(ras, view, 0, 3000 * scene);
     else
@@ -955,13 +931,38 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     return s;
 }
 
+static const char *const sf_shadings[] = {"flat", "gouraud", "phong", NULL};
+static const char *const sf_culls[] = {"auto", "back", "none", NULL};
+
+static const vv_option_spec sf_options[] = {
+    {"shading", VV_OPTION_ENUM, "phong", 0, 0, 0, sf_shadings,
+     "flat: a normal a triangle; gouraud: colours at vertices; phong: normals at pixels"},
+    {"wireframe", VV_OPTION_BOOL, "0", 0, 1, 0, NULL, "triangle edges only"},
+    {"cull", VV_OPTION_ENUM, "auto", 0, 0, 0, sf_culls,
+     "auto: back faces of closed surfaces; back: every back face; none"},
+    {"caps", VV_OPTION_BOOL, "1", 0, 1, 0, NULL, "close surfaces cut by cut planes"},
+    {"segments", VV_OPTION_INT, "64", 3, 4096, 0, NULL,
+     "meridians of spheres and sides of cylinders"},
+};
+
 const vv_renderer_ops vv_surface_ops = {
-    "surface",
-    "geometry rendering: Marching Cubes isosurfaces and geometric objects, rasterized",
-    sf_create,
-    sf_set_option,
-    sf_render,
-    sf_destroy,
-    "shading (flat|gouraud|phong; phong), wireframe (0), cull (auto|back|none; auto), caps (1), "
-    "segments (64)",
+    .version = VV_RENDERER_OPS_VERSION,
+    .info =
+        {
+            .name = "surface",
+            .description = "geometry rendering: Marching Cubes isosurfaces and geometric "
+                           "objects, rasterized",
+            .draws = VV_DRAWS(VV_OBJECT_VOLUME) | VV_DRAWS(VV_OBJECT_GRID) | VV_DRAWS_GEOMETRY,
+            .modes = VV_MODES_ALL,
+            .caps = 0,
+            .quality = "ignored: volumes and grids are drawn as isosurfaces in every mode "
+                       "(iso: the isovalue; else the transfer function's half-opacity value)",
+            .options = sf_options,
+            .n_options = VV_OPTIONS_COUNT(sf_options),
+        },
+    .create = sf_create,
+    .destroy = sf_destroy,
+    .set_option = sf_set_option,
+    .render = sf_render,
+    .render_region = NULL,
 };

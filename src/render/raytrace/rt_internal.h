@@ -14,8 +14,8 @@
 #include "render/registry.h"
 #include "render/volume_cache.h"
 #include "volvis/render.h"
+#include "volvis/sys/renderer.h"
 
-#define RT_TILE 16 /* image tile side in pixels */
 #define RT_MAX_OBJ 64
 #define RT_SGRID 4                    /* shadow grid spacing, voxels */
 #define RT_LGRID 2                    /* light volume spacing, voxels */
@@ -136,6 +136,14 @@ typedef struct rt_vobj {
     vv_vextra x;                /* 2-D transfer function and solid texture */
     int extras;                 /* x has something: the general loop handles the object */
     int textured;               /* iso mode: an image texture modulates the base colour */
+    /* region renders (sys/renderer.h): the object is traced twice. Its
+     * region part samples the region's voxels on primary rays and casts no
+     * shadow; its context (the World's own volume of the object: the whole
+     * one, or a coarse proxy) casts the shadows and is invisible to rays. */
+    const vv_render_region *region; /* the region part: its region, else NULL */
+    int context;                    /* the context: shadows only */
+    double region_dt;               /* the step the region's samples are counted with */
+    int inv_form;                   /* vv_vray_clip_region's form for this object's kernel */
 } rt_vobj;
 
 /* Bounding volume hierarchy over a mesh's triangles (object space). */
@@ -186,11 +194,16 @@ typedef struct rt_frame {
     int n_lights;
     float et;
     int shadows, max_depth;
-    int avx2;          /* the processor has AVX2 and FMA (vv_vray_classify) */
-    double scene_size; /* for ray offsets */
-    /* primary rays, affine in the pixel position before normalisation (as
-     * the ray caster's): origin o00 + x ox + y oy, direction d00 + x dx + y dy */
-    vv_vec3 o00, ox, oy, d00, dx, dy;
+    int avx2;           /* the processor has AVX2 and FMA (vv_vray_classify) */
+    double scene_size;  /* for ray offsets */
+    vv_camera_rays cam; /* primary rays (the ray caster's arithmetic) */
+    /* the pass being run by the frame runner */
+    const vv_view *view;
+    vv_image *out;
+    float *key;         /* region renders of projections: the key per pixel, else NULL */
+    int nss;            /* supersamples per pixel side */
+    int adaptive;       /* pass 1 traces pixel centres, pass 2 supersamples where they differ */
+    const float *first; /* pass 2: the image of pass 1 */
 } rt_frame;
 
 /* A surface hit. */
@@ -215,7 +228,9 @@ typedef struct rt_scache {
 /* The world ray over [tmin, tmax] clipped to a volume in its index space. */
 static inline int
 vray_setup(const rt_vobj *ob, const vv_ray *wr, double tmin, double tmax, vv_vray *r) {
-    return vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, wr, tmin, tmax, r);
+    if (!vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, wr, tmin, tmax, r))
+        return 0;
+    return !ob->region || vv_vray_clip_region(r, ob->region, ob->region_dt, ob->inv_form);
 }
 
 static inline float
@@ -322,5 +337,9 @@ void rt_shade_geometry(const rt_frame *fr, const vv_ray *wr, const rt_hit *h, in
  * coverage (1 where a surface is hit), *tdepth the first visible hit. */
 void rt_trace(const rt_frame *fr, const vv_ray *wr, int depth, int primary, float weight,
               float out[3], float *alpha, float *tdepth);
+/* rt_trace, and *key (when not NULL) the value projected by the last
+ * projection volume on the ray, NAN when none (region renders). */
+void rt_trace_key(const rt_frame *fr, const vv_ray *wr, int depth, int primary, float weight,
+                  float out[3], float *alpha, float *tdepth, float *key);
 
 #endif
