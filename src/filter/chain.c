@@ -243,15 +243,15 @@ parse_conn(const char *s, int *conn) {
     return 1;
 }
 
-/* A parse_step group returned this: the filter is not one of the group. */
+/* A parse_step group returned this: the filter is not one of the group. The
+ * groups get the argument text @p a .. @p end and its first colon (or NULL). */
 #define NOT_IN_GROUP 1
 
 /* The argument of a step of smoothing: gaussian, median and morphology, bilateral, diffusion;
  * NOT_IN_GROUP for other filters. */
 static vv_status
-parse_smoothing_step(step *st) {
-    const char *a = st->arg ? st->arg : "";
-    const char *end = a + strlen(a);
+parse_smoothing_step(step *st, const char *a, const char *end, const char *colon) {
+    (void)colon;
     double v[8];
     int k;
     switch (st->id) {
@@ -307,10 +307,7 @@ parse_smoothing_step(step *st) {
 /* The argument of a step of resampling and reshaping: resample, resize, crop, pad, flip, permute,
  * cast; NOT_IN_GROUP for other filters. */
 static vv_status
-parse_geometry_step(step *st) {
-    const char *a = st->arg ? st->arg : "";
-    const char *end = a + strlen(a);
-    const char *colon = strchr(a, ':');
+parse_geometry_step(step *st, const char *a, const char *end, const char *colon) {
     double v[8];
     int k;
     switch (st->id) {
@@ -397,10 +394,7 @@ parse_geometry_step(step *st) {
 /* The argument of a step of derivatives: gradient, Laplacian, a gradient component, vesselness;
  * NOT_IN_GROUP for other filters. */
 static vv_status
-parse_derivative_step(step *st) {
-    const char *a = st->arg ? st->arg : "";
-    const char *end = a + strlen(a);
-    const char *colon = strchr(a, ':');
+parse_derivative_step(step *st, const char *a, const char *end, const char *colon) {
     int k;
     switch (st->id) {
     case F_GRADIENT:
@@ -448,10 +442,7 @@ parse_derivative_step(step *st) {
 /* The argument of a step of segmentation: threshold, window, region growing, components, largest,
  * fill holes; NOT_IN_GROUP for other filters. */
 static vv_status
-parse_segment_step(step *st) {
-    const char *a = st->arg ? st->arg : "";
-    const char *end = a + strlen(a);
-    const char *colon = strchr(a, ':');
+parse_segment_step(step *st, const char *a, const char *end, const char *colon) {
     double v[8];
     int k;
     switch (st->id) {
@@ -547,10 +538,13 @@ parse_segment_step(step *st) {
 
 static vv_status
 parse_step(step *st) {
-    vv_status (*const groups[])(step *) = {parse_smoothing_step, parse_geometry_step,
-                                           parse_derivative_step, parse_segment_step};
+    vv_status (*const groups[])(step *, const char *, const char *, const char *) = {
+        parse_smoothing_step, parse_geometry_step, parse_derivative_step, parse_segment_step};
+    const char *a = st->arg ? st->arg : "";
+    const char *end = a + strlen(a);
+    const char *colon = strchr(a, ':');
     for (size_t i = 0; i < sizeof groups / sizeof groups[0]; i++) {
-        vv_status s = groups[i](st);
+        vv_status s = groups[i](st, a, end, colon);
         if (s != NOT_IN_GROUP)
             return s;
     }
