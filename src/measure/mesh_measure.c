@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "measure_internal.h"
+#include "measure/measure_internal.h"
 
 vv_status
 vv_measure_mesh_volume(const vv_mesh *m, double *volume) {

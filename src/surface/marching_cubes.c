@@ -771,6 +771,11 @@ vv_isosurface_extract(vv_mesh **out, const vv_volume *v, double isovalue,
     return vv_isosurface_extract_ex(out, v, isovalue, opt, NULL);
 }
 
+/* Kept whole (231 lines) for now: four passes (classify, count, prefix
+ * sums, generate) share one set of per-slab buffers and one cleanup, and
+ * the thread set-up they run under is what issue 27's geometry work
+ * replaces with core's vv_parallel_for; the passes become functions with
+ * that change rather than twice. */
 vv_status
 vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
                          const vv_isosurface_options *opt, mc_extra *x) {
@@ -1026,7 +1031,7 @@ face_emit(vv_mc_face_polygon_fn emit, void *ctx, int axis, int pos, int a, int b
         pts[c][u] = a + qu[c];
         pts[c][w] = b + qw[c];
     }
-    emit(ctx, n, (const double(*)[3])pts);
+    emit(ctx, n, &pts[0][0]);
 }
 
 double
