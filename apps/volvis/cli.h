@@ -134,6 +134,13 @@ int cli_parse_plane(const cli_args *a, const char *opt, const char *text, vv_cut
 /** 1 when @p s ends with @p suffix, ignoring ASCII case (file extensions). */
 int cli_ends_with(const char *s, const char *suffix);
 
+/** Prints the volume formats (and with @p grids the grid formats) of the
+ *  format tables, one entry each with what it reads and writes. */
+void cli_print_formats(FILE *out, int grids);
+/** The names (or with @p extensions the ".ext"s) of the formats that write,
+ *  joined by @p sep, into @p buf. */
+void cli_writable_formats(char *buf, size_t cap, const char *sep, int extensions);
+
 /* ---- errors ---------------------------------------------------------------- */
 
 /** Prints "volvis: <formatted>" as one line on stderr (newlines become "; "). */

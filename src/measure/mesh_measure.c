@@ -11,7 +11,7 @@
 
 #include "core/bvh.h"
 #include "core/geom.h"
-#include "measure_internal.h"
+#include "measure/measure_internal.h"
 
 vv_status
 vv_measure_mesh_volume(const vv_mesh *m, double *volume) {

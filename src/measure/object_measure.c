@@ -1,14 +1,14 @@
 /*
  * Measures of the World's geometric objects: area, enclosed volume and the
  * distance between two objects, over their tessellations by the
- * geometry-type table (src/model/geometry.h) in world coordinates.
+ * geometry-type table (include/volvis/sys/geometry.h) in world coordinates.
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "measure_internal.h"
-#include "model/geometry.h"
+#include "volvis/sys/geometry.h"
 
 /* The object's triangles in world coordinates within @p tolerance world
  * units (a new mesh the caller frees), and whether they enclose a volume. */

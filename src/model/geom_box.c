@@ -2,7 +2,7 @@
 #include <math.h>
 
 #include "core/geom.h"
-#include "model/geometry.h"
+#include "volvis/sys/geometry.h"
 
 static vv_status
 box_check(const vv_geometry *g) {

@@ -9,7 +9,7 @@
 
 #include "core/bvh.h"
 #include "core/geom.h"
-#include "model/geometry.h"
+#include "volvis/sys/geometry.h"
 
 static vv_status
 mesh_check(const vv_geometry *g) {

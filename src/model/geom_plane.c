@@ -6,7 +6,7 @@
 #include <math.h>
 
 #include "core/geom.h"
-#include "model/geometry.h"
+#include "volvis/sys/geometry.h"
 
 static vv_status
 plane_check(const vv_geometry *g) {

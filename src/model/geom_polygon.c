@@ -8,7 +8,7 @@
 #include <string.h>
 
 #include "core/geom.h"
-#include "model/geometry.h"
+#include "volvis/sys/geometry.h"
 
 /* What intersect and distance need: the plane, and the axis dropped to test
  * inside the polygon in 2-D (the normal's largest component). */

@@ -1,8 +1,8 @@
 /*
- * The geometry-type table (src/model/geometry.h): one row per geometric
+ * The geometry-type table (include/volvis/sys/geometry.h): one row per geometric
  * object type, and the helpers its record files share.
  */
-#include "model/geometry.h"
+#include "volvis/sys/geometry.h"
 
 #include <math.h>
 #include <stddef.h>

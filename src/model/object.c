@@ -8,12 +8,12 @@
 #include <string.h>
 
 #include "core/internal.h"
-#include "model/geometry.h"
+#include "volvis/sys/geometry.h"
 #include "model/model_internal.h"
 #include "volvis/model.h"
 
 double
-vv_model_min_spacing(const vv_volume *v) {
+vv_tf_default_unit_distance(const vv_volume *v) {
     double s = v->spacing[0];
     if (v->spacing[1] < s)
         s = v->spacing[1];
@@ -100,8 +100,8 @@ vv_object_new_volume(vv_object **out, vv_volume *volume, const char *name) {
     if (!(hi > lo))
         hi = lo + 1.0;
     o->threshold = 0.5 * (lo + hi);
-    vv_tf_set_ramp(&o->tf, lo, hi, 1.0, vv_vec3_make(1, 1, 1), vv_model_min_spacing(volume));
-    o->tf2d.opacity_unit_distance = vv_model_min_spacing(volume);
+    vv_tf_set_ramp(&o->tf, lo, hi, 1.0, vv_vec3_make(1, 1, 1), vv_tf_default_unit_distance(volume));
+    o->tf2d.opacity_unit_distance = vv_tf_default_unit_distance(volume);
     o->isovalue = 0.5 * (lo + hi);
     *out = o;
     return VV_OK;

@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "model/geometry.h"
+#include "volvis/sys/geometry.h"
 #include "modeling_internal.h"
 
 const char *

@@ -1007,7 +1007,7 @@ face_emit(vv_mc_face_polygon_fn emit, void *ctx, int axis, int pos, int a, int b
         pts[c][u] = a + qu[c];
         pts[c][w] = b + qw[c];
     }
-    emit(ctx, n, (const double(*)[3])pts);
+    emit(ctx, n, &pts[0][0]);
 }
 
 double

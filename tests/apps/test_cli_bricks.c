@@ -27,7 +27,7 @@ test_convert_render(void **state) {
     struct stat st;
     const char *nut = vt_data("volumes/nut.slc");
     if (stat(nut, &st) != 0)
-        skip();
+        vt_skip("../shared/data/volumes/nut.slc is missing");
     char vvb[1200], nrrd[1200], vvb2[1200], mem[1200], ooc[1200], ooc2[1200];
     snprintf(vvb, sizeof vvb, "%s/nut.vvb", outdir());
     snprintf(nrrd, sizeof nrrd, "%s/nut_raw.nrrd", outdir());
@@ -102,7 +102,7 @@ test_renderers(void **state) {
     struct stat st;
     const char *nut = vt_data("volumes/nut.slc"), *head = vt_data("volumes/ct_head.nrrd");
     if (stat(nut, &st) != 0 || stat(head, &st) != 0)
-        skip();
+        vt_skip("../shared/data/volumes/nut.slc or ct_head.nrrd is missing");
     char nvvb[1200], hvvb[1200];
     snprintf(nvvb, sizeof nvvb, "%s/nut_r.vvb", outdir());
     snprintf(hvvb, sizeof hvvb, "%s/head_r.vvb", outdir());
@@ -130,7 +130,7 @@ test_errors(void **state) {
     struct stat st;
     const char *nut = vt_data("volumes/nut.slc");
     if (stat(nut, &st) != 0)
-        skip();
+        vt_skip("../shared/data/volumes/nut.slc is missing");
     char vvb[1200], png[1200];
     snprintf(vvb, sizeof vvb, "%s/nut_e.vvb", outdir());
     snprintf(png, sizeof png, "%s/never.png", outdir());
@@ -166,5 +166,5 @@ main(void) {
         cmocka_unit_test(test_renderers),
         cmocka_unit_test(test_errors),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -740,5 +740,5 @@ main(void) {
         cmocka_unit_test(test_object_measures),
         cmocka_unit_test(test_geodesic),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

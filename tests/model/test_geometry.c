@@ -1,5 +1,5 @@
 /*
- * The geometry-type table (src/model/geometry.h), every record against its
+ * The geometry-type table (include/volvis/sys/geometry.h), every record against its
  * own tessellation: the bounds contain it; the signed distance is 0 on it
  * (within the tessellation tolerance), positive outside and negative inside
  * (behind a surface); intersect finds the hit the triangles give, within the
@@ -14,7 +14,7 @@
 #include <string.h>
 
 #include "core/geom.h"
-#include "model/geometry.h"
+#include "volvis/sys/geometry.h"
 
 /* An L-shaped (non-convex) hexagon in a tilted plane, and a convex quad. */
 static const vv_vec3 L_SHAPE[6] = {{0, 0, 0},   {2, 0, 0.4}, {2, 1, 0.9},

@@ -1012,5 +1012,5 @@ main(void) {
         cmocka_unit_test(test_winding_number),   cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_threads_progress), cmocka_unit_test(test_world_objects),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -71,7 +71,7 @@ static void
 test_cli(void **state) {
     (void)state;
     if (!have_mpi())
-        skip();
+        vt_skip("the build has no MPI (libopenmpi-dev, openmpi-bin)");
 #ifdef VV_MPI_COMPARE
     const char *dir = outdir();
     /* two scene folders with a scene of the same name and different content,
@@ -101,7 +101,7 @@ test_cli(void **state) {
     chmod(wrap, 0755);
     struct stat st;
     if (stat(vt_data("volumes/neghip.slc"), &st) != 0)
-        skip();
+        vt_skip("../shared/data/volumes/neghip.slc is missing");
 
     char cmd[8192], *out = NULL, png[1400];
     /* the same scene everywhere: rank 0 writes and names the rank count */
@@ -266,5 +266,5 @@ main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cli),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -1299,5 +1299,5 @@ main(void) {
         cmocka_unit_test(test_neghip_cross_check),
         cmocka_unit_test(test_iso_cache_and_tf),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

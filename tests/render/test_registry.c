@@ -426,5 +426,5 @@ main(void) {
         cmocka_unit_test(test_frame_runner), cmocka_unit_test(test_camera_rays),
         cmocka_unit_test(test_region_ops),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

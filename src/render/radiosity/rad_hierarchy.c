@@ -13,7 +13,7 @@
 #include <string.h>
 
 #include "core/geom.h"
-#include "model/geometry.h"
+#include "volvis/sys/geometry.h"
 #include "render/radiosity/radiosity_internal.h"
 
 /* ---------------------------------------------------------------------- */

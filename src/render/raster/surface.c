@@ -18,7 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "model/geometry.h"
+#include "volvis/sys/geometry.h"
 #include "render/registry.h"
 #include "render/volume_cache.h"
 #include "volvis/raster.h"

@@ -1,7 +1,7 @@
 /*
  * Volumetric ray tracing, the geometry: the nearest hit among the geometric
  * objects a ray sees and its world normal. Each object's intersection is
- * its record of the geometry-type table (src/model/geometry.h; a mesh's
+ * its record of the geometry-type table (include/volvis/sys/geometry.h; a mesh's
  * through its bounding volume hierarchy, core/bvh.h).
  */
 #include <math.h>

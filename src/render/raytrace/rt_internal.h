@@ -12,7 +12,7 @@
 #include <stdint.h>
 
 #include "core/geom.h"
-#include "model/geometry.h"
+#include "volvis/sys/geometry.h"
 #include "render/registry.h"
 #include "render/volume_cache.h"
 #include "volvis/render.h"

@@ -1,7 +1,8 @@
 /*
- * The geometry-type table (not installed): one record per kind of geometric
- * object of the World (plane, polygon, sphere, box, cylinder, mesh), with
- * everything the components need to know about that kind of shape --
+ * The geometry-type table, part of the implementor's API (like
+ * sys/renderer.h): one record per kind of geometric object of the World
+ * (plane, polygon, sphere, box, cylinder, mesh), with everything the
+ * components need to know about that kind of shape --
  *
  *   check        is the shape valid (a sphere's radius > 0, ...)
  *   bounds       its object-space bounding box
@@ -30,8 +31,8 @@
  * Thread-safety: records are constant; every function is reentrant, and a
  * prepared object may be queried by any number of threads at once.
  */
-#ifndef VOLVIS_MODEL_GEOMETRY_H
-#define VOLVIS_MODEL_GEOMETRY_H
+#ifndef VOLVIS_SYS_GEOMETRY_H
+#define VOLVIS_SYS_GEOMETRY_H
 
 #include "volvis/mesh.h"
 #include "volvis/model.h"
