@@ -8,9 +8,9 @@
 #include <string.h>
 
 #include "core/internal.h"
-#include "volvis/sys/geometry.h"
 #include "model/model_internal.h"
 #include "volvis/model.h"
+#include "volvis/sys/geometry.h"
 
 double
 vv_tf_default_unit_distance(const vv_volume *v) {

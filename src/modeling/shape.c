@@ -9,8 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "volvis/sys/geometry.h"
 #include "modeling_internal.h"
+#include "volvis/sys/geometry.h"
 
 const char *
 vv_csg_op_name(vv_csg_op op) {

@@ -13,8 +13,8 @@
 #include <string.h>
 
 #include "core/geom.h"
-#include "volvis/sys/geometry.h"
 #include "render/radiosity/radiosity_internal.h"
+#include "volvis/sys/geometry.h"
 
 /* ---------------------------------------------------------------------- */
 /* hierarchy: a binary bounding-volume tree per object                      */

@@ -12,8 +12,8 @@
 #include <string.h>
 
 #include "core/geom.h"
-#include "volvis/sys/geometry.h"
 #include "render/radiosity/radiosity_internal.h"
+#include "volvis/sys/geometry.h"
 
 static rad_elem *
 new_elem(builder *b) {

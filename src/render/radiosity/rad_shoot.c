@@ -14,8 +14,8 @@
 #include <string.h>
 
 #include "core/geom.h"
-#include "volvis/sys/geometry.h"
 #include "render/radiosity/radiosity_internal.h"
+#include "volvis/sys/geometry.h"
 
 static int
 is_leaf(const rad_node *n) {
@@ -408,7 +408,7 @@ transfer(solver *sv, const shooter *sh, int S, int R, double T_known) {
             g = cp;
         else if (e->kind == RAD_PATCH) /* the patch's solid angle, exactly */
             g = rad_solid_angle(vv_vec3_sub(f3(e->tri), xs), vv_vec3_sub(f3(e->tri + 3), xs),
-                            vv_vec3_sub(f3(e->tri + 6), xs));
+                                vv_vec3_sub(f3(e->tri + 6), xs));
         else
             g = cp / (den + cp / RAD_PI); /* keeps adjacent voxels finite */
         for (int c = 0; c < 3; c++)

@@ -16,8 +16,8 @@
 #include <string.h>
 
 #include "core/geom.h"
-#include "volvis/sys/geometry.h"
 #include "render/radiosity/radiosity_internal.h"
+#include "volvis/sys/geometry.h"
 
 void
 vv_radiosity_options_init(vv_radiosity_options *o) {

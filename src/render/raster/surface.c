@@ -18,12 +18,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "volvis/sys/geometry.h"
 #include "render/registry.h"
 #include "render/volume_cache.h"
 #include "volvis/raster.h"
 #include "volvis/render.h"
 #include "volvis/surface.h"
+#include "volvis/sys/geometry.h"
 
 #define SF_MAX_CACHE 64
 

@@ -12,10 +12,10 @@
 #include <stdint.h>
 
 #include "core/geom.h"
-#include "volvis/sys/geometry.h"
 #include "render/registry.h"
 #include "render/volume_cache.h"
 #include "volvis/render.h"
+#include "volvis/sys/geometry.h"
 #include "volvis/sys/renderer.h"
 
 #define RT_MAX_OBJ 64
