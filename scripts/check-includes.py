@@ -60,7 +60,7 @@ PUBLIC = {
     "model.h": "model",
     "io.h": "io", "video.h": "io", "sys/format.h": "io", "bricks.h": "io",
     "render.h": "render", "raster.h": "render", "radiosity.h": "render",
-    "sys/renderer.h": "render", "geometry.h": "model",
+    "sys/renderer.h": "render", "sys/geometry.h": "model",
     "modeling.h": "modeling",
     "filter.h": "filter",
     "measure.h": "measure",

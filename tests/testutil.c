@@ -203,6 +203,15 @@ vt_sphere_mesh(double r, int levels) {
 }
 
 double
+vt_rnd(uint64_t *s, double lo, double hi) {
+    uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    z ^= z >> 31;
+    return lo + (hi - lo) * (double)(z >> 11) / 9007199254740992.0;
+}
+
+double
 vt_png_psnr(const char *a, const char *b) {
     vv_image *x = NULL, *y = NULL;
     vt_ok(vv_image_read_png(&x, a));

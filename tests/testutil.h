@@ -79,6 +79,9 @@ unsigned char *vt_read_file(const char *path, size_t *n);
  */
 vv_mesh *vt_sphere_mesh(double r, int levels);
 
+/** Deterministic uniform numbers in [lo, hi) from the state @p s (splitmix64). */
+double vt_rnd(uint64_t *s, double lo, double hi);
+
 /** What a run of the volvis command-line tool did (vt_run_cli_v). */
 typedef struct vt_run_result {
     int status; /**< exit status, or 128 + signal number */

@@ -27,6 +27,7 @@
 #include "core.h"
 #include "math.h"
 #include "mesh.h"
+#include "model.h"
 #include "volume.h"
 
 #ifdef __cplusplus
@@ -185,6 +186,15 @@ typedef enum vv_mesh_mode {
 vv_status vv_shape_mesh(vv_shape **out, vv_mesh *mesh, vv_mesh_mode mode, double thickness);
 /** A mesh loaded with vv_mesh_load (any format Assimp reads). Errors as vv_mesh_load. */
 vv_status vv_shape_mesh_load(vv_shape **out, const char *path, vv_mesh_mode mode, double thickness);
+/**
+ * A World object's geometry as a model primitive, placed by the object's
+ * transform: spheres, boxes and capped cylinders through their exact signed
+ * distances (the geometry-type table, src/model/geometry.h), meshes as mesh
+ * shapes (VV_MESH_AUTO). The shape keeps its own copy of the object.
+ * Errors: VV_ERR_INVALID (NULL, a volume or grid, a broken shape, a plane
+ * (no bounds), a polygon or an open cylinder (no inside)), VV_ERR_NOMEM.
+ */
+vv_status vv_shape_object(vv_shape **out, const vv_object *obj);
 /**
  * A CSG operation on @p n >= 1 children (n >= 2 for a difference is not
  * required: a difference of one child is that child). Takes ownership of

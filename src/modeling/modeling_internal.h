@@ -6,6 +6,7 @@
 #ifndef VV_MODELING_INTERNAL_H
 #define VV_MODELING_INTERNAL_H
 
+#include "volvis/model.h"
 #include "volvis/modeling.h"
 
 typedef enum shape_kind {
@@ -17,6 +18,7 @@ typedef enum shape_kind {
     SHAPE_EXTRUSION,  /* also the thick planar polygon (with a frame) */
     SHAPE_HELIX,
     SHAPE_MESH,
+    SHAPE_OBJECT, /* a World object's geometry, through its geometry-type record */
     SHAPE_CSG
 } shape_kind;
 
@@ -35,6 +37,9 @@ struct vv_shape {
     vv_csg_op op;
     int n_children;
     vv_shape **children;
+    vv_object *obj;                  /* SHAPE_OBJECT: a copy of the object (owned) */
+    const struct vv_geom_type *geom; /* its record (include/volvis/sys/geometry.h) */
+    void *prep;                      /* what geom->prepare built, or NULL */
 };
 
 /**

@@ -10,6 +10,7 @@
 #include <immintrin.h>
 #endif
 
+#include "core/geom.h"
 #include "core/internal.h"
 
 /* ---------------------------------------------------------------------- */
@@ -677,22 +678,9 @@ vv_vray_setup(const double w2i[3][4], const int dims[3], const vv_plane *planes,
         d[a] = w2i[a][0] * wr->dir.x + w2i[a][1] * wr->dir.y + w2i[a][2] * wr->dir.z;
     }
     double t0 = tmin, t1 = tmax;
-    for (int a = 0; a < 3; a++) {
-        double hi = dims[a] - 1;
-        if (fabs(d[a]) < 1e-300) {
-            if (o[a] < 0 || o[a] > hi)
-                return 0;
-            continue;
-        }
-        double ta = (0 - o[a]) / d[a], tb = (hi - o[a]) / d[a];
-        if (ta > tb) {
-            double tt = ta;
-            ta = tb;
-            tb = tt;
-        }
-        t0 = ta > t0 ? ta : t0;
-        t1 = tb < t1 ? tb : t1;
-    }
+    const double lo[3] = {0, 0, 0}, hi[3] = {dims[0] - 1, dims[1] - 1, dims[2] - 1};
+    if (!vv_slab(lo, hi, o, d, &t0, &t1))
+        return 0;
     for (int p = 0; p < n_planes; p++)
         if (!vv_plane_clip_ray(planes[p], *wr, &t0, &t1))
             return 0;

@@ -70,9 +70,9 @@ typedef struct vv_format_probe {
  * NULL: never detected (raw). fits and write NULL: not written.
  */
 typedef struct vv_volume_format {
-    int version;        /**< VV_FORMAT_RECORD_VERSION */
-    const char *name;   /**< lower-case, as --format takes it: "nrrd" */
-    const char *title;  /**< as people write it, for messages: "NRRD", "MetaImage" */
+    int version;                   /**< VV_FORMAT_RECORD_VERSION */
+    const char *name;              /**< lower-case, as --format takes it: "nrrd" */
+    const char *title;             /**< as people write it, for messages: "NRRD", "MetaImage" */
     const char *const *extensions; /**< NULL-terminated, lower-case, no dot ("nii.gz"
                                         allowed), the first is the usual one; may be NULL */
     const char *const *aliases;    /**< other names --format takes; NULL-terminated, may be NULL */

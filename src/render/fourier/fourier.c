@@ -30,6 +30,7 @@
 #include <string.h>
 
 #include "compress/vvc_internal.h"
+#include "core/geom.h"
 #include "render/registry.h"
 #include "volvis/render.h"
 
@@ -522,22 +523,8 @@ cubic_w(float t, float w[4]) {
 static inline double
 chord_local(double P, double Q, double a, double b, const double lo[3], const double hi[3]) {
     double z0 = lo[2], z1 = hi[2];
-    const double base[2] = {P, Q}, slope[2] = {a, b};
-    for (int i = 0; i < 2; i++) {
-        if (slope[i] == 0) {
-            if (base[i] < lo[i] || base[i] > hi[i])
-                return 0;
-            continue;
-        }
-        double t0 = (lo[i] - base[i]) / slope[i], t1 = (hi[i] - base[i]) / slope[i];
-        if (t0 > t1) {
-            double t = t0;
-            t0 = t1;
-            t1 = t;
-        }
-        z0 = t0 > z0 ? t0 : z0;
-        z1 = t1 < z1 ? t1 : z1;
-    }
+    if (!vv_slab_axis(lo[0], hi[0], P, a, &z0, &z1) || !vv_slab_axis(lo[1], hi[1], Q, b, &z0, &z1))
+        return 0;
     return z1 > z0 ? z1 - z0 : 0;
 }
 
@@ -874,29 +861,14 @@ sheared_sample(const fr_sheared *sh, const float *img, double P, double Q) {
     return v;
 }
 
-/* Slab test of a ray in index space against the box [lo, hi]^3 per axis. */
+/* Slab test of a ray in index space against the box [lo, hi]^3 per axis
+ * (inv = 1 / d, infinite for a zero component). */
 static int
-box_hit(const double o[3], const double d[3], const double inv[3], const double lo[3],
-        const double hi[3], double *t0, double *t1) {
-    double a = -INFINITY, b = INFINITY;
-    for (int i = 0; i < 3; i++) {
-        if (d[i] == 0) {
-            if (o[i] < lo[i] || o[i] > hi[i])
-                return 0;
-            continue;
-        }
-        double u = (lo[i] - o[i]) * inv[i], v = (hi[i] - o[i]) * inv[i];
-        if (u > v) {
-            double t = u;
-            u = v;
-            v = t;
-        }
-        a = u > a ? u : a;
-        b = v < b ? v : b;
-    }
-    *t0 = a;
-    *t1 = b;
-    return b >= a;
+box_hit(const double o[3], const double inv[3], const double lo[3], const double hi[3], double *t0,
+        double *t1) {
+    *t0 = -INFINITY;
+    *t1 = INFINITY;
+    return vv_slab_inv(lo, hi, o, inv, t0, t1);
 }
 
 /* The modes other than xray are not linear along the ray (maximum, minimum,
@@ -1085,7 +1057,7 @@ fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         const double offset = ob.src->offset;
         double dinv[3];
         for (int k = 0; k < 3; k++)
-            dinv[k] = ob.di[k] != 0 ? 1.0 / ob.di[k] : 0;
+            dinv[k] = 1.0 / ob.di[k];
         double lut_lo, lut_scale;
         build_lut(obj, lut, &lut_lo, &lut_scale);
 #pragma omp parallel for num_threads(threads) schedule(static)
@@ -1099,8 +1071,7 @@ fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
                 /* the samples of the spatial X-ray lie in the node-centred grid
                  * box; each voxel's band-limited footprint reaches half a voxel
                  * further, which is the length the integral is divided by */
-                if (!box_hit(o, ob.di, dinv, glo, ghi, &t0, &t1) ||
-                    !box_hit(o, ob.di, dinv, blo, bhi, &u0, &u1))
+                if (!box_hit(o, dinv, glo, ghi, &t0, &t1) || !box_hit(o, dinv, blo, bhi, &u0, &u1))
                     continue;
                 const double Pq = Pp0 + Ppx * px + Ppy * py, Qq = Qp0 + Qpx * px + Qpy * py;
                 const double len = att ? sheared_sample(&sh, sh.L, Pq, Qq) : u1 - u0;

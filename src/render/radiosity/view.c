@@ -14,8 +14,6 @@
 
 #define RAD_BLOCK 8
 
-vv_status rad_prepare_render(vv_radiosity *r);
-
 /* Per voxel: sigma, display radiance (power / (4 capacity)), diffuse normal;
  * opaque voxels that are not elements take the mean of their element
  * neighbours so the colour does not darken towards buried voxels. */
@@ -128,98 +126,6 @@ rad_prepare_render(vv_radiosity *r) {
 static vv_vec3
 f3v(const float *p) {
     return vv_vec3_make(p[0], p[1], p[2]);
-}
-
-/* Slab test with the reciprocal direction; inline for the per-pixel loops. */
-static inline int
-slab(const float *mn, const float *mx, const double *o, const double *inv, double tmax,
-     double *t0) {
-    double a = 0, b = tmax;
-    for (int k = 0; k < 3; k++) {
-        double u = (mn[k] - o[k]) * inv[k], v = (mx[k] - o[k]) * inv[k];
-        if (u > v) {
-            double t = u;
-            u = v;
-            v = t;
-        }
-        a = u > a ? u : a;
-        b = v < b ? v : b;
-        if (a > b)
-            return 0;
-    }
-    *t0 = a;
-    return 1;
-}
-
-/* Ray-triangle (Moller-Trumbore); returns t or -1. */
-static inline double
-tri_t(const float *tri, const double *o, const double *d) {
-    double e1[3], e2[3], p[3], s[3], q[3];
-    for (int k = 0; k < 3; k++) {
-        e1[k] = tri[3 + k] - tri[k];
-        e2[k] = tri[6 + k] - tri[k];
-        s[k] = o[k] - tri[k];
-    }
-    p[0] = d[1] * e2[2] - d[2] * e2[1];
-    p[1] = d[2] * e2[0] - d[0] * e2[2];
-    p[2] = d[0] * e2[1] - d[1] * e2[0];
-    double det = e1[0] * p[0] + e1[1] * p[1] + e1[2] * p[2];
-    if (fabs(det) < 1e-300)
-        return -1;
-    double inv = 1 / det;
-    double u = (s[0] * p[0] + s[1] * p[1] + s[2] * p[2]) * inv;
-    if (u < 0 || u > 1)
-        return -1;
-    q[0] = s[1] * e1[2] - s[2] * e1[1];
-    q[1] = s[2] * e1[0] - s[0] * e1[2];
-    q[2] = s[0] * e1[1] - s[1] * e1[0];
-    double v = (d[0] * q[0] + d[1] * q[1] + d[2] * q[2]) * inv;
-    if (v < 0 || u + v > 1)
-        return -1;
-    return (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) * inv;
-}
-
-/* The nearest patch along the ray (front-to-back traversal of the trees). */
-static int
-first_patch(const vv_radiosity *r, vv_vec3 ov, vv_vec3 dv, double *thit) {
-    const double o[3] = {ov.x, ov.y, ov.z}, d[3] = {dv.x, dv.y, dv.z};
-    const double inv[3] = {1 / d[0], 1 / d[1], 1 / d[2]};
-    int best = -1;
-    double tb = INFINITY;
-    int stack[128];
-    for (int ri = 0; ri < r->n_roots; ri++) {
-        if (r->nodes[r->roots[ri]].kind != RAD_PATCH)
-            continue;
-        int sp = 0;
-        stack[sp++] = r->roots[ri];
-        while (sp) {
-            const rad_node *nd = &r->nodes[stack[--sp]];
-            double a;
-            if (!slab(nd->bmin, nd->bmax, o, inv, tb, &a))
-                continue;
-            if (nd->child[0] < 0) {
-                double t = tri_t(r->elems[nd->lo].tri, o, d);
-                if (t > 0 && t < tb) {
-                    tb = t;
-                    best = nd->lo;
-                }
-                continue;
-            }
-            if (sp + 2 <= 128) {
-                /* the nearer child last, so it is taken first */
-                const rad_node *c0 = &r->nodes[nd->child[0]], *c1 = &r->nodes[nd->child[1]];
-                double d0 =
-                    (c0->c[0] - o[0]) * d[0] + (c0->c[1] - o[1]) * d[1] + (c0->c[2] - o[2]) * d[2];
-                double d1 =
-                    (c1->c[0] - o[0]) * d[0] + (c1->c[1] - o[1]) * d[1] + (c1->c[2] - o[2]) * d[2];
-                int n0 = d0 <= d1 ? nd->child[0] : nd->child[1];
-                stack[sp++] = n0 == nd->child[0] ? nd->child[1] : nd->child[0];
-                stack[sp++] = n0;
-            }
-        }
-    }
-    *thit = tb;
-    return best;
 }
 
 /* The patch seen at each pixel centre, by rasterizing every patch into an
@@ -400,7 +306,7 @@ view_pixel(const rad_view *c, int x, int y) {
                                   : vv_vec3_length(vv_vec3_sub(f3v(e->p), ray.origin));
         }
     } else if (c->has_patches) {
-        pe = first_patch(r, ray.origin, ray.dir, &tp);
+        pe = rad_patch_hit(r, ray.origin, ray.dir, 0, INFINITY, 0, &tp);
     }
     double col[3] = {0, 0, 0}, T = 1, depth = pe >= 0 ? tp : INFINITY;
     /* volumes front to back by entry (overlapping volumes are taken one after another) */

@@ -139,79 +139,26 @@ prepare_geometry(rt_frame *fr, rt_gobj *g, const vv_object *obj) {
     g->kt = (float)m->transparency;
     g->ior = m->ior;
     const vv_geometry *ge = &obj->geometry;
-    switch (obj->type) {
-    case VV_OBJECT_PLANE:
-        if (!(v3len(ge->normal) > 0))
-            return vv_error_set(VV_ERR_INVALID, "object '%s': plane with a zero normal", obj->name);
-        g->pp = vv_mat4_mul_point(o2w, ge->point);
-        g->pn = v3(
+    vv_status s = vv_geom_object_type(obj, &g->geom);
+    if (s != VV_OK)
+        return s;
+    if (g->geom->prepare && (s = g->geom->prepare(ge, &g->prep)) != VV_OK)
+        return vv_error_prefix(s, "object '%s'", obj->name);
+    g->closed = g->geom->solid(ge);
+    if (obj->type == VV_OBJECT_PLANE) {
+        /* traced in world space: its world point and normal (M^-T n) */
+        g->wplane.point = vv_mat4_mul_point(o2w, ge->point);
+        g->wplane.normal = v3(
             g->nrm[0][0] * ge->normal.x + g->nrm[0][1] * ge->normal.y + g->nrm[0][2] * ge->normal.z,
             g->nrm[1][0] * ge->normal.x + g->nrm[1][1] * ge->normal.y + g->nrm[1][2] * ge->normal.z,
             g->nrm[2][0] * ge->normal.x + g->nrm[2][1] * ge->normal.y +
                 g->nrm[2][2] * ge->normal.z);
-        break;
-    case VV_OBJECT_POLYGON: {
-        if (ge->n_vertices < 3 || !ge->vertices)
-            return vv_error_set(VV_ERR_INVALID, "object '%s': polygon with %d vertices", obj->name,
-                                ge->n_vertices);
-        vv_vec3 nn = {0, 0, 0}; /* Newell's normal */
-        for (int i = 0; i < ge->n_vertices; i++) {
-            vv_vec3 a = ge->vertices[i], b = ge->vertices[(i + 1) % ge->n_vertices];
-            nn.x += (a.y - b.y) * (a.z + b.z);
-            nn.y += (a.z - b.z) * (a.x + b.x);
-            nn.z += (a.x - b.x) * (a.y + b.y);
-        }
-        if (!(v3len(nn) > 0))
-            return vv_error_set(VV_ERR_INVALID, "object '%s': degenerate polygon", obj->name);
-        g->plane = vv_plane_from_point_normal(ge->vertices[0], nn);
-        double ax = fabs(nn.x), ay = fabs(nn.y), az = fabs(nn.z);
-        g->drop = ax >= ay && ax >= az ? 0 : ay >= az ? 1 : 2;
-        break;
     }
-    case VV_OBJECT_SPHERE:
-        if (!(ge->radius > 0))
-            return vv_error_set(VV_ERR_INVALID, "object '%s': sphere radius must be > 0",
-                                obj->name);
-        g->closed = 1;
-        break;
-    case VV_OBJECT_BOX:
-        if (!(ge->box.max.x >= ge->box.min.x && ge->box.max.y >= ge->box.min.y &&
-              ge->box.max.z >= ge->box.min.z))
-            return vv_error_set(VV_ERR_INVALID, "object '%s': box with min > max", obj->name);
-        g->closed = 1;
-        break;
-    case VV_OBJECT_CYLINDER:
-        if (!(ge->radius > 0) || !(v3len(v3sub(ge->top, ge->base)) > 0))
-            return vv_error_set(VV_ERR_INVALID,
-                                "object '%s': cylinder needs radius > 0 and base != top",
-                                obj->name);
-        g->closed = ge->capped;
-        break;
-    case VV_OBJECT_MESH: {
-        if (!ge->mesh)
-            return vv_error_set(VV_ERR_INVALID, "object '%s': mesh object without a mesh",
-                                obj->name);
-        vv_status s = rt_bvh_build(&g->bvh, ge->mesh);
-        if (s != VV_OK)
-            return vv_error_prefix(s, "object '%s'", obj->name);
-        g->closed = 1;
-        break;
-    }
-    default:
-        return vv_error_set(VV_ERR_INVALID, "object '%s': unsupported type %d", obj->name,
-                            (int)obj->type);
-    }
-    if (obj->type == VV_OBJECT_POLYGON || obj->type == VV_OBJECT_BOX) {
+    vv_box ob;
+    if ((obj->type == VV_OBJECT_POLYGON || obj->type == VV_OBJECT_BOX) &&
+        g->geom->bounds(ge, &ob)) {
         /* world-space bounding sphere of the object-space bounding box */
-        vv_vec3 lo = ge->box.min, hi = ge->box.max;
-        if (obj->type == VV_OBJECT_POLYGON) {
-            lo = hi = ge->vertices[0];
-            for (int i = 1; i < ge->n_vertices; i++) {
-                const vv_vec3 q = ge->vertices[i];
-                lo = v3(q.x < lo.x ? q.x : lo.x, q.y < lo.y ? q.y : lo.y, q.z < lo.z ? q.z : lo.z);
-                hi = v3(q.x > hi.x ? q.x : hi.x, q.y > hi.y ? q.y : hi.y, q.z > hi.z ? q.z : hi.z);
-            }
-        }
+        const vv_vec3 lo = ob.min, hi = ob.max;
         g->bc = vv_mat4_mul_point(o2w, v3scale(v3add(lo, hi), 0.5));
         double r = 0;
         for (int k = 0; k < 8; k++) {
@@ -261,10 +208,9 @@ frame_release(rt_frame *fr) {
                 free(fr->vobjs[i].lvol[l]);
         }
     }
-    for (int i = 0; i < fr->n_gobj; i++) {
-        free(fr->gobjs[i].bvh.nodes);
-        free(fr->gobjs[i].bvh.tri);
-    }
+    for (int i = 0; i < fr->n_gobj; i++)
+        if (fr->gobjs[i].prep)
+            fr->gobjs[i].geom->release(fr->gobjs[i].prep);
     free(fr->vobjs);
     free(fr->gobjs);
 }

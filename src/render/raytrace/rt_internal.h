@@ -11,9 +11,11 @@
 #include <stdatomic.h>
 #include <stdint.h>
 
+#include "core/geom.h"
 #include "render/registry.h"
 #include "render/volume_cache.h"
 #include "volvis/render.h"
+#include "volvis/sys/geometry.h"
 #include "volvis/sys/renderer.h"
 
 #define RT_MAX_OBJ 64
@@ -23,43 +25,17 @@
 #define RT_EPS 1e-6                   /* relative ray offset off surfaces */
 
 /* ---------------------------------------------------------------------- */
-/* Vector helpers, inline (the library's are in another translation unit
- * and sit on the hot path of every intersection)                            */
+/* Vector helpers: the ray tracer's short names for core/geom.h's inline ones */
 
-static inline vv_vec3
-v3(double x, double y, double z) {
-    vv_vec3 r = {x, y, z};
-    return r;
-}
-static inline vv_vec3
-v3add(vv_vec3 a, vv_vec3 b) {
-    return v3(a.x + b.x, a.y + b.y, a.z + b.z);
-}
-static inline vv_vec3
-v3sub(vv_vec3 a, vv_vec3 b) {
-    return v3(a.x - b.x, a.y - b.y, a.z - b.z);
-}
-static inline vv_vec3
-v3scale(vv_vec3 a, double k) {
-    return v3(a.x * k, a.y * k, a.z * k);
-}
-static inline double
-v3dot(vv_vec3 a, vv_vec3 b) {
-    return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-static inline vv_vec3
-v3cross(vv_vec3 a, vv_vec3 b) {
-    return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
-}
-static inline double
-v3len(vv_vec3 a) {
-    return sqrt(v3dot(a, a));
-}
-static inline vv_vec3
-v3norm(vv_vec3 a) {
-    double l = v3len(a);
-    return l > 0 ? v3scale(a, 1.0 / l) : a;
-}
+#define v3 vv_v3
+#define v3add vv_v3_add
+#define v3sub vv_v3_sub
+#define v3scale vv_v3_scale
+#define v3dot vv_v3_dot
+#define v3cross vv_v3_cross
+#define v3len vv_v3_len
+#define v3norm vv_v3_norm
+
 static inline vv_vec3
 ray_at(const vv_ray *r, double t) {
     return v3add(r->origin, v3scale(r->dir, t));
@@ -146,37 +122,22 @@ typedef struct rt_vobj {
     int inv_form;                   /* vv_vray_clip_region's form for this object's kernel */
 } rt_vobj;
 
-/* Bounding volume hierarchy over a mesh's triangles (object space). */
-typedef struct rt_bvh_node {
-    float lo[3], hi[3];
-    int left;       /* child index, or -1 for a leaf */
-    int first, cnt; /* leaf: triangles tri[first .. first + cnt) */
-} rt_bvh_node;
-
-typedef struct rt_bvh {
-    rt_bvh_node *nodes;
-    int n_nodes;
-    uint32_t *tri; /* triangle order */
-} rt_bvh;
-
 /* One geometric object prepared for this render. */
 typedef struct rt_gobj {
     const vv_object *obj;
     vv_object_type type;
-    double w2o[3][4]; /* world -> object */
-    double nrm[3][3]; /* object normal -> world normal (M^-T) */
-    vv_plane plane;   /* polygon: its plane (object space); axis dropped for 2-D test */
-    int drop;
-    rt_bvh bvh;
-    vv_box obox; /* object-space bounds (not for planes) */
+    double w2o[3][4];         /* world -> object */
+    double nrm[3][3];         /* object normal -> world normal (M^-T) */
+    const vv_geom_type *geom; /* its record of the geometry-type table */
+    void *prep;               /* what geom->prepare built, or NULL */
     float col[3];
     float kr, kt; /* reflectance (0 when the object does not reflect), transparency */
     double ior;
-    int closed;     /* refracts (a solid); planes and polygons transmit straight */
-    int bounded;    /* polygon, box: a world-space bounding sphere rejects rays early */
-    vv_vec3 bc;     /* its centre */
-    double br2;     /* its squared radius */
-    vv_vec3 pn, pp; /* plane: world-space normal (M^-T n) and point */
+    int closed;         /* refracts (a solid); planes and polygons transmit straight */
+    int bounded;        /* polygon, box: a world-space bounding sphere rejects rays early */
+    vv_vec3 bc;         /* its centre */
+    double br2;         /* its squared radius */
+    vv_geometry wplane; /* plane: its world-space point and normal (M^-T n) */
 } rt_gobj;
 
 typedef struct rt_frame {
@@ -287,10 +248,6 @@ xf_dir(const double m[3][4], vv_vec3 d) {
               m[1][0] * d.x + m[1][1] * d.y + m[1][2] * d.z,
               m[2][0] * d.x + m[2][1] * d.y + m[2][2] * d.z);
 }
-
-/* Median split on the longest centroid axis, 4 triangles per leaf. Nodes
- * are stored with siblings adjacent (left, left + 1). */
-vv_status rt_bvh_build(rt_bvh *bvh, const vv_mesh *m);
 
 /* Nearest hit of one geometric object in (tmin, tmax); its object-space
  * normal in *no (not normalised, not flipped towards the ray; gobj_normal
