@@ -78,18 +78,10 @@ PUBLIC = {
 # included header as written) -> reason. Reported, not failed; a stale entry
 # fails.
 PENDING = {
-    ("src/render/fourier/fourier.c", "compress/vvc_internal.h"):
-        "src/render (frame's area): the Fourier renderer still uses compress's internals",
 }
 
 # Calls the same pieces of work are removing: (object's source, symbol) -> reason.
 PENDING_CALLS = {
-    ("src/render/fourier/fourier.c", "vv_vvc_spectra"):
-        "src/render (frame's area): the Fourier renderer still uses compress's internals",
-    ("src/render/fourier/fourier.c", "vv_fftw_lock"):
-        "src/render (frame's area): the Fourier renderer still uses compress's internals",
-    ("src/render/fourier/fourier.c", "vv_fftw_unlock"):
-        "src/render (frame's area): the Fourier renderer still uses compress's internals",
 }
 
 # "header", and <volvis/header> (the installed spelling, which the GUI uses)

@@ -24,14 +24,15 @@
  * composited front to back with a transmittance per subcube); the sheared
  * image is finally resampled (Catmull-Rom) into the output image.
  */
+#include <fftw3.h>
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "compress/vvc_internal.h"
 #include "core/geom.h"
 #include "render/registry.h"
+#include "volvis/compress.h"
 #include "volvis/render.h"
 
 #define FR_MAX_CACHE 4 /* volumes whose spectra are kept (each several times the volume) */
