@@ -189,6 +189,17 @@ vv_render_region_check(const vv_world *w, const vv_render_region *rg, vv_region_
     return VV_OK;
 }
 
+vv_status
+vv_render_region_part(const vv_world *w, const vv_render_region *rg, vv_region_op *op,
+                      vv_object *part) {
+    vv_status s = vv_render_region_check(w, rg, op);
+    if (s != VV_OK)
+        return s;
+    *part = *w->objects[rg->object];
+    part->volume = (vv_volume *)rg->voxels;
+    return VV_OK;
+}
+
 void
 vv_region_image_clear(vv_region_image *img) {
     const size_t n = (size_t)img->image->width * (size_t)img->image->height;

@@ -153,6 +153,31 @@ void vv_region_image_finish(vv_region_image *img, vv_vec3 background);
  */
 vv_status vv_render_region_check(const vv_world *w, const vv_render_region *rg, vv_region_op *op);
 
+/**
+ * vv_render_region_check, then *part = the region's object with its volume
+ * replaced by the region's voxels (a shallow copy: nothing in it is
+ * released; it lives as long as @p w and @p rg). Errors as
+ * vv_render_region_check.
+ */
+vv_status vv_render_region_part(const vv_world *w, const vv_render_region *rg, vv_region_op *op,
+                                vv_object *part);
+
+/**
+ * The World's ambient light and background as floats for a frame; with
+ * @p region non-zero the background is 0 (partial images of a region are
+ * composited first and the background is added once, by
+ * vv_region_image_finish).
+ */
+static inline void
+vv_frame_colours(const vv_world *w, int region, float ambient[3], float background[3]) {
+    ambient[0] = (float)w->ambient.x;
+    ambient[1] = (float)w->ambient.y;
+    ambient[2] = (float)w->ambient.z;
+    background[0] = region ? 0.0f : (float)w->background.x;
+    background[1] = region ? 0.0f : (float)w->background.y;
+    background[2] = region ? 0.0f : (float)w->background.z;
+}
+
 /** Clears @p img to "nothing seen": colour 0, depth INFINITY, key NAN. */
 void vv_region_image_clear(vv_region_image *img);
 

@@ -1099,10 +1099,8 @@ ir_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     fr.st = st;
     fr.view = view;
     fr.et = st->early_termination;
-    fr.bg[0] = (float)w->background.x;
-    fr.bg[1] = (float)w->background.y;
-    fr.bg[2] = (float)w->background.z;
-    const float ambient[3] = {(float)w->ambient.x, (float)w->ambient.y, (float)w->ambient.z};
+    float ambient[3];
+    vv_frame_colours(w, 0, ambient, fr.bg);
     fr.n_lights = vv_vlights_prepare(fr.lights, w, view);
     for (int l = 0; l < fr.n_lights; l++)
         fr.point_lights |= fr.lights[l].point;

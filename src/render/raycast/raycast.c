@@ -528,14 +528,7 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
     fr.view = view;
     fr.out = out;
     fr.et = (float)st->early_termination;
-    fr.ambient[0] = (float)w->ambient.x;
-    fr.ambient[1] = (float)w->ambient.y;
-    fr.ambient[2] = (float)w->ambient.z;
-    fr.bg[0] = (float)w->background.x;
-    fr.bg[1] = (float)w->background.y;
-    fr.bg[2] = (float)w->background.z;
-    if (region) /* partial pixels: the background is added once to the whole */
-        fr.bg[0] = fr.bg[1] = fr.bg[2] = 0;
+    vv_frame_colours(w, region != NULL, fr.ambient, fr.bg);
     prepare_lights(&fr, w, view);
     vv_camera_rays_init(&fr.cam, view);
 
@@ -610,12 +603,10 @@ static vv_status
 rc_render_region(void *state, const vv_world *w, const vv_view *view,
                  const vv_render_region *region, const vv_render_options *opt,
                  vv_region_image *out) {
-    const vv_object *obj = w->objects[region->object];
-    vv_status s = vv_render_region_check(w, region, &out->op);
+    vv_object copy;
+    vv_status s = vv_render_region_part(w, region, &out->op, &copy);
     if (s != VV_OK)
         return s;
-    vv_object copy = *obj; /* shallow: nothing in it is released */
-    copy.volume = (vv_volume *)region->voxels;
     vv_object *objs[1] = {&copy};
     vv_world tmp = *w;
     tmp.objects = objs;

@@ -422,14 +422,7 @@ render_frame(rt_state *st, const vv_world *w, const vv_view *view, const vv_rend
     fr.avx2 = vv_vc_have_avx2();
     st->frame++;
     fr.et = (float)st->early_termination;
-    fr.ambient[0] = (float)w->ambient.x;
-    fr.ambient[1] = (float)w->ambient.y;
-    fr.ambient[2] = (float)w->ambient.z;
-    fr.bg[0] = (float)w->background.x;
-    fr.bg[1] = (float)w->background.y;
-    fr.bg[2] = (float)w->background.z;
-    if (region) /* partial pixels: the background is added once to the whole */
-        fr.bg[0] = fr.bg[1] = fr.bg[2] = 0;
+    vv_frame_colours(w, region != NULL, fr.ambient, fr.bg);
     /* quality: 0 preview (no secondary rays, one sample), 1 one sample
      * with shadows and reflections, 2 final (supersampling as set) */
     fr.shadows = opt->quality >= 1 && st->shadows;
@@ -494,14 +487,12 @@ static vv_status
 rt_render_region(void *state, const vv_world *w, const vv_view *view,
                  const vv_render_region *region, const vv_render_options *opt,
                  vv_region_image *out) {
-    const vv_object *obj = w->objects[region->object];
-    vv_status s = vv_render_region_check(w, region, &out->op);
+    vv_object part;
+    vv_status s = vv_render_region_part(w, region, &out->op, &part);
     if (s != VV_OK)
         return s;
-    vv_object part = *obj; /* shallow: nothing in it is released */
-    part.volume = (vv_volume *)region->voxels;
     return render_frame(state, w, view, opt, region, &part, out->image,
-                        obj->mode == VV_MODE_COMPOSITE ? NULL : out->key);
+                        part.mode == VV_MODE_COMPOSITE ? NULL : out->key);
 }
 
 static vv_status

@@ -272,12 +272,7 @@ sp_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     fr->view = view;
     st->vc.frame++;
     fr->et = (float)st->early_termination;
-    fr->ambient[0] = (float)w->ambient.x;
-    fr->ambient[1] = (float)w->ambient.y;
-    fr->ambient[2] = (float)w->ambient.z;
-    fr->bg[0] = (float)w->background.x;
-    fr->bg[1] = (float)w->background.y;
-    fr->bg[2] = (float)w->background.z;
+    vv_frame_colours(w, 0, fr->ambient, fr->bg);
     fr->n_lights = vv_vlights_prepare(fr->lights, w, view);
     for (int l = 0; l < fr->n_lights; l++)
         fr->point_lights |= fr->lights[l].point;
