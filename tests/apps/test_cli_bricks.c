@@ -6,9 +6,10 @@
  * raycast and raytrace (region renders trace one ray a pixel: the ray
  * tracer's quality 1; MIP byte for byte; composite with its shadows traced
  * through the proxy: >= 50 dB where the proxy is the whole volume, the nut;
- * on the CT head, a 2x coarser proxy, exact without shadows and measured
- * with them), and its errors: a memory limit smaller than one brick, a bad
- * size, a scene file, a renderer without the region contract.
+ * on the CT head, a 4x coarser proxy (the .vvb's coarse level), exact
+ * without shadows and measured with them), and its errors: a memory limit
+ * smaller than one brick, a bad size, a scene file, a renderer without the
+ * region contract.
  */
 #include "testutil.h"
 
@@ -117,7 +118,7 @@ test_renderers(void **state) {
     assert_true(mem_vs_ooc(nut, nvvb, "raytrace", "composite", "shadows=1", "40:200") >= 50);
     assert_true(isinf(mem_vs_ooc(nut, nvvb, "raycast", "mip", "simd=1", "40:200")));
     /* the CT head: MIP exact; composite exact without shadows, with them
-     * through the 2x coarser proxy (docs/parallel.md gives the figure) */
+     * through the 4x coarser proxy (docs/parallel.md gives the figure) */
     assert_true(isinf(mem_vs_ooc(head, hvvb, "raytrace", "mip", "shadows=1", "100:1500")));
     assert_true(mem_vs_ooc(head, hvvb, "raytrace", "composite", "shadows=0", "100:1500") >= 50);
     assert_true(mem_vs_ooc(head, hvvb, "raytrace", "composite", "shadows=1", "100:1500") >= 30);
