@@ -117,6 +117,8 @@ main(int argc, char **argv) {
     if (vv_renderer_new(&ren, "raycast") != VV_OK || vv_image_new(&img, size, size) != VV_OK)
         bench_die("bench_ooc", "renderer");
     double times[100];
+    vv_brick_source src;
+    vv_bricked_source(b, &src);
     vv_bricked_stats st0, st1;
     vv_bricked_stats_get(b, &st0);
     const uint64_t open_bytes = st0.bytes_read;
@@ -125,7 +127,7 @@ main(int argc, char **argv) {
             vv_view_orbit(&w->view, 10 * 3.14159265358979 / 180, 0);
         vv_bricked_stats_get(b, &st0);
         const double t = bench_now();
-        if (vv_bricked_render(b, ren, w, 0, &w->view, NULL, img) != VV_OK)
+        if (vv_renderer_render_bricks(ren, w, 0, &src, &w->view, NULL, img) != VV_OK)
             bench_die("bench_ooc", "render");
         times[f] = bench_now() - t;
         vv_bricked_stats_get(b, &st1);

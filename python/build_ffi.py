@@ -47,6 +47,11 @@ def preprocess(cc, include_dir, headers):
                 f.write("#pragma once\n")
                 for t in STANDARD_TYPES:
                     f.write("typedef int %s;\n" % t)
+        # the inline helpers of include/volvis/sys/renderer.h use sqrt and
+        # INFINITY in their bodies, which become declarations only
+        with open(os.path.join(fake, "math.h"), "w") as f:
+            f.write("#pragma once\ndouble sqrt(double);\n"
+                    "#define INFINITY (__builtin_inff())\n#define NAN (__builtin_nanf(\"\"))\n")
         src = os.path.join(fake, "all.h")
         with open(src, "w") as f:
             for h in headers:

@@ -13,6 +13,41 @@
 
 extern char **environ;
 
+/* Tests skipped in this program (cmocka runs its tests one after another
+ * in one thread). */
+static int g_skipped;
+
+void
+vt_skip_note(const char *file, int line, const char *fmt, ...) {
+    char msg[512];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    g_skipped++;
+    const char *base = strrchr(file, '/');
+    print_message("SKIPPED at %s:%d: %s\n", base ? base + 1 : file, line, msg);
+}
+
+int
+vt_run_status(int failures) {
+    if (failures == 0 && g_skipped > 0) {
+        print_message("%d test(s) skipped: reported to CTest as skipped (exit %d)\n", g_skipped,
+                      VT_SKIP_STATUS);
+        return VT_SKIP_STATUS;
+    }
+    return failures;
+}
+
+int
+vt_have_data(const char *rel) {
+    FILE *f = fopen(vt_data(rel), "rb");
+    if (!f)
+        return 0;
+    fclose(f);
+    return 1;
+}
+
 const char *
 vt_data(const char *rel) {
     static _Thread_local char buf[8][1024];
@@ -165,4 +200,29 @@ vt_sphere_mesh(double r, int levels) {
         free(old);
     }
     return m;
+}
+
+double
+vt_rnd(uint64_t *s, double lo, double hi) {
+    uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    z ^= z >> 31;
+    return lo + (hi - lo) * (double)(z >> 11) / 9007199254740992.0;
+}
+
+double
+vt_png_psnr(const char *a, const char *b) {
+    vv_image *x = NULL, *y = NULL;
+    vt_ok(vv_image_read_png(&x, a));
+    vt_ok(vv_image_read_png(&y, b));
+    assert_int_equal(x->width, y->width);
+    assert_int_equal(x->height, y->height);
+    const size_t n = 4 * (size_t)x->width * (size_t)x->height;
+    double se = 0;
+    for (size_t i = 0; i < n; i++)
+        se += ((double)x->rgba[i] - y->rgba[i]) * ((double)x->rgba[i] - y->rgba[i]);
+    vv_image_free(x);
+    vv_image_free(y);
+    return se > 0 ? 10 * log10(1.0 / (se / (double)n)) : INFINITY;
 }

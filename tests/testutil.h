@@ -17,6 +17,40 @@
 
 #define VV_DATA_DIR VV_SOURCE_DIR "/../shared/data"
 
+/*
+ * Skipping honestly. Every test program exits through vt_run_tests, which
+ * returns VT_SKIP_STATUS (CTest's SKIP_RETURN_CODE, set for every test in
+ * tests/CMakeLists.txt) when a test was skipped and none failed, so CTest
+ * reports the program "Skipped", never "Passed"; CI (scripts/test.sh) fails
+ * on any skip. A test skips with vt_skip("why"), never with cmocka's bare
+ * skip(), which is disabled below so that no skip goes uncounted.
+ */
+#define VT_SKIP_STATUS 77
+
+/** Records and prints why the running test is skipped (use vt_skip). */
+void vt_skip_note(const char *file, int line, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+/** Skips the running test, printing the reason (printf format). */
+#define vt_skip(...)                                                                               \
+    do {                                                                                           \
+        vt_skip_note(__FILE__, __LINE__, __VA_ARGS__);                                             \
+        _skip(__FILE__, __LINE__);                                                                 \
+    } while (0)
+
+#undef skip
+#define skip() vt_skip_needs_a_reason_use_vt_skip
+
+/** The exit status of a test program: 0, VT_SKIP_STATUS, or @p failures. */
+int vt_run_status(int failures);
+
+/** Runs a cmocka group (as cmocka_run_group_tests) and returns vt_run_status. */
+#define vt_run_tests(tests, setup, teardown)                                                       \
+    vt_run_status(cmocka_run_group_tests(tests, setup, teardown))
+
+/** 1 when the shared data file @p rel (as for vt_data) can be opened. */
+int vt_have_data(const char *rel);
+
 /** Path of a shared data file, e.g. vt_data("volumes/nut.slc"); static buffer per call site. */
 const char *vt_data(const char *rel);
 
@@ -45,6 +79,9 @@ unsigned char *vt_read_file(const char *path, size_t *n);
  */
 vv_mesh *vt_sphere_mesh(double r, int levels);
 
+/** Deterministic uniform numbers in [lo, hi) from the state @p s (splitmix64). */
+double vt_rnd(uint64_t *s, double lo, double hi);
+
 /** What a run of the volvis command-line tool did (vt_run_cli_v). */
 typedef struct vt_run_result {
     int status; /**< exit status, or 128 + signal number */
@@ -62,6 +99,10 @@ vt_run_result vt_run_cli_v(const char *dir, const char *const *args);
 void vt_run_result_free(vt_run_result *r);
 /** "@p dir/@p name" in one of 8 rotating buffers. */
 const char *vt_path(const char *dir, const char *name);
+
+/** PSNR in dB of two PNG files of one size over their RGBA channels in
+ * [0, 1] (INFINITY when identical); asserts both read and match in size. */
+double vt_png_psnr(const char *a, const char *b);
 
 /** Asserts |a - b| <= eps, printing both values on failure. */
 #define assert_near(a, b, eps)                                                                     \

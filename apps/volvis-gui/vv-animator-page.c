@@ -886,7 +886,7 @@ render_main(gpointer data) {
     vv_renderer *r = NULL;
     vv_error_clear();
     /* the World's renderer with its options and quality, as `volvis animate` */
-    vv_status s = vv_renderer_new_from_settings(&r, &w->render);
+    vv_status s = vv_renderer_new_for_world(&r, w);
     if (s == VV_OK) {
         vv_anim_render_options o;
         vv_anim_render_options_init(&o);

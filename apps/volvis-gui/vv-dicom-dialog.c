@@ -222,6 +222,8 @@ vv_dicom_dialog_present(GtkWindow *parent, VvDocument *doc) {
     g_signal_connect(d->show_phi, "toggled", G_CALLBACK(phi_toggled), d);
     gtk_box_append(GTK_BOX(box), d->show_phi);
     d->list = gtk_list_box_new();
+    /* a click selects a series, a double click (or Open series) opens it */
+    gtk_list_box_set_activate_on_single_click(GTK_LIST_BOX(d->list), FALSE);
     vvg_name(d->list, "series");
     g_signal_connect(d->list, "row-activated", G_CALLBACK(row_activated), d);
     GtkWidget *sc = vvg_scrolled(d->list);

@@ -218,23 +218,21 @@ open_scene(VvDocument *doc, const char *path, GError **error) {
     return TRUE;
 }
 
-/* The renderer that draws every object of @p w: a World of geometry
- * alone gets `surface`, volumes beside geometry `raytrace`; a renderer
- * the user chose that draws them is kept. */
+/* The renderer that draws every object of @p w: a renderer the user chose
+ * that draws them is kept, else the World's default (vv_world_renderer:
+ * the first renderer whose capabilities cover every object), named in the
+ * settings so the saved scene renders the same through the CLI. */
 static void
 choose_renderer(vv_world *w) {
-    int volumes = 0, geometry = 0;
-    for (int i = 0; i < w->n_objects; i++) {
-        if (w->objects[i]->type == VV_OBJECT_VOLUME)
-            volumes++;
-        else if (w->objects[i]->type != VV_OBJECT_GRID)
-            geometry++;
-    }
-    const char *r = vv_render_settings_renderer(&w->render);
-    if (!geometry || strcmp(r, "raycast") != 0)
-        return; /* only the ray caster draws no geometry */
-    g_strlcpy(w->render.renderer, volumes ? "raytrace" : "surface", sizeof w->render.renderer);
-    w->render.n_options = 0;
+    const vv_renderer_info *info = vv_renderer_info_find(vv_render_settings_renderer(&w->render));
+    gboolean all = info != NULL;
+    for (int i = 0; all && i < w->n_objects; i++)
+        all = !w->objects[i]->visible || (info->draws & VV_DRAWS(w->objects[i]->type));
+    if (all)
+        return;
+    w->render.renderer[0] = '\0';
+    w->render.n_options = 0; /* the options belong to the other renderer */
+    g_strlcpy(w->render.renderer, vv_world_renderer(w), sizeof w->render.renderer);
 }
 
 gboolean

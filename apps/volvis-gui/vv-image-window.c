@@ -45,7 +45,7 @@ render_main(gpointer data) {
     const vv_world *w = win->world;
     vv_renderer *r = NULL;
     vv_error_clear();
-    vv_status s = vv_renderer_new_from_settings(&r, &w->render);
+    vv_status s = vv_renderer_new_for_world(&r, w);
     if (s == VV_OK)
         s = vv_image_new(&win->image, w->view.width, w->view.height);
     if (s == VV_OK) {

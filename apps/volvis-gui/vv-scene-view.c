@@ -158,7 +158,7 @@ render_one(VvSceneView *self, const job *j, vv_preview_kind kind) {
     f->refine = j->refine;
     f->posted_us = j->posted_us;
     const vv_world *w = j->world;
-    const char *rname = vv_render_settings_renderer(&w->render);
+    const char *rname = vv_world_renderer(w);
     vv_status s = VV_OK;
     vv_error_clear();
     if (!self->preview || strcmp(rname, self->preview_renderer) != 0) {

@@ -136,6 +136,13 @@ int cli_parse_plane(const cli_args *a, const char *opt, const char *text, vv_cut
 /** 1 when @p s ends with @p suffix, ignoring ASCII case (file extensions). */
 int cli_ends_with(const char *s, const char *suffix);
 
+/** Prints the volume formats (and with @p grids the grid formats) of the
+ *  format tables, one entry each with what it reads and writes. */
+void cli_print_formats(FILE *out, int grids);
+/** The names (or with @p extensions the ".ext"s) of the formats that write,
+ *  joined by @p sep, into @p buf. */
+void cli_writable_formats(char *buf, size_t cap, const char *sep, int extensions);
+
 /* ---- errors ---------------------------------------------------------------- */
 
 /** Prints "volvis: <formatted>" as one line on stderr (newlines become "; "). */
@@ -249,6 +256,20 @@ void cli_render_ortho(const cli_render_args *r, vv_world *w);
  */
 int cli_render_renderer(const cli_args *a, const cli_render_args *r, const vv_world *w,
                         vv_renderer **out, int *quality);
+/** The registered renderers' names, comma-separated, into @p buf; returns it. */
+const char *cli_renderer_names(char *buf, size_t cap);
+/** The object kinds in a vv_renderer_info.draws mask ("volume, plane"), into @p buf. */
+const char *cli_renderer_kinds(unsigned draws, char *buf, size_t cap);
+/** The modes in a vv_renderer_info.modes mask ("composite, mip"), into @p buf. */
+const char *cli_renderer_modes(unsigned modes, char *buf, size_t cap);
+/**
+ * Prints on stderr which visible objects of @p w the renderer leaves out
+ * (kinds it does not draw; vv_renderer_check_world), if any.
+ */
+void cli_render_note_left_out(const vv_renderer *ren, const vv_world *w);
+/** `volvis renderers`: lists the renderers, their capabilities and options. */
+int cli_renderers_main(int argc, char **argv);
+void cli_renderers_usage(FILE *out);
 /** The --help lines of the shared options (from --mode to --quiet). */
 void cli_render_print_options(FILE *out);
 /** The registry's renderers with their --set options, for --help. */

@@ -177,6 +177,151 @@ scene_beside(const char *anim_path, const char *scene) {
     return p;
 }
 
+/* The animation: --animation FILE (its scene the INPUT when none is given:
+ * *@p scene_path, malloc'ed), --fps and --frames overriding it; else a new
+ * one of @p frames at @p fps. Returns 0 or an exit status. */
+static int
+animation_from_args(cli_args *a, cli_render_args *r, const char *anim_file, double fps, int frames,
+                    vv_animation **anim_out, char **scene_path) {
+    vv_animation *anim = NULL;
+    vv_status st;
+    int rc;
+    if (!anim_file) {
+        if ((st = vv_animation_new(&anim)) != VV_OK)
+            return cli_fail(st, NULL);
+        anim->fps = fps;
+        anim->duration = frames / fps;
+        *anim_out = anim;
+        return 0;
+    }
+    vv_error_clear();
+    if ((rc = cli_check_readable(anim_file)))
+        return rc;
+    if ((st = vv_animation_load(&anim, anim_file)) != VV_OK)
+        return cli_fail(st, anim_file);
+    if (!r->input) {
+        if (!anim->scene) {
+            vv_animation_free(anim);
+            return cli_usage_error(a, "missing INPUT: %s names no scene", anim_file);
+        }
+        if (!(*scene_path = scene_beside(anim_file, anim->scene))) {
+            vv_animation_free(anim);
+            cli_error("out of memory");
+            return CLI_EXIT_FAIL;
+        }
+        r->input = *scene_path;
+    }
+    if (cli_get(a, "fps"))
+        anim->fps = fps;
+    if (cli_get(a, "frames"))
+        anim->duration = frames / anim->fps;
+    *anim_out = anim;
+    return 0;
+}
+
+/* The sequences: the start view (render's turn as an orbit of @p orbit
+ * degrees, so that frame k draws exactly what `volvis render --azimuth
+ * (AZIMUTH + DEG k / N)` draws), then --rotate-object, --fly and
+ * --sweep-cut in the order given. */
+static int
+add_sequences(cli_args *a, const cli_render_args *r, double orbit, vv_world *w,
+              vv_animation *anim) {
+    vv_anim_sequence q;
+    memset(&q, 0, sizeof q);
+    q.type = VV_SEQ_ORBIT;
+    q.degrees = orbit;
+    q.azimuth = r->azimuth;
+    q.elevation = r->elevation;
+    q.zoom = r->zoom;
+    if (r->ortho) /* --ortho framed the view already; its height holds the zoom */
+        q.zoom = 1;
+    vv_error_clear();
+    vv_status st;
+    if ((st = vv_animation_add_sequence(anim, &q)) != VV_OK)
+        return cli_fail(st, NULL);
+    for (int i = 0; i < a->n_seen; i++) {
+        const char *name = a->specs[a->seen[i].opt].name, *v = a->seen[i].value;
+        int rc;
+        memset(&q, 0, sizeof q);
+        q.zoom = 1;
+        if (strcmp(name, "rotate-object") == 0) {
+            q.type = VV_SEQ_ROTATE_OBJECT;
+            rc = parse_rotate(a, v, &q);
+        } else if (strcmp(name, "fly") == 0) {
+            double d[3];
+            int vox;
+            q.type = VV_SEQ_FLY;
+            rc = cli_parse_point(a, "fly", v, d, &vox);
+            if (!rc && vox)
+                rc = cli_usage_error(a, "--fly: expected X,Y,Z in world units, got '%s'", v);
+            q.offset = vv_vec3_make(d[0], d[1], d[2]);
+        } else if (strcmp(name, "sweep-cut") == 0) {
+            q.type = VV_SEQ_SWEEP_CUT;
+            rc = parse_sweep(a, v, w, &q);
+        } else {
+            continue;
+        }
+        if (rc)
+            return rc;
+        vv_error_clear();
+        if ((st = vv_animation_add_sequence(anim, &q)) != VV_OK)
+            return cli_fail(st, NULL);
+    }
+    return 0;
+}
+
+/* Renders every frame (under mpirun through cli_animate_parallel) and
+ * prints what was written. */
+static int
+render_frames(cli_args *a, const cli_render_args *r, vv_animation *anim, vv_world *w,
+              vv_renderer *ren, int quality, int crf) {
+    vv_anim_render_options o;
+    vv_anim_render_options_init(&o);
+    o.output = r->output;
+    o.render.threads = r->threads;
+    o.render.quality = quality;
+    o.gamma = r->gamma;
+    o.alpha = r->alpha;
+    o.resume = cli_count(a, "no-resume") == 0;
+    o.video.crf = crf;
+    cli_progress pr;
+    cli_progress_begin(&pr, r->quiet);
+    o.progress = pr.p;
+    vv_anim_render_stats stats;
+    vv_status st;
+    vv_error_clear();
+    if (vv_parallel_launched()) {
+        /* under mpirun: rank 0 runs the Animator, the others render with it */
+        int mrank = 0, msize = 1;
+        vv_parallel_init(NULL, NULL, &mrank, &msize);
+        int rc = cli_animate_parallel(r, anim, w, ren, &o, &stats, &st);
+        cli_progress_end(&pr);
+        if (rc || mrank != 0)
+            return rc;
+        if (!r->quiet)
+            printf("wrote %s (%d frames at %g fps, %dx%d; %d rendered, %d reused; %.2f s on %d "
+                   "rank%s)\n",
+                   r->output, stats.frames, anim->fps, w->view.width, w->view.height,
+                   stats.rendered, stats.reused, stats.total_s, msize, msize == 1 ? "" : "s");
+        return CLI_EXIT_OK;
+    }
+    st = vv_animation_render(anim, w, ren, &o, &stats);
+    cli_progress_end(&pr);
+    if (st == VV_ERR_CANCELLED) {
+        cli_error("animate: interrupted after %d of %d frames; run the same command again to "
+                  "resume",
+                  stats.rendered + stats.reused, stats.frames);
+        return CLI_EXIT_CANCEL;
+    }
+    if (st != VV_OK)
+        return cli_fail(st, NULL);
+    if (!r->quiet)
+        printf("wrote %s (%d frames at %g fps, %dx%d; %d rendered, %d reused; %.2f s)\n", r->output,
+               stats.frames, anim->fps, w->view.width, w->view.height, stats.rendered, stats.reused,
+               stats.total_s);
+    return CLI_EXIT_OK;
+}
+
 int
 cli_animate_main(int argc, char **argv) {
     cli_args a;
@@ -219,83 +364,13 @@ cli_animate_main(int argc, char **argv) {
     vv_renderer *ren = NULL;
     char *scene_path = NULL;
     vv_status st;
-    if (anim_file) {
-        vv_error_clear();
-        if ((rc = cli_check_readable(anim_file)))
-            return rc;
-        if ((st = vv_animation_load(&anim, anim_file)) != VV_OK)
-            return cli_fail(st, anim_file);
-        if (!r.input) {
-            if (!anim->scene) {
-                vv_animation_free(anim);
-                return cli_usage_error(&a, "missing INPUT: %s names no scene", anim_file);
-            }
-            if (!(scene_path = scene_beside(anim_file, anim->scene))) {
-                vv_animation_free(anim);
-                cli_error("out of memory");
-                return CLI_EXIT_FAIL;
-            }
-            r.input = scene_path;
-        }
-        if (cli_get(&a, "fps")) {
-            anim->fps = fps;
-        }
-        if (cli_get(&a, "frames"))
-            anim->duration = frames / anim->fps;
-    } else {
-        if ((st = vv_animation_new(&anim)) != VV_OK)
-            return cli_fail(st, NULL);
-        anim->fps = fps;
-        anim->duration = frames / fps;
-    }
+    if ((rc = animation_from_args(&a, &r, anim_file, fps, frames, &anim, &scene_path)))
+        return rc;
     if ((rc = cli_render_world(&r, &w)))
         goto done;
-    /* The start view: render's turn as a sequence, so that frame k draws
-     * exactly what `volvis render --azimuth (AZIMUTH + DEG k / N)` draws. */
     cli_render_ortho(&r, w);
-    vv_anim_sequence q;
-    memset(&q, 0, sizeof q);
-    q.type = VV_SEQ_ORBIT;
-    q.degrees = orbit;
-    q.azimuth = r.azimuth;
-    q.elevation = r.elevation;
-    q.zoom = r.zoom;
-    if (r.ortho) /* --ortho framed the view already; its height holds the zoom */
-        q.zoom = 1;
-    vv_error_clear();
-    if ((st = vv_animation_add_sequence(anim, &q)) != VV_OK) {
-        rc = cli_fail(st, NULL);
+    if ((rc = add_sequences(&a, &r, orbit, w, anim)))
         goto done;
-    }
-    for (int i = 0; i < a.n_seen; i++) {
-        const char *name = a.specs[a.seen[i].opt].name, *v = a.seen[i].value;
-        memset(&q, 0, sizeof q);
-        q.zoom = 1;
-        if (strcmp(name, "rotate-object") == 0) {
-            q.type = VV_SEQ_ROTATE_OBJECT;
-            rc = parse_rotate(&a, v, &q);
-        } else if (strcmp(name, "fly") == 0) {
-            double d[3];
-            int vox;
-            q.type = VV_SEQ_FLY;
-            rc = cli_parse_point(&a, "fly", v, d, &vox);
-            if (!rc && vox)
-                rc = cli_usage_error(&a, "--fly: expected X,Y,Z in world units, got '%s'", v);
-            q.offset = vv_vec3_make(d[0], d[1], d[2]);
-        } else if (strcmp(name, "sweep-cut") == 0) {
-            q.type = VV_SEQ_SWEEP_CUT;
-            rc = parse_sweep(&a, v, w, &q);
-        } else {
-            continue;
-        }
-        if (rc)
-            goto done;
-        vv_error_clear();
-        if ((st = vv_animation_add_sequence(anim, &q)) != VV_OK) {
-            rc = cli_fail(st, NULL);
-            goto done;
-        }
-    }
     vv_error_clear();
     if ((st = vv_animation_validate(anim)) != VV_OK ||
         (st = vv_animation_check_world(anim, w)) != VV_OK) {
@@ -314,55 +389,7 @@ cli_animate_main(int argc, char **argv) {
         goto done;
     if (r.threads > 0)
         vv_threads_set(r.threads);
-
-    vv_anim_render_options o;
-    vv_anim_render_options_init(&o);
-    o.output = r.output;
-    o.render.threads = r.threads;
-    o.render.quality = quality;
-    o.gamma = r.gamma;
-    o.alpha = r.alpha;
-    o.resume = cli_count(&a, "no-resume") == 0;
-    o.video.crf = crf;
-    cli_progress pr;
-    cli_progress_begin(&pr, r.quiet);
-    o.progress = pr.p;
-    vv_anim_render_stats stats;
-    vv_error_clear();
-    if (vv_parallel_launched()) {
-        /* under mpirun: rank 0 runs the Animator, the others render with it */
-        int mrank = 0, msize = 1;
-        vv_parallel_init(NULL, NULL, &mrank, &msize);
-        rc = cli_animate_parallel(&r, anim, w, ren, &o, &stats, &st);
-        cli_progress_end(&pr);
-        if (rc || mrank != 0)
-            goto done;
-        if (!r.quiet)
-            printf("wrote %s (%d frames at %g fps, %dx%d; %d rendered, %d reused; %.2f s on %d "
-                   "rank%s)\n",
-                   r.output, stats.frames, anim->fps, w->view.width, w->view.height, stats.rendered,
-                   stats.reused, stats.total_s, msize, msize == 1 ? "" : "s");
-        rc = CLI_EXIT_OK;
-        goto done;
-    }
-    st = vv_animation_render(anim, w, ren, &o, &stats);
-    cli_progress_end(&pr);
-    if (st != VV_OK) {
-        if (st == VV_ERR_CANCELLED) {
-            cli_error("animate: interrupted after %d of %d frames; run the same command again to "
-                      "resume",
-                      stats.rendered + stats.reused, stats.frames);
-            rc = CLI_EXIT_CANCEL;
-        } else {
-            rc = cli_fail(st, NULL);
-        }
-        goto done;
-    }
-    if (!r.quiet)
-        printf("wrote %s (%d frames at %g fps, %dx%d; %d rendered, %d reused; %.2f s)\n", r.output,
-               stats.frames, anim->fps, w->view.width, w->view.height, stats.rendered, stats.reused,
-               stats.total_s);
-    rc = CLI_EXIT_OK;
+    rc = render_frames(&a, &r, anim, w, ren, quality, crf);
 done:
     vv_renderer_free(ren);
     vv_world_free(w);

@@ -5,6 +5,7 @@
 #include <strings.h>
 
 #include "cli.h"
+#include "volvis/sys/format.h"
 
 static const cli_opt_spec convert_opts[] = {
     {"format", 0, "nrrd|slc|vvb"},
@@ -19,35 +20,43 @@ static const cli_opt_spec convert_opts[] = {
 
 void
 cli_convert_usage(FILE *out) {
-    fprintf(out, "usage: volvis convert [OPTIONS] IN OUT\n"
-                 "\n"
-                 "Converts any readable volume (SLC, NRRD, NIfTI, MetaImage, VTK, TIFF,\n"
-                 "DICOM, raw) to\n"
-                 "NRRD (.nrrd, .nhdr; gzip-compressed, keeps the voxel type, spacing and\n"
-                 "origin) or SLC (.slc; VolVis's own 8-bit format). SLC holds 8-bit data only:\n"
-                 "other voxel types are rescaled from the value range to 0..255, with a note\n"
-                 "on stderr. The output is written atomically: on failure an existing OUT is\n"
-                 "left untouched. Prints what was written. No patient identifier of a DICOM\n"
-                 "series is written (a volume keeps none).\n"
-                 "\n"
-                 "OUT.vvb is VolVis's bricked format for volumes larger than memory\n"
-                 "(docs/file-formats.md; rendered with 'volvis render --memory-limit'):\n"
-                 "raw input (--raw) and uncompressed NRRD are read a brick at a time by\n"
-                 "pread, so memory stays bounded by a brick; other formats are read whole\n"
-                 "first. Each brick gets a coarse level (every 4th voxel) unless\n"
-                 "--no-coarse.\n"
-                 "\n"
-                 "Options:\n"
-                 "  --format nrrd|slc|vvb  output format (default: from OUT's extension)\n"
-                 "  --no-coarse        .vvb: no coarse level per brick\n"
-                 "  --strict           refuse to rescale to 8 bits for SLC (exit 1 instead)\n"
-                 "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
-                 "                     read IN as raw voxels (see 'volvis info --help')\n"
-                 "  --series N         DICOM: series N as 'volvis info' lists them\n"
-                 "  --channel C        TIFF and DICOM: channel C, from 0 (default 0)\n"
-                 "  -q, --quiet        no 'wrote' line and no rescaling note\n"
-                 "  -h, --help         show this help\n"
-                 "\n"
+    char names[128];
+    cli_writable_formats(names, sizeof names, "|", 0);
+    fprintf(out,
+            "usage: volvis convert [OPTIONS] IN OUT\n"
+            "\n"
+            "Converts any readable volume (the formats below, or raw with --raw) to one\n"
+            "of the formats that write (below), chosen from OUT's extension or --format.\n"
+            "NRRD (.nrrd, .nhdr) is gzip-compressed and keeps the voxel type, spacing,\n"
+            "origin and direction; SLC (.slc; VolVis's own 8-bit format) holds 8-bit\n"
+            "data only: other voxel types are rescaled from the value range to 0..255,\n"
+            "with a note on stderr. The output is written atomically: on failure an\n"
+            "existing OUT is left untouched. Prints what was written. No patient\n"
+            "identifier of a DICOM series is written (a volume keeps none).\n"
+            "\n"
+            "OUT.vvb is VolVis's bricked format for volumes larger than memory\n"
+            "(docs/file-formats.md; rendered with 'volvis render --memory-limit'):\n"
+            "raw input (--raw) and uncompressed NRRD are read a brick at a time by\n"
+            "pread, so memory stays bounded by a brick; other formats are read whole\n"
+            "first. Each brick gets a coarse level (every 4th voxel) unless\n"
+            "--no-coarse.\n"
+            "\n"
+            "Options:\n"
+            "  --format %s|vvb  output format (default: from OUT's extension)\n"
+            "  --no-coarse        .vvb: no coarse level per brick\n"
+            "  --strict           refuse what the format cannot hold as it is (SLC: a\n"
+            "                     voxel type other than 8 bits) instead of converting\n"
+            "                     it (exit 1)\n"
+            "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
+            "                     read IN as raw voxels (see 'volvis info --help')\n"
+            "  --series N         DICOM: series N as 'volvis info' lists them\n"
+            "  --channel C        TIFF and DICOM: channel C, from 0 (default 0)\n"
+            "  -q, --quiet        no 'wrote' line and no conversion note\n"
+            "  -h, --help         show this help\n"
+            "\n",
+            names);
+    cli_print_formats(out, 0);
+    fprintf(out, "\n"
                  "Examples:\n"
                  "  volvis convert ../shared/data/volumes/nut.slc nut.nrrd\n"
                  "  volvis convert ../shared/data/volumes/ct_head.nrrd head.slc\n"
@@ -113,28 +122,28 @@ cli_convert_main(int argc, char **argv) {
         return cli_usage_error(&a, "expected IN and OUT, got %d arguments", a.n_pos);
     const char *in = a.pos[0], *out = a.pos[1];
 
+    /* the format: --format NAME (one that writes, or vvb), else OUT's extension;
+     * VV_FORMAT_AUTO stands for .vvb below */
     vv_format format;
     const char *s = cli_get(&a, "format");
+    char names[128], exts[128];
+    cli_writable_formats(names, sizeof names, ", ", 0);
+    cli_writable_formats(exts, sizeof exts, "/", 1);
     if (s) {
-        if (strcmp(s, "nrrd") == 0)
-            format = VV_FORMAT_NRRD;
-        else if (strcmp(s, "slc") == 0)
-            format = VV_FORMAT_SLC;
-        else if (strcmp(s, "vvb") == 0)
-            format = VV_FORMAT_AUTO; /* .vvb: below */
-        else
-            return cli_usage_error(&a, "--format: cannot write '%s' (nrrd, slc or vvb)", s);
+        vv_error_clear();
+        if (strcmp(s, "vvb") == 0)
+            format = VV_FORMAT_AUTO;
+        else if (vv_format_parse(s, &format) != VV_OK || format == VV_FORMAT_AUTO ||
+                 !vv_volume_format_table(NULL)[format - 1]->write)
+            return cli_usage_error(&a, "--format: cannot write '%s' (%s or vvb)", s, names);
     } else if (cli_ends_with(out, ".vvb")) {
         format = VV_FORMAT_AUTO;
-    } else if (cli_ends_with(out, ".slc")) {
-        format = VV_FORMAT_SLC;
-    } else if (cli_ends_with(out, ".nrrd") || cli_ends_with(out, ".nhdr")) {
-        format = VV_FORMAT_NRRD;
-    } else {
+    } else if ((format = vv_format_from_extension(out)) == VV_FORMAT_UNKNOWN) {
+        cli_writable_formats(names, sizeof names, "|", 0);
         return cli_usage_error(&a,
                                "cannot tell the output format from '%s'; use --format "
-                               "nrrd|slc or a .nrrd/.slc extension",
-                               out);
+                               "%s or a %s extension",
+                               out, names, exts);
     }
     int strict = cli_count(&a, "strict") > 0;
     int quiet = cli_count(&a, "quiet") > 0;
@@ -152,11 +161,13 @@ cli_convert_main(int argc, char **argv) {
                            cli_count(&a, "no-coarse") == 0, quiet);
     if ((rc = cli_load_volume_sc(in, raw_spec ? &raw : NULL, series, channel, &v)))
         return rc;
-    int rescale = format == VV_FORMAT_SLC && v->type != VV_U8;
-    if (rescale && strict) {
-        cli_error("%s: SLC holds 8-bit voxels only; refusing to rescale %s data to 8 bits "
-                  "(--strict)",
-                  out, vv_voxel_type_name(v->type));
+    /* what the format cannot hold as it is (SLC: 8 bits only) is refused with
+     * --strict, else converted with a note */
+    const vv_volume_format *rec = vv_volume_format_table(NULL)[format - 1];
+    char why[256];
+    const int convert = rec->fits && !rec->fits(v, why, sizeof why);
+    if (convert && strict) {
+        cli_error("%s: %s; refusing to convert it (--strict)", out, why);
         vv_volume_free(v);
         return CLI_EXIT_FAIL;
     }
@@ -167,13 +178,22 @@ cli_convert_main(int argc, char **argv) {
         vv_volume_free(v);
         return rc;
     }
-    if (rescale && !quiet)
-        cli_error("note: %s: rescaled %s values %g..%g to 8 bits (0..255) for SLC", out,
-                  vv_voxel_type_name(v->type), v->range[0], v->range[1]);
-    if (!quiet)
+    vv_volume *back = NULL;
+    if (convert && !quiet)
+        cli_error("note: %s: %s: rescaled values %g..%g to fit", out, why, v->range[0],
+                  v->range[1]);
+    if (!quiet) {
+        /* the voxel type written: what the file holds now */
+        vv_load_options lo;
+        vv_load_options_init(&lo);
+        lo.format = format;
+        const char *type = vv_voxel_type_name(v->type);
+        if (convert && vv_volume_load(&back, out, &lo) == VV_OK)
+            type = vv_voxel_type_name(back->type);
         printf("wrote %s (%s, %d x %d x %d, %s)\n", out, vv_format_name(format), v->dims[0],
-               v->dims[1], v->dims[2],
-               format == VV_FORMAT_SLC ? "u8" : vv_voxel_type_name(v->type));
+               v->dims[1], v->dims[2], type);
+        vv_volume_free(back);
+    }
     vv_volume_free(v);
     return CLI_EXIT_OK;
 }

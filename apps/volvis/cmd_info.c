@@ -29,17 +29,16 @@ cli_info_usage(FILE *out) {
                  "Prints a volume's format, dimensions, voxel type, voxel spacing, origin,\n"
                  "direction (when not identity), unit, data origin, value range, mean,\n"
                  "percentiles (1/5/50/95/99) and a text histogram.\n"
-                 "Formats: SLC, NRRD, NIfTI-1/2, MetaImage, VTK legacy, TIFF stacks (a\n"
-                 "multi-page file or a folder of pages), DICOM (a folder, a DICOMDIR or a\n"
-                 "file), raw (with --raw), and .vvc (compressed: its header alone, with the\n"
-                 "subcube size, quality, compressed size, compression ratio and bits per\n"
-                 "voxel; the volume is decoded for statistics only with --stats).\n"
+                 "Formats: those listed below, raw (with --raw), and .vvc (compressed: its\n"
+                 "header alone, with the subcube size, quality, compressed size, compression\n"
+                 "ratio and bits per voxel; the volume is decoded for statistics only with\n"
+                 "--stats).\n"
                  "For DICOM, first lists the series found (number, modality, description,\n"
                  "size, files); the volume follows when there is one series or --series\n"
                  "picks one. Patient names and IDs are printed only with --show-phi.\n"
-                 "For an irregular grid (VTK UNSTRUCTURED_GRID, .vtu, OpenDX, PLOT3D,\n"
-                 "NetCDF): its kind, point and cell counts by cell type, blocks or axes,\n"
-                 "bounds, and each field with its range and missing values.\n"
+                 "For an irregular grid (the grid formats below): its kind, point and cell\n"
+                 "counts by cell type, blocks or axes, bounds, and each field with its range\n"
+                 "and missing values.\n"
                  "\n"
                  "Options:\n"
                  "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
@@ -58,7 +57,9 @@ cli_info_usage(FILE *out) {
                  "Example:\n"
                  "  volvis info ../shared/data/volumes/nut.slc\n"
                  "  volvis info --raw 256x256x128:u16:be:0.9x0.9x2 scan.raw\n"
-                 "  volvis info --series 2 ~/scans/CT_folder\n");
+                 "  volvis info --series 2 ~/scans/CT_folder\n"
+                 "\n");
+    cli_print_formats(out, 1);
 }
 
 /* Lists the DICOM series of @p path; *@p n_out gets their count. */

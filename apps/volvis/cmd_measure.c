@@ -288,82 +288,82 @@ measure_mesh(const char *in, const measure_req *r) {
     return CLI_EXIT_OK;
 }
 
-static int
-measure_volume(const char *in, const vv_raw_params *raw, const measure_req *r) {
-    vv_volume *v;
-    int rc;
-    if ((rc = cli_load_volume(in, raw, &v)))
-        return rc;
-    const char *u = unit_of(v->unit);
+/* What measure_volume found. */
+typedef struct volume_results {
     vv_isosurface_measure im;
-    vv_histogram *h = NULL;
-    double dist = NAN, dw[2][3] = {{0}};
+    vv_histogram *h;
+    double dist, dw[2][3]; /* --distance: the distance and its points (world) */
+    double geo;            /* --geodesic: the distance and the surface points */
+    vv_vec3 gon[2];
+} volume_results;
+
+/* The isosurface options of @p r for @p v: region, threads, the seed
+ * (given in world units unless --seed-voxel) in index coordinates. */
+static void
+iso_options(const measure_req *r, const vv_volume *v, vv_isosurface_measure_options *o) {
+    vv_isosurface_measure_options_init(o);
+    o->method = r->method;
+    o->region = r->region;
+    o->threads = r->threads;
+    if (r->has_seed) {
+        o->has_seed = 1;
+        vv_vec3 p = vv_vec3_make(r->seed[0], r->seed[1], r->seed[2]);
+        if (!r->seed_voxel)
+            p = vv_mat4_mul_point(vv_volume_world_to_index(v), p);
+        o->seed[0] = p.x;
+        o->seed[1] = p.y;
+        o->seed[2] = p.z;
+    }
+}
+
+/* The geodesic distance along the isosurface between the two points of
+ * --geodesic (voxel points taken to world units). */
+static vv_status
+measure_geodesic(const measure_req *r, const vv_volume *v, volume_results *res) {
+    vv_isosurface_measure_options o, d;
+    iso_options(r, v, &o);
+    vv_isosurface_measure_options_init(&d);
+    o.method = d.method; /* the mesh is Marching Cubes' whatever --method says */
+    vv_mat4 M = vv_volume_index_to_world(v);
+    vv_vec3 gp[2];
+    for (int i = 0; i < 2; i++) {
+        gp[i] = vv_vec3_make(r->gp[i][0], r->gp[i][1], r->gp[i][2]);
+        if (r->gvox[i])
+            gp[i] = vv_mat4_mul_point(M, gp[i]);
+    }
+    vv_mesh *gm = NULL;
     vv_status s;
+    if ((s = vv_measure_isosurface_mesh(&gm, v, r->iso, &o)) == VV_OK)
+        s = vv_measure_geodesic(gm, gp[0], gp[1], r->steiner, &res->geo, &res->gon[0],
+                                &res->gon[1]);
+    vv_mesh_free(gm);
+    return s;
+}
+
+/* The measurements @p r asks of @p v; on failure the message names the
+ * file that failed in *@p fail_path. */
+static vv_status
+measure_compute(const char *in, const measure_req *r, const vv_volume *v, volume_results *res,
+                const char **fail_path) {
+    vv_status s;
+    *fail_path = in;
     if (r->has_iso) {
         vv_isosurface_measure_options o;
-        vv_isosurface_measure_options_init(&o);
-        o.method = r->method;
-        o.region = r->region;
-        o.threads = r->threads;
-        if (r->has_seed) {
-            o.has_seed = 1;
-            vv_vec3 p = vv_vec3_make(r->seed[0], r->seed[1], r->seed[2]);
-            if (!r->seed_voxel)
-                p = vv_mat4_mul_point(vv_volume_world_to_index(v), p);
-            o.seed[0] = p.x;
-            o.seed[1] = p.y;
-            o.seed[2] = p.z;
-        }
-        if ((s = vv_measure_isosurface(&im, v, r->iso, &o)) != VV_OK) {
-            rc = cli_fail(s, in);
-            vv_volume_free(v);
-            return rc;
-        }
+        iso_options(r, v, &o);
+        if ((s = vv_measure_isosurface(&res->im, v, r->iso, &o)) != VV_OK)
+            return s;
     }
-    double geo = NAN;
-    vv_vec3 gon[2] = {{0, 0, 0}, {0, 0, 0}};
-    if (r->has_geodesic) {
-        vv_isosurface_measure_options o;
-        vv_isosurface_measure_options_init(&o);
-        o.region = r->region;
-        o.threads = r->threads;
-        o.has_seed = r->has_seed;
-        if (r->has_seed) {
-            vv_vec3 p = vv_vec3_make(r->seed[0], r->seed[1], r->seed[2]);
-            if (!r->seed_voxel)
-                p = vv_mat4_mul_point(vv_volume_world_to_index(v), p);
-            o.seed[0] = p.x;
-            o.seed[1] = p.y;
-            o.seed[2] = p.z;
-        }
-        vv_mat4 M = vv_volume_index_to_world(v);
-        vv_vec3 gp[2];
-        for (int i = 0; i < 2; i++) {
-            gp[i] = vv_vec3_make(r->gp[i][0], r->gp[i][1], r->gp[i][2]);
-            if (r->gvox[i])
-                gp[i] = vv_mat4_mul_point(M, gp[i]);
-        }
-        vv_mesh *gm = NULL;
-        if ((s = vv_measure_isosurface_mesh(&gm, v, r->iso, &o)) != VV_OK ||
-            (s = vv_measure_geodesic(gm, gp[0], gp[1], r->steiner, &geo, &gon[0], &gon[1])) !=
-                VV_OK) {
-            rc = cli_fail(s, in);
-            vv_mesh_free(gm);
-            vv_volume_free(v);
-            return rc;
-        }
-        vv_mesh_free(gm);
-    }
+    if (r->has_geodesic && (s = measure_geodesic(r, v, res)) != VV_OK)
+        return s;
     if (r->histogram) {
-        if ((s = vv_measure_histogram(&h, v, r->bins, r->has_range ? r->lo : 0,
-                                      r->has_range ? r->hi : 0, &r->region)) != VV_OK ||
-            (r->plot && (s = vv_histogram_plot_png(h, r->plot, 900, 560,
-                                                   strrchr(in, '/') ? strrchr(in, '/') + 1 : in,
-                                                   "value", r->log)) != VV_OK)) {
-            rc = cli_fail(s, r->plot && h ? r->plot : in);
-            vv_histogram_free(h);
-            vv_volume_free(v);
-            return rc;
+        if ((s = vv_measure_histogram(&res->h, v, r->bins, r->has_range ? r->lo : 0,
+                                      r->has_range ? r->hi : 0, &r->region)) != VV_OK)
+            return s;
+        if (r->plot && (s = vv_histogram_plot_png(res->h, r->plot, 900, 560,
+                                                  strrchr(in, '/') ? strrchr(in, '/') + 1 : in,
+                                                  "value", r->log)) != VV_OK) {
+            *fail_path = r->plot;
+            return s;
         }
     }
     if (r->has_distance) {
@@ -372,172 +372,354 @@ measure_volume(const char *in, const vv_raw_params *raw, const measure_req *r) {
             vv_vec3 p = vv_vec3_make(r->dp[i][0], r->dp[i][1], r->dp[i][2]);
             if (r->dvox[i])
                 p = vv_mat4_mul_point(M, p);
-            dw[i][0] = p.x;
-            dw[i][1] = p.y;
-            dw[i][2] = p.z;
+            res->dw[i][0] = p.x;
+            res->dw[i][1] = p.y;
+            res->dw[i][2] = p.z;
         }
-        vv_measure_distance(NULL, vv_vec3_make(dw[0][0], dw[0][1], dw[0][2]), 0,
-                            vv_vec3_make(dw[1][0], dw[1][1], dw[1][2]), 0, &dist);
+        vv_measure_distance(NULL, vv_vec3_make(res->dw[0][0], res->dw[0][1], res->dw[0][2]), 0,
+                            vv_vec3_make(res->dw[1][0], res->dw[1][1], res->dw[1][2]), 0,
+                            &res->dist);
     }
-    const char *mname = r->method == VV_MEASURE_VOXEL ? "voxel" : "mc";
-    if (r->json) {
-        printf("{\"input\": ");
-        json_str(in);
-        printf(", \"kind\": \"volume\", \"dims\": [%d, %d, %d], \"spacing\": [%.10g, %.10g, "
-               "%.10g], \"unit\": \"%s\"",
-               v->dims[0], v->dims[1], v->dims[2], v->spacing[0], v->spacing[1], v->spacing[2], u);
-        if (r->has_iso) {
-            printf(", \"isosurface\": {\"isovalue\": %.10g, \"method\": \"%s\", \"area\": ", r->iso,
-                   mname);
-            json_num(im.area);
-            printf(", \"volume\": ");
-            json_num(im.volume);
-            printf(", \"cut_area\": ");
-            json_num(im.cut_area);
-            printf(", \"voxels\": %llu, \"triangles\": %zu, \"area_bias\": %g",
-                   (unsigned long long)im.voxels, im.n_triangles, im.area_bias);
-            if (r->has_seed)
-                printf(", \"seed_voxel\": [%d, %d, %d]", im.seed_voxel[0], im.seed_voxel[1],
-                       im.seed_voxel[2]);
-            if (r->has_geodesic) {
-                printf(", \"geodesic\": {\"p1\": [%.10g, %.10g, %.10g], \"p2\": [%.10g, %.10g, "
-                       "%.10g], \"steiner\": %d, \"value\": ",
-                       gon[0].x, gon[0].y, gon[0].z, gon[1].x, gon[1].y, gon[1].z, r->steiner);
-                json_num(geo);
-                printf("}");
-            }
-            printf("}");
-        }
-        if (h) {
-            printf(", \"histogram\": {\"lo\": %.10g, \"hi\": %.10g, \"bins\": %d, \"total\": %llu, "
-                   "\"outside\": %llu, \"nan\": %llu, \"min\": ",
-                   h->lo, h->hi, h->nbins, (unsigned long long)h->total,
-                   (unsigned long long)h->outside, (unsigned long long)h->nan);
-            json_num(h->min);
-            printf(", \"max\": ");
-            json_num(h->max);
-            printf(", \"mean\": ");
-            json_num(h->mean);
-            printf(", \"sd\": ");
-            json_num(h->sd);
-            printf(", \"counts\": [");
-            for (int b = 0; b < h->nbins; b++)
-                printf("%s%llu", b ? ", " : "", (unsigned long long)h->counts[b]);
-            printf("]");
-            if (r->plot) {
-                printf(", \"plot\": ");
-                json_str(r->plot);
-            }
-            printf("}");
-        }
-        if (r->has_distance) {
-            printf(", \"distance\": {\"p1\": [%.10g, %.10g, %.10g], \"p2\": [%.10g, %.10g, "
-                   "%.10g], \"value\": ",
-                   dw[0][0], dw[0][1], dw[0][2], dw[1][0], dw[1][1], dw[1][2]);
-            json_num(dist);
-            printf("}");
-        }
-        printf("}\n");
-    } else {
-        printf("%-22s %s (%d x %d x %d %s, spacing %g x %g x %g %s)\n", "input", in, v->dims[0],
-               v->dims[1], v->dims[2], vv_voxel_type_name(v->type), v->spacing[0], v->spacing[1],
-               v->spacing[2], u);
-        if (r->has_iso) {
-            printf("%-22s %g (inside: values >= %g)\n", "isovalue", r->iso, r->iso);
-            if (r->has_seed)
-                printf("%-22s surface-tracked section from voxel (%d, %d, %d)\n", "region",
-                       im.seed_voxel[0], im.seed_voxel[1], im.seed_voxel[2]);
-            if (r->method == VV_MEASURE_MC) {
-                printf("%-22s Marching Cubes (%zu triangles)\n", "method", im.n_triangles);
-                printf("%-22s %.10g %s^2\n", "surface area", im.area, u);
-                printf("%-22s %.10g %s^3 (divergence theorem, closed by %.6g %s^2 of caps)\n",
-                       "enclosed volume", im.volume, u, im.cut_area, u);
-            } else {
-                printf("%-22s voxel counting\n", "method");
-                printf("%-22s %.10g %s^2 (exposed voxel faces: about %.2gx the smooth surface)\n",
-                       "surface area", im.area, u, im.area_bias);
-                printf("%-22s %.10g %s^3 (%llu voxels)\n", "enclosed volume", im.volume, u,
-                       (unsigned long long)im.voxels);
-                if (im.cut_area > 0)
-                    printf("%-22s %.10g %s^2 of voxel faces on the region's boundary\n", "cut",
-                           im.cut_area, u);
-            }
-            if (r->method == VV_MEASURE_MC)
-                printf("%-22s %llu\n", "voxels inside", (unsigned long long)im.voxels);
-            if (r->has_geodesic)
-                printf("%-22s %.10g %s along the surface between (%g, %g, %g) and (%g, %g, %g) "
-                       "(Steiner graph, %d points per edge)\n",
-                       "geodesic distance", geo, u, gon[0].x, gon[0].y, gon[0].z, gon[1].x,
-                       gon[1].y, gon[1].z, r->steiner);
-        }
-        if (h) {
-            printf("%-22s %llu voxels (%llu outside the range, %llu NaN), min %g, max %g, mean "
-                   "%.6g, sd %.6g\n",
-                   "histogram", (unsigned long long)h->total, (unsigned long long)h->outside,
-                   (unsigned long long)h->nan, h->min, h->max, h->mean, h->sd);
-            uint64_t cmax = 1;
-            for (int b = 0; b < h->nbins; b++)
-                cmax = h->counts[b] > cmax ? h->counts[b] : cmax;
-            double w = (h->hi - h->lo) / h->nbins;
-            for (int b = 0; b < h->nbins; b++) {
-                int bar = (int)(40.0 * (double)h->counts[b] / (double)cmax + 0.5);
-                printf("  [%12.6g, %12.6g%c %12llu  ", h->lo + b * w, h->lo + (b + 1) * w,
-                       b == h->nbins - 1 ? ']' : ')', (unsigned long long)h->counts[b]);
-                for (int q = 0; q < bar; q++)
-                    putchar('#');
-                putchar('\n');
-            }
-            if (r->plot)
-                printf("%-22s %s\n", "plot", r->plot);
-        }
-        if (r->has_distance)
-            printf("%-22s %.10g %s between (%g, %g, %g) and (%g, %g, %g) (world)\n", "distance",
-                   dist, u, dw[0][0], dw[0][1], dw[0][2], dw[1][0], dw[1][1], dw[1][2]);
-    }
-    vv_histogram_free(h);
-    vv_volume_free(v);
-    return CLI_EXIT_OK;
+    return VV_OK;
 }
 
-int
-cli_measure_main(int argc, char **argv) {
-    /* "--distance P1 P2" takes two arguments: join them for the parser ("P1;P2") */
+/* The results as one JSON object on stdout. */
+static void
+print_volume_json(const char *in, const measure_req *r, const vv_volume *v,
+                  const volume_results *res) {
+    const char *u = unit_of(v->unit);
+    const char *mname = r->method == VV_MEASURE_VOXEL ? "voxel" : "mc";
+    const vv_isosurface_measure im = res->im;
+    const vv_histogram *h = res->h;
+    const double geo = res->geo, dist = res->dist;
+    const vv_vec3 *gon = res->gon;
+    const double(*dw)[3] = res->dw;
+    printf("{\"input\": ");
+    json_str(in);
+    printf(", \"kind\": \"volume\", \"dims\": [%d, %d, %d], \"spacing\": [%.10g, %.10g, "
+           "%.10g], \"unit\": \"%s\"",
+           v->dims[0], v->dims[1], v->dims[2], v->spacing[0], v->spacing[1], v->spacing[2], u);
+    if (r->has_iso) {
+        printf(", \"isosurface\": {\"isovalue\": %.10g, \"method\": \"%s\", \"area\": ", r->iso,
+               mname);
+        json_num(im.area);
+        printf(", \"volume\": ");
+        json_num(im.volume);
+        printf(", \"cut_area\": ");
+        json_num(im.cut_area);
+        printf(", \"voxels\": %llu, \"triangles\": %zu, \"area_bias\": %g",
+               (unsigned long long)im.voxels, im.n_triangles, im.area_bias);
+        if (r->has_seed)
+            printf(", \"seed_voxel\": [%d, %d, %d]", im.seed_voxel[0], im.seed_voxel[1],
+                   im.seed_voxel[2]);
+        if (r->has_geodesic) {
+            printf(", \"geodesic\": {\"p1\": [%.10g, %.10g, %.10g], \"p2\": [%.10g, %.10g, "
+                   "%.10g], \"steiner\": %d, \"value\": ",
+                   gon[0].x, gon[0].y, gon[0].z, gon[1].x, gon[1].y, gon[1].z, r->steiner);
+            json_num(geo);
+            printf("}");
+        }
+        printf("}");
+    }
+    if (h) {
+        printf(", \"histogram\": {\"lo\": %.10g, \"hi\": %.10g, \"bins\": %d, \"total\": %llu, "
+               "\"outside\": %llu, \"nan\": %llu, \"min\": ",
+               h->lo, h->hi, h->nbins, (unsigned long long)h->total, (unsigned long long)h->outside,
+               (unsigned long long)h->nan);
+        json_num(h->min);
+        printf(", \"max\": ");
+        json_num(h->max);
+        printf(", \"mean\": ");
+        json_num(h->mean);
+        printf(", \"sd\": ");
+        json_num(h->sd);
+        printf(", \"counts\": [");
+        for (int b = 0; b < h->nbins; b++)
+            printf("%s%llu", b ? ", " : "", (unsigned long long)h->counts[b]);
+        printf("]");
+        if (r->plot) {
+            printf(", \"plot\": ");
+            json_str(r->plot);
+        }
+        printf("}");
+    }
+    if (r->has_distance) {
+        printf(", \"distance\": {\"p1\": [%.10g, %.10g, %.10g], \"p2\": [%.10g, %.10g, "
+               "%.10g], \"value\": ",
+               dw[0][0], dw[0][1], dw[0][2], dw[1][0], dw[1][1], dw[1][2]);
+        json_num(dist);
+        printf("}");
+    }
+    printf("}\n");
+}
+
+/* The results as aligned text on stdout. */
+static void
+print_volume_text(const char *in, const measure_req *r, const vv_volume *v,
+                  const volume_results *res) {
+    const char *u = unit_of(v->unit);
+    const vv_isosurface_measure im = res->im;
+    const vv_histogram *h = res->h;
+    const double geo = res->geo, dist = res->dist;
+    const vv_vec3 *gon = res->gon;
+    const double(*dw)[3] = res->dw;
+    printf("%-22s %s (%d x %d x %d %s, spacing %g x %g x %g %s)\n", "input", in, v->dims[0],
+           v->dims[1], v->dims[2], vv_voxel_type_name(v->type), v->spacing[0], v->spacing[1],
+           v->spacing[2], u);
+    if (r->has_iso) {
+        printf("%-22s %g (inside: values >= %g)\n", "isovalue", r->iso, r->iso);
+        if (r->has_seed)
+            printf("%-22s surface-tracked section from voxel (%d, %d, %d)\n", "region",
+                   im.seed_voxel[0], im.seed_voxel[1], im.seed_voxel[2]);
+        if (r->method == VV_MEASURE_MC) {
+            printf("%-22s Marching Cubes (%zu triangles)\n", "method", im.n_triangles);
+            printf("%-22s %.10g %s^2\n", "surface area", im.area, u);
+            printf("%-22s %.10g %s^3 (divergence theorem, closed by %.6g %s^2 of caps)\n",
+                   "enclosed volume", im.volume, u, im.cut_area, u);
+        } else {
+            printf("%-22s voxel counting\n", "method");
+            printf("%-22s %.10g %s^2 (exposed voxel faces: about %.2gx the smooth surface)\n",
+                   "surface area", im.area, u, im.area_bias);
+            printf("%-22s %.10g %s^3 (%llu voxels)\n", "enclosed volume", im.volume, u,
+                   (unsigned long long)im.voxels);
+            if (im.cut_area > 0)
+                printf("%-22s %.10g %s^2 of voxel faces on the region's boundary\n", "cut",
+                       im.cut_area, u);
+        }
+        if (r->method == VV_MEASURE_MC)
+            printf("%-22s %llu\n", "voxels inside", (unsigned long long)im.voxels);
+        if (r->has_geodesic)
+            printf("%-22s %.10g %s along the surface between (%g, %g, %g) and (%g, %g, %g) "
+                   "(Steiner graph, %d points per edge)\n",
+                   "geodesic distance", geo, u, gon[0].x, gon[0].y, gon[0].z, gon[1].x, gon[1].y,
+                   gon[1].z, r->steiner);
+    }
+    if (h) {
+        printf("%-22s %llu voxels (%llu outside the range, %llu NaN), min %g, max %g, mean "
+               "%.6g, sd %.6g\n",
+               "histogram", (unsigned long long)h->total, (unsigned long long)h->outside,
+               (unsigned long long)h->nan, h->min, h->max, h->mean, h->sd);
+        uint64_t cmax = 1;
+        for (int b = 0; b < h->nbins; b++)
+            cmax = h->counts[b] > cmax ? h->counts[b] : cmax;
+        double w = (h->hi - h->lo) / h->nbins;
+        for (int b = 0; b < h->nbins; b++) {
+            int bar = (int)(40.0 * (double)h->counts[b] / (double)cmax + 0.5);
+            printf("  [%12.6g, %12.6g%c %12llu  ", h->lo + b * w, h->lo + (b + 1) * w,
+                   b == h->nbins - 1 ? ']' : ')', (unsigned long long)h->counts[b]);
+            for (int q = 0; q < bar; q++)
+                putchar('#');
+            putchar('\n');
+        }
+        if (r->plot)
+            printf("%-22s %s\n", "plot", r->plot);
+    }
+    if (r->has_distance)
+        printf("%-22s %.10g %s between (%g, %g, %g) and (%g, %g, %g) (world)\n", "distance", dist,
+               u, dw[0][0], dw[0][1], dw[0][2], dw[1][0], dw[1][1], dw[1][2]);
+}
+
+static int
+measure_volume(const char *in, const vv_raw_params *raw, const measure_req *r) {
+    vv_volume *v;
+    int rc;
+    if ((rc = cli_load_volume(in, raw, &v)))
+        return rc;
+    volume_results res;
+    memset(&res, 0, sizeof res);
+    res.dist = res.geo = NAN;
+    const char *fail_path = in;
+    vv_status s = measure_compute(in, r, v, &res, &fail_path);
+    if (s != VV_OK) {
+        rc = cli_fail(s, fail_path);
+    } else {
+        if (r->json)
+            print_volume_json(in, r, v, &res);
+        else
+            print_volume_text(in, r, v, &res);
+        rc = CLI_EXIT_OK;
+    }
+    vv_histogram_free(res.h);
+    vv_volume_free(v);
+    return rc;
+}
+
+/* "--distance P1 P2" and "--geodesic P1 P2" take two arguments: joined for
+ * the parser into "--distance=P1;P2". *@p av (malloc'ed) is the new argument
+ * list, @p joined the strings made (free both). Returns 0 or an exit status. */
+static int
+join_point_args(int argc, char **argv, char ***av_out, int *ac_out, char *joined[2]) {
     char **av = malloc(((size_t)argc + 1) * sizeof *av);
-    char *joined[2] = {NULL, NULL};
     if (!av) {
         cli_error("out of memory");
         return CLI_EXIT_FAIL;
     }
     int ac = 0;
     for (int i = 0; i < argc; i++) {
-        if (strcmp(argv[i], "--distance") == 0 || strcmp(argv[i], "--geodesic") == 0) {
-            int g = argv[i][2] == 'g';
-            if (i + 2 >= argc) {
-                free(av);
-                free(joined[0]);
-                free(joined[1]);
-                cli_error("measure: %s needs two points P1 P2 (see 'volvis measure --help')",
-                          argv[i]);
-                return CLI_EXIT_USAGE;
-            }
-            free(joined[g]);
-            size_t n = strlen(argv[i + 1]) + strlen(argv[i + 2]) + 16;
-            joined[g] = malloc(n);
-            if (!joined[g]) {
-                free(av);
-                free(joined[1 - g]);
-                return CLI_EXIT_FAIL;
-            }
-            snprintf(joined[g], n, "%s=%s;%s", argv[i], argv[i + 1], argv[i + 2]);
-            av[ac++] = joined[g];
-            i += 2;
-        } else {
+        if (strcmp(argv[i], "--distance") != 0 && strcmp(argv[i], "--geodesic") != 0) {
             av[ac++] = argv[i];
+            continue;
         }
+        int g = argv[i][2] == 'g';
+        if (i + 2 >= argc) {
+            free(av);
+            cli_error("measure: %s needs two points P1 P2 (see 'volvis measure --help')", argv[i]);
+            return CLI_EXIT_USAGE;
+        }
+        free(joined[g]);
+        size_t n = strlen(argv[i + 1]) + strlen(argv[i + 2]) + 16;
+        if (!(joined[g] = malloc(n))) {
+            free(av);
+            return CLI_EXIT_FAIL;
+        }
+        snprintf(joined[g], n, "%s=%s;%s", argv[i], argv[i + 1], argv[i + 2]);
+        av[ac++] = joined[g];
+        i += 2;
     }
     av[ac] = NULL;
+    *av_out = av;
+    *ac_out = ac;
+    return 0;
+}
+
+/* The two points "P1;P2" of option @p opt (as join_point_args made it). */
+static int
+parse_two_points(const cli_args *a, const char *opt, const char *s, double p[2][3], int vox[2]) {
+    const char *semi = strchr(s, ';');
+    char p1[256];
+    size_t n1 = semi ? (size_t)(semi - s) : 0;
+    if (!semi || n1 >= sizeof p1)
+        return cli_usage_error(a, "--%s needs two points P1 P2", opt);
+    memcpy(p1, s, n1);
+    p1[n1] = '\0';
+    int rc = cli_parse_point(a, opt, p1, p[0], &vox[0]);
+    return rc ? rc : cli_parse_point(a, opt, semi + 1, p[1], &vox[1]);
+}
+
+/* The isosurface, histogram and region options into @p r. */
+static int
+parse_volume_options(cli_args *a, measure_req *r) {
+    const char *s;
+    int rc;
+    if ((s = cli_get(a, "iso"))) {
+        r->has_iso = 1;
+        if ((rc = cli_parse_double(a, "iso", s, -HUGE_VAL, HUGE_VAL, &r->iso)))
+            return rc;
+    }
+    if ((s = cli_get(a, "seed"))) {
+        r->has_seed = 1;
+        if ((rc = cli_parse_point(a, "seed", s, r->seed, &r->seed_voxel)))
+            return rc;
+        if (!r->has_iso)
+            return cli_usage_error(a, "--seed needs --iso");
+    }
+    if ((s = cli_get(a, "method"))) {
+        if (!strcmp(s, "voxel"))
+            r->method = VV_MEASURE_VOXEL;
+        else if (strcmp(s, "mc"))
+            return cli_usage_error(a, "--method: expected voxel or mc, got '%s'", s);
+    }
+    if ((s = cli_get(a, "bins")) && (rc = cli_parse_int(a, "bins", s, 1, 100000, &r->bins)))
+        return rc;
+    if ((s = cli_get(a, "range"))) {
+        r->has_range = 1;
+        if ((rc = cli_parse_range(a, "range", s, &r->lo, &r->hi)))
+            return rc;
+    }
+    if ((r->plot || cli_get(a, "bins") || cli_get(a, "range") || r->log) && !r->histogram)
+        return cli_usage_error(a, "--plot, --bins, --range and --log go with --histogram");
+    if ((s = cli_get(a, "threads")) && (rc = cli_parse_int(a, "threads", s, 0, 4096, &r->threads)))
+        return rc;
+    if ((s = cli_get(a, "roi")) &&
+        (rc = cli_parse_roi(a, "roi", s, r->region.roi_min, r->region.roi_max)))
+        return rc;
+    for (int i = 0; i < a->n_seen; i++) {
+        if (strcmp(a->specs[a->seen[i].opt].name, "cut"))
+            continue;
+        if (r->region.n_cut_planes == VV_MAX_CUT_PLANES)
+            return cli_usage_error(a, "--cut: at most %d planes", VV_MAX_CUT_PLANES);
+        if ((rc = cli_parse_plane(a, "cut", a->seen[i].value,
+                                  &r->region.cut_planes[r->region.n_cut_planes++])))
+            return rc;
+    }
+    return 0;
+}
+
+/* --distance, --steiner and --geodesic into @p r. */
+static int
+parse_point_options(cli_args *a, measure_req *r) {
+    const char *s;
+    int rc;
+    if ((s = cli_get(a, "distance"))) {
+        r->has_distance = 1;
+        if ((rc = parse_two_points(a, "distance", s, r->dp, r->dvox)))
+            return rc;
+    }
+    r->steiner = 8;
+    if ((s = cli_get(a, "steiner")) && (rc = cli_parse_int(a, "steiner", s, 0, 64, &r->steiner)))
+        return rc;
+    if ((s = cli_get(a, "geodesic"))) {
+        r->has_geodesic = 1;
+        if ((rc = parse_two_points(a, "geodesic", s, r->gp, r->gvox)))
+            return rc;
+        if (!r->has_iso)
+            return cli_usage_error(a, "--geodesic needs --iso (the surface to follow)");
+        if (r->method == VV_MEASURE_VOXEL)
+            return cli_usage_error(a, "--geodesic follows the Marching Cubes surface (not with "
+                                      "--method voxel)");
+    }
+    return 0;
+}
+
+/* Measures INPUT as @p r says: a mesh, label volumes or a volume. */
+static int
+measure_input(cli_args *a, measure_req *r) {
+    const char *in = a->pos[0];
+    int rc;
+    if (is_mesh_file(in) && !cli_get(a, "raw")) {
+        if (r->has_iso || r->histogram || cli_get(a, "roi") || r->region.n_cut_planes ||
+            cli_get(a, "method"))
+            return cli_usage_error(a,
+                                   "%s is a mesh: --iso, --seed, --method, --histogram, --roi "
+                                   "and --cut measure volumes",
+                                   in);
+        if ((rc = cli_check_readable(in)))
+            return rc;
+        return measure_mesh(in, r);
+    }
+    if (r->to || r->want_volume)
+        return cli_usage_error(a, "--to and --volume measure meshes (.ply .obj .stl .off)");
+    vv_raw_params raw;
+    const char *raw_spec = cli_get(a, "raw");
+    if (cli_count(a, "labels") > 0) {
+        if (r->has_iso || r->histogram || r->has_distance)
+            return cli_usage_error(a, "--labels measures the labels alone (not with --iso, "
+                                      "--histogram or --distance)");
+        if (raw_spec && (rc = cli_parse_raw(a, "raw", raw_spec, &raw)))
+            return rc;
+        return measure_labels(in, raw_spec ? &raw : NULL, r->json);
+    }
+    if (!r->has_iso && !r->histogram && !r->has_distance)
+        return cli_usage_error(a, "nothing to measure: give --iso V, --histogram or --distance P1 "
+                                  "P2");
+    if (raw_spec && (rc = cli_parse_raw(a, "raw", raw_spec, &raw)))
+        return rc;
+    return measure_volume(in, raw_spec ? &raw : NULL, r);
+}
+
+int
+cli_measure_main(int argc, char **argv) {
+    char **av = NULL;
+    char *joined[2] = {NULL, NULL};
+    int ac = 0;
+    int rc = join_point_args(argc, argv, &av, &ac, joined);
+    if (rc) {
+        free(joined[0]);
+        free(joined[1]);
+        return rc;
+    }
     cli_args a;
-    int rc = cli_parse(&a, "measure", measure_opts, N_MEASURE_OPTS, ac, av);
+    rc = cli_parse(&a, "measure", measure_opts, N_MEASURE_OPTS, ac, av);
     if (rc == CLI_HELP) {
         cli_measure_usage(stdout);
         rc = CLI_EXIT_OK;
@@ -561,140 +743,9 @@ cli_measure_main(int argc, char **argv) {
     r.want_volume = cli_count(&a, "volume") > 0;
     r.plot = cli_get(&a, "plot");
     r.to = cli_get(&a, "to");
-    const char *s;
-    if ((s = cli_get(&a, "iso"))) {
-        r.has_iso = 1;
-        if ((rc = cli_parse_double(&a, "iso", s, -HUGE_VAL, HUGE_VAL, &r.iso)))
-            goto done;
-    }
-    if ((s = cli_get(&a, "seed"))) {
-        r.has_seed = 1;
-        if ((rc = cli_parse_point(&a, "seed", s, r.seed, &r.seed_voxel)))
-            goto done;
-        if (!r.has_iso) {
-            rc = cli_usage_error(&a, "--seed needs --iso");
-            goto done;
-        }
-    }
-    if ((s = cli_get(&a, "method"))) {
-        if (!strcmp(s, "voxel"))
-            r.method = VV_MEASURE_VOXEL;
-        else if (strcmp(s, "mc")) {
-            rc = cli_usage_error(&a, "--method: expected voxel or mc, got '%s'", s);
-            goto done;
-        }
-    }
-    if ((s = cli_get(&a, "bins")) && (rc = cli_parse_int(&a, "bins", s, 1, 100000, &r.bins)))
+    if ((rc = parse_volume_options(&a, &r)) || (rc = parse_point_options(&a, &r)))
         goto done;
-    if ((s = cli_get(&a, "range"))) {
-        r.has_range = 1;
-        if ((rc = cli_parse_range(&a, "range", s, &r.lo, &r.hi)))
-            goto done;
-    }
-    if ((r.plot || cli_get(&a, "bins") || cli_get(&a, "range") || r.log) && !r.histogram) {
-        rc = cli_usage_error(&a, "--plot, --bins, --range and --log go with --histogram");
-        goto done;
-    }
-    if ((s = cli_get(&a, "threads")) && (rc = cli_parse_int(&a, "threads", s, 0, 4096, &r.threads)))
-        goto done;
-    if ((s = cli_get(&a, "roi")) &&
-        (rc = cli_parse_roi(&a, "roi", s, r.region.roi_min, r.region.roi_max)))
-        goto done;
-    for (int i = 0; i < a.n_seen; i++) {
-        if (strcmp(a.specs[a.seen[i].opt].name, "cut"))
-            continue;
-        if (r.region.n_cut_planes == VV_MAX_CUT_PLANES) {
-            rc = cli_usage_error(&a, "--cut: at most %d planes", VV_MAX_CUT_PLANES);
-            goto done;
-        }
-        if ((rc = cli_parse_plane(&a, "cut", a.seen[i].value,
-                                  &r.region.cut_planes[r.region.n_cut_planes++])))
-            goto done;
-    }
-    if ((s = cli_get(&a, "distance"))) {
-        r.has_distance = 1;
-        const char *semi = strchr(s, ';');
-        char p1[256];
-        size_t n1 = semi ? (size_t)(semi - s) : 0;
-        if (!semi || n1 >= sizeof p1) {
-            rc = cli_usage_error(&a, "--distance needs two points P1 P2");
-            goto done;
-        }
-        memcpy(p1, s, n1);
-        p1[n1] = '\0';
-        if ((rc = cli_parse_point(&a, "distance", p1, r.dp[0], &r.dvox[0])) ||
-            (rc = cli_parse_point(&a, "distance", semi + 1, r.dp[1], &r.dvox[1])))
-            goto done;
-    }
-    r.steiner = 8;
-    if ((s = cli_get(&a, "steiner")) && (rc = cli_parse_int(&a, "steiner", s, 0, 64, &r.steiner)))
-        goto done;
-    if ((s = cli_get(&a, "geodesic"))) {
-        r.has_geodesic = 1;
-        const char *semi = strchr(s, ';');
-        char p1[256];
-        size_t n1 = semi ? (size_t)(semi - s) : 0;
-        if (!semi || n1 >= sizeof p1) {
-            rc = cli_usage_error(&a, "--geodesic needs two points P1 P2");
-            goto done;
-        }
-        memcpy(p1, s, n1);
-        p1[n1] = '\0';
-        if ((rc = cli_parse_point(&a, "geodesic", p1, r.gp[0], &r.gvox[0])) ||
-            (rc = cli_parse_point(&a, "geodesic", semi + 1, r.gp[1], &r.gvox[1])))
-            goto done;
-        if (!r.has_iso) {
-            rc = cli_usage_error(&a, "--geodesic needs --iso (the surface to follow)");
-            goto done;
-        }
-        if (r.method == VV_MEASURE_VOXEL) {
-            rc = cli_usage_error(&a, "--geodesic follows the Marching Cubes surface (not with "
-                                     "--method voxel)");
-            goto done;
-        }
-    }
-    const char *in = a.pos[0];
-    if (is_mesh_file(in) && !cli_get(&a, "raw")) {
-        if (r.has_iso || r.histogram || cli_get(&a, "roi") || r.region.n_cut_planes ||
-            cli_get(&a, "method")) {
-            rc = cli_usage_error(&a,
-                                 "%s is a mesh: --iso, --seed, --method, --histogram, --roi "
-                                 "and --cut measure volumes",
-                                 in);
-            goto done;
-        }
-        if ((rc = cli_check_readable(in)))
-            goto done;
-        rc = measure_mesh(in, &r);
-        goto done;
-    }
-    if (r.to || r.want_volume) {
-        rc = cli_usage_error(&a, "--to and --volume measure meshes (.ply .obj .stl .off)");
-        goto done;
-    }
-    if (cli_count(&a, "labels") > 0) {
-        if (r.has_iso || r.histogram || r.has_distance) {
-            rc = cli_usage_error(&a, "--labels measures the labels alone (not with --iso, "
-                                     "--histogram or --distance)");
-            goto done;
-        }
-        vv_raw_params lraw;
-        const char *lraw_spec = cli_get(&a, "raw");
-        if (lraw_spec && (rc = cli_parse_raw(&a, "raw", lraw_spec, &lraw)))
-            goto done;
-        rc = measure_labels(in, lraw_spec ? &lraw : NULL, r.json);
-        goto done;
-    }
-    if (!r.has_iso && !r.histogram && !r.has_distance) {
-        rc = cli_usage_error(&a, "nothing to measure: give --iso V, --histogram or --distance P1 "
-                                 "P2");
-        goto done;
-    }
-    vv_raw_params raw;
-    const char *raw_spec = cli_get(&a, "raw");
-    if (raw_spec && (rc = cli_parse_raw(&a, "raw", raw_spec, &raw)))
-        goto done;
-    rc = measure_volume(in, raw_spec ? &raw : NULL, &r);
+    rc = measure_input(&a, &r);
 done:
     free(joined[0]);
     free(joined[1]);

@@ -77,6 +77,8 @@ cli_render_main(int argc, char **argv) {
     int quality = 2;
     if ((rc = cli_render_renderer(&a, &r, w, &ren, &quality)))
         goto done;
+    if (!r.quiet)
+        cli_render_note_left_out(ren, w);
     if ((s = vv_image_new(&img, w->view.width, w->view.height)) != VV_OK) {
         rc = cli_fail(s, NULL);
         goto done;

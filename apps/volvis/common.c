@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "volvis/sys/format.h"
 
 /* The last error line (without "volvis: "), and whether error lines are
  * kept only (the ranks other than 0 under mpirun print nothing). */
@@ -255,6 +256,61 @@ cli_now(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* " (.a, .b)" of a NULL-terminated extension list, or "". */
+static void
+extension_list(char *buf, size_t cap, const char *const *ext) {
+    buf[0] = '\0';
+    for (int i = 0; ext && ext[i]; i++) {
+        size_t k = strlen(buf);
+        snprintf(buf + k, cap - k, "%s.%s", i ? ", " : " (", ext[i]);
+    }
+    if (buf[0]) {
+        size_t k = strlen(buf);
+        snprintf(buf + k, cap - k, ")");
+    }
+}
+
+void
+cli_print_formats(FILE *out, int grids) {
+    int n = 0;
+    char ext[256];
+    const vv_volume_format *const *v = vv_volume_format_table(&n);
+    fprintf(out, "Volume formats (detected from the content; --format NAME where a command "
+                 "takes it):\n");
+    for (int i = 0; i < n; i++) {
+        extension_list(ext, sizeof ext, v[i]->extensions);
+        fprintf(out, "  %s%s: %s%s\n      %s\n", v[i]->name, ext,
+                v[i]->write ? "read and write" : "read",
+                v[i]->flags & VV_FORMAT_FLAG_FOLDER ? ", files or folders" : "", v[i]->doc);
+    }
+    if (!grids)
+        return;
+    const vv_grid_format_record *const *g = vv_grid_format_table(&n);
+    fprintf(out, "Irregular grid formats (detected from the content or the name):\n");
+    for (int i = 0; i < n; i++) {
+        extension_list(ext, sizeof ext, g[i]->extensions);
+        fprintf(out, "  %s%s: %s\n      %s\n", g[i]->name, ext,
+                g[i]->write ? "read and write" : "read", g[i]->doc);
+    }
+}
+
+void
+cli_writable_formats(char *buf, size_t cap, const char *sep, int extensions) {
+    int n = 0, k = 0;
+    const vv_volume_format *const *t = vv_volume_format_table(&n);
+    buf[0] = '\0';
+    for (int i = 0; i < n; i++) {
+        if (!t[i]->write)
+            continue;
+        for (const char *const *e = extensions ? t[i]->extensions : &t[i]->name; e && *e; e++) {
+            size_t len = strlen(buf);
+            snprintf(buf + len, cap - len, "%s%s%s", k++ ? sep : "", extensions ? "." : "", *e);
+            if (!extensions)
+                break;
+        }
+    }
 }
 
 int

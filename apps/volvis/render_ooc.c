@@ -1,9 +1,12 @@
 /*
  * `volvis render INPUT --memory-limit SIZE` (or a .vvb INPUT): a volume
- * larger than memory rendered brick by brick by the ray caster within the
- * memory budget (include/volvis/bricks.h). The World's defaults (view
- * framing, transfer function from the histogram) come from a coarse proxy
- * of the volume (vv_bricked_proxy), so the volume is never read whole.
+ * larger than memory rendered brick by brick within the memory budget
+ * (include/volvis/bricks.h) by any renderer with the region contract
+ * (vv_renderer_render_bricks: raycast, raytrace). The World's defaults
+ * (view framing, transfer function from the histogram) come from a coarse
+ * proxy of the volume (vv_bricked_proxy), so the volume is never read
+ * whole; the proxy stays the object's volume, through which a renderer
+ * with global effects (raytrace's shadows) traces them.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -68,12 +71,6 @@ cli_render_out_of_core(cli_args *a, cli_render_args *r) {
     int quality = 2;
     if ((rc = cli_render_renderer(a, r, w, &ren, &quality)))
         goto done;
-    if (strcmp(vv_renderer_name(ren), "raycast") != 0) {
-        cli_error("render: out of core (--memory-limit, .vvb) the renderer is raycast, not %s",
-                  vv_renderer_name(ren));
-        rc = CLI_EXIT_FAIL;
-        goto done;
-    }
     if ((s = vv_image_new(&img, w->view.width, w->view.height)) != VV_OK) {
         rc = cli_fail(s, NULL);
         goto done;
@@ -86,7 +83,9 @@ cli_render_out_of_core(cli_args *a, cli_render_args *r) {
     ro.quality = quality;
     double t0 = cli_now();
     vv_error_clear();
-    s = vv_bricked_render(b, ren, w, 0, &w->view, &ro, img);
+    vv_brick_source src;
+    vv_bricked_source(b, &src);
+    s = vv_renderer_render_bricks(ren, w, 0, &src, &w->view, &ro, img);
     double seconds = cli_now() - t0;
     if (s != VV_OK) {
         rc = cli_fail(s, NULL);

@@ -187,12 +187,6 @@ cli_render_parallel(cli_args *a, cli_render_args *r) {
     cli_render_turn(r, w);
     int quality = 2;
     rc = cli_render_renderer(a, r, w, &ren, &quality);
-    if (!rc && strcmp(vv_renderer_name(ren), "raycast") != 0) {
-        cli_error("render: under mpirun the renderer is raycast (sort-last compositing of "
-                  "bricks), not %s",
-                  vv_renderer_name(ren));
-        rc = CLI_EXIT_FAIL;
-    }
     vv_parallel_options po;
     vv_parallel_options_init(&po);
     po.method = (vv_compositing)r->compositing;
@@ -267,12 +261,6 @@ cli_animate_parallel(const cli_render_args *r, const vv_animation *anim, const v
     vv_parallel *par = NULL;
     vv_status s = vv_parallel_init(NULL, NULL, &rank, &size);
     int rc = 0;
-    if (s == VV_OK && strcmp(vv_renderer_name(ren), "raycast") != 0) {
-        cli_error("animate: under mpirun the renderer is raycast (sort-last compositing of "
-                  "bricks), not %s",
-                  vv_renderer_name(ren));
-        rc = CLI_EXIT_FAIL;
-    }
     vv_parallel_options po;
     vv_parallel_options_init(&po);
     po.method = (vv_compositing)r->compositing;

@@ -49,11 +49,7 @@ parse_mode(const cli_args *a, const char *text, vv_render_mode *out) {
 
 static int
 renderer_known(const char *name) {
-    const vv_renderer_ops *const *reg = vv_renderer_registry();
-    for (int i = 0; reg && reg[i]; i++)
-        if (reg[i]->name && strcmp(reg[i]->name, name) == 0)
-            return 1;
-    return 0;
+    return vv_renderer_info_find(name) != NULL;
 }
 
 /* A scene file: extension .json, or content that starts with '{' after whitespace. */
@@ -217,14 +213,9 @@ cli_render_parse(cli_args *a, cli_render_args *r) {
     if ((s = cli_get(a, "renderer"))) {
         r->renderer = s;
         if (!renderer_known(s)) {
-            char names[512] = "";
-            const vv_renderer_ops *const *reg = vv_renderer_registry();
-            for (int i = 0; reg && reg[i]; i++) {
-                size_t n = strlen(names);
-                snprintf(names + n, sizeof names - n, "%s%s", i ? ", " : "", reg[i]->name);
-            }
+            char names[512];
             return cli_usage_error(a, "--renderer: unknown renderer '%s' (available: %s)", s,
-                                   names[0] ? names : "none");
+                                   cli_renderer_names(names, sizeof names));
         }
     }
     for (int i = 0; i < a->n_seen; i++) {
@@ -393,14 +384,12 @@ cli_render_turn(const cli_render_args *r, vv_world *w) {
     cli_render_ortho(r, w);
 }
 
-/* The registered renderers' names, comma-separated, in @p buf. */
-static const char *
-renderer_names(char *buf, size_t cap) {
+const char *
+cli_renderer_names(char *buf, size_t cap) {
     buf[0] = '\0';
-    const vv_renderer_ops *const *reg = vv_renderer_registry();
-    for (int i = 0; reg && reg[i]; i++) {
+    for (int i = 0; i < vv_renderer_count(); i++) {
         size_t n = strlen(buf);
-        snprintf(buf + n, cap - n, "%s%s", i ? ", " : "", reg[i]->name);
+        snprintf(buf + n, cap - n, "%s%s", i ? ", " : "", vv_renderer_info_at(i)->name);
     }
     return buf[0] ? buf : "none";
 }
@@ -410,12 +399,13 @@ cli_render_renderer(const cli_args *a, const cli_render_args *r, const vv_world 
                     vv_renderer **out, int *quality) {
     *out = NULL;
     const vv_render_settings *sc = &w->render;
-    const char *scene_renderer = vv_render_settings_renderer(sc);
+    /* the scene's renderer, else the one its objects call for (render.h) */
+    const char *scene_renderer = vv_world_renderer(w);
     const char *name = r->renderer ? r->renderer : scene_renderer;
     if (!r->renderer && !renderer_known(name)) {
         char names[512];
         cli_error("%s: render.renderer: unknown renderer '%s' (available: %s)", r->input, name,
-                  renderer_names(names, sizeof names));
+                  cli_renderer_names(names, sizeof names));
         return CLI_EXIT_FAIL;
     }
     *quality = r->has_quality ? r->quality : vv_render_settings_quality(sc);
@@ -477,9 +467,11 @@ cli_render_print_options(FILE *out) {
             "  --elevation DEG  orbit the camera towards the up axis, degrees (default 0)\n"
             "  --zoom F         > 1 moves the camera closer, < 1 farther (default 1)\n"
             "  --threads N      threads, 0 = all cores (default 0)\n"
-            "  --renderer NAME  rendering method (default raycast or the scene's), one of\n"
-            "                   the list below; naming another renderer than the scene's\n"
-            "                   drops the scene's renderer options\n"
+            "  --renderer NAME  rendering method, one of the list below (default: the\n"
+            "                   scene's, else the first that draws every object: raycast\n"
+            "                   for volumes, raytrace with geometry, irregular for grids);\n"
+            "                   naming another renderer than the scene's drops the\n"
+            "                   scene's renderer options\n"
             "  --step S         sample step in units of the smallest voxel spacing\n"
             "                   (default 0.5 or the scene's)\n"
             "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
@@ -513,12 +505,79 @@ cli_render_print_options(FILE *out) {
             VV_IMAGE_MAX_SIDE);
 }
 
+/* "volume, grid" etc.: the object kinds in @p draws, into buf. */
+const char *
+cli_renderer_kinds(unsigned draws, char *buf, size_t cap) {
+    buf[0] = '\0';
+    for (int t = 0; t <= VV_OBJECT_GRID; t++) {
+        if (!(draws & VV_DRAWS(t)))
+            continue;
+        size_t n = strlen(buf);
+        snprintf(buf + n, cap - n, "%s%s", n ? ", " : "", vv_object_type_name((vv_object_type)t));
+    }
+    return buf;
+}
+
+/* "composite, mip, ...": the modes in @p modes, into buf. */
+const char *
+cli_renderer_modes(unsigned modes, char *buf, size_t cap) {
+    buf[0] = '\0';
+    for (size_t m = 0; m < sizeof mode_names / sizeof mode_names[0]; m++) {
+        if (!(modes & VV_MODE_BIT(mode_values[m])))
+            continue;
+        size_t n = strlen(buf);
+        snprintf(buf + n, cap - n, "%s%s", n ? ", " : "", mode_names[m]);
+    }
+    return buf;
+}
+
 void
 cli_render_print_renderers(FILE *out) {
-    const vv_renderer_ops *const *reg = vv_renderer_registry();
-    for (int i = 0; reg && reg[i]; i++) {
-        fprintf(out, "  %-16s %s\n", reg[i]->name, reg[i]->description ? reg[i]->description : "");
-        if (reg[i]->options)
-            print_wrapped(out, "options: ", reg[i]->options, 19, 79);
+    for (int i = 0; i < vv_renderer_count(); i++) {
+        const vv_renderer_info *in = vv_renderer_info_at(i);
+        char kinds[256], modes[128], line[1024], what[256];
+        fprintf(out, "  %-16s %s\n", in->name, in->description);
+        snprintf(line, sizeof line, "draws %s (%s)%s",
+                 cli_renderer_kinds(in->draws, kinds, sizeof kinds),
+                 cli_renderer_modes(in->modes, modes, sizeof modes),
+                 (in->caps & VV_RENDERER_REGION) ? "; renders regions (--memory-limit, mpirun)"
+                                                 : "");
+        print_wrapped(out, "", line, 19, 79);
+        print_wrapped(out, "quality: ", in->quality, 19, 79);
+        for (int k = 0; k < in->n_options; k++) {
+            const vv_option_spec *o = &in->options[k];
+            snprintf(line, sizeof line, "%s=%s (default %s): %s", o->key,
+                     vv_option_describe(o, what, sizeof what), o->def[0] ? o->def : "none", o->doc);
+            print_wrapped(out, "--set ", line, 19, 79);
+        }
     }
+}
+
+void
+cli_render_note_left_out(const vv_renderer *ren, const vv_world *w) {
+    const vv_renderer_info *in = vv_renderer_get_info(ren);
+    if (vv_renderer_check_world(in, w) != VV_OK) {
+        vv_error_clear(); /* the render says why */
+        return;
+    }
+    char names[1024] = "";
+    int n = 0;
+    for (int i = 0; i < w->n_objects; i++) {
+        const vv_object *o = w->objects[i];
+        if (!o || !o->visible || (in->draws & VV_DRAWS(o->type)))
+            continue;
+        if ((o->type == VV_OBJECT_VOLUME && !o->volume) || (o->type == VV_OBJECT_GRID && !o->grid))
+            continue;
+        size_t len = strlen(names);
+        if (n < 4)
+            snprintf(names + len, sizeof names - len, "%s'%s' (%s)", n ? ", " : "", o->name,
+                     vv_object_type_name(o->type));
+        n++;
+    }
+    if (!n)
+        return;
+    fprintf(stderr,
+            "volvis: note: %s leaves out %s%s: it does not draw those kinds ('volvis "
+            "renderers' lists what each renderer draws)\n",
+            in->name, names, n > 4 ? " and more" : "");
 }

@@ -1,8 +1,11 @@
 /*
  * VolVis out-of-core volumes: a volume larger than memory, cut into bricks
  * that are read on demand into a cache with a memory budget, least recently
- * used first out (src/core/bricks.c), and rendered brick by brick by the ray
- * caster in front-to-back order (src/render/raycast/raycast_ooc.c).
+ * used first out (src/io/bricked.c). The reader serves its bricks through
+ * the volume-source interface (include/volvis/sys/source.h,
+ * vv_bricked_source), through which any renderer with the region contract
+ * renders it brick by brick in front-to-back order
+ * (vv_renderer_render_bricks in render.h, src/render/bricks_render.c).
  *
  * Bricks are 64^3 cells with a one-voxel ghost border (each brick is read
  * with the voxels one beyond its faces, so that trilinear samples and
@@ -23,10 +26,8 @@
 #include <stdint.h>
 
 #include "core.h"
-#include "image.h"
 #include "io.h"
-#include "model.h"
-#include "render.h"
+#include "sys/source.h"
 #include "volume.h"
 
 #ifdef __cplusplus
@@ -126,20 +127,26 @@ vv_status vv_bricked_write_vvb(vv_bricked *src, const char *path, int coarse,
  */
 vv_status vv_volume_write_vvb(const vv_volume *v, const char *path, int coarse);
 
+/** Bricks in all (nb[0] nb[1] nb[2], i fastest). */
+int vv_bricked_count(const vv_bricked *b);
+/** Brick @p index's boxes and min/max (@p index in 0 .. vv_bricked_count - 1). */
+void vv_bricked_info(const vv_bricked *b, int index, vv_brick_info *info);
 /**
- * Renders object @p object of @p w (a volume object in composite, mip or
- * minip mode; its volume is ignored and only its transform, transfer
- * function and shading are used) with the volume of @p b, brick by brick in
- * front-to-back order through @p view, with raycast renderer @p ren (its
- * options apply). Bricks whose min/max the transfer function makes
- * transparent are skipped unread (composite mode); every other brick is
- * read at most once a frame. The image is the in-memory render's up to
- * compositing rounding (bit for bit for mip and minip). Errors:
- * VV_ERR_UNSUPPORTED (mode, other visible objects), VV_ERR_INVALID, those of
- * reading and rendering.
+ * Brick @p index as a volume of its voxels read (the box slo .. shi) with
+ * the whole volume's geometry and value range, from the cache or the file;
+ * a new reference (free it). Errors: VV_ERR_IO, VV_ERR_FORMAT (short
+ * read), VV_ERR_NOMEM.
  */
-vv_status vv_bricked_render(vv_bricked *b, vv_renderer *ren, const vv_world *w, int object,
-                            const vv_view *view, const vv_render_options *opt, vv_image *out);
+vv_status vv_bricked_load(vv_bricked *b, int index, vv_volume **out);
+/** Counts a brick skipped unread (vv_bricked_stats.skipped). */
+void vv_bricked_note_skip(vv_bricked *b);
+
+/**
+ * @p b as a volume source (sys/source.h) for vv_renderer_render_bricks:
+ * header, grid, info, load and note_skip call the functions above. @p b
+ * is borrowed: keep it open while @p out is used.
+ */
+void vv_bricked_source(vv_bricked *b, vv_brick_source *out);
 
 #ifdef __cplusplus
 }

@@ -151,6 +151,30 @@ int vv_vvc_detect(const char *path);
 vv_status vv_vvc_decompress(vv_volume **out, const vv_vvc *c, int threads,
                             const vv_progress *progress);
 
+/**
+ * The r2c spectrum of every M^3 subcube of @p v (M = 8, 16 or 32, as a
+ * .vvc's subcube size), unquantised: the coded values (value - offset) /
+ * unit with the padding of edge subcubes at 0 (i.e. the minimum), each in
+ * the layout of vv_vvc_decode_spectrum, subcubes in index order:
+ * n * 2 * M * M * (M/2 + 1) floats in *spectra, allocated with FFTW's
+ * fftwf_malloc (free with fftwf_free); *offset and *unit receive the value
+ * scale. This is what a .vvc codes before its quantiser; the Fourier
+ * renderer (compression-domain rendering, paper section 4.6) slices it
+ * directly. Runs on @p threads threads (0: all). Errors: VV_ERR_INVALID,
+ * VV_ERR_NOMEM, VV_ERR_CANCELLED.
+ */
+vv_status vv_vvc_spectra(const vv_volume *v, int M, int threads, float **spectra, double *offset,
+                         double *unit, const vv_progress *progress);
+
+/**
+ * FFTW's planner is not thread-safe: the library makes and destroys every
+ * FFTW plan between vv_fftw_lock() and vv_fftw_unlock() (a process-wide
+ * mutex). A program that plans its own FFTW transforms while VolVis runs
+ * in other threads takes the same lock around its planner calls.
+ */
+void vv_fftw_lock(void);
+void vv_fftw_unlock(void);
+
 /** Number of subcubes (subcubes[0] * subcubes[1] * subcubes[2]); index = (z * ny + y) * nx + x. */
 int vv_vvc_subcube_count(const vv_vvc *c);
 

@@ -32,10 +32,11 @@
  * casting to an integer type writes 0 for NaN.
  *
  * Threads: each filter runs on vv_filter_options.threads threads (0: the
- * library default, vv_threads_get()) as plain threads taking rows from a
- * shared counter (the scheme of Marching Cubes, src/surface). Every output
- * voxel is computed by the same operations in the same order whatever the
- * thread count, so results are bit-identical for every thread count.
+ * library default, vv_threads_get()), OpenMP threads taking rows from a
+ * shared counter (vv_parallel_for, src/core/parallel_for.h, as Marching
+ * Cubes). Every output voxel is computed by the same operations in the same
+ * order whatever the thread count, so results are bit-identical for every
+ * thread count.
  * Progress is reported through options.progress; a callback returning
  * non-zero stops the filter, which returns VV_ERR_CANCELLED and no volume.
  *

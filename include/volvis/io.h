@@ -25,14 +25,22 @@
 #include <stdint.h>
 
 #include "core.h"
+#include "model.h"
 #include "volume.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
+/**
+ * A volume format: its row in the format table (src/io/formats.c; the
+ * records are described in include/volvis/sys/format.h). The formats built
+ * in have names here; a format added to the table gets the next id and is
+ * found by name (vv_format_parse), as --format finds it.
+ */
 typedef enum vv_format {
-    VV_FORMAT_AUTO = 0, /**< detect from content, extension as a hint */
+    VV_FORMAT_UNKNOWN = -1, /**< not a format this build reads */
+    VV_FORMAT_AUTO = 0,     /**< detect from content, extension as a hint */
     VV_FORMAT_SLC,
     VV_FORMAT_NRRD,
     VV_FORMAT_NIFTI,
@@ -40,24 +48,30 @@ typedef enum vv_format {
     VV_FORMAT_VTK,
     VV_FORMAT_RAW,
     VV_FORMAT_TIFF,
-    VV_FORMAT_DICOM,
-    VV_FORMAT_UNKNOWN
+    VV_FORMAT_DICOM
 } vv_format;
 
-/** Lower-case format name ("slc", "nrrd", ...). */
+/** Number of volume formats: their ids run from 1 to this. */
+int vv_format_count(void);
+/** Lower-case format name ("slc", "nrrd", ...); "auto" and "unknown" for those. */
 const char *vv_format_name(vv_format f);
-/** Parses a format name as printed by vv_format_name. */
+/**
+ * Parses a format name as printed by vv_format_name, or one of a format's
+ * other names ("nhdr", "nii", "mha", "metaimage", "tif", "dcm", ...), in any
+ * case. Errors: VV_ERR_INVALID naming the formats.
+ */
 vv_status vv_format_parse(const char *name, vv_format *out);
 
 /**
- * Detects the format of @p path: magic numbers first (SLC "11111", "NRRD000",
- * NIfTI sizeof_hdr 348/540 also gzip-compressed, "# vtk DataFile",
- * MetaImage keys, TIFF "II*"/"MM*" and BigTIFF "II+"/"MM+", DICOM "DICM" at
- * byte 128 or a file GDCM can read), the extension as a hint when the content
- * is ambiguous. A folder is VV_FORMAT_DICOM when it holds a DICOMDIR or a
- * DICOM file, else VV_FORMAT_TIFF when it holds a .tif/.tiff file. Returns
- * VV_FORMAT_UNKNOWN when nothing matches (and for raw files, which have no
- * signature).
+ * Detects the format of @p path by asking every format of the table whether
+ * the file looks like it: signatures first (SLC "11111", "NRRD000", NIfTI
+ * sizeof_hdr 348/540 also gzip-compressed, "# vtk DataFile", MetaImage keys,
+ * TIFF "II*"/"MM*" and BigTIFF "II+"/"MM+", DICOM "DICM" at byte 128), then,
+ * when none matched, the tests that open other files (a DICOM file without
+ * its preamble that GDCM can read, the header beside an Analyze .img). A
+ * folder is VV_FORMAT_DICOM when it holds a DICOMDIR or a DICOM file, else
+ * VV_FORMAT_TIFF when it holds a TIFF file. Returns VV_FORMAT_UNKNOWN when
+ * nothing matches (and for raw files, which have no signature).
  */
 vv_format vv_format_detect(const char *path);
 
@@ -105,12 +119,49 @@ void vv_load_options_init(vv_load_options *o);
 vv_status vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt);
 
 /**
- * Writes @p v to @p path as @p format (VV_FORMAT_AUTO: from the extension,
- * .slc or .nrrd/.nhdr). SLC holds 8-bit data only: other types are rescaled
- * from range[] to 0..255 (and the modification set to "other") unless
- * @p strict, in which case VV_ERR_UNSUPPORTED is returned.
+ * The format that writes files with the extension of @p path (.slc, .nrrd,
+ * .nhdr: the extensions of the formats with a writer, case-insensitive), or
+ * VV_FORMAT_UNKNOWN.
  */
+vv_format vv_format_from_extension(const char *path);
+
+/** Options for vv_volume_save_with. */
+typedef struct vv_save_options {
+    vv_format format; /**< VV_FORMAT_AUTO: from the extension */
+    /** 1: what the format cannot hold as it is (another voxel type) is
+     *  VV_ERR_UNSUPPORTED; 0: it is converted (SLC: rescaled to 8 bits) */
+    int strict;
+    /** -1: the format's default (NRRD gzip, SLC run-length); 0: none; 1: compressed */
+    int compress;
+} vv_save_options;
+
+/** Format VV_FORMAT_AUTO, strict 0, compress -1. */
+void vv_save_options_init(vv_save_options *o);
+
+/**
+ * Writes @p v to @p path as @p opt says (@p opt may be NULL: the defaults):
+ * the format from opt->format, or with VV_FORMAT_AUTO from the extension
+ * among the formats that write (.slc, .nrrd, .nhdr). What the format cannot
+ * hold as it is (SLC: 8-bit voxels only) is converted (SLC: rescaled from
+ * range[] to 0..255, the modification set to "other") unless opt->strict.
+ * Atomic: on failure an existing file is left as it was. Errors:
+ * VV_ERR_INVALID (no format from the extension), VV_ERR_UNSUPPORTED (a
+ * format that is read only; strict and the volume does not fit), VV_ERR_IO,
+ * VV_ERR_NOMEM.
+ */
+vv_status vv_volume_save_with(const vv_volume *v, const char *path, const vv_save_options *opt);
+
+/** vv_volume_save_with of @p format and @p strict, compression as the format's default. */
 vv_status vv_volume_save(const vv_volume *v, const char *path, vv_format format, int strict);
+
+/* ---- images ------------------------------------------------------------- */
+
+/**
+ * Loads a PNG (vv_image_read_png) from @p path; @p source (may be NULL:
+ * @p path) is the name kept for scene saving. Errors: those of
+ * vv_image_read_png, VV_ERR_NOMEM.
+ */
+vv_status vv_texture_image_load(vv_texture_image **out, const char *path, const char *source);
 
 /* ---- per-format entry points (same contracts as above) ---------------- */
 

@@ -234,6 +234,37 @@ vv_status vv_measure_mesh_volume(const vv_mesh *m, double *volume);
 vv_status vv_measure_mesh_distance(const vv_mesh *a, const vv_mesh *b, int threads, double *dist,
                                    vv_vec3 *pa, vv_vec3 *pb);
 
+/* ---- geometric objects --------------------------------------------------------- */
+
+/** What vv_measure_object reports, world units. */
+typedef struct vv_object_measure {
+    double area;        /**< surface area of the tessellation */
+    double volume;      /**< enclosed volume (solids: sphere, box, capped cylinder, mesh), else 0 */
+    int solid;          /**< the shape encloses a volume */
+    size_t n_triangles; /**< of the tessellation measured */
+} vv_object_measure;
+
+/**
+ * Area and enclosed volume of a geometric object of the World (sphere, box,
+ * cylinder, polygon, mesh) in world units, placed by its transform: sums
+ * over its tessellation within @p tolerance world units of the surface (the
+ * geometry-type table's, src/model/geometry.h; <= 0: 1/1000 of the object's
+ * size). Exact for flat shapes; a curved one comes out smaller by about
+ * 2 tolerance / radius relative (inscribed facets). Errors: VV_ERR_INVALID
+ * (NULL, not geometry, a plane (unbounded), a broken shape), VV_ERR_NOMEM.
+ */
+vv_status vv_measure_object(const vv_object *obj, double tolerance, vv_object_measure *out);
+
+/**
+ * Minimum distance between the surfaces of two geometric objects of the
+ * World (world units, 0 when they touch or cross), with the closest points
+ * (pa, pb may be NULL): vv_measure_mesh_distance between their
+ * tessellations within @p tolerance (as vv_measure_object), so within
+ * tolerance of the exact distance. Errors: as vv_measure_object.
+ */
+vv_status vv_measure_object_distance(const vv_object *a, const vv_object *b, double tolerance,
+                                     int threads, double *dist, vv_vec3 *pa, vv_vec3 *pb);
+
 /* ---- label volumes -------------------------------------------------------- */
 
 /** What vv_measure_labels reports for one label. */

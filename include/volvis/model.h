@@ -2,7 +2,8 @@
  * VolVis abstract model: the World of the VolVis paper (Avila et al., IEEE
  * Visualization '94, section 3 "Abstract model"): lights, objects, views,
  * global cut planes and global shading (ambient light, background colour).
- * Plus scene files (JSON, read with Jansson; schema in docs/scene-format.md).
+ * Scene files (JSON) are read and written by the scene layer above
+ * (include/volvis/scene.h), which loads the files they name.
  *
  * Units: positions and distances in world units; angles in radians (scene
  * files use degrees and are converted on load).
@@ -124,6 +125,13 @@ const char *const *vv_tf_preset_names(void);
 /** The one-line description of preset @p name (static storage), or NULL for an unknown name. */
 const char *vv_tf_preset_description(const char *name);
 
+/**
+ * The opacity unit distance a transfer function of @p v starts with: the
+ * smallest voxel spacing of @p v (world units), or 1 when that is not
+ * positive and finite. Thread-safe.
+ */
+double vv_tf_default_unit_distance(const vv_volume *v);
+
 /* ---- 2-D transfer function (value x gradient magnitude) ------------------ */
 
 /**
@@ -214,12 +222,6 @@ typedef struct vv_texture_image {
     int refcount;    /**< internal; use vv_texture_image_ref / _free */
 } vv_texture_image;
 
-/**
- * Loads a PNG (vv_image_read_png) from @p path; @p source (may be NULL:
- * @p path) is the name kept for scene saving. Errors: those of
- * vv_image_read_png, VV_ERR_NOMEM.
- */
-vv_status vv_texture_image_load(vv_texture_image **out, const char *path, const char *source);
 /** Wraps @p image (ownership taken, also on failure) with refcount 1. */
 vv_status vv_texture_image_new(vv_texture_image **out, vv_image *image, const char *source);
 /** Takes one more reference; returns @p t. */
@@ -711,49 +713,17 @@ vv_status vv_world_new_for_grid(vv_world **out, vv_grid *grid, const char *field
                                 const vv_default_scene_options *opt);
 
 /**
- * Loads a scene file (JSON, docs/scene-format.md; at most 16 MiB). Volume
- * files are resolved relative to the scene file and loaded with
- * vv_volume_load. Unknown keys are errors. On failure *out is NULL. Errors:
- * VV_ERR_IO, VV_ERR_LIMIT (file too large), VV_ERR_FORMAT with the file,
- * line and column (1-based) and the path of the offending value
- * ("scene.json:12:7: view.fov: expected a number, got a string"), or
- * whatever loading a volume returned, prefixed with the position of its
- * "file" key.
+ * The default transfer function of @p v for @p mode (docs/scene-format.md,
+ * "Default scene"): for the projection modes (MIP, MinIP, X-ray) a grey
+ * ramp from the 1st to the 99.9th percentile of the values; for the others
+ * an opacity ramp with a warm colour map over the foreground (the
+ * histogram's background peak left out: 2 % to 99.5 % of the remaining
+ * count); unit distance vv_tf_default_unit_distance.
+ * Fills @p tf and stores the composite ramp's lower end in *@p iso_lo (may
+ * be NULL), a default isovalue. What vv_world_new_for_volume and scene files
+ * without a "transfer_function" use. Never fails; thread-safe.
  */
-vv_status vv_scene_load(vv_world **out, const char *path);
-
-/**
- * vv_scene_load reporting the progress of voxelizing the "geometry" objects
- * (each voxelization reports 0 to 1 in turn) to @p progress (may be NULL),
- * which can cancel (VV_ERR_CANCELLED). Geometry objects are volume-sampled
- * by the Modeling component (include/volvis/modeling.h) into volume objects.
- */
-vv_status vv_scene_load_progress(vv_world **out, const char *path, const vv_progress *progress);
-
-struct vv_filter_cache;
-/**
- * vv_scene_load_progress keeping the volumes of objects with a "filters"
- * chain in @p cache (include/volvis/filter.h; may be NULL: filtered again at
- * every load), so loading the scene again does not filter again. Those
- * volumes are shared with the cache: the World treats them as read-only
- * (objects copy a volume before editing it).
- */
-vv_status vv_scene_load_cached(vv_world **out, const char *path, const vv_progress *progress,
-                               struct vv_filter_cache *cache);
-
-/**
- * Writes a World as a scene file, atomically. Volumes are referred to by
- * @p volume_files[i] for object i (relative to the scene file); a mesh
- * object by volume_files[i] when given, else by its geometry.source; the
- * entries of other geometric objects are not read, and @p volume_files may
- * be NULL when there are no volume objects. Every field is written (the volume's current
- * origin and spacing too; the "render" section when any render setting is
- * set), so vv_scene_load of the file reproduces the World; the TF of a
- * threshold-segmented object is not kept. A volume object with no entry in
- * @p volume_files is referred to by its geometry.source. Errors:
- * VV_ERR_IO, VV_ERR_INVALID.
- */
-vv_status vv_scene_save(const vv_world *w, const char *path, const char *const *volume_files);
+void vv_tf_default(vv_tf *tf, const vv_volume *v, vv_render_mode mode, double *iso_lo);
 
 #ifdef __cplusplus
 }

@@ -27,6 +27,7 @@
 #include "core.h"
 #include "math.h"
 #include "mesh.h"
+#include "model.h"
 #include "volume.h"
 
 #ifdef __cplusplus
@@ -186,6 +187,15 @@ vv_status vv_shape_mesh(vv_shape **out, vv_mesh *mesh, vv_mesh_mode mode, double
 /** A mesh loaded with vv_mesh_load (any format Assimp reads). Errors as vv_mesh_load. */
 vv_status vv_shape_mesh_load(vv_shape **out, const char *path, vv_mesh_mode mode, double thickness);
 /**
+ * A World object's geometry as a model primitive, placed by the object's
+ * transform: spheres, boxes and capped cylinders through their exact signed
+ * distances (the geometry-type table, src/model/geometry.h), meshes as mesh
+ * shapes (VV_MESH_AUTO). The shape keeps its own copy of the object.
+ * Errors: VV_ERR_INVALID (NULL, a volume or grid, a broken shape, a plane
+ * (no bounds), a polygon or an open cylinder (no inside)), VV_ERR_NOMEM.
+ */
+vv_status vv_shape_object(vv_shape **out, const vv_object *obj);
+/**
  * A CSG operation on @p n >= 1 children (n >= 2 for a difference is not
  * required: a difference of one child is that child). Takes ownership of
  * every non-NULL child, also on failure. Errors: VV_ERR_INVALID when a child
@@ -265,6 +275,39 @@ vv_status vv_voxelize(vv_volume **out, const vv_shape *shape, const vv_voxelize_
  * offending value, VV_ERR_INVALID (a scene without geometry objects).
  */
 vv_status vv_model_load(vv_shape **out, const char *path, vv_voxelize_options *opt);
+
+/**
+ * Reads a model tree given as JSON text (docs/scene-format.md, "Geometry
+ * objects"): a primitive ({"type": "sphere", "radius": 10, ...}) or an
+ * operation ({"op": "union", "children": [...]}), each with an optional
+ * transform. This is how the scene layer hands the "primitive" or "csg"
+ * value of a scene file's geometry object to Modeling. @p json is @p len
+ * bytes of UTF-8 (not NUL-terminated necessarily); @p key_path is where the
+ * value sits in the enclosing document ("objects[2].csg", may be ""), used
+ * to name the offending value; mesh files named in the tree are resolved
+ * relative to the folder of @p base_path (the scene file; may be NULL: the
+ * current folder).
+ *
+ * On error the message is the problem without a file position, and
+ * @p err_path (@p cap bytes, may be NULL) receives the key path of the
+ * offending value (starting with @p key_path), so that the caller can add
+ * the line and column in its own text. Errors: VV_ERR_FORMAT (malformed JSON,
+ * a bad key or value), VV_ERR_LIMIT (a tree deeper than 1000 levels), those
+ * of vv_mesh_load for mesh nodes, VV_ERR_NOMEM. Reentrant.
+ */
+vv_status vv_shape_parse_json(vv_shape **out, const char *json, size_t len, const char *key_path,
+                              const char *base_path, char *err_path, size_t cap);
+
+/**
+ * Reads the voxelization keys ("resolution", "voxel_spacing", "filter",
+ * "filter_radius", "margin", "voxel_type") of the JSON object in @p json
+ * (@p len bytes; other keys are ignored) into @p opt, leaving the fields of
+ * absent keys as they are. @p key_path and @p err_path as in
+ * vv_shape_parse_json. Errors: VV_ERR_FORMAT (malformed JSON, a value out
+ * of range), VV_ERR_LIMIT (a resolution over VV_VOLUME_MAX_DIM). Reentrant.
+ */
+vv_status vv_voxelize_options_parse_json(vv_voxelize_options *opt, const char *json, size_t len,
+                                         const char *key_path, char *err_path, size_t cap);
 
 #ifdef __cplusplus
 }

@@ -1,13 +1,14 @@
 /*
- * VolVis distributed rendering over MPI: sort-last parallel volume ray
- * casting (src/parallel, an optional build: on when CMake finds MPI).
+ * VolVis distributed rendering over MPI: sort-last parallel volume
+ * rendering (src/parallel, an optional build: on when CMake finds MPI).
  *
  * Each rank keeps one brick of the volume (a box cut at multiples of 16
  * voxels, with ghost voxels so that interpolation and gradients are those
- * of the whole volume), ray casts it with the ordinary raycast renderer in
- * the whole volume's frame, and the partial images (premultiplied colour,
- * opacity, depth; or the extreme value for maximum/minimum intensity
- * projection) are composited in visibility order by binary swap (Ma,
+ * of the whole volume) and renders it as one region of any renderer with
+ * the region contract (include/volvis/sys/renderer.h: raycast, raytrace)
+ * in the whole volume's frame; the partial images (premultiplied colour,
+ * opacity, depth, and for maximum/minimum intensity projection the
+ * projected value as the key) are composited in visibility order by binary swap (Ma,
  * Painter, Hansen and Krogh, "Parallel Volume Rendering Using Binary-Swap
  * Compositing", IEEE CG&A 1994; a count of ranks that is not a power of two
  * first folds the extra ranks into partners) or radix-k (Peterka, Goodell,
@@ -114,15 +115,15 @@ typedef struct vv_parallel_stats {
 typedef struct vv_parallel vv_parallel;
 
 /**
- * A distributed renderer drawing with raycast renderer @p ren (borrowed:
- * keep it alive until vv_parallel_free; its options, vv_renderer_set_option,
- * apply; brick mode is set on it at each render), or with one of its own
- * when @p ren is NULL. @p opt may be NULL (defaults). Not collective.
+ * A distributed renderer drawing with renderer @p ren (borrowed: keep it
+ * alive until vv_parallel_free; its options, vv_renderer_set_option, apply;
+ * it must declare VV_RENDERER_REGION), or with a raycast renderer of its
+ * own when @p ren is NULL. @p opt may be NULL (defaults). Not collective.
  * Errors: VV_ERR_UNSUPPORTED (built without MPI, or MPI not initialised),
- * VV_ERR_INVALID (@p ren is not raycast), VV_ERR_NOMEM.
+ * VV_ERR_INVALID (@p ren renders no regions), VV_ERR_NOMEM.
  */
 vv_status vv_parallel_new(vv_parallel **out, vv_renderer *ren, const vv_parallel_options *opt);
-/** The raycast renderer it uses; borrowed. */
+/** The renderer it uses; borrowed. */
 vv_renderer *vv_parallel_renderer(vv_parallel *p);
 /**
  * Frees the context, its bricks and images, and the renderer it created
@@ -146,9 +147,13 @@ vv_status vv_parallel_set_source(vv_parallel *p, struct vv_bricked *source);
  * Collective: renders @p w (one visible volume object, composite, mip or
  * minip; the same World on every rank) through @p view. Each rank cuts its
  * brick from the object's volume (kept between frames while the volume is
- * unchanged), renders it, and the partial images are composited; rank 0
+ * unchanged), renders it as a region (the World, with the object's own
+ * volume, is the renderer's context: raytrace traces its shadows through
+ * it, exactly when it is the whole volume, from the proxy when the ranks
+ * read a bricked source), and the partial images are composited; rank 0
  * receives the whole image in @p out (view->width x view->height, RGBA
- * float and depth, as vv_renderer_render draws it), the other ranks leave
+ * float and depth, as vv_renderer_render draws it; a region is traced one
+ * ray a pixel, so raytrace gives its quality-1 sampling), the other ranks leave
  * @p out untouched (it may be NULL there). @p stats may be NULL. A failure
  * on any rank fails every rank (vv_parallel_agree). Errors:
  * VV_ERR_UNSUPPORTED (other objects or modes), VV_ERR_LIMIT (a volume too

@@ -1,15 +1,23 @@
 /*
- * VolVis rendering: one interface for every rendering method, and a registry.
+ * VolVis rendering, the user's side: pick a rendering method by name, read
+ * what it draws and which options it takes, set them, render a World.
  *
  * A renderer turns a World plus a View into an image (RGBA float + depth,
- * see image.h). Each method implements vv_renderer_ops and is listed in the
- * registry (src/render/registry.c); callers pick one by name ("raycast") and
- * never special-case a method.
+ * see image.h). Every method is listed in one registry
+ * (src/render/registry.c) with a vv_renderer_info: its capabilities (the
+ * object kinds and modes it draws, whether it renders regions for
+ * out-of-core and distributed rendering) and a declarative table of typed
+ * options. The CLI's --set and --help, `volvis renderers`, scene files'
+ * "render.options", the GUI's Rendering page and Python all read that one
+ * table; values are validated from it. Implementing a method is the other
+ * side (include/volvis/sys/renderer.h, libgit2's include/git2/sys/ split).
  *
  * Thread-safety: one vv_renderer must not render from two threads at once;
- * distinct renderers are independent. A renderer may cache per-volume data
- * (gradients, subvolume min/max) between renders; the cache is keyed on the
- * volume and its `modified` counter and holds a reference to the volume.
+ * distinct renderers are independent. The registry and the info records are
+ * immutable and may be read from any thread. A renderer may cache
+ * per-volume data (gradients, subvolume min/max) between renders; the cache
+ * is keyed on the volume and its `modified` counter and holds a reference
+ * to the volume.
  */
 #ifndef VOLVIS_RENDER_H
 #define VOLVIS_RENDER_H
@@ -25,36 +33,157 @@ extern "C" {
 /** Options of one render call. */
 typedef struct vv_render_options {
     int threads;          /**< <= 0: vv_threads_get() */
-    int quality;          /**< 0 draft .. 2 final; methods may ignore it (raytrace: 0 no
-                               shadow or secondary rays, 1 one ray a pixel, 2 supersampled) */
+    int quality;          /**< 0 draft .. 2 final; what it means: vv_renderer_info.quality */
     vv_progress progress; /**< reports the fraction of image tiles done; may cancel */
 } vv_render_options;
 
 /** threads 0, quality 2, no progress callback. */
 void vv_render_options_init(vv_render_options *o);
 
-/** The table every rendering method implements. */
-typedef struct vv_renderer_ops {
-    const char *name;        /**< registry key, e.g. "raycast" */
-    const char *description; /**< one line for --help */
-    vv_status (*create)(void **state);
-    /** Sets a method-specific option from text; VV_ERR_INVALID for unknown keys. */
-    vv_status (*set_option)(void *state, const char *key, const char *value);
-    vv_status (*render)(void *state, const vv_world *world, const vv_view *view,
-                        const vv_render_options *opt, vv_image *out);
-    void (*destroy)(void *state);
-    /**
-     * The method's --set options with their defaults, and what --quality
-     * means to it, as plain text for --help ("key (default), ..."); may be
-     * NULL.
-     */
-    const char *options;
-} vv_renderer_ops;
+/* ---- typed option tables ------------------------------------------------ */
+
+/** The type of a renderer option's value. */
+typedef enum vv_option_type {
+    VV_OPTION_BOOL = 0,   /**< "1" or "0" */
+    VV_OPTION_INT = 1,    /**< a decimal integer within [min, max] */
+    VV_OPTION_REAL = 2,   /**< a decimal number within [min, max] (ends open when flagged) */
+    VV_OPTION_ENUM = 3,   /**< one of `words` */
+    VV_OPTION_STRING = 4, /**< any text (a file name) shorter than VV_RENDER_OPTION_VALUE_MAX */
+} vv_option_type;
+
+/** vv_option_spec.flags */
+#define VV_OPTION_MIN_OPEN 1u /**< the value must be > min (not >=) */
+#define VV_OPTION_MAX_OPEN 2u /**< the value must be < max (not <=) */
+
+/**
+ * One option of a renderer: what `--set KEY=VALUE` accepts. For INT and
+ * REAL, `words` (may be NULL) lists words accepted besides numbers (e.g.
+ * "auto", "exact"); for ENUM it lists every value. `def` is the default as
+ * the text --set would take, and it passes the option's own validator
+ * (tests/render/test_registry.c checks every table).
+ */
+typedef struct vv_option_spec {
+    const char *key;          /**< [a-z0-9_]+ */
+    vv_option_type type;      /**< value type */
+    const char *def;          /**< default, as text; never NULL ("" for an empty string) */
+    double min, max;          /**< INT, REAL: the inclusive range (flags make ends open) */
+    unsigned flags;           /**< VV_OPTION_MIN_OPEN, VV_OPTION_MAX_OPEN */
+    const char *const *words; /**< NULL-terminated (see above), or NULL */
+    const char *doc;          /**< one line: meaning and unit */
+} vv_option_spec;
+
+/** A validated option value (vv_option_parse). */
+typedef struct vv_option_value {
+    vv_option_type type; /**< the spec's type */
+    int word;            /**< index into spec->words when the text was one of them, else -1 */
+    int b;               /**< BOOL: 0 or 1 */
+    long long i;         /**< INT (and BOOL as 0/1) */
+    double r;            /**< INT, REAL: the number (NAN for a word) */
+    const char *text;    /**< the text as given (borrowed from the caller) */
+} vv_option_value;
+
+/**
+ * Parses and validates @p text as a value of option @p spec: type, range,
+ * enumerated values. Errors: VV_ERR_INVALID with a one-line message naming
+ * the key, the text and what is accepted ("early_termination: '2' is not in
+ * (0, 1]"). Thread-safe.
+ */
+vv_status vv_option_parse(const vv_option_spec *spec, const char *text, vv_option_value *out);
+
+/**
+ * Writes what @p spec accepts into @p buf (e.g. "real in (0, 1]",
+ * "post|pre", "integer in 1..16 or auto"); returns @p buf.
+ */
+const char *vv_option_describe(const vv_option_spec *spec, char *buf, size_t cap);
+
+/** "bool", "int", "real", "enum" or "string". */
+const char *vv_option_type_name(vv_option_type t);
+
+/* ---- capabilities -------------------------------------------------------- */
+
+/** vv_renderer_info.draws: the object kinds a renderer draws (1u << vv_object_type). */
+#define VV_DRAWS(type) (1u << (unsigned)(type))
+/** Every geometric primitive (plane, polygon, sphere, box, cylinder) and meshes. */
+#define VV_DRAWS_GEOMETRY                                                                          \
+    (VV_DRAWS(VV_OBJECT_PLANE) | VV_DRAWS(VV_OBJECT_POLYGON) | VV_DRAWS(VV_OBJECT_SPHERE) |        \
+     VV_DRAWS(VV_OBJECT_BOX) | VV_DRAWS(VV_OBJECT_CYLINDER) | VV_DRAWS(VV_OBJECT_MESH))
+
+/** vv_renderer_info.modes: the modes of volume and grid objects it draws (1u << vv_render_mode). */
+#define VV_MODE_BIT(mode) (1u << (unsigned)(mode))
+#define VV_MODES_ALL                                                                               \
+    (VV_MODE_BIT(VV_MODE_COMPOSITE) | VV_MODE_BIT(VV_MODE_MIP) | VV_MODE_BIT(VV_MODE_MINIP) |      \
+     VV_MODE_BIT(VV_MODE_XRAY) | VV_MODE_BIT(VV_MODE_ISO))
+
+/** vv_renderer_info.caps */
+#define VV_RENDERER_REGION 1u      /**< renders regions (sys/renderer.h): out of core, MPI */
+#define VV_RENDERER_QUALITY 2u     /**< the quality level changes the image */
+#define VV_RENDERER_PREVIEW 4u     /**< draws the Navigator's reduced-resolution previews */
+#define VV_RENDERER_PROGRESSIVE 8u /**< reserved: draws from resident data and refines */
+#define VV_RENDERER_GLOBAL                                                                         \
+    16u /**< pixels depend on objects off their primary ray                                        \
+             (shadows, reflections, interreflection) */
+
+/**
+ * What a rendering method is, draws and takes. Immutable, owned by the
+ * library. A renderer draws the visible objects of the kinds in `draws`
+ * (volume and grid objects only in the `modes` listed) and leaves the other
+ * kinds out; a World of which it draws nothing, or an object of a drawn
+ * kind in a mode it does not draw, is an error (vv_renderer_check_world).
+ */
+typedef struct vv_renderer_info {
+    const char *name;              /**< registry key, e.g. "raycast" */
+    const char *description;       /**< one line */
+    unsigned draws;                /**< VV_DRAWS(...) bits */
+    unsigned modes;                /**< VV_MODE_BIT(...) bits */
+    unsigned caps;                 /**< VV_RENDERER_* bits */
+    const char *quality;           /**< one line: what quality 0, 1, 2 mean to it */
+    const vv_option_spec *options; /**< its options, n_options of them (may be NULL) */
+    int n_options;
+} vv_renderer_info;
+
+/** Renderers built in. */
+int vv_renderer_count(void);
+/** Renderer @p i (0 .. vv_renderer_count() - 1) in registry order; NULL out of range. */
+const vv_renderer_info *vv_renderer_info_at(int i);
+/** The renderer called @p name, or NULL. */
+const vv_renderer_info *vv_renderer_info_find(const char *name);
+/** Option @p key of @p info, or NULL. */
+const vv_option_spec *vv_renderer_info_option(const vv_renderer_info *info, const char *key);
+/**
+ * Validates `key=value` for the renderer @p info without creating one (the
+ * GUI checks a field with it). Errors: VV_ERR_INVALID: unknown key (the
+ * message lists the keys) or a bad value (vv_option_parse).
+ */
+vv_status vv_renderer_info_check_option(const vv_renderer_info *info, const char *key,
+                                        const char *value);
+/** 1 when @p info draws @p obj: its kind, and for volumes and grids its mode. */
+int vv_renderer_info_draws(const vv_renderer_info *info, const vv_object *obj);
+
+/**
+ * Checks that @p info can draw @p w: it must draw at least one visible
+ * object (volume objects without a volume and grid objects without a grid
+ * do not count), and every visible object of a kind it draws must be in a
+ * mode it draws. Objects of other kinds are left out (not an error: the
+ * CLI notes them). A World without visible objects passes (the background).
+ * Errors: VV_ERR_UNSUPPORTED, one line naming the object, its kind or mode,
+ * the renderer and the renderers that draw it.
+ */
+vv_status vv_renderer_check_world(const vv_renderer_info *info, const vv_world *w);
+
+/**
+ * The renderer for @p w: the one its render settings name, else the default
+ * chosen from the capabilities: the first renderer in registry order
+ * (raycast, raytrace, irregular, splat, surface, radiosity, fourier) that
+ * draws every visible object of the World, else the first that draws the
+ * most of them. A World of volumes gets raycast, volumes with geometry
+ * raytrace, grids irregular, grids with volumes or geometry surface; an
+ * empty World raycast. Never NULL; the pointer is into @p w or static.
+ */
+const char *vv_world_renderer(const vv_world *w);
+
+/* ---- renderer objects ------------------------------------------------------ */
 
 typedef struct vv_renderer vv_renderer;
-
-/** The registry: a NULL-terminated array of every method built in. */
-const vv_renderer_ops *const *vv_renderer_registry(void);
 
 /** Creates the method called @p name. Errors: VV_ERR_INVALID (unknown name), VV_ERR_NOMEM. */
 vv_status vv_renderer_new(vv_renderer **out, const char *name);
@@ -62,28 +191,31 @@ vv_status vv_renderer_new(vv_renderer **out, const char *name);
 void vv_renderer_free(vv_renderer *r);
 /** The method's registry name ("raycast"); owned by the library. */
 const char *vv_renderer_name(const vv_renderer *r);
+/** The method's info record; owned by the library. */
+const vv_renderer_info *vv_renderer_get_info(const vv_renderer *r);
 /**
- * Sets a method-specific option from text (for raycast: early_termination,
- * gradient_budget_mb, empty_space_skipping, simd; for raytrace: shadows,
- * max_depth, samples, jitter, seed, adaptive, adaptive_threshold, parc,
- * shadow_grid, early_termination; for radiosity: tolerance, error, near,
- * patch_size, grid, diffuse_voxels, max_shots, levels; docs/rendering.md).
- * Errors: VV_ERR_INVALID for an unknown key or a bad value, with a message.
+ * Sets option @p key of the renderer from text, validated against its
+ * option table (vv_renderer_info_check_option) before the renderer sees it;
+ * docs/rendering.md and `volvis renderers` list every table. Errors:
+ * VV_ERR_INVALID for an unknown key or a bad value, with a one-line message;
+ * those of applying it (fourier's vvc=FILE: reading the file).
  */
 vv_status vv_renderer_set_option(vv_renderer *r, const char *key, const char *value);
 
 /**
  * Renders @p world seen through @p view into @p out, which must be
- * view->width x view->height. @p opt may be NULL (defaults). Errors:
- * VV_ERR_INVALID (size mismatch, bad World), VV_ERR_NOMEM, VV_ERR_CANCELLED.
+ * view->width x view->height. @p opt may be NULL (defaults). The World is
+ * checked first (vv_renderer_check_world). Errors: VV_ERR_INVALID (size
+ * mismatch, bad World), VV_ERR_UNSUPPORTED (nothing it draws, a mode it
+ * does not draw), VV_ERR_NOMEM, VV_ERR_CANCELLED.
  */
 vv_status vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
                              const vv_render_options *opt, vv_image *out);
 
 /**
  * The renderer a World's render settings name (vv_render_settings, in
- * model.h): their renderer, or "raycast" when none is set. Never NULL; the
- * pointer is into @p rs or static.
+ * model.h), or "raycast" when none is set. Never NULL. Callers that have
+ * the World use vv_world_renderer, which chooses by its objects.
  */
 const char *vv_render_settings_renderer(const vv_render_settings *rs);
 /** Their quality level, or 2 (final) when none is set. */
@@ -100,6 +232,12 @@ vv_status vv_renderer_apply_settings(vv_renderer *r, const vv_render_settings *r
  * *out is NULL. Errors: those of both.
  */
 vv_status vv_renderer_new_from_settings(vv_renderer **out, const vv_render_settings *rs);
+/**
+ * A new renderer for @p w: vv_renderer_new of vv_world_renderer(w), then
+ * the options of its render settings (vv_renderer_apply_settings; they
+ * belong to the World's renderer). Errors: those of both.
+ */
+vv_status vv_renderer_new_for_world(vv_renderer **out, const vv_world *w);
 
 /**
  * The surface a surface-drawing method shows for a volume object: in iso
@@ -111,6 +249,32 @@ vv_status vv_renderer_new_from_settings(vv_renderer **out, const vv_render_setti
  * renderer and the Navigator's previews so they show the same surface.
  */
 int vv_object_surface_value(const vv_object *obj, double *iso, vv_vec3 *color);
+
+/* ---- out-of-core rendering --------------------------------------------------- */
+
+struct vv_brick_source; /* include/volvis/sys/source.h */
+
+/**
+ * Renders object @p object of @p w (a volume object in composite, mip or
+ * minip mode; no other visible object) with the voxels of @p src, brick by
+ * brick in front-to-back order through @p view, with renderer @p r, which
+ * must declare VV_RENDERER_REGION (its options apply): each brick is one
+ * region render (include/volvis/sys/renderer.h) and the partial images are
+ * composited in that order (over; max or min for mip and minip). The
+ * object's own volume gives the World's defaults and the renderer's
+ * whole-volume context (raytrace traces shadows through it: exact when it is
+ * the whole volume, from a coarse proxy otherwise); the geometry comes from
+ * the source's header. Bricks whose min/max the transfer function makes
+ * transparent are skipped unread (composite); every other brick is read at
+ * most once a frame. The image is the in-memory render's up to the rounding
+ * of compositing (bit for bit for mip and minip). Errors:
+ * VV_ERR_UNSUPPORTED (the renderer has no region method, a mode it cannot
+ * split, other visible objects), VV_ERR_INVALID, those of reading and
+ * rendering.
+ */
+vv_status vv_renderer_render_bricks(vv_renderer *r, const vv_world *w, int object,
+                                    const struct vv_brick_source *src, const vv_view *view,
+                                    const vv_render_options *opt, vv_image *out);
 
 #ifdef __cplusplus
 }

@@ -198,6 +198,37 @@ size_t vv_coarse_bytes(const vv_coarse_surface *c);
 /** Releases a coarse surface. Accepts NULL. */
 void vv_coarse_free(vv_coarse_surface *c);
 
+/* ---- Marching Cubes on one grid face (capping isosurfaces) ---------------- */
+
+/**
+ * Area, in index units (cells of size 1 x 1), of the part of the grid face
+ * axis == @p pos (0 <= pos < dims[axis]; axis 0, 1 or 2) of the region
+ * @p lo .. @p hi (inclusive voxel box, within the volume) where the
+ * piecewise-linear Marching Cubes field of @p v is inside (>= @p isovalue):
+ * marching squares with the same edge interpolation and face decider as the
+ * 3-D extraction (vv_isosurface_extract), so the caps close its surface exactly.
+ * Used by the measurement of isosurface-bounded volumes and areas where a
+ * surface is cut by the region's box. Never fails; thread-safe.
+ */
+double vv_mc_face_inside_area(const vv_volume *v, double isovalue, int axis, int pos,
+                              const int lo[3], const int hi[3]);
+
+/** Receives one polygon of @p n (3..6) points in index coordinates (see
+ *  below): @p pts holds 3 * @p n doubles, x, y, z of each point in turn. */
+typedef void (*vv_mc_face_polygon_fn)(void *ctx, int n, const double *pts);
+
+/**
+ * vv_mc_face_inside_area, and when @p emit is not NULL also the inside part
+ * of every face cell as polygons (one per cell, two for an ambiguous face
+ * whose inside corners are not joined), in index coordinates, counter-
+ * clockwise in the (u, w) plane of the face, u < w the two other axes (so
+ * their vector area is along e_u x e_w). @p emit is called serially, cell by
+ * cell, with @p ctx. Returns the area as vv_mc_face_inside_area.
+ */
+double vv_mc_face_inside_polygons(const vv_volume *v, double isovalue, int axis, int pos,
+                                  const int lo[3], const int hi[3], vv_mc_face_polygon_fn emit,
+                                  void *ctx);
+
 #ifdef __cplusplus
 }
 #endif

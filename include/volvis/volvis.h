@@ -24,6 +24,7 @@
 #include "radiosity.h"
 #include "raster.h"
 #include "render.h"
+#include "scene.h"
 #include "slice.h"
 #include "surface.h"
 #include "video.h"

@@ -39,18 +39,56 @@ def option_text(value):
     raise InvalidError("renderer option: cannot pass a %s as text" % type(value).__name__)
 
 
-class RendererInfo:
-    """A rendering method of the registry: ``name``, ``description`` and
-    ``options`` (the method's option text, as ``volvis render --help`` prints
-    it). Calling it makes a :class:`Renderer`."""
+_OPTION_TYPES = {0: "bool", 1: "int", 2: "real", 3: "enum", 4: "string"}
+_KINDS = ["volume", "plane", "polygon", "sphere", "box", "cylinder", "mesh", "grid"]
+_MODES = ["composite", "mip", "minip", "xray", "iso"]
+_CAPS = ["region", "quality", "preview", "progressive", "global"]
 
-    def __init__(self, ops):
-        self.name = pystr(ops.name)
-        self.description = pystr(ops.description)
-        self.options = pystr(ops.options) if ops.options != ffi.NULL else ""
-        self.__doc__ = "%s: %s\n\nOptions (volvis.render(..., KEY=VALUE) or Renderer(%r, " \
-            "KEY=VALUE)):\n\n%s\n" % (self.name, self.description, self.name,
-                                       self.options or "(none)")
+
+def _option(spec):
+    """One entry of a renderer's typed option table as a dict."""
+    words = []
+    if spec.words != ffi.NULL:
+        i = 0
+        while spec.words[i] != ffi.NULL:
+            words.append(pystr(spec.words[i]))
+            i += 1
+    kind = _OPTION_TYPES.get(spec.type, "unknown")
+    d = {"type": kind, "default": pystr(getattr(spec, "def")), "doc": pystr(spec.doc),
+         "values": words}
+    if kind in ("int", "real"):
+        d["min"] = spec.min
+        d["max"] = spec.max
+        d["min_open"] = bool(spec.flags & 1)
+        d["max_open"] = bool(spec.flags & 2)
+    buf = ffi.new("char[256]")
+    d["accepts"] = pystr(lib.vv_option_describe(spec, buf, 256))
+    return d
+
+
+class RendererInfo:
+    """A rendering method of the registry (vv_renderer_info): ``name``,
+    ``description``, ``draws`` (object kinds), ``modes``, ``capabilities``,
+    ``quality`` (what the quality level means to it) and ``options``, its
+    typed option table: key -> {"type", "default", "min", "max", "values",
+    "accepts", "doc"}, the table the CLI's --set and scene files are
+    validated against. Calling it makes a :class:`Renderer`."""
+
+    def __init__(self, info):
+        self.name = pystr(info.name)
+        self.description = pystr(info.description)
+        self.draws = [k for i, k in enumerate(_KINDS) if info.draws & (1 << i)]
+        self.modes = [m for i, m in enumerate(_MODES) if info.modes & (1 << i)]
+        self.capabilities = [c for i, c in enumerate(_CAPS) if info.caps & (1 << i)]
+        self.quality = pystr(info.quality)
+        self.options = {pystr(info.options[k].key): _option(info.options + k)
+                        for k in range(info.n_options)}
+        lines = ["  %s=%s (default %s): %s" % (k, o["accepts"], o["default"] or "none", o["doc"])
+                 for k, o in self.options.items()]
+        self.__doc__ = "%s: %s\n\nDraws %s (%s); quality: %s\n\nOptions " \
+            "(volvis.render(..., KEY=VALUE) or Renderer(%r, KEY=VALUE)):\n\n%s\n" % (
+                self.name, self.description, ", ".join(self.draws), ", ".join(self.modes),
+                self.quality, self.name, "\n".join(lines) or "  (none)")
 
     def __call__(self, **options):
         return Renderer(self.name, **options)
@@ -68,12 +106,9 @@ class _Registry(dict):
 
 def _registry():
     reg = _Registry()
-    ops = lib.vv_renderer_registry()
-    i = 0
-    while ops[i] != ffi.NULL:
-        info = RendererInfo(ops[i])
+    for i in range(lib.vv_renderer_count()):
+        info = RendererInfo(lib.vv_renderer_info_at(i))
         reg[info.name] = info
-        i += 1
     return reg
 
 

@@ -468,6 +468,116 @@ find_corrections(const enc *en, int k, const float *vals, double max_error, doub
     return n;
 }
 
+/* What the passes of encode_v2 over the subcubes share. */
+typedef struct v2_pass {
+    const enc *en;
+    vvc2_model *m;
+    const double *inv;
+    const float *rdo, *weight, *step_abs, *recon;
+    fftwf_plan c2r; /* the decoder's inverse plan (corrections only) */
+    double bound, corr_step;
+    uint64_t *counts; /* 2 * m->nctx context statistics, added to */
+    uint16_t *p0;
+    vv_rc_enc *rc;   /* per subcube */
+    vvc_corr **corr; /* per subcube, corrections only */
+    int *ncorr;
+} v2_pass;
+
+/* The voxel corrections of every subcube, found on the values the decoder
+ * will decode, and their context statistics added to P->counts. */
+static vv_status
+v2_corrections(const v2_pass *P) {
+    const enc *en = P->en;
+    const vvc_scan *sc = en->sc;
+    const int M = sc->M, H = M / 2 + 1, N = sc->N;
+    const vvc2_model *mm = P->m;
+    int failed = 0;
+#pragma omp parallel num_threads(en->threads)
+    {
+        int64_t *q = calloc((size_t)N + 1, sizeof *q);
+        float *sp = fftwf_malloc(sizeof(float) * 2 * (size_t)M * M * H);
+        float *vals = fftwf_malloc(sizeof(float) * (size_t)N);
+        vvc_corr *tmp = malloc(sizeof *tmp * (size_t)N);
+        uint64_t *lc = calloc(2 * (size_t)mm->nctx, sizeof *lc);
+        uint64_t lb = 0;
+#pragma omp for schedule(dynamic, 8)
+        for (int k = 0; k < en->nsub; k++) {
+            if (!q || !sp || !vals || !tmp || !lc) {
+                failed = 1;
+                continue;
+            }
+            v2_quantise(en, mm, k, P->inv, P->rdo, P->weight, q);
+            vvc_dequantise(sc, P->step_abs, P->recon, q, sp);
+            vvc_values(P->c2r, N, en->unit, en->offset, sp, vals);
+            const int n = find_corrections(en, k, vals, P->bound, P->corr_step, tmp);
+            P->ncorr[k] = n;
+            if (n > 0) {
+                if (!(P->corr[k] = malloc(sizeof *tmp * (size_t)n))) {
+                    failed = 1;
+                    continue;
+                }
+                memcpy(P->corr[k], tmp, sizeof *tmp * (size_t)n);
+            }
+            vvc2_code_corrections(mm, P->corr[k], n, lc, &lb, NULL, NULL);
+        }
+#pragma omp critical(vvc_stats)
+        if (lc) {
+            for (int i = 0; i < 2 * mm->nctx; i++)
+                P->counts[i] += lc[i];
+        }
+        free(q);
+        fftwf_free(sp);
+        fftwf_free(vals);
+        free(tmp);
+        free(lc);
+    }
+    return failed ? vv_error_set(VV_ERR_NOMEM, "out of memory") : VV_OK;
+}
+
+/* Every subcube coded into its range coder (with its corrections when
+ * @p with_corrections), progress from 0.7 to 1. */
+static vv_status
+v2_encode_blocks(const v2_pass *P, int with_corrections, const vv_progress *progress) {
+    const enc *en = P->en;
+    const vvc_scan *sc = en->sc;
+    const int N = sc->N;
+    int failed = 0, cancelled = 0;
+    long done_n = 0;
+#pragma omp parallel num_threads(en->threads)
+    {
+        int64_t *q = calloc((size_t)N + 1, sizeof *q);
+#pragma omp for schedule(dynamic, 8)
+        for (int k = 0; k < en->nsub; k++) {
+            if (!q || cancelled) {
+                failed |= !q;
+                continue;
+            }
+            vv_rc_enc_init(&P->rc[k]);
+            v2_quantise(en, P->m, k, P->inv, P->rdo, P->weight, q);
+            vvc2_encode_block(sc, P->m, q, P->p0, &P->rc[k]);
+            if (with_corrections)
+                vvc2_code_corrections(P->m, P->corr[k], P->ncorr[k], NULL, NULL, P->p0, &P->rc[k]);
+            vv_rc_enc_flush(&P->rc[k]);
+            if (P->rc[k].failed)
+                failed = 1;
+            if (progress && progress->fn) {
+#pragma omp critical(vvc_progress)
+                {
+                    done_n++;
+                    if (vv_progress_report(progress, 0.7 + 0.3 * (double)done_n / en->nsub))
+                        cancelled = 1;
+                }
+            }
+        }
+        free(q);
+    }
+    if (failed)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    if (cancelled)
+        return vv_error_set(VV_ERR_CANCELLED, "cancelled");
+    return VV_OK;
+}
+
 /* Writes a version 2 file at @p quality; with max_error > 0 the voxel
  * corrections too. */
 static vv_status
@@ -526,90 +636,14 @@ encode_v2(const enc *en, double quality, double slope, double max_error, double 
             goto done;
         }
     }
-    int failed = 0, cancelled = 0;
-    long done_n = 0;
-    if (max_error > 0) {
-        /* the corrections, decoded as the decoder will, then their statistics */
-#pragma omp parallel num_threads(en->threads)
-        {
-            int64_t *q = calloc((size_t)N + 1, sizeof *q);
-            float *sp = fftwf_malloc(sizeof(float) * 2 * (size_t)M * M * H);
-            float *vals = fftwf_malloc(sizeof(float) * (size_t)N);
-            vvc_corr *tmp = malloc(sizeof *tmp * (size_t)N);
-            uint64_t *lc = calloc(2 * (size_t)m.nctx, sizeof *lc);
-            uint64_t lb = 0;
-#pragma omp for schedule(dynamic, 8)
-            for (int k = 0; k < en->nsub; k++) {
-                if (!q || !sp || !vals || !tmp || !lc) {
-                    failed = 1;
-                    continue;
-                }
-                v2_quantise(en, &m, k, inv, rdo, weight, q);
-                vvc_dequantise(sc, step_abs, recon, q, sp);
-                vvc_values(c2r, N, en->unit, en->offset, sp, vals);
-                const int n = find_corrections(en, k, vals, bound, corr_step, tmp);
-                ncorr[k] = n;
-                if (n > 0) {
-                    if (!(corr[k] = malloc(sizeof *tmp * (size_t)n))) {
-                        failed = 1;
-                        continue;
-                    }
-                    memcpy(corr[k], tmp, sizeof *tmp * (size_t)n);
-                }
-                vvc2_code_corrections(&m, corr[k], n, lc, &lb, NULL, NULL);
-            }
-#pragma omp critical(vvc_stats)
-            if (lc) {
-                for (int i = 0; i < 2 * m.nctx; i++)
-                    counts[i] += lc[i];
-            }
-            free(q);
-            fftwf_free(sp);
-            fftwf_free(vals);
-            free(tmp);
-            free(lc);
-        }
-        if (failed) {
-            s = vv_error_set(VV_ERR_NOMEM, "out of memory");
-            goto done;
-        }
-    }
+    const v2_pass P = {en,    &m,        inv,    rdo, weight, step_abs, recon, c2r,
+                       bound, corr_step, counts, p0,  rc,     corr,     ncorr};
+    if (max_error > 0 && (s = v2_corrections(&P)) != VV_OK)
+        goto done;
     vvc2_probabilities(&m, counts, code, p0);
-    if ((s = vvc2_pack_codes(&m, code, &pz, &pzlen)) != VV_OK)
+    if ((s = vvc2_pack_codes(&m, code, &pz, &pzlen)) != VV_OK ||
+        (s = v2_encode_blocks(&P, max_error > 0, progress)) != VV_OK)
         goto done;
-#pragma omp parallel num_threads(en->threads)
-    {
-        int64_t *q = calloc((size_t)N + 1, sizeof *q);
-#pragma omp for schedule(dynamic, 8)
-        for (int k = 0; k < en->nsub; k++) {
-            if (!q || cancelled) {
-                failed |= !q;
-                continue;
-            }
-            vv_rc_enc_init(&rc[k]);
-            v2_quantise(en, &m, k, inv, rdo, weight, q);
-            vvc2_encode_block(sc, &m, q, p0, &rc[k]);
-            if (max_error > 0)
-                vvc2_code_corrections(&m, corr[k], ncorr[k], NULL, NULL, p0, &rc[k]);
-            vv_rc_enc_flush(&rc[k]);
-            if (rc[k].failed)
-                failed = 1;
-            if (progress && progress->fn) {
-#pragma omp critical(vvc_progress)
-                {
-                    done_n++;
-                    if (vv_progress_report(progress, 0.7 + 0.3 * (double)done_n / en->nsub))
-                        cancelled = 1;
-                }
-            }
-        }
-        free(q);
-    }
-    if (failed || cancelled) {
-        s = failed ? vv_error_set(VV_ERR_NOMEM, "out of memory")
-                   : vv_error_set(VV_ERR_CANCELLED, "cancelled");
-        goto done;
-    }
     for (int k = 0; k < en->nsub; k++) {
         bufs[k] = rc[k].buf;
         lens[k] = rc[k].len;

@@ -316,11 +316,18 @@ parse_huff(const unsigned char **pp, const unsigned char *end, vv_huff_table *t,
     return VV_OK;
 }
 
-vv_status
-vvc_parse(vv_vvc *c, const char *name) {
+/* Where the sections are, from the header. */
+typedef struct vvc_sections {
+    uint32_t hbytes;
+    uint64_t tables_size, index_size, data_size;
+} vvc_sections;
+
+/* The header (and version 2's extension): c->info, c->M, c->nsub and the
+ * section sizes, every field checked. */
+static vv_status
+vvc_parse_header(vv_vvc *c, vvc_sections *sec) {
     const unsigned char *b = c->bytes;
     const uint64_t size = c->size;
-    (void)name;
     if (size < 8 || memcmp(b, VVC_MAGIC, 8) != 0)
         return vv_error_set(VV_ERR_FORMAT, "not a .vvc file (bad magic number)");
     if (size < VVC_HEADER_BYTES)
@@ -333,6 +340,7 @@ vvc_parse(vv_vvc *c, const char *name) {
         return vv_error_set(VV_ERR_FORMAT, "format version %u (this build reads versions 1 to %d)",
                             version, VV_VVC_VERSION);
     const uint32_t hbytes = version == 1 ? VVC_HEADER_BYTES : VVC_HEADER_BYTES_V2;
+    sec->hbytes = hbytes;
     if (rd_u32(b + 12) != hbytes)
         return vv_error_set(VV_ERR_FORMAT, "header size %u (expected %u for version %u)",
                             rd_u32(b + 12), hbytes, version);
@@ -398,6 +406,9 @@ vvc_parse(vv_vvc *c, const char *name) {
     }
     p += 12;
     const uint64_t tables_size = rd_u64(p), index_size = rd_u64(p + 8), data_size = rd_u64(p + 16);
+    sec->tables_size = tables_size;
+    sec->index_size = index_size;
+    sec->data_size = data_size;
     const uint64_t rest = size - hbytes;
     if (tables_size > rest || index_size > rest - tables_size ||
         data_size != rest - tables_size - index_size)
@@ -414,9 +425,60 @@ vvc_parse(vv_vvc *c, const char *name) {
     in->ratio = (double)in->raw_bytes / (double)size;
     in->bits_per_voxel =
         8.0 * (double)size / ((double)in->dims[0] * (double)in->dims[1] * (double)in->dims[2]);
+    return VV_OK;
+}
 
-    /* tables */
-    const unsigned char *t0 = b + hbytes;
+/* Version 2's context tables (the adaptive binary model's initial
+ * probabilities, zlib-compressed) and reconstruction offsets, from @p hp
+ * to @p hend. */
+static vv_status
+vvc_parse_contexts(vv_vvc *c, const unsigned char *hp, const unsigned char *hend) {
+    vvc2_model_init(&c->model, c->scan.nb);
+    const int nr = 2 * c->model.nb;
+    if (hend - hp < 8 || rd_u32(hp) != (uint32_t)c->model.nctx ||
+        (uint64_t)(hend - hp) != 8 + (uint64_t)rd_u32(hp + 4) + 4 + 4 * (uint64_t)nr)
+        return vv_error_set(VV_ERR_FORMAT, "context table of %lld bytes (expected %d contexts)",
+                            (long long)(hend - hp), c->model.nctx);
+    const unsigned char *rp = hp + 8 + rd_u32(hp + 4);
+    if (rd_u32(rp) != (uint32_t)nr)
+        return vv_error_set(VV_ERR_FORMAT, "%u reconstruction offsets (expected %d)", rd_u32(rp),
+                            nr);
+    if (!(c->recon = malloc(sizeof *c->recon * (size_t)nr)))
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < nr; i++) {
+        c->recon[i] = rd_f32(rp + 4 + 4 * (size_t)i);
+        if (!(c->recon[i] >= -0.5f && c->recon[i] <= 0.5f))
+            return vv_error_set(VV_ERR_FORMAT, "reconstruction offset %d is %g", i,
+                                (double)c->recon[i]);
+    }
+    uint8_t *code = malloc((size_t)c->model.nctx);
+    if (!code || !(c->p0 = malloc(sizeof *c->p0 * (size_t)c->model.nctx))) {
+        free(code);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    uLongf n = (uLongf)c->model.nctx;
+    const int zr = uncompress(code, &n, hp + 8, (uLong)rd_u32(hp + 4));
+    if (zr != Z_OK || n != (uLongf)c->model.nctx) {
+        free(code);
+        return vv_error_set(VV_ERR_FORMAT, "context table does not inflate to %d bytes",
+                            c->model.nctx);
+    }
+    for (int i = 0; i < c->model.nctx; i++)
+        c->p0[i] = (uint16_t)vvc2_prob_of_code(code[i]);
+    free(code);
+    return VV_OK;
+}
+
+/* The tables: the quantisation table (stored, or from the quality and
+ * slope), then version 1's Huffman tables or version 2's contexts. */
+static vv_status
+vvc_parse_tables(vv_vvc *c, const vvc_sections *sec) {
+    const unsigned char *b = c->bytes;
+    const vv_vvc_info *in = &c->info;
+    const int version = in->version, M = c->M;
+    const uint64_t tables_size = sec->tables_size;
+    vv_status s;
+    const unsigned char *t0 = b + sec->hbytes;
     if (tables_size < 8 || rd_u32(t0 + tables_size - 4) != vvc_crc(t0, tables_size - 4))
         return vv_error_set(VV_ERR_FORMAT, "tables CRC-32 mismatch (corrupt file)");
     const int H = M / 2 + 1;
@@ -455,44 +517,18 @@ vvc_parse(vv_vvc *c, const char *name) {
         if ((s = vv_huff_make_dec(&c->dct, &c->dc)) != VV_OK ||
             (s = vv_huff_make_dec(&c->act, &c->ac)) != VV_OK)
             return s;
-    } else {
-        vvc2_model_init(&c->model, c->scan.nb);
-        const int nr = 2 * c->model.nb;
-        if (hend - hp < 8 || rd_u32(hp) != (uint32_t)c->model.nctx ||
-            (uint64_t)(hend - hp) != 8 + (uint64_t)rd_u32(hp + 4) + 4 + 4 * (uint64_t)nr)
-            return vv_error_set(VV_ERR_FORMAT, "context table of %lld bytes (expected %d contexts)",
-                                (long long)(hend - hp), c->model.nctx);
-        const unsigned char *rp = hp + 8 + rd_u32(hp + 4);
-        if (rd_u32(rp) != (uint32_t)nr)
-            return vv_error_set(VV_ERR_FORMAT, "%u reconstruction offsets (expected %d)",
-                                rd_u32(rp), nr);
-        if (!(c->recon = malloc(sizeof *c->recon * (size_t)nr)))
-            return vv_error_set(VV_ERR_NOMEM, "out of memory");
-        for (int i = 0; i < nr; i++) {
-            c->recon[i] = rd_f32(rp + 4 + 4 * (size_t)i);
-            if (!(c->recon[i] >= -0.5f && c->recon[i] <= 0.5f))
-                return vv_error_set(VV_ERR_FORMAT, "reconstruction offset %d is %g", i,
-                                    (double)c->recon[i]);
-        }
-        uint8_t *code = malloc((size_t)c->model.nctx);
-        if (!code || !(c->p0 = malloc(sizeof *c->p0 * (size_t)c->model.nctx))) {
-            free(code);
-            return vv_error_set(VV_ERR_NOMEM, "out of memory");
-        }
-        uLongf n = (uLongf)c->model.nctx;
-        const int zr = uncompress(code, &n, hp + 8, (uLong)rd_u32(hp + 4));
-        if (zr != Z_OK || n != (uLongf)c->model.nctx) {
-            free(code);
-            return vv_error_set(VV_ERR_FORMAT, "context table does not inflate to %d bytes",
-                                c->model.nctx);
-        }
-        for (int i = 0; i < c->model.nctx; i++)
-            c->p0[i] = (uint16_t)vvc2_prob_of_code(code[i]);
-        free(code);
+    } else if ((s = vvc_parse_contexts(c, hp, hend)) != VV_OK) {
+        return s;
     }
+    return VV_OK;
+}
 
-    /* index */
-    const unsigned char *i0 = t0 + tables_size;
+/* The subcube index (offsets in order, within the data) and the data's CRC. */
+static vv_status
+vvc_parse_index(vv_vvc *c, const vvc_sections *sec) {
+    const unsigned char *b = c->bytes;
+    const uint64_t index_size = sec->index_size, data_size = sec->data_size;
+    const unsigned char *i0 = b + sec->hbytes + sec->tables_size;
     if (data_size < 4)
         return vv_error_set(VV_ERR_FORMAT, "data section of %llu bytes",
                             (unsigned long long)data_size);
@@ -521,6 +557,16 @@ vvc_parse(vv_vvc *c, const char *name) {
     c->data_start = (uint64_t)(d0 - b);
     c->data_len = data_len;
     return VV_OK;
+}
+
+vv_status
+vvc_parse(vv_vvc *c, const char *name) {
+    (void)name;
+    vvc_sections sec = {0, 0, 0, 0};
+    vv_status s;
+    if ((s = vvc_parse_header(c, &sec)) != VV_OK || (s = vvc_parse_tables(c, &sec)) != VV_OK)
+        return s;
+    return vvc_parse_index(c, &sec);
 }
 
 vv_status

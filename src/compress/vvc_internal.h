@@ -27,20 +27,6 @@
 #define VVC_ZRL (15 * 64)
 #define VVC_MAX_FILE (((uint64_t)64) << 30)
 
-/* FFTW's planner is not thread-safe: every plan is made and destroyed under this lock. */
-void vv_fftw_lock(void);
-void vv_fftw_unlock(void);
-
-/**
- * The r2c spectrum of every M^3 subcube of @p v, coded values
- * (value - offset) / unit with the padding at 0 (i.e. the minimum), in
- * FFTW's layout (see vv_vvc_decode_spectrum), subcubes in index order:
- * n * 2 * M * M * (M/2 + 1) floats (fftwf_malloc'ed; free with fftwf_free).
- * No quantisation: this is what a .vvc codes before its quantiser.
- */
-vv_status vv_vvc_spectra(const vv_volume *v, int M, int threads, float **spectra, double *offset,
-                         double *unit, const vv_progress *progress);
-
 /** The coded-value offset and unit of @p v (see compress.h). */
 void vv_vvc_value_scale(const vv_volume *v, double *offset, double *unit);
 

@@ -8,11 +8,21 @@
  * text that walks to the offending path and reports where its key (or, for
  * an array element, its value) starts. This pass runs only when there is an
  * error to report.
+ *
+ * Writing: vv_json_write_text turns a Jansson tree into text a person can
+ * read and edit (short arrays and objects on one line, numbers with as few
+ * digits as read back to the same double), which Jansson's own dump cannot
+ * do: it writes every real with a fixed precision (17 digits make 0.1 read
+ * 0.10000000000000001; fewer lose values) and, indented, puts every array
+ * element on its own line.
  */
 #include <jansson.h>
+#include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
+#include "core/internal.h"
 #include "core/json_internal.h"
 
 #define PATH_MAX_LEN 256
@@ -258,4 +268,181 @@ vv_json_kind(const json_t *v) {
         break;
     }
     return "null";
+}
+
+/* ---- writing ------------------------------------------------------------- */
+
+#define WRITE_WIDTH 100
+
+typedef struct jbuf {
+    char *p;
+    size_t n, cap;
+    int nomem;
+} jbuf;
+
+static void
+jb_put(jbuf *b, const char *s, size_t n) {
+    if (b->nomem)
+        return;
+    if (b->n + n + 1 > b->cap) {
+        size_t cap = b->cap ? b->cap : 256;
+        while (cap < b->n + n + 1)
+            cap *= 2;
+        char *p = realloc(b->p, cap);
+        if (!p) {
+            b->nomem = 1;
+            return;
+        }
+        b->p = p;
+        b->cap = cap;
+    }
+    memcpy(b->p + b->n, s, n);
+    b->n += n;
+    b->p[b->n] = '\0';
+}
+
+static void
+jb_puts(jbuf *b, const char *s) {
+    jb_put(b, s, strlen(s));
+}
+
+static void
+jb_indent(jbuf *b, int n) {
+    for (int i = 0; i < n; i++)
+        jb_put(b, " ", 1);
+}
+
+/* A string as JSON text, escaped by Jansson. */
+static void
+jb_string(jbuf *b, const char *s, size_t len) {
+    json_t *j = json_stringn_nocheck(s, len);
+    char *t = j ? json_dumps(j, JSON_ENCODE_ANY) : NULL;
+    json_decref(j);
+    if (!t) {
+        b->nomem = 1;
+        return;
+    }
+    jb_puts(b, t);
+    free(t);
+}
+
+/* The shortest of %.15g and %.17g that reads back as the same double. */
+static void
+jb_real(jbuf *b, double v) {
+    char buf[64];
+    if (!isfinite(v))
+        v = 0.0; /* JSON has no NaN or infinity; json_real refuses them anyway */
+    snprintf(buf, sizeof buf, "%.15g", v);
+    if (strtod(buf, NULL) != v)
+        snprintf(buf, sizeof buf, "%.17g", v);
+    jb_puts(b, buf);
+}
+
+static void jb_value(jbuf *b, const json_t *v, int indent, int column, int force_lines);
+
+/* @p v on one line. */
+static void
+jb_inline(jbuf *b, const json_t *v) {
+    jb_value(b, v, 0, 0, -1);
+}
+
+/* Writes @p v: containers on one line when they fit in WRITE_WIDTH columns
+ * from @p column (or always when @p force_lines < 0), else one member per
+ * line indented by @p indent + 2 (always when @p force_lines > 0). */
+static void
+jb_value(jbuf *b, const json_t *v, int indent, int column, int force_lines) {
+    char buf[64];
+    switch (json_typeof(v)) {
+    case JSON_OBJECT:
+    case JSON_ARRAY: {
+        const int is_obj = json_is_object(v);
+        const size_t n = is_obj ? json_object_size(v) : json_array_size(v);
+        if (n == 0) {
+            jb_puts(b, is_obj ? "{}" : "[]");
+            return;
+        }
+        if (force_lines == 0) {
+            jbuf t = {0};
+            jb_inline(&t, v);
+            if (t.nomem)
+                b->nomem = 1;
+            else if ((size_t)column + t.n <= WRITE_WIDTH) {
+                jb_put(b, t.p, t.n);
+                free(t.p);
+                return;
+            }
+            free(t.p);
+        }
+        const int lines = force_lines >= 0;
+        jb_puts(b, is_obj ? "{" : "[");
+        size_t i = 0;
+        const char *key;
+        json_t *e;
+        void *it = is_obj ? json_object_iter((json_t *)v) : NULL;
+        for (i = 0; i < n; i++) {
+            if (i)
+                jb_puts(b, ",");
+            if (lines) {
+                jb_puts(b, "\n");
+                jb_indent(b, indent + 2);
+            } else if (i) {
+                jb_puts(b, " ");
+            }
+            int col = indent + 2;
+            if (is_obj) {
+                key = json_object_iter_key(it);
+                e = json_object_iter_value(it);
+                it = json_object_iter_next((json_t *)v, it);
+                size_t before = b->n;
+                jb_string(b, key, strlen(key));
+                jb_puts(b, ": ");
+                col += (int)(b->n - before);
+            } else {
+                e = json_array_get(v, i);
+            }
+            jb_value(b, e, indent + 2, col, lines ? 0 : -1);
+        }
+        if (lines) {
+            jb_puts(b, "\n");
+            jb_indent(b, indent);
+        }
+        jb_puts(b, is_obj ? "}" : "]");
+        return;
+    }
+    case JSON_STRING:
+        jb_string(b, json_string_value(v), json_string_length(v));
+        return;
+    case JSON_INTEGER:
+        snprintf(buf, sizeof buf, "%" JSON_INTEGER_FORMAT, json_integer_value(v));
+        jb_puts(b, buf);
+        return;
+    case JSON_REAL:
+        jb_real(b, json_real_value(v));
+        return;
+    case JSON_TRUE:
+        jb_puts(b, "true");
+        return;
+    case JSON_FALSE:
+        jb_puts(b, "false");
+        return;
+    case JSON_NULL:
+        jb_puts(b, "null");
+        return;
+    }
+}
+
+vv_status
+vv_json_write_text(const json_t *root, char **out, size_t *len) {
+    *out = NULL;
+    *len = 0;
+    jbuf b = {0};
+    jb_value(&b, root, 0, 0, 1);
+    jb_puts(&b, "\n");
+    if (b.nomem) {
+        free(b.p);
+        return vv_error_set(VV_ERR_NOMEM, "json: out of memory");
+    }
+    *out = b.p;
+    *len = b.n;
+    return VV_OK;
 }

@@ -1,6 +1,7 @@
 /* Vectors, matrices, quaternions, rays, boxes, planes (see volvis/math.h). */
 #include <math.h>
 
+#include "core/geom.h"
 #include "volvis/math.h"
 
 vv_vec3
@@ -316,30 +317,13 @@ vv_ray_at(vv_ray r, double t) {
 
 int
 vv_box_intersect_ray(vv_box b, vv_ray r, double *t0, double *t1) {
-    double lo = -INFINITY, hi = INFINITY;
     const double o[3] = {r.origin.x, r.origin.y, r.origin.z};
     const double d[3] = {r.dir.x, r.dir.y, r.dir.z};
     const double mn[3] = {b.min.x, b.min.y, b.min.z};
     const double mx[3] = {b.max.x, b.max.y, b.max.z};
-    for (int a = 0; a < 3; a++) {
-        if (d[a] == 0) {
-            if (o[a] < mn[a] || o[a] > mx[a])
-                return 0;
-            continue;
-        }
-        double ta = (mn[a] - o[a]) / d[a], tb = (mx[a] - o[a]) / d[a];
-        if (ta > tb) {
-            double t = ta;
-            ta = tb;
-            tb = t;
-        }
-        if (ta > lo)
-            lo = ta;
-        if (tb < hi)
-            hi = tb;
-        if (lo > hi)
-            return 0;
-    }
+    double lo = -INFINITY, hi = INFINITY;
+    if (!vv_slab(mn, mx, o, d, &lo, &hi))
+        return 0;
     *t0 = lo;
     *t1 = hi;
     return 1;

@@ -243,11 +243,15 @@ parse_conn(const char *s, int *conn) {
     return 1;
 }
 
+/* A parse_step group returned this: the filter is not one of the group. The
+ * groups get the argument text @p a .. @p end and its first colon (or NULL). */
+#define NOT_IN_GROUP 1
+
+/* The argument of a step of smoothing: gaussian, median and morphology, bilateral, diffusion;
+ * NOT_IN_GROUP for other filters. */
 static vv_status
-parse_step(step *st) {
-    const char *a = st->arg ? st->arg : "";
-    const char *end = a + strlen(a);
-    const char *colon = strchr(a, ':');
+parse_smoothing_step(step *st, const char *a, const char *end, const char *colon) {
+    (void)colon;
     double v[8];
     int k;
     switch (st->id) {
@@ -295,6 +299,18 @@ parse_step(step *st) {
         st->d[0] = v[1];
         st->d[1] = k == 3 ? v[2] : 0.125;
         return VV_OK;
+    default:
+        return NOT_IN_GROUP;
+    }
+}
+
+/* The argument of a step of resampling and reshaping: resample, resize, crop, pad, flip, permute,
+ * cast; NOT_IN_GROUP for other filters. */
+static vv_status
+parse_geometry_step(step *st, const char *a, const char *end, const char *colon) {
+    double v[8];
+    int k;
+    switch (st->id) {
     case F_RESAMPLE:
     case F_RESIZE: {
         const char *e = colon ? colon : end;
@@ -370,6 +386,17 @@ parse_step(step *st) {
         st->rescale = colon && strcmp(colon + 1, "rescale") == 0;
         return VV_OK;
     }
+    default:
+        return NOT_IN_GROUP;
+    }
+}
+
+/* The argument of a step of derivatives: gradient, Laplacian, a gradient component, vesselness;
+ * NOT_IN_GROUP for other filters. */
+static vv_status
+parse_derivative_step(step *st, const char *a, const char *end, const char *colon) {
+    int k;
+    switch (st->id) {
     case F_GRADIENT:
     case F_LAPLACIAN:
         if (!num(a, end, &st->d[0]) || !(st->d[0] >= 0))
@@ -407,6 +434,18 @@ parse_step(step *st) {
         st->n_scales = k;
         return VV_OK;
     }
+    default:
+        return NOT_IN_GROUP;
+    }
+}
+
+/* The argument of a step of segmentation: threshold, window, region growing, components, largest,
+ * fill holes; NOT_IN_GROUP for other filters. */
+static vv_status
+parse_segment_step(step *st, const char *a, const char *end, const char *colon) {
+    double v[8];
+    int k;
+    switch (st->id) {
     case F_THRESHOLD:
         if (strcasecmp(a, "otsu") == 0) {
             st->otsu = 1;
@@ -492,6 +531,22 @@ parse_step(step *st) {
         if (a[0])
             return bad(st, "takes no argument");
         return VV_OK;
+    default:
+        return NOT_IN_GROUP;
+    }
+}
+
+static vv_status
+parse_step(step *st) {
+    vv_status (*const groups[])(step *, const char *, const char *, const char *) = {
+        parse_smoothing_step, parse_geometry_step, parse_derivative_step, parse_segment_step};
+    const char *a = st->arg ? st->arg : "";
+    const char *end = a + strlen(a);
+    const char *colon = strchr(a, ':');
+    for (size_t i = 0; i < sizeof groups / sizeof groups[0]; i++) {
+        vv_status s = groups[i](st, a, end, colon);
+        if (s != NOT_IN_GROUP)
+            return s;
     }
     return bad(st, "unknown filter");
 }

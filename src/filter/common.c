@@ -1,11 +1,9 @@
 /*
- * Shared machinery of the filters: a row-parallel loop on plain threads,
+ * Shared machinery of the filters: the row-parallel loop (core/parallel_for.h),
  * voxel-type conversion, output volumes, Gaussian kernels and the separable
  * convolution behind the Gaussian, the derivatives and the Hessian.
  */
 #include <math.h>
-#include <pthread.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -33,81 +31,13 @@ vf_report(const vv_filter_options *o, double f) {
     return VV_OK;
 }
 
-/*
- * Plain threads that take chunks from an atomic counter, as Marching Cubes
- * does (src/surface/marching_cubes.c explains why not OpenMP: libgomp's
- * spinning threads steal the core a late partner needs on a loaded machine).
- */
-typedef struct vf_loop {
-    vf_body body;
-    void *ctx;
-    long n, chunk;
-    atomic_long next;
-    atomic_int cancel;
-    const vv_filter_options *o;
-    double p0, p1;
-} vf_loop;
-
-typedef struct vf_worker {
-    vf_loop *L;
-    int w;
-} vf_worker;
-
-static void
-loop_run(vf_loop *L, int w) {
-    for (;;) {
-        if (atomic_load_explicit(&L->cancel, memory_order_relaxed))
-            break;
-        long i0 = atomic_fetch_add_explicit(&L->next, L->chunk, memory_order_relaxed);
-        if (i0 >= L->n)
-            break;
-        long i1 = i0 + L->chunk < L->n ? i0 + L->chunk : L->n;
-        L->body(L->ctx, i0, i1, w);
-        if (w == 0 && L->o && L->o->progress.fn &&
-            vv_progress_report(&L->o->progress,
-                               L->p0 + (L->p1 - L->p0) * (double)i1 / (double)L->n))
-            atomic_store(&L->cancel, 1);
-    }
-}
-
-static void *
-loop_thread(void *a) {
-    vf_worker *W = a;
-    loop_run(W->L, W->w);
-    return NULL;
-}
-
 vv_status
 vf_parallel(const vv_filter_options *o, long n, long chunk, vf_body body, void *ctx, double p0,
             double p1) {
-    if (n <= 0)
-        return vf_report(o, p1);
-    if (chunk < 1)
-        chunk = 1;
-    vf_loop L = {.body = body, .ctx = ctx, .n = n, .chunk = chunk, .o = o, .p0 = p0, .p1 = p1};
-    atomic_init(&L.next, 0);
-    atomic_init(&L.cancel, 0);
-    int nt = vf_threads(o);
-    long useful = (n + chunk - 1) / chunk;
-    if (nt > useful)
-        nt = (int)useful;
-    pthread_t tid[VF_MAX_THREADS];
-    vf_worker W[VF_MAX_THREADS];
-    int started = 0;
-    for (int w = 1; w < nt; w++) {
-        W[w].L = &L;
-        W[w].w = w;
-        if (pthread_create(&tid[w], NULL, loop_thread, &W[w]) != 0)
-            break;
-        started = w;
-    }
-    /* a worker that could not be started leaves its chunks to the others,
-     * which is harmless: bodies do not depend on the worker */
-    loop_run(&L, 0);
-    for (int w = 1; w <= started; w++)
-        pthread_join(tid[w], NULL);
-    if (atomic_load(&L.cancel))
-        return vv_error_set(VV_ERR_CANCELLED, "filter: cancelled");
+    const vv_parallel_progress pr = {o ? &o->progress : NULL, p0, p1, 1};
+    vv_status s = vv_parallel_for(n, chunk, vf_threads(o), body, ctx, &pr);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "filter");
     /* the end of every loop is reported, whoever ran its last chunks, so a
      * cancel is seen at the latest when the loop ends */
     return vf_report(o, p1);

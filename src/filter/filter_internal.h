@@ -9,10 +9,14 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "core/parallel_for.h"
 #include "volvis/filter.h"
 
 /** Most threads a filter uses. */
 #define VF_MAX_THREADS 64
+#if VF_MAX_THREADS > VV_PARALLEL_MAX_THREADS
+#error "a filter cannot use more threads than vv_parallel_for"
+#endif
 
 /** Threads a filter with options @p o uses (1..VF_MAX_THREADS). */
 int vf_threads(const vv_filter_options *o);
@@ -22,13 +26,13 @@ int vf_threads(const vv_filter_options *o);
  * Items are handed out in chunks from a shared counter; a body must compute
  * each item independently of which worker runs it (determinism).
  */
-typedef void (*vf_body)(void *ctx, long i0, long i1, int w);
+typedef vv_parallel_fn vf_body;
 
 /**
- * Runs @p body over items 0..n-1 in chunks of @p chunk on vf_threads(o)
- * threads (the caller is worker 0). Worker 0 reports progress p0..p1 as
- * items complete; a cancel stops every worker. Returns VV_OK or
- * VV_ERR_CANCELLED (with a message).
+ * vv_parallel_for over items 0..n-1 in chunks of @p chunk on vf_threads(o)
+ * threads (the caller is worker 0): worker 0 reports progress p0..p1 after
+ * each of its chunks and p1 at the end; a cancel stops every worker.
+ * Returns VV_OK or VV_ERR_CANCELLED ("filter: cancelled").
  */
 vv_status vf_parallel(const vv_filter_options *o, long n, long chunk, vf_body body, void *ctx,
                       double p0, double p1);

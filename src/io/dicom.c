@@ -33,6 +33,7 @@
 #include "core/internal.h"
 #include "io/dicom.h"
 #include "volvis/io.h"
+#include "volvis/sys/format.h"
 
 int
 vv_dicom_sniff(const char *path) {
@@ -829,13 +830,14 @@ slice_range(vv_voxel_type t, const void *p, size_t n, double *lo, double *hi) {
 #undef VV_DCM_RANGE
 }
 
+/* The files a..b of a series agree (size, samples, bits; no multi-frame
+ * file among others) and make a volume within the limits: its dims and the
+ * slice count in *@p nz, the channel in *@p ch. */
 static vv_status
-read_series(vv_volume **out, const scan *sc, int si, int channel) {
-    int a = sc->start[si], b = sc->start[si + 1];
-    int nfiles = b - a;
+check_series(const scan *sc, int a, int b, int channel, int dims[3], long *nz, int *ch) {
+    const int nfiles = b - a;
     const vv_dcm_file *f0 = &sc->f[sc->order[a]];
-    /* consistency and the slice list */
-    long nz = 0;
+    *nz = 0;
     for (int i = a; i < b; i++) {
         const vv_dcm_file *f = &sc->f[sc->order[i]];
         if (f->frames > 1 && nfiles > 1)
@@ -849,32 +851,37 @@ read_series(vv_volume **out, const scan *sc, int si, int channel) {
                                 "bits (mixed images in one series)",
                                 f->path, f->cols, f->rows, f->samples, f->bits_allocated, f0->path,
                                 f0->cols, f0->rows, f0->samples, f0->bits_allocated);
-        nz += f->frames;
+        *nz += f->frames;
     }
     if (f0->bits_allocated != 8 && f0->bits_allocated != 16 && f0->bits_allocated != 32)
         return vv_error_set(VV_ERR_UNSUPPORTED, "%s: %d bits allocated (8, 16 or 32 supported)",
                             f0->path, f0->bits_allocated);
     if (f0->samples < 1 || f0->samples > 4)
         return vv_error_set(VV_ERR_FORMAT, "%s: %d samples per pixel", f0->path, f0->samples);
-    int ch = channel < 0 ? 0 : channel;
-    if (ch >= f0->samples)
+    *ch = channel < 0 ? 0 : channel;
+    if (*ch >= f0->samples)
         return vv_error_set(VV_ERR_INVALID, "%s: channel %d asked, the images have %d", f0->path,
-                            ch, f0->samples);
-    if (nz > VV_VOLUME_MAX_DIM || f0->rows < 1 || f0->cols < 1)
+                            *ch, f0->samples);
+    if (*nz > VV_VOLUME_MAX_DIM || f0->rows < 1 || f0->cols < 1)
         return vv_error_set(VV_ERR_LIMIT, "%s: %d x %d pixels x %ld slices (limit %d per side)",
-                            f0->path, f0->cols, f0->rows, nz, VV_VOLUME_MAX_DIM);
-    int dims[3] = {f0->cols, f0->rows, (int)nz};
+                            f0->path, f0->cols, f0->rows, *nz, VV_VOLUME_MAX_DIM);
+    dims[0] = f0->cols;
+    dims[1] = f0->rows;
+    dims[2] = (int)*nz;
     vv_status s = vv_volume_check_size(dims, VV_F64, NULL);
     if (s != VV_OK)
         return vv_error_prefix(s, "%s", f0->path);
-    /* the decoded size of each file, checked before any allocation */
-    uint64_t frame_bytes =
-        (uint64_t)f0->rows * (uint64_t)f0->cols * (uint64_t)f0->samples * (f0->bits_allocated / 8);
-    /* uncompressed pixel data must fit in the file: a cheap check for
-     * truncated files and absurd sizes before anything is allocated (GDCM
-     * reads a short Pixel Data element without complaint, zero-filled); where
-     * the value starts, for reading native voxels straight into the volume */
-    uint64_t *direct = calloc((size_t)(b - a), sizeof *direct); /* start + 1, 0: via GDCM */
+    return VV_OK;
+}
+
+/* Uncompressed pixel data must fit in the file: a cheap check for
+ * truncated files and absurd sizes before anything is allocated (GDCM reads
+ * a short Pixel Data element without complaint, zero-filled). Also where
+ * the value starts, for reading native voxels straight into the volume:
+ * direct[i - a] = start + 1, or 0 to read through GDCM (calloc'ed). */
+static vv_status
+plan_direct_reads(const scan *sc, int a, int b, uint64_t frame_bytes, uint64_t **direct_out) {
+    uint64_t *direct = calloc((size_t)(b - a), sizeof *direct);
     if (!direct)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     for (int i = a; i < b; i++) {
@@ -895,48 +902,34 @@ read_series(vv_volume **out, const scan *sc, int si, int channel) {
             vv_host_is_little_endian())
             direct[i - a] = start + 1;
     }
-    slice_ref *refs = calloc((size_t)nz, sizeof *refs);
-    if (!refs) {
-        free(direct);
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    }
-    long z = 0;
-    for (int i = a; i < b; i++) {
-        const vv_dcm_file *f = &sc->f[sc->order[i]];
-        for (int fr = 0; fr < f->frames; fr++, z++) {
-            refs[z].file = sc->order[i];
-            refs[z].frame = fr;
-            refs[z].instance = f->instance_number;
-        }
-    }
-    vv_volume *v = NULL;
-    vv_voxel_type t = output_type(sc, refs, (int)nz);
-    s = vv_volume_new(&v, dims, t);
-    if (s == VV_OK)
-        s = order_slices(sc, refs, (int)nz, f0, v);
-    if (s != VV_OK) {
-        free(refs);
-        free(direct);
-        vv_volume_free(v);
-        return s;
-    }
-    size_t slice_bytes = (size_t)f0->rows * f0->cols * vv_voxel_type_size(t);
-    size_t np = (size_t)f0->rows * f0->cols;
-    int same_size = vv_voxel_type_size(t) * 8 == (size_t)f0->bits_allocated;
-    /* the slot of each file's first frame */
-    long *slot = malloc((size_t)(b - a) * sizeof *slot);
-    if (!slot) {
-        free(refs);
-        free(direct);
-        vv_volume_free(v);
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    }
-    for (int i = 0; i < b - a; i++)
-        slot[i] = -1;
-    for (long k = 0; k < nz; k++)
-        for (int i = a; i < b; i++)
-            if (sc->order[i] == refs[k].file && refs[k].frame == 0)
-                slot[i - a] = k;
+    *direct_out = direct;
+    return VV_OK;
+}
+
+/* What the parallel read of a series' pixels shares. */
+typedef struct series_read {
+    const scan *sc;
+    int a, b, ch;
+    long nz;
+    const slice_ref *refs;
+    const uint64_t *direct; /* plan_direct_reads */
+    const long *slot;       /* the slice of each file's first frame, -1 none */
+    uint64_t frame_bytes;
+    vv_volume *v;
+} series_read;
+
+/* Reads every file's pixels into its slices of the volume (in parallel),
+ * rescaled; the value range in *lo, *hi. The first file that fails (in
+ * series order, whatever the threads did) is named in the error. */
+static vv_status
+read_pixels(const series_read *R, double *lo_out, double *hi_out) {
+    const scan *sc = R->sc;
+    vv_volume *v = R->v;
+    const vv_voxel_type t = v->type;
+    const vv_dcm_file *f0 = &sc->f[sc->order[R->a]];
+    const size_t slice_bytes = (size_t)f0->rows * f0->cols * vv_voxel_type_size(t);
+    const size_t np = (size_t)f0->rows * f0->cols;
+    const int same_size = vv_voxel_type_size(t) * 8 == (size_t)f0->bits_allocated;
     int failed = -1;
     char err[256] = "";
     double lo = INFINITY, hi = -INFINITY;
@@ -947,16 +940,17 @@ read_series(vv_volume **out, const scan *sc, int si, int channel) {
         size_t cap = 0;
         double tlo = INFINITY, thi = -INFINITY;
 #pragma omp for schedule(dynamic, 2)
-        for (int i = a; i < b; i++) {
+        for (int i = R->a; i < R->b; i++) {
             const vv_dcm_file *f = &sc->f[sc->order[i]];
-            size_t need = (size_t)(frame_bytes * (uint64_t)f->frames);
+            size_t need = (size_t)(R->frame_bytes * (uint64_t)f->frames);
             char e[256] = "";
             int bad = 0;
-            if (direct[i - a] && same_size && slot[i - a] >= 0) {
+            if (R->direct[i - R->a] && same_size && R->slot[i - R->a] >= 0) {
                 /* native little-endian voxels: read in place, rescale in place */
-                unsigned char *dst = (unsigned char *)v->data + (size_t)slot[i - a] * slice_bytes;
+                unsigned char *dst =
+                    (unsigned char *)v->data + (size_t)R->slot[i - R->a] * slice_bytes;
                 FILE *fp = fopen(f->path, "rb");
-                if (!fp || fseeko(fp, (off_t)(direct[i - a] - 1), SEEK_SET) != 0 ||
+                if (!fp || fseeko(fp, (off_t)(R->direct[i - R->a] - 1), SEEK_SET) != 0 ||
                     fread(dst, 1, need, fp) != need) {
                     snprintf(e, sizeof e, "cannot read the pixel data: %s",
                              fp ? "file truncated" : strerror(errno));
@@ -979,10 +973,10 @@ read_series(vv_volume **out, const scan *sc, int si, int channel) {
                 } else if (guarded_read_pixels(f->path, buf, need, e, sizeof e) != 0) {
                     bad = 1;
                 } else {
-                    for (long k = 0; k < nz; k++)
-                        if (refs[k].file == sc->order[i]) {
+                    for (long k = 0; k < R->nz; k++)
+                        if (R->refs[k].file == sc->order[i]) {
                             unsigned char *dst = (unsigned char *)v->data + (size_t)k * slice_bytes;
-                            convert_frame(f, buf, refs[k].frame, ch, t, dst);
+                            convert_frame(f, buf, R->refs[k].frame, R->ch, t, dst);
                             slice_range(t, dst, np, &tlo, &thi);
                         }
                 }
@@ -1002,17 +996,63 @@ read_series(vv_volume **out, const scan *sc, int si, int channel) {
             hi = fmax(hi, thi);
         }
     }
-    free(slot);
-    free(refs);
-    free(direct);
-    if (failed >= 0) {
-        vv_volume_free(v);
-        const char *fp = sc->f[sc->order[failed]].path;
-        /* the decoder's message may already begin with the file's name */
-        if (strncmp(err, fp, strlen(fp)) == 0)
-            return vv_error_set(VV_ERR_FORMAT, "%s", err);
-        return vv_error_set(VV_ERR_FORMAT, "%s: %s", fp, err);
+    *lo_out = lo;
+    *hi_out = hi;
+    if (failed < 0)
+        return VV_OK;
+    const char *fp = sc->f[sc->order[failed]].path;
+    /* the decoder's message may already begin with the file's name */
+    if (strncmp(err, fp, strlen(fp)) == 0)
+        return vv_error_set(VV_ERR_FORMAT, "%s", err);
+    return vv_error_set(VV_ERR_FORMAT, "%s: %s", fp, err);
+}
+
+static vv_status
+read_series(vv_volume **out, const scan *sc, int si, int channel) {
+    int a = sc->start[si], b = sc->start[si + 1];
+    const vv_dcm_file *f0 = &sc->f[sc->order[a]];
+    int dims[3] = {0, 0, 0}, ch = 0;
+    long nz = 0;
+    vv_status s = check_series(sc, a, b, channel, dims, &nz, &ch);
+    if (s != VV_OK)
+        return s;
+    /* the decoded size of each file, checked before any allocation */
+    uint64_t frame_bytes =
+        (uint64_t)f0->rows * (uint64_t)f0->cols * (uint64_t)f0->samples * (f0->bits_allocated / 8);
+    uint64_t *direct = NULL;
+    if ((s = plan_direct_reads(sc, a, b, frame_bytes, &direct)) != VV_OK)
+        return s;
+    slice_ref *refs = calloc((size_t)nz, sizeof *refs);
+    long *slot = malloc((size_t)(b - a) * sizeof *slot);
+    vv_volume *v = NULL;
+    if (!refs || !slot) {
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+        goto done;
     }
+    long z = 0;
+    for (int i = a; i < b; i++) {
+        const vv_dcm_file *f = &sc->f[sc->order[i]];
+        for (int fr = 0; fr < f->frames; fr++, z++) {
+            refs[z].file = sc->order[i];
+            refs[z].frame = fr;
+            refs[z].instance = f->instance_number;
+        }
+    }
+    vv_voxel_type t = output_type(sc, refs, (int)nz);
+    if ((s = vv_volume_new(&v, dims, t)) != VV_OK ||
+        (s = order_slices(sc, refs, (int)nz, f0, v)) != VV_OK)
+        goto done;
+    /* the slot of each file's first frame */
+    for (int i = 0; i < b - a; i++)
+        slot[i] = -1;
+    for (long k = 0; k < nz; k++)
+        for (int i = a; i < b; i++)
+            if (sc->order[i] == refs[k].file && refs[k].frame == 0)
+                slot[i - a] = k;
+    series_read R = {sc, a, b, ch, nz, refs, direct, slot, frame_bytes, v};
+    double lo, hi;
+    if ((s = read_pixels(&R, &lo, &hi)) != VV_OK)
+        goto done;
     if (!strcasecmp(f0->modality, "CT"))
         v->data_origin = VV_ORIGIN_CT;
     else if (!strcasecmp(f0->modality, "MR"))
@@ -1024,6 +1064,14 @@ read_series(vv_volume **out, const scan *sc, int si, int channel) {
     v->range[0] = lo <= hi ? lo : 0;
     v->range[1] = lo <= hi ? hi : 0;
     v->modified++;
+done:
+    free(slot);
+    free(refs);
+    free(direct);
+    if (s != VV_OK) {
+        vv_volume_free(v);
+        return s;
+    }
     *out = v;
     return VV_OK;
 }
@@ -1082,3 +1130,49 @@ vv_dicom_read_files(vv_volume **out, const char *const *files, int n, int series
 }
 
 #endif
+
+/* ---- the format record ------------------------------------------------------ */
+
+/* A DICOMDIR or a DICOM file in a folder, or (at depth 0) in a subfolder:
+ * @p ctx points at the depth. */
+static int
+dicom_entry(const char *entry, const char *name, int is_dir, void *ctx) {
+    const int depth = *(const int *)ctx;
+    if (is_dir) {
+        int deeper = depth + 1;
+        return depth < 1 && vv_format_folder_any(entry, dicom_entry, &deeper);
+    }
+    return !strcasecmp(name, "DICOMDIR") || vv_format_detect(entry) == VV_FORMAT_DICOM;
+}
+
+/* "DICM" after the 128-byte preamble, a folder of DICOM files; at @p deep
+ * 1 a file without the preamble (old ACR-NEMA style) whose first element
+ * reads as DICOM. */
+static int
+dicom_looks_like(const vv_format_probe *p, int deep) {
+    if (p->is_dir)
+        return !deep && vv_format_folder_any(p->path, dicom_entry, &(int){0});
+    if (!deep)
+        return p->n >= 132 && !memcmp(p->head + 128, "DICM", 4);
+    return p->n > 0 && vv_dicom_sniff(p->path);
+}
+
+static vv_status
+dicom_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
+    return vv_dicom_read(out, path, opt->series, opt->channel);
+}
+
+static const char *const dicom_extensions[] = {"dcm", NULL};
+static const char *const dicom_aliases[] = {"dcm", NULL};
+
+const vv_volume_format vv_volume_format_dicom = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "dicom",
+    .title = "DICOM",
+    .extensions = dicom_extensions,
+    .aliases = dicom_aliases,
+    .doc = "DICOM series through GDCM: folders, DICOMDIR, multi-frame, compressed syntaxes",
+    .flags = VV_FORMAT_FLAG_THIRD_PARTY | VV_FORMAT_FLAG_FOLDER,
+    .looks_like = dicom_looks_like,
+    .read = dicom_read_record,
+};

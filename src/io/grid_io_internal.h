@@ -1,10 +1,17 @@
-/* Shared helpers of the grid readers (internal). */
+/*
+ * What the grid readers of src/io share (not installed; grid_text.c): a
+ * cursor over a file held in memory, the value types of the VTK, VTK XML and
+ * OpenDX formats, and the common end of a reader.
+ */
 #ifndef VOLVIS_GRID_IO_INTERNAL_H
 #define VOLVIS_GRID_IO_INTERNAL_H
 
 #include <stddef.h>
 
 #include "volvis/grid.h"
+
+/** Largest grid file read into memory (bytes). */
+#define VV_GRID_FILE_MAX (4ull << 30)
 
 /** A cursor over a file held in memory. */
 typedef struct vv_gcur {

@@ -21,6 +21,7 @@
 
 #include "io/grid_io_internal.h"
 #include "volvis/grid.h"
+#include "volvis/sys/format.h"
 
 #ifdef VV_HAVE_NETCDF
 #include <netcdf.h>
@@ -72,209 +73,248 @@ halfway_edges(const double *c, size_t n, double *e) {
     e[n] = n > 1 ? c[n - 1] + (c[n - 1] - e[n - 1]) : c[0] + 0.5;
 }
 
-vv_status
-vv_grid_read_netcdf(vv_grid **out, const char *path) {
-    *out = NULL;
-    int nc, e;
-    if ((e = nc_open(path, NC_NOWRITE, &nc)) != NC_NOERR)
-        return vv_error_set(e == NC_ENOTNC ? VV_ERR_FORMAT : VV_ERR_IO, "%s: %s", path,
-                            nc_strerror(e));
-    vv_status s = VV_OK;
-    vv_grid *g = NULL;
-    double *ax[3] = {NULL, NULL, NULL}, *edges[3] = {NULL, NULL, NULL}, *buf = NULL;
-    int nvars = 0;
-    if ((e = nc_inq_nvars(nc, &nvars)) != NC_NOERR) {
-        s = nc_fail(e, path, "variables");
-        goto done;
-    }
-    /* the first variable of 3 dimensions (or 4 with a leading one of length 1) */
-    int dimids[NC_MAX_VAR_DIMS], ndims = 0, first = -1;
-    for (int v = 0; v < nvars && first < 0; v++) {
+/* What the reader found of a file: its first three-dimensional variable
+ * (the layout every field shares) and the three coordinate axes. */
+typedef struct nc_layout {
+    int nc;
+    const char *path;
+    int nvars, ndims, dimids[3];
+    char vname[NC_MAX_NAME + 1];
+    size_t len[3];                  /* per dimension of the variable */
+    int coord[3];                   /* the dimension's coordinate variable */
+    int dim_of_kind[3];             /* dimension of longitude, latitude, vertical */
+    double *ax[3], *edges[3];       /* centres (len) and edges (len + 1) per dimension */
+    int zinc, down, latinc, loninc; /* the directions of the axes in the file */
+} nc_layout;
+
+/* The first variable of 3 dimensions (or 4 with a leading one of length 1). */
+static vv_status
+nc_first_variable(nc_layout *L) {
+    int e, first = -1;
+    if ((e = nc_inq_nvars(L->nc, &L->nvars)) != NC_NOERR)
+        return nc_fail(e, L->path, "variables");
+    for (int v = 0; v < L->nvars && first < 0; v++) {
         int nd;
         int ids[NC_MAX_VAR_DIMS];
-        if (nc_inq_varndims(nc, v, &nd) != NC_NOERR || nc_inq_vardimid(nc, v, ids) != NC_NOERR)
+        if (nc_inq_varndims(L->nc, v, &nd) != NC_NOERR ||
+            nc_inq_vardimid(L->nc, v, ids) != NC_NOERR)
             continue;
         size_t l0 = 0;
         if (nd == 4)
-            nc_inq_dimlen(nc, ids[0], &l0);
+            nc_inq_dimlen(L->nc, ids[0], &l0);
         if (nd == 3 || (nd == 4 && l0 == 1)) {
             first = v;
-            ndims = nd;
-            memcpy(dimids, ids + (nd == 4), 3 * sizeof(int));
+            L->ndims = nd;
+            memcpy(L->dimids, ids + (nd == 4), 3 * sizeof(int));
         }
     }
-    if (first < 0) {
-        s = vv_error_set(VV_ERR_FORMAT, "%s: no variable of three dimensions", path);
-        goto done;
+    if (first < 0)
+        return vv_error_set(VV_ERR_FORMAT, "%s: no variable of three dimensions", L->path);
+    nc_inq_varname(L->nc, first, L->vname);
+    return VV_OK;
+}
+
+/* The edges of axis @p d from Ferret's "edges" or CF's "bounds" variable,
+ * when the coordinate variable names one (else they stay halfway). */
+static void
+nc_axis_edges(const nc_layout *L, int d) {
+    char en[NC_MAX_NAME + 1];
+    int ev;
+    const int nc = L->nc, cv = L->coord[d];
+    const size_t n = L->len[d];
+    att_text(nc, cv, "edges", en, sizeof en);
+    if (en[0] && nc_inq_varid(nc, en, &ev) == NC_NOERR) {
+        int end_;
+        size_t el = 0;
+        int eid;
+        if (nc_inq_varndims(nc, ev, &end_) == NC_NOERR && end_ == 1 &&
+            nc_inq_vardimid(nc, ev, &eid) == NC_NOERR && nc_inq_dimlen(nc, eid, &el) == NC_NOERR &&
+            el == n + 1)
+            nc_get_var_double(nc, ev, L->edges[d]);
+        return;
     }
-    char vname[NC_MAX_NAME + 1];
-    nc_inq_varname(nc, first, vname);
-    /* coordinate variables of the three dimensions: vertical, latitude, longitude */
-    size_t len[3];
-    int kind_of_dim[3], dim_of_kind[3] = {-1, -1, -1}, coord[3];
-    for (int d = 0; d < 3; d++) {
-        char dname[NC_MAX_NAME + 1];
-        nc_inq_dim(nc, dimids[d], dname, &len[d]);
-        if (nc_inq_varid(nc, dname, &coord[d]) != NC_NOERR) {
-            s = vv_error_set(VV_ERR_FORMAT,
-                             "%s: variable %s: dimension %s has no coordinate variable", path,
-                             vname, dname);
-            goto done;
+    att_text(nc, cv, "bounds", en, sizeof en);
+    if (en[0] && nc_inq_varid(nc, en, &ev) == NC_NOERR) {
+        double *b = malloc(2 * n * sizeof *b);
+        if (b && nc_get_var_double(nc, ev, b) == NC_NOERR) {
+            for (size_t i = 0; i < n; i++)
+                L->edges[d][i] = b[2 * i];
+            L->edges[d][n] = b[2 * n - 1];
         }
-        kind_of_dim[d] = axis_kind(nc, coord[d], dname);
-        if (kind_of_dim[d] < 0 || dim_of_kind[kind_of_dim[d]] >= 0) {
-            s = vv_error_set(VV_ERR_UNSUPPORTED,
-                             "%s: variable %s: dimension %s is not a longitude, latitude or "
-                             "vertical axis (or repeats one)",
-                             path, vname, dname);
-            goto done;
-        }
-        dim_of_kind[kind_of_dim[d]] = d;
-        if (len[d] < 1 || len[d] > 100000) {
-            s = vv_error_set(VV_ERR_LIMIT, "%s: dimension %s of length %zu", path, dname, len[d]);
-            goto done;
-        }
-        ax[d] = malloc(len[d] * sizeof(double));
-        edges[d] = malloc((len[d] + 1) * sizeof(double));
-        if (!ax[d] || !edges[d]) {
-            s = vv_error_set(VV_ERR_NOMEM, "%s: out of memory", path);
-            goto done;
-        }
-        if ((e = nc_get_var_double(nc, coord[d], ax[d])) != NC_NOERR) {
-            s = nc_fail(e, path, dname);
-            goto done;
-        }
-        halfway_edges(ax[d], len[d], edges[d]);
-        /* Ferret's "edges" or CF's "bounds" */
-        char en[NC_MAX_NAME + 1];
-        int ev;
-        att_text(nc, coord[d], "edges", en, sizeof en);
-        if (en[0] && nc_inq_varid(nc, en, &ev) == NC_NOERR) {
-            int end_;
-            size_t el = 0;
-            int eid;
-            if (nc_inq_varndims(nc, ev, &end_) == NC_NOERR && end_ == 1 &&
-                nc_inq_vardimid(nc, ev, &eid) == NC_NOERR &&
-                nc_inq_dimlen(nc, eid, &el) == NC_NOERR && el == len[d] + 1)
-                nc_get_var_double(nc, ev, edges[d]);
-        } else {
-            att_text(nc, coord[d], "bounds", en, sizeof en);
-            if (en[0] && nc_inq_varid(nc, en, &ev) == NC_NOERR) {
-                double *b = malloc(2 * len[d] * sizeof *b);
-                if (b && nc_get_var_double(nc, ev, b) == NC_NOERR) {
-                    for (size_t i = 0; i < len[d]; i++)
-                        edges[d][i] = b[2 * i];
-                    edges[d][len[d]] = b[2 * len[d] - 1];
-                }
-                free(b);
-            }
-        }
+        free(b);
     }
-    for (int k = 0; k < 3; k++)
-        if (dim_of_kind[k] < 0) {
-            s = vv_error_set(VV_ERR_UNSUPPORTED, "%s: variable %s lacks a %s axis", path, vname,
-                             k == 0   ? "longitude"
-                             : k == 1 ? "latitude"
-                                      : "vertical");
-            goto done;
-        }
-    const int dlon = dim_of_kind[0], dlat = dim_of_kind[1], dz = dim_of_kind[2];
-    const size_t nlon = len[dlon], nlat = len[dlat], nz = len[dz];
-    /* vertical: depth (positive down, metres unless km) to radius */
+}
+
+/* Dimension @p d: its coordinate variable, which axis it is, its centres
+ * and edges. */
+static vv_status
+nc_axis(nc_layout *L, int d) {
+    char dname[NC_MAX_NAME + 1];
+    int e;
+    nc_inq_dim(L->nc, L->dimids[d], dname, &L->len[d]);
+    if (nc_inq_varid(L->nc, dname, &L->coord[d]) != NC_NOERR)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: variable %s: dimension %s has no coordinate variable", L->path,
+                            L->vname, dname);
+    const int kind = axis_kind(L->nc, L->coord[d], dname);
+    if (kind < 0 || L->dim_of_kind[kind] >= 0)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "%s: variable %s: dimension %s is not a longitude, latitude or "
+                            "vertical axis (or repeats one)",
+                            L->path, L->vname, dname);
+    L->dim_of_kind[kind] = d;
+    if (L->len[d] < 1 || L->len[d] > 100000)
+        return vv_error_set(VV_ERR_LIMIT, "%s: dimension %s of length %zu", L->path, dname,
+                            L->len[d]);
+    L->ax[d] = malloc(L->len[d] * sizeof(double));
+    L->edges[d] = malloc((L->len[d] + 1) * sizeof(double));
+    if (!L->ax[d] || !L->edges[d])
+        return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", L->path);
+    if ((e = nc_get_var_double(L->nc, L->coord[d], L->ax[d])) != NC_NOERR)
+        return nc_fail(e, L->path, dname);
+    halfway_edges(L->ax[d], L->len[d], L->edges[d]);
+    nc_axis_edges(L, d);
+    return VV_OK;
+}
+
+/* The spherical grid of the axes' edges: radius from the vertical axis
+ * (depth positive down, metres unless km, exaggerated), theta from the
+ * latitude, phi from the longitude (wrapping round a whole turn). */
+static vv_status
+nc_spherical(nc_layout *L, vv_grid **g) {
+    const int dlon = L->dim_of_kind[0], dlat = L->dim_of_kind[1], dz = L->dim_of_kind[2];
+    const size_t nlon = L->len[dlon], nlat = L->len[dlat], nz = L->len[dz];
+    const double *ez = L->edges[dz], *elat = L->edges[dlat], *elon = L->edges[dlon];
     char units[64], positive[16];
-    att_text(nc, coord[dz], "units", units, sizeof units);
-    att_text(nc, coord[dz], "positive", positive, sizeof positive);
+    att_text(L->nc, L->coord[dz], "units", units, sizeof units);
+    att_text(L->nc, L->coord[dz], "positive", positive, sizeof positive);
     const double to_km =
         !strncasecmp(units, "km", 2) || !strncasecmp(units, "kilomet", 7) ? 1.0 : 0.001;
-    const int down = strcasecmp(positive, "up") != 0;
+    L->down = strcasecmp(positive, "up") != 0;
     double *r = malloc((nz + 1) * sizeof *r), *theta = malloc((nlat + 1) * sizeof *theta),
            *phi = malloc((nlon + 1) * sizeof *phi);
+    vv_status s = VV_OK;
     if (!r || !theta || !phi) {
-        free(r);
-        free(theta);
-        free(phi);
-        s = vv_error_set(VV_ERR_NOMEM, "%s: out of memory", path);
+        s = vv_error_set(VV_ERR_NOMEM, "%s: out of memory", L->path);
         goto done;
     }
     /* r increasing: the deepest edge first */
-    const int zinc = edges[dz][nz] > edges[dz][0];
+    L->zinc = ez[nz] > ez[0];
     for (size_t i = 0; i <= nz; i++) {
-        const double zv = edges[dz][i] * to_km * (down ? -1 : 1); /* height, km */
-        r[zinc == down ? nz - i : i] = VV_EARTH_RADIUS_KM + VV_NETCDF_EXAGGERATION * zv;
+        const double zv = ez[i] * to_km * (L->down ? -1 : 1); /* height, km */
+        r[L->zinc == L->down ? nz - i : i] = VV_EARTH_RADIUS_KM + VV_NETCDF_EXAGGERATION * zv;
     }
     /* theta from +z (north) increasing: latitude decreasing */
-    const int latinc = edges[dlat][nlat] > edges[dlat][0];
+    L->latinc = elat[nlat] > elat[0];
     for (size_t j = 0; j <= nlat; j++) {
-        double lat = edges[dlat][latinc ? nlat - j : j];
+        double lat = elat[L->latinc ? nlat - j : j];
         lat = lat > 90 ? 90 : lat < -90 ? -90 : lat;
         theta[j] = (90 - lat) * M_PI / 180;
     }
-    const int loninc = edges[dlon][nlon] > edges[dlon][0];
-    const double span = fabs(edges[dlon][nlon] - edges[dlon][0]);
+    L->loninc = elon[nlon] > elon[0];
+    const double span = fabs(elon[nlon] - elon[0]);
     const int wrap = fabs(span - 360) < 1e-6 * 360;
     for (size_t k = 0; k <= nlon; k++)
-        phi[k] = edges[dlon][loninc ? k : nlon - k] * M_PI / 180;
-    s = vv_grid_new_spherical(&g, r, (int)nz + 1, theta, (int)nlat + 1, phi,
+        phi[k] = elon[L->loninc ? k : nlon - k] * M_PI / 180;
+    s = vv_grid_new_spherical(g, r, (int)nz + 1, theta, (int)nlat + 1, phi,
                               (int)nlon + (wrap ? 0 : 1), wrap);
+    if (s != VV_OK)
+        s = vv_error_prefix(s, "%s", L->path);
+done:
     free(r);
     free(theta);
     free(phi);
-    if (s != VV_OK) {
-        s = vv_error_prefix(s, "%s", path);
-        goto done;
-    }
-    /* every variable on the same dimensions: a cell field */
-    const size_t ncell = nlon * nlat * nz;
-    buf = malloc(ncell * sizeof *buf);
-    if (!buf) {
-        s = vv_error_set(VV_ERR_NOMEM, "%s: out of memory", path);
-        goto done;
-    }
-    for (int v = 0; v < nvars; v++) {
+    return s;
+}
+
+/* Variable @p v as a cell field: fill and missing values as NaN, scale
+ * and offset applied, reordered from the file's axes to the grid's. */
+static vv_status
+nc_field(const nc_layout *L, int v, double *buf, vv_grid *g) {
+    const int dlon = L->dim_of_kind[0], dlat = L->dim_of_kind[1], dz = L->dim_of_kind[2];
+    const size_t nlon = L->len[dlon], nlat = L->len[dlat], nz = L->len[dz];
+    char name[NC_MAX_NAME + 1];
+    int e;
+    nc_inq_varname(L->nc, v, name);
+    if ((e = nc_get_var_double(L->nc, v, buf)) != NC_NOERR)
+        return nc_fail(e, L->path, name);
+    double fill = NAN, missing = NAN, scale = 1, offset = 0;
+    int has_fill = nc_get_att_double(L->nc, v, "_FillValue", &fill) == NC_NOERR;
+    int has_missing = nc_get_att_double(L->nc, v, "missing_value", &missing) == NC_NOERR;
+    nc_get_att_double(L->nc, v, "scale_factor", &scale);
+    nc_get_att_double(L->nc, v, "add_offset", &offset);
+    vv_grid_field *f = NULL;
+    vv_status s = vv_grid_add_field(g, name, 1, 1, &f);
+    if (s != VV_OK)
+        return s;
+    f->has_fill = 1;
+    f->fill = NAN; /* missing values are stored as NaN */
+    size_t idx[3];
+    for (size_t k = 0; k < nlon; k++)
+        for (size_t j = 0; j < nlat; j++)
+            for (size_t i = 0; i < nz; i++) {
+                /* grid cell (i: r, j: theta, k: phi) -> file indices */
+                idx[dz] = L->zinc == L->down ? nz - 1 - i : i;
+                idx[dlat] = L->latinc ? nlat - 1 - j : j;
+                idx[dlon] = L->loninc ? k : nlon - 1 - k;
+                const size_t src = (idx[0] * L->len[1] + idx[1]) * L->len[2] + idx[2];
+                double x = buf[src];
+                if ((has_fill && x == fill) || (has_missing && x == missing) || !isfinite(x))
+                    x = NAN;
+                else
+                    x = x * scale + offset;
+                f->values[(k * nlat + j) * nz + i] = (float)x;
+            }
+    return VV_OK;
+}
+
+/* Every variable on the first variable's dimensions, as a cell field. */
+static vv_status
+nc_fields(const nc_layout *L, vv_grid *g) {
+    const size_t ncell = L->len[0] * L->len[1] * L->len[2];
+    double *buf = malloc(ncell * sizeof *buf);
+    if (!buf)
+        return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", L->path);
+    vv_status s = VV_OK;
+    for (int v = 0; v < L->nvars && s == VV_OK; v++) {
         int nd, ids[NC_MAX_VAR_DIMS];
-        if (nc_inq_varndims(nc, v, &nd) != NC_NOERR || nd != ndims ||
-            nc_inq_vardimid(nc, v, ids) != NC_NOERR ||
-            memcmp(ids + (nd == 4), dimids, 3 * sizeof(int)))
+        if (nc_inq_varndims(L->nc, v, &nd) != NC_NOERR || nd != L->ndims ||
+            nc_inq_vardimid(L->nc, v, ids) != NC_NOERR ||
+            memcmp(ids + (nd == 4), L->dimids, 3 * sizeof(int)))
             continue;
-        char name[NC_MAX_NAME + 1];
-        nc_inq_varname(nc, v, name);
-        if ((e = nc_get_var_double(nc, v, buf)) != NC_NOERR) {
-            s = nc_fail(e, path, name);
-            goto done;
-        }
-        double fill = NAN, missing = NAN, scale = 1, offset = 0;
-        int has_fill = nc_get_att_double(nc, v, "_FillValue", &fill) == NC_NOERR;
-        int has_missing = nc_get_att_double(nc, v, "missing_value", &missing) == NC_NOERR;
-        nc_get_att_double(nc, v, "scale_factor", &scale);
-        nc_get_att_double(nc, v, "add_offset", &offset);
-        vv_grid_field *f = NULL;
-        if ((s = vv_grid_add_field(g, name, 1, 1, &f)) != VV_OK)
-            goto done;
-        f->has_fill = 1;
-        f->fill = NAN; /* missing values are stored as NaN */
-        size_t idx[3];
-        for (size_t k = 0; k < nlon; k++)
-            for (size_t j = 0; j < nlat; j++)
-                for (size_t i = 0; i < nz; i++) {
-                    /* grid cell (i: r, j: theta, k: phi) -> file indices */
-                    idx[dz] = zinc == down ? nz - 1 - i : i;
-                    idx[dlat] = latinc ? nlat - 1 - j : j;
-                    idx[dlon] = loninc ? k : nlon - 1 - k;
-                    const size_t src = (idx[0] * len[1] + idx[1]) * len[2] + idx[2];
-                    double x = buf[src];
-                    if ((has_fill && x == fill) || (has_missing && x == missing) || !isfinite(x))
-                        x = NAN;
-                    else
-                        x = x * scale + offset;
-                    f->values[(k * nlat + j) * nz + i] = (float)x;
-                }
+        s = nc_field(L, v, buf, g);
     }
-done:
-    nc_close(nc);
     free(buf);
+    return s;
+}
+
+vv_status
+vv_grid_read_netcdf(vv_grid **out, const char *path) {
+    *out = NULL;
+    nc_layout L;
+    memset(&L, 0, sizeof L);
+    L.path = path;
+    L.dim_of_kind[0] = L.dim_of_kind[1] = L.dim_of_kind[2] = -1;
+    int e;
+    if ((e = nc_open(path, NC_NOWRITE, &L.nc)) != NC_NOERR)
+        return vv_error_set(e == NC_ENOTNC ? VV_ERR_FORMAT : VV_ERR_IO, "%s: %s", path,
+                            nc_strerror(e));
+    vv_grid *g = NULL;
+    vv_status s = nc_first_variable(&L);
+    for (int d = 0; d < 3 && s == VV_OK; d++)
+        s = nc_axis(&L, d);
+    for (int k = 0; k < 3 && s == VV_OK; k++)
+        if (L.dim_of_kind[k] < 0)
+            s = vv_error_set(VV_ERR_UNSUPPORTED, "%s: variable %s lacks a %s axis", path, L.vname,
+                             k == 0   ? "longitude"
+                             : k == 1 ? "latitude"
+                                      : "vertical");
+    if (s == VV_OK && (s = nc_spherical(&L, &g)) == VV_OK)
+        s = nc_fields(&L, g);
+    nc_close(L.nc);
     for (int d = 0; d < 3; d++) {
-        free(ax[d]);
-        free(edges[d]);
+        free(L.ax[d]);
+        free(L.edges[d]);
     }
     if (s != VV_OK) {
         vv_grid_free(g);
@@ -292,3 +332,31 @@ vv_grid_read_netcdf(vv_grid **out, const char *path) {
 }
 
 #endif
+
+/* ---- the format record ------------------------------------------------------ */
+
+/* NetCDF classic ("CDF" and version 1, 2 or 5), or NetCDF-4 (an HDF5 file)
+ * named .nc or .cdf. */
+static int
+netcdf_looks_like(const vv_format_probe *p, int deep) {
+    const unsigned char *h = p->head;
+    if (deep || p->n < 4)
+        return 0;
+    if (!memcmp(h, "CDF", 3) && (h[3] == 1 || h[3] == 2 || h[3] == 5))
+        return 1;
+    return p->n >= 8 && !memcmp(h, "\x89HDF\r\n\x1a\n", 8) &&
+           (vv_format_path_has_ext(p->path, "nc") || vv_format_path_has_ext(p->path, "cdf"));
+}
+
+static const char *const netcdf_extensions[] = {"nc", "cdf", NULL};
+
+const vv_grid_format_record vv_grid_format_netcdf = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "netcdf",
+    .title = "NetCDF",
+    .extensions = netcdf_extensions,
+    .doc = "NetCDF (CF conventions) through libnetcdf: cells on longitude, latitude, depth",
+    .flags = VV_FORMAT_FLAG_THIRD_PARTY,
+    .looks_like = netcdf_looks_like,
+    .read = vv_grid_read_netcdf,
+};

@@ -15,10 +15,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "core/internal.h"
 #include "io/grid_io_internal.h"
 #include "volvis/grid.h"
+#include "volvis/sys/format.h"
 
 #define P3D_FILE_MAX (4ull << 30)
 #define P3D_TRAILING_OK 1024 /* bytes a solution may carry beyond its records */
@@ -263,3 +265,47 @@ done:
     }
     return vv_grid_finish(g, xyz_path, out);
 }
+
+/* ---- the format record ------------------------------------------------------ */
+
+/* PLOT3D has no signature: a grid named *.xyz or *xyz.bin, asked only
+ * after every format with one said no. */
+static int
+plot3d_looks_like(const vv_format_probe *p, int deep) {
+    const size_t n = strlen(p->path);
+    return deep && ((n >= 4 && !strcasecmp(p->path + n - 4, ".xyz")) ||
+                    (n >= 7 && !strcasecmp(p->path + n - 7, "xyz.bin")));
+}
+
+/* The grid with its solution beside it when there is one: xxxxyz.bin ->
+ * xxxq.bin, x.xyz -> x.q. */
+static vv_status
+plot3d_read_record(vv_grid **out, const char *path) {
+    char q[4096];
+    snprintf(q, sizeof q, "%s", path);
+    size_t n = strlen(q);
+    int have = 0;
+    if (n >= 7 && !strcasecmp(q + n - 7, "xyz.bin")) {
+        snprintf(q + n - 7, sizeof q - (n - 7), "q.bin");
+        have = 1;
+    } else if (n >= 4 && !strcasecmp(q + n - 4, ".xyz")) {
+        snprintf(q + n - 4, sizeof q - (n - 4), ".q");
+        have = 1;
+    }
+    FILE *fp = have ? fopen(q, "rb") : NULL;
+    if (fp)
+        fclose(fp);
+    return vv_grid_read_plot3d(out, path, fp ? q : NULL);
+}
+
+static const char *const plot3d_extensions[] = {"xyz", "bin", NULL};
+
+const vv_grid_format_record vv_grid_format_plot3d = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "plot3d",
+    .title = "PLOT3D",
+    .extensions = plot3d_extensions,
+    .doc = "PLOT3D grid with its solution beside it (*.q, *q.bin): blocks, IBLANK",
+    .looks_like = plot3d_looks_like,
+    .read = plot3d_read_record,
+};

@@ -15,6 +15,7 @@
 
 #include "core/internal.h"
 #include "volvis/io.h"
+#include "volvis/sys/format.h"
 
 #define MHD_LINE_MAX 4096
 #define MHD_MAX_FILES 65536
@@ -616,3 +617,81 @@ vv_mhd_read(vv_volume **out, const char *path) {
         return vv_error_prefix(s, "mhd: %s", name);
     return VV_OK;
 }
+
+/* ---- the format record ------------------------------------------------------ */
+
+/* The first line is "Key = ..." with a MetaImage key. */
+static int
+mhd_looks_like(const vv_format_probe *p, int deep) {
+    static const char *const keys[] = {"ObjectType",
+                                       "NDims",
+                                       "ObjectSubType",
+                                       "DimSize",
+                                       "ElementType",
+                                       "ElementSpacing",
+                                       "Comment",
+                                       "TransformType",
+                                       "BinaryData",
+                                       "BinaryDataByteOrderMSB",
+                                       "ElementByteOrderMSB",
+                                       "CompressedData",
+                                       "Offset",
+                                       "Position",
+                                       "Origin",
+                                       "TransformMatrix",
+                                       "Rotation",
+                                       "Orientation",
+                                       "CenterOfRotation",
+                                       "AnatomicalOrientation",
+                                       "ElementDataFile",
+                                       "HeaderSize",
+                                       "ElementNumberOfChannels",
+                                       "ElementSize",
+                                       "Name",
+                                       "ID",
+                                       "ParentID",
+                                       "Color",
+                                       "ElementMin",
+                                       "ElementMax"};
+    if (deep || p->is_dir)
+        return 0;
+    const unsigned char *h = p->head;
+    const size_t n = p->n;
+    size_t i = 0;
+    while (i < n && isspace(h[i]))
+        i++;
+    size_t k0 = i;
+    while (i < n && (isalnum(h[i]) || h[i] == '_'))
+        i++;
+    size_t klen = i - k0;
+    if (klen == 0)
+        return 0;
+    while (i < n && (h[i] == ' ' || h[i] == '\t'))
+        i++;
+    if (i >= n || h[i] != '=')
+        return 0;
+    for (size_t j = 0; j < sizeof keys / sizeof keys[0]; j++)
+        if (strlen(keys[j]) == klen && !strncasecmp((const char *)h + k0, keys[j], klen))
+            return 1;
+    return 0;
+}
+
+static vv_status
+mhd_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
+    (void)opt;
+    return vv_mhd_read(out, path);
+}
+
+static const char *const mhd_extensions[] = {"mhd", "mha", NULL};
+static const char *const mhd_aliases[] = {"mha", "metaimage", NULL};
+
+const vv_volume_format vv_volume_format_mhd = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "mhd",
+    .title = "MetaImage",
+    .extensions = mhd_extensions,
+    .aliases = mhd_aliases,
+    .doc = "MetaImage (ITK): detached data (.mhd) or one file (.mha), raw or zlib",
+    .looks_like = mhd_looks_like,
+    .read = mhd_read_record,
+};

@@ -32,6 +32,7 @@
 
 #include "core/internal.h"
 #include "volvis/io.h"
+#include "volvis/sys/format.h"
 
 static pthread_mutex_t nifti_lock = PTHREAD_MUTEX_INITIALIZER;
 
@@ -475,3 +476,80 @@ vv_nifti_read(vv_volume **out, const char *path) {
         return vv_error_prefix(s, "nifti: %s", vv_path_basename(path));
     return VV_OK;
 }
+
+/* ---- the format record ------------------------------------------------------ */
+
+static uint32_t
+get_u32(const unsigned char *p, int big) {
+    return big ? ((uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3])
+               : ((uint32_t)p[3] << 24 | (uint32_t)p[2] << 16 | (uint32_t)p[1] << 8 | p[0]);
+}
+
+/* 2: NIfTI with magic, 1: a 348-byte header without magic (Analyze), 0: neither. */
+static int
+nifti_header_kind(const unsigned char *h, size_t n) {
+    if (n < 348)
+        return 0;
+    for (int big = 0; big < 2; big++) {
+        uint32_t sz = get_u32(h, big);
+        if (sz == 348) {
+            if (!memcmp(h + 344, "n+1", 4) || !memcmp(h + 344, "ni1", 4))
+                return 2;
+            return 1;
+        }
+        if (sz == 540 && n >= 12) {
+            if (!memcmp(h + 4, "n+2", 4) || !memcmp(h + 4, "ni2", 4))
+                return 2;
+        }
+    }
+    return 0;
+}
+
+/* A NIfTI header (also gzip-compressed), or an Analyze header named .hdr;
+ * at @p deep 1, the image half of a .hdr/.img pair: the header beside it. */
+static int
+nifti_looks_like(const vv_format_probe *p, int deep) {
+    if (p->is_dir)
+        return 0;
+    if (!deep) {
+        int nk = nifti_header_kind(p->head, p->n);
+        if (p->gzip)
+            return nk == 2 || (nk == 1 && strstr(vv_path_basename(p->path), ".hdr"));
+        return nk == 2 || (nk == 1 && vv_format_path_has_ext(p->path, "hdr"));
+    }
+    if (p->gzip || !vv_format_path_has_ext(p->path, "img"))
+        return 0;
+    size_t len = strlen(p->path);
+    char *hdr = malloc(len + 1);
+    if (!hdr)
+        return 0;
+    memcpy(hdr, p->path, len + 1);
+    memcpy(hdr + len - 3, p->path[len - 3] == 'I' ? "HDR" : "hdr", 3);
+    unsigned char buf[VV_FORMAT_PROBE_BYTES + 1];
+    char text[VV_FORMAT_PROBE_BYTES + 1];
+    vv_format_probe h;
+    vv_format_probe_fill(&h, hdr, buf, text);
+    free(hdr);
+    return !h.gzip && nifti_header_kind(h.head, h.n) > 0;
+}
+
+static vv_status
+nifti_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
+    (void)opt;
+    return vv_nifti_read(out, path);
+}
+
+static const char *const nifti_extensions[] = {"nii", "nii.gz", "hdr", "img", NULL};
+static const char *const nifti_aliases[] = {"nii", "hdr", NULL};
+
+const vv_volume_format vv_volume_format_nifti = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "nifti",
+    .title = "NIfTI",
+    .extensions = nifti_extensions,
+    .aliases = nifti_aliases,
+    .doc = "NIfTI-1 and NIfTI-2 through nifti_clib: scaling applied, qform/sform geometry",
+    .flags = VV_FORMAT_FLAG_THIRD_PARTY | VV_FORMAT_FLAG_GZIP,
+    .looks_like = nifti_looks_like,
+    .read = nifti_read_record,
+};

@@ -38,9 +38,10 @@
 #include <teem/nrrd.h>
 #include <zlib.h>
 
-#include "core/bricks_internal.h"
 #include "core/internal.h"
+#include "io/bricked_internal.h"
 #include "volvis/io.h"
+#include "volvis/sys/format.h"
 
 static pthread_mutex_t teem_lock = PTHREAD_MUTEX_INITIALIZER;
 
@@ -877,7 +878,7 @@ vv_nrrd_write(const vv_volume *v, const char *path, int gzip) {
     return VV_OK;
 }
 
-/* ---- raw layout for bricked reading (src/core/bricks.c) --------------- */
+/* ---- raw layout for bricked reading (src/io/bricked.c) ----------------- */
 
 /* The byte offset just past the header's blank line ("\n\n" or "\r\n\r\n"). */
 static vv_status
@@ -1030,3 +1031,38 @@ vv_nrrd_raw_layout(const char *path, vv_volume **header, char **data_path, uint6
         return vv_error_prefix(s, "nrrd: %s", vv_path_basename(path));
     return VV_OK;
 }
+
+/* ---- the format record ------------------------------------------------------ */
+
+static int
+nrrd_looks_like(const vv_format_probe *p, int deep) {
+    return !deep && !p->is_dir && p->n >= 7 && !memcmp(p->head, "NRRD000", 7);
+}
+
+static vv_status
+nrrd_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
+    (void)opt;
+    return vv_nrrd_read(out, path);
+}
+
+/* gzip-compressed unless asked otherwise; NRRD holds every volume. */
+static vv_status
+nrrd_write_record(const vv_volume *v, const char *path, const vv_save_options *opt) {
+    return vv_nrrd_write(v, path, opt->compress != 0);
+}
+
+static const char *const nrrd_extensions[] = {"nrrd", "nhdr", NULL};
+static const char *const nrrd_aliases[] = {"nhdr", NULL};
+
+const vv_volume_format vv_volume_format_nrrd = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "nrrd",
+    .title = "NRRD",
+    .extensions = nrrd_extensions,
+    .aliases = nrrd_aliases,
+    .doc = "NRRD through Teem: every voxel type, spacing, origin, direction; gzip",
+    .flags = VV_FORMAT_FLAG_THIRD_PARTY,
+    .looks_like = nrrd_looks_like,
+    .read = nrrd_read_record,
+    .write = nrrd_write_record,
+};

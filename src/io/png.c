@@ -1,4 +1,4 @@
-/* PNG output and input through libpng. */
+/* PNG output and input through libpng; PNG files as texture images. */
 #include <errno.h>
 #include <png.h>
 #include <setjmp.h>
@@ -7,6 +7,8 @@
 
 #include "core/internal.h"
 #include "volvis/image.h"
+#include "volvis/io.h"
+#include "volvis/model.h"
 
 /* Largest image vv_image_read_png accepts (2^26 pixels: 1 GiB as float RGBA). */
 #define VV_PNG_READ_MAX_PIXELS (((uint64_t)1) << 26)
@@ -164,4 +166,16 @@ vv_image_read_png(vv_image **out, const char *path) {
     free(rows);
     *out = im;
     return VV_OK;
+}
+
+vv_status
+vv_texture_image_load(vv_texture_image **out, const char *path, const char *source) {
+    if (!out || !path)
+        return vv_error_set(VV_ERR_INVALID, "texture: NULL %s", out ? "path" : "output");
+    *out = NULL;
+    vv_image *img = NULL;
+    vv_status st = vv_image_read_png(&img, path);
+    if (st != VV_OK)
+        return vv_error_prefix(st, "texture");
+    return vv_texture_image_new(out, img, source ? source : path);
 }

@@ -11,6 +11,7 @@
 
 #include "core/internal.h"
 #include "volvis/io.h"
+#include "volvis/sys/format.h"
 
 void
 vv_raw_params_init(vv_raw_params *p) {
@@ -94,3 +95,19 @@ vv_raw_read(vv_volume **out, const char *path, const vv_raw_params *params) {
         return vv_error_prefix(s, "raw: %s", name);
     return VV_OK;
 }
+
+/* ---- the format record ------------------------------------------------------ */
+
+static vv_status
+raw_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
+    return vv_raw_read(out, path, &opt->raw);
+}
+
+const vv_volume_format vv_volume_format_raw = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "raw",
+    .title = "raw",
+    .doc = "raw voxels described by --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]",
+    .flags = VV_FORMAT_FLAG_DESCRIBED,
+    .read = raw_read_record,
+};

@@ -2,6 +2,7 @@
  * SLC: VolVis's own slice format (8-bit voxels, optionally run-length
  * compressed). See docs/formats.md for the layout.
  */
+#include <ctype.h>
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -12,6 +13,7 @@
 
 #include "core/internal.h"
 #include "volvis/io.h"
+#include "volvis/sys/format.h"
 
 #define SLC_MAGIC 11111
 #define SLC_ICON_MAX 64
@@ -463,3 +465,94 @@ vv_slc_write(const vv_volume *v, const char *path, int rle) {
         return vv_error_prefix(s, "slc: %s", name);
     return VV_OK;
 }
+
+/* ---- the format record ------------------------------------------------------ */
+
+/* "11111" (the magic number) after optional white space. */
+static int
+slc_looks_like(const vv_format_probe *p, int deep) {
+    if (deep || p->is_dir)
+        return 0;
+    size_t i = 0;
+    while (i < p->n && isspace(p->head[i]))
+        i++;
+    return p->n - i >= 5 && !memcmp(p->head + i, "11111", 5);
+}
+
+static vv_status
+slc_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
+    (void)opt;
+    return vv_slc_read(out, path);
+}
+
+static int
+slc_fits(const vv_volume *v, char *why, size_t cap) {
+    if (v->type == VV_U8)
+        return 1;
+    snprintf(why, cap, "SLC holds 8-bit voxels only, the volume is %s",
+             vv_voxel_type_name(v->type));
+    return 0;
+}
+
+/* A u8 copy of @p v rescaled linearly from range[] to 0..255. */
+static vv_status
+to_u8(const vv_volume *v, vv_volume **out) {
+    vv_volume *u = NULL;
+    vv_status s = vv_volume_new(&u, v->dims, VV_U8);
+    if (s != VV_OK)
+        return s;
+    memcpy(u->spacing, v->spacing, sizeof u->spacing);
+    memcpy(u->origin, v->origin, sizeof u->origin);
+    memcpy(u->direction, v->direction, sizeof u->direction);
+    u->unit = v->unit;
+    u->data_origin = v->data_origin;
+    u->modification = VV_MOD_OTHER;
+    double lo = v->range[0], hi = v->range[1];
+    double scale = (hi > lo && isfinite(hi - lo)) ? 255.0 / (hi - lo) : 0;
+    unsigned char *dst = u->data;
+    uint64_t i = 0;
+    for (int k = 0; k < v->dims[2]; k++)
+        for (int j = 0; j < v->dims[1]; j++)
+            for (int x = 0; x < v->dims[0]; x++, i++) {
+                double val = vv_volume_get(v, x, j, k);
+                double y = (val - lo) * scale;
+                if (!(y > 0)) /* also NaN */
+                    y = 0;
+                if (y > 255)
+                    y = 255;
+                dst[i] = (unsigned char)lround(y);
+            }
+    vv_volume_update_range(u);
+    *out = u;
+    return VV_OK;
+}
+
+/* Run-length compressed unless asked otherwise; other voxel types rescaled
+ * to 8 bits (vv_volume_save_with has refused them when strict). */
+static vv_status
+slc_write_record(const vv_volume *v, const char *path, const vv_save_options *opt) {
+    const int rle = opt->compress != 0;
+    if (v->type == VV_U8)
+        return vv_slc_write(v, path, rle);
+    vv_volume *u = NULL;
+    vv_status s = to_u8(v, &u);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "slc: %s", vv_path_basename(path));
+    s = vv_slc_write(u, path, rle);
+    vv_volume_free(u);
+    return s;
+}
+
+static const char *const slc_extensions[] = {"slc", NULL};
+
+const vv_volume_format vv_volume_format_slc = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "slc",
+    .title = "SLC",
+    .extensions = slc_extensions,
+    .doc = "VolVis's slice format: 8-bit voxels, run-length compressed, voxel spacing",
+    .looks_like = slc_looks_like,
+    .fits = slc_fits,
+    .read = slc_read_record,
+    .write = slc_write_record,
+};

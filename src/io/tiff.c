@@ -37,6 +37,7 @@
 
 #include "core/internal.h"
 #include "volvis/io.h"
+#include "volvis/sys/format.h"
 
 /* The first message libtiff reported for one open file. */
 typedef struct tiff_msg {
@@ -652,3 +653,45 @@ vv_tiff_read(vv_volume **out, const char *path, int channel) {
     free_list(files, n);
     return s;
 }
+
+/* ---- the format record ------------------------------------------------------ */
+
+/* A TIFF file in a folder. */
+static int
+tiff_entry(const char *entry, const char *name, int is_dir, void *ctx) {
+    (void)name;
+    (void)ctx;
+    return !is_dir && vv_format_detect(entry) == VV_FORMAT_TIFF;
+}
+
+/* TIFF and BigTIFF in either byte order; a folder of TIFF pages only at
+ * @p deep 1, so that a folder with a DICOM file in it is DICOM. */
+static int
+tiff_looks_like(const vv_format_probe *p, int deep) {
+    if (p->is_dir)
+        return deep && vv_format_folder_any(p->path, tiff_entry, NULL);
+    const unsigned char *h = p->head;
+    return !deep && p->n >= 4 &&
+           (!memcmp(h, "II*\0", 4) || !memcmp(h, "MM\0*", 4) || !memcmp(h, "II+\0", 4) ||
+            !memcmp(h, "MM\0+", 4));
+}
+
+static vv_status
+tiff_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
+    return vv_tiff_read(out, path, opt->channel);
+}
+
+static const char *const tiff_extensions[] = {"tif", "tiff", NULL};
+static const char *const tiff_aliases[] = {"tif", NULL};
+
+const vv_volume_format vv_volume_format_tiff = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "tiff",
+    .title = "TIFF",
+    .extensions = tiff_extensions,
+    .aliases = tiff_aliases,
+    .doc = "TIFF through libtiff: pages or a folder of pages, BigTIFF, OME-TIFF, ImageJ",
+    .flags = VV_FORMAT_FLAG_THIRD_PARTY | VV_FORMAT_FLAG_FOLDER,
+    .looks_like = tiff_looks_like,
+    .read = tiff_read_record,
+};

@@ -15,6 +15,7 @@
 
 #include "core/internal.h"
 #include "volvis/io.h"
+#include "volvis/sys/format.h"
 
 #define VTK_LINE_MAX 1024
 #define VTK_TOKEN_MAX 256
@@ -179,10 +180,20 @@ vtk_store(void *data, vv_voxel_type t, uint64_t i, const char *tok) {
     return VV_OK;
 }
 
+/* What the header of a STRUCTURED_POINTS file says. */
+typedef struct vtk_header {
+    int binary;
+    int dims[3];
+    double spacing[3], origin[3];
+    uint64_t count; /* voxels */
+    vv_voxel_type type;
+    uint64_t bytes;
+} vtk_header;
+
+/* The first three lines: the version line, the title and ASCII or BINARY. */
 static vv_status
-vtk_read_stream(vv_volume **out, vtk_in *in) {
+vtk_read_preamble(vtk_in *in, vtk_header *h) {
     char line[VTK_LINE_MAX], tok[VTK_TOKEN_MAX];
-    vv_status s;
     if (!vtk_line(in, line, sizeof line))
         return vv_error_set(VV_ERR_FORMAT, "empty file");
     if (strncmp(line, "# vtk DataFile Version", 22) != 0)
@@ -195,20 +206,29 @@ vtk_read_stream(vv_volume **out, vtk_in *in) {
         return vv_error_prefix(VV_ERR_FORMAT, "ASCII/BINARY line");
     if (r == 0)
         return vv_error_set(VV_ERR_FORMAT, "truncated header (no ASCII/BINARY line)");
-    const char *fmt = tok;
-    int binary;
-    if (!strcasecmp(fmt, "BINARY"))
-        binary = 1;
-    else if (!strcasecmp(fmt, "ASCII"))
-        binary = 0;
+    if (!strcasecmp(tok, "BINARY"))
+        h->binary = 1;
+    else if (!strcasecmp(tok, "ASCII"))
+        h->binary = 0;
     else
         return vv_error_set(VV_ERR_FORMAT, "third line is \"%.40s\", expected ASCII or BINARY",
-                            fmt);
+                            tok);
+    return VV_OK;
+}
 
+/* The dataset keywords up to POINT_DATA: DATASET STRUCTURED_POINTS,
+ * DIMENSIONS, SPACING (or ASPECT_RATIO), ORIGIN; checked dimensions. */
+static vv_status
+vtk_read_dataset(vtk_in *in, vtk_header *h) {
+    char tok[VTK_TOKEN_MAX];
+    vv_status s;
     long dims[3] = {0, 0, 0};
     int have_dims = 0, have_dataset = 0;
-    double spacing[3] = {1, 1, 1}, origin[3] = {0, 0, 0};
     long npoints = -1;
+    for (int a = 0; a < 3; a++) {
+        h->spacing[a] = 1;
+        h->origin[a] = 0;
+    }
     for (;;) {
         if ((s = vtk_need(in, tok, sizeof tok, "POINT_DATA")) != VV_OK)
             return s;
@@ -226,15 +246,15 @@ vtk_read_stream(vv_volume **out, vtk_in *in) {
             have_dims = 1;
         } else if (!strcasecmp(tok, "SPACING") || !strcasecmp(tok, "ASPECT_RATIO")) {
             for (int a = 0; a < 3; a++)
-                if ((s = vtk_need_double(in, "SPACING", &spacing[a])) != VV_OK)
+                if ((s = vtk_need_double(in, "SPACING", &h->spacing[a])) != VV_OK)
                     return s;
             for (int a = 0; a < 3; a++)
-                if (!(spacing[a] > 0))
-                    return vv_error_set(VV_ERR_FORMAT, "bad SPACING %g %g %g", spacing[0],
-                                        spacing[1], spacing[2]);
+                if (!(h->spacing[a] > 0))
+                    return vv_error_set(VV_ERR_FORMAT, "bad SPACING %g %g %g", h->spacing[0],
+                                        h->spacing[1], h->spacing[2]);
         } else if (!strcasecmp(tok, "ORIGIN")) {
             for (int a = 0; a < 3; a++)
-                if ((s = vtk_need_double(in, "ORIGIN", &origin[a])) != VV_OK)
+                if ((s = vtk_need_double(in, "ORIGIN", &h->origin[a])) != VV_OK)
                     return s;
         } else if (!strcasecmp(tok, "POINT_DATA")) {
             if ((s = vtk_need_long(in, "POINT_DATA", &npoints)) != VV_OK)
@@ -255,13 +275,21 @@ vtk_read_stream(vv_volume **out, vtk_in *in) {
     if (dims[0] > VV_VOLUME_MAX_DIM || dims[1] > VV_VOLUME_MAX_DIM || dims[2] > VV_VOLUME_MAX_DIM)
         return vv_error_set(VV_ERR_LIMIT, "DIMENSIONS %ld %ld %ld over the limit of %d per axis",
                             dims[0], dims[1], dims[2], VV_VOLUME_MAX_DIM);
-    int idims[3] = {(int)dims[0], (int)dims[1], (int)dims[2]};
-    uint64_t count = (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2];
-    if (npoints < 0 || (uint64_t)npoints != count)
+    for (int a = 0; a < 3; a++)
+        h->dims[a] = (int)dims[a];
+    h->count = (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2];
+    if (npoints < 0 || (uint64_t)npoints != h->count)
         return vv_error_set(VV_ERR_FORMAT, "POINT_DATA %ld does not match DIMENSIONS (%llu)",
-                            npoints, (unsigned long long)count);
+                            npoints, (unsigned long long)h->count);
+    return VV_OK;
+}
 
-    /* SCALARS name type [ncomp] on one line. */
+/* SCALARS name type [ncomp] on one line, then an optional LOOKUP_TABLE
+ * line; the size checked. */
+static vv_status
+vtk_read_scalars(vtk_in *in, vtk_header *h) {
+    char line[VTK_LINE_MAX], tok[VTK_TOKEN_MAX];
+    vv_status s;
     if ((s = vtk_need(in, tok, sizeof tok, "SCALARS")) != VV_OK)
         return s;
     if (strcasecmp(tok, "SCALARS"))
@@ -274,20 +302,17 @@ vtk_read_stream(vv_volume **out, vtk_in *in) {
     int nf = sscanf(line, "%255s %255s %ld %255s", name, tname, &ncomp, extra);
     if (nf < 2)
         return vv_error_set(VV_ERR_FORMAT, "SCALARS: expected a name and a type");
-    vv_voxel_type type = VV_U8;
-    if ((s = vtk_parse_type(tname, &type)) != VV_OK)
+    h->type = VV_U8;
+    if ((s = vtk_parse_type(tname, &h->type)) != VV_OK)
         return s;
     if (nf >= 3 && ncomp != 1)
         return vv_error_set(VV_ERR_UNSUPPORTED, "SCALARS with %ld components (only 1)", ncomp);
-    uint64_t bytes;
-    if ((s = vv_volume_check_size(idims, type, &bytes)) != VV_OK)
+    if ((s = vv_volume_check_size(h->dims, h->type, &h->bytes)) != VV_OK)
         return s;
-
-    /* Optional LOOKUP_TABLE line. */
     off_t mark = ftello(in->fp);
     if (mark < 0)
         return vv_error_set(VV_ERR_IO, "cannot tell the position");
-    r = vtk_token(in, tok, sizeof tok);
+    int r = vtk_token(in, tok, sizeof tok);
     if (r < 0)
         return VV_ERR_FORMAT;
     if (r > 0 && !strcasecmp(tok, "LOOKUP_TABLE")) {
@@ -296,47 +321,63 @@ vtk_read_stream(vv_volume **out, vtk_in *in) {
     } else if (fseeko(in->fp, mark, SEEK_SET) != 0) {
         return vv_error_set(VV_ERR_IO, "cannot seek");
     }
+    return VV_OK;
+}
 
+/* The values, binary (big-endian) or ASCII, into @p v. */
+static vv_status
+vtk_read_values(vtk_in *in, const vtk_header *h, vv_volume *v) {
+    if (h->binary) {
+        if (fread(v->data, 1, (size_t)h->bytes, in->fp) != (size_t)h->bytes)
+            return vv_error_set(VV_ERR_FORMAT, "truncated binary data");
+        size_t vs = vv_voxel_type_size(h->type);
+        if (vs > 1 && vv_host_is_little_endian())
+            vv_byteswap(v->data, h->count, vs);
+        return VV_OK;
+    }
+    char tok[VTK_TOKEN_MAX];
+    for (uint64_t i = 0; i < h->count; i++) {
+        int r = vtk_token(in, tok, sizeof tok);
+        if (r < 0)
+            return vv_error_prefix(VV_ERR_FORMAT, "value %llu", (unsigned long long)i);
+        if (r == 0)
+            return vv_error_set(VV_ERR_FORMAT, "truncated data: %llu of %llu values",
+                                (unsigned long long)i, (unsigned long long)h->count);
+        vv_status s = vtk_store(v->data, h->type, i, tok);
+        if (s != VV_OK)
+            return s;
+    }
+    return VV_OK;
+}
+
+static vv_status
+vtk_read_stream(vv_volume **out, vtk_in *in) {
+    vtk_header h;
+    memset(&h, 0, sizeof h);
+    vv_status s;
+    if ((s = vtk_read_preamble(in, &h)) != VV_OK || (s = vtk_read_dataset(in, &h)) != VV_OK ||
+        (s = vtk_read_scalars(in, &h)) != VV_OK)
+        return s;
     /* Every ASCII value takes at least two characters, every binary value
        its size: check the file can hold the data before allocating it. */
     uint64_t rest = vtk_remaining(in);
-    if (binary ? rest < bytes : rest < 2 * count - 1)
+    if (h.binary ? rest < h.bytes : rest < 2 * h.count - 1)
         return vv_error_set(
             VV_ERR_FORMAT,
             "truncated data: %llu %s values need %s%llu bytes, the file has %llu "
             "left",
-            (unsigned long long)count, vv_voxel_type_name(type), binary ? "" : "at least ",
-            (unsigned long long)(binary ? bytes : 2 * count - 1), (unsigned long long)rest);
+            (unsigned long long)h.count, vv_voxel_type_name(h.type), h.binary ? "" : "at least ",
+            (unsigned long long)(h.binary ? h.bytes : 2 * h.count - 1), (unsigned long long)rest);
     vv_volume *v = NULL;
-    if ((s = vv_volume_new(&v, idims, type)) != VV_OK)
+    if ((s = vv_volume_new(&v, h.dims, h.type)) != VV_OK)
         return s;
-    if (binary) {
-        if (fread(v->data, 1, (size_t)bytes, in->fp) != (size_t)bytes) {
-            vv_volume_free(v);
-            return vv_error_set(VV_ERR_FORMAT, "truncated binary data");
-        }
-        size_t vs = vv_voxel_type_size(type);
-        if (vs > 1 && vv_host_is_little_endian())
-            vv_byteswap(v->data, count, vs);
-    } else {
-        for (uint64_t i = 0; i < count; i++) {
-            r = vtk_token(in, tok, sizeof tok);
-            if (r <= 0) {
-                vv_volume_free(v);
-                if (r < 0)
-                    return vv_error_prefix(VV_ERR_FORMAT, "value %llu", (unsigned long long)i);
-                return vv_error_set(VV_ERR_FORMAT, "truncated data: %llu of %llu values",
-                                    (unsigned long long)i, (unsigned long long)count);
-            }
-            if ((s = vtk_store(v->data, type, i, tok)) != VV_OK) {
-                vv_volume_free(v);
-                return s;
-            }
-        }
+    if ((s = vtk_read_values(in, &h, v)) != VV_OK) {
+        vv_volume_free(v);
+        return s;
     }
     for (int a = 0; a < 3; a++) {
-        v->spacing[a] = spacing[a];
-        v->origin[a] = origin[a];
+        v->spacing[a] = h.spacing[a];
+        v->origin[a] = h.origin[a];
     }
     vv_volume_update_range(v);
     *out = v;
@@ -359,3 +400,33 @@ vv_vtk_read(vv_volume **out, const char *path) {
         return vv_error_prefix(s, "vtk: %s", name);
     return VV_OK;
 }
+
+/* ---- the format record ------------------------------------------------------ */
+
+static int
+vtk_looks_like(const vv_format_probe *p, int deep) {
+    if (deep || p->is_dir)
+        return 0;
+    size_t i = 0;
+    while (i < p->n && isspace(p->head[i]))
+        i++;
+    return p->n - i >= 14 && !memcmp(p->head + i, "# vtk DataFile", 14);
+}
+
+static vv_status
+vtk_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
+    (void)opt;
+    return vv_vtk_read(out, path);
+}
+
+static const char *const vtk_extensions[] = {"vtk", NULL};
+
+const vv_volume_format vv_volume_format_vtk = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "vtk",
+    .title = "VTK legacy",
+    .extensions = vtk_extensions,
+    .doc = "VTK legacy STRUCTURED_POINTS, binary or ASCII: the first SCALARS array",
+    .looks_like = vtk_looks_like,
+    .read = vtk_read_record,
+};

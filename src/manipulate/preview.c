@@ -69,7 +69,10 @@ typedef struct pv_surface {
 
 struct vv_preview {
     vv_renderer *final;
-    vv_renderer *raycast; /* the final renderer itself when that is the ray caster */
+    /* the renderer of the reduced-resolution previews: the first that
+     * declares VV_RENDERER_PREVIEW (the ray caster), the final renderer
+     * itself when it declares it (one gradient cache) */
+    vv_renderer *raycast;
     /* How far the renderers' caches are built for a volume: 1 after its first
      * ray cast (subvolume min/max, tables), 2 after its first shaded one
      * (gradients), 3 after its first full frame (the final renderer's). */
@@ -100,12 +103,19 @@ vv_preview_new(vv_preview **out, const char *final_renderer) {
     vv_preview *p = calloc(1, sizeof *p);
     if (!p)
         return vv_error_set(VV_ERR_NOMEM, "preview: out of memory");
-    vv_status s = vv_renderer_new(&p->final, final_renderer ? final_renderer : "raycast");
-    /* one ray caster for previews and the final frame: one gradient cache */
-    if (s == VV_OK && !strcmp(vv_renderer_name(p->final), "raycast"))
+    vv_status s =
+        vv_renderer_new(&p->final, final_renderer ? final_renderer : vv_renderer_info_at(0)->name);
+    /* one renderer for previews and the final frame: one gradient cache */
+    if (s == VV_OK && (vv_renderer_get_info(p->final)->caps & VV_RENDERER_PREVIEW)) {
         p->raycast = p->final;
-    else if (s == VV_OK)
-        s = vv_renderer_new(&p->raycast, "raycast");
+    } else if (s == VV_OK) {
+        const vv_renderer_info *pv = NULL;
+        for (int i = 0; i < vv_renderer_count() && !pv; i++)
+            if (vv_renderer_info_at(i)->caps & VV_RENDERER_PREVIEW)
+                pv = vv_renderer_info_at(i);
+        s = pv ? vv_renderer_new(&p->raycast, pv->name)
+               : vv_error_set(VV_ERR_UNSUPPORTED, "preview: no renderer draws previews");
+    }
     if (s == VV_OK)
         s = vv_renderer_new(&p->surface, "surface");
     if (s != VV_OK) {
@@ -357,7 +367,14 @@ render_reduced(vv_preview *p, const vv_world *world, const vv_view *view, int st
     v.width = out->width;
     v.height = out->height;
     w->view = v;
-    s = vv_renderer_render(p->raycast, w, &v, opt, out);
+    /* a World the preview renderer draws nothing of (only grids): the
+     * final renderer at the reduced size instead of an error */
+    vv_renderer *r = p->raycast;
+    vv_error_clear();
+    if (vv_renderer_check_world(vv_renderer_get_info(r), w) != VV_OK)
+        r = p->final;
+    vv_error_clear();
+    s = vv_renderer_render(r, w, &v, opt, out);
     vv_world_free(w);
     return s;
 }

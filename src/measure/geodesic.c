@@ -13,7 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "measure_internal.h"
+#include "measure/measure_internal.h"
 
 typedef struct geo_mesh {
     const vv_mesh *m;

@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "core/internal.h"
-#include "measure_internal.h"
+#include "measure/measure_internal.h"
 
 void
 vv_region_init(vv_region *r) {

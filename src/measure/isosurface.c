@@ -24,8 +24,8 @@
 #include <string.h>
 
 #include "core/internal.h"
-#include "measure_internal.h"
-#include "surface/surface_internal.h"
+#include "measure/measure_internal.h"
+#include "volvis/surface.h"
 
 void
 vv_isosurface_measure_options_init(vv_isosurface_measure_options *o) {
@@ -343,11 +343,11 @@ typedef struct face_ctx {
 } face_ctx;
 
 static void
-face_polygon(void *vctx, int n, const double (*pts)[3]) {
+face_polygon(void *vctx, int n, const double *pts) {
     face_ctx *f = vctx;
     double w[CLIP_MAX_POINTS][3];
     for (int i = 0; i < n; i++) {
-        const double *x = pts[f->reverse ? n - 1 - i : i];
+        const double *x = pts + 3 * (f->reverse ? n - 1 - i : i);
         vv_vec3 y = vv_mat4_mul_point(f->M, vv_vec3_make(x[0], x[1], x[2]));
         w[i][0] = y.x;
         w[i][1] = y.y;

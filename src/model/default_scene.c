@@ -229,10 +229,10 @@ default_ranges(const vv_volume *v, double *lo, double *hi, double *plo, double *
 }
 
 void
-vv_model_default_tf(const vv_volume *v, vv_render_mode mode, vv_tf *tf, double *iso_lo) {
+vv_tf_default(vv_tf *tf, const vv_volume *v, vv_render_mode mode, double *iso_lo) {
     double lo, hi, plo, phi;
     default_ranges(v, &lo, &hi, &plo, &phi);
-    double unit = vv_model_min_spacing(v);
+    double unit = vv_tf_default_unit_distance(v);
     if (is_projection_mode(mode))
         grey_tf(tf, plo, phi, unit);
     else
@@ -307,9 +307,9 @@ vv_world_new_for_volume(vv_world **out, vv_volume *volume, const vv_default_scen
     }
     o->mode = opt->mode;
     double iso_lo;
-    vv_model_default_tf(volume, opt->mode, &o->tf, &iso_lo);
+    vv_tf_default(&o->tf, volume, opt->mode, &iso_lo);
     if (opt->has_tf_range) {
-        double unit = vv_model_min_spacing(volume);
+        double unit = vv_tf_default_unit_distance(volume);
         if (is_projection_mode(opt->mode))
             grey_tf(&o->tf, opt->tf_lo, opt->tf_hi, unit);
         else

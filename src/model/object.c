@@ -10,9 +10,10 @@
 #include "core/internal.h"
 #include "model/model_internal.h"
 #include "volvis/model.h"
+#include "volvis/sys/geometry.h"
 
 double
-vv_model_min_spacing(const vv_volume *v) {
+vv_tf_default_unit_distance(const vv_volume *v) {
     double s = v->spacing[0];
     if (v->spacing[1] < s)
         s = v->spacing[1];
@@ -66,25 +67,12 @@ object_defaults(vv_object *o) {
 
 const char *
 vv_object_type_name(vv_object_type t) {
-    switch (t) {
-    case VV_OBJECT_VOLUME:
+    if (t == VV_OBJECT_VOLUME)
         return "volume";
-    case VV_OBJECT_PLANE:
-        return "plane";
-    case VV_OBJECT_POLYGON:
-        return "polygon";
-    case VV_OBJECT_SPHERE:
-        return "sphere";
-    case VV_OBJECT_BOX:
-        return "box";
-    case VV_OBJECT_CYLINDER:
-        return "cylinder";
-    case VV_OBJECT_MESH:
-        return "mesh";
-    case VV_OBJECT_GRID:
+    if (t == VV_OBJECT_GRID)
         return "grid";
-    }
-    return "unknown";
+    const vv_geom_type *gt = vv_geom_type_get(t);
+    return gt ? gt->name : "unknown";
 }
 
 vv_status
@@ -112,8 +100,8 @@ vv_object_new_volume(vv_object **out, vv_volume *volume, const char *name) {
     if (!(hi > lo))
         hi = lo + 1.0;
     o->threshold = 0.5 * (lo + hi);
-    vv_tf_set_ramp(&o->tf, lo, hi, 1.0, vv_vec3_make(1, 1, 1), vv_model_min_spacing(volume));
-    o->tf2d.opacity_unit_distance = vv_model_min_spacing(volume);
+    vv_tf_set_ramp(&o->tf, lo, hi, 1.0, vv_vec3_make(1, 1, 1), vv_tf_default_unit_distance(volume));
+    o->tf2d.opacity_unit_distance = vv_tf_default_unit_distance(volume);
     o->isovalue = 0.5 * (lo + hi);
     *out = o;
     return VV_OK;
@@ -361,63 +349,18 @@ vv_object_index_to_world(const vv_object *obj) {
     return vv_mat4_mul(vv_object_matrix(obj), vv_volume_index_to_world(obj->volume));
 }
 
-/* Object-space bounds of a shape; 0 for an unbounded or empty one. */
+/* Object-space bounds of a shape (its geometry-type record's, or the
+ * grid's); 0 for an unbounded or empty one. */
 static int
 geometry_bounds(const vv_object *obj, vv_box *b) {
-    const vv_geometry *g = &obj->geometry;
-    switch (obj->type) {
-    case VV_OBJECT_SPHERE: {
-        vv_vec3 r = {g->radius, g->radius, g->radius};
-        b->min = vv_vec3_sub(g->center, r);
-        b->max = vv_vec3_add(g->center, r);
-        return 1;
-    }
-    case VV_OBJECT_BOX:
-        *b = g->box;
-        return 1;
-    case VV_OBJECT_CYLINDER: {
-        /* exact bounds of the two cap discs */
-        vv_vec3 a = vv_vec3_sub(g->top, g->base);
-        double l2 = vv_vec3_dot(a, a);
-        if (!(l2 > 0))
-            return 0;
-        double e[3] = {g->radius * sqrt(fmax(0.0, 1.0 - a.x * a.x / l2)),
-                       g->radius * sqrt(fmax(0.0, 1.0 - a.y * a.y / l2)),
-                       g->radius * sqrt(fmax(0.0, 1.0 - a.z * a.z / l2))};
-        vv_vec3 ev = {e[0], e[1], e[2]};
-        vv_vec3 lo = {fmin(g->base.x, g->top.x), fmin(g->base.y, g->top.y),
-                      fmin(g->base.z, g->top.z)};
-        vv_vec3 hi = {fmax(g->base.x, g->top.x), fmax(g->base.y, g->top.y),
-                      fmax(g->base.z, g->top.z)};
-        b->min = vv_vec3_sub(lo, ev);
-        b->max = vv_vec3_add(hi, ev);
-        return 1;
-    }
-    case VV_OBJECT_POLYGON:
-        if (g->n_vertices < 1 || !g->vertices)
-            return 0;
-        b->min = b->max = g->vertices[0];
-        for (int i = 1; i < g->n_vertices; i++) {
-            vv_vec3 p = g->vertices[i];
-            b->min = vv_vec3_make(fmin(b->min.x, p.x), fmin(b->min.y, p.y), fmin(b->min.z, p.z));
-            b->max = vv_vec3_make(fmax(b->max.x, p.x), fmax(b->max.y, p.y), fmax(b->max.z, p.z));
-        }
-        return 1;
-    case VV_OBJECT_MESH:
-        if (!g->mesh || g->mesh->n_vertices == 0)
-            return 0;
-        *b = vv_mesh_bounds(g->mesh);
-        return 1;
-    case VV_OBJECT_GRID:
+    if (obj->type == VV_OBJECT_GRID) {
         if (!obj->grid || obj->grid->n_points == 0)
             return 0;
         *b = vv_grid_bounds(obj->grid);
         return 1;
-    case VV_OBJECT_PLANE:
-    case VV_OBJECT_VOLUME:
-        break;
     }
-    return 0;
+    const vv_geom_type *gt = vv_geom_type_get(obj->type);
+    return gt ? gt->bounds(&obj->geometry, b) : 0;
 }
 
 vv_box

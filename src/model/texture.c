@@ -39,18 +39,6 @@ vv_texture_image_new(vv_texture_image **out, vv_image *image, const char *source
     return VV_OK;
 }
 
-vv_status
-vv_texture_image_load(vv_texture_image **out, const char *path, const char *source) {
-    if (!out || !path)
-        return vv_error_set(VV_ERR_INVALID, "texture: NULL %s", out ? "path" : "output");
-    *out = NULL;
-    vv_image *img = NULL;
-    vv_status st = vv_image_read_png(&img, path);
-    if (st != VV_OK)
-        return vv_error_prefix(st, "texture");
-    return vv_texture_image_new(out, img, source ? source : path);
-}
-
 vv_texture_image *
 vv_texture_image_ref(vv_texture_image *t) {
     if (t)

@@ -1,13 +1,12 @@
 /*
  * Internals of the Modeling component shared by its files (not installed):
  * the shape node, the per-primitive distance functions, mesh scan
- * conversion, and the JSON reader of models used by scene files.
+ * conversion.
  */
 #ifndef VV_MODELING_INTERNAL_H
 #define VV_MODELING_INTERNAL_H
 
-#include <jansson.h>
-
+#include "volvis/model.h"
 #include "volvis/modeling.h"
 
 typedef enum shape_kind {
@@ -19,6 +18,7 @@ typedef enum shape_kind {
     SHAPE_EXTRUSION,  /* also the thick planar polygon (with a frame) */
     SHAPE_HELIX,
     SHAPE_MESH,
+    SHAPE_OBJECT, /* a World object's geometry, through its geometry-type record */
     SHAPE_CSG
 } shape_kind;
 
@@ -37,6 +37,9 @@ struct vv_shape {
     vv_csg_op op;
     int n_children;
     vv_shape **children;
+    vv_object *obj;                  /* SHAPE_OBJECT: a copy of the object (owned) */
+    const struct vv_geom_type *geom; /* its record (include/volvis/sys/geometry.h) */
+    void *prep;                      /* what geom->prepare built, or NULL */
 };
 
 /**
@@ -103,25 +106,5 @@ void vv_mesh_loop_centroid(const vv_mesh *m, const vv_mesh_holes *h, size_t l, d
  * origin's side opposite its normal (Van Oosterom and Strackee 1983).
  */
 double vv_solid_angle(const double a[3], const double b[3], const double c[3]);
-
-/**
- * Reads a model node of a scene file: a primitive ({"type": "sphere", ...})
- * or an operation ({"op": "union", "children": [...]}), with an optional
- * transform. Mesh files are resolved relative to @p scene_path. On a JSON
- * error, the message is the problem without position and @p err_path (cap
- * bytes) receives the key path of the offending value, starting from
- * @p path, so the caller can add the line and column; on other errors
- * (a mesh file) err_path names the key too.
- */
-vv_status vv_shape_from_json(vv_shape **out, json_t *node, const char *path, const char *scene_path,
-                             char *err_path, size_t cap);
-
-/**
- * Reads the voxelization keys of a geometry object ("resolution",
- * "voxel_spacing", "filter", "filter_radius", "margin", "voxel_type") into
- * @p opt. Errors as vv_shape_from_json.
- */
-vv_status vv_voxelize_options_from_json(vv_voxelize_options *opt, json_t *obj, const char *path,
-                                        char *err_path, size_t cap);
 
 #endif

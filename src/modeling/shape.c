@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "modeling_internal.h"
+#include "volvis/sys/geometry.h"
 
 const char *
 vv_csg_op_name(vv_csg_op op) {
@@ -396,6 +397,47 @@ vv_shape_mesh_load(vv_shape **out, const char *path, vv_mesh_mode mode, double t
 }
 
 vv_status
+vv_shape_object(vv_shape **out, const vv_object *obj) {
+    if (!out || !obj)
+        return vv_error_set(VV_ERR_INVALID, "object shape: NULL argument");
+    *out = NULL;
+    const vv_geom_type *gt = vv_geom_type_get(obj->type);
+    if (!gt)
+        return vv_error_set(VV_ERR_INVALID, "object '%s': a %s is not a geometric shape", obj->name,
+                            vv_object_type_name(obj->type));
+    vv_status st = gt->check(&obj->geometry);
+    if (st != VV_OK)
+        return vv_error_prefix(st, "object '%s'", obj->name);
+    vv_box b;
+    if (!gt->bounds(&obj->geometry, &b))
+        return vv_error_set(VV_ERR_INVALID, "object '%s': a %s has no bounds to voxelize",
+                            obj->name, gt->name);
+    if (!gt->solid(&obj->geometry))
+        return vv_error_set(VV_ERR_INVALID,
+                            "object '%s': a %s encloses no volume (a model's polygon has a "
+                            "thickness; a capped cylinder is a solid)",
+                            obj->name, gt->name);
+    if (obj->type == VV_OBJECT_MESH) {
+        /* Modeling's own scan conversion (generalized winding numbers) */
+        st = vv_shape_mesh(out, obj->geometry.mesh, VV_MESH_AUTO, 0);
+    } else {
+        vv_shape *s = NULL;
+        st = shape_alloc(&s, SHAPE_OBJECT, gt->name);
+        if (st == VV_OK) {
+            s->geom = gt;
+            st = vv_object_clone(&s->obj, obj);
+            if (st == VV_OK && gt->prepare)
+                st = gt->prepare(&s->obj->geometry, &s->prep);
+            st = finish(out, s, st);
+        }
+    }
+    if (st != VV_OK)
+        return vv_error_prefix(st, "object '%s'", obj->name);
+    (*out)->M = vv_object_matrix(obj);
+    return VV_OK;
+}
+
+vv_status
 vv_shape_csg(vv_shape **out, vv_csg_op op, int n, vv_shape **children) {
     vv_status st = VV_OK;
     const char *opn = vv_csg_op_name(op);
@@ -433,6 +475,9 @@ vv_shape_csg(vv_shape **out, vv_csg_op op, int n, vv_shape **children) {
 
 static void
 shape_free_one(vv_shape *s) {
+    if (s->prep)
+        s->geom->release(s->prep);
+    vv_object_free(s->obj);
     free(s->children);
     free(s->pts);
     vv_mesh_free(s->mesh);
@@ -511,15 +556,6 @@ poly_sdf(const double *p, int n, double x, double y, int skip_axis) {
     return inside ? -d : d;
 }
 
-/* Exact distance combining a 2-D distance a with a slab distance b (both
- * signed): the capped-cylinder / extrusion formula. */
-static double
-combine2(double a, double b) {
-    double oa = a > 0 ? a : 0, ob = b > 0 ? b : 0;
-    double in = a > b ? a : b;
-    return (in < 0 ? in : 0) + sqrt(oa * oa + ob * ob);
-}
-
 static double
 helix_sdf(const vv_shape *s, vv_vec3 q) {
     double pitch = s->p[0], ap = fabs(pitch);
@@ -542,7 +578,7 @@ double
 vv_shape_sdf(const vv_shape *s, vv_vec3 q) {
     switch (s->kind) {
     case SHAPE_SPHERE:
-        return sqrt(q.x * q.x + q.y * q.y + q.z * q.z) - s->p[0];
+        return vv_geom_sphere_distance(q, s->p[0]);
     case SHAPE_ELLIPSOID: {
         /* first-order distance k0 (k0 - 1) / k1: exact zero set, accurate near it */
         double ax = q.x / s->p[0], ay = q.y / s->p[1], az = q.z / s->p[2];
@@ -553,14 +589,10 @@ vv_shape_sdf(const vv_shape *s, vv_vec3 q) {
             return -fmin(s->p[0], fmin(s->p[1], s->p[2]));
         return k0 * (k0 - 1.0) / k1;
     }
-    case SHAPE_BOX: {
-        double r = s->p[3];
-        double qx = fabs(q.x) - s->p[0] + r, qy = fabs(q.y) - s->p[1] + r,
-               qz = fabs(q.z) - s->p[2] + r;
-        double ox = qx > 0 ? qx : 0, oy = qy > 0 ? qy : 0, oz = qz > 0 ? qz : 0;
-        double in = fmax(qx, fmax(qy, qz));
-        return sqrt(ox * ox + oy * oy + oz * oz) + (in < 0 ? in : 0) - r;
-    }
+    case SHAPE_BOX:
+        return vv_geom_box_distance(q, vv_vec3_make(s->p[0], s->p[1], s->p[2]), s->p[3]);
+    case SHAPE_OBJECT:
+        return s->geom->distance(&s->obj->geometry, s->prep, q);
     case SHAPE_TORUS: {
         double a = sqrt(q.x * q.x + q.y * q.y) - s->p[0];
         return sqrt(a * a + q.z * q.z) - s->p[1];
@@ -568,7 +600,7 @@ vv_shape_sdf(const vv_shape *s, vv_vec3 q) {
     case SHAPE_REVOLUTION:
         return poly_sdf(s->pts, s->n, sqrt(q.x * q.x + q.y * q.y), q.z, 1);
     case SHAPE_EXTRUSION:
-        return combine2(poly_sdf(s->pts, s->n, q.x, q.y, 0), fabs(q.z) - s->p[0]);
+        return vv_geom_prism_distance(poly_sdf(s->pts, s->n, q.x, q.y, 0), fabs(q.z) - s->p[0]);
     case SHAPE_HELIX:
         return helix_sdf(s, q);
     case SHAPE_MESH:
@@ -595,7 +627,7 @@ vv_shape_sdf_bound(const vv_shape *s, vv_vec3 q) {
         zlo = fmax(zlo, s->p[1]);
         zhi = fmin(zhi + fabs(s->p[0]), s->p[2]);
         double b = fabs(q.z - 0.5 * (zlo + zhi)) - 0.5 * (zhi - zlo);
-        double d = combine2(a, b);
+        double d = vv_geom_prism_distance(a, b);
         return d > 0 ? d : 0.0;
     }
     default:
@@ -636,6 +668,8 @@ vv_shape_local_box(const vv_shape *s) {
         return (vv_box){{-s->pbox[2], -s->pbox[2], s->p[1]}, {s->pbox[2], s->pbox[2], s->p[2]}};
     case SHAPE_MESH:
         return vv_mesh_bounds(s->mesh);
+    case SHAPE_OBJECT:
+        return s->geom->bounds(&s->obj->geometry, &b) ? b : empty_box();
     case SHAPE_CSG:
     default:
         return empty_box();

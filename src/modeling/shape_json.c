@@ -11,9 +11,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "../core/internal.h"
+#include "core/internal.h"
 #include "core/json_internal.h"
-#include "modeling_internal.h"
+#include "modeling/modeling_internal.h"
 
 #define JPATH 256
 
@@ -460,18 +460,18 @@ node(const jctx *c, json_t *o, const char *path, vv_shape **out, int depth) {
     return VV_OK;
 }
 
-vv_status
-vv_shape_from_json(vv_shape **out, json_t *n, const char *path, const char *scene_path,
-                   char *err_path, size_t cap) {
+static vv_status
+shape_from_json(vv_shape **out, json_t *n, const char *path, const char *scene_path, char *err_path,
+                size_t cap) {
     jctx c = {scene_path, err_path, cap};
     if (err_path && cap)
         err_path[0] = '\0';
     return node(&c, n, path, out, 0);
 }
 
-vv_status
-vv_voxelize_options_from_json(vv_voxelize_options *opt, json_t *o, const char *path, char *err_path,
-                              size_t cap) {
+static vv_status
+voxelize_options_from_json(vv_voxelize_options *opt, json_t *o, const char *path, char *err_path,
+                           size_t cap) {
     jctx c = {NULL, err_path, cap};
     vv_status st;
     double v;
@@ -628,7 +628,7 @@ model_from_scene(vv_shape **out, const char *path, vv_voxelize_options *opt) {
             break;
         vv_shape_transform(parts[np++], M);
         if (np == 1 && opt)
-            st = vv_voxelize_options_from_json(opt, o, op, ep, sizeof ep);
+            st = voxelize_options_from_json(opt, o, op, ep, sizeof ep);
     }
     json_decref(root);
     if (st == VV_OK && np == 0)
@@ -661,4 +661,60 @@ vv_model_load(vv_shape **out, const char *path, vv_voxelize_options *opt) {
     if (is_json(path))
         return model_from_scene(out, path, opt);
     return vv_shape_mesh_load(out, path, VV_MESH_AUTO, 0.0);
+}
+
+/* Parses @p len bytes of JSON text as the scene reader does (duplicate keys
+ * refused, integers as reals); on failure the error names the position in
+ * that text and err_path gets @p key_path. */
+static vv_status
+parse_text(json_t **out, const char *json, size_t len, const char *key_path, char *err_path,
+           size_t cap) {
+    if (err_path && cap)
+        snprintf(err_path, cap, "%s", key_path ? key_path : "");
+    if (!json)
+        return vv_error_set(VV_ERR_INVALID, "model: NULL JSON text");
+    json_error_t jerr;
+    *out = json_loadb(json, len, JSON_REJECT_DUPLICATES | JSON_DECODE_INT_AS_REAL | JSON_DECODE_ANY,
+                      &jerr);
+    if (!*out)
+        return vv_error_set(VV_ERR_FORMAT, "%d:%d: %s", jerr.line, jerr.column, jerr.text);
+    if (err_path && cap)
+        err_path[0] = '\0';
+    return VV_OK;
+}
+
+vv_status
+vv_shape_parse_json(vv_shape **out, const char *json, size_t len, const char *key_path,
+                    const char *base_path, char *err_path, size_t cap) {
+    if (!out)
+        return vv_error_set(VV_ERR_INVALID, "model: NULL output");
+    *out = NULL;
+    json_t *root = NULL;
+    vv_status st = parse_text(&root, json, len, key_path, err_path, cap);
+    if (st != VV_OK)
+        return st;
+    st = shape_from_json(out, root, key_path ? key_path : "", base_path, err_path, cap);
+    json_decref(root);
+    return st;
+}
+
+vv_status
+vv_voxelize_options_parse_json(vv_voxelize_options *opt, const char *json, size_t len,
+                               const char *key_path, char *err_path, size_t cap) {
+    if (!opt)
+        return vv_error_set(VV_ERR_INVALID, "model: NULL options");
+    json_t *root = NULL;
+    vv_status st = parse_text(&root, json, len, key_path, err_path, cap);
+    if (st != VV_OK)
+        return st;
+    if (!json_is_object(root)) {
+        if (err_path && cap)
+            snprintf(err_path, cap, "%s", key_path ? key_path : "");
+        st = vv_error_set(VV_ERR_FORMAT, "expected an object, got %s", vv_json_kind(root));
+        json_decref(root);
+        return st;
+    }
+    st = voxelize_options_from_json(opt, root, key_path ? key_path : "", err_path, cap);
+    json_decref(root);
+    return st;
 }

@@ -27,7 +27,7 @@
  * face (gradients by central differences and trilinear samples at the box
  * faces then read the same voxels as in the whole volume), as a volume with
  * the whole volume's geometry and value range
- * (src/render/raycast/raycast_brick.h), cut from the World's volume or read
+ * (a region's voxels, include/volvis/sys/renderer.h), cut from the World's volume or read
  * from a bricked source (vv_parallel_set_source: only the box is read).
  */
 #include <math.h>
@@ -39,14 +39,14 @@
 #include <time.h>
 
 #include "core/internal.h"
-#include "render/raycast/raycast_brick.h"
 #include "volvis/bricks.h"
 #include "volvis/parallel.h"
+#include "volvis/sys/renderer.h"
 
 #define PAR_ALIGN 16 /* brick faces: multiples of this many voxels */
 #define PAR_MAX_LEVELS 40
 #define PAR_MAX_K 4096 /* largest group of one round (a prime rank count) */
-#define PAR_REC 5      /* floats per pixel in messages: r, g, b, a, depth */
+#define PAR_REC 6      /* floats per pixel in messages: r, g, b, a, depth, key */
 
 struct vv_parallel {
     vv_parallel_options opt;
@@ -59,7 +59,7 @@ struct vv_parallel {
     const void *src;
     uint64_t src_modified;
     vv_volume *brick;
-    vv_raycast_brick rb;
+    vv_render_region rg; /* the region the brick is (voxels, rectangle: set per frame) */
     int box_lo[3], box_hi[3];
 };
 
@@ -190,9 +190,10 @@ vv_parallel_options_init(vv_parallel_options *o) {
 vv_status
 vv_parallel_new(vv_parallel **out, vv_renderer *ren, const vv_parallel_options *opt) {
     *out = NULL;
-    if (ren && strcmp(vv_renderer_name(ren), "raycast") != 0)
+    if (ren && !(vv_renderer_get_info(ren)->caps & VV_RENDERER_REGION))
         return vv_error_set(VV_ERR_INVALID,
-                            "parallel: distributed rendering uses the raycast renderer, not %s",
+                            "parallel: %s renders no regions; distributed rendering needs a "
+                            "renderer with the region contract (`volvis renderers`)",
                             vv_renderer_name(ren));
     int inited = 0;
     MPI_Initialized(&inited);
@@ -232,7 +233,6 @@ void
 vv_parallel_free(vv_parallel *p) {
     if (!p)
         return;
-    vv_raycast_set_brick(p->ren, NULL);
     if (p->owns_ren)
         vv_renderer_free(p->ren);
     vv_volume_free(p->brick);
@@ -454,27 +454,11 @@ visibility_order(const par_level *lev, int ortho, const double E[3], const doubl
 
 /* dst = dst (front) combined with src (behind), npix records. */
 static void
-combine(float *dst, const float *src, size_t npix, int mode) {
+combine(float *dst, const float *src, size_t npix, vv_region_op op) {
     for (size_t i = 0; i < npix; i++) {
         float *f = dst + PAR_REC * i;
         const float *b = src + PAR_REC * i;
-        if (mode == VV_MODE_COMPOSITE) {
-            const float w = 1 - f[3];
-            f[0] += w * b[0];
-            f[1] += w * b[1];
-            f[2] += w * b[2];
-            f[3] += w * b[3];
-            if (f[4] == INFINITY)
-                f[4] = b[4];
-        } else if (b[1] > 0) {
-            /* projections: {value, hit}; the first of equal extremes stays */
-            const int better = !(f[1] > 0) || (mode == VV_MODE_MIP ? b[0] > f[0] : b[0] < f[0]);
-            if (better) {
-                f[0] = b[0];
-                f[1] = 1;
-                f[4] = b[4];
-            }
-        }
+        vv_region_pixel_combine(op, f, &f[4], &f[5], b, b[4], b[5]);
     }
 }
 
@@ -505,7 +489,7 @@ mpi_fail(int rc, const char *what) {
 /* The compositing rounds on buffer img (P records; on return this rank's
  * final range holds the whole composite). */
 static vv_status
-composite(const par_plan *pl, float *img, size_t P, int mode, int ortho, const double E[3],
+composite(const par_plan *pl, float *img, size_t P, vv_region_op mode, int ortho, const double E[3],
           const double D[3]) {
     const int tag = 4242;
     if (pl->has_fold) {
@@ -647,7 +631,7 @@ make_brick(vv_parallel *p, const vv_volume *v, const par_plan *pl) {
                 memcpy((char *)b->data + dst, (const char *)v->data + src, row);
             }
         /* the whole volume's frame and range: the brick's voxel (0, 0, 0) is
-         * the whole volume's voxel off (raycast_brick.h) */
+         * the whole volume's voxel off (a region's voxels, sys/renderer.h) */
         memcpy(b->spacing, v->spacing, sizeof b->spacing);
         memcpy(b->origin, v->origin, sizeof b->origin);
         memcpy(b->direction, v->direction, sizeof b->direction);
@@ -661,12 +645,14 @@ make_brick(vv_parallel *p, const vv_volume *v, const par_plan *pl) {
     p->src_modified = mod;
     memcpy(p->box_lo, pl->lo, sizeof p->box_lo);
     memcpy(p->box_hi, pl->hi, sizeof p->box_hi);
+    memset(&p->rg, 0, sizeof p->rg);
     for (int a = 0; a < 3; a++) {
-        p->rb.gdims[a] = g->dims[a];
-        p->rb.off[a] = off[a];
-        p->rb.lo[a] = pl->lo[a] > 0 ? pl->lo[a] : -INFINITY;
-        p->rb.hi[a] = pl->hi[a] < g->dims[a] - 1 ? pl->hi[a] : INFINITY;
+        p->rg.dims[a] = g->dims[a];
+        p->rg.offset[a] = off[a];
+        p->rg.lo[a] = pl->lo[a] > 0 ? pl->lo[a] : -INFINITY;
+        p->rg.hi[a] = pl->hi[a] < g->dims[a] - 1 ? pl->hi[a] : INFINITY;
     }
+    p->rg.voxels = b;
     return VV_OK;
 }
 
@@ -717,7 +703,7 @@ find_object(const vv_world *w) {
 static vv_status
 render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *view,
             const vv_render_options *opt, par_plan *pl, int *obj_index, float **img_out,
-            vv_parallel_stats *st, int *agreed) {
+            vv_region_op *op, vv_parallel_stats *st, int *agreed) {
     /* collective: every rank calls this once a frame, whatever failed */
     vv_status s = pre;
     const int oi = s == VV_OK ? find_object(w) : -1;
@@ -749,37 +735,55 @@ render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *vie
         p->brick->range[0] = vv_bricked_header(p->source)->range[0];
         p->brick->range[1] = vv_bricked_header(p->source)->range[1];
     }
-    vv_world *bw = NULL;
-    s = vv_world_clone(&bw, w);
-    if (s != VV_OK)
-        return s;
-    vv_object *bo = bw->objects[oi];
-    vv_volume_free(bo->volume);
-    bo->volume = vv_volume_ref(p->brick);
+    /* the region: this rank's brick, seen where its box projects; the
+     * World keeps the object's own volume (the whole one, or rank 0's
+     * proxy when the ranks read by bricks) for effects that cross bricks */
+    vv_render_region rg = p->rg;
+    rg.object = oi;
+    {
+        const vv_volume *g = p->source ? vv_bricked_header(p->source) : obj->volume;
+        vv_object geo = *obj; /* shallow: nothing in it is released */
+        geo.volume = (vv_volume *)g;
+        int rlo[3], rhi[3];
+        for (int a = 0; a < 3; a++) {
+            rlo[a] = rg.offset[a];
+            rhi[a] = rg.offset[a] + p->brick->dims[a] - 1;
+        }
+        vv_region_rect(&rg, vv_object_index_to_world(&geo), view, rlo, rhi);
+    }
+    const size_t P = (size_t)view->width * (size_t)view->height;
     vv_image *img = NULL;
-    s = vv_image_new(&img, view->width, view->height);
-    if (s == VV_OK)
-        s = vv_raycast_set_brick(p->ren, &p->rb);
+    float *key = malloc(sizeof(float) * (P ? P : 1));
+    s = key ? vv_image_new(&img, view->width, view->height)
+            : vv_error_set(VV_ERR_NOMEM, "out of memory");
+    vv_region_image ri = {img, key, VV_REGION_OVER};
     double t0 = MPI_Wtime();
     struct timespec c0, c1;
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
-    if (s == VV_OK)
-        s = vv_renderer_render(p->ren, bw, view, opt, img);
+    if (s == VV_OK && rg.x1 > rg.x0 && rg.y1 <= rg.y0) {
+        vv_region_image_clear(&ri); /* off screen */
+        ri.op = obj->mode == VV_MODE_MIP     ? VV_REGION_MAX
+                : obj->mode == VV_MODE_MINIP ? VV_REGION_MIN
+                                             : VV_REGION_OVER;
+    } else if (s == VV_OK) {
+        s = vv_renderer_render_region(p->ren, w, view, &rg, opt, &ri);
+    }
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c1);
     st->render = MPI_Wtime() - t0;
     st->render_cpu = (double)(c1.tv_sec - c0.tv_sec) + 1e-9 * (double)(c1.tv_nsec - c0.tv_nsec);
-    vv_world_free(bw);
+    *op = ri.op;
     float *buf = NULL;
     if (s == VV_OK) {
-        const size_t P = (size_t)view->width * (size_t)view->height;
         buf = malloc(sizeof(float) * PAR_REC * (P ? P : 1));
         if (!buf)
             s = vv_error_set(VV_ERR_NOMEM, "out of memory");
         for (size_t i = 0; buf && i < P; i++) {
             memcpy(buf + PAR_REC * i, img->rgba + 4 * i, 4 * sizeof(float));
             buf[PAR_REC * i + 4] = img->depth[i];
+            buf[PAR_REC * i + 5] = key[i];
         }
     }
+    free(key);
     vv_image_free(img);
     *img_out = buf;
     st->brick_voxels =
@@ -809,7 +813,8 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
         s = vv_error_set(VV_ERR_INVALID, "parallel: the output image is not %dx%d", view->width,
                          view->height);
     int agreed = 0;
-    s = render_part(p, s, w, view, opt, &pl, &oi, &img, &st, &agreed);
+    vv_region_op op = VV_REGION_OVER;
+    s = render_part(p, s, w, view, opt, &pl, &oi, &img, &op, &st, &agreed);
     /* every rank learns of any failure here, before the exchanges */
     if (!agreed)
         s = vv_parallel_agree(s);
@@ -820,7 +825,6 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
     }
     const size_t P = (size_t)view->width * (size_t)view->height;
     const vv_object *obj = w->objects[oi];
-    const int mode = obj->mode;
     /* the eye (or view direction) in the whole volume's index space */
     const int ortho = view->projection == VV_PROJECTION_ORTHOGRAPHIC;
     int ok = 0;
@@ -834,7 +838,7 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
     if (p->opt.barrier)
         MPI_Barrier(MPI_COMM_WORLD);
     double t1 = MPI_Wtime();
-    s = composite(&pl, img, P, mode, ortho, E, D);
+    s = composite(&pl, img, P, op, ortho, E, D);
     double t2 = MPI_Wtime();
     st.wait = t1 - t0;
     st.composite = t2 - t1;
@@ -872,24 +876,14 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
     st.max_composite = gmx[1];
     st.max_render_cpu = gmx[2];
     if (s == VV_OK && p->rank == 0) {
-        const float bg[3] = {(float)w->background.x, (float)w->background.y,
-                             (float)w->background.z};
         for (size_t i = 0; i < P; i++) {
             const float *r = whole + PAR_REC * i;
-            float *pix = out->rgba + 4 * i;
-            if (mode == VV_MODE_COMPOSITE) {
-                /* as the raycaster's render_pixel: C + (1 - A) background */
-                const float A = r[3] > 1 ? 1 : r[3];
-                for (int ch = 0; ch < 3; ch++)
-                    pix[ch] = r[ch] + (1 - A) * bg[ch];
-                pix[3] = A;
-            } else {
-                memcpy(pix, r, 4 * sizeof(float));
-            }
+            memcpy(out->rgba + 4 * i, r, 4 * sizeof(float));
             out->depth[i] = r[4];
         }
-        if (mode != VV_MODE_COMPOSITE)
-            s = vv_raycast_finish_projection(p->ren, out);
+        /* the background once, as the whole render adds it */
+        vv_region_image fin = {out, NULL, op};
+        vv_region_image_finish(&fin, w->background);
     }
     free(counts);
     free(displs);

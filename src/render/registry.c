@@ -1,23 +1,52 @@
-/* The renderer registry and the generic renderer object (see volvis/render.h). */
+/*
+ * The renderer registry, the generic renderer object, option validation
+ * from the renderers' typed tables, the World checks and the default
+ * renderer of a World (include/volvis/render.h, include/volvis/sys/renderer.h).
+ */
+#include <errno.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "render/registry.h"
 #include "volvis/render.h"
+#include "volvis/sys/renderer.h"
 
 struct vv_renderer {
     const vv_renderer_ops *ops;
     void *state;
 };
 
-/* Every rendering method built in, in the order --help lists them. */
+/* Every rendering method built in, in registry order: --help lists them so,
+ * and the default renderer of a World is the first that draws all of it
+ * (vv_world_renderer), hence the volume and grid ray casters first. */
 static const vv_renderer_ops *const registry[] = {
-    &vv_raycast_ops, &vv_raytrace_ops, &vv_radiosity_ops, &vv_splat_ops,
-    &vv_surface_ops, &vv_fourier_ops,  &vv_irregular_ops, NULL};
+    &vv_raycast_ops, &vv_raytrace_ops,  &vv_irregular_ops, &vv_splat_ops,
+    &vv_surface_ops, &vv_radiosity_ops, &vv_fourier_ops,   NULL};
+
+#define N_REGISTRY ((int)(sizeof registry / sizeof registry[0]) - 1)
 
 const vv_renderer_ops *const *
 vv_renderer_registry(void) {
     return registry;
+}
+
+int
+vv_renderer_count(void) {
+    return N_REGISTRY;
+}
+
+const vv_renderer_info *
+vv_renderer_info_at(int i) {
+    return i >= 0 && i < N_REGISTRY ? &registry[i]->info : NULL;
+}
+
+const vv_renderer_info *
+vv_renderer_info_find(const char *name) {
+    for (int i = 0; name && i < N_REGISTRY; i++)
+        if (strcmp(registry[i]->info.name, name) == 0)
+            return &registry[i]->info;
+    return NULL;
 }
 
 void
@@ -26,12 +55,291 @@ vv_render_options_init(vv_render_options *o) {
     o->quality = 2;
 }
 
+/* ---- option values ------------------------------------------------------ */
+
+const char *
+vv_option_type_name(vv_option_type t) {
+    switch (t) {
+    case VV_OPTION_BOOL:
+        return "bool";
+    case VV_OPTION_INT:
+        return "int";
+    case VV_OPTION_REAL:
+        return "real";
+    case VV_OPTION_ENUM:
+        return "enum";
+    case VV_OPTION_STRING:
+        return "string";
+    }
+    return "unknown";
+}
+
+/* Appends printf-style text to buf (cap bytes), truncating. */
+static void
+append(char *buf, size_t cap, const char *fmt, const char *a, double x) {
+    const size_t n = strlen(buf);
+    if (n + 1 >= cap)
+        return;
+    if (a)
+        snprintf(buf + n, cap - n, fmt, a);
+    else
+        snprintf(buf + n, cap - n, fmt, x);
+}
+
+const char *
+vv_option_describe(const vv_option_spec *spec, char *buf, size_t cap) {
+    if (!cap)
+        return buf;
+    buf[0] = '\0';
+    const int nw = spec->words != NULL;
+    switch (spec->type) {
+    case VV_OPTION_BOOL:
+        append(buf, cap, "%s", "0|1", 0);
+        break;
+    case VV_OPTION_INT:
+        append(buf, cap, "integer in %.17g", NULL, spec->min);
+        append(buf, cap, "..%.17g", NULL, spec->max);
+        break;
+    case VV_OPTION_REAL: {
+        const int hi_inf = spec->max == INFINITY;
+        if (hi_inf) {
+            append(buf, cap, (spec->flags & VV_OPTION_MIN_OPEN) ? "real > %.17g" : "real >= %.17g",
+                   NULL, spec->min);
+        } else {
+            append(buf, cap,
+                   (spec->flags & VV_OPTION_MIN_OPEN) ? "real in (%.17g" : "real in [%.17g", NULL,
+                   spec->min);
+            append(buf, cap, (spec->flags & VV_OPTION_MAX_OPEN) ? ", %.17g)" : ", %.17g]", NULL,
+                   spec->max);
+        }
+        break;
+    }
+    case VV_OPTION_ENUM:
+        for (int i = 0; nw && spec->words[i]; i++)
+            append(buf, cap, i ? "|%s" : "%s", spec->words[i], 0);
+        return buf;
+    case VV_OPTION_STRING:
+        append(buf, cap, "%s", "text", 0);
+        break;
+    }
+    for (int i = 0; nw && spec->words[i]; i++)
+        append(buf, cap, i ? "|%s" : " or %s", spec->words[i], 0);
+    return buf;
+}
+
+static vv_status
+bad_value(const vv_option_spec *spec, const char *text) {
+    char what[256];
+    return vv_error_set(VV_ERR_INVALID, "%s: '%s' is not %s%s", spec->key, text,
+                        spec->type == VV_OPTION_ENUM ? "one of " : "",
+                        vv_option_describe(spec, what, sizeof what));
+}
+
+vv_status
+vv_option_parse(const vv_option_spec *spec, const char *text, vv_option_value *out) {
+    if (!spec || !text || !out)
+        return vv_error_set(VV_ERR_INVALID, "option: NULL argument");
+    memset(out, 0, sizeof *out);
+    out->type = spec->type;
+    out->word = -1;
+    out->text = text;
+    out->r = NAN;
+    for (int i = 0; spec->words && spec->words[i]; i++)
+        if (strcmp(text, spec->words[i]) == 0) {
+            out->word = i;
+            return VV_OK;
+        }
+    switch (spec->type) {
+    case VV_OPTION_ENUM:
+        return bad_value(spec, text);
+    case VV_OPTION_STRING:
+        if (strlen(text) >= VV_RENDER_OPTION_VALUE_MAX)
+            return vv_error_set(VV_ERR_INVALID, "%s: value of %zu bytes (at most %d)", spec->key,
+                                strlen(text), VV_RENDER_OPTION_VALUE_MAX - 1);
+        return VV_OK;
+    case VV_OPTION_BOOL:
+        if (strcmp(text, "1") == 0 || strcmp(text, "0") == 0) {
+            out->b = text[0] == '1';
+            out->i = out->b;
+            out->r = out->b;
+            return VV_OK;
+        }
+        return bad_value(spec, text);
+    case VV_OPTION_INT: {
+        char *end = NULL;
+        errno = 0;
+        const long long v = strtoll(text, &end, 10);
+        if (!end || end == text || *end || errno || (double)v < spec->min || (double)v > spec->max)
+            return bad_value(spec, text);
+        out->i = v;
+        out->r = (double)v;
+        return VV_OK;
+    }
+    case VV_OPTION_REAL: {
+        char *end = NULL;
+        const double v = strtod(text, &end);
+        if (!end || end == text || *end || v != v || v == INFINITY || v == -INFINITY)
+            return bad_value(spec, text);
+        const int lo_ok = (spec->flags & VV_OPTION_MIN_OPEN) ? v > spec->min : v >= spec->min;
+        const int hi_ok = (spec->flags & VV_OPTION_MAX_OPEN) ? v < spec->max : v <= spec->max;
+        if (!lo_ok || !hi_ok)
+            return bad_value(spec, text);
+        out->r = v;
+        return VV_OK;
+    }
+    }
+    return vv_error_set(VV_ERR_INVALID, "%s: option of unknown type %d", spec->key,
+                        (int)spec->type);
+}
+
+const vv_option_spec *
+vv_renderer_info_option(const vv_renderer_info *info, const char *key) {
+    for (int i = 0; info && key && i < info->n_options; i++)
+        if (strcmp(info->options[i].key, key) == 0)
+            return &info->options[i];
+    return NULL;
+}
+
+static vv_status
+unknown_key(const vv_renderer_info *info, const char *key) {
+    char known[1024] = "";
+    for (int i = 0; i < info->n_options; i++)
+        append(known, sizeof known, i ? ", %s" : "%s", info->options[i].key, 0);
+    if (!info->n_options)
+        return vv_error_set(VV_ERR_INVALID, "unknown option '%s' (%s takes no options)", key,
+                            info->name);
+    return vv_error_set(VV_ERR_INVALID, "unknown option '%s' (%s)", key, known);
+}
+
+vv_status
+vv_renderer_info_check_option(const vv_renderer_info *info, const char *key, const char *value) {
+    if (!info || !key || !value)
+        return vv_error_set(VV_ERR_INVALID, "option: NULL argument");
+    const vv_option_spec *spec = vv_renderer_info_option(info, key);
+    if (!spec)
+        return unknown_key(info, key);
+    vv_option_value v;
+    return vv_option_parse(spec, value, &v);
+}
+
+/* ---- what a renderer draws ------------------------------------------------- */
+
+/* 1 when @p obj is a visible object with something to draw. */
+static int
+has_content(const vv_object *obj) {
+    if (!obj || !obj->visible)
+        return 0;
+    if (obj->type == VV_OBJECT_VOLUME)
+        return obj->volume != NULL;
+    if (obj->type == VV_OBJECT_GRID)
+        return obj->grid != NULL;
+    return 1;
+}
+
+static int
+has_mode(vv_object_type t) {
+    return t == VV_OBJECT_VOLUME || t == VV_OBJECT_GRID;
+}
+
+int
+vv_renderer_info_draws(const vv_renderer_info *info, const vv_object *obj) {
+    if (!info || !obj || !(info->draws & VV_DRAWS(obj->type)))
+        return 0;
+    return !has_mode(obj->type) || (info->modes & VV_MODE_BIT(obj->mode)) != 0;
+}
+
+static const char *const mode_names[] = {"composite", "mip", "minip", "xray", "iso"};
+
+static const char *
+mode_name(vv_render_mode m) {
+    return (int)m >= 0 && (int)m < 5 ? mode_names[m] : "unknown";
+}
+
+/* The renderers that draw @p obj, comma-separated, into buf. */
+static const char *
+drawn_by(const vv_object *obj, char *buf, size_t cap) {
+    buf[0] = '\0';
+    for (int i = 0; i < N_REGISTRY; i++)
+        if (vv_renderer_info_draws(&registry[i]->info, obj))
+            append(buf, cap, buf[0] ? ", %s" : "%s", registry[i]->info.name, 0);
+    if (!buf[0])
+        snprintf(buf, cap, "none");
+    return buf;
+}
+
+vv_status
+vv_renderer_check_world(const vv_renderer_info *info, const vv_world *w) {
+    if (!info || !w)
+        return vv_error_set(VV_ERR_INVALID, "render: NULL renderer or World");
+    int drawn = 0, left = 0;
+    const vv_object *first_left = NULL;
+    char who[256];
+    for (int i = 0; i < w->n_objects; i++) {
+        const vv_object *o = w->objects[i];
+        if (!has_content(o))
+            continue;
+        if (!(info->draws & VV_DRAWS(o->type))) {
+            if (!left++)
+                first_left = o;
+            continue;
+        }
+        if (has_mode(o->type) && !(info->modes & VV_MODE_BIT(o->mode)))
+            return vv_error_set(VV_ERR_UNSUPPORTED,
+                                "object '%s': %s mode is not drawn by %s (drawn by %s)", o->name,
+                                mode_name(o->mode), info->name, drawn_by(o, who, sizeof who));
+        drawn++;
+    }
+    if (drawn == 0 && left == 1)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "object '%s' is a %s object, which %s does not draw; it is drawn by %s",
+                            first_left->name, vv_object_type_name(first_left->type), info->name,
+                            drawn_by(first_left, who, sizeof who));
+    if (drawn == 0 && left > 1)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "none of the World's %d visible objects is drawn by %s ('%s' is a "
+                            "%s object, drawn by %s)",
+                            left, info->name, first_left->name,
+                            vv_object_type_name(first_left->type),
+                            drawn_by(first_left, who, sizeof who));
+    return VV_OK;
+}
+
+const char *
+vv_world_renderer(const vv_world *w) {
+    if (!w)
+        return "raycast";
+    if (w->render.renderer[0])
+        return w->render.renderer;
+    int n = 0;
+    for (int i = 0; i < w->n_objects; i++)
+        n += has_content(w->objects[i]);
+    int best = -1, best_n = 0;
+    for (int r = 0; r < N_REGISTRY; r++) {
+        int k = 0;
+        for (int i = 0; i < w->n_objects; i++)
+            k += has_content(w->objects[i]) &&
+                 vv_renderer_info_draws(&registry[r]->info, w->objects[i]);
+        if (k == n)
+            return registry[r]->info.name;
+        if (k > best_n) {
+            best = r;
+            best_n = k;
+        }
+    }
+    return best >= 0 ? registry[best]->info.name : "raycast";
+}
+
+/* ---- renderer objects ---------------------------------------------------------- */
+
 vv_status
 vv_renderer_new(vv_renderer **out, const char *name) {
     *out = NULL;
-    for (int i = 0; registry[i]; i++) {
-        if (strcmp(registry[i]->name, name) != 0)
+    for (int i = 0; name && registry[i]; i++) {
+        if (strcmp(registry[i]->info.name, name) != 0)
             continue;
+        if (registry[i]->version != VV_RENDERER_OPS_VERSION)
+            return vv_error_set(VV_ERR_UNSUPPORTED, "renderer '%s': interface version %d, not %d",
+                                name, registry[i]->version, VV_RENDERER_OPS_VERSION);
         vv_renderer *r = calloc(1, sizeof *r);
         if (!r)
             return vv_error_set(VV_ERR_NOMEM, "out of memory");
@@ -45,12 +353,10 @@ vv_renderer_new(vv_renderer **out, const char *name) {
         return VV_OK;
     }
     char known[256] = "";
-    for (int i = 0; registry[i]; i++) {
-        if (i)
-            strncat(known, ", ", sizeof known - strlen(known) - 1);
-        strncat(known, registry[i]->name, sizeof known - strlen(known) - 1);
-    }
-    return vv_error_set(VV_ERR_INVALID, "unknown renderer '%s' (available: %s)", name, known);
+    for (int i = 0; registry[i]; i++)
+        append(known, sizeof known, i ? ", %s" : "%s", registry[i]->info.name, 0);
+    return vv_error_set(VV_ERR_INVALID, "unknown renderer '%s' (available: %s)",
+                        name ? name : "(null)", known);
 }
 
 void
@@ -63,7 +369,17 @@ vv_renderer_free(vv_renderer *r) {
 
 const char *
 vv_renderer_name(const vv_renderer *r) {
-    return r->ops->name;
+    return r->ops->info.name;
+}
+
+const vv_renderer_info *
+vv_renderer_get_info(const vv_renderer *r) {
+    return &r->ops->info;
+}
+
+const vv_renderer_ops *
+vv_renderer_ops_of(const vv_renderer *r) {
+    return r->ops;
 }
 
 void *
@@ -73,8 +389,19 @@ vv_renderer_state(const vv_renderer *r) {
 
 vv_status
 vv_renderer_set_option(vv_renderer *r, const char *key, const char *value) {
-    vv_status s = r->ops->set_option(r->state, key, value);
-    return s == VV_OK ? s : vv_error_prefix(s, "%s", r->ops->name);
+    if (!r || !key || !value)
+        return vv_error_set(VV_ERR_INVALID, "set option: NULL argument");
+    const vv_option_spec *spec = vv_renderer_info_option(&r->ops->info, key);
+    vv_status s;
+    if (!spec) {
+        s = unknown_key(&r->ops->info, key);
+    } else {
+        vv_option_value v;
+        s = vv_option_parse(spec, value, &v);
+        if (s == VV_OK)
+            s = r->ops->set_option(r->state, spec, &v);
+    }
+    return s == VV_OK ? s : vv_error_prefix(s, "%s", r->ops->info.name);
 }
 
 vv_status
@@ -85,13 +412,51 @@ vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
         vv_render_options_init(&def);
         opt = &def;
     }
-    if (!world || !view || !out)
-        return vv_error_set(VV_ERR_INVALID, "render: NULL world, view or image");
+    if (!r || !world || !view || !out)
+        return vv_error_set(VV_ERR_INVALID, "render: NULL renderer, world, view or image");
     if (out->width != view->width || out->height != view->height)
         return vv_error_set(VV_ERR_INVALID, "render: image is %d x %d but the view is %d x %d",
                             out->width, out->height, view->width, view->height);
-    vv_status s = r->ops->render(r->state, world, view, opt, out);
-    return s == VV_OK ? s : vv_error_prefix(s, "%s", r->ops->name);
+    vv_status s = vv_renderer_check_world(&r->ops->info, world);
+    if (s == VV_OK)
+        s = r->ops->render(r->state, world, view, opt, out);
+    return s == VV_OK ? s : vv_error_prefix(s, "%s", r->ops->info.name);
+}
+
+vv_status
+vv_renderer_render_region(vv_renderer *r, const vv_world *world, const vv_view *view,
+                          const vv_render_region *region, const vv_render_options *opt,
+                          vv_region_image *out) {
+    vv_render_options def;
+    if (!opt) {
+        vv_render_options_init(&def);
+        opt = &def;
+    }
+    if (!r || !world || !view || !region || !out || !out->image || !out->key)
+        return vv_error_set(VV_ERR_INVALID, "region render: NULL argument");
+    const char *name = r->ops->info.name;
+    if (!r->ops->render_region || !(r->ops->info.caps & VV_RENDERER_REGION))
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "%s: renders no regions (out-of-core and distributed rendering "
+                            "need a renderer with the region contract: `volvis renderers`)",
+                            name);
+    if (out->image->width != view->width || out->image->height != view->height)
+        return vv_error_set(VV_ERR_INVALID, "%s: region image is %d x %d but the view is %d x %d",
+                            name, out->image->width, out->image->height, view->width, view->height);
+    if (region->object < 0 || region->object >= world->n_objects || !region->voxels)
+        return vv_error_set(VV_ERR_INVALID, "%s: region of object %d without voxels", name,
+                            region->object);
+    const vv_object *obj = world->objects[region->object];
+    if (obj->type != VV_OBJECT_VOLUME || !obj->volume)
+        return vv_error_set(VV_ERR_INVALID, "%s: object '%s' is not a volume object", name,
+                            obj->name);
+    vv_status s = vv_renderer_check_world(&r->ops->info, world);
+    if (s == VV_OK) {
+        vv_region_image_clear(out);
+        out->op = VV_REGION_OVER;
+        s = r->ops->render_region(r->state, world, view, region, opt, out);
+    }
+    return s == VV_OK ? s : vv_error_prefix(s, "%s", name);
 }
 
 /* Samples of the transfer function searched for its surface value. */
@@ -178,6 +543,24 @@ vv_renderer_new_from_settings(vv_renderer **out, const vv_render_settings *rs) {
     vv_status s = vv_renderer_new(&r, vv_render_settings_renderer(rs));
     if (s == VV_OK)
         s = vv_renderer_apply_settings(r, rs);
+    if (s != VV_OK) {
+        vv_renderer_free(r);
+        return s;
+    }
+    *out = r;
+    return VV_OK;
+}
+
+vv_status
+vv_renderer_new_for_world(vv_renderer **out, const vv_world *w) {
+    if (!out || !w)
+        return vv_error_set(VV_ERR_INVALID, "renderer: NULL argument");
+    *out = NULL;
+    vv_renderer *r = NULL;
+    vv_status s = vv_renderer_new(&r, vv_world_renderer(w));
+    /* the settings' options belong to the World's renderer */
+    if (s == VV_OK)
+        s = vv_renderer_apply_settings(r, &w->render);
     if (s != VV_OK) {
         vv_renderer_free(r);
         return s;

@@ -3,6 +3,7 @@
 #define VV_RENDER_REGISTRY_H
 
 #include "volvis/render.h"
+#include "volvis/sys/renderer.h"
 
 /** Direct volume ray casting (src/render/raycast). */
 extern const vv_renderer_ops vv_raycast_ops;
@@ -26,5 +27,8 @@ extern const vv_renderer_ops vv_splat_ops;
 
 /** The method state behind @p r (what its create returned); borrowed. */
 void *vv_renderer_state(const vv_renderer *r);
+
+/** The number of entries of a static option table. */
+#define VV_OPTIONS_COUNT(table) ((int)(sizeof(table) / sizeof((table)[0])))
 
 #endif

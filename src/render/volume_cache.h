@@ -35,6 +35,7 @@
 #endif
 
 #include "volvis/render.h"
+#include "volvis/sys/renderer.h"
 
 #define VV_VC_BLOCK 4  /* subvolume side in cells */
 #define VV_VC_GROUP 4  /* subvolumes per side of a group (the pyramid's second level) */
@@ -131,6 +132,8 @@ typedef struct vv_vcache_set {
 /* Empty set; gradients allowed up to a quarter of physical memory, at most
  * 8 GiB. */
 void vv_vcache_set_init(vv_vcache_set *s);
+/* The gradient budget of a new set (the option value "auto"). */
+void vv_vcache_set_default_budget(vv_vcache_set *s);
 /* Releases every cached volume (the set stays usable). */
 void vv_vcache_set_clear(vv_vcache_set *s);
 /* Drops the cached volumes that no object of @p w shows. */
@@ -188,6 +191,19 @@ typedef struct vv_vray {
  * nothing is left. */
 int vv_vray_setup(const double w2i[3][4], const int dims[3], const vv_plane *planes, int n_planes,
                   const vv_ray *wr, double tmin, double tmax, vv_vray *r);
+
+/* Region renders (include/volvis/sys/renderer.h): cuts @p r, set up in the
+ * whole volume's index space, to the samples t = k dt that region @p rg
+ * owns (lo <= p < hi per axis; along a ray each coordinate is monotonic in
+ * k, so they are found by bisection), and points it at the region's voxels
+ * (r->off = rg->offset). @p inv_form says how the kernel finds its first
+ * and last samples: ceil(t0 * (1 / dt)) (1) or ceil(t0 / dt) (0), so that
+ * the whole ray's samples are counted as the whole render counts them. A
+ * ray shorter than a step keeps its one middle sample when the region owns
+ * it. The cut ends lie half a step beyond the first and last owned
+ * samples, so any kernel rounding finds them again. Returns 0 when the
+ * region owns no sample of the ray. */
+int vv_vray_clip_region(vv_vray *r, const vv_render_region *rg, double dt, int inv_form);
 
 static inline void
 vv_vray_point(const vv_vray *r, double t, float p[3]) {

@@ -26,15 +26,14 @@
  */
 #include <float.h>
 #include <math.h>
-#include <pthread.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/parallel_for.h"
 #include "surface_internal.h"
 
 #define MC_WORD 64
-#define VV_MC_MAX_THREADS 256
+#define VV_MC_MAX_THREADS VV_PARALLEL_MAX_THREADS
 #define MC_CNT 5 /* counts per row */
 
 typedef struct mc_job {
@@ -61,7 +60,6 @@ typedef struct mc_job {
     float *centres; /* edges_only: centre vertex positions */
     uint64_t *coff; /* edges_only: per row, its first centre vertex */
     vv_mesh *m;
-    volatile int cancel;
     int failed;
 } mc_job;
 
@@ -666,87 +664,44 @@ fix_zero_normals(vv_mesh *m) {
 /* ---- threads -------------------------------------------------------------------- */
 
 /*
- * The passes run on plain threads that block between passes (pthread_join), not
- * on OpenMP: libgomp's threads spin-wait at every barrier and between parallel
- * regions (GOMP_SPINCOUNT, 300 000 pause loops, several ms on current CPUs), and
- * on a machine with more runnable threads than cores the spinning thread takes
- * the core its late partner needs. On the project's loaded 2-core machine that
- * made 2 threads twice as slow as 1. Rows are handed out dynamically, 16 at a
- * time, from an atomic counter, so a descheduled thread delays the pass by at
- * most its 16 rows.
+ * Each pass is one vv_parallel_for (core/parallel_for.h) over the grid rows,
+ * handed out 16 at a time, so a descheduled thread delays a pass by at most
+ * its 16 rows.
  */
 typedef struct mc_pass {
     mc_job *J;
     int which;          /* MC_PASS_* */
-    long n;             /* rows */
-    atomic_long next;   /* next row to hand out */
     uint8_t **scratch;  /* per worker: classify's byte row */
     long *zero_normals; /* per worker */
     const vv_minmax_grid *grid;
-    const vv_progress *progress;
 } mc_pass;
 
 enum { MC_PASS_CLASSIFY, MC_PASS_COUNT, MC_PASS_GENERATE };
 #define MC_CHUNK 16
 
 static void
-pass_worker(mc_pass *P, int w) {
+pass_rows(void *ctx, long r0, long r1, int w) {
+    mc_pass *P = ctx;
     mc_job *J = P->J;
-    int tick = 0;
-    for (;;) {
-        long r0 = atomic_fetch_add_explicit(&P->next, MC_CHUNK, memory_order_relaxed);
-        if (r0 >= P->n || J->cancel)
-            break;
-        long r1 = r0 + MC_CHUNK < P->n ? r0 + MC_CHUNK : P->n;
-        for (long r = r0; r < r1; r++) {
-            int j = (int)(r % J->n[1]), k = (int)(r / J->n[1]);
-            if (P->which == MC_PASS_CLASSIFY)
-                classify_row(J, P->grid, j, k, P->scratch[w]);
-            else if (P->which == MC_PASS_COUNT)
-                count_row(J, j, k);
-            else
-                P->zero_normals[w] += generate_row(J, j, k);
-        }
-        /* the calling thread (worker 0) reports; a cancel stops every worker */
-        if (w == 0 && P->which == MC_PASS_GENERATE && P->progress && P->progress->fn &&
-            (++tick & 3) == 0 &&
-            vv_progress_report(P->progress, 0.4 + 0.5 * (double)r1 / (double)P->n))
-            J->cancel = 1;
+    for (long r = r0; r < r1; r++) {
+        int j = (int)(r % J->n[1]), k = (int)(r / J->n[1]);
+        if (P->which == MC_PASS_CLASSIFY)
+            classify_row(J, P->grid, j, k, P->scratch[w]);
+        else if (P->which == MC_PASS_COUNT)
+            count_row(J, j, k);
+        else
+            P->zero_normals[w] += generate_row(J, j, k);
     }
 }
 
-typedef struct mc_worker_arg {
-    mc_pass *P;
-    int w;
-} mc_worker_arg;
-
-static void *
-pass_thread(void *a) {
-    mc_worker_arg *arg = a;
-    pass_worker(arg->P, arg->w);
-    return NULL;
-}
-
-/* Runs pass P on nt threads (the caller is worker 0); fewer if threads cannot be made. */
-static void
-run_pass(mc_pass *P, int nt) {
-    pthread_t tid[VV_MC_MAX_THREADS];
-    mc_worker_arg arg[VV_MC_MAX_THREADS];
-    atomic_store_explicit(&P->next, 0, memory_order_relaxed);
-    long max_useful = (P->n + MC_CHUNK - 1) / MC_CHUNK;
-    if (nt > max_useful)
-        nt = (int)max_useful;
-    int started = 0;
-    for (int w = 1; w < nt; w++) {
-        arg[w].P = P;
-        arg[w].w = w;
-        if (pthread_create(&tid[w], NULL, pass_thread, &arg[w]) != 0)
-            break;
-        started = w;
-    }
-    pass_worker(P, 0);
-    for (int w = 1; w <= started; w++)
-        pthread_join(tid[w], NULL);
+/* Runs pass P over @p rows on nt threads; the generate pass reports progress
+ * 0.4 .. 0.9 every 4 chunks of the calling thread. VV_ERR_CANCELLED on a
+ * cancel. */
+static vv_status
+run_pass(mc_pass *P, long rows, int nt, const vv_progress *progress) {
+    const vv_parallel_progress pr = {progress, 0.4, 0.9, 4};
+    return vv_parallel_for(rows, MC_CHUNK, nt, pass_rows, P,
+                           P->which == MC_PASS_GENERATE ? &pr : NULL);
 }
 
 /* ---- driver ------------------------------------------------------------------- */
@@ -771,28 +726,67 @@ vv_isosurface_extract(vv_mesh **out, const vv_volume *v, double isovalue,
     return vv_isosurface_extract_ex(out, v, isovalue, opt, NULL);
 }
 
-vv_status
-vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
-                         const vv_isosurface_options *opt, mc_extra *x) {
-    if (out)
-        *out = NULL;
-    if (!out || !v || !v->data)
-        return vv_error_set(VV_ERR_INVALID, "isosurface: NULL argument");
-    if (!isfinite(isovalue))
-        return vv_error_set(VV_ERR_INVALID, "isosurface: isovalue %g is not finite", isovalue);
-    vv_isosurface_options defaults;
-    if (!opt) {
-        vv_isosurface_options_init(&defaults);
-        opt = &defaults;
+/* Pass 3: each row's first vertex, triangle and centre vertex from the
+ * counts of pass 2; the totals. */
+static void
+prefix_sums(mc_job *J, size_t rows, uint64_t *nv_out, uint64_t *ntri_out, uint64_t *ncent_out) {
+    uint64_t nv = 0, ntri = 0, ncent = 0;
+    for (size_t r = 0; r < rows; r++) {
+        J->voff[r] = nv;
+        J->toff[r] = ntri;
+        if (J->coff)
+            J->coff[r] = ncent;
+        const uint32_t *c = J->cnt + MC_CNT * r;
+        nv += (uint64_t)c[0] + c[1] + c[2] + c[4];
+        ntri += c[3];
+        ncent += c[4];
     }
+    J->voff[rows] = nv;
+    J->toff[rows] = ntri;
+    *nv_out = nv;
+    *ntri_out = ntri;
+    *ncent_out = ncent;
+}
+
+/* The extras of a coarse surface (mc_extra): edge ids, quantised codes and,
+ * with edges only, the centre vertices. */
+static vv_status
+extra_alloc(mc_job *J, mc_extra *x, uint64_t nv, uint64_t ncent) {
+    x->edge_ids = malloc((nv ? (size_t)nv : 1) * sizeof(uint32_t));
+    x->codes = x->quantize ? malloc(nv ? (size_t)nv : 1) : NULL;
+    if (!x->edge_ids || (x->quantize && !x->codes)) {
+        return vv_error_set(VV_ERR_NOMEM, "isosurface: out of memory");
+    }
+    if (3 * (uint64_t)vv_volume_voxel_count(J->v) > UINT32_MAX) {
+        return vv_error_set(VV_ERR_LIMIT, "isosurface: edge ids need %llu voxels < 2^32 / 3",
+                            (unsigned long long)vv_volume_voxel_count(J->v));
+    }
+    J->edge_ids = x->edge_ids;
+    J->codes = x->codes;
+    if (J->edges_only) {
+        x->n_vertices = (size_t)nv;
+        x->n_centres = (size_t)ncent;
+        x->centres = J->centres = malloc((ncent ? (size_t)ncent : 1) * 3 * sizeof(float));
+        if (!J->centres) {
+            return vv_error_set(VV_ERR_NOMEM, "isosurface: out of memory");
+        }
+    }
+    return VV_OK;
+}
+
+/* The job of one extraction: the region, the checks of the options (errors
+ * as vv_isosurface_extract), the strides and transforms; *grid_out the
+ * min/max grid when it is this volume's and exact. */
+static vv_status
+job_init(mc_job *J, const vv_volume *v, double isovalue, const vv_isosurface_options *opt,
+         const mc_extra *x, const vv_minmax_grid **grid_out) {
     const mc_tables *tb = mc_tables_get();
     if (!tb)
         return vv_error_set(VV_ERR_INVALID, "isosurface: internal error building the case tables");
-    mc_job J;
-    memset(&J, 0, sizeof J);
-    J.v = v;
-    J.iso = isovalue;
-    J.tb = tb;
+    memset(J, 0, sizeof *J);
+    J->v = v;
+    J->iso = isovalue;
+    J->tb = tb;
     for (int a = 0; a < 3; a++) {
         int lo = 0, hi = v->dims[a] - 1;
         if (opt->roi_max[0] >= 0) {
@@ -804,8 +798,8 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
                                     "outside the volume's 0..%d",
                                     lo, hi, "ijk"[a], v -> dims[a] - 1);
         }
-        J.lo[a] = lo;
-        J.n[a] = hi - lo + 1;
+        J->lo[a] = lo;
+        J->n[a] = hi - lo + 1;
     }
     if (opt->n_cut_planes < 0 || opt->n_cut_planes > VV_MAX_CUT_PLANES)
         return vv_error_set(VV_ERR_INVALID, "isosurface: %d cut planes (0..%d)", opt->n_cut_planes,
@@ -826,26 +820,49 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
                  grid->dims[1] != (v->dims[1] > 1 ? (v->dims[1] - 2) / grid->block + 1 : 1) ||
                  grid->dims[2] != (v->dims[2] > 1 ? (v->dims[2] - 2) / grid->block + 1 : 1)))
         grid = NULL; /* not this volume's grid, or values not exact in float: read voxels */
-    J.sy = (size_t)v->dims[0];
-    J.sz = J.sy * (size_t)v->dims[1];
-    J.W = (J.n[0] + MC_WORD - 1) / MC_WORD;
-    J.normals = opt->compute_normals != 0;
-    J.sv = opt->scalar_volume;
-    J.quantize = x ? x->quantize : 0;
-    J.edges_only = x && x->quantize && x->edges_only;
-    if (J.edges_only) {
+    *grid_out = grid;
+    J->sy = (size_t)v->dims[0];
+    J->sz = J->sy * (size_t)v->dims[1];
+    J->W = (J->n[0] + MC_WORD - 1) / MC_WORD;
+    J->normals = opt->compute_normals != 0;
+    J->sv = opt->scalar_volume;
+    J->quantize = x ? x->quantize : 0;
+    J->edges_only = x && x->quantize && x->edges_only;
+    if (J->edges_only) {
         if (opt->n_cut_planes)
             return vv_error_set(VV_ERR_INVALID, "isosurface: cut planes need vertex positions");
-        J.normals = 0;
-        J.sv = NULL;
+        J->normals = 0;
+        J->sv = NULL;
     }
     vv_mat4 M = vv_volume_index_to_world(v);
     for (int r = 0; r < 3; r++)
         for (int c = 0; c < 4; c++)
-            J.M[r][c] = M.m[r][c];
+            J->M[r][c] = M.m[r][c];
     for (int r = 0; r < 3; r++)
         for (int c = 0; c < 3; c++)
-            J.G[r][c] = v->direction[3 * r + c] / v->spacing[c];
+            J->G[r][c] = v->direction[3 * r + c] / v->spacing[c];
+    return VV_OK;
+}
+
+vv_status
+vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
+                         const vv_isosurface_options *opt, mc_extra *x) {
+    if (out)
+        *out = NULL;
+    if (!out || !v || !v->data)
+        return vv_error_set(VV_ERR_INVALID, "isosurface: NULL argument");
+    if (!isfinite(isovalue))
+        return vv_error_set(VV_ERR_INVALID, "isosurface: isovalue %g is not finite", isovalue);
+    vv_isosurface_options defaults;
+    if (!opt) {
+        vv_isosurface_options_init(&defaults);
+        opt = &defaults;
+    }
+    mc_job J;
+    const vv_minmax_grid *grid = NULL;
+    vv_status jst = job_init(&J, v, isovalue, opt, x, &grid);
+    if (jst != VV_OK)
+        return jst;
     int nt = opt->threads;
     if (nt <= 0) {
         /* by default at most one thread per 2^18 voxels: on small grids starting the
@@ -878,9 +895,7 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
     mc_pass P;
     memset(&P, 0, sizeof P);
     P.J = &J;
-    P.n = (long)rows;
     P.grid = grid;
-    P.progress = &opt->progress;
     long zn[VV_MC_MAX_THREADS] = {0};
     uint8_t *scratch[VV_MC_MAX_THREADS] = {NULL};
     P.scratch = scratch;
@@ -893,7 +908,7 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
             goto done;
         }
     P.which = MC_PASS_CLASSIFY;
-    run_pass(&P, nt);
+    run_pass(&P, (long)rows, nt, NULL);
     for (int w = 0; w < nt; w++)
         free(scratch[w]);
     if (report(&opt->progress, 0.2)) {
@@ -902,21 +917,10 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
     }
     /* pass 2: count */
     P.which = MC_PASS_COUNT;
-    run_pass(&P, nt);
+    run_pass(&P, (long)rows, nt, NULL);
     /* pass 3: prefix sums */
-    uint64_t nv = 0, ntri = 0, ncent = 0;
-    for (size_t r = 0; r < rows; r++) {
-        J.voff[r] = nv;
-        J.toff[r] = ntri;
-        if (J.coff)
-            J.coff[r] = ncent;
-        const uint32_t *c = J.cnt + MC_CNT * r;
-        nv += (uint64_t)c[0] + c[1] + c[2] + c[4];
-        ntri += c[3];
-        ncent += c[4];
-    }
-    J.voff[rows] = nv;
-    J.toff[rows] = ntri;
+    uint64_t nv, ntri, ncent;
+    prefix_sums(&J, rows, &nv, &ntri, &ncent);
     if (nv > VV_MESH_MAX_ELEMENTS || ntri > VV_MESH_MAX_ELEMENTS || nv > UINT32_MAX) {
         st = vv_error_set(
             VV_ERR_LIMIT, "isosurface: %llu vertices and %llu triangles (at most %zu each)",
@@ -934,43 +938,20 @@ vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double isovalue,
         vv_error_prefix(st, "isosurface");
         goto done;
     }
-    if (x) {
-        x->edge_ids = malloc((nv ? (size_t)nv : 1) * sizeof(uint32_t));
-        x->codes = x->quantize ? malloc(nv ? (size_t)nv : 1) : NULL;
-        if (!x->edge_ids || (x->quantize && !x->codes)) {
-            st = vv_error_set(VV_ERR_NOMEM, "isosurface: out of memory");
-            goto done;
-        }
-        if (3 * (uint64_t)vv_volume_voxel_count(v) > UINT32_MAX) {
-            st = vv_error_set(VV_ERR_LIMIT, "isosurface: edge ids need %llu voxels < 2^32 / 3",
-                              (unsigned long long)vv_volume_voxel_count(v));
-            goto done;
-        }
-        J.edge_ids = x->edge_ids;
-        J.codes = x->codes;
-        if (J.edges_only) {
-            x->n_vertices = (size_t)nv;
-            x->n_centres = (size_t)ncent;
-            x->centres = J.centres = malloc((ncent ? (size_t)ncent : 1) * 3 * sizeof(float));
-            if (!J.centres) {
-                st = vv_error_set(VV_ERR_NOMEM, "isosurface: out of memory");
-                goto done;
-            }
-        }
-    }
+    if (x && (st = extra_alloc(&J, x, nv, ncent)) != VV_OK)
+        goto done;
     m->n_vertices = J.edges_only ? 0 : (size_t)nv;
     m->n_triangles = (size_t)ntri;
     J.m = m;
     /* pass 4: generate */
     P.which = MC_PASS_GENERATE;
-    run_pass(&P, nt);
-    long zero_normals = 0;
-    for (int w = 0; w < nt; w++)
-        zero_normals += zn[w];
-    if (J.cancel) {
+    if (run_pass(&P, (long)rows, nt, &opt->progress) != VV_OK) {
         st = vv_error_set(VV_ERR_CANCELLED, "isosurface: cancelled");
         goto done;
     }
+    long zero_normals = 0;
+    for (int w = 0; w < nt; w++)
+        zero_normals += zn[w];
     if (J.normals && zero_normals > 0)
         fix_zero_normals(m);
     for (int p = 0; p < opt->n_cut_planes; p++) {
@@ -1026,7 +1007,7 @@ face_emit(vv_mc_face_polygon_fn emit, void *ctx, int axis, int pos, int a, int b
         pts[c][u] = a + qu[c];
         pts[c][w] = b + qw[c];
     }
-    emit(ctx, n, (const double(*)[3])pts);
+    emit(ctx, n, &pts[0][0]);
 }
 
 double

@@ -87,28 +87,4 @@ vv_status vv_isosurface_extract_ex(vv_mesh **out, const vv_volume *v, double iso
  */
 vv_status vv_mesh_clip_plane(vv_mesh *m, vv_vec3 n, double d);
 
-/**
- * Area, in index units (cells of size 1 x 1), of the part of the grid face
- * axis == @p pos (0 <= pos < dims[axis]) of the region lo..hi (inclusive
- * voxel box) where the piecewise-linear Marching Cubes field is inside
- * (>= isovalue): marching squares with the same edge interpolation and face
- * decider as the 3-D extraction.
- */
-double vv_mc_face_inside_area(const vv_volume *v, double isovalue, int axis, int pos,
-                              const int lo[3], const int hi[3]);
-
-/** Receives one polygon of n (3..6) points in index coordinates (see below). */
-typedef void (*vv_mc_face_polygon_fn)(void *ctx, int n, const double (*pts)[3]);
-
-/**
- * vv_mc_face_inside_area, and when @p emit is not NULL also the inside part
- * of every face cell as polygons (one per cell, two for an ambiguous face
- * whose inside corners are not joined), in index coordinates, counter-
- * clockwise in the (u, w) plane of the face, u < w the two other axes (so
- * their vector area is along e_u x e_w). Called serially, cell by cell.
- */
-double vv_mc_face_inside_polygons(const vv_volume *v, double isovalue, int axis, int pos,
-                                  const int lo[3], const int hi[3], vv_mc_face_polygon_fn emit,
-                                  void *ctx);
-
 #endif

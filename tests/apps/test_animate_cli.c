@@ -207,5 +207,5 @@ main(void) {
         cmocka_unit_test(test_orbit_mp4_psnr_and_webm),
         cmocka_unit_test(test_errors_and_help),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

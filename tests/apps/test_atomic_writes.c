@@ -22,6 +22,7 @@
 
 #include "core/internal.h"
 #include "volvis/model.h"
+#include "volvis/scene.h"
 
 static const char *
 outdir(void) {
@@ -205,5 +206,5 @@ main(void) {
         cmocka_unit_test(test_file_size_limit),
         cmocka_unit_test(test_killed_mid_write),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

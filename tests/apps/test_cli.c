@@ -94,12 +94,18 @@ test_help(void **state) {
         assert_contains(r.out, "--threads");
         assert_contains(r.out, "--zoom");
         assert_contains(r.out, "--elevation");
-        /* the renderer registry is listed */
-        const vv_renderer_ops *const *reg = vv_renderer_registry();
-        assert_non_null(reg);
-        assert_non_null(reg[0]);
-        for (int i = 0; reg[i]; i++)
-            assert_contains(r.out, reg[i]->name);
+        /* the renderer registry is listed, with every option of every
+         * renderer's table and its default */
+        assert_true(vv_renderer_count() > 0);
+        for (int i = 0; i < vv_renderer_count(); i++) {
+            const vv_renderer_info *in = vv_renderer_info_at(i);
+            assert_contains(r.out, in->name);
+            for (int k = 0; k < in->n_options; k++) {
+                char opt[160];
+                snprintf(opt, sizeof opt, "--set %s=", in->options[k].key);
+                assert_contains(r.out, opt);
+            }
+        }
         free_result(&r);
     }
     const char *globals[] = {"--help", "help", "-h"};
@@ -365,6 +371,217 @@ check_png(const char *path, int w, int h) {
     vv_image_free(img);
     if (!(hi - lo > 0.05f))
         fail_msg("%s looks blank: values %g..%g", path, lo, hi);
+}
+
+/* ---- options that must take effect ------------------------------------------------ */
+
+#define BLOB_N 32
+
+/* A 32^3 u8 raw volume: a ball of radius 7 voxels centred off the middle
+ * in x, y and z, bright at its centre and falling off linearly (255 - 25 r). */
+static const char *
+write_blob(void) {
+    static unsigned char v[BLOB_N * BLOB_N * BLOB_N];
+    const double c[3] = {22, 20, 19};
+    for (int k = 0; k < BLOB_N; k++)
+        for (int j = 0; j < BLOB_N; j++)
+            for (int i = 0; i < BLOB_N; i++) {
+                double r = sqrt((i - c[0]) * (i - c[0]) + (j - c[1]) * (j - c[1]) +
+                                (k - c[2]) * (k - c[2]));
+                v[(k * BLOB_N + j) * BLOB_N + i] = (unsigned char)(r < 7 ? 255 - 25 * r : 0);
+            }
+    const char *path = out_file("blob.raw");
+    vt_write_file(path, v, sizeof v);
+    return path;
+}
+
+/* Renders @p in (raw blob when @p raw) at 64x64 with the extra arguments
+ * (NULL-terminated) and returns the image read back from the PNG. */
+static vv_image *
+render_with(const char *in, int raw, const char *name, const char *const *extra) {
+    const char *args[32];
+    int n = 0;
+    const char *png = out_file(name);
+    args[n++] = "render";
+    if (raw) {
+        args[n++] = "--raw";
+        args[n++] = "32x32x32:u8";
+    }
+    args[n++] = in;
+    args[n++] = "-o";
+    args[n++] = png;
+    args[n++] = "--size";
+    args[n++] = "64x64";
+    for (int i = 0; extra[i] && n < 31; i++)
+        args[n++] = extra[i];
+    args[n] = NULL;
+    run_result r = vt_run_cli_v(outdir(), args);
+    if (r.status != 0)
+        fail_msg("render %s: exit %d: %s", name, r.status, r.err);
+    free_result(&r);
+    vv_image *img = NULL;
+    vt_ok(vv_image_read_png(&img, png));
+    return img;
+}
+
+static double
+luminance(const vv_image *im, int i) {
+    return (im->rgba[4 * i] + im->rgba[4 * i + 1] + im->rgba[4 * i + 2]) / 3.0;
+}
+
+/* The intensity centroid (pixels) and the silhouette (pixels brighter
+ * than 0.02): its area and its bounding box's width and height. */
+static void
+image_shape(const vv_image *im, double c[2], int *area, int *w, int *h) {
+    double s = 0, sx = 0, sy = 0;
+    int x0 = im->width, x1 = -1, y0 = im->height, y1 = -1;
+    *area = 0;
+    for (int y = 0; y < im->height; y++)
+        for (int x = 0; x < im->width; x++) {
+            double l = luminance(im, y * im->width + x);
+            s += l;
+            sx += l * x;
+            sy += l * y;
+            if (l > 0.02) {
+                (*area)++;
+                x0 = x < x0 ? x : x0;
+                x1 = x > x1 ? x : x1;
+                y0 = y < y0 ? y : y0;
+                y1 = y > y1 ? y : y1;
+            }
+        }
+    assert_true(s > 0);
+    c[0] = sx / s;
+    c[1] = sy / s;
+    *w = x1 - x0 + 1;
+    *h = y1 - y0 + 1;
+}
+
+/* --mode mip: a maximum along each ray does not depend on the ray's
+ * direction, so (orthographic) the view from behind is the mirror image;
+ * its grey transfer function gives R = G = B; and it is not the composite
+ * image. */
+static void
+test_option_mode_mip(void **state) {
+    (void)state;
+    const char *blob = write_blob();
+    vv_image *front = render_with(blob, 1, "opt-mip0.png",
+                                  (const char *const[]){"--mode", "mip", "--ortho", NULL});
+    vv_image *back =
+        render_with(blob, 1, "opt-mip180.png",
+                    (const char *const[]){"--mode", "mip", "--ortho", "--azimuth", "180", NULL});
+    vv_image *comp = render_with(blob, 1, "opt-comp0.png", (const char *const[]){"--ortho", NULL});
+    const int W = front->width, H = front->height;
+    double diff = 0, grey = 0, vs_comp = 0, hi = 0;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            const int i = y * W + x, m = y * W + (W - 1 - x);
+            diff += fabs(luminance(front, i) - luminance(back, m));
+            vs_comp += fabs(luminance(front, i) - luminance(comp, i));
+            const float *p = &front->rgba[4 * i];
+            grey = fmax(grey, fmax(fabs(p[0] - p[1]), fabs(p[1] - p[2])));
+            hi = fmax(hi, luminance(front, i));
+        }
+    diff /= W * H;
+    vs_comp /= W * H;
+    print_message("mip: front vs mirrored back %.4f, vs composite %.4f, max channel gap %.4f, "
+                  "brightest %.3f\n",
+                  diff, vs_comp, grey, hi);
+    assert_true(hi > 0.5);          /* the ball is there */
+    assert_true(diff < 0.01);       /* order-independent: the mirror image */
+    assert_true(grey <= 1.0 / 255); /* the grey ramp */
+    assert_true(vs_comp > 5 * diff + 0.005);
+    vv_image_free(front);
+    vv_image_free(back);
+    vv_image_free(comp);
+}
+
+/* --azimuth turns the camera about the up axis: the off-centre ball's
+ * centroid moves to the mirrored side at 180 degrees, and 360 is 0. */
+static void
+test_option_azimuth(void **state) {
+    (void)state;
+    const char *blob = write_blob();
+    double c0[2], c90[2], c180[2], c360[2];
+    int a, w, h;
+    const char *names[4] = {"opt-az0.png", "opt-az90.png", "opt-az180.png", "opt-az360.png"};
+    const char *deg[4] = {"0", "90", "180", "360"};
+    double *cs[4] = {c0, c90, c180, c360};
+    for (int i = 0; i < 4; i++) {
+        vv_image *im = render_with(blob, 1, names[i],
+                                   (const char *const[]){"--ortho", "--azimuth", deg[i], NULL});
+        image_shape(im, cs[i], &a, &w, &h);
+        vv_image_free(im);
+    }
+    const double mid = 31.5;
+    print_message("azimuth: centroid x %.2f (0), %.2f (90), %.2f (180), %.2f (360)\n", c0[0],
+                  c90[0], c180[0], c360[0]);
+    assert_true(fabs(c0[0] - mid) > 3);                     /* off centre to begin with */
+    assert_true(fabs((c0[0] - mid) + (c180[0] - mid)) < 1); /* mirrored at 180 */
+    assert_true(fabs(c0[1] - c180[1]) < 1);                 /* about the vertical axis */
+    assert_true(fabs(c90[0] - c0[0]) > 2);                  /* 90 degrees: elsewhere */
+    assert_true(fabs(c360[0] - c0[0]) < 0.05 && fabs(c360[1] - c0[1]) < 0.05);
+}
+
+/* --zoom 2 (orthographic: the framed height halves) doubles the
+ * silhouette's width and height and quadruples its area, about the
+ * image centre. */
+static void
+test_option_zoom(void **state) {
+    (void)state;
+    const char *blob = write_blob();
+    vv_image *one = render_with(blob, 1, "opt-zoom1.png", (const char *const[]){"--ortho", NULL});
+    vv_image *two = render_with(blob, 1, "opt-zoom2.png",
+                                (const char *const[]){"--ortho", "--zoom", "2", NULL});
+    double c1[2], c2[2];
+    int a1, w1, h1, a2, w2, h2;
+    image_shape(one, c1, &a1, &w1, &h1);
+    image_shape(two, c2, &a2, &w2, &h2);
+    print_message("zoom: silhouette %dx%d (%d px) -> %dx%d (%d px), centroid (%.2f, %.2f) -> "
+                  "(%.2f, %.2f)\n",
+                  w1, h1, a1, w2, h2, a2, c1[0], c1[1], c2[0], c2[1]);
+    assert_true(w1 >= 8 && h1 >= 8);
+    assert_true(fabs((double)w2 / w1 - 2) < 0.25 && fabs((double)h2 / h1 - 2) < 0.25);
+    assert_true(fabs((double)a2 / a1 - 4) < 0.6);
+    /* distances from the image centre double too */
+    for (int k = 0; k < 2; k++)
+        assert_true(fabs((c2[k] - 31.5) - 2 * (c1[k] - 31.5)) < 1.0);
+    vv_image_free(one);
+    vv_image_free(two);
+}
+
+/* --gamma G writes v^(1/G): every pixel of the default render, mapped by
+ * the power law, is the pixel of the gamma render (within 8-bit rounding). */
+static void
+test_option_gamma(void **state) {
+    (void)state;
+    const char *neghip = vt_data("volumes/neghip.slc");
+    vv_image *lin = render_with(neghip, 0, "opt-gamma1.png", (const char *const[]){NULL});
+    vv_image *g =
+        render_with(neghip, 0, "opt-gamma22.png", (const char *const[]){"--gamma", "2.2", NULL});
+    int checked = 0, changed = 0;
+    double worst = 0;
+    for (int i = 0; i < 4 * lin->width * lin->height; i++) {
+        if (i % 4 == 3)
+            continue; /* alpha */
+        const double x = lin->rgba[i], y = g->rgba[i];
+        if (x < 16.0 / 255)
+            continue; /* the power law's slope is steep near 0: rounding dominates */
+        const double want = pow(x, 1 / 2.2);
+        /* the linear value was rounded to 1/255: allow that through the slope */
+        const double tol = (1.0 + 0.5 * (1 / 2.2) * pow(x, 1 / 2.2 - 1)) / 255;
+        worst = fmax(worst, fabs(y - want) / tol);
+        if (!(fabs(y - want) <= tol))
+            fail_msg("channel %d: %.4f with gamma 2.2, expected %.4f = %.4f^(1/2.2)", i, y, want,
+                     x);
+        checked++;
+        changed += fabs(y - x) > 2.0 / 255;
+    }
+    print_message("gamma: %d values checked, %d changed, worst error %.2f of the tolerance\n",
+                  checked, changed, worst);
+    assert_true(checked > 500 && changed > checked / 2);
+    vv_image_free(lin);
+    vv_image_free(g);
 }
 
 static void
@@ -801,6 +1018,10 @@ main(void) {
         cmocka_unit_test(test_info_nut),
         cmocka_unit_test(test_info_raw),
         cmocka_unit_test(test_render_png),
+        cmocka_unit_test(test_option_mode_mip),
+        cmocka_unit_test(test_option_azimuth),
+        cmocka_unit_test(test_option_zoom),
+        cmocka_unit_test(test_option_gamma),
         cmocka_unit_test(test_render_failure_keeps_output),
         cmocka_unit_test(test_render_scene),
         cmocka_unit_test(test_render_raytrace_scene),
@@ -808,5 +1029,5 @@ main(void) {
         cmocka_unit_test(test_convert_roundtrip),
         cmocka_unit_test(test_convert_rescale_and_strict),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

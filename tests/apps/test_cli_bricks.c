@@ -2,11 +2,18 @@
  * The CLI out of core: `volvis convert IN OUT.vvb` (by bricks from an
  * uncompressed NRRD, whole from other formats), `volvis render OUT.vvb`
  * and `volvis render --memory-limit` (the same image as in memory with the
- * same transfer function; the `wrote` line counts the bricks read), and its
- * errors: a memory limit smaller than one brick, a bad size, a scene file.
+ * same transfer function; the `wrote` line counts the bricks read), with
+ * raycast and raytrace (region renders trace one ray a pixel: the ray
+ * tracer's quality 1; MIP byte for byte; composite with its shadows traced
+ * through the proxy: >= 50 dB where the proxy is the whole volume, the nut;
+ * on the CT head, a 4x coarser proxy (the .vvb's coarse level), exact
+ * without shadows and measured with them), and its errors: a memory limit
+ * smaller than one brick, a bad size, a scene file, a renderer without the
+ * region contract.
  */
 #include "testutil.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -21,7 +28,7 @@ test_convert_render(void **state) {
     struct stat st;
     const char *nut = vt_data("volumes/nut.slc");
     if (stat(nut, &st) != 0)
-        skip();
+        vt_skip("../shared/data/volumes/nut.slc is missing");
     char vvb[1200], nrrd[1200], vvb2[1200], mem[1200], ooc[1200], ooc2[1200];
     snprintf(vvb, sizeof vvb, "%s/nut.vvb", outdir());
     snprintf(nrrd, sizeof nrrd, "%s/nut_raw.nrrd", outdir());
@@ -66,13 +73,65 @@ test_convert_render(void **state) {
     free(c);
 }
 
+/* In memory and out of core (--memory-limit) with @p renderer at quality 1
+ * and the extra options; returns the PSNR of the two PNGs. */
+static double
+mem_vs_ooc(const char *input, const char *vvb, const char *renderer, const char *mode,
+           const char *set, const char *tf) {
+    char mem[1200], ooc[1200];
+    snprintf(mem, sizeof mem, "%s/%s_%s_mem.png", outdir(), renderer, mode);
+    snprintf(ooc, sizeof ooc, "%s/%s_%s_ooc.png", outdir(), renderer, mode);
+    vt_run_result r = run_cli("render", input, "--renderer", renderer, "--quality", "1", "--mode",
+                              mode, "--set", set, "--tf", tf, "--size", "96x80", "-q", "-o", mem);
+    assert_int_equal(r.status, 0);
+    vt_run_result_free(&r);
+    r = run_cli("render", vvb, "--memory-limit", "4M", "--renderer", renderer, "--quality", "1",
+                "--mode", mode, "--set", set, "--tf", tf, "--size", "96x80", "-o", ooc);
+    if (r.status != 0)
+        fail_msg("%s", r.err);
+    assert_non_null(strstr(r.out, "out of core: "));
+    vt_run_result_free(&r);
+    const double db = vt_png_psnr(mem, ooc);
+    printf("%s %s %s (%s): %.1f dB out of core against in memory\n", input, renderer, mode, set,
+           db);
+    return db;
+}
+
+static void
+test_renderers(void **state) {
+    (void)state;
+    struct stat st;
+    const char *nut = vt_data("volumes/nut.slc"), *head = vt_data("volumes/ct_head.nrrd");
+    if (stat(nut, &st) != 0 || stat(head, &st) != 0)
+        vt_skip("../shared/data/volumes/nut.slc or ct_head.nrrd is missing");
+    char nvvb[1200], hvvb[1200];
+    snprintf(nvvb, sizeof nvvb, "%s/nut_r.vvb", outdir());
+    snprintf(hvvb, sizeof hvvb, "%s/head_r.vvb", outdir());
+    vt_run_result r = run_cli("convert", "-q", nut, nvvb);
+    assert_int_equal(r.status, 0);
+    vt_run_result_free(&r);
+    r = run_cli("convert", "-q", head, hvvb);
+    assert_int_equal(r.status, 0);
+    vt_run_result_free(&r);
+    /* the nut (68 x 41 x 59) is its own proxy: shadows exact */
+    assert_true(isinf(mem_vs_ooc(nut, nvvb, "raytrace", "mip", "shadows=1", "40:200")));
+    assert_true(mem_vs_ooc(nut, nvvb, "raytrace", "composite", "shadows=1", "40:200") >= 50);
+    assert_true(isinf(mem_vs_ooc(nut, nvvb, "raycast", "mip", "simd=1", "40:200")));
+    /* the CT head: MIP exact; composite exact without shadows, with them
+     * through the 4x coarser proxy (docs/parallel.md gives the figure) */
+    assert_true(isinf(mem_vs_ooc(head, hvvb, "raytrace", "mip", "shadows=1", "100:1500")));
+    assert_true(mem_vs_ooc(head, hvvb, "raytrace", "composite", "shadows=0", "100:1500") >= 50);
+    assert_true(mem_vs_ooc(head, hvvb, "raytrace", "composite", "shadows=1", "100:1500") >= 30);
+    assert_true(mem_vs_ooc(head, hvvb, "raycast", "composite", "simd=1", "100:1500") >= 50);
+}
+
 static void
 test_errors(void **state) {
     (void)state;
     struct stat st;
     const char *nut = vt_data("volumes/nut.slc");
     if (stat(nut, &st) != 0)
-        skip();
+        vt_skip("../shared/data/volumes/nut.slc is missing");
     char vvb[1200], png[1200];
     snprintf(vvb, sizeof vvb, "%s/nut_e.vvb", outdir());
     snprintf(png, sizeof png, "%s/never.png", outdir());
@@ -93,6 +152,11 @@ test_errors(void **state) {
     assert_int_equal(r.status, 1);
     assert_non_null(strstr(r.err, "convert it to .vvb first"));
     vt_run_result_free(&r);
+    /* a renderer without the region contract */
+    r = run_cli("render", vvb, "--renderer", "splat", "-o", png);
+    assert_int_equal(r.status, 1);
+    assert_non_null(strstr(r.err, "splat renders no regions"));
+    vt_run_result_free(&r);
     assert_int_not_equal(stat(png, &st), 0);
 }
 
@@ -100,7 +164,8 @@ int
 main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_convert_render),
+        cmocka_unit_test(test_renderers),
         cmocka_unit_test(test_errors),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

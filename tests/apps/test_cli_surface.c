@@ -286,5 +286,5 @@ main(void) {
         cmocka_unit_test(test_measure_volume),
         cmocka_unit_test(test_measure_sections_and_meshes),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -180,5 +180,5 @@ main(void) {
         cmocka_unit_test(test_compress_decompress_info),
         cmocka_unit_test(test_errors),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -712,5 +712,5 @@ main(void) {
         cmocka_unit_test(test_bad_error_bounds),
         cmocka_unit_test(test_rates_both_versions),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -253,5 +253,5 @@ main(void) {
         cmocka_unit_test(test_status_names), cmocka_unit_test(test_progress),
         cmocka_unit_test(test_threads),      cmocka_unit_test(test_version),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

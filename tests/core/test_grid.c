@@ -331,5 +331,5 @@ main(void) {
         cmocka_unit_test(test_blocks_and_spherical),
         cmocka_unit_test(test_marching_tetrahedra_sphere),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -602,5 +602,5 @@ main(void) {
         cmocka_unit_test(test_write_out_of_space),
         cmocka_unit_test(test_write_replaces_atomically),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

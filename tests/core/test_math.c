@@ -599,5 +599,5 @@ main(void) {
         cmocka_unit_test(test_box_transform),
         cmocka_unit_test(test_plane),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -125,5 +125,5 @@ main(void) {
         cmocka_unit_test(test_round_trip),
         cmocka_unit_test(test_shared_meshes),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -678,11 +678,8 @@ test_large(void **state) {
     const int dims[3] = {512, 512, 512};
     vv_volume *v = NULL;
     vv_status s = vv_volume_new(&v, dims, VV_U8);
-    if (s == VV_ERR_NOMEM) {
-        print_message("skipping: 512^3 u8 (128 MiB) could not be allocated: %s\n",
-                      vv_error_message());
-        skip();
-    }
+    if (s == VV_ERR_NOMEM)
+        vt_skip("512^3 u8 (128 MiB) could not be allocated: %s", vv_error_message());
     vt_ok(s);
     assert_true(vv_volume_voxel_count(v) == (uint64_t)1 << 27);
     vv_volume_set(v, 511, 511, 511, 7);
@@ -774,5 +771,5 @@ main(void) {
         cmocka_unit_test(test_quantile),       cmocka_unit_test(test_large),
         cmocka_unit_test(test_type_names),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

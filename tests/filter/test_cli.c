@@ -157,10 +157,8 @@ static void
 test_ct_head_largest_bone(void **state) {
     (void)state;
     const char *ct = vt_data("volumes/ct_head.nrrd");
-    if (access(ct, R_OK) != 0) {
-        print_message("skipping: %s is missing\n", ct);
-        skip();
-    }
+    if (access(ct, R_OK) != 0)
+        vt_skip("%s is missing", ct);
     vv_volume *v;
     vt_ok(vv_volume_load(&v, ct, NULL));
     vv_filter_options o;
@@ -225,5 +223,5 @@ main(void) {
         cmocka_unit_test(test_bad_usage),
         cmocka_unit_test(test_ct_head_largest_bone),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

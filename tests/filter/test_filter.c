@@ -586,5 +586,5 @@ main(void) {
         cmocka_unit_test(test_morphology_shapes),
         cmocka_unit_test(test_vesselness),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

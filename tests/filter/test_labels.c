@@ -162,5 +162,5 @@ main(void) {
         cmocka_unit_test(test_measure_labels),
         cmocka_unit_test(test_scene_labels),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

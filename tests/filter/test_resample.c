@@ -53,11 +53,8 @@ check(const vv_volume *v, const char *in_path, const int dims[3], vv_filter_kern
 static void
 test_unu(void **state) {
     (void)state;
-    if (system("command -v teem-unu >/dev/null 2>&1") != 0) {
-        print_message("teem-unu (package teem-apps) is missing: skipping the comparison with "
-                      "unu resample\n");
-        skip();
-    }
+    if (system("command -v teem-unu >/dev/null 2>&1") != 0)
+        vt_skip("teem-unu (package teem-apps) is missing: no comparison with unu resample");
     vv_volume *v;
     vt_ok(vv_volume_new(&v, (int[]){17, 13, 11}, VV_F32));
     v->spacing[0] = 0.7;
@@ -96,5 +93,5 @@ test_unu(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_unu)};
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

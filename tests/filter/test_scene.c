@@ -111,5 +111,5 @@ main(void) {
         cmocka_unit_test(test_filters_at_load),
         cmocka_unit_test(test_filter_errors),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

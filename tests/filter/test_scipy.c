@@ -21,9 +21,6 @@ scipy_available(void) {
     if (have_scipy < 0) {
         int rc = system(PY " -c 'import scipy.ndimage' >/dev/null 2>&1");
         have_scipy = rc == 0;
-        if (!have_scipy)
-            print_message("SciPy (python3-scipy for " PY ") is missing: skipping the comparison "
-                          "with scipy.ndimage\n");
     }
     return have_scipy;
 }
@@ -93,7 +90,7 @@ static void
 test_gaussian(void **state) {
     (void)state;
     if (!scipy_available())
-        skip();
+        vt_skip("SciPy (python3-scipy for " PY ") is missing: no comparison with scipy.ndimage");
     const int dims[3] = {23, 19, 17};
     vv_volume *v = noise(dims, VV_I16, -1000, 2000);
     v->spacing[0] = 0.8;
@@ -137,7 +134,7 @@ static void
 test_median(void **state) {
     (void)state;
     if (!scipy_available())
-        skip();
+        vt_skip("SciPy (python3-scipy for " PY ") is missing: no comparison with scipy.ndimage");
     check_median((int[]){21, 17, 13}, VV_U8, 1);
     check_median((int[]){21, 17, 13}, VV_I16, 1);
     check_median((int[]){15, 12, 11}, VV_F32, 2);
@@ -150,7 +147,7 @@ static void
 test_morphology(void **state) {
     (void)state;
     if (!scipy_available())
-        skip();
+        vt_skip("SciPy (python3-scipy for " PY ") is missing: no comparison with scipy.ndimage");
     const int dims[3] = {26, 22, 19};
     vv_volume *m = blobs(dims, 0.45);
     size_t n = (size_t)vv_volume_voxel_count(m);
@@ -184,7 +181,7 @@ static void
 test_labels(void **state) {
     (void)state;
     if (!scipy_available())
-        skip();
+        vt_skip("SciPy (python3-scipy for " PY ") is missing: no comparison with scipy.ndimage");
     const int dims[3] = {40, 33, 29};
     vv_volume *m = blobs(dims, 0.3);
     size_t n = (size_t)vv_volume_voxel_count(m);
@@ -226,5 +223,5 @@ main(void) {
         cmocka_unit_test(test_morphology),
         cmocka_unit_test(test_labels),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

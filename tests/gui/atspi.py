@@ -62,7 +62,7 @@ class Session:
         for tool in ("Xvfb", "xdotool", "dbus-launch"):
             if not shutil.which(tool):
                 skip(f"{tool} is not installed")
-        self.gui, self.args, self.out = gui, list(args), out
+        self.gui, self.args, self.out = os.path.abspath(gui), list(args), out
         os.makedirs(out, exist_ok=True)
         self.frames = os.path.join(out, "frames.log")
         if os.path.exists(self.frames):
@@ -281,10 +281,17 @@ class Session:
             res.append(o)
         return res
 
-    def find(self, name, role=None, root=None, timeout=10, visible=True):
+    def find(self, name, role=None, root=None, timeout=10, visible=None):
+        """The first widget of @p name (a string or a predicate) and @p role
+        under @p root; on screen unless @p visible is False (by default a
+        page, "… page", may reach below the window: it only needs extents)."""
+        if visible is None:
+            visible = not (isinstance(name, str) and name.endswith(" page"))
         t0 = time.time()
         while True:
             r = self.find_all(name, role, root, visible=visible)
+            if not visible:  # hidden pages of a stack have no extents
+                r = [o for o in r if self._has_extents(o)] or r
             if r:
                 return r[0]
             if time.time() - t0 > timeout:
@@ -304,6 +311,12 @@ class Session:
             if time.time() - t0 > timeout:
                 raise Failure("no such label on screen")
             time.sleep(0.3)
+
+    def _has_extents(self, o):
+        try:
+            return self.extents(o)[2] > 0
+        except Exception:
+            return False
 
     def value(self, o):
         return o.queryValue().currentValue
@@ -425,8 +438,17 @@ class Session:
                 break
             time.sleep(0.3)
         check(rows, f"no side-bar page {title!r}")
-        self.click(rows[0])
-        time.sleep(0.5)
+        def shown():  # a hidden page of the stack has no extents
+            return [o for o in self.find_all(f"{title} page") if self.extents(o)[2] > 0]
+
+        for _ in range(3):  # a click a busy GUI missed is made again
+            self.click(rows[0])
+            t0 = time.time()
+            while time.time() - t0 < 8:
+                if shown():
+                    return
+                time.sleep(0.3)
+        raise Failure(f"the side bar did not show the page {title!r}")
 
     def title(self):
         return self.xdo("getwindowname", self.wid).strip()

@@ -138,5 +138,5 @@ main(void) {
         cmocka_unit_test(test_undo_restores_first),
         cmocka_unit_test(test_save_writes_the_kept_world),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -85,5 +85,5 @@ main(void) {
         cmocka_unit_test(test_undo),
         cmocka_unit_test(test_tf_editing),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

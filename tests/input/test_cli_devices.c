@@ -47,5 +47,5 @@ test_devices_cli(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {cmocka_unit_test(test_devices_cli)};
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

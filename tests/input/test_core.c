@@ -490,5 +490,5 @@ main(void) {
         cmocka_unit_test(test_nan_and_huge),
         cmocka_unit_test(test_idle),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -316,7 +316,7 @@ main(void) {
 #endif
         cmocka_unit_test(test_network),
     };
-    int r = cmocka_run_group_tests(tests, NULL, NULL);
+    int r = vt_run_tests(tests, NULL, NULL);
     if (sockdir[0])
         rmdir(sockdir);
     return r;

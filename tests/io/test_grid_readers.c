@@ -11,6 +11,7 @@
 #include <zlib.h>
 
 #include "testutil.h"
+#include "volvis/sys/format.h"
 
 #if defined(__has_include)
 #if __has_include(<netcdf.h>)
@@ -46,7 +47,7 @@ static void
 test_hyper_dx(void **state) {
     (void)state;
     if (!have_data())
-        skip();
+        vt_skip("../shared/data/grids is missing");
     vv_grid *g = load("grids/hyper.dx");
     assert_int_equal(g->kind, VV_GRID_UNSTRUCTURED);
     assert_int_equal(g->n_points, 8000);
@@ -66,7 +67,7 @@ static void
 test_fire_vtu(void **state) {
     (void)state;
     if (!have_data())
-        skip();
+        vt_skip("../shared/data/grids is missing");
     vv_grid *g = load("grids/fire_ug.vtu");
     assert_int_equal(g->n_points, 12323);
     assert_int_equal(g->n_cells, 10462);
@@ -85,7 +86,7 @@ static void
 test_blow_vtk(void **state) {
     (void)state;
     if (!have_data())
-        skip();
+        vt_skip("../shared/data/grids is missing");
     vv_grid *g = load("grids/blow.vtk");
     assert_int_equal(g->n_points, 687);
     assert_int_equal(g->n_cells, 1057);
@@ -105,7 +106,7 @@ static void
 test_plot3d(void **state) {
     (void)state;
     if (!have_data())
-        skip();
+        vt_skip("../shared/data/grids is missing");
     vv_grid *g = load("grids/bluntfinxyz.bin");
     assert_int_equal(g->kind, VV_GRID_CURVILINEAR);
     assert_int_equal(g->n_blocks, 1);
@@ -134,11 +135,11 @@ static void
 test_levitus(void **state) {
     (void)state;
     if (!have_data())
-        skip();
+        vt_skip("../shared/data/grids is missing");
     vv_grid *g = NULL;
     vv_status s = vv_grid_load(&g, vt_data("grids/levitus_climatology.cdf"));
     if (s == VV_ERR_UNSUPPORTED)
-        skip(); /* built without NetCDF */
+        vt_skip("the build has no NetCDF (libnetcdf-dev)");
     vt_ok(s);
     assert_int_equal(g->kind, VV_GRID_SPHERICAL);
     assert_int_equal(g->sph_dims[0], 21); /* depth edges */
@@ -689,19 +690,60 @@ test_netcdf_without_coordinates(void **state) {
     vv_error_clear();
     vv_status s = vv_grid_load(&g, p);
     if (s == VV_ERR_UNSUPPORTED)
-        skip();
+        vt_skip("the build has no NetCDF (libnetcdf-dev)");
     assert_true(s < 0);
     assert_null(g);
     printf("  nocoords.nc: %s\n", vv_error_message());
     assert_non_null(strstr(vv_error_message(), "no coordinate variable"));
 #else
-    skip();
+    vt_skip("the test program was built without NetCDF (libnetcdf-dev)");
 #endif
+}
+
+/* The grid format table: complete records in the order of vv_grid_format,
+ * and every shared grid file detected as its format (volume files not). */
+static void
+test_format_table(void **state) {
+    (void)state;
+    int n = 0;
+    const vv_grid_format_record *const *t = vv_grid_format_table(&n);
+    assert_int_equal(n, VV_GRID_FORMAT_NETCDF);
+    static const char *const names[] = {"vtk", "vtu", "dx", "plot3d", "netcdf"};
+    for (int i = 0; i < n; i++) {
+        assert_int_equal(t[i]->version, VV_FORMAT_RECORD_VERSION);
+        assert_string_equal(t[i]->name, names[i]);
+        assert_non_null(t[i]->title);
+        assert_true(strlen(t[i]->doc) > 20);
+        assert_non_null(t[i]->looks_like);
+        assert_non_null(t[i]->read);
+    }
+    if (!have_data())
+        vt_skip("../shared/data/grids is missing");
+    static const struct {
+        const char *file;
+        vv_grid_format f;
+    } files[] = {{"grids/hyper.dx", VV_GRID_FORMAT_DX},
+                 {"grids/fire_ug.vtu", VV_GRID_FORMAT_VTU},
+                 {"grids/bluntfinxyz.bin", VV_GRID_FORMAT_PLOT3D},
+                 {"grids/combxyz.bin", VV_GRID_FORMAT_PLOT3D},
+                 {"grids/blow.vtk", VV_GRID_FORMAT_VTK},
+                 {"grids/levitus_climatology.cdf", VV_GRID_FORMAT_NETCDF}};
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        vv_grid_format f = VV_GRID_FORMAT_AUTO;
+        if (!vv_grid_file_detect(vt_data(files[i].file), &f) || f != files[i].f)
+            fail_msg("%s detected as %d, expected %d", files[i].file, (int)f, (int)files[i].f);
+    }
+    vv_grid_format f = VV_GRID_FORMAT_VTK;
+    assert_false(vv_grid_file_detect(vt_data("volumes/ironProt.vtk"), &f)); /* structured points */
+    assert_int_equal(f, VV_GRID_FORMAT_AUTO);
+    assert_false(vv_grid_file_detect(vt_data("volumes/nut.slc"), NULL));
+    assert_false(vv_grid_file_detect(vt_data("grids"), NULL)); /* a folder */
 }
 
 int
 main(void) {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_format_table),
         cmocka_unit_test(test_hyper_dx),
         cmocka_unit_test(test_fire_vtu),
         cmocka_unit_test(test_blow_vtk),
@@ -715,5 +757,5 @@ main(void) {
         cmocka_unit_test(test_netcdf_without_coordinates),
         cmocka_unit_test(test_scene_grid_object),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

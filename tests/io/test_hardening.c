@@ -715,5 +715,5 @@ main(void) {
         cmocka_unit_test(test_teem_failed_loads_free),
         cmocka_unit_test(test_cli_budget_and_info),
     };
-    return cmocka_run_group_tests(tests, setup, NULL);
+    return vt_run_tests(tests, setup, NULL);
 }

@@ -373,5 +373,5 @@ main(void) {
         cmocka_unit_test(test_compressed), cmocka_unit_test(test_data_files),
         cmocka_unit_test(test_bad_input),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

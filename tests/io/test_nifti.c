@@ -55,10 +55,8 @@ static void
 test_ch2_if_installed(void **state) {
     (void)state;
     const char *path = "/usr/share/mricron/templates/ch2.nii.gz";
-    if (access(path, R_OK) != 0) {
-        skip();
-        return;
-    }
+    if (access(path, R_OK) != 0)
+        vt_skip("%s (package mricron-data) is not installed", path);
     vv_volume *v = NULL;
     vt_ok(vv_nifti_read(&v, path));
     assert_int_equal(v->dims[0], 181);
@@ -426,5 +424,5 @@ main(void) {
         cmocka_unit_test(test_pixdim_only_f64_scaled_gz),
         cmocka_unit_test(test_bad_input),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -183,5 +183,5 @@ main(void) {
         cmocka_unit_test(test_byte_order_and_skip),
         cmocka_unit_test(test_bad_input),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

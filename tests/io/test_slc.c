@@ -446,5 +446,5 @@ main(void) {
         cmocka_unit_test(test_truncations_and_noise),
         cmocka_unit_test(test_write_errors),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

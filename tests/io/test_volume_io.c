@@ -3,6 +3,7 @@
  * shared volume (dimensions from ../shared/data/README.md).
  */
 #include "testutil.h"
+#include "volvis/sys/format.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -42,15 +43,17 @@ static const struct {
 static void
 test_format_names(void **state) {
     (void)state;
-    for (int f = VV_FORMAT_AUTO; f <= VV_FORMAT_UNKNOWN; f++) {
+    /* every row of the table: its name and aliases parse to its id */
+    const int n = vv_format_count();
+    assert_true(n >= 8);
+    for (int f = VV_FORMAT_AUTO; f <= n; f++) {
         vv_format g = VV_FORMAT_UNKNOWN;
-        if (f == VV_FORMAT_UNKNOWN)
-            break;
         vt_ok(vv_format_parse(vv_format_name((vv_format)f), &g));
         assert_int_equal(g, f);
     }
     assert_string_equal(vv_format_name(VV_FORMAT_NIFTI), "nifti");
-    assert_string_equal(vv_format_name((vv_format)99), "unknown");
+    assert_string_equal(vv_format_name((vv_format)(n + 1)), "unknown");
+    assert_string_equal(vv_format_name(VV_FORMAT_UNKNOWN), "unknown");
     vv_format g;
     vt_ok(vv_format_parse("NRRD", &g));
     assert_int_equal(g, VV_FORMAT_NRRD);
@@ -58,7 +61,62 @@ test_format_names(void **state) {
     assert_int_equal(g, VV_FORMAT_TIFF);
     vt_ok(vv_format_parse("DICOM", &g));
     assert_int_equal(g, VV_FORMAT_DICOM);
+    vt_ok(vv_format_parse("metaimage", &g));
+    assert_int_equal(g, VV_FORMAT_MHD);
+    vv_error_clear();
     assert_int_equal(vv_format_parse("gif", &g), VV_ERR_INVALID);
+    /* the message lists the table's names */
+    assert_non_null(
+        strstr(vv_error_message(), "auto, slc, nrrd, nifti, mhd, vtk, raw, tiff or dicom"));
+}
+
+/* The records (include/volvis/sys/format.h): complete, the version of the
+ * header, the named ids in their rows, unique names, writers with
+ * extensions, and each extension of a writer chosen by vv_volume_save. */
+static void
+test_format_table(void **state) {
+    (void)state;
+    int n = 0;
+    const vv_volume_format *const *t = vv_volume_format_table(&n);
+    assert_int_equal(n, vv_format_count());
+    for (int i = 0; i < n; i++) {
+        const vv_volume_format *r = t[i];
+        assert_int_equal(r->version, VV_FORMAT_RECORD_VERSION);
+        assert_non_null(r->name);
+        assert_non_null(r->title);
+        assert_non_null(r->doc);
+        assert_non_null(r->read);
+        assert_true(strlen(r->doc) > 20);
+        assert_string_equal(vv_format_name((vv_format)(i + 1)), r->name);
+        for (int j = 0; j < i; j++)
+            assert_string_not_equal(t[j]->name, r->name);
+        /* a format with no signature is read only when described */
+        if (!r->looks_like)
+            assert_true(r->flags & VV_FORMAT_FLAG_DESCRIBED);
+        if (r->write)
+            assert_non_null(r->extensions);
+    }
+    static const struct {
+        vv_format id;
+        const char *name;
+    } named[] = {{VV_FORMAT_SLC, "slc"},   {VV_FORMAT_NRRD, "nrrd"},  {VV_FORMAT_NIFTI, "nifti"},
+                 {VV_FORMAT_MHD, "mhd"},   {VV_FORMAT_VTK, "vtk"},    {VV_FORMAT_RAW, "raw"},
+                 {VV_FORMAT_TIFF, "tiff"}, {VV_FORMAT_DICOM, "dicom"}};
+    for (size_t i = 0; i < sizeof named / sizeof named[0]; i++)
+        assert_string_equal(t[named[i].id - 1]->name, named[i].name);
+    /* the third-party parsers are marked for the sandbox */
+    assert_true(t[VV_FORMAT_NRRD - 1]->flags & VV_FORMAT_FLAG_THIRD_PARTY);
+    assert_true(t[VV_FORMAT_DICOM - 1]->flags & VV_FORMAT_FLAG_THIRD_PARTY);
+    assert_false(t[VV_FORMAT_SLC - 1]->flags & VV_FORMAT_FLAG_THIRD_PARTY);
+    /* SLC's fits test says what it cannot hold */
+    int dims[3] = {2, 2, 2};
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_new(&v, dims, VV_I16));
+    char why[256] = "";
+    assert_false(t[VV_FORMAT_SLC - 1]->fits(v, why, sizeof why));
+    assert_non_null(strstr(why, "8-bit"));
+    assert_non_null(strstr(why, "i16"));
+    vv_volume_free(v);
 }
 
 static void
@@ -283,10 +341,10 @@ test_save_reload(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_format_names),    cmocka_unit_test(test_detect_shared),
-        cmocka_unit_test(test_detect_handmade), cmocka_unit_test(test_load_shared),
-        cmocka_unit_test(test_load_errors),     cmocka_unit_test(test_load_raw),
-        cmocka_unit_test(test_save_reload),
+        cmocka_unit_test(test_format_names),  cmocka_unit_test(test_format_table),
+        cmocka_unit_test(test_detect_shared), cmocka_unit_test(test_detect_handmade),
+        cmocka_unit_test(test_load_shared),   cmocka_unit_test(test_load_errors),
+        cmocka_unit_test(test_load_raw),      cmocka_unit_test(test_save_reload),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

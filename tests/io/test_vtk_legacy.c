@@ -220,5 +220,5 @@ main(void) {
         cmocka_unit_test(test_synthetic_ascii),
         cmocka_unit_test(test_bad_input),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

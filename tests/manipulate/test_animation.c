@@ -527,5 +527,5 @@ main(void) {
         cmocka_unit_test(test_file_roundtrip),
         cmocka_unit_test(test_file_errors),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -332,5 +332,5 @@ main(void) {
         cmocka_unit_test(test_video_cancel_resume),
         cmocka_unit_test(test_video_writer_direct),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -311,5 +311,5 @@ main(void) {
         cmocka_unit_test(test_objects_lights), cmocka_unit_test(test_policy),
         cmocka_unit_test(test_preview_render),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

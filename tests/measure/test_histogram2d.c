@@ -49,5 +49,5 @@ main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_ramp_constant_gradient),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

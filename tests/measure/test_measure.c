@@ -580,6 +580,76 @@ test_mesh_measures(void **state) {
     vv_mesh_free(b);
 }
 
+/* Geometric objects: area and volume against the analytic ones, placed by
+ * their transforms; distances between objects against the exact ones; the
+ * closest points do not depend on the thread count. */
+static void
+test_object_measures(void **state) {
+    (void)state;
+    vv_object *sp = NULL, *bx = NULL, *cy = NULL, *pg = NULL, *pl = NULL;
+    vt_ok(vv_object_new_geometry(&sp, VV_OBJECT_SPHERE, "ball"));
+    sp->geometry.radius = 2;
+    sp->scale = vv_vec3_make(3, 3, 3); /* radius 6 in the world */
+    sp->position = vv_vec3_make(20, 0, 0);
+    vv_object_measure m;
+    const double tol = 1e-3;
+    vt_ok(vv_measure_object(sp, tol, &m));
+    assert_true(m.solid);
+    /* inscribed facets: smaller, by at most about 2 tol / r */
+    const double A = 4 * VV_PI * 36, V = 4.0 / 3 * VV_PI * 216;
+    assert_true(m.area < A && m.area > A * (1 - 4 * tol / 6));
+    assert_true(m.volume < V && m.volume > V * (1 - 6 * tol / 6));
+    /* a rotated box: exact */
+    vt_ok(vv_object_new_geometry(&bx, VV_OBJECT_BOX, "crate"));
+    bx->geometry.box = (vv_box){{0, 0, 0}, {3, 4, 5}};
+    bx->orientation = vv_quat_from_axis_angle(vv_vec3_make(1, 1, 0), 0.7);
+    vt_ok(vv_measure_object(bx, 0, &m));
+    assert_near(m.area, 2 * (12 + 20 + 15), 1e-5);
+    assert_near(m.volume, 60, 1e-5);
+    assert_int_equal(m.n_triangles, 12);
+    /* a capped cylinder stretched along its axis by the scale */
+    vt_ok(vv_object_new_geometry(&cy, VV_OBJECT_CYLINDER, "can"));
+    cy->geometry.base = vv_vec3_make(0, 0, 0);
+    cy->geometry.top = vv_vec3_make(0, 0, 2);
+    cy->geometry.radius = 1;
+    cy->scale = vv_vec3_make(1, 1, 5);
+    vt_ok(vv_measure_object(cy, tol, &m));
+    assert_true(fabs(m.volume / (VV_PI * 10) - 1) < 4 * tol);
+    assert_true(fabs(m.area / (2 * VV_PI * 10 + 2 * VV_PI) - 1) < 4 * tol);
+    /* a polygon: its area, no volume */
+    vt_ok(vv_object_new_geometry(&pg, VV_OBJECT_POLYGON, "L"));
+    const vv_vec3 L[6] = {{0, 0, 0}, {2, 0, 0}, {2, 1, 0}, {1, 1, 0}, {1, 2, 0}, {0, 2, 0}};
+    vt_ok(vv_object_set_polygon(pg, 6, L));
+    vt_ok(vv_measure_object(pg, 0, &m));
+    assert_near(m.area, 3, 1e-12);
+    assert_near(m.volume, 0, 0);
+    assert_false(m.solid);
+    /* a plane is unbounded; a volume is not geometry */
+    vt_ok(vv_object_new_geometry(&pl, VV_OBJECT_PLANE, NULL));
+    vt_err(vv_measure_object(pl, 0, &m));
+    vt_err(vv_measure_object(NULL, 0, &m));
+    /* distances: sphere to box face (exact to the tolerance), polygon to box */
+    bx->orientation = vv_quat_identity();
+    bx->position = vv_vec3_make(5, -2, -2); /* x from 5 to 8 */
+    double d, d1;
+    vv_vec3 pa, pb, qa, qb;
+    vt_ok(vv_measure_object_distance(sp, bx, tol, 2, &d, &pa, &pb));
+    assert_true(fabs(d - (20 - 6 - 8)) < 2 * tol);
+    assert_near(vv_vec3_length(vv_vec3_sub(pa, pb)), d, 1e-9);
+    vt_ok(vv_measure_object_distance(sp, bx, tol, 1, &d1, &qa, &qb));
+    assert_true(d1 == d && qa.x == pa.x && qa.y == pa.y && qa.z == pa.z && qb.x == pb.x &&
+                qb.y == pb.y && qb.z == pb.z);
+    pg->position = vv_vec3_make(5, 0, -7); /* the L under the box, 5 below its bottom */
+    vt_ok(vv_measure_object_distance(pg, bx, 0, 2, &d, NULL, NULL));
+    assert_near(d, 5, 1e-6);
+    vt_err(vv_measure_object_distance(pg, pl, 0, 2, &d, NULL, NULL));
+    vv_object_free(sp);
+    vv_object_free(bx);
+    vv_object_free(cy);
+    vv_object_free(pg);
+    vv_object_free(pl);
+}
+
 /* Geodesics: a plane (straight lines), a sphere (great circles), and a surface-tracked
  * section (points on another sphere are unreachable). */
 static void
@@ -667,7 +737,8 @@ main(void) {
         cmocka_unit_test(test_ct_head),
         cmocka_unit_test(test_distance),
         cmocka_unit_test(test_mesh_measures),
+        cmocka_unit_test(test_object_measures),
         cmocka_unit_test(test_geodesic),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

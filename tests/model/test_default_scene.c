@@ -251,5 +251,5 @@ main(void) {
         cmocka_unit_test(test_synthetic),
         cmocka_unit_test(test_single_slice),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

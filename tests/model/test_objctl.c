@@ -337,5 +337,5 @@ main(void) {
         cmocka_unit_test(test_scene_round_trip),
         cmocka_unit_test(test_scene_errors),
     };
-    return cmocka_run_group_tests(tests, setup, NULL);
+    return vt_run_tests(tests, setup, NULL);
 }

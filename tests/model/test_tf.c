@@ -116,5 +116,5 @@ main(void) {
         cmocka_unit_test(test_step),  cmocka_unit_test(test_limits),
         cmocka_unit_test(test_ramp),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

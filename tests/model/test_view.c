@@ -175,5 +175,5 @@ main(void) {
         cmocka_unit_test(test_orthographic), cmocka_unit_test(test_frame_box),
         cmocka_unit_test(test_orbit),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

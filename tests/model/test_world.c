@@ -185,5 +185,5 @@ main(void) {
         cmocka_unit_test(test_world),
         cmocka_unit_test(test_world_clone),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

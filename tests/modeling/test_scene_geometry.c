@@ -250,5 +250,5 @@ main(void) {
         cmocka_unit_test(test_bad_scenes),
         cmocka_unit_test(test_cli),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

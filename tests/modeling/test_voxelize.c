@@ -325,6 +325,98 @@ test_primitives(void **state) {
     check_shape(s, 8.0 * 2 * VT_PI * (34.0 / 3) * 40 / 5.0, 0, 0.5, "helix thread");
 }
 
+/* World objects as model primitives (vv_shape_object: the geometry-type
+ * table's distances): analytic volumes and areas, the same voxels as
+ * Modeling's own sphere and box, CSG with them, and the refusals. */
+static void
+test_world_objects(void **state) {
+    (void)state;
+    vv_object *o = NULL;
+    vv_shape *s = NULL;
+    /* a sphere placed and rotated by the object transform */
+    vt_ok(vv_object_new_geometry(&o, VV_OBJECT_SPHERE, "ball"));
+    o->geometry.radius = 12;
+    o->position = vv_vec3_make(5, -3, 2);
+    vt_ok(vv_shape_object(&s, o));
+    check_shape(s, 4.0 / 3 * VT_PI * 12 * 12 * 12, 4 * VT_PI * 144, 0.5, "object sphere");
+    /* voxel for voxel the same as Modeling's sphere there */
+    vv_voxelize_options opt;
+    opts_f32(&opt, VV_FILTER_TENT, 1.5);
+    opt.voxel_spacing = 1.0;
+    vt_ok(vv_shape_object(&s, o));
+    vv_volume *a = vox(s, &opt);
+    vv_shape_free(s);
+    vt_ok(vv_shape_sphere(&s, 12));
+    vv_shape_transform(s, vv_mat4_translate(o->position));
+    vv_volume *b = vox(s, &opt);
+    vv_shape_free(s);
+    assert_memory_equal(a->dims, b->dims, sizeof a->dims);
+    assert_memory_equal(a->data, b->data, vv_volume_voxel_count(a) * sizeof(float));
+    vv_volume_free(a);
+    vv_volume_free(b);
+    vv_object_free(o);
+    /* a box off the origin, rotated: V = abc, A = 2(ab + bc + ca) */
+    vt_ok(vv_object_new_geometry(&o, VV_OBJECT_BOX, "crate"));
+    o->geometry.box = (vv_box){{-5, 0, 2}, {25, 20, 16}};
+    o->orientation = vv_quat_from_axis_angle(vv_vec3_make(1, 2, 3), 0.6);
+    vt_ok(vv_shape_object(&s, o));
+    check_shape(s, 30 * 20 * 14, 2 * (30 * 20 + 20 * 14 + 14 * 30), 0.5, "object box");
+    /* the same voxels as Modeling's box of the same size and centre */
+    o->orientation = vv_quat_identity();
+    vt_ok(vv_shape_object(&s, o));
+    a = vox(s, &opt);
+    vv_shape_free(s);
+    vt_ok(vv_shape_box(&s, vv_vec3_make(30, 20, 14), 0));
+    vv_shape_transform(s, vv_mat4_translate(vv_vec3_make(10, 10, 9)));
+    b = vox(s, &opt);
+    vv_shape_free(s);
+    assert_memory_equal(a->data, b->data, vv_volume_voxel_count(a) * sizeof(float));
+    vv_volume_free(a);
+    vv_volume_free(b);
+    vv_object_free(o);
+    /* a capped cylinder along a slanted axis: V = pi r^2 h, A = 2 pi r (r + h) */
+    vt_ok(vv_object_new_geometry(&o, VV_OBJECT_CYLINDER, "can"));
+    o->geometry.base = vv_vec3_make(0, 0, 0);
+    o->geometry.top = vv_vec3_make(12, 16, 0); /* h = 20 */
+    o->geometry.radius = 6;
+    vt_ok(vv_shape_object(&s, o));
+    check_shape(s, VT_PI * 36 * 20, 2 * VT_PI * 6 * 26, 0.5, "object cylinder");
+    /* minus a sphere on its axis: CSG works on object shapes */
+    vv_shape *kids[2] = {NULL, NULL};
+    vt_ok(vv_shape_object(&kids[0], o));
+    vt_ok(vv_shape_sphere(&kids[1], 4));
+    vv_shape_transform(kids[1], vv_mat4_translate(vv_vec3_make(6, 8, 0)));
+    vt_ok(vv_shape_csg(&s, VV_CSG_DIFFERENCE, 2, kids));
+    check_shape(s, VT_PI * 36 * 20 - 4.0 / 3 * VT_PI * 64, 0, 0.5, "cylinder minus sphere");
+    /* an open tube, a polygon, a plane and a volume are refused */
+    o->geometry.capped = 0;
+    vt_err(vv_shape_object(&s, o));
+    assert_null(s);
+    vv_object_free(o);
+    vt_ok(vv_object_new_geometry(&o, VV_OBJECT_PLANE, NULL));
+    vt_err(vv_shape_object(&s, o));
+    vv_object_free(o);
+    vt_ok(vv_object_new_geometry(&o, VV_OBJECT_POLYGON, NULL));
+    const vv_vec3 quad[4] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    vt_ok(vv_object_set_polygon(o, 4, quad));
+    vt_err(vv_shape_object(&s, o));
+    vv_object_free(o);
+    vt_ok(vv_object_new_geometry(&o, VV_OBJECT_SPHERE, NULL));
+    o->geometry.radius = -1;
+    vt_err(vv_shape_object(&s, o));
+    vv_object_free(o);
+    /* a mesh object: Modeling's scan conversion of the mesh */
+    vv_mesh *m = vt_sphere_mesh(10, 4);
+    vt_ok(vv_object_new_geometry(&o, VV_OBJECT_MESH, NULL));
+    vt_ok(vv_object_set_mesh(o, m, NULL));
+    vv_mesh_free(m);
+    vt_ok(vv_shape_object(&s, o));
+    double mv = 0;
+    vt_ok(vv_measure_mesh_volume(o->geometry.mesh, &mv));
+    check_shape(s, mv, 0, 0.5, "object mesh");
+    vv_object_free(o);
+}
+
 static void
 test_csg(void **state) {
     (void)state;
@@ -918,7 +1010,7 @@ main(void) {
         cmocka_unit_test(test_primitives),       cmocka_unit_test(test_csg),
         cmocka_unit_test(test_meshes),           cmocka_unit_test(test_imperfect_meshes),
         cmocka_unit_test(test_winding_number),   cmocka_unit_test(test_bad_input),
-        cmocka_unit_test(test_threads_progress),
+        cmocka_unit_test(test_threads_progress), cmocka_unit_test(test_world_objects),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -1,9 +1,11 @@
 /*
  * Run under mpirun by tests/parallel/test_mpi.c: renders scenes both
- * distributed (vv_parallel_render, binary swap and radix-k) and, on rank 0,
- * in one process with the ordinary raycast renderer, and compares the float
- * images: maximum and minimum intensity projection bit for bit, composite
- * >= 50 dB PSNR. The volumes are a synthetic 70x66x60 u16 volume whose
+ * distributed (vv_parallel_render, binary swap and radix-k, through the
+ * region contract) and, on rank 0, in one process with the same renderer
+ * (raycast; raytrace at quality 1, one ray a pixel with its shadows, which
+ * every rank traces through the World's whole volume), and compares the
+ * float images: maximum and minimum intensity projection bit for bit,
+ * composite >= 50 dB PSNR. The volumes are a synthetic 70x66x60 u16 volume whose
  * objects straddle the brick faces (they sit around the middle of every
  * axis, where the first cuts fall) and, when ../shared is there, the CT
  * head. Then a World that one rank cannot render (rank 1's object hidden)
@@ -59,8 +61,8 @@ psnr(const vv_image *a, const vv_image *b, int *identical) {
 }
 
 static void
-run_case(const char *name, vv_volume *vol, vv_render_mode mode, double azimuth, double elevation,
-         int ortho, vv_compositing method, int radix) {
+run_case_with(const char *renderer, const char *name, vv_volume *vol, vv_render_mode mode,
+              double azimuth, double elevation, int ortho, vv_compositing method, int radix) {
     vv_default_scene_options o;
     vv_default_scene_options_init(&o);
     o.mode = mode;
@@ -77,35 +79,42 @@ run_case(const char *name, vv_volume *vol, vv_render_mode mode, double azimuth, 
     po.method = method;
     po.radix = radix;
     vv_parallel *par = NULL;
+    vv_renderer *dren = NULL;
     vv_image *dist = NULL, *one = NULL;
+    vv_render_options ro;
+    vv_render_options_init(&ro);
+    ro.quality = strcmp(renderer, "raytrace") == 0 ? 1 : 2; /* regions: one ray a pixel */
     if (s == VV_OK)
-        s = vv_parallel_new(&par, NULL, &po);
+        s = vv_renderer_new(&dren, renderer);
+    if (s == VV_OK)
+        s = vv_parallel_new(&par, dren, &po);
     if (s == VV_OK && rank == 0)
         s = vv_image_new(&dist, w->view.width, w->view.height);
     s = vv_parallel_agree(s);
     if (s == VV_OK)
-        s = vv_parallel_render(par, w, &w->view, NULL, dist, NULL);
+        s = vv_parallel_render(par, w, &w->view, &ro, dist, NULL);
     if (rank == 0) {
         const char *what = mode == VV_MODE_MIP     ? "mip"
                            : mode == VV_MODE_MINIP ? "minip"
                                                    : "composite";
         const char *how = method == VV_COMPOSITING_BINARY_SWAP ? "binary-swap" : "radix-k";
         if (s != VV_OK) {
-            printf("FAIL %s %s %s np %d: %s\n", name, what, how, size, vv_error_message());
+            printf("FAIL %s %s %s %s np %d: %s\n", renderer, name, what, how, size,
+                   vv_error_message());
             failures++;
         } else {
             vv_renderer *ren = NULL;
-            s = vv_renderer_new(&ren, "raycast");
+            s = vv_renderer_new(&ren, renderer);
             if (s == VV_OK)
                 s = vv_image_new(&one, w->view.width, w->view.height);
             if (s == VV_OK)
-                s = vv_renderer_render(ren, w, &w->view, NULL, one);
+                s = vv_renderer_render(ren, w, &w->view, &ro, one);
             vv_renderer_free(ren);
             int same = 0;
             const double db = s == VV_OK ? psnr(one, dist, &same) : 0;
             const int ok = s == VV_OK && (mode == VV_MODE_COMPOSITE ? db >= 50 : same);
-            printf("%s %s %s %s%s np %d: %s, %.1f dB\n", ok ? "ok" : "FAIL", name, what, how,
-                   ortho ? " ortho" : "", size, same ? "bit-identical" : "differs", db);
+            printf("%s %s %s %s %s%s np %d: %s, %.1f dB\n", ok ? "ok" : "FAIL", renderer, name,
+                   what, how, ortho ? " ortho" : "", size, same ? "bit-identical" : "differs", db);
             failures += !ok;
         }
     } else if (s != VV_OK) {
@@ -114,7 +123,14 @@ run_case(const char *name, vv_volume *vol, vv_render_mode mode, double azimuth, 
     vv_image_free(dist);
     vv_image_free(one);
     vv_parallel_free(par);
+    vv_renderer_free(dren);
     vv_world_free(w);
+}
+
+static void
+run_case(const char *name, vv_volume *vol, vv_render_mode mode, double azimuth, double elevation,
+         int ortho, vv_compositing method, int radix) {
+    run_case_with("raycast", name, vol, mode, azimuth, elevation, ortho, method, radix);
 }
 
 /* A World rank 1 cannot render: every rank must return rank 1's error. */
@@ -154,6 +170,8 @@ main(int argc, char **argv) {
         run_case("synthetic", syn, modes[m], 30, 20, 0, VV_COMPOSITING_BINARY_SWAP, 4);
         run_case("synthetic", syn, modes[m], 30, 20, 0, VV_COMPOSITING_RADIX_K, 4);
         run_case("synthetic", syn, modes[m], 110, -35, 1, VV_COMPOSITING_RADIX_K, 2);
+        run_case_with("raytrace", "synthetic", syn, modes[m], 30, 20, 0, VV_COMPOSITING_BINARY_SWAP,
+                      4);
     }
     if (argc > 1) {
         char path[4096];
@@ -162,6 +180,10 @@ main(int argc, char **argv) {
         if (vv_volume_load(&head, path, NULL) == VV_OK) {
             run_case("ct_head", head, VV_MODE_COMPOSITE, 200, 15, 0, VV_COMPOSITING_BINARY_SWAP, 4);
             run_case("ct_head", head, VV_MODE_MIP, 200, 15, 0, VV_COMPOSITING_RADIX_K, 3);
+            run_case_with("raytrace", "ct_head", head, VV_MODE_COMPOSITE, 200, 15, 0,
+                          VV_COMPOSITING_BINARY_SWAP, 4);
+            run_case_with("raytrace", "ct_head", head, VV_MODE_MIP, 200, 15, 0,
+                          VV_COMPOSITING_RADIX_K, 3);
         } else if (rank == 0) {
             printf("skip ct_head: %s\n", vv_error_message());
         }

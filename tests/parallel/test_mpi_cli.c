@@ -5,12 +5,15 @@
  * by bricks (each rank its own box) gives the one-process MIP image; a rank that
  * cannot read the input (or its .vvb is cut short) and ranks that read different scene
  * files stop every
- * rank with one clear error and no output; another renderer is refused.
+ * rank with one clear error and no output; the ray tracer gives the
+ * one-process image at quality 1 (MIP bit for bit, composite >= 50 dB on
+ * the PNGs); a renderer without the region contract is refused.
  * Every run has a time limit (timeout), so a hang fails instead of blocking.
  * Skipped when the build has no MPI.
  */
 #include "testutil.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -68,7 +71,7 @@ static void
 test_cli(void **state) {
     (void)state;
     if (!have_mpi())
-        skip();
+        vt_skip("the build has no MPI (libopenmpi-dev, openmpi-bin)");
 #ifdef VV_MPI_COMPARE
     const char *dir = outdir();
     /* two scene folders with a scene of the same name and different content,
@@ -98,7 +101,7 @@ test_cli(void **state) {
     chmod(wrap, 0755);
     struct stat st;
     if (stat(vt_data("volumes/neghip.slc"), &st) != 0)
-        skip();
+        vt_skip("../shared/data/volumes/neghip.slc is missing");
 
     char cmd[8192], *out = NULL, png[1400];
     /* the same scene everywhere: rank 0 writes and names the rank count */
@@ -215,14 +218,45 @@ test_cli(void **state) {
         free(out);
     }
 
-    /* another renderer than raycast is refused on every rank */
+    /* the ray tracer: the one-process image at quality 1 (regions trace one
+     * ray a pixel); MIP byte for byte, composite >= 50 dB */
+    for (int m = 0; m < 2; m++) {
+        char one[1400], three[1400];
+        snprintf(one, sizeof one, "%s/rt1_%d.png", dir, m);
+        snprintf(three, sizeof three, "%s/rt3_%d.png", dir, m);
+        const char *mode = m ? "--mode mip" : "";
+        snprintf(cmd, sizeof cmd, "%s render %s --renderer raytrace --quality 1 %s -q -o %s 2>&1",
+                 cli(), vt_data("volumes/neghip.slc"), mode, one);
+        rc = run(cmd, &out);
+        if (rc != 0)
+            fail_msg("%s\n%s", cmd, out);
+        free(out);
+        snprintf(cmd, sizeof cmd,
+                 MPIRUN " -np 3 %s %s %s %s render %s --renderer raytrace --quality 1 %s -o %s "
+                        "2>&1",
+                 wrap, a, a, cli(), vt_data("volumes/neghip.slc"), mode, three);
+        rc = run(cmd, &out);
+        if (rc != 0)
+            fail_msg("%s\n%s", cmd, out);
+        assert_non_null(strstr(out, "on 3 ranks)"));
+        free(out);
+        const double db = vt_png_psnr(one, three);
+        printf("mpirun -np 3 raytrace %s: %.1f dB against one process\n", m ? "mip" : "composite",
+               db);
+        if (m)
+            assert_true(isinf(db));
+        else
+            assert_true(db >= 50);
+    }
+
+    /* a renderer without the region contract is refused on every rank */
     snprintf(cmd, sizeof cmd,
              MPIRUN " -np 2 %s %s %s %s render s.json --renderer splat -o %s/splat.png 2>&1", wrap,
              a, a, cli(), dir);
     rc = run(cmd, &out);
     assert_int_not_equal(rc, 0);
     assert_int_not_equal(rc, 124);
-    assert_non_null(strstr(out, "under mpirun the renderer is raycast"));
+    assert_non_null(strstr(out, "splat renders no regions"));
     free(out);
 #endif
 }
@@ -232,5 +266,5 @@ main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cli),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -73,6 +73,13 @@ def test_renderer_registry_help():
     assert set(volvis.renderers) >= {"raycast", "raytrace", "splat", "surface"}
     info = volvis.renderers["raytrace"]
     assert "shadows" in info.__doc__ and info.description
+    # the typed option table: every default is accepted by the renderer
+    assert info.options["shadows"]["type"] == "bool" and info.options["samples"]["max"] == 16
+    assert "region" in info.capabilities and "volume" in info.draws
+    for name, ri in volvis.renderers.items():
+        for key, opt in ri.options.items():
+            if opt["type"] != "string":
+                volvis.Renderer(name).set(**{key: opt["default"]})
     r = info(shadows=False)
     assert isinstance(r, volvis.Renderer) and r.name == "raytrace"
 

@@ -113,15 +113,6 @@ scene_for(vv_volume *v, int size, double az, double el) {
     return w;
 }
 
-VT_UNUSED static int
-have_data(const char *rel) {
-    FILE *f = fopen(vt_data(rel), "rb");
-    if (!f)
-        return 0;
-    fclose(f);
-    return 1;
-}
-
 /* Renders w with both methods in @p mode, writes both images, returns the
  * PSNR. Projections get a grey ramp over the volume's range, opaque. */
 VT_UNUSED static double

@@ -495,5 +495,5 @@ main(void) {
         cmocka_unit_test(test_other_modes_decode),
         cmocka_unit_test(test_refusals),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -329,8 +329,9 @@ static void
 test_ct_head_images(void **state) {
     (void)state;
     vv_volume *v = NULL;
-    if (vv_volume_load(&v, vt_data("volumes/ct_head.nrrd"), NULL) != VV_OK)
-        skip();
+    if (!vt_have_data("volumes/ct_head.nrrd"))
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    vt_ok(vv_volume_load(&v, vt_data("volumes/ct_head.nrrd"), NULL));
     vv_world *w = NULL;
     vv_default_scene_options so;
     vv_default_scene_options_init(&so);
@@ -374,5 +375,5 @@ main(void) {
         cmocka_unit_test(test_texture_sphere_spherical), cmocka_unit_test(test_solid_checker_cube),
         cmocka_unit_test(test_ct_head_images),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -845,5 +845,5 @@ main(void) {
                                         teardown_timer),
         cmocka_unit_test_setup_teardown(test_scene_emission, setup_timer, teardown_timer),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -1021,7 +1021,9 @@ test_bad_input(void **state) {
     vt_err(vv_renderer_set_option(s, "segments", "2"));
     vt_err(vv_renderer_set_option(s, "colour", "1"));
     vt_ok(vv_renderer_set_option(s, "cull", "back"));
-    vt_ok(vv_renderer_set_option(s, "wireframe", "off"));
+    /* booleans are 0 or 1, as the option table says (render.h) */
+    vt_err(vv_renderer_set_option(s, "wireframe", "off"));
+    vt_ok(vv_renderer_set_option(s, "wireframe", "0"));
     vv_renderer_free(s);
 }
 
@@ -1297,5 +1299,5 @@ main(void) {
         cmocka_unit_test(test_neghip_cross_check),
         cmocka_unit_test(test_iso_cache_and_tf),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

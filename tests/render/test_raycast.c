@@ -1155,5 +1155,5 @@ main(void) {
         cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_real_files),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

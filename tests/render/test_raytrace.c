@@ -945,5 +945,5 @@ main(void) {
         cmocka_unit_test(test_progress_and_cancel),
         cmocka_unit_test(test_bad_input),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -188,8 +188,7 @@ test_ct_against_teem(void **state) {
     char cmd[2048];
     snprintf(cmd, sizeof cmd, "teem-unu slice -a 2 -p 54 -i '%s' -o '%s' 2>/dev/null", in, ref);
     if (system(cmd) != 0) {
-        print_message("teem-unu is not installed (Debian teem-apps)\n");
-        skip();
+        vt_skip("teem-unu is not installed (Debian teem-apps)");
     }
     vv_volume *v = NULL, *r = NULL;
     vt_ok(vv_volume_load(&v, in, NULL));
@@ -280,5 +279,5 @@ main(void) {
         cmocka_unit_test(test_transformed),  cmocka_unit_test(test_ct_against_teem),
         cmocka_unit_test(test_window_level), cmocka_unit_test(test_cli),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -14,8 +14,8 @@
 static void
 test_agree_transform_cut(void **state) {
     (void)state;
-    if (!have_data("volumes/neghip.slc"))
-        skip();
+    if (!vt_have_data("volumes/neghip.slc"))
+        vt_skip("../shared/data/volumes/neghip.slc is missing");
     vv_volume *v = NULL;
     vt_ok(vv_volume_load(&v, vt_data("volumes/neghip.slc"), NULL));
     v->spacing[2] = 1.7; /* anisotropic */
@@ -158,8 +158,8 @@ orbit_diffs(vv_renderer *r, vv_world *w, double a0, int n, double *d) {
 static void
 test_no_popping(void **state) {
     (void)state;
-    if (!have_data("volumes/neghip.slc"))
-        skip();
+    if (!vt_have_data("volumes/neghip.slc"))
+        vt_skip("../shared/data/volumes/neghip.slc is missing");
     vv_volume *v = NULL;
     vt_ok(vv_volume_load(&v, vt_data("volumes/neghip.slc"), NULL));
     /* ortho, looking along +x rotated about z: the axis-aligned method
@@ -291,8 +291,8 @@ identical(const vv_image *a, const vv_image *b) {
 static void
 test_threads_lists_culling(void **state) {
     (void)state;
-    if (!have_data("volumes/neghip.slc"))
-        skip();
+    if (!vt_have_data("volumes/neghip.slc"))
+        vt_skip("../shared/data/volumes/neghip.slc is missing");
     vv_volume *v = NULL;
     vt_ok(vv_volume_load(&v, vt_data("volumes/neghip.slc"), NULL));
     vv_world *w = scene_for(v, 96, 30, 20);
@@ -348,8 +348,8 @@ test_threads_lists_culling(void **state) {
 static void
 test_preclassified_and_quality(void **state) {
     (void)state;
-    if (!have_data("volumes/neghip.slc"))
-        skip();
+    if (!vt_have_data("volumes/neghip.slc"))
+        vt_skip("../shared/data/volumes/neghip.slc is missing");
     vv_volume *v = NULL;
     vt_ok(vv_volume_load(&v, vt_data("volumes/neghip.slc"), NULL));
     vv_world *w = scene_for(v, 128, 30, 20);
@@ -547,5 +547,5 @@ main(int argc, char **argv) {
         cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_view_inside),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -57,8 +57,8 @@ check_agreement(vv_volume *v, const char *name, int size) {
 static void
 test_agree_neghip(void **state) {
     (void)state;
-    if (!have_data("volumes/neghip.slc"))
-        skip();
+    if (!vt_have_data("volumes/neghip.slc"))
+        vt_skip("../shared/data/volumes/neghip.slc is missing");
     vv_volume *v = NULL;
     vt_ok(vv_volume_load(&v, vt_data("volumes/neghip.slc"), NULL));
     check_agreement(v, "neghip", 128);
@@ -68,8 +68,8 @@ test_agree_neghip(void **state) {
 static void
 test_agree_ct_head(void **state) {
     (void)state;
-    if (!have_data("volumes/ct_head.nrrd"))
-        skip();
+    if (!vt_have_data("volumes/ct_head.nrrd"))
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
     vv_volume *v = NULL;
     vt_ok(vv_volume_load(&v, vt_data("volumes/ct_head.nrrd"), NULL));
     /* 256^2: at 128^2 a pixel spans two voxels, and the EWA filter, which
@@ -95,5 +95,5 @@ main(int argc, char **argv) {
         cmocka_unit_test(test_agree_ct_head),
         cmocka_unit_test(test_agree_marschner_lobb),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -699,5 +699,5 @@ main(void) {
         cmocka_unit_test(test_mesh_files),
         cmocka_unit_test(test_ct_head),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -152,5 +152,5 @@ main(void) {
         cmocka_unit_test(test_parc),
         cmocka_unit_test(test_coarse),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    return vt_run_tests(tests, NULL, NULL);
 }

@@ -24,13 +24,15 @@
  * composited front to back with a transmittance per subcube); the sheared
  * image is finally resampled (Catmull-Rom) into the output image.
  */
+#include <fftw3.h>
 #include <math.h>
 #include <omp.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "compress/vvc_internal.h"
+#include "core/geom.h"
 #include "render/registry.h"
+#include "volvis/compress.h"
 #include "volvis/render.h"
 
 #define FR_MAX_CACHE 4 /* volumes whose spectra are kept (each several times the volume) */
@@ -125,16 +127,6 @@ fr_destroy(void *state) {
     free(st);
 }
 
-static int
-parse_num(const char *text, double lo, double hi, double *out) {
-    char *end;
-    double v = strtod(text, &end);
-    if (end == text || *end || !(v >= lo && v <= hi))
-        return 0;
-    *out = v;
-    return 1;
-}
-
 static void
 drop_cache(fr_state *st) {
     for (int i = 0; i < st->n_cache; i++)
@@ -143,14 +135,15 @@ drop_cache(fr_state *st) {
 }
 
 static vv_status
-fr_set_option(void *state, const char *key, const char *value) {
+fr_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
     fr_state *st = state;
-    double v;
+    const char *key = spec->key;
     /* a new source of spectra: nothing cached from the old one is valid */
     if (strcmp(key, "vvc") == 0 || strcmp(key, "quality") == 0 || strcmp(key, "rate") == 0 ||
         strcmp(key, "block") == 0)
         drop_cache(st);
     if (strcmp(key, "vvc") == 0) {
+        const char *value = v->text;
         vv_vvc *c = NULL;
         if (*value) {
             vv_status s = vv_vvc_load(&c, value);
@@ -168,45 +161,22 @@ fr_set_option(void *state, const char *key, const char *value) {
         vv_vvc_free(st->vvc);
         st->vvc_path = p;
         st->vvc = c;
-        return VV_OK;
-    }
-    if (strcmp(key, "quality") == 0) {
-        if (strcmp(value, "exact") == 0) {
-            st->quality = -1;
-            st->rate = -1;
-            return VV_OK;
-        }
-        if (!parse_num(value, 0, 100, &v))
-            return vv_error_set(VV_ERR_INVALID, "quality: expected 0..100 or 'exact', got '%s'",
-                                value);
-        st->quality = v;
+    } else if (strcmp(key, "quality") == 0) {
+        st->quality = v->word >= 0 ? -1 : v->r; /* "exact" */
         st->rate = -1;
-        return VV_OK;
+    } else if (strcmp(key, "rate") == 0) {
+        if (v->word >= 0) {
+            st->rate = -1;
+        } else {
+            st->rate = v->r;
+            st->quality = -1;
+        }
+    } else if (strcmp(key, "block") == 0) {
+        st->block = v->word == 0 ? 8 : v->word == 1 ? 16 : 32;
+    } else if (strcmp(key, "attenuation") == 0) {
+        st->attenuation = v->r;
     }
-    if (strcmp(key, "rate") == 0) {
-        if (!parse_num(value, 1e-6, 64, &v))
-            return vv_error_set(VV_ERR_INVALID,
-                                "rate: expected bits per voxel in (0, 64], got '%s'", value);
-        st->rate = v;
-        st->quality = -1;
-        return VV_OK;
-    }
-    if (strcmp(key, "block") == 0) {
-        if (!parse_num(value, 8, 32, &v) || (v != 8 && v != 16 && v != 32))
-            return vv_error_set(VV_ERR_INVALID, "block: expected 8, 16 or 32, got '%s'", value);
-        st->block = (int)v;
-        return VV_OK;
-    }
-    if (strcmp(key, "attenuation") == 0) {
-        if (!parse_num(value, 0, 1e6, &v))
-            return vv_error_set(VV_ERR_INVALID, "attenuation: expected a number >= 0, got '%s'",
-                                value);
-        st->attenuation = v;
-        return VV_OK;
-    }
-    return vv_error_set(
-        VV_ERR_INVALID,
-        "unknown option '%s' (fourier takes vvc, quality, rate, block, attenuation)", key);
+    return VV_OK;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -554,22 +524,8 @@ cubic_w(float t, float w[4]) {
 static inline double
 chord_local(double P, double Q, double a, double b, const double lo[3], const double hi[3]) {
     double z0 = lo[2], z1 = hi[2];
-    const double base[2] = {P, Q}, slope[2] = {a, b};
-    for (int i = 0; i < 2; i++) {
-        if (slope[i] == 0) {
-            if (base[i] < lo[i] || base[i] > hi[i])
-                return 0;
-            continue;
-        }
-        double t0 = (lo[i] - base[i]) / slope[i], t1 = (hi[i] - base[i]) / slope[i];
-        if (t0 > t1) {
-            double t = t0;
-            t0 = t1;
-            t1 = t;
-        }
-        z0 = t0 > z0 ? t0 : z0;
-        z1 = t1 < z1 ? t1 : z1;
-    }
+    if (!vv_slab_axis(lo[0], hi[0], P, a, &z0, &z1) || !vv_slab_axis(lo[1], hi[1], Q, b, &z0, &z1))
+        return 0;
     return z1 > z0 ? z1 - z0 : 0;
 }
 
@@ -643,6 +599,10 @@ plan_for(fr_state *st, int M) {
     return st->plan2d[slot];
 }
 
+/* Over 150 lines on purpose: one subcube's slice extraction, inverse FFT
+ * and shear-warp accumulation share the thread's buffers, its FFTW plan and
+ * the progress bookkeeping inside one OpenMP region; split into functions
+ * they would pass a dozen pointers per subcube (the frame's hot loop). */
 static vv_status
 project_object(fr_state *st, const fr_frame *fr, fr_obj *ob, int threads,
                const vv_progress *progress, fr_sheared *sh) {
@@ -902,29 +862,14 @@ sheared_sample(const fr_sheared *sh, const float *img, double P, double Q) {
     return v;
 }
 
-/* Slab test of a ray in index space against the box [lo, hi]^3 per axis. */
+/* Slab test of a ray in index space against the box [lo, hi]^3 per axis
+ * (inv = 1 / d, infinite for a zero component). */
 static int
-box_hit(const double o[3], const double d[3], const double inv[3], const double lo[3],
-        const double hi[3], double *t0, double *t1) {
-    double a = -INFINITY, b = INFINITY;
-    for (int i = 0; i < 3; i++) {
-        if (d[i] == 0) {
-            if (o[i] < lo[i] || o[i] > hi[i])
-                return 0;
-            continue;
-        }
-        double u = (lo[i] - o[i]) * inv[i], v = (hi[i] - o[i]) * inv[i];
-        if (u > v) {
-            double t = u;
-            u = v;
-            v = t;
-        }
-        a = u > a ? u : a;
-        b = v < b ? v : b;
-    }
-    *t0 = a;
-    *t1 = b;
-    return b >= a;
+box_hit(const double o[3], const double inv[3], const double lo[3], const double hi[3], double *t0,
+        double *t1) {
+    *t0 = -INFINITY;
+    *t1 = INFINITY;
+    return vv_slab_inv(lo, hi, o, inv, t0, t1);
 }
 
 /* The modes other than xray are not linear along the ray (maximum, minimum,
@@ -977,6 +922,66 @@ render_decoded(fr_state *st, const vv_world *w, const vv_view *view, const vv_re
     return s;
 }
 
+/* The object's projection geometry: the view direction in its index space,
+ * the major axis c and the shear (a, b) of the other two, and the pixel
+ * rays' origins in index space. Errors: VV_ERR_INVALID (singular). */
+static vv_status
+object_setup(const fr_frame *fr, fr_obj *ob, const vv_object *obj) {
+    int ok;
+    const vv_mat4 w2i = vv_mat4_inverse(vv_object_index_to_world(obj), &ok);
+    if (!ok)
+        return vv_error_set(VV_ERR_INVALID, "object '%s': singular transform", obj->name);
+    const vv_vec3 di = vv_mat4_mul_dir(w2i, fr->dir);
+    ob->di[0] = di.x;
+    ob->di[1] = di.y;
+    ob->di[2] = di.z;
+    ob->c = 0;
+    for (int i = 1; i < 3; i++)
+        if (fabs(ob->di[i]) > fabs(ob->di[ob->c]))
+            ob->c = i;
+    ob->p = (ob->c + 1) % 3;
+    ob->q = (ob->c + 2) % 3;
+    ob->a = ob->di[ob->p] / ob->di[ob->c];
+    ob->b = ob->di[ob->q] / ob->di[ob->c];
+    ob->lscale = 1.0 / fabs(ob->di[ob->c]); /* |index-to-world(di)| = 1 */
+    const vv_vec3 X0 = vv_mat4_mul_point(w2i, fr->o00);
+    const vv_vec3 Xx = vv_mat4_mul_dir(w2i, fr->ox), Xy = vv_mat4_mul_dir(w2i, fr->oy);
+    const double x0[3] = {X0.x, X0.y, X0.z}, xx[3] = {Xx.x, Xx.y, Xx.z}, xy[3] = {Xy.x, Xy.y, Xy.z};
+    memcpy(ob->X0, x0, sizeof x0);
+    memcpy(ob->Xx, xx, sizeof xx);
+    memcpy(ob->Xy, xy, sizeof xy);
+    return VV_OK;
+}
+
+/* As the ray caster: FR_LUT entries {opacity, colour} over the volume's
+ * value range, looked up by truncation at (value - *lo) * *scale. */
+static void
+build_lut(const vv_object *obj, float *lut, double *lo_out, double *scale_out) {
+    const vv_volume *vol = obj->volume;
+    double lut_lo = vol->range[0], lut_hi = vol->range[1];
+    if (!(lut_hi > lut_lo))
+        lut_hi = lut_lo + 1;
+    const double lut_scale = (FR_LUT - 1) / (lut_hi - lut_lo);
+    for (int k = 0; k < FR_LUT; k++) {
+        const double x = lut_lo + (lut_hi - lut_lo) * k / (FR_LUT - 1);
+        double a;
+        vv_vec3 col;
+        if (obj->segmentation == VV_SEG_THRESHOLD) {
+            a = x >= obj->threshold ? 1.0 : 0.0;
+            col = obj->material.color;
+        } else {
+            a = vv_tf_eval_opacity(&obj->tf, x);
+            col = vv_tf_eval_color(&obj->tf, x);
+        }
+        lut[4 * k] = (float)(a < 0 ? 0 : a > 1 ? 1 : a);
+        lut[4 * k + 1] = (float)col.x;
+        lut[4 * k + 2] = (float)col.y;
+        lut[4 * k + 3] = (float)col.z;
+    }
+    *lo_out = lut_lo;
+    *scale_out = lut_scale;
+}
+
 static vv_status
 fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
           vv_image *out) {
@@ -1000,12 +1005,12 @@ fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     fr.W = view->width;
     fr.Hh = view->height;
     fr.attenuation = st->attenuation;
-    vv_ray r00 = vv_view_ray(view, 0, 0), r10 = vv_view_ray(view, 1, 0),
-           r01 = vv_view_ray(view, 0, 1);
-    fr.o00 = r00.origin;
-    fr.ox = vv_vec3_sub(r10.origin, r00.origin);
-    fr.oy = vv_vec3_sub(r01.origin, r00.origin);
-    fr.dir = vv_vec3_normalize(r00.dir);
+    vv_camera_rays cam; /* parallel rays: one direction */
+    vv_camera_rays_init(&cam, view);
+    fr.o00 = cam.o00;
+    fr.ox = cam.ox;
+    fr.oy = cam.oy;
+    fr.dir = vv_vec3_normalize(cam.d00);
     const size_t npix = (size_t)fr.W * fr.Hh;
 
     float *P = calloc(3 * npix, sizeof(float)); /* projections combined by maximum */
@@ -1033,32 +1038,8 @@ fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         ob.obj = obj;
         if ((s = get_source(st, obj->volume, threads, &ob.src)) != VV_OK)
             goto done;
-        int ok;
-        const vv_mat4 w2i = vv_mat4_inverse(vv_object_index_to_world(obj), &ok);
-        if (!ok) {
-            s = vv_error_set(VV_ERR_INVALID, "object '%s': singular transform", obj->name);
+        if ((s = object_setup(&fr, &ob, obj)) != VV_OK)
             goto done;
-        }
-        const vv_vec3 di = vv_mat4_mul_dir(w2i, fr.dir);
-        ob.di[0] = di.x;
-        ob.di[1] = di.y;
-        ob.di[2] = di.z;
-        ob.c = 0;
-        for (int i = 1; i < 3; i++)
-            if (fabs(ob.di[i]) > fabs(ob.di[ob.c]))
-                ob.c = i;
-        ob.p = (ob.c + 1) % 3;
-        ob.q = (ob.c + 2) % 3;
-        ob.a = ob.di[ob.p] / ob.di[ob.c];
-        ob.b = ob.di[ob.q] / ob.di[ob.c];
-        ob.lscale = 1.0 / fabs(ob.di[ob.c]); /* |index-to-world(di)| = 1 */
-        const vv_vec3 X0 = vv_mat4_mul_point(w2i, fr.o00);
-        const vv_vec3 Xx = vv_mat4_mul_dir(w2i, fr.ox), Xy = vv_mat4_mul_dir(w2i, fr.oy);
-        const double x0[3] = {X0.x, X0.y, X0.z}, xx[3] = {Xx.x, Xx.y, Xx.z},
-                     xy[3] = {Xy.x, Xy.y, Xy.z};
-        memcpy(ob.X0, x0, sizeof x0);
-        memcpy(ob.Xx, xx, sizeof xx);
-        memcpy(ob.Xy, xy, sizeof xy);
         fr_sheared sh;
         if ((s = project_object(st, &fr, &ob, threads, &opt->progress, &sh)) != VV_OK)
             goto done;
@@ -1077,29 +1058,9 @@ fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         const double offset = ob.src->offset;
         double dinv[3];
         for (int k = 0; k < 3; k++)
-            dinv[k] = ob.di[k] != 0 ? 1.0 / ob.di[k] : 0;
-        /* as the ray caster: FR_LUT entries over the value range, colour and
-         * opacity at the projected value, looked up by truncation */
-        double lut_lo = vol->range[0], lut_hi = vol->range[1];
-        if (!(lut_hi > lut_lo))
-            lut_hi = lut_lo + 1;
-        const double lut_scale = (FR_LUT - 1) / (lut_hi - lut_lo);
-        for (int k = 0; k < FR_LUT; k++) {
-            const double x = lut_lo + (lut_hi - lut_lo) * k / (FR_LUT - 1);
-            double a;
-            vv_vec3 col;
-            if (obj->segmentation == VV_SEG_THRESHOLD) {
-                a = x >= obj->threshold ? 1.0 : 0.0;
-                col = obj->material.color;
-            } else {
-                a = vv_tf_eval_opacity(&obj->tf, x);
-                col = vv_tf_eval_color(&obj->tf, x);
-            }
-            lut[4 * k] = (float)(a < 0 ? 0 : a > 1 ? 1 : a);
-            lut[4 * k + 1] = (float)col.x;
-            lut[4 * k + 2] = (float)col.y;
-            lut[4 * k + 3] = (float)col.z;
-        }
+            dinv[k] = 1.0 / ob.di[k];
+        double lut_lo, lut_scale;
+        build_lut(obj, lut, &lut_lo, &lut_scale);
 #pragma omp parallel for num_threads(threads) schedule(static)
         for (int py = 0; py < fr.Hh; py++)
             for (int px = 0; px < fr.W; px++) {
@@ -1111,8 +1072,7 @@ fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
                 /* the samples of the spatial X-ray lie in the node-centred grid
                  * box; each voxel's band-limited footprint reaches half a voxel
                  * further, which is the length the integral is divided by */
-                if (!box_hit(o, ob.di, dinv, glo, ghi, &t0, &t1) ||
-                    !box_hit(o, ob.di, dinv, blo, bhi, &u0, &u1))
+                if (!box_hit(o, dinv, glo, ghi, &t0, &t1) || !box_hit(o, dinv, blo, bhi, &u0, &u1))
                     continue;
                 const double Pq = Pp0 + Ppx * px + Ppy * py, Qq = Qp0 + Qpx * px + Qpy * py;
                 const double len = att ? sheared_sample(&sh, sh.L, Pq, Qq) : u1 - u0;
@@ -1150,12 +1110,41 @@ done:
     return s;
 }
 
+static const char *const fr_exact[] = {"exact", NULL};
+static const char *const fr_blocks[] = {"8", "16", "32", NULL};
+static const char *const fr_none[] = {"none", NULL};
+
+static const vv_option_spec fr_options[] = {
+    {"vvc", VV_OPTION_STRING, "", 0, 0, 0, NULL,
+     "a .vvc file of the volume: its coded spectra are projected (empty: none)"},
+    {"quality", VV_OPTION_REAL, "exact", 0, 100, 0, fr_exact,
+     "exact: the volume's own spectra; 0..100: compressed in memory at this quality first"},
+    {"rate", VV_OPTION_REAL, "none", 0, 64, VV_OPTION_MIN_OPEN, fr_none,
+     "compressed in memory at this many bits per voxel first (none: by quality)"},
+    {"block", VV_OPTION_ENUM, "16", 0, 0, 0, fr_blocks, "subcube side, voxels"},
+    {"attenuation", VV_OPTION_REAL, "0", 0, 1e6, 0, NULL,
+     "attenuation of the projection per world unit (0: a plain X-ray)"},
+};
+
 const vv_renderer_ops vv_fourier_ops = {
-    "fourier",
-    "compression-domain X-ray projection by the Fourier projection-slice theorem (parallel "
-    "views); other modes: the ray caster on the decoded volume",
-    fr_create,
-    fr_set_option,
-    fr_render,
-    fr_destroy,
-    "vvc=FILE, quality (exact), rate, block (16), attenuation (0); needs --ortho"};
+    .version = VV_RENDERER_OPS_VERSION,
+    .info =
+        {
+            .name = "fourier",
+            .description = "compression-domain X-ray projection by the Fourier projection-slice "
+                           "theorem (parallel views); other modes: the ray caster on the decoded "
+                           "volume",
+            .draws = VV_DRAWS(VV_OBJECT_VOLUME),
+            .modes = VV_MODES_ALL,
+            .caps = 0,
+            .quality = "ignored (its option quality sets the compression); xray needs an "
+                       "orthographic view (--ortho)",
+            .options = fr_options,
+            .n_options = VV_OPTIONS_COUNT(fr_options),
+        },
+    .create = fr_create,
+    .destroy = fr_destroy,
+    .set_option = fr_set_option,
+    .render = fr_render,
+    .render_region = NULL,
+};

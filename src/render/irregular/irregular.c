@@ -28,37 +28,29 @@
  * path length, isosurfaces the exact crossing of the linear field.
  */
 #include <math.h>
-#include <omp.h>
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/bvh.h"
+#include "core/geom.h"
 #include "core/grid_internal.h"
 #include "render/registry.h"
 #include "render/volume_cache.h"
 #include "volvis/render.h"
+#include "volvis/sys/renderer.h"
 
-#define IR_TILE 16
 #define IR_MAX_OBJ 16
 #define IR_BINS 4096     /* pre-integration table entries */
 #define IR_PIECE_TAU 0.1 /* optical depth of one piece of a cell segment */
 #define IR_MAX_PIECES 64 /* pieces of one segment */
-#define IR_BVH_LEAF 4
 
-typedef struct ir_bvh_node {
-    float lo[3], hi[3];
-    int32_t left;  /* inner: left child (right = left + 1); leaf: first face */
-    int32_t count; /* leaf: faces; inner: 0 */
-    int32_t axis;  /* inner: the split axis (the left child holds the lower centroids) */
-} ir_bvh_node;
-
-/* Entering faces and their BVH: the mesh's boundary faces, or those of
- * the tetrahedra a transfer function leaves visible. */
+/* Entering faces and their bounding volume hierarchy (core/bvh.h): the
+ * mesh's boundary faces, or those of the tetrahedra a transfer function
+ * leaves visible. */
 typedef struct ir_layer {
-    int32_t *faces; /* 4 * tet + face, in BVH order */
+    int32_t *faces; /* 4 * tet + face, in the hierarchy's leaf order */
     size_t n_faces;
-    ir_bvh_node *nodes;
-    size_t n_nodes;
+    vv_bvh bvh;
 } ir_layer;
 
 /* A grid field prepared for rendering: tetrahedra, adjacency, BVH. */
@@ -107,6 +99,7 @@ typedef struct ir_obj {
 
 typedef struct ir_frame {
     ir_state *st;
+    vv_image *out; /* the image being written */
     ir_obj *objs;
     int n_obj;
     const vv_view *view;
@@ -118,16 +111,7 @@ typedef struct ir_frame {
 } ir_frame;
 
 /* ---------------------------------------------------------------------- */
-/* Boundary-face BVH                                                        */
-
-typedef struct bvh_build {
-    const vv_tetmesh *m;
-    int32_t *faces;
-    float *cen;  /* 3 per face */
-    float *fbox; /* 6 per face: its box, rounded outwards so float boxes never cut it */
-    ir_bvh_node *nodes;
-    size_t n_nodes;
-} bvh_build;
+/* Boundary-face hierarchy                                                   */
 
 static void
 face_points(const vv_tetmesh *m, int32_t f, const double *p[3]) {
@@ -138,75 +122,9 @@ face_points(const vv_tetmesh *m, int32_t f, const double *p[3]) {
 }
 
 static void
-bvh_split(bvh_build *b, size_t node, size_t first, size_t count) {
-    ir_bvh_node *n = &b->nodes[node];
-    for (int a = 0; a < 3; a++) {
-        n->lo[a] = INFINITY;
-        n->hi[a] = -INFINITY;
-    }
-    float clo[3] = {INFINITY, INFINITY, INFINITY}, chi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t i = first; i < first + count; i++) {
-        const float *fb = b->fbox + 6 * i;
-        for (int a = 0; a < 3; a++) {
-            n->lo[a] = fb[a] < n->lo[a] ? fb[a] : n->lo[a];
-            n->hi[a] = fb[3 + a] > n->hi[a] ? fb[3 + a] : n->hi[a];
-        }
-        for (int a = 0; a < 3; a++) {
-            const float c = b->cen[3 * i + (size_t)a];
-            clo[a] = c < clo[a] ? c : clo[a];
-            chi[a] = c > chi[a] ? c : chi[a];
-        }
-    }
-    int axis = 0;
-    for (int a = 1; a < 3; a++)
-        if (chi[a] - clo[a] > chi[axis] - clo[axis])
-            axis = a;
-    if (count <= IR_BVH_LEAF) {
-        n->left = (int32_t)first;
-        n->count = (int32_t)count;
-        n->axis = 0;
-        return;
-    }
-    /* partition about the middle of the centroid box (halves when the
-     * centroids coincide) */
-    const float mid = 0.5f * (clo[axis] + chi[axis]);
-    size_t i = first, j = first + count;
-    while (chi[axis] > clo[axis] && i < j) {
-        if (b->cen[3 * i + (size_t)axis] < mid) {
-            i++;
-        } else {
-            j--;
-            int32_t tf = b->faces[i];
-            b->faces[i] = b->faces[j];
-            b->faces[j] = tf;
-            for (int a = 0; a < 3; a++) {
-                float tc = b->cen[3 * i + (size_t)a];
-                b->cen[3 * i + (size_t)a] = b->cen[3 * j + (size_t)a];
-                b->cen[3 * j + (size_t)a] = tc;
-            }
-            for (int a = 0; a < 6; a++) {
-                float tb = b->fbox[6 * i + (size_t)a];
-                b->fbox[6 * i + (size_t)a] = b->fbox[6 * j + (size_t)a];
-                b->fbox[6 * j + (size_t)a] = tb;
-            }
-        }
-    }
-    size_t nl = i - first;
-    if (nl == 0 || nl == count)
-        nl = count / 2;
-    const size_t left = b->n_nodes;
-    b->n_nodes += 2;
-    n->left = (int32_t)left;
-    n->count = 0;
-    n->axis = axis;
-    bvh_split(b, left, first, nl);
-    bvh_split(b, left + 1, first + nl, count - nl);
-}
-
-static void
 layer_clear(ir_layer *L) {
     free(L->faces);
-    free(L->nodes);
+    vv_bvh_clear(&L->bvh);
     memset(L, 0, sizeof *L);
 }
 
@@ -222,8 +140,7 @@ layer_build(ir_layer *L, const vv_tetmesh *m, const uint8_t *vis) {
     L->faces = malloc((nb ? nb : 1) * sizeof *L->faces);
     float *cen = malloc(3 * (nb ? nb : 1) * sizeof *cen);
     float *fbox = malloc(6 * (nb ? nb : 1) * sizeof *fbox);
-    L->nodes = malloc(2 * (nb ? nb : 1) * sizeof *L->nodes);
-    if (!L->faces || !cen || !fbox || !L->nodes) {
+    if (!L->faces || !cen || !fbox) {
         free(cen);
         free(fbox);
         layer_clear(L);
@@ -240,6 +157,7 @@ layer_build(ir_layer *L, const vv_tetmesh *m, const uint8_t *vis) {
         face_points(m, (int32_t)f, p);
         for (int a = 0; a < 3; a++) {
             cen[3 * k + (size_t)a] = (float)((p[0][a] + p[1][a] + p[2][a]) / 3);
+            /* rounded outwards, so the float box never cuts the face */
             const double lo = fmin(p[0][a], fmin(p[1][a], p[2][a]));
             const double hi = fmax(p[0][a], fmax(p[1][a], p[2][a]));
             fbox[6 * k + (size_t)a] = nextafterf((float)lo, -INFINITY);
@@ -248,12 +166,23 @@ layer_build(ir_layer *L, const vv_tetmesh *m, const uint8_t *vis) {
         k++;
     }
     L->n_faces = nb;
-    bvh_build b = {m, L->faces, cen, fbox, L->nodes, 1};
-    if (nb)
-        bvh_split(&b, 0, 0, nb);
-    L->n_nodes = b.n_nodes;
+    vv_status s = vv_bvh_build(&L->bvh, nb, fbox, cen);
     free(cen);
     free(fbox);
+    if (s != VV_OK) {
+        layer_clear(L);
+        return vv_error_prefix(s, "irregular");
+    }
+    /* the faces in leaf order: a leaf's faces are contiguous */
+    int32_t *ordered = malloc((nb ? nb : 1) * sizeof *ordered);
+    if (!ordered) {
+        layer_clear(L);
+        return vv_error_set(VV_ERR_NOMEM, "irregular: out of memory for the boundary BVH");
+    }
+    for (size_t i = 0; i < nb; i++)
+        ordered[i] = L->faces[L->bvh.items[i]];
+    free(L->faces);
+    L->faces = ordered;
     return VV_OK;
 }
 
@@ -299,23 +228,47 @@ typedef struct ir_ray {
     float inv[3];
 } ir_ray;
 
-static inline int
-box_hit(const ir_bvh_node *n, const ir_ray *r, double tmin, double tmax) {
-    for (int a = 0; a < 3; a++) {
-        double t0 = ((double)n->lo[a] - r->o[a]) * r->inv[a];
-        double t1 = ((double)n->hi[a] - r->o[a]) * r->inv[a];
-        if (t0 > t1) {
-            double x = t0;
-            t0 = t1;
-            t1 = x;
-        }
-        /* NaN (0 * inf) passes: the slab is then all of the line */
-        tmin = t0 > tmin ? t0 : tmin;
-        tmax = t1 < tmax ? t1 : tmax;
-        if (tmin > tmax)
-            return 0;
+/* The search of bvh_enter: the nearest entering face so far. */
+typedef struct ir_enter {
+    const ir_mesh *im;
+    const ir_layer *L;
+    const ir_ray *r;
+    double tmin;
+    int32_t skip, best;
+    double t; /* the best face's t */
+    double *w;
+} ir_enter;
+
+static int
+enter_leaf(void *ctx, const uint32_t *items, int count, double *bt) {
+    ir_enter *e = ctx;
+    const vv_vec3 o = vv_v3_d(e->r->o), d = vv_v3_d(e->r->d);
+    const int32_t *faces = e->L->faces + vv_bvh_leaf_offset(&e->L->bvh, items);
+    for (int i = 0; i < count; i++) {
+        const int32_t f = faces[i];
+        if (f == e->skip)
+            continue;
+        const double *p[3];
+        face_points(&e->im->m, f, p);
+        const vv_vec3 a = vv_v3_d(p[0]);
+        const vv_vec3 e1 = vv_v3_sub(vv_v3_d(p[1]), a), e2 = vv_v3_sub(vv_v3_d(p[2]), a);
+        /* entering: d . (e1 x e2) < 0 (outward normal) */
+        if (!(vv_v3_dot(d, vv_v3_cross(e1, e2)) < 0))
+            continue;
+        double t, u, v;
+        if (!vv_ray_triangle(o, d, a, e1, e2, &t, &u, &v))
+            continue;
+        if (t < e->tmin || t > *bt)
+            continue;
+        if (t == *bt && e->best >= 0 && f > e->best)
+            continue; /* ties go to the lower face: deterministic */
+        *bt = e->t = t;
+        e->best = f;
+        e->w[0] = 1 - u - v;
+        e->w[1] = u;
+        e->w[2] = v;
     }
-    return 1;
+    return 0;
 }
 
 /* The nearest boundary face the ray enters (d . outward normal < 0) at t
@@ -324,73 +277,11 @@ box_hit(const ir_bvh_node *n, const ir_ray *r, double tmin, double tmax) {
 static int32_t
 bvh_enter(const ir_mesh *im, const ir_layer *L, const ir_ray *r, double tmin, double tmax,
           int32_t skip, double *t_hit, double w[3]) {
-    if (!L->n_faces)
-        return -1;
-    int32_t best = -1;
-    double bt = tmax;
-    int32_t stack[128];
-    int sp = 0;
-    stack[sp++] = 0;
-    while (sp > 0) {
-        const ir_bvh_node *n = &L->nodes[stack[--sp]];
-        if (!box_hit(n, r, tmin, bt))
-            continue;
-        if (n->count == 0) {
-            if (sp + 2 <= 128) {
-                /* the nearer child first, so the hit found shrinks the search */
-                const int far_first = r->d[n->axis] < 0;
-                stack[sp++] = n->left + (far_first ? 0 : 1);
-                stack[sp++] = n->left + (far_first ? 1 : 0);
-            }
-            continue;
-        }
-        for (int32_t i = n->left; i < n->left + n->count; i++) {
-            const int32_t f = L->faces[i];
-            if (f == skip)
-                continue;
-            const double *p[3];
-            face_points(&im->m, f, p);
-            double e1[3], e2[3], s[3], q[3], h[3];
-            for (int a = 0; a < 3; a++) {
-                e1[a] = p[1][a] - p[0][a];
-                e2[a] = p[2][a] - p[0][a];
-                s[a] = r->o[a] - p[0][a];
-            }
-            /* entering: d . (e1 x e2) < 0 (outward normal) */
-            const double nx = e1[1] * e2[2] - e1[2] * e2[1], ny = e1[2] * e2[0] - e1[0] * e2[2],
-                         nz = e1[0] * e2[1] - e1[1] * e2[0];
-            if (!(r->d[0] * nx + r->d[1] * ny + r->d[2] * nz < 0))
-                continue;
-            h[0] = r->d[1] * e2[2] - r->d[2] * e2[1];
-            h[1] = r->d[2] * e2[0] - r->d[0] * e2[2];
-            h[2] = r->d[0] * e2[1] - r->d[1] * e2[0];
-            const double det = e1[0] * h[0] + e1[1] * h[1] + e1[2] * h[2];
-            if (det == 0)
-                continue;
-            const double inv = 1.0 / det;
-            const double u = (s[0] * h[0] + s[1] * h[1] + s[2] * h[2]) * inv;
-            if (u < 0 || u > 1)
-                continue;
-            q[0] = s[1] * e1[2] - s[2] * e1[1];
-            q[1] = s[2] * e1[0] - s[0] * e1[2];
-            q[2] = s[0] * e1[1] - s[1] * e1[0];
-            const double v = (r->d[0] * q[0] + r->d[1] * q[1] + r->d[2] * q[2]) * inv;
-            if (v < 0 || u + v > 1)
-                continue;
-            const double t = (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) * inv;
-            if (t < tmin || t > bt)
-                continue;
-            if (t == bt && best >= 0 && f > best)
-                continue; /* ties go to the lower face: deterministic */
-            bt = t;
-            best = f;
-            w[0] = 1 - u - v;
-            w[1] = u;
-            w[2] = v;
-        }
-    }
-    *t_hit = bt;
-    return best;
+    ir_enter e = {im, L, r, tmin, skip, -1, tmax, w};
+    const double inv[3] = {r->inv[0], r->inv[1], r->inv[2]};
+    vv_bvh_ray(&L->bvh, r->o, inv, tmin, tmax, enter_leaf, &e);
+    *t_hit = e.t;
+    return e.best;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -545,6 +436,10 @@ typedef struct ir_pre {
     double s, T, K[3];
 } ir_pre;
 
+/* Over 150 lines on purpose: the per-segment integration of every mode
+ * (pre-integrated composite with shading, projections, iso crossings) on
+ * the hot path of each cell a ray crosses; its cases share the segment's
+ * values and weights, kept in registers. */
 /* One cell segment [t0, t1] of tetrahedron t, with barycentric weights b0
  * and b1 at its ends and values s0, s1 there. */
 static void
@@ -735,6 +630,10 @@ edge_canon(const ir_ray *r, const double *a, const double *b, uint32_t ga, uint3
     return ga > gb ? -v : v;
 }
 
+/* Over 150 lines on purpose: the cell-to-cell walk of one ray, whose
+ * carried state (the shared face's points and edge sides, the entry
+ * record, the restart after a gap) is what makes each step cost one point
+ * and three edge sides; splitting it would spill that state per cell. */
 /* Walks one object along the ray, clipped to [tc0, tc1]. The points
  * (relative to the ray origin) and edge sides of the three points a
  * tetrahedron shares with the one before are carried over, so each step
@@ -1182,6 +1081,15 @@ obj_clear(ir_obj *ob) {
 }
 
 static vv_status
+render_tile(void *user, const vv_frame_tile *t) {
+    const ir_frame *fr = user;
+    for (int y = t->y0; y < t->y1; y++)
+        for (int x = t->x0; x < t->x1; x++)
+            render_pixel(fr, x, y, fr->out);
+    return VV_OK;
+}
+
+static vv_status
 ir_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
           vv_image *out) {
     ir_state *st = state;
@@ -1191,10 +1099,8 @@ ir_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     fr.st = st;
     fr.view = view;
     fr.et = st->early_termination;
-    fr.bg[0] = (float)w->background.x;
-    fr.bg[1] = (float)w->background.y;
-    fr.bg[2] = (float)w->background.z;
-    const float ambient[3] = {(float)w->ambient.x, (float)w->ambient.y, (float)w->ambient.z};
+    float ambient[3];
+    vv_frame_colours(w, 0, ambient, fr.bg);
     fr.n_lights = vv_vlights_prepare(fr.lights, w, view);
     for (int l = 0; l < fr.n_lights; l++)
         fr.point_lights |= fr.lights[l].point;
@@ -1216,33 +1122,10 @@ ir_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         fr.n_obj++;
     }
     if (s == VV_OK) {
-        const int tx = (view->width + IR_TILE - 1) / IR_TILE;
-        const int ty = (view->height + IR_TILE - 1) / IR_TILE;
-        const int ntiles = tx * ty;
-        const int nt = opt->threads > 0 ? opt->threads : vv_threads_get();
-        atomic_int cancelled = 0;
-        int done = 0;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
-        for (int tile = 0; tile < ntiles; tile++) {
-            if (atomic_load_explicit(&cancelled, memory_order_relaxed))
-                continue;
-            const int x0 = (tile % tx) * IR_TILE, y0 = (tile / tx) * IR_TILE;
-            const int x1 = x0 + IR_TILE < view->width ? x0 + IR_TILE : view->width;
-            const int y1 = y0 + IR_TILE < view->height ? y0 + IR_TILE : view->height;
-            for (int y = y0; y < y1; y++)
-                for (int x = x0; x < x1; x++)
-                    render_pixel(&fr, x, y, out);
-            if (opt->progress.fn) {
-#pragma omp critical(vv_irregular_progress)
-                {
-                    done++;
-                    if (vv_progress_report(&opt->progress, (double)done / ntiles))
-                        atomic_store(&cancelled, 1);
-                }
-            }
-        }
-        if (atomic_load(&cancelled))
-            s = vv_error_set(VV_ERR_CANCELLED, "cancelled");
+        fr.out = out;
+        vv_frame_job job;
+        vv_frame_job_init(&job, view->width, view->height, render_tile, &fr);
+        s = vv_frame_run(&job, opt);
     }
     for (int i = 0; i < fr.n_obj; i++)
         obj_clear(&objs[i]);
@@ -1261,24 +1144,13 @@ ir_create(void **state) {
 }
 
 static vv_status
-ir_set_option(void *state, const char *key, const char *value) {
+ir_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
     ir_state *st = state;
-    char *end = NULL;
-    const double x = strtod(value, &end);
-    if (!end || *end || end == value || x != x)
-        return vv_error_set(VV_ERR_INVALID, "option %s: '%s' is not a number", key, value);
-    if (strcmp(key, "early_termination") == 0) {
-        if (!(x > 0 && x <= 1))
-            return vv_error_set(VV_ERR_INVALID, "early_termination must be in (0, 1]");
-        st->early_termination = x;
-        return VV_OK;
-    }
-    if (strcmp(key, "empty_space_skipping") == 0) {
-        st->skipping = x != 0;
-        return VV_OK;
-    }
-    return vv_error_set(VV_ERR_INVALID,
-                        "unknown option '%s' (early_termination, empty_space_skipping)", key);
+    if (strcmp(spec->key, "early_termination") == 0)
+        st->early_termination = v->r;
+    else if (strcmp(spec->key, "empty_space_skipping") == 0)
+        st->skipping = v->b;
+    return VV_OK;
 }
 
 static void
@@ -1291,13 +1163,30 @@ ir_destroy(void *state) {
     free(st);
 }
 
+static const vv_option_spec ir_options[] = {
+    {"early_termination", VV_OPTION_REAL, "0.99", 0, 1, VV_OPTION_MIN_OPEN, NULL,
+     "accumulated opacity that ends a composite ray"},
+    {"empty_space_skipping", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
+     "skip tetrahedra the transfer function hides (0 for tests; same image)"},
+};
+
 const vv_renderer_ops vv_irregular_ops = {
-    "irregular",
-    "cell-by-cell ray casting of irregular grids (grid objects): composite (pre-integrated), "
-    "mip, minip, xray, iso",
-    ir_create,
-    ir_set_option,
-    ir_render,
-    ir_destroy,
-    "early_termination (0.99), empty_space_skipping (1)",
+    .version = VV_RENDERER_OPS_VERSION,
+    .info =
+        {
+            .name = "irregular",
+            .description = "cell-by-cell ray casting of irregular grids (grid objects): "
+                           "composite (pre-integrated), mip, minip, xray, iso",
+            .draws = VV_DRAWS(VV_OBJECT_GRID),
+            .modes = VV_MODES_ALL,
+            .caps = 0,
+            .quality = "ignored: one ray a pixel, every cell crossed",
+            .options = ir_options,
+            .n_options = VV_OPTIONS_COUNT(ir_options),
+        },
+    .create = ir_create,
+    .destroy = ir_destroy,
+    .set_option = ir_set_option,
+    .render = ir_render,
+    .render_region = NULL,
 };

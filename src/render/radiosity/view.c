@@ -14,8 +14,6 @@
 
 #define RAD_BLOCK 8
 
-vv_status rad_prepare_render(vv_radiosity *r);
-
 /* Per voxel: sigma, display radiance (power / (4 capacity)), diffuse normal;
  * opaque voxels that are not elements take the mean of their element
  * neighbours so the colour does not darken towards buried voxels. */
@@ -128,98 +126,6 @@ rad_prepare_render(vv_radiosity *r) {
 static vv_vec3
 f3v(const float *p) {
     return vv_vec3_make(p[0], p[1], p[2]);
-}
-
-/* Slab test with the reciprocal direction; inline for the per-pixel loops. */
-static inline int
-slab(const float *mn, const float *mx, const double *o, const double *inv, double tmax,
-     double *t0) {
-    double a = 0, b = tmax;
-    for (int k = 0; k < 3; k++) {
-        double u = (mn[k] - o[k]) * inv[k], v = (mx[k] - o[k]) * inv[k];
-        if (u > v) {
-            double t = u;
-            u = v;
-            v = t;
-        }
-        a = u > a ? u : a;
-        b = v < b ? v : b;
-        if (a > b)
-            return 0;
-    }
-    *t0 = a;
-    return 1;
-}
-
-/* Ray-triangle (Moller-Trumbore); returns t or -1. */
-static inline double
-tri_t(const float *tri, const double *o, const double *d) {
-    double e1[3], e2[3], p[3], s[3], q[3];
-    for (int k = 0; k < 3; k++) {
-        e1[k] = tri[3 + k] - tri[k];
-        e2[k] = tri[6 + k] - tri[k];
-        s[k] = o[k] - tri[k];
-    }
-    p[0] = d[1] * e2[2] - d[2] * e2[1];
-    p[1] = d[2] * e2[0] - d[0] * e2[2];
-    p[2] = d[0] * e2[1] - d[1] * e2[0];
-    double det = e1[0] * p[0] + e1[1] * p[1] + e1[2] * p[2];
-    if (fabs(det) < 1e-300)
-        return -1;
-    double inv = 1 / det;
-    double u = (s[0] * p[0] + s[1] * p[1] + s[2] * p[2]) * inv;
-    if (u < 0 || u > 1)
-        return -1;
-    q[0] = s[1] * e1[2] - s[2] * e1[1];
-    q[1] = s[2] * e1[0] - s[0] * e1[2];
-    q[2] = s[0] * e1[1] - s[1] * e1[0];
-    double v = (d[0] * q[0] + d[1] * q[1] + d[2] * q[2]) * inv;
-    if (v < 0 || u + v > 1)
-        return -1;
-    return (e2[0] * q[0] + e2[1] * q[1] + e2[2] * q[2]) * inv;
-}
-
-/* The nearest patch along the ray (front-to-back traversal of the trees). */
-static int
-first_patch(const vv_radiosity *r, vv_vec3 ov, vv_vec3 dv, double *thit) {
-    const double o[3] = {ov.x, ov.y, ov.z}, d[3] = {dv.x, dv.y, dv.z};
-    const double inv[3] = {1 / d[0], 1 / d[1], 1 / d[2]};
-    int best = -1;
-    double tb = INFINITY;
-    int stack[128];
-    for (int ri = 0; ri < r->n_roots; ri++) {
-        if (r->nodes[r->roots[ri]].kind != RAD_PATCH)
-            continue;
-        int sp = 0;
-        stack[sp++] = r->roots[ri];
-        while (sp) {
-            const rad_node *nd = &r->nodes[stack[--sp]];
-            double a;
-            if (!slab(nd->bmin, nd->bmax, o, inv, tb, &a))
-                continue;
-            if (nd->child[0] < 0) {
-                double t = tri_t(r->elems[nd->lo].tri, o, d);
-                if (t > 0 && t < tb) {
-                    tb = t;
-                    best = nd->lo;
-                }
-                continue;
-            }
-            if (sp + 2 <= 128) {
-                /* the nearer child last, so it is taken first */
-                const rad_node *c0 = &r->nodes[nd->child[0]], *c1 = &r->nodes[nd->child[1]];
-                double d0 =
-                    (c0->c[0] - o[0]) * d[0] + (c0->c[1] - o[1]) * d[1] + (c0->c[2] - o[2]) * d[2];
-                double d1 =
-                    (c1->c[0] - o[0]) * d[0] + (c1->c[1] - o[1]) * d[1] + (c1->c[2] - o[2]) * d[2];
-                int n0 = d0 <= d1 ? nd->child[0] : nd->child[1];
-                stack[sp++] = n0 == nd->child[0] ? nd->child[1] : nd->child[0];
-                stack[sp++] = n0;
-            }
-        }
-    }
-    *thit = tb;
-    return best;
 }
 
 /* The patch seen at each pixel centre, by rasterizing every patch into an
@@ -372,6 +278,91 @@ march(const rad_vol *rv, vv_vec3 o, vv_vec3 d, double t0, double t1, double col[
     return depth;
 }
 
+/* What the tiles of one view frame share. */
+typedef struct rad_view {
+    const vv_radiosity *r;
+    vv_camera_rays cam;
+    const int *ids; /* rasterized patch per pixel, or NULL: trace rays for patches */
+    int has_patches;
+    vv_vec3 bg;
+    vv_image *out;
+} rad_view;
+
+/* One pixel: the first patch, then the volumes in front of it front to back. */
+static void
+view_pixel(const rad_view *c, int x, int y) {
+    const vv_radiosity *r = c->r;
+    const int W = c->out->width;
+    const vv_ray ray = vv_camera_ray(&c->cam, x, y);
+    double tp = INFINITY;
+    int pe = -1;
+    if (c->ids) {
+        pe = c->ids[(size_t)y * W + x];
+        if (pe >= 0) {
+            const rad_elem *e = &r->elems[pe];
+            vv_vec3 n = f3v(e->n);
+            double dn = vv_vec3_dot(n, ray.dir);
+            tp = fabs(dn) > 1e-12 ? vv_vec3_dot(n, vv_vec3_sub(f3v(e->p), ray.origin)) / dn
+                                  : vv_vec3_length(vv_vec3_sub(f3v(e->p), ray.origin));
+        }
+    } else if (c->has_patches) {
+        pe = rad_patch_hit(r, ray.origin, ray.dir, 0, INFINITY, 0, &tp);
+    }
+    double col[3] = {0, 0, 0}, T = 1, depth = pe >= 0 ? tp : INFINITY;
+    /* volumes front to back by entry (overlapping volumes are taken one after another) */
+    int order[8], n = 0;
+    double ent[8];
+    for (int v = 0; v < r->n_vols && n < 8; v++) {
+        double a, b;
+        if (r->vols[v].rbox.min.x > r->vols[v].rbox.max.x ||
+            !vv_box_intersect_ray(r->vols[v].rbox, ray, &a, &b) || b < 0 || a > tp)
+            continue;
+        int i = n++;
+        while (i > 0 && ent[i - 1] > a) {
+            ent[i] = ent[i - 1];
+            order[i] = order[i - 1];
+            i--;
+        }
+        ent[i] = a;
+        order[i] = v;
+    }
+    for (int i = 0; i < n && T > 0.01; i++) {
+        const rad_vol *rv = &r->vols[order[i]];
+        double a, b;
+        vv_box_intersect_ray(rv->rbox, ray, &a, &b);
+        a = a > 0 ? a : 0;
+        b = b < tp ? b : tp;
+        double dd = march(rv, ray.origin, ray.dir, a, b, col, &T);
+        depth = dd < depth ? dd : depth;
+    }
+    double alpha = 1 - T;
+    if (pe >= 0) {
+        const rad_elem *e = &r->elems[pe];
+        int side = vv_vec3_dot(f3v(e->n), ray.dir) > 0;
+        for (int ch = 0; ch < 3; ch++)
+            col[ch] += T * e->total[side][ch] / e->area;
+        alpha = 1;
+    } else {
+        col[0] += T * c->bg.x;
+        col[1] += T * c->bg.y;
+        col[2] += T * c->bg.z;
+    }
+    float *px = &c->out->rgba[4 * ((size_t)y * W + x)];
+    for (int ch = 0; ch < 3; ch++)
+        px[ch] = (float)col[ch];
+    px[3] = (float)alpha;
+    c->out->depth[(size_t)y * W + x] = alpha > 0 ? (float)depth : INFINITY;
+}
+
+static vv_status
+view_tile(void *user, const vv_frame_tile *t) {
+    const rad_view *c = user;
+    for (int y = t->y0; y < t->y1; y++)
+        for (int x = t->x0; x < t->x1; x++)
+            view_pixel(c, x, y);
+    return VV_OK;
+}
+
 vv_status
 vv_radiosity_view_frame(const vv_radiosity *r, const vv_world *world, const vv_view *view,
                         int threads, vv_image *out) {
@@ -386,24 +377,6 @@ vv_radiosity_view_frame(const vv_radiosity *r, const vv_world *world, const vv_v
     int has_patches = 0;
     for (int i = 0; i < r->n_roots; i++)
         has_patches |= r->nodes[r->roots[i]].kind == RAD_PATCH;
-    /* vv_view_ray is affine in the pixel position before its direction is
-     * normalised (perspective: scaled to unit depth along the view axis):
-     * three rays give every pixel's for a few multiply-adds */
-    vv_ray r00 = vv_view_ray(view, 0, 0), r10 = vv_view_ray(view, 1, 0),
-           r01 = vv_view_ray(view, 0, 1);
-    {
-        const vv_vec3 f = vv_vec3_normalize(vv_vec3_sub(view->at, view->eye));
-        vv_ray *rs[3] = {&r00, &r10, &r01};
-        for (int i = 0; i < 3; i++) {
-            const double df = vv_vec3_dot(rs[i]->dir, f);
-            if (view->projection != VV_PROJECTION_ORTHOGRAPHIC && df > 0)
-                rs[i]->dir = vv_vec3_scale(rs[i]->dir, 1.0 / df);
-        }
-    }
-    const vv_vec3 o00 = r00.origin, ox = vv_vec3_sub(r10.origin, r00.origin),
-                  oy = vv_vec3_sub(r01.origin, r00.origin);
-    const vv_vec3 d00 = r00.dir, dx = vv_vec3_sub(r10.dir, r00.dir),
-                  dy = vv_vec3_sub(r01.dir, r00.dir);
     int *ids = NULL;
     float *zb = NULL;
     if (has_patches) {
@@ -415,83 +388,22 @@ vv_radiosity_view_frame(const vv_radiosity *r, const vv_world *world, const vv_v
         }
         free(zb);
     }
-#pragma omp parallel for schedule(dynamic, 4) num_threads(nt)
-    for (int y = 0; y < H; y++) {
-        for (int x = 0; x < W; x++) {
-            vv_ray ray;
-            ray.origin.x = o00.x + x * ox.x + y * oy.x;
-            ray.origin.y = o00.y + x * ox.y + y * oy.y;
-            ray.origin.z = o00.z + x * ox.z + y * oy.z;
-            {
-                const double ddx = d00.x + x * dx.x + y * dy.x, ddy = d00.y + x * dx.y + y * dy.y,
-                             ddz = d00.z + x * dx.z + y * dy.z;
-                const double inv = 1.0 / sqrt(ddx * ddx + ddy * ddy + ddz * ddz);
-                ray.dir.x = ddx * inv;
-                ray.dir.y = ddy * inv;
-                ray.dir.z = ddz * inv;
-            }
-            double tp = INFINITY;
-            int pe = -1;
-            if (ids) {
-                pe = ids[(size_t)y * W + x];
-                if (pe >= 0) {
-                    const rad_elem *e = &r->elems[pe];
-                    vv_vec3 n = f3v(e->n);
-                    double dn = vv_vec3_dot(n, ray.dir);
-                    tp = fabs(dn) > 1e-12 ? vv_vec3_dot(n, vv_vec3_sub(f3v(e->p), ray.origin)) / dn
-                                          : vv_vec3_length(vv_vec3_sub(f3v(e->p), ray.origin));
-                }
-            } else if (has_patches) {
-                pe = first_patch(r, ray.origin, ray.dir, &tp);
-            }
-            double col[3] = {0, 0, 0}, T = 1, depth = pe >= 0 ? tp : INFINITY;
-            /* volumes front to back by entry (overlapping volumes are taken one after another) */
-            int order[8], n = 0;
-            double ent[8];
-            for (int v = 0; v < r->n_vols && n < 8; v++) {
-                double a, b;
-                if (r->vols[v].rbox.min.x > r->vols[v].rbox.max.x ||
-                    !vv_box_intersect_ray(r->vols[v].rbox, ray, &a, &b) || b < 0 || a > tp)
-                    continue;
-                int i = n++;
-                while (i > 0 && ent[i - 1] > a) {
-                    ent[i] = ent[i - 1];
-                    order[i] = order[i - 1];
-                    i--;
-                }
-                ent[i] = a;
-                order[i] = v;
-            }
-            for (int i = 0; i < n && T > 0.01; i++) {
-                const rad_vol *rv = &r->vols[order[i]];
-                double a, b;
-                vv_box_intersect_ray(rv->rbox, ray, &a, &b);
-                a = a > 0 ? a : 0;
-                b = b < tp ? b : tp;
-                double dd = march(rv, ray.origin, ray.dir, a, b, col, &T);
-                depth = dd < depth ? dd : depth;
-            }
-            double alpha = 1 - T;
-            if (pe >= 0) {
-                const rad_elem *e = &r->elems[pe];
-                int side = vv_vec3_dot(f3v(e->n), ray.dir) > 0;
-                for (int c = 0; c < 3; c++)
-                    col[c] += T * e->total[side][c] / e->area;
-                alpha = 1;
-            } else {
-                col[0] += T * bg.x;
-                col[1] += T * bg.y;
-                col[2] += T * bg.z;
-            }
-            float *px = &out->rgba[4 * ((size_t)y * W + x)];
-            for (int c = 0; c < 3; c++)
-                px[c] = (float)col[c];
-            px[3] = (float)alpha;
-            out->depth[(size_t)y * W + x] = alpha > 0 ? (float)depth : INFINITY;
-        }
-    }
+    rad_view c;
+    memset(&c, 0, sizeof c);
+    c.r = r;
+    vv_camera_rays_init(&c.cam, view);
+    c.ids = ids;
+    c.has_patches = has_patches;
+    c.bg = bg;
+    c.out = out;
+    vv_frame_job job;
+    vv_frame_job_init(&job, W, H, view_tile, &c);
+    vv_render_options ro;
+    vv_render_options_init(&ro);
+    ro.threads = nt;
+    vv_status s = vv_frame_run(&job, &ro);
     free(ids);
-    return VV_OK;
+    return s;
 }
 
 /* ---------------------------------------------------------------------- */
@@ -585,56 +497,26 @@ rad_create(void **state) {
 }
 
 static vv_status
-parse_double(const char *key, const char *value, double *out) {
-    char *end = NULL;
-    double v = strtod(value, &end);
-    if (!end || end == value || *end || !isfinite(v))
-        return vv_error_set(VV_ERR_INVALID, "option %s: '%s' is not a number", key, value);
-    *out = v;
-    return VV_OK;
-}
-
-static vv_status
-parse_int(const char *key, const char *value, int lo, int hi, int *out) {
-    char *end = NULL;
-    long v = strtol(value, &end, 10);
-    if (!end || end == value || *end || v < lo || v > hi)
-        return vv_error_set(VV_ERR_INVALID, "option %s: '%s' is not an integer in %d..%d", key,
-                            value, lo, hi);
-    *out = (int)v;
-    return VV_OK;
-}
-
-static vv_status
-rad_set_option(void *state, const char *key, const char *value) {
+rad_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
     rad_state *st = state;
     vv_radiosity_options o = st->opt;
-    vv_status s;
+    const char *key = spec->key;
     if (!strcmp(key, "tolerance"))
-        s = parse_double(key, value, &o.tolerance);
+        o.tolerance = v->r;
     else if (!strcmp(key, "error"))
-        s = parse_double(key, value, &o.error);
+        o.error = v->r;
     else if (!strcmp(key, "near"))
-        s = parse_double(key, value, &o.near);
+        o.near = v->r;
     else if (!strcmp(key, "patch_size"))
-        s = parse_double(key, value, &o.patch_size);
+        o.patch_size = v->r;
     else if (!strcmp(key, "grid"))
-        s = parse_int(key, value, 2, 1024, &o.grid);
+        o.grid = (int)v->i;
     else if (!strcmp(key, "diffuse_voxels"))
-        s = parse_int(key, value, 0, 1, &o.diffuse_voxels);
+        o.diffuse_voxels = v->b;
     else if (!strcmp(key, "max_shots"))
-        s = parse_int(key, value, 1, 100000000, &o.max_shots);
+        o.max_shots = (int)v->i;
     else if (!strcmp(key, "levels"))
-        s = parse_int(key, value, 0, 30, &o.levels);
-    else
-        return vv_error_set(VV_ERR_INVALID,
-                            "unknown option '%s' (tolerance, error, near, patch_size, grid, "
-                            "diffuse_voxels, max_shots, levels)",
-                            key);
-    if (s != VV_OK)
-        return s;
-    if (!(o.tolerance > 0 && o.tolerance < 1) || !(o.error >= 0) || !(o.near > 0))
-        return vv_error_set(VV_ERR_INVALID, "option %s: '%s' is out of range", key, value);
+        o.levels = (int)v->i;
     st->opt = o;
     return VV_OK;
 }
@@ -664,17 +546,43 @@ rad_destroy(void *state) {
     free(st);
 }
 
+static const vv_option_spec rad_options[] = {
+    {"tolerance", VV_OPTION_REAL, "0.001", 0, 1, VV_OPTION_MIN_OPEN | VV_OPTION_MAX_OPEN, NULL,
+     "stop when the unshot power is below this fraction of the power received"},
+    {"error", VV_OPTION_REAL, "0.0001", 0, INFINITY, 0, NULL,
+     "hierarchical refinement bound, fraction of the power in (0: element to element)"},
+    {"near", VV_OPTION_REAL, "0.5", 0, INFINITY, VV_OPTION_MIN_OPEN, NULL,
+     "a pair is near when (radius + radius) > near x distance"},
+    {"patch_size", VV_OPTION_REAL, "0", 0, INFINITY, 0, NULL,
+     "longest patch edge, world units (0: the World's diagonal / 48)"},
+    {"grid", VV_OPTION_INT, "128", 2, 1024, 0, NULL, "voxels along a volume's longest axis"},
+    {"diffuse_voxels", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
+     "voxels scatter diffusely about their gradient (0: isotropically)"},
+    {"max_shots", VV_OPTION_INT, "20000", 1, 100000000, 0, NULL,
+     "shots at most (then it stops with power left unshot)"},
+    {"levels", VV_OPTION_INT, "0", 0, 30, 0, NULL,
+     "hierarchy levels used (0: all; 1: element to element)"},
+};
+
 const vv_renderer_ops vv_radiosity_ops = {
-    .name = "radiosity",
-    .description = "volumetric radiosity: diffuse interreflection between volumes and surfaces",
+    .version = VV_RENDERER_OPS_VERSION,
+    .info =
+        {
+            .name = "radiosity",
+            .description = "volumetric radiosity: diffuse interreflection between volumes and "
+                           "surfaces",
+            /* infinite planes have no finite patches: left out */
+            .draws = VV_DRAWS(VV_OBJECT_VOLUME) | (VV_DRAWS_GEOMETRY & ~VV_DRAWS(VV_OBJECT_PLANE)),
+            .modes = VV_MODES_ALL,
+            .caps = VV_RENDERER_GLOBAL,
+            .quality = "ignored; the solution is kept while only the view changes (volumes "
+                       "scatter by their transfer function or threshold in every mode)",
+            .options = rad_options,
+            .n_options = VV_OPTIONS_COUNT(rad_options),
+        },
     .create = rad_create,
+    .destroy = rad_destroy,
     .set_option = rad_set_option,
     .render = rad_render,
-    .destroy = rad_destroy,
-    .options = "tolerance (0.001: unshot power left, fraction of the power in), error (1e-4: "
-               "hierarchical refinement bound, fraction of the power in; 0 = element to "
-               "element), near (0.5), patch_size (0 = World diagonal / 48, world units), grid "
-               "(128 voxels along a volume's longest axis), diffuse_voxels (1), max_shots "
-               "(20000), levels (0 = all); quality is ignored. The solution is kept while only "
-               "the view changes.",
+    .render_region = NULL,
 };

@@ -359,6 +359,9 @@ det3(vv_mat4 m) {
            m.m[0][2] * (m.m[1][0] * m.m[2][1] - m.m[1][1] * m.m[2][0]);
 }
 
+/* Over 150 lines on purpose: one pass of the immediate-mode pipeline for a
+ * mesh (transform, clip, snap, cull, bin) whose stages hand each other the
+ * per-mesh arrays; the stages are marked inside. */
 vv_status
 vv_raster_draw_mesh(vv_raster *r, const vv_mesh *mesh, vv_mat4 model) {
     if (!r || !mesh)

@@ -23,6 +23,7 @@
 #include "volvis/raster.h"
 #include "volvis/render.h"
 #include "volvis/surface.h"
+#include "volvis/sys/geometry.h"
 
 #define SF_MAX_CACHE 64
 
@@ -61,241 +62,6 @@ typedef struct sf_state {
     int n_topo;
     uint64_t frame;
 } sf_state;
-
-/* ---------------------------------------------------------------------- */
-/* Tessellation of the geometric objects (object coordinates, CCW outside)  */
-
-static vv_status
-add_vertex(vv_mesh *m, vv_vec3 p, vv_vec3 n) {
-    uint32_t i;
-    vv_status s = vv_mesh_add_vertex(m, p, &i);
-    if (s != VV_OK)
-        return s;
-    m->normals[3 * (size_t)i] = (float)n.x;
-    m->normals[3 * (size_t)i + 1] = (float)n.y;
-    m->normals[3 * (size_t)i + 2] = (float)n.z;
-    return VV_OK;
-}
-
-static vv_status
-new_mesh(vv_mesh **out, size_t nv, size_t nt) {
-    vv_status s = vv_mesh_new(out);
-    if (s == VV_OK)
-        s = vv_mesh_enable_attributes(*out, 1, 0);
-    if (s == VV_OK)
-        s = vv_mesh_reserve(*out, nv, nt);
-    if (s != VV_OK) {
-        vv_mesh_free(*out);
-        *out = NULL;
-    }
-    return s;
-}
-
-/* A unit vector perpendicular to @p e, and a second one with p1 x p2 = e. */
-static void
-perpendicular(vv_vec3 e, vv_vec3 *p1, vv_vec3 *p2) {
-    vv_vec3 a = fabs(e.x) < 0.9 ? vv_vec3_make(1, 0, 0) : vv_vec3_make(0, 1, 0);
-    *p1 = vv_vec3_normalize(vv_vec3_cross(a, e));
-    *p2 = vv_vec3_cross(e, *p1);
-}
-
-/* UV sphere: `seg` meridians, seg / 2 parallels bands, one vertex per pole. */
-static vv_status
-tess_sphere(vv_mesh **out, vv_vec3 c, double r, int seg) {
-    const int nlat = seg / 2 < 2 ? 2 : seg / 2;
-    vv_status s = new_mesh(out, (size_t)(nlat - 1) * (size_t)seg + 2, 2 * (size_t)nlat * seg);
-    vv_mesh *m = *out;
-    s = s == VV_OK ? add_vertex(m, vv_vec3_add(c, vv_vec3_make(0, 0, r)), vv_vec3_make(0, 0, 1))
-                   : s;
-    for (int i = 1; i < nlat && s == VV_OK; i++) {
-        const double th = VV_PI * i / nlat;
-        for (int j = 0; j < seg && s == VV_OK; j++) {
-            const double ph = 2 * VV_PI * j / seg;
-            vv_vec3 n = vv_vec3_make(sin(th) * cos(ph), sin(th) * sin(ph), cos(th));
-            s = add_vertex(m, vv_vec3_add(c, vv_vec3_scale(n, r)), n);
-        }
-    }
-    if (s == VV_OK)
-        s = add_vertex(m, vv_vec3_add(c, vv_vec3_make(0, 0, -r)), vv_vec3_make(0, 0, -1));
-    const uint32_t south = (uint32_t)((nlat - 1) * seg + 1);
-    for (int j = 0; j < seg && s == VV_OK; j++) {
-        const uint32_t j1 = (uint32_t)((j + 1) % seg);
-        s = vv_mesh_add_triangle(m, 0, 1 + (uint32_t)j, 1 + j1);
-        for (int i = 1; i + 1 < nlat && s == VV_OK; i++) {
-            const uint32_t a = 1 + (uint32_t)((i - 1) * seg + j),
-                           d = 1 + (uint32_t)((i - 1) * seg) + j1;
-            const uint32_t b = a + (uint32_t)seg, cc = d + (uint32_t)seg;
-            s = vv_mesh_add_triangle(m, a, b, cc);
-            if (s == VV_OK)
-                s = vv_mesh_add_triangle(m, a, cc, d);
-        }
-        if (s == VV_OK) {
-            const uint32_t base = 1 + (uint32_t)((nlat - 2) * seg);
-            s = vv_mesh_add_triangle(m, base + (uint32_t)j, south, base + j1);
-        }
-    }
-    return s;
-}
-
-static vv_status
-tess_box(vv_mesh **out, vv_box b) {
-    vv_status s = new_mesh(out, 24, 12);
-    vv_mesh *m = *out;
-    const double lo[3] = {b.min.x, b.min.y, b.min.z}, hi[3] = {b.max.x, b.max.y, b.max.z};
-    for (int a = 0; a < 3 && s == VV_OK; a++)
-        for (int sign = 0; sign < 2 && s == VV_OK; sign++) {
-            /* e_b x e_c = e_a: (u, v) = (b, c) on the + face, (c, b) on the - face */
-            const int ub = (a + 1) % 3, vc = (a + 2) % 3;
-            const int u = sign ? ub : vc, v = sign ? vc : ub;
-            double n[3] = {0, 0, 0};
-            n[a] = sign ? 1 : -1;
-            const uint32_t first = (uint32_t)m->n_vertices;
-            const int corner[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-            for (int k = 0; k < 4 && s == VV_OK; k++) {
-                double p[3];
-                p[a] = sign ? hi[a] : lo[a];
-                p[u] = corner[k][0] ? hi[u] : lo[u];
-                p[v] = corner[k][1] ? hi[v] : lo[v];
-                s = add_vertex(m, vv_vec3_make(p[0], p[1], p[2]), vv_vec3_make(n[0], n[1], n[2]));
-            }
-            if (s == VV_OK)
-                s = vv_mesh_add_triangle(m, first, first + 1, first + 2);
-            if (s == VV_OK)
-                s = vv_mesh_add_triangle(m, first, first + 2, first + 3);
-        }
-    return s;
-}
-
-static vv_status
-tess_cylinder(vv_mesh **out, vv_vec3 base, vv_vec3 top, double r, int capped, int seg) {
-    vv_vec3 d = vv_vec3_sub(top, base);
-    vv_vec3 e = vv_vec3_normalize(d), p1, p2;
-    perpendicular(e, &p1, &p2);
-    vv_status s = new_mesh(out, 4 * (size_t)seg + 2, 4 * (size_t)seg);
-    vv_mesh *m = *out;
-    /* side: bottom ring, top ring */
-    for (int ring = 0; ring < 2 && s == VV_OK; ring++)
-        for (int j = 0; j < seg && s == VV_OK; j++) {
-            const double ph = 2 * VV_PI * j / seg;
-            vv_vec3 n = vv_vec3_add(vv_vec3_scale(p1, cos(ph)), vv_vec3_scale(p2, sin(ph)));
-            s = add_vertex(m, vv_vec3_add(ring ? top : base, vv_vec3_scale(n, r)), n);
-        }
-    for (int j = 0; j < seg && s == VV_OK; j++) {
-        const uint32_t bl = (uint32_t)j, br = (uint32_t)((j + 1) % seg);
-        s = vv_mesh_add_triangle(m, bl, br, br + (uint32_t)seg);
-        if (s == VV_OK)
-            s = vv_mesh_add_triangle(m, bl, br + (uint32_t)seg, bl + (uint32_t)seg);
-    }
-    if (!capped)
-        return s;
-    for (int cap = 0; cap < 2 && s == VV_OK; cap++) {
-        vv_vec3 n = cap ? e : vv_vec3_scale(e, -1), c = cap ? top : base;
-        const uint32_t centre = (uint32_t)m->n_vertices;
-        s = add_vertex(m, c, n);
-        for (int j = 0; j < seg && s == VV_OK; j++) {
-            const double ph = 2 * VV_PI * j / seg;
-            vv_vec3 q = vv_vec3_add(vv_vec3_scale(p1, cos(ph)), vv_vec3_scale(p2, sin(ph)));
-            s = add_vertex(m, vv_vec3_add(c, vv_vec3_scale(q, r)), n);
-        }
-        for (int j = 0; j < seg && s == VV_OK; j++) {
-            const uint32_t a = centre + 1 + (uint32_t)j, b = centre + 1 + (uint32_t)((j + 1) % seg);
-            s = cap ? vv_mesh_add_triangle(m, centre, a, b) : vv_mesh_add_triangle(m, centre, b, a);
-        }
-    }
-    return s;
-}
-
-/* Polygon by ear clipping in the plane of its Newell normal; triangles keep
- * the polygon's own winding. */
-static vv_status
-tess_polygon(vv_mesh **out, const vv_vec3 *v, int n) {
-    vv_vec3 nn = {0, 0, 0};
-    for (int i = 0; i < n; i++) {
-        vv_vec3 a = v[i], b = v[(i + 1) % n];
-        nn.x += (a.y - b.y) * (a.z + b.z);
-        nn.y += (a.z - b.z) * (a.x + b.x);
-        nn.z += (a.x - b.x) * (a.y + b.y);
-    }
-    nn = vv_vec3_normalize(nn);
-    vv_vec3 p1, p2;
-    perpendicular(nn, &p1, &p2);
-    vv_status s = new_mesh(out, (size_t)n, (size_t)n);
-    vv_mesh *m = *out;
-    for (int i = 0; i < n && s == VV_OK; i++)
-        s = add_vertex(m, v[i], nn);
-    int *idx = malloc((size_t)n * sizeof *idx);
-    double(*q)[2] = malloc((size_t)n * sizeof *q);
-    if (s == VV_OK && (!idx || !q))
-        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
-    for (int i = 0; i < n && s == VV_OK; i++) {
-        idx[i] = i;
-        q[i][0] = vv_vec3_dot(v[i], p1);
-        q[i][1] = vv_vec3_dot(v[i], p2);
-    }
-    /* counter-clockwise in (p1, p2) because p1 x p2 = the Newell normal */
-    int k = n;
-    while (k > 3 && s == VV_OK) {
-        int found = -1;
-        for (int i = 0; i < k && found < 0; i++) {
-            const int a = idx[(i + k - 1) % k], b = idx[i], c = idx[(i + 1) % k];
-            const double cr = (q[b][0] - q[a][0]) * (q[c][1] - q[a][1]) -
-                              (q[b][1] - q[a][1]) * (q[c][0] - q[a][0]);
-            if (cr <= 0)
-                continue; /* reflex */
-            int inside = 0;
-            for (int j = 0; j < k && !inside; j++) {
-                const int p = idx[j];
-                if (p == a || p == b || p == c)
-                    continue;
-                const double d1 = (q[b][0] - q[a][0]) * (q[p][1] - q[a][1]) -
-                                  (q[b][1] - q[a][1]) * (q[p][0] - q[a][0]);
-                const double d2 = (q[c][0] - q[b][0]) * (q[p][1] - q[b][1]) -
-                                  (q[c][1] - q[b][1]) * (q[p][0] - q[b][0]);
-                const double d3 = (q[a][0] - q[c][0]) * (q[p][1] - q[c][1]) -
-                                  (q[a][1] - q[c][1]) * (q[p][0] - q[c][0]);
-                inside = d1 >= 0 && d2 >= 0 && d3 >= 0;
-            }
-            if (!inside)
-                found = i;
-        }
-        if (found < 0)
-            found = 0; /* self-intersecting input: clip anyway */
-        const int a = idx[(found + k - 1) % k], b = idx[found], c = idx[(found + 1) % k];
-        s = vv_mesh_add_triangle(m, (uint32_t)a, (uint32_t)b, (uint32_t)c);
-        memmove(idx + found, idx + found + 1, (size_t)(k - found - 1) * sizeof *idx);
-        k--;
-    }
-    if (s == VV_OK)
-        s = vv_mesh_add_triangle(m, (uint32_t)idx[0], (uint32_t)idx[1], (uint32_t)idx[2]);
-    free(idx);
-    free(q);
-    return s;
-}
-
-/* An infinite plane as a 16 x 16 grid of quads, `half` on each side of the
- * point @p c on it, facing @p n (world coordinates). */
-static vv_status
-tess_plane(vv_mesh **out, vv_vec3 c, vv_vec3 n, double half) {
-    enum { G = 16 };
-    vv_vec3 p1, p2;
-    perpendicular(n, &p1, &p2);
-    vv_status s = new_mesh(out, (G + 1) * (G + 1), 2 * G * G);
-    vv_mesh *m = *out;
-    for (int j = 0; j <= G && s == VV_OK; j++)
-        for (int i = 0; i <= G && s == VV_OK; i++) {
-            const double u = half * (2.0 * i / G - 1), v = half * (2.0 * j / G - 1);
-            s = add_vertex(
-                m, vv_vec3_add(c, vv_vec3_add(vv_vec3_scale(p1, u), vv_vec3_scale(p2, v))), n);
-        }
-    for (int j = 0; j < G && s == VV_OK; j++)
-        for (int i = 0; i < G && s == VV_OK; i++) {
-            const uint32_t a = (uint32_t)(j * (G + 1) + i);
-            s = vv_mesh_add_triangle(m, a, a + 1, a + G + 2);
-            if (s == VV_OK)
-                s = vv_mesh_add_triangle(m, a, a + G + 2, a + G + 1);
-        }
-    return s;
-}
 
 /* ---------------------------------------------------------------------- */
 /* Isosurfaces of volume objects                                            */
@@ -450,102 +216,63 @@ sf_destroy(void *state) {
     free(st);
 }
 
-static int
-parse_bool(const char *v, int *out) {
-    if (!strcmp(v, "1") || !strcmp(v, "on") || !strcmp(v, "true") || !strcmp(v, "yes"))
-        *out = 1;
-    else if (!strcmp(v, "0") || !strcmp(v, "off") || !strcmp(v, "false") || !strcmp(v, "no"))
-        *out = 0;
-    else
-        return 0;
-    return 1;
-}
-
 static vv_status
-sf_set_option(void *state, const char *key, const char *value) {
+sf_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
     sf_state *st = state;
+    const char *key = spec->key;
     if (!strcmp(key, "shading")) {
-        if (!strcmp(value, "flat"))
-            st->shading = VV_RASTER_FLAT;
-        else if (!strcmp(value, "gouraud"))
-            st->shading = VV_RASTER_GOURAUD;
-        else if (!strcmp(value, "phong"))
-            st->shading = VV_RASTER_PHONG;
-        else
-            return vv_error_set(VV_ERR_INVALID,
-                                "option shading: '%s' is not flat, gouraud or phong", value);
+        static const vv_raster_shading shadings[] = {VV_RASTER_FLAT, VV_RASTER_GOURAUD,
+                                                     VV_RASTER_PHONG};
+        st->shading = shadings[v->word];
     } else if (!strcmp(key, "wireframe")) {
-        if (!parse_bool(value, &st->wireframe))
-            return vv_error_set(VV_ERR_INVALID, "option wireframe: '%s' is not 0 or 1", value);
+        st->wireframe = v->b;
     } else if (!strcmp(key, "cull")) {
-        int b;
-        if (!strcmp(value, "auto"))
-            st->cull = SF_CULL_AUTO;
-        else if (!strcmp(value, "back") || (parse_bool(value, &b) && b))
-            st->cull = SF_CULL_BACK;
-        else if (!strcmp(value, "none") || parse_bool(value, &b))
-            st->cull = SF_CULL_NONE;
-        else
-            return vv_error_set(VV_ERR_INVALID, "option cull: '%s' is not auto, back or none",
-                                value);
+        static const sf_cull culls[] = {SF_CULL_AUTO, SF_CULL_BACK, SF_CULL_NONE};
+        st->cull = culls[v->word];
     } else if (!strcmp(key, "caps")) {
-        if (!parse_bool(value, &st->caps))
-            return vv_error_set(VV_ERR_INVALID, "option caps: '%s' is not 0 or 1", value);
+        st->caps = v->b;
     } else if (!strcmp(key, "segments")) {
-        char *end = NULL;
-        long n = strtol(value, &end, 10);
-        if (!end || *end || end == value || n < 3 || n > 4096)
-            return vv_error_set(VV_ERR_INVALID,
-                                "option segments: '%s' is not an integer in 3..4096", value);
-        st->segments = (int)n;
-    } else {
-        return vv_error_set(VV_ERR_INVALID,
-                            "unknown option '%s' (shading, wireframe, cull, caps, segments)", key);
+        st->segments = (int)v->i;
     }
     return VV_OK;
 }
 
 /* The geometric object's triangles in object coordinates (a plane: in world
- * coordinates, *world set), and whether they enclose a volume. */
+ * coordinates, *world set), from its geometry-type record, and whether they
+ * enclose a volume. */
 static vv_status
 tessellate(const sf_state *st, const vv_object *obj, const vv_view *view, double scene,
            vv_mesh **out, int *closed, int *world) {
-    const vv_geometry *g = &obj->geometry;
+    const vv_geom_type *gt;
     *closed = 0;
     *world = 0;
-    switch (obj->type) {
-    case VV_OBJECT_SPHERE:
-        *closed = 1;
-        return tess_sphere(out, g->center, g->radius, st->segments);
-    case VV_OBJECT_BOX:
-        *closed = 1;
-        return tess_box(out, g->box);
-    case VV_OBJECT_CYLINDER:
-        *closed = g->capped;
-        return tess_cylinder(out, g->base, g->top, g->radius, g->capped, st->segments);
-    case VV_OBJECT_POLYGON:
-        if (g->n_vertices < 3 || !g->vertices)
-            return vv_error_set(VV_ERR_INVALID, "object '%s': polygon without vertices", obj->name);
-        return tess_polygon(out, g->vertices, g->n_vertices);
-    case VV_OBJECT_PLANE: {
+    vv_status s = vv_geom_object_type(obj, &gt);
+    if (s != VV_OK)
+        return s;
+    vv_geom_tess opt = {.segments = st->segments};
+    vv_geometry wg;
+    const vv_geometry *g = &obj->geometry;
+    if (obj->type == VV_OBJECT_PLANE) {
+        /* in world coordinates, centred on the point of the plane nearest the
+         * view target */
         vv_mat4 M = vv_object_matrix(obj);
         int ok = 0;
         vv_mat4 inv = vv_mat4_inverse(M, &ok);
         if (!ok)
             return vv_error_set(VV_ERR_INVALID, "object '%s': singular transform", obj->name);
-        vv_vec3 p = vv_mat4_mul_point(M, g->point);
-        vv_vec3 n = vv_vec3_normalize(vv_mat4_mul_dir(vv_mat4_transpose(inv), g->normal));
-        if (!(vv_vec3_length(n) > 0))
-            return vv_error_set(VV_ERR_INVALID, "object '%s': plane without a normal", obj->name);
-        /* centred on the point of the plane nearest the view target */
-        vv_vec3 c =
-            vv_vec3_sub(view->at, vv_vec3_scale(n, vv_vec3_dot(n, vv_vec3_sub(view->at, p))));
+        memset(&wg, 0, sizeof wg);
+        wg.point = vv_mat4_mul_point(M, g->point);
+        wg.normal = vv_vec3_normalize(vv_mat4_mul_dir(vv_mat4_transpose(inv), g->normal));
+        opt.center = view->at;
+        opt.half = 1000 * scene;
+        g = &wg;
         *world = 1;
-        return tess_plane(out, c, n, 1000 * scene);
     }
-    default:
-        return vv_error_set(VV_ERR_INVALID, "object '%s': not a geometric object", obj->name);
-    }
+    s = gt->tessellate(g, &opt, out);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "object '%s'", obj->name);
+    *closed = gt->solid(g);
+    return VV_OK;
 }
 
 /* Colour bands of a grid surface coloured by its field. */
@@ -737,6 +464,45 @@ draw_banded(vv_raster *ras, const vv_mesh *mesh, vv_mat4 model, const vv_object 
     return s;
 }
 
+/* How big the scene is, for the clip distances and the size of plane
+ * squares: its bounds, the eye's distance to them and to the target, and
+ * to every plane (planes are squares 1000 times larger than that, which
+ * puts their edges near the horizon). */
+static double
+scene_size(const vv_world *w, const vv_view *view) {
+    vv_box b = vv_world_bounds(w);
+    vv_vec3 centre = vv_vec3_scale(vv_vec3_add(b.min, b.max), 0.5);
+    double radius = 0.5 * vv_vec3_length(vv_vec3_sub(b.max, b.min));
+    double dist = vv_vec3_length(vv_vec3_sub(centre, view->eye));
+    double atd = vv_vec3_length(vv_vec3_sub(view->at, view->eye));
+    double scene = radius > dist ? radius : dist;
+    scene = scene > atd ? scene : atd;
+    if (view->projection == VV_PROJECTION_ORTHOGRAPHIC) {
+        double half = 0.5 * view->ortho_height;
+        scene = scene > half ? scene : half;
+    }
+    if (!(scene > 0) || !isfinite(scene))
+        scene = 1;
+    for (int i = 0; i < w->n_objects; i++) {
+        const vv_object *obj = w->objects[i];
+        if (!obj->visible || obj->type != VV_OBJECT_PLANE)
+            continue;
+        vv_mat4 M = vv_object_matrix(obj);
+        int ok = 0;
+        vv_mat4 inv = vv_mat4_inverse(M, &ok);
+        vv_vec3 p = vv_mat4_mul_point(M, obj->geometry.point);
+        vv_vec3 n =
+            vv_vec3_normalize(vv_mat4_mul_dir(vv_mat4_transpose(inv), obj->geometry.normal));
+        double dp = fabs(vv_vec3_dot(n, vv_vec3_sub(view->eye, p)));
+        if (ok && isfinite(dp) && dp > scene)
+            scene = dp;
+    }
+    return scene;
+}
+
+/* Over 150 lines: the loop over the World's objects turns each kind into
+ * meshes (isosurfaces, grid surfaces, tessellated primitives) and draws
+ * them; the geometry-type table of issue 27 replaces its per-kind part. */
 static vv_status
 sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
           vv_image *out) {
@@ -755,36 +521,7 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         st->ras_height = view->height;
     }
     vv_raster *ras = st->ras;
-    /* how big the scene is: clip distances and the size of plane squares */
-    vv_box b = vv_world_bounds(w);
-    vv_vec3 centre = vv_vec3_scale(vv_vec3_add(b.min, b.max), 0.5);
-    double radius = 0.5 * vv_vec3_length(vv_vec3_sub(b.max, b.min));
-    double dist = vv_vec3_length(vv_vec3_sub(centre, view->eye));
-    double atd = vv_vec3_length(vv_vec3_sub(view->at, view->eye));
-    double scene = radius > dist ? radius : dist;
-    scene = scene > atd ? scene : atd;
-    if (view->projection == VV_PROJECTION_ORTHOGRAPHIC) {
-        double half = 0.5 * view->ortho_height;
-        scene = scene > half ? scene : half;
-    }
-    if (!(scene > 0) || !isfinite(scene))
-        scene = 1;
-    /* planes are squares 1000 times larger than the scene or their distance
-     * from the eye, which puts their edges near the horizon */
-    for (int i = 0; i < w->n_objects; i++) {
-        const vv_object *obj = w->objects[i];
-        if (!obj->visible || obj->type != VV_OBJECT_PLANE)
-            continue;
-        vv_mat4 M = vv_object_matrix(obj);
-        int ok = 0;
-        vv_mat4 inv = vv_mat4_inverse(M, &ok);
-        vv_vec3 p = vv_mat4_mul_point(M, obj->geometry.point);
-        vv_vec3 n =
-            vv_vec3_normalize(vv_mat4_mul_dir(vv_mat4_transpose(inv), obj->geometry.normal));
-        double dp = fabs(vv_vec3_dot(n, vv_vec3_sub(view->eye, p)));
-        if (ok && isfinite(dp) && dp > scene)
-            scene = dp;
-    }
+    const double scene = scene_size(w, view);
     if (view->projection == VV_PROJECTION_ORTHOGRAPHIC)
         s = vv_raster_set_view(ras, view, 0, 3000 * scene);
     else
@@ -955,13 +692,38 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     return s;
 }
 
+static const char *const sf_shadings[] = {"flat", "gouraud", "phong", NULL};
+static const char *const sf_culls[] = {"auto", "back", "none", NULL};
+
+static const vv_option_spec sf_options[] = {
+    {"shading", VV_OPTION_ENUM, "phong", 0, 0, 0, sf_shadings,
+     "flat: a normal a triangle; gouraud: colours at vertices; phong: normals at pixels"},
+    {"wireframe", VV_OPTION_BOOL, "0", 0, 1, 0, NULL, "triangle edges only"},
+    {"cull", VV_OPTION_ENUM, "auto", 0, 0, 0, sf_culls,
+     "auto: back faces of closed surfaces; back: every back face; none"},
+    {"caps", VV_OPTION_BOOL, "1", 0, 1, 0, NULL, "close surfaces cut by cut planes"},
+    {"segments", VV_OPTION_INT, "64", 3, 4096, 0, NULL,
+     "meridians of spheres and sides of cylinders"},
+};
+
 const vv_renderer_ops vv_surface_ops = {
-    "surface",
-    "geometry rendering: Marching Cubes isosurfaces and geometric objects, rasterized",
-    sf_create,
-    sf_set_option,
-    sf_render,
-    sf_destroy,
-    "shading (flat|gouraud|phong; phong), wireframe (0), cull (auto|back|none; auto), caps (1), "
-    "segments (64)",
+    .version = VV_RENDERER_OPS_VERSION,
+    .info =
+        {
+            .name = "surface",
+            .description = "geometry rendering: Marching Cubes isosurfaces and geometric "
+                           "objects, rasterized",
+            .draws = VV_DRAWS(VV_OBJECT_VOLUME) | VV_DRAWS(VV_OBJECT_GRID) | VV_DRAWS_GEOMETRY,
+            .modes = VV_MODES_ALL,
+            .caps = 0,
+            .quality = "ignored: volumes and grids are drawn as isosurfaces in every mode "
+                       "(iso: the isovalue; else the transfer function's half-opacity value)",
+            .options = sf_options,
+            .n_options = VV_OPTIONS_COUNT(sf_options),
+        },
+    .create = sf_create,
+    .destroy = sf_destroy,
+    .set_option = sf_set_option,
+    .render = sf_render,
+    .render_region = NULL,
 };

@@ -25,21 +25,18 @@
  * processor has it) and then shades and composites the visible ones.
  * docs/rendering.md describes the method and its measurements. */
 #include <math.h>
-#include <omp.h>
 #ifdef __SSE2__
 #include <emmintrin.h>
 #endif
-#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "core/internal.h"
-#include "render/raycast/raycast_brick.h"
 #include "render/registry.h"
 #include "render/volume_cache.h"
 #include "volvis/render.h"
+#include "volvis/sys/renderer.h"
 
-#define RC_TILE 16    /* image tile side in pixels */
 #define RC_MAX_OBJ 64 /* objects handled in one render (<= VV_VC_MAX) */
 
 typedef struct rc_state {
@@ -47,12 +44,6 @@ typedef struct rc_state {
     double early_termination; /* accumulated opacity that ends a ray */
     int skipping;             /* empty-space skipping on/off (for tests) */
     int simd;                 /* use AVX2 when the processor has it (for tests) */
-    /* brick mode (raycast_brick.h) and what a projection brick render
-     * leaves for vv_raycast_finish_projection */
-    int brick_on;
-    vv_raycast_brick brick;
-    float *plut; /* VV_VC_LUT x {alpha, r, g, b}, or NULL */
-    float plut_lo, plut_scale, pbg[3];
 } rc_state;
 
 /* One object prepared for this render. */
@@ -78,9 +69,10 @@ typedef struct rc_obj {
     vv_vextra x;  /* 2-D transfer function and solid texture */
     int extras;   /* x has something: the general kernel handles the object */
     int textured; /* iso mode: an image texture modulates the base colour */
-    /* brick mode: the brick, the step and whether the kernel finds its first
-     * sample as ceil(t0 * (1 / dt)) (trace_composite_one) or ceil(t0 / dt) */
-    const vv_raycast_brick *brick;
+    /* region renders: the region, the step and whether the kernel finds its
+     * first sample as ceil(t0 * (1 / dt)) (trace_composite_one) or
+     * ceil(t0 / dt) (vv_vray_clip_region) */
+    const vv_render_region *region;
     double dt;
     int inv_form;
 } rc_obj;
@@ -96,11 +88,12 @@ typedef struct rc_frame {
     float bg[3];
     vv_vlight lights[VV_MAX_LIGHTS];
     int n_lights;
-    float et;         /* early termination */
-    int point_lights; /* any point light (needs the world position of samples) */
-    int avx2;         /* the processor has AVX2 and FMA (vv_vray_classify) */
-    /* primary rays: origin and unnormalised direction are affine in (px, py) */
-    vv_vec3 o00, ox, oy, d00, dx, dy;
+    float et;           /* early termination */
+    int point_lights;   /* any point light (needs the world position of samples) */
+    int avx2;           /* the processor has AVX2 and FMA (vv_vray_classify) */
+    vv_camera_rays cam; /* primary rays */
+    vv_image *out;      /* the image being written */
+    float *key;         /* region renders of projections: the key per pixel, else NULL */
 } rc_frame;
 
 /* ---------------------------------------------------------------------- */
@@ -116,90 +109,13 @@ shade(const rc_frame *fr, const rc_obj *o, const float g[3], const float pw[3], 
 /* ---------------------------------------------------------------------- */
 /* Ray set-up per object                                                    */
 
-/* Brick mode: whether sample k of r (the point vv_vray_point computes,
- * before the brick offset) lies in the brick's box on axis a, on its low
- * (side 0: p >= lo) or high (side 1: p < hi) side. */
-static inline int
-brick_side(const vv_vray *r, const vv_raycast_brick *b, double dt, int a, int side, int64_t k) {
-    const float tf = (float)((double)k * dt - r->tb);
-    const float p = r->o[a] + tf * r->d[a];
-    return side ? p < b->hi[a] : p >= b->lo[a];
-}
-
-/* The samples kg0 .. kg1 that are the brick's: along a ray each coordinate of
- * the sample point is monotonic in k, so on each axis and side they are a
- * prefix or a suffix, found by bisection. Returns 0 when none. */
-static int
-brick_range(const vv_vray *r, const vv_raycast_brick *b, double dt, int64_t kg0, int64_t kg1,
-            int64_t *ka, int64_t *kb) {
-    int64_t lo = kg0, hi = kg1;
-    for (int a = 0; a < 3; a++)
-        for (int side = 0; side < 2; side++) {
-            if ((side == 0 && b->lo[a] == -INFINITY) || (side == 1 && b->hi[a] == INFINITY))
-                continue;
-            const int t_first = brick_side(r, b, dt, a, side, kg0);
-            const int t_last = brick_side(r, b, dt, a, side, kg1);
-            if (!t_first && !t_last)
-                return 0;
-            if (t_first && t_last)
-                continue;
-            /* bisection for the boundary between kg0 and kg1 */
-            int64_t x = kg0, y = kg1; /* test(x) == t_first, test(y) == t_last */
-            while (y - x > 1) {
-                const int64_t m = x + (y - x) / 2;
-                if (brick_side(r, b, dt, a, side, m) == t_first)
-                    x = m;
-                else
-                    y = m;
-            }
-            if (t_last) /* false then true: the suffix from y */
-                lo = y > lo ? y : lo;
-            else /* true then false: the prefix up to x */
-                hi = x < hi ? x : hi;
-        }
-    *ka = lo;
-    *kb = hi;
-    return lo <= hi;
-}
-
-/* The ray clipped to the object in its index space; in brick mode, set up
- * in the whole volume's index space and cut to the brick's samples. */
+/* The ray clipped to the object in its index space; in a region render,
+ * set up in the whole volume's index space and cut to the region's samples. */
 static inline int
 ray_setup(const rc_obj *ob, const vv_ray *wr, vv_vray *r) {
     if (!vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, wr, 0, INFINITY, r))
         return 0;
-    const vv_raycast_brick *b = ob->brick;
-    if (!b)
-        return 1;
-    const double dt = ob->dt;
-    const int64_t kg0 =
-        (int64_t)(ob->inv_form ? vv_ceil_pos(r->t0 * (1.0 / dt)) : vv_ceil_pos(r->t0 / dt));
-    const int64_t kg1 =
-        (int64_t)(ob->inv_form ? vv_floor_pos(r->t1 * (1.0 / dt)) : vv_floor_pos(r->t1 / dt));
-    for (int a = 0; a < 3; a++)
-        r->off[a] = (float)b->off[a];
-    if (kg0 > kg1) {
-        /* shorter than a step: a projection takes one sample in the middle,
-         * which belongs to the brick that holds it */
-        float p[3];
-        const double tm = 0.5 * (r->t0 + r->t1);
-        const float tf = (float)(tm - r->tb);
-        for (int a = 0; a < 3; a++) {
-            p[a] = r->o[a] + tf * r->d[a];
-            if (!(p[a] >= b->lo[a] && p[a] < b->hi[a]))
-                return 0;
-        }
-        return 1;
-    }
-    int64_t ka, kb;
-    if (!brick_range(r, b, dt, kg0, kg1, &ka, &kb))
-        return 0;
-    /* half a step from the first and last samples: the kernels find them
-     * again whatever their rounding */
-    const double t0 = ((double)ka - 0.5) * dt, t1 = ((double)kb + 0.5) * dt;
-    r->t0 = t0 > r->t0 ? t0 : r->t0;
-    r->t1 = t1 < r->t1 ? t1 : r->t1;
-    return 1;
+    return !ob->region || vv_vray_clip_region(r, ob->region, ob->dt, ob->inv_form);
 }
 
 static inline float
@@ -497,7 +413,8 @@ trace_projection(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, float *
 /* Frame set-up                                                             */
 
 static vv_status
-prepare_object(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w) {
+prepare_object(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w,
+               const vv_render_region *region) {
     rc_state *st = fr->st;
     memset(ro, 0, sizeof *ro);
     ro->obj = obj;
@@ -509,10 +426,11 @@ prepare_object(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w
                            ro->dims, ro->planes, &ro->n_planes, &ro->sh);
     if (s != VV_OK)
         return s;
-    if (st->brick_on) {
-        ro->brick = &st->brick;
+    if (region) {
+        /* rays in the whole volume's index box, samples from the region's voxels */
+        ro->region = region;
         for (int a = 0; a < 3; a++)
-            ro->dims[a] = st->brick.gdims[a] > 1 ? st->brick.gdims[a] : 2;
+            ro->dims[a] = region->dims[a] > 1 ? region->dims[a] : 2;
     }
     ro->shading = obj->shading;
     if (ro->mode == VV_MODE_COMPOSITE || ro->mode == VV_MODE_ISO)
@@ -546,58 +464,26 @@ prepare_lights(rc_frame *fr, const vv_world *w, const vv_view *view) {
         fr->point_lights |= fr->lights[l].point;
 }
 
-/* vv_view_ray is affine in the pixel position before the direction is
- * normalised; take the affine form from three rays so that every pixel costs
- * a few multiply-adds instead of a camera set-up. */
-static void
-prepare_rays(rc_frame *fr, const vv_view *view) {
-    vv_vec3 f = vv_vec3_normalize(vv_vec3_sub(view->at, view->eye));
-    vv_ray r00 = vv_view_ray(view, 0, 0), r10 = vv_view_ray(view, 1, 0),
-           r01 = vv_view_ray(view, 0, 1);
-    vv_ray *rs[3] = {&r00, &r10, &r01};
-    for (int i = 0; i < 3; i++) {
-        double df = vv_vec3_dot(rs[i]->dir, f);
-        if (view->projection != VV_PROJECTION_ORTHOGRAPHIC && df > 0)
-            rs[i]->dir = vv_vec3_scale(rs[i]->dir, 1.0 / df);
-    }
-    fr->o00 = r00.origin;
-    fr->ox = vv_vec3_sub(r10.origin, r00.origin);
-    fr->oy = vv_vec3_sub(r01.origin, r00.origin);
-    fr->d00 = r00.dir;
-    fr->dx = vv_vec3_sub(r10.dir, r00.dir);
-    fr->dy = vv_vec3_sub(r01.dir, r00.dir);
-}
-
 /* ---------------------------------------------------------------------- */
 /* The renderer                                                             */
 
 static void
-render_pixel(const rc_frame *fr, int x, int y, vv_image *out) {
+render_pixel(const rc_frame *fr, int x, int y) {
     /* inline: this runs for every pixel, most of which miss the volume */
-    const double fx = x, fy = y;
-    vv_ray wr;
-    wr.origin.x = fr->o00.x + fx * fr->ox.x + fy * fr->oy.x;
-    wr.origin.y = fr->o00.y + fx * fr->ox.y + fy * fr->oy.y;
-    wr.origin.z = fr->o00.z + fx * fr->ox.z + fy * fr->oy.z;
-    double dx = fr->d00.x + fx * fr->dx.x + fy * fr->dy.x;
-    double dy = fr->d00.y + fx * fr->dx.y + fy * fr->dy.y;
-    double dz = fr->d00.z + fx * fr->dx.z + fy * fr->dy.z;
-    double inv = 1.0 / sqrt(dx * dx + dy * dy + dz * dz);
-    wr.dir.x = dx * inv;
-    wr.dir.y = dy * inv;
-    wr.dir.z = dz * inv;
+    const vv_ray wr = vv_camera_ray(&fr->cam, x, y);
     rc_result res = {{0, 0, 0}, 0, INFINITY};
     if (fr->n_comp == 1 && fr->objs[0].mode == VV_MODE_COMPOSITE && !fr->objs[0].extras)
         trace_composite_one(fr, &fr->objs[0], &wr, &res);
     else if (fr->n_comp > 0)
         trace_composite(fr, &wr, &res);
     /* projection objects: combined behind the composited ones */
-    float P[3] = {0, 0, 0}, PA = 0, pdepth = INFINITY;
+    float P[3] = {0, 0, 0}, PA = 0, pdepth = INFINITY, key = NAN;
     for (int i = fr->n_comp; i < fr->n_obj; i++) {
         const rc_obj *ob = &fr->objs[i];
         float val, dep;
         if (!trace_projection(fr, ob, &wr, &val, &dep))
             continue;
+        key = val;
         const float *e = ob->lut + 4 * (int)lut_index_f(ob, val);
         for (int ch = 0; ch < 3; ch++) {
             float cv = e[1 + ch] * e[0];
@@ -606,47 +492,45 @@ render_pixel(const rc_frame *fr, int x, int y, vv_image *out) {
         PA = e[0] > PA ? e[0] : PA;
         pdepth = dep < pdepth ? dep : pdepth;
     }
-    float *pix = out->rgba + 4 * ((size_t)y * (size_t)out->width + (size_t)x);
-    if (fr->st->brick_on && fr->n_comp == 0) {
-        /* a projection brick: its extreme value, classified once the bricks
-         * are combined (vv_raycast_finish_projection) */
-        float val = 0, dep = INFINITY;
-        const int hit = fr->n_obj == 1 && trace_projection(fr, &fr->objs[0], &wr, &val, &dep);
-        pix[0] = hit ? val : 0;
-        pix[1] = (float)hit;
-        pix[2] = pix[3] = 0;
-        out->depth[(size_t)y * (size_t)out->width + (size_t)x] = hit ? dep : INFINITY;
-        return;
-    }
+    const size_t at = (size_t)y * (size_t)fr->out->width + (size_t)x;
+    float *pix = fr->out->rgba + 4 * at;
     float A = res.a;
     float rest = 1 - A;
     float A2 = A + rest * PA;
+    /* (a region render's background is black: the driver adds it once) */
     for (int ch = 0; ch < 3; ch++)
         pix[ch] = res.rgb[ch] + rest * P[ch] + (1 - A2) * fr->bg[ch];
     pix[3] = A2;
-    out->depth[(size_t)y * (size_t)out->width + (size_t)x] =
-        res.depth < pdepth ? res.depth : pdepth;
+    fr->out->depth[at] = res.depth < pdepth ? res.depth : pdepth;
+    if (fr->key)
+        fr->key[at] = key;
 }
 
 static vv_status
-rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
-          vv_image *out) {
-    rc_state *st = state;
+render_tile(void *user, const vv_frame_tile *t) {
+    const rc_frame *fr = user;
+    for (int y = t->y0; y < t->y1; y++)
+        for (int x = t->x0; x < t->x1; x++)
+            render_pixel(fr, x, y);
+    return VV_OK;
+}
+
+/* A whole render, or with @p region only its samples (the World then has
+ * that one visible object, a copy whose volume is the region's voxels). */
+static vv_status
+render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+             const vv_render_region *region, vv_image *out, float *key) {
     rc_frame fr;
     memset(&fr, 0, sizeof fr);
     fr.st = st;
     st->vc.frame++;
     fr.avx2 = st->simd && vv_vc_have_avx2();
     fr.view = view;
+    fr.out = out;
     fr.et = (float)st->early_termination;
-    fr.ambient[0] = (float)w->ambient.x;
-    fr.ambient[1] = (float)w->ambient.y;
-    fr.ambient[2] = (float)w->ambient.z;
-    fr.bg[0] = (float)w->background.x;
-    fr.bg[1] = (float)w->background.y;
-    fr.bg[2] = (float)w->background.z;
+    vv_frame_colours(w, region != NULL, fr.ambient, fr.bg);
     prepare_lights(&fr, w, view);
-    prepare_rays(&fr, view);
+    vv_camera_rays_init(&fr.cam, view);
 
     int nvis = 0;
     for (int i = 0; i < w->n_objects; i++)
@@ -656,23 +540,6 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     if (nvis > RC_MAX_OBJ)
         return vv_error_set(VV_ERR_LIMIT, "%d visible objects; at most %d are supported", nvis,
                             RC_MAX_OBJ);
-    if (st->brick_on) {
-        if (nvis != 1)
-            return vv_error_set(VV_ERR_UNSUPPORTED,
-                                "raycast: a brick render draws one volume object, not %d", nvis);
-        for (int i = 0; i < w->n_objects; i++) {
-            const vv_object *ob = w->objects[i];
-            if (ob->visible && ob->type == VV_OBJECT_VOLUME && ob->volume &&
-                ob->mode != VV_MODE_COMPOSITE && ob->mode != VV_MODE_MIP &&
-                ob->mode != VV_MODE_MINIP)
-                return vv_error_set(VV_ERR_UNSUPPORTED,
-                                    "raycast: object '%s': a brick render draws composite, mip "
-                                    "or minip, not this mode",
-                                    ob->name);
-        }
-        /* partial pixels: no background, it is added once to the whole */
-        fr.bg[0] = fr.bg[1] = fr.bg[2] = 0;
-    }
     rc_obj *objs = calloc(nvis ? (size_t)nvis : 1, sizeof *objs);
     if (!objs)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
@@ -691,7 +558,7 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
             if (!(ob->step > 0))
                 s = vv_error_set(VV_ERR_INVALID, "object '%s': step must be > 0", ob->name);
             else
-                s = prepare_object(&fr, &objs[fr.n_obj++], ob, w);
+                s = prepare_object(&fr, &objs[fr.n_obj++], ob, w, region);
             if (s == VV_OK) {
                 double sd = vv_vobject_step(ob);
                 dt = sd < dt ? sd : dt;
@@ -705,66 +572,12 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         objs[i].dt = fr.dt;
         objs[i].inv_form = fr.n_comp == 1 && objs[i].mode == VV_MODE_COMPOSITE && !objs[i].extras;
     }
-    if (s == VV_OK && st->brick_on && fr.n_comp == 0 && fr.n_obj == 1) {
-        /* keep the projection table for vv_raycast_finish_projection */
-        if (!st->plut)
-            st->plut = malloc(sizeof(float) * 4 * VV_VC_LUT);
-        if (!st->plut) {
-            s = vv_error_set(VV_ERR_NOMEM, "out of memory");
-        } else {
-            memcpy(st->plut, objs[0].lut, sizeof(float) * 4 * VV_VC_LUT);
-            st->plut_lo = objs[0].lut_lo;
-            st->plut_scale = objs[0].lut_scale;
-            st->pbg[0] = (float)w->background.x;
-            st->pbg[1] = (float)w->background.y;
-            st->pbg[2] = (float)w->background.z;
-        }
-    }
-
-    int rx0 = 0, ry0 = 0, rx1 = view->width, ry1 = view->height;
-    if (s == VV_OK && st->brick_on && st->brick.x1 > st->brick.x0) {
-        /* only the brick's rectangle is traced; the rest stays empty */
-        const size_t np = (size_t)view->width * (size_t)view->height;
-        memset(out->rgba, 0, sizeof(float) * 4 * np);
-        for (size_t i = 0; i < np; i++)
-            out->depth[i] = INFINITY;
-        rx0 = st->brick.x0 > 0 ? st->brick.x0 : 0;
-        ry0 = st->brick.y0 > 0 ? st->brick.y0 : 0;
-        rx1 = st->brick.x1 < view->width ? st->brick.x1 : view->width;
-        ry1 = st->brick.y1 < view->height ? st->brick.y1 : view->height;
-    }
     if (s == VV_OK) {
-        const int tx = (view->width + RC_TILE - 1) / RC_TILE;
-        const int ty = (view->height + RC_TILE - 1) / RC_TILE;
-        const int ntiles = tx * ty;
-        const int nt = opt->threads > 0 ? opt->threads : vv_threads_get();
-        atomic_int cancelled = 0;
-        int done = 0;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
-        for (int tile = 0; tile < ntiles; tile++) {
-            if (atomic_load_explicit(&cancelled, memory_order_relaxed))
-                continue;
-            int x0 = (tile % tx) * RC_TILE, y0 = (tile / tx) * RC_TILE;
-            int x1 = x0 + RC_TILE < view->width ? x0 + RC_TILE : view->width;
-            int y1 = y0 + RC_TILE < view->height ? y0 + RC_TILE : view->height;
-            x0 = x0 > rx0 ? x0 : rx0;
-            y0 = y0 > ry0 ? y0 : ry0;
-            x1 = x1 < rx1 ? x1 : rx1;
-            y1 = y1 < ry1 ? y1 : ry1;
-            for (int y = y0; y < y1; y++)
-                for (int x = x0; x < x1; x++)
-                    render_pixel(&fr, x, y, out);
-            if (opt->progress.fn) {
-#pragma omp critical(vv_raycast_progress)
-                {
-                    done++;
-                    if (vv_progress_report(&opt->progress, (double)done / ntiles))
-                        atomic_store(&cancelled, 1);
-                }
-            }
-        }
-        if (atomic_load(&cancelled))
-            s = vv_error_set(VV_ERR_CANCELLED, "cancelled");
+        fr.key = region && fr.n_comp == 0 ? key : NULL;
+        vv_frame_job job;
+        vv_frame_job_init(&job, view->width, view->height, render_tile, &fr);
+        vv_frame_job_region(&job, region); /* the rest stays empty */
+        s = vv_frame_run(&job, opt);
     }
     for (int i = 0; i < fr.n_obj; i++) {
         if (objs[i].owns_tables)
@@ -774,6 +587,31 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     /* drop cached volumes the World no longer shows */
     vv_vcache_set_prune(&st->vc, w);
     return s;
+}
+
+static vv_status
+rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+          vv_image *out) {
+    return render_frame(state, w, view, opt, NULL, out, NULL);
+}
+
+/* The region contract: the World seen with the object's volume replaced
+ * by the region's voxels (which carry the whole volume's geometry and
+ * range), rays in the whole volume's index box, and only the region's
+ * samples taken. */
+static vv_status
+rc_render_region(void *state, const vv_world *w, const vv_view *view,
+                 const vv_render_region *region, const vv_render_options *opt,
+                 vv_region_image *out) {
+    vv_object copy;
+    vv_status s = vv_render_region_part(w, region, &out->op, &copy);
+    if (s != VV_OK)
+        return s;
+    vv_object *objs[1] = {&copy};
+    vv_world tmp = *w;
+    tmp.objects = objs;
+    tmp.n_objects = 1;
+    return render_frame(state, &tmp, view, opt, region, out->image, out->key);
 }
 
 static vv_status
@@ -790,30 +628,20 @@ rc_create(void **state) {
 }
 
 static vv_status
-rc_set_option(void *state, const char *key, const char *value) {
+rc_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
     rc_state *st = state;
-    char *end = NULL;
-    double x = strtod(value, &end);
-    if (!end || *end || end == value || x != x)
-        return vv_error_set(VV_ERR_INVALID, "option %s: '%s' is not a number", key, value);
-    if (strcmp(key, "early_termination") == 0) {
-        if (!(x > 0 && x <= 1))
-            return vv_error_set(VV_ERR_INVALID, "early_termination must be in (0, 1]");
-        st->early_termination = x;
-    } else if (strcmp(key, "gradient_budget_mb") == 0) {
-        if (!(x >= 0))
-            return vv_error_set(VV_ERR_INVALID, "gradient_budget_mb must be >= 0");
-        st->vc.gradient_budget = (uint64_t)(x * 1048576.0);
+    if (strcmp(spec->key, "early_termination") == 0) {
+        st->early_termination = v->r;
+    } else if (strcmp(spec->key, "gradient_budget_mb") == 0) {
+        if (v->word >= 0)
+            vv_vcache_set_default_budget(&st->vc);
+        else
+            st->vc.gradient_budget = (uint64_t)(v->r * 1048576.0);
         vv_vcache_set_clear(&st->vc);
-    } else if (strcmp(key, "empty_space_skipping") == 0) {
-        st->skipping = x != 0;
-    } else if (strcmp(key, "simd") == 0) {
-        st->simd = x != 0;
-    } else {
-        return vv_error_set(VV_ERR_INVALID,
-                            "unknown option '%s' (early_termination, gradient_budget_mb, "
-                            "empty_space_skipping, simd)",
-                            key);
+    } else if (strcmp(spec->key, "empty_space_skipping") == 0) {
+        st->skipping = v->b;
+    } else if (strcmp(spec->key, "simd") == 0) {
+        st->simd = v->b;
     }
     return VV_OK;
 }
@@ -824,130 +652,41 @@ rc_destroy(void *state) {
     if (!st)
         return;
     vv_vcache_set_clear(&st->vc);
-    free(st->plut);
     free(st);
 }
 
-vv_status
-vv_raycast_set_brick(vv_renderer *r, const vv_raycast_brick *b) {
-    if (!r || strcmp(vv_renderer_name(r), "raycast") != 0)
-        return vv_error_set(VV_ERR_INVALID, "brick rendering needs the raycast renderer");
-    rc_state *st = vv_renderer_state(r);
-    st->brick_on = b != NULL;
-    if (b)
-        st->brick = *b;
-    return VV_OK;
-}
+static const char *const rc_auto[] = {"auto", NULL};
 
-/* Solves the 3x3 system with columns c0, c1, c2 for rhs (Cramer); 0 when
- * singular. */
-static int
-solve3(vv_vec3 c0, vv_vec3 c1, vv_vec3 c2, vv_vec3 rhs, double x[3]) {
-    const double det = vv_vec3_dot(c0, vv_vec3_cross(c1, c2));
-    if (!(fabs(det) > 1e-300))
-        return 0;
-    x[0] = vv_vec3_dot(rhs, vv_vec3_cross(c1, c2)) / det;
-    x[1] = vv_vec3_dot(c0, vv_vec3_cross(rhs, c2)) / det;
-    x[2] = vv_vec3_dot(c0, vv_vec3_cross(c1, rhs)) / det;
-    return 1;
-}
-
-void
-vv_raycast_brick_rect(vv_raycast_brick *b, const vv_object *obj, const vv_view *view,
-                      const int lo[3], const int hi[3]) {
-    b->x0 = b->y0 = 0;
-    b->x1 = b->y1 = 0; /* whole image until proven smaller */
-    /* primary rays are affine in the pixel position (prepare_rays): origin
-     * O00 + px OX + py OY, direction along D00 + px DX + py DY */
-    const vv_ray r00 = vv_view_ray(view, 0, 0), r10 = vv_view_ray(view, 1, 0),
-                 r01 = vv_view_ray(view, 0, 1);
-    const int ortho = view->projection == VV_PROJECTION_ORTHOGRAPHIC;
-    const vv_vec3 f = vv_vec3_normalize(vv_vec3_sub(view->at, view->eye));
-    vv_vec3 d[3] = {r00.dir, r10.dir, r01.dir};
-    if (!ortho)
-        for (int i = 0; i < 3; i++) {
-            const double df = vv_vec3_dot(d[i], f);
-            if (!(df > 0))
-                return;
-            d[i] = vv_vec3_scale(d[i], 1.0 / df);
-        }
-    const vv_vec3 DX = vv_vec3_sub(d[1], d[0]), DY = vv_vec3_sub(d[2], d[0]);
-    const vv_vec3 OX = vv_vec3_sub(r10.origin, r00.origin),
-                  OY = vv_vec3_sub(r01.origin, r00.origin);
-    const vv_mat4 m = vv_object_index_to_world(obj);
-    double xmin = INFINITY, xmax = -INFINITY, ymin = INFINITY, ymax = -INFINITY;
-    for (int c = 0; c < 8; c++) {
-        const vv_vec3 pi =
-            vv_vec3_make(c & 1 ? hi[0] : lo[0], c & 2 ? hi[1] : lo[1], c & 4 ? hi[2] : lo[2]);
-        const vv_vec3 pw = vv_mat4_mul_point(m, pi);
-        double x[3];
-        if (ortho) {
-            if (!solve3(OX, OY, f, vv_vec3_sub(pw, r00.origin), x))
-                return;
-        } else {
-            if (!solve3(DX, DY, d[0], vv_vec3_sub(pw, r00.origin), x) || !(x[2] > 1e-9))
-                return; /* behind the eye: every pixel may see it */
-            x[0] /= x[2];
-            x[1] /= x[2];
-        }
-        xmin = x[0] < xmin ? x[0] : xmin;
-        xmax = x[0] > xmax ? x[0] : xmax;
-        ymin = x[1] < ymin ? x[1] : ymin;
-        ymax = x[1] > ymax ? x[1] : ymax;
-    }
-    if (!(xmax - xmin < 1e7 && ymax - ymin < 1e7))
-        return;
-    /* pixel px's ray is at px: the pixels within two of the projection */
-    const double X0 = floor(xmin) - 2, X1 = ceil(xmax) + 3, Y0 = floor(ymin) - 2,
-                 Y1 = ceil(ymax) + 3;
-    b->x0 = X0 < 0 ? 0 : X0 > view->width ? view->width : (int)X0;
-    b->x1 = X1 < 0 ? 0 : X1 > view->width ? view->width : (int)X1;
-    b->y0 = Y0 < 0 ? 0 : Y0 > view->height ? view->height : (int)Y0;
-    b->y1 = Y1 < 0 ? 0 : Y1 > view->height ? view->height : (int)Y1;
-    if (b->x1 <= b->x0 || b->y1 <= b->y0) {
-        /* off screen: an empty rectangle that is not "whole image" */
-        b->x0 = 0;
-        b->x1 = 1;
-        b->y0 = b->y1 = 0;
-    }
-}
-
-vv_status
-vv_raycast_finish_projection(vv_renderer *r, vv_image *img) {
-    if (!r || strcmp(vv_renderer_name(r), "raycast") != 0)
-        return vv_error_set(VV_ERR_INVALID, "brick rendering needs the raycast renderer");
-    const rc_state *st = vv_renderer_state(r);
-    if (!st->plut)
-        return vv_error_set(VV_ERR_INVALID, "no projection brick was rendered");
-    const size_t n = (size_t)img->width * (size_t)img->height;
-    for (size_t i = 0; i < n; i++) {
-        float *pix = img->rgba + 4 * i;
-        /* as render_pixel: no composite object (A = 0), one projection */
-        float P[3] = {0, 0, 0}, PA = 0;
-        if (pix[1] > 0) {
-            float x = (pix[0] - st->plut_lo) * st->plut_scale;
-            x = x < 0 ? 0 : x > VV_VC_LUT - 1 ? VV_VC_LUT - 1 : x;
-            const float *e = st->plut + 4 * (int)x;
-            for (int ch = 0; ch < 3; ch++) {
-                float cv = e[1 + ch] * e[0];
-                P[ch] = cv > P[ch] ? cv : P[ch];
-            }
-            PA = e[0] > PA ? e[0] : PA;
-        }
-        const float A = 0, rest = 1 - A, A2 = A + rest * PA;
-        for (int ch = 0; ch < 3; ch++)
-            pix[ch] = 0 + rest * P[ch] + (1 - A2) * st->pbg[ch];
-        pix[3] = A2;
-    }
-    return VV_OK;
-}
+/* The ray caster's options (docs/rendering.md); gradient_budget_mb is
+ * shared with splat (vv_vcache_options_budget in volume_cache.h). */
+static const vv_option_spec rc_options[] = {
+    {"early_termination", VV_OPTION_REAL, "0.99", 0, 1, VV_OPTION_MIN_OPEN, NULL,
+     "accumulated opacity that ends a composite ray"},
+    {"gradient_budget_mb", VV_OPTION_REAL, "auto", 0, INFINITY, 0, rc_auto,
+     "MiB allowed for cached gradients (auto: a quarter of RAM, at most 8192; 0: on the fly)"},
+    {"empty_space_skipping", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
+     "leap over subvolumes the transfer function hides (0 for tests; same image)"},
+    {"simd", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
+     "AVX2 classification where the processor has it (0: the portable path)"},
+};
 
 const vv_renderer_ops vv_raycast_ops = {
-    "raycast",
-    "direct volume ray casting: composite, mip, minip, xray, iso; subvolume skipping",
-    rc_create,
-    rc_set_option,
-    rc_render,
-    rc_destroy,
-    "early_termination (0.99), gradient_budget_mb, empty_space_skipping (1), simd (1)",
+    .version = VV_RENDERER_OPS_VERSION,
+    .info =
+        {
+            .name = "raycast",
+            .description = "direct volume ray casting: composite, mip, minip, xray, iso; "
+                           "subvolume skipping",
+            .draws = VV_DRAWS(VV_OBJECT_VOLUME),
+            .modes = VV_MODES_ALL,
+            .caps = VV_RENDERER_REGION | VV_RENDERER_PREVIEW,
+            .quality = "ignored: every level casts one ray a pixel at the objects' step",
+            .options = rc_options,
+            .n_options = VV_OPTIONS_COUNT(rc_options),
+        },
+    .create = rc_create,
+    .destroy = rc_destroy,
+    .set_option = rc_set_option,
+    .render = rc_render,
+    .render_region = rc_render_region,
 };

@@ -35,8 +35,6 @@
  * shadow ray per sample instead. docs/rendering.md describes the method.
  */
 #include <math.h>
-#include <omp.h>
-#include <stdatomic.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -46,6 +44,7 @@
 #include "render/registry.h"
 #include "render/volume_cache.h"
 #include "volvis/render.h"
+#include "volvis/sys/renderer.h"
 
 /* ---------------------------------------------------------------------- */
 /* Frame set-up                                                             */
@@ -98,7 +97,7 @@ build_tables(rt_frame *fr, rt_vobj *ro) {
     ro->extras = vv_vextra_prepare(&ro->x, obj, ro->mode, &ro->tab);
     ro->textured = ro->mode == VV_MODE_ISO && obj->texture.image != NULL;
     if (fr->shadows && obj->receives_shadows && obj->shading && ro->mode == VV_MODE_COMPOSITE &&
-        fr->st->shadow_grid) {
+        fr->st->shadow_grid && !ro->context) {
         size_t ng = 1;
         for (int a = 0; a < 3; a++) {
             ro->gdim[a] = (ro->dims[a] - 1 + RT_SGRID - 1) / RT_SGRID + 1;
@@ -140,79 +139,26 @@ prepare_geometry(rt_frame *fr, rt_gobj *g, const vv_object *obj) {
     g->kt = (float)m->transparency;
     g->ior = m->ior;
     const vv_geometry *ge = &obj->geometry;
-    switch (obj->type) {
-    case VV_OBJECT_PLANE:
-        if (!(v3len(ge->normal) > 0))
-            return vv_error_set(VV_ERR_INVALID, "object '%s': plane with a zero normal", obj->name);
-        g->pp = vv_mat4_mul_point(o2w, ge->point);
-        g->pn = v3(
+    vv_status s = vv_geom_object_type(obj, &g->geom);
+    if (s != VV_OK)
+        return s;
+    if (g->geom->prepare && (s = g->geom->prepare(ge, &g->prep)) != VV_OK)
+        return vv_error_prefix(s, "object '%s'", obj->name);
+    g->closed = g->geom->solid(ge);
+    if (obj->type == VV_OBJECT_PLANE) {
+        /* traced in world space: its world point and normal (M^-T n) */
+        g->wplane.point = vv_mat4_mul_point(o2w, ge->point);
+        g->wplane.normal = v3(
             g->nrm[0][0] * ge->normal.x + g->nrm[0][1] * ge->normal.y + g->nrm[0][2] * ge->normal.z,
             g->nrm[1][0] * ge->normal.x + g->nrm[1][1] * ge->normal.y + g->nrm[1][2] * ge->normal.z,
             g->nrm[2][0] * ge->normal.x + g->nrm[2][1] * ge->normal.y +
                 g->nrm[2][2] * ge->normal.z);
-        break;
-    case VV_OBJECT_POLYGON: {
-        if (ge->n_vertices < 3 || !ge->vertices)
-            return vv_error_set(VV_ERR_INVALID, "object '%s': polygon with %d vertices", obj->name,
-                                ge->n_vertices);
-        vv_vec3 nn = {0, 0, 0}; /* Newell's normal */
-        for (int i = 0; i < ge->n_vertices; i++) {
-            vv_vec3 a = ge->vertices[i], b = ge->vertices[(i + 1) % ge->n_vertices];
-            nn.x += (a.y - b.y) * (a.z + b.z);
-            nn.y += (a.z - b.z) * (a.x + b.x);
-            nn.z += (a.x - b.x) * (a.y + b.y);
-        }
-        if (!(v3len(nn) > 0))
-            return vv_error_set(VV_ERR_INVALID, "object '%s': degenerate polygon", obj->name);
-        g->plane = vv_plane_from_point_normal(ge->vertices[0], nn);
-        double ax = fabs(nn.x), ay = fabs(nn.y), az = fabs(nn.z);
-        g->drop = ax >= ay && ax >= az ? 0 : ay >= az ? 1 : 2;
-        break;
     }
-    case VV_OBJECT_SPHERE:
-        if (!(ge->radius > 0))
-            return vv_error_set(VV_ERR_INVALID, "object '%s': sphere radius must be > 0",
-                                obj->name);
-        g->closed = 1;
-        break;
-    case VV_OBJECT_BOX:
-        if (!(ge->box.max.x >= ge->box.min.x && ge->box.max.y >= ge->box.min.y &&
-              ge->box.max.z >= ge->box.min.z))
-            return vv_error_set(VV_ERR_INVALID, "object '%s': box with min > max", obj->name);
-        g->closed = 1;
-        break;
-    case VV_OBJECT_CYLINDER:
-        if (!(ge->radius > 0) || !(v3len(v3sub(ge->top, ge->base)) > 0))
-            return vv_error_set(VV_ERR_INVALID,
-                                "object '%s': cylinder needs radius > 0 and base != top",
-                                obj->name);
-        g->closed = ge->capped;
-        break;
-    case VV_OBJECT_MESH: {
-        if (!ge->mesh)
-            return vv_error_set(VV_ERR_INVALID, "object '%s': mesh object without a mesh",
-                                obj->name);
-        vv_status s = rt_bvh_build(&g->bvh, ge->mesh);
-        if (s != VV_OK)
-            return vv_error_prefix(s, "object '%s'", obj->name);
-        g->closed = 1;
-        break;
-    }
-    default:
-        return vv_error_set(VV_ERR_INVALID, "object '%s': unsupported type %d", obj->name,
-                            (int)obj->type);
-    }
-    if (obj->type == VV_OBJECT_POLYGON || obj->type == VV_OBJECT_BOX) {
+    vv_box ob;
+    if ((obj->type == VV_OBJECT_POLYGON || obj->type == VV_OBJECT_BOX) &&
+        g->geom->bounds(ge, &ob)) {
         /* world-space bounding sphere of the object-space bounding box */
-        vv_vec3 lo = ge->box.min, hi = ge->box.max;
-        if (obj->type == VV_OBJECT_POLYGON) {
-            lo = hi = ge->vertices[0];
-            for (int i = 1; i < ge->n_vertices; i++) {
-                const vv_vec3 q = ge->vertices[i];
-                lo = v3(q.x < lo.x ? q.x : lo.x, q.y < lo.y ? q.y : lo.y, q.z < lo.z ? q.z : lo.z);
-                hi = v3(q.x > hi.x ? q.x : hi.x, q.y > hi.y ? q.y : hi.y, q.z > hi.z ? q.z : hi.z);
-            }
-        }
+        const vv_vec3 lo = ob.min, hi = ob.max;
         g->bc = vv_mat4_mul_point(o2w, v3scale(v3add(lo, hi), 0.5));
         double r = 0;
         for (int k = 0; k < 8; k++) {
@@ -262,10 +208,9 @@ frame_release(rt_frame *fr) {
                 free(fr->vobjs[i].lvol[l]);
         }
     }
-    for (int i = 0; i < fr->n_gobj; i++) {
-        free(fr->gobjs[i].bvh.nodes);
-        free(fr->gobjs[i].bvh.tri);
-    }
+    for (int i = 0; i < fr->n_gobj; i++)
+        if (fr->gobjs[i].prep)
+            fr->gobjs[i].geom->release(fr->gobjs[i].prep);
     free(fr->vobjs);
     free(fr->gobjs);
 }
@@ -281,53 +226,17 @@ mix64(uint64_t x) {
     return x ^ (x >> 31);
 }
 
-/* vv_view_ray is affine in the pixel position before the direction is
- * normalised (the ray caster's prepare_rays): take the affine form from
- * three rays so that a primary ray costs a few multiply-adds instead of a
- * camera set-up. */
 static void
-prepare_rays(rt_frame *fr, const vv_view *view) {
-    vv_vec3 f = v3norm(v3sub(view->at, view->eye));
-    vv_ray r00 = vv_view_ray(view, 0, 0), r10 = vv_view_ray(view, 1, 0),
-           r01 = vv_view_ray(view, 0, 1);
-    vv_ray *rs[3] = {&r00, &r10, &r01};
-    for (int i = 0; i < 3; i++) {
-        double df = v3dot(rs[i]->dir, f);
-        if (view->projection != VV_PROJECTION_ORTHOGRAPHIC && df > 0)
-            rs[i]->dir = v3scale(rs[i]->dir, 1.0 / df);
-    }
-    fr->o00 = r00.origin;
-    fr->ox = v3sub(r10.origin, r00.origin);
-    fr->oy = v3sub(r01.origin, r00.origin);
-    fr->d00 = r00.dir;
-    fr->dx = v3sub(r10.dir, r00.dir);
-    fr->dy = v3sub(r01.dir, r00.dir);
-}
-
-static void
-trace_primary(const rt_frame *fr, const vv_view *view, double px, double py, float rgba[4],
-              float *depth) {
-    (void)view;
-    vv_ray wr;
+trace_primary(const rt_frame *fr, double px, double py, float rgba[4], float *depth, float *key) {
     /* the ray caster's arithmetic, so that without effects the images agree */
-    wr.origin.x = fr->o00.x + px * fr->ox.x + py * fr->oy.x;
-    wr.origin.y = fr->o00.y + px * fr->ox.y + py * fr->oy.y;
-    wr.origin.z = fr->o00.z + px * fr->ox.z + py * fr->oy.z;
-    const double dx = fr->d00.x + px * fr->dx.x + py * fr->dy.x;
-    const double dy = fr->d00.y + px * fr->dx.y + py * fr->dy.y;
-    const double dz = fr->d00.z + px * fr->dx.z + py * fr->dy.z;
-    const double inv = 1.0 / sqrt(dx * dx + dy * dy + dz * dz);
-    wr.dir.x = dx * inv;
-    wr.dir.y = dy * inv;
-    wr.dir.z = dz * inv;
-    rt_trace(fr, &wr, 0, 1, 1.0f, rgba, &rgba[3], depth);
+    const vv_ray wr = vv_camera_ray(&fr->cam, px, py);
+    rt_trace_key(fr, &wr, 0, 1, 1.0f, rgba, &rgba[3], depth, key);
 }
 
 /* n x n supersamples of pixel (x, y), regular or jittered (seeded by the
  * pixel, so images do not depend on threads). */
 static void
-supersample(const rt_frame *fr, const vv_view *view, int x, int y, int n, float rgba[4],
-            float *depth) {
+supersample(const rt_frame *fr, int x, int y, int n, float rgba[4], float *depth) {
     float acc[4] = {0, 0, 0, 0};
     float dmin = INFINITY;
     for (int s = 0; s < n * n; s++) {
@@ -340,7 +249,7 @@ supersample(const rt_frame *fr, const vv_view *view, int x, int y, int n, float 
             oy = (s / n + (double)(h & 0xFFFFFF) / 16777216.0) / n - 0.5;
         }
         float c[4], d;
-        trace_primary(fr, view, x + ox, y + oy, c, &d);
+        trace_primary(fr, x + ox, y + oy, c, &d, NULL);
         for (int ch = 0; ch < 4; ch++)
             acc[ch] += c[ch];
         dmin = d < dmin ? d : dmin;
@@ -353,72 +262,100 @@ supersample(const rt_frame *fr, const vv_view *view, int x, int y, int n, float 
 /* ---------------------------------------------------------------------- */
 /* The renderer                                                             */
 
-typedef struct rt_progress {
-    const vv_progress *p;
-    atomic_int cancelled;
-    int done, total;
-} rt_progress;
-
-static void
-tile_done(rt_progress *pr) {
-    if (!pr->p->fn)
-        return;
-#pragma omp critical(vv_raytrace_progress)
-    {
-        pr->done++;
-        if (vv_progress_report(pr->p, (double)pr->done / pr->total))
-            atomic_store(&pr->cancelled, 1);
-    }
+/* Pass 1: one ray per pixel (or the full supersampling when not adaptive);
+ * region renders: one ray per pixel and the projection key. */
+static vv_status
+pass_first(void *user, const vv_frame_tile *t) {
+    const rt_frame *fr = user;
+    const int W = fr->out->width;
+    for (int y = t->y0; y < t->y1; y++)
+        for (int x = t->x0; x < t->x1; x++) {
+            const size_t at = (size_t)y * (size_t)W + (size_t)x;
+            float *pix = fr->out->rgba + 4 * at;
+            float *dp = fr->out->depth + at;
+            if (fr->nss > 1 && !fr->adaptive)
+                supersample(fr, x, y, fr->nss, pix, dp);
+            else
+                trace_primary(fr, x, y, pix, dp, fr->key ? fr->key + at : NULL);
+        }
+    return VV_OK;
 }
 
+/* Pass 2 (adaptive): supersample the pixels that differ from a neighbour
+ * in the image of pass 1 by more than the threshold. */
 static vv_status
-rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
-          vv_image *out) {
-    rt_state *st = state;
-    rt_frame fr;
-    memset(&fr, 0, sizeof fr);
-    fr.st = st;
-    fr.w = w;
-    st->vc.frame++;
-    fr.avx2 = vv_vc_have_avx2();
-    st->frame++;
-    fr.et = (float)st->early_termination;
-    fr.ambient[0] = (float)w->ambient.x;
-    fr.ambient[1] = (float)w->ambient.y;
-    fr.ambient[2] = (float)w->ambient.z;
-    fr.bg[0] = (float)w->background.x;
-    fr.bg[1] = (float)w->background.y;
-    fr.bg[2] = (float)w->background.z;
-    /* quality: 0 preview (no secondary rays, one sample), 1 one sample
-     * with shadows and reflections, 2 final (supersampling as set) */
-    fr.shadows = opt->quality >= 1 && st->shadows;
-    fr.max_depth = opt->quality >= 1 ? st->max_depth : 0;
-    const int nss = opt->quality >= 2 ? st->samples : 1;
-    prepare_lights(&fr, w, view);
-    prepare_rays(&fr, view);
+pass_refine(void *user, const vv_frame_tile *t) {
+    const rt_frame *fr = user;
+    const int W = fr->out->width, H = fr->out->height;
+    const float thr = (float)fr->st->threshold;
+    const float *first = fr->first;
+    for (int y = t->y0; y < t->y1; y++)
+        for (int x = t->x0; x < t->x1; x++) {
+            const float *c = first + 4 * ((size_t)y * (size_t)W + (size_t)x);
+            int differs = 0;
+            const int nb[4][2] = {{x - 1, y}, {x + 1, y}, {x, y - 1}, {x, y + 1}};
+            for (int k = 0; k < 4 && !differs; k++) {
+                if (nb[k][0] < 0 || nb[k][0] >= W || nb[k][1] < 0 || nb[k][1] >= H)
+                    continue;
+                const float *q = first + 4 * ((size_t)nb[k][1] * (size_t)W + (size_t)nb[k][0]);
+                for (int ch = 0; ch < 4; ch++)
+                    differs |= fabsf(q[ch] - c[ch]) > thr;
+            }
+            if (differs)
+                supersample(fr, x, y, fr->nss, fr->out->rgba + 4 * ((size_t)y * (size_t)W + x),
+                            fr->out->depth + (size_t)y * (size_t)W + (size_t)x);
+        }
+    return VV_OK;
+}
 
-    int nv = 0, ng = 0;
+/* Counts the objects a render prepares; errors beyond the limits. */
+static vv_status
+count_objects(const vv_world *w, int *nv, int *ng) {
+    *nv = *ng = 0;
     for (int i = 0; i < w->n_objects; i++) {
         const vv_object *o = w->objects[i];
         if (!o || !o->visible || o->type == VV_OBJECT_GRID) /* grids: the irregular renderer */
             continue;
         if (o->type == VV_OBJECT_VOLUME)
-            nv += o->volume != NULL;
+            *nv += o->volume != NULL;
         else
-            ng++;
+            (*ng)++;
     }
-    if (nv > RT_MAX_OBJ || ng > RT_MAX_OBJ * 16)
+    if (*nv > RT_MAX_OBJ || *ng > RT_MAX_OBJ * 16)
         return vv_error_set(VV_ERR_LIMIT, "%d volume and %d geometric objects; at most %d and %d",
-                            nv, ng, RT_MAX_OBJ, RT_MAX_OBJ * 16);
-    fr.vobjs = calloc(nv ? (size_t)nv : 1, sizeof *fr.vobjs);
-    fr.gobjs = calloc(ng ? (size_t)ng : 1, sizeof *fr.gobjs);
-    if (!fr.vobjs || !fr.gobjs) {
-        frame_release(&fr);
+                            *nv, *ng, RT_MAX_OBJ, RT_MAX_OBJ * 16);
+    return VV_OK;
+}
+
+/* Prepares every object of the frame: geometry, volumes, tables, light
+ * volumes and swept shadow grids. With @p region, the region's object is
+ * traced twice (rt_vobj.region, rt_vobj.context) and no other object is
+ * visible. */
+static vv_status
+prepare_frame(rt_frame *fr, const vv_world *w, const vv_view *view, const vv_render_region *region,
+              const vv_object *part, int nt) {
+    rt_state *st = fr->st;
+    int nv = 0, ng = 0;
+    vv_status s = count_objects(w, &nv, &ng);
+    if (s != VV_OK)
+        return s;
+    nv += region != NULL;
+    fr->vobjs = calloc(nv ? (size_t)nv : 1, sizeof *fr->vobjs);
+    fr->gobjs = calloc(ng ? (size_t)ng : 1, sizeof *fr->gobjs);
+    if (!fr->vobjs || !fr->gobjs)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    }
-    vv_status s = VV_OK;
     double dt = INFINITY;
     vv_box bounds = vv_world_bounds(w);
+    if (region) {
+        /* the region part first: the samples of the whole volume that the
+         * region owns, from its voxels */
+        rt_vobj *ro = &fr->vobjs[fr->n_vobj++];
+        s = prepare_volume(fr, ro, part);
+        ro->region = region;
+        for (int a = 0; a < 3; a++)
+            ro->dims[a] = region->dims[a] > 1 ? region->dims[a] : 2;
+        dt = vv_vobject_step(part);
+    }
     for (int i = 0; i < w->n_objects && s == VV_OK; i++) {
         const vv_object *o = w->objects[i];
         if (!o || !o->visible || o->type == VV_OBJECT_GRID)
@@ -430,116 +367,102 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
                 s = vv_error_set(VV_ERR_INVALID, "object '%s': step must be > 0", o->name);
                 break;
             }
-            s = prepare_volume(&fr, &fr.vobjs[fr.n_vobj++], o);
-            double sd = vv_vobject_step(o);
-            dt = sd < dt ? sd : dt;
+            rt_vobj *ro = &fr->vobjs[fr->n_vobj++];
+            s = prepare_volume(fr, ro, o);
+            ro->context = region != NULL;
+            if (!region) {
+                double sd = vv_vobject_step(o);
+                dt = sd < dt ? sd : dt;
+            }
         } else {
-            s = prepare_geometry(&fr, &fr.gobjs[fr.n_gobj++], o);
+            s = prepare_geometry(fr, &fr->gobjs[fr->n_gobj++], o);
         }
     }
-    fr.dt = (float)(dt < INFINITY ? dt : 1.0);
+    fr->dt = (float)(dt < INFINITY ? dt : 1.0);
     double size = v3len(v3sub(bounds.max, bounds.min));
     size += v3len(v3sub(view->eye, v3scale(v3add(bounds.max, bounds.min), 0.5)));
-    fr.scene_size = size > 0 && size < INFINITY ? size : 1.0;
-    for (int i = 0; i < fr.n_vobj && s == VV_OK; i++) {
-        s = build_tables(&fr, &fr.vobjs[i]);
+    fr->scene_size = size > 0 && size < INFINITY ? size : 1.0;
+    for (int i = 0; i < fr->n_vobj && s == VV_OK; i++) {
+        rt_vobj *ro = &fr->vobjs[i];
+        s = build_tables(fr, ro);
+        ro->region_dt = fr->dt;
+        ro->inv_form = ro->mode == VV_MODE_COMPOSITE && !ro->extras; /* march_one */
     }
-    if (s != VV_OK) {
-        frame_release(&fr);
-        return s;
-    }
-
-    const int nt = opt->threads > 0 ? opt->threads : vv_threads_get();
     /* light volumes of directional lights through composite volumes that
      * cast shadows, then the shadow grids, now that every object is ready */
-    for (int i = 0; i < fr.n_vobj && s == VV_OK && fr.shadows && st->light_volumes; i++) {
-        rt_vobj *ro = &fr.vobjs[i];
-        if (ro->mode != VV_MODE_COMPOSITE || !ro->obj->casts_shadows)
+    for (int i = 0; i < fr->n_vobj && s == VV_OK && fr->shadows && st->light_volumes; i++) {
+        rt_vobj *ro = &fr->vobjs[i];
+        if (ro->mode != VV_MODE_COMPOSITE || !ro->obj->casts_shadows || ro->region)
             continue;
-        for (int l = 0; l < fr.n_lights && s == VV_OK; l++)
-            if (!fr.lights[l].point)
-                s = rt_build_light_volume(&fr, ro, l, nt);
+        for (int l = 0; l < fr->n_lights && s == VV_OK; l++)
+            if (!fr->lights[l].point)
+                s = rt_build_light_volume(fr, ro, l, nt);
     }
-    for (int i = 0; i < fr.n_vobj && s == VV_OK; i++) {
-        rt_vobj *ro = &fr.vobjs[i];
+    for (int i = 0; i < fr->n_vobj && s == VV_OK; i++) {
+        rt_vobj *ro = &fr->vobjs[i];
         if (ro->gdim[0] == 0)
             continue;
-        for (int l = 0; l < fr.n_lights && s == VV_OK; l++)
-            if (!fr.lights[l].point && st->shadow_grid == 2)
-                s = rt_sweep_light(&fr, ro, l, nt);
+        for (int l = 0; l < fr->n_lights && s == VV_OK; l++)
+            if (!fr->lights[l].point && st->shadow_grid == 2)
+                s = rt_sweep_light(fr, ro, l, nt);
     }
+    return s;
+}
+
+/* A whole render, or with @p region only its samples, one ray a pixel,
+ * into @p out (and the projection keys into @p key). */
+static vv_status
+render_frame(rt_state *st, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+             const vv_render_region *region, const vv_object *part, vv_image *out, float *key) {
+    rt_frame fr;
+    memset(&fr, 0, sizeof fr);
+    fr.st = st;
+    fr.w = w;
+    st->vc.frame++;
+    fr.avx2 = vv_vc_have_avx2();
+    st->frame++;
+    fr.et = (float)st->early_termination;
+    vv_frame_colours(w, region != NULL, fr.ambient, fr.bg);
+    /* quality: 0 preview (no secondary rays, one sample), 1 one sample
+     * with shadows and reflections, 2 final (supersampling as set) */
+    fr.shadows = opt->quality >= 1 && st->shadows;
+    fr.max_depth = opt->quality >= 1 ? st->max_depth : 0;
+    fr.nss = opt->quality >= 2 && !region ? st->samples : 1;
+    fr.adaptive = fr.nss > 1 && st->adaptive;
+    fr.view = view;
+    fr.out = out;
+    fr.key = key;
+    prepare_lights(&fr, w, view);
+    vv_camera_rays_init(&fr.cam, view);
+    const int nt = opt->threads > 0 ? opt->threads : vv_threads_get();
+    vv_status s = prepare_frame(&fr, w, view, region, part, nt);
     if (s != VV_OK) {
         frame_release(&fr);
         return s;
     }
-    const int W = view->width, H = view->height;
-    const int tx = (W + RT_TILE - 1) / RT_TILE, ty = (H + RT_TILE - 1) / RT_TILE;
-    const int ntiles = tx * ty;
-    const int adaptive = nss > 1 && st->adaptive;
-    rt_progress pr;
-    pr.p = &opt->progress;
-    atomic_init(&pr.cancelled, 0);
-    pr.done = 0;
-    pr.total = adaptive ? 2 * ntiles : ntiles;
-    /* pass 1: one ray per pixel (or the full supersampling when not adaptive) */
-#pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
-    for (int tile = 0; tile < ntiles; tile++) {
-        if (atomic_load_explicit(&pr.cancelled, memory_order_relaxed))
-            continue;
-        int x0 = (tile % tx) * RT_TILE, y0 = (tile / tx) * RT_TILE;
-        int x1 = x0 + RT_TILE < W ? x0 + RT_TILE : W, y1 = y0 + RT_TILE < H ? y0 + RT_TILE : H;
-        for (int y = y0; y < y1; y++)
-            for (int x = x0; x < x1; x++) {
-                float *pix = out->rgba + 4 * ((size_t)y * (size_t)W + (size_t)x);
-                float *dp = out->depth + (size_t)y * (size_t)W + (size_t)x;
-                if (nss > 1 && !adaptive)
-                    supersample(&fr, view, x, y, nss, pix, dp);
-                else
-                    trace_primary(&fr, view, x, y, pix, dp);
-            }
-        tile_done(&pr);
-    }
-    /* pass 2 (adaptive): supersample pixels that differ from a neighbour */
-    if (adaptive && !atomic_load(&pr.cancelled)) {
-        const size_t np = (size_t)W * (size_t)H;
+    vv_frame_job job;
+    vv_frame_job_init(&job, view->width, view->height, pass_first, &fr);
+    vv_frame_job_region(&job, region);
+    job.progress_to = fr.adaptive ? 0.5 : 1.0;
+    s = vv_frame_run(&job, opt);
+    if (s == VV_OK && fr.adaptive) {
+        const size_t np = (size_t)view->width * (size_t)view->height;
         float *first = malloc(np * 4 * sizeof(float));
         if (!first) {
-            frame_release(&fr);
-            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+            s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+        } else {
+            memcpy(first, out->rgba, np * 4 * sizeof(float));
+            fr.first = first;
+            job.fn = pass_refine;
+            job.progress_from = 0.5;
+            job.progress_to = 1.0;
+            s = vv_frame_run(&job, opt);
+            free(first);
         }
-        memcpy(first, out->rgba, np * 4 * sizeof(float));
-        const float thr = (float)st->threshold;
-#pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
-        for (int tile = 0; tile < ntiles; tile++) {
-            if (atomic_load_explicit(&pr.cancelled, memory_order_relaxed))
-                continue;
-            int x0 = (tile % tx) * RT_TILE, y0 = (tile / tx) * RT_TILE;
-            int x1 = x0 + RT_TILE < W ? x0 + RT_TILE : W, y1 = y0 + RT_TILE < H ? y0 + RT_TILE : H;
-            for (int y = y0; y < y1; y++)
-                for (int x = x0; x < x1; x++) {
-                    const float *c = first + 4 * ((size_t)y * (size_t)W + (size_t)x);
-                    int differs = 0;
-                    const int nb[4][2] = {{x - 1, y}, {x + 1, y}, {x, y - 1}, {x, y + 1}};
-                    for (int k = 0; k < 4 && !differs; k++) {
-                        if (nb[k][0] < 0 || nb[k][0] >= W || nb[k][1] < 0 || nb[k][1] >= H)
-                            continue;
-                        const float *q =
-                            first + 4 * ((size_t)nb[k][1] * (size_t)W + (size_t)nb[k][0]);
-                        for (int ch = 0; ch < 4; ch++)
-                            differs |= fabsf(q[ch] - c[ch]) > thr;
-                    }
-                    if (differs)
-                        supersample(&fr, view, x, y, nss,
-                                    out->rgba + 4 * ((size_t)y * (size_t)W + (size_t)x),
-                                    out->depth + (size_t)y * (size_t)W + (size_t)x);
-                }
-            tile_done(&pr);
-        }
-        free(first);
     }
     frame_release(&fr);
-    if (atomic_load(&pr.cancelled))
-        return vv_error_set(VV_ERR_CANCELLED, "cancelled");
+    if (s != VV_OK)
+        return s;
     /* drop cached volumes the World no longer shows */
     vv_vcache_set_prune(&st->vc, w);
     /* light volumes this frame did not use: gone (they can be large) */
@@ -547,6 +470,29 @@ rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         if (st->lv[i].vol && st->lv[i].used != st->frame)
             rt_lv_release(&st->lv[i]);
     return VV_OK;
+}
+
+static vv_status
+rt_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+          vv_image *out) {
+    return render_frame(state, w, view, opt, NULL, NULL, out, NULL);
+}
+
+/* The region contract: the region's object traced twice, its region part
+ * sampling the region's voxels on primary rays (one a pixel: the adaptive
+ * supersampling of quality 2 decides from finished pixels, which a region
+ * does not have) and its context, the World's own volume of the object,
+ * casting the shadows. */
+static vv_status
+rt_render_region(void *state, const vv_world *w, const vv_view *view,
+                 const vv_render_region *region, const vv_render_options *opt,
+                 vv_region_image *out) {
+    vv_object part;
+    vv_status s = vv_render_region_part(w, region, &out->op, &part);
+    if (s != VV_OK)
+        return s;
+    return render_frame(state, w, view, opt, region, &part, out->image,
+                        part.mode == VV_MODE_COMPOSITE ? NULL : out->key);
 }
 
 static vv_status
@@ -571,55 +517,31 @@ rt_create(void **state) {
 }
 
 static vv_status
-rt_set_option(void *state, const char *key, const char *value) {
+rt_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
     rt_state *st = state;
-    char *end = NULL;
-    double x = strtod(value, &end);
-    if (!end || *end || end == value || x != x)
-        return vv_error_set(VV_ERR_INVALID, "option %s: '%s' is not a number", key, value);
-    if (strcmp(key, "parc") == 0) {
-        st->parc = x != 0;
-    } else if (strcmp(key, "shadows") == 0) {
-        st->shadows = x != 0;
-    } else if (strcmp(key, "shadow_grid") == 0) {
-        if (x != 0 && x != 1 && x != 2)
-            return vv_error_set(VV_ERR_INVALID, "shadow_grid must be 0, 1 or 2");
-        st->shadow_grid = (int)x;
-    } else if (strcmp(key, "light_volumes") == 0) {
-        st->light_volumes = x != 0;
-    } else if (strcmp(key, "max_depth") == 0) {
-        if (!(x >= 0 && x <= 64) || x != floor(x))
-            return vv_error_set(VV_ERR_INVALID, "max_depth must be an integer in 0..64");
-        st->max_depth = (int)x;
-    } else if (strcmp(key, "samples") == 0) {
-        if (!(x >= 1 && x <= 16) || x != floor(x))
-            return vv_error_set(VV_ERR_INVALID,
-                                "samples (per pixel side) must be an integer in 1..16");
-        st->samples = (int)x;
-    } else if (strcmp(key, "jitter") == 0) {
-        st->jitter = x != 0;
-    } else if (strcmp(key, "adaptive") == 0) {
-        st->adaptive = x != 0;
-    } else if (strcmp(key, "adaptive_threshold") == 0) {
-        if (!(x >= 0))
-            return vv_error_set(VV_ERR_INVALID, "adaptive_threshold must be >= 0");
-        st->threshold = x;
-    } else if (strcmp(key, "seed") == 0) {
-        if (!(x >= 0 && x < 1.8e19))
-            return vv_error_set(VV_ERR_INVALID, "seed must be a non-negative integer");
-        st->seed = (uint64_t)x;
-    } else if (strcmp(key, "early_termination") == 0) {
-        if (!(x > 0 && x <= 1))
-            return vv_error_set(VV_ERR_INVALID, "early_termination must be in (0, 1]");
-        st->early_termination = x;
-    } else {
-        return vv_error_set(
-            VV_ERR_INVALID,
-            "unknown option '%s' (parc, shadows, shadow_grid, light_volumes, max_depth, "
-            "samples, "
-            "jitter, adaptive, adaptive_threshold, seed, early_termination)",
-            key);
-    }
+    const char *key = spec->key;
+    if (strcmp(key, "parc") == 0)
+        st->parc = v->b;
+    else if (strcmp(key, "shadows") == 0)
+        st->shadows = v->b;
+    else if (strcmp(key, "shadow_grid") == 0)
+        st->shadow_grid = (int)v->i;
+    else if (strcmp(key, "light_volumes") == 0)
+        st->light_volumes = v->b;
+    else if (strcmp(key, "max_depth") == 0)
+        st->max_depth = (int)v->i;
+    else if (strcmp(key, "samples") == 0)
+        st->samples = (int)v->i;
+    else if (strcmp(key, "jitter") == 0)
+        st->jitter = v->b;
+    else if (strcmp(key, "adaptive") == 0)
+        st->adaptive = v->b;
+    else if (strcmp(key, "adaptive_threshold") == 0)
+        st->threshold = v->r;
+    else if (strcmp(key, "seed") == 0)
+        st->seed = (uint64_t)v->i;
+    else if (strcmp(key, "early_termination") == 0)
+        st->early_termination = v->r;
     return VV_OK;
 }
 
@@ -634,15 +556,50 @@ rt_destroy(void *state) {
     free(st);
 }
 
+static const vv_option_spec rt_options[] = {
+    {"shadows", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
+     "shadow rays (0: every light reaches every point)"},
+    {"max_depth", VV_OPTION_INT, "3", 0, 64, 0, NULL, "reflection and transmission depth"},
+    {"samples", VV_OPTION_INT, "2", 1, 16, 0, NULL,
+     "rays per pixel side at quality 2 (2: 2 x 2 a pixel)"},
+    {"jitter", VV_OPTION_BOOL, "0", 0, 1, 0, NULL, "jittered supersampling"},
+    {"seed", VV_OPTION_INT, "1", 0, 9007199254740992.0, 0, NULL,
+     "seed of the jitter (a hash of it and the pixel)"},
+    {"adaptive", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
+     "supersample only pixels that differ from a neighbour"},
+    {"adaptive_threshold", VV_OPTION_REAL, "0.05", 0, INFINITY, 0, NULL,
+     "channel difference that triggers supersampling"},
+    {"parc", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
+     "leap over empty subvolumes on every ray (0 for measurements; same image)"},
+    {"shadow_grid", VV_OPTION_INT, "1", 0, 2, 0, NULL,
+     "volume samples' shadows: 1 a lazily traced grid of shadow rays, 0 an exact ray per "
+     "sample, 2 a swept light volume for directional lights"},
+    {"light_volumes", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
+     "shadow rays of directional lights through composite volumes from a light volume "
+     "(0: marched)"},
+    {"early_termination", VV_OPTION_REAL, "0.99", 0, 1, VV_OPTION_MIN_OPEN, NULL,
+     "accumulated opacity that ends compositing"},
+};
+
 const vv_renderer_ops vv_raytrace_ops = {
-    "raytrace",
-    "volumetric ray tracing: volumes and geometry, shadows, mirrors, refraction, PARC",
-    rt_create,
-    rt_set_option,
-    rt_render,
-    rt_destroy,
-    "shadows (1), max_depth (3), samples (2: 2x2 a pixel at quality 2), jitter (0), seed (1), "
-    "adaptive (1), adaptive_threshold (0.05), parc (1), shadow_grid (1), light_volumes (1), "
-    "early_termination (0.99); --quality 0: no shadow or secondary rays, 1: one ray a pixel, "
-    "2: supersampled",
+    .version = VV_RENDERER_OPS_VERSION,
+    .info =
+        {
+            .name = "raytrace",
+            .description = "volumetric ray tracing: volumes and geometry, shadows, mirrors, "
+                           "refraction, PARC",
+            .draws = VV_DRAWS(VV_OBJECT_VOLUME) | VV_DRAWS_GEOMETRY,
+            .modes = VV_MODES_ALL,
+            .caps = VV_RENDERER_REGION | VV_RENDERER_QUALITY | VV_RENDERER_GLOBAL,
+            .quality = "0: one ray a pixel, no shadow or secondary rays; 1: one ray a pixel "
+                       "with every effect; 2: supersampled (samples, adaptive); region renders "
+                       "(out of core, MPI) trace one ray a pixel",
+            .options = rt_options,
+            .n_options = VV_OPTIONS_COUNT(rt_options),
+        },
+    .create = rt_create,
+    .destroy = rt_destroy,
+    .set_option = rt_set_option,
+    .render = rt_render,
+    .render_region = rt_render_region,
 };

@@ -11,11 +11,13 @@
 #include <stdatomic.h>
 #include <stdint.h>
 
+#include "core/geom.h"
 #include "render/registry.h"
 #include "render/volume_cache.h"
 #include "volvis/render.h"
+#include "volvis/sys/geometry.h"
+#include "volvis/sys/renderer.h"
 
-#define RT_TILE 16 /* image tile side in pixels */
 #define RT_MAX_OBJ 64
 #define RT_SGRID 4                    /* shadow grid spacing, voxels */
 #define RT_LGRID 2                    /* light volume spacing, voxels */
@@ -23,43 +25,17 @@
 #define RT_EPS 1e-6                   /* relative ray offset off surfaces */
 
 /* ---------------------------------------------------------------------- */
-/* Vector helpers, inline (the library's are in another translation unit
- * and sit on the hot path of every intersection)                            */
+/* Vector helpers: the ray tracer's short names for core/geom.h's inline ones */
 
-static inline vv_vec3
-v3(double x, double y, double z) {
-    vv_vec3 r = {x, y, z};
-    return r;
-}
-static inline vv_vec3
-v3add(vv_vec3 a, vv_vec3 b) {
-    return v3(a.x + b.x, a.y + b.y, a.z + b.z);
-}
-static inline vv_vec3
-v3sub(vv_vec3 a, vv_vec3 b) {
-    return v3(a.x - b.x, a.y - b.y, a.z - b.z);
-}
-static inline vv_vec3
-v3scale(vv_vec3 a, double k) {
-    return v3(a.x * k, a.y * k, a.z * k);
-}
-static inline double
-v3dot(vv_vec3 a, vv_vec3 b) {
-    return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-static inline vv_vec3
-v3cross(vv_vec3 a, vv_vec3 b) {
-    return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
-}
-static inline double
-v3len(vv_vec3 a) {
-    return sqrt(v3dot(a, a));
-}
-static inline vv_vec3
-v3norm(vv_vec3 a) {
-    double l = v3len(a);
-    return l > 0 ? v3scale(a, 1.0 / l) : a;
-}
+#define v3 vv_v3
+#define v3add vv_v3_add
+#define v3sub vv_v3_sub
+#define v3scale vv_v3_scale
+#define v3dot vv_v3_dot
+#define v3cross vv_v3_cross
+#define v3len vv_v3_len
+#define v3norm vv_v3_norm
+
 static inline vv_vec3
 ray_at(const vv_ray *r, double t) {
     return v3add(r->origin, v3scale(r->dir, t));
@@ -136,39 +112,32 @@ typedef struct rt_vobj {
     vv_vextra x;                /* 2-D transfer function and solid texture */
     int extras;                 /* x has something: the general loop handles the object */
     int textured;               /* iso mode: an image texture modulates the base colour */
+    /* region renders (sys/renderer.h): the object is traced twice. Its
+     * region part samples the region's voxels on primary rays and casts no
+     * shadow; its context (the World's own volume of the object: the whole
+     * one, or a coarse proxy) casts the shadows and is invisible to rays. */
+    const vv_render_region *region; /* the region part: its region, else NULL */
+    int context;                    /* the context: shadows only */
+    double region_dt;               /* the step the region's samples are counted with */
+    int inv_form;                   /* vv_vray_clip_region's form for this object's kernel */
 } rt_vobj;
-
-/* Bounding volume hierarchy over a mesh's triangles (object space). */
-typedef struct rt_bvh_node {
-    float lo[3], hi[3];
-    int left;       /* child index, or -1 for a leaf */
-    int first, cnt; /* leaf: triangles tri[first .. first + cnt) */
-} rt_bvh_node;
-
-typedef struct rt_bvh {
-    rt_bvh_node *nodes;
-    int n_nodes;
-    uint32_t *tri; /* triangle order */
-} rt_bvh;
 
 /* One geometric object prepared for this render. */
 typedef struct rt_gobj {
     const vv_object *obj;
     vv_object_type type;
-    double w2o[3][4]; /* world -> object */
-    double nrm[3][3]; /* object normal -> world normal (M^-T) */
-    vv_plane plane;   /* polygon: its plane (object space); axis dropped for 2-D test */
-    int drop;
-    rt_bvh bvh;
-    vv_box obox; /* object-space bounds (not for planes) */
+    double w2o[3][4];         /* world -> object */
+    double nrm[3][3];         /* object normal -> world normal (M^-T) */
+    const vv_geom_type *geom; /* its record of the geometry-type table */
+    void *prep;               /* what geom->prepare built, or NULL */
     float col[3];
     float kr, kt; /* reflectance (0 when the object does not reflect), transparency */
     double ior;
-    int closed;     /* refracts (a solid); planes and polygons transmit straight */
-    int bounded;    /* polygon, box: a world-space bounding sphere rejects rays early */
-    vv_vec3 bc;     /* its centre */
-    double br2;     /* its squared radius */
-    vv_vec3 pn, pp; /* plane: world-space normal (M^-T n) and point */
+    int closed;         /* refracts (a solid); planes and polygons transmit straight */
+    int bounded;        /* polygon, box: a world-space bounding sphere rejects rays early */
+    vv_vec3 bc;         /* its centre */
+    double br2;         /* its squared radius */
+    vv_geometry wplane; /* plane: its world-space point and normal (M^-T n) */
 } rt_gobj;
 
 typedef struct rt_frame {
@@ -186,11 +155,16 @@ typedef struct rt_frame {
     int n_lights;
     float et;
     int shadows, max_depth;
-    int avx2;          /* the processor has AVX2 and FMA (vv_vray_classify) */
-    double scene_size; /* for ray offsets */
-    /* primary rays, affine in the pixel position before normalisation (as
-     * the ray caster's): origin o00 + x ox + y oy, direction d00 + x dx + y dy */
-    vv_vec3 o00, ox, oy, d00, dx, dy;
+    int avx2;           /* the processor has AVX2 and FMA (vv_vray_classify) */
+    double scene_size;  /* for ray offsets */
+    vv_camera_rays cam; /* primary rays (the ray caster's arithmetic) */
+    /* the pass being run by the frame runner */
+    const vv_view *view;
+    vv_image *out;
+    float *key;         /* region renders of projections: the key per pixel, else NULL */
+    int nss;            /* supersamples per pixel side */
+    int adaptive;       /* pass 1 traces pixel centres, pass 2 supersamples where they differ */
+    const float *first; /* pass 2: the image of pass 1 */
 } rt_frame;
 
 /* A surface hit. */
@@ -215,7 +189,9 @@ typedef struct rt_scache {
 /* The world ray over [tmin, tmax] clipped to a volume in its index space. */
 static inline int
 vray_setup(const rt_vobj *ob, const vv_ray *wr, double tmin, double tmax, vv_vray *r) {
-    return vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, wr, tmin, tmax, r);
+    if (!vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, wr, tmin, tmax, r))
+        return 0;
+    return !ob->region || vv_vray_clip_region(r, ob->region, ob->region_dt, ob->inv_form);
 }
 
 static inline float
@@ -273,10 +249,6 @@ xf_dir(const double m[3][4], vv_vec3 d) {
               m[2][0] * d.x + m[2][1] * d.y + m[2][2] * d.z);
 }
 
-/* Median split on the longest centroid axis, 4 triangles per leaf. Nodes
- * are stored with siblings adjacent (left, left + 1). */
-vv_status rt_bvh_build(rt_bvh *bvh, const vv_mesh *m);
-
 /* Nearest hit of one geometric object in (tmin, tmax); its object-space
  * normal in *no (not normalised, not flipped towards the ray; gobj_normal
  * turns it into the world normal), or NULL when not needed. */
@@ -322,5 +294,9 @@ void rt_shade_geometry(const rt_frame *fr, const vv_ray *wr, const rt_hit *h, in
  * coverage (1 where a surface is hit), *tdepth the first visible hit. */
 void rt_trace(const rt_frame *fr, const vv_ray *wr, int depth, int primary, float weight,
               float out[3], float *alpha, float *tdepth);
+/* rt_trace, and *key (when not NULL) the value projected by the last
+ * projection volume on the ray, NAN when none (region renders). */
+void rt_trace_key(const rt_frame *fr, const vv_ray *wr, int depth, int primary, float weight,
+                  float out[3], float *alpha, float *tdepth, float *key);
 
 #endif

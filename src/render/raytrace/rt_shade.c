@@ -162,7 +162,7 @@ shadow_segment(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start, d
     }
     for (int i = 0; i < fr->n_vobj && T > 0.0037f; i++) {
         const rt_vobj *ob = &fr->vobjs[i];
-        if (ob->obj->casts_shadows)
+        if (ob->obj->casts_shadows && !ob->region)
             T *= volume_transmittance(fr, ob, &r, start, tmax, light);
     }
     return T;
@@ -369,8 +369,17 @@ rt_build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
 
 /* Shadow of a volume sample at index point pi (world pw) for light l. */
 static float
-volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float pi[3],
+volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float pi_in[3],
                      const float pw[3], rt_scache *sc) {
+    /* a region part samples its voxels in their own index space: the
+     * shadow grids are the whole volume's */
+    float pr[3];
+    const float *pi = pi_in;
+    if (ob->region) {
+        for (int a = 0; a < 3; a++)
+            pr[a] = pi_in[a] + (float)ob->region->offset[a];
+        pi = pr;
+    }
     if (ob->sweep[l]) {
         /* the swept grid, looked up 1.5 grid cells towards the light so that
          * a surface does not shadow itself */

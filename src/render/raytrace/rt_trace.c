@@ -112,6 +112,9 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
     *Aout = A > 1 ? 1 : A;
 }
 
+/* Over 150 lines on purpose: the multi-volume march keeps per-object ray
+ * state (iso crossings, leaps) in arrays on the stack across the samples of
+ * one ray, the ray caster's trace_composite for the ray tracer. */
 /* Front-to-back compositing of the composite and iso volumes along the ray
  * over [0, tlim] on the samples t = k dt (the ray caster's grid). An iso
  * hit is a surface: shaded with shadows and reflections, it ends the ray. */
@@ -126,7 +129,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
     double tmin = INFINITY, tmax = -INFINITY;
     for (int i = 0; i < fr->n_vobj; i++) {
         const rt_vobj *ob = &fr->vobjs[i];
-        if (ob->mode != VV_MODE_COMPOSITE && ob->mode != VV_MODE_ISO)
+        if ((ob->mode != VV_MODE_COMPOSITE && ob->mode != VV_MODE_ISO) || ob->context)
             continue;
         if (!primary && !ob->obj->visible_in_reflections)
             continue;
@@ -293,6 +296,12 @@ project_volume(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double t
 void
 rt_trace(const rt_frame *fr, const vv_ray *wr, int depth, int primary, float weight, float out[3],
          float *alpha, float *tdepth) {
+    rt_trace_key(fr, wr, depth, primary, weight, out, alpha, tdepth, NULL);
+}
+
+void
+rt_trace_key(const rt_frame *fr, const vv_ray *wr, int depth, int primary, float weight,
+             float out[3], float *alpha, float *tdepth, float *key) {
     rt_hit h;
     /* secondary rays start off their surface already (offset along the normal) */
     const int geo = rt_nearest_hit(fr, wr, 0, INFINITY, primary, &h);
@@ -300,15 +309,19 @@ rt_trace(const rt_frame *fr, const vv_ray *wr, int depth, int primary, float wei
     float C[3] = {0, 0, 0}, A = 0, dep = INFINITY;
     march_volumes(fr, wr, tlim, depth, primary, weight, C, &A, &dep);
     float P[3] = {0, 0, 0}, PA = 0, pdepth = INFINITY;
+    if (key)
+        *key = NAN;
     for (int i = 0; i < fr->n_vobj; i++) {
         const rt_vobj *ob = &fr->vobjs[i];
-        if (ob->mode == VV_MODE_COMPOSITE || ob->mode == VV_MODE_ISO)
+        if (ob->mode == VV_MODE_COMPOSITE || ob->mode == VV_MODE_ISO || ob->context)
             continue;
         if (!primary && !ob->obj->visible_in_reflections)
             continue;
         float val, d;
         if (!project_volume(fr, ob, wr, tlim, &val, &d))
             continue;
+        if (key)
+            *key = val;
         const float *e = ob->lut + 4 * (int)lut_index_f(ob, val);
         for (int ch = 0; ch < 3; ch++) {
             float cv = e[1 + ch] * e[0];

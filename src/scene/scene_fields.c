@@ -3,6 +3,7 @@
  * line and column (vv_json_locate, src/core/json_text.c), the closest key
  * suggested for an unknown one, and typed fields with their ranges.
  */
+#include <float.h>
 #include <jansson.h>
 #include <math.h>
 #include <stdarg.h>
@@ -12,9 +13,7 @@
 
 #include "core/internal.h"
 #include "core/json_internal.h"
-#include "model/model_internal.h"
-#include "model/scene_internal.h"
-#include "modeling/modeling_internal.h"
+#include "scene/scene_internal.h"
 #include "volvis/io.h"
 #include "volvis/model.h"
 #include "volvis/modeling.h"
@@ -24,6 +23,14 @@
 void
 vv_scene_locate(const sctx *c, const char *path, int *line, int *col) {
     vv_json_locate(c->text, c->len, path, line, col);
+}
+
+vv_vec3
+vv_scene_unit(vv_vec3 v) {
+    double n2 = vv_vec3_dot(v, v);
+    if (fabs(n2 - 1.0) <= 8 * DBL_EPSILON)
+        return v;
+    return vv_vec3_normalize(v);
 }
 
 /* ---- error reporting ---------------------------------------------------- */

@@ -15,9 +15,7 @@
 
 #include "core/internal.h"
 #include "core/json_internal.h"
-#include "model/model_internal.h"
-#include "model/scene_internal.h"
-#include "modeling/modeling_internal.h"
+#include "scene/scene_internal.h"
 #include "volvis/io.h"
 #include "volvis/model.h"
 #include "volvis/modeling.h"
@@ -52,7 +50,7 @@ vv_scene_parse_cut_planes(const sctx *c, json_t *arr, const char *path, vv_cut_p
         if (!hn)
             return vv_scene_missing(c, ep, "normal", "the normal of the kept half-space");
         planes[i].point = p;
-        planes[i].normal = vv_vec3_normalize(nrm);
+        planes[i].normal = vv_scene_unit(nrm);
         (*n)++;
     }
     return VV_OK;
@@ -141,7 +139,7 @@ parse_lights(const sctx *c, json_t *arr, vv_world *w) {
                                      "\"point\")");
             }
             if (hd) {
-                l.direction = vv_vec3_normalize(l.direction);
+                l.direction = vv_scene_unit(l.direction);
             } else {
                 l.headlight = 1;
                 l.direction = view_dir;
@@ -318,7 +316,7 @@ vv_scene_load_progress(vv_world **out, const char *path, const vv_progress *prog
 
 vv_status
 vv_scene_load_cached(vv_world **out, const char *path, const vv_progress *progress,
-                     struct vv_filter_cache *cache) {
+                     vv_filter_cache *cache) {
     if (!out)
         return vv_error_set(VV_ERR_INVALID, "scene: NULL output");
     *out = NULL;

@@ -1,7 +1,9 @@
 /*
  * What the files of the scene reader and writer share (not installed): the
  * parse context, the error reporting and the typed field readers
- * (scene_fields.c), the object sections (scene_objects.c).
+ * (scene_fields.c), the objects (scene_objects.c: dispatch and volume
+ * objects; scene_geometry.c: geometric, "geometry" and grid objects;
+ * scene_appearance.c: what every object carries).
  */
 #ifndef VOLVIS_SCENE_INTERNAL_H
 #define VOLVIS_SCENE_INTERNAL_H
@@ -10,7 +12,9 @@
 #include <stddef.h>
 
 #include "core/internal.h"
+#include "volvis/filter.h"
 #include "volvis/model.h"
+#include "volvis/scene.h"
 
 #define SCENE_MAX_BYTES (16u << 20)
 #define PATH_MAX_LEN 256
@@ -21,12 +25,18 @@ typedef struct sctx {
     const char *path; /* scene file as given */
     const char *text;
     size_t len;
-    const vv_progress *progress;    /* voxelization of geometry objects; may be NULL */
-    struct vv_filter_cache *fcache; /* filtered volumes kept between loads; may be NULL */
+    const vv_progress *progress; /* voxelization of geometry objects; may be NULL */
+    vv_filter_cache *fcache;     /* filtered volumes kept between loads; may be NULL */
 } sctx;
 
 /** The render modes' names in scene files, by vv_render_mode. */
 extern const char *const vv_scene_mode_names[5];
+
+/* @p v scaled to unit length, or @p v itself when it already is to within
+ * rounding (|v|^2 within 8 epsilon of 1): normalizing a normalized vector
+ * again moves its last bits, and a World saved and loaded again must not
+ * drift. @p v must not be zero. */
+vv_vec3 vv_scene_unit(vv_vec3 v);
 
 /* Line and column of @p path in the scene text (its nearest ancestor's when
  * the path itself cannot be found). */
@@ -100,5 +110,50 @@ vv_status vv_scene_parse_cut_planes(const sctx *c, json_t *arr, const char *path
 
 /* Object @p idx of the "objects" array, added to @p w (scene_objects.c). */
 vv_status vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w);
+
+/* ---- scene_objects.c: what the object kinds share ---- */
+
+/* A default object name from a file path: its base name without the
+ * extension(s), truncated to VV_NAME_MAX - 1 bytes. */
+void vv_scene_name_from_file(char dst[VV_NAME_MAX], const char *file);
+
+/* Checks the keys of object @p e: "name" and "type", the kind's own keys
+ * @p own (NULL-terminated), the keys of volume-like objects (mode,
+ * segmentation, cut planes) when @p volume_like, and the transform,
+ * material, visibility and shading-effect keys every object takes. */
+vv_status vv_scene_check_object_keys(const sctx *c, json_t *e, const char *op,
+                                     const char *const *own, int volume_like);
+
+/* The optional "name" of object @p e (borrowed), at most VV_NAME_MAX - 1 bytes. */
+vv_status vv_scene_get_object_name(const sctx *c, json_t *e, const char *op, const char **name);
+
+/* ---- scene_appearance.c ---- */
+
+/* Object fields other than the source (file, shape): mode, isovalue,
+ * step, shading, visibility, transform, segmentation (TF, 2-D TF,
+ * threshold, labels), textures, material and local cut planes. */
+vv_status vv_scene_parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o);
+
+/* The shading-effect flags every object takes (casts_shadows, ...). */
+vv_status vv_scene_parse_effect_flags(const sctx *c, json_t *e, const char *op, vv_object *o);
+
+/* @p st (set by loading a file named at key path @p kp) prefixed with
+ * "scene:line:col: kp". */
+vv_status vv_scene_file_err(const sctx *c, vv_status st, const char *kp);
+
+/* ---- scene_geometry.c ---- */
+
+/* The geometric object type named @p name ("plane", ..., "mesh"), or
+ * VV_OBJECT_VOLUME for "volume" and names that are not geometric types. */
+vv_object_type vv_scene_geometry_type(const char *name);
+
+/* A geometric object (ray tracer): shape, transform, material, flags. */
+vv_status vv_scene_parse_geometry_object(const sctx *c, json_t *e, const char *op, vv_world *w);
+
+/* A "geometry" object: a Modeling primitive or CSG tree volume-sampled now. */
+vv_status vv_scene_parse_voxelized_geometry(const sctx *c, json_t *e, const char *op, vv_world *w);
+
+/* An irregular grid object. */
+vv_status vv_scene_parse_grid_object(const sctx *c, json_t *e, const char *op, vv_world *w);
 
 #endif

@@ -12,7 +12,7 @@ static char g_dir[1024];
 static int
 setup(void **state) {
     (void)state;
-    snprintf(g_dir, sizeof g_dir, "%s", vt_outdir("model_scene"));
+    snprintf(g_dir, sizeof g_dir, "%s", vt_outdir("scene_files"));
     int dims[3] = {6, 5, 4};
     vv_volume *v = NULL;
     if (vv_volume_new(&v, dims, VV_I16) != VV_OK)
@@ -710,12 +710,58 @@ test_render_settings(void **state) {
                  "render.options.o32: more than 32 options");
 }
 
+/* The writer writes JSON that Jansson reads: short members on one line,
+ * numbers with as few digits as read back, strings escaped, and a name that
+ * is not UTF-8 (which the reader would refuse) is an error naming the
+ * object, with the old file left as it was. */
+static void
+test_writer_text(void **state) {
+    (void)state;
+    vv_world *a = NULL, *b = NULL;
+    vt_ok(vv_world_new(&a));
+    a->view.eye = vv_vec3_make(0.1, 1.0 / 3.0, 250);
+    a->view.fov = vv_deg_to_rad(30);
+    char out[1200];
+    snprintf(out, sizeof out, "%s/text_out.json", g_dir);
+    vt_ok(vv_scene_save(a, out, NULL));
+    size_t n = 0;
+    char *text = (char *)vt_read_file(out, &n);
+    /* 0.1 as written by a person, 1/3 with the 17 digits it needs, 30 degrees */
+    assert_non_null(strstr(text, "\"eye\": [0.1, 0.33333333333333331, 250],\n"));
+    assert_non_null(strstr(text, "\"fov\": 30,\n"));
+    assert_non_null(strstr(text, "\"cut_planes\": [],\n"));
+    assert_true(n > 0 && text[n - 1] == '\n');
+    vt_ok(vv_scene_load(&b, out));
+    compare_worlds(a, b);
+    vv_world_free(b);
+
+    vv_volume *v = NULL;
+    snprintf(out, sizeof out, "%s/ct_head.nrrd", g_dir);
+    vt_ok(vv_volume_load(&v, out, NULL));
+    vv_object *o = NULL;
+    vt_ok(vv_object_new_volume(&o, v, "bad\xff name"));
+    vv_volume_free(v);
+    vt_ok(vv_world_add_object(a, o));
+    const char *files[1] = {"ct_head.nrrd"};
+    snprintf(out, sizeof out, "%s/text_out.json", g_dir);
+    vv_error_clear();
+    assert_int_equal(vv_scene_save(a, out, files), VV_ERR_INVALID);
+    assert_non_null(strstr(vv_error_message(), "object 0"));
+    assert_non_null(strstr(vv_error_message(), "UTF-8"));
+    char *again = (char *)vt_read_file(out, &n);
+    assert_string_equal(again, text);
+    free(again);
+    free(text);
+    vv_world_free(a);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_example),          cmocka_unit_test(test_every_key),
         cmocka_unit_test(test_round_trip),       cmocka_unit_test(test_errors),
         cmocka_unit_test(test_geometry_objects), cmocka_unit_test(test_render_settings),
+        cmocka_unit_test(test_writer_text),
     };
-    return cmocka_run_group_tests(tests, setup, NULL);
+    return vt_run_tests(tests, setup, NULL);
 }

@@ -1,24 +1,21 @@
 /*
- * Scene files, the objects: volume objects (transfer functions, textures,
- * materials, modes, cut planes), geometric objects for the ray tracer,
- * geometry objects volume-sampled by Modeling, and grid objects.
+ * Scene files, what every object carries: transfer functions (1-D and 2-D),
+ * textures (images and solid textures), materials, the rendering mode,
+ * the transform, the segmentation, local cut planes and the shading-effect
+ * flags.
  */
+#include <float.h>
 #include <jansson.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "core/internal.h"
 #include "core/json_internal.h"
-#include "filter/filter_scene.h"
-#include "model/model_internal.h"
-#include "model/scene_internal.h"
-#include "modeling/modeling_internal.h"
+#include "scene/scene_internal.h"
 #include "volvis/io.h"
 #include "volvis/model.h"
-#include "volvis/modeling.h"
 
 static vv_status
 parse_tf_points(const sctx *c, json_t *tfj, const char *tp, vv_tf *tf, int opacity) {
@@ -75,7 +72,7 @@ parse_tf(const sctx *c, json_t *tfj, const char *tp, vv_object *o) {
     vv_tf tf;
     vv_tf_init(&tf);
     tf.opacity_unit_distance =
-        o->volume ? vv_model_min_spacing(o->volume) : o->tf.opacity_unit_distance;
+        o->volume ? vv_tf_default_unit_distance(o->volume) : o->tf.opacity_unit_distance;
     if ((st = parse_tf_points(c, tfj, tp, &tf, 1)) != VV_OK ||
         (st = parse_tf_points(c, tfj, tp, &tf, 0)) != VV_OK ||
         (st = vv_scene_get_number_in(c, tfj, tp, "opacity_unit_distance", &tf.opacity_unit_distance,
@@ -182,7 +179,7 @@ parse_tf2d(const sctx *c, json_t *tj, const char *tp, vv_object *o) {
         return vv_scene_serr(c, ap, "more than %d widgets", VV_TF2D_MAX_WIDGETS);
     vv_tf2d tf;
     vv_tf2d_init(&tf);
-    tf.opacity_unit_distance = o->volume ? vv_model_min_spacing(o->volume) : 1.0;
+    tf.opacity_unit_distance = o->volume ? vv_tf_default_unit_distance(o->volume) : 1.0;
     size_t i;
     json_t *e;
     json_array_foreach(arr, i, e) {
@@ -200,8 +197,8 @@ parse_tf2d(const sctx *c, json_t *tj, const char *tp, vv_object *o) {
 }
 
 /* A file named relative to the scene file, for error messages at its key. */
-static vv_status
-file_err(const sctx *c, vv_status st, const char *kp) {
+vv_status
+vv_scene_file_err(const sctx *c, vv_status st, const char *kp) {
     int line, col;
     vv_scene_locate(c, kp, &line, &col);
     return vv_error_prefix(st, "%s:%d:%d: %s", c->path, line, col, kp);
@@ -235,7 +232,7 @@ parse_texture(const sctx *c, json_t *tj, const char *tp, vv_object *o) {
         vv_scene_path_key(kp, tp, "scale");
         return vv_scene_serr(c, kp, "scale factors must not be 0");
     }
-    m.axis = vv_vec3_normalize(m.axis);
+    m.axis = vv_scene_unit(m.axis);
     m.scale[0] = sc[0];
     m.scale[1] = sc[1];
     vv_scene_path_key(kp, tp, "image");
@@ -248,7 +245,7 @@ parse_texture(const sctx *c, json_t *tj, const char *tp, vv_object *o) {
     st = vv_texture_image_load(&img, full, file);
     free(full);
     if (st != VV_OK)
-        return file_err(c, st, kp);
+        return vv_scene_file_err(c, st, kp);
     m.image = img; /* the reference from loading moves into the object */
     vv_texture_image_free(o->texture.image);
     o->texture = m;
@@ -285,7 +282,7 @@ parse_solid_texture(const sctx *c, json_t *tj, const char *tp, vv_object *o) {
         return vv_scene_serr(c, kp, "expected an integer, got %g", seed);
     }
     s.seed = (unsigned)seed;
-    s.axis = vv_vec3_normalize(s.axis);
+    s.axis = vv_scene_unit(s.axis);
     if ((proc != NULL) == (file != NULL))
         return vv_scene_serr(c, tp,
                              "give exactly one of \"procedural\" (checker3d, wood, marble) and "
@@ -314,7 +311,7 @@ parse_solid_texture(const sctx *c, json_t *tj, const char *tp, vv_object *o) {
         st = vv_volume_load(&vol, full, NULL);
         free(full);
         if (st != VV_OK)
-            return file_err(c, st, kp);
+            return vv_scene_file_err(c, st, kp);
         st = vv_solid_texture_set_volume(&s, vol, file);
         vv_volume_free(vol);
         if (st != VV_OK)
@@ -353,8 +350,8 @@ parse_material_global(const sctx *c, json_t *m, const char *mp, vv_material *mat
 }
 
 /* The per-object shading-effect flags (every object type). */
-static vv_status
-parse_effect_flags(const sctx *c, json_t *e, const char *op, vv_object *o) {
+vv_status
+vv_scene_parse_effect_flags(const sctx *c, json_t *e, const char *op, vv_object *o) {
     vv_status st;
     if ((st = vv_scene_get_bool(c, e, op, "casts_shadows", &o->casts_shadows)) != VV_OK ||
         (st = vv_scene_get_bool(c, e, op, "receives_shadows", &o->receives_shadows)) != VV_OK ||
@@ -402,30 +399,12 @@ parse_mode(const sctx *c, const char *op, const char *s, vv_render_mode *out) {
                          s);
 }
 
-/* Object fields other than the volume source (file, origin, spacing). */
+/* "rotation" (axis-angle, degrees) or "orientation" (a quaternion), not both. */
 static vv_status
-parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
+parse_orientation(const sctx *c, json_t *e, const char *op, vv_object *o) {
     vv_status st;
     char kp[PATH_MAX_LEN];
-    const char *mode = NULL;
-    int has_iso, has_rot, has_ori;
-    if ((st = vv_scene_get_string(c, e, op, "mode", &mode)) != VV_OK)
-        return st;
-    if (mode && (st = parse_mode(c, op, mode, &o->mode)) != VV_OK)
-        return st;
-    if ((st = vv_scene_get_number(c, e, op, "isovalue", &o->isovalue, &has_iso)) != VV_OK ||
-        (st = vv_scene_get_number_in(c, e, op, "step", &o->step, NULL, 0, 1, INFINITY, 1)) !=
-            VV_OK ||
-        (st = vv_scene_get_bool(c, e, op, "shading", &o->shading)) != VV_OK ||
-        (st = vv_scene_get_bool(c, e, op, "visible", &o->visible)) != VV_OK ||
-        (st = vv_scene_get_vec3(c, e, op, "position", &o->position, NULL)) != VV_OK)
-        return st;
-    if (o->mode == VV_MODE_ISO && !has_iso) {
-        vv_scene_path_key(kp, op, "mode");
-        return vv_scene_serr(c, kp, "mode \"iso\" needs an \"isovalue\"");
-    }
-
-    /* rotation (axis-angle, degrees) or orientation (quaternion) */
+    int has_rot, has_ori;
     json_t *rot;
     if ((st = vv_scene_get_object(c, e, op, "rotation", &rot)) != VV_OK)
         return st;
@@ -465,13 +444,22 @@ parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
             if ((st = vv_scene_value_number(c, json_array_get(q, i), ip, &d[i])) != VV_OK)
                 return st;
         }
-        double n = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + d[3] * d[3]);
-        if (!(n > 0.0))
+        double n2 = d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + d[3] * d[3];
+        if (!(n2 > 0.0))
             return vv_scene_serr(c, kp, "the zero quaternion is not a rotation");
+        /* as vv_scene_unit: a unit quaternion (a saved one) is kept bit for bit */
+        double n = fabs(n2 - 1.0) <= 8 * DBL_EPSILON ? 1.0 : sqrt(n2);
         o->orientation = (vv_quat){d[0] / n, d[1] / n, d[2] / n, d[3] / n};
     }
 
-    /* scale: a number (uniform) or [sx, sy, sz], all > 0 */
+    return VV_OK;
+}
+
+/* "scale": a number (uniform) or [sx, sy, sz], all > 0. */
+static vv_status
+parse_scale(const sctx *c, json_t *e, const char *op, vv_object *o) {
+    vv_status st;
+    char kp[PATH_MAX_LEN];
     json_t *sc = json_object_get(e, "scale");
     if (sc) {
         vv_scene_path_key(kp, op, "scale");
@@ -487,7 +475,15 @@ parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
         o->scale = s;
     }
 
-    /* segmentation: a transfer function (1-D or 2-D) or a threshold */
+    return VV_OK;
+}
+
+/* The segmentation (a 1-D or 2-D transfer function, a threshold, labels),
+ * the textures, the material and the local cut planes. */
+static vv_status
+parse_segmentation(const sctx *c, json_t *e, const char *op, vv_object *o) {
+    vv_status st;
+    char kp[PATH_MAX_LEN];
     json_t *tfj, *seg = NULL, *mat, *cuts, *tf2j, *texj, *soj;
     const char *seg_name = NULL;
     json_t *segv = json_object_get(e, "segmentation");
@@ -550,7 +546,7 @@ parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
     } else if (o->volume) {
         /* the default TF depends on the mode, known only now */
         double iso_lo;
-        vv_model_default_tf(o->volume, o->mode, &o->tf, &iso_lo);
+        vv_tf_default(&o->tf, o->volume, o->mode, &iso_lo);
     }
     if (seg) {
         static const char *const skeys[] = {"threshold", NULL};
@@ -577,463 +573,29 @@ parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
     return VV_OK;
 }
 
-/* Name from a file path: its base name without the extension(s). */
-static void
-name_from_file(char dst[VV_NAME_MAX], const char *file) {
-    vv_model_copy_name(dst, vv_path_basename(file));
-    char *dot = strchr(dst, '.');
-    if (dot && dot != dst)
-        *dot = '\0';
-}
-
-/* ---- geometric objects (volumetric ray tracing) ---------------------------- */
-
-/* VV_OBJECT_VOLUME for "volume" and for names that are not geometric types. */
-static vv_object_type
-geometry_type(const char *name) {
-    static const vv_object_type types[] = {VV_OBJECT_PLANE, VV_OBJECT_POLYGON,  VV_OBJECT_SPHERE,
-                                           VV_OBJECT_BOX,   VV_OBJECT_CYLINDER, VV_OBJECT_MESH};
-    for (size_t i = 0; i < sizeof types / sizeof types[0]; i++)
-        if (strcmp(name, vv_object_type_name(types[i])) == 0)
-            return types[i];
-    return VV_OBJECT_VOLUME;
-}
-
-/* The shape keys of one geometric type. */
-static vv_status
-parse_shape(const sctx *c, json_t *e, const char *op, vv_object *o) {
-    vv_geometry *g = &o->geometry;
+/* Object fields other than the volume source (file, origin, spacing). */
+vv_status
+vv_scene_parse_object_fields(const sctx *c, json_t *e, const char *op, vv_object *o) {
     vv_status st;
     char kp[PATH_MAX_LEN];
-    int has_a, has_b;
-    switch (o->type) {
-    case VV_OBJECT_PLANE:
-        if ((st = vv_scene_get_vec3(c, e, op, "point", &g->point, NULL)) != VV_OK ||
-            (st = vv_scene_get_nonzero_vec3(c, e, op, "normal", &g->normal, NULL)) != VV_OK)
-            return st;
-        g->normal = vv_vec3_normalize(g->normal);
-        return VV_OK;
-    case VV_OBJECT_SPHERE:
-        return (st = vv_scene_get_vec3(c, e, op, "center", &g->center, NULL)) != VV_OK
-                   ? st
-                   : vv_scene_get_number_in(c, e, op, "radius", &g->radius, NULL, 0, 1, INFINITY,
-                                            1);
-    case VV_OBJECT_BOX: {
-        vv_box b = g->box;
-        if ((st = vv_scene_get_vec3(c, e, op, "min", &b.min, &has_a)) != VV_OK ||
-            (st = vv_scene_get_vec3(c, e, op, "max", &b.max, &has_b)) != VV_OK)
-            return st;
-        if (!(b.min.x < b.max.x && b.min.y < b.max.y && b.min.z < b.max.z)) {
-            vv_scene_path_key(kp, op, "max");
-            return vv_scene_serr(c, kp, "each coordinate must be greater than in \"min\"");
-        }
-        g->box = b;
-        return VV_OK;
-    }
-    case VV_OBJECT_CYLINDER:
-        if ((st = vv_scene_get_vec3(c, e, op, "base", &g->base, NULL)) != VV_OK ||
-            (st = vv_scene_get_vec3(c, e, op, "top", &g->top, NULL)) != VV_OK ||
-            (st = vv_scene_get_number_in(c, e, op, "radius", &g->radius, NULL, 0, 1, INFINITY,
-                                         1)) != VV_OK ||
-            (st = vv_scene_get_bool(c, e, op, "capped", &g->capped)) != VV_OK)
-            return st;
-        if (!(vv_vec3_length(vv_vec3_sub(g->top, g->base)) > 0)) {
-            vv_scene_path_key(kp, op, "top");
-            return vv_scene_serr(c, kp, "the cylinder's top must differ from its base");
-        }
-        return VV_OK;
-    case VV_OBJECT_POLYGON: {
-        json_t *arr;
-        if ((st = vv_scene_get_array(c, e, op, "vertices", &arr)) != VV_OK)
-            return st;
-        if (!arr)
-            return vv_scene_missing(c, op, "vertices",
-                                    "[[x, y, z], ...], at least 3, in one plane");
-        vv_scene_path_key(kp, op, "vertices");
-        size_t n = json_array_size(arr);
-        if (n < 3 || n > 100000)
-            return vv_scene_serr(c, kp, "expected 3 to 100000 vertices, got %zu", n);
-        vv_vec3 *v = malloc(n * sizeof *v);
-        if (!v)
-            return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
-        for (size_t i = 0; i < n; i++) {
-            char ip[PATH_MAX_LEN];
-            vv_scene_path_index(ip, kp, i);
-            if ((st = vv_scene_value_vec3(c, json_array_get(arr, i), ip, &v[i])) != VV_OK) {
-                free(v);
-                return st;
-            }
-        }
-        vv_error_clear();
-        st = vv_object_set_polygon(o, (int)n, v);
-        free(v);
-        if (st != VV_OK) {
-            int line, col;
-            vv_scene_locate(c, kp, &line, &col);
-            return vv_error_prefix(VV_ERR_FORMAT, "%s:%d:%d: %s", c->path, line, col, kp);
-        }
-        return VV_OK;
-    }
-    case VV_OBJECT_MESH: {
-        const char *file = NULL;
-        if ((st = vv_scene_get_string(c, e, op, "file", &file)) != VV_OK)
-            return st;
-        if (!file)
-            return vv_scene_missing(c, op, "file",
-                                    "the mesh file (OBJ, PLY, STL, ...), relative to the "
-                                    "scene file");
-        vv_scene_path_key(kp, op, "file");
-        if (!file[0])
-            return vv_scene_serr(c, kp, "empty file name");
-        char *full = vv_path_join_dir(c->path, file);
-        if (!full)
-            return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
-        vv_mesh *m = NULL;
-        st = vv_mesh_load(&m, full);
-        free(full);
-        if (st == VV_OK) {
-            st = vv_object_set_mesh(o, m, file);
-            vv_mesh_free(m);
-        }
-        if (st != VV_OK) {
-            int line, col;
-            vv_scene_locate(c, kp, &line, &col);
-            return vv_error_prefix(st, "%s:%d:%d: %s", c->path, line, col, kp);
-        }
-        return VV_OK;
-    }
-    default:
-        return vv_scene_serr(c, op, "not a geometric object");
-    }
-}
-
-/* Checks the keys of object @p e: "name" and "type", the kind's own keys
- * @p own (NULL-terminated), the keys of volume-like objects (mode,
- * segmentation, cut planes) when @p volume_like, and the transform,
- * material, visibility and shading-effect keys every object takes. */
-static vv_status
-check_object_keys(const sctx *c, json_t *e, const char *op, const char *const *own,
-                  int volume_like) {
-    static const char *const head[] = {"name", "type", NULL};
-    static const char *const volume_head[] = {"mode", "isovalue", "step", "shading", NULL};
-    static const char *const place[] = {"visible",     "position", "rotation",
-                                        "orientation", "scale",    NULL};
-    static const char *const volume_mid[] = {"transfer_function", "segmentation", "tf2d",
-                                             "solid_texture", NULL};
-    static const char *const mat[] = {"material", "texture", NULL};
-    static const char *const volume_tail[] = {"cut_planes", NULL};
-    static const char *const flags[] = {"casts_shadows", "receives_shadows",
-                                        "visible_in_reflections", "reflects", NULL};
-    const char *const *parts[] = {head,
-                                  own,
-                                  volume_like ? volume_head : NULL,
-                                  place,
-                                  volume_like ? volume_mid : NULL,
-                                  mat,
-                                  volume_like ? volume_tail : NULL,
-                                  flags};
-    const char *keys[64];
-    size_t n = 0;
-    for (size_t p = 0; p < sizeof parts / sizeof parts[0]; p++)
-        for (size_t i = 0; parts[p] && parts[p][i] && n + 1 < sizeof keys / sizeof keys[0]; i++)
-            keys[n++] = parts[p][i];
-    keys[n] = NULL;
-    return vv_scene_check_keys(c, e, op, keys);
-}
-
-/* The optional "name" of object @p e, at most VV_NAME_MAX - 1 bytes. */
-static vv_status
-get_object_name(const sctx *c, json_t *e, const char *op, const char **name) {
-    vv_status st = vv_scene_get_string(c, e, op, "name", name);
-    if (st == VV_OK && *name && strlen(*name) >= VV_NAME_MAX) {
-        char kp[PATH_MAX_LEN];
-        vv_scene_path_key(kp, op, "name");
-        return vv_scene_serr(c, kp, "longer than %d bytes", VV_NAME_MAX - 1);
-    }
-    return st;
-}
-
-/* A geometric object: its shape (in object coordinates), transform,
- * material, visibility and shading-effect flags. */
-static vv_status
-parse_geometry_object(const sctx *c, json_t *e, const char *op, vv_world *w) {
-    static const char *const shape_keys[][5] = {
-        [VV_OBJECT_PLANE] = {"point", "normal", NULL},
-        [VV_OBJECT_POLYGON] = {"vertices", NULL},
-        [VV_OBJECT_SPHERE] = {"center", "radius", NULL},
-        [VV_OBJECT_BOX] = {"min", "max", NULL},
-        [VV_OBJECT_CYLINDER] = {"base", "top", "radius", "capped", NULL},
-        [VV_OBJECT_MESH] = {"file", NULL},
-    };
-    const vv_object_type type = geometry_type(json_string_value(json_object_get(e, "type")));
-    const char *name = NULL;
-    vv_status st = check_object_keys(c, e, op, shape_keys[type], 0);
-    if (st != VV_OK || (st = get_object_name(c, e, op, &name)) != VV_OK)
+    const char *mode = NULL;
+    int has_iso;
+    if ((st = vv_scene_get_string(c, e, op, "mode", &mode)) != VV_OK)
         return st;
-    vv_object *o = NULL;
-    if ((st = vv_object_new_geometry(&o, type, name)) != VV_OK)
-        return vv_error_prefix(st, "%s: %s", c->path, op);
-    if ((st = parse_shape(c, e, op, o)) != VV_OK ||
-        (st = parse_object_fields(c, e, op, o)) != VV_OK ||
-        (st = parse_effect_flags(c, e, op, o)) != VV_OK) {
-        vv_object_free(o);
+    if (mode && (st = parse_mode(c, op, mode, &o->mode)) != VV_OK)
         return st;
-    }
-    return vv_world_add_object(w, o);
-}
-
-/* ---- geometry objects (issue 3, Modeling) ---------------------------------
- * A "geometry" object holds a primitive or a CSG tree, read by the Modeling
- * component (src/modeling/shape_json.c) and volume-sampled here at load, so
- * it becomes a volume object that every volume renderer draws. */
-
-/* Adds "file:line:col: key.path" in front of a message set by Modeling. */
-static vv_status
-geometry_err(const sctx *c, vv_status st, const char *path) {
-    int line, col;
-    vv_scene_locate(c, path, &line, &col);
-    return vv_error_prefix(st, "%s:%d:%d: %s", c->path, line, col, path);
-}
-
-static vv_status
-parse_voxelized_geometry(const sctx *c, json_t *e, const char *op, vv_world *w) {
-    static const char *const own[] = {"primitive",     "csg",        "resolution",
-                                      "voxel_spacing", "filter",     "filter_radius",
-                                      "margin",        "voxel_type", NULL};
-    char kp[PATH_MAX_LEN], ep[PATH_MAX_LEN];
-    const char *name = NULL;
-    vv_status st = check_object_keys(c, e, op, own, 1);
-    if (st != VV_OK || (st = get_object_name(c, e, op, &name)) != VV_OK)
+    if ((st = vv_scene_get_number(c, e, op, "isovalue", &o->isovalue, &has_iso)) != VV_OK ||
+        (st = vv_scene_get_number_in(c, e, op, "step", &o->step, NULL, 0, 1, INFINITY, 1)) !=
+            VV_OK ||
+        (st = vv_scene_get_bool(c, e, op, "shading", &o->shading)) != VV_OK ||
+        (st = vv_scene_get_bool(c, e, op, "visible", &o->visible)) != VV_OK ||
+        (st = vv_scene_get_vec3(c, e, op, "position", &o->position, NULL)) != VV_OK)
         return st;
-    json_t *prim = json_object_get(e, "primitive"), *csg = json_object_get(e, "csg");
-    if (prim && csg) {
-        vv_scene_path_key(kp, op, "csg");
-        return vv_scene_serr(c, kp, "give either \"primitive\" or \"csg\", not both");
+    if (o->mode == VV_MODE_ISO && !has_iso) {
+        vv_scene_path_key(kp, op, "mode");
+        return vv_scene_serr(c, kp, "mode \"iso\" needs an \"isovalue\"");
     }
-    if (!prim && !csg)
-        return vv_scene_missing(c, op, "primitive",
-                                "a primitive {\"type\": ...} or a \"csg\" tree {\"op\": ...}");
-    vv_scene_path_key(kp, op, prim ? "primitive" : "csg");
-    if (csg && !json_object_get(csg, "op"))
-        return vv_scene_serr(c, kp, "expected a CSG operation {\"op\": ..., \"children\": [...]}");
-    vv_voxelize_options vo;
-    vv_voxelize_options_init(&vo);
-    if (c->progress)
-        vo.progress = *c->progress;
-    if ((st = vv_voxelize_options_from_json(&vo, e, op, ep, sizeof ep)) != VV_OK)
-        return geometry_err(c, st, ep);
-    vv_shape *shape = NULL;
-    if ((st = vv_shape_from_json(&shape, prim ? prim : csg, kp, c->path, ep, sizeof ep)) != VV_OK)
-        return geometry_err(c, st, ep[0] ? ep : kp);
-    vv_volume *vol = NULL;
-    st = vv_voxelize(&vol, shape, &vo);
-    vv_shape_free(shape);
-    if (st != VV_OK)
-        return geometry_err(c, st, kp);
-    vv_object *o = NULL;
-    st = vv_object_new_volume(&o, vol, name ? name : "geometry");
-    vv_volume_free(vol);
-    if (st != VV_OK)
-        return vv_error_prefix(st, "%s: %s", c->path, op);
-    if ((st = parse_object_fields(c, e, op, o)) != VV_OK ||
-        (st = parse_effect_flags(c, e, op, o)) != VV_OK) {
-        vv_object_free(o);
+    if ((st = parse_orientation(c, e, op, o)) != VV_OK || (st = parse_scale(c, e, op, o)) != VV_OK)
         return st;
-    }
-    if (!json_object_get(e, "transfer_function") && !json_object_get(e, "segmentation")) {
-        /* densities: opaque from just below the surface level (half scale) */
-        double top = vo.type == VV_U8 ? 255.0 : 1.0;
-        vv_tf_set_ramp(&o->tf, 0.3 * top, 0.6 * top, 1.0, o->material.color,
-                       o->tf.opacity_unit_distance);
-    }
-    return vv_world_add_object(w, o);
-}
-
-/* An irregular grid object: {"type": "grid", "file": ..., "field": ...,
- * "component": -1, "time": 0} with the volume objects' keys. */
-static vv_status
-parse_grid_object(const sctx *c, json_t *e, const char *op, vv_world *w) {
-    static const char *const own[] = {"file", "field", "component", "time", NULL};
-    char kp[PATH_MAX_LEN];
-    vv_status st = check_object_keys(c, e, op, own, 1);
-    const char *name = NULL, *file = NULL, *field = NULL;
-    int component = -1, time = 0;
-    if (st != VV_OK || (st = get_object_name(c, e, op, &name)) != VV_OK ||
-        (st = vv_scene_get_string(c, e, op, "file", &file)) != VV_OK ||
-        (st = vv_scene_get_string(c, e, op, "field", &field)) != VV_OK ||
-        (st = vv_scene_get_int_in(c, e, op, "component", &component, -1, 8)) != VV_OK ||
-        (st = vv_scene_get_int_in(c, e, op, "time", &time, 0, 1000000)) != VV_OK)
-        return st;
-    if (!file)
-        return vv_scene_missing(
-            c, op, "file",
-            "the grid file (VTK, .vtu, OpenDX, PLOT3D, NetCDF), relative to the "
-            "scene file");
-    vv_scene_path_key(kp, op, "file");
-    if (!file[0])
-        return vv_scene_serr(c, kp, "empty file name");
-    char *full = vv_path_join_dir(c->path, file);
-    if (!full)
-        return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
-    vv_grid *g = NULL;
-    st = vv_grid_load(&g, full);
-    vv_object *o = NULL;
-    if (st == VV_OK) {
-        char defname[VV_NAME_MAX];
-        name_from_file(defname, file);
-        st = vv_object_new_grid(&o, g, NULL, name ? name : defname);
-        vv_grid_free(g);
-    }
-    if (st != VV_OK) {
-        free(full);
-        int line, col;
-        vv_scene_locate(c, kp, &line, &col);
-        return vv_error_prefix(st, "%s:%d:%d: %s", c->path, line, col, kp);
-    }
-    o->geometry.source = full;
-    o->component = component;
-    o->time = time;
-    if (field)
-        snprintf(o->field, sizeof o->field, "%s", field);
-    if (vv_object_grid_field(o) < 0 && o->grid->n_fields > 0) {
-        vv_scene_path_key(kp, op, field ? "field" : "time");
-        char msg[512];
-        snprintf(msg, sizeof msg, "%s", vv_error_message());
-        vv_object_free(o);
-        return vv_scene_serr(c, kp, "%s", msg);
-    }
-    /* the TF default follows the chosen field */
-    const int f = vv_object_grid_field(o);
-    if (f >= 0 && o->grid->fields[f].range[1] > o->grid->fields[f].range[0])
-        vv_tf_set_ramp(&o->tf, o->grid->fields[f].range[0], o->grid->fields[f].range[1], 1.0,
-                       vv_vec3_make(1, 1, 1), o->tf.opacity_unit_distance);
-    if ((st = parse_object_fields(c, e, op, o)) != VV_OK ||
-        (st = parse_effect_flags(c, e, op, o)) != VV_OK) {
-        vv_object_free(o);
-        return st;
-    }
-    return vv_world_add_object(w, o);
-}
-
-vv_status
-vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
-    static const char *const own[] = {"file", "origin", "spacing", "filters", NULL};
-    char op[PATH_MAX_LEN], kp[PATH_MAX_LEN];
-    vv_scene_path_index(op, "objects", idx);
-    if (json_is_object(e)) {
-        json_t *tj = json_object_get(e, "type");
-        if (json_is_string(tj) && strcmp(json_string_value(tj), "geometry") == 0)
-            return parse_voxelized_geometry(c, e, op, w);
-        if (json_is_string(tj) && strcmp(json_string_value(tj), "grid") == 0)
-            return parse_grid_object(c, e, op, w);
-        if (json_is_string(tj) && geometry_type(json_string_value(tj)) != VV_OBJECT_VOLUME)
-            return parse_geometry_object(c, e, op, w);
-    }
-    if (!json_is_object(e))
-        return vv_scene_serr(c, op, "expected an object, got %s", vv_json_kind(e));
-    vv_status st = check_object_keys(c, e, op, own, 1);
-    if (st != VV_OK)
-        return st;
-    const char *type = "volume", *name = NULL, *file = NULL;
-    if ((st = vv_scene_get_string(c, e, op, "type", &type)) != VV_OK ||
-        (st = get_object_name(c, e, op, &name)) != VV_OK ||
-        (st = vv_scene_get_string(c, e, op, "file", &file)) != VV_OK)
-        return st;
-    if (strcmp(type, "volume") != 0) {
-        vv_scene_path_key(kp, op, "type");
-        return vv_scene_serr(
-            c, kp,
-            "unsupported object type \"%s\"; expected volume, grid, geometry, plane, "
-            "polygon, sphere, box, cylinder or mesh",
-            type);
-    }
-    if (!file)
-        return vv_scene_missing(c, op, "file", "the volume file, relative to the scene file");
-    vv_scene_path_key(kp, op, "file");
-    if (!file[0])
-        return vv_scene_serr(c, kp, "empty file name");
-    vv_vec3 origin, spacing;
-    int has_origin, has_spacing;
-    if ((st = vv_scene_get_vec3(c, e, op, "origin", &origin, &has_origin)) != VV_OK ||
-        (st = vv_scene_get_vec3(c, e, op, "spacing", &spacing, &has_spacing)) != VV_OK)
-        return st;
-    if (has_spacing && !(spacing.x > 0.0 && spacing.y > 0.0 && spacing.z > 0.0)) {
-        vv_scene_path_key(kp, op, "spacing");
-        return vv_scene_serr(c, kp, "voxel spacing must be > 0");
-    }
-
-    char *full = vv_path_join_dir(c->path, file);
-    if (!full)
-        return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
-    vv_volume *vol = NULL;
-    /* "filters": a filter chain applied at load (src/filter), the result cached */
-    json_t *fj = json_object_get(e, "filters");
-    vv_filter_chain *chain = NULL;
-    if (fj) {
-        int bad;
-        vv_scene_path_key(kp, op, "filters");
-        if ((st = vf_chain_from_json(fj, &chain, &bad)) != VV_OK) {
-            char msg[512], ip[PATH_MAX_LEN];
-            snprintf(msg, sizeof msg, "%s", vv_error_message());
-            free(full);
-            if (bad >= 0)
-                vv_scene_path_index(ip, kp, (size_t)bad);
-            return vv_scene_serr(c, bad >= 0 ? ip : kp, "%s", msg);
-        }
-        double o3[3] = {origin.x, origin.y, origin.z}, s3[3] = {spacing.x, spacing.y, spacing.z};
-        vv_filter_options fo;
-        vv_filter_options_init(&fo);
-        if (c->progress)
-            fo.progress = *c->progress; /* and its cancel */
-        st = vv_filter_load_cached(c->fcache, full, has_origin ? o3 : NULL, has_spacing ? s3 : NULL,
-                                   chain, &fo, &vol);
-    } else {
-        st = vv_volume_load(&vol, full, NULL);
-    }
-    if (st != VV_OK) {
-        vv_filter_chain_free(chain);
-        free(full);
-        int line, col;
-        vv_scene_path_key(kp, op, fj ? "filters" : "file");
-        vv_scene_locate(c, kp, &line, &col);
-        return vv_error_prefix(st, "%s:%d:%d: %s", c->path, line, col, kp);
-    }
-    /* the volume is freshly loaded and ours alone, so overriding is safe (a
-     * filtered one is shared with the cache and already has them) */
-    if (has_origin && !fj) {
-        vol->origin[0] = origin.x;
-        vol->origin[1] = origin.y;
-        vol->origin[2] = origin.z;
-    }
-    if (has_spacing && !fj) {
-        vol->spacing[0] = spacing.x;
-        vol->spacing[1] = spacing.y;
-        vol->spacing[2] = spacing.z;
-    }
-    char defname[VV_NAME_MAX];
-    name_from_file(defname, file);
-    vv_object *o = NULL;
-    st = vv_object_new_volume(&o, vol, name ? name : defname);
-    vv_volume_free(vol);
-    if (st != VV_OK) {
-        vv_filter_chain_free(chain);
-        free(full);
-        return vv_error_prefix(st, "%s: %s", c->path, op);
-    }
-    o->geometry.source = full; /* kept for saving the scene again */
-    if (chain && vv_filter_chain_length(chain) > 0 &&
-        !(o->geometry.filters = vv_strdup(vv_filter_chain_text(chain)))) {
-        vv_filter_chain_free(chain);
-        vv_object_free(o);
-        return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
-    }
-    vv_filter_chain_free(chain);
-    st = parse_object_fields(c, e, op, o);
-    if (st == VV_OK)
-        st = parse_effect_flags(c, e, op, o);
-    if (st != VV_OK) {
-        vv_object_free(o);
-        return st;
-    }
-    return vv_world_add_object(w, o);
+    return parse_segmentation(c, e, op, o);
 }

@@ -21,8 +21,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "core/bricks_internal.h"
 #include "core/internal.h"
+#include "io/bricked_internal.h"
 
 #define VVB_MAGIC "VOLVISB1"
 #define VVB_HEADER 256
@@ -190,6 +190,43 @@ vv_bricked_grid(const vv_bricked *b, int nb[3]) {
     memcpy(nb, b->nb, sizeof b->nb);
 }
 
+static const vv_volume *
+src_header(void *user) {
+    return vv_bricked_header(user);
+}
+
+static void
+src_grid(void *user, int nb[3]) {
+    vv_bricked_grid(user, nb);
+}
+
+static void
+src_info(void *user, int index, vv_brick_info *out) {
+    vv_bricked_info(user, index, out);
+}
+
+static vv_status
+src_load(void *user, int index, vv_volume **out) {
+    return vv_bricked_load(user, index, out);
+}
+
+static void
+src_skip(void *user) {
+    vv_bricked_note_skip(user);
+}
+
+void
+vv_bricked_source(vv_bricked *b, vv_brick_source *out) {
+    memset(out, 0, sizeof *out);
+    out->version = VV_BRICK_SOURCE_VERSION;
+    out->user = b;
+    out->header = src_header;
+    out->grid = src_grid;
+    out->info = src_info;
+    out->load = src_load;
+    out->note_skip = src_skip;
+}
+
 void
 vv_bricked_stats_get(const vv_bricked *b, vv_bricked_stats *s) {
     *s = b->st;
@@ -294,7 +331,7 @@ vv_bricked_load(vv_bricked *b, int index, vv_volume **out) {
         vv_volume_free(v);
         return vv_error_prefix(s, "bricks: %s", vv_path_basename(b->path));
     }
-    /* the whole volume's frame and range (raycast_brick.h) */
+    /* the whole volume's frame and range (a region's voxels, sys/renderer.h) */
     memcpy(v->spacing, b->header->spacing, sizeof v->spacing);
     memcpy(v->origin, b->header->origin, sizeof v->origin);
     memcpy(v->direction, b->header->direction, sizeof v->direction);

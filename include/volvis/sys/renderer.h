@@ -1,0 +1,347 @@
+/*
+ * VolVis rendering, the implementor's side (include/volvis/render.h is the
+ * user's): the versioned table a rendering method fills in, the region
+ * contract that out-of-core and distributed rendering use, the frame runner
+ * that owns the tile loop, and the camera-ray helper every ray-casting
+ * method starts from. libgit2's include/git2/sys/ split; OSPRay's renderers
+ * likewise supply the work of a tile while a load balancer owns the loop,
+ * and distribution is a named contract (renderRegion), not a back channel.
+ *
+ * Adding a method: fill a vv_renderer_ops (version VV_RENDERER_OPS_VERSION,
+ * a vv_renderer_info with its capabilities and option table, create,
+ * destroy, set_option, render; render_region optional), declare it in
+ * src/render/registry.h and list it in src/render/registry.c. Nothing else
+ * names it: the CLI, the GUI, scene files and Python read the registry.
+ *
+ * Room for what comes next (issues 29, 30, 32): a volume source
+ * (sys/source.h) feeds region renders brick by brick today and levels of
+ * detail later; a tile's work gets its rectangle and a per-thread scratch,
+ * so a kernel may trace a packet of rays (8 with AVX2) per call instead of
+ * one; channels are a property of the object, not of this interface.
+ *
+ * Thread-safety: the registry and its tables are immutable. A method's
+ * state serves one render (or region render) at a time (render.h); within
+ * it, vv_frame_run calls the tile function on several threads at once, so
+ * a tile writes only its own pixels and reads what the frame prepared.
+ * Errors follow the library's convention (vv_status and the thread-local
+ * trace; a tile's message is carried back to the caller's thread).
+ */
+#ifndef VOLVIS_SYS_RENDERER_H
+#define VOLVIS_SYS_RENDERER_H
+
+#include <math.h>
+#include <stddef.h>
+
+#include "../render.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/** The version of vv_renderer_ops this header describes. */
+#define VV_RENDERER_OPS_VERSION 1
+
+/* ---- regions ---------------------------------------------------------------- */
+
+/**
+ * How partial images of regions combine (front over back, in visibility
+ * order). Exactness: every sample of a whole render is taken by exactly
+ * one region, at the same point, with the same classification and shading,
+ * so MAX and MIN give the whole render's image bit for bit and OVER up to
+ * the rounding of re-associating the over operator (≥ 50 dB; tests).
+ * X-ray (a mean along the ray: a sum and a count) and iso (a crossing
+ * between two samples that may lie in two regions) are not split.
+ */
+typedef enum vv_region_op {
+    VV_REGION_OVER = 0, /**< composite: premultiplied colour and opacity, Porter-Duff over;
+                             depth: the front region's unless it saw nothing */
+    VV_REGION_MAX = 1,  /**< maximum intensity projection: the pixel of the larger key;
+                             equal keys keep the front one */
+    VV_REGION_MIN = 2,  /**< minimum intensity projection: the pixel of the smaller key */
+} vv_region_op;
+
+/**
+ * One region of a volume object: the samples inside an axis-aligned box of
+ * the object's index space (voxel units of its whole volume; the box is an
+ * oriented box of the World when the object is turned). A region render
+ * draws only the samples p with lo <= p < hi on each axis (an infinite
+ * bound leaves that side open), as the whole render takes them (rays, step
+ * and sample points t = k dt of the whole volume), from the voxels given.
+ */
+typedef struct vv_render_region {
+    int object;   /**< index of the volume object in the World */
+    int dims[3];  /**< the whole volume's dims */
+    double lo[3]; /**< owned samples: lo <= p (index units; -INFINITY: open) */
+    double hi[3]; /**< owned samples: p < hi (+INFINITY: open) */
+    /**
+     * The region's voxels: the box plus at least one voxel beyond each
+     * owned face (within the volume), so that trilinear samples and
+     * central-difference gradients are the whole volume's; with the whole
+     * volume's spacing, origin, direction and value range; its voxel
+     * (0, 0, 0) is the whole volume's voxel `offset`. Borrowed.
+     */
+    const vv_volume *voxels;
+    int offset[3];
+    int x0, y0, x1, y1; /**< pixels x0 <= x < x1, y0 <= y < y1 that can see the region
+                             (vv_region_rect); x1 <= x0: the whole image */
+} vv_render_region;
+
+/** A region render's output: the partial image and how it combines. */
+typedef struct vv_region_image {
+    /**
+     * view->width x view->height; RGBA premultiplied colour and opacity
+     * without the background, depth of the first visible sample (OVER) or of
+     * the key's sample (MAX, MIN), INFINITY where none; pixels outside the
+     * region's rectangle are {0, 0, 0, 0}, INFINITY.
+     */
+    vv_image *image;
+    /**
+     * width * height floats (MAX, MIN): the projected sample value of the
+     * pixel, in units that order like the data and are the same in every
+     * region of one render; NAN where the region took no sample. The colour
+     * of the pixel is the classification of this value, so the pixel of the
+     * winning key is the whole render's pixel.
+     */
+    float *key;
+    vv_region_op op; /**< set by the renderer */
+} vv_region_image;
+
+/** Combines one pixel: @p f (front, updated) and @p b (behind). */
+static inline void
+vv_region_pixel_combine(vv_region_op op, float f[4], float *fdepth, float *fkey, const float b[4],
+                        float bdepth, float bkey) {
+    if (op == VV_REGION_OVER) {
+        const float w = 1 - f[3];
+        f[0] += w * b[0];
+        f[1] += w * b[1];
+        f[2] += w * b[2];
+        f[3] += w * b[3];
+        if (*fdepth == INFINITY)
+            *fdepth = bdepth;
+        return;
+    }
+    if (bkey != bkey) /* behind took no sample */
+        return;
+    if (*fkey != *fkey || (op == VV_REGION_MAX ? bkey > *fkey : bkey < *fkey)) {
+        f[0] = b[0];
+        f[1] = b[1];
+        f[2] = b[2];
+        f[3] = b[3];
+        *fdepth = bdepth;
+        *fkey = bkey;
+    }
+}
+
+/**
+ * Combines whole partial images: @p front becomes front combined with
+ * @p back (same size and op). Thread-safe for distinct images.
+ */
+void vv_region_image_combine(vv_region_image *front, const vv_region_image *back);
+
+/**
+ * Turns a combined partial image into the final one: colour + (1 -
+ * opacity) × @p background, opacity clamped to 1 (exactly as the whole
+ * render writes a pixel).
+ */
+void vv_region_image_finish(vv_region_image *img, vv_vec3 background);
+
+/**
+ * The checks every region method starts with: @p rg->object is the World's
+ * only visible object, in composite, mip or minip mode, without a solid
+ * texture; *op receives how its partial images combine (over, max, min).
+ * Errors: VV_ERR_UNSUPPORTED naming the object.
+ */
+vv_status vv_render_region_check(const vv_world *w, const vv_render_region *rg, vv_region_op *op);
+
+/**
+ * vv_render_region_check, then *part = the region's object with its volume
+ * replaced by the region's voxels (a shallow copy: nothing in it is
+ * released; it lives as long as @p w and @p rg). Errors as
+ * vv_render_region_check.
+ */
+vv_status vv_render_region_part(const vv_world *w, const vv_render_region *rg, vv_region_op *op,
+                                vv_object *part);
+
+/**
+ * The World's ambient light and background as floats for a frame; with
+ * @p region non-zero the background is 0 (partial images of a region are
+ * composited first and the background is added once, by
+ * vv_region_image_finish).
+ */
+static inline void
+vv_frame_colours(const vv_world *w, int region, float ambient[3], float background[3]) {
+    ambient[0] = (float)w->ambient.x;
+    ambient[1] = (float)w->ambient.y;
+    ambient[2] = (float)w->ambient.z;
+    background[0] = region ? 0.0f : (float)w->background.x;
+    background[1] = region ? 0.0f : (float)w->background.y;
+    background[2] = region ? 0.0f : (float)w->background.z;
+}
+
+/** Clears @p img to "nothing seen": colour 0, depth INFINITY, key NAN. */
+void vv_region_image_clear(vv_region_image *img);
+
+/**
+ * The pixel rectangle of @p view that can see the index box lo .. hi of a
+ * volume placed by @p index_to_world, two pixels wider on each side; the
+ * whole image (x1 <= x0) when the box reaches behind the eye; an empty
+ * rectangle (x1 > x0, y1 <= y0) when it is off screen. Fills rg->x0 .. y1.
+ */
+void vv_region_rect(vv_render_region *rg, vv_mat4 index_to_world, const vv_view *view,
+                    const int lo[3], const int hi[3]);
+
+/* ---- the table a method fills in ---------------------------------------------- */
+
+/**
+ * One rendering method. Methods may be NULL where marked optional; callers
+ * go through render.h, which checks the version, validates options against
+ * info.options and checks the World against info.draws and info.modes
+ * before a method sees them.
+ */
+typedef struct vv_renderer_ops {
+    int version;           /**< VV_RENDERER_OPS_VERSION */
+    vv_renderer_info info; /**< name, capabilities, option table */
+    /** A new state with every option at its default. Errors: VV_ERR_NOMEM. */
+    vv_status (*create)(void **state);
+    /** Frees the state (NULL allowed). */
+    void (*destroy)(void *state);
+    /**
+     * Applies option @p spec (an entry of info.options) with value @p v,
+     * already validated. Errors: those of applying it (reading a file).
+     */
+    vv_status (*set_option)(void *state, const vv_option_spec *spec, const vv_option_value *v);
+    /** Renders the whole image (render.h: vv_renderer_render). */
+    vv_status (*render)(void *state, const vv_world *world, const vv_view *view,
+                        const vv_render_options *opt, vv_image *out);
+    /**
+     * Optional (VV_RENDERER_REGION): renders only @p region of the World's
+     * object region->object into @p out (vv_region_image), on one ray
+     * through each pixel centre. The World has that one visible object, in
+     * composite, mip or minip mode; its own volume spans the same world box
+     * and holds real voxels: the whole volume (distributed rendering of an
+     * in-memory volume) or a coarse proxy (out of core): a method with
+     * global effects traces them through it, so they are exact only with
+     * the whole volume. Errors: VV_ERR_UNSUPPORTED (a mode or option it
+     * cannot split), VV_ERR_NOMEM, VV_ERR_CANCELLED.
+     */
+    vv_status (*render_region)(void *state, const vv_world *world, const vv_view *view,
+                               const vv_render_region *region, const vv_render_options *opt,
+                               vv_region_image *out);
+} vv_renderer_ops;
+
+/** The registry: a NULL-terminated array of every method built in, in registry order. */
+const vv_renderer_ops *const *vv_renderer_registry(void);
+
+/** The table behind @p r; owned by the library. */
+const vv_renderer_ops *vv_renderer_ops_of(const vv_renderer *r);
+
+/**
+ * Renders a region with renderer @p r (which must declare
+ * VV_RENDERER_REGION): checks the arguments and clears @p out, then calls
+ * its render_region. Errors: VV_ERR_UNSUPPORTED (no region method),
+ * VV_ERR_INVALID (sizes, object), those of the method.
+ */
+vv_status vv_renderer_render_region(vv_renderer *r, const vv_world *world, const vv_view *view,
+                                    const vv_render_region *region, const vv_render_options *opt,
+                                    vv_region_image *out);
+
+/* ---- the frame runner (src/render/frame.c) ------------------------------------ */
+
+#define VV_FRAME_TILE 16 /**< default tile side, pixels */
+
+/** The piece of work a tile callback gets. */
+typedef struct vv_frame_tile {
+    int x0, y0, x1, y1; /**< pixels x0 <= x < x1, y0 <= y < y1 (never empty) */
+    int index;          /**< tile number, row-major over the whole image */
+    int thread;         /**< 0 .. threads - 1 */
+    void *scratch;      /**< this thread's scratch (vv_frame_job.scratch_bytes, 64-byte
+                             aligned, zeroed once per run), or NULL */
+    const void *run;    /**< the run (vv_frame_cancelled) */
+} vv_frame_tile;
+
+/**
+ * 1 once the run of tile @p t is cancelled or another tile failed: a long
+ * tile may stop early (its pixels are discarded with the frame).
+ */
+int vv_frame_cancelled(const vv_frame_tile *t);
+
+/**
+ * The work of a tile: fill the pixels of @p t (only those). Runs on worker
+ * threads, several tiles at once; a tile's pixels depend on the tile
+ * alone, so the image is the same for any thread count. Return VV_OK, or
+ * an error (with vv_error_set on the worker's thread: its message is
+ * carried back) to stop the run.
+ */
+typedef vv_status (*vv_frame_tile_fn)(void *user, const vv_frame_tile *t);
+
+/** One pass over the image's tiles. */
+typedef struct vv_frame_job {
+    int width, height;    /**< image size */
+    int tile;             /**< tile width (side), pixels; <= 0: VV_FRAME_TILE */
+    int tile_h;           /**< tile height; <= 0: square tiles (bands of rows: tile = width) */
+    int x0, y0, x1, y1;   /**< only these pixels (tiles clipped to them); x1 <= x0: all */
+    size_t scratch_bytes; /**< per-thread scratch, 0: none */
+    vv_frame_tile_fn fn;  /**< the tile's work */
+    void *user;           /**< its payload */
+    double progress_from; /**< the run reports progress from here ... */
+    double progress_to;   /**< ... to here (0 and 0: 0 to 1) */
+} vv_frame_job;
+
+/** A whole image, 16-pixel tiles, progress 0 to 1. */
+void vv_frame_job_init(vv_frame_job *job, int width, int height, vv_frame_tile_fn fn, void *user);
+
+/** Limits @p job to the pixel rectangle of region @p rg (none when it has none). */
+void vv_frame_job_region(vv_frame_job *job, const vv_render_region *rg);
+
+/**
+ * Runs @p job: tiles row-major, taken dynamically by opt->threads OpenMP
+ * threads (<= 0: vv_threads_get()); after each tile the fraction of tiles
+ * done is reported through opt->progress (tiles outside the job's
+ * rectangle count as done), and a non-zero answer cancels: tiles not begun
+ * are skipped. Errors: VV_ERR_CANCELLED, VV_ERR_NOMEM (scratch), the first
+ * error a tile returned (its message).
+ */
+vv_status vv_frame_run(const vv_frame_job *job, const vv_render_options *opt);
+
+/* ---- camera rays ------------------------------------------------------------------ */
+
+/**
+ * The primary rays of a view in affine form: vv_view_ray's origin and
+ * (before normalisation) direction are affine in the pixel position, so
+ * ray (px, py) = origin o00 + px ox + py oy, direction d00 + px dx + py dy,
+ * normalised. Perspective directions are scaled to unit depth along the
+ * view axis first. Every ray-casting renderer starts from this form (a
+ * packet kernel evaluates it for 8 pixels at once); its rays agree with
+ * vv_view_ray to rounding.
+ */
+typedef struct vv_camera_rays {
+    vv_vec3 o00, ox, oy; /**< origin at pixel (0, 0) and its change per pixel in x, y */
+    vv_vec3 d00, dx, dy; /**< unnormalised direction likewise */
+    vv_vec3 forward;     /**< unit view direction */
+    int ortho;           /**< orthographic (parallel rays) */
+} vv_camera_rays;
+
+/** The affine form of @p view's rays (three vv_view_ray calls). */
+void vv_camera_rays_init(vv_camera_rays *c, const vv_view *view);
+
+/** The unit ray through image position (px, py) (integers: pixel centres). */
+static inline vv_ray
+vv_camera_ray(const vv_camera_rays *c, double px, double py) {
+    vv_ray r;
+    r.origin.x = c->o00.x + px * c->ox.x + py * c->oy.x;
+    r.origin.y = c->o00.y + px * c->ox.y + py * c->oy.y;
+    r.origin.z = c->o00.z + px * c->ox.z + py * c->oy.z;
+    const double dx = c->d00.x + px * c->dx.x + py * c->dy.x;
+    const double dy = c->d00.y + px * c->dx.y + py * c->dy.y;
+    const double dz = c->d00.z + px * c->dx.z + py * c->dy.z;
+    const double inv = 1.0 / sqrt(dx * dx + dy * dy + dz * dz);
+    r.dir.x = dx * inv;
+    r.dir.y = dy * inv;
+    r.dir.z = dz * inv;
+    return r;
+}
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,198 @@
+/*
+ * The volume format table (after Teem's nrrd/format.c): one record per
+ * format, defined in the format's own file (include/volvis/sys/format.h
+ * says what a record holds), listed once below. A format's id (vv_format)
+ * is its row. Detection, the names --format takes, loading and saving
+ * (volume_io.c) and the lists in --help all read this table.
+ */
+#include <ctype.h>
+#include <dirent.h>
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+
+#include <zlib.h>
+
+#include "core/internal.h"
+#include "volvis/io.h"
+#include "volvis/sys/format.h"
+
+/* The table: one row per format, in the order of the vv_format ids (the
+ * named ones first). Adding a format: its file defines
+ * vv_volume_format_<name>, and one X(<name>) row goes here. */
+#define VV_VOLUME_FORMAT_TABLE(X)                                                                  \
+    X(slc)                                                                                         \
+    X(nrrd)                                                                                        \
+    X(nifti)                                                                                       \
+    X(mhd)                                                                                         \
+    X(vtk)                                                                                         \
+    X(raw)                                                                                         \
+    X(tiff)                                                                                        \
+    X(dicom)
+
+#define DECLARE(name) extern const vv_volume_format vv_volume_format_##name;
+VV_VOLUME_FORMAT_TABLE(DECLARE)
+#undef DECLARE
+
+#define ROW(name) &vv_volume_format_##name,
+static const vv_volume_format *const table[] = {VV_VOLUME_FORMAT_TABLE(ROW)};
+#undef ROW
+
+#define N_FORMATS ((int)(sizeof table / sizeof table[0]))
+
+const vv_volume_format *const *
+vv_volume_format_table(int *n) {
+    if (n)
+        *n = N_FORMATS;
+    return table;
+}
+
+int
+vv_format_count(void) {
+    return N_FORMATS;
+}
+
+/* The record of id @p f, or NULL. */
+static const vv_volume_format *
+record(vv_format f) {
+    return (int)f >= 1 && (int)f <= N_FORMATS ? table[(int)f - 1] : NULL;
+}
+
+const char *
+vv_format_name(vv_format f) {
+    if (f == VV_FORMAT_AUTO)
+        return "auto";
+    const vv_volume_format *r = record(f);
+    return r ? r->name : "unknown";
+}
+
+vv_status
+vv_format_parse(const char *name, vv_format *out) {
+    if (!name || !out)
+        return vv_error_set(VV_ERR_INVALID, "format: NULL argument");
+    if (!strcasecmp(name, "auto")) {
+        *out = VV_FORMAT_AUTO;
+        return VV_OK;
+    }
+    for (int i = 0; i < N_FORMATS; i++) {
+        int hit = !strcasecmp(name, table[i]->name);
+        for (const char *const *a = table[i]->aliases; !hit && a && *a; a++)
+            hit = !strcasecmp(name, *a);
+        if (hit) {
+            *out = (vv_format)(i + 1);
+            return VV_OK;
+        }
+    }
+    char list[512] = "auto";
+    for (int i = 0; i < N_FORMATS; i++) {
+        size_t k = strlen(list);
+        snprintf(list + k, sizeof list - k, "%s%s", i + 1 < N_FORMATS ? ", " : " or ",
+                 table[i]->name);
+    }
+    return vv_error_set(VV_ERR_INVALID, "unknown format \"%s\" (expected %s)", name, list);
+}
+
+/* ---- probing ------------------------------------------------------------- */
+
+int
+vv_format_path_has_ext(const char *path, const char *ext) {
+    const char *base = vv_path_basename(path);
+    size_t n = strlen(base), m = strlen(ext);
+    return n > m + 1 && base[n - m - 1] == '.' && strcasecmp(base + n - m, ext) == 0;
+}
+
+int
+vv_format_probe_fill(vv_format_probe *p, const char *path, unsigned char *buf, char *text) {
+    memset(p, 0, sizeof *p);
+    p->path = path;
+    p->head = buf;
+    p->text = text;
+    text[0] = '\0';
+    struct stat st;
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+        p->is_dir = 1;
+        return 0;
+    }
+    FILE *f = fopen(path, "rb");
+    if (!f)
+        return errno ? errno : EIO;
+    size_t n = fread(buf, 1, VV_FORMAT_PROBE_BYTES, f);
+    int err = ferror(f) ? EIO : 0;
+    fclose(f);
+    if (n >= 2 && buf[0] == 0x1f && buf[1] == 0x8b) {
+        p->gzip = 1;
+        gzFile g = gzopen(path, "rb");
+        int r = g ? gzread(g, buf, VV_FORMAT_PROBE_BYTES) : 0;
+        if (g)
+            gzclose(g);
+        n = r > 0 ? (size_t)r : 0;
+    }
+    p->n = n;
+    for (size_t i = 0; i < n; i++)
+        text[i] = buf[i] ? (char)buf[i] : ' ';
+    text[n] = '\0';
+    return err;
+}
+
+int
+vv_format_folder_any(const char *path,
+                     int (*match)(const char *entry, const char *name, int is_dir, void *ctx),
+                     void *ctx) {
+    DIR *d = opendir(path);
+    if (!d)
+        return 0;
+    int found = 0, looked = 0;
+    struct dirent *e;
+    while (!found && looked < 4096 && (e = readdir(d))) {
+        if (e->d_name[0] == '.')
+            continue;
+        size_t len = strlen(path) + strlen(e->d_name) + 2;
+        char *p = malloc(len);
+        if (!p)
+            break;
+        snprintf(p, len, "%s/%s", path, e->d_name);
+        struct stat st;
+        if (stat(p, &st) == 0) {
+            if (S_ISDIR(st.st_mode)) {
+                found = match(p, e->d_name, 1, ctx);
+            } else if (S_ISREG(st.st_mode)) {
+                looked++;
+                found = match(p, e->d_name, 0, ctx);
+            }
+        }
+        free(p);
+    }
+    closedir(d);
+    return found;
+}
+
+/* The first format, in table order, whose looks_like says yes at @p deep;
+ * a gzip-compressed file is asked of the formats read compressed only. */
+static vv_format
+ask(const vv_format_probe *p, int deep) {
+    for (int i = 0; i < N_FORMATS; i++) {
+        const vv_volume_format *r = table[i];
+        if (!r->looks_like || (p->gzip && !(r->flags & VV_FORMAT_FLAG_GZIP)))
+            continue;
+        if (r->looks_like(p, deep))
+            return (vv_format)(i + 1);
+    }
+    return VV_FORMAT_UNKNOWN;
+}
+
+vv_format
+vv_format_detect(const char *path) {
+    if (!path)
+        return VV_FORMAT_UNKNOWN;
+    unsigned char buf[VV_FORMAT_PROBE_BYTES + 1];
+    char text[VV_FORMAT_PROBE_BYTES + 1];
+    vv_format_probe p;
+    int err = vv_format_probe_fill(&p, path, buf, text);
+    vv_format f = ask(&p, 0);
+    if (f != VV_FORMAT_UNKNOWN || err)
+        return f;
+    return ask(&p, 1);
+}

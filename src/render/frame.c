@@ -1,0 +1,296 @@
+/*
+ * The frame runner, the camera rays and the region images
+ * (include/volvis/sys/renderer.h).
+ *
+ * One tile loop for every renderer that works per pixel: the image is cut
+ * into square tiles, row-major, taken dynamically by OpenMP threads (as
+ * OSPRay's load balancer hands out tiles); the renderer supplies the work
+ * of one tile. Tiles write disjoint pixels and a pixel depends on its tile
+ * alone, so the image is the same for any thread count. Progress is the
+ * fraction of tiles done, reported under one lock; a non-zero answer
+ * cancels the tiles not yet begun.
+ */
+#include <math.h>
+#include <omp.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/internal.h"
+#include "volvis/render.h"
+#include "volvis/sys/renderer.h"
+
+/* ---- the frame runner ---------------------------------------------------------- */
+
+void
+vv_frame_job_init(vv_frame_job *job, int width, int height, vv_frame_tile_fn fn, void *user) {
+    memset(job, 0, sizeof *job);
+    job->width = width;
+    job->height = height;
+    job->tile = VV_FRAME_TILE;
+    job->fn = fn;
+    job->user = user;
+    job->progress_to = 1;
+}
+
+void
+vv_frame_job_region(vv_frame_job *job, const vv_render_region *rg) {
+    if (!rg || rg->x1 <= rg->x0)
+        return;
+    job->x0 = rg->x0;
+    job->y0 = rg->y0;
+    job->x1 = rg->x1;
+    job->y1 = rg->y1;
+}
+
+#define FRAME_SCRATCH_ALIGN 64
+
+vv_status
+vv_frame_run(const vv_frame_job *job, const vv_render_options *opt) {
+    if (!job || !job->fn)
+        return vv_error_set(VV_ERR_INVALID, "frame: NULL job");
+    vv_render_options def;
+    if (!opt) {
+        vv_render_options_init(&def);
+        opt = &def;
+    }
+    const int W = job->width, H = job->height;
+    if (W <= 0 || H <= 0)
+        return VV_OK;
+    const int ts = job->tile > 0 ? job->tile : VV_FRAME_TILE;
+    const int th = job->tile_h > 0 ? job->tile_h : ts;
+    int rx0 = 0, ry0 = 0, rx1 = W, ry1 = H;
+    if (job->x1 > job->x0) {
+        rx0 = job->x0 > 0 ? job->x0 : 0;
+        ry0 = job->y0 > 0 ? job->y0 : 0;
+        rx1 = job->x1 < W ? job->x1 : W;
+        ry1 = job->y1 < H ? job->y1 : H;
+    }
+    const int tx = (W + ts - 1) / ts, ty = (H + th - 1) / th;
+    const int ntiles = tx * ty;
+    const int nt = opt->threads > 0 ? opt->threads : vv_threads_get();
+    const double p0 = job->progress_from, p1 = job->progress_to > 0 ? job->progress_to : 1.0;
+    /* per-thread scratch, each on its own cache lines */
+    size_t stride = 0;
+    unsigned char *scratch = NULL;
+    if (job->scratch_bytes) {
+        stride = (job->scratch_bytes + FRAME_SCRATCH_ALIGN - 1) / FRAME_SCRATCH_ALIGN *
+                 FRAME_SCRATCH_ALIGN;
+        scratch = aligned_alloc(FRAME_SCRATCH_ALIGN, stride * (size_t)nt);
+        if (!scratch)
+            return vv_error_set(VV_ERR_NOMEM, "frame: out of memory for %d x %zu bytes of scratch",
+                                nt, job->scratch_bytes);
+        memset(scratch, 0, stride * (size_t)nt);
+    }
+    atomic_int stop = 0; /* 1: cancelled, 2: a tile failed */
+    int done = 0;
+    vv_status failed = VV_OK;
+    char message[1024] = "";
+#pragma omp parallel for schedule(dynamic, 1) num_threads(nt)
+    for (int tile = 0; tile < ntiles; tile++) {
+        if (atomic_load_explicit(&stop, memory_order_relaxed))
+            continue;
+        vv_frame_tile t;
+        t.x0 = (tile % tx) * ts;
+        t.y0 = (tile / tx) * th;
+        t.x1 = t.x0 + ts < W ? t.x0 + ts : W;
+        t.y1 = t.y0 + th < H ? t.y0 + th : H;
+        t.x0 = t.x0 > rx0 ? t.x0 : rx0;
+        t.y0 = t.y0 > ry0 ? t.y0 : ry0;
+        t.x1 = t.x1 < rx1 ? t.x1 : rx1;
+        t.y1 = t.y1 < ry1 ? t.y1 : ry1;
+        t.index = tile;
+        t.thread = omp_get_thread_num();
+        t.scratch = scratch ? scratch + stride * (size_t)t.thread : NULL;
+        t.run = &stop;
+        if (t.x1 > t.x0 && t.y1 > t.y0) {
+            vv_status s = job->fn(job->user, &t);
+            if (s != VV_OK) {
+#pragma omp critical(vv_frame_error)
+                {
+                    if (failed == VV_OK) {
+                        failed = s;
+                        snprintf(message, sizeof message, "%s", vv_error_message());
+                    }
+                }
+                atomic_store(&stop, 2);
+                continue;
+            }
+        }
+        if (opt->progress.fn) {
+#pragma omp critical(vv_frame_progress)
+            {
+                done++;
+                if (vv_progress_report(&opt->progress, p0 + (p1 - p0) * ((double)done / ntiles)))
+                    atomic_store(&stop, 1);
+            }
+        }
+    }
+    free(scratch);
+    if (failed != VV_OK)
+        return vv_error_set(failed, "%s", message[0] ? message : "a tile failed");
+    if (atomic_load(&stop))
+        return vv_error_set(VV_ERR_CANCELLED, "cancelled");
+    return VV_OK;
+}
+
+int
+vv_frame_cancelled(const vv_frame_tile *t) {
+    return atomic_load_explicit((const atomic_int *)t->run, memory_order_relaxed) != 0;
+}
+
+/* ---- camera rays ------------------------------------------------------------------ */
+
+void
+vv_camera_rays_init(vv_camera_rays *c, const vv_view *view) {
+    const vv_vec3 f = vv_vec3_normalize(vv_vec3_sub(view->at, view->eye));
+    vv_ray r00 = vv_view_ray(view, 0, 0), r10 = vv_view_ray(view, 1, 0),
+           r01 = vv_view_ray(view, 0, 1);
+    vv_ray *rs[3] = {&r00, &r10, &r01};
+    c->ortho = view->projection == VV_PROJECTION_ORTHOGRAPHIC;
+    for (int i = 0; i < 3; i++) {
+        /* perspective: to unit depth along the view axis, where the
+         * direction is affine in the pixel position */
+        const double df = vv_vec3_dot(rs[i]->dir, f);
+        if (!c->ortho && df > 0)
+            rs[i]->dir = vv_vec3_scale(rs[i]->dir, 1.0 / df);
+    }
+    c->forward = f;
+    c->o00 = r00.origin;
+    c->ox = vv_vec3_sub(r10.origin, r00.origin);
+    c->oy = vv_vec3_sub(r01.origin, r00.origin);
+    c->d00 = r00.dir;
+    c->dx = vv_vec3_sub(r10.dir, r00.dir);
+    c->dy = vv_vec3_sub(r01.dir, r00.dir);
+}
+
+/* ---- region images ------------------------------------------------------------------ */
+
+vv_status
+vv_render_region_check(const vv_world *w, const vv_render_region *rg, vv_region_op *op) {
+    const vv_object *obj = w->objects[rg->object];
+    for (int i = 0; i < w->n_objects; i++)
+        if (i != rg->object && w->objects[i]->visible)
+            return vv_error_set(VV_ERR_UNSUPPORTED,
+                                "object '%s': a region render draws one object, not '%s' too",
+                                obj->name, w->objects[i]->name);
+    if (obj->mode != VV_MODE_COMPOSITE && obj->mode != VV_MODE_MIP && obj->mode != VV_MODE_MINIP)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "object '%s': regions are rendered in composite, mip or minip mode "
+                            "(xray and iso do not split)",
+                            obj->name);
+    if (obj->solid_texture.kind != VV_SOLID_TEXTURE_NONE)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "object '%s': solid textures are not rendered by regions", obj->name);
+    *op = obj->mode == VV_MODE_MIP     ? VV_REGION_MAX
+          : obj->mode == VV_MODE_MINIP ? VV_REGION_MIN
+                                       : VV_REGION_OVER;
+    return VV_OK;
+}
+
+vv_status
+vv_render_region_part(const vv_world *w, const vv_render_region *rg, vv_region_op *op,
+                      vv_object *part) {
+    vv_status s = vv_render_region_check(w, rg, op);
+    if (s != VV_OK)
+        return s;
+    *part = *w->objects[rg->object];
+    part->volume = (vv_volume *)rg->voxels;
+    return VV_OK;
+}
+
+void
+vv_region_image_clear(vv_region_image *img) {
+    const size_t n = (size_t)img->image->width * (size_t)img->image->height;
+    memset(img->image->rgba, 0, sizeof(float) * 4 * n);
+    for (size_t i = 0; i < n; i++) {
+        img->image->depth[i] = INFINITY;
+        img->key[i] = NAN;
+    }
+}
+
+void
+vv_region_image_combine(vv_region_image *front, const vv_region_image *back) {
+    const size_t n = (size_t)front->image->width * (size_t)front->image->height;
+    const vv_region_op op = front->op;
+    for (size_t i = 0; i < n; i++)
+        vv_region_pixel_combine(op, front->image->rgba + 4 * i, front->image->depth + i,
+                                front->key + i, back->image->rgba + 4 * i, back->image->depth[i],
+                                back->key[i]);
+}
+
+void
+vv_region_image_finish(vv_region_image *img, vv_vec3 background) {
+    const size_t n = (size_t)img->image->width * (size_t)img->image->height;
+    const float bg[3] = {(float)background.x, (float)background.y, (float)background.z};
+    for (size_t i = 0; i < n; i++) {
+        float *pix = img->image->rgba + 4 * i;
+        /* as the whole render writes a pixel: C + (1 - A) background */
+        const float A = pix[3] > 1 ? 1 : pix[3];
+        for (int ch = 0; ch < 3; ch++)
+            pix[ch] = pix[ch] + (1 - A) * bg[ch];
+        pix[3] = A;
+    }
+}
+
+/* Solves the 3x3 system with columns c0, c1, c2 for rhs (Cramer); 0 when
+ * singular. */
+static int
+solve3(vv_vec3 c0, vv_vec3 c1, vv_vec3 c2, vv_vec3 rhs, double x[3]) {
+    const double det = vv_vec3_dot(c0, vv_vec3_cross(c1, c2));
+    if (!(fabs(det) > 1e-300))
+        return 0;
+    x[0] = vv_vec3_dot(rhs, vv_vec3_cross(c1, c2)) / det;
+    x[1] = vv_vec3_dot(c0, vv_vec3_cross(rhs, c2)) / det;
+    x[2] = vv_vec3_dot(c0, vv_vec3_cross(c1, rhs)) / det;
+    return 1;
+}
+
+void
+vv_region_rect(vv_render_region *b, vv_mat4 m, const vv_view *view, const int lo[3],
+               const int hi[3]) {
+    b->x0 = b->y0 = 0;
+    b->x1 = b->y1 = 0; /* whole image until proven smaller */
+    vv_camera_rays c;
+    vv_camera_rays_init(&c, view);
+    const vv_vec3 f = c.forward;
+    /* the pixel position of a point: solve o00 + x ox + y oy + z f = p
+     * (orthographic) or o00 + z (d00 + x dx + y dy) = p (perspective) */
+    double xmin = INFINITY, xmax = -INFINITY, ymin = INFINITY, ymax = -INFINITY;
+    for (int k = 0; k < 8; k++) {
+        const vv_vec3 pi =
+            vv_vec3_make(k & 1 ? hi[0] : lo[0], k & 2 ? hi[1] : lo[1], k & 4 ? hi[2] : lo[2]);
+        const vv_vec3 pw = vv_mat4_mul_point(m, pi);
+        double x[3];
+        if (c.ortho) {
+            if (!solve3(c.ox, c.oy, f, vv_vec3_sub(pw, c.o00), x))
+                return;
+        } else {
+            if (!(vv_vec3_dot(c.d00, f) > 0) ||
+                !solve3(c.dx, c.dy, c.d00, vv_vec3_sub(pw, c.o00), x) || !(x[2] > 1e-9))
+                return; /* behind the eye: every pixel may see it */
+            x[0] /= x[2];
+            x[1] /= x[2];
+        }
+        xmin = x[0] < xmin ? x[0] : xmin;
+        xmax = x[0] > xmax ? x[0] : xmax;
+        ymin = x[1] < ymin ? x[1] : ymin;
+        ymax = x[1] > ymax ? x[1] : ymax;
+    }
+    if (!(xmax - xmin < 1e7 && ymax - ymin < 1e7))
+        return;
+    /* pixel px's ray is at px: the pixels within two of the projection */
+    const double X0 = floor(xmin) - 2, X1 = ceil(xmax) + 3, Y0 = floor(ymin) - 2,
+                 Y1 = ceil(ymax) + 3;
+    b->x0 = X0 < 0 ? 0 : X0 > view->width ? view->width : (int)X0;
+    b->x1 = X1 < 0 ? 0 : X1 > view->width ? view->width : (int)X1;
+    b->y0 = Y0 < 0 ? 0 : Y0 > view->height ? view->height : (int)Y0;
+    b->y1 = Y1 < 0 ? 0 : Y1 > view->height ? view->height : (int)Y1;
+    if (b->x1 <= b->x0 || b->y1 <= b->y0) {
+        /* off screen: an empty rectangle that is not "whole image" */
+        b->x0 = 0;
+        b->x1 = 1;
+        b->y0 = b->y1 = 0;
+    }
+}

@@ -1,0 +1,255 @@
+/*
+ * Scene files, the objects: the dispatch on "type", the keys every object
+ * takes, and volume objects (a volume file, optionally through a filter
+ * chain). The other kinds are in scene_geometry.c, what every object
+ * carries in scene_appearance.c.
+ */
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/internal.h"
+#include "core/json_internal.h"
+#include "scene/scene_internal.h"
+#include "volvis/filter.h"
+#include "volvis/io.h"
+#include "volvis/model.h"
+
+/* Name from a file path: its base name without the extension(s). */
+void
+vv_scene_name_from_file(char dst[VV_NAME_MAX], const char *file) {
+    snprintf(dst, VV_NAME_MAX, "%s", vv_path_basename(file));
+    char *dot = strchr(dst, '.');
+    if (dot && dot != dst)
+        *dot = '\0';
+}
+
+/* Checks the keys of object @p e: "name" and "type", the kind's own keys
+ * @p own (NULL-terminated), the keys of volume-like objects (mode,
+ * segmentation, cut planes) when @p volume_like, and the transform,
+ * material, visibility and shading-effect keys every object takes. */
+vv_status
+vv_scene_check_object_keys(const sctx *c, json_t *e, const char *op, const char *const *own,
+                           int volume_like) {
+    static const char *const head[] = {"name", "type", NULL};
+    static const char *const volume_head[] = {"mode", "isovalue", "step", "shading", NULL};
+    static const char *const place[] = {"visible",     "position", "rotation",
+                                        "orientation", "scale",    NULL};
+    static const char *const volume_mid[] = {"transfer_function", "segmentation", "tf2d",
+                                             "solid_texture", NULL};
+    static const char *const mat[] = {"material", "texture", NULL};
+    static const char *const volume_tail[] = {"cut_planes", NULL};
+    static const char *const flags[] = {"casts_shadows", "receives_shadows",
+                                        "visible_in_reflections", "reflects", NULL};
+    const char *const *parts[] = {head,
+                                  own,
+                                  volume_like ? volume_head : NULL,
+                                  place,
+                                  volume_like ? volume_mid : NULL,
+                                  mat,
+                                  volume_like ? volume_tail : NULL,
+                                  flags};
+    const char *keys[64];
+    size_t n = 0;
+    for (size_t p = 0; p < sizeof parts / sizeof parts[0]; p++)
+        for (size_t i = 0; parts[p] && parts[p][i] && n + 1 < sizeof keys / sizeof keys[0]; i++)
+            keys[n++] = parts[p][i];
+    keys[n] = NULL;
+    return vv_scene_check_keys(c, e, op, keys);
+}
+
+/* The optional "name" of object @p e, at most VV_NAME_MAX - 1 bytes. */
+vv_status
+vv_scene_get_object_name(const sctx *c, json_t *e, const char *op, const char **name) {
+    vv_status st = vv_scene_get_string(c, e, op, "name", name);
+    if (st == VV_OK && *name && strlen(*name) >= VV_NAME_MAX) {
+        char kp[PATH_MAX_LEN];
+        vv_scene_path_key(kp, op, "name");
+        return vv_scene_serr(c, kp, "longer than %d bytes", VV_NAME_MAX - 1);
+    }
+    return st;
+}
+
+/* A volume object's "filters" value as a filter chain: a string in
+ * command-line syntax ("--gaussian 1.5 --median 1") or an array of one-key
+ * objects ({"gaussian": 1.5}, {"threshold": "300:"}, {"fill-holes": true}):
+ * the key names the filter, the value is its argument (a string, a number,
+ * or true/null for a filter without one). On error *@p bad_item is the
+ * array index at fault (-1: the value itself) and the message says why.
+ * Errors: VV_ERR_INVALID, VV_ERR_NOMEM. */
+static vv_status
+chain_from_json(const json_t *j, vv_filter_chain **out, int *bad_item) {
+    *bad_item = -1;
+    if (json_is_string(j))
+        return vv_filter_chain_parse(json_string_value(j), out);
+    if (!json_is_array(j))
+        return vv_error_set(VV_ERR_INVALID,
+                            "expected a string (\"--gaussian 1.5 --median 1\") or an array of "
+                            "{\"filter\": argument} objects");
+    vv_filter_chain *c;
+    vv_status s = vv_filter_chain_new(&c);
+    if (s != VV_OK)
+        return s;
+    size_t i;
+    json_t *e;
+    json_array_foreach(j, i, e) {
+        *bad_item = (int)i;
+        if (!json_is_object(e) || json_object_size(e) != 1) {
+            s = vv_error_set(VV_ERR_INVALID,
+                             "expected an object with one key, the filter's name, e.g. "
+                             "{\"gaussian\": 1.5}");
+            break;
+        }
+        const char *name = json_object_iter_key(json_object_iter((json_t *)e));
+        json_t *v = json_object_iter_value(json_object_iter((json_t *)e));
+        char arg[256];
+        const char *a = arg;
+        if (json_is_string(v)) {
+            a = json_string_value(v);
+        } else if (json_is_integer(v)) {
+            snprintf(arg, sizeof arg, "%lld", (long long)json_integer_value(v));
+        } else if (json_is_real(v)) {
+            snprintf(arg, sizeof arg, "%.15g", json_real_value(v));
+        } else if (json_is_true(v) || json_is_null(v)) {
+            a = NULL;
+        } else {
+            s = vv_error_set(VV_ERR_INVALID, "\"%s\": expected a string or a number argument",
+                             name);
+            break;
+        }
+        if ((s = vv_filter_chain_add(c, name, a)) != VV_OK)
+            break;
+    }
+    if (s != VV_OK) {
+        vv_filter_chain_free(c);
+        return s;
+    }
+    *bad_item = -1;
+    *out = c;
+    return VV_OK;
+}
+
+vv_status
+vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
+    static const char *const own[] = {"file", "origin", "spacing", "filters", NULL};
+    char op[PATH_MAX_LEN], kp[PATH_MAX_LEN];
+    vv_scene_path_index(op, "objects", idx);
+    if (json_is_object(e)) {
+        json_t *tj = json_object_get(e, "type");
+        if (json_is_string(tj) && strcmp(json_string_value(tj), "geometry") == 0)
+            return vv_scene_parse_voxelized_geometry(c, e, op, w);
+        if (json_is_string(tj) && strcmp(json_string_value(tj), "grid") == 0)
+            return vv_scene_parse_grid_object(c, e, op, w);
+        if (json_is_string(tj) && vv_scene_geometry_type(json_string_value(tj)) != VV_OBJECT_VOLUME)
+            return vv_scene_parse_geometry_object(c, e, op, w);
+    }
+    if (!json_is_object(e))
+        return vv_scene_serr(c, op, "expected an object, got %s", vv_json_kind(e));
+    vv_status st = vv_scene_check_object_keys(c, e, op, own, 1);
+    if (st != VV_OK)
+        return st;
+    const char *type = "volume", *name = NULL, *file = NULL;
+    if ((st = vv_scene_get_string(c, e, op, "type", &type)) != VV_OK ||
+        (st = vv_scene_get_object_name(c, e, op, &name)) != VV_OK ||
+        (st = vv_scene_get_string(c, e, op, "file", &file)) != VV_OK)
+        return st;
+    if (strcmp(type, "volume") != 0) {
+        vv_scene_path_key(kp, op, "type");
+        return vv_scene_serr(
+            c, kp,
+            "unsupported object type \"%s\"; expected volume, grid, geometry, plane, "
+            "polygon, sphere, box, cylinder or mesh",
+            type);
+    }
+    if (!file)
+        return vv_scene_missing(c, op, "file", "the volume file, relative to the scene file");
+    vv_scene_path_key(kp, op, "file");
+    if (!file[0])
+        return vv_scene_serr(c, kp, "empty file name");
+    vv_vec3 origin, spacing;
+    int has_origin, has_spacing;
+    if ((st = vv_scene_get_vec3(c, e, op, "origin", &origin, &has_origin)) != VV_OK ||
+        (st = vv_scene_get_vec3(c, e, op, "spacing", &spacing, &has_spacing)) != VV_OK)
+        return st;
+    if (has_spacing && !(spacing.x > 0.0 && spacing.y > 0.0 && spacing.z > 0.0)) {
+        vv_scene_path_key(kp, op, "spacing");
+        return vv_scene_serr(c, kp, "voxel spacing must be > 0");
+    }
+
+    char *full = vv_path_join_dir(c->path, file);
+    if (!full)
+        return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
+    vv_volume *vol = NULL;
+    /* "filters": a filter chain applied at load (src/filter), the result cached */
+    json_t *fj = json_object_get(e, "filters");
+    vv_filter_chain *chain = NULL;
+    if (fj) {
+        int bad;
+        vv_scene_path_key(kp, op, "filters");
+        if ((st = chain_from_json(fj, &chain, &bad)) != VV_OK) {
+            char msg[512], ip[PATH_MAX_LEN];
+            snprintf(msg, sizeof msg, "%s", vv_error_message());
+            free(full);
+            if (bad >= 0)
+                vv_scene_path_index(ip, kp, (size_t)bad);
+            return vv_scene_serr(c, bad >= 0 ? ip : kp, "%s", msg);
+        }
+        double o3[3] = {origin.x, origin.y, origin.z}, s3[3] = {spacing.x, spacing.y, spacing.z};
+        vv_filter_options fo;
+        vv_filter_options_init(&fo);
+        if (c->progress)
+            fo.progress = *c->progress; /* and its cancel */
+        st = vv_filter_load_cached(c->fcache, full, has_origin ? o3 : NULL, has_spacing ? s3 : NULL,
+                                   chain, &fo, &vol);
+    } else {
+        st = vv_volume_load(&vol, full, NULL);
+    }
+    if (st != VV_OK) {
+        vv_filter_chain_free(chain);
+        free(full);
+        int line, col;
+        vv_scene_path_key(kp, op, fj ? "filters" : "file");
+        vv_scene_locate(c, kp, &line, &col);
+        return vv_error_prefix(st, "%s:%d:%d: %s", c->path, line, col, kp);
+    }
+    /* the volume is freshly loaded and ours alone, so overriding is safe (a
+     * filtered one is shared with the cache and already has them) */
+    if (has_origin && !fj) {
+        vol->origin[0] = origin.x;
+        vol->origin[1] = origin.y;
+        vol->origin[2] = origin.z;
+    }
+    if (has_spacing && !fj) {
+        vol->spacing[0] = spacing.x;
+        vol->spacing[1] = spacing.y;
+        vol->spacing[2] = spacing.z;
+    }
+    char defname[VV_NAME_MAX];
+    vv_scene_name_from_file(defname, file);
+    vv_object *o = NULL;
+    st = vv_object_new_volume(&o, vol, name ? name : defname);
+    vv_volume_free(vol);
+    if (st != VV_OK) {
+        vv_filter_chain_free(chain);
+        free(full);
+        return vv_error_prefix(st, "%s: %s", c->path, op);
+    }
+    o->geometry.source = full; /* kept for saving the scene again */
+    if (chain && vv_filter_chain_length(chain) > 0 &&
+        !(o->geometry.filters = vv_strdup(vv_filter_chain_text(chain)))) {
+        vv_filter_chain_free(chain);
+        vv_object_free(o);
+        return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
+    }
+    vv_filter_chain_free(chain);
+    st = vv_scene_parse_object_fields(c, e, op, o);
+    if (st == VV_OK)
+        st = vv_scene_parse_effect_flags(c, e, op, o);
+    if (st != VV_OK) {
+        vv_object_free(o);
+        return st;
+    }
+    return vv_world_add_object(w, o);
+}

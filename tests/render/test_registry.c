@@ -1,0 +1,430 @@
+/*
+ * The renderer framework (src/render/registry.c, src/render/frame.c;
+ * include/volvis/render.h, include/volvis/sys/renderer.h):
+ * - every renderer's table: the interface version, an option table whose
+ *   every entry has a key, a type and a default that its own validator
+ *   accepts (and that setting it on a new renderer is accepted), the region
+ *   capability exactly when a region method exists;
+ * - `volvis renderers --json` lists the same tables (parsed with Jansson):
+ *   names, types, defaults, capabilities;
+ * - option validation: types, ranges with open and closed ends, words,
+ *   enumerations, unknown keys, one-line messages naming key and value;
+ * - what a renderer draws: a World of grids with raycast, a volume with
+ *   irregular, iso with splat are errors naming the object and the
+ *   renderers that draw it; a mixed World draws what it can;
+ * - the default renderer of a World (vv_world_renderer);
+ * - the frame runner: every pixel once, the same image for 1, 2 and 3
+ *   threads, restricted rectangles, bands, progress from 0 to 1, cancel,
+ *   a tile's error with its message;
+ * - the camera rays agree with vv_view_ray (perspective and parallel);
+ * - the region compositing operators.
+ */
+#include "testutil.h"
+
+#include <jansson.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "volvis/sys/renderer.h"
+
+static void
+test_tables(void **state) {
+    (void)state;
+    const vv_renderer_ops *const *reg = vv_renderer_registry();
+    assert_int_equal(vv_renderer_count() > 0, 1);
+    int n = 0;
+    for (; reg[n]; n++) {
+        const vv_renderer_ops *ops = reg[n];
+        const vv_renderer_info *in = &ops->info;
+        assert_int_equal(ops->version, VV_RENDERER_OPS_VERSION);
+        assert_ptr_equal(vv_renderer_info_at(n), in);
+        assert_ptr_equal(vv_renderer_info_find(in->name), in);
+        assert_non_null(in->description);
+        assert_non_null(in->quality);
+        assert_true(in->draws != 0);
+        assert_true(ops->create && ops->destroy && ops->set_option && ops->render);
+        /* the region capability exactly when a region method exists */
+        assert_int_equal((in->caps & VV_RENDERER_REGION) != 0, ops->render_region != NULL);
+        vv_renderer *r = NULL;
+        vt_ok(vv_renderer_new(&r, in->name));
+        assert_ptr_equal(vv_renderer_get_info(r), in);
+        for (int k = 0; k < in->n_options; k++) {
+            const vv_option_spec *o = &in->options[k];
+            assert_non_null(o->key);
+            assert_non_null(o->def);
+            assert_non_null(o->doc);
+            assert_true(o->type >= VV_OPTION_BOOL && o->type <= VV_OPTION_STRING);
+            if (o->type == VV_OPTION_ENUM)
+                assert_non_null(o->words);
+            /* keys are distinct */
+            for (int j = 0; j < k; j++)
+                assert_string_not_equal(in->options[j].key, o->key);
+            /* the default passes its own validator and the renderer takes it
+             * (fourier's empty vvc: no file) */
+            vv_option_value v;
+            vt_ok(vv_option_parse(o, o->def, &v));
+            vt_ok(vv_renderer_info_check_option(in, o->key, o->def));
+            vt_ok(vv_renderer_set_option(r, o->key, o->def));
+        }
+        vv_renderer_free(r);
+    }
+    assert_int_equal(n, vv_renderer_count());
+    assert_null(vv_renderer_info_at(n));
+    assert_null(vv_renderer_info_find("no-such-renderer"));
+}
+
+/* `volvis renderers --json`: the same tables. */
+static void
+test_cli_json(void **state) {
+    (void)state;
+    char cmd[2048];
+    snprintf(cmd, sizeof cmd, "%s renderers --json", getenv("VV_CLI"));
+    FILE *p = popen(cmd, "r");
+    assert_non_null(p);
+    json_error_t e;
+    json_t *root = json_loadf(p, 0, &e);
+    assert_int_equal(pclose(p), 0);
+    if (!root)
+        fail_msg("volvis renderers --json: %s at %d:%d", e.text, e.line, e.column);
+    json_t *list = json_object_get(root, "renderers");
+    assert_true(json_is_array(list));
+    assert_int_equal((int)json_array_size(list), vv_renderer_count());
+    for (int i = 0; i < vv_renderer_count(); i++) {
+        const vv_renderer_info *in = vv_renderer_info_at(i);
+        json_t *r = json_array_get(list, (size_t)i);
+        assert_string_equal(json_string_value(json_object_get(r, "name")), in->name);
+        json_t *opts = json_object_get(r, "options");
+        assert_int_equal((int)json_array_size(opts), in->n_options);
+        const int region = (in->caps & VV_RENDERER_REGION) != 0;
+        int listed = 0;
+        json_t *caps = json_object_get(r, "capabilities");
+        for (size_t c = 0; c < json_array_size(caps); c++)
+            listed |= strcmp(json_string_value(json_array_get(caps, c)), "region") == 0;
+        assert_int_equal(listed, region);
+        for (int k = 0; k < in->n_options; k++) {
+            json_t *o = json_array_get(opts, (size_t)k);
+            const char *key = json_string_value(json_object_get(o, "key"));
+            const char *type = json_string_value(json_object_get(o, "type"));
+            const char *def = json_string_value(json_object_get(o, "default"));
+            assert_non_null(key);
+            assert_non_null(type);
+            assert_non_null(def);
+            assert_string_equal(key, in->options[k].key);
+            assert_string_equal(type, vv_option_type_name(in->options[k].type));
+            /* the default the JSON gives passes the option's validator */
+            vt_ok(vv_renderer_info_check_option(in, key, def));
+        }
+    }
+    json_decref(root);
+}
+
+static void
+expect_invalid(const char *renderer, const char *key, const char *value, const char *says) {
+    const vv_renderer_info *in = vv_renderer_info_find(renderer);
+    vv_error_clear();
+    vv_status s = vv_renderer_info_check_option(in, key, value);
+    if (s != VV_ERR_INVALID)
+        fail_msg("%s %s=%s: got %s", renderer, key, value, vv_status_name(s));
+    const char *m = vv_error_message();
+    if (!strstr(m, says) || strchr(m, '\n'))
+        fail_msg("%s %s=%s: message '%s' does not say '%s' on one line", renderer, key, value, m,
+                 says);
+}
+
+static void
+test_validation(void **state) {
+    (void)state;
+    /* open and closed ends */
+    expect_invalid("raycast", "early_termination", "0", "is not real in (0, 1]");
+    vt_ok(
+        vv_renderer_info_check_option(vv_renderer_info_find("raycast"), "early_termination", "1"));
+    expect_invalid("raycast", "early_termination", "1.0001", "(0, 1]");
+    expect_invalid("raycast", "early_termination", "nan", "early_termination: 'nan'");
+    expect_invalid("raycast", "early_termination", "0.5x", "'0.5x'");
+    expect_invalid("raycast", "early_termination", "", "''");
+    expect_invalid("radiosity", "tolerance", "1", "(0, 1)");
+    /* integers */
+    expect_invalid("raytrace", "samples", "17", "integer in 1..16");
+    expect_invalid("raytrace", "samples", "2.5", "'2.5'");
+    expect_invalid("raytrace", "max_depth", "-1", "0..64");
+    /* booleans: 0 or 1 */
+    expect_invalid("raytrace", "shadows", "yes", "0|1");
+    /* words beside numbers */
+    vt_ok(vv_renderer_info_check_option(vv_renderer_info_find("raycast"), "gradient_budget_mb",
+                                        "auto"));
+    expect_invalid("raycast", "gradient_budget_mb", "-1", "or auto");
+    vt_ok(vv_renderer_info_check_option(vv_renderer_info_find("fourier"), "quality", "exact"));
+    vt_ok(vv_renderer_info_check_option(vv_renderer_info_find("fourier"), "quality", "75"));
+    /* enumerations */
+    expect_invalid("surface", "shading", "smooth", "one of flat|gouraud|phong");
+    expect_invalid("splat", "classification", "both", "post|pre");
+    expect_invalid("fourier", "block", "12", "8|16|32");
+    /* unknown keys list the known ones */
+    expect_invalid("irregular", "samples", "2", "early_termination, empty_space_skipping");
+    /* through a renderer: the same check, prefixed with its name */
+    vv_renderer *r = NULL;
+    vt_ok(vv_renderer_new(&r, "raytrace"));
+    assert_int_equal(vv_renderer_set_option(r, "samples", "0"), VV_ERR_INVALID);
+    assert_non_null(strstr(vv_error_message(), "raytrace: samples: '0'"));
+    vt_ok(vv_renderer_set_option(r, "samples", "3"));
+    vv_renderer_free(r);
+    char buf[128];
+    const vv_option_spec *o = vv_renderer_info_option(vv_renderer_info_find("splat"), "radius");
+    assert_string_equal(vv_option_describe(o, buf, sizeof buf), "real in (0, 8]");
+}
+
+/* A World of one volume (neghip-like sphere), one grid, or both. */
+static vv_world *
+world_of(int volume, int grid, int plane) {
+    vv_world *w = NULL;
+    vt_ok(vv_world_new(&w));
+    if (volume) {
+        const int dims[3] = {16, 16, 16};
+        vv_volume *v = NULL;
+        vt_ok(vv_volume_new(&v, dims, VV_U8));
+        for (int k = 0; k < 16; k++)
+            for (int j = 0; j < 16; j++)
+                for (int i = 0; i < 16; i++)
+                    ((uint8_t *)v->data)[(k * 16 + j) * 16 + i] =
+                        (uint8_t)(255 * (((i - 8) * (i - 8) + (j - 8) * (j - 8) +
+                                          (k - 8) * (k - 8)) < 30));
+        vv_volume_update_range(v);
+        vv_object *o = NULL;
+        vt_ok(vv_object_new_volume(&o, v, "head"));
+        vv_volume_free(v);
+        vt_ok(vv_world_add_object(w, o));
+    }
+    if (grid) {
+        vv_grid *g = NULL;
+        vt_ok(vv_grid_load(&g, vt_data("grids/fire_ug.vtu")));
+        vv_world *gw = NULL;
+        vt_ok(vv_world_new_for_grid(&gw, g, NULL, 0, NULL));
+        vv_grid_free(g);
+        vv_object *o = NULL;
+        vt_ok(vv_object_clone(&o, gw->objects[0]));
+        snprintf(o->name, sizeof o->name, "fire");
+        vv_world_free(gw);
+        vt_ok(vv_world_add_object(w, o));
+    }
+    if (plane) {
+        vv_object *o = NULL;
+        vt_ok(vv_object_new_geometry(&o, VV_OBJECT_PLANE, "floor"));
+        o->geometry.normal = vv_vec3_make(0, 0, 1);
+        vt_ok(vv_world_add_object(w, o));
+    }
+    return w;
+}
+
+static void
+test_world_checks(void **state) {
+    (void)state;
+    vv_world *g = world_of(0, 1, 0), *v = world_of(1, 0, 0), *vp = world_of(1, 0, 1),
+             *vg = world_of(1, 1, 0), *e = world_of(0, 0, 0);
+    /* grids only: raycast draws nothing of it */
+    assert_int_equal(vv_renderer_check_world(vv_renderer_info_find("raycast"), g),
+                     VV_ERR_UNSUPPORTED);
+    const char *m = vv_error_message();
+    assert_non_null(strstr(m, "object 'fire' is a grid object, which raycast does not draw"));
+    assert_non_null(strstr(m, "drawn by irregular, surface"));
+    /* a volume: irregular draws nothing of it */
+    assert_int_equal(vv_renderer_check_world(vv_renderer_info_find("irregular"), v),
+                     VV_ERR_UNSUPPORTED);
+    assert_non_null(strstr(vv_error_message(), "object 'head' is a volume object"));
+    /* a mode the renderer does not draw */
+    v->objects[0]->mode = VV_MODE_ISO;
+    assert_int_equal(vv_renderer_check_world(vv_renderer_info_find("splat"), v),
+                     VV_ERR_UNSUPPORTED);
+    assert_non_null(strstr(vv_error_message(), "object 'head': iso mode is not drawn by splat"));
+    v->objects[0]->mode = VV_MODE_COMPOSITE;
+    /* a mixed World: what it can (the plane is left out) */
+    vt_ok(vv_renderer_check_world(vv_renderer_info_find("raycast"), vp));
+    vt_ok(vv_renderer_check_world(vv_renderer_info_find("raycast"), e));
+    /* and through vv_renderer_render: an error, not a blank image */
+    vv_renderer *r = NULL;
+    vv_image *img = NULL;
+    vt_ok(vv_renderer_new(&r, "raycast"));
+    vt_ok(vv_image_new(&img, g->view.width, g->view.height));
+    assert_int_equal(vv_renderer_render(r, g, &g->view, NULL, img), VV_ERR_UNSUPPORTED);
+    assert_non_null(strstr(vv_error_message(), "raycast: object 'fire'"));
+    vv_image_free(img);
+    vv_renderer_free(r);
+    /* the default renderer */
+    assert_string_equal(vv_world_renderer(v), "raycast");
+    assert_string_equal(vv_world_renderer(g), "irregular");
+    assert_string_equal(vv_world_renderer(vp), "raytrace");
+    assert_string_equal(vv_world_renderer(vg), "surface");
+    assert_string_equal(vv_world_renderer(e), "raycast");
+    snprintf(vp->render.renderer, sizeof vp->render.renderer, "splat");
+    assert_string_equal(vv_world_renderer(vp), "splat");
+    vv_renderer *d = NULL;
+    vt_ok(vv_renderer_new_for_world(&d, g));
+    assert_string_equal(vv_renderer_name(d), "irregular");
+    vv_renderer_free(d);
+    vv_world_free(g);
+    vv_world_free(v);
+    vv_world_free(vp);
+    vv_world_free(vg);
+    vv_world_free(e);
+}
+
+/* ---- the frame runner --------------------------------------------------- */
+
+typedef struct paint {
+    vv_image *img;
+    int *count;  /* per pixel */
+    int fail_at; /* tile index that fails, or -1 */
+} paint;
+
+static vv_status
+paint_tile(void *user, const vv_frame_tile *t) {
+    paint *p = user;
+    if (t->index == p->fail_at)
+        return vv_error_set(VV_ERR_IO, "tile %d could not read its data", t->index);
+    assert_non_null(t->scratch);
+    for (int y = t->y0; y < t->y1; y++)
+        for (int x = t->x0; x < t->x1; x++) {
+            const size_t i = (size_t)y * (size_t)p->img->width + (size_t)x;
+            p->img->rgba[4 * i] = (float)sin(0.1 * x + 0.07 * y * y);
+            __atomic_add_fetch(&p->count[i], 1, __ATOMIC_RELAXED);
+        }
+    return VV_OK;
+}
+
+typedef struct prog {
+    double last;
+    int calls, cancel_after;
+} prog;
+
+static int
+on_progress(void *user, double f) {
+    prog *p = user;
+    assert_true(f >= p->last && f <= 1.0);
+    p->last = f;
+    p->calls++;
+    return p->cancel_after > 0 && p->calls >= p->cancel_after;
+}
+
+static void
+test_frame_runner(void **state) {
+    (void)state;
+    const int W = 83, H = 61;
+    vv_image *ref = NULL;
+    for (int threads = 1; threads <= 3; threads++) {
+        vv_image *img = NULL;
+        vt_ok(vv_image_new(&img, W, H));
+        int *count = calloc((size_t)W * H, sizeof *count);
+        paint p = {img, count, -1};
+        vv_frame_job job;
+        vv_frame_job_init(&job, W, H, paint_tile, &p);
+        job.scratch_bytes = 100;
+        vv_render_options o;
+        vv_render_options_init(&o);
+        o.threads = threads;
+        prog pr = {0, 0, 0};
+        o.progress.fn = on_progress;
+        o.progress.user = &pr;
+        vt_ok(vv_frame_run(&job, &o));
+        assert_true(pr.last == 1.0);
+        assert_int_equal(pr.calls, ((W + 15) / 16) * ((H + 15) / 16));
+        for (int i = 0; i < W * H; i++)
+            assert_int_equal(count[i], 1);
+        if (!ref)
+            ref = img;
+        else
+            assert_memory_equal(ref->rgba, img->rgba, sizeof(float) * 4 * W * H);
+        /* a rectangle and bands of rows: only those pixels, once */
+        memset(count, 0, sizeof(int) * (size_t)W * H);
+        job.x0 = 10;
+        job.y0 = 5;
+        job.x1 = 50;
+        job.y1 = 40;
+        job.tile = W;
+        job.tile_h = 7;
+        pr = (prog){0, 0, 0};
+        vt_ok(vv_frame_run(&job, &o));
+        assert_true(pr.last == 1.0);
+        assert_int_equal(pr.calls, (H + 6) / 7);
+        for (int y = 0; y < H; y++)
+            for (int x = 0; x < W; x++)
+                assert_int_equal(count[y * W + x], x >= 10 && x < 50 && y >= 5 && y < 40);
+        /* cancel after the second tile; an error in a tile with its message */
+        vv_frame_job_init(&job, W, H, paint_tile, &p);
+        job.scratch_bytes = 100;
+        pr = (prog){0, 0, 2};
+        assert_int_equal(vv_frame_run(&job, &o), VV_ERR_CANCELLED);
+        pr = (prog){0, 0, 0};
+        p.fail_at = 3;
+        assert_int_equal(vv_frame_run(&job, &o), VV_ERR_IO);
+        assert_non_null(strstr(vv_error_message(), "tile 3 could not read its data"));
+        free(count);
+        if (img != ref)
+            vv_image_free(img);
+    }
+    vv_image_free(ref);
+}
+
+static void
+test_camera_rays(void **state) {
+    (void)state;
+    vv_view v;
+    vv_world *w = NULL;
+    vt_ok(vv_world_new(&w));
+    v = w->view;
+    v.width = 97;
+    v.height = 55;
+    v.eye = vv_vec3_make(10, -300, 40);
+    v.at = vv_vec3_make(-3, 2, 5);
+    for (int ortho = 0; ortho < 2; ortho++) {
+        v.projection = ortho ? VV_PROJECTION_ORTHOGRAPHIC : VV_PROJECTION_PERSPECTIVE;
+        vv_camera_rays c;
+        vv_camera_rays_init(&c, &v);
+        assert_int_equal(c.ortho, ortho);
+        const double px[4][2] = {{0, 0}, {96, 54}, {13.25, 40.5}, {50, 0}};
+        for (int i = 0; i < 4; i++) {
+            const vv_ray a = vv_camera_ray(&c, px[i][0], px[i][1]);
+            const vv_ray b = vv_view_ray(&v, px[i][0], px[i][1]);
+            assert_true(fabs(a.origin.x - b.origin.x) < 1e-9 &&
+                        fabs(a.origin.y - b.origin.y) < 1e-9 &&
+                        fabs(a.origin.z - b.origin.z) < 1e-9);
+            assert_true(fabs(a.dir.x - b.dir.x) < 1e-12 && fabs(a.dir.y - b.dir.y) < 1e-12 &&
+                        fabs(a.dir.z - b.dir.z) < 1e-12);
+        }
+    }
+    vv_world_free(w);
+}
+
+static void
+test_region_ops(void **state) {
+    (void)state;
+    /* over: front 0.5 opaque red over back green */
+    float f[4] = {0.5f, 0, 0, 0.5f}, b[4] = {0, 0.8f, 0, 0.8f};
+    float fd = 3, fk = NAN;
+    vv_region_pixel_combine(VV_REGION_OVER, f, &fd, &fk, b, 7, NAN);
+    assert_true(f[0] == 0.5f && fabsf(f[1] - 0.4f) < 1e-7f && fabsf(f[3] - 0.9f) < 1e-7f);
+    assert_true(fd == 3);
+    /* max: the larger key wins, ties keep the front */
+    float m[4] = {1, 1, 1, 1}, n[4] = {2, 2, 2, 2};
+    float md = 5, mk = 10;
+    vv_region_pixel_combine(VV_REGION_MAX, m, &md, &mk, n, 9, 10);
+    assert_true(m[0] == 1 && md == 5 && mk == 10);
+    vv_region_pixel_combine(VV_REGION_MAX, m, &md, &mk, n, 9, 11);
+    assert_true(m[0] == 2 && md == 9 && mk == 11);
+    vv_region_pixel_combine(VV_REGION_MIN, m, &md, &mk, n, 9, NAN); /* nothing behind */
+    assert_true(mk == 11);
+    float z[4] = {0, 0, 0, 0}, zd = INFINITY, zk = NAN;
+    vv_region_pixel_combine(VV_REGION_MIN, z, &zd, &zk, n, 4, 3); /* nothing in front */
+    assert_true(zk == 3 && zd == 4 && z[0] == 2);
+}
+
+int
+main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_tables),       cmocka_unit_test(test_cli_json),
+        cmocka_unit_test(test_validation),   cmocka_unit_test(test_world_checks),
+        cmocka_unit_test(test_frame_runner), cmocka_unit_test(test_camera_rays),
+        cmocka_unit_test(test_region_ops),
+    };
+    return vt_run_tests(tests, NULL, NULL);
+}
