@@ -9,9 +9,9 @@ Prints, per case (ray caster, ray tracer, and with --big a 512^3 volume):
   anchor=volvis op=navigator_refine_ms ...           (last input to the full frame)
   anchor=volvis op=navigator_full_render_ms ...      (the full frame's own render time)
   anchor=volvis op=navigator_gui_overhead_ms ...     (median, renderer's end to paint, drag)
-  anchor=volvis op=animator_preview_fps ...          (the Animator's Play of an orbit)
-Targets (issue 11): fps >= 30, max gap <= 100 ms, refine <= 150 ms + one full render;
-(issue 13) the Animator's preview plays at 30 frames a second.
+Targets (issue 11): fps >= 30, max gap <= 100 ms, refine <= 150 ms + one full render.
+The Animator's Play and issue 28's targets (a 1000 x 800 view, the transfer-function
+editor, slice views): bench/bench_gui.py.
 """
 import argparse, json, os, statistics, subprocess, sys, tempfile, time
 
@@ -92,66 +92,6 @@ def run_case(gui, scene, name, log_dir, drag_s=5.0):
     print(f"# {ds}: {len(drag)} frames in {(end - start) / 1000:.2f} s, representations {kinds}; "
           f"refine target {150 + full[3]:.0f} ms", flush=True)
 
-def run_play(gui, volume, name, log_dir, play_s=5.0):
-    """The Animator's Play (an orbit) previewed in the scene view: frames a second."""
-    here = os.path.dirname(os.path.abspath(__file__))
-    locate = os.path.join(here, "..", "tests", "gui", "locate.py")
-    log = os.path.join(log_dir, name + ".log")
-    if os.path.exists(log):
-        os.remove(log)
-    env = dict(os.environ, GDK_BACKEND="x11", NO_AT_BRIDGE="1", VOLVIS_FRAME_LOG=log)
-    p = subprocess.Popen([gui, volume], env=env, stdout=subprocess.DEVNULL,
-                         stderr=subprocess.DEVNULL)
-    shot = os.path.join(log_dir, "shot.png")
-    try:
-        deadline = time.time() + 60
-        while time.time() < deadline and not (os.path.exists(log) and " full " in open(log).read()):
-            time.sleep(0.1)
-        wid = subprocess.run(["xdotool", "search", "--sync", "--name", "^VolVis — "],
-                             capture_output=True, text=True).stdout.split()[0]
-        subprocess.run(["xdotool", "windowmove", wid, "0", "0", "windowsize", wid, "1100", "720"])
-        time.sleep(1.0)
-        subprocess.run(["import", "-window", "root", shot])
-        entries = subprocess.run([sys.executable, locate, "sidebar", shot], capture_output=True,
-                                 text=True).stdout.splitlines()
-        box = None
-        for e in reversed(entries):
-            x, y = e.split()
-            subprocess.run(["xdotool", "mousemove", x, y, "click", "1"])
-            time.sleep(0.4)
-            subprocess.run(["import", "-window", "root", shot])
-            r = subprocess.run([sys.executable, locate, "timeline", shot], capture_output=True,
-                               text=True)
-            if r.returncode == 0:
-                box = [int(v) for v in r.stdout.split()]
-                break
-        if not box:
-            raise SystemExit(f"{name}: no Animator page")
-        L, T, R, B = box
-        W = R - L
-        subprocess.run(["xdotool", "mousemove", str(L + W // 2), str(B + 572), "click", "1"])
-        time.sleep(0.5)
-        n0 = len(open(log).read().splitlines())
-        subprocess.run(["xdotool", "mousemove", str(L + W // 6), str(B + 22), "click", "1"])
-        time.sleep(play_s)
-        n1 = len(open(log).read().splitlines())
-        subprocess.run(["xdotool", "mousemove", str(L + W // 2), str(B + 22), "click", "1"])
-        time.sleep(1.0)
-        lines = open(log).read().splitlines()[n0:n1]
-    finally:
-        subprocess.run(["xdotool", "key", "ctrl+q"])
-        try:
-            p.wait(timeout=10)
-        except subprocess.TimeoutExpired:
-            p.kill()
-    t = [float(l.split()[0]) for l in lines]
-    # skip the first second (the start of Play), count the rest
-    t = [x for x in t if x >= t[0] + 1000] if t else []
-    fps = (len(t) - 1) / ((t[-1] - t[0]) / 1000) if len(t) > 1 else 0.0
-    print(f"anchor=volvis op=animator_preview_fps dataset={name} value={fps:.1f} unit=fps")
-    print(f"# {name}: {len(lines)} frames during {play_s:.0f} s of Play", flush=True)
-
-
 def scene(path, volume, renderer, origin=None):
     obj = {"name": "v", "type": "volume", "file": os.path.abspath(volume), "mode": "composite",
            "step": 0.5}
@@ -187,7 +127,6 @@ def main():
     with open(s, "w") as f:
         json.dump(j, f)
     run_case(gui, s, "ct_head.nrrd:raytrace", d)
-    run_play(gui, os.path.abspath(a.volume), "ct_head.nrrd:play", d)
     if a.big:
         import numpy as np
         n = 512

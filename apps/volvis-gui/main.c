@@ -20,12 +20,16 @@ usage(FILE *out) {
             "VolVis %s: the desktop application. Opens volumes (NRRD, NIfTI, MetaImage,\n"
             "VTK, SLC, ...), meshes (OBJ, PLY, STL, OFF, ...) and scene files (.json).\n"
             "\n"
-            "Pages: Manipulation (objects, Object Control, Navigator), Rendering,\n"
-            "Measurement, Modeling, Input devices (3-D mouse, game controllers, network\n"
-            "socket, replay, record). Drag in the view: rotate (Shift: pan, Ctrl: zoom,\n"
-            "Alt: the selected object; right button: pan); wheel: zoom.\n"
-            "Keys: Ctrl+O open, Ctrl+S save session, Ctrl+Z undo, Ctrl+Shift+Z redo,\n"
-            "Ctrl+R render, Ctrl+Q quit.\n"
+            "The 3-D view fills the window; \"4 views\" adds axial, coronal and sagittal\n"
+            "slice views (click: move the cursor; right drag: window/level; wheel: next\n"
+            "slice). Pages: Objects, Transfer function (editor, presets), View, Lights,\n"
+            "Cut planes, Rendering, Measurement, Modeling, Filtering, Animator, Input\n"
+            "devices (3-D mouse and game controllers present at start are used).\n"
+            "Drag in the view: rotate (Shift: pan, Ctrl: zoom, Alt: the selected object;\n"
+            "right button: pan); wheel: zoom.\n"
+            "Keys: Ctrl+O open, Ctrl+I import raw, Ctrl+D browse DICOM, Ctrl+S save\n"
+            "session, Ctrl+Z undo, Ctrl+Shift+Z redo, Ctrl+R render, Ctrl+0 frame all,\n"
+            "Ctrl+1 / Ctrl+4 one or four views, Ctrl+W close, Ctrl+Q quit.\n"
             "\n"
             "Environment (docs/gui.md):\n"
             "  VOLVIS_FRAME_LOG=FILE     append a line per frame shown\n"
@@ -33,7 +37,9 @@ usage(FILE *out) {
             "  VOLVIS_INPUT_SOCKET=PATH  listen for input devices on a Unix socket at start\n"
             "                            (protocol: docs/input.md)\n"
             "  VOLVIS_INPUT_REPLAY=FILE  replay a recording of input devices at start\n"
-            "  VOLVIS_DEVICE_DIR=DIR     more device information-base files\n",
+            "  VOLVIS_DEVICE_DIR=DIR     more device information-base files\n"
+            "  VOLVIS_NO_AUTO_DEVICES=1  do not open the devices present at start\n"
+            "  VOLVIS_SLICE_LOG=FILE     append a line each time a slice view resamples\n",
             vv_version());
 }
 

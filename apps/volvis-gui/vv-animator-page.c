@@ -1041,6 +1041,7 @@ build(VvAnimatorPage *self) {
     add_button(r, gtk_button_new_with_label("Save…"), G_CALLBACK(save_clicked), self);
     self->timeline = gtk_drawing_area_new();
     gtk_widget_set_size_request(self->timeline, 280, 44);
+    vvg_name(self->timeline, "timeline");
     gtk_drawing_area_set_draw_func(GTK_DRAWING_AREA(self->timeline), timeline_draw, self, NULL);
     GtkGesture *click = gtk_gesture_click_new();
     g_signal_connect(click, "pressed", G_CALLBACK(timeline_pressed), self);

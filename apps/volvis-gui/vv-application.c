@@ -37,6 +37,11 @@ vv_application_startup(GApplication *app) {
     } keys[] = {
         {"app.quit", {"<Control>q", NULL}},
         {"win.open", {"<Control>o", NULL}},
+        {"win.import-raw", {"<Control>i", NULL}},
+        {"win.browse-dicom", {"<Control>d", NULL}},
+        {"win.close", {"<Control>w", NULL}},
+        {"win.layout::1", {"<Control>1", NULL}},
+        {"win.layout::4", {"<Control>4", NULL}},
         {"win.save", {"<Control>s", NULL}},
         {"win.save-as", {"<Control><Shift>s", NULL}},
         {"win.undo", {"<Control>z", NULL}},

@@ -1,8 +1,11 @@
 /* VvDevicesPage: the "Input devices" page (vv-devices-page.h). */
+#define _DEFAULT_SOURCE /* S_ISSOCK */
 #include "vv-devices-page.h"
 #include "vvg-widgets.h"
 
+#include <errno.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "vv-devices.h"
 
@@ -13,8 +16,8 @@ struct _VvDevicesPage {
     GtkWidget *scroll;
     GtkWidget *list;
     GtkWidget *status;
-    GtkWidget *socket_entry, *replay_entry, *record_entry, *record_button;
-    guint rebuild_idle, start_idle;
+    GtkWidget *socket_entry, *replay_entry, *record_entry, *record_button, *auto_start;
+    guint rebuild_idle, start_idle, auto_source;
 };
 
 G_DEFINE_TYPE(VvDevicesPage, vv_devices_page, GTK_TYPE_WIDGET)
@@ -405,8 +408,12 @@ path_row(GtkWidget *box, const char *text, gboolean save, const char *button, GC
     GtkWidget *e = gtk_entry_new();
     gtk_editable_set_text(GTK_EDITABLE(e), text ? text : "");
     gtk_widget_set_hexpand(e, TRUE);
+    g_autofree char *ename = g_strdup_printf("%s file", button);
+    vvg_name(e, ename);
     gtk_box_append(GTK_BOX(r), e);
     GtkWidget *ch = gtk_button_new_with_label("…");
+    g_autofree char *chname = g_strdup_printf("choose the %s file", button);
+    vvg_name(ch, chname);
     gtk_widget_set_tooltip_text(ch, "choose a file");
     g_object_set_data(G_OBJECT(ch), "save", GINT_TO_POINTER(save));
     g_signal_connect(ch, "clicked", G_CALLBACK(choose_clicked), e);
@@ -417,6 +424,96 @@ path_row(GtkWidget *box, const char *text, gboolean save, const char *button, GC
     if (button_out)
         *button_out = b;
     return e;
+}
+
+/* ---- devices present at start ---------------------------------------------------------- */
+
+/* The GUI's settings file ($XDG_CONFIG_HOME/volvis/gui.ini). */
+static char *
+settings_path(void) {
+    return g_build_filename(g_get_user_config_dir(), "volvis", "gui.ini", NULL);
+}
+
+/* "Use devices present at start": on unless the settings say off or
+ * VOLVIS_NO_AUTO_DEVICES is set. */
+static gboolean
+auto_devices_enabled(void) {
+    const char *env = g_getenv("VOLVIS_NO_AUTO_DEVICES");
+    if (env && *env && strcmp(env, "0"))
+        return FALSE;
+    g_autofree char *path = settings_path();
+    g_autoptr(GKeyFile) kf = g_key_file_new();
+    if (!g_key_file_load_from_file(kf, path, G_KEY_FILE_NONE, NULL))
+        return TRUE;
+    GError *err = NULL;
+    gboolean on = g_key_file_get_boolean(kf, "devices", "use-at-start", &err);
+    if (err) {
+        g_error_free(err);
+        return TRUE;
+    }
+    return on;
+}
+
+static void
+auto_start_toggled(GtkCheckButton *b, gpointer user) {
+    (void)user;
+    g_autofree char *path = settings_path();
+    g_autofree char *dir = g_path_get_dirname(path);
+    g_autoptr(GKeyFile) kf = g_key_file_new();
+    g_key_file_load_from_file(kf, path, G_KEY_FILE_KEEP_COMMENTS, NULL);
+    g_key_file_set_boolean(kf, "devices", "use-at-start", gtk_check_button_get_active(b));
+    GError *err = NULL;
+    /* g_key_file_save_to_file writes a temporary file and renames it */
+    if (g_mkdir_with_parents(dir, 0700) != 0 || !g_key_file_save_to_file(kf, path, &err)) {
+        g_warning("volvis-gui: cannot save %s: %s", path, err ? err->message : g_strerror(errno));
+        g_clear_error(&err);
+    }
+}
+
+/* A spacenavd socket where libspnav looks for it. */
+static gboolean
+spacenav_present(void) {
+    const char *p = g_getenv("SPNAV_SOCKET");
+    struct stat st;
+    return stat(p && *p ? p : "/var/run/spnav.sock", &st) == 0 && S_ISSOCK(st.st_mode);
+}
+
+/* A joystick or game pad on the system (what SDL would find). */
+static gboolean
+controller_present(void) {
+    GDir *d = g_dir_open("/dev/input", 0, NULL);
+    gboolean found = FALSE;
+    for (const char *n; d && !found && (n = g_dir_read_name(d));)
+        found = g_str_has_prefix(n, "js");
+    if (d)
+        g_dir_close(d);
+    d = g_dir_open("/dev/input/by-id", 0, NULL);
+    for (const char *n; d && !found && (n = g_dir_read_name(d));)
+        found = strstr(n, "joystick") != NULL;
+    if (d)
+        g_dir_close(d);
+    return found;
+}
+
+/* The devices present at start are used without a visit to this page, as
+ * Blender and FreeCAD do; a failure is a warning, not a dialog. */
+static gboolean
+auto_start_cb(gpointer user) {
+    VvDevicesPage *self = user;
+    self->auto_source = 0;
+    GError *err = NULL;
+    if (spacenav_present()) {
+        if (vv_devices_open_spacenav(self->devices, &err))
+            update_status(self);
+        else
+            g_warning("volvis-gui: the 3-D mouse present at start: %s", err->message);
+        g_clear_error(&err);
+    }
+    if (controller_present() && !vv_devices_open_controllers(self->devices, &err)) {
+        g_warning("volvis-gui: the game controllers present at start: %s", err->message);
+        g_clear_error(&err);
+    }
+    return G_SOURCE_REMOVE;
 }
 
 /* VOLVIS_INPUT_SOCKET and VOLVIS_INPUT_REPLAY, once the window is up (errors in a dialog). */
@@ -434,6 +531,9 @@ start_cb(gpointer user) {
         gtk_editable_set_text(GTK_EDITABLE(self->replay_entry), replay);
         replay_clicked(NULL, self);
     }
+    /* after the first image: connecting takes a moment */
+    if (auto_devices_enabled())
+        self->auto_source = g_timeout_add(400, auto_start_cb, self);
     return G_SOURCE_REMOVE;
 }
 
@@ -444,6 +544,7 @@ vv_devices_page_dispose(GObject *o) {
     VvDevicesPage *self = VV_DEVICES_PAGE(o);
     g_clear_handle_id(&self->rebuild_idle, g_source_remove);
     g_clear_handle_id(&self->start_idle, g_source_remove);
+    g_clear_handle_id(&self->auto_source, g_source_remove);
     if (self->devices) {
         g_signal_handler_disconnect(self->devices, self->changed_id);
         g_clear_object(&self->devices);
@@ -511,10 +612,16 @@ vv_devices_page_new(VvWindow *win) {
     gtk_widget_set_tooltip_text(b, "SDL2 game controllers, attached now or later");
     g_signal_connect(b, "clicked", G_CALLBACK(controllers_clicked), self);
     gtk_box_append(GTK_BOX(r), b);
+    self->auto_start =
+        gtk_check_button_new_with_label("use the 3-D mouse and game controllers present at start");
+    gtk_check_button_set_active(GTK_CHECK_BUTTON(self->auto_start), auto_devices_enabled());
+    g_signal_connect(self->auto_start, "toggled", G_CALLBACK(auto_start_toggled), self);
+    gtk_box_append(GTK_BOX(box), self->auto_start);
 
     heading(box, "Network socket");
     char *sock = vv_devices_default_socket_path();
     self->socket_entry = gtk_entry_new();
+    vvg_name(self->socket_entry, "socket path");
     gtk_editable_set_text(GTK_EDITABLE(self->socket_entry), sock);
     g_free(sock);
     gtk_widget_set_hexpand(self->socket_entry, TRUE);

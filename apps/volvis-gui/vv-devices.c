@@ -85,6 +85,14 @@ emit_changed(VvDevices *self) {
     self->emitting = FALSE;
 }
 
+/* One Navigator motion of the view (vv_nav_apply). */
+static void
+nav_view(vv_world *w, vv_nav_motion m) {
+    vv_nav_target t = {VV_NAV_TARGET_VIEW, 0, -1};
+    if (vv_nav_apply(w, &t, &m) != VV_OK)
+        g_debug("volvis-gui: device motion: %s", vv_error_message());
+}
+
 /* Moves the view for motion v (tx ty tz rx ry rz): rates applied over dt
  * seconds, or (dt < 0) a mouse's drag distance in units of ppu pixels. */
 static void
@@ -95,30 +103,34 @@ move_view(VvDevices *self, const double v[6], double dt, double ppu) {
     if (!any)
         return;
     begin_burst(self, g_get_monotonic_time());
-    vv_view *view = &vv_document_world(self->doc)->view;
-    double h = view->height > 0 ? view->height : 512;
+    vv_world *w = vv_document_world(self->doc);
+    double h = w->view.height > 0 ? w->view.height : 512;
     if (dt < 0) {
         /* the mouse's own mapping (docs/input.md) undone: dx -> ry, dy -> rx,
          * right drag (tx, -ty), middle drag and wheel tz; applied as the
          * scene view applies a drag of that many pixels */
         if (v[3] != 0 || v[4] != 0)
-            vv_nav_view_rotate(view, v[4] * ppu, v[3] * ppu);
+            nav_view(w, (vv_nav_motion){.kind = VV_NAV_ROTATE, .dx = v[4] * ppu, .dy = v[3] * ppu});
         if (v[0] != 0 || v[1] != 0)
-            vv_nav_view_pan(view, v[0] * ppu, -v[1] * ppu);
+            nav_view(w, (vv_nav_motion){.kind = VV_NAV_PAN, .dx = v[0] * ppu, .dy = -v[1] * ppu});
         if (v[2] != 0)
-            vv_nav_view_zoom(view, exp(-v[2]));
+            nav_view(w, (vv_nav_motion){.kind = VV_NAV_ZOOM, .factor = exp(-v[2])});
     } else {
-        /* vv_nav_view_rotate turns 180 degrees for a drag across the view's height */
+        /* a rotation drag turns 180 degrees across the view's height */
         double px_per_rad = h / G_PI;
         if (v[3] != 0 || v[4] != 0)
-            vv_nav_view_rotate(view, v[4] * ROT_RATE * dt * px_per_rad,
-                               v[3] * ROT_RATE * dt * px_per_rad);
+            nav_view(w, (vv_nav_motion){.kind = VV_NAV_ROTATE,
+                                        .dx = v[4] * ROT_RATE * dt * px_per_rad,
+                                        .dy = v[3] * ROT_RATE * dt * px_per_rad});
         if (v[5] != 0)
-            vv_nav_view_fly(view, 0, 0, v[5] * ROT_RATE, 0, dt);
+            nav_view(w, (vv_nav_motion){.kind = VV_NAV_FLY, .roll = v[5] * ROT_RATE, .dt = dt});
         if (v[0] != 0 || v[1] != 0)
-            vv_nav_view_pan(view, v[0] * PAN_RATE * h * dt, -v[1] * PAN_RATE * h * dt);
+            nav_view(w, (vv_nav_motion){.kind = VV_NAV_PAN,
+                                        .dx = v[0] * PAN_RATE * h * dt,
+                                        .dy = -v[1] * PAN_RATE * h * dt});
         if (v[2] != 0)
-            vv_nav_view_zoom(view, exp(-v[2] * ZOOM_RATE * dt));
+            nav_view(w,
+                     (vv_nav_motion){.kind = VV_NAV_ZOOM, .factor = exp(-v[2] * ZOOM_RATE * dt)});
     }
     emit_changed(self);
 }
@@ -174,29 +186,16 @@ set_held(VvDevices *self, int id, const double v[6]) {
  * distance. */
 static void
 two_hand(VvDevices *self, const vv_input_action *a) {
-    vv_view *view = &vv_document_world(self->doc)->view;
     gboolean turn = fabs(a->rotation.w) < 1 - 1e-12;
     gboolean zoom = isfinite(a->scale) && a->scale > 0 && a->scale != 1;
     if (!turn && !zoom)
         return;
     begin_burst(self, g_get_monotonic_time());
-    if (turn) {
-        vv_vec3 f = vv_vec3_normalize(vv_vec3_sub(view->at, view->eye));
-        vv_vec3 r = vv_vec3_normalize(vv_vec3_cross(f, view->up));
-        vv_vec3 u = vv_vec3_cross(r, f);
-        vv_vec3 axis = vv_vec3_add(
-            vv_vec3_add(vv_vec3_scale(r, a->rotation.x), vv_vec3_scale(u, a->rotation.y)),
-            vv_vec3_scale(f, -a->rotation.z));
-        /* the camera turns the other way about the look-at point */
-        vv_quat q = vv_quat_normalize((vv_quat){a->rotation.w, -axis.x, -axis.y, -axis.z});
-        vv_view c = *view;
-        c.eye = vv_vec3_add(view->at, vv_quat_rotate(q, vv_vec3_sub(view->eye, view->at)));
-        c.up = vv_quat_rotate(q, view->up);
-        if (vv_nav_view_valid(&c))
-            *view = c;
-    }
+    vv_world *w = vv_document_world(self->doc);
+    if (turn)
+        nav_view(w, (vv_nav_motion){.kind = VV_NAV_TURN, .rotation = a->rotation});
     if (zoom)
-        vv_nav_view_zoom(view, a->scale);
+        nav_view(w, (vv_nav_motion){.kind = VV_NAV_ZOOM, .factor = a->scale});
     emit_changed(self);
 }
 

@@ -201,6 +201,11 @@ open_scene(VvDocument *doc, const char *path, GError **error) {
         return FALSE;
     }
     vv_document_begin_edit(doc, "open scene");
+    /* the view fills the window: the scene's camera at the window's size */
+    if (doc->world->view.width > 0 && doc->world->view.height > 0) {
+        w->view.width = doc->world->view.width;
+        w->view.height = doc->world->view.height;
+    }
     vv_world_free(doc->world);
     doc->world = w;
     /* the scene names its volumes relative to itself; without the names at
@@ -213,77 +218,149 @@ open_scene(VvDocument *doc, const char *path, GError **error) {
     return TRUE;
 }
 
+/* The renderer that draws every object of @p w: a renderer the user chose
+ * that draws them is kept, else the World's default (vv_world_renderer:
+ * the first renderer whose capabilities cover every object), named in the
+ * settings so the saved scene renders the same through the CLI. */
+static void
+choose_renderer(vv_world *w) {
+    const vv_renderer_info *info = vv_renderer_info_find(vv_render_settings_renderer(&w->render));
+    gboolean all = info != NULL;
+    for (int i = 0; all && i < w->n_objects; i++)
+        all = !w->objects[i]->visible || (info->draws & VV_DRAWS(w->objects[i]->type));
+    if (all)
+        return;
+    w->render.renderer[0] = '\0';
+    w->render.n_options = 0; /* the options belong to the other renderer */
+    g_strlcpy(w->render.renderer, vv_world_renderer(w), sizeof w->render.renderer);
+}
+
+gboolean
+vv_document_mesh_is_y_up(const char *path) {
+    /* the exporters' conventions: OBJ, PLY, glTF, COLLADA and FBX are
+     * usually Y-up; STL, OFF and 3DS (CAD, printing) Z-up */
+    static const char *const y_up[] = {".obj", ".ply", ".gltf", ".glb", ".dae", ".fbx", NULL};
+    return has_suffix(path, y_up);
+}
+
+/* The object added beside others: the view frames the whole World (same
+ * undo step), and the renderer is one that draws everything. */
+static void
+added_beside(VvDocument *doc) {
+    vv_world *w = doc->world;
+    choose_renderer(w);
+    vv_view_frame_box(&w->view, vv_world_bounds(w));
+    vv_document_changed(doc);
+}
+
+static gboolean
+open_mesh(VvDocument *doc, const char *path, GError **error) {
+    vv_mesh *m = NULL;
+    vv_object *o = NULL;
+    if (vv_mesh_load(&m, path) != VV_OK) {
+        set_error(error, "cannot read the mesh");
+        return FALSE;
+    }
+    g_autofree char *base = g_path_get_basename(path);
+    vv_status s = vv_object_new_geometry(&o, VV_OBJECT_MESH, base);
+    g_autofree char *abs = g_canonicalize_filename(path, NULL);
+    if (s == VV_OK)
+        s = vv_object_set_mesh(o, m, abs);
+    vv_mesh_free(m);
+    if (s != VV_OK) {
+        vv_object_free(o);
+        set_error(error, "cannot use the mesh");
+        return FALSE;
+    }
+    if (vv_document_mesh_is_y_up(path)) /* its Y turned to the World's Z (up) */
+        o->orientation = vv_quat_from_axis_angle(vv_vec3_make(1, 0, 0), VV_PI / 2);
+    gboolean fresh = doc->world->n_objects == 0 && !doc->dirty;
+    if (doc->world->n_objects == 0 && doc->world->n_lights == 0) {
+        vv_light l = {VV_LIGHT_DIRECTIONAL, 1, {0, 1, 0}, {0, 0, 0}, {1, 1, 1}, 1.0};
+        vv_world_add_light(doc->world, &l);
+    }
+    vv_document_add_object(doc, o, NULL);
+    added_beside(doc);
+    doc->dirty = !fresh;
+    return TRUE;
+}
+
+gboolean
+vv_document_add_volume(VvDocument *doc, vv_volume *v, const char *name, const char *source,
+                       GError **error) {
+    vv_world *w = NULL;
+    vv_error_clear();
+    if (vv_world_new_for_volume(&w, v, NULL) != VV_OK) {
+        set_error(error, "cannot show the volume");
+        return FALSE;
+    }
+    /* the object as `volvis render FILE` shows it */
+    vv_object *obj = NULL;
+    vv_world_take_object(w, 0, &obj);
+    g_strlcpy(obj->name, name, sizeof obj->name);
+    if (source)
+        remember_source(obj, source);
+    if (doc->world->n_objects == 0) {
+        gboolean fresh = !doc->dirty;
+        vv_document_begin_edit(doc, "open volume");
+        /* the default scene's view, lights and shading; the session's
+         * render settings and view size stay */
+        w->render = doc->world->render;
+        gboolean resized = FALSE;
+        if (doc->world->view.width > 0 && doc->world->view.height > 0) {
+            resized = w->view.width != doc->world->view.width ||
+                      w->view.height != doc->world->view.height;
+            w->view.width = doc->world->view.width;
+            w->view.height = doc->world->view.height;
+        }
+        vv_world_free(doc->world);
+        doc->world = w;
+        vv_world_add_object(doc->world, obj);
+        if (resized) /* framed for the window's shape */
+            vv_view_frame_box(&w->view, vv_world_bounds(w));
+        doc->selected = 0;
+        doc->dirty = !fresh; /* a file just opened is not "unsaved" */
+        world_replaced(doc);
+        return TRUE;
+    }
+    vv_world_free(w);
+    vv_document_add_object(doc, obj, NULL);
+    added_beside(doc);
+    return TRUE;
+}
+
 gboolean
 vv_document_open(VvDocument *doc, const char *path, GError **error) {
     static const char *const scene_suffixes[] = {".json", NULL};
     if (has_suffix(path, scene_suffixes))
         return open_scene(doc, path, error);
     vv_error_clear();
-    if (has_suffix(path, mesh_suffixes)) {
-        vv_mesh *m = NULL;
-        vv_object *o = NULL;
-        if (vv_mesh_load(&m, path) != VV_OK) {
-            set_error(error, "cannot read the mesh");
-            return FALSE;
-        }
-        g_autofree char *base = g_path_get_basename(path);
-        vv_status s = vv_object_new_geometry(&o, VV_OBJECT_MESH, base);
-        g_autofree char *abs = g_canonicalize_filename(path, NULL);
-        if (s == VV_OK)
-            s = vv_object_set_mesh(o, m, abs);
-        vv_mesh_free(m);
-        if (s != VV_OK) {
-            vv_object_free(o);
-            set_error(error, "cannot use the mesh");
-            return FALSE;
-        }
-        if (doc->world->n_objects == 0) {
-            vv_view_frame_box(&doc->world->view, vv_object_world_box(o));
-            if (doc->world->n_lights == 0) {
-                vv_light l = {VV_LIGHT_DIRECTIONAL, 1, {0, 1, 0}, {0, 0, 0}, {1, 1, 1}, 1.0};
-                vv_world_add_light(doc->world, &l);
-            }
-        }
-        vv_document_add_object(doc, o, NULL);
-        return TRUE;
-    }
+    if (has_suffix(path, mesh_suffixes))
+        return open_mesh(doc, path, error);
     vv_volume *v = NULL;
     if (vv_volume_load(&v, path, NULL) != VV_OK) {
         set_error(error, "cannot read the volume");
         return FALSE;
     }
-    vv_world *w = NULL;
-    vv_status s = vv_world_new_for_volume(&w, v, NULL);
-    if (s != VV_OK) {
-        vv_volume_free(v);
-        set_error(error, "cannot show the volume");
-        return FALSE;
-    }
-    vv_volume_free(v);
-    /* the object as `volvis render FILE` shows it, named after the file */
-    vv_object *obj = NULL;
-    vv_world_take_object(w, 0, &obj);
     g_autofree char *base = g_path_get_basename(path);
     char *dot = strchr(base, '.');
     if (dot && dot != base)
         *dot = '\0';
-    g_strlcpy(obj->name, base, sizeof obj->name);
-    remember_source(obj, path);
-    if (doc->world->n_objects == 0) {
-        vv_document_begin_edit(doc, "open volume");
-        /* the default scene's view, lights and shading; the session's
-         * render settings stay */
-        w->render = doc->world->render;
-        vv_world_free(doc->world);
-        doc->world = w;
-        vv_world_add_object(doc->world, obj);
-        doc->selected = 0;
-        world_replaced(doc);
-        return TRUE;
+    gboolean ok = vv_document_add_volume(doc, v, base, path, error);
+    vv_volume_free(v);
+    return ok;
+}
+
+void
+vv_document_set_view_size(VvDocument *doc, int width, int height) {
+    if (width < 1 || height < 1)
+        return;
+    doc->world->view.width = width;
+    doc->world->view.height = height;
+    if (doc->kept) {
+        doc->kept->view.width = width;
+        doc->kept->view.height = height;
     }
-    vv_world_free(w);
-    vv_document_add_object(doc, obj, NULL);
-    return TRUE;
 }
 
 const char *

@@ -42,7 +42,13 @@ gboolean vv_document_can_redo(VvDocument *doc);
  * Opens a volume (any format vv_volume_load reads), a mesh (any format
  * Assimp reads: .obj .ply .stl .off ...) or a scene file (.json). The first
  * volume into an empty World gets the default scene of `volvis render FILE`;
- * later ones are added beside it; a scene replaces the World. One undo step.
+ * later objects are added beside it and the view frames them all; a mesh
+ * whose format is usually Y-up (vv_document_mesh_is_y_up) is turned so that
+ * its Y is the World's up (Z); a renderer that would not draw a mesh (the
+ * ray caster) is replaced by one that does (raytrace beside volumes, else
+ * surface); a scene replaces the World (keeping the view's size: the view
+ * fills the window). A file opened into a fresh session leaves it saved.
+ * One undo step.
  * On failure the World is unchanged and @p error holds the library's message
  * naming the file.
  */
@@ -54,6 +60,23 @@ gboolean vv_document_open(VvDocument *doc, const char *path, GError **error);
  * is atomic. On failure @p error holds the message.
  */
 gboolean vv_document_save(VvDocument *doc, const char *path, GError **error);
+/**
+ * Adds volume @p v (borrowed; the World takes a reference) as an object
+ * named @p name, read from @p source (NULL: made in the session, written
+ * beside the scene when saved). Into an empty World it gets the default
+ * scene of `volvis render FILE` (and the session stays unsaved only if it
+ * was); beside other objects the view frames them all. One undo step.
+ */
+gboolean vv_document_add_volume(VvDocument *doc, vv_volume *v, const char *name, const char *source,
+                                GError **error);
+/** TRUE for mesh files whose exporters usually write Y up (OBJ, PLY, glTF, COLLADA, FBX). */
+gboolean vv_document_mesh_is_y_up(const char *path);
+/**
+ * Sets the view's image size (pixels) without an undo step and without
+ * marking the session unsaved: the scene view renders at its own size, and
+ * a saved session renders through the CLI at that size. No signal.
+ */
+void vv_document_set_view_size(VvDocument *doc, int width, int height);
 /** The scene file the session was opened from or saved to, or NULL. */
 const char *vv_document_path(VvDocument *doc);
 /** TRUE when the World has changed since it was opened or saved. */

@@ -11,7 +11,7 @@
 struct _VvFilterPage {
     GtkBox parent;
     VvDocument *doc;
-    GtkWidget *chain, *apply, *cancel, *progress, *status;
+    GtkWidget *chain, *apply, *cancel, *progress, *status, *adapt;
     GtkWidget *which, *arg, *help;
     GTask *task;     /* the running filter, or NULL */
     guint tick;      /* progress bar timer */
@@ -138,10 +138,12 @@ filter_done(GObject *src, GAsyncResult *res, gpointer user) {
         g_free(f);
     }
     double lo = j->out->range[0], hi = j->out->range[1];
+    gboolean new_range = !same_kind || lo < olo || hi > ohi || hi - lo < 0.5 * (ohi - olo);
     if (ends_in_labels(text)) {
         o->segmentation = VV_SEG_LABELS;
-    } else if (!same_kind || lo < olo || hi > ohi || hi - lo < 0.5 * (ohi - olo)) {
-        /* a new value range: a ramp over it */
+    } else if (new_range && gtk_check_button_get_active(GTK_CHECK_BUTTON(page->adapt))) {
+        /* a new value range, and the user asked: a ramp over it (else the
+         * user's transfer function stays as it was) */
         if (o->segmentation == VV_SEG_LABELS || o->segmentation == VV_SEG_THRESHOLD)
             o->segmentation = VV_SEG_TRANSFER_FUNCTION;
         vv_tf_set_ramp(&o->tf, lo, hi > lo ? hi : lo + 1, 1.0, o->material.color,
@@ -302,6 +304,7 @@ vv_filter_page_new(VvDocument *doc) {
 
     vvg_section(box, "Filter chain, applied in order to the selected volume");
     page->chain = gtk_entry_new();
+    vvg_name(page->chain, "filter chain");
     gtk_entry_set_placeholder_text(GTK_ENTRY(page->chain),
                                    "--gaussian 1.5 --threshold 300: --largest 1");
     g_signal_connect_swapped(page->chain, "activate", G_CALLBACK(apply_clicked), page);
@@ -318,6 +321,9 @@ vv_filter_page_new(VvDocument *doc) {
     gtk_box_append(GTK_BOX(row), page->cancel);
     gtk_box_append(GTK_BOX(row), clear);
     gtk_box_append(GTK_BOX(box), row);
+    page->adapt = gtk_check_button_new_with_label(
+        "adapt the transfer function to a new value range (a ramp over it)");
+    gtk_box_append(GTK_BOX(box), page->adapt);
     page->progress = gtk_progress_bar_new();
     gtk_box_append(GTK_BOX(box), page->progress);
     page->status = gtk_label_new("");

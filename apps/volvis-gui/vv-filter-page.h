@@ -8,8 +8,9 @@
  * result replaces the object's volume in one undo step; the chain is added
  * to the object's filters (geometry.filters), so a saved session reloads
  * the file and filters it again. A label volume (--components) is shown by
- * label (segmentation "labels"); a mask or a new value range gets a ramp
- * transfer function over its values. UI thread only.
+ * label (segmentation "labels"). The object's transfer function is kept; a
+ * mask or a new value range gets a ramp over its values only when "adapt the
+ * transfer function" is on. UI thread only.
  */
 #ifndef VV_FILTER_PAGE_H
 #define VV_FILTER_PAGE_H

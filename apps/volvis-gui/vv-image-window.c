@@ -1,5 +1,6 @@
 /* VvImageWindow: a final render with progress, Cancel and Save (vv-image-window.h). */
 #include "vv-image-window.h"
+#include "vvg-widgets.h"
 
 #include <stdio.h>
 #include <string.h>
@@ -17,7 +18,14 @@ struct _VvImageWindow {
     gboolean disposed;
     char error[512];
     GtkWidget *picture, *progress, *cancel_button, *save_button, *status_label;
+    GtkWidget *width, *height, *rerender;
+    guint gen; /* of the render under way: a restarted one's end is ignored */
 };
+
+typedef struct done_msg {
+    VvImageWindow *win; /* a reference */
+    guint gen;
+} done_msg;
 
 G_DEFINE_TYPE(VvImageWindow, vv_image_window, GTK_TYPE_WINDOW)
 
@@ -33,6 +41,7 @@ static gboolean render_done(gpointer data);
 static gpointer
 render_main(gpointer data) {
     VvImageWindow *win = data;
+    guint gen = win->gen; /* set before this thread started */
     const vv_world *w = win->world;
     vv_renderer *r = NULL;
     vv_error_clear();
@@ -51,7 +60,10 @@ render_main(gpointer data) {
     if (s != VV_OK)
         g_strlcpy(win->error, vv_error_message(), sizeof win->error);
     vv_renderer_free(r);
-    g_idle_add(render_done, g_object_ref(win));
+    done_msg *m = g_new(done_msg, 1);
+    m->win = g_object_ref(win);
+    m->gen = gen;
+    g_idle_add(render_done, m);
     return NULL;
 }
 
@@ -73,8 +85,11 @@ tick(gpointer data) {
 
 static gboolean
 render_done(gpointer data) {
-    VvImageWindow *win = data;
-    if (win->disposed) {
+    done_msg *m = data;
+    VvImageWindow *win = m->win;
+    gboolean stale = m->gen != win->gen;
+    g_free(m);
+    if (win->disposed || stale) {
         g_object_unref(win);
         return G_SOURCE_REMOVE;
     }
@@ -112,6 +127,38 @@ render_done(gpointer data) {
     }
     g_object_unref(win);
     return G_SOURCE_REMOVE;
+}
+
+/* Renders the snapshot again at the size typed (the same camera: the
+ * vertical field of view is kept), after stopping a render under way. */
+static void
+start_render(VvImageWindow *win) {
+    if (win->thread) {
+        __atomic_store_n(&win->cancel, 1, __ATOMIC_RELAXED);
+        g_thread_join(win->thread);
+        win->thread = NULL;
+    }
+    __atomic_store_n(&win->cancel, 0, __ATOMIC_RELAXED);
+    vv_image_free(win->image);
+    win->image = NULL;
+    win->world->view.width = (int)vvg_spin_value(win->width);
+    win->world->view.height = (int)vvg_spin_value(win->height);
+    double zero = 0;
+    __atomic_store(&win->fraction, &zero, __ATOMIC_RELAXED);
+    gtk_widget_set_sensitive(win->save_button, FALSE);
+    gtk_widget_set_sensitive(win->cancel_button, TRUE);
+    gtk_label_set_text(GTK_LABEL(win->status_label), "");
+    win->start_us = g_get_monotonic_time();
+    win->gen++;
+    if (!win->timer)
+        win->timer = g_timeout_add(100, tick, win);
+    win->thread = g_thread_new("volvis-final", render_main, win);
+}
+
+static void
+rerender_clicked(GtkButton *b, gpointer user) {
+    (void)b;
+    start_render(user);
 }
 
 static void
@@ -204,6 +251,20 @@ vv_image_window_init(VvImageWindow *win) {
     GtkWidget *box = gtk_box_new(GTK_ORIENTATION_VERTICAL, 6);
     win->picture = gtk_picture_new();
     gtk_widget_set_vexpand(win->picture, TRUE);
+    vvg_name(win->picture, "rendered image");
+    GtkWidget *size = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 6);
+    GtkWidget *wl = gtk_label_new("width"), *hl = gtk_label_new("height");
+    win->width = vvg_spin(16, VV_IMAGE_MAX_SIDE, 16, 0, 512);
+    win->height = vvg_spin(16, VV_IMAGE_MAX_SIDE, 16, 0, 512);
+    vvg_label_for(win->width, wl);
+    vvg_label_for(win->height, hl);
+    win->rerender = gtk_button_new_with_label("Render at this size");
+    g_signal_connect(win->rerender, "clicked", G_CALLBACK(rerender_clicked), win);
+    gtk_box_append(GTK_BOX(size), wl);
+    gtk_box_append(GTK_BOX(size), win->width);
+    gtk_box_append(GTK_BOX(size), hl);
+    gtk_box_append(GTK_BOX(size), win->height);
+    gtk_box_append(GTK_BOX(size), win->rerender);
     win->progress = gtk_progress_bar_new();
     gtk_progress_bar_set_show_text(GTK_PROGRESS_BAR(win->progress), TRUE);
     GtkWidget *row = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 6);
@@ -219,10 +280,15 @@ vv_image_window_init(VvImageWindow *win) {
     gtk_widget_set_hexpand(win->progress, TRUE);
     gtk_box_append(GTK_BOX(row), win->cancel_button);
     gtk_box_append(GTK_BOX(row), win->save_button);
+    GtkWidget *close = gtk_button_new_with_label("Close");
+    g_signal_connect_swapped(close, "clicked", G_CALLBACK(gtk_window_close), win);
+    gtk_box_append(GTK_BOX(row), close);
+    gtk_box_append(GTK_BOX(box), size);
     gtk_box_append(GTK_BOX(box), win->picture);
     gtk_box_append(GTK_BOX(box), row);
     gtk_box_append(GTK_BOX(box), win->status_label);
     gtk_window_set_child(GTK_WINDOW(win), box);
+    vvg_close_on_escape(GTK_WINDOW(win));
 }
 
 VvImageWindow *
@@ -236,9 +302,10 @@ vv_image_window_new(GtkWindow *parent, vv_world *world) {
             gtk_window_set_application(GTK_WINDOW(win), app);
     }
     win->world = world;
-    gtk_window_set_default_size(GTK_WINDOW(win), world->view.width, world->view.height + 60);
-    win->start_us = g_get_monotonic_time();
-    win->timer = g_timeout_add(100, tick, win);
-    win->thread = g_thread_new("volvis-final", render_main, win);
+    vvg_set_spin(win->width, world->view.width);
+    vvg_set_spin(win->height, world->view.height);
+    gtk_window_set_default_size(GTK_WINDOW(win), MIN(world->view.width, 1200),
+                                MIN(world->view.height, 900) + 100);
+    start_render(win);
     return win;
 }

@@ -1,6 +1,8 @@
 /* VvSceneView: the scene view and the Navigator (vv-scene-view.h). */
 #define _GNU_SOURCE /* syscall(SYS_gettid) for the render thread's priority */
 #include "vv-scene-view.h"
+#include "vv-scene-overlay.h"
+#include "vvg-widgets.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -11,9 +13,12 @@
 #include <unistd.h>
 #endif
 
-/* Seconds a preview frame may take so the view holds 30 frames a second,
- * leaving time for showing it. */
-#define PREVIEW_BUDGET (1.0 / 30.0 - 0.006)
+/* Seconds a preview frame may take so the view holds 24 frames a second
+ * (the target is 20, with room for the load of a shared machine), leaving
+ * time for showing it. */
+#define PREVIEW_BUDGET (1.0 / 24.0 - 0.006)
+/* Volumes of at most this many voxels (256^3) are never drawn as boxes. */
+#define SURFACES_ABOVE_VOXELS (256.0 * 256.0 * 256.0)
 
 static gint64 start_us;
 
@@ -53,6 +58,7 @@ typedef struct frame {
 struct _VvSceneView {
     GtkWidget parent;
     VvDocument *doc;
+    VvMarks *marks;
     gulong changed_id;
 
     /* worker */
@@ -86,6 +92,7 @@ struct _VvSceneView {
     gboolean moving;
     VvNavTarget target;
     int light;
+    int cut_object, cut_plane; /* vv_scene_view_set_cut_plane */
     double drag_last_x, drag_last_y;
     int drag_button;
     GdkModifierType drag_mods;
@@ -223,7 +230,10 @@ warm_previews(VvSceneView *self) {
     for (size_t i = 0; i < G_N_ELEMENTS(kinds); i++) {
         g_mutex_lock(&self->lock);
         gboolean busy = self->pending != NULL || self->quit;
-        gboolean known = self->policy.seconds[kinds[i]] >= 0;
+        /* surfaces are drawn only for large volumes whose 1/8 ray cast is too slow */
+        double cast = self->policy.seconds[VV_PREVIEW_RAYCAST_8];
+        gboolean known = self->policy.seconds[kinds[i]] >= 0 || cast < 0 ||
+                         cast <= PREVIEW_BUDGET || !self->policy.allowed[kinds[i]];
         vv_world *w = busy || known ? NULL : self->last_world;
         /* a large volume's reduced surfaces take seconds to build, which a
          * drag starting meanwhile would wait for: they are left out */
@@ -430,8 +440,11 @@ refine_cb(gpointer data) {
 }
 
 /* The World changed: draw a preview now and refine after the delay. */
+static gboolean sync_size(VvSceneView *self);
+
 static void
 state_changed(VvSceneView *self) {
+    sync_size(self);
     self->gen++;
     __atomic_store_n(&self->cancel_below, self->gen, __ATOMIC_RELAXED);
     self->moving = TRUE;
@@ -442,7 +455,18 @@ state_changed(VvSceneView *self) {
         gtk_widget_queue_draw(GTK_WIDGET(self));
         return;
     }
+    /* volumes up to 256^3 are always cast (at 1/8 size at worst): boxes and
+     * surfaces only stand in for larger ones whose 1/8 cast misses the budget */
+    const vv_world *wd = vv_document_world(self->doc);
+    double voxels = 0;
+    for (int i = 0; i < wd->n_objects; i++) {
+        const vv_volume *v = wd->objects[i]->volume;
+        if (v && wd->objects[i]->visible)
+            voxels = fmax(voxels, (double)v->dims[0] * v->dims[1] * v->dims[2]);
+    }
     g_mutex_lock(&self->lock);
+    for (int k = VV_PREVIEW_BBOX; k <= VV_PREVIEW_COARSE_MC; k++)
+        self->policy.allowed[k] = voxels > SURFACES_ABOVE_VOXELS;
     vv_preview_kind k = vv_preview_policy_choose(&self->policy, PREVIEW_BUDGET);
     g_mutex_unlock(&self->lock);
     job *j = new_job(self, FALSE);
@@ -480,32 +504,6 @@ image_rect(VvSceneView *self, double *x0, double *y0, double *scale) {
     *y0 = floor((wh - vh * s) / 2);
 }
 
-/* Image pixel coordinates of world point @p p seen through @p v (the
- * inverse of vv_view_ray); FALSE behind the eye. */
-static gboolean
-project(const vv_view *v, vv_vec3 p, double *px, double *py) {
-    vv_vec3 f = vv_vec3_normalize(vv_vec3_sub(v->at, v->eye));
-    vv_vec3 r = vv_vec3_normalize(vv_vec3_cross(f, v->up));
-    vv_vec3 u = vv_vec3_cross(r, f);
-    vv_vec3 d = vv_vec3_sub(p, v->eye);
-    double aspect = (double)v->width / v->height, x, y;
-    if (v->projection == VV_PROJECTION_ORTHOGRAPHIC) {
-        double hh = 0.5 * v->ortho_height;
-        x = vv_vec3_dot(d, r) / (hh * aspect);
-        y = vv_vec3_dot(d, u) / hh;
-    } else {
-        double z = vv_vec3_dot(d, f);
-        if (!(z > 1e-9))
-            return FALSE;
-        double t = tan(0.5 * v->fov);
-        x = vv_vec3_dot(d, r) / (z * t * aspect);
-        y = vv_vec3_dot(d, u) / (z * t);
-    }
-    *px = (x + 1) / 2 * v->width - 0.5;
-    *py = (1 - y) / 2 * v->height - 0.5;
-    return isfinite(*px) && isfinite(*py);
-}
-
 gboolean
 vv_scene_view_pick(VvSceneView *self, double x, double y, vv_vec3 *world) {
     if (!self->shown_depth || self->shown_gen != self->gen || !self->texture)
@@ -532,71 +530,29 @@ vv_scene_view_pick_next(VvSceneView *self, VvPickFunc fn, gpointer user) {
 }
 
 /* The cut plane a VV_NAV_CUT drag moves: the selected object's last local
- * one, else the World's last global one; NULL when there is none. */
+ * one, else the World's last global one; NULL when there is none. With
+ * @p t, also its vv_nav_apply target. */
 static vv_cut_plane *
-target_plane(VvSceneView *self) {
+target_plane(VvSceneView *self, vv_nav_target *t) {
     vv_world *w = vv_document_world(self->doc);
     vv_object *o = vv_document_selected_object(self->doc);
-    if (o && o->n_cut_planes > 0)
-        return &o->cut_planes[o->n_cut_planes - 1];
-    if (w->n_cut_planes > 0)
-        return &w->cut_planes[w->n_cut_planes - 1];
-    return NULL;
-}
-
-/* The handles of the plane or light being moved, drawn over the image. */
-static void
-draw_handles(VvSceneView *self, GtkSnapshot *snapshot) {
-    if (self->target != VV_NAV_CUT && self->target != VV_NAV_LIGHT)
-        return;
-    const vv_world *w = vv_document_world(self->doc);
-    const vv_view *v = &w->view;
-    double x0, y0, s;
-    image_rect(self, &x0, &y0, &s);
-    int ww = gtk_widget_get_width(GTK_WIDGET(self)), wh = gtk_widget_get_height(GTK_WIDGET(self));
-    cairo_t *cr = gtk_snapshot_append_cairo(snapshot, &GRAPHENE_RECT_INIT(0, 0, ww, wh));
-    cairo_set_line_width(cr, 2);
-    double dist = vv_vec3_length(vv_vec3_sub(v->at, v->eye));
-    double ax, ay, bx, by;
-    if (self->target == VV_NAV_CUT) {
-        vv_cut_plane *pl = target_plane(self);
-        if (pl && project(v, pl->point, &ax, &ay) &&
-            project(v, vv_vec3_add(pl->point, vv_vec3_scale(pl->normal, 0.15 * dist)), &bx, &by)) {
-            cairo_set_source_rgb(cr, 0.2, 0.9, 1.0);
-            cairo_arc(cr, x0 + s * ax, y0 + s * ay, 7, 0, 2 * G_PI);
-            cairo_stroke(cr);
-            cairo_move_to(cr, x0 + s * ax, y0 + s * ay);
-            cairo_line_to(cr, x0 + s * bx, y0 + s * by);
-            cairo_stroke(cr);
-            cairo_arc(cr, x0 + s * bx, y0 + s * by, 3.5, 0, 2 * G_PI);
-            cairo_fill(cr);
-        }
-    } else if (self->light >= 0 && self->light < w->n_lights) {
-        const vv_light *l = &w->lights[self->light];
-        cairo_set_source_rgb(cr, 1.0, 0.85, 0.2);
-        if (l->type == VV_LIGHT_POINT && project(v, l->position, &ax, &ay)) {
-            double cx = x0 + s * ax, cy = y0 + s * ay;
-            cairo_arc(cr, cx, cy, 6, 0, 2 * G_PI);
-            cairo_fill(cr);
-            for (int k = 0; k < 8; k++) {
-                double a = k * G_PI / 4;
-                cairo_move_to(cr, cx + 9 * cos(a), cy + 9 * sin(a));
-                cairo_line_to(cr, cx + 14 * cos(a), cy + 14 * sin(a));
-            }
-            cairo_stroke(cr);
-        } else if (l->type == VV_LIGHT_DIRECTIONAL && !l->headlight &&
-                   project(v, vv_vec3_sub(v->at, vv_vec3_scale(l->direction, 0.3 * dist)), &ax,
-                           &ay) &&
-                   project(v, v->at, &bx, &by)) {
-            /* an arrow from where the light comes from towards the look-at point */
-            cairo_move_to(cr, x0 + s * ax, y0 + s * ay);
-            cairo_line_to(cr, x0 + s * bx, y0 + s * by);
-            cairo_stroke(cr);
-            cairo_arc(cr, x0 + s * ax, y0 + s * ay, 6, 0, 2 * G_PI);
-            cairo_fill(cr);
-        }
+    vv_nav_target nt = {VV_NAV_TARGET_CUT, -1, -1};
+    vv_cut_plane *pl = NULL;
+    int co = self->cut_object, cp = self->cut_plane;
+    if (cp >= 0 && co < w->n_objects &&
+        cp < (co < 0 ? w->n_cut_planes : w->objects[co]->n_cut_planes)) {
+        nt.index = co;
+        nt.plane = cp;
+        pl = co < 0 ? &w->cut_planes[cp] : &w->objects[co]->cut_planes[cp];
+    } else if (o && o->n_cut_planes > 0) {
+        nt.index = vv_document_selected(self->doc);
+        pl = &o->cut_planes[o->n_cut_planes - 1];
+    } else if (w->n_cut_planes > 0) {
+        pl = &w->cut_planes[w->n_cut_planes - 1];
     }
-    cairo_destroy(cr);
+    if (pl && t)
+        *t = nt;
+    return pl;
 }
 
 /* ---- drawing -------------------------------------------------------------- */
@@ -617,6 +573,36 @@ log_frame(VvSceneView *self) {
     fflush(self->frame_log);
 }
 
+/* The anatomical frame and unit of the selected volume (else the first). */
+static void
+volume_frame(VvSceneView *self, vv_space *space, const char **units) {
+    const vv_world *w = vv_document_world(self->doc);
+    const vv_object *o = vv_document_selected_object(self->doc);
+    for (int i = 0; (!o || !o->volume) && i < w->n_objects; i++)
+        o = w->objects[i];
+    *space = o && o->volume ? o->volume->space : VV_SPACE_UNKNOWN;
+    *units = vvg_unit_label(o ? o->volume : NULL);
+}
+
+static void
+draw_overlays(VvSceneView *self, GtkSnapshot *snapshot, int ww, int wh) {
+    VvSceneOverlay ov;
+    memset(&ov, 0, sizeof ov);
+    ov.world = vv_document_world(self->doc);
+    ov.view = &ov.world->view;
+    image_rect(self, &ov.x0, &ov.y0, &ov.scale);
+    ov.width = ww;
+    ov.height = wh;
+    ov.target = self->target;
+    ov.moving_plane = self->target == VV_NAV_CUT ? target_plane(self, NULL) : NULL;
+    ov.light = self->light;
+    ov.marks = self->marks;
+    volume_frame(self, &ov.space, &ov.units);
+    cairo_t *cr = gtk_snapshot_append_cairo(snapshot, &GRAPHENE_RECT_INIT(0, 0, ww, wh));
+    vv_scene_overlay_draw(cr, &ov);
+    cairo_destroy(cr);
+}
+
 static void
 vv_scene_view_snapshot(GtkWidget *widget, GtkSnapshot *snapshot) {
     VvSceneView *self = VV_SCENE_VIEW(widget);
@@ -625,26 +611,51 @@ vv_scene_view_snapshot(GtkWidget *widget, GtkSnapshot *snapshot) {
     vv_vec3 bg = w->background;
     GdkRGBA bgc = {(float)bg.x, (float)bg.y, (float)bg.z, 1};
     gtk_snapshot_append_color(snapshot, &bgc, &GRAPHENE_RECT_INIT(0, 0, ww, wh));
-    if (!self->texture)
+    if (!self->texture || w->n_objects == 0)
         return;
-    /* the view's image size, centred; scaled down only when the widget is smaller */
+    /* the view's image: the widget's size (times its scale), centred */
     double x0, y0, sc;
     image_rect(self, &x0, &y0, &sc);
     graphene_rect_t r = GRAPHENE_RECT_INIT((float)x0, (float)y0, (float)(w->view.width * sc),
                                            (float)(w->view.height * sc));
     gtk_snapshot_append_texture(snapshot, self->texture, &r);
-    draw_handles(self, snapshot);
+    draw_overlays(self, snapshot, ww, wh);
     log_frame(self);
+}
+
+/* The view renders at the widget's size in device pixels: the World's view
+ * follows it (no undo step, the session stays saved; a saved session
+ * renders through the CLI at this size). TRUE when it changed. */
+static gboolean
+sync_size(VvSceneView *self) {
+    int scale = gtk_widget_get_scale_factor(GTK_WIDGET(self));
+    int w = gtk_widget_get_width(GTK_WIDGET(self)) * scale;
+    int h = gtk_widget_get_height(GTK_WIDGET(self)) * scale;
+    if (w < 16 || h < 16)
+        return FALSE;
+    const vv_view *v = &vv_document_world(self->doc)->view;
+    if (v->width == w && v->height == h)
+        return FALSE;
+    vv_document_set_view_size(self->doc, w, h);
+    return TRUE;
+}
+
+static void
+vv_scene_view_size_allocate(GtkWidget *widget, int width, int height, int baseline) {
+    GTK_WIDGET_CLASS(vv_scene_view_parent_class)->size_allocate(widget, width, height, baseline);
+    VvSceneView *self = VV_SCENE_VIEW(widget);
+    if (self->doc && sync_size(self))
+        state_changed(self);
 }
 
 static void
 vv_scene_view_measure(GtkWidget *widget, GtkOrientation o, int for_size, int *min, int *nat,
                       int *min_base, int *nat_base) {
+    (void)widget;
     (void)for_size;
-    VvSceneView *self = VV_SCENE_VIEW(widget);
-    const vv_world *w = vv_document_world(self->doc);
-    *min = 64;
-    *nat = o == GTK_ORIENTATION_HORIZONTAL ? w->view.width : w->view.height;
+    /* small: the view takes what the window gives it */
+    *min = 96;
+    *nat = o == GTK_ORIENTATION_HORIZONTAL ? 320 : 240;
     *min_base = *nat_base = -1;
 }
 
@@ -655,6 +666,10 @@ begin_interaction(VvSceneView *self, const char *label) {
     vv_document_begin_edit(self->doc, label);
 }
 
+/* A drag of (dx, dy) widget pixels, through the Navigator (vv_nav_apply):
+ * left drag rotates, Shift or the middle or right button pans, Ctrl zooms
+ * (an object scales); Alt moves the selected object. A cut plane slides
+ * along its normal, Shift turns it. */
 static void
 apply_motion(VvSceneView *self, double dx, double dy) {
     vv_world *w = vv_document_world(self->doc);
@@ -663,54 +678,35 @@ apply_motion(VvSceneView *self, double dx, double dy) {
     image_rect(self, &x0, &y0, &s);
     dx /= s;
     dy /= s;
-    gboolean pan =
-        self->drag_button == 3 || self->drag_button == 2 || (self->drag_mods & GDK_SHIFT_MASK);
+    gboolean shift = (self->drag_mods & GDK_SHIFT_MASK) != 0;
+    gboolean pan = self->drag_button == 3 || self->drag_button == 2 || shift;
     gboolean zoom = (self->drag_mods & GDK_CONTROL_MASK) != 0;
     VvNavTarget target = self->target;
     if (self->drag_mods & GDK_ALT_MASK)
         target = VV_NAV_OBJECT;
-    vv_object *obj = vv_document_selected_object(self->doc);
-    if (target == VV_NAV_OBJECT && obj) {
-        if (zoom)
-            vv_nav_object_scale(obj, exp(-dy / 200.0));
-        else if (pan)
-            vv_nav_object_translate(obj, &w->view, dx, dy);
-        else
-            vv_nav_object_rotate(obj, &w->view, dx, dy);
+    vv_nav_target t = {VV_NAV_TARGET_VIEW, 0, -1};
+    vv_nav_motion m = {.kind = zoom  ? VV_NAV_ZOOM
+                               : pan ? VV_NAV_PAN
+                                     : VV_NAV_ROTATE,
+                       .dx = dx,
+                       .dy = dy,
+                       .factor = exp(-dy / 200.0)};
+    if (target == VV_NAV_OBJECT && vv_document_selected(self->doc) >= 0) {
+        t.kind = VV_NAV_TARGET_OBJECT;
+        t.index = vv_document_selected(self->doc);
     } else if (target == VV_NAV_CUT) {
-        vv_cut_plane *pl = target_plane(self);
-        if (!pl)
+        if (!target_plane(self, &t))
             return;
-        if (self->drag_mods & GDK_SHIFT_MASK) {
-            /* turn the normal as the trackball turns a direction */
-            vv_light tmp = {VV_LIGHT_DIRECTIONAL, 0, pl->normal, pl->point, {1, 1, 1}, 1};
-            vv_nav_light_drag(&tmp, &w->view, dx, dy);
-            pl->normal = tmp.direction;
-        } else {
-            /* along the normal, by the mouse motion along the normal's image direction */
-            double dist = vv_vec3_length(vv_vec3_sub(w->view.at, w->view.eye));
-            double ax, ay, bx, by;
-            vv_vec3 tip = vv_vec3_add(pl->point, vv_vec3_scale(pl->normal, 0.15 * dist));
-            if (project(&w->view, pl->point, &ax, &ay) && project(&w->view, tip, &bx, &by)) {
-                double lx = bx - ax, ly = by - ay, len = hypot(lx, ly);
-                if (len > 1e-6) {
-                    double along = (dx * lx + dy * ly) / len; /* pixels */
-                    vv_vec3 np = vv_vec3_add(pl->point,
-                                             vv_vec3_scale(pl->normal, along * 0.15 * dist / len));
-                    if (isfinite(np.x) && isfinite(np.y) && isfinite(np.z))
-                        pl->point = np;
-                }
-            }
-        }
-    } else if (target == VV_NAV_LIGHT && self->light >= 0 && self->light < w->n_lights) {
-        vv_nav_light_drag(&w->lights[self->light], &w->view, dx, dy);
-    } else if (zoom) {
-        vv_nav_view_zoom(&w->view, exp(-dy / 200.0));
-    } else if (pan) {
-        vv_nav_view_pan(&w->view, dx, dy);
-    } else {
-        vv_nav_view_rotate(&w->view, dx, dy);
+        m.kind = shift ? VV_NAV_ROTATE : VV_NAV_PAN;
+    } else if (target == VV_NAV_LIGHT) {
+        if (self->light < 0 || self->light >= w->n_lights)
+            return;
+        t.kind = VV_NAV_TARGET_LIGHT;
+        t.index = self->light;
+        m.kind = VV_NAV_ROTATE; /* a light follows any drag */
     }
+    if (vv_nav_apply(w, &t, &m) != VV_OK)
+        return;
     vv_document_changed(self->doc);
 }
 
@@ -790,9 +786,10 @@ scroll_cb(GtkEventControllerScroll *c, double dx, double dy, gpointer user) {
     if (!isfinite(dy) || dy == 0)
         return FALSE;
     begin_interaction(self, "zoom");
-    vv_world *w = vv_document_world(self->doc);
-    vv_nav_view_zoom(&w->view, pow(1.1, -dy));
-    vv_document_changed(self->doc);
+    vv_nav_motion m = {.kind = VV_NAV_ZOOM, .factor = pow(1.1, -dy)};
+    vv_nav_target t = {VV_NAV_TARGET_VIEW, 0, -1};
+    if (vv_nav_apply(vv_document_world(self->doc), &t, &m) == VV_OK)
+        vv_document_changed(self->doc);
     return TRUE;
 }
 
@@ -815,9 +812,15 @@ tick_cb(GtkWidget *widget, GdkFrameClock *clock, gpointer user) {
     double size = vv_vec3_length(vv_vec3_sub(b.max, b.min));
     if (!(size > 0))
         size = 1;
-    vv_nav_view_fly(&w->view, self->yaw_rate, self->pitch_rate, self->roll_rate,
-                    self->throttle * 0.25 * size, dt);
-    vv_document_changed(self->doc);
+    vv_nav_motion m = {.kind = VV_NAV_FLY,
+                       .yaw = self->yaw_rate,
+                       .pitch = self->pitch_rate,
+                       .roll = self->roll_rate,
+                       .speed = self->throttle * 0.25 * size,
+                       .dt = dt};
+    vv_nav_target t = {VV_NAV_TARGET_VIEW, 0, -1};
+    if (vv_nav_apply(w, &t, &m) == VV_OK)
+        vv_document_changed(self->doc);
     return G_SOURCE_CONTINUE;
 }
 
@@ -906,6 +909,10 @@ vv_scene_view_dispose(GObject *o) {
         g_signal_handler_disconnect(self->doc, self->changed_id);
         g_clear_object(&self->doc);
     }
+    if (self->marks) {
+        g_signal_handlers_disconnect_by_data(self->marks, self);
+        g_clear_object(&self->marks);
+    }
     g_clear_object(&self->texture);
     g_free(self->shown_depth);
     self->shown_depth = NULL;
@@ -930,6 +937,7 @@ vv_scene_view_class_init(VvSceneViewClass *klass) {
     G_OBJECT_CLASS(klass)->finalize = vv_scene_view_finalize;
     GTK_WIDGET_CLASS(klass)->snapshot = vv_scene_view_snapshot;
     GTK_WIDGET_CLASS(klass)->measure = vv_scene_view_measure;
+    GTK_WIDGET_CLASS(klass)->size_allocate = vv_scene_view_size_allocate;
 }
 
 static void
@@ -939,7 +947,9 @@ vv_scene_view_init(VvSceneView *self) {
     vv_preview_policy_init(&self->policy);
     self->refine_delay_ms = 100;
     self->shown_kind = -1;
+    self->cut_plane = -1;
     gtk_widget_set_focusable(GTK_WIDGET(self), TRUE);
+    vvg_name(GTK_WIDGET(self), "3-D view");
     gtk_widget_set_hexpand(GTK_WIDGET(self), TRUE);
     gtk_widget_set_vexpand(GTK_WIDGET(self), TRUE);
     const char *log = g_getenv("VOLVIS_FRAME_LOG");
@@ -967,10 +977,18 @@ vv_scene_view_init(VvSceneView *self) {
     gtk_widget_add_controller(GTK_WIDGET(self), keys);
 }
 
+static void
+marks_changed(VvMarks *m, gpointer user) {
+    (void)m;
+    gtk_widget_queue_draw(GTK_WIDGET(user));
+}
+
 VvSceneView *
-vv_scene_view_new(VvDocument *doc) {
+vv_scene_view_new(VvDocument *doc, VvMarks *marks) {
     VvSceneView *self = g_object_new(VV_TYPE_SCENE_VIEW, NULL);
     self->doc = g_object_ref(doc);
+    self->marks = g_object_ref(marks);
+    g_signal_connect(marks, "changed", G_CALLBACK(marks_changed), self);
     self->changed_id = g_signal_connect(doc, "changed", G_CALLBACK(doc_changed), self);
     self->thread = g_thread_new("volvis-render", worker_main, self);
     state_changed(self);
@@ -980,6 +998,15 @@ vv_scene_view_new(VvDocument *doc) {
 void
 vv_scene_view_set_target(VvSceneView *self, VvNavTarget target) {
     self->target = target;
+    gtk_widget_queue_draw(GTK_WIDGET(self));
+}
+
+void
+vv_scene_view_set_cut_plane(VvSceneView *self, int object, int plane) {
+    self->cut_object = object;
+    self->cut_plane = plane;
+    if (self->marks)
+        vv_marks_set_cut_plane(self->marks, object, plane);
     gtk_widget_queue_draw(GTK_WIDGET(self));
 }
 

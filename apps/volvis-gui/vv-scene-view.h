@@ -21,6 +21,7 @@
 #define VV_SCENE_VIEW_H
 
 #include "vv-document.h"
+#include "vv-marks.h"
 
 G_BEGIN_DECLS
 
@@ -32,13 +33,20 @@ typedef enum VvNavTarget {
     VV_NAV_VIEW = 0,   /**< the camera (trackball, pan, zoom) */
     VV_NAV_OBJECT = 1, /**< the selected object */
     VV_NAV_LIGHT = 2,  /**< the selected light */
-    VV_NAV_CUT = 3     /**< the last cut plane (the selected object's local one if it has
-                            one, else the last global one): a drag moves it along its normal,
-                            Shift+drag turns the normal */
+    VV_NAV_CUT = 3     /**< the cut plane chosen with vv_scene_view_set_cut_plane (else the
+                            selected object's last one, else the last global one): a drag
+                            moves it along its normal, Shift+drag turns the normal */
 } VvNavTarget;
 
-VvSceneView *vv_scene_view_new(VvDocument *doc);
+/** The view of @p doc with the marks of @p marks drawn over it (references are held). */
+VvSceneView *vv_scene_view_new(VvDocument *doc, VvMarks *marks);
 void vv_scene_view_set_target(VvSceneView *view, VvNavTarget target);
+/**
+ * The cut plane a VV_NAV_CUT drag moves: plane @p plane of object @p object
+ * (-1: the World's global planes); @p plane -1 (or a plane that no longer
+ * exists): the selected object's last one, else the last global one.
+ */
+void vv_scene_view_set_cut_plane(VvSceneView *view, int object, int plane);
 /** The light a VV_NAV_LIGHT drag moves. */
 void vv_scene_view_set_light(VvSceneView *view, int index);
 /** Forces a representation while moving (a vv_preview_kind), or -1 for automatic. */

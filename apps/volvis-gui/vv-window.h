@@ -1,8 +1,11 @@
 /*
- * VvWindow: the VolVis main window (the paper's Figure 3): the scene view
- * (Navigator) in the middle and a side bar with one page per component of
- * the paper: Manipulation (object list, Object Control, Navigator),
- * Rendering, Measurement and Modeling. Every command is a named action
+ * VvWindow: the VolVis main window (the paper's Figure 3): a header bar
+ * (Open, Save, Undo, Redo, the layout, the application menu), the view area
+ * (the 3-D scene view of the Navigator that fills it, alone or beside three
+ * slice views; a start page while the World is empty) and a side bar with a
+ * page per component: Objects, Transfer function, View, Lights, Cut planes,
+ * Rendering, Measurement, Modeling, Filtering, Animator, Input devices. Every command is a named
+ * action
  * ("win.open", "win.save", "win.undo", ...), so menus, shortcuts, devices
  * and tests drive the same code. UI thread only.
  */
@@ -10,6 +13,7 @@
 #define VV_WINDOW_H
 
 #include "vv-document.h"
+#include "vv-scene-view.h"
 
 G_BEGIN_DECLS
 
@@ -20,9 +24,12 @@ VvWindow *vv_window_new(GtkApplication *app);
 /** Opens a file into the window's World; on failure shows an error dialog. */
 void vv_window_open(VvWindow *win, const char *path);
 VvDocument *vv_window_document(VvWindow *win);
+/** The window's 3-D view (owned by the window). */
+VvSceneView *vv_window_scene_view(VvWindow *win);
 /**
- * Asks before discarding unsaved changes, then calls @p done(user) when the
- * window may close (at once when there is nothing unsaved).
+ * Asks before unsaved changes are lost (Save, Close without saving,
+ * Cancel), then calls @p done(user) when the window may close: at once when
+ * there is nothing unsaved, after a successful save with Save.
  */
 void vv_window_confirm_close(VvWindow *win, void (*done)(void *user), void *user);
 

@@ -59,6 +59,8 @@ int cli_animate_main(int argc, char **argv);
 void cli_animate_usage(FILE *out);
 int cli_filter_main(int argc, char **argv);
 void cli_filter_usage(FILE *out);
+int cli_slice_main(int argc, char **argv);
+void cli_slice_usage(FILE *out);
 
 /* ---- option parsing ------------------------------------------------------ */
 

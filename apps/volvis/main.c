@@ -1,7 +1,8 @@
 /*
  * volvis: the command-line tool. Dispatches a table of subcommands, one file
  * each (cmd_info.c, cmd_render.c, cmd_renderers.c, cmd_convert.c, cmd_compress.c,
- * cmd_isosurface.c, cmd_measure.c, cmd_voxelize.c, cmd_filter.c, cmd_devices.c, cmd_animate.c). See
+ * cmd_isosurface.c, cmd_measure.c, cmd_voxelize.c, cmd_filter.c, cmd_devices.c, cmd_animate.c,
+ * cmd_slice.c). See
  * docs/cli.md.
  */
 #include <signal.h>
@@ -14,6 +15,8 @@
 static const cli_command commands[] = {
     {"info", "print a volume's header, value range and histogram", cli_info_main, cli_info_usage},
     {"render", "render a volume or a scene file to a PNG image", cli_render_main, cli_render_usage},
+    {"slice", "one axial, coronal, sagittal or oblique slice of a volume to a PNG; probe a value",
+     cli_slice_main, cli_slice_usage},
     {"renderers", "list the renderers, what they draw and their options (--json)",
      cli_renderers_main, cli_renderers_usage},
     {"animate", "render an animation (orbit, keyframes, flight path) to PNGs, MP4 or WebM",

@@ -95,25 +95,35 @@ void vv_tf_set_ramp(vv_tf *tf, double lo, double hi, double max_opacity, vv_vec3
                     double unit_distance);
 
 /**
- * Transfer-function presets. @p name is one of vv_tf_preset_names():
- * "ct-bone" (bone opaque and ivory, everything below about 150 HU
- * transparent), "ct-soft-tissue" (skin and soft tissue faint and reddish,
- * bone opaque), "mr" (a grey ramp from the 50th to the 99th percentile of
- * the volume's values, for MR and other data without absolute units).
- *
- * CT presets are written in Hounsfield units and placed on the volume's
- * values thus: a volume whose minimum is below -200 is taken as HU; one
- * whose values lie in [-200, 65535] with a maximum of at least 1200 (CT
- * stored unsigned, e.g. 0..4095) as HU + 1024; any other range (8-bit CT)
- * as [-1024, 3071] HU stretched linearly over the volume's range.
+ * Transfer-function presets. @p name is one of vv_tf_preset_names(), in
+ * three families:
+ *  - CT, in Hounsfield units: "ct-bone" (bone opaque and ivory, below about
+ *    150 HU transparent), "ct-soft-tissue" (skin and soft tissue faint and
+ *    reddish, bone opaque), "ct-lung", "ct-vessels" (contrast 150..500 HU),
+ *    "ct-muscle", "ct-skin", "ct-fat". They are placed on the volume's
+ *    values thus: a volume whose minimum is below -200 is taken as HU; one
+ *    whose values lie in [-200, 65535] with a maximum of at least 1200 (CT
+ *    stored unsigned, e.g. 0..4095) as HU + 1024; any other range (8-bit
+ *    CT) as [-1024, 3071] HU stretched linearly over the volume's range.
+ *  - MR, without absolute units, from the 50th to the 99th percentile of
+ *    the volume's values: "mr" (a grey ramp), "mr-t1-brain", "mr-t2-brain",
+ *    "mr-angio".
+ *  - Any data, from the 1st to the 99.5th percentile: "mip" (black to
+ *    white, for maximum intensity projection), "grey", "fire",
+ *    "microscopy-green", "microscopy-magenta", "microscopy-cyan",
+ *    "hot-iron", "viridis", "inferno", "cool-warm" (diverging),
+ *    "top-5-percent".
+ * vv_tf_preset_description gives each a one-line description.
  * @p v may be NULL only for the CT presets (then HU). The TF's
  * opacity_unit_distance is the smallest voxel spacing of @p v (1 without
  * a volume). Errors: VV_ERR_INVALID (unknown name, with the list; NULL
- * tf; "mr" without a volume).
+ * tf; an MR or data preset without a volume).
  */
 vv_status vv_tf_preset(vv_tf *tf, const char *name, const vv_volume *v);
 /** The names vv_tf_preset accepts, NULL-terminated; static storage. */
 const char *const *vv_tf_preset_names(void);
+/** The one-line description of preset @p name (static storage), or NULL for an unknown name. */
+const char *vv_tf_preset_description(const char *name);
 
 /**
  * The opacity unit distance a transfer function of @p v starts with: the

@@ -98,6 +98,85 @@ void vv_nav_object_scale(vv_object *obj, double factor);
  */
 void vv_nav_light_drag(vv_light *light, const vv_view *view, double dx, double dy);
 
+/* ---- one entry point: a motion applied to a part of the World ------------ */
+
+/**
+ * Image position of world point @p p seen through @p view, in pixels of the
+ * view's width x height (the inverse of vv_view_ray: pixel (px, py) covers
+ * [px, px + 1) x [py, py + 1), so the centre of pixel (i, j) is (i + 0.5,
+ * j + 0.5) here). Returns 0 (and leaves the outputs alone) for a point on or
+ * behind the eye plane of a perspective view, or when the result would not
+ * be finite. Pure; thread-safe.
+ */
+int vv_nav_view_project(const vv_view *view, vv_vec3 p, double *px, double *py);
+
+/** What a motion moves (vv_nav_apply). */
+typedef enum vv_nav_target_kind {
+    VV_NAV_TARGET_VIEW = 0,   /**< the camera */
+    VV_NAV_TARGET_OBJECT = 1, /**< World object `index` */
+    VV_NAV_TARGET_LIGHT = 2,  /**< World light `index` */
+    VV_NAV_TARGET_CUT = 3     /**< a cut plane: object `index`'s local plane `plane`, or
+                                   (index -1) the World's global plane `plane`; `plane`
+                                   -1 is the last one of the list */
+} vv_nav_target_kind;
+
+/** A part of the World to move. */
+typedef struct vv_nav_target {
+    vv_nav_target_kind kind;
+    int index; /**< object or light index; VV_NAV_TARGET_CUT: object, or -1 for global */
+    int plane; /**< VV_NAV_TARGET_CUT: plane index, -1 for the last */
+} vv_nav_target;
+
+/** Kinds of motion (vv_nav_apply), in the units of the field they use. */
+typedef enum vv_nav_motion_kind {
+    /** Trackball by (dx, dy) pixels: the view orbits its look-at point
+        (vv_nav_view_rotate), an object turns about its box centre, a light
+        is dragged (vv_nav_light_drag), a cut plane's normal turns. */
+    VV_NAV_ROTATE = 0,
+    /** Pan by (dx, dy) pixels: the view pans (vv_nav_view_pan), an object or a
+        point light follows the mouse in the view plane, a cut plane moves
+        along its normal by the drag's component along the normal's image
+        direction (a drag the length of the drawn handle, 0.15 of the eye
+        distance, moves it that far). */
+    VV_NAV_PAN = 1,
+    /** Zoom by `factor` (> 1 closer): the view (vv_nav_view_zoom); an object
+        scales about its box centre (vv_nav_object_scale). */
+    VV_NAV_ZOOM = 2,
+    /** Flight over `dt` seconds at rates `yaw`, `pitch`, `roll` (radians a
+        second) and `speed` (world units a second): the view only
+        (vv_nav_view_fly); roll alone is a device's twist. */
+    VV_NAV_FLY = 3,
+    /** A rotation `rotation` given in the view's axes (x right, y up, z
+        towards the viewer): the scene turns by it about the look-at point
+        (the camera the other way), as two hands turn a held object; the
+        view only. */
+    VV_NAV_TURN = 4
+} vv_nav_motion_kind;
+
+/** One motion (vv_nav_apply); only the fields of its kind are read. */
+typedef struct vv_nav_motion {
+    vv_nav_motion_kind kind;
+    double dx, dy;                  /**< ROTATE, PAN: pixels of the view's image */
+    double factor;                  /**< ZOOM: > 0 */
+    double yaw, pitch, roll, speed; /**< FLY: radians a second, world units a second */
+    double dt;                      /**< FLY: seconds, [0, 1] */
+    vv_quat rotation;               /**< TURN: unit quaternion in view axes */
+} vv_nav_motion;
+
+/**
+ * Applies @p motion to @p target of @p world seen through world->view: the
+ * one function the GUI's mouse, the input devices (src/input delivers
+ * actions, the GUI turns them into motions) and the tests drive (VolVis
+ * paper, section 4, the Navigator). Each kind is the Navigator maths above
+ * (inputs sanitised, a non-finite result leaves the World as it was). A
+ * motion a target does not take (FLY or TURN on an object) changes
+ * nothing and is not an error. Errors: VV_ERR_INVALID (NULL argument, no
+ * such object, light or cut plane, an object motion on an object index out
+ * of range, an invalid view); the World is then unchanged. Not thread-safe
+ * for one World (it writes it); pure otherwise.
+ */
+vv_status vv_nav_apply(vv_world *world, const vv_nav_target *target, const vv_nav_motion *motion);
+
 /* ---- previews ----------------------------------------------------------- */
 
 /** The representations a frame can be drawn with, cheapest first. */
@@ -105,15 +184,16 @@ typedef enum vv_preview_kind {
     VV_PREVIEW_BBOX = 0,      /**< bounding boxes of the objects, wireframe */
     VV_PREVIEW_BOXES = 1,     /**< PARC subvolume boxes (paper, section 4, first method) */
     VV_PREVIEW_COARSE_MC = 2, /**< coarse Marching Cubes, four edge positions (second method) */
-    VV_PREVIEW_RAYCAST_4 = 3, /**< the ray caster at 1/4 resolution, step x 4, shown scaled up */
-    VV_PREVIEW_RAYCAST_2 = 4, /**< the ray caster at 1/2 resolution, step x 2 */
-    VV_PREVIEW_FULL = 5       /**< the selected renderer at full resolution and quality */
+    VV_PREVIEW_RAYCAST_8 = 3, /**< the ray caster at 1/8 resolution, step x 4, shown scaled up */
+    VV_PREVIEW_RAYCAST_4 = 4, /**< the ray caster at 1/4 resolution, step x 4, shown scaled up */
+    VV_PREVIEW_RAYCAST_2 = 5, /**< the ray caster at 1/2 resolution, step x 2 */
+    VV_PREVIEW_FULL = 6       /**< the selected renderer at full resolution and quality */
 } vv_preview_kind;
-#define VV_PREVIEW_COUNT 6
+#define VV_PREVIEW_COUNT 7
 
 /**
  * Name of a representation as in the frame log: "bbox", "boxes", "coarse_mc",
- * "raycast_1/4", "raycast_1/2", "full". Never NULL.
+ * "raycast_1/8", "raycast_1/4", "raycast_1/2", "full". Never NULL.
  */
 const char *vv_preview_kind_name(vv_preview_kind k);
 /** Parses a name of vv_preview_kind_name. Errors: VV_ERR_INVALID. */
@@ -121,7 +201,7 @@ vv_status vv_preview_kind_parse(const char *name, vv_preview_kind *out);
 
 /**
  * Image size in pixels of representation @p k for a @p width x @p height
- * view (1/4 and 1/2 rounded up, at least 1).
+ * view (1/8, 1/4 and 1/2 rounded up, at least 1).
  */
 void vv_preview_size(vv_preview_kind k, int width, int height, int *w, int *h);
 
@@ -167,8 +247,11 @@ vv_status vv_preview_render(vv_preview *p, const vv_world *world, const vv_view 
 /**
  * The frame-rate policy. Times are learnt per representation (an
  * exponential average of its last frames); vv_preview_policy_choose picks
- * the best representation whose expected time fits the budget. The 1/2 ray
- * cast is expected to take 4 times the 1/4 one until it is measured.
+ * a ray cast of the data whenever one fits: the finest of 1/2, 1/4 and 1/8
+ * resolution whose expected time fits the budget; surfaces (coarse
+ * Marching Cubes, PARC boxes) or bounding boxes only when even the 1/8 cast
+ * has been measured over it and they are much quicker. Until measured, each ray cast is expected to
+ * take 4 times the next coarser one.
  */
 typedef struct vv_preview_policy {
     double seconds[VV_PREVIEW_COUNT]; /**< expected seconds a frame, < 0 when unknown */
@@ -187,12 +270,18 @@ void vv_preview_policy_init(vv_preview_policy *pol);
  */
 void vv_preview_policy_record(vv_preview_policy *pol, vv_preview_kind kind, double seconds);
 /**
- * The representation to draw while moving within @p budget seconds a frame:
- * the best allowed one whose expected time fits; of those not measured yet
- * only the 1/4 ray cast (and bounding boxes) are tried, since the others
- * build surfaces first (measure them off screen); every 24th choice is the next
- * better one when it is expected within 1.5 times the budget, so that
- * estimates follow the machine's load.
+ * The representation to draw while moving within @p budget seconds a frame
+ * (issue 28: interaction shows the data, never boxes, where a reduced ray
+ * cast can keep the rate): the finest allowed ray cast whose expected time
+ * fits; with nothing measured, the 1/8 cast. When the 1/8 cast is measured
+ * over the budget, the best allowed surface representation that fits and
+ * takes less than half the 1/8 cast's time (a load that slows everything
+ * gains nothing from boxes); bounding boxes, not yet measured, only when the
+ * 1/8 cast takes more than 4 times the budget (data too large to cast);
+ * otherwise still the 1/8 cast. Every 24th choice is the next finer ray cast
+ * when it is expected within 1.5 times the budget (the 1/8 cast, tried
+ * again from surfaces, within 4 times), so that estimates follow the
+ * machine's load.
  */
 vv_preview_kind vv_preview_policy_choose(vv_preview_policy *pol, double budget);
 

@@ -25,6 +25,7 @@
 #include "raster.h"
 #include "render.h"
 #include "scene.h"
+#include "slice.h"
 #include "surface.h"
 #include "video.h"
 #include "volume.h"

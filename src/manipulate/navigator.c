@@ -261,3 +261,177 @@ vv_nav_light_drag(vv_light *light, const vv_view *view, double dx, double dy) {
         light->headlight = 0;
     }
 }
+
+/* ---- vv_nav_apply ---------------------------------------------------------- */
+
+int
+vv_nav_view_project(const vv_view *v, vv_vec3 p, double *px, double *py) {
+    if (!v || !px || !py || !vv_nav_view_valid(v) || v->width <= 0 || v->height <= 0)
+        return 0;
+    vv_vec3 f, r, u;
+    basis(v, &f, &r, &u);
+    vv_vec3 d = vv_vec3_sub(p, v->eye);
+    double aspect = (double)v->width / v->height, x, y;
+    if (v->projection == VV_PROJECTION_ORTHOGRAPHIC) {
+        double hh = 0.5 * v->ortho_height;
+        x = vv_vec3_dot(d, r) / (hh * aspect);
+        y = vv_vec3_dot(d, u) / hh;
+    } else {
+        double z = vv_vec3_dot(d, f);
+        if (!(z > 1e-9 * (1.0 + vv_vec3_length(d))))
+            return 0;
+        double t = tan(0.5 * v->fov);
+        x = vv_vec3_dot(d, r) / (z * t * aspect);
+        y = vv_vec3_dot(d, u) / (z * t);
+    }
+    double ix = (x + 1) / 2 * v->width, iy = (1 - y) / 2 * v->height;
+    if (!isfinite(ix) || !isfinite(iy))
+        return 0;
+    *px = ix;
+    *py = iy;
+    return 1;
+}
+
+/* The cut plane of @p t, or NULL. */
+static vv_cut_plane *
+target_plane(vv_world *w, const vv_nav_target *t) {
+    vv_cut_plane *list;
+    int n;
+    if (t->index >= 0) {
+        if (t->index >= w->n_objects)
+            return NULL;
+        list = w->objects[t->index]->cut_planes;
+        n = w->objects[t->index]->n_cut_planes;
+    } else {
+        list = w->cut_planes;
+        n = w->n_cut_planes;
+    }
+    int k = t->plane < 0 ? n - 1 : t->plane;
+    return k >= 0 && k < n ? &list[k] : NULL;
+}
+
+/* A cut plane moved along its normal by the drag's component along the
+ * normal's image direction: the handle drawn 0.15 of the eye distance long
+ * follows the mouse. */
+static void
+plane_slide(vv_cut_plane *pl, const vv_view *v, double dx, double dy) {
+    dx = clampf(dx, VV_NAV_MAX_PIXELS);
+    dy = clampf(dy, VV_NAV_MAX_PIXELS);
+    double len3 = 0.15 * vv_vec3_length(vv_vec3_sub(v->at, v->eye));
+    double ax, ay, bx, by;
+    if (!vv_nav_view_project(v, pl->point, &ax, &ay) ||
+        !vv_nav_view_project(v, vv_vec3_add(pl->point, vv_vec3_scale(pl->normal, len3)), &bx, &by))
+        return;
+    double lx = bx - ax, ly = by - ay, len = hypot(lx, ly);
+    if (!(len > 1e-6))
+        return; /* the normal points at the viewer: no image direction to follow */
+    double along = (dx * lx + dy * ly) / len; /* pixels along the handle */
+    vv_vec3 np = vv_vec3_add(pl->point, vv_vec3_scale(pl->normal, along * len3 / len));
+    if (vec_finite(np))
+        pl->point = np;
+}
+
+/* A cut plane's normal turned as the trackball turns a direction. */
+static void
+plane_turn(vv_cut_plane *pl, const vv_view *v, double dx, double dy) {
+    vv_vec3 n = vv_vec3_normalize(vv_quat_rotate(drag_rotation(v, dx, dy), pl->normal));
+    if (vec_finite(n) && vv_vec3_length(n) > 0.5)
+        pl->normal = n;
+}
+
+/* The scene turned by @p q given in view axes: the camera turns the other
+ * way about the look-at point. */
+static void
+view_turn(vv_view *view, vv_quat q) {
+    if (!quat_finite(q))
+        return;
+    q = vv_quat_normalize(q);
+    if (fabs(q.w) >= 1 - 1e-15)
+        return;
+    vv_vec3 f, r, u;
+    basis(view, &f, &r, &u);
+    vv_vec3 axis = vv_vec3_add(vv_vec3_add(vv_vec3_scale(r, q.x), vv_vec3_scale(u, q.y)),
+                               vv_vec3_scale(f, -q.z));
+    vv_quat cam = vv_quat_normalize((vv_quat){q.w, -axis.x, -axis.y, -axis.z});
+    vv_view c = *view;
+    c.eye = vv_vec3_add(view->at, vv_quat_rotate(cam, vv_vec3_sub(view->eye, view->at)));
+    c.up = vv_quat_rotate(cam, view->up);
+    commit_view(view, &c);
+}
+
+static void
+apply_view(vv_view *v, const vv_nav_motion *m) {
+    switch (m->kind) {
+    case VV_NAV_ROTATE:
+        vv_nav_view_rotate(v, m->dx, m->dy);
+        break;
+    case VV_NAV_PAN:
+        vv_nav_view_pan(v, m->dx, m->dy);
+        break;
+    case VV_NAV_ZOOM:
+        vv_nav_view_zoom(v, m->factor);
+        break;
+    case VV_NAV_FLY:
+        vv_nav_view_fly(v, m->yaw, m->pitch, m->roll, m->speed, m->dt);
+        break;
+    case VV_NAV_TURN:
+        view_turn(v, m->rotation);
+        break;
+    }
+}
+
+vv_status
+vv_nav_apply(vv_world *world, const vv_nav_target *target, const vv_nav_motion *motion) {
+    if (!world || !target || !motion)
+        return vv_error_set(VV_ERR_INVALID, "navigator: NULL %s",
+                            !world    ? "world"
+                            : !target ? "target"
+                                      : "motion");
+    if ((int)motion->kind < VV_NAV_ROTATE || (int)motion->kind > VV_NAV_TURN)
+        return vv_error_set(VV_ERR_INVALID, "navigator: unknown motion %d", (int)motion->kind);
+    vv_view *v = &world->view;
+    if (!vv_nav_view_valid(v))
+        return vv_error_set(VV_ERR_INVALID, "navigator: the World's view is not valid");
+    switch (target->kind) {
+    case VV_NAV_TARGET_VIEW:
+        apply_view(v, motion);
+        return VV_OK;
+    case VV_NAV_TARGET_OBJECT: {
+        if (target->index < 0 || target->index >= world->n_objects)
+            return vv_error_set(VV_ERR_INVALID, "navigator: no object %d (the World has %d)",
+                                target->index, world->n_objects);
+        vv_object *o = world->objects[target->index];
+        if (motion->kind == VV_NAV_ROTATE)
+            vv_nav_object_rotate(o, v, motion->dx, motion->dy);
+        else if (motion->kind == VV_NAV_PAN)
+            vv_nav_object_translate(o, v, motion->dx, motion->dy);
+        else if (motion->kind == VV_NAV_ZOOM)
+            vv_nav_object_scale(o, motion->factor);
+        return VV_OK;
+    }
+    case VV_NAV_TARGET_LIGHT: {
+        if (target->index < 0 || target->index >= world->n_lights)
+            return vv_error_set(VV_ERR_INVALID, "navigator: no light %d (the World has %d)",
+                                target->index, world->n_lights);
+        vv_light *l = &world->lights[target->index];
+        /* a point light follows the mouse whichever way it is dragged; a
+         * directional one turns */
+        if (motion->kind == VV_NAV_ROTATE || motion->kind == VV_NAV_PAN)
+            vv_nav_light_drag(l, v, motion->dx, motion->dy);
+        return VV_OK;
+    }
+    case VV_NAV_TARGET_CUT: {
+        vv_cut_plane *pl = target_plane(world, target);
+        if (!pl)
+            return vv_error_set(VV_ERR_INVALID, "navigator: no cut plane %d of %s %d",
+                                target->plane, target->index < 0 ? "the World" : "object",
+                                target->index);
+        if (motion->kind == VV_NAV_PAN)
+            plane_slide(pl, v, motion->dx, motion->dy);
+        else if (motion->kind == VV_NAV_ROTATE)
+            plane_turn(pl, v, motion->dx, motion->dy);
+        return VV_OK;
+    }
+    }
+    return vv_error_set(VV_ERR_INVALID, "navigator: unknown target %d", (int)target->kind);
+}

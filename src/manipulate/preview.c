@@ -12,8 +12,8 @@
 #include "volvis/navigator.h"
 #include "volvis/surface.h"
 
-static const char *const kind_names[VV_PREVIEW_COUNT] = {"bbox",        "boxes",       "coarse_mc",
-                                                         "raycast_1/4", "raycast_1/2", "full"};
+static const char *const kind_names[VV_PREVIEW_COUNT] = {
+    "bbox", "boxes", "coarse_mc", "raycast_1/8", "raycast_1/4", "raycast_1/2", "full"};
 
 const char *
 vv_preview_kind_name(vv_preview_kind k) {
@@ -30,8 +30,8 @@ vv_preview_kind_parse(const char *name, vv_preview_kind *out) {
             return VV_OK;
         }
     return vv_error_set(VV_ERR_INVALID,
-                        "unknown preview '%s' (bbox, boxes, coarse_mc, raycast_1/4, "
-                        "raycast_1/2, full)",
+                        "unknown preview '%s' (bbox, boxes, coarse_mc, raycast_1/8, "
+                        "raycast_1/4, raycast_1/2, full)",
                         name ? name : "(null)");
 }
 
@@ -43,7 +43,10 @@ divide_up(int n, int d) {
 
 void
 vv_preview_size(vv_preview_kind k, int width, int height, int *w, int *h) {
-    int d = k == VV_PREVIEW_RAYCAST_4 ? 4 : k == VV_PREVIEW_RAYCAST_2 ? 2 : 1;
+    int d = k == VV_PREVIEW_RAYCAST_8   ? 8
+            : k == VV_PREVIEW_RAYCAST_4 ? 4
+            : k == VV_PREVIEW_RAYCAST_2 ? 2
+                                        : 1;
     *w = divide_up(width, d);
     *h = divide_up(height, d);
 }
@@ -333,9 +336,9 @@ vv_preview_last_warmup(const vv_preview *p) {
     return p ? p->warmup : 0;
 }
 
-/* The ray caster at 1/divisor resolution and divisor x the sample step. */
+/* The ray caster at 1/divisor resolution and @p step_factor x the sample step. */
 static vv_status
-render_reduced(vv_preview *p, const vv_world *world, const vv_view *view, int divisor,
+render_reduced(vv_preview *p, const vv_world *world, const vv_view *view, int step_factor,
                const vv_render_options *opt, vv_image *out) {
     vv_world *w = NULL;
     vv_status s = vv_world_clone(&w, world);
@@ -345,7 +348,7 @@ render_reduced(vv_preview *p, const vv_world *world, const vv_view *view, int di
         vv_object *o = w->objects[i];
         if (o->type != VV_OBJECT_VOLUME || !o->volume)
             continue;
-        o->step *= divisor;
+        o->step *= step_factor;
         /* The first frame of a volume builds the ray caster's cache and the
          * first shaded one its gradients (about half a second each for
          * 256^3): the first preview is drawn unshaded so that something is
@@ -407,6 +410,8 @@ vv_preview_render(vv_preview *p, const vv_world *world, const vv_view *view, vv_
     }
     o.quality = 0;
     switch (kind) {
+    case VV_PREVIEW_RAYCAST_8: /* a coarser step would lose thin structures */
+        return render_reduced(p, world, view, 4, &o, out);
     case VV_PREVIEW_RAYCAST_4:
         return render_reduced(p, world, view, 4, &o, out);
     case VV_PREVIEW_RAYCAST_2:
@@ -442,38 +447,63 @@ vv_preview_policy_record(vv_preview_policy *pol, vv_preview_kind kind, double se
     *s = *s < 0.0 ? seconds : 0.6 * *s + 0.4 * seconds;
 }
 
-/* Expected seconds of kind k; < 0 when nothing can be said. */
+/* Expected seconds of kind k; < 0 when nothing can be said. A ray cast
+ * not measured yet is taken as 4 times the next coarser one (4 times the
+ * rays) or a quarter of the next finer one. */
 static double
 expected(const vv_preview_policy *pol, int k) {
     if (pol->seconds[k] >= 0.0)
         return pol->seconds[k];
-    if (k == VV_PREVIEW_RAYCAST_2) /* 4x the pixels of 1/4; not tried before 1/4 */
-        return pol->seconds[VV_PREVIEW_RAYCAST_4] >= 0.0 ? 4.0 * pol->seconds[VV_PREVIEW_RAYCAST_4]
-                                                         : INFINITY;
-    if (k == VV_PREVIEW_RAYCAST_4 && pol->seconds[VV_PREVIEW_RAYCAST_2] >= 0.0)
-        return 0.25 * pol->seconds[VV_PREVIEW_RAYCAST_2];
-    if (k == VV_PREVIEW_RAYCAST_4 && pol->seconds[VV_PREVIEW_FULL] >= 0.0)
-        return pol->seconds[VV_PREVIEW_FULL] / 32.0;
+    if (k >= VV_PREVIEW_RAYCAST_8 && k <= VV_PREVIEW_RAYCAST_2) {
+        for (int c = k - 1, f = 4; c >= VV_PREVIEW_RAYCAST_8; c--, f *= 4)
+            if (pol->seconds[c] >= 0.0)
+                return f * pol->seconds[c];
+        for (int c = k + 1, f = 4; c <= VV_PREVIEW_RAYCAST_2; c++, f *= 4)
+            if (pol->seconds[c] >= 0.0)
+                return pol->seconds[c] / f;
+        if (pol->seconds[VV_PREVIEW_FULL] >= 0.0) /* at least 4 times the rays of 1/2 */
+            return pol->seconds[VV_PREVIEW_FULL] / (k == VV_PREVIEW_RAYCAST_2   ? 8.0
+                                                    : k == VV_PREVIEW_RAYCAST_4 ? 32.0
+                                                                                : 128.0);
+    }
     return -1.0;
+}
+
+/* The finest allowed ray cast expected within @p budget, or -1. */
+static int
+fitting_cast(const vv_preview_policy *pol, double budget) {
+    for (int k = VV_PREVIEW_RAYCAST_2; k >= VV_PREVIEW_RAYCAST_8; k--) {
+        double e = expected(pol, k);
+        if (pol->allowed[k] && e >= 0.0 && e <= budget)
+            return k;
+    }
+    return -1;
 }
 
 vv_preview_kind
 vv_preview_policy_choose(vv_preview_policy *pol, double budget) {
     if (pol->forced >= 0 && pol->forced < VV_PREVIEW_COUNT)
         return (vv_preview_kind)pol->forced;
-    /* the best representation that fits. Of those not measured yet only the
-     * 1/4 ray cast is tried while moving: the surfaces of the others may
-     * take long to build (their times are learnt off screen, after a
-     * refinement), and bounding boxes cost nothing to build. */
-    int best = -1;
-    for (int k = VV_PREVIEW_COUNT - 1; k >= 0 && best < 0; k--) {
-        if (!pol->allowed[k])
-            continue;
+    int best = fitting_cast(pol, budget);
+    /* nothing known yet: the 1/8 cast, the cheapest view of the data */
+    if (best < 0 && pol->allowed[VV_PREVIEW_RAYCAST_8] && expected(pol, VV_PREVIEW_RAYCAST_8) < 0.0)
+        best = VV_PREVIEW_RAYCAST_8;
+    /* the data cannot be cast within the budget: a surface that fits and
+     * is at least twice as quick as the 1/8 cast (under a passing load
+     * every representation is slow, and boxes would show nothing gained);
+     * bounding boxes unmeasured only for data whose 1/8 cast takes more than
+     * 4 times the budget; else the 1/8 cast, slow as it is */
+    double e8 = expected(pol, VV_PREVIEW_RAYCAST_8);
+    for (int k = VV_PREVIEW_COARSE_MC; k >= VV_PREVIEW_BBOX && best < 0; k--) {
         double e = expected(pol, k);
-        if ((e < 0.0 && (k == VV_PREVIEW_RAYCAST_4 || k == VV_PREVIEW_BBOX)) ||
-            (e >= 0.0 && e <= budget))
+        if (pol->allowed[k] && e >= 0.0 && e <= budget && (e8 < 0.0 || e < 0.5 * e8))
             best = k;
     }
+    if (best < 0 && pol->allowed[VV_PREVIEW_BBOX] && e8 > 4.0 * budget &&
+        expected(pol, VV_PREVIEW_BBOX) < 0.0)
+        best = VV_PREVIEW_BBOX;
+    if (best < 0 && pol->allowed[VV_PREVIEW_RAYCAST_8])
+        best = VV_PREVIEW_RAYCAST_8;
     if (best < 0) { /* nothing fits: the cheapest allowed */
         for (int k = 0; k < VV_PREVIEW_COUNT && best < 0; k++)
             if (pol->allowed[k])
@@ -481,16 +511,19 @@ vv_preview_policy_choose(vv_preview_policy *pol, double budget) {
         if (best < 0)
             return VV_PREVIEW_BBOX;
     }
-    /* now and then the next better one is tried again, so that the choice
+    /* now and then the next finer cast is tried again, so that the choice
      * follows a machine that has become less busy */
-    if (++pol->choices % 24 == 0)
-        for (int k = best + 1; k < VV_PREVIEW_COUNT; k++)
-            if (pol->allowed[k]) {
-                /* only one that could fit: a probe must not stall the view */
-                double e = expected(pol, k);
-                if ((e >= 0.0 && e <= 1.5 * budget) || (e < 0.0 && k == VV_PREVIEW_RAYCAST_4))
-                    return (vv_preview_kind)k;
-                break;
-            }
+    if (++pol->choices % 24 == 0) {
+        int next = best < VV_PREVIEW_RAYCAST_8 ? VV_PREVIEW_RAYCAST_8 : best + 1;
+        if (next <= VV_PREVIEW_RAYCAST_2 && pol->allowed[next]) {
+            /* only one that could fit: a probe must not stall the view (the
+             * 1/8 cast is probed from surfaces even at 4 times the budget:
+             * its time under a passing load must not keep boxes for good) */
+            double e = expected(pol, next);
+            double slack = next == VV_PREVIEW_RAYCAST_8 ? 4.0 : 1.5;
+            if (e >= 0.0 && e <= slack * budget)
+                return (vv_preview_kind)next;
+        }
+    }
     return (vv_preview_kind)best;
 }

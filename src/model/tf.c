@@ -195,21 +195,272 @@ vv_tf_set_ramp(vv_tf *tf, double lo, double hi, double max_opacity, vv_vec3 colo
 
 /* ---- presets -------------------------------------------------------------- */
 
-static const char *const preset_names[] = {"ct-bone", "ct-soft-tissue", "mr", NULL};
+/* How a preset's abscissae are placed on a volume's values. */
+typedef enum preset_scale {
+    PRESET_HU = 0,     /* Hounsfield units (hu_map_of) */
+    PRESET_MEDIAN = 1, /* 0..1 over the 50th to the 99th percentile (MR without units) */
+    PRESET_RANGE = 2   /* 0..1 over the 1st to the 99.5th percentile (any data) */
+} preset_scale;
+
+typedef struct preset_point {
+    double x;
+    double a;
+    double r, g, b;
+} preset_point;
+
+#define PRESET_MAX_POINTS 10
+
+typedef struct preset {
+    const char *name, *doc;
+    preset_scale scale;
+    int n;
+    preset_point p[PRESET_MAX_POINTS];
+} preset;
+
+/*
+ * The presets: CT tissues in Hounsfield units (windows of radiology
+ * practice: lung -1000..-400, fat -150..-50, soft tissue 20..80, contrast
+ * vessels 150..500, bone above 300), MR from the median of the volume up
+ * (T1: white matter brighter than grey; T2: fluid brightest; angiography:
+ * the brightest voxels), and colour maps over the range of any data
+ * (microscopy channels as ImageJ/Fiji colours them; viridis and inferno,
+ * van der Walt and Smith's perceptually uniform maps; Moreland's cool-warm).
+ */
+static const preset presets[] = {
+    {"ct-bone",
+     "CT: bone opaque and ivory, below about 150 HU transparent",
+     PRESET_HU,
+     5,
+     {{-1024, 0, 0, 0, 0},
+      {150, 0, 0.55, 0.25, 0.15},
+      {300, 0.25, 0.85, 0.65, 0.45},
+      {600, 0.8, 0.95, 0.9, 0.8},
+      {1500, 1, 1, 1, 0.95}}},
+    {"ct-soft-tissue",
+     "CT: skin and soft tissue faint and reddish, bone opaque",
+     PRESET_HU,
+     8,
+     {{-1024, 0, 0, 0, 0},
+      {-600, 0, 0.4, 0.15, 0.1},
+      {-400, 0.03, 0.7, 0.35, 0.25},
+      {-100, 0.03, 0.85, 0.55, 0.45},
+      {40, 0.12, 0.9, 0.45, 0.4},
+      {150, 0.12, 0.9, 0.6, 0.5},
+      {300, 0.6, 0.95, 0.9, 0.8},
+      {1000, 0.95, 1, 1, 0.95}}},
+    {"ct-lung",
+     "CT: lung parenchyma faint pink, airways clear, vessels and bone faint",
+     PRESET_HU,
+     7,
+     {{-1024, 0, 0, 0, 0},
+      {-950, 0, 0.9, 0.6, 0.6},
+      {-800, 0.04, 0.95, 0.65, 0.65},
+      {-550, 0.08, 0.9, 0.45, 0.45},
+      {-400, 0, 0.8, 0.3, 0.3},
+      {300, 0, 0.9, 0.9, 0.85},
+      {1000, 0.15, 1, 1, 1}}},
+    {"ct-vessels",
+     "CT angiography: contrast-filled vessels red, bone faint ivory",
+     PRESET_HU,
+     7,
+     {{-1024, 0, 0, 0, 0},
+      {100, 0, 0.6, 0.05, 0.05},
+      {180, 0.35, 0.85, 0.1, 0.1},
+      {400, 0.7, 1, 0.35, 0.25},
+      {550, 0.05, 1, 0.9, 0.8},
+      {1000, 0.1, 1, 1, 0.95},
+      {2000, 0.3, 1, 1, 1}}},
+    {"ct-muscle",
+     "CT: muscle and organs (20..80 HU) red, fat and air clear, bone faint",
+     PRESET_HU,
+     7,
+     {{-1024, 0, 0, 0, 0},
+      {-50, 0, 0.7, 0.3, 0.25},
+      {20, 0.15, 0.8, 0.25, 0.2},
+      {80, 0.3, 0.9, 0.35, 0.3},
+      {150, 0, 0.95, 0.8, 0.7},
+      {400, 0.2, 1, 0.95, 0.9},
+      {1500, 0.6, 1, 1, 1}}},
+    {"ct-skin",
+     "CT: the skin surface opaque, everything inside hidden by it",
+     PRESET_HU,
+     4,
+     {{-1024, 0, 0, 0, 0},
+      {-300, 0, 0.9, 0.7, 0.6},
+      {-150, 0.9, 0.95, 0.75, 0.65},
+      {3000, 0.9, 1, 0.85, 0.75}}},
+    {"ct-fat",
+     "CT: fat (-150..-50 HU) yellow, soft tissue faint, bone white",
+     PRESET_HU,
+     7,
+     {{-1024, 0, 0, 0, 0},
+      {-200, 0, 1, 0.9, 0.4},
+      {-110, 0.25, 1, 0.85, 0.3},
+      {-40, 0, 0.9, 0.6, 0.4},
+      {60, 0.03, 0.9, 0.5, 0.45},
+      {300, 0.3, 1, 0.95, 0.9},
+      {1500, 0.8, 1, 1, 1}}},
+    {"mr",
+     "MR: a grey ramp from the median to the 99th percentile",
+     PRESET_MEDIAN,
+     3,
+     {{0, 0, 0.3, 0.3, 0.3}, {0.5, 0.3, 0.8, 0.75, 0.7}, {1, 0.8, 1, 0.95, 0.9}}},
+    {"mr-t1-brain",
+     "MR T1: grey matter faint, white matter and fat bright and warm",
+     PRESET_MEDIAN,
+     5,
+     {{0, 0, 0.2, 0.15, 0.1},
+      {0.25, 0.02, 0.55, 0.45, 0.4},
+      {0.55, 0.15, 0.85, 0.75, 0.65},
+      {0.8, 0.5, 0.98, 0.92, 0.82},
+      {1, 0.9, 1, 1, 0.95}}},
+    {"mr-t2-brain",
+     "MR T2: fluid (the brightest) blue and opaque, tissue faint",
+     PRESET_MEDIAN,
+     5,
+     {{0, 0, 0.2, 0.2, 0.25},
+      {0.4, 0.02, 0.5, 0.5, 0.6},
+      {0.7, 0.05, 0.6, 0.7, 0.9},
+      {0.85, 0.45, 0.4, 0.7, 1},
+      {1, 0.9, 0.8, 0.95, 1}}},
+    {"mr-angio",
+     "MR angiography: the brightest voxels (vessels) red and opaque",
+     PRESET_MEDIAN,
+     4,
+     {{0, 0, 0.3, 0, 0},
+      {0.8, 0, 0.6, 0.05, 0.05},
+      {0.92, 0.5, 0.95, 0.2, 0.15},
+      {1, 1, 1, 0.9, 0.8}}},
+    {"mip",
+     "maximum intensity projection: grey from black to white over the range",
+     PRESET_RANGE,
+     2,
+     {{0, 0, 0, 0, 0}, {1, 1, 1, 1, 1}}},
+    {"grey",
+     "a grey ramp over the range, half opaque at the top",
+     PRESET_RANGE,
+     2,
+     {{0, 0, 0.2, 0.2, 0.2}, {1, 0.5, 1, 1, 1}}},
+    {"fire",
+     "microscopy (Fiji's Fire): black, red, yellow, white",
+     PRESET_RANGE,
+     5,
+     {{0, 0, 0, 0, 0},
+      {0.25, 0.05, 0.55, 0, 0.35},
+      {0.5, 0.2, 0.95, 0.25, 0},
+      {0.75, 0.5, 1, 0.75, 0},
+      {1, 0.9, 1, 1, 1}}},
+    {"microscopy-green",
+     "microscopy: a green channel (GFP), black to green",
+     PRESET_RANGE,
+     3,
+     {{0, 0, 0, 0, 0}, {0.5, 0.2, 0, 0.6, 0}, {1, 0.8, 0.4, 1, 0.4}}},
+    {"microscopy-magenta",
+     "microscopy: a magenta channel, black to magenta",
+     PRESET_RANGE,
+     3,
+     {{0, 0, 0, 0, 0}, {0.5, 0.2, 0.6, 0, 0.6}, {1, 0.8, 1, 0.4, 1}}},
+    {"microscopy-cyan",
+     "microscopy: a cyan channel (DAPI shown cyan), black to cyan",
+     PRESET_RANGE,
+     3,
+     {{0, 0, 0, 0, 0}, {0.5, 0.2, 0, 0.55, 0.6}, {1, 0.8, 0.4, 1, 1}}},
+    {"hot-iron",
+     "hot iron: black, red, orange, yellow, white",
+     PRESET_RANGE,
+     5,
+     {{0, 0, 0, 0, 0},
+      {0.3, 0.1, 0.7, 0, 0},
+      {0.6, 0.35, 1, 0.5, 0},
+      {0.85, 0.7, 1, 0.9, 0.2},
+      {1, 0.95, 1, 1, 1}}},
+    {"viridis",
+     "viridis colour map (perceptually uniform), opacity rising with the value",
+     PRESET_RANGE,
+     5,
+     {{0, 0, 0.267, 0.005, 0.329},
+      {0.25, 0.1, 0.229, 0.322, 0.546},
+      {0.5, 0.3, 0.128, 0.567, 0.551},
+      {0.75, 0.55, 0.369, 0.789, 0.383},
+      {1, 0.85, 0.993, 0.906, 0.144}}},
+    {"inferno",
+     "inferno colour map (perceptually uniform), opacity rising with the value",
+     PRESET_RANGE,
+     5,
+     {{0, 0, 0.001, 0, 0.014},
+      {0.25, 0.1, 0.341, 0.062, 0.429},
+      {0.5, 0.3, 0.735, 0.216, 0.33},
+      {0.75, 0.55, 0.978, 0.557, 0.035},
+      {1, 0.85, 0.988, 1, 0.644}}},
+    {"cool-warm",
+     "Moreland's diverging cool-warm map: low blue, middle clear, high red",
+     PRESET_RANGE,
+     5,
+     {{0, 0.6, 0.23, 0.299, 0.754},
+      {0.3, 0.15, 0.55, 0.69, 0.99},
+      {0.5, 0, 0.865, 0.865, 0.865},
+      {0.7, 0.15, 0.96, 0.61, 0.48},
+      {1, 0.6, 0.706, 0.016, 0.15}}},
+    {"top-5-percent",
+     "only the brightest 5 % of the range, opaque white; the rest clear",
+     PRESET_RANGE,
+     3,
+     {{0, 0, 0.5, 0.5, 0.5}, {0.93, 0, 0.9, 0.9, 0.9}, {0.97, 1, 1, 1, 1}}},
+};
+#define N_PRESETS ((int)(sizeof presets / sizeof presets[0]))
+
+static const char *const preset_names[N_PRESETS + 1] = {"ct-bone",
+                                                        "ct-soft-tissue",
+                                                        "ct-lung",
+                                                        "ct-vessels",
+                                                        "ct-muscle",
+                                                        "ct-skin",
+                                                        "ct-fat",
+                                                        "mr",
+                                                        "mr-t1-brain",
+                                                        "mr-t2-brain",
+                                                        "mr-angio",
+                                                        "mip",
+                                                        "grey",
+                                                        "fire",
+                                                        "microscopy-green",
+                                                        "microscopy-magenta",
+                                                        "microscopy-cyan",
+                                                        "hot-iron",
+                                                        "viridis",
+                                                        "inferno",
+                                                        "cool-warm",
+                                                        "top-5-percent",
+                                                        NULL};
 
 const char *const *
 vv_tf_preset_names(void) {
     return preset_names;
 }
 
+static const preset *
+find_preset(const char *name) {
+    for (int i = 0; name && i < N_PRESETS; i++)
+        if (!strcmp(presets[i].name, name))
+            return &presets[i];
+    return NULL;
+}
+
+const char *
+vv_tf_preset_description(const char *name) {
+    const preset *p = find_preset(name);
+    return p ? p->doc : NULL;
+}
+
 /* Maps Hounsfield units onto the volume's values (vv_tf_preset). */
 typedef struct hu_map {
     double scale, offset; /* value = scale * HU + offset */
+    double top;           /* relative presets: the value at 1 (exactly hi) */
 } hu_map;
 
 static hu_map
 hu_map_of(const vv_volume *v) {
-    hu_map m = {1.0, 0.0};
+    hu_map m = {1.0, 0.0, 0.0};
     if (!v)
         return m;
     double lo = v->range[0], hi = v->range[1];
@@ -227,16 +478,25 @@ hu_map_of(const vv_volume *v) {
     return m;
 }
 
-typedef struct preset_point {
-    double x;
-    double a;
-    double r, g, b;
-} preset_point;
+/* The values a preset's 0..1 abscissae span on @p v: lo + x (hi - lo),
+ * exactly hi at x = 1 (the offset is lo, the scale hi - lo). */
+static hu_map
+range_map_of(const vv_volume *v, preset_scale scale) {
+    double lo = vv_volume_quantile(v, scale == PRESET_MEDIAN ? 0.5 : 0.01);
+    double hi = vv_volume_quantile(v, scale == PRESET_MEDIAN ? 0.99 : 0.995);
+    if (!isfinite(lo) || !isfinite(hi) || !(hi > lo)) {
+        lo = v->range[0];
+        hi = v->range[1] > lo ? v->range[1] : lo + 1.0;
+    }
+    return (hu_map){hi - lo, lo, hi};
+}
 
 static vv_status
-preset_fill(vv_tf *tf, const preset_point *p, int n, hu_map m) {
+preset_fill(vv_tf *tf, const preset_point *p, int n, hu_map m, int relative) {
     for (int i = 0; i < n; i++) {
         double x = m.scale * p[i].x + m.offset;
+        if (relative) /* lo + x (hi - lo), the top exactly hi */
+            x = p[i].x == 1.0 ? m.top : m.offset + p[i].x * m.scale;
         vv_status st = vv_tf_add_opacity(tf, x, p[i].a);
         if (st == VV_OK)
             st = vv_tf_add_color(tf, x, vv_vec3_make(p[i].r, p[i].g, p[i].b));
@@ -251,6 +511,19 @@ vv_tf_preset(vv_tf *tf, const char *name, const vv_volume *v) {
     if (!tf || !name)
         return vv_error_set(VV_ERR_INVALID, "transfer function preset: NULL %s",
                             tf ? "name" : "transfer function");
+    const preset *p = find_preset(name);
+    if (!p) {
+        char list[1024] = "";
+        for (int i = 0; i < N_PRESETS; i++) {
+            strncat(list, presets[i].name, sizeof list - strlen(list) - 1);
+            if (i + 1 < N_PRESETS)
+                strncat(list, ", ", sizeof list - strlen(list) - 1);
+        }
+        return vv_error_set(VV_ERR_INVALID,
+                            "transfer function preset \"%s\" is unknown; expected %s", name, list);
+    }
+    if (p->scale != PRESET_HU && !v)
+        return vv_error_set(VV_ERR_INVALID, "transfer function preset %s: needs a volume", name);
     double unit = 1.0;
     if (v) {
         unit = v->spacing[0];
@@ -262,39 +535,8 @@ vv_tf_preset(vv_tf *tf, const char *name, const vv_volume *v) {
     vv_tf out;
     vv_tf_init(&out);
     out.opacity_unit_distance = unit;
-    vv_status st;
-    if (strcmp(name, "ct-bone") == 0) {
-        static const preset_point p[] = {{-1024, 0, 0, 0, 0},
-                                         {150, 0, 0.55, 0.25, 0.15},
-                                         {300, 0.25, 0.85, 0.65, 0.45},
-                                         {600, 0.8, 0.95, 0.9, 0.8},
-                                         {1500, 1, 1, 1, 0.95}};
-        st = preset_fill(&out, p, 5, hu_map_of(v));
-    } else if (strcmp(name, "ct-soft-tissue") == 0) {
-        static const preset_point p[] = {
-            {-1024, 0, 0, 0, 0},           {-600, 0, 0.4, 0.15, 0.1},
-            {-400, 0.03, 0.7, 0.35, 0.25}, {-100, 0.03, 0.85, 0.55, 0.45},
-            {40, 0.12, 0.9, 0.45, 0.4},    {150, 0.12, 0.9, 0.6, 0.5},
-            {300, 0.6, 0.95, 0.9, 0.8},    {1000, 0.95, 1, 1, 0.95}};
-        st = preset_fill(&out, p, 8, hu_map_of(v));
-    } else if (strcmp(name, "mr") == 0) {
-        if (!v)
-            return vv_error_set(VV_ERR_INVALID, "transfer function preset mr: needs a volume");
-        double lo = vv_volume_quantile(v, 0.5), hi = vv_volume_quantile(v, 0.99);
-        if (!isfinite(lo) || !isfinite(hi) || !(hi > lo)) {
-            lo = v->range[0];
-            hi = v->range[1] > lo ? v->range[1] : lo + 1.0;
-        }
-        const preset_point p[] = {{lo, 0, 0.3, 0.3, 0.3},
-                                  {lo + 0.5 * (hi - lo), 0.3, 0.8, 0.75, 0.7},
-                                  {hi, 0.8, 1, 0.95, 0.9}};
-        st = preset_fill(&out, p, 3, (hu_map){1.0, 0.0});
-    } else {
-        return vv_error_set(VV_ERR_INVALID,
-                            "transfer function preset \"%s\" is unknown; expected ct-bone, "
-                            "ct-soft-tissue or mr",
-                            name);
-    }
+    hu_map m = p->scale == PRESET_HU ? hu_map_of(v) : range_map_of(v, p->scale);
+    vv_status st = preset_fill(&out, p->p, p->n, m, p->scale != PRESET_HU);
     if (st != VV_OK)
         return vv_error_prefix(st, "transfer function preset %s", name);
     *tf = out;

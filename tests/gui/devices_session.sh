@@ -11,8 +11,8 @@
 # Ctrl+Q exits 0. A recording replayed at start (VOLVIS_INPUT_REPLAY) turns
 # the view through the manager's timeouts alone (a replay has no
 # descriptor), as one undo step; a malformed recording shows an error
-# dialog and the application keeps running. Screenshots of the Input
-# devices page are left in OUT (devices.png, devices_closed.png).
+# dialog and the application keeps running. (The Input devices page itself
+# is shown by scripts/gui-screenshots.sh, which finds it by name.)
 set -euo pipefail
 GUI=$1 OUT=$3
 DATA=$(cd ../shared/data/volumes && pwd)
@@ -124,38 +124,6 @@ wait_file "$OUT/c.declared" "the client did not connect"
 sleep 0.5
 import -window root "$OUT/open.png"
 
-# the Input devices page: the side bar's fifth entry (after Modeling), found
-# in the screenshot from the selected first entry's box and the text lines
-read -r px py < <(python3 - "$OUT/open.png" <<'PY'
-import subprocess, sys
-rows = subprocess.run(["convert", sys.argv[1], "-crop", "700x720+400+0", "txt:-"],
-                      capture_output=True, text=True).stdout.splitlines()[1:]
-px = {}
-for line in rows:
-    pos, rest = line.split(":", 1)
-    x, y = map(int, pos.split(","))
-    px[(x + 400, y)] = rest.split()[1].lstrip("#")[:6]
-sel = [(x, y) for (x, y), c in px.items() if c == "E8E6E3" and y < 60]
-if not sel:
-    sys.exit("no selected side-bar entry")
-x0, x1 = min(x for x, _ in sel), max(x for x, _ in sel)
-lines, inside = [], False
-for y in range(720):
-    dark = any(int(px.get((x, y), "FFFFFF")[:2], 16) < 100 for x in range(x0 + 4, x1 - 4))
-    if dark and not inside:
-        lines.append([y, y])
-    if dark:
-        lines[-1][1] = y
-    inside = dark
-if len(lines) < 5:
-    sys.exit("side bar: %d entries" % len(lines))
-print((x0 + x1) // 2, (lines[4][0] + lines[4][1]) // 2)
-PY
-) || fail "no side bar on screen"
-xdotool mousemove "$px" "$py" click 1
-sleep 0.8
-import -window root "$OUT/devices.png"
-echo "Input devices page at $px,$py: $OUT/devices.png"
 
 # 6-DOF rotation: the view turns
 n=$(nfull)
@@ -219,8 +187,15 @@ cp "$OUT/scene.json" "$OUT/session.json"
 rm -f "$OUT/frames.log"
 VOLVIS_INPUT_REPLAY=$OUT/turn.vvin "$GUI" "$OUT/session.json" > "$OUT/gui_replay.log" 2>&1 &
 pid=$!
-xdotool search --sync --name '^VolVis — ' > /dev/null
-sleep 4.5
+# the same window size as the first run: the view renders at the window's size
+wid=$(xdotool search --sync --name '^VolVis — ' | head -1)
+xdotool windowmove "$wid" 0 0 windowsize "$wid" 1100 720
+# the motion comes 3 s after the replay starts, which is after the window is
+# up: under load, well after the first frames
+for _ in $(seq 1 300); do
+  [ "$(awk '$6 > m { m = $6 } END { print m + 0 }' "$OUT/frames.log" 2>/dev/null)" -gt 4 ] && break
+  sleep 0.1
+done
 wait_settled 0 "the replay"
 d=$(ae "$OUT/full.png" "$OUT/full0.png")
 awk -v d="$d" 'BEGIN { exit !(d > 1000) }' || fail "the replay did not turn the view ($d pixels differ)"

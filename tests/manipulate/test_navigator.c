@@ -153,33 +153,61 @@ test_objects_lights(void **state) {
     assert_near(fabs(hl.direction.x), 1, 1e-9);
 }
 
+/* The policy casts rays whenever a reduced cast fits: 1/8 first, finer
+ * ones as they are measured to fit; surfaces only when even 1/8 is too slow. */
 static void
 test_policy(void **state) {
     (void)state;
     vv_preview_policy pol;
     vv_preview_policy_init(&pol);
-    assert_int_equal(vv_preview_policy_choose(&pol, 0.03), VV_PREVIEW_RAYCAST_4);
-    vv_preview_policy_record(&pol, VV_PREVIEW_RAYCAST_4, 0.004);
-    /* 1/2 expected at 4x: 16 ms fits */
+    assert_int_equal(vv_preview_policy_choose(&pol, 0.03), VV_PREVIEW_RAYCAST_8);
+    vv_preview_policy_record(&pol, VV_PREVIEW_RAYCAST_8, 0.001);
+    /* 1/4 expected at 4 ms, 1/2 at 16 ms: both fit, the finer wins */
     assert_int_equal(vv_preview_policy_choose(&pol, 0.03), VV_PREVIEW_RAYCAST_2);
     vv_preview_policy_record(&pol, VV_PREVIEW_RAYCAST_2, 0.2);
     vv_preview_policy_record(&pol, VV_PREVIEW_RAYCAST_2, 0.2);
     assert_int_equal(vv_preview_policy_choose(&pol, 0.03), VV_PREVIEW_RAYCAST_4);
     vv_preview_policy_record(&pol, VV_PREVIEW_RAYCAST_4, 0.1);
     vv_preview_policy_record(&pol, VV_PREVIEW_RAYCAST_4, 0.1);
+    assert_int_equal(vv_preview_policy_choose(&pol, 0.03), VV_PREVIEW_RAYCAST_8);
+    /* 1/8 a little too slow (a passing load): still the data, not boxes */
+    vv_preview_policy_record(&pol, VV_PREVIEW_RAYCAST_8, 0.05);
+    vv_preview_policy_record(&pol, VV_PREVIEW_RAYCAST_8, 0.05);
+    assert_int_equal(vv_preview_policy_choose(&pol, 0.03), VV_PREVIEW_RAYCAST_8);
+    /* a surface that fits and is much quicker than the slow cast */
     vv_preview_policy_record(&pol, VV_PREVIEW_BOXES, 0.002);
+    assert_int_equal(vv_preview_policy_choose(&pol, 0.03), VV_PREVIEW_BOXES);
     vv_preview_policy_record(&pol, VV_PREVIEW_COARSE_MC, 0.01);
     assert_int_equal(vv_preview_policy_choose(&pol, 0.03), VV_PREVIEW_COARSE_MC);
+    /* data too large to cast (1/8 at 5 times the budget): bounding boxes
+     * before anything else is measured */
+    vv_preview_policy_init(&pol);
+    vv_preview_policy_record(&pol, VV_PREVIEW_RAYCAST_8, 0.15);
+    assert_int_equal(vv_preview_policy_choose(&pol, 0.03), VV_PREVIEW_BBOX);
     pol.forced = VV_PREVIEW_BBOX;
     assert_int_equal(vv_preview_policy_choose(&pol, 0.03), VV_PREVIEW_BBOX);
+    /* a machine that became quick again: every 24th choice probes a finer cast */
+    vv_preview_policy_init(&pol);
+    vv_preview_policy_record(&pol, VV_PREVIEW_RAYCAST_8, 0.002);
+    vv_preview_policy_record(&pol, VV_PREVIEW_RAYCAST_4, 0.02);
+    vv_preview_policy_record(&pol, VV_PREVIEW_RAYCAST_2, 0.04);
+    int probes = 0;
+    for (int i = 0; i < 48; i++)
+        probes += vv_preview_policy_choose(&pol, 0.03) == VV_PREVIEW_RAYCAST_2;
+    assert_int_equal(probes, 2);
     vv_preview_kind k;
     vt_ok(vv_preview_kind_parse("raycast_1/2", &k));
     assert_int_equal(k, VV_PREVIEW_RAYCAST_2);
+    vt_ok(vv_preview_kind_parse("raycast_1/8", &k));
+    assert_int_equal(k, VV_PREVIEW_RAYCAST_8);
     vt_err(vv_preview_kind_parse("fast", &k));
     int w, h;
     vv_preview_size(VV_PREVIEW_RAYCAST_4, 513, 7, &w, &h);
     assert_int_equal(w, 129);
     assert_int_equal(h, 2);
+    vv_preview_size(VV_PREVIEW_RAYCAST_8, 1000, 801, &w, &h);
+    assert_int_equal(w, 125);
+    assert_int_equal(h, 101);
 }
 
 static double

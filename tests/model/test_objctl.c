@@ -143,12 +143,34 @@ test_presets(void **state) {
     int n = 0;
     while (names[n])
         n++;
-    assert_int_equal(n, 3);
+    assert_true(n >= 20);
     vv_tf tf;
     /* Hounsfield units */
     vv_volume *hu = ramp_volume(VV_I16, -1024, 2986);
-    for (int i = 0; i < n; i++)
+    for (int i = 0; i < n; i++) {
         vt_ok(vv_tf_preset(&tf, names[i], hu));
+        assert_non_null(vv_tf_preset_description(names[i]));
+        assert_true(tf.n_opacity >= 2 && tf.n_color >= 2);
+        for (int k = 1; k < tf.n_opacity; k++) /* sorted, within the data's range or HU */
+            assert_true(tf.opacity[k].value >= tf.opacity[k - 1].value);
+        for (int j = 0; j < i; j++) /* distinct names */
+            assert_string_not_equal(names[i], names[j]);
+    }
+    assert_null(vv_tf_preset_description("nonsense"));
+    /* the CT presets by their tissues: lung parenchyma, contrast, muscle, fat */
+    vt_ok(vv_tf_preset(&tf, "ct-lung", hu));
+    assert_true(vv_tf_eval_opacity(&tf, -700) > 0.03);
+    assert_near(vv_tf_eval_opacity(&tf, 0), 0, 0.05);
+    vt_ok(vv_tf_preset(&tf, "ct-vessels", hu));
+    assert_true(vv_tf_eval_opacity(&tf, 300) > 0.4);
+    assert_near(vv_tf_eval_opacity(&tf, 40), 0, 0);
+    vt_ok(vv_tf_preset(&tf, "ct-fat", hu));
+    assert_true(vv_tf_eval_opacity(&tf, -110) > vv_tf_eval_opacity(&tf, 40));
+    /* data presets over the 1st..99.5th percentile: mip is black to white */
+    vt_ok(vv_tf_preset(&tf, "mip", hu));
+    assert_near(vv_tf_eval_opacity(&tf, -1024), 0, 0.01);
+    assert_true(vv_tf_eval_color(&tf, 2986).x > 0.99);
+    vt_err(vv_tf_preset(&tf, "viridis", NULL));
     vt_ok(vv_tf_preset(&tf, "ct-bone", hu));
     assert_near(vv_tf_eval_opacity(&tf, 0), 0, 0);     /* water */
     assert_near(vv_tf_eval_opacity(&tf, -1000), 0, 0); /* air */
@@ -171,8 +193,9 @@ test_presets(void **state) {
     assert_near(vv_tf_eval_opacity(&tf, 0), 0, 0);
     assert_true(vv_tf_eval_opacity(&tf, 255) > 0.5);
     vt_err(vv_tf_preset(&tf, "mr", NULL));
-    vt_err(vv_tf_preset(&tf, "ct-lung", hu));
+    vt_err(vv_tf_preset(&tf, "ct-liver", hu));
     assert_non_null(strstr(vv_error_message(), "ct-bone"));
+    assert_non_null(strstr(vv_error_message(), "top-5-percent"));
     vv_volume_free(hu);
     vv_volume_free(u);
     vv_volume_free(b);

@@ -1,0 +1,76 @@
+/* VvNavigatorPanel: the Navigator's settings (vv-navigator-panel.h). */
+#include "vv-navigator-panel.h"
+#include "vvg-widgets.h"
+
+struct _VvNavigatorPanel {
+    GtkBox parent;
+    VvSceneView *scene; /* borrowed */
+    GtkWidget *target;
+};
+
+G_DEFINE_TYPE(VvNavigatorPanel, vv_navigator_panel, GTK_TYPE_BOX)
+
+static void
+target_changed(GObject *o, GParamSpec *p, gpointer user) {
+    (void)p;
+    VvNavigatorPanel *self = user;
+    vv_scene_view_set_target(self->scene,
+                             (VvNavTarget)gtk_drop_down_get_selected(GTK_DROP_DOWN(o)));
+}
+
+static void
+preview_changed(GObject *o, GParamSpec *p, gpointer user) {
+    (void)p;
+    VvNavigatorPanel *self = user;
+    vv_scene_view_set_preview(self->scene, (int)gtk_drop_down_get_selected(GTK_DROP_DOWN(o)) - 1);
+}
+
+static void
+delay_changed(GtkSpinButton *s, gpointer user) {
+    VvNavigatorPanel *self = user;
+    vv_scene_view_set_refine_delay(self->scene, (int)gtk_spin_button_get_value(s));
+}
+
+static void
+flight_toggled(GtkCheckButton *b, gpointer user) {
+    VvNavigatorPanel *self = user;
+    vv_scene_view_set_flight(self->scene, gtk_check_button_get_active(b));
+    gtk_widget_grab_focus(GTK_WIDGET(self->scene));
+}
+
+static void
+vv_navigator_panel_class_init(VvNavigatorPanelClass *klass) {
+    (void)klass;
+}
+
+static void
+vv_navigator_panel_init(VvNavigatorPanel *self) {
+    vvg_vbox_init(GTK_WIDGET(self));
+}
+
+GtkWidget *
+vv_navigator_panel_new(VvSceneView *scene) {
+    VvNavigatorPanel *self = g_object_new(VV_TYPE_NAVIGATOR_PANEL, NULL);
+    self->scene = scene;
+    GtkWidget *g = vvg_section(GTK_WIDGET(self), "Navigator");
+    static const char *const targets[] = {"view", "selected object", "selected light", "cut plane",
+                                          NULL};
+    self->target = vvg_row(g, "drag moves", gtk_drop_down_new_from_strings(targets));
+    g_signal_connect(self->target, "notify::selected", G_CALLBACK(target_changed), self);
+    static const char *const previews[] = {"automatic",    "bounding boxes", "PARC boxes",
+                                           "coarse MC",    "ray cast 1/8",   "ray cast 1/4",
+                                           "ray cast 1/2", "full quality",   NULL};
+    GtkWidget *pv = vvg_row(g, "preview", gtk_drop_down_new_from_strings(previews));
+    g_signal_connect(pv, "notify::selected", G_CALLBACK(preview_changed), self);
+    GtkWidget *dl = vvg_row(g, "refine after (ms)", vvg_spin(0, 2000, 10, 0, 100));
+    g_signal_connect(dl, "value-changed", G_CALLBACK(delay_changed), self);
+    GtkWidget *fl = gtk_check_button_new_with_label("flight simulator keys (arrows, Q/E, W/S)");
+    g_signal_connect(fl, "toggled", G_CALLBACK(flight_toggled), self);
+    gtk_grid_attach(GTK_GRID(g), fl, 0, vvg_grid_rows(g), 2, 1);
+    return GTK_WIDGET(self);
+}
+
+void
+vv_navigator_panel_set_target(VvNavigatorPanel *self, VvNavTarget target) {
+    gtk_drop_down_set_selected(GTK_DROP_DOWN(self->target), (guint)target);
+}

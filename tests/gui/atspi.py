@@ -1,0 +1,517 @@
+"""Driving the real volvis-gui by accessible names and roles (AT-SPI), the way
+a screen reader finds widgets, under a private Xvfb and session bus; real
+input goes through xdotool at a widget's extents, values are read back over
+AT-SPI. Never pixel coordinates of a layout (../shared/GUI-TESTING.md).
+
+Run with the system Python (/usr/bin/python3: pyatspi is a Debian package).
+
+    with Session(gui, ["head.nrrd"], out) as s:
+        s.wait_full(0)
+        s.page("Objects")
+        spin = s.find("scale", "spin button")
+        s.wheel(spin, down=3)
+        assert s.value(spin) == 1.0
+"""
+import os
+import re
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+
+SKIP = 77  # CTest SKIP_RETURN_CODE
+
+
+def skip(why):
+    print("SKIP:", why)
+    sys.exit(SKIP)
+
+
+try:
+    import pyatspi  # noqa: E402
+except ImportError:  # pragma: no cover
+    pyatspi = None
+
+
+class Failure(Exception):
+    pass
+
+
+def check(cond, what):
+    if not cond:
+        raise Failure(what)
+
+
+def free_display():
+    for n in range(120, 400):
+        if not os.path.exists(f"/tmp/.X{n}-lock") and not os.path.exists(f"/tmp/.X11-unix/X{n}"):
+            return n
+    raise Failure("no free X display number")
+
+
+class Session:
+    """One Xvfb, one session bus with the accessibility bus, one volvis-gui."""
+
+    def __init__(self, gui, args, out, env=None, size=(1600, 1000), window=(1100, 720),
+                 start_app=True, cwd=None):
+        if pyatspi is None:
+            skip("python3-pyatspi is not installed")
+        for tool in ("Xvfb", "xdotool", "dbus-launch"):
+            if not shutil.which(tool):
+                skip(f"{tool} is not installed")
+        self.gui, self.args, self.out = os.path.abspath(gui), list(args), out
+        os.makedirs(out, exist_ok=True)
+        self.frames = os.path.join(out, "frames.log")
+        if os.path.exists(self.frames):
+            os.remove(self.frames)
+        self.size, self.window_size = size, window
+        self.extra_env = dict(env or {})
+        self.procs = []
+        self.app_proc = None
+        self._app = None
+        self.start_app = start_app
+        self.cwd = cwd
+
+    # ---- life cycle ---------------------------------------------------------------
+
+    def __enter__(self):
+        self.display = free_display()
+        self.env = dict(os.environ)
+        self.env.pop("NO_AT_BRIDGE", None)
+        home = tempfile.mkdtemp(prefix="vvgui-home-", dir=self.out)
+        self.env.update({
+            "DISPLAY": f":{self.display}", "GDK_BACKEND": "x11",
+            "XDG_DATA_HOME": os.path.join(home, "data"),
+            "XDG_CONFIG_HOME": os.path.join(home, "config"),
+            "XDG_CACHE_HOME": os.path.join(home, "cache"),
+            "XDG_RUNTIME_DIR": home, "GTK_A11Y": "atspi",
+            "VOLVIS_FRAME_LOG": self.frames, "VOLVIS_FRAME_DIR": self.out,
+            "VOLVIS_NO_AUTO_DEVICES": "1",
+        })
+        self.env.update(self.extra_env)
+        w, h = self.size
+        x = subprocess.Popen(["Xvfb", f":{self.display}", "-screen", "0", f"{w}x{h}x24",
+                              "-nolisten", "tcp"], stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL)
+        self.procs.append(x)
+        for _ in range(100):
+            if os.path.exists(f"/tmp/.X11-unix/X{self.display}"):
+                break
+            time.sleep(0.05)
+        out = subprocess.run(["dbus-launch", "--sh-syntax"], env=self.env, capture_output=True,
+                             text=True).stdout
+        m = re.search(r"DBUS_SESSION_BUS_ADDRESS='([^']*)'", out)
+        pid = re.search(r"DBUS_SESSION_BUS_PID=(\d+)", out)
+        check(m and pid, "dbus-launch gave no session bus")
+        self.env["DBUS_SESSION_BUS_ADDRESS"] = m.group(1)
+        self.dbus_pid = int(pid.group(1))
+        os.environ["DBUS_SESSION_BUS_ADDRESS"] = m.group(1)
+        os.environ["DISPLAY"] = f":{self.display}"
+        a = subprocess.Popen(["/usr/libexec/at-spi-bus-launcher", "--launch-immediately"],
+                             env=self.env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        self.procs.append(a)
+        time.sleep(0.5)
+        if self.start_app:
+            self.launch()
+        return self
+
+    def launch(self, args=None, cwd=None):
+        self.log = open(os.path.join(self.out, "gui.log"), "w")
+        self.app_proc = subprocess.Popen([self.gui] + (args if args is not None else self.args),
+                                         env=self.env, stdout=self.log, stderr=subprocess.STDOUT,
+                                         cwd=cwd or self.cwd)
+        self.wid = self.xdo("search", "--sync", "--name", "^VolVis — ").split()[0]
+        self.xdo("windowmove", self.wid, "0", "0", "windowsize", self.wid,
+                 str(self.window_size[0]), str(self.window_size[1]))
+        # no window manager gives it the keyboard: the keys of a second launch
+        # would go nowhere
+        self.xdo("windowfocus", self.wid)
+        self._app = None
+        self.app()
+        return self.app_proc
+
+    def __exit__(self, *exc):
+        if self.app_proc and self.app_proc.poll() is None:
+            self.app_proc.kill()
+            self.app_proc.wait()
+        for p in reversed(self.procs):
+            if p.poll() is None:
+                p.terminate()
+                try:
+                    p.wait(5)
+                except subprocess.TimeoutExpired:
+                    p.kill()
+        try:
+            os.kill(self.dbus_pid, signal.SIGTERM)
+        except (ProcessLookupError, AttributeError):
+            pass
+        return False
+
+    def quit(self, expect=0, timeout=20):
+        """Ctrl+Q; the exit status must be @p expect."""
+        self.focus_main()
+        self.key("ctrl+q")
+        return self.wait_exit(expect, timeout)
+
+    def quit_discard(self):
+        """Ctrl+Q with unsaved changes: the dialog asks; Close without saving; exit 0."""
+        self.focus_main()
+        self.key("ctrl+q")
+        self.xdo("search", "--sync", "--name", "VolVis: unsaved changes")
+        time.sleep(0.5)
+        dialog = self.find("VolVis: unsaved changes", visible=False)
+        self.click(self.find(lambda n: n.endswith("Close without saving"), "push button",
+                             root=dialog, visible=False))
+        return self.wait_exit(0)
+
+    def wait_exit(self, expect=0, timeout=20):
+        try:
+            st = self.app_proc.wait(timeout)
+        except subprocess.TimeoutExpired:
+            raise Failure("the application did not exit")
+        check(st == expect, f"exit status {st}, expected {expect}")
+        return st
+
+    # ---- X input ----------------------------------------------------------------------
+
+    def xdo(self, *args):
+        r = subprocess.run(["xdotool"] + list(args), env=self.env, capture_output=True,
+                           text=True, timeout=60)
+        return r.stdout
+
+    def focus_main(self):
+        """Gives the main window the keyboard (without a window manager, a
+        closed window leaves the focus nowhere)."""
+        self.xdo("windowfocus", self.wid)
+        time.sleep(0.2)
+
+    def key(self, *keys):
+        self.xdo("key", "--clearmodifiers", *keys)
+        time.sleep(0.2)
+
+    def type(self, text):
+        self.xdo("type", "--delay", "20", "--", text)
+        time.sleep(0.2)
+
+    def count_color(self, o, rgb, shot="count.png"):
+        """Pixels of colour @p rgb (r, g, b) inside widget @p o on screen."""
+        path = self.screenshot(shot)
+        x, y, w, h = self.extents(o)
+        r = subprocess.run(["convert", path, "-crop", f"{w}x{h}+{x}+{y}", "+repage", "-fill",
+                            "black", "+opaque", "rgb(%d,%d,%d)" % tuple(rgb), "-fill", "white",
+                            "-opaque", "rgb(%d,%d,%d)" % tuple(rgb), "-format",
+                            "%[fx:mean*w*h]", "info:"], capture_output=True, text=True)
+        try:
+            return int(round(float(r.stdout)))
+        except ValueError:
+            return 0
+
+    def screenshot(self, name):
+        path = os.path.join(self.out, name)
+        subprocess.run(["import", "-display", f":{self.display}", "-window", "root", path],
+                       env=self.env, check=False)
+        return path
+
+    # ---- the accessibility tree ---------------------------------------------------------
+
+    def app(self, timeout=20):
+        if self._app is not None:
+            return self._app
+        t0 = time.time()
+        while time.time() - t0 < timeout:
+            desk = pyatspi.Registry.getDesktop(0)
+            for i in range(desk.childCount):
+                a = desk.getChildAtIndex(i)
+                if a is not None and "volvis" in (a.name or "").lower():
+                    self._app = a
+                    return a
+            time.sleep(0.2)
+        raise Failure("volvis-gui did not register with AT-SPI")
+
+    def walk(self, root=None, showing_in=None):
+        root = root or self.app()
+        stack = [root]
+        while stack:
+            o = stack.pop()
+            if o is None:
+                continue
+            yield o
+            try:
+                n = o.childCount
+            except Exception:
+                continue
+            for i in range(n - 1, -1, -1):
+                try:
+                    stack.append(o.getChildAtIndex(i))
+                except Exception:
+                    pass
+
+    def extents(self, o):
+        e = o.queryComponent().getExtents(pyatspi.DESKTOP_COORDS)
+        return e.x, e.y, e.width, e.height
+
+    def on_screen(self, o):
+        """Inside the window and not zero-sized (GTK 4.8 sets no SHOWING state)."""
+        try:
+            x, y, w, h = self.extents(o)
+        except Exception:
+            return False
+        W, H = self.window_size
+        return w > 0 and h > 0 and x >= 0 and y >= 0 and x + w <= W + 2 and y + h <= H + 2
+
+    def find_all(self, name=None, role=None, root=None, visible=False):
+        res = []
+        for o in self.walk(root):
+            try:
+                if role and o.getRoleName() != role:
+                    continue
+                if name is not None:
+                    n = o.name or ""
+                    if callable(name) and not name(n):
+                        continue
+                    if not callable(name) and n != name:
+                        continue
+            except Exception:
+                continue
+            if visible and not self.on_screen(o):
+                continue
+            res.append(o)
+        return res
+
+    def find(self, name, role=None, root=None, timeout=10, visible=None):
+        """The first widget of @p name (a string or a predicate) and @p role
+        under @p root; on screen unless @p visible is False (by default a
+        page, "… page", may reach below the window: it only needs extents)."""
+        if visible is None:
+            visible = not (isinstance(name, str) and name.endswith(" page"))
+        t0 = time.time()
+        while True:
+            r = self.find_all(name, role, root, visible=visible)
+            if not visible:  # hidden pages of a stack have no extents
+                r = [o for o in r if self._has_extents(o)] or r
+            if r:
+                return r[0]
+            if time.time() - t0 > timeout:
+                raise Failure(f"no {role or 'widget'} named {name!r} on screen")
+            time.sleep(0.2)
+
+    def find_label(self, pred, root=None, timeout=10):
+        """A label on screen whose name or text satisfies @p pred."""
+        t0 = time.time()
+        while True:
+            for o in self.find_all(role="label", root=root, visible=True):
+                try:
+                    if pred(o.name or "") or pred(self.text(o)):
+                        return o
+                except Exception:
+                    continue
+            if time.time() - t0 > timeout:
+                raise Failure("no such label on screen")
+            time.sleep(0.3)
+
+    def _has_extents(self, o):
+        try:
+            return self.extents(o)[2] > 0
+        except Exception:
+            return False
+
+    def value(self, o):
+        return o.queryValue().currentValue
+
+    def text(self, o):
+        try:
+            t = o.queryText()
+            return t.getText(0, t.characterCount)
+        except Exception:
+            return o.name or ""
+
+    def center(self, o):
+        x, y, w, h = self.extents(o)
+        return x + w // 2, y + h // 2
+
+    def click(self, o, button=1, at=None):
+        x, y, w, h = self.extents(o)
+        px, py = (x + w // 2, y + h // 2) if at is None else (x + int(at[0] * w), y + int(at[1] * h))
+        self.xdo("mousemove", str(px + 2), str(py + 1))
+        self.xdo("mousemove", str(px), str(py), "click", str(button))
+        time.sleep(0.3)
+
+    def wait_for(self, cond, what, timeout=10):
+        """Polls @p cond() until it is true (the GUI may lag under load)."""
+        t0 = time.time()
+        while not cond():
+            if time.time() - t0 > timeout:
+                raise Failure(what)
+            time.sleep(0.2)
+
+    def wheel(self, o, down=1, up=0):
+        cx, cy = self.center(o)
+        # a motion from outside onto the widget first: GTK sends the wheel to
+        # the widget it last saw the pointer enter
+        x, y, w, h = self.extents(o)
+        self.xdo("mousemove", str(max(0, x - 8)), str(max(0, y - 8)))
+        time.sleep(0.1)
+        self.xdo("mousemove", str(cx + 3), str(cy + 3))
+        time.sleep(0.1)
+        self.xdo("mousemove", str(cx), str(cy))
+        time.sleep(0.1)
+        time.sleep(0.1)
+        for _ in range(down):
+            self.xdo("click", "5")
+            time.sleep(0.05)
+        for _ in range(up):
+            self.xdo("click", "4")
+            time.sleep(0.05)
+        time.sleep(0.3)
+
+    def drag(self, o, frm, to, steps=16, button=1, delay=0.02, mods=None):
+        """A real drag inside widget @p o from fraction frm=(fx, fy) to to=(fx, fy) of its extents."""
+        x, y, w, h = self.extents(o)
+        ax, ay = x + int(frm[0] * w), y + int(frm[1] * h)
+        bx, by = x + int(to[0] * w), y + int(to[1] * h)
+        if mods:
+            self.xdo("keydown", mods)
+        self.xdo("mousemove", str(ax), str(ay), "mousedown", str(button))
+        for k in range(1, steps + 1):
+            self.xdo("mousemove", str(ax + (bx - ax) * k // steps), str(ay + (by - ay) * k // steps))
+            time.sleep(delay)
+        self.xdo("mouseup", str(button))
+        if mods:
+            self.xdo("keyup", mods)
+        time.sleep(0.2)
+
+    def shown(self, combo):
+        """The item a drop-down shows."""
+        texts = [self.text(o) for o in self.find_all(role="label", root=combo)]
+        texts = [t for t in texts if t and t != "(None)"]
+        return texts[-1] if texts else ""
+
+    def choose(self, combo, options, item):
+        """Chooses @p item of drop-down @p combo whose items are @p options, in
+        order: opened with a click, moved to with the arrow keys, taken with
+        Return (a click on an item of GTK 4.8's drop-down list is not taken
+        under Xvfb)."""
+        check(item in options, f"{item!r} is not one of {options}")
+        self.click(combo)
+        time.sleep(0.4)
+        self.key("Home")  # the list opens with its first item under the keyboard
+        for _ in range(options.index(item)):
+            self.key("Down")
+        self.key("Return")
+        time.sleep(0.3)
+        check(self.shown(combo) == item, f"{combo.name}: chose {self.shown(combo)!r}, not {item!r}")
+
+    def save_as(self, path):
+        """Ctrl+Shift+S, the path typed into the file chooser, Return (an old
+        file there is removed first: the chooser would ask to replace it)."""
+        if os.path.exists(path):
+            os.remove(path)
+        self.focus_main()
+        self.key("ctrl+shift+s")
+        self.xdo("search", "--sync", "--name", "Save session")
+        time.sleep(0.5)
+        self.key("ctrl+a")
+        self.type(path)
+        self.key("Return")
+        time.sleep(1.5)
+        check(os.path.exists(path), f"Save as wrote no {path}")
+        self.focus_main()
+
+    def set_spin(self, o, value):
+        """Types a value into a spin button: click, select all, type, Enter."""
+        self.click(o)
+        self.key("ctrl+a")
+        self.type(str(value))
+        self.key("Return")
+
+    def page(self, title, timeout=10):
+        """Shows the side-bar page @p title (a row of the stack sidebar)."""
+        sidebar = self.find("Sidebar", "list", visible=False, timeout=timeout)
+        t0 = time.time()
+        while True:
+            rows = [o for o in self.find_all(title, root=sidebar)
+                    if o.getRoleName() in ("label", "list item") and self.on_screen(o)]
+            if rows or time.time() - t0 > timeout:
+                break
+            time.sleep(0.3)
+        check(rows, f"no side-bar page {title!r}")
+        def shown():  # a hidden page of the stack has no extents
+            return [o for o in self.find_all(f"{title} page") if self.extents(o)[2] > 0]
+
+        for _ in range(3):  # a click a busy GUI missed is made again
+            self.click(rows[0])
+            t0 = time.time()
+            while time.time() - t0 < 8:
+                if shown():
+                    return
+                time.sleep(0.3)
+        raise Failure(f"the side bar did not show the page {title!r}")
+
+    def title(self):
+        return self.xdo("getwindowname", self.wid).strip()
+
+    # ---- frames ---------------------------------------------------------------------------
+
+    def frames_log(self):
+        if not os.path.exists(self.frames):
+            return []
+        rows = []
+        for line in open(self.frames):
+            p = line.split()
+            if len(p) >= 7:
+                w, h = map(int, p[2].split("x"))
+                rows.append({"ms": float(p[0]), "kind": p[1], "w": w, "h": h,
+                             "render_ms": float(p[3]), "latency_ms": float(p[4]),
+                             "state": int(p[5])})
+        return rows
+
+    def n_full(self):
+        return sum(1 for f in self.frames_log() if f["kind"] == "full")
+
+    def wait_full(self, n, what="a full frame", timeout=120):
+        """Waits for more than @p n full-quality frames."""
+        t0 = time.time()
+        while time.time() - t0 < timeout:
+            if self.n_full() > n:
+                time.sleep(0.4)
+                return
+            if self.app_proc and self.app_proc.poll() is not None:
+                raise Failure(f"the application died waiting for {what}")
+            time.sleep(0.1)
+        raise Failure(f"no full-quality frame after {what}")
+
+    def full_png(self, copy_to=None):
+        src = os.path.join(self.out, "full.png")
+        if copy_to:
+            dst = os.path.join(self.out, copy_to)
+            shutil.copyfile(src, dst)
+            return dst
+        return src
+
+
+def ae(a, b):
+    """ImageMagick's absolute error count between two images (0: identical)."""
+    r = subprocess.run(["compare", "-metric", "AE", a, b, "null:"], capture_output=True, text=True)
+    try:
+        return float(r.stderr.split()[0])
+    except (ValueError, IndexError):
+        return float("inf")
+
+
+def psnr(a, b):
+    r = subprocess.run(["compare", "-metric", "PSNR", a, b, "null:"], capture_output=True, text=True)
+    t = r.stderr.split()[0] if r.stderr.split() else "0"
+    return float("inf") if t == "inf" else float(t)
+
+
+def run(main):
+    """Runs a test's main(): exit 0 on success, 1 with the message on a Failure."""
+    try:
+        main()
+    except Failure as e:
+        print("FAIL:", e)
+        sys.exit(1)
+    print("passed")
