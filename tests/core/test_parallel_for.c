@@ -10,6 +10,7 @@
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
+#include <threads.h>
 
 #include "core/parallel_for.h"
 
@@ -98,6 +99,7 @@ typedef struct prog_ctx {
     int calls;
     int bad;
     int stop_at; /* cancel at this call (0: never) */
+    int hold;    /* other threads wait in the body until the caller has reported */
     long ran;
 } prog_ctx;
 
@@ -107,6 +109,7 @@ prog_cb(void *user, double f) {
     if (omp_get_thread_num() != 0 || f < p->last || f < 0.25 || f > 0.75)
         p->bad = 1;
     p->last = f;
+#pragma omp atomic update
     p->calls++;
     return p->stop_at && p->calls >= p->stop_at;
 }
@@ -115,6 +118,17 @@ static void
 ran_body(void *ctx, long i0, long i1, int w) {
     (void)w;
     prog_ctx *p = ctx;
+    /* on a busy machine the other threads could run every item before the
+     * caller, which alone reports, runs its first chunk: with hold they
+     * wait (at most 10 s) for its first report */
+    for (int k = 0; p->hold && omp_get_thread_num() != 0 && k < 100000; k++) {
+        int calls;
+#pragma omp atomic read
+        calls = p->calls;
+        if (calls > 0)
+            break;
+        thrd_sleep(&(struct timespec){.tv_sec = 0, .tv_nsec = 100000}, NULL);
+    }
 #pragma omp atomic
     p->ran += i1 - i0;
 }
@@ -153,6 +167,7 @@ test_progress_and_cancel(void **state) {
     /* with threads, the others stop too: far from every item runs */
     memset(&p, 0, sizeof p);
     p.stop_at = 1;
+    p.hold = 1;
     assert_int_equal(vv_parallel_for(1000000, 1, 4, ran_body, &p, &pr), VV_ERR_CANCELLED);
     assert_true(p.ran < 1000000);
     /* no callback: no reports, no cancellation */
