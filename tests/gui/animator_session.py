@@ -115,8 +115,10 @@ def main():
                 if count is not None and k >= count:
                     time.sleep(0.5)
                     return
+                # without a count: done when no frame came for 2 s (with a
+                # count, wait for it: a frame may take longer, e.g. under asan)
                 stable = stable + 1 if k == last and k > 0 else 0
-                if stable >= 8:
+                if count is None and stable >= 8:
                     return
                 last = k
                 time.sleep(0.25)
