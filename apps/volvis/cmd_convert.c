@@ -11,6 +11,9 @@ static const cli_opt_spec convert_opts[] = {
     {"format", 0, "nrrd|slc|vvb"},
     {"no-coarse", 0, NULL},
     {"strict", 0, NULL},
+    {"label", 0, NULL},
+    {"nifti2", 0, NULL},
+    {"no-compress", 0, NULL},
     {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
     {"series", 0, "N"},
     {"channel", 0, "C"},
@@ -172,16 +175,26 @@ cli_convert_main(int argc, char **argv) {
         return CLI_EXIT_FAIL;
     }
     vv_error_clear();
-    vv_status st = vv_volume_save(v, out, format, strict);
+    vv_save_options so;
+    vv_save_options_init(&so);
+    so.format = format;
+    so.strict = strict;
+    so.label = cli_count(&a, "label") > 0;
+    so.nifti_version = cli_count(&a, "nifti2") > 0 ? 2 : 0;
+    if (cli_count(&a, "no-compress") > 0)
+        so.compress = 0;
+    vv_status st = vv_volume_save_with(v, out, &so);
     if (st != VV_OK) {
         rc = cli_fail(st, out);
         vv_volume_free(v);
         return rc;
     }
     vv_volume *back = NULL;
-    if (convert && !quiet)
+    if (convert && !quiet && format == VV_FORMAT_SLC)
         cli_error("note: %s: %s: rescaled values %g..%g to fit", out, why, v->range[0],
                   v->range[1]);
+    else if (convert && !quiet)
+        cli_error("warning: %s: %s", out, why);
     if (!quiet) {
         /* the voxel type written: what the file holds now */
         vv_load_options lo;

@@ -131,8 +131,15 @@ typedef struct vv_save_options {
     /** 1: what the format cannot hold as it is (another voxel type) is
      *  VV_ERR_UNSUPPORTED; 0: it is converted (SLC: rescaled to 8 bits) */
     int strict;
-    /** -1: the format's default (NRRD gzip, SLC run-length); 0: none; 1: compressed */
+    /** -1: the format's default (NRRD gzip, SLC run-length, MetaImage zlib);
+     *  0: none; 1: compressed. NIfTI follows the name (.nii.gz: gzip). */
     int compress;
+    /** 1: the voxels are labels (segment ids): NIfTI marks the file
+     *  NIFTI_INTENT_LABEL; an integer voxel type is required */
+    int label;
+    /** NIfTI: 1 or 2; 0: NIfTI-1 unless an axis is longer than NIfTI-1's
+     *  32767 voxels */
+    int nifti_version;
 } vv_save_options;
 
 /** Format VV_FORMAT_AUTO, strict 0, compress -1. */
@@ -176,8 +183,27 @@ vv_status vv_nrrd_write(const vv_volume *v, const char *path, int gzip);
 
 /** NIfTI-1/NIfTI-2 (.nii, .nii.gz, .hdr/.img) through nifti_clib; scaling applied. */
 vv_status vv_nifti_read(vv_volume **out, const char *path);
+/**
+ * Writes NIfTI-1 (NIfTI-2 when opt->nifti_version is 2 or an axis is over
+ * 32767 voxels) as one file: .nii, or .nii.gz gzip-compressed. Voxel type,
+ * spacing, origin and direction are kept (an LPS volume's world turned into
+ * NIfTI's RAS); sform always, qform when the direction is orthonormal;
+ * intent NIFTI_INTENT_LABEL when opt->label. Atomic. @p opt may be NULL.
+ * Errors: VV_ERR_UNSUPPORTED (another extension; a float label volume;
+ * NIfTI-1 asked for a volume it cannot hold), VV_ERR_INVALID, VV_ERR_IO.
+ */
+vv_status vv_nifti_write(const vv_volume *v, const char *path, const vv_save_options *opt);
 /** MetaImage .mhd (detached data) or .mha (LOCAL data), optionally zlib-compressed. */
 vv_status vv_mhd_read(vv_volume **out, const char *path);
+/**
+ * Writes MetaImage: .mha (one file) or .mhd with its data beside it (.raw,
+ * or .zraw when compressed), every voxel type, spacing, origin and
+ * direction (a RAS volume's world turned into ITK's LPS); zlib-compressed
+ * unless @p compress is 0. Atomic (an .mhd's data file is removed when its
+ * header cannot be written). Errors: VV_ERR_UNSUPPORTED (another
+ * extension), VV_ERR_INVALID, VV_ERR_IO, VV_ERR_NOMEM.
+ */
+vv_status vv_mhd_write(const vv_volume *v, const char *path, int compress);
 /** VTK legacy STRUCTURED_POINTS, BINARY (big-endian) or ASCII, first SCALARS array. */
 vv_status vv_vtk_read(vv_volume **out, const char *path);
 /**

@@ -682,6 +682,11 @@ mhd_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
     return vv_mhd_read(out, path);
 }
 
+static vv_status
+mhd_write_record(const vv_volume *v, const char *path, const vv_save_options *opt) {
+    return vv_mhd_write(v, path, opt->compress);
+}
+
 static const char *const mhd_extensions[] = {"mhd", "mha", NULL};
 static const char *const mhd_aliases[] = {"mha", "metaimage", NULL};
 
@@ -691,7 +696,10 @@ const vv_volume_format vv_volume_format_mhd = {
     .title = "MetaImage",
     .extensions = mhd_extensions,
     .aliases = mhd_aliases,
-    .doc = "MetaImage (ITK): detached data (.mhd) or one file (.mha), raw or zlib",
+    .doc = "MetaImage (ITK): detached data (.mhd) or one file (.mha), raw or zlib; writes "
+           "every voxel type, TransformMatrix/Offset/ElementSpacing (RAS turned to ITK's LPS), "
+           "zlib-compressed unless --no-compress",
     .looks_like = mhd_looks_like,
     .read = mhd_read_record,
+    .write = mhd_write_record,
 };

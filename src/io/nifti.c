@@ -13,6 +13,18 @@
  * norms of M's upper 3x3, direction = its normalised columns, origin = its
  * translation column; world coordinates are NIfTI's RAS+.
  *
+ * Writing (vv_nifti_write): NIfTI-1 (NIfTI-2 when asked or when an axis
+ * is longer than 32767 voxels) as one file, .nii or .nii.gz, every voxel
+ * type as it is; the header is made by nifti_clib from a nifti_image (the
+ * quaternion of the qform by nifti_dmat44_to_quatern), the bytes are
+ * written by us through an atomic file (zout.h for gzip). The world of an
+ * LPS volume (DICOM) is turned into NIfTI's RAS (x and y negated), the
+ * conversion the reader undoes; a volume of another or no frame is written
+ * as it is. sform = the full index-to-world matrix; qform = the same when
+ * the direction matrix is orthonormal (else qform_code 0: a quaternion
+ * cannot hold a shear); both codes NIFTI_XFORM_SCANNER_ANAT. NIfTI-1 holds
+ * the matrix, spacing and origin as 32-bit floats, NIfTI-2 as doubles.
+ *
  * Values: scl_slope/scl_inter are applied when slope is finite, non-zero and
  * not the identity (1, 0); the volume is then f32, or f64 when the stored type
  * is f64 or a 64-bit integer. Without scaling the stored type is kept;
@@ -33,6 +45,7 @@
 #include "core/internal.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
+#include "zout.h"
 
 static pthread_mutex_t nifti_lock = PTHREAD_MUTEX_INITIALIZER;
 
@@ -433,7 +446,32 @@ read_locked(vv_volume **out, const char *path) {
     int dims[3];
     vv_voxel_type stored = VV_U8;
     vv_status s = header_dims(nim, dims, &stored);
-    if (s == VV_OK && nim->iname) {
+    int one_file =
+        nim->nifti_type == NIFTI_FTYPE_NIFTI1_1 || nim->nifti_type == NIFTI_FTYPE_NIFTI2_1;
+    if (s == VV_OK && one_file) {
+        /* one file: the voxels follow the header in @p path, read here.
+         * nifti_image_load looks the image file up again by its base name
+         * and takes x.nii before the x.nii.gz it was given (the voxels of
+         * another file) */
+        struct stat a, b;
+        if (!nim->fname || stat(nim->fname, &a) != 0 || stat(path, &b) != 0 ||
+            a.st_dev != b.st_dev || a.st_ino != b.st_ino)
+            s = vv_error_set(VV_ERR_FORMAT, "nifti_clib read the header of %s, not of this file",
+                             nim->fname ? vv_path_basename(nim->fname) : "another file");
+        int64_t bytes = s == VV_OK ? nifti_get_volsize(nim) : 0;
+        znzFile fp = NULL;
+        if (s == VV_OK && !(nim->data = malloc(bytes > 0 ? (size_t)bytes : 1)))
+            s = vv_error_set(VV_ERR_NOMEM, "out of memory for %lld bytes", (long long)bytes);
+        if (s == VV_OK && znz_isnull(fp = znzopen(path, "rb", nifti_is_gzfile(path))))
+            s = vv_error_set(VV_ERR_IO, "cannot open: %s", strerror(errno));
+        if (s == VV_OK && (znzseek(fp, (znz_off_t)nim->iname_offset, SEEK_SET) < 0 ||
+                           nifti_read_buffer(fp, nim->data, bytes, nim) != bytes))
+            s = vv_error_set(VV_ERR_FORMAT,
+                             "cannot read the voxel data (file truncated or corrupt)");
+        if (!znz_isnull(fp))
+            znzclose(fp);
+    }
+    if (s == VV_OK && !one_file && nim->iname) {
         FILE *f = fopen(nim->iname, "rb");
         if (!f)
             s = vv_error_set(VV_ERR_IO, "cannot open image file %s: %s",
@@ -441,7 +479,7 @@ read_locked(vv_volume **out, const char *path) {
         else
             fclose(f);
     }
-    if (s == VV_OK && nifti_image_load(nim) != 0)
+    if (s == VV_OK && !one_file && nifti_image_load(nim) != 0)
         s = vv_error_set(VV_ERR_FORMAT, "cannot read the voxel data (file truncated or corrupt)");
     if (s == VV_OK && !nim->data)
         s = vv_error_set(VV_ERR_FORMAT, "no voxel data");
@@ -475,6 +513,214 @@ vv_nifti_read(vv_volume **out, const char *path) {
     if (s != VV_OK)
         return vv_error_prefix(s, "nifti: %s", vv_path_basename(path));
     return VV_OK;
+}
+
+/* ---- writing ------------------------------------------------------------------ */
+
+static int
+nifti_datatype_of(vv_voxel_type t) {
+    static const int map[] = {DT_UINT8,  DT_INT8,  DT_UINT16,  DT_INT16,
+                              DT_UINT32, DT_INT32, DT_FLOAT32, DT_FLOAT64};
+    return (int)t >= 0 && (int)t < 8 ? map[t] : DT_UNKNOWN;
+}
+
+/* Millimetres per unit of the units NIfTI cannot name (feet, inches), else 0. */
+static double
+foreign_unit_mm(vv_unit u) {
+    return u == VV_UNIT_FOOT ? 304.8 : u == VV_UNIT_INCH ? 25.4 : 0;
+}
+
+static int
+nifti_fits(const vv_volume *v, char *why, size_t cap) {
+    if (foreign_unit_mm(v->unit) > 0) {
+        snprintf(why, cap,
+                 "NIfTI holds metres, millimetres or microns, the spacing is in %s "
+                 "(written in millimetres)",
+                 vv_unit_name(v->unit));
+        return 0;
+    }
+    return 1;
+}
+
+/* 1 when the columns of @p d (row-major) are orthonormal to 1e-6. */
+static int
+orthonormal(const double d[9]) {
+    for (int a = 0; a < 3; a++)
+        for (int b = a; b < 3; b++) {
+            double dot = 0;
+            for (int r = 0; r < 3; r++)
+                dot += d[r * 3 + a] * d[r * 3 + b];
+            if (fabs(dot - (a == b)) > 1e-6)
+                return 0;
+        }
+    return 1;
+}
+
+/*
+ * The header of @p v (and its 4-byte extension flag, all zero) into @p buf
+ * (at least 544 bytes), *@p len its size (352 or 544): nifti_clib builds it
+ * from a nifti_image. Called under nifti_lock.
+ */
+static vv_status
+make_header(const vv_volume *v, const vv_save_options *opt, int version, unsigned char *buf,
+            size_t *len) {
+    int64_t dims[8] = {3, v->dims[0], v->dims[1], v->dims[2], 1, 1, 1, 1};
+    nifti_set_debug_level(0);
+    nifti_image *nim = nifti_make_new_nim(dims, nifti_datatype_of(v->type), 0);
+    if (!nim)
+        return vv_error_set(VV_ERR_NOMEM, "nifti_clib cannot make the header");
+    double mm = foreign_unit_mm(v->unit), scale = mm > 0 ? mm : 1;
+    /* LPS to RAS: x and y change sign */
+    double flip[3] = {1, 1, 1};
+    if (v->space == VV_SPACE_LPS)
+        flip[0] = flip[1] = -1;
+    nifti_dmat44 m;
+    memset(&m, 0, sizeof m);
+    for (int r = 0; r < 3; r++) {
+        for (int c = 0; c < 3; c++)
+            m.m[r][c] = flip[r] * v->direction[r * 3 + c] * v->spacing[c] * scale;
+        m.m[r][3] = flip[r] * v->origin[r] * scale;
+    }
+    m.m[3][3] = 1;
+    for (int c = 0; c < 3; c++)
+        nim->pixdim[c + 1] = v->spacing[c] * scale;
+    nim->dx = nim->pixdim[1];
+    nim->dy = nim->pixdim[2];
+    nim->dz = nim->pixdim[3];
+    nim->sform_code = NIFTI_XFORM_SCANNER_ANAT;
+    nim->sto_xyz = m;
+    nim->qform_code = NIFTI_XFORM_UNKNOWN;
+    if (orthonormal(v->direction)) {
+        double dx, dy, dz;
+        nifti_dmat44_to_quatern(m, &nim->quatern_b, &nim->quatern_c, &nim->quatern_d,
+                                &nim->qoffset_x, &nim->qoffset_y, &nim->qoffset_z, &dx, &dy, &dz,
+                                &nim->qfac);
+        nim->qform_code = NIFTI_XFORM_SCANNER_ANAT;
+        nim->qto_xyz = m;
+    }
+    nim->pixdim[0] = nim->qfac;
+    switch (mm > 0 ? VV_UNIT_MM : v->unit) {
+    case VV_UNIT_METER:
+        nim->xyz_units = NIFTI_UNITS_METER;
+        break;
+    case VV_UNIT_MM:
+        nim->xyz_units = NIFTI_UNITS_MM;
+        break;
+    case VV_UNIT_MICRON:
+        nim->xyz_units = NIFTI_UNITS_MICRON;
+        break;
+    default:
+        nim->xyz_units = NIFTI_UNITS_UNKNOWN;
+        break;
+    }
+    nim->time_units = NIFTI_UNITS_UNKNOWN; /* no time axis */
+    nim->scl_slope = 1;
+    nim->scl_inter = 0;
+    nim->intent_code = opt->label ? NIFTI_INTENT_LABEL : NIFTI_INTENT_NONE;
+    snprintf(nim->descrip, sizeof nim->descrip, "VolVis");
+    nim->nifti_type = version == 2 ? NIFTI_FTYPE_NIFTI2_1 : NIFTI_FTYPE_NIFTI1_1;
+    nim->iname_offset = version == 2 ? 544 : 352;
+    memset(buf, 0, 544);
+    int bad;
+    if (version == 2) {
+        nifti_2_header h;
+        bad = nifti_convert_nim2n2hdr(nim, &h);
+        h.vox_offset = 544; /* the conversion leaves it 0: data right after the header */
+        memcpy(buf, &h, sizeof h);
+        *len = 544;
+    } else {
+        nifti_1_header h;
+        bad = nifti_convert_nim2n1hdr(nim, &h);
+        h.vox_offset = 352; /* the conversion leaves it 0: data right after the header */
+        memcpy(buf, &h, sizeof h);
+        *len = 352;
+    }
+    nifti_image_free(nim);
+    if (bad)
+        return vv_error_set(VV_ERR_INVALID, "nifti_clib cannot convert the header");
+    return VV_OK;
+}
+
+static vv_status
+check_writable(const vv_volume *v, const vv_save_options *opt, int *version) {
+    if (!v->data)
+        return vv_error_set(VV_ERR_INVALID, "volume has no data");
+    if (nifti_datatype_of(v->type) == DT_UNKNOWN)
+        return vv_error_set(VV_ERR_UNSUPPORTED, "voxel type %d cannot be written", (int)v->type);
+    if (opt->label && (v->type == VV_F32 || v->type == VV_F64))
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "a label volume must hold integers, the volume is %s",
+                            vv_voxel_type_name(v->type));
+    for (int i = 0; i < 3; i++)
+        if (!(v->spacing[i] > 0) || !isfinite(v->spacing[i]) || !isfinite(v->origin[i]))
+            return vv_error_set(VV_ERR_INVALID, "axis %d: spacing %g, origin %g", i, v->spacing[i],
+                                v->origin[i]);
+    for (int i = 0; i < 9; i++)
+        if (!isfinite(v->direction[i]))
+            return vv_error_set(VV_ERR_INVALID, "the direction matrix is not finite");
+    int need2 = v->dims[0] > 32767 || v->dims[1] > 32767 || v->dims[2] > 32767;
+    if (opt->nifti_version != 0 && opt->nifti_version != 1 && opt->nifti_version != 2)
+        return vv_error_set(VV_ERR_INVALID, "NIfTI version %d (1 or 2)", opt->nifti_version);
+    if (opt->nifti_version == 1 && need2)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "NIfTI-1 holds at most 32767 voxels per axis, the volume is %d x %d "
+                            "x %d (write NIfTI-2)",
+                            v->dims[0], v->dims[1], v->dims[2]);
+    *version = opt->nifti_version ? opt->nifti_version : need2 ? 2 : 1;
+    return VV_OK;
+}
+
+vv_status
+vv_nifti_write(const vv_volume *v, const char *path, const vv_save_options *opt) {
+    if (!v || !path)
+        return vv_error_set(VV_ERR_INVALID, "nifti: NULL argument");
+    vv_save_options defaults;
+    vv_save_options_init(&defaults);
+    if (!opt)
+        opt = &defaults;
+    int gz = vv_format_path_has_ext(path, "nii.gz"), version = 1;
+    vv_status s = VV_OK;
+    if (!gz && !vv_format_path_has_ext(path, "nii"))
+        s = vv_error_set(VV_ERR_UNSUPPORTED,
+                         "NIfTI is written as one file named .nii or .nii.gz (not as a "
+                         ".hdr/.img pair)");
+    if (s == VV_OK)
+        s = check_writable(v, opt, &version);
+    unsigned char hdr[544];
+    size_t hlen = 0;
+    if (s == VV_OK) {
+        pthread_mutex_lock(&nifti_lock);
+        s = make_header(v, opt, version, hdr, &hlen);
+        pthread_mutex_unlock(&nifti_lock);
+    }
+    vv_atomic_file af;
+    if (s == VV_OK)
+        s = vv_atomic_file_open(&af, path);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "nifti: %s", vv_path_basename(path));
+    vv_zout *z = NULL;
+    s = vv_zout_begin(&z, af.fp, gz ? VV_ZOUT_GZIP : VV_ZOUT_PLAIN);
+    if (s == VV_OK)
+        s = vv_zout_write(z, hdr, hlen);
+    if (s == VV_OK)
+        s = vv_zout_write(z, v->data, vv_volume_voxel_count(v) * vv_voxel_type_size(v->type));
+    if (s == VV_OK) {
+        s = vv_zout_end(z, NULL);
+        z = NULL;
+    }
+    vv_zout_abort(z);
+    if (s == VV_OK)
+        s = vv_atomic_file_commit(&af);
+    else
+        vv_atomic_file_abort(&af);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "nifti: %s", vv_path_basename(path));
+    return VV_OK;
+}
+
+static vv_status
+nifti_write_record(const vv_volume *v, const char *path, const vv_save_options *opt) {
+    return vv_nifti_write(v, path, opt);
 }
 
 /* ---- the format record ------------------------------------------------------ */
@@ -548,8 +794,12 @@ const vv_volume_format vv_volume_format_nifti = {
     .title = "NIfTI",
     .extensions = nifti_extensions,
     .aliases = nifti_aliases,
-    .doc = "NIfTI-1 and NIfTI-2 through nifti_clib: scaling applied, qform/sform geometry",
+    .doc = "NIfTI-1 and NIfTI-2 through nifti_clib: scaling applied, qform/sform geometry; "
+           "writes .nii/.nii.gz, every voxel type, qform+sform (LPS turned to RAS), units, "
+           "intent LABEL with --label",
     .flags = VV_FORMAT_FLAG_THIRD_PARTY | VV_FORMAT_FLAG_GZIP,
     .looks_like = nifti_looks_like,
+    .fits = nifti_fits,
     .read = nifti_read_record,
+    .write = nifti_write_record,
 };

@@ -1,0 +1,270 @@
+/*
+ * The NIfTI and MetaImage writers (issue 34): byte-identical voxels for
+ * every voxel type through .nii, .nii.gz, NIfTI-2, .mha and .mhd (raw and
+ * zlib), geometry carried (an oblique direction; LPS into NIfTI's RAS and
+ * RAS into MetaImage's LPS, x and y negated), and the failures: a full disk
+ * (RLIMIT_FSIZE), an unwritable folder, a float label volume, a .hdr name;
+ * each a one-line error naming the file, with no file left behind. The
+ * independent readers (nibabel, VTK) are in tests/writers.
+ */
+#include "testutil.h"
+
+#include <dirent.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "volvis/io.h"
+
+/* A volume of @p t with values over the type's whole range (seeded), an
+ * oblique orthonormal direction, spacing (0.7, 1.1, 2.3), origin (-5, 7, 11). */
+static vv_volume *
+make_volume(vv_voxel_type t, int nx, int ny, int nz, vv_space space) {
+    int dims[3] = {nx, ny, nz};
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_new(&v, dims, t));
+    uint64_t seed = 1234 + (uint64_t)t;
+    size_t bytes = (size_t)vv_volume_voxel_count(v) * vv_voxel_type_size(t);
+    unsigned char *p = v->data;
+    for (size_t i = 0; i < bytes; i++)
+        p[i] = (unsigned char)(vt_rnd(&seed, 0, 256));
+    if (t == VV_F32) /* no NaN bit patterns: values compare */
+        for (size_t i = 0; i < bytes / 4; i++)
+            ((float *)v->data)[i] = (float)vt_rnd(&seed, -1e6, 1e6);
+    if (t == VV_F64)
+        for (size_t i = 0; i < bytes / 8; i++)
+            ((double *)v->data)[i] = vt_rnd(&seed, -1e12, 1e12);
+    double a = 0.3, b = -0.2; /* rotation about z by a, then about x by b */
+    double rz[9] = {cos(a), -sin(a), 0, sin(a), cos(a), 0, 0, 0, 1};
+    double rx[9] = {1, 0, 0, 0, cos(b), -sin(b), 0, sin(b), cos(b)};
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) {
+            double s = 0;
+            for (int k = 0; k < 3; k++)
+                s += rx[r * 3 + k] * rz[k * 3 + c];
+            v->direction[r * 3 + c] = s;
+        }
+    v->spacing[0] = 0.7;
+    v->spacing[1] = 1.1;
+    v->spacing[2] = 2.3;
+    v->origin[0] = -5;
+    v->origin[1] = 7;
+    v->origin[2] = 11;
+    v->unit = VV_UNIT_MM;
+    v->space = space;
+    vv_volume_update_range(v);
+    return v;
+}
+
+/* Asserts @p back has @p v's voxels byte for byte and its geometry, x and y
+ * negated when @p flip, to @p eps. */
+static void
+assert_same(const vv_volume *v, const vv_volume *back, int flip, double eps) {
+    assert_int_equal(back->type, v->type);
+    for (int i = 0; i < 3; i++)
+        assert_int_equal(back->dims[i], v->dims[i]);
+    size_t bytes = (size_t)vv_volume_voxel_count(v) * vv_voxel_type_size(v->type);
+    assert_memory_equal(back->data, v->data, bytes);
+    for (int r = 0; r < 3; r++) {
+        double s = flip && r < 2 ? -1 : 1;
+        assert_near(back->spacing[r], v->spacing[r], eps);
+        assert_near(back->origin[r], s * v->origin[r], eps * 10);
+        for (int c = 0; c < 3; c++)
+            assert_near(back->direction[r * 3 + c], s * v->direction[r * 3 + c], eps);
+    }
+}
+
+static void
+roundtrip(const char *name, const vv_save_options *o, vv_space space, int flip, double eps) {
+    const char *dir = vt_outdir("io_writers");
+    for (int t = VV_U8; t <= VV_F64; t++) {
+        vv_volume *v = make_volume((vv_voxel_type)t, 13, 7, 5, space), *back = NULL;
+        const char *path = vt_path(dir, name);
+        vt_ok(vv_volume_save_with(v, path, o));
+        vt_ok(vv_volume_load(&back, path, NULL));
+        assert_same(v, back, flip, eps);
+        vv_volume_free(back);
+        vv_volume_free(v);
+    }
+}
+
+static void
+test_nifti_types(void **state) {
+    (void)state;
+    vv_save_options o;
+    vv_save_options_init(&o);
+    /* NIfTI-1 keeps the geometry as 32-bit floats */
+    roundtrip("types.nii", &o, VV_SPACE_RAS, 0, 1e-6);
+    roundtrip("types.nii.gz", &o, VV_SPACE_UNKNOWN, 0, 1e-6);
+    roundtrip("types_lps.nii.gz", &o, VV_SPACE_LPS, 1, 1e-6);
+    o.nifti_version = 2; /* doubles */
+    roundtrip("types2.nii", &o, VV_SPACE_RAS, 0, 1e-12);
+}
+
+static void
+test_mhd_types(void **state) {
+    (void)state;
+    vv_save_options o;
+    vv_save_options_init(&o);
+    roundtrip("types.mha", &o, VV_SPACE_LPS, 0, 1e-14);
+    roundtrip("types_ras.mha", &o, VV_SPACE_RAS, 1, 1e-14);
+    roundtrip("types.mhd", &o, VV_SPACE_UNKNOWN, 0, 1e-14);
+    o.compress = 0;
+    roundtrip("types_raw.mha", &o, VV_SPACE_UNKNOWN, 0, 1e-14);
+    roundtrip("types_raw.mhd", &o, VV_SPACE_UNKNOWN, 0, 1e-14);
+}
+
+/* An axis of 40000 voxels is NIfTI-2 (NIfTI-1 holds 32767); asking for
+ * NIfTI-1 is an error. */
+static void
+test_nifti2_long_axis(void **state) {
+    (void)state;
+    const char *dir = vt_outdir("io_writers");
+    vv_volume *v = make_volume(VV_U8, 40000, 2, 1, VV_SPACE_RAS), *back = NULL;
+    const char *path = vt_path(dir, "long.nii");
+    vt_ok(vv_volume_save_with(v, path, NULL));
+    size_t n = 0;
+    unsigned char *bytes = vt_read_file(path, &n);
+    assert_int_equal(n, 544 + 80000);
+    int32_t hs;
+    memcpy(&hs, bytes, 4);
+    assert_int_equal(hs, 540);
+    free(bytes);
+    vt_ok(vv_volume_load(&back, path, NULL));
+    assert_same(v, back, 0, 1e-12);
+    vv_volume_free(back);
+    vv_save_options o;
+    vv_save_options_init(&o);
+    o.nifti_version = 1;
+    unlink(path);
+    assert_int_equal(vv_volume_save_with(v, path, &o), VV_ERR_UNSUPPORTED);
+    assert_non_null(strstr(vv_error_message(), "32767"));
+    assert_int_not_equal(access(path, F_OK), 0);
+    vv_volume_free(v);
+}
+
+/* Number of entries of @p dir other than . and .. */
+static int
+entries(const char *dir) {
+    DIR *d = opendir(dir);
+    assert_non_null(d);
+    int n = 0;
+    struct dirent *e;
+    while ((e = readdir(d)))
+        n += strcmp(e->d_name, ".") && strcmp(e->d_name, "..");
+    closedir(d);
+    return n;
+}
+
+/* Asserts the last error is one line naming @p name. */
+static void
+assert_one_line(const char *name) {
+    const char *m = vv_error_message();
+    if (!strstr(m, name) || strchr(m, '\n'))
+        fail_msg("not a one-line error naming %s: \"%s\"", name, m);
+}
+
+/* A file-size limit of 64 KiB (a full disk) under a 1 MiB volume: each
+ * writer fails with one line naming the file and leaves no file. The limit
+ * is this process's soft limit, lowered for the write and raised back (no
+ * fork: a child of a process with OpenMP threads can deadlock in them). */
+static void
+test_full_disk(void **state) {
+    (void)state;
+    char dir[512];
+    snprintf(dir, sizeof dir, "%s/fsize", vt_outdir("io_writers"));
+    mkdir(dir, 0755);
+    static const char *const names[] = {"full.nii", "full.nii.gz", "full.mha", "full_raw.mha",
+                                        "full.mhd"};
+    vv_volume *v = make_volume(VV_U8, 128, 128, 64, VV_SPACE_RAS);
+    void (*was)(int) = signal(SIGXFSZ, SIG_IGN);
+    struct rlimit keep;
+    assert_int_equal(getrlimit(RLIMIT_FSIZE, &keep), 0);
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
+        unlink(vt_path(dir, names[i]));
+        vv_save_options o;
+        vv_save_options_init(&o);
+        o.compress = strstr(names[i], "raw") ? 0 : 1;
+        struct rlimit rl = {64 * 1024, keep.rlim_max};
+        assert_int_equal(setrlimit(RLIMIT_FSIZE, &rl), 0);
+        vv_status s = vv_volume_save_with(v, vt_path(dir, names[i]), &o);
+        assert_int_equal(setrlimit(RLIMIT_FSIZE, &keep), 0);
+        const char *m = vv_error_message();
+        if (!(s == VV_ERR_IO && strstr(m, names[i]) && !strchr(m, '\n')))
+            fail_msg("%s: status %d, \"%s\"", names[i], (int)s, m);
+        assert_int_equal(entries(dir), 0);
+    }
+    signal(SIGXFSZ, was);
+    vv_volume_free(v);
+}
+
+static void
+test_errors(void **state) {
+    (void)state;
+    vv_volume *v = make_volume(VV_F32, 4, 4, 4, VV_SPACE_RAS);
+    const char *dir = vt_outdir("io_writers");
+    /* an unwritable folder: one line, nothing there */
+    char ro[512];
+    snprintf(ro, sizeof ro, "%s/missing-folder", dir);
+    static const char *const names[] = {"a.nii", "a.nii.gz", "a.mha", "a.mhd"};
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
+        vv_error_clear();
+        assert_int_equal(vv_volume_save_with(v, vt_path(ro, names[i]), NULL), VV_ERR_IO);
+        assert_one_line(names[i]);
+    }
+    /* a float label volume cannot be NIfTI's LABEL intent */
+    vv_save_options o;
+    vv_save_options_init(&o);
+    o.label = 1;
+    const char *p = vt_path(dir, "label_f32.nii");
+    unlink(p);
+    vv_error_clear();
+    assert_int_equal(vv_volume_save_with(v, p, &o), VV_ERR_UNSUPPORTED);
+    assert_one_line("label_f32.nii");
+    assert_non_null(strstr(vv_error_message(), "integers"));
+    assert_int_not_equal(access(p, F_OK), 0);
+    /* NIfTI is written as one file only */
+    o.label = 0;
+    o.format = VV_FORMAT_NIFTI;
+    p = vt_path(dir, "pair.hdr");
+    vv_error_clear();
+    assert_int_equal(vv_volume_save_with(v, p, &o), VV_ERR_UNSUPPORTED);
+    assert_one_line("pair.hdr");
+    assert_int_not_equal(access(p, F_OK), 0);
+    vv_volume_free(v);
+}
+
+/* The label intent is written: NIfTI-1 intent_code (offset 68) 1002. */
+static void
+test_label_intent(void **state) {
+    (void)state;
+    vv_volume *v = make_volume(VV_U16, 4, 4, 4, VV_SPACE_RAS);
+    vv_save_options o;
+    vv_save_options_init(&o);
+    o.label = 1;
+    const char *p = vt_path(vt_outdir("io_writers"), "label.nii");
+    vt_ok(vv_volume_save_with(v, p, &o));
+    size_t n = 0;
+    unsigned char *b = vt_read_file(p, &n);
+    int16_t code;
+    memcpy(&code, b + 68, 2);
+    assert_int_equal(code, 1002);
+    free(b);
+    vv_volume_free(v);
+}
+
+int
+main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_nifti_types),      cmocka_unit_test(test_mhd_types),
+        cmocka_unit_test(test_nifti2_long_axis), cmocka_unit_test(test_full_disk),
+        cmocka_unit_test(test_errors),           cmocka_unit_test(test_label_intent),
+    };
+    return vt_run_tests(tests, NULL, NULL);
+}
