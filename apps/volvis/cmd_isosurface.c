@@ -1,5 +1,5 @@
 /*
- * volvis isosurface INPUT --iso V -o OUT.(ply|obj|stl) [--coarse L | --parc L]:
+ * volvis isosurface INPUT --iso V -o OUT.(ply|obj|stl|glb|vtp) [--coarse L | --parc L]:
  * Marching Cubes surface (or one of the Navigator's previews) to a mesh file.
  */
 #include <math.h>
@@ -75,12 +75,13 @@ void
 cli_isosurface_usage(FILE *out) {
     fprintf(
         out,
-        "usage: volvis isosurface [OPTIONS] INPUT --iso V -o OUT.(ply|obj|stl)\n"
+        "usage: volvis isosurface [OPTIONS] INPUT --iso V -o OUT.(ply|obj|stl|glb|vtp)\n"
         "\n"
         "Extracts the isosurface value == V of a volume with Marching Cubes (asymptotic\n"
         "decider on ambiguous faces: closed, crack-free surfaces) in world coordinates,\n"
-        "with normals from the volume gradient, and writes it as binary PLY, OBJ or\n"
-        "binary STL (from OUT's extension). Triangles face the lower values (for CT\n"
+        "with normals from the volume gradient, and writes it as binary PLY, OBJ,\n"
+        "binary STL, glTF 2.0 binary (.glb) or VTK XML PolyData (.vtp, normals as a\n"
+        "point field) (from OUT's extension). Triangles face the lower values (for CT\n"
         "bone at 300: out of the bone). Or writes one of the Navigator's previews:\n"
         "  --coarse L   coarse Marching Cubes on a grid reduced 2^L times, each vertex\n"
         "               at one of 4 positions along its edge (L = 0..8)\n"
@@ -94,7 +95,7 @@ cli_isosurface_usage(FILE *out) {
         "Options:\n"
         "  --iso V        the isovalue; voxels >= V are inside (required; must lie in\n"
         "                 the volume's value range)\n"
-        "  -o, --output OUT  the mesh file: .ply, .obj or .stl (required)\n"
+        "  -o, --output OUT  the mesh file: .ply, .obj, .stl, .glb or .vtp (required)\n"
         "  --roi I0,J0,K0:I1,J1,K1   only this voxel box (inclusive; Marching Cubes)\n"
         "  --cut PX,PY,PZ:NX,NY,NZ   clip to the side of the plane the normal points to\n"
         "                 (world coordinates; repeatable, up to 8; Marching Cubes)\n"
@@ -128,11 +129,14 @@ cli_isosurface_main(int argc, char **argv) {
             &a, a.n_pos ? "expected one INPUT, got %d arguments" : "missing INPUT", a.n_pos);
     const char *in = a.pos[0], *out = cli_get(&a, "output"), *s;
     if (!out)
-        return cli_usage_error(&a, "missing -o OUT.(ply|obj|stl)");
+        return cli_usage_error(&a, "missing -o OUT.(ply|obj|stl|glb|vtp)");
     size_t n = strlen(out);
-    if (!(n > 4 && (!strcmp(out + n - 4, ".ply") || !strcmp(out + n - 4, ".obj") ||
-                    !strcmp(out + n - 4, ".stl"))))
-        return cli_usage_error(&a, "-o: '%s' does not end in .ply, .obj or .stl", out);
+    int known = 0;
+    for (const char *const *e = (const char *const[]){".ply", ".obj", ".stl", ".glb", ".vtp", NULL};
+         *e; e++)
+        known |= n > 4 && !strcmp(out + n - 4, *e);
+    if (!known)
+        return cli_usage_error(&a, "-o: '%s' does not end in .ply, .obj, .stl, .glb or .vtp", out);
     double iso;
     if (!(s = cli_get(&a, "iso")))
         return cli_usage_error(&a, "missing --iso V");

@@ -30,7 +30,7 @@ static const cli_command commands[] = {
      cli_compress_usage},
     {"decompress", "decompress a .vvc file to NRRD or SLC", cli_decompress_main,
      cli_decompress_usage},
-    {"isosurface", "extract an isosurface (or a preview of it) to PLY, OBJ or STL",
+    {"isosurface", "extract an isosurface (or a preview of it) to PLY, OBJ, STL, glTF or VTP",
      cli_isosurface_main, cli_isosurface_usage},
     {"measure", "isosurface area and volume, histograms, distances; mesh area and volume",
      cli_measure_main, cli_measure_usage},

@@ -25,6 +25,7 @@
 #include <stdint.h>
 
 #include "core.h"
+#include "mesh.h"
 #include "model.h"
 #include "volume.h"
 
@@ -48,7 +49,8 @@ typedef enum vv_format {
     VV_FORMAT_VTK,
     VV_FORMAT_RAW,
     VV_FORMAT_TIFF,
-    VV_FORMAT_DICOM
+    VV_FORMAT_DICOM,
+    VV_FORMAT_VTI /**< VTK XML image data: written, not read */
 } vv_format;
 
 /** Number of volume formats: their ids run from 1 to this. */
@@ -206,6 +208,31 @@ vv_status vv_mhd_read(vv_volume **out, const char *path);
 vv_status vv_mhd_write(const vv_volume *v, const char *path, int compress);
 /** VTK legacy STRUCTURED_POINTS, BINARY (big-endian) or ASCII, first SCALARS array. */
 vv_status vv_vtk_read(vv_volume **out, const char *path);
+/**
+ * Writes VTK legacy STRUCTURED_POINTS, BINARY (big-endian voxels, as the
+ * format defines them), every voxel type, origin and spacing; the format has
+ * no direction matrix, so an oblique volume is written axis-aligned (the
+ * format record's fits says so first). Atomic. Errors: VV_ERR_INVALID (no
+ * data, non-finite geometry), VV_ERR_IO, VV_ERR_NOMEM.
+ */
+vv_status vv_vtk_write(const vv_volume *v, const char *path);
+/**
+ * Writes VTK XML image data (.vti, as ParaView reads it): WholeExtent,
+ * Origin, Spacing and Direction (row-major, VTK >= 9), the voxels as one
+ * point-data array "scalars" of the volume's type in one appended block,
+ * zlib-compressed in VTK's block layout when @p compress, raw otherwise;
+ * the host's byte order, UInt64 headers. Atomic. Errors: as vv_vtk_write.
+ */
+vv_status vv_vti_write(const vv_volume *v, const char *path, int compress);
+/**
+ * Writes @p m as VTK XML PolyData (.vtp): Float32 points, per-vertex normals
+ * ("Normals") and scalars (named @p scalar_name, "scalars" when NULL: the
+ * label or the field the surface was extracted from) when the mesh has
+ * them, the triangles as Int64 connectivity and offsets, one raw appended
+ * block each. Atomic. Errors: VV_ERR_INVALID (empty mesh, a name that is not
+ * plain text), VV_ERR_IO, VV_ERR_NOMEM.
+ */
+vv_status vv_vtp_write(const vv_mesh *m, const char *path, const char *scalar_name);
 /**
  * Raw voxels described by @p params (borrowed). The file must hold at least
  * header_skip + the volume's bytes; VV_ERR_FORMAT names both sizes otherwise.

@@ -155,7 +155,7 @@ class Mesh:
         return d[0], np.array([pa.x, pa.y, pa.z]), np.array([pb.x, pb.y, pb.z])
 
     def save(self, path):
-        """Writes .ply, .obj or .stl by the extension, atomically."""
+        """Writes .ply, .obj, .stl, .glb (glTF 2.0 binary) or .vtp (VTK XML PolyData) by the extension, atomically."""
         check(lib.vv_mesh_save(self._ptr, cstr(path)))
 
     def __repr__(self):

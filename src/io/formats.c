@@ -31,7 +31,8 @@
     X(vtk)                                                                                         \
     X(raw)                                                                                         \
     X(tiff)                                                                                        \
-    X(dicom)
+    X(dicom)                                                                                       \
+    X(vti)
 
 #define DECLARE(name) extern const vv_volume_format vv_volume_format_##name;
 VV_VOLUME_FORMAT_TABLE(DECLARE)

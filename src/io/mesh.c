@@ -17,7 +17,9 @@
 #include <unistd.h>
 
 #include "core/internal.h"
+#include "volvis/io.h"
 #include "volvis/mesh.h"
+#include "volvis/sys/format.h"
 
 /* Mesh files larger than this are refused before Assimp reads them. */
 #define MESH_MAX_FILE_BYTES ((uint64_t)8 << 30)
@@ -525,6 +527,8 @@ export_format(const char *path) {
         return "objnomtl";
     if (strcasecmp(dot, ".stl") == 0)
         return "stlb";
+    if (strcasecmp(dot, ".glb") == 0)
+        return "glb2"; /* glTF 2.0 binary */
     return NULL;
 }
 
@@ -533,9 +537,12 @@ vv_mesh_save(const vv_mesh *m, const char *path) {
     if (!m || !path)
         return vv_error_set(VV_ERR_INVALID, "mesh: NULL argument");
     const char *name = vv_path_basename(path);
+    if (vv_format_path_has_ext(path, "vtp"))
+        return vv_vtp_write(m, path, NULL);
     const char *fmt = export_format(path);
     if (!fmt)
-        return vv_error_set(VV_ERR_INVALID, "mesh: %s: unknown extension (use .ply, .obj or .stl)",
+        return vv_error_set(VV_ERR_INVALID,
+                            "mesh: %s: unknown extension (use .ply, .obj, .stl, .glb or .vtp)",
                             name);
     if (m->n_triangles == 0)
         return vv_error_set(VV_ERR_INVALID, "mesh: %s: the mesh has no triangles", name);

@@ -133,6 +133,9 @@ vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
                             "cannot tell the format of %s (not %s; use --raw for raw data)", path,
                             list);
     }
+    if (!r->read)
+        return vv_error_set(VV_ERR_UNSUPPORTED, "load: %s: VolVis writes %s but does not read it",
+                            vv_path_basename(path), r->title);
     s = r->read(out, path, opt);
     if (s != VV_OK) {
         vv_volume_free(*out);

@@ -419,6 +419,24 @@ vtk_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
     return vv_vtk_read(out, path);
 }
 
+static int
+vtk_fits(const vv_volume *v, char *why, size_t cap) {
+    for (int i = 0; i < 9; i++)
+        if (v->direction[i] != (i % 4 == 0 ? 1.0 : 0.0)) {
+            snprintf(why, cap,
+                     "VTK legacy STRUCTURED_POINTS holds no direction matrix: the oblique volume "
+                     "is written axis-aligned (write .vti to keep it)");
+            return 0;
+        }
+    return 1;
+}
+
+static vv_status
+vtk_write_record(const vv_volume *v, const char *path, const vv_save_options *opt) {
+    (void)opt;
+    return vv_vtk_write(v, path);
+}
+
 static const char *const vtk_extensions[] = {"vtk", NULL};
 
 const vv_volume_format vv_volume_format_vtk = {
@@ -426,7 +444,10 @@ const vv_volume_format vv_volume_format_vtk = {
     .name = "vtk",
     .title = "VTK legacy",
     .extensions = vtk_extensions,
-    .doc = "VTK legacy STRUCTURED_POINTS, binary or ASCII: the first SCALARS array",
+    .doc = "VTK legacy STRUCTURED_POINTS, binary or ASCII: the first SCALARS array; writes "
+           "binary, every voxel type, origin and spacing (no direction matrix)",
     .looks_like = vtk_looks_like,
+    .fits = vtk_fits,
     .read = vtk_read_record,
+    .write = vtk_write_record,
 };

@@ -66,8 +66,9 @@ typedef struct vv_format_probe {
 #define VV_FORMAT_PROBE_BYTES 1024
 
 /**
- * A volume format. Required: version, name, title, doc, read. looks_like
- * NULL: never detected (raw). fits and write NULL: not written.
+ * A volume format. Required: version, name, title, doc, and read or write.
+ * looks_like NULL: never detected (raw). fits and write NULL: not written.
+ * read NULL: written only (VTK XML image data).
  */
 typedef struct vv_volume_format {
     int version;                   /**< VV_FORMAT_RECORD_VERSION */
@@ -93,7 +94,8 @@ typedef struct vv_volume_format {
      * only, the volume is i16"). NULL: holds every volume.
      */
     int (*fits)(const vv_volume *v, char *why, size_t cap);
-    /** Reads @p path (@p opt never NULL) with the contract of vv_volume_load. */
+    /** Reads @p path (@p opt never NULL) with the contract of vv_volume_load;
+     *  NULL: the format is written only. */
     vv_status (*read)(vv_volume **out, const char *path, const vv_load_options *opt);
     /**
      * Writes @p v to @p path (@p opt never NULL) atomically, converting

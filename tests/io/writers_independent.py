@@ -1,0 +1,209 @@
+#!/usr/bin/python3
+"""The volume and mesh writers read back by independent readers (issue 34).
+
+  writers_independent.py VOLVIS OUTDIR SOURCE_DIR
+
+Writes, with numpy only, a raw NRRD of every voxel type with an oblique
+direction, an origin and anisotropic spacing in LPS, converts it with
+`volvis convert` to NIfTI (.nii, .nii.gz, NIfTI-2), MetaImage (.mha, .mhd),
+VTK legacy (.vtk) and VTK XML image data (.vti), and reads each back with
+nibabel or VTK's readers: voxels equal, affine / spacing / origin /
+direction equal to what was written (NIfTI's RAS is LPS with x and y
+negated). An oblique DICOM series (written by scripts/dicom_testdata.py with
+pydicom) converted to NIfTI lands where its Image Position (Patient) says in
+nibabel. An isosurface written as .vtp has the area `volvis isosurface`
+reports by vtkMassProperties, normals and the same counts; as .glb (parsed
+here: a JSON chunk and a binary chunk) the same triangle count and bounds.
+Exit 0 passed, 1 failed, 77 skipped (a module missing).
+"""
+import json
+import os
+import re
+import struct
+import subprocess
+import sys
+
+try:
+    import numpy as np
+    import nibabel as nib
+    import vtk
+    from vtk.util.numpy_support import vtk_to_numpy
+    import pydicom
+except ImportError as e:  # pragma: no cover
+    print(f"skipped: {e} (python3-numpy, python3-nibabel, python3-vtk9, python3-pydicom)")
+    sys.exit(77)
+
+VOLVIS, OUT, SRC = sys.argv[1], sys.argv[2], sys.argv[3]
+os.makedirs(OUT, exist_ok=True)
+failures = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what)
+    if not cond:
+        failures.append(what)
+
+
+def run(*args):
+    p = subprocess.run([VOLVIS, *args], capture_output=True, text=True)
+    if p.returncode != 0:
+        raise SystemExit(f"FAIL volvis {' '.join(args)}: {p.stderr.strip()}")
+    return p.stdout + p.stderr
+
+
+TYPES = {"u8": ("uint8", "unsigned char"), "i8": ("int8", "signed char"),
+         "u16": ("uint16", "unsigned short"), "i16": ("int16", "short"),
+         "u32": ("uint32", "unsigned int"), "i32": ("int32", "int"),
+         "f32": ("float32", "float"), "f64": ("float64", "double")}
+DIMS = (13, 7, 5)  # i, j, k
+SPACING = np.array([0.7, 1.1, 2.3])
+ORIGIN = np.array([-5.0, 7.0, 11.0])  # LPS
+a, b = 0.3, -0.2
+RZ = np.array([[np.cos(a), -np.sin(a), 0], [np.sin(a), np.cos(a), 0], [0, 0, 1]])
+RX = np.array([[1, 0, 0], [0, np.cos(b), -np.sin(b)], [0, np.sin(b), np.cos(b)]])
+DIRECTION = RX @ RZ  # columns: the world directions of i, j, k
+LPS2RAS = np.diag([-1.0, -1.0, 1.0])
+
+
+def write_nrrd(path, arr, ntype):
+    """arr indexed [k, j, i] (C order: i fastest), as NRRD's raw data."""
+    cols = [DIRECTION[:, c] * SPACING[c] for c in range(3)]
+    vec = " ".join("(%s)" % ",".join(repr(float(x)) for x in c) for c in cols)
+    hdr = ("NRRD0004\ntype: %s\ndimension: 3\nspace: left-posterior-superior\n"
+           "sizes: %d %d %d\nspace directions: %s\nspace origin: (%s)\n"
+           "endian: little\nencoding: raw\n\n" %
+           (ntype, *DIMS, vec, ",".join(repr(float(x)) for x in ORIGIN)))
+    with open(path, "wb") as f:
+        f.write(hdr.encode())
+        f.write(arr.astype(arr.dtype.newbyteorder("<")).tobytes())
+
+
+def vtk_image(reader_cls, path):
+    r = reader_cls()
+    r.SetFileName(path)
+    r.Update()
+    o = r.GetOutput()
+    nx, ny, nz = o.GetDimensions()
+    a = vtk_to_numpy(o.GetPointData().GetScalars()).reshape(nz, ny, nx)
+    return o, a
+
+
+rng = np.random.default_rng(34)
+lps_affine = np.eye(4)
+lps_affine[:3, :3] = DIRECTION * SPACING
+lps_affine[:3, 3] = ORIGIN
+for name, (dt, ntype) in TYPES.items():
+    info = np.iinfo(dt) if dt[0] in "ui" else None
+    if info:
+        arr = rng.integers(info.min, info.max, size=DIMS[::-1], dtype=dt, endpoint=True)
+    else:
+        arr = (rng.standard_normal(DIMS[::-1]) * 1e5).astype(dt)
+    src = os.path.join(OUT, f"src_{name}.nrrd")
+    write_nrrd(src, arr, ntype)
+    # NIfTI through nibabel: voxels, affine (RAS), codes
+    for ext, extra in ((".nii", []), (".nii.gz", []), ("_2.nii", ["--nifti2"])):
+        dst = os.path.join(OUT, f"w_{name}{ext}")
+        run("convert", src, dst, "--quiet", *extra)
+        img = nib.load(dst)
+        data = np.asanyarray(img.dataobj)
+        check(data.dtype == np.dtype(dt) and np.array_equal(data, arr.transpose(2, 1, 0)),
+              f"nibabel {name}{ext}: voxels and type equal")
+        want = np.diag([-1.0, -1.0, 1.0, 1.0]) @ lps_affine
+        tol = 1e-12 if extra else 1e-5  # NIfTI-1 stores float32
+        check(np.allclose(img.affine, want, atol=tol), f"nibabel {name}{ext}: affine (RAS)")
+        hdr = img.header
+        check(int(hdr["sform_code"]) == 1 and int(hdr["qform_code"]) == 1,
+              f"nibabel {name}{ext}: sform and qform codes 1 (scanner)")
+        check(np.allclose(img.get_qform(), want, atol=1e-4), f"nibabel {name}{ext}: qform")
+        check(isinstance(img, nib.Nifti2Image) == bool(extra), f"nibabel {name}{ext}: version")
+    # MetaImage, VTK legacy, .vti through VTK's readers
+    for ext, cls in ((".mha", vtk.vtkMetaImageReader), (".mhd", vtk.vtkMetaImageReader),
+                     (".vtk", vtk.vtkStructuredPointsReader),
+                     (".vti", vtk.vtkXMLImageDataReader)):
+        dst = os.path.join(OUT, f"w_{name}{ext}")
+        run("convert", src, dst, "--quiet")
+        o, data = vtk_image(cls, dst)
+        check(data.dtype == np.dtype(dt) and np.array_equal(data, arr),
+              f"VTK {name}{ext}: voxels and type equal")
+        check(np.allclose(o.GetSpacing(), SPACING, atol=1e-12), f"VTK {name}{ext}: spacing")
+        check(np.allclose(o.GetOrigin(), ORIGIN, atol=1e-12), f"VTK {name}{ext}: origin")
+        if ext == ".vti":
+            m = o.GetDirectionMatrix()
+            d = np.array([[m.GetElement(r, c) for c in range(3)] for r in range(3)])
+            check(np.allclose(d, DIRECTION, atol=1e-12), f"VTK {name}{ext}: direction")
+
+# What a format cannot hold is a warning: the direction into legacy VTK
+p = subprocess.run([VOLVIS, "convert", os.path.join(OUT, "src_u8.nrrd"),
+                    os.path.join(OUT, "warn.vtk")], capture_output=True, text=True)
+check(p.returncode == 0 and "warning" in p.stderr and "direction" in p.stderr,
+      "legacy VTK of an oblique volume: a warning names the direction matrix")
+p = subprocess.run([VOLVIS, "convert", "--strict", os.path.join(OUT, "src_u8.nrrd"),
+                    os.path.join(OUT, "strict.vtk")], capture_output=True, text=True)
+check(p.returncode != 0 and not os.path.exists(os.path.join(OUT, "strict.vtk")) and
+      len(p.stderr.strip().splitlines()) == 1, "--strict: one-line error, no file")
+
+# An oblique DICOM series as NIfTI lands where its positions say
+ct = os.path.join(SRC, "..", "shared", "data", "volumes", "ct_head.nrrd")
+series = os.path.join(OUT, "oblique_series")
+subprocess.run([sys.executable, os.path.join(SRC, "scripts", "dicom_testdata.py"), "ct", ct,
+                series, "--first", "40", "--count", "6", "--crop", "48", "--oblique", "25"],
+               check=True)
+nii = os.path.join(OUT, "oblique.nii.gz")
+run("convert", series, nii, "--quiet")
+img = nib.load(nii)
+A = img.affine
+data = np.asanyarray(img.dataobj)
+files = sorted(os.listdir(series))
+ok_pos = ok_vox = True
+for fn in files:
+    ds = pydicom.dcmread(os.path.join(series, fn))
+    ipp = LPS2RAS @ np.array([float(x) for x in ds.ImagePositionPatient])
+    iop = [float(x) for x in ds.ImageOrientationPatient]
+    ks = [k for k in range(data.shape[2]) if np.allclose(A @ [0, 0, k, 1], [*ipp, 1], atol=1e-3)]
+    if len(ks) != 1:
+        ok_pos = False
+        continue
+    px = ds.pixel_array.astype(np.float64) * float(ds.RescaleSlope) + float(ds.RescaleIntercept)
+    ok_vox &= np.array_equal(data[:, :, ks[0]].T.astype(np.float64), px)
+    row, col = LPS2RAS @ np.array(iop[:3]), LPS2RAS @ np.array(iop[3:])
+    sp = [float(x) for x in ds.PixelSpacing]
+    ok_pos &= np.allclose(A[:3, 0], row * sp[1], atol=1e-4)
+    ok_pos &= np.allclose(A[:3, 1], col * sp[0], atol=1e-4)
+check(ok_pos, "oblique DICOM as NIfTI: every slice at its Image Position (Patient) in nibabel")
+check(ok_vox, "oblique DICOM as NIfTI: every slice's pixels (rescaled) in place")
+
+# Meshes: .vtp (VTK) and .glb (parsed here) against volvis's own figures
+txt = run("isosurface", ct, "--iso", "300", "-o", os.path.join(OUT, "bone.vtp"))
+m = re.search(r"(\d+) vertices, (\d+) triangles, area ([0-9.e+]+)", txt)
+nv, nt, area = int(m.group(1)), int(m.group(2)), float(m.group(3))
+r = vtk.vtkXMLPolyDataReader()
+r.SetFileName(os.path.join(OUT, "bone.vtp"))
+r.Update()
+pd = r.GetOutput()
+check(pd.GetNumberOfPoints() == nv and pd.GetNumberOfPolys() == nt, "vtp: vertex and triangle counts")
+check(pd.GetPointData().GetNormals() is not None, "vtp: normals")
+mp = vtk.vtkMassProperties()
+mp.SetInputData(pd)
+mp.Update()
+check(abs(mp.GetSurfaceArea() - area) <= 1e-5 * area + 1,
+      f"vtp: vtkMassProperties area {mp.GetSurfaceArea():.2f} = volvis's {area:.2f}")
+run("isosurface", ct, "--iso", "300", "-o", os.path.join(OUT, "bone.glb"))
+b = open(os.path.join(OUT, "bone.glb"), "rb").read()
+magic, version, length = struct.unpack("<4sII", b[:12])
+clen, ctype = struct.unpack("<I4s", b[12:20])
+gl = json.loads(b[20:20 + clen])
+check(magic == b"glTF" and version == 2 and length == len(b) and ctype == b"JSON",
+      "glb: header and JSON chunk")
+prim = gl["meshes"][0]["primitives"][0]
+pos = gl["accessors"][prim["attributes"]["POSITION"]]
+idx = gl["accessors"][prim["indices"]]
+check(idx["count"] == 3 * nt, "glb: triangle count")
+bounds = pd.GetBounds()
+check(np.allclose(pos["min"], bounds[0::2], atol=1e-3) and
+      np.allclose(pos["max"], bounds[1::2], atol=1e-3), "glb: bounds equal the .vtp's")
+check("NORMAL" in prim["attributes"], "glb: normals")
+
+if failures:
+    print(f"{len(failures)} checks failed")
+    sys.exit(1)
+print("all checks passed")
