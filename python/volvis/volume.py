@@ -364,9 +364,12 @@ class Volume:
 
     def save(self, path, format=None, strict=False):
         """Writes the volume (vv_volume_save, atomically): format None picks
-        it from the extension (.nrrd/.nhdr, .slc), or "nrrd", "slc". SLC holds
-        8-bit data: other types are rescaled unless ``strict`` (then
-        UnsupportedError). Errors: FileError, InvalidError, UnsupportedError."""
+        it from the extension (.nrrd/.nhdr, .slc, .nii/.nii.gz, .mha/.mhd,
+        .vtk, .vti), or a format's name ("nrrd", "nifti", "mhd",
+        "vti", ...; ``volvis convert --help`` lists them). What a format
+        cannot hold is converted (SLC: rescaled to 8 bits; VTK legacy: the
+        direction matrix dropped) unless ``strict`` (then UnsupportedError).
+        Errors: FileError, InvalidError, UnsupportedError."""
         fmt = lib.VV_FORMAT_AUTO
         if format is not None:
             f = ffi.new("vv_format *")
