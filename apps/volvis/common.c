@@ -282,7 +282,9 @@ cli_print_formats(FILE *out, int grids) {
     for (int i = 0; i < n; i++) {
         extension_list(ext, sizeof ext, v[i]->extensions);
         fprintf(out, "  %s%s: %s%s\n      %s\n", v[i]->name, ext,
-                v[i]->write ? "read and write" : "read",
+                !v[i]->read   ? "write"
+                : v[i]->write ? "read and write"
+                              : "read",
                 v[i]->flags & VV_FORMAT_FLAG_FOLDER ? ", files or folders" : "", v[i]->doc);
     }
     if (!grids)
