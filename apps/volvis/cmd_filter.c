@@ -1,16 +1,18 @@
 /*
  * volvis filter IN OUT --FILTER ARG ...: the Filtering component
  * (include/volvis/filter.h) from the command line. The filters run in the
- * order given; the result is written atomically to NRRD or SLC.
+ * order given; the result is written atomically in any format that writes
+ * (from OUT's extension, as volvis convert).
  */
 #include <stdlib.h>
 #include <string.h>
 
 #include "cli.h"
+#include "volvis/sys/format.h"
 
 /* the filters' own options come from the library's table, after these */
 static const cli_opt_spec base_opts[] = {
-    {"format", 0, "nrrd|slc"},
+    {"format", 0, "NAME"},
     {"threads", 0, "N"},
     {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
     {"series", 0, "N"},
@@ -41,9 +43,11 @@ cli_filter_usage(FILE *out) {
                  "\n"
                  "Filters a volume: smoothing, resampling, derivatives, segmentation. The\n"
                  "filters run in the order given on the command line; each reads the\n"
-                 "previous one's output. OUT is written atomically as NRRD (.nrrd, .nhdr;\n"
-                 "keeps the voxel type, spacing, origin and orientation) or SLC (.slc, 8-bit:\n"
-                 "other types are rescaled). World units are the volume's (usually mm).\n"
+                 "previous one's output. OUT is written atomically in the format its\n"
+                 "extension names, as 'volvis convert' writes it: NRRD, NIfTI, MetaImage,\n"
+                 "VTK XML (.vti) keep the voxel type, spacing, origin and orientation; VTK\n"
+                 "legacy drops the orientation and SLC (8-bit) rescales, each with a\n"
+                 "warning. World units are the volume's (usually mm).\n"
                  "Results are identical for every thread count.\n"
                  "\n"
                  "Filters (output type after ->):\n");
@@ -72,7 +76,8 @@ cli_filter_usage(FILE *out) {
     fprintf(out,
             "\n"
             "Options:\n"
-            "  --format nrrd|slc  output format (default: from OUT's extension)\n"
+            "  --format NAME      output format: nrrd, slc, nifti, mhd, vtk or vti\n"
+            "                     (default: from OUT's extension, as volvis convert)\n"
             "  --threads N        threads (default: all cores)\n"
             "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
             "                     read IN as raw voxels (see 'volvis info --help')\n"
@@ -105,24 +110,24 @@ cli_filter_main(int argc, char **argv) {
     if (a.n_pos > 2)
         return cli_usage_error(&a, "expected IN and OUT, got %d arguments", a.n_pos);
     const char *in = a.pos[0], *out = a.pos[1];
+    /* the format: --format NAME (one that writes), else OUT's extension:
+     * the writers of the format table, as volvis convert */
     vv_format format;
     const char *s = cli_get(&a, "format");
+    char names[128], exts[128];
+    cli_writable_formats(names, sizeof names, ", ", 0);
+    cli_writable_formats(exts, sizeof exts, "/", 1);
     if (s) {
-        if (strcmp(s, "nrrd") == 0)
-            format = VV_FORMAT_NRRD;
-        else if (strcmp(s, "slc") == 0)
-            format = VV_FORMAT_SLC;
-        else
-            return cli_usage_error(&a, "--format: cannot write '%s' (nrrd or slc)", s);
-    } else if (cli_ends_with(out, ".slc")) {
-        format = VV_FORMAT_SLC;
-    } else if (cli_ends_with(out, ".nrrd") || cli_ends_with(out, ".nhdr")) {
-        format = VV_FORMAT_NRRD;
-    } else {
+        vv_error_clear();
+        if (vv_format_parse(s, &format) != VV_OK || format == VV_FORMAT_AUTO ||
+            !vv_volume_format_table(NULL)[format - 1]->write)
+            return cli_usage_error(&a, "--format: cannot write '%s' (%s)", s, names);
+    } else if ((format = vv_format_from_extension(out)) == VV_FORMAT_UNKNOWN) {
+        cli_writable_formats(names, sizeof names, "|", 0);
         return cli_usage_error(&a,
                                "cannot tell the output format from '%s'; use --format "
-                               "nrrd|slc or a .nrrd/.slc extension",
-                               out);
+                               "%s or a %s extension",
+                               out, names, exts);
     }
     int threads = 0, quiet = cli_count(&a, "quiet") > 0;
     if ((s = cli_get(&a, "threads")) && (rc = cli_parse_int(&a, "threads", s, 0, 4096, &threads)))
@@ -174,6 +179,10 @@ cli_filter_main(int argc, char **argv) {
         vv_filter_chain_free(chain);
         return rc;
     }
+    const vv_volume_format *rec = vv_volume_format_table(NULL)[format - 1];
+    char why[256];
+    if (!quiet && rec->fits && !rec->fits(f, why, sizeof why))
+        cli_error("warning: %s: %s", out, why);
     vv_error_clear();
     st = vv_volume_save(f, out, format, 0);
     if (st != VV_OK) {
