@@ -1,5 +1,5 @@
 /*
- * volvis convert IN OUT: any readable volume to NRRD or SLC, atomically.
+ * volvis convert IN OUT: any readable volume to any format that writes, atomically.
  */
 #include <string.h>
 #include <strings.h>
@@ -14,6 +14,8 @@ static const cli_opt_spec convert_opts[] = {
     {"label", 0, NULL},
     {"nifti2", 0, NULL},
     {"no-compress", 0, NULL},
+    {"codec", 0, "NAME"},
+    {"bigtiff", 0, NULL},
     {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
     {"series", 0, "N"},
     {"channel", 0, "C"},
@@ -34,7 +36,10 @@ cli_convert_usage(FILE *out) {
             "VTK XML image data (.vti) keep the voxel type, spacing, origin and\n"
             "direction (NIfTI in RAS, MetaImage in LPS: the frame is converted);\n"
             "VTK legacy (.vtk) has no direction matrix: an oblique volume is written\n"
-            "axis-aligned, with a warning; SLC (.slc; VolVis's own 8-bit format)\n"
+            "axis-aligned, with a warning; TIFF (.tif, .tiff: one page per slice in\n"
+            "the voxel type, ImageJ's spacing, unit and origin; .ome.tif, .ome.tiff:\n"
+            "OME-XML with physical sizes and plane positions) has no direction matrix\n"
+            "either; SLC (.slc; VolVis's own 8-bit format)\n"
             "holds 8-bit data only: other voxel types are rescaled from the value\n"
             "range to 0..255, with a note on stderr. What a format cannot hold is\n"
             "never changed silently (--strict: an error instead). The output is\n"
@@ -55,12 +60,15 @@ cli_convert_usage(FILE *out) {
             "  --strict           refuse what the format cannot hold as it is (SLC: a\n"
             "                     voxel type other than 8 bits; VTK legacy: a direction\n"
             "                     matrix) instead of converting it (exit 1)\n"
-            "  --no-compress      NRRD, MetaImage, .vti: write the voxels uncompressed\n"
+            "  --no-compress      NRRD, MetaImage, .vti, TIFF: write the voxels uncompressed\n"
             "                     (NIfTI follows the name: .nii or .nii.gz)\n"
             "  --label            the voxels are labels (segment ids): NIfTI intent\n"
             "                     NIFTI_INTENT_LABEL; an integer voxel type is required\n"
             "  --nifti2           NIfTI-2 (default NIfTI-1, or NIfTI-2 when an axis is\n"
             "                     longer than 32767 voxels)\n"
+            "  --codec NAME       TIFF: deflate (default), lzw, zstd, packbits or none\n"
+            "  --bigtiff          TIFF: write BigTIFF (64-bit offsets) whatever the size\n"
+            "                     (default: only when the voxels reach 3.75 GiB)\n"
             "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
             "                     read IN as raw voxels (see 'volvis info --help')\n"
             "  --series N         DICOM: series N as 'volvis info' lists them\n"
@@ -76,6 +84,7 @@ cli_convert_usage(FILE *out) {
                  "  volvis convert ../shared/data/volumes/ct_head.nrrd head.slc\n"
                  "  volvis convert ../shared/data/volumes/ct_head.nrrd head.nii.gz\n"
                  "  volvis convert ../shared/data/volumes/ct_head.nrrd head.vti\n"
+                 "  volvis convert ../shared/data/volumes/ct_head.nrrd head.ome.tif\n"
                  "  volvis convert --raw 64x64x64:f32 field.raw field.nrrd\n"
                  "  volvis convert --raw 2048x2048x2048:u8 big.raw big.vvb\n");
 }
@@ -163,6 +172,8 @@ cli_convert_main(int argc, char **argv) {
     }
     int strict = cli_count(&a, "strict") > 0;
     int quiet = cli_count(&a, "quiet") > 0;
+    if ((cli_get(&a, "codec") || cli_count(&a, "bigtiff") > 0) && format != VV_FORMAT_TIFF)
+        return cli_usage_error(&a, "--codec and --bigtiff are for TIFF output");
     vv_raw_params raw;
     const char *raw_spec = cli_get(&a, "raw");
     if (raw_spec && (rc = cli_parse_raw(&a, "raw", raw_spec, &raw)))
@@ -196,6 +207,8 @@ cli_convert_main(int argc, char **argv) {
     so.nifti_version = cli_count(&a, "nifti2") > 0 ? 2 : 0;
     if (cli_count(&a, "no-compress") > 0)
         so.compress = 0;
+    so.codec = cli_get(&a, "codec");
+    so.bigtiff = cli_count(&a, "bigtiff") > 0;
     vv_status st = vv_volume_save_with(v, out, &so);
     if (st != VV_OK) {
         rc = cli_fail(st, out);

@@ -142,6 +142,12 @@ typedef struct vv_save_options {
     /** NIfTI: 1 or 2; 0: NIfTI-1 unless an axis is longer than NIfTI-1's
      *  32767 voxels */
     int nifti_version;
+    /** TIFF: the codec by name ("deflate", "lzw", "zstd", "packbits",
+     *  "none"); NULL: deflate, or none when compress is 0 */
+    const char *codec;
+    /** TIFF: 1 writes BigTIFF (64-bit offsets) whatever the size; 0:
+     *  BigTIFF only when the voxels come near classic TIFF's 4 GiB */
+    int bigtiff;
 } vv_save_options;
 
 /** Format VV_FORMAT_AUTO, strict 0, compress -1. */
@@ -254,6 +260,25 @@ vv_status vv_raw_read(vv_volume **out, const char *path, const vv_raw_params *pa
  * allocation), VV_ERR_UNSUPPORTED, VV_ERR_INVALID (channel out of range).
  */
 vv_status vv_tiff_read(vv_volume **out, const char *path, int channel);
+
+/**
+ * Writes @p v to @p path as a multi-page TIFF through libtiff, atomically:
+ * page k is slice k (dims[0] x dims[1] pixels, one sample, row 0 first),
+ * in the voxel type (8/16/32-bit integers with SampleFormat UINT or INT,
+ * 32/64-bit IEEE floats), strips of at most 256 KiB, compressed by
+ * opt->codec (deflate by default; integers with horizontal
+ * differencing). A name ending .ome.tif or .ome.tiff gets OME-XML (OME
+ * 2016-06: Pixels XYZCT, PhysicalSizeX/Y/Z in the volume's unit, "pixel"
+ * when unknown, a Plane per slice with its position), any other name
+ * ImageJ's keys (slices, spacing, unit, the origin in voxels) and
+ * X/YResolution = 1 / spacing. BigTIFF when opt->bigtiff or the voxels
+ * reach 3.75 GiB. The direction matrix is not held (the record's fits
+ * says so). @p opt may be NULL (the defaults). Errors: VV_ERR_INVALID (no
+ * data, a non-positive spacing, an unknown codec), VV_ERR_UNSUPPORTED (a
+ * codec this libtiff lacks), VV_ERR_IO (with libtiff's message; nothing is
+ * left behind), VV_ERR_NOMEM. Reentrant.
+ */
+vv_status vv_tiff_write(const vv_volume *v, const char *path, const vv_save_options *opt);
 
 /** One DICOM image series found by vv_dicom_list. Strings are NUL-terminated. */
 typedef struct vv_dicom_series {

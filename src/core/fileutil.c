@@ -74,7 +74,7 @@ vv_atomic_file_open(vv_atomic_file *af, const char *path) {
         }
         if (dir)
             dir[slash == path ? 1 : (size_t)(slash - path)] = '\0';
-        fd = open(dir ? dir : ".", O_TMPFILE | O_WRONLY | O_CLOEXEC, 0666);
+        fd = open(dir ? dir : ".", O_TMPFILE | O_RDWR | O_CLOEXEC, 0666);
         free(dir);
         if (fd >= 0)
             af->anonymous = 1;
@@ -85,7 +85,7 @@ vv_atomic_file_open(vv_atomic_file *af, const char *path) {
 #endif
     for (int attempt = 0; attempt < 100 && fd < 0; attempt++) {
         tmp_name(af, n + 16, attempt);
-        fd = open(af->tmp_path, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+        fd = open(af->tmp_path, O_RDWR | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
         if (fd < 0 && errno != EEXIST)
             break;
     }

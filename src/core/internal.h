@@ -17,7 +17,8 @@
  * only by vv_atomic_file_commit after fsync. On any failure call
  * vv_atomic_file_abort: the target is untouched and no temporary file is
  * left; a process killed mid-write leaves none either (but for the named
- * fallback). Write through fp, or through fd (then fp must stay unused).
+ * fallback). Write through fp, or through fd (then fp must stay unused);
+ * the descriptor reads too (libtiff reads back what it wrote).
  */
 typedef struct vv_atomic_file {
     FILE *fp;

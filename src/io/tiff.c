@@ -10,13 +10,19 @@
  *
  * Metadata (only from the first file's first page, ImageDescription):
  * - OME-TIFF: the first <Pixels> element's SizeX/Y/Z/C/T, DimensionOrder and
- *   PhysicalSizeX/Y/Z (+Unit, default micrometres). Page of (z, c, t) from
+ *   PhysicalSizeX/Y/Z (+Unit, default micrometres); the origin from the first
+ *   <Plane>'s PositionX/Y/Z when in the same unit. Page of (z, c, t) from
  *   DimensionOrder.
  * - ImageJ: "images=", "channels=", "slices=", "frames=", "spacing=",
- *   "unit=" lines; the in-plane pixel size is 1/XResolution (ImageJ stores it
- *   there). Page order is ImageJ's XYCZT.
+ *   "unit=", "xorigin=" (in voxels) lines; the in-plane pixel size is
+ *   1/XResolution (ImageJ stores it there). Page order is ImageJ's XYCZT.
  * - Neither: each page is a slice, spacing 1, unit unknown.
  * The volume is channel @p channel at the first time point.
+ *
+ * Writing (vv_tiff_write): one page per slice in the voxel type, OME-XML
+ * for .ome.tif(f) names and ImageJ's keys otherwise, deflate/LZW/zstd with
+ * a predictor, BigTIFF on request or near 4 GiB; libtiff writes through our
+ * own I/O procedures on the atomic file's descriptor.
  *
  * libtiff reports errors through handlers; the per-file handlers of
  * TIFFOpenExt (libtiff >= 4.5) keep its first message for our trace, so
@@ -32,6 +38,7 @@
 #include <string.h>
 #include <strings.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <tiffio.h>
 
@@ -199,6 +206,10 @@ typedef struct stack_meta {
     double spacing[3];           /* 0: unknown */
     vv_unit unit;
     int is_ome, is_imagej;
+    double origin[3]; /* world position of voxel (0, 0, 0), in unit */
+    int has_origin[3];
+    double ij_origin[3]; /* ImageJ's origin, in voxels (world = -value * spacing) */
+    int has_ij_origin[3];
 } stack_meta;
 
 /* Value of attribute @p name inside the tag starting at @p tag (up to '>'). */
@@ -269,6 +280,23 @@ parse_ome(const char *desc, stack_meta *m) {
         if (i == 0 && xml_attr(px, units[i], v, sizeof v))
             m->unit = ome_unit(v);
     }
+    /* the origin: the first Plane's position, when given in the pixels' unit */
+    const char *pl = strstr(px, "<Plane ");
+    if (!pl)
+        pl = strstr(px, ":Plane ");
+    static const char *const pos[3] = {"PositionX", "PositionY", "PositionZ"};
+    static const char *const pos_units[3] = {"PositionXUnit", "PositionYUnit", "PositionZUnit"};
+    for (int i = 0; pl && i < 3; i++) {
+        char u[32];
+        if (xml_attr(pl, pos[i], v, sizeof v) && xml_attr(pl, pos_units[i], u, sizeof u) &&
+            ome_unit(u) == m->unit && m->unit != VV_UNIT_UNKNOWN) {
+            double d = strtod(v, NULL);
+            if (isfinite(d)) {
+                m->origin[i] = d;
+                m->has_origin[i] = 1;
+            }
+        }
+    }
 }
 
 /* "key=value" line of an ImageJ description; 1 when found. */
@@ -316,6 +344,15 @@ parse_imagej(TIFF *t, const char *desc, stack_meta *m) {
         else
             m->unit = vv_unit_parse(v);
     }
+    static const char *const origins[3] = {"xorigin", "yorigin", "zorigin"};
+    for (int i = 0; i < 3; i++)
+        if (ij_value(desc, origins[i], v, sizeof v)) {
+            double d = strtod(v, NULL);
+            if (isfinite(d)) {
+                m->ij_origin[i] = d;
+                m->has_ij_origin[i] = 1;
+            }
+        }
     float xr = 0, yr = 0;
     if (TIFFGetField(t, TIFFTAG_XRESOLUTION, &xr) && xr > 0 && isfinite(xr))
         m->spacing[0] = 1.0 / xr;
@@ -613,6 +650,10 @@ read_stack(vv_volume **out, char **files, int n_files, int channel, const char *
             v->spacing[i] = m.spacing[i];
     if (m.spacing[0] > 0 && !(m.spacing[1] > 0))
         v->spacing[1] = m.spacing[0];
+    for (int i = 0; i < 3; i++)
+        v->origin[i] = m.has_origin[i]      ? m.origin[i]
+                       : m.has_ij_origin[i] ? -m.ij_origin[i] * v->spacing[i]
+                                            : 0;
     v->unit = (m.is_ome || m.is_imagej) ? m.unit : VV_UNIT_UNKNOWN;
     v->modification = VV_MOD_ORIGINAL;
     vv_volume_update_range(v);
@@ -654,6 +695,395 @@ vv_tiff_read(vv_volume **out, const char *path, int channel) {
     return s;
 }
 
+/* ---- writing ---------------------------------------------------------------- */
+
+/* libtiff's I/O on the atomic file's descriptor: positioned reads and writes
+ * (libtiff reads back a directory when it links the next page), never
+ * closed by TIFFClose (the atomic file owns it). */
+typedef struct tiff_fd {
+    int fd;
+    uint64_t off;
+} tiff_fd;
+
+static tmsize_t
+fd_read(thandle_t h, void *buf, tmsize_t n) {
+    tiff_fd *f = (tiff_fd *)h;
+    tmsize_t done = 0;
+    while (done < n) {
+        ssize_t r = pread(f->fd, (char *)buf + done, (size_t)(n - done), (off_t)f->off);
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r <= 0)
+            break;
+        done += r;
+        f->off += (uint64_t)r;
+    }
+    return done ? done : (n ? -1 : 0);
+}
+
+static tmsize_t
+fd_write(thandle_t h, void *buf, tmsize_t n) {
+    tiff_fd *f = (tiff_fd *)h;
+    tmsize_t done = 0;
+    while (done < n) {
+        ssize_t r = pwrite(f->fd, (const char *)buf + done, (size_t)(n - done), (off_t)f->off);
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r <= 0)
+            return -1; /* a full disk or a file-size limit: libtiff reports it */
+        done += r;
+        f->off += (uint64_t)r;
+    }
+    return done;
+}
+
+static toff_t
+fd_size(thandle_t h) {
+    struct stat st;
+    return fstat(((tiff_fd *)h)->fd, &st) == 0 ? (toff_t)st.st_size : 0;
+}
+
+static toff_t
+fd_seek(thandle_t h, toff_t off, int whence) {
+    tiff_fd *f = (tiff_fd *)h;
+    uint64_t base = whence == SEEK_CUR ? f->off : whence == SEEK_END ? fd_size(h) : 0;
+    f->off = base + off;
+    return (toff_t)f->off;
+}
+
+static int
+fd_close(thandle_t h) {
+    (void)h;
+    return 0;
+}
+
+static int
+fd_map(thandle_t h, void **base, toff_t *size) {
+    (void)h;
+    (void)base;
+    (void)size;
+    return 0;
+}
+
+static void
+fd_unmap(thandle_t h, void *base, toff_t size) {
+    (void)h;
+    (void)base;
+    (void)size;
+}
+
+/* The codec of @p opt: its name (opt->codec), else deflate, or none when
+ * opt->compress is 0. */
+static vv_status
+tiff_codec(const vv_save_options *opt, uint16_t *comp) {
+    static const struct {
+        const char *name;
+        uint16_t id;
+    } codecs[] = {{"deflate", COMPRESSION_ADOBE_DEFLATE},
+                  {"zlib", COMPRESSION_ADOBE_DEFLATE},
+                  {"lzw", COMPRESSION_LZW},
+                  {"zstd", COMPRESSION_ZSTD},
+                  {"packbits", COMPRESSION_PACKBITS},
+                  {"none", COMPRESSION_NONE}};
+    const char *name = opt->codec ? opt->codec : opt->compress == 0 ? "none" : "deflate";
+    for (size_t i = 0; i < sizeof codecs / sizeof codecs[0]; i++) {
+        if (strcasecmp(name, codecs[i].name) != 0)
+            continue;
+        if (!TIFFIsCODECConfigured(codecs[i].id))
+            return vv_error_set(VV_ERR_UNSUPPORTED, "this libtiff was built without %s", name);
+        *comp = codecs[i].id;
+        return VV_OK;
+    }
+    return vv_error_set(VV_ERR_INVALID, "unknown codec '%s' (deflate, lzw, zstd, packbits, none)",
+                        name);
+}
+
+/* TIFF's sample format and OME's pixel type of a voxel type. */
+static void
+tiff_sample_of(vv_voxel_type t, uint16_t *fmt, const char **ome) {
+    static const char *const names[] = {"uint8",  "int8",  "uint16", "int16",
+                                        "uint32", "int32", "float",  "double"};
+    *fmt = (t == VV_F32 || t == VV_F64)                 ? SAMPLEFORMAT_IEEEFP
+           : (t == VV_I8 || t == VV_I16 || t == VV_I32) ? SAMPLEFORMAT_INT
+                                                        : SAMPLEFORMAT_UINT;
+    *ome = names[t];
+}
+
+/* OME's UnitsLength of a unit; "pixel" when the unit is unknown. */
+static const char *
+ome_unit_name(vv_unit u) {
+    switch (u) {
+    case VV_UNIT_METER:
+        return "m";
+    case VV_UNIT_MM:
+        return "mm";
+    case VV_UNIT_MICRON:
+        return "\xc2\xb5m"; /* µm */
+    case VV_UNIT_FOOT:
+        return "ft";
+    case VV_UNIT_INCH:
+        return "in";
+    default:
+        return "pixel";
+    }
+}
+
+/* A growing text buffer (the image description). */
+typedef struct desc_buf {
+    char *s;
+    size_t n, cap;
+    int failed;
+} desc_buf;
+
+static void
+desc_add(desc_buf *b, const char *fmt, ...) {
+    if (b->failed)
+        return;
+    for (;;) {
+        va_list ap;
+        va_start(ap, fmt);
+        int k = vsnprintf(b->s ? b->s + b->n : NULL, b->s ? b->cap - b->n : 0, fmt, ap);
+        va_end(ap);
+        if (k < 0) {
+            b->failed = 1;
+            return;
+        }
+        if (b->s && b->n + (size_t)k < b->cap) {
+            b->n += (size_t)k;
+            return;
+        }
+        size_t cap = (b->cap ? b->cap * 2 : 4096) + (size_t)k;
+        char *s = realloc(b->s, cap);
+        if (!s) {
+            b->failed = 1;
+            return;
+        }
+        b->s = s;
+        b->cap = cap;
+    }
+}
+
+/* @p s with XML's five special characters escaped. */
+static void
+desc_add_xml(desc_buf *b, const char *s) {
+    for (; *s; s++) {
+        const char *e = *s == '&'    ? "&amp;"
+                        : *s == '<'  ? "&lt;"
+                        : *s == '>'  ? "&gt;"
+                        : *s == '"'  ? "&quot;"
+                        : *s == '\'' ? "&apos;"
+                                     : NULL;
+        if (e)
+            desc_add(b, "%s", e);
+        else
+            desc_add(b, "%c", *s);
+    }
+}
+
+/* 1 when @p path names an OME-TIFF (.ome.tif, .ome.tiff). */
+static int
+is_ome_name(const char *path) {
+    size_t n = strlen(path);
+    return (n > 8 && !strcasecmp(path + n - 8, ".ome.tif")) ||
+           (n > 9 && !strcasecmp(path + n - 9, ".ome.tiff"));
+}
+
+/*
+ * OME-XML of @p v (OME 2016-06): one Image, Pixels in XYZCT order with the
+ * physical sizes, one Channel, TiffData for the pages and one Plane per
+ * slice with its position (the origin stepped along k).
+ */
+static void
+ome_description(desc_buf *b, const vv_volume *v, const char *path) {
+    uint16_t fmt;
+    const char *type;
+    tiff_sample_of(v->type, &fmt, &type);
+    const char *unit = ome_unit_name(v->unit);
+    const char *base = vv_path_basename(path);
+    size_t stem = strlen(base) - (strcasecmp(base + strlen(base) - 4, "tiff") ? 8 : 9);
+    char name[256];
+    snprintf(name, sizeof name, "%.*s", (int)(stem < sizeof name ? stem : sizeof name - 1), base);
+    desc_add(b, "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+                "<OME xmlns=\"http://www.openmicroscopy.org/Schemas/OME/2016-06\" "
+                "xmlns:xsi=\"http://www.w3.org/2001/XMLSchema-instance\" "
+                "xsi:schemaLocation=\"http://www.openmicroscopy.org/Schemas/OME/2016-06 "
+                "http://www.openmicroscopy.org/Schemas/OME/2016-06/ome.xsd\" "
+                "Creator=\"VolVis\">\n<Image ID=\"Image:0\" Name=\"");
+    desc_add_xml(b, name);
+    desc_add(b,
+             "\">\n<Pixels ID=\"Pixels:0\" DimensionOrder=\"XYZCT\" Type=\"%s\" "
+             "SizeX=\"%d\" SizeY=\"%d\" SizeZ=\"%d\" SizeC=\"1\" SizeT=\"1\" "
+             "PhysicalSizeX=\"%.17g\" PhysicalSizeXUnit=\"%s\" "
+             "PhysicalSizeY=\"%.17g\" PhysicalSizeYUnit=\"%s\" "
+             "PhysicalSizeZ=\"%.17g\" PhysicalSizeZUnit=\"%s\" BigEndian=\"false\">\n"
+             "<Channel ID=\"Channel:0:0\" SamplesPerPixel=\"1\"><LightPath/></Channel>\n"
+             "<TiffData IFD=\"0\" PlaneCount=\"%d\"/>\n",
+             type, v->dims[0], v->dims[1], v->dims[2], v->spacing[0], unit, v->spacing[1], unit,
+             v->spacing[2], unit, v->dims[2]);
+    for (int k = 0; k < v->dims[2]; k++)
+        desc_add(b,
+                 "<Plane TheZ=\"%d\" TheC=\"0\" TheT=\"0\" PositionX=\"%.17g\" "
+                 "PositionXUnit=\"%s\" PositionY=\"%.17g\" PositionYUnit=\"%s\" "
+                 "PositionZ=\"%.17g\" PositionZUnit=\"%s\"/>\n",
+                 k, v->origin[0], unit, v->origin[1], unit, v->origin[2] + k * v->spacing[2], unit);
+    desc_add(b, "</Pixels>\n</Image>\n</OME>\n");
+}
+
+/* ImageJ's description of a z-stack (its hyperstack keys; the origin in
+ * voxels, as ImageJ's calibration keeps it). */
+static void
+imagej_description(desc_buf *b, const vv_volume *v) {
+    desc_add(b, "ImageJ=1.11a\nimages=%d\nslices=%d\n", v->dims[2], v->dims[2]);
+    if (v->unit != VV_UNIT_UNKNOWN)
+        desc_add(b, "unit=%s\n", v->unit == VV_UNIT_MICRON ? "micron" : vv_unit_name(v->unit));
+    desc_add(b, "spacing=%.17g\nloop=false\n", v->spacing[2]);
+    for (int i = 0; i < 3; i++)
+        if (v->origin[i] != 0)
+            desc_add(b, "%corigin=%.17g\n", "xyz"[i], -v->origin[i] / v->spacing[i]);
+    desc_add(b, "min=%.17g\nmax=%.17g\n", v->range[0], v->range[1]);
+}
+
+/* 1 when the voxels come near classic TIFF's 4 GiB of offsets. */
+static int
+wants_bigtiff(const vv_volume *v) {
+    uint64_t bytes = (uint64_t)v->dims[0] * v->dims[1] * v->dims[2] * vv_voxel_type_size(v->type);
+    return bytes > ((uint64_t)15 << 28); /* 3.75 GiB: room for directories and metadata */
+}
+
+/* One page (slice @p k) with its tags and strips. */
+static vv_status
+write_page(TIFF *t, const vv_volume *v, int k, uint16_t comp, const char *desc,
+           unsigned char *scratch, size_t scratch_cap, tiff_msg *msg) {
+    uint16_t fmt;
+    const char *type;
+    tiff_sample_of(v->type, &fmt, &type);
+    size_t es = vv_voxel_type_size(v->type);
+    size_t row = (size_t)v->dims[0] * es;
+    uint32_t rps = (uint32_t)(scratch_cap / row);
+    if (rps < 1)
+        rps = 1;
+    if (rps > (uint32_t)v->dims[1])
+        rps = (uint32_t)v->dims[1];
+    int ok = TIFFSetField(t, TIFFTAG_IMAGEWIDTH, (uint32_t)v->dims[0]) &&
+             TIFFSetField(t, TIFFTAG_IMAGELENGTH, (uint32_t)v->dims[1]) &&
+             TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, (uint16_t)(es * 8)) &&
+             TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, (uint16_t)1) &&
+             TIFFSetField(t, TIFFTAG_SAMPLEFORMAT, fmt) &&
+             TIFFSetField(t, TIFFTAG_PHOTOMETRIC, (uint16_t)PHOTOMETRIC_MINISBLACK) &&
+             TIFFSetField(t, TIFFTAG_PLANARCONFIG, (uint16_t)PLANARCONFIG_CONTIG) &&
+             TIFFSetField(t, TIFFTAG_COMPRESSION, comp) &&
+             TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, rps) &&
+             TIFFSetField(t, TIFFTAG_SOFTWARE, "VolVis");
+    if (ok && comp != COMPRESSION_NONE && comp != COMPRESSION_PACKBITS &&
+        fmt != SAMPLEFORMAT_IEEEFP)
+        /* horizontal differencing of integers; floats get none: the
+         * floating-point predictor (3) is not read by tifffile without
+         * imagecodecs, nor by older ImageJ */
+        ok = TIFFSetField(t, TIFFTAG_PREDICTOR, (uint16_t)PREDICTOR_HORIZONTAL);
+    if (ok && desc) {
+        ok = TIFFSetField(t, TIFFTAG_IMAGEDESCRIPTION, desc);
+        if (ok && strncmp(desc, "ImageJ=", 7) == 0)
+            ok = TIFFSetField(t, TIFFTAG_XRESOLUTION, (float)(1.0 / v->spacing[0])) &&
+                 TIFFSetField(t, TIFFTAG_YRESOLUTION, (float)(1.0 / v->spacing[1])) &&
+                 TIFFSetField(t, TIFFTAG_RESOLUTIONUNIT, (uint16_t)RESUNIT_NONE);
+    }
+    if (!ok)
+        return vv_error_set(VV_ERR_IO, "page %d: %s", k, msg_or(msg, "cannot set its tags"));
+    const unsigned char *slice = (const unsigned char *)v->data + (size_t)k * v->dims[1] * row;
+    for (uint32_t y = 0, s = 0; y < (uint32_t)v->dims[1]; y += rps, s++) {
+        uint32_t rows = y + rps <= (uint32_t)v->dims[1] ? rps : (uint32_t)v->dims[1] - y;
+        size_t bytes = rows * row;
+        /* libtiff's predictor and byte order work on the buffer given: a copy */
+        memcpy(scratch, slice + (size_t)y * row, bytes);
+        if (TIFFWriteEncodedStrip(t, s, scratch, (tmsize_t)bytes) < 0)
+            return vv_error_set(VV_ERR_IO, "page %d: %s", k, msg_or(msg, "write failed"));
+    }
+    if (!TIFFWriteDirectory(t))
+        return vv_error_set(VV_ERR_IO, "page %d: %s", k, msg_or(msg, "write failed"));
+    return VV_OK;
+}
+
+static vv_status
+write_pages(const vv_volume *v, const char *path, const vv_save_options *opt, int fd,
+            uint16_t comp) {
+    desc_buf d = {0};
+    if (is_ome_name(path))
+        ome_description(&d, v, path);
+    else
+        imagej_description(&d, v);
+    if (d.failed) {
+        free(d.s);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    size_t row = (size_t)v->dims[0] * vv_voxel_type_size(v->type);
+    size_t cap = row > ((size_t)256 << 10) ? row : ((size_t)256 << 10);
+    unsigned char *scratch = malloc(cap);
+    tiff_msg msg = {{0}};
+    TIFFOpenOptions *o = TIFFOpenOptionsAlloc();
+    if (!scratch || !o) {
+        free(scratch);
+        free(d.s);
+        if (o)
+            TIFFOpenOptionsFree(o);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    TIFFOpenOptionsSetErrorHandlerExtR(o, on_tiff_error, &msg);
+    TIFFOpenOptionsSetWarningHandlerExtR(o, on_tiff_warning, &msg);
+    tiff_fd f = {fd, 0};
+    const char *mode = opt->bigtiff || wants_bigtiff(v) ? "w8" : "w";
+    TIFF *t = TIFFClientOpenExt(path, mode, (thandle_t)&f, fd_read, fd_write, fd_seek, fd_close,
+                                fd_size, fd_map, fd_unmap, o);
+    TIFFOpenOptionsFree(o);
+    vv_status s = VV_OK;
+    if (!t)
+        s = vv_error_set(VV_ERR_IO, "%s", msg_or(&msg, "cannot start the file"));
+    for (int k = 0; s == VV_OK && k < v->dims[2]; k++)
+        s = write_page(t, v, k, comp, k == 0 ? d.s : NULL, scratch, cap, &msg);
+    if (t) {
+        TIFFFlush(t);
+        TIFFClose(t);
+    }
+    free(scratch);
+    free(d.s);
+    return s;
+}
+
+vv_status
+vv_tiff_write(const vv_volume *v, const char *path, const vv_save_options *opt) {
+    if (!v || !path)
+        return vv_error_set(VV_ERR_INVALID, "tiff: NULL argument");
+    vv_save_options defaults;
+    if (!opt) {
+        vv_save_options_init(&defaults);
+        opt = &defaults;
+    }
+    vv_status s = VV_OK;
+    uint16_t comp = COMPRESSION_NONE;
+    if (!v->data)
+        s = vv_error_set(VV_ERR_INVALID, "volume has no data");
+    else if ((unsigned)v->type > VV_F64)
+        s = vv_error_set(VV_ERR_UNSUPPORTED, "voxel type %d cannot be written", (int)v->type);
+    for (int i = 0; s == VV_OK && i < 3; i++)
+        if (!(v->spacing[i] > 0) || !isfinite(v->spacing[i]) || !isfinite(v->origin[i]))
+            s = vv_error_set(VV_ERR_INVALID, "axis %d: spacing %g, origin %g", i, v->spacing[i],
+                             v->origin[i]);
+    if (s == VV_OK)
+        s = tiff_codec(opt, &comp);
+    vv_atomic_file af;
+    if (s == VV_OK)
+        s = vv_atomic_file_open(&af, path);
+    if (s == VV_OK) {
+        s = write_pages(v, path, opt, af.fd, comp);
+        if (s == VV_OK)
+            s = vv_atomic_file_commit(&af);
+        else
+            vv_atomic_file_abort(&af);
+    }
+    if (s != VV_OK)
+        return vv_error_prefix(s, "tiff: %s", vv_path_basename(path));
+    return VV_OK;
+}
+
 /* ---- the format record ------------------------------------------------------ */
 
 /* A TIFF file in a folder. */
@@ -681,6 +1111,23 @@ tiff_read_record(vv_volume **out, const char *path, const vv_load_options *opt) 
     return vv_tiff_read(out, path, opt->channel);
 }
 
+/* TIFF holds no direction matrix. */
+static int
+tiff_fits(const vv_volume *v, char *why, size_t cap) {
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++)
+            if (v->direction[r * 3 + c] != (r == c)) {
+                snprintf(why, cap, "TIFF holds no direction matrix (written axis-aligned)");
+                return 0;
+            }
+    return 1;
+}
+
+static vv_status
+tiff_write_record(const vv_volume *v, const char *path, const vv_save_options *opt) {
+    return vv_tiff_write(v, path, opt);
+}
+
 static const char *const tiff_extensions[] = {"tif", "tiff", NULL};
 static const char *const tiff_aliases[] = {"tif", NULL};
 
@@ -690,8 +1137,12 @@ const vv_volume_format vv_volume_format_tiff = {
     .title = "TIFF",
     .extensions = tiff_extensions,
     .aliases = tiff_aliases,
-    .doc = "TIFF through libtiff: pages or a folder of pages, BigTIFF, OME-TIFF, ImageJ",
+    .doc = "TIFF through libtiff: pages or a folder of pages, BigTIFF, OME-TIFF, ImageJ; written "
+           "as one page per slice (OME-XML for .ome.tif, ImageJ's keys otherwise), deflate "
+           "unless --codec or --no-compress",
     .flags = VV_FORMAT_FLAG_THIRD_PARTY | VV_FORMAT_FLAG_FOLDER,
     .looks_like = tiff_looks_like,
+    .fits = tiff_fits,
     .read = tiff_read_record,
+    .write = tiff_write_record,
 };

@@ -168,7 +168,8 @@ test_usage_errors(void **state) {
         {"render", neghip, "-o", png, "--size", NULL},
         {"convert", nut, NULL},
         {"convert", nut, out_file("x.foo"), NULL},
-        {"convert", "--format", "tiff", nut, out_file("x.tif"), NULL},
+        {"convert", "--format", "dicom", nut, out_file("x.dcm"), NULL},
+        {"convert", "--codec", "lzw", nut, out_file("x.nrrd"), NULL},
     };
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         run_result r = vt_run_cli_v(outdir(), cases[i]);

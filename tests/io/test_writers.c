@@ -1,8 +1,8 @@
 /*
- * The NIfTI and MetaImage writers (issue 34): byte-identical voxels for
- * every voxel type through .nii, .nii.gz, NIfTI-2, .mha and .mhd (raw and
- * zlib), geometry carried (an oblique direction; LPS into NIfTI's RAS and
- * RAS into MetaImage's LPS, x and y negated), and the failures: a full disk
+ * The NIfTI, MetaImage and TIFF writers (issue 34): byte-identical voxels
+ * for every voxel type through .nii, .nii.gz, NIfTI-2, .mha and .mhd (raw
+ * and zlib), .tif and .ome.tif (every codec, BigTIFF), geometry carried (an oblique direction; LPS
+ * into NIfTI's RAS and RAS into MetaImage's LPS, x and y negated), and the failures: a full disk
  * (RLIMIT_FSIZE), an unwritable folder, a float label volume, a .hdr name;
  * each a one-line error naming the file, with no file left behind. The
  * independent readers (nibabel, VTK) are in tests/writers.
@@ -120,6 +120,51 @@ test_mhd_types(void **state) {
     roundtrip("types_raw.mhd", &o, VV_SPACE_UNKNOWN, 0, 1e-14);
 }
 
+/* TIFF holds no direction: the volumes are axis-aligned. Plain .tif keeps
+ * the in-plane spacing as a 32-bit rational (1 / XResolution), OME-TIFF
+ * every figure as written (%.17g). */
+static void
+tiff_roundtrip(const char *name, const vv_save_options *o, double eps) {
+    const char *dir = vt_outdir("io_writers");
+    for (int t = VV_U8; t <= VV_F64; t++) {
+        vv_volume *v = make_volume((vv_voxel_type)t, 13, 7, 5, VV_SPACE_UNKNOWN), *back = NULL;
+        for (int i = 0; i < 9; i++)
+            v->direction[i] = i % 4 == 0;
+        const char *path = vt_path(dir, name);
+        vt_ok(vv_volume_save_with(v, path, o));
+        vt_ok(vv_volume_load(&back, path, NULL));
+        assert_same(v, back, 0, eps);
+        assert_int_equal(back->unit, VV_UNIT_MM);
+        vv_volume_free(back);
+        vv_volume_free(v);
+    }
+}
+
+static void
+test_tiff_types(void **state) {
+    (void)state;
+    vv_save_options o;
+    vv_save_options_init(&o);
+    tiff_roundtrip("types.ome.tif", &o, 1e-12);
+    tiff_roundtrip("types.tif", &o, 1e-6);
+    static const char *const codecs[] = {"lzw", "zstd", "packbits", "none"};
+    for (size_t i = 0; i < sizeof codecs / sizeof codecs[0]; i++) {
+        o.codec = codecs[i];
+        tiff_roundtrip("codec.ome.tiff", &o, 1e-12);
+    }
+    o.codec = NULL;
+    o.compress = 0;
+    tiff_roundtrip("plain.tiff", &o, 1e-6);
+    /* BigTIFF on request: the header's version 43 */
+    o.compress = -1;
+    o.bigtiff = 1;
+    tiff_roundtrip("big.ome.tif", &o, 1e-12);
+    size_t n = 0;
+    unsigned char *b = vt_read_file(vt_path(vt_outdir("io_writers"), "big.ome.tif"), &n);
+    assert_true(n > 8 && b[0] == 'I' && b[1] == 'I' && b[2] == 43 && b[3] == 0);
+    free(b);
+}
+
 /* An axis of 40000 voxels is NIfTI-2 (NIfTI-1 holds 32767); asking for
  * NIfTI-1 is an error. */
 static void
@@ -180,8 +225,8 @@ test_full_disk(void **state) {
     char dir[512];
     snprintf(dir, sizeof dir, "%s/fsize", vt_outdir("io_writers"));
     mkdir(dir, 0755);
-    static const char *const names[] = {"full.nii", "full.nii.gz", "full.mha", "full_raw.mha",
-                                        "full.mhd"};
+    static const char *const names[] = {"full.nii", "full.nii.gz",  "full.mha",    "full_raw.mha",
+                                        "full.mhd", "full_raw.tif", "full.ome.tif"};
     vv_volume *v = make_volume(VV_U8, 128, 128, 64, VV_SPACE_RAS);
     void (*was)(int) = signal(SIGXFSZ, SIG_IGN);
     struct rlimit keep;
@@ -212,17 +257,27 @@ test_errors(void **state) {
     /* an unwritable folder: one line, nothing there */
     char ro[512];
     snprintf(ro, sizeof ro, "%s/missing-folder", dir);
-    static const char *const names[] = {"a.nii", "a.nii.gz", "a.mha", "a.mhd"};
+    static const char *const names[] = {"a.nii", "a.nii.gz", "a.mha", "a.mhd", "a.tif"};
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
         vv_error_clear();
         assert_int_equal(vv_volume_save_with(v, vt_path(ro, names[i]), NULL), VV_ERR_IO);
         assert_one_line(names[i]);
     }
-    /* a float label volume cannot be NIfTI's LABEL intent */
+    /* a codec TIFF does not know */
     vv_save_options o;
     vv_save_options_init(&o);
+    o.codec = "jpeg2000";
+    const char *p = vt_path(dir, "codec.tif");
+    unlink(p);
+    vv_error_clear();
+    assert_int_equal(vv_volume_save_with(v, p, &o), VV_ERR_INVALID);
+    assert_one_line("codec.tif");
+    assert_non_null(strstr(vv_error_message(), "jpeg2000"));
+    assert_int_not_equal(access(p, F_OK), 0);
+    o.codec = NULL;
+    /* a float label volume cannot be NIfTI's LABEL intent */
     o.label = 1;
-    const char *p = vt_path(dir, "label_f32.nii");
+    p = vt_path(dir, "label_f32.nii");
     unlink(p);
     vv_error_clear();
     assert_int_equal(vv_volume_save_with(v, p, &o), VV_ERR_UNSUPPORTED);
@@ -265,6 +320,7 @@ main(void) {
         cmocka_unit_test(test_nifti_types),      cmocka_unit_test(test_mhd_types),
         cmocka_unit_test(test_nifti2_long_axis), cmocka_unit_test(test_full_disk),
         cmocka_unit_test(test_errors),           cmocka_unit_test(test_label_intent),
+        cmocka_unit_test(test_tiff_types),
     };
     return vt_run_tests(tests, NULL, NULL);
 }

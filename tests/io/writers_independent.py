@@ -6,8 +6,9 @@
 Writes, with numpy only, a raw NRRD of every voxel type with an oblique
 direction, an origin and anisotropic spacing in LPS, converts it with
 `volvis convert` to NIfTI (.nii, .nii.gz, NIfTI-2), MetaImage (.mha, .mhd),
-VTK legacy (.vtk) and VTK XML image data (.vti), and reads each back with
-nibabel or VTK's readers: voxels equal, affine / spacing / origin /
+VTK legacy (.vtk), VTK XML image data (.vti) and TIFF (.tif with ImageJ's
+keys, .ome.tif; every codec, BigTIFF), and reads each back with nibabel,
+VTK's readers or tifffile: voxels equal, affine / spacing / origin /
 direction equal to what was written (NIfTI's RAS is LPS with x and y
 negated). An oblique DICOM series (written by scripts/dicom_testdata.py with
 pydicom) converted to NIfTI lands where its Image Position (Patient) says in
@@ -29,8 +30,10 @@ try:
     import vtk
     from vtk.util.numpy_support import vtk_to_numpy
     import pydicom
+    import tifffile
 except ImportError as e:  # pragma: no cover
-    print(f"skipped: {e} (python3-numpy, python3-nibabel, python3-vtk9, python3-pydicom)")
+    print(f"skipped: {e} (python3-numpy, python3-nibabel, python3-vtk9, python3-pydicom, "
+          "python3-tifffile)")
     sys.exit(77)
 
 VOLVIS, OUT, SRC = sys.argv[1], sys.argv[2], sys.argv[3]
@@ -65,14 +68,15 @@ DIRECTION = RX @ RZ  # columns: the world directions of i, j, k
 LPS2RAS = np.diag([-1.0, -1.0, 1.0])
 
 
-def write_nrrd(path, arr, ntype):
+def write_nrrd(path, arr, ntype, direction=DIRECTION, units=False):
     """arr indexed [k, j, i] (C order: i fastest), as NRRD's raw data."""
-    cols = [DIRECTION[:, c] * SPACING[c] for c in range(3)]
+    cols = [direction[:, c] * SPACING[c] for c in range(3)]
     vec = " ".join("(%s)" % ",".join(repr(float(x)) for x in c) for c in cols)
     hdr = ("NRRD0004\ntype: %s\ndimension: 3\nspace: left-posterior-superior\n"
-           "sizes: %d %d %d\nspace directions: %s\nspace origin: (%s)\n"
+           "sizes: %d %d %d\nspace directions: %s\nspace origin: (%s)\n%s"
            "endian: little\nencoding: raw\n\n" %
-           (ntype, *DIMS, vec, ",".join(repr(float(x)) for x in ORIGIN)))
+           (ntype, *DIMS, vec, ",".join(repr(float(x)) for x in ORIGIN),
+            'space units: "mm" "mm" "mm"\n' if units else ""))
     with open(path, "wb") as f:
         f.write(hdr.encode())
         f.write(arr.astype(arr.dtype.newbyteorder("<")).tobytes())
@@ -131,6 +135,72 @@ for name, (dt, ntype) in TYPES.items():
             m = o.GetDirectionMatrix()
             d = np.array([[m.GetElement(r, c) for c in range(3)] for r in range(3)])
             check(np.allclose(d, DIRECTION, atol=1e-12), f"VTK {name}{ext}: direction")
+
+# TIFF through tifffile: an axis-aligned source in millimetres (TIFF holds
+# no direction). OME-TIFF: axes, pixel type, physical sizes and units, the
+# planes' positions; ImageJ: slices, spacing, unit, origin, X/YResolution.
+# LZW and zstd need imagecodecs, which Debian 12 lacks: for them the
+# compression tag is read here and the voxels by VolVis (test_io_writers).
+import xml.etree.ElementTree as ET
+OME_NS = {"o": "http://www.openmicroscopy.org/Schemas/OME/2016-06"}
+for name, (dt, ntype) in TYPES.items():
+    info = np.iinfo(dt) if dt[0] in "ui" else None
+    if info:
+        arr = rng.integers(info.min, info.max, size=DIMS[::-1], dtype=dt, endpoint=True)
+    else:
+        arr = (rng.standard_normal(DIMS[::-1]) * 1e5).astype(dt)
+    src = os.path.join(OUT, f"tsrc_{name}.nrrd")
+    write_nrrd(src, arr, ntype, direction=np.eye(3), units=True)
+    ome = os.path.join(OUT, f"w_{name}.ome.tif")
+    run("convert", src, ome, "--quiet")
+    with tifffile.TiffFile(ome) as t:
+        ser = t.series[0]
+        check(t.is_ome and ser.axes == "ZYX" and ser.dtype == np.dtype(dt) and
+              np.array_equal(ser.asarray(), arr), f"tifffile {name}.ome.tif: axes ZYX, voxels")
+        px = ET.fromstring(t.ome_metadata).find(".//o:Pixels", OME_NS)
+        planes = px.findall("o:Plane", OME_NS)
+        sizes = [float(px.get(f"PhysicalSize{a}")) for a in "XYZ"]
+        check(np.allclose(sizes, SPACING, rtol=1e-15) and
+              all(px.get(f"PhysicalSize{a}Unit") == "mm" for a in "XYZ"),
+              f"tifffile {name}.ome.tif: physical sizes in mm")
+        pos = [[float(p.get(f"Position{a}")) for a in "XYZ"] for p in planes]
+        want = [ORIGIN + [0, 0, k * SPACING[2]] for k in range(DIMS[2])]
+        check(len(planes) == DIMS[2] and np.allclose(pos, want, atol=1e-12) and
+              px.find("o:Channel", OME_NS) is not None,
+              f"tifffile {name}.ome.tif: a channel and a plane per slice at its position")
+    ij = os.path.join(OUT, f"w_{name}.tif")
+    run("convert", src, ij, "--quiet")
+    with tifffile.TiffFile(ij) as t:
+        md = t.imagej_metadata or {}
+        check(t.is_imagej and np.array_equal(t.asarray(), arr) and md.get("slices") == DIMS[2],
+              f"tifffile {name}.tif: ImageJ stack, voxels")
+        xr = t.pages[0].tags["XResolution"].value
+        yr = t.pages[0].tags["YResolution"].value
+        check(abs(xr[1] / xr[0] - SPACING[0]) < 1e-6 and abs(yr[1] / yr[0] - SPACING[1]) < 1e-6
+              and abs(md.get("spacing", 0) - SPACING[2]) < 1e-12 and md.get("unit") == "mm",
+              f"tifffile {name}.tif: X/YResolution, spacing and unit")
+        org = [-md.get(f"{a}origin", 0) * SPACING[i] for i, a in enumerate("xyz")]
+        check(np.allclose(org, ORIGIN, atol=1e-9), f"tifffile {name}.tif: origin (in voxels)")
+src = os.path.join(OUT, "tsrc_i16.nrrd")
+for codec, tag in (("deflate", 8), ("packbits", 32773), ("none", 1), ("lzw", 5),
+                   ("zstd", 50000)):
+    dst = os.path.join(OUT, f"codec_{codec}.tif")
+    run("convert", src, dst, "--quiet", "--codec", codec)
+    with tifffile.TiffFile(dst) as t:
+        ok = all(p.compression == tag for p in t.pages)
+        if tag in (8, 32773, 1):
+            ok &= np.array_equal(t.asarray(), tifffile.imread(os.path.join(OUT, "w_i16.tif")))
+        check(ok, f"tifffile --codec {codec}: compression {tag} on every page" +
+              (", voxels" if tag in (8, 32773, 1) else ""))
+dst = os.path.join(OUT, "big.ome.tif")
+run("convert", src, dst, "--quiet", "--bigtiff")
+with tifffile.TiffFile(dst) as t:
+    check(t.is_bigtiff and t.is_ome and np.array_equal(t.asarray(), tifffile.imread(
+        os.path.join(OUT, "w_i16.ome.tif"))), "tifffile --bigtiff: BigTIFF, OME, voxels")
+p = subprocess.run([VOLVIS, "convert", os.path.join(OUT, "src_u8.nrrd"),
+                    os.path.join(OUT, "warn.ome.tif")], capture_output=True, text=True)
+check(p.returncode == 0 and "warning" in p.stderr and "direction" in p.stderr,
+      "OME-TIFF of an oblique volume: a warning names the direction matrix")
 
 # What a format cannot hold is a warning: the direction into legacy VTK
 p = subprocess.run([VOLVIS, "convert", os.path.join(OUT, "src_u8.nrrd"),
