@@ -44,6 +44,7 @@ vv_application_startup(GApplication *app) {
         {"win.layout::4", {"<Control>4", NULL}},
         {"win.save", {"<Control>s", NULL}},
         {"win.save-as", {"<Control><Shift>s", NULL}},
+        {"win.save-volume", {"<Control><Shift>e", NULL}},
         {"win.undo", {"<Control>z", NULL}},
         {"win.redo", {"<Control><Shift>z", "<Control>y", NULL}},
         {"win.render", {"<Control>r", NULL}},

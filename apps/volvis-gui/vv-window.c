@@ -5,6 +5,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "volvis/sys/format.h"
 #include "vv-animator-page.h"
 #include "vv-cut-panel.h"
 #include "vv-devices-page.h"
@@ -245,6 +246,144 @@ act_save(GSimpleAction *a, GVariant *p, gpointer user) {
         act_save_as(a, p, user);
 }
 
+/* ---- Save volume as… --------------------------------------------------------
+ * The selected volume object (else the first one) written to any format
+ * that writes, chosen by the name's extension (the format table, as
+ * `volvis convert`). The write runs on a worker thread with its own
+ * reference to the volume, so a large file does not stop the window; what
+ * the format cannot hold (its record's fits) is said after the save. */
+
+typedef struct save_volume_job {
+    vv_volume *volume; /* a reference of its own */
+    char *path;
+    char *warning; /* what the format dropped, or NULL */
+} save_volume_job;
+
+static void
+save_volume_job_free(gpointer p) {
+    save_volume_job *j = p;
+    vv_volume_free(j->volume);
+    g_free(j->path);
+    g_free(j->warning);
+    g_free(j);
+}
+
+static void
+save_volume_thread(GTask *task, gpointer source, gpointer data, GCancellable *cancel) {
+    (void)source;
+    (void)cancel;
+    save_volume_job *j = data;
+    if (vv_volume_save_with(j->volume, j->path, NULL) != VV_OK)
+        g_task_return_new_error(task, G_IO_ERROR, G_IO_ERROR_FAILED, "%s", vv_error_message());
+    else
+        g_task_return_boolean(task, TRUE);
+}
+
+static void
+save_volume_done(GObject *source, GAsyncResult *res, gpointer user) {
+    (void)user;
+    VvWindow *win = VV_WINDOW(source);
+    save_volume_job *j = g_task_get_task_data(G_TASK(res));
+    g_autofree char *base = g_path_get_basename(j->path);
+    GError *err = NULL;
+    if (!g_task_propagate_boolean(G_TASK(res), &err)) {
+        g_autofree char *what = g_strdup_printf("Cannot save %s", base);
+        show_error(win, what, err->message);
+        g_error_free(err);
+        return;
+    }
+    if (j->warning) {
+        g_printerr("volvis-gui: saved %s: %s\n", base, j->warning);
+        GtkWidget *d =
+            gtk_message_dialog_new(GTK_WINDOW(win), GTK_DIALOG_MODAL, GTK_MESSAGE_WARNING,
+                                   GTK_BUTTONS_CLOSE, "Saved %s", base);
+        gtk_message_dialog_format_secondary_text(GTK_MESSAGE_DIALOG(d), "%s", j->warning);
+        gtk_window_set_title(GTK_WINDOW(d), "VolVis: saved with a warning");
+        g_signal_connect(d, "response", G_CALLBACK(gtk_window_destroy), NULL);
+        gtk_widget_show(d);
+    }
+}
+
+/* The volume Save volume as… writes: the selected object's, else the first. */
+static vv_object *
+volume_to_save(VvWindow *win) {
+    vv_object *o = vv_document_selected_object(win->doc);
+    if (o && o->type == VV_OBJECT_VOLUME && o->volume)
+        return o;
+    vv_world *w = vv_document_world(win->doc);
+    for (int i = 0; i < w->n_objects; i++)
+        if (w->objects[i]->type == VV_OBJECT_VOLUME && w->objects[i]->volume)
+            return w->objects[i];
+    return NULL;
+}
+
+void
+vv_window_save_volume(VvWindow *win, const char *path) {
+    vv_object *o = volume_to_save(win);
+    g_autofree char *base = g_path_get_basename(path);
+    g_autofree char *what = g_strdup_printf("Cannot save %s", base);
+    if (!o) {
+        show_error(win, what, "there is no volume in the scene");
+        return;
+    }
+    vv_format f = vv_format_from_extension(path);
+    int n = 0;
+    const vv_volume_format *const *table = vv_volume_format_table(&n);
+    const vv_volume_format *r = f >= 1 && f <= n ? table[f - 1] : NULL;
+    if (!r || !r->write) {
+        GString *exts = g_string_new(NULL);
+        for (int i = 0; i < n; i++)
+            for (const char *const *e = vv_volume_format_write_extensions(table[i]); e && *e; e++)
+                g_string_append_printf(exts, "%s.%s", exts->len ? ", " : "", *e);
+        g_autofree char *m =
+            g_strdup_printf("no format that writes has this extension (use %s)", exts->str);
+        g_string_free(exts, TRUE);
+        show_error(win, what, m);
+        return;
+    }
+    save_volume_job *j = g_new0(save_volume_job, 1);
+    j->volume = vv_volume_ref(o->volume);
+    j->path = g_strdup(path);
+    char why[256];
+    if (r->fits && !r->fits(o->volume, why, sizeof why))
+        j->warning = g_strdup(why);
+    GTask *task = g_task_new(win, NULL, save_volume_done, NULL);
+    g_task_set_task_data(task, j, save_volume_job_free);
+    g_task_run_in_thread(task, save_volume_thread);
+    g_object_unref(task);
+}
+
+static void
+save_volume_response(GtkNativeDialog *d, int response, gpointer user) {
+    if (response == GTK_RESPONSE_ACCEPT) {
+        GFile *f = gtk_file_chooser_get_file(GTK_FILE_CHOOSER(d));
+        char *p = g_file_get_path(f);
+        if (p)
+            vv_window_save_volume(user, p);
+        g_free(p);
+        g_object_unref(f);
+    }
+    g_object_unref(d);
+}
+
+static void
+act_save_volume(GSimpleAction *a, GVariant *p, gpointer user) {
+    (void)a;
+    (void)p;
+    VvWindow *win = user;
+    vv_object *o = volume_to_save(win);
+    if (!o) {
+        show_error(win, "Cannot save a volume", "there is no volume in the scene");
+        return;
+    }
+    GtkFileChooserNative *d = gtk_file_chooser_native_new(
+        "Save volume as", user, GTK_FILE_CHOOSER_ACTION_SAVE, "_Save", "_Cancel");
+    g_autofree char *name = g_strdup_printf("%s.nii.gz", o->name[0] ? o->name : "volume");
+    gtk_file_chooser_set_current_name(GTK_FILE_CHOOSER(d), name);
+    g_signal_connect(d, "response", G_CALLBACK(save_volume_response), user);
+    gtk_native_dialog_show(GTK_NATIVE_DIALOG(d));
+}
+
 static void
 act_undo(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
@@ -454,6 +593,7 @@ main_menu(void) {
         {"File", "Browse DICOM…", "win.browse-dicom"},
         {"File", "Save session", "win.save"},
         {"File", "Save session as…", "win.save-as"},
+        {"File", "Save volume as…", "win.save-volume"},
         {"File", "Close window", "win.close"},
         {"File", "Quit", "app.quit"},
         {"Edit", "Undo", "win.undo"},
@@ -603,6 +743,7 @@ static const GActionEntry win_actions[] = {
     {"browse-dicom", act_browse_dicom, NULL, NULL, NULL, {0}},
     {"save", act_save, NULL, NULL, NULL, {0}},
     {"save-as", act_save_as, NULL, NULL, NULL, {0}},
+    {"save-volume", act_save_volume, NULL, NULL, NULL, {0}},
     {"close", act_close, NULL, NULL, NULL, {0}},
     {"undo", act_undo, NULL, NULL, NULL, {0}},
     {"redo", act_redo, NULL, NULL, NULL, {0}},

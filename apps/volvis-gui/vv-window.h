@@ -23,6 +23,13 @@ G_DECLARE_FINAL_TYPE(VvWindow, vv_window, VV, WINDOW, GtkApplicationWindow)
 VvWindow *vv_window_new(GtkApplication *app);
 /** Opens a file into the window's World; on failure shows an error dialog. */
 void vv_window_open(VvWindow *win, const char *path);
+/**
+ * Save volume as… without the chooser: writes the selected volume object
+ * (else the first volume) to @p path in the format of its extension, on a
+ * worker thread, atomically; errors and what the format could not hold
+ * are shown in dialogs.
+ */
+void vv_window_save_volume(VvWindow *win, const char *path);
 VvDocument *vv_window_document(VvWindow *win);
 /** The window's 3-D view (owned by the window). */
 VvSceneView *vv_window_scene_view(VvWindow *win);

@@ -306,7 +306,9 @@ cli_writable_formats(char *buf, size_t cap, const char *sep, int extensions) {
     for (int i = 0; i < n; i++) {
         if (!t[i]->write)
             continue;
-        for (const char *const *e = extensions ? t[i]->extensions : &t[i]->name; e && *e; e++) {
+        for (const char *const *e = extensions ? vv_volume_format_write_extensions(t[i])
+                                               : &t[i]->name;
+             e && *e; e++) {
             size_t len = strlen(buf);
             snprintf(buf + len, cap - len, "%s%s%s", k++ ? sep : "", extensions ? "." : "", *e);
             if (!extensions)

@@ -51,6 +51,13 @@ vv_volume_format_table(int *n) {
     return table;
 }
 
+const char *const *
+vv_volume_format_write_extensions(const vv_volume_format *f) {
+    if (!f || !f->write)
+        return NULL;
+    return f->write_extensions ? f->write_extensions : f->extensions;
+}
+
 int
 vv_format_count(void) {
     return N_FORMATS;

@@ -787,12 +787,14 @@ nifti_read_record(vv_volume **out, const char *path, const vv_load_options *opt)
 
 static const char *const nifti_extensions[] = {"nii", "nii.gz", "hdr", "img", NULL};
 static const char *const nifti_aliases[] = {"nii", "hdr", NULL};
+static const char *const nifti_write_extensions[] = {"nii", "nii.gz", NULL};
 
 const vv_volume_format vv_volume_format_nifti = {
     .version = VV_FORMAT_RECORD_VERSION,
     .name = "nifti",
     .title = "NIfTI",
     .extensions = nifti_extensions,
+    .write_extensions = nifti_write_extensions,
     .aliases = nifti_aliases,
     .doc = "NIfTI-1 and NIfTI-2 through nifti_clib: scaling applied, qform/sform geometry; "
            "writes .nii/.nii.gz, every voxel type, qform+sform (LPS turned to RAS), units, "

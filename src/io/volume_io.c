@@ -169,11 +169,11 @@ writable_extensions(char *buf, size_t cap) {
     int n, k = 0, total = 0;
     const vv_volume_format *const *t = vv_volume_format_table(&n);
     for (int i = 0; i < n; i++)
-        for (const char *const *e = t[i]->extensions; t[i]->write && e && *e; e++)
+        for (const char *const *e = vv_volume_format_write_extensions(t[i]); e && *e; e++)
             total++;
     buf[0] = '\0';
     for (int i = 0; i < n; i++)
-        for (const char *const *e = t[i]->extensions; t[i]->write && e && *e; e++, k++) {
+        for (const char *const *e = vv_volume_format_write_extensions(t[i]); e && *e; e++, k++) {
             size_t len = strlen(buf);
             snprintf(buf + len, cap - len, "%s.%s",
                      k == 0          ? ""

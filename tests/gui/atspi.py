@@ -425,6 +425,25 @@ class Session:
         check(os.path.exists(path), f"Save as wrote no {path}")
         self.focus_main()
 
+    def save_volume_as(self, path, expect_file=True):
+        """Ctrl+Shift+E (Save volume as…), the path typed into the chooser,
+        Return; waits for the file the worker thread writes (an old file is
+        removed first: the chooser would ask to replace it)."""
+        if os.path.exists(path):
+            os.remove(path)
+        self.focus_main()
+        self.key("ctrl+shift+e")
+        self.xdo("search", "--sync", "--name", "Save volume as")
+        time.sleep(0.5)
+        self.key("ctrl+a")
+        self.type(path)
+        self.key("Return")
+        if expect_file:
+            self.wait_for(lambda: os.path.exists(path), f"Save volume as wrote no {path}",
+                          timeout=60)
+            time.sleep(0.5)
+            self.focus_main()
+
     def set_spin(self, o, value):
         """Types a value into a spin button: click, select all, type, Enter."""
         self.click(o)

@@ -3,7 +3,10 @@
 opens; the chain "--threshold 300: --largest 1:26" typed on the page and
 applied (with "adapt the transfer function" on) gives a u8 mask (the log
 line the page writes says so) and a different, non-blank image without the
-head holder; undo restores the first image exactly; a chain built with "Add
+head holder; Save volume as… (Ctrl+Shift+E) writes the mask as .nii.gz
+with the voxels and affine of `volvis filter`'s (read by nibabel), and a
+name no format writes is an error dialog with no file; undo restores the
+first image exactly; a chain built with "Add
 step" (--median 1) applies too; a bad chain shows an error dialog and the
 application keeps running; Ctrl+Q, Close without saving, exit 0.
 
@@ -71,6 +74,32 @@ def main():
         e0, e1 = edges_mean(full0), edges_mean(bone)
         check(e1 < 0.5 * e0, f"the head holder is still there ({e0} -> {e1})")
         print(f"filtered: mean {mean}; outer quarters {e0} before, {e1} after")
+        # Save volume as…: the mask, as the CLI's filter writes it, read by nibabel
+        mask = os.path.join(OUT, "mask.nii.gz")
+        s.save_volume_as(mask)
+        cli_mask = os.path.join(OUT, "cli_mask.nii.gz")
+        subprocess.run([CLI, "filter", head, cli_mask, "--threshold", "300:", "--largest",
+                        "1:26", "--quiet"], check=True)
+        import nibabel as nib
+        import numpy as np
+        a, b = nib.load(mask), nib.load(cli_mask)
+        va, vb = np.asanyarray(a.dataobj), np.asanyarray(b.dataobj)
+        check(va.dtype == np.uint8 and va.shape == (256, 256, 108) and
+              np.array_equal(va, vb) and np.allclose(a.affine, b.affine) and
+              set(np.unique(va)) == {0, 1},
+              f"Save volume as: {va.dtype} {va.shape} mask differs from volvis filter's")
+        print(f"save volume as: mask.nii.gz = volvis filter's ({int(va.sum())} voxels set)")
+        # a name no format writes: an error dialog, no file, still running
+        bad = os.path.join(OUT, "mask.foo")
+        s.save_volume_as(bad, expect_file=False)
+        s.xdo("search", "--sync", "--name", "VolVis: error")
+        time.sleep(0.3)
+        s.screenshot("save_volume_error.png")
+        check(not os.path.exists(bad) and s.app_proc.poll() is None,
+              "Save volume as mask.foo: a file, or the application died")
+        s.key("Escape")
+        time.sleep(0.3)
+        s.focus_main()
         n = s.n_full()
         s.key("ctrl+z")
         s.wait_full(n, "undo")

@@ -103,7 +103,15 @@ typedef struct vv_volume_format {
      * refused that when opt->strict). NULL: the format is read only.
      */
     vv_status (*write)(const vv_volume *v, const char *path, const vv_save_options *opt);
+    /** The extensions write takes, when fewer than extensions (NIfTI writes
+     *  .nii and .nii.gz, not the .hdr/.img pair it reads); NULL: extensions.
+     *  For the lists of names that write (messages, --help, the GUI). */
+    const char *const *write_extensions;
 } vv_volume_format;
+
+/** The extensions @p f writes (write_extensions, else extensions); NULL
+ *  when it writes none. */
+const char *const *vv_volume_format_write_extensions(const vv_volume_format *f);
 
 /** The volume formats in table order (id 1 first); *@p n their number. */
 const vv_volume_format *const *vv_volume_format_table(int *n);
