@@ -1,8 +1,11 @@
 /*
  * Streaming output for the volume writers (not installed): bytes go to a
  * FILE as they are, as a zlib stream (MetaImage CompressedData, VTK XML
- * appended blocks) or as a gzip member (.nii.gz), in one pass with a
- * fixed-size buffer, so a writer never holds a second copy of the voxels.
+ * appended blocks) or as a gzip member (.nii.gz), in one pass through a
+ * bounded buffer (at most 32 MiB of input and its output, compressed on
+ * every core in 1 MiB blocks, pigz's scheme: zout.c), so a writer never
+ * holds a second copy of the voxels. The bytes written depend on the input
+ * only, never on the thread count.
  *
  * Thread-safety: one vv_zout per thread; the functions are reentrant.
  */
