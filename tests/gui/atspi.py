@@ -409,35 +409,30 @@ class Session:
         time.sleep(0.3)
         check(self.shown(combo) == item, f"{combo.name}: chose {self.shown(combo)!r}, not {item!r}")
 
-    def save_as(self, path):
-        """Ctrl+Shift+S, the path typed into the file chooser, Return (an old
-        file there is removed first: the chooser would ask to replace it)."""
+    def _save_dialog(self, keys, title, path):
+        """@p keys, the chooser called @p title, the path typed, Return (an
+        old file there is removed first: the chooser would ask to replace it)."""
         if os.path.exists(path):
             os.remove(path)
         self.focus_main()
-        self.key("ctrl+shift+s")
-        self.xdo("search", "--sync", "--name", "Save session")
+        self.key(keys)
+        self.xdo("search", "--sync", "--name", title)
         time.sleep(0.5)
         self.key("ctrl+a")
         self.type(path)
         self.key("Return")
+
+    def save_as(self, path):
+        """Save session as: Ctrl+Shift+S and the path."""
+        self._save_dialog("ctrl+shift+s", "Save session", path)
         time.sleep(1.5)
         check(os.path.exists(path), f"Save as wrote no {path}")
         self.focus_main()
 
     def save_volume_as(self, path, expect_file=True):
-        """Ctrl+Shift+E (Save volume as…), the path typed into the chooser,
-        Return; waits for the file the worker thread writes (an old file is
-        removed first: the chooser would ask to replace it)."""
-        if os.path.exists(path):
-            os.remove(path)
-        self.focus_main()
-        self.key("ctrl+shift+e")
-        self.xdo("search", "--sync", "--name", "Save volume as")
-        time.sleep(0.5)
-        self.key("ctrl+a")
-        self.type(path)
-        self.key("Return")
+        """Save volume as…: Ctrl+Shift+E and the path; waits for the file the
+        worker thread writes (unless @p expect_file is False)."""
+        self._save_dialog("ctrl+shift+e", "Save volume as", path)
         if expect_file:
             self.wait_for(lambda: os.path.exists(path), f"Save volume as wrote no {path}",
                           timeout=60)

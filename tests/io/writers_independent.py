@@ -93,15 +93,22 @@ def vtk_image(reader_cls, path):
 
 
 rng = np.random.default_rng(34)
+
+
+def random_array(dt):
+    """DIMS voxels of type dt, [k, j, i]: integers over the type's whole
+    range, floats of a wide spread."""
+    if dt[0] in "ui":
+        info = np.iinfo(dt)
+        return rng.integers(info.min, info.max, size=DIMS[::-1], dtype=dt, endpoint=True)
+    return (rng.standard_normal(DIMS[::-1]) * 1e5).astype(dt)
+
+
 lps_affine = np.eye(4)
 lps_affine[:3, :3] = DIRECTION * SPACING
 lps_affine[:3, 3] = ORIGIN
 for name, (dt, ntype) in TYPES.items():
-    info = np.iinfo(dt) if dt[0] in "ui" else None
-    if info:
-        arr = rng.integers(info.min, info.max, size=DIMS[::-1], dtype=dt, endpoint=True)
-    else:
-        arr = (rng.standard_normal(DIMS[::-1]) * 1e5).astype(dt)
+    arr = random_array(dt)
     src = os.path.join(OUT, f"src_{name}.nrrd")
     write_nrrd(src, arr, ntype)
     # NIfTI through nibabel: voxels, affine (RAS), codes
@@ -144,11 +151,7 @@ for name, (dt, ntype) in TYPES.items():
 import xml.etree.ElementTree as ET
 OME_NS = {"o": "http://www.openmicroscopy.org/Schemas/OME/2016-06"}
 for name, (dt, ntype) in TYPES.items():
-    info = np.iinfo(dt) if dt[0] in "ui" else None
-    if info:
-        arr = rng.integers(info.min, info.max, size=DIMS[::-1], dtype=dt, endpoint=True)
-    else:
-        arr = (rng.standard_normal(DIMS[::-1]) * 1e5).astype(dt)
+    arr = random_array(dt)
     src = os.path.join(OUT, f"tsrc_{name}.nrrd")
     write_nrrd(src, arr, ntype, direction=np.eye(3), units=True)
     ome = os.path.join(OUT, f"w_{name}.ome.tif")
