@@ -50,7 +50,8 @@ typedef enum vv_format {
     VV_FORMAT_RAW,
     VV_FORMAT_TIFF,
     VV_FORMAT_DICOM,
-    VV_FORMAT_VTI /**< VTK XML image data: written, not read */
+    VV_FORMAT_VTI,     /**< VTK XML image data: written, not read */
+    VV_FORMAT_OME_ZARR /**< OME-Zarr 0.4 (Zarr v2 folder): written, not read yet */
 } vv_format;
 
 /** Number of volume formats: their ids run from 1 to this. */
@@ -230,6 +231,26 @@ vv_status vv_vtk_write(const vv_volume *v, const char *path);
  * the host's byte order, UInt64 headers. Atomic. Errors: as vv_vtk_write.
  */
 vv_status vv_vti_write(const vv_volume *v, const char *path, int compress);
+/**
+ * Writes @p v as an OME-Zarr 0.4 store (a Zarr v2 folder, src/io/zarr_write.c):
+ * levels 0..L, each half the previous along every axis longer than one
+ * voxel, until every axis fits a chunk; a voxel of the next level is the
+ * mean of its 2x2x2 voxels (rounded for integers) or, with opt->label, the
+ * first of them. Arrays [z][y][x] in C order, chunks of at most 64^3,
+ * little-endian voxels of the volume's type, zlib level 1 unless
+ * opt->compress is 0; "/" dimension separator. Metadata: multiscales with
+ * axes z, y, x (space; the unit as OME-NGFF names it when known), each
+ * level's scale (spacing x factor) and translation (origin, shifted to the
+ * centre of the averaged voxels), omero (one channel, the value range as
+ * its window), image-label for labels. No direction matrix (the record's
+ * fits says so). Atomic: written into "<path>.tmp-XXXXXX", synced, then
+ * renamed into place or exchanged with an old store (an existing path that
+ * is not a Zarr store is refused and left as it is). Chunks are written on
+ * every core. @p opt may be NULL. Errors: VV_ERR_INVALID (no data, a
+ * non-positive spacing), VV_ERR_UNSUPPORTED (a float label volume), VV_ERR_IO
+ * (nothing is left behind), VV_ERR_NOMEM.
+ */
+vv_status vv_ome_zarr_write(const vv_volume *v, const char *path, const vv_save_options *opt);
 /**
  * Writes @p m as VTK XML PolyData (.vtp): Float32 points, per-vertex normals
  * ("Normals") and scalars (named @p scalar_name, "scalars" when NULL: the

@@ -365,11 +365,11 @@ class Volume:
     def save(self, path, format=None, strict=False):
         """Writes the volume (vv_volume_save, atomically): format None picks
         it from the extension (.nrrd/.nhdr, .slc, .nii/.nii.gz, .mha/.mhd,
-        .vtk, .vti, .tif/.tiff, .ome.tif/.ome.tiff), or a format's name
-        ("nrrd", "nifti", "mhd", "vti", "tiff", ...; ``volvis convert
-        --help`` lists them). What a format cannot hold is converted (SLC:
-        rescaled to 8 bits; VTK legacy and TIFF: the direction matrix
-        dropped) unless ``strict`` (then UnsupportedError).
+        .vtk, .vti, .tif/.tiff, .ome.tif/.ome.tiff, .ome.zarr/.zarr), or a
+        format's name ("nrrd", "nifti", "mhd", "vti", "tiff", "zarr", ...;
+        ``volvis convert --help`` lists them). What a format cannot hold is
+        converted (SLC: rescaled to 8 bits; VTK legacy, TIFF and OME-Zarr:
+        the direction matrix dropped) unless ``strict`` (then UnsupportedError).
         Errors: FileError, InvalidError, UnsupportedError."""
         fmt = lib.VV_FORMAT_AUTO
         if format is not None:

@@ -32,7 +32,8 @@
     X(raw)                                                                                         \
     X(tiff)                                                                                        \
     X(dicom)                                                                                       \
-    X(vti)
+    X(vti)                                                                                         \
+    X(ome_zarr)
 
 #define DECLARE(name) extern const vv_volume_format vv_volume_format_##name;
 VV_VOLUME_FORMAT_TABLE(DECLARE)

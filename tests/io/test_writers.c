@@ -358,6 +358,70 @@ test_label_intent(void **state) {
     vv_volume_free(v);
 }
 
+/* OME-Zarr's folder is written as a whole or not at all: a path that is
+ * not a Zarr store is refused and left as it was, an old store is replaced
+ * (no file of it left), and a full disk leaves nothing (no temporary). The
+ * voxels are read back by zarr-python in writers_independent.py. */
+static void
+test_zarr_store(void **state) {
+    (void)state;
+    char dir[512];
+    snprintf(dir, sizeof dir, "%s/zarr", vt_outdir("io_writers"));
+    mkdir(dir, 0755);
+    vv_volume *v = make_volume(VV_U16, 100, 90, 70, VV_SPACE_RAS);
+    for (int i = 0; i < 9; i++)
+        v->direction[i] = i % 4 == 0;
+    /* a plain file by that name: refused, untouched */
+    const char *p = vt_path(dir, "notes.zarr");
+    FILE *f = fopen(p, "w");
+    assert_non_null(f);
+    fputs("mine", f);
+    fclose(f);
+    vv_error_clear();
+    assert_int_equal(vv_volume_save_with(v, p, NULL), VV_ERR_IO);
+    assert_one_line("notes.zarr");
+    size_t n = 0;
+    char *back = (char *)vt_read_file(p, &n);
+    assert_true(n == 4 && !memcmp(back, "mine", 4));
+    free(back);
+    unlink(p);
+    /* a store, then a smaller one over it: the old level 1 is gone */
+    p = vt_path(dir, "a.ome.zarr");
+    vt_ok(vv_volume_save_with(v, p, NULL));
+    char lvl[600];
+    snprintf(lvl, sizeof lvl, "%s/1/.zarray", p);
+    assert_int_equal(access(lvl, F_OK), 0);
+    vv_volume *small = make_volume(VV_U8, 20, 20, 20, VV_SPACE_RAS);
+    for (int i = 0; i < 9; i++)
+        small->direction[i] = i % 4 == 0;
+    vt_ok(vv_volume_save_with(small, p, NULL));
+    assert_int_not_equal(access(lvl, F_OK), 0);
+    snprintf(lvl, sizeof lvl, "%s/0/.zarray", p);
+    back = (char *)vt_read_file(lvl, &n);
+    assert_non_null(strstr(back, "\"|u1\""));
+    free(back);
+    assert_int_equal(entries(dir), 1);
+    /* a full disk (64 KiB per file, a 1.2 MB level): one line, nothing left
+     * but the store written before */
+    void (*was)(int) = signal(SIGXFSZ, SIG_IGN);
+    struct rlimit keep;
+    assert_int_equal(getrlimit(RLIMIT_FSIZE, &keep), 0);
+    vv_save_options o;
+    vv_save_options_init(&o);
+    o.compress = 0;
+    struct rlimit rl = {64 * 1024, keep.rlim_max};
+    assert_int_equal(setrlimit(RLIMIT_FSIZE, &rl), 0);
+    vv_error_clear();
+    vv_status s = vv_volume_save_with(v, vt_path(dir, "full.zarr"), &o);
+    assert_int_equal(setrlimit(RLIMIT_FSIZE, &keep), 0);
+    signal(SIGXFSZ, was);
+    assert_int_equal(s, VV_ERR_IO);
+    assert_one_line("full.zarr");
+    assert_int_equal(entries(dir), 1);
+    vv_volume_free(small);
+    vv_volume_free(v);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
@@ -365,6 +429,7 @@ main(void) {
         cmocka_unit_test(test_nifti2_long_axis), cmocka_unit_test(test_full_disk),
         cmocka_unit_test(test_errors),           cmocka_unit_test(test_label_intent),
         cmocka_unit_test(test_tiff_types),       cmocka_unit_test(test_parallel_deflate),
+        cmocka_unit_test(test_zarr_store),
     };
     return vt_run_tests(tests, NULL, NULL);
 }

@@ -6,9 +6,9 @@
 Writes, with numpy only, a raw NRRD of every voxel type with an oblique
 direction, an origin and anisotropic spacing in LPS, converts it with
 `volvis convert` to NIfTI (.nii, .nii.gz, NIfTI-2), MetaImage (.mha, .mhd),
-VTK legacy (.vtk), VTK XML image data (.vti) and TIFF (.tif with ImageJ's
-keys, .ome.tif; every codec, BigTIFF), and reads each back with nibabel,
-VTK's readers or tifffile: voxels equal, affine / spacing / origin /
+VTK legacy (.vtk), VTK XML image data (.vti), TIFF (.tif with ImageJ's
+keys, .ome.tif; every codec, BigTIFF) and OME-Zarr (a pyramid), and reads
+each back with nibabel, VTK's readers, tifffile or zarr-python: voxels equal, affine / spacing / origin /
 direction equal to what was written (NIfTI's RAS is LPS with x and y
 negated). An oblique DICOM series (written by scripts/dicom_testdata.py with
 pydicom) converted to NIfTI lands where its Image Position (Patient) says in
@@ -31,9 +31,10 @@ try:
     from vtk.util.numpy_support import vtk_to_numpy
     import pydicom
     import tifffile
+    import zarr
 except ImportError as e:  # pragma: no cover
     print(f"skipped: {e} (python3-numpy, python3-nibabel, python3-vtk9, python3-pydicom, "
-          "python3-tifffile)")
+          "python3-tifffile, python3-zarr)")
     sys.exit(77)
 
 VOLVIS, OUT, SRC = sys.argv[1], sys.argv[2], sys.argv[3]
@@ -204,6 +205,75 @@ p = subprocess.run([VOLVIS, "convert", os.path.join(OUT, "src_u8.nrrd"),
                     os.path.join(OUT, "warn.ome.tif")], capture_output=True, text=True)
 check(p.returncode == 0 and "warning" in p.stderr and "direction" in p.stderr,
       "OME-TIFF of an oblique volume: a warning names the direction matrix")
+
+# OME-Zarr through zarr-python: a pyramid of a 150 x 70 x 40 volume (levels
+# 150 x 70 x 40, 75 x 35 x 20, 38 x 18 x 10), every voxel type; level 0
+# equals the voxels, level 1 numpy's 2x2x2 mean (the partial blocks of odd
+# axes averaged over what is inside; integers rounded half up), labels the
+# first voxel of each block; scale and translation of each level, axes and
+# unit, the zlib compressor and 64^3 chunks.
+def mean_down(x):
+    """2x2x2 means of x [k, j, i] over the voxels inside."""
+    shape = [(n + 1) // 2 * 2 if n > 1 else 1 for n in x.shape]
+    pad = np.zeros(shape)
+    cnt = np.zeros(shape)
+    pad[:x.shape[0], :x.shape[1], :x.shape[2]] = x
+    cnt[:x.shape[0], :x.shape[1], :x.shape[2]] = 1
+    f = [2 if n > 1 else 1 for n in x.shape]
+    r = lambda a: a.reshape(shape[0] // f[0], f[0], shape[1] // f[1], f[1],  # noqa: E731
+                            shape[2] // f[2], f[2]).sum(axis=(1, 3, 5))
+    return r(pad) / r(cnt)
+
+
+ZDIMS = (150, 70, 40)  # i, j, k
+for name, (dt, ntype) in TYPES.items():
+    if dt[0] in "ui":
+        info = np.iinfo(dt)
+        lo, hi = max(info.min, -100000), min(info.max, 100000)
+        arr = rng.integers(lo, hi, size=ZDIMS[::-1], dtype=dt, endpoint=True)
+    else:
+        arr = (rng.standard_normal(ZDIMS[::-1]) * 1e3).astype(dt)
+    src = os.path.join(OUT, f"zsrc_{name}.nrrd")
+    cols = " ".join("(%s)" % ",".join(repr(float(x)) for x in np.eye(3)[:, c] * SPACING[c])
+                    for c in range(3))
+    with open(src, "wb") as f:
+        f.write(("NRRD0004\ntype: %s\ndimension: 3\nspace: left-posterior-superior\n"
+                 "sizes: %d %d %d\nspace directions: %s\nspace origin: (%s)\n"
+                 'space units: "mm" "mm" "mm"\nendian: little\nencoding: raw\n\n' %
+                 (ntype, *ZDIMS, cols, ",".join(repr(float(x)) for x in ORIGIN))).encode())
+        f.write(arr.astype(arr.dtype.newbyteorder("<")).tobytes())
+    for label in ([False, True] if dt[0] in "ui" else [False]):
+        dst = os.path.join(OUT, f"w_{name}{'_label' if label else ''}.ome.zarr")
+        run("convert", src, dst, "--quiet", *(["--label"] if label else []))
+        g = zarr.open_group(dst, mode="r")
+        ms = g.attrs["multiscales"][0]
+        sets = ms["datasets"]
+        tag = f"zarr {name}{' label' if label else ''}"
+        check(ms["version"] == "0.4" and [a["name"] for a in ms["axes"]] == ["z", "y", "x"] and
+              all(a.get("unit") == "millimeter" for a in ms["axes"]) and len(sets) == 3,
+              f"{tag}: multiscales 0.4, axes z y x in millimeter, 3 levels")
+        a0, a1 = g[sets[0]["path"]], g[sets[1]["path"]]
+        check(a0.dtype == np.dtype(dt) and np.array_equal(a0[:], arr) and
+              a0.chunks == (40, 64, 64) and a0.compressor.codec_id == "zlib",
+              f"{tag}: level 0 voxels, chunks, zlib")
+        if label:
+            want = arr[::2, ::2, ::2]
+        elif dt[0] == "f":
+            want = mean_down(arr.astype(np.float64)).astype(dt)
+        else:
+            want = np.floor(mean_down(arr.astype(np.float64)) + 0.5).astype(dt)
+        ok = a1.shape == want.shape and (np.allclose(a1[:], want, rtol=1e-6) if dt[0] == "f"
+                                         else np.array_equal(a1[:], want))
+        check(ok, f"{tag}: level 1 is the {'first voxel' if label else 'mean'} of each block")
+        ok = True
+        for l, d in enumerate(sets):
+            tf = {t["type"]: t for t in d["coordinateTransformations"]}
+            fac = np.array([2 ** l if n > 1 else 1 for n in ZDIMS[::-1]], dtype=float)
+            sc = SPACING[::-1] * fac
+            tr = ORIGIN[::-1] + (0 if label else 0.5 * (fac - 1) * SPACING[::-1])
+            ok &= np.allclose(tf["scale"]["scale"], sc, rtol=1e-15)
+            ok &= np.allclose(tf["translation"]["translation"], tr, atol=1e-12)
+        check(ok, f"{tag}: scale and translation of every level")
 
 # What a format cannot hold is a warning: the direction into legacy VTK
 p = subprocess.run([VOLVIS, "convert", os.path.join(OUT, "src_u8.nrrd"),
