@@ -69,7 +69,7 @@ new_window(GApplication *app) {
 
 static void
 vv_application_activate(GApplication *app) {
-    new_window(app);
+    vv_window_offer_restore(new_window(app));
 }
 
 static void
@@ -82,6 +82,7 @@ vv_application_open(GApplication *app, GFile **files, int n, const char *hint) {
             vv_window_open(w, p);
         g_free(p);
     }
+    vv_window_offer_restore(w);
 }
 
 static void

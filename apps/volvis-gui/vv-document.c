@@ -1,8 +1,15 @@
 /* VvDocument: the edited World, undo, sources and selection (vv-document.h). */
+#define _GNU_SOURCE /* renameat2 */
 #include "vv-document.h"
 
+#include <errno.h>
+#include <fcntl.h>
+#include <ftw.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "volvis/filter.h"
 #include "vvg-models.h"
@@ -16,7 +23,25 @@ struct _VvDocument {
     gboolean dirty;
     int selected;
     vv_filter_cache *filtered; /* filtered volumes of scene objects, kept across reopenings */
+    GPtrArray *autosaved;      /* autosaved_volume: what the last autosave wrote */
 };
+
+/* A volume the last autosave wrote, by identity (a reference of its own) and
+ * its modification count: an autosave links the file instead of writing it
+ * again while both are the same. */
+typedef struct autosaved_volume {
+    vv_volume *volume;
+    uint64_t modified;
+    char *file; /* base name in the autosave folder */
+} autosaved_volume;
+
+static void
+autosaved_volume_free(gpointer p) {
+    autosaved_volume *a = p;
+    vv_volume_free(a->volume);
+    g_free(a->file);
+    g_free(a);
+}
 
 G_DEFINE_TYPE(VvDocument, vv_document, G_TYPE_OBJECT)
 
@@ -39,6 +64,7 @@ vv_document_finalize(GObject *o) {
     vvg_undo_free(doc->undo);
     vv_filter_cache_free(doc->filtered);
     g_free(doc->path);
+    g_ptr_array_unref(doc->autosaved);
     G_OBJECT_CLASS(vv_document_parent_class)->finalize(o);
 }
 
@@ -58,6 +84,7 @@ vv_document_init(VvDocument *doc) {
         vv_filter_cache_new(&doc->filtered, 8) != VV_OK)
         g_error("volvis-gui: out of memory");
     doc->selected = -1;
+    doc->autosaved = g_ptr_array_new_with_free_func(autosaved_volume_free);
 }
 
 VvDocument *
@@ -408,6 +435,131 @@ vv_document_save(VvDocument *doc, const char *path, GError **error) {
     g_free(doc->path);
     doc->path = saved;
     doc->dirty = FALSE;
+    return TRUE;
+}
+
+/* ---- autosave ---------------------------------------------------------------- */
+
+static int
+remove_entry(const char *p, const struct stat *st, int flag, struct FTW *ftw) {
+    (void)st;
+    (void)flag;
+    (void)ftw;
+    return remove(p) != 0 && errno != ENOENT ? -1 : 0;
+}
+
+void
+vv_document_remove_folder(const char *dir) {
+    if (dir)
+        nftw(dir, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
+}
+
+/* The file the last autosave wrote for @p v as it is now, or NULL. */
+static const char *
+autosaved_file(VvDocument *doc, const vv_volume *v) {
+    for (guint i = 0; i < doc->autosaved->len; i++) {
+        const autosaved_volume *a = g_ptr_array_index(doc->autosaved, i);
+        if (a->volume == v && a->modified == v->modified)
+            return a->file;
+    }
+    return NULL;
+}
+
+/* Writes the staged session into @p stage: volume_<i>.nrrd for each volume
+ * made in the session (linked from @p dir when unchanged), then session.json.
+ * The new list of written volumes goes to @p done. */
+static gboolean
+autosave_stage(VvDocument *doc, const vv_world *w, const char *dir, const char *stage,
+               GPtrArray *done, GError **error) {
+    const char **files = g_new0(const char *, w->n_objects > 0 ? w->n_objects : 1);
+    GPtrArray *names = g_ptr_array_new_with_free_func(g_free);
+    gboolean ok = TRUE;
+    for (int i = 0; ok && i < w->n_objects; i++) {
+        vv_object *o = w->objects[i];
+        if (o->type != VV_OBJECT_VOLUME || !o->volume || o->geometry.source)
+            continue;
+        char *name = g_strdup_printf("volume_%d.nrrd", i);
+        g_ptr_array_add(names, name);
+        files[i] = name;
+        g_autofree char *to = g_build_filename(stage, name, NULL);
+        const char *old = autosaved_file(doc, o->volume);
+        g_autofree char *from = old ? g_build_filename(dir, old, NULL) : NULL;
+        if (!from || link(from, to) != 0) {
+            vv_error_clear();
+            if (vv_volume_save(o->volume, to, VV_FORMAT_NRRD, 0) != VV_OK) {
+                set_error(error, "cannot write a volume");
+                ok = FALSE;
+                break;
+            }
+        }
+        autosaved_volume *a = g_new0(autosaved_volume, 1);
+        a->volume = vv_volume_ref(o->volume);
+        a->modified = o->volume->modified;
+        a->file = g_strdup(name);
+        g_ptr_array_add(done, a);
+    }
+    g_autofree char *scene = g_build_filename(stage, "session.json", NULL);
+    vv_error_clear();
+    if (ok && vv_scene_save(w, scene, files) != VV_OK) {
+        set_error(error, "cannot write the scene");
+        ok = FALSE;
+    }
+    g_free(files);
+    g_ptr_array_unref(names);
+    return ok;
+}
+
+gboolean
+vv_document_autosave(VvDocument *doc, const char *dir, GError **error) {
+    const vv_world *w = doc->kept ? doc->kept : doc->world; /* never a transient World */
+    g_autofree char *stage = g_strconcat(dir, ".tmp", NULL);
+    vv_document_remove_folder(stage); /* a stage an earlier crash left */
+    if (g_mkdir_with_parents(stage, 0700) != 0) {
+        g_set_error(error, VV_GUI_ERROR, 1, "%s: %s", stage, g_strerror(errno));
+        return FALSE;
+    }
+    GPtrArray *done = g_ptr_array_new_with_free_func(autosaved_volume_free);
+    gboolean ok = autosave_stage(doc, w, dir, stage, done, error);
+    /* one unit: the stage takes the folder's place in one step */
+    if (ok && g_file_test(dir, G_FILE_TEST_IS_DIR)) {
+        if (renameat2(AT_FDCWD, stage, AT_FDCWD, dir, RENAME_EXCHANGE) != 0) {
+            g_set_error(error, VV_GUI_ERROR, 1, "%s: %s", dir, g_strerror(errno));
+            ok = FALSE;
+        }
+    } else if (ok && rename(stage, dir) != 0) {
+        g_set_error(error, VV_GUI_ERROR, 1, "%s: %s", dir, g_strerror(errno));
+        ok = FALSE;
+    }
+    vv_document_remove_folder(stage); /* the old autosave, or what failed */
+    if (ok) {
+        g_ptr_array_unref(doc->autosaved);
+        doc->autosaved = done;
+    } else {
+        g_ptr_array_unref(done);
+    }
+    return ok;
+}
+
+gboolean
+vv_document_restore(VvDocument *doc, const char *dir, GError **error) {
+    g_autofree char *scene = g_build_filename(dir, "session.json", NULL);
+    if (!open_scene(doc, scene, error))
+        return FALSE;
+    /* the autosave's own volumes are volumes of the session again: saving
+     * writes them (the folder goes away once the new autosave stands) */
+    g_autofree char *prefix = g_canonicalize_filename(dir, NULL);
+    for (int i = 0; i < doc->world->n_objects; i++) {
+        vv_object *o = doc->world->objects[i];
+        if (o->geometry.source && g_str_has_prefix(o->geometry.source, prefix) &&
+            o->geometry.source[strlen(prefix)] == '/') {
+            free(o->geometry.source);
+            o->geometry.source = NULL;
+        }
+    }
+    g_free(doc->path);
+    doc->path = NULL;
+    doc->dirty = TRUE;
+    g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
     return TRUE;
 }
 

@@ -77,6 +77,26 @@ gboolean vv_document_mesh_is_y_up(const char *path);
  * a saved session renders through the CLI at that size. No signal.
  */
 void vv_document_set_view_size(VvDocument *doc, int width, int height);
+/**
+ * Autosave (issue 33): writes the World (the kept one while a transient
+ * World is shown) into the folder @p dir as one unit: session.json and
+ * volume_<i>.nrrd for each volume made in the session, staged in
+ * "<dir>.tmp" and exchanged with @p dir in one rename (renameat2
+ * RENAME_EXCHANGE), so @p dir always holds one whole autosave. A volume the
+ * previous autosave wrote and that has not changed since is hard-linked, not
+ * written again. The document's path, unsaved flag and sources are left as
+ * they are. On failure @p dir keeps the previous autosave and @p error the
+ * message.
+ */
+gboolean vv_document_autosave(VvDocument *doc, const char *dir, GError **error);
+/**
+ * Opens the autosave in @p dir as an untitled session with unsaved
+ * changes; its volumes become volumes of the session again (written by the
+ * next save or autosave, so the folder can go). Emits "changed".
+ */
+gboolean vv_document_restore(VvDocument *doc, const char *dir, GError **error);
+/** Removes the folder @p dir and all in it (an autosave); NULL is ignored. */
+void vv_document_remove_folder(const char *dir);
 /** The scene file the session was opened from or saved to, or NULL. */
 const char *vv_document_path(VvDocument *doc);
 /** TRUE when the World has changed since it was opened or saved. */

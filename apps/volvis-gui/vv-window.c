@@ -2,8 +2,14 @@
 #include "vv-window.h"
 #include "vvg-widgets.h"
 
+#include <errno.h>
 #include <math.h>
+#include <signal.h>
+#include <stdio.h>
 #include <string.h>
+#include <unistd.h>
+
+#include <glib/gstdio.h>
 
 #include "volvis/sys/format.h"
 #include "vv-animator-page.h"
@@ -40,6 +46,12 @@ struct _VvWindow {
     void *after_save_user;
     gboolean closing;         /* the close was confirmed: let the window go */
     const void *marks_volume; /* the volume the slice cursor belongs to (compared only) */
+    /* autosave (issue 33): this window's folder, its timers, and the folder of
+     * a restored session, removed once this window's own autosave stands */
+    char *autosave_dir;
+    char *restore_from;
+    guint autosave_tick, autosave_delay;
+    gboolean autosave_pending;
 };
 
 G_DEFINE_TYPE(VvWindow, vv_window, GTK_TYPE_APPLICATION_WINDOW)
@@ -64,10 +76,172 @@ update_title(VvWindow *win) {
     g_simple_action_set_enabled(G_SIMPLE_ACTION(a), vv_document_can_redo(win->doc));
 }
 
+/* ---- autosave -----------------------------------------------------------------
+ * After an edit (a few seconds after the last one) and every 60 s while
+ * there are unsaved changes, the session goes to
+ * $XDG_STATE_HOME/volvis/session-<pid>-<n> as one unit
+ * (vv_document_autosave). A saved or closed session removes its folder; a
+ * folder whose process is gone is a crash, offered for restoring at the
+ * next start. VOLVIS_AUTOSAVE_DELAY and VOLVIS_AUTOSAVE_SECONDS set the two
+ * times (tests). */
+
+static char *
+autosave_root(void) {
+    return g_build_filename(g_get_user_state_dir(), "volvis", NULL);
+}
+
+static guint
+env_seconds(const char *name, guint fallback) {
+    const char *v = g_getenv(name);
+    guint64 n = v ? g_ascii_strtoull(v, NULL, 10) : 0;
+    return n >= 1 && n <= 86400 ? (guint)n : fallback;
+}
+
+static void
+do_autosave(VvWindow *win) {
+    if (!win->doc)
+        return;
+    win->autosave_pending = FALSE;
+    if (!vv_document_dirty(win->doc)) { /* nothing unsaved: nothing to restore */
+        vv_document_remove_folder(win->autosave_dir);
+        return;
+    }
+    GError *err = NULL;
+    if (!vv_document_autosave(win->doc, win->autosave_dir, &err)) {
+        g_printerr("volvis-gui: autosave failed: %s\n", err->message);
+        g_error_free(err);
+        win->autosave_pending = TRUE; /* again at the next tick */
+        return;
+    }
+    g_printerr("volvis-gui: autosaved %s\n", win->autosave_dir);
+    if (win->restore_from) {
+        vv_document_remove_folder(win->restore_from);
+        g_clear_pointer(&win->restore_from, g_free);
+    }
+}
+
+static gboolean
+autosave_delay_cb(gpointer user) {
+    VvWindow *win = user;
+    win->autosave_delay = 0;
+    do_autosave(win);
+    return G_SOURCE_REMOVE;
+}
+
+static gboolean
+autosave_tick_cb(gpointer user) {
+    VvWindow *win = user;
+    if (win->autosave_pending)
+        do_autosave(win);
+    return G_SOURCE_CONTINUE;
+}
+
 static void
 doc_changed(VvDocument *doc, gpointer user) {
     (void)doc;
-    update_title(user);
+    VvWindow *win = user;
+    update_title(win);
+    win->autosave_pending = TRUE;
+    if (win->autosave_delay)
+        g_source_remove(win->autosave_delay);
+    win->autosave_delay =
+        g_timeout_add_seconds(env_seconds("VOLVIS_AUTOSAVE_DELAY", 5), autosave_delay_cb, win);
+}
+
+/* 1 when process @p pid is a running volvis-gui. */
+static gboolean
+gui_alive(long pid) {
+    if (pid <= 0 || (kill((pid_t)pid, 0) != 0 && errno != EPERM))
+        return FALSE;
+    g_autofree char *path = g_strdup_printf("/proc/%ld/comm", pid);
+    g_autofree char *comm = NULL;
+    return g_file_get_contents(path, &comm, NULL, NULL) && strstr(comm, "volvis-gui") != NULL;
+}
+
+/* The folders of autosaves whose process is gone, newest first. */
+static GPtrArray *
+stale_autosaves(void) {
+    GPtrArray *out = g_ptr_array_new_with_free_func(g_free);
+    g_autofree char *root = autosave_root();
+    GDir *d = g_dir_open(root, 0, NULL);
+    const char *name;
+    while (d && (name = g_dir_read_name(d))) {
+        long pid = 0;
+        if (!g_str_has_prefix(name, "session-") || sscanf(name + 8, "%ld", &pid) != 1 ||
+            pid == (long)getpid() || gui_alive(pid))
+            continue;
+        char *dir = g_build_filename(root, name, NULL);
+        if (g_str_has_suffix(name, ".tmp")) { /* a stage the crash interrupted */
+            vv_document_remove_folder(dir);
+            g_free(dir);
+            continue;
+        }
+        g_ptr_array_add(out, dir);
+    }
+    if (d)
+        g_dir_close(d);
+    return out;
+}
+
+static gint64
+session_mtime(const char *dir) {
+    g_autofree char *p = g_build_filename(dir, "session.json", NULL);
+    GStatBuf st;
+    return g_stat(p, &st) == 0 ? (gint64)st.st_mtime : 0;
+}
+
+static void
+restore_response(GtkDialog *d, int response, gpointer user) {
+    VvWindow *win = user;
+    GPtrArray *stale = g_object_get_data(G_OBJECT(d), "stale");
+    const char *newest = g_ptr_array_index(stale, 0);
+    if (response == GTK_RESPONSE_ACCEPT) {
+        GError *err = NULL;
+        if (vv_document_restore(win->doc, newest, &err)) {
+            win->restore_from = g_strdup(newest);
+            do_autosave(win); /* the restored volumes into this window's own folder */
+        } else {
+            show_error(win, "Cannot restore the session", err->message);
+            g_error_free(err);
+        }
+    } else {
+        for (guint i = 0; i < stale->len; i++)
+            vv_document_remove_folder(g_ptr_array_index(stale, i));
+    }
+    gtk_window_destroy(GTK_WINDOW(d));
+}
+
+void
+vv_window_offer_restore(VvWindow *win) {
+    GPtrArray *stale = stale_autosaves();
+    guint best = 0;
+    for (guint i = 0; i < stale->len; i++)
+        if (session_mtime(g_ptr_array_index(stale, i)) >
+            session_mtime(g_ptr_array_index(stale, best)))
+            best = i;
+    if (stale->len == 0 || session_mtime(g_ptr_array_index(stale, best)) == 0) {
+        for (guint i = 0; i < stale->len; i++) /* no session in it: nothing to offer */
+            vv_document_remove_folder(g_ptr_array_index(stale, i));
+        g_ptr_array_unref(stale);
+        return;
+    }
+    char *first = g_ptr_array_steal_index(stale, best);
+    g_ptr_array_insert(stale, 0, first);
+    g_autoptr(GDateTime) t = g_date_time_new_from_unix_local(session_mtime(first));
+    g_autofree char *when = g_date_time_format(t, "%Y-%m-%d %H:%M:%S");
+    GtkWidget *d = gtk_message_dialog_new(GTK_WINDOW(win), GTK_DIALOG_MODAL, GTK_MESSAGE_QUESTION,
+                                          GTK_BUTTONS_NONE, "Restore the last session?");
+    gtk_message_dialog_format_secondary_text(
+        GTK_MESSAGE_DIALOG(d),
+        "VolVis did not close properly. The session autosaved at %s, with its unsaved "
+        "changes, can be restored; Discard removes it.",
+        when);
+    gtk_window_set_title(GTK_WINDOW(d), "VolVis — restore");
+    gtk_dialog_add_button(GTK_DIALOG(d), "_Discard", GTK_RESPONSE_REJECT);
+    gtk_dialog_add_button(GTK_DIALOG(d), "_Restore", GTK_RESPONSE_ACCEPT);
+    g_object_set_data_full(G_OBJECT(d), "stale", stale, (GDestroyNotify)g_ptr_array_unref);
+    g_signal_connect(d, "response", G_CALLBACK(restore_response), win);
+    gtk_widget_show(d);
 }
 
 /* A new volume selected: the slice views start again from its centre. */
@@ -723,6 +897,13 @@ side_bar(VvWindow *win) {
 static void
 vv_window_dispose(GObject *o) {
     VvWindow *win = VV_WINDOW(o);
+    g_clear_handle_id(&win->autosave_delay, g_source_remove);
+    g_clear_handle_id(&win->autosave_tick, g_source_remove);
+    if (win->autosave_dir) { /* closed as the user chose: no crash to restore */
+        vv_document_remove_folder(win->autosave_dir);
+        g_clear_pointer(&win->autosave_dir, g_free);
+    }
+    g_clear_pointer(&win->restore_from, g_free);
     if (win->doc) {
         g_signal_handlers_disconnect_by_data(win->doc, win);
         g_clear_object(&win->doc);
@@ -785,6 +966,12 @@ vv_window_init(VvWindow *win) {
     g_signal_connect(win->doc, "changed", G_CALLBACK(doc_changed), win);
     g_signal_connect(win->doc, "selection-changed", G_CALLBACK(selection_changed), win);
     update_title(win);
+    static int serial;
+    g_autofree char *root = autosave_root();
+    g_autofree char *name = g_strdup_printf("session-%ld-%d", (long)getpid(), ++serial);
+    win->autosave_dir = g_build_filename(root, name, NULL);
+    win->autosave_tick =
+        g_timeout_add_seconds(env_seconds("VOLVIS_AUTOSAVE_SECONDS", 60), autosave_tick_cb, win);
 }
 
 VvWindow *

@@ -30,6 +30,13 @@ void vv_window_open(VvWindow *win, const char *path);
  * are shown in dialogs.
  */
 void vv_window_save_volume(VvWindow *win, const char *path);
+/**
+ * Offers to restore the newest autosave whose process is gone (a crash or
+ * a kill): a dialog "Restore the last session?" with Restore (the World as
+ * it was, untitled, unsaved) and Discard (the folders removed). Nothing
+ * when there is none. Called once at start.
+ */
+void vv_window_offer_restore(VvWindow *win);
 VvDocument *vv_window_document(VvWindow *win);
 /** The window's 3-D view (owned by the window). */
 VvSceneView *vv_window_scene_view(VvWindow *win);

@@ -1,9 +1,12 @@
 /* VvDocument's transient Worlds (the Animator's Play), without a display:
  * no undo steps and nothing unsaved; ending one puts back the very World
  * kept aside; an edit keeps the World shown; undo restores first; saving
- * writes the kept World. */
+ * writes the kept World. Autosave and restore. */
 #include "testutil.h"
 #include "vv-document.h"
+
+#include <sys/stat.h>
+#include <unistd.h>
 
 static int changed;
 
@@ -130,6 +133,79 @@ test_save_writes_the_kept_world(void **state) {
     g_object_unref(doc);
 }
 
+static ino_t
+inode_of(const char *path) {
+    struct stat st;
+    assert_int_equal(stat(path, &st), 0);
+    return st.st_ino;
+}
+
+/* Autosave (issue 33) of a volume made in the session: session.json and
+ * volume_1.nrrd in the folder; a second autosave links the unchanged volume
+ * (the same inode) and leaves no stage; a changed volume is written anew;
+ * the document's path and unsaved flag are untouched. Restoring gives an
+ * untitled, unsaved document whose volume has no source (it is the
+ * session's again) and the same voxels. A folder that cannot be made is an
+ * error and the previous autosave stays. */
+static void
+test_autosave_and_restore(void **state) {
+    (void)state;
+    VvDocument *doc = doc_with_sphere();
+    int dims[3] = {20, 16, 12};
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_new(&v, dims, VV_U16));
+    for (int i = 0; i < 20 * 16 * 12; i++)
+        ((uint16_t *)v->data)[i] = (uint16_t)(i * 7);
+    vv_volume_update_range(v);
+    GError *err = NULL;
+    assert_true(vv_document_add_volume(doc, v, "made", NULL, &err));
+    char dir[512];
+    snprintf(dir, sizeof dir, "%s/autosave", vt_outdir("gui_document"));
+    vv_document_remove_folder(dir);
+    assert_true(vv_document_autosave(doc, dir, &err));
+    assert_true(vv_document_dirty(doc));
+    assert_null(vv_document_path(doc));
+    char vol[700], stage[600];
+    snprintf(vol, sizeof vol, "%s/volume_1.nrrd", dir);
+    snprintf(stage, sizeof stage, "%s.tmp", dir);
+    ino_t first = inode_of(vol);
+    assert_true(vv_document_autosave(doc, dir, &err));
+    assert_int_equal(inode_of(vol), first);
+    assert_int_not_equal(access(stage, F_OK), 0);
+    vv_object *o = vv_document_world(doc)->objects[1];
+    o->volume->modified++;
+    assert_true(vv_document_autosave(doc, dir, &err));
+    assert_int_not_equal(inode_of(vol), first);
+    /* a folder that cannot be made: an error, the autosave as it was */
+    char bad[600];
+    snprintf(bad, sizeof bad, "%s/session.json/x", dir);
+    assert_false(vv_document_autosave(doc, bad, &err));
+    assert_non_null(err);
+    g_clear_error(&err);
+    assert_int_equal(access(vol, F_OK), 0);
+
+    VvDocument *back = vv_document_new();
+    assert_true(vv_document_restore(back, dir, &err));
+    assert_null(vv_document_path(back));
+    assert_true(vv_document_dirty(back));
+    vv_world *w = vv_document_world(back);
+    assert_int_equal(w->n_objects, 2);
+    assert_null(w->objects[1]->geometry.source);
+    assert_memory_equal(w->objects[1]->volume->data, v->data, (size_t)20 * 16 * 12 * 2);
+    /* its own autosave writes the volume again: the old folder can go */
+    char dir2[600];
+    snprintf(dir2, sizeof dir2, "%s2", dir);
+    vv_document_remove_folder(dir2);
+    assert_true(vv_document_autosave(back, dir2, &err));
+    vv_document_remove_folder(dir);
+    snprintf(vol, sizeof vol, "%s/volume_1.nrrd", dir2);
+    assert_int_equal(access(vol, F_OK), 0);
+    vv_document_remove_folder(dir2);
+    g_object_unref(back);
+    vv_volume_free(v);
+    g_object_unref(doc);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
@@ -137,6 +213,7 @@ main(void) {
         cmocka_unit_test(test_edit_keeps_the_frame),
         cmocka_unit_test(test_undo_restores_first),
         cmocka_unit_test(test_save_writes_the_kept_world),
+        cmocka_unit_test(test_autosave_and_restore),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
