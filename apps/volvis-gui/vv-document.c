@@ -408,28 +408,56 @@ vv_document_save(VvDocument *doc, const char *path, GError **error) {
     char *dot = strrchr(stem, '.');
     if (dot && dot != stem)
         *dot = '\0';
-    for (int i = 0; i < w->n_objects; i++) {
+    /* All or nothing: the volumes made in the session are written under
+     * names no file has yet (an older save's files stay as its scene needs
+     * them), then the scene; when the scene cannot be written, the volumes
+     * of this save are removed again and no object takes their names. */
+    const char **files = g_new0(const char *, w->n_objects > 0 ? w->n_objects : 1);
+    GPtrArray *written = g_ptr_array_new_with_free_func(g_free);
+    gboolean ok = TRUE;
+    for (int i = 0; ok && i < w->n_objects; i++) {
         vv_object *o = w->objects[i];
         if (o->type != VV_OBJECT_VOLUME || !o->volume || o->geometry.source)
             continue; /* vv_scene_save refers to the file it came from */
-        /* made in this session: written beside the scene */
-        g_autofree char *name = g_strdup_printf("%s_%d_%s.nrrd", stem, i, o->name);
-        for (char *c = name; *c; c++)
+        g_autofree char *base = g_strdup_printf("%s_%d_%s", stem, i, o->name);
+        for (char *c = base; *c; c++)
             if (!g_ascii_isalnum(*c) && *c != '.' && *c != '_' && *c != '-')
                 *c = '_';
-        g_autofree char *full = g_build_filename(dir, name, NULL);
+        char *full = NULL;
+        for (int k = 1; !full || g_file_test(full, G_FILE_TEST_EXISTS); k++) {
+            g_free(full);
+            g_autofree char *name =
+                k == 1 ? g_strdup_printf("%s.nrrd", base) : g_strdup_printf("%s-%d.nrrd", base, k);
+            full = g_build_filename(dir, name, NULL);
+        }
         vv_error_clear();
         if (vv_volume_save(o->volume, full, VV_FORMAT_NRRD, 0) != VV_OK) {
             set_error(error, "cannot write a volume");
-            return FALSE;
+            g_free(full);
+            ok = FALSE;
+            break;
         }
-        remember_source(o, full);
+        g_ptr_array_add(written, full);
+        const char *slash = strrchr(full, '/');
+        files[i] = slash ? slash + 1 : full; /* beside the scene: relative to it */
     }
     vv_error_clear();
-    if (vv_scene_save(w, path, NULL) != VV_OK) {
+    if (ok && vv_scene_save(w, path, files) != VV_OK) {
         set_error(error, "cannot write the scene");
-        return FALSE;
+        ok = FALSE;
     }
+    if (ok) {
+        for (int i = 0, k = 0; i < w->n_objects; i++)
+            if (files[i])
+                remember_source(w->objects[i], g_ptr_array_index(written, k++));
+    } else {
+        for (guint i = 0; i < written->len; i++)
+            unlink(g_ptr_array_index(written, i));
+    }
+    g_free(files);
+    g_ptr_array_unref(written);
+    if (!ok)
+        return FALSE;
     /* @p path may be doc->path itself (Save): canonicalize before freeing */
     char *saved = g_canonicalize_filename(path, NULL);
     g_free(doc->path);

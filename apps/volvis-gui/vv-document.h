@@ -56,8 +56,12 @@ gboolean vv_document_open(VvDocument *doc, const char *path, GError **error);
 /**
  * Saves the World as a scene file that `volvis render` renders to the same
  * image. Volumes that came from files are referred to by path; volumes made
- * in the session (Modeling) are written as NRRD beside the scene. The write
- * is atomic. On failure @p error holds the message.
+ * in the session (Modeling, raw import) are written as NRRD beside the
+ * scene, under names no file has yet ("<scene>_<i>_<name>.nrrd", else with
+ * "-2", "-3", ...), referred to relative to it. All or nothing: the scene
+ * is written atomically after the volumes, and when it cannot be, the
+ * volumes of this save are removed and the objects keep no reference to
+ * them. On failure @p error holds the message.
  */
 gboolean vv_document_save(VvDocument *doc, const char *path, GError **error);
 /**

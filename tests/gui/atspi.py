@@ -87,6 +87,7 @@ class Session:
             "XDG_DATA_HOME": os.path.join(home, "data"),
             "XDG_CONFIG_HOME": os.path.join(home, "config"),
             "XDG_CACHE_HOME": os.path.join(home, "cache"),
+            "XDG_STATE_HOME": os.path.join(home, "state"),  # autosaves: this session's own
             "XDG_RUNTIME_DIR": home, "GTK_A11Y": "atspi",
             "VOLVIS_FRAME_LOG": self.frames, "VOLVIS_FRAME_DIR": self.out,
             "VOLVIS_NO_AUTO_DEVICES": "1",

@@ -206,6 +206,65 @@ test_autosave_and_restore(void **state) {
     g_object_unref(doc);
 }
 
+/* Saving is all or nothing: a scene that cannot be written (its name is a
+ * folder) leaves no volume file of that save behind, and the volume stays
+ * the session's (no source); then a good save writes both, the volume
+ * named relative to the scene; a second save under the same name keeps
+ * the first save's file (a new name for the new one). */
+static void
+test_save_all_or_nothing(void **state) {
+    (void)state;
+    VvDocument *doc = doc_with_sphere();
+    int dims[3] = {8, 8, 8};
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_new(&v, dims, VV_U8));
+    GError *err = NULL;
+    assert_true(vv_document_add_volume(doc, v, "made", NULL, &err));
+    char dir[512];
+    snprintf(dir, sizeof dir, "%s/all_or_nothing", vt_outdir("gui_document"));
+    vv_document_remove_folder(dir);
+    g_mkdir_with_parents(dir, 0755);
+    char scene[600];
+    snprintf(scene, sizeof scene, "%s/s.json", dir);
+    g_mkdir_with_parents(scene, 0755); /* a folder where the scene goes */
+    assert_false(vv_document_save(doc, scene, &err));
+    g_clear_error(&err);
+    GDir *d = g_dir_open(dir, 0, NULL);
+    const char *name;
+    int n = 0;
+    while ((name = g_dir_read_name(d)))
+        n++;
+    g_dir_close(d);
+    assert_int_equal(n, 1); /* the folder named s.json only */
+    assert_null(vv_document_world(doc)->objects[1]->geometry.source);
+    assert_true(vv_document_dirty(doc));
+    rmdir(scene);
+    assert_true(vv_document_save(doc, scene, &err));
+    char vol[700];
+    snprintf(vol, sizeof vol, "%s/s_1_made.nrrd", dir);
+    assert_int_equal(access(vol, F_OK), 0);
+    vv_world *back = NULL;
+    vt_ok(vv_scene_load(&back, scene));
+    assert_int_equal(back->n_objects, 2);
+    vv_world_free(back);
+    gchar *text = NULL;
+    assert_true(g_file_get_contents(scene, &text, NULL, NULL));
+    assert_non_null(strstr(text, "\"s_1_made.nrrd\""));
+    g_free(text);
+    /* the volume is now the file's: a new volume object saved again under the
+     * same scene name gets a name of its own */
+    vv_volume_free(v);
+    vt_ok(vv_volume_new(&v, dims, VV_U8));
+    vv_document_delete_object(doc, 1);
+    assert_true(vv_document_add_volume(doc, v, "made", NULL, &err));
+    assert_true(vv_document_save(doc, scene, &err));
+    snprintf(vol, sizeof vol, "%s/s_1_made-2.nrrd", dir);
+    assert_int_equal(access(vol, F_OK), 0);
+    vv_document_remove_folder(dir);
+    vv_volume_free(v);
+    g_object_unref(doc);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
@@ -214,6 +273,7 @@ main(void) {
         cmocka_unit_test(test_undo_restores_first),
         cmocka_unit_test(test_save_writes_the_kept_world),
         cmocka_unit_test(test_autosave_and_restore),
+        cmocka_unit_test(test_save_all_or_nothing),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
