@@ -62,7 +62,7 @@ def main():
         s.page("Animator")
         page = s.find("Animator page")
         button = lambda name: s.find(name, "push button", root=page)  # noqa: E731
-        timeline = s.find("timeline", root=page)
+        timeline = s.find("timeline", root=page, timeout=30)  # first shown: slow under ASan
         lanes = lambda: s.count_color(timeline, LANE, "lanes.png")  # noqa: E731
         check(lanes() == 0, "the new animation is not empty")
         s.click(button("Add sequence"))  # an orbit of 360 degrees over 60 frames
