@@ -66,8 +66,10 @@ usage(FILE *out) {
                  "Global option (any command, anywhere on the line):\n"
                  "  --max-memory SIZE  memory budget of one volume, grid or mesh read or\n"
                  "                     decoded (e.g. 512M, 8G; default: half of the available\n"
-                 "                     memory, or $VOLVIS_MAX_MEMORY). A file whose header\n"
-                 "                     asks for more is refused before anything is allocated.\n"
+                 "                     memory, the memory cgroup's limit counted, or\n"
+                 "                     $VOLVIS_MAX_MEMORY). A file whose header asks for more\n"
+                 "                     is refused before anything is allocated; so is one\n"
+                 "                     past the cgroup's limit, whatever the budget.\n"
                  "\n"
                  "Exit status: 0 success, 1 bad input (file, format or render error),\n"
                  "2 bad usage, 130 interrupted. Errors are one line on stderr.\n");

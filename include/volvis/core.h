@@ -97,11 +97,28 @@ int vv_threads_get(void);
  * so a small hostile file cannot make the process allocate gigabytes.
  * @p bytes 0 restores the default: the environment variable
  * VOLVIS_MAX_MEMORY when set (a size as vv_memory_size_parse reads it), else
- * half of the machine's available memory (MemAvailable in /proc/meminfo,
- * read once; 4 GiB when unknown), and never less than 64 MiB.
+ * half of the memory the process may still use: the machine's available
+ * memory (MemAvailable in /proc/meminfo) or, when less, what its memory
+ * cgroups allow (version 1 or 2; over the cgroup and its ancestors the least
+ * limit less usage, reclaimable page cache not counted), read once; 4 GiB
+ * when neither is known; never less than 64 MiB. So under a container's or
+ * a systemd unit's memory limit a volume too large for it is refused with
+ * VV_ERR_LIMIT instead of the kernel's OOM killer ending the process.
  * Thread-safety: an atomic global; set it before starting work.
  */
 void vv_memory_budget_set(uint64_t bytes);
+
+/**
+ * The bytes the process may still allocate now without the kernel's OOM
+ * killer: the least of the machine's available memory (MemAvailable) and
+ * what its memory cgroups allow (limit less usage, reclaimable page cache
+ * not counted, over the cgroup and its ancestors). Read afresh at each call
+ * (a few small files under /proc and /sys/fs/cgroup); UINT64_MAX when
+ * neither is known. The renderers size their optional caches (cached
+ * gradients) by it and refuse a required one that does not fit.
+ * Thread-safety: safe from any thread.
+ */
+uint64_t vv_memory_available(void);
 
 /** The budget in bytes now (the default computed on first use). */
 uint64_t vv_memory_budget_get(void);
@@ -109,7 +126,9 @@ uint64_t vv_memory_budget_get(void);
 /**
  * VV_OK when @p bytes fit the budget, else VV_ERR_LIMIT with a message
  * naming @p what (e.g. "volume of 512 x 512 x 512 f32"), the size and the
- * budget.
+ * budget. A budget raised above what the memory cgroup's limit leaves
+ * (vv_memory_available) still fails there: past it the kernel's OOM killer,
+ * not an error, would answer.
  */
 vv_status vv_memory_budget_check(uint64_t bytes, const char *what);
 

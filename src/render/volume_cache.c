@@ -125,6 +125,12 @@ vv_vcache_need_gmag(vv_vcache *c) {
         for (int cc = 0; cc < 3; cc++)
             g2w[r][cc] = (float)inv.m[cc][r];
     const size_t n = c->sz * (size_t)c->nz;
+    uint64_t left = vv_memory_available();
+    if ((uint64_t)n * sizeof(float) > left)
+        return vv_error_set(VV_ERR_LIMIT,
+                            "gradient magnitudes of %zu voxels need %llu bytes, more than the %llu "
+                            "bytes of memory left (the machine's or the memory cgroup's)",
+                            n, (unsigned long long)(n * sizeof(float)), (unsigned long long)left);
     float *gm = malloc(n * sizeof *gm);
     if (!gm)
         return vv_error_set(VV_ERR_NOMEM, "out of memory for gradient magnitudes of %zu voxels", n);
@@ -223,11 +229,26 @@ cache_build(const vv_vcache_set *s, vv_vcache *c, vv_volume *vol) {
         c->qoff = 0;
         c->q16 = vol->data;
         c->q16_borrowed = 1;
-    } else if (is_integer_type(vol->type) && vol->range[1] - vol->range[0] <= 65535.0) {
-        c->qoff = vol->range[0];
-        c->q16 = malloc(n * sizeof *c->q16);
     } else {
-        c->f32 = malloc(n * sizeof *c->f32);
+        /* the renderers' copy: refused when the memory left cannot hold it
+         * (under a cgroup's limit the allocation would succeed and the OOM
+         * killer end the process when the copy is filled) */
+        int q = is_integer_type(vol->type) && vol->range[1] - vol->range[0] <= 65535.0;
+        uint64_t bytes = (uint64_t)n * (q ? sizeof *c->q16 : sizeof *c->f32);
+        uint64_t left = vv_memory_available();
+        if (bytes > left)
+            return vv_error_set(VV_ERR_LIMIT,
+                                "the renderers' copy of a %d x %d x %d volume needs %llu bytes, "
+                                "more than the %llu bytes of memory left (the machine's or the "
+                                "memory cgroup's)",
+                                vol->dims[0], vol->dims[1], vol->dims[2], (unsigned long long)bytes,
+                                (unsigned long long)left);
+        if (q) {
+            c->qoff = vol->range[0];
+            c->q16 = malloc(n * sizeof *c->q16);
+        } else {
+            c->f32 = malloc(n * sizeof *c->f32);
+        }
     }
     c->bx = (c->nx - 2) / VV_VC_BLOCK + 1;
     c->by = (c->ny - 2) / VV_VC_BLOCK + 1;
@@ -264,7 +285,11 @@ vv_vcache_need_normals(const vv_vcache_set *s, vv_vcache *c) {
         return;
     c->nrm_tried = 1;
     const size_t n = c->sz * (size_t)c->nz;
-    if ((uint64_t)n * 3 <= s->gradient_budget)
+    /* within the set's budget and half of the memory left now (a cgroup's
+     * limit included): the cache is an optimisation, never a reason for the
+     * OOM killer */
+    uint64_t left = vv_memory_available();
+    if ((uint64_t)n * 3 <= s->gradient_budget && (uint64_t)n * 3 <= left / 2)
         c->nrm = malloc(n * 3 + 1); /* NULL: gradients on the fly */
     if (c->nrm) {
         c->nrm[n * 3] = 0; /* the padding byte vv_vcache_normal reads past the last voxel */

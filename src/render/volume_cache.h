@@ -140,7 +140,8 @@ void vv_vcache_set_clear(vv_vcache_set *s);
 void vv_vcache_set_prune(vv_vcache_set *s, const vv_world *w);
 /* The cache of @p vol, built (or rebuilt when the volume was modified) on
  * demand; the least recently used one is evicted when the set is full.
- * Errors: VV_ERR_NOMEM. */
+ * Errors: VV_ERR_NOMEM; VV_ERR_LIMIT when the copy of the values is more
+ * than the memory left (vv_memory_available: a cgroup's limit included). */
 vv_status vv_vcache_get(vv_vcache_set *s, vv_volume *vol, vv_vcache **out);
 
 /* The tables of object @p obj on cache @p c for step @p dt (world units)
@@ -154,7 +155,7 @@ vv_status vv_vtables_get(vv_vcache_set *s, vv_vcache *c, const vv_object *obj, v
 void vv_vtables_free(vv_vtables *t);
 
 /* Builds c->nrm once, when a shaded object first needs it and it fits
- * @p s's gradient budget (else, or without memory, it stays NULL and
+ * @p s's gradient budget and half of the memory left (else, or without memory, it stays NULL and
  * gradients are computed at each sample: slower, never wrong). A volume
  * shown only as MIP, MinIP or X-ray never pays for it. */
 void vv_vcache_need_normals(const vv_vcache_set *s, vv_vcache *c);
@@ -163,7 +164,8 @@ void vv_vcache_need_normals(const vv_vcache_set *s, vv_vcache *c);
  * data units per world unit of the volume's own coordinates (central
  * differences, one-sided at the faces, mapped by the inverse transpose of
  * the volume's index-to-world matrix; vv_histogram2d_compute's definition).
- * Errors: VV_ERR_NOMEM, VV_ERR_INVALID (singular matrix). */
+ * Errors: VV_ERR_NOMEM, VV_ERR_LIMIT (more than the memory left),
+ * VV_ERR_INVALID (singular matrix). */
 vv_status vv_vcache_need_gmag(vv_vcache *c);
 
 /* Step in world units of an object: step * smallest voxel spacing in world. */
