@@ -240,8 +240,8 @@ collect(file_list *l, const char *path) {
     int nrefs = 0;
     char err[256] = "";
     int r = guarded_dicomdir_files(path, &refs, &nrefs, err, sizeof err);
-    if (r < 0)
-        return vv_error_set(VV_ERR_FORMAT, "DICOMDIR: %s", err);
+    if (r < 0) /* a DICOMDIR's or any file's header: the message says which element */
+        return vv_error_set(VV_ERR_FORMAT, "%s", err);
     if (r == 0)
         return list_add(l, path);
     s = VV_OK;

@@ -191,9 +191,12 @@ std::once_flag init_once;
  * from its length before reading it, so a 1 KB file whose length field says
  * 900 MB made it allocate (and zero) 900 MB. Explicit and implicit VR, little
  * and big endian, nested sequences and items, encapsulated pixel data
- * (fragments skipped); a deflated data set is not walked. Returns 0, or -1
- * with the reason in @p err. Anything the walk cannot follow (an unknown
- * VR) ends it quietly: GDCM then decides.
+ * (fragments skipped), UN values that are sequences (their elements in
+ * implicit VR, as GDCM reads them: a UN of undefined length with an
+ * implicit element claiming 2 GB inside made GDCM allocate it, found by
+ * fuzzing); a deflated data set is not walked. Returns 0, or -1 with the
+ * reason in @p err. Anything the walk cannot follow (an undefined length on
+ * an element that is no sequence) ends it quietly: GDCM then decides.
  */
 int
 check_lengths(const char *path, char *err, size_t errlen) {
@@ -215,7 +218,21 @@ check_lengths(const char *path, char *err, size_t errlen) {
         pos = 132;
     int explicit_vr = 1, big = 0, in_meta = pos == 132, fragments = 0, rc = 0;
     char ts[72] = "";
+    /* the sequences being walked: where each ends (UINT64_MAX: at its
+     * sequence delimitation item) and the VR mode to go back to after it;
+     * a UN sequence's elements are implicit VR little endian, as GDCM reads
+     * them */
+    struct open_seq {
+        uint64_t end;
+        int explicit_vr;
+    };
+    std::vector<open_seq> seqs;
+    const size_t max_depth = 256;
     for (long count = 0; count < 4000000 && pos + 8 <= size; count++) {
+        while (!seqs.empty() && seqs.back().end != UINT64_MAX && pos >= seqs.back().end) {
+            explicit_vr = seqs.back().explicit_vr;
+            seqs.pop_back();
+        }
         if (std::fseek(fp, (long)pos, SEEK_SET) != 0 || std::fread(b, 1, 8, fp) != 8)
             break;
         auto u16 = [&](const unsigned char *q) {
@@ -244,11 +261,16 @@ check_lengths(const char *path, char *err, size_t errlen) {
         unsigned elem = u16(b + 2);
         uint64_t hdr = 8;
         uint32_t len;
-        int sq = 0;
+        int sq = 0, un = 0;
         if (group == 0xfffe) {
             len = u32(b + 4); /* items and delimiters: no VR */
             if (elem == 0xe0dd) {
-                fragments = 0;
+                if (fragments) {
+                    fragments = 0;
+                } else if (!seqs.empty() && seqs.back().end == UINT64_MAX) {
+                    explicit_vr = seqs.back().explicit_vr;
+                    seqs.pop_back();
+                }
                 len = 0;
             } else if (elem == 0xe00d) {
                 len = 0;
@@ -289,6 +311,7 @@ check_lengths(const char *path, char *err, size_t errlen) {
                 if (b[4] == (unsigned char)v[0] && b[5] == (unsigned char)v[1])
                     is_long = 1;
             sq = b[4] == 'S' && b[5] == 'Q';
+            un = b[4] == 'U' && b[5] == 'N';
             if (is_long) {
                 if (pos + 12 > size || std::fread(b + 8, 1, 4, fp) != 4)
                     break;
@@ -310,10 +333,23 @@ check_lengths(const char *path, char *err, size_t errlen) {
             break;
         }
         if (len == 0xffffffffu) {
-            if (!sq && group != 0xfffe) {
-                if (group != 0x7fe0 || elem != 0x0010)
-                    break;     /* an implicit-VR sequence (UN or implicit): not followed */
-                fragments = 1; /* encapsulated pixel data: items are fragments */
+            if (group != 0xfffe) {
+                if (group == 0x7fe0 && elem == 0x0010 && !sq && !un) {
+                    fragments = 1; /* encapsulated pixel data: items are fragments */
+                } else if (sq || un || !explicit_vr) {
+                    /* a sequence (SQ, UN or implicit VR): its elements next,
+                     * a UN's in implicit VR */
+                    if (seqs.size() >= max_depth) {
+                        std::snprintf(err, errlen, "sequences nested deeper than %zu", max_depth);
+                        rc = -1;
+                        break;
+                    }
+                    seqs.push_back({UINT64_MAX, explicit_vr});
+                    if (un)
+                        explicit_vr = 0;
+                } else {
+                    break; /* an undefined length GDCM will judge */
+                }
             }
             pos += hdr;
             continue;
@@ -331,6 +367,17 @@ check_lengths(const char *path, char *err, size_t errlen) {
             ts[len] = '\0';
             for (size_t i = len; i > 0 && (ts[i - 1] == ' ' || ts[i - 1] == '\0'); i--)
                 ts[i - 1] = '\0';
+        }
+        if (un && len >= 8 && !big && seqs.size() < max_depth) {
+            /* a UN value that starts with an item is a sequence to GDCM:
+             * walk its implicit VR elements too */
+            unsigned char it[4];
+            if (std::fseek(fp, (long)(pos + hdr), SEEK_SET) == 0 && std::fread(it, 1, 4, fp) == 4 &&
+                it[0] == 0xfe && it[1] == 0xff && it[2] == 0x00 && it[3] == 0xe0) {
+                seqs.push_back({pos + hdr + len, explicit_vr});
+                explicit_vr = 0;
+                sq = 1;
+            }
         }
         pos += hdr + (sq ? 0 : len); /* a defined-length sequence or item: its elements next */
     }

@@ -609,6 +609,21 @@ test_fuzz_findings(void **state) {
     expect_error(s, VV_ERR_FORMAT, "claims 774909494 bytes");
     if (now_s() - t0 > 3)
         fail_msg("refusing the file took %.1f s", now_s() - t0);
+    /* a UN element holding a sequence, whose implicit-VR element inside
+     * claims 2 GB: GDCM allocated it (2.1 GB, 24 s for a 300-byte file)
+     * before the length walk followed UN sequences; undefined and defined
+     * length */
+    static const char *const un_files[] = {"timeout-un-sequence", "timeout-un-defined-sequence"};
+    for (int k = 0; k < 2; k++) {
+        snprintf(dcm, sizeof dcm, "%s/tests/fuzz/corpus/dicom/%s", VV_SOURCE_DIR, un_files[k]);
+        t0 = now_s();
+        vv_error_clear();
+        s = vv_dicom_read(&v, dcm, 0, -1);
+        expect_error(s, VV_ERR_FORMAT, "(0029,0010) claims 2147483632 bytes");
+        assert_null(v);
+        if (now_s() - t0 > 3)
+            fail_msg("refusing %s took %.1f s", un_files[k], now_s() - t0);
+    }
     /* a malformed explicit-VR element on which GDCM fails an assertion
      * (abort()): an error through the library's abort guard, twice (the
      * guard can be taken again), not the end of the process */
