@@ -482,23 +482,33 @@ vv_document_remove_folder(const char *dir) {
         nftw(dir, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
 }
 
-/* The file the last autosave wrote for @p v as it is now, or NULL. */
+/* The file the autosave @p prev lists for @p v as it is now, or NULL. */
 static const char *
-autosaved_file(VvDocument *doc, const vv_volume *v) {
-    for (guint i = 0; i < doc->autosaved->len; i++) {
-        const autosaved_volume *a = g_ptr_array_index(doc->autosaved, i);
+autosaved_file(const GPtrArray *prev, const vv_volume *v) {
+    for (guint i = 0; i < prev->len; i++) {
+        const autosaved_volume *a = g_ptr_array_index(prev, i);
         if (a->volume == v && a->modified == v->modified)
             return a->file;
     }
     return NULL;
 }
 
+/* An autosave in the making: a snapshot of the World (the objects share
+ * their volumes, referenced) and what the last autosave wrote, so that it
+ * can be written on another thread while the session goes on. */
+struct vv_autosave_job {
+    vv_world *world;
+    char *dir;
+    GPtrArray *prev; /* autosaved_volume: the last autosave's, references of their own */
+    GPtrArray *done; /* autosaved_volume: what this one wrote */
+};
+
 /* Writes the staged session into @p stage: volume_<i>.nrrd for each volume
- * made in the session (linked from @p dir when unchanged), then session.json.
- * The new list of written volumes goes to @p done. */
+ * made in the session (linked from the job's folder when unchanged), then
+ * session.json. */
 static gboolean
-autosave_stage(VvDocument *doc, const vv_world *w, const char *dir, const char *stage,
-               GPtrArray *done, GError **error) {
+autosave_stage(vv_autosave_job *job, const char *stage, GError **error) {
+    const vv_world *w = job->world;
     const char **files = g_new0(const char *, w->n_objects > 0 ? w->n_objects : 1);
     GPtrArray *names = g_ptr_array_new_with_free_func(g_free);
     gboolean ok = TRUE;
@@ -510,8 +520,8 @@ autosave_stage(VvDocument *doc, const vv_world *w, const char *dir, const char *
         g_ptr_array_add(names, name);
         files[i] = name;
         g_autofree char *to = g_build_filename(stage, name, NULL);
-        const char *old = autosaved_file(doc, o->volume);
-        g_autofree char *from = old ? g_build_filename(dir, old, NULL) : NULL;
+        const char *old = autosaved_file(job->prev, o->volume);
+        g_autofree char *from = old ? g_build_filename(job->dir, old, NULL) : NULL;
         if (!from || link(from, to) != 0) {
             vv_error_clear();
             if (vv_volume_save(o->volume, to, VV_FORMAT_NRRD, 0) != VV_OK) {
@@ -524,7 +534,7 @@ autosave_stage(VvDocument *doc, const vv_world *w, const char *dir, const char *
         a->volume = vv_volume_ref(o->volume);
         a->modified = o->volume->modified;
         a->file = g_strdup(name);
-        g_ptr_array_add(done, a);
+        g_ptr_array_add(job->done, a);
     }
     g_autofree char *scene = g_build_filename(stage, "session.json", NULL);
     vv_error_clear();
@@ -537,17 +547,40 @@ autosave_stage(VvDocument *doc, const vv_world *w, const char *dir, const char *
     return ok;
 }
 
-gboolean
-vv_document_autosave(VvDocument *doc, const char *dir, GError **error) {
+vv_autosave_job *
+vv_document_autosave_begin(VvDocument *doc, const char *dir, GError **error) {
     const vv_world *w = doc->kept ? doc->kept : doc->world; /* never a transient World */
+    vv_autosave_job *job = g_new0(vv_autosave_job, 1);
+    vv_error_clear();
+    if (vv_world_clone(&job->world, w) != VV_OK) {
+        set_error(error, "cannot take a snapshot of the World");
+        g_free(job);
+        return NULL;
+    }
+    job->dir = g_strdup(dir);
+    job->prev = g_ptr_array_new_with_free_func(autosaved_volume_free);
+    for (guint i = 0; i < doc->autosaved->len; i++) {
+        const autosaved_volume *a = g_ptr_array_index(doc->autosaved, i);
+        autosaved_volume *c = g_new0(autosaved_volume, 1);
+        c->volume = vv_volume_ref(a->volume);
+        c->modified = a->modified;
+        c->file = g_strdup(a->file);
+        g_ptr_array_add(job->prev, c);
+    }
+    job->done = g_ptr_array_new_with_free_func(autosaved_volume_free);
+    return job;
+}
+
+gboolean
+vv_autosave_job_run(vv_autosave_job *job, GError **error) {
+    const char *dir = job->dir;
     g_autofree char *stage = g_strconcat(dir, ".tmp", NULL);
     vv_document_remove_folder(stage); /* a stage an earlier crash left */
     if (g_mkdir_with_parents(stage, 0700) != 0) {
         g_set_error(error, VV_GUI_ERROR, 1, "%s: %s", stage, g_strerror(errno));
         return FALSE;
     }
-    GPtrArray *done = g_ptr_array_new_with_free_func(autosaved_volume_free);
-    gboolean ok = autosave_stage(doc, w, dir, stage, done, error);
+    gboolean ok = autosave_stage(job, stage, error);
     /* one unit: the stage takes the folder's place in one step */
     if (ok && g_file_test(dir, G_FILE_TEST_IS_DIR)) {
         if (renameat2(AT_FDCWD, stage, AT_FDCWD, dir, RENAME_EXCHANGE) != 0) {
@@ -559,12 +592,44 @@ vv_document_autosave(VvDocument *doc, const char *dir, GError **error) {
         ok = FALSE;
     }
     vv_document_remove_folder(stage); /* the old autosave, or what failed */
-    if (ok) {
-        g_ptr_array_unref(doc->autosaved);
-        doc->autosaved = done;
-    } else {
-        g_ptr_array_unref(done);
-    }
+    if (!ok)
+        g_ptr_array_set_size(job->done, 0);
+    return ok;
+}
+
+const char *
+vv_autosave_job_folder(const vv_autosave_job *job) {
+    return job->dir;
+}
+
+void
+vv_document_autosave_end(VvDocument *doc, vv_autosave_job *job, gboolean ok) {
+    if (!ok)
+        return;
+    g_ptr_array_unref(doc->autosaved);
+    doc->autosaved = job->done;
+    job->done = g_ptr_array_new_with_free_func(autosaved_volume_free);
+}
+
+void
+vv_autosave_job_free(vv_autosave_job *job) {
+    if (!job)
+        return;
+    vv_world_free(job->world);
+    g_free(job->dir);
+    g_ptr_array_unref(job->prev);
+    g_ptr_array_unref(job->done);
+    g_free(job);
+}
+
+gboolean
+vv_document_autosave(VvDocument *doc, const char *dir, GError **error) {
+    vv_autosave_job *job = vv_document_autosave_begin(doc, dir, error);
+    if (!job)
+        return FALSE;
+    gboolean ok = vv_autosave_job_run(job, error);
+    vv_document_autosave_end(doc, job, ok);
+    vv_autosave_job_free(job);
     return ok;
 }
 

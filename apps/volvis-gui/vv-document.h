@@ -94,6 +94,23 @@ void vv_document_set_view_size(VvDocument *doc, int width, int height);
  */
 gboolean vv_document_autosave(VvDocument *doc, const char *dir, GError **error);
 /**
+ * The same in three steps, so that the writing runs on a worker thread:
+ * vv_document_autosave_begin takes a snapshot of the World (a clone whose
+ * objects share the volumes) and of what the last autosave wrote, on the
+ * main thread (NULL with @p error when the snapshot fails);
+ * vv_autosave_job_run writes it into the folder on any thread, touching
+ * nothing of the document; vv_document_autosave_end, on the main thread,
+ * makes the document remember what a successful run wrote (for the links
+ * of the next one). vv_autosave_job_free releases the job (NULL is fine).
+ */
+typedef struct vv_autosave_job vv_autosave_job;
+vv_autosave_job *vv_document_autosave_begin(VvDocument *doc, const char *dir, GError **error);
+gboolean vv_autosave_job_run(vv_autosave_job *job, GError **error);
+/** The folder the job writes (owned by the job). */
+const char *vv_autosave_job_folder(const vv_autosave_job *job);
+void vv_document_autosave_end(VvDocument *doc, vv_autosave_job *job, gboolean ok);
+void vv_autosave_job_free(vv_autosave_job *job);
+/**
  * Opens the autosave in @p dir as an untitled session with unsaved
  * changes; its volumes become volumes of the session again (written by the
  * next save or autosave, so the folder can go). Emits "changed".

@@ -52,6 +52,15 @@ struct _VvWindow {
     char *restore_from;
     guint autosave_tick, autosave_delay;
     gboolean autosave_pending;
+    /* an autosave written on a worker thread: at most one at a time; the
+     * window waits for it before it goes (autosave_lock, autosave_done);
+     * autosave_gen moves on when the folder must go (saved, closed), so
+     * that a run that ends after that removes what it wrote */
+    GMutex autosave_lock;
+    GCond autosave_done;
+    gboolean autosave_writing; /* the worker's, under the lock */
+    gboolean autosave_running; /* the main thread's: until autosave_finished */
+    guint autosave_gen;
 };
 
 G_DEFINE_TYPE(VvWindow, vv_window, GTK_TYPE_APPLICATION_WINDOW)
@@ -97,27 +106,117 @@ env_seconds(const char *name, guint fallback) {
     return n >= 1 && n <= 86400 ? (guint)n : fallback;
 }
 
+typedef struct autosave_task {
+    vv_autosave_job *job;
+    guint gen;
+    gboolean ok;
+    char *error;
+} autosave_task;
+
 static void
-do_autosave(VvWindow *win) {
-    if (!win->doc)
-        return;
-    win->autosave_pending = FALSE;
-    if (!vv_document_dirty(win->doc)) { /* nothing unsaved: nothing to restore */
-        vv_document_remove_folder(win->autosave_dir);
+autosave_task_free(gpointer p) {
+    autosave_task *t = p;
+    vv_autosave_job_free(t->job);
+    g_free(t->error);
+    g_free(t);
+}
+
+/* The worker: writes the snapshot, then lets a closing window go on. */
+static void
+autosave_thread(GTask *task, gpointer source, gpointer data, GCancellable *cancel) {
+    (void)cancel;
+    VvWindow *win = source;
+    autosave_task *t = data;
+    GError *err = NULL;
+    t->ok = vv_autosave_job_run(t->job, &err);
+    if (err) {
+        t->error = g_strdup(err->message);
+        g_error_free(err);
+    }
+    g_mutex_lock(&win->autosave_lock);
+    win->autosave_writing = FALSE;
+    g_cond_broadcast(&win->autosave_done);
+    g_mutex_unlock(&win->autosave_lock);
+    g_task_return_boolean(task, TRUE);
+}
+
+static void do_autosave(VvWindow *win);
+
+/* Back on the main thread: the document remembers what was written; a
+ * folder that should be gone by now (the session was saved or the window
+ * closed while it was written) is removed. */
+static void
+autosave_finished(GObject *source, GAsyncResult *res, gpointer user) {
+    (void)user;
+    VvWindow *win = VV_WINDOW(source);
+    autosave_task *t = g_task_get_task_data(G_TASK(res));
+    const char *dir = vv_autosave_job_folder(t->job);
+    win->autosave_running = FALSE;
+    if (t->gen != win->autosave_gen || !win->doc) {
+        vv_document_remove_folder(dir);
+        if (win->doc && win->autosave_pending) /* edited again since the save */
+            do_autosave(win);
         return;
     }
-    GError *err = NULL;
-    if (!vv_document_autosave(win->doc, win->autosave_dir, &err)) {
-        g_printerr("volvis-gui: autosave failed: %s\n", err->message);
-        g_error_free(err);
+    vv_document_autosave_end(win->doc, t->job, t->ok);
+    if (!t->ok) {
+        g_printerr("volvis-gui: autosave failed: %s\n", t->error ? t->error : "unknown error");
         win->autosave_pending = TRUE; /* again at the next tick */
         return;
     }
-    g_printerr("volvis-gui: autosaved %s\n", win->autosave_dir);
+    g_printerr("volvis-gui: autosaved %s\n", dir);
     if (win->restore_from) {
         vv_document_remove_folder(win->restore_from);
         g_clear_pointer(&win->restore_from, g_free);
     }
+    if (win->autosave_pending) /* edits while it was written */
+        do_autosave(win);
+}
+
+/* Waits for an autosave being written (the window is going). */
+static void
+autosave_wait(VvWindow *win) {
+    g_mutex_lock(&win->autosave_lock);
+    while (win->autosave_writing)
+        g_cond_wait(&win->autosave_done, &win->autosave_lock);
+    g_mutex_unlock(&win->autosave_lock);
+}
+
+static void
+do_autosave(VvWindow *win) {
+    if (!win->doc || !win->autosave_dir)
+        return;
+    if (!vv_document_dirty(win->doc)) { /* nothing unsaved: nothing to restore */
+        win->autosave_pending = FALSE;
+        win->autosave_gen++; /* a run still writing removes its folder when done */
+        if (!win->autosave_running)
+            vv_document_remove_folder(win->autosave_dir);
+        return;
+    }
+    if (win->autosave_running) { /* one at a time: this one once that ends */
+        win->autosave_pending = TRUE;
+        return;
+    }
+    win->autosave_pending = FALSE;
+    GError *err = NULL;
+    vv_autosave_job *job = vv_document_autosave_begin(win->doc, win->autosave_dir, &err);
+    if (!job) {
+        g_printerr("volvis-gui: autosave failed: %s\n", err->message);
+        g_error_free(err);
+        win->autosave_pending = TRUE;
+        return;
+    }
+    autosave_task *t = g_new0(autosave_task, 1);
+    t->job = job;
+    t->gen = win->autosave_gen;
+    win->autosave_running = TRUE;
+    g_mutex_lock(&win->autosave_lock);
+    win->autosave_writing = TRUE;
+    g_mutex_unlock(&win->autosave_lock);
+    GTask *task = g_task_new(win, NULL, autosave_finished, NULL);
+    g_task_set_task_data(task, t, autosave_task_free);
+    g_task_run_in_thread(task, autosave_thread);
+    g_object_unref(task);
 }
 
 static gboolean
@@ -899,6 +998,8 @@ vv_window_dispose(GObject *o) {
     VvWindow *win = VV_WINDOW(o);
     g_clear_handle_id(&win->autosave_delay, g_source_remove);
     g_clear_handle_id(&win->autosave_tick, g_source_remove);
+    autosave_wait(win); /* an autosave being written ends first */
+    win->autosave_gen++;
     if (win->autosave_dir) { /* closed as the user chose: no crash to restore */
         vv_document_remove_folder(win->autosave_dir);
         g_clear_pointer(&win->autosave_dir, g_free);
@@ -913,8 +1014,17 @@ vv_window_dispose(GObject *o) {
 }
 
 static void
+vv_window_finalize(GObject *o) {
+    VvWindow *win = VV_WINDOW(o);
+    g_mutex_clear(&win->autosave_lock);
+    g_cond_clear(&win->autosave_done);
+    G_OBJECT_CLASS(vv_window_parent_class)->finalize(o);
+}
+
+static void
 vv_window_class_init(VvWindowClass *klass) {
     G_OBJECT_CLASS(klass)->dispose = vv_window_dispose;
+    G_OBJECT_CLASS(klass)->finalize = vv_window_finalize;
 }
 
 static const GActionEntry win_actions[] = {
@@ -941,6 +1051,8 @@ static const GActionEntry win_actions[] = {
 
 static void
 vv_window_init(VvWindow *win) {
+    g_mutex_init(&win->autosave_lock);
+    g_cond_init(&win->autosave_done);
     win->doc = vv_document_new();
     win->marks = vv_marks_new();
     g_action_map_add_action_entries(G_ACTION_MAP(win), win_actions, G_N_ELEMENTS(win_actions), win);

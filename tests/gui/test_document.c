@@ -140,6 +140,11 @@ inode_of(const char *path) {
     return st.st_ino;
 }
 
+static gpointer
+autosave_job_thread(gpointer job) {
+    return GINT_TO_POINTER(vv_autosave_job_run(job, NULL));
+}
+
 /* Autosave (issue 33) of a volume made in the session: session.json and
  * volume_1.nrrd in the folder; a second autosave links the unchanged volume
  * (the same inode) and leaves no stage; a changed volume is written anew;
@@ -183,6 +188,20 @@ test_autosave_and_restore(void **state) {
     assert_non_null(err);
     g_clear_error(&err);
     assert_int_equal(access(vol, F_OK), 0);
+
+    /* in three steps (the GUI runs the middle one on a worker thread): the
+     * snapshot is what gets written, whatever the document does meanwhile */
+    vv_autosave_job *job = vv_document_autosave_begin(doc, dir, &err);
+    assert_non_null(job);
+    vv_document_delete_object(doc, 1);
+    assert_int_equal(vv_document_world(doc)->n_objects, 1);
+    GThread *worker = g_thread_new("autosave", autosave_job_thread, job);
+    assert_true(GPOINTER_TO_INT(g_thread_join(worker)));
+    vv_document_autosave_end(doc, job, TRUE);
+    vv_autosave_job_free(job);
+    assert_int_equal(access(vol, F_OK), 0);
+    vv_document_undo(doc); /* the volume back, for what follows */
+    assert_int_equal(vv_document_world(doc)->n_objects, 2);
 
     VvDocument *back = vv_document_new();
     assert_true(vv_document_restore(back, dir, &err));
