@@ -310,8 +310,21 @@ check_lengths(const char *path, char *err, size_t errlen) {
             for (const char *v : long_vrs)
                 if (b[4] == (unsigned char)v[0] && b[5] == (unsigned char)v[1])
                     is_long = 1;
+            static const char *const short_vrs[] = {"AE", "AS", "AT", "CS", "DA", "DS", "DT",
+                                                    "FL", "FD", "IS", "LO", "LT", "PN", "SH",
+                                                    "SL", "SS", "ST", "TM", "UI", "UL", "US"};
+            int known = is_long;
+            for (const char *v : short_vrs)
+                if (b[4] == (unsigned char)v[0] && b[5] == (unsigned char)v[1])
+                    known = 1;
             sq = b[4] == 'S' && b[5] == 'Q';
-            un = b[4] == 'U' && b[5] == 'N';
+            /* a VR GDCM does not know is read as UN first (two reserved
+             * bytes, a 32-bit length), its 16-bit form only after that
+             * failed: the 32-bit length is what it allocates (a "CU" whose
+             * value began "MONO" asked for 1.3 GB, found by fuzzing) */
+            un = (b[4] == 'U' && b[5] == 'N') || !known;
+            if (!known)
+                is_long = 1;
             if (is_long) {
                 if (pos + 12 > size || std::fread(b + 8, 1, 4, fp) != 4)
                     break;

@@ -326,8 +326,10 @@ header_scan_free(header_scan *hs) {
  * files) is refused before Teem parses it, which takes time quadratic in
  * the number of lines. */
 #define NRRD_MAX_HEADER ((size_t)4 << 20)
-/* The longest header line (a field) given to Teem. */
-#define NRRD_MAX_LINE 1000
+/* The longest header line (a field) given to Teem: it formats a bad line
+ * into a 1 KB message buffer after a prefix of its own, and a line of 960
+ * bytes already overflowed it (found by fuzzing); 768 leaves room. */
+#define NRRD_MAX_LINE 768
 /* At most this many detached data files (one per slice of the largest volume). */
 #define NRRD_MAX_FILES VV_VOLUME_MAX_DIM
 

@@ -581,7 +581,7 @@ test_vvc_index_past_end(void **state) {
     free(d);
 }
 
-/* ---- what the fuzzers found: a VTK grid's cell counts, a DICOM length --- */
+/* ---- what the fuzzers found: a VTK grid's cell counts, a NRRD line, DICOM lengths */
 
 static void
 test_fuzz_findings(void **state) {
@@ -596,6 +596,22 @@ test_fuzz_findings(void **state) {
     vv_error_clear();
     expect_error(vv_grid_load(&g, tpath("cells.vtk")), VV_ERR_FORMAT, "cell 0 has 3 points");
     assert_null(g);
+    /* a NRRD header line of 960 bytes that Teem does not recognise: its
+     * message about it overflowed a 1 KB buffer (a fortified abort) */
+    {
+        char line[961];
+        memset(line, 'x', 960);
+        line[960] = '\0';
+        write_text(tpath("long_line.nrrd"),
+                   "NRRD0005\n%s\ntype: short\ndimension: 3\nsizes: 1 5 1\n"
+                   "encoding: raw\nendian: little\n\n0123456789",
+                   line);
+        vv_volume *lv = NULL;
+        vv_error_clear();
+        expect_error(vv_nrrd_read(&lv, tpath("long_line.nrrd")), VV_ERR_FORMAT,
+                     "a header line of 960 bytes (at most 768)");
+        assert_null(lv);
+    }
     /* a 1.2 KB DICOM file one of whose lengths says 775 MB: GDCM allocated
      * it (0.9 GB, 6 s) before noticing the file ends */
     char dcm[1024];
@@ -624,6 +640,17 @@ test_fuzz_findings(void **state) {
         if (now_s() - t0 > 3)
             fail_msg("refusing %s took %.1f s", un_files[k], now_s() - t0);
     }
+    /* an unknown VR ("CU", a mutated CS) that GDCM reads as UN first: the
+     * 32-bit length after it ("MONO" of MONOCHROME2) made it allocate 1.3 GB */
+    snprintf(dcm, sizeof dcm, "%s/tests/fuzz/corpus/dicom/oom-unknown-vr-long-length",
+             VV_SOURCE_DIR);
+    t0 = now_s();
+    vv_error_clear();
+    s = vv_dicom_read(&v, dcm, 0, -1);
+    expect_error(s, VV_ERR_FORMAT, "(0028,0004) claims 1330532173 bytes");
+    assert_null(v);
+    if (now_s() - t0 > 3)
+        fail_msg("refusing the unknown VR took %.1f s", now_s() - t0);
     /* a malformed explicit-VR element on which GDCM fails an assertion
      * (abort()): an error through the library's abort guard, twice (the
      * guard can be taken again), not the end of the process */
