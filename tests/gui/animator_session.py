@@ -22,11 +22,41 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from atspi import Session, ae, check, psnr, run  # noqa: E402
+from atspi import Failure, Session, ae, check, psnr, run  # noqa: E402
 
 GUI, CLI, OUT = sys.argv[1:4]
 os.makedirs(OUT, exist_ok=True)
 LANE = (115, 191, 115)  # sequences on the timeline (vv-animator-page.c)
+
+
+def find_timeline(s, timeout=60):
+    """The Animator's timeline once it has a size inside the window (shown
+    the first time it is slow under ASan); a failure says where it was."""
+    t0 = time.time()
+    resized = t0
+    while True:
+        if time.time() - resized > 5:  # a window that came back at its own size
+            s.xdo("windowsize", s.wid, str(s.window_size[0]), str(s.window_size[1]))
+            resized = time.time()
+        found = s.find_all("timeline")
+        for o in found:
+            try:
+                x, y, w, h = s.extents(o)
+            except Exception:
+                continue
+            W, H = s.window_size
+            if w > 0 and h > 0 and x >= 0 and y >= 0 and x < W and y < H:
+                return o
+        if time.time() - t0 > timeout:
+            where = []
+            for o in found:
+                try:
+                    where.append(s.extents(o))
+                except Exception as e:
+                    where.append(repr(e))
+            raise Failure(f"no timeline inside the window {s.window_size} after {timeout} s "
+                          f"({len(found)} found: {where})")
+        time.sleep(0.3)
 KEY = (242, 209, 77)    # keys
 
 
@@ -62,7 +92,7 @@ def main():
         s.page("Animator")
         page = s.find("Animator page")
         button = lambda name: s.find(name, "push button", root=page)  # noqa: E731
-        timeline = s.find("timeline", root=page, timeout=30)  # first shown: slow under ASan
+        timeline = find_timeline(s)
         lanes = lambda: s.count_color(timeline, LANE, "lanes.png")  # noqa: E731
         check(lanes() == 0, "the new animation is not empty")
         s.click(button("Add sequence"))  # an orbit of 360 degrees over 60 frames

@@ -413,6 +413,10 @@ class Session:
     def _save_dialog(self, keys, title, path):
         """@p keys, the chooser called @p title, the path typed, Return (an
         old file there is removed first: the chooser would ask to replace it)."""
+        shared = os.path.realpath(os.path.join(os.path.dirname(__file__), "..", "..", "..",
+                                               "shared"))
+        if os.path.realpath(path).startswith(shared + os.sep):
+            raise Failure(f"{path}: a save dialog never writes over the shared data")
         if os.path.exists(path):
             os.remove(path)
         self.focus_main()
