@@ -59,6 +59,7 @@ PUBLIC = {
     "sys/source.h": "core",  # the brick source interface: io serves it, render reads it
     "model.h": "model",
     "io.h": "io", "video.h": "io", "sys/format.h": "io", "bricks.h": "io",
+    "sys/sandbox.h": "io",  # the sandboxed reader's entry point (apps/volvis-reader)
     "render.h": "render", "raster.h": "render", "radiosity.h": "render", "slice.h": "render",
     "sys/renderer.h": "render", "sys/geometry.h": "model",
     "modeling.h": "modeling",

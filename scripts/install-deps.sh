@@ -16,7 +16,7 @@ set -euo pipefail
 pkgs=(build-essential cmake pkg-config libteem-dev libnifti2-dev libjansson-dev
       libpng-dev zlib1g-dev libassimp-dev libfftw3-dev libcairo2-dev libgtk-4-dev
       libspnav-dev libsdl2-dev libxml2-dev libnetcdf-dev libavformat-dev libavcodec-dev
-      libswscale-dev libavutil-dev libtiff-dev libgdcm-dev libopenmpi-dev openmpi-bin
+      libswscale-dev libavutil-dev libtiff-dev libgdcm-dev libseccomp-dev libopenmpi-dev openmpi-bin
       python3-dev python3-cffi python3-numpy)
 for what in "$@"; do
   case "$what" in

@@ -38,6 +38,22 @@ typedef struct vv_atomic_file {
  */
 int vv_call_guarded(void (*fn)(void *ctx), void *ctx);
 
+/**
+ * Where vv_volume_new puts voxels: @p alloc returns zeroed memory of
+ * @p bytes (NULL on failure) and the release vv_volume_free calls with
+ * @p user; NULL restores calloc/free. Set once, before any volume is made
+ * and before threads start, by the sandboxed reader (voxels in a memfd that
+ * goes to the parent: src/io/sandbox.c); never by the library's users.
+ */
+void vv_volume_set_allocator(void *(*alloc)(size_t bytes), void (*release)(void *user, void *data));
+
+/**
+ * The folder of the memory cgroup hierarchy the process is in (the root of
+ * what vv_memory_budget_check reads: the sandboxed reader may read beneath
+ * it), in @p buf; 0 when there is none or it does not fit. Thread-safe.
+ */
+int vv_memory_cgroup_root(char *buf, size_t cap);
+
 /** Opens the temporary file. Errors: VV_ERR_IO (with path and strerror), VV_ERR_NOMEM. */
 vv_status vv_atomic_file_open(vv_atomic_file *af, const char *path);
 /** Flushes, closes and renames. Errors: VV_ERR_IO (the temporary is removed). */

@@ -200,6 +200,14 @@ cgroup_headroom(void) {
     return least;
 }
 
+int
+vv_memory_cgroup_root(char *buf, size_t cap) {
+    pthread_once(&cg_once, cg_locate);
+    if (!cg_version || snprintf(buf, cap, "%s", cg_top) >= (int)cap)
+        return 0;
+    return 1;
+}
+
 uint64_t
 vv_memory_available(void) {
     uint64_t avail = half_available() * 2;

@@ -112,6 +112,16 @@ vv_volume_check_size(const int dims[3], vv_voxel_type t, uint64_t *bytes) {
     return VV_OK;
 }
 
+/* vv_volume_set_allocator: set once at the start of volvis-reader. */
+static void *(*data_alloc)(size_t bytes);
+static void (*data_release)(void *user, void *data);
+
+void
+vv_volume_set_allocator(void *(*alloc)(size_t bytes), void (*release)(void *user, void *data)) {
+    data_alloc = alloc;
+    data_release = alloc ? release : NULL;
+}
+
 vv_status
 vv_volume_new(vv_volume **out, const int dims[3], vv_voxel_type t) {
     *out = NULL;
@@ -122,7 +132,8 @@ vv_volume_new(vv_volume **out, const int dims[3], vv_voxel_type t) {
     vv_volume *v = calloc(1, sizeof *v);
     if (!v)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    v->data = calloc((size_t)bytes, 1);
+    v->data = data_alloc ? data_alloc((size_t)bytes) : calloc((size_t)bytes, 1);
+    v->release = data_alloc ? data_release : NULL;
     if (!v->data) {
         free(v);
         return vv_error_set(VV_ERR_NOMEM, "out of memory for a volume of %llu bytes",

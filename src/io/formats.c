@@ -17,6 +17,7 @@
 #include <zlib.h>
 
 #include "core/internal.h"
+#include "io/sandbox.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 
@@ -192,8 +193,10 @@ ask(const vv_format_probe *p, int deep) {
     return VV_FORMAT_UNKNOWN;
 }
 
-vv_format
-vv_format_detect(const char *path) {
+/* Detection's first pass (signatures) and, when @p deep and it found
+ * nothing, the second. */
+static vv_format
+detect(const char *path, int deep) {
     if (!path)
         return VV_FORMAT_UNKNOWN;
     unsigned char buf[VV_FORMAT_PROBE_BYTES + 1];
@@ -201,7 +204,17 @@ vv_format_detect(const char *path) {
     vv_format_probe p;
     int err = vv_format_probe_fill(&p, path, buf, text);
     vv_format f = ask(&p, 0);
-    if (f != VV_FORMAT_UNKNOWN || err)
+    if (f != VV_FORMAT_UNKNOWN || err || !deep)
         return f;
     return ask(&p, 1);
+}
+
+vv_format
+vv_format_detect_signature(const char *path) {
+    return detect(path, 0);
+}
+
+vv_format
+vv_format_detect(const char *path) {
+    return detect(path, 1);
 }

@@ -10,6 +10,7 @@
 #include <sys/stat.h>
 
 #include "core/internal.h"
+#include "io/sandbox.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 
@@ -116,6 +117,17 @@ vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
     vv_status s = check_input(path, f, &is_dir);
     if (s != VV_OK)
         return s;
+    if (f == VV_FORMAT_AUTO && vv_sandbox_wanted(NULL)) {
+        /* signatures here; the deep tests, which may call a third-party
+         * parser, in the sandbox with the read */
+        vv_format g = vv_format_detect_signature(path);
+        if (!format_of(g) || vv_sandbox_wanted(format_of(g)))
+            return vv_sandbox_volume_load(out, path, format_of(g) ? g : VV_FORMAT_AUTO, opt);
+        f = g;
+        r = format_of(f);
+    } else if (r && vv_sandbox_wanted(r)) {
+        return vv_sandbox_volume_load(out, path, f, opt);
+    }
     if (f == VV_FORMAT_AUTO) {
         f = vv_format_detect(path);
         if (f == VV_FORMAT_UNKNOWN && opt->has_raw)

@@ -173,5 +173,45 @@ def main():
         s.quit()
         print("bad file: error dialog, raw import offered, still running, exit 0")
 
+        # a NRRD reader that aborts in the sandbox (injected): the error
+        # dialog names it, the GUI lives on, the World renders as before
+        s.env = dict(s.env, VOLVIS_SANDBOX_INJECT="abort")
+        n = s.n_full()
+        s.launch([os.path.join(DATA, "nut.slc")])  # SLC: read in-process
+        s.wait_full(n, "opening nut.slc")
+        before = s.full_png("sandbox_before.png")
+        s.focus_main()  # Open… (the shared file is only read: never _save_dialog here)
+        s.key("ctrl+o")
+        s.xdo("search", "--sync", "--name", "Open volume, mesh or scene")
+        time.sleep(0.5)
+        s.key("ctrl+l")
+        s.key("ctrl+a")
+        s.type(os.path.join(DATA, "ct_head.nrrd"))
+        s.key("Return")
+        s.xdo("search", "--sync", "--name", "VolVis: error")
+        time.sleep(0.5)
+        s.screenshot("sandbox_error.png")
+        texts = " ".join(s.text(o) for o in s.find_all(role="label"))
+        check("the NRRD reader crashed (SIGABRT)" in texts,
+              f"the error dialog does not name the crash: {texts!r}")
+        check(s.app_proc.poll() is None, "the application died with its reader")
+        s.key("Escape")
+        time.sleep(0.3)
+        time.sleep(1)
+        check(ae(s.full_png("sandbox_after.png"), before) == 0,
+              "the view changed after the reader crashed")
+        # the objects' names are the texts of their editable entries
+        names = []
+        for o in s.find_all(role="text"):
+            try:
+                names.append(s.text(o))
+            except Exception:
+                pass
+        check("nut" in names, f"the World lost its volume: {names}")
+        check(not [n for n in names if "ct_head" in n],
+              f"an object of the file that failed is in the World: {names}")
+        s.quit()
+        print("a reader crash in the sandbox: the error dialog, the World unchanged, exit 0")
+
 
 run(main)

@@ -1,0 +1,987 @@
+/*
+ * The reader sandbox (src/io/sandbox.h; docs/security.md, "The reader
+ * sandbox"). Both sides live here: the parent, which starts volvis-reader
+ * and turns whatever it does into a volume or one error, and the child's
+ * main function, which locks itself down before it touches the file.
+ *
+ * The protocol, over a SOCK_SEQPACKET socket pair on the child's descriptor
+ * 3 (each message whole or not at all): the parent sends one sbx_request;
+ * the child answers with an sbx_reply of kind SBX_FORMAT once it knows the
+ * format (so that a crash can be named after its reader) and one of kind
+ * SBX_RESULT, which carries the memfd of the voxels (SCM_RIGHTS) when the
+ * read succeeded. The parent trusts nothing in a reply: sizes are checked
+ * against the memfd, the memfd must be sealed against shrinking, geometry
+ * must be finite, and the value range is computed again.
+ */
+#define _GNU_SOURCE
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <linux/landlock.h>
+#include <math.h>
+#include <poll.h>
+#include <pthread.h>
+#include <seccomp.h>
+#include <signal.h>
+#include <spawn.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <sys/prctl.h>
+#include <sys/resource.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/syscall.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "core/internal.h"
+#include "io/sandbox.h"
+
+extern char **environ;
+
+#define SBX_MAGIC 0x56565342u /* "VVSB" */
+#define SBX_VERSION 1
+#define SBX_FD 3
+#define SBX_MAX_PATH 4096
+#define SBX_MAX_ERROR 4096
+
+/* Test-only misbehaviour of the child (VOLVIS_SANDBOX_INJECT), after it is
+ * locked down: what a hostile or broken parser would do. */
+enum sbx_inject {
+    INJECT_NONE,
+    INJECT_ABORT,  /* abort(): a library assertion */
+    INJECT_SEGV,   /* a wild write */
+    INJECT_OPEN,   /* opens /etc/passwd: refused by Landlock */
+    INJECT_WRITE,  /* opens a file for writing: killed */
+    INJECT_SOCKET, /* socket(): killed */
+    INJECT_EXEC,   /* execve(): killed */
+    INJECT_FORK,   /* fork(): killed */
+    INJECT_LOOP,   /* never ends: stopped at the time limit */
+    INJECT_OOM     /* allocates until malloc fails, then aborts */
+};
+static const char *const inject_names[] = {"",       "abort",  "segv", "open", "write",
+                                           "socket", "execve", "fork", "loop", "oom"};
+#define N_INJECT ((int)(sizeof inject_names / sizeof inject_names[0]))
+
+typedef struct sbx_request {
+    uint32_t magic, version;
+    int32_t format, has_raw;
+    vv_raw_params raw;
+    int32_t series, channel;
+    uint64_t budget;
+    int32_t threads;
+    int32_t inject;
+    uint32_t cpu_seconds;
+    uint32_t path_len;
+    char path[SBX_MAX_PATH];
+} sbx_request;
+
+enum { SBX_FORMAT = 1, SBX_RESULT = 2 };
+
+typedef struct sbx_reply {
+    uint32_t magic;
+    int32_t kind;
+    int32_t format;
+    int32_t status;
+    int32_t dims[3];
+    int32_t type;
+    double spacing[3], origin[3], direction[9];
+    int32_t unit, data_origin, modification, space;
+    uint64_t bytes;
+    uint32_t err_len;
+    char err[SBX_MAX_ERROR];
+} sbx_reply;
+
+/* 1 in volvis-reader: vv_volume_load reads in-process there. */
+static int in_child;
+
+int
+vv_sandbox_wanted(const vv_volume_format *r) {
+    if (in_child)
+        return 0;
+    if (r && !(r->flags & VV_FORMAT_FLAG_THIRD_PARTY))
+        return 0;
+    const char *e = getenv("VOLVIS_SANDBOX");
+    return !(e && !strcmp(e, "0"));
+}
+
+/* ---- the child ------------------------------------------------------------ */
+
+/* The voxels of the volumes the child makes: each in its own memfd. */
+typedef struct sbx_block {
+    void *data;
+    size_t bytes;
+    int fd;
+} sbx_block;
+static sbx_block blocks[8];
+static pthread_mutex_t blocks_lock = PTHREAD_MUTEX_INITIALIZER;
+
+static void *
+memfd_alloc(size_t bytes) {
+    size_t len = bytes ? bytes : 1;
+    int fd = memfd_create("volvis-voxels", MFD_CLOEXEC | MFD_ALLOW_SEALING);
+    if (fd < 0)
+        return NULL;
+    void *p = MAP_FAILED;
+    if (ftruncate(fd, (off_t)len) == 0)
+        p = mmap(NULL, len, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+    if (p == MAP_FAILED) {
+        close(fd);
+        return NULL;
+    }
+    pthread_mutex_lock(&blocks_lock);
+    int slot = -1;
+    for (int i = 0; i < (int)(sizeof blocks / sizeof blocks[0]) && slot < 0; i++)
+        if (!blocks[i].data)
+            slot = i;
+    if (slot >= 0)
+        blocks[slot] = (sbx_block){p, len, fd};
+    pthread_mutex_unlock(&blocks_lock);
+    if (slot < 0) {
+        munmap(p, len);
+        close(fd);
+        return NULL;
+    }
+    return p;
+}
+
+static void
+memfd_release(void *user, void *data) {
+    (void)user;
+    pthread_mutex_lock(&blocks_lock);
+    for (int i = 0; i < (int)(sizeof blocks / sizeof blocks[0]); i++)
+        if (blocks[i].data == data) {
+            munmap(data, blocks[i].bytes);
+            close(blocks[i].fd);
+            blocks[i] = (sbx_block){0};
+        }
+    pthread_mutex_unlock(&blocks_lock);
+}
+
+/* The memfd holding @p data; a copy into a new one when a reader made the
+ * voxels some other way. -1 on failure. */
+static int
+memfd_of(void *data, size_t bytes) {
+    for (int i = 0; i < (int)(sizeof blocks / sizeof blocks[0]); i++)
+        if (blocks[i].data == data && blocks[i].bytes >= bytes)
+            return blocks[i].fd;
+    void *p = memfd_alloc(bytes);
+    if (!p)
+        return -1;
+    memcpy(p, data, bytes);
+    return memfd_of(p, bytes);
+}
+
+/* Landlock: the structures and constants of ABI 6, defined here where the
+ * system's header is older (Debian 12's describes ABI 2). */
+struct sbx_landlock_ruleset_attr {
+    uint64_t handled_access_fs;
+    uint64_t handled_access_net;
+    uint64_t scoped;
+};
+#ifndef LANDLOCK_ACCESS_NET_BIND_TCP
+#define LANDLOCK_ACCESS_NET_BIND_TCP (1ULL << 0)
+#define LANDLOCK_ACCESS_NET_CONNECT_TCP (1ULL << 1)
+#endif
+#ifndef LANDLOCK_SCOPE_ABSTRACT_UNIX_SOCKET
+#define LANDLOCK_SCOPE_ABSTRACT_UNIX_SOCKET (1ULL << 0)
+#define LANDLOCK_SCOPE_SIGNAL (1ULL << 1)
+#endif
+
+/* Read access beneath the folder of @p path (the folder itself when it is
+ * one) and nothing else on any file system; no TCP; no signals to or
+ * abstract sockets of processes outside. Returns 0, or -1 with errno (the
+ * kernel has no Landlock: ENOSYS or EOPNOTSUPP). */
+static int
+landlock_restrict(const char *path) {
+    long abi = syscall(SYS_landlock_create_ruleset, NULL, 0, LANDLOCK_CREATE_RULESET_VERSION);
+    if (abi < 1)
+        return -1;
+    struct sbx_landlock_ruleset_attr ra = {0};
+    ra.handled_access_fs = abi >= 5   ? 0xffffULL
+                           : abi >= 3 ? 0x7fffULL
+                           : abi >= 2 ? 0x3fffULL
+                                      : 0x1fffULL;
+    if (abi >= 4)
+        ra.handled_access_net = LANDLOCK_ACCESS_NET_BIND_TCP | LANDLOCK_ACCESS_NET_CONNECT_TCP;
+    if (abi >= 6)
+        ra.scoped = LANDLOCK_SCOPE_ABSTRACT_UNIX_SOCKET | LANDLOCK_SCOPE_SIGNAL;
+    size_t size = abi >= 6 ? sizeof ra : abi >= 4 ? 2 * sizeof(uint64_t) : sizeof(uint64_t);
+    int rs = (int)syscall(SYS_landlock_create_ruleset, &ra, size, 0);
+    if (rs < 0)
+        return -1;
+    /* the folder of the input, by the name given and by its real path; the
+     * memory cgroup's files, which the memory budget's check reads */
+    char dirs[3][SBX_MAX_PATH];
+    int nd = 0;
+    if (vv_memory_cgroup_root(dirs[0], sizeof dirs[0]))
+        nd++;
+    char *real = realpath(path, NULL);
+    const char *names[2] = {path, real};
+    for (int i = 0; i < 2; i++) {
+        if (!names[i])
+            continue;
+        struct stat st;
+        snprintf(dirs[nd], sizeof dirs[nd], "%s", names[i]);
+        if (stat(names[i], &st) == 0 && !S_ISDIR(st.st_mode)) {
+            char *slash = strrchr(dirs[nd], '/');
+            if (!slash)
+                snprintf(dirs[nd], sizeof dirs[nd], ".");
+            else if (slash == dirs[nd])
+                slash[1] = '\0';
+            else
+                *slash = '\0';
+        }
+        nd++;
+    }
+    free(real);
+    int ok = 1;
+    for (int i = 0; i < nd && ok; i++) {
+        struct landlock_path_beneath_attr pb = {0};
+        pb.allowed_access = LANDLOCK_ACCESS_FS_READ_FILE | LANDLOCK_ACCESS_FS_READ_DIR;
+        pb.parent_fd = open(dirs[i], O_PATH | O_CLOEXEC);
+        if (pb.parent_fd < 0)
+            continue;
+        if (syscall(SYS_landlock_add_rule, rs, LANDLOCK_RULE_PATH_BENEATH, &pb, 0) != 0)
+            ok = 0;
+        close(pb.parent_fd);
+    }
+    if (ok && syscall(SYS_landlock_restrict_self, rs, 0) != 0)
+        ok = 0;
+    int e = errno;
+    close(rs);
+    errno = e;
+    return ok ? 0 : -1;
+}
+
+/* The system calls a reader needs to read files it may open, compute with
+ * threads, and hand back its result; everything else ends the process
+ * (SIGSYS). Returns 0 or -1. */
+/* VOLVIS_SANDBOX_DEBUG: the forbidden call's number on stderr, then the
+ * same end (SIGSYS). */
+static void
+on_sigsys(int sig, siginfo_t *si, void *uc) {
+    (void)uc;
+    char msg[96];
+    int n = snprintf(msg, sizeof msg, "volvis-reader: forbidden system call %d\n", si->si_syscall);
+    if (n > 0 && write(2, msg, (size_t)n) < 0)
+        n = 0;
+    signal(sig, SIG_DFL);
+    raise(sig);
+}
+
+static int
+seccomp_restrict(void) {
+    uint32_t deny = SCMP_ACT_KILL_PROCESS;
+    if (getenv("VOLVIS_SANDBOX_DEBUG")) {
+        struct sigaction sa;
+        memset(&sa, 0, sizeof sa);
+        sa.sa_sigaction = on_sigsys;
+        sa.sa_flags = SA_SIGINFO;
+        sigaction(SIGSYS, &sa, NULL);
+        deny = SCMP_ACT_TRAP;
+    }
+    scmp_filter_ctx c = seccomp_init(deny);
+    if (!c)
+        return -1;
+    static const char *const allowed[] = {"read",
+                                          "pread64",
+                                          "readv",
+                                          "preadv",
+                                          "preadv2",
+                                          "write",
+                                          "writev",
+                                          "pwrite64",
+                                          "lseek",
+                                          "close",
+                                          "fstat",
+                                          "newfstatat",
+                                          "statx",
+                                          "stat",
+                                          "lstat",
+                                          "fstatfs",
+                                          "statfs",
+                                          "getdents64",
+                                          "fcntl",
+                                          "dup",
+                                          "dup2",
+                                          "dup3",
+                                          "readlink",
+                                          "readlinkat",
+                                          "access",
+                                          "faccessat",
+                                          "faccessat2",
+                                          "getcwd",
+                                          "fadvise64",
+                                          "munmap",
+                                          "mremap",
+                                          "madvise",
+                                          "brk",
+                                          "futex",
+                                          "futex_waitv",
+                                          "set_robust_list",
+                                          "get_robust_list",
+                                          "rseq",
+                                          "set_tid_address",
+                                          "rt_sigaction",
+                                          "rt_sigprocmask",
+                                          "rt_sigreturn",
+                                          "sigaltstack",
+                                          "gettid",
+                                          "getpid",
+                                          "getppid",
+                                          "exit",
+                                          "exit_group",
+                                          "restart_syscall",
+                                          "clock_gettime",
+                                          "clock_getres",
+                                          "clock_nanosleep",
+                                          "nanosleep",
+                                          "gettimeofday",
+                                          "time",
+                                          "sched_yield",
+                                          "sched_getaffinity",
+                                          "sched_getparam",
+                                          "sched_getscheduler",
+                                          "getrandom",
+                                          "memfd_create",
+                                          "ftruncate",
+                                          "sendmsg",
+                                          "recvmsg",
+                                          "recvfrom",
+                                          "poll",
+                                          "ppoll",
+                                          "getuid",
+                                          "geteuid",
+                                          "getgid",
+                                          "getegid",
+                                          "uname",
+                                          "sysinfo",
+                                          "getrusage",
+                                          "times",
+                                          "getrlimit",
+                                          "membarrier",
+                                          "mincore",
+                                          "msync"};
+    int rc = 0;
+    for (size_t i = 0; i < sizeof allowed / sizeof allowed[0] && rc == 0; i++) {
+        int nr = seccomp_syscall_resolve_name(allowed[i]);
+        if (nr != __NR_SCMP_ERROR)
+            rc = seccomp_rule_add(c, SCMP_ACT_ALLOW, nr, 0);
+    }
+    /* files: read-only opens only */
+    const scmp_datum_t wflags =
+        O_WRONLY | O_RDWR | O_CREAT | O_TRUNC | O_APPEND | (O_TMPFILE & ~O_DIRECTORY);
+    if (rc == 0)
+        rc = seccomp_rule_add(c, SCMP_ACT_ALLOW, SCMP_SYS(openat), 1,
+                              SCMP_A2(SCMP_CMP_MASKED_EQ, wflags, 0));
+    if (rc == 0)
+        rc = seccomp_rule_add(c, SCMP_ACT_ALLOW, SCMP_SYS(open), 1,
+                              SCMP_A1(SCMP_CMP_MASKED_EQ, wflags, 0));
+    /* memory: never executable */
+    if (rc == 0)
+        rc = seccomp_rule_add(c, SCMP_ACT_ALLOW, SCMP_SYS(mmap), 1,
+                              SCMP_A2(SCMP_CMP_MASKED_EQ, PROT_EXEC, 0));
+    if (rc == 0)
+        rc = seccomp_rule_add(c, SCMP_ACT_ALLOW, SCMP_SYS(mprotect), 1,
+                              SCMP_A2(SCMP_CMP_MASKED_EQ, PROT_EXEC, 0));
+    /* threads, not processes; clone3 says ENOSYS so that glibc uses clone */
+    if (rc == 0)
+        rc = seccomp_rule_add(c, SCMP_ACT_ALLOW, SCMP_SYS(clone), 1,
+                              SCMP_A0(SCMP_CMP_MASKED_EQ, CLONE_THREAD, CLONE_THREAD));
+    if (rc == 0)
+        rc = seccomp_rule_add(c, SCMP_ACT_ERRNO(ENOSYS), SCMP_SYS(clone3), 0);
+    /* signals to its own threads only (abort, raise) */
+    if (rc == 0)
+        rc = seccomp_rule_add(c, SCMP_ACT_ALLOW, SCMP_SYS(tgkill), 1,
+                              SCMP_A0(SCMP_CMP_EQ, (scmp_datum_t)getpid()));
+    /* getrlimit through prlimit64, never setting */
+    if (rc == 0)
+        rc = seccomp_rule_add(c, SCMP_ACT_ALLOW, SCMP_SYS(prlimit64), 1, SCMP_A2(SCMP_CMP_EQ, 0));
+    /* isatty and other terminal queries: "not a terminal" */
+    if (rc == 0)
+        rc = seccomp_rule_add(c, SCMP_ACT_ERRNO(ENOTTY), SCMP_SYS(ioctl), 0);
+    /* send() without an address (glibc's send is sendto) */
+    if (rc == 0)
+        rc = seccomp_rule_add(c, SCMP_ACT_ALLOW, SCMP_SYS(sendto), 1, SCMP_A4(SCMP_CMP_EQ, 0));
+    if (rc == 0)
+        rc = seccomp_load(c);
+    seccomp_release(c);
+    return rc == 0 ? 0 : -1;
+}
+
+/* What a broken or hostile parser would do, for the tests. */
+static void
+misbehave(int what) {
+    switch (what) {
+    case INJECT_ABORT:
+        abort();
+    case INJECT_SEGV: {
+        volatile int *volatile wild = NULL;
+        *wild = 1;
+        break;
+    }
+    case INJECT_OPEN: {
+        int fd = open("/etc/passwd", O_RDONLY | O_CLOEXEC);
+        if (fd >= 0) {
+            close(fd);
+            vv_error_set(VV_ERR_IO, "injected: /etc/passwd could be opened");
+        } else {
+            int e = errno;
+            vv_error_set(VV_ERR_IO, "injected: cannot open /etc/passwd: %s", strerror(e));
+        }
+        break;
+    }
+    case INJECT_WRITE: {
+        int fd = open("volvis-sandbox-escape", O_WRONLY | O_CREAT | O_CLOEXEC, 0600);
+        if (fd >= 0)
+            close(fd);
+        break;
+    }
+    case INJECT_SOCKET: {
+        int fd = socket(AF_INET, SOCK_STREAM, 0);
+        if (fd >= 0)
+            close(fd);
+        break;
+    }
+    case INJECT_EXEC: {
+        char *args[] = {(char *)"/bin/true", NULL};
+        execve(args[0], args, environ);
+        break;
+    }
+    case INJECT_FORK: {
+        pid_t p = fork();
+        if (p == 0)
+            _exit(0);
+        break;
+    }
+    case INJECT_LOOP:
+        for (volatile unsigned long i = 0;; i++)
+            ;
+    case INJECT_OOM:
+        for (;;) {
+            char *p = malloc((size_t)64 << 20);
+            if (!p)
+                abort();
+            memset(p, 1, (size_t)64 << 20);
+        }
+    default:
+        break;
+    }
+}
+
+static void
+send_reply(const sbx_reply *r, int fd_to_pass) {
+    struct iovec io = {(void *)r, offsetof(sbx_reply, err) + r->err_len};
+    union {
+        struct cmsghdr h;
+        char buf[CMSG_SPACE(sizeof(int))];
+    } u;
+    struct msghdr m = {0};
+    m.msg_iov = &io;
+    m.msg_iovlen = 1;
+    if (fd_to_pass >= 0) {
+        memset(&u, 0, sizeof u);
+        m.msg_control = u.buf;
+        m.msg_controllen = sizeof u.buf;
+        struct cmsghdr *c = CMSG_FIRSTHDR(&m);
+        c->cmsg_level = SOL_SOCKET;
+        c->cmsg_type = SCM_RIGHTS;
+        c->cmsg_len = CMSG_LEN(sizeof(int));
+        memcpy(CMSG_DATA(c), &fd_to_pass, sizeof(int));
+    }
+    while (sendmsg(SBX_FD, &m, MSG_NOSIGNAL) < 0 && errno == EINTR)
+        ;
+}
+
+/* The child's address-space limit: the voxels and a copy of them (the
+ * memory budget twice), the libraries' own buffers and the executable's
+ * mappings (1 GiB), a thread stack and a malloc arena per thread. */
+static uint64_t
+address_limit(uint64_t budget, int threads) {
+    return 2 * budget + ((uint64_t)1 << 30) + (uint64_t)(threads > 0 ? threads : 1) * (72u << 20);
+}
+
+/* The limits of the child: no core file; CPU seconds; address space from
+ * the memory budget (not under a sanitizer, whose shadow memory is
+ * terabytes of address space). */
+static void
+set_limits(const sbx_request *rq) {
+    struct rlimit no_core = {0, 0};
+    setrlimit(RLIMIT_CORE, &no_core);
+    struct rlimit cpu = {rq->cpu_seconds, (rlim_t)rq->cpu_seconds + 5};
+    setrlimit(RLIMIT_CPU, &cpu);
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+#define VV_SBX_SANITIZER 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer) || __has_feature(thread_sanitizer) ||                         \
+    __has_feature(memory_sanitizer)
+#define VV_SBX_SANITIZER 1
+#endif
+#endif
+#ifndef VV_SBX_SANITIZER
+    uint64_t as = address_limit(rq->budget, rq->threads);
+    struct rlimit r_as = {(rlim_t)as, (rlim_t)as};
+    setrlimit(RLIMIT_AS, &r_as);
+#endif
+    prctl(PR_SET_DUMPABLE, 0, 0, 0, 0);
+}
+
+int
+vv_sandbox_reader_main(int argc, char **argv) {
+    (void)argc;
+    (void)argv;
+    in_child = 1;
+    if (fcntl(SBX_FD, F_GETFD) < 0) {
+        fprintf(stderr, "volvis-reader: started by VolVis's loader only (it reads its request "
+                        "from descriptor 3)\n");
+        return 2;
+    }
+    static sbx_request rq;
+    ssize_t n;
+    while ((n = recv(SBX_FD, &rq, sizeof rq, 0)) < 0 && errno == EINTR)
+        ;
+    if (n != (ssize_t)sizeof rq || rq.magic != SBX_MAGIC || rq.version != SBX_VERSION ||
+        rq.path_len == 0 || rq.path_len >= SBX_MAX_PATH) {
+        fprintf(stderr, "volvis-reader: malformed request on descriptor 3\n");
+        return 2;
+    }
+    rq.path[rq.path_len] = '\0';
+    static sbx_reply r;
+    r.magic = SBX_MAGIC;
+    r.kind = SBX_RESULT;
+    r.format = rq.format;
+
+    vv_memory_budget_set(rq.budget);
+    vv_threads_set(rq.threads);
+    set_limits(&rq);
+    if (prctl(PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) != 0 ||
+        (landlock_restrict(rq.path) != 0 && errno != ENOSYS && errno != EOPNOTSUPP) ||
+        seccomp_restrict() != 0) {
+        int e = errno;
+        r.status = VV_ERR_UNSUPPORTED;
+        r.err_len = (uint32_t)snprintf(r.err, sizeof r.err,
+                                       "the reader sandbox could not be set up (%s)", strerror(e));
+        send_reply(&r, -1);
+        _exit(0);
+    }
+    /* from here on, what the file makes the parser do stays in here */
+    vv_volume_set_allocator(memfd_alloc, memfd_release);
+    vv_format f = (vv_format)rq.format;
+    if (f == VV_FORMAT_AUTO) {
+        f = vv_format_detect(rq.path);
+        if (f == VV_FORMAT_UNKNOWN && rq.has_raw)
+            f = VV_FORMAT_RAW;
+    }
+    sbx_reply fr = {.magic = SBX_MAGIC, .kind = SBX_FORMAT, .format = (int32_t)f};
+    send_reply(&fr, -1);
+    if (rq.inject > INJECT_NONE && rq.inject < N_INJECT)
+        misbehave(rq.inject);
+    vv_volume *v = NULL;
+    vv_status s = VV_OK;
+    if (rq.inject == INJECT_OPEN) {
+        s = VV_ERR_IO;
+    } else {
+        vv_load_options o;
+        vv_load_options_init(&o);
+        o.format = f == VV_FORMAT_UNKNOWN ? VV_FORMAT_AUTO : f;
+        o.has_raw = rq.has_raw;
+        o.raw = rq.raw;
+        o.series = rq.series;
+        o.channel = rq.channel;
+        s = vv_volume_load(&v, rq.path, &o);
+    }
+    r.format = (int32_t)f;
+    r.status = s;
+    int fd = -1;
+    if (s == VV_OK) {
+        memcpy(r.dims, v->dims, sizeof r.dims);
+        r.type = v->type;
+        memcpy(r.spacing, v->spacing, sizeof r.spacing);
+        memcpy(r.origin, v->origin, sizeof r.origin);
+        memcpy(r.direction, v->direction, sizeof r.direction);
+        r.unit = v->unit;
+        r.data_origin = v->data_origin;
+        r.modification = v->modification;
+        r.space = v->space;
+        r.bytes = vv_volume_voxel_count(v) * vv_voxel_type_size(v->type);
+        fd = memfd_of(v->data, (size_t)r.bytes);
+        if (fd < 0 || fcntl(fd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_SEAL) != 0) {
+            r.status = VV_ERR_NOMEM;
+            fd = -1;
+            snprintf(r.err, sizeof r.err, "the reader could not hand over %llu bytes of voxels",
+                     (unsigned long long)r.bytes);
+            r.err_len = (uint32_t)strlen(r.err);
+        }
+    } else {
+        r.err_len = (uint32_t)snprintf(r.err, sizeof r.err, "%s", vv_error_message());
+        if (r.err_len >= sizeof r.err)
+            r.err_len = sizeof r.err - 1;
+    }
+    send_reply(&r, fd);
+    _exit(0);
+}
+
+/* ---- the parent ------------------------------------------------------------ */
+
+/* The volvis-reader to start: $VOLVIS_READER, else the one beside this
+ * program, the installed one, or the one of the build tree. */
+static int
+reader_path(char *buf, size_t cap) {
+    const char *e = getenv("VOLVIS_READER");
+    if (e && *e) {
+        snprintf(buf, cap, "%s", e);
+        return access(buf, X_OK) == 0;
+    }
+    char self[PATH_MAX];
+    ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
+    if (n > 0) {
+        self[n] = '\0';
+        char *slash = strrchr(self, '/');
+        if (slash) {
+            *slash = '\0';
+            if (snprintf(buf, cap, "%s/volvis-reader", self) < (int)cap && access(buf, X_OK) == 0)
+                return 1;
+        }
+    }
+#ifdef VV_READER_INSTALL_PATH
+    snprintf(buf, cap, "%s", VV_READER_INSTALL_PATH);
+    if (access(buf, X_OK) == 0)
+        return 1;
+#endif
+#ifdef VV_READER_BUILD_PATH
+    snprintf(buf, cap, "%s", VV_READER_BUILD_PATH);
+    if (access(buf, X_OK) == 0)
+        return 1;
+#endif
+    return 0;
+}
+
+static double
+now_s(void) {
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/* Seconds the child may run: 60 plus one per 10 MB of input (a folder's
+ * files counted), or $VOLVIS_SANDBOX_TIMEOUT. */
+static unsigned
+time_limit(const char *path) {
+    const char *e = getenv("VOLVIS_SANDBOX_TIMEOUT");
+    if (e && *e) {
+        char *end;
+        long t = strtol(e, &end, 10);
+        if (*end == '\0' && t >= 1 && t <= 86400)
+            return (unsigned)t;
+    }
+    struct stat st;
+    uint64_t size = 0;
+    int there = stat(path, &st) == 0;
+    if (there && S_ISREG(st.st_mode)) {
+        size = (uint64_t)st.st_size;
+    } else if (there && S_ISDIR(st.st_mode)) { /* a series or a stack: its files */
+        DIR *d = opendir(path);
+        struct dirent *ent;
+        while (d && (ent = readdir(d)))
+            if (fstatat(dirfd(d), ent->d_name, &st, 0) == 0 && S_ISREG(st.st_mode))
+                size += (uint64_t)st.st_size;
+        if (d)
+            closedir(d);
+    }
+    uint64_t t = 60 + size / 10000000u;
+    return t > 86400 ? 86400u : (unsigned)t;
+}
+
+static void
+release_mapping(void *user, void *data) {
+    munmap(data, (size_t)(uintptr_t)user);
+}
+
+/* The one line for a child that ended without a result. */
+static vv_status
+describe_end(int status, uint64_t peak, uint64_t budget, const char *fmt_name, const char *title,
+             const char *file, unsigned limit, int timed_out) {
+    if (timed_out)
+        return vv_error_set(VV_ERR_LIMIT, "%s: %s: the %s reader took more than %u s; stopped",
+                            fmt_name, file, title, limit);
+    if (WIFSIGNALED(status)) {
+        int sig = WTERMSIG(status);
+        const char *abbrev = sigabbrev_np(sig);
+        char name[32];
+        snprintf(name, sizeof name, "SIG%s", abbrev ? abbrev : "?");
+        if (sig == SIGSYS)
+            return vv_error_set(VV_ERR_FORMAT,
+                                "%s: %s: the %s reader made a system call the sandbox forbids "
+                                "(SIGSYS) and was stopped; the file is hostile or the reader "
+                                "broken",
+                                fmt_name, file, title);
+        if (sig == SIGXCPU)
+            return vv_error_set(VV_ERR_LIMIT,
+                                "%s: %s: the %s reader used more than %u s of CPU time; stopped",
+                                fmt_name, file, title, limit);
+        /* malloc failing at the address-space limit ends in abort() (or a
+         * C++ bad_alloc that nobody catches): the peak tells it apart */
+        if ((sig == SIGABRT || sig == SIGSEGV || sig == SIGKILL) && peak >= budget / 2)
+            return vv_error_set(
+                VV_ERR_LIMIT,
+                "%s: %s: the %s reader ran out of memory (%s at a peak of %llu "
+                "MiB; it may map %llu MiB); the file is malformed or too large",
+                fmt_name, file, title, name, (unsigned long long)(peak >> 20),
+                (unsigned long long)(address_limit(budget, vv_threads_get()) >> 20));
+        if (sig == SIGKILL)
+            return vv_error_set(VV_ERR_FORMAT,
+                                "%s: %s: the %s reader was killed (SIGKILL; out of memory?)",
+                                fmt_name, file, title);
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: %s: the %s reader crashed (%s); the file is "
+                            "malformed",
+                            fmt_name, file, title, name);
+    }
+    return vv_error_set(VV_ERR_FORMAT, "%s: %s: the %s reader exited with status %d and no result",
+                        fmt_name, file, title, WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+}
+
+static int
+finite_all(const double *x, int n) {
+    for (int i = 0; i < n; i++)
+        if (!isfinite(x[i]))
+            return 0;
+    return 1;
+}
+
+/* The volume of a result reply and its memfd. Owns @p fd. */
+static vv_status
+volume_from_reply(vv_volume **out, const sbx_reply *r, int fd, const char *fmt_name,
+                  const char *file) {
+    uint64_t bytes = 0;
+    vv_status s = VV_OK;
+    struct stat st;
+    int seals = fd >= 0 ? fcntl(fd, F_GET_SEALS) : -1;
+    if (fd < 0 || r->type < VV_U8 || r->type > VV_F64)
+        s = vv_error_set(VV_ERR_FORMAT, "%s: %s: the reader's result has no voxels", fmt_name,
+                         file);
+    else if ((s = vv_volume_check_size(r->dims, (vv_voxel_type)r->type, &bytes)) != VV_OK)
+        s = vv_error_prefix(s, "%s: %s: the reader's result", fmt_name, file);
+    else if (bytes != r->bytes || fstat(fd, &st) != 0 || (uint64_t)st.st_size < bytes ||
+             seals < 0 || !(seals & F_SEAL_SHRINK))
+        s = vv_error_set(VV_ERR_FORMAT,
+                         "%s: %s: the reader's result does not hold the %llu bytes it names",
+                         fmt_name, file, (unsigned long long)bytes);
+    else if (!finite_all(r->spacing, 3) || !finite_all(r->origin, 3) ||
+             !finite_all(r->direction, 9) || !(r->spacing[0] > 0) || !(r->spacing[1] > 0) ||
+             !(r->spacing[2] > 0))
+        s = vv_error_set(VV_ERR_FORMAT, "%s: %s: the reader's result has a broken geometry",
+                         fmt_name, file);
+    if (s != VV_OK) {
+        if (fd >= 0)
+            close(fd);
+        return s;
+    }
+    size_t len = bytes ? (size_t)bytes : 1;
+    void *p = mmap(NULL, len, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_POPULATE, fd, 0);
+    int e = errno;
+    close(fd);
+    if (p == MAP_FAILED)
+        return vv_error_set(VV_ERR_NOMEM, "%s: %s: cannot map the reader's %llu bytes: %s",
+                            fmt_name, file, (unsigned long long)bytes, strerror(e));
+    vv_volume *v = NULL;
+    s = vv_volume_wrap(&v, r->dims, (vv_voxel_type)r->type, p, release_mapping,
+                       (void *)(uintptr_t)len);
+    if (s != VV_OK) {
+        munmap(p, len);
+        return s;
+    }
+    memcpy(v->spacing, r->spacing, sizeof v->spacing);
+    memcpy(v->origin, r->origin, sizeof v->origin);
+    memcpy(v->direction, r->direction, sizeof v->direction);
+    v->unit = r->unit >= 0 && r->unit <= VV_UNIT_UNKNOWN ? (vv_unit)r->unit : VV_UNIT_UNKNOWN;
+    v->data_origin = r->data_origin >= 0 && r->data_origin <= VV_ORIGIN_OTHER
+                         ? (vv_data_origin)r->data_origin
+                         : VV_ORIGIN_OTHER;
+    v->modification = r->modification >= 0 && r->modification <= VV_MOD_OTHER
+                          ? (vv_modification)r->modification
+                          : VV_MOD_OTHER;
+    v->space = r->space == VV_SPACE_RAS || r->space == VV_SPACE_LPS ? (vv_space)r->space
+                                                                    : VV_SPACE_UNKNOWN;
+    *out = v;
+    return VV_OK;
+}
+
+static const vv_volume_format *
+record_of(vv_format f) {
+    int n;
+    const vv_volume_format *const *t = vv_volume_format_table(&n);
+    return (int)f >= 1 && (int)f <= n ? t[(int)f - 1] : NULL;
+}
+
+vv_status
+vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_load_options *opt) {
+    *out = NULL;
+    const char *file = vv_path_basename(path);
+    if (strlen(path) >= SBX_MAX_PATH)
+        return vv_error_set(VV_ERR_LIMIT, "load: %s: a path of over %d bytes", file,
+                            SBX_MAX_PATH - 1);
+    char exe[PATH_MAX];
+    if (!reader_path(exe, sizeof exe))
+        return vv_error_set(VV_ERR_IO,
+                            "load: %s: the sandboxed reader volvis-reader was not found (%s; "
+                            "set VOLVIS_READER to its path, or VOLVIS_SANDBOX=0 to read in "
+                            "this process)",
+                            file, exe);
+    static sbx_request proto; /* zeroes for the request's padding */
+    sbx_request *rq = malloc(sizeof *rq);
+    if (!rq)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    *rq = proto;
+    rq->magic = SBX_MAGIC;
+    rq->version = SBX_VERSION;
+    rq->format = (int32_t)f;
+    rq->has_raw = opt->has_raw;
+    rq->raw = opt->raw;
+    rq->series = opt->series;
+    rq->channel = opt->channel;
+    rq->budget = vv_memory_budget_get();
+    uint64_t rq_budget = rq->budget;
+    rq->threads = vv_threads_get();
+    unsigned limit = time_limit(path);
+    rq->cpu_seconds = limit;
+    rq->path_len = (uint32_t)strlen(path);
+    memcpy(rq->path, path, rq->path_len);
+    const char *inj = getenv("VOLVIS_SANDBOX_INJECT");
+    for (int i = 1; inj && i < N_INJECT; i++)
+        if (!strcmp(inj, inject_names[i]))
+            rq->inject = i;
+
+    int sv[2];
+    if (socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0, sv) != 0) {
+        int e = errno;
+        free(rq);
+        return vv_error_set(VV_ERR_IO, "load: %s: cannot start the reader: %s", file, strerror(e));
+    }
+    if (sv[1] == SBX_FD) { /* dup2 onto itself would keep close-on-exec */
+        int d = fcntl(sv[1], F_DUPFD_CLOEXEC, SBX_FD + 1);
+        close(sv[1]);
+        sv[1] = d;
+    }
+    posix_spawn_file_actions_t fa;
+    posix_spawnattr_t at;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_adddup2(&fa, sv[1], SBX_FD);
+    posix_spawn_file_actions_addclosefrom_np(&fa, SBX_FD + 1);
+    posix_spawnattr_init(&at);
+    sigset_t none, all;
+    sigemptyset(&none);
+    sigfillset(&all);
+    posix_spawnattr_setsigmask(&at, &none);
+    posix_spawnattr_setsigdefault(&at, &all);
+    posix_spawnattr_setflags(&at, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
+    char *args[] = {(char *)"volvis-reader", NULL};
+    pid_t pid = -1;
+    int err = sv[1] < 0 ? errno : posix_spawn(&pid, exe, &fa, &at, args, environ);
+    posix_spawn_file_actions_destroy(&fa);
+    posix_spawnattr_destroy(&at);
+    if (sv[1] >= 0)
+        close(sv[1]);
+    if (err != 0) {
+        close(sv[0]);
+        free(rq);
+        return vv_error_set(VV_ERR_IO, "load: %s: cannot start %s: %s", file, exe, strerror(err));
+    }
+    ssize_t n;
+    while ((n = send(sv[0], rq, sizeof *rq, MSG_NOSIGNAL)) < 0 && errno == EINTR)
+        ;
+    free(rq);
+
+    vv_format seen = f;
+    sbx_reply *r = malloc(sizeof *r);
+    int result = 0, timed_out = 0, fd = -1;
+    double deadline = now_s() + limit + 5;
+    while (r && !result && n >= 0) {
+        double left = deadline - now_s();
+        if (left <= 0) {
+            timed_out = 1;
+            break;
+        }
+        struct pollfd pf = {sv[0], POLLIN, 0};
+        int pr = poll(&pf, 1, (int)(left * 1000) + 1);
+        if (pr < 0 && errno == EINTR)
+            continue;
+        if (pr <= 0)
+            continue;
+        union {
+            struct cmsghdr h;
+            char buf[CMSG_SPACE(sizeof(int))];
+        } u;
+        struct iovec io = {r, sizeof *r};
+        struct msghdr m = {0};
+        m.msg_iov = &io;
+        m.msg_iovlen = 1;
+        m.msg_control = u.buf;
+        m.msg_controllen = sizeof u.buf;
+        ssize_t got = recvmsg(sv[0], &m, MSG_CMSG_CLOEXEC);
+        if (got < 0 && errno == EINTR)
+            continue;
+        if (got <= 0)
+            break; /* the child is gone */
+        int passed = -1;
+        for (struct cmsghdr *c = CMSG_FIRSTHDR(&m); c; c = CMSG_NXTHDR(&m, c))
+            if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_RIGHTS &&
+                c->cmsg_len == CMSG_LEN(sizeof(int))) {
+                if (passed >= 0)
+                    close(passed);
+                memcpy(&passed, CMSG_DATA(c), sizeof(int));
+            }
+        int whole = got >= (ssize_t)offsetof(sbx_reply, err) && r->magic == SBX_MAGIC &&
+                    r->err_len < SBX_MAX_ERROR &&
+                    (size_t)got == offsetof(sbx_reply, err) + r->err_len &&
+                    !(m.msg_flags & (MSG_TRUNC | MSG_CTRUNC));
+        if (!whole || r->kind != SBX_RESULT) {
+            if (passed >= 0)
+                close(passed);
+            if (whole && r->kind == SBX_FORMAT && record_of((vv_format)r->format))
+                seen = (vv_format)r->format;
+            if (!whole)
+                break;
+            continue;
+        }
+        r->err[r->err_len] = '\0';
+        fd = passed;
+        result = 1;
+    }
+    close(sv[0]);
+    /* with its result sent the child has nothing left to do; without one
+     * it is stopped */
+    kill(pid, SIGKILL);
+    int status = 0;
+    struct rusage ru;
+    memset(&ru, 0, sizeof ru);
+    while (wait4(pid, &status, 0, &ru) < 0 && errno == EINTR)
+        ;
+    uint64_t peak = (uint64_t)ru.ru_maxrss * 1024u;
+    const vv_volume_format *rec = record_of(seen);
+    const char *fmt_name = rec ? rec->name : "load";
+    const char *title = rec ? rec->title : "file";
+    vv_status s;
+    if (!r) {
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+    } else if (!result) {
+        s = describe_end(status, peak, rq_budget, fmt_name, title, file, limit, timed_out);
+    } else if (r->status != VV_OK) {
+        if (fd >= 0)
+            close(fd);
+        s = r->status >= VV_ERR_CANCELLED && r->status < 0 ? (vv_status)r->status : VV_ERR_FORMAT;
+        s = vv_error_set(s, "%s", r->err[0] ? r->err : "the reader failed without a message");
+    } else {
+        s = volume_from_reply(out, r, fd, fmt_name, file);
+    }
+    free(r);
+    return s;
+}

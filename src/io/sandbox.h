@@ -1,0 +1,47 @@
+/*
+ * The reader sandbox (issue 33; docs/security.md, "The reader sandbox"):
+ * loads through a third-party parser (Teem, nifti_clib, libtiff, GDCM) run
+ * in a separate process, volvis-reader, exec'd fresh for each load. The
+ * child reads the file under a Landlock rule set (read access beneath the
+ * input's folder only), a seccomp filter (no sockets, no execve, no new
+ * processes, files opened read-only, no executable memory), no core file
+ * and limits on address space and CPU time; its voxels come back in a
+ * sealed memfd that the parent maps (no copy), its error trace as text.
+ * A crash, abort, out-of-memory or time-out in the child is one error line
+ * in the parent. Not installed.
+ */
+#ifndef VOLVIS_IO_SANDBOX_H
+#define VOLVIS_IO_SANDBOX_H
+
+#include "volvis/io.h"
+#include "volvis/sys/format.h"
+#include "volvis/sys/sandbox.h"
+
+/**
+ * 1 when vv_volume_load should read format @p r in the sandbox: @p r is
+ * NULL (detection needs the deep tests, which may call a third-party
+ * parser) or a third-party format, VOLVIS_SANDBOX is not "0", and this is
+ * not the sandboxed reader itself. Thread-safe.
+ */
+int vv_sandbox_wanted(const vv_volume_format *r);
+
+/**
+ * vv_volume_load's contract, in the sandboxed reader. @p f is the format
+ * (VV_FORMAT_AUTO: the child detects it). The voxels are a shared mapping
+ * of the child's memfd, released by vv_volume_free. Errors: the child's own
+ * (status and trace as it set them); VV_ERR_FORMAT when the child crashed,
+ * aborted, was killed by the sandbox or ran out of memory ("nrrd: a.nrrd:
+ * the NRRD reader crashed (SIGSEGV); the file is malformed"); VV_ERR_LIMIT
+ * when it ran out of time; VV_ERR_IO when volvis-reader cannot be found or
+ * started. Thread-safe: each call starts its own child.
+ */
+vv_status vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f,
+                                 const vv_load_options *opt);
+
+/**
+ * The format whose signature @p path has (vv_format_detect's first pass
+ * only: no test that may call a third-party parser), or VV_FORMAT_UNKNOWN.
+ */
+vv_format vv_format_detect_signature(const char *path);
+
+#endif
