@@ -1,0 +1,125 @@
+/*
+ * What the reader sandbox costs (issue 33): loading through volvis-reader
+ * (a fresh process, Landlock, seccomp, the voxels handed back in a memfd)
+ * against loading in this process (VOLVIS_SANDBOX=0), in the same run, on
+ *   - the CT head (../shared/data/volumes/ct_head.nrrd, 256 x 256 x 113 u16),
+ *   - a 512^3 u16 NRRD (raw encoding, written into a temporary folder),
+ *   - a 512 x 512 x 300 DICOM series (scripts/dicom_testdata.py bench,
+ *     python3-pydicom and python3-numpy; skipped with a message without).
+ *
+ *   bench_sandbox [--repeat N] [--keep]
+ *
+ * Each figure is the median of N loads (default 7) after one of each that
+ * warms the page cache; the two ways alternate so that drift hits both.
+ * Prints anchor lines (op=load_inprocess, op=load_sandbox) and, on stderr,
+ * the overhead against the target: at most 5 % or at most 20 ms.
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "util.h"
+#include "volvis/volvis.h"
+
+#define PROG "bench_sandbox"
+#define PYTHON "/usr/bin/python3"
+
+static double
+load_once(const char *path, int sandbox) {
+    setenv("VOLVIS_SANDBOX", sandbox ? "1" : "0", 1);
+    vv_volume *v = NULL;
+    double t0 = bench_now();
+    if (vv_volume_load(&v, path, NULL) != VV_OK)
+        bench_die(PROG, path);
+    double t = bench_now() - t0;
+    vv_volume_free(v);
+    return t;
+}
+
+static void
+measure(const char *path, const char *dataset, int repeat) {
+    double *in = malloc((size_t)repeat * sizeof *in), *sb = malloc((size_t)repeat * sizeof *sb);
+    load_once(path, 0);
+    load_once(path, 1);
+    for (int i = 0; i < repeat; i++) {
+        if (i % 2) {
+            in[i] = load_once(path, 0);
+            sb[i] = load_once(path, 1);
+        } else {
+            sb[i] = load_once(path, 1);
+            in[i] = load_once(path, 0);
+        }
+    }
+    double a = bench_median(in, repeat), b = bench_median(sb, repeat);
+    bench_emit("load_inprocess", dataset, a, "s");
+    bench_emit("load_sandbox", dataset, b, "s");
+    double over = b - a, pct = 100.0 * over / a;
+    int ok = pct <= 5.0 || over <= 0.020;
+    fprintf(stderr, "%s: %s: in-process %.1f ms, sandbox %.1f ms: %+.1f ms (%+.1f %%) %s\n", PROG,
+            dataset, 1e3 * a, 1e3 * b, 1e3 * over, pct,
+            ok ? "(target <= 5 % or <= 20 ms: met)" : "(target <= 5 % or <= 20 ms: MISSED)");
+    fflush(stdout);
+    free(in);
+    free(sb);
+}
+
+int
+main(int argc, char **argv) {
+    int repeat = 7, keep = 0;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--repeat") && i + 1 < argc)
+            repeat = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--keep"))
+            keep = 1;
+        else {
+            fprintf(stderr, "usage: %s [--repeat N] [--keep]\n", PROG);
+            return 2;
+        }
+    }
+    if (repeat < 1)
+        repeat = 1;
+    const char *head = VV_SOURCE_DIR "/../shared/data/volumes/ct_head.nrrd";
+    measure(head, "ct_head", repeat);
+
+    char tmp[] = "/tmp/vv_bench_sandbox_XXXXXX";
+    if (!mkdtemp(tmp)) {
+        perror(PROG ": mkdtemp");
+        return 1;
+    }
+    char path[1200], cmd[4096];
+    /* 512^3 u16: a smooth field with some structure, written raw */
+    int dims[3] = {512, 512, 512};
+    vv_volume *v = NULL;
+    if (vv_volume_new(&v, dims, VV_U16) != VV_OK)
+        bench_die(PROG, "512^3 volume");
+    uint16_t *d = v->data;
+    for (long k = 0; k < 512; k++)
+        for (long j = 0; j < 512; j++)
+            for (long i = 0; i < 512; i++)
+                d[(k * 512 + j) * 512 + i] = (uint16_t)((i * 7 + j * 13 + k * 29) & 0xfff);
+    snprintf(path, sizeof path, "%s/cube512.nrrd", tmp);
+    if (vv_nrrd_write(v, path, 0) != VV_OK)
+        bench_die(PROG, path);
+    vv_volume_free(v);
+    measure(path, "nrrd512", repeat);
+
+    snprintf(path, sizeof path, "%s/series", tmp);
+    snprintf(cmd, sizeof cmd,
+             PYTHON " %s/scripts/dicom_testdata.py bench %s %s --size 512 --slices 300 "
+                    ">/dev/null",
+             VV_SOURCE_DIR, head, path);
+    if (system(cmd) == 0)
+        measure(path, "dicom512x512x300", repeat);
+    else
+        fprintf(stderr, "%s: DICOM series not measured (python3-pydicom, python3-numpy)\n", PROG);
+
+    if (!keep) {
+        snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp);
+        if (system(cmd) != 0)
+            fprintf(stderr, "%s: could not remove %s\n", PROG, tmp);
+    } else {
+        fprintf(stderr, "%s: kept %s\n", PROG, tmp);
+    }
+    return 0;
+}
