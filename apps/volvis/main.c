@@ -71,6 +71,10 @@ usage(FILE *out) {
                  "                     is refused before anything is allocated; so is one\n"
                  "                     past the cgroup's limit, whatever the budget.\n"
                  "\n"
+                 "NRRD, NIfTI, TIFF and DICOM files are read by their libraries in a separate,\n"
+                 "locked-down process (volvis-reader); a crash there is one line of error.\n"
+                 "VOLVIS_SANDBOX=0 reads them in this process (docs/security.md).\n"
+                 "\n"
                  "Exit status: 0 success, 1 bad input (file, format or render error),\n"
                  "2 bad usage, 130 interrupted. Errors are one line on stderr.\n");
 }
