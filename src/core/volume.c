@@ -213,17 +213,21 @@ vv_volume_voxel_count(const vv_volume *v) {
     return (uint64_t)v->dims[0] * (uint64_t)v->dims[1] * (uint64_t)v->dims[2];
 }
 
-#define VV_RANGE_LOOP(T)                                                                           \
+/* Min and max in the voxel type itself (the compiler vectorizes integer
+ * min/max; a conversion to double per voxel did not: 0.7 GB/s a thread).
+ * Floats compare in their type; NaN compares false and is skipped. */
+#define VV_RANGE_LOOP(T, START_LO, START_HI)                                                       \
     do {                                                                                           \
         const T *p = (const T *)v->data;                                                           \
-        _Pragma("omp parallel for reduction(min : lo) reduction(max : hi) schedule(static)") for ( \
+        T l = (START_LO), h = (START_HI);                                                          \
+        _Pragma("omp parallel for reduction(min : l) reduction(max : h) schedule(static)") for (   \
             int64_t i = 0; i < (int64_t)n; i++) {                                                  \
-            double x = (double)p[i];                                                               \
-            if (x < lo)                                                                            \
-                lo = x;                                                                            \
-            if (x > hi)                                                                            \
-                hi = x;                                                                            \
+            T x = p[i];                                                                            \
+            l = x < l ? x : l;                                                                     \
+            h = x > h ? x : h;                                                                     \
         }                                                                                          \
+        lo = (double)l;                                                                            \
+        hi = (double)h;                                                                            \
     } while (0)
 
 void
@@ -232,28 +236,28 @@ vv_volume_update_range(vv_volume *v) {
     double lo = INFINITY, hi = -INFINITY;
     switch (v->type) {
     case VV_U8:
-        VV_RANGE_LOOP(uint8_t);
+        VV_RANGE_LOOP(uint8_t, UINT8_MAX, 0);
         break;
     case VV_I8:
-        VV_RANGE_LOOP(int8_t);
+        VV_RANGE_LOOP(int8_t, INT8_MAX, INT8_MIN);
         break;
     case VV_U16:
-        VV_RANGE_LOOP(uint16_t);
+        VV_RANGE_LOOP(uint16_t, UINT16_MAX, 0);
         break;
     case VV_I16:
-        VV_RANGE_LOOP(int16_t);
+        VV_RANGE_LOOP(int16_t, INT16_MAX, INT16_MIN);
         break;
     case VV_U32:
-        VV_RANGE_LOOP(uint32_t);
+        VV_RANGE_LOOP(uint32_t, UINT32_MAX, 0);
         break;
     case VV_I32:
-        VV_RANGE_LOOP(int32_t);
+        VV_RANGE_LOOP(int32_t, INT32_MAX, INT32_MIN);
         break;
     case VV_F32:
-        VV_RANGE_LOOP(float); /* NaN compares false and is skipped */
+        VV_RANGE_LOOP(float, INFINITY, -INFINITY);
         break;
     case VV_F64:
-        VV_RANGE_LOOP(double);
+        VV_RANGE_LOOP(double, INFINITY, -INFINITY);
         break;
     }
     if (!(lo <= hi))
