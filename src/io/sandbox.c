@@ -129,7 +129,7 @@ memfd_alloc(size_t bytes) {
         return NULL;
     void *p = MAP_FAILED;
     if (ftruncate(fd, (off_t)len) == 0)
-        p = mmap(NULL, len, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+        p = mmap(NULL, len, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_POPULATE, fd, 0);
     if (p == MAP_FAILED) {
         close(fd);
         return NULL;
@@ -546,6 +546,8 @@ vv_sandbox_reader_main(int argc, char **argv) {
     ssize_t n;
     while ((n = recv(SBX_FD, &rq, sizeof rq, 0)) < 0 && errno == EINTR)
         ;
+    if (n == 0) /* a spare reader whose program ended: nothing to do */
+        _exit(0);
     if (n != (ssize_t)sizeof rq || rq.magic != SBX_MAGIC || rq.version != SBX_VERSION ||
         rq.path_len == 0 || rq.path_len >= SBX_MAX_PATH) {
         fprintf(stderr, "volvis-reader: malformed request on descriptor 3\n");
@@ -813,6 +815,165 @@ volume_from_reply(vv_volume **out, const sbx_reply *r, int fd, const char *fmt_n
     return VV_OK;
 }
 
+/* Starts volvis-reader with the parent's end of a new socket pair in
+ * *@p sock. Returns 0 or an errno value. */
+static int
+spawn_reader(const char *exe, pid_t *pid, int *sock) {
+    int sv[2];
+    if (socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0, sv) != 0)
+        return errno;
+    if (sv[1] == SBX_FD) { /* dup2 onto itself would keep close-on-exec */
+        int d = fcntl(sv[1], F_DUPFD_CLOEXEC, SBX_FD + 1);
+        close(sv[1]);
+        sv[1] = d;
+    }
+    posix_spawn_file_actions_t fa;
+    posix_spawnattr_t at;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_adddup2(&fa, sv[1], SBX_FD);
+    posix_spawn_file_actions_addclosefrom_np(&fa, SBX_FD + 1);
+    posix_spawnattr_init(&at);
+    sigset_t none, all;
+    sigemptyset(&none);
+    sigfillset(&all);
+    posix_spawnattr_setsigmask(&at, &none);
+    posix_spawnattr_setsigdefault(&at, &all);
+    posix_spawnattr_setflags(&at, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
+    char *args[] = {(char *)"volvis-reader", NULL};
+    /* the environment, and glibc's malloc asking for transparent huge pages
+     * (a fresh process faults in all it allocates; 4 KiB faults cost more
+     * than the parser's work on a small file) */
+    size_t ne = 0;
+    while (environ[ne])
+        ne++;
+    char **env = calloc(ne + 2, sizeof *env);
+    char *tunables = NULL;
+    const char *old = getenv("GLIBC_TUNABLES");
+    if (env && asprintf(&tunables, "GLIBC_TUNABLES=%s%sglibc.malloc.hugetlb=1", old ? old : "",
+                        old && *old ? ":" : "") < 0)
+        tunables = NULL;
+    size_t k = 0;
+    for (size_t i = 0; env && i < ne; i++)
+        if (strncmp(environ[i], "GLIBC_TUNABLES=", 15) || !tunables)
+            env[k++] = environ[i];
+    if (env && tunables)
+        env[k++] = tunables;
+    int err = sv[1] < 0 ? errno : posix_spawn(pid, exe, &fa, &at, args, env ? env : environ);
+    free(tunables);
+    free(env);
+    posix_spawn_file_actions_destroy(&fa);
+    posix_spawnattr_destroy(&at);
+    if (sv[1] >= 0)
+        close(sv[1]);
+    if (err != 0) {
+        close(sv[0]);
+        return err;
+    }
+    *sock = sv[0];
+    return 0;
+}
+
+/*
+ * One reader started ahead of the next load (a reader's start, mostly
+ * GDCM's dictionary and the dynamic linking, is about 50 ms): started
+ * after each sandboxed load, taken by the next one when it is still alive,
+ * of the same program and of this process (not inherited through fork).
+ * It waits for its request unlocked and exits when this process closes its
+ * end. Process-wide, under spare_lock. VOLVIS_SANDBOX_SPARE=0: none.
+ */
+static pthread_mutex_t spare_lock = PTHREAD_MUTEX_INITIALIZER;
+static pid_t spare_pid, spare_owner;
+static int spare_sock = -1;
+static char spare_exe[PATH_MAX];
+
+/* Readers killed after their result came, reaped later (their teardown,
+ * unmapping a process, need not delay the load): under spare_lock. */
+static pid_t dying[16];
+static int n_dying;
+
+/* Reaps what has ended of dying[] (all of it when @p block). Holds
+ * spare_lock. */
+static void
+reap_dying(int block) {
+    int k = 0;
+    for (int i = 0; i < n_dying; i++) {
+        pid_t r;
+        while ((r = waitpid(dying[i], NULL, block ? 0 : WNOHANG)) < 0 && errno == EINTR)
+            ;
+        if (r == 0)
+            dying[k++] = dying[i]; /* still ending */
+    }
+    n_dying = k;
+}
+
+static void
+reap_later(pid_t pid) {
+    pthread_mutex_lock(&spare_lock);
+    reap_dying(0);
+    if (n_dying == (int)(sizeof dying / sizeof dying[0]))
+        reap_dying(1);
+    dying[n_dying++] = pid;
+    pthread_mutex_unlock(&spare_lock);
+}
+
+static int
+take_reader(const char *exe, pid_t *pid, int *sock) {
+    pthread_mutex_lock(&spare_lock);
+    reap_dying(0);
+    pid_t p = spare_pid;
+    int fd = spare_sock, mine = spare_owner == getpid() && !strcmp(spare_exe, exe);
+    spare_pid = 0;
+    spare_sock = -1;
+    pthread_mutex_unlock(&spare_lock);
+    if (p > 0 && mine && waitpid(p, NULL, WNOHANG) == 0) {
+        *pid = p;
+        *sock = fd;
+        return 0;
+    }
+    if (fd >= 0)
+        close(fd); /* a dead spare, another program's, or a parent's */
+    if (p > 0 && mine) {
+        kill(p, SIGKILL);
+        waitpid(p, NULL, 0);
+    }
+    return spawn_reader(exe, pid, sock);
+}
+
+static void
+refill_spare(const char *exe) {
+    const char *e = getenv("VOLVIS_SANDBOX_SPARE");
+    if (e && !strcmp(e, "0"))
+        return;
+    pthread_mutex_lock(&spare_lock);
+    if (spare_pid <= 0 || spare_owner != getpid()) {
+        pid_t p;
+        int fd;
+        if (spawn_reader(exe, &p, &fd) == 0) {
+            spare_pid = p;
+            spare_sock = fd;
+            spare_owner = getpid();
+            snprintf(spare_exe, sizeof spare_exe, "%s", exe);
+        }
+    }
+    pthread_mutex_unlock(&spare_lock);
+}
+
+void
+vv_sandbox_release_spare(void) {
+    pthread_mutex_lock(&spare_lock);
+    reap_dying(1);
+    if (spare_pid > 0 && spare_owner == getpid()) {
+        close(spare_sock);
+        kill(spare_pid, SIGKILL);
+        waitpid(spare_pid, NULL, 0);
+    }
+    spare_pid = 0;
+    spare_sock = -1;
+    pthread_mutex_unlock(&spare_lock);
+}
+
 static const vv_volume_format *
 record_of(vv_format f) {
     int n;
@@ -858,47 +1019,18 @@ vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_
         if (!strcmp(inj, inject_names[i]))
             rq->inject = i;
 
-    int sv[2];
-    if (socketpair(AF_UNIX, SOCK_SEQPACKET | SOCK_CLOEXEC, 0, sv) != 0) {
-        int e = errno;
-        free(rq);
-        return vv_error_set(VV_ERR_IO, "load: %s: cannot start the reader: %s", file, strerror(e));
-    }
-    if (sv[1] == SBX_FD) { /* dup2 onto itself would keep close-on-exec */
-        int d = fcntl(sv[1], F_DUPFD_CLOEXEC, SBX_FD + 1);
-        close(sv[1]);
-        sv[1] = d;
-    }
-    posix_spawn_file_actions_t fa;
-    posix_spawnattr_t at;
-    posix_spawn_file_actions_init(&fa);
-    posix_spawn_file_actions_addopen(&fa, 0, "/dev/null", O_RDONLY, 0);
-    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
-    posix_spawn_file_actions_adddup2(&fa, sv[1], SBX_FD);
-    posix_spawn_file_actions_addclosefrom_np(&fa, SBX_FD + 1);
-    posix_spawnattr_init(&at);
-    sigset_t none, all;
-    sigemptyset(&none);
-    sigfillset(&all);
-    posix_spawnattr_setsigmask(&at, &none);
-    posix_spawnattr_setsigdefault(&at, &all);
-    posix_spawnattr_setflags(&at, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
-    char *args[] = {(char *)"volvis-reader", NULL};
     pid_t pid = -1;
-    int err = sv[1] < 0 ? errno : posix_spawn(&pid, exe, &fa, &at, args, environ);
-    posix_spawn_file_actions_destroy(&fa);
-    posix_spawnattr_destroy(&at);
-    if (sv[1] >= 0)
-        close(sv[1]);
+    int sock = -1;
+    int err = take_reader(exe, &pid, &sock);
     if (err != 0) {
-        close(sv[0]);
         free(rq);
         return vv_error_set(VV_ERR_IO, "load: %s: cannot start %s: %s", file, exe, strerror(err));
     }
     ssize_t n;
-    while ((n = send(sv[0], rq, sizeof *rq, MSG_NOSIGNAL)) < 0 && errno == EINTR)
+    while ((n = send(sock, rq, sizeof *rq, MSG_NOSIGNAL)) < 0 && errno == EINTR)
         ;
     free(rq);
+    refill_spare(exe); /* starts while this one reads */
 
     vv_format seen = f;
     sbx_reply *r = malloc(sizeof *r);
@@ -910,7 +1042,7 @@ vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_
             timed_out = 1;
             break;
         }
-        struct pollfd pf = {sv[0], POLLIN, 0};
+        struct pollfd pf = {sock, POLLIN, 0};
         int pr = poll(&pf, 1, (int)(left * 1000) + 1);
         if (pr < 0 && errno == EINTR)
             continue;
@@ -926,7 +1058,7 @@ vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_
         m.msg_iovlen = 1;
         m.msg_control = u.buf;
         m.msg_controllen = sizeof u.buf;
-        ssize_t got = recvmsg(sv[0], &m, MSG_CMSG_CLOEXEC);
+        ssize_t got = recvmsg(sock, &m, MSG_CMSG_CLOEXEC);
         if (got < 0 && errno == EINTR)
             continue;
         if (got <= 0)
@@ -956,16 +1088,21 @@ vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_
         fd = passed;
         result = 1;
     }
-    close(sv[0]);
-    /* with its result sent the child has nothing left to do; without one
-     * it is stopped */
+    close(sock);
+    /* with its result sent the child has nothing left to do (reaped
+     * later); without one it is stopped and its end described */
     kill(pid, SIGKILL);
     int status = 0;
-    struct rusage ru;
-    memset(&ru, 0, sizeof ru);
-    while (wait4(pid, &status, 0, &ru) < 0 && errno == EINTR)
-        ;
-    uint64_t peak = (uint64_t)ru.ru_maxrss * 1024u;
+    uint64_t peak = 0;
+    if (result) {
+        reap_later(pid);
+    } else {
+        struct rusage ru;
+        memset(&ru, 0, sizeof ru);
+        while (wait4(pid, &status, 0, &ru) < 0 && errno == EINTR)
+            ;
+        peak = (uint64_t)ru.ru_maxrss * 1024u;
+    }
     const vv_volume_format *rec = record_of(seen);
     const char *fmt_name = rec ? rec->name : "load";
     const char *title = rec ? rec->title : "file";

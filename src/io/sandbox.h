@@ -44,4 +44,11 @@ vv_status vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f,
  */
 vv_format vv_format_detect_signature(const char *path);
 
+/**
+ * Stops the reader started ahead for the next load (vv_sandbox_volume_load
+ * keeps one, process-wide), for tests that count child processes and for a
+ * program that wants none left idle. Thread-safe.
+ */
+void vv_sandbox_release_spare(void);
+
 #endif
