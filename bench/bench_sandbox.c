@@ -9,8 +9,11 @@
  *
  *   bench_sandbox [--repeat N] [--keep]
  *
- * Each figure is the median of N loads (default 7) after one of each that
- * warms the page cache; the two ways alternate so that drift hits both.
+ * Each way runs in processes of its own (a worker: one load that warms
+ * the process, its page cache and its reader started ahead, then three
+ * timed loads, their median); N workers of each way (default 7) alternate,
+ * and the figure is the median of their medians. In one process the two
+ * ways changed each other's times (malloc's heap and thresholds).
  * Prints anchor lines (op=load_inprocess, op=load_sandbox) and, on stderr,
  * the overhead against the target: at most 5 % or at most 20 ms.
  */
@@ -26,8 +29,7 @@
 #define PYTHON "/usr/bin/python3"
 
 static double
-load_once(const char *path, int sandbox) {
-    setenv("VOLVIS_SANDBOX", sandbox ? "1" : "0", 1);
+load_once(const char *path) {
     vv_volume *v = NULL;
     double t0 = bench_now();
     if (vv_volume_load(&v, path, NULL) != VV_OK)
@@ -37,18 +39,43 @@ load_once(const char *path, int sandbox) {
     return t;
 }
 
+/* A worker: a process of one way (VOLVIS_SANDBOX set by the caller), one
+ * load that warms it (its reader started ahead, its heap), then @p n timed
+ * loads; prints their median in seconds. */
+static int
+worker(const char *path, int n) {
+    load_once(path);
+    double *t = malloc((size_t)n * sizeof *t);
+    for (int i = 0; i < n; i++)
+        t[i] = load_once(path);
+    printf("%.9f\n", bench_median(t, n));
+    free(t);
+    return 0;
+}
+
+/* The median load time of a worker process of @p sandbox. */
+static double
+run_worker(const char *self, const char *path, int sandbox, int n) {
+    char cmd[4096];
+    snprintf(cmd, sizeof cmd, "VOLVIS_SANDBOX=%d '%s' --worker '%s' %d", sandbox, self, path, n);
+    FILE *p = popen(cmd, "r");
+    double t = -1;
+    if (!p || fscanf(p, "%lf", &t) != 1 || t < 0)
+        bench_die(PROG, cmd);
+    pclose(p);
+    return t;
+}
+
 static void
-measure(const char *path, const char *dataset, int repeat) {
+measure(const char *self, const char *path, const char *dataset, int repeat) {
     double *in = malloc((size_t)repeat * sizeof *in), *sb = malloc((size_t)repeat * sizeof *sb);
-    load_once(path, 0);
-    load_once(path, 1);
     for (int i = 0; i < repeat; i++) {
         if (i % 2) {
-            in[i] = load_once(path, 0);
-            sb[i] = load_once(path, 1);
+            in[i] = run_worker(self, path, 0, 3);
+            sb[i] = run_worker(self, path, 1, 3);
         } else {
-            sb[i] = load_once(path, 1);
-            in[i] = load_once(path, 0);
+            sb[i] = run_worker(self, path, 1, 3);
+            in[i] = run_worker(self, path, 0, 3);
         }
     }
     double a = bench_median(in, repeat), b = bench_median(sb, repeat);
@@ -66,6 +93,8 @@ measure(const char *path, const char *dataset, int repeat) {
 
 int
 main(int argc, char **argv) {
+    if (argc == 4 && !strcmp(argv[1], "--worker"))
+        return worker(argv[2], atoi(argv[3]));
     int repeat = 7, keep = 0;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--repeat") && i + 1 < argc)
@@ -80,7 +109,7 @@ main(int argc, char **argv) {
     if (repeat < 1)
         repeat = 1;
     const char *head = VV_SOURCE_DIR "/../shared/data/volumes/ct_head.nrrd";
-    measure(head, "ct_head", repeat);
+    measure(argv[0], head, "ct_head", repeat);
 
     char tmp[] = "/tmp/vv_bench_sandbox_XXXXXX";
     if (!mkdtemp(tmp)) {
@@ -102,7 +131,7 @@ main(int argc, char **argv) {
     if (vv_nrrd_write(v, path, 0) != VV_OK)
         bench_die(PROG, path);
     vv_volume_free(v);
-    measure(path, "nrrd512", repeat);
+    measure(argv[0], path, "nrrd512", repeat);
 
     snprintf(path, sizeof path, "%s/series", tmp);
     snprintf(cmd, sizeof cmd,
@@ -110,7 +139,7 @@ main(int argc, char **argv) {
                     ">/dev/null",
              VV_SOURCE_DIR, head, path);
     if (system(cmd) == 0)
-        measure(path, "dicom512x512x300", repeat);
+        measure(argv[0], path, "dicom512x512x300", repeat);
     else
         fprintf(stderr, "%s: DICOM series not measured (python3-pydicom, python3-numpy)\n", PROG);
 
