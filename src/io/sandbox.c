@@ -62,10 +62,11 @@ enum sbx_inject {
     INJECT_EXEC,   /* execve(): killed */
     INJECT_FORK,   /* fork(): killed */
     INJECT_LOOP,   /* never ends: stopped at the time limit */
-    INJECT_OOM     /* allocates until malloc fails, then aborts */
+    INJECT_OOM,    /* allocates until malloc fails, then aborts */
+    INJECT_REPLY   /* sends a reply cut short, then waits */
 };
-static const char *const inject_names[] = {"",       "abort",  "segv", "open", "write",
-                                           "socket", "execve", "fork", "loop", "oom"};
+static const char *const inject_names[] = {"",       "abort", "segv", "open", "write", "socket",
+                                           "execve", "fork",  "loop", "oom",  "reply"};
 #define N_INJECT ((int)(sizeof inject_names / sizeof inject_names[0]))
 
 typedef struct sbx_request {
@@ -471,6 +472,13 @@ misbehave(int what) {
                 abort();
             memset(p, 1, (size_t)64 << 20);
         }
+    case INJECT_REPLY: {
+        const uint32_t half[2] = {SBX_MAGIC, SBX_RESULT};
+        while (send(SBX_FD, half, sizeof half, MSG_NOSIGNAL) < 0 && errno == EINTR)
+            ;
+        for (volatile unsigned long i = 0;; i++) /* the parent stops it */
+            ;
+    }
     default:
         break;
     }
@@ -1035,7 +1043,7 @@ vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_
 
     vv_format seen = f;
     sbx_reply *r = malloc(sizeof *r);
-    int result = 0, timed_out = 0, fd = -1;
+    int result = 0, timed_out = 0, malformed = 0, fd = -1;
     double deadline = now_s() + limit + 5;
     while (r && !result && n >= 0) {
         double left = deadline - now_s();
@@ -1081,8 +1089,10 @@ vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_
                 close(passed);
             if (whole && r->kind == SBX_FORMAT && record_of((vv_format)r->format))
                 seen = (vv_format)r->format;
-            if (!whole)
+            if (!whole) {
+                malformed = 1;
                 break;
+            }
             continue;
         }
         r->err[r->err_len] = '\0';
@@ -1110,6 +1120,11 @@ vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_
     vv_status s;
     if (!r) {
         s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+    } else if (malformed) {
+        s = vv_error_set(VV_ERR_FORMAT,
+                         "%s: %s: the %s reader sent a malformed reply and was stopped; the "
+                         "file is hostile or the reader broken",
+                         fmt_name, file, title);
     } else if (!result) {
         s = describe_end(status, peak, rq_budget, fmt_name, title, file, limit, timed_out);
     } else if (r->status != VV_OK) {

@@ -3,7 +3,8 @@
  * third-party parser comes back from volvis-reader with the same voxels and
  * geometry as read in-process; whatever the reader does wrong (an abort, a
  * crash, a file outside its folder, a socket, execve, fork, a write, an
- * endless loop, running out of memory: injected with VOLVIS_SANDBOX_INJECT)
+ * endless loop, running out of memory, a reply cut short: injected with
+ * VOLVIS_SANDBOX_INJECT)
  * is one line of error, the test process survives, no child is left and no
  * core file is written; the CLI exits 1 with that line and writes nothing;
  * every fuzz finding of the sandboxed formats goes through the sandbox.
@@ -141,6 +142,7 @@ test_injected_faults(void **state) {
     injected("socket", forbids, VV_ERR_FORMAT);
     injected("execve", forbids, VV_ERR_FORMAT);
     injected("fork", forbids, VV_ERR_FORMAT);
+    injected("reply", "the NRRD reader sent a malformed reply and was stopped", VV_ERR_FORMAT);
     setenv("VOLVIS_SANDBOX_TIMEOUT", "1", 1);
     injected("loop", "the NRRD reader used more than 1 s of CPU time; stopped", VV_ERR_LIMIT);
     unsetenv("VOLVIS_SANDBOX_TIMEOUT");
