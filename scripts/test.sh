@@ -29,7 +29,7 @@ for preset in release asan; do
   # a skipped test fails the suite here: everything is installed
   bash scripts/ctest-no-skips.sh --preset "$preset" -j"$jobs" || status=1
 done
-echo "== fuzz: every harness for 30 s" >&2
+echo "== fuzz: every harness for 30 s, one a core at a time" >&2
 # Advisory: 30 s of exploration still finds new defects inside Teem and GDCM
 # in most runs (issue 21 is open on it); they are reported with their inputs
 # under build/fuzz/artifacts/ but do not fail the suite.
