@@ -44,11 +44,9 @@
 
 extern char **environ;
 
-#define SBX_MAGIC 0x56565342u /* "VVSB" */
 #define SBX_VERSION 1
 #define SBX_FD 3
 #define SBX_MAX_PATH 4096
-#define SBX_MAX_ERROR 4096
 
 /* Test-only misbehaviour of the child (VOLVIS_SANDBOX_INJECT), after it is
  * locked down: what a hostile or broken parser would do. */
@@ -81,22 +79,6 @@ typedef struct sbx_request {
     uint32_t path_len;
     char path[SBX_MAX_PATH];
 } sbx_request;
-
-enum { SBX_FORMAT = 1, SBX_RESULT = 2 };
-
-typedef struct sbx_reply {
-    uint32_t magic;
-    int32_t kind;
-    int32_t format;
-    int32_t status;
-    int32_t dims[3];
-    int32_t type;
-    double spacing[3], origin[3], direction[9];
-    int32_t unit, data_origin, modification, space;
-    uint64_t bytes;
-    uint32_t err_len;
-    char err[SBX_MAX_ERROR];
-} sbx_reply;
 
 /* 1 in volvis-reader: vv_volume_load reads in-process there. */
 static int in_child;
@@ -990,6 +972,54 @@ record_of(vv_format f) {
     return (int)f >= 1 && (int)f <= n ? t[(int)f - 1] : NULL;
 }
 
+int
+vv_sandbox_take_message(const void *msg, size_t len, int fd, vv_format *seen, const char *file,
+                        vv_volume **out, vv_status *status) {
+    *out = NULL;
+    *status = VV_OK;
+    sbx_reply *r = malloc(sizeof *r);
+    if (!r) {
+        if (fd >= 0)
+            close(fd);
+        *status = vv_error_set(VV_ERR_NOMEM, "out of memory");
+        return 1;
+    }
+    int whole = len >= offsetof(sbx_reply, err) && len <= sizeof *r;
+    if (whole) {
+        memcpy(r, msg, len);
+        whole = r->magic == SBX_MAGIC && r->err_len < SBX_MAX_ERROR &&
+                len == offsetof(sbx_reply, err) + r->err_len &&
+                (r->kind == SBX_FORMAT || r->kind == SBX_RESULT);
+    }
+    if (!whole || r->kind == SBX_FORMAT) {
+        if (fd >= 0)
+            close(fd);
+        if (whole && record_of((vv_format)r->format))
+            *seen = (vv_format)r->format;
+        free(r);
+        return whole ? 0 : -1;
+    }
+    r->err[r->err_len] = '\0';
+    for (char *c = r->err; *c; c++) /* one line of printable text */
+        if ((unsigned char)*c < 0x20 || *c == 0x7f)
+            *c = ' ';
+    const vv_volume_format *rec = record_of(*seen);
+    const char *fmt_name = rec ? rec->name : "load";
+    if (r->status != VV_OK) {
+        if (fd >= 0)
+            close(fd);
+        vv_status e =
+            r->status >= VV_ERR_CANCELLED && r->status < 0 ? (vv_status)r->status : VV_ERR_FORMAT;
+        *status = r->err[0] ? vv_error_set(e, "%s", r->err)
+                            : vv_error_set(e, "%s: %s: the reader failed without a message",
+                                           fmt_name, file);
+    } else {
+        *status = volume_from_reply(out, r, fd, fmt_name, file);
+    }
+    free(r);
+    return 1;
+}
+
 vv_status
 vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_load_options *opt) {
     *out = NULL;
@@ -1043,9 +1073,10 @@ vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_
 
     vv_format seen = f;
     sbx_reply *r = malloc(sizeof *r);
-    int result = 0, timed_out = 0, malformed = 0, fd = -1;
+    int result = 0, timed_out = 0, malformed = 0;
+    vv_status s = VV_OK;
     double deadline = now_s() + limit + 5;
-    while (r && !result && n >= 0) {
+    while (r && !result && !malformed && n >= 0) {
         double left = deadline - now_s();
         if (left <= 0) {
             timed_out = 1;
@@ -1080,24 +1111,15 @@ vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_
                     close(passed);
                 memcpy(&passed, CMSG_DATA(c), sizeof(int));
             }
-        int whole = got >= (ssize_t)offsetof(sbx_reply, err) && r->magic == SBX_MAGIC &&
-                    r->err_len < SBX_MAX_ERROR &&
-                    (size_t)got == offsetof(sbx_reply, err) + r->err_len &&
-                    !(m.msg_flags & (MSG_TRUNC | MSG_CTRUNC));
-        if (!whole || r->kind != SBX_RESULT) {
+        if (m.msg_flags & (MSG_TRUNC | MSG_CTRUNC)) {
             if (passed >= 0)
                 close(passed);
-            if (whole && r->kind == SBX_FORMAT && record_of((vv_format)r->format))
-                seen = (vv_format)r->format;
-            if (!whole) {
-                malformed = 1;
-                break;
-            }
-            continue;
+            malformed = 1;
+            break;
         }
-        r->err[r->err_len] = '\0';
-        fd = passed;
-        result = 1;
+        int k = vv_sandbox_take_message(r, (size_t)got, passed, &seen, file, out, &s);
+        result = k > 0;
+        malformed = k < 0;
     }
     close(sock);
     /* with its result sent the child has nothing left to do (reaped
@@ -1117,7 +1139,6 @@ vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_
     const vv_volume_format *rec = record_of(seen);
     const char *fmt_name = rec ? rec->name : "load";
     const char *title = rec ? rec->title : "file";
-    vv_status s;
     if (!r) {
         s = vv_error_set(VV_ERR_NOMEM, "out of memory");
     } else if (malformed) {
@@ -1127,13 +1148,6 @@ vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_
                          fmt_name, file, title);
     } else if (!result) {
         s = describe_end(status, peak, rq_budget, fmt_name, title, file, limit, timed_out);
-    } else if (r->status != VV_OK) {
-        if (fd >= 0)
-            close(fd);
-        s = r->status >= VV_ERR_CANCELLED && r->status < 0 ? (vv_status)r->status : VV_ERR_FORMAT;
-        s = vv_error_set(s, "%s", r->err[0] ? r->err : "the reader failed without a message");
-    } else {
-        s = volume_from_reply(out, r, fd, fmt_name, file);
     }
     free(r);
     return s;

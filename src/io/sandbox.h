@@ -17,6 +17,35 @@
 #include "volvis/sys/format.h"
 #include "volvis/sys/sandbox.h"
 
+#include <stdint.h>
+
+#define SBX_MAGIC 0x56565342u /* "VVSB" */
+#define SBX_MAX_ERROR 4096
+
+/** The kinds of the reader's messages. */
+enum { SBX_FORMAT = 1, SBX_RESULT = 2 };
+
+/**
+ * A message of the reader to the parent (sent whole, of
+ * offsetof(sbx_reply, err) + err_len bytes): kind SBX_FORMAT names the
+ * format it detected; kind SBX_RESULT ends the read with a status (a
+ * vv_status), the error trace in err, and on success the volume's
+ * geometry, with the voxels (@c bytes of them) in the memfd it carries.
+ */
+typedef struct sbx_reply {
+    uint32_t magic;
+    int32_t kind;
+    int32_t format;
+    int32_t status;
+    int32_t dims[3];
+    int32_t type;
+    double spacing[3], origin[3], direction[9];
+    int32_t unit, data_origin, modification, space;
+    uint64_t bytes;
+    uint32_t err_len;
+    char err[SBX_MAX_ERROR];
+} sbx_reply;
+
 /**
  * 1 when vv_volume_load should read format @p r in the sandbox: @p r is
  * NULL (detection needs the deep tests, which may call a third-party
@@ -37,6 +66,21 @@ int vv_sandbox_wanted(const vv_volume_format *r);
  */
 vv_status vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f,
                                  const vv_load_options *opt);
+
+/**
+ * What the parent makes of one message of a reader: @p msg, @p len bytes as
+ * received (untrusted: any bytes), with @p fd the descriptor it carried or
+ * -1 (owned: closed, or mapped and closed). Returns 0 when more is to come
+ * (a format message: *@p seen is set to the format it names when that is
+ * a known one), 1 for the result: *@p status is VV_OK and *@p out the volume
+ * (a shared mapping of @p fd, released by vv_volume_free), or the error the
+ * reader sent or found in its result (VV_ERR_FORMAT, VV_ERR_LIMIT,
+ * VV_ERR_NOMEM; set with vv_error_set, naming @p file), and -1 when the
+ * message is malformed (no error set). Thread-safe; fuzzed by
+ * tests/fuzz/fuzz_sandbox.c.
+ */
+int vv_sandbox_take_message(const void *msg, size_t len, int fd, vv_format *seen, const char *file,
+                            vv_volume **out, vv_status *status);
 
 /**
  * The format whose signature @p path has (vv_format_detect's first pass

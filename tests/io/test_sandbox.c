@@ -9,15 +9,21 @@
  * core file is written; the CLI exits 1 with that line and writes nothing;
  * every fuzz finding of the sandboxed formats goes through the sandbox.
  */
+#define _GNU_SOURCE /* memfd_create, the seals */
 #include "testutil.h"
 
 #include "io/sandbox.h"
 
 #include <dirent.h>
 #include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -247,13 +253,146 @@ test_fuzz_corpus(void **state) {
     assert_true(n >= 20);
 }
 
+/* A memfd holding @p n bytes of @p d, sealed with @p seals. */
+static int
+memfd_with(const void *d, size_t n, int seals) {
+    int fd = memfd_create("test-voxels", MFD_CLOEXEC | MFD_ALLOW_SEALING);
+    assert_true(fd >= 0);
+    assert_int_equal(write(fd, d, n), (ssize_t)n);
+    if (seals)
+        assert_int_equal(fcntl(fd, F_ADD_SEALS, seals), 0);
+    return fd;
+}
+
+static uint16_t g_vox[64];
+
+/* Hands @p r (@p len bytes, with a memfd of @p fd_bytes voxel bytes sealed
+ * with @p seals, or none when @p fd_bytes is 0) to the parent: it must
+ * answer @p expect_k, and for a result no volume but an error holding
+ * @p expect (NULL: the well-formed case, a volume). */
+static void
+hostile(const char *what, const sbx_reply *r, size_t len, size_t fd_bytes, int seals, int expect_k,
+        const char *expect) {
+    vv_format seen = VV_FORMAT_NRRD;
+    vv_volume *v = NULL;
+    vv_status s = VV_OK;
+    vv_error_clear();
+    int fd = fd_bytes ? memfd_with(g_vox, fd_bytes, seals) : -1;
+    int k = vv_sandbox_take_message(r, len, fd, &seen, "a.nrrd", &v, &s);
+    printf("# %s: %d %s\n", what, k, k > 0 && s != VV_OK ? vv_error_message() : "");
+    if (k != expect_k)
+        fail_msg("%s: %d, not %d", what, k, expect_k);
+    if (k <= 0 || !expect) {
+        if (k > 0) {
+            vt_ok(s);
+            assert_non_null(v);
+            vv_volume_free(v);
+        }
+        return;
+    }
+    assert_null(v);
+    assert_true(s < 0);
+    if (!strstr(vv_error_message(), expect))
+        fail_msg("%s: \"%s\" does not say \"%s\"", what, vv_error_message(), expect);
+}
+
+/* What a broken or hostile reader could send: the parent makes an error or
+ * "malformed" of each, never a volume that does not hold its voxels
+ * (tests/fuzz/fuzz_sandbox.c explores the rest). */
+static void
+test_hostile_replies(void **state) {
+    (void)state;
+    sbx_reply ok;
+    memset(&ok, 0, sizeof ok);
+    ok.magic = SBX_MAGIC;
+    ok.kind = SBX_RESULT;
+    ok.dims[0] = ok.dims[1] = ok.dims[2] = 4;
+    ok.type = VV_U16;
+    ok.bytes = sizeof g_vox;
+    for (int i = 0; i < 3; i++) {
+        ok.spacing[i] = 0.5;
+        ok.direction[4 * i] = 1;
+    }
+    for (int i = 0; i < 64; i++)
+        g_vox[i] = (uint16_t)(1000 + i);
+    const size_t len = offsetof(sbx_reply, err), all = sizeof g_vox;
+    const int sealed = F_SEAL_SHRINK | F_SEAL_GROW;
+
+    /* the well-formed result: the voxels, their range computed again */
+    vv_format seen = VV_FORMAT_NRRD;
+    vv_volume *v = NULL;
+    vv_status s;
+    assert_int_equal(
+        vv_sandbox_take_message(&ok, len, memfd_with(g_vox, all, sealed), &seen, "a.nrrd", &v, &s),
+        1);
+    vt_ok(s);
+    assert_non_null(v);
+    assert_int_equal(((uint16_t *)v->data)[63], 1063);
+    assert_true(v->range[0] == 1000 && v->range[1] == 1063);
+    assert_true(v->spacing[1] == 0.5);
+    vv_volume_free(v);
+
+    sbx_reply r = ok;
+    hostile("cut short", &r, 12, all, sealed, -1, NULL);
+    hostile("unsealed memfd", &r, len, all, 0, 1, "does not hold the 128 bytes");
+    hostile("memfd too small", &r, len, all / 2, sealed, 1, "does not hold the 128 bytes");
+    hostile("no memfd", &r, len, 0, 0, 1, "has no voxels");
+    r.bytes = 64;
+    hostile("byte count wrong", &r, len, all, sealed, 1, "does not hold");
+    r = ok;
+    r.dims[0] = r.dims[1] = r.dims[2] = 1 << 30;
+    hostile("huge dims", &r, len, all, sealed, 1, "the reader's result");
+    r = ok;
+    r.dims[1] = -4;
+    hostile("negative dims", &r, len, all, sealed, 1, "the reader's result");
+    r = ok;
+    r.spacing[1] = NAN;
+    hostile("NaN spacing", &r, len, all, sealed, 1, "broken geometry");
+    r = ok;
+    r.spacing[2] = 0;
+    hostile("zero spacing", &r, len, all, sealed, 1, "broken geometry");
+    r = ok;
+    r.type = 99;
+    hostile("unknown voxel type", &r, len, all, sealed, 1, "has no voxels");
+    r = ok;
+    r.magic = 1;
+    hostile("bad magic", &r, len, all, sealed, -1, NULL);
+    r = ok;
+    r.kind = 7;
+    hostile("unknown kind", &r, len, all, sealed, -1, NULL);
+    r = ok;
+    r.err_len = 100;
+    hostile("error text past the message", &r, len, all, sealed, -1, NULL);
+    r.err_len = SBX_MAX_ERROR;
+    hostile("error text too long", &r, sizeof r, all, sealed, -1, NULL);
+    r = ok;
+    r.status = VV_ERR_FORMAT;
+    hostile("an error without text", &r, len, all, sealed, 1, "without a message");
+    r.status = 12345;
+    hostile("a status out of range", &r, len, 0, 0, 1, "nrrd: a.nrrd: the reader failed without");
+    const char *lines = "nrrd: a.nrrd: first\nsecond\r\x1b[2J";
+    r.err_len = (uint32_t)strlen(lines);
+    memcpy(r.err, lines, r.err_len);
+    hostile("an error of several lines", &r, len + r.err_len, 0, 0, 1,
+            "nrrd: a.nrrd: first second  [2J");
+    r = ok;
+    r.kind = SBX_FORMAT;
+    r.format = 9999;
+    hostile("an unknown format", &r, len, all, sealed, 0, NULL);
+    r.format = VV_FORMAT_TIFF;
+    seen = VV_FORMAT_NRRD;
+    assert_int_equal(vv_sandbox_take_message(&r, len, -1, &seen, "a.nrrd", &v, &s), 0);
+    assert_int_equal(seen, VV_FORMAT_TIFF);
+    assert_no_child();
+}
+
 int
 main(void) {
     snprintf(g_dir, sizeof g_dir, "%s", vt_outdir("sandbox"));
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_same_volume), cmocka_unit_test(test_injected_faults),
         cmocka_unit_test(test_cli),         cmocka_unit_test(test_reader_alone_and_missing),
-        cmocka_unit_test(test_fuzz_corpus),
+        cmocka_unit_test(test_fuzz_corpus), cmocka_unit_test(test_hostile_replies),
     };
     return vt_run_tests(tests, NULL, NULL);
 }

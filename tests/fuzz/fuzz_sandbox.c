@@ -1,0 +1,91 @@
+/*
+ * libFuzzer harness: the parent's side of the reader sandbox
+ * (vv_sandbox_take_message; src/io/sandbox.c). Whatever a broken or hostile
+ * volvis-reader sends (any message, a memfd of any size and seals, or none),
+ * the parent must not crash, leak or hang: it makes a volume that holds all
+ * its voxels, an error of one line, or "malformed".
+ *
+ * The input: a flags byte, a message length (two bytes, little-endian),
+ * the message, then what the memfd holds. Flags: 1 a memfd is passed; 2 it
+ * is sealed against shrinking, 4 against growing; 8 the message is made
+ * plausible (the magic, a kind, err_len fitting the length, and with 16 the
+ * byte count naming the memfd's size), so the fuzzer spends its time past
+ * the first checks; 32 a second message follows the format message.
+ */
+#define _GNU_SOURCE
+#include <fcntl.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include "fuzz_util.h"
+#include "io/sandbox.h"
+#include "volvis/volvis.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+static int
+make_memfd(const uint8_t *d, size_t n, int flags) {
+    int fd = memfd_create("fuzz-voxels", MFD_CLOEXEC | MFD_ALLOW_SEALING);
+    if (fd < 0)
+        __builtin_trap(); /* the machine, not the input */
+    size_t off = 0;
+    while (off < n) {
+        ssize_t w = write(fd, d + off, n - off);
+        if (w <= 0)
+            __builtin_trap();
+        off += (size_t)w;
+    }
+    int seals = (flags & 2 ? F_SEAL_SHRINK : 0) | (flags & 4 ? F_SEAL_GROW : 0);
+    if (seals)
+        fcntl(fd, F_ADD_SEALS, seals);
+    return fd;
+}
+
+int
+LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+    if (size < 3)
+        return 0;
+    const int flags = data[0];
+    size_t len = (size_t)data[1] | (size_t)data[2] << 8;
+    data += 3;
+    size -= 3;
+    if (len > size)
+        len = size;
+    static sbx_reply msg;
+    if (len > sizeof msg)
+        len = sizeof msg;
+    memset(&msg, 0, sizeof msg);
+    memcpy(&msg, data, len);
+    const uint8_t *rest = data + len;
+    const size_t nrest = size - len;
+    if (flags & 8) {
+        msg.magic = SBX_MAGIC;
+        msg.kind = flags & 32 ? SBX_FORMAT : SBX_RESULT;
+        if (len < offsetof(sbx_reply, err))
+            len = offsetof(sbx_reply, err);
+        msg.err_len = (uint32_t)(len - offsetof(sbx_reply, err));
+        if (flags & 16)
+            msg.bytes = nrest;
+    }
+    vv_format seen = VV_FORMAT_NRRD;
+    vv_volume *v = NULL;
+    vv_status st = VV_OK;
+    int fd = flags & 1 ? make_memfd(rest, nrest, flags) : -1;
+    int k = vv_sandbox_take_message(&msg, len, fd, &seen, "in.nrrd", &v, &st);
+    if (k == 0 && (flags & 32)) {
+        /* the result after the format message: the same bytes as a result */
+        msg.kind = SBX_RESULT;
+        fd = flags & 1 ? make_memfd(rest, nrest, flags) : -1;
+        k = vv_sandbox_take_message(&msg, len, fd, &seen, "in.nrrd", &v, &st);
+    }
+    if (k > 0 && st == VV_OK)
+        fuzz_check_volume(v);
+    else if (v)
+        __builtin_trap(); /* a volume with an error or without a result */
+    else if (k > 0 && strpbrk(vv_error_message(), "\n\r\x1b"))
+        __builtin_trap(); /* the error is one line of text */
+    return 0;
+}
