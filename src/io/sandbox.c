@@ -25,6 +25,7 @@
 #include <seccomp.h>
 #include <signal.h>
 #include <spawn.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -869,12 +870,14 @@ spawn_reader(const char *exe, pid_t *pid, int *sock) {
 /*
  * One reader started ahead of the next load (a reader's start, mostly
  * GDCM's dictionary and the dynamic linking, is about 50 ms): started
- * after each sandboxed load, taken by the next one when it is still alive,
+ * during each sandboxed load but a process's first, taken by the next one
+ * when it is still alive,
  * of the same program and of this process (not inherited through fork).
  * It waits for its request unlocked and exits when this process closes its
  * end. Process-wide, under spare_lock. VOLVIS_SANDBOX_SPARE=0: none.
  */
 static pthread_mutex_t spare_lock = PTHREAD_MUTEX_INITIALIZER;
+static atomic_int loads_started;
 static pid_t spare_pid, spare_owner;
 static int spare_sock = -1;
 static char spare_exe[PATH_MAX];
@@ -1069,7 +1072,11 @@ vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_
     while ((n = send(sock, rq, sizeof *rq, MSG_NOSIGNAL)) < 0 && errno == EINTR)
         ;
     free(rq);
-    refill_spare(exe); /* starts while this one reads */
+    /* a process's second load and later ones start the next reader while
+     * this one reads (most programs that load once never load again: the
+     * CLI's spare would only take a core from this load) */
+    if (atomic_fetch_add(&loads_started, 1) > 0)
+        refill_spare(exe);
 
     vv_format seen = f;
     sbx_reply *r = malloc(sizeof *r);
