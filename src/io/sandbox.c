@@ -45,9 +45,10 @@
 
 extern char **environ;
 
-#define SBX_VERSION 1
+#define SBX_VERSION 2
 #define SBX_FD 3
 #define SBX_MAX_PATH 4096
+#define SBX_MAX_SERIES 200000 /* as many as the files a listing reads */
 
 /* Test-only misbehaviour of the child (VOLVIS_SANDBOX_INJECT), after it is
  * locked down: what a hostile or broken parser would do. */
@@ -68,6 +69,10 @@ static const char *const inject_names[] = {"",       "abort", "segv", "open", "w
                                            "execve", "fork",  "loop", "oom",  "reply"};
 #define N_INJECT ((int)(sizeof inject_names / sizeof inject_names[0]))
 
+/* What the reader is asked for: a volume (vv_volume_load), or the image
+ * series of a DICOM file, folder or DICOMDIR (vv_dicom_list). */
+enum { SBX_OP_VOLUME = 0, SBX_OP_DICOM_LIST = 1 };
+
 typedef struct sbx_request {
     uint32_t magic, version;
     int32_t format, has_raw;
@@ -77,6 +82,7 @@ typedef struct sbx_request {
     int32_t threads;
     int32_t inject;
     uint32_t cpu_seconds;
+    int32_t op; /* SBX_OP_VOLUME or SBX_OP_DICOM_LIST */
     uint32_t path_len;
     char path[SBX_MAX_PATH];
 } sbx_request;
@@ -524,6 +530,38 @@ set_limits(const sbx_request *rq) {
     prctl(PR_SET_DUMPABLE, 0, 0, 0, 0);
 }
 
+/* The child's answer to SBX_OP_DICOM_LIST: the vv_dicom_series array in
+ * a sealed memfd (bytes = n * sizeof (vv_dicom_series), dims[0] = n). */
+static void
+list_series(const sbx_request *rq, sbx_reply *r) {
+    r->format = VV_FORMAT_DICOM;
+    sbx_reply fr = {.magic = SBX_MAGIC, .kind = SBX_FORMAT, .format = VV_FORMAT_DICOM};
+    send_reply(&fr, -1);
+    if (rq->inject > INJECT_NONE && rq->inject < N_INJECT)
+        misbehave(rq->inject);
+    vv_dicom_series *ser = NULL;
+    int n = 0, fd = -1;
+    vv_status s = rq->inject == INJECT_OPEN ? VV_ERR_IO : vv_dicom_list(&ser, &n, rq->path);
+    if (s == VV_OK) {
+        r->bytes = (uint64_t)n * sizeof *ser;
+        r->dims[0] = n;
+        fd = memfd_of(ser, (size_t)r->bytes); /* a copy in a new memfd */
+        if (fd < 0 || fcntl(fd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_SEAL) != 0) {
+            s = vv_error_set(VV_ERR_NOMEM, "the reader could not hand over %d series", n);
+            fd = -1;
+        }
+    }
+    free(ser);
+    r->status = s;
+    if (s != VV_OK) {
+        r->err_len = (uint32_t)snprintf(r->err, sizeof r->err, "%s", vv_error_message());
+        if (r->err_len >= sizeof r->err)
+            r->err_len = sizeof r->err - 1;
+    }
+    send_reply(r, fd);
+    _exit(0);
+}
+
 int
 vv_sandbox_reader_main(int argc, char **argv) {
     (void)argc;
@@ -566,6 +604,8 @@ vv_sandbox_reader_main(int argc, char **argv) {
     }
     /* from here on, what the file makes the parser do stays in here */
     vv_volume_set_allocator(memfd_alloc, memfd_release);
+    if (rq.op == SBX_OP_DICOM_LIST)
+        list_series(&rq, &r);
     vv_format f = (vv_format)rq.format;
     if (f == VV_FORMAT_AUTO) {
         f = vv_format_detect(rq.path);
@@ -975,10 +1015,62 @@ record_of(vv_format f) {
     return (int)f >= 1 && (int)f <= n ? t[(int)f - 1] : NULL;
 }
 
-int
-vv_sandbox_take_message(const void *msg, size_t len, int fd, vv_format *seen, const char *file,
-                        vv_volume **out, vv_status *status) {
-    *out = NULL;
+/* The series list of a result reply and its memfd (copied: it is small).
+ * Owns @p fd. */
+static vv_status
+series_from_reply(vv_dicom_series **out, int *n, const sbx_reply *r, int fd, const char *file) {
+    struct stat st;
+    int seals = fd >= 0 ? fcntl(fd, F_GET_SEALS) : -1;
+    const int count = r->dims[0];
+    vv_dicom_series *a = NULL;
+    vv_status s = VV_OK;
+    if (fd < 0 || count < 1 || count > SBX_MAX_SERIES || r->bytes != (uint64_t)count * sizeof *a ||
+        fstat(fd, &st) != 0 || (uint64_t)st.st_size < r->bytes || seals < 0 ||
+        !(seals & F_SEAL_SHRINK))
+        s = vv_error_set(VV_ERR_FORMAT, "dicom: %s: the reader's list of series is malformed",
+                         file);
+    else if (!(a = malloc((size_t)r->bytes)))
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+    for (size_t got = 0; s == VV_OK && got < r->bytes;) {
+        ssize_t k = pread(fd, (char *)a + got, (size_t)r->bytes - got, (off_t)got);
+        if (k < 0 && errno == EINTR)
+            continue;
+        if (k <= 0)
+            s = vv_error_set(VV_ERR_IO, "dicom: %s: cannot read the reader's list of series", file);
+        else
+            got += (size_t)k;
+    }
+    if (fd >= 0)
+        close(fd);
+    for (int i = 0; s == VV_OK && i < count; i++) {
+        vv_dicom_series *e = &a[i];
+        /* every string ends inside its field; no negative size */
+        e->uid[sizeof e->uid - 1] = e->description[sizeof e->description - 1] = '\0';
+        e->modality[sizeof e->modality - 1] = e->first_file[sizeof e->first_file - 1] = '\0';
+        e->study_description[sizeof e->study_description - 1] = '\0';
+        e->study_date[sizeof e->study_date - 1] = '\0';
+        e->patient_name[sizeof e->patient_name - 1] = '\0';
+        e->patient_id[sizeof e->patient_id - 1] = '\0';
+        if (e->dims[0] < 0 || e->dims[1] < 0 || e->dims[2] < 0 || e->n_files < 0)
+            s = vv_error_set(VV_ERR_FORMAT, "dicom: %s: the reader's list of series is malformed",
+                             file);
+    }
+    if (s != VV_OK) {
+        free(a);
+        return s;
+    }
+    *out = a;
+    *n = count;
+    return VV_OK;
+}
+
+/* vv_sandbox_take_message for the answer to @p op: a volume in *@p out, or
+ * the series in *@p ser (*@p nser of them). */
+static int
+take_message(int op, const void *msg, size_t len, int fd, vv_format *seen, const char *file,
+             vv_volume **out, vv_dicom_series **ser, int *nser, vv_status *status) {
+    if (out)
+        *out = NULL;
     *status = VV_OK;
     sbx_reply *r = malloc(sizeof *r);
     if (!r) {
@@ -1016,6 +1108,8 @@ vv_sandbox_take_message(const void *msg, size_t len, int fd, vv_format *seen, co
         *status = r->err[0] ? vv_error_set(e, "%s", r->err)
                             : vv_error_set(e, "%s: %s: the reader failed without a message",
                                            fmt_name, file);
+    } else if (op == SBX_OP_DICOM_LIST) {
+        *status = series_from_reply(ser, nser, r, fd, file);
     } else {
         *status = volume_from_reply(out, r, fd, fmt_name, file);
     }
@@ -1023,9 +1117,17 @@ vv_sandbox_take_message(const void *msg, size_t len, int fd, vv_format *seen, co
     return 1;
 }
 
-vv_status
-vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_load_options *opt) {
-    *out = NULL;
+int
+vv_sandbox_take_message(const void *msg, size_t len, int fd, vv_format *seen, const char *file,
+                        vv_volume **out, vv_status *status) {
+    return take_message(SBX_OP_VOLUME, msg, len, fd, seen, file, out, NULL, NULL, status);
+}
+
+/* A reader's run for @p op on @p path: the volume in *@p out, or the
+ * series in *@p ser (*@p nser). */
+static vv_status
+run_reader(int op, const char *path, vv_format f, const vv_load_options *opt, vv_volume **out,
+           vv_dicom_series **ser, int *nser) {
     const char *file = vv_path_basename(path);
     if (strlen(path) >= SBX_MAX_PATH)
         return vv_error_set(VV_ERR_LIMIT, "load: %s: a path of over %d bytes", file,
@@ -1045,6 +1147,7 @@ vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_
     rq->magic = SBX_MAGIC;
     rq->version = SBX_VERSION;
     rq->format = (int32_t)f;
+    rq->op = op;
     rq->has_raw = opt->has_raw;
     rq->raw = opt->raw;
     rq->series = opt->series;
@@ -1124,7 +1227,7 @@ vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_
             malformed = 1;
             break;
         }
-        int k = vv_sandbox_take_message(r, (size_t)got, passed, &seen, file, out, &s);
+        int k = take_message(op, r, (size_t)got, passed, &seen, file, out, ser, nser, &s);
         result = k > 0;
         malformed = k < 0;
     }
@@ -1158,4 +1261,19 @@ vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_
     }
     free(r);
     return s;
+}
+
+vv_status
+vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_load_options *opt) {
+    *out = NULL;
+    return run_reader(SBX_OP_VOLUME, path, f, opt, out, NULL, NULL);
+}
+
+vv_status
+vv_sandbox_dicom_list(vv_dicom_series **out, int *n, const char *path) {
+    *out = NULL;
+    *n = 0;
+    vv_load_options o;
+    vv_load_options_init(&o);
+    return run_reader(SBX_OP_DICOM_LIST, path, VV_FORMAT_DICOM, &o, NULL, out, n);
 }

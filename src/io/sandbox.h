@@ -68,6 +68,16 @@ vv_status vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f,
                                  const vv_load_options *opt);
 
 /**
+ * vv_dicom_list's contract, in the sandboxed reader: the series of the
+ * DICOM file, folder or DICOMDIR @p path as GDCM lists them there, copied
+ * back (*@p out a new array of *@p n entries, free() it; every string ends
+ * inside its field). Errors: the child's own, or as vv_sandbox_volume_load
+ * ("dicom: ct: the DICOM reader crashed (SIGABRT); the file is
+ * malformed"). Thread-safe.
+ */
+vv_status vv_sandbox_dicom_list(vv_dicom_series **out, int *n, const char *path);
+
+/**
  * What the parent makes of one message of a reader: @p msg, @p len bytes as
  * received (untrusted: any bytes), with @p fd the descriptor it carried or
  * -1 (owned: closed, or mapped and closed). Returns 0 when more is to come

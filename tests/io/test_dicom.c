@@ -515,6 +515,28 @@ test_mixed_series_and_cli(void **state) {
     o.series = 3;
     vt_err(vv_volume_load(&v, tmp("mixed"), &o));
 
+    /* the listing is read by GDCM in volvis-reader (the sandbox): the same
+     * series, byte for byte, as read in this process; a reader that
+     * aborts while listing is one line */
+    vv_dicom_series *sb = NULL, *in = NULL;
+    int nsb = 0, nin = 0;
+    vt_ok(vv_dicom_list(&sb, &nsb, tmp("mixed")));
+    setenv("VOLVIS_SANDBOX", "0", 1);
+    vt_ok(vv_dicom_list(&in, &nin, tmp("mixed")));
+    unsetenv("VOLVIS_SANDBOX");
+    assert_int_equal(nsb, 2);
+    assert_int_equal(nsb, nin);
+    assert_memory_equal(sb, in, (size_t)nin * sizeof *in);
+    free(sb);
+    free(in);
+    setenv("VOLVIS_SANDBOX_INJECT", "abort", 1);
+    vt_err(vv_dicom_list(&sb, &nsb, tmp("mixed")));
+    unsetenv("VOLVIS_SANDBOX_INJECT");
+    assert_null(sb);
+    assert_int_equal(nsb, 0);
+    assert_one_line_naming("mixed");
+    assert_non_null(strstr(vv_error_message(), "the DICOM reader crashed (SIGABRT)"));
+
     const char *out = vt_outdir("io_dicom");
     const char *info[] = {"info", tmp("mixed"), NULL};
     vt_run_result r = vt_run_cli_v(out, info);
