@@ -19,7 +19,10 @@
 /** Memory budget of the library under the fuzzer: 256 MiB. */
 #define FUZZ_MEMORY_BUDGET ((uint64_t)256 << 20)
 
-/** Sets the budget, one thread, and makes the private temporary folder. */
+/**
+ * Sets the budget, one thread, VOLVIS_SANDBOX=0 (unless set: the parsers
+ * are fuzzed in this process), and makes the private temporary folder.
+ */
 void fuzz_init(void);
 
 /**
