@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "core/internal.h"
+#include "io/sandbox.h"
 #include "volvis/io.h"
 #include "volvis/mesh.h"
 #include "volvis/sys/format.h"
@@ -435,6 +436,8 @@ vv_mesh_load(vv_mesh **out, const char *path) {
         return vv_error_prefix(s, "mesh: %s", name);
     if (is_ply(path) && (s = ply_validate(path)) != VV_OK)
         return vv_error_prefix(s, "mesh: %s", name);
+    if (vv_sandbox_wanted(NULL)) /* Assimp reads it in volvis-reader */
+        return vv_sandbox_mesh_load(out, path);
 
     /* Drop every attribute but positions before joining vertices, so facet
      * normals (STL) or texture seams do not split a closed surface; normals

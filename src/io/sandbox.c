@@ -69,9 +69,10 @@ static const char *const inject_names[] = {"",       "abort", "segv", "open", "w
                                            "execve", "fork",  "loop", "oom",  "reply"};
 #define N_INJECT ((int)(sizeof inject_names / sizeof inject_names[0]))
 
-/* What the reader is asked for: a volume (vv_volume_load), or the image
- * series of a DICOM file, folder or DICOMDIR (vv_dicom_list). */
-enum { SBX_OP_VOLUME = 0, SBX_OP_DICOM_LIST = 1 };
+/* What the reader is asked for: a volume (vv_volume_load), the image
+ * series of a DICOM file, folder or DICOMDIR (vv_dicom_list), or a mesh
+ * (vv_mesh_load, Assimp). */
+enum { SBX_OP_VOLUME = 0, SBX_OP_DICOM_LIST = 1, SBX_OP_MESH = 2 };
 
 typedef struct sbx_request {
     uint32_t magic, version;
@@ -82,7 +83,7 @@ typedef struct sbx_request {
     int32_t threads;
     int32_t inject;
     uint32_t cpu_seconds;
-    int32_t op; /* SBX_OP_VOLUME or SBX_OP_DICOM_LIST */
+    int32_t op; /* SBX_OP_VOLUME, SBX_OP_DICOM_LIST or SBX_OP_MESH */
     uint32_t path_len;
     char path[SBX_MAX_PATH];
 } sbx_request;
@@ -514,6 +515,15 @@ set_limits(const sbx_request *rq) {
     setrlimit(RLIMIT_CORE, &no_core);
     struct rlimit cpu = {rq->cpu_seconds, (rlim_t)rq->cpu_seconds + 5};
     setrlimit(RLIMIT_CPU, &cpu);
+    /* the reader writes only its memfds, which a file-size limit of the
+     * caller's (ulimit -f) would cut with SIGXFSZ: up to the hard limit,
+     * and a write past that fails (EFBIG) instead of ending the reader */
+    struct rlimit fsize;
+    if (getrlimit(RLIMIT_FSIZE, &fsize) == 0 && fsize.rlim_cur != fsize.rlim_max) {
+        fsize.rlim_cur = fsize.rlim_max;
+        setrlimit(RLIMIT_FSIZE, &fsize);
+    }
+    signal(SIGXFSZ, SIG_IGN);
 #if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
 #define VV_SBX_SANITIZER 1
 #elif defined(__has_feature)
@@ -552,6 +562,45 @@ list_series(const sbx_request *rq, sbx_reply *r) {
         }
     }
     free(ser);
+    r->status = s;
+    if (s != VV_OK) {
+        r->err_len = (uint32_t)snprintf(r->err, sizeof r->err, "%s", vv_error_message());
+        if (r->err_len >= sizeof r->err)
+            r->err_len = sizeof r->err - 1;
+    }
+    send_reply(r, fd);
+    _exit(0);
+}
+
+/* The child's answer to SBX_OP_MESH: the positions (3 float32 a vertex)
+ * then the triangles (3 uint32 each) in a sealed memfd. */
+static void
+read_mesh(const sbx_request *rq, sbx_reply *r) {
+    r->format = VV_FORMAT_UNKNOWN;
+    sbx_reply fr = {.magic = SBX_MAGIC, .kind = SBX_FORMAT, .format = VV_FORMAT_UNKNOWN};
+    send_reply(&fr, -1);
+    if (rq->inject > INJECT_NONE && rq->inject < N_INJECT)
+        misbehave(rq->inject);
+    vv_mesh *m = NULL;
+    int fd = -1;
+    vv_status s = rq->inject == INJECT_OPEN ? VV_ERR_IO : vv_mesh_load(&m, rq->path);
+    if (s == VV_OK) {
+        size_t pos = m->n_vertices * 3 * sizeof(float), tri = m->n_triangles * 3 * sizeof(uint32_t);
+        r->n_vertices = m->n_vertices;
+        r->n_triangles = m->n_triangles;
+        r->bytes = (uint64_t)(pos + tri);
+        char *p = memfd_alloc(pos + tri);
+        if (p) {
+            memcpy(p, m->positions, pos);
+            memcpy(p + pos, m->triangles, tri);
+            fd = memfd_of(p, pos + tri);
+        }
+        if (fd < 0 || fcntl(fd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_SEAL) != 0) {
+            s = vv_error_set(VV_ERR_NOMEM, "the reader could not hand over the mesh");
+            fd = -1;
+        }
+    }
+    vv_mesh_free(m);
     r->status = s;
     if (s != VV_OK) {
         r->err_len = (uint32_t)snprintf(r->err, sizeof r->err, "%s", vv_error_message());
@@ -606,6 +655,8 @@ vv_sandbox_reader_main(int argc, char **argv) {
     vv_volume_set_allocator(memfd_alloc, memfd_release);
     if (rq.op == SBX_OP_DICOM_LIST)
         list_series(&rq, &r);
+    if (rq.op == SBX_OP_MESH)
+        read_mesh(&rq, &r);
     vv_format f = (vv_format)rq.format;
     if (f == VV_FORMAT_AUTO) {
         f = vv_format_detect(rq.path);
@@ -1064,11 +1115,57 @@ series_from_reply(vv_dicom_series **out, int *n, const sbx_reply *r, int fd, con
     return VV_OK;
 }
 
+/* The mesh of a result reply and its memfd (copied into a new mesh, every
+ * index checked; normals computed here). Owns @p fd. */
+static vv_status
+mesh_from_reply(vv_mesh **out, const sbx_reply *r, int fd, const char *file) {
+    struct stat st;
+    int seals = fd >= 0 ? fcntl(fd, F_GET_SEALS) : -1;
+    const uint64_t nv = r->n_vertices, nt = r->n_triangles;
+    vv_status s = VV_OK;
+    if (fd < 0 || nv < 3 || nt < 1 || nv > VV_MESH_MAX_ELEMENTS || nt > VV_MESH_MAX_ELEMENTS ||
+        r->bytes != nv * 3 * sizeof(float) + nt * 3 * sizeof(uint32_t) || fstat(fd, &st) != 0 ||
+        (uint64_t)st.st_size < r->bytes || seals < 0 || !(seals & F_SEAL_SHRINK)) {
+        if (fd >= 0)
+            close(fd);
+        return vv_error_set(VV_ERR_FORMAT, "mesh: %s: the reader's mesh is malformed", file);
+    }
+    void *p = mmap(NULL, (size_t)r->bytes, PROT_READ, MAP_SHARED, fd, 0);
+    int e = errno;
+    close(fd);
+    if (p == MAP_FAILED)
+        return vv_error_set(VV_ERR_NOMEM, "mesh: %s: cannot map the reader's %llu bytes: %s", file,
+                            (unsigned long long)r->bytes, strerror(e));
+    const float *pos = p;
+    const uint32_t *tri = (const uint32_t *)((const char *)p + nv * 3 * sizeof(float));
+    vv_mesh *m = NULL;
+    if ((s = vv_mesh_new(&m)) == VV_OK &&
+        (s = vv_mesh_reserve(m, (size_t)nv, (size_t)nt)) == VV_OK) {
+        memcpy(m->positions, pos, (size_t)nv * 3 * sizeof(float));
+        m->n_vertices = (size_t)nv;
+        for (uint64_t i = 0; i < 3 * nv && s == VV_OK; i++)
+            if (!isfinite(m->positions[i]))
+                s = vv_error_set(VV_ERR_FORMAT, "mesh: %s: the reader's mesh has a broken vertex",
+                                 file);
+        for (uint64_t t = 0; t < nt && s == VV_OK; t++) /* checks every index */
+            s = vv_mesh_add_triangle(m, tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]);
+        if (s == VV_OK)
+            s = vv_mesh_compute_normals(m);
+    }
+    munmap(p, (size_t)r->bytes);
+    if (s != VV_OK) {
+        vv_mesh_free(m);
+        return vv_error_prefix(s, "mesh: %s: the reader's result", file);
+    }
+    *out = m;
+    return VV_OK;
+}
+
 /* vv_sandbox_take_message for the answer to @p op: a volume in *@p out, or
  * the series in *@p ser (*@p nser of them). */
 static int
 take_message(int op, const void *msg, size_t len, int fd, vv_format *seen, const char *file,
-             vv_volume **out, vv_dicom_series **ser, int *nser, vv_status *status) {
+             vv_volume **out, vv_dicom_series **ser, int *nser, vv_mesh **mesh, vv_status *status) {
     if (out)
         *out = NULL;
     *status = VV_OK;
@@ -1110,6 +1207,8 @@ take_message(int op, const void *msg, size_t len, int fd, vv_format *seen, const
                                            fmt_name, file);
     } else if (op == SBX_OP_DICOM_LIST) {
         *status = series_from_reply(ser, nser, r, fd, file);
+    } else if (op == SBX_OP_MESH) {
+        *status = mesh_from_reply(mesh, r, fd, file);
     } else {
         *status = volume_from_reply(out, r, fd, fmt_name, file);
     }
@@ -1120,14 +1219,14 @@ take_message(int op, const void *msg, size_t len, int fd, vv_format *seen, const
 int
 vv_sandbox_take_message(const void *msg, size_t len, int fd, vv_format *seen, const char *file,
                         vv_volume **out, vv_status *status) {
-    return take_message(SBX_OP_VOLUME, msg, len, fd, seen, file, out, NULL, NULL, status);
+    return take_message(SBX_OP_VOLUME, msg, len, fd, seen, file, out, NULL, NULL, NULL, status);
 }
 
 /* A reader's run for @p op on @p path: the volume in *@p out, or the
  * series in *@p ser (*@p nser). */
 static vv_status
 run_reader(int op, const char *path, vv_format f, const vv_load_options *opt, vv_volume **out,
-           vv_dicom_series **ser, int *nser) {
+           vv_dicom_series **ser, int *nser, vv_mesh **mesh) {
     const char *file = vv_path_basename(path);
     if (strlen(path) >= SBX_MAX_PATH)
         return vv_error_set(VV_ERR_LIMIT, "load: %s: a path of over %d bytes", file,
@@ -1227,7 +1326,7 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt, vv
             malformed = 1;
             break;
         }
-        int k = take_message(op, r, (size_t)got, passed, &seen, file, out, ser, nser, &s);
+        int k = take_message(op, r, (size_t)got, passed, &seen, file, out, ser, nser, mesh, &s);
         result = k > 0;
         malformed = k < 0;
     }
@@ -1247,8 +1346,8 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt, vv
         peak = (uint64_t)ru.ru_maxrss * 1024u;
     }
     const vv_volume_format *rec = record_of(seen);
-    const char *fmt_name = rec ? rec->name : "load";
-    const char *title = rec ? rec->title : "file";
+    const char *fmt_name = op == SBX_OP_MESH ? "mesh" : rec ? rec->name : "load";
+    const char *title = op == SBX_OP_MESH ? "mesh" : rec ? rec->title : "file";
     if (!r) {
         s = vv_error_set(VV_ERR_NOMEM, "out of memory");
     } else if (malformed) {
@@ -1266,7 +1365,7 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt, vv
 vv_status
 vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_load_options *opt) {
     *out = NULL;
-    return run_reader(SBX_OP_VOLUME, path, f, opt, out, NULL, NULL);
+    return run_reader(SBX_OP_VOLUME, path, f, opt, out, NULL, NULL, NULL);
 }
 
 vv_status
@@ -1275,5 +1374,13 @@ vv_sandbox_dicom_list(vv_dicom_series **out, int *n, const char *path) {
     *n = 0;
     vv_load_options o;
     vv_load_options_init(&o);
-    return run_reader(SBX_OP_DICOM_LIST, path, VV_FORMAT_DICOM, &o, NULL, out, n);
+    return run_reader(SBX_OP_DICOM_LIST, path, VV_FORMAT_DICOM, &o, NULL, out, n, NULL);
+}
+
+vv_status
+vv_sandbox_mesh_load(vv_mesh **out, const char *path) {
+    *out = NULL;
+    vv_load_options o;
+    vv_load_options_init(&o);
+    return run_reader(SBX_OP_MESH, path, VV_FORMAT_UNKNOWN, &o, NULL, NULL, NULL, out);
 }

@@ -14,6 +14,7 @@
 #define VOLVIS_IO_SANDBOX_H
 
 #include "volvis/io.h"
+#include "volvis/mesh.h"
 #include "volvis/sys/format.h"
 #include "volvis/sys/sandbox.h"
 
@@ -42,6 +43,7 @@ typedef struct sbx_reply {
     double spacing[3], origin[3], direction[9];
     int32_t unit, data_origin, modification, space;
     uint64_t bytes;
+    uint64_t n_vertices, n_triangles; /* a mesh: positions then triangles */
     uint32_t err_len;
     char err[SBX_MAX_ERROR];
 } sbx_reply;
@@ -76,6 +78,16 @@ vv_status vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f,
  * malformed"). Thread-safe.
  */
 vv_status vv_sandbox_dicom_list(vv_dicom_series **out, int *n, const char *path);
+
+/**
+ * vv_mesh_load's contract, in the sandboxed reader (Assimp): the
+ * positions and triangles come back in a sealed memfd and are copied into
+ * a new mesh (every index checked against the vertex count; normals
+ * computed again here). Errors: the child's own, or as
+ * vv_sandbox_volume_load ("mesh: a.ply: the mesh reader crashed (SIGABRT);
+ * the file is malformed"). Thread-safe.
+ */
+vv_status vv_sandbox_mesh_load(vv_mesh **out, const char *path);
 
 /**
  * What the parent makes of one message of a reader: @p msg, @p len bytes as

@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -253,6 +254,72 @@ test_fuzz_corpus(void **state) {
     assert_true(n >= 20);
 }
 
+/* Meshes (Assimp) through the sandbox: the same vertices, triangles and
+ * normals as read in this process; an abort in the reader is one line. */
+static void
+test_meshes(void **state) {
+    (void)state;
+    static const char *const files[] = {"meshes/bunny.ply", "meshes/cow.obj", "meshes/knot1.off",
+                                        "meshes/propeller.stl", "meshes/42400-IDGH.stl"};
+    int n = 0;
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        if (!vt_have_data(files[i]))
+            continue;
+        vv_mesh *a = NULL, *b = NULL;
+        setenv("VOLVIS_SANDBOX", "0", 1);
+        vt_ok(vv_mesh_load(&a, vt_data(files[i])));
+        setenv("VOLVIS_SANDBOX", "1", 1);
+        vt_ok(vv_mesh_load(&b, vt_data(files[i])));
+        unsetenv("VOLVIS_SANDBOX");
+        assert_int_equal(a->n_vertices, b->n_vertices);
+        assert_int_equal(a->n_triangles, b->n_triangles);
+        assert_memory_equal(a->positions, b->positions, a->n_vertices * 3 * sizeof(float));
+        assert_memory_equal(a->triangles, b->triangles, a->n_triangles * 3 * sizeof(uint32_t));
+        assert_non_null(b->normals);
+        assert_memory_equal(a->normals, b->normals, a->n_vertices * 3 * sizeof(float));
+        printf("# %s: %zu vertices, %zu triangles, the same\n", files[i], b->n_vertices,
+               b->n_triangles);
+        vv_mesh_free(a);
+        vv_mesh_free(b);
+        n++;
+    }
+    if (n == 0)
+        vt_skip("../shared/data/meshes is missing");
+    setenv("VOLVIS_SANDBOX_INJECT", "abort", 1);
+    vv_mesh *m = NULL;
+    vv_status s = vv_mesh_load(&m, vt_data(files[0]));
+    unsetenv("VOLVIS_SANDBOX_INJECT");
+    printf("# abort: %s\n", vv_error_message());
+    assert_true(s < 0);
+    assert_null(m);
+    assert_null(strchr(vv_error_message(), '\n'));
+    assert_non_null(
+        strstr(vv_error_message(), "mesh: bunny.ply: the mesh reader crashed (SIGABRT)"));
+    assert_no_child();
+}
+
+/* A caller's file-size limit (ulimit -f) does not cut the reader's memfd:
+ * the CT head (13.5 MiB of voxels) loads under a soft limit of 4 KiB. */
+static void
+test_file_size_limit(void **state) {
+    (void)state;
+    if (!vt_have_data("volumes/ct_head.nrrd"))
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    struct rlimit old, lim;
+    assert_int_equal(getrlimit(RLIMIT_FSIZE, &old), 0);
+    lim = old;
+    lim.rlim_cur = 4096;
+    assert_int_equal(setrlimit(RLIMIT_FSIZE, &lim), 0);
+    vv_volume *v = NULL;
+    vv_status s = load(&v, vt_data("volumes/ct_head.nrrd"), 1);
+    assert_int_equal(setrlimit(RLIMIT_FSIZE, &old), 0);
+    if (s != VV_OK)
+        fail_msg("under a file-size limit: %s", vv_error_message());
+    assert_int_equal(v->dims[2], 108);
+    vv_volume_free(v);
+    assert_no_child();
+}
+
 /* A memfd holding @p n bytes of @p d, sealed with @p seals. */
 static int
 memfd_with(const void *d, size_t n, int seals) {
@@ -393,6 +460,7 @@ main(void) {
         cmocka_unit_test(test_same_volume), cmocka_unit_test(test_injected_faults),
         cmocka_unit_test(test_cli),         cmocka_unit_test(test_reader_alone_and_missing),
         cmocka_unit_test(test_fuzz_corpus), cmocka_unit_test(test_hostile_replies),
+        cmocka_unit_test(test_meshes),      cmocka_unit_test(test_file_size_limit),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
