@@ -2,16 +2,16 @@
  * What the reader sandbox costs (issue 33): loading through volvis-reader
  * (a fresh process, Landlock, seccomp, the voxels handed back in a memfd)
  * against loading in this process (VOLVIS_SANDBOX=0), in the same run, on
- *   - the CT head (../shared/data/volumes/ct_head.nrrd, 256 x 256 x 113 u16),
+ *   - the CT head (../shared/data/volumes/ct_head.nrrd, 256 x 256 x 108 i16),
  *   - a 512^3 u16 NRRD (raw encoding, written into a temporary folder),
  *   - a 512 x 512 x 300 DICOM series (scripts/dicom_testdata.py bench,
  *     python3-pydicom and python3-numpy; skipped with a message without).
  *
  *   bench_sandbox [--repeat N] [--keep]
  *
- * Each way runs in processes of its own (a worker: one load that warms
- * the process, its page cache and its reader started ahead, then three
- * timed loads, their median); N workers of each way (default 7) alternate,
+ * Each way runs in processes of its own (a worker: two loads that warm
+ * the process, its page cache and (from the second) its reader started
+ * ahead, then three timed loads, their median); N workers of each way (default 7) alternate,
  * and the figure is the median of their medians. In one process the two
  * ways changed each other's times (malloc's heap and thresholds).
  * Prints anchor lines (op=load_inprocess, op=load_sandbox) and, on stderr,
