@@ -540,47 +540,66 @@ set_limits(const sbx_request *rq) {
     prctl(PR_SET_DUMPABLE, 0, 0, 0, 0);
 }
 
-/* The child's answer to SBX_OP_DICOM_LIST: the vv_dicom_series array in
- * a sealed memfd (bytes = n * sizeof (vv_dicom_series), dims[0] = n). */
+/* The child names the format it reads (so that a crash can be named after
+ * its reader), then misbehaves when a test asked it to. */
 static void
-list_series(const sbx_request *rq, sbx_reply *r) {
-    r->format = VV_FORMAT_DICOM;
-    sbx_reply fr = {.magic = SBX_MAGIC, .kind = SBX_FORMAT, .format = VV_FORMAT_DICOM};
+announce(const sbx_request *rq, vv_format f) {
+    sbx_reply fr = {.magic = SBX_MAGIC, .kind = SBX_FORMAT, .format = (int32_t)f};
     send_reply(&fr, -1);
     if (rq->inject > INJECT_NONE && rq->inject < N_INJECT)
         misbehave(rq->inject);
-    vv_dicom_series *ser = NULL;
-    int n = 0, fd = -1;
-    vv_status s = rq->inject == INJECT_OPEN ? VV_ERR_IO : vv_dicom_list(&ser, &n, rq->path);
-    if (s == VV_OK) {
-        r->bytes = (uint64_t)n * sizeof *ser;
-        r->dims[0] = n;
-        fd = memfd_of(ser, (size_t)r->bytes); /* a copy in a new memfd */
-        if (fd < 0 || fcntl(fd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_SEAL) != 0) {
-            s = vv_error_set(VV_ERR_NOMEM, "the reader could not hand over %d series", n);
-            fd = -1;
-        }
+}
+
+/* @p fd sealed for handing over (the parent maps it), or -1 when it is -1
+ * or cannot be sealed (then closed). */
+static int
+sealed(int fd) {
+    if (fd >= 0 && fcntl(fd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_SEAL) != 0) {
+        close(fd);
+        return -1;
     }
-    free(ser);
+    return fd;
+}
+
+/* The child's last message: @p r with status @p s (and the error trace
+ * when it failed) and @p fd, the memfd of the result; then it exits. */
+static _Noreturn void
+finish(sbx_reply *r, vv_status s, int fd) {
     r->status = s;
     if (s != VV_OK) {
         r->err_len = (uint32_t)snprintf(r->err, sizeof r->err, "%s", vv_error_message());
         if (r->err_len >= sizeof r->err)
             r->err_len = sizeof r->err - 1;
     }
-    send_reply(r, fd);
+    send_reply(r, s == VV_OK ? fd : -1);
     _exit(0);
+}
+
+/* The child's answer to SBX_OP_DICOM_LIST: the vv_dicom_series array in
+ * a sealed memfd (bytes = n * sizeof (vv_dicom_series), dims[0] = n). */
+static _Noreturn void
+list_series(const sbx_request *rq, sbx_reply *r) {
+    r->format = VV_FORMAT_DICOM;
+    announce(rq, VV_FORMAT_DICOM);
+    vv_dicom_series *ser = NULL;
+    int n = 0, fd = -1;
+    vv_status s = rq->inject == INJECT_OPEN ? VV_ERR_IO : vv_dicom_list(&ser, &n, rq->path);
+    if (s == VV_OK) {
+        r->bytes = (uint64_t)n * sizeof *ser;
+        r->dims[0] = n;
+        if ((fd = sealed(memfd_of(ser, (size_t)r->bytes))) < 0) /* a copy in a new memfd */
+            s = vv_error_set(VV_ERR_NOMEM, "the reader could not hand over %d series", n);
+    }
+    free(ser);
+    finish(r, s, fd);
 }
 
 /* The child's answer to SBX_OP_MESH: the positions (3 float32 a vertex)
  * then the triangles (3 uint32 each) in a sealed memfd. */
-static void
+static _Noreturn void
 read_mesh(const sbx_request *rq, sbx_reply *r) {
     r->format = VV_FORMAT_UNKNOWN;
-    sbx_reply fr = {.magic = SBX_MAGIC, .kind = SBX_FORMAT, .format = VV_FORMAT_UNKNOWN};
-    send_reply(&fr, -1);
-    if (rq->inject > INJECT_NONE && rq->inject < N_INJECT)
-        misbehave(rq->inject);
+    announce(rq, VV_FORMAT_UNKNOWN);
     vv_mesh *m = NULL;
     int fd = -1;
     vv_status s = rq->inject == INJECT_OPEN ? VV_ERR_IO : vv_mesh_load(&m, rq->path);
@@ -593,22 +612,13 @@ read_mesh(const sbx_request *rq, sbx_reply *r) {
         if (p) {
             memcpy(p, m->positions, pos);
             memcpy(p + pos, m->triangles, tri);
-            fd = memfd_of(p, pos + tri);
+            fd = sealed(memfd_of(p, pos + tri));
         }
-        if (fd < 0 || fcntl(fd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_SEAL) != 0) {
+        if (fd < 0)
             s = vv_error_set(VV_ERR_NOMEM, "the reader could not hand over the mesh");
-            fd = -1;
-        }
     }
     vv_mesh_free(m);
-    r->status = s;
-    if (s != VV_OK) {
-        r->err_len = (uint32_t)snprintf(r->err, sizeof r->err, "%s", vv_error_message());
-        if (r->err_len >= sizeof r->err)
-            r->err_len = sizeof r->err - 1;
-    }
-    send_reply(r, fd);
-    _exit(0);
+    finish(r, s, fd);
 }
 
 int
@@ -645,11 +655,10 @@ vv_sandbox_reader_main(int argc, char **argv) {
         (landlock_restrict(rq.path) != 0 && errno != ENOSYS && errno != EOPNOTSUPP) ||
         seccomp_restrict() != 0) {
         int e = errno;
-        r.status = VV_ERR_UNSUPPORTED;
-        r.err_len = (uint32_t)snprintf(r.err, sizeof r.err,
-                                       "the reader sandbox could not be set up (%s)", strerror(e));
-        send_reply(&r, -1);
-        _exit(0);
+        finish(&r,
+               vv_error_set(VV_ERR_UNSUPPORTED, "the reader sandbox could not be set up (%s)",
+                            strerror(e)),
+               -1);
     }
     /* from here on, what the file makes the parser do stays in here */
     vv_volume_set_allocator(memfd_alloc, memfd_release);
@@ -663,10 +672,7 @@ vv_sandbox_reader_main(int argc, char **argv) {
         if (f == VV_FORMAT_UNKNOWN && rq.has_raw)
             f = VV_FORMAT_RAW;
     }
-    sbx_reply fr = {.magic = SBX_MAGIC, .kind = SBX_FORMAT, .format = (int32_t)f};
-    send_reply(&fr, -1);
-    if (rq.inject > INJECT_NONE && rq.inject < N_INJECT)
-        misbehave(rq.inject);
+    announce(&rq, f);
     vv_volume *v = NULL;
     vv_status s = VV_OK;
     if (rq.inject == INJECT_OPEN) {
@@ -682,7 +688,6 @@ vv_sandbox_reader_main(int argc, char **argv) {
         s = vv_volume_load(&v, rq.path, &o);
     }
     r.format = (int32_t)f;
-    r.status = s;
     int fd = -1;
     if (s == VV_OK) {
         memcpy(r.dims, v->dims, sizeof r.dims);
@@ -695,21 +700,11 @@ vv_sandbox_reader_main(int argc, char **argv) {
         r.modification = v->modification;
         r.space = v->space;
         r.bytes = vv_volume_voxel_count(v) * vv_voxel_type_size(v->type);
-        fd = memfd_of(v->data, (size_t)r.bytes);
-        if (fd < 0 || fcntl(fd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_SEAL) != 0) {
-            r.status = VV_ERR_NOMEM;
-            fd = -1;
-            snprintf(r.err, sizeof r.err, "the reader could not hand over %llu bytes of voxels",
-                     (unsigned long long)r.bytes);
-            r.err_len = (uint32_t)strlen(r.err);
-        }
-    } else {
-        r.err_len = (uint32_t)snprintf(r.err, sizeof r.err, "%s", vv_error_message());
-        if (r.err_len >= sizeof r.err)
-            r.err_len = sizeof r.err - 1;
+        if ((fd = sealed(memfd_of(v->data, (size_t)r.bytes))) < 0)
+            s = vv_error_set(VV_ERR_NOMEM, "the reader could not hand over %llu bytes of voxels",
+                             (unsigned long long)r.bytes);
     }
-    send_reply(&r, fd);
-    _exit(0);
+    finish(&r, s, fd);
 }
 
 /* ---- the parent ------------------------------------------------------------ */
