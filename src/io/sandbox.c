@@ -69,11 +69,6 @@ static const char *const inject_names[] = {"",       "abort", "segv", "open", "w
                                            "execve", "fork",  "loop", "oom",  "reply"};
 #define N_INJECT ((int)(sizeof inject_names / sizeof inject_names[0]))
 
-/* What the reader is asked for: a volume (vv_volume_load), the image
- * series of a DICOM file, folder or DICOMDIR (vv_dicom_list), or a mesh
- * (vv_mesh_load, Assimp). */
-enum { SBX_OP_VOLUME = 0, SBX_OP_DICOM_LIST = 1, SBX_OP_MESH = 2 };
-
 typedef struct sbx_request {
     uint32_t magic, version;
     int32_t format, has_raw;
@@ -1140,8 +1135,8 @@ mesh_from_reply(vv_mesh **out, const sbx_reply *r, int fd, const char *file) {
         m->n_vertices = (size_t)nv;
         for (uint64_t i = 0; i < 3 * nv && s == VV_OK; i++)
             if (!isfinite(m->positions[i]))
-                s = vv_error_set(VV_ERR_FORMAT, "mesh: %s: the reader's mesh has a broken vertex",
-                                 file);
+                s = vv_error_set(VV_ERR_FORMAT, "vertex %llu is not finite",
+                                 (unsigned long long)(i / 3));
         for (uint64_t t = 0; t < nt && s == VV_OK; t++) /* checks every index */
             s = vv_mesh_add_triangle(m, tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]);
         if (s == VV_OK)
@@ -1156,14 +1151,11 @@ mesh_from_reply(vv_mesh **out, const sbx_reply *r, int fd, const char *file) {
     return VV_OK;
 }
 
-/* vv_sandbox_take_message for the answer to @p op: a volume in *@p out, or
- * the series in *@p ser (*@p nser of them). */
-static int
-take_message(int op, const void *msg, size_t len, int fd, vv_format *seen, const char *file,
-             vv_volume **out, vv_dicom_series **ser, int *nser, vv_mesh **mesh, vv_status *status) {
-    if (out)
-        *out = NULL;
-    *status = VV_OK;
+int
+vv_sandbox_take_message(int op, const void *msg, size_t len, int fd, vv_format *seen,
+                        const char *file, vv_sandbox_answer *a) {
+    memset(a, 0, sizeof *a);
+    vv_status *status = &a->status;
     sbx_reply *r = malloc(sizeof *r);
     if (!r) {
         if (fd >= 0)
@@ -1201,20 +1193,14 @@ take_message(int op, const void *msg, size_t len, int fd, vv_format *seen, const
                             : vv_error_set(e, "%s: %s: the reader failed without a message",
                                            fmt_name, file);
     } else if (op == SBX_OP_DICOM_LIST) {
-        *status = series_from_reply(ser, nser, r, fd, file);
+        *status = series_from_reply(&a->series, &a->n_series, r, fd, file);
     } else if (op == SBX_OP_MESH) {
-        *status = mesh_from_reply(mesh, r, fd, file);
+        *status = mesh_from_reply(&a->mesh, r, fd, file);
     } else {
-        *status = volume_from_reply(out, r, fd, fmt_name, file);
+        *status = volume_from_reply(&a->volume, r, fd, fmt_name, file);
     }
     free(r);
     return 1;
-}
-
-int
-vv_sandbox_take_message(const void *msg, size_t len, int fd, vv_format *seen, const char *file,
-                        vv_volume **out, vv_status *status) {
-    return take_message(SBX_OP_VOLUME, msg, len, fd, seen, file, out, NULL, NULL, NULL, status);
 }
 
 /* A reader's run for @p op on @p path: the volume in *@p out, or the
@@ -1321,7 +1307,19 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt, vv
             malformed = 1;
             break;
         }
-        int k = take_message(op, r, (size_t)got, passed, &seen, file, out, ser, nser, mesh, &s);
+        vv_sandbox_answer ans;
+        int k = vv_sandbox_take_message(op, r, (size_t)got, passed, &seen, file, &ans);
+        if (k > 0) {
+            s = ans.status;
+            if (out)
+                *out = ans.volume;
+            if (ser) {
+                *ser = ans.series;
+                *nser = ans.n_series;
+            }
+            if (mesh)
+                *mesh = ans.mesh;
+        }
         result = k > 0;
         malformed = k < 0;
     }

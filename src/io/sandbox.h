@@ -89,20 +89,32 @@ vv_status vv_sandbox_dicom_list(vv_dicom_series **out, int *n, const char *path)
  */
 vv_status vv_sandbox_mesh_load(vv_mesh **out, const char *path);
 
+/** What the reader is asked for (sbx_request.op). */
+enum { SBX_OP_VOLUME = 0, SBX_OP_DICOM_LIST = 1, SBX_OP_MESH = 2 };
+
+/** What the parent made of a reader's result: one of the three, by op. */
+typedef struct vv_sandbox_answer {
+    vv_volume *volume;       /**< SBX_OP_VOLUME: owned by the caller */
+    vv_dicom_series *series; /**< SBX_OP_DICOM_LIST: free() it */
+    int n_series;            /**< entries of series */
+    vv_mesh *mesh;           /**< SBX_OP_MESH: owned by the caller */
+    vv_status status;        /**< VV_OK, or the error (set with vv_error_set) */
+} vv_sandbox_answer;
+
 /**
- * What the parent makes of one message of a reader: @p msg, @p len bytes as
- * received (untrusted: any bytes), with @p fd the descriptor it carried or
- * -1 (owned: closed, or mapped and closed). Returns 0 when more is to come
- * (a format message: *@p seen is set to the format it names when that is
- * a known one), 1 for the result: *@p status is VV_OK and *@p out the volume
- * (a shared mapping of @p fd, released by vv_volume_free), or the error the
- * reader sent or found in its result (VV_ERR_FORMAT, VV_ERR_LIMIT,
- * VV_ERR_NOMEM; set with vv_error_set, naming @p file), and -1 when the
- * message is malformed (no error set). Thread-safe; fuzzed by
+ * What the parent makes of one message of a reader asked for @p op: @p msg,
+ * @p len bytes as received (untrusted: any bytes), with @p fd the
+ * descriptor it carried or -1 (owned: closed, or mapped and closed).
+ * Returns 0 when more is to come (a format message: *@p seen is set to the
+ * format it names when that is a known one), 1 for the result, in *@p a
+ * (zeroed first): a->status is VV_OK with the volume, series or mesh, or
+ * the error the reader sent or found in its result (VV_ERR_FORMAT,
+ * VV_ERR_LIMIT, VV_ERR_NOMEM, naming @p file), and -1 when the message is
+ * malformed (no error set). Thread-safe; fuzzed by
  * tests/fuzz/fuzz_sandbox.c.
  */
-int vv_sandbox_take_message(const void *msg, size_t len, int fd, vv_format *seen, const char *file,
-                            vv_volume **out, vv_status *status);
+int vv_sandbox_take_message(int op, const void *msg, size_t len, int fd, vv_format *seen,
+                            const char *file, vv_sandbox_answer *a);
 
 /**
  * The format whose signature @p path has (vv_format_detect's first pass

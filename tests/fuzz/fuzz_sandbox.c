@@ -10,12 +10,15 @@
  * is sealed against shrinking, 4 against growing; 8 the message is made
  * plausible (the magic, a kind, err_len fitting the length, and with 16 the
  * byte count naming the memfd's size), so the fuzzer spends its time past
- * the first checks; 32 a second message follows the format message.
+ * the first checks; 32 a second message follows the format message;
+ * 64 and 128 pick the answer asked for: a volume, a DICOM series list or a
+ * mesh (with 8, a mesh's counts are made to fill the memfd).
  */
 #define _GNU_SOURCE
 #include <fcntl.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
 #include <unistd.h>
@@ -70,22 +73,50 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         if (flags & 16)
             msg.bytes = nrest;
     }
+    const int ops[4] = {SBX_OP_VOLUME, SBX_OP_DICOM_LIST, SBX_OP_MESH, SBX_OP_VOLUME};
+    const int op = ops[(flags >> 6) & 3];
+    if ((flags & 8) && op == SBX_OP_MESH && msg.n_vertices < 1024) {
+        msg.n_triangles = nrest > 36 ? (nrest - 36) / 12 : 1;
+        msg.n_vertices = 3;
+    }
     vv_format seen = VV_FORMAT_NRRD;
-    vv_volume *v = NULL;
-    vv_status st = VV_OK;
+    vv_sandbox_answer a;
     int fd = flags & 1 ? make_memfd(rest, nrest, flags) : -1;
-    int k = vv_sandbox_take_message(&msg, len, fd, &seen, "in.nrrd", &v, &st);
+    int k = vv_sandbox_take_message(op, &msg, len, fd, &seen, "in.nrrd", &a);
     if (k == 0 && (flags & 32)) {
         /* the result after the format message: the same bytes as a result */
         msg.kind = SBX_RESULT;
         fd = flags & 1 ? make_memfd(rest, nrest, flags) : -1;
-        k = vv_sandbox_take_message(&msg, len, fd, &seen, "in.nrrd", &v, &st);
+        k = vv_sandbox_take_message(op, &msg, len, fd, &seen, "in.nrrd", &a);
     }
-    if (k > 0 && st == VV_OK)
-        fuzz_check_volume(v);
-    else if (v)
-        __builtin_trap(); /* a volume with an error or without a result */
-    else if (k > 0 && strpbrk(vv_error_message(), "\n\r\x1b"))
-        __builtin_trap(); /* the error is one line of text */
+    const int got = a.volume || a.series || a.mesh;
+    if (k <= 0 || a.status != VV_OK) {
+        if (got)
+            __builtin_trap(); /* a result with an error or without a result */
+        if (k > 0 && strpbrk(vv_error_message(), "\n\r\x1b"))
+            __builtin_trap(); /* the error is one line of text */
+        return 0;
+    }
+    if (op == SBX_OP_VOLUME) {
+        fuzz_check_volume(a.volume);
+    } else if (op == SBX_OP_DICOM_LIST) {
+        if (!a.series || a.n_series < 1)
+            __builtin_trap();
+        for (int i = 0; i < a.n_series; i++) /* every string ends in its field */
+            if (strnlen(a.series[i].first_file, sizeof a.series[i].first_file) ==
+                    sizeof a.series[i].first_file ||
+                strnlen(a.series[i].patient_id, sizeof a.series[i].patient_id) ==
+                    sizeof a.series[i].patient_id)
+                __builtin_trap();
+        free(a.series);
+    } else {
+        vv_mesh *m = a.mesh;
+        if (!m || !m->normals)
+            __builtin_trap();
+        for (size_t t = 0; t < 3 * m->n_triangles; t++) /* every index names a vertex */
+            if (m->triangles[t] >= m->n_vertices)
+                __builtin_trap();
+        vv_mesh_free(m);
+    }
     return 0;
 }

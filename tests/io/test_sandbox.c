@@ -345,7 +345,10 @@ hostile(const char *what, const sbx_reply *r, size_t len, size_t fd_bytes, int s
     vv_status s = VV_OK;
     vv_error_clear();
     int fd = fd_bytes ? memfd_with(g_vox, fd_bytes, seals) : -1;
-    int k = vv_sandbox_take_message(r, len, fd, &seen, "a.nrrd", &v, &s);
+    vv_sandbox_answer a;
+    int k = vv_sandbox_take_message(SBX_OP_VOLUME, r, len, fd, &seen, "a.nrrd", &a);
+    v = a.volume;
+    s = a.status;
     printf("# %s: %d %s\n", what, k, k > 0 && s != VV_OK ? vv_error_message() : "");
     if (k != expect_k)
         fail_msg("%s: %d, not %d", what, k, expect_k);
@@ -389,9 +392,12 @@ test_hostile_replies(void **state) {
     vv_format seen = VV_FORMAT_NRRD;
     vv_volume *v = NULL;
     vv_status s;
-    assert_int_equal(
-        vv_sandbox_take_message(&ok, len, memfd_with(g_vox, all, sealed), &seen, "a.nrrd", &v, &s),
-        1);
+    vv_sandbox_answer a;
+    assert_int_equal(vv_sandbox_take_message(SBX_OP_VOLUME, &ok, len,
+                                             memfd_with(g_vox, all, sealed), &seen, "a.nrrd", &a),
+                     1);
+    v = a.volume;
+    s = a.status;
     vt_ok(s);
     assert_non_null(v);
     assert_int_equal(((uint16_t *)v->data)[63], 1063);
@@ -448,8 +454,76 @@ test_hostile_replies(void **state) {
     hostile("an unknown format", &r, len, all, sealed, 0, NULL);
     r.format = VV_FORMAT_TIFF;
     seen = VV_FORMAT_NRRD;
-    assert_int_equal(vv_sandbox_take_message(&r, len, -1, &seen, "a.nrrd", &v, &s), 0);
+    assert_int_equal(vv_sandbox_take_message(SBX_OP_VOLUME, &r, len, -1, &seen, "a.nrrd", &a), 0);
     assert_int_equal(seen, VV_FORMAT_TIFF);
+
+    /* a mesh: a well-formed one (a tetrahedron), an index past the
+     * vertices, a vertex that is not finite, counts past the memfd */
+    typedef struct {
+        float p[12];
+        uint32_t t[12];
+    } tet_t;
+    const tet_t tet = {{0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3}};
+    sbx_reply mr = ok;
+    mr.n_vertices = 4;
+    mr.n_triangles = 4;
+    mr.bytes = sizeof tet;
+    const char *expect[] = {NULL, "names a vertex >= 4", "the reader's result: vertex 1 is not finite", "malformed"};
+    for (int c = 0; c < 4; c++) {
+        tet_t t = tet;
+        sbx_reply q = mr;
+        if (c == 1)
+            t.t[7] = 4;
+        if (c == 2)
+            t.p[5] = NAN;
+        if (c == 3)
+            q.n_vertices = 1u << 20;
+        int k = vv_sandbox_take_message(SBX_OP_MESH, &q, len, memfd_with(&t, sizeof t, sealed),
+                                        &seen, "t.ply", &a);
+        printf("# mesh case %d: %d %s\n", c, k, a.status ? vv_error_message() : "");
+        assert_int_equal(k, 1);
+        if (!expect[c]) {
+            vt_ok(a.status);
+            assert_int_equal(a.mesh->n_triangles, 4);
+            assert_non_null(a.mesh->normals);
+            vv_mesh_free(a.mesh);
+        } else {
+            assert_null(a.mesh);
+            assert_non_null(strstr(vv_error_message(), expect[c]));
+        }
+    }
+    /* a series list: strings without their end are ended in their field */
+    vv_dicom_series list[2];
+    memset(list, 'x', sizeof list);
+    list[0].number = 1;
+    list[0].dims[0] = list[0].dims[1] = list[0].dims[2] = list[0].n_files = 4;
+    list[1] = list[0];
+    sbx_reply lr = ok;
+    lr.dims[0] = 2;
+    lr.bytes = sizeof list;
+    assert_int_equal(vv_sandbox_take_message(SBX_OP_DICOM_LIST, &lr, len,
+                                             memfd_with(list, sizeof list, sealed), &seen, "ct",
+                                             &a),
+                     1);
+    vt_ok(a.status);
+    assert_int_equal(a.n_series, 2);
+    assert_int_equal(strlen(a.series[1].uid), sizeof a.series[1].uid - 1);
+    assert_int_equal(strlen(a.series[1].patient_id), sizeof a.series[1].patient_id - 1);
+    free(a.series);
+    lr.dims[0] = 3; /* more than the memfd holds */
+    assert_int_equal(vv_sandbox_take_message(SBX_OP_DICOM_LIST, &lr, len,
+                                             memfd_with(list, sizeof list, sealed), &seen, "ct",
+                                             &a),
+                     1);
+    assert_null(a.series);
+    assert_non_null(strstr(vv_error_message(), "the reader's list of series is malformed"));
+    list[1].n_files = -1;
+    lr.dims[0] = 2;
+    assert_int_equal(vv_sandbox_take_message(SBX_OP_DICOM_LIST, &lr, len,
+                                             memfd_with(list, sizeof list, sealed), &seen, "ct",
+                                             &a),
+                     1);
+    assert_null(a.series);
     assert_no_child();
 }
 
