@@ -468,7 +468,8 @@ test_hostile_replies(void **state) {
     mr.n_vertices = 4;
     mr.n_triangles = 4;
     mr.bytes = sizeof tet;
-    const char *expect[] = {NULL, "names a vertex >= 4", "the reader's result: vertex 1 is not finite", "malformed"};
+    const char *expect[] = {NULL, "names a vertex >= 4",
+                            "the reader's result: vertex 1 is not finite", "malformed"};
     for (int c = 0; c < 4; c++) {
         tet_t t = tet;
         sbx_reply q = mr;
