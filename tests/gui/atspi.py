@@ -130,14 +130,40 @@ class Session:
                                          env=self.env, stdout=self.log, stderr=subprocess.STDOUT,
                                          cwd=cwd or self.cwd)
         self.wid = self.xdo("search", "--sync", "--name", "^VolVis — ").split()[0]
-        self.xdo("windowmove", self.wid, "0", "0", "windowsize", self.wid,
-                 str(self.window_size[0]), str(self.window_size[1]))
+        self.set_window_size()
         # no window manager gives it the keyboard: the keys of a second launch
         # would go nowhere
         self.xdo("windowfocus", self.wid)
         self._app = None
         self.app()
         return self.app_proc
+
+    def window_geometry(self):
+        """(x, y, width, height) of the main window, as the X server has it."""
+        out = self.xdo("getwindowgeometry", "--shell", self.wid)
+        g = dict(line.split("=", 1) for line in out.split() if "=" in line)
+        return tuple(int(g.get(k, -1)) for k in ("X", "Y", "WIDTH", "HEIGHT"))
+
+    def set_window_size(self, timeout=20):
+        """Moves the main window to (0, 0) at the session's window size, and
+        asks again until the size has held for a second: without a window
+        manager, a window found as soon as it has its title can still be
+        mapped or configured afterwards at its own default size (CI runs saw
+        the 3-D view 477 pixels wide in a window asked to be 1600)."""
+        want = tuple(self.window_size)
+        held, t0 = 0, time.time()
+        while time.time() - t0 < timeout:
+            if self.window_geometry()[2:] == want:
+                held += 1
+                if held >= 3:
+                    return
+            else:
+                held = 0
+                self.xdo("windowmove", self.wid, "0", "0", "windowsize", self.wid,
+                         str(want[0]), str(want[1]))
+            time.sleep(0.4)
+        print(f"warning: the window is {self.window_geometry()[2:]}, not {want}, after "
+              f"{timeout} s", file=sys.stderr)
 
     def __exit__(self, *exc):
         if self.app_proc and self.app_proc.poll() is None:
