@@ -1203,11 +1203,13 @@ vv_sandbox_take_message(int op, const void *msg, size_t len, int fd, vv_format *
     return 1;
 }
 
-/* A reader's run for @p op on @p path: the volume in *@p out, or the
- * series in *@p ser (*@p nser). */
+/* A reader's run for @p op on @p path: its result in *@p ans (zeroed
+ * first); returns ans->status, or the error of a reader that ended without
+ * a result. */
 static vv_status
-run_reader(int op, const char *path, vv_format f, const vv_load_options *opt, vv_volume **out,
-           vv_dicom_series **ser, int *nser, vv_mesh **mesh) {
+run_reader(int op, const char *path, vv_format f, const vv_load_options *opt,
+           vv_sandbox_answer *ans) {
+    memset(ans, 0, sizeof *ans);
     const char *file = vv_path_basename(path);
     if (strlen(path) >= SBX_MAX_PATH)
         return vv_error_set(VV_ERR_LIMIT, "load: %s: a path of over %d bytes", file,
@@ -1307,19 +1309,9 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt, vv
             malformed = 1;
             break;
         }
-        vv_sandbox_answer ans;
-        int k = vv_sandbox_take_message(op, r, (size_t)got, passed, &seen, file, &ans);
-        if (k > 0) {
-            s = ans.status;
-            if (out)
-                *out = ans.volume;
-            if (ser) {
-                *ser = ans.series;
-                *nser = ans.n_series;
-            }
-            if (mesh)
-                *mesh = ans.mesh;
-        }
+        int k = vv_sandbox_take_message(op, r, (size_t)got, passed, &seen, file, ans);
+        if (k > 0)
+            s = ans->status;
         result = k > 0;
         malformed = k < 0;
     }
@@ -1357,23 +1349,29 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt, vv
 
 vv_status
 vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_load_options *opt) {
-    *out = NULL;
-    return run_reader(SBX_OP_VOLUME, path, f, opt, out, NULL, NULL, NULL);
+    vv_sandbox_answer a;
+    vv_status s = run_reader(SBX_OP_VOLUME, path, f, opt, &a);
+    *out = a.volume;
+    return s;
 }
 
 vv_status
 vv_sandbox_dicom_list(vv_dicom_series **out, int *n, const char *path) {
-    *out = NULL;
-    *n = 0;
     vv_load_options o;
     vv_load_options_init(&o);
-    return run_reader(SBX_OP_DICOM_LIST, path, VV_FORMAT_DICOM, &o, NULL, out, n, NULL);
+    vv_sandbox_answer a;
+    vv_status s = run_reader(SBX_OP_DICOM_LIST, path, VV_FORMAT_DICOM, &o, &a);
+    *out = a.series;
+    *n = a.n_series;
+    return s;
 }
 
 vv_status
 vv_sandbox_mesh_load(vv_mesh **out, const char *path) {
-    *out = NULL;
     vv_load_options o;
     vv_load_options_init(&o);
-    return run_reader(SBX_OP_MESH, path, VV_FORMAT_UNKNOWN, &o, NULL, NULL, NULL, out);
+    vv_sandbox_answer a;
+    vv_status s = run_reader(SBX_OP_MESH, path, VV_FORMAT_UNKNOWN, &o, &a);
+    *out = a.mesh;
+    return s;
 }

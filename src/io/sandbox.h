@@ -30,8 +30,12 @@ enum { SBX_FORMAT = 1, SBX_RESULT = 2 };
  * A message of the reader to the parent (sent whole, of
  * offsetof(sbx_reply, err) + err_len bytes): kind SBX_FORMAT names the
  * format it detected; kind SBX_RESULT ends the read with a status (a
- * vv_status), the error trace in err, and on success the volume's
- * geometry, with the voxels (@c bytes of them) in the memfd it carries.
+ * vv_status) and the error trace in err, and on success carries a sealed
+ * memfd of @c bytes bytes: for a volume its voxels (x fastest; the
+ * geometry in the fields), for a DICOM listing dims[0] vv_dicom_series
+ * entries, for a mesh n_vertices positions (3 float32 each, world units)
+ * then n_triangles triangles (3 uint32 vertex indices each). Nothing in it
+ * is trusted: vv_sandbox_take_message checks every field.
  */
 typedef struct sbx_reply {
     uint32_t magic;
