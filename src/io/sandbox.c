@@ -78,7 +78,7 @@ typedef struct sbx_request {
     int32_t threads;
     int32_t inject;
     uint32_t cpu_seconds;
-    int32_t op; /* SBX_OP_VOLUME, SBX_OP_DICOM_LIST or SBX_OP_MESH */
+    int32_t op; /* SBX_OP_VOLUME, SBX_OP_DICOM_LIST, SBX_OP_MESH or SBX_OP_GRID */
     uint32_t path_len;
     char path[SBX_MAX_PATH];
 } sbx_request;
@@ -616,6 +616,90 @@ read_mesh(const sbx_request *rq, sbx_reply *r) {
     finish(r, s, fd);
 }
 
+/* Bytes rounded up to a multiple of 8 (the grid memfd's sections). */
+static uint64_t
+pad8(uint64_t n) {
+    return (n + 7) & ~(uint64_t)7;
+}
+
+/* The child's answer to SBX_OP_GRID: the grid in one sealed memfd, laid
+ * out as sbx_grid_head says. */
+static _Noreturn void
+read_grid(const sbx_request *rq, sbx_reply *r) {
+    r->format = VV_FORMAT_UNKNOWN;
+    announce(rq, VV_FORMAT_UNKNOWN);
+    vv_grid *g = NULL;
+    int fd = -1;
+    vv_status s = rq->inject == INJECT_OPEN ? VV_ERR_IO : vv_grid_load(&g, rq->path);
+    if (s == VV_OK) {
+        const int sph = g->kind == VV_GRID_SPHERICAL;
+        const uint64_t n_conn = g->n_cells ? g->cell_offsets[g->n_cells] : 0;
+        const uint64_t n_axes =
+            sph ? (uint64_t)g->sph_dims[0] + (uint64_t)g->sph_dims[1] + (uint64_t)g->sph_dims[2]
+                : 0;
+        uint64_t bytes = pad8(sizeof(sbx_grid_head)) + pad8(g->n_points * 3 * sizeof(double)) +
+                         pad8(g->n_cells) + pad8((g->n_cells + 1) * sizeof(uint64_t)) +
+                         pad8(n_conn * sizeof(uint32_t)) +
+                         pad8((uint64_t)g->n_blocks * 3 * sizeof(int32_t)) + n_axes * 8;
+        for (int i = 0; i < g->n_fields; i++)
+            bytes += sizeof(sbx_grid_field) +
+                     pad8(g->fields[i].n_tuples * (uint64_t)g->fields[i].n_components * 4);
+        char *p = memfd_alloc((size_t)bytes), *q = p;
+        if (p) {
+            sbx_grid_head h = {.kind = g->kind,
+                               .n_fields = g->n_fields,
+                               .n_blocks = g->n_blocks,
+                               .n_points = g->n_points,
+                               .n_cells = g->n_cells,
+                               .n_conn = n_conn};
+            if (sph)
+                memcpy(h.sph_dims, g->sph_dims, sizeof h.sph_dims);
+            memcpy(q, &h, sizeof h);
+            q += pad8(sizeof h);
+            memcpy(q, g->points, g->n_points * 3 * sizeof(double));
+            q += pad8(g->n_points * 3 * sizeof(double));
+            memcpy(q, g->cell_types, g->n_cells);
+            q += pad8(g->n_cells);
+            for (size_t c = 0; c <= g->n_cells; c++) {
+                uint64_t o = g->n_cells ? g->cell_offsets[c] : 0;
+                memcpy(q + 8 * c, &o, 8);
+            }
+            q += pad8((g->n_cells + 1) * sizeof(uint64_t));
+            memcpy(q, g->connectivity, n_conn * sizeof(uint32_t));
+            q += pad8(n_conn * sizeof(uint32_t));
+            for (int b = 0; b < g->n_blocks; b++)
+                for (int a = 0; a < 3; a++) {
+                    int32_t d = g->block_dims[b][a];
+                    memcpy(q + 4 * (3 * b + a), &d, 4);
+                }
+            q += pad8((uint64_t)g->n_blocks * 3 * sizeof(int32_t));
+            for (int a = 0; a < 3 && sph; a++) {
+                memcpy(q, g->sph_axes[a], (size_t)g->sph_dims[a] * sizeof(double));
+                q += (size_t)g->sph_dims[a] * sizeof(double);
+            }
+            for (int i = 0; i < g->n_fields; i++) {
+                const vv_grid_field *f = &g->fields[i];
+                sbx_grid_field fh = {.cell_data = f->cell_data,
+                                     .n_components = f->n_components,
+                                     .has_fill = f->has_fill,
+                                     .fill = f->fill,
+                                     .n_tuples = f->n_tuples};
+                memcpy(fh.name, f->name, sizeof fh.name);
+                memcpy(q, &fh, sizeof fh);
+                q += sizeof fh;
+                memcpy(q, f->values, f->n_tuples * (size_t)f->n_components * sizeof(float));
+                q += pad8(f->n_tuples * (uint64_t)f->n_components * 4);
+            }
+            r->bytes = bytes;
+            fd = sealed(memfd_of(p, (size_t)bytes));
+        }
+        if (fd < 0)
+            s = vv_error_set(VV_ERR_NOMEM, "the reader could not hand over the grid");
+    }
+    vv_grid_free(g);
+    finish(r, s, fd);
+}
+
 int
 vv_sandbox_reader_main(int argc, char **argv) {
     (void)argc;
@@ -661,6 +745,8 @@ vv_sandbox_reader_main(int argc, char **argv) {
         list_series(&rq, &r);
     if (rq.op == SBX_OP_MESH)
         read_mesh(&rq, &r);
+    if (rq.op == SBX_OP_GRID)
+        read_grid(&rq, &r);
     vv_format f = (vv_format)rq.format;
     if (f == VV_FORMAT_AUTO) {
         f = vv_format_detect(rq.path);
@@ -1151,6 +1237,177 @@ mesh_from_reply(vv_mesh **out, const sbx_reply *r, int fd, const char *file) {
     return VV_OK;
 }
 
+/* A cursor over a grid's memfd: take() hands out the next section of @p n
+ * bytes (rounded up to 8), or NULL past the end. */
+typedef struct grid_cursor {
+    const char *p;
+    uint64_t at, size;
+} grid_cursor;
+
+static const void *
+take(grid_cursor *c, uint64_t n) {
+    if (n > c->size - c->at || pad8(n) > c->size - c->at)
+        return NULL;
+    const void *q = c->p + c->at;
+    c->at += pad8(n);
+    return q;
+}
+
+/* Copies the grid of a mapped memfd into @p g, checking what it copied. */
+static vv_status
+grid_copy(vv_grid *g, grid_cursor *c) {
+    sbx_grid_head h;
+    const void *q = take(c, sizeof h);
+    if (!q)
+        return vv_error_set(VV_ERR_FORMAT, "grid: no grid head");
+    memcpy(&h, q, sizeof h);
+    if (h.kind < VV_GRID_UNSTRUCTURED || h.kind > VV_GRID_SPHERICAL || h.n_fields < 0 ||
+        h.n_fields > VV_GRID_MAX_FIELDS || h.n_blocks < 0 || h.n_blocks > VV_GRID_MAX_BLOCKS ||
+        (h.kind == VV_GRID_CURVILINEAR) != (h.n_blocks > 0))
+        return vv_error_set(VV_ERR_FORMAT, "grid: a grid head out of range");
+    vv_status s = vv_grid_alloc(g, (size_t)h.n_points, (size_t)h.n_cells, (size_t)h.n_conn);
+    if (s != VV_OK)
+        return s;
+    g->kind = (vv_grid_kind)h.kind;
+    const uint64_t np = h.n_points, nc = h.n_cells, nk = h.n_conn;
+    if (!(q = take(c, np * 3 * sizeof(double))))
+        return vv_error_set(VV_ERR_FORMAT, "grid: %llu points past its end",
+                            (unsigned long long)np);
+    memcpy(g->points, q, (size_t)np * 3 * sizeof(double));
+    for (uint64_t i = 0; i < 3 * np; i++)
+        if (!isfinite(g->points[i]))
+            return vv_error_set(VV_ERR_FORMAT, "grid: point %llu is not finite",
+                                (unsigned long long)(i / 3));
+    if (!(q = take(c, nc)))
+        return vv_error_set(VV_ERR_FORMAT, "grid: %llu cells past its end", (unsigned long long)nc);
+    memcpy(g->cell_types, q, (size_t)nc);
+    if (!(q = take(c, (nc + 1) * sizeof(uint64_t))))
+        return vv_error_set(VV_ERR_FORMAT, "grid: cell offsets past its end");
+    for (uint64_t i = 0; i <= nc; i++) {
+        uint64_t o;
+        memcpy(&o, (const char *)q + 8 * i, 8);
+        if (o > nk)
+            return vv_error_set(VV_ERR_FORMAT,
+                                "grid: cell offset %llu is past the %llu point indices",
+                                (unsigned long long)i, (unsigned long long)nk);
+        g->cell_offsets[i] = (size_t)o;
+    }
+    if (nc && g->cell_offsets[nc] != nk)
+        return vv_error_set(VV_ERR_FORMAT, "grid: the cells use %zu of %llu point indices",
+                            g->cell_offsets[nc], (unsigned long long)nk);
+    if (!(q = take(c, nk * sizeof(uint32_t))))
+        return vv_error_set(VV_ERR_FORMAT, "grid: point indices past its end");
+    memcpy(g->connectivity, q, (size_t)nk * sizeof(uint32_t));
+    if (h.n_blocks) {
+        if (!(q = take(c, (uint64_t)h.n_blocks * 3 * sizeof(int32_t))) ||
+            !(g->block_dims = malloc((size_t)h.n_blocks * sizeof *g->block_dims)))
+            return vv_error_set(q ? VV_ERR_NOMEM : VV_ERR_FORMAT, "grid: no room for %d blocks",
+                                h.n_blocks);
+        memcpy(g->block_dims, q, (size_t)h.n_blocks * sizeof *g->block_dims);
+        g->n_blocks = h.n_blocks;
+        uint64_t sum = 0;
+        for (int b = 0; b < h.n_blocks; b++) {
+            uint64_t k = 1;
+            for (int a = 0; a < 3; a++) {
+                const int d = g->block_dims[b][a];
+                if (d < 2 || d > (int)VV_GRID_MAX_POINTS)
+                    return vv_error_set(VV_ERR_FORMAT, "grid: block %d has a dimension of %d", b,
+                                        d);
+                k *= (uint64_t)d;
+            }
+            if ((sum += k) > np)
+                break;
+        }
+        if (sum != np)
+            return vv_error_set(VV_ERR_FORMAT, "grid: its blocks do not hold its %llu points",
+                                (unsigned long long)np);
+    }
+    if (h.kind == VV_GRID_SPHERICAL) {
+        uint64_t k = 1;
+        for (int a = 0; a < 3; a++) {
+            const int d = h.sph_dims[a];
+            if (d < 2 || (uint64_t)d > np || (k *= (uint64_t)d) > np) {
+                k = UINT64_MAX; /* never np */
+                break;
+            }
+        }
+        if (k != np)
+            return vv_error_set(
+                VV_ERR_FORMAT, "grid: spherical axes of %d x %d x %d values for %llu points",
+                h.sph_dims[0], h.sph_dims[1], h.sph_dims[2], (unsigned long long)np);
+        for (int a = 0; a < 3; a++) {
+            const size_t d = (size_t)h.sph_dims[a];
+            if (!(q = take(c, d * sizeof(double))) ||
+                !(g->sph_axes[a] = malloc(d * sizeof(double))))
+                return vv_error_set(q ? VV_ERR_NOMEM : VV_ERR_FORMAT, "grid: no room for an axis");
+            memcpy(g->sph_axes[a], q, d * sizeof(double));
+            g->sph_dims[a] = (int)d;
+            for (size_t i = 0; i < d; i++)
+                if (!isfinite(g->sph_axes[a][i]) ||
+                    (i && !(g->sph_axes[a][i] > g->sph_axes[a][i - 1])))
+                    return vv_error_set(VV_ERR_FORMAT, "grid: a spherical axis not increasing");
+        }
+    }
+    for (int i = 0; i < h.n_fields; i++) {
+        sbx_grid_field fh;
+        if (!(q = take(c, sizeof fh)))
+            return vv_error_set(VV_ERR_FORMAT, "grid: field %d past its end", i);
+        memcpy(&fh, q, sizeof fh);
+        fh.name[sizeof fh.name - 1] = '\0';
+        for (char *ch = fh.name; *ch; ch++) /* printable, for messages and lists */
+            if ((unsigned char)*ch < 0x20 || *ch == 0x7f)
+                *ch = '?';
+        vv_grid_field *f = NULL;
+        if ((s = vv_grid_add_field(g, fh.name, fh.cell_data != 0, fh.n_components, &f)) != VV_OK)
+            return s;
+        if (fh.n_tuples != f->n_tuples)
+            return vv_error_set(VV_ERR_FORMAT, "grid: field '%s' has %llu tuples for %zu", f->name,
+                                (unsigned long long)fh.n_tuples, f->n_tuples);
+        const uint64_t vb = (uint64_t)f->n_tuples * (uint64_t)f->n_components * sizeof(float);
+        if (!(q = take(c, vb)))
+            return vv_error_set(VV_ERR_FORMAT, "grid: field '%s' past its end", f->name);
+        memcpy(f->values, q, (size_t)vb);
+        f->has_fill = fh.has_fill != 0;
+        f->fill = fh.fill;
+        vv_grid_field_update_range(f);
+    }
+    return vv_grid_validate(g);
+}
+
+/* The grid of a result reply and its memfd (copied into a new grid, then
+ * checked). Owns @p fd. */
+static vv_status
+grid_from_reply(vv_grid **out, const sbx_reply *r, int fd, const char *fmt_name, const char *file) {
+    struct stat st;
+    int seals = fd >= 0 ? fcntl(fd, F_GET_SEALS) : -1;
+    if (fd < 0 || r->bytes < sizeof(sbx_grid_head) || r->bytes > ((uint64_t)1 << 46) ||
+        fstat(fd, &st) != 0 || (uint64_t)st.st_size < r->bytes || seals < 0 ||
+        !(seals & F_SEAL_SHRINK)) {
+        if (fd >= 0)
+            close(fd);
+        return vv_error_set(VV_ERR_FORMAT, "%s: %s: the reader's grid is malformed", fmt_name,
+                            file);
+    }
+    void *p = mmap(NULL, (size_t)r->bytes, PROT_READ, MAP_SHARED, fd, 0);
+    int e = errno;
+    close(fd);
+    if (p == MAP_FAILED)
+        return vv_error_set(VV_ERR_NOMEM, "%s: %s: cannot map the reader's %llu bytes: %s",
+                            fmt_name, file, (unsigned long long)r->bytes, strerror(e));
+    grid_cursor c = {p, 0, r->bytes};
+    vv_grid *g = NULL;
+    vv_status s = vv_grid_new(&g, VV_GRID_UNSTRUCTURED);
+    if (s == VV_OK)
+        s = grid_copy(g, &c);
+    munmap(p, (size_t)r->bytes);
+    if (s != VV_OK) {
+        vv_grid_free(g);
+        return vv_error_prefix(s, "%s: %s: the reader's", fmt_name, file);
+    }
+    *out = g;
+    return VV_OK;
+}
+
 int
 vv_sandbox_take_message(int op, const void *msg, size_t len, int fd, vv_format *seen,
                         const char *file, vv_sandbox_answer *a) {
@@ -1183,7 +1440,7 @@ vv_sandbox_take_message(int op, const void *msg, size_t len, int fd, vv_format *
         if ((unsigned char)*c < 0x20 || *c == 0x7f)
             *c = ' ';
     const vv_volume_format *rec = record_of(*seen);
-    const char *fmt_name = rec ? rec->name : "load";
+    const char *fmt_name = op == SBX_OP_GRID ? "grid" : rec ? rec->name : "load";
     if (r->status != VV_OK) {
         if (fd >= 0)
             close(fd);
@@ -1196,6 +1453,8 @@ vv_sandbox_take_message(int op, const void *msg, size_t len, int fd, vv_format *
         *status = series_from_reply(&a->series, &a->n_series, r, fd, file);
     } else if (op == SBX_OP_MESH) {
         *status = mesh_from_reply(&a->mesh, r, fd, file);
+    } else if (op == SBX_OP_GRID) {
+        *status = grid_from_reply(&a->grid, r, fd, fmt_name, file);
     } else {
         *status = volume_from_reply(&a->volume, r, fd, fmt_name, file);
     }
@@ -1333,6 +1592,11 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt,
     const vv_volume_format *rec = record_of(seen);
     const char *fmt_name = op == SBX_OP_MESH ? "mesh" : rec ? rec->name : "load";
     const char *title = op == SBX_OP_MESH ? "mesh" : rec ? rec->title : "file";
+    vv_grid_format gf;
+    if (op == SBX_OP_GRID && vv_grid_file_detect(path, &gf)) {
+        fmt_name = vv_grid_format_table(NULL)[(int)gf - 1]->name;
+        title = vv_grid_format_table(NULL)[(int)gf - 1]->title;
+    }
     if (!r) {
         s = vv_error_set(VV_ERR_NOMEM, "out of memory");
     } else if (malformed) {
@@ -1373,5 +1637,15 @@ vv_sandbox_mesh_load(vv_mesh **out, const char *path) {
     vv_sandbox_answer a;
     vv_status s = run_reader(SBX_OP_MESH, path, VV_FORMAT_UNKNOWN, &o, &a);
     *out = a.mesh;
+    return s;
+}
+
+vv_status
+vv_sandbox_grid_load(vv_grid **out, const char *path) {
+    vv_load_options o;
+    vv_load_options_init(&o);
+    vv_sandbox_answer a;
+    vv_status s = run_reader(SBX_OP_GRID, path, VV_FORMAT_UNKNOWN, &o, &a);
+    *out = a.grid;
     return s;
 }

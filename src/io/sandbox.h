@@ -1,7 +1,9 @@
 /*
  * The reader sandbox (issue 33; docs/security.md, "The reader sandbox"):
  * loads through a third-party parser (Teem, nifti_clib, libtiff, GDCM) run
- * in a separate process, volvis-reader, exec'd fresh for each load. The
+ * in a separate process, volvis-reader, exec'd fresh for each load (also
+ * the DICOM series listing, Assimp's meshes and the libxml2 / libnetcdf
+ * grids). The
  * child reads the file under a Landlock rule set (read access beneath the
  * input's folder only), a seccomp filter (no sockets, no execve, no new
  * processes, files opened read-only, no executable memory), no core file
@@ -13,6 +15,7 @@
 #ifndef VOLVIS_IO_SANDBOX_H
 #define VOLVIS_IO_SANDBOX_H
 
+#include "volvis/grid.h"
 #include "volvis/io.h"
 #include "volvis/mesh.h"
 #include "volvis/sys/format.h"
@@ -34,8 +37,10 @@ enum { SBX_FORMAT = 1, SBX_RESULT = 2 };
  * memfd of @c bytes bytes: for a volume its voxels (x fastest; the
  * geometry in the fields), for a DICOM listing dims[0] vv_dicom_series
  * entries, for a mesh n_vertices positions (3 float32 each, world units)
- * then n_triangles triangles (3 uint32 vertex indices each). Nothing in it
- * is trusted: vv_sandbox_take_message checks every field.
+ * then n_triangles triangles (3 uint32 vertex indices each), for a grid
+ * the sections of sbx_grid_head. Nothing in it is trusted:
+ * vv_sandbox_take_message checks every field, and copies a grid before it
+ * checks it (the child could still write to its memfd).
  */
 typedef struct sbx_reply {
     uint32_t magic;
@@ -93,15 +98,51 @@ vv_status vv_sandbox_dicom_list(vv_dicom_series **out, int *n, const char *path)
  */
 vv_status vv_sandbox_mesh_load(vv_mesh **out, const char *path);
 
-/** What the reader is asked for (sbx_request.op). */
-enum { SBX_OP_VOLUME = 0, SBX_OP_DICOM_LIST = 1, SBX_OP_MESH = 2 };
+/**
+ * A grid in the reader's memfd: this head, then, each section starting on
+ * a multiple of 8 bytes: the points (3 * n_points double, world units),
+ * the cell types (n_cells bytes), the cell offsets (n_cells + 1 uint64),
+ * the connectivity (n_conn uint32), the block dimensions (n_blocks * 3
+ * int32), the spherical axes (sph_dims[0] + sph_dims[1] + sph_dims[2]
+ * double: r, theta, phi), then n_fields times an sbx_grid_field and its
+ * n_tuples * n_components float values.
+ */
+typedef struct sbx_grid_head {
+    int32_t kind; /* vv_grid_kind */
+    int32_t n_fields, n_blocks;
+    int32_t sph_dims[3];
+    uint64_t n_points, n_cells, n_conn;
+} sbx_grid_head;
 
-/** What the parent made of a reader's result: one of the three, by op. */
+/** A field's head in a grid's memfd (see sbx_grid_head). */
+typedef struct sbx_grid_field {
+    char name[VV_GRID_FIELD_NAME_MAX];
+    int32_t cell_data, n_components, has_fill, pad;
+    double fill;
+    uint64_t n_tuples;
+} sbx_grid_field;
+
+/**
+ * vv_grid_load's contract, in the sandboxed reader (libxml2's .vtu,
+ * libnetcdf's NetCDF): the grid comes back in a sealed memfd, is copied
+ * into a new grid and checked here (vv_grid_validate, every point finite,
+ * the blocks and spherical axes consistent with the points; ranges
+ * computed again). Errors: the child's own, or as vv_sandbox_volume_load
+ * ("vtu: a.vtu: the grid reader crashed (SIGSEGV); the file is
+ * malformed"). Thread-safe.
+ */
+vv_status vv_sandbox_grid_load(vv_grid **out, const char *path);
+
+/** What the reader is asked for (sbx_request.op). */
+enum { SBX_OP_VOLUME = 0, SBX_OP_DICOM_LIST = 1, SBX_OP_MESH = 2, SBX_OP_GRID = 3 };
+
+/** What the parent made of a reader's result: one of the four, by op. */
 typedef struct vv_sandbox_answer {
     vv_volume *volume;       /**< SBX_OP_VOLUME: owned by the caller */
     vv_dicom_series *series; /**< SBX_OP_DICOM_LIST: free() it */
     int n_series;            /**< entries of series */
     vv_mesh *mesh;           /**< SBX_OP_MESH: owned by the caller */
+    vv_grid *grid;           /**< SBX_OP_GRID: owned by the caller */
     vv_status status;        /**< VV_OK, or the error (set with vv_error_set) */
 } vv_sandbox_answer;
 
@@ -111,7 +152,7 @@ typedef struct vv_sandbox_answer {
  * descriptor it carried or -1 (owned: closed, or mapped and closed).
  * Returns 0 when more is to come (a format message: *@p seen is set to the
  * format it names when that is a known one), 1 for the result, in *@p a
- * (zeroed first): a->status is VV_OK with the volume, series or mesh, or
+ * (zeroed first): a->status is VV_OK with the volume, series, mesh or grid, or
  * the error the reader sent or found in its result (VV_ERR_FORMAT,
  * VV_ERR_LIMIT, VV_ERR_NOMEM, naming @p file), and -1 when the message is
  * malformed (no error set). Thread-safe; fuzzed by

@@ -11,8 +11,9 @@
  * plausible (the magic, a kind, err_len fitting the length, and with 16 the
  * byte count naming the memfd's size), so the fuzzer spends its time past
  * the first checks; 32 a second message follows the format message;
- * 64 and 128 pick the answer asked for: a volume, a DICOM series list or a
- * mesh (with 8, a mesh's counts are made to fill the memfd).
+ * 64 and 128 pick the answer asked for: a volume, a DICOM series list, a
+ * mesh (with 8, a mesh's counts are made to fill the memfd) or a grid
+ * (the memfd's sections as sbx_grid_head lays them out).
  */
 #define _GNU_SOURCE
 #include <fcntl.h>
@@ -73,7 +74,7 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         if (flags & 16)
             msg.bytes = nrest;
     }
-    const int ops[4] = {SBX_OP_VOLUME, SBX_OP_DICOM_LIST, SBX_OP_MESH, SBX_OP_VOLUME};
+    const int ops[4] = {SBX_OP_VOLUME, SBX_OP_DICOM_LIST, SBX_OP_MESH, SBX_OP_GRID};
     const int op = ops[(flags >> 6) & 3];
     if ((flags & 8) && op == SBX_OP_MESH && msg.n_vertices < 1024) {
         msg.n_triangles = nrest > 36 ? (nrest - 36) / 12 : 1;
@@ -89,7 +90,7 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         fd = flags & 1 ? make_memfd(rest, nrest, flags) : -1;
         k = vv_sandbox_take_message(op, &msg, len, fd, &seen, "in.nrrd", &a);
     }
-    const int got = a.volume || a.series || a.mesh;
+    const int got = a.volume || a.series || a.mesh || a.grid;
     if (k <= 0 || a.status != VV_OK) {
         if (got)
             __builtin_trap(); /* a result with an error or without a result */
@@ -109,6 +110,19 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
                     sizeof a.series[i].patient_id)
                 __builtin_trap();
         free(a.series);
+    } else if (op == SBX_OP_GRID) {
+        vv_grid *g = a.grid;
+        if (!g || vv_grid_validate(g) != VV_OK)
+            __builtin_trap();
+        for (int i = 0; i < g->n_fields; i++) { /* every field holds its values */
+            const vv_grid_field *f = &g->fields[i];
+            const size_t n = f->n_tuples * (size_t)f->n_components;
+            if (n) {
+                volatile float last = f->values[n - 1]; /* ASan: inside the buffer */
+                (void)last;
+            }
+        }
+        vv_grid_free(g);
     } else {
         vv_mesh *m = a.mesh;
         if (!m || !m->normals)

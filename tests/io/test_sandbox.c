@@ -7,7 +7,9 @@
  * VOLVIS_SANDBOX_INJECT)
  * is one line of error, the test process survives, no child is left and no
  * core file is written; the CLI exits 1 with that line and writes nothing;
- * every fuzz finding of the sandboxed formats goes through the sandbox.
+ * every fuzz finding of the sandboxed formats goes through the sandbox;
+ * meshes and grids come back the same as read in-process, and hostile
+ * replies for each answer are refused.
  */
 #define _GNU_SOURCE /* memfd_create, the seals */
 #include "testutil.h"
@@ -298,6 +300,85 @@ test_meshes(void **state) {
     assert_no_child();
 }
 
+/* Grids (libxml2's .vtu, libnetcdf's NetCDF) through the sandbox: the same
+ * points, cells, blocks, axes and fields as read in this process; an abort
+ * in the reader is one line. */
+static void
+test_grids(void **state) {
+    (void)state;
+    static const char *const files[] = {"grids/fire_ug.vtu", "grids/levitus_climatology.cdf"};
+    int n = 0;
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        if (!vt_have_data(files[i]))
+            continue;
+        vv_grid *a = NULL, *b = NULL;
+        setenv("VOLVIS_SANDBOX", "0", 1);
+        vt_ok(vv_grid_load(&a, vt_data(files[i])));
+        setenv("VOLVIS_SANDBOX", "1", 1);
+        vt_ok(vv_grid_load(&b, vt_data(files[i])));
+        unsetenv("VOLVIS_SANDBOX");
+        assert_int_equal(a->kind, b->kind);
+        assert_int_equal(a->n_points, b->n_points);
+        assert_int_equal(a->n_cells, b->n_cells);
+        assert_memory_equal(a->points, b->points, a->n_points * 3 * sizeof(double));
+        assert_memory_equal(a->cell_types, b->cell_types, a->n_cells);
+        assert_memory_equal(a->cell_offsets, b->cell_offsets, (a->n_cells + 1) * sizeof(size_t));
+        assert_memory_equal(a->connectivity, b->connectivity,
+                            a->cell_offsets[a->n_cells] * sizeof(uint32_t));
+        assert_int_equal(a->n_blocks, b->n_blocks);
+        for (int k = 0; k < 3; k++) {
+            assert_int_equal(a->sph_dims[k], b->sph_dims[k]);
+            if (a->sph_dims[k])
+                assert_memory_equal(a->sph_axes[k], b->sph_axes[k],
+                                    (size_t)a->sph_dims[k] * sizeof(double));
+        }
+        assert_int_equal(a->n_fields, b->n_fields);
+        for (int f = 0; f < a->n_fields; f++) {
+            const vv_grid_field *fa = &a->fields[f], *fb = &b->fields[f];
+            assert_string_equal(fa->name, fb->name);
+            assert_int_equal(fa->cell_data, fb->cell_data);
+            assert_int_equal(fa->n_components, fb->n_components);
+            assert_int_equal(fa->n_tuples, fb->n_tuples);
+            assert_int_equal(fa->has_fill, fb->has_fill);
+            assert_memory_equal(fa->values, fb->values,
+                                fa->n_tuples * (size_t)fa->n_components * sizeof(float));
+            assert_memory_equal(fa->range, fb->range, sizeof fa->range);
+        }
+        printf("# %s: %s, %zu points, %zu cells, %d fields, the same\n", files[i],
+               vv_grid_kind_name(b->kind), b->n_points, b->n_cells, b->n_fields);
+        vv_grid_free(a);
+        vv_grid_free(b);
+        n++;
+    }
+    if (n == 0)
+        vt_skip("../shared/data/grids is missing");
+    static const char *const expect[] = {"vtu: fire_ug.vtu: the .vtu reader crashed (SIGABRT)",
+                                         "netcdf: levitus_climatology.cdf: the NetCDF reader "
+                                         "crashed (SIGABRT)"};
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        if (!vt_have_data(files[i]))
+            continue;
+        setenv("VOLVIS_SANDBOX_INJECT", "abort", 1);
+        vv_grid *g = NULL;
+        vv_status s = vv_grid_load(&g, vt_data(files[i]));
+        unsetenv("VOLVIS_SANDBOX_INJECT");
+        printf("# abort: %s\n", vv_error_message());
+        assert_true(s < 0);
+        assert_null(g);
+        assert_null(strchr(vv_error_message(), '\n'));
+        assert_non_null(strstr(vv_error_message(), expect[i]));
+    }
+    /* VTK legacy is our own parser: read in this process, abort or not */
+    if (vt_have_data("grids/blow.vtk")) {
+        setenv("VOLVIS_SANDBOX_INJECT", "abort", 1);
+        vv_grid *g = NULL;
+        vt_ok(vv_grid_load(&g, vt_data("grids/blow.vtk")));
+        unsetenv("VOLVIS_SANDBOX_INJECT");
+        vv_grid_free(g);
+    }
+    assert_no_child();
+}
+
 /* A caller's file-size limit (ulimit -f) does not cut the reader's memfd:
  * the CT head (13.5 MiB of voxels) loads under a soft limit of 4 KiB. */
 static void
@@ -528,14 +609,132 @@ test_hostile_replies(void **state) {
     assert_no_child();
 }
 
+/* One tetrahedron with a point field "f" (4 values), laid out as the
+ * reader lays out a grid (sbx_grid_head). */
+typedef struct {
+    sbx_grid_head h;
+    double p[12];
+    uint8_t types[8];
+    uint64_t offsets[2];
+    uint32_t conn[4];
+    sbx_grid_field fh;
+    float values[4];
+} tet_grid;
+
+/* The parent given @p t (@p bytes of it named, the memfd holding all of
+ * it): a grid when @p expect is NULL, else no grid and an error holding
+ * @p expect. */
+static void
+hostile_grid(const char *what, const tet_grid *t, uint64_t bytes, const char *expect) {
+    sbx_reply r;
+    memset(&r, 0, sizeof r);
+    r.magic = SBX_MAGIC;
+    r.kind = SBX_RESULT;
+    r.bytes = bytes;
+    vv_format seen = VV_FORMAT_UNKNOWN;
+    vv_sandbox_answer a;
+    vv_error_clear();
+    int k = vv_sandbox_take_message(SBX_OP_GRID, &r, offsetof(sbx_reply, err),
+                                    memfd_with(t, sizeof *t, F_SEAL_SHRINK | F_SEAL_GROW), &seen,
+                                    "t.vtu", &a);
+    printf("# grid, %s: %d %s\n", what, k, a.status ? vv_error_message() : "");
+    assert_int_equal(k, 1);
+    if (!expect) {
+        vt_ok(a.status);
+        assert_non_null(a.grid);
+        assert_int_equal(a.grid->n_cells, 1);
+        assert_true(a.grid->fields[0].range[0] == 1 && a.grid->fields[0].range[1] == 4);
+        vv_grid_free(a.grid);
+        return;
+    }
+    assert_null(a.grid);
+    assert_true(a.status < 0);
+    assert_null(strchr(vv_error_message(), '\n'));
+    if (!strstr(vv_error_message(), expect))
+        fail_msg("grid, %s: \"%s\" does not say \"%s\"", what, vv_error_message(), expect);
+}
+
+/* What a hostile reader could send for a grid: every count, offset, index,
+ * point and field is checked on the parent's copy. */
+static void
+test_hostile_grids(void **state) {
+    (void)state;
+    tet_grid ok;
+    memset(&ok, 0, sizeof ok);
+    ok.h.kind = VV_GRID_UNSTRUCTURED;
+    ok.h.n_fields = 1;
+    ok.h.n_points = 4;
+    ok.h.n_cells = 1;
+    ok.h.n_conn = 4;
+    const double p[12] = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+    memcpy(ok.p, p, sizeof p);
+    ok.types[0] = VV_CELL_TETRA;
+    ok.offsets[1] = 4;
+    for (uint32_t i = 0; i < 4; i++) {
+        ok.conn[i] = i;
+        ok.values[i] = (float)(i + 1);
+    }
+    snprintf(ok.fh.name, sizeof ok.fh.name, "f");
+    ok.fh.n_components = 1;
+    ok.fh.n_tuples = 4;
+    hostile_grid("well-formed", &ok, sizeof ok, NULL);
+    tet_grid t = ok;
+    hostile_grid("cut short", &t, sizeof t - 4, "field 'f' past its end");
+    hostile_grid("no head", &t, 8, "malformed");
+    t.conn[2] = 4;
+    hostile_grid("an index past the points", &t, sizeof t, "uses point 4 but there are 4");
+    t = ok;
+    t.p[4] = NAN;
+    hostile_grid("a point not finite", &t, sizeof t, "point 1 is not finite");
+    t = ok;
+    t.offsets[1] = 5;
+    hostile_grid("an offset past the indices", &t, sizeof t,
+                 "cell offset 1 is past the 4 point indices");
+    t = ok;
+    t.offsets[1] = 3;
+    hostile_grid("indices left over", &t, sizeof t, "the cells use 3 of 4 point indices");
+    t = ok;
+    t.types[0] = 200;
+    hostile_grid("an unknown cell type", &t, sizeof t, "unsupported cell type 200");
+    t = ok;
+    t.h.n_points = (uint64_t)1 << 40;
+    hostile_grid("a huge point count", &t, sizeof t, "points (at most");
+    t = ok;
+    t.h.n_cells = (uint64_t)1 << 27;
+    hostile_grid("more cells than the memfd", &t, sizeof t, "past its end");
+    t = ok;
+    t.fh.n_tuples = 5;
+    hostile_grid("a field's tuples", &t, sizeof t, "field 'f' has 5 tuples for 4");
+    t = ok;
+    t.fh.n_components = 10;
+    hostile_grid("a field of 10 components", &t, sizeof t, "10 components");
+    t = ok;
+    t.h.n_fields = -1;
+    hostile_grid("a negative field count", &t, sizeof t, "a grid head out of range");
+    t = ok;
+    t.h.kind = VV_GRID_CURVILINEAR;
+    hostile_grid("curvilinear without blocks", &t, sizeof t, "a grid head out of range");
+    t = ok;
+    t.h.kind = VV_GRID_SPHERICAL;
+    t.h.sph_dims[0] = t.h.sph_dims[1] = t.h.sph_dims[2] = 2;
+    hostile_grid("spherical axes past the points", &t, sizeof t,
+                 "spherical axes of 2 x 2 x 2 values for 4 points");
+    t = ok;
+    memset(t.fh.name, 'x', sizeof t.fh.name);
+    t.fh.name[1] = '\n';
+    hostile_grid("a name without its end", &t, sizeof t, NULL);
+    assert_no_child();
+}
+
 int
 main(void) {
     snprintf(g_dir, sizeof g_dir, "%s", vt_outdir("sandbox"));
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_same_volume), cmocka_unit_test(test_injected_faults),
-        cmocka_unit_test(test_cli),         cmocka_unit_test(test_reader_alone_and_missing),
-        cmocka_unit_test(test_fuzz_corpus), cmocka_unit_test(test_hostile_replies),
-        cmocka_unit_test(test_meshes),      cmocka_unit_test(test_file_size_limit),
+        cmocka_unit_test(test_same_volume),   cmocka_unit_test(test_injected_faults),
+        cmocka_unit_test(test_cli),           cmocka_unit_test(test_reader_alone_and_missing),
+        cmocka_unit_test(test_fuzz_corpus),   cmocka_unit_test(test_hostile_replies),
+        cmocka_unit_test(test_meshes),        cmocka_unit_test(test_grids),
+        cmocka_unit_test(test_hostile_grids), cmocka_unit_test(test_file_size_limit),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
