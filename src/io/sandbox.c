@@ -30,6 +30,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
 #include <sys/mman.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
@@ -390,6 +391,13 @@ seccomp_restrict(void) {
     if (rc == 0)
         rc =
             seccomp_rule_add(c, SCMP_ACT_ALLOW, SCMP_SYS(prlimit64), 1, SCMP_A2(SCMP_CMP_EQ, 0, 0));
+    /* shared advisory locks and their release (libhdf5 locks a NetCDF-4
+     * file it reads); an exclusive lock could hold up other programs */
+    for (int i = 0; i < 3 && rc == 0; i++) {
+        static const scmp_datum_t ops[3] = {LOCK_SH, LOCK_SH | LOCK_NB, LOCK_UN};
+        rc = seccomp_rule_add(c, SCMP_ACT_ALLOW, SCMP_SYS(flock), 1,
+                              SCMP_A1(SCMP_CMP_EQ, ops[i], 0));
+    }
     /* isatty and other terminal queries: "not a terminal" */
     if (rc == 0)
         rc = seccomp_rule_add(c, SCMP_ACT_ERRNO(ENOTTY), SCMP_SYS(ioctl), 0);
