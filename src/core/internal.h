@@ -29,16 +29,6 @@ typedef struct vv_atomic_file {
 } vv_atomic_file;
 
 /**
- * Runs fn(ctx) so that an abort() raised on this thread during the call (a
- * library's failed assertion: Assimp and GDCM are built with them) returns
- * 1 instead of ending the process; 0 when fn returned. Guarded calls on
- * several threads run concurrently; SIGABRT elsewhere keeps its previous
- * disposition. What the library allocated in an interrupted call is lost.
- * src/core/guard.c.
- */
-int vv_call_guarded(void (*fn)(void *ctx), void *ctx);
-
-/**
  * Where vv_volume_new puts voxels: @p alloc returns zeroed memory of
  * @p bytes (NULL on failure) and the release vv_volume_free calls with
  * @p user; NULL restores calloc/free. Set once, before any volume is made

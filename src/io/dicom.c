@@ -32,6 +32,7 @@
 
 #include "core/internal.h"
 #include "io/dicom.h"
+#include "io/prescan.h"
 #include "io/sandbox.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
@@ -166,60 +167,12 @@ scan_folder(file_list *l, const char *dir, int depth) {
     return s;
 }
 
-/* ---- GDCM calls, guarded against its assertions -------------------------- */
-
-/* Debian builds GDCM with its assertions on; a malformed element can make
- * it call abort() (found by fuzzing): every call into it runs under
- * vv_call_guarded, so that becomes an error. */
-typedef struct dcm_call {
-    int which; /* 0 header, 1 pixels, 2 DICOMDIR */
-    const char *path;
-    vv_dcm_file *f;
-    void *dst;
-    size_t bytes;
-    char ***files;
-    int *n;
-    char *err;
-    size_t errlen;
-    int r;
-} dcm_call;
-
-static void
-run_dcm(void *ctx) {
-    dcm_call *c = ctx;
-    if (c->which == 0)
-        c->r = vv_dcm_read_header(c->path, c->f, c->err, c->errlen);
-    else if (c->which == 1)
-        c->r = vv_dcm_read_pixels(c->path, c->dst, c->bytes, c->err, c->errlen);
-    else
-        c->r = vv_dcm_dicomdir_files(c->path, c->files, c->n, c->err, c->errlen);
-}
-
-static int
-dcm_guarded(dcm_call *c) {
-    if (vv_call_guarded(run_dcm, c)) {
-        snprintf(c->err, c->errlen, "GDCM failed an internal assertion on a malformed element");
-        return -1;
-    }
-    return c->r;
-}
-
-static int
-guarded_read_header(const char *path, vv_dcm_file *f, char *err, size_t errlen) {
-    dcm_call c = {0, path, f, NULL, 0, NULL, NULL, err, errlen, 0};
-    return dcm_guarded(&c);
-}
-
-static int
-guarded_read_pixels(const char *path, void *dst, size_t bytes, char *err, size_t errlen) {
-    dcm_call c = {1, path, NULL, dst, bytes, NULL, NULL, err, errlen, 0};
-    return dcm_guarded(&c);
-}
-
-static int
-guarded_dicomdir_files(const char *path, char ***files, int *n, char *err, size_t errlen) {
-    dcm_call c = {2, path, NULL, NULL, 0, files, n, err, errlen, 0};
-    return dcm_guarded(&c);
+vv_status
+vv_dicom_prescan(const char *path) {
+    char err[512] = "";
+    if (vv_dcm_prescan(path, err, sizeof err) != 0)
+        return vv_error_set(VV_ERR_FORMAT, "dicom: %s: %s", vv_path_basename(path), err);
+    return VV_OK;
 }
 
 /* The candidate files of @p path: a folder's files (recursively), a
@@ -240,7 +193,7 @@ collect(file_list *l, const char *path) {
     char **refs = NULL;
     int nrefs = 0;
     char err[256] = "";
-    int r = guarded_dicomdir_files(path, &refs, &nrefs, err, sizeof err);
+    int r = vv_dcm_dicomdir_files(path, &refs, &nrefs, err, sizeof err);
     if (r < 0) /* a DICOMDIR's or any file's header: the message says which element */
         return vv_error_set(VV_ERR_FORMAT, "%s", err);
     if (r == 0)
@@ -308,7 +261,7 @@ scan_files(scan *sc, char **paths, int n) {
     vv_dcm_init();
 #pragma omp parallel for schedule(dynamic, 4)
     for (int i = 0; i < n; i++)
-        kind[i] = guarded_read_header(paths[i], &f[i], errs[i], sizeof errs[i]);
+        kind[i] = vv_dcm_read_header(paths[i], &f[i], errs[i], sizeof errs[i]);
     vv_status s = VV_OK;
     int m = 0;
     for (int i = 0; i < n; i++) {
@@ -973,7 +926,7 @@ read_pixels(const series_read *R, double *lo_out, double *hi_out) {
                 if (!buf) {
                     snprintf(e, sizeof e, "out of memory for %zu bytes", need);
                     bad = 1;
-                } else if (guarded_read_pixels(f->path, buf, need, e, sizeof e) != 0) {
+                } else if (vv_dcm_read_pixels(f->path, buf, need, e, sizeof e) != 0) {
                     bad = 1;
                 } else {
                     for (long k = 0; k < R->nz; k++)

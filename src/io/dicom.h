@@ -40,6 +40,12 @@ typedef struct vv_dcm_file {
 void vv_dcm_init(void);
 
 /**
+ * Our walk of the data elements' lengths and the meta-group patterns GDCM
+ * asserts on, alone (no GDCM call): 0, or -1 with the reason in @p err.
+ */
+int vv_dcm_prescan(const char *path, char *err, size_t errlen);
+
+/**
  * Reads the header of @p path (pixel data skipped) into @p f (f->path is
  * left alone). Returns 1 for a DICOM image, 0 for a file that is not DICOM or
  * holds no image (no rows/columns), -1 on a broken DICOM file with the

@@ -415,6 +415,18 @@ vv_dcm_init(void) {
 }
 
 extern "C" int
+vv_dcm_prescan(const char *path, char *err, size_t errlen) {
+    try {
+        return check_lengths(path, err, errlen);
+    } catch (const std::exception &e) {
+        set_err(err, errlen, e.what());
+    } catch (...) {
+        set_err(err, errlen, "unreadable");
+    }
+    return -1;
+}
+
+extern "C" int
 vv_dcm_read_header(const char *path, vv_dcm_file *f, char *err, size_t errlen) {
     char *keep = f->path;
     std::memset(f, 0, sizeof *f);

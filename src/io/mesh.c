@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "core/internal.h"
+#include "io/prescan.h"
 #include "io/sandbox.h"
 #include "volvis/io.h"
 #include "volvis/mesh.h"
@@ -388,36 +389,8 @@ is_ply(const char *path) {
     return got >= 3 && !memcmp(b, "ply", 3); /* Assimp takes it for PLY on these three bytes */
 }
 
-/* ---- the Assimp call, guarded against its assertions ------------------- */
-
-/* Debian builds Assimp with its assertions on, and a failed one calls
- * abort(): an import runs under vv_call_guarded, so a library assertion is
- * an error, not the end of the process. */
-typedef struct import_call {
-    const char *path;
-    unsigned flags;
-    struct aiPropertyStore *props;
-    const struct aiScene *scene;
-} import_call;
-
-static void
-run_import(void *ctx) {
-    import_call *c = ctx;
-    c->scene = aiImportFileExWithProperties(c->path, c->flags, NULL, c->props);
-}
-
-static const struct aiScene *
-guarded_import(const char *path, unsigned flags, struct aiPropertyStore *props, int *aborted) {
-    import_call c = {path, flags, props, NULL};
-    *aborted = vv_call_guarded(run_import, &c);
-    return *aborted ? NULL : c.scene;
-}
-
 vv_status
-vv_mesh_load(vv_mesh **out, const char *path) {
-    if (!out || !path)
-        return vv_error_set(VV_ERR_INVALID, "mesh: NULL argument");
-    *out = NULL;
+vv_mesh_prescan(const char *path) {
     const char *name = vv_path_basename(path);
     FILE *fp = NULL;
     uint64_t size = 0;
@@ -436,6 +409,18 @@ vv_mesh_load(vv_mesh **out, const char *path) {
         return vv_error_prefix(s, "mesh: %s", name);
     if (is_ply(path) && (s = ply_validate(path)) != VV_OK)
         return vv_error_prefix(s, "mesh: %s", name);
+    return VV_OK;
+}
+
+vv_status
+vv_mesh_load(vv_mesh **out, const char *path) {
+    if (!out || !path)
+        return vv_error_set(VV_ERR_INVALID, "mesh: NULL argument");
+    *out = NULL;
+    const char *name = vv_path_basename(path);
+    vv_status s = vv_mesh_prescan(path);
+    if (s != VV_OK)
+        return s;
     if (vv_sandbox_wanted(NULL)) /* Assimp reads it in volvis-reader */
         return vv_sandbox_mesh_load(out, path);
 
@@ -456,13 +441,10 @@ vv_mesh_load(vv_mesh **out, const char *path) {
     unsigned flags = aiProcess_RemoveComponent | aiProcess_Triangulate |
                      aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices |
                      aiProcess_SortByPType | aiProcess_FindDegenerates;
-    int aborted = 0;
-    const struct aiScene *sc = guarded_import(path, flags, props, &aborted);
+    /* Assimp's assertions (on in Debian's build) end the process: in
+     * volvis-reader that is one line of error in the parent */
+    const struct aiScene *sc = aiImportFileExWithProperties(path, flags, NULL, props);
     aiReleasePropertyStore(props);
-    if (aborted)
-        return vv_error_set(VV_ERR_FORMAT,
-                            "mesh: %s: Assimp stopped on an internal assertion (malformed file)",
-                            name);
     if (!sc) {
         const char *why = aiGetErrorString();
         return vv_error_set(VV_ERR_FORMAT, "mesh: %s: %s", name, why && *why ? why : "unreadable");

@@ -43,6 +43,7 @@
 #include <zlib.h>
 
 #include "core/internal.h"
+#include "io/prescan.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 #include "zout.h"
@@ -314,8 +315,8 @@ file_gzipped(const char *path, uint64_t *size) {
  * 1/1032 of them, deflate's largest ratio), so a small file never makes the
  * library allocate or inflate gigabytes.
  */
-static vv_status
-check_raw_header(const char *path) {
+vv_status
+vv_nifti_prescan(const char *path) {
     /* nifti_clib takes x.img (.img.gz) for its header x.hdr (.hdr.gz) */
     char hdr[4096];
     size_t plen = strlen(path);
@@ -434,7 +435,7 @@ check_raw_header(const char *path) {
 
 static vv_status
 read_locked(vv_volume **out, const char *path) {
-    vv_status s0 = check_raw_header(path);
+    vv_status s0 = vv_nifti_prescan(path);
     if (s0 != VV_OK)
         return s0;
     nifti_set_debug_level(0);

@@ -40,6 +40,7 @@
 
 #include "core/internal.h"
 #include "io/bricked_internal.h"
+#include "io/prescan.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 
@@ -747,6 +748,15 @@ done:
         nrrdNuke(n);
     if (nio)
         nrrdIoStateNix(nio);
+    return s;
+}
+
+vv_status
+vv_nrrd_prescan(const char *path) {
+    header_scan hs;
+    vv_status s = scan_header(path, &hs);
+    if (s == VV_OK)
+        header_scan_free(&hs);
     return s;
 }
 

@@ -43,6 +43,7 @@
 #include <tiffio.h>
 
 #include "core/internal.h"
+#include "io/prescan.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 
@@ -317,8 +318,10 @@ ij_value(const char *desc, const char *key, char *val, size_t cap) {
     return 0;
 }
 
+/* The ImageJ description's keys (the resolution tags are read by
+ * parse_imagej). */
 static void
-parse_imagej(TIFF *t, const char *desc, stack_meta *m) {
+parse_imagej_text(const char *desc, stack_meta *m) {
     if (strncmp(desc, "ImageJ=", 7) != 0)
         return;
     m->is_imagej = 1;
@@ -353,11 +356,29 @@ parse_imagej(TIFF *t, const char *desc, stack_meta *m) {
                 m->has_ij_origin[i] = 1;
             }
         }
+}
+
+static void
+parse_imagej(TIFF *t, const char *desc, stack_meta *m) {
+    parse_imagej_text(desc, m);
+    if (!m->is_imagej)
+        return;
     float xr = 0, yr = 0;
     if (TIFFGetField(t, TIFFTAG_XRESOLUTION, &xr) && xr > 0 && isfinite(xr))
         m->spacing[0] = 1.0 / xr;
     if (TIFFGetField(t, TIFFTAG_YRESOLUTION, &yr) && yr > 0 && isfinite(yr))
         m->spacing[1] = 1.0 / yr;
+}
+
+int
+vv_tiff_prescan_description(const char *desc) {
+    stack_meta m;
+    memset(&m, 0, sizeof m);
+    m.unit = VV_UNIT_UNKNOWN;
+    parse_ome(desc, &m);
+    if (!m.is_ome)
+        parse_imagej_text(desc, &m);
+    return m.is_ome ? 1 : m.is_imagej ? 2 : 0;
 }
 
 /* ---- pages ------------------------------------------------------------------ */

@@ -112,3 +112,14 @@ fuzz_check_volume(vv_volume *v) {
     (void)sink;
     vv_volume_free(v);
 }
+
+void
+fuzz_check_status(int status) {
+    if (status > 0)
+        __builtin_trap(); /* a status is VV_OK or a negative error */
+    if (status < 0) {
+        const char *m = vv_error_message();
+        if (!m[0] || strchr(m, '\n'))
+            __builtin_trap(); /* an error is one line, never empty */
+    }
+}

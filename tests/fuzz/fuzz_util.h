@@ -43,6 +43,12 @@ struct vv_volume;
  */
 void fuzz_check_volume(struct vv_volume *v);
 
+/**
+ * Checks a status a check returned: VV_OK, or a negative error whose
+ * message (vv_error_message) is one line and not empty. Traps otherwise.
+ */
+void fuzz_check_status(int status);
+
 /** The private temporary folder. */
 const char *fuzz_dir(void);
 

@@ -227,7 +227,7 @@ test_reader_alone_and_missing(void **state) {
 static void
 test_fuzz_corpus(void **state) {
     (void)state;
-    static const char *const dirs[] = {"nrrd", "nifti", "tiff", "dicom"};
+    static const char *const dirs[] = {"nrrd", "nifti", "tiff", "dicom", "mesh", "grid"};
     int n = 0;
     for (size_t d = 0; d < sizeof dirs / sizeof dirs[0]; d++) {
         char dir[512];
@@ -245,12 +245,20 @@ test_fuzz_corpus(void **state) {
             vv_format_parse(dirs[d], &o.format);
             setenv("VOLVIS_SANDBOX", "1", 1);
             vv_volume *v = NULL;
+            vv_mesh *m = NULL;
+            vv_grid *g = NULL;
             vv_error_clear();
-            vv_status s = vv_volume_load(&v, path, &o);
+            vv_status s = d == 4   ? vv_mesh_load(&m, path)
+                          : d == 5 ? vv_grid_load(&g, path)
+                                   : vv_volume_load(&v, path, &o);
             unsetenv("VOLVIS_SANDBOX");
             if (s == VV_OK) {
-                assert_non_null(v->release);
+                assert_true(v || m || g);
+                if (v)
+                    assert_non_null(v->release);
                 vv_volume_free(v);
+                vv_mesh_free(m);
+                vv_grid_free(g);
             } else {
                 assert_null(strchr(vv_error_message(), '\n'));
             }
