@@ -62,6 +62,7 @@ sp_fp_setup(double xx, double xy, double yy, double s, double ewa, double rho2, 
     fp->norm = (float)(1.0 / sqrt(det));
 }
 
+#ifndef __SSE2__ /* else exp_neg_ps below, four lanes at a time */
 /* exp(x) for x in [-40, 0], relative error below 3e-7: x log2(e) =
  * i + f with i an integer and |f| <= 1/2, 2^i from the exponent bits and
  * 2^f by its Taylor polynomial of degree 5. */
@@ -81,6 +82,7 @@ exp_neg(float x) {
     memcpy(&sc, &bits, sizeof sc);
     return p * sc;
 }
+#endif
 
 #ifdef __SSE2__
 /* exp_neg of four lanes, the same arithmetic. */
