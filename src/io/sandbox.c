@@ -55,19 +55,20 @@ extern char **environ;
  * locked down: what a hostile or broken parser would do. */
 enum sbx_inject {
     INJECT_NONE,
-    INJECT_ABORT,  /* abort(): a library assertion */
-    INJECT_SEGV,   /* a wild write */
-    INJECT_OPEN,   /* opens /etc/passwd: refused by Landlock */
-    INJECT_WRITE,  /* opens a file for writing: killed */
-    INJECT_SOCKET, /* socket(): killed */
-    INJECT_EXEC,   /* execve(): killed */
-    INJECT_FORK,   /* fork(): killed */
-    INJECT_LOOP,   /* never ends: stopped at the time limit */
-    INJECT_OOM,    /* allocates until malloc fails, then aborts */
-    INJECT_REPLY   /* sends a reply cut short, then waits */
+    INJECT_ABORT,   /* abort(): a library assertion */
+    INJECT_SEGV,    /* a wild write */
+    INJECT_OPEN,    /* opens /etc/passwd: refused by Landlock */
+    INJECT_WRITE,   /* opens a file for writing: killed */
+    INJECT_SOCKET,  /* socket(): killed */
+    INJECT_EXEC,    /* execve(): killed */
+    INJECT_FORK,    /* fork(): killed */
+    INJECT_LOOP,    /* never ends: stopped at the time limit */
+    INJECT_OOM,     /* allocates until malloc fails, then aborts */
+    INJECT_REPLY,   /* sends a reply cut short, then waits */
+    INJECT_SCRIBBLE /* keeps writing to its memfd after sending it */
 };
 static const char *const inject_names[] = {"",       "abort", "segv", "open", "write", "socket",
-                                           "execve", "fork",  "loop", "oom",  "reply"};
+                                           "execve", "fork",  "loop", "oom",  "reply", "scribble"};
 #define N_INJECT ((int)(sizeof inject_names / sizeof inject_names[0]))
 
 typedef struct sbx_request {
@@ -86,6 +87,8 @@ typedef struct sbx_request {
 
 /* 1 in volvis-reader: vv_volume_load reads in-process there. */
 static int in_child;
+/* The child's injected fault (INJECT_*), for the tests. */
+static int inject;
 
 int
 vv_sandbox_wanted(const vv_volume_format *r) {
@@ -574,7 +577,12 @@ finish(sbx_reply *r, vv_status s, int fd) {
         if (r->err_len >= sizeof r->err)
             r->err_len = sizeof r->err - 1;
     }
+    unsigned char *mine = MAP_FAILED;
+    if (inject == INJECT_SCRIBBLE && s == VV_OK && r->bytes)
+        mine = mmap(NULL, (size_t)r->bytes, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
     send_reply(r, s == VV_OK ? fd : -1);
+    for (unsigned char v = 0; mine != MAP_FAILED; v++) /* the parent must stop it first */
+        memset(mine, v, (size_t)r->bytes);
     _exit(0);
 }
 
@@ -730,6 +738,7 @@ vv_sandbox_reader_main(int argc, char **argv) {
         return 2;
     }
     rq.path[rq.path_len] = '\0';
+    inject = rq.inject > INJECT_NONE && rq.inject < N_INJECT ? rq.inject : INJECT_NONE;
     static sbx_reply r;
     r.magic = SBX_MAGIC;
     r.kind = SBX_RESULT;
@@ -1532,7 +1541,7 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt,
 
     vv_format seen = f;
     sbx_reply *r = malloc(sizeof *r);
-    int result = 0, timed_out = 0, malformed = 0;
+    int result = 0, timed_out = 0, malformed = 0, dead = 0, status = 0;
     vv_status s = VV_OK;
     double deadline = now_s() + limit + 5;
     while (r && !result && !malformed && n >= 0) {
@@ -1576,19 +1585,31 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt,
             malformed = 1;
             break;
         }
+        if (passed >= 0 && !dead) {
+            /* a memfd comes with the result: the child is stopped and
+             * reaped before the parent looks at it, so that nothing can
+             * write to the memfd while it is checked and mapped (it is
+             * sealed against resizing only) */
+            kill(pid, SIGKILL);
+            while (wait4(pid, &status, 0, NULL) < 0 && errno == EINTR)
+                ;
+            dead = 1;
+        }
         int k = vv_sandbox_take_message(op, r, (size_t)got, passed, &seen, file, ans);
         if (k > 0)
             s = ans->status;
         result = k > 0;
-        malformed = k < 0;
+        malformed = k < 0 || (k == 0 && passed >= 0); /* a memfd before the result */
     }
     close(sock);
     /* with its result sent the child has nothing left to do (reaped
      * later); without one it is stopped and its end described */
-    kill(pid, SIGKILL);
-    int status = 0;
     uint64_t peak = 0;
-    if (result) {
+    if (!dead)
+        kill(pid, SIGKILL);
+    if (dead) {
+        /* reaped when its memfd came */
+    } else if (result) {
         reap_later(pid);
     } else {
         struct rusage ru;

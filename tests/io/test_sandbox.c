@@ -168,6 +168,22 @@ test_injected_faults(void **state) {
         injected("oom", "the NRRD reader ran out of memory", VV_ERR_LIMIT);
         vv_memory_budget_set(budget);
     }
+    /* a reader that keeps writing to its memfd after handing it over: it
+     * is stopped before the parent checks and maps the voxels, so they are
+     * the ones it sent and the range holds them (before, the parent
+     * scanned a memfd that was still changing) */
+    vv_volume *a = NULL, *b = NULL;
+    vt_ok(load(&a, vt_data("volumes/ct_head.nrrd"), 0));
+    setenv("VOLVIS_SANDBOX_INJECT", "scribble", 1);
+    vt_ok(load(&b, vt_data("volumes/ct_head.nrrd"), 1));
+    unsetenv("VOLVIS_SANDBOX_INJECT");
+    size_t nb = vv_volume_voxel_count(a) * vv_voxel_type_size(a->type);
+    usleep(20000); /* a reader still alive would have written by now */
+    assert_memory_equal(a->data, b->data, nb);
+    assert_true(a->range[0] == b->range[0] && a->range[1] == b->range[1]);
+    vv_volume_free(a);
+    vv_volume_free(b);
+    assert_no_child();
     struct stat st;
     assert_int_not_equal(stat("core", &st), 0);
     assert_int_not_equal(stat("volvis-sandbox-escape", &st), 0);
