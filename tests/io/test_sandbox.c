@@ -215,6 +215,22 @@ test_cli(void **state) {
     assert_int_equal(r.status, 0);
     assert_int_equal(stat(out, &st), 0);
     vt_run_result_free(&r);
+    /* a grid read by libxml2: the same one line, no image */
+    if (vt_have_data("grids/fire_ug.vtu")) {
+        const char *png = vt_path(g_dir, "never.png");
+        const char *ren[] = {"render", vt_data("grids/fire_ug.vtu"), "-o", png, "--size", "64x64",
+                             NULL};
+        unlink(png);
+        setenv("VOLVIS_SANDBOX_INJECT", "abort", 1);
+        r = vt_run_cli_v(g_dir, ren);
+        unsetenv("VOLVIS_SANDBOX_INJECT");
+        printf("# stderr: %s", r.err);
+        assert_int_equal(r.status, 1);
+        assert_string_equal(r.err, "volvis: vtu: fire_ug.vtu: the .vtu reader crashed (SIGABRT); "
+                                   "the file is malformed\n");
+        assert_int_not_equal(stat(png, &st), 0);
+        vt_run_result_free(&r);
+    }
 }
 
 static void
