@@ -581,8 +581,9 @@ finish(sbx_reply *r, vv_status s, int fd) {
     if (inject == INJECT_SCRIBBLE && s == VV_OK && r->bytes)
         mine = mmap(NULL, (size_t)r->bytes, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
     send_reply(r, s == VV_OK ? fd : -1);
-    for (unsigned char v = 0; mine != MAP_FAILED; v++) /* the parent must stop it first */
-        memset(mine, v, (size_t)r->bytes);
+    if (mine != MAP_FAILED)
+        for (unsigned char v = 0;; v++) /* the parent must stop it first */
+            memset(mine, v, (size_t)r->bytes);
     _exit(0);
 }
 
