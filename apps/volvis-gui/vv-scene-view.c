@@ -67,7 +67,7 @@ struct _VvSceneView {
     GCond cond;
     job *pending;         /* newest request not yet taken */
     vv_world *last_world; /* the last refined state, for warm_previews (under lock) */
-    gboolean quit;
+    gboolean quit;        /* written under lock, atomically: cancel_cb reads it without */
     guint64 cancel_below; /* refinement of a generation below this stops (atomic) */
     vv_preview *preview;  /* worker only */
     char preview_renderer[32];
@@ -890,7 +890,8 @@ vv_scene_view_dispose(GObject *o) {
     VvSceneView *self = VV_SCENE_VIEW(o);
     if (self->thread) {
         g_mutex_lock(&self->lock);
-        self->quit = TRUE;
+        /* atomic: cancel_cb reads it without the lock, on the renderer's threads */
+        __atomic_store_n(&self->quit, TRUE, __ATOMIC_RELAXED);
         __atomic_store_n(&self->cancel_below, G_MAXUINT64, __ATOMIC_RELAXED);
         g_cond_signal(&self->cond);
         g_mutex_unlock(&self->lock);
