@@ -321,6 +321,10 @@ worker_main(gpointer data) {
 
 static void
 post_job(VvSceneView *self, job *j) {
+    if (!self->thread) { /* stopped */
+        job_free(j);
+        return;
+    }
     g_mutex_lock(&self->lock);
     job_free(self->pending);
     self->pending = j;
@@ -885,9 +889,8 @@ key_released(GtkEventControllerKey *c, guint key, guint code, GdkModifierType mo
 
 /* ---- life cycle ---------------------------------------------------------- */
 
-static void
-vv_scene_view_dispose(GObject *o) {
-    VvSceneView *self = VV_SCENE_VIEW(o);
+void
+vv_scene_view_stop(VvSceneView *self) {
     if (self->thread) {
         g_mutex_lock(&self->lock);
         /* atomic: cancel_cb reads it without the lock, on the renderer's threads */
@@ -897,11 +900,17 @@ vv_scene_view_dispose(GObject *o) {
         g_mutex_unlock(&self->lock);
         g_thread_join(self->thread);
         self->thread = NULL;
-        job_free(self->pending);
-        self->pending = NULL;
-        vv_world_free(self->last_world);
-        self->last_world = NULL;
     }
+    job_free(self->pending);
+    self->pending = NULL;
+    vv_world_free(self->last_world);
+    self->last_world = NULL;
+}
+
+static void
+vv_scene_view_dispose(GObject *o) {
+    VvSceneView *self = VV_SCENE_VIEW(o);
+    vv_scene_view_stop(self);
     if (self->refine_source) {
         g_source_remove(self->refine_source);
         self->refine_source = 0;

@@ -77,5 +77,14 @@ void vv_scene_view_pick_next(VvSceneView *view, VvPickFunc fn, gpointer user);
 /** Microseconds of g_get_monotonic_time() at which the process started (for the frame log). */
 void vv_scene_view_set_start_time(gint64 us);
 
+/**
+ * Stops the render thread: the frame being drawn is cancelled and the
+ * thread joined; the view keeps what is on screen and draws nothing more.
+ * The window calls it when it goes: a frame being drawn holds a reference
+ * to the view, so the view's own dispose (which stops the thread too) can
+ * come after the window's, or never before the process exits. Idempotent.
+ */
+void vv_scene_view_stop(VvSceneView *view);
+
 G_END_DECLS
 #endif

@@ -996,6 +996,10 @@ side_bar(VvWindow *win) {
 static void
 vv_window_dispose(GObject *o) {
     VvWindow *win = VV_WINDOW(o);
+    /* the render thread ends with the window, not with the last frame
+     * that holds the view (vv_scene_view_stop) */
+    if (win->scene)
+        vv_scene_view_stop(win->scene);
     g_clear_handle_id(&win->autosave_delay, g_source_remove);
     g_clear_handle_id(&win->autosave_tick, g_source_remove);
     autosave_wait(win); /* an autosave being written ends first */
