@@ -20,6 +20,14 @@
 /* Volumes of at most this many voxels (256^3) are never drawn as boxes. */
 #define SURFACES_ABOVE_VOXELS (256.0 * 256.0 * 256.0)
 
+/* ThreadSanitizer builds (VOLVIS_TSAN, scripts/tsan.sh) count the frames
+ * for the report and can inject a race; other builds have neither. */
+#ifdef VV_TSAN
+#define TSAN_COUNT(counter) (self->tsan_##counter++)
+#else
+#define TSAN_COUNT(counter) ((void)0)
+#endif
+
 static gint64 start_us;
 
 void
@@ -105,6 +113,12 @@ struct _VvSceneView {
     double yaw_rate, pitch_rate, roll_rate, throttle;
     guint tick_id;
     gint64 last_tick_us;
+
+#ifdef VV_TSAN
+    gboolean tsan_inject_race;                        /* VOLVIS_TSAN_INJECT_RACE=1 */
+    guint64 tsan_posted, tsan_cancelled, tsan_warmed; /* worker only */
+    guint64 tsan_shown, tsan_dropped;                 /* UI only */
+#endif
 };
 
 G_DEFINE_TYPE(VvSceneView, vv_scene_view, GTK_TYPE_WIDGET)
@@ -182,6 +196,14 @@ render_one(VvSceneView *self, const job *j, vv_preview_kind kind) {
     ro.quality = vv_render_settings_quality(&w->render);
     ro.progress.fn = cancel_cb;
     ro.progress.user = &cc;
+#ifdef VV_TSAN
+    /* the injected race: the policy entry of this kind written without
+     * the lock while the UI thread reads the policy under it */
+    if (self->tsan_inject_race) {
+        volatile double *entry = &self->policy.seconds[kind];
+        *entry = *entry;
+    }
+#endif
     gint64 t0 = g_get_monotonic_time();
     if (s == VV_OK)
         s = vv_preview_render(self->preview, w, &w->view, kind, &ro, img);
@@ -253,8 +275,12 @@ warm_previews(VvSceneView *self) {
         /* twice: the first builds, the second is timed and learnt */
         for (int r = 0; r < 2; r++) {
             frame *f = render_one(self, &j, kinds[i]);
-            if (f)
+            if (f) {
+                TSAN_COUNT(warmed);
                 frame_free(f);
+            } else {
+                TSAN_COUNT(cancelled);
+            }
         }
         g_mutex_lock(&self->lock);
         if (!self->last_world)
@@ -290,8 +316,11 @@ worker_main(gpointer data) {
             if (cancel_cb(&(cancel_ctx){self, j->gen, j->refine}, 0))
                 break;
             frame *f = render_one(self, j, j->kinds[k]);
-            if (!f)
+            if (!f) {
+                TSAN_COUNT(cancelled);
                 break;
+            }
+            TSAN_COUNT(posted);
             /* at the priority of input events: a stream of motion events
              * must not hold back the frames they cause */
             g_idle_add_full(G_PRIORITY_DEFAULT, show_frame, f, NULL);
@@ -367,6 +396,7 @@ show_frame(gpointer data) {
     /* never a frame older than the one on screen, and never a refinement
      * of a state that has changed since */
     if (f->gen < self->shown_gen || (f->refine && f->gen != self->gen)) {
+        TSAN_COUNT(dropped);
         frame_free(f);
         return G_SOURCE_REMOVE;
     }
@@ -381,6 +411,7 @@ show_frame(gpointer data) {
     self->last_error[0] = '\0';
     /* at the same state, a better representation replaces a worse one only */
     if (f->gen == self->shown_gen && self->texture && (int)f->kind < self->shown_kind) {
+        TSAN_COUNT(dropped);
         frame_free(f);
         return G_SOURCE_REMOVE;
     }
@@ -402,6 +433,7 @@ show_frame(gpointer data) {
         self->shown_depth = f->depth;
         f->depth = NULL;
     }
+    TSAN_COUNT(shown);
     gtk_widget_queue_draw(GTK_WIDGET(self));
     frame_free(f);
     return G_SOURCE_REMOVE;
@@ -900,6 +932,14 @@ vv_scene_view_stop(VvSceneView *self) {
         g_mutex_unlock(&self->lock);
         g_thread_join(self->thread);
         self->thread = NULL;
+#ifdef VV_TSAN
+        g_printerr("volvis-gui: render thread: %" G_GUINT64_FORMAT
+                   " frames posted, %" G_GUINT64_FORMAT " cancelled, %" G_GUINT64_FORMAT
+                   " drawn off screen; UI: %" G_GUINT64_FORMAT " shown, %" G_GUINT64_FORMAT
+                   " dropped as stale or worse\n",
+                   self->tsan_posted, self->tsan_cancelled, self->tsan_warmed, self->tsan_shown,
+                   self->tsan_dropped);
+#endif
     }
     job_free(self->pending);
     self->pending = NULL;
@@ -958,6 +998,12 @@ vv_scene_view_init(VvSceneView *self) {
     self->refine_delay_ms = 100;
     self->shown_kind = -1;
     self->cut_plane = -1;
+#ifdef VV_TSAN
+    self->tsan_inject_race = g_strcmp0(g_getenv("VOLVIS_TSAN_INJECT_RACE"), "1") == 0;
+    if (self->tsan_inject_race)
+        g_printerr("volvis-gui: VOLVIS_TSAN_INJECT_RACE=1: the render thread writes the preview "
+                   "policy without its lock\n");
+#endif
     gtk_widget_set_focusable(GTK_WIDGET(self), TRUE);
     vvg_name(GTK_WIDGET(self), "3-D view");
     gtk_widget_set_hexpand(GTK_WIDGET(self), TRUE);
