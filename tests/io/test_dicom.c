@@ -186,6 +186,41 @@ test_ct_series(void **state) {
     free(s);
 }
 
+/* The headers of a series are read in parallel (scan_files, an OpenMP loop):
+ * with four threads, in this process (VOLVIS_SANDBOX=0) and in the reader,
+ * the CT series and the listing of a folder of two series come out as with
+ * one thread. scripts/tsan.sh runs this under ThreadSanitizer. */
+static void
+test_parallel_headers(void **state) {
+    (void)state;
+    NEED_DATA();
+    int threads = vv_threads_get();
+    for (int sandbox = 0; sandbox < 2; sandbox++) {
+        if (sandbox)
+            unsetenv("VOLVIS_SANDBOX");
+        else
+            setenv("VOLVIS_SANDBOX", "0", 1);
+        vv_dicom_series *one = NULL, *four = NULL;
+        int n_one = 0, n_four = 0;
+        vv_threads_set(1);
+        vt_ok(vv_dicom_list(&one, &n_one, tmp("mixed")));
+        vv_threads_set(4);
+        assert_int_equal(vv_threads_get(), 4);
+        vt_ok(vv_dicom_list(&four, &n_four, tmp("mixed")));
+        assert_int_equal(n_one, 2);
+        assert_int_equal(n_four, n_one);
+        assert_memory_equal(four, one, (size_t)n_one * sizeof *one);
+        free(one);
+        free(four);
+        vv_volume *v = NULL;
+        vt_ok(vv_volume_load(&v, tmp("ct"), NULL));
+        check_ct(v);
+        vv_volume_free(v);
+    }
+    unsetenv("VOLVIS_SANDBOX");
+    vv_threads_set(threads);
+}
+
 /* Renamed files in a shuffled order, and an explicit list of files. */
 static void
 test_shuffled_renamed(void **state) {
@@ -645,11 +680,17 @@ test_bad_input(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_ct_series),       cmocka_unit_test(test_shuffled_renamed),
-        cmocka_unit_test(test_missing_slice),   cmocka_unit_test(test_oblique),
-        cmocka_unit_test(test_oblique_upright), cmocka_unit_test(test_enhanced_multiframe),
-        cmocka_unit_test(test_compressions),    cmocka_unit_test(test_pydicom_files),
-        cmocka_unit_test(test_nibabel_files),   cmocka_unit_test(test_mixed_series_and_cli),
+        cmocka_unit_test(test_ct_series),
+        cmocka_unit_test(test_parallel_headers),
+        cmocka_unit_test(test_shuffled_renamed),
+        cmocka_unit_test(test_missing_slice),
+        cmocka_unit_test(test_oblique),
+        cmocka_unit_test(test_oblique_upright),
+        cmocka_unit_test(test_enhanced_multiframe),
+        cmocka_unit_test(test_compressions),
+        cmocka_unit_test(test_pydicom_files),
+        cmocka_unit_test(test_nibabel_files),
+        cmocka_unit_test(test_mixed_series_and_cli),
         cmocka_unit_test(test_bad_input),
     };
     return vt_run_tests(tests, setup, teardown);
