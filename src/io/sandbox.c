@@ -557,10 +557,28 @@ announce(const sbx_request *rq, vv_format f) {
 }
 
 /* @p fd sealed for handing over (the parent maps it), or -1 when it is -1
- * or cannot be sealed (then closed). */
+ * or cannot be sealed (then closed): this process's mapping of it is
+ * removed first, so that it can be sealed against writing too (a memfd
+ * with a writable shared mapping cannot be); nothing can change its bytes
+ * once the parent has it. The injected "scribble" keeps its mapping and
+ * hands it over unsealed against writing, as a hostile reader would. */
 static int
 sealed(int fd) {
-    if (fd >= 0 && fcntl(fd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_SEAL) != 0) {
+    if (fd < 0)
+        return -1;
+    unsigned seals = F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_WRITE | F_SEAL_SEAL;
+    if (inject == INJECT_SCRIBBLE) {
+        seals = F_SEAL_SHRINK | F_SEAL_GROW;
+    } else {
+        pthread_mutex_lock(&blocks_lock);
+        for (int i = 0; i < (int)(sizeof blocks / sizeof blocks[0]); i++)
+            if (blocks[i].fd == fd && blocks[i].data) {
+                munmap(blocks[i].data, blocks[i].bytes);
+                blocks[i].data = NULL; /* the fd stays open: it is handed over */
+            }
+        pthread_mutex_unlock(&blocks_lock);
+    }
+    if (fcntl(fd, F_ADD_SEALS, seals) != 0) {
         close(fd);
         return -1;
     }
@@ -952,6 +970,11 @@ volume_from_reply(vv_volume **out, const sbx_reply *r, int fd, const char *fmt_n
         s = vv_error_set(VV_ERR_FORMAT,
                          "%s: %s: the reader's result does not hold the %llu bytes it names",
                          fmt_name, file, (unsigned long long)bytes);
+    else if (!(seals & F_SEAL_WRITE))
+        s = vv_error_set(VV_ERR_FORMAT,
+                         "%s: %s: the reader's voxels are not sealed against writing; the file is "
+                         "hostile or the reader broken",
+                         fmt_name, file);
     else if (!finite_all(r->spacing, 3) || !finite_all(r->origin, 3) ||
              !finite_all(r->direction, 9) || !(r->spacing[0] > 0) || !(r->spacing[1] > 0) ||
              !(r->spacing[2] > 0))
@@ -962,10 +985,15 @@ volume_from_reply(vv_volume **out, const sbx_reply *r, int fd, const char *fmt_n
             close(fd);
         return s;
     }
+    /* private: the memfd is sealed against writing; the page cache's pages
+     * are mapped read-only (populated without copying) and copied only
+     * where the program writes to the volume */
     size_t len = bytes ? (size_t)bytes : 1;
-    void *p = mmap(NULL, len, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_POPULATE, fd, 0);
+    void *p = mmap(NULL, len, PROT_READ | PROT_WRITE, MAP_PRIVATE, fd, 0);
     int e = errno;
     close(fd);
+    if (p != MAP_FAILED)
+        madvise(p, len, MADV_POPULATE_READ);
     if (p == MAP_FAILED)
         return vv_error_set(VV_ERR_NOMEM, "%s: %s: cannot map the reader's %llu bytes: %s",
                             fmt_name, file, (unsigned long long)bytes, strerror(e));
@@ -1542,7 +1570,7 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt,
 
     vv_format seen = f;
     sbx_reply *r = malloc(sizeof *r);
-    int result = 0, timed_out = 0, malformed = 0, dead = 0, status = 0;
+    int result = 0, timed_out = 0, malformed = 0, status = 0;
     vv_status s = VV_OK;
     double deadline = now_s() + limit + 5;
     while (r && !result && !malformed && n >= 0) {
@@ -1586,16 +1614,6 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt,
             malformed = 1;
             break;
         }
-        if (passed >= 0 && !dead) {
-            /* a memfd comes with the result: the child is stopped and
-             * reaped before the parent looks at it, so that nothing can
-             * write to the memfd while it is checked and mapped (it is
-             * sealed against resizing only) */
-            kill(pid, SIGKILL);
-            while (wait4(pid, &status, 0, NULL) < 0 && errno == EINTR)
-                ;
-            dead = 1;
-        }
         int k = vv_sandbox_take_message(op, r, (size_t)got, passed, &seen, file, ans);
         if (k > 0)
             s = ans->status;
@@ -1606,11 +1624,8 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt,
     /* with its result sent the child has nothing left to do (reaped
      * later); without one it is stopped and its end described */
     uint64_t peak = 0;
-    if (!dead)
-        kill(pid, SIGKILL);
-    if (dead) {
-        /* reaped when its memfd came */
-    } else if (result) {
+    kill(pid, SIGKILL);
+    if (result) {
         reap_later(pid);
     } else {
         struct rusage ru;

@@ -7,7 +7,7 @@
  *
  * The input: a flags byte, a message length (two bytes, little-endian),
  * the message, then what the memfd holds. Flags: 1 a memfd is passed; 2 it
- * is sealed against shrinking, 4 against growing; 8 the message is made
+ * is sealed against shrinking, 4 against growing and writing; 8 the message is made
  * plausible (the magic, a kind, err_len fitting the length, and with 16 the
  * byte count naming the memfd's size), so the fuzzer spends its time past
  * the first checks; 32 a second message follows the format message;
@@ -42,7 +42,7 @@ make_memfd(const uint8_t *d, size_t n, int flags) {
             __builtin_trap();
         off += (size_t)w;
     }
-    int seals = (flags & 2 ? F_SEAL_SHRINK : 0) | (flags & 4 ? F_SEAL_GROW : 0);
+    int seals = (flags & 2 ? F_SEAL_SHRINK : 0) | (flags & 4 ? F_SEAL_GROW | F_SEAL_WRITE : 0);
     if (seals)
         fcntl(fd, F_ADD_SEALS, seals);
     return fd;
