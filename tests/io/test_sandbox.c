@@ -257,7 +257,13 @@ test_fuzz_corpus(void **state) {
         assert_non_null(dp);
         struct dirent *e;
         while ((e = readdir(dp))) {
-            if (e->d_name[0] == '.')
+            /* the findings (crash-, oom-, timeout-, leak-, slow-); the
+             * seeds are well-formed files other tests read */
+            static const char *const kinds[] = {"crash-", "oom-", "timeout-", "leak-", "slow-"};
+            int finding = 0;
+            for (size_t k = 0; k < sizeof kinds / sizeof kinds[0]; k++)
+                finding |= !strncmp(e->d_name, kinds[k], strlen(kinds[k]));
+            if (!finding)
                 continue;
             char path[1024];
             snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
@@ -288,8 +294,8 @@ test_fuzz_corpus(void **state) {
         }
         closedir(dp);
     }
-    printf("# %d fuzz inputs read through the sandbox\n", n);
-    assert_true(n >= 20);
+    printf("# %d fuzz findings read through the sandbox\n", n);
+    assert_true(n >= 20); /* 22 at issue 33's end */
 }
 
 /* Meshes (Assimp) through the sandbox: the same vertices, triangles and
