@@ -292,10 +292,10 @@ void g_once_init_leave(volatile void *location, gsize result);
 
 gboolean
 g_once_init_enter(volatile void *location) {
-    gboolean todo = real_g_once_init_enter()(location);
-    if (annotate_on() && !todo)
+    gboolean must_init = real_g_once_init_enter()(location);
+    if (annotate_on() && !must_init)
         __tsan_acquire((void *)location);
-    return todo;
+    return must_init;
 }
 
 void

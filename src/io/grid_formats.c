@@ -87,6 +87,6 @@ vv_grid_load(vv_grid **out, const char *path) {
     }
     /* libxml2 and libnetcdf read in volvis-reader (issue 33) */
     if ((table[(int)f - 1]->flags & VV_FORMAT_FLAG_THIRD_PARTY) && vv_sandbox_wanted(NULL))
-        return vv_sandbox_grid_load(out, path);
+        return vv_sandbox_grid_load(out, path, table[(int)f - 1]);
     return table[(int)f - 1]->read(out, path);
 }

@@ -1292,7 +1292,7 @@ typedef struct grid_cursor {
 
 static const void *
 take(grid_cursor *c, uint64_t n) {
-    if (n > c->size - c->at || pad8(n) > c->size - c->at)
+    if (pad8(n) > c->size - c->at) /* n is bounded by the grid limits: no overflow */
         return NULL;
     const void *q = c->p + c->at;
     c->at += pad8(n);
@@ -1508,13 +1508,19 @@ vv_sandbox_take_message(int op, const void *msg, size_t len, int fd, vv_format *
     return 1;
 }
 
-/* A reader's run for @p op on @p path: its result in *@p ans (zeroed
- * first); returns ans->status, or the error of a reader that ended without
- * a result. */
+/* A reader's run for @p op on @p path (@p opt NULL: the defaults): its
+ * result in *@p ans (zeroed first); returns ans->status, or the error of a
+ * reader that ended without a result, naming the reader @p name and
+ * @p title ("mesh", ".vtu"; NULL: the volume format the reader announced). */
 static vv_status
-run_reader(int op, const char *path, vv_format f, const vv_load_options *opt,
-           vv_sandbox_answer *ans) {
+run_reader(int op, const char *path, vv_format f, const vv_load_options *opt, const char *name,
+           const char *title, vv_sandbox_answer *ans) {
     memset(ans, 0, sizeof *ans);
+    vv_load_options defaults;
+    if (!opt) {
+        vv_load_options_init(&defaults);
+        opt = &defaults;
+    }
     const char *file = vv_path_basename(path);
     if (strlen(path) >= SBX_MAX_PATH)
         return vv_error_set(VV_ERR_LIMIT, "load: %s: a path of over %d bytes", file,
@@ -1635,13 +1641,9 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt,
         peak = (uint64_t)ru.ru_maxrss * 1024u;
     }
     const vv_volume_format *rec = record_of(seen);
-    const char *fmt_name = op == SBX_OP_MESH ? "mesh" : rec ? rec->name : "load";
-    const char *title = op == SBX_OP_MESH ? "mesh" : rec ? rec->title : "file";
-    vv_grid_format gf;
-    if (op == SBX_OP_GRID && vv_grid_file_detect(path, &gf)) {
-        fmt_name = vv_grid_format_table(NULL)[(int)gf - 1]->name;
-        title = vv_grid_format_table(NULL)[(int)gf - 1]->title;
-    }
+    const char *fmt_name = name ? name : rec ? rec->name : "load";
+    if (!title)
+        title = rec ? rec->title : "file";
     if (!r) {
         s = vv_error_set(VV_ERR_NOMEM, "out of memory");
     } else if (malformed) {
@@ -1659,17 +1661,15 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt,
 vv_status
 vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_load_options *opt) {
     vv_sandbox_answer a;
-    vv_status s = run_reader(SBX_OP_VOLUME, path, f, opt, &a);
+    vv_status s = run_reader(SBX_OP_VOLUME, path, f, opt, NULL, NULL, &a);
     *out = a.volume;
     return s;
 }
 
 vv_status
 vv_sandbox_dicom_list(vv_dicom_series **out, int *n, const char *path) {
-    vv_load_options o;
-    vv_load_options_init(&o);
     vv_sandbox_answer a;
-    vv_status s = run_reader(SBX_OP_DICOM_LIST, path, VV_FORMAT_DICOM, &o, &a);
+    vv_status s = run_reader(SBX_OP_DICOM_LIST, path, VV_FORMAT_DICOM, NULL, NULL, NULL, &a);
     *out = a.series;
     *n = a.n_series;
     return s;
@@ -1677,20 +1677,16 @@ vv_sandbox_dicom_list(vv_dicom_series **out, int *n, const char *path) {
 
 vv_status
 vv_sandbox_mesh_load(vv_mesh **out, const char *path) {
-    vv_load_options o;
-    vv_load_options_init(&o);
     vv_sandbox_answer a;
-    vv_status s = run_reader(SBX_OP_MESH, path, VV_FORMAT_UNKNOWN, &o, &a);
+    vv_status s = run_reader(SBX_OP_MESH, path, VV_FORMAT_UNKNOWN, NULL, "mesh", "mesh", &a);
     *out = a.mesh;
     return s;
 }
 
 vv_status
-vv_sandbox_grid_load(vv_grid **out, const char *path) {
-    vv_load_options o;
-    vv_load_options_init(&o);
+vv_sandbox_grid_load(vv_grid **out, const char *path, const vv_grid_format_record *rec) {
     vv_sandbox_answer a;
-    vv_status s = run_reader(SBX_OP_GRID, path, VV_FORMAT_UNKNOWN, &o, &a);
+    vv_status s = run_reader(SBX_OP_GRID, path, VV_FORMAT_UNKNOWN, NULL, rec->name, rec->title, &a);
     *out = a.grid;
     return s;
 }

@@ -127,11 +127,12 @@ typedef struct sbx_grid_field {
  * libnetcdf's NetCDF): the grid comes back in a sealed memfd, is copied
  * into a new grid and checked here (vv_grid_validate, every point finite,
  * the blocks and spherical axes consistent with the points; ranges
- * computed again). Errors: the child's own, or as vv_sandbox_volume_load
- * ("vtu: a.vtu: the grid reader crashed (SIGSEGV); the file is
- * malformed"). Thread-safe.
+ * computed again). @p rec is the grid format vv_grid_load detected (its
+ * name and title in messages; the reader detects it again). Errors: the
+ * child's own, or as vv_sandbox_volume_load ("vtu: a.vtu: the .vtu reader
+ * crashed (SIGSEGV); the file is malformed"). Thread-safe.
  */
-vv_status vv_sandbox_grid_load(vv_grid **out, const char *path);
+vv_status vv_sandbox_grid_load(vv_grid **out, const char *path, const vv_grid_format_record *rec);
 
 /** What the reader is asked for (sbx_request.op). */
 enum { SBX_OP_VOLUME = 0, SBX_OP_DICOM_LIST = 1, SBX_OP_MESH = 2, SBX_OP_GRID = 3 };
