@@ -66,6 +66,14 @@ typedef struct sbx_reply {
 int vv_sandbox_wanted(const vv_volume_format *r);
 
 /**
+ * 1 in volvis-reader once it reads its request: a process of one load that
+ * ends after it, so that what a library leaks on a malformed file ends with
+ * it (checks that exist only to keep a long-lived process from such leaks
+ * may be left out there). Thread-safe.
+ */
+int vv_sandbox_in_reader(void);
+
+/**
  * vv_volume_load's contract, in the sandboxed reader. @p f is the format
  * (VV_FORMAT_AUTO: the child detects it). The voxels are a shared mapping
  * of the child's memfd, released by vv_volume_free. Errors: the child's own
