@@ -105,29 +105,27 @@ vv_sandbox_in_reader(void) {
     return in_child;
 }
 
-/* ---- the child ------------------------------------------------------------ */
-
 /*
  * madvise(@p advice) over [@p p, @p p + @p len) in 8 MiB pieces on the
  * library's threads: the kernel populates or zaps the page tables of
  * different pieces in parallel (both take the mapping lock shared), where
  * one call does it on one core; a 150 MiB volume is 38 400 pages. @p p is
- * page-aligned. Returns 0, or -1 when the kernel refused the advice.
+ * page-aligned. Used by both sides: the reader's memfd, the parent's
+ * mapping of it. Advice the kernel refuses (MADV_POPULATE_* before Linux
+ * 5.14) is ignored: the pages are then faulted in use.
  */
-static int
+static void
 madvise_parallel(void *p, size_t len, int advice) {
     const size_t piece = (size_t)8 << 20;
     const int64_t n = (int64_t)((len + piece - 1) / piece);
-    if (n < 2)
-        return madvise(p, len, advice);
-    int failed = 0;
-#pragma omp parallel for schedule(static) reduction(| : failed)
+#pragma omp parallel for schedule(static) if (n > 1)
     for (int64_t i = 0; i < n; i++) {
         size_t off = (size_t)i * piece;
-        failed |= madvise((char *)p + off, len - off < piece ? len - off : piece, advice) != 0;
+        (void)madvise((char *)p + off, len - off < piece ? len - off : piece, advice);
     }
-    return failed ? -1 : 0;
 }
+
+/* ---- the child ------------------------------------------------------------ */
 
 /* The voxels of the volumes the child makes: each in its own memfd. */
 typedef struct sbx_block {
@@ -151,8 +149,7 @@ memfd_alloc(size_t bytes) {
         close(fd);
         return NULL;
     }
-    /* the pages made ahead, in parallel (a fault a page costs more); a
-     * kernel without MADV_POPULATE_WRITE (before 5.14) faults them in use */
+    /* the pages made ahead, in parallel (a fault a page costs more) */
     madvise_parallel(p, len, MADV_POPULATE_WRITE);
     pthread_mutex_lock(&blocks_lock);
     int slot = -1;
