@@ -182,24 +182,36 @@ class Session:
             pass
         return False
 
-    def quit(self, expect=0, timeout=20):
+    def quit(self, expect=0, timeout=60):
         """Ctrl+Q; the exit status must be @p expect."""
         self.focus_main()
         self.key("ctrl+q")
         return self.wait_exit(expect, timeout)
 
     def quit_discard(self):
-        """Ctrl+Q with unsaved changes: the dialog asks; Close without saving; exit 0."""
+        """Ctrl+Q with unsaved changes: the dialog asks; Close without saving; exit 0.
+        The click is repeated while the dialog stays open (a loaded machine may
+        show the dialog before it takes input)."""
         self.focus_main()
         self.key("ctrl+q")
         self.xdo("search", "--sync", "--name", "VolVis: unsaved changes")
-        time.sleep(0.5)
-        dialog = self.find("VolVis: unsaved changes", visible=False)
-        self.click(self.find(lambda n: n.endswith("Close without saving"), "push button",
-                             root=dialog, visible=False))
+        for _ in range(5):
+            time.sleep(0.5)
+            try:
+                dialog = self.find("VolVis: unsaved changes", visible=False, timeout=5)
+                self.click(self.find(lambda n: n.endswith("Close without saving"), "push button",
+                                     root=dialog, visible=False, timeout=5))
+            except Failure:
+                pass  # gone: the click before was taken
+            try:
+                self.app_proc.wait(10)
+                break
+            except subprocess.TimeoutExpired:
+                if not self.xdo("search", "--name", "VolVis: unsaved changes").split():
+                    break  # closed, the application is ending
         return self.wait_exit(0)
 
-    def wait_exit(self, expect=0, timeout=20):
+    def wait_exit(self, expect=0, timeout=60):
         try:
             st = self.app_proc.wait(timeout)
         except subprocess.TimeoutExpired:
@@ -447,10 +459,41 @@ class Session:
             os.remove(path)
         self.focus_main()
         self.key(keys)
+        self.chooser_type(title, path)
+
+    def focused_text(self):
+        """The text entry that holds the keyboard focus, or None."""
+        for o in self.find_all(role="text"):
+            try:
+                if o.getState().contains(pyatspi.STATE_FOCUSED):
+                    return o
+            except Exception:
+                continue
+        return None
+
+    def chooser_type(self, title, path, location=False, timeout=60):
+        """Types @p path into the file chooser called @p title and presses
+        Return: waits for the window, (Ctrl+L for the location entry if
+        @p location), for a text entry with the focus, and for the typed
+        path to be in it: a loaded machine (the sanitizers, a test beside)
+        may take seconds for each, where a fixed sleep would type into
+        nothing."""
         self.xdo("search", "--sync", "--name", title)
-        time.sleep(0.5)
+        entry = None
+        t0 = time.time()
+        while entry is None:
+            if location:  # again if the window took no keys yet (not sooner: it toggles)
+                self.key("ctrl+l")
+            t1 = time.time()
+            while entry is None and time.time() - t1 < 5:
+                entry = self.focused_text()
+                time.sleep(0.2)
+            if entry is None and time.time() - t0 > timeout:
+                raise Failure(f"{title}: no text entry has the focus")
         self.key("ctrl+a")
         self.type(path)
+        self.wait_for(lambda: path in self.text(entry), f"{title}: {path!r} not in the entry",
+                      timeout=timeout)
         self.key("Return")
 
     def save_as(self, path):
