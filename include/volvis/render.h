@@ -122,13 +122,19 @@ const char *vv_option_type_name(vv_option_type t);
 #define VV_RENDERER_GLOBAL                                                                         \
     16u /**< pixels depend on objects off their primary ray                                        \
              (shadows, reflections, interreflection) */
+/** draws every visible channel of a multi-channel volume object
+ * (vv_object.channels) combined by its blend rule; a renderer without it
+ * refuses such an object (vv_renderer_check_world) */
+#define VV_RENDERER_CHANNELS 32u
 
 /**
  * What a rendering method is, draws and takes. Immutable, owned by the
  * library. A renderer draws the visible objects of the kinds in `draws`
  * (volume and grid objects only in the `modes` listed) and leaves the other
  * kinds out; a World of which it draws nothing, or an object of a drawn
- * kind in a mode it does not draw, is an error (vv_renderer_check_world).
+ * kind in a mode it does not draw, or a visible volume object of several
+ * channels for a renderer without VV_RENDERER_CHANNELS, is an error
+ * (vv_renderer_check_world).
  */
 typedef struct vv_renderer_info {
     const char *name;              /**< registry key, e.g. "raycast" */
@@ -156,7 +162,8 @@ const vv_option_spec *vv_renderer_info_option(const vv_renderer_info *info, cons
  */
 vv_status vv_renderer_info_check_option(const vv_renderer_info *info, const char *key,
                                         const char *value);
-/** 1 when @p info draws @p obj: its kind, and for volumes and grids its mode. */
+/** 1 when @p info draws @p obj: its kind, for volumes and grids its mode, and
+ * for a volume of several channels VV_RENDERER_CHANNELS. */
 int vv_renderer_info_draws(const vv_renderer_info *info, const vv_object *obj);
 
 /**

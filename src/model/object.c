@@ -274,6 +274,9 @@ vv_object_free(vv_object *obj) {
     vv_texture_image_free(obj->texture.image);
     vv_volume_free(obj->solid_texture.volume);
     free(obj->solid_texture.source);
+    for (int c = 0; c < obj->n_channels; c++)
+        vv_volume_free(obj->channels[c].volume);
+    free(obj->channels);
     free(obj);
 }
 
@@ -290,6 +293,13 @@ vv_object_clone(vv_object **out, const vv_object *obj) {
     c->geometry.source = NULL;
     c->geometry.filters = NULL;
     c->solid_texture.source = NULL;
+    c->channels = NULL;
+    if (obj->n_channels > 0) {
+        c->channels = malloc((size_t)obj->n_channels * sizeof *c->channels);
+        if (!c->channels)
+            goto nomem;
+        memcpy(c->channels, obj->channels, (size_t)obj->n_channels * sizeof *c->channels);
+    }
     if (obj->geometry.vertices && obj->geometry.n_vertices > 0) {
         size_t n = (size_t)obj->geometry.n_vertices * sizeof *c->geometry.vertices;
         c->geometry.vertices = malloc(n);
@@ -321,9 +331,12 @@ vv_object_clone(vv_object **out, const vv_object *obj) {
     vv_texture_image_ref(c->texture.image);
     if (c->solid_texture.volume)
         vv_volume_ref(c->solid_texture.volume);
+    for (int k = 0; k < c->n_channels; k++)
+        vv_volume_ref(c->channels[k].volume);
     *out = c;
     return VV_OK;
 nomem:
+    free(c->channels);
     free(c->geometry.vertices);
     free(c->geometry.source);
     free(c->solid_texture.source);

@@ -245,6 +245,8 @@ int
 vv_renderer_info_draws(const vv_renderer_info *info, const vv_object *obj) {
     if (!info || !obj || !(info->draws & VV_DRAWS(obj->type)))
         return 0;
+    if (obj->n_channels > 1 && !(info->caps & VV_RENDERER_CHANNELS))
+        return 0;
     return !has_mode(obj->type) || (info->modes & VV_MODE_BIT(obj->mode)) != 0;
 }
 
@@ -287,6 +289,11 @@ vv_renderer_check_world(const vv_renderer_info *info, const vv_world *w) {
             return vv_error_set(VV_ERR_UNSUPPORTED,
                                 "object '%s': %s mode is not drawn by %s (drawn by %s)", o->name,
                                 mode_name(o->mode), info->name, drawn_by(o, who, sizeof who));
+        if (o->n_channels > 1 && !(info->caps & VV_RENDERER_CHANNELS))
+            return vv_error_set(VV_ERR_UNSUPPORTED,
+                                "object '%s' has %d channels; %s draws one channel an object "
+                                "(channels are drawn by %s)",
+                                o->name, o->n_channels, info->name, drawn_by(o, who, sizeof who));
         drawn++;
     }
     if (drawn == 0 && left == 1)
@@ -446,6 +453,12 @@ vv_renderer_render_region(vv_renderer *r, const vv_world *world, const vv_view *
     if (region->object < 0 || region->object >= world->n_objects || !region->voxels)
         return vv_error_set(VV_ERR_INVALID, "%s: region of object %d without voxels", name,
                             region->object);
+    if (world->objects[region->object]->n_channels > 1)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "%s: object '%s' has %d channels; region renders (out of core, "
+                            "distributed) draw one channel an object",
+                            name, world->objects[region->object]->name,
+                            world->objects[region->object]->n_channels);
     const vv_object *obj = world->objects[region->object];
     if (obj->type != VV_OBJECT_VOLUME || !obj->volume)
         return vv_error_set(VV_ERR_INVALID, "%s: object '%s' is not a volume object", name,

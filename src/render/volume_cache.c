@@ -326,8 +326,12 @@ void
 vv_vcache_set_prune(vv_vcache_set *s, const vv_world *w) {
     for (int i = 0; i < s->n;) {
         int used = 0;
-        for (int j = 0; j < w->n_objects; j++)
-            used |= w->objects[j] && w->objects[j]->volume == s->cache[i].vol;
+        for (int j = 0; j < w->n_objects; j++) {
+            const vv_object *o = w->objects[j];
+            used |= o && o->volume == s->cache[i].vol;
+            for (int c = 0; o && c < o->n_channels; c++)
+                used |= o->channels[c].volume == s->cache[i].vol;
+        }
         if (!used) {
             cache_release(&s->cache[i]);
             s->cache[i] = s->cache[--s->n];

@@ -75,6 +75,12 @@ typedef struct rc_obj {
     const vv_render_region *region;
     double dt;
     int inv_form;
+    /* a multi-channel object (vv_object.channels): its visible channels,
+     * each prepared as an object of its own (ray set-up, cache, tables);
+     * this slot's own fields set up the rays (every channel shares them) */
+    int nch;
+    struct rc_obj *ch;
+    vv_channel_blend blend;
 } rc_obj;
 
 typedef struct rc_frame {
@@ -159,6 +165,192 @@ composite_sample(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, const f
     *A += w * e[0];
 }
 
+/* The subvolume of index point p: its index, and its coordinates in bc.
+ * p >= 0 up to rounding: a negative index would wrap and clamp high, so the
+ * float is clamped instead. bxm, bym, bzm: the grid's last subvolume. */
+static inline size_t
+block_of(const vv_vcache *c, const float p[3], unsigned bxm, unsigned bym, unsigned bzm,
+         unsigned bc[3]) {
+    unsigned bi = (unsigned)(int)((p[0] > 0 ? p[0] : 0) * (1.0f / VV_VC_BLOCK));
+    unsigned bj = (unsigned)(int)((p[1] > 0 ? p[1] : 0) * (1.0f / VV_VC_BLOCK));
+    unsigned bk = (unsigned)(int)((p[2] > 0 ? p[2] : 0) * (1.0f / VV_VC_BLOCK));
+    bc[0] = bi > bxm ? bxm : bi;
+    bc[1] = bj > bym ? bym : bj;
+    bc[2] = bk > bzm ? bzm : bk;
+    return ((size_t)bc[2] * (size_t)c->by + (size_t)bc[1]) * (size_t)c->bx + (size_t)bc[0];
+}
+
+/* The sample index after leaving the empty cube of 2 dist - 1 subvolumes
+ * around subvolume bc (p, at ray parameter t, in it; k its sample index). */
+static inline double
+leap(const vv_vray *r, const float p[3], double t, const unsigned bc[3], int dist, double inv_dt,
+     double k) {
+    float te = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        if (r->inv[a] == 0)
+            continue;
+        float bound = r->d[a] > 0 ? (float)((int)bc[a] + dist) * VV_VC_BLOCK
+                                  : (float)((int)bc[a] - dist + 1) * VV_VC_BLOCK;
+        float ta = (bound - p[a]) * r->inv[a];
+        te = ta < te ? ta : te;
+    }
+    double ks = vv_ceil_pos((t + te) * inv_dt);
+    return ks > k + 1 ? ks : k + 1;
+}
+
+/* Shades and composites one classified sample of channel co (table entry
+ * e) at cell o, fractions f (point p, ray parameter t) under C, A. */
+static inline void
+channel_composite(const rc_frame *fr, const rc_obj *co, const vv_ray *wr, const float v[3],
+                  const float *e, size_t o, const float f[3], const float p[3], double t,
+                  float C[3], float *A) {
+    float g[3] = {0, 0, 0};
+    if (co->shading && co->c->nrm)
+        vv_vcache_gradient_at(co->c, o, f, g);
+    else if (co->shading)
+        vv_vcache_gradient(co->c, p, g);
+    composite_sample(fr, co, wr, v, e, t, g, C, A);
+}
+
+/* One sample of a multi-channel object under the composite rule
+ * (VV_BLEND_COMPOSITE) at cell o, fractions f (point p, ray parameter t):
+ * e[ch] is channel ch's table entry there, NULL where its subvolume cannot
+ * show. Each channel with opacity is shaded with its own gradient; the
+ * opacities combine as independent absorbers, alpha = 1 - prod(1 - a_c),
+ * the colours mix weighted by opacity, and the mixed sample is composited
+ * under C, A. Returns 1 when the sample had any opacity. */
+static inline int
+mix_channels(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, const float v[3],
+             const float *const *e, size_t o, const float f[3], const float p[3], double t,
+             float C[3], float *A) {
+    float T = 1, sum_a = 0, col[3] = {0, 0, 0};
+    for (int k = 0; k < ob->nch; k++) {
+        if (!e[k] || e[k][0] <= 0)
+            continue;
+        /* the channel's shaded, opacity-weighted colour: composited under
+         * nothing, composite_sample adds exactly that */
+        float one[3] = {0, 0, 0}, a = 0;
+        channel_composite(fr, &ob->ch[k], wr, v, e[k], o, f, p, t, one, &a);
+        col[0] += one[0];
+        col[1] += one[1];
+        col[2] += one[2];
+        sum_a += e[k][0];
+        T *= 1 - e[k][0];
+    }
+    if (!(sum_a > 0))
+        return 0;
+    const float a = 1 - T, scale = a / sum_a, w = 1 - *A;
+    C[0] += w * scale * col[0];
+    C[1] += w * scale * col[1];
+    C[2] += w * scale * col[2];
+    *A += w * a;
+    return 1;
+}
+
+/* A multi-channel object on its own ray: under the composite rule (alone
+ * among the composited objects) the channels mixed per sample
+ * (mix_channels), under the additive rule (VV_BLEND_ADDITIVE) every
+ * visible channel composited front to back on its own, ending at its own
+ * early termination, and the colours added, res->a = 1 - prod(1 - A_c).
+ * As trace_composite_one does for one channel: the rays leap over cubes of
+ * subvolumes that no channel shows (the smallest of the channels'
+ * distances), and inside a subvolume each channel that may show there
+ * classifies a chunk of samples at a time (vv_vray_classify: the same
+ * values, hence the same image, as the one-channel kernel's). */
+static void
+trace_channels(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result *res) {
+    const int additive = ob->blend == VV_BLEND_ADDITIVE, nch = ob->nch;
+    float C[VV_MAX_CHANNELS][3], A[VV_MAX_CHANNELS];
+    int live = additive ? nch : 1;
+    float depth = INFINITY;
+    memset(C, 0, sizeof C);
+    memset(A, 0, sizeof A);
+    vv_vray r;
+    if (ray_setup(ob, wr, &r)) {
+        const vv_vcache *c = ob->ch[0].c;
+        const double dt = fr->dt, inv_dt = 1.0 / fr->dt;
+        const float et = fr->et;
+        const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
+        const unsigned bxm = (unsigned)c->bx - 1, bym = (unsigned)c->by - 1,
+                       bzm = (unsigned)c->bz - 1;
+        double k = vv_ceil_pos(r.t0 * inv_dt);
+        const double kend = vv_floor_pos(r.t1 * inv_dt);
+        while (k <= kend && live > 0) {
+            double t = k * dt;
+            float p[3];
+            vv_vray_point(&r, t, p);
+            unsigned bc[3];
+            const size_t b = block_of(c, p, bxm, bym, bzm, bc);
+            int dist = 255;
+            for (int ch = 0; ch < nch; ch++)
+                if (A[additive ? ch : 0] < et && ob->ch[ch].bdist[b] < dist)
+                    dist = ob->ch[ch].bdist[b];
+            if (dist) {
+                k = leap(&r, p, t, bc, dist, inv_dt, k);
+                continue;
+            }
+            double klast = vv_floor_pos(vv_vray_cube_exit(&r, p, t, VV_VC_BLOCK) * inv_dt);
+            klast = klast < kend ? klast : kend;
+            klast = klast < k ? k : klast;
+            const int n = (int)(klast - k) + 1;
+            for (int s0 = 0; s0 < n && live > 0; s0 += VV_VC_CHUNK) {
+                const int m = n - s0 < VV_VC_CHUNK ? n - s0 : VV_VC_CHUNK;
+                size_t cell[VV_VC_CHUNK];
+                int32_t entry[VV_MAX_CHANNELS][VV_VC_CHUNK];
+                float fx[VV_VC_CHUNK], fy[VV_VC_CHUNK], fz[VV_VC_CHUNK];
+                int shows[VV_MAX_CHANNELS];
+                const double kfirst = k + s0;
+                for (int ch = 0; ch < nch; ch++) {
+                    const rc_obj *co = &ob->ch[ch];
+                    shows[ch] = co->bvis[b] && A[additive ? ch : 0] < et;
+                    if (shows[ch])
+                        vv_vray_classify(co->c, &co->tab, &r, kfirst, dt, m, fr->avx2, cell, fx, fy,
+                                         fz, entry[ch]);
+                }
+                for (int s = 0; s < m && live > 0; s++) {
+                    t = (kfirst + s) * dt;
+                    const float f[3] = {fx[s], fy[s], fz[s]};
+                    if (ob->ch[0].shading || fr->point_lights)
+                        vv_vray_point(&r, t, p);
+                    if (!additive) {
+                        const float *e[VV_MAX_CHANNELS];
+                        for (int ch = 0; ch < nch; ch++)
+                            e[ch] = shows[ch] ? ob->ch[ch].lut + entry[ch][s] : NULL;
+                        if (mix_channels(fr, ob, wr, v, e, cell[s], f, p, t, C[0], &A[0]) &&
+                            depth == INFINITY)
+                            depth = (float)t;
+                        live = A[0] < et;
+                        continue;
+                    }
+                    for (int ch = 0; ch < nch; ch++) {
+                        const rc_obj *co = &ob->ch[ch];
+                        if (!shows[ch] || A[ch] >= et)
+                            continue;
+                        const float *e = co->lut + entry[ch][s];
+                        if (e[0] <= 0)
+                            continue;
+                        channel_composite(fr, co, wr, v, e, cell[s], f, p, t, C[ch], &A[ch]);
+                        if (depth == INFINITY)
+                            depth = (float)t;
+                        live -= A[ch] >= et;
+                    }
+                }
+            }
+            k = klast + 1;
+        }
+    }
+    float T = 1;
+    res->rgb[0] = res->rgb[1] = res->rgb[2] = 0;
+    for (int ch = 0; ch < (additive ? nch : 1); ch++) {
+        res->rgb[0] += C[ch][0];
+        res->rgb[1] += C[ch][1];
+        res->rgb[2] += C[ch][2];
+        T *= 1 - (A[ch] > 1 ? 1 : A[ch]);
+    }
+    res->a = additive ? 1 - T : A[0] > 1 ? 1 : A[0];
+    res->depth = depth;
+}
+
 /* The common case, one volume in composite mode, without the bookkeeping
  * of the general loop: a two-level subvolume skip, then a tight march
  * through each visible subvolume. Produces the same samples (t = k dt) as
@@ -184,30 +376,12 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
         {
             /* Without skipping every subvolume is marked visible and at
              * distance 0, so both cases run this same code and produce the
-             * same samples. p >= 0 up to rounding: a negative index wraps and clamps high,
-             * so clamp the float instead */
-            unsigned bi = (unsigned)(int)((p[0] > 0 ? p[0] : 0) * (1.0f / VV_VC_BLOCK));
-            unsigned bj = (unsigned)(int)((p[1] > 0 ? p[1] : 0) * (1.0f / VV_VC_BLOCK));
-            unsigned bk = (unsigned)(int)((p[2] > 0 ? p[2] : 0) * (1.0f / VV_VC_BLOCK));
-            bi = bi > bxm ? bxm : bi;
-            bj = bj > bym ? bym : bj;
-            bk = bk > bzm ? bzm : bk;
-            size_t b = ((size_t)bk * (size_t)c->by + (size_t)bj) * (size_t)c->bx + (size_t)bi;
+             * same samples. */
+            unsigned bc[3];
+            const size_t b = block_of(c, p, bxm, bym, bzm, bc);
             const int dist = ob->bdist[b];
             if (dist) {
-                /* leave the empty cube of 2 dist - 1 subvolumes around b */
-                const unsigned bc[3] = {bi, bj, bk};
-                float te = INFINITY;
-                for (int a = 0; a < 3; a++) {
-                    if (r.inv[a] == 0)
-                        continue;
-                    float bound = r.d[a] > 0 ? (float)((int)bc[a] + dist) * VV_VC_BLOCK
-                                             : (float)((int)bc[a] - dist + 1) * VV_VC_BLOCK;
-                    float ta = (bound - p[a]) * r.inv[a];
-                    te = ta < te ? ta : te;
-                }
-                double ks = vv_ceil_pos((t + te) * inv_dt);
-                k = ks > k + 1 ? ks : k + 1;
+                k = leap(&r, p, t, bc, dist, inv_dt, k);
                 continue;
             }
             double te = vv_vray_cube_exit(&r, p, t, VV_VC_BLOCK);
@@ -305,6 +479,31 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
             float p[3];
             vv_vray_point(r, t, p);
             const vv_vcache *c = ob->c;
+            if (ob->nch) { /* a multi-channel object: its channels mixed */
+                const size_t b = vv_vcache_block(c, p);
+                int may = 0;
+                for (int ch = 0; ch < ob->nch; ch++)
+                    may |= ob->ch[ch].bvis[b];
+                if (!may) {
+                    double te = vv_vray_cube_exit(r, p, t, VV_VC_BLOCK);
+                    skip_to = te < skip_to ? te : skip_to;
+                    continue;
+                }
+                sampled = 1;
+                float f[3];
+                const size_t o = vv_vcache_cell_of(c, p, f);
+                const float *e[VV_MAX_CHANNELS];
+                for (int ch = 0; ch < ob->nch; ch++) {
+                    const rc_obj *co = &ob->ch[ch];
+                    e[ch] =
+                        co->bvis[b]
+                            ? co->lut + 4 * (int)lut_index_f(co, vv_vcache_value_at(co->c, o, f))
+                            : NULL;
+                }
+                if (mix_channels(fr, ob, wr, v, e, o, f, p, t, C, &A) && depth == INFINITY)
+                    depth = (float)t;
+                continue;
+            }
             size_t b = vv_vcache_block(c, p);
             if (!ob->bvis[b]) {
                 double te = vv_vray_cube_exit(r, p, t, VV_VC_BLOCK);
@@ -409,6 +608,29 @@ trace_projection(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, float *
     return 1;
 }
 
+/* A multi-channel object under the maximum rule (VV_BLEND_MAXIMUM): a
+ * maximum intensity projection per visible channel, each maximum coloured
+ * as a one-channel MIP is (colour times opacity at that value), the
+ * channels added. res->a = 1 - prod(1 - a_c). */
+static void
+trace_channels_maximum(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result *res) {
+    float T = 1;
+    res->rgb[0] = res->rgb[1] = res->rgb[2] = 0;
+    res->depth = INFINITY;
+    for (int c = 0; c < ob->nch; c++) {
+        const rc_obj *co = &ob->ch[c];
+        float val, dep;
+        if (!trace_projection(fr, co, wr, &val, &dep))
+            continue;
+        const float *e = co->lut + 4 * (int)lut_index_f(co, val);
+        for (int k = 0; k < 3; k++)
+            res->rgb[k] += e[1 + k] * e[0];
+        T *= 1 - e[0];
+        res->depth = dep < res->depth ? dep : res->depth;
+    }
+    res->a = 1 - T;
+}
+
 /* ---------------------------------------------------------------------- */
 /* Frame set-up                                                             */
 
@@ -436,6 +658,53 @@ prepare_object(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w
     if (ro->mode == VV_MODE_COMPOSITE || ro->mode == VV_MODE_ISO)
         vv_vcache_need_normals(&st->vc, ro->c);
     ro->iso = (float)(obj->isovalue - ro->c->qoff);
+    return VV_OK;
+}
+
+/* The visible channels of a multi-channel object. */
+static int
+channels_shown(const vv_object *obj) {
+    int n = 0;
+    for (int c = 0; c < obj->n_channels; c++)
+        n += obj->channels[c].visible && obj->channels[c].volume != NULL;
+    return n;
+}
+
+/* A multi-channel object: each visible channel prepared as an object of its
+ * own, chobj[k] (the object with the channel's volume and transfer
+ * function, one channel, no 2-D TF or texture; composite mode for the
+ * composite and additive rules, MIP for the maximum rule) into ch[k]; the
+ * slot ro set up as the first of them (rays, the skipping grid's layout). */
+static vv_status
+prepare_channels(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w, rc_obj *ch,
+                 vv_object *chobj) {
+    int n = 0;
+    for (int c = 0; c < obj->n_channels; c++) {
+        const vv_channel *cc = &obj->channels[c];
+        if (!cc->visible || !cc->volume)
+            continue;
+        vv_object *o = &chobj[n];
+        *o = *obj;
+        o->volume = cc->volume;
+        o->tf = cc->tf;
+        o->n_channels = 0;
+        o->channels = NULL;
+        o->mode = obj->blend == VV_BLEND_MAXIMUM ? VV_MODE_MIP : VV_MODE_COMPOSITE;
+        o->segmentation = VV_SEG_TRANSFER_FUNCTION;
+        o->texture.image = NULL;
+        vv_solid_texture_init(&o->solid_texture);
+        vv_status s = prepare_object(fr, &ch[n], o, w, NULL);
+        if (s != VV_OK)
+            return vv_error_prefix(s, "channel %d ('%s')", c, cc->name);
+        n++;
+    }
+    vv_status s = prepare_object(fr, ro, &chobj[0], w, NULL);
+    if (s != VV_OK)
+        return s;
+    ro->obj = obj;
+    ro->nch = n;
+    ro->ch = ch;
+    ro->blend = obj->blend;
     return VV_OK;
 }
 
@@ -472,7 +741,9 @@ render_pixel(const rc_frame *fr, int x, int y) {
     /* inline: this runs for every pixel, most of which miss the volume */
     const vv_ray wr = vv_camera_ray(&fr->cam, x, y);
     rc_result res = {{0, 0, 0}, 0, INFINITY};
-    if (fr->n_comp == 1 && fr->objs[0].mode == VV_MODE_COMPOSITE && !fr->objs[0].extras)
+    if (fr->n_comp == 1 && fr->objs[0].nch)
+        trace_channels(fr, &fr->objs[0], &wr, &res);
+    else if (fr->n_comp == 1 && fr->objs[0].mode == VV_MODE_COMPOSITE && !fr->objs[0].extras)
         trace_composite_one(fr, &fr->objs[0], &wr, &res);
     else if (fr->n_comp > 0)
         trace_composite(fr, &wr, &res);
@@ -481,6 +752,18 @@ render_pixel(const rc_frame *fr, int x, int y) {
     for (int i = fr->n_comp; i < fr->n_obj; i++) {
         const rc_obj *ob = &fr->objs[i];
         float val, dep;
+        if (ob->nch) { /* a multi-channel object, additive or maximum */
+            rc_result g;
+            if (ob->blend == VV_BLEND_ADDITIVE)
+                trace_channels(fr, ob, &wr, &g);
+            else
+                trace_channels_maximum(fr, ob, &wr, &g);
+            for (int ch = 0; ch < 3; ch++)
+                P[ch] = g.rgb[ch] > P[ch] ? g.rgb[ch] : P[ch];
+            PA = g.a > PA ? g.a : PA;
+            pdepth = g.depth < pdepth ? g.depth : pdepth;
+            continue;
+        }
         if (!trace_projection(fr, ob, &wr, &val, &dep))
             continue;
         key = val;
@@ -532,34 +815,57 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
     prepare_lights(&fr, w, view);
     vv_camera_rays_init(&fr.cam, view);
 
-    int nvis = 0;
-    for (int i = 0; i < w->n_objects; i++)
-        if (w->objects[i]->visible && w->objects[i]->type == VV_OBJECT_VOLUME &&
-            w->objects[i]->volume)
+    int nvis = 0, nch = 0;
+    for (int i = 0; i < w->n_objects; i++) {
+        const vv_object *ob = w->objects[i];
+        if (ob->visible && ob->type == VV_OBJECT_VOLUME && ob->volume &&
+            (ob->n_channels < 2 || channels_shown(ob))) {
             nvis++;
-    if (nvis > RC_MAX_OBJ)
-        return vv_error_set(VV_ERR_LIMIT, "%d visible objects; at most %d are supported", nvis,
-                            RC_MAX_OBJ);
-    rc_obj *objs = calloc(nvis ? (size_t)nvis : 1, sizeof *objs);
-    if (!objs)
+            nch += ob->n_channels > 1 ? channels_shown(ob) : 0;
+        }
+    }
+    if (nvis > RC_MAX_OBJ || nvis + nch > VV_VC_MAX)
+        return vv_error_set(VV_ERR_LIMIT,
+                            "%d visible objects and %d channels; at most %d objects and %d volumes "
+                            "are supported",
+                            nvis, nch, RC_MAX_OBJ, VV_VC_MAX);
+    rc_obj *objs = calloc((size_t)nvis + 1, sizeof *objs);
+    rc_obj *chans = calloc((size_t)nch + 1, sizeof *chans);
+    vv_object *chobj = calloc((size_t)nch + 1, sizeof *chobj);
+    if (!objs || !chans || !chobj) {
+        free(objs);
+        free(chans);
+        free(chobj);
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
     fr.objs = objs;
-    /* composite and iso objects first, projections after */
+    /* composite and iso objects first (a multi-channel object under the
+     * composite rule among them), projections after (the additive and
+     * maximum rules among them) */
     double dt = INFINITY;
     vv_status s = VV_OK;
+    int n_chans = 0;
     for (int pass = 0; pass < 2 && s == VV_OK; pass++)
         for (int i = 0; i < w->n_objects && s == VV_OK; i++) {
             const vv_object *ob = w->objects[i];
             if (!ob->visible || ob->type != VV_OBJECT_VOLUME || !ob->volume)
                 continue;
-            int comp = ob->mode == VV_MODE_COMPOSITE || ob->mode == VV_MODE_ISO;
+            const int multi = ob->n_channels > 1;
+            if (multi && !channels_shown(ob))
+                continue;
+            int comp = multi ? ob->blend == VV_BLEND_COMPOSITE
+                             : ob->mode == VV_MODE_COMPOSITE || ob->mode == VV_MODE_ISO;
             if (comp != (pass == 0))
                 continue;
             if (!(ob->step > 0))
                 s = vv_error_set(VV_ERR_INVALID, "object '%s': step must be > 0", ob->name);
+            else if (multi)
+                s = prepare_channels(&fr, &objs[fr.n_obj++], ob, w, chans + n_chans,
+                                     chobj + n_chans);
             else
                 s = prepare_object(&fr, &objs[fr.n_obj++], ob, w, region);
             if (s == VV_OK) {
+                n_chans += objs[fr.n_obj - 1].nch;
                 double sd = vv_vobject_step(ob);
                 dt = sd < dt ? sd : dt;
             }
@@ -568,9 +874,16 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
         }
     fr.dt = (float)(dt < INFINITY ? dt : 1.0);
     for (int i = 0; i < fr.n_obj && s == VV_OK; i++) {
-        s = prepare_tables(&fr, &objs[i]);
         objs[i].dt = fr.dt;
-        objs[i].inv_form = fr.n_comp == 1 && objs[i].mode == VV_MODE_COMPOSITE && !objs[i].extras;
+        if (objs[i].nch)
+            continue; /* its channels have the tables */
+        s = prepare_tables(&fr, &objs[i]);
+        objs[i].inv_form =
+            fr.n_comp == 1 && objs[i].mode == VV_MODE_COMPOSITE && !objs[i].extras && !objs[i].nch;
+    }
+    for (int i = 0; i < n_chans && s == VV_OK; i++) {
+        s = prepare_tables(&fr, &chans[i]);
+        chans[i].dt = fr.dt;
     }
     if (s == VV_OK) {
         fr.key = region && fr.n_comp == 0 ? key : NULL;
@@ -583,7 +896,12 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
         if (objs[i].owns_tables)
             vv_vtables_free(&objs[i].tab);
     }
+    for (int i = 0; i < n_chans; i++)
+        if (chans[i].owns_tables)
+            vv_vtables_free(&chans[i].tab);
     free(objs);
+    free(chans);
+    free(chobj);
     /* drop cached volumes the World no longer shows */
     vv_vcache_set_prune(&st->vc, w);
     return s;
@@ -679,7 +997,7 @@ const vv_renderer_ops vv_raycast_ops = {
                            "subvolume skipping",
             .draws = VV_DRAWS(VV_OBJECT_VOLUME),
             .modes = VV_MODES_ALL,
-            .caps = VV_RENDERER_REGION | VV_RENDERER_PREVIEW,
+            .caps = VV_RENDERER_REGION | VV_RENDERER_PREVIEW | VV_RENDERER_CHANNELS,
             .quality = "ignored: every level casts one ray a pixel at the objects' step",
             .options = rc_options,
             .n_options = VV_OPTIONS_COUNT(rc_options),

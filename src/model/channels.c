@@ -1,0 +1,133 @@
+/*
+ * Multi-channel volume objects (issue: several channels and time steps):
+ * the channels of one object, their default colours and the microscopy
+ * shorthand for a channel's transfer function (colour, contrast limits,
+ * gamma). Rendering them in one pass is the ray caster's
+ * (src/render/raycast/raycast.c, VV_RENDERER_CHANNELS).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/internal.h"
+#include "model/model_internal.h"
+#include "volvis/model.h"
+
+static const char *const blend_names[] = {"composite", "additive", "maximum"};
+
+const char *
+vv_channel_blend_name(vv_channel_blend b) {
+    return (unsigned)b < sizeof blend_names / sizeof blend_names[0] ? blend_names[b] : NULL;
+}
+
+vv_status
+vv_channel_blend_parse(const char *name, vv_channel_blend *out) {
+    for (int i = 0; name && i < (int)(sizeof blend_names / sizeof blend_names[0]); i++)
+        if (strcmp(name, blend_names[i]) == 0) {
+            *out = (vv_channel_blend)i;
+            return VV_OK;
+        }
+    return vv_error_set(VV_ERR_INVALID, "blend: unknown rule '%s' (composite, additive or maximum)",
+                        name ? name : "(null)");
+}
+
+vv_vec3
+vv_channel_default_color(int index) {
+    static const double c[10][3] = {
+        {1, 0, 1},          {0, 1, 0},          {0, 1, 1},          {1, 1, 0},
+        {0.90, 0.62, 0.00}, {0.34, 0.71, 0.91}, {0.00, 0.62, 0.45}, {0.84, 0.37, 0.00},
+        {0.00, 0.45, 0.70}, {0.80, 0.47, 0.65},
+    };
+    int i = index < 0 ? 0 : index % 10;
+    return vv_vec3_make(c[i][0], c[i][1], c[i][2]);
+}
+
+void
+vv_channel_default_contrast(const vv_volume *v, double *lo, double *hi) {
+    /* the background's level and noise from the quartiles: for Gaussian
+     * noise of deviation s, q75 - q50 = 0.674 s, so 4.5 (q75 - q50) = 3 s */
+    const double q50 = vv_volume_quantile(v, 0.5), q75 = vv_volume_quantile(v, 0.75);
+    *lo = q50 + 4.5 * (q75 - q50);
+    *hi = vv_volume_quantile(v, 0.9999);
+    if (*hi > q50 && !(*lo < *hi))
+        *lo = q50;
+    if (!isfinite(*lo) || !isfinite(*hi) || !(*hi > *lo)) {
+        *lo = isfinite(v->range[0]) ? v->range[0] : 0;
+        *hi = isfinite(v->range[1]) && v->range[1] > *lo ? v->range[1] : *lo + 1;
+    }
+}
+
+vv_status
+vv_tf_set_contrast(vv_tf *tf, double lo, double hi, double gamma, double max_opacity, vv_vec3 color,
+                   double unit_distance) {
+    if (!tf)
+        return vv_error_set(VV_ERR_INVALID, "contrast: NULL transfer function");
+    if (!isfinite(lo) || !isfinite(hi) || !(hi > lo))
+        return vv_error_set(VV_ERR_INVALID, "contrast: limits %g..%g (need lo < hi)", lo, hi);
+    if (!(gamma >= 0.05 && gamma <= 20))
+        return vv_error_set(VV_ERR_INVALID, "contrast: gamma %g outside [0.05, 20]", gamma);
+    if (!(max_opacity >= 0 && max_opacity <= 1))
+        return vv_error_set(VV_ERR_INVALID, "contrast: opacity %g outside [0, 1]", max_opacity);
+    if (!(unit_distance > 0) || !isfinite(unit_distance))
+        return vv_error_set(VV_ERR_INVALID, "contrast: unit distance %g (need > 0)", unit_distance);
+    vv_tf_set_ramp(tf, lo, hi, max_opacity, color, unit_distance);
+    if (gamma != 1.0) {
+        tf->n_opacity = 0;
+        for (int i = 0; i <= 8; i++) {
+            double f = i / 8.0;
+            tf->opacity[i].value = lo + f * (hi - lo);
+            tf->opacity[i].opacity = max_opacity * pow(f, gamma);
+        }
+        tf->n_opacity = 9;
+    }
+    return VV_OK;
+}
+
+vv_status
+vv_object_set_channels(vv_object *obj, int n, vv_volume *const *volumes, const char *const *names) {
+    if (!obj || obj->type != VV_OBJECT_VOLUME)
+        return vv_error_set(VV_ERR_INVALID, "channels: %s is not a volume object",
+                            obj ? obj->name : "(null)");
+    if (n < 2 || n > VV_MAX_CHANNELS)
+        return vv_error_set(VV_ERR_INVALID, "channels: %d channels (2..%d)", n, VV_MAX_CHANNELS);
+    if (!volumes)
+        return vv_error_set(VV_ERR_INVALID, "channels: NULL volumes");
+    for (int c = 0; c < n; c++) {
+        if (!volumes[c])
+            return vv_error_set(VV_ERR_INVALID, "channels: channel %d has no volume", c);
+        const int *d = volumes[c]->dims, *d0 = volumes[0]->dims;
+        if (d[0] != d0[0] || d[1] != d0[1] || d[2] != d0[2])
+            return vv_error_set(VV_ERR_INVALID,
+                                "channels: channel %d is %dx%dx%d, channel 0 is %dx%dx%d (every "
+                                "channel of an object has the same size)",
+                                c, d[0], d[1], d[2], d0[0], d0[1], d0[2]);
+    }
+    vv_channel *ch = calloc((size_t)n, sizeof *ch);
+    if (!ch)
+        return vv_error_set(VV_ERR_NOMEM, "channels: out of memory");
+    for (int c = 0; c < n; c++) {
+        const vv_volume *v = volumes[c];
+        if (names && names[c])
+            vv_model_copy_name(ch[c].name, names[c]);
+        else
+            snprintf(ch[c].name, sizeof ch[c].name, "channel %d", c);
+        ch[c].visible = 1;
+        double lo, hi;
+        vv_channel_default_contrast(v, &lo, &hi);
+        /* the arguments are valid by construction */
+        (void)vv_tf_set_contrast(&ch[c].tf, lo, hi, 1.0, 0.5, vv_channel_default_color(c),
+                                 vv_tf_default_unit_distance(v));
+    }
+    for (int c = 0; c < n; c++)
+        ch[c].volume = vv_volume_ref(volumes[c]);
+    for (int c = 0; c < obj->n_channels; c++)
+        vv_volume_free(obj->channels[c].volume);
+    free(obj->channels);
+    vv_volume_ref(volumes[0]);
+    vv_volume_free(obj->volume);
+    obj->volume = volumes[0];
+    obj->channels = ch;
+    obj->n_channels = n;
+    return VV_OK;
+}

@@ -1,0 +1,420 @@
+/*
+ * Multi-channel volume objects (vv_object_set_channels) and the ray
+ * caster's one-pass rendering of them under the three blend rules
+ * (include/volvis/model.h, vv_channel_blend).
+ *
+ * - Analytic: three balls, each in its own channel at a known place: every
+ *   rule shows each channel's colour at its ball and only there.
+ * - Additive: the image equals the sum of the channels' one-channel images
+ *   (the one-object kernel, a separate code path) within 8-bit rounding.
+ * - Maximum: the image equals the sum of the channels' one-channel MIPs.
+ * - Composite: on a slab where two channels overlap completely, the colour
+ *   is the opacity-weighted mix (red : green = a_red : a_green per sample)
+ *   and the pixel is at least as opaque and as bright as either channel
+ *   alone (no dark seam where channels overlap), against the per-sample
+ *   formula evaluated here.
+ * - Thread counts and empty-space skipping do not change a bit; clones
+ *   hold their own references; bad input gets one-line errors; renderers
+ *   without VV_RENDERER_CHANNELS and region renders refuse such objects.
+ */
+#include "testutil.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define N 40
+
+/* u8 volume N^3, value 200 inside a ball of radius r around (cx, cy, cz), else 0. */
+static vv_volume *
+ball(double cx, double cy, double cz, double r) {
+    vv_volume *v = NULL;
+    const int dims[3] = {N, N, N};
+    vt_ok(vv_volume_new(&v, dims, VV_U8));
+    for (int k = 0; k < N; k++)
+        for (int j = 0; j < N; j++)
+            for (int i = 0; i < N; i++) {
+                double d = sqrt((i - cx) * (i - cx) + (j - cy) * (j - cy) + (k - cz) * (k - cz));
+                vv_volume_set(v, i, j, k, d <= r ? 200 : 0);
+            }
+    vv_volume_update_range(v);
+    return v;
+}
+
+static vv_volume *
+constant(double value) {
+    vv_volume *v = NULL;
+    const int dims[3] = {16, 16, 16};
+    vt_ok(vv_volume_new(&v, dims, VV_U8));
+    for (int k = 0; k < 16; k++)
+        for (int j = 0; j < 16; j++)
+            for (int i = 0; i < 16; i++)
+                vv_volume_set(v, i, j, k, value);
+    vv_volume_update_range(v);
+    return v;
+}
+
+/* Orthographic view down -z onto the box [0, n-1]^2, 2 pixels a voxel. */
+static vv_view
+view_z(int n) {
+    vv_view v;
+    memset(&v, 0, sizeof v);
+    double c = 0.5 * (n - 1);
+    v.eye = vv_vec3_make(c, c, 3.0 * n + 0.25);
+    v.at = vv_vec3_make(c, c, 0);
+    v.up = vv_vec3_make(0, 1, 0);
+    v.fov = vv_deg_to_rad(30);
+    v.ortho_height = n;
+    v.projection = VV_PROJECTION_ORTHOGRAPHIC;
+    v.width = v.height = 2 * n;
+    return v;
+}
+
+static vv_world *
+world(void) {
+    vv_world *w = NULL;
+    vt_ok(vv_world_new(&w));
+    w->background = vv_vec3_make(0, 0, 0);
+    w->n_lights = 1;
+    memset(&w->lights[0], 0, sizeof w->lights[0]);
+    w->lights[0].type = VV_LIGHT_DIRECTIONAL;
+    w->lights[0].direction = vv_vec3_make(-0.3, -0.4, -0.866);
+    w->lights[0].color = vv_vec3_make(1, 1, 1);
+    w->lights[0].intensity = 1;
+    return w;
+}
+
+static const vv_vec3 RGB[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+
+/* A World holding one object of the channels @p vols (colours RGB[c],
+ * contrast 50..150, opacity @p op), blend @p b, shading @p shading. */
+static vv_world *
+channel_world(vv_volume **vols, int n, vv_channel_blend b, int shading, double op) {
+    vv_world *w = world();
+    vv_object *o = NULL;
+    vt_ok(vv_object_new_volume(&o, vols[0], "cells"));
+    vt_ok(vv_object_set_channels(o, n, vols, NULL));
+    for (int c = 0; c < n; c++)
+        vt_ok(vv_tf_set_contrast(&o->channels[c].tf, 50, 150, 1.0, op, RGB[c % 3], 1.0));
+    o->blend = b;
+    o->shading = shading;
+    o->step = 0.5;
+    vt_ok(vv_world_add_object(w, o));
+    return w;
+}
+
+/* The World of channel @p c alone, as a one-channel object in @p mode. */
+static vv_world *
+single_world(const vv_world *multi, int c, vv_render_mode mode) {
+    const vv_object *m = multi->objects[0];
+    vv_world *w = world();
+    vv_object *o = NULL;
+    vt_ok(vv_object_new_volume(&o, m->channels[c].volume, "one"));
+    o->tf = m->channels[c].tf;
+    o->mode = mode;
+    o->shading = m->shading;
+    o->material = m->material;
+    o->step = m->step;
+    vt_ok(vv_world_add_object(w, o));
+    return w;
+}
+
+static vv_image *
+render_opt(const vv_world *w, const vv_view *view, int threads, int skipping) {
+    vv_renderer *r = NULL;
+    vt_ok(vv_renderer_new(&r, "raycast"));
+    if (!skipping)
+        vt_ok(vv_renderer_set_option(r, "empty_space_skipping", "0"));
+    vv_image *img = NULL;
+    vt_ok(vv_image_new(&img, view->width, view->height));
+    vv_render_options opt;
+    vv_render_options_init(&opt);
+    opt.threads = threads;
+    vt_ok(vv_renderer_render(r, w, view, &opt, img));
+    vv_renderer_free(r);
+    return img;
+}
+
+static vv_image *
+render(const vv_world *w, const vv_view *view) {
+    return render_opt(w, view, 0, 1);
+}
+
+static const float *
+px(const vv_image *img, int x, int y) {
+    return img->rgba + 4 * ((size_t)y * (size_t)img->width + (size_t)x);
+}
+
+static void
+save(const vv_image *img, const char *name) {
+    char path[1200];
+    snprintf(path, sizeof path, "%s/%s.png", vt_outdir("render"), name);
+    vt_ok(vv_image_write_png(img, path, 1.0, 0));
+}
+
+/* Pixel of voxel column (i, j) in view_z(n), n = the image's width / 2. */
+static const float *
+at_voxel(const vv_image *img, double i, double j) {
+    int n = img->width / 2;
+    int x = (int)(2 * i + 1), y = (int)(2 * (n - 1 - j) + 1);
+    return px(img, x, y);
+}
+
+static void
+three_balls(vv_volume *v[3]) {
+    v[0] = ball(10, 20, 20, 6);
+    v[1] = ball(20, 20, 20, 6);
+    v[2] = ball(30, 20, 20, 6);
+}
+
+static void
+test_three_balls(void **state) {
+    (void)state;
+    vv_volume *v[3];
+    three_balls(v);
+    vv_view view = view_z(N);
+    const vv_channel_blend rules[3] = {VV_BLEND_COMPOSITE, VV_BLEND_ADDITIVE, VV_BLEND_MAXIMUM};
+    for (int r = 0; r < 3; r++) {
+        /* unshaded: a white highlight would show in every colour */
+        vv_world *w = channel_world(v, 3, rules[r], 0, 0.8);
+        vv_image *img = render(w, &view);
+        char name[64];
+        snprintf(name, sizeof name, "channels_balls_%s", vv_channel_blend_name(rules[r]));
+        save(img, name);
+        for (int c = 0; c < 3; c++) {
+            const float *p = at_voxel(img, 10 + 10 * c, 20);
+            for (int k = 0; k < 3; k++) {
+                if (k == c && !(p[k] > 0.2f))
+                    fail_msg("%s: ball %d shows %.3f of its own colour", name, c, p[k]);
+                if (k != c && !(p[k] < 1e-6f))
+                    fail_msg("%s: ball %d shows %.3g of channel %d's colour", name, c, p[k], k);
+            }
+        }
+        /* outside every ball: the black background */
+        const float *o = at_voxel(img, 20, 35);
+        assert_true(o[0] == 0 && o[1] == 0 && o[2] == 0 && o[3] == 0);
+        /* hiding channel 1 removes its ball and nothing else */
+        w->objects[0]->channels[1].visible = 0;
+        vv_image *hid = render(w, &view);
+        const float *h = at_voxel(hid, 20, 20);
+        assert_true(h[0] == 0 && h[1] == 0 && h[2] == 0);
+        assert_true(at_voxel(hid, 10, 20)[0] == at_voxel(img, 10, 20)[0]);
+        vv_image_free(hid);
+        vv_image_free(img);
+        vv_world_free(w);
+    }
+    for (int c = 0; c < 3; c++)
+        vv_volume_free(v[c]);
+}
+
+/* |a - b| over the RGB of every pixel. */
+static double
+max_rgb_diff(const vv_image *a, const vv_image *b) {
+    double m = 0;
+    for (size_t i = 0; i < (size_t)a->width * (size_t)a->height; i++)
+        for (int k = 0; k < 3; k++) {
+            double d = fabs((double)a->rgba[4 * i + k] - (double)b->rgba[4 * i + k]);
+            m = d > m ? d : m;
+        }
+    return m;
+}
+
+/* The blend rule's image against the sum of one-channel images in @p mode. */
+static void
+check_sum(vv_channel_blend rule, vv_render_mode mode, int shading, const char *name) {
+    vv_volume *v[2] = {ball(16, 20, 20, 9), ball(24, 20, 20, 9)}; /* overlapping */
+    vv_view view = view_z(N);
+    vv_world *w = channel_world(v, 2, rule, shading, 0.6);
+    vv_image *img = render(w, &view);
+    save(img, name);
+    vv_image *sum = NULL;
+    vt_ok(vv_image_new(&sum, view.width, view.height));
+    for (int c = 0; c < 2; c++) {
+        vv_world *one = single_world(w, c, mode);
+        vv_image *i1 = render(one, &view);
+        for (size_t p = 0; p < 4 * (size_t)view.width * (size_t)view.height; p++)
+            sum->rgba[p] += i1->rgba[p];
+        vv_image_free(i1);
+        vv_world_free(one);
+    }
+    double d = max_rgb_diff(img, sum);
+    print_message("%s: largest difference from the sum of one-channel images %.3g\n", name, d);
+    if (!(d <= 1.0 / 255))
+        fail_msg("%s: differs from the sum of the one-channel images by %.4f (> 1/255)", name, d);
+    /* where the balls overlap both channels show */
+    const float *p = at_voxel(img, 20, 20);
+    assert_true(p[0] > 0.05f && p[1] > 0.05f);
+    vv_image_free(sum);
+    vv_image_free(img);
+    vv_world_free(w);
+    vv_volume_free(v[0]);
+    vv_volume_free(v[1]);
+}
+
+static void
+test_additive_is_sum(void **state) {
+    (void)state;
+    check_sum(VV_BLEND_ADDITIVE, VV_MODE_COMPOSITE, 1, "channels_additive_shaded");
+    check_sum(VV_BLEND_ADDITIVE, VV_MODE_COMPOSITE, 0, "channels_additive");
+}
+
+static void
+test_maximum_is_sum_of_mips(void **state) {
+    (void)state;
+    check_sum(VV_BLEND_MAXIMUM, VV_MODE_MIP, 0, "channels_maximum");
+}
+
+/* Composite rule on a slab both channels fill: per sample the opacities
+ * a_r, a_g (the step-corrected table values) combine as 1 - (1-a_r)(1-a_g)
+ * and the colour is red a_r + green a_g over their sum, so at every pixel
+ * red / green = a_r / a_g exactly and red + green = alpha; the pixel is at
+ * least as opaque and bright as either channel alone. */
+static void
+test_composite_mix(void **state) {
+    (void)state;
+    vv_volume *v[2] = {constant(100), constant(100)};
+    vv_view view = view_z(16);
+    vv_world *w = world();
+    vv_object *o = NULL;
+    vt_ok(vv_object_new_volume(&o, v[0], "slab"));
+    vt_ok(vv_object_set_channels(o, 2, v, (const char *const[]){"red", "green"}));
+    /* constant opacity per unit distance: 0.1 (red) and 0.03 (green), so
+     * that no ray ends early */
+    vv_tf_set_ramp(&o->channels[0].tf, 0, 200, 0.2, RGB[0], 1.0);
+    vv_tf_set_ramp(&o->channels[1].tf, 0, 200, 0.06, RGB[1], 1.0);
+    o->shading = 0;
+    o->step = 0.5;
+    vt_ok(vv_world_add_object(w, o));
+    vv_image *img = render(w, &view);
+    save(img, "channels_composite_slab");
+    const float *p = at_voxel(img, 8, 8);
+    const double ar = 1 - pow(1 - 0.1, 0.5), ag = 1 - pow(1 - 0.03, 0.5);
+    /* samples inside the slab: from alpha = 1 - ((1-ar)(1-ag))^n */
+    double n = log(1 - p[3]) / log((1 - ar) * (1 - ag));
+    print_message("composite: alpha %.5f (%.3f samples), red %.5f green %.5f\n", p[3], n, p[0],
+                  p[1]);
+    assert_near(n, round(n), 1e-3);
+    assert_near(p[0] / p[1], ar / ag, 1e-4);
+    assert_near(p[0] + p[1], p[3], 1e-5);
+    for (int c = 0; c < 2; c++) {
+        vv_world *one = single_world(w, c, VV_MODE_COMPOSITE);
+        vv_image *i1 = render(one, &view);
+        const float *q = at_voxel(i1, 8, 8);
+        assert_true(p[3] >= q[3]);
+        assert_true(p[0] + p[1] + p[2] >= q[0] + q[1] + q[2]);
+        vv_image_free(i1);
+        vv_world_free(one);
+    }
+    vv_image_free(img);
+    vv_world_free(w);
+    vv_volume_free(v[0]);
+    vv_volume_free(v[1]);
+}
+
+/* Thread counts and empty-space skipping change no bit; clones hold their
+ * own references (the original freed first). */
+static void
+test_deterministic_and_clone(void **state) {
+    (void)state;
+    vv_volume *v[3];
+    three_balls(v);
+    vv_view view = view_z(N);
+    const vv_channel_blend rules[3] = {VV_BLEND_COMPOSITE, VV_BLEND_ADDITIVE, VV_BLEND_MAXIMUM};
+    for (int r = 0; r < 3; r++) {
+        vv_world *w = channel_world(v, 3, rules[r], 1, 0.5);
+        vv_image *a = render_opt(w, &view, 1, 1), *b = render_opt(w, &view, 2, 1),
+                 *c = render_opt(w, &view, 2, 0);
+        size_t n = 4 * (size_t)view.width * (size_t)view.height * sizeof(float);
+        assert_memory_equal(a->rgba, b->rgba, n);
+        assert_memory_equal(a->rgba, c->rgba, n);
+        /* beside another composited object, off to the side, the
+         * multi-channel object goes through the general loop: the same image
+         * where the other one does not reach */
+        if (rules[r] == VV_BLEND_COMPOSITE) {
+            vv_volume *far = ball(20, 20, 20, 4);
+            vv_object *o = NULL;
+            vt_ok(vv_object_new_volume(&o, far, "far"));
+            vv_volume_free(far);
+            o->position = vv_vec3_make(500, 0, 0);
+            o->shading = 0;
+            vt_ok(vv_world_add_object(w, o));
+            vv_image *g = render_opt(w, &view, 2, 1);
+            assert_memory_equal(a->rgba, g->rgba, n);
+            vv_image_free(g);
+            vv_object *taken = NULL;
+            vt_ok(vv_world_take_object(w, 1, &taken));
+            vv_object_free(taken);
+        }
+        vv_world *snap = NULL;
+        vt_ok(vv_world_clone(&snap, w));
+        vv_world_free(w);
+        vv_image *d = render_opt(snap, &view, 2, 1);
+        assert_memory_equal(a->rgba, d->rgba, n);
+        vv_world_free(snap);
+        vv_image_free(a);
+        vv_image_free(b);
+        vv_image_free(c);
+        vv_image_free(d);
+    }
+    for (int c = 0; c < 3; c++)
+        vv_volume_free(v[c]);
+}
+
+static void
+test_bad_input(void **state) {
+    (void)state;
+    vv_volume *v[2] = {ball(20, 20, 20, 5), constant(1)};
+    vv_object *o = NULL;
+    vt_ok(vv_object_new_volume(&o, v[0], "x"));
+    vt_err(vv_object_set_channels(o, 2, v, NULL)); /* 40^3 and 16^3 */
+    assert_non_null(strstr(vv_error_message(), "channel 1 is 16x16x16"));
+    assert_int_equal(o->n_channels, 0);
+    vv_volume *one[1] = {v[0]};
+    vt_err(vv_object_set_channels(o, 1, one, NULL));
+    vv_volume *many[VV_MAX_CHANNELS + 1];
+    for (int c = 0; c <= VV_MAX_CHANNELS; c++)
+        many[c] = v[0];
+    vt_err(vv_object_set_channels(o, VV_MAX_CHANNELS + 1, many, NULL));
+    vt_ok(vv_object_set_channels(o, VV_MAX_CHANNELS, many, NULL));
+    assert_string_equal(o->channels[3].name, "channel 3");
+    vv_channel_blend b;
+    vt_err(vv_channel_blend_parse("sum", &b));
+    assert_non_null(strstr(vv_error_message(), "composite, additive or maximum"));
+    vt_ok(vv_channel_blend_parse("maximum", &b));
+    assert_int_equal(b, VV_BLEND_MAXIMUM);
+    vv_tf tf;
+    vt_err(vv_tf_set_contrast(&tf, 5, 5, 1, 1, RGB[0], 1));
+    vt_err(vv_tf_set_contrast(&tf, 0, 5, 0, 1, RGB[0], 1));
+    vt_err(vv_tf_set_contrast(&tf, 0, 5, 1, 2, RGB[0], 1));
+    /* a renderer without VV_RENDERER_CHANNELS refuses the object and names the one that draws it */
+    vv_world *w = world();
+    vt_ok(vv_world_add_object(w, o));
+    vv_view view = view_z(N);
+    vv_renderer *r = NULL;
+    vt_ok(vv_renderer_new(&r, "splat"));
+    vv_image *img = NULL;
+    vt_ok(vv_image_new(&img, view.width, view.height));
+    vt_err(vv_renderer_render(r, w, &view, NULL, img));
+    assert_non_null(strstr(vv_error_message(), "16 channels"));
+    assert_non_null(strstr(vv_error_message(), "raycast"));
+    assert_string_equal(vv_world_renderer(w), "raycast");
+    vv_renderer_free(r);
+    vv_image_free(img);
+    vv_world_free(w);
+    vv_volume_free(v[0]);
+    vv_volume_free(v[1]);
+}
+
+int
+main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_three_balls),
+        cmocka_unit_test(test_additive_is_sum),
+        cmocka_unit_test(test_maximum_is_sum_of_mips),
+        cmocka_unit_test(test_composite_mix),
+        cmocka_unit_test(test_deterministic_and_clone),
+        cmocka_unit_test(test_bad_input),
+    };
+    return vt_run_tests(tests, NULL, NULL);
+}
