@@ -172,8 +172,9 @@ int cli_fail(vv_status s, const char *path);
         {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"}, {"gamma", 0, "G"},                   \
         {"quality", 0, "0|1|2"}, {"set", 0, "KEY=VALUE"}, {"alpha", 0, NULL}, {"ortho", 0, NULL},  \
         {"labels", 0, NULL}, {"field", 0, "NAME"}, {"time", 0, "T"}, {"series", 0, "N"},           \
-        {"channel", 0, "C"}, {"compositing", 0, "binary-swap|radix-k[:K]"},                        \
-        {"memory-limit", 0, "BYTES[K|M|G]"}, {                                                     \
+        {"channel", 0, "C"}, {"channels", 0, "C,C,..."}, {"colors", 0, "COLOR,..."},               \
+        {"blend", 0, "composite|additive|maximum"}, {"contrast", 0, "LO:HI,..."},                  \
+        {"compositing", 0, "binary-swap|radix-k[:K]"}, {"memory-limit", 0, "BYTES[K|M|G]"}, {      \
         "quiet", 'q', NULL                                                                         \
     }
 
@@ -198,6 +199,15 @@ typedef struct cli_render_args {
     vv_raw_params raw;
     int series;  /**< --series N (DICOM), 0: the only series */
     int channel; /**< --channel C (TIFF, DICOM), -1: channel 0 */
+    /* --channels: the file's channels shown as one multi-channel object */
+    int n_channels;                      /**< 0: not given */
+    int channels[VV_MAX_CHANNELS];       /**< their indices in the file */
+    int n_colors;                        /**< --colors given for the first n_colors */
+    vv_vec3 colors[VV_MAX_CHANNELS];     /**< RGB in [0, 1] */
+    int n_contrast;                      /**< --contrast given for the first n_contrast */
+    double contrast[VV_MAX_CHANNELS][2]; /**< lower and upper limits, data values */
+    int has_blend;                       /**< --blend given */
+    vv_channel_blend blend;
     double gamma;
     int has_quality, quality; /**< --quality given, and its value */
     const char *field;        /**< --field: a grid's field (NULL: the first scalar field) */

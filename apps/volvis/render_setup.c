@@ -94,6 +94,124 @@ stretch_tf(vv_tf *tf, double lo, double hi) {
         tf->color[i].value = lo + (tf->color[i].value - a) * s;
 }
 
+/* One colour: a name of the table or #rrggbb. */
+static int
+parse_color(const char *text, size_t n, vv_vec3 *out) {
+    static const struct {
+        const char *name;
+        double r, g, b;
+    } names[] = {{"red", 1, 0, 0},          {"green", 0, 1, 0},       {"blue", 0, 0, 1},
+                 {"magenta", 1, 0, 1},      {"cyan", 0, 1, 1},        {"yellow", 1, 1, 0},
+                 {"white", 1, 1, 1},        {"gray", 0.5, 0.5, 0.5},  {"grey", 0.5, 0.5, 0.5},
+                 {"orange", 0.90, 0.62, 0}, {"sky", 0.34, 0.71, 0.91}};
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
+        if (strlen(names[i].name) == n && strncasecmp(text, names[i].name, n) == 0) {
+            *out = vv_vec3_make(names[i].r, names[i].g, names[i].b);
+            return 1;
+        }
+    if (n == 7 && text[0] == '#' && strspn(text + 1, "0123456789abcdefABCDEF") >= 6) {
+        char hex[3] = {0, 0, 0};
+        double c[3];
+        for (int k = 0; k < 3; k++) {
+            memcpy(hex, text + 1 + 2 * k, 2);
+            c[k] = (double)strtol(hex, NULL, 16) / 255.0;
+        }
+        *out = vv_vec3_make(c[0], c[1], c[2]);
+        return 1;
+    }
+    return 0;
+}
+
+/* --channels, --colors, --contrast, --blend (a file's channels as one object). */
+static int
+parse_channel_options(cli_args *a, cli_render_args *r) {
+    const char *s;
+    int rc;
+    if ((s = cli_get(a, "channels"))) {
+        if (cli_get(a, "channel"))
+            return cli_usage_error(a, "--channels: give either --channel C or --channels LIST");
+        for (const char *p = s;;) {
+            char *end;
+            long c = strtol(p, &end, 10);
+            if (end == p || c < 0 || c > 1000000 || (*end && *end != ','))
+                return cli_usage_error(a,
+                                       "--channels: '%s' is not a list of channel indices "
+                                       "(e.g. 0,2)",
+                                       s);
+            if (r->n_channels == VV_MAX_CHANNELS)
+                return cli_usage_error(a, "--channels: at most %d channels", VV_MAX_CHANNELS);
+            for (int i = 0; i < r->n_channels; i++)
+                if (r->channels[i] == (int)c)
+                    return cli_usage_error(a, "--channels: channel %ld twice", c);
+            r->channels[r->n_channels++] = (int)c;
+            if (!*end)
+                break;
+            p = end + 1;
+        }
+    }
+    if ((s = cli_get(a, "colors"))) {
+        for (const char *p = s;;) {
+            size_t n = strcspn(p, ",");
+            if (r->n_colors == VV_MAX_CHANNELS || !parse_color(p, n, &r->colors[r->n_colors]))
+                return cli_usage_error(a,
+                                       "--colors: '%.*s' is not a colour (red, green, blue, "
+                                       "magenta, cyan, yellow, white, gray, orange, sky or "
+                                       "#rrggbb)",
+                                       (int)n, p);
+            r->n_colors++;
+            if (!p[n])
+                break;
+            p += n + 1;
+        }
+    }
+    if ((s = cli_get(a, "contrast"))) {
+        for (const char *p = s;;) {
+            size_t n = strcspn(p, ",");
+            char one[128];
+            if (n >= sizeof one || r->n_contrast == VV_MAX_CHANNELS)
+                return cli_usage_error(a, "--contrast: '%s' is too long", s);
+            memcpy(one, p, n);
+            one[n] = '\0';
+            double *lim = r->contrast[r->n_contrast];
+            if ((rc = cli_parse_range(a, "contrast", one, &lim[0], &lim[1])))
+                return rc;
+            if (!(lim[1] > lim[0]))
+                return cli_usage_error(a, "--contrast: '%s' needs LO < HI", one);
+            r->n_contrast++;
+            if (!p[n])
+                break;
+            p += n + 1;
+        }
+    }
+    if ((s = cli_get(a, "blend"))) {
+        vv_error_clear();
+        if (vv_channel_blend_parse(s, &r->blend) != VV_OK)
+            return cli_usage_error(a,
+                                   "--blend: unknown rule '%s' (composite, additive or "
+                                   "maximum)",
+                                   s);
+        r->has_blend = 1;
+    }
+    const char *needs = r->n_colors     ? "--colors"
+                        : r->n_contrast ? "--contrast"
+                        : r->has_blend  ? "--blend"
+                                        : NULL;
+    if (needs && !r->n_channels)
+        return cli_usage_error(a, "%s: only with --channels LIST", needs);
+    if (r->n_colors > r->n_channels || r->n_contrast > r->n_channels)
+        return cli_usage_error(a, "%s: %d given for %d channel%s",
+                               r->n_colors > r->n_channels ? "--colors" : "--contrast",
+                               r->n_colors > r->n_channels ? r->n_colors : r->n_contrast,
+                               r->n_channels, r->n_channels == 1 ? "" : "s");
+    if (r->n_channels && cli_get(a, "memory-limit"))
+        return cli_usage_error(a, "--channels: volumes larger than memory are drawn one "
+                                  "channel at a time (--channel C with --memory-limit)");
+    if (r->n_channels && (cli_get(a, "mode") || cli_get(a, "iso") || cli_get(a, "tf")))
+        return cli_usage_error(a, "--channels: the channels show by --blend and --contrast, "
+                                  "not --mode, --iso or --tf");
+    return 0;
+}
+
 int
 cli_render_parse(cli_args *a, cli_render_args *r) {
     int rc;
@@ -201,6 +319,8 @@ cli_render_parse(cli_args *a, cli_render_args *r) {
     }
     if ((rc = cli_parse_series_channel(a, &r->series, &r->channel)))
         return rc;
+    if ((rc = parse_channel_options(a, r)))
+        return rc;
     if ((s = cli_get(a, "gamma"))) {
         if ((rc = cli_parse_double(a, "gamma", s, 0.01, 100, &r->gamma)))
             return rc;
@@ -266,9 +386,61 @@ world_for_grid(const cli_render_args *r, vv_world **out) {
     return 0;
 }
 
+/* --channels: the file's channels as one object of several channels
+ * (vv_object_set_channels), coloured and limited by --colors and
+ * --contrast, combined by --blend; one channel alone is a one-channel
+ * object with that colour and contrast. */
+static int
+world_for_channels(const cli_render_args *r, vv_world **out) {
+    vv_volume *v[VV_MAX_CHANNELS] = {NULL};
+    char names[VV_MAX_CHANNELS][32];
+    const char *np[VV_MAX_CHANNELS];
+    int rc = 0;
+    for (int c = 0; c < r->n_channels && !rc; c++) {
+        rc = cli_load_volume_sc(r->input, r->has_raw ? &r->raw : NULL, r->series, r->channels[c],
+                                &v[c]);
+        snprintf(names[c], sizeof names[c], "channel %d", r->channels[c]);
+        np[c] = names[c];
+    }
+    if (!rc)
+        rc = cli_render_world_volume(r, v[0], out);
+    vv_object *o = rc ? NULL : (*out)->objects[0];
+    vv_status s = VV_OK;
+    if (o && r->n_channels > 1) {
+        vv_error_clear();
+        s = vv_object_set_channels(o, r->n_channels, v, np);
+        o->blend = r->has_blend ? r->blend : VV_BLEND_COMPOSITE;
+    }
+    for (int c = 0; o && s == VV_OK && c < r->n_channels; c++) {
+        vv_tf *tf = r->n_channels > 1 ? &o->channels[c].tf : &o->tf;
+        double lo, hi;
+        if (c < r->n_contrast) {
+            lo = r->contrast[c][0];
+            hi = r->contrast[c][1];
+        } else if (r->n_channels > 1) { /* vv_object_set_channels' quantiles */
+            lo = tf->opacity[0].value;
+            hi = tf->opacity[tf->n_opacity - 1].value;
+        } else {
+            vv_channel_default_contrast(v[0], &lo, &hi);
+        }
+        vv_vec3 col = c < r->n_colors ? r->colors[c] : vv_channel_default_color(c);
+        vv_error_clear();
+        s = vv_tf_set_contrast(tf, lo, hi, 1.0, 0.5, col, vv_tf_default_unit_distance(v[c]));
+        if (r->n_channels == 1 && r->has_blend && r->blend == VV_BLEND_MAXIMUM)
+            o->mode = VV_MODE_MIP;
+    }
+    for (int c = 0; c < r->n_channels; c++)
+        vv_volume_free(v[c]); /* the object holds its own references */
+    if (s != VV_OK)
+        return cli_fail(s, r->input);
+    return rc;
+}
+
 /* Builds the World for a volume file. */
 static int
 world_for_volume(const cli_render_args *r, vv_world **out) {
+    if (r->n_channels)
+        return world_for_channels(r, out);
     vv_volume *v;
     int rc = cli_load_volume_sc(r->input, r->has_raw ? &r->raw : NULL, r->series, r->channel, &v);
     if (rc)
@@ -350,6 +522,11 @@ cli_render_world(const cli_render_args *r, vv_world **out) {
         return rc;
     int scene = !r->has_raw && is_scene_file(r->input);
     const int grid = !scene && !r->has_raw && vv_grid_file_detect(r->input, NULL);
+    if ((scene || grid) && r->n_channels) {
+        fprintf(stderr, "volvis: %s: --channels is for a volume file's channels, not a %s\n",
+                r->input, scene ? "scene" : "grid");
+        return CLI_EXIT_FAIL;
+    }
     rc = scene ? world_for_scene(r, out) : grid ? world_for_grid(r, out) : world_for_volume(r, out);
     if (rc) {
         vv_world_free(*out);
@@ -479,30 +656,44 @@ cli_render_print_options(FILE *out) {
             "  --series N       DICOM: series N of INPUT as 'volvis info' lists them (a\n"
             "                   folder with one series needs none)\n"
             "  --channel C      TIFF and DICOM: channel C, from 0 (default 0)\n"
-            "  --gamma G        8-bit conversion v^(1/G) (default 1: values unchanged)\n"
-            "  --quality Q      0 draft, 1 medium, 2 final (default 2 or the scene's; per\n"
-            "                   renderer below)\n"
-            "  --set KEY=VALUE  renderer-specific option (repeatable), listed with each\n"
-            "                   renderer below; adds to or overrides the scene's options;\n"
-            "                   see docs/rendering.md\n"
-            "  --alpha          write RGBA (coverage in the alpha channel); default RGB\n"
-            "  --ortho          parallel projection (orthographic), the view framed on\n"
-            "                   the scene; needed by the fourier renderer\n"
-            "  --labels         the volumes are label volumes (volvis filter --components):\n"
-            "                   each label in its own colour, label 0 transparent\n"
-            "  --field NAME     a grid's field to show (default: its first scalar field;\n"
-            "                   vectors by magnitude); for a scene, every grid object's\n"
-            "  --time T         a grid's time step: field NAME<T> (blow.vtk: thickness3)\n"
-            "  --memory-limit SIZE  render a volume larger than memory brick by brick\n"
-            "                   within SIZE bytes (K, M, G suffixes): raw (--raw),\n"
-            "                   uncompressed NRRD or .vvb ('volvis convert IN OUT.vvb');\n"
-            "                   a .vvb INPUT is always rendered so (default 1G)\n"
-            "  --compositing binary-swap|radix-k[:K]\n"
-            "                   under mpirun -np N: how the ranks' partial images are\n"
-            "                   composited (default binary-swap; radix-k: groups of at\n"
-            "                   most K ranks a round, default 4); docs/parallel.md\n"
-            "  -q, --quiet      no progress bar and no 'wrote' line\n",
-            VV_IMAGE_MAX_SIDE);
+            "  --channels C,C,...  TIFF and DICOM: these channels (up to %d) as one\n"
+            "                   object, each in its own colour, drawn in one pass\n"
+            "                   (raycast); docs/rendering.md, \"Channels\"\n"
+            "  --colors COLOR,...  the channels' colours: red, green, blue, magenta,\n"
+            "                   cyan, yellow, white, gray, orange, sky or #rrggbb\n"
+            "                   (default magenta, green, cyan, yellow, then Okabe-Ito)\n"
+            "  --contrast LO:HI,...  the channels' contrast limits in data values:\n"
+            "                   transparent up to LO, opacity 0.5 from HI (default: LO\n"
+            "                   the background plus 3 deviations of its noise, from the\n"
+            "                   quartiles; HI the 99.99 %% quantile)\n"
+            "  --blend RULE     how the channels combine: composite (default; opacities\n"
+            "                   as independent absorbers, colours mixed by opacity),\n"
+            "                   additive (each channel composited alone, colours added)\n"
+            "                   or maximum (a MIP per channel, coloured, added)\n",
+            VV_IMAGE_MAX_SIDE, VV_MAX_CHANNELS);
+    fprintf(out, "  --gamma G        8-bit conversion v^(1/G) (default 1: values unchanged)\n"
+                 "  --quality Q      0 draft, 1 medium, 2 final (default 2 or the scene's; per\n"
+                 "                   renderer below)\n"
+                 "  --set KEY=VALUE  renderer-specific option (repeatable), listed with each\n"
+                 "                   renderer below; adds to or overrides the scene's options;\n"
+                 "                   see docs/rendering.md\n"
+                 "  --alpha          write RGBA (coverage in the alpha channel); default RGB\n"
+                 "  --ortho          parallel projection (orthographic), the view framed on\n"
+                 "                   the scene; needed by the fourier renderer\n"
+                 "  --labels         the volumes are label volumes (volvis filter --components):\n"
+                 "                   each label in its own colour, label 0 transparent\n"
+                 "  --field NAME     a grid's field to show (default: its first scalar field;\n"
+                 "                   vectors by magnitude); for a scene, every grid object's\n"
+                 "  --time T         a grid's time step: field NAME<T> (blow.vtk: thickness3)\n"
+                 "  --memory-limit SIZE  render a volume larger than memory brick by brick\n"
+                 "                   within SIZE bytes (K, M, G suffixes): raw (--raw),\n"
+                 "                   uncompressed NRRD or .vvb ('volvis convert IN OUT.vvb');\n"
+                 "                   a .vvb INPUT is always rendered so (default 1G)\n"
+                 "  --compositing binary-swap|radix-k[:K]\n"
+                 "                   under mpirun -np N: how the ranks' partial images are\n"
+                 "                   composited (default binary-swap; radix-k: groups of at\n"
+                 "                   most K ranks a round, default 4); docs/parallel.md\n"
+                 "  -q, --quiet      no progress bar and no 'wrote' line\n");
 }
 
 /* "volume, grid" etc.: the object kinds in @p draws, into buf. */
