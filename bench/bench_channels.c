@@ -15,11 +15,14 @@
  *
  * ops (times are medians of --runs renders after a warm-up render):
  *   channels_one_frame         channel 0 alone (a one-channel object)
+ *   channels_one_mip_frame     channel 0 alone, maximum intensity projection
  *   channels_<rule>_frame      all channels, one object, rule composite,
  *                              additive or maximum
  *   channels_separate_frame    the channels as C objects of one World
  *                              (composite, each with its channel's TF)
- *   channels_<rule>_over_one   ratio to channels_one_frame (target <= 2.5)
+ *   channels_<rule>_over_one   composite, additive: ratio to channels_one_frame
+ *                              (target <= 2.5)
+ *   channels_maximum_over_one_mip  ratio to channels_one_mip_frame (target <= 2.5)
  *   channels_separate_over_composite  (target >= 2)
  *
  * usage: bench_channels [--channels C] [--dims NXxNYxNZ] [--size N]
@@ -181,6 +184,10 @@ main(int argc, char **argv) {
     double t_one = time_renders(one, threads, runs, img);
     save(img, outdir, "one");
 
+    one->objects[0]->mode = VV_MODE_MIP;
+    double t_one_mip = time_renders(one, threads, runs, img);
+    save(img, outdir, "one_mip");
+
     double t_rule[3];
     for (int b = 0; b < 3; b++) {
         mo->blend = (vv_channel_blend)b;
@@ -215,11 +222,13 @@ main(int argc, char **argv) {
         snprintf(op, sizeof op, "channels_%s_frame", vv_channel_blend_name((vv_channel_blend)b));
         bench_emit(op, dataset, t_rule[b], "s");
     }
+    bench_emit("channels_one_mip_frame", dataset, t_one_mip, "s");
     bench_emit("channels_separate_frame", dataset, t_sep, "s");
-    for (int b = 0; b < 3; b++) {
+    for (int b = 0; b < 2; b++) {
         snprintf(op, sizeof op, "channels_%s_over_one", vv_channel_blend_name((vv_channel_blend)b));
         bench_emit(op, dataset, t_rule[b] / t_one, "x");
     }
+    bench_emit("channels_maximum_over_one_mip", dataset, t_rule[VV_BLEND_MAXIMUM] / t_one_mip, "x");
     bench_emit("channels_separate_over_composite", dataset, t_sep / t_rule[0], "x");
     vv_world_free(one);
     vv_world_free(multi);

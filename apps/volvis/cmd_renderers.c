@@ -39,7 +39,8 @@ cli_renderers_usage(FILE *out) {
                  "  volvis renderers raytrace --json\n");
 }
 
-static const char *const cap_names[] = {"region", "quality", "preview", "progressive", "global"};
+static const char *const cap_names[] = {"region",      "quality", "preview",
+                                        "progressive", "global",  "channels"};
 
 static json_t *
 option_json(const vv_option_spec *o) {

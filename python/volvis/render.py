@@ -42,7 +42,7 @@ def option_text(value):
 _OPTION_TYPES = {0: "bool", 1: "int", 2: "real", 3: "enum", 4: "string"}
 _KINDS = ["volume", "plane", "polygon", "sphere", "box", "cylinder", "mesh", "grid"]
 _MODES = ["composite", "mip", "minip", "xray", "iso"]
-_CAPS = ["region", "quality", "preview", "progressive", "global"]
+_CAPS = ["region", "quality", "preview", "progressive", "global", "channels"]
 
 
 def _option(spec):

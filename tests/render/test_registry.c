@@ -98,11 +98,15 @@ test_cli_json(void **state) {
         json_t *opts = json_object_get(r, "options");
         assert_int_equal((int)json_array_size(opts), in->n_options);
         const int region = (in->caps & VV_RENDERER_REGION) != 0;
-        int listed = 0;
+        const int channels = (in->caps & VV_RENDERER_CHANNELS) != 0;
+        int listed = 0, listed_ch = 0;
         json_t *caps = json_object_get(r, "capabilities");
-        for (size_t c = 0; c < json_array_size(caps); c++)
+        for (size_t c = 0; c < json_array_size(caps); c++) {
             listed |= strcmp(json_string_value(json_array_get(caps, c)), "region") == 0;
+            listed_ch |= strcmp(json_string_value(json_array_get(caps, c)), "channels") == 0;
+        }
         assert_int_equal(listed, region);
+        assert_int_equal(listed_ch, channels);
         for (int k = 0; k < in->n_options; k++) {
             json_t *o = json_array_get(opts, (size_t)k);
             const char *key = json_string_value(json_object_get(o, "key"));
