@@ -410,6 +410,8 @@ world_for_channels(const cli_render_args *r, vv_world **out) {
         vv_error_clear();
         s = vv_object_set_channels(o, r->n_channels, v, np);
         o->blend = r->has_blend ? r->blend : VV_BLEND_COMPOSITE;
+        for (int c = 0; s == VV_OK && c < r->n_channels; c++)
+            o->channels[c].index = r->channels[c];
     }
     for (int c = 0; o && s == VV_OK && c < r->n_channels; c++) {
         vv_tf *tf = r->n_channels > 1 ? &o->channels[c].tf : &o->tf;

@@ -506,6 +506,7 @@ typedef struct vv_channel {
     vv_volume *volume; /**< one reference held; the same dims as every channel of the object */
     vv_tf tf;          /**< its classification (opacity and colour) */
     int visible;       /**< 0: left out of the image */
+    int index;         /**< its channel in the object's file (a scene file's "channel"), from 0 */
 } vv_channel;
 
 /**
@@ -602,7 +603,7 @@ vv_status vv_object_new_volume(vv_object **out, vv_volume *volume, const char *n
  * (@p names or an entry may be NULL: "channel c"), visible, coloured
  * vv_channel_default_color(c) with contrast limits
  * vv_channel_default_contrast and opacity 0.5 per smallest voxel spacing
- * (vv_tf_set_contrast, gamma 1). The object's `volume` becomes
+ * (vv_tf_set_contrast, gamma 1), index c. The object's `volume` becomes
  * volumes[0]; blend stays as it was. Replaces channels set before. Errors:
  * VV_ERR_INVALID (not a volume object, n out of range, a NULL volume, dims
  * differing from channel 0's: named), VV_ERR_NOMEM; on error @p obj is

@@ -113,6 +113,7 @@ vv_object_set_channels(vv_object *obj, int n, vv_volume *const *volumes, const c
         else
             snprintf(ch[c].name, sizeof ch[c].name, "channel %d", c);
         ch[c].visible = 1;
+        ch[c].index = c;
         double lo, hi;
         vv_channel_default_contrast(v, &lo, &hi);
         /* the arguments are valid by construction */

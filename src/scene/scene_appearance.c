@@ -61,8 +61,8 @@ parse_tf_points(const sctx *c, json_t *tfj, const char *tp, vv_tf *tf, int opaci
     return VV_OK;
 }
 
-static vv_status
-parse_tf(const sctx *c, json_t *tfj, const char *tp, vv_object *o) {
+vv_status
+vv_scene_parse_tf(const sctx *c, json_t *tfj, const char *tp, double unit, vv_tf *out) {
     static const char *const keys[] = {"opacity", "color", "opacity_unit_distance", NULL};
     vv_status st = vv_scene_check_keys(c, tfj, tp, keys);
     if (st != VV_OK)
@@ -71,15 +71,21 @@ parse_tf(const sctx *c, json_t *tfj, const char *tp, vv_object *o) {
         return vv_scene_missing(c, tp, "opacity", "[[value, opacity], ...]");
     vv_tf tf;
     vv_tf_init(&tf);
-    tf.opacity_unit_distance =
-        o->volume ? vv_tf_default_unit_distance(o->volume) : o->tf.opacity_unit_distance;
+    tf.opacity_unit_distance = unit;
     if ((st = parse_tf_points(c, tfj, tp, &tf, 1)) != VV_OK ||
         (st = parse_tf_points(c, tfj, tp, &tf, 0)) != VV_OK ||
         (st = vv_scene_get_number_in(c, tfj, tp, "opacity_unit_distance", &tf.opacity_unit_distance,
                                      NULL, 0, 1, INFINITY, 1)) != VV_OK)
         return st;
-    o->tf = tf;
+    *out = tf;
     return VV_OK;
+}
+
+static vv_status
+parse_tf(const sctx *c, json_t *tfj, const char *tp, vv_object *o) {
+    return vv_scene_parse_tf(
+        c, tfj, tp,
+        o->volume ? vv_tf_default_unit_distance(o->volume) : o->tf.opacity_unit_distance, &o->tf);
 }
 
 /* An optional [a, b] pair of numbers. */

@@ -129,6 +129,20 @@ vv_status vv_scene_get_object_name(const sctx *c, json_t *e, const char *op, con
 
 /* ---- scene_appearance.c ---- */
 
+/* A 1-D transfer function {"opacity": ..., "color": ...,
+ * "opacity_unit_distance": ...} at @p tp into *out (unchanged on error);
+ * @p unit: the unit distance when the key is absent. */
+vv_status vv_scene_parse_tf(const sctx *c, json_t *tfj, const char *tp, double unit, vv_tf *out);
+
+/* ---- scene_channels.c ---- */
+
+/* The "channels" and "blend" of volume object @p e (at @p op; its file
+ * @p full, its own keys parsed into @p o): each channel loaded from @p full
+ * (its "channel" index), named, shown or hidden, with its transfer function
+ * (else vv_object_set_channels' defaults). No "channels": nothing. */
+vv_status vv_scene_parse_channels(const sctx *c, json_t *e, const char *op, const char *full,
+                                  vv_object *o);
+
 /* Object fields other than the source (file, shape): mode, isovalue,
  * step, shading, visibility, transform, segmentation (TF, 2-D TF,
  * threshold, labels), textures, material and local cut planes. */

@@ -133,7 +133,8 @@ chain_from_json(const json_t *j, vv_filter_chain **out, int *bad_item) {
 
 vv_status
 vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
-    static const char *const own[] = {"file", "origin", "spacing", "filters", NULL};
+    static const char *const own[] = {"file",     "origin", "spacing", "filters",
+                                      "channels", "blend",  NULL};
     char op[PATH_MAX_LEN], kp[PATH_MAX_LEN];
     vv_scene_path_index(op, "objects", idx);
     if (json_is_object(e)) {
@@ -247,6 +248,8 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     st = vv_scene_parse_object_fields(c, e, op, o);
     if (st == VV_OK)
         st = vv_scene_parse_effect_flags(c, e, op, o);
+    if (st == VV_OK)
+        st = vv_scene_parse_channels(c, e, op, full, o);
     if (st != VV_OK) {
         vv_object_free(o);
         return st;

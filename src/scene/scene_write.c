@@ -324,6 +324,28 @@ put_segmentation(wctx *c, json_t *oj, const vv_object *o) {
         put(c, oj, "tf2d", tf2d(c, &o->tf2d));
 }
 
+/* The channels of a multi-channel volume object: each its index in the
+ * object's file, name, visibility and transfer function; the blend rule. */
+static void
+put_channels(wctx *c, json_t *oj, const vv_object *o) {
+    if (o->n_channels < 2)
+        return;
+    json_t *arr = json_array();
+    for (int k = 0; arr && k < o->n_channels; k++) {
+        const vv_channel *ch = &o->channels[k];
+        json_t *cj = json_object();
+        append(c, arr, cj);
+        if (!cj)
+            break;
+        put(c, cj, "channel", json_integer(ch->index));
+        put_str(c, cj, "name", ch->name, "a channel's name");
+        put(c, cj, "visible", json_boolean(ch->visible));
+        put(c, cj, "transfer_function", tf1d(c, &ch->tf));
+    }
+    put(c, oj, "channels", arr);
+    put_str(c, oj, "blend", vv_channel_blend_name(o->blend), "the blend rule");
+}
+
 /* A volume or grid object (@p file: its file, else geometry.source), or a
  * geometric one. */
 static json_t *
@@ -350,6 +372,7 @@ object(wctx *c, const vv_object *o, const char *file) {
         put(c, oj, "spacing", vec3(vv_vec3_make(v->spacing[0], v->spacing[1], v->spacing[2])));
         if (o->geometry.filters)
             put_str(c, oj, "filters", o->geometry.filters, "the filter chain");
+        put_channels(c, oj, o);
     }
     put_transform(c, oj, o);
     int mode = (int)o->mode;

@@ -16,6 +16,10 @@
  * - Thread counts and empty-space skipping do not change a bit; clones
  *   hold their own references; bad input gets one-line errors; renderers
  *   without VV_RENDERER_CHANNELS and region renders refuse such objects.
+ * - Scene files: the channels of an ImageJ hyperstack (written here with
+ *   libtiff) load with their indices, names, visibility, transfer functions
+ *   and blend rule, render, save and load again to the same bits; bad
+ *   "channels" and "blend" entries are errors naming their place.
  */
 #include "testutil.h"
 
@@ -23,6 +27,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <tiffio.h>
 
 #define N 40
 
@@ -406,6 +411,128 @@ test_bad_input(void **state) {
     vv_volume_free(v[1]);
 }
 
+/* An ImageJ hyperstack of two u8 channels (pages z-major, channel-minor). */
+static void
+write_hyperstack(const char *path, vv_volume *const v[2]) {
+    TIFF *t = TIFFOpen(path, "w");
+    assert_non_null(t);
+    char desc[128];
+    snprintf(desc, sizeof desc, "ImageJ=1.53t\nimages=%d\nchannels=2\nslices=%d\nhyperstack=true\n",
+             2 * N, N);
+    unsigned char row[N];
+    for (int p = 0; p < 2 * N; p++) {
+        const int z = p / 2, c = p % 2;
+        TIFFSetField(t, TIFFTAG_IMAGEWIDTH, (uint32_t)N);
+        TIFFSetField(t, TIFFTAG_IMAGELENGTH, (uint32_t)N);
+        TIFFSetField(t, TIFFTAG_BITSPERSAMPLE, (uint16_t)8);
+        TIFFSetField(t, TIFFTAG_SAMPLESPERPIXEL, (uint16_t)1);
+        TIFFSetField(t, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+        TIFFSetField(t, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_MINISBLACK);
+        TIFFSetField(t, TIFFTAG_ROWSPERSTRIP, (uint32_t)N);
+        if (p == 0)
+            TIFFSetField(t, TIFFTAG_IMAGEDESCRIPTION, desc);
+        for (int y = 0; y < N; y++) {
+            for (int x = 0; x < N; x++)
+                row[x] = (unsigned char)vv_volume_get(v[c], x, y, z);
+            assert_true(TIFFWriteScanline(t, row, (uint32_t)y, 0) >= 0);
+        }
+        assert_true(TIFFWriteDirectory(t));
+    }
+    TIFFClose(t);
+}
+
+static vv_status
+load_text(const char *dir, const char *name, const char *json, vv_world **w) {
+    const char *path = vt_path(dir, name);
+    vt_write_file(path, json, strlen(json));
+    vv_error_clear();
+    return vv_scene_load(w, path);
+}
+
+static void
+test_scene_round_trip(void **state) {
+    (void)state;
+    vv_volume *v[2] = {ball(14, 20, 20, 7), ball(26, 20, 20, 7)};
+    char dir[1024]; /* vt_outdir's buffer is reused by save() */
+    snprintf(dir, sizeof dir, "%s", vt_outdir("channels_scene"));
+    write_hyperstack(vt_path(dir, "hyper.tif"), v);
+    const char *scene =
+        "{\"view\": {\"eye\": [19.5, 19.5, 200], \"at\": [19.5, 19.5, 0], \"up\": [0, 1, 0],\n"
+        "  \"projection\": \"orthographic\", \"ortho_height\": 40, \"width\": 80, \"height\": "
+        "80},\n"
+        " \"objects\": [{\"file\": \"hyper.tif\", \"name\": \"cells\", \"shading\": false,\n"
+        "   \"blend\": \"additive\",\n"
+        "   \"channels\": [{\"channel\": 1, \"name\": \"membrane\"},\n"
+        "                {\"channel\": 0, \"name\": \"nuclei\", \"visible\": true,\n"
+        "                 \"transfer_function\": {\"opacity\": [[50, 0], [150, 0.4]],\n"
+        "                                       \"color\": [[0, [0, 1, 0]]]}}]}]}\n";
+    vv_world *w = NULL;
+    vt_ok(load_text(dir, "cells.json", scene, &w));
+    const vv_object *o = w->objects[0];
+    assert_int_equal(o->n_channels, 2);
+    assert_int_equal(o->blend, VV_BLEND_ADDITIVE);
+    assert_int_equal(o->channels[0].index, 1);
+    assert_int_equal(o->channels[1].index, 0);
+    assert_string_equal(o->channels[0].name, "membrane");
+    assert_string_equal(o->channels[1].name, "nuclei");
+    assert_int_equal(o->channels[1].tf.n_opacity, 2);
+    assert_near(o->channels[1].tf.opacity[1].opacity, 0.4, 1e-12);
+    for (int c = 0; c < 2; c++) /* the voxels of the file's channel */
+        for (int i = 0; i < N; i += 3)
+            assert_true(vv_volume_get(o->channels[c].volume, i, 20, 20) ==
+                        vv_volume_get(v[1 - c], i, 20, 20));
+    vv_image *a = render(w, &w->view);
+    save(a, "channels_scene");
+    /* nuclei (file channel 0, green by its TF) at x = 14, membrane (the
+     * object's channel 0: magenta by default) at 26 */
+    assert_true(at_voxel(a, 14, 20)[1] > 0.1f && at_voxel(a, 14, 20)[0] == 0);
+    assert_true(at_voxel(a, 26, 20)[0] > 0.1f && at_voxel(a, 26, 20)[2] > 0.1f &&
+                at_voxel(a, 26, 20)[1] == 0);
+    const char *saved = vt_path(dir, "saved.json");
+    vt_ok(vv_scene_save(w, saved, NULL));
+    vv_world *w2 = NULL;
+    vt_ok(vv_scene_load(&w2, saved));
+    const vv_object *o2 = w2->objects[0];
+    assert_int_equal(o2->n_channels, 2);
+    assert_int_equal(o2->blend, VV_BLEND_ADDITIVE);
+    assert_int_equal(o2->channels[0].index, 1);
+    assert_string_equal(o2->channels[1].name, "nuclei");
+    vv_image *b = render(w2, &w2->view);
+    assert_memory_equal(a->rgba, b->rgba, 4 * sizeof(float) * (size_t)a->width * a->height);
+    vv_image_free(a);
+    vv_image_free(b);
+    vv_world_free(w);
+    vv_world_free(w2);
+    /* bad entries: an error naming the place, no World */
+    static const struct {
+        const char *objects, *needle;
+    } bad[] = {
+        {"[{\"file\": \"hyper.tif\", \"channels\": [{\"channel\": 0}]}]", "1 channels"},
+        {"[{\"file\": \"hyper.tif\", \"blend\": \"sum\", \"channels\": [{\"channel\": 0}, "
+         "{\"channel\": 1}]}]",
+         "unknown blend"},
+        {"[{\"file\": \"hyper.tif\", \"blend\": \"maximum\"}]", "needs \"channels\""},
+        {"[{\"file\": \"hyper.tif\", \"channels\": [{\"channel\": 0}, {\"name\": \"x\"}]}]",
+         "channels[1]"},
+        {"[{\"file\": \"hyper.tif\", \"channels\": [{\"channel\": 0}, {\"channel\": 5}]}]",
+         "channels[1].channel"},
+        {"[{\"file\": \"hyper.tif\", \"channels\": [{\"channel\": 0}, {\"channel\": 1, "
+         "\"colour\": 1}]}]",
+         "colour"},
+    };
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        char text[512];
+        snprintf(text, sizeof text, "{\"objects\": %s}", bad[i].objects);
+        vv_world *x = NULL;
+        assert_true(load_text(dir, "bad.json", text, &x) != VV_OK);
+        assert_null(x);
+        if (!strstr(vv_error_message(), bad[i].needle))
+            fail_msg("%s: '%s' not in: %s", bad[i].objects, bad[i].needle, vv_error_message());
+    }
+    vv_volume_free(v[0]);
+    vv_volume_free(v[1]);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
@@ -415,6 +542,7 @@ main(void) {
         cmocka_unit_test(test_composite_mix),
         cmocka_unit_test(test_deterministic_and_clone),
         cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_scene_round_trip),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
