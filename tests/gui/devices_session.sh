@@ -42,10 +42,11 @@ JSON
 cp "$OUT/scene.json" "$OUT/session.json"
 nfull() { local c; c=$(grep -c " full " "$OUT/frames.log" 2>/dev/null) || true; echo "${c:-0}"; }
 nlines() { local c; c=$(wc -l < "$OUT/frames.log" 2>/dev/null) || true; echo "${c:-0}"; }
-# more than $1 full frames, the last frame full, and no new frame for 0.6 s
+# more than $1 full frames, the last frame full, and no new frame for 0.6 s;
+# within 120 s (a full frame under ASan beside another test takes seconds)
 wait_settled() {
-  local last=-1 cur
-  for _ in $(seq 1 200); do
+  local last=-1 cur end=$((SECONDS + 120))
+  while [ "$SECONDS" -lt "$end" ]; do
     if [ "$(nfull)" -gt "$1" ] && tail -1 "$OUT/frames.log" | grep -q " full "; then
       cur=$(nlines)
       [ "$cur" = "$last" ] && return 0
@@ -58,7 +59,7 @@ wait_settled() {
   done
   fail "no settled full-quality frame after $2"
 }
-wait_file() { for _ in $(seq 1 200); do [ -e "$1" ] && return 0; sleep 0.1; done; fail "$2"; }
+wait_file() { for _ in $(seq 1 600); do [ -e "$1" ] && return 0; sleep 0.1; done; fail "$2"; }
 same() { [ "$(compare -metric AE "$1" "$2" null: 2>&1 || true)" = "0" ]; }
 ae() { compare -metric AE "$1" "$2" null: 2>&1 || true; }
 quit_saved() { # Ctrl+S (the session's own file), Ctrl+Q: exit status 0
