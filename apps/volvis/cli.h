@@ -296,19 +296,21 @@ int cli_check_readable(const char *path);
 int cli_check_readable_input(const char *path);
 
 /**
- * Parses --series N (1..) and --channel C (0..) of @p a when given into
- * *@p series (else 0) and *@p channel (else -1). 0 or a usage error.
+ * Parses --series N (1..), --channel C (0..) and --time T (0..) of @p a when
+ * given into *@p series (else 0), *@p channel and *@p time (else -1). 0 or a
+ * usage error.
  */
-int cli_parse_series_channel(const cli_args *a, int *series, int *channel);
+int cli_parse_series_channel(const cli_args *a, int *series, int *channel, int *time);
 
 /**
  * Loads a volume: as raw when @p raw is non-NULL, else any detected format.
  * Returns 0, or CLI_EXIT_FAIL after printing the error.
  */
 int cli_load_volume(const char *path, const vv_raw_params *raw, vv_volume **out);
-/** cli_load_volume with a DICOM series (1.., 0: the only one) and a channel (-1: 0). */
+/** cli_load_volume with a DICOM series (1.., 0: the only one), a channel and a time step
+ * (-1: 0); the file's channels and time steps in *@p info when it is not NULL. */
 int cli_load_volume_sc(const char *path, const vv_raw_params *raw, int series, int channel,
-                       vv_volume **out);
+                       int time, vv_load_info *info, vv_volume **out);
 
 /* ---- progress ----------------------------------------------------------------- */
 

@@ -19,6 +19,7 @@ static const cli_opt_spec convert_opts[] = {
     {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
     {"series", 0, "N"},
     {"channel", 0, "C"},
+    {"time", 0, "T"},
     {"quiet", 'q', NULL},
 };
 #define N_CONVERT_OPTS ((int)(sizeof convert_opts / sizeof convert_opts[0]))
@@ -78,7 +79,10 @@ cli_convert_usage(FILE *out) {
             "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
             "                     read IN as raw voxels (see 'volvis info --help')\n"
             "  --series N         DICOM: series N as 'volvis info' lists them\n"
-            "  --channel C        TIFF and DICOM: channel C, from 0 (default 0)\n"
+            "  --channel C        channel C, from 0 (default 0): TIFF, DICOM, NIfTI (dim[5]),\n"
+            "                     NRRD (an axis of kind RGB-color, vector, list, ...)\n"
+            "  --time T           time step T, from 0 (default 0): OME-TIFF, ImageJ\n"
+            "                     hyperstacks, NIfTI (dim[4]), NRRD (an axis of kind time)\n"
             "  -q, --quiet        no 'wrote' line and no conversion note\n"
             "  -h, --help         show this help\n"
             "\n",
@@ -100,11 +104,11 @@ cli_convert_usage(FILE *out) {
  * whole first. */
 static int
 convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int series, int channel,
-            int coarse, int quiet) {
+            int time, int coarse, int quiet) {
     vv_bricked *b = NULL;
     vv_error_clear();
     vv_status s = VV_ERR_FORMAT;
-    if (raw || vv_format_detect(in) == VV_FORMAT_NRRD)
+    if ((raw || vv_format_detect(in) == VV_FORMAT_NRRD) && channel <= 0 && time <= 0)
         s = vv_bricked_open(&b, in, raw, 0);
     int dims[3];
     const char *type;
@@ -121,7 +125,7 @@ convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int serie
     } else {
         /* not readable by bricks (compressed NRRD, other formats): whole */
         vv_volume *v = NULL;
-        int rc = cli_load_volume_sc(in, raw, series, channel, &v);
+        int rc = cli_load_volume_sc(in, raw, series, channel, time, NULL, &v);
         if (rc)
             return rc;
         vv_error_clear();
@@ -187,13 +191,13 @@ cli_convert_main(int argc, char **argv) {
         return rc;
 
     vv_volume *v;
-    int series = 0, channel = -1;
-    if ((rc = cli_parse_series_channel(&a, &series, &channel)))
+    int series = 0, channel = -1, time = -1;
+    if ((rc = cli_parse_series_channel(&a, &series, &channel, &time)))
         return rc;
     if (format == VV_FORMAT_AUTO)
-        return convert_vvb(in, out, raw_spec ? &raw : NULL, series, channel,
+        return convert_vvb(in, out, raw_spec ? &raw : NULL, series, channel, time,
                            cli_count(&a, "no-coarse") == 0, quiet);
-    if ((rc = cli_load_volume_sc(in, raw_spec ? &raw : NULL, series, channel, &v)))
+    if ((rc = cli_load_volume_sc(in, raw_spec ? &raw : NULL, series, channel, time, NULL, &v)))
         return rc;
     /* what the format cannot hold as it is (SLC: 8 bits only) is refused with
      * --strict, else converted with a note */

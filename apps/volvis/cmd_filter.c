@@ -17,6 +17,7 @@ static const cli_opt_spec base_opts[] = {
     {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
     {"series", 0, "N"},
     {"channel", 0, "C"},
+    {"time", 0, "T"},
     {"quiet", 'q', NULL},
 };
 #define N_BASE ((int)(sizeof base_opts / sizeof base_opts[0]))
@@ -81,7 +82,8 @@ cli_filter_usage(FILE *out) {
             "  --threads N        threads (default: all cores)\n"
             "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
             "                     read IN as raw voxels (see 'volvis info --help')\n"
-            "  --series N         DICOM: series N; --channel C  TIFF/DICOM channel\n"
+            "  --series N         DICOM: series N; --channel C, --time T  the file's channel\n"
+            "                     and time step (from 0)\n"
             "  -q, --quiet        no progress bar and no 'wrote' line\n"
             "  -h, --help         show this help\n"
             "\n"
@@ -136,8 +138,8 @@ cli_filter_main(int argc, char **argv) {
     const char *raw_spec = cli_get(&a, "raw");
     if (raw_spec && (rc = cli_parse_raw(&a, "raw", raw_spec, &raw)))
         return rc;
-    int series = 0, channel = -1;
-    if ((rc = cli_parse_series_channel(&a, &series, &channel)))
+    int series = 0, channel = -1, time = -1;
+    if ((rc = cli_parse_series_channel(&a, &series, &channel, &time)))
         return rc;
 
     /* the chain, in command-line order, checked before anything is read */
@@ -160,7 +162,7 @@ cli_filter_main(int argc, char **argv) {
     }
 
     vv_volume *v = NULL, *f = NULL;
-    if ((rc = cli_load_volume_sc(in, raw_spec ? &raw : NULL, series, channel, &v))) {
+    if ((rc = cli_load_volume_sc(in, raw_spec ? &raw : NULL, series, channel, time, NULL, &v))) {
         vv_filter_chain_free(chain);
         return rc;
     }

@@ -17,6 +17,7 @@ static const cli_opt_spec info_opts[] = {
     {"bins", 0, "N"},
     {"series", 0, "N"},
     {"channel", 0, "C"},
+    {"time", 0, "T"},
     {"show-phi", 0, NULL},
     {"stats", 0, NULL},
 };
@@ -47,7 +48,10 @@ cli_info_usage(FILE *out) {
                  "                  spacing (default 1x1x1) and header bytes to skip (default 0)\n"
                  "  --bins N        histogram bins, 1..256 (default 16)\n"
                  "  --series N      DICOM: describe series N as listed\n"
-                 "  --channel C     TIFF and DICOM: channel C, from 0 (default 0)\n"
+                 "  --channel C     channel C, from 0 (default 0): TIFF, DICOM, NIfTI (dim[5]),\n"
+                 "                  NRRD (an axis of kind RGB-color, vector, list, ...)\n"
+                 "  --time T        time step T, from 0 (default 0): OME-TIFF, ImageJ\n"
+                 "                  hyperstacks, NIfTI (dim[4]), NRRD (an axis of kind time)\n"
                  "  --show-phi      DICOM: also print the patient's name and ID and the\n"
                  "                  study (protected health information)\n"
                  "  --stats         .vvc: decode the volume and print its statistics\n"
@@ -60,6 +64,53 @@ cli_info_usage(FILE *out) {
                  "  volvis info --series 2 ~/scans/CT_folder\n"
                  "\n");
     cli_print_formats(out, 1);
+}
+
+/* "name" #rrggbb of a channel, as far as the file says. */
+static void
+print_channel_label(const vv_load_info *in) {
+    if (in->channel_name[0])
+        printf(" \"%s\"", in->channel_name);
+    if (in->has_color)
+        printf(" #%02x%02x%02x", (unsigned)lround(in->color[0] * 255),
+               (unsigned)lround(in->color[1] * 255), (unsigned)lround(in->color[2] * 255));
+}
+
+/* The channels (each with its name, colour and value range at this time
+ * step; each read from the file) and the time axis of a file of several. */
+static int
+print_axes(const char *path, const vv_raw_params *raw, int series, int channel, int time,
+           const vv_load_info *axes, const vv_volume *v) {
+    int ch = channel < 0 ? 0 : channel, tp = time < 0 ? 0 : time;
+    if (axes->n_channels > 1) {
+        printf("channels:     %d (this is channel %d)\n", axes->n_channels, ch);
+        int listed = axes->n_channels <= VV_MAX_CHANNELS ? axes->n_channels : 0;
+        for (int c = 0; c < listed; c++) {
+            vv_load_info in = *axes;
+            vv_volume *cv = NULL;
+            if (c != ch) {
+                int rc = cli_load_volume_sc(path, raw, series, c, time, &in, &cv);
+                if (rc)
+                    return rc;
+            }
+            const vv_volume *w = c == ch ? v : cv;
+            printf("  channel %-3d", c);
+            print_channel_label(&in);
+            printf(" range %g .. %g\n", w->range[0], w->range[1]);
+            vv_volume_free(cv);
+        }
+    } else {
+        printf("channels:     1");
+        print_channel_label(axes);
+        printf("\n");
+    }
+    if (axes->n_times > 1) {
+        printf("time steps:   %d (this is step %d)", axes->n_times, tp);
+        if (axes->time_step > 0)
+            printf(", %g s apart", axes->time_step);
+        printf("\n");
+    }
+    return 0;
 }
 
 /* Lists the DICOM series of @p path; *@p n_out gets their count. */
@@ -384,8 +435,8 @@ cli_info_main(int argc, char **argv) {
     const char *raw_spec = cli_get(&a, "raw");
     if (raw_spec && (rc = cli_parse_raw(&a, "raw", raw_spec, &raw)))
         return rc;
-    int series = 0, channel = -1;
-    if ((rc = cli_parse_series_channel(&a, &series, &channel)))
+    int series = 0, channel = -1, time = -1;
+    if ((rc = cli_parse_series_channel(&a, &series, &channel, &time)))
         return rc;
 
     const char *path = a.pos[0];
@@ -403,6 +454,7 @@ cli_info_main(int argc, char **argv) {
     }
     vv_volume *v;
     vv_vvc_info vinfo;
+    vv_load_info axes = {.n_channels = 1, .n_times = 1};
     const int is_vvc = !raw_spec && vv_vvc_detect(path);
     if (is_vvc) {
         /* a .vvc: its header, then the statistics of the decompressed volume */
@@ -421,7 +473,8 @@ cli_info_main(int argc, char **argv) {
         vv_vvc_free(c);
         if (s2 != VV_OK)
             return cli_fail(s2, path);
-    } else if ((rc = cli_load_volume_sc(path, raw_spec ? &raw : NULL, series, channel, &v))) {
+    } else if ((rc = cli_load_volume_sc(path, raw_spec ? &raw : NULL, series, channel, time, &axes,
+                                        &v))) {
         return rc;
     }
 
@@ -447,6 +500,13 @@ cli_info_main(int argc, char **argv) {
         if (vinfo.max_error > 0)
             printf("error bound:  %g on every voxel (corrections in steps of %g)\n",
                    vinfo.max_error, vinfo.corr_step);
+    }
+    if (axes.n_channels > 1 || axes.n_times > 1) {
+        rc = print_axes(path, raw_spec ? &raw : NULL, series, channel, time, &axes, v);
+        if (rc) {
+            vv_volume_free(v);
+            return rc;
+        }
     }
     printf("voxel type:   %s (%zu byte%s)\n", vv_voxel_type_name(v->type),
            vv_voxel_type_size(v->type), vv_voxel_type_size(v->type) == 1 ? "" : "s");

@@ -24,6 +24,7 @@ static const cli_opt_spec slice_opts[] = {
     {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
     {"series", 0, "N"},
     {"channel", 0, "C"},
+    {"time", 0, "T"},
     {"quiet", 'q', NULL},
 };
 #define N_SLICE_OPTS ((int)(sizeof slice_opts / sizeof slice_opts[0]))
@@ -58,7 +59,8 @@ cli_slice_usage(FILE *out) {
             "                   voxel index and world position; -o is then optional\n"
             "  --object N       a scene's volume object N, from 0 (default: the first)\n"
             "  --raw DESC       read INPUT as raw voxels (see 'volvis info --help')\n"
-            "  --series N, --channel C  DICOM series, TIFF/DICOM channel\n"
+            "  --series N, --channel C, --time T  DICOM series, the file's channel and time\n"
+            "                   step (from 0)\n"
             "  -q, --quiet      print nothing but errors (and --probe's line)\n"
             "  -h, --help       show this help\n"
             "\n"
@@ -86,13 +88,14 @@ load(const cli_args *a, const char *input, vv_world **w, const vv_object **obj) 
             return cli_fail(s, input);
     } else {
         vv_raw_params raw;
-        int has_raw = cli_get(a, "raw") != NULL, series = 0, channel = -1;
+        int has_raw = cli_get(a, "raw") != NULL, series = 0, channel = -1, time = -1;
         if (has_raw && (rc = cli_parse_raw(a, "raw", cli_get(a, "raw"), &raw)))
             return rc;
-        if ((rc = cli_parse_series_channel(a, &series, &channel)))
+        if ((rc = cli_parse_series_channel(a, &series, &channel, &time)))
             return rc;
         vv_volume *v = NULL;
-        if ((rc = cli_load_volume_sc(input, has_raw ? &raw : NULL, series, channel, &v)))
+        if ((rc =
+                 cli_load_volume_sc(input, has_raw ? &raw : NULL, series, channel, time, NULL, &v)))
             return rc;
         s = vv_world_new_for_volume(w, v, NULL);
         vv_volume_free(v);

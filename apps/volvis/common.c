@@ -129,26 +129,29 @@ cli_check_readable_input(const char *path) {
 }
 
 int
-cli_parse_series_channel(const cli_args *a, int *series, int *channel) {
+cli_parse_series_channel(const cli_args *a, int *series, int *channel, int *time) {
     int rc;
     const char *s;
     *series = 0;
     *channel = -1;
+    *time = -1;
     if ((s = cli_get(a, "series")) && (rc = cli_parse_int(a, "series", s, 1, 1000000, series)))
         return rc;
     if ((s = cli_get(a, "channel")) && (rc = cli_parse_int(a, "channel", s, 0, 1000000, channel)))
+        return rc;
+    if ((s = cli_get(a, "time")) && (rc = cli_parse_int(a, "time", s, 0, 1000000, time)))
         return rc;
     return 0;
 }
 
 int
 cli_load_volume(const char *path, const vv_raw_params *raw, vv_volume **out) {
-    return cli_load_volume_sc(path, raw, 0, -1, out);
+    return cli_load_volume_sc(path, raw, 0, -1, -1, NULL, out);
 }
 
 int
-cli_load_volume_sc(const char *path, const vv_raw_params *raw, int series, int channel,
-                   vv_volume **out) {
+cli_load_volume_sc(const char *path, const vv_raw_params *raw, int series, int channel, int time,
+                   vv_load_info *info, vv_volume **out) {
     *out = NULL;
     int rc = raw ? cli_check_readable(path) : cli_check_readable_input(path);
     if (rc)
@@ -157,6 +160,8 @@ cli_load_volume_sc(const char *path, const vv_raw_params *raw, int series, int c
     vv_load_options_init(&opt);
     opt.series = series;
     opt.channel = channel;
+    opt.time = time;
+    opt.info = info;
     if (raw) {
         opt.format = VV_FORMAT_RAW;
         opt.has_raw = 1;

@@ -317,7 +317,8 @@ cli_render_parse(cli_args *a, cli_render_args *r) {
             return rc;
         r->has_raw = 1;
     }
-    if ((rc = cli_parse_series_channel(a, &r->series, &r->channel)))
+    int time_unused; /* --time is parsed above: a grid's step, or the volume file's */
+    if ((rc = cli_parse_series_channel(a, &r->series, &r->channel, &time_unused)))
         return rc;
     if ((rc = parse_channel_options(a, r)))
         return rc;
@@ -393,13 +394,18 @@ world_for_grid(const cli_render_args *r, vv_world **out) {
 static int
 world_for_channels(const cli_render_args *r, vv_world **out) {
     vv_volume *v[VV_MAX_CHANNELS] = {NULL};
-    char names[VV_MAX_CHANNELS][32];
+    vv_load_info info[VV_MAX_CHANNELS];
+    char names[VV_MAX_CHANNELS][VV_CHANNEL_NAME_MAX];
     const char *np[VV_MAX_CHANNELS];
     int rc = 0;
     for (int c = 0; c < r->n_channels && !rc; c++) {
         rc = cli_load_volume_sc(r->input, r->has_raw ? &r->raw : NULL, r->series, r->channels[c],
-                                &v[c]);
-        snprintf(names[c], sizeof names[c], "channel %d", r->channels[c]);
+                                r->has_time ? r->time : -1, &info[c], &v[c]);
+        /* the file's name for the channel (OME Channel Name), else its index */
+        if (!rc && info[c].channel_name[0])
+            snprintf(names[c], sizeof names[c], "%s", info[c].channel_name);
+        else
+            snprintf(names[c], sizeof names[c], "channel %d", r->channels[c]);
         np[c] = names[c];
     }
     if (!rc)
@@ -425,7 +431,11 @@ world_for_channels(const cli_render_args *r, vv_world **out) {
         } else {
             vv_channel_default_contrast(v[0], &lo, &hi);
         }
-        vv_vec3 col = c < r->n_colors ? r->colors[c] : vv_channel_default_color(c);
+        /* --colors, else the file's colour (OME Channel Color), else the default set */
+        vv_vec3 col = c < r->n_colors ? r->colors[c]
+                      : info[c].has_color
+                          ? vv_vec3_make(info[c].color[0], info[c].color[1], info[c].color[2])
+                          : vv_channel_default_color(c);
         vv_error_clear();
         s = vv_tf_set_contrast(tf, lo, hi, 1.0, 0.5, col, vv_tf_default_unit_distance(v[c]));
         if (r->n_channels == 1 && r->has_blend && r->blend == VV_BLEND_MAXIMUM)
@@ -444,7 +454,8 @@ world_for_volume(const cli_render_args *r, vv_world **out) {
     if (r->n_channels)
         return world_for_channels(r, out);
     vv_volume *v;
-    int rc = cli_load_volume_sc(r->input, r->has_raw ? &r->raw : NULL, r->series, r->channel, &v);
+    int rc = cli_load_volume_sc(r->input, r->has_raw ? &r->raw : NULL, r->series, r->channel,
+                                r->has_time ? r->time : -1, NULL, &v);
     if (rc)
         return rc;
     rc = cli_render_world_volume(r, v, out);
@@ -657,8 +668,9 @@ cli_render_print_options(FILE *out) {
             "                   read INPUT as raw voxels (see 'volvis info --help')\n"
             "  --series N       DICOM: series N of INPUT as 'volvis info' lists them (a\n"
             "                   folder with one series needs none)\n"
-            "  --channel C      TIFF and DICOM: channel C, from 0 (default 0)\n"
-            "  --channels C,C,...  TIFF and DICOM: these channels (up to %d) as one\n"
+            "  --channel C      channel C, from 0 (default 0): TIFF, DICOM, NIfTI dim[5],\n"
+            "                   NRRD (an axis of kind RGB-color, vector, list, ...)\n"
+            "  --channels C,C,...  these channels of the file (up to %d) as one\n"
             "                   object, each in its own colour, drawn in one pass\n"
             "                   (raycast); docs/rendering.md, \"Channels\"\n"
             "  --colors COLOR,...  the channels' colours: red, green, blue, magenta,\n"
@@ -686,7 +698,9 @@ cli_render_print_options(FILE *out) {
                  "                   each label in its own colour, label 0 transparent\n"
                  "  --field NAME     a grid's field to show (default: its first scalar field;\n"
                  "                   vectors by magnitude); for a scene, every grid object's\n"
-                 "  --time T         a grid's time step: field NAME<T> (blow.vtk: thickness3)\n"
+                 "  --time T         time step T, from 0: a grid's field NAME<T> (blow.vtk:\n"
+                 "                   thickness3), or a volume file's (OME-TIFF, ImageJ\n"
+                 "                   hyperstacks, NIfTI dim[4], NRRD's axis of kind time)\n"
                  "  --memory-limit SIZE  render a volume larger than memory brick by brick\n"
                  "                   within SIZE bytes (K, M, G suffixes): raw (--raw),\n"
                  "                   uncompressed NRRD or .vvb ('volvis convert IN OUT.vvb');\n"

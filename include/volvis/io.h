@@ -91,6 +91,26 @@ typedef struct vv_raw_params {
 /** Unset dims (0), u8, little-endian, spacing 1, origin 0, no skip. */
 void vv_raw_params_init(vv_raw_params *p);
 
+/** Name bytes of vv_load_info.channel_name, with its NUL. */
+#define VV_CHANNEL_NAME_MAX 64
+
+/**
+ * The axes of a file beyond its three spatial ones, as the reader found
+ * them (vv_load_options.info). A format without channels or time has one
+ * of each.
+ */
+typedef struct vv_load_info {
+    int n_channels; /**< channels in the file, >= 1 */
+    int n_times;    /**< time steps in the file, >= 1 */
+    /** The read channel's name from the file's metadata (OME Channel Name,
+     *  ImageJ Labels are not read), UTF-8, NUL-terminated; "" when none. */
+    char channel_name[VV_CHANNEL_NAME_MAX];
+    int has_color;    /**< 1: color holds the read channel's colour from the metadata */
+    float color[3];   /**< RGB in [0, 1] (OME Channel Color) */
+    double time_step; /**< time between steps in seconds when the file says (NIfTI pixdim[4],
+                           OME TimeIncrement), else 0 */
+} vv_load_info;
+
 /** Options for vv_volume_load. */
 typedef struct vv_load_options {
     vv_format format; /**< VV_FORMAT_AUTO to detect */
@@ -103,14 +123,30 @@ typedef struct vv_load_options {
      */
     int series;
     /**
-     * TIFF and DICOM: which channel (sample or OME/ImageJ channel), from 0;
-     * -1 (the default): channel 0.
+     * Which channel, from 0; -1 (the default): channel 0. TIFF and DICOM: a
+     * sample of each pixel or an OME/ImageJ channel; NIfTI: the fifth axis
+     * (dim[5]); NRRD: the axis of kind RGB-color, RGBA-color, vector,
+     * covariant-vector, list, point or 3-/4-vector. A channel past the file's
+     * is VV_ERR_INVALID naming the count.
      */
     int channel;
+    /**
+     * Which time step, from 0; -1 (the default): step 0. OME-TIFF and ImageJ
+     * hyperstacks (SizeT, frames=), NIfTI (dim[4]), NRRD (the axis of kind
+     * time). A step past the file's is VV_ERR_INVALID naming the count; a
+     * format without a time axis has one step.
+     */
+    int time;
+    /**
+     * Out, may be NULL: what the file holds besides the volume read (its
+     * channels and time steps, the read channel's name and colour). Filled
+     * on success; through the sandbox too. Borrowed for the call.
+     */
+    vv_load_info *info;
 } vv_load_options;
 
 /** Format VV_FORMAT_AUTO, no raw parameters (has_raw 0, raw as vv_raw_params_init),
- * series 0, channel -1. */
+ * series 0, channel -1, time -1, info NULL. */
 void vv_load_options_init(vv_load_options *o);
 
 /**

@@ -402,13 +402,16 @@ def _mat4(m):
     return np.array([[m.m[r][c] for c in range(4)] for r in range(4)], dtype=np.float64)
 
 
-def open(path, series=None, channel=None, format=None, raw=None):
+def open(path, series=None, channel=None, format=None, raw=None, time=None):
     """Loads a volume file of any format the library reads (vv_volume_load):
     SLC, NRRD, NIfTI, MetaImage, VTK legacy, TIFF stacks, DICOM series
     (folders, DICOMDIR), raw files, and .vvc compressed volumes (decoded).
 
     series: DICOM series number (1-based as ``volvis info`` lists them; None:
-    the only one). channel: TIFF/DICOM channel (0-based; None: 0). format:
+    the only one). channel: the file's channel (0-based; None: 0): TIFF and
+    DICOM samples or OME/ImageJ channels, NIfTI dim[5], NRRD's axis of a
+    channel kind. time: the file's time step (0-based; None: 0): OME-TIFF and
+    ImageJ hyperstacks, NIfTI dim[4], NRRD's axis of kind time. format:
     "slc", "nrrd", "nifti", "mhd", "vtk", "raw", "tiff", "dicom" or None
     (detect). raw: for raw files, a dict with dims (i, j, k), dtype, and
     optionally spacing, origin, big_endian, header_skip (bytes).
@@ -430,6 +433,8 @@ def open(path, series=None, channel=None, format=None, raw=None):
         opt.series = int(series)
     if channel is not None:
         opt.channel = int(channel)
+    if time is not None:
+        opt.time = int(time)
     if raw is not None:
         raw = dict(raw)
         opt.has_raw = 1

@@ -123,20 +123,29 @@ exact_int64(const void *data, int dt, uint64_t i) {
     return ((const uint64_t *)data)[i] <= (uint64_t)lim;
 }
 
+/* The spatial dims, and the time steps (dim[4]) and channels (dim[5]: the
+ * components of a vector intent) in @p nt and @p nc. */
 static vv_status
-header_dims(const nifti_image *nim, int dims[3], vv_voxel_type *stored) {
+header_dims(const nifti_image *nim, int dims[3], vv_voxel_type *stored, int *nt, int *nc) {
     int64_t ndim = nim->dim[0];
     if (ndim < 1 || ndim > 7)
         return vv_error_set(VV_ERR_FORMAT, "dim[0] is %lld (must be 1 to 7)", (long long)ndim);
     for (int d = 1; d <= ndim; d++)
         if (nim->dim[d] < 1)
             return vv_error_set(VV_ERR_FORMAT, "dim[%d] is %lld", d, (long long)nim->dim[d]);
-    for (int d = 4; d <= ndim; d++)
+    for (int d = 6; d <= ndim; d++)
         if (nim->dim[d] != 1)
             return vv_error_set(VV_ERR_UNSUPPORTED,
-                                "dim[%d] is %lld: only 3-D volumes (time and other axes of size "
-                                "1) are supported",
+                                "dim[%d] is %lld: axes past time (dim[4]) and channels (dim[5]) "
+                                "must have size 1",
                                 d, (long long)nim->dim[d]);
+    for (int d = 4; d <= 5; d++) {
+        int64_t n = d <= ndim ? nim->dim[d] : 1;
+        if (n > VV_VOLUME_MAX_DIM)
+            return vv_error_set(VV_ERR_LIMIT, "dim[%d] is %lld (limit %d %s)", d, (long long)n,
+                                VV_VOLUME_MAX_DIM, d == 4 ? "time steps" : "channels");
+        *(d == 4 ? nt : nc) = (int)n;
+    }
     for (int d = 1; d <= 3; d++) {
         int64_t n = d <= ndim ? nim->dim[d] : 1;
         if (n > INT_MAX)
@@ -208,8 +217,10 @@ set_geometry(vv_volume *v, const nifti_image *nim) {
     }
 }
 
+/* The 3-D volume at @p data (the voxels of one time step and channel). */
 static vv_status
-convert_data(vv_volume **out, const nifti_image *nim, const int dims[3], vv_voxel_type stored) {
+convert_data(vv_volume **out, const nifti_image *nim, const void *data, const int dims[3],
+             vv_voxel_type stored) {
     double slope = nim->scl_slope, inter = nim->scl_inter;
     int scaled = isfinite(slope) && slope != 0 && !(slope == 1 && inter == 0);
     if (!isfinite(inter))
@@ -228,11 +239,11 @@ convert_data(vv_volume **out, const nifti_image *nim, const int dims[3], vv_voxe
         return vv_error_set(VV_ERR_FORMAT, "data size does not match the header");
     }
     if (!scaled && !is64) {
-        memcpy(v->data, nim->data, (size_t)(count * vv_voxel_type_size(t)));
+        memcpy(v->data, data, (size_t)(count * vv_voxel_type_size(t)));
     } else {
         for (uint64_t i = 0; i < count; i++) {
-            double x = stored_value(nim->data, nim->datatype, i);
-            if (is64 && !scaled && !exact_int64(nim->data, nim->datatype, i)) {
+            double x = stored_value(data, nim->datatype, i);
+            if (is64 && !scaled && !exact_int64(data, nim->datatype, i)) {
                 vv_volume_free(v);
                 return vv_error_set(VV_ERR_UNSUPPORTED,
                                     "64-bit integer voxel %llu (%.17g) cannot be held exactly in "
@@ -381,17 +392,23 @@ vv_nifti_prescan(const char *path) {
     if (count > UINT64_MAX / (uint64_t)(bitpix / 8))
         return vv_error_set(VV_ERR_LIMIT, "the data size overflows");
     uint64_t need = count * (uint64_t)(bitpix / 8);
-    if (need > VV_VOLUME_MAX_BYTES)
-        return vv_error_set(VV_ERR_LIMIT, "%llu bytes of voxels (limit %llu)",
-                            (unsigned long long)need, (unsigned long long)VV_VOLUME_MAX_BYTES);
-    vv_status sb = vv_memory_budget_check(need, "NIfTI voxel data");
-    if (sb != VV_OK)
-        return sb;
-
     /* where the image data are: this file (magic "n+1"/"n+2"), else the
      * .img beside a .hdr (plain or gzip-compressed) */
     const unsigned char *magic = v2 ? h + 4 : h + 344;
     int single = magic[0] == 'n' && magic[1] == '+' && (magic[2] == '1' || magic[2] == '2');
+    /* one file: only the volume of one time step and channel is read;
+     * nifti_clib loads the whole image of a .hdr/.img pair */
+    uint64_t held = need;
+    if (single)
+        for (int i = 4; i <= dim[0]; i++)
+            held /= (uint64_t)dim[i];
+    if (held > VV_VOLUME_MAX_BYTES)
+        return vv_error_set(VV_ERR_LIMIT, "%llu bytes of voxels (limit %llu)",
+                            (unsigned long long)held, (unsigned long long)VV_VOLUME_MAX_BYTES);
+    vv_status sb = vv_memory_budget_check(held, "NIfTI voxel data");
+    if (sb != VV_OK)
+        return sb;
+
     char img[4096];
     const char *data = NULL;
     uint64_t start = 0;
@@ -434,7 +451,7 @@ vv_nifti_prescan(const char *path) {
 }
 
 static vv_status
-read_locked(vv_volume **out, const char *path) {
+read_locked(vv_volume **out, const char *path, int channel, int time, vv_load_info *info) {
     vv_status s0 = vv_nifti_prescan(path);
     if (s0 != VV_OK)
         return s0;
@@ -444,9 +461,19 @@ read_locked(vv_volume **out, const char *path) {
         return vv_error_set(VV_ERR_FORMAT,
                             "not a readable NIfTI-1/NIfTI-2 or Analyze header (names must end in "
                             ".nii, .nii.gz, .hdr or .img)");
-    int dims[3];
+    int dims[3], nt = 1, nc = 1;
     vv_voxel_type stored = VV_U8;
-    vv_status s = header_dims(nim, dims, &stored);
+    vv_status s = header_dims(nim, dims, &stored, &nt, &nc);
+    int ch = channel < 0 ? 0 : channel, tp = time < 0 ? 0 : time;
+    if (s == VV_OK && ch >= nc)
+        s = vv_error_set(VV_ERR_INVALID, "channel %d asked, the file has %d channel%s (dim[5])", ch,
+                         nc, nc == 1 ? "" : "s");
+    if (s == VV_OK && tp >= nt)
+        s = vv_error_set(VV_ERR_INVALID, "time step %d asked, the file has %d time step%s (dim[4])",
+                         tp, nt, nt == 1 ? "" : "s");
+    /* the volume (tp, ch): NIfTI's order is x fastest, then y, z, t, channel */
+    int64_t vol_bytes = s == VV_OK ? (int64_t)dims[0] * dims[1] * dims[2] * nim->nbyper : 0;
+    int64_t vol_index = (int64_t)ch * nt + tp;
     int one_file =
         nim->nifti_type == NIFTI_FTYPE_NIFTI1_1 || nim->nifti_type == NIFTI_FTYPE_NIFTI2_1;
     if (s == VV_OK && one_file) {
@@ -459,14 +486,15 @@ read_locked(vv_volume **out, const char *path) {
             a.st_dev != b.st_dev || a.st_ino != b.st_ino)
             s = vv_error_set(VV_ERR_FORMAT, "nifti_clib read the header of %s, not of this file",
                              nim->fname ? vv_path_basename(nim->fname) : "another file");
-        int64_t bytes = s == VV_OK ? nifti_get_volsize(nim) : 0;
+        int64_t bytes = s == VV_OK ? vol_bytes : 0;
         znzFile fp = NULL;
         if (s == VV_OK && !(nim->data = malloc(bytes > 0 ? (size_t)bytes : 1)))
             s = vv_error_set(VV_ERR_NOMEM, "out of memory for %lld bytes", (long long)bytes);
         if (s == VV_OK && znz_isnull(fp = znzopen(path, "rb", nifti_is_gzfile(path))))
             s = vv_error_set(VV_ERR_IO, "cannot open: %s", strerror(errno));
-        if (s == VV_OK && (znzseek(fp, (znz_off_t)nim->iname_offset, SEEK_SET) < 0 ||
-                           nifti_read_buffer(fp, nim->data, bytes, nim) != bytes))
+        if (s == VV_OK &&
+            (znzseek(fp, (znz_off_t)(nim->iname_offset + vol_index * vol_bytes), SEEK_SET) < 0 ||
+             nifti_read_buffer(fp, nim->data, bytes, nim) != bytes))
             s = vv_error_set(VV_ERR_FORMAT,
                              "cannot read the voxel data (file truncated or corrupt)");
         if (!znz_isnull(fp))
@@ -485,13 +513,24 @@ read_locked(vv_volume **out, const char *path) {
     if (s == VV_OK && !nim->data)
         s = vv_error_set(VV_ERR_FORMAT, "no voxel data");
     if (s == VV_OK)
-        s = convert_data(out, nim, dims, stored);
+        s = convert_data(out, nim,
+                         one_file ? nim->data : (const char *)nim->data + vol_index * vol_bytes,
+                         dims, stored);
+    if (s == VV_OK && info) {
+        info->n_channels = nc;
+        info->n_times = nt;
+        double step = nim->dt > 0 && isfinite(nim->dt) ? nim->dt : 0;
+        info->time_step = nim->time_units == NIFTI_UNITS_MSEC   ? step * 1e-3
+                          : nim->time_units == NIFTI_UNITS_USEC ? step * 1e-6
+                          : nim->time_units == NIFTI_UNITS_SEC  ? step
+                                                                : 0;
+    }
     nifti_image_free(nim);
     return s;
 }
 
-vv_status
-vv_nifti_read(vv_volume **out, const char *path) {
+static vv_status
+nifti_read_at(vv_volume **out, const char *path, int channel, int time, vv_load_info *info) {
     if (!out || !path)
         return vv_error_set(VV_ERR_INVALID, "nifti: NULL argument");
     *out = NULL;
@@ -508,12 +547,17 @@ vv_nifti_read(vv_volume **out, const char *path) {
         s = vv_error_set(VV_ERR_FORMAT, "empty file");
     } else {
         pthread_mutex_lock(&nifti_lock);
-        s = read_locked(out, path);
+        s = read_locked(out, path, channel, time, info);
         pthread_mutex_unlock(&nifti_lock);
     }
     if (s != VV_OK)
         return vv_error_prefix(s, "nifti: %s", vv_path_basename(path));
     return VV_OK;
+}
+
+vv_status
+vv_nifti_read(vv_volume **out, const char *path) {
+    return nifti_read_at(out, path, -1, -1, NULL);
 }
 
 /* ---- writing ------------------------------------------------------------------ */
@@ -782,8 +826,7 @@ nifti_looks_like(const vv_format_probe *p, int deep) {
 
 static vv_status
 nifti_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
-    (void)opt;
-    return vv_nifti_read(out, path);
+    return nifti_read_at(out, path, opt->channel, opt->time, opt->info);
 }
 
 static const char *const nifti_extensions[] = {"nii", "nii.gz", "hdr", "img", NULL};

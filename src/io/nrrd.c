@@ -134,40 +134,79 @@ vv_type_to_nrrd(vv_voxel_type t) {
     return nrrdTypeUnknown;
 }
 
+/* 1: an axis of this kind holds the components of a sample (a colour, a
+ * vector, a list): the channels of a volume. Time has its own axis; domain,
+ * space, stub, scalar and unknown axes are spatial. */
+static int
+kind_is_channel(int kind) {
+    return kind != nrrdKindUnknown && kind != nrrdKindDomain && kind != nrrdKindSpace &&
+           kind != nrrdKindTime && kind != nrrdKindStub && kind != nrrdKindScalar &&
+           kind > nrrdKindUnknown && kind < nrrdKindLast;
+}
+
 /*
- * The three spatial axes of the nrrd: dimension 1..3 (missing axes have size
- * 1), or 4 when the first (or last) axis has size 1, as in a one-component
- * vector volume.
+ * The axes of the nrrd: the three spatial ones in @p ax (dimension 1..3;
+ * missing axes have size 1), and the axis of kind time and the axis of a
+ * channel kind (RGB-color, vector, list, ...) in @p t_axis and @p c_axis
+ * (-1: none). Of four spatial-looking axes a first (or last) one of size 1
+ * is dropped, as in a one-component vector volume.
  */
 static vv_status
-pick_axes(const Nrrd *n, unsigned int ax[3], int *nax) {
-    unsigned int first = 0;
-    if (n->dim < 1)
+pick_axes(const Nrrd *n, unsigned int ax[3], int *nax, int *c_axis, int *t_axis) {
+    *c_axis = *t_axis = -1;
+    if (n->dim < 1 || n->dim > NRRD_DIM_MAX)
         return vv_error_set(VV_ERR_FORMAT, "dimension %u", n->dim);
-    if (n->dim == 4) {
-        if (n->axis[0].size == 1)
+    unsigned int rest[NRRD_DIM_MAX];
+    unsigned int nrest = 0;
+    for (unsigned int a = 0; a < n->dim; a++) {
+        int k = n->axis[a].kind;
+        int *slot = k == nrrdKindTime ? t_axis : kind_is_channel(k) ? c_axis : NULL;
+        if (slot && *slot >= 0)
+            return vv_error_set(VV_ERR_UNSUPPORTED, "axes %d and %u are both %s axes", *slot, a,
+                                slot == t_axis ? "time" : "channel (non-spatial kind)");
+        if (slot)
+            *slot = (int)a;
+        else
+            rest[nrest++] = a;
+    }
+    unsigned int first = 0;
+    if (nrest == 4) {
+        if (n->axis[rest[0]].size == 1)
             first = 1;
-        else if (n->axis[3].size != 1)
+        else if (n->axis[rest[3]].size != 1)
             return vv_error_set(VV_ERR_UNSUPPORTED,
                                 "4-D data with sizes %zu %zu %zu %zu (only a first or last axis "
-                                "of size 1 is accepted)",
+                                "of size 1, or an axis of kind time or of a channel kind such as "
+                                "RGB-color or vector, is accepted)",
                                 n->axis[0].size, n->axis[1].size, n->axis[2].size, n->axis[3].size);
-    } else if (n->dim > 4) {
-        return vv_error_set(VV_ERR_UNSUPPORTED, "%u-D data (3-D volumes only)", n->dim);
+    } else if (nrest > 4) {
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "%u-D data with %u spatial axes (3 spatial axes, a time and a "
+                            "channel axis at most)",
+                            n->dim, nrest);
     }
     *nax = 0;
-    for (unsigned int a = first; a < n->dim && *nax < 3; a++)
-        ax[(*nax)++] = a;
+    for (unsigned int i = first; i < nrest && *nax < 3; i++)
+        ax[(*nax)++] = rest[i];
     return VV_OK;
 }
 
+/* The spatial dims and voxel type; the channel and time axes' sizes in
+ * @p nc and @p nt (1 when absent). */
 static vv_status
-header_dims(const Nrrd *n, int dims[3], vv_voxel_type *type) {
+header_dims(const Nrrd *n, int dims[3], vv_voxel_type *type, int *nc, int *nt) {
     unsigned int ax[3];
-    int nax = 0;
-    vv_status s = pick_axes(n, ax, &nax);
+    int nax = 0, c_axis, t_axis;
+    vv_status s = pick_axes(n, ax, &nax, &c_axis, &t_axis);
     if (s != VV_OK)
         return s;
+    size_t csz = c_axis >= 0 ? n->axis[c_axis].size : 1,
+           tsz = t_axis >= 0 ? n->axis[t_axis].size : 1;
+    if (csz > VV_VOLUME_MAX_DIM || tsz > VV_VOLUME_MAX_DIM)
+        return vv_error_set(VV_ERR_LIMIT, "%zu %s (limit %d)", csz > VV_VOLUME_MAX_DIM ? csz : tsz,
+                            csz > VV_VOLUME_MAX_DIM ? "channels" : "time steps", VV_VOLUME_MAX_DIM);
+    *nc = (int)csz;
+    *nt = (int)tsz;
     if (!nrrd_type_map(n->type, type))
         return vv_error_set(VV_ERR_UNSUPPORTED, "voxel type \"%s\" is not supported",
                             airEnumStr(nrrdType, n->type));
@@ -192,8 +231,8 @@ cross(const double a[3], const double b[3], double c[3]) {
 static vv_status
 set_geometry(vv_volume *v, const Nrrd *n) {
     unsigned int ax[3];
-    int nax = 0;
-    vv_status s = pick_axes(n, ax, &nax);
+    int nax = 0, c_axis, t_axis;
+    vv_status s = pick_axes(n, ax, &nax, &c_axis, &t_axis);
     if (s != VV_OK)
         return s;
     double col[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
@@ -680,12 +719,29 @@ check_promise(const char *path, const NrrdIoState *nio, const header_scan *hs, u
 }
 
 /* The body of vv_nrrd_read, under teem_lock. */
+/* Replaces *@p n by its slice at @p pos along @p axis (Teem's nrrdSlice). */
 static vv_status
-read_locked(vv_volume **out, const char *path, const header_scan *hs) {
+slice_axis(Nrrd **n, int axis, int pos) {
+    Nrrd *out = nrrdNew();
+    if (!out)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    if (nrrdSlice(out, *n, (unsigned int)axis, (size_t)pos)) {
+        nrrdNuke(out);
+        return teem_error(VV_ERR_FORMAT, "cannot take the slice");
+    }
+    nrrdNuke(*n);
+    *n = out;
+    return VV_OK;
+}
+
+static vv_status
+read_locked(vv_volume **out, const char *path, const header_scan *hs, int channel, int time,
+            vv_load_info *info) {
     vv_status s = VV_OK;
     vv_volume *v = NULL;
-    int dims[3];
+    int dims[3], nc = 1, nt = 1;
     vv_voxel_type type;
+    int ch = channel < 0 ? 0 : channel, tp = time < 0 ? 0 : time;
 
     /* pass 1: header only; detached data files are checked for existence */
     Nrrd *n = nrrdNew();
@@ -699,10 +755,26 @@ read_locked(vv_volume **out, const char *path, const header_scan *hs) {
         s = teem_error(VV_ERR_FORMAT, "cannot read header");
         goto done;
     }
-    s = header_dims(n, dims, &type);
+    s = header_dims(n, dims, &type, &nc, &nt);
     if (s != VV_OK)
         goto done;
-    s = check_promise(path, nio, hs, (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2],
+    if (ch >= nc || tp >= nt) {
+        s = ch >= nc
+                ? vv_error_set(VV_ERR_INVALID, "channel %d asked, the file has %d channel%s", ch,
+                               nc, nc == 1 ? "" : "s")
+                : vv_error_set(VV_ERR_INVALID, "time step %d asked, the file has %d time step%s",
+                               tp, nt, nt == 1 ? "" : "s");
+        goto done;
+    }
+    /* the whole file is read, then sliced: its size is budgeted */
+    if (nc * nt > 1 &&
+        (s = vv_memory_budget_check((uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2] *
+                                        (uint64_t)nc * (uint64_t)nt * nrrdTypeSize[n->type],
+                                    "NRRD channels and time steps")) != VV_OK)
+        goto done;
+    s = check_promise(path, nio, hs,
+                      (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2] * (uint64_t)nc *
+                          (uint64_t)nt,
                       nrrdTypeSize[n->type]);
     if (s != VV_OK)
         goto done;
@@ -721,18 +793,33 @@ read_locked(vv_volume **out, const char *path, const header_scan *hs) {
         goto done;
     }
     /* the file may have changed between the passes: check again */
-    int dims2[3];
+    int dims2[3], nc2, nt2;
     vv_voxel_type type2;
-    s = header_dims(n, dims2, &type2);
+    s = header_dims(n, dims2, &type2, &nc2, &nt2);
     if (s != VV_OK)
         goto done;
-    if (dims2[0] != dims[0] || dims2[1] != dims[1] || dims2[2] != dims[2] || type2 != type) {
+    if (dims2[0] != dims[0] || dims2[1] != dims[1] || dims2[2] != dims[2] || type2 != type ||
+        nc2 != nc || nt2 != nt) {
         s = vv_error_set(VV_ERR_FORMAT, "file changed while being read");
         goto done;
     }
     if (!n->data) {
         s = vv_error_set(VV_ERR_FORMAT, "no data");
         goto done;
+    }
+    /* the time step, then the channel (the higher axis first, so the
+     * other's index holds) */
+    {
+        unsigned int ax[3];
+        int nax, c_axis, t_axis;
+        if ((s = pick_axes(n, ax, &nax, &c_axis, &t_axis)) != VV_OK)
+            goto done;
+        int first = c_axis > t_axis ? c_axis : t_axis, second = c_axis > t_axis ? t_axis : c_axis;
+        int first_pos = first == c_axis ? ch : tp, second_pos = second == c_axis ? ch : tp;
+        if (first >= 0 && (s = slice_axis(&n, first, first_pos)) != VV_OK)
+            goto done;
+        if (second >= 0 && (s = slice_axis(&n, second, second_pos)) != VV_OK)
+            goto done;
     }
     s = vv_volume_new(&v, dims, type);
     if (s != VV_OK)
@@ -745,6 +832,10 @@ read_locked(vv_volume **out, const char *path, const header_scan *hs) {
         goto done;
     v->modification = VV_MOD_ORIGINAL;
     vv_volume_update_range(v);
+    if (info) {
+        info->n_channels = nc;
+        info->n_times = nt;
+    }
     *out = v;
     v = NULL;
 done:
@@ -765,8 +856,8 @@ vv_nrrd_prescan(const char *path) {
     return s;
 }
 
-vv_status
-vv_nrrd_read(vv_volume **out, const char *path) {
+static vv_status
+nrrd_read_at(vv_volume **out, const char *path, int channel, int time, vv_load_info *info) {
     if (!out || !path) {
         return vv_error_set(VV_ERR_INVALID, "nrrd: NULL argument");
     }
@@ -775,13 +866,18 @@ vv_nrrd_read(vv_volume **out, const char *path) {
     vv_status s = scan_header(path, &hs);
     if (s == VV_OK) {
         pthread_mutex_lock(&teem_lock);
-        s = read_locked(out, path, &hs);
+        s = read_locked(out, path, &hs, channel, time, info);
         pthread_mutex_unlock(&teem_lock);
         header_scan_free(&hs);
     }
     if (s != VV_OK)
         return vv_error_prefix(s, "nrrd: %s", vv_path_basename(path));
     return VV_OK;
+}
+
+vv_status
+vv_nrrd_read(vv_volume **out, const char *path) {
+    return nrrd_read_at(out, path, -1, -1, NULL);
 }
 
 /* The body of vv_nrrd_write, under teem_lock, writing into af->fp. */
@@ -939,10 +1035,18 @@ raw_layout_locked(const char *path, vv_volume **header, char **data_path, uint64
         s = teem_error(VV_ERR_FORMAT, "cannot read header");
         goto done;
     }
-    int dims[3];
+    int dims[3], nc, nt;
     vv_voxel_type type;
-    if ((s = header_dims(n, dims, &type)) != VV_OK)
+    if ((s = header_dims(n, dims, &type, &nc, &nt)) != VV_OK)
         goto done;
+    if (nc * nt > 1) {
+        s = vv_error_set(VV_ERR_UNSUPPORTED,
+                         "%d channels and %d time steps: out-of-core reading takes one 3-D "
+                         "volume; convert one channel and time step first (volvis convert IN "
+                         "OUT.nrrd --channel C --time T)",
+                         nc, nt);
+        goto done;
+    }
     if (n->type == nrrdTypeLLong || n->type == nrrdTypeULLong) {
         s = vv_error_set(VV_ERR_FORMAT, "64-bit integers need conversion: convert it to .vvb "
                                         "first (volvis convert IN OUT.vvb)");
@@ -1058,8 +1162,7 @@ nrrd_looks_like(const vv_format_probe *p, int deep) {
 
 static vv_status
 nrrd_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
-    (void)opt;
-    return vv_nrrd_read(out, path);
+    return nrrd_read_at(out, path, opt->channel, opt->time, opt->info);
 }
 
 /* gzip-compressed unless asked otherwise; NRRD holds every volume. */

@@ -46,7 +46,7 @@
 
 extern char **environ;
 
-#define SBX_VERSION 2
+#define SBX_VERSION 3
 #define SBX_FD 3
 #define SBX_MAX_PATH 4096
 #define SBX_MAX_SERIES 200000 /* as many as the files a listing reads */
@@ -75,7 +75,7 @@ typedef struct sbx_request {
     uint32_t magic, version;
     int32_t format, has_raw;
     vv_raw_params raw;
-    int32_t series, channel;
+    int32_t series, channel, time;
     uint64_t budget;
     int32_t threads;
     int32_t inject;
@@ -821,6 +821,8 @@ vv_sandbox_reader_main(int argc, char **argv) {
     }
     announce(&rq, f);
     vv_volume *v = NULL;
+    vv_load_info info;
+    memset(&info, 0, sizeof info);
     vv_status s = VV_OK;
     if (rq.inject == INJECT_OPEN) {
         s = VV_ERR_IO;
@@ -832,6 +834,8 @@ vv_sandbox_reader_main(int argc, char **argv) {
         o.raw = rq.raw;
         o.series = rq.series;
         o.channel = rq.channel;
+        o.time = rq.time;
+        o.info = &info;
         s = vv_volume_load(&v, rq.path, &o);
     }
     r.format = (int32_t)f;
@@ -844,6 +848,12 @@ vv_sandbox_reader_main(int argc, char **argv) {
         memcpy(r.direction, v->direction, sizeof r.direction);
         r.unit = v->unit;
         r.data_origin = v->data_origin;
+        r.n_channels = info.n_channels;
+        r.n_times = info.n_times;
+        r.has_color = info.has_color;
+        memcpy(r.color, info.color, sizeof r.color);
+        r.time_step = info.time_step;
+        memcpy(r.channel_name, info.channel_name, sizeof r.channel_name);
         r.modification = v->modification;
         r.space = v->space;
         r.bytes = vv_volume_voxel_count(v) * vv_voxel_type_size(v->type);
@@ -984,8 +994,8 @@ finite_all(const double *x, int n) {
 
 /* The volume of a result reply and its memfd. Owns @p fd. */
 static vv_status
-volume_from_reply(vv_volume **out, const sbx_reply *r, int fd, const char *fmt_name,
-                  const char *file) {
+volume_from_reply(vv_volume **out, vv_load_info *info, const sbx_reply *r, int fd,
+                  const char *fmt_name, const char *file) {
     uint64_t bytes = 0;
     vv_status s = VV_OK;
     struct stat st;
@@ -1010,6 +1020,15 @@ volume_from_reply(vv_volume **out, const sbx_reply *r, int fd, const char *fmt_n
              !(r->spacing[2] > 0))
         s = vv_error_set(VV_ERR_FORMAT, "%s: %s: the reader's result has a broken geometry",
                          fmt_name, file);
+    else if (r->n_channels < 0 || r->n_channels > VV_VOLUME_MAX_DIM || r->n_times < 0 ||
+             r->n_times > VV_VOLUME_MAX_DIM ||
+             !memchr(r->channel_name, 0, sizeof r->channel_name) ||
+             !(r->time_step >= 0 && r->time_step < 1e12) ||
+             !(r->color[0] >= 0 && r->color[0] <= 1 && r->color[1] >= 0 && r->color[1] <= 1 &&
+               r->color[2] >= 0 && r->color[2] <= 1))
+        s = vv_error_set(VV_ERR_FORMAT,
+                         "%s: %s: the reader's result has broken channel or time axes", fmt_name,
+                         file);
     if (s != VV_OK) {
         if (fd >= 0)
             close(fd);
@@ -1046,6 +1065,13 @@ volume_from_reply(vv_volume **out, const sbx_reply *r, int fd, const char *fmt_n
                           : VV_MOD_OTHER;
     v->space = r->space == VV_SPACE_RAS || r->space == VV_SPACE_LPS ? (vv_space)r->space
                                                                     : VV_SPACE_UNKNOWN;
+    memset(info, 0, sizeof *info);
+    info->n_channels = r->n_channels;
+    info->n_times = r->n_times;
+    info->has_color = r->has_color != 0;
+    memcpy(info->color, r->color, sizeof info->color);
+    info->time_step = r->time_step;
+    memcpy(info->channel_name, r->channel_name, sizeof info->channel_name);
     *out = v;
     return VV_OK;
 }
@@ -1532,7 +1558,7 @@ vv_sandbox_take_message(int op, const void *msg, size_t len, int fd, vv_format *
     } else if (op == SBX_OP_GRID) {
         *status = grid_from_reply(&a->grid, r, fd, fmt_name, file);
     } else {
-        *status = volume_from_reply(&a->volume, r, fd, fmt_name, file);
+        *status = volume_from_reply(&a->volume, &a->info, r, fd, fmt_name, file);
     }
     free(r);
     return 1;
@@ -1575,6 +1601,7 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt, co
     rq->raw = opt->raw;
     rq->series = opt->series;
     rq->channel = opt->channel;
+    rq->time = opt->time;
     rq->budget = vv_memory_budget_get();
     uint64_t rq_budget = rq->budget;
     rq->threads = vv_threads_get();
@@ -1693,6 +1720,8 @@ vv_sandbox_volume_load(vv_volume **out, const char *path, vv_format f, const vv_
     vv_sandbox_answer a;
     vv_status s = run_reader(SBX_OP_VOLUME, path, f, opt, NULL, NULL, &a);
     *out = a.volume;
+    if (s == VV_OK && opt->info)
+        *opt->info = a.info;
     return s;
 }
 

@@ -51,6 +51,11 @@ typedef struct sbx_reply {
     int32_t type;
     double spacing[3], origin[3], direction[9];
     int32_t unit, data_origin, modification, space;
+    /* a volume's vv_load_info (checked: counts in range, the name ended) */
+    int32_t n_channels, n_times, has_color;
+    float color[3];
+    double time_step;
+    char channel_name[VV_CHANNEL_NAME_MAX];
     uint64_t bytes;
     uint64_t n_vertices, n_triangles; /* a mesh: positions then triangles */
     uint32_t err_len;
@@ -148,6 +153,7 @@ enum { SBX_OP_VOLUME = 0, SBX_OP_DICOM_LIST = 1, SBX_OP_MESH = 2, SBX_OP_GRID = 
 /** What the parent made of a reader's result: one of the four, by op. */
 typedef struct vv_sandbox_answer {
     vv_volume *volume;       /**< SBX_OP_VOLUME: owned by the caller */
+    vv_load_info info;       /**< SBX_OP_VOLUME: the file's axes (checked) */
     vv_dicom_series *series; /**< SBX_OP_DICOM_LIST: free() it */
     int n_series;            /**< entries of series */
     vv_mesh *mesh;           /**< SBX_OP_MESH: owned by the caller */

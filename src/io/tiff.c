@@ -33,6 +33,7 @@
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -211,6 +212,8 @@ typedef struct stack_meta {
     int has_origin[3];
     double ij_origin[3]; /* ImageJ's origin, in voxels (world = -value * spacing) */
     int has_ij_origin[3];
+    double time_step;   /* seconds between time points (OME TimeIncrement), 0: unknown */
+    const char *pixels; /* OME: the Pixels element in the description while it is held */
 } stack_meta;
 
 /* Value of attribute @p name inside the tag starting at @p tag (up to '>'). */
@@ -269,6 +272,15 @@ parse_ome(const char *desc, stack_meta *m) {
             *dst[i] = atoi(v);
     if (xml_attr(px, "DimensionOrder", v, sizeof v) && strlen(v) == 5)
         memcpy(m->order, v, 6);
+    m->pixels = px;
+    if (xml_attr(px, "TimeIncrement", v, sizeof v)) {
+        double d = strtod(v, NULL), scale = 1;
+        char u[16];
+        if (xml_attr(px, "TimeIncrementUnit", u, sizeof u))
+            scale = !strcmp(u, "ms") ? 1e-3 : !strcmp(u, "min") ? 60 : !strcmp(u, "h") ? 3600 : 1;
+        if (d > 0 && isfinite(d * scale))
+            m->time_step = d * scale;
+    }
     static const char *const phys[3] = {"PhysicalSizeX", "PhysicalSizeY", "PhysicalSizeZ"};
     static const char *const units[3] = {"PhysicalSizeXUnit", "PhysicalSizeYUnit",
                                          "PhysicalSizeZUnit"};
@@ -296,6 +308,40 @@ parse_ome(const char *desc, stack_meta *m) {
                 m->origin[i] = d;
                 m->has_origin[i] = 1;
             }
+        }
+    }
+}
+
+/*
+ * The name and colour of OME channel @p c: the c-th Channel element inside
+ * the Pixels element (Name; Color, a signed 32-bit RGBA integer).
+ */
+static void
+ome_channel(const stack_meta *m, int c, vv_load_info *info) {
+    const char *end = strstr(m->pixels, "</Pixels>");
+    if (!end)
+        end = strstr(m->pixels, ":Pixels>");
+    const char *p = m->pixels;
+    for (int i = 0; p && i <= c; i++) {
+        const char *a = strstr(p + 1, "<Channel "), *b = strstr(p + 1, ":Channel ");
+        p = a && (!b || a < b) ? a : b;
+        if (p && end && p > end)
+            p = NULL;
+    }
+    if (!p)
+        return;
+    char v[VV_CHANNEL_NAME_MAX];
+    if (xml_attr(p, "Name", v, sizeof v))
+        memcpy(info->channel_name, v, sizeof v);
+    if (xml_attr(p, "Color", v, sizeof v)) {
+        char *e = NULL;
+        long long x = strtoll(v, &e, 10);
+        if (e != v && *e == '\0' && x >= INT32_MIN && x <= UINT32_MAX) {
+            uint32_t rgba = (uint32_t)x;
+            for (int k = 0; k < 3; k++)
+                info->color[k] = (float)((rgba >> (24 - 8 * k)) & 0xffu) / 255.0f;
+            /* black would hide the channel: as if no colour were given */
+            info->has_color = (rgba >> 8) != 0;
         }
     }
 }
@@ -520,14 +566,14 @@ read_page(TIFF *t, const page_fmt *f, int sample, unsigned char *dst, tiff_msg *
     return VV_OK;
 }
 
-/* Page index of (z, c, t=0) for the dimension order. */
+/* Page index of (z, c, t) for the dimension order. */
 static long
-page_of(const stack_meta *m, int z, int c) {
+page_of(const stack_meta *m, int z, int c, int tp) {
     long sz[3] = {m->size_z, m->size_c, m->size_t_};
     long idx = 0, mul = 1;
     for (int i = 2; i < 5; i++) {
         char d = m->order[i];
-        long v = d == 'Z' ? z : d == 'C' ? c : 0;
+        long v = d == 'Z' ? z : d == 'C' ? c : tp;
         long n = d == 'Z' ? sz[0] : d == 'C' ? sz[1] : sz[2];
         idx += v * mul;
         mul *= n;
@@ -553,7 +599,8 @@ typedef struct page_ref {
 } page_ref;
 
 static vv_status
-read_stack(vv_volume **out, char **files, int n_files, int channel, const char **bad_file) {
+read_stack(vv_volume **out, char **files, int n_files, int channel, int time, vv_load_info *info,
+           const char **bad_file) {
     tiff_msg msg;
     *bad_file = files[0];
     TIFF *t = tiff_open(files[0], &msg);
@@ -574,6 +621,12 @@ read_stack(vv_volume **out, char **files, int n_files, int channel, const char *
         if (!m.is_ome)
             parse_imagej(t, desc, &m);
     }
+    /* the channel's name and colour while the description is held */
+    vv_load_info meta;
+    memset(&meta, 0, sizeof meta);
+    if (m.is_ome && m.pixels)
+        ome_channel(&m, channel < 0 ? 0 : channel, &meta);
+    m.pixels = NULL;
     long pages0 = count_pages(t, VV_VOLUME_MAX_DIM * 64L);
     TIFFClose(t);
     if (pages0 > VV_VOLUME_MAX_DIM * 64L)
@@ -597,10 +650,13 @@ read_stack(vv_volume **out, char **files, int n_files, int channel, const char *
         m.size_z = nz;
         memcpy(m.order, "XYZCT", 6);
     }
-    int ch = channel < 0 ? 0 : channel;
+    int ch = channel < 0 ? 0 : channel, tp = time < 0 ? 0 : time;
     if (ch >= nc)
         return vv_error_set(VV_ERR_INVALID, "channel %d asked, the stack has %d channel%s", ch, nc,
                             nc == 1 ? "" : "s");
+    if (tp >= m.size_t_)
+        return vv_error_set(VV_ERR_INVALID, "time step %d asked, the stack has %d time step%s", tp,
+                            m.size_t_, m.size_t_ == 1 ? "" : "s");
     int dims[3] = {(int)f0.w, (int)f0.h, nz};
     s = vv_volume_check_size(dims, f0.type, NULL);
     if (s != VV_OK)
@@ -612,7 +668,7 @@ read_stack(vv_volume **out, char **files, int n_files, int channel, const char *
     for (int z = 0; z < nz; z++) {
         if (n_files == 1) {
             refs[z].file = 0;
-            refs[z].page = page_of(&m, z, m.size_c > 1 ? ch : 0);
+            refs[z].page = page_of(&m, z, m.size_c > 1 ? ch : 0, tp);
         } else {
             refs[z].file = z;
             refs[z].page = 0;
@@ -678,12 +734,18 @@ read_stack(vv_volume **out, char **files, int n_files, int channel, const char *
     v->unit = (m.is_ome || m.is_imagej) ? m.unit : VV_UNIT_UNKNOWN;
     v->modification = VV_MOD_ORIGINAL;
     vv_volume_update_range(v);
+    if (info) {
+        *info = meta;
+        info->n_channels = nc;
+        info->n_times = m.size_t_;
+        info->time_step = m.time_step;
+    }
     *out = v;
     return VV_OK;
 }
 
-vv_status
-vv_tiff_read(vv_volume **out, const char *path, int channel) {
+static vv_status
+tiff_read_at(vv_volume **out, const char *path, int channel, int time, vv_load_info *info) {
     if (!out || !path)
         return vv_error_set(VV_ERR_INVALID, "tiff: NULL argument");
     *out = NULL;
@@ -709,11 +771,16 @@ vv_tiff_read(vv_volume **out, const char *path, int channel) {
         n = 1;
     }
     const char *bad = path;
-    s = read_stack(out, files, n, channel, &bad);
+    s = read_stack(out, files, n, channel, time, info, &bad);
     if (s != VV_OK)
         s = vv_error_prefix(s, "tiff: %s", n > 1 || S_ISDIR(st.st_mode) ? bad : path);
     free_list(files, n);
     return s;
+}
+
+vv_status
+vv_tiff_read(vv_volume **out, const char *path, int channel) {
+    return tiff_read_at(out, path, channel, -1, NULL);
 }
 
 /* ---- writing ---------------------------------------------------------------- */
@@ -1129,7 +1196,7 @@ tiff_looks_like(const vv_format_probe *p, int deep) {
 
 static vv_status
 tiff_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
-    return vv_tiff_read(out, path, opt->channel);
+    return tiff_read_at(out, path, opt->channel, opt->time, opt->info);
 }
 
 /* TIFF holds no direction matrix. */

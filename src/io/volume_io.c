@@ -24,6 +24,8 @@ vv_load_options_init(vv_load_options *o) {
     vv_raw_params_init(&o->raw);
     o->series = 0;
     o->channel = -1;
+    o->time = -1;
+    o->info = NULL;
 }
 
 void
@@ -95,6 +97,44 @@ check_input(const char *path, vv_format f, int *is_dir) {
     return VV_OK;
 }
 
+/*
+ * After a read: a reader that reported no time axis read a file of one time
+ * step, and a time step past the file's is an error here for the readers
+ * that do not select them (they read the only one). A reader that reported
+ * no channels has one channel, or selects its samples itself (DICOM).
+ * Copies the axes to @p want. On error frees *@p out.
+ */
+static vv_status
+finish_axes(vv_volume **out, const char *path, const vv_load_options *opt, vv_load_info *want) {
+    vv_load_info *info = opt->info;
+    int channels_known = info->n_channels > 0;
+    if (info->n_channels < 1)
+        info->n_channels = 1;
+    if (info->n_times < 1)
+        info->n_times = 1;
+    info->channel_name[VV_CHANNEL_NAME_MAX - 1] = '\0';
+    const char *what = NULL;
+    int asked = 0, have = 0;
+    if (channels_known && opt->channel >= info->n_channels) {
+        what = "channel";
+        asked = opt->channel;
+        have = info->n_channels;
+    } else if (opt->time >= info->n_times) {
+        what = "time step";
+        asked = opt->time;
+        have = info->n_times;
+    }
+    if (what) {
+        vv_volume_free(*out);
+        *out = NULL;
+        return vv_error_set(VV_ERR_INVALID, "load: %s: %s %d asked, the file has %d %s%s (from 0)",
+                            vv_path_basename(path), what, asked, have, what, have == 1 ? "" : "s");
+    }
+    if (want)
+        *want = *info;
+    return VV_OK;
+}
+
 vv_status
 vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
     if (!out || !path)
@@ -104,6 +144,15 @@ vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
     vv_load_options_init(&defaults);
     if (!opt)
         opt = &defaults;
+    /* the readers always report the file's axes: the checks below need them */
+    vv_load_info info_local;
+    vv_load_info *want = opt->info;
+    vv_load_options with_info = *opt;
+    memset(&info_local, 0, sizeof info_local);
+    with_info.info = &info_local;
+    opt = &with_info;
+    if (want)
+        memset(want, 0, sizeof *want);
     vv_format f = opt->format;
     if (f != VV_FORMAT_AUTO && !format_of(f))
         return vv_error_set(VV_ERR_INVALID, "load: %s: no format of id %d", vv_path_basename(path),
@@ -121,12 +170,15 @@ vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
         /* signatures here; the deep tests, which may call a third-party
          * parser, in the sandbox with the read */
         vv_format g = vv_format_detect_signature(path);
-        if (!format_of(g) || vv_sandbox_wanted(format_of(g)))
-            return vv_sandbox_volume_load(out, path, format_of(g) ? g : VV_FORMAT_AUTO, opt);
+        if (!format_of(g) || vv_sandbox_wanted(format_of(g))) {
+            s = vv_sandbox_volume_load(out, path, format_of(g) ? g : VV_FORMAT_AUTO, opt);
+            return s == VV_OK ? finish_axes(out, path, &with_info, want) : s;
+        }
         f = g;
         r = format_of(f);
     } else if (r && vv_sandbox_wanted(r)) {
-        return vv_sandbox_volume_load(out, path, f, opt);
+        s = vv_sandbox_volume_load(out, path, f, opt);
+        return s == VV_OK ? finish_axes(out, path, &with_info, want) : s;
     }
     if (f == VV_FORMAT_AUTO) {
         f = vv_format_detect(path);
@@ -161,7 +213,7 @@ vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
      * (a second pass over a large volume costs as much as a fast reader) */
     if ((*out)->range[0] == 0 && (*out)->range[1] == 0)
         vv_volume_update_range(*out);
-    return VV_OK;
+    return finish_axes(out, path, &with_info, want);
 }
 
 vv_format

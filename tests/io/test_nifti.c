@@ -391,11 +391,19 @@ test_bad_input(void **state) {
     expect_error(out_path("huge.nii"), VV_ERR_LIMIT);
 
     memcpy(bad, good, n);
-    set_i16(bad, 40, 4); /* a 4-D series of 2 volumes */
+    set_i16(bad, 40, 4); /* a 4-D series of 2 volumes: the first is read */
     set_i16(bad, 48, 2);
     set_i16(bad, 46, 4);
     vt_write_file(out_path("series.nii"), bad, n);
-    expect_error(out_path("series.nii"), VV_ERR_UNSUPPORTED);
+    vv_volume *first = NULL;
+    vt_ok(vv_nifti_read(&first, out_path("series.nii")));
+    assert_int_equal(first->dims[2], 4);
+    vv_volume_free(first);
+    set_i16(bad, 40, 6); /* an axis past time and channels: refused */
+    set_i16(bad, 48, 1);
+    set_i16(bad, 52, 2);
+    vt_write_file(out_path("sixd.nii"), bad, n);
+    expect_error(out_path("sixd.nii"), VV_ERR_UNSUPPORTED);
 
     memcpy(bad, good, n);
     set_i16(bad, 40, 4); /* 4-D with dim[4] = 1 is a volume */

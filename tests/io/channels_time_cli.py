@@ -1,0 +1,193 @@
+#!/usr/bin/python3
+"""A file's channels and time steps on the command line (issue 30).
+
+  channels_time_cli.py VOLVIS OUTDIR
+
+Writes, with independent writers, files of several channels and time steps:
+
+- an OME-TIFF (TCZYX, u16) by tifffile, with channel names, colours and a
+  time increment;
+- an ImageJ hyperstack (TZCYX, u16) by tifffile;
+- a 5-D NIfTI-1 (x, y, z, t, channel; f32, gzip) and a 4-D one by nibabel;
+- a NRRD with an axis of kind RGB-color and one of kind time by Teem's
+  `unu make` (when teem-apps is there: else the test is skipped);
+
+then checks:
+
+- `volvis convert IN OUT.nii --channel C --time T` gives, read with nibabel,
+  the voxels numpy wrote at (T, C), for every channel and step;
+- `volvis info` names the counts, the OME names and colours, each channel's
+  value range and the time increment;
+- `volvis render --channels C` takes the file's colour when no --colors;
+- bad input: a step or channel past the file's, --time on a file without a
+  time axis, a NRRD with two time axes: one line naming the file and the
+  count, a non-zero exit, no output written.
+
+Exit 0 passed, 1 failed, 77 skipped (a module or unu missing).
+"""
+import os
+import shutil
+import subprocess
+import sys
+
+try:
+    import numpy as np
+    import nibabel as nib
+    import tifffile
+    from PIL import Image
+except ImportError as e:  # pragma: no cover
+    print(f"skipped: {e} (python3-numpy, python3-nibabel, python3-tifffile, python3-pil)")
+    sys.exit(77)
+UNU = shutil.which("teem-unu") or shutil.which("unu")
+if not UNU:  # pragma: no cover
+    print("skipped: Teem's unu (teem-unu) is missing (teem-apps)")
+    sys.exit(77)
+
+VOLVIS, OUT = sys.argv[1], sys.argv[2]
+os.makedirs(OUT, exist_ok=True)
+failures = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what)
+    if not cond:
+        failures.append(what)
+
+
+def volvis(*args):
+    return subprocess.run([VOLVIS, *args], capture_output=True, text=True)
+
+
+def read_back(path, c, t, extra=()):
+    """volvis convert --channel c --time t to NIfTI, read with nibabel as (z, y, x)."""
+    nii = os.path.join(OUT, f"back_{os.path.basename(path)}_{c}_{t}.nii")
+    if os.path.exists(nii):
+        os.remove(nii)
+    p = volvis("convert", path, nii, "--channel", str(c), "--time", str(t), "--quiet", *extra)
+    if p.returncode != 0:
+        check(False, f"convert {os.path.basename(path)} --channel {c} --time {t}: "
+              f"{p.stderr.strip()}")
+        return None
+    return np.asarray(nib.load(nii).dataobj).transpose(2, 1, 0)
+
+
+def refused(args, needle, out_file, what):
+    if os.path.exists(out_file):
+        os.remove(out_file)
+    p = volvis(*args)
+    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    check(p.returncode != 0 and len(lines) == 1 and needle in lines[0] and
+          not os.path.exists(out_file), f"{what}: {lines[:2]} (exit {p.returncode})")
+
+
+rng = np.random.default_rng(30)
+T, C, Z, Y, X = 4, 3, 6, 14, 11
+tczyx = rng.integers(0, 4000, size=(T, C, Z, Y, X), dtype=np.uint16)
+
+# OME-TIFF: red, green and blue channels by name (OME colours are RGBA)
+ome = os.path.join(OUT, "cells.ome.tif")
+tifffile.imwrite(ome, tczyx, metadata={
+    "axes": "TCZYX",
+    "Channel": {"Name": ["DAPI", "GFP", "mCherry"],
+                "Color": [-16776961, 16711935, 65535]},
+    "TimeIncrement": 0.5, "TimeIncrementUnit": "s"})
+for t in range(T):
+    for c in range(C):
+        got = read_back(ome, c, t)
+        if got is not None:
+            check(np.array_equal(got, tczyx[t, c]), f"OME-TIFF channel {c} time {t}: voxels")
+
+# ImageJ hyperstack: TZCYX
+ij = os.path.join(OUT, "stack_ij.tif")
+tifffile.imwrite(ij, np.ascontiguousarray(tczyx.transpose(0, 2, 1, 3, 4)), imagej=True,
+                 metadata={"axes": "TZCYX"})
+for t, c in ((0, 0), (3, 2), (2, 1)):
+    got = read_back(ij, c, t)
+    if got is not None:
+        check(np.array_equal(got, tczyx[t, c]), f"ImageJ hyperstack channel {c} time {t}: voxels")
+
+# NIfTI: x, y, z, t, channel
+xyztc = rng.normal(size=(X, Y, Z, T, C)).astype(np.float32)
+img = nib.Nifti1Image(xyztc, np.diag([0.5, 0.6, 0.7, 1.0]))
+img.header.set_xyzt_units("mm", "msec")
+img.header["pixdim"][4] = 250
+five = os.path.join(OUT, "five.nii.gz")
+nib.save(img, five)
+for t, c in ((0, 0), (1, 2), (3, 1), (2, 0)):
+    got = read_back(five, c, t)
+    if got is not None:
+        check(np.array_equal(got, xyztc[:, :, :, t, c].transpose(2, 1, 0)),
+              f"5-D NIfTI channel {c} time {t}: voxels")
+four = os.path.join(OUT, "four.nii")
+nib.save(nib.Nifti1Image(xyztc[..., 1], np.eye(4)), four)
+got = read_back(four, 0, 2)
+if got is not None:
+    check(np.array_equal(got, xyztc[:, :, :, 2, 1].transpose(2, 1, 0)), "4-D NIfTI time 2: voxels")
+
+# NRRD by unu make: axes (RGB-color, x, y, z, time), the colour fastest
+cxyzt = rng.integers(-3000, 3000, size=(T, Z, Y, X, 3), dtype=np.int16)  # numpy: t, z, y, x, c
+raw = os.path.join(OUT, "rgbt.raw")
+cxyzt.tofile(raw)
+nrrd = os.path.join(OUT, "rgbt.nrrd")
+p = subprocess.run([UNU, "make", "-i", raw, "-t", "short", "-s", "3", str(X), str(Y), str(Z),
+                    str(T), "-k", "RGB-color", "space", "space", "space", "time", "-e", "raw",
+                    "-en", "little", "-o", nrrd], capture_output=True, text=True)
+check(p.returncode == 0, f"unu make: {p.stderr.strip()}")
+for t, c in ((0, 0), (3, 1), (1, 2)):
+    got = read_back(nrrd, c, t)
+    if got is not None:
+        check(np.array_equal(got, cxyzt[t, :, :, :, c]), f"NRRD RGB-color channel {c} time {t}: voxels")
+# two time axes: refused in one line
+bad_nrrd = os.path.join(OUT, "twotime.nrrd")
+subprocess.run([UNU, "make", "-i", raw, "-t", "short", "-s", "3", str(X), str(Y), str(Z),
+                str(T), "-k", "time", "space", "space", "space", "time", "-e", "raw", "-en",
+                "little", "-o", bad_nrrd], check=True, capture_output=True)
+refused(["convert", bad_nrrd, os.path.join(OUT, "bad.nii"), "-q"], "both time axes",
+        os.path.join(OUT, "bad.nii"), "NRRD with two time axes")
+
+# volvis info: the counts, names, colours, ranges and the time increment
+p = volvis("info", ome, "--time", "2")
+lines = p.stdout.splitlines()
+check(p.returncode == 0, f"volvis info OME-TIFF: {p.stderr.strip()}")
+check("channels:     3 (this is channel 0)" in lines, "info: 3 channels")
+for c, (name, colour) in enumerate((("DAPI", "#ff0000"), ("GFP", "#00ff00"),
+                                    ("mCherry", "#0000ff"))):
+    want = (f"  channel {c:<3d} \"{name}\" {colour} range {tczyx[2, c].min()} .. "
+            f"{tczyx[2, c].max()}")
+    check(want in lines, f"info: {want.strip()}")
+check("time steps:   4 (this is step 2), 0.5 s apart" in lines, "info: 4 time steps, 0.5 s")
+p = volvis("info", five)
+check("time steps:   4 (this is step 0), 0.25 s apart" in p.stdout.splitlines() and
+      "channels:     3 (this is channel 0)" in p.stdout.splitlines(),
+      f"info 5-D NIfTI: channels and steps 0.25 s apart ({p.stderr.strip()})")
+
+# render --channels C takes the file's colour: blue mCherry, a MIP
+png = os.path.join(OUT, "blue.png")
+p = volvis("render", ome, "--channels", "2", "--blend", "maximum", "--time", "1", "-o", png,
+           "--size", "64x64", "--ortho", "-q")
+check(p.returncode == 0, f"render --channels 2: {p.stderr.strip()}")
+if p.returncode == 0:
+    im = np.asarray(Image.open(png).convert("RGB")).astype(int)
+    check(im[..., 2].max() > 100 and im[..., 0].max() == 0 and im[..., 1].max() == 0,
+          f"render --channels 2 is blue (max R G B {im[..., 0].max()} {im[..., 1].max()} "
+          f"{im[..., 2].max()})")
+
+# bad input
+out_nii = os.path.join(OUT, "refused.nii")
+refused(["convert", ome, out_nii, "--time", "4", "-q"], "time step 4 asked, the stack has 4",
+        out_nii, "OME-TIFF --time 4")
+refused(["convert", five, out_nii, "--channel", "3", "-q"], "channel 3 asked, the file has 3",
+        out_nii, "NIfTI --channel 3")
+refused(["convert", nrrd, out_nii, "--time", "9", "-q"], "time step 9 asked, the file has 4",
+        out_nii, "NRRD --time 9")
+head = "../shared/data/volumes/ct_head.nrrd"
+if os.path.exists(head):
+    refused(["convert", head, out_nii, "--time", "1", "-q"], "time step 1 asked, the file has 1",
+            out_nii, "3-D NRRD --time 1")
+slc = "../shared/data/volumes/nut.slc"
+if os.path.exists(slc):
+    refused(["info", slc, "--time", "1"], "the file has 1 time step", out_nii,
+            "SLC --time 1 (no time axis)")
+
+print(f"{len(failures)} failed" if failures else "all passed")
+sys.exit(1 if failures else 0)
