@@ -1,6 +1,7 @@
 /*
  * volvis measure INPUT [--iso V] [--seed P] [--method voxel|mc]
  *                [--histogram [--plot OUT.png]] [--distance P1 P2] [--json]
+ *                [--channel C] [--time T] [--coloc C1,C2 [--mask M] [--thresholds TA,TB]]
  * The Measurement component on the command line: a readable table, or the
  * same numbers as JSON. INPUT is a volume, or a mesh (.ply .obj .stl .off),
  * for which area, enclosed volume, distances and the distance to another
@@ -33,6 +34,12 @@ static const cli_opt_spec measure_opts[] = {
     {"json", 0, NULL},
     {"threads", 0, "N"},
     {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
+    {"series", 0, "N"},
+    {"channel", 0, "C"},
+    {"time", 0, "T"},
+    {"coloc", 0, "C1,C2"},
+    {"mask", 0, "FILE"},
+    {"thresholds", 0, "TA,TB"},
     {"quiet", 'q', NULL},
 };
 #define N_MEASURE_OPTS ((int)(sizeof measure_opts / sizeof measure_opts[0]))
@@ -63,6 +70,13 @@ cli_measure_usage(FILE *out) {
             "  --log            logarithmic count axis in the plot\n"
             "  --labels         INPUT is a label volume (volvis filter --components): for\n"
             "                   each label its voxels, volume, centroid and bounding box\n"
+            "  --channel C, --time T, --series N  measure this channel and time step of\n"
+            "                   INPUT (from 0), this DICOM series\n"
+            "  --coloc C1,C2    colocalisation of channels C1 and C2 (at --time T):\n"
+            "                   Pearson's r and Manders' M1, M2 over the voxels where\n"
+            "                   --mask FILE (a volume of the same size) is non-zero\n"
+            "  --thresholds TA,TB  Manders: the channels' values above these count as\n"
+            "                   signal (default 0,0: Manders' original coefficients)\n"
             "  --roi I0,J0,K0:I1,J1,K1  restrict to this voxel box (inclusive)\n"
             "  --cut PX,PY,PZ:NX,NY,NZ  keep the side of this world plane the normal points to\n"
             "                   (repeatable, up to 8; histogram and both --method)\n"
@@ -86,7 +100,9 @@ cli_measure_usage(FILE *out) {
             "  volvis measure ct_head.nrrd --iso 300 --seed voxel:128,60,54\n"
             "  volvis measure ct_head.nrrd --histogram --bins 64 --plot hist.png --log\n"
             "  volvis measure ct_head.nrrd --distance voxel:0,0,0 voxel:255,255,107\n"
-            "  volvis measure ../shared/data/meshes/bunny.ply --to other.stl\n");
+            "  volvis measure ../shared/data/meshes/bunny.ply --to other.stl\n"
+            "  volvis measure cells.ome.tif --channel 1 --histogram\n"
+            "  volvis measure cells.ome.tif --coloc 0,1 --thresholds 120,90 --mask nuclei.nrrd\n");
 }
 
 #if defined(__SANITIZE_ADDRESS__)
@@ -188,6 +204,10 @@ measure_labels(const char *in, const vv_raw_params *raw, int json) {
 
 typedef struct measure_req {
     int json, histogram, log, bins, threads, want_volume;
+    int series, channel, time; /* which series, channel and time step of INPUT (-1: 0) */
+    int coloc[2];              /* --coloc C1,C2 (-1: none) */
+    double thresholds[2];
+    const char *mask;
     int has_iso, has_seed, seed_voxel, has_range;
     double iso, seed[3], lo, hi;
     vv_measure_method method;
@@ -523,7 +543,7 @@ static int
 measure_volume(const char *in, const vv_raw_params *raw, const measure_req *r) {
     vv_volume *v;
     int rc;
-    if ((rc = cli_load_volume(in, raw, &v)))
+    if ((rc = cli_load_volume_sc(in, raw, r->series, r->channel, r->time, NULL, &v)))
         return rc;
     volume_results res;
     memset(&res, 0, sizeof res);
@@ -671,6 +691,100 @@ parse_point_options(cli_args *a, measure_req *r) {
     return 0;
 }
 
+/* --coloc C1,C2: Pearson's r and Manders' M1, M2 of two channels of INPUT. */
+static int
+measure_coloc(const char *in, const vv_raw_params *raw, const measure_req *r) {
+    vv_volume *v[2] = {NULL, NULL}, *mask = NULL;
+    int rc = 0;
+    for (int c = 0; c < 2 && !rc; c++)
+        rc = cli_load_volume_sc(in, raw, r->series, r->coloc[c], r->time, NULL, &v[c]);
+    if (!rc && r->mask)
+        rc = cli_load_volume(r->mask, NULL, &mask);
+    vv_colocalisation co;
+    vv_status s = VV_OK;
+    if (!rc) {
+        vv_error_clear();
+        s = vv_measure_colocalisation(v[0], v[1], mask, r->thresholds[0], r->thresholds[1], &co);
+        if (s != VV_OK)
+            rc = cli_fail(s, in);
+    }
+    if (!rc && r->json) {
+        printf("{\"file\": ");
+        json_str(in);
+        printf(", \"channels\": [%d, %d], \"time\": %d, \"mask\": ", r->coloc[0], r->coloc[1],
+               r->time < 0 ? 0 : r->time);
+        if (r->mask)
+            json_str(r->mask);
+        else
+            printf("null");
+        printf(", \"voxels\": %llu, \"pearson\": ", (unsigned long long)co.voxels);
+        json_num(co.pearson);
+        printf(", \"manders_m1\": ");
+        json_num(co.manders_m1);
+        printf(", \"manders_m2\": ");
+        json_num(co.manders_m2);
+        printf(", \"thresholds\": [");
+        json_num(co.threshold[0]);
+        printf(", ");
+        json_num(co.threshold[1]);
+        printf("], \"means\": [");
+        json_num(co.mean[0]);
+        printf(", ");
+        json_num(co.mean[1]);
+        printf("]}\n");
+    } else if (!rc) {
+        printf("%-22s %s, channels %d and %d, time step %d\n", "colocalisation", in, r->coloc[0],
+               r->coloc[1], r->time < 0 ? 0 : r->time);
+        printf("%-22s %s\n", "mask", r->mask ? r->mask : "none (every voxel)");
+        printf("%-22s %llu\n", "voxels", (unsigned long long)co.voxels);
+        printf("%-22s %.6f\n", "pearson r", co.pearson);
+        printf("%-22s %.6f (channel %d's signal where channel %d's is)\n", "manders M1",
+               co.manders_m1, r->coloc[0], r->coloc[1]);
+        printf("%-22s %.6f (channel %d's signal where channel %d's is)\n", "manders M2",
+               co.manders_m2, r->coloc[1], r->coloc[0]);
+        printf("%-22s %g, %g (values above count as signal)\n", "thresholds", co.threshold[0],
+               co.threshold[1]);
+        printf("%-22s %g, %g\n", "means", co.mean[0], co.mean[1]);
+    }
+    vv_volume_free(v[0]);
+    vv_volume_free(v[1]);
+    vv_volume_free(mask);
+    return rc;
+}
+
+/* --series, --channel, --time, --coloc, --mask, --thresholds. */
+static int
+parse_channel_options(cli_args *a, measure_req *r) {
+    int rc;
+    const char *s;
+    if ((rc = cli_parse_series_channel(a, &r->series, &r->channel, &r->time)))
+        return rc;
+    r->coloc[0] = r->coloc[1] = -1;
+    if ((s = cli_get(a, "coloc"))) {
+        long c1, c2;
+        char *e1, *e2;
+        c1 = strtol(s, &e1, 10);
+        if (e1 == s || *e1 != ',' || (c2 = strtol(e1 + 1, &e2, 10), e2 == e1 + 1) || *e2 ||
+            c1 < 0 || c2 < 0 || c1 > 1000000 || c2 > 1000000 || c1 == c2)
+            return cli_usage_error(a, "--coloc: '%s' is not two different channels C1,C2", s);
+        r->coloc[0] = (int)c1;
+        r->coloc[1] = (int)c2;
+        if (r->channel >= 0)
+            return cli_usage_error(a, "--coloc names its channels: not with --channel");
+    }
+    r->mask = cli_get(a, "mask");
+    if ((s = cli_get(a, "thresholds"))) {
+        char *e1, *e2;
+        r->thresholds[0] = strtod(s, &e1);
+        if (e1 == s || *e1 != ',' || (r->thresholds[1] = strtod(e1 + 1, &e2), e2 == e1 + 1) ||
+            *e2 || !isfinite(r->thresholds[0]) || !isfinite(r->thresholds[1]))
+            return cli_usage_error(a, "--thresholds: '%s' is not two values TA,TB", s);
+    }
+    if ((r->mask || cli_get(a, "thresholds")) && r->coloc[0] < 0)
+        return cli_usage_error(a, "--mask and --thresholds go with --coloc C1,C2");
+    return 0;
+}
+
 /* Measures INPUT as @p r says: a mesh, label volumes or a volume. */
 static int
 measure_input(cli_args *a, measure_req *r) {
@@ -699,9 +813,19 @@ measure_input(cli_args *a, measure_req *r) {
             return rc;
         return measure_labels(in, raw_spec ? &raw : NULL, r->json);
     }
+    if (r->coloc[0] >= 0) {
+        if (r->has_iso || r->histogram || r->has_distance)
+            return cli_usage_error(a, "--coloc measures the two channels alone (not with --iso, "
+                                      "--histogram or --distance)");
+        if (raw_spec && (rc = cli_parse_raw(a, "raw", raw_spec, &raw)))
+            return rc;
+        if (r->mask && (rc = cli_check_readable_input(r->mask)))
+            return rc;
+        return measure_coloc(in, raw_spec ? &raw : NULL, r);
+    }
     if (!r->has_iso && !r->histogram && !r->has_distance)
-        return cli_usage_error(a, "nothing to measure: give --iso V, --histogram or --distance P1 "
-                                  "P2");
+        return cli_usage_error(a, "nothing to measure: give --iso V, --histogram, --distance P1 "
+                                  "P2 or --coloc C1,C2");
     if (raw_spec && (rc = cli_parse_raw(a, "raw", raw_spec, &raw)))
         return rc;
     return measure_volume(in, raw_spec ? &raw : NULL, r);
@@ -743,7 +867,8 @@ cli_measure_main(int argc, char **argv) {
     r.want_volume = cli_count(&a, "volume") > 0;
     r.plot = cli_get(&a, "plot");
     r.to = cli_get(&a, "to");
-    if ((rc = parse_volume_options(&a, &r)) || (rc = parse_point_options(&a, &r)))
+    if ((rc = parse_volume_options(&a, &r)) || (rc = parse_point_options(&a, &r)) ||
+        (rc = parse_channel_options(&a, &r)))
         goto done;
     rc = measure_input(&a, &r);
 done:

@@ -21,8 +21,8 @@ from .world import (Box, CutPlane, Cylinder, GridObject, Light, Material, MeshOb
                     World, load_scene, tf_presets)
 from .render import Image, Renderer, RendererInfo, render, renderers
 from .mesh import Grid, Mesh, load_grid, load_mesh
-from .components import (Compressed, Measurement, Shape, compress, decompress, filter,
-                         filters, isosurface, measure, voxelize)
+from .components import (Colocalisation, Compressed, Measurement, Shape, colocalisation,
+                         compress, decompress, filter, filters, isosurface, measure, voxelize)
 from .animation import Animation, orbit, render_movie
 from . import notebook
 from .notebook import read_png, save_png, show
@@ -49,7 +49,8 @@ __all__ = [
     "MeshObject", "World", "load_scene",
     "Renderer", "RendererInfo", "renderers", "render", "Image",
     "Mesh", "load_mesh", "Grid", "load_grid",
-    "filter", "filters", "isosurface", "measure", "Measurement", "voxelize", "Shape", "compress",
+    "filter", "filters", "isosurface", "measure", "Measurement", "colocalisation",
+    "Colocalisation", "voxelize", "Shape", "compress",
     "decompress", "Compressed",
     "Animation", "orbit", "render_movie", "show", "read_png", "save_png", "set_threads", "get_threads",
 ]

@@ -18,8 +18,8 @@ from .render import option_text
 from .volume import Histogram, Volume, _CODE, _histogram_from, _voxel_name
 from .world import CutPlane
 
-__all__ = ["filter", "filters", "isosurface", "measure", "Measurement", "voxelize", "Shape",
-           "compress", "decompress", "Compressed"]
+__all__ = ["filter", "filters", "isosurface", "measure", "Measurement", "colocalisation",
+           "Colocalisation", "voxelize", "Shape", "compress", "decompress", "Compressed"]
 
 
 def _as_volume(v):
@@ -165,6 +165,37 @@ class Measurement:
     n_triangles: int = None
     area_bias: float = None
     seed_voxel: tuple = None
+
+
+@dataclasses.dataclass(frozen=True)
+class Colocalisation:
+    """Colocalisation of two channels (vv_measure_colocalisation): the voxels
+    measured, Pearson's r, Manders' M1 and M2 (NaN where undefined), the
+    thresholds and the channels' means."""
+    voxels: int
+    pearson: float
+    manders_m1: float
+    manders_m2: float
+    thresholds: tuple
+    means: tuple
+
+
+def colocalisation(a, b, mask=None, thresholds=(0.0, 0.0)):
+    """Pearson's correlation coefficient and Manders' M1, M2 of two channels
+    ``a`` and ``b`` (Volumes or numpy arrays (nk, nj, ni) of the same shape)
+    over the voxels where ``mask`` (None: all; else the same shape) is
+    non-zero and both values are finite. ``thresholds`` (tA, tB): values above
+    them count as signal for M1 and M2 (0, 0: Manders' original
+    coefficients). Manders, Verbeek and Aten, J. Microscopy 169 (1993).
+    Errors: InvalidError (shapes that differ, a threshold not finite)."""
+    va, vb = _as_volume(a), _as_volume(b)
+    vm = _as_volume(mask) if mask is not None else None
+    out = ffi.new("vv_colocalisation *")
+    ta, tb = (float(t) for t in thresholds)
+    check(lib.vv_measure_colocalisation(va._ptr, vb._ptr, vm._ptr if vm is not None else ffi.NULL,
+                                        ta, tb, out))
+    return Colocalisation(int(out.voxels), out.pearson, out.manders_m1, out.manders_m2,
+                          (out.threshold[0], out.threshold[1]), (out.mean[0], out.mean[1]))
 
 
 def _region(volume, roi, cut_planes):

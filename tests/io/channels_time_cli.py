@@ -19,6 +19,9 @@ then checks:
 - `volvis info` names the counts, the OME names and colours, each channel's
   value range and the time increment;
 - `volvis render --channels C` takes the file's colour when no --colors;
+- `volvis measure --coloc C1,C2 --mask M --thresholds TA,TB` equals numpy's
+  Pearson's r and Manders' M1, M2; `--channel C --time T --histogram`
+  equals numpy's histogram;
 - bad input: a step or channel past the file's, --time on a file without a
   time axis, a NRRD with two time axes: one line naming the file and the
   count, a non-zero exit, no output written.
@@ -171,6 +174,42 @@ if p.returncode == 0:
     check(im[..., 2].max() > 100 and im[..., 0].max() == 0 and im[..., 1].max() == 0,
           f"render --channels 2 is blue (max R G B {im[..., 0].max()} {im[..., 1].max()} "
           f"{im[..., 2].max()})")
+
+# colocalisation against numpy: Pearson's r and Manders' M1, M2 within a
+# mask written by nibabel, with thresholds; a channel's histogram at a step
+mask_xyz = (rng.random((X, Y, Z)) < 0.6).astype(np.uint8)
+mask = os.path.join(OUT, "mask.nii")
+nib.save(nib.Nifti1Image(mask_xyz, np.eye(4)), mask)
+inside = mask_xyz.transpose(2, 1, 0).astype(bool)
+p = volvis("measure", ome, "--coloc", "0,2", "--time", "3", "--mask", mask, "--thresholds",
+           "1200,800", "--json")
+check(p.returncode == 0, f"measure --coloc: {p.stderr.strip()}")
+if p.returncode == 0:
+    import json
+    got = json.loads(p.stdout)
+    a, b = tczyx[3, 0][inside].astype(float), tczyx[3, 2][inside].astype(float)
+    both = (a > 1200) & (b > 800)
+    want = {"voxels": int(inside.sum()), "pearson": np.corrcoef(a, b)[0, 1],
+            "manders_m1": a[both].sum() / a[a > 1200].sum(),
+            "manders_m2": b[both].sum() / b[b > 800].sum()}
+    for key, value in want.items():
+        check(abs(got[key] - value) <= 1e-9 * max(1, abs(value)),
+              f"measure --coloc {key}: {got[key]} against numpy {value}")
+p = volvis("measure", ome, "--channel", "1", "--time", "2", "--histogram", "--bins", "4",
+           "--range", "0:4000", "--json")
+if p.returncode == 0:
+    import json
+    counts = json.loads(p.stdout)["histogram"]["counts"]
+    want = np.histogram(tczyx[2, 1], bins=4, range=(0, 4000))[0].tolist()
+    check(counts == want, f"measure --channel 1 --time 2 --histogram: {counts} against {want}")
+else:
+    check(False, f"measure --channel 1 --histogram: {p.stderr.strip()}")
+refused(["measure", ome, "--coloc", "0,3"], "channel 3 asked, the stack has 3",
+        os.path.join(OUT, "none"), "measure --coloc 0,3 on 3 channels")
+small = os.path.join(OUT, "small_mask.nii")
+nib.save(nib.Nifti1Image(mask_xyz[:, :, :-1], np.eye(4)), small)
+refused(["measure", ome, "--coloc", "0,1", "--mask", small], "mask is 11 x 14 x 5",
+        os.path.join(OUT, "none"), "measure --coloc with a mask of another size")
 
 # bad input
 out_nii = os.path.join(OUT, "refused.nii")

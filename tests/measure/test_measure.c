@@ -725,20 +725,88 @@ test_geodesic(void **state) {
     vv_volume_free(v);
 }
 
+/* Colocalisation: analytic answers (identical channels, a channel against
+ * its negative, disjoint and half-overlapping balls), a mask, thresholds,
+ * the same bits for 1 and 2 threads, errors. */
+static void
+test_colocalisation(void **state) {
+    (void)state;
+    const int n = 24, dims[3] = {24, 24, 24};
+    vv_volume *a = NULL, *b = NULL, *neg = NULL, *m = NULL, *small = NULL;
+    vt_ok(vv_volume_new(&a, dims, VV_F32));
+    vt_ok(vv_volume_new(&b, dims, VV_U16));
+    vt_ok(vv_volume_new(&neg, dims, VV_F32));
+    vt_ok(vv_volume_new(&m, dims, VV_U8));
+    for (int k = 0; k < n; k++)
+        for (int j = 0; j < n; j++)
+            for (int i = 0; i < n; i++) {
+                double x = 100.0 * (i + 2 * j) + 7.0 * k;
+                vv_volume_set(a, i, j, k, x);
+                vv_volume_set(neg, i, j, k, 5000.0 - 2.0 * x);
+                /* b: a ball in the lower half of i, a: signal everywhere */
+                int in_ball = (i - 6) * (i - 6) + (j - 12) * (j - 12) + (k - 12) * (k - 12) <= 25;
+                vv_volume_set(b, i, j, k, in_ball ? 900 : 0);
+                vv_volume_set(m, i, j, k, i < 12);
+            }
+    vv_colocalisation c;
+    vt_ok(vv_measure_colocalisation(a, a, NULL, 0, 0, &c));
+    assert_int_equal(c.voxels, (uint64_t)n * n * n);
+    assert_true(fabs(c.pearson - 1) < 1e-12);
+    assert_true(fabs(c.manders_m1 - 1) < 1e-12 && fabs(c.manders_m2 - 1) < 1e-12);
+    vt_ok(vv_measure_colocalisation(a, neg, NULL, 0, 0, &c));
+    assert_true(fabs(c.pearson + 1) < 1e-12);
+    /* M2: all of b's signal lies where a > 0 (a is 0 only at the origin,
+     * outside the ball); M1: a's intensity inside the ball over all of it */
+    vt_ok(vv_measure_colocalisation(a, b, NULL, 0, 0, &c));
+    double in = 0, all = 0;
+    for (int k = 0; k < n; k++)
+        for (int j = 0; j < n; j++)
+            for (int i = 0; i < n; i++) {
+                double x = vv_volume_get(a, i, j, k);
+                all += x;
+                in += vv_volume_get(b, i, j, k) > 0 ? x : 0;
+            }
+    assert_true(fabs(c.manders_m2 - 1) < 1e-12);
+    assert_true(fabs(c.manders_m1 - in / all) < 1e-12);
+    /* a threshold above every value of b: no colocalised signal */
+    vt_ok(vv_measure_colocalisation(a, b, NULL, 0, 900, &c));
+    assert_true(c.manders_m1 == 0 && isnan(c.manders_m2));
+    /* the mask keeps i < 12 */
+    vt_ok(vv_measure_colocalisation(a, b, m, 0, 0, &c));
+    assert_int_equal(c.voxels, (uint64_t)n * n * 12);
+    /* the same bits for any thread count */
+    vv_colocalisation c1, c2;
+    int saved = vv_threads_get();
+    vv_threads_set(1);
+    vt_ok(vv_measure_colocalisation(a, b, m, 10, 1, &c1));
+    vv_threads_set(2);
+    vt_ok(vv_measure_colocalisation(a, b, m, 10, 1, &c2));
+    vv_threads_set(saved);
+    assert_memory_equal(&c1, &c2, sizeof c1);
+    /* errors */
+    const int sd[3] = {24, 24, 23};
+    vt_ok(vv_volume_new(&small, sd, VV_U8));
+    vt_err(vv_measure_colocalisation(a, small, NULL, 0, 0, &c));
+    assert_non_null(strstr(vv_error_message(), "channel B is 24 x 24 x 23"));
+    vt_err(vv_measure_colocalisation(a, b, small, 0, 0, &c));
+    assert_non_null(strstr(vv_error_message(), "mask is 24 x 24 x 23"));
+    vt_err(vv_measure_colocalisation(a, b, NULL, NAN, 0, &c));
+    vv_volume_free(a);
+    vv_volume_free(b);
+    vv_volume_free(neg);
+    vv_volume_free(m);
+    vv_volume_free(small);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_histogram),
-        cmocka_unit_test(test_histogram_plot),
-        cmocka_unit_test(test_sphere_mc_and_voxels),
-        cmocka_unit_test(test_cut_sphere_volume),
-        cmocka_unit_test(test_cut_planes_mc),
-        cmocka_unit_test(test_surface_tracking),
-        cmocka_unit_test(test_ct_head),
-        cmocka_unit_test(test_distance),
-        cmocka_unit_test(test_mesh_measures),
-        cmocka_unit_test(test_object_measures),
-        cmocka_unit_test(test_geodesic),
+        cmocka_unit_test(test_colocalisation),    cmocka_unit_test(test_histogram),
+        cmocka_unit_test(test_histogram_plot),    cmocka_unit_test(test_sphere_mc_and_voxels),
+        cmocka_unit_test(test_cut_sphere_volume), cmocka_unit_test(test_cut_planes_mc),
+        cmocka_unit_test(test_surface_tracking),  cmocka_unit_test(test_ct_head),
+        cmocka_unit_test(test_distance),          cmocka_unit_test(test_mesh_measures),
+        cmocka_unit_test(test_object_measures),   cmocka_unit_test(test_geodesic),
     };
     return vt_run_tests(tests, NULL, NULL);
 }

@@ -43,6 +43,22 @@ def test_measure_agrees_with_analytic_and_histogram():
     assert m.histogram.total == a.size
 
 
+def test_colocalisation_matches_numpy():
+    rng = np.random.default_rng(7)
+    a = rng.integers(0, 1000, size=(9, 10, 11)).astype(np.uint16)
+    b = (0.6 * a + rng.integers(0, 400, size=a.shape)).astype(np.float32)
+    mask = (rng.random(a.shape) < 0.7).astype(np.uint8)
+    c = volvis.colocalisation(a, b, mask=mask, thresholds=(300, 250))
+    x, y = a[mask > 0].astype(float), b[mask > 0].astype(float)
+    both = (x > 300) & (y > 250)
+    assert c.voxels == int(mask.sum())
+    assert c.pearson == pytest.approx(np.corrcoef(x, y)[0, 1], rel=1e-12)
+    assert c.manders_m1 == pytest.approx(x[both].sum() / x[x > 300].sum(), rel=1e-12)
+    assert c.manders_m2 == pytest.approx(y[both].sum() / y[y > 250].sum(), rel=1e-12)
+    with pytest.raises(volvis.InvalidError, match="mask is 11 x 10 x 8"):
+        volvis.colocalisation(a, b, mask=mask[:-1])
+
+
 def test_filter_matches_scipy():
     ndimage = pytest.importorskip("scipy.ndimage")
     rng = np.random.default_rng(7)
