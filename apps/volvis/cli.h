@@ -211,7 +211,8 @@ typedef struct cli_render_args {
     double gamma;
     int has_quality, quality; /**< --quality given, and its value */
     const char *field;        /**< --field: a grid's field (NULL: the first scalar field) */
-    int has_time, time;       /**< --time given, and a grid's time step */
+    int has_time, time;       /**< --time given, and a grid's or a volume file's time step */
+    int time_range;           /**< 1: `render --time-range` (a volume file's steps) */
     int alpha, quiet, ortho;
     int labels; /**< --labels: volumes are label volumes (VV_SEG_LABELS) */
     /* under mpirun: --compositing (vv_parallel_options) */

@@ -9,7 +9,7 @@
 
 #include "cli.h"
 
-static const cli_opt_spec render_opts[] = {CLI_RENDER_OPT_SPECS};
+static const cli_opt_spec render_opts[] = {CLI_RENDER_OPT_SPECS, {"time-range", 0, "A:B[:STEP]"}};
 #define N_RENDER_OPTS ((int)(sizeof render_opts / sizeof render_opts[0]))
 
 void
@@ -29,7 +29,12 @@ cli_render_usage(FILE *out) {
                  "Options:\n"
                  "  -o, --output OUT.png  output PNG (required); written atomically\n");
     cli_render_print_options(out);
-    fprintf(out, "  -h, --help       show this help\n"
+    fprintf(out, "  --time-range A:B[:STEP]  a volume file's time steps A to B (inclusive,\n"
+                 "                   every STEP-th, default 1), one PNG each: OUT's name with\n"
+                 "                   _tNNNN before .png (head.png: head_t0000.png, ...); the\n"
+                 "                   transfer function and view of step A for all; each step\n"
+                 "                   read while the one before is drawn\n"
+                 "  -h, --help       show this help\n"
                  "\n"
                  "Renderers:\n");
     cli_render_print_renderers(out);
@@ -41,10 +46,128 @@ cli_render_usage(FILE *out) {
             "  volvis render ../shared/data/volumes/ct_head.nrrd --iso 400 --renderer surface \\\n"
             "      --set shading=gouraud -o bone.png\n"
             "  volvis render ../shared/data/grids/fire_ug.vtu --field t -o fire.png\n"
+            "  volvis render beating_heart.nii.gz --time-range 0:19 -o heart.png\n"
             "  volvis render scene.json --size 1024x1024 --azimuth 45 -o scene.png\n"
             "  volvis render examples/head_mirror.json --renderer raytrace -o mirror.png\n"
             "  volvis render head.nrrd --renderer fourier --ortho --set vvc=head.vvc \\\n"
             "      --mode xray --tf -1024:300 -o fourier.png\n");
+}
+
+/* --time-range A:B[:STEP] into @p range; 0 or a usage error. */
+static int
+parse_time_range(const cli_args *a, const char *s, int range[3]) {
+    char *e = NULL;
+    long v[3] = {0, 0, 1};
+    const char *p = s;
+    int n = 0;
+    for (; n < 3; n++) {
+        v[n] = strtol(p, &e, 10);
+        if (e == p || v[n] < 0 || v[n] > 1000000)
+            break;
+        if (*e != ':')
+            break;
+        p = e + 1;
+    }
+    if (n < 1 || n > 2 || *e || v[2] < 1 || v[1] < v[0])
+        return cli_usage_error(a,
+                               "--time-range: '%s' is not A:B or A:B:STEP (0 <= A <= B, "
+                               "STEP >= 1)",
+                               s);
+    for (int i = 0; i < 3; i++)
+        range[i] = (int)v[i];
+    return 0;
+}
+
+/* OUT with _tNNNN before its .png (or at its end). */
+static void
+step_path(const char *out, int t, char *buf, size_t cap) {
+    size_t len = strlen(out);
+    size_t stem = cli_ends_with(out, ".png") || cli_ends_with(out, ".PNG") ? len - 4 : len;
+    snprintf(buf, cap, "%.*s_t%04d%s", (int)stem, out, t, out + stem);
+}
+
+/*
+ * --time-range: the steps of the World's volume object read one after the
+ * other through a time series per channel (the next read ahead while this
+ * one is drawn), each drawn with the first step's World and written to its
+ * own PNG.
+ */
+static int
+render_time_range(const cli_render_args *r, const int range[3], vv_world *w, vv_renderer *ren,
+                  const vv_render_options *ro, vv_image *img) {
+    vv_object *o = NULL;
+    for (int i = 0; i < w->n_objects && !o; i++)
+        if (w->objects[i]->type == VV_OBJECT_VOLUME)
+            o = w->objects[i];
+    if (!o) {
+        cli_error("%s: --time-range needs a volume file", r->input);
+        return CLI_EXIT_USAGE;
+    }
+    int nch = o->n_channels > 0 ? o->n_channels : 1;
+    vv_time_series *ts[VV_MAX_CHANNELS] = {NULL};
+    vv_status s = VV_OK;
+    for (int c = 0; c < nch && s == VV_OK; c++) {
+        vv_load_options opt;
+        vv_load_options_init(&opt);
+        opt.series = r->series;
+        opt.channel = o->n_channels > 0 ? o->channels[c].index : r->channel;
+        if (r->has_raw) {
+            opt.format = VV_FORMAT_RAW;
+            opt.has_raw = 1;
+            opt.raw = r->raw;
+        }
+        vv_error_clear();
+        s = vv_time_series_open(&ts[c], r->input, &opt, 0);
+    }
+    int rc = s == VV_OK ? 0 : cli_fail(s, r->input);
+    if (!rc && range[1] >= vv_time_series_count(ts[0])) {
+        cli_error("%s: --time-range %d:%d: the file has %d time step%s (from 0)", r->input,
+                  range[0], range[1], vv_time_series_count(ts[0]),
+                  vv_time_series_count(ts[0]) == 1 ? "" : "s");
+        rc = CLI_EXIT_FAIL;
+    }
+    double t_all = cli_now();
+    int frames = 0;
+    for (int t = range[0]; !rc && t <= range[1]; t += range[2]) {
+        vv_volume *v[VV_MAX_CHANNELS] = {NULL};
+        vv_error_clear();
+        for (int c = 0; c < nch && s == VV_OK; c++)
+            s = vv_time_series_get(ts[c], t, &v[c]);
+        for (int c = 0; c < nch && s == VV_OK; c++)
+            vv_time_series_prefetch(ts[c], t + range[2]);
+        if (s == VV_OK)
+            s = vv_object_replace_volumes(o, nch, v);
+        for (int c = 0; c < nch; c++)
+            vv_volume_free(v[c]); /* the object holds its own references */
+        double t0 = cli_now();
+        if (s == VV_OK)
+            s = vv_renderer_render(ren, w, &w->view, ro, img);
+        if (s == VV_OK && cli_interrupted())
+            s = vv_error_set(VV_ERR_CANCELLED, "interrupted");
+        char path[4096];
+        step_path(r->output, t, path, sizeof path);
+        if (s == VV_OK && (s = vv_image_write_png(img, path, r->gamma, r->alpha)) != VV_OK) {
+            rc = cli_fail(s, path);
+            break;
+        }
+        if (s != VV_OK) {
+            rc = s == VV_ERR_CANCELLED && cli_interrupted() ? CLI_EXIT_CANCEL
+                                                            : cli_fail(s, r->input);
+            break;
+        }
+        frames++;
+        if (!r->quiet)
+            printf("wrote %s (%dx%d, time step %d, %.2f s)\n", path, img->width, img->height, t,
+                   cli_now() - t0);
+    }
+    if (!rc && !r->quiet) {
+        double secs = cli_now() - t_all;
+        printf("%d time steps in %.2f s (%.2f steps a second)\n", frames, secs,
+               secs > 0 ? frames / secs : 0.0);
+    }
+    for (int c = 0; c < nch; c++)
+        vv_time_series_free(ts[c]);
+    return rc;
 }
 
 int
@@ -61,6 +184,19 @@ cli_render_main(int argc, char **argv) {
     memset(&r, 0, sizeof r);
     if ((rc = cli_render_parse(&a, &r)))
         return rc;
+    int range[3] = {0, 0, 1};
+    const char *tr = cli_get(&a, "time-range");
+    if (tr) {
+        if ((rc = parse_time_range(&a, tr, range)))
+            return rc;
+        if (r.has_time)
+            return cli_usage_error(&a, "--time-range: not with --time");
+        if (r.memory_limit > 0 || vv_parallel_launched())
+            return cli_usage_error(&a, "--time-range: in memory, one process");
+        r.has_time = 1; /* the World from step A */
+        r.time = range[0];
+        r.time_range = 1;
+    }
     /* under mpirun a .vvb is read by bricks, each rank its own box */
     if (r.memory_limit > 0 || (cli_ends_with(r.input, ".vvb") && !vv_parallel_launched()))
         return cli_render_out_of_core(&a, &r);
@@ -93,6 +229,11 @@ cli_render_main(int argc, char **argv) {
     cli_progress pr;
     cli_progress_begin(&pr, r.quiet);
     ro.progress = pr.p;
+    if (tr) {
+        rc = render_time_range(&r, range, w, ren, &ro, img);
+        cli_progress_end(&pr);
+        goto done;
+    }
     double t0 = cli_now();
     vv_error_clear();
     s = vv_renderer_render(ren, w, &w->view, &ro, img);

@@ -535,9 +535,10 @@ cli_render_world(const cli_render_args *r, vv_world **out) {
         return rc;
     int scene = !r->has_raw && is_scene_file(r->input);
     const int grid = !scene && !r->has_raw && vv_grid_file_detect(r->input, NULL);
-    if ((scene || grid) && r->n_channels) {
-        fprintf(stderr, "volvis: %s: --channels is for a volume file's channels, not a %s\n",
-                r->input, scene ? "scene" : "grid");
+    if ((scene || grid) && (r->n_channels || r->time_range)) {
+        fprintf(stderr, "volvis: %s: %s is for a volume file's %s, not a %s\n", r->input,
+                r->n_channels ? "--channels" : "--time-range",
+                r->n_channels ? "channels" : "time steps", scene ? "scene" : "grid");
         return CLI_EXIT_FAIL;
     }
     rc = scene ? world_for_scene(r, out) : grid ? world_for_grid(r, out) : world_for_volume(r, out);

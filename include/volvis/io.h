@@ -158,6 +158,57 @@ void vv_load_options_init(vv_load_options *o);
 vv_status vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt);
 
 /**
+ * The time steps of one channel of a file (vv_load_info.n_times), read step
+ * by step as they are asked for: only the steps in use are resident, in a
+ * cache bounded by bytes (the least recently used step goes first, the one
+ * asked for last always stays), and the step that will be wanted next can
+ * be read ahead on a background thread while the current one is drawn.
+ * Every step must have step 0's dimensions and voxel type.
+ * Thread-safety: every function may be called from any thread; a step being
+ * read is read once, whoever asks for it meanwhile waits for it.
+ */
+typedef struct vv_time_series vv_time_series;
+
+/**
+ * Opens the time steps of @p path (@p opt: its format, series and channel;
+ * time and info are ignored; NULL: defaults) and reads step 0 (for the
+ * count and the shape). @p cache_bytes bounds the resident steps' voxels
+ * (0: three steps). Errors: those of vv_volume_load, VV_ERR_NOMEM.
+ */
+vv_status vv_time_series_open(vv_time_series **out, const char *path, const vv_load_options *opt,
+                              uint64_t cache_bytes);
+
+/** The number of time steps (>= 1). */
+int vv_time_series_count(const vv_time_series *ts);
+
+/** What step 0's read said of the file (channels, steps, name, colour, time increment). */
+const vv_load_info *vv_time_series_info(const vv_time_series *ts);
+
+/**
+ * Step @p t (0..count-1) as a new reference in *@p out (vv_volume_free it):
+ * from the cache, or read now (waiting for a read-ahead of the same step).
+ * Errors: VV_ERR_INVALID (a step out of range), the read's own (its message
+ * kept for every later ask: a broken step stays broken), VV_ERR_FORMAT
+ * (a step whose shape differs from step 0's, named).
+ */
+vv_status vv_time_series_get(vv_time_series *ts, int t, vv_volume **out);
+
+/**
+ * Reads step @p t ahead on the series' background thread when it is not
+ * resident; a newer prefetch replaces one not yet started (the latest view
+ * wins). Steps out of range are ignored. Never blocks on a read.
+ */
+void vv_time_series_prefetch(vv_time_series *ts, int t);
+
+/** Counts for tests and reports: steps read from the file so far, steps resident now,
+ *  their bytes. Any pointer may be NULL. */
+void vv_time_series_stats(vv_time_series *ts, int *reads, int *resident, uint64_t *bytes);
+
+/** Stops the read-ahead (waiting for a read in progress) and frees the series
+ *  and its cache (volumes handed out keep their own references). NULL is a no-op. */
+void vv_time_series_free(vv_time_series *ts);
+
+/**
  * The format that writes files with the extension of @p path (.slc, .nrrd,
  * .nhdr: the extensions of the formats with a writer, case-insensitive), or
  * VV_FORMAT_UNKNOWN.

@@ -613,6 +613,19 @@ vv_status vv_object_set_channels(vv_object *obj, int n, vv_volume *const *volume
                                  const char *const *names);
 
 /**
+ * Replaces the voxels of volume object @p obj by another time step of the
+ * same data (vv_time_series_get): @p volumes[0] for an object of one
+ * channel, else one volume per channel in the object's channel order
+ * (@p n is max(1, n_channels)); each borrowed, the object takes its own
+ * reference. Transfer functions, names and everything else stay. Errors:
+ * VV_ERR_INVALID (not a volume object, @p n not the channel count, a NULL
+ * volume, dims differing from the volume it replaces: named); on error
+ * @p obj is unchanged. Not thread-safe on the same object (edit a copy,
+ * as snapshots do).
+ */
+vv_status vv_object_replace_volumes(vv_object *obj, int n, vv_volume *const *volumes);
+
+/**
  * A new geometric object of @p type (not VV_OBJECT_VOLUME) with the same
  * defaults as vv_object_new_volume (material, flags) and a unit shape: sphere
  * at the origin with radius 1, plane z = 0 facing +z, box [-1, 1]^3, capped

@@ -132,3 +132,34 @@ vv_object_set_channels(vv_object *obj, int n, vv_volume *const *volumes, const c
     obj->n_channels = n;
     return VV_OK;
 }
+
+vv_status
+vv_object_replace_volumes(vv_object *obj, int n, vv_volume *const *volumes) {
+    if (!obj || !volumes || obj->type != VV_OBJECT_VOLUME || !obj->volume)
+        return vv_error_set(VV_ERR_INVALID, "replace volumes: not a volume object");
+    int want = obj->n_channels > 0 ? obj->n_channels : 1;
+    if (n != want)
+        return vv_error_set(VV_ERR_INVALID,
+                            "replace volumes: %s: %d volume%s given, the object has %d channel%s",
+                            obj->name, n, n == 1 ? "" : "s", want, want == 1 ? "" : "s");
+    for (int c = 0; c < n; c++) {
+        const vv_volume *old = obj->n_channels > 0 ? obj->channels[c].volume : obj->volume;
+        const vv_volume *v = volumes[c];
+        if (!v || v->dims[0] != old->dims[0] || v->dims[1] != old->dims[1] ||
+            v->dims[2] != old->dims[2])
+            return vv_error_set(VV_ERR_INVALID,
+                                "replace volumes: %s: channel %d's new volume is %s, the old one "
+                                "%dx%dx%d",
+                                obj->name, c, v ? "another size" : "missing", old->dims[0],
+                                old->dims[1], old->dims[2]);
+    }
+    for (int c = 0; c < obj->n_channels; c++) {
+        vv_volume_ref(volumes[c]);
+        vv_volume_free(obj->channels[c].volume);
+        obj->channels[c].volume = volumes[c];
+    }
+    vv_volume_ref(volumes[0]);
+    vv_volume_free(obj->volume);
+    obj->volume = volumes[0];
+    return VV_OK;
+}

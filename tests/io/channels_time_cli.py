@@ -19,6 +19,8 @@ then checks:
 - `volvis info` names the counts, the OME names and colours, each channel's
   value range and the time increment;
 - `volvis render --channels C` takes the file's colour when no --colors;
+- `volvis render --time-range A:B:S` writes each step's image, equal to
+  `--time T` alone, one channel and several;
 - `volvis measure --coloc C1,C2 --mask M --thresholds TA,TB` equals numpy's
   Pearson's r and Manders' M1, M2; `--channel C --time T --histogram`
   equals numpy's histogram;
@@ -174,6 +176,29 @@ if p.returncode == 0:
     check(im[..., 2].max() > 100 and im[..., 0].max() == 0 and im[..., 1].max() == 0,
           f"render --channels 2 is blue (max R G B {im[..., 0].max()} {im[..., 1].max()} "
           f"{im[..., 2].max()})")
+
+# render --time-range: each step's PNG equals the render of --time T alone
+# (with the transfer function given: else the range's first step's is used
+# for all); channels too
+for extra in (("--tf", "500:3500"),
+              ("--channels", "0,2", "--blend", "maximum", "--contrast", "500:3500,900:3900")):
+    base = os.path.join(OUT, "range" + ("_ch" if extra else "") + ".png")
+    p = volvis("render", ome, "--time-range", "1:3:2", *extra, "-o", base, "--size", "48x48",
+               "--ortho", "-q")
+    check(p.returncode == 0, f"render --time-range 1:3:2 {' '.join(extra)}: {p.stderr.strip()}")
+    for t in (1, 3):
+        step = base[:-4] + f"_t{t:04d}.png"
+        one = os.path.join(OUT, "one.png")
+        q = volvis("render", ome, "--time", str(t), *extra, "-o", one, "--size", "48x48",
+                   "--ortho", "-q")
+        if p.returncode or q.returncode or not os.path.exists(step):
+            check(False, f"render --time {t} {' '.join(extra)}: {q.stderr.strip()}")
+            continue
+        same = np.array_equal(np.asarray(Image.open(step)), np.asarray(Image.open(one)))
+        check(same and not os.path.exists(base[:-4] + "_t0002.png"),
+              f"--time-range step {t} {' '.join(extra)} equals --time {t}; step 2 skipped")
+refused(["render", ome, "--time-range", "2:7", "-o", os.path.join(OUT, "r.png")],
+        "the file has 4 time steps", os.path.join(OUT, "r_t0002.png"), "render --time-range 2:7")
 
 # colocalisation against numpy: Pearson's r and Manders' M1, M2 within a
 # mask written by nibabel, with thresholds; a channel's histogram at a step

@@ -1,7 +1,8 @@
 /*
  * NIfTI reading: the MNI template, files whose headers are built here byte by
  * byte (NIfTI-2 with scaling and an sform, a NIfTI-1 .hdr/.img pair with a
- * qform, gzip with pixdim only, 2-D), and bad input.
+ * qform, gzip with pixdim only, 2-D), a 5-D file's time steps and channels
+ * (also through vv_time_series), and bad input.
  */
 #include "testutil.h"
 
@@ -9,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <zlib.h>
@@ -422,6 +424,114 @@ test_bad_input(void **state) {
     free(good);
 }
 
+/* Voxel (i, j, k) of time step t, channel c in test_time_steps. */
+static uint16_t
+step_value(int i, int j, int k, int t, int c) {
+    return (uint16_t)(c * 20000 + t * 1000 + (k * 12 + j) * 16 + i);
+}
+
+/*
+ * A 5-D NIfTI-2 (16 x 12 x 10 voxels, 6 time steps, 2 channels; u16; time
+ * in ms): each (t, c) read through vv_volume_load with the axes reported,
+ * and the steps of channel 1 through a time series whose cache holds two:
+ * the voxels, the bound on resident steps, a read-ahead that makes the
+ * next get read nothing, a step out of range, volumes outliving eviction.
+ */
+static void
+test_time_steps(void **state) {
+    (void)state;
+    enum { NX = 16, NY = 12, NZ = 10, NT = 6, NC = 2 };
+    hdr_spec sp = {.version = 2,
+                   .dim = {5, NX, NY, NZ, NT, NC, 1, 1},
+                   .datatype = 512, /* DT_UINT16 */
+                   .bitpix = 16,
+                   .pixdim = {1, 1, 1, 1, 40, 1, 1, 1},
+                   .slope = 1,
+                   .xyzt_units = 2 | 16}; /* mm, ms */
+    size_t n = (size_t)NX * NY * NZ * NT * NC;
+    uint16_t *data = malloc(n * sizeof *data);
+    assert_non_null(data);
+    size_t q = 0;
+    for (int c = 0; c < NC; c++)
+        for (int t = 0; t < NT; t++)
+            for (int k = 0; k < NZ; k++)
+                for (int j = 0; j < NY; j++)
+                    for (int i = 0; i < NX; i++)
+                        data[q++] = step_value(i, j, k, t, c);
+    write_nifti(out_path("series5d.nii"), &sp, data, n * sizeof *data);
+    free(data);
+    const char *path = out_path("series5d.nii");
+
+    for (int c = 0; c < NC; c++)
+        for (int t = 0; t < NT; t += 5) {
+            vv_load_options o;
+            vv_load_options_init(&o);
+            vv_load_info info;
+            o.channel = c;
+            o.time = t;
+            o.info = &info;
+            vv_volume *v = NULL;
+            vt_ok(vv_volume_load(&v, path, &o));
+            assert_int_equal(info.n_channels, NC);
+            assert_int_equal(info.n_times, NT);
+            assert_near(info.time_step, 0.040, 1e-9);
+            assert_int_equal(vv_volume_get(v, 3, 5, 7), step_value(3, 5, 7, t, c));
+            assert_int_equal(vv_volume_get(v, NX - 1, NY - 1, NZ - 1),
+                             step_value(NX - 1, NY - 1, NZ - 1, t, c));
+            vv_volume_free(v);
+        }
+    vv_load_options o;
+    vv_load_options_init(&o);
+    o.time = NT;
+    vv_volume *bad = NULL;
+    vt_err(vv_volume_load(&bad, path, &o));
+    assert_non_null(strstr(vv_error_message(), "time step 6 asked, the file has 6"));
+
+    o.time = -1;
+    o.channel = 1;
+    vv_time_series *ts = NULL;
+    const uint64_t step_bytes = (uint64_t)NX * NY * NZ * 2;
+    vt_ok(vv_time_series_open(&ts, path, &o, 2 * step_bytes));
+    assert_int_equal(vv_time_series_count(ts), NT);
+    assert_int_equal(vv_time_series_info(ts)->n_channels, NC);
+    vv_volume *keep = NULL;
+    int reads = 0, resident = 0;
+    for (int t = 0; t < NT; t++) {
+        vv_volume *v = NULL;
+        vt_ok(vv_time_series_get(ts, t, &v));
+        assert_int_equal(vv_volume_get(v, 1, 2, 3), step_value(1, 2, 3, t, 1));
+        vv_time_series_stats(ts, &reads, &resident, NULL);
+        assert_true(resident <= 2);
+        if (t == 0)
+            keep = v; /* evicted later, still ours */
+        else
+            vv_volume_free(v);
+    }
+    assert_int_equal(reads, NT);
+    assert_int_equal(vv_volume_get(keep, 1, 2, 3), step_value(1, 2, 3, 0, 1));
+    vv_volume_free(keep);
+    /* a read-ahead of step 1 (evicted): the get that follows reads nothing */
+    vv_time_series_prefetch(ts, 1);
+    for (int tries = 0; tries < 5000; tries++) {
+        vv_time_series_stats(ts, &reads, NULL, NULL);
+        if (reads == NT + 1)
+            break;
+        nanosleep(&(struct timespec){0, 1000000}, NULL);
+    }
+    assert_int_equal(reads, NT + 1);
+    vv_volume *v1 = NULL;
+    vt_ok(vv_time_series_get(ts, 1, &v1));
+    vv_time_series_stats(ts, &reads, &resident, NULL);
+    assert_int_equal(reads, NT + 1);
+    assert_int_equal(vv_volume_get(v1, 0, 0, 0), step_value(0, 0, 0, 1, 1));
+    vv_volume_free(v1);
+    vt_err(vv_time_series_get(ts, NT, &v1));
+    assert_null(v1);
+    /* freed with a read-ahead perhaps in flight */
+    vv_time_series_prefetch(ts, 4);
+    vv_time_series_free(ts);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
@@ -431,6 +541,7 @@ main(void) {
         cmocka_unit_test(test_hdr_img_pair_qform),
         cmocka_unit_test(test_pixdim_only_f64_scaled_gz),
         cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_time_steps),
     };
     return vt_run_tests(tests, NULL, NULL);
 }

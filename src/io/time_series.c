@@ -1,0 +1,261 @@
+/*
+ * The time steps of a file, read step by step into a cache bounded by bytes,
+ * with one background thread that reads the next step ahead (the volume
+ * source of a time series: DESIGN.md, "Volume sources").
+ */
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/internal.h"
+#include "volvis/io.h"
+
+enum { STEP_EMPTY, STEP_READING, STEP_READY, STEP_FAILED };
+
+typedef struct step {
+    int state;
+    vv_volume *volume; /* STEP_READY: the cache's reference */
+    uint64_t last_use; /* the use clock at the last ask */
+    vv_status status;  /* STEP_FAILED */
+    char *message;     /* STEP_FAILED: the read's error trace */
+} step;
+
+struct vv_time_series {
+    char *path;
+    vv_load_options opt;
+    vv_load_info info;
+    int n;
+    int dims[3];
+    vv_voxel_type type;
+    uint64_t step_bytes, cache_bytes;
+    step *steps;
+    pthread_mutex_t lock;
+    pthread_cond_t changed; /* a step's state changed, or a prefetch was asked */
+    uint64_t clock;
+    int reads;
+    int pending; /* the step the thread reads next, -1: none */
+    int quit;
+    int has_thread;
+    pthread_t thread;
+};
+
+/* Drops the least recently used ready steps until the cache holds at most
+ * cache_bytes, keeping @p keep. Under the lock. */
+static void
+evict(vv_time_series *ts, int keep) {
+    for (;;) {
+        uint64_t held = 0;
+        int oldest = -1;
+        for (int t = 0; t < ts->n; t++) {
+            if (ts->steps[t].state != STEP_READY)
+                continue;
+            held += ts->step_bytes;
+            if (t != keep && (oldest < 0 || ts->steps[t].last_use < ts->steps[oldest].last_use))
+                oldest = t;
+        }
+        if (held <= ts->cache_bytes || oldest < 0)
+            return;
+        vv_volume_free(ts->steps[oldest].volume);
+        ts->steps[oldest].volume = NULL;
+        ts->steps[oldest].state = STEP_EMPTY;
+    }
+}
+
+/* Reads step @p t, which the caller marked STEP_READING, without the lock;
+ * stores the result under it and wakes the waiters. */
+static void
+read_step(vv_time_series *ts, int t) {
+    vv_load_options o = ts->opt;
+    o.time = t;
+    o.info = NULL;
+    vv_volume *v = NULL;
+    vv_status s = vv_volume_load(&v, ts->path, &o);
+    if (s == VV_OK && (v->dims[0] != ts->dims[0] || v->dims[1] != ts->dims[1] ||
+                       v->dims[2] != ts->dims[2] || v->type != ts->type)) {
+        s = vv_error_set(VV_ERR_FORMAT,
+                         "time series: %s: time step %d is %d x %d x %d %s, step 0 is %d x %d x "
+                         "%d %s (every step of a series has one shape)",
+                         vv_path_basename(ts->path), t, v->dims[0], v->dims[1], v->dims[2],
+                         vv_voxel_type_name(v->type), ts->dims[0], ts->dims[1], ts->dims[2],
+                         vv_voxel_type_name(ts->type));
+        vv_volume_free(v);
+        v = NULL;
+    }
+    char *msg = s == VV_OK ? NULL : strdup(vv_error_message());
+    pthread_mutex_lock(&ts->lock);
+    step *st = &ts->steps[t];
+    ts->reads++;
+    if (s == VV_OK) {
+        st->state = STEP_READY;
+        st->volume = v;
+        st->last_use = ++ts->clock;
+        evict(ts, t);
+    } else {
+        st->state = STEP_FAILED;
+        st->status = s;
+        st->message = msg;
+    }
+    pthread_cond_broadcast(&ts->changed);
+    pthread_mutex_unlock(&ts->lock);
+}
+
+static void *
+prefetch_main(void *arg) {
+    vv_time_series *ts = arg;
+    pthread_mutex_lock(&ts->lock);
+    for (;;) {
+        while (!ts->quit && ts->pending < 0)
+            pthread_cond_wait(&ts->changed, &ts->lock);
+        if (ts->quit)
+            break;
+        int t = ts->pending;
+        ts->pending = -1;
+        if (ts->steps[t].state != STEP_EMPTY)
+            continue;
+        ts->steps[t].state = STEP_READING;
+        pthread_mutex_unlock(&ts->lock);
+        read_step(ts, t);
+        pthread_mutex_lock(&ts->lock);
+    }
+    pthread_mutex_unlock(&ts->lock);
+    return NULL;
+}
+
+vv_status
+vv_time_series_open(vv_time_series **out, const char *path, const vv_load_options *opt,
+                    uint64_t cache_bytes) {
+    if (!out || !path)
+        return vv_error_set(VV_ERR_INVALID, "time series: NULL argument");
+    *out = NULL;
+    vv_time_series *ts = calloc(1, sizeof *ts);
+    if (!ts || !(ts->path = strdup(path))) {
+        free(ts);
+        return vv_error_set(VV_ERR_NOMEM, "time series: out of memory");
+    }
+    if (opt)
+        ts->opt = *opt;
+    else
+        vv_load_options_init(&ts->opt);
+    ts->opt.time = 0;
+    ts->opt.info = &ts->info;
+    vv_volume *v0 = NULL;
+    vv_status s = vv_volume_load(&v0, path, &ts->opt);
+    ts->opt.info = NULL;
+    if (s == VV_OK && !(ts->steps = calloc((size_t)ts->info.n_times, sizeof *ts->steps)))
+        s = vv_error_set(VV_ERR_NOMEM, "time series: out of memory");
+    if (s != VV_OK) {
+        vv_volume_free(v0);
+        free(ts->path);
+        free(ts);
+        return s;
+    }
+    ts->n = ts->info.n_times;
+    memcpy(ts->dims, v0->dims, sizeof ts->dims);
+    ts->type = v0->type;
+    ts->step_bytes = vv_volume_voxel_count(v0) * vv_voxel_type_size(v0->type);
+    ts->cache_bytes = cache_bytes ? cache_bytes : 3 * ts->step_bytes;
+    ts->steps[0].state = STEP_READY;
+    ts->steps[0].volume = v0;
+    ts->steps[0].last_use = ++ts->clock;
+    ts->reads = 1;
+    ts->pending = -1;
+    pthread_mutex_init(&ts->lock, NULL);
+    pthread_cond_init(&ts->changed, NULL);
+    evict(ts, 0);
+    *out = ts;
+    return VV_OK;
+}
+
+int
+vv_time_series_count(const vv_time_series *ts) {
+    return ts ? ts->n : 0;
+}
+
+const vv_load_info *
+vv_time_series_info(const vv_time_series *ts) {
+    return ts ? &ts->info : NULL;
+}
+
+vv_status
+vv_time_series_get(vv_time_series *ts, int t, vv_volume **out) {
+    if (!ts || !out)
+        return vv_error_set(VV_ERR_INVALID, "time series: NULL argument");
+    *out = NULL;
+    if (t < 0 || t >= ts->n)
+        return vv_error_set(VV_ERR_INVALID,
+                            "time series: %s: time step %d asked, it has %d (from 0)",
+                            vv_path_basename(ts->path), t, ts->n);
+    pthread_mutex_lock(&ts->lock);
+    step *st = &ts->steps[t];
+    while (st->state == STEP_READING)
+        pthread_cond_wait(&ts->changed, &ts->lock);
+    if (st->state == STEP_EMPTY) {
+        st->state = STEP_READING;
+        pthread_mutex_unlock(&ts->lock);
+        read_step(ts, t);
+        pthread_mutex_lock(&ts->lock);
+    }
+    vv_status s = VV_OK;
+    if (st->state == STEP_READY) {
+        st->last_use = ++ts->clock;
+        *out = vv_volume_ref(st->volume);
+    } else {
+        s = vv_error_set(st->status, "%s", st->message ? st->message : "time step unreadable");
+    }
+    pthread_mutex_unlock(&ts->lock);
+    return s;
+}
+
+void
+vv_time_series_prefetch(vv_time_series *ts, int t) {
+    if (!ts || t < 0 || t >= ts->n)
+        return;
+    pthread_mutex_lock(&ts->lock);
+    if (ts->steps[t].state == STEP_EMPTY) {
+        if (!ts->has_thread && pthread_create(&ts->thread, NULL, prefetch_main, ts) == 0)
+            ts->has_thread = 1;
+        ts->pending = t;
+        pthread_cond_broadcast(&ts->changed);
+    }
+    pthread_mutex_unlock(&ts->lock);
+}
+
+void
+vv_time_series_stats(vv_time_series *ts, int *reads, int *resident, uint64_t *bytes) {
+    int r = 0, n = 0;
+    if (ts) {
+        pthread_mutex_lock(&ts->lock);
+        r = ts->reads;
+        for (int t = 0; t < ts->n; t++)
+            n += ts->steps[t].state == STEP_READY;
+        pthread_mutex_unlock(&ts->lock);
+    }
+    if (reads)
+        *reads = r;
+    if (resident)
+        *resident = n;
+    if (bytes)
+        *bytes = ts ? (uint64_t)n * ts->step_bytes : 0;
+}
+
+void
+vv_time_series_free(vv_time_series *ts) {
+    if (!ts)
+        return;
+    pthread_mutex_lock(&ts->lock);
+    ts->quit = 1;
+    pthread_cond_broadcast(&ts->changed);
+    pthread_mutex_unlock(&ts->lock);
+    if (ts->has_thread)
+        pthread_join(ts->thread, NULL);
+    for (int t = 0; t < ts->n; t++) {
+        vv_volume_free(ts->steps[t].volume);
+        free(ts->steps[t].message);
+    }
+    pthread_mutex_destroy(&ts->lock);
+    pthread_cond_destroy(&ts->changed);
+    free(ts->steps);
+    free(ts->path);
+    free(ts);
+}
