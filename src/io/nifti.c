@@ -217,12 +217,26 @@ set_geometry(vv_volume *v, const nifti_image *nim) {
     }
 }
 
+/* 1 when the stored voxels are scaled (scl_slope, scl_inter). */
+static int
+is_scaled(const nifti_image *nim) {
+    double slope = nim->scl_slope, inter = nim->scl_inter;
+    return isfinite(slope) && slope != 0 && !(slope == 1 && inter == 0);
+}
+
+/* 1 when the stored voxels are the volume's as they are: no scaling and no
+ * 64-bit integers to convert. */
+static int
+stored_as_is(const nifti_image *nim) {
+    return !is_scaled(nim) && nim->datatype != DT_INT64 && nim->datatype != DT_UINT64;
+}
+
 /* The 3-D volume at @p data (the voxels of one time step and channel). */
 static vv_status
 convert_data(vv_volume **out, const nifti_image *nim, const void *data, const int dims[3],
              vv_voxel_type stored) {
     double slope = nim->scl_slope, inter = nim->scl_inter;
-    int scaled = isfinite(slope) && slope != 0 && !(slope == 1 && inter == 0);
+    int scaled = is_scaled(nim);
     if (!isfinite(inter))
         inter = 0;
     int is64 = nim->datatype == DT_INT64 || nim->datatype == DT_UINT64;
@@ -463,6 +477,7 @@ read_locked(vv_volume **out, const char *path, int channel, int time, vv_load_in
                             ".nii, .nii.gz, .hdr or .img)");
     int dims[3], nt = 1, nc = 1;
     vv_voxel_type stored = VV_U8;
+    vv_volume *direct = NULL; /* the volume read into, when stored as it is */
     vv_status s = header_dims(nim, dims, &stored, &nt, &nc);
     int ch = channel < 0 ? 0 : channel, tp = time < 0 ? 0 : time;
     if (s == VV_OK && ch >= nc)
@@ -488,13 +503,20 @@ read_locked(vv_volume **out, const char *path, int channel, int time, vv_load_in
                              nim->fname ? vv_path_basename(nim->fname) : "another file");
         int64_t bytes = s == VV_OK ? vol_bytes : 0;
         znzFile fp = NULL;
-        if (s == VV_OK && !(nim->data = malloc(bytes > 0 ? (size_t)bytes : 1)))
+        /* voxels stored as they are go straight into the volume: one buffer
+         * of the volume's size is allocated and filled, not two */
+        void *dst = NULL;
+        if (s == VV_OK && stored_as_is(nim)) {
+            if ((s = vv_volume_new(&direct, dims, stored)) == VV_OK)
+                dst = direct->data;
+        } else if (s == VV_OK && !(dst = nim->data = malloc(bytes > 0 ? (size_t)bytes : 1))) {
             s = vv_error_set(VV_ERR_NOMEM, "out of memory for %lld bytes", (long long)bytes);
+        }
         if (s == VV_OK && znz_isnull(fp = znzopen(path, "rb", nifti_is_gzfile(path))))
             s = vv_error_set(VV_ERR_IO, "cannot open: %s", strerror(errno));
         if (s == VV_OK &&
             (znzseek(fp, (znz_off_t)(nim->iname_offset + vol_index * vol_bytes), SEEK_SET) < 0 ||
-             nifti_read_buffer(fp, nim->data, bytes, nim) != bytes))
+             nifti_read_buffer(fp, dst, bytes, nim) != bytes))
             s = vv_error_set(VV_ERR_FORMAT,
                              "cannot read the voxel data (file truncated or corrupt)");
         if (!znz_isnull(fp))
@@ -510,12 +532,20 @@ read_locked(vv_volume **out, const char *path, int channel, int time, vv_load_in
     }
     if (s == VV_OK && !one_file && nifti_image_load(nim) != 0)
         s = vv_error_set(VV_ERR_FORMAT, "cannot read the voxel data (file truncated or corrupt)");
-    if (s == VV_OK && !nim->data)
+    if (s == VV_OK && direct) {
+        set_geometry(direct, nim);
+        direct->modification = VV_MOD_ORIGINAL;
+        vv_volume_update_range(direct);
+        *out = direct;
+        direct = NULL;
+    } else if (s == VV_OK && !nim->data) {
         s = vv_error_set(VV_ERR_FORMAT, "no voxel data");
-    if (s == VV_OK)
+    } else if (s == VV_OK) {
         s = convert_data(out, nim,
                          one_file ? nim->data : (const char *)nim->data + vol_index * vol_bytes,
                          dims, stored);
+    }
+    vv_volume_free(direct);
     if (s == VV_OK && info) {
         info->n_channels = nc;
         info->n_times = nt;
