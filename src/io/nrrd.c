@@ -718,7 +718,6 @@ check_promise(const char *path, const NrrdIoState *nio, const header_scan *hs, u
     return VV_OK;
 }
 
-/* The body of vv_nrrd_read, under teem_lock. */
 /* Replaces *@p n by its slice at @p pos along @p axis (Teem's nrrdSlice). */
 static vv_status
 slice_axis(Nrrd **n, int axis, int pos) {
@@ -734,6 +733,7 @@ slice_axis(Nrrd **n, int axis, int pos) {
     return VV_OK;
 }
 
+/* The body of vv_nrrd_read, under teem_lock. */
 static vv_status
 read_locked(vv_volume **out, const char *path, const header_scan *hs, int channel, int time,
             vv_load_info *info) {
@@ -766,16 +766,20 @@ read_locked(vv_volume **out, const char *path, const header_scan *hs, int channe
                                tp, nt, nt == 1 ? "" : "s");
         goto done;
     }
-    /* the whole file is read, then sliced: its size is budgeted */
-    if (nc * nt > 1 &&
-        (s = vv_memory_budget_check((uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2] *
-                                        (uint64_t)nc * (uint64_t)nt * nrrdTypeSize[n->type],
-                                    "NRRD channels and time steps")) != VV_OK)
+    /* the whole file is read, then sliced: its size is limited and budgeted
+     * (the 3-D count is within the volume limits already; nc, nt <= 2^16) */
+    const uint64_t count3 = (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2];
+    const uint64_t steps = (uint64_t)nc * (uint64_t)nt;
+    if (steps > VV_VOLUME_MAX_BYTES / (count3 * nrrdTypeSize[n->type])) {
+        s = vv_error_set(VV_ERR_LIMIT,
+                         "%d channels x %d time steps of %llu voxels (limit %llu bytes)", nc, nt,
+                         (unsigned long long)count3, (unsigned long long)VV_VOLUME_MAX_BYTES);
         goto done;
-    s = check_promise(path, nio, hs,
-                      (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2] * (uint64_t)nc *
-                          (uint64_t)nt,
-                      nrrdTypeSize[n->type]);
+    }
+    if (steps > 1 && (s = vv_memory_budget_check(count3 * steps * nrrdTypeSize[n->type],
+                                                 "NRRD channels and time steps")) != VV_OK)
+        goto done;
+    s = check_promise(path, nio, hs, count3 * steps, nrrdTypeSize[n->type]);
     if (s != VV_OK)
         goto done;
     nrrdNuke(n);

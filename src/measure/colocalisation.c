@@ -18,6 +18,18 @@ typedef struct slice_sums {
     double b_over, b_both;
 } slice_sums;
 
+/* 1 when voxel @p q is measured (inside the mask, both values finite), its
+ * values in *@p x and *@p y. */
+static inline int
+pair_at(const vv_volume *a, const vv_volume *b, const vv_volume *mask, size_t q, double *x,
+        double *y) {
+    if (mask && vv_voxel_at(mask, q) == 0)
+        return 0;
+    *x = vv_voxel_at(a, q);
+    *y = vv_voxel_at(b, q);
+    return isfinite(*x) && isfinite(*y);
+}
+
 static int
 same_dims(const vv_volume *x, const vv_volume *y) {
     return x->dims[0] == y->dims[0] && x->dims[1] == y->dims[1] && x->dims[2] == y->dims[2];
@@ -49,10 +61,8 @@ vv_measure_colocalisation(const vv_volume *a, const vv_volume *b, const vv_volum
         slice_sums *s = &ss[k];
         const size_t q0 = (size_t)k * slice;
         for (size_t q = q0; q < q0 + slice; q++) {
-            if (mask && vv_voxel_at(mask, q) == 0)
-                continue;
-            double x = vv_voxel_at(a, q), y = vv_voxel_at(b, q);
-            if (!isfinite(x) || !isfinite(y))
+            double x, y;
+            if (!pair_at(a, b, mask, q, &x, &y))
                 continue;
             s->n++;
             s->sa += x;
@@ -82,10 +92,8 @@ vv_measure_colocalisation(const vv_volume *a, const vv_volume *b, const vv_volum
         slice_sums *s = &ss[k];
         const size_t q0 = (size_t)k * slice;
         for (size_t q = q0; q < q0 + slice; q++) {
-            if (mask && vv_voxel_at(mask, q) == 0)
-                continue;
-            double x = vv_voxel_at(a, q), y = vv_voxel_at(b, q);
-            if (!isfinite(x) || !isfinite(y))
+            double x, y;
+            if (!pair_at(a, b, mask, q, &x, &y))
                 continue;
             double dx = x - ma, dy = y - mb;
             s->saa += dx * dx;
