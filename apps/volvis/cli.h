@@ -252,6 +252,23 @@ void cli_proxy_opacity_unit(vv_world *w, const vv_volume *whole, const vv_volume
  * cli_render_turn. 0 or CLI_EXIT_FAIL after printing the error.
  */
 int cli_render_world(const cli_render_args *r, vv_world **out);
+/** The time steps of a volume file's object: a vv_time_series per channel. */
+typedef struct cli_time_source {
+    int n;                               /**< channels (1 for an object of one) */
+    vv_time_series *ts[VV_MAX_CHANNELS]; /**< channel c's steps */
+} cli_time_source;
+
+/**
+ * Opens the time steps of r->input for volume object @p o of the World built
+ * from it (its channels' file indices, r's series and raw description).
+ * Errors: those of vv_time_series_open (src is left closed).
+ */
+vv_status cli_time_source_open(const cli_render_args *r, const vv_object *o, cli_time_source *src);
+/** Puts step @p t into @p o (vv_object_replace_volumes) and reads step @p next (>= 0) ahead. */
+vv_status cli_time_source_apply(cli_time_source *src, vv_object *o, int t, int next);
+/** Frees the series; the struct may have been zeroed only. */
+void cli_time_source_close(cli_time_source *src);
+
 /** The view turn of --azimuth, --elevation, --zoom (vv_anim_view_turn), then cli_render_ortho. */
 void cli_render_turn(const cli_render_args *r, vv_world *w);
 /** --ortho: parallel projection framed on the World (the height divided by --zoom). */

@@ -270,6 +270,54 @@ add_sequences(cli_args *a, const cli_render_args *r, double orbit, vv_world *w,
     return 0;
 }
 
+/* An object's ".time" track on a volume file: each frame's snapshot gets
+ * the step its object's time asks for, read through a time series. */
+typedef struct time_frames {
+    const cli_render_args *r;
+    int volume_file; /* INPUT is a volume file (else a scene: no time steps of its volumes) */
+    int base;        /* the step the base World's object holds (--time, else 0) */
+    int opened;
+    cli_time_source src;
+} time_frames;
+
+static vv_status
+prepare_time_step(void *user, int frame, vv_world *w) {
+    (void)frame;
+    time_frames *tf = user;
+    for (int i = 0; i < w->n_objects; i++) {
+        vv_object *o = w->objects[i];
+        if (o->type != VV_OBJECT_VOLUME || o->time == tf->base)
+            continue;
+        vv_status s;
+        if (!tf->volume_file)
+            return vv_error_set(VV_ERR_INVALID,
+                                "object '%s': a time track on a volume needs a volume file as "
+                                "INPUT (a scene's volumes are one time step)",
+                                o->name);
+        if (!tf->opened) {
+            if ((s = cli_time_source_open(tf->r, o, &tf->src)) != VV_OK)
+                return s;
+            tf->opened = 1;
+        }
+        int next = o->time + 1 < vv_time_series_count(tf->src.ts[0]) ? o->time + 1 : -1;
+        if ((s = cli_time_source_apply(&tf->src, o, o->time, next)) != VV_OK)
+            return vv_error_prefix(s, "object '%s': time %d", o->name, o->time);
+    }
+    return VV_OK;
+}
+
+/* 1 when a track of @p anim animates an object's time step. */
+static int
+has_time_track(const vv_animation *anim) {
+    for (int i = 0; i < anim->n_tracks; i++) {
+        const char *p = anim->tracks[i].property;
+        size_t n = strlen(p);
+        if (n > 5 && !strcmp(p + n - 5, ".time") && !strncmp(p, "objects", 7))
+            return 1;
+    }
+    return 0;
+}
+
 /* Renders every frame (under mpirun through cli_animate_parallel) and
  * prints what was written. */
 static int
@@ -290,12 +338,25 @@ render_frames(cli_args *a, const cli_render_args *r, vv_animation *anim, vv_worl
     vv_anim_render_stats stats;
     vv_status st;
     vv_error_clear();
+    /* a volume file's time steps, when a track animates them (a grid's
+     * time is its field NAME<T>, a scene's volumes have no file axes here) */
+    time_frames tf = {.r = r, .base = r->has_time ? r->time : 0};
+    tf.volume_file = r->input && (r->has_raw || vv_format_detect(r->input) != VV_FORMAT_UNKNOWN);
+    if (has_time_track(anim)) {
+        for (int i = 0; i < w->n_objects && tf.volume_file; i++)
+            if (w->objects[i]->type == VV_OBJECT_VOLUME)
+                w->objects[i]->time = tf.base;
+        o.prepare_frame = prepare_time_step;
+        o.prepare_frame_user = &tf;
+    }
     if (vv_parallel_launched()) {
         /* under mpirun: rank 0 runs the Animator, the others render with it */
         int mrank = 0, msize = 1;
         vv_parallel_init(NULL, NULL, &mrank, &msize);
         int rc = cli_animate_parallel(r, anim, w, ren, &o, &stats, &st);
         cli_progress_end(&pr);
+        if (tf.opened)
+            cli_time_source_close(&tf.src);
         if (rc || mrank != 0)
             return rc;
         if (!r->quiet)
@@ -307,6 +368,8 @@ render_frames(cli_args *a, const cli_render_args *r, vv_animation *anim, vv_worl
     }
     st = vv_animation_render(anim, w, ren, &o, &stats);
     cli_progress_end(&pr);
+    if (tf.opened)
+        cli_time_source_close(&tf.src);
     if (st == VV_ERR_CANCELLED) {
         cli_error("animate: interrupted after %d of %d frames; run the same command again to "
                   "resume",

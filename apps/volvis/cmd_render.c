@@ -103,42 +103,20 @@ render_time_range(const cli_render_args *r, const int range[3], vv_world *w, vv_
         cli_error("%s: --time-range needs a volume file", r->input);
         return CLI_EXIT_USAGE;
     }
-    int nch = o->n_channels > 0 ? o->n_channels : 1;
-    vv_time_series *ts[VV_MAX_CHANNELS] = {NULL};
-    vv_status s = VV_OK;
-    for (int c = 0; c < nch && s == VV_OK; c++) {
-        vv_load_options opt;
-        vv_load_options_init(&opt);
-        opt.series = r->series;
-        opt.channel = o->n_channels > 0 ? o->channels[c].index : r->channel;
-        if (r->has_raw) {
-            opt.format = VV_FORMAT_RAW;
-            opt.has_raw = 1;
-            opt.raw = r->raw;
-        }
-        vv_error_clear();
-        s = vv_time_series_open(&ts[c], r->input, &opt, 0);
-    }
+    cli_time_source src;
+    vv_status s = cli_time_source_open(r, o, &src);
     int rc = s == VV_OK ? 0 : cli_fail(s, r->input);
-    if (!rc && range[1] >= vv_time_series_count(ts[0])) {
+    int steps = rc ? 0 : vv_time_series_count(src.ts[0]);
+    if (!rc && range[1] >= steps) {
         cli_error("%s: --time-range %d:%d: the file has %d time step%s (from 0)", r->input,
-                  range[0], range[1], vv_time_series_count(ts[0]),
-                  vv_time_series_count(ts[0]) == 1 ? "" : "s");
+                  range[0], range[1], steps, steps == 1 ? "" : "s");
         rc = CLI_EXIT_FAIL;
     }
     double t_all = cli_now();
     int frames = 0;
     for (int t = range[0]; !rc && t <= range[1]; t += range[2]) {
-        vv_volume *v[VV_MAX_CHANNELS] = {NULL};
         vv_error_clear();
-        for (int c = 0; c < nch && s == VV_OK; c++)
-            s = vv_time_series_get(ts[c], t, &v[c]);
-        for (int c = 0; c < nch && s == VV_OK; c++)
-            vv_time_series_prefetch(ts[c], t + range[2]);
-        if (s == VV_OK)
-            s = vv_object_replace_volumes(o, nch, v);
-        for (int c = 0; c < nch; c++)
-            vv_volume_free(v[c]); /* the object holds its own references */
+        s = cli_time_source_apply(&src, o, t, t + range[2] <= range[1] ? t + range[2] : -1);
         double t0 = cli_now();
         if (s == VV_OK)
             s = vv_renderer_render(ren, w, &w->view, ro, img);
@@ -165,8 +143,7 @@ render_time_range(const cli_render_args *r, const int range[3], vv_world *w, vv_
         printf("%d time steps in %.2f s (%.2f steps a second)\n", frames, secs,
                secs > 0 ? frames / secs : 0.0);
     }
-    for (int c = 0; c < nch; c++)
-        vv_time_series_free(ts[c]);
+    cli_time_source_close(&src);
     return rc;
 }
 

@@ -789,3 +789,48 @@ cli_render_note_left_out(const vv_renderer *ren, const vv_world *w) {
             "renderers' lists what each renderer draws)\n",
             in->name, names, n > 4 ? " and more" : "");
 }
+
+vv_status
+cli_time_source_open(const cli_render_args *r, const vv_object *o, cli_time_source *src) {
+    memset(src, 0, sizeof *src);
+    src->n = o->n_channels > 0 ? o->n_channels : 1;
+    vv_status s = VV_OK;
+    for (int c = 0; c < src->n && s == VV_OK; c++) {
+        vv_load_options opt;
+        vv_load_options_init(&opt);
+        opt.series = r->series;
+        opt.channel = o->n_channels > 0 ? o->channels[c].index : r->channel;
+        if (r->has_raw) {
+            opt.format = VV_FORMAT_RAW;
+            opt.has_raw = 1;
+            opt.raw = r->raw;
+        }
+        vv_error_clear();
+        s = vv_time_series_open(&src->ts[c], r->input, &opt, 0);
+    }
+    if (s != VV_OK)
+        cli_time_source_close(src);
+    return s;
+}
+
+vv_status
+cli_time_source_apply(cli_time_source *src, vv_object *o, int t, int next) {
+    vv_volume *v[VV_MAX_CHANNELS] = {NULL};
+    vv_status s = VV_OK;
+    for (int c = 0; c < src->n && s == VV_OK; c++)
+        s = vv_time_series_get(src->ts[c], t, &v[c]);
+    for (int c = 0; c < src->n && s == VV_OK && next >= 0; c++)
+        vv_time_series_prefetch(src->ts[c], next);
+    if (s == VV_OK)
+        s = vv_object_replace_volumes(o, src->n, v);
+    for (int c = 0; c < src->n; c++)
+        vv_volume_free(v[c]); /* the object holds its own references */
+    return s;
+}
+
+void
+cli_time_source_close(cli_time_source *src) {
+    for (int c = 0; c < VV_MAX_CHANNELS; c++)
+        vv_time_series_free(src->ts[c]);
+    memset(src, 0, sizeof *src);
+}

@@ -87,7 +87,9 @@ typedef struct vv_anim_target {
  * "background", "ambient", "lights[i].position|direction|color|intensity",
  * "cut_planes[i].point|normal", and for an object addressed as "objects[i]"
  * or "objects.NAME": ".position", ".orientation", ".scale", ".tf",
- * ".isovalue", ".threshold", ".step", ".material.color|ambient|diffuse|
+ * ".isovalue", ".threshold", ".step", ".time" (the time step, rounded to
+ * the nearest: a grid's field NAME<T>, a volume's step as prepare_frame of
+ * vv_anim_render_options loads it), ".material.color|ambient|diffuse|
  * specular|shininess|reflectance|transparency", ".cut_planes[j].point|normal".
  */
 typedef struct vv_anim_track {
@@ -325,6 +327,15 @@ typedef struct vv_anim_render_options {
     vv_status (*render_frame)(void *user, int frame, const vv_world *w, const vv_view *view,
                               const vv_render_options *ro, vv_image *out);
     void *render_frame_user;
+    /**
+     * Called with frame @p frame's World snapshot @p w (the caller's alone,
+     * freed after the frame) before it is drawn, from the calling thread;
+     * may change it: `volvis animate` puts the time step an object's
+     * ".time" track asks for into the object (vv_time_series_get,
+     * vv_object_replace_volumes). NULL: nothing. An error stops the render.
+     */
+    vv_status (*prepare_frame)(void *user, int frame, vv_world *w);
+    void *prepare_frame_user;
 } vv_anim_render_options;
 
 /** output NULL, default render options, gamma 1, RGB, resume on, default video options. */

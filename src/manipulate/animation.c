@@ -46,6 +46,7 @@ enum {
     F_O_ISOVALUE,
     F_O_THRESHOLD,
     F_O_STEP,
+    F_O_TIME,
     F_M_COLOR,
     F_M_AMBIENT,
     F_M_DIFFUSE,
@@ -83,6 +84,7 @@ static const leaf object_leaves[] = {{"position", F_O_POSITION, VV_ANIM_VEC3},
                                      {"isovalue", F_O_ISOVALUE, VV_ANIM_SCALAR},
                                      {"threshold", F_O_THRESHOLD, VV_ANIM_SCALAR},
                                      {"step", F_O_STEP, VV_ANIM_SCALAR},
+                                     {"time", F_O_TIME, VV_ANIM_SCALAR},
                                      {"material.color", F_M_COLOR, VV_ANIM_VEC3},
                                      {"material.ambient", F_M_AMBIENT, VV_ANIM_SCALAR},
                                      {"material.diffuse", F_M_DIFFUSE, VV_ANIM_SCALAR},
@@ -204,7 +206,7 @@ vv_anim_parse_property(const char *prop, vv_anim_target *t, vv_anim_kind *kind) 
             return VV_OK;
         return vv_error_set(VV_ERR_INVALID,
                             "unknown property '%s' (an object has position, orientation, scale, "
-                            "tf, isovalue, threshold, step, material.color|ambient|diffuse|"
+                            "tf, isovalue, threshold, step, time, material.color|ambient|diffuse|"
                             "specular|shininess|reflectance|transparency, cut_planes[j].point|"
                             "normal)",
                             prop);
@@ -1045,6 +1047,9 @@ apply_track(const vv_anim_track *t, vv_world *w, double time, vv_tf *tfbuf) {
         break;
     case F_O_STEP:
         o->step = v[0] > 1e-3 ? v[0] : 1e-3;
+        break;
+    case F_O_TIME: /* the nearest step; the caller reads it (prepare_frame) */
+        o->time = v[0] > 0 && v[0] < 1e6 ? (int)lround(v[0]) : v[0] >= 1e6 ? 1000000 : 0;
         break;
     case F_M_COLOR:
         o->material.color = clamp_color(x);

@@ -408,6 +408,11 @@ vv_animation_render(const vv_animation *a, const vv_world *base, vv_renderer *re
             vv_world *snap = NULL;
             if ((s = vv_animation_eval_frame(a, base, k, &snap)) != VV_OK)
                 break;
+            if (opt->prepare_frame &&
+                (s = opt->prepare_frame(opt->prepare_frame_user, k, snap)) != VV_OK) {
+                vv_world_free(snap);
+                break;
+            }
             vv_render_options ro = opt->render;
             frame_progress fp = {&opt->progress, k, n};
             ro.progress.fn = on_render_progress;

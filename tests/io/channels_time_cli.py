@@ -21,7 +21,8 @@ then checks:
   value range and the time increment;
 - `volvis render --channels C` takes the file's colour when no --colors;
 - `volvis render --time-range A:B:S` writes each step's image, equal to
-  `--time T` alone, one channel and several;
+  `--time T` alone, one channel and several; `volvis animate` with an
+  `objects[0].time` track draws step k in frame k, equal to `--time k`;
 - `volvis measure --coloc C1,C2 --mask M --thresholds TA,TB` equals numpy's
   Pearson's r and Manders' M1, M2; `--channel C --time T --histogram`
   equals numpy's histogram;
@@ -201,6 +202,38 @@ for extra in (("--tf", "500:3500"),
               f"--time-range step {t} {' '.join(extra)} equals --time {t}; step 2 skipped")
 refused(["render", ome, "--time-range", "2:7", "-o", os.path.join(OUT, "r.png")],
         "the file has 4 time steps", os.path.join(OUT, "r_t0002.png"), "render --time-range 2:7")
+
+# volvis animate with an objects[0].time track: frame k shows step k, equal
+# to the render of --time k (the transfer function given, gradients at the
+# samples as --time-range); a key past the file's steps is an error
+anim = os.path.join(OUT, "time.json")
+with open(anim, "w") as f:
+    f.write('{"fps": 1, "duration": 4, "tracks": [{"property": "objects[0].time", '
+            '"interpolation": "linear", "keys": [{"time": 0, "value": 0}, '
+            '{"time": 3, "value": 3}]}]}')
+frames = os.path.join(OUT, "frames")
+shutil.rmtree(frames, ignore_errors=True)
+os.makedirs(frames)
+same_args = ("--size", "40x40", "--ortho", "--tf", "500:3500", "--set", "gradient_budget_mb=0")
+p = volvis("animate", ome, "--animation", anim, "-o", os.path.join(frames, "f_%02d.png"), "-q",
+           *same_args)
+check(p.returncode == 0, f"animate with a time track: {p.stderr.strip()}")
+if p.returncode == 0:
+    images = []
+    for t in range(4):
+        one = os.path.join(OUT, f"anim_one_{t}.png")
+        volvis("render", ome, "--time", str(t), "-o", one, "-q", *same_args)
+        a = np.asarray(Image.open(os.path.join(frames, f"f_{t:02d}.png")))
+        images.append(a)
+        check(np.array_equal(a, np.asarray(Image.open(one))),
+              f"animate time track: frame {t} equals --time {t}")
+    check(not np.array_equal(images[0], images[3]), "animate time track: frames 0 and 3 differ")
+with open(anim, "w") as f:
+    f.write('{"fps": 1, "duration": 2, "tracks": [{"property": "objects[0].time", '
+            '"keys": [{"time": 0, "value": 0}, {"time": 1, "value": 9}]}]}')
+refused(["animate", ome, "--animation", anim, "-o", os.path.join(frames, "g_%02d.png"), "-q",
+         "--size", "16x16"], "time step 9 asked, it has 4", os.path.join(frames, "g_01.png"),
+        "animate: a time key past the file's steps")
 
 # colocalisation against numpy: Pearson's r and Manders' M1, M2 within a
 # mask written by nibabel, with thresholds; a channel's histogram at a step
