@@ -445,6 +445,8 @@ world_for_channels(const cli_render_args *r, vv_world **out) {
         vv_volume_free(v[c]); /* the object holds its own references */
     if (s != VV_OK)
         return cli_fail(s, r->input);
+    if (o && r->has_time)
+        o->time = r->time; /* the file's step it shows */
     return rc;
 }
 
@@ -460,6 +462,8 @@ world_for_volume(const cli_render_args *r, vv_world **out) {
         return rc;
     rc = cli_render_world_volume(r, v, out);
     vv_volume_free(v); /* the World holds its own reference */
+    if (!rc && r->has_time)
+        (*out)->objects[0]->time = r->time; /* the file's step it shows */
     return rc;
 }
 
@@ -821,8 +825,8 @@ cli_time_source_apply(cli_time_source *src, vv_object *o, int t, int next) {
         s = vv_time_series_get(src->ts[c], t, &v[c]);
     for (int c = 0; c < src->n && s == VV_OK && next >= 0; c++)
         vv_time_series_prefetch(src->ts[c], next);
-    if (s == VV_OK)
-        s = vv_object_replace_volumes(o, src->n, v);
+    if (s == VV_OK && (s = vv_object_replace_volumes(o, src->n, v)) == VV_OK)
+        o->time = t;
     for (int c = 0; c < src->n; c++)
         vv_volume_free(v[c]); /* the object holds its own references */
     return s;

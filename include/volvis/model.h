@@ -578,7 +578,8 @@ typedef struct vv_object {
     vv_grid *grid;                              /**< VV_OBJECT_GRID: one reference held */
     char field[VV_GRID_FIELD_NAME_MAX];         /**< grid: field shown ("" = the first) */
     int component;                              /**< grid: vector component, -1 = magnitude */
-    int time;                                   /**< grid: time step (vv_grid_find_field) */
+    int time; /**< grid: time step (vv_grid_find_field); volume: the time step of its file
+                   its voxels are (scene files' "time", vv_time_series users set it) */
     /** Volume objects with several channels (vv_object_set_channels): 0 for
      * an object of one channel (volume and tf), else 2..VV_MAX_CHANNELS;
      * channels[0].volume is also `volume`. */

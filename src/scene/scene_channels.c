@@ -68,6 +68,7 @@ vv_scene_parse_channels(const sctx *c, json_t *e, const char *op, const char *fu
         vv_load_options lo;
         vv_load_options_init(&lo);
         lo.channel = index[i];
+        lo.time = o->time; /* the object's time step (its "time") */
         if ((st = vv_volume_load(&vols[i], full, &lo)) != VV_OK) {
             int line, col;
             vv_scene_path_key(fp, ip, "channel");

@@ -134,7 +134,7 @@ chain_from_json(const json_t *j, vv_filter_chain **out, int *bad_item) {
 vv_status
 vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     static const char *const own[] = {"file",     "origin", "spacing", "filters",
-                                      "channels", "blend",  NULL};
+                                      "channels", "blend",  "time",    NULL};
     char op[PATH_MAX_LEN], kp[PATH_MAX_LEN];
     vv_scene_path_index(op, "objects", idx);
     if (json_is_object(e)) {
@@ -178,6 +178,14 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
         vv_scene_path_key(kp, op, "spacing");
         return vv_scene_serr(c, kp, "voxel spacing must be > 0");
     }
+    /* "time": the file's time step the object shows (OME-TIFF, NIfTI, NRRD) */
+    int time = -1;
+    if ((st = vv_scene_get_int_in(c, e, op, "time", &time, 0, 1000000)) != VV_OK)
+        return st;
+    if (time > 0 && json_object_get(e, "filters")) {
+        vv_scene_path_key(kp, op, "time");
+        return vv_scene_serr(c, kp, "\"filters\" apply to time step 0 of a file");
+    }
 
     char *full = vv_path_join_dir(c->path, file);
     if (!full)
@@ -205,13 +213,16 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
         st = vv_filter_load_cached(c->fcache, full, has_origin ? o3 : NULL, has_spacing ? s3 : NULL,
                                    chain, &fo, &vol);
     } else {
-        st = vv_volume_load(&vol, full, NULL);
+        vv_load_options lo;
+        vv_load_options_init(&lo);
+        lo.time = time;
+        st = vv_volume_load(&vol, full, &lo);
     }
     if (st != VV_OK) {
         vv_filter_chain_free(chain);
         free(full);
         int line, col;
-        vv_scene_path_key(kp, op, fj ? "filters" : "file");
+        vv_scene_path_key(kp, op, fj ? "filters" : time > 0 ? "time" : "file");
         vv_scene_locate(c, kp, &line, &col);
         return vv_error_prefix(st, "%s:%d:%d: %s", c->path, line, col, kp);
     }
@@ -238,6 +249,7 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
         return vv_error_prefix(st, "%s: %s", c->path, op);
     }
     o->geometry.source = full; /* kept for saving the scene again */
+    o->time = time > 0 ? time : 0;
     if (chain && vv_filter_chain_length(chain) > 0 &&
         !(o->geometry.filters = vv_strdup(vv_filter_chain_text(chain)))) {
         vv_filter_chain_free(chain);

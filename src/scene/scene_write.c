@@ -372,6 +372,8 @@ object(wctx *c, const vv_object *o, const char *file) {
         put(c, oj, "spacing", vec3(vv_vec3_make(v->spacing[0], v->spacing[1], v->spacing[2])));
         if (o->geometry.filters)
             put_str(c, oj, "filters", o->geometry.filters, "the filter chain");
+        if (o->time > 0)
+            put(c, oj, "time", json_integer(o->time));
         put_channels(c, oj, o);
     }
     put_transform(c, oj, o);

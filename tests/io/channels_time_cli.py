@@ -23,6 +23,7 @@ then checks:
 - `volvis render --time-range A:B:S` writes each step's image, equal to
   `--time T` alone, one channel and several; `volvis animate` with an
   `objects[0].time` track draws step k in frame k, equal to `--time k`;
+- a scene's volume object with "time" draws that step (channels too);
 - `volvis measure --coloc C1,C2 --mask M --thresholds TA,TB` equals numpy's
   Pearson's r and Manders' M1, M2; `--channel C --time T --histogram`
   equals numpy's histogram;
@@ -234,6 +235,45 @@ with open(anim, "w") as f:
 refused(["animate", ome, "--animation", anim, "-o", os.path.join(frames, "g_%02d.png"), "-q",
          "--size", "16x16"], "time step 9 asked, it has 4", os.path.join(frames, "g_01.png"),
         "animate: a time key past the file's steps")
+
+# scene files: a volume object's "time" draws that step of the file (the
+# same image as a scene of the step alone, written by volvis convert --time);
+# with "channels" each channel's step; a step past the file's names the key
+step2 = os.path.join(OUT, "step2.ome.tif")
+p = volvis("convert", ome, step2, "--time", "2", "-q")
+check(p.returncode == 0, f"convert --time 2 to OME-TIFF: {p.stderr.strip()}")
+
+
+def scene_png(name, body):
+    scene = os.path.join(OUT, name + ".json")
+    with open(scene, "w") as f:
+        f.write('{"objects": [%s]}' % body)
+    png = os.path.join(OUT, name + ".png")
+    q = volvis("render", scene, "-o", png, "-q", "--size", "40x40", "--ortho")
+    if q.returncode:
+        check(False, f"scene {name}: {q.stderr.strip()}")
+        return None
+    return np.asarray(Image.open(png))
+
+
+one_tf = '"transfer_function": {"opacity": [[500, 0], [3500, 0.5]]}'
+a = scene_png("scene_t2", '{"type": "volume", "file": "cells.ome.tif", "time": 2, %s}' % one_tf)
+b = scene_png("scene_step2", '{"type": "volume", "file": "step2.ome.tif", %s}' % one_tf)
+c0 = scene_png("scene_t0", '{"type": "volume", "file": "cells.ome.tif", %s}' % one_tf)
+if a is not None and b is not None and c0 is not None:
+    check(np.array_equal(a, b) and not np.array_equal(a, c0),
+          'scene "time": 2 equals a scene of step 2 alone, not of step 0')
+chans = ', "blend": "maximum", "channels": [{"channel": 0}, {"channel": 2}]'
+a = scene_png("scene_tc2", '{"type": "volume", "file": "cells.ome.tif", "time": 2%s}' % chans)
+c0 = scene_png("scene_tc0", '{"type": "volume", "file": "cells.ome.tif"%s}' % chans)
+if a is not None and c0 is not None:
+    check(not np.array_equal(a, c0), 'scene "time": 2 with "channels" draws step 2, not 0')
+bad = os.path.join(OUT, "scene_bad.json")
+with open(bad, "w") as f:
+    f.write('{"objects": [{"type": "volume", "file": "cells.ome.tif", "time": 9}]}')
+refused(["render", bad, "-o", os.path.join(OUT, "scene_bad.png"), "-q"],
+        "scene_bad.json:1:58: objects[0].time: tiff:", os.path.join(OUT, "scene_bad.png"),
+        'scene "time": 9 on 4 steps')
 
 # colocalisation against numpy: Pearson's r and Manders' M1, M2 within a
 # mask written by nibabel, with thresholds; a channel's histogram at a step

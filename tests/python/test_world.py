@@ -104,3 +104,28 @@ def test_viewer_widget(ct_head):
     v.refine()
     turned = volvis.World.for_volume(ct_head, size=(64, 64), azimuth=40)
     assert v.image.value == volvis.notebook.png_bytes(volvis.render(turned))
+
+
+def test_scene_time_step_round_trip(out_dir):
+    """A volume object's "time" (issue 30): the scene draws that time step of
+    an OME-TIFF written by tifffile, and saving the scene keeps it with the
+    channels."""
+    import json
+    import tifffile
+    rng = np.random.default_rng(3)
+    data = rng.integers(0, 4000, size=(3, 2, 4, 9, 8), dtype=np.uint16)  # T, C, Z, Y, X
+    tifffile.imwrite(str(out_dir / "cells.ome.tif"), data, metadata={"axes": "TCZYX"})
+    scene = out_dir / "s.json"
+    scene.write_text(json.dumps({"objects": [{
+        "type": "volume", "file": "cells.ome.tif", "time": 2, "blend": "maximum",
+        "channels": [{"channel": 1}, {"channel": 0}]}]}))
+    w = volvis.load_scene(str(scene))
+    obj = w.objects[0]
+    np.testing.assert_array_equal(obj.volume.array, data[2, 1])
+    again = out_dir / "again.json"
+    w.save(str(again))
+    saved = json.loads(again.read_text())["objects"][0]
+    assert saved["time"] == 2
+    assert [c["channel"] for c in saved["channels"]] == [1, 0]
+    w2 = volvis.load_scene(str(again))
+    np.testing.assert_array_equal(w2.objects[0].volume.array, data[2, 1])
