@@ -461,8 +461,11 @@ build_tables(const vv_vcache *c, const vv_object *obj, const vv_vtables_key *key
     memset(t, 0, sizeof *t);
     const size_t nb = (size_t)c->bx * (size_t)c->by * (size_t)c->bz;
     double lo = obj->volume->range[0], hi = obj->volume->range[1];
-    if (!(hi > lo))
-        hi = lo + 1;
+    /* a range too narrow for the table's scale in float (a constant volume,
+     * or denormal values whose width makes the scale infinite: NaN table
+     * indices crashed the ray caster) is widened; it then falls in one bin */
+    if (!(hi > lo) || !((VV_VC_LUT - 1) / (hi - lo) < 1e30))
+        hi = lo + fmax(1.0, fabs(lo) * 1e-6);
     t->lut_lo = (float)(lo - c->qoff);
     t->lut_scale = (float)((VV_VC_LUT - 1) / (hi - lo));
     t->bvis = malloc(nb);
