@@ -21,8 +21,13 @@
  *   time_steps_first_frame_full  seconds of a full frame of a step not drawn
  *                          before (median over the steps of the full pass)
  *
+ * Gradients are computed at the samples drawn (gradient_budget_mb=0), as
+ * `volvis render --time-range` and `volvis animate` do for time steps;
+ * --gradient-cache measures the ray caster's per-volume gradient cache
+ * instead. --resident keeps every step in the cache (drawing alone).
+ *
  * usage: bench_time_steps [--dims N] [--steps T] [--size S] [--threads N]
- *                         [--outdir DIR] [--keep]
+ *                         [--outdir DIR] [--keep] [--gradient-cache] [--resident]
  */
 #include <math.h>
 #include <stdint.h>
@@ -145,7 +150,8 @@ pass(vv_time_series *ts, vv_world *w, vv_preview *pv, int kind, int size, double
 
 int
 main(int argc, char **argv) {
-    int n = 256, steps = 20, size = 512, threads = 0, keep = 0, gradients_on_the_fly = 0;
+    int n = 256, steps = 20, size = 512, threads = 0, keep = 0, gradients_on_the_fly = 1;
+    int resident = 0; /* 1: every step stays in the cache (drawing alone after the warm-up) */
     const char *outdir = "build/bench-out/time_steps";
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--dims") && i + 1 < argc)
@@ -160,12 +166,14 @@ main(int argc, char **argv) {
             outdir = argv[++i];
         else if (!strcmp(argv[i], "--keep"))
             keep = 1;
-        else if (!strcmp(argv[i], "--gradients-on-the-fly"))
-            gradients_on_the_fly = 1;
+        else if (!strcmp(argv[i], "--gradient-cache"))
+            gradients_on_the_fly = 0;
+        else if (!strcmp(argv[i], "--resident"))
+            resident = 1;
         else {
             fprintf(stderr,
                     "usage: %s [--dims N] [--steps T] [--size S] [--threads N] [--outdir DIR] "
-                    "[--keep]\n",
+                    "[--keep] [--gradient-cache] [--resident]\n",
                     prog);
             return 2;
         }
@@ -187,7 +195,8 @@ main(int argc, char **argv) {
             bench_now() - tw);
 
     vv_time_series *ts = NULL;
-    if (vv_time_series_open(&ts, path, NULL, 0) != VV_OK)
+    uint64_t step_bytes = (uint64_t)n * n * n * 2;
+    if (vv_time_series_open(&ts, path, NULL, resident ? step_bytes * (uint64_t)steps : 0) != VV_OK)
         bench_die(prog, path);
     vv_volume *v0 = NULL;
     if (vv_time_series_get(ts, 0, &v0) != VV_OK)

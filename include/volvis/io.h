@@ -109,6 +109,18 @@ typedef struct vv_load_info {
     float color[3];   /**< RGB in [0, 1] (OME Channel Color) */
     double time_step; /**< time between steps in seconds when the file says (NIfTI pixdim[4],
                            OME TimeIncrement), else 0 */
+    /**
+     * 1 when every step's voxels lie in the file as they are (uncompressed,
+     * unscaled, in the volume's type), one volume each: the voxels of
+     * (channel c, step t) are the volume's bytes at raw_offset +
+     * c * raw_channel_bytes + t * raw_step_bytes, in the byte order
+     * raw_big_endian says. vv_time_series reads later steps so, with pread
+     * into recycled memory (NIfTI one-file .nii). Untrusted: a reader of
+     * these offsets checks them against the file's size.
+     */
+    int has_raw_layout;
+    int raw_big_endian;
+    uint64_t raw_offset, raw_step_bytes, raw_channel_bytes;
 } vv_load_info;
 
 /** Options for vv_volume_load. */

@@ -547,6 +547,15 @@ read_locked(vv_volume **out, const char *path, int channel, int time, vv_load_in
     }
     vv_volume_free(direct);
     if (s == VV_OK && info) {
+        /* uncompressed one file, stored as it is: later steps can be read
+         * by offset (vv_time_series) */
+        if (one_file && stored_as_is(nim) && !nifti_is_gzfile(path)) {
+            info->has_raw_layout = 1;
+            info->raw_big_endian = nim->byteorder == 2; /* nifti_clib's MSB_FIRST */
+            info->raw_offset = (uint64_t)nim->iname_offset;
+            info->raw_step_bytes = (uint64_t)vol_bytes;
+            info->raw_channel_bytes = (uint64_t)vol_bytes * (uint64_t)nt;
+        }
         info->n_channels = nc;
         info->n_times = nt;
         double step = nim->dt > 0 && isfinite(nim->dt) ? nim->dt : 0;

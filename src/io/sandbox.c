@@ -853,6 +853,11 @@ vv_sandbox_reader_main(int argc, char **argv) {
         r.has_color = info.has_color;
         memcpy(r.color, info.color, sizeof r.color);
         r.time_step = info.time_step;
+        r.has_raw_layout = info.has_raw_layout;
+        r.raw_big_endian = info.raw_big_endian;
+        r.raw_offset = info.raw_offset;
+        r.raw_step_bytes = info.raw_step_bytes;
+        r.raw_channel_bytes = info.raw_channel_bytes;
         memcpy(r.channel_name, info.channel_name, sizeof r.channel_name);
         r.modification = v->modification;
         r.space = v->space;
@@ -1071,6 +1076,12 @@ volume_from_reply(vv_volume **out, vv_load_info *info, const sbx_reply *r, int f
     info->has_color = r->has_color != 0;
     memcpy(info->color, r->color, sizeof info->color);
     info->time_step = r->time_step;
+    /* offsets into the file, checked against its size by their reader */
+    info->has_raw_layout = r->has_raw_layout == 1 && r->raw_step_bytes == r->bytes;
+    info->raw_big_endian = r->raw_big_endian != 0;
+    info->raw_offset = r->raw_offset;
+    info->raw_step_bytes = r->raw_step_bytes;
+    info->raw_channel_bytes = r->raw_channel_bytes;
     memcpy(info->channel_name, r->channel_name, sizeof info->channel_name);
     *out = v;
     return VV_OK;

@@ -55,6 +55,8 @@ typedef struct sbx_reply {
     int32_t n_channels, n_times, has_color;
     float color[3];
     double time_step;
+    int32_t has_raw_layout, raw_big_endian;
+    uint64_t raw_offset, raw_step_bytes, raw_channel_bytes;
     char channel_name[VV_CHANNEL_NAME_MAX];
     uint64_t bytes;
     uint64_t n_vertices, n_triangles; /* a mesh: positions then triangles */
