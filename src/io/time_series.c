@@ -77,17 +77,6 @@ evict(vv_time_series *ts, int keep) {
     }
 }
 
-/* Byte-swaps @p n voxels of @p size bytes at @p p. */
-static void
-swap_bytes(unsigned char *p, size_t n, size_t size) {
-    for (size_t i = 0; i < n; i++, p += size)
-        for (size_t a = 0, b = size - 1; a < b; a++, b--) {
-            unsigned char x = p[a];
-            p[a] = p[b];
-            p[b] = x;
-        }
-}
-
 /* Step @p t by offset (the raw layout): pread into the spare volume when
  * there is one, else a new one; step 0's geometry. */
 static vv_status
@@ -116,11 +105,9 @@ read_raw_step(vv_time_series *ts, int t, vv_volume **out) {
         }
         done += (uint64_t)got;
     }
-    const unsigned one = 1;
-    int host_big = *(const unsigned char *)&one == 0;
     size_t vs = vv_voxel_type_size(ts->type);
-    if (vs > 1 && host_big != ts->info.raw_big_endian)
-        swap_bytes(p, (size_t)(ts->step_bytes / vs), vs);
+    if (vs > 1 && (ts->info.raw_big_endian ? 1 : 0) == vv_host_is_little_endian())
+        vv_byteswap(p, ts->step_bytes / vs, vs);
     const vv_volume *g = ts->step0;
     memcpy(v->spacing, g->spacing, sizeof v->spacing);
     memcpy(v->origin, g->origin, sizeof v->origin);
