@@ -6,6 +6,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -68,7 +69,8 @@ evict(vv_time_series *ts, int keep) {
         vv_volume *v = ts->steps[oldest].volume;
         /* held by the cache alone (no reference handed out is left): its
          * memory, already paged in, takes the next step read by offset */
-        if (ts->raw_fd >= 0 && !ts->spare && v->refcount == 1 && !v->release)
+        int refs = atomic_load_explicit((_Atomic int *)&v->refcount, memory_order_acquire);
+        if (ts->raw_fd >= 0 && !ts->spare && refs == 1 && !v->release)
             ts->spare = v;
         else
             vv_volume_free(v);
