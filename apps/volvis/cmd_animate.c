@@ -348,6 +348,8 @@ render_frames(cli_args *a, const cli_render_args *r, vv_animation *anim, vv_worl
                 w->objects[i]->time = tf.base;
         o.prepare_frame = prepare_time_step;
         o.prepare_frame_user = &tf;
+        if (tf.volume_file)
+            cli_time_steps_gradients(a, ren);
     }
     if (vv_parallel_launched()) {
         /* under mpirun: rank 0 runs the Animator, the others render with it */

@@ -207,17 +207,7 @@ cli_render_main(int argc, char **argv) {
     cli_progress_begin(&pr, r.quiet);
     ro.progress = pr.p;
     if (tr) {
-        /* each step's volume is drawn once: gradients at the samples drawn
-         * cost less than a gradient cache of every voxel (bench_time_steps:
-         * 3.5 -> 6.9 steps a second on 256^3), unless --set says otherwise */
-        int user_budget = 0;
-        for (int i = 0; i < a.n_seen; i++)
-            if (!strcmp(a.specs[a.seen[i].opt].name, "set") && a.seen[i].value &&
-                !strncmp(a.seen[i].value, "gradient_budget_mb=", 19))
-                user_budget = 1;
-        /* renderers without the option refuse it: nothing to change there */
-        if (!user_budget && vv_renderer_set_option(ren, "gradient_budget_mb", "0") != VV_OK)
-            vv_error_clear();
+        cli_time_steps_gradients(&a, ren);
         rc = render_time_range(&r, range, w, ren, &ro, img);
         cli_progress_end(&pr);
         goto done;

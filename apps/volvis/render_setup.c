@@ -838,3 +838,14 @@ cli_time_source_close(cli_time_source *src) {
         vv_time_series_free(src->ts[c]);
     memset(src, 0, sizeof *src);
 }
+
+void
+cli_time_steps_gradients(const cli_args *a, vv_renderer *ren) {
+    for (int i = 0; i < a->n_seen; i++)
+        if (!strcmp(a->specs[a->seen[i].opt].name, "set") && a->seen[i].value &&
+            !strncmp(a->seen[i].value, "gradient_budget_mb=", 19))
+            return;
+    /* renderers without the option refuse it: nothing to change there */
+    if (vv_renderer_set_option(ren, "gradient_budget_mb", "0") != VV_OK)
+        vv_error_clear();
+}
