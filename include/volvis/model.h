@@ -541,6 +541,21 @@ vv_status vv_tf_set_contrast(vv_tf *tf, double lo, double hi, double gamma, doub
                              vv_vec3 color, double unit_distance);
 
 /**
+ * The contrast limits, gamma, opacity and colour of @p tf read back as
+ * vv_tf_set_contrast's parameters (the GUI's contrast sliders): lo the
+ * first opacity point's value, hi the first point at the highest opacity
+ * (lo + 1 when that is not above lo), gamma the least-squares fit of
+ * log(opacity / max) = gamma log((v - lo) / (hi - lo)) over the points
+ * between (1 for a straight ramp; clamped to [0.05, 20]), the colour at hi.
+ * Any output may be NULL. Returns 1 when vv_tf_set_contrast with those
+ * makes @p tf again (a contrast function), 0 for any other function (the
+ * values are then the nearest contrast function's) or a function of fewer
+ * than two opacity points. Reads @p tf only; reentrant.
+ */
+int vv_tf_get_contrast(const vv_tf *tf, double *lo, double *hi, double *gamma, double *max_opacity,
+                       vv_vec3 *color);
+
+/**
  * An object of the World: a volume or a geometric shape. World position of
  * an object point q (the volume's own world coordinates, or the geometry's
  * coordinates) is  position + orientation ⊗ (scale ∘ q).

@@ -127,6 +127,31 @@ double vv_slice_step(const vv_object *obj, vv_vec3 normal);
 vv_status vv_slice_sample(const vv_object *obj, const vv_slice_plane *p, float *values);
 
 /**
+ * As vv_slice_sample, the voxels of channel @p channel (0..n_channels-1) of
+ * multi-channel volume object @p obj (vv_object_set_channels): every
+ * channel shares channel 0's grid and the object's placement. Errors:
+ * VV_ERR_INVALID (NULL argument, a channel the object does not have, a
+ * transform that cannot be inverted).
+ */
+vv_status vv_slice_sample_channel(const vv_object *obj, int channel, const vv_slice_plane *p,
+                                  float *values);
+
+/**
+ * The channels of @p obj blended into opaque RGBA8 (4 bytes a pixel) as a
+ * fluorescence microscope's viewer shows a slice (napari's additive
+ * blending, Fiji's composite display): each visible channel adds its
+ * transfer function's colour at the value times its opacity there relative
+ * to the function's highest opacity (so a contrast function,
+ * vv_tf_set_contrast, gives colour x ((v - lo) / (hi - lo))^gamma,
+ * saturating at hi), each component clamped to 1. @p values holds
+ * n_channels arrays of @p n samples (vv_slice_sample_channel); a pixel NaN
+ * in every channel is @p outside (RGB, 0..1). Hidden channels add nothing.
+ * Reads its arguments only; reentrant.
+ */
+void vv_slice_blend_channels(const vv_object *obj, const float *const *values, size_t n,
+                             vv_vec3 outside, uint8_t *rgba);
+
+/**
  * The voxel value of volume object @p obj at world point @p world
  * (trilinear), with its continuous voxel index in @p ijk (may be NULL).
  * Returns NaN outside the volume's box or for an object without a volume.

@@ -163,3 +163,61 @@ vv_object_replace_volumes(vv_object *obj, int n, vv_volume *const *volumes) {
     obj->volume = volumes[0];
     return VV_OK;
 }
+
+int
+vv_tf_get_contrast(const vv_tf *tf, double *lo, double *hi, double *gamma, double *max_opacity,
+                   vv_vec3 *color) {
+    if (!tf || tf->n_opacity < 2)
+        return 0;
+    const vv_tf_opacity_point *p = tf->opacity;
+    const int n = tf->n_opacity;
+    double top = 0;
+    for (int i = 0; i < n; i++)
+        top = fmax(top, p[i].opacity);
+    int first_top = n - 1;
+    for (int i = 0; i < n; i++)
+        if (p[i].opacity >= top) {
+            first_top = i;
+            break;
+        }
+    const double l = p[0].value, h = p[first_top].value > l ? p[first_top].value : l + 1;
+    /* gamma: the least-squares fit of log(opacity / top) = gamma log(f) over
+     * the points strictly inside the ramp (1 for a straight ramp) */
+    double sxy = 0, sxx = 0;
+    for (int i = 1; i < first_top && top > 0; i++) {
+        double f = (p[i].value - l) / (h - l);
+        if (f > 0 && f < 1 && p[i].opacity > 0) {
+            double x = log(f), y = log(p[i].opacity / top);
+            sxy += x * y;
+            sxx += x * x;
+        }
+    }
+    double g = sxx > 0 ? sxy / sxx : 1.0;
+    g = fmin(fmax(g, 0.05), 20);
+    vv_vec3 col = vv_tf_eval_color(tf, h);
+    if (lo)
+        *lo = l;
+    if (hi)
+        *hi = h;
+    if (gamma)
+        *gamma = g;
+    if (max_opacity)
+        *max_opacity = top;
+    if (color)
+        *color = col;
+    /* exact when vv_tf_set_contrast with these makes the same function */
+    vv_tf same = *tf;
+    if (vv_tf_set_contrast(&same, l, h, fabs(g - 1) < 1e-9 ? 1.0 : g, top, col,
+                           tf->opacity_unit_distance > 0 ? tf->opacity_unit_distance : 1) !=
+            VV_OK ||
+        same.n_opacity != n || same.n_color != tf->n_color)
+        return 0;
+    for (int i = 0; i < n; i++)
+        if (fabs(same.opacity[i].value - p[i].value) > 1e-9 * fmax(1, fabs(p[i].value)) ||
+            fabs(same.opacity[i].opacity - p[i].opacity) > 1e-6)
+            return 0;
+    for (int i = 0; i < tf->n_color; i++)
+        if (vv_vec3_length(vv_vec3_sub(same.color[i].color, tf->color[i].color)) > 1e-6)
+            return 0;
+    return 1;
+}

@@ -227,11 +227,10 @@ sample_inside(const vv_volume *v, double x, double y, double z) {
     return vv_volume_sample_index(v, x, y, z);
 }
 
-vv_status
-vv_slice_sample(const vv_object *obj, const vv_slice_plane *p, float *values) {
-    if (!obj || !p || !values || !obj->volume)
-        return vv_error_set(VV_ERR_INVALID, "slice: %s",
-                            !obj || !obj->volume ? "the object has no volume" : "NULL argument");
+/* Samples @p v (the object's volume or one of its channels: the same
+ * grid) on plane @p p through the object's placement. */
+static vv_status
+sample_volume(const vv_object *obj, const vv_volume *v, const vv_slice_plane *p, float *values) {
     vv_status s = check_image(p->width, p->height, p->pixel);
     if (s != VV_OK)
         return s;
@@ -239,7 +238,6 @@ vv_slice_sample(const vv_object *obj, const vv_slice_plane *p, float *values) {
     if (!world_to_index(obj, &m))
         return vv_error_set(VV_ERR_INVALID, "slice: %s: the object's transform is singular",
                             obj->name);
-    const vv_volume *v = obj->volume;
     vv_vec3 o = vv_mat4_mul_point(m, vv_vec3_make(0, 0, 0));
     vv_vec3 dx = vv_vec3_sub(vv_mat4_mul_point(m, vv_vec3_scale(p->right, p->pixel)), o);
     const int w = p->width, h = p->height;
@@ -252,6 +250,71 @@ vv_slice_sample(const vv_object *obj, const vv_slice_plane *p, float *values) {
             row[x] = sample_inside(v, r0.x + x * dx.x, r0.y + x * dx.y, r0.z + x * dx.z);
     }
     return VV_OK;
+}
+
+vv_status
+vv_slice_sample(const vv_object *obj, const vv_slice_plane *p, float *values) {
+    if (!obj || !p || !values || !obj->volume)
+        return vv_error_set(VV_ERR_INVALID, "slice: %s",
+                            !obj || !obj->volume ? "the object has no volume" : "NULL argument");
+    return sample_volume(obj, obj->volume, p, values);
+}
+
+vv_status
+vv_slice_sample_channel(const vv_object *obj, int channel, const vv_slice_plane *p, float *values) {
+    if (!obj || !p || !values)
+        return vv_error_set(VV_ERR_INVALID, "slice: NULL argument");
+    if (channel < 0 || channel >= obj->n_channels || !obj->channels[channel].volume)
+        return vv_error_set(VV_ERR_INVALID, "slice: %s has no channel %d (%d channels)", obj->name,
+                            channel, obj->n_channels);
+    return sample_volume(obj, obj->channels[channel].volume, p, values);
+}
+
+void
+vv_slice_blend_channels(const vv_object *obj, const float *const *values, size_t n, vv_vec3 outside,
+                        uint8_t *rgba) {
+    double peak[VV_MAX_CHANNELS];
+    const int nc = obj && obj->n_channels <= VV_MAX_CHANNELS ? obj->n_channels : 0;
+    for (int c = 0; c < nc; c++) {
+        const vv_tf *tf = &obj->channels[c].tf;
+        peak[c] = 0;
+        for (int i = 0; i < tf->n_opacity; i++)
+            peak[c] = fmax(peak[c], tf->opacity[i].opacity);
+    }
+    const uint8_t out[3] = {(uint8_t)lrint(fmin(fmax(outside.x, 0), 1) * 255),
+                            (uint8_t)lrint(fmin(fmax(outside.y, 0), 1) * 255),
+                            (uint8_t)lrint(fmin(fmax(outside.z, 0), 1) * 255)};
+    for (size_t i = 0; i < n; i++) {
+        uint8_t *px = rgba + 4 * i;
+        double r = 0, g = 0, b = 0;
+        int inside = 0;
+        for (int c = 0; c < nc; c++) {
+            const float v = values[c][i];
+            if (v != v)
+                continue;
+            inside = 1;
+            if (!obj->channels[c].visible || !(peak[c] > 0))
+                continue;
+            const vv_tf *tf = &obj->channels[c].tf;
+            double k = vv_tf_eval_opacity(tf, v) / peak[c];
+            if (k <= 0)
+                continue;
+            vv_vec3 col = vv_tf_eval_color(tf, v);
+            r += k * col.x;
+            g += k * col.y;
+            b += k * col.z;
+        }
+        if (!inside) {
+            px[0] = out[0];
+            px[1] = out[1];
+            px[2] = out[2];
+        } else {
+            px[0] = (uint8_t)lrint(fmin(r, 1) * 255);
+            px[1] = (uint8_t)lrint(fmin(g, 1) * 255);
+            px[2] = (uint8_t)lrint(fmin(b, 1) * 255);
+        }
+        px[3] = 255;
+    }
 }
 
 double

@@ -533,6 +533,90 @@ test_scene_round_trip(void **state) {
     vv_volume_free(v[1]);
 }
 
+/* vv_tf_get_contrast reads vv_tf_set_contrast's parameters back exactly,
+ * for gamma 1 (a ramp) and another gamma; an edited function is not one. */
+static void
+test_contrast_read_back(void **state) {
+    (void)state;
+    const double gammas[] = {1.0, 0.5, 2.2};
+    for (int i = 0; i < 3; i++) {
+        vv_tf tf;
+        vt_ok(vv_tf_set_contrast(&tf, 12, 180, gammas[i], 0.7, vv_vec3_make(1, 0, 1), 2));
+        double lo, hi, g, op;
+        vv_vec3 col;
+        assert_int_equal(vv_tf_get_contrast(&tf, &lo, &hi, &g, &op, &col), 1);
+        assert_true(fabs(lo - 12) < 1e-12 && fabs(hi - 180) < 1e-12);
+        assert_true(fabs(g - gammas[i]) < 1e-9);
+        assert_true(fabs(op - 0.7) < 1e-12);
+        assert_true(col.x == 1 && col.y == 0 && col.z == 1);
+        vt_ok(vv_tf_add_opacity(&tf, 100, 0.05)); /* a point added in the editor */
+        assert_int_equal(vv_tf_get_contrast(&tf, NULL, NULL, NULL, NULL, NULL), 0);
+    }
+    vv_tf empty;
+    vv_tf_init(&empty);
+    assert_int_equal(vv_tf_get_contrast(&empty, NULL, NULL, NULL, NULL, NULL), 0);
+}
+
+/* Slices of two channels blend additively by their contrast functions:
+ * each ball shows its channel's colour scaled by ((v - lo)/(hi - lo))^gamma,
+ * the background black, a hidden channel nothing; per-channel samples equal
+ * the one-channel object's. */
+static void
+test_slice_blend(void **state) {
+    (void)state;
+    vv_volume *v[2] = {ball(12, 20, 20, 6), ball(28, 20, 20, 6)};
+    vv_object *o = NULL;
+    vt_ok(vv_object_new_volume(&o, v[0], "two"));
+    vt_ok(vv_object_set_channels(o, 2, v, NULL));
+    vt_ok(vv_tf_set_contrast(&o->channels[0].tf, 0, 400, 1.0, 0.5, vv_vec3_make(1, 0, 1), 1));
+    vt_ok(vv_tf_set_contrast(&o->channels[1].tf, 0, 200, 2.0, 0.3, vv_vec3_make(0, 1, 0), 1));
+    vv_slice_plane p;
+    vt_ok(vv_slice_plane_standard(&p, VV_SLICE_AXIAL, VV_SPACE_UNKNOWN, vv_vec3_make(20, 20, 20), N,
+                                  N, 1));
+    size_t n = (size_t)N * N;
+    float *a = malloc(n * sizeof *a), *b = malloc(n * sizeof *b), *ref = malloc(n * sizeof *ref);
+    uint8_t *rgba = malloc(4 * n);
+    vt_ok(vv_slice_sample_channel(o, 0, &p, a));
+    vt_ok(vv_slice_sample_channel(o, 1, &p, b));
+    vv_object *one = NULL;
+    vt_ok(vv_object_new_volume(&one, v[1], "one"));
+    vt_ok(vv_slice_sample(one, &p, ref));
+    assert_memory_equal(b, ref, n * sizeof *b);
+    const float *vals[2] = {a, b};
+    vv_slice_blend_channels(o, vals, n, vv_vec3_make(0, 0, 1), rgba);
+    double x, y;
+    vv_slice_plane_from_world(&p, vv_vec3_make(12, 20, 20), &x, &y, NULL);
+    const uint8_t *px = rgba + 4 * ((size_t)y * N + (size_t)x);
+    /* channel 0 at 200 of 0..400, gamma 1: half magenta */
+    assert_int_equal(px[0], 128);
+    assert_int_equal(px[1], 0);
+    assert_int_equal(px[2], 128);
+    vv_slice_plane_from_world(&p, vv_vec3_make(28, 20, 20), &x, &y, NULL);
+    px = rgba + 4 * ((size_t)y * N + (size_t)x);
+    assert_int_equal(px[0], 0);
+    assert_int_equal(px[1], 255); /* 200 of 0..200: full green */
+    assert_int_equal(px[2], 0);
+    vv_slice_plane_from_world(&p, vv_vec3_make(20, 35, 20), &x, &y, NULL);
+    px = rgba + 4 * ((size_t)y * N + (size_t)x);
+    assert_true(px[0] == 0 && px[1] == 0 && px[2] == 0 && px[3] == 255);
+    o->channels[1].visible = 0;
+    vv_slice_blend_channels(o, vals, n, vv_vec3_make(0, 0, 1), rgba);
+    vv_slice_plane_from_world(&p, vv_vec3_make(28, 20, 20), &x, &y, NULL);
+    px = rgba + 4 * ((size_t)y * N + (size_t)x);
+    assert_true(px[0] == 0 && px[1] == 0 && px[2] == 0);
+    assert_int_equal(vv_slice_sample_channel(o, 2, &p, a), VV_ERR_INVALID);
+    assert_non_null(strstr(vv_error_message(), "no channel 2"));
+    assert_int_equal(vv_slice_sample_channel(one, 0, &p, a), VV_ERR_INVALID);
+    free(a);
+    free(b);
+    free(ref);
+    free(rgba);
+    vv_object_free(one);
+    vv_object_free(o);
+    vv_volume_free(v[0]);
+    vv_volume_free(v[1]);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
@@ -543,6 +627,8 @@ main(void) {
         cmocka_unit_test(test_deterministic_and_clone),
         cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_scene_round_trip),
+        cmocka_unit_test(test_contrast_read_back),
+        cmocka_unit_test(test_slice_blend),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
