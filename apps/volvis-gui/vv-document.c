@@ -24,6 +24,11 @@ struct _VvDocument {
     int selected;
     vv_filter_cache *filtered; /* filtered volumes of scene objects, kept across reopenings */
     GPtrArray *autosaved;      /* autosaved_volume: what the last autosave wrote */
+    int edited_channel;        /* the channel the Transfer function page edits */
+    char *merge_label;         /* vv_document_begin_edit_merging: the last merged edit */
+    gint64 merge_time;
+    GHashTable *time_steps; /* source path -> the file's time steps (GINT_TO_POINTER) */
+    GHashTable *series;     /* "channel\npath" -> vv_time_series* */
 };
 
 /* A volume the last autosave wrote, by identity (a reference of its own) and
@@ -65,6 +70,9 @@ vv_document_finalize(GObject *o) {
     vv_filter_cache_free(doc->filtered);
     g_free(doc->path);
     g_ptr_array_unref(doc->autosaved);
+    g_free(doc->merge_label);
+    g_hash_table_unref(doc->time_steps);
+    g_hash_table_unref(doc->series);
     G_OBJECT_CLASS(vv_document_parent_class)->finalize(o);
 }
 
@@ -85,6 +93,9 @@ vv_document_init(VvDocument *doc) {
         g_error("volvis-gui: out of memory");
     doc->selected = -1;
     doc->autosaved = g_ptr_array_new_with_free_func(autosaved_volume_free);
+    doc->time_steps = g_hash_table_new_full(g_str_hash, g_str_equal, g_free, NULL);
+    doc->series =
+        g_hash_table_new_full(g_str_hash, g_str_equal, g_free, (GDestroyNotify)vv_time_series_free);
 }
 
 VvDocument *
@@ -138,6 +149,21 @@ vv_document_begin_edit(VvDocument *doc, const char *label) {
     if (vvg_undo_push(doc->undo, doc->world, label) != VV_OK)
         g_warning("volvis-gui: no undo step for '%s': %s", label, vv_error_message());
     doc->dirty = TRUE;
+    g_clear_pointer(&doc->merge_label, g_free);
+}
+
+void
+vv_document_begin_edit_merging(VvDocument *doc, const char *label) {
+    gint64 now = g_get_monotonic_time();
+    if (doc->merge_label && !strcmp(doc->merge_label, label) && now - doc->merge_time < 1000000 &&
+        !doc->kept && vvg_undo_can_undo(doc->undo)) {
+        doc->merge_time = now;
+        doc->dirty = TRUE;
+        return;
+    }
+    vv_document_begin_edit(doc, label);
+    doc->merge_label = g_strdup(label);
+    doc->merge_time = now;
 }
 
 void
@@ -154,6 +180,7 @@ world_replaced(VvDocument *doc) {
 
 gboolean
 vv_document_undo(VvDocument *doc) {
+    g_clear_pointer(&doc->merge_label, g_free);
     gboolean restored = doc->kept != NULL;
     restore_kept(doc);
     if (vvg_undo_undo(doc->undo, &doc->world) != VV_OK) {
@@ -168,6 +195,7 @@ vv_document_undo(VvDocument *doc) {
 
 gboolean
 vv_document_redo(VvDocument *doc) {
+    g_clear_pointer(&doc->merge_label, g_free);
     gboolean restored = doc->kept != NULL;
     restore_kept(doc);
     if (vvg_undo_redo(doc->undo, &doc->world) != VV_OK) {
@@ -312,12 +340,15 @@ open_mesh(VvDocument *doc, const char *path, GError **error) {
     return TRUE;
 }
 
-gboolean
-vv_document_add_volume(VvDocument *doc, vv_volume *v, const char *name, const char *source,
-                       GError **error) {
+/* Adds the @p n channels @p v of one file (n == 1: a volume of one channel)
+ * as one object; @p info[c]: what the read of channel c said (names,
+ * colours), may be NULL. */
+static gboolean
+add_volume_channels(VvDocument *doc, vv_volume *const *v, int n, const vv_load_info *info,
+                    const char *name, const char *source, GError **error) {
     vv_world *w = NULL;
     vv_error_clear();
-    if (vv_world_new_for_volume(&w, v, NULL) != VV_OK) {
+    if (vv_world_new_for_volume(&w, v[0], NULL) != VV_OK) {
         set_error(error, "cannot show the volume");
         return FALSE;
     }
@@ -325,6 +356,26 @@ vv_document_add_volume(VvDocument *doc, vv_volume *v, const char *name, const ch
     vv_object *obj = NULL;
     vv_world_take_object(w, 0, &obj);
     g_strlcpy(obj->name, name, sizeof obj->name);
+    if (n > 1) { /* as `volvis render FILE --channels 0,1,..`: the file's names and colours */
+        const char *names[VV_MAX_CHANNELS] = {NULL};
+        for (int c = 0; c < n && info; c++)
+            names[c] = info[c].channel_name[0] ? info[c].channel_name : NULL;
+        if (vv_object_set_channels(obj, n, v, names) != VV_OK) {
+            set_error(error, "cannot make the channels");
+            vv_object_free(obj);
+            vv_world_free(w);
+            return FALSE;
+        }
+        for (int c = 0; c < n && info; c++) {
+            vv_channel *ch = &obj->channels[c];
+            double lo, hi, g, op;
+            if (info[c].has_color && vv_tf_get_contrast(&ch->tf, &lo, &hi, &g, &op, NULL))
+                (void)vv_tf_set_contrast(
+                    &ch->tf, lo, hi, g, op,
+                    vv_vec3_make(info[c].color[0], info[c].color[1], info[c].color[2]),
+                    ch->tf.opacity_unit_distance);
+        }
+    }
     if (source)
         remember_source(obj, source);
     if (doc->world->n_objects == 0) {
@@ -357,6 +408,12 @@ vv_document_add_volume(VvDocument *doc, vv_volume *v, const char *name, const ch
 }
 
 gboolean
+vv_document_add_volume(VvDocument *doc, vv_volume *v, const char *name, const char *source,
+                       GError **error) {
+    return add_volume_channels(doc, &v, 1, NULL, name, source, error);
+}
+
+gboolean
 vv_document_open(VvDocument *doc, const char *path, GError **error) {
     static const char *const scene_suffixes[] = {".json", NULL};
     if (has_suffix(path, scene_suffixes))
@@ -364,18 +421,113 @@ vv_document_open(VvDocument *doc, const char *path, GError **error) {
     vv_error_clear();
     if (has_suffix(path, mesh_suffixes))
         return open_mesh(doc, path, error);
-    vv_volume *v = NULL;
-    if (vv_volume_load(&v, path, NULL) != VV_OK) {
-        set_error(error, "cannot read the volume");
-        return FALSE;
+    /* every channel of the file (the first VV_MAX_CHANNELS), each at time step 0 */
+    vv_volume *v[VV_MAX_CHANNELS] = {NULL};
+    vv_load_info info[VV_MAX_CHANNELS];
+    int n = 1;
+    gboolean ok = TRUE;
+    for (int c = 0; c < n && ok; c++) {
+        vv_load_options opt;
+        vv_load_options_init(&opt);
+        opt.channel = c == 0 ? -1 : c; /* -1: the format's default for files of one */
+        opt.info = &info[c];
+        ok = vv_volume_load(&v[c], path, &opt) == VV_OK;
+        if (ok && c == 0)
+            n = info[0].n_channels < VV_MAX_CHANNELS ? info[0].n_channels : VV_MAX_CHANNELS;
+        if (!ok)
+            set_error(error, "cannot read the volume");
     }
+    if (ok && info[0].n_channels > VV_MAX_CHANNELS)
+        g_message("volvis-gui: %s has %d channels; the first %d are shown", path,
+                  info[0].n_channels, VV_MAX_CHANNELS);
     g_autofree char *base = g_path_get_basename(path);
     char *dot = strchr(base, '.');
     if (dot && dot != base)
         *dot = '\0';
-    gboolean ok = vv_document_add_volume(doc, v, base, path, error);
-    vv_volume_free(v);
+    if (ok)
+        ok = add_volume_channels(doc, v, n, info, base, path, error);
+    if (ok) /* keyed as remember_source names the file */
+        g_hash_table_replace(doc->time_steps, g_canonicalize_filename(path, NULL),
+                             GINT_TO_POINTER(info[0].n_times > 1 ? info[0].n_times : 1));
+    for (int c = 0; c < n; c++)
+        vv_volume_free(v[c]);
     return ok;
+}
+
+int
+vv_document_edited_channel(VvDocument *doc) {
+    vv_object *o = vv_document_selected_object(doc);
+    if (!o || o->n_channels < 1)
+        return -1;
+    return doc->edited_channel < o->n_channels ? doc->edited_channel : 0;
+}
+
+void
+vv_document_set_edited_channel(VvDocument *doc, int channel) {
+    doc->edited_channel = channel > 0 ? channel : 0;
+    g_signal_emit(doc, signals[SIGNAL_SELECTION_CHANGED], 0);
+}
+
+int
+vv_document_time_steps(VvDocument *doc, const vv_object *o) {
+    if (!o || o->type != VV_OBJECT_VOLUME || !o->geometry.source)
+        return 0;
+    return GPOINTER_TO_INT(g_hash_table_lookup(doc->time_steps, o->geometry.source));
+}
+
+/* The time series of channel @p index of @p path, opened once a session. */
+static vv_time_series *
+series_for(VvDocument *doc, const char *path, int index) {
+    g_autofree char *key = g_strdup_printf("%d\n%s", index, path);
+    vv_time_series *ts = g_hash_table_lookup(doc->series, key);
+    if (ts)
+        return ts;
+    vv_load_options opt;
+    vv_load_options_init(&opt);
+    opt.channel = index;
+    vv_error_clear();
+    if (vv_time_series_open(&ts, path, &opt, 0) != VV_OK)
+        return NULL;
+    g_hash_table_replace(doc->series, g_steal_pointer(&key), ts);
+    return ts;
+}
+
+gboolean
+vv_document_set_time(VvDocument *doc, int t, GError **error) {
+    vv_object *o = vv_document_selected_object(doc);
+    int steps = vv_document_time_steps(doc, o);
+    if (steps < 2 || t < 0 || t >= steps) {
+        g_set_error(error, VV_GUI_ERROR, 1, "%s: no time step %d (%d steps)",
+                    o ? o->name : "no object", t, steps);
+        return FALSE;
+    }
+    if (o->time == t)
+        return TRUE;
+    const int n = o->n_channels > 0 ? o->n_channels : 1;
+    vv_volume *v[VV_MAX_CHANNELS] = {NULL};
+    vv_status s = VV_OK;
+    for (int c = 0; c < n && s == VV_OK; c++) {
+        vv_time_series *ts =
+            series_for(doc, o->geometry.source, o->n_channels > 0 ? o->channels[c].index : -1);
+        s = ts ? vv_time_series_get(ts, t, &v[c]) : VV_ERR_IO;
+        if (ts && s == VV_OK && t + 1 < steps) /* read ahead: the next step while this one draws */
+            vv_time_series_prefetch(ts, t + 1);
+    }
+    if (s == VV_OK) {
+        vv_document_begin_edit_merging(doc, "time step");
+        o = vv_document_selected_object(doc);
+        vv_error_clear();
+        if ((s = vv_object_replace_volumes(o, n, v)) == VV_OK)
+            o->time = t;
+    }
+    for (int c = 0; c < n; c++)
+        vv_volume_free(v[c]);
+    if (s != VV_OK) {
+        set_error(error, "cannot read the time step");
+        return FALSE;
+    }
+    vv_document_changed(doc);
+    return TRUE;
 }
 
 void

@@ -31,6 +31,12 @@ vv_world *vv_document_snapshot(VvDocument *doc);
 
 /** Records an undo step called @p label before the World is changed, and marks it unsaved. */
 void vv_document_begin_edit(VvDocument *doc, const char *label);
+/**
+ * As vv_document_begin_edit, but edits of the same @p label less than a
+ * second apart (a slider dragged, time played) make one undo step; any other
+ * edit, undo or redo ends the run.
+ */
+void vv_document_begin_edit_merging(VvDocument *doc, const char *label);
 /** Emits "changed": the World was changed (live, during a drag too). */
 void vv_document_changed(VvDocument *doc);
 gboolean vv_document_undo(VvDocument *doc);
@@ -122,6 +128,29 @@ void vv_document_remove_folder(const char *dir);
 const char *vv_document_path(VvDocument *doc);
 /** TRUE when the World has changed since it was opened or saved. */
 gboolean vv_document_dirty(VvDocument *doc);
+
+/**
+ * The channel of the selected object that the Transfer function page edits
+ * (0..n_channels-1), or -1 for an object of one channel (its own tf).
+ */
+int vv_document_edited_channel(VvDocument *doc);
+/** Picks the channel the Transfer function page edits; emits "selection-changed". */
+void vv_document_set_edited_channel(VvDocument *doc, int channel);
+/**
+ * The time steps of the file volume object @p o came from, as its read in
+ * this session said (vv_document_open): 0 when unknown (a scene's object,
+ * a volume made in the session), else >= 1.
+ */
+int vv_document_time_steps(VvDocument *doc, const vv_object *o);
+/**
+ * Shows time step @p t of the selected object's file: every channel's
+ * voxels replaced by that step's (vv_time_series, opened once a session and
+ * reading the next step ahead; only the steps in use are resident), the
+ * object's time set. Steps shown within a second of each other are one undo
+ * step. Emits "changed". On failure the World is unchanged and @p error
+ * holds the message naming the file.
+ */
+gboolean vv_document_set_time(VvDocument *doc, int t, GError **error);
 
 /** Adds @p obj (the World takes it), remembering @p source (may be NULL); one undo step. */
 void vv_document_add_object(VvDocument *doc, vv_object *obj, const char *source);

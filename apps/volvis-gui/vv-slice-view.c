@@ -21,6 +21,13 @@ struct _VvSliceView {
     uint64_t modified;
     float *values;
     size_t n_values;
+    /* a multi-channel object: every channel's samples (channel 0's also in
+     * values), the channels' volumes sampled and the styles blended */
+    int n_channels;
+    float *channel_values[VV_MAX_CHANNELS];
+    const vv_volume *channel_volume[VV_MAX_CHANNELS];
+    vv_tf *channel_tf; /* VV_MAX_CHANNELS, on the heap: GObject instances stay under 64 KiB */
+    int channel_visible[VV_MAX_CHANNELS];
     cairo_surface_t *surface;
     double surface_window, surface_level;
     gboolean have_plane;
@@ -106,18 +113,31 @@ current_plane(VvSliceView *self, const vv_object *obj, vv_slice_plane *p) {
 static void
 update_samples(VvSliceView *self, const vv_object *obj, const vv_slice_plane *p) {
     vv_mat4 m = vv_object_index_to_world(obj);
-    if (self->have_plane && self->volume == obj->volume &&
+    gboolean same_channels = obj->n_channels == self->n_channels;
+    for (int c = 0; same_channels && c < obj->n_channels; c++)
+        same_channels = obj->channels[c].volume == self->channel_volume[c];
+    if (self->have_plane && self->volume == obj->volume && same_channels &&
         self->modified == obj->volume->modified && !memcmp(&m, &self->placed, sizeof m) &&
         !memcmp(p, &self->plane, sizeof *p))
         return;
     size_t n = (size_t)p->width * p->height;
-    if (n != self->n_values) {
+    if (n != self->n_values || obj->n_channels != self->n_channels) {
         g_free(self->values);
         self->values = g_new(float, n);
         self->n_values = n;
+        for (int c = 0; c < VV_MAX_CHANNELS; c++)
+            g_clear_pointer(&self->channel_values[c], g_free);
+        for (int c = 0; c < obj->n_channels; c++)
+            self->channel_values[c] = g_new(float, n);
+        self->n_channels = obj->n_channels;
     }
     gint64 t0 = g_get_monotonic_time();
-    if (vv_slice_sample(obj, p, self->values) != VV_OK) {
+    gboolean ok = vv_slice_sample(obj, p, self->values) == VV_OK;
+    for (int c = 0; ok && c < obj->n_channels; c++) {
+        ok = vv_slice_sample_channel(obj, c, p, self->channel_values[c]) == VV_OK;
+        self->channel_volume[c] = obj->channels[c].volume;
+    }
+    if (!ok) {
         self->have_plane = FALSE;
         return;
     }
@@ -137,9 +157,51 @@ update_samples(VvSliceView *self, const vv_object *obj, const vv_slice_plane *p)
     g_clear_pointer(&self->surface, cairo_surface_destroy);
 }
 
-/* The grey image of the samples at the marks' window and level. */
+/* The channels of a multi-channel object blended by their transfer
+ * functions (vv_slice_blend_channels), again only when one changed. */
+static void
+update_channel_surface(VvSliceView *self, const vv_object *obj) {
+    gboolean same = self->surface != NULL && self->channel_tf != NULL;
+    for (int c = 0; same && c < obj->n_channels; c++)
+        same = obj->channels[c].visible == self->channel_visible[c] &&
+               !memcmp(&obj->channels[c].tf, &self->channel_tf[c], sizeof(vv_tf));
+    if (same)
+        return;
+    g_clear_pointer(&self->surface, cairo_surface_destroy);
+    int w = self->plane.width, h = self->plane.height;
+    self->surface = cairo_image_surface_create(CAIRO_FORMAT_RGB24, w, h);
+    cairo_surface_flush(self->surface);
+    unsigned char *data = cairo_image_surface_get_data(self->surface);
+    int stride = cairo_image_surface_get_stride(self->surface);
+    const float *rows[VV_MAX_CHANNELS];
+    for (int y = 0; y < h; y++) {
+        for (int c = 0; c < obj->n_channels; c++)
+            rows[c] = self->channel_values[c] + (size_t)y * w;
+        unsigned char *px = data + (size_t)y * stride;
+        vv_slice_blend_channels(obj, rows, (size_t)w, vv_vec3_make(0, 0, 0), px);
+        for (int x = 0; x < w; x++) { /* RGBA bytes to cairo's native 0xXXRRGGBB words */
+            unsigned char *q = px + 4 * (size_t)x;
+            guint32 word = 0xff000000u | (guint32)q[0] << 16 | (guint32)q[1] << 8 | q[2];
+            memcpy(q, &word, 4);
+        }
+    }
+    cairo_surface_mark_dirty(self->surface);
+    if (!self->channel_tf)
+        self->channel_tf = g_new0(vv_tf, VV_MAX_CHANNELS);
+    for (int c = 0; c < obj->n_channels; c++) {
+        self->channel_tf[c] = obj->channels[c].tf;
+        self->channel_visible[c] = obj->channels[c].visible;
+    }
+}
+
+/* The grey image of the samples at the marks' window and level; a
+ * multi-channel object's channels blended in their colours. */
 static void
 update_surface(VvSliceView *self, const vv_object *obj) {
+    if (obj->n_channels > 0) {
+        update_channel_surface(self, obj);
+        return;
+    }
     double win, lev;
     if (!vv_marks_window(self->marks, &win, &lev))
         vv_slice_auto_window(obj->volume, &win, &lev);
@@ -444,6 +506,9 @@ vv_slice_view_dispose(GObject *o) {
     }
     g_clear_pointer(&self->surface, cairo_surface_destroy);
     g_clear_pointer(&self->values, g_free);
+    for (int c = 0; c < VV_MAX_CHANNELS; c++)
+        g_clear_pointer(&self->channel_values[c], g_free);
+    g_clear_pointer(&self->channel_tf, g_free);
     g_clear_pointer(&self->log, fclose);
     G_OBJECT_CLASS(vv_slice_view_parent_class)->dispose(o);
 }

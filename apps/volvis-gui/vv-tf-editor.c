@@ -42,12 +42,28 @@ volume_object(VvTfEditor *ed) {
     return o && o->type == VV_OBJECT_VOLUME && o->volume ? o : NULL;
 }
 
+/* The transfer function edited: the channel picked on the Channels page
+ * (vv_document_edited_channel) of a multi-channel object, else the object's. */
+static vv_tf *
+edited_tf(VvTfEditor *ed, vv_object *o) {
+    int c = vv_document_edited_channel(ed->doc);
+    return c >= 0 && c < o->n_channels ? &o->channels[c].tf : &o->tf;
+}
+
+/* The voxels under the edited function (its histogram and value axis). */
+static const vv_volume *
+edited_volume(VvTfEditor *ed, const vv_object *o) {
+    int c = vv_document_edited_channel(ed->doc);
+    return c >= 0 && c < o->n_channels ? o->channels[c].volume : o->volume;
+}
+
 /* The plot's axes: data values along x, opacity up, in plot coordinates
  * (the canvas translated by LEFT, TOP). */
 static vvg_tf_axes
 axes(VvTfEditor *ed, const vv_object *o) {
     double W = gtk_widget_get_width(ed->canvas), H = gtk_widget_get_height(ed->canvas);
-    vvg_tf_axes a = {o->volume->range[0], o->volume->range[1], fmax(W - LEFT - RIGHT, 8),
+    const vv_volume *v = edited_volume(ed, o);
+    vvg_tf_axes a = {v->range[0], v->range[1], fmax(W - LEFT - RIGHT, 8),
                      fmax(H - TOP - STRIP - BOTTOM, 8)};
     if (!(a.vmax > a.vmin))
         a.vmax = a.vmin + 1;
@@ -178,13 +194,13 @@ canvas_draw(GtkDrawingArea *area, cairo_t *cr, int W, int H, gpointer user) {
         (void)W;
         return;
     }
-    ed->drawn = o->tf;
-    update_histogram(ed, o->volume);
+    ed->drawn = *edited_tf(ed, o);
+    update_histogram(ed, edited_volume(ed, o));
     vvg_tf_axes a = axes(ed, o);
     cairo_translate(cr, LEFT, TOP);
     draw_histogram(ed, cr, &a);
     draw_axes(cr, &a);
-    draw_function(ed, cr, &a, &o->tf);
+    draw_function(ed, cr, &a, edited_tf(ed, o));
 }
 
 /* ---- the selected point's numbers ---------------------------------------------------- */
@@ -192,7 +208,7 @@ canvas_draw(GtkDrawingArea *area, cairo_t *cr, int W, int H, gpointer user) {
 static void
 fill_selection(VvTfEditor *ed) {
     vv_object *o = volume_object(ed);
-    const vv_tf *tf = o ? &o->tf : NULL;
+    const vv_tf *tf = o ? edited_tf(ed, o) : NULL;
     int n = !tf ? 0 : ed->sel_is_color ? tf->n_color : tf->n_opacity;
     gboolean on = tf && ed->sel_point >= 0 && ed->sel_point < n;
     gtk_widget_set_sensitive(ed->sel_box, on);
@@ -201,7 +217,8 @@ fill_selection(VvTfEditor *ed) {
         return;
     }
     ed->updating = TRUE;
-    double lo = o->volume->range[0], hi = o->volume->range[1] > lo ? o->volume->range[1] : lo + 1;
+    const vv_volume *v = edited_volume(ed, o);
+    double lo = v->range[0], hi = v->range[1] > lo ? v->range[1] : lo + 1;
     gtk_spin_button_set_range(GTK_SPIN_BUTTON(ed->sel_value), lo, hi);
     if (ed->sel_is_color) {
         vvg_set_spin(ed->sel_value, tf->color[ed->sel_point].value);
@@ -229,7 +246,7 @@ selection_edited(VvTfEditor *ed) {
         return;
     vv_document_begin_edit(ed->doc, "edit transfer-function point");
     o = volume_object(ed);
-    vv_tf *tf = &o->tf;
+    vv_tf *tf = edited_tf(ed, o);
     double v = vvg_spin_value(ed->sel_value);
     if (ed->sel_is_color && ed->sel_point < tf->n_color) {
         int i = ed->sel_point;
@@ -273,9 +290,9 @@ sel_delete_clicked(GtkButton *b, gpointer user) {
     vv_document_begin_edit(ed->doc, "delete transfer-function point");
     o = volume_object(ed);
     if (ed->sel_is_color)
-        vvg_tf_delete_color(&o->tf, ed->sel_point);
+        vvg_tf_delete_color(edited_tf(ed, o), ed->sel_point);
     else
-        vvg_tf_delete_point(&o->tf, ed->sel_point);
+        vvg_tf_delete_point(edited_tf(ed, o), ed->sel_point);
     ed->sel_point = -1;
     vv_document_changed(ed->doc);
     fill_selection(ed);
@@ -299,7 +316,7 @@ pressed(GtkGestureClick *g, int n_press, double x, double y, gpointer user) {
     gboolean in_strip = y > a.height;
     vv_document_begin_edit(ed->doc, "edit transfer function");
     o = volume_object(ed); /* unchanged by begin_edit, which copies */
-    vv_tf *tf = &o->tf;
+    vv_tf *tf = edited_tf(ed, o);
     if (in_strip) {
         int i = vvg_tf_hit_color(tf, &a, x, RADIUS);
         if (button == 3) {
@@ -345,9 +362,9 @@ drag_update(GtkGestureDrag *g, double ox, double oy, gpointer user) {
         return;
     vvg_tf_axes a = axes(ed, o);
     if (ed->drag_point >= 0)
-        vvg_tf_move_point(&o->tf, ed->drag_point, &a, ed->drag_x0 + ox, ed->drag_y0 + oy);
+        vvg_tf_move_point(edited_tf(ed, o), ed->drag_point, &a, ed->drag_x0 + ox, ed->drag_y0 + oy);
     else if (ed->drag_color >= 0)
-        vvg_tf_move_color(&o->tf, ed->drag_color, &a, ed->drag_x0 + ox);
+        vvg_tf_move_color(edited_tf(ed, o), ed->drag_color, &a, ed->drag_x0 + ox);
     else
         return;
     vv_document_changed(ed->doc);
@@ -368,11 +385,11 @@ motion(GtkEventControllerMotion *c, double x, double y, gpointer user) {
     vvg_tf_axes a = axes(ed, o);
     double px = fmin(fmax(x - LEFT, 0), a.width);
     double v = vvg_tf_value(&a, px);
-    vv_vec3 col = vv_tf_eval_color(&o->tf, v);
+    vv_vec3 col = vv_tf_eval_color(edited_tf(ed, o), v);
     int bin = (int)fmin(HIST_BINS - 1, fmax(0, (v - a.vmin) / (a.vmax - a.vmin) * HIST_BINS));
     char t[200];
     snprintf(t, sizeof t, "value %.5g · opacity %.3f · colour #%02X%02X%02X · %.2f%% of voxels", v,
-             vv_tf_eval_opacity(&o->tf, v), (unsigned)lrint(col.x * 255),
+             vv_tf_eval_opacity(edited_tf(ed, o), v), (unsigned)lrint(col.x * 255),
              (unsigned)lrint(col.y * 255), (unsigned)lrint(col.z * 255),
              ed->hist_total ? 100.0 * (double)ed->hist[bin] / (double)ed->hist_total : 0.0);
     gtk_label_set_text(GTK_LABEL(ed->readout), t);
@@ -385,7 +402,7 @@ doc_changed(VvDocument *doc, gpointer user) {
     /* the World changes on every motion event of a drag in the view: redraw
      * only when this object's function did */
     vv_object *o = volume_object(ed);
-    if (o && o == ed->drawn_object && memcmp(&o->tf, &ed->drawn, sizeof ed->drawn) == 0)
+    if (o && o == ed->drawn_object && memcmp(edited_tf(ed, o), &ed->drawn, sizeof ed->drawn) == 0)
         return;
     if (o != ed->drawn_object)
         ed->sel_point = -1;
