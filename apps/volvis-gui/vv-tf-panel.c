@@ -14,6 +14,7 @@ struct _VvTfPanel {
     VvTfEditor *tf_editor;
     VvTf2dEditor *tf2d_editor;
     GtkWidget *w2d_color, *w2d_opacity;
+    GtkWidget *editing; /* which channel of a multi-channel object the editor edits */
 };
 
 G_DEFINE_TYPE(VvTfPanel, vv_tf_panel, GTK_TYPE_BOX)
@@ -33,6 +34,14 @@ fill(VvTfPanel *self) {
         gtk_drop_down_set_selected(GTK_DROP_DOWN(self->render_mode), o->mode);
         vvg_set_spin(self->isovalue, o->isovalue);
         vvg_set_spin(self->step, o->step);
+    }
+    int c = vv_document_edited_channel(self->doc);
+    gtk_widget_set_visible(self->editing, c >= 0);
+    if (c >= 0) {
+        g_autofree char *t = g_strdup_printf(
+            "Editing channel \"%s\" (another: its \"edit TF\" on the Channels and time page)",
+            o->channels[c].name);
+        gtk_label_set_text(GTK_LABEL(self->editing), t);
     }
     self->updating = FALSE;
 }
@@ -155,6 +164,10 @@ wire_drop(VvTfPanel *self, const char *const *items) {
 static void
 build_tf(VvTfPanel *self) {
     GtkWidget *box = GTK_WIDGET(self);
+    self->editing = gtk_label_new("");
+    gtk_label_set_wrap(GTK_LABEL(self->editing), TRUE);
+    gtk_label_set_xalign(GTK_LABEL(self->editing), 0);
+    gtk_box_append(GTK_BOX(box), self->editing);
     self->tf_editor = vv_tf_editor_new(self->doc);
     gtk_box_append(GTK_BOX(box), GTK_WIDGET(self->tf_editor));
     GtkWidget *tb = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 4);

@@ -13,6 +13,7 @@
 
 #include "volvis/sys/format.h"
 #include "vv-animator-page.h"
+#include "vv-channel-panel.h"
 #include "vv-cut-panel.h"
 #include "vv-devices-page.h"
 #include "vv-dicom-dialog.h"
@@ -970,6 +971,7 @@ side_bar(VvWindow *win) {
     add_page(win, two(vv_object_list_new(win->doc), vv_object_panel_new(win->doc)), "objects",
              "Objects");
     add_page(win, one(vv_tf_panel_new(win->doc)), "transfer", "Transfer function");
+    add_page(win, one(vv_channel_panel_new(win->doc)), "channels", "Channels and time");
     win->navigator = vv_navigator_panel_new(win->scene);
     add_page(win, two(win->navigator, vv_view_panel_new(win->doc)), "view", "View");
     add_page(win, one(vv_lights_panel_new(win->doc, win->scene, am)), "lights", "Lights");
