@@ -138,7 +138,8 @@ typedef struct vv_load_options {
      * Which channel, from 0; -1 (the default): channel 0. TIFF and DICOM: a
      * sample of each pixel or an OME/ImageJ channel; NIfTI: the fifth axis
      * (dim[5]); NRRD: the axis of kind RGB-color, RGBA-color, vector,
-     * covariant-vector, list, point or 3-/4-vector. A channel past the file's
+     * covariant-vector, list, point or 3-/4-vector; VTK legacy: a component
+     * of the SCALARS (numComp 1..4). A channel past the file's
      * is VV_ERR_INVALID naming the count.
      */
     int channel;
@@ -312,7 +313,8 @@ vv_status vv_mhd_read(vv_volume **out, const char *path);
  * extension), VV_ERR_INVALID, VV_ERR_IO, VV_ERR_NOMEM.
  */
 vv_status vv_mhd_write(const vv_volume *v, const char *path, int compress);
-/** VTK legacy STRUCTURED_POINTS, BINARY (big-endian) or ASCII, first SCALARS array. */
+/** VTK legacy STRUCTURED_POINTS, BINARY (big-endian) or ASCII, first SCALARS array
+ *  (its first component; vv_volume_load's channel picks another of its 1..4). */
 vv_status vv_vtk_read(vv_volume **out, const char *path);
 /**
  * Writes VTK legacy STRUCTURED_POINTS, BINARY (big-endian voxels, as the

@@ -187,7 +187,9 @@ typedef struct vtk_header {
     double spacing[3], origin[3];
     uint64_t count; /* voxels */
     vv_voxel_type type;
-    uint64_t bytes;
+    uint64_t bytes;   /* one component's voxels */
+    int n_components; /* SCALARS' numComp, 1..4: interleaved per point */
+    int component;    /* the one read (a channel) */
 } vtk_header;
 
 /* The first three lines: the version line, the title and ASCII or BINARY. */
@@ -305,8 +307,13 @@ vtk_read_scalars(vtk_in *in, vtk_header *h) {
     h->type = VV_U8;
     if ((s = vtk_parse_type(tname, &h->type)) != VV_OK)
         return s;
-    if (nf >= 3 && ncomp != 1)
-        return vv_error_set(VV_ERR_UNSUPPORTED, "SCALARS with %ld components (only 1)", ncomp);
+    /* numComp is 1..4 (the file-format document); each is a channel */
+    if (nf >= 3 && (ncomp < 1 || ncomp > 4))
+        return vv_error_set(VV_ERR_FORMAT, "SCALARS with %ld components (1 to 4)", ncomp);
+    h->n_components = nf >= 3 ? (int)ncomp : 1;
+    if (h->component >= h->n_components)
+        return vv_error_set(VV_ERR_INVALID, "channel %d asked, the file has %d (from 0)",
+                            h->component, h->n_components);
     if ((s = vv_volume_check_size(h->dims, h->type, &h->bytes)) != VV_OK)
         return s;
     off_t mark = ftello(in->fp);
@@ -327,23 +334,44 @@ vtk_read_scalars(vtk_in *in, vtk_header *h) {
 /* The values, binary (big-endian) or ASCII, into @p v. */
 static vv_status
 vtk_read_values(vtk_in *in, const vtk_header *h, vv_volume *v) {
+    const uint64_t nc = (uint64_t)h->n_components, total = h->count * nc;
     if (h->binary) {
-        if (fread(v->data, 1, (size_t)h->bytes, in->fp) != (size_t)h->bytes)
-            return vv_error_set(VV_ERR_FORMAT, "truncated binary data");
         size_t vs = vv_voxel_type_size(h->type);
+        if (nc == 1) {
+            if (fread(v->data, 1, (size_t)h->bytes, in->fp) != (size_t)h->bytes)
+                return vv_error_set(VV_ERR_FORMAT, "truncated binary data");
+        } else { /* the component's values out of the points' tuples, a block at a time */
+            enum { BLOCK = 1 << 16 };
+            unsigned char *buf = malloc((size_t)BLOCK * nc * vs);
+            if (!buf)
+                return vv_error_set(VV_ERR_NOMEM, "out of memory");
+            unsigned char *dst = v->data;
+            for (uint64_t p = 0; p < h->count; p += BLOCK) {
+                size_t n = (size_t)(h->count - p < BLOCK ? h->count - p : BLOCK);
+                if (fread(buf, vs * nc, n, in->fp) != n) {
+                    free(buf);
+                    return vv_error_set(VV_ERR_FORMAT, "truncated binary data");
+                }
+                for (size_t i = 0; i < n; i++)
+                    memcpy(dst + (p + i) * vs, buf + (i * nc + (size_t)h->component) * vs, vs);
+            }
+            free(buf);
+        }
         if (vs > 1 && vv_host_is_little_endian())
             vv_byteswap(v->data, h->count, vs);
         return VV_OK;
     }
     char tok[VTK_TOKEN_MAX];
-    for (uint64_t i = 0; i < h->count; i++) {
+    for (uint64_t i = 0; i < total; i++) {
         int r = vtk_token(in, tok, sizeof tok);
         if (r < 0)
             return vv_error_prefix(VV_ERR_FORMAT, "value %llu", (unsigned long long)i);
         if (r == 0)
             return vv_error_set(VV_ERR_FORMAT, "truncated data: %llu of %llu values",
-                                (unsigned long long)i, (unsigned long long)h->count);
-        vv_status s = vtk_store(v->data, h->type, i, tok);
+                                (unsigned long long)i, (unsigned long long)total);
+        if (i % nc != (uint64_t)h->component)
+            continue;
+        vv_status s = vtk_store(v->data, h->type, i / nc, tok);
         if (s != VV_OK)
             return s;
     }
@@ -351,23 +379,27 @@ vtk_read_values(vtk_in *in, const vtk_header *h, vv_volume *v) {
 }
 
 static vv_status
-vtk_read_stream(vv_volume **out, vtk_in *in) {
+vtk_read_stream(vv_volume **out, vtk_in *in, int channel, vv_load_info *info) {
     vtk_header h;
     memset(&h, 0, sizeof h);
+    h.component = channel > 0 ? channel : 0;
     vv_status s;
     if ((s = vtk_read_preamble(in, &h)) != VV_OK || (s = vtk_read_dataset(in, &h)) != VV_OK ||
         (s = vtk_read_scalars(in, &h)) != VV_OK)
         return s;
     /* Every ASCII value takes at least two characters, every binary value
        its size: check the file can hold the data before allocating it. */
-    uint64_t rest = vtk_remaining(in);
-    if (h.binary ? rest < h.bytes : rest < 2 * h.count - 1)
-        return vv_error_set(
-            VV_ERR_FORMAT,
-            "truncated data: %llu %s values need %s%llu bytes, the file has %llu "
-            "left",
-            (unsigned long long)h.count, vv_voxel_type_name(h.type), h.binary ? "" : "at least ",
-            (unsigned long long)(h.binary ? h.bytes : 2 * h.count - 1), (unsigned long long)rest);
+    uint64_t rest = vtk_remaining(in), values = h.count * (uint64_t)h.n_components;
+    uint64_t need = h.binary ? h.bytes * (uint64_t)h.n_components : 2 * values - 1;
+    if (rest < need)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "truncated data: %llu %s values need %s%llu bytes, the file has %llu "
+                            "left",
+                            (unsigned long long)values, vv_voxel_type_name(h.type),
+                            h.binary ? "" : "at least ", (unsigned long long)need,
+                            (unsigned long long)rest);
+    if (info)
+        info->n_channels = h.n_components;
     vv_volume *v = NULL;
     if ((s = vv_volume_new(&v, h.dims, h.type)) != VV_OK)
         return s;
@@ -384,8 +416,10 @@ vtk_read_stream(vv_volume **out, vtk_in *in) {
     return VV_OK;
 }
 
-vv_status
-vv_vtk_read(vv_volume **out, const char *path) {
+/* Component @p channel (-1: 0) of the file's SCALARS; @p info (may be
+ * NULL) gets their count as the channels. */
+static vv_status
+vtk_read_channel(vv_volume **out, const char *path, int channel, vv_load_info *info) {
     if (!out || !path)
         return vv_error_set(VV_ERR_INVALID, "vtk: NULL argument");
     *out = NULL;
@@ -394,11 +428,16 @@ vv_vtk_read(vv_volume **out, const char *path) {
     vv_status s = vv_open_regular(path, &in.fp, &in.size);
     if (s != VV_OK)
         return vv_error_prefix(s, "vtk: %s", name);
-    s = vtk_read_stream(out, &in);
+    s = vtk_read_stream(out, &in, channel, info);
     fclose(in.fp);
     if (s != VV_OK)
         return vv_error_prefix(s, "vtk: %s", name);
     return VV_OK;
+}
+
+vv_status
+vv_vtk_read(vv_volume **out, const char *path) {
+    return vtk_read_channel(out, path, -1, NULL);
 }
 
 /* ---- the format record ------------------------------------------------------ */
@@ -415,8 +454,7 @@ vtk_looks_like(const vv_format_probe *p, int deep) {
 
 static vv_status
 vtk_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
-    (void)opt;
-    return vv_vtk_read(out, path);
+    return vtk_read_channel(out, path, opt ? opt->channel : -1, opt ? opt->info : NULL);
 }
 
 static int

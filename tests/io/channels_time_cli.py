@@ -154,6 +154,44 @@ subprocess.run([UNU, "make", "-i", raw, "-t", "short", "-s", "3", str(X), str(Y)
 refused(["convert", bad_nrrd, os.path.join(OUT, "bad.nii"), "-q"], "both time axes",
         os.path.join(OUT, "bad.nii"), "NRRD with two time axes")
 
+# VTK legacy with a 3-component SCALARS array, written by VTK's own writer
+# (binary, big-endian) and as ASCII: each component is a channel
+try:
+    import vtk
+    from vtk.util import numpy_support
+except ImportError:  # pragma: no cover
+    vtk = None
+    check(False, "python3-vtk9 is missing: VTK multi-component channels not checked")
+if vtk is not None:
+    zyxc = rng.integers(0, 60000, size=(Z, Y, X, 3), dtype=np.uint16)
+    im = vtk.vtkImageData()
+    im.SetDimensions(X, Y, Z)
+    im.SetSpacing(0.5, 0.5, 2.0)
+    arr = numpy_support.numpy_to_vtk(zyxc.reshape(-1, 3), deep=1,
+                                     array_type=vtk.VTK_UNSIGNED_SHORT)
+    arr.SetName("rgb")
+    im.GetPointData().SetScalars(arr)
+    for mode in ("binary", "ascii"):
+        vtkf = os.path.join(OUT, f"three_{mode}.vtk")
+        w = vtk.vtkStructuredPointsWriter()
+        w.SetInputData(im)
+        w.SetFileName(vtkf)
+        if mode == "binary":
+            w.SetFileTypeToBinary()
+        else:
+            w.SetFileTypeToASCII()
+        w.Write()
+        for c in (0, 2):
+            got = read_back(vtkf, c, 0)
+            if got is not None:
+                check(np.array_equal(got, zyxc[..., c]), f"VTK {mode} component {c}: voxels")
+    p = volvis("info", os.path.join(OUT, "three_binary.vtk"))
+    check("channels:     3 (this is channel 0)" in p.stdout.splitlines(),
+          f"info: VTK with 3 components lists 3 channels: {p.stdout.strip()[-200:]}")
+    refused(["convert", os.path.join(OUT, "three_ascii.vtk"), os.path.join(OUT, "bad.nii"),
+             "--channel", "3", "-q"], "channel 3", os.path.join(OUT, "bad.nii"),
+            "VTK component past the file's")
+
 # volvis info: the counts, names, colours, ranges and the time increment
 p = volvis("info", ome, "--time", "2")
 lines = p.stdout.splitlines()

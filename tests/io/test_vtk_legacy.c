@@ -170,8 +170,11 @@ test_bad_input(void **state) {
     expect_error("neg.vtk", neg, sizeof neg - 1, VV_ERR_FORMAT, "DIMENSIONS");
     static const char pd[] = HDR("ASCII", "2 2 2", "7", "unsigned_char") "1 2 3 4 5 6 7 8";
     expect_error("pointdata.vtk", pd, sizeof pd - 1, VV_ERR_FORMAT, "POINT_DATA 7");
-    static const char nc[] = HDR("ASCII", "1 1 1", "1", "float 3") "1 2 3";
-    expect_error("ncomp.vtk", nc, sizeof nc - 1, VV_ERR_UNSUPPORTED, "3 components");
+    /* 1..4 components are channels; more is not VTK legacy */
+    static const char nc[] = HDR("ASCII", "1 1 1", "1", "float 5") "1 2 3 4 5";
+    expect_error("ncomp.vtk", nc, sizeof nc - 1, VV_ERR_FORMAT, "5 components");
+    static const char nt[] = HDR("ASCII", "1 1 1", "1", "float 3") "1 2";
+    expect_error("ncomp_short.vtk", nt, sizeof nt - 1, VV_ERR_FORMAT, "truncated");
     static const char ty[] = HDR("ASCII", "1 1 1", "1", "bit") "1";
     expect_error("type.vtk", ty, sizeof ty - 1, VV_ERR_UNSUPPORTED, "bit");
     static const char ds[] = "# vtk DataFile Version 2.0\nt\nASCII\nDATASET UNSTRUCTURED_GRID\n";
