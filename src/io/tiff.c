@@ -16,6 +16,8 @@
  * - ImageJ: "images=", "channels=", "slices=", "frames=", "spacing=",
  *   "unit=", "xorigin=" (in voxels) lines; the in-plane pixel size is
  *   1/XResolution (ImageJ stores it there). Page order is ImageJ's XYCZT.
+ *   A channel's colour from its lookup table in the IJMetadata tag
+ *   (imagej_lut).
  * - Neither: each page is a slice, spacing 1, unit unknown.
  * The volume is channel @p channel at the first time point.
  *
@@ -346,6 +348,55 @@ ome_channel(const stack_meta *m, int c, vv_load_info *info) {
     }
 }
 
+static uint32_t
+ij_u32(const unsigned char *p, int big_endian) {
+    return big_endian ? (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3]
+                      : (uint32_t)p[3] << 24 | (uint32_t)p[2] << 16 | (uint32_t)p[1] << 8 | p[0];
+}
+
+/*
+ * The colour of ImageJ's lookup table of channel @p c: the IJMetadata tag
+ * (50839) holds a header ("IJIJ" big-endian or "JIJI" little-endian, then a
+ * (type, count) pair of 32-bit integers a block type) and the blocks, whose
+ * sizes are IJMetadataByteCounts (50838), the header's first; a 'luts'
+ * block is 256 reds, 256 greens, 256 blues. The colour is the table's
+ * brightest entry; a grey table gives none (the default colours stay).
+ * Every offset is checked against the tag's size.
+ */
+static void
+imagej_lut(TIFF *t, int c, vv_load_info *info) {
+    uint32_t n_counts = 0, n_bytes = 0;
+    const uint32_t *counts = NULL;
+    const unsigned char *data = NULL;
+    if (!TIFFGetField(t, 50838, &n_counts, &counts) || !TIFFGetField(t, 50839, &n_bytes, &data) ||
+        !counts || !data || n_counts < 1 || counts[0] < 4 || counts[0] > n_bytes)
+        return;
+    int be = !memcmp(data, "IJIJ", 4);
+    if (!be && memcmp(data, "JIJI", 4))
+        return;
+    const uint32_t n_types = (counts[0] - 4) / 8;
+    uint64_t off = counts[0];
+    uint32_t block = 1;
+    for (uint32_t i = 0; i < n_types; i++) {
+        uint32_t type = ij_u32(data + 4 + 8 * (size_t)i, be);
+        uint32_t n = ij_u32(data + 8 + 8 * (size_t)i, be);
+        for (uint32_t k = 0; k < n; k++, block++) {
+            if (block >= n_counts || off + counts[block] > n_bytes)
+                return;
+            if (type == 0x6c757473u /* "luts" */ && k == (uint32_t)c && counts[block] == 768) {
+                const unsigned char *lut = data + off;
+                if (lut[255] == lut[511] && lut[511] == lut[767])
+                    return; /* grey */
+                for (int j = 0; j < 3; j++)
+                    info->color[j] = (float)lut[255 + 256 * j] / 255.0f;
+                info->has_color = 1;
+                return;
+            }
+            off += counts[block];
+        }
+    }
+}
+
 /* "key=value" line of an ImageJ description; 1 when found. */
 static int
 ij_value(const char *desc, const char *key, char *val, size_t cap) {
@@ -626,6 +677,8 @@ read_stack(vv_volume **out, char **files, int n_files, int channel, int time, vv
     memset(&meta, 0, sizeof meta);
     if (m.is_ome && m.pixels)
         ome_channel(&m, channel < 0 ? 0 : channel, &meta);
+    else if (m.is_imagej)
+        imagej_lut(t, channel < 0 ? 0 : channel, &meta);
     m.pixels = NULL;
     long pages0 = count_pages(t, VV_VOLUME_MAX_DIM * 64L);
     TIFFClose(t);

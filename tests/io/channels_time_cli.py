@@ -108,8 +108,14 @@ for t, c in ((0, 0), (3, 2), (1, 1)):
 
 # ImageJ hyperstack: TZCYX
 ij = os.path.join(OUT, "stack_ij.tif")
+# with ImageJ lookup tables (IJMetadata "luts"): yellow, cyan and grey
+luts = np.zeros((3, 3, 256), np.uint8)
+ramp = np.arange(256, dtype=np.uint8)
+luts[0, 0] = luts[0, 1] = ramp
+luts[1, 1] = luts[1, 2] = ramp
+luts[2, 0] = luts[2, 1] = luts[2, 2] = ramp
 tifffile.imwrite(ij, np.ascontiguousarray(tczyx.transpose(0, 2, 1, 3, 4)), imagej=True,
-                 metadata={"axes": "TZCYX"})
+                 metadata={"axes": "TZCYX", "LUTs": list(luts)})
 for t, c in ((3, 2), (2, 1)):
     got = read_back(ij, c, t)
     if got is not None:
@@ -203,6 +209,13 @@ for c, (name, colour) in enumerate((("DAPI", "#ff0000"), ("GFP", "#00ff00"),
             f"{tczyx[2, c].max()}")
     check(want in lines, f"info: {want.strip()}")
 check("time steps:   4 (this is step 2), 0.5 s apart" in lines, "info: 4 time steps, 0.5 s")
+p = volvis("info", ij)
+lines = p.stdout.splitlines()
+for c, colour in enumerate(("#ffff00", "#00ffff")):
+    check(any(ln.startswith(f"  channel {c:<3d} {colour} range") for ln in lines),
+          f"info: ImageJ LUT of channel {c} is {colour}")
+check(any(ln.startswith("  channel 2   range") for ln in lines),
+      "info: ImageJ's grey LUT gives no colour (the default set)")
 p = volvis("info", five)
 check("time steps:   4 (this is step 0), 0.25 s apart" in p.stdout.splitlines() and
       "channels:     3 (this is channel 0)" in p.stdout.splitlines(),
