@@ -500,6 +500,7 @@ GtkWidget *
 vv_channel_panel_new(VvDocument *doc) {
     VvChannelPanel *self = g_object_new(VV_TYPE_CHANNEL_PANEL, NULL);
     self->doc = g_object_ref(doc);
+    build_time(self); /* first: in reach above any number of channels */
     GtkWidget *g = vvg_section(GTK_WIDGET(self), "Channels");
     self->summary = gtk_label_new("");
     gtk_label_set_wrap(GTK_LABEL(self->summary), TRUE);
@@ -515,7 +516,6 @@ vv_channel_panel_new(VvDocument *doc) {
     gtk_box_append(GTK_BOX(self), self->blend_box);
     self->rows = gtk_box_new(GTK_ORIENTATION_VERTICAL, 4);
     gtk_box_append(GTK_BOX(self), self->rows);
-    build_time(self);
     g_signal_connect(doc, "changed", G_CALLBACK(doc_changed), self);
     g_signal_connect(doc, "selection-changed", G_CALLBACK(selection_changed), self);
     fill(self);

@@ -444,11 +444,12 @@ vv_document_open(VvDocument *doc, const char *path, GError **error) {
     char *dot = strchr(base, '.');
     if (dot && dot != base)
         *dot = '\0';
-    if (ok)
-        ok = add_volume_channels(doc, v, n, info, base, path, error);
-    if (ok) /* keyed as remember_source names the file */
+    if (ok) /* before the object, whose "changed" the pages fill from; keyed as
+             * remember_source names the file */
         g_hash_table_replace(doc->time_steps, g_canonicalize_filename(path, NULL),
                              GINT_TO_POINTER(info[0].n_times > 1 ? info[0].n_times : 1));
+    if (ok)
+        ok = add_volume_channels(doc, v, n, info, base, path, error);
     for (int c = 0; c < n; c++)
         vv_volume_free(v[c]);
     return ok;
