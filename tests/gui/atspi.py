@@ -45,11 +45,21 @@ def check(cond, what):
         raise Failure(what)
 
 
-def free_display():
-    for n in range(120, 400):
-        if not os.path.exists(f"/tmp/.X{n}-lock") and not os.path.exists(f"/tmp/.X11-unix/X{n}"):
-            return n
-    raise Failure("no free X display number")
+def start_xvfb(w, h):
+    """An Xvfb of @p w x @p h on a display number it picks itself (-displayfd:
+    the server takes the first free one and writes it when it is ready, so
+    sessions started at the same moment never race for one): (process, n)."""
+    r, wfd = os.pipe()
+    x = subprocess.Popen(["Xvfb", "-displayfd", str(wfd), "-screen", "0", f"{w}x{h}x24",
+                          "-nolisten", "tcp"], stdout=subprocess.DEVNULL,
+                         stderr=subprocess.DEVNULL, pass_fds=(wfd,))
+    os.close(wfd)
+    with os.fdopen(r) as f:
+        line = f.readline().strip()
+    if not line.isdigit():
+        x.kill()
+        raise Failure("Xvfb did not start (no display number)")
+    return x, int(line)
 
 
 class Session:
@@ -78,7 +88,8 @@ class Session:
     # ---- life cycle ---------------------------------------------------------------
 
     def __enter__(self):
-        self.display = free_display()
+        x, self.display = start_xvfb(*self.size)
+        self.procs.append(x)
         self.env = dict(os.environ)
         self.env.pop("NO_AT_BRIDGE", None)
         home = tempfile.mkdtemp(prefix="vvgui-home-", dir=self.out)
@@ -98,15 +109,6 @@ class Session:
                                                    "detect_leaks=0"])),
         })
         self.env.update(self.extra_env)
-        w, h = self.size
-        x = subprocess.Popen(["Xvfb", f":{self.display}", "-screen", "0", f"{w}x{h}x24",
-                              "-nolisten", "tcp"], stdout=subprocess.DEVNULL,
-                             stderr=subprocess.DEVNULL)
-        self.procs.append(x)
-        for _ in range(100):
-            if os.path.exists(f"/tmp/.X11-unix/X{self.display}"):
-                break
-            time.sleep(0.05)
         out = subprocess.run(["dbus-launch", "--sh-syntax"], env=self.env, capture_output=True,
                              text=True).stdout
         m = re.search(r"DBUS_SESSION_BUS_ADDRESS='([^']*)'", out)
