@@ -264,6 +264,12 @@ typedef struct cli_time_source {
  * Errors: those of vv_time_series_open (src is left closed).
  */
 vv_status cli_time_source_open(const cli_render_args *r, const vv_object *o, cli_time_source *src);
+/**
+ * The same for file @p path (a scene object's geometry.source), with @p r's
+ * series, channel and raw description when @p r is not NULL.
+ */
+vv_status cli_time_source_open_file(const char *path, const cli_render_args *r, const vv_object *o,
+                                    cli_time_source *src);
 /** Puts step @p t into @p o (vv_object_replace_volumes) and reads step @p next (>= 0) ahead. */
 vv_status cli_time_source_apply(cli_time_source *src, vv_object *o, int t, int next);
 /**

@@ -270,37 +270,53 @@ add_sequences(cli_args *a, const cli_render_args *r, double orbit, vv_world *w,
     return 0;
 }
 
-/* An object's ".time" track on a volume file: each frame's snapshot gets
- * the step its object's time asks for, read through a time series. */
+/* An object's ".time" track: each frame's snapshot gets the step its
+ * object's time asks for, read through a time series of the file the object
+ * came from (INPUT, or a scene object's file). */
 typedef struct time_frames {
     const cli_render_args *r;
-    int volume_file; /* INPUT is a volume file (else a scene: no time steps of its volumes) */
-    int base;        /* the step the base World's object holds (--time, else 0) */
-    int opened;
-    cli_time_source src;
+    int volume_file;      /* INPUT is a volume file (else a scene: each object's own file) */
+    const vv_world *base; /* the World the frames come from: the steps its objects hold */
+    int n;                /* objects of base */
+    int *opened;          /* per object: src[i] is open */
+    cli_time_source *src; /* per object */
 } time_frames;
+
+static void
+time_frames_close(time_frames *tf) {
+    for (int i = 0; i < tf->n && tf->opened; i++)
+        if (tf->opened[i])
+            cli_time_source_close(&tf->src[i]);
+    free(tf->opened);
+    free(tf->src);
+    tf->opened = NULL;
+    tf->src = NULL;
+}
 
 static vv_status
 prepare_time_step(void *user, int frame, vv_world *w) {
     (void)frame;
     time_frames *tf = user;
-    for (int i = 0; i < w->n_objects; i++) {
+    for (int i = 0; i < w->n_objects && i < tf->n; i++) {
         vv_object *o = w->objects[i];
-        if (o->type != VV_OBJECT_VOLUME || o->time == tf->base)
+        if (o->type != VV_OBJECT_VOLUME || o->time == tf->base->objects[i]->time)
             continue;
         vv_status s;
-        if (!tf->volume_file)
+        if (!tf->volume_file && !o->geometry.source)
             return vv_error_set(VV_ERR_INVALID,
-                                "object '%s': a time track on a volume needs a volume file as "
-                                "INPUT (a scene's volumes are one time step)",
+                                "object '%s': a time track on a volume needs the volume read "
+                                "from a file",
                                 o->name);
-        if (!tf->opened) {
-            if ((s = cli_time_source_open(tf->r, o, &tf->src)) != VV_OK)
-                return s;
-            tf->opened = 1;
+        if (!tf->opened[i]) {
+            s = tf->volume_file
+                    ? cli_time_source_open(tf->r, o, &tf->src[i])
+                    : cli_time_source_open_file(o->geometry.source, NULL, o, &tf->src[i]);
+            if (s != VV_OK)
+                return vv_error_prefix(s, "object '%s'", o->name);
+            tf->opened[i] = 1;
         }
-        int next = o->time + 1 < vv_time_series_count(tf->src.ts[0]) ? o->time + 1 : -1;
-        if ((s = cli_time_source_apply(&tf->src, o, o->time, next)) != VV_OK)
+        int next = o->time + 1 < vv_time_series_count(tf->src[i].ts[0]) ? o->time + 1 : -1;
+        if ((s = cli_time_source_apply(&tf->src[i], o, o->time, next)) != VV_OK)
             return vv_error_prefix(s, "object '%s': time %d", o->name, o->time);
     }
     return VV_OK;
@@ -340,16 +356,22 @@ render_frames(cli_args *a, const cli_render_args *r, vv_animation *anim, vv_worl
     vv_error_clear();
     /* a volume file's time steps, when a track animates them (a grid's
      * time is its field NAME<T>, a scene's volumes have no file axes here) */
-    time_frames tf = {.r = r, .base = r->has_time ? r->time : 0};
+    time_frames tf = {.r = r, .base = w, .n = w->n_objects};
     tf.volume_file = r->input && (r->has_raw || vv_format_detect(r->input) != VV_FORMAT_UNKNOWN);
     if (has_time_track(anim)) {
         for (int i = 0; i < w->n_objects && tf.volume_file; i++)
             if (w->objects[i]->type == VV_OBJECT_VOLUME)
-                w->objects[i]->time = tf.base;
+                w->objects[i]->time = r->has_time ? r->time : 0;
+        tf.opened = calloc((size_t)(tf.n > 0 ? tf.n : 1), sizeof *tf.opened);
+        tf.src = calloc((size_t)(tf.n > 0 ? tf.n : 1), sizeof *tf.src);
+        if (!tf.opened || !tf.src) {
+            time_frames_close(&tf);
+            cli_progress_end(&pr);
+            return cli_fail(vv_error_set(VV_ERR_NOMEM, "animate: out of memory"), r->input);
+        }
         o.prepare_frame = prepare_time_step;
         o.prepare_frame_user = &tf;
-        if (tf.volume_file)
-            cli_time_steps_gradients(a, ren);
+        cli_time_steps_gradients(a, ren);
     }
     if (vv_parallel_launched()) {
         /* under mpirun: rank 0 runs the Animator, the others render with it */
@@ -357,8 +379,7 @@ render_frames(cli_args *a, const cli_render_args *r, vv_animation *anim, vv_worl
         vv_parallel_init(NULL, NULL, &mrank, &msize);
         int rc = cli_animate_parallel(r, anim, w, ren, &o, &stats, &st);
         cli_progress_end(&pr);
-        if (tf.opened)
-            cli_time_source_close(&tf.src);
+        time_frames_close(&tf);
         if (rc || mrank != 0)
             return rc;
         if (!r->quiet)
@@ -370,8 +391,7 @@ render_frames(cli_args *a, const cli_render_args *r, vv_animation *anim, vv_worl
     }
     st = vv_animation_render(anim, w, ren, &o, &stats);
     cli_progress_end(&pr);
-    if (tf.opened)
-        cli_time_source_close(&tf.src);
+    time_frames_close(&tf);
     if (st == VV_ERR_CANCELLED) {
         cli_error("animate: interrupted after %d of %d frames; run the same command again to "
                   "resume",

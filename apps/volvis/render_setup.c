@@ -796,21 +796,27 @@ cli_render_note_left_out(const vv_renderer *ren, const vv_world *w) {
 
 vv_status
 cli_time_source_open(const cli_render_args *r, const vv_object *o, cli_time_source *src) {
+    return cli_time_source_open_file(r->input, r, o, src);
+}
+
+vv_status
+cli_time_source_open_file(const char *path, const cli_render_args *r, const vv_object *o,
+                          cli_time_source *src) {
     memset(src, 0, sizeof *src);
     src->n = o->n_channels > 0 ? o->n_channels : 1;
     vv_status s = VV_OK;
     for (int c = 0; c < src->n && s == VV_OK; c++) {
         vv_load_options opt;
         vv_load_options_init(&opt);
-        opt.series = r->series;
-        opt.channel = o->n_channels > 0 ? o->channels[c].index : r->channel;
-        if (r->has_raw) {
+        opt.series = r ? r->series : 0;
+        opt.channel = o->n_channels > 0 ? o->channels[c].index : r ? r->channel : -1;
+        if (r && r->has_raw) {
             opt.format = VV_FORMAT_RAW;
             opt.has_raw = 1;
             opt.raw = r->raw;
         }
         vv_error_clear();
-        s = vv_time_series_open(&src->ts[c], r->input, &opt, 0);
+        s = vv_time_series_open(&src->ts[c], path, &opt, 0);
     }
     if (s != VV_OK)
         cli_time_source_close(src);

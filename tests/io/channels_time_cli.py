@@ -319,6 +319,34 @@ a = scene_png("scene_tc2", '{"type": "volume", "file": "cells.ome.tif", "time": 
 c0 = scene_png("scene_tc0", '{"type": "volume", "file": "cells.ome.tif"%s}' % chans)
 if a is not None and c0 is not None:
     check(not np.array_equal(a, c0), 'scene "time": 2 with "channels" draws step 2, not 0')
+# volvis animate of a scene (the GUI's saved session) with an objects[0].time
+# track: frame 2 draws each channel's step 2 of the object's own file, as
+# the scene with "time": 2 does
+anim2 = os.path.join(OUT, "time2.json")
+with open(anim2, "w") as f:
+    f.write('{"fps": 1, "duration": 3, "tracks": [{"property": "objects[0].time", '
+            '"interpolation": "linear", "keys": [{"time": 0, "value": 0}, '
+            '{"time": 2, "value": 2}]}]}')
+# (transfer functions given: a scene's default ones come from its step's
+# quantiles, while a track keeps those of the step it starts from)
+grad = ("--size", "40x40", "--ortho", "--set", "gradient_budget_mb=0")
+tfc = '{"opacity": [[500, 0], [3500, 0.5]], "color": [[0, [1, 0, 1]]]}'
+for name, t in (("scene_anim0", 0), ("scene_anim2", 2)):
+    with open(os.path.join(OUT, name + ".json"), "w") as f:
+        f.write('{"objects": [{"type": "volume", "file": "cells.ome.tif", "time": %d, '
+                '"blend": "maximum", "channels": [{"channel": 0, "transfer_function": %s}, '
+                '{"channel": 2, "transfer_function": %s}]}]}' % (t, tfc, tfc))
+p = volvis("animate", os.path.join(OUT, "scene_anim0.json"), "--animation", anim2, "-o",
+           os.path.join(frames, "s_%02d.png"), "-q", *grad)
+check(p.returncode == 0, f"animate a scene with a time track: {p.stderr.strip()}")
+q = volvis("render", os.path.join(OUT, "scene_anim2.json"), "-o", os.path.join(OUT, "tc2g.png"),
+           "-q", *grad)
+if p.returncode == 0 and q.returncode == 0:
+    s2 = np.asarray(Image.open(os.path.join(frames, "s_02.png")))
+    s0 = np.asarray(Image.open(os.path.join(frames, "s_00.png")))
+    check(np.array_equal(s2, np.asarray(Image.open(os.path.join(OUT, "tc2g.png")))) and
+          not np.array_equal(s2, s0),
+          'animate a scene: frame 2 of the time track equals the scene with "time": 2')
 bad = os.path.join(OUT, "scene_bad.json")
 with open(bad, "w") as f:
     f.write('{"objects": [{"type": "volume", "file": "cells.ome.tif", "time": 9}]}')
