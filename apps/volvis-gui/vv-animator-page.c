@@ -24,6 +24,7 @@ typedef struct render_job {
     VvAnimatorPage *page; /* not a reference: the page joins the thread before it goes */
     vv_animation *anim;   /* owned snapshots */
     vv_world *world;
+    GHashTable *series; /* the time steps of objects[i].time tracks (vv_world_apply_time) */
     char *output;
     int resume;
     int frames;
@@ -57,6 +58,7 @@ struct _VvAnimatorPage {
     guint play_source;
     vv_animation *playing; /* the copy being played */
     vv_world *base;        /* the World at Play: every frame is evaluated from it */
+    GHashTable *series;    /* time series of objects[i].time tracks, kept a session */
     gint64 play_start_us;
     double play_time;
 
@@ -433,6 +435,12 @@ show_play_frame(VvAnimatorPage *self, double t, char *err, size_t cap) {
         g_strlcpy(err, vv_error_message(), cap);
         return FALSE;
     }
+    g_autoptr(GError) terr = NULL;
+    if (!vv_world_apply_time(self->series, w, self->base, &terr)) { /* objects[i].time */
+        g_strlcpy(err, terr->message, cap);
+        vv_world_free(w);
+        return FALSE;
+    }
     self->play_time = t;
     vv_document_show_transient(self->doc, w);
     update_time_label(self);
@@ -730,6 +738,40 @@ add_key_clicked(GtkButton *b, gpointer user) {
     refresh(self);
 }
 
+/* The selected volume object's time step (the Channels and time page's) as
+ * a key of its objects[i].time track at the key time: linear between keys,
+ * so that the steps between two keys play in order. */
+static void
+add_time_key_clicked(GtkButton *b, gpointer user) {
+    (void)b;
+    VvAnimatorPage *self = user;
+    int i = vv_document_selected(self->doc);
+    vv_object *o = vv_document_selected_object(self->doc);
+    if (!o || o->type != VV_OBJECT_VOLUME || vv_document_time_steps(self->doc, o) < 2) {
+        vvg_show_error(GTK_WIDGET(self), "Cannot add a time-step key",
+                       "Select a volume object read from a file with time steps (its step is set "
+                       "on the Channels and time page).");
+        return;
+    }
+    char prop[64];
+    snprintf(prop, sizeof prop, "objects[%d].time", i);
+    double t = spin_value(self->key_time);
+    const double v[4] = {o->time, 0, 0, 0};
+    vv_error_clear();
+    vv_anim_track *tr = find_or_add_track(self->anim, prop);
+    if (!tr || set_key(tr, t, v) != VV_OK) {
+        show_library_error(self, "Cannot add the time-step key");
+        refresh(self);
+        return;
+    }
+    tr->interp = VV_INTERP_LINEAR;
+    double end = t + 1.0 / self->anim->fps;
+    if (end > self->anim->duration + 1e-9)
+        self->anim->duration = end;
+    gtk_spin_button_set_value(GTK_SPIN_BUTTON(self->key_time), t + 1.0);
+    refresh(self);
+}
+
 /* ---- New, Open, Save ------------------------------------------------------------------- */
 
 static void
@@ -858,6 +900,8 @@ job_free(render_job *j) {
         return;
     vv_animation_free(j->anim);
     vv_world_free(j->world);
+    if (j->series)
+        g_hash_table_unref(j->series);
     g_free(j->output);
     g_free(j);
 }
@@ -879,6 +923,18 @@ render_frame_done(void *user, int frame, const vv_image *img, int reused) {
 
 static gboolean render_done(gpointer data);
 
+/* A frame's World before it is drawn: the time steps its objects[i].time
+ * tracks ask for (the worker thread's own series). */
+static vv_status
+render_prepare(void *user, int frame, vv_world *w) {
+    (void)frame;
+    render_job *j = user;
+    g_autoptr(GError) err = NULL;
+    if (!vv_world_apply_time(j->series, w, j->world, &err))
+        return vv_error_set(VV_ERR_IO, "%s", err->message);
+    return VV_OK;
+}
+
 static gpointer
 render_main(gpointer data) {
     render_job *j = data;
@@ -897,6 +953,9 @@ render_main(gpointer data) {
         o.progress.user = j;
         o.on_frame = render_frame_done;
         o.on_frame_user = j;
+        o.prepare_frame = render_prepare;
+        o.prepare_frame_user = j;
+        j->series = vv_time_cache_new();
         s = vv_animation_render(j->anim, w, r, &o, &j->stats);
     }
     j->status = s;
@@ -1131,6 +1190,8 @@ build(VvAnimatorPage *self) {
     g_signal_connect_swapped(self->key_time, "value-changed", G_CALLBACK(update_time_label), self);
     r = button_row(box);
     add_button(r, gtk_button_new_with_label("Add camera key"), G_CALLBACK(add_key_clicked), self);
+    add_button(r, gtk_button_new_with_label("Add time-step key"), G_CALLBACK(add_time_key_clicked),
+               self);
 
     /* the animation: last, as it grows */
     vvg_section(box, "Tracks and sequences of the animation");
@@ -1180,6 +1241,7 @@ static void
 vv_animator_page_finalize(GObject *o) {
     VvAnimatorPage *self = VV_ANIMATOR_PAGE(o);
     vv_animation_free(self->anim);
+    g_hash_table_unref(self->series);
     G_OBJECT_CLASS(vv_animator_page_parent_class)->finalize(o);
 }
 
@@ -1196,6 +1258,7 @@ vv_animator_page_init(VvAnimatorPage *self) {
         g_error("volvis-gui: out of memory");
     self->anim->fps = 30;
     self->anim->duration = 2; /* 60 frames */
+    self->series = vv_time_cache_new();
     build(self);
 }
 

@@ -94,8 +94,7 @@ vv_document_init(VvDocument *doc) {
     doc->selected = -1;
     doc->autosaved = g_ptr_array_new_with_free_func(autosaved_volume_free);
     doc->time_steps = g_hash_table_new_full(g_str_hash, g_str_equal, g_free, NULL);
-    doc->series =
-        g_hash_table_new_full(g_str_hash, g_str_equal, g_free, (GDestroyNotify)vv_time_series_free);
+    doc->series = vv_time_cache_new();
 }
 
 VvDocument *
@@ -476,11 +475,17 @@ vv_document_time_steps(VvDocument *doc, const vv_object *o) {
     return GPOINTER_TO_INT(g_hash_table_lookup(doc->time_steps, o->geometry.source));
 }
 
-/* The time series of channel @p index of @p path, opened once a session. */
+GHashTable *
+vv_time_cache_new(void) {
+    return g_hash_table_new_full(g_str_hash, g_str_equal, g_free,
+                                 (GDestroyNotify)vv_time_series_free);
+}
+
+/* The time series of channel @p index of @p path in @p cache, opened once. */
 static vv_time_series *
-series_for(VvDocument *doc, const char *path, int index) {
+series_for(GHashTable *cache, const char *path, int index) {
     g_autofree char *key = g_strdup_printf("%d\n%s", index, path);
-    vv_time_series *ts = g_hash_table_lookup(doc->series, key);
+    vv_time_series *ts = g_hash_table_lookup(cache, key);
     if (ts)
         return ts;
     vv_load_options opt;
@@ -489,8 +494,53 @@ series_for(VvDocument *doc, const char *path, int index) {
     vv_error_clear();
     if (vv_time_series_open(&ts, path, &opt, 0) != VV_OK)
         return NULL;
-    g_hash_table_replace(doc->series, g_steal_pointer(&key), ts);
+    g_hash_table_replace(cache, g_steal_pointer(&key), ts);
     return ts;
+}
+
+/* Step @p t of every channel of @p o's file into @p v (new references), the
+ * step after read ahead. */
+static vv_status
+read_step(GHashTable *cache, const vv_object *o, int t, vv_volume **v) {
+    const int n = o->n_channels > 0 ? o->n_channels : 1;
+    vv_status s = VV_OK;
+    for (int c = 0; c < n && s == VV_OK; c++) {
+        vv_time_series *ts =
+            series_for(cache, o->geometry.source, o->n_channels > 0 ? o->channels[c].index : -1);
+        s = ts ? vv_time_series_get(ts, t, &v[c]) : vv_error_prefix(VV_ERR_IO, "%s", o->name);
+        if (ts && s == VV_OK && t + 1 < vv_time_series_count(ts))
+            vv_time_series_prefetch(ts, t + 1); /* the next step while this one draws */
+    }
+    if (s != VV_OK)
+        for (int c = 0; c < n; c++)
+            g_clear_pointer(&v[c], vv_volume_free);
+    return s;
+}
+
+gboolean
+vv_world_apply_time(GHashTable *cache, vv_world *w, const vv_world *base, GError **error) {
+    for (int i = 0; i < w->n_objects && i < base->n_objects; i++) {
+        vv_object *o = w->objects[i];
+        if (o->type != VV_OBJECT_VOLUME || !o->volume || o->time == base->objects[i]->time)
+            continue;
+        if (!o->geometry.source) {
+            g_set_error(error, VV_GUI_ERROR, 1,
+                        "%s: time step %d: the volume was not read from a file", o->name, o->time);
+            return FALSE;
+        }
+        vv_volume *v[VV_MAX_CHANNELS] = {NULL};
+        vv_error_clear();
+        vv_status s = read_step(cache, o, o->time, v);
+        if (s == VV_OK)
+            s = vv_object_replace_volumes(o, o->n_channels > 0 ? o->n_channels : 1, v);
+        for (int c = 0; c < VV_MAX_CHANNELS; c++)
+            vv_volume_free(v[c]);
+        if (s != VV_OK) {
+            set_error(error, "cannot read the time step");
+            return FALSE;
+        }
+    }
+    return TRUE;
 }
 
 gboolean
@@ -506,14 +556,8 @@ vv_document_set_time(VvDocument *doc, int t, GError **error) {
         return TRUE;
     const int n = o->n_channels > 0 ? o->n_channels : 1;
     vv_volume *v[VV_MAX_CHANNELS] = {NULL};
-    vv_status s = VV_OK;
-    for (int c = 0; c < n && s == VV_OK; c++) {
-        vv_time_series *ts =
-            series_for(doc, o->geometry.source, o->n_channels > 0 ? o->channels[c].index : -1);
-        s = ts ? vv_time_series_get(ts, t, &v[c]) : VV_ERR_IO;
-        if (ts && s == VV_OK && t + 1 < steps) /* read ahead: the next step while this one draws */
-            vv_time_series_prefetch(ts, t + 1);
-    }
+    vv_error_clear();
+    vv_status s = read_step(doc->series, o, t, v);
     if (s == VV_OK) {
         vv_document_begin_edit_merging(doc, "time step");
         o = vv_document_selected_object(doc);

@@ -152,6 +152,21 @@ int vv_document_time_steps(VvDocument *doc, const vv_object *o);
  */
 gboolean vv_document_set_time(VvDocument *doc, int t, GError **error);
 
+/** A cache of time series by (file, channel) for vv_world_apply_time (g_hash_table_unref it). */
+GHashTable *vv_time_cache_new(void);
+/**
+ * Puts into every volume object of @p w whose time step differs from the
+ * same object's of @p base (the World @p w was evaluated from: the same
+ * objects, their voxels those of base's steps) the voxels of its step, read
+ * from the file it came from (geometry.source; each channel's own) through
+ * the series of @p cache, the step after read ahead: an Animator's
+ * objects[i].time track. Any one thread a cache (vv_time_series are
+ * thread-safe, the cache is not). FALSE with @p error naming the object or
+ * file: a volume made in the session, a step the file does not have, a
+ * read error.
+ */
+gboolean vv_world_apply_time(GHashTable *cache, vv_world *w, const vv_world *base, GError **error);
+
 /** Adds @p obj (the World takes it), remembering @p source (may be NULL); one undo step. */
 void vv_document_add_object(VvDocument *doc, vv_object *obj, const char *source);
 /** Deletes object @p index; one undo step. */

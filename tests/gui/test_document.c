@@ -284,6 +284,114 @@ test_save_all_or_nothing(void **state) {
     g_object_unref(doc);
 }
 
+/* A NIfTI-1 file of X x Y x Z voxels (u8), T time steps and C channels
+ * (dim[4], dim[5]), written here byte by byte: voxel (i, j, k) of step t,
+ * channel c is value(i, t, c). */
+#define NX 6
+#define NY 5
+#define NZ 4
+static int
+value(int i, int t, int c) {
+    return 10 * t + 100 * c + i;
+}
+
+static void
+write_nifti(const char *path, int T, int C) {
+    size_t n = (size_t)NX * NY * NZ * T * C;
+    unsigned char *buf = calloc(352 + n, 1);
+    assert_non_null(buf);
+    int32_t i32 = 348;
+    memcpy(buf, &i32, 4);
+    int16_t dim[8] = {C > 1 ? 5 : 4, NX, NY, NZ, (int16_t)T, (int16_t)C, 1, 1};
+    memcpy(buf + 40, dim, sizeof dim);
+    int16_t datatype = 2, bitpix = 8; /* DT_UINT8 */
+    memcpy(buf + 70, &datatype, 2);
+    memcpy(buf + 72, &bitpix, 2);
+    float pixdim[8] = {1, 1, 1, 1, 0.5f, 1, 1, 1};
+    memcpy(buf + 76, pixdim, sizeof pixdim);
+    float vox_offset = 352;
+    memcpy(buf + 108, &vox_offset, 4);
+    memcpy(buf + 344, "n+1", 4);
+    unsigned char *d = buf + 352;
+    for (int c = 0; c < C; c++)
+        for (int t = 0; t < T; t++)
+            for (int k = 0; k < NZ; k++)
+                for (int j = 0; j < NY; j++)
+                    for (int i = 0; i < NX; i++)
+                        *d++ = (unsigned char)value(i, t, c);
+    vt_write_file(path, buf, 352 + n);
+    free(buf);
+}
+
+/* Every voxel of @p v is value(i, t, c). */
+static void
+assert_step(const vv_volume *v, int t, int c) {
+    for (int k = 0; k < NZ; k++)
+        for (int j = 0; j < NY; j++)
+            for (int i = 0; i < NX; i++)
+                assert_int_equal((int)vv_volume_get(v, i, j, k), value(i, t, c));
+}
+
+/* A 4-D NIfTI of two channels opens as one object of two channels with its
+ * time steps known; vv_document_set_time puts step 2 of both channels in,
+ * steps shown within a second make one undo step, which undo takes back;
+ * vv_world_apply_time puts a frame's step into a World evaluated from the
+ * document's (an Animator's objects[i].time track) and names what it
+ * cannot read. */
+static void
+test_channels_and_time(void **state) {
+    (void)state;
+    const char *path = vt_path(vt_outdir("gui_document"), "cells.nii");
+    write_nifti(path, 4, 2);
+    VvDocument *doc = vv_document_new();
+    GError *err = NULL;
+    assert_true(vv_document_open(doc, path, &err));
+    vv_object *o = vv_document_selected_object(doc);
+    assert_non_null(o);
+    assert_int_equal(o->n_channels, 2);
+    assert_int_equal(vv_document_time_steps(doc, o), 4);
+    assert_int_equal(vv_document_edited_channel(doc), 0);
+    vv_document_set_edited_channel(doc, 1);
+    assert_int_equal(vv_document_edited_channel(doc), 1);
+    assert_step(o->channels[1].volume, 0, 1);
+    assert_true(vv_document_set_time(doc, 1, &err));
+    assert_true(vv_document_set_time(doc, 2, &err));
+    o = vv_document_selected_object(doc);
+    assert_int_equal(o->time, 2);
+    assert_step(o->channels[0].volume, 2, 0);
+    assert_step(o->channels[1].volume, 2, 1);
+    assert_true(o->volume == o->channels[0].volume);
+    assert_false(vv_document_set_time(doc, 4, &err));
+    assert_non_null(strstr(err->message, "no time step 4 (4 steps)"));
+    g_clear_error(&err);
+    assert_true(vv_document_undo(doc)); /* both steps at once: back to step 0 */
+    o = vv_document_selected_object(doc);
+    assert_int_equal(o->time, 0);
+    assert_step(o->channels[1].volume, 0, 1);
+
+    /* an Animator frame: the object at step 3, the base World's at step 0 */
+    GHashTable *cache = vv_time_cache_new();
+    vv_world *base = vv_document_snapshot(doc), *w = vv_document_snapshot(doc);
+    w->objects[0]->time = 3;
+    assert_true(vv_world_apply_time(cache, w, base, &err));
+    assert_step(w->objects[0]->channels[0].volume, 3, 0);
+    assert_step(w->objects[0]->channels[1].volume, 3, 1);
+    assert_step(base->objects[0]->channels[1].volume, 0, 1);
+    w->objects[0]->time = 7;
+    assert_false(vv_world_apply_time(cache, w, base, &err));
+    assert_non_null(strstr(err->message, "time step 7"));
+    g_clear_error(&err);
+    free(w->objects[0]->geometry.source);
+    w->objects[0]->geometry.source = NULL;
+    assert_false(vv_world_apply_time(cache, w, base, &err));
+    assert_non_null(strstr(err->message, "not read from a file"));
+    g_clear_error(&err);
+    vv_world_free(w);
+    vv_world_free(base);
+    g_hash_table_unref(cache);
+    g_object_unref(doc);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
@@ -293,6 +401,7 @@ main(void) {
         cmocka_unit_test(test_save_writes_the_kept_world),
         cmocka_unit_test(test_autosave_and_restore),
         cmocka_unit_test(test_save_all_or_nothing),
+        cmocka_unit_test(test_channels_and_time),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
