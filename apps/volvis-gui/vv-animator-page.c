@@ -1185,7 +1185,7 @@ build(VvAnimatorPage *self) {
                self);
 
     /* camera keys */
-    g = vvg_section(box, "Camera keyframes");
+    g = vvg_section(box, "Keyframes (camera, time step)");
     self->key_time = vvg_row(g, "time (s)", vvg_spin(0, 1e5, 0.1, 2, 0));
     g_signal_connect_swapped(self->key_time, "value-changed", G_CALLBACK(update_time_label), self);
     r = button_row(box);
