@@ -88,6 +88,13 @@ class Session:
     # ---- life cycle ---------------------------------------------------------------
 
     def __enter__(self):
+        try:
+            return self._start()
+        except BaseException:
+            self.__exit__()  # a session that fails to start leaves no Xvfb or bus behind
+            raise
+
+    def _start(self):
         x, self.display = start_xvfb(*self.size)
         self.procs.append(x)
         self.env = dict(os.environ)
