@@ -157,6 +157,17 @@ update_samples(VvSliceView *self, const vv_object *obj, const vv_slice_plane *p)
     g_clear_pointer(&self->surface, cairo_surface_destroy);
 }
 
+/* A new image of the plane's size in place of the last; its pixels and row stride. */
+static unsigned char *
+new_surface(VvSliceView *self, int *stride) {
+    g_clear_pointer(&self->surface, cairo_surface_destroy);
+    self->surface =
+        cairo_image_surface_create(CAIRO_FORMAT_RGB24, self->plane.width, self->plane.height);
+    cairo_surface_flush(self->surface);
+    *stride = cairo_image_surface_get_stride(self->surface);
+    return cairo_image_surface_get_data(self->surface);
+}
+
 /* The channels of a multi-channel object blended by their transfer
  * functions (vv_slice_blend_channels), again only when one changed. */
 static void
@@ -167,12 +178,8 @@ update_channel_surface(VvSliceView *self, const vv_object *obj) {
                !memcmp(&obj->channels[c].tf, &self->channel_tf[c], sizeof(vv_tf));
     if (same)
         return;
-    g_clear_pointer(&self->surface, cairo_surface_destroy);
-    int w = self->plane.width, h = self->plane.height;
-    self->surface = cairo_image_surface_create(CAIRO_FORMAT_RGB24, w, h);
-    cairo_surface_flush(self->surface);
-    unsigned char *data = cairo_image_surface_get_data(self->surface);
-    int stride = cairo_image_surface_get_stride(self->surface);
+    int w = self->plane.width, h = self->plane.height, stride;
+    unsigned char *data = new_surface(self, &stride);
     const float *rows[VV_MAX_CHANNELS];
     for (int y = 0; y < h; y++) {
         for (int c = 0; c < obj->n_channels; c++)
@@ -207,12 +214,8 @@ update_surface(VvSliceView *self, const vv_object *obj) {
         vv_slice_auto_window(obj->volume, &win, &lev);
     if (self->surface && win == self->surface_window && lev == self->surface_level)
         return;
-    g_clear_pointer(&self->surface, cairo_surface_destroy);
-    int w = self->plane.width, h = self->plane.height;
-    self->surface = cairo_image_surface_create(CAIRO_FORMAT_RGB24, w, h);
-    cairo_surface_flush(self->surface);
-    unsigned char *data = cairo_image_surface_get_data(self->surface);
-    int stride = cairo_image_surface_get_stride(self->surface);
+    int w = self->plane.width, h = self->plane.height, stride;
+    unsigned char *data = new_surface(self, &stride);
     for (int y = 0; y < h; y++) /* grey, black outside: the byte order does not matter */
         vv_slice_window_level(self->values + (size_t)y * w, (size_t)w, win, lev,
                               vv_vec3_make(0, 0, 0), data + (size_t)y * stride);
