@@ -67,7 +67,9 @@ def main():
             s.key(keys)  # File → Import raw…, Browse DICOM…
             s.xdo("search", "--sync", "--name", title)
             time.sleep(0.8)
-            n, b = unnamed(s, s.app())
+            # the dialog's own tree (the main window's was walked above)
+            n, b = unnamed(s, s.find(title, visible=False))
+            check(n > 0, f"{title}: no controls found")
             bad += [f"{title}: {x}" for x in b]
             s.key("Escape")
             time.sleep(0.5)
