@@ -432,7 +432,7 @@ parse_imagej_text(const char *desc, stack_meta *m) {
     if (ij_value(desc, "slices", v, sizeof v))
         m->size_z = atoi(v);
     else if (images > 0 && m->size_c > 0 && m->size_t_ > 0)
-        m->size_z = images / (m->size_c * m->size_t_);
+        m->size_z = (int)(images / ((long long)m->size_c * m->size_t_));
     if (ij_value(desc, "spacing", v, sizeof v)) {
         double d = strtod(v, NULL);
         if (d > 0 && isfinite(d))
@@ -688,8 +688,11 @@ read_stack(vv_volume **out, char **files, int n_files, int channel, int time, vv
     /* the slices: (file, page) of each z for the channel */
     long total = n_files == 1 ? pages0 : n_files; /* a folder: one page a file */
     int nz, nc = f0.spp;
+    /* each product checked before the next (sizes from the description are
+     * any int): no overflow */
     if ((m.is_ome || m.is_imagej) && n_files == 1 && m.size_z > 0 && m.size_c > 0 &&
-        m.size_t_ > 0 && (long)m.size_z * m.size_c * m.size_t_ <= total) {
+        m.size_t_ > 0 && m.size_z <= total && m.size_c <= total && m.size_t_ <= total &&
+        (long)m.size_z * m.size_c <= total && (long)m.size_z * m.size_c * m.size_t_ <= total) {
         nz = m.size_z;
         if (m.size_c > 1)
             nc = m.size_c;
