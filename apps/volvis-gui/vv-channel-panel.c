@@ -40,10 +40,8 @@ volume_object(VvChannelPanel *self) {
 
 /* The row's channel of the selected object, or NULL when it has no such channel. */
 static vv_channel *
-row_channel(channel_row *r, vv_object **obj) {
+row_channel(channel_row *r) {
     vv_object *o = volume_object(r->panel);
-    if (obj)
-        *obj = o;
     return o && r->c < o->n_channels ? &o->channels[r->c] : NULL;
 }
 
@@ -83,7 +81,7 @@ hist_draw(GtkDrawingArea *area, cairo_t *cr, int W, int H, gpointer user) {
     channel_row *r = user;
     cairo_set_source_rgb(cr, 0.12, 0.12, 0.14);
     cairo_paint(cr);
-    vv_channel *ch = row_channel(r, NULL);
+    vv_channel *ch = row_channel(r);
     if (!ch || !ch->volume)
         return;
     update_histogram(r, ch->volume);
@@ -128,10 +126,10 @@ hist_draw(GtkDrawingArea *area, cairo_t *cr, int W, int H, gpointer user) {
 static void
 show_toggled(GtkCheckButton *b, gpointer user) {
     channel_row *r = user;
-    if (r->panel->updating || !row_channel(r, NULL))
+    if (r->panel->updating || !row_channel(r))
         return;
     vv_document_begin_edit(r->panel->doc, "channel visibility");
-    vv_channel *ch = row_channel(r, NULL);
+    vv_channel *ch = row_channel(r);
     ch->visible = gtk_check_button_get_active(b);
     vv_document_changed(r->panel->doc);
 }
@@ -140,12 +138,12 @@ show_toggled(GtkCheckButton *b, gpointer user) {
 static void
 color_set(GtkColorButton *b, gpointer user) {
     channel_row *r = user;
-    if (r->panel->updating || !row_channel(r, NULL))
+    if (r->panel->updating || !row_channel(r))
         return;
     GdkRGBA c;
     gtk_color_chooser_get_rgba(GTK_COLOR_CHOOSER(b), &c);
     vv_document_begin_edit(r->panel->doc, "channel colour");
-    vv_tf *tf = &row_channel(r, NULL)->tf;
+    vv_tf *tf = &row_channel(r)->tf;
     if (tf->n_color == 0)
         (void)vv_tf_add_color(tf, 0, vvg_vec3(&c));
     for (int i = 0; i < tf->n_color; i++)
@@ -160,7 +158,7 @@ static void
 contrast_changed(GtkWidget *w, gpointer user) {
     (void)w;
     channel_row *r = user;
-    vv_channel *ch = row_channel(r, NULL);
+    vv_channel *ch = row_channel(r);
     if (r->panel->updating || !ch)
         return;
     double lo = gtk_range_get_value(GTK_RANGE(r->lo)), hi = gtk_range_get_value(GTK_RANGE(r->hi));
@@ -173,7 +171,7 @@ contrast_changed(GtkWidget *w, gpointer user) {
     if (!(op > 0))
         op = 0.5;
     vv_document_begin_edit_merging(r->panel->doc, "channel contrast");
-    ch = row_channel(r, NULL);
+    ch = row_channel(r);
     vv_error_clear();
     if (vv_tf_set_contrast(&ch->tf, lo, hi, gamma, op, col, ch->tf.opacity_unit_distance) !=
         VV_OK) {

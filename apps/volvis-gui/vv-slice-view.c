@@ -186,9 +186,10 @@ update_channel_surface(VvSliceView *self, const vv_object *obj) {
             rows[c] = self->channel_values[c] + (size_t)y * w;
         unsigned char *px = data + (size_t)y * stride;
         vv_slice_blend_channels(obj, rows, (size_t)w, vv_vec3_make(0, 0, 0), px);
-        for (int x = 0; x < w; x++) { /* RGBA bytes to cairo's native 0xXXRRGGBB words */
+        for (int x = 0; x < w;
+             x++) { /* RGBA bytes to CAIRO_FORMAT_RGB24's native-endian 0x00RRGGBB words */
             unsigned char *q = px + 4 * (size_t)x;
-            guint32 word = 0xff000000u | (guint32)q[0] << 16 | (guint32)q[1] << 8 | q[2];
+            guint32 word = (guint32)q[0] << 16 | (guint32)q[1] << 8 | q[2];
             memcpy(q, &word, 4);
         }
     }
