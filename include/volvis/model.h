@@ -469,7 +469,7 @@ typedef enum vv_segmentation {
 
 /**
  * How the channels of a multi-channel volume object combine along a ray
- * (vv_object.blend; the ray caster draws them in one pass).
+ * (vv_object.blend; the ray caster and the ray tracer draw them).
  */
 typedef enum vv_channel_blend {
     /** Per sample, the visible channels' opacities combine as independent

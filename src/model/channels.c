@@ -2,8 +2,8 @@
  * Multi-channel volume objects (issue: several channels and time steps):
  * the channels of one object, their default colours and the microscopy
  * shorthand for a channel's transfer function (colour, contrast limits,
- * gamma). Rendering them in one pass is the ray caster's
- * (src/render/raycast/raycast.c, VV_RENDERER_CHANNELS).
+ * gamma). The ray caster and the ray tracer draw them (src/render/raycast/,
+ * src/render/raytrace/: VV_RENDERER_CHANNELS).
  */
 #include <math.h>
 #include <stdio.h>

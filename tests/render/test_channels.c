@@ -13,6 +13,10 @@
  *   and the pixel is at least as opaque and as bright as either channel
  *   alone (no dark seam where channels overlap), against the per-sample
  *   formula evaluated here.
+ * - The ray tracer draws the channels by the same rules: with its global
+ *   effects off its images are the ray caster's (PSNR >= 40 dB, and the
+ *   balls' colours at their places); with shadows on, each channel's ball
+ *   shadows a floor, and hiding the channel takes its shadow away.
  * - Thread counts and empty-space skipping do not change a bit; clones
  *   hold their own references; bad input gets one-line errors; renderers
  *   without VV_RENDERER_CHANNELS and region renders refuse such objects.
@@ -313,6 +317,127 @@ test_composite_mix(void **state) {
     }
     vv_image_free(img);
     vv_world_free(w);
+    vv_volume_free(v[0]);
+    vv_volume_free(v[1]);
+}
+
+/* The ray tracer's image of @p w at quality 1 (one ray a pixel), its
+ * shadows on or off, no reflected rays. */
+static vv_image *
+render_rt(const vv_world *w, const vv_view *view, int shadows) {
+    vv_renderer *r = NULL;
+    vt_ok(vv_renderer_new(&r, "raytrace"));
+    vt_ok(vv_renderer_set_option(r, "shadows", shadows ? "1" : "0"));
+    vt_ok(vv_renderer_set_option(r, "max_depth", "0"));
+    vv_image *img = NULL;
+    vt_ok(vv_image_new(&img, view->width, view->height));
+    vv_render_options opt;
+    vv_render_options_init(&opt);
+    opt.quality = 1;
+    vt_ok(vv_renderer_render(r, w, view, &opt, img));
+    vv_renderer_free(r);
+    return img;
+}
+
+/* With its effects off the ray tracer draws the channels as the ray caster
+ * does, under every rule: three overlapping shaded balls, and the three
+ * apart unshaded (each channel's colour at its ball and only there). */
+static void
+test_raytrace_agrees(void **state) {
+    (void)state;
+    vv_volume *v[3] = {ball(13, 20, 20, 8), ball(20, 22, 20, 8), ball(27, 20, 20, 8)};
+    vv_volume *apart[3];
+    three_balls(apart);
+    vv_view view = view_z(N);
+    const vv_channel_blend rules[3] = {VV_BLEND_COMPOSITE, VV_BLEND_ADDITIVE, VV_BLEND_MAXIMUM};
+    for (int r = 0; r < 3; r++) {
+        vv_world *w = channel_world(v, 3, rules[r], 1, 0.5);
+        vv_image *a = render(w, &view), *b = render_rt(w, &view, 0);
+        char name[64];
+        snprintf(name, sizeof name, "channels_raytrace_%s", vv_channel_blend_name(rules[r]));
+        save(b, name);
+        const double psnr = vv_image_psnr(a, b);
+        print_message("%s: raytrace vs raycast PSNR %.2f dB, largest difference %.4f\n", name, psnr,
+                      max_rgb_diff(a, b));
+        if (!(psnr >= 40.0))
+            fail_msg("%s: the ray tracer's image differs from the ray caster's (PSNR %.2f dB)",
+                     name, psnr);
+        /* where the three overlap, every channel shows (under the
+         * composite rule the middle ball's front hides the others') */
+        const float *p = at_voxel(b, 20, 21);
+        if (rules[r] != VV_BLEND_COMPOSITE)
+            assert_true(p[0] > 0.02f && p[1] > 0.02f && p[2] > 0.02f);
+        else
+            assert_true(p[1] > 0.05f);
+        vv_image_free(a);
+        vv_image_free(b);
+        vv_world_free(w);
+        w = channel_world(apart, 3, rules[r], 0, 0.8);
+        b = render_rt(w, &view, 0);
+        for (int c = 0; c < 3; c++) {
+            const float *q = at_voxel(b, 10 + 10 * c, 20);
+            for (int k = 0; k < 3; k++)
+                if (k == c ? !(q[k] > 0.2f) : !(q[k] < 1e-6f))
+                    fail_msg("%s: ball %d shows %.3g of channel %d's colour", name, c, q[k], k);
+        }
+        vv_image_free(b);
+        vv_world_free(w);
+    }
+    for (int c = 0; c < 3; c++) {
+        vv_volume_free(v[c]);
+        vv_volume_free(apart[c]);
+    }
+}
+
+/* Shadows of the channels on a floor: two balls in two channels over a
+ * grey plane at z = -10, the light travelling along (-0.3, -0.4, -0.866),
+ * so that a ball centred at (cx, cy, 20) shadows the floor around
+ * (cx - 10.4, cy - 13.9). Under every rule each ball's shadow is dark
+ * against the floor with both channels hidden, and hiding channel 1 lights
+ * the floor under its ball again and leaves channel 0's shadow as it was. */
+static void
+test_raytrace_shadows(void **state) {
+    (void)state;
+    vv_volume *v[2] = {ball(12, 30, 20, 6), ball(30, 30, 20, 6)};
+    vv_view view = view_z(N);
+    const vv_channel_blend rules[3] = {VV_BLEND_COMPOSITE, VV_BLEND_ADDITIVE, VV_BLEND_MAXIMUM};
+    for (int r = 0; r < 3; r++) {
+        vv_world *w = channel_world(v, 2, rules[r], 1, 1.0);
+        vv_object *pl = NULL;
+        vt_ok(vv_object_new_geometry(&pl, VV_OBJECT_PLANE, "floor"));
+        pl->position = vv_vec3_make(0, 0, -10);
+        pl->material.color = vv_vec3_make(0.5, 0.5, 0.5);
+        vt_ok(vv_world_add_object(w, pl));
+        vv_image *img = render_rt(w, &view, 1);
+        char name[64];
+        snprintf(name, sizeof name, "channels_raytrace_shadows_%s",
+                 vv_channel_blend_name(rules[r]));
+        save(img, name);
+        const float s0 = at_voxel(img, 12 - 10.4, 30 - 13.9)[0];
+        const float s1 = at_voxel(img, 30 - 10.4, 30 - 13.9)[0];
+        w->objects[0]->channels[0].visible = w->objects[0]->channels[1].visible = 0;
+        vv_image *none = render_rt(w, &view, 1);
+        const float lit = at_voxel(none, 30 - 10.4, 30 - 13.9)[0];
+        assert_true(fabsf(at_voxel(none, 12 - 10.4, 30 - 13.9)[0] - lit) < 1e-6f);
+        vv_image_free(none);
+        w->objects[0]->channels[0].visible = 1;
+        print_message("%s: floor %.3f lit, %.3f and %.3f in the balls' shadows\n", name, lit, s0,
+                      s1);
+        if (!(lit > 0.1f && s0 < 0.6f * lit && s1 < 0.6f * lit))
+            fail_msg("%s: no shadow of the channels' balls (floor %.3f, shadows %.3f %.3f)", name,
+                     lit, s0, s1);
+        w->objects[0]->channels[1].visible = 0;
+        vv_image *hid = render_rt(w, &view, 1);
+        const float h1 = at_voxel(hid, 30 - 10.4, 30 - 13.9)[0];
+        const float h0 = at_voxel(hid, 12 - 10.4, 30 - 13.9)[0];
+        if (!(fabsf(h1 - lit) < 0.02f && fabsf(h0 - s0) < 0.005f))
+            fail_msg("%s: hiding channel 1 leaves its shadow (%.3f, lit %.3f) or moves the "
+                     "other's (%.5f, was %.5f)",
+                     name, h1, lit, h0, s0);
+        vv_image_free(hid);
+        vv_image_free(img);
+        vv_world_free(w);
+    }
     vv_volume_free(v[0]);
     vv_volume_free(v[1]);
 }
@@ -624,6 +749,8 @@ main(void) {
         cmocka_unit_test(test_additive_is_sum),
         cmocka_unit_test(test_maximum_is_sum_of_mips),
         cmocka_unit_test(test_composite_mix),
+        cmocka_unit_test(test_raytrace_agrees),
+        cmocka_unit_test(test_raytrace_shadows),
         cmocka_unit_test(test_deterministic_and_clone),
         cmocka_unit_test(test_bad_input),
         cmocka_unit_test(test_scene_round_trip),

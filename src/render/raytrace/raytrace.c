@@ -55,6 +55,8 @@ prepare_volume(rt_frame *fr, rt_vobj *ro, const vv_object *obj) {
     memset(ro, 0, sizeof *ro);
     ro->obj = obj;
     ro->mode = obj->mode;
+    ro->group = -1;
+    ro->lead = ro;
     vv_status s = vv_vcache_get(&fr->st->vc, obj->volume, &ro->c);
     if (s != VV_OK)
         return vv_error_prefix(s, "object '%s'", obj->name);
@@ -96,8 +98,9 @@ build_tables(rt_frame *fr, rt_vobj *ro) {
     ro->bdist = ro->tab.bdist;
     ro->extras = vv_vextra_prepare(&ro->x, obj, ro->mode, &ro->tab);
     ro->textured = ro->mode == VV_MODE_ISO && obj->texture.image != NULL;
+    /* (a channel's samples use its leader's grids: ro->lead) */
     if (fr->shadows && obj->receives_shadows && obj->shading && ro->mode == VV_MODE_COMPOSITE &&
-        fr->st->shadow_grid && !ro->context) {
+        fr->st->shadow_grid && !ro->context && ro->lead == ro) {
         size_t ng = 1;
         for (int a = 0; a < 3; a++) {
             ro->gdim[a] = (ro->dims[a] - 1 + RT_SGRID - 1) / RT_SGRID + 1;
@@ -213,6 +216,7 @@ frame_release(rt_frame *fr) {
             fr->gobjs[i].geom->release(fr->gobjs[i].prep);
     free(fr->vobjs);
     free(fr->gobjs);
+    free(fr->chobjs);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -308,22 +312,72 @@ pass_refine(void *user, const vv_frame_tile *t) {
     return VV_OK;
 }
 
-/* Counts the objects a render prepares; errors beyond the limits. */
+/* The visible channels of a multi-channel object (0 for one of one channel). */
+static int
+channels_shown(const vv_object *o) {
+    int n = 0;
+    for (int c = 0; o->n_channels > 1 && c < o->n_channels; c++)
+        n += o->channels[c].visible && o->channels[c].volume != NULL;
+    return n;
+}
+
+/* Counts the volumes (a multi-channel object's visible channels each
+ * count) and geometric objects a render prepares, and the channels among
+ * the volumes; errors beyond the limits. */
 static vv_status
-count_objects(const vv_world *w, int *nv, int *ng) {
-    *nv = *ng = 0;
+count_objects(const vv_world *w, int *nv, int *ng, int *nch) {
+    *nv = *ng = *nch = 0;
     for (int i = 0; i < w->n_objects; i++) {
         const vv_object *o = w->objects[i];
         if (!o || !o->visible || o->type == VV_OBJECT_GRID) /* grids: the irregular renderer */
             continue;
-        if (o->type == VV_OBJECT_VOLUME)
+        if (o->type == VV_OBJECT_VOLUME && o->n_channels > 1) {
+            *nv += channels_shown(o);
+            *nch += channels_shown(o);
+        } else if (o->type == VV_OBJECT_VOLUME) {
             *nv += o->volume != NULL;
-        else
+        } else {
             (*ng)++;
+        }
     }
     if (*nv > RT_MAX_OBJ || *ng > RT_MAX_OBJ * 16)
         return vv_error_set(VV_ERR_LIMIT, "%d volume and %d geometric objects; at most %d and %d",
                             *nv, *ng, RT_MAX_OBJ, RT_MAX_OBJ * 16);
+    return VV_OK;
+}
+
+/* The visible channels of multi-channel object @p obj, each prepared as a
+ * volume of its own (the ray caster's rules: the object with the channel's
+ * volume and transfer function, one channel, no 2-D TF or texture;
+ * composite mode under the composite and additive rules, MIP under the
+ * maximum rule), in consecutive vobjs with the first as their leader. */
+static vv_status
+prepare_channels(rt_frame *fr, const vv_object *obj, int context) {
+    const int first = fr->n_vobj;
+    for (int c = 0; c < obj->n_channels; c++) {
+        const vv_channel *cc = &obj->channels[c];
+        if (!cc->visible || !cc->volume)
+            continue;
+        vv_object *o = &fr->chobjs[fr->n_chobj++];
+        *o = *obj;
+        o->volume = cc->volume;
+        o->tf = cc->tf;
+        o->n_channels = 0;
+        o->channels = NULL;
+        o->mode = obj->blend == VV_BLEND_MAXIMUM ? VV_MODE_MIP : VV_MODE_COMPOSITE;
+        o->segmentation = VV_SEG_TRANSFER_FUNCTION;
+        o->texture.image = NULL;
+        vv_solid_texture_init(&o->solid_texture);
+        rt_vobj *ro = &fr->vobjs[fr->n_vobj++];
+        vv_status s = prepare_volume(fr, ro, o);
+        if (s != VV_OK)
+            return vv_error_prefix(s, "object '%s', channel %d ('%s')", obj->name, c, cc->name);
+        ro->context = context;
+        ro->group = first;
+        ro->blend = obj->blend;
+        ro->lead = &fr->vobjs[first];
+    }
+    fr->vobjs[first].gn = fr->n_vobj - first;
     return VV_OK;
 }
 
@@ -335,14 +389,15 @@ static vv_status
 prepare_frame(rt_frame *fr, const vv_world *w, const vv_view *view, const vv_render_region *region,
               const vv_object *part, int nt) {
     rt_state *st = fr->st;
-    int nv = 0, ng = 0;
-    vv_status s = count_objects(w, &nv, &ng);
+    int nv = 0, ng = 0, nch = 0;
+    vv_status s = count_objects(w, &nv, &ng, &nch);
     if (s != VV_OK)
         return s;
     nv += region != NULL;
     fr->vobjs = calloc(nv ? (size_t)nv : 1, sizeof *fr->vobjs);
     fr->gobjs = calloc(ng ? (size_t)ng : 1, sizeof *fr->gobjs);
-    if (!fr->vobjs || !fr->gobjs)
+    fr->chobjs = calloc(nch ? (size_t)nch : 1, sizeof *fr->chobjs);
+    if (!fr->vobjs || !fr->gobjs || !fr->chobjs)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     double dt = INFINITY;
     vv_box bounds = vv_world_bounds(w);
@@ -367,9 +422,15 @@ prepare_frame(rt_frame *fr, const vv_world *w, const vv_view *view, const vv_ren
                 s = vv_error_set(VV_ERR_INVALID, "object '%s': step must be > 0", o->name);
                 break;
             }
-            rt_vobj *ro = &fr->vobjs[fr->n_vobj++];
-            s = prepare_volume(fr, ro, o);
-            ro->context = region != NULL;
+            if (o->n_channels > 1 && !channels_shown(o))
+                continue;
+            if (o->n_channels > 1) {
+                s = prepare_channels(fr, o, region != NULL);
+            } else {
+                rt_vobj *ro = &fr->vobjs[fr->n_vobj++];
+                s = prepare_volume(fr, ro, o);
+                ro->context = region != NULL;
+            }
             if (!region) {
                 double sd = vv_vobject_step(o);
                 dt = sd < dt ? sd : dt;
@@ -590,7 +651,8 @@ const vv_renderer_ops vv_raytrace_ops = {
                            "refraction, PARC",
             .draws = VV_DRAWS(VV_OBJECT_VOLUME) | VV_DRAWS_GEOMETRY,
             .modes = VV_MODES_ALL,
-            .caps = VV_RENDERER_REGION | VV_RENDERER_QUALITY | VV_RENDERER_GLOBAL,
+            .caps = VV_RENDERER_REGION | VV_RENDERER_QUALITY | VV_RENDERER_GLOBAL |
+                    VV_RENDERER_CHANNELS,
             .quality = "0: one ray a pixel, no shadow or secondary rays; 1: one ray a pixel "
                        "with every effect; 2: supersampled (samples, adaptive); region renders "
                        "(out of core, MPI) trace one ray a pixel",

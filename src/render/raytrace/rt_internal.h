@@ -120,6 +120,17 @@ typedef struct rt_vobj {
     int context;                    /* the context: shadows only */
     double region_dt;               /* the step the region's samples are counted with */
     int inv_form;                   /* vv_vray_clip_region's form for this object's kernel */
+    /* a channel of a multi-channel object (vv_object.channels), prepared as
+     * a volume of its own (its own cache, tables and light volumes, so that
+     * shadow rays cross every channel as independent absorbers): group is
+     * the index in vobjs of the object's first visible channel, its leader,
+     * whose gn is the count of the object's visible channels (the next gn
+     * entries); -1 (and gn 0) for an object of one channel */
+    int group, gn;
+    vv_channel_blend blend;     /* the object's rule for combining its channels */
+    const struct rt_vobj *lead; /* whose shading constants and shadow grids its samples
+                                   use: itself, or its group's leader (the channels share
+                                   one transform, hence one grid of shadow rays) */
 } rt_vobj;
 
 /* One geometric object prepared for this render. */
@@ -147,6 +158,8 @@ typedef struct rt_frame {
     int n_vobj;
     rt_gobj *gobjs;
     int n_gobj;
+    vv_object *chobjs; /* the channels of multi-channel objects as objects of one channel */
+    int n_chobj;
     float dt;
     float bg[3];
     float ambient[3];

@@ -21,7 +21,9 @@
 
 /* Composites one classified sample (opacity and premultiplied colour e) at
  * index point p, ray parameter t, under the accumulated C, A; gin: the
- * index-space gradient there, or NULL to compute it. */
+ * index-space gradient there, or NULL to compute it. A channel's sample is
+ * shaded with its own gradient under its leader's shading constants and
+ * shadow grids (ob->lead). */
 static inline void
 composite_sample(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, const float v[3],
                  const float *e, const float p[3], double t, const float *gin, rt_scache *sc,
@@ -36,7 +38,7 @@ composite_sample(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, const 
         pw[0] = (float)(wr->origin.x + t * wr->dir.x);
         pw[1] = (float)(wr->origin.y + t * wr->dir.y);
         pw[2] = (float)(wr->origin.z + t * wr->dir.z);
-        rt_shade_volume(fr, ob, g, p, pw, v, e + 1, e[0], sc, o3);
+        rt_shade_volume(fr, ob->lead, g, p, pw, v, e + 1, e[0], sc, o3);
         C[0] += w * o3[0];
         C[1] += w * o3[1];
         C[2] += w * o3[2];
@@ -112,6 +114,32 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
     *Aout = A > 1 ? 1 : A;
 }
 
+/* The samples of one multi-channel object's channels at one point under
+ * the composite rule (VV_BLEND_COMPOSITE), mixed as the ray caster mixes
+ * them (vv_channel_blend): opacities as independent absorbers, alpha = 1 -
+ * prod(1 - a_c), shaded colours weighted by opacity. */
+typedef struct rt_mix {
+    int group; /* the object's leader in vobjs; -1: nothing gathered */
+    float col[3], sum_a, T;
+} rt_mix;
+
+/* Composites the gathered mix, if any, at ray parameter t under C, A. */
+static inline void
+mix_flush(rt_mix *m, double t, float C[3], float *A, float *dep) {
+    if (m->group >= 0 && m->sum_a > 0) {
+        const float a = 1 - m->T, scale = a / m->sum_a, w = 1 - *A;
+        C[0] += w * scale * m->col[0];
+        C[1] += w * scale * m->col[1];
+        C[2] += w * scale * m->col[2];
+        *A += w * a;
+        if (*dep == INFINITY)
+            *dep = (float)t;
+    }
+    m->group = -1;
+    m->col[0] = m->col[1] = m->col[2] = m->sum_a = 0;
+    m->T = 1;
+}
+
 /* Over 150 lines on purpose: the multi-volume march keeps per-object ray
  * state (iso crossings, leaps) in arrays on the stack across the samples of
  * one ray, the ray caster's trace_composite for the ray tracer. */
@@ -131,6 +159,8 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
         const rt_vobj *ob = &fr->vobjs[i];
         if ((ob->mode != VV_MODE_COMPOSITE && ob->mode != VV_MODE_ISO) || ob->context)
             continue;
+        if (ob->group >= 0 && ob->blend != VV_BLEND_COMPOSITE)
+            continue; /* additive channels: channel_overlay */
         if (!primary && !ob->obj->visible_in_reflections)
             continue;
         if (vray_setup(ob, wr, 0, tlim, &rays[na])) {
@@ -154,6 +184,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
     float prev_v[RT_MAX_OBJ];
     double prev_t[RT_MAX_OBJ];
     int has_prev[RT_MAX_OBJ];
+    rt_mix mix = {-1, {0, 0, 0}, 0, 1};
     for (int i = 0; i < na; i++)
         has_prev[i] = 0;
     double k = vv_ceil_pos(tmin / dt);
@@ -166,6 +197,8 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
         for (int ai = 0; ai < na; ai++) {
             const rt_vobj *ob = &fr->vobjs[act[ai]];
             const vv_vray *r = &rays[ai];
+            if (mix.group >= 0 && ob->group != mix.group)
+                mix_flush(&mix, t, C, &A, dep); /* an object's channels are consecutive */
             if (t < r->t0 || t > r->t1) {
                 if (t < r->t0 && r->t0 < skip_to)
                     skip_to = r->t0;
@@ -262,10 +295,24 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
             float ebuf[4];
             if (ob->extras && (e = vv_vextra_apply(&ob->x, c, p, val, e, ebuf))[0] <= 0)
                 continue;
+            if (ob->group >= 0) {
+                /* a channel: its shaded colour (composited under nothing)
+                 * gathered with the object's other channels at this point */
+                float one[3] = {0, 0, 0}, a = 0;
+                composite_sample(fr, ob, wr, v, e, p, t, NULL, &sc, one, &a);
+                mix.group = ob->group;
+                mix.col[0] += one[0];
+                mix.col[1] += one[1];
+                mix.col[2] += one[2];
+                mix.sum_a += e[0];
+                mix.T *= 1 - e[0];
+                continue;
+            }
             composite_sample(fr, ob, wr, v, e, p, t, NULL, &sc, C, &A);
             if (*dep == INFINITY)
                 *dep = (float)t;
         }
+        mix_flush(&mix, t, C, &A, dep);
         if (A >= fr->et)
             break;
         if (!sampled && skip_to < INFINITY) {
@@ -291,6 +338,47 @@ project_volume(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double t
     return 1;
 }
 
+/* A multi-channel object under the additive or maximum rule (leader ob of
+ * its channels) over the part of the ray in [0, tlim], as the ray caster
+ * draws it: additive, each visible channel composited front to back on its
+ * own (march_one) and the colours added; maximum, a MIP per channel
+ * coloured as a one-channel MIP is (colour times opacity at that value),
+ * added. *a = 1 - prod(1 - a_c). Returns 0 when the ray misses it. */
+static int
+channel_overlay(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double tlim, float rgb[3],
+                float *a, float *depth) {
+    const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
+    float T = 1;
+    int hit = 0;
+    rgb[0] = rgb[1] = rgb[2] = 0;
+    *depth = INFINITY;
+    for (int k = 0; k < ob->gn; k++) {
+        const rt_vobj *co = ob + k;
+        float col[3] = {0, 0, 0}, ac = 0, d = INFINITY;
+        if (co->mode == VV_MODE_MIP) {
+            float val;
+            if (!project_volume(fr, co, wr, tlim, &val, &d))
+                continue;
+            const float *e = co->lut + 4 * (int)lut_index_f(co, val);
+            for (int i = 0; i < 3; i++)
+                col[i] = e[1 + i] * e[0];
+            ac = e[0];
+        } else {
+            vv_vray r;
+            if (!vray_setup(co, wr, 0, tlim, &r))
+                continue;
+            march_one(fr, co, &r, wr, v, col, &ac, &d);
+        }
+        hit = 1;
+        for (int i = 0; i < 3; i++)
+            rgb[i] += col[i];
+        T *= 1 - ac;
+        *depth = d < *depth ? d : *depth;
+    }
+    *a = 1 - T;
+    return hit;
+}
+
 /* I(x, w) = I_v + tau I_s along one ray: out is the colour, *alpha the
  * coverage (1 where a surface is hit), *tdepth the first visible hit. */
 void
@@ -313,9 +401,22 @@ rt_trace_key(const rt_frame *fr, const vv_ray *wr, int depth, int primary, float
         *key = NAN;
     for (int i = 0; i < fr->n_vobj; i++) {
         const rt_vobj *ob = &fr->vobjs[i];
-        if (ob->mode == VV_MODE_COMPOSITE || ob->mode == VV_MODE_ISO || ob->context)
+        if (ob->context || (!primary && !ob->obj->visible_in_reflections))
             continue;
-        if (!primary && !ob->obj->visible_in_reflections)
+        if (ob->group >= 0) {
+            /* a multi-channel object under the additive or maximum rule:
+             * shown with the projections (the ray caster's order) */
+            float g[3], ga, gd;
+            if (ob->lead != ob || ob->blend == VV_BLEND_COMPOSITE ||
+                !channel_overlay(fr, ob, wr, tlim, g, &ga, &gd))
+                continue;
+            for (int ch = 0; ch < 3; ch++)
+                P[ch] = g[ch] > P[ch] ? g[ch] : P[ch];
+            PA = ga > PA ? ga : PA;
+            pdepth = gd < pdepth ? gd : pdepth;
+            continue;
+        }
+        if (ob->mode == VV_MODE_COMPOSITE || ob->mode == VV_MODE_ISO)
             continue;
         float val, d;
         if (!project_volume(fr, ob, wr, tlim, &val, &d))
