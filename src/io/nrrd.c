@@ -813,11 +813,14 @@ read_locked(vv_volume **out, const char *path, const header_scan *hs, int channe
     }
     /* the time step, then the channel (the higher axis first, so the
      * other's index holds) */
+    int rgb = 0;
     {
         unsigned int ax[3];
         int nax, c_axis, t_axis;
         if ((s = pick_axes(n, ax, &nax, &c_axis, &t_axis)) != VV_OK)
             goto done;
+        rgb = c_axis >= 0 && (n->axis[c_axis].kind == nrrdKindRGBColor ||
+                              n->axis[c_axis].kind == nrrdKindRGBAColor);
         int first = c_axis > t_axis ? c_axis : t_axis, second = c_axis > t_axis ? t_axis : c_axis;
         int first_pos = first == c_axis ? ch : tp, second_pos = second == c_axis ? ch : tp;
         if (first >= 0 && (s = slice_axis(&n, first, first_pos)) != VV_OK)
@@ -839,6 +842,10 @@ read_locked(vv_volume **out, const char *path, const header_scan *hs, int channe
     if (info) {
         info->n_channels = nc;
         info->n_times = nt;
+        if (rgb && ch < 3) { /* an RGB(A)-color axis: red, green, blue (alpha keeps the default) */
+            info->color[ch] = 1.0f;
+            info->has_color = 1;
+        }
     }
     *out = v;
     v = NULL;

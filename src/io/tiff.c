@@ -484,6 +484,7 @@ vv_tiff_prescan_description(const char *desc) {
 typedef struct page_fmt {
     uint32_t w, h;
     uint16_t bps, spp, fmt, planar;
+    uint16_t photometric; /* PHOTOMETRIC_RGB: samples 0..2 are red, green and blue */
     vv_voxel_type type;
 } page_fmt;
 
@@ -527,6 +528,8 @@ page_format(TIFF *t, page_fmt *f) {
     f->spp = spp;
     f->fmt = fmt;
     f->planar = planar;
+    f->photometric = 0xffff;
+    TIFFGetField(t, TIFFTAG_PHOTOMETRIC, &f->photometric);
     f->type = ty;
     return VV_OK;
 }
@@ -707,6 +710,12 @@ read_stack(vv_volume **out, char **files, int n_files, int channel, int time, vv
         memcpy(m.order, "XYZCT", 6);
     }
     int ch = channel < 0 ? 0 : channel, tp = time < 0 ? 0 : time;
+    if (!meta.has_color && nc == f0.spp && f0.photometric == PHOTOMETRIC_RGB && ch < 3) {
+        /* an RGB image's samples: red, green and blue (extra samples,
+         * such as alpha, keep the default colours) */
+        meta.color[ch] = 1.0f;
+        meta.has_color = 1;
+    }
     if (ch >= nc)
         return vv_error_set(VV_ERR_INVALID, "channel %d asked, the stack has %d channel%s", ch, nc,
                             nc == 1 ? "" : "s");

@@ -18,7 +18,8 @@ then checks:
   the voxels numpy wrote at (T, C), for every channel and step (a sample of
   pairs, first and last among them);
 - `volvis info` names the counts, the OME names and colours, each channel's
-  value range and the time increment;
+  value range and the time increment; an RGB TIFF's samples and a NRRD
+  RGB-color axis are red, green and blue;
 - `volvis render --channels C` takes the file's colour when no --colors;
 - `volvis render --time-range A:B:S` writes each step's image, equal to
   `--time T` alone, one channel and several; `volvis animate` with an
@@ -216,6 +217,17 @@ for c, colour in enumerate(("#ffff00", "#00ffff")):
           f"info: ImageJ LUT of channel {c} is {colour}")
 check(any(ln.startswith("  channel 2   range") for ln in lines),
       "info: ImageJ's grey LUT gives no colour (the default set)")
+# an RGB TIFF (tifffile, photometric RGB) and a NRRD axis of kind
+# RGB-color: their samples are red, green and blue
+rgb_tif = os.path.join(OUT, "rgb.tif")
+tifffile.imwrite(rgb_tif, rng.integers(0, 255, size=(Z, Y, X, 3), dtype=np.uint8),
+                 photometric="rgb")
+for path in (rgb_tif, nrrd):
+    p = volvis("info", path)
+    lines = p.stdout.splitlines()
+    for c, colour in enumerate(("#ff0000", "#00ff00", "#0000ff")):
+        check(any(ln.startswith(f"  channel {c:<3d} {colour} range") for ln in lines),
+              f"info {os.path.basename(path)}: sample {c} is {colour} ({p.stderr.strip()})")
 p = volvis("info", five)
 check("time steps:   4 (this is step 0), 0.25 s apart" in p.stdout.splitlines() and
       "channels:     3 (this is channel 0)" in p.stdout.splitlines(),
