@@ -83,7 +83,8 @@ cli_convert_usage(FILE *out) {
             "                     NRRD (an axis of kind RGB-color, vector, list, ...),\n"
             "                     VTK legacy (a component of SCALARS)\n"
             "  --time T           time step T, from 0 (default 0): OME-TIFF, ImageJ\n"
-            "                     hyperstacks, NIfTI (dim[4]), NRRD (an axis of kind time)\n"
+            "                     hyperstacks, NIfTI (dim[4]), NRRD (an axis of kind time),\n"
+            "                     DICOM (images repeating at each position: cine, 4-D CT)\n"
             "  -q, --quiet        no 'wrote' line and no conversion note\n"
             "  -h, --help         show this help\n"
             "\n",

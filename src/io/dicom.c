@@ -94,6 +94,14 @@ vv_dicom_read_files(vv_volume **out, const char *const *files, int n, int series
     return vv_dicom_list(NULL, NULL, n > 0 && files ? files[0] : "");
 }
 
+static vv_status
+dicom_read_at(vv_volume **out, const char *path, int series, int channel, int time,
+              vv_load_info *info) {
+    (void)time;
+    (void)info;
+    return vv_dicom_read(out, path, series, channel);
+}
+
 #else
 
 #define MAX_FILES 200000
@@ -374,16 +382,72 @@ typedef struct slice_ref {
     double d;
     double p[3];
     int instance;
+    int temporal;   /* Temporal Position Identifier, 0 none */
+    double trigger; /* Trigger Time (ms), or the instance number when there is none */
 } slice_ref;
 
+/* Along the normal, then, at one position, in time: Temporal Position
+ * Identifier, Trigger Time, Instance Number, frame. */
 static int
 cmp_slice(const void *a, const void *b) {
     const slice_ref *x = a, *y = b;
     if (x->d != y->d)
         return x->d < y->d ? -1 : 1;
+    if (x->temporal != y->temporal)
+        return x->temporal < y->temporal ? -1 : 1;
+    if (x->trigger != y->trigger)
+        return x->trigger < y->trigger ? -1 : 1;
     if (x->instance != y->instance)
         return x->instance < y->instance ? -1 : 1;
     return x->frame - y->frame;
+}
+
+/* Positions closer than this (mm along the normal) are one place. */
+#define DCM_SAME_PLACE 1e-4
+
+/*
+ * A time series (a cardiac cine, a perfusion or 4-D CT series: several
+ * images at each position, DICOM PS3.3 C.7.6.2 and C.8.3.1): when the
+ * sorted @p refs come in runs of one position and every run has the same
+ * length T > 1, the series has T time steps and *@p nz becomes the count of
+ * positions, refs[k] the image of step @p time at position k (in run order:
+ * Temporal Position Identifier, Trigger Time, Instance Number); *@p nt = T
+ * and *@p step_s the time between steps in seconds from the first
+ * position's trigger times (0 when unknown). Runs of unequal length are left
+ * for order_slices to name (two images at one place). Errors: a step out of
+ * range.
+ */
+static vv_status
+pick_time_step(const scan *sc, slice_ref *refs, int *nz, int time, int *nt, double *step_s) {
+    *nt = 1;
+    *step_s = 0;
+    int run = 1;
+    while (run < *nz && refs[run].d - refs[0].d < DCM_SAME_PLACE)
+        run++;
+    if (run < 2 || *nz % run != 0)
+        return time > 0 ? vv_error_set(VV_ERR_INVALID,
+                                       "time step %d asked, the series has one time step", time)
+                        : VV_OK;
+    for (int z = 0; z < *nz; z += run) {
+        if (refs[z + run - 1].d - refs[z].d >= DCM_SAME_PLACE ||
+            (z + run < *nz && refs[z + run].d - refs[z + run - 1].d < DCM_SAME_PLACE))
+            return time > 0 ? vv_error_set(VV_ERR_INVALID,
+                                           "time step %d asked, but the series' positions "
+                                           "hold different numbers of images",
+                                           time)
+                            : VV_OK;
+    }
+    if (time < 0 || time >= run)
+        return vv_error_set(VV_ERR_INVALID, "time step %d asked, the series has %d", time, run);
+    const vv_dcm_file *f0 = &sc->f[refs[0].file], *f1 = &sc->f[refs[1].file];
+    if (f0->has_trigger && f1->has_trigger && refs[1].trigger > refs[0].trigger)
+        *step_s = (refs[1].trigger - refs[0].trigger) / 1000.0;
+    const int n = *nz / run;
+    for (int k = 0; k < n; k++)
+        refs[k] = refs[k * run + time];
+    *nz = n;
+    *nt = run;
+    return VV_OK;
 }
 
 static void
@@ -415,9 +479,12 @@ slice_name(const scan *sc, const slice_ref *r, char *buf, size_t cap) {
     return buf;
 }
 
-/* Orders @p refs and sets the volume's geometry, or errors on gaps. */
+/* Orders @p refs, keeps time step @p time's (pick_time_step: *@p nz, *@p nt,
+ * *@p step_s) and sets the volume's geometry, or errors on gaps. */
 static vv_status
-order_slices(const scan *sc, slice_ref *refs, int nz, const vv_dcm_file *f0, vv_volume *v) {
+order_slices(const scan *sc, slice_ref *refs, int *nz_io, const vv_dcm_file *f0, int time, int *nt,
+             double *step_s, vv_volume *v) {
+    int nz = *nz_io;
     int geo = f0->has_iop;
     for (int z = 0; z < nz && geo; z++) {
         const vv_dcm_file *f = &sc->f[refs[z].file];
@@ -463,6 +530,19 @@ order_slices(const scan *sc, slice_ref *refs, int nz, const vv_dcm_file *f0, vv_
             refs[z].d = (double)sc->f[refs[z].file].instance_number * 1e6 + refs[z].frame;
     }
     qsort(refs, (size_t)nz, sizeof *refs, cmp_slice);
+    *nt = 1;
+    *step_s = 0;
+    if (geo) {
+        vv_status s = pick_time_step(sc, refs, &nz, time, nt, step_s);
+        if (s != VV_OK)
+            return s;
+        *nz_io = nz;
+    } else if (time > 0) {
+        return vv_error_set(VV_ERR_INVALID,
+                            "time step %d asked, the series has one time step (its images have "
+                            "no positions)",
+                            time);
+    }
 
     double dz = 1, kaxis[3];
     memcpy(kaxis, nrm, sizeof kaxis);
@@ -481,10 +561,11 @@ order_slices(const scan *sc, slice_ref *refs, int nz, const vv_dcm_file *f0, vv_
         char a[1100], b[1100];
         for (int z = 0; z + 1 < nz; z++) {
             double step = refs[z + 1].d - refs[z].d;
-            if (step < 1e-4)
+            if (step < DCM_SAME_PLACE)
                 return vv_error_set(VV_ERR_FORMAT,
                                     "%s and %s are at the same position (%.4g mm along the "
-                                    "normal): several acquisitions in one series?",
+                                    "normal): several acquisitions in one series? (a time "
+                                    "series has as many images at every position)",
                                     slice_name(sc, &refs[z], a, sizeof a),
                                     slice_name(sc, &refs[z + 1], b, sizeof b), refs[z].d);
         }
@@ -898,6 +979,8 @@ read_pixels(const series_read *R, double *lo_out, double *hi_out) {
 #pragma omp for schedule(dynamic, 2)
         for (int i = R->a; i < R->b; i++) {
             const vv_dcm_file *f = &sc->f[sc->order[i]];
+            if (f->frames == 1 && R->slot[i - R->a] < 0)
+                continue; /* an image of another time step */
             size_t need = (size_t)(R->frame_bytes * (uint64_t)f->frames);
             char e[256] = "";
             int bad = 0;
@@ -964,7 +1047,7 @@ read_pixels(const series_read *R, double *lo_out, double *hi_out) {
 }
 
 static vv_status
-read_series(vv_volume **out, const scan *sc, int si, int channel) {
+read_series(vv_volume **out, const scan *sc, int si, int channel, int time, vv_load_info *info) {
     int a = sc->start[si], b = sc->start[si + 1];
     const vv_dcm_file *f0 = &sc->f[sc->order[a]];
     int dims[3] = {0, 0, 0}, ch = 0;
@@ -980,7 +1063,7 @@ read_series(vv_volume **out, const scan *sc, int si, int channel) {
         return s;
     slice_ref *refs = calloc((size_t)nz, sizeof *refs);
     long *slot = malloc((size_t)(b - a) * sizeof *slot);
-    vv_volume *v = NULL;
+    vv_volume *v = NULL, *geo = NULL;
     if (!refs || !slot) {
         s = vv_error_set(VV_ERR_NOMEM, "out of memory");
         goto done;
@@ -992,19 +1075,38 @@ read_series(vv_volume **out, const scan *sc, int si, int channel) {
             refs[z].file = sc->order[i];
             refs[z].frame = fr;
             refs[z].instance = f->instance_number;
+            refs[z].temporal = f->temporal_position;
+            refs[z].trigger = f->has_trigger ? f->trigger_time : f->instance_number;
         }
     }
     vv_voxel_type t = output_type(sc, refs, (int)nz);
-    if ((s = vv_volume_new(&v, dims, t)) != VV_OK ||
-        (s = order_slices(sc, refs, (int)nz, f0, v)) != VV_OK)
+    /* the geometry, and of a time series the one step's slices, first: the
+     * volume has that many */
+    int nzi = (int)nz, nt = 1;
+    double step_s = 0;
+    if ((s = vv_volume_new(&geo, (const int[3]){1, 1, 1}, t)) != VV_OK ||
+        (s = order_slices(sc, refs, &nzi, f0, time, &nt, &step_s, geo)) != VV_OK)
         goto done;
-    /* the slot of each file's first frame */
+    nz = nzi;
+    dims[2] = nzi;
+    if ((s = vv_volume_new(&v, dims, t)) != VV_OK)
+        goto done;
+    memcpy(v->spacing, geo->spacing, sizeof v->spacing);
+    memcpy(v->origin, geo->origin, sizeof v->origin);
+    memcpy(v->direction, geo->direction, sizeof v->direction);
+    v->space = geo->space;
+    v->unit = geo->unit;
+    /* the slot of each file's first frame; -1 for a file of another step */
     for (int i = 0; i < b - a; i++)
         slot[i] = -1;
     for (long k = 0; k < nz; k++)
         for (int i = a; i < b; i++)
             if (sc->order[i] == refs[k].file && refs[k].frame == 0)
                 slot[i - a] = k;
+    if (info) {
+        info->n_times = nt;
+        info->time_step = step_s;
+    }
     series_read R = {sc, a, b, ch, nz, refs, direct, slot, frame_bytes, v};
     double lo, hi;
     if ((s = read_pixels(&R, &lo, &hi)) != VV_OK)
@@ -1021,6 +1123,7 @@ read_series(vv_volume **out, const scan *sc, int si, int channel) {
     v->range[1] = lo <= hi ? hi : 0;
     v->modified++;
 done:
+    vv_volume_free(geo);
     free(slot);
     free(refs);
     free(direct);
@@ -1033,7 +1136,7 @@ done:
 }
 
 static vv_status
-read_scanned(vv_volume **out, scan *sc, int series, int channel) {
+read_scanned(vv_volume **out, scan *sc, int series, int channel, int time, vv_load_info *info) {
     if (series < 0 || series > sc->n_series)
         return vv_error_set(VV_ERR_INVALID, "series %d asked, there %s %d", series,
                             sc->n_series == 1 ? "is" : "are", sc->n_series);
@@ -1042,7 +1145,7 @@ read_scanned(vv_volume **out, scan *sc, int series, int channel) {
                             "%d series (mixed series): choose one with --series N (1 to %d; "
                             "'volvis info' lists them)",
                             sc->n_series, sc->n_series);
-    return read_series(out, sc, series ? series - 1 : 0, channel);
+    return read_series(out, sc, series ? series - 1 : 0, channel, time, info);
 }
 
 /* Prefixes "dicom: PATH" to the error of @p s, or only "dicom" when the
@@ -1055,19 +1158,26 @@ prefix_path(vv_status s, const char *path) {
     return vv_error_prefix(s, "dicom: %s", path);
 }
 
-vv_status
-vv_dicom_read(vv_volume **out, const char *path, int series, int channel) {
+/* vv_dicom_read with a time step and the file's axes (vv_load_info). */
+static vv_status
+dicom_read_at(vv_volume **out, const char *path, int series, int channel, int time,
+              vv_load_info *info) {
     if (!out || !path)
         return vv_error_set(VV_ERR_INVALID, "dicom: NULL argument");
     *out = NULL;
     scan sc;
     vv_status s = scan_path(&sc, path);
     if (s == VV_OK)
-        s = read_scanned(out, &sc, series, channel);
+        s = read_scanned(out, &sc, series, channel, time, info);
     scan_free(&sc);
     if (s != VV_OK)
         return prefix_path(s, path);
     return VV_OK;
+}
+
+vv_status
+vv_dicom_read(vv_volume **out, const char *path, int series, int channel) {
+    return dicom_read_at(out, path, series, channel, 0, NULL);
 }
 
 vv_status
@@ -1078,7 +1188,7 @@ vv_dicom_read_files(vv_volume **out, const char *const *files, int n, int series
     scan sc;
     vv_status s = scan_files(&sc, (char **)files, n);
     if (s == VV_OK)
-        s = read_scanned(out, &sc, series, channel);
+        s = read_scanned(out, &sc, series, channel, 0, NULL);
     scan_free(&sc);
     if (s != VV_OK)
         return vv_error_prefix(s, "dicom: %d files", n);
@@ -1115,7 +1225,7 @@ dicom_looks_like(const vv_format_probe *p, int deep) {
 
 static vv_status
 dicom_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
-    return vv_dicom_read(out, path, opt->series, opt->channel);
+    return dicom_read_at(out, path, opt->series, opt->channel, opt->time, opt->info);
 }
 
 static const char *const dicom_extensions[] = {"dcm", NULL};

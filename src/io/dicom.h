@@ -34,6 +34,11 @@ typedef struct vv_dcm_file {
     double frame_spacing;    /**< multi-frame: GDCM's slice spacing, 0 unknown */
     double slope, intercept;
     double *frame_ipp; /**< multi-frame: frames * 3 positions (malloc'ed), or NULL */
+    /** the image's place in a time series (cardiac phases, perfusion):
+     *  Temporal Position Identifier (0020,0100), 0 when absent, and Trigger
+     *  Time (0018,1060) in ms when has_trigger */
+    int temporal_position, has_trigger;
+    double trigger_time;
 } vv_dcm_file;
 
 /** Initialises GDCM's global dictionaries (idempotent, not thread-safe). */

@@ -7,6 +7,7 @@
 #include "io/dicom.h"
 
 #include <cctype>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -459,6 +460,9 @@ vv_dcm_read_header(const char *path, vv_dcm_file *f, char *err, size_t errlen) {
         double num[6];
         f->series_number = get_nums(ds, 0x0020, 0x0011, num, 1) == 1 ? (int)num[0] : 0;
         f->instance_number = get_nums(ds, 0x0020, 0x0013, num, 1) == 1 ? (int)num[0] : 0;
+        f->temporal_position = get_nums(ds, 0x0020, 0x0100, num, 1) == 1 ? (int)num[0] : 0;
+        f->has_trigger = get_nums(ds, 0x0018, 0x1060, num, 1) == 1 && std::isfinite(num[0]);
+        f->trigger_time = f->has_trigger ? num[0] : 0;
 
         std::vector<unsigned int> dims = gdcm::ImageHelper::GetDimensionsValue(file);
         gdcm::PixelFormat pf = gdcm::ImageHelper::GetPixelFormatValue(file);

@@ -11,6 +11,9 @@ Writes, with independent writers, files of several channels and time steps:
 - a 5-D NIfTI-1 (x, y, z, t, channel; f32, gzip) and a 4-D one by nibabel;
 - a NRRD with an axis of kind RGB-color and one of kind time by Teem's
   `unu make` (when teem-apps is there: else the test is skipped);
+- a cardiac cine DICOM series by pydicom: 4 phases at each of 6 slice
+  positions, one file an image, the files' names and instance numbers
+  shuffled, Trigger Time and Temporal Position Identifier set;
 
 then checks:
 
@@ -46,8 +49,12 @@ try:
     import nibabel as nib
     import tifffile
     from PIL import Image
+    import pydicom
+    from pydicom.dataset import FileDataset, FileMetaDataset
+    from pydicom.uid import ExplicitVRLittleEndian, generate_uid
 except ImportError as e:  # pragma: no cover
-    print(f"skipped: {e} (python3-numpy, python3-nibabel, python3-tifffile, python3-pil)")
+    print(f"skipped: {e} (python3-numpy, python3-nibabel, python3-tifffile, python3-pil, "
+          "python3-pydicom)")
     sys.exit(77)
 UNU = shutil.which("teem-unu") or shutil.which("unu")
 if not UNU:  # pragma: no cover
@@ -198,6 +205,58 @@ if vtk is not None:
     refused(["convert", os.path.join(OUT, "three_ascii.vtk"), os.path.join(OUT, "bad.nii"),
              "--channel", "3", "-q"], "channel 3", os.path.join(OUT, "bad.nii"),
             "VTK component past the file's")
+
+# A cardiac cine series (pydicom): T phases at each of Z positions along an
+# oblique normal, one MR image a file, written in a shuffled order. Each
+# step reads as numpy wrote it, sorted along the normal; info says T steps
+# 40 ms apart; a step past them and a series whose positions hold unequal
+# numbers of images are one-line errors.
+MR_STORAGE = "1.2.840.10008.5.1.4.1.1.4"
+cine = os.path.join(OUT, "cine")
+shutil.rmtree(cine, ignore_errors=True)
+os.makedirs(cine)
+tzyx = rng.integers(0, 4000, size=(T, Z, Y, X), dtype=np.uint16)
+series_uid, study_uid, frame_uid = generate_uid(), generate_uid(), generate_uid()
+row, col = np.array([1.0, 0, 0]), np.array([0, 0.8, -0.6])
+normal = np.cross(row, col)
+order = rng.permutation(T * Z)
+for n, idx in enumerate(order):
+    t, z = int(idx % T), int(idx // T)
+    meta = FileMetaDataset()
+    meta.MediaStorageSOPClassUID = MR_STORAGE
+    meta.MediaStorageSOPInstanceUID = generate_uid()
+    meta.TransferSyntaxUID = ExplicitVRLittleEndian
+    path = os.path.join(cine, f"im{n:03d}.dcm")
+    ds = FileDataset(path, {}, file_meta=meta, preamble=b"\0" * 128)
+    ds.is_little_endian, ds.is_implicit_VR = True, False
+    ds.SOPClassUID, ds.SOPInstanceUID = MR_STORAGE, meta.MediaStorageSOPInstanceUID
+    ds.StudyInstanceUID, ds.SeriesInstanceUID = study_uid, series_uid
+    ds.FrameOfReferenceUID, ds.Modality, ds.SeriesNumber = frame_uid, "MR", 7
+    ds.InstanceNumber = int(n + 1)  # shuffled: not the time order
+    ds.TriggerTime = f"{40 * t:.1f}"
+    ds.TemporalPositionIdentifier = t + 1
+    ds.ImageOrientationPatient = [f"{v:.6f}" for v in (*row, *col)]
+    ds.ImagePositionPatient = [f"{v:.6f}" for v in (np.array([-20.0, 5, 30]) + 2.5 * z * normal)]
+    ds.PixelSpacing = ["1.25", "0.75"]
+    ds.SliceThickness = "2.5"
+    ds.SamplesPerPixel, ds.PhotometricInterpretation = 1, "MONOCHROME2"
+    ds.Rows, ds.Columns = Y, X
+    ds.BitsAllocated, ds.BitsStored, ds.HighBit, ds.PixelRepresentation = 16, 16, 15, 0
+    ds.PixelData = tzyx[t, z].tobytes()
+    ds.save_as(path, write_like_original=False)
+for t in (0, 2, 3):
+    got = read_back(cine, 0, t)
+    if got is not None:
+        check(np.array_equal(got, tzyx[t]), f"DICOM cine phase {t}: voxels")
+p = volvis("info", cine, "--time", "1")
+check(p.returncode == 0 and "time steps:   4 (this is step 1), 0.04 s apart" in
+      p.stdout.splitlines(), f"info DICOM cine: 4 steps 40 ms apart ({p.stderr.strip()})")
+refused(["convert", cine, os.path.join(OUT, "cine_bad.nii"), "--time", "4", "-q"],
+        "time step 4 asked, the series has 4", os.path.join(OUT, "cine_bad.nii"),
+        "DICOM cine: a step past the series")
+os.remove(os.path.join(cine, "im000.dcm"))
+refused(["convert", cine, os.path.join(OUT, "cine_bad.nii"), "-q"], "same position",
+        os.path.join(OUT, "cine_bad.nii"), "DICOM cine with an image missing")
 
 # volvis info: the counts, names, colours, ranges and the time increment
 p = volvis("info", ome, "--time", "2")
