@@ -50,6 +50,7 @@
 
 #include "core/internal.h"
 #include "core/parallel_for.h"
+#include "io/zarr.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 
@@ -561,8 +562,12 @@ const vv_volume_format vv_volume_format_ome_zarr = {
     .name = "zarr",
     .title = "OME-Zarr",
     .extensions = zarr_extensions,
-    .doc = "OME-Zarr 0.4 (a Zarr v2 folder), written only: a pyramid of 2x2x2 means (labels: "
-           "nearest), 64^3 chunks, zlib unless --no-compress, scale and translation per level",
+    .doc = "OME-Zarr 0.4 / Zarr v2 (a folder): read, level 0, one channel and time step (axes t, "
+           "c, z, y, x in any order; raw, zlib, gzip, zstd, blosc chunks); written as a pyramid of "
+           "2x2x2 means (labels: nearest), 64^3 chunks, zlib unless --no-compress",
+    .flags = VV_FORMAT_FLAG_FOLDER | VV_FORMAT_FLAG_THIRD_PARTY,
+    .looks_like = vv_ome_zarr_looks_like,
     .fits = zarr_fits,
+    .read = vv_ome_zarr_read,
     .write = zarr_write_record,
 };

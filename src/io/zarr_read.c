@@ -1,0 +1,621 @@
+/*
+ * OME-Zarr / Zarr v2 reader: one channel at one time step of the full
+ * resolution level as a volume (vv_volume_load's contract).
+ *
+ * A store is a folder. Its root .zattrs holds the OME-NGFF multiscales
+ * metadata (0.4: "axes" objects with name, type and unit; 0.3: axis names;
+ * older: none, the axes then t, c, z, y, x of a 5-D array), the first
+ * dataset's path is level 0 and its coordinateTransformations (scale, then
+ * an optional translation; multiplied by the multiscale's own) give the
+ * spacing and origin of the spatial axes and the time between steps. The
+ * omero block names and colours the channels. A folder with a .zarray and
+ * no multiscales is a plain 3-D array (z, y, x).
+ *
+ * The array's .zarray (Zarr v2 spec): shape, chunks, dtype ("<u2", ">f4",
+ * "|u1": u1 u2 u4 i1 i2 i4 f4 f8, either byte order), compressor (null,
+ * zlib, gzip, zstd, blosc with any of its inner codecs and shuffles), C
+ * order, no filters, fill_value, dimension_separator "." or "/". Chunks
+ * are files named by their indices; a missing chunk is the fill value. Only
+ * the chunks holding the asked channel and step are read, each checked to
+ * decode to exactly the chunk's size.
+ *
+ * Axes: two or three spatial ones (type "space", or named x, y, z), at most
+ * one "channel" (or c) and one "time" (or t) axis, in any order. Every size
+ * is checked against the limits before anything is allocated; JSON files
+ * over 16 MiB and chunks over 1 GiB are refused.
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+
+#include <blosc.h>
+#include <jansson.h>
+#include <zlib.h>
+#include <zstd.h>
+
+#include "core/internal.h"
+#include "io/zarr.h"
+
+#define ZR_MAX_DIM 5
+#define ZR_JSON_MAX (16u << 20)
+#define ZR_CHUNK_MAX ((uint64_t)1 << 30)
+
+typedef struct zr_axis {
+    char name[32];
+    int kind; /* 0 space, 1 channel, 2 time */
+    char unit[32];
+} zr_axis;
+
+/* The array and what the metadata says of it. */
+typedef struct zr_array {
+    char dir[4096];
+    int ndim;
+    uint64_t shape[ZR_MAX_DIM], chunks[ZR_MAX_DIM];
+    vv_voxel_type type;
+    int swap; /* stored in the other byte order */
+    size_t esize;
+    char codec[16]; /* "" raw, zlib, gzip, zstd, blosc */
+    char sep;
+    double fill;
+    zr_axis axes[ZR_MAX_DIM];
+    double scale[ZR_MAX_DIM], trans[ZR_MAX_DIM];
+} zr_array;
+
+/* path/name loaded as JSON (at most ZR_JSON_MAX bytes); NULL with the error
+ * set, or NULL without an error when the file is absent and @p optional. */
+static json_t *
+load_json(const char *dir, const char *name, int optional, vv_status *s) {
+    char p[4200];
+    snprintf(p, sizeof p, "%s/%s", dir, name);
+    struct stat st;
+    *s = VV_OK;
+    if (stat(p, &st) != 0) {
+        if (!optional)
+            *s = vv_error_set(VV_ERR_FORMAT, "no %s (not a Zarr array)", name);
+        return NULL;
+    }
+    if (st.st_size > ZR_JSON_MAX) {
+        *s = vv_error_set(VV_ERR_LIMIT, "%s is %lld bytes (limit %u)", name, (long long)st.st_size,
+                          ZR_JSON_MAX);
+        return NULL;
+    }
+    json_error_t e;
+    json_t *j = json_load_file(p, JSON_REJECT_DUPLICATES, &e);
+    if (!j)
+        *s = vv_error_set(VV_ERR_FORMAT, "%s: line %d: %s", name, e.line, e.text);
+    return j;
+}
+
+static vv_status
+parse_dtype(const char *d, zr_array *a) {
+    if (!d || strlen(d) != 3 || !strchr("<>|", d[0]))
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            ".zarray: dtype \"%s\" (supported: u1 u2 u4 i1 i2 "
+                            "i4 f4 f8, either byte order)",
+                            d ? d : "(none)");
+    static const struct {
+        const char *k;
+        vv_voxel_type t;
+    } map[] = {{"u1", VV_U8},  {"i1", VV_I8},  {"u2", VV_U16}, {"i2", VV_I16},
+               {"u4", VV_U32}, {"i4", VV_I32}, {"f4", VV_F32}, {"f8", VV_F64}};
+    for (size_t i = 0; i < sizeof map / sizeof map[0]; i++)
+        if (!strcmp(d + 1, map[i].k)) {
+            a->type = map[i].t;
+            a->esize = vv_voxel_type_size(a->type);
+            a->swap = a->esize > 1 && (d[0] == '>') == vv_host_is_little_endian();
+            return VV_OK;
+        }
+    return vv_error_set(VV_ERR_UNSUPPORTED,
+                        ".zarray: dtype \"%s\" (supported: u1 u2 u4 i1 i2 i4 f4 f8)", d);
+}
+
+/* The .zarray of folder @p dir into @p a. */
+static vv_status
+parse_zarray(zr_array *a) {
+    vv_status s;
+    json_t *j = load_json(a->dir, ".zarray", 0, &s);
+    if (!j)
+        return s;
+    json_t *shape = json_object_get(j, "shape"), *chunks = json_object_get(j, "chunks");
+    json_t *comp = json_object_get(j, "compressor"), *filt = json_object_get(j, "filters");
+    json_t *fmt = json_object_get(j, "zarr_format"), *order = json_object_get(j, "order");
+    json_t *fill = json_object_get(j, "fill_value"),
+           *sep = json_object_get(j, "dimension_separator");
+    s = VV_OK;
+    if (!json_is_integer(fmt) || json_integer_value(fmt) != 2)
+        s = vv_error_set(VV_ERR_UNSUPPORTED, ".zarray: zarr_format is not 2");
+    else if (!json_is_array(shape) || !json_is_array(chunks) ||
+             json_array_size(shape) != json_array_size(chunks) || json_array_size(shape) < 2 ||
+             json_array_size(shape) > ZR_MAX_DIM)
+        s = vv_error_set(VV_ERR_FORMAT,
+                         ".zarray: shape and chunks must be arrays of 2 to %d sizes, alike",
+                         ZR_MAX_DIM);
+    else if (order && (!json_is_string(order) || strcmp(json_string_value(order), "C")))
+        s = vv_error_set(VV_ERR_UNSUPPORTED, ".zarray: order \"%s\" (only C order is read)",
+                         json_is_string(order) ? json_string_value(order) : "?");
+    else if (filt && !json_is_null(filt) && !(json_is_array(filt) && json_array_size(filt) == 0))
+        s = vv_error_set(VV_ERR_UNSUPPORTED, ".zarray: filters are not supported");
+    if (s == VV_OK) {
+        a->ndim = (int)json_array_size(shape);
+        for (int i = 0; i < a->ndim && s == VV_OK; i++) {
+            json_t *x = json_array_get(shape, (size_t)i), *c = json_array_get(chunks, (size_t)i);
+            if (!json_is_integer(x) || !json_is_integer(c) || json_integer_value(x) < 1 ||
+                json_integer_value(c) < 1 || json_integer_value(x) > (1LL << 40) ||
+                json_integer_value(c) > (1LL << 40))
+                s = vv_error_set(VV_ERR_FORMAT, ".zarray: axis %d: shape or chunk size not a size",
+                                 i);
+            else {
+                a->shape[i] = (uint64_t)json_integer_value(x);
+                a->chunks[i] = (uint64_t)json_integer_value(c);
+            }
+        }
+    }
+    if (s == VV_OK)
+        s = parse_dtype(json_string_value(json_object_get(j, "dtype")), a);
+    if (s == VV_OK) {
+        a->codec[0] = '\0';
+        if (comp && !json_is_null(comp)) {
+            const char *id = json_string_value(json_object_get(comp, "id"));
+            if (!id || (strcmp(id, "zlib") && strcmp(id, "gzip") && strcmp(id, "zstd") &&
+                        strcmp(id, "blosc")))
+                s = vv_error_set(VV_ERR_UNSUPPORTED,
+                                 ".zarray: compressor \"%s\" (supported: zlib, gzip, zstd, blosc)",
+                                 id ? id : "?");
+            else
+                snprintf(a->codec, sizeof a->codec, "%s", id);
+        }
+        a->sep = '.';
+        if (sep && json_is_string(sep) && !strcmp(json_string_value(sep), "/"))
+            a->sep = '/';
+        else if (sep && !(json_is_string(sep) && !strcmp(json_string_value(sep), ".")))
+            s = vv_error_set(VV_ERR_FORMAT, ".zarray: dimension_separator is not \".\" or \"/\"");
+        a->fill = 0;
+        if (json_is_number(fill))
+            a->fill = json_number_value(fill);
+        else if (json_is_string(fill) && !strcmp(json_string_value(fill), "NaN"))
+            a->fill = NAN;
+    }
+    json_decref(j);
+    return s;
+}
+
+static int
+axis_kind(const char *name, const char *type) {
+    if (type && !strcmp(type, "channel"))
+        return 1;
+    if (type && !strcmp(type, "time"))
+        return 2;
+    if (type && !strcmp(type, "space"))
+        return 0;
+    if (!strcmp(name, "c"))
+        return 1;
+    if (!strcmp(name, "t"))
+        return 2;
+    if (!strcmp(name, "x") || !strcmp(name, "y") || !strcmp(name, "z"))
+        return 0;
+    return -1;
+}
+
+/* scale (and translation) of one coordinateTransformations list into
+ * sc/tr (multiplied, added: nested levels compose). */
+static void
+apply_transforms(json_t *list, int ndim, double *sc, double *tr) {
+    size_t i;
+    json_t *t;
+    json_array_foreach(list, i, t) {
+        const char *type = json_string_value(json_object_get(t, "type"));
+        json_t *v = json_object_get(t, type ? type : "");
+        if (!type || !json_is_array(v) || (int)json_array_size(v) != ndim)
+            continue;
+        for (int k = 0; k < ndim; k++) {
+            double x = json_number_value(json_array_get(v, (size_t)k));
+            if (!strcmp(type, "scale") && x > 0 && isfinite(x))
+                sc[k] *= x;
+            else if (!strcmp(type, "translation") && isfinite(x))
+                tr[k] = tr[k] * 1 + x;
+        }
+    }
+}
+
+/* The OME metadata of the store at @p root (its .zattrs): level 0's folder,
+ * axes, transforms; the channel's name and colour into @p info. */
+static vv_status
+parse_store(const char *root, zr_array *a, int channel, vv_load_info *info) {
+    vv_status s;
+    json_t *za = load_json(root, ".zattrs", 1, &s);
+    if (s != VV_OK)
+        return s;
+    json_t *ms = za ? json_array_get(json_object_get(za, "multiscales"), 0) : NULL;
+    snprintf(a->dir, sizeof a->dir, "%s", root);
+    json_t *axes = ms ? json_object_get(ms, "axes") : NULL;
+    json_t *ds0 = ms ? json_array_get(json_object_get(ms, "datasets"), 0) : NULL;
+    if (ms && !ds0) {
+        json_decref(za);
+        return vv_error_set(VV_ERR_FORMAT, ".zattrs: multiscales without datasets");
+    }
+    if (ds0) {
+        const char *p = json_string_value(json_object_get(ds0, "path"));
+        if (!p || !*p || strstr(p, "..") || p[0] == '/') {
+            json_decref(za);
+            return vv_error_set(VV_ERR_FORMAT, ".zattrs: dataset path \"%s\"", p ? p : "(none)");
+        }
+        snprintf(a->dir, sizeof a->dir, "%s/%s", root, p);
+    }
+    s = parse_zarray(a);
+    if (s != VV_OK) {
+        char level[256];
+        snprintf(level, sizeof level, "%s",
+                 ds0 ? json_string_value(json_object_get(ds0, "path")) : ".");
+        json_decref(za);
+        return vv_error_prefix(s, "level %s", level);
+    }
+    /* the axes: from the metadata, else (no OME axes) the last three are z,
+     * y, x after t and c */
+    static const char *const tczyx[5] = {"t", "c", "z", "y", "x"};
+    for (int i = 0; i < a->ndim; i++) {
+        json_t *ax = axes ? json_array_get(axes, (size_t)i) : NULL;
+        const char *name = json_is_string(ax) ? json_string_value(ax)
+                           : ax               ? json_string_value(json_object_get(ax, "name"))
+                                              : tczyx[5 - a->ndim + i];
+        const char *type =
+            ax && json_is_object(ax) ? json_string_value(json_object_get(ax, "type")) : NULL;
+        const char *unit =
+            ax && json_is_object(ax) ? json_string_value(json_object_get(ax, "unit")) : NULL;
+        if (axes && (int)json_array_size(axes) != a->ndim) {
+            s = vv_error_set(VV_ERR_FORMAT, ".zattrs: %zu axes for an array of %d dimensions",
+                             json_array_size(axes), a->ndim);
+            break;
+        }
+        if (!axes && a->ndim < 3) {
+            s = vv_error_set(VV_ERR_FORMAT, "a %d-D array without OME axes", a->ndim);
+            break;
+        }
+        snprintf(a->axes[i].name, sizeof a->axes[i].name, "%s", name ? name : "?");
+        snprintf(a->axes[i].unit, sizeof a->axes[i].unit, "%s", unit ? unit : "");
+        a->axes[i].kind = axis_kind(a->axes[i].name, type);
+        if (a->axes[i].kind < 0) {
+            s = vv_error_set(VV_ERR_UNSUPPORTED, ".zattrs: axis \"%s\" of type \"%s\"",
+                             a->axes[i].name, type ? type : "?");
+            break;
+        }
+        a->scale[i] = 1;
+        a->trans[i] = 0;
+    }
+    if (s == VV_OK && ds0) {
+        apply_transforms(json_object_get(ds0, "coordinateTransformations"), a->ndim, a->scale,
+                         a->trans);
+        apply_transforms(json_object_get(ms, "coordinateTransformations"), a->ndim, a->scale,
+                         a->trans);
+    }
+    /* omero: the channel's label and colour (RRGGBB) */
+    json_t *chs = za ? json_object_get(json_object_get(za, "omero"), "channels") : NULL;
+    json_t *ch = json_array_get(chs, (size_t)(channel < 0 ? 0 : channel));
+    if (s == VV_OK && ch && info) {
+        const char *label = json_string_value(json_object_get(ch, "label"));
+        if (label)
+            snprintf(info->channel_name, sizeof info->channel_name, "%s", label);
+        const char *col = json_string_value(json_object_get(ch, "color"));
+        char *end = NULL;
+        unsigned long rgb = col && strlen(col) == 6 ? strtoul(col, &end, 16) : 0;
+        if (end && *end == '\0' && rgb != 0) {
+            for (int k = 0; k < 3; k++)
+                info->color[k] = (float)((rgb >> (16 - 8 * k)) & 0xffu) / 255.0f;
+            info->has_color = 1;
+        }
+    }
+    json_decref(za);
+    return s;
+}
+
+/* Reads and decodes chunk file @p path into @p out (exactly @p n bytes);
+ * 0 with *missing = 1 when the file does not exist. */
+static vv_status
+read_chunk(const zr_array *a, const char *path, unsigned char *out, size_t n, int *missing) {
+    *missing = 0;
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        if (errno == ENOENT) {
+            *missing = 1;
+            return VV_OK;
+        }
+        return vv_error_set(VV_ERR_IO, "%s: %s", path, strerror(errno));
+    }
+    struct stat st;
+    if (fstat(fileno(f), &st) != 0 || st.st_size < 0 || (uint64_t)st.st_size > ZR_CHUNK_MAX) {
+        fclose(f);
+        return vv_error_set(VV_ERR_LIMIT, "%s: chunk file over %llu bytes", path,
+                            (unsigned long long)ZR_CHUNK_MAX);
+    }
+    size_t m = (size_t)st.st_size;
+    unsigned char *src = malloc(m ? m : 1);
+    if (!src) {
+        fclose(f);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk");
+    }
+    size_t got = fread(src, 1, m, f);
+    fclose(f);
+    vv_status s = VV_OK;
+    if (got != m) {
+        s = vv_error_set(VV_ERR_IO, "%s: cannot read the chunk", path);
+    } else if (!a->codec[0]) {
+        if (m != n)
+            s = vv_error_set(VV_ERR_FORMAT, "%s: %zu bytes, an uncompressed chunk has %zu", path, m,
+                             n);
+        else
+            memcpy(out, src, n);
+    } else if (!strcmp(a->codec, "zlib") || !strcmp(a->codec, "gzip")) {
+        z_stream z;
+        memset(&z, 0, sizeof z);
+        int ok = inflateInit2(&z, !strcmp(a->codec, "gzip") ? 16 + MAX_WBITS : MAX_WBITS) == Z_OK;
+        size_t done = 0;
+        int r = Z_DATA_ERROR;
+        if (ok) {
+            z.next_in = src;
+            z.avail_in = (uInt)m;
+            z.next_out = out;
+            z.avail_out = (uInt)n;
+            r = inflate(&z, Z_FINISH);
+            done = n - z.avail_out;
+            inflateEnd(&z);
+        }
+        if (r != Z_STREAM_END || done != n)
+            s = vv_error_set(VV_ERR_FORMAT, "%s: the %s stream does not decode to %zu bytes", path,
+                             a->codec, n);
+    } else if (!strcmp(a->codec, "zstd")) {
+        unsigned long long fs = ZSTD_getFrameContentSize(src, m);
+        size_t r = fs == (unsigned long long)n ? ZSTD_decompress(out, n, src, m) : 0;
+        if (fs != (unsigned long long)n || ZSTD_isError(r) || r != n)
+            s = vv_error_set(VV_ERR_FORMAT, "%s: the zstd frame does not decode to %zu bytes", path,
+                             n);
+    } else { /* blosc */
+        size_t nb = 0;
+        if (blosc_cbuffer_validate(src, m, &nb) != 0 || nb != n ||
+            blosc_decompress_ctx(src, out, n, 1) != (int)n)
+            s = vv_error_set(VV_ERR_FORMAT, "%s: the blosc buffer does not decode to %zu bytes",
+                             path, n);
+    }
+    free(src);
+    return s;
+}
+
+static void
+swap_bytes(unsigned char *p, size_t count, size_t esize) {
+    for (size_t i = 0; i < count; i++, p += esize)
+        for (size_t k = 0; k < esize / 2; k++) {
+            unsigned char t = p[k];
+            p[k] = p[esize - 1 - k];
+            p[esize - 1 - k] = t;
+        }
+}
+
+/* Fills @p n voxels of type @p t at @p dst with @p x (the fill value, cast). */
+static void
+fill_voxels(void *dst, size_t n, vv_voxel_type t, double x) {
+#define ZR_FILL(T)                                                                                 \
+    for (size_t i = 0; i < n; i++)                                                                 \
+        ((T *)dst)[i] = (T)x;
+    static const double lo[] = {0, -128, 0, -32768, 0, -2147483648.0},
+                        hi[] = {255, 127, 65535, 32767, 4294967295.0, 2147483647.0};
+    if (t <= VV_I32 && !(x >= lo[t] && x <= hi[t]))
+        x = 0; /* a fill value the type cannot hold (never cast out of range) */
+    if (t == VV_F32 && isfinite(x) && fabs(x) > 3.4e38)
+        x = 0;
+    switch (t) {
+    case VV_U8:
+        ZR_FILL(uint8_t) break;
+    case VV_I8:
+        ZR_FILL(int8_t) break;
+    case VV_U16:
+        ZR_FILL(uint16_t) break;
+    case VV_I16:
+        ZR_FILL(int16_t) break;
+    case VV_U32:
+        ZR_FILL(uint32_t) break;
+    case VV_I32:
+        ZR_FILL(int32_t) break;
+    case VV_F32:
+        ZR_FILL(float) break;
+    case VV_F64:
+        ZR_FILL(double) break;
+    }
+#undef ZR_FILL
+}
+
+static vv_status
+read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
+    zr_array a;
+    memset(&a, 0, sizeof a);
+    vv_load_info *info = opt->info;
+    vv_status s = parse_store(path, &a, opt->channel, info);
+    if (s != VV_OK)
+        return s;
+    int sp[3], ns = 0, cax = -1, tax = -1;
+    for (int i = 0; i < a.ndim; i++) {
+        int *slot = a.axes[i].kind == 1 ? &cax : a.axes[i].kind == 2 ? &tax : NULL;
+        if (slot && *slot >= 0)
+            return vv_error_set(VV_ERR_UNSUPPORTED, "two %s axes",
+                                a.axes[i].kind == 1 ? "channel" : "time");
+        if (slot)
+            *slot = i;
+        else if (ns < 3)
+            sp[ns++] = i;
+        else
+            return vv_error_set(VV_ERR_UNSUPPORTED, "more than three spatial axes");
+    }
+    if (ns < 2)
+        return vv_error_set(VV_ERR_UNSUPPORTED, "%d spatial axes (2 or 3 are read)", ns);
+    /* volume axes i, j, k = the last, the middle, the first spatial axis */
+    int vax[3] = {sp[ns - 1], sp[ns - 2], ns == 3 ? sp[0] : -1};
+    int dims[3];
+    for (int k = 0; k < 3; k++) {
+        uint64_t n = vax[k] >= 0 ? a.shape[vax[k]] : 1;
+        if (n > VV_VOLUME_MAX_DIM)
+            return vv_error_set(VV_ERR_LIMIT, "axis %s has %llu samples (limit %d)",
+                                a.axes[vax[k]].name, (unsigned long long)n, VV_VOLUME_MAX_DIM);
+        dims[k] = (int)n;
+    }
+    const uint64_t nc = cax >= 0 ? a.shape[cax] : 1, nt = tax >= 0 ? a.shape[tax] : 1;
+    const int ch = opt->channel < 0 ? 0 : opt->channel, tp = opt->time < 0 ? 0 : opt->time;
+    if ((uint64_t)ch >= nc)
+        return vv_error_set(VV_ERR_INVALID, "channel %d asked, the store has %llu", ch,
+                            (unsigned long long)nc);
+    if ((uint64_t)tp >= nt)
+        return vv_error_set(VV_ERR_INVALID, "time step %d asked, the store has %llu", tp,
+                            (unsigned long long)nt);
+    if ((s = vv_volume_check_size(dims, a.type, NULL)) != VV_OK)
+        return s;
+    uint64_t cbytes = a.esize;
+    for (int i = 0; i < a.ndim; i++) {
+        if (a.chunks[i] > ZR_CHUNK_MAX || cbytes > ZR_CHUNK_MAX / a.chunks[i])
+            return vv_error_set(VV_ERR_LIMIT, "chunks of over %llu bytes",
+                                (unsigned long long)ZR_CHUNK_MAX);
+        cbytes *= a.chunks[i];
+    }
+    vv_volume *v = NULL;
+    if ((s = vv_volume_new(&v, dims, a.type)) != VV_OK)
+        return s;
+    unsigned char *buf = malloc((size_t)cbytes);
+    if (!buf) {
+        vv_volume_free(v);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk of %llu bytes",
+                            (unsigned long long)cbytes);
+    }
+    /* element strides of a chunk (C order) */
+    uint64_t cstride[ZR_MAX_DIM];
+    cstride[a.ndim - 1] = 1;
+    for (int i = a.ndim - 2; i >= 0; i--)
+        cstride[i] = cstride[i + 1] * a.chunks[i + 1];
+    uint64_t idx[ZR_MAX_DIM] = {0}, nchunk[ZR_MAX_DIM];
+    for (int i = 0; i < a.ndim; i++)
+        nchunk[i] = (a.shape[i] + a.chunks[i] - 1) / a.chunks[i];
+    if (cax >= 0)
+        idx[cax] = (uint64_t)ch / a.chunks[cax];
+    if (tax >= 0)
+        idx[tax] = (uint64_t)tp / a.chunks[tax];
+    const size_t vs = a.esize;
+    unsigned char *vd = v->data;
+    for (;;) {
+        /* the chunk's file name */
+        char name[8192];
+        int len = snprintf(name, sizeof name, "%s/", a.dir);
+        for (int i = 0; i < a.ndim && len < (int)sizeof name; i++)
+            len += snprintf(name + len, sizeof name - (size_t)len, "%s%llu",
+                            i ? (char[2]){a.sep, 0} : "", (unsigned long long)idx[i]);
+        int missing = 0;
+        s = read_chunk(&a, name, buf, (size_t)cbytes, &missing);
+        if (s != VV_OK)
+            break;
+        if (missing) {
+            fill_voxels(buf, (size_t)(cbytes / vs), a.type, a.fill);
+        } else if (a.swap) {
+            swap_bytes(buf, (size_t)(cbytes / vs), vs);
+        }
+        /* copy the part inside the array, at the asked channel and step */
+        uint64_t base = 0;
+        if (cax >= 0)
+            base += ((uint64_t)ch - idx[cax] * a.chunks[cax]) * cstride[cax];
+        if (tax >= 0)
+            base += ((uint64_t)tp - idx[tax] * a.chunks[tax]) * cstride[tax];
+        uint64_t o[3], n[3];
+        for (int k = 0; k < 3; k++) {
+            if (vax[k] < 0) {
+                o[k] = 0;
+                n[k] = 1;
+                continue;
+            }
+            o[k] = idx[vax[k]] * a.chunks[vax[k]];
+            uint64_t e = o[k] + a.chunks[vax[k]];
+            n[k] = (e > a.shape[vax[k]] ? a.shape[vax[k]] : e) - o[k];
+        }
+        const uint64_t si = cstride[vax[0]], sj = cstride[vax[1]],
+                       sk = vax[2] >= 0 ? cstride[vax[2]] : 0;
+        for (uint64_t kk = 0; kk < n[2]; kk++)
+            for (uint64_t jj = 0; jj < n[1]; jj++) {
+                unsigned char *dst =
+                    vd +
+                    (((o[2] + kk) * (uint64_t)dims[1] + o[1] + jj) * (uint64_t)dims[0] + o[0]) * vs;
+                const unsigned char *src = buf + (base + kk * sk + jj * sj) * vs;
+                if (si == 1)
+                    memcpy(dst, src, (size_t)(n[0] * vs));
+                else
+                    for (uint64_t ii = 0; ii < n[0]; ii++)
+                        memcpy(dst + ii * vs, src + ii * si * vs, vs);
+            }
+        /* next spatial chunk (channel and time stay) */
+        int i = a.ndim - 1;
+        for (; i >= 0; i--) {
+            if (i == cax || i == tax)
+                continue;
+            if (++idx[i] < nchunk[i])
+                break;
+            idx[i] = 0;
+        }
+        if (i < 0)
+            break;
+    }
+    free(buf);
+    if (s != VV_OK) {
+        vv_volume_free(v);
+        return s;
+    }
+    for (int k = 0; k < 3; k++) {
+        v->spacing[k] = vax[k] >= 0 ? a.scale[vax[k]] : 1;
+        v->origin[k] = vax[k] >= 0 ? a.trans[vax[k]] : 0;
+    }
+    v->unit = vv_unit_parse(a.axes[vax[0]].unit);
+    v->modification = VV_MOD_ORIGINAL;
+    vv_volume_update_range(v);
+    if (info) {
+        info->n_channels = (int)nc;
+        info->n_times = (int)nt;
+        if (tax >= 0 && a.scale[tax] > 0) {
+            const char *u = a.axes[tax].unit;
+            double f = !strcmp(u, "second")        ? 1
+                       : !strcmp(u, "millisecond") ? 1e-3
+                       : !strcmp(u, "microsecond") ? 1e-6
+                       : !strcmp(u, "minute")      ? 60
+                       : !strcmp(u, "hour")        ? 3600
+                                                   : 0;
+            info->time_step = a.scale[tax] * f;
+        }
+    }
+    *out = v;
+    return VV_OK;
+}
+
+vv_status
+vv_ome_zarr_read(vv_volume **out, const char *path, const vv_load_options *opt) {
+    if (!out || !path || !opt)
+        return vv_error_set(VV_ERR_INVALID, "zarr: NULL argument");
+    *out = NULL;
+    vv_status s = read_store(out, path, opt);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "zarr: %s", vv_path_basename(path));
+    return VV_OK;
+}
+
+/* A folder with a .zarray, or a .zattrs naming multiscales. */
+int
+vv_ome_zarr_looks_like(const vv_format_probe *p, int deep) {
+    if (!p->is_dir || deep)
+        return 0;
+    char f[4200];
+    struct stat st;
+    snprintf(f, sizeof f, "%s/.zarray", p->path);
+    if (stat(f, &st) == 0)
+        return 1;
+    snprintf(f, sizeof f, "%s/.zattrs", p->path);
+    FILE *fp = fopen(f, "rb");
+    if (!fp)
+        return 0;
+    char head[4096];
+    size_t n = fread(head, 1, sizeof head - 1, fp);
+    fclose(fp);
+    head[n] = '\0';
+    return strstr(head, "\"multiscales\"") != NULL;
+}
