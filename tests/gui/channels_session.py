@@ -15,6 +15,10 @@ step to step) opens as one object of three channels:
 - the time-step slider shows step 2: the session says "time": 2 and
   `volvis render` of it (reading step 2 of the file itself) gives the GUI's
   frame bit for bit; Play advances the step shown and Pause stops it;
+- the Animator's "Add time-step key" at step 0 (0 s) and step 2 (1 s) makes
+  a linear objects[0].time track of 2 keys; rendered at one frame a
+  second, its frame 1 is `volvis render` of the session at step 2, bit for
+  bit;
 - "edit TF" of a channel makes the Transfer function page edit that
   channel's function (it says which).
 
@@ -159,6 +163,42 @@ def main():
         time.sleep(0.8)
         check(s.text(label) == stopped, "Pause did not stop the time steps")
         print(f"time: step 2 saved and rendered alike; play then pause at {stopped!r}")
+
+        # the Animator's time-step keys: step 0 at 0 s, step 2 at 1 s
+        def to_step(key, step):
+            s.page("Channels and time")
+            slider = s.find("time step", role="slider")
+            s.click(slider)
+            s.key(key)
+            s.wait_for(lambda: s.value(slider) == step, f"the time slider at {step}")
+            time.sleep(1.1)  # (a step shown a second: its own undo step)
+
+        to_step("Home", 0)
+        s.page("Animator")
+        apage = s.find("Animator page")
+        s.click(s.find("Add time-step key", root=apage))
+        to_step("End", 2)
+        path_t2, _ = saved(s, "session_anim_t2.json")
+        s.page("Animator")
+        s.click(s.find("Add time-step key", root=apage))
+        track = s.find_label(lambda n: n.startswith("objects[0].time"))
+        check(s.text(track) == "objects[0].time (linear): 2 keys at 0, 1 s",
+              f"the Animator's track reads {s.text(track)!r}")
+        s.set_spin(s.find("frames per second", "spin button", root=apage), 1)
+        frames = os.path.join(OUT, "anim_time")
+        os.makedirs(frames, exist_ok=True)
+        s.click(s.find("output", "text", root=apage))
+        s.key("ctrl+a")
+        s.type(os.path.join(frames, "f_%03d.png"))
+        s.click(s.find("Render", "push button", root=apage))
+        f1 = os.path.join(frames, "f_001.png")
+        s.wait_for(lambda: os.path.exists(f1) and os.path.getsize(f1) > 0, "frame 1", 180)
+        time.sleep(1.0)
+        check(ae(f1, cli_render(path_t2, os.path.join(OUT, "cli_anim_t2.png"))) == 0,
+              "the Animator's frame 1 (step 2) does not render as the session at step 2")
+        check(ae(os.path.join(frames, "f_000.png"), f1) > 0, "frames 0 and 1 (steps 0, 2) alike")
+        to_step("Home", 0)
+        print("Animator: a time track of 2 keys; frame 1 is step 2")
 
         # the slice view blends the channels in their colours
         s.click(s.find("4 views"))
