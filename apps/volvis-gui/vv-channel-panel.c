@@ -51,8 +51,9 @@ static void fill(VvChannelPanel *self);
 
 static void
 update_histogram(channel_row *r, const vv_volume *v) {
-    /* while time plays the first step's histogram stays (a histogram a
-     * step would cost more than the step's read) */
+    /* while time plays the histogram of the step it started from stays (a
+     * histogram a step would cost more than the step's read); stop_playing
+     * redraws it for the step shown */
     if (r->hist_volume == v && r->hist_modified == v->modified)
         return;
     if (r->hist_volume && r->panel->play_source)
@@ -230,6 +231,10 @@ stop_playing(VvChannelPanel *self) {
     if (self->play_source) {
         g_source_remove(self->play_source);
         self->play_source = 0;
+        /* paused: the histograms of the step shown (they stayed while it played) */
+        for (int c = 0; c < self->n_rows; c++)
+            if (self->row[c].hist)
+                gtk_widget_queue_draw(self->row[c].hist);
     }
     if (self->play && gtk_toggle_button_get_active(GTK_TOGGLE_BUTTON(self->play))) {
         self->updating = TRUE;

@@ -35,6 +35,7 @@
 
 #include <blosc.h>
 #include <jansson.h>
+#include <omp.h>
 #include <zlib.h>
 #include <zstd.h>
 
@@ -426,6 +427,84 @@ fill_voxels(void *dst, size_t n, vv_voxel_type t, double x) {
 #undef ZR_FILL
 }
 
+/* What the parallel read of one channel and step shares. */
+typedef struct zr_job {
+    const zr_array *a;
+    int cax, tax, vax[3], dims[3];
+    uint64_t ch, tp;
+    uint64_t cstride[ZR_MAX_DIM], nchunk[ZR_MAX_DIM];
+    size_t cbytes;
+    vv_volume *v;
+} zr_job;
+
+/* Spatial chunk @p L (in C order over the spatial axes, at the job's
+ * channel and step): read, decoded into @p buf and its voxels inside the
+ * array copied into the volume (chunks cover disjoint voxels). */
+static vv_status
+copy_chunk(const zr_job *J, uint64_t L, unsigned char *buf) {
+    const zr_array *a = J->a;
+    uint64_t idx[ZR_MAX_DIM];
+    for (int i = a->ndim - 1; i >= 0; i--) {
+        if (i == J->cax)
+            idx[i] = J->ch / a->chunks[i];
+        else if (i == J->tax)
+            idx[i] = J->tp / a->chunks[i];
+        else {
+            idx[i] = L % J->nchunk[i];
+            L /= J->nchunk[i];
+        }
+    }
+    char name[8192];
+    int len = snprintf(name, sizeof name, "%s/", a->dir);
+    for (int i = 0; i < a->ndim && len < (int)sizeof name; i++)
+        len += snprintf(name + len, sizeof name - (size_t)len, "%s%llu",
+                        i ? (char[2]){a->sep, 0} : "", (unsigned long long)idx[i]);
+    int missing = 0;
+    vv_status s = read_chunk(a, name, buf, J->cbytes, &missing);
+    if (s != VV_OK)
+        return s;
+    const size_t vs = a->esize;
+    if (missing)
+        fill_voxels(buf, J->cbytes / vs, a->type, a->fill);
+    else if (a->swap)
+        swap_bytes(buf, J->cbytes / vs, vs);
+    /* the part inside the array, at the asked channel and step */
+    uint64_t base = 0;
+    if (J->cax >= 0)
+        base += (J->ch - idx[J->cax] * a->chunks[J->cax]) * J->cstride[J->cax];
+    if (J->tax >= 0)
+        base += (J->tp - idx[J->tax] * a->chunks[J->tax]) * J->cstride[J->tax];
+    uint64_t o[3], n[3];
+    for (int k = 0; k < 3; k++) {
+        const int ax = J->vax[k];
+        if (ax < 0) {
+            o[k] = 0;
+            n[k] = 1;
+            continue;
+        }
+        o[k] = idx[ax] * a->chunks[ax];
+        uint64_t e = o[k] + a->chunks[ax];
+        n[k] = (e > a->shape[ax] ? a->shape[ax] : e) - o[k];
+    }
+    const uint64_t si = J->cstride[J->vax[0]], sj = J->cstride[J->vax[1]],
+                   sk = J->vax[2] >= 0 ? J->cstride[J->vax[2]] : 0;
+    unsigned char *vd = J->v->data;
+    for (uint64_t kk = 0; kk < n[2]; kk++)
+        for (uint64_t jj = 0; jj < n[1]; jj++) {
+            unsigned char *dst =
+                vd +
+                (((o[2] + kk) * (uint64_t)J->dims[1] + o[1] + jj) * (uint64_t)J->dims[0] + o[0]) *
+                    vs;
+            const unsigned char *src = buf + (base + kk * sk + jj * sj) * vs;
+            if (si == 1)
+                memcpy(dst, src, (size_t)(n[0] * vs));
+            else
+                for (uint64_t ii = 0; ii < n[0]; ii++)
+                    memcpy(dst + ii * vs, src + ii * si * vs, vs);
+        }
+    return VV_OK;
+}
+
 static vv_status
 read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
     zr_array a;
@@ -479,89 +558,55 @@ read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
     vv_volume *v = NULL;
     if ((s = vv_volume_new(&v, dims, a.type)) != VV_OK)
         return s;
-    unsigned char *buf = malloc((size_t)cbytes);
-    if (!buf) {
-        vv_volume_free(v);
-        return vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk of %llu bytes",
-                            (unsigned long long)cbytes);
-    }
-    /* element strides of a chunk (C order) */
-    uint64_t cstride[ZR_MAX_DIM];
-    cstride[a.ndim - 1] = 1;
+    zr_job J;
+    memset(&J, 0, sizeof J);
+    J.a = &a;
+    J.cax = cax;
+    J.tax = tax;
+    J.ch = (uint64_t)ch;
+    J.tp = (uint64_t)tp;
+    memcpy(J.vax, vax, sizeof J.vax);
+    memcpy(J.dims, dims, sizeof J.dims);
+    J.cbytes = (size_t)cbytes;
+    J.v = v;
+    /* element strides of a chunk (C order), chunks per axis */
+    J.cstride[a.ndim - 1] = 1;
     for (int i = a.ndim - 2; i >= 0; i--)
-        cstride[i] = cstride[i + 1] * a.chunks[i + 1];
-    uint64_t idx[ZR_MAX_DIM] = {0}, nchunk[ZR_MAX_DIM];
-    for (int i = 0; i < a.ndim; i++)
-        nchunk[i] = (a.shape[i] + a.chunks[i] - 1) / a.chunks[i];
-    if (cax >= 0)
-        idx[cax] = (uint64_t)ch / a.chunks[cax];
-    if (tax >= 0)
-        idx[tax] = (uint64_t)tp / a.chunks[tax];
-    const size_t vs = a.esize;
-    unsigned char *vd = v->data;
-    for (;;) {
-        /* the chunk's file name */
-        char name[8192];
-        int len = snprintf(name, sizeof name, "%s/", a.dir);
-        for (int i = 0; i < a.ndim && len < (int)sizeof name; i++)
-            len += snprintf(name + len, sizeof name - (size_t)len, "%s%llu",
-                            i ? (char[2]){a.sep, 0} : "", (unsigned long long)idx[i]);
-        int missing = 0;
-        s = read_chunk(&a, name, buf, (size_t)cbytes, &missing);
-        if (s != VV_OK)
-            break;
-        if (missing) {
-            fill_voxels(buf, (size_t)(cbytes / vs), a.type, a.fill);
-        } else if (a.swap) {
-            swap_bytes(buf, (size_t)(cbytes / vs), vs);
-        }
-        /* copy the part inside the array, at the asked channel and step */
-        uint64_t base = 0;
-        if (cax >= 0)
-            base += ((uint64_t)ch - idx[cax] * a.chunks[cax]) * cstride[cax];
-        if (tax >= 0)
-            base += ((uint64_t)tp - idx[tax] * a.chunks[tax]) * cstride[tax];
-        uint64_t o[3], n[3];
-        for (int k = 0; k < 3; k++) {
-            if (vax[k] < 0) {
-                o[k] = 0;
-                n[k] = 1;
-                continue;
-            }
-            o[k] = idx[vax[k]] * a.chunks[vax[k]];
-            uint64_t e = o[k] + a.chunks[vax[k]];
-            n[k] = (e > a.shape[vax[k]] ? a.shape[vax[k]] : e) - o[k];
-        }
-        const uint64_t si = cstride[vax[0]], sj = cstride[vax[1]],
-                       sk = vax[2] >= 0 ? cstride[vax[2]] : 0;
-        for (uint64_t kk = 0; kk < n[2]; kk++)
-            for (uint64_t jj = 0; jj < n[1]; jj++) {
-                unsigned char *dst =
-                    vd +
-                    (((o[2] + kk) * (uint64_t)dims[1] + o[1] + jj) * (uint64_t)dims[0] + o[0]) * vs;
-                const unsigned char *src = buf + (base + kk * sk + jj * sj) * vs;
-                if (si == 1)
-                    memcpy(dst, src, (size_t)(n[0] * vs));
-                else
-                    for (uint64_t ii = 0; ii < n[0]; ii++)
-                        memcpy(dst + ii * vs, src + ii * si * vs, vs);
-            }
-        /* next spatial chunk (channel and time stay) */
-        int i = a.ndim - 1;
-        for (; i >= 0; i--) {
-            if (i == cax || i == tax)
-                continue;
-            if (++idx[i] < nchunk[i])
-                break;
-            idx[i] = 0;
-        }
-        if (i < 0)
-            break;
+        J.cstride[i] = J.cstride[i + 1] * a.chunks[i + 1];
+    uint64_t n_spatial = 1;
+    for (int i = 0; i < a.ndim; i++) {
+        J.nchunk[i] = (a.shape[i] + a.chunks[i] - 1) / a.chunks[i];
+        if (i != cax && i != tax)
+            n_spatial *= J.nchunk[i]; /* at most 2^48: each axis is at most 65536 */
     }
-    free(buf);
-    if (s != VV_OK) {
+    /* the chunks in parallel, each thread its own buffer (one thread for
+     * chunks over 64 MiB); the error of the first failing chunk in order */
+    long long first = -1;
+    vv_status first_status = VV_OK;
+    char first_msg[1024] = "";
+    const int nthreads = J.cbytes > ((size_t)64 << 20) ? 1 : omp_get_max_threads();
+#pragma omp parallel num_threads(nthreads)
+    {
+        unsigned char *buf = malloc(J.cbytes);
+#pragma omp for schedule(dynamic, 1)
+        for (long long L = 0; L < (long long)n_spatial; L++) {
+            vv_status cs = buf ? copy_chunk(&J, (uint64_t)L, buf)
+                               : vv_error_set(VV_ERR_NOMEM,
+                                              "out of memory for a chunk of %zu bytes", J.cbytes);
+            if (cs != VV_OK) {
+#pragma omp critical(vv_zarr_err)
+                if (first < 0 || L < first) {
+                    first = L;
+                    first_status = cs;
+                    snprintf(first_msg, sizeof first_msg, "%s", vv_error_message());
+                }
+            }
+        }
+        free(buf);
+    }
+    if (first >= 0) {
         vv_volume_free(v);
-        return s;
+        return vv_error_set(first_status, "%s", first_msg);
     }
     for (int k = 0; k < 3; k++) {
         v->spacing[k] = vax[k] >= 0 ? a.scale[vax[k]] : 1;
