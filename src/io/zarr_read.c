@@ -384,16 +384,6 @@ read_chunk(const zr_array *a, const char *path, unsigned char *out, size_t n, in
     return s;
 }
 
-static void
-swap_bytes(unsigned char *p, size_t count, size_t esize) {
-    for (size_t i = 0; i < count; i++, p += esize)
-        for (size_t k = 0; k < esize / 2; k++) {
-            unsigned char t = p[k];
-            p[k] = p[esize - 1 - k];
-            p[esize - 1 - k] = t;
-        }
-}
-
 /* Fills @p n voxels of type @p t at @p dst with @p x (the fill value, cast). */
 static void
 fill_voxels(void *dst, size_t n, vv_voxel_type t, double x) {
@@ -467,7 +457,7 @@ copy_chunk(const zr_job *J, uint64_t L, unsigned char *buf) {
     if (missing)
         fill_voxels(buf, J->cbytes / vs, a->type, a->fill);
     else if (a->swap)
-        swap_bytes(buf, J->cbytes / vs, vs);
+        vv_byteswap(buf, J->cbytes / vs, vs);
     /* the part inside the array, at the asked channel and step */
     uint64_t base = 0;
     if (J->cax >= 0)

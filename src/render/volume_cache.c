@@ -829,6 +829,19 @@ vv_vlights_prepare(vv_vlight out[VV_MAX_LIGHTS], const vv_world *w, const vv_vie
     return n;
 }
 
+void
+vv_vchannel_object(const vv_object *obj, const vv_channel *cc, vv_object *out) {
+    *out = *obj;
+    out->volume = cc->volume;
+    out->tf = cc->tf;
+    out->n_channels = 0;
+    out->channels = NULL;
+    out->mode = obj->blend == VV_BLEND_MAXIMUM ? VV_MODE_MIP : VV_MODE_COMPOSITE;
+    out->segmentation = VV_SEG_TRANSFER_FUNCTION;
+    out->texture.image = NULL;
+    vv_solid_texture_init(&out->solid_texture);
+}
+
 vv_status
 vv_vobject_prepare(const vv_object *obj, const vv_world *w, const float ambient[3],
                    const vv_vlight *lights, int n_lights, double w2i[3][4], double i2w[3][4],

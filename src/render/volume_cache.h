@@ -569,6 +569,14 @@ vv_status vv_vobject_prepare(const vv_object *obj, const vv_world *w, const floa
                              double i2w[3][4], int dims[3], vv_plane *planes, int *n_planes,
                              vv_vshading *sh);
 
+/* Channel @p cc of multi-channel object @p obj as an object of one channel,
+ * @p out: a shallow copy of @p obj (it borrows the volume and transfer
+ * function, owns nothing: not to be freed) with the channel's volume and
+ * transfer function, no channels, no 2-D TF or texture, composite mode
+ * (VV_MODE_MIP under VV_BLEND_MAXIMUM). How the ray caster and the ray
+ * tracer prepare each visible channel (vv_channel_blend). */
+void vv_vchannel_object(const vv_object *obj, const vv_channel *cc, vv_object *out);
+
 /* A light's transmittance for shading (shadows), or NULL: none. */
 typedef float (*vv_vshadow_fn)(const void *ctx, int light);
 

@@ -684,15 +684,7 @@ prepare_channels(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world 
         if (!cc->visible || !cc->volume)
             continue;
         vv_object *o = &chobj[n];
-        *o = *obj;
-        o->volume = cc->volume;
-        o->tf = cc->tf;
-        o->n_channels = 0;
-        o->channels = NULL;
-        o->mode = obj->blend == VV_BLEND_MAXIMUM ? VV_MODE_MIP : VV_MODE_COMPOSITE;
-        o->segmentation = VV_SEG_TRANSFER_FUNCTION;
-        o->texture.image = NULL;
-        vv_solid_texture_init(&o->solid_texture);
+        vv_vchannel_object(obj, cc, o);
         vv_status s = prepare_object(fr, &ch[n], o, w, NULL);
         if (s != VV_OK)
             return vv_error_prefix(s, "channel %d ('%s')", c, cc->name);

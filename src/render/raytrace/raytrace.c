@@ -359,15 +359,7 @@ prepare_channels(rt_frame *fr, const vv_object *obj, int context) {
         if (!cc->visible || !cc->volume)
             continue;
         vv_object *o = &fr->chobjs[fr->n_chobj++];
-        *o = *obj;
-        o->volume = cc->volume;
-        o->tf = cc->tf;
-        o->n_channels = 0;
-        o->channels = NULL;
-        o->mode = obj->blend == VV_BLEND_MAXIMUM ? VV_MODE_MIP : VV_MODE_COMPOSITE;
-        o->segmentation = VV_SEG_TRANSFER_FUNCTION;
-        o->texture.image = NULL;
-        vv_solid_texture_init(&o->solid_texture);
+        vv_vchannel_object(obj, cc, o);
         rt_vobj *ro = &fr->vobjs[fr->n_vobj++];
         vv_status s = prepare_volume(fr, ro, o);
         if (s != VV_OK)
