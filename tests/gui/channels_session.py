@@ -113,9 +113,8 @@ def main():
         n = s.n_full()
         s.key("ctrl+z")
         s.wait_full(n, "undo")
-        path, scene = saved(s, "session_undone.json")
-        check(volume_entry(scene)["channels"][0].get("visible", True) is True,
-              "Ctrl+Z did not show nuclei again")
+        check(ae(s.full_png("full_undone.png"), os.path.join(OUT, "full0.png")) == 0,
+              "Ctrl+Z did not show nuclei again (the first image)")
 
         # blend rule and a contrast limit
         n = s.n_full()
@@ -171,14 +170,12 @@ def main():
             s.click(slider)
             s.key(key)
             s.wait_for(lambda: s.value(slider) == step, f"the time slider at {step}")
-            time.sleep(1.1)  # (a step shown a second: its own undo step)
 
         to_step("Home", 0)
         s.page("Animator")
         apage = s.find("Animator page")
         s.click(s.find("Add time-step key", root=apage))
-        to_step("End", 2)
-        path_t2, _ = saved(s, "session_anim_t2.json")
+        to_step("End", 2)  # as session_t2.json was saved
         s.page("Animator")
         s.click(s.find("Add time-step key", root=apage))
         track = s.find_label(lambda n: n.startswith("objects[0].time"))
@@ -194,7 +191,7 @@ def main():
         f1 = os.path.join(frames, "f_001.png")
         s.wait_for(lambda: os.path.exists(f1) and os.path.getsize(f1) > 0, "frame 1", 180)
         time.sleep(1.0)
-        check(ae(f1, cli_render(path_t2, os.path.join(OUT, "cli_anim_t2.png"))) == 0,
+        check(ae(f1, os.path.join(OUT, "cli_t2.png")) == 0,
               "the Animator's frame 1 (step 2) does not render as the session at step 2")
         check(ae(os.path.join(frames, "f_000.png"), f1) > 0, "frames 0 and 1 (steps 0, 2) alike")
         to_step("Home", 0)
