@@ -30,7 +30,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 #include <sys/stat.h>
 
 #include <blosc.h>
@@ -215,10 +214,13 @@ apply_transforms(json_t *list, int ndim, double *sc, double *tr) {
             continue;
         for (int k = 0; k < ndim; k++) {
             double x = json_number_value(json_array_get(v, (size_t)k));
-            if (!strcmp(type, "scale") && x > 0 && isfinite(x))
+            /* x' = s x (the translation so far scaled too), x' = x + t */
+            if (!strcmp(type, "scale") && x > 0 && isfinite(x)) {
                 sc[k] *= x;
-            else if (!strcmp(type, "translation") && isfinite(x))
-                tr[k] = tr[k] * 1 + x;
+                tr[k] *= x;
+            } else if (!strcmp(type, "translation") && isfinite(x)) {
+                tr[k] += x;
+            }
         }
     }
 }

@@ -842,6 +842,14 @@ vv_vchannel_object(const vv_object *obj, const vv_channel *cc, vv_object *out) {
     vv_solid_texture_init(&out->solid_texture);
 }
 
+int
+vv_vchannels_shown(const vv_object *obj) {
+    int n = 0;
+    for (int c = 0; obj->n_channels > 1 && c < obj->n_channels; c++)
+        n += obj->channels[c].visible && obj->channels[c].volume != NULL;
+    return n;
+}
+
 vv_status
 vv_vobject_prepare(const vv_object *obj, const vv_world *w, const float ambient[3],
                    const vv_vlight *lights, int n_lights, double w2i[3][4], double i2w[3][4],

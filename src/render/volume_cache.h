@@ -577,6 +577,10 @@ vv_status vv_vobject_prepare(const vv_object *obj, const vv_world *w, const floa
  * tracer prepare each visible channel (vv_channel_blend). */
 void vv_vchannel_object(const vv_object *obj, const vv_channel *cc, vv_object *out);
 
+/* The visible channels (with a volume) of @p obj: 0 for an object of one
+ * channel (n_channels < 2). */
+int vv_vchannels_shown(const vv_object *obj);
+
 /* A light's transmittance for shading (shadows), or NULL: none. */
 typedef float (*vv_vshadow_fn)(const void *ctx, int light);
 

@@ -661,15 +661,6 @@ prepare_object(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w
     return VV_OK;
 }
 
-/* The visible channels of a multi-channel object. */
-static int
-channels_shown(const vv_object *obj) {
-    int n = 0;
-    for (int c = 0; c < obj->n_channels; c++)
-        n += obj->channels[c].visible && obj->channels[c].volume != NULL;
-    return n;
-}
-
 /* A multi-channel object: each visible channel prepared as an object of its
  * own, chobj[k] (the object with the channel's volume and transfer
  * function, one channel, no 2-D TF or texture; composite mode for the
@@ -811,9 +802,9 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
     for (int i = 0; i < w->n_objects; i++) {
         const vv_object *ob = w->objects[i];
         if (ob->visible && ob->type == VV_OBJECT_VOLUME && ob->volume &&
-            (ob->n_channels < 2 || channels_shown(ob))) {
+            (ob->n_channels < 2 || vv_vchannels_shown(ob))) {
             nvis++;
-            nch += ob->n_channels > 1 ? channels_shown(ob) : 0;
+            nch += ob->n_channels > 1 ? vv_vchannels_shown(ob) : 0;
         }
     }
     if (nvis > RC_MAX_OBJ || nvis + nch > VV_VC_MAX)
@@ -843,7 +834,7 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
             if (!ob->visible || ob->type != VV_OBJECT_VOLUME || !ob->volume)
                 continue;
             const int multi = ob->n_channels > 1;
-            if (multi && !channels_shown(ob))
+            if (multi && !vv_vchannels_shown(ob))
                 continue;
             int comp = multi ? ob->blend == VV_BLEND_COMPOSITE
                              : ob->mode == VV_MODE_COMPOSITE || ob->mode == VV_MODE_ISO;

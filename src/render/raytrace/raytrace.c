@@ -312,15 +312,6 @@ pass_refine(void *user, const vv_frame_tile *t) {
     return VV_OK;
 }
 
-/* The visible channels of a multi-channel object (0 for one of one channel). */
-static int
-channels_shown(const vv_object *o) {
-    int n = 0;
-    for (int c = 0; o->n_channels > 1 && c < o->n_channels; c++)
-        n += o->channels[c].visible && o->channels[c].volume != NULL;
-    return n;
-}
-
 /* Counts the volumes (a multi-channel object's visible channels each
  * count) and geometric objects a render prepares, and the channels among
  * the volumes; errors beyond the limits. */
@@ -332,8 +323,8 @@ count_objects(const vv_world *w, int *nv, int *ng, int *nch) {
         if (!o || !o->visible || o->type == VV_OBJECT_GRID) /* grids: the irregular renderer */
             continue;
         if (o->type == VV_OBJECT_VOLUME && o->n_channels > 1) {
-            *nv += channels_shown(o);
-            *nch += channels_shown(o);
+            *nv += vv_vchannels_shown(o);
+            *nch += vv_vchannels_shown(o);
         } else if (o->type == VV_OBJECT_VOLUME) {
             *nv += o->volume != NULL;
         } else {
@@ -414,7 +405,7 @@ prepare_frame(rt_frame *fr, const vv_world *w, const vv_view *view, const vv_ren
                 s = vv_error_set(VV_ERR_INVALID, "object '%s': step must be > 0", o->name);
                 break;
             }
-            if (o->n_channels > 1 && !channels_shown(o))
+            if (o->n_channels > 1 && !vv_vchannels_shown(o))
                 continue;
             if (o->n_channels > 1) {
                 s = prepare_channels(fr, o, region != NULL);
