@@ -391,6 +391,13 @@ fill_row(channel_row *r, const vv_object *o, int edited) {
     }
     if (fabs(vvg_spin_value(r->gamma) - gamma) > 1e-6)
         vvg_set_spin(r->gamma, gamma);
+    /* a label channel is coloured by label: no colour or contrast to set */
+    GtkWidget *tf_widgets[4] = {r->color, r->lo, r->hi, r->gamma};
+    for (int k = 0; k < 4; k++) {
+        gtk_widget_set_sensitive(tf_widgets[k], !ch->labels);
+        gtk_widget_set_tooltip_text(
+            tf_widgets[k], ch->labels ? "A label channel: each label in its own colour" : NULL);
+    }
     gtk_widget_queue_draw(r->hist);
 }
 

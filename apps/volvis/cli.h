@@ -174,7 +174,8 @@ int cli_fail(vv_status s, const char *path);
         {"labels", 0, NULL}, {"field", 0, "NAME"}, {"time", 0, "T"}, {"series", 0, "N"},           \
         {"channel", 0, "C"}, {"channels", 0, "C,C,..."}, {"colors", 0, "COLOR,..."},               \
         {"blend", 0, "composite|additive|maximum"}, {"contrast", 0, "LO:HI,..."},                  \
-        {"compositing", 0, "binary-swap|radix-k[:K]"}, {"memory-limit", 0, "BYTES[K|M|G]"}, {      \
+        {"label-channels", 0, "C,C,..."}, {"compositing", 0, "binary-swap|radix-k[:K]"},           \
+        {"memory-limit", 0, "BYTES[K|M|G]"}, {                                                     \
         "quiet", 'q', NULL                                                                         \
     }
 
@@ -207,6 +208,7 @@ typedef struct cli_render_args {
     int n_contrast;                      /**< --contrast given for the first n_contrast */
     double contrast[VV_MAX_CHANNELS][2]; /**< lower and upper limits, data values */
     int has_blend;                       /**< --blend given */
+    int label_channel[VV_MAX_CHANNELS];  /**< --label-channels: 1 where channels[i] holds labels */
     vv_channel_blend blend;
     double gamma;
     int has_quality, quality; /**< --quality given, and its value */

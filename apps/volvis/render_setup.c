@@ -192,10 +192,34 @@ parse_channel_options(cli_args *a, cli_render_args *r) {
                                    s);
         r->has_blend = 1;
     }
-    const char *needs = r->n_colors     ? "--colors"
-                        : r->n_contrast ? "--contrast"
-                        : r->has_blend  ? "--blend"
-                                        : NULL;
+    if ((s = cli_get(a, "label-channels"))) {
+        for (const char *p = s;;) {
+            char *end;
+            long c = strtol(p, &end, 10);
+            int at = -1;
+            for (int i = 0; end != p && i < r->n_channels; i++)
+                if (r->channels[i] == c)
+                    at = i;
+            if (end == p || (*end && *end != ','))
+                return cli_usage_error(a,
+                                       "--label-channels: '%s' is not a list of channel indices "
+                                       "(e.g. 3)",
+                                       s);
+            if (at < 0 && r->n_channels)
+                return cli_usage_error(a, "--label-channels: channel %ld is not in --channels %s",
+                                       c, cli_get(a, "channels"));
+            if (at >= 0)
+                r->label_channel[at] = 1;
+            if (!*end)
+                break;
+            p = end + 1;
+        }
+    }
+    const char *needs = r->n_colors                    ? "--colors"
+                        : r->n_contrast                ? "--contrast"
+                        : r->has_blend                 ? "--blend"
+                        : cli_get(a, "label-channels") ? "--label-channels"
+                                                       : NULL;
     if (needs && !r->n_channels)
         return cli_usage_error(a, "%s: only with --channels LIST", needs);
     if (r->n_colors > r->n_channels || r->n_contrast > r->n_channels)
@@ -416,8 +440,11 @@ world_for_channels(const cli_render_args *r, vv_world **out) {
         vv_error_clear();
         s = vv_object_set_channels(o, r->n_channels, v, np);
         o->blend = r->has_blend ? r->blend : VV_BLEND_COMPOSITE;
-        for (int c = 0; s == VV_OK && c < r->n_channels; c++)
+        for (int c = 0; s == VV_OK && c < r->n_channels; c++) {
             o->channels[c].index = r->channels[c];
+            if (r->label_channel[c])
+                s = vv_object_set_channel_labels(o, c, 1);
+        }
     }
     for (int c = 0; o && s == VV_OK && c < r->n_channels; c++) {
         vv_tf *tf = r->n_channels > 1 ? &o->channels[c].tf : &o->tf;
@@ -440,6 +467,8 @@ world_for_channels(const cli_render_args *r, vv_world **out) {
         s = vv_tf_set_contrast(tf, lo, hi, 1.0, 0.5, col, vv_tf_default_unit_distance(v[c]));
         if (r->n_channels == 1 && r->has_blend && r->blend == VV_BLEND_MAXIMUM)
             o->mode = VV_MODE_MIP;
+        if (r->n_channels == 1 && r->label_channel[0])
+            o->segmentation = VV_SEG_LABELS;
     }
     for (int c = 0; c < r->n_channels; c++)
         vv_volume_free(v[c]); /* the object holds its own references */
@@ -689,7 +718,9 @@ cli_render_print_options(FILE *out) {
             "  --blend RULE     how the channels combine: composite (default; opacities\n"
             "                   as independent absorbers, colours mixed by opacity),\n"
             "                   additive (each channel composited alone, colours added)\n"
-            "                   or maximum (a MIP per channel, coloured, added)\n",
+            "                   or maximum (a MIP per channel, coloured, added)\n"
+            "  --label-channels C,...  these of the --channels hold labels (segment ids):\n"
+            "                   each label in its own colour, label 0 transparent\n",
             VV_IMAGE_MAX_SIDE, VV_MAX_CHANNELS);
     fprintf(out, "  --gamma G        8-bit conversion v^(1/G) (default 1: values unchanged)\n"
                  "  --quality Q      0 draft, 1 medium, 2 final (default 2 or the scene's; per\n"

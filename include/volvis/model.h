@@ -507,6 +507,9 @@ typedef struct vv_channel {
     vv_tf tf;          /**< its classification (opacity and colour) */
     int visible;       /**< 0: left out of the image */
     int index;         /**< its channel in the object's file (a scene file's "channel"), from 0 */
+    int labels;        /**< 1: a label volume (segment ids; vv_object_set_channel_labels): label 0
+                            transparent, every other label opaque in vv_label_color(label), as
+                            VV_SEG_LABELS; tf is kept but not used */
 } vv_channel;
 
 /**
@@ -627,6 +630,20 @@ vv_status vv_object_new_volume(vv_object **out, vv_volume *volume, const char *n
  */
 vv_status vv_object_set_channels(vv_object *obj, int n, vv_volume *const *volumes,
                                  const char *const *names);
+
+/**
+ * Marks channel @p c of multi-channel object @p obj as a label volume
+ * (@p labels 1: segment ids, coloured by label as VV_SEG_LABELS colours a
+ * one-channel object; label 0 transparent) or back to a transfer-function
+ * channel (0). Every renderer that draws channels honours it under every
+ * blend rule: composite and additive show each label's region opaque in
+ * vv_label_color (the nearest non-zero label of a sample's cell, so colours
+ * do not blend across labels); maximum projects the largest label. Errors:
+ * VV_ERR_INVALID (not a multi-channel object, @p c out of range, a float
+ * channel: labels are integers, @p labels not 0 or 1: named); on error
+ * @p obj is unchanged. Not thread-safe on the same object.
+ */
+vv_status vv_object_set_channel_labels(vv_object *obj, int c, int labels);
 
 /**
  * Replaces the voxels of volume object @p obj by another time step of the

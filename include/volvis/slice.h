@@ -129,7 +129,9 @@ vv_status vv_slice_sample(const vv_object *obj, const vv_slice_plane *p, float *
 /**
  * As vv_slice_sample, the voxels of channel @p channel (0..n_channels-1) of
  * multi-channel volume object @p obj (vv_object_set_channels): every
- * channel shares channel 0's grid and the object's placement. Errors:
+ * channel shares channel 0's grid and the object's placement; a label
+ * channel (vv_channel.labels) takes each pixel's nearest voxel (trilinear
+ * for the others), so labels never blend into ids between them. Errors:
  * VV_ERR_INVALID (NULL argument, a channel the object does not have, a
  * transform that cannot be inverted).
  */
@@ -143,7 +145,8 @@ vv_status vv_slice_sample_channel(const vv_object *obj, int channel, const vv_sl
  * transfer function's colour at the value times its opacity there relative
  * to the function's highest opacity (so a contrast function,
  * vv_tf_set_contrast, gives colour x ((v - lo) / (hi - lo))^gamma,
- * saturating at hi), each component clamped to 1. @p values holds
+ * saturating at hi); a label channel adds half its label's colour
+ * (vv_label_color; label 0 nothing); each component clamped to 1. @p values holds
  * n_channels arrays of @p n samples (vv_slice_sample_channel); a pixel NaN
  * in every channel is @p outside (RGB, 0..1). Hidden channels add nothing.
  * Reads its arguments only; reentrant.

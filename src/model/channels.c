@@ -134,6 +134,26 @@ vv_object_set_channels(vv_object *obj, int n, vv_volume *const *volumes, const c
 }
 
 vv_status
+vv_object_set_channel_labels(vv_object *obj, int c, int labels) {
+    if (!obj || obj->type != VV_OBJECT_VOLUME || obj->n_channels < 2)
+        return vv_error_set(VV_ERR_INVALID, "label channel: %s is not an object of channels",
+                            obj ? obj->name : "(null)");
+    if (c < 0 || c >= obj->n_channels)
+        return vv_error_set(VV_ERR_INVALID, "label channel: %s has channels 0..%d, not %d",
+                            obj->name, obj->n_channels - 1, c);
+    if (labels != 0 && labels != 1)
+        return vv_error_set(VV_ERR_INVALID, "label channel: %d (0 or 1)", labels);
+    const vv_volume *v = obj->channels[c].volume;
+    if (labels && v && (v->type == VV_F32 || v->type == VV_F64))
+        return vv_error_set(VV_ERR_INVALID,
+                            "label channel: channel %d ('%s') of %s holds %s voxels; labels are "
+                            "integers",
+                            c, obj->channels[c].name, obj->name, vv_voxel_type_name(v->type));
+    obj->channels[c].labels = labels;
+    return VV_OK;
+}
+
+vv_status
 vv_object_replace_volumes(vv_object *obj, int n, vv_volume *const *volumes) {
     if (!obj || !volumes || obj->type != VV_OBJECT_VOLUME || !obj->volume)
         return vv_error_set(VV_ERR_INVALID, "replace volumes: not a volume object");

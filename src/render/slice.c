@@ -219,18 +219,23 @@ vv_slice_step(const vv_object *obj, vv_vec3 normal) {
 /* The trilinear value at continuous index (x, y, z), NaN outside the
  * node-centred box (with a tolerance of 1e-6 voxel for rounding). */
 static float
-sample_inside(const vv_volume *v, double x, double y, double z) {
+sample_inside(const vv_volume *v, double x, double y, double z, int nearest) {
     const double e = 1e-6;
     if (!(x >= -e && y >= -e && z >= -e && x <= v->dims[0] - 1 + e && y <= v->dims[1] - 1 + e &&
           z <= v->dims[2] - 1 + e))
         return NAN;
+    if (nearest) /* labels: the nearest voxel's, never a blend of two ids */
+        return (float)vv_volume_get(v, (int)lrint(x < 0 ? 0 : x), (int)lrint(y < 0 ? 0 : y),
+                                    (int)lrint(z < 0 ? 0 : z));
     return vv_volume_sample_index(v, x, y, z);
 }
 
 /* Samples @p v (the object's volume or one of its channels: the same
- * grid) on plane @p p through the object's placement. */
+ * grid) on plane @p p through the object's placement; @p nearest: the
+ * nearest voxel's value (a label channel), else trilinear. */
 static vv_status
-sample_volume(const vv_object *obj, const vv_volume *v, const vv_slice_plane *p, float *values) {
+sample_volume(const vv_object *obj, const vv_volume *v, const vv_slice_plane *p, int nearest,
+              float *values) {
     vv_status s = check_image(p->width, p->height, p->pixel);
     if (s != VV_OK)
         return s;
@@ -247,7 +252,7 @@ sample_volume(const vv_object *obj, const vv_volume *v, const vv_slice_plane *p,
         vv_vec3 r0 = vv_mat4_mul_point(m, vv_slice_plane_to_world(p, 0.5, y + 0.5));
         float *row = values + (size_t)y * w;
         for (int x = 0; x < w; x++)
-            row[x] = sample_inside(v, r0.x + x * dx.x, r0.y + x * dx.y, r0.z + x * dx.z);
+            row[x] = sample_inside(v, r0.x + x * dx.x, r0.y + x * dx.y, r0.z + x * dx.z, nearest);
     }
     return VV_OK;
 }
@@ -257,7 +262,7 @@ vv_slice_sample(const vv_object *obj, const vv_slice_plane *p, float *values) {
     if (!obj || !p || !values || !obj->volume)
         return vv_error_set(VV_ERR_INVALID, "slice: %s",
                             !obj || !obj->volume ? "the object has no volume" : "NULL argument");
-    return sample_volume(obj, obj->volume, p, values);
+    return sample_volume(obj, obj->volume, p, 0, values);
 }
 
 vv_status
@@ -267,7 +272,8 @@ vv_slice_sample_channel(const vv_object *obj, int channel, const vv_slice_plane 
     if (channel < 0 || channel >= obj->n_channels || !obj->channels[channel].volume)
         return vv_error_set(VV_ERR_INVALID, "slice: %s has no channel %d (%d channels)", obj->name,
                             channel, obj->n_channels);
-    return sample_volume(obj, obj->channels[channel].volume, p, values);
+    return sample_volume(obj, obj->channels[channel].volume, p, obj->channels[channel].labels,
+                         values);
 }
 
 void
@@ -293,7 +299,20 @@ vv_slice_blend_channels(const vv_object *obj, const float *const *values, size_t
             if (v != v)
                 continue;
             inside = 1;
-            if (!obj->channels[c].visible || !(peak[c] > 0))
+            if (!obj->channels[c].visible)
+                continue;
+            if (obj->channels[c].labels) {
+                /* a label: its colour at half strength over the other channels */
+                const double l = floor(v + 0.5);
+                if (l >= 1 && l < 4294967296.0) {
+                    vv_vec3 col = vv_label_color((uint32_t)l);
+                    r += 0.5 * col.x;
+                    g += 0.5 * col.y;
+                    b += 0.5 * col.z;
+                }
+                continue;
+            }
+            if (!(peak[c] > 0))
                 continue;
             const vv_tf *tf = &obj->channels[c].tf;
             double k = vv_tf_eval_opacity(tf, v) / peak[c];
@@ -328,7 +347,7 @@ vv_slice_probe(const vv_object *obj, vv_vec3 world, double ijk[3]) {
         ijk[1] = q.y;
         ijk[2] = q.z;
     }
-    return sample_inside(obj->volume, q.x, q.y, q.z);
+    return sample_inside(obj->volume, q.x, q.y, q.z, 0);
 }
 
 void

@@ -837,7 +837,7 @@ vv_vchannel_object(const vv_object *obj, const vv_channel *cc, vv_object *out) {
     out->n_channels = 0;
     out->channels = NULL;
     out->mode = obj->blend == VV_BLEND_MAXIMUM ? VV_MODE_MIP : VV_MODE_COMPOSITE;
-    out->segmentation = VV_SEG_TRANSFER_FUNCTION;
+    out->segmentation = cc->labels ? VV_SEG_LABELS : VV_SEG_TRANSFER_FUNCTION;
     out->texture.image = NULL;
     vv_solid_texture_init(&out->solid_texture);
 }

@@ -573,7 +573,8 @@ vv_status vv_vobject_prepare(const vv_object *obj, const vv_world *w, const floa
  * @p out: a shallow copy of @p obj (it borrows the volume and transfer
  * function, owns nothing: not to be freed) with the channel's volume and
  * transfer function, no channels, no 2-D TF or texture, composite mode
- * (VV_MODE_MIP under VV_BLEND_MAXIMUM). How the ray caster and the ray
+ * (VV_MODE_MIP under VV_BLEND_MAXIMUM), segmented by labels for a label
+ * channel (VV_SEG_LABELS: its vv_vextra colours by label). How the ray caster and the ray
  * tracer prepare each visible channel (vv_channel_blend). */
 void vv_vchannel_object(const vv_object *obj, const vv_channel *cc, vv_object *out);
 

@@ -3,7 +3,8 @@
  *
  *   {"type": "volume", "file": "cells.ome.tif", "blend": "maximum",
  *    "channels": [{"channel": 0, "name": "nuclei", "visible": true,
- *                  "transfer_function": {...}}, {"channel": 2}, ...]}
+ *                  "transfer_function": {...}}, {"channel": 2},
+ *                 {"channel": 3, "labels": true}, ...]}
  *
  * Each entry loads channel "channel" of the object's file (TIFF, DICOM);
  * the object's "origin" and "spacing" place every channel.
@@ -19,7 +20,8 @@
 
 vv_status
 vv_scene_parse_channels(const sctx *c, json_t *e, const char *op, const char *full, vv_object *o) {
-    static const char *const keys[] = {"channel", "name", "visible", "transfer_function", NULL};
+    static const char *const keys[] = {"channel",           "name",   "visible",
+                                       "transfer_function", "labels", NULL};
     char kp[PATH_MAX_LEN], ip[PATH_MAX_LEN], fp[PATH_MAX_LEN];
     json_t *arr = NULL;
     vv_status st = vv_scene_get_array(c, e, op, "channels", &arr);
@@ -44,7 +46,7 @@ vv_scene_parse_channels(const sctx *c, json_t *e, const char *op, const char *fu
         return vv_scene_serr(c, kp, "\"filters\" apply to an object of one channel");
     vv_volume *vols[VV_MAX_CHANNELS] = {NULL};
     const char *names[VV_MAX_CHANNELS] = {NULL};
-    int index[VV_MAX_CHANNELS], visible[VV_MAX_CHANNELS];
+    int index[VV_MAX_CHANNELS], visible[VV_MAX_CHANNELS], labels[VV_MAX_CHANNELS];
     json_t *tfs[VV_MAX_CHANNELS] = {NULL};
     for (size_t i = 0; i < n && st == VV_OK; i++) {
         json_t *ch = json_array_get(arr, i);
@@ -54,11 +56,13 @@ vv_scene_parse_channels(const sctx *c, json_t *e, const char *op, const char *fu
             break;
         }
         visible[i] = 1;
+        labels[i] = 0;
         index[i] = -1;
         if ((st = vv_scene_check_keys(c, ch, ip, keys)) != VV_OK ||
             (st = vv_scene_get_int_in(c, ch, ip, "channel", &index[i], 0, 1000000)) != VV_OK ||
             (st = vv_scene_get_string(c, ch, ip, "name", &names[i])) != VV_OK ||
             (st = vv_scene_get_bool(c, ch, ip, "visible", &visible[i])) != VV_OK ||
+            (st = vv_scene_get_bool(c, ch, ip, "labels", &labels[i])) != VV_OK ||
             (st = vv_scene_get_object(c, ch, ip, "transfer_function", &tfs[i])) != VV_OK)
             break;
         if (index[i] < 0) {
@@ -86,6 +90,13 @@ vv_scene_parse_channels(const sctx *c, json_t *e, const char *op, const char *fu
         vv_channel *ch = &o->channels[i];
         ch->index = index[i];
         ch->visible = visible[i];
+        if (labels[i] && vv_object_set_channel_labels(o, (int)i, 1) != VV_OK) {
+            vv_scene_path_index(ip, kp, i);
+            vv_scene_path_key(fp, ip, "labels");
+            st = vv_scene_serr(c, fp, "channel %d of the file holds %s voxels; labels are integers",
+                               index[i], vv_voxel_type_name(ch->volume->type));
+            break;
+        }
         if (tfs[i]) {
             vv_scene_path_index(ip, kp, i);
             vv_scene_path_key(fp, ip, "transfer_function");

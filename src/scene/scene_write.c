@@ -325,7 +325,8 @@ put_segmentation(wctx *c, json_t *oj, const vv_object *o) {
 }
 
 /* The channels of a multi-channel volume object: each its index in the
- * object's file, name, visibility and transfer function; the blend rule. */
+ * object's file, name, visibility, whether it holds labels and transfer
+ * function; the blend rule. */
 static void
 put_channels(wctx *c, json_t *oj, const vv_object *o) {
     if (o->n_channels < 2)
@@ -340,6 +341,8 @@ put_channels(wctx *c, json_t *oj, const vv_object *o) {
         put(c, cj, "channel", json_integer(ch->index));
         put_str(c, cj, "name", ch->name, "a channel's name");
         put(c, cj, "visible", json_boolean(ch->visible));
+        if (ch->labels)
+            put(c, cj, "labels", json_true());
         put(c, cj, "transfer_function", tf1d(c, &ch->tf));
     }
     put(c, oj, "channels", arr);

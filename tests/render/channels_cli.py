@@ -13,6 +13,8 @@ hyperstack of two channels and two time points (TZCYX), then checks:
   (the balls' image centroids, in order along x);
 - additive equals the sum of the one-channel images (PNG, within 8-bit
   rounding), maximum the sum of the one-channel MIPs;
+- --label-channels: a label channel shows each label in the colour the
+  one-channel `--labels` render gives it;
 - bad input: a channel the file lacks, an unknown colour or rule, --channel
   with --channels, colours beyond the channels, --channels on a scene: one
   line naming the problem, a non-zero exit, no image written.
@@ -131,8 +133,30 @@ img = render("hyper", hyper, "--channels", "0,1", "--colors", "magenta,green",
 check((img[..., 1] > 40).sum() > 50 and ((img[..., 0] > 40) & (img[..., 2] > 40)).sum() > 50,
       "ImageJ hyperstack: both channels show")
 
+# a label volume as a channel (--label-channels): each label's region in the
+# colour the one-channel --labels render gives it, the other channel its own
+lab = os.path.join(OUT, "labels.ome.tif")
+labels = np.zeros((Z, Y, X), np.uint16)
+labels[6:18, 8:24, 30:42] = 3
+labels[6:18, 8:24, 50:62] = 7
+tifffile.imwrite(lab, np.stack([ball(CENTRES[0]), labels]), ome=True,
+                 metadata={"axes": "CZYX"})
+both = render("label_channel", lab, "--channels", "0,1", "--label-channels", "1",
+              "--colors", "red")
+alone = render("label_alone", lab, "--channel", "1", "--labels")
+box = alone.max(axis=2) > 40
+d = np.abs(both[box] - alone[box]).max() if box.any() else 999
+check(box.sum() > 200 and d <= 3,
+      f"--label-channels: the labels' colours as --labels draws them ({box.sum()} pixels, "
+      f"largest difference {d})")
+check(dominant(both, 0).sum() > 50, "--label-channels: the other channel still in its colour")
+two = {tuple(c) for c in alone[box][:, :3] // 16}
+check(len(two) >= 2, f"--label-channels: two labels, two colours ({len(two)} seen)")
+
 # bad input: one line, non-zero exit, no image
 bad = [
+    ([lab, "--channels", "0,1", "--label-channels", "5"], "not in --channels", 2),
+    ([lab, "--label-channels", "1"], "only with --channels", 2),
     ([ome, "--channels", "0,5"], "channel 5", 1),
     ([ome, "--channels", "0,1", "--colors", "red,purple"], "purple", 2),
     ([ome, "--channels", "0,1", "--blend", "sum"], "sum", 2),

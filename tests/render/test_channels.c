@@ -20,6 +20,8 @@
  * - Thread counts and empty-space skipping do not change a bit; clones
  *   hold their own references; bad input gets one-line errors; renderers
  *   without VV_RENDERER_CHANNELS and region renders refuse such objects.
+ * - A label volume as a channel shows each label in its colour under every
+ *   rule in both renderers, and alone equals the one-channel labels object.
  * - Scene files: the channels of an ImageJ hyperstack (written here with
  *   libtiff) load with their indices, names, visibility, transfer functions
  *   and blend rule, render, save and load again to the same bits; bad
@@ -628,6 +630,19 @@ test_scene_round_trip(void **state) {
     vv_image_free(b);
     vv_world_free(w);
     vv_world_free(w2);
+    /* a label channel: "labels" loads, saves and loads again */
+    const char *lscene =
+        "{\"objects\": [{\"file\": \"hyper.tif\", \"channels\": [{\"channel\": 0}, "
+        "{\"channel\": 1, \"labels\": true}]}]}";
+    vt_ok(load_text(dir, "labels.json", lscene, &w));
+    assert_int_equal(w->objects[0]->channels[0].labels, 0);
+    assert_int_equal(w->objects[0]->channels[1].labels, 1);
+    vt_ok(vv_scene_save(w, saved, NULL));
+    vt_ok(vv_scene_load(&w2, saved));
+    assert_int_equal(w2->objects[0]->channels[0].labels, 0);
+    assert_int_equal(w2->objects[0]->channels[1].labels, 1);
+    vv_world_free(w);
+    vv_world_free(w2);
     /* bad entries: an error naming the place, no World */
     static const struct {
         const char *objects, *needle;
@@ -644,6 +659,9 @@ test_scene_round_trip(void **state) {
         {"[{\"file\": \"hyper.tif\", \"channels\": [{\"channel\": 0}, {\"channel\": 1, "
          "\"colour\": 1}]}]",
          "colour"},
+        {"[{\"file\": \"hyper.tif\", \"channels\": [{\"channel\": 0}, {\"channel\": 1, "
+         "\"labels\": 1}]}]",
+         "channels[1].labels"},
     };
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
         char text[512];
@@ -742,6 +760,124 @@ test_slice_blend(void **state) {
     vv_volume_free(v[1]);
 }
 
+/* u8 label volume N^3: label 1 in the box x 22..28, y 12..18, label 2 in
+ * x 22..28, y 22..28 (z 14..26 both), 0 elsewhere. */
+static vv_volume *
+two_labels(void) {
+    vv_volume *v = NULL;
+    const int dims[3] = {N, N, N};
+    vt_ok(vv_volume_new(&v, dims, VV_U8));
+    for (int k = 14; k <= 26; k++)
+        for (int j = 12; j <= 28; j++)
+            for (int i = 22; i <= 28; i++)
+                vv_volume_set(v, i, j, k, j <= 18 ? 1 : j >= 22 ? 2 : 0);
+    vv_volume_update_range(v);
+    return v;
+}
+
+static int
+near_rgb(const float *p, vv_vec3 c, double tol) {
+    return fabs(p[0] - c.x) <= tol && fabs(p[1] - c.y) <= tol && fabs(p[2] - c.z) <= tol;
+}
+
+/* A label volume as one channel (vv_object_set_channel_labels): under
+ * every rule, in the ray caster and the ray tracer, each label's region
+ * shows vv_label_color(label) (unshaded, opaque) and the other channel its
+ * own colour; the label channel alone draws as the one-channel object with
+ * VV_SEG_LABELS (the general kernel, another code path); slices take the
+ * nearest label and add half its colour; a float channel or a missing one
+ * is refused, and the flag survives a clone. */
+static void
+test_label_channel(void **state) {
+    (void)state;
+    vv_volume *v[2] = {ball(10, 20, 20, 6), two_labels()};
+    const vv_vec3 l1 = vv_label_color(1), l2 = vv_label_color(2);
+    vv_view view = view_z(N);
+    for (int rule = 0; rule < 3; rule++) {
+        vv_world *w = channel_world(v, 2, (vv_channel_blend)rule, 0, 1.0);
+        vt_ok(vv_object_set_channel_labels(w->objects[0], 1, 1));
+        for (int rt = 0; rt < 2; rt++) {
+            vv_image *img = rt ? render_rt(w, &view, 0) : render(w, &view);
+            if (rule == 0 && rt == 0)
+                save(img, "channels_labels");
+            const double tol = rule == VV_BLEND_MAXIMUM ? 0.02 : 0.002;
+            if (!near_rgb(at_voxel(img, 25, 15), l1, tol) ||
+                !near_rgb(at_voxel(img, 25, 25), l2, tol))
+                fail_msg("%s, %s: label colours (%g %g %g), (%g %g %g)",
+                         rt ? "raytrace" : "raycast", vv_channel_blend_name(rule),
+                         at_voxel(img, 25, 15)[0], at_voxel(img, 25, 15)[1],
+                         at_voxel(img, 25, 15)[2], at_voxel(img, 25, 25)[0],
+                         at_voxel(img, 25, 25)[1], at_voxel(img, 25, 25)[2]);
+            const float *b = at_voxel(img, 10, 20); /* the ball: red only */
+            assert_true(b[0] > 0.5f && b[1] < 0.01f && b[2] < 0.01f);
+            const float *gap = at_voxel(img, 25, 20); /* label 0 between the boxes */
+            assert_true(gap[0] < 0.01f && gap[1] < 0.01f && gap[2] < 0.01f);
+            vv_image_free(img);
+        }
+        vv_world_free(w);
+    }
+    /* the label channel alone against the one-channel labels object */
+    vv_world *w = channel_world(v, 2, VV_BLEND_COMPOSITE, 1, 1.0);
+    vt_ok(vv_object_set_channel_labels(w->objects[0], 1, 1));
+    w->objects[0]->channels[0].visible = 0;
+    vv_world *one = single_world(w, 1, VV_MODE_COMPOSITE);
+    one->objects[0]->segmentation = VV_SEG_LABELS;
+    vv_image *a = render(w, &view), *b = render(one, &view);
+    assert_true(max_rgb_diff(a, b) < 1e-4);
+    vv_image_free(a);
+    vv_image_free(b);
+    /* clones keep the flag */
+    vv_object *c = NULL;
+    vt_ok(vv_object_clone(&c, w->objects[0]));
+    assert_int_equal(c->channels[1].labels, 1);
+    assert_int_equal(c->channels[0].labels, 0);
+    vv_object_free(c);
+    /* slices: nearest labels, half their colour */
+    vv_slice_plane p;
+    vt_ok(vv_slice_plane_standard(&p, VV_SLICE_AXIAL, VV_SPACE_UNKNOWN, vv_vec3_make(20, 20, 20), N,
+                                  N, 1));
+    const size_t n = (size_t)N * N;
+    float *s0 = malloc(n * sizeof *s0), *s1 = malloc(n * sizeof *s1);
+    uint8_t *rgba = malloc(4 * n);
+    vt_ok(vv_slice_sample_channel(w->objects[0], 0, &p, s0));
+    vt_ok(vv_slice_sample_channel(w->objects[0], 1, &p, s1));
+    for (size_t i = 0; i < n; i++)
+        assert_true(s1[i] != s1[i] || s1[i] == 0 || s1[i] == 1 || s1[i] == 2);
+    w->objects[0]->channels[0].visible = 1;
+    const float *vals[2] = {s0, s1};
+    vv_slice_blend_channels(w->objects[0], vals, n, vv_vec3_make(0, 0, 0), rgba);
+    double x, y;
+    vv_slice_plane_from_world(&p, vv_vec3_make(25, 25, 20), &x, &y, NULL);
+    const uint8_t *q = rgba + 4 * ((size_t)y * N + (size_t)x);
+    assert_true(abs(q[0] - (int)lrint(0.5 * l2.x * 255)) <= 1 &&
+                abs(q[1] - (int)lrint(0.5 * l2.y * 255)) <= 1 &&
+                abs(q[2] - (int)lrint(0.5 * l2.z * 255)) <= 1);
+    free(s0);
+    free(s1);
+    free(rgba);
+    /* bad input */
+    vt_err(vv_object_set_channel_labels(w->objects[0], 2, 1));
+    assert_non_null(strstr(vv_error_message(), "channels 0..1, not 2"));
+    vt_err(vv_object_set_channel_labels(one->objects[0], 0, 1));
+    vv_volume *f[2] = {NULL, NULL};
+    const int dims[3] = {N, N, N};
+    vt_ok(vv_volume_new(&f[0], dims, VV_U8));
+    vt_ok(vv_volume_new(&f[1], dims, VV_F32));
+    vv_object *fo = NULL;
+    vt_ok(vv_object_new_volume(&fo, f[0], "mixed"));
+    vt_ok(vv_object_set_channels(fo, 2, f, NULL));
+    vt_err(vv_object_set_channel_labels(fo, 1, 1));
+    assert_non_null(strstr(vv_error_message(), "labels are integers"));
+    assert_int_equal(fo->channels[1].labels, 0);
+    vv_object_free(fo);
+    vv_volume_free(f[0]);
+    vv_volume_free(f[1]);
+    vv_world_free(w);
+    vv_world_free(one);
+    vv_volume_free(v[0]);
+    vv_volume_free(v[1]);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
@@ -756,6 +892,7 @@ main(void) {
         cmocka_unit_test(test_scene_round_trip),
         cmocka_unit_test(test_contrast_read_back),
         cmocka_unit_test(test_slice_blend),
+        cmocka_unit_test(test_label_channel),
     };
     return vt_run_tests(tests, NULL, NULL);
 }

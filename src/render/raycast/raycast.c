@@ -81,6 +81,7 @@ typedef struct rc_obj {
     int nch;
     struct rc_obj *ch;
     vv_channel_blend blend;
+    int ch_extras; /* some channel has extras (a label channel's colours) */
 } rc_obj;
 
 typedef struct rc_frame {
@@ -212,6 +213,17 @@ channel_composite(const rc_frame *fr, const rc_obj *co, const vv_ray *wr, const 
     composite_sample(fr, co, wr, v, e, t, g, C, A);
 }
 
+/* Channel co's table entry e at index point p with its extras applied (a
+ * label channel's colour by label, vv_vextra_apply); buf holds the result
+ * when it is not e itself. */
+static inline const float *
+channel_entry(const rc_obj *co, const float *e, const float p[3], float buf[4]) {
+    if (!co->extras || e[0] <= 0)
+        return e;
+    const float val = co->x.lut2d ? vv_vcache_sample(co->c, p) : 0;
+    return vv_vextra_apply(&co->x, co->c, p, val, e, buf);
+}
+
 /* One sample of a multi-channel object under the composite rule
  * (VV_BLEND_COMPOSITE) at cell o, fractions f (point p, ray parameter t):
  * e[ch] is channel ch's table entry there, NULL where its subvolume cannot
@@ -310,12 +322,16 @@ trace_channels(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result
                 for (int s = 0; s < m && live > 0; s++) {
                     t = (kfirst + s) * dt;
                     const float f[3] = {fx[s], fy[s], fz[s]};
-                    if (ob->ch[0].shading || fr->point_lights)
+                    if (ob->ch[0].shading || fr->point_lights || ob->ch_extras)
                         vv_vray_point(&r, t, p);
                     if (!additive) {
                         const float *e[VV_MAX_CHANNELS];
+                        float ebuf[VV_MAX_CHANNELS][4];
                         for (int ch = 0; ch < nch; ch++)
-                            e[ch] = shows[ch] ? ob->ch[ch].lut + entry[ch][s] : NULL;
+                            e[ch] = shows[ch]
+                                        ? channel_entry(&ob->ch[ch], ob->ch[ch].lut + entry[ch][s],
+                                                        p, ebuf[ch])
+                                        : NULL;
                         if (mix_channels(fr, ob, wr, v, e, cell[s], f, p, t, C[0], &A[0]) &&
                             depth == INFINITY)
                             depth = (float)t;
@@ -326,7 +342,8 @@ trace_channels(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result
                         const rc_obj *co = &ob->ch[ch];
                         if (!shows[ch] || A[ch] >= et)
                             continue;
-                        const float *e = co->lut + entry[ch][s];
+                        float ebuf[4];
+                        const float *e = channel_entry(co, co->lut + entry[ch][s], p, ebuf);
                         if (e[0] <= 0)
                             continue;
                         channel_composite(fr, co, wr, v, e, cell[s], f, p, t, C[ch], &A[ch]);
@@ -493,11 +510,15 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
                 float f[3];
                 const size_t o = vv_vcache_cell_of(c, p, f);
                 const float *e[VV_MAX_CHANNELS];
+                float ebuf[VV_MAX_CHANNELS][4];
                 for (int ch = 0; ch < ob->nch; ch++) {
                     const rc_obj *co = &ob->ch[ch];
                     e[ch] =
                         co->bvis[b]
-                            ? co->lut + 4 * (int)lut_index_f(co, vv_vcache_value_at(co->c, o, f))
+                            ? channel_entry(co,
+                                            co->lut + 4 * (int)lut_index_f(
+                                                              co, vv_vcache_value_at(co->c, o, f)),
+                                            p, ebuf[ch])
                             : NULL;
                 }
                 if (mix_channels(fr, ob, wr, v, e, o, f, p, t, C, &A) && depth == INFINITY)
@@ -868,6 +889,9 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
         s = prepare_tables(&fr, &chans[i]);
         chans[i].dt = fr.dt;
     }
+    for (int i = 0; i < fr.n_obj && s == VV_OK; i++)
+        for (int k = 0; k < objs[i].nch; k++)
+            objs[i].ch_extras |= objs[i].ch[k].extras;
     if (s == VV_OK) {
         fr.key = region && fr.n_comp == 0 ? key : NULL;
         vv_frame_job job;

@@ -90,6 +90,13 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
                 if (e[0] <= 0)
                     continue;
                 const double t = (kfirst + s) * dt;
+                float ebuf[4];
+                if (ob->extras) { /* a label channel (channel_overlay): colours by label */
+                    vv_vray_point(r, t, p);
+                    const float val = ob->x.lut2d ? vv_vcache_sample(c, p) : 0;
+                    if ((e = vv_vextra_apply(&ob->x, c, p, val, e, ebuf))[0] <= 0)
+                        continue;
+                }
                 float g[3] = {0, 0, 0};
                 if (shading) {
                     vv_vray_point(r, t, p);
