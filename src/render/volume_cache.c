@@ -1133,6 +1133,147 @@ vv_vray_project_tables(const vv_vcache *c, const vv_vtables *t, const vv_vray *r
         project(c, NULL, r, mode, dt, skipping, avx2, -INFINITY, INFINITY, value, depth);
 }
 
+/* The samples k .. klast of ray r in channel c's maximum (best, tbest):
+ * the one-channel kernel's march through one subvolume. */
+static void
+project_block(const vv_vcache *c, const vv_vray *r, double k, double klast, double dt, int avx2,
+              float *best, double *tbest) {
+#if VV_VC_HAVE_AVX2
+    if (avx2) {
+        while (k <= klast) {
+            const int m = klast - k + 1 < VV_VC_CHUNK ? (int)(klast - k + 1) : VV_VC_CHUNK;
+            float val[VV_VC_CHUNK];
+            values_chunk_avx2(c, r, k, dt, m, val);
+            for (int s = 0; s < m; s++)
+                if (val[s] > *best) {
+                    *best = val[s];
+                    *tbest = (k + s) * dt;
+                }
+            k += m;
+        }
+        return;
+    }
+#else
+    (void)avx2;
+#endif
+    for (; k <= klast; k++) {
+        float p[3], f[3];
+        vv_vray_point(r, k * dt, p);
+        const size_t o = vv_vcache_cell_in(c, p, f);
+        const float x = vv_vcache_value_at(c, o, f);
+        if (x > *best) {
+            *best = x;
+            *tbest = k * dt;
+        }
+    }
+}
+
+void
+vv_vray_project_channels(const vv_vcache *const *cs, const vv_vtables *const *ts, int n,
+                         const vv_vray *r, double dt, int skipping, int avx2, float *value,
+                         float *depth) {
+    double k = vv_ceil_pos(r->t0 / dt);
+    const double kend = vv_floor_pos(r->t1 / dt);
+    if (k > kend || n < 2 || n > VV_MAX_CHANNELS) {
+        for (int ch = 0; ch < n; ch++)
+            vv_vray_project_tables(cs[ch], ts[ch], r, VV_MODE_MIP, dt, skipping, avx2, &value[ch],
+                                   &depth[ch]);
+        return;
+    }
+    float best[VV_MAX_CHANNELS], stop[VV_MAX_CHANNELS];
+    double tbest[VV_MAX_CHANNELS];
+    int vec[VV_MAX_CHANNELS], act[VV_MAX_CHANNELS], na = 0;
+    for (int ch = 0; ch < n; ch++) {
+        const vv_vcache *c = cs[ch];
+        best[ch] = ts[ch]->pdist ? ts[ch]->plo : -INFINITY;
+        stop[ch] = ts[ch]->pdist ? ts[ch]->phi : INFINITY;
+        tbest[ch] = r->t0;
+        vec[ch] = avx2 && c->q16 && c->sz * (size_t)c->nz < ((size_t)1 << 30);
+        if (best[ch] < stop[ch])
+            act[na++] = ch;
+    }
+    const vv_vcache *c0 = cs[0]; /* every channel has its grid */
+    const int gsize = VV_VC_BLOCK * VV_VC_GROUP;
+    while (k <= kend && na > 0) {
+        float p[3];
+        vv_vray_point(r, k * dt, p);
+        int bc[3];
+        for (int a = 0; a < 3; a++) {
+            bc[a] = (int)((p[a] > 0 ? p[a] : 0) * (1.0f / VV_VC_BLOCK));
+            const int bn = a == 0 ? c0->bx : a == 1 ? c0->by : c0->bz;
+            bc[a] = bc[a] >= bn ? bn - 1 : bc[a];
+        }
+        const size_t b =
+            ((size_t)bc[2] * (size_t)c0->by + (size_t)bc[1]) * (size_t)c0->bx + (size_t)bc[0];
+        if (skipping) {
+            /* the cube of subvolumes that no live channel has anything in
+             * beyond its starting bound (the smallest of their distances),
+             * then the group or subvolume that no live channel can beat
+             * its maximum in */
+            int dist = 255, size = gsize;
+            size_t g = 0;
+            {
+                int gi = (int)((p[0] > 0 ? p[0] : 0) * (1.0f / gsize));
+                int gj = (int)((p[1] > 0 ? p[1] : 0) * (1.0f / gsize));
+                int gk = (int)((p[2] > 0 ? p[2] : 0) * (1.0f / gsize));
+                gi = gi >= c0->gx ? c0->gx - 1 : gi;
+                gj = gj >= c0->gy ? c0->gy - 1 : gj;
+                gk = gk >= c0->gz ? c0->gz - 1 : gk;
+                g = ((size_t)gk * (size_t)c0->gy + (size_t)gj) * (size_t)c0->gx + (size_t)gi;
+            }
+            for (int i = 0; i < na; i++) {
+                const int ch = act[i];
+                const int d = ts[ch]->pdist ? ts[ch]->pdist[b] : 0;
+                dist = d < dist ? d : dist;
+                const int sz = cs[ch]->gmax[g] <= best[ch]   ? gsize
+                               : cs[ch]->bmax[b] <= best[ch] ? VV_VC_BLOCK
+                                                             : 0;
+                size = sz < size ? sz : size;
+            }
+            if (dist) {
+                float te = INFINITY;
+                for (int a = 0; a < 3; a++) {
+                    if (r->inv[a] == 0)
+                        continue;
+                    const float bound = r->d[a] > 0 ? (float)(bc[a] + dist) * VV_VC_BLOCK
+                                                    : (float)(bc[a] - dist + 1) * VV_VC_BLOCK;
+                    const float ta = (bound - p[a]) * r->inv[a];
+                    te = ta < te ? ta : te;
+                }
+                const double ks = vv_ceil_pos((k * dt + te) / dt);
+                k = ks > k + 1 ? ks : k + 1;
+                continue;
+            }
+            if (size) {
+                const double ks = vv_ceil_pos(vv_vray_cube_exit(r, p, k * dt, size) / dt);
+                k = ks > k + 1 ? ks : k + 1;
+                continue;
+            }
+        }
+        const double te = vv_vray_cube_exit(r, p, k * dt, VV_VC_BLOCK);
+        double klast = vv_floor_pos(te / dt);
+        klast = klast < kend ? klast : kend;
+        klast = klast < k ? k : klast;
+        /* each live channel that can change its maximum here marches the
+         * subvolume as its one-channel projection does */
+        int keep = 0;
+        for (int i = 0; i < na; i++) {
+            const int ch = act[i];
+            if (!skipping ||
+                ((!ts[ch]->pdist || ts[ch]->pdist[b] == 0) && cs[ch]->bmax[b] > best[ch]))
+                project_block(cs[ch], r, k, klast, dt, vec[ch], &best[ch], &tbest[ch]);
+            if (best[ch] < stop[ch])
+                act[keep++] = ch;
+        }
+        na = keep;
+        k = klast + 1;
+    }
+    for (int ch = 0; ch < n; ch++) {
+        value[ch] = best[ch];
+        depth[ch] = (float)tbest[ch];
+    }
+}
+
 void
 vv_vtables_flat_ends(const vv_vtables *t, float *lo, float *hi) {
     const float *e = t->lut;

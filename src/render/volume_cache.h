@@ -708,6 +708,18 @@ void vv_vray_project(const vv_vcache *c, const vv_vray *r, vv_render_mode mode, 
 void vv_vray_project_tables(const vv_vcache *c, const vv_vtables *t, const vv_vray *r,
                             vv_render_mode mode, double dt, int skipping, int avx2, float *value,
                             float *depth);
+/* The maximum intensity projections of @p n channels (2..VV_MAX_CHANNELS)
+ * on one ray, in one pass: cs[ch], ts[ch] each channel's cache and MIP
+ * tables (every channel has the same grid), value[ch] and depth[ch] what
+ * vv_vray_project_tables gives channel ch alone, the same samples and the
+ * same results. With @p skipping the rays leap over the cubes of
+ * subvolumes where no channel still short of its upper bound holds
+ * anything beyond its starting bound, skip groups and subvolumes where none
+ * can beat its maximum, and inside a subvolume only the channels that can
+ * are sampled: the traversal is shared, the sampling is per channel. */
+void vv_vray_project_channels(const vv_vcache *const *cs, const vv_vtables *const *ts, int n,
+                              const vv_vray *r, double dt, int skipping, int avx2, float *value,
+                              float *depth);
 
 /* The bounds @p lo, @p hi of vv_vray_project for a projection table @p t
  * ({alpha, r, g, b} entries): the largest stored value below which every

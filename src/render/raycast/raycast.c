@@ -632,17 +632,34 @@ trace_projection(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, float *
 /* A multi-channel object under the maximum rule (VV_BLEND_MAXIMUM): a
  * maximum intensity projection per visible channel, each maximum coloured
  * as a one-channel MIP is (colour times opacity at that value), the
- * channels added. res->a = 1 - prod(1 - a_c). */
+ * channels added. res->a = 1 - prod(1 - a_c). The projections share one
+ * traversal of the ray (vv_vray_project_channels: the values of the
+ * one-channel projections). */
 static void
 trace_channels_maximum(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result *res) {
     float T = 1;
     res->rgb[0] = res->rgb[1] = res->rgb[2] = 0;
     res->depth = INFINITY;
+    res->a = 0;
+    vv_vray r;
+    if (!ray_setup(ob, wr, &r))
+        return; /* every channel shares the object's rays */
+    const vv_vcache *cs[VV_MAX_CHANNELS];
+    const vv_vtables *ts[VV_MAX_CHANNELS];
+    float vals[VV_MAX_CHANNELS], deps[VV_MAX_CHANNELS];
+    for (int c = 0; c < ob->nch; c++) {
+        cs[c] = ob->ch[c].c;
+        ts[c] = &ob->ch[c].tab;
+    }
+    if (ob->nch > 1)
+        vv_vray_project_channels(cs, ts, ob->nch, &r, fr->dt, fr->st->skipping, fr->avx2, vals,
+                                 deps);
+    else
+        vv_vray_project_tables(cs[0], ts[0], &r, VV_MODE_MIP, fr->dt, fr->st->skipping, fr->avx2,
+                               &vals[0], &deps[0]);
     for (int c = 0; c < ob->nch; c++) {
         const rc_obj *co = &ob->ch[c];
-        float val, dep;
-        if (!trace_projection(fr, co, wr, &val, &dep))
-            continue;
+        const float val = vals[c], dep = deps[c];
         const float *e = co->lut + 4 * (int)lut_index_f(co, val);
         for (int k = 0; k < 3; k++)
             res->rgb[k] += e[1 + k] * e[0];
