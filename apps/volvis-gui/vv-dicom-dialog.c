@@ -68,10 +68,12 @@ rebuild(dicom_dialog *d) {
                 s->study_date[0] ? s->study_date : "no date");
             gtk_list_box_append(GTK_LIST_BOX(d->list), header_row(m, 16));
         }
+        g_autofree char *steps =
+            s->time_steps > 1 ? g_strdup_printf(" × %d time steps", s->time_steps) : g_strdup("");
         g_autofree char *t = g_strdup_printf(
-            "Series %d: %s %s — %d × %d × %d, %d file%s", s->number,
+            "Series %d: %s %s — %d × %d × %d%s, %d file%s", s->number,
             s->modality[0] ? s->modality : "?", s->description[0] ? s->description : "", s->dims[0],
-            s->dims[1], s->dims[2], s->n_files, s->n_files == 1 ? "" : "s");
+            s->dims[1], s->dims[2], steps, s->n_files, s->n_files == 1 ? "" : "s");
         GtkWidget *l = gtk_label_new(t);
         gtk_label_set_xalign(GTK_LABEL(l), 0);
         gtk_widget_set_margin_start(l, 32);

@@ -127,9 +127,12 @@ list_dicom(const char *path, int show_phi, int *n_out) {
     printf("dicom:        %d series in %s\n", n, path);
     for (int i = 0; i < n; i++) {
         const vv_dicom_series *d = &ser[i];
-        printf("series %d:     #%d %s \"%s\" %d x %d x %d (%d file%s)\n", i + 1, d->number,
+        printf("series %d:     #%d %s \"%s\" %d x %d x %d", i + 1, d->number,
                d->modality[0] ? d->modality : "?", d->description, d->dims[0], d->dims[1],
-               d->dims[2], d->n_files, d->n_files == 1 ? "" : "s");
+               d->dims[2]);
+        if (d->time_steps > 1)
+            printf(" x %d time steps", d->time_steps);
+        printf(" (%d file%s)\n", d->n_files, d->n_files == 1 ? "" : "s");
         if (show_phi)
             printf("              patient \"%s\" id \"%s\" study \"%s\" %s\n", d->patient_name,
                    d->patient_id, d->study_description, d->study_date);

@@ -404,12 +404,14 @@ vv_status vv_tiff_write(const vv_volume *v, const char *path, const vv_save_opti
 
 /** One DICOM image series found by vv_dicom_list. Strings are NUL-terminated. */
 typedef struct vv_dicom_series {
-    char uid[72];               /**< Series Instance UID */
-    char description[72];       /**< Series Description (0008,103E) */
-    char modality[20];          /**< Modality (0008,0060): CT, MR, ... */
-    int number;                 /**< Series Number (0020,0011), 0 when absent */
-    int dims[3];                /**< columns, rows, slices (files x frames) */
-    int n_files;                /**< image files in the series */
+    char uid[72];         /**< Series Instance UID */
+    char description[72]; /**< Series Description (0008,103E) */
+    char modality[20];    /**< Modality (0008,0060): CT, MR, ... */
+    int number;           /**< Series Number (0020,0011), 0 when absent */
+    int dims[3];    /**< columns, rows, slices (of one time step: files x frames / time_steps) */
+    int time_steps; /**< images at every position of a time series (a cardiac cine, 4-D CT):
+                         the steps --time and vv_load_options.time read; 1 for one volume */
+    int n_files;    /**< image files in the series */
     char first_file[1024];      /**< one file of the series (for messages) */
     char study_description[72]; /**< Study Description (0008,1030) */
     char study_date[20];        /**< Study Date (0008,0020), YYYYMMDD */

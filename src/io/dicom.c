@@ -325,6 +325,42 @@ scan_path(scan *sc, const char *path) {
     return s;
 }
 
+static int images_per_place(const void *base, size_t stride, int n);
+static int cmp_double(const void *a, const void *b);
+
+/* The time steps of series @p si as its reader finds them (pick_time_step):
+ * the images' places along the first one's normal, sorted, in runs of T
+ * images each; 1 when the images have no positions or one each. */
+static int
+series_time_steps(const scan *sc, int si, long frames) {
+    const vv_dcm_file *f0 = &sc->f[sc->order[sc->start[si]]];
+    if (!f0->has_iop || frames < 2 || frames > (1L << 24))
+        return 1;
+    double *d = malloc((size_t)frames * sizeof *d);
+    if (!d)
+        return 1;
+    const double *r = f0->iop, *c = f0->iop + 3;
+    const double nrm[3] = {r[1] * c[2] - r[2] * c[1], r[2] * c[0] - r[0] * c[2],
+                           r[0] * c[1] - r[1] * c[0]};
+    long k = 0;
+    int ok = 1;
+    for (int i = sc->start[si]; ok && i < sc->start[si + 1]; i++) {
+        const vv_dcm_file *f = &sc->f[sc->order[i]];
+        ok = f->frame_ipp || (f->has_ipp && f->frames == 1);
+        for (int fr = 0; ok && fr < f->frames; fr++) {
+            const double *p = f->frame_ipp ? f->frame_ipp + 3 * fr : f->ipp;
+            d[k++] = nrm[0] * p[0] + nrm[1] * p[1] + nrm[2] * p[2];
+        }
+    }
+    int t = 1;
+    if (ok) {
+        qsort(d, (size_t)k, sizeof *d, cmp_double);
+        t = images_per_place(d, sizeof *d, (int)k);
+    }
+    free(d);
+    return t > 1 ? t : 1;
+}
+
 static void
 describe(const scan *sc, int si, vv_dicom_series *d) {
     memset(d, 0, sizeof *d);
@@ -344,6 +380,8 @@ describe(const scan *sc, int si, vv_dicom_series *d) {
     long frames = 0;
     for (int i = sc->start[si]; i < sc->start[si + 1]; i++)
         frames += sc->f[sc->order[i]].frames;
+    d->time_steps = series_time_steps(sc, si, frames);
+    frames /= d->time_steps;
     d->dims[2] = frames > 1 << 30 ? 1 << 30 : (int)frames;
 }
 
@@ -405,6 +443,28 @@ cmp_slice(const void *a, const void *b) {
 /* Positions closer than this (mm along the normal) are one place. */
 #define DCM_SAME_PLACE 1e-4
 
+/* Of n images at the sorted places d(0) <= d(1) <= ... (d(i) the double at
+ * @p base + i * @p stride bytes): the number T of images at every place
+ * when each place holds the same T; 1 when one each, 0 when the counts
+ * differ. */
+static int
+images_per_place(const void *base, size_t stride, int n) {
+#define DCM_D(i) (*(const double *)(const void *)((const char *)base + (size_t)(i)*stride))
+    int run = 1;
+    while (run < n && DCM_D(run) - DCM_D(0) < DCM_SAME_PLACE)
+        run++;
+    if (run < 2)
+        return 1;
+    if (n % run != 0)
+        return 0;
+    for (int z = 0; z < n; z += run)
+        if (DCM_D(z + run - 1) - DCM_D(z) >= DCM_SAME_PLACE ||
+            (z + run < n && DCM_D(z + run) - DCM_D(z + run - 1) < DCM_SAME_PLACE))
+            return 0;
+    return run;
+#undef DCM_D
+}
+
 /*
  * A time series (a cardiac cine, a perfusion or 4-D CT series: several
  * images at each position, DICOM PS3.3 C.7.6.2 and C.8.3.1): when the
@@ -421,22 +481,15 @@ static vv_status
 pick_time_step(const scan *sc, slice_ref *refs, int *nz, int time, int *nt, double *step_s) {
     *nt = 1;
     *step_s = 0;
-    int run = 1;
-    while (run < *nz && refs[run].d - refs[0].d < DCM_SAME_PLACE)
-        run++;
-    if (run < 2 || *nz % run != 0)
-        return time > 0 ? vv_error_set(VV_ERR_INVALID,
-                                       "time step %d asked, the series has one time step", time)
-                        : VV_OK;
-    for (int z = 0; z < *nz; z += run) {
-        if (refs[z + run - 1].d - refs[z].d >= DCM_SAME_PLACE ||
-            (z + run < *nz && refs[z + run].d - refs[z + run - 1].d < DCM_SAME_PLACE))
-            return time > 0 ? vv_error_set(VV_ERR_INVALID,
-                                           "time step %d asked, but the series' positions "
-                                           "hold different numbers of images",
-                                           time)
-                            : VV_OK;
-    }
+    const int run = images_per_place(&refs[0].d, sizeof *refs, *nz);
+    if (run < 2)
+        return time <= 0 ? VV_OK
+               : run     ? vv_error_set(VV_ERR_INVALID,
+                                        "time step %d asked, the series has one time step", time)
+                         : vv_error_set(VV_ERR_INVALID,
+                                        "time step %d asked, but the series' positions hold "
+                                            "different numbers of images",
+                                        time);
     if (time < 0 || time >= run)
         return vv_error_set(VV_ERR_INVALID, "time step %d asked, the series has %d", time, run);
     const vv_dcm_file *f0 = &sc->f[refs[0].file], *f1 = &sc->f[refs[1].file];

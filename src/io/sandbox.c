@@ -1291,7 +1291,8 @@ series_from_reply(vv_dicom_series **out, int *n, const sbx_reply *r, int fd, con
         e->study_date[sizeof e->study_date - 1] = '\0';
         e->patient_name[sizeof e->patient_name - 1] = '\0';
         e->patient_id[sizeof e->patient_id - 1] = '\0';
-        if (e->dims[0] < 0 || e->dims[1] < 0 || e->dims[2] < 0 || e->n_files < 0)
+        if (e->dims[0] < 0 || e->dims[1] < 0 || e->dims[2] < 0 || e->n_files < 0 ||
+            e->time_steps < 1)
             s = vv_error_set(VV_ERR_FORMAT, "dicom: %s: the reader's list of series is malformed",
                              file);
     }

@@ -208,8 +208,8 @@ if vtk is not None:
 
 # A cardiac cine series (pydicom): T phases at each of Z positions along an
 # oblique normal, one MR image a file, written in a shuffled order. Each
-# step reads as numpy wrote it, sorted along the normal; info says T steps
-# 40 ms apart; a step past them and a series whose positions hold unequal
+# step reads as numpy wrote it, sorted along the normal; info lists the
+# series as Z slices x T time steps and says the steps are 40 ms apart; a step past them and a series whose positions hold unequal
 # numbers of images are one-line errors.
 MR_STORAGE = "1.2.840.10008.5.1.4.1.1.4"
 cine = os.path.join(OUT, "cine")
@@ -251,6 +251,10 @@ for t in (0, 2, 3):
 p = volvis("info", cine, "--time", "1")
 check(p.returncode == 0 and "time steps:   4 (this is step 1), 0.04 s apart" in
       p.stdout.splitlines(), f"info DICOM cine: 4 steps 40 ms apart ({p.stderr.strip()})")
+# the listing counts the slices of one step and names the steps
+want = f'#7 MR "" {X} x {Y} x {Z} x {T} time steps ({T * Z} files)'
+check(any(line.endswith(want) for line in p.stdout.splitlines()),
+      f"info DICOM cine: the series listed as {want} ({p.stdout.splitlines()[:2]})")
 refused(["convert", cine, os.path.join(OUT, "cine_bad.nii"), "--time", "4", "-q"],
         "time step 4 asked, the series has 4", os.path.join(OUT, "cine_bad.nii"),
         "DICOM cine: a step past the series")
