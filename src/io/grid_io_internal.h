@@ -60,4 +60,44 @@ vv_status vv_gcur_values(vv_gcur *c, int binary, int big_endian, vv_gtype t, siz
 /** Validates @p g and sets its field ranges; on failure frees it. */
 vv_status vv_grid_finish(vv_grid *g, const char *path, vv_grid **out);
 
+/* ---- VTK XML files (grid_vtu.c; the .vti volume reader too) ------------- */
+
+struct _xmlDoc;
+struct _xmlNode;
+
+/** A VTK XML file being read: its root's encoding and the appended data. */
+typedef struct vv_vtkxml {
+    const char *path;              /**< for messages */
+    int big_endian;                /**< byte_order="BigEndian" */
+    int header64;                  /**< header_type="UInt64" (else UInt32) */
+    int zlib;                      /**< compressor="vtkZLibDataCompressor" */
+    const unsigned char *appended; /**< the AppendedData bytes after the '_', or NULL */
+    size_t appended_len;
+    int appended_base64; /**< AppendedData encoding="base64" (else raw) */
+} vv_vtkxml;
+
+/**
+ * Parses the VTK XML file @p data (@p size bytes, v->path set) whose root
+ * VTKFile has type @p type: entity declarations refused before parsing (no
+ * XML bomb), the appended data cut out, no network; *@p doc the document
+ * (xmlFreeDoc it), *@p xml what was parsed (free() it when it is not
+ * @p data), *@p dataset the root's @p type element. Errors: VV_ERR_FORMAT
+ * (not well-formed, another type, no such element: one line),
+ * VV_ERR_UNSUPPORTED (a compressor other than zlib), VV_ERR_NOMEM.
+ */
+vv_status vv_vtkxml_open(vv_vtkxml *v, unsigned char *data, uint64_t size, const char *type,
+                         struct _xmlDoc **doc, unsigned char **xml, struct _xmlNode **dataset);
+/**
+ * The bytes of DataArray @p da, "binary" (base64 text) or "appended", zlib
+ * compressed or not, checked to be exactly @p nbytes long before anything
+ * that size is allocated; *@p out is malloc'ed. @p name names the array in
+ * errors. Errors: VV_ERR_FORMAT (another format such as "ascii" included:
+ * the caller reads those as text; truncated or inconsistent blocks),
+ * VV_ERR_NOMEM.
+ */
+vv_status vv_vtkxml_array_bytes(const vv_vtkxml *v, struct _xmlNode *da, size_t nbytes,
+                                const char *name, unsigned char **out);
+/** The first child element of @p n named @p name, or NULL. */
+struct _xmlNode *vv_vtkxml_child(struct _xmlNode *n, const char *name);
+
 #endif

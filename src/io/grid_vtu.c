@@ -4,6 +4,9 @@
  * compressed or not, UInt32 or UInt64 headers, either byte order ("VTK
  * File Formats", XML file formats).
  *
+ * The file-level parts (vv_vtkxml_open, vv_vtkxml_array_bytes) serve the
+ * .vti volume reader too (vti_read.c).
+ *
  * Hostile files: entity declarations (the "billion laughs" XML bomb) are
  * refused before parsing, libxml2 runs without network access and entity
  * substitution, every array's decoded and decompressed size is checked
@@ -24,15 +27,7 @@
 
 #define VTU_FILE_MAX (4ull << 30)
 
-typedef struct vtu {
-    const char *path;
-    int big_endian;
-    int header64;
-    int zlib;
-    const unsigned char *appended; /* after the '_' */
-    size_t appended_len;
-    int appended_base64;
-} vtu;
+typedef vv_vtkxml vtu;
 
 static int
 b64_value(unsigned char ch) {
@@ -296,13 +291,47 @@ is_elem(xmlNode *n, const char *name) {
     return n->type == XML_ELEMENT_NODE && !strcmp((const char *)n->name, name);
 }
 
+vv_status
+vv_vtkxml_array_bytes(const vv_vtkxml *v, xmlNode *da, size_t nbytes, const char *name,
+                      unsigned char **out) {
+    *out = NULL;
+    char *fmt = prop(da, "format"), *offs = prop(da, "offset");
+    vv_status s;
+    if (fmt && !strcmp(fmt, "binary")) {
+        xmlChar *text = xmlNodeGetContent(da);
+        const unsigned char *p = text ? text : (const unsigned char *)"";
+        const unsigned char *e = p + strlen((const char *)p);
+        while (p < e && (*p == ' ' || *p == '\n' || *p == '\r' || *p == '\t'))
+            p++;
+        s = binary_array(v, p, e, 1, nbytes, name, out);
+        xmlFree(text);
+    } else if (fmt && !strcmp(fmt, "appended")) {
+        char *end;
+        const unsigned long long off = offs ? strtoull(offs, &end, 10) : 0;
+        if (!offs || *end || !v->appended || off > v->appended_len)
+            s = vv_error_set(VV_ERR_FORMAT,
+                             "%s: DataArray %s: appended offset \"%s\" is not in "
+                             "the appended data",
+                             v->path, name, offs ? offs : "");
+        else
+            s = binary_array(v, v->appended + off, v->appended + v->appended_len,
+                             v->appended_base64, nbytes, name, out);
+    } else {
+        s = vv_error_set(VV_ERR_FORMAT, "%s: DataArray %s: format \"%s\"", v->path, name,
+                         fmt ? fmt : "");
+    }
+    xmlFree(fmt);
+    xmlFree(offs);
+    return s;
+}
+
 /* Reads a DataArray of n tuples x ncomp (ncomp 0: whatever it declares,
  * returned in *ncomp_out) into doubles. */
 static vv_status
 data_array(const vtu *v, xmlNode *da, size_t n, int ncomp, int *ncomp_out, double **out) {
     *out = NULL;
     char *type = prop(da, "type"), *fmt = prop(da, "format"), *nc = prop(da, "NumberOfComponents"),
-         *name = prop(da, "Name"), *offs = prop(da, "offset");
+         *name = prop(da, "Name");
     vv_status s = VV_OK;
     const char *nm = name ? name : "(unnamed)";
     vv_gtype t;
@@ -337,30 +366,7 @@ data_array(const vtu *v, xmlNode *da, size_t n, int ncomp, int *ncomp_out, doubl
         xmlFree(text);
         goto done;
     }
-    if (fmt && !strcmp(fmt, "binary")) {
-        xmlChar *text = xmlNodeGetContent(da);
-        const unsigned char *p = text ? text : (const unsigned char *)"";
-        const unsigned char *e = p + strlen((const char *)p);
-        while (p < e && (*p == ' ' || *p == '\n' || *p == '\r' || *p == '\t'))
-            p++;
-        s = binary_array(v, p, e, 1, nv * sz, nm, &raw);
-        xmlFree(text);
-    } else if (fmt && !strcmp(fmt, "appended")) {
-        char *end;
-        const unsigned long long off = offs ? strtoull(offs, &end, 10) : 0;
-        if (!offs || *end || !v->appended || off > v->appended_len) {
-            s = vv_error_set(VV_ERR_FORMAT,
-                             "%s: DataArray %s: appended offset \"%s\" is not in "
-                             "the appended data",
-                             v->path, nm, offs ? offs : "");
-            goto done;
-        }
-        s = binary_array(v, v->appended + off, v->appended + v->appended_len, v->appended_base64,
-                         nv * sz, nm, &raw);
-    } else {
-        s = vv_error_set(VV_ERR_FORMAT, "%s: DataArray %s: format \"%s\"", v->path, nm,
-                         fmt ? fmt : "");
-    }
+    s = vv_vtkxml_array_bytes(v, da, nv * sz, nm, &raw);
     if (s == VV_OK)
         for (size_t i = 0; i < nv; i++)
             vals[i] = vv_gtype_get(raw + i * sz, t, v->big_endian);
@@ -372,7 +378,6 @@ done:
     xmlFree(fmt);
     xmlFree(nc);
     xmlFree(name);
-    xmlFree(offs);
     if (s != VV_OK) {
         free(vals);
         return s;
@@ -381,13 +386,15 @@ done:
     return VV_OK;
 }
 
-static xmlNode *
-child(xmlNode *n, const char *name) {
+xmlNode *
+vv_vtkxml_child(xmlNode *n, const char *name) {
     for (xmlNode *c = n ? n->children : NULL; c; c = c->next)
         if (is_elem(c, name))
             return c;
     return NULL;
 }
+
+#define child vv_vtkxml_child
 
 static xmlNode *
 named_array(xmlNode *parent, const char *name) {
@@ -425,8 +432,8 @@ vtu_refuse_entities(const unsigned char *data, uint64_t size, const char *path) 
     for (size_t i = 0; i + 8 <= scan; i++)
         if (!memcmp(data + i, "<!ENTITY", 8) || !memcmp(data + i, "<!DOCTYPE", 9))
             return vv_error_set(VV_ERR_FORMAT,
-                                "%s: DOCTYPE or entity declarations are not allowed in a .vtu "
-                                "file (possible XML bomb)",
+                                "%s: DOCTYPE or entity declarations are not allowed in a VTK "
+                                "XML file (possible XML bomb)",
                                 path);
     return VV_OK;
 }
@@ -501,11 +508,10 @@ vtu_parse(const unsigned char *xml, size_t xml_len, const char *path, xmlDoc **d
                         xe ? xe->line : 0, msg);
 }
 
-/* The VTKFile root (type, byte order, header type, compressor) and its one
- * Piece with its point and cell counts, checked against the limits and the
- * file's @p size. */
+/* The VTKFile root (type, byte order, header type, compressor): @p type's
+ * element in *@p dataset. */
 static vv_status
-vtu_piece(vtu *v, xmlDoc *doc, uint64_t size, xmlNode **piece, size_t *np, size_t *nc) {
+vtkxml_root(vv_vtkxml *v, xmlDoc *doc, const char *type, xmlNode **dataset) {
     const char *path = v->path;
     xmlNode *root = xmlDocGetRootElement(doc);
     if (!root || !is_elem(root, "VTKFile"))
@@ -513,22 +519,47 @@ vtu_piece(vtu *v, xmlDoc *doc, uint64_t size, xmlNode **piece, size_t *np, size_
     vv_status s = VV_OK;
     char *ty = prop(root, "type"), *bo = prop(root, "byte_order"), *ht = prop(root, "header_type"),
          *cp = prop(root, "compressor");
-    int ok = ty && !strcmp(ty, "UnstructuredGrid");
+    int ok = ty && !strcmp(ty, type);
     v->big_endian = bo && !strcmp(bo, "BigEndian");
     v->header64 = ht && !strcmp(ht, "UInt64");
     v->zlib = cp && !strcmp(cp, "vtkZLibDataCompressor");
     const int bad_cp = cp && !v->zlib;
     if (!ok || bad_cp)
         s = vv_error_set(bad_cp ? VV_ERR_UNSUPPORTED : VV_ERR_FORMAT,
-                         "%s: %s \"%s\" (UnstructuredGrid with zlib or no compression)", path,
-                         bad_cp ? "compressor" : "type", bad_cp ? cp : (ty ? ty : ""));
+                         "%s: %s \"%s\" (%s with zlib or no compression)", path,
+                         bad_cp ? "compressor" : "type", bad_cp ? cp : (ty ? ty : ""), type);
     xmlFree(ty);
     xmlFree(bo);
     xmlFree(ht);
     xmlFree(cp);
     if (s != VV_OK)
         return s;
-    *piece = child(child(root, "UnstructuredGrid"), "Piece");
+    *dataset = child(root, type);
+    if (!*dataset)
+        return vv_error_set(VV_ERR_FORMAT, "%s: no %s element", path, type);
+    return VV_OK;
+}
+
+vv_status
+vv_vtkxml_open(vv_vtkxml *v, unsigned char *data, uint64_t size, const char *type, xmlDoc **doc,
+               unsigned char **xml, xmlNode **dataset) {
+    size_t xml_len = 0;
+    *doc = NULL;
+    *xml = NULL;
+    vv_status s;
+    if ((s = vtu_refuse_entities(data, size, v->path)) == VV_OK &&
+        (s = vtu_cut_appended(v, data, size, xml, &xml_len)) == VV_OK &&
+        (s = vtu_parse(*xml, xml_len, v->path, doc)) == VV_OK)
+        s = vtkxml_root(v, *doc, type, dataset);
+    return s;
+}
+
+/* The UnstructuredGrid's one Piece with its point and cell counts, checked
+ * against the limits and the file's @p size. */
+static vv_status
+vtu_piece(vtu *v, xmlNode *grid, uint64_t size, xmlNode **piece, size_t *np, size_t *nc) {
+    const char *path = v->path;
+    *piece = child(grid, "Piece");
     if (!*piece)
         return vv_error_set(VV_ERR_FORMAT, "%s: no UnstructuredGrid/Piece", path);
     for (xmlNode *c = (*piece)->next; c; c = c->next)
@@ -646,13 +677,11 @@ vv_grid_read_vtu(vv_grid **out, const char *path) {
         return vv_error_prefix(s, "%s", path);
     vtu v = {path, 0, 0, 0, NULL, 0, 0};
     xmlDoc *doc = NULL;
-    xmlNode *piece = NULL;
+    xmlNode *piece = NULL, *grid = NULL;
     vv_grid *g = NULL;
-    size_t xml_len = 0, np = 0, nc = 0;
-    if ((s = vtu_refuse_entities(data, size, path)) == VV_OK &&
-        (s = vtu_cut_appended(&v, data, size, &xml, &xml_len)) == VV_OK &&
-        (s = vtu_parse(xml, xml_len, path, &doc)) == VV_OK &&
-        (s = vtu_piece(&v, doc, size, &piece, &np, &nc)) == VV_OK &&
+    size_t np = 0, nc = 0;
+    if ((s = vv_vtkxml_open(&v, data, size, "UnstructuredGrid", &doc, &xml, &grid)) == VV_OK &&
+        (s = vtu_piece(&v, grid, size, &piece, &np, &nc)) == VV_OK &&
         (s = vtu_grid(&v, piece, np, nc, &g)) == VV_OK)
         s = vtu_fields(&v, piece, g);
     if (doc)

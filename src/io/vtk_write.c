@@ -28,6 +28,7 @@
 #include <zlib.h>
 
 #include "core/internal.h"
+#include "io/vti.h"
 #include "volvis/io.h"
 #include "volvis/mesh.h"
 #include "volvis/sys/format.h"
@@ -348,7 +349,11 @@ const vv_volume_format vv_volume_format_vti = {
     .name = "vti",
     .title = "VTK XML image data",
     .extensions = vti_extensions,
-    .doc = "VTK XML image data (ParaView's .vti), written only: origin, spacing and direction, "
+    .doc = "VTK XML image data (ParaView's .vti) through libxml2: reads inline or appended, "
+           "base64 or raw, zlib, components as channels; writes origin, spacing and direction, "
            "every voxel type, one appended block, zlib-compressed unless --no-compress",
+    .flags = VV_FORMAT_FLAG_THIRD_PARTY,
+    .looks_like = vv_vti_looks_like,
+    .read = vv_vti_read,
     .write = vti_write_record,
 };

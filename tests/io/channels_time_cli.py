@@ -11,6 +11,9 @@ Writes, with independent writers, files of several channels and time steps:
 - a 5-D NIfTI-1 (x, y, z, t, channel; f32, gzip) and a 4-D one by nibabel;
 - a NRRD with an axis of kind RGB-color and one of kind time by Teem's
   `unu make` (when teem-apps is there: else the test is skipped);
+- VTK XML image data (.vti) by vtkXMLImageDataWriter in every data mode,
+  zlib or not, either byte order: each component a channel, its name, the
+  direction and the extent's origin; bad .vti files are one-line errors;
 - a cardiac cine DICOM series by pydicom: 4 phases at each of 6 slice
   positions, one file an image, the files' names and instance numbers
   shuffled, Trigger Time and Temporal Position Identifier set;
@@ -205,6 +208,77 @@ if vtk is not None:
     refused(["convert", os.path.join(OUT, "three_ascii.vtk"), os.path.join(OUT, "bad.nii"),
              "--channel", "3", "-q"], "channel 3", os.path.join(OUT, "bad.nii"),
             "VTK component past the file's")
+
+    # VTK XML image data (.vti) by vtkXMLImageDataWriter: every data mode
+    # (ascii, inline base64, appended raw or base64), zlib or none, either
+    # byte order; i16 with 3 named components, a direction matrix and an
+    # extent that does not start at 0
+    i16 = rng.integers(-3000, 3000, size=(Z, Y, X, 3), dtype=np.int16)
+    im = vtk.vtkImageData()
+    im.SetExtent(2, X + 1, 0, Y - 1, -1, Z - 2)
+    im.SetSpacing(0.5, 0.75, 2.0)
+    im.SetOrigin(1, 2, 3)
+    im.SetDirectionMatrix(0, -1, 0, 1, 0, 0, 0, 0, 1)
+    arr = numpy_support.numpy_to_vtk(i16.reshape(-1, 3), deep=1, array_type=vtk.VTK_SHORT)
+    arr.SetName("stains")
+    for c, nm in enumerate(("nuclei", "membrane", "protein")):
+        arr.SetComponentName(c, nm)
+    im.GetPointData().SetScalars(arr)
+    modes = {"ascii": ("ascii", True, False, False), "base64_zlib": ("binary", True, False, False),
+             "base64_raw": ("binary", False, False, False),
+             "appended_zlib": ("appended", True, False, False),
+             "appended_raw": ("appended", False, True, False),
+             "appended_be": ("appended", True, True, True)}
+    for mode, (dm, zlib, raw, be) in modes.items():
+        vti = os.path.join(OUT, f"stains_{mode}.vti")
+        w = vtk.vtkXMLImageDataWriter()
+        w.SetInputData(im)
+        w.SetFileName(vti)
+        {"ascii": w.SetDataModeToAscii, "binary": w.SetDataModeToBinary,
+         "appended": w.SetDataModeToAppended}[dm]()
+        if not zlib:
+            w.SetCompressorTypeToNone()
+        if raw:
+            w.EncodeAppendedDataOff()
+        if be:
+            w.SetByteOrderToBigEndian()
+        w.Write()
+        for c in (0, 2):
+            got = read_back(vti, c, 0)
+            if got is not None:
+                check(np.array_equal(got, i16[..., c]), f"VTI {mode} component {c}: voxels")
+    p = volvis("info", os.path.join(OUT, "stains_appended_zlib.vti"))
+    lines = p.stdout.splitlines()
+    check("channels:     3 (this is channel 0)" in lines and
+          any('"membrane"' in ln for ln in lines) and
+          "direction:    [0 -1 0; 1 0 0; 0 0 1] (columns: i, j, k axes)" in lines and
+          "spacing:      0.5 x 0.75 x 2" in lines,
+          f"info VTI: 3 named channels, direction, spacing ({p.stderr.strip()})")
+    # the extent's first point (2, 0, -1) is the volume's origin
+    check(any(ln.split() == ["origin:", "1", "3", "1"] for ln in lines),
+          f"info VTI: origin at the extent's first point ({[ln for ln in lines if 'origin' in ln]})")
+    # a round trip through VolVis' own writer
+    back = os.path.join(OUT, "stains_back.vti")
+    p = volvis("convert", os.path.join(OUT, "stains_ascii.vti"), back, "--channel", "1", "-q")
+    got = read_back(back, 0, 0) if p.returncode == 0 else None
+    check(got is not None and np.array_equal(got, i16[..., 1]),
+          f"VTI written by volvis reads back ({p.stderr.strip()})")
+    # bad files: one line naming the file and the problem, no output
+    good = open(os.path.join(OUT, "stains_appended_raw.vti"), "rb").read()
+    bads = {"truncated": good[: len(good) // 2],
+            "bomb": good.replace(b"<VTKFile", b'<!DOCTYPE x [<!ENTITY a "aaaa">]>\n<VTKFile', 1),
+            "extent": good.replace(b'WholeExtent="2', b'WholeExtent="9', 1),
+            "type": good.replace(b'type="Int16"', b'type="Int64"', 1)}
+    needles = {"truncated": "stains_bad_truncated.vti", "bomb": "entity",
+               "extent": "Extent", "type": "Int64"}
+    for k, data in bads.items():
+        path = os.path.join(OUT, f"stains_bad_{k}.vti")
+        open(path, "wb").write(data)
+        refused(["convert", path, os.path.join(OUT, "bad.nii"), "-q"], needles[k],
+                os.path.join(OUT, "bad.nii"), f"VTI {k}")
+    refused(["convert", os.path.join(OUT, "stains_base64_raw.vti"), os.path.join(OUT, "bad.nii"),
+             "--channel", "3", "-q"], "channel 3", os.path.join(OUT, "bad.nii"),
+            "VTI component past the file's")
 
 # A cardiac cine series (pydicom): T phases at each of Z positions along an
 # oblique normal, one MR image a file, written in a shuffled order. Each
