@@ -206,24 +206,29 @@ blend_changed(GObject *d, GParamSpec *p, gpointer user) {
 
 /* ---- time ------------------------------------------------------------------------- */
 
-static gboolean
-show_step(VvChannelPanel *self, int t) {
-    g_autoptr(GError) err = NULL;
-    if (vv_document_set_time(self->doc, t, &err))
-        return TRUE;
-    vvg_show_error(GTK_WIDGET(self), "Cannot show the time step", err->message);
-    return FALSE;
+static void stop_playing(VvChannelPanel *self);
+
+/* A step that could not be read: said once, Play stopped, the slider back
+ * at the step shown. */
+static void
+step_failed(VvDocument *doc, const char *message, gpointer user) {
+    (void)doc;
+    VvChannelPanel *self = user;
+    stop_playing(self);
+    vvg_show_error(GTK_WIDGET(self), "Cannot show the time step", message);
+    fill(self);
 }
 
+/* The slider asks for a step; it is read off the interface's thread and
+ * shown when it arrives (vv_document_request_time: the latest ask wins). */
 static void
 time_changed(GtkRange *range, gpointer user) {
     VvChannelPanel *self = user;
     vv_object *o = volume_object(self);
     int t = (int)lrint(gtk_range_get_value(range));
-    if (self->updating || !o || o->time == t)
+    if (self->updating || !o)
         return;
-    if (!show_step(self, t))
-        fill(self);
+    vv_document_request_time(self->doc, t, step_failed, self);
 }
 
 static void
@@ -248,11 +253,15 @@ play_tick(gpointer user) {
     VvChannelPanel *self = user;
     vv_object *o = volume_object(self);
     int steps = vv_document_time_steps(self->doc, o);
-    if (steps < 2 || !show_step(self, (o->time + 1) % steps)) {
+    if (steps < 2) {
         self->play_source = 0;
         stop_playing(self);
         return G_SOURCE_REMOVE;
     }
+    /* the next step after the one shown, once the last one asked is in
+     * (a step slower to read than a tick holds Play back, never queues) */
+    if (!vv_document_time_pending(self->doc))
+        vv_document_request_time(self->doc, (o->time + 1) % steps, step_failed, self);
     return G_SOURCE_CONTINUE;
 }
 
@@ -435,7 +444,10 @@ fill(VvChannelPanel *self) {
     gtk_widget_set_visible(self->time_box, steps > 1);
     if (steps > 1) {
         gtk_range_set_range(GTK_RANGE(self->time_scale), 0, steps - 1);
-        if (lrint(gtk_range_get_value(GTK_RANGE(self->time_scale))) != o->time)
+        /* while a step asked for is being read the slider stays where the
+         * user put it; the label says the step shown */
+        if (!vv_document_time_pending(self->doc) &&
+            lrint(gtk_range_get_value(GTK_RANGE(self->time_scale))) != o->time)
             gtk_range_set_value(GTK_RANGE(self->time_scale), o->time);
         snprintf(text, sizeof text, "step %d of %d", o->time + 1, steps);
         gtk_label_set_text(GTK_LABEL(self->time_label), text);

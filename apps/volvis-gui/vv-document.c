@@ -29,6 +29,11 @@ struct _VvDocument {
     gint64 merge_time;
     GHashTable *time_steps; /* source path -> the file's time steps (GINT_TO_POINTER) */
     GHashTable *series;     /* "channel\npath" -> vv_time_series* */
+    /* vv_document_request_time: a read in flight, the step asked for since */
+    gboolean time_busy;
+    int time_want; /* -1: none */
+    VvTimeFailed time_failed;
+    gpointer time_failed_user;
 };
 
 /* A volume the last autosave wrote, by identity (a reference of its own) and
@@ -95,6 +100,7 @@ vv_document_init(VvDocument *doc) {
     doc->autosaved = g_ptr_array_new_with_free_func(autosaved_volume_free);
     doc->time_steps = g_hash_table_new_full(g_str_hash, g_str_equal, g_free, NULL);
     doc->series = vv_time_cache_new();
+    doc->time_want = -1;
 }
 
 VvDocument *
@@ -573,6 +579,124 @@ vv_document_set_time(VvDocument *doc, int t, GError **error) {
     }
     vv_document_changed(doc);
     return TRUE;
+}
+
+/* One asynchronous step read (vv_document_request_time): the series are
+ * resolved on the main thread, read on a worker. */
+typedef struct time_job {
+    int t, n;
+    char *source; /* the object's file: the result goes to an object of it */
+    vv_time_series *ts[VV_MAX_CHANNELS];
+    vv_volume *v[VV_MAX_CHANNELS];
+    char *message; /* the read's error, or NULL */
+} time_job;
+
+static void
+time_job_free(gpointer p) {
+    time_job *j = p;
+    for (int c = 0; c < j->n; c++)
+        vv_volume_free(j->v[c]);
+    g_free(j->source);
+    g_free(j->message);
+    g_free(j);
+}
+
+static void
+time_job_run(GTask *task, gpointer src, gpointer data, GCancellable *cancel) {
+    (void)src;
+    (void)cancel;
+    time_job *j = data;
+    for (int c = 0; c < j->n && !j->message; c++) {
+        vv_error_clear();
+        if (vv_time_series_get(j->ts[c], j->t, &j->v[c]) != VV_OK)
+            j->message = g_strdup(vv_error_message());
+        else if (j->t + 1 < vv_time_series_count(j->ts[c]))
+            vv_time_series_prefetch(j->ts[c], j->t + 1); /* the next step while this one draws */
+    }
+    g_task_return_boolean(task, TRUE);
+}
+
+static void time_job_start(VvDocument *doc);
+
+static void
+time_job_done(GObject *src, GAsyncResult *res, gpointer data) {
+    (void)data;
+    VvDocument *doc = VV_DOCUMENT(src);
+    time_job *j = g_task_get_task_data(G_TASK(res));
+    doc->time_busy = FALSE;
+    vv_object *o = vv_document_selected_object(doc);
+    const int n = o && o->n_channels > 0 ? o->n_channels : 1;
+    if (j->message) {
+        doc->time_want = -1;
+        if (doc->time_failed)
+            doc->time_failed(doc, j->message, doc->time_failed_user);
+    } else if (o && o->geometry.source && !strcmp(o->geometry.source, j->source) && n == j->n &&
+               o->time != j->t) {
+        vv_document_begin_edit_merging(doc, "time step");
+        o = vv_document_selected_object(doc);
+        vv_error_clear();
+        if (vv_object_replace_volumes(o, n, j->v) == VV_OK) {
+            o->time = j->t;
+            vv_document_changed(doc);
+        } else if (doc->time_failed) {
+            doc->time_failed(doc, vv_error_message(), doc->time_failed_user);
+        }
+    }
+    if (doc->time_want >= 0)
+        time_job_start(doc);
+}
+
+/* Starts reading doc->time_want of the selected object, unless it is shown. */
+static void
+time_job_start(VvDocument *doc) {
+    vv_object *o = vv_document_selected_object(doc);
+    const int t = doc->time_want;
+    doc->time_want = -1;
+    if (!o || !o->geometry.source || o->time == t)
+        return;
+    time_job *j = g_new0(time_job, 1);
+    j->t = t;
+    j->n = o->n_channels > 0 ? o->n_channels : 1;
+    j->source = g_strdup(o->geometry.source);
+    for (int c = 0; c < j->n; c++) {
+        j->ts[c] = series_for(doc->series, o->geometry.source,
+                              o->n_channels > 0 ? o->channels[c].index : -1);
+        if (!j->ts[c]) {
+            if (doc->time_failed)
+                doc->time_failed(doc, vv_error_message(), doc->time_failed_user);
+            time_job_free(j);
+            return;
+        }
+    }
+    doc->time_busy = TRUE;
+    GTask *task = g_task_new(doc, NULL, time_job_done, NULL);
+    g_task_set_task_data(task, j, time_job_free);
+    g_task_run_in_thread(task, time_job_run);
+    g_object_unref(task);
+}
+
+void
+vv_document_request_time(VvDocument *doc, int t, VvTimeFailed failed, gpointer user) {
+    vv_object *o = vv_document_selected_object(doc);
+    const int steps = vv_document_time_steps(doc, o);
+    doc->time_failed = failed;
+    doc->time_failed_user = user;
+    if (steps < 2 || t < 0 || t >= steps) {
+        if (failed) {
+            g_autofree char *m = g_strdup_printf("%s: no time step %d (%d steps)",
+                                                 o ? o->name : "no object", t, steps);
+            failed(doc, m, user);
+        }
+        return;
+    }
+    doc->time_want = t;
+    if (!doc->time_busy)
+        time_job_start(doc);
+}
+
+gboolean
+vv_document_time_pending(VvDocument *doc) {
+    return doc->time_busy || doc->time_want >= 0;
 }
 
 void

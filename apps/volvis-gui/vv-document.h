@@ -152,6 +152,23 @@ int vv_document_time_steps(VvDocument *doc, const vv_object *o);
  */
 gboolean vv_document_set_time(VvDocument *doc, int t, GError **error);
 
+/** Called on the main thread when a requested step could not be shown. */
+typedef void (*VvTimeFailed)(VvDocument *doc, const char *message, gpointer user);
+/**
+ * vv_document_set_time without blocking the interface: the step's voxels
+ * are read on a worker thread (the time series are thread-safe; the main
+ * thread only opens them) and put in when they arrive, as set_time puts
+ * them, if the selected object is still the one asked for and not at that
+ * step already. One read is in flight at a time: asks while it reads
+ * replace the step to show next (the latest wins), so dragging the slider
+ * shows the steps it can keep up with and ends on the last. @p failed
+ * (may be NULL) hears of a read that failed. vv_document_time_pending says
+ * whether a read or a next step is outstanding (tests wait on it).
+ */
+void vv_document_request_time(VvDocument *doc, int t, VvTimeFailed failed, gpointer user);
+/** 1 while vv_document_request_time has a read in flight or a step waiting. */
+gboolean vv_document_time_pending(VvDocument *doc);
+
 /** A cache of time series by (file, channel) for vv_world_apply_time (g_hash_table_unref it). */
 GHashTable *vv_time_cache_new(void);
 /**

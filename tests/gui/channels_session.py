@@ -143,6 +143,8 @@ def main():
         s.key("Right")
         s.key("Right")
         s.wait_for(lambda: s.value(ts) == 2, "the time slider at 2")
+        shown = s.find_label(lambda n: n.startswith("step ") and " of " in n)
+        s.wait_for(lambda: s.text(shown) == "step 3 of 3", "step 2 shown")
         time.sleep(1.0)
         n = s.n_full()
         s.wait_full(n - 1, "step 2")
@@ -170,6 +172,9 @@ def main():
             s.click(slider)
             s.key(key)
             s.wait_for(lambda: s.value(slider) == step, f"the time slider at {step}")
+            # the step is read off the interface's thread: shown when the label says so
+            lab = s.find_label(lambda n: n.startswith("step ") and " of " in n)
+            s.wait_for(lambda: s.text(lab) == f"step {step + 1} of 3", f"step {step} shown")
 
         to_step("Home", 0)
         s.page("Animator")

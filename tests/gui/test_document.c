@@ -332,9 +332,17 @@ assert_step(const vv_volume *v, int t, int c) {
                 assert_int_equal((int)vv_volume_get(v, i, j, k), value(i, t, c));
 }
 
+static void
+time_failed(VvDocument *doc, const char *message, gpointer user) {
+    (void)doc;
+    snprintf(user, 256, "%s", message);
+}
+
 /* A 4-D NIfTI of two channels opens as one object of two channels with its
  * time steps known; vv_document_set_time puts step 2 of both channels in,
  * steps shown within a second make one undo step, which undo takes back;
+ * vv_document_request_time reads off the main thread and shows the last
+ * step asked;
  * vv_world_apply_time puts a frame's step into a World evaluated from the
  * document's (an Animator's objects[i].time track) and names what it
  * cannot read. */
@@ -368,6 +376,27 @@ test_channels_and_time(void **state) {
     o = vv_document_selected_object(doc);
     assert_int_equal(o->time, 0);
     assert_step(o->channels[1].volume, 0, 1);
+
+    /* asked without blocking: asks while a read is in flight replace the
+     * step to show next, and the last one asked ends shown; a step out of
+     * range is heard of, the World unchanged */
+    char heard[256] = "";
+    vv_document_request_time(doc, 1, time_failed, heard);
+    vv_document_request_time(doc, 3, time_failed, heard);
+    vv_document_request_time(doc, 2, time_failed, heard);
+    while (vv_document_time_pending(doc))
+        g_main_context_iteration(NULL, TRUE);
+    o = vv_document_selected_object(doc);
+    assert_int_equal(o->time, 2);
+    assert_step(o->channels[0].volume, 2, 0);
+    assert_step(o->channels[1].volume, 2, 1);
+    assert_string_equal(heard, "");
+    vv_document_request_time(doc, 9, time_failed, heard);
+    assert_false(vv_document_time_pending(doc));
+    assert_non_null(strstr(heard, "no time step 9"));
+    assert_int_equal(vv_document_selected_object(doc)->time, 2);
+    assert_true(vv_document_undo(doc)); /* back to step 0 */
+    assert_int_equal(vv_document_selected_object(doc)->time, 0);
 
     /* an Animator frame: the object at step 3, the base World's at step 0 */
     GHashTable *cache = vv_time_cache_new();
