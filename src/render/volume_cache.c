@@ -977,6 +977,85 @@ values_chunk_avx2(const vv_vcache *c, const vv_vray *r, double kfirst, double dt
 }
 #endif
 
+/* The subvolume of index point p: its grid coordinates in bc (clamped)
+ * and its index. */
+static inline size_t
+proj_block(const vv_vcache *c, const float p[3], int bc[3]) {
+    for (int a = 0; a < 3; a++) {
+        bc[a] = (int)((p[a] > 0 ? p[a] : 0) * (1.0f / VV_VC_BLOCK));
+        const int bn = a == 0 ? c->bx : a == 1 ? c->by : c->bz;
+        bc[a] = bc[a] >= bn ? bn - 1 : bc[a];
+    }
+    return ((size_t)bc[2] * (size_t)c->by + (size_t)bc[1]) * (size_t)c->bx + (size_t)bc[0];
+}
+
+/* The group of subvolumes of index point p (clamped). */
+static inline size_t
+proj_group(const vv_vcache *c, const float p[3]) {
+    const int gsize = VV_VC_BLOCK * VV_VC_GROUP;
+    int gi = (int)((p[0] > 0 ? p[0] : 0) * (1.0f / gsize));
+    int gj = (int)((p[1] > 0 ? p[1] : 0) * (1.0f / gsize));
+    int gk = (int)((p[2] > 0 ? p[2] : 0) * (1.0f / gsize));
+    gi = gi >= c->gx ? c->gx - 1 : gi;
+    gj = gj >= c->gy ? c->gy - 1 : gj;
+    gk = gk >= c->gz ? c->gz - 1 : gk;
+    return ((size_t)gk * (size_t)c->gy + (size_t)gj) * (size_t)c->gx + (size_t)gi;
+}
+
+/* The sample after leaving the cube of 2 dist - 1 subvolumes around
+ * subvolume bc (p, sample k, in it). */
+static inline double
+proj_leap(const vv_vray *r, const float p[3], const int bc[3], int dist, double k, double dt) {
+    float te = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        if (r->inv[a] == 0)
+            continue;
+        const float bound = r->d[a] > 0 ? (float)(bc[a] + dist) * VV_VC_BLOCK
+                                        : (float)(bc[a] - dist + 1) * VV_VC_BLOCK;
+        const float ta = (bound - p[a]) * r->inv[a];
+        te = ta < te ? ta : te;
+    }
+    const double ks = vv_ceil_pos((k * dt + te) / dt);
+    return ks > k + 1 ? ks : k + 1;
+}
+
+/* The samples k .. klast of ray r in the running maximum of sg * value
+ * (best, tbest: the parameter of its first sample): one subvolume's march. */
+static void
+project_block(const vv_vcache *c, const vv_vray *r, double k, double klast, double dt, float sg,
+              int avx2, float *best, double *tbest) {
+#if VV_VC_HAVE_AVX2
+    if (avx2) {
+        while (k <= klast) {
+            const int m = klast - k + 1 < VV_VC_CHUNK ? (int)(klast - k + 1) : VV_VC_CHUNK;
+            float val[VV_VC_CHUNK];
+            values_chunk_avx2(c, r, k, dt, m, val);
+            for (int s = 0; s < m; s++) {
+                const float x = sg * val[s];
+                if (x > *best) {
+                    *best = x;
+                    *tbest = (k + s) * dt;
+                }
+            }
+            k += m;
+        }
+        return;
+    }
+#else
+    (void)avx2;
+#endif
+    for (; k <= klast; k++) {
+        float p[3], f[3];
+        vv_vray_point(r, k * dt, p);
+        const size_t o = vv_vcache_cell_in(c, p, f);
+        const float x = sg * vv_vcache_value_at(c, o, f);
+        if (x > *best) {
+            *best = x;
+            *tbest = k * dt;
+        }
+    }
+}
+
 /* The maximum of sg * value over the samples k .. kend of r that exceed
  * @p floor0 (floor0 itself when none does, at parameter t0), stopping once
  * it reaches @p stop; *tbest: the parameter of its first sample. */
@@ -991,47 +1070,22 @@ project_from(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, double 
     while (k <= kend && best < stop) {
         float p[3];
         vv_vray_point(r, k * dt, p);
-        if (skipping && pdist) {
+        int bc[3];
+        const size_t b = proj_block(c, p, bc);
+        if (skipping && pdist && pdist[b]) {
             /* leave the cube of 2 dist - 1 subvolumes around p that hold
              * nothing beyond the starting bound */
-            int bc[3];
-            for (int a = 0; a < 3; a++) {
-                bc[a] = (int)((p[a] > 0 ? p[a] : 0) * (1.0f / VV_VC_BLOCK));
-                const int bn = a == 0 ? c->bx : a == 1 ? c->by : c->bz;
-                bc[a] = bc[a] >= bn ? bn - 1 : bc[a];
-            }
-            const int dist = pdist[((size_t)bc[2] * (size_t)c->by + (size_t)bc[1]) * (size_t)c->bx +
-                                   (size_t)bc[0]];
-            if (dist) {
-                float te = INFINITY;
-                for (int a = 0; a < 3; a++) {
-                    if (r->inv[a] == 0)
-                        continue;
-                    const float bound = r->d[a] > 0 ? (float)(bc[a] + dist) * VV_VC_BLOCK
-                                                    : (float)(bc[a] - dist + 1) * VV_VC_BLOCK;
-                    const float ta = (bound - p[a]) * r->inv[a];
-                    te = ta < te ? ta : te;
-                }
-                const double ks = vv_ceil_pos((k * dt + te) / dt);
-                k = ks > k + 1 ? ks : k + 1;
-                continue;
-            }
+            k = proj_leap(r, p, bc, pdist[b], k, dt);
+            continue;
         }
         if (skipping) {
             /* a group, then a subvolume, that cannot beat the current
              * extreme is skipped whole (the test is strict, so its samples
              * could not change the result) */
-            int gi = (int)((p[0] > 0 ? p[0] : 0) * (1.0f / gsize));
-            int gj = (int)((p[1] > 0 ? p[1] : 0) * (1.0f / gsize));
-            int gk = (int)((p[2] > 0 ? p[2] : 0) * (1.0f / gsize));
-            gi = gi >= c->gx ? c->gx - 1 : gi;
-            gj = gj >= c->gy ? c->gy - 1 : gj;
-            gk = gk >= c->gz ? c->gz - 1 : gk;
-            const size_t g = ((size_t)gk * (size_t)c->gy + (size_t)gj) * (size_t)c->gx + (size_t)gi;
             int size = 0;
-            if (sg * gext[g] <= best)
+            if (sg * gext[proj_group(c, p)] <= best)
                 size = gsize;
-            else if (sg * bext[vv_vcache_block(c, p)] <= best)
+            else if (sg * bext[b] <= best)
                 size = VV_VC_BLOCK;
             if (size) {
                 const double ks = vv_ceil_pos(vv_vray_cube_exit(r, p, k * dt, size) / dt);
@@ -1043,34 +1097,8 @@ project_from(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, double 
         double klast = vv_floor_pos(te / dt);
         klast = klast < kend ? klast : kend;
         klast = klast < k ? k : klast;
-#if VV_VC_HAVE_AVX2
-        if (avx2) {
-            while (k <= klast) {
-                const int m = klast - k + 1 < VV_VC_CHUNK ? (int)(klast - k + 1) : VV_VC_CHUNK;
-                float val[VV_VC_CHUNK];
-                values_chunk_avx2(c, r, k, dt, m, val);
-                for (int s = 0; s < m; s++) {
-                    const float x = sg * val[s];
-                    if (x > best) {
-                        best = x;
-                        tbest = (k + s) * dt;
-                    }
-                }
-                k += m;
-            }
-            continue;
-        }
-#endif
-        for (; k <= klast; k++) {
-            float f[3];
-            vv_vray_point(r, k * dt, p);
-            const size_t o = vv_vcache_cell_in(c, p, f);
-            const float x = sg * vv_vcache_value_at(c, o, f);
-            if (x > best) {
-                best = x;
-                tbest = k * dt;
-            }
-        }
+        project_block(c, r, k, klast, dt, sg, avx2, &best, &tbest);
+        k = klast + 1;
     }
     *tbest_out = tbest;
     return best;
@@ -1133,41 +1161,6 @@ vv_vray_project_tables(const vv_vcache *c, const vv_vtables *t, const vv_vray *r
         project(c, NULL, r, mode, dt, skipping, avx2, -INFINITY, INFINITY, value, depth);
 }
 
-/* The samples k .. klast of ray r in channel c's maximum (best, tbest):
- * the one-channel kernel's march through one subvolume. */
-static void
-project_block(const vv_vcache *c, const vv_vray *r, double k, double klast, double dt, int avx2,
-              float *best, double *tbest) {
-#if VV_VC_HAVE_AVX2
-    if (avx2) {
-        while (k <= klast) {
-            const int m = klast - k + 1 < VV_VC_CHUNK ? (int)(klast - k + 1) : VV_VC_CHUNK;
-            float val[VV_VC_CHUNK];
-            values_chunk_avx2(c, r, k, dt, m, val);
-            for (int s = 0; s < m; s++)
-                if (val[s] > *best) {
-                    *best = val[s];
-                    *tbest = (k + s) * dt;
-                }
-            k += m;
-        }
-        return;
-    }
-#else
-    (void)avx2;
-#endif
-    for (; k <= klast; k++) {
-        float p[3], f[3];
-        vv_vray_point(r, k * dt, p);
-        const size_t o = vv_vcache_cell_in(c, p, f);
-        const float x = vv_vcache_value_at(c, o, f);
-        if (x > *best) {
-            *best = x;
-            *tbest = k * dt;
-        }
-    }
-}
-
 void
 vv_vray_project_channels(const vv_vcache *const *cs, const vv_vtables *const *ts, int n,
                          const vv_vray *r, double dt, int skipping, int avx2, float *value,
@@ -1198,29 +1191,14 @@ vv_vray_project_channels(const vv_vcache *const *cs, const vv_vtables *const *ts
         float p[3];
         vv_vray_point(r, k * dt, p);
         int bc[3];
-        for (int a = 0; a < 3; a++) {
-            bc[a] = (int)((p[a] > 0 ? p[a] : 0) * (1.0f / VV_VC_BLOCK));
-            const int bn = a == 0 ? c0->bx : a == 1 ? c0->by : c0->bz;
-            bc[a] = bc[a] >= bn ? bn - 1 : bc[a];
-        }
-        const size_t b =
-            ((size_t)bc[2] * (size_t)c0->by + (size_t)bc[1]) * (size_t)c0->bx + (size_t)bc[0];
+        const size_t b = proj_block(c0, p, bc);
         if (skipping) {
             /* the cube of subvolumes that no live channel has anything in
              * beyond its starting bound (the smallest of their distances),
              * then the group or subvolume that no live channel can beat
              * its maximum in */
             int dist = 255, size = gsize;
-            size_t g = 0;
-            {
-                int gi = (int)((p[0] > 0 ? p[0] : 0) * (1.0f / gsize));
-                int gj = (int)((p[1] > 0 ? p[1] : 0) * (1.0f / gsize));
-                int gk = (int)((p[2] > 0 ? p[2] : 0) * (1.0f / gsize));
-                gi = gi >= c0->gx ? c0->gx - 1 : gi;
-                gj = gj >= c0->gy ? c0->gy - 1 : gj;
-                gk = gk >= c0->gz ? c0->gz - 1 : gk;
-                g = ((size_t)gk * (size_t)c0->gy + (size_t)gj) * (size_t)c0->gx + (size_t)gi;
-            }
+            const size_t g = proj_group(c0, p);
             for (int i = 0; i < na; i++) {
                 const int ch = act[i];
                 const int d = ts[ch]->pdist ? ts[ch]->pdist[b] : 0;
@@ -1231,17 +1209,7 @@ vv_vray_project_channels(const vv_vcache *const *cs, const vv_vtables *const *ts
                 size = sz < size ? sz : size;
             }
             if (dist) {
-                float te = INFINITY;
-                for (int a = 0; a < 3; a++) {
-                    if (r->inv[a] == 0)
-                        continue;
-                    const float bound = r->d[a] > 0 ? (float)(bc[a] + dist) * VV_VC_BLOCK
-                                                    : (float)(bc[a] - dist + 1) * VV_VC_BLOCK;
-                    const float ta = (bound - p[a]) * r->inv[a];
-                    te = ta < te ? ta : te;
-                }
-                const double ks = vv_ceil_pos((k * dt + te) / dt);
-                k = ks > k + 1 ? ks : k + 1;
+                k = proj_leap(r, p, bc, dist, k, dt);
                 continue;
             }
             if (size) {
@@ -1261,7 +1229,7 @@ vv_vray_project_channels(const vv_vcache *const *cs, const vv_vtables *const *ts
             const int ch = act[i];
             if (!skipping ||
                 ((!ts[ch]->pdist || ts[ch]->pdist[b] == 0) && cs[ch]->bmax[b] > best[ch]))
-                project_block(cs[ch], r, k, klast, dt, vec[ch], &best[ch], &tbest[ch]);
+                project_block(cs[ch], r, k, klast, dt, 1.0f, vec[ch], &best[ch], &tbest[ch]);
             if (best[ch] < stop[ch])
                 act[keep++] = ch;
         }
