@@ -477,6 +477,7 @@ vv_channel_panel_dispose(GObject *o) {
     stop_playing(self);
     if (self->doc) {
         g_signal_handlers_disconnect_by_data(self->doc, self);
+        vv_document_forget_time_listener(self->doc, self); /* a read in flight tells no one */
         g_clear_object(&self->doc);
     }
     g_clear_pointer(&self->signature, g_free);

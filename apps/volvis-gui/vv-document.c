@@ -700,6 +700,14 @@ vv_document_time_pending(VvDocument *doc) {
 }
 
 void
+vv_document_forget_time_listener(VvDocument *doc, gpointer user) {
+    if (doc->time_failed_user == user) {
+        doc->time_failed = NULL;
+        doc->time_failed_user = NULL;
+    }
+}
+
+void
 vv_document_set_view_size(VvDocument *doc, int width, int height) {
     if (width < 1 || height < 1)
         return;

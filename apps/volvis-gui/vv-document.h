@@ -168,6 +168,9 @@ typedef void (*VvTimeFailed)(VvDocument *doc, const char *message, gpointer user
 void vv_document_request_time(VvDocument *doc, int t, VvTimeFailed failed, gpointer user);
 /** 1 while vv_document_request_time has a read in flight or a step waiting. */
 gboolean vv_document_time_pending(VvDocument *doc);
+/** Drops @p user as the listener of vv_document_request_time's failures
+ *  (call it when @p user goes away with a read in flight). */
+void vv_document_forget_time_listener(VvDocument *doc, gpointer user);
 
 /** A cache of time series by (file, channel) for vv_world_apply_time (g_hash_table_unref it). */
 GHashTable *vv_time_cache_new(void);

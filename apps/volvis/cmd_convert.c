@@ -42,7 +42,7 @@ cli_convert_usage(FILE *out) {
             "OME-XML with physical sizes and plane positions) has no direction matrix\n"
             "either; OME-Zarr (.ome.zarr, .zarr: a Zarr v2 folder with a pyramid of\n"
             "2x2x2 means, labels by nearest, and each level's scale and translation;\n"
-            "written only: reading waits for the big-data work) has none either;\n"
+            "read back at level 0: the levels are not read yet) has none either;\n"
             "SLC (.slc; VolVis's own 8-bit format)\n"
             "holds 8-bit data only: other voxel types are rescaled from the value\n"
             "range to 0..255, with a note on stderr. What a format cannot hold is\n"

@@ -1019,6 +1019,21 @@ proj_leap(const vv_vray *r, const float p[3], const int bc[3], int dist, double 
     return ks > k + 1 ? ks : k + 1;
 }
 
+/* The sample after the cube of @p size index units around p (sample k). */
+static inline double
+proj_after_cube(const vv_vray *r, const float p[3], double k, double dt, int size) {
+    const double ks = vv_ceil_pos(vv_vray_cube_exit(r, p, k * dt, size) / dt);
+    return ks > k + 1 ? ks : k + 1;
+}
+
+/* The last sample (at most kend, at least k) in the subvolume of p. */
+static inline double
+proj_block_last(const vv_vray *r, const float p[3], double k, double kend, double dt) {
+    double klast = vv_floor_pos(vv_vray_cube_exit(r, p, k * dt, VV_VC_BLOCK) / dt);
+    klast = klast < kend ? klast : kend;
+    return klast < k ? k : klast;
+}
+
 /* The samples k .. klast of ray r in the running maximum of sg * value
  * (best, tbest: the parameter of its first sample): one subvolume's march. */
 static void
@@ -1088,15 +1103,11 @@ project_from(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, double 
             else if (sg * bext[b] <= best)
                 size = VV_VC_BLOCK;
             if (size) {
-                const double ks = vv_ceil_pos(vv_vray_cube_exit(r, p, k * dt, size) / dt);
-                k = ks > k + 1 ? ks : k + 1;
+                k = proj_after_cube(r, p, k, dt, size);
                 continue;
             }
         }
-        const double te = vv_vray_cube_exit(r, p, k * dt, VV_VC_BLOCK);
-        double klast = vv_floor_pos(te / dt);
-        klast = klast < kend ? klast : kend;
-        klast = klast < k ? k : klast;
+        const double klast = proj_block_last(r, p, k, kend, dt);
         project_block(c, r, k, klast, dt, sg, avx2, &best, &tbest);
         k = klast + 1;
     }
@@ -1213,15 +1224,11 @@ vv_vray_project_channels(const vv_vcache *const *cs, const vv_vtables *const *ts
                 continue;
             }
             if (size) {
-                const double ks = vv_ceil_pos(vv_vray_cube_exit(r, p, k * dt, size) / dt);
-                k = ks > k + 1 ? ks : k + 1;
+                k = proj_after_cube(r, p, k, dt, size);
                 continue;
             }
         }
-        const double te = vv_vray_cube_exit(r, p, k * dt, VV_VC_BLOCK);
-        double klast = vv_floor_pos(te / dt);
-        klast = klast < kend ? klast : kend;
-        klast = klast < k ? k : klast;
+        const double klast = proj_block_last(r, p, k, kend, dt);
         /* each live channel that can change its maximum here marches the
          * subvolume as its one-channel projection does */
         int keep = 0;

@@ -243,7 +243,9 @@ if vtk is not None:
         if be:
             w.SetByteOrderToBigEndian()
         w.Write()
-        for c in (0, 2):
+        # both ends of the components in two modes, one in the others (each
+        # read back is a convert: the suite's time under the sanitizers)
+        for c in (0, 2) if mode in ("ascii", "appended_be") else (len(mode) % 2 * 2,):
             got = read_back(vti, c, 0)
             if got is not None:
                 check(np.array_equal(got, i16[..., c]), f"VTI {mode} component {c}: voxels")

@@ -68,7 +68,7 @@ typedef struct vv_format_probe {
 /**
  * A volume format. Required: version, name, title, doc, and read or write.
  * looks_like NULL: never detected (raw). fits and write NULL: not written.
- * read NULL: written only (VTK XML image data).
+ * read NULL: written only (no built-in format is, today).
  */
 typedef struct vv_volume_format {
     int version;                   /**< VV_FORMAT_RECORD_VERSION */
