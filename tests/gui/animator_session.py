@@ -182,7 +182,8 @@ def main():
                      os.path.join(png, f"f_00{k}.png")) == 0,
                   f"volvis animate of the saved file: frame {k} differs")
         s.click(button("New"))
-        check(lanes() == 0, "New did not empty the animation")
+        # the timeline is redrawn after the click: under load, a moment later
+        s.wait_for(lambda: lanes() == 0, "New did not empty the animation", timeout=30)
         s.click(button("Open…"))
         s.chooser_type("^Open animation", saved, location=True)
         s.wait_for(lambda: lanes() > 100, "Open…: no sequence on the timeline", timeout=60)

@@ -270,7 +270,9 @@ class Session:
 
     # ---- the accessibility tree ---------------------------------------------------------
 
-    def app(self, timeout=20):
+    def app(self, timeout=60):
+        # a sanitized GUI starting beside two busy cores can take over 20 s
+        # to register (it returns as soon as it does)
         if self._app is not None:
             return self._app
         t0 = time.time()
