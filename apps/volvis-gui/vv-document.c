@@ -549,15 +549,22 @@ vv_world_apply_time(GHashTable *cache, vv_world *w, const vv_world *base, GError
     return TRUE;
 }
 
+/* Step @p t of the selected object @p o exists; else @p error says not. */
+static gboolean
+check_step(VvDocument *doc, const vv_object *o, int t, GError **error) {
+    const int steps = vv_document_time_steps(doc, o);
+    if (steps >= 2 && t >= 0 && t < steps)
+        return TRUE;
+    g_set_error(error, VV_GUI_ERROR, 1, "%s: no time step %d (%d steps)", o ? o->name : "no object",
+                t, steps);
+    return FALSE;
+}
+
 gboolean
 vv_document_set_time(VvDocument *doc, int t, GError **error) {
     vv_object *o = vv_document_selected_object(doc);
-    int steps = vv_document_time_steps(doc, o);
-    if (steps < 2 || t < 0 || t >= steps) {
-        g_set_error(error, VV_GUI_ERROR, 1, "%s: no time step %d (%d steps)",
-                    o ? o->name : "no object", t, steps);
+    if (!check_step(doc, o, t, error))
         return FALSE;
-    }
     if (o->time == t)
         return TRUE;
     const int n = o->n_channels > 0 ? o->n_channels : 1;
@@ -677,16 +684,12 @@ time_job_start(VvDocument *doc) {
 
 void
 vv_document_request_time(VvDocument *doc, int t, VvTimeFailed failed, gpointer user) {
-    vv_object *o = vv_document_selected_object(doc);
-    const int steps = vv_document_time_steps(doc, o);
+    g_autoptr(GError) err = NULL;
     doc->time_failed = failed;
     doc->time_failed_user = user;
-    if (steps < 2 || t < 0 || t >= steps) {
-        if (failed) {
-            g_autofree char *m = g_strdup_printf("%s: no time step %d (%d steps)",
-                                                 o ? o->name : "no object", t, steps);
-            failed(doc, m, user);
-        }
+    if (!check_step(doc, vv_document_selected_object(doc), t, &err)) {
+        if (failed)
+            failed(doc, err->message, user);
         return;
     }
     doc->time_want = t;

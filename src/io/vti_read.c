@@ -99,8 +99,8 @@ host_big_endian(void) {
 /* The ImageData's geometry into @p v's place: dims from WholeExtent, and
  * the one Piece covering it. */
 static vv_status
-image_geometry(const char *name, xmlNode *img, int dims[3], double origin[3], double spacing[3],
-               double direction[9], xmlNode **piece) {
+image_geometry(xmlNode *img, int dims[3], double origin[3], double spacing[3], double direction[9],
+               xmlNode **piece) {
     double ext[6], pext[6];
     if (numbers(img, "WholeExtent", 6, ext) != 1)
         return vv_error_set(VV_ERR_FORMAT, "ImageData without a WholeExtent of six integers");
@@ -146,7 +146,6 @@ image_geometry(const char *name, xmlNode *img, int dims[3], double origin[3], do
         return vv_error_set(VV_ERR_UNSUPPORTED,
                             "the Piece's Extent is not the WholeExtent (pieces of a larger image "
                             "are not supported)");
-    (void)name;
     return VV_OK;
 }
 
@@ -317,7 +316,7 @@ vv_vti_read(vv_volume **out, const char *path, const vv_load_options *opt) {
         info->channel_name[0] = '\0';
     }
     if ((s = vv_vtkxml_open(&x, data, size, "ImageData", &doc, &xml, &img)) == VV_OK &&
-        (s = image_geometry(base, img, dims, origin, spacing, direction, &piece)) == VV_OK &&
+        (s = image_geometry(img, dims, origin, spacing, direction, &piece)) == VV_OK &&
         (s = scalars_array(piece, &da)) == VV_OK)
         s = read_array(&x, da, size, dims, channel, info, &v);
     if (doc)

@@ -708,7 +708,8 @@ void vv_vray_project(const vv_vcache *c, const vv_vray *r, vv_render_mode mode, 
 void vv_vray_project_tables(const vv_vcache *c, const vv_vtables *t, const vv_vray *r,
                             vv_render_mode mode, double dt, int skipping, int avx2, float *value,
                             float *depth);
-/* The maximum intensity projections of @p n channels (2..VV_MAX_CHANNELS)
+/* The maximum intensity projections of @p n channels (1..VV_MAX_CHANNELS;
+ * one, or a ray shorter than a step: vv_vray_project_tables per channel)
  * on one ray, in one pass: cs[ch], ts[ch] each channel's cache and MIP
  * tables (every channel has the same grid), value[ch] and depth[ch] what
  * vv_vray_project_tables gives channel ch alone, the same samples and the

@@ -651,12 +651,7 @@ trace_channels_maximum(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, r
         cs[c] = ob->ch[c].c;
         ts[c] = &ob->ch[c].tab;
     }
-    if (ob->nch > 1)
-        vv_vray_project_channels(cs, ts, ob->nch, &r, fr->dt, fr->st->skipping, fr->avx2, vals,
-                                 deps);
-    else
-        vv_vray_project_tables(cs[0], ts[0], &r, VV_MODE_MIP, fr->dt, fr->st->skipping, fr->avx2,
-                               &vals[0], &deps[0]);
+    vv_vray_project_channels(cs, ts, ob->nch, &r, fr->dt, fr->st->skipping, fr->avx2, vals, deps);
     for (int c = 0; c < ob->nch; c++) {
         const rc_obj *co = &ob->ch[c];
         const float val = vals[c], dep = deps[c];
