@@ -9,21 +9,59 @@ struct _VvApplication {
 
 G_DEFINE_TYPE(VvApplication, vv_application, GTK_TYPE_APPLICATION)
 
+/* Quit: each window with unsaved changes asks in turn (Cancel stops the
+ * quit), then every window goes as a closed one does: its render thread
+ * ends and its autosave folder is removed. GtkApplication's quit alone
+ * leaves the windows undisposed, and an autosave folder left behind would
+ * be offered as a crashed session at the next start. A quit's serial marks
+ * the windows whose question it has had answered. */
+static guint quit_serial;
+
+static gboolean quit_next(gpointer user);
+
 static void
-quit_now(void *user) {
-    g_application_quit(G_APPLICATION(user));
+quit_answered(void *user) {
+    GtkWindow *w = user;
+    g_object_set_data(G_OBJECT(w), "vv-quit-answered", GUINT_TO_POINTER(quit_serial));
+    /* not from inside the dialog's or the save's own handlers */
+    g_idle_add(quit_next, g_object_ref(gtk_window_get_application(w)));
+}
+
+static gpointer
+ref_window(gconstpointer w, gpointer unused) {
+    (void)unused;
+    return g_object_ref((gpointer)w);
+}
+
+static gboolean
+quit_next(gpointer user) {
+    GtkApplication *app = user;
+    for (GList *l = gtk_application_get_windows(app); l; l = l->next) {
+        if (!VV_IS_WINDOW(l->data) ||
+            GPOINTER_TO_UINT(g_object_get_data(G_OBJECT(l->data), "vv-quit-answered")) ==
+                quit_serial ||
+            !vv_document_dirty(vv_window_document(l->data)))
+            continue;
+        gtk_window_present(GTK_WINDOW(l->data));
+        vv_window_confirm_close(VV_WINDOW(l->data), quit_answered, l->data);
+        g_object_unref(app);
+        return G_SOURCE_REMOVE;
+    }
+    GList *all = g_list_copy_deep(gtk_application_get_windows(app), ref_window, NULL);
+    for (GList *l = all; l; l = l->next)
+        gtk_window_destroy(GTK_WINDOW(l->data));
+    g_list_free_full(all, g_object_unref);
+    g_application_quit(G_APPLICATION(app));
+    g_object_unref(app);
+    return G_SOURCE_REMOVE;
 }
 
 static void
 act_quit(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    GtkApplication *app = user;
-    GtkWindow *w = gtk_application_get_active_window(app);
-    if (w && VV_IS_WINDOW(w))
-        vv_window_confirm_close(VV_WINDOW(w), quit_now, app);
-    else
-        g_application_quit(G_APPLICATION(app));
+    quit_serial++;
+    quit_next(g_object_ref(user));
 }
 
 static void

@@ -183,15 +183,28 @@ autosave_wait(VvWindow *win) {
     g_mutex_unlock(&win->autosave_lock);
 }
 
+/* The session is saved: its autosave folder goes (a run still writing
+ * removes it when done), and so does a crashed session it was restored
+ * from. Kept, either would be offered after a later crash as a session
+ * newer than the file, and it is older. */
+static void
+autosave_drop(VvWindow *win) {
+    win->autosave_pending = FALSE;
+    win->autosave_gen++;
+    if (win->autosave_dir && !win->autosave_running)
+        vv_document_remove_folder(win->autosave_dir);
+    if (win->restore_from) {
+        vv_document_remove_folder(win->restore_from);
+        g_clear_pointer(&win->restore_from, g_free);
+    }
+}
+
 static void
 do_autosave(VvWindow *win) {
     if (!win->doc || !win->autosave_dir)
         return;
     if (!vv_document_dirty(win->doc)) { /* nothing unsaved: nothing to restore */
-        win->autosave_pending = FALSE;
-        win->autosave_gen++; /* a run still writing removes its folder when done */
-        if (!win->autosave_running)
-            vv_document_remove_folder(win->autosave_dir);
+        autosave_drop(win);
         return;
     }
     if (win->autosave_running) { /* one at a time: this one once that ends */
@@ -403,6 +416,8 @@ vv_window_open(VvWindow *win, const char *path) {
         g_error_free(err);
     } else {
         vv_start_page_add_recent(path);
+        if (!vv_document_dirty(win->doc))
+            autosave_drop(win);
     }
     update_title(win);
 }
@@ -465,6 +480,8 @@ save_to(VvWindow *win, const char *path) {
         g_error_free(err);
     } else {
         vv_start_page_add_recent(path);
+        if (!vv_document_dirty(win->doc))
+            autosave_drop(win);
     }
     update_title(win);
     /* a close or quit waiting for this save goes on now, or not at all */

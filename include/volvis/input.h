@@ -430,8 +430,11 @@ vv_status vv_input_manager_open_controllers(vv_input_manager *m);
  * (VV_ERR_FORMAT "replay: FILE: line N: problem", VV_ERR_IO, VV_ERR_LIMIT);
  * then its devices are added (the recorded kinds and names) and its events
  * are fed on a virtual clock: the first event is due at @p start, and event
- * t at start + (t - t_first) / speed (speed > 0; INFINITY: all at once). Fed
- * events keep the recorded times, so a replay is bit-for-bit repeatable.
+ * t at start + (t - t_first) / speed (speed > 0; INFINITY: all at once). A
+ * dispatch that comes more than 0.1 s after an event was due (a stalled
+ * caller) delays the rest of the replay by that much instead of delivering
+ * it all at once, so a recorded motion keeps its duration. Fed events keep
+ * the recorded times, so a replay is bit-for-bit repeatable.
  * *n_devices / first_id (may be NULL) receive how many devices it added and
  * the id of the first (the others follow in order).
  */

@@ -12,6 +12,10 @@
 
 #define REPLAY_MAX_BYTES (64u << 20)
 #define REPLAY_MAX_DEVICES 16
+/* Seconds an event may be late before the rest of the replay is delayed: a
+ * caller that stalled (a busy main loop) must not get a recorded motion
+ * delivered all at once, which would collapse its duration to nothing. */
+#define REPLAY_MAX_LAG 0.1
 
 int
 vv_input_tokenize(char *line, char **tok, int max) {
@@ -231,7 +235,15 @@ due(const replay *r, size_t i) {
 static void
 replay_poll(vv_input_manager *m, vv_input_driver *drv, double now) {
     replay *r = drv->self;
-    while (r->next < r->n && due(r, r->next) <= now) {
+    double slack = 0;
+    if (r->next < r->n && !isinf(r->speed)) {
+        double late = now - due(r, r->next);
+        if (late > REPLAY_MAX_LAG) {
+            r->start += late; /* the rest keeps its recorded spacing from now on */
+            slack = 1e-9;     /* the next event is due now, whatever the rounding */
+        }
+    }
+    while (r->next < r->n && due(r, r->next) <= now + slack) {
         vv_input_raw_event ev = r->ev[r->next++];
         for (int i = 0; i < r->n_dev; i++)
             if (r->dev[i].file_id == ev.device) {

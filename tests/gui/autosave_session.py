@@ -6,9 +6,10 @@ VOLVIS_AUTOSAVE_DELAY) writes $XDG_STATE_HOME/volvis/session-<pid>-1. The
 application is killed (SIGKILL: no chance to clean up); the next start
 offers "Restore the last session?", Restore brings the World back, untitled
 and unsaved, and its image is identical (AE 0) to the one before the kill;
-the old folder goes once the new window's autosave stands. Killed again,
-Discard removes every autosave and the window stays empty; a quit without
-unsaved changes leaves no autosave behind.
+the old folder goes once the new window's autosave stands. A quit that
+discards the unsaved changes leaves no autosave; the same folder put back
+as a crash leaves it, Discard removes every autosave and the window stays
+empty; a quit without unsaved changes leaves no autosave behind.
 
 usage: autosave_session.py GUI CLI OUTDIR
 """
@@ -97,8 +98,17 @@ def main():
               f"the old autosave stays, or no new one: {now}")
         print(f"restored: AE 0; {os.path.basename(now[0])} replaces {os.path.basename(first[0])}")
 
-        s.app_proc.kill()
-        s.app_proc.wait()
+        # a quit that discards the unsaved changes leaves no autosave either
+        # (the user chose; nothing is offered at the next start)
+        aside = os.path.join(OUT, "crashed-copy")
+        shutil.rmtree(aside, ignore_errors=True)
+        shutil.copytree(now[0], aside)
+        pid = s.app_proc.pid
+        s.quit_discard()
+        check(folders() == [], f"a quit without saving left autosaves: {folders()}")
+        print("quit without saving: no autosave left")
+        # the same folder as a crash leaves it (its process gone): Discard
+        shutil.copytree(aside, os.path.join(STATE, "volvis", f"session-{pid}-1"))
         s.launch([])
         restore_dialog(s, "Discard")
         check(folders() == [], f"Discard left autosaves: {folders()}")

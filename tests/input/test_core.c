@@ -250,6 +250,42 @@ test_mouse_record_replay(void **state) {
     collect_free(&b);
 }
 
+/* A stalled caller: the replay is delayed by the stall, not compressed. */
+static void
+test_replay_stall(void **state) {
+    (void)state;
+    const char *path = vt_path(outdir(), "stall.vvin");
+    write_text(path, "volvis-input 1\n"
+                     "device 1 spaceball puck\n"
+                     "0 motion6 1 0 0 0 0 0 0 0 16\n"
+                     "1.0 motion6 1 0 0 0 0 0 350 0 16\n"
+                     "1.25 motion6 1 0 0 0 0 0 300 0 16\n"
+                     "1.5 motion6 1 0 0 0 0 0 0 0 16\n");
+    vv_input_manager *m = new_manager();
+    collect c = {0};
+    vt_ok(vv_input_manager_subscribe(m, "navigator", collect_fn, &c, NULL));
+    vt_ok(vv_input_manager_open_replay(m, path, 10.0, 1.0, NULL, NULL));
+    vv_input_manager_dispatch(m, 10.05); /* 0.05 s late: on time enough */
+    int n0 = collect_count(&c, VV_ACTION_MOTION);
+    assert_near(vv_input_manager_timeout(m, 10.05), 0.95, 1e-9);
+    /* the caller stalls 3 s: the first motion now, the rest at its spacing */
+    vv_input_manager_dispatch(m, 14.0);
+    assert_int_equal(collect_count(&c, VV_ACTION_MOTION), n0 + 1);
+    assert_near(vv_input_manager_timeout(m, 14.0), 0.25, 1e-9);
+    vv_input_manager_dispatch(m, 14.2);
+    assert_int_equal(collect_count(&c, VV_ACTION_MOTION), n0 + 1);
+    vv_input_manager_dispatch(m, 14.25);
+    assert_int_equal(collect_count(&c, VV_ACTION_MOTION), n0 + 2);
+    assert_true(vv_input_manager_replay_pending(m));
+    vv_input_manager_dispatch(m, 14.5);
+    assert_false(vv_input_manager_replay_pending(m));
+    /* recorded times are kept */
+    int i = collect_find(&c, VV_ACTION_MOTION, n0);
+    assert_true(i >= 0 && c.a[i].time == 1.0 && c.a[i].motion[4] > 0);
+    vv_input_manager_free(m);
+    collect_free(&c);
+}
+
 /* ---- gloves: snap-dragging and two hands ----------------------------------- */
 
 static void
@@ -478,17 +514,12 @@ test_idle(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_response),
-        cmocka_unit_test(test_snap),
-        cmocka_unit_test(test_two_hand_solve),
-        cmocka_unit_test(test_devinfo),
-        cmocka_unit_test(test_keyboard),
-        cmocka_unit_test(test_mouse_record_replay),
-        cmocka_unit_test(test_snap_drag_replay),
-        cmocka_unit_test(test_two_hand_replay),
-        cmocka_unit_test(test_bad_replay_files),
-        cmocka_unit_test(test_nan_and_huge),
-        cmocka_unit_test(test_idle),
+        cmocka_unit_test(test_response),        cmocka_unit_test(test_snap),
+        cmocka_unit_test(test_two_hand_solve),  cmocka_unit_test(test_devinfo),
+        cmocka_unit_test(test_keyboard),        cmocka_unit_test(test_mouse_record_replay),
+        cmocka_unit_test(test_replay_stall),    cmocka_unit_test(test_snap_drag_replay),
+        cmocka_unit_test(test_two_hand_replay), cmocka_unit_test(test_bad_replay_files),
+        cmocka_unit_test(test_nan_and_huge),    cmocka_unit_test(test_idle),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
