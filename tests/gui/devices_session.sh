@@ -67,6 +67,15 @@ wait_settled() {
   echo "focus: $(xdotool getwindowfocus getwindowname 2>&1 | tr '\n' ' ')" >&2
   fail "no settled full-quality frame after $2"
 }
+# gives window $1 the keyboard (no window manager does); a window not yet
+# mapped refuses the focus (BadMatch), so this tries again for 30 s
+focus_window() {
+  for _ in $(seq 1 300); do
+    xdotool windowfocus "$1" 2> /dev/null && return 0
+    sleep 0.1
+  done
+  fail "cannot give window $1 the keyboard"
+}
 wait_file() { for _ in $(seq 1 600); do [ -e "$1" ] && return 0; sleep 0.1; done; fail "$2"; }
 same() { [ "$(compare -metric AE "$1" "$2" null: 2>&1 || true)" = "0" ]; }
 ae() { compare -metric AE "$1" "$2" null: 2>&1 || true; }
@@ -125,9 +134,7 @@ pid=$!
 wait_settled 0 "opening"
 wid=$(xdotool search --sync --name '^VolVis — ' | head -1)
 xdotool windowmove "$wid" 0 0 windowsize "$wid" 1100 720
-# no window manager gives it the keyboard: without this, the Ctrl keys below
-# went nowhere in a loaded run (the GUI saw no key event at all)
-xdotool windowfocus "$wid"
+focus_window "$wid"
 wait_file "$SOCK" "the GUI does not listen on $SOCK"
 cp "$OUT/full.png" "$OUT/full0.png"
 python3 "$OUT/client.py" "$OUT" "$SOCK" > "$OUT/client.log" 2>&1 &
@@ -207,9 +214,7 @@ pid=$!
 # the same window size as the first run: the view renders at the window's size
 wid=$(xdotool search --sync --name '^VolVis — ' | head -1)
 xdotool windowmove "$wid" 0 0 windowsize "$wid" 1100 720
-# no window manager gives it the keyboard: without this, the Ctrl keys below
-# went nowhere in a loaded run (the GUI saw no key event at all)
-xdotool windowfocus "$wid"
+focus_window "$wid"
 # the motion comes 3 s after the replay starts, which is after the window is
 # up: under load, well after the first frames
 for _ in $(seq 1 300); do
@@ -231,7 +236,7 @@ printf 'volvis-input 1\ndevice 1 spaceball p\n0 motion6 1 0 1 2\n' > "$OUT/bad.v
 VOLVIS_INPUT_REPLAY=$OUT/bad.vvin "$GUI" > "$OUT/gui_bad.log" 2>&1 &
 pid=$!
 errwid=$(xdotool search --sync --name 'VolVis: error' | head -1)
-xdotool windowfocus "$errwid"
+focus_window "$errwid"
 sleep 0.5
 import -window root "$OUT/replay_error.png"
 kill -0 "$pid" || fail "the GUI died on a malformed recording"
@@ -241,7 +246,7 @@ xdotool key Escape
 sleep 0.3
 wid=$(xdotool search --name '^VolVis — untitled' | head -1)
 [ -n "$wid" ] || fail "the main window is gone"
-xdotool windowfocus "$wid"
+focus_window "$wid"
 sleep 0.2
 xdotool key ctrl+q
 st=0
