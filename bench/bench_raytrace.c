@@ -10,7 +10,11 @@
  * (the plain ray caster on the same World and view: it shows the volume
  * only), and the ratios raytrace_parc_speedup and raytrace_vs_raycast.
  * Each time is the median of --runs renders after one warm-up render
- * (caches built).
+ * (caches built). raytrace_orbit_frame: the median frame of the view
+ * turned by 2 degrees a frame, 8 frames (a drag in the GUI: the shadow
+ * grids kept from the frames before serve the new views);
+ * raytrace_first_frame: a new renderer's first frame (every cache cold but
+ * the volume's file read).
  *
  * usage: bench_raytrace [SCENE] [--size N] [--runs N] [--threads N]
  *                       [--max-depth N] [--outdir DIR]
@@ -111,12 +115,50 @@ main(int argc, char **argv) {
     save(img, outdir, "raycast.png");
     double t_rn = time_renders(rn, w, 1, threads, runs, img);
     save(img, outdir, "raytrace_noparc.png");
+    /* a drag: the view turned 2 degrees a frame */
+    double t_orbit[8];
+    {
+        vv_render_options opt;
+        vv_render_options_init(&opt);
+        opt.quality = 1;
+        opt.threads = threads;
+        for (int i = 0; i < 8; i++) {
+            vv_view v = w->view;
+            vv_anim_view_turn(&v, (i + 1) * 2.0 * 3.14159265358979 / 180, 0, 1);
+            double t0 = bench_now();
+            if (vv_renderer_render(rt, w, &v, &opt, img) != VV_OK)
+                bench_die("bench_raytrace", "render");
+            t_orbit[i] = bench_now() - t0;
+        }
+        qsort(t_orbit, 8, sizeof t_orbit[0], bench_cmp_double);
+    }
+    /* a new renderer's first frame */
+    double t_first;
+    {
+        vv_renderer *r1 = NULL;
+        if (vv_renderer_new(&r1, "raytrace") != VV_OK ||
+            vv_renderer_set_option(r1, "samples", "1") != VV_OK ||
+            vv_renderer_set_option(r1, "max_depth", depth) != VV_OK)
+            bench_die("bench_raytrace", "renderer");
+        vv_render_options opt;
+        vv_render_options_init(&opt);
+        opt.quality = 1;
+        opt.threads = threads;
+        double t0 = bench_now();
+        if (vv_renderer_render(r1, w, &w->view, &opt, img) != VV_OK)
+            bench_die("bench_raytrace", "render");
+        t_first = bench_now() - t0;
+        vv_renderer_free(r1);
+    }
     emit("raytrace_frame", t_rt, "s");
     emit("raytrace_frame_noparc", t_rn, "s");
+    emit("raytrace_orbit_frame", t_orbit[4], "s");
+    emit("raytrace_first_frame", t_first, "s");
     emit("raytrace_rays_per_s", (double)size * size / t_rt, "rays/s");
     emit("raycast_frame", t_rc, "s");
     emit("raytrace_parc_speedup", t_rn / t_rt, "x");
     emit("raytrace_vs_raycast", t_rt / t_rc, "x");
+    emit("raytrace_orbit_vs_raycast", t_orbit[4] / t_rc, "x");
     vv_renderer_free(rt);
     vv_renderer_free(rn);
     vv_renderer_free(rc);

@@ -648,6 +648,105 @@ test_shadow_grid_vs_exact(void **state) {
     vv_world_free(w);
 }
 
+/* Renders @p view with the kept renderer @p kept and with a new one of the
+ * same options; the two images must be the same bits (a shadow grid kept
+ * from an earlier frame is reused only for the same shadow rays). */
+static void
+expect_as_fresh(vv_renderer *kept, const char *const *opts, const vv_world *w, const vv_view *view,
+                const char *what) {
+    vv_renderer *fresh = new_tracer(opts);
+    vv_image *a = render_q(kept, w, view, 1, 2);
+    vv_image *b = render_q(fresh, w, view, 1, 1);
+    const size_t n = 4 * (size_t)view->width * (size_t)view->height;
+    size_t differ = 0;
+    for (size_t i = 0; i < n; i++)
+        differ += a->rgba[i] != b->rgba[i];
+    if (differ)
+        print_message("%s: %zu values differ from a new renderer's (PSNR %.2f dB)\n", what, differ,
+                      vv_image_psnr(a, b));
+    assert_int_equal(differ, 0);
+    vv_image_free(a);
+    vv_image_free(b);
+    vv_renderer_free(fresh);
+}
+
+/* Shadow grids kept between frames: after a change of view the kept
+ * renderer's image equals a new renderer's, bit for bit, and after every
+ * change of what casts or receives shadows (a shadow caster moved, its
+ * transparency, the volume's transfer function, its voxels, a cut plane, a
+ * light) too: a grid is never reused for other shadow rays. Lazily filled
+ * grids and swept ones, directional and point lights. */
+/* The head-and-mirror scene at 48 x 48 pixels with a point light added,
+ * the head resampled to a quarter of its voxels along each axis (quick
+ * under the sanitizers). */
+static vv_world *
+kept_scene(const vv_light *pl) {
+    vv_world *w = NULL;
+    vt_ok(vv_scene_load(&w, VV_SOURCE_DIR "/examples/head_mirror.json"));
+    w->view.width = w->view.height = 48;
+    vt_ok(vv_world_add_light(w, pl));
+    vv_object *head = w->objects[0];
+    const int dims[3] = {head->volume->dims[0] / 4, head->volume->dims[1] / 4,
+                         head->volume->dims[2] / 4};
+    vv_volume *small = NULL;
+    vt_ok(vv_filter_resample(head->volume, dims, VV_KERNEL_LINEAR, NULL, &small));
+    vv_volume_free(head->volume);
+    head->volume = small;
+    return w;
+}
+
+static void
+test_shadow_grid_kept(void **state) {
+    (void)state;
+    vv_light pl;
+    memset(&pl, 0, sizeof pl);
+    pl.type = VV_LIGHT_POINT;
+    pl.position = vv_vec3_make(-100, 250, 300);
+    pl.color = vv_vec3_make(1, 1, 1);
+    pl.intensity = 0.5;
+    vv_world *w = kept_scene(&pl);
+    vv_object *head = w->objects[0], *frame = w->objects[2];
+    for (int g = 1; g <= 2; g++) {
+        const char *const opts[] = {"samples", "1", "shadow_grid", g == 1 ? "1" : "2", NULL};
+        vv_renderer *kept = new_tracer(opts);
+        vv_image_free(render_q(kept, w, &w->view, 1, 2));
+        vv_view v = w->view;
+        v.eye = vv_vec3_make(520, 300, 160); /* another view */
+        expect_as_fresh(kept, opts, w, &v, "a new view");
+        v.width = v.height = 40;
+        expect_as_fresh(kept, opts, w, &v, "a smaller image");
+        frame->position.z += 40;
+        expect_as_fresh(kept, opts, w, &v, "the frame moved");
+        frame->material.transparency = 0.5;
+        expect_as_fresh(kept, opts, w, &v, "the frame half transparent");
+        head->tf.opacity[head->tf.n_opacity - 1].opacity *= 0.5;
+        expect_as_fresh(kept, opts, w, &v, "the head's opacity halved");
+        vv_volume *vol = head->volume;
+        for (int k = 0; k < vol->dims[2] / 2; k++)
+            for (int j = 0; j < vol->dims[1]; j++)
+                for (int i = 0; i < vol->dims[0]; i++)
+                    vv_volume_set(vol, i, j, k, -1000);
+        vv_volume_update_range(vol);
+        expect_as_fresh(kept, opts, w, &v, "the lower half of the voxels cleared");
+        vv_cut_plane cp;
+        memset(&cp, 0, sizeof cp);
+        cp.point = vv_vec3_make(0, 0, 0);
+        cp.normal = vv_vec3_make(1, 0, 0);
+        head->cut_planes[head->n_cut_planes++] = cp;
+        expect_as_fresh(kept, opts, w, &v, "a cut plane");
+        w->lights[2].position.x += 50;
+        expect_as_fresh(kept, opts, w, &v, "the point light moved");
+        w->lights[0].direction = vv_vec3_normalize(vv_vec3_make(-0.5, -0.5, -0.7));
+        expect_as_fresh(kept, opts, w, &v, "a directional light turned");
+        vv_renderer_free(kept);
+        vv_world_free(w);
+        w = kept_scene(&pl);
+        head = w->objects[0];
+        frame = w->objects[2];
+    }
+    vv_world_free(w);
+}
+
 /* ---------------------------------------------------------------------- */
 /* Primitives, antialiasing, threads, progress                               */
 
@@ -939,6 +1038,7 @@ main(void) {
         cmocka_unit_test(test_equals_raycast),
         cmocka_unit_test(test_parc_same_image),
         cmocka_unit_test(test_shadow_grid_vs_exact),
+        cmocka_unit_test(test_shadow_grid_kept),
         cmocka_unit_test(test_primitive_silhouettes),
         cmocka_unit_test(test_refraction_sphere),
         cmocka_unit_test(test_supersampling),

@@ -31,8 +31,10 @@
  * opacity of their projected value. A volume sample takes its shadow from a
  * lazily filled grid of shadow rays (one grid point every 4 voxels, each ray
  * starting 6 voxels towards the light so that a surface does not shadow
- * itself), interpolated trilinearly; option shadow_grid=0 traces one exact
- * shadow ray per sample instead. docs/rendering.md describes the method.
+ * itself), interpolated trilinearly and kept between frames while what
+ * casts shadows stays the same (rt_cache.c); option shadow_grid=0 traces
+ * one exact shadow ray per sample instead. docs/rendering.md describes the
+ * method.
  */
 #include <math.h>
 #include <stdint.h>
@@ -101,19 +103,42 @@ build_tables(rt_frame *fr, rt_vobj *ro) {
     /* (a channel's samples use its leader's grids: ro->lead) */
     if (fr->shadows && obj->receives_shadows && obj->shading && ro->mode == VV_MODE_COMPOSITE &&
         fr->st->shadow_grid && !ro->context && ro->lead == ro) {
-        size_t ng = 1;
+        /* its shadow grids: once every object is ready (shadow_grids) */
         for (int a = 0; a < 3; a++) {
             ro->gdim[a] = (ro->dims[a] - 1 + RT_SGRID - 1) / RT_SGRID + 1;
             ro->gdim[a] = ro->gdim[a] < 2 ? 2 : ro->gdim[a];
-            ng *= (size_t)ro->gdim[a];
         }
-        for (int l = 0; l < fr->n_lights; l++) {
-            if (!fr->lights[l].point && fr->st->shadow_grid == 2)
-                continue; /* swept once all objects are ready (sweep_light) */
-            ro->sgrid[l] = calloc(ng, sizeof *ro->sgrid[l]);
-            if (!ro->sgrid[l])
+    }
+    return VV_OK;
+}
+
+/* The shadow grids of a volume whose samples receive shadows, one per
+ * light: lazily filled, or for directional lights swept (shadow_grid=2);
+ * from the renderer state when an earlier frame had the same content
+ * (rt_cache.c), else new and kept there. */
+static vv_status
+shadow_grids(rt_frame *fr, rt_vobj *ro, int nt) {
+    const size_t ng = (size_t)ro->gdim[0] * (size_t)ro->gdim[1] * (size_t)ro->gdim[2];
+    for (int l = 0; l < fr->n_lights; l++) {
+        const int swept = !fr->lights[l].point && fr->st->shadow_grid == 2;
+        void *g = rt_sgrid_find(fr, ro, l, swept);
+        if (swept) {
+            ro->sweep[l] = g;
+            vv_status s = rt_sweep_light(fr, ro, l, nt); /* sweeps only when not kept */
+            if (s != VV_OK)
+                return s;
+            if (!g && ro->sweep[l] && !rt_sgrid_keep(fr, ro, l, 1, ro->sweep[l]))
+                ro->sgrid_owned |= 1u << l;
+            continue;
+        }
+        if (!g) {
+            g = calloc(ng, sizeof *ro->sgrid[l]);
+            if (!g)
                 return vv_error_set(VV_ERR_NOMEM, "out of memory for a shadow grid");
+            if (!rt_sgrid_keep(fr, ro, l, 0, g))
+                ro->sgrid_owned |= 1u << l;
         }
+        ro->sgrid[l] = g;
     }
     return VV_OK;
 }
@@ -205,8 +230,10 @@ frame_release(rt_frame *fr) {
         if (fr->vobjs[i].owns_tables)
             vv_vtables_free(&fr->vobjs[i].tab);
         for (int l = 0; l < VV_MAX_LIGHTS; l++) {
-            free(fr->vobjs[i].sgrid[l]);
-            free(fr->vobjs[i].sweep[l]);
+            if (fr->vobjs[i].sgrid_owned & (1u << l)) {
+                free(fr->vobjs[i].sgrid[l]);
+                free(fr->vobjs[i].sweep[l]);
+            }
             if (fr->vobjs[i].lvol_owned & (1u << l))
                 free(fr->vobjs[i].lvol[l]);
         }
@@ -217,6 +244,7 @@ frame_release(rt_frame *fr) {
     free(fr->vobjs);
     free(fr->gobjs);
     free(fr->chobjs);
+    free(fr->skey);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -442,14 +470,9 @@ prepare_frame(rt_frame *fr, const vv_world *w, const vv_view *view, const vv_ren
             if (!fr->lights[l].point)
                 s = rt_build_light_volume(fr, ro, l, nt);
     }
-    for (int i = 0; i < fr->n_vobj && s == VV_OK; i++) {
-        rt_vobj *ro = &fr->vobjs[i];
-        if (ro->gdim[0] == 0)
-            continue;
-        for (int l = 0; l < fr->n_lights && s == VV_OK; l++)
-            if (!fr->lights[l].point && st->shadow_grid == 2)
-                s = rt_sweep_light(fr, ro, l, nt);
-    }
+    for (int i = 0; i < fr->n_vobj && s == VV_OK; i++)
+        if (fr->vobjs[i].gdim[0])
+            s = shadow_grids(fr, &fr->vobjs[i], nt);
     return s;
 }
 
@@ -476,6 +499,7 @@ render_frame(rt_state *st, const vv_world *w, const vv_view *view, const vv_rend
     fr.view = view;
     fr.out = out;
     fr.key = key;
+    fr.region = region;
     prepare_lights(&fr, w, view);
     vv_camera_rays_init(&fr.cam, view);
     const int nt = opt->threads > 0 ? opt->threads : vv_threads_get();
@@ -513,6 +537,9 @@ render_frame(rt_state *st, const vv_world *w, const vv_view *view, const vv_rend
     for (int i = 0; i < RT_LV_CACHE; i++)
         if (st->lv[i].vol && st->lv[i].used != st->frame)
             rt_lv_release(&st->lv[i]);
+    for (int i = 0; i < RT_SG_CACHE; i++)
+        if (st->sg[i].grid && st->sg[i].used != st->frame)
+            rt_sg_release(&st->sg[i]);
     return VV_OK;
 }
 
@@ -597,6 +624,8 @@ rt_destroy(void *state) {
     vv_vcache_set_clear(&st->vc);
     for (int i = 0; i < RT_LV_CACHE; i++)
         rt_lv_release(&st->lv[i]);
+    for (int i = 0; i < RT_SG_CACHE; i++)
+        rt_sg_release(&st->sg[i]);
     free(st);
 }
 
@@ -622,7 +651,8 @@ static const vv_option_spec rt_options[] = {
      "shadow rays of directional lights through composite volumes from a light volume "
      "(0: marched)"},
     {"early_termination", VV_OPTION_REAL, "0.99", 0, 1, VV_OPTION_MIN_OPEN, NULL,
-     "accumulated opacity that ends compositing"},
+     "accumulated opacity that ends compositing (a secondary ray of weight w: 1 - (1 - "
+     "value) / w)"},
 };
 
 const vv_renderer_ops vv_raytrace_ops = {

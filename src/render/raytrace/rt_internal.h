@@ -59,8 +59,23 @@ typedef struct rt_lv {
     uint64_t used; /* frame that last used it */
 } rt_lv;
 
+#define RT_SG_CACHE 32 /* shadow grids kept between frames */
+
+/* A shadow grid kept between frames (rt_cache.c): a grid point's shadow
+ * ray does not depend on the view. key: the bytes of every input of its
+ * rays; vols: the volumes it names by address (references held). */
+typedef struct rt_sg {
+    void *grid; /* _Atomic uint32_t (lazily filled) or float (swept); NULL: free slot */
+    unsigned char *key;
+    size_t key_len;
+    vv_volume **vols;
+    int n_vols;
+    uint64_t used; /* frame that last used it */
+} rt_sg;
+
 typedef struct rt_state {
     rt_lv lv[RT_LV_CACHE];
+    rt_sg sg[RT_SG_CACHE];
     uint64_t frame;
     vv_vcache_set vc; /* per-volume caches (src/render/volume_cache.h) */
     int parc;         /* PARC skipping on primary and secondary rays */
@@ -109,6 +124,8 @@ typedef struct rt_vobj {
     float *lvol[VV_MAX_LIGHTS]; /* directional lights: this volume's own transmittance
                                    from each point towards the light (a light volume) */
     unsigned lvol_owned;        /* bit l: lvol[l] is this frame's (else the state's cache) */
+    unsigned sgrid_owned;       /* bit l: sgrid[l] and sweep[l] are this frame's (else the
+                                   state's cache) */
     vv_vextra x;                /* 2-D transfer function and solid texture */
     int extras;                 /* x has something: the general loop handles the object */
     int textured;               /* iso mode: an image texture modulates the base colour */
@@ -178,6 +195,13 @@ typedef struct rt_frame {
     int nss;            /* supersamples per pixel side */
     int adaptive;       /* pass 1 traces pixel centres, pass 2 supersamples where they differ */
     const float *first; /* pass 2: the image of pass 1 */
+    /* the shadow-grid cache's key of what casts shadows (rt_cache.c) */
+    const vv_render_region *region; /* a region render (keeps no shadow grid) */
+    unsigned char *skey;
+    size_t skey_len;
+    int skey_failed;
+    vv_volume *svols[RT_MAX_OBJ]; /* the volumes skey names */
+    int n_svols;
 } rt_frame;
 
 /* A surface hit. */
@@ -273,8 +297,21 @@ int rt_nearest_hit(const rt_frame *fr, const vv_ray *wr, double tmin, double tma
                    rt_hit *h);
 
 /* The shadow grid of directional light l for the volume's own samples
- * (shadow_grid=2): swept through every object that casts shadows. */
+ * (shadow_grid=2): swept through every object that casts shadows into
+ * ob->sweep[l], unless that holds one kept from an earlier frame; sets
+ * ob->lidx[l]. */
 vv_status rt_sweep_light(const rt_frame *fr, rt_vobj *ob, int l, int nt);
+
+/* The shadow grid of volume ob (a group leader) and light l, lazily
+ * filled (swept 0) or swept (1), kept from an earlier frame of the same
+ * shadow-casting content; NULL when there is none. */
+void *rt_sgrid_find(rt_frame *fr, const rt_vobj *ob, int l, int swept);
+/* Keeps @p grid (filled, or to be filled lazily, by this and later frames)
+ * in the renderer state: 1 when kept (the state owns it), 0 when not (a
+ * region render, no memory: the caller frees it after the frame). */
+int rt_sgrid_keep(rt_frame *fr, const rt_vobj *ob, int l, int swept, void *grid);
+/* Empties a shadow-grid cache slot. */
+void rt_sg_release(rt_sg *e);
 
 /* Empties a light-volume cache slot: its volume reference and transmittances. */
 void rt_lv_release(rt_lv *e);

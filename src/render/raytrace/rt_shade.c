@@ -281,10 +281,12 @@ sweep_grid(const rt_frame *fr, const rt_vobj *ob, int l, int nt, double G, const
 }
 
 /* The shadow grid of directional light l for the volume's own samples
- * (shadow_grid=2): swept through every object that casts shadows. */
+ * (shadow_grid=2): swept through every object that casts shadows, unless
+ * ob->sweep[l] holds one kept from an earlier frame. */
 vv_status
 rt_sweep_light(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
-    vv_status s = sweep_grid(fr, ob, l, nt, RT_SGRID, ob->gdim, 0, &ob->sweep[l]);
+    vv_status s =
+        ob->sweep[l] ? VV_OK : sweep_grid(fr, ob, l, nt, RT_SGRID, ob->gdim, 0, &ob->sweep[l]);
     for (int a = 0; a < 3; a++)
         ob->lidx[l][a] =
             (float)(ob->w2i[a][0] * fr->lights[l].dir[0] + ob->w2i[a][1] * fr->lights[l].dir[1] +

@@ -50,13 +50,23 @@ composite_sample(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, const 
     *A += w * e[0];
 }
 
+/* The accumulated opacity that ends a ray of weight @p weight (its share
+ * of the pixel): the light it would still gather is at most weight (1 -
+ * A), so it stops once that is under what a primary ray leaves, 1 - et
+ * (the contribution-based pruning of the ray tree: Hall and Greenberg, "A
+ * Testbed for Realistic Image Synthesis", IEEE CG&A 1983). */
+static inline float
+ray_et(const rt_frame *fr, float weight) {
+    return weight >= 1 ? fr->et : 1 - (1 - fr->et) / weight;
+}
+
 /* The common case, one composite volume on the ray: subvolume by
  * subvolume, leaping over empty ones, the same samples t = k dt as the
  * general loop below, classified a chunk at a time (vv_vray_classify, the
  * ray caster's kernel) before the visible ones are shaded. */
 static void
 march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray *wr,
-          const float v[3], float C[3], float *Aout, float *dep) {
+          const float v[3], float et, float C[3], float *Aout, float *dep) {
     const double dt = fr->dt, inv_dt = 1.0 / fr->dt;
     const vv_vcache *c = ob->c;
     const int shading = ob->obj->shading;
@@ -110,7 +120,7 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
                 composite_sample(fr, ob, wr, v, e, p, t, g, &sc, C, &A);
                 if (*dep == INFINITY)
                     *dep = (float)t;
-                if (A >= fr->et) {
+                if (A >= et) {
                     *Aout = A > 1 ? 1 : A;
                     return;
                 }
@@ -182,10 +192,11 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
         *Aout = 0;
         return;
     }
+    const float et = ray_et(fr, weight);
     const double dt = fr->dt;
     const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
     if (na == 1 && fr->vobjs[act[0]].mode == VV_MODE_COMPOSITE && !fr->vobjs[act[0]].extras) {
-        march_one(fr, &fr->vobjs[act[0]], &rays[0], wr, v, C, Aout, dep);
+        march_one(fr, &fr->vobjs[act[0]], &rays[0], wr, v, et, C, Aout, dep);
         return;
     }
     float prev_v[RT_MAX_OBJ];
@@ -320,7 +331,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                 *dep = (float)t;
         }
         mix_flush(&mix, t, C, &A, dep);
-        if (A >= fr->et)
+        if (A >= et)
             break;
         if (!sampled && skip_to < INFINITY) {
             double ks = vv_ceil_pos(skip_to / dt);
@@ -374,7 +385,7 @@ channel_overlay(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double 
             vv_vray r;
             if (!vray_setup(co, wr, 0, tlim, &r))
                 continue;
-            march_one(fr, co, &r, wr, v, col, &ac, &d);
+            march_one(fr, co, &r, wr, v, fr->et, col, &ac, &d);
         }
         hit = 1;
         for (int i = 0; i < 3; i++)
