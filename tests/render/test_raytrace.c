@@ -382,6 +382,81 @@ test_volume_attenuation(void **state) {
     vv_world_free(w);
 }
 
+/* A point light above the slab: each floor point's light crosses the
+ * slab's whole height on its own slanted path, L = 10 |d| / d_z with d the
+ * way to the light, so the floor shows cos(theta) exp(-tau L) pixel by
+ * pixel; with the light volume of the point light (swept in order of
+ * distance to the light), with marched shadow rays, and from 1 and 2
+ * threads (the same bits). */
+static void
+test_point_light_attenuation(void **state) {
+    (void)state;
+    const double a = 0.1, unit = 1.0;
+    vv_world *w = new_world();
+    vv_light l;
+    memset(&l, 0, sizeof l);
+    l.type = VV_LIGHT_POINT;
+    l.color = vv_vec3_make(1, 1, 1);
+    l.intensity = 1;
+    vt_ok(vv_world_add_light(w, &l));
+    vv_object *pl = add_geometry(w, VV_OBJECT_PLANE, "floor");
+    matte(pl, 0, 1);
+    vv_volume *v = constant_volume(41, 11, 11, 1.0);
+    v->origin[2] = 10;
+    vv_object *o = NULL;
+    vt_ok(vv_object_new_volume(&o, v, "slab"));
+    vv_volume_free(v);
+    vv_tf_init(&o->tf);
+    vt_ok(vv_tf_add_opacity(&o->tf, 0, a));
+    vt_ok(vv_tf_add_opacity(&o->tf, 2, a));
+    o->tf.opacity_unit_distance = unit;
+    vt_ok(vv_world_add_object(w, o));
+    /* floor x in [42, 46]: every path crosses the slab inside it (x <= 40
+     * where it does), and the view misses the slab */
+    vv_view view = ortho_view(vv_vec3_make(44, 5, 100), vv_vec3_make(44, 5, 0),
+                              vv_vec3_make(0, 1, 0), 4, 24, 24);
+    const double tau = -log(1 - a) / unit;
+    const size_t bytes = 4 * sizeof(float) * (size_t)view.width * (size_t)view.height;
+    /* the light above the slab (z 40), then inside it (z 15) */
+    for (int inside = 0; inside < 2; inside++) {
+        w->lights[0].position = vv_vec3_make(20, 5, inside ? 15 : 40);
+        const double top = inside ? 15 : 20; /* where the light's path leaves the slab */
+        vv_image *img[3];
+        for (int m = 0; m < 3; m++) {
+            vv_renderer *r = new_tracer(
+                (const char *const[]){"samples", "1", "light_volumes", m == 1 ? "0" : "1", NULL});
+            img[m] = render_q(r, w, &view, 2, m == 2 ? 1 : 2);
+            double worst = 0, lo = INFINITY, hi = 0;
+            for (int y = 0; y < view.height; y++)
+                for (int x = 0; x < view.width; x++) {
+                    const vv_vec3 p = floor_point(&view, x, y);
+                    const vv_vec3 d = vv_vec3_sub(w->lights[0].position, p);
+                    const double len = vv_vec3_length(d);
+                    const double expect = d.z / len * exp(-tau * (top - 10) * len / d.z);
+                    worst = fmax(worst, fabs(px(img[m], x, y)[0] - expect) / expect);
+                    lo = fmin(lo, expect);
+                    hi = fmax(hi, expect);
+                }
+            print_message("point light %s the slab (%s): expected %.5f .. %.5f, worst relative "
+                          "error %.5f\n",
+                          inside ? "inside" : "above",
+                          m == 1   ? "marched"
+                          : m == 2 ? "light volume, 1 thread"
+                                   : "light volume",
+                          lo, hi, worst);
+            assert_true(hi > 1.1 * lo); /* the paths differ across the view */
+            assert_true(worst < 0.005);
+            vv_renderer_free(r);
+        }
+        assert_memory_equal(img[0]->rgba, img[2]->rgba, bytes);
+        /* (and the light volume did answer: its rounding is not the march's) */
+        assert_memory_not_equal(img[0]->rgba, img[1]->rgba, bytes);
+        for (int m = 0; m < 3; m++)
+            vv_image_free(img[m]);
+    }
+    vv_world_free(w);
+}
+
 /* ---------------------------------------------------------------------- */
 /* Mirror                                                                   */
 
@@ -621,30 +696,46 @@ test_shadow_grid_vs_exact(void **state) {
     vv_world *w = NULL;
     vt_ok(vv_scene_load(&w, VV_SOURCE_DIR "/examples/head_mirror.json"));
     w->view.width = w->view.height = 96;
-    double psnr[4];
-    vv_image *img[4];
-    for (int g = 0; g < 4; g++) {
-        char gs[8];
-        snprintf(gs, sizeof gs, "%d", g % 3);
-        vv_renderer *r = new_tracer((const char *const[]){
-            "samples", "1", "shadow_grid", gs, "light_volumes", g == 0 ? "0" : "1", NULL});
-        img[g] = render_q(r, w, &w->view, 1, 0);
-        vv_renderer_free(r);
+    /* the scene's two directional lights, then a point light added too
+     * (its light volume swept in order of distance to it) */
+    for (int point = 0; point < 2; point++) {
+        if (point) {
+            vv_light pl;
+            memset(&pl, 0, sizeof pl);
+            pl.type = VV_LIGHT_POINT;
+            pl.position = vv_vec3_make(-100, 250, 300);
+            pl.color = vv_vec3_make(1, 1, 1);
+            pl.intensity = 0.5;
+            vt_ok(vv_world_add_light(w, &pl));
+        }
+        double psnr[4];
+        vv_image *img[4];
+        for (int g = 0; g < 4; g++) {
+            char gs[8];
+            snprintf(gs, sizeof gs, "%d", g % 3);
+            vv_renderer *r = new_tracer((const char *const[]){
+                "samples", "1", "shadow_grid", gs, "light_volumes", g == 0 ? "0" : "1", NULL});
+            img[g] = render_q(r, w, &w->view, 1, 0);
+            vv_renderer_free(r);
+        }
+        save(img[0], point ? "shadow_point_exact.png" : "shadow_exact.png");
+        save(img[1], point ? "shadow_point_grid.png" : "shadow_grid.png");
+        save(img[2], point ? "shadow_point_sweep.png" : "shadow_sweep.png");
+        save(img[3], point ? "shadow_point_light_volumes.png" : "shadow_light_volumes.png");
+        for (int g = 1; g < 4; g++)
+            psnr[g] = vv_image_psnr(img[0], img[g]);
+        print_message("volume shadows vs exact shadow rays%s: grid %.2f dB, swept %.2f dB, light "
+                      "volumes with exact sample shadows %.2f dB\n",
+                      point ? " (and a point light)" : "", psnr[1], psnr[2], psnr[3]);
+        /* (the grids' error grows with a third light whichever way its
+         * shadow rays cross the head: 29.5 dB marched or from its light
+         * volume) */
+        assert_true(psnr[1] >= (point ? 29.0 : 30.0));
+        assert_true(psnr[2] >= (point ? 29.0 : 30.0));
+        assert_true(psnr[3] >= 35.0);
+        for (int g = 0; g < 4; g++)
+            vv_image_free(img[g]);
     }
-    save(img[0], "shadow_exact.png");
-    save(img[1], "shadow_grid.png");
-    save(img[2], "shadow_sweep.png");
-    save(img[3], "shadow_light_volumes.png");
-    for (int g = 1; g < 4; g++)
-        psnr[g] = vv_image_psnr(img[0], img[g]);
-    print_message("volume shadows vs exact shadow rays: grid %.2f dB, swept %.2f dB, light "
-                  "volumes with exact sample shadows %.2f dB\n",
-                  psnr[1], psnr[2], psnr[3]);
-    assert_true(psnr[1] >= 30.0);
-    assert_true(psnr[2] >= 30.0);
-    assert_true(psnr[3] >= 35.0);
-    for (int g = 0; g < 4; g++)
-        vv_image_free(img[g]);
     vv_world_free(w);
 }
 
@@ -1033,6 +1124,7 @@ main(void) {
         cmocka_unit_test(test_point_light_shadow),
         cmocka_unit_test(test_flag_casts_shadows),
         cmocka_unit_test(test_volume_attenuation),
+        cmocka_unit_test(test_point_light_attenuation),
         cmocka_unit_test(test_mirror_equals_mirrored_camera),
         cmocka_unit_test(test_facing_mirrors_terminate),
         cmocka_unit_test(test_equals_raycast),

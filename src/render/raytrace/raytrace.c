@@ -460,15 +460,14 @@ prepare_frame(rt_frame *fr, const vv_world *w, const vv_view *view, const vv_ren
         ro->region_dt = fr->dt;
         ro->inv_form = ro->mode == VV_MODE_COMPOSITE && !ro->extras; /* march_one */
     }
-    /* light volumes of directional lights through composite volumes that
-     * cast shadows, then the shadow grids, now that every object is ready */
+    /* light volumes of the lights through composite volumes that cast
+     * shadows, then the shadow grids, now that every object is ready */
     for (int i = 0; i < fr->n_vobj && s == VV_OK && fr->shadows && st->light_volumes; i++) {
         rt_vobj *ro = &fr->vobjs[i];
         if (ro->mode != VV_MODE_COMPOSITE || !ro->obj->casts_shadows || ro->region)
             continue;
         for (int l = 0; l < fr->n_lights && s == VV_OK; l++)
-            if (!fr->lights[l].point)
-                s = rt_build_light_volume(fr, ro, l, nt);
+            s = rt_build_light_volume(fr, ro, l, nt);
     }
     for (int i = 0; i < fr->n_vobj && s == VV_OK; i++)
         if (fr->vobjs[i].gdim[0])
@@ -648,8 +647,8 @@ static const vv_option_spec rt_options[] = {
      "volume samples' shadows: 1 a lazily traced grid of shadow rays, 0 an exact ray per "
      "sample, 2 a swept light volume for directional lights"},
     {"light_volumes", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
-     "shadow rays of directional lights through composite volumes from a light volume "
-     "(0: marched)"},
+     "shadow rays through composite volumes from a light volume, directional and point "
+     "lights (0: marched)"},
     {"early_termination", VV_OPTION_REAL, "0.99", 0, 1, VV_OPTION_MIN_OPEN, NULL,
      "accumulated opacity that ends compositing (a secondary ray of weight w: 1 - (1 - "
      "value) / w)"},

@@ -49,7 +49,9 @@ typedef struct rt_lv {
     vv_volume *vol; /* reference held; NULL: free slot */
     uint64_t modified;
     double w2i[3][4];
-    double dir[3];
+    int point;     /* a point light (pos), else directional (dir) */
+    double dir[3]; /* directional light: towards it */
+    double pos[3]; /* point light: its position */
     double dt;
     int n_planes;
     vv_plane planes[2 * VV_MAX_CUT_PLANES];
@@ -121,8 +123,8 @@ typedef struct rt_vobj {
     float *sweep[VV_MAX_LIGHTS];            /* directional lights: swept transmittance */
     float lidx[VV_MAX_LIGHTS][3];           /* index-space direction to the light per world unit */
     int ldim[3];                /* light volume points per axis (every RT_LGRID voxels) */
-    float *lvol[VV_MAX_LIGHTS]; /* directional lights: this volume's own transmittance
-                                   from each point towards the light (a light volume) */
+    float *lvol[VV_MAX_LIGHTS]; /* this volume's own transmittance from each point
+                                   towards the light (a light volume) */
     unsigned lvol_owned;        /* bit l: lvol[l] is this frame's (else the state's cache) */
     unsigned sgrid_owned;       /* bit l: sgrid[l] and sweep[l] are this frame's (else the
                                    state's cache) */
@@ -316,10 +318,11 @@ void rt_sg_release(rt_sg *e);
 /* Empties a light-volume cache slot: its volume reference and transmittances. */
 void rt_lv_release(rt_lv *e);
 
-/* The light volume of directional light l for volume ob: transmittances
- * towards the light every RT_LGRID voxels (ob->lvol[l]), from the renderer
- * state's cache when the volume, light and transfer function match, else
- * swept with nt threads and cached (least recently used slot replaced). */
+/* The light volume of light l (directional or point) for volume ob:
+ * transmittances towards the light every RT_LGRID voxels (ob->lvol[l]),
+ * from the renderer state's cache when the volume, light and transfer
+ * function match, else swept with nt threads and cached (least recently
+ * used slot replaced). */
 vv_status rt_build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt);
 
 /* The ray caster's volume Phong (vv_vshade: reflection vector, two-sided,

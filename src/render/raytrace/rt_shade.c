@@ -4,6 +4,7 @@
  * volumes, and Phong shading with those shadows for volume samples and
  * geometric surfaces (with the reflected and transmitted rays they spawn).
  */
+#include <float.h>
 #include <math.h>
 #include <omp.h>
 #include <stdatomic.h>
@@ -20,10 +21,16 @@
 /* ---------------------------------------------------------------------- */
 /* Shadow rays                                                               */
 
-/* This volume's own transmittance towards directional light l from index
- * point p: its light volume, interpolated trilinearly. */
+/* This volume's own transmittance towards light l from index point p: its
+ * light volume, interpolated trilinearly. A point light's holds the mean
+ * extinction s_i of each grid point's way to the light; each corner then
+ * gives the transmittance exp(-s_i r) over the query's own distance r to the
+ * light, and those are interpolated: exact in a constant medium (where the
+ * transmittance itself is curved across the grid by the light's distance),
+ * and linear in the transmittance at shadow edges, as the directional
+ * lights' are. */
 static float
-light_volume_at(const rt_vobj *ob, int l, const float p[3]) {
+light_volume_at(const rt_vobj *ob, int l, const float p[3], float r) {
     float f[3];
     int i0[3];
     for (int a = 0; a < 3; a++) {
@@ -36,15 +43,19 @@ light_volume_at(const rt_vobj *ob, int l, const float p[3]) {
     }
     const size_t sy = (size_t)ob->ldim[0], sz = sy * (size_t)ob->ldim[1];
     const float *v = ob->lvol[l] + (size_t)i0[2] * sz + (size_t)i0[1] * sy + (size_t)i0[0];
-    float x0 = vv_lerpf(v[0], v[1], f[0]), x1 = vv_lerpf(v[sy], v[sy + 1], f[0]);
-    float x2 = vv_lerpf(v[sz], v[sz + 1], f[0]), x3 = vv_lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
+    float c[8] = {v[0], v[1], v[sy], v[sy + 1], v[sz], v[sz + 1], v[sz + sy], v[sz + sy + 1]};
+    if (r > 0)
+        for (int k = 0; k < 8; k++)
+            c[k] = expf(-c[k] * r);
+    float x0 = vv_lerpf(c[0], c[1], f[0]), x1 = vv_lerpf(c[2], c[3], f[0]);
+    float x2 = vv_lerpf(c[4], c[5], f[0]), x3 = vv_lerpf(c[6], c[7], f[0]);
     return vv_lerpf(vv_lerpf(x0, x1, f[1]), vv_lerpf(x2, x3, f[1]), f[2]);
 }
 
 /* Transmittance of one volume along the world ray over (tmin, tmax).
- * light >= 0: the ray is a whole shadow ray towards that directional
- * light (tmax infinite), answered from the light volume where there is
- * one. */
+ * light >= 0: the ray is a whole shadow ray towards that light (tmax
+ * infinite for a directional light, the light's distance for a point
+ * light), answered from the light volume where there is one. */
 static float
 volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, double tmin,
                      double tmax, int light) {
@@ -53,8 +64,15 @@ volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, do
         return 1.0f;
     const vv_vcache *c = ob->c;
     const double dt = fr->dt;
-    if (light >= 0 && ob->lvol[light])
-        return light_volume_at(ob, light, r.o); /* r.o: where the ray enters */
+    if (light >= 0 && ob->lvol[light]) {
+        /* r.o: where the ray enters, at r.t0; a point light's distance from there */
+        const rt_light *lt = &fr->lights[light];
+        const float dist =
+            lt->point
+                ? (float)v3len(v3sub(v3(lt->pos[0], lt->pos[1], lt->pos[2]), ray_at(wr, r.t0)))
+                : 0.0f;
+        return light_volume_at(ob, light, r.o, dist);
+    }
     if (ob->mode == VV_MODE_COMPOSITE) {
         /* exp(-sum sigma h): each visible subvolume's piece of the ray is cut
          * into equal parts no longer than dt, sampled at their midpoints */
@@ -146,8 +164,8 @@ shadow_segment(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start, d
         r.dir = v3(l->dir[0], l->dir[1], l->dir[2]);
         tmax = INFINITY;
     }
-    /* a whole shadow ray towards a directional light: light volumes answer it */
-    const int light = !l->point && limit == INFINITY ? (int)(l - fr->lights) : -1;
+    /* a whole shadow ray towards a light: light volumes answer it */
+    const int light = limit == INFINITY ? (int)(l - fr->lights) : -1;
     tmax = limit < tmax ? limit : tmax;
     r.origin = p;
     float T = 1.0f;
@@ -180,29 +198,36 @@ index_to_world(const rt_vobj *ob, const double q[3]) {
               ob->i2w[2][0] * q[0] + ob->i2w[2][1] * q[1] + ob->i2w[2][2] * q[2] + ob->i2w[2][3]);
 }
 
-/* A composite volume's own transmittance over the segment of world length
+/* A composite volume's own optical depth over the segment of world length
  * seg from index point p (world wp) along the index direction li (world
- * direction ldir): one sample at its middle, exp(-sigma seg); 1 where the
- * middle is outside the volume, cut away or in a subvolume that cannot
+ * direction ldir): one sample at its middle, sigma seg; 0 where the middle
+ * is outside the volume, cut away or in a subvolume that cannot
  * contribute. */
 static float
-own_segment(const rt_vobj *ob, const double p[3], const double li[3], double seg, vv_vec3 wp,
-            vv_vec3 ldir) {
+own_depth(const rt_vobj *ob, const double p[3], const double li[3], double seg, vv_vec3 wp,
+          vv_vec3 ldir) {
     float q[3];
     for (int a = 0; a < 3; a++) {
         q[a] = (float)(p[a] + li[a] * seg * 0.5);
         if (!(q[a] >= 0 && q[a] <= (float)(ob->dims[a] - 1)))
-            return 1.0f;
+            return 0.0f;
     }
     if (!ob->bvis[vv_vcache_block(ob->c, q)])
-        return 1.0f;
+        return 0.0f;
     if (ob->n_planes) {
         const vv_vec3 wm = v3add(wp, v3scale(ldir, 0.5 * seg));
         for (int i = 0; i < ob->n_planes; i++)
             if (vv_plane_distance(ob->planes[i], wm) < 0)
-                return 1.0f;
+                return 0.0f;
     }
-    return expf(-ob->ext[(int)lut_index_f(ob, vv_vcache_sample(ob->c, q))] * (float)seg);
+    return ob->ext[(int)lut_index_f(ob, vv_vcache_sample(ob->c, q))] * (float)seg;
+}
+
+/* Its transmittance, exp(-own_depth). */
+static float
+own_segment(const rt_vobj *ob, const double p[3], const double li[3], double seg, vv_vec3 wp,
+            vv_vec3 ldir) {
+    return expf(-own_depth(ob, p, li, seg, wp, ldir));
 }
 
 /* The shadow grid of a directional light, swept layer by layer from the
@@ -280,6 +305,180 @@ sweep_grid(const rt_frame *fr, const rt_vobj *ob, int l, int nt, double G, const
     return VV_OK;
 }
 
+/* Sorts n (key, index) pairs by key (non-negative doubles, whose bits
+ * order as unsigned integers): least significant digit first, 16 bits a
+ * pass. tmp: room for n more. Returns 0 when out of memory. */
+typedef struct rt_kidx {
+    uint64_t key;
+    uint32_t idx;
+} rt_kidx;
+
+static int
+radix_sort(rt_kidx *a, rt_kidx *tmp, size_t n) {
+    size_t *count = malloc(65536 * sizeof *count);
+    if (!count)
+        return 0;
+    for (int pass = 0; pass < 4; pass++) {
+        const int shift = 16 * pass;
+        memset(count, 0, 65536 * sizeof *count);
+        for (size_t i = 0; i < n; i++)
+            count[(a[i].key >> shift) & 0xFFFF]++;
+        size_t sum = 0;
+        for (int d = 0; d < 65536; d++) {
+            const size_t c = count[d];
+            count[d] = sum;
+            sum += c;
+        }
+        for (size_t i = 0; i < n; i++)
+            tmp[count[(a[i].key >> shift) & 0xFFFF]++] = a[i];
+        rt_kidx *t = a;
+        a = tmp;
+        tmp = t;
+    }
+    free(count); /* four passes: the result is back in the caller's array */
+    return 1;
+}
+
+/* One point of a point light's light volume (sweep_point): the mean
+ * extinction of the way to the light, tau / r (r its world length), which
+ * is constant in a constant medium (where the transmittance, exp(-sigma r),
+ * is curved across the grid and bilinear interpolation would bias it).
+ * tau: that of the point one grid layer nearer the light (bilinear in its
+ * layer from points strictly nearer the light, as light_volume_at
+ * interpolates) plus the segment's; within a layer of the light, the
+ * segment to the light itself; where the nearer point leaves the grid, a
+ * whole ray through this volume. */
+static float
+point_lv_value(const rt_frame *fr, const rt_vobj *ob, const rt_light *lt, double G, const int *gd,
+               const double Lg[3], const float *S, const int id[3]) {
+    const double p[3] = {id[0] * G, id[1] * G, id[2] * G};
+    const vv_vec3 wp = index_to_world(ob, p);
+    const vv_vec3 lp = v3(lt->pos[0], lt->pos[1], lt->pos[2]);
+    const vv_vec3 to = v3sub(lp, wp);
+    const double dist = v3len(to);
+    if (!(dist > 0))
+        return 0.0f;
+    const vv_vec3 ldir = v3scale(to, 1 / dist);
+    double d[3];
+    int A = 0;
+    for (int a = 0; a < 3; a++) {
+        d[a] = Lg[a] - id[a];
+        if (fabs(d[a]) > fabs(d[A]))
+            A = a;
+    }
+    const double k = fabs(d[A]);
+    double li[3]; /* index-space direction per world unit */
+    for (int a = 0; a < 3; a++)
+        li[a] = d[a] * G / dist;
+    double tau;
+    const int B = (A + 1) % 3, Cc = (A + 2) % 3;
+    const int la = id[A] + (d[A] > 0 ? 1 : -1);
+    const double qb = id[B] + d[B] / (k > 0 ? k : 1), qc = id[Cc] + d[Cc] / (k > 0 ? k : 1);
+    if (k <= 1) { /* the light is within a layer: the segment to it */
+        tau = own_depth(ob, p, li, dist, wp, ldir);
+    } else if (la < 0 || la > gd[A] - 1 || !(qb >= 0 && qb <= gd[B] - 1) ||
+               !(qc >= 0 && qc <= gd[Cc] - 1)) {
+        const float T = volume_transmittance(fr, ob, &(vv_ray){wp, ldir}, 0, dist, -1);
+        tau = T > 0 ? -log(T) : INFINITY;
+    } else {
+        const int ib = (int)qb, ic = (int)qc;
+        const float fb = (float)(qb - ib), fc = (float)(qc - ic);
+        /* a neighbour of weight 0 may be as far from the light as this
+         * point: not read */
+        float v[4] = {0, 0, 0, 0};
+        for (int m = 0; m < 4; m++) {
+            if (((m & 1) && fb == 0) || ((m >> 1) && fc == 0))
+                continue;
+            int q[3];
+            q[A] = la;
+            q[B] = ib + (m & 1);
+            q[Cc] = ic + (m >> 1);
+            v[m] = S[((size_t)q[2] * (size_t)gd[1] + (size_t)q[1]) * (size_t)gd[0] + (size_t)q[0]];
+        }
+        const double seg = dist / k; /* world length of one layer towards the light */
+        /* each neighbour's transmittance over the nearer point's distance
+         * (light_volume_at), interpolated */
+        for (int m = 0; m < 4; m++)
+            v[m] = expf(-v[m] * (float)(dist - seg));
+        const double tq = vv_lerpf(vv_lerpf(v[0], v[1], fb), vv_lerpf(v[2], v[3], fb), fc);
+        tau = (tq > 0 ? -log(tq) : INFINITY) + own_depth(ob, p, li, seg, wp, ldir);
+    }
+    const double s = tau / dist;
+    return (float)(s < FLT_MAX ? s : FLT_MAX);
+}
+
+/* The light volume of a point light: the volume's own mean extinction on
+ * the way from every grid point to the light (point_lv_value; the
+ * transmittance is exp(-value r), r the distance to the light). The light's rays diverge, so there
+ * are no fixed layers to sweep; instead each point looks one grid layer towards the light along the
+ * axis on which the light is farthest (its distance k in that axis, in grid units: the point's
+ * L-infinity distance to the light), where the point it reaches and its bilinear neighbours are all
+ * strictly nearer the light in that distance. The points are therefore
+ * computed in order of k, the points of equal k in parallel (each depends
+ * only on earlier ones: any thread count gives the same values). */
+static vv_status
+sweep_point(const rt_frame *fr, const rt_vobj *ob, int l, int nt, double G, const int *gd,
+            float **out) {
+    const rt_light *lt = &fr->lights[l];
+    *out = NULL;
+    double Lg[3];
+    for (int a = 0; a < 3; a++)
+        Lg[a] = (ob->w2i[a][0] * lt->pos[0] + ob->w2i[a][1] * lt->pos[1] +
+                 ob->w2i[a][2] * lt->pos[2] + ob->w2i[a][3]) /
+                G;
+    if (!(isfinite(Lg[0]) && isfinite(Lg[1]) && isfinite(Lg[2])))
+        return VV_OK;
+    const size_t ng = (size_t)gd[0] * (size_t)gd[1] * (size_t)gd[2];
+    if (ng > UINT32_MAX)
+        return VV_OK; /* shadow rays then march */
+    float *S = malloc(ng * sizeof *S);
+    rt_kidx *ord = malloc(2 * ng * sizeof *ord);
+    size_t *starts = malloc((ng + 1) * sizeof *starts);
+    if (!S || !ord || !starts) {
+        free(S);
+        free(ord);
+        free(starts);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for a light volume");
+    }
+#pragma omp parallel for schedule(static) num_threads(nt)
+    for (size_t i = 0; i < ng; i++) {
+        const size_t ix = i % (size_t)gd[0], iy = i / (size_t)gd[0] % (size_t)gd[1],
+                     iz = i / ((size_t)gd[0] * (size_t)gd[1]);
+        double k = fabs(Lg[0] - (double)ix);
+        k = fmax(k, fabs(Lg[1] - (double)iy));
+        k = fmax(k, fabs(Lg[2] - (double)iz));
+        uint64_t bits;
+        memcpy(&bits, &k, sizeof bits);
+        ord[i].key = bits;
+        ord[i].idx = (uint32_t)i;
+    }
+    if (!radix_sort(ord, ord + ng, ng)) {
+        free(S);
+        free(ord);
+        free(starts);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for a light volume");
+    }
+    size_t nb = 0;
+    for (size_t i = 0; i < ng; i++)
+        if (i == 0 || ord[i].key != ord[i - 1].key)
+            starts[nb++] = i;
+    starts[nb] = ng;
+    for (size_t b = 0; b < nb; b++) {
+        const size_t s0 = starts[b], s1 = starts[b + 1];
+#pragma omp parallel for schedule(dynamic, 64) num_threads(nt) if (s1 - s0 >= 256)
+        for (size_t i = s0; i < s1; i++) {
+            const size_t at = ord[i].idx;
+            const int id[3] = {(int)(at % (size_t)gd[0]), (int)(at / (size_t)gd[0] % (size_t)gd[1]),
+                               (int)(at / ((size_t)gd[0] * (size_t)gd[1]))};
+            S[at] = point_lv_value(fr, ob, lt, G, gd, Lg, S, id);
+        }
+    }
+    free(ord);
+    free(starts);
+    *out = S;
+    return VV_OK;
+}
+
 /* The shadow grid of directional light l for the volume's own samples
  * (shadow_grid=2): swept through every object that casts shadows, unless
  * ob->sweep[l] holds one kept from an earlier frame. */
@@ -294,19 +493,23 @@ rt_sweep_light(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
     return s;
 }
 
-/* The light volume of a composite volume for directional light l: its own
+/* The light volume of a composite volume for light l: its own
  * transmittance towards the light from every point of a grid RT_LGRID
- * voxels apart, swept layer by layer from the light's side. Whole shadow
- * rays towards the light then cross the volume in one lookup where they
- * enter it (light_volume_at). */
+ * voxels apart, swept layer by layer from the light's side (a directional
+ * light, sweep_grid) or in order of distance to it (a point light,
+ * sweep_point). Whole shadow rays towards the light then cross the volume
+ * in one lookup where they enter it (light_volume_at). */
 static int
 lv_matches(const rt_lv *e, const rt_frame *fr, const rt_vobj *ob, int l) {
     if (e->vol != ob->obj->volume || e->modified != ob->obj->volume->modified || e->dt != fr->dt ||
         e->n_planes != ob->n_planes || e->lut_lo != ob->tab.lut_lo ||
         e->lut_scale != ob->tab.lut_scale)
         return 0;
+    const rt_light *lt = &fr->lights[l];
+    if (e->point != lt->point)
+        return 0;
     for (int a = 0; a < 3; a++)
-        if (e->dir[a] != fr->lights[l].dir[a])
+        if (lt->point ? e->pos[a] != lt->pos[a] : e->dir[a] != lt->dir[a])
             return 0;
     return memcmp(e->w2i, ob->w2i, sizeof e->w2i) == 0 &&
            memcmp(e->planes, ob->planes, (size_t)ob->n_planes * sizeof *ob->planes) == 0 &&
@@ -333,7 +536,9 @@ rt_build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
             ob->lvol[l] = st->lv[i].T;
             return VV_OK;
         }
-    vv_status s = sweep_grid(fr, ob, l, nt, RT_LGRID, ob->ldim, 1, &ob->lvol[l]);
+    vv_status s = fr->lights[l].point
+                      ? sweep_point(fr, ob, l, nt, RT_LGRID, ob->ldim, &ob->lvol[l])
+                      : sweep_grid(fr, ob, l, nt, RT_LGRID, ob->ldim, 1, &ob->lvol[l]);
     if (s != VV_OK || !ob->lvol[l])
         return s;
     /* keep it: in a free slot, else in place of the least recently used one
@@ -356,8 +561,11 @@ rt_build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
     e->vol = vv_volume_ref(ob->obj->volume);
     e->modified = ob->obj->volume->modified;
     memcpy(e->w2i, ob->w2i, sizeof e->w2i);
-    for (int a = 0; a < 3; a++)
+    e->point = fr->lights[l].point;
+    for (int a = 0; a < 3; a++) {
         e->dir[a] = fr->lights[l].dir[a];
+        e->pos[a] = fr->lights[l].pos[a];
+    }
     e->dt = fr->dt;
     e->n_planes = ob->n_planes;
     memcpy(e->planes, ob->planes, (size_t)ob->n_planes * sizeof *ob->planes);
