@@ -183,10 +183,12 @@ autosave_wait(VvWindow *win) {
     g_mutex_unlock(&win->autosave_lock);
 }
 
-/* The session is saved: its autosave folder goes (a run still writing
- * removes it when done), and so does a crashed session it was restored
- * from. Kept, either would be offered after a later crash as a session
- * newer than the file, and it is older. */
+/* The session is saved, or a file was opened that left it with nothing
+ * unsaved (what the next autosave would find too, do_autosave, only at
+ * once): its autosave folder goes (a run still writing removes it when
+ * done), and so does a crashed session it was restored from. Kept, either
+ * would be offered after a later crash as a session newer than the file,
+ * and it is older. */
 static void
 autosave_drop(VvWindow *win) {
     win->autosave_pending = FALSE;
