@@ -804,6 +804,8 @@ test_shadow_grid_kept(void **state) {
         vv_view v = w->view;
         v.eye = vv_vec3_make(520, 300, 160); /* another view */
         expect_as_fresh(kept, opts, w, &v, "a new view");
+        vv_image_free(render_q(kept, w, &v, 0, 2)); /* a preview: no shadows, grids kept */
+        expect_as_fresh(kept, opts, w, &v, "after a preview");
         v.width = v.height = 40;
         expect_as_fresh(kept, opts, w, &v, "a smaller image");
         frame->position.z += 40;

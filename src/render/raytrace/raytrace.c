@@ -532,13 +532,18 @@ render_frame(rt_state *st, const vv_world *w, const vv_view *view, const vv_rend
         return s;
     /* drop cached volumes the World no longer shows */
     vv_vcache_set_prune(&st->vc, w);
-    /* light volumes this frame did not use: gone (they can be large) */
-    for (int i = 0; i < RT_LV_CACHE; i++)
-        if (st->lv[i].vol && st->lv[i].used != st->frame)
-            rt_lv_release(&st->lv[i]);
-    for (int i = 0; i < RT_SG_CACHE; i++)
-        if (st->sg[i].grid && st->sg[i].used != st->frame)
-            rt_sg_release(&st->sg[i]);
+    /* light volumes and shadow grids a frame with shadows did not use: gone
+     * (they can be large). A frame without shadows (a preview between the
+     * frames of a drag) leaves them, and so does a region render for the
+     * shadow grids (it keeps none of its own). */
+    if (fr.shadows)
+        for (int i = 0; i < RT_LV_CACHE; i++)
+            if (st->lv[i].vol && st->lv[i].used != st->frame)
+                rt_lv_release(&st->lv[i]);
+    if (fr.shadows && !region)
+        for (int i = 0; i < RT_SG_CACHE; i++)
+            if (st->sg[i].grid && st->sg[i].used != st->frame)
+                rt_sg_release(&st->sg[i]);
     return VV_OK;
 }
 
