@@ -330,15 +330,12 @@ constant_volume(int nx, int ny, int nz, double value) {
     return v;
 }
 
-static void
-test_volume_attenuation(void **state) {
-    (void)state;
-    const double a = 0.1, unit = 1.0; /* TF opacity per unit length */
-    vv_world *w = new_world();
-    add_directional(w, vv_vec3_make(1, 0, -1), 1.0);
+/* A matte floor z = 0 and above it a slab x in [0, 40], y in [0, 10], z in
+ * [10, 20] of constant density, opacity @p a per @p unit of length. */
+static vv_object *
+add_slab(vv_world *w, double a, double unit) {
     vv_object *pl = add_geometry(w, VV_OBJECT_PLANE, "floor");
     matte(pl, 0, 1);
-    /* a slab x in [0, 40], y in [0, 10], z in [10, 20] of constant density */
     vv_volume *v = constant_volume(41, 11, 11, 1.0);
     v->origin[2] = 10;
     vv_object *o = NULL;
@@ -349,6 +346,16 @@ test_volume_attenuation(void **state) {
     vt_ok(vv_tf_add_opacity(&o->tf, 2, a));
     o->tf.opacity_unit_distance = unit;
     vt_ok(vv_world_add_object(w, o));
+    return o;
+}
+
+static void
+test_volume_attenuation(void **state) {
+    (void)state;
+    const double a = 0.1, unit = 1.0; /* TF opacity per unit length */
+    vv_world *w = new_world();
+    add_directional(w, vv_vec3_make(1, 0, -1), 1.0);
+    vv_object *o = add_slab(w, a, unit);
     /* floor points x in [42, 48]: light reaches them through the whole
      * slab height on a 45 degree path, L = 10 sqrt 2; the view misses the slab */
     vv_view view = ortho_view(vv_vec3_make(45, 5, 100), vv_vec3_make(45, 5, 0),
@@ -399,18 +406,7 @@ test_point_light_attenuation(void **state) {
     l.color = vv_vec3_make(1, 1, 1);
     l.intensity = 1;
     vt_ok(vv_world_add_light(w, &l));
-    vv_object *pl = add_geometry(w, VV_OBJECT_PLANE, "floor");
-    matte(pl, 0, 1);
-    vv_volume *v = constant_volume(41, 11, 11, 1.0);
-    v->origin[2] = 10;
-    vv_object *o = NULL;
-    vt_ok(vv_object_new_volume(&o, v, "slab"));
-    vv_volume_free(v);
-    vv_tf_init(&o->tf);
-    vt_ok(vv_tf_add_opacity(&o->tf, 0, a));
-    vt_ok(vv_tf_add_opacity(&o->tf, 2, a));
-    o->tf.opacity_unit_distance = unit;
-    vt_ok(vv_world_add_object(w, o));
+    add_slab(w, a, unit);
     /* floor x in [42, 46]: every path crosses the slab inside it (x <= 40
      * where it does), and the view misses the slab */
     vv_view view = ortho_view(vv_vec3_make(44, 5, 100), vv_vec3_make(44, 5, 0),
