@@ -3,6 +3,10 @@
  * rendered by the ray caster, printed as
  *   anchor=volvis op=<op> dataset=<file> value=<number> unit=<unit>
  * so that ../shared/anchors/summarize.py can put it beside VTK and Teem.
+ * Composite also prints the physical anchor: samples and shaded samples a
+ * frame (vv_render_stats), shaded samples per second and core, the same
+ * kernel's peak on one core (peak_shaded_rate), their ratio, and the frame
+ * every shaded sample at the peak would take (docs/rendering.md).
  *
  * usage: bench_raycast VOLUME [--iso V] [--tf-lo A] [--tf-hi B] [--size N]
  *                      [--runs N] [--threads N] [--outdir DIR] [--step-vox S]
@@ -84,6 +88,77 @@ save(const vv_image *img, const bench_cfg *cfg, const char *stem, const char *mo
     if (vv_image_write_png(img, path, 1.0, 0) != VV_OK)
         bench_die("bench_raycast", "write png");
     printf("# image %s\n", path);
+}
+
+/* The physical anchor's peak: shaded samples per second of one thread on
+ * a synthetic volume of the dataset's voxel type small enough to stay in
+ * cache (48^3, a smooth field over the dataset's range), every sample
+ * visible (a flat, faint opacity: no ray terminates early) and every pixel
+ * on it: the same kernel, classification, gradients, shading and
+ * compositing, with nothing skipped and no memory stalls. */
+static double
+peak_shaded_rate(const vv_volume *like, const bench_cfg *cfg) {
+    const int dims[3] = {48, 48, 48};
+    vv_volume *v = NULL;
+    if (vv_volume_new(&v, dims, like->type) != VV_OK)
+        bench_die("bench_raycast", "peak volume");
+    const double lo = like->range[0], hi = like->range[1];
+    for (int k = 0; k < 48; k++)
+        for (int j = 0; j < 48; j++)
+            for (int i = 0; i < 48; i++)
+                vv_volume_set(v, i, j, k,
+                              lo + (hi - lo) * (0.5 + 0.45 * sin(0.31 * i) * cos(0.23 * j) *
+                                                          sin(0.17 * k + 0.5)));
+    for (int a = 0; a < 3; a++)
+        v->origin[a] = -23.5;
+    vv_volume_update_range(v);
+    vv_world *w;
+    vv_object *obj;
+    if (vv_world_new(&w) != VV_OK || vv_object_new_volume(&obj, v, "peak") != VV_OK ||
+        vv_world_add_object(w, obj) != VV_OK)
+        bench_die("bench_raycast", "peak world");
+    vv_light head;
+    memset(&head, 0, sizeof head);
+    head.type = VV_LIGHT_DIRECTIONAL;
+    head.headlight = 1;
+    head.color = vv_vec3_make(1, 1, 1);
+    head.intensity = 1;
+    vv_world_add_light(w, &head);
+    bench_cfg pc = *cfg;
+    pc.size = 256;
+    setup_world(w, obj, &pc, VV_MODE_COMPOSITE);
+    w->view.fov = vv_deg_to_rad(9); /* every pixel on the cube */
+    vv_tf_init(&obj->tf);
+    obj->tf.opacity_unit_distance = 1;
+    vv_tf_add_opacity(&obj->tf, v->range[0], 0.02);
+    vv_tf_add_opacity(&obj->tf, v->range[1], 0.02);
+    vv_image *img;
+    vv_renderer *r;
+    if (vv_image_new(&img, pc.size, pc.size) != VV_OK || vv_renderer_new(&r, "raycast") != VV_OK)
+        bench_die("bench_raycast", "peak renderer");
+    vv_render_options opt;
+    vv_render_options_init(&opt);
+    opt.threads = 1;
+    vv_render_stats st = {0, 0};
+    opt.stats = &st;
+    if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK) /* warm-up, and the count */
+        bench_die("bench_raycast", "peak render");
+    opt.stats = NULL;
+    double best = INFINITY;
+    for (int i = 0; i < 3; i++) {
+        const double a = bench_now();
+        if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK)
+            bench_die("bench_raycast", "peak render");
+        const double t = bench_now() - a;
+        best = t < best ? t : best;
+    }
+    if (st.samples != st.shaded || st.shaded < (uint64_t)pc.size * pc.size * 48)
+        bench_die("bench_raycast", "peak: not every sample shaded");
+    vv_renderer_free(r);
+    vv_image_free(img);
+    vv_world_free(w);
+    vv_volume_free(v);
+    return (double)st.shaded / best;
 }
 
 int
@@ -217,8 +292,11 @@ main(int argc, char **argv) {
             bench_die("bench_raycast", "render");
         double first = bench_now() - a;
         double *times = malloc(sizeof(double) * (size_t)cfg.runs);
+        vv_render_stats work = {0, 0};
+        opt.stats = &work; /* (the same counts every frame) */
         if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK) /* warm-up */
             bench_die("bench_raycast", "render");
+        opt.stats = NULL;
         for (int i = 0; i < cfg.runs; i++) {
             a = bench_now();
             if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK)
@@ -234,6 +312,19 @@ main(int argc, char **argv) {
         emit(op, med, "s");
         snprintf(op, sizeof op, "dvr_%s_fps", modes[m].name);
         emit(op, 1.0 / med, "frames/s");
+        if (modes[m].mode == VV_MODE_COMPOSITE && work.samples) {
+            /* the physical anchor: shaded samples per second and core
+             * against the same kernel's peak on one core */
+            const int nt = cfg.threads > 0 ? cfg.threads : vv_threads_get();
+            const double rate = (double)work.shaded / med / nt;
+            const double peak = peak_shaded_rate(vol, &cfg);
+            emit("dvr_composite_samples", (double)work.samples, "samples");
+            emit("dvr_composite_shaded", (double)work.shaded, "samples");
+            emit("dvr_composite_shaded_per_s_per_core", rate, "samples/s");
+            emit("dvr_composite_peak_shaded_per_s_per_core", peak, "samples/s");
+            emit("dvr_composite_of_peak", rate / peak, "x");
+            emit("dvr_composite_floor_frame", (double)work.shaded / peak / nt, "s");
+        }
         save(img, &cfg, stem, modes[m].name);
         free(times);
         vv_renderer_free(r);

@@ -30,14 +30,29 @@
 extern "C" {
 #endif
 
+/**
+ * The work of a render, counted for measurements (bench/bench_raycast's
+ * shaded samples per second against the machine's peak). Counts are added
+ * to what the struct holds; a render that counts nothing leaves it.
+ */
+typedef struct vv_render_stats {
+    uint64_t samples; /**< samples taken along rays (value and transfer-function entry) */
+    uint64_t shaded;  /**< of those, the samples that contributed: shaded and composited */
+} vv_render_stats;
+
 /** Options of one render call. */
 typedef struct vv_render_options {
     int threads;          /**< <= 0: vv_threads_get() */
     int quality;          /**< 0 draft .. 2 final; what it means: vv_renderer_info.quality */
     vv_progress progress; /**< reports the fraction of image tiles done; may cancel */
+    /** NULL, or where the render adds the work it did. Counted by the ray
+     * caster's march of one composite volume (the common case and the
+     * speed anchor); other renderers and paths add nothing. Counting
+     * neither changes the image nor costs measurable time. */
+    vv_render_stats *stats;
 } vv_render_options;
 
-/** threads 0, quality 2, no progress callback. */
+/** threads 0, quality 2, no progress callback, no stats. */
 void vv_render_options_init(vv_render_options *o);
 
 /* ---- typed option tables ------------------------------------------------ */

@@ -275,6 +275,27 @@ test_slab_sample_count(void **state) {
     assert_float_equal(px(img, 0, 0)[3], expect, 1e-4);
     assert_float_equal(img->depth[0], 40.0, 1e-4);
     vv_image_free(img);
+    /* the work counted (vv_render_options.stats): 17 samples on each of
+     * the 4 rays, all shaded; added to what the counts held, from any
+     * thread count; a transparent object takes none (skipped) */
+    for (int threads = 1; threads <= 2; threads++) {
+        vv_render_stats st = {1, 1};
+        vv_render_options opt;
+        vv_render_options_init(&opt);
+        opt.threads = threads;
+        opt.stats = &st;
+        vt_ok(vv_image_new(&img, view.width, view.height));
+        vt_ok(vv_renderer_render(r, w, &view, &opt, img));
+        assert_int_equal(st.samples, 1 + 4 * 17);
+        assert_int_equal(st.shaded, 1 + 4 * 17);
+        o->tf.opacity[0].opacity = 0;
+        st.samples = st.shaded = 0;
+        vt_ok(vv_renderer_render(r, w, &view, &opt, img));
+        assert_int_equal(st.samples, 0);
+        assert_int_equal(st.shaded, 0);
+        o->tf.opacity[0].opacity = 0.3;
+        vv_image_free(img);
+    }
     vv_renderer_free(r);
     vv_world_free(w);
     vv_volume_free(v);

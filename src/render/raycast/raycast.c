@@ -86,6 +86,7 @@ typedef struct rc_obj {
 
 typedef struct rc_frame {
     rc_state *st;
+    vv_render_stats *stats; /* the caller's counts (vv_render_options.stats), or NULL */
     rc_obj *objs;
     int n_obj;
     int n_comp; /* composite/iso objects first in objs[], then projections */
@@ -138,6 +139,7 @@ typedef struct rc_result {
     float rgb[3];
     float a;
     float depth;
+    uint32_t samples, shaded; /* work counted (vv_render_stats) */
 } rc_result;
 
 /* Composites one classified sample (table entry e: opacity, then colour
@@ -419,11 +421,13 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
                 float fx[VV_VC_CHUNK], fy[VV_VC_CHUNK], fz[VV_VC_CHUNK];
                 const double kfirst = klast - (n - 1 - s0);
                 vv_vray_classify(c, &ob->tab, &r, kfirst, dt, m, fr->avx2, cell, fx, fy, fz, entry);
+                res->samples += (uint32_t)m;
                 for (int s = 0; s < m; s++) {
                     const float *e = ob->lut + entry[s];
                     const float alpha = e[0];
                     if (alpha <= 0)
                         continue;
+                    res->shaded++;
                     t = (klast - (n - 1 - (s0 + s))) * dt;
                     float g[3] = {0, 0, 0};
                     if (ob->shading && c->nrm) {
@@ -753,10 +757,10 @@ prepare_lights(rc_frame *fr, const vv_world *w, const vv_view *view) {
 /* The renderer                                                             */
 
 static void
-render_pixel(const rc_frame *fr, int x, int y) {
+render_pixel(const rc_frame *fr, int x, int y, vv_render_stats *work) {
     /* inline: this runs for every pixel, most of which miss the volume */
     const vv_ray wr = vv_camera_ray(&fr->cam, x, y);
-    rc_result res = {{0, 0, 0}, 0, INFINITY};
+    rc_result res = {{0, 0, 0}, 0, INFINITY, 0, 0};
     if (fr->n_comp == 1 && fr->objs[0].nch)
         trace_channels(fr, &fr->objs[0], &wr, &res);
     else if (fr->n_comp == 1 && fr->objs[0].mode == VV_MODE_COMPOSITE && !fr->objs[0].extras)
@@ -803,14 +807,23 @@ render_pixel(const rc_frame *fr, int x, int y) {
     fr->out->depth[at] = res.depth < pdepth ? res.depth : pdepth;
     if (fr->key)
         fr->key[at] = key;
+    work->samples += res.samples;
+    work->shaded += res.shaded;
 }
 
 static vv_status
 render_tile(void *user, const vv_frame_tile *t) {
     const rc_frame *fr = user;
+    vv_render_stats work = {0, 0};
     for (int y = t->y0; y < t->y1; y++)
         for (int x = t->x0; x < t->x1; x++)
-            render_pixel(fr, x, y);
+            render_pixel(fr, x, y, &work);
+    if (fr->stats) {
+#pragma omp atomic
+        fr->stats->samples += work.samples;
+#pragma omp atomic
+        fr->stats->shaded += work.shaded;
+    }
     return VV_OK;
 }
 
@@ -827,6 +840,7 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
     fr.view = view;
     fr.out = out;
     fr.et = (float)st->early_termination;
+    fr.stats = opt ? opt->stats : NULL;
     vv_frame_colours(w, region != NULL, fr.ambient, fr.bg);
     prepare_lights(&fr, w, view);
     vv_camera_rays_init(&fr.cam, view);
