@@ -20,6 +20,7 @@
 #include <sys/stat.h>
 #include <time.h>
 
+#include "common/bench_scene.h"
 #include "util.h"
 #include "volvis/volvis.h"
 
@@ -114,16 +115,8 @@ peak_shaded_rate(const vv_volume *like, const bench_cfg *cfg) {
     vv_volume_update_range(v);
     vv_world *w;
     vv_object *obj;
-    if (vv_world_new(&w) != VV_OK || vv_object_new_volume(&obj, v, "peak") != VV_OK ||
-        vv_world_add_object(w, obj) != VV_OK)
+    if (vvb_volume_world(&w, &obj, v, "peak") != VV_OK)
         bench_die("bench_raycast", "peak world");
-    vv_light head;
-    memset(&head, 0, sizeof head);
-    head.type = VV_LIGHT_DIRECTIONAL;
-    head.headlight = 1;
-    head.color = vv_vec3_make(1, 1, 1);
-    head.intensity = 1;
-    vv_world_add_light(w, &head);
     bench_cfg pc = *cfg;
     pc.size = 256;
     setup_world(w, obj, &pc, VV_MODE_COMPOSITE);
@@ -245,16 +238,8 @@ main(int argc, char **argv) {
 
     vv_world *w;
     vv_object *obj;
-    if (vv_world_new(&w) != VV_OK || vv_object_new_volume(&obj, vol, "bench") != VV_OK ||
-        vv_world_add_object(w, obj) != VV_OK)
+    if (vvb_volume_world(&w, &obj, vol, "bench") != VV_OK)
         bench_die("bench_raycast", "world");
-    vv_light head;
-    memset(&head, 0, sizeof head);
-    head.type = VV_LIGHT_DIRECTIONAL;
-    head.headlight = 1;
-    head.color = vv_vec3_make(1, 1, 1);
-    head.intensity = 1;
-    vv_world_add_light(w, &head);
 
     vv_image *img;
     if (vv_image_new(&img, cfg.size, cfg.size) != VV_OK)

@@ -9,19 +9,13 @@
 #include <string.h>
 
 vv_status
-vvb_surface_world(vv_world **out, vv_object **out_obj, vv_volume *vol, double iso, int size) {
-    /* centred, identity direction: the peers' placement */
-    for (int a = 0; a < 3; a++)
-        vol->origin[a] = -(vol->dims[a] - 1) * vol->spacing[a] / 2.0;
-    for (int a = 0; a < 9; a++)
-        vol->direction[a] = a % 4 == 0;
-    vol->modified++;
-
+vvb_volume_world(vv_world **out, vv_object **out_obj, vv_volume *vol, const char *name) {
+    *out = NULL;
     vv_world *w = NULL;
     vv_object *obj = NULL;
     vv_status s = vv_world_new(&w);
     if (s == VV_OK)
-        s = vv_object_new_volume(&obj, vol, "bench");
+        s = vv_object_new_volume(&obj, vol, name);
     if (s == VV_OK)
         s = vv_world_add_object(w, obj); /* owns obj from here, also on failure */
     vv_light head;
@@ -36,6 +30,26 @@ vvb_surface_world(vv_world **out, vv_object **out_obj, vv_volume *vol, double is
         vv_world_free(w);
         return s;
     }
+    *out = w;
+    if (out_obj)
+        *out_obj = obj;
+    return VV_OK;
+}
+
+vv_status
+vvb_surface_world(vv_world **out, vv_object **out_obj, vv_volume *vol, double iso, int size) {
+    /* centred, identity direction: the peers' placement */
+    for (int a = 0; a < 3; a++)
+        vol->origin[a] = -(vol->dims[a] - 1) * vol->spacing[a] / 2.0;
+    for (int a = 0; a < 9; a++)
+        vol->direction[a] = a % 4 == 0;
+    vol->modified++;
+
+    vv_world *w = NULL;
+    vv_object *obj = NULL;
+    vv_status s = vvb_volume_world(&w, &obj, vol, "bench");
+    if (s != VV_OK)
+        return s;
     double ext = 0;
     for (int a = 0; a < 3; a++) {
         double e = (vol->dims[a] - 1) * vol->spacing[a];

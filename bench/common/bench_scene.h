@@ -10,6 +10,13 @@
 #include "volvis/volvis.h"
 
 /*
+ * A World holding one volume object of vol (named name; the World takes a
+ * reference to vol) and one white headlight, and nothing else set up.
+ * *obj (may be NULL) receives the object. Errors: vv_error_set.
+ */
+vv_status vvb_volume_world(vv_world **w, vv_object **obj, vv_volume *vol, const char *name);
+
+/*
  * Builds the benchmark World around vol for the `surface` renderer: vol is
  * centred at the origin with an identity direction (the peers' placement;
  * vol->modified is bumped), drawn as its isosurface at iso (mode iso,

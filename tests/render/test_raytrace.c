@@ -682,6 +682,18 @@ test_parc_same_image(void **state) {
     vv_world_free(w);
 }
 
+/* A point light above and behind the head of the mirror scene. */
+static vv_light
+mirror_point_light(void) {
+    vv_light pl;
+    memset(&pl, 0, sizeof pl);
+    pl.type = VV_LIGHT_POINT;
+    pl.position = vv_vec3_make(-100, 250, 300);
+    pl.color = vv_vec3_make(1, 1, 1);
+    pl.intensity = 0.5;
+    return pl;
+}
+
 /* The shadow grid of volume samples (lazy shadow rays, or a swept light
  * volume), and the light volumes that answer shadow rays of directional
  * lights through volumes, against one exact shadow ray per sample and per
@@ -696,12 +708,7 @@ test_shadow_grid_vs_exact(void **state) {
      * (its light volume swept in order of distance to it) */
     for (int point = 0; point < 2; point++) {
         if (point) {
-            vv_light pl;
-            memset(&pl, 0, sizeof pl);
-            pl.type = VV_LIGHT_POINT;
-            pl.position = vv_vec3_make(-100, 250, 300);
-            pl.color = vv_vec3_make(1, 1, 1);
-            pl.intensity = 0.5;
+            const vv_light pl = mirror_point_light();
             vt_ok(vv_world_add_light(w, &pl));
         }
         double psnr[4];
@@ -785,12 +792,7 @@ kept_scene(const vv_light *pl) {
 static void
 test_shadow_grid_kept(void **state) {
     (void)state;
-    vv_light pl;
-    memset(&pl, 0, sizeof pl);
-    pl.type = VV_LIGHT_POINT;
-    pl.position = vv_vec3_make(-100, 250, 300);
-    pl.color = vv_vec3_make(1, 1, 1);
-    pl.intensity = 0.5;
+    const vv_light pl = mirror_point_light();
     vv_world *w = kept_scene(&pl);
     vv_object *head = w->objects[0], *frame = w->objects[2];
     for (int g = 1; g <= 2; g++) {
