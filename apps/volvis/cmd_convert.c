@@ -20,6 +20,7 @@ static const cli_opt_spec convert_opts[] = {
     {"series", 0, "N"},
     {"channel", 0, "C"},
     {"time", 0, "T"},
+    {"level", 0, "L"},
     {"quiet", 'q', NULL},
 };
 #define N_CONVERT_OPTS ((int)(sizeof convert_opts / sizeof convert_opts[0]))
@@ -42,7 +43,7 @@ cli_convert_usage(FILE *out) {
             "OME-XML with physical sizes and plane positions) has no direction matrix\n"
             "either; OME-Zarr (.ome.zarr, .zarr: a Zarr v2 folder with a pyramid of\n"
             "2x2x2 means, labels by nearest, and each level's scale and translation;\n"
-            "read back at level 0: the levels are not read yet) has none either;\n"
+            "read back at any level with --level) has none either;\n"
             "SLC (.slc; VolVis's own 8-bit format)\n"
             "holds 8-bit data only: other voxel types are rescaled from the value\n"
             "range to 0..255, with a note on stderr. What a format cannot hold is\n"
@@ -85,6 +86,8 @@ cli_convert_usage(FILE *out) {
             "  --time T           time step T, from 0 (default 0): OME-TIFF, ImageJ\n"
             "                     hyperstacks, NIfTI (dim[4]), NRRD (an axis of kind time),\n"
             "                     DICOM (images repeating at each position: cine, 4-D CT)\n"
+            "  --level L          resolution level L of a multiresolution IN (OME-Zarr\n"
+            "                     multiscales, from 0, the finest; default 0)\n"
             "  -q, --quiet        no 'wrote' line and no conversion note\n"
             "  -h, --help         show this help\n"
             "\n",
@@ -196,10 +199,17 @@ cli_convert_main(int argc, char **argv) {
     int series = 0, channel = -1, time = -1;
     if ((rc = cli_parse_series_channel(&a, &series, &channel, &time)))
         return rc;
+    int level = 0;
+    const char *ls = cli_get(&a, "level");
+    if (ls && (rc = cli_parse_int(&a, "level", ls, 0, 64, &level)))
+        return rc;
+    if (format == VV_FORMAT_AUTO && level > 0)
+        return cli_usage_error(&a, "--level: a .vvb is written from level 0");
     if (format == VV_FORMAT_AUTO)
         return convert_vvb(in, out, raw_spec ? &raw : NULL, series, channel, time,
                            cli_count(&a, "no-coarse") == 0, quiet);
-    if ((rc = cli_load_volume_sc(in, raw_spec ? &raw : NULL, series, channel, time, NULL, &v)))
+    if ((rc = cli_load_volume_level(in, raw_spec ? &raw : NULL, series, channel, time, level, NULL,
+                                    &v)))
         return rc;
     /* what the format cannot hold as it is (SLC: 8 bits only) is refused with
      * --strict, else converted with a note */

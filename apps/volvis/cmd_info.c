@@ -507,6 +507,9 @@ cli_info_main(int argc, char **argv) {
             printf("error bound:  %g on every voxel (corrections in steps of %g)\n",
                    vinfo.max_error, vinfo.corr_step);
     }
+    if (axes.n_levels > 1)
+        printf("levels:       %d (a multiresolution pyramid: volvis render --lod, --level L)\n",
+               axes.n_levels);
     if (axes.n_channels > 1 || axes.n_times > 1) {
         rc = print_axes(path, raw_spec ? &raw : NULL, series, channel, time, &axes, v);
         if (rc) {

@@ -175,7 +175,8 @@ cli_render_main(int argc, char **argv) {
         r.time_range = 1;
     }
     /* under mpirun a .vvb is read by bricks, each rank its own box */
-    if (r.memory_limit > 0 || (cli_ends_with(r.input, ".vvb") && !vv_parallel_launched()))
+    if (r.memory_limit > 0 || r.has_lod ||
+        (cli_ends_with(r.input, ".vvb") && !vv_parallel_launched()))
         return cli_render_out_of_core(&a, &r);
     if (vv_parallel_launched())
         return cli_render_parallel(&a, &r);

@@ -152,6 +152,12 @@ cli_load_volume(const char *path, const vv_raw_params *raw, vv_volume **out) {
 int
 cli_load_volume_sc(const char *path, const vv_raw_params *raw, int series, int channel, int time,
                    vv_load_info *info, vv_volume **out) {
+    return cli_load_volume_level(path, raw, series, channel, time, 0, info, out);
+}
+
+int
+cli_load_volume_level(const char *path, const vv_raw_params *raw, int series, int channel, int time,
+                      int level, vv_load_info *info, vv_volume **out) {
     *out = NULL;
     int rc = raw ? cli_check_readable(path) : cli_check_readable_input(path);
     if (rc)
@@ -161,6 +167,7 @@ cli_load_volume_sc(const char *path, const vv_raw_params *raw, int series, int c
     opt.series = series;
     opt.channel = channel;
     opt.time = time;
+    opt.level = level;
     opt.info = info;
     if (raw) {
         opt.format = VV_FORMAT_RAW;

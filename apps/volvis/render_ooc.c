@@ -7,10 +7,16 @@
  * proxy of the volume (vv_bricked_proxy), so the volume is never read
  * whole; the proxy stays the object's volume, through which a renderer
  * with global effects (raytrace's shadows) traces them.
+ *
+ * An OME-Zarr store is rendered from its pyramid (vv_pyramid) by level of
+ * detail (vv_renderer_render_multires): --lod PIXELS, or --level L for
+ * every node at one level; the proxy is its coarsest level, placed over the
+ * box of level 0 (or of --level L), which the view frames.
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "cli.h"
 
@@ -26,6 +32,125 @@ cli_proxy_opacity_unit(vv_world *w, const vv_volume *whole, const vv_volume *pro
     for (int i = 0; i < w->n_objects; i++)
         if (fabs(w->objects[i]->tf.opacity_unit_distance - pp) <= 1e-12 * pp)
             w->objects[i]->tf.opacity_unit_distance = ph;
+}
+
+/* A folder holding .zattrs or .zarray: a Zarr store. */
+static int
+is_zarr_store(const char *path) {
+    struct stat st;
+    char f[4200];
+    if (stat(path, &st) != 0 || !S_ISDIR(st.st_mode))
+        return 0;
+    snprintf(f, sizeof f, "%s/.zattrs", path);
+    if (stat(f, &st) == 0)
+        return 1;
+    snprintf(f, sizeof f, "%s/.zarray", path);
+    return stat(f, &st) == 0;
+}
+
+/* The coarsest level as the World's volume, its box stretched over the box
+ * of level @p frame (the view frames it, the histogram sets the transfer
+ * function). */
+static vv_status
+pyramid_proxy(vv_pyramid *p, int frame, vv_volume **out) {
+    const int top = vv_pyramid_levels(p) - 1;
+    const vv_volume *h = vv_pyramid_level(p, top), *f = vv_pyramid_level(p, frame);
+    const int lo[3] = {0, 0, 0}, hi[3] = {h->dims[0] - 1, h->dims[1] - 1, h->dims[2] - 1};
+    vv_status s = vv_pyramid_read_box(p, top, lo, hi, out);
+    if (s != VV_OK)
+        return s;
+    vv_volume *v = *out;
+    for (int k = 0; k < 3; k++) {
+        v->origin[k] = f->origin[k];
+        v->spacing[k] =
+            h->dims[k] > 1 ? f->spacing[k] * (f->dims[k] - 1) / (h->dims[k] - 1) : f->spacing[k];
+    }
+    return VV_OK;
+}
+
+static int
+render_pyramid(cli_args *a, cli_render_args *r) {
+    vv_pyramid *p = NULL;
+    vv_world *w = NULL;
+    vv_volume *proxy = NULL;
+    vv_renderer *ren = NULL;
+    vv_image *img = NULL;
+    int rc;
+    vv_error_clear();
+    vv_status s = vv_pyramid_open(&p, r->input, r->channel, r->has_time ? r->time : -1,
+                                  r->memory_limit, NULL);
+    if (s != VV_OK) {
+        rc = cli_fail(s, r->input);
+        goto done;
+    }
+    if (r->has_level && r->level >= vv_pyramid_levels(p)) {
+        cli_error("%s: level %d asked, the store has %d", r->input, r->level, vv_pyramid_levels(p));
+        rc = CLI_EXIT_FAIL;
+        goto done;
+    }
+    const int frame = r->has_level ? r->level : 0;
+    if ((s = pyramid_proxy(p, frame, &proxy)) != VV_OK) {
+        rc = cli_fail(s, r->input);
+        goto done;
+    }
+    if ((rc = cli_render_world_volume(r, proxy, &w)))
+        goto done;
+    cli_proxy_opacity_unit(w, vv_pyramid_level(p, frame), proxy);
+    cli_render_turn(r, w);
+    int quality = 2;
+    if ((rc = cli_render_renderer(a, r, w, &ren, &quality)))
+        goto done;
+    if ((s = vv_image_new(&img, w->view.width, w->view.height)) != VV_OK) {
+        rc = cli_fail(s, NULL);
+        goto done;
+    }
+    if (r->threads > 0)
+        vv_threads_set(r->threads);
+    vv_render_options ro;
+    vv_render_options_init(&ro);
+    ro.threads = r->threads;
+    ro.quality = quality;
+    vv_lod lod;
+    vv_lod_init(&lod);
+    lod.level = r->has_level ? r->level : -1;
+    lod.voxel_pixels = r->lod;
+    vv_multires_source src;
+    vv_pyramid_source(p, &src);
+    double t0 = cli_now();
+    vv_error_clear();
+    s = vv_renderer_render_multires(ren, w, 0, &src, &w->view, &ro, &lod, img);
+    double seconds = cli_now() - t0;
+    if (s != VV_OK) {
+        rc = cli_fail(s, NULL);
+        goto done;
+    }
+    vv_error_clear();
+    if ((s = vv_image_write_png(img, r->output, r->gamma, r->alpha)) != VV_OK) {
+        rc = cli_fail(s, r->output);
+        goto done;
+    }
+    if (!r->quiet) {
+        vv_pyramid_stats st;
+        vv_pyramid_stats_get(p, &st);
+        char levels[512] = "";
+        int len = 0;
+        for (int l = 0; l < vv_pyramid_levels(p) && len < (int)sizeof levels - 64; l++)
+            len += snprintf(levels + len, sizeof levels - (size_t)len, "%s%d: %d nodes %llu chunks",
+                            l ? ", " : "", l, lod.nodes[l], (unsigned long long)st.chunk_reads[l]);
+        printf("wrote %s (%dx%d, %.2f s; out of core from %d levels: %s; %d nodes skipped, "
+               "%.1f MiB read, peak cache %.1f MiB, a chunk read at most %d times a frame)\n",
+               r->output, img->width, img->height, seconds, vv_pyramid_levels(p), levels,
+               lod.skipped, (double)st.bytes_read / 1048576.0, (double)st.peak_bytes / 1048576.0,
+               st.max_reads_per_frame);
+    }
+    rc = CLI_EXIT_OK;
+done:
+    vv_image_free(img);
+    vv_renderer_free(ren);
+    vv_world_free(w);
+    vv_volume_free(proxy);
+    vv_pyramid_free(p);
+    return rc;
 }
 
 int
@@ -49,6 +174,12 @@ cli_render_out_of_core(cli_args *a, cli_render_args *r) {
     int rc = cli_check_readable_input(r->input);
     if (rc)
         return rc;
+    if (!r->has_raw && is_zarr_store(r->input))
+        return render_pyramid(a, r);
+    if (r->has_lod || (r->has_level && r->level > 0)) {
+        cli_error("%s: --lod and --level need a multiresolution file (OME-Zarr)", r->input);
+        return CLI_EXIT_USAGE;
+    }
     vv_bricked *b = NULL;
     vv_world *w = NULL;
     vv_volume *proxy = NULL;

@@ -323,6 +323,19 @@ cli_render_parse(cli_args *a, cli_render_args *r) {
             return cli_usage_error(a, "--memory-limit: '%s' is not a size (e.g. 512M, 1G)", s);
         r->memory_limit = (uint64_t)(x * mul);
     }
+    if ((s = cli_get(a, "level"))) {
+        if ((rc = cli_parse_int(a, "level", s, 0, 64, &r->level)))
+            return rc;
+        r->has_level = 1;
+    }
+    r->lod = 1;
+    if ((s = cli_get(a, "lod"))) {
+        if ((rc = cli_parse_double(a, "lod", s, 1e-3, 1e3, &r->lod)))
+            return rc;
+        r->has_lod = 1;
+        if (r->has_level)
+            return cli_usage_error(a, "--lod and --level: one or the other");
+    }
     r->field = cli_get(a, "field");
     if ((s = cli_get(a, "time"))) {
         if ((rc = cli_parse_int(a, "time", s, 0, 1000000, &r->time)))
@@ -485,8 +498,9 @@ world_for_volume(const cli_render_args *r, vv_world **out) {
     if (r->n_channels)
         return world_for_channels(r, out);
     vv_volume *v;
-    int rc = cli_load_volume_sc(r->input, r->has_raw ? &r->raw : NULL, r->series, r->channel,
-                                r->has_time ? r->time : -1, NULL, &v);
+    int rc =
+        cli_load_volume_level(r->input, r->has_raw ? &r->raw : NULL, r->series, r->channel,
+                              r->has_time ? r->time : -1, r->has_level ? r->level : 0, NULL, &v);
     if (rc)
         return rc;
     rc = cli_render_world_volume(r, v, out);
@@ -742,7 +756,16 @@ cli_render_print_options(FILE *out) {
                  "  --memory-limit SIZE  render a volume larger than memory brick by brick\n"
                  "                   within SIZE bytes (K, M, G suffixes): raw (--raw),\n"
                  "                   uncompressed NRRD or .vvb ('volvis convert IN OUT.vvb');\n"
-                 "                   a .vvb INPUT is always rendered so (default 1G)\n"
+                 "                   a .vvb INPUT is always rendered so (default 1G);\n"
+                 "                   an OME-Zarr store is rendered from its pyramid by\n"
+                 "                   level of detail (--lod), its chunks cached within SIZE\n"
+                 "  --lod PIXELS     OME-Zarr out of core: each 64^3 node of the volume at\n"
+                 "                   the coarsest level whose voxel covers at most PIXELS\n"
+                 "                   pixels (default 1; larger is coarser and faster);\n"
+                 "                   implies --memory-limit 1G when not given\n"
+                 "  --level L        level L of a multiresolution file (OME-Zarr, from 0,\n"
+                 "                   the finest; default 0): in memory, or out of core\n"
+                 "                   (--memory-limit) every node at level L\n"
                  "  --compositing binary-swap|radix-k[:K]\n"
                  "                   under mpirun -np N: how the ranks' partial images are\n"
                  "                   composited (default binary-swap; radix-k: groups of at\n"

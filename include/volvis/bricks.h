@@ -148,6 +148,69 @@ void vv_bricked_note_skip(vv_bricked *b);
  */
 void vv_bricked_source(vv_bricked *b, vv_brick_source *out);
 
+/* ---- multiresolution pyramids (OME-Zarr) ------------------------------------------ */
+
+#define VV_PYRAMID_MAX_LEVELS 16 /**< levels read from one store */
+
+typedef struct vv_pyramid vv_pyramid;
+
+/** What a pyramid did since it was opened. */
+typedef struct vv_pyramid_stats {
+    uint64_t chunk_reads[VV_PYRAMID_MAX_LEVELS]; /**< chunk files read and decoded, per level */
+    uint64_t chunk_hits;                         /**< chunks found decoded in the cache */
+    uint64_t missing;        /**< chunks absent from the store (the fill value) */
+    uint64_t evictions;      /**< chunks dropped to stay within the limit */
+    uint64_t bytes_read;     /**< bytes of chunk files read */
+    uint64_t peak_bytes;     /**< the cache's largest size, bytes of voxels */
+    uint64_t frames;         /**< frames begun (vv_multires_source.frame) */
+    int max_reads_per_frame; /**< the most times one chunk was read within one frame */
+} vv_pyramid_stats;
+
+/**
+ * Opens the OME-Zarr store (or plain Zarr v2 array: one level) at folder
+ * @p path for reading by boxes: channel @p channel at time step @p time
+ * (-1: 0) of every multiscales level. Only the metadata and the coarsest
+ * level's chunks are read. The value range is the omero window's min and
+ * max of the channel, else the coarsest level's (finer values beyond it
+ * classify as its ends). @p memory_limit (bytes, 0: 1 GiB) bounds the
+ * decoded chunks held and the working set of the box being rendered.
+ * @p info (may be NULL) gets the channel, step and level counts and the
+ * omero name and colour. Every level must have level 0's axes, type,
+ * channels and steps. Errors (prefixed "zarr: NAME"): those of
+ * vv_ome_zarr_read, VV_ERR_FORMAT (inconsistent multiscales), VV_ERR_LIMIT
+ * (over VV_PYRAMID_MAX_LEVELS levels; a limit below one box's working
+ * set). Thread-safety: one vv_pyramid is used from one thread at a time
+ * (it decodes chunks on every core).
+ */
+vv_status vv_pyramid_open(vv_pyramid **out, const char *path, int channel, int time,
+                          uint64_t memory_limit, vv_load_info *info);
+void vv_pyramid_free(vv_pyramid *p);
+/** Levels (>= 1). */
+int vv_pyramid_levels(const vv_pyramid *p);
+/**
+ * Level @p level's geometry (dims, type, spacing and origin from the
+ * level's scale and translation, the store's range) as a volume whose
+ * voxels must not be read; borrowed; NULL when out of range.
+ */
+const vv_volume *vv_pyramid_level(const vv_pyramid *p, int level);
+/**
+ * Voxels lo .. hi (inclusive) of level @p level as a new volume (voxel
+ * (0, 0, 0) is the level's voxel lo; the level's spacing, origin,
+ * direction and the store's range), assembled from the cached chunks and
+ * those read for it (kept). Errors: VV_ERR_INVALID (a box outside the
+ * level), VV_ERR_LIMIT (its chunks do not fit the limit), those of reading
+ * a chunk (naming the chunk's file).
+ */
+vv_status vv_pyramid_read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3],
+                              vv_volume **out);
+void vv_pyramid_stats_get(const vv_pyramid *p, vv_pyramid_stats *st);
+/**
+ * @p p as a multiresolution source (sys/source.h) for
+ * vv_renderer_render_multires: box ranges from the chunks decoded so far.
+ * @p p is borrowed: keep it open while @p out is used.
+ */
+void vv_pyramid_source(vv_pyramid *p, vv_multires_source *out);
+
 #ifdef __cplusplus
 }
 #endif

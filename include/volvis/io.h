@@ -51,7 +51,7 @@ typedef enum vv_format {
     VV_FORMAT_TIFF,
     VV_FORMAT_DICOM,
     VV_FORMAT_VTI,     /**< VTK XML image data: written, not read */
-    VV_FORMAT_OME_ZARR /**< OME-Zarr 0.4 (Zarr v2 folder): written, not read yet */
+    VV_FORMAT_OME_ZARR /**< OME-Zarr 0.4 (Zarr v2 folder), every multiscales level */
 } vv_format;
 
 /** Number of volume formats: their ids run from 1 to this. */
@@ -102,6 +102,7 @@ void vv_raw_params_init(vv_raw_params *p);
 typedef struct vv_load_info {
     int n_channels; /**< channels in the file, >= 1 */
     int n_times;    /**< time steps in the file, >= 1 */
+    int n_levels;   /**< resolution levels in the file (OME-Zarr multiscales), >= 1 */
     /** The read channel's name from the file's metadata (OME Channel Name,
      *  ImageJ Labels are not read), UTF-8, NUL-terminated; "" when none. */
     char channel_name[VV_CHANNEL_NAME_MAX];
@@ -151,6 +152,13 @@ typedef struct vv_load_options {
      */
     int time;
     /**
+     * Which resolution level of a multiresolution file, from 0 (the finest,
+     * the default): OME-Zarr's multiscales datasets in their order. A level
+     * past the file's is VV_ERR_INVALID naming the count; other formats
+     * have level 0 only.
+     */
+    int level;
+    /**
      * Out, may be NULL: what the file holds besides the volume read (its
      * channels and time steps, the read channel's name and colour). Filled
      * on success; through the sandbox too. Borrowed for the call.
@@ -159,7 +167,7 @@ typedef struct vv_load_options {
 } vv_load_options;
 
 /** Format VV_FORMAT_AUTO, no raw parameters (has_raw 0, raw as vv_raw_params_init),
- * series 0, channel -1, time -1, info NULL. */
+ * series 0, channel -1, time -1, level 0, info NULL. */
 void vv_load_options_init(vv_load_options *o);
 
 /**

@@ -298,6 +298,52 @@ vv_status vv_renderer_render_bricks(vv_renderer *r, const vv_world *w, int objec
                                     const struct vv_brick_source *src, const vv_view *view,
                                     const vv_render_options *opt, vv_image *out);
 
+struct vv_multires_source; /* include/volvis/sys/source.h */
+
+#define VV_LOD_MAX_LEVELS 16 /**< levels vv_renderer_render_multires draws from */
+
+/** Level of detail of a multiresolution render, and what the frame used. */
+typedef struct vv_lod {
+    /**
+     * In: >= 0: every node at this level (the coarsest when past it); -1:
+     * each node at the coarsest level whose voxel projects to at most
+     * voxel_pixels pixels at the node's point nearest the eye (screen-space
+     * error).
+     */
+    int level;
+    double voxel_pixels;          /**< in: > 0 (default 1; larger is coarser and faster) */
+    int nodes[VV_LOD_MAX_LEVELS]; /**< out: nodes rendered at each level */
+    int skipped; /**< out: nodes skipped unread (their known min/max is transparent) */
+} vv_lod;
+
+/** level -1 (screen-space error), voxel_pixels 1, counts 0. */
+void vv_lod_init(vv_lod *lod);
+
+/**
+ * Renders object @p object of @p w from the pyramid @p src by level of
+ * detail: an octree over level 0's cells (nodes of src->node_cells << d
+ * cells a side at depth d) is walked front to back from the root; a node
+ * whose chosen level (lod) is at least its depth is one region render
+ * (include/volvis/sys/renderer.h) of that level's voxels -- the node's box
+ * mapped into the level's index space through the levels' scale and
+ * translation, one voxel beyond each face read -- else its eight children
+ * are, nearest first. Nodes tile level 0's box exactly, so neighbours at
+ * different levels meet without cracks (the values on the two sides of a
+ * face are those of two levels). Each level samples at the object's step
+ * in its own voxels, opacity corrected for the step's world length. A node
+ * whose min/max the source knows and the transfer function makes
+ * transparent is skipped unread (composite). The object's own volume gives
+ * the World's defaults (a proxy); the geometry comes from the source. With
+ * level 0 everywhere the image is vv_renderer_render_bricks's of level 0
+ * (bit for bit for mip and minip against the in-memory render). The
+ * object's transform and level 0's direction apply to every level.
+ * Thread-safety: as the renderer; @p src is used from this thread. Errors
+ * as vv_renderer_render_bricks; those of the source's reads.
+ */
+vv_status vv_renderer_render_multires(vv_renderer *r, const vv_world *w, int object,
+                                      const struct vv_multires_source *src, const vv_view *view,
+                                      const vv_render_options *opt, vv_lod *lod, vv_image *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -46,7 +46,7 @@
 
 extern char **environ;
 
-#define SBX_VERSION 3
+#define SBX_VERSION 4
 #define SBX_FD 3
 #define SBX_MAX_PATH 4096
 #define SBX_MAX_SERIES 200000 /* as many as the files a listing reads */
@@ -75,7 +75,7 @@ typedef struct sbx_request {
     uint32_t magic, version;
     int32_t format, has_raw;
     vv_raw_params raw;
-    int32_t series, channel, time;
+    int32_t series, channel, time, level;
     uint64_t budget;
     int32_t threads;
     int32_t inject;
@@ -835,6 +835,7 @@ vv_sandbox_reader_main(int argc, char **argv) {
         o.series = rq.series;
         o.channel = rq.channel;
         o.time = rq.time;
+        o.level = rq.level;
         o.info = &info;
         s = vv_volume_load(&v, rq.path, &o);
     }
@@ -850,6 +851,7 @@ vv_sandbox_reader_main(int argc, char **argv) {
         r.data_origin = v->data_origin;
         r.n_channels = info.n_channels;
         r.n_times = info.n_times;
+        r.n_levels = info.n_levels;
         r.has_color = info.has_color;
         memcpy(r.color, info.color, sizeof r.color);
         r.time_step = info.time_step;
@@ -1026,7 +1028,7 @@ volume_from_reply(vv_volume **out, vv_load_info *info, const sbx_reply *r, int f
         s = vv_error_set(VV_ERR_FORMAT, "%s: %s: the reader's result has a broken geometry",
                          fmt_name, file);
     else if (r->n_channels < 0 || r->n_channels > VV_VOLUME_MAX_DIM || r->n_times < 0 ||
-             r->n_times > VV_VOLUME_MAX_DIM ||
+             r->n_times > VV_VOLUME_MAX_DIM || r->n_levels < 0 || r->n_levels > 64 ||
              !memchr(r->channel_name, 0, sizeof r->channel_name) ||
              !(r->time_step >= 0 && r->time_step < 1e12) ||
              !(r->color[0] >= 0 && r->color[0] <= 1 && r->color[1] >= 0 && r->color[1] <= 1 &&
@@ -1073,6 +1075,7 @@ volume_from_reply(vv_volume **out, vv_load_info *info, const sbx_reply *r, int f
     memset(info, 0, sizeof *info);
     info->n_channels = r->n_channels;
     info->n_times = r->n_times;
+    info->n_levels = r->n_levels;
     info->has_color = r->has_color != 0;
     memcpy(info->color, r->color, sizeof info->color);
     info->time_step = r->time_step;
@@ -1614,6 +1617,7 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt, co
     rq->series = opt->series;
     rq->channel = opt->channel;
     rq->time = opt->time;
+    rq->level = opt->level;
     rq->budget = vv_memory_budget_get();
     uint64_t rq_budget = rq->budget;
     rq->threads = vv_threads_get();

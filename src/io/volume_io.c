@@ -25,6 +25,7 @@ vv_load_options_init(vv_load_options *o) {
     o->series = 0;
     o->channel = -1;
     o->time = -1;
+    o->level = 0;
     o->info = NULL;
 }
 
@@ -112,6 +113,8 @@ finish_axes(vv_volume **out, const char *path, const vv_load_options *opt, vv_lo
         info->n_channels = 1;
     if (info->n_times < 1)
         info->n_times = 1;
+    if (info->n_levels < 1)
+        info->n_levels = 1;
     info->channel_name[VV_CHANNEL_NAME_MAX - 1] = '\0';
     const char *what = NULL;
     int asked = 0, have = 0;
@@ -123,6 +126,10 @@ finish_axes(vv_volume **out, const char *path, const vv_load_options *opt, vv_lo
         what = "time step";
         asked = opt->time;
         have = info->n_times;
+    } else if (opt->level >= info->n_levels || opt->level < 0) {
+        what = "level";
+        asked = opt->level;
+        have = info->n_levels;
     }
     if (what) {
         vv_volume_free(*out);

@@ -41,31 +41,6 @@
 #include "core/internal.h"
 #include "io/zarr.h"
 
-#define ZR_MAX_DIM 5
-#define ZR_JSON_MAX (16u << 20)
-#define ZR_CHUNK_MAX ((uint64_t)1 << 30)
-
-typedef struct zr_axis {
-    char name[32];
-    int kind; /* 0 space, 1 channel, 2 time */
-    char unit[32];
-} zr_axis;
-
-/* The array and what the metadata says of it. */
-typedef struct zr_array {
-    char dir[4096];
-    int ndim;
-    uint64_t shape[ZR_MAX_DIM], chunks[ZR_MAX_DIM];
-    vv_voxel_type type;
-    int swap; /* stored in the other byte order */
-    size_t esize;
-    char codec[16]; /* "" raw, zlib, gzip, zstd, blosc */
-    char sep;
-    double fill;
-    zr_axis axes[ZR_MAX_DIM];
-    double scale[ZR_MAX_DIM], trans[ZR_MAX_DIM];
-} zr_array;
-
 /* path/name loaded as JSON (at most ZR_JSON_MAX bytes); NULL with the error
  * set, or NULL without an error when the file is absent and @p optional. */
 static json_t *
@@ -225,10 +200,11 @@ apply_transforms(json_t *list, int ndim, double *sc, double *tr) {
     }
 }
 
-/* The OME metadata of the store at @p root (its .zattrs): level 0's folder,
- * axes, transforms; the channel's name and colour into @p info. */
-static vv_status
-parse_store(const char *root, zr_array *a, int channel, vv_load_info *info) {
+/* The OME metadata of the store at @p root (its .zattrs): level @p level's
+ * folder, axes, transforms; the channel's name and colour into @p info. */
+vv_status
+vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load_info *info,
+                  int *n_levels) {
     vv_status s;
     json_t *za = load_json(root, ".zattrs", 1, &s);
     if (s != VV_OK)
@@ -236,10 +212,18 @@ parse_store(const char *root, zr_array *a, int channel, vv_load_info *info) {
     json_t *ms = za ? json_array_get(json_object_get(za, "multiscales"), 0) : NULL;
     snprintf(a->dir, sizeof a->dir, "%s", root);
     json_t *axes = ms ? json_object_get(ms, "axes") : NULL;
-    json_t *ds0 = ms ? json_array_get(json_object_get(ms, "datasets"), 0) : NULL;
-    if (ms && !ds0) {
+    json_t *dsl = ms ? json_object_get(ms, "datasets") : NULL;
+    json_t *ds0 = ms ? json_array_get(dsl, (size_t)level) : NULL;
+    if (ms && !json_array_get(dsl, 0)) {
         json_decref(za);
         return vv_error_set(VV_ERR_FORMAT, ".zattrs: multiscales without datasets");
+    }
+    const int count = ms ? (int)json_array_size(dsl) : 1;
+    if (n_levels)
+        *n_levels = count;
+    if (level < 0 || (ms ? !ds0 : level > 0)) {
+        json_decref(za);
+        return vv_error_set(VV_ERR_INVALID, "level %d asked, the store has %d", level, count);
     }
     if (ds0) {
         const char *p = json_string_value(json_object_get(ds0, "path"));
@@ -251,11 +235,11 @@ parse_store(const char *root, zr_array *a, int channel, vv_load_info *info) {
     }
     s = parse_zarray(a);
     if (s != VV_OK) {
-        char level[256];
-        snprintf(level, sizeof level, "%s",
+        char lname[256];
+        snprintf(lname, sizeof lname, "%s",
                  ds0 ? json_string_value(json_object_get(ds0, "path")) : ".");
         json_decref(za);
-        return vv_error_prefix(s, "level %s", level);
+        return vv_error_prefix(s, "level %s", lname);
     }
     /* the axes: from the metadata, else (no OME axes) the last three are z,
      * y, x after t and c */
@@ -317,9 +301,12 @@ parse_store(const char *root, zr_array *a, int channel, vv_load_info *info) {
 
 /* Reads and decodes chunk file @p path into @p out (exactly @p n bytes);
  * 0 with *missing = 1 when the file does not exist. */
-static vv_status
-read_chunk(const zr_array *a, const char *path, unsigned char *out, size_t n, int *missing) {
+vv_status
+vv_zr_read_chunk(const zr_array *a, const char *path, unsigned char *out, size_t n, int *missing,
+                 uint64_t *file_bytes) {
     *missing = 0;
+    if (file_bytes)
+        *file_bytes = 0;
     FILE *f = fopen(path, "rb");
     if (!f) {
         if (errno == ENOENT) {
@@ -342,6 +329,8 @@ read_chunk(const zr_array *a, const char *path, unsigned char *out, size_t n, in
     }
     size_t got = fread(src, 1, m, f);
     fclose(f);
+    if (file_bytes)
+        *file_bytes = got;
     vv_status s = VV_OK;
     if (got != m) {
         s = vv_error_set(VV_ERR_IO, "%s: cannot read the chunk", path);
@@ -387,8 +376,8 @@ read_chunk(const zr_array *a, const char *path, unsigned char *out, size_t n, in
 }
 
 /* Fills @p n voxels of type @p t at @p dst with @p x (the fill value, cast). */
-static void
-fill_voxels(void *dst, size_t n, vv_voxel_type t, double x) {
+void
+vv_zr_fill(void *dst, size_t n, vv_voxel_type t, double x) {
 #define ZR_FILL(T)                                                                                 \
     for (size_t i = 0; i < n; i++)                                                                 \
         ((T *)dst)[i] = (T)x;
@@ -419,21 +408,84 @@ fill_voxels(void *dst, size_t n, vv_voxel_type t, double x) {
 #undef ZR_FILL
 }
 
-/* What the parallel read of one channel and step shares. */
-typedef struct zr_job {
-    const zr_array *a;
-    int cax, tax, vax[3], dims[3];
-    uint64_t ch, tp;
-    uint64_t cstride[ZR_MAX_DIM], nchunk[ZR_MAX_DIM];
-    size_t cbytes;
-    vv_volume *v;
-} zr_job;
+vv_status
+vv_zr_layout(const zr_array *a, int channel, int time, zr_layout *J) {
+    memset(J, 0, sizeof *J);
+    J->a = a;
+    int sp[3], ns = 0;
+    J->cax = J->tax = -1;
+    for (int i = 0; i < a->ndim; i++) {
+        int *slot = a->axes[i].kind == 1 ? &J->cax : a->axes[i].kind == 2 ? &J->tax : NULL;
+        if (slot && *slot >= 0)
+            return vv_error_set(VV_ERR_UNSUPPORTED, "two %s axes",
+                                a->axes[i].kind == 1 ? "channel" : "time");
+        if (slot)
+            *slot = i;
+        else if (ns < 3)
+            sp[ns++] = i;
+        else
+            return vv_error_set(VV_ERR_UNSUPPORTED, "more than three spatial axes");
+    }
+    if (ns < 2)
+        return vv_error_set(VV_ERR_UNSUPPORTED, "%d spatial axes (2 or 3 are read)", ns);
+    /* volume axes i, j, k = the last, the middle, the first spatial axis */
+    J->vax[0] = sp[ns - 1];
+    J->vax[1] = sp[ns - 2];
+    J->vax[2] = ns == 3 ? sp[0] : -1;
+    for (int k = 0; k < 3; k++) {
+        uint64_t n = J->vax[k] >= 0 ? a->shape[J->vax[k]] : 1;
+        if (n > VV_VOLUME_MAX_DIM)
+            return vv_error_set(VV_ERR_LIMIT, "axis %s has %llu samples (limit %d)",
+                                a->axes[J->vax[k]].name, (unsigned long long)n, VV_VOLUME_MAX_DIM);
+        J->dims[k] = (int)n;
+    }
+    J->nc = J->cax >= 0 ? a->shape[J->cax] : 1;
+    J->nt = J->tax >= 0 ? a->shape[J->tax] : 1;
+    const int ch = channel < 0 ? 0 : channel, tp = time < 0 ? 0 : time;
+    if ((uint64_t)ch >= J->nc)
+        return vv_error_set(VV_ERR_INVALID, "channel %d asked, the store has %llu", ch,
+                            (unsigned long long)J->nc);
+    if ((uint64_t)tp >= J->nt)
+        return vv_error_set(VV_ERR_INVALID, "time step %d asked, the store has %llu", tp,
+                            (unsigned long long)J->nt);
+    J->ch = (uint64_t)ch;
+    J->tp = (uint64_t)tp;
+    uint64_t cbytes = a->esize;
+    for (int i = 0; i < a->ndim; i++) {
+        if (a->chunks[i] > ZR_CHUNK_MAX || cbytes > ZR_CHUNK_MAX / a->chunks[i])
+            return vv_error_set(VV_ERR_LIMIT, "chunks of over %llu bytes",
+                                (unsigned long long)ZR_CHUNK_MAX);
+        cbytes *= a->chunks[i];
+    }
+    J->cbytes = (size_t)cbytes;
+    /* element strides of a chunk (C order), chunks per axis */
+    J->cstride[a->ndim - 1] = 1;
+    for (int i = a->ndim - 2; i >= 0; i--)
+        J->cstride[i] = J->cstride[i + 1] * a->chunks[i + 1];
+    for (int i = 0; i < a->ndim; i++)
+        J->nchunk[i] = (a->shape[i] + a->chunks[i] - 1) / a->chunks[i];
+    for (int k = 0; k < 3; k++) {
+        J->cdims[k] = J->vax[k] >= 0 ? (int)a->chunks[J->vax[k]] : 1;
+        J->nchunks[k] = J->vax[k] >= 0 ? (int)J->nchunk[J->vax[k]] : 1;
+    }
+    return VV_OK;
+}
 
-/* Spatial chunk @p L (in C order over the spatial axes, at the job's
- * channel and step): read, decoded into @p buf and its voxels inside the
- * array copied into the volume (chunks cover disjoint voxels). */
-static vv_status
-copy_chunk(const zr_job *J, uint64_t L, unsigned char *buf) {
+uint64_t
+vv_zr_chunk_linear(const zr_layout *J, const int c[3]) {
+    uint64_t L = 0;
+    for (int i = 0; i < J->a->ndim; i++) {
+        if (i == J->cax || i == J->tax)
+            continue;
+        const int k = i == J->vax[0] ? 0 : i == J->vax[1] ? 1 : 2;
+        L = L * J->nchunk[i] + (uint64_t)c[k];
+    }
+    return L;
+}
+
+vv_status
+vv_zr_copy_chunk(const zr_layout *J, uint64_t L, unsigned char *buf, unsigned char *dst,
+                 const int dorg[3], const int ddims[3], int *missing_out, uint64_t *file_bytes) {
     const zr_array *a = J->a;
     uint64_t idx[ZR_MAX_DIM];
     for (int i = a->ndim - 1; i >= 0; i--) {
@@ -452,12 +504,14 @@ copy_chunk(const zr_job *J, uint64_t L, unsigned char *buf) {
         len += snprintf(name + len, sizeof name - (size_t)len, "%s%llu",
                         i ? (char[2]){a->sep, 0} : "", (unsigned long long)idx[i]);
     int missing = 0;
-    vv_status s = read_chunk(a, name, buf, J->cbytes, &missing);
+    vv_status s = vv_zr_read_chunk(a, name, buf, J->cbytes, &missing, file_bytes);
     if (s != VV_OK)
         return s;
+    if (missing_out)
+        *missing_out = missing;
     const size_t vs = a->esize;
     if (missing)
-        fill_voxels(buf, J->cbytes / vs, a->type, a->fill);
+        vv_zr_fill(buf, J->cbytes / vs, a->type, a->fill);
     else if (a->swap)
         vv_byteswap(buf, J->cbytes / vs, vs);
     /* the part inside the array, at the asked channel and step */
@@ -480,19 +534,19 @@ copy_chunk(const zr_job *J, uint64_t L, unsigned char *buf) {
     }
     const uint64_t si = J->cstride[J->vax[0]], sj = J->cstride[J->vax[1]],
                    sk = J->vax[2] >= 0 ? J->cstride[J->vax[2]] : 0;
-    unsigned char *vd = J->v->data;
     for (uint64_t kk = 0; kk < n[2]; kk++)
         for (uint64_t jj = 0; jj < n[1]; jj++) {
-            unsigned char *dst =
-                vd +
-                (((o[2] + kk) * (uint64_t)J->dims[1] + o[1] + jj) * (uint64_t)J->dims[0] + o[0]) *
-                    vs;
+            unsigned char *d = dst + (((o[2] - (uint64_t)dorg[2] + kk) * (uint64_t)ddims[1] + o[1] -
+                                       (uint64_t)dorg[1] + jj) *
+                                          (uint64_t)ddims[0] +
+                                      o[0] - (uint64_t)dorg[0]) *
+                                         vs;
             const unsigned char *src = buf + (base + kk * sk + jj * sj) * vs;
             if (si == 1)
-                memcpy(dst, src, (size_t)(n[0] * vs));
+                memcpy(d, src, (size_t)(n[0] * vs));
             else
                 for (uint64_t ii = 0; ii < n[0]; ii++)
-                    memcpy(dst + ii * vs, src + ii * si * vs, vs);
+                    memcpy(d + ii * vs, src + ii * si * vs, vs);
         }
     return VV_OK;
 }
@@ -502,89 +556,41 @@ read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
     zr_array a;
     memset(&a, 0, sizeof a);
     vv_load_info *info = opt->info;
-    vv_status s = parse_store(path, &a, opt->channel, info);
+    int n_levels = 1;
+    vv_status s = vv_zr_parse_store(path, opt->level, &a, opt->channel, info, &n_levels);
     if (s != VV_OK)
         return s;
-    int sp[3], ns = 0, cax = -1, tax = -1;
-    for (int i = 0; i < a.ndim; i++) {
-        int *slot = a.axes[i].kind == 1 ? &cax : a.axes[i].kind == 2 ? &tax : NULL;
-        if (slot && *slot >= 0)
-            return vv_error_set(VV_ERR_UNSUPPORTED, "two %s axes",
-                                a.axes[i].kind == 1 ? "channel" : "time");
-        if (slot)
-            *slot = i;
-        else if (ns < 3)
-            sp[ns++] = i;
-        else
-            return vv_error_set(VV_ERR_UNSUPPORTED, "more than three spatial axes");
-    }
-    if (ns < 2)
-        return vv_error_set(VV_ERR_UNSUPPORTED, "%d spatial axes (2 or 3 are read)", ns);
-    /* volume axes i, j, k = the last, the middle, the first spatial axis */
-    int vax[3] = {sp[ns - 1], sp[ns - 2], ns == 3 ? sp[0] : -1};
-    int dims[3];
-    for (int k = 0; k < 3; k++) {
-        uint64_t n = vax[k] >= 0 ? a.shape[vax[k]] : 1;
-        if (n > VV_VOLUME_MAX_DIM)
-            return vv_error_set(VV_ERR_LIMIT, "axis %s has %llu samples (limit %d)",
-                                a.axes[vax[k]].name, (unsigned long long)n, VV_VOLUME_MAX_DIM);
-        dims[k] = (int)n;
-    }
-    const uint64_t nc = cax >= 0 ? a.shape[cax] : 1, nt = tax >= 0 ? a.shape[tax] : 1;
-    const int ch = opt->channel < 0 ? 0 : opt->channel, tp = opt->time < 0 ? 0 : opt->time;
-    if ((uint64_t)ch >= nc)
-        return vv_error_set(VV_ERR_INVALID, "channel %d asked, the store has %llu", ch,
-                            (unsigned long long)nc);
-    if ((uint64_t)tp >= nt)
-        return vv_error_set(VV_ERR_INVALID, "time step %d asked, the store has %llu", tp,
-                            (unsigned long long)nt);
+    zr_layout J;
+    if ((s = vv_zr_layout(&a, opt->channel, opt->time, &J)) != VV_OK)
+        return s;
+    const int *dims = J.dims, *vax = J.vax;
+    const int cax = J.cax, tax = J.tax;
+    const uint64_t nc = J.nc, nt = J.nt;
     if ((s = vv_volume_check_size(dims, a.type, NULL)) != VV_OK)
         return s;
-    uint64_t cbytes = a.esize;
-    for (int i = 0; i < a.ndim; i++) {
-        if (a.chunks[i] > ZR_CHUNK_MAX || cbytes > ZR_CHUNK_MAX / a.chunks[i])
-            return vv_error_set(VV_ERR_LIMIT, "chunks of over %llu bytes",
-                                (unsigned long long)ZR_CHUNK_MAX);
-        cbytes *= a.chunks[i];
-    }
     vv_volume *v = NULL;
     if ((s = vv_volume_new(&v, dims, a.type)) != VV_OK)
         return s;
-    zr_job J;
-    memset(&J, 0, sizeof J);
-    J.a = &a;
-    J.cax = cax;
-    J.tax = tax;
-    J.ch = (uint64_t)ch;
-    J.tp = (uint64_t)tp;
-    memcpy(J.vax, vax, sizeof J.vax);
-    memcpy(J.dims, dims, sizeof J.dims);
-    J.cbytes = (size_t)cbytes;
-    J.v = v;
-    /* element strides of a chunk (C order), chunks per axis */
-    J.cstride[a.ndim - 1] = 1;
-    for (int i = a.ndim - 2; i >= 0; i--)
-        J.cstride[i] = J.cstride[i + 1] * a.chunks[i + 1];
     uint64_t n_spatial = 1;
-    for (int i = 0; i < a.ndim; i++) {
-        J.nchunk[i] = (a.shape[i] + a.chunks[i] - 1) / a.chunks[i];
+    for (int i = 0; i < a.ndim; i++)
         if (i != cax && i != tax)
             n_spatial *= J.nchunk[i]; /* at most 2^48: each axis is at most 65536 */
-    }
     /* the chunks in parallel, each thread its own buffer (one thread for
      * chunks over 64 MiB); the error of the first failing chunk in order */
     long long first = -1;
     vv_status first_status = VV_OK;
     char first_msg[1024] = "";
     const int nthreads = J.cbytes > ((size_t)64 << 20) ? 1 : omp_get_max_threads();
+    const int zero[3] = {0, 0, 0};
 #pragma omp parallel num_threads(nthreads)
     {
         unsigned char *buf = malloc(J.cbytes);
 #pragma omp for schedule(dynamic, 1)
         for (long long L = 0; L < (long long)n_spatial; L++) {
-            vv_status cs = buf ? copy_chunk(&J, (uint64_t)L, buf)
-                               : vv_error_set(VV_ERR_NOMEM,
-                                              "out of memory for a chunk of %zu bytes", J.cbytes);
+            vv_status cs =
+                buf ? vv_zr_copy_chunk(&J, (uint64_t)L, buf, v->data, zero, dims, NULL, NULL)
+                    : vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk of %zu bytes",
+                                   J.cbytes);
             if (cs != VV_OK) {
 #pragma omp critical(vv_zarr_err)
                 if (first < 0 || L < first) {
@@ -609,6 +615,7 @@ read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
     vv_volume_update_range(v);
     if (info) {
         info->n_channels = (int)nc;
+        info->n_levels = n_levels;
         info->n_times = (int)nt;
         if (tax >= 0 && a.scale[tax] > 0) {
             const char *u = a.axes[tax].unit;

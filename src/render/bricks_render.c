@@ -19,6 +19,7 @@
 
 #include "core/internal.h"
 #include "render/volume_cache.h"
+#include "volvis/bricks.h"
 #include "volvis/render.h"
 #include "volvis/sys/renderer.h"
 #include "volvis/sys/source.h"
@@ -87,15 +88,13 @@ tf_max_opacity(const vv_tf *tf, double a, double b) {
     return m;
 }
 
-/* The argument checks of vv_renderer_render_bricks. */
+/* The argument checks of vv_renderer_render_bricks and _multires (the
+ * source's own checked by the caller). */
 static vv_status
-check_args(vv_renderer *r, const vv_world *w, int object, const vv_brick_source *src,
-           const vv_view *view, const vv_image *out) {
-    if (!r || !w || !src || !view || !out || object < 0 || object >= w->n_objects)
+check_args(vv_renderer *r, const vv_world *w, int object, const vv_view *view,
+           const vv_image *out) {
+    if (!r || !w || !view || !out || object < 0 || object >= w->n_objects)
         return vv_error_set(VV_ERR_INVALID, "bricks: bad arguments");
-    if (src->version != VV_BRICK_SOURCE_VERSION)
-        return vv_error_set(VV_ERR_UNSUPPORTED, "bricks: source interface version %d, not %d",
-                            src->version, VV_BRICK_SOURCE_VERSION);
     if (out->width != view->width || out->height != view->height)
         return vv_error_set(VV_ERR_INVALID, "bricks: image %dx%d for a %dx%d view", out->width,
                             out->height, view->width, view->height);
@@ -122,10 +121,28 @@ check_args(vv_renderer *r, const vv_world *w, int object, const vv_brick_source 
     return VV_OK;
 }
 
+/* One region render, composited under the image so far. */
+static vv_status
+render_piece(vv_renderer *r, const vv_world *w, const vv_view *view, const vv_render_region *rg,
+             const vv_render_options *opt, vv_region_image *piece, vv_region_image *whole) {
+    vv_status s = vv_renderer_render_region(r, w, view, rg, opt, piece);
+    if (s != VV_OK)
+        return s;
+    if (piece->op != whole->op)
+        return vv_error_set(VV_ERR_INVALID, "bricks: %s combined its regions by %d, not %d",
+                            vv_renderer_name(r), (int)piece->op, (int)whole->op);
+    vv_region_image_combine(whole, piece); /* in front over this region */
+    return VV_OK;
+}
+
 vv_status
 vv_renderer_render_bricks(vv_renderer *r, const vv_world *w, int object, const vv_brick_source *src,
                           const vv_view *view, const vv_render_options *opt, vv_image *out) {
-    vv_status s = check_args(r, w, object, src, view, out);
+    if (src && src->version != VV_BRICK_SOURCE_VERSION)
+        return vv_error_set(VV_ERR_UNSUPPORTED, "bricks: source interface version %d, not %d",
+                            src->version, VV_BRICK_SOURCE_VERSION);
+    vv_status s = src ? check_args(r, w, object, view, out)
+                      : vv_error_set(VV_ERR_INVALID, "bricks: no source");
     if (s != VV_OK)
         return s;
     const vv_object *obj = w->objects[object];
@@ -207,21 +224,321 @@ vv_renderer_render_bricks(vv_renderer *r, const vv_world *w, int object, const v
         if ((s = src->load(src->user, idx, &bv)) != VV_OK)
             break;
         rg.voxels = bv;
-        s = vv_renderer_render_region(r, w, view, &rg, opt, &piece);
+        s = render_piece(r, w, view, &rg, opt, &piece, &whole);
         vv_volume_free(bv); /* the renderer's cache may keep its own reference */
-        if (s != VV_OK)
-            break;
-        if (piece.op != whole.op) {
-            s = vv_error_set(VV_ERR_INVALID, "bricks: %s combined its regions by %d, not %d",
-                             vv_renderer_name(r), (int)piece.op, (int)whole.op);
-            break;
-        }
-        vv_region_image_combine(&whole, &piece); /* in front over this brick */
     }
     if (s == VV_OK)
         vv_region_image_finish(&whole, w->background);
     vv_image_free(part);
     free(keys);
     free(ord.list);
+    return s;
+}
+
+/* ---- multiresolution sources: level of detail per node ------------------------ */
+
+/* A node to render: its level, region (voxels unset) and box of voxels. */
+typedef struct mr_node {
+    int level;
+    vv_render_region rg;
+    int lo[3], hi[3];
+} mr_node;
+
+/* What one multiresolution frame shares. */
+typedef struct mr_frame {
+    mr_node *nodes; /* the frame's nodes front to back */
+    int n_nodes, cap_nodes;
+    vv_renderer *r;
+    const vv_world *w;
+    const vv_multires_source *src;
+    const vv_view *view;
+    const vv_render_options *opt;
+    vv_lod *lod;
+    const vv_object *obj;
+    int object, n_levels, cells[3], ortho, skip;
+    int leaf; /* the octree leaves' side, level-0 cells */
+    vv_mat4 i2w[VV_LOD_MAX_LEVELS];
+    double a[VV_LOD_MAX_LEVELS][3], b[VV_LOD_MAX_LEVELS][3]; /* level L index = (x0 - b) / a */
+    double vox[VV_LOD_MAX_LEVELS]; /* a level's smallest voxel edge, world units */
+    double E[3], D[3];             /* eye and view direction, level 0's index space */
+    vv_vec3 fwd;                   /* unit view direction, world */
+    double ppw;                    /* pixels a world unit at depth 1 (perspective) or anywhere */
+    double bin;                    /* a transfer-function table entry's width */
+    vv_region_image *whole, *piece;
+} mr_frame;
+
+/* The coarsest level whose voxel projects to at most lod->voxel_pixels at
+ * the node's point nearest the eye (the fixed level when one is asked). */
+static int
+desired_level(const mr_frame *f, const int n0[3], const int n1[3]) {
+    if (f->lod->level >= 0)
+        return f->lod->level < f->n_levels ? f->lod->level : f->n_levels - 1;
+    double p[3];
+    for (int k = 0; k < 3; k++)
+        p[k] = f->E[k] < n0[k] ? n0[k] : f->E[k] > n1[k] ? n1[k] : f->E[k];
+    double scale = f->ppw;
+    if (!f->ortho) {
+        const vv_vec3 q = vv_mat4_mul_point(f->i2w[0], vv_vec3_make(p[0], p[1], p[2]));
+        const double z = vv_vec3_dot(vv_vec3_sub(q, f->view->eye), f->fwd);
+        if (!(z > 0))
+            return 0; /* the eye in or beside the node */
+        scale = f->ppw / z;
+    }
+    const double limit = f->lod->voxel_pixels > 0 ? f->lod->voxel_pixels : 1.0;
+    int best = 0;
+    for (int L = 1; L < f->n_levels; L++)
+        if (f->vox[L] * scale <= limit)
+            best = L;
+    return best;
+}
+
+/* The node of level-0 cells n0 .. n1 with the voxels of level L, added to
+ * the frame's list unless it is off screen or known to be transparent. */
+static vv_status
+plan_node(mr_frame *f, int L, const int n0[3], const int n1[3]) {
+    const vv_volume *h = f->src->level(f->src->user, L);
+    vv_render_region rg;
+    memset(&rg, 0, sizeof rg);
+    rg.object = f->object;
+    int slo[3], shi[3];
+    for (int k = 0; k < 3; k++) {
+        const double lo = (n0[k] - f->b[L][k]) / f->a[L][k], hi = (n1[k] - f->b[L][k]) / f->a[L][k];
+        slo[k] = (int)floor(lo) - 1;
+        shi[k] = (int)ceil(hi) + 1;
+        slo[k] = slo[k] < 0 ? 0 : slo[k];
+        shi[k] = shi[k] > h->dims[k] - 1 ? h->dims[k] - 1 : shi[k];
+        if (slo[k] > shi[k])
+            return VV_OK; /* beyond this level's voxels */
+        rg.dims[k] = h->dims[k];
+        rg.offset[k] = slo[k];
+        rg.lo[k] = n0[k] > 0 ? lo : -INFINITY;
+        rg.hi[k] = n1[k] < f->cells[k] ? hi : INFINITY;
+    }
+    float vmin, vmax;
+    if (f->skip && f->src->box_range &&
+        f->src->box_range(f->src->user, L, slo, shi, &vmin, &vmax) &&
+        !(tf_max_opacity(&f->obj->tf, vmin - f->bin, vmax) > 0)) {
+        f->lod->skipped++;
+        return VV_OK;
+    }
+    vv_region_rect(&rg, f->i2w[L], f->view, slo, shi);
+    if (rg.x1 > rg.x0 && rg.y1 <= rg.y0)
+        return VV_OK; /* off screen */
+    if (f->n_nodes == f->cap_nodes) {
+        const int cap = f->cap_nodes ? 2 * f->cap_nodes : 256;
+        mr_node *nn = realloc(f->nodes, sizeof *nn * (size_t)cap);
+        if (!nn)
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        f->nodes = nn;
+        f->cap_nodes = cap;
+    }
+    mr_node *nd = &f->nodes[f->n_nodes++];
+    nd->level = L;
+    nd->rg = rg;
+    memcpy(nd->lo, slo, sizeof nd->lo);
+    memcpy(nd->hi, shi, sizeof nd->hi);
+    return VV_OK;
+}
+
+/* The planned nodes read and rendered in order. */
+static vv_status
+render_nodes(mr_frame *f) {
+    const int n = f->n_nodes;
+    if (f->src->plan && n > 0) {
+        int *lv = malloc(sizeof(int) * (size_t)n);
+        int *lo = malloc(sizeof(int) * 3 * (size_t)n), *hi = malloc(sizeof(int) * 3 * (size_t)n);
+        if (lv && lo && hi) {
+            for (int i = 0; i < n; i++) {
+                lv[i] = f->nodes[i].level;
+                memcpy(lo + 3 * i, f->nodes[i].lo, sizeof f->nodes[i].lo);
+                memcpy(hi + 3 * i, f->nodes[i].hi, sizeof f->nodes[i].hi);
+            }
+            if (f->src->plan(f->src->user, n, lv, lo, hi) != VV_OK)
+                vv_error_clear(); /* unplanned reads: least recently used out */
+        }
+        free(lv);
+        free(lo);
+        free(hi);
+    }
+    for (int i = 0; i < n; i++) {
+        mr_node *nd = &f->nodes[i];
+        vv_volume *bv = NULL;
+        vv_status s = f->src->read_box(f->src->user, nd->level, nd->lo, nd->hi, &bv);
+        if (s != VV_OK)
+            return s;
+        nd->rg.voxels = bv;
+        s = render_piece(f->r, f->w, f->view, &nd->rg, f->opt, f->piece, f->whole);
+        nd->rg.voxels = NULL;
+        vv_volume_free(bv);
+        if (s != VV_OK)
+            return s;
+        f->lod->nodes[nd->level]++;
+    }
+    return VV_OK;
+}
+
+/* The octree node of depth @p depth (f->leaf << depth level-0 cells
+ * a side) at cell @p o: rendered at its level when that level is at least
+ * its depth, else its children front to back. */
+static vv_status
+render_tree(mr_frame *f, int depth, const int o[3]) {
+    const int side = f->leaf << depth;
+    int n0[3], n1[3];
+    for (int k = 0; k < 3; k++) {
+        if (o[k] > 0 && o[k] >= f->cells[k])
+            return VV_OK; /* past the volume */
+        n0[k] = o[k];
+        n1[k] = o[k] + side < f->cells[k] ? o[k] + side : f->cells[k];
+    }
+    int want = desired_level(f, n0, n1);
+    /* a node's box stays within VV_PYRAMID_MAX_BOX voxels of its level (a
+     * level not halved along an axis takes deeper nodes) */
+    int fits = 1;
+    for (int k = 0; k < 3; k++)
+        fits &= (n1[k] - n0[k]) / f->a[want][k] <= f->leaf + 1e-9;
+    if (depth == 0 || (want >= depth && fits)) {
+        while (!fits && want > 0) { /* a leaf: the coarsest level that fits */
+            want--;
+            fits = 1;
+            for (int k = 0; k < 3; k++)
+                fits &= (n1[k] - n0[k]) / f->a[want][k] <= f->leaf + 1e-9;
+        }
+        return plan_node(f, want, n0, n1);
+    }
+    const int half = side / 2;
+    int near = 0;
+    for (int k = 0; k < 3; k++) {
+        const double plane = o[k] + half;
+        near |= (f->ortho ? f->D[k] < 0 : f->E[k] >= plane) << k; /* the upper half first */
+    }
+    for (int c = 0; c < 8; c++) {
+        const int bits = c ^ near;
+        const int co[3] = {o[0] + (bits & 1) * half, o[1] + ((bits >> 1) & 1) * half,
+                           o[2] + ((bits >> 2) & 1) * half};
+        vv_status s = render_tree(f, depth - 1, co);
+        if (s != VV_OK)
+            return s;
+    }
+    return VV_OK;
+}
+
+/* The levels' placements in level 0's index space and their voxel sizes. */
+static vv_status
+setup_levels(mr_frame *f) {
+    const vv_volume *h0 = f->src->level(f->src->user, 0);
+    for (int L = 0; L < f->n_levels; L++) {
+        const vv_volume *h = f->src->level(f->src->user, L);
+        if (!h)
+            return vv_error_set(VV_ERR_INVALID, "multires: level %d has no header", L);
+        vv_object geo = *f->obj; /* shallow: nothing in it is released */
+        geo.volume = (vv_volume *)h;
+        f->i2w[L] = vv_object_index_to_world(&geo);
+        double best = INFINITY;
+        for (int k = 0; k < 3; k++) {
+            f->a[L][k] = h->spacing[k] / h0->spacing[k];
+            f->b[L][k] = (h->origin[k] - h0->origin[k]) / h0->spacing[k];
+            const vv_mat4 *m = &f->i2w[L];
+            const double l =
+                sqrt(m->m[0][k] * m->m[0][k] + m->m[1][k] * m->m[1][k] + m->m[2][k] * m->m[2][k]);
+            best = l > 0 && l < best ? l : best;
+        }
+        f->vox[L] = best;
+    }
+    int ok = 0;
+    const vv_mat4 w2i = vv_mat4_inverse(f->i2w[0], &ok);
+    if (!ok)
+        return vv_error_set(VV_ERR_INVALID, "bricks: object '%s': singular transform",
+                            f->obj->name);
+    const vv_vec3 e = vv_mat4_mul_point(w2i, f->view->eye);
+    const vv_vec3 fwd = vv_vec3_sub(f->view->at, f->view->eye);
+    f->E[0] = e.x;
+    f->E[1] = e.y;
+    f->E[2] = e.z;
+    for (int k = 0; k < 3; k++) {
+        f->D[k] = w2i.m[k][0] * fwd.x + w2i.m[k][1] * fwd.y + w2i.m[k][2] * fwd.z;
+        f->cells[k] = h0->dims[k] > 1 ? h0->dims[k] - 1 : 0;
+    }
+    f->fwd = vv_vec3_normalize(fwd);
+    f->ortho = f->view->projection == VV_PROJECTION_ORTHOGRAPHIC;
+    f->ppw = f->ortho ? f->view->height / f->view->ortho_height
+                      : f->view->height / (2 * tan(f->view->fov / 2));
+    f->bin = (h0->range[1] - h0->range[0]) / (VV_VC_LUT - 1);
+    return VV_OK;
+}
+
+void
+vv_lod_init(vv_lod *lod) {
+    memset(lod, 0, sizeof *lod);
+    lod->level = -1;
+    lod->voxel_pixels = 1.0;
+}
+
+vv_status
+vv_renderer_render_multires(vv_renderer *r, const vv_world *w, int object,
+                            const vv_multires_source *src, const vv_view *view,
+                            const vv_render_options *opt, vv_lod *lod, vv_image *out) {
+    if (!src || !lod)
+        return vv_error_set(VV_ERR_INVALID, "multires: no source or level-of-detail options");
+    if (src->version != VV_MULTIRES_SOURCE_VERSION)
+        return vv_error_set(VV_ERR_UNSUPPORTED, "multires: source interface version %d, not %d",
+                            src->version, VV_MULTIRES_SOURCE_VERSION);
+    if (src->n_levels < 1 || src->n_levels > VV_LOD_MAX_LEVELS || !src->level || !src->read_box)
+        return vv_error_set(VV_ERR_INVALID, "multires: a source of %d levels (1 to %d)",
+                            src->n_levels, VV_LOD_MAX_LEVELS);
+    vv_status s = check_args(r, w, object, view, out);
+    if (s != VV_OK)
+        return s;
+    memset(lod->nodes, 0, sizeof lod->nodes);
+    lod->skipped = 0;
+    mr_frame f;
+    memset(&f, 0, sizeof f);
+    f.r = r;
+    f.w = w;
+    f.src = src;
+    f.view = view;
+    f.opt = opt;
+    f.lod = lod;
+    f.object = object;
+    f.obj = w->objects[object];
+    f.n_levels = src->n_levels;
+    f.leaf = src->node_cells > 0 ? src->node_cells : VV_BRICK_CELLS;
+    if ((s = setup_levels(&f)) != VV_OK)
+        return s;
+    f.skip = f.obj->mode == VV_MODE_COMPOSITE && f.obj->segmentation == VV_SEG_TRANSFER_FUNCTION;
+
+    const size_t np = (size_t)view->width * (size_t)view->height;
+    vv_image *part = NULL;
+    float *keys = malloc(sizeof(float) * 2 * (np ? np : 1));
+    vv_region_image whole = {out, keys, VV_REGION_OVER};
+    vv_region_image piece = {NULL, keys ? keys + np : NULL, VV_REGION_OVER};
+    s = keys ? vv_image_new(&part, view->width, view->height)
+             : vv_error_set(VV_ERR_NOMEM, "out of memory");
+    piece.image = part;
+    f.whole = &whole;
+    f.piece = &piece;
+    if (s == VV_OK) {
+        vv_region_image_clear(&whole);
+        whole.op = f.obj->mode == VV_MODE_MIP     ? VV_REGION_MAX
+                   : f.obj->mode == VV_MODE_MINIP ? VV_REGION_MIN
+                                                  : VV_REGION_OVER;
+        /* the root: the smallest node that covers every axis */
+        int depth = 0, big = f.cells[0] > f.cells[1] ? f.cells[0] : f.cells[1];
+        big = f.cells[2] > big ? f.cells[2] : big;
+        while ((f.leaf << depth) < big && depth < 24)
+            depth++;
+        const int zero[3] = {0, 0, 0};
+        if (src->frame)
+            src->frame(src->user, 1);
+        s = render_tree(&f, depth, zero);
+        if (s == VV_OK)
+            s = render_nodes(&f);
+        if (src->frame)
+            src->frame(src->user, 0);
+    }
+    free(f.nodes);
+    if (s == VV_OK)
+        vv_region_image_finish(&whole, w->background);
+    vv_image_free(part);
+    free(keys);
     return s;
 }

@@ -1,0 +1,298 @@
+#!/usr/bin/python3
+"""OME-Zarr pyramids written by zarr-python, rendered out of core by level.
+
+  zarr_pyramid_cli.py VOLVIS OUTDIR
+
+Writes with zarr-python and numcodecs (independent writers) three-level
+pyramids of 2x2x2 means, each level with its OME-NGFF scale and the
+translation of its voxel centres:
+
+- the CT head (256x256x108, int16) in 32^3 chunks, Blosc lz4 with byte
+  shuffle, "/" separator, the omero window's min and max the data's;
+- an analytic phantom (128^3 uint8: a ball of 200 inside a ball of 100 in
+  a background of 0, so every level keeps the range 0..200) in 64^3
+  chunks, once each with zstd and "." separator, zlib, and no compressor;
+
+then checks:
+
+- `volvis convert STORE OUT.nii --level L` equals zarr-python's level L,
+  voxel for voxel, with the level's spacing and origin (every level, every
+  store);
+- out of core (`volvis render STORE --memory-limit 4M --level 0`, every
+  box assembled from cached chunks) against the in-memory render of level
+  0: composite >= 50 dB, MIP bit-identical; the cache never above the
+  limit; with a limit that holds the frame's chunks (16M) each chunk is
+  read once a frame (the counts the render prints);
+- the phantom at levels 1 and 2 out of core (4M) against the in-memory
+  render of the same level: MIP bit-identical (the boxes of coarser
+  levels, their placement);
+- level of detail: a perspective view with --lod 2.5 mixes levels 0 and
+  1; against the same view at level 1 everywhere it has no crack (no pixel
+  opaque in one and empty in the other) and is close (PSNR >= 25 dB);
+- bad stores out of core: a chunk that decodes to the wrong size, an
+  unknown compressor, inconsistent multiscales (a level of another dtype,
+  a level larger than level 0): one line naming the store, a non-zero
+  exit and no PNG; a missing chunk is the fill value, as zarr-python reads
+  it.
+"""
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+try:
+    import numpy as np
+    import nibabel as nib
+    import numcodecs
+    import zarr
+    from PIL import Image
+except ImportError as e:  # pragma: no cover
+    print(f"skipped: {e} (python3-numpy, python3-nibabel, python3-zarr, python3-numcodecs, "
+          "python3-pil)")
+    sys.exit(77)
+
+VOLVIS, OUT = sys.argv[1], sys.argv[2]
+HEAD = os.path.abspath("../shared/data/volumes/ct_head.nrrd")
+shutil.rmtree(OUT, ignore_errors=True)
+os.makedirs(OUT)
+failures = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what)
+    if not cond:
+        failures.append(what)
+
+
+def volvis(*args):
+    return subprocess.run([VOLVIS, *args], capture_output=True, text=True)
+
+
+def levels_of(arr, n):
+    """Level 0 and n - 1 levels of 2x2x2 means (rounded), each axis halved (floor)."""
+    out = [arr]
+    for _ in range(1, n):
+        p = out[-1]
+        z, y, x = [s // 2 * 2 for s in p.shape]
+        q = p[:z, :y, :x].astype(np.float64).reshape(z // 2, 2, y // 2, 2, x // 2, 2)
+        out.append(np.rint(q.mean(axis=(1, 3, 5))).astype(arr.dtype))
+    return out
+
+
+def pyramid(name, arr, spacing, chunks, compressor, sep, n=3, window=True):
+    """An OME-Zarr 0.4 store of n levels; returns (path, levels)."""
+    root = os.path.join(OUT, name)
+    store = zarr.DirectoryStore(root, dimension_separator=sep)
+    g = zarr.open_group(store, mode="w")
+    lv = levels_of(arr, n)
+    ds = []
+    for k, a in enumerate(lv):
+        g.create_dataset(str(k), data=a, chunks=chunks, compressor=compressor,
+                         dimension_separator=sep)
+        f = 2 ** k
+        ds.append({"path": str(k), "coordinateTransformations": [
+            {"type": "scale", "scale": [s * f for s in spacing]},
+            {"type": "translation", "translation": [s * (f - 1) / 2 for s in spacing]}]})
+    g.attrs["multiscales"] = [{"version": "0.4", "axes": [
+        {"name": a, "type": "space", "unit": "millimeter"} for a in "zyx"], "datasets": ds}]
+    if window:
+        lo, hi = float(arr.min()), float(arr.max())
+        g.attrs["omero"] = {"channels": [{"label": "v", "color": "FFFFFF", "window": {
+            "min": lo, "max": hi, "start": lo, "end": hi}}]}
+    return root, lv
+
+
+def read_level(store, level):
+    """volvis convert --level to NIfTI: (z, y, x) voxels and the affine."""
+    nii = os.path.join(OUT, "level.nii")
+    p = volvis("convert", store, nii, "--level", str(level), "--quiet")
+    if p.returncode != 0:
+        return None, None, p.stderr.strip()
+    img = nib.load(nii)
+    return np.asarray(img.dataobj).transpose(2, 1, 0), img.affine, ""
+
+
+def image(path):
+    return np.asarray(Image.open(path).convert("RGBA" if path.endswith("_a.png") else "RGB"),
+                      dtype=np.float64)
+
+
+def psnr(a, b):
+    m = ((image(a) - image(b)) ** 2).mean()
+    return 99.0 if m == 0 else 10 * np.log10(255.0 ** 2 / m)
+
+
+def render(store, out, *args):
+    p = volvis("render", store, "-o", out, "--size", "256x256", *args)
+    return p
+
+
+def stats(p):
+    """(peak cache MiB, most reads of one chunk in a frame, nodes per level) from the line."""
+    m = re.search(r"peak cache ([0-9.]+) MiB, a chunk read at most (\d+) times", p.stdout)
+    nodes = [int(x) for x in re.findall(r"(\d+) nodes \d+ chunks", p.stdout)]
+    return (float(m.group(1)), int(m.group(2)), nodes) if m else (None, None, nodes)
+
+
+# ---- the stores -------------------------------------------------------------------------
+head_nii = os.path.join(OUT, "head.nii")
+p = volvis("convert", HEAD, head_nii, "--quiet")
+check(p.returncode == 0, f"the CT head converted for numpy ({p.stderr.strip()})")
+hi = nib.load(head_nii)
+head = np.ascontiguousarray(np.asarray(hi.dataobj).transpose(2, 1, 0))
+head_sp = [float(z) for z in hi.header.get_zooms()[::-1]]
+head_store, head_lv = pyramid("head.zarr", head, head_sp, (32, 32, 32),
+                              numcodecs.Blosc("lz4", shuffle=numcodecs.Blosc.SHUFFLE), "/")
+
+z, y, x = np.mgrid[0:128, 0:128, 0:128].astype(np.float64)
+r = np.sqrt((x - 60) ** 2 + (y - 66) ** 2 + (z - 63) ** 2)
+phantom = np.where(r < 24, 200, np.where(r < 48, 100, 0)).astype(np.uint8)
+phantoms = {
+    "zstd": pyramid("ph_zstd.zarr", phantom, [1.0, 1.0, 1.0], (64, 64, 64),
+                    numcodecs.Zstd(level=3), "."),
+    "zlib": pyramid("ph_zlib.zarr", phantom, [1.0, 1.0, 1.0], (64, 64, 64),
+                    numcodecs.Zlib(level=1), "/"),
+    "raw": pyramid("ph_raw.zarr", phantom, [1.0, 1.0, 1.0], (64, 64, 64), None, "."),
+}
+
+# ---- every level's voxels -----------------------------------------------------------------
+for name, (store, lv) in [("head", (head_store, head_lv))] + list(phantoms.items()):
+    for k, want in enumerate(lv):
+        got, aff, err = read_level(store, k)
+        same = got is not None and got.shape == want.shape and np.array_equal(got, want)
+        check(same, f"{name} level {k}: volvis reads zarr-python's voxels {want.shape} {err}")
+        if got is not None:
+            f = 2 ** k
+            sp = (head_sp if name == "head" else [1.0, 1.0, 1.0])[::-1]
+            check(np.allclose(np.abs(np.diag(aff)[:3]), [s * f for s in sp], rtol=1e-5),
+                  f"{name} level {k}: spacing {np.abs(np.diag(aff)[:3])}")
+got, _, err = read_level(head_store, 3)
+check(got is None and "level 3" in err and "3" in err,
+      f"a level past the store's is refused: {err}")
+
+# ---- out of core against in memory ----------------------------------------------------------
+TF = ["--tf", "100:1500"]
+for mode in ["composite", "mip"]:
+    mem = os.path.join(OUT, f"head_{mode}_mem.png")
+    ooc = os.path.join(OUT, f"head_{mode}_ooc.png")
+    p1 = render(head_store, mem, "--mode", mode, *TF)
+    p2 = render(head_store, ooc, "--mode", mode, *TF, "--memory-limit", "4M", "--level", "0")
+    check(p1.returncode == 0 and p2.returncode == 0,
+          f"head {mode}: rendered in memory and out of core ({p1.stderr.strip()} "
+          f"{p2.stderr.strip()})")
+    if p1.returncode or p2.returncode:
+        continue
+    peak, most, _ = stats(p2)
+    print(f"     {p2.stdout.strip()}")
+    check(peak is not None and peak <= 4.0, f"head {mode} at 4M: peak cache {peak} MiB <= 4 MiB")
+    q = psnr(mem, ooc)
+    if mode == "mip":
+        check(q == 99.0, f"head mip out of core (4 MiB) is the in-memory image bit for bit ({q})")
+    else:
+        check(q >= 50, f"head composite out of core (4 MiB): {q:.1f} dB >= 50 against in memory")
+p = render(head_store, os.path.join(OUT, "head_16m.png"), *TF, "--memory-limit", "16M",
+           "--level", "0")
+peak, most, _ = stats(p)
+check(p.returncode == 0 and most == 1,
+      f"head at 16M: each chunk read once a frame ({p.stdout.strip()} {p.stderr.strip()})")
+
+for k in (1, 2):
+    mem = os.path.join(OUT, f"ph_l{k}_mem.png")
+    ooc = os.path.join(OUT, f"ph_l{k}_ooc.png")
+    store = phantoms["zstd"][0]
+    p1 = render(store, mem, "--mode", "mip", "--tf", "50:250", "--level", str(k))
+    p2 = render(store, ooc, "--mode", "mip", "--tf", "50:250", "--level", str(k),
+                "--memory-limit", "4M", "--azimuth", "0")
+    ok = p1.returncode == 0 and p2.returncode == 0
+    check(ok and psnr(mem, ooc) == 99.0,
+          f"phantom level {k}: out-of-core MIP is the in-memory one bit for bit "
+          f"({p1.stderr.strip()} {p2.stderr.strip()})")
+
+# ---- level of detail without cracks ---------------------------------------------------------
+store = phantoms["zlib"][0]
+view = ["--azimuth", "35", "--elevation", "20", "--tf", "50:250", "--alpha", "--memory-limit",
+        "4M"]
+mixed = os.path.join(OUT, "lod_mixed_a.png")
+coarse = os.path.join(OUT, "lod_coarse_a.png")
+p1 = render(store, mixed, *view, "--lod", "2.5")
+p2 = render(store, coarse, *view, "--level", "1")
+_, _, nodes = stats(p1)
+print(f"     {p1.stdout.strip()}")
+check(p1.returncode == 0 and len(nodes) >= 2 and nodes[0] > 0 and nodes[1] > 0,
+      f"--lod 2.5 mixes levels 0 and 1 (nodes per level {nodes}) {p1.stderr.strip()}")
+if p1.returncode == 0 and p2.returncode == 0:
+    a, b = image(mixed), image(coarse)
+    cracks = int(np.sum((b[..., 3] > 128) & (a[..., 3] < 8)) + np.sum((a[..., 3] > 128) &
+                                                                      (b[..., 3] < 8)))
+    check(cracks == 0, f"no crack between levels: {cracks} pixels opaque in one, empty in the other")
+    q = psnr(mixed, coarse)
+    check(q >= 25, f"mixed levels against level 1 everywhere: {q:.1f} dB >= 25")
+
+# ---- bad stores ----------------------------------------------------------------------------
+
+
+def broken(name, edit):
+    src = phantoms["zstd"][0]
+    dst = os.path.join(OUT, name)
+    shutil.rmtree(dst, ignore_errors=True)
+    shutil.copytree(src, dst)
+    edit(dst)
+    return dst
+
+
+def refused(store, needle, what):
+    png = os.path.join(OUT, "bad.png")
+    if os.path.exists(png):
+        os.remove(png)
+    p = render(store, png, "--memory-limit", "4M", "--level", "0")
+    err = p.stderr.strip()
+    check(p.returncode != 0 and len(err.splitlines()) == 1 and os.path.basename(store) in err
+          and needle in err and not os.path.exists(png), f"{what}: {err}")
+
+
+def wrong_size(d):
+    c = zarr.open_array(os.path.join(d, "0"), mode="r")
+    with open(os.path.join(d, "0", "1.1.0"), "wb") as f:
+        f.write(numcodecs.Zstd().encode(np.zeros(1000, np.uint8).tobytes()))
+    del c
+
+
+refused(broken("bad_size.zarr", wrong_size), "1.1.0", "a chunk that decodes to the wrong size")
+
+
+def set_key(level, key, value):
+    def edit(d):
+        import json
+        path = os.path.join(d, level, ".zarray")
+        meta = json.load(open(path))
+        meta[key] = value
+        json.dump(meta, open(path, "w"))
+    return edit
+
+
+refused(broken("bad_codec.zarr", set_key("0", "compressor", {"id": "lzma"})), "lzma",
+        "an unknown compressor")
+refused(broken("bad_dtype.zarr", set_key("1", "dtype", "<u2")), "inconsistent",
+        "a level of another dtype")
+refused(broken("bad_shape.zarr", set_key("2", "shape", [256, 256, 256])), "inconsistent",
+        "a level larger than level 0")
+
+
+def drop_chunk(d):
+    os.remove(os.path.join(d, "0", "0.0.0"))
+
+
+store = broken("missing.zarr", drop_chunk)
+want = zarr.open_array(os.path.join(store, "0"), mode="r")[...]
+got, _, err = read_level(store, 0)
+check(got is not None and np.array_equal(got, want),
+      f"a missing chunk reads as zarr-python reads it (the fill value) {err}")
+mem, ooc = os.path.join(OUT, "missing_mem.png"), os.path.join(OUT, "missing_ooc.png")
+p1 = render(store, mem, "--mode", "mip", "--tf", "50:250")
+p2 = render(store, ooc, "--mode", "mip", "--tf", "50:250", "--memory-limit", "4M", "--level", "0")
+check(p1.returncode == 0 and p2.returncode == 0 and psnr(mem, ooc) == 99.0,
+      f"a missing chunk out of core: the fill value, as in memory {p2.stderr.strip()}")
+
+print(f"{len(failures)} failure(s)")
+sys.exit(1 if failures else 0)
