@@ -756,7 +756,7 @@ render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *vie
     float *key = malloc(sizeof(float) * (P ? P : 1));
     s = key ? vv_image_new(&img, view->width, view->height)
             : vv_error_set(VV_ERR_NOMEM, "out of memory");
-    vv_region_image ri = {img, key, VV_REGION_OVER};
+    vv_region_image ri = {img, key, VV_REGION_OVER, 0};
     double t0 = MPI_Wtime();
     struct timespec c0, c1;
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
@@ -882,7 +882,7 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
             out->depth[i] = r[4];
         }
         /* the background once, as the whole render adds it */
-        vv_region_image fin = {out, NULL, op};
+        vv_region_image fin = {out, NULL, op, 0};
         vv_region_image_finish(&fin, w->background);
     }
     free(counts);

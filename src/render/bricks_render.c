@@ -121,18 +121,23 @@ check_args(vv_renderer *r, const vv_world *w, int object, const vv_view *view,
     return VV_OK;
 }
 
-/* One region render, composited under the image so far. */
+/* One region render, composited under the image so far over its
+ * rectangle; the piece is cleared there again after (it stays clear
+ * outside every rectangle: the renderer clears only the next one). */
 static vv_status
 render_piece(vv_renderer *r, const vv_world *w, const vv_view *view, const vv_render_region *rg,
              const vv_render_options *opt, vv_region_image *piece, vv_region_image *whole) {
+    const int W = view->width, H = view->height;
+    const int x0 = rg->x1 > rg->x0 ? rg->x0 : 0, y0 = rg->x1 > rg->x0 ? rg->y0 : 0;
+    const int x1 = rg->x1 > rg->x0 ? rg->x1 : W, y1 = rg->x1 > rg->x0 ? rg->y1 : H;
     vv_status s = vv_renderer_render_region(r, w, view, rg, opt, piece);
-    if (s != VV_OK)
-        return s;
-    if (piece->op != whole->op)
-        return vv_error_set(VV_ERR_INVALID, "bricks: %s combined its regions by %d, not %d",
-                            vv_renderer_name(r), (int)piece->op, (int)whole->op);
-    vv_region_image_combine(whole, piece); /* in front over this region */
-    return VV_OK;
+    if (s == VV_OK && piece->op != whole->op)
+        s = vv_error_set(VV_ERR_INVALID, "bricks: %s combined its regions by %d, not %d",
+                         vv_renderer_name(r), (int)piece->op, (int)whole->op);
+    if (s == VV_OK)
+        vv_region_image_combine_rect(whole, piece, x0, y0, x1, y1); /* in front over it */
+    vv_region_image_clear_rect(piece, x0, y0, x1, y1);
+    return s;
 }
 
 vv_status
@@ -183,11 +188,13 @@ vv_renderer_render_bricks(vv_renderer *r, const vv_world *w, int object, const v
     const size_t np = (size_t)view->width * (size_t)view->height;
     vv_image *part = NULL;
     float *keys = malloc(sizeof(float) * 2 * (np ? np : 1));
-    vv_region_image whole = {out, keys, VV_REGION_OVER};
-    vv_region_image piece = {NULL, keys ? keys + np : NULL, VV_REGION_OVER};
+    vv_region_image whole = {out, keys, VV_REGION_OVER, 0};
+    vv_region_image piece = {NULL, keys ? keys + np : NULL, VV_REGION_OVER, 1};
     s = keys ? vv_image_new(&part, view->width, view->height)
              : vv_error_set(VV_ERR_NOMEM, "out of memory");
     piece.image = part;
+    if (s == VV_OK)
+        vv_region_image_clear(&piece);
     if (s == VV_OK) {
         vv_region_image_clear(&whole);
         whole.op = mode == VV_MODE_MIP     ? VV_REGION_MAX
@@ -509,11 +516,13 @@ vv_renderer_render_multires(vv_renderer *r, const vv_world *w, int object,
     const size_t np = (size_t)view->width * (size_t)view->height;
     vv_image *part = NULL;
     float *keys = malloc(sizeof(float) * 2 * (np ? np : 1));
-    vv_region_image whole = {out, keys, VV_REGION_OVER};
-    vv_region_image piece = {NULL, keys ? keys + np : NULL, VV_REGION_OVER};
+    vv_region_image whole = {out, keys, VV_REGION_OVER, 0};
+    vv_region_image piece = {NULL, keys ? keys + np : NULL, VV_REGION_OVER, 1};
     s = keys ? vv_image_new(&part, view->width, view->height)
              : vv_error_set(VV_ERR_NOMEM, "out of memory");
     piece.image = part;
+    if (s == VV_OK)
+        vv_region_image_clear(&piece);
     f.whole = &whole;
     f.piece = &piece;
     if (s == VV_OK) {

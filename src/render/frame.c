@@ -201,23 +201,47 @@ vv_render_region_part(const vv_world *w, const vv_render_region *rg, vv_region_o
 }
 
 void
-vv_region_image_clear(vv_region_image *img) {
-    const size_t n = (size_t)img->image->width * (size_t)img->image->height;
-    memset(img->image->rgba, 0, sizeof(float) * 4 * n);
-    for (size_t i = 0; i < n; i++) {
-        img->image->depth[i] = INFINITY;
-        img->key[i] = NAN;
+vv_region_image_clear_rect(vv_region_image *img, int x0, int y0, int x1, int y1) {
+    const int W = img->image->width;
+    x0 = x0 < 0 ? 0 : x0;
+    y0 = y0 < 0 ? 0 : y0;
+    x1 = x1 > W ? W : x1;
+    y1 = y1 > img->image->height ? img->image->height : y1;
+    for (int y = y0; y < y1 && x1 > x0; y++) {
+        const size_t row = (size_t)y * (size_t)W;
+        memset(img->image->rgba + 4 * (row + (size_t)x0), 0, sizeof(float) * 4 * (size_t)(x1 - x0));
+        for (size_t i = row + (size_t)x0; i < row + (size_t)x1; i++) {
+            img->image->depth[i] = INFINITY;
+            img->key[i] = NAN;
+        }
     }
 }
 
 void
-vv_region_image_combine(vv_region_image *front, const vv_region_image *back) {
-    const size_t n = (size_t)front->image->width * (size_t)front->image->height;
+vv_region_image_clear(vv_region_image *img) {
+    vv_region_image_clear_rect(img, 0, 0, img->image->width, img->image->height);
+}
+
+void
+vv_region_image_combine_rect(vv_region_image *front, const vv_region_image *back, int x0, int y0,
+                             int x1, int y1) {
+    const int W = front->image->width;
     const vv_region_op op = front->op;
-    for (size_t i = 0; i < n; i++)
-        vv_region_pixel_combine(op, front->image->rgba + 4 * i, front->image->depth + i,
-                                front->key + i, back->image->rgba + 4 * i, back->image->depth[i],
-                                back->key[i]);
+    x0 = x0 < 0 ? 0 : x0;
+    y0 = y0 < 0 ? 0 : y0;
+    x1 = x1 > W ? W : x1;
+    y1 = y1 > front->image->height ? front->image->height : y1;
+    for (int y = y0; y < y1; y++)
+        for (size_t i = (size_t)y * (size_t)W + (size_t)x0; i < (size_t)y * (size_t)W + (size_t)x1;
+             i++)
+            vv_region_pixel_combine(op, front->image->rgba + 4 * i, front->image->depth + i,
+                                    front->key + i, back->image->rgba + 4 * i,
+                                    back->image->depth[i], back->key[i]);
+}
+
+void
+vv_region_image_combine(vv_region_image *front, const vv_region_image *back) {
+    vv_region_image_combine_rect(front, back, 0, 0, front->image->width, front->image->height);
 }
 
 void

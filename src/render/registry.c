@@ -465,7 +465,10 @@ vv_renderer_render_region(vv_renderer *r, const vv_world *world, const vv_view *
                             obj->name);
     vv_status s = vv_renderer_check_world(&r->ops->info, world);
     if (s == VV_OK) {
-        vv_region_image_clear(out);
+        if (out->clear_outside && region->x1 > region->x0)
+            vv_region_image_clear_rect(out, region->x0, region->y0, region->x1, region->y1);
+        else
+            vv_region_image_clear(out);
         out->op = VV_REGION_OVER;
         s = r->ops->render_region(r->state, world, view, region, opt, out);
     }

@@ -104,6 +104,13 @@ typedef struct vv_region_image {
      */
     float *key;
     vv_region_op op; /**< set by the renderer */
+    /**
+     * 1: the caller keeps the image clear outside the rectangle of the
+     * region it asks for (a driver that clears each rectangle after using
+     * it), so vv_renderer_render_region clears only the rectangle; 0 (an
+     * initializer's default): the whole image is cleared.
+     */
+    int clear_outside;
 } vv_region_image;
 
 /** Combines one pixel: @p f (front, updated) and @p b (behind). */
@@ -137,6 +144,9 @@ vv_region_pixel_combine(vv_region_op op, float f[4], float *fdepth, float *fkey,
  * @p back (same size and op). Thread-safe for distinct images.
  */
 void vv_region_image_combine(vv_region_image *front, const vv_region_image *back);
+/** vv_region_image_combine over pixels x0 <= x < x1, y0 <= y < y1 only. */
+void vv_region_image_combine_rect(vv_region_image *front, const vv_region_image *back, int x0,
+                                  int y0, int x1, int y1);
 
 /**
  * Turns a combined partial image into the final one: colour + (1 -
@@ -180,6 +190,8 @@ vv_frame_colours(const vv_world *w, int region, float ambient[3], float backgrou
 
 /** Clears @p img to "nothing seen": colour 0, depth INFINITY, key NAN. */
 void vv_region_image_clear(vv_region_image *img);
+/** vv_region_image_clear over pixels x0 <= x < x1, y0 <= y < y1 only. */
+void vv_region_image_clear_rect(vv_region_image *img, int x0, int y0, int x1, int y1);
 
 /**
  * The pixel rectangle of @p view that can see the index box lo .. hi of a

@@ -1,0 +1,157 @@
+/*
+ * bench_pyramid: OME-Zarr pyramids rendered out of core by level of detail
+ * (vv_pyramid, vv_renderer_render_multires), run by bench/zarr_pyramid.sh
+ * on a generated store under a cgroup memory limit:
+ *   bench_pyramid STORE [--memory-limit MiB] [--size N] [--frames F]
+ *                 [--tf LO:HI] [--lod PIXELS | --level L] [--dataset NAME]
+ * Opens STORE with the memory limit (default 1024 MiB), builds the default
+ * World from its coarsest level (the proxy, over level 0's box) with a
+ * transfer function ramp LO..HI, and renders F frames (default 4) at N x N
+ * (default 512), orbiting 10 degrees a frame, each node at the coarsest
+ * level within PIXELS (default 1) or every node at level L. Prints, as
+ * anchor lines: the open time (metadata and the coarsest level), the first
+ * frame (chunks cold in the cache; the files as the page cache has them),
+ * the median of the next frames, the chunks read and the nodes per level,
+ * the most reads of one chunk in a frame, the peak cache and the process's
+ * peak resident size (getrusage); writes the last frame to
+ * $VV_BENCH_OUT/pyramid.png when that is set.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+
+#include "util.h"
+#include "volvis/volvis.h"
+
+/* The coarsest level, placed over level 0's box (the World's proxy). */
+static vv_volume *
+proxy_of(vv_pyramid *p) {
+    const int top = vv_pyramid_levels(p) - 1;
+    const vv_volume *h = vv_pyramid_level(p, top), *h0 = vv_pyramid_level(p, 0);
+    const int lo[3] = {0, 0, 0}, hi[3] = {h->dims[0] - 1, h->dims[1] - 1, h->dims[2] - 1};
+    vv_volume *v = NULL;
+    if (vv_pyramid_read_box(p, top, lo, hi, &v) != VV_OK)
+        bench_die("bench_pyramid", "proxy");
+    for (int k = 0; k < 3; k++) {
+        v->origin[k] = h0->origin[k];
+        if (h->dims[k] > 1)
+            v->spacing[k] = h0->spacing[k] * (h0->dims[k] - 1) / (h->dims[k] - 1);
+    }
+    return v;
+}
+
+static uint64_t
+chunks_read(const vv_pyramid_stats *st) {
+    uint64_t n = 0;
+    for (int l = 0; l < VV_PYRAMID_MAX_LEVELS; l++)
+        n += st->chunk_reads[l];
+    return n;
+}
+
+int
+main(int argc, char **argv) {
+    const char *path = NULL, *dataset = "store";
+    double limit_mib = 1024, tf_lo = 60, tf_hi = 255, lod_px = 1;
+    int size = 512, frames = 4, level = -1;
+    for (int i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--memory-limit") == 0 && i + 1 < argc)
+            limit_mib = atof(argv[++i]);
+        else if (strcmp(argv[i], "--size") == 0 && i + 1 < argc)
+            size = atoi(argv[++i]);
+        else if (strcmp(argv[i], "--frames") == 0 && i + 1 < argc)
+            frames = atoi(argv[++i]);
+        else if (strcmp(argv[i], "--lod") == 0 && i + 1 < argc)
+            lod_px = atof(argv[++i]);
+        else if (strcmp(argv[i], "--level") == 0 && i + 1 < argc)
+            level = atoi(argv[++i]);
+        else if (strcmp(argv[i], "--tf") == 0 && i + 1 < argc) {
+            if (sscanf(argv[++i], "%lf:%lf", &tf_lo, &tf_hi) != 2)
+                return 2;
+        } else if (strcmp(argv[i], "--dataset") == 0 && i + 1 < argc)
+            dataset = argv[++i];
+        else
+            path = argv[i];
+    }
+    if (!path || size < 1 || frames < 1 || frames > 100 || !(limit_mib > 0)) {
+        fprintf(stderr, "usage: bench_pyramid STORE [--memory-limit MiB] [--size N] [--frames F] "
+                        "[--tf LO:HI] [--lod PIXELS | --level L] [--dataset NAME]\n");
+        return 2;
+    }
+    double t0 = bench_now();
+    vv_pyramid *p = NULL;
+    if (vv_pyramid_open(&p, path, -1, -1, (uint64_t)(limit_mib * 1048576.0), NULL) != VV_OK)
+        bench_die("bench_pyramid", path);
+    vv_volume *proxy = proxy_of(p);
+    bench_emit("pyramid_open", dataset, bench_now() - t0, "s");
+    vv_default_scene_options o;
+    vv_default_scene_options_init(&o);
+    o.width = o.height = size;
+    o.has_tf_range = 1;
+    o.tf_lo = tf_lo;
+    o.tf_hi = tf_hi;
+    vv_world *w = NULL;
+    if (vv_world_new_for_volume(&w, proxy, &o) != VV_OK)
+        bench_die("bench_pyramid", "world");
+    /* opacity per voxel spacing of level 0, not of the proxy */
+    w->objects[0]->tf.opacity_unit_distance *=
+        vv_pyramid_level(p, 0)->spacing[0] / proxy->spacing[0];
+    vv_renderer *ren = NULL;
+    vv_image *img = NULL;
+    if (vv_renderer_new(&ren, "raycast") != VV_OK || vv_image_new(&img, size, size) != VV_OK)
+        bench_die("bench_pyramid", "renderer");
+    double times[100];
+    vv_multires_source src;
+    vv_pyramid_source(p, &src);
+    vv_pyramid_stats st0, st1;
+    vv_lod lod;
+    for (int f = 0; f < frames; f++) {
+        if (f > 0)
+            vv_view_orbit(&w->view, 10 * 3.14159265358979 / 180, 0);
+        vv_lod_init(&lod);
+        lod.level = level;
+        lod.voxel_pixels = lod_px;
+        vv_pyramid_stats_get(p, &st0);
+        const double t = bench_now();
+        if (vv_renderer_render_multires(ren, w, 0, &src, &w->view, NULL, &lod, img) != VV_OK)
+            bench_die("bench_pyramid", "render");
+        times[f] = bench_now() - t;
+        vv_pyramid_stats_get(p, &st1);
+        char nodes[256] = "";
+        int len = 0;
+        for (int l = 0; l < vv_pyramid_levels(p) && len < 200; l++)
+            len += snprintf(nodes + len, sizeof nodes - (size_t)len, " %d", lod.nodes[l]);
+        fprintf(stderr,
+                "bench_pyramid: frame %d: %.2f s, nodes per level%s, %d skipped, %llu chunks "
+                "read, %llu from the cache, %.1f MiB read\n",
+                f, times[f], nodes, lod.skipped,
+                (unsigned long long)(chunks_read(&st1) - chunks_read(&st0)),
+                (unsigned long long)(st1.chunk_hits - st0.chunk_hits),
+                (double)(st1.bytes_read - st0.bytes_read) / 1048576.0);
+    }
+    bench_emit("pyramid_first_frame", dataset, times[0], "s");
+    if (frames > 1)
+        bench_emit("pyramid_next_frames", dataset, bench_median(times + 1, frames - 1), "s");
+    vv_pyramid_stats st;
+    vv_pyramid_stats_get(p, &st);
+    bench_emit("pyramid_chunks_read", dataset, (double)chunks_read(&st), "chunks");
+    bench_emit("pyramid_bytes_read", dataset, (double)st.bytes_read / 1048576.0, "MiB");
+    bench_emit("pyramid_most_reads_a_frame", dataset, st.max_reads_per_frame, "reads");
+    bench_emit("pyramid_peak_cache", dataset, (double)st.peak_bytes / 1048576.0, "MiB");
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    bench_emit("pyramid_peak_rss", dataset, (double)ru.ru_maxrss / 1024.0, "MiB");
+    const char *out = getenv("VV_BENCH_OUT");
+    if (out && *out) {
+        char png[4096];
+        snprintf(png, sizeof png, "%s/pyramid.png", out);
+        vv_image_write_png(img, png, 1, 0);
+    }
+    vv_image_free(img);
+    vv_renderer_free(ren);
+    vv_world_free(w);
+    vv_volume_free(proxy);
+    vv_pyramid_free(p);
+    return 0;
+}

@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# OME-Zarr pyramids out of core (issue 29, docs/parallel.md): the synthetic
+# SIDE^3 u8 volume of bench_ooc --generate, written as an OME-Zarr pyramid
+# (volvis convert: 64^3 zlib chunks, levels of 2x2x2 means) into a temporary
+# folder, rendered at 512^2 by bench_pyramid inside a cgroup (v1) memory
+# limit, once by level of detail (--lod 1) and once at full resolution
+# (every node at level 0); the folder is deleted after. Needs root (cgroup)
+# and about SIDE^3 bytes of free disk and memory for the conversion (the
+# converter reads the volume whole).
+# usage: bench/zarr_pyramid.sh [BUILD_DIR] [SIDE] [LIMIT_MIB] [CGROUP_MIB] [FRAMES]
+#   (from the repo root; defaults 1024, 128, 256, 3)
+set -euo pipefail
+build=${1:-build/release}
+side=${2:-1024}
+limit=${3:-128}
+cgmib=${4:-256}
+frames=${5:-3}
+gen=$(readlink -f "$build/bench/bench_ooc")
+bin=$(readlink -f "$build/bench/bench_pyramid")
+volvis=$(readlink -f "$build/volvis")
+tmp=$(mktemp -d "${TMPDIR:-/tmp}/vv_pyr.XXXXXX")
+cg=/sys/fs/cgroup/memory/vv_pyr_$$
+cleanup() {
+  rm -rf "$tmp"
+  if [ -d "$cg" ]; then rmdir "$cg" 2>/dev/null || true; fi
+}
+trap cleanup EXIT
+echo "# $(date -u +%FT%TZ) load: $(cut -d' ' -f1-3 /proc/loadavg); ${side}^3 u8 in $tmp"
+"$gen" --generate "$side" "$tmp/big.raw"
+"$volvis" convert "$tmp/big.raw" --raw "${side}x${side}x${side}:u8" "$tmp/big.ome.zarr" --quiet
+rm "$tmp/big.raw"
+echo "# store: $(du -sm "$tmp/big.ome.zarr" | cut -f1) MiB on disk; load: $(cut -d' ' -f1-3 /proc/loadavg)"
+mkdir "$cg"
+echo $((cgmib * 1024 * 1024)) > "$cg/memory.limit_in_bytes"
+for mode in "--lod 1" "--level 0"; do
+  name=synthetic_${side}_u8_$(echo "$mode" | tr -d ' -')
+  echo "# $mode"
+  sh -c "echo \$\$ > $cg/cgroup.procs && exec $bin $tmp/big.ome.zarr --memory-limit $limit \
+    --size 512 --frames $frames --tf 60:255 $mode --dataset $name"
+done
+echo "# cgroup: peak $(( $(cat "$cg/memory.max_usage_in_bytes") / 1048576 )) MiB of $cgmib, failcnt $(cat "$cg/memory.failcnt"); load: $(cut -d' ' -f1-3 /proc/loadavg)"
