@@ -121,23 +121,28 @@ shadow_grids(rt_frame *fr, rt_vobj *ro, int nt) {
     const size_t ng = (size_t)ro->gdim[0] * (size_t)ro->gdim[1] * (size_t)ro->gdim[2];
     for (int l = 0; l < fr->n_lights; l++) {
         const int swept = !fr->lights[l].point && fr->st->shadow_grid == 2;
-        void *g = rt_sgrid_find(fr, ro, l, swept);
+        rt_sgkey key;
+        void *g = rt_sgrid_find(fr, ro, l, swept, &key);
         if (swept) {
             ro->sweep[l] = g;
             vv_status s = rt_sweep_light(fr, ro, l, nt); /* sweeps only when not kept */
+            if (s == VV_OK && !g && ro->sweep[l] && !rt_sgrid_keep(fr, &key, ro->sweep[l]))
+                ro->sgrid_owned |= 1u << l;
+            rt_sgkey_free(&key);
             if (s != VV_OK)
                 return s;
-            if (!g && ro->sweep[l] && !rt_sgrid_keep(fr, ro, l, 1, ro->sweep[l]))
-                ro->sgrid_owned |= 1u << l;
             continue;
         }
         if (!g) {
             g = calloc(ng, sizeof *ro->sgrid[l]);
-            if (!g)
+            if (!g) {
+                rt_sgkey_free(&key);
                 return vv_error_set(VV_ERR_NOMEM, "out of memory for a shadow grid");
-            if (!rt_sgrid_keep(fr, ro, l, 0, g))
+            }
+            if (!rt_sgrid_keep(fr, &key, g))
                 ro->sgrid_owned |= 1u << l;
         }
+        rt_sgkey_free(&key);
         ro->sgrid[l] = g;
     }
     return VV_OK;

@@ -189,17 +189,12 @@ rt_sg_release(rt_sg *e) {
     memset(e, 0, sizeof *e);
 }
 
-static int
-sg_matches(const rt_sg *e, const rt_frame *fr, const rt_key *own) {
-    return e->grid && e->key_len == fr->skey_len + own->n && memcmp(e->key, own->b, own->n) == 0 &&
-           memcmp(e->key + own->n, fr->skey, fr->skey_len) == 0;
-}
-
-/* The grid's own key in *own; 0 when the frame keeps nothing (a region
+/* The grid's whole key (its own part, then the frame's shadow-casting
+ * content) in *key; 0 (key->b NULL) when the frame keeps nothing (a region
  * render: its part is not the World's object) or memory ran out. */
 static int
-own_key(rt_frame *fr, const rt_vobj *ob, int l, int swept, rt_key *own) {
-    memset(own, 0, sizeof *own);
+whole_key(rt_frame *fr, const rt_vobj *ob, int l, int swept, rt_sgkey *key) {
+    memset(key, 0, sizeof *key);
     if (fr->region || fr->skey_failed)
         return 0;
     if (!fr->skey && scene_key(fr) != VV_OK) {
@@ -207,62 +202,55 @@ own_key(rt_frame *fr, const rt_vobj *ob, int l, int swept, rt_key *own) {
         fr->skey_failed = 1;
         return 0;
     }
-    grid_key(own, fr, ob, l, swept);
-    if (own->nomem) {
-        free(own->b);
+    rt_key k;
+    memset(&k, 0, sizeof k);
+    grid_key(&k, fr, ob, l, swept);
+    key_put(&k, fr->skey, fr->skey_len);
+    if (k.nomem) {
+        free(k.b);
         return 0;
     }
+    key->b = k.b;
+    key->n = k.n;
     return 1;
 }
 
 void *
-rt_sgrid_find(rt_frame *fr, const rt_vobj *ob, int l, int swept) {
-    rt_key own;
-    if (!own_key(fr, ob, l, swept, &own))
+rt_sgrid_find(rt_frame *fr, const rt_vobj *ob, int l, int swept, rt_sgkey *key) {
+    if (!whole_key(fr, ob, l, swept, key))
         return NULL;
     rt_state *st = fr->st;
-    void *g = NULL;
-    for (int i = 0; i < RT_SG_CACHE && !g; i++)
-        if (sg_matches(&st->sg[i], fr, &own)) {
-            st->sg[i].used = st->frame;
-            g = st->sg[i].grid;
+    for (int i = 0; i < RT_SG_CACHE; i++) {
+        rt_sg *e = &st->sg[i];
+        if (e->grid && e->key_len == key->n && memcmp(e->key, key->b, key->n) == 0) {
+            e->used = st->frame;
+            return e->grid;
         }
-    free(own.b);
-    return g;
+    }
+    return NULL;
+}
+
+void
+rt_sgkey_free(rt_sgkey *key) {
+    free(key->b);
+    memset(key, 0, sizeof *key);
 }
 
 int
-rt_sgrid_keep(rt_frame *fr, const rt_vobj *ob, int l, int swept, void *grid) {
-    rt_key own;
-    if (!own_key(fr, ob, l, swept, &own))
-        return 0;
-    /* a free slot, else the least recently used one this frame does not use */
+rt_sgrid_keep(rt_frame *fr, rt_sgkey *key, void *grid) {
     rt_state *st = fr->st;
-    int slot = -1;
-    for (int i = 0; i < RT_SG_CACHE; i++)
-        if (!st->sg[i].grid) {
-            slot = i;
-            break;
-        } else if (st->sg[i].used != st->frame &&
-                   (slot < 0 || st->sg[i].used < st->sg[slot].used)) {
-            slot = i;
-        }
-    unsigned char *key = slot >= 0 ? malloc(own.n + fr->skey_len) : NULL;
+    const int slot = key->b ? RT_CACHE_SLOT(rt_sg, st->sg, grid, RT_SG_CACHE, st->frame) : -1;
     vv_volume **vols =
         slot >= 0 ? malloc((fr->n_svols ? (size_t)fr->n_svols : 1) * sizeof *vols) : NULL;
-    if (!key || !vols) {
-        free(key);
-        free(vols);
-        free(own.b);
+    if (!vols) {
+        rt_sgkey_free(key);
         return 0;
     }
     rt_sg *e = &st->sg[slot];
     rt_sg_release(e);
-    memcpy(key, own.b, own.n);
-    memcpy(key + own.n, fr->skey, fr->skey_len);
-    free(own.b);
-    e->key = key;
-    e->key_len = own.n + fr->skey_len;
+    e->key = key->b; /* the entry owns the key now */
+    e->key_len = key->n;
+    memset(key, 0, sizeof *key);
     for (int i = 0; i < fr->n_svols; i++)
         vols[i] = vv_volume_ref(fr->svols[i]);
     e->vols = vols;

@@ -9,7 +9,9 @@
 
 #include <math.h>
 #include <stdatomic.h>
+#include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "core/geom.h"
 #include "render/registry.h"
@@ -74,6 +76,37 @@ typedef struct rt_sg {
     int n_vols;
     uint64_t used; /* frame that last used it */
 } rt_sg;
+
+/*
+ * The slot of a renderer-state cache (n entries of @p type, a pointer
+ * field @p busy that is NULL in a free slot, a uint64_t field used: the
+ * frame that last used it) for a new entry: the first free one, else the
+ * least recently used that frame @p frame does not use; -1 when every slot
+ * is in use this frame.
+ */
+static inline int
+rt_cache_slot(const unsigned char *base, size_t stride, size_t busy, size_t used, int n,
+              uint64_t frame) {
+    int slot = -1;
+    uint64_t best = 0;
+    for (int i = 0; i < n; i++) {
+        const unsigned char *e = base + (size_t)i * stride;
+        uint64_t u;
+        void *p;
+        memcpy(&p, e + busy, sizeof p);
+        memcpy(&u, e + used, sizeof u);
+        if (!p)
+            return i;
+        if (u != frame && (slot < 0 || u < best)) {
+            slot = i;
+            best = u;
+        }
+    }
+    return slot;
+}
+#define RT_CACHE_SLOT(type, arr, busy, n, frame)                                                   \
+    rt_cache_slot((const unsigned char *)(arr), sizeof(type), offsetof(type, busy),                \
+                  offsetof(type, used), (n), (frame))
 
 typedef struct rt_state {
     rt_lv lv[RT_LV_CACHE];
@@ -304,14 +337,24 @@ int rt_nearest_hit(const rt_frame *fr, const vv_ray *wr, double tmin, double tma
  * ob->lidx[l]. */
 vv_status rt_sweep_light(const rt_frame *fr, rt_vobj *ob, int l, int nt);
 
+/* A shadow grid's key: its own part (placement, light), then the frame's
+ * shadow-casting content (rt_cache.c); b NULL: none (nothing is kept). */
+typedef struct rt_sgkey {
+    unsigned char *b;
+    size_t n;
+} rt_sgkey;
+
 /* The shadow grid of volume ob (a group leader) and light l, lazily
  * filled (swept 0) or swept (1), kept from an earlier frame of the same
- * shadow-casting content; NULL when there is none. */
-void *rt_sgrid_find(rt_frame *fr, const rt_vobj *ob, int l, int swept);
+ * shadow-casting content; NULL when there is none. Its key is left in
+ * *key either way, for rt_sgrid_keep or rt_sgkey_free. */
+void *rt_sgrid_find(rt_frame *fr, const rt_vobj *ob, int l, int swept, rt_sgkey *key);
 /* Keeps @p grid (filled, or to be filled lazily, by this and later frames)
- * in the renderer state: 1 when kept (the state owns it), 0 when not (a
- * region render, no memory: the caller frees it after the frame). */
-int rt_sgrid_keep(rt_frame *fr, const rt_vobj *ob, int l, int swept, void *grid);
+ * in the renderer state under *key (taken: emptied): 1 when kept (the
+ * state owns it), 0 when not (a region render, no memory: the caller frees
+ * it after the frame). */
+int rt_sgrid_keep(rt_frame *fr, rt_sgkey *key, void *grid);
+void rt_sgkey_free(rt_sgkey *key);
 /* Empties a shadow-grid cache slot. */
 void rt_sg_release(rt_sg *e);
 

@@ -543,15 +543,7 @@ rt_build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
         return s;
     /* keep it: in a free slot, else in place of the least recently used one
      * that this frame does not use */
-    int slot = -1;
-    for (int i = 0; i < RT_LV_CACHE; i++)
-        if (!st->lv[i].vol) {
-            slot = i;
-            break;
-        } else if (st->lv[i].used != st->frame &&
-                   (slot < 0 || st->lv[i].used < st->lv[slot].used)) {
-            slot = i;
-        }
+    const int slot = RT_CACHE_SLOT(rt_lv, st->lv, vol, RT_LV_CACHE, st->frame);
     if (slot < 0) {
         ob->lvol_owned |= 1u << l;
         return VV_OK;
