@@ -175,7 +175,8 @@ int cli_fail(vv_status s, const char *path);
         {"channel", 0, "C"}, {"channels", 0, "C,C,..."}, {"colors", 0, "COLOR,..."},               \
         {"blend", 0, "composite|additive|maximum"}, {"contrast", 0, "LO:HI,..."},                  \
         {"label-channels", 0, "C,C,..."}, {"compositing", 0, "binary-swap|radix-k[:K]"},           \
-        {"memory-limit", 0, "BYTES[K|M|G]"}, {"level", 0, "L"}, {"lod", 0, "PIXELS"}, {            \
+        {"memory-limit", 0, "BYTES[K|M|G]"}, {"level", 0, "L"}, {"lod", 0, "PIXELS"},              \
+        {"progressive", 0, "CHUNKS"}, {                                                            \
         "quiet", 'q', NULL                                                                         \
     }
 
@@ -223,6 +224,7 @@ typedef struct cli_render_args {
     int has_level, level;  /**< --level: a multiresolution file's level (every node at it) */
     int has_lod;           /**< --lod given: a pyramid by level of detail */
     double lod;            /**< --lod: pixels a voxel may cover (default 1) */
+    int progressive;       /**< --progressive CHUNKS: chunks read a step (0: not given) */
 } cli_render_args;
 
 /** Parses the shared options of @p a (one INPUT, -o); 0 or a usage error. */
@@ -348,6 +350,9 @@ int cli_load_volume(const char *path, const vv_raw_params *raw, vv_volume **out)
  * (-1: 0); the file's channels and time steps in *@p info when it is not NULL. */
 int cli_load_volume_sc(const char *path, const vv_raw_params *raw, int series, int channel,
                        int time, vv_load_info *info, vv_volume **out);
+/** OUT with _TNNNN before its .png (or at its end): T the tag ('t' time steps, 'p'
+ *  progressive steps), NNNN @p n. */
+void cli_numbered_path(const char *out, char tag, int n, char *buf, size_t cap);
 /** cli_load_volume_sc of resolution level @p level (OME-Zarr multiscales; 0 the finest). */
 int cli_load_volume_level(const char *path, const vv_raw_params *raw, int series, int channel,
                           int time, int level, vv_load_info *info, vv_volume **out);

@@ -78,14 +78,6 @@ parse_time_range(const cli_args *a, const char *s, int range[3]) {
     return 0;
 }
 
-/* OUT with _tNNNN before its .png (or at its end). */
-static void
-step_path(const char *out, int t, char *buf, size_t cap) {
-    size_t len = strlen(out);
-    size_t stem = cli_ends_with(out, ".png") || cli_ends_with(out, ".PNG") ? len - 4 : len;
-    snprintf(buf, cap, "%.*s_t%04d%s", (int)stem, out, t, out + stem);
-}
-
 /*
  * --time-range: the steps of the World's volume object read one after the
  * other through a time series per channel (the next read ahead while this
@@ -123,7 +115,7 @@ render_time_range(const cli_render_args *r, const int range[3], vv_world *w, vv_
         if (s == VV_OK && cli_interrupted())
             s = vv_error_set(VV_ERR_CANCELLED, "interrupted");
         char path[4096];
-        step_path(r->output, t, path, sizeof path);
+        cli_numbered_path(r->output, 't', t, path, sizeof path);
         if (s == VV_OK && (s = vv_image_write_png(img, path, r->gamma, r->alpha)) != VV_OK) {
             rc = cli_fail(s, path);
             break;
@@ -175,7 +167,7 @@ cli_render_main(int argc, char **argv) {
         r.time_range = 1;
     }
     /* under mpirun a .vvb is read by bricks, each rank its own box */
-    if (r.memory_limit > 0 || r.has_lod ||
+    if (r.memory_limit > 0 || r.has_lod || r.progressive > 0 ||
         (cli_ends_with(r.input, ".vvb") && !vv_parallel_launched()))
         return cli_render_out_of_core(&a, &r);
     if (vv_parallel_launched())

@@ -334,3 +334,10 @@ cli_ends_with(const char *s, const char *suffix) {
     size_t n = strlen(s), m = strlen(suffix);
     return n >= m && strcasecmp(s + n - m, suffix) == 0;
 }
+
+void
+cli_numbered_path(const char *out, char tag, int n, char *buf, size_t cap) {
+    size_t len = strlen(out);
+    size_t stem = cli_ends_with(out, ".png") || cli_ends_with(out, ".PNG") ? len - 4 : len;
+    snprintf(buf, cap, "%.*s_%c%04d%s", (int)stem, out, tag, n, out + stem);
+}

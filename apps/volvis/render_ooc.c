@@ -118,7 +118,25 @@ render_pyramid(cli_args *a, cli_render_args *r) {
     vv_pyramid_source(p, &src);
     double t0 = cli_now();
     vv_error_clear();
-    s = vv_renderer_render_multires(ren, w, 0, &src, &w->view, &ro, &lod, img);
+    /* --progressive: step 0 from what is resident (the coarsest level), each
+     * next step reading at most N chunks more, until nothing is pending */
+    lod.progressive = r->progressive > 0;
+    int steps = 0;
+    for (;;) {
+        lod.load_budget = steps == 0 ? 0 : r->progressive;
+        s = vv_renderer_render_multires(ren, w, 0, &src, &w->view, &ro, &lod, img);
+        if (s != VV_OK || !lod.progressive)
+            break;
+        char step[4200];
+        cli_numbered_path(r->output, 'p', steps, step, sizeof step);
+        if ((s = vv_image_write_png(img, step, r->gamma, r->alpha)) != VV_OK) {
+            rc = cli_fail(s, step);
+            goto done;
+        }
+        steps++;
+        if (lod.pending == 0)
+            break;
+    }
     double seconds = cli_now() - t0;
     if (s != VV_OK) {
         rc = cli_fail(s, NULL);
@@ -137,6 +155,8 @@ render_pyramid(cli_args *a, cli_render_args *r) {
         for (int l = 0; l < vv_pyramid_levels(p) && len < (int)sizeof levels - 64; l++)
             len += snprintf(levels + len, sizeof levels - (size_t)len, "%s%d: %d nodes %llu chunks",
                             l ? ", " : "", l, lod.nodes[l], (unsigned long long)st.chunk_reads[l]);
+        if (steps > 0)
+            printf("wrote %d progressive steps (_p0000 .. _p%04d)\n", steps, steps - 1);
         printf("wrote %s (%dx%d, %.2f s; out of core from %d levels: %s; %d nodes skipped, "
                "%.1f MiB read, peak cache %.1f MiB, a chunk read at most %d times a frame)\n",
                r->output, img->width, img->height, seconds, vv_pyramid_levels(p), levels,
@@ -176,8 +196,9 @@ cli_render_out_of_core(cli_args *a, cli_render_args *r) {
         return rc;
     if (!r->has_raw && is_zarr_store(r->input))
         return render_pyramid(a, r);
-    if (r->has_lod || (r->has_level && r->level > 0)) {
-        cli_error("%s: --lod and --level need a multiresolution file (OME-Zarr)", r->input);
+    if (r->has_lod || r->progressive > 0 || (r->has_level && r->level > 0)) {
+        cli_error("%s: --lod, --level and --progressive need a multiresolution file (OME-Zarr)",
+                  r->input);
         return CLI_EXIT_USAGE;
     }
     vv_bricked *b = NULL;

@@ -336,6 +336,9 @@ cli_render_parse(cli_args *a, cli_render_args *r) {
         if (r->has_level)
             return cli_usage_error(a, "--lod and --level: one or the other");
     }
+    if ((s = cli_get(a, "progressive")) &&
+        (rc = cli_parse_int(a, "progressive", s, 1, 1000000000, &r->progressive)))
+        return rc;
     r->field = cli_get(a, "field");
     if ((s = cli_get(a, "time"))) {
         if ((rc = cli_parse_int(a, "time", s, 0, 1000000, &r->time)))
@@ -766,6 +769,11 @@ cli_render_print_options(FILE *out) {
                  "  --level L        level L of a multiresolution file (OME-Zarr, from 0,\n"
                  "                   the finest; default 0): in memory, or out of core\n"
                  "                   (--memory-limit) every node at level L\n"
+                 "  --progressive CHUNKS  OME-Zarr out of core: write the refinement too, one\n"
+                 "                   PNG a step (OUT's name with _pNNNN before .png): step 0\n"
+                 "                   from the coarsest level, each next step reading at most\n"
+                 "                   CHUNKS more chunks, nearest first, until every node is at\n"
+                 "                   its level; OUT is the converged image\n"
                  "  --compositing binary-swap|radix-k[:K]\n"
                  "                   under mpirun -np N: how the ranks' partial images are\n"
                  "                   composited (default binary-swap; radix-k: groups of at\n"

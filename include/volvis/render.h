@@ -311,9 +311,20 @@ typedef struct vv_lod {
      * error).
      */
     int level;
-    double voxel_pixels;          /**< in: > 0 (default 1; larger is coarser and faster) */
+    double voxel_pixels; /**< in: > 0 (default 1; larger is coarser and faster) */
+    /**
+     * In: 1: a progressive frame -- a node is drawn at its level when the
+     * source holds its chunks, or when they fit in what is left of
+     * load_budget chunks (nodes nearest the eye first); otherwise at the
+     * finest coarser level the source holds (the coarsest at worst), and
+     * counted in pending. Needs the source's missing_chunks. 0: every node
+     * at its level, read as needed.
+     */
+    int progressive;
+    int load_budget;              /**< in: chunks a progressive frame may read (>= 0) */
     int nodes[VV_LOD_MAX_LEVELS]; /**< out: nodes rendered at each level */
     int skipped; /**< out: nodes skipped unread (their known min/max is transparent) */
+    int pending; /**< out: nodes drawn coarser than their level (0: the converged image) */
 } vv_lod;
 
 /** level -1 (screen-space error), voxel_pixels 1, counts 0. */

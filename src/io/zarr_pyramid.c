@@ -437,6 +437,20 @@ vv_pyramid_read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3], 
 }
 
 static int
+missing_chunks(const vv_pyramid *p, int level, const int lo[3], const int hi[3]) {
+    const py_level *l = &p->lv[level];
+    int c0[3], c1[3], n = 0;
+    chunk_span(l, lo, hi, c0, c1);
+    for (int z = c0[2]; z <= c1[2]; z++)
+        for (int y = c0[1]; y <= c1[1]; y++)
+            for (int x = c0[0]; x <= c1[0]; x++) {
+                const int c[3] = {x, y, z};
+                n += !find_chunk(p, level, vv_zr_chunk_linear(&l->J, c));
+            }
+    return n;
+}
+
+static int
 box_range(const vv_pyramid *p, int level, const int lo[3], const int hi[3], float *vmin,
           float *vmax) {
     const py_level *l = &p->lv[level];
@@ -491,6 +505,11 @@ src_read_box(void *user, int level, const int lo[3], const int hi[3], vv_volume 
 static int
 src_box_range(void *user, int level, const int lo[3], const int hi[3], float *vmin, float *vmax) {
     return box_range(user, level, lo, hi, vmin, vmax);
+}
+
+static int
+src_missing(void *user, int level, const int lo[3], const int hi[3]) {
+    return missing_chunks(user, level, lo, hi);
 }
 
 static void
@@ -569,6 +588,7 @@ vv_pyramid_source(vv_pyramid *p, vv_multires_source *out) {
     out->box_range = src_box_range;
     out->frame = src_frame;
     out->plan = src_plan;
+    out->missing_chunks = src_missing;
 }
 
 /* ---- opening ------------------------------------------------------------------ */

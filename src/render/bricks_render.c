@@ -248,7 +248,8 @@ vv_renderer_render_bricks(vv_renderer *r, const vv_world *w, int object, const v
 typedef struct mr_node {
     int level;
     vv_render_region rg;
-    int lo[3], hi[3];
+    int lo[3], hi[3]; /* its voxels at that level */
+    int n0[3], n1[3]; /* its level-0 cells */
 } mr_node;
 
 /* What one multiresolution frame shares. */
@@ -299,15 +300,15 @@ desired_level(const mr_frame *f, const int n0[3], const int n1[3]) {
     return best;
 }
 
-/* The node of level-0 cells n0 .. n1 with the voxels of level L, added to
- * the frame's list unless it is off screen or known to be transparent. */
-static vv_status
-plan_node(mr_frame *f, int L, const int n0[3], const int n1[3]) {
+/* The region of the node of level-0 cells n0 .. n1 drawn with the voxels
+ * of level L (rg, without voxels or rectangle) and its box of voxels slo ..
+ * shi; 0 when the node lies beyond the level's voxels. */
+static int
+node_region(const mr_frame *f, int L, const int n0[3], const int n1[3], vv_render_region *rg,
+            int slo[3], int shi[3]) {
     const vv_volume *h = f->src->level(f->src->user, L);
-    vv_render_region rg;
-    memset(&rg, 0, sizeof rg);
-    rg.object = f->object;
-    int slo[3], shi[3];
+    memset(rg, 0, sizeof *rg);
+    rg->object = f->object;
     for (int k = 0; k < 3; k++) {
         const double lo = (n0[k] - f->b[L][k]) / f->a[L][k], hi = (n1[k] - f->b[L][k]) / f->a[L][k];
         slo[k] = (int)floor(lo) - 1;
@@ -315,12 +316,23 @@ plan_node(mr_frame *f, int L, const int n0[3], const int n1[3]) {
         slo[k] = slo[k] < 0 ? 0 : slo[k];
         shi[k] = shi[k] > h->dims[k] - 1 ? h->dims[k] - 1 : shi[k];
         if (slo[k] > shi[k])
-            return VV_OK; /* beyond this level's voxels */
-        rg.dims[k] = h->dims[k];
-        rg.offset[k] = slo[k];
-        rg.lo[k] = n0[k] > 0 ? lo : -INFINITY;
-        rg.hi[k] = n1[k] < f->cells[k] ? hi : INFINITY;
+            return 0;
+        rg->dims[k] = h->dims[k];
+        rg->offset[k] = slo[k];
+        rg->lo[k] = n0[k] > 0 ? lo : -INFINITY;
+        rg->hi[k] = n1[k] < f->cells[k] ? hi : INFINITY;
     }
+    return 1;
+}
+
+/* The node of level-0 cells n0 .. n1 with the voxels of level L, added to
+ * the frame's list unless it is off screen or known to be transparent. */
+static vv_status
+plan_node(mr_frame *f, int L, const int n0[3], const int n1[3]) {
+    vv_render_region rg;
+    int slo[3], shi[3];
+    if (!node_region(f, L, n0, n1, &rg, slo, shi))
+        return VV_OK; /* beyond this level's voxels */
     float vmin, vmax;
     if (f->skip && f->src->box_range &&
         f->src->box_range(f->src->user, L, slo, shi, &vmin, &vmax) &&
@@ -344,14 +356,39 @@ plan_node(mr_frame *f, int L, const int n0[3], const int n1[3]) {
     nd->rg = rg;
     memcpy(nd->lo, slo, sizeof nd->lo);
     memcpy(nd->hi, shi, sizeof nd->hi);
+    memcpy(nd->n0, n0, sizeof nd->n0);
+    memcpy(nd->n1, n1, sizeof nd->n1);
     return VV_OK;
+}
+
+/* Progressive frames (lod->progressive): node @p nd redrawn at the finest
+ * level coarser than its own whose chunks are all in the source's cache
+ * (the coarsest when none is); 0 when it then lies beyond that level. */
+static int
+coarser_resident(const mr_frame *f, mr_node *nd) {
+    for (int L = nd->level + 1; L < f->n_levels; L++) {
+        vv_render_region rg;
+        int lo[3], hi[3];
+        if (!node_region(f, L, nd->n0, nd->n1, &rg, lo, hi))
+            return 0;
+        if (L < f->n_levels - 1 && f->src->missing_chunks(f->src->user, L, lo, hi) > 0)
+            continue;
+        vv_region_rect(&rg, f->i2w[L], f->view, lo, hi);
+        nd->level = L;
+        nd->rg = rg;
+        memcpy(nd->lo, lo, sizeof lo);
+        memcpy(nd->hi, hi, sizeof hi);
+        return 1;
+    }
+    return 0;
 }
 
 /* The planned nodes read and rendered in order. */
 static vv_status
 render_nodes(mr_frame *f) {
     const int n = f->n_nodes;
-    if (f->src->plan && n > 0) {
+    const int progressive = f->lod->progressive && f->src->missing_chunks;
+    if (f->src->plan && n > 0 && !progressive) {
         int *lv = malloc(sizeof(int) * (size_t)n);
         int *lo = malloc(sizeof(int) * 3 * (size_t)n), *hi = malloc(sizeof(int) * 3 * (size_t)n);
         if (lv && lo && hi) {
@@ -367,8 +404,21 @@ render_nodes(mr_frame *f) {
         free(lo);
         free(hi);
     }
+    int budget = f->lod->load_budget;
     for (int i = 0; i < n; i++) {
         mr_node *nd = &f->nodes[i];
+        if (progressive) {
+            /* its own level when resident or within the chunks left to read
+             * (the nearest nodes come first), else a coarser resident one */
+            const int miss = f->src->missing_chunks(f->src->user, nd->level, nd->lo, nd->hi);
+            if (miss > budget && nd->level < f->n_levels - 1) {
+                f->lod->pending++;
+                if (!coarser_resident(f, nd))
+                    continue;
+            } else {
+                budget -= miss;
+            }
+        }
         vv_volume *bv = NULL;
         vv_status s = f->src->read_box(f->src->user, nd->level, nd->lo, nd->hi, &bv);
         if (s != VV_OK)
@@ -497,6 +547,7 @@ vv_renderer_render_multires(vv_renderer *r, const vv_world *w, int object,
         return s;
     memset(lod->nodes, 0, sizeof lod->nodes);
     lod->skipped = 0;
+    lod->pending = 0;
     mr_frame f;
     memset(&f, 0, sizeof f);
     f.r = r;

@@ -26,6 +26,9 @@ then checks:
 - the phantom at levels 1 and 2 out of core (4M) against the in-memory
   render of the same level: MIP bit-identical (the boxes of coarser
   levels, their placement);
+- progressive frames (--progressive 40 chunks a step): the first step from
+  the coarsest level, each step no farther from the converged image (PSNR
+  non-decreasing), the last (and OUT) the converged image bit for bit;
 - level of detail: a perspective view with --lod 2.5 mixes levels 0 and
   1; against the same view at level 1 everywhere it has no crack (no pixel
   opaque in one and empty in the other) and is close (PSNR >= 25 dB);
@@ -208,6 +211,26 @@ for k in (1, 2):
     check(ok and psnr(mem, ooc) == 99.0,
           f"phantom level {k}: out-of-core MIP is the in-memory one bit for bit "
           f"({p1.stderr.strip()} {p2.stderr.strip()})")
+
+# ---- progressive frames ------------------------------------------------------------------
+for mode in ["composite", "mip"]:
+    conv = os.path.join(OUT, f"prog_{mode}_conv.png")
+    prog = os.path.join(OUT, f"prog_{mode}.png")
+    p1 = render(head_store, conv, "--mode", mode, *TF, "--memory-limit", "16M")
+    p2 = render(head_store, prog, "--mode", mode, *TF, "--memory-limit", "16M", "--progressive",
+                "40")
+    steps = sorted(f for f in os.listdir(OUT) if f.startswith(f"prog_{mode}_p"))
+    ok = p1.returncode == 0 and p2.returncode == 0 and len(steps) >= 3
+    check(ok, f"head {mode} --progressive 40: {len(steps)} steps {p2.stderr.strip()}")
+    if not ok:
+        continue
+    q = [psnr(os.path.join(OUT, f), conv) for f in steps]
+    print(f"     PSNR of each step against the converged image: {[round(x, 1) for x in q]}")
+    check(all(b >= a for a, b in zip(q, q[1:])),
+          f"head {mode}: each step closer to the converged image (PSNR non-decreasing)")
+    check(q[-1] == 99.0 and psnr(prog, conv) == 99.0,
+          f"head {mode}: the last step and OUT are the converged image bit for bit")
+    check(q[0] < 40, f"head {mode}: the first step is drawn from the coarsest level ({q[0]:.1f} dB)")
 
 # ---- level of detail without cracks ---------------------------------------------------------
 store = phantoms["zlib"][0]

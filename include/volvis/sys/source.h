@@ -120,6 +120,12 @@ typedef struct vv_multires_source {
      * Errors: VV_ERR_NOMEM (the reads then go unplanned).
      */
     vv_status (*plan)(void *user, int n, const int *level, const int *lo, const int *hi);
+    /**
+     * Optional (NULL): how many of the chunks holding voxels lo .. hi of
+     * @p level are not in the source's cache (0: the box reads without I/O);
+     * for progressive frames (vv_lod.progressive).
+     */
+    int (*missing_chunks)(void *user, int level, const int lo[3], const int hi[3]);
 } vv_multires_source;
 
 #ifdef __cplusplus
