@@ -34,6 +34,31 @@ cli_proxy_opacity_unit(vv_world *w, const vv_volume *whole, const vv_volume *pro
             w->objects[i]->tf.opacity_unit_distance = ph;
 }
 
+/* The World from the proxy (its transfer function's opacity per @p whole's
+ * voxel), turned; the renderer, the image and the options of the frame.
+ * 0 or an exit code. */
+static int
+frame_setup(cli_args *a, cli_render_args *r, vv_volume *proxy, const vv_volume *whole, vv_world **w,
+            vv_renderer **ren, vv_image **img, vv_render_options *ro) {
+    int rc = cli_render_world_volume(r, proxy, w);
+    if (rc)
+        return rc;
+    cli_proxy_opacity_unit(*w, whole, proxy);
+    cli_render_turn(r, *w);
+    int quality = 2;
+    if ((rc = cli_render_renderer(a, r, *w, ren, &quality)))
+        return rc;
+    vv_status s = vv_image_new(img, (*w)->view.width, (*w)->view.height);
+    if (s != VV_OK)
+        return cli_fail(s, NULL);
+    if (r->threads > 0)
+        vv_threads_set(r->threads);
+    vv_render_options_init(ro);
+    ro->threads = r->threads;
+    ro->quality = quality;
+    return 0;
+}
+
 /* A folder holding .zattrs or .zarray: a Zarr store. */
 static int
 is_zarr_store(const char *path) {
@@ -93,23 +118,9 @@ render_pyramid(cli_args *a, cli_render_args *r) {
         rc = cli_fail(s, r->input);
         goto done;
     }
-    if ((rc = cli_render_world_volume(r, proxy, &w)))
-        goto done;
-    cli_proxy_opacity_unit(w, vv_pyramid_level(p, frame), proxy);
-    cli_render_turn(r, w);
-    int quality = 2;
-    if ((rc = cli_render_renderer(a, r, w, &ren, &quality)))
-        goto done;
-    if ((s = vv_image_new(&img, w->view.width, w->view.height)) != VV_OK) {
-        rc = cli_fail(s, NULL);
-        goto done;
-    }
-    if (r->threads > 0)
-        vv_threads_set(r->threads);
     vv_render_options ro;
-    vv_render_options_init(&ro);
-    ro.threads = r->threads;
-    ro.quality = quality;
+    if ((rc = frame_setup(a, r, proxy, vv_pyramid_level(p, frame), &w, &ren, &img, &ro)))
+        goto done;
     vv_lod lod;
     vv_lod_init(&lod);
     lod.level = r->has_level ? r->level : -1;
@@ -216,23 +227,9 @@ cli_render_out_of_core(cli_args *a, cli_render_args *r) {
         rc = cli_fail(s, r->input);
         goto done;
     }
-    if ((rc = cli_render_world_volume(r, proxy, &w)))
-        goto done;
-    cli_proxy_opacity_unit(w, vv_bricked_header(b), proxy);
-    cli_render_turn(r, w);
-    int quality = 2;
-    if ((rc = cli_render_renderer(a, r, w, &ren, &quality)))
-        goto done;
-    if ((s = vv_image_new(&img, w->view.width, w->view.height)) != VV_OK) {
-        rc = cli_fail(s, NULL);
-        goto done;
-    }
-    if (r->threads > 0)
-        vv_threads_set(r->threads);
     vv_render_options ro;
-    vv_render_options_init(&ro);
-    ro.threads = r->threads;
-    ro.quality = quality;
+    if ((rc = frame_setup(a, r, proxy, vv_bricked_header(b), &w, &ren, &img, &ro)))
+        goto done;
     double t0 = cli_now();
     vv_error_clear();
     vv_brick_source src;

@@ -121,6 +121,30 @@ check_args(vv_renderer *r, const vv_world *w, int object, const vv_view *view,
     return VV_OK;
 }
 
+/* The frame's images: @p whole (the output, cleared, combined by the
+ * mode's operation) and @p piece (each region's, clear, kept clear outside
+ * each region's rectangle); the keys of both in one block at whole->key.
+ * Free piece->image and whole->key after, also on error. */
+static vv_status
+frame_images(const vv_view *view, vv_image *out, vv_render_mode mode, vv_region_image *whole,
+             vv_region_image *piece) {
+    const size_t np = (size_t)view->width * (size_t)view->height;
+    float *keys = malloc(sizeof(float) * 2 * (np ? np : 1));
+    const vv_region_op op = mode == VV_MODE_MIP     ? VV_REGION_MAX
+                            : mode == VV_MODE_MINIP ? VV_REGION_MIN
+                                                    : VV_REGION_OVER;
+    *whole = (vv_region_image){out, keys, op, 0};
+    *piece = (vv_region_image){NULL, keys ? keys + np : NULL, VV_REGION_OVER, 1};
+    if (!keys)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    vv_status s = vv_image_new(&piece->image, view->width, view->height);
+    if (s != VV_OK)
+        return s;
+    vv_region_image_clear(piece);
+    vv_region_image_clear(whole);
+    return VV_OK;
+}
+
 /* One region render, composited under the image so far over its
  * rectangle; the piece is cleared there again after (it stays clear
  * outside every rectangle: the renderer clears only the next one). */
@@ -185,22 +209,8 @@ vv_renderer_render_bricks(vv_renderer *r, const vv_world *w, int object, const v
     if (n > 0)
         order_bricks(&ord, zero, nb);
 
-    const size_t np = (size_t)view->width * (size_t)view->height;
-    vv_image *part = NULL;
-    float *keys = malloc(sizeof(float) * 2 * (np ? np : 1));
-    vv_region_image whole = {out, keys, VV_REGION_OVER, 0};
-    vv_region_image piece = {NULL, keys ? keys + np : NULL, VV_REGION_OVER, 1};
-    s = keys ? vv_image_new(&part, view->width, view->height)
-             : vv_error_set(VV_ERR_NOMEM, "out of memory");
-    piece.image = part;
-    if (s == VV_OK)
-        vv_region_image_clear(&piece);
-    if (s == VV_OK) {
-        vv_region_image_clear(&whole);
-        whole.op = mode == VV_MODE_MIP     ? VV_REGION_MAX
-                   : mode == VV_MODE_MINIP ? VV_REGION_MIN
-                                           : VV_REGION_OVER;
-    }
+    vv_region_image whole, piece;
+    s = frame_images(view, out, mode, &whole, &piece);
     const int skip = mode == VV_MODE_COMPOSITE && obj->segmentation == VV_SEG_TRANSFER_FUNCTION;
     for (int oi = 0; oi < n && s == VV_OK; oi++) {
         const int idx = ord.list[oi];
@@ -236,8 +246,8 @@ vv_renderer_render_bricks(vv_renderer *r, const vv_world *w, int object, const v
     }
     if (s == VV_OK)
         vv_region_image_finish(&whole, w->background);
-    vv_image_free(part);
-    free(keys);
+    vv_image_free(piece.image);
+    free(whole.key);
     free(ord.list);
     return s;
 }
@@ -564,23 +574,11 @@ vv_renderer_render_multires(vv_renderer *r, const vv_world *w, int object,
         return s;
     f.skip = f.obj->mode == VV_MODE_COMPOSITE && f.obj->segmentation == VV_SEG_TRANSFER_FUNCTION;
 
-    const size_t np = (size_t)view->width * (size_t)view->height;
-    vv_image *part = NULL;
-    float *keys = malloc(sizeof(float) * 2 * (np ? np : 1));
-    vv_region_image whole = {out, keys, VV_REGION_OVER, 0};
-    vv_region_image piece = {NULL, keys ? keys + np : NULL, VV_REGION_OVER, 1};
-    s = keys ? vv_image_new(&part, view->width, view->height)
-             : vv_error_set(VV_ERR_NOMEM, "out of memory");
-    piece.image = part;
-    if (s == VV_OK)
-        vv_region_image_clear(&piece);
+    vv_region_image whole, piece;
+    s = frame_images(view, out, f.obj->mode, &whole, &piece);
     f.whole = &whole;
     f.piece = &piece;
     if (s == VV_OK) {
-        vv_region_image_clear(&whole);
-        whole.op = f.obj->mode == VV_MODE_MIP     ? VV_REGION_MAX
-                   : f.obj->mode == VV_MODE_MINIP ? VV_REGION_MIN
-                                                  : VV_REGION_OVER;
         /* the root: the smallest node that covers every axis */
         int depth = 0, big = f.cells[0] > f.cells[1] ? f.cells[0] : f.cells[1];
         big = f.cells[2] > big ? f.cells[2] : big;
@@ -598,7 +596,7 @@ vv_renderer_render_multires(vv_renderer *r, const vv_world *w, int object,
     free(f.nodes);
     if (s == VV_OK)
         vv_region_image_finish(&whole, w->background);
-    vv_image_free(part);
-    free(keys);
+    vv_image_free(piece.image);
+    free(whole.key);
     return s;
 }
