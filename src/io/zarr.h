@@ -63,6 +63,10 @@ vv_status vv_zr_parse_store(const char *root, int level, zr_array *a, int channe
  * VV_ERR_UNSUPPORTED (axes), VV_ERR_LIMIT, VV_ERR_INVALID (out of range). */
 vv_status vv_zr_layout(const zr_array *a, int channel, int time, zr_layout *J);
 
+/* The volume's spacing, origin (the level's scale and translation along
+ * i, j, k), unit and modification (original) from @p J's array. */
+void vv_zr_geometry(const zr_layout *J, vv_volume *v);
+
 /* The spatial chunk index (C order over the array's spatial axes) of the
  * chunk at position c (along i, j, k). */
 uint64_t vv_zr_chunk_linear(const zr_layout *J, const int c[3]);

@@ -48,9 +48,9 @@ typedef struct py_use {
 typedef struct py_chunk {
     int level;
     uint64_t L;
-    py_use *use;    /* its uses in the plan, or NULL */
-    int org[3];     /* the block's first voxel in the level */
-    vv_volume *blk; /* the chunk's voxels inside the array */
+    py_use *use;      /* its uses in the plan, or NULL */
+    int org[3], n[3]; /* the block's first voxel in the level, its size */
+    vv_volume *blk;   /* the chunk's voxels inside the array */
     uint64_t bytes;
     int pins; /* boxes being assembled from it */
     struct py_chunk *prev, *next, *hnext;
@@ -227,16 +227,18 @@ count_read(vv_pyramid *p, int level, uint64_t L, uint64_t file_bytes) {
         p->st.max_reads_per_frame = l->frame_reads[L];
 }
 
-/* Reads and decodes the chunks in @p todo (n of them, blocks allocated) on
- * every core; the first failing chunk's error in order. */
+/* Reads and decodes the chunks in @p todo (n >= 1 of them, their blocks
+ * allocated) on every core, file bytes and missing flags per chunk into
+ * @p file_bytes and @p missing; the first failing chunk's error in order. */
 static vv_status
 decode_chunks(vv_pyramid *p, py_chunk **todo, int n, uint64_t *file_bytes, int *missing) {
     const py_level *l = &p->lv[todo[0]->level];
     long long first = -1;
     vv_status first_status = VV_OK;
     char first_msg[1024] = "";
-    const int nthreads =
-        l->J.cbytes > ((size_t)64 << 20) || n < 2 ? 1 : (int)fmin(omp_get_max_threads(), n);
+    const int nthreads = l->J.cbytes > ((size_t)64 << 20) || n < 2 ? 1
+                         : omp_get_max_threads() < n               ? omp_get_max_threads()
+                                                                   : n;
 #pragma omp parallel num_threads(nthreads)
     {
         unsigned char *buf = malloc(l->J.cbytes);
@@ -336,9 +338,8 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
                     }
                     e->level = level;
                     e->L = L;
-                    int cn[3];
-                    chunk_box(l, c, e->org, cn);
-                    e->bytes = (uint64_t)cn[0] * (uint64_t)cn[1] * (uint64_t)cn[2] * vs;
+                    chunk_box(l, c, e->org, e->n);
+                    e->bytes = (uint64_t)e->n[0] * (uint64_t)e->n[1] * (uint64_t)e->n[2] * vs;
                     need += e->bytes;
                     todo[nt++] = e;
                 }
@@ -350,14 +351,8 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
                          "memory limit of %llu bytes: the %d chunks of a box of level %d do not "
                          "fit",
                          (unsigned long long)p->limit, n, level);
-    for (int i = 0; i < nt && s == VV_OK; i++) {
-        int cn[3];
-        for (int k = 0; k < 3; k++) {
-            const int e = todo[i]->org[k] + l->J.cdims[k];
-            cn[k] = (e > l->J.dims[k] ? l->J.dims[k] : e) - todo[i]->org[k];
-        }
-        s = vv_volume_new(&todo[i]->blk, cn, l->a.type);
-    }
+    for (int i = 0; i < nt && s == VV_OK; i++)
+        s = vv_volume_new(&todo[i]->blk, todo[i]->n, l->a.type);
     if (s == VV_OK && nt > 0)
         s = decode_chunks(p, todo, nt, fbytes, missing);
     for (int i = 0; i < nu; i++)
@@ -397,15 +392,9 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
 /* The header of a level: its geometry with the store's range. */
 static void
 set_geometry(vv_volume *v, const vv_pyramid *p, const py_level *l) {
-    const int *vax = l->J.vax;
-    for (int k = 0; k < 3; k++) {
-        v->spacing[k] = vax[k] >= 0 ? l->a.scale[vax[k]] : 1;
-        v->origin[k] = vax[k] >= 0 ? l->a.trans[vax[k]] : 0;
-    }
-    v->unit = vv_unit_parse(l->a.axes[vax[0]].unit);
+    vv_zr_geometry(&l->J, v);
     v->range[0] = p->range[0];
     v->range[1] = p->range[1];
-    v->modification = VV_MOD_ORIGINAL;
 }
 
 vv_status

@@ -471,6 +471,16 @@ vv_zr_layout(const zr_array *a, int channel, int time, zr_layout *J) {
     return VV_OK;
 }
 
+void
+vv_zr_geometry(const zr_layout *J, vv_volume *v) {
+    for (int k = 0; k < 3; k++) {
+        v->spacing[k] = J->vax[k] >= 0 ? J->a->scale[J->vax[k]] : 1;
+        v->origin[k] = J->vax[k] >= 0 ? J->a->trans[J->vax[k]] : 0;
+    }
+    v->unit = vv_unit_parse(J->a->axes[J->vax[0]].unit);
+    v->modification = VV_MOD_ORIGINAL;
+}
+
 uint64_t
 vv_zr_chunk_linear(const zr_layout *J, const int c[3]) {
     uint64_t L = 0;
@@ -563,7 +573,7 @@ read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
     zr_layout J;
     if ((s = vv_zr_layout(&a, opt->channel, opt->time, &J)) != VV_OK)
         return s;
-    const int *dims = J.dims, *vax = J.vax;
+    const int *dims = J.dims;
     const int cax = J.cax, tax = J.tax;
     const uint64_t nc = J.nc, nt = J.nt;
     if ((s = vv_volume_check_size(dims, a.type, NULL)) != VV_OK)
@@ -606,12 +616,7 @@ read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
         vv_volume_free(v);
         return vv_error_set(first_status, "%s", first_msg);
     }
-    for (int k = 0; k < 3; k++) {
-        v->spacing[k] = vax[k] >= 0 ? a.scale[vax[k]] : 1;
-        v->origin[k] = vax[k] >= 0 ? a.trans[vax[k]] : 0;
-    }
-    v->unit = vv_unit_parse(a.axes[vax[0]].unit);
-    v->modification = VV_MOD_ORIGINAL;
+    vv_zr_geometry(&J, v);
     vv_volume_update_range(v);
     if (info) {
         info->n_channels = (int)nc;
