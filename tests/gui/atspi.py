@@ -506,6 +506,15 @@ class Session:
         self.wait_for(lambda: path in self.text(entry), f"{title}: {path!r} not in the entry",
                       timeout=timeout)
         self.key("Return")
+        # Return can be taken by the entry's completion popup instead of the
+        # dialog: press it again while the window stays open
+        for _ in range(3):
+            t1 = time.time()
+            while time.time() - t1 < 8 and self.xdo("search", "--name", title).strip():
+                time.sleep(0.2)
+            if not self.xdo("search", "--name", title).strip():
+                break
+            self.key("Return")
 
     def save_as(self, path):
         """Save session as: Ctrl+Shift+S and the path."""
