@@ -16,13 +16,13 @@ set -euo pipefail
 pkgs=(build-essential cmake pkg-config libteem-dev libnifti2-dev libjansson-dev libblosc-dev libzstd-dev
       libpng-dev zlib1g-dev libassimp-dev libfftw3-dev libcairo2-dev libgtk-4-dev
       libspnav-dev libsdl2-dev libxml2-dev libnetcdf-dev libavformat-dev libavcodec-dev
-      libswscale-dev libavutil-dev libtiff-dev libgdcm-dev libseccomp-dev libopenmpi-dev openmpi-bin
+      libswscale-dev libavutil-dev libtiff-dev libgdcm-dev libseccomp-dev libhdf5-dev libopenmpi-dev openmpi-bin
       python3-dev python3-cffi python3-numpy)
 for what in "$@"; do
   case "$what" in
     build) ;;
     demo) pkgs+=(mricron-data) ;;
-    test) pkgs+=(libcmocka-dev ffmpeg xvfb xauth xdotool imagemagick at-spi2-core python3-pyatspi dbus-x11 python3-pydicom python3-nibabel python3-tifffile python3-pil python3-zarr python3-numcodecs python3-vtk9 libgdcm-tools python3-scipy teem-apps
+    test) pkgs+=(libcmocka-dev ffmpeg xvfb xauth xdotool imagemagick at-spi2-core python3-pyatspi dbus-x11 python3-pydicom python3-nibabel python3-tifffile python3-pil python3-zarr python3-numcodecs python3-h5py python3-vtk9 libgdcm-tools python3-scipy teem-apps
                  python3-pytest python3-tqdm python3-ipywidgets python3-ipykernel jupyter-nbconvert) ;;
     fuzz) pkgs+=(clang-14 libfuzzer-14-dev libomp-14-dev teem-apps imagemagick libgdcm-tools python3-vtk9 python3-numpy python3-pydicom) ;;
     bench) pkgs+=(python3-vtk9 python3-numpy python3-pydicom xvfb libgl1-mesa-dri teem-apps zfp) ;;

@@ -87,7 +87,8 @@ cli_convert_usage(FILE *out) {
             "                     hyperstacks, NIfTI (dim[4]), NRRD (an axis of kind time),\n"
             "                     DICOM (images repeating at each position: cine, 4-D CT)\n"
             "  --level L          resolution level L of a multiresolution IN (OME-Zarr\n"
-            "                     multiscales, from 0, the finest; default 0)\n"
+            "                     multiscales, BigDataViewer, Imaris; from 0, the\n"
+            "                     finest; default 0)\n"
             "  -q, --quiet        no 'wrote' line and no conversion note\n"
             "  -h, --help         show this help\n"
             "\n",

@@ -59,20 +59,6 @@ frame_setup(cli_args *a, cli_render_args *r, vv_volume *proxy, const vv_volume *
     return 0;
 }
 
-/* A folder holding .zattrs or .zarray: a Zarr store. */
-static int
-is_zarr_store(const char *path) {
-    struct stat st;
-    char f[4200];
-    if (stat(path, &st) != 0 || !S_ISDIR(st.st_mode))
-        return 0;
-    snprintf(f, sizeof f, "%s/.zattrs", path);
-    if (stat(f, &st) == 0)
-        return 1;
-    snprintf(f, sizeof f, "%s/.zarray", path);
-    return stat(f, &st) == 0;
-}
-
 /* The coarsest level as the World's volume, its box stretched over the box
  * of level @p frame (the view frames it, the histogram sets the transfer
  * function). */
@@ -205,10 +191,11 @@ cli_render_out_of_core(cli_args *a, cli_render_args *r) {
     int rc = cli_check_readable_input(r->input);
     if (rc)
         return rc;
-    if (!r->has_raw && is_zarr_store(r->input))
+    if (!r->has_raw && vv_pyramid_probe(r->input))
         return render_pyramid(a, r);
     if (r->has_lod || r->progressive > 0 || (r->has_level && r->level > 0)) {
-        cli_error("%s: --lod, --level and --progressive need a multiresolution file (OME-Zarr)",
+        cli_error("%s: --lod, --level and --progressive need a multiresolution file (OME-Zarr, "
+                  "BigDataViewer or Imaris HDF5)",
                   r->input);
         return CLI_EXIT_USAGE;
     }

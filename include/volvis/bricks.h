@@ -148,7 +148,7 @@ void vv_bricked_note_skip(vv_bricked *b);
  */
 void vv_bricked_source(vv_bricked *b, vv_brick_source *out);
 
-/* ---- multiresolution pyramids (OME-Zarr) ------------------------------------------ */
+/* ---- multiresolution pyramids (OME-Zarr, BigDataViewer / Imaris HDF5) --------------- */
 
 #define VV_PYRAMID_MAX_LEVELS 16 /**< levels read from one store */
 
@@ -167,24 +167,34 @@ typedef struct vv_pyramid_stats {
 } vv_pyramid_stats;
 
 /**
- * Opens the OME-Zarr store (or plain Zarr v2 array: one level) at folder
- * @p path for reading by boxes: channel @p channel at time step @p time
- * (-1: 0) of every multiscales level. Only the metadata and the coarsest
- * level's chunks are read. The value range is the omero window's min and
- * max of the channel, else the coarsest level's (finer values beyond it
- * classify as its ends). @p memory_limit (bytes, 0: 1 GiB) bounds the
- * decoded chunks held and the working set of the box being rendered.
- * @p info (may be NULL) gets the channel, step and level counts and the
- * omero name and colour. Every level must have level 0's axes, type,
- * channels and steps. Errors (prefixed "zarr: NAME"): those of
- * vv_ome_zarr_read, VV_ERR_FORMAT (inconsistent multiscales), VV_ERR_LIMIT
- * (over VV_PYRAMID_MAX_LEVELS levels; a limit below one box's working
- * set). Thread-safety: one vv_pyramid is used from one thread at a time
- * (it decodes chunks on every core).
+ * Opens the multiresolution file at @p path for reading by boxes: an
+ * OME-Zarr store (or plain Zarr v2 array: one level; a folder), or a
+ * BigDataViewer HDF5 or Imaris .ims file (an HDF5 file), channel
+ * @p channel (BigDataViewer: setup) at time step @p time (-1: 0) of every
+ * level. Only the metadata and the coarsest level's chunks are read. The
+ * value range is the omero window's min and max of the channel, else the
+ * coarsest level's (finer values beyond it classify as its ends).
+ * @p memory_limit (bytes, 0: 1 GiB) bounds the decoded chunks held and the
+ * working set of the box being rendered. @p info (may be NULL) gets the
+ * channel, step and level counts and the omero name and colour. Every level
+ * must have level 0's axes, type, channels and steps. Zarr chunks are
+ * decoded in this process on every core; HDF5 chunks are read by libhdf5
+ * in a long-lived sandboxed reader (docs/security.md), one at a time.
+ * Errors (prefixed "zarr: NAME" or "hdf5: NAME"): those of
+ * vv_ome_zarr_read or the HDF5 reader, VV_ERR_FORMAT (inconsistent
+ * multiscales; neither HDF5 layout), VV_ERR_LIMIT (over
+ * VV_PYRAMID_MAX_LEVELS levels; a limit below one box's working set).
+ * Thread-safety: one vv_pyramid is used from one thread at a time.
  */
 vv_status vv_pyramid_open(vv_pyramid **out, const char *path, int channel, int time,
                           uint64_t memory_limit, vv_load_info *info);
 void vv_pyramid_free(vv_pyramid *p);
+/**
+ * 1 when @p path is what vv_pyramid_open reads: a folder holding .zattrs
+ * or .zarray, or a file starting with HDF5's signature; 0 otherwise (not
+ * a promise that it opens). Thread-safe.
+ */
+int vv_pyramid_probe(const char *path);
 /** Levels (>= 1). */
 int vv_pyramid_levels(const vv_pyramid *p);
 /**

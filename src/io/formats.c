@@ -34,7 +34,8 @@
     X(tiff)                                                                                        \
     X(dicom)                                                                                       \
     X(vti)                                                                                         \
-    X(ome_zarr)
+    X(ome_zarr)                                                                                    \
+    X(hdf5)
 
 #define DECLARE(name) extern const vv_volume_format vv_volume_format_##name;
 VV_VOLUME_FORMAT_TABLE(DECLARE)

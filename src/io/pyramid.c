@@ -1,17 +1,19 @@
 /*
- * OME-Zarr pyramids out of core (include/volvis/bricks.h, vv_pyramid): the
- * multiscales levels of one channel at one time step, read by boxes of
- * voxels through a cache of decoded chunks within a memory limit.
+ * Multiresolution pyramids out of core (include/volvis/bricks.h,
+ * vv_pyramid): the levels of one channel at one time step of an OME-Zarr
+ * store or a BigDataViewer / Imaris HDF5 file (their stores:
+ * src/io/pyramid.h), read by boxes of voxels through a cache of decoded
+ * chunks within a memory limit.
  *
- * Opening reads the metadata only (.zattrs, each level's .zarray) and the
- * coarsest level, whose voxels give the proxy and, without an omero window,
- * the value range. A box of a level is assembled from the chunks it
- * overlaps: those in the cache are used as they are, the others are read
- * and decoded on every core (one buffer a thread) and kept, least recently
- * used first out. The min and max of every chunk decoded are remembered
- * (a few bytes a chunk), so a later frame skips transparent boxes unread.
- * Each chunk's reads within one frame are counted (frames are marked by
- * the renderer through the source's frame method).
+ * Opening reads the metadata only (the store's) and the coarsest level,
+ * whose voxels give the proxy and, without a window in the metadata, the
+ * value range. A box of a level is assembled from the chunks it overlaps:
+ * those in the cache are used as they are, the others are fetched from the
+ * store (decoded on every core when the store allows, one scratch buffer a
+ * thread) and kept, least recently used first out. The min and max of every chunk decoded are
+ * remembered (a few bytes a chunk), so a later frame skips transparent boxes unread. Each chunk's
+ * reads within one frame are counted (frames are marked by the renderer through the source's frame
+ * method).
  *
  * When the renderer plans its frame (the boxes it will read, in order),
  * each chunk's uses in the plan are known, and the chunk evicted is the
@@ -27,11 +29,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-#include <jansson.h>
+#include <sys/stat.h>
 
 #include "core/internal.h"
-#include "io/zarr.h"
+#include "io/pyramid.h"
 #include "volvis/bricks.h"
 
 #define PY_BUCKETS 4096u
@@ -57,8 +58,9 @@ typedef struct py_chunk {
 } py_chunk;
 
 typedef struct py_level {
-    zr_array a;
-    zr_layout J;
+    int dims[3], cdims[3], nchunks[3];
+    vv_voxel_type type;
+    size_t esize;
     vv_volume *hdr; /* geometry only: 1-voxel data, dims set to the level's */
     uint64_t n_chunks;
     float *cmin, *cmax;    /* per chunk, when known */
@@ -69,6 +71,7 @@ typedef struct py_level {
 
 struct vv_pyramid {
     char path[4096];
+    pyr_store store;
     int n_levels;
     py_level lv[VV_PYRAMID_MAX_LEVELS];
     double range[2];
@@ -87,6 +90,24 @@ static unsigned
 bucket_of(int level, uint64_t L) {
     uint64_t h = (L + 1) * 0x9E3779B97F4A7C15ull ^ (uint64_t)level * 0xBF58476D1CE4E5B9ull;
     return (unsigned)(h >> 52) & (PY_BUCKETS - 1);
+}
+
+/* @p s prefixed with "NAME: FILE" unless its message starts so already (a
+ * store's reader names the file itself). */
+static vv_status
+prefix_once(vv_status s, const char *name, const char *path) {
+    char head[512];
+    const int n = snprintf(head, sizeof head, "%s: %s:", name, vv_path_basename(path));
+    if (n > 0 && n < (int)sizeof head && !strncmp(vv_error_message(), head, (size_t)n))
+        return s;
+    return vv_error_prefix(s, "%s: %s", name, vv_path_basename(path));
+}
+
+/* The cache's index of chunk position c of level @p l (x fastest). */
+static uint64_t
+chunk_linear(const py_level *l, const int c[3]) {
+    return ((uint64_t)c[2] * (uint64_t)l->nchunks[1] + (uint64_t)c[1]) * (uint64_t)l->nchunks[0] +
+           (uint64_t)c[0];
 }
 
 static py_chunk *
@@ -203,9 +224,9 @@ make_room(vv_pyramid *p, uint64_t need) {
 static void
 chunk_box(const py_level *l, const int c[3], int org[3], int n[3]) {
     for (int k = 0; k < 3; k++) {
-        org[k] = c[k] * l->J.cdims[k];
-        const int e = org[k] + l->J.cdims[k];
-        n[k] = (e > l->J.dims[k] ? l->J.dims[k] : e) - org[k];
+        org[k] = c[k] * l->cdims[k];
+        const int e = org[k] + l->cdims[k];
+        n[k] = (e > l->dims[k] ? l->dims[k] : e) - org[k];
     }
 }
 
@@ -227,30 +248,35 @@ count_read(vv_pyramid *p, int level, uint64_t L, uint64_t file_bytes) {
         p->st.max_reads_per_frame = l->frame_reads[L];
 }
 
-/* Reads and decodes the chunks in @p todo (n >= 1 of them, their blocks
- * allocated) on every core, file bytes and missing flags per chunk into
- * @p file_bytes and @p missing; the first failing chunk's error in order. */
+/* Fetches the chunks in @p todo (n >= 1 of them, their blocks allocated)
+ * from the store, on every core when it allows, file bytes and missing
+ * flags per chunk into @p file_bytes and @p missing; the first failing
+ * chunk's error in order. */
 static vv_status
 decode_chunks(vv_pyramid *p, py_chunk **todo, int n, uint64_t *file_bytes, int *missing) {
-    const py_level *l = &p->lv[todo[0]->level];
+    const pyr_store *st = &p->store;
     long long first = -1;
     vv_status first_status = VV_OK;
     char first_msg[1024] = "";
-    const int nthreads = l->J.cbytes > ((size_t)64 << 20) || n < 2 ? 1
-                         : omp_get_max_threads() < n               ? omp_get_max_threads()
-                                                                   : n;
+    const int nthreads = !st->parallel || st->scratch > ((size_t)64 << 20) || n < 2 ? 1
+                         : omp_get_max_threads() < n ? omp_get_max_threads()
+                                                     : n;
 #pragma omp parallel num_threads(nthreads)
     {
-        unsigned char *buf = malloc(l->J.cbytes);
+        unsigned char *buf = st->scratch ? malloc(st->scratch) : NULL;
 #pragma omp for schedule(dynamic, 1)
         for (int i = 0; i < n; i++) {
             py_chunk *c = todo[i];
             const py_level *cl = &p->lv[c->level];
+            int cc[3];
+            for (int k = 0; k < 3; k++)
+                cc[k] = c->org[k] / cl->cdims[k];
             vv_status cs =
-                buf ? vv_zr_copy_chunk(&cl->J, c->L, buf, c->blk->data, c->org, c->blk->dims,
-                                       &missing[i], &file_bytes[i])
+                buf || !st->scratch
+                    ? st->read_chunk(st->ctx, c->level, cc, buf, c->blk->data, c->org, c->blk->dims,
+                                     &missing[i], &file_bytes[i])
                     : vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk of %zu bytes",
-                                   cl->J.cbytes);
+                                   st->scratch);
             if (cs == VV_OK)
                 vv_volume_update_range(c->blk);
             else {
@@ -301,8 +327,8 @@ copy_block(const py_chunk *c, const int lo[3], vv_volume *out) {
 static void
 chunk_span(const py_level *l, const int lo[3], const int hi[3], int c0[3], int c1[3]) {
     for (int k = 0; k < 3; k++) {
-        c0[k] = lo[k] / l->J.cdims[k];
-        c1[k] = hi[k] / l->J.cdims[k];
+        c0[k] = lo[k] / l->cdims[k];
+        c1[k] = hi[k] / l->cdims[k];
     }
 }
 
@@ -319,12 +345,12 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
         use && todo && fbytes && missing ? VV_OK : vv_error_set(VV_ERR_NOMEM, "out of memory");
     int nu = 0, nt = 0;
     uint64_t need = 0;
-    const size_t vs = l->a.esize;
+    const size_t vs = l->esize;
     for (int z = c0[2]; z <= c1[2] && s == VV_OK; z++)
         for (int y = c0[1]; y <= c1[1]; y++)
             for (int x = c0[0]; x <= c1[0]; x++) {
                 const int c[3] = {x, y, z};
-                const uint64_t L = vv_zr_chunk_linear(&l->J, c);
+                const uint64_t L = chunk_linear(l, c);
                 py_chunk *e = find_chunk(p, level, L);
                 if (e) {
                     lru_unlink(p, e);
@@ -352,7 +378,7 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
                          "fit",
                          (unsigned long long)p->limit, n, level);
     for (int i = 0; i < nt && s == VV_OK; i++)
-        s = vv_volume_new(&todo[i]->blk, todo[i]->n, l->a.type);
+        s = vv_volume_new(&todo[i]->blk, todo[i]->n, l->type);
     if (s == VV_OK && nt > 0)
         s = decode_chunks(p, todo, nt, fbytes, missing);
     for (int i = 0; i < nu; i++)
@@ -392,7 +418,11 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
 /* The header of a level: its geometry with the store's range. */
 static void
 set_geometry(vv_volume *v, const vv_pyramid *p, const py_level *l) {
-    vv_zr_geometry(&l->J, v);
+    memcpy(v->spacing, l->hdr->spacing, sizeof v->spacing);
+    memcpy(v->origin, l->hdr->origin, sizeof v->origin);
+    memcpy(v->direction, l->hdr->direction, sizeof v->direction);
+    v->unit = l->hdr->unit;
+    v->modification = l->hdr->modification;
     v->range[0] = p->range[0];
     v->range[1] = p->range[1];
 }
@@ -405,20 +435,20 @@ vv_pyramid_read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3], 
     const py_level *l = &p->lv[level];
     int dims[3];
     for (int k = 0; k < 3; k++) {
-        if (lo[k] < 0 || hi[k] < lo[k] || hi[k] >= l->J.dims[k])
+        if (lo[k] < 0 || hi[k] < lo[k] || hi[k] >= l->dims[k])
             return vv_error_set(VV_ERR_INVALID, "pyramid: box %d..%d outside level %d's %d voxels",
-                                lo[k], hi[k], level, l->J.dims[k]);
+                                lo[k], hi[k], level, l->dims[k]);
         dims[k] = hi[k] - lo[k] + 1;
     }
     vv_volume *v = NULL;
-    vv_status s = vv_volume_new(&v, dims, l->a.type);
+    vv_status s = vv_volume_new(&v, dims, l->type);
     if (s == VV_OK)
         s = assemble(p, level, lo, hi, v);
     if (p->planned)
         p->cursor++;
     if (s != VV_OK) {
         vv_volume_free(v);
-        return vv_error_prefix(s, "zarr: %s", vv_path_basename(p->path));
+        return prefix_once(s, p->store.name, p->path);
     }
     set_geometry(v, p, l);
     *out = v;
@@ -434,7 +464,7 @@ missing_chunks(const vv_pyramid *p, int level, const int lo[3], const int hi[3])
         for (int y = c0[1]; y <= c1[1]; y++)
             for (int x = c0[0]; x <= c1[0]; x++) {
                 const int c[3] = {x, y, z};
-                n += !find_chunk(p, level, vv_zr_chunk_linear(&l->J, c));
+                n += !find_chunk(p, level, chunk_linear(l, c));
             }
     return n;
 }
@@ -452,7 +482,7 @@ box_range(const vv_pyramid *p, int level, const int lo[3], const int hi[3], floa
         for (int y = c0[1]; y <= c1[1]; y++)
             for (int x = c0[0]; x <= c1[0]; x++) {
                 const int c[3] = {x, y, z};
-                const uint64_t L = vv_zr_chunk_linear(&l->J, c);
+                const uint64_t L = chunk_linear(l, c);
                 if (!l->known[L])
                     return 0;
                 a = l->cmin[L] < a ? l->cmin[L] : a;
@@ -551,7 +581,7 @@ src_plan(void *user, int n, const int *level, const int *lo, const int *hi) {
             for (int y = c0[1]; y <= c1[1] && s == VV_OK; y++)
                 for (int x = c0[0]; x <= c1[0] && s == VV_OK; x++) {
                     const int c[3] = {x, y, z};
-                    s = add_use(p, level[i], vv_zr_chunk_linear(&l->J, c), i);
+                    s = add_use(p, level[i], chunk_linear(l, c), i);
                 }
     }
     if (s != VV_OK) {
@@ -598,38 +628,56 @@ vv_pyramid_free(vv_pyramid *p) {
         free(l->read_frame);
         free(l->frame_reads);
     }
+    vv_pyr_store_close(&p->store);
     free(p);
 }
 
-/* Level @p i's metadata, layout, header and chunk tables; each level must
- * have level 0's axes and type. */
+void
+vv_pyr_store_close(pyr_store *st) {
+    for (int i = 0; i < VV_PYRAMID_MAX_LEVELS; i++) {
+        vv_volume_free(st->lv[i].hdr);
+        st->lv[i].hdr = NULL;
+    }
+    if (st->close && st->ctx)
+        st->close(st->ctx);
+    st->ctx = NULL;
+}
+
+/* Level @p i's layout, header and chunk tables from the store's level;
+ * each level must have level 0's type and no more voxels. */
 static vv_status
-open_level(vv_pyramid *p, int i, int channel, int time, vv_load_info *info) {
+open_level(vv_pyramid *p, int i) {
     py_level *l = &p->lv[i];
-    vv_status s = vv_zr_parse_store(p->path, i, &l->a, channel, i == 0 ? info : NULL, NULL);
-    if (s == VV_OK)
-        s = vv_zr_layout(&l->a, channel, time, &l->J);
-    if (s != VV_OK)
-        return vv_error_prefix(s, "level %d", i);
-    l->J.a = &l->a; /* the layout points into the level it describes */
+    pyr_store_level *sl = &p->store.lv[i];
+    if (!sl->hdr)
+        return vv_error_set(VV_ERR_FORMAT, "level %d: no geometry", i);
+    l->type = sl->hdr->type;
+    l->esize = vv_voxel_type_size(l->type);
+    for (int k = 0; k < 3; k++) {
+        l->dims[k] = sl->hdr->dims[k];
+        l->cdims[k] = sl->cdims[k];
+        if (l->dims[k] < 1 || l->cdims[k] < 1)
+            return vv_error_set(VV_ERR_FORMAT, "level %d: %d voxels in chunks of %d along axis %d",
+                                i, l->dims[k], l->cdims[k], k);
+        l->nchunks[k] = (l->dims[k] + l->cdims[k] - 1) / l->cdims[k];
+    }
     if (i > 0) {
         const py_level *l0 = &p->lv[0];
-        if (l->a.ndim != l0->a.ndim || l->a.type != l0->a.type || l->J.cax != l0->J.cax ||
-            l->J.tax != l0->J.tax || l->J.nc != l0->J.nc || l->J.nt != l0->J.nt)
+        if (l->type != l0->type)
             return vv_error_set(VV_ERR_FORMAT,
-                                "level %d: its axes, channels, steps or type differ from level 0's "
-                                "(inconsistent multiscales)",
+                                "level %d: its type differs from level 0's (inconsistent "
+                                "multiscales)",
                                 i);
         for (int k = 0; k < 3; k++)
-            if (l->J.dims[k] > l0->J.dims[k])
+            if (l->dims[k] > l0->dims[k])
                 return vv_error_set(VV_ERR_FORMAT,
                                     "level %d: %d voxels along axis %d, more than level 0's %d "
                                     "(inconsistent multiscales)",
-                                    i, l->J.dims[k], k, l0->J.dims[k]);
+                                    i, l->dims[k], k, l0->dims[k]);
     }
     uint64_t n = 1;
     for (int k = 0; k < 3; k++)
-        n *= (uint64_t)l->J.nchunks[k];
+        n *= (uint64_t)l->nchunks[k];
     l->n_chunks = n;
     if (n <= PY_MAX_LEVEL_CHUNKS) {
         l->cmin = malloc(sizeof(float) * n);
@@ -640,33 +688,9 @@ open_level(vv_pyramid *p, int i, int channel, int time, vv_load_info *info) {
         if (!l->cmin || !l->cmax || !l->known || !l->read_frame || !l->frame_reads)
             return vv_error_set(VV_ERR_NOMEM, "out of memory");
     }
-    const int one[3] = {1, 1, 1};
-    if ((s = vv_volume_new(&l->hdr, one, l->a.type)) != VV_OK)
-        return s;
-    memcpy(l->hdr->dims, l->J.dims, sizeof l->hdr->dims); /* geometry only */
+    l->hdr = sl->hdr; /* taken */
+    sl->hdr = NULL;
     return VV_OK;
-}
-
-/* The omero window's min and max of @p channel when the store names them. */
-static int
-omero_range(const char *path, int channel, double r[2]) {
-    char f[4200];
-    snprintf(f, sizeof f, "%s/.zattrs", path);
-    json_error_t e;
-    json_t *j = json_load_file(f, JSON_REJECT_DUPLICATES, &e);
-    json_t *ch = json_array_get(json_object_get(json_object_get(j, "omero"), "channels"),
-                                (size_t)(channel < 0 ? 0 : channel));
-    json_t *w = json_object_get(ch, "window");
-    json_t *mn = json_object_get(w, "min"), *mx = json_object_get(w, "max");
-    int ok = json_is_number(mn) && json_is_number(mx) &&
-             json_number_value(mx) >= json_number_value(mn) && isfinite(json_number_value(mn)) &&
-             isfinite(json_number_value(mx));
-    if (ok) {
-        r[0] = json_number_value(mn);
-        r[1] = json_number_value(mx);
-    }
-    json_decref(j);
-    return ok;
 }
 
 /* The bytes a node of @p cells cells a side holds while rendered (its box:
@@ -678,37 +702,32 @@ static uint64_t
 working_set(const vv_pyramid *p, int cells, uint64_t *chunks) {
     uint64_t v = 1, worst = 0;
     for (int k = 0; k < 3; k++) {
-        const int d = p->lv[0].J.dims[k], box = cells + 5;
+        const int d = p->lv[0].dims[k], box = cells + 5;
         v *= (uint64_t)(d < box ? d : box);
     }
     for (int i = 0; i < p->n_levels; i++) {
         const py_level *l = &p->lv[i];
-        uint64_t c = l->a.esize;
+        uint64_t c = l->esize;
         for (int k = 0; k < 3; k++) {
-            const int box = cells + 5, cd = l->J.cdims[k];
+            const int box = cells + 5, cd = l->cdims[k];
             int n = (box + cd - 1) / cd + 1;
-            n = n < l->J.nchunks[k] ? n : l->J.nchunks[k];
-            c *= (uint64_t)n * (uint64_t)(cd < l->J.dims[k] ? cd : l->J.dims[k]);
+            n = n < l->nchunks[k] ? n : l->nchunks[k];
+            c *= (uint64_t)n * (uint64_t)(cd < l->dims[k] ? cd : l->dims[k]);
         }
         worst = c > worst ? c : worst;
     }
     *chunks = worst;
-    return v * (p->lv[0].a.esize + 4 + 4 + p->lv[0].a.esize);
+    return v * (p->lv[0].esize + 4 + 4 + p->lv[0].esize);
 }
 
 static vv_status
-pyramid_open(vv_pyramid *p, int channel, int time, uint64_t memory_limit, vv_load_info *info) {
-    int n_levels = 1;
-    zr_array probe;
-    memset(&probe, 0, sizeof probe);
-    vv_status s = vv_zr_parse_store(p->path, 0, &probe, channel, NULL, &n_levels);
-    if (s != VV_OK)
-        return s;
-    if (n_levels > VV_PYRAMID_MAX_LEVELS)
-        return vv_error_set(VV_ERR_LIMIT, "%d levels (at most %d are read)", n_levels,
+pyramid_open(vv_pyramid *p, uint64_t memory_limit, vv_load_info *info) {
+    vv_status s = VV_OK;
+    if (p->store.n_levels < 1 || p->store.n_levels > VV_PYRAMID_MAX_LEVELS)
+        return vv_error_set(VV_ERR_LIMIT, "%d levels (1 .. %d are read)", p->store.n_levels,
                             VV_PYRAMID_MAX_LEVELS);
-    for (int i = 0; i < n_levels; i++) {
-        s = open_level(p, i, channel, time, info);
+    for (int i = 0; i < p->store.n_levels; i++) {
+        s = open_level(p, i);
         p->n_levels = i + 1;
         if (s != VV_OK)
             return s;
@@ -730,12 +749,15 @@ pyramid_open(vv_pyramid *p, int channel, int time, uint64_t memory_limit, vv_loa
                             (unsigned long long)p->limit, (unsigned long long)(ws + chunks));
     p->node_cells = cells;
     p->capacity = p->limit - ws;
-    /* the range: the omero window's, else the coarsest level's */
+    /* the range: the store's (an omero window), else the coarsest level's */
     p->range[0] = 0;
     p->range[1] = 1;
-    if (!omero_range(p->path, channel, p->range)) {
+    if (p->store.has_range) {
+        p->range[0] = p->store.range[0];
+        p->range[1] = p->store.range[1];
+    } else {
         const py_level *c = &p->lv[p->n_levels - 1];
-        const int lo[3] = {0, 0, 0}, hi[3] = {c->J.dims[0] - 1, c->J.dims[1] - 1, c->J.dims[2] - 1};
+        const int lo[3] = {0, 0, 0}, hi[3] = {c->dims[0] - 1, c->dims[1] - 1, c->dims[2] - 1};
         vv_volume *v = NULL;
         if ((s = vv_pyramid_read_box(p, p->n_levels - 1, lo, hi, &v)) != VV_OK)
             return s;
@@ -744,14 +766,53 @@ pyramid_open(vv_pyramid *p, int channel, int time, uint64_t memory_limit, vv_loa
         p->range[1] = v->range[1];
         vv_volume_free(v);
     }
-    for (int i = 0; i < p->n_levels; i++)
-        set_geometry(p->lv[i].hdr, p, &p->lv[i]);
+    for (int i = 0; i < p->n_levels; i++) {
+        p->lv[i].hdr->range[0] = p->range[0];
+        p->lv[i].hdr->range[1] = p->range[1];
+    }
     if (info) {
-        info->n_channels = (int)p->lv[0].J.nc;
-        info->n_times = (int)p->lv[0].J.nt;
+        info->n_channels = p->store.n_channels;
+        info->n_times = p->store.n_times;
         info->n_levels = p->n_levels;
     }
     return VV_OK;
+}
+
+vv_status
+vv_pyramid_open_store(vv_pyramid **out, pyr_store *st, const char *path, uint64_t memory_limit,
+                      vv_load_info *info) {
+    *out = NULL;
+    const char *name = st->name ? st->name : "pyramid";
+    vv_pyramid *p = strlen(path) < sizeof(((vv_pyramid *)0)->path) ? calloc(1, sizeof *p) : NULL;
+    if (!p) {
+        vv_pyr_store_close(st);
+        return vv_error_set(VV_ERR_NOMEM, "%s: %s: out of memory", name, vv_path_basename(path));
+    }
+    snprintf(p->path, sizeof p->path, "%s", path);
+    p->store = *st; /* taken */
+    memset(st, 0, sizeof *st);
+    vv_status s = pyramid_open(p, memory_limit, info);
+    if (s != VV_OK) {
+        vv_pyramid_free(p);
+        return prefix_once(s, name, path);
+    }
+    *out = p;
+    return VV_OK;
+}
+
+int
+vv_pyramid_probe(const char *path) {
+    struct stat st;
+    char f[4200];
+    if (!path || stat(path, &st) != 0)
+        return 0;
+    if (!S_ISDIR(st.st_mode))
+        return S_ISREG(st.st_mode) && vv_h5_is_hdf5(path);
+    snprintf(f, sizeof f, "%s/.zattrs", path);
+    if (stat(f, &st) == 0)
+        return 1;
+    snprintf(f, sizeof f, "%s/.zarray", path);
+    return stat(f, &st) == 0;
 }
 
 vv_status
@@ -760,17 +821,16 @@ vv_pyramid_open(vv_pyramid **out, const char *path, int channel, int time, uint6
     if (!out || !path)
         return vv_error_set(VV_ERR_INVALID, "pyramid: NULL argument");
     *out = NULL;
-    if (strlen(path) >= sizeof(((vv_pyramid *)0)->path))
-        return vv_error_set(VV_ERR_LIMIT, "zarr: path too long");
-    vv_pyramid *p = calloc(1, sizeof *p);
-    if (!p)
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    snprintf(p->path, sizeof p->path, "%s", path);
-    vv_status s = pyramid_open(p, channel, time, memory_limit, info);
+    const int h5 = vv_h5_is_hdf5(path);
+    if (strlen(path) >= 4096)
+        return vv_error_set(VV_ERR_LIMIT, "%s: path too long", h5 ? "hdf5" : "zarr");
+    pyr_store st;
+    memset(&st, 0, sizeof st);
+    vv_status s = h5 ? vv_h5_pyramid_store(&st, path, channel, time)
+                     : vv_zr_pyramid_store(&st, path, channel, time, info);
     if (s != VV_OK) {
-        vv_pyramid_free(p);
-        return vv_error_prefix(s, "zarr: %s", vv_path_basename(path));
+        vv_pyr_store_close(&st);
+        return prefix_once(s, h5 ? "hdf5" : "zarr", path);
     }
-    *out = p;
-    return VV_OK;
+    return vv_pyramid_open_store(out, &st, path, memory_limit, info);
 }

@@ -43,6 +43,7 @@
 
 #include "core/internal.h"
 #include "io/sandbox.h"
+#include "volvis/bricks.h"
 
 extern char **environ;
 
@@ -84,6 +85,15 @@ typedef struct sbx_request {
     uint32_t path_len;
     char path[SBX_MAX_PATH];
 } sbx_request;
+
+/* A box asked of a long-lived reader (SBX_OP_BOXES): voxels lo .. lo +
+ * dims - 1 of a level. */
+typedef struct sbx_box {
+    uint32_t magic;
+    int32_t level, lo[3], dims[3];
+} sbx_box;
+
+#define SBX_MAX_BOX_BYTES ((uint64_t)1 << 30)
 
 /* 1 in volvis-reader: vv_volume_load reads in-process there. */
 static int in_child;
@@ -635,6 +645,120 @@ finish(sbx_reply *r, vv_status s, int fd) {
     _exit(0);
 }
 
+/* A new memfd of @p bytes mapped for writing into *map; -1 on failure. */
+static int
+box_memfd(size_t bytes, void **map) {
+    int fd = memfd_create("volvis-box", MFD_CLOEXEC | MFD_ALLOW_SEALING);
+    *map = MAP_FAILED;
+    if (fd >= 0 && ftruncate(fd, (off_t)(bytes ? bytes : 1)) == 0)
+        *map = mmap(NULL, bytes ? bytes : 1, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+    if (*map == MAP_FAILED && fd >= 0) {
+        close(fd);
+        fd = -1;
+    }
+    return fd;
+}
+
+/* @p fd (mapped at @p map, @p bytes) unmapped and sealed for handing
+ * over, or -1 (closed). */
+static int
+box_seal(int fd, void *map, size_t bytes) {
+    munmap(map, bytes ? bytes : 1);
+    if (fcntl(fd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_WRITE | F_SEAL_SEAL) != 0) {
+        close(fd);
+        return -1;
+    }
+    return fd;
+}
+
+/* One reply of the box server (status @p s, its error text when it
+ * failed, @p fd handed over and closed). */
+static void
+box_reply(sbx_reply *r, vv_status s, int fd) {
+    r->kind = SBX_RESULT;
+    r->status = s;
+    r->err_len = 0;
+    if (s != VV_OK) {
+        r->err_len = (uint32_t)snprintf(r->err, sizeof r->err, "%s", vv_error_message());
+        if (r->err_len >= sizeof r->err)
+            r->err_len = sizeof r->err - 1;
+    }
+    send_reply(r, s == VV_OK ? fd : -1);
+    if (fd >= 0)
+        close(fd);
+}
+
+/* The child's answer to SBX_OP_BOXES: the HDF5 pyramid's levels, then one
+ * box of voxels for each sbx_box until the parent closes its end. */
+static _Noreturn void
+serve_boxes(const sbx_request *rq, sbx_reply *r) {
+    announce(rq, (vv_format)rq->format);
+    h5p *h = NULL;
+    vv_status s = rq->inject == INJECT_OPEN ? vv_error_set(VV_ERR_IO, "cannot open it")
+                                            : vv_h5p_open(&h, rq->path, rq->channel, rq->time);
+    int fd = -1;
+    if (s == VV_OK) {
+        int nc = 0, nt = 0;
+        const int n = vv_h5p_levels(h, &nc, &nt);
+        vv_h5p_level tab[VV_PYRAMID_MAX_LEVELS];
+        for (int l = 0; l < n; l++)
+            tab[l] = *vv_h5p_level_info(h, l);
+        r->n_levels = n;
+        r->n_channels = nc;
+        r->n_times = nt;
+        r->bytes = (uint64_t)n * sizeof tab[0];
+        void *map;
+        if ((fd = box_memfd((size_t)r->bytes, &map)) >= 0) {
+            memcpy(map, tab, (size_t)r->bytes);
+            fd = box_seal(fd, map, (size_t)r->bytes);
+        }
+        if (fd < 0)
+            s = vv_error_set(VV_ERR_NOMEM, "the reader could not hand over its levels");
+    }
+    if (s != VV_OK)
+        s = vv_error_prefix(s, "hdf5: %s", vv_path_basename(rq->path));
+    box_reply(r, s, fd);
+    if (s != VV_OK)
+        _exit(0);
+    for (;;) {
+        sbx_box q;
+        ssize_t n;
+        while ((n = recv(SBX_FD, &q, sizeof q, 0)) < 0 && errno == EINTR)
+            ;
+        if (n == 0)
+            _exit(0); /* the parent is done */
+        if (n != (ssize_t)sizeof q || q.magic != SBX_MAGIC)
+            _exit(2);
+        const vv_h5p_level *L = vv_h5p_level_info(h, q.level);
+        uint64_t bytes = L ? vv_voxel_type_size((vv_voxel_type)L->type) : 0;
+        for (int k = 0; k < 3 && L; k++)
+            bytes *= q.dims[k] > 0 ? (uint64_t)q.dims[k] : 0;
+        void *map = MAP_FAILED;
+        fd = -1;
+        memset(r, 0, offsetof(sbx_reply, err));
+        r->magic = SBX_MAGIC;
+        r->format = rq->format;
+        r->bytes = bytes;
+        if (!L || bytes == 0 || bytes > SBX_MAX_BOX_BYTES)
+            s = vv_error_set(VV_ERR_INVALID, "hdf5: %s: a box of %llu bytes of level %d asked",
+                             vv_path_basename(rq->path), (unsigned long long)bytes, q.level);
+        else if ((fd = box_memfd((size_t)bytes, &map)) < 0)
+            s = vv_error_set(VV_ERR_NOMEM, "hdf5: %s: out of memory for a box of %llu bytes",
+                             vv_path_basename(rq->path), (unsigned long long)bytes);
+        else if ((s = vv_h5p_read_box(h, q.level, q.lo, q.dims, map)) != VV_OK)
+            s = vv_error_prefix(s, "hdf5: %s", vv_path_basename(rq->path));
+        if (fd >= 0 && s != VV_OK) {
+            munmap(map, (size_t)bytes);
+            close(fd);
+            fd = -1;
+        } else if (fd >= 0 && (fd = box_seal(fd, map, (size_t)bytes)) < 0) {
+            s = vv_error_set(VV_ERR_NOMEM, "hdf5: %s: the reader could not hand over a box",
+                             vv_path_basename(rq->path));
+        }
+        box_reply(r, s, fd);
+    }
+}
+
 /* The child's answer to SBX_OP_DICOM_LIST: the vv_dicom_series array in
  * a sealed memfd (bytes = n * sizeof (vv_dicom_series), dims[0] = n). */
 static _Noreturn void
@@ -813,6 +937,8 @@ vv_sandbox_reader_main(int argc, char **argv) {
         read_mesh(&rq, &r);
     if (rq.op == SBX_OP_GRID)
         read_grid(&rq, &r);
+    if (rq.op == SBX_OP_BOXES)
+        serve_boxes(&rq, &r);
     vv_format f = (vv_format)rq.format;
     if (f == VV_FORMAT_AUTO) {
         f = vv_format_detect(rq.path);
@@ -1579,6 +1705,37 @@ vv_sandbox_take_message(int op, const void *msg, size_t len, int fd, vv_format *
     return 1;
 }
 
+/* A reader's request for @p op on @p path (malloc'd; NULL: out of
+ * memory); @p path is shorter than SBX_MAX_PATH. */
+static sbx_request *
+new_request(int op, const char *path, vv_format f, const vv_load_options *opt) {
+    static sbx_request proto; /* zeroes for the request's padding */
+    sbx_request *rq = malloc(sizeof *rq);
+    if (!rq)
+        return NULL;
+    *rq = proto;
+    rq->magic = SBX_MAGIC;
+    rq->version = SBX_VERSION;
+    rq->format = (int32_t)f;
+    rq->op = op;
+    rq->has_raw = opt->has_raw;
+    rq->raw = opt->raw;
+    rq->series = opt->series;
+    rq->channel = opt->channel;
+    rq->time = opt->time;
+    rq->level = opt->level;
+    rq->budget = vv_memory_budget_get();
+    rq->threads = vv_threads_get();
+    rq->cpu_seconds = time_limit(path);
+    rq->path_len = (uint32_t)strlen(path);
+    memcpy(rq->path, path, rq->path_len);
+    const char *inj = getenv("VOLVIS_SANDBOX_INJECT");
+    for (int i = 1; inj && i < N_INJECT; i++)
+        if (!strcmp(inj, inject_names[i]))
+            rq->inject = i;
+    return rq;
+}
+
 /* A reader's run for @p op on @p path (@p opt NULL: the defaults): its
  * result in *@p ans (zeroed first); returns ans->status, or the error of a
  * reader that ended without a result, naming the reader @p name and
@@ -1603,32 +1760,11 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt, co
                             "set VOLVIS_READER to its path, or VOLVIS_SANDBOX=0 to read in "
                             "this process)",
                             file, exe);
-    static sbx_request proto; /* zeroes for the request's padding */
-    sbx_request *rq = malloc(sizeof *rq);
+    sbx_request *rq = new_request(op, path, f, opt);
     if (!rq)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    *rq = proto;
-    rq->magic = SBX_MAGIC;
-    rq->version = SBX_VERSION;
-    rq->format = (int32_t)f;
-    rq->op = op;
-    rq->has_raw = opt->has_raw;
-    rq->raw = opt->raw;
-    rq->series = opt->series;
-    rq->channel = opt->channel;
-    rq->time = opt->time;
-    rq->level = opt->level;
-    rq->budget = vv_memory_budget_get();
     uint64_t rq_budget = rq->budget;
-    rq->threads = vv_threads_get();
-    unsigned limit = time_limit(path);
-    rq->cpu_seconds = limit;
-    rq->path_len = (uint32_t)strlen(path);
-    memcpy(rq->path, path, rq->path_len);
-    const char *inj = getenv("VOLVIS_SANDBOX_INJECT");
-    for (int i = 1; inj && i < N_INJECT; i++)
-        if (!strcmp(inj, inject_names[i]))
-            rq->inject = i;
+    unsigned limit = rq->cpu_seconds;
 
     pid_t pid = -1;
     int sock = -1;
@@ -1764,4 +1900,288 @@ vv_sandbox_grid_load(vv_grid **out, const char *path, const vv_grid_format_recor
     vv_status s = run_reader(SBX_OP_GRID, path, VV_FORMAT_UNKNOWN, NULL, rec->name, rec->title, &a);
     *out = a.grid;
     return s;
+}
+
+/* ---- the long-lived reader of an HDF5 pyramid ----------------------------------- */
+
+struct vv_sandbox_boxes {
+    pid_t pid;
+    int sock;
+    char file[256];
+    unsigned limit;
+    uint64_t budget;
+    int n_levels;
+    vv_h5p_level lv[VV_PYRAMID_MAX_LEVELS];
+    vv_status dead; /* VV_OK while the reader serves */
+    char why[1024]; /* its end, for every later read */
+};
+
+static const char *const boxes_name = "hdf5", *const boxes_title = "BigDataViewer / Imaris HDF5";
+
+/* The reader's end: stopped, reaped and described once; later reads repeat
+ * the line. */
+static vv_status
+boxes_fail(vv_sandbox_boxes *b, int timed_out, int malformed) {
+    if (b->dead == VV_OK) {
+        int status = 0;
+        struct rusage ru;
+        memset(&ru, 0, sizeof ru);
+        kill(b->pid, SIGKILL);
+        while (wait4(b->pid, &status, 0, &ru) < 0 && errno == EINTR)
+            ;
+        b->pid = -1;
+        close(b->sock);
+        b->sock = -1;
+        b->dead = malformed ? vv_error_set(VV_ERR_FORMAT,
+                                           "%s: %s: the %s reader sent a malformed reply and was "
+                                           "stopped; the file is hostile or the reader broken",
+                                           boxes_name, b->file, boxes_title)
+                            : describe_end(status, (uint64_t)ru.ru_maxrss * 1024u, b->budget,
+                                           boxes_name, boxes_title, b->file, b->limit, timed_out);
+        snprintf(b->why, sizeof b->why, "%s", vv_error_message());
+    }
+    return vv_error_set(b->dead, "%s", b->why);
+}
+
+/* The reader's next result into @p r, its memfd (or -1) into *fd; the
+ * reader's own error when it sent one. */
+static vv_status
+boxes_wait(vv_sandbox_boxes *b, sbx_reply *r, int *fd) {
+    *fd = -1;
+    const double deadline = now_s() + b->limit + 5;
+    for (;;) {
+        const double left = deadline - now_s();
+        if (left <= 0)
+            return boxes_fail(b, 1, 0);
+        struct pollfd pf = {b->sock, POLLIN, 0};
+        const int pr = poll(&pf, 1, (int)(left * 1000) + 1);
+        if (pr <= 0)
+            continue;
+        union {
+            struct cmsghdr h;
+            char buf[CMSG_SPACE(sizeof(int))];
+        } u;
+        struct iovec io = {r, sizeof *r};
+        struct msghdr m = {0};
+        m.msg_iov = &io;
+        m.msg_iovlen = 1;
+        m.msg_control = u.buf;
+        m.msg_controllen = sizeof u.buf;
+        const ssize_t got = recvmsg(b->sock, &m, MSG_CMSG_CLOEXEC);
+        if (got < 0 && errno == EINTR)
+            continue;
+        if (got <= 0)
+            return boxes_fail(b, 0, 0); /* the reader is gone */
+        int passed = -1;
+        for (struct cmsghdr *c = CMSG_FIRSTHDR(&m); c; c = CMSG_NXTHDR(&m, c))
+            if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_RIGHTS &&
+                c->cmsg_len == CMSG_LEN(sizeof(int))) {
+                if (passed >= 0)
+                    close(passed);
+                memcpy(&passed, CMSG_DATA(c), sizeof(int));
+            }
+        const int whole = !(m.msg_flags & (MSG_TRUNC | MSG_CTRUNC)) &&
+                          (size_t)got >= offsetof(sbx_reply, err) && r->magic == SBX_MAGIC &&
+                          r->err_len < SBX_MAX_ERROR &&
+                          (size_t)got == offsetof(sbx_reply, err) + r->err_len &&
+                          (r->kind == SBX_FORMAT || r->kind == SBX_RESULT);
+        if (!whole || (r->kind == SBX_FORMAT && passed >= 0)) {
+            if (passed >= 0)
+                close(passed);
+            return boxes_fail(b, 0, 1);
+        }
+        if (r->kind == SBX_FORMAT)
+            continue;
+        r->err[r->err_len] = '\0';
+        for (char *c = r->err; *c; c++) /* one line of printable text */
+            if ((unsigned char)*c < 0x20 || *c == 0x7f)
+                *c = ' ';
+        if (r->status != VV_OK) {
+            if (passed >= 0)
+                close(passed);
+            const vv_status e = r->status >= VV_ERR_CANCELLED && r->status < 0
+                                    ? (vv_status)r->status
+                                    : VV_ERR_FORMAT;
+            return r->err[0] ? vv_error_set(e, "%s", r->err)
+                             : vv_error_set(e, "%s: %s: the reader failed without a message",
+                                            boxes_name, b->file);
+        }
+        *fd = passed;
+        return VV_OK;
+    }
+}
+
+/* The @p bytes of sealed memfd @p fd copied into @p dst; @p fd closed. */
+static vv_status
+boxes_take(vv_sandbox_boxes *b, int fd, void *dst, uint64_t bytes) {
+    struct stat st;
+    const int seals = fd >= 0 ? fcntl(fd, F_GET_SEALS) : -1;
+    vv_status s = VV_OK;
+    if (fd < 0 || fstat(fd, &st) != 0 || (uint64_t)st.st_size < bytes || seals < 0 ||
+        !(seals & F_SEAL_SHRINK) || !(seals & F_SEAL_WRITE)) {
+        if (fd >= 0)
+            close(fd);
+        return boxes_fail(b, 0, 1);
+    }
+    void *p = bytes ? mmap(NULL, (size_t)bytes, PROT_READ, MAP_SHARED, fd, 0) : NULL;
+    if (p == MAP_FAILED)
+        s = vv_error_set(VV_ERR_NOMEM, "%s: %s: cannot map the reader's %llu bytes: %s", boxes_name,
+                         b->file, (unsigned long long)bytes, strerror(errno));
+    else if (bytes) {
+        memcpy(dst, p, (size_t)bytes);
+        munmap(p, (size_t)bytes);
+    }
+    close(fd);
+    return s;
+}
+
+/* Level table entry @p L as the reader sent it, checked. */
+static int
+level_ok(const vv_h5p_level *L) {
+    if (L->type < VV_U8 || L->type > VV_F64)
+        return 0;
+    for (int k = 0; k < 3; k++)
+        if (L->dims[k] < 1 || L->dims[k] > VV_VOLUME_MAX_DIM || L->cdims[k] < 1 ||
+            L->cdims[k] > 4096 || !(L->spacing[k] > 0) || !isfinite(L->spacing[k]) ||
+            !isfinite(L->origin[k]))
+            return 0;
+    return L->unit >= 0 && L->unit <= VV_UNIT_UNKNOWN &&
+           (!L->has_range ||
+            (isfinite(L->range[0]) && isfinite(L->range[1]) && L->range[1] >= L->range[0]));
+}
+
+vv_status
+vv_sandbox_boxes_open(vv_sandbox_boxes **out, const char *path, int channel, int time,
+                      vv_h5p_level *levels, int *n_levels, int *n_channels, int *n_times) {
+    *out = NULL;
+    const char *file = vv_path_basename(path);
+    if (strlen(path) >= SBX_MAX_PATH)
+        return vv_error_set(VV_ERR_LIMIT, "%s: %s: a path of over %d bytes", boxes_name, file,
+                            SBX_MAX_PATH - 1);
+    char exe[PATH_MAX];
+    if (!reader_path(exe, sizeof exe))
+        return vv_error_set(VV_ERR_IO,
+                            "%s: %s: the sandboxed reader volvis-reader was not found (%s; set "
+                            "VOLVIS_READER to its path, or VOLVIS_SANDBOX=0 to read in this "
+                            "process)",
+                            boxes_name, file, exe);
+    int n;
+    const vv_volume_format *const *t = vv_volume_format_table(&n);
+    vv_format f = VV_FORMAT_UNKNOWN;
+    for (int i = 0; i < n; i++)
+        if (!strcmp(t[i]->name, boxes_name))
+            f = (vv_format)(i + 1);
+    vv_load_options o;
+    vv_load_options_init(&o);
+    o.channel = channel;
+    o.time = time;
+    sbx_request *rq = new_request(SBX_OP_BOXES, path, f, &o);
+    vv_sandbox_boxes *b = calloc(1, sizeof *b);
+    sbx_reply *r = malloc(sizeof *r);
+    if (!rq || !b || !r) {
+        free(rq);
+        free(b);
+        free(r);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    snprintf(b->file, sizeof b->file, "%s", file);
+    b->limit = rq->cpu_seconds;
+    b->budget = rq->budget;
+    b->sock = -1;
+    int err = take_reader(exe, &b->pid, &b->sock);
+    if (err != 0) {
+        free(rq);
+        free(b);
+        free(r);
+        return vv_error_set(VV_ERR_IO, "%s: %s: cannot start %s: %s", boxes_name, file, exe,
+                            strerror(err));
+    }
+    ssize_t sent;
+    while ((sent = send(b->sock, rq, sizeof *rq, MSG_NOSIGNAL)) < 0 && errno == EINTR)
+        ;
+    free(rq);
+    int fd = -1;
+    vv_status s = boxes_wait(b, r, &fd);
+    if (s == VV_OK &&
+        (r->n_levels < 1 || r->n_levels > VV_PYRAMID_MAX_LEVELS ||
+         r->bytes != (uint64_t)r->n_levels * sizeof(vv_h5p_level) || r->n_channels < 1 ||
+         r->n_channels > VV_VOLUME_MAX_DIM || r->n_times < 1 || r->n_times > VV_VOLUME_MAX_DIM)) {
+        if (fd >= 0)
+            close(fd);
+        s = boxes_fail(b, 0, 1);
+    } else if (s == VV_OK && (s = boxes_take(b, fd, b->lv, r->bytes)) == VV_OK) {
+        b->n_levels = r->n_levels;
+        for (int l = 0; l < b->n_levels; l++)
+            if (!level_ok(&b->lv[l]) || b->lv[l].type != b->lv[0].type)
+                s = boxes_fail(b, 0, 1);
+        if (s == VV_OK) {
+            memcpy(levels, b->lv, sizeof(vv_h5p_level) * (size_t)b->n_levels);
+            *n_levels = b->n_levels;
+            *n_channels = r->n_channels;
+            *n_times = r->n_times;
+        }
+    }
+    free(r);
+    if (s != VV_OK) {
+        vv_sandbox_boxes_close(b);
+        return s;
+    }
+    *out = b;
+    return VV_OK;
+}
+
+vv_status
+vv_sandbox_boxes_read(vv_sandbox_boxes *b, int level, const int lo[3], const int dims[3],
+                      void *dst) {
+    if (b->dead != VV_OK)
+        return vv_error_set(b->dead, "%s", b->why);
+    if (level < 0 || level >= b->n_levels)
+        return vv_error_set(VV_ERR_INVALID, "%s: %s: level %d of %d", boxes_name, b->file, level,
+                            b->n_levels);
+    uint64_t bytes = vv_voxel_type_size((vv_voxel_type)b->lv[level].type);
+    sbx_box q = {.magic = SBX_MAGIC, .level = level};
+    for (int k = 0; k < 3; k++) {
+        if (lo[k] < 0 || dims[k] < 1 || lo[k] > b->lv[level].dims[k] - dims[k])
+            return vv_error_set(VV_ERR_INVALID, "%s: %s: a box outside level %d", boxes_name,
+                                b->file, level);
+        q.lo[k] = lo[k];
+        q.dims[k] = dims[k];
+        bytes *= (uint64_t)dims[k];
+    }
+    if (bytes > SBX_MAX_BOX_BYTES)
+        return vv_error_set(VV_ERR_LIMIT, "%s: %s: a box of %llu bytes (at most %llu a read)",
+                            boxes_name, b->file, (unsigned long long)bytes,
+                            (unsigned long long)SBX_MAX_BOX_BYTES);
+    ssize_t sent;
+    while ((sent = send(b->sock, &q, sizeof q, MSG_NOSIGNAL)) < 0 && errno == EINTR)
+        ;
+    if (sent != (ssize_t)sizeof q)
+        return boxes_fail(b, 0, 0);
+    sbx_reply *r = malloc(sizeof *r);
+    if (!r)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    int fd = -1;
+    vv_status s = boxes_wait(b, r, &fd);
+    if (s == VV_OK && r->bytes != bytes) {
+        if (fd >= 0)
+            close(fd);
+        s = boxes_fail(b, 0, 1);
+    } else if (s == VV_OK) {
+        s = boxes_take(b, fd, dst, bytes);
+    }
+    free(r);
+    return s;
+}
+
+void
+vv_sandbox_boxes_close(vv_sandbox_boxes *b) {
+    if (!b)
+        return;
+    if (b->sock >= 0)
+        close(b->sock); /* the reader's recv ends: it exits */
+    if (b->pid > 0) {
+        kill(b->pid, SIGKILL);
+        reap_later(b->pid);
+    }
+    free(b);
 }

@@ -15,6 +15,7 @@
 #ifndef VOLVIS_IO_SANDBOX_H
 #define VOLVIS_IO_SANDBOX_H
 
+#include "io/hdf5_pyramid.h"
 #include "volvis/grid.h"
 #include "volvis/io.h"
 #include "volvis/mesh.h"
@@ -150,7 +151,42 @@ typedef struct sbx_grid_field {
 vv_status vv_sandbox_grid_load(vv_grid **out, const char *path, const vv_grid_format_record *rec);
 
 /** What the reader is asked for (sbx_request.op). */
-enum { SBX_OP_VOLUME = 0, SBX_OP_DICOM_LIST = 1, SBX_OP_MESH = 2, SBX_OP_GRID = 3 };
+enum {
+    SBX_OP_VOLUME = 0,
+    SBX_OP_DICOM_LIST = 1,
+    SBX_OP_MESH = 2,
+    SBX_OP_GRID = 3,
+    SBX_OP_BOXES = 4
+};
+
+/**
+ * A long-lived sandboxed reader of an HDF5 pyramid (BigDataViewer,
+ * Imaris; src/io/hdf5_pyramid.c), for the pyramid's store: opened once,
+ * then asked for one box of voxels at a time. The protocol after the
+ * request (op SBX_OP_BOXES): the child answers with one SBX_RESULT whose
+ * sealed memfd holds n_levels vv_h5p_level entries (n_channels, n_times in
+ * the reply), then serves sbx_box messages, each answered by an SBX_RESULT
+ * with the box's voxels in a sealed memfd (or its error), until the parent
+ * closes its end. Nothing in a reply is trusted (levels checked, sizes
+ * against the memfd, seals); a crash, a stall past the time limit or a
+ * malformed reply ends the reader with one error line, and every later
+ * read fails with it. One thread at a time.
+ */
+typedef struct vv_sandbox_boxes vv_sandbox_boxes;
+
+/**
+ * Starts the reader of @p path (@p channel, @p time: -1 the first) and
+ * takes its levels: *n_levels entries of @p levels (VV_PYRAMID_MAX_LEVELS
+ * room), the channel and step counts. Errors: the reader's own (prefixed
+ * "hdf5: FILE"), or as vv_sandbox_volume_load.
+ */
+vv_status vv_sandbox_boxes_open(vv_sandbox_boxes **out, const char *path, int channel, int time,
+                                vv_h5p_level *levels, int *n_levels, int *n_channels, int *n_times);
+/** Voxels lo .. lo + dims - 1 of @p level into @p dst (the level's type). */
+vv_status vv_sandbox_boxes_read(vv_sandbox_boxes *b, int level, const int lo[3], const int dims[3],
+                                void *dst);
+/** Ends the reader (NULL: nothing). */
+void vv_sandbox_boxes_close(vv_sandbox_boxes *b);
 
 /** What the parent made of a reader's result: one of the four, by op. */
 typedef struct vv_sandbox_answer {

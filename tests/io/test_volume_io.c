@@ -66,8 +66,9 @@ test_format_names(void **state) {
     vv_error_clear();
     assert_int_equal(vv_format_parse("gif", &g), VV_ERR_INVALID);
     /* the message lists the table's names */
-    assert_non_null(strstr(vv_error_message(),
-                           "auto, slc, nrrd, nifti, mhd, vtk, raw, tiff, dicom, vti or zarr"));
+    assert_non_null(
+        strstr(vv_error_message(),
+               "auto, slc, nrrd, nifti, mhd, vtk, raw, tiff, dicom, vti, zarr or hdf5"));
 }
 
 /* The records (include/volvis/sys/format.h): complete, the version of the

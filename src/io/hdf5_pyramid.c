@@ -1,0 +1,610 @@
+/*
+ * HDF5 multiresolution pyramids through libhdf5: BigDataViewer's layout
+ * (Pietzsch et al., Nature Methods 12, 2015: t<TTTTT>/s<SS>/<level>/cells,
+ * s<SS>/resolutions, s<SS>/subdivisions) and Imaris 5.5's (DataSet/
+ * ResolutionLevel N/TimePoint T/Channel C/Data, DataSetInfo/Image's extents).
+ *
+ * Three users: the format record "hdf5" (one level read whole, in the
+ * reader sandbox like every third-party parser), the pyramid's store
+ * (src/io/pyramid.h), whose chunks come from a long-lived sandboxed reader
+ * (vv_sandbox_boxes_*, src/io/sandbox.c) or, with VOLVIS_SANDBOX=0, from
+ * this process, and that reader itself (vv_h5p_*, called in the child).
+ *
+ * Geometry. BigDataViewer: level l of factors f (s00/resolutions) has
+ * spacing f (the voxel size of the companion XML is not read: level 0's
+ * spacing is 1) and its voxel 0 at (f - 1) / 2, BigDataViewer's mipmap
+ * transform; a 16-bit signed "cells" dataset holds unsigned 16-bit voxels
+ * (the format's convention), read bit for bit as u16. Imaris: the image
+ * spans ExtMin .. ExtMax (DataSetInfo/Image), level l has ImageSizeX/Y/Z
+ * voxels (its Channel group's attributes; the Data dataset may be padded
+ * beyond them), so its spacing is the extent over the size and its voxel 0
+ * sits half a voxel inside ExtMin.
+ *
+ * Thread-safety: Debian's libhdf5 is not built thread-safe; one h5p is
+ * used from one thread at a time, and two open at once must not be used
+ * concurrently.
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <hdf5.h>
+
+#include "core/internal.h"
+#include "io/hdf5_pyramid.h"
+#include "io/pyramid.h"
+#include "io/sandbox.h"
+#include "volvis/sys/format.h"
+
+#define H5P_MAX_CHUNK 128 /* the store's chunk box at most, a side */
+
+struct h5p {
+    char file[256]; /* its base name, for errors */
+    hid_t fid;
+    int kind; /* 1 BigDataViewer, 2 Imaris */
+    int n_levels, n_channels, n_times;
+    hid_t dset[VV_PYRAMID_MAX_LEVELS];
+    vv_h5p_level lv[VV_PYRAMID_MAX_LEVELS];
+    hid_t mtype; /* the memory type read */
+    vv_voxel_type type;
+};
+
+static int
+link_exists(hid_t loc, const char *path) {
+    return H5Lexists(loc, path, H5P_DEFAULT) > 0;
+}
+
+/* The voxel type of a dataset's type, the memory type to read it with;
+ * @p bdv: a signed 16-bit dataset holds unsigned voxels. -1: not one of
+ * ours. */
+static int
+type_of(hid_t ftype, int bdv, hid_t *mtype) {
+    const H5T_class_t cl = H5Tget_class(ftype);
+    const size_t sz = H5Tget_size(ftype);
+    if (cl == H5T_INTEGER) {
+        const int sgn = H5Tget_sign(ftype) == H5T_SGN_2;
+        if (sz == 1) {
+            *mtype = sgn ? H5T_NATIVE_INT8 : H5T_NATIVE_UINT8;
+            return sgn ? VV_I8 : VV_U8;
+        }
+        if (sz == 2) {
+            if (sgn && bdv) { /* the bits as they are: no conversion clamps them */
+                *mtype = H5T_NATIVE_INT16;
+                return VV_U16;
+            }
+            *mtype = sgn ? H5T_NATIVE_INT16 : H5T_NATIVE_UINT16;
+            return sgn ? VV_I16 : VV_U16;
+        }
+        if (sz == 4) {
+            *mtype = sgn ? H5T_NATIVE_INT32 : H5T_NATIVE_UINT32;
+            return sgn ? VV_I32 : VV_U32;
+        }
+        return -1;
+    }
+    if (cl == H5T_FLOAT && (sz == 4 || sz == 8)) {
+        *mtype = sz == 4 ? H5T_NATIVE_FLOAT : H5T_NATIVE_DOUBLE;
+        return sz == 4 ? VV_F32 : VV_F64;
+    }
+    return -1;
+}
+
+/* Dataset @p path's dims (x, y, z from its z, y, x) and chunk dims (the
+ * dataset's own, else @p fallback), opened into *d. */
+static vv_status
+open_volume(h5p *h, const char *path, hid_t *d, int dims[3], int cdims[3]) {
+    if (!link_exists(h->fid, path) || (*d = H5Dopen2(h->fid, path, H5P_DEFAULT)) < 0)
+        return vv_error_set(VV_ERR_FORMAT, "no dataset %s", path);
+    hid_t sp = H5Dget_space(*d);
+    hsize_t sh[4] = {0};
+    const int nd = sp >= 0 ? H5Sget_simple_extent_ndims(sp) : -1;
+    if (nd == 3)
+        H5Sget_simple_extent_dims(sp, sh, NULL);
+    H5Sclose(sp);
+    if (nd != 3)
+        return vv_error_set(VV_ERR_FORMAT, "%s: %d dimensions, not 3 (z, y, x)", path, nd);
+    for (int k = 0; k < 3; k++) {
+        if (sh[2 - k] < 1 || sh[2 - k] > VV_VOLUME_MAX_DIM)
+            return vv_error_set(VV_ERR_LIMIT, "%s: %llu voxels along axis %d (1 .. %d allowed)",
+                                path, (unsigned long long)sh[2 - k], k, VV_VOLUME_MAX_DIM);
+        dims[k] = (int)sh[2 - k];
+        cdims[k] = 64;
+    }
+    hid_t pl = H5Dget_create_plist(*d);
+    hsize_t ch[4] = {0};
+    if (pl >= 0 && H5Pget_layout(pl) == H5D_CHUNKED && H5Pget_chunk(pl, 3, ch) == 3)
+        for (int k = 0; k < 3; k++) /* whole HDF5 chunks, within 8 .. H5P_MAX_CHUNK */
+            cdims[k] = ch[2 - k] < 8 ? (int)(8 / ch[2 - k] + (8 % ch[2 - k] != 0)) * (int)ch[2 - k]
+                       : ch[2 - k] > H5P_MAX_CHUNK ? H5P_MAX_CHUNK
+                                                   : (int)ch[2 - k];
+    if (pl >= 0)
+        H5Pclose(pl);
+    return VV_OK;
+}
+
+/* A small dataset of @p n doubles in a row-major (levels, 3) table. */
+static int
+read_table(hid_t fid, const char *path, hid_t mtype, void *buf, int max_rows, int *rows) {
+    hid_t d = link_exists(fid, path) ? H5Dopen2(fid, path, H5P_DEFAULT) : -1;
+    if (d < 0)
+        return 0;
+    hid_t sp = H5Dget_space(d);
+    hsize_t sh[2] = {0, 0};
+    int ok = sp >= 0 && H5Sget_simple_extent_ndims(sp) == 2 &&
+             H5Sget_simple_extent_dims(sp, sh, NULL) == 2 && sh[1] == 3 && sh[0] >= 1 &&
+             sh[0] <= (hsize_t)max_rows;
+    if (ok)
+        ok = H5Dread(d, mtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) >= 0;
+    if (ok)
+        *rows = (int)sh[0];
+    if (sp >= 0)
+        H5Sclose(sp);
+    H5Dclose(d);
+    return ok;
+}
+
+static vv_status
+open_bdv(h5p *h, int channel, int time) {
+    const int setup = channel < 0 ? 0 : channel, t = time < 0 ? 0 : time;
+    char path[256];
+    h->n_channels = 0;
+    for (int s = 0; s < 100; s++) {
+        snprintf(path, sizeof path, "s%02d", s);
+        if (!link_exists(h->fid, path))
+            break;
+        h->n_channels = s + 1;
+    }
+    h->n_times = 0;
+    for (int k = 0; k < 100000; k++) {
+        snprintf(path, sizeof path, "t%05d", k);
+        if (!link_exists(h->fid, path))
+            break;
+        h->n_times = k + 1;
+    }
+    if (setup >= h->n_channels)
+        return vv_error_set(VV_ERR_INVALID, "channel %d asked, the file has %d setups (s00 ..)",
+                            setup, h->n_channels);
+    if (t >= h->n_times)
+        return vv_error_set(VV_ERR_INVALID, "time step %d asked, the file has %d (t00000 ..)", t,
+                            h->n_times);
+    double res[VV_PYRAMID_MAX_LEVELS][3];
+    int sub[VV_PYRAMID_MAX_LEVELS][3], nr = 0, ns = 0;
+    snprintf(path, sizeof path, "s%02d/resolutions", setup);
+    if (!read_table(h->fid, path, H5T_NATIVE_DOUBLE, res, VV_PYRAMID_MAX_LEVELS, &nr))
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: missing, or not a table of (x, y, z) factors "
+                            "of 1 .. 16 levels",
+                            path);
+    snprintf(path, sizeof path, "s%02d/subdivisions", setup);
+    const int has_sub =
+        read_table(h->fid, path, H5T_NATIVE_INT, sub, VV_PYRAMID_MAX_LEVELS, &ns) && ns == nr;
+    h->n_levels = nr;
+    for (int l = 0; l < nr; l++) {
+        vv_h5p_level *L = &h->lv[l];
+        snprintf(path, sizeof path, "t%05d/s%02d/%d/cells", t, setup, l);
+        vv_status s = open_volume(h, path, &h->dset[l], L->dims, L->cdims);
+        if (s != VV_OK)
+            return s;
+        for (int k = 0; k < 3; k++) {
+            const double f = res[l][k];
+            if (!(f >= 1 && f <= 65536) || (l > 0 && f < res[l - 1][k]))
+                return vv_error_set(VV_ERR_FORMAT,
+                                    "s%02d/resolutions: level %d's factor %g along axis %d "
+                                    "(inconsistent multiscales)",
+                                    setup, l, f, k);
+            L->spacing[k] = f;
+            L->origin[k] = 0.5 * (f - 1);
+            if (has_sub && sub[l][k] >= 8 && sub[l][k] <= H5P_MAX_CHUNK)
+                L->cdims[k] = sub[l][k];
+        }
+    }
+    return VV_OK;
+}
+
+/* Attribute @p name of @p obj as text: Imaris writes numbers as arrays of
+ * one-byte strings ("5", "1", "2"); a fixed-length string is read alike. */
+static int
+attr_text(hid_t obj, const char *name, char *buf, size_t cap) {
+    if (H5Aexists(obj, name) <= 0)
+        return 0;
+    hid_t a = H5Aopen(obj, name, H5P_DEFAULT);
+    hid_t ft = a >= 0 ? H5Aget_type(a) : -1, sp = a >= 0 ? H5Aget_space(a) : -1;
+    int ok = 0;
+    if (ft >= 0 && sp >= 0 && H5Tget_class(ft) == H5T_STRING && !H5Tis_variable_str(ft)) {
+        const hssize_t np = H5Sget_simple_extent_npoints(sp);
+        const size_t sz = H5Tget_size(ft);
+        if (np >= 1 && sz >= 1 && (size_t)np * sz < cap) {
+            hid_t mt = H5Tcopy(H5T_C_S1);
+            H5Tset_size(mt, sz);
+            H5Tset_strpad(mt, H5T_STR_NULLPAD);
+            memset(buf, 0, cap);
+            ok = H5Aread(a, mt, buf) >= 0;
+            H5Tclose(mt);
+            /* the pieces joined, NUL padding removed */
+            size_t n = 0;
+            for (size_t i = 0; ok && i < (size_t)np * sz; i++)
+                if (buf[i])
+                    buf[n++] = buf[i];
+            buf[n] = '\0';
+        }
+    }
+    if (ft >= 0)
+        H5Tclose(ft);
+    if (sp >= 0)
+        H5Sclose(sp);
+    if (a >= 0)
+        H5Aclose(a);
+    return ok;
+}
+
+static int
+attr_number(hid_t obj, const char *name, double *x) {
+    char t[64], *end;
+    if (!attr_text(obj, name, t, sizeof t))
+        return 0;
+    errno = 0;
+    *x = strtod(t, &end);
+    return end != t && *end == '\0' && errno == 0 && isfinite(*x);
+}
+
+static vv_status
+open_ims(h5p *h, int channel, int time) {
+    const int c = channel < 0 ? 0 : channel, t = time < 0 ? 0 : time;
+    char path[256];
+    h->n_levels = 0;
+    for (int l = 0; l < VV_PYRAMID_MAX_LEVELS + 1; l++) {
+        snprintf(path, sizeof path, "DataSet/ResolutionLevel %d", l);
+        if (!link_exists(h->fid, path))
+            break;
+        h->n_levels = l + 1;
+    }
+    if (h->n_levels > VV_PYRAMID_MAX_LEVELS)
+        return vv_error_set(VV_ERR_LIMIT, "more than %d resolution levels", VV_PYRAMID_MAX_LEVELS);
+    h->n_times = h->n_channels = 0;
+    for (int k = 0; k < 100000; k++) {
+        snprintf(path, sizeof path, "DataSet/ResolutionLevel 0/TimePoint %d", k);
+        if (!link_exists(h->fid, path))
+            break;
+        h->n_times = k + 1;
+    }
+    for (int k = 0; k < 1000; k++) {
+        snprintf(path, sizeof path, "DataSet/ResolutionLevel 0/TimePoint 0/Channel %d", k);
+        if (!link_exists(h->fid, path))
+            break;
+        h->n_channels = k + 1;
+    }
+    if (c >= h->n_channels)
+        return vv_error_set(VV_ERR_INVALID, "channel %d asked, the file has %d", c, h->n_channels);
+    if (t >= h->n_times)
+        return vv_error_set(VV_ERR_INVALID, "time step %d asked, the file has %d", t, h->n_times);
+    /* the extent, when the image's attributes give it */
+    double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    int has_ext = link_exists(h->fid, "DataSetInfo") && link_exists(h->fid, "DataSetInfo/Image");
+    hid_t img = has_ext ? H5Gopen2(h->fid, "DataSetInfo/Image", H5P_DEFAULT) : -1;
+    for (int k = 0; k < 3 && img >= 0; k++) {
+        char a[16], b[16];
+        snprintf(a, sizeof a, "ExtMin%d", k);
+        snprintf(b, sizeof b, "ExtMax%d", k);
+        has_ext = has_ext && attr_number(img, a, &lo[k]) && attr_number(img, b, &hi[k]);
+    }
+    char unit[64] = "";
+    if (img >= 0 && attr_text(img, "Unit", unit, sizeof unit))
+        h->lv[0].unit = (int)vv_unit_parse(unit);
+    if (img >= 0)
+        H5Gclose(img);
+    for (int l = 0; l < h->n_levels; l++) {
+        vv_h5p_level *L = &h->lv[l];
+        snprintf(path, sizeof path, "DataSet/ResolutionLevel %d/TimePoint %d/Channel %d/Data", l, t,
+                 c);
+        vv_status s = open_volume(h, path, &h->dset[l], L->dims, L->cdims);
+        if (s != VV_OK)
+            return s;
+        /* the image's size within the padded dataset */
+        snprintf(path, sizeof path, "DataSet/ResolutionLevel %d/TimePoint %d/Channel %d", l, t, c);
+        hid_t g = H5Gopen2(h->fid, path, H5P_DEFAULT);
+        for (int k = 0; k < 3 && g >= 0; k++) {
+            static const char *const names[3] = {"ImageSizeX", "ImageSizeY", "ImageSizeZ"};
+            double n;
+            if (attr_number(g, names[k], &n)) {
+                if (!(n >= 1 && n <= L->dims[k])) {
+                    H5Gclose(g);
+                    return vv_error_set(VV_ERR_FORMAT,
+                                        "%s: %s %g outside the Data dataset's %d voxels", path,
+                                        names[k], n, L->dims[k]);
+                }
+                L->dims[k] = (int)n;
+            }
+        }
+        double r0, r1; /* the channel's value range, as Imaris computes it */
+        if (l == 0 && g >= 0 && attr_number(g, "HistogramMin", &r0) &&
+            attr_number(g, "HistogramMax", &r1) && r1 >= r0) {
+            L->has_range = 1;
+            L->range[0] = r0;
+            L->range[1] = r1;
+        }
+        if (g >= 0)
+            H5Gclose(g);
+        L->unit = h->lv[0].unit;
+        for (int k = 0; k < 3; k++) {
+            const double sp = has_ext && hi[k] > lo[k] ? (hi[k] - lo[k]) / L->dims[k]
+                                                       : (double)h->lv[0].dims[k] / L->dims[k];
+            L->spacing[k] = sp;
+            L->origin[k] = (has_ext ? lo[k] : 0) + 0.5 * sp;
+            if (l > 0 && L->dims[k] > h->lv[0].dims[k])
+                return vv_error_set(VV_ERR_FORMAT,
+                                    "level %d: %d voxels along axis %d, more than level 0's %d "
+                                    "(inconsistent multiscales)",
+                                    l, L->dims[k], k, h->lv[0].dims[k]);
+        }
+    }
+    return h->n_levels > 0 ? VV_OK : vv_error_set(VV_ERR_FORMAT, "no DataSet/ResolutionLevel 0");
+}
+
+void
+vv_h5p_close(h5p *h) {
+    if (!h)
+        return;
+    for (int l = 0; l < VV_PYRAMID_MAX_LEVELS; l++)
+        if (h->dset[l] > 0)
+            H5Dclose(h->dset[l]);
+    if (h->fid > 0)
+        H5Fclose(h->fid);
+    free(h);
+}
+
+vv_status
+vv_h5p_open(h5p **out, const char *path, int channel, int time) {
+    *out = NULL;
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL); /* errors are ours to report */
+    h5p *h = calloc(1, sizeof *h);
+    if (!h)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    snprintf(h->file, sizeof h->file, "%s", vv_path_basename(path));
+    vv_status s = VV_OK;
+    h->fid = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    if (h->fid < 0)
+        s = vv_error_set(VV_ERR_IO, "cannot open it as an HDF5 file");
+    else if (link_exists(h->fid, "DataSet") && link_exists(h->fid, "DataSet/ResolutionLevel 0"))
+        h->kind = 2;
+    else if (link_exists(h->fid, "s00") && link_exists(h->fid, "t00000"))
+        h->kind = 1;
+    else
+        s = vv_error_set(VV_ERR_FORMAT,
+                         "neither a BigDataViewer file (t00000/s00/0/cells) nor an Imaris one "
+                         "(DataSet/ResolutionLevel 0)");
+    if (s == VV_OK)
+        s = h->kind == 1 ? open_bdv(h, channel, time) : open_ims(h, channel, time);
+    for (int l = 0; l < h->n_levels && s == VV_OK; l++) {
+        hid_t ft = H5Dget_type(h->dset[l]);
+        hid_t mt = 0;
+        const int t = ft >= 0 ? type_of(ft, h->kind == 1, &mt) : -1;
+        if (ft >= 0)
+            H5Tclose(ft);
+        if (t < 0)
+            s = vv_error_set(VV_ERR_UNSUPPORTED,
+                             "level %d: a voxel type other than 8/16/32-bit integers or 32/64-bit "
+                             "floats",
+                             l);
+        else if (l == 0) {
+            h->type = (vv_voxel_type)t;
+            h->mtype = mt;
+        } else if ((vv_voxel_type)t != h->type)
+            s = vv_error_set(VV_ERR_FORMAT,
+                             "level %d: its type differs from level 0's (inconsistent "
+                             "multiscales)",
+                             l);
+        for (int k = 0; k < 3 && s == VV_OK; k++)
+            if (h->lv[l].dims[k] > h->lv[0].dims[k])
+                s = vv_error_set(VV_ERR_FORMAT,
+                                 "level %d: %d voxels along axis %d, more than level 0's %d "
+                                 "(inconsistent multiscales)",
+                                 l, h->lv[l].dims[k], k, h->lv[0].dims[k]);
+        h->lv[l].type = h->type;
+    }
+    if (s != VV_OK) {
+        vv_h5p_close(h);
+        return s;
+    }
+    *out = h;
+    return VV_OK;
+}
+
+int
+vv_h5p_levels(const h5p *h, int *n_channels, int *n_times) {
+    if (n_channels)
+        *n_channels = h->n_channels;
+    if (n_times)
+        *n_times = h->n_times;
+    return h->n_levels;
+}
+
+const vv_h5p_level *
+vv_h5p_level_info(const h5p *h, int level) {
+    return level >= 0 && level < h->n_levels ? &h->lv[level] : NULL;
+}
+
+vv_status
+vv_h5p_read_box(h5p *h, int level, const int lo[3], const int dims[3], void *dst) {
+    if (level < 0 || level >= h->n_levels)
+        return vv_error_set(VV_ERR_INVALID, "level %d of %d", level, h->n_levels);
+    for (int k = 0; k < 3; k++)
+        if (lo[k] < 0 || dims[k] < 1 || lo[k] > h->lv[level].dims[k] - dims[k])
+            return vv_error_set(VV_ERR_INVALID, "box %d + %d outside level %d's %d voxels", lo[k],
+                                dims[k], level, h->lv[level].dims[k]);
+    hsize_t start[3], count[3];
+    for (int k = 0; k < 3; k++) {
+        start[2 - k] = (hsize_t)lo[k];
+        count[2 - k] = (hsize_t)dims[k];
+    }
+    hid_t fs = H5Dget_space(h->dset[level]);
+    hid_t ms = H5Screate_simple(3, count, NULL);
+    herr_t e =
+        fs >= 0 && ms >= 0 ? H5Sselect_hyperslab(fs, H5S_SELECT_SET, start, NULL, count, NULL) : -1;
+    if (e >= 0)
+        e = H5Dread(h->dset[level], h->mtype, ms, fs, H5P_DEFAULT, dst);
+    if (ms >= 0)
+        H5Sclose(ms);
+    if (fs >= 0)
+        H5Sclose(fs);
+    if (e < 0)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "level %d: the chunk at voxel (%d, %d, %d) does not read (a corrupt "
+                            "or truncated dataset, or a filter libhdf5 lacks)",
+                            level, lo[0], lo[1], lo[2]);
+    return VV_OK;
+}
+
+/* ---- the format record: one level read whole -------------------------------- */
+
+void
+vv_h5p_geometry(const vv_h5p_level *L, vv_volume *v) {
+    for (int k = 0; k < 3; k++) {
+        v->spacing[k] = L->spacing[k];
+        v->origin[k] = L->origin[k];
+    }
+    v->unit = L->unit > 0 && L->unit <= VV_UNIT_UNKNOWN ? (vv_unit)L->unit : VV_UNIT_UNKNOWN;
+    v->modification = VV_MOD_ORIGINAL;
+}
+
+static vv_status
+h5_read(vv_volume **out, const char *path, const vv_load_options *opt) {
+    *out = NULL;
+    h5p *h = NULL;
+    vv_status s = vv_h5p_open(&h, path, opt->channel, opt->time);
+    const int level = opt->level > 0 ? opt->level : 0;
+    if (s == VV_OK && level >= h->n_levels)
+        s = vv_error_set(VV_ERR_INVALID, "level %d asked, the file has %d", level, h->n_levels);
+    vv_volume *v = NULL;
+    if (s == VV_OK)
+        s = vv_volume_new(&v, h->lv[level].dims, h->type);
+    const int zero[3] = {0, 0, 0};
+    if (s == VV_OK)
+        s = vv_h5p_read_box(h, level, zero, h->lv[level].dims, v->data);
+    if (s == VV_OK) {
+        vv_h5p_geometry(&h->lv[level], v);
+        vv_volume_update_range(v);
+        if (opt->info) {
+            opt->info->n_channels = h->n_channels;
+            opt->info->n_times = h->n_times;
+            opt->info->n_levels = h->n_levels;
+        }
+    }
+    vv_h5p_close(h);
+    if (s != VV_OK) {
+        vv_volume_free(v);
+        return vv_error_prefix(s, "hdf5: %s", vv_path_basename(path));
+    }
+    *out = v;
+    return VV_OK;
+}
+
+static const unsigned char h5_signature[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
+
+static int
+h5_looks_like(const vv_format_probe *p, int deep) {
+    (void)deep;
+    return !p->is_dir && p->n >= 8 && !memcmp(p->head, h5_signature, 8);
+}
+
+int
+vv_h5_is_hdf5(const char *path) {
+    FILE *f = fopen(path, "rb");
+    unsigned char b[8];
+    const int ok = f && fread(b, 1, 8, f) == 8 && !memcmp(b, h5_signature, 8);
+    if (f)
+        fclose(f);
+    return ok;
+}
+
+static const char *const h5_extensions[] = {"h5", "ims", "hdf5", NULL};
+
+const vv_volume_format vv_volume_format_hdf5 = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "hdf5",
+    .title = "BigDataViewer / Imaris HDF5",
+    .extensions = h5_extensions,
+    .doc = "BigDataViewer HDF5 (t00000/s00/<level>/cells) and Imaris .ims (DataSet/"
+           "ResolutionLevel N): read, one level (--level), channel and time step; 8/16/32-bit "
+           "integer and float voxels; rendered out of core by level of detail (volvis render "
+           "--lod)",
+    .flags = VV_FORMAT_FLAG_THIRD_PARTY,
+    .looks_like = h5_looks_like,
+    .read = h5_read,
+};
+
+/* ---- the pyramid's store ------------------------------------------------------ */
+
+typedef struct h5_store {
+    h5p *local;              /* in this process (VOLVIS_SANDBOX=0) */
+    vv_sandbox_boxes *boxes; /* or in the sandboxed reader */
+    size_t esize;
+} h5_store;
+
+static vv_status
+h5s_read_chunk(void *ctx, int level, const int c[3], unsigned char *scratch, unsigned char *dst,
+               const int org[3], const int dims[3], int *missing, uint64_t *file_bytes) {
+    (void)c;
+    (void)scratch;
+    h5_store *z = ctx;
+    *missing = 0;
+    *file_bytes = (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2] * z->esize;
+    if (!z->local)
+        return vv_sandbox_boxes_read(z->boxes, level, org, dims, dst);
+    const vv_status s = vv_h5p_read_box(z->local, level, org, dims, dst);
+    return s == VV_OK ? s : vv_error_prefix(s, "hdf5: %s", z->local->file);
+}
+
+static void
+h5s_close(void *ctx) {
+    h5_store *z = ctx;
+    vv_h5p_close(z->local);
+    vv_sandbox_boxes_close(z->boxes);
+    free(z);
+}
+
+vv_status
+vv_h5_pyramid_store(pyr_store *st, const char *path, int channel, int time) {
+    memset(st, 0, sizeof *st);
+    st->name = "hdf5";
+    h5_store *z = calloc(1, sizeof *z);
+    if (!z)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    st->ctx = z;
+    st->close = h5s_close;
+    st->read_chunk = h5s_read_chunk;
+    st->parallel = 0; /* one reader, one request at a time */
+    vv_h5p_level lv[VV_PYRAMID_MAX_LEVELS];
+    int n = 0;
+    vv_status s;
+    if (vv_sandbox_wanted(NULL)) {
+        s = vv_sandbox_boxes_open(&z->boxes, path, channel, time, lv, &n, &st->n_channels,
+                                  &st->n_times);
+    } else {
+        s = vv_h5p_open(&z->local, path, channel, time);
+        if (s != VV_OK)
+            s = vv_error_prefix(s, "hdf5: %s", vv_path_basename(path));
+        if (s == VV_OK) {
+            n = vv_h5p_levels(z->local, &st->n_channels, &st->n_times);
+            for (int l = 0; l < n; l++)
+                lv[l] = *vv_h5p_level_info(z->local, l);
+        }
+    }
+    if (s != VV_OK)
+        return s;
+    st->n_levels = n;
+    st->has_range = lv[0].has_range;
+    st->range[0] = lv[0].range[0];
+    st->range[1] = lv[0].range[1];
+    z->esize = vv_voxel_type_size(lv[0].type);
+    for (int l = 0; l < n; l++) {
+        const int one[3] = {1, 1, 1};
+        if ((s = vv_volume_new(&st->lv[l].hdr, one, lv[l].type)) != VV_OK)
+            return s;
+        vv_h5p_geometry(&lv[l], st->lv[l].hdr);
+        memcpy(st->lv[l].hdr->dims, lv[l].dims, sizeof lv[l].dims); /* geometry only */
+        memcpy(st->lv[l].cdims, lv[l].cdims, sizeof lv[l].cdims);
+    }
+    return VV_OK;
+}

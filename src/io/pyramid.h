@@ -1,0 +1,81 @@
+/*
+ * A pyramid's store: the format's side of vv_pyramid (src/io/pyramid.c;
+ * include/volvis/bricks.h). The cache, the frame's plan, the statistics and
+ * the source interface are the pyramid's; a store only says what its
+ * levels are and fetches one chunk's voxels. Two stores exist: OME-Zarr
+ * (src/io/zarr_pyramid.c, decoded in this process on every core) and the
+ * HDF5 pyramids of BigDataViewer and Imaris (src/io/hdf5_pyramid.c, read
+ * by libhdf5 in a long-lived reader sandbox, one chunk at a time). A remote
+ * store (HTTP) would be a third: a chunk fetcher behind read_chunk.
+ */
+#ifndef VOLVIS_IO_PYRAMID_H
+#define VOLVIS_IO_PYRAMID_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "volvis/bricks.h"
+
+/** One level of a store. */
+typedef struct pyr_store_level {
+    /**
+     * The level's geometry as a volume of one voxel whose dims are set to
+     * the level's (dims, type, spacing, origin of its voxel 0, direction,
+     * unit); owned by the store until vv_pyramid_open_store takes it.
+     */
+    vv_volume *hdr;
+    int cdims[3]; /**< the chunk box (voxels along x, y, z), >= 1 */
+} pyr_store_level;
+
+/** A pyramid's store (filled by its opener; the pyramid takes it whole). */
+typedef struct pyr_store {
+    const char *name; /**< the format's name for errors ("zarr", "hdf5") */
+    void *ctx;        /**< the store's state, freed by close */
+    int n_levels;     /**< 1 .. VV_PYRAMID_MAX_LEVELS, finest first */
+    pyr_store_level lv[VV_PYRAMID_MAX_LEVELS];
+    int n_channels, n_times; /**< for vv_load_info */
+    int has_range;           /**< 1: range is the data's (an omero window) */
+    double range[2];
+    size_t scratch; /**< bytes of scratch each read_chunk call needs (0: none) */
+    int parallel;   /**< 1: read_chunk may run on several threads at once */
+    /**
+     * Chunk @p c (chunk indices along x, y, z) of @p level: its voxels
+     * inside the level, box org .. org + dims - 1, written to @p dst (x
+     * fastest, the level's type); @p scratch holds the store's scratch
+     * bytes. *missing: 1 when the chunk is absent and was filled with the
+     * fill value; *file_bytes: the bytes read from storage. Errors:
+     * VV_ERR_IO, VV_ERR_FORMAT, VV_ERR_NOMEM, VV_ERR_LIMIT (naming the
+     * chunk).
+     */
+    vv_status (*read_chunk)(void *ctx, int level, const int c[3], unsigned char *scratch,
+                            unsigned char *dst, const int org[3], const int dims[3], int *missing,
+                            uint64_t *file_bytes);
+    void (*close)(void *ctx);
+} pyr_store;
+
+/**
+ * A pyramid over store @p st, taken whole (closed and its headers freed on
+ * error too), under a memory limit of @p memory_limit bytes (0: 1 GiB);
+ * @p path names it in errors; *info (may be NULL) gets the channel, time
+ * step and level counts. Errors as vv_pyramid_open.
+ */
+vv_status vv_pyramid_open_store(vv_pyramid **out, pyr_store *st, const char *path,
+                                uint64_t memory_limit, vv_load_info *info);
+
+/** Frees what a store holds (its headers and, through close, its state). */
+void vv_pyr_store_close(pyr_store *st);
+
+/** The OME-Zarr store of @p path (channel, time step, level 0's info). */
+vv_status vv_zr_pyramid_store(pyr_store *st, const char *path, int channel, int time,
+                              vv_load_info *info);
+
+/** 1 when @p path is an HDF5 file (its signature at offset 0). */
+int vv_h5_is_hdf5(const char *path);
+
+/**
+ * The store of a BigDataViewer HDF5 or Imaris file @p path, read in a
+ * long-lived reader sandbox (src/io/sandbox.c, SBX_OP_BOXES).
+ */
+vv_status vv_h5_pyramid_store(pyr_store *st, const char *path, int channel, int time);
+
+#endif
