@@ -599,12 +599,10 @@ vv_h5_pyramid_store(pyr_store *st, const char *path, int channel, int time) {
     st->range[1] = lv[0].range[1];
     z->esize = vv_voxel_type_size(lv[0].type);
     for (int l = 0; l < n; l++) {
-        const int one[3] = {1, 1, 1};
-        if ((s = vv_volume_new(&st->lv[l].hdr, one, lv[l].type)) != VV_OK)
+        if ((s = vv_pyr_store_level(st, l, (vv_voxel_type)lv[l].type, lv[l].dims, lv[l].cdims)) !=
+            VV_OK)
             return s;
         vv_h5p_geometry(&lv[l], st->lv[l].hdr);
-        memcpy(st->lv[l].hdr->dims, lv[l].dims, sizeof lv[l].dims); /* geometry only */
-        memcpy(st->lv[l].cdims, lv[l].cdims, sizeof lv[l].cdims);
     }
     return VV_OK;
 }

@@ -632,6 +632,18 @@ vv_pyramid_free(vv_pyramid *p) {
     free(p);
 }
 
+vv_status
+vv_pyr_store_level(pyr_store *st, int level, vv_voxel_type type, const int dims[3],
+                   const int cdims[3]) {
+    const int one[3] = {1, 1, 1};
+    const vv_status s = vv_volume_new(&st->lv[level].hdr, one, type);
+    if (s != VV_OK)
+        return s;
+    memcpy(st->lv[level].hdr->dims, dims, sizeof st->lv[level].hdr->dims); /* geometry only */
+    memcpy(st->lv[level].cdims, cdims, sizeof st->lv[level].cdims);
+    return VV_OK;
+}
+
 void
 vv_pyr_store_close(pyr_store *st) {
     for (int i = 0; i < VV_PYRAMID_MAX_LEVELS; i++) {

@@ -62,6 +62,14 @@ typedef struct pyr_store {
 vv_status vv_pyramid_open_store(vv_pyramid **out, pyr_store *st, const char *path,
                                 uint64_t memory_limit, vv_load_info *info);
 
+/**
+ * Level @p level's header (one voxel of @p type, its dims set to
+ * @p dims; the caller sets its geometry) and chunk box @p cdims. Errors:
+ * VV_ERR_NOMEM.
+ */
+vv_status vv_pyr_store_level(pyr_store *st, int level, vv_voxel_type type, const int dims[3],
+                             const int cdims[3]);
+
 /** Frees what a store holds (its headers and, through close, its state). */
 void vv_pyr_store_close(pyr_store *st);
 

@@ -1705,6 +1705,61 @@ vv_sandbox_take_message(int op, const void *msg, size_t len, int fd, vv_format *
     return 1;
 }
 
+/* One message of a reader on @p sock into @p r: its length; 0 when the
+ * reader is gone, -1 when interrupted (try again), -2 when the message or
+ * its control data was cut (malformed). *passed: the descriptor it carried
+ * (-1: none; of several, the last, the others closed; closed when cut). */
+static ssize_t
+recv_reply(int sock, sbx_reply *r, int *passed) {
+    union {
+        struct cmsghdr h;
+        char buf[CMSG_SPACE(sizeof(int))];
+    } u;
+    struct iovec io = {r, sizeof *r};
+    struct msghdr m = {0};
+    m.msg_iov = &io;
+    m.msg_iovlen = 1;
+    m.msg_control = u.buf;
+    m.msg_controllen = sizeof u.buf;
+    *passed = -1;
+    const ssize_t got = recvmsg(sock, &m, MSG_CMSG_CLOEXEC);
+    if (got < 0 && errno == EINTR)
+        return -1;
+    if (got <= 0)
+        return 0;
+    for (struct cmsghdr *c = CMSG_FIRSTHDR(&m); c; c = CMSG_NXTHDR(&m, c))
+        if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_RIGHTS &&
+            c->cmsg_len == CMSG_LEN(sizeof(int))) {
+            if (*passed >= 0)
+                close(*passed);
+            memcpy(passed, CMSG_DATA(c), sizeof(int));
+        }
+    if (m.msg_flags & (MSG_TRUNC | MSG_CTRUNC)) {
+        if (*passed >= 0)
+            close(*passed);
+        *passed = -1;
+        return -2;
+    }
+    return got;
+}
+
+/* The volvis-reader to run on @p path into @p exe (PATH_MAX bytes); errors
+ * named "@p name: FILE": a path too long for a request, no reader found. */
+static vv_status
+reader_for(const char *name, const char *path, char *exe) {
+    const char *file = vv_path_basename(path);
+    if (strlen(path) >= SBX_MAX_PATH)
+        return vv_error_set(VV_ERR_LIMIT, "%s: %s: a path of over %d bytes", name, file,
+                            SBX_MAX_PATH - 1);
+    if (!reader_path(exe, PATH_MAX))
+        return vv_error_set(VV_ERR_IO,
+                            "%s: %s: the sandboxed reader volvis-reader was not found (%s; set "
+                            "VOLVIS_READER to its path, or VOLVIS_SANDBOX=0 to read in this "
+                            "process)",
+                            name, file, exe);
+    return VV_OK;
+}
+
 /* A reader's request for @p op on @p path (malloc'd; NULL: out of
  * memory); @p path is shorter than SBX_MAX_PATH. */
 static sbx_request *
@@ -1750,16 +1805,10 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt, co
         opt = &defaults;
     }
     const char *file = vv_path_basename(path);
-    if (strlen(path) >= SBX_MAX_PATH)
-        return vv_error_set(VV_ERR_LIMIT, "load: %s: a path of over %d bytes", file,
-                            SBX_MAX_PATH - 1);
     char exe[PATH_MAX];
-    if (!reader_path(exe, sizeof exe))
-        return vv_error_set(VV_ERR_IO,
-                            "load: %s: the sandboxed reader volvis-reader was not found (%s; "
-                            "set VOLVIS_READER to its path, or VOLVIS_SANDBOX=0 to read in "
-                            "this process)",
-                            file, exe);
+    vv_status s0 = reader_for("load", path, exe);
+    if (s0 != VV_OK)
+        return s0;
     sbx_request *rq = new_request(op, path, f, opt);
     if (!rq)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
@@ -1800,32 +1849,13 @@ run_reader(int op, const char *path, vv_format f, const vv_load_options *opt, co
             continue;
         if (pr <= 0)
             continue;
-        union {
-            struct cmsghdr h;
-            char buf[CMSG_SPACE(sizeof(int))];
-        } u;
-        struct iovec io = {r, sizeof *r};
-        struct msghdr m = {0};
-        m.msg_iov = &io;
-        m.msg_iovlen = 1;
-        m.msg_control = u.buf;
-        m.msg_controllen = sizeof u.buf;
-        ssize_t got = recvmsg(sock, &m, MSG_CMSG_CLOEXEC);
-        if (got < 0 && errno == EINTR)
-            continue;
-        if (got <= 0)
-            break; /* the child is gone */
         int passed = -1;
-        for (struct cmsghdr *c = CMSG_FIRSTHDR(&m); c; c = CMSG_NXTHDR(&m, c))
-            if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_RIGHTS &&
-                c->cmsg_len == CMSG_LEN(sizeof(int))) {
-                if (passed >= 0)
-                    close(passed);
-                memcpy(&passed, CMSG_DATA(c), sizeof(int));
-            }
-        if (m.msg_flags & (MSG_TRUNC | MSG_CTRUNC)) {
-            if (passed >= 0)
-                close(passed);
+        const ssize_t got = recv_reply(sock, r, &passed);
+        if (got == -1)
+            continue;
+        if (got == 0)
+            break; /* the child is gone */
+        if (got < 0) {
             malformed = 1;
             break;
         }
@@ -1957,31 +1987,15 @@ boxes_wait(vv_sandbox_boxes *b, sbx_reply *r, int *fd) {
         const int pr = poll(&pf, 1, (int)(left * 1000) + 1);
         if (pr <= 0)
             continue;
-        union {
-            struct cmsghdr h;
-            char buf[CMSG_SPACE(sizeof(int))];
-        } u;
-        struct iovec io = {r, sizeof *r};
-        struct msghdr m = {0};
-        m.msg_iov = &io;
-        m.msg_iovlen = 1;
-        m.msg_control = u.buf;
-        m.msg_controllen = sizeof u.buf;
-        const ssize_t got = recvmsg(b->sock, &m, MSG_CMSG_CLOEXEC);
-        if (got < 0 && errno == EINTR)
-            continue;
-        if (got <= 0)
-            return boxes_fail(b, 0, 0); /* the reader is gone */
         int passed = -1;
-        for (struct cmsghdr *c = CMSG_FIRSTHDR(&m); c; c = CMSG_NXTHDR(&m, c))
-            if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_RIGHTS &&
-                c->cmsg_len == CMSG_LEN(sizeof(int))) {
-                if (passed >= 0)
-                    close(passed);
-                memcpy(&passed, CMSG_DATA(c), sizeof(int));
-            }
-        const int whole = !(m.msg_flags & (MSG_TRUNC | MSG_CTRUNC)) &&
-                          (size_t)got >= offsetof(sbx_reply, err) && r->magic == SBX_MAGIC &&
+        const ssize_t got = recv_reply(b->sock, r, &passed);
+        if (got == -1)
+            continue;
+        if (got == 0)
+            return boxes_fail(b, 0, 0); /* the reader is gone */
+        if (got < 0)
+            return boxes_fail(b, 0, 1);
+        const int whole = (size_t)got >= offsetof(sbx_reply, err) && r->magic == SBX_MAGIC &&
                           r->err_len < SBX_MAX_ERROR &&
                           (size_t)got == offsetof(sbx_reply, err) + r->err_len &&
                           (r->kind == SBX_FORMAT || r->kind == SBX_RESULT);
@@ -2055,16 +2069,10 @@ vv_sandbox_boxes_open(vv_sandbox_boxes **out, const char *path, int channel, int
                       vv_h5p_level *levels, int *n_levels, int *n_channels, int *n_times) {
     *out = NULL;
     const char *file = vv_path_basename(path);
-    if (strlen(path) >= SBX_MAX_PATH)
-        return vv_error_set(VV_ERR_LIMIT, "%s: %s: a path of over %d bytes", boxes_name, file,
-                            SBX_MAX_PATH - 1);
     char exe[PATH_MAX];
-    if (!reader_path(exe, sizeof exe))
-        return vv_error_set(VV_ERR_IO,
-                            "%s: %s: the sandboxed reader volvis-reader was not found (%s; set "
-                            "VOLVIS_READER to its path, or VOLVIS_SANDBOX=0 to read in this "
-                            "process)",
-                            boxes_name, file, exe);
+    vv_status s0 = reader_for(boxes_name, path, exe);
+    if (s0 != VV_OK)
+        return s0;
     int n;
     const vv_volume_format *const *t = vv_volume_format_table(&n);
     vv_format f = VV_FORMAT_UNKNOWN;

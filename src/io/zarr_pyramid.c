@@ -110,12 +110,9 @@ vv_zr_pyramid_store(pyr_store *st, const char *path, int channel, int time, vv_l
             return s;
         z->n_levels = st->n_levels = i + 1;
         const zp_level *l = &z->lv[i];
-        const int one[3] = {1, 1, 1};
-        if ((s = vv_volume_new(&st->lv[i].hdr, one, l->a.type)) != VV_OK)
+        if ((s = vv_pyr_store_level(st, i, l->a.type, l->J.dims, l->J.cdims)) != VV_OK)
             return s;
         vv_zr_geometry(&l->J, st->lv[i].hdr);
-        memcpy(st->lv[i].hdr->dims, l->J.dims, sizeof l->J.dims); /* geometry only */
-        memcpy(st->lv[i].cdims, l->J.cdims, sizeof l->J.cdims);
         st->scratch = l->J.cbytes > st->scratch ? l->J.cbytes : st->scratch;
     }
     st->n_channels = (int)z->lv[0].J.nc;

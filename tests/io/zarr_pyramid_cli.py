@@ -39,7 +39,6 @@ then checks:
   it.
 """
 import os
-import re
 import shutil
 import subprocess
 import sys
@@ -49,11 +48,14 @@ try:
     import nibabel as nib
     import numcodecs
     import zarr
-    from PIL import Image
+    from PIL import Image  # noqa: F401 (pyramid_common's)
 except ImportError as e:  # pragma: no cover
     print(f"skipped: {e} (python3-numpy, python3-nibabel, python3-zarr, python3-numcodecs, "
           "python3-pil)")
     sys.exit(77)
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from pyramid_common import cracks, levels_of, psnr, stats  # noqa: E402
 
 VOLVIS, OUT = sys.argv[1], sys.argv[2]
 HEAD = os.path.abspath("../shared/data/volumes/ct_head.nrrd")
@@ -70,17 +72,6 @@ def check(cond, what):
 
 def volvis(*args):
     return subprocess.run([VOLVIS, *args], capture_output=True, text=True)
-
-
-def levels_of(arr, n):
-    """Level 0 and n - 1 levels of 2x2x2 means (rounded), each axis halved (floor)."""
-    out = [arr]
-    for _ in range(1, n):
-        p = out[-1]
-        z, y, x = [s // 2 * 2 for s in p.shape]
-        q = p[:z, :y, :x].astype(np.float64).reshape(z // 2, 2, y // 2, 2, x // 2, 2)
-        out.append(np.rint(q.mean(axis=(1, 3, 5))).astype(arr.dtype))
-    return out
 
 
 def pyramid(name, arr, spacing, chunks, compressor, sep, n=3, window=True):
@@ -116,26 +107,9 @@ def read_level(store, level):
     return np.asarray(img.dataobj).transpose(2, 1, 0), img.affine, ""
 
 
-def image(path):
-    return np.asarray(Image.open(path).convert("RGBA" if path.endswith("_a.png") else "RGB"),
-                      dtype=np.float64)
-
-
-def psnr(a, b):
-    m = ((image(a) - image(b)) ** 2).mean()
-    return 99.0 if m == 0 else 10 * np.log10(255.0 ** 2 / m)
-
-
 def render(store, out, *args):
     p = volvis("render", store, "-o", out, "--size", "256x256", *args)
     return p
-
-
-def stats(p):
-    """(peak cache MiB, most reads of one chunk in a frame, nodes per level) from the line."""
-    m = re.search(r"peak cache ([0-9.]+) MiB, a chunk read at most (\d+) times", p.stdout)
-    nodes = [int(x) for x in re.findall(r"(\d+) nodes \d+ chunks", p.stdout)]
-    return (float(m.group(1)), int(m.group(2)), nodes) if m else (None, None, nodes)
 
 
 # ---- the stores -------------------------------------------------------------------------
@@ -245,10 +219,8 @@ print(f"     {p1.stdout.strip()}")
 check(p1.returncode == 0 and len(nodes) >= 2 and nodes[0] > 0 and nodes[1] > 0,
       f"--lod 2.5 mixes levels 0 and 1 (nodes per level {nodes}) {p1.stderr.strip()}")
 if p1.returncode == 0 and p2.returncode == 0:
-    a, b = image(mixed), image(coarse)
-    cracks = int(np.sum((b[..., 3] > 128) & (a[..., 3] < 8)) + np.sum((a[..., 3] > 128) &
-                                                                      (b[..., 3] < 8)))
-    check(cracks == 0, f"no crack between levels: {cracks} pixels opaque in one, empty in the other")
+    n = cracks(mixed, coarse)
+    check(n == 0, f"no crack between levels: {n} pixels opaque in one, empty in the other")
     q = psnr(mixed, coarse)
     check(q >= 25, f"mixed levels against level 1 everywhere: {q:.1f} dB >= 25")
 
