@@ -284,7 +284,7 @@ open_ims(h5p *h, int channel, int time) {
     int has_ext = link_exists(h->fid, "DataSetInfo") && link_exists(h->fid, "DataSetInfo/Image");
     hid_t img = has_ext ? H5Gopen2(h->fid, "DataSetInfo/Image", H5P_DEFAULT) : -1;
     for (int k = 0; k < 3 && img >= 0; k++) {
-        char a[16], b[16];
+        char a[32], b[32];
         snprintf(a, sizeof a, "ExtMin%d", k);
         snprintf(b, sizeof b, "ExtMax%d", k);
         has_ext = has_ext && attr_number(img, a, &lo[k]) && attr_number(img, b, &hi[k]);
