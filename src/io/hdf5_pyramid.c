@@ -4,11 +4,11 @@
  * s<SS>/resolutions, s<SS>/subdivisions) and Imaris 5.5's (DataSet/
  * ResolutionLevel N/TimePoint T/Channel C/Data, DataSetInfo/Image's extents).
  *
- * Three users: the format record "hdf5" (one level read whole, in the
- * reader sandbox like every third-party parser), the pyramid's store
- * (src/io/pyramid.h), whose chunks come from a long-lived sandboxed reader
- * (vv_sandbox_boxes_*, src/io/sandbox.c) or, with VOLVIS_SANDBOX=0, from
- * this process, and that reader itself (vv_h5p_*, called in the child).
+ * Two users: the format record "hdf5" (one level read whole, in the
+ * reader sandbox like every third-party parser) and the pyramid's store
+ * (src/io/pyramid.h), opened in the long-lived sandboxed readers
+ * (vv_sandbox_store_open, src/io/sandbox.c) or, with VOLVIS_SANDBOX=0, in
+ * this process.
  *
  * Geometry. BigDataViewer: level l of factors f (s00/resolutions) has
  * spacing f (the voxel size of the companion XML is not read: level 0's
@@ -34,23 +34,32 @@
 #include <hdf5.h>
 
 #include "core/internal.h"
-#include "io/hdf5_pyramid.h"
 #include "io/pyramid.h"
-#include "io/sandbox.h"
 #include "volvis/sys/format.h"
 
 #define H5P_MAX_CHUNK 128 /* the store's chunk box at most, a side */
 
-struct h5p {
+/* One level as the reader found it. */
+typedef struct h5p_level {
+    int dims[3];       /* voxels along x, y, z */
+    int cdims[3];      /* the chunk box the store reads by (the dataset's chunks) */
+    double spacing[3]; /* level-0 voxels (BigDataViewer) or the file's units (Imaris) */
+    double origin[3];  /* the centre of voxel 0 */
+    int unit;          /* vv_unit of the spacing (Imaris's Unit; else unknown) */
+    int has_range;     /* 1: range is the data's (Imaris's HistogramMin/Max) */
+    double range[2];
+} h5p_level;
+
+typedef struct h5p {
     char file[256]; /* its base name, for errors */
     hid_t fid;
     int kind; /* 1 BigDataViewer, 2 Imaris */
     int n_levels, n_channels, n_times;
     hid_t dset[VV_PYRAMID_MAX_LEVELS];
-    vv_h5p_level lv[VV_PYRAMID_MAX_LEVELS];
+    h5p_level lv[VV_PYRAMID_MAX_LEVELS];
     hid_t mtype; /* the memory type read */
     vv_voxel_type type;
-};
+} h5p;
 
 static int
 link_exists(hid_t loc, const char *path) {
@@ -182,7 +191,7 @@ open_bdv(h5p *h, int channel, int time) {
         read_table(h->fid, path, H5T_NATIVE_INT, sub, VV_PYRAMID_MAX_LEVELS, &ns) && ns == nr;
     h->n_levels = nr;
     for (int l = 0; l < nr; l++) {
-        vv_h5p_level *L = &h->lv[l];
+        h5p_level *L = &h->lv[l];
         snprintf(path, sizeof path, "t%05d/s%02d/%d/cells", t, setup, l);
         vv_status s = open_volume(h, path, &h->dset[l], L->dims, L->cdims);
         if (s != VV_OK)
@@ -295,7 +304,7 @@ open_ims(h5p *h, int channel, int time) {
     if (img >= 0)
         H5Gclose(img);
     for (int l = 0; l < h->n_levels; l++) {
-        vv_h5p_level *L = &h->lv[l];
+        h5p_level *L = &h->lv[l];
         snprintf(path, sizeof path, "DataSet/ResolutionLevel %d/TimePoint %d/Channel %d/Data", l, t,
                  c);
         vv_status s = open_volume(h, path, &h->dset[l], L->dims, L->cdims);
@@ -342,8 +351,8 @@ open_ims(h5p *h, int channel, int time) {
     return h->n_levels > 0 ? VV_OK : vv_error_set(VV_ERR_FORMAT, "no DataSet/ResolutionLevel 0");
 }
 
-void
-vv_h5p_close(h5p *h) {
+static void
+h5p_close(h5p *h) {
     if (!h)
         return;
     for (int l = 0; l < VV_PYRAMID_MAX_LEVELS; l++)
@@ -354,8 +363,8 @@ vv_h5p_close(h5p *h) {
     free(h);
 }
 
-vv_status
-vv_h5p_open(h5p **out, const char *path, int channel, int time) {
+static vv_status
+h5p_open(h5p **out, const char *path, int channel, int time) {
     *out = NULL;
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL); /* errors are ours to report */
     h5p *h = calloc(1, sizeof *h);
@@ -401,32 +410,17 @@ vv_h5p_open(h5p **out, const char *path, int channel, int time) {
                                  "level %d: %d voxels along axis %d, more than level 0's %d "
                                  "(inconsistent multiscales)",
                                  l, h->lv[l].dims[k], k, h->lv[0].dims[k]);
-        h->lv[l].type = h->type;
     }
     if (s != VV_OK) {
-        vv_h5p_close(h);
+        h5p_close(h);
         return s;
     }
     *out = h;
     return VV_OK;
 }
 
-int
-vv_h5p_levels(const h5p *h, int *n_channels, int *n_times) {
-    if (n_channels)
-        *n_channels = h->n_channels;
-    if (n_times)
-        *n_times = h->n_times;
-    return h->n_levels;
-}
-
-const vv_h5p_level *
-vv_h5p_level_info(const h5p *h, int level) {
-    return level >= 0 && level < h->n_levels ? &h->lv[level] : NULL;
-}
-
-vv_status
-vv_h5p_read_box(h5p *h, int level, const int lo[3], const int dims[3], void *dst) {
+static vv_status
+h5p_read_box(h5p *h, int level, const int lo[3], const int dims[3], void *dst) {
     if (level < 0 || level >= h->n_levels)
         return vv_error_set(VV_ERR_INVALID, "level %d of %d", level, h->n_levels);
     for (int k = 0; k < 3; k++)
@@ -458,8 +452,8 @@ vv_h5p_read_box(h5p *h, int level, const int lo[3], const int dims[3], void *dst
 
 /* ---- the format record: one level read whole -------------------------------- */
 
-void
-vv_h5p_geometry(const vv_h5p_level *L, vv_volume *v) {
+static void
+h5p_geometry(const h5p_level *L, vv_volume *v) {
     for (int k = 0; k < 3; k++) {
         v->spacing[k] = L->spacing[k];
         v->origin[k] = L->origin[k];
@@ -472,7 +466,7 @@ static vv_status
 h5_read(vv_volume **out, const char *path, const vv_load_options *opt) {
     *out = NULL;
     h5p *h = NULL;
-    vv_status s = vv_h5p_open(&h, path, opt->channel, opt->time);
+    vv_status s = h5p_open(&h, path, opt->channel, opt->time);
     const int level = opt->level > 0 ? opt->level : 0;
     if (s == VV_OK && level >= h->n_levels)
         s = vv_error_set(VV_ERR_INVALID, "level %d asked, the file has %d", level, h->n_levels);
@@ -481,9 +475,9 @@ h5_read(vv_volume **out, const char *path, const vv_load_options *opt) {
         s = vv_volume_new(&v, h->lv[level].dims, h->type);
     const int zero[3] = {0, 0, 0};
     if (s == VV_OK)
-        s = vv_h5p_read_box(h, level, zero, h->lv[level].dims, v->data);
+        s = h5p_read_box(h, level, zero, h->lv[level].dims, v->data);
     if (s == VV_OK) {
-        vv_h5p_geometry(&h->lv[level], v);
+        h5p_geometry(&h->lv[level], v);
         vv_volume_update_range(v);
         if (opt->info) {
             opt->info->n_channels = h->n_channels;
@@ -491,7 +485,7 @@ h5_read(vv_volume **out, const char *path, const vv_load_options *opt) {
             opt->info->n_levels = h->n_levels;
         }
     }
-    vv_h5p_close(h);
+    h5p_close(h);
     if (s != VV_OK) {
         vv_volume_free(v);
         return vv_error_prefix(s, "hdf5: %s", vv_path_basename(path));
@@ -536,73 +530,45 @@ const vv_volume_format vv_volume_format_hdf5 = {
 
 /* ---- the pyramid's store ------------------------------------------------------ */
 
-typedef struct h5_store {
-    h5p *local;              /* in this process (VOLVIS_SANDBOX=0) */
-    vv_sandbox_boxes *boxes; /* or in the sandboxed reader */
-    size_t esize;
-} h5_store;
-
 static vv_status
 h5s_read_chunk(void *ctx, int level, const int c[3], unsigned char *scratch, unsigned char *dst,
                const int org[3], const int dims[3], int *missing, uint64_t *file_bytes) {
     (void)c;
     (void)scratch;
-    h5_store *z = ctx;
+    h5p *h = ctx;
     *missing = 0;
-    *file_bytes = (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2] * z->esize;
-    if (!z->local)
-        return vv_sandbox_boxes_read(z->boxes, level, org, dims, dst);
-    const vv_status s = vv_h5p_read_box(z->local, level, org, dims, dst);
-    return s == VV_OK ? s : vv_error_prefix(s, "hdf5: %s", z->local->file);
+    *file_bytes =
+        (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2] * vv_voxel_type_size(h->type);
+    return h5p_read_box(h, level, org, dims, dst);
 }
 
 static void
 h5s_close(void *ctx) {
-    h5_store *z = ctx;
-    vv_h5p_close(z->local);
-    vv_sandbox_boxes_close(z->boxes);
-    free(z);
+    h5p_close(ctx);
 }
 
 vv_status
 vv_h5_pyramid_store(pyr_store *st, const char *path, int channel, int time) {
     memset(st, 0, sizeof *st);
     st->name = "hdf5";
-    h5_store *z = calloc(1, sizeof *z);
-    if (!z)
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    st->ctx = z;
-    st->close = h5s_close;
-    st->read_chunk = h5s_read_chunk;
-    st->parallel = 0; /* one reader, one request at a time */
-    vv_h5p_level lv[VV_PYRAMID_MAX_LEVELS];
-    int n = 0;
-    vv_status s;
-    if (vv_sandbox_wanted(NULL)) {
-        s = vv_sandbox_boxes_open(&z->boxes, path, channel, time, lv, &n, &st->n_channels,
-                                  &st->n_times);
-    } else {
-        s = vv_h5p_open(&z->local, path, channel, time);
-        if (s != VV_OK)
-            s = vv_error_prefix(s, "hdf5: %s", vv_path_basename(path));
-        if (s == VV_OK) {
-            n = vv_h5p_levels(z->local, &st->n_channels, &st->n_times);
-            for (int l = 0; l < n; l++)
-                lv[l] = *vv_h5p_level_info(z->local, l);
-        }
-    }
+    h5p *h = NULL;
+    vv_status s = h5p_open(&h, path, channel, time);
     if (s != VV_OK)
         return s;
-    st->n_levels = n;
-    st->has_range = lv[0].has_range;
-    st->range[0] = lv[0].range[0];
-    st->range[1] = lv[0].range[1];
-    z->esize = vv_voxel_type_size(lv[0].type);
-    for (int l = 0; l < n; l++) {
-        if ((s = vv_pyr_store_level(st, l, (vv_voxel_type)lv[l].type, lv[l].dims, lv[l].cdims)) !=
-            VV_OK)
+    st->ctx = h;
+    st->close = h5s_close;
+    st->read_chunk = h5s_read_chunk;
+    st->parallel = 0; /* libhdf5 is not thread-safe: one chunk at a time */
+    st->n_levels = h->n_levels;
+    st->n_channels = h->n_channels;
+    st->n_times = h->n_times;
+    st->has_range = h->lv[0].has_range;
+    st->range[0] = h->lv[0].range[0];
+    st->range[1] = h->lv[0].range[1];
+    for (int l = 0; l < h->n_levels; l++) {
+        if ((s = vv_pyr_store_level(st, l, h->type, h->lv[l].dims, h->lv[l].cdims)) != VV_OK)
             return s;
-        vv_h5p_geometry(&lv[l], st->lv[l].hdr);
+        h5p_geometry(&h->lv[l], st->lv[l].hdr);
     }
     return VV_OK;
 }

@@ -33,6 +33,7 @@
 
 #include "core/internal.h"
 #include "io/pyramid.h"
+#include "io/sandbox.h"
 #include "volvis/bricks.h"
 
 #define PY_BUCKETS 4096u
@@ -812,6 +813,13 @@ vv_pyramid_open_store(vv_pyramid **out, pyr_store *st, const char *path, uint64_
     return VV_OK;
 }
 
+vv_status
+vv_pyr_store_open_local(pyr_store *st, const char *path, int channel, int time,
+                        vv_load_info *info) {
+    return vv_h5_is_hdf5(path) ? vv_h5_pyramid_store(st, path, channel, time)
+                               : vv_zr_pyramid_store(st, path, channel, time, info);
+}
+
 int
 vv_pyramid_probe(const char *path) {
     struct stat st;
@@ -838,8 +846,8 @@ vv_pyramid_open(vv_pyramid **out, const char *path, int channel, int time, uint6
         return vv_error_set(VV_ERR_LIMIT, "%s: path too long", h5 ? "hdf5" : "zarr");
     pyr_store st;
     memset(&st, 0, sizeof st);
-    vv_status s = h5 ? vv_h5_pyramid_store(&st, path, channel, time)
-                     : vv_zr_pyramid_store(&st, path, channel, time, info);
+    vv_status s = vv_sandbox_wanted(NULL) ? vv_sandbox_store_open(&st, path, channel, time, info)
+                                          : vv_pyr_store_open_local(&st, path, channel, time, info);
     if (s != VV_OK) {
         vv_pyr_store_close(&st);
         return prefix_once(s, h5 ? "hdf5" : "zarr", path);

@@ -2,11 +2,13 @@
  * A pyramid's store: the format's side of vv_pyramid (src/io/pyramid.c;
  * include/volvis/bricks.h). The cache, the frame's plan, the statistics and
  * the source interface are the pyramid's; a store only says what its
- * levels are and fetches one chunk's voxels. Two stores exist: OME-Zarr
- * (src/io/zarr_pyramid.c, decoded in this process on every core) and the
- * HDF5 pyramids of BigDataViewer and Imaris (src/io/hdf5_pyramid.c, read
- * by libhdf5 in a long-lived reader sandbox, one chunk at a time). A remote
- * store (HTTP) would be a third: a chunk fetcher behind read_chunk.
+ * levels are and fetches one chunk's voxels. Two formats have one:
+ * OME-Zarr (src/io/zarr_pyramid.c) and the HDF5 pyramids of BigDataViewer
+ * and Imaris (src/io/hdf5_pyramid.c). Either is opened in long-lived
+ * sandboxed readers, one a thread, behind a store that forwards each
+ * chunk (vv_sandbox_store_open, src/io/sandbox.c), or in this process
+ * with VOLVIS_SANDBOX=0. A remote store (HTTP) would be a third format: a
+ * chunk fetcher behind read_chunk.
  */
 #ifndef VOLVIS_IO_PYRAMID_H
 #define VOLVIS_IO_PYRAMID_H
@@ -77,13 +79,17 @@ void vv_pyr_store_close(pyr_store *st);
 vv_status vv_zr_pyramid_store(pyr_store *st, const char *path, int channel, int time,
                               vv_load_info *info);
 
+/**
+ * The store of @p path read in this process: an HDF5 file's
+ * (vv_h5_pyramid_store) or a Zarr store's (vv_zr_pyramid_store).
+ */
+vv_status vv_pyr_store_open_local(pyr_store *st, const char *path, int channel, int time,
+                                  vv_load_info *info);
+
 /** 1 when @p path is an HDF5 file (its signature at offset 0). */
 int vv_h5_is_hdf5(const char *path);
 
-/**
- * The store of a BigDataViewer HDF5 or Imaris file @p path, read in a
- * long-lived reader sandbox (src/io/sandbox.c, SBX_OP_BOXES).
- */
+/** The store of a BigDataViewer HDF5 or Imaris file @p path, read in this process. */
 vv_status vv_h5_pyramid_store(pyr_store *st, const char *path, int channel, int time);
 
 #endif

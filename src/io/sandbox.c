@@ -86,11 +86,11 @@ typedef struct sbx_request {
     char path[SBX_MAX_PATH];
 } sbx_request;
 
-/* A box asked of a long-lived reader (SBX_OP_BOXES): voxels lo .. lo +
- * dims - 1 of a level. */
+/* A chunk asked of a long-lived reader (SBX_OP_BOXES): chunk c (chunk
+ * indices along x, y, z) of a level. */
 typedef struct sbx_box {
     uint32_t magic;
-    int32_t level, lo[3], dims[3];
+    int32_t level, c[3];
 } sbx_box;
 
 #define SBX_MAX_BOX_BYTES ((uint64_t)1 << 30)
@@ -557,7 +557,8 @@ set_limits(const sbx_request *rq) {
     struct rlimit no_core = {0, 0};
     setrlimit(RLIMIT_CORE, &no_core);
     struct rlimit cpu = {rq->cpu_seconds, (rlim_t)rq->cpu_seconds + 5};
-    setrlimit(RLIMIT_CPU, &cpu);
+    if (rq->cpu_seconds > 0) /* 0: a long-lived reader, timed request by request */
+        setrlimit(RLIMIT_CPU, &cpu);
     /* the reader writes only its memfds, which a file-size limit of the
      * caller's (ulimit -f) would cut with SIGXFSZ: up to the hard limit,
      * and a write past that fails (EFBIG) instead of ending the reader */
@@ -645,33 +646,7 @@ finish(sbx_reply *r, vv_status s, int fd) {
     _exit(0);
 }
 
-/* A new memfd of @p bytes mapped for writing into *map; -1 on failure. */
-static int
-box_memfd(size_t bytes, void **map) {
-    int fd = memfd_create("volvis-box", MFD_CLOEXEC | MFD_ALLOW_SEALING);
-    *map = MAP_FAILED;
-    if (fd >= 0 && ftruncate(fd, (off_t)(bytes ? bytes : 1)) == 0)
-        *map = mmap(NULL, bytes ? bytes : 1, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
-    if (*map == MAP_FAILED && fd >= 0) {
-        close(fd);
-        fd = -1;
-    }
-    return fd;
-}
-
-/* @p fd (mapped at @p map, @p bytes) unmapped and sealed for handing
- * over, or -1 (closed). */
-static int
-box_seal(int fd, void *map, size_t bytes) {
-    munmap(map, bytes ? bytes : 1);
-    if (fcntl(fd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_WRITE | F_SEAL_SEAL) != 0) {
-        close(fd);
-        return -1;
-    }
-    return fd;
-}
-
-/* One reply of the box server (status @p s, its error text when it
+/* One reply of the store server (status @p s, its error text when it
  * failed, @p fd handed over and closed). */
 static void
 box_reply(sbx_reply *r, vv_status s, int fd) {
@@ -688,37 +663,82 @@ box_reply(sbx_reply *r, vv_status s, int fd) {
         close(fd);
 }
 
-/* The child's answer to SBX_OP_BOXES: the HDF5 pyramid's levels, then one
- * box of voxels for each sbx_box until the parent closes its end. */
-static _Noreturn void
-serve_boxes(const sbx_request *rq, sbx_reply *r) {
-    announce(rq, (vv_format)rq->format);
-    h5p *h = NULL;
-    vv_status s = rq->inject == INJECT_OPEN ? vv_error_set(VV_ERR_IO, "cannot open it")
-                                            : vv_h5p_open(&h, rq->path, rq->channel, rq->time);
-    int fd = -1;
-    if (s == VV_OK) {
-        int nc = 0, nt = 0;
-        const int n = vv_h5p_levels(h, &nc, &nt);
-        vv_h5p_level tab[VV_PYRAMID_MAX_LEVELS];
-        for (int l = 0; l < n; l++)
-            tab[l] = *vv_h5p_level_info(h, l);
-        r->n_levels = n;
-        r->n_channels = nc;
-        r->n_times = nt;
-        r->bytes = (uint64_t)n * sizeof tab[0];
-        void *map;
-        if ((fd = box_memfd((size_t)r->bytes, &map)) >= 0) {
-            memcpy(map, tab, (size_t)r->bytes);
-            fd = box_seal(fd, map, (size_t)r->bytes);
-        }
-        if (fd < 0)
-            s = vv_error_set(VV_ERR_NOMEM, "the reader could not hand over its levels");
+/* The bytes of a store's window: its table, or its largest chunk. 0 when
+ * a chunk is over SBX_MAX_BOX_BYTES. */
+static uint64_t
+window_bytes(const sbx_store_head *h) {
+    uint64_t w = sizeof *h;
+    for (int l = 0; l < h->n_levels; l++) {
+        uint64_t c = vv_voxel_type_size((vv_voxel_type)h->lv[l].type);
+        for (int k = 0; k < 3; k++)
+            c *= (uint64_t)(h->lv[l].cdims[k] < h->lv[l].dims[k] ? h->lv[l].cdims[k]
+                                                                 : h->lv[l].dims[k]);
+        if (c > SBX_MAX_BOX_BYTES)
+            return 0;
+        w = c > w ? c : w;
     }
-    if (s != VV_OK)
-        s = vv_error_prefix(s, "hdf5: %s", vv_path_basename(rq->path));
+    return w;
+}
+
+/* The child's answer to SBX_OP_BOXES: the pyramid store's table (an
+ * sbx_store_head at the start of the reader's window, a memfd sealed
+ * against shrinking and growing, handed over once), then one chunk's
+ * voxels in the window for each sbx_box until the parent closes its end. */
+static _Noreturn void
+serve_store(const sbx_request *rq, sbx_reply *r) {
+    announce(rq, (vv_format)rq->format);
+    pyr_store st;
+    memset(&st, 0, sizeof st);
+    vv_load_info info;
+    memset(&info, 0, sizeof info);
+    vv_status s = rq->inject == INJECT_OPEN
+                      ? vv_error_set(VV_ERR_IO, "cannot open it")
+                      : vv_pyr_store_open_local(&st, rq->path, rq->channel, rq->time, &info);
+    int fd = -1;
+    unsigned char *win = MAP_FAILED;
+    static sbx_store_head head;
+    uint64_t wbytes = 0;
+    if (s == VV_OK) {
+        head.n_levels = st.n_levels;
+        head.n_channels = st.n_channels;
+        head.n_times = st.n_times;
+        head.has_range = st.has_range;
+        memcpy(head.range, st.range, sizeof head.range);
+        for (int l = 0; l < st.n_levels; l++) {
+            const vv_volume *h = st.lv[l].hdr;
+            memcpy(head.lv[l].dims, h->dims, sizeof head.lv[l].dims);
+            memcpy(head.lv[l].cdims, st.lv[l].cdims, sizeof head.lv[l].cdims);
+            head.lv[l].type = h->type;
+            head.lv[l].unit = h->unit;
+            memcpy(head.lv[l].spacing, h->spacing, sizeof head.lv[l].spacing);
+            memcpy(head.lv[l].origin, h->origin, sizeof head.lv[l].origin);
+        }
+        r->has_color = info.has_color;
+        memcpy(r->color, info.color, sizeof r->color);
+        memcpy(r->channel_name, info.channel_name, sizeof r->channel_name);
+        if (!(wbytes = window_bytes(&head)))
+            s = vv_error_set(VV_ERR_LIMIT, "chunks of over %llu bytes",
+                             (unsigned long long)SBX_MAX_BOX_BYTES);
+    }
+    if (s == VV_OK) {
+        r->bytes = wbytes;
+        fd = memfd_create("volvis-window", MFD_CLOEXEC | MFD_ALLOW_SEALING);
+        if (fd >= 0 && ftruncate(fd, (off_t)wbytes) == 0 &&
+            fcntl(fd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_SEAL) == 0)
+            win = mmap(NULL, (size_t)wbytes, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
+        if (win == MAP_FAILED) {
+            if (fd >= 0)
+                close(fd);
+            fd = -1;
+            s = vv_error_set(VV_ERR_NOMEM, "the reader could not make its window of %llu bytes",
+                             (unsigned long long)wbytes);
+        } else {
+            memcpy(win, &head, sizeof head);
+        }
+    }
     box_reply(r, s, fd);
-    if (s != VV_OK)
+    unsigned char *scratch = s == VV_OK && st.scratch ? malloc(st.scratch) : NULL;
+    if (s != VV_OK || (st.scratch && !scratch))
         _exit(0);
     for (;;) {
         sbx_box q;
@@ -729,33 +749,29 @@ serve_boxes(const sbx_request *rq, sbx_reply *r) {
             _exit(0); /* the parent is done */
         if (n != (ssize_t)sizeof q || q.magic != SBX_MAGIC)
             _exit(2);
-        const vv_h5p_level *L = vv_h5p_level_info(h, q.level);
-        uint64_t bytes = L ? vv_voxel_type_size((vv_voxel_type)L->type) : 0;
-        for (int k = 0; k < 3 && L; k++)
-            bytes *= q.dims[k] > 0 ? (uint64_t)q.dims[k] : 0;
-        void *map = MAP_FAILED;
-        fd = -1;
+        int ok = q.level >= 0 && q.level < st.n_levels, org[3] = {0, 0, 0}, dims[3] = {0, 0, 0};
+        uint64_t bytes = ok ? vv_voxel_type_size(st.lv[q.level].hdr->type) : 0;
+        for (int k = 0; k < 3 && ok; k++) {
+            const int cd = st.lv[q.level].cdims[k], d = st.lv[q.level].hdr->dims[k];
+            ok = q.c[k] >= 0 && q.c[k] <= (d - 1) / cd;
+            org[k] = ok ? q.c[k] * cd : 0;
+            dims[k] = ok ? (org[k] + cd > d ? d : org[k] + cd) - org[k] : 0;
+            bytes *= (uint64_t)dims[k];
+        }
         memset(r, 0, offsetof(sbx_reply, err));
         r->magic = SBX_MAGIC;
         r->format = rq->format;
         r->bytes = bytes;
-        if (!L || bytes == 0 || bytes > SBX_MAX_BOX_BYTES)
-            s = vv_error_set(VV_ERR_INVALID, "hdf5: %s: a box of %llu bytes of level %d asked",
-                             vv_path_basename(rq->path), (unsigned long long)bytes, q.level);
-        else if ((fd = box_memfd((size_t)bytes, &map)) < 0)
-            s = vv_error_set(VV_ERR_NOMEM, "hdf5: %s: out of memory for a box of %llu bytes",
-                             vv_path_basename(rq->path), (unsigned long long)bytes);
-        else if ((s = vv_h5p_read_box(h, q.level, q.lo, q.dims, map)) != VV_OK)
-            s = vv_error_prefix(s, "hdf5: %s", vv_path_basename(rq->path));
-        if (fd >= 0 && s != VV_OK) {
-            munmap(map, (size_t)bytes);
-            close(fd);
-            fd = -1;
-        } else if (fd >= 0 && (fd = box_seal(fd, map, (size_t)bytes)) < 0) {
-            s = vv_error_set(VV_ERR_NOMEM, "hdf5: %s: the reader could not hand over a box",
-                             vv_path_basename(rq->path));
-        }
-        box_reply(r, s, fd);
+        int missing = 0;
+        uint64_t file_bytes = 0;
+        if (!ok || bytes == 0 || bytes > wbytes)
+            s = vv_error_set(VV_ERR_INVALID, "chunk (%d, %d, %d) of level %d asked: not in it",
+                             q.c[0], q.c[1], q.c[2], q.level);
+        else
+            s = st.read_chunk(st.ctx, q.level, q.c, scratch, win, org, dims, &missing, &file_bytes);
+        r->missing = missing;
+        r->file_bytes = file_bytes;
+        box_reply(r, s, -1);
     }
 }
 
@@ -938,7 +954,7 @@ vv_sandbox_reader_main(int argc, char **argv) {
     if (rq.op == SBX_OP_GRID)
         read_grid(&rq, &r);
     if (rq.op == SBX_OP_BOXES)
-        serve_boxes(&rq, &r);
+        serve_store(&rq, &r);
     vv_format f = (vv_format)rq.format;
     if (f == VV_FORMAT_AUTO) {
         f = vv_format_detect(rq.path);
@@ -1932,69 +1948,87 @@ vv_sandbox_grid_load(vv_grid **out, const char *path, const vv_grid_format_recor
     return s;
 }
 
-/* ---- the long-lived reader of an HDF5 pyramid ----------------------------------- */
+/* ---- the long-lived readers of a pyramid's store ------------------------------- */
 
-struct vv_sandbox_boxes {
+#define SBX_MAX_READERS 16
+
+typedef struct sbx_reader {
     pid_t pid;
-    int sock;
+    int sock, busy;
+    const unsigned char *win; /* its window, mapped read-only (shared with it) */
+    uint64_t wbytes;
+} sbx_reader;
+
+/* A pool of readers serving one store: each thread of the pyramid's
+ * decode takes an idle one for a chunk. */
+typedef struct sbx_store {
+    const char *name, *title; /* the format's, for messages */
     char file[256];
-    unsigned limit;
+    unsigned limit; /* seconds a request may take */
     uint64_t budget;
-    int n_levels;
-    vv_h5p_level lv[VV_PYRAMID_MAX_LEVELS];
-    vv_status dead; /* VV_OK while the reader serves */
-    char why[1024]; /* its end, for every later read */
-};
+    int n;
+    sbx_reader rd[SBX_MAX_READERS];
+    pthread_mutex_t lock;
+    pthread_cond_t idle;
+    vv_status dead; /* VV_OK while the readers serve */
+    char why[1024]; /* the first end, for every later read */
+    sbx_store_head head;
+} sbx_store;
 
-static const char *const boxes_name = "hdf5", *const boxes_title = "BigDataViewer / Imaris HDF5";
-
-/* The reader's end: stopped, reaped and described once; later reads repeat
- * the line. */
+/* Reader @p i's end: stopped, reaped and described; the store is dead
+ * from then on (the first end's line repeated by every later read). */
 static vv_status
-boxes_fail(vv_sandbox_boxes *b, int timed_out, int malformed) {
-    if (b->dead == VV_OK) {
-        int status = 0;
-        struct rusage ru;
-        memset(&ru, 0, sizeof ru);
-        kill(b->pid, SIGKILL);
-        while (wait4(b->pid, &status, 0, &ru) < 0 && errno == EINTR)
+store_fail(sbx_store *b, int i, int timed_out, int malformed) {
+    int status = 0;
+    struct rusage ru;
+    memset(&ru, 0, sizeof ru);
+    sbx_reader *rd = &b->rd[i];
+    if (rd->pid > 0) {
+        kill(rd->pid, SIGKILL);
+        while (wait4(rd->pid, &status, 0, &ru) < 0 && errno == EINTR)
             ;
-        b->pid = -1;
-        close(b->sock);
-        b->sock = -1;
-        b->dead = malformed ? vv_error_set(VV_ERR_FORMAT,
+        rd->pid = -1;
+    }
+    if (rd->sock >= 0)
+        close(rd->sock);
+    rd->sock = -1;
+    vv_status s = malformed ? vv_error_set(VV_ERR_FORMAT,
                                            "%s: %s: the %s reader sent a malformed reply and was "
                                            "stopped; the file is hostile or the reader broken",
-                                           boxes_name, b->file, boxes_title)
+                                           b->name, b->file, b->title)
                             : describe_end(status, (uint64_t)ru.ru_maxrss * 1024u, b->budget,
-                                           boxes_name, boxes_title, b->file, b->limit, timed_out);
+                                           b->name, b->title, b->file, b->limit, timed_out);
+    pthread_mutex_lock(&b->lock);
+    if (b->dead == VV_OK) {
+        b->dead = s;
         snprintf(b->why, sizeof b->why, "%s", vv_error_message());
     }
-    return vv_error_set(b->dead, "%s", b->why);
+    s = vv_error_set(b->dead, "%s", b->why);
+    pthread_mutex_unlock(&b->lock);
+    return s;
 }
 
-/* The reader's next result into @p r, its memfd (or -1) into *fd; the
+/* Reader @p i's next result into @p r, its memfd (or -1) into *fd; the
  * reader's own error when it sent one. */
 static vv_status
-boxes_wait(vv_sandbox_boxes *b, sbx_reply *r, int *fd) {
+store_wait(sbx_store *b, int i, sbx_reply *r, int *fd) {
     *fd = -1;
     const double deadline = now_s() + b->limit + 5;
     for (;;) {
         const double left = deadline - now_s();
         if (left <= 0)
-            return boxes_fail(b, 1, 0);
-        struct pollfd pf = {b->sock, POLLIN, 0};
-        const int pr = poll(&pf, 1, (int)(left * 1000) + 1);
-        if (pr <= 0)
+            return store_fail(b, i, 1, 0);
+        struct pollfd pf = {b->rd[i].sock, POLLIN, 0};
+        if (poll(&pf, 1, (int)(left * 1000) + 1) <= 0)
             continue;
         int passed = -1;
-        const ssize_t got = recv_reply(b->sock, r, &passed);
+        const ssize_t got = recv_reply(b->rd[i].sock, r, &passed);
         if (got == -1)
             continue;
         if (got == 0)
-            return boxes_fail(b, 0, 0); /* the reader is gone */
+            return store_fail(b, i, 0, 0); /* the reader is gone */
         if (got < 0)
-            return boxes_fail(b, 0, 1);
+            return store_fail(b, i, 0, 1);
         const int whole = (size_t)got >= offsetof(sbx_reply, err) && r->magic == SBX_MAGIC &&
                           r->err_len < SBX_MAX_ERROR &&
                           (size_t)got == offsetof(sbx_reply, err) + r->err_len &&
@@ -2002,7 +2036,7 @@ boxes_wait(vv_sandbox_boxes *b, sbx_reply *r, int *fd) {
         if (!whole || (r->kind == SBX_FORMAT && passed >= 0)) {
             if (passed >= 0)
                 close(passed);
-            return boxes_fail(b, 0, 1);
+            return store_fail(b, i, 0, 1);
         }
         if (r->kind == SBX_FORMAT)
             continue;
@@ -2017,179 +2051,239 @@ boxes_wait(vv_sandbox_boxes *b, sbx_reply *r, int *fd) {
                                     ? (vv_status)r->status
                                     : VV_ERR_FORMAT;
             return r->err[0] ? vv_error_set(e, "%s", r->err)
-                             : vv_error_set(e, "%s: %s: the reader failed without a message",
-                                            boxes_name, b->file);
+                             : vv_error_set(e, "the reader failed without a message");
         }
         *fd = passed;
         return VV_OK;
     }
 }
 
-/* The @p bytes of sealed memfd @p fd copied into @p dst; @p fd closed. */
+/* Reader @p i's window, handed over as memfd @p fd of @p bytes (closed):
+ * sealed against shrinking and growing (so that the mapping stays whole),
+ * mapped read-only. The reader writes it: what is copied out of it is
+ * only ever copied, never trusted. */
 static vv_status
-boxes_take(vv_sandbox_boxes *b, int fd, void *dst, uint64_t bytes) {
+store_map(sbx_store *b, int i, int fd, uint64_t bytes) {
     struct stat st;
     const int seals = fd >= 0 ? fcntl(fd, F_GET_SEALS) : -1;
-    vv_status s = VV_OK;
-    if (fd < 0 || fstat(fd, &st) != 0 || (uint64_t)st.st_size < bytes || seals < 0 ||
-        !(seals & F_SEAL_SHRINK) || !(seals & F_SEAL_WRITE)) {
+    if (fd < 0 || fstat(fd, &st) != 0 || (uint64_t)st.st_size != bytes || seals < 0 ||
+        !(seals & F_SEAL_SHRINK) || !(seals & F_SEAL_GROW) || bytes < sizeof(sbx_store_head) ||
+        bytes > SBX_MAX_BOX_BYTES) {
         if (fd >= 0)
             close(fd);
-        return boxes_fail(b, 0, 1);
+        return store_fail(b, i, 0, 1);
     }
-    void *p = bytes ? mmap(NULL, (size_t)bytes, PROT_READ, MAP_SHARED, fd, 0) : NULL;
-    if (p == MAP_FAILED)
-        s = vv_error_set(VV_ERR_NOMEM, "%s: %s: cannot map the reader's %llu bytes: %s", boxes_name,
-                         b->file, (unsigned long long)bytes, strerror(errno));
-    else if (bytes) {
-        memcpy(dst, p, (size_t)bytes);
-        munmap(p, (size_t)bytes);
-    }
+    void *p = mmap(NULL, (size_t)bytes, PROT_READ, MAP_SHARED, fd, 0);
+    const int e = errno;
     close(fd);
+    if (p == MAP_FAILED)
+        return vv_error_set(VV_ERR_NOMEM, "cannot map the reader's window of %llu bytes: %s",
+                            (unsigned long long)bytes, strerror(e));
+    b->rd[i].win = p;
+    b->rd[i].wbytes = bytes;
+    return VV_OK;
+}
+
+/* The table a reader sent, checked: levels, counts, geometry, range. */
+static int
+head_ok(const sbx_store_head *h) {
+    if (h->n_levels < 1 || h->n_levels > VV_PYRAMID_MAX_LEVELS || h->n_channels < 1 ||
+        h->n_channels > VV_VOLUME_MAX_DIM || h->n_times < 1 || h->n_times > VV_VOLUME_MAX_DIM ||
+        (h->has_range &&
+         !(isfinite(h->range[0]) && isfinite(h->range[1]) && h->range[1] >= h->range[0])))
+        return 0;
+    for (int l = 0; l < h->n_levels; l++) {
+        const sbx_level *L = &h->lv[l];
+        if (L->type < VV_U8 || L->type > VV_F64 || L->type != h->lv[0].type || L->unit < 0 ||
+            L->unit > VV_UNIT_UNKNOWN)
+            return 0;
+        for (int k = 0; k < 3; k++)
+            if (L->dims[k] < 1 || L->dims[k] > VV_VOLUME_MAX_DIM || L->cdims[k] < 1 ||
+                L->cdims[k] > 4096 || !(L->spacing[k] > 0) || !isfinite(L->spacing[k]) ||
+                !isfinite(L->origin[k]))
+                return 0;
+    }
+    return 1;
+}
+
+static vv_status
+store_read_chunk(void *ctx, int level, const int c[3], unsigned char *scratch, unsigned char *dst,
+                 const int org[3], const int dims[3], int *missing, uint64_t *file_bytes) {
+    (void)scratch;
+    (void)org;
+    sbx_store *b = ctx;
+    uint64_t bytes = vv_voxel_type_size((vv_voxel_type)b->head.lv[level].type);
+    for (int k = 0; k < 3; k++)
+        bytes *= (uint64_t)dims[k];
+    pthread_mutex_lock(&b->lock);
+    int i = -1;
+    while (b->dead == VV_OK && i < 0) {
+        for (int k = 0; k < b->n && i < 0; k++)
+            if (!b->rd[k].busy)
+                i = k;
+        if (i < 0)
+            pthread_cond_wait(&b->idle, &b->lock);
+    }
+    if (i < 0) {
+        vv_status s = vv_error_set(b->dead, "%s", b->why);
+        pthread_mutex_unlock(&b->lock);
+        return s;
+    }
+    b->rd[i].busy = 1;
+    pthread_mutex_unlock(&b->lock);
+    const sbx_box q = {SBX_MAGIC, level, {c[0], c[1], c[2]}};
+    ssize_t sent;
+    while ((sent = send(b->rd[i].sock, &q, sizeof q, MSG_NOSIGNAL)) < 0 && errno == EINTR)
+        ;
+    vv_status s = VV_OK;
+    sbx_reply *r = malloc(sizeof *r);
+    int fd = -1;
+    if (sent != (ssize_t)sizeof q)
+        s = store_fail(b, i, 0, 0);
+    else if (!r)
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+    else if ((s = store_wait(b, i, r, &fd)) == VV_OK &&
+             (r->bytes != bytes || bytes > b->rd[i].wbytes || fd >= 0)) {
+        if (fd >= 0)
+            close(fd);
+        s = store_fail(b, i, 0, 1);
+    } else if (s == VV_OK) {
+        memcpy(dst, b->rd[i].win, (size_t)bytes); /* copied once, then only the copy is read */
+        *missing = r->missing != 0;
+        *file_bytes = r->file_bytes; /* statistics only */
+    }
+    free(r);
+    pthread_mutex_lock(&b->lock);
+    b->rd[i].busy = 0;
+    pthread_cond_broadcast(&b->idle);
+    pthread_mutex_unlock(&b->lock);
     return s;
 }
 
-/* Level table entry @p L as the reader sent it, checked. */
-static int
-level_ok(const vv_h5p_level *L) {
-    if (L->type < VV_U8 || L->type > VV_F64)
-        return 0;
-    for (int k = 0; k < 3; k++)
-        if (L->dims[k] < 1 || L->dims[k] > VV_VOLUME_MAX_DIM || L->cdims[k] < 1 ||
-            L->cdims[k] > 4096 || !(L->spacing[k] > 0) || !isfinite(L->spacing[k]) ||
-            !isfinite(L->origin[k]))
-            return 0;
-    return L->unit >= 0 && L->unit <= VV_UNIT_UNKNOWN &&
-           (!L->has_range ||
-            (isfinite(L->range[0]) && isfinite(L->range[1]) && L->range[1] >= L->range[0]));
+static void
+store_close(void *ctx) {
+    sbx_store *b = ctx;
+    if (!b)
+        return;
+    for (int i = 0; i < b->n; i++) {
+        if (b->rd[i].win)
+            munmap((void *)b->rd[i].win, (size_t)b->rd[i].wbytes);
+        if (b->rd[i].sock >= 0)
+            close(b->rd[i].sock); /* the reader's recv ends: it exits */
+        if (b->rd[i].pid > 0) {
+            kill(b->rd[i].pid, SIGKILL);
+            reap_later(b->rd[i].pid);
+        }
+    }
+    pthread_mutex_destroy(&b->lock);
+    pthread_cond_destroy(&b->idle);
+    free(b);
+}
+
+/* Starts the readers and takes the first's table; the others' must be
+ * the same. */
+static vv_status
+store_start(sbx_store *b, const char *exe, const sbx_request *rq, vv_load_info *info) {
+    for (int i = 0; i < b->n; i++) {
+        int err = i == 0 ? take_reader(exe, &b->rd[i].pid, &b->rd[i].sock)
+                         : spawn_reader(exe, &b->rd[i].pid, &b->rd[i].sock);
+        if (err != 0)
+            return vv_error_set(VV_ERR_IO, "cannot start %s: %s", exe, strerror(err));
+        ssize_t sent;
+        while ((sent = send(b->rd[i].sock, rq, sizeof *rq, MSG_NOSIGNAL)) < 0 && errno == EINTR)
+            ;
+    }
+    sbx_reply *r = malloc(sizeof *r);
+    sbx_store_head *h = malloc(sizeof *h);
+    vv_status s = r && h ? VV_OK : vv_error_set(VV_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < b->n && s == VV_OK; i++) {
+        int fd = -1;
+        if ((s = store_wait(b, i, r, &fd)) != VV_OK)
+            break;
+        if ((s = store_map(b, i, fd, r->bytes)) == VV_OK) {
+            memcpy(h, b->rd[i].win, sizeof *h);
+            if (i == 0 && head_ok(h) && window_bytes(h) && window_bytes(h) <= r->bytes) {
+                b->head = *h;
+                if (info && memchr(r->channel_name, 0, sizeof r->channel_name)) {
+                    info->has_color = r->has_color != 0;
+                    for (int k = 0; k < 3; k++)
+                        info->color[k] = r->color[k] >= 0 && r->color[k] <= 1 ? r->color[k] : 1;
+                    memcpy(info->channel_name, r->channel_name, sizeof info->channel_name);
+                }
+            } else if (i == 0 || memcmp(h, &b->head, sizeof *h)) {
+                s = store_fail(b, i, 0, 1);
+            }
+        }
+    }
+    free(r);
+    free(h);
+    return s;
 }
 
 vv_status
-vv_sandbox_boxes_open(vv_sandbox_boxes **out, const char *path, int channel, int time,
-                      vv_h5p_level *levels, int *n_levels, int *n_channels, int *n_times) {
-    *out = NULL;
-    const char *file = vv_path_basename(path);
+vv_sandbox_store_open(pyr_store *st, const char *path, int channel, int time, vv_load_info *info) {
+    memset(st, 0, sizeof *st);
+    const int h5 = vv_h5_is_hdf5(path);
+    st->name = h5 ? "hdf5" : "zarr";
     char exe[PATH_MAX];
-    vv_status s0 = reader_for(boxes_name, path, exe);
-    if (s0 != VV_OK)
-        return s0;
-    int n;
-    const vv_volume_format *const *t = vv_volume_format_table(&n);
+    vv_status s = reader_for(st->name, path, exe);
+    if (s != VV_OK)
+        return s;
+    int nf;
+    const vv_volume_format *const *t = vv_volume_format_table(&nf);
     vv_format f = VV_FORMAT_UNKNOWN;
-    for (int i = 0; i < n; i++)
-        if (!strcmp(t[i]->name, boxes_name))
+    const char *title = h5 ? "HDF5" : "Zarr";
+    for (int i = 0; i < nf; i++)
+        if (!strcmp(t[i]->name, st->name)) {
             f = (vv_format)(i + 1);
+            title = t[i]->title;
+        }
     vv_load_options o;
     vv_load_options_init(&o);
     o.channel = channel;
     o.time = time;
     sbx_request *rq = new_request(SBX_OP_BOXES, path, f, &o);
-    vv_sandbox_boxes *b = calloc(1, sizeof *b);
-    sbx_reply *r = malloc(sizeof *r);
-    if (!rq || !b || !r) {
+    sbx_store *b = calloc(1, sizeof *b);
+    if (!rq || !b) {
         free(rq);
         free(b);
-        free(r);
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     }
-    snprintf(b->file, sizeof b->file, "%s", file);
-    b->limit = rq->cpu_seconds;
+    b->name = st->name;
+    b->title = title;
+    snprintf(b->file, sizeof b->file, "%s", vv_path_basename(path));
+    b->limit = rq->cpu_seconds; /* a request's wall time; the reader's CPU is not limited */
+    rq->cpu_seconds = 0;
     b->budget = rq->budget;
-    b->sock = -1;
-    int err = take_reader(exe, &b->pid, &b->sock);
-    if (err != 0) {
-        free(rq);
-        free(b);
-        free(r);
-        return vv_error_set(VV_ERR_IO, "%s: %s: cannot start %s: %s", boxes_name, file, exe,
-                            strerror(err));
-    }
-    ssize_t sent;
-    while ((sent = send(b->sock, rq, sizeof *rq, MSG_NOSIGNAL)) < 0 && errno == EINTR)
-        ;
+    pthread_mutex_init(&b->lock, NULL);
+    pthread_cond_init(&b->idle, NULL);
+    const int nt = vv_threads_get();
+    b->n = nt < 1 ? 1 : nt > SBX_MAX_READERS ? SBX_MAX_READERS : nt;
+    for (int i = 0; i < b->n; i++)
+        b->rd[i] = (sbx_reader){-1, -1, 0, NULL, 0};
+    st->ctx = b;
+    st->close = store_close;
+    st->read_chunk = store_read_chunk;
+    st->parallel = 1; /* a reader a thread */
+    s = store_start(b, exe, rq, info);
     free(rq);
-    int fd = -1;
-    vv_status s = boxes_wait(b, r, &fd);
-    if (s == VV_OK &&
-        (r->n_levels < 1 || r->n_levels > VV_PYRAMID_MAX_LEVELS ||
-         r->bytes != (uint64_t)r->n_levels * sizeof(vv_h5p_level) || r->n_channels < 1 ||
-         r->n_channels > VV_VOLUME_MAX_DIM || r->n_times < 1 || r->n_times > VV_VOLUME_MAX_DIM)) {
-        if (fd >= 0)
-            close(fd);
-        s = boxes_fail(b, 0, 1);
-    } else if (s == VV_OK && (s = boxes_take(b, fd, b->lv, r->bytes)) == VV_OK) {
-        b->n_levels = r->n_levels;
-        for (int l = 0; l < b->n_levels; l++)
-            if (!level_ok(&b->lv[l]) || b->lv[l].type != b->lv[0].type)
-                s = boxes_fail(b, 0, 1);
+    if (s != VV_OK)
+        return s;
+    const sbx_store_head *h = &b->head;
+    st->n_levels = h->n_levels;
+    st->n_channels = h->n_channels;
+    st->n_times = h->n_times;
+    st->has_range = h->has_range;
+    memcpy(st->range, h->range, sizeof st->range);
+    for (int l = 0; l < h->n_levels && s == VV_OK; l++) {
+        s = vv_pyr_store_level(st, l, (vv_voxel_type)h->lv[l].type, h->lv[l].dims, h->lv[l].cdims);
         if (s == VV_OK) {
-            memcpy(levels, b->lv, sizeof(vv_h5p_level) * (size_t)b->n_levels);
-            *n_levels = b->n_levels;
-            *n_channels = r->n_channels;
-            *n_times = r->n_times;
+            vv_volume *v = st->lv[l].hdr;
+            memcpy(v->spacing, h->lv[l].spacing, sizeof v->spacing);
+            memcpy(v->origin, h->lv[l].origin, sizeof v->origin);
+            v->unit = (vv_unit)h->lv[l].unit;
+            v->modification = VV_MOD_ORIGINAL;
         }
     }
-    free(r);
-    if (s != VV_OK) {
-        vv_sandbox_boxes_close(b);
-        return s;
-    }
-    *out = b;
-    return VV_OK;
-}
-
-vv_status
-vv_sandbox_boxes_read(vv_sandbox_boxes *b, int level, const int lo[3], const int dims[3],
-                      void *dst) {
-    if (b->dead != VV_OK)
-        return vv_error_set(b->dead, "%s", b->why);
-    if (level < 0 || level >= b->n_levels)
-        return vv_error_set(VV_ERR_INVALID, "%s: %s: level %d of %d", boxes_name, b->file, level,
-                            b->n_levels);
-    uint64_t bytes = vv_voxel_type_size((vv_voxel_type)b->lv[level].type);
-    sbx_box q = {.magic = SBX_MAGIC, .level = level};
-    for (int k = 0; k < 3; k++) {
-        if (lo[k] < 0 || dims[k] < 1 || lo[k] > b->lv[level].dims[k] - dims[k])
-            return vv_error_set(VV_ERR_INVALID, "%s: %s: a box outside level %d", boxes_name,
-                                b->file, level);
-        q.lo[k] = lo[k];
-        q.dims[k] = dims[k];
-        bytes *= (uint64_t)dims[k];
-    }
-    if (bytes > SBX_MAX_BOX_BYTES)
-        return vv_error_set(VV_ERR_LIMIT, "%s: %s: a box of %llu bytes (at most %llu a read)",
-                            boxes_name, b->file, (unsigned long long)bytes,
-                            (unsigned long long)SBX_MAX_BOX_BYTES);
-    ssize_t sent;
-    while ((sent = send(b->sock, &q, sizeof q, MSG_NOSIGNAL)) < 0 && errno == EINTR)
-        ;
-    if (sent != (ssize_t)sizeof q)
-        return boxes_fail(b, 0, 0);
-    sbx_reply *r = malloc(sizeof *r);
-    if (!r)
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    int fd = -1;
-    vv_status s = boxes_wait(b, r, &fd);
-    if (s == VV_OK && r->bytes != bytes) {
-        if (fd >= 0)
-            close(fd);
-        s = boxes_fail(b, 0, 1);
-    } else if (s == VV_OK) {
-        s = boxes_take(b, fd, dst, bytes);
-    }
-    free(r);
     return s;
-}
-
-void
-vv_sandbox_boxes_close(vv_sandbox_boxes *b) {
-    if (!b)
-        return;
-    if (b->sock >= 0)
-        close(b->sock); /* the reader's recv ends: it exits */
-    if (b->pid > 0) {
-        kill(b->pid, SIGKILL);
-        reap_later(b->pid);
-    }
-    free(b);
 }

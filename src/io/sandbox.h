@@ -15,7 +15,7 @@
 #ifndef VOLVIS_IO_SANDBOX_H
 #define VOLVIS_IO_SANDBOX_H
 
-#include "io/hdf5_pyramid.h"
+#include "io/pyramid.h"
 #include "volvis/grid.h"
 #include "volvis/io.h"
 #include "volvis/mesh.h"
@@ -61,6 +61,8 @@ typedef struct sbx_reply {
     char channel_name[VV_CHANNEL_NAME_MAX];
     uint64_t bytes;
     uint64_t n_vertices, n_triangles; /* a mesh: positions then triangles */
+    uint64_t file_bytes;              /* a store's chunk: bytes read from storage */
+    int32_t missing;                  /* a store's chunk: absent, the fill value */
     uint32_t err_len;
     char err[SBX_MAX_ERROR];
 } sbx_reply;
@@ -159,34 +161,41 @@ enum {
     SBX_OP_BOXES = 4
 };
 
-/**
- * A long-lived sandboxed reader of an HDF5 pyramid (BigDataViewer,
- * Imaris; src/io/hdf5_pyramid.c), for the pyramid's store: opened once,
- * then asked for one box of voxels at a time. The protocol after the
- * request (op SBX_OP_BOXES): the child answers with one SBX_RESULT whose
- * sealed memfd holds n_levels vv_h5p_level entries (n_channels, n_times in
- * the reply), then serves sbx_box messages, each answered by an SBX_RESULT
- * with the box's voxels in a sealed memfd (or its error), until the parent
- * closes its end. Nothing in a reply is trusted (levels checked, sizes
- * against the memfd, seals); a crash, a stall past the time limit or a
- * malformed reply ends the reader with one error line, and every later
- * read fails with it. One thread at a time.
- */
-typedef struct vv_sandbox_boxes vv_sandbox_boxes;
+/** One level of a store as its reader sends it (sbx_store_head). */
+typedef struct sbx_level {
+    int32_t dims[3], cdims[3], type, unit;
+    double spacing[3], origin[3];
+} sbx_level;
+
+/** A store's table, sent whole in a sealed memfd (SBX_OP_BOXES). */
+typedef struct sbx_store_head {
+    int32_t n_levels, n_channels, n_times, has_range;
+    double range[2];
+    sbx_level lv[VV_PYRAMID_MAX_LEVELS];
+} sbx_store_head;
 
 /**
- * Starts the reader of @p path (@p channel, @p time: -1 the first) and
- * takes its levels: *n_levels entries of @p levels (VV_PYRAMID_MAX_LEVELS
- * room), the channel and step counts. Errors: the reader's own (prefixed
- * "hdf5: FILE"), or as vv_sandbox_volume_load.
+ * A pyramid's store (src/io/pyramid.h) read by long-lived sandboxed
+ * readers: the OME-Zarr store or HDF5 file @p path (@p channel, @p time:
+ * -1 the first), opened by one volvis-reader a thread (vv_threads_get, at
+ * most 16), each locked down as every reader. The protocol after the
+ * request (op SBX_OP_BOXES, no CPU-time limit: each request is timed
+ * instead): a reader answers with one SBX_RESULT whose sealed memfd holds
+ * an sbx_store_head (the channel's name and colour in the reply), then
+ * serves one chunk (sbx_box: level, chunk indices) at a time, each
+ * answered by an SBX_RESULT with the chunk's voxels in a new sealed memfd
+ * (missing and file_bytes in the reply) or its error, until the parent
+ * closes its end. Nothing is trusted: the table is checked (levels,
+ * counts, geometry, range) and must be the same from every reader, each
+ * chunk's size and seals are checked, and a request waits at most the
+ * sandbox's time limit; a crash, stall or malformed reply stops that
+ * reader with one error line, which every later read of the store
+ * repeats. read_chunk is called from several threads at once (a reader
+ * each). Errors: the readers' own (not prefixed), or as
+ * vv_sandbox_volume_load (prefixed "zarr: FILE" or "hdf5: FILE").
  */
-vv_status vv_sandbox_boxes_open(vv_sandbox_boxes **out, const char *path, int channel, int time,
-                                vv_h5p_level *levels, int *n_levels, int *n_channels, int *n_times);
-/** Voxels lo .. lo + dims - 1 of @p level into @p dst (the level's type). */
-vv_status vv_sandbox_boxes_read(vv_sandbox_boxes *b, int level, const int lo[3], const int dims[3],
-                                void *dst);
-/** Ends the reader (NULL: nothing). */
-void vv_sandbox_boxes_close(vv_sandbox_boxes *b);
+vv_status vv_sandbox_store_open(pyr_store *st, const char *path, int channel, int time,
+                                vv_load_info *info);
 
 /** What the parent made of a reader's result: one of the four, by op. */
 typedef struct vv_sandbox_answer {

@@ -32,6 +32,9 @@ then checks:
 - level of detail: a perspective view with --lod 2.5 mixes levels 0 and
   1; against the same view at level 1 everywhere it has no crack (no pixel
   opaque in one and empty in the other) and is close (PSNR >= 25 dB);
+- the chunks decoded by the long-lived sandboxed readers (the default) and
+  in-process (VOLVIS_SANDBOX=0) make one image; a reader that crashes
+  (VOLVIS_SANDBOX_INJECT=segv) is one line naming the store;
 - bad stores out of core: a chunk that decodes to the wrong size, an
   unknown compressor, inconsistent multiscales (a level of another dtype,
   a level larger than level 0): one line naming the store, a non-zero
@@ -70,8 +73,9 @@ def check(cond, what):
         failures.append(what)
 
 
-def volvis(*args):
-    return subprocess.run([VOLVIS, *args], capture_output=True, text=True)
+def volvis(*args, env=None):
+    return subprocess.run([VOLVIS, *args], capture_output=True, text=True,
+                          env=dict(os.environ, **(env or {})))
 
 
 def pyramid(name, arr, spacing, chunks, compressor, sep, n=3, window=True):
@@ -107,9 +111,8 @@ def read_level(store, level):
     return np.asarray(img.dataobj).transpose(2, 1, 0), img.affine, ""
 
 
-def render(store, out, *args):
-    p = volvis("render", store, "-o", out, "--size", "256x256", *args)
-    return p
+def render(store, out, *args, env=None):
+    return volvis("render", store, "-o", out, "--size", "256x256", *args, env=env)
 
 
 # ---- the stores -------------------------------------------------------------------------
@@ -288,6 +291,22 @@ p1 = render(store, mem, "--mode", "mip", "--tf", "50:250")
 p2 = render(store, ooc, "--mode", "mip", "--tf", "50:250", "--memory-limit", "4M", "--level", "0")
 check(p1.returncode == 0 and p2.returncode == 0 and psnr(mem, ooc) == 99.0,
       f"a missing chunk out of core: the fill value, as in memory {p2.stderr.strip()}")
+
+# ---- the sandboxed readers ------------------------------------------------------------------
+# the chunks decoded by the long-lived sandboxed readers (the default) and in this process
+# (VOLVIS_SANDBOX=0) make one image; a reader that crashes is one line
+sbx, local = os.path.join(OUT, "sbx.png"), os.path.join(OUT, "local.png")
+p1 = render(head_store, sbx, *TF, "--memory-limit", "4M", "--level", "0")
+p2 = render(head_store, local, *TF, "--memory-limit", "4M", "--level", "0",
+            env={"VOLVIS_SANDBOX": "0"})
+check(p1.returncode == 0 and p2.returncode == 0 and psnr(sbx, local) == 99.0,
+      f"sandboxed readers and in-process decoding give one image {p1.stderr.strip()}")
+png = os.path.join(OUT, "crash.png")
+p = render(head_store, png, *TF, "--memory-limit", "4M", env={"VOLVIS_SANDBOX_INJECT": "segv"})
+err = p.stderr.strip()
+check(p.returncode != 0 and len(err.splitlines()) == 1 and "head.zarr" in err
+      and "crashed (SIGSEGV)" in err and not os.path.exists(png),
+      f"a chunk reader that crashes: {err}")
 
 print(f"{len(failures)} failure(s)")
 sys.exit(1 if failures else 0)
