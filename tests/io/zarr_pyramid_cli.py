@@ -34,7 +34,7 @@ then checks:
   opaque in one and empty in the other) and is close (PSNR >= 25 dB);
 - the chunks decoded by the long-lived sandboxed readers (the default) and
   in-process (VOLVIS_SANDBOX=0) make one image; a reader that crashes
-  (VOLVIS_SANDBOX_INJECT=segv) is one line naming the store;
+  (VOLVIS_SANDBOX_INJECT=abort) is one line naming the store;
 - bad stores out of core: a chunk that decodes to the wrong size, an
   unknown compressor, inconsistent multiscales (a level of another dtype,
   a level larger than level 0): one line naming the store, a non-zero
@@ -302,10 +302,10 @@ p2 = render(head_store, local, *TF, "--memory-limit", "4M", "--level", "0",
 check(p1.returncode == 0 and p2.returncode == 0 and psnr(sbx, local) == 99.0,
       f"sandboxed readers and in-process decoding give one image {p1.stderr.strip()}")
 png = os.path.join(OUT, "crash.png")
-p = render(head_store, png, *TF, "--memory-limit", "4M", env={"VOLVIS_SANDBOX_INJECT": "segv"})
+p = render(head_store, png, *TF, "--memory-limit", "4M", env={"VOLVIS_SANDBOX_INJECT": "abort"})
 err = p.stderr.strip()
 check(p.returncode != 0 and len(err.splitlines()) == 1 and "head.zarr" in err
-      and "crashed (SIGSEGV)" in err and not os.path.exists(png),
+      and "crashed (SIGABRT)" in err and not os.path.exists(png),
       f"a chunk reader that crashes: {err}")
 
 print(f"{len(failures)} failure(s)")
