@@ -4,7 +4,8 @@
 # (volvis convert: 64^3 zlib chunks, levels of 2x2x2 means) into a temporary
 # folder, rendered at 512^2 by bench_pyramid inside a cgroup (v1) memory
 # limit, once by level of detail (--lod 1) and once at full resolution
-# (every node at level 0); the folder is deleted after. Needs root (cgroup)
+# (every node at level 0), the chunks decoded by the sandboxed readers, then
+# at full resolution decoded in-process; the folder is deleted after. Needs root (cgroup)
 # and about SIDE^3 bytes of free disk and memory for the conversion (the
 # converter reads the volume whole).
 # usage: bench/zarr_pyramid.sh [BUILD_DIR] [SIDE] [LIMIT_MIB] [CGROUP_MIB] [FRAMES]
@@ -32,10 +33,14 @@ rm "$tmp/big.raw"
 echo "# store: $(du -sm "$tmp/big.ome.zarr" | cut -f1) MiB on disk; load: $(cut -d' ' -f1-3 /proc/loadavg)"
 mkdir "$cg"
 echo $((cgmib * 1024 * 1024)) > "$cg/memory.limit_in_bytes"
-for mode in "--lod 1" "--level 0"; do
-  name=synthetic_${side}_u8_$(echo "$mode" | tr -d ' -')
-  echo "# $mode"
-  sh -c "echo \$\$ > $cg/cgroup.procs && exec $bin $tmp/big.ome.zarr --memory-limit $limit \
-    --size 512 --frames $frames --tf 60:255 $mode --dataset $name"
+# the chunks are decoded by the sandboxed readers (the default); the last
+# run decodes them in-process (VOLVIS_SANDBOX=0), the sandbox's cost
+for run in "1 --lod 1" "1 --level 0" "0 --level 0"; do
+  sbx=${run%% *}
+  mode=${run#* }
+  name=synthetic_${side}_u8_$(echo "$mode" | tr -d ' -')$([ "$sbx" = 0 ] && echo _inprocess || true)
+  echo "# $mode (VOLVIS_SANDBOX=$sbx)"
+  sh -c "echo \$\$ > $cg/cgroup.procs && VOLVIS_SANDBOX=$sbx exec $bin $tmp/big.ome.zarr \
+    --memory-limit $limit --size 512 --frames $frames --tf 60:255 $mode --dataset $name"
 done
 echo "# cgroup: peak $(( $(cat "$cg/memory.max_usage_in_bytes") / 1048576 )) MiB of $cgmib, failcnt $(cat "$cg/memory.failcnt"); load: $(cut -d' ' -f1-3 /proc/loadavg)"
