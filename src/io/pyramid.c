@@ -20,7 +20,10 @@
  * one needed again farthest ahead or never (Belady's optimal policy):
  * ghost voxels pull a node's neighbours' chunks in early, and they stay
  * until their own node when the limit allows. Unplanned reads evict the
- * least recently used.
+ * least recently used. With a plan, after each box the chunks of the next
+ * few boxes that are not cached are asked of the store ahead (when it can
+ * fetch in the background: the sandboxed readers), so that they are
+ * decoded while the renderer draws.
  */
 #include <limits.h>
 #include <math.h>
@@ -84,6 +87,7 @@ struct vv_pyramid {
     /* the frame's plan: uses by chunk, the box being read */
     py_use *ubucket[PY_BUCKETS];
     int planned, cursor;
+    int plan_n, *plan_box; /* the plan's boxes in order: level, lo[3], hi[3] each */
     vv_pyramid_stats st;
 };
 
@@ -176,6 +180,9 @@ clear_plan(vv_pyramid *p) {
         c->use = NULL;
     p->planned = 0;
     p->cursor = 0;
+    free(p->plan_box);
+    p->plan_box = NULL;
+    p->plan_n = 0;
 }
 
 /* The plan's next box needing chunk @p c from the box being read on;
@@ -428,6 +435,31 @@ set_geometry(vv_volume *v, const vv_pyramid *p, const py_level *l) {
     v->range[1] = p->range[1];
 }
 
+/* The plan's boxes after the one just read (at most PY_LOOKAHEAD of them):
+ * their chunks not cached are asked of the store ahead (its prefetch),
+ * nearest in the plan first, until it has no reader free. The store
+ * decodes them while the renderer draws this box. */
+#define PY_LOOKAHEAD 4
+static void
+prefetch_ahead(vv_pyramid *p) {
+    if (!p->planned || !p->store.prefetch || !p->plan_box)
+        return;
+    for (int b = p->cursor + 1; b < p->plan_n && b <= p->cursor + PY_LOOKAHEAD; b++) {
+        const int *box = p->plan_box + 7 * b, level = box[0];
+        const py_level *l = &p->lv[level];
+        int c0[3], c1[3];
+        chunk_span(l, box + 1, box + 4, c0, c1);
+        for (int z = c0[2]; z <= c1[2]; z++)
+            for (int y = c0[1]; y <= c1[1]; y++)
+                for (int x = c0[0]; x <= c1[0]; x++) {
+                    const int c[3] = {x, y, z};
+                    if (!find_chunk(p, level, chunk_linear(l, c)) &&
+                        !p->store.prefetch(p->store.ctx, level, c))
+                        return;
+                }
+    }
+}
+
 vv_status
 vv_pyramid_read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume **out) {
     if (!p || !out || level < 0 || level >= p->n_levels)
@@ -445,6 +477,8 @@ vv_pyramid_read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3], 
     vv_status s = vv_volume_new(&v, dims, l->type);
     if (s == VV_OK)
         s = assemble(p, level, lo, hi, v);
+    if (s == VV_OK)
+        prefetch_ahead(p);
     if (p->planned)
         p->cursor++;
     if (s != VV_OK) {
@@ -591,6 +625,18 @@ src_plan(void *user, int n, const int *level, const int *lo, const int *hi) {
     }
     for (py_chunk *c = p->mru; c; c = c->next)
         c->use = find_use(p, c->level, c->L);
+    if (p->store.prefetch && n > 0 && (p->plan_box = malloc(sizeof(int) * 7 * (size_t)n))) {
+        for (int i = 0; i < n; i++) {
+            const int ok = level[i] >= 0 && level[i] < p->n_levels;
+            int *box = p->plan_box + 7 * i;
+            box[0] = ok ? level[i] : 0;
+            for (int k = 0; k < 3; k++) { /* a box out of range: an empty one at level 0 */
+                box[1 + k] = ok ? lo[3 * i + k] : 0;
+                box[4 + k] = ok ? hi[3 * i + k] : 0;
+            }
+        }
+        p->plan_n = n;
+    }
     p->planned = 1;
     p->cursor = 0;
     return VV_OK;

@@ -5,10 +5,10 @@
  * levels are and fetches one chunk's voxels. Two formats have one:
  * OME-Zarr (src/io/zarr_pyramid.c) and the HDF5 pyramids of BigDataViewer
  * and Imaris (src/io/hdf5_pyramid.c). Either is opened in long-lived
- * sandboxed readers, one a thread, behind a store that forwards each
- * chunk (vv_sandbox_store_open, src/io/sandbox.c), or in this process
- * with VOLVIS_SANDBOX=0. A remote store (HTTP) would be a third format: a
- * chunk fetcher behind read_chunk.
+ * sandboxed readers, two a thread, behind a store that forwards each
+ * chunk and fetches the plan's next ones ahead (vv_sandbox_store_open,
+ * src/io/sandbox.c), or in this process with VOLVIS_SANDBOX=0. A remote store (HTTP) would be a
+ * third format: a chunk fetcher behind read_chunk.
  */
 #ifndef VOLVIS_IO_PYRAMID_H
 #define VOLVIS_IO_PYRAMID_H
@@ -53,6 +53,14 @@ typedef struct pyr_store {
                             unsigned char *dst, const int org[3], const int dims[3], int *missing,
                             uint64_t *file_bytes);
     void (*close)(void *ctx);
+    /**
+     * Optional (NULL): start fetching chunk @p c of @p level ahead of its
+     * read_chunk, without waiting (a later read_chunk of it takes the
+     * result; one of another chunk may drop it). 1: asked (or already
+     * asked); 0: nothing free to ask, stop. Called from one thread, never
+     * during read_chunk.
+     */
+    int (*prefetch)(void *ctx, int level, const int c[3]);
 } pyr_store;
 
 /**

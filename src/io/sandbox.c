@@ -1952,9 +1952,12 @@ vv_sandbox_grid_load(vv_grid **out, const char *path, const vv_grid_format_recor
 
 #define SBX_MAX_READERS 16
 
+enum { RD_IDLE, RD_BUSY, RD_AHEAD }; /* a reader: free, in a read, asked ahead */
+
 typedef struct sbx_reader {
     pid_t pid;
-    int sock, busy;
+    int sock, busy;           /* RD_* */
+    int level, c[3];          /* RD_AHEAD: the chunk asked */
     const unsigned char *win; /* its window, mapped read-only (shared with it) */
     uint64_t wbytes;
 } sbx_reader;
@@ -2106,6 +2109,16 @@ head_ok(const sbx_store_head *h) {
     return 1;
 }
 
+/* Sends chunk @p c of @p level to reader @p i (reserved by the caller). */
+static vv_status
+store_ask(sbx_store *b, int i, int level, const int c[3]) {
+    const sbx_box q = {SBX_MAGIC, level, {c[0], c[1], c[2]}};
+    ssize_t sent;
+    while ((sent = send(b->rd[i].sock, &q, sizeof q, MSG_NOSIGNAL)) < 0 && errno == EINTR)
+        ;
+    return sent == (ssize_t)sizeof q ? VV_OK : store_fail(b, i, 0, 0);
+}
+
 static vv_status
 store_read_chunk(void *ctx, int level, const int c[3], unsigned char *scratch, unsigned char *dst,
                  const int org[3], const int dims[3], int *missing, uint64_t *file_bytes) {
@@ -2115,12 +2128,21 @@ store_read_chunk(void *ctx, int level, const int c[3], unsigned char *scratch, u
     uint64_t bytes = vv_voxel_type_size((vv_voxel_type)b->head.lv[level].type);
     for (int k = 0; k < 3; k++)
         bytes *= (uint64_t)dims[k];
+    /* the reader that was asked for this chunk ahead, else an idle one, else
+     * one asked for another chunk ahead (its result dropped) */
     pthread_mutex_lock(&b->lock);
-    int i = -1;
+    int i = -1, asked = 0, stale = 0;
     while (b->dead == VV_OK && i < 0) {
         for (int k = 0; k < b->n && i < 0; k++)
-            if (!b->rd[k].busy)
+            if (b->rd[k].busy == RD_AHEAD && b->rd[k].level == level && b->rd[k].c[0] == c[0] &&
+                b->rd[k].c[1] == c[1] && b->rd[k].c[2] == c[2])
+                i = k, asked = 1;
+        for (int k = 0; k < b->n && i < 0; k++)
+            if (b->rd[k].busy == RD_IDLE)
                 i = k;
+        for (int k = 0; k < b->n && i < 0; k++)
+            if (b->rd[k].busy == RD_AHEAD)
+                i = k, stale = 1;
         if (i < 0)
             pthread_cond_wait(&b->idle, &b->lock);
     }
@@ -2129,21 +2151,24 @@ store_read_chunk(void *ctx, int level, const int c[3], unsigned char *scratch, u
         pthread_mutex_unlock(&b->lock);
         return s;
     }
-    b->rd[i].busy = 1;
+    b->rd[i].busy = RD_BUSY;
     pthread_mutex_unlock(&b->lock);
-    const sbx_box q = {SBX_MAGIC, level, {c[0], c[1], c[2]}};
-    ssize_t sent;
-    while ((sent = send(b->rd[i].sock, &q, sizeof q, MSG_NOSIGNAL)) < 0 && errno == EINTR)
-        ;
     vv_status s = VV_OK;
     sbx_reply *r = malloc(sizeof *r);
     int fd = -1;
-    if (sent != (ssize_t)sizeof q)
-        s = store_fail(b, i, 0, 0);
-    else if (!r)
+    if (!r)
         s = vv_error_set(VV_ERR_NOMEM, "out of memory");
-    else if ((s = store_wait(b, i, r, &fd)) == VV_OK &&
-             (r->bytes != bytes || bytes > b->rd[i].wbytes || fd >= 0)) {
+    if (s == VV_OK && stale) { /* the other chunk's result, or its error, dropped */
+        s = store_wait(b, i, r, &fd);
+        if (fd >= 0)
+            close(fd);
+        fd = -1;
+        s = b->dead == VV_OK ? VV_OK : vv_error_set(b->dead, "%s", b->why);
+    }
+    if (s == VV_OK && !asked)
+        s = store_ask(b, i, level, c);
+    if (s == VV_OK && (s = store_wait(b, i, r, &fd)) == VV_OK &&
+        (r->bytes != bytes || bytes > b->rd[i].wbytes || fd >= 0)) {
         if (fd >= 0)
             close(fd);
         s = store_fail(b, i, 0, 1);
@@ -2154,10 +2179,34 @@ store_read_chunk(void *ctx, int level, const int c[3], unsigned char *scratch, u
     }
     free(r);
     pthread_mutex_lock(&b->lock);
-    b->rd[i].busy = 0;
+    b->rd[i].busy = RD_IDLE;
     pthread_cond_broadcast(&b->idle);
     pthread_mutex_unlock(&b->lock);
     return s;
+}
+
+/* Asks an idle reader for chunk @p c of @p level ahead (pyr_store.prefetch). */
+static int
+store_prefetch(void *ctx, int level, const int c[3]) {
+    sbx_store *b = ctx;
+    pthread_mutex_lock(&b->lock);
+    int i = -1, have = 0;
+    for (int k = 0; k < b->n && b->dead == VV_OK; k++) {
+        if (b->rd[k].busy == RD_AHEAD && b->rd[k].level == level && b->rd[k].c[0] == c[0] &&
+            b->rd[k].c[1] == c[1] && b->rd[k].c[2] == c[2])
+            have = 1;
+        if (b->rd[k].busy == RD_IDLE && i < 0)
+            i = k;
+    }
+    if (have || i < 0) {
+        pthread_mutex_unlock(&b->lock);
+        return have;
+    }
+    b->rd[i].busy = RD_AHEAD;
+    b->rd[i].level = level;
+    memcpy(b->rd[i].c, c, sizeof b->rd[i].c);
+    pthread_mutex_unlock(&b->lock);
+    return store_ask(b, i, level, c) == VV_OK;
 }
 
 static void
@@ -2257,13 +2306,16 @@ vv_sandbox_store_open(pyr_store *st, const char *path, int channel, int time, vv
     b->budget = rq->budget;
     pthread_mutex_init(&b->lock, NULL);
     pthread_cond_init(&b->idle, NULL);
-    const int nt = vv_threads_get();
-    b->n = nt < 1 ? 1 : nt > SBX_MAX_READERS ? SBX_MAX_READERS : nt;
+    /* two readers a thread: one decoding for a read while another decodes
+     * ahead (store_prefetch) */
+    const int nr = 2 * vv_threads_get();
+    b->n = nr < 1 ? 1 : nr > SBX_MAX_READERS ? SBX_MAX_READERS : nr;
     for (int i = 0; i < b->n; i++)
-        b->rd[i] = (sbx_reader){-1, -1, 0, NULL, 0};
+        b->rd[i] = (sbx_reader){-1, -1, RD_IDLE, 0, {0, 0, 0}, NULL, 0};
     st->ctx = b;
     st->close = store_close;
     st->read_chunk = store_read_chunk;
+    st->prefetch = store_prefetch;
     st->parallel = 1; /* a reader a thread */
     s = store_start(b, exe, rq, info);
     free(rq);

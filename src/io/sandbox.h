@@ -177,15 +177,18 @@ typedef struct sbx_store_head {
 /**
  * A pyramid's store (src/io/pyramid.h) read by long-lived sandboxed
  * readers: the OME-Zarr store or HDF5 file @p path (@p channel, @p time:
- * -1 the first), opened by one volvis-reader a thread (vv_threads_get, at
- * most 16), each locked down as every reader. The protocol after the
+ * -1 the first), opened by two volvis-readers a thread (2 vv_threads_get,
+ * at most 16), each locked down as every reader. The protocol after the
  * request (op SBX_OP_BOXES, no CPU-time limit: each request is timed
  * instead): a reader answers with one SBX_RESULT whose sealed memfd holds
  * an sbx_store_head (the channel's name and colour in the reply), then
  * serves one chunk (sbx_box: level, chunk indices) at a time, each
- * answered by an SBX_RESULT with the chunk's voxels in a new sealed memfd
- * (missing and file_bytes in the reply) or its error, until the parent
- * closes its end. Nothing is trusted: the table is checked (levels,
+ * answered by an SBX_RESULT (missing and file_bytes in the reply, or its
+ * error) with the chunk's voxels at the start of its window: a memfd
+ * sealed against shrinking and growing, handed over with the table and
+ * mapped read-only by the parent, which copies each chunk out once; until
+ * the parent closes its end. A chunk may be asked ahead (the store's
+ * prefetch) and taken by the read that needs it. Nothing is trusted: the table is checked (levels,
  * counts, geometry, range) and must be the same from every reader, each
  * chunk's size and seals are checked, and a request waits at most the
  * sandbox's time limit; a crash, stall or malformed reply stops that
