@@ -192,10 +192,20 @@ def public_functions(root):
     return names
 
 
-def nm(path, *flags):
-    out = subprocess.run(["nm", "-P"] + list(flags) + [path], capture_output=True, text=True,
-                         check=True).stdout
-    return [line.split() for line in out.splitlines() if line.strip()]
+def nm_symbols(paths):
+    """{path: [(symbol, type)]} of every external symbol of the objects, one nm
+    for all of them (one nm an object took 90 ms each, 35 s a build)."""
+    out = {p: [] for p in paths}
+    for i in range(0, len(paths), 500):
+        batch = paths[i:i + 500]
+        text = subprocess.run(["nm", "-P", "-A", "--extern-only"] + batch, capture_output=True,
+                              text=True, check=True).stdout
+        for line in text.splitlines():
+            path, sep, rest = line.rpartition(": ")
+            f = rest.split()
+            if sep and len(f) >= 2 and path in out:
+                out[path].append((f[0], f[1]))
+    return out
 
 
 def object_source(build, obj):
@@ -224,13 +234,15 @@ def scan_objects(root, build):
     if not any(src.startswith("src/") for src, _ in objs):
         raise SystemExit("check-includes: no library objects under %s (build it first)" % build)
     defined, used = {}, []
+    symbols = nm_symbols([path for _, path in objs])
     for src, path in objs:
-        for f in nm(path, "--defined-only", "--extern-only"):
-            if len(f) >= 2 and f[0].startswith("vv_") and f[1] in "TDBRVW":
-                defined[f[0]] = src
-        for f in nm(path, "--undefined-only"):
-            if f and f[0].startswith("vv_"):
-                used.append((src, f[0]))
+        for sym, kind in symbols[path]:
+            if not sym.startswith("vv_"):
+                continue
+            if kind == "U":
+                used.append((src, sym))
+            elif kind in "TDBRVW":
+                defined[sym] = src
     public = public_functions(root)
     found = []
     for src, sym in sorted(set(used)):
