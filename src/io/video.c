@@ -95,6 +95,7 @@ vv_video_writer_abort(vv_video_writer *w) {
 
 #else
 
+#include <dlfcn.h>
 #include <libavcodec/avcodec.h>
 #include <libavformat/avformat.h>
 #include <libavutil/imgutils.h>
@@ -102,13 +103,105 @@ vv_video_writer_abort(vv_video_writer *w) {
 #include <libswscale/swscale.h>
 #include <pthread.h>
 
-static pthread_once_t g_quiet_once = PTHREAD_ONCE_INIT;
+/* FFmpeg is opened on first use (dlopen) rather than linked: its four
+ * libraries bring about 90 shared objects with them, which every run of the
+ * library paid at start (0.08 s a process, 0.14 s under AddressSanitizer)
+ * though few runs write video. The sonames are the majors of the headers
+ * this file was compiled against, so the ABI is the one compiled for; a
+ * machine without them gets VV_ERR_UNSUPPORTED naming the library. */
+#define VV_SONAME_(name, major) "lib" name ".so." #major
+#define VV_SONAME(name, major) VV_SONAME_(name, major)
+/* X(library, function): U libavutil, C libavcodec, F libavformat, S libswscale */
+#define VV_FFMPEG_FUNCTIONS                                                                        \
+    X(U, av_d2q)                                                                                   \
+    X(U, av_frame_alloc)                                                                           \
+    X(U, av_frame_free)                                                                            \
+    X(U, av_frame_get_buffer)                                                                      \
+    X(U, av_frame_make_writable)                                                                   \
+    X(U, av_free)                                                                                  \
+    X(U, av_freep)                                                                                 \
+    X(F, av_interleaved_write_frame)                                                               \
+    X(U, av_log_set_level)                                                                         \
+    X(U, av_malloc)                                                                                \
+    X(U, av_opt_set)                                                                               \
+    X(U, av_opt_set_int)                                                                           \
+    X(C, av_packet_alloc)                                                                          \
+    X(C, av_packet_free)                                                                           \
+    X(C, av_packet_rescale_ts)                                                                     \
+    X(C, av_packet_unref)                                                                          \
+    X(U, av_strerror)                                                                              \
+    X(F, av_write_trailer)                                                                         \
+    X(C, avcodec_alloc_context3)                                                                   \
+    X(C, avcodec_find_encoder_by_name)                                                             \
+    X(C, avcodec_free_context)                                                                     \
+    X(C, avcodec_open2)                                                                            \
+    X(C, avcodec_parameters_from_context)                                                          \
+    X(C, avcodec_receive_packet)                                                                   \
+    X(C, avcodec_send_frame)                                                                       \
+    X(F, avformat_alloc_output_context2)                                                           \
+    X(F, avformat_free_context)                                                                    \
+    X(F, avformat_new_stream)                                                                      \
+    X(F, avformat_write_header)                                                                    \
+    X(F, avio_alloc_context)                                                                       \
+    X(F, avio_context_free)                                                                        \
+    X(F, avio_flush)                                                                               \
+    X(S, sws_freeContext)                                                                          \
+    X(S, sws_getContext)                                                                           \
+    X(S, sws_scale)                                                                                \
+    /* end */
 
-/* The library never prints: FFmpeg's own log (codec banners, statistics) is
- * silenced; failures come back as statuses with av_strerror's text. */
+static struct {
+#define X(lib, fn) __typeof__(&fn) fn;
+    VV_FFMPEG_FUNCTIONS
+#undef X
+} ff;
+static pthread_once_t g_ff_once = PTHREAD_ONCE_INIT;
+static char g_ff_error[320]; /* empty: loaded */
+
+static void *
+ff_open(const char *soname) {
+    void *h = dlopen(soname, RTLD_NOW | RTLD_LOCAL);
+    if (!h && !g_ff_error[0]) {
+        const char *e = dlerror();
+        snprintf(g_ff_error, sizeof g_ff_error, "%s", e ? e : soname);
+    }
+    return h;
+}
+
+/* Opens the four libraries (kept open for the process's life) and resolves
+ * every function; the library never prints, so FFmpeg's own log (codec
+ * banners, statistics) is silenced: failures come back as statuses with
+ * av_strerror's text. */
 static void
-quiet_ffmpeg(void) {
-    av_log_set_level(AV_LOG_QUIET);
+ff_load(void) {
+    void *U = ff_open(VV_SONAME("avutil", LIBAVUTIL_VERSION_MAJOR));
+    void *C = ff_open(VV_SONAME("avcodec", LIBAVCODEC_VERSION_MAJOR));
+    void *F = ff_open(VV_SONAME("avformat", LIBAVFORMAT_VERSION_MAJOR));
+    void *S = ff_open(VV_SONAME("swscale", LIBSWSCALE_VERSION_MAJOR));
+    if (g_ff_error[0])
+        return;
+#define X(lib, fn)                                                                                 \
+    {                                                                                              \
+        void *sym = dlsym(lib, #fn);                                                               \
+        if (!sym) {                                                                                \
+            snprintf(g_ff_error, sizeof g_ff_error, "FFmpeg has no function %s", #fn);             \
+            return;                                                                                \
+        }                                                                                          \
+        memcpy(&ff.fn, &sym, sizeof sym);                                                          \
+    }
+    VV_FFMPEG_FUNCTIONS
+#undef X
+    ff.av_log_set_level(AV_LOG_QUIET);
+}
+
+/* VV_OK when FFmpeg is loaded; otherwise VV_ERR_UNSUPPORTED naming what is missing. */
+static vv_status
+ff_ready(const char *path) {
+    pthread_once(&g_ff_once, ff_load);
+    if (!g_ff_error[0])
+        return VV_OK;
+    return vv_error_set(VV_ERR_UNSUPPORTED, "video: %s: FFmpeg cannot be loaded: %s",
+                        path ? path : "(null)", g_ff_error);
 }
 
 struct vv_video_writer {
@@ -135,13 +228,14 @@ encoder_name(vv_video_codec codec) {
 
 int
 vv_video_codec_available(vv_video_codec codec) {
-    return avcodec_find_encoder_by_name(encoder_name(codec)) != NULL;
+    pthread_once(&g_ff_once, ff_load);
+    return !g_ff_error[0] && ff.avcodec_find_encoder_by_name(encoder_name(codec)) != NULL;
 }
 
 static vv_status
 av_fail(vv_video_writer *w, const char *what, int err) {
     char buf[AV_ERROR_MAX_STRING_SIZE] = "";
-    av_strerror(err, buf, sizeof buf);
+    ff.av_strerror(err, buf, sizeof buf);
     return vv_error_set(VV_ERR_IO, "video: %s: %s: %s", w->path, what, buf);
 }
 
@@ -185,8 +279,8 @@ io_seek(void *opaque, int64_t offset, int whence) {
 static void
 io_free(vv_video_writer *w) {
     if (w->oc && w->oc->pb) {
-        av_freep(&w->oc->pb->buffer);
-        avio_context_free(&w->oc->pb);
+        ff.av_freep(&w->oc->pb->buffer);
+        ff.avio_context_free(&w->oc->pb);
     }
 }
 
@@ -196,12 +290,12 @@ writer_release(vv_video_writer *w, int remove_tmp) {
         return;
     if (w->oc) {
         io_free(w);
-        avformat_free_context(w->oc);
+        ff.avformat_free_context(w->oc);
     }
-    avcodec_free_context(&w->cc);
-    av_frame_free(&w->frame);
-    av_packet_free(&w->pkt);
-    sws_freeContext(w->sws);
+    ff.avcodec_free_context(&w->cc);
+    ff.av_frame_free(&w->frame);
+    ff.av_packet_free(&w->pkt);
+    ff.sws_freeContext(w->sws);
     if (remove_tmp)
         vv_atomic_file_abort(&w->af);
     free(w->pad);
@@ -236,8 +330,10 @@ vv_video_writer_open(vv_video_writer **out, const char *path, int width, int hei
     if (opt->crf > crf_max)
         return vv_error_set(VV_ERR_INVALID, "video: %s: crf %d is over %d for %s", path, opt->crf,
                             crf_max, encoder_name(codec));
-    pthread_once(&g_quiet_once, quiet_ffmpeg);
-    const AVCodec *enc = avcodec_find_encoder_by_name(encoder_name(codec));
+    vv_status loaded = ff_ready(path);
+    if (loaded != VV_OK)
+        return loaded;
+    const AVCodec *enc = ff.avcodec_find_encoder_by_name(encoder_name(codec));
     if (!enc)
         return vv_error_set(VV_ERR_UNSUPPORTED,
                             "video: %s: the %s encoder is not in this FFmpeg (libavcodec)", path,
@@ -261,18 +357,18 @@ vv_video_writer_open(vv_video_writer **out, const char *path, int width, int hei
     vv_status s = VV_OK;
     int err;
     const char *fmt = codec == VV_VIDEO_VP9 ? "webm" : "mp4";
-    if ((err = avformat_alloc_output_context2(&w->oc, NULL, fmt, w->path)) < 0 || !w->oc) {
+    if ((err = ff.avformat_alloc_output_context2(&w->oc, NULL, fmt, w->path)) < 0 || !w->oc) {
         s = av_fail(w, "cannot create the container", err);
         goto fail;
     }
-    w->cc = avcodec_alloc_context3(enc);
-    w->frame = av_frame_alloc();
-    w->pkt = av_packet_alloc();
+    w->cc = ff.avcodec_alloc_context3(enc);
+    w->frame = ff.av_frame_alloc();
+    w->pkt = ff.av_packet_alloc();
     if (!w->cc || !w->frame || !w->pkt) {
         s = vv_error_set(VV_ERR_NOMEM, "video: out of memory");
         goto fail;
     }
-    AVRational rate = av_d2q(opt->fps, 100000);
+    AVRational rate = ff.av_d2q(opt->fps, 100000);
     w->cc->width = w->ew;
     w->cc->height = w->eh;
     w->cc->pix_fmt = AV_PIX_FMT_YUV420P;
@@ -285,24 +381,24 @@ vv_video_writer_open(vv_video_writer **out, const char *path, int width, int hei
     w->cc->color_trc = AVCOL_TRC_SMPTE170M;
     int crf = opt->crf >= 0 ? opt->crf : (codec == VV_VIDEO_VP9 ? 31 : 20);
     if (codec == VV_VIDEO_H264) {
-        av_opt_set(w->cc->priv_data, "preset", "superfast", 0);
-        av_opt_set_int(w->cc->priv_data, "crf", crf, 0);
+        ff.av_opt_set(w->cc->priv_data, "preset", "superfast", 0);
+        ff.av_opt_set_int(w->cc->priv_data, "crf", crf, 0);
     } else {
         w->cc->bit_rate = 0; /* constant quality */
-        av_opt_set_int(w->cc->priv_data, "crf", crf, 0);
-        av_opt_set(w->cc->priv_data, "deadline", "good", 0);
-        av_opt_set_int(w->cc->priv_data, "cpu-used", 4, 0);
-        av_opt_set_int(w->cc->priv_data, "row-mt", 1, 0);
+        ff.av_opt_set_int(w->cc->priv_data, "crf", crf, 0);
+        ff.av_opt_set(w->cc->priv_data, "deadline", "good", 0);
+        ff.av_opt_set_int(w->cc->priv_data, "cpu-used", 4, 0);
+        ff.av_opt_set_int(w->cc->priv_data, "row-mt", 1, 0);
     }
     if (w->oc->oformat->flags & AVFMT_GLOBALHEADER)
         w->cc->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
-    if ((err = avcodec_open2(w->cc, enc, NULL)) < 0) {
+    if ((err = ff.avcodec_open2(w->cc, enc, NULL)) < 0) {
         s = av_fail(w, "cannot open the encoder", err);
         if (s == VV_ERR_IO)
             s = VV_ERR_UNSUPPORTED;
         goto fail;
     }
-    w->st = avformat_new_stream(w->oc, NULL);
+    w->st = ff.avformat_new_stream(w->oc, NULL);
     if (!w->st) {
         s = vv_error_set(VV_ERR_NOMEM, "video: out of memory");
         goto fail;
@@ -310,21 +406,21 @@ vv_video_writer_open(vv_video_writer **out, const char *path, int width, int hei
     w->st->time_base = w->cc->time_base;
     w->st->avg_frame_rate = rate;
     w->st->r_frame_rate = rate;
-    if ((err = avcodec_parameters_from_context(w->st->codecpar, w->cc)) < 0) {
+    if ((err = ff.avcodec_parameters_from_context(w->st->codecpar, w->cc)) < 0) {
         s = av_fail(w, "cannot set the stream parameters", err);
         goto fail;
     }
     {
-        unsigned char *buf = av_malloc(1 << 16);
-        w->oc->pb = buf ? avio_alloc_context(buf, 1 << 16, 1, w, NULL, io_write, io_seek) : NULL;
+        unsigned char *buf = ff.av_malloc(1 << 16);
+        w->oc->pb = buf ? ff.avio_alloc_context(buf, 1 << 16, 1, w, NULL, io_write, io_seek) : NULL;
         if (!w->oc->pb) {
-            av_free(buf);
+            ff.av_free(buf);
             s = vv_error_set(VV_ERR_NOMEM, "video: out of memory");
             goto fail;
         }
         w->oc->flags |= AVFMT_FLAG_CUSTOM_IO;
     }
-    if ((err = avformat_write_header(w->oc, NULL)) < 0) {
+    if ((err = ff.avformat_write_header(w->oc, NULL)) < 0) {
         s = av_fail(w, "cannot write the header", err);
         goto fail;
     }
@@ -332,12 +428,13 @@ vv_video_writer_open(vv_video_writer **out, const char *path, int width, int hei
     w->frame->format = AV_PIX_FMT_YUV420P;
     w->frame->width = w->ew;
     w->frame->height = w->eh;
-    if ((err = av_frame_get_buffer(w->frame, 0)) < 0) {
+    if ((err = ff.av_frame_get_buffer(w->frame, 0)) < 0) {
         s = av_fail(w, "cannot allocate a frame", err);
         goto fail;
     }
-    w->sws = sws_getContext(w->ew, w->eh, AV_PIX_FMT_RGB24, w->ew, w->eh, AV_PIX_FMT_YUV420P,
-                            SWS_BICUBIC | SWS_ACCURATE_RND | SWS_FULL_CHR_H_INP, NULL, NULL, NULL);
+    w->sws =
+        ff.sws_getContext(w->ew, w->eh, AV_PIX_FMT_RGB24, w->ew, w->eh, AV_PIX_FMT_YUV420P,
+                          SWS_BICUBIC | SWS_ACCURATE_RND | SWS_FULL_CHR_H_INP, NULL, NULL, NULL);
     if (!w->sws) {
         s = vv_error_set(VV_ERR_NOMEM, "video: %s: cannot create the colour converter", path);
         goto fail;
@@ -359,21 +456,21 @@ fail:
 /* Sends @p frame (NULL: flush) and writes every packet the encoder has ready. */
 static vv_status
 encode(vv_video_writer *w, AVFrame *frame) {
-    int err = avcodec_send_frame(w->cc, frame);
+    int err = ff.avcodec_send_frame(w->cc, frame);
     if (err < 0)
         return av_fail(w, "encoder refused a frame", err);
     for (;;) {
-        err = avcodec_receive_packet(w->cc, w->pkt);
+        err = ff.avcodec_receive_packet(w->cc, w->pkt);
         if (err == AVERROR(EAGAIN) || err == AVERROR_EOF)
             return VV_OK;
         if (err < 0)
             return av_fail(w, "encoding failed", err);
         /* every frame lasts 1 / fps: without a duration MP4 loses the last frame */
         w->pkt->duration = 1;
-        av_packet_rescale_ts(w->pkt, w->cc->time_base, w->st->time_base);
+        ff.av_packet_rescale_ts(w->pkt, w->cc->time_base, w->st->time_base);
         w->pkt->stream_index = w->st->index;
-        err = av_interleaved_write_frame(w->oc, w->pkt);
-        av_packet_unref(w->pkt);
+        err = ff.av_interleaved_write_frame(w->oc, w->pkt);
+        ff.av_packet_unref(w->pkt);
         if (err < 0)
             return av_fail(w, "cannot write a packet", err);
     }
@@ -395,12 +492,12 @@ vv_video_writer_add(vv_video_writer *w, const uint8_t *rgb) {
         }
         src = w->pad;
     }
-    int err = av_frame_make_writable(w->frame);
+    int err = ff.av_frame_make_writable(w->frame);
     if (err < 0)
         return av_fail(w, "frame not writable", err);
     const uint8_t *planes[1] = {src};
     int strides[1] = {w->ew * 3};
-    sws_scale(w->sws, planes, strides, 0, w->eh, w->frame->data, w->frame->linesize);
+    ff.sws_scale(w->sws, planes, strides, 0, w->eh, w->frame->data, w->frame->linesize);
     w->frame->pts = w->next_pts++;
     return encode(w, w->frame);
 }
@@ -424,13 +521,13 @@ vv_video_writer_finish(vv_video_writer *w) {
         writer_release(w, 1);
         return s;
     }
-    int err = av_write_trailer(w->oc);
+    int err = ff.av_write_trailer(w->oc);
     if (err < 0) {
         s = av_fail(w, "cannot write the trailer", err);
         writer_release(w, 1);
         return s;
     }
-    avio_flush(w->oc->pb);
+    ff.avio_flush(w->oc->pb);
     if (w->write_err || w->oc->pb->error < 0) {
         s = vv_error_set(VV_ERR_IO, "video: %s: write failed: %s", w->path,
                          strerror(w->write_err ? w->write_err : EIO));
