@@ -115,8 +115,9 @@ const char *vv_unit_name(vv_unit u);
 
 /**
  * Parses a unit name: the short names of vv_unit_name and the usual long
- * forms ("millimeter(s)", "micron(s)", "micrometer", "inch(es)", "foot",
- * "feet", "meter(s)"). Anything else gives VV_UNIT_UNKNOWN.
+ * forms ("millimeter(s)", "micron(s)", "micrometer(s)", "µm" with the micro
+ * sign or the Greek mu, "inch(es)", "foot", "feet", "meter(s)"). Anything
+ * else gives VV_UNIT_UNKNOWN.
  */
 vv_unit vv_unit_parse(const char *name);
 

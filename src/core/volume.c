@@ -39,14 +39,25 @@ vv_unit_parse(const char *u) {
     static const struct {
         const char *name;
         vv_unit unit;
-    } alias[] = {{"m", VV_UNIT_METER},        {"meter", VV_UNIT_METER},
-                 {"meters", VV_UNIT_METER},   {"mm", VV_UNIT_MM},
-                 {"millimeter", VV_UNIT_MM},  {"millimeters", VV_UNIT_MM},
-                 {"um", VV_UNIT_MICRON},      {"micron", VV_UNIT_MICRON},
-                 {"microns", VV_UNIT_MICRON}, {"micrometer", VV_UNIT_MICRON},
-                 {"ft", VV_UNIT_FOOT},        {"foot", VV_UNIT_FOOT},
-                 {"feet", VV_UNIT_FOOT},      {"in", VV_UNIT_INCH},
-                 {"inch", VV_UNIT_INCH},      {"inches", VV_UNIT_INCH}};
+    } alias[] = {{"m", VV_UNIT_METER},
+                 {"meter", VV_UNIT_METER},
+                 {"meters", VV_UNIT_METER},
+                 {"mm", VV_UNIT_MM},
+                 {"millimeter", VV_UNIT_MM},
+                 {"millimeters", VV_UNIT_MM},
+                 {"um", VV_UNIT_MICRON},
+                 {"micron", VV_UNIT_MICRON},
+                 {"microns", VV_UNIT_MICRON},
+                 {"micrometer", VV_UNIT_MICRON},
+                 {"micrometers", VV_UNIT_MICRON},
+                 {"\xc2\xb5m", VV_UNIT_MICRON}, /* micro sign */
+                 {"\xce\xbcm", VV_UNIT_MICRON}, /* Greek mu (BigDataViewer, Fiji) */
+                 {"ft", VV_UNIT_FOOT},
+                 {"foot", VV_UNIT_FOOT},
+                 {"feet", VV_UNIT_FOOT},
+                 {"in", VV_UNIT_INCH},
+                 {"inch", VV_UNIT_INCH},
+                 {"inches", VV_UNIT_INCH}};
     for (size_t i = 0; u && i < sizeof alias / sizeof alias[0]; i++)
         if (strcmp(u, alias[i].name) == 0)
             return alias[i].unit;

@@ -11,9 +11,12 @@
  * this process.
  *
  * Geometry. BigDataViewer: level l of factors f (s00/resolutions) has
- * spacing f (the voxel size of the companion XML is not read: level 0's
- * spacing is 1) and its voxel 0 at (f - 1) / 2, BigDataViewer's mipmap
- * transform; a 16-bit signed "cells" dataset holds unsigned 16-bit voxels
+ * spacing f times level 0's voxel size and its voxel 0 at (f - 1) / 2 of
+ * them, BigDataViewer's mipmap transform. The voxel size and its unit are
+ * the companion XML's (NAME.xml beside NAME.h5, as BigDataViewer and Fiji
+ * write them: SpimData/SequenceDescription/ViewSetups/ViewSetup[id]/
+ * voxelSize, read through libxml2); without one a voxel is 1 unit a side.
+ * A 16-bit signed "cells" dataset holds unsigned 16-bit voxels
  * (the format's convention), read bit for bit as u16. Imaris: the image
  * spans ExtMin .. ExtMax (DataSetInfo/Image), level l has ImageSizeX/Y/Z
  * voxels (its Channel group's attributes; the Data dataset may be padded
@@ -32,6 +35,8 @@
 #include <string.h>
 
 #include <hdf5.h>
+#include <libxml/parser.h>
+#include <libxml/tree.h>
 
 #include "core/internal.h"
 #include "io/pyramid.h"
@@ -43,9 +48,9 @@
 typedef struct h5p_level {
     int dims[3];       /* voxels along x, y, z */
     int cdims[3];      /* the chunk box the store reads by (the dataset's chunks) */
-    double spacing[3]; /* level-0 voxels (BigDataViewer) or the file's units (Imaris) */
+    double spacing[3]; /* in the XML's or the file's units (Imaris), else level-0 voxels */
     double origin[3];  /* the centre of voxel 0 */
-    int unit;          /* vv_unit of the spacing (Imaris's Unit; else unknown) */
+    int unit;          /* vv_unit of the spacing (the XML's or Imaris's; else unknown) */
     int has_range;     /* 1: range is the data's (Imaris's HistogramMin/Max) */
     double range[2];
 } h5p_level;
@@ -210,6 +215,96 @@ open_bdv(h5p *h, int channel, int time) {
         }
     }
     return VV_OK;
+}
+
+/* Text of the first child element @p name of @p n, or NULL (xmlFree it). */
+static char *
+xml_child_text(xmlNode *n, const char *name) {
+    for (xmlNode *c = n ? n->children : NULL; c; c = c->next)
+        if (c->type == XML_ELEMENT_NODE && strcmp((const char *)c->name, name) == 0)
+            return (char *)xmlNodeGetContent(c);
+    return NULL;
+}
+
+static xmlNode *
+xml_child(xmlNode *n, const char *name) {
+    for (xmlNode *c = n ? n->children : NULL; c; c = c->next)
+        if (c->type == XML_ELEMENT_NODE && strcmp((const char *)c->name, name) == 0)
+            return c;
+    return NULL;
+}
+
+/* The voxel size of setup @p setup from BigDataViewer's companion XML
+ * (NAME.xml beside NAME.h5). No companion, one that is not SpimData or
+ * whose ImageLoader names another HDF5 file: level 0's voxel stays 1 unit
+ * (VV_OK). A companion that cannot be parsed, or whose setup's voxelSize is
+ * not three positive finite numbers: VV_ERR_FORMAT naming the XML. */
+static vv_status
+bdv_voxel_size(h5p *h, const char *path, int setup) {
+    char xml[4096];
+    const char *dot = strrchr(path, '.'), *slash = strrchr(path, '/');
+    const size_t stem = dot && (!slash || dot > slash) ? (size_t)(dot - path) : strlen(path);
+    if (stem + 5 > sizeof xml)
+        return VV_OK;
+    memcpy(xml, path, stem);
+    memcpy(xml + stem, ".xml", 5);
+    const char *xname = vv_path_basename(xml);
+    FILE *f = fopen(xml, "rb");
+    if (!f)
+        return VV_OK;
+    fseek(f, 0, SEEK_END);
+    const long size = ftell(f);
+    fclose(f);
+    if (size < 0 || size > (64L << 20))
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: %ld bytes, over the 64 MiB a companion XML may have", xname, size);
+    xmlDoc *doc = xmlReadFile(xml, NULL, XML_PARSE_NONET | XML_PARSE_NOERROR | XML_PARSE_NOWARNING);
+    xmlNode *root = doc ? xmlDocGetRootElement(doc) : NULL;
+    if (!root) {
+        xmlFreeDoc(doc);
+        return vv_error_set(VV_ERR_FORMAT, "%s: the companion XML cannot be parsed", xname);
+    }
+    vv_status st = VV_OK;
+    xmlNode *seq = xml_child(root, "SequenceDescription");
+    char *loader = xml_child_text(xml_child(seq, "ImageLoader"), "hdf5");
+    const int other = loader && strcmp(vv_path_basename(loader), vv_path_basename(path)) != 0;
+    xmlFree(loader);
+    if (strcmp((const char *)root->name, "SpimData") != 0 || other) {
+        xmlFreeDoc(doc);
+        return VV_OK;
+    }
+    for (xmlNode *vs = xml_child(xml_child(seq, "ViewSetups"), "ViewSetup"); vs; vs = vs->next) {
+        if (vs->type != XML_ELEMENT_NODE || strcmp((const char *)vs->name, "ViewSetup") != 0)
+            continue;
+        char *id = xml_child_text(vs, "id");
+        const int mine = id && atoi(id) == setup;
+        xmlFree(id);
+        xmlNode *vox = mine ? xml_child(vs, "voxelSize") : NULL;
+        if (!vox)
+            continue;
+        char *text = xml_child_text(vox, "size"), *unit = xml_child_text(vox, "unit");
+        double d[3];
+        char tail = 0;
+        if (!text || sscanf(text, "%lf %lf %lf %c", &d[0], &d[1], &d[2], &tail) != 3 ||
+            !(d[0] > 0 && d[1] > 0 && d[2] > 0 && d[0] < 1e30 && d[1] < 1e30 && d[2] < 1e30))
+            st = vv_error_set(VV_ERR_FORMAT,
+                              "%s: ViewSetup %d's voxelSize \"%s\" is not three positive "
+                              "numbers",
+                              xname, setup, text ? text : "");
+        else
+            for (int l = 0; l < h->n_levels; l++) {
+                for (int k = 0; k < 3; k++) {
+                    h->lv[l].spacing[k] *= d[k];
+                    h->lv[l].origin[k] *= d[k];
+                }
+                h->lv[l].unit = unit ? (int)vv_unit_parse(unit) : (int)VV_UNIT_UNKNOWN;
+            }
+        xmlFree(text);
+        xmlFree(unit);
+        break;
+    }
+    xmlFreeDoc(doc);
+    return st;
 }
 
 /* Attribute @p name of @p obj as text: Imaris writes numbers as arrays of
@@ -385,6 +480,8 @@ h5p_open(h5p **out, const char *path, int channel, int time) {
                          "(DataSet/ResolutionLevel 0)");
     if (s == VV_OK)
         s = h->kind == 1 ? open_bdv(h, channel, time) : open_ims(h, channel, time);
+    if (s == VV_OK && h->kind == 1)
+        s = bdv_voxel_size(h, path, channel < 0 ? 0 : channel);
     for (int l = 0; l < h->n_levels && s == VV_OK; l++) {
         hid_t ft = H5Dget_type(h->dset[l]);
         hid_t mt = 0;

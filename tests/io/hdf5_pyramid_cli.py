@@ -208,6 +208,64 @@ check(p1.returncode == 0 and p2.returncode == 0 and psnr(mem, ooc) == 99.0,
       f"bdv phantom level 1: out-of-core MIP is the in-memory one bit for bit "
       f"({p1.stderr.strip()} {p2.stderr.strip()})")
 
+# ---- BigDataViewer's companion XML: the voxel size and its unit ------------------------------
+
+
+def bdv_xml(name, h5name, size, unit="\u00b5m"):
+    """NAME.xml as BigDataViewer/Fiji write it: setup 0's voxelSize (x y z)."""
+    with open(os.path.join(OUT, name), "w", encoding="utf-8") as f:
+        f.write(f"""<?xml version="1.0" encoding="UTF-8"?>
+<SpimData version="0.2">
+  <BasePath type="relative">.</BasePath>
+  <SequenceDescription>
+    <ImageLoader format="bdv.hdf5"><hdf5 type="relative">{h5name}</hdf5></ImageLoader>
+    <ViewSetups>
+      <ViewSetup><id>1</id><name>other</name>
+        <voxelSize><unit>mm</unit><size>9 9 9</size></voxelSize></ViewSetup>
+      <ViewSetup><id>0</id><name>0</name><size>64 64 64</size>
+        <voxelSize><unit>{unit}</unit><size>{size}</size></voxelSize></ViewSetup>
+    </ViewSetups>
+  </SequenceDescription>
+</SpimData>
+""")
+
+
+aniso_lv = levels_of(phantom[:64, :64, :64])
+vs = [0.5, 0.75, 2.0]  # x, y, z
+aniso = os.path.join(OUT, "aniso.h5")
+bdv(aniso, [aniso_lv])
+bdv_xml("aniso.xml", "aniso.h5", " ".join(map(str, vs)))
+p = volvis("info", aniso)
+check(p.returncode == 0 and re.search(r"spacing:\s+0\.5 x 0\.75 x 2 um", p.stdout)
+      and re.search(r"unit:\s+um", p.stdout),
+      "bdv + XML: volvis info gives the XML's voxel size and unit "
+      f"{re.findall(r'(?:spacing|unit):.*', p.stdout)} {p.stderr.strip()}")
+for k in range(2):
+    got, aff, err = read_level(aniso, k)
+    f = 2.0 ** k
+    ok = got is not None and np.array_equal(got, aniso_lv[k])
+    ok = ok and np.allclose(np.abs(np.diag(aff)[:3]), [f * v for v in vs], rtol=1e-4)
+    ok = ok and np.allclose(np.abs(aff[:3, 3]), [(f - 1) / 2 * v for v in vs], atol=1e-4)
+    check(ok, f"bdv + XML level {k}: spacing {f} x {vs}, voxel 0 at {(f - 1) / 2} voxels "
+          f"({None if aff is None else aff[:3].tolist()} {err})")
+view = ["--mode", "mip", "--azimuth", "30", "--elevation", "25", "--tf", "10000:45000"]
+mem = os.path.join(OUT, "aniso_mem.png")
+ooc = os.path.join(OUT, "aniso_ooc.png")
+iso = os.path.join(OUT, "aniso_iso.png")
+p1 = render(aniso, mem, *view)
+p2 = render(aniso, ooc, *view, "--memory-limit", "4M", "--level", "0")
+check(p1.returncode == 0 and p2.returncode == 0 and psnr(mem, ooc) == 99.0,
+      f"bdv + XML: the out-of-core MIP (the readers' level table) is the in-memory one "
+      f"({p1.stderr.strip()} {p2.stderr.strip()})")
+bdv_xml("aniso.xml", "another.h5", " ".join(map(str, vs)))
+p3 = render(aniso, iso, *view)
+check(p3.returncode == 0 and psnr(mem, iso) < 30,
+      f"an XML of another HDF5 file is not read (isotropic image {psnr(mem, iso):.1f} dB "
+      f"from the anisotropic one) {p3.stderr.strip()}")
+got, aff, err = read_level(aniso, 0)
+check(aff is not None and np.allclose(np.abs(np.diag(aff)[:3]), 1),
+      f"... and its voxels stay 1 a side {err}")
+
 view = ["--azimuth", "35", "--elevation", "20", "--tf", "10000:45000", "--alpha", "--channel",
         "1", "--memory-limit", "4M"]
 mixed = os.path.join(OUT, "lod_mixed_a.png")
@@ -254,6 +312,12 @@ def bad_bdv(name, dataset, data):
     return path
 
 
+bdv_xml("aniso.xml", "aniso.h5", "0 0.5 2")
+refused(aniso, "aniso.xml: ViewSetup 0's voxelSize", "a companion XML with a voxel size of 0")
+with open(os.path.join(OUT, "aniso.xml"), "w") as f:
+    f.write("<SpimData><SequenceDescription><ViewSetups")
+refused(aniso, "aniso.xml: the companion XML cannot be parsed", "a truncated companion XML")
+os.remove(os.path.join(OUT, "aniso.xml"))
 refused(bad_bdv("rank2.h5", "t00000/s00/0/cells", np.zeros((64, 64), np.uint16)), "not 3",
         "a cells dataset of rank 2")
 refused(bad_bdv("bigger.h5", "t00000/s00/2/cells", np.zeros((128, 16, 16), np.uint16)),
