@@ -48,6 +48,7 @@
 typedef struct h5p_level {
     int dims[3];       /* voxels along x, y, z */
     int cdims[3];      /* the chunk box the store reads by (the dataset's chunks) */
+    int hchunk[3];     /* the dataset's own HDF5 chunk; 0: contiguous */
     double spacing[3]; /* in the XML's or the file's units (Imaris), else level-0 voxels */
     double origin[3];  /* the centre of voxel 0 */
     int unit;          /* vv_unit of the spacing (the XML's or Imaris's; else unknown) */
@@ -105,10 +106,12 @@ type_of(hid_t ftype, int bdv, hid_t *mtype) {
     return -1;
 }
 
-/* Dataset @p path's dims (x, y, z from its z, y, x) and chunk dims (the
- * dataset's own, else @p fallback), opened into *d. */
+/* Dataset @p path's dims (x, y, z from its z, y, x), HDF5 chunk (0:
+ * contiguous) and the chunk box the store reads by (the HDF5 chunk within
+ * 8 .. H5P_MAX_CHUNK, else 64), opened into *d. */
 static vv_status
-open_volume(h5p *h, const char *path, hid_t *d, int dims[3], int cdims[3]) {
+open_volume(h5p *h, const char *path, hid_t *d, h5p_level *L) {
+    int *dims = L->dims, *cdims = L->cdims;
     if (!link_exists(h->fid, path) || (*d = H5Dopen2(h->fid, path, H5P_DEFAULT)) < 0)
         return vv_error_set(VV_ERR_FORMAT, "no dataset %s", path);
     hid_t sp = H5Dget_space(*d);
@@ -125,14 +128,17 @@ open_volume(h5p *h, const char *path, hid_t *d, int dims[3], int cdims[3]) {
                                 path, (unsigned long long)sh[2 - k], k, VV_VOLUME_MAX_DIM);
         dims[k] = (int)sh[2 - k];
         cdims[k] = 64;
+        L->hchunk[k] = 0;
     }
     hid_t pl = H5Dget_create_plist(*d);
     hsize_t ch[4] = {0};
     if (pl >= 0 && H5Pget_layout(pl) == H5D_CHUNKED && H5Pget_chunk(pl, 3, ch) == 3)
-        for (int k = 0; k < 3; k++) /* whole HDF5 chunks, within 8 .. H5P_MAX_CHUNK */
+        for (int k = 0; k < 3; k++) { /* whole HDF5 chunks, within 8 .. H5P_MAX_CHUNK */
+            L->hchunk[k] = ch[2 - k] <= (hsize_t)VV_VOLUME_MAX_DIM ? (int)ch[2 - k] : 0;
             cdims[k] = ch[2 - k] < 8 ? (int)(8 / ch[2 - k] + (8 % ch[2 - k] != 0)) * (int)ch[2 - k]
                        : ch[2 - k] > H5P_MAX_CHUNK ? H5P_MAX_CHUNK
                                                    : (int)ch[2 - k];
+        }
     if (pl >= 0)
         H5Pclose(pl);
     return VV_OK;
@@ -198,7 +204,7 @@ open_bdv(h5p *h, int channel, int time) {
     for (int l = 0; l < nr; l++) {
         h5p_level *L = &h->lv[l];
         snprintf(path, sizeof path, "t%05d/s%02d/%d/cells", t, setup, l);
-        vv_status s = open_volume(h, path, &h->dset[l], L->dims, L->cdims);
+        vv_status s = open_volume(h, path, &h->dset[l], L);
         if (s != VV_OK)
             return s;
         for (int k = 0; k < 3; k++) {
@@ -402,7 +408,7 @@ open_ims(h5p *h, int channel, int time) {
         h5p_level *L = &h->lv[l];
         snprintf(path, sizeof path, "DataSet/ResolutionLevel %d/TimePoint %d/Channel %d/Data", l, t,
                  c);
-        vv_status s = open_volume(h, path, &h->dset[l], L->dims, L->cdims);
+        vv_status s = open_volume(h, path, &h->dset[l], L);
         if (s != VV_OK)
             return s;
         /* the image's size within the padded dataset */
@@ -627,6 +633,35 @@ const vv_volume_format vv_volume_format_hdf5 = {
 
 /* ---- the pyramid's store ------------------------------------------------------ */
 
+/* The bytes libhdf5 reads from the file for the box @p lo + @p dims of
+ * @p level: the stored (compressed) size of every HDF5 chunk it touches
+ * (a chunk never written costs none), or the box's bytes where the
+ * dataset is contiguous. Statistics only (volvis render -v). */
+static uint64_t
+stored_bytes(h5p *h, int level, const int lo[3], const int dims[3]) {
+    const h5p_level *L = &h->lv[level];
+    if (!L->hchunk[0] || !L->hchunk[1] || !L->hchunk[2])
+        return (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2] *
+               vv_voxel_type_size(h->type);
+    uint64_t total = 0;
+    int a[3], b[3];
+    for (int k = 0; k < 3; k++) {
+        a[k] = lo[k] / L->hchunk[k];
+        b[k] = (lo[k] + dims[k] - 1) / L->hchunk[k];
+    }
+    for (int z = a[2]; z <= b[2]; z++)
+        for (int y = a[1]; y <= b[1]; y++)
+            for (int x = a[0]; x <= b[0]; x++) {
+                hsize_t off[3] = {(hsize_t)z * (hsize_t)L->hchunk[2],
+                                  (hsize_t)y * (hsize_t)L->hchunk[1],
+                                  (hsize_t)x * (hsize_t)L->hchunk[0]};
+                hsize_t n = 0;
+                if (H5Dget_chunk_storage_size(h->dset[level], off, &n) >= 0)
+                    total += n;
+            }
+    return total;
+}
+
 static vv_status
 h5s_read_chunk(void *ctx, int level, const int c[3], unsigned char *scratch, unsigned char *dst,
                const int org[3], const int dims[3], int *missing, uint64_t *file_bytes) {
@@ -634,8 +669,7 @@ h5s_read_chunk(void *ctx, int level, const int c[3], unsigned char *scratch, uns
     (void)scratch;
     h5p *h = ctx;
     *missing = 0;
-    *file_bytes =
-        (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2] * vv_voxel_type_size(h->type);
+    *file_bytes = stored_bytes(h, level, org, dims);
     return h5p_read_box(h, level, org, dims, dst);
 }
 
