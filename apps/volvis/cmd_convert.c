@@ -43,7 +43,9 @@ cli_convert_usage(FILE *out) {
             "OME-XML with physical sizes and plane positions) has no direction matrix\n"
             "either; OME-Zarr (.ome.zarr, .zarr: a Zarr v2 folder with a pyramid of\n"
             "2x2x2 means, labels by nearest, and each level's scale and translation;\n"
-            "read back at any level with --level) has none either;\n"
+            "read back at any level with --level) has none either; it is written\n"
+            "chunk by chunk, with memory bounded by a few 64^3 chunks, when IN is raw,\n"
+            "an uncompressed NRRD or a pyramid (OME-Zarr, BigDataViewer, Imaris);\n"
             "SLC (.slc; VolVis's own 8-bit format)\n"
             "holds 8-bit data only: other voxel types are rescaled from the value\n"
             "range to 0..255, with a note on stderr. What a format cannot hold is\n"
@@ -148,6 +150,63 @@ convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int serie
     return CLI_EXIT_OK;
 }
 
+static vv_status
+read_bricked_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
+    return vv_bricked_read_box(ctx, lo, hi, out);
+}
+
+static vv_status
+read_pyramid_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
+    return vv_pyramid_read_box(ctx, 0, lo, hi, out);
+}
+
+/* IN to OUT.zarr chunk by chunk (vv_ome_zarr_write_boxes), never holding
+ * IN whole: raw or uncompressed NRRD (read by rows, vv_bricked) and
+ * pyramids (OME-Zarr, BigDataViewer, Imaris: level 0 through the chunk
+ * cache). -1: IN is neither (the caller reads it whole). */
+static int
+convert_zarr_boxes(const char *in, const char *out, const vv_raw_params *raw, int channel, int time,
+                   const vv_save_options *so, int strict, int quiet) {
+    vv_bricked *b = NULL;
+    vv_pyramid *p = NULL;
+    vv_error_clear();
+    if ((raw || vv_format_detect(in) == VV_FORMAT_NRRD) && channel <= 0 && time <= 0) {
+        if (vv_bricked_open_header(&b, in, raw, 0) != VV_OK) {
+            vv_error_clear(); /* a compressed NRRD: read whole */
+            return -1;
+        }
+    } else if (!raw && vv_pyramid_probe(in)) {
+        vv_status s = vv_pyramid_open(&p, in, channel, time, (uint64_t)256 << 20, NULL);
+        if (s != VV_OK)
+            return cli_fail(s, in);
+    } else
+        return -1;
+    const vv_volume *hdr = b ? vv_bricked_header(b) : vv_pyramid_level(p, 0);
+    const vv_volume_format *rec = vv_volume_format_table(NULL)[VV_FORMAT_OME_ZARR - 1];
+    char why[256];
+    const int convert = rec->fits && !rec->fits(hdr, why, sizeof why);
+    int rc = CLI_EXIT_OK;
+    if (convert && strict) {
+        cli_error("%s: %s; refusing to convert it (--strict)", out, why);
+        rc = CLI_EXIT_FAIL;
+    } else {
+        vv_status s = b ? vv_ome_zarr_write_boxes(hdr, read_bricked_box, b, out, so)
+                        : vv_ome_zarr_write_boxes(hdr, read_pyramid_box, p, out, so);
+        if (s != VV_OK)
+            rc = cli_fail(s, out);
+        else if (!quiet) {
+            if (convert)
+                cli_error("warning: %s: %s", out, why);
+            printf("wrote %s (%s, %d x %d x %d, %s, chunk by chunk)\n", out,
+                   vv_format_name(VV_FORMAT_OME_ZARR), hdr->dims[0], hdr->dims[1], hdr->dims[2],
+                   vv_voxel_type_name(hdr->type));
+        }
+    }
+    vv_bricked_free(b);
+    vv_pyramid_free(p);
+    return rc;
+}
+
 int
 cli_convert_main(int argc, char **argv) {
     cli_args a;
@@ -209,6 +268,20 @@ cli_convert_main(int argc, char **argv) {
     if (format == VV_FORMAT_AUTO)
         return convert_vvb(in, out, raw_spec ? &raw : NULL, series, channel, time,
                            cli_count(&a, "no-coarse") == 0, quiet);
+    vv_save_options so;
+    vv_save_options_init(&so);
+    so.format = format;
+    so.strict = strict;
+    so.label = cli_count(&a, "label") > 0;
+    so.nifti_version = cli_count(&a, "nifti2") > 0 ? 2 : 0;
+    if (cli_count(&a, "no-compress") > 0)
+        so.compress = 0;
+    so.codec = cli_get(&a, "codec");
+    so.bigtiff = cli_count(&a, "bigtiff") > 0;
+    if (format == VV_FORMAT_OME_ZARR && level == 0 && series == 0 &&
+        (rc = convert_zarr_boxes(in, out, raw_spec ? &raw : NULL, channel, time, &so, strict,
+                                 quiet)) >= 0)
+        return rc;
     if ((rc = cli_load_volume_level(in, raw_spec ? &raw : NULL, series, channel, time, level, NULL,
                                     &v)))
         return rc;
@@ -223,16 +296,6 @@ cli_convert_main(int argc, char **argv) {
         return CLI_EXIT_FAIL;
     }
     vv_error_clear();
-    vv_save_options so;
-    vv_save_options_init(&so);
-    so.format = format;
-    so.strict = strict;
-    so.label = cli_count(&a, "label") > 0;
-    so.nifti_version = cli_count(&a, "nifti2") > 0 ? 2 : 0;
-    if (cli_count(&a, "no-compress") > 0)
-        so.compress = 0;
-    so.codec = cli_get(&a, "codec");
-    so.bigtiff = cli_count(&a, "bigtiff") > 0;
     vv_status st = vv_volume_save_with(v, out, &so);
     if (st != VV_OK) {
         rc = cli_fail(st, out);

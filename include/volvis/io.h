@@ -361,6 +361,29 @@ vv_status vv_vti_write(const vv_volume *v, const char *path, int compress);
  */
 vv_status vv_ome_zarr_write(const vv_volume *v, const char *path, const vv_save_options *opt);
 /**
+ * A volume read box by box: voxels lo .. hi (inclusive, x, y, z) as a new
+ * volume of hi - lo + 1 voxels a side and the volume's type (voxel
+ * (0, 0, 0) is voxel lo), which the caller frees. vv_bricked_read_box and
+ * vv_pyramid_read_box (level 0) fit it with a one-line adapter.
+ */
+typedef vv_status (*vv_box_reader)(void *ctx, const int lo[3], const int hi[3], vv_volume **out);
+/**
+ * Writes the OME-Zarr store of vv_ome_zarr_write (the same levels, chunks
+ * and bytes) from a volume that need not fit in memory: level 0 one chunk
+ * (64^3 voxels at most) at a time from @p read, called from one thread at a
+ * time, and each further level from the level before, read back from the
+ * store being written (the 2x2x2 blocks under each of its chunks). Memory:
+ * about nine chunks a thread (128^3 voxels of the level before, one chunk
+ * and their compressed bytes), whatever the volume's size. @p hdr gives the
+ * dims, type, spacing, origin and unit (its voxels are never read); the
+ * omero window is the range of the voxels read. Chunks are compressed and
+ * written on every core. Atomic as vv_ome_zarr_write. Errors: those of
+ * vv_ome_zarr_write, the reader's first error (nothing is left behind),
+ * VV_ERR_INVALID (a box of another shape or type from @p read).
+ */
+vv_status vv_ome_zarr_write_boxes(const vv_volume *hdr, vv_box_reader read, void *ctx,
+                                  const char *path, const vv_save_options *opt);
+/**
  * Writes @p m as VTK XML PolyData (.vtp): Float32 points, per-vertex normals
  * ("Normals") and scalars (named @p scalar_name, "scalars" when NULL: the
  * label or the field the surface was extracted from) when the mesh has

@@ -37,6 +37,7 @@
 #include <fcntl.h>
 #include <ftw.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -315,14 +316,181 @@ next_level(const zarr_level *src, zarr_level *dst, vv_voxel_type t, int label) {
 
 /* ---- chunks ------------------------------------------------------------------- */
 
+/* Where a level's voxels come from when they are not in memory: level 0
+ * from the caller's box reader (one box a chunk, one call at a time), a
+ * further level from the level before it, read back from the store being
+ * written (the 2x2x2 blocks under one chunk) and reduced as next_level does. */
+typedef struct box_feed {
+    vv_box_reader read; /* level 0; NULL: the level before */
+    void *ctx;
+    pthread_mutex_t lock; /* read and range */
+    double range[2];      /* of the voxels read (level 0) */
+    int have_range;
+    vv_status status;       /* the reader's first failure */
+    char message[1024];     /* its text (the error is the reading thread's) */
+    const zarr_level *prev; /* the level before, written in prev_dir */
+    const char *prev_dir;
+    int prev_chunk[3], step[3], label;
+} box_feed;
+
 typedef struct chunk_job {
     const char *dir; /* the level's folder */
     const zarr_level *l;
     vv_voxel_type type;
     int chunk[3], n[3]; /* chunk shape, chunks per axis (x, y, z) */
     int compress;
-    int failed; /* the first errno, or -1 for out of memory */
+    int failed;     /* the first errno, or -1 for out of memory, -2 the feed's status */
+    box_feed *feed; /* NULL: l->data in memory */
 } chunk_job;
+
+/* Reads chunk file @p p of @p raw_n bytes (zlib when @p compress) into
+ * @p raw; 0 or an errno (EILSEQ: not a chunk of that size). */
+static int
+read_chunk_file(const char *p, int compress, unsigned char *raw, size_t raw_n, unsigned char *z,
+                size_t zcap) {
+    int fd = open(p, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return errno;
+    unsigned char *buf = compress ? z : raw;
+    const size_t cap = compress ? zcap : raw_n;
+    size_t got = 0;
+    int err = 0;
+    for (;;) {
+        ssize_t r = read(fd, buf + got, cap - got);
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r < 0)
+            err = errno;
+        if (r <= 0 || (got += (size_t)r) == cap)
+            break;
+    }
+    close(fd);
+    if (err)
+        return err;
+    if (!compress)
+        return got == raw_n ? 0 : EILSEQ;
+    uLongf n = (uLongf)raw_n;
+    return uncompress(raw, &n, z, (uLong)got) == Z_OK && n == raw_n ? 0 : EILSEQ;
+}
+
+/* Voxels lo .. lo + n - 1 of the level before (f->prev, written) into
+ * @p box (x fastest); @p cbuf and @p z hold one of its chunks. */
+static int
+read_prev_box(const box_feed *f, vv_voxel_type t, const int lo[3], const int n[3],
+              unsigned char *box, unsigned char *cbuf, unsigned char *z, size_t zcap) {
+    const size_t es = vv_voxel_type_size(t);
+    const int *C = f->prev_chunk;
+    const size_t raw_n = (size_t)C[0] * C[1] * C[2] * es;
+    int a[3], b[3];
+    for (int i = 0; i < 3; i++) {
+        a[i] = lo[i] / C[i];
+        b[i] = (lo[i] + n[i] - 1) / C[i];
+    }
+    for (int cz = a[2]; cz <= b[2]; cz++)
+        for (int cy = a[1]; cy <= b[1]; cy++)
+            for (int cx = a[0]; cx <= b[0]; cx++) {
+                char p[ZARR_PATH_MAX];
+                store_path(p, "%s/%d/%d/%d", f->prev_dir, cz, cy, cx);
+                int err = read_chunk_file(p, z != NULL, cbuf, raw_n, z, zcap);
+                if (err)
+                    return err;
+                const int c0[3] = {cx * C[0], cy * C[1], cz * C[2]};
+                int g0[3], g1[3]; /* the overlap, in level voxels */
+                for (int i = 0; i < 3; i++) {
+                    g0[i] = lo[i] > c0[i] ? lo[i] : c0[i];
+                    g1[i] = lo[i] + n[i] < c0[i] + C[i] ? lo[i] + n[i] : c0[i] + C[i];
+                }
+                for (int k = g0[2]; k < g1[2]; k++)
+                    for (int y = g0[1]; y < g1[1]; y++)
+                        memcpy(box + (((size_t)(k - lo[2]) * n[1] + (y - lo[1])) * n[0] +
+                                      (g0[0] - lo[0])) *
+                                         es,
+                               cbuf + (((size_t)(k - c0[2]) * C[1] + (y - c0[1])) * C[0] +
+                                       (g0[0] - c0[0])) *
+                                          es,
+                               (size_t)(g1[0] - g0[0]) * es);
+            }
+    return 0;
+}
+
+/* The chunk at x0, y0, z0 (w x h x d voxels inside the level) into @p raw
+ * (chunk-shaped, cleared) from the feed; @p work: a buffer of the level
+ * before's box and one of its chunks (further levels). 0, an errno, -1 out
+ * of memory or -2 (the reader's failure, in f->status). */
+static int
+feed_chunk(chunk_job *j, const int o[3], const int e[3], unsigned char *raw, unsigned char *work,
+           unsigned char *cbuf, unsigned char *z, size_t zcap) {
+    box_feed *f = j->feed;
+    const size_t es = vv_voxel_type_size(j->type);
+    if (f->read) {
+        const int hi[3] = {o[0] + e[0] - 1, o[1] + e[1] - 1, o[2] + e[2] - 1};
+        vv_volume *v = NULL;
+        pthread_mutex_lock(&f->lock);
+        vv_status s = f->status == VV_OK ? f->read(f->ctx, o, hi, &v) : f->status;
+        if (s == VV_OK && (!v || v->type != j->type || v->dims[0] != e[0] || v->dims[1] != e[1] ||
+                           v->dims[2] != e[2]))
+            s = vv_error_set(VV_ERR_INVALID, "the reader gave a box of another shape or type");
+        if (s == VV_OK)
+            for (size_t i = 0, n = (size_t)e[0] * e[1] * e[2]; i < n; i++) {
+                const double x = load_voxel(v->data, j->type, i);
+                if (!f->have_range || x < f->range[0])
+                    f->range[0] = x;
+                if (!f->have_range || x > f->range[1])
+                    f->range[1] = x;
+                f->have_range = 1;
+            }
+        if (s != VV_OK && f->status == VV_OK) {
+            f->status = s;
+            snprintf(f->message, sizeof f->message, "%s", vv_error_message());
+        }
+        pthread_mutex_unlock(&f->lock);
+        if (s != VV_OK) {
+            vv_volume_free(v);
+            return -2;
+        }
+        for (int k = 0; k < e[2]; k++)
+            for (int y = 0; y < e[1]; y++)
+                memcpy(raw + ((size_t)k * j->chunk[1] + y) * j->chunk[0] * es,
+                       (const char *)v->data + ((size_t)k * e[1] + y) * e[0] * es,
+                       (size_t)e[0] * es);
+        vv_volume_free(v);
+        return 0;
+    }
+    /* the blocks under the chunk, in the level before */
+    const int *sd = f->prev->dims, *st = f->step;
+    int plo[3], pn[3];
+    for (int i = 0; i < 3; i++) {
+        plo[i] = o[i] * st[i];
+        pn[i] = (o[i] + e[i]) * st[i] < sd[i] ? e[i] * st[i] : sd[i] - plo[i];
+    }
+    int err = read_prev_box(f, j->type, plo, pn, work, cbuf, z, zcap);
+    if (err)
+        return err;
+    /* as down_body: the same voxels summed in the same order */
+    for (int k = 0; k < e[2]; k++)
+        for (int y = 0; y < e[1]; y++)
+            for (int x = 0; x < e[0]; x++) {
+                const size_t out = ((size_t)k * j->chunk[1] + y) * j->chunk[0] + x;
+                const int x0 = (o[0] + x) * st[0], y0 = (o[1] + y) * st[1], z0 = (o[2] + k) * st[2];
+                if (f->label) {
+                    const size_t i =
+                        ((size_t)(z0 - plo[2]) * pn[1] + (y0 - plo[1])) * pn[0] + (x0 - plo[0]);
+                    memcpy(raw + out * es, work + i * es, es);
+                    continue;
+                }
+                double sum = 0;
+                int n = 0;
+                for (int dz = 0; dz < st[2] && z0 + dz < sd[2]; dz++)
+                    for (int dy = 0; dy < st[1] && y0 + dy < sd[1]; dy++)
+                        for (int dx = 0; dx < st[0] && x0 + dx < sd[0]; dx++, n++)
+                            sum += load_voxel(
+                                work, j->type,
+                                ((size_t)(z0 + dz - plo[2]) * pn[1] + (y0 + dy - plo[1])) * pn[0] +
+                                    (x0 + dx - plo[0]));
+                store_voxel(raw, j->type, out, sum / n);
+            }
+    return 0;
+}
 
 static void
 chunk_body(void *ctx, long c0, long c1, int worker) {
@@ -332,18 +500,44 @@ chunk_body(void *ctx, long c0, long c1, int worker) {
     size_t raw_n = (size_t)j->chunk[0] * j->chunk[1] * j->chunk[2] * es;
     uLong cap = compressBound((uLong)raw_n);
     unsigned char *raw = calloc(1, raw_n), *z = j->compress ? malloc(cap) : NULL;
+    /* a further level from the store: the box of the level before under a
+     * chunk, one of its chunks, and its compressed bytes */
+    box_feed *f = j->feed;
+    size_t work_n = 0, pchunk_n = 0, pcap = 0;
+    if (f && !f->read) {
+        work_n = (size_t)f->step[0] * f->step[1] * f->step[2] * raw_n;
+        pchunk_n = (size_t)f->prev_chunk[0] * f->prev_chunk[1] * f->prev_chunk[2] * es;
+        pcap = compressBound((uLong)pchunk_n);
+    }
+    unsigned char *work = work_n ? malloc(work_n) : NULL,
+                  *pchunk = work_n ? malloc(pchunk_n) : NULL,
+                  *pz = work_n && j->compress ? malloc(pcap) : NULL;
+    if (work_n && (!work || !pchunk || (j->compress && !pz)))
+        j->failed = -1;
     for (long c = c0; c < c1 && raw && (z || !j->compress) && !j->failed; c++) {
         int cx = (int)(c % j->n[0]), cy = (int)(c / j->n[0] % j->n[1]),
             cz = (int)(c / ((long)j->n[0] * j->n[1]));
         int x0 = cx * j->chunk[0], y0 = cy * j->chunk[1], z0 = cz * j->chunk[2];
         int w = j->l->dims[0] - x0 < j->chunk[0] ? j->l->dims[0] - x0 : j->chunk[0];
         memset(raw, 0, raw_n); /* the padding of edge chunks: the fill value */
-        for (int k = 0; k < j->chunk[2] && z0 + k < j->l->dims[2]; k++)
-            for (int y = 0; y < j->chunk[1] && y0 + y < j->l->dims[1]; y++)
-                memcpy(raw + ((size_t)k * j->chunk[1] + y) * j->chunk[0] * es,
-                       (const char *)j->l->data +
-                           (((size_t)(z0 + k) * j->l->dims[1] + y0 + y) * j->l->dims[0] + x0) * es,
-                       (size_t)w * es);
+        if (f) {
+            const int o[3] = {x0, y0, z0};
+            const int e[3] = {w,
+                              j->l->dims[1] - y0 < j->chunk[1] ? j->l->dims[1] - y0 : j->chunk[1],
+                              j->l->dims[2] - z0 < j->chunk[2] ? j->l->dims[2] - z0 : j->chunk[2]};
+            int err = feed_chunk(j, o, e, raw, work, pchunk, pz, pcap);
+            if (err) {
+                j->failed = err;
+                break;
+            }
+        } else
+            for (int k = 0; k < j->chunk[2] && z0 + k < j->l->dims[2]; k++)
+                for (int y = 0; y < j->chunk[1] && y0 + y < j->l->dims[1]; y++)
+                    memcpy(raw + ((size_t)k * j->chunk[1] + y) * j->chunk[0] * es,
+                           (const char *)j->l->data +
+                               (((size_t)(z0 + k) * j->l->dims[1] + y0 + y) * j->l->dims[0] + x0) *
+                                   es,
+                           (size_t)w * es);
         const unsigned char *out = raw;
         size_t out_n = raw_n;
         if (j->compress) {
@@ -379,13 +573,17 @@ chunk_body(void *ctx, long c0, long c1, int worker) {
         j->failed = -1;
     free(raw);
     free(z);
+    free(work);
+    free(pchunk);
+    free(pz);
 }
 
 static vv_status
-write_level(const char *root, int index, const vv_volume *v, const zarr_level *l, int compress) {
+write_level(const char *root, int index, const vv_volume *v, const zarr_level *l, int compress,
+            box_feed *feed) {
     char dir[ZARR_PATH_MAX];
     store_path(dir, "%s/%d", root, index);
-    chunk_job j = {dir, l, v->type, {0}, {0}, compress, 0};
+    chunk_job j = {dir, l, v->type, {0}, {0}, compress, 0, feed};
     for (int i = 0; i < 3; i++) {
         j.chunk[i] = l->dims[i] < ZARR_CHUNK ? l->dims[i] : ZARR_CHUNK;
         j.n[i] = (l->dims[i] + j.chunk[i] - 1) / j.chunk[i];
@@ -407,8 +605,14 @@ write_level(const char *root, int index, const vv_volume *v, const zarr_level *l
     if (s != VV_OK)
         return s;
     vv_parallel_for((long)j.n[0] * j.n[1] * j.n[2], 4, 0, chunk_body, &j, NULL);
+    if (j.failed == -2)
+        return vv_error_set(feed->status, "%s", feed->message);
     if (j.failed == -1)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    if (j.failed == EILSEQ)
+        return vv_error_set(VV_ERR_IO,
+                            "level %d: a chunk of level %d read back is not the one written", index,
+                            index - 1);
     if (j.failed)
         return vv_error_set(VV_ERR_IO, "level %d: write failed: %s", index, strerror(j.failed));
     return VV_OK;
@@ -456,7 +660,7 @@ write_store(const vv_volume *v, const char *path, const char *tmp, const vv_save
     while (s == VV_OK && n < ZARR_MAX_LEVELS &&
            (lv[n - 1].dims[0] > ZARR_CHUNK || lv[n - 1].dims[1] > ZARR_CHUNK ||
             lv[n - 1].dims[2] > ZARR_CHUNK)) {
-        s = write_level(tmp, n - 1, v, &lv[n - 1], opt->compress != 0);
+        s = write_level(tmp, n - 1, v, &lv[n - 1], opt->compress != 0, NULL);
         if (s == VV_OK)
             s = next_level(&lv[n - 1], &lv[n], v->type, opt->label);
         if (s == VV_OK) {
@@ -466,7 +670,7 @@ write_store(const vv_volume *v, const char *path, const char *tmp, const vv_save
         }
     }
     if (s == VV_OK)
-        s = write_level(tmp, n - 1, v, &lv[n - 1], opt->compress != 0);
+        s = write_level(tmp, n - 1, v, &lv[n - 1], opt->compress != 0, NULL);
     for (int l = 0; l < n; l++)
         free(lv[l].owned);
     if (s == VV_OK)
@@ -481,8 +685,84 @@ write_store(const vv_volume *v, const char *path, const char *tmp, const vv_save
     return s;
 }
 
+/* The store from a volume read box by box: level 0 a chunk at a time from
+ * @p read, each further level from the level before read back from @p tmp;
+ * the omero window is the range of the voxels read. */
+static vv_status
+write_store_boxes(const vv_volume *hdr, vv_box_reader read, void *ctx, const char *path,
+                  const char *tmp, const vv_save_options *opt) {
+    zarr_level lv[ZARR_MAX_LEVELS];
+    memset(lv, 0, sizeof lv);
+    int n = 1;
+    for (int i = 0; i < 3; i++) {
+        lv[0].dims[i] = hdr->dims[i];
+        lv[0].factor[i] = 1;
+    }
+    while (n < ZARR_MAX_LEVELS &&
+           (lv[n - 1].dims[0] > ZARR_CHUNK || lv[n - 1].dims[1] > ZARR_CHUNK ||
+            lv[n - 1].dims[2] > ZARR_CHUNK)) {
+        for (int i = 0; i < 3; i++) {
+            const int step = lv[n - 1].dims[i] > 1 ? 2 : 1;
+            lv[n].dims[i] = (lv[n - 1].dims[i] + step - 1) / step;
+            lv[n].factor[i] = lv[n - 1].factor[i] * step;
+        }
+        n++;
+    }
+    box_feed f0;
+    memset(&f0, 0, sizeof f0);
+    f0.read = read;
+    f0.ctx = ctx;
+    pthread_mutex_init(&f0.lock, NULL);
+    vv_status s = write_level(tmp, 0, hdr, &lv[0], opt->compress != 0, &f0);
+    pthread_mutex_destroy(&f0.lock);
+    char prev_dir[ZARR_PATH_MAX];
+    for (int l = 1; s == VV_OK && l < n; l++) {
+        box_feed f;
+        memset(&f, 0, sizeof f);
+        store_path(prev_dir, "%s/%d", tmp, l - 1);
+        f.prev = &lv[l - 1];
+        f.prev_dir = prev_dir;
+        f.label = opt->label;
+        for (int i = 0; i < 3; i++) {
+            f.prev_chunk[i] = lv[l - 1].dims[i] < ZARR_CHUNK ? lv[l - 1].dims[i] : ZARR_CHUNK;
+            f.step[i] = lv[l - 1].dims[i] > 1 ? 2 : 1;
+        }
+        s = write_level(tmp, l, hdr, &lv[l], opt->compress != 0, &f);
+    }
+    if (s == VV_OK)
+        s = write_json(tmp, ".zgroup", json_pack("{s:i}", "zarr_format", 2));
+    if (s == VV_OK) {
+        vv_volume v = *hdr; /* the geometry, and the range of the voxels read */
+        v.range[0] = f0.range[0];
+        v.range[1] = f0.range[1];
+        char name[256];
+        const char *base = vv_path_basename(path);
+        size_t len = strcspn(base, ".");
+        snprintf(name, sizeof name, "%.*s", (int)(len ? len : strlen(base)), base);
+        s = write_zattrs(tmp, &v, lv, n, opt->label, name);
+    }
+    return s;
+}
+
+static vv_status write_atomic(const vv_volume *v, vv_box_reader read, void *ctx, const char *path,
+                              const vv_save_options *opt);
+
 vv_status
 vv_ome_zarr_write(const vv_volume *v, const char *path, const vv_save_options *opt) {
+    return write_atomic(v, NULL, NULL, path, opt);
+}
+
+vv_status
+vv_ome_zarr_write_boxes(const vv_volume *hdr, vv_box_reader read, void *ctx, const char *path,
+                        const vv_save_options *opt) {
+    if (!read)
+        return vv_error_set(VV_ERR_INVALID, "ome-zarr: no box reader");
+    return write_atomic(hdr, read, ctx, path, opt);
+}
+
+static vv_status
+write_atomic(const vv_volume *v, vv_box_reader read, void *ctx, const char *path,
+             const vv_save_options *opt) {
     if (!v || !path)
         return vv_error_set(VV_ERR_INVALID, "ome-zarr: NULL argument");
     vv_save_options defaults;
@@ -493,7 +773,7 @@ vv_ome_zarr_write(const vv_volume *v, const char *path, const vv_save_options *o
     vv_status s = VV_OK;
     struct stat st;
     int exists = lstat(path, &st) == 0;
-    if (!v->data)
+    if (!v->data && !read)
         s = vv_error_set(VV_ERR_INVALID, "volume has no data");
     else if (!zarr_dtype(v->type))
         s = vv_error_set(VV_ERR_UNSUPPORTED, "voxel type %d cannot be written", (int)v->type);
@@ -524,7 +804,7 @@ vv_ome_zarr_write(const vv_volume *v, const char *path, const vv_save_options *o
         }
     }
     if (s == VV_OK)
-        s = write_store(v, path, tmp, opt);
+        s = read ? write_store_boxes(v, read, ctx, path, tmp, opt) : write_store(v, path, tmp, opt);
     if (s == VV_OK)
         s = sync_store(tmp);
     if (s == VV_OK)

@@ -1,0 +1,216 @@
+#!/usr/bin/python3
+"""`volvis convert IN OUT.zarr` chunk by chunk, with bounded memory.
+
+  zarr_convert_cli.py VOLVIS OUTDIR
+
+Inputs that can be read by boxes (raw, uncompressed NRRD, and pyramids:
+OME-Zarr, BigDataViewer HDF5) are written chunk by chunk
+(vv_ome_zarr_write_boxes); everything else is read whole and written by
+vv_ome_zarr_write. Checks:
+
+- the two writers make the same store, byte for byte (every chunk, the
+  .zarray and .zattrs files): raw f32 and u16 of odd sizes (edge chunks,
+  an axis of one level shorter than a chunk), a label volume (the first
+  voxel of each block), an uncompressed NRRD against its gzip twin (the
+  CT head), and a BigDataViewer file written by h5py;
+- zarr-python reads every level of the chunk-by-chunk store as numpy's
+  2x2x2 means of the level before (an independent reader and reduction);
+- memory: the peak resident set of converting a 128 MiB raw volume is
+  under half of it (the whole-volume writer needs all of it);
+- bad input: a raw file shorter than its size says, and a BigDataViewer
+  file with a corrupt chunk met half way through, are one line naming the
+  file, a non-zero exit, and no store (not even the temporary folder) left;
+  an existing path that is not a Zarr store is refused and left as it is.
+"""
+import os
+import shutil
+import subprocess
+import sys
+import time
+
+try:
+    import h5py
+    import numpy as np
+    import zarr
+except ImportError as e:  # pragma: no cover
+    print(f"skipped: {e} (python3-numpy, python3-h5py, python3-zarr)")
+    sys.exit(77)
+
+VOLVIS, OUT = sys.argv[1], sys.argv[2]
+HEAD = os.path.abspath("../shared/data/volumes/ct_head.nrrd")
+shutil.rmtree(OUT, ignore_errors=True)
+os.makedirs(OUT)
+failures = []
+
+
+def check(cond, what):
+    print(("ok   " if cond else "FAIL ") + what)
+    if not cond:
+        failures.append(what)
+
+
+def volvis(*args):
+    return subprocess.run([VOLVIS, *args], capture_output=True, text=True)
+
+
+def tree(path):
+    """{relative name: bytes} of every file of a store."""
+    out = {}
+    for d, _, names in os.walk(path):
+        for n in names:
+            p = os.path.join(d, n)
+            with open(p, "rb") as f:
+                out[os.path.relpath(p, path)] = f.read()
+    return out
+
+
+def same_store(a, b, what):
+    ta, tb = tree(a), tree(b)
+    diff = sorted(k for k in set(ta) | set(tb) if ta.get(k) != tb.get(k))
+    check(len(ta) > 3 and not diff, f"{what}: the same store byte for byte ({len(ta)} files"
+          f"{', differing: ' + ', '.join(diff[:5]) if diff else ''})")
+
+
+def both(name, src, raw=None, extra=()):
+    """IN -> OUT.zarr chunk by chunk, and IN -> NIfTI -> OUT.zarr whole."""
+    rawopt = ["--raw", raw] if raw else []
+    a, b = os.path.join(OUT, "stream", name), os.path.join(OUT, "whole", name)
+    for d in (a, b):
+        os.makedirs(os.path.dirname(d), exist_ok=True)
+    p = volvis("convert", *rawopt, src, a, *extra)
+    check(p.returncode == 0 and "chunk by chunk" in p.stdout,
+          f"{name}: written chunk by chunk ({p.stdout.strip()} {p.stderr.strip()})")
+    nii = os.path.join(OUT, name + ".nii")
+    p1 = volvis("convert", *rawopt, src, nii, "--quiet")
+    p2 = volvis("convert", nii, b, *extra)
+    check(p1.returncode == 0 and p2.returncode == 0 and "chunk by chunk" not in p2.stdout,
+          f"{name}: written whole ({p1.stderr.strip()} {p2.stderr.strip()})")
+    same_store(a, b, name)
+    return a
+
+
+# ---- the same bytes as the whole-volume writer ------------------------------------------
+z, y, x = np.mgrid[0:70, 0:131, 0:97].astype(np.float32)
+f32 = (np.sin(x / 7) * np.cos(y / 11) * 1000 + z * 3).astype(np.float32)
+f32.tofile(os.path.join(OUT, "f.raw"))
+store = both("f32.zarr", os.path.join(OUT, "f.raw"), "97x131x70:f32")
+
+u16 = ((x * 37 + y * 11 + z * 101) % 4099).astype(np.uint16)
+u16.tofile(os.path.join(OUT, "u.raw"))
+both("u16.zarr", os.path.join(OUT, "u.raw"), "97x131x70:u16")
+
+lab = ((x // 9 + y // 13 + z // 5) % 7).astype(np.uint8)
+lab.tofile(os.path.join(OUT, "l.raw"))
+both("label.zarr", os.path.join(OUT, "l.raw"), "97x131x70:u8", ("--label",))
+
+head_raw = os.path.join(OUT, "head_raw.nrrd")
+p = volvis("convert", HEAD, head_raw, "--no-compress", "--quiet")
+check(p.returncode == 0, f"the CT head as an uncompressed NRRD {p.stderr.strip()}")
+a, b = os.path.join(OUT, "stream", "head.zarr"), os.path.join(OUT, "whole", "head.zarr")
+p1 = volvis("convert", head_raw, a)
+p2 = volvis("convert", HEAD, b)  # gzip: read whole
+check(p1.returncode == 0 and "chunk by chunk" in p1.stdout and p2.returncode == 0
+      and "chunk by chunk" not in p2.stdout,
+      f"CT head: raw NRRD chunk by chunk, gzip NRRD whole ({p1.stderr.strip()} "
+      f"{p2.stderr.strip()})")
+same_store(a, b, "CT head")
+
+bdv = os.path.join(OUT, "bdv.h5")
+with h5py.File(bdv, "w") as f:
+    f["s00/resolutions"] = np.array([[1.0, 1.0, 1.0], [2.0, 2.0, 2.0]])
+    f["s00/subdivisions"] = np.array([[32, 32, 32], [32, 32, 32]], dtype=np.int32)
+    f.create_dataset("t00000/s00/0/cells", data=u16, chunks=(32, 32, 32), compression="gzip")
+    f.create_dataset("t00000/s00/1/cells", data=u16[::2, ::2, ::2], chunks=(32, 32, 32))
+both("bdv.zarr", bdv)
+
+# ---- zarr-python reads it; each level the 2x2x2 means of the one before -----------------
+g = zarr.open_group(store, mode="r")
+levels = [np.asarray(g[str(k)]) for k in range(len(g.attrs["multiscales"][0]["datasets"]))]
+check(len(levels) == 3 and np.array_equal(levels[0], f32),
+      f"zarr-python reads level 0 of the f32 store as written ({len(levels)} levels)")
+for k in range(1, len(levels)):
+    a = levels[k - 1].astype(np.float64)
+    pad = [(0, s % 2) for s in a.shape]
+    n = np.pad(np.ones_like(a), pad).reshape(
+        a.shape[0] // 2 + pad[0][1], 2, a.shape[1] // 2 + pad[1][1], 2,
+        a.shape[2] // 2 + pad[2][1], 2).sum(axis=(1, 3, 5))
+    s = np.pad(a, pad).reshape(n.shape[0], 2, n.shape[1], 2, n.shape[2], 2).sum(axis=(1, 3, 5))
+    want = (s / n).astype(np.float32)
+    err = float(np.abs(levels[k] - want).max())
+    check(levels[k].shape == want.shape and err <= 1e-3 * float(np.abs(want).max()),
+          f"level {k}: numpy's 2x2x2 means of level {k - 1} (max difference {err:.3g})")
+
+# ---- bounded memory ----------------------------------------------------------------------
+big = os.path.join(OUT, "big.raw")
+# Under the sanitizers (VV_SANITIZER) the resident set is the allocator's
+# quarantine and shadow, not the writer's: a smaller volume is converted
+# there and the bound is checked by the release suite.
+SANITIZER = bool(os.environ.get("VV_SANITIZER"))
+side = (256, 256, 256) if SANITIZER else (512, 512, 256)  # x, y, z; u16: 32 or 128 MiB
+with open(big, "wb") as f:
+    row = (np.arange(side[0] * side[1], dtype=np.uint32) % 3001).astype(np.uint16)
+    for k in range(side[2]):
+        (row + k).tofile(f)
+proc = subprocess.Popen([VOLVIS, "convert", "--raw", "%dx%dx%d:u16" % side, big,
+                         os.path.join(OUT, "big.zarr")], stdout=subprocess.PIPE,
+                        stderr=subprocess.PIPE, text=True)
+# The child's own high-water mark (VmHWM, after exec: not this interpreter's
+# pages that a fork carries, which its ru_maxrss would count), read until it
+# exits; it only grows.
+peak = 0
+while proc.poll() is None:
+    try:
+        with open(f"/proc/{proc.pid}/status") as f:
+            for line in f:
+                if line.startswith("VmHWM:"):
+                    peak = max(peak, int(line.split()[1]))
+    except OSError:
+        pass
+    time.sleep(0.005)
+out, err = proc.communicate()
+p = subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
+size_mib = os.path.getsize(big) / 2**20
+check(p.returncode == 0 and "chunk by chunk" in p.stdout,
+      f"a {size_mib:.0f} MiB raw volume converted chunk by chunk {p.stderr.strip()}")
+if SANITIZER:
+    print(f"note peak resident set {peak / 1024:.0f} MiB: not bounded under the sanitizers "
+          "(the release suite checks it)")
+else:
+    check(0 < peak / 1024 < size_mib / 2,
+          f"peak resident set {peak / 1024:.0f} MiB < half the volume's {size_mib:.0f} MiB")
+os.remove(big)
+shutil.rmtree(os.path.join(OUT, "big.zarr"), ignore_errors=True)
+
+# ---- bad input ---------------------------------------------------------------------------
+short = os.path.join(OUT, "short.raw")
+with open(short, "wb") as f:
+    f.write(u16.tobytes()[: u16.nbytes // 2])
+dst = os.path.join(OUT, "short.zarr")
+p = volvis("convert", "--raw", "97x131x70:u16", short, dst)
+err = p.stderr.strip()
+left = [n for n in os.listdir(OUT) if n.startswith("short.zarr")]
+check(p.returncode != 0 and len(err.splitlines()) == 1 and "short.raw" in err and not left,
+      f"a raw file shorter than its size: one line, nothing left ({err}; left {left})")
+bad = os.path.join(OUT, "bad.h5")
+shutil.copy(bdv, bad)
+with h5py.File(bad, "r") as f:
+    off = f["t00000/s00/0/cells"].id.get_chunk_info(3).byte_offset
+with open(bad, "r+b") as f:
+    f.seek(off)
+    f.write(b"\xff" * 200)
+p = volvis("convert", bad, os.path.join(OUT, "bad.zarr"))
+err = p.stderr.strip()
+left = [n for n in os.listdir(OUT) if n.startswith("bad.zarr")]
+check(p.returncode != 0 and len(err.splitlines()) == 1 and "bad.h5" in err and "chunk" in err
+      and not left, f"a corrupt chunk met half way: one line naming it, nothing left ({err})")
+keep = os.path.join(OUT, "notzarr")
+os.makedirs(keep)
+with open(os.path.join(keep, "mine.txt"), "w") as f:
+    f.write("keep")
+p = volvis("convert", "--raw", "97x131x70:u16", os.path.join(OUT, "u.raw"), keep, "--format",
+           "zarr")
+check(p.returncode != 0 and os.listdir(keep) == ["mine.txt"],
+      f"a folder that is not a Zarr store is left as it is: {p.stderr.strip()}")
+
+print(f"{len(failures)} failure(s)")
+sys.exit(1 if failures else 0)
