@@ -59,11 +59,8 @@ frame_setup(cli_args *a, cli_render_args *r, vv_volume *proxy, const vv_volume *
     return 0;
 }
 
-/* The coarsest level as the World's volume, its box stretched over the box
- * of level @p frame (the view frames it, the histogram sets the transfer
- * function). */
-static vv_status
-pyramid_proxy(vv_pyramid *p, int frame, vv_volume **out) {
+vv_status
+cli_pyramid_proxy(vv_pyramid *p, int frame, vv_volume **out) {
     const int top = vv_pyramid_levels(p) - 1;
     const vv_volume *h = vv_pyramid_level(p, top), *f = vv_pyramid_level(p, frame);
     const int lo[3] = {0, 0, 0}, hi[3] = {h->dims[0] - 1, h->dims[1] - 1, h->dims[2] - 1};
@@ -100,7 +97,7 @@ render_pyramid(cli_args *a, cli_render_args *r) {
         goto done;
     }
     const int frame = r->has_level ? r->level : 0;
-    if ((s = pyramid_proxy(p, frame, &proxy)) != VV_OK) {
+    if ((s = cli_pyramid_proxy(p, frame, &proxy)) != VV_OK) {
         rc = cli_fail(s, r->input);
         goto done;
     }

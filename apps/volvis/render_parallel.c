@@ -71,30 +71,75 @@ agree(int rc) {
     return rc ? rc : CLI_EXIT_FAIL;
 }
 
-/* A volume readable by bricks (.vvb, --raw, uncompressed NRRD): opened
- * header-only on every rank (*out NULL when not such a file); the status
- * of the attempt, VV_ERR_UNSUPPORTED when not tried. */
+/* What the ranks read by boxes: a bricked file or one level of a pyramid. */
+typedef struct par_source {
+    vv_bricked *b;
+    vv_pyramid *p;
+    int level;
+} par_source;
+
 static vv_status
-open_source(const cli_render_args *r, vv_bricked **out) {
-    *out = NULL;
+read_level_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
+    const par_source *src = ctx;
+    return vv_pyramid_read_box(src->p, src->level, lo, hi, out);
+}
+
+static vv_status
+read_bricked_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
+    const par_source *src = ctx;
+    return vv_bricked_read_box(src->b, lo, hi, out);
+}
+
+static const vv_volume *
+source_header(const par_source *src) {
+    return src->b ? vv_bricked_header(src->b) : vv_pyramid_level(src->p, src->level);
+}
+
+static void
+source_close(par_source *src) {
+    vv_bricked_free(src->b);
+    vv_pyramid_free(src->p);
+    memset(src, 0, sizeof *src);
+}
+
+/* A volume readable by boxes, opened on every rank (nothing opened when
+ * it is not such a file): a pyramid (OME-Zarr, BigDataViewer, Imaris; its
+ * level --level, chunks cached within --memory-limit, 1 GiB when not
+ * given) or a bricked file (.vvb, --raw, uncompressed NRRD; header only).
+ * The status of the attempt, VV_ERR_UNSUPPORTED when not tried. */
+static vv_status
+open_source(const cli_render_args *r, par_source *src) {
+    memset(src, 0, sizeof *src);
     if (cli_ends_with(r->input, ".json"))
         return VV_ERR_UNSUPPORTED;
+    vv_error_clear();
+    if (!r->has_raw && vv_pyramid_probe(r->input)) {
+        vv_status s = vv_pyramid_open(&src->p, r->input, r->channel, r->has_time ? r->time : -1,
+                                      r->memory_limit ? r->memory_limit : (uint64_t)1 << 30, NULL);
+        src->level = r->has_level ? r->level : 0;
+        if (s == VV_OK && src->level >= vv_pyramid_levels(src->p))
+            s = vv_error_set(VV_ERR_INVALID, "%s: level %d asked, the store has %d", r->input,
+                             src->level, vv_pyramid_levels(src->p));
+        if (s != VV_OK)
+            source_close(src);
+        return s;
+    }
     if (!r->has_raw && !cli_ends_with(r->input, ".vvb") &&
         vv_format_detect(r->input) != VV_FORMAT_NRRD)
         return VV_ERR_UNSUPPORTED;
-    vv_error_clear();
-    return vv_bricked_open_header(out, r->input, r->has_raw ? &r->raw : NULL, 0);
+    return vv_bricked_open_header(&src->b, r->input, r->has_raw ? &r->raw : NULL, 0);
 }
 
 /* Rank 0's coarse proxy of the source, on every rank. */
 static vv_status
-shared_proxy(vv_bricked *b, int rank, vv_volume **out) {
+shared_proxy(const par_source *src, int rank, vv_volume **out) {
     *out = NULL;
     vv_volume *p = NULL;
     int meta[5] = {0, 0, 0, 0, 0}; /* dims, type, ok */
     double geo[16];
     if (rank == 0) {
-        vv_status s = vv_bricked_proxy(b, 128, &p);
+        vv_status s =
+            src->b ? vv_bricked_proxy(src->b, 128, &p) : cli_pyramid_proxy(src->p, src->level, &p);
         if (s == VV_OK) {
             memcpy(meta, p->dims, sizeof p->dims);
             meta[3] = (int)p->type;
@@ -116,8 +161,8 @@ shared_proxy(vv_bricked *b, int rank, vv_volume **out) {
             memcpy(p->spacing, geo, 3 * sizeof(double));
             memcpy(p->origin, geo + 3, 3 * sizeof(double));
             memcpy(p->direction, geo + 6, 9 * sizeof(double));
-            p->unit = vv_bricked_header(b)->unit;
-            p->space = vv_bricked_header(b)->space;
+            p->unit = source_header(src)->unit;
+            p->space = source_header(src)->space;
         }
     }
     if (s == VV_OK)
@@ -139,12 +184,12 @@ cli_render_parallel(cli_args *a, cli_render_args *r) {
     vv_renderer *ren = NULL;
     vv_parallel *par = NULL;
     vv_image *img = NULL;
-    vv_bricked *src = NULL;
+    par_source src = {NULL, NULL, 0};
     vv_volume *proxy = NULL;
     vv_status s = vv_parallel_init(NULL, NULL, &rank, &size);
     if (s != VV_OK)
         return cli_fail(s, NULL);
-    /* a volume readable by bricks: each rank reads only its own box; the
+    /* a volume readable by boxes: each rank reads only its own box; the
      * World's defaults come from rank 0's coarse proxy */
     const vv_status os = open_source(r, &src);
     char why[2048];
@@ -165,14 +210,13 @@ cli_render_parallel(cli_args *a, cli_render_args *r) {
         goto done;
     }
     if (!all) {
-        vv_bricked_free(src);
-        src = NULL;
+        source_close(&src);
         rc = agree(cli_render_world(r, &w));
     } else {
-        s = shared_proxy(src, rank, &proxy);
+        s = shared_proxy(&src, rank, &proxy);
         rc = s != VV_OK ? cli_fail(s, r->input) : cli_render_world_volume(r, proxy, &w);
         if (!rc)
-            cli_proxy_opacity_unit(w, vv_bricked_header(src), proxy);
+            cli_proxy_opacity_unit(w, source_header(&src), proxy);
         rc = agree(rc);
     }
     if (rc)
@@ -193,8 +237,9 @@ cli_render_parallel(cli_args *a, cli_render_args *r) {
     po.radix = r->radix;
     if (!rc && (s = vv_parallel_new(&par, ren, &po)) != VV_OK)
         rc = cli_fail(s, NULL);
-    if (!rc && src)
-        vv_parallel_set_source(par, src);
+    if (!rc && (src.b || src.p))
+        vv_parallel_set_box_source(par, source_header(&src),
+                                   src.b ? read_bricked_box : read_level_box, &src);
     if (!rc && rank == 0 && (s = vv_image_new(&img, w->view.width, w->view.height)) != VV_OK)
         rc = cli_fail(s, NULL);
     if ((rc = agree(rc)))
@@ -232,7 +277,7 @@ done:
     vv_renderer_free(ren);
     vv_world_free(w);
     vv_volume_free(proxy);
-    vv_bricked_free(src);
+    source_close(&src);
     return rc;
 }
 

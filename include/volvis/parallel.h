@@ -26,6 +26,7 @@
 
 #include "core.h"
 #include "image.h"
+#include "io.h"
 #include "model.h"
 #include "render.h"
 
@@ -142,6 +143,19 @@ void vv_parallel_free(vv_parallel *p);
  */
 struct vv_bricked;
 vv_status vv_parallel_set_source(vv_parallel *p, struct vv_bricked *source);
+/**
+ * Makes each rank read its brick through @p read (io.h's box reader, called
+ * with @p ctx from this rank's thread; borrowed until vv_parallel_free), as
+ * vv_parallel_set_source does for a bricked file: a pyramid's level
+ * (vv_pyramid_read_box), any volume read by boxes. @p header gives the
+ * volume's dims, type, spacing, origin, direction, unit and space (copied;
+ * its voxels are never read); the value range is learnt from the ranks'
+ * bricks at the first render. NULL @p read: cut the brick from the World's
+ * volume again. Errors: VV_ERR_INVALID (a reader without a header). Not
+ * collective.
+ */
+vv_status vv_parallel_set_box_source(vv_parallel *p, const vv_volume *header, vv_box_reader read,
+                                     void *ctx);
 
 /**
  * Collective: renders @p w (one visible volume object, composite, mip or

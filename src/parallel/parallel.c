@@ -28,7 +28,8 @@
  * faces then read the same voxels as in the whole volume), as a volume with
  * the whole volume's geometry and value range
  * (a region's voxels, include/volvis/sys/renderer.h), cut from the World's volume or read
- * from a bricked source (vv_parallel_set_source: only the box is read).
+ * from a source of boxes (vv_parallel_set_source, vv_parallel_set_box_source:
+ * a bricked file, a pyramid's level; only the box is read).
  */
 #include <math.h>
 #include <mpi.h>
@@ -40,6 +41,7 @@
 
 #include "core/internal.h"
 #include "volvis/bricks.h"
+#include "volvis/io.h"
 #include "volvis/parallel.h"
 #include "volvis/sys/renderer.h"
 
@@ -54,8 +56,11 @@ struct vv_parallel {
     int owns_ren;
     int rank, size;
     /* the brick kept between frames */
-    vv_bricked *source; /* read bricks from here (vv_parallel_set_source), or NULL */
-    int range_done;     /* the source's value range is known (agreed over the ranks) */
+    /* read bricks from here (vv_parallel_set_source, _set_box_source), or NULL */
+    void *source;
+    vv_box_reader read;
+    vv_volume hdr;  /* the source's geometry (its voxels never read); range once learnt */
+    int range_done; /* the source's value range is known (agreed over the ranks) */
     const void *src;
     uint64_t src_modified;
     vv_volume *brick;
@@ -587,7 +592,7 @@ composite(const par_plan *pl, float *img, size_t P, vv_region_op mode, int ortho
 
 static vv_status
 make_brick(vv_parallel *p, const vv_volume *v, const par_plan *pl) {
-    const vv_volume *g = p->source ? vv_bricked_header(p->source) : v;
+    const vv_volume *g = p->source ? &p->hdr : v;
     const void *key = p->source ? (const void *)p->source : (const void *)v;
     const uint64_t mod = p->source ? 0 : v->modified;
     int same = p->brick && p->src == key && p->src_modified == mod;
@@ -610,7 +615,7 @@ make_brick(vv_parallel *p, const vv_volume *v, const par_plan *pl) {
     vv_status s;
     if (p->source) {
         /* only this rank's box is read from the file */
-        if ((s = vv_bricked_read_box(p->source, off, end, &b)) != VV_OK)
+        if ((s = p->read(p->source, off, end, &b)) != VV_OK)
             return vv_error_prefix(s, "parallel: brick %d..%d x %d..%d x %d..%d", off[0], end[0],
                                    off[1], end[1], off[2], end[2]);
     } else {
@@ -656,9 +661,29 @@ make_brick(vv_parallel *p, const vv_volume *v, const par_plan *pl) {
     return VV_OK;
 }
 
+static vv_status
+read_bricked_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
+    return vv_bricked_read_box(ctx, lo, hi, out);
+}
+
 vv_status
 vv_parallel_set_source(vv_parallel *p, vv_bricked *source) {
-    p->source = source;
+    return source
+               ? vv_parallel_set_box_source(p, vv_bricked_header(source), read_bricked_box, source)
+               : vv_parallel_set_box_source(p, NULL, NULL, NULL);
+}
+
+vv_status
+vv_parallel_set_box_source(vv_parallel *p, const vv_volume *header, vv_box_reader read, void *ctx) {
+    if (read && !header)
+        return vv_error_set(VV_ERR_INVALID, "parallel: a box source without its header");
+    p->source = read ? ctx : NULL;
+    p->read = read;
+    memset(&p->hdr, 0, sizeof p->hdr);
+    if (read) {
+        p->hdr = *header; /* geometry only: its voxels are never read */
+        p->hdr.data = NULL;
+    }
     p->range_done = 0;
     vv_volume_free(p->brick);
     p->brick = NULL;
@@ -712,7 +737,7 @@ render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *vie
     *obj_index = oi;
     const vv_object *obj = oi >= 0 ? w->objects[oi] : NULL;
     if (s == VV_OK) {
-        const int *dims = p->source ? vv_bricked_header(p->source)->dims : obj->volume->dims;
+        const int *dims = p->source ? p->hdr.dims : obj->volume->dims;
         s = plan_build(pl, p->rank, p->size, dims, &p->opt);
     }
     if (s == VV_OK)
@@ -728,12 +753,13 @@ render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *vie
         double mn = p->brick->range[0], mx = -p->brick->range[1], gmn = mn, gmx = mx;
         MPI_Allreduce(&mn, &gmn, 1, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
         MPI_Allreduce(&mx, &gmx, 1, MPI_DOUBLE, MPI_MIN, MPI_COMM_WORLD);
-        vv_bricked_set_range(p->source, gmn, -gmx);
+        p->hdr.range[0] = gmn;
+        p->hdr.range[1] = -gmx;
         p->range_done = 1;
     }
     if (p->source) {
-        p->brick->range[0] = vv_bricked_header(p->source)->range[0];
-        p->brick->range[1] = vv_bricked_header(p->source)->range[1];
+        p->brick->range[0] = p->hdr.range[0];
+        p->brick->range[1] = p->hdr.range[1];
     }
     /* the region: this rank's brick, seen where its box projects; the
      * World keeps the object's own volume (the whole one, or rank 0's
@@ -741,7 +767,7 @@ render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *vie
     vv_render_region rg = p->rg;
     rg.object = oi;
     {
-        const vv_volume *g = p->source ? vv_bricked_header(p->source) : obj->volume;
+        const vv_volume *g = p->source ? &p->hdr : obj->volume;
         vv_object geo = *obj; /* shallow: nothing in it is released */
         geo.volume = (vv_volume *)g;
         int rlo[3], rhi[3];

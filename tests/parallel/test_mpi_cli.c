@@ -2,7 +2,9 @@
  * The CLI under mpirun (src/parallel, apps/volvis/render_parallel.c):
  * `volvis render` on 3 ranks: rank 0 writes the PNG and prints "on 3
  * ranks"; `volvis animate` likewise, frame by frame, and resumes; a .vvb read
- * by bricks (each rank its own box) gives the one-process MIP image; a rank that
+ * by bricks (each rank its own box) gives the one-process MIP image, and so
+ * does an OME-Zarr pyramid at levels 0 and 1 (each rank its box of the
+ * level, through its own chunk cache); a rank that
  * cannot read the input (or its .vvb is cut short) and ranks that read different scene
  * files stop every
  * rank with one clear error and no output; the ray tracer gives the
@@ -222,6 +224,48 @@ test_cli(void **state) {
         assert_non_null(strstr(out, "past the end of the file"));
         assert_int_not_equal(stat(png, &st), 0);
         free(out);
+    }
+
+    /* an OME-Zarr pyramid: every rank reads only its box of the level
+     * through its own chunk cache; MIP at levels 0 and 1 equals one
+     * process's in-memory image of that level (an explicit transfer
+     * function: the default one comes from the coarsest level's histogram
+     * on the ranks) */
+    {
+        char store[1300], one[1400], three[1400];
+        snprintf(store, sizeof store, "%s/n.zarr", a);
+        snprintf(cmd, sizeof cmd, "%s convert %s %s -q 2>&1", cli(), vt_data("volumes/neghip.slc"),
+                 store);
+        rc = run(cmd, &out);
+        if (rc != 0)
+            fail_msg("%s\n%s", cmd, out);
+        free(out);
+        for (int level = 0; level < 2; level++) {
+            snprintf(one, sizeof one, "%s/zarr1_%d.png", dir, level);
+            snprintf(three, sizeof three, "%s/zarr3_%d.png", dir, level);
+            snprintf(cmd, sizeof cmd,
+                     "%s render %s --level %d --mode mip --tf 20:200 --size 64x48 -q -o %s 2>&1",
+                     cli(), store, level, one);
+            rc = run(cmd, &out);
+            if (rc != 0)
+                fail_msg("%s\n%s", cmd, out);
+            free(out);
+            snprintf(cmd, sizeof cmd,
+                     MPIRUN " -np 3 %s %s %s %s render n.zarr --level %d --mode mip --tf 20:200 "
+                            "--size 64x48 -o %s 2>&1",
+                     wrap, a, a, cli(), level, three);
+            rc = run(cmd, &out);
+            if (rc != 0)
+                fail_msg("%s\n%s", cmd, out);
+            assert_non_null(strstr(out, "on 3 ranks)"));
+            free(out);
+            size_t n1, n3;
+            unsigned char *p1 = vt_read_file(one, &n1), *p3 = vt_read_file(three, &n3);
+            assert_int_equal(n1, n3);
+            assert_memory_equal(p1, p3, n1);
+            free(p1);
+            free(p3);
+        }
     }
 
     /* the ray tracer: the one-process image at quality 1 (regions trace one
