@@ -47,6 +47,30 @@ run(const char *cmd, char **out) {
     return WIFEXITED(st) ? WEXITSTATUS(st) : 128;
 }
 
+/* Runs @p cmd, which must exit 0; when @p needle is given, its output must
+ * hold it. */
+static void
+run_ok(const char *cmd, const char *needle) {
+    char *out = NULL;
+    int rc = run(cmd, &out);
+    if (rc != 0)
+        fail_msg("%s\n%s", cmd, out);
+    if (needle && !strstr(out, needle))
+        fail_msg("%s: no '%s' in\n%s", cmd, needle, out);
+    free(out);
+}
+
+/* Files @p a and @p b hold the same bytes. */
+static void
+same_bytes(const char *a, const char *b) {
+    size_t na, nb;
+    unsigned char *pa = vt_read_file(a, &na), *pb = vt_read_file(b, &nb);
+    assert_int_equal(na, nb);
+    assert_memory_equal(pa, pb, na);
+    free(pa);
+    free(pb);
+}
+
 static const char *
 cli(void) {
     const char *c = getenv("VV_CLI");
@@ -195,24 +219,12 @@ test_cli(void **state) {
         free(bytes);
         snprintf(cmd, sizeof cmd, "%s render %s --mode mip --size 64x48 -q -o %s 2>&1", cli(), vvb,
                  one);
-        rc = run(cmd, &out);
-        if (rc != 0)
-            fail_msg("%s\n%s", cmd, out);
-        free(out);
+        run_ok(cmd, NULL);
         snprintf(cmd, sizeof cmd,
                  MPIRUN_LEAKS " -np 3 %s %s %s %s render v.vvb --mode mip --size 64x48 -o %s 2>&1",
                  wrap, a, a, cli(), three);
-        rc = run(cmd, &out);
-        if (rc != 0)
-            fail_msg("%s\n%s", cmd, out);
-        assert_non_null(strstr(out, "on 3 ranks)"));
-        free(out);
-        size_t n1, n3;
-        unsigned char *p1 = vt_read_file(one, &n1), *p3 = vt_read_file(three, &n3);
-        assert_int_equal(n1, n3);
-        assert_memory_equal(p1, p3, n1);
-        free(p1);
-        free(p3);
+        run_ok(cmd, "on 3 ranks)");
+        same_bytes(one, three);
         snprintf(png, sizeof png, "%s/cut.png", dir);
         remove(png);
         snprintf(cmd, sizeof cmd, MPIRUN " -np 4 %s %s %s %s render v.vvb -o %s 2>&1", wrap, a, b,
@@ -236,35 +248,20 @@ test_cli(void **state) {
         snprintf(store, sizeof store, "%s/n.zarr", a);
         snprintf(cmd, sizeof cmd, "%s convert %s %s -q 2>&1", cli(), vt_data("volumes/neghip.slc"),
                  store);
-        rc = run(cmd, &out);
-        if (rc != 0)
-            fail_msg("%s\n%s", cmd, out);
-        free(out);
+        run_ok(cmd, NULL);
         for (int level = 0; level < 2; level++) {
             snprintf(one, sizeof one, "%s/zarr1_%d.png", dir, level);
             snprintf(three, sizeof three, "%s/zarr3_%d.png", dir, level);
             snprintf(cmd, sizeof cmd,
                      "%s render %s --level %d --mode mip --tf 20:200 --size 64x48 -q -o %s 2>&1",
                      cli(), store, level, one);
-            rc = run(cmd, &out);
-            if (rc != 0)
-                fail_msg("%s\n%s", cmd, out);
-            free(out);
+            run_ok(cmd, NULL);
             snprintf(cmd, sizeof cmd,
                      MPIRUN " -np 3 %s %s %s %s render n.zarr --level %d --mode mip --tf 20:200 "
                             "--size 64x48 -o %s 2>&1",
                      wrap, a, a, cli(), level, three);
-            rc = run(cmd, &out);
-            if (rc != 0)
-                fail_msg("%s\n%s", cmd, out);
-            assert_non_null(strstr(out, "on 3 ranks)"));
-            free(out);
-            size_t n1, n3;
-            unsigned char *p1 = vt_read_file(one, &n1), *p3 = vt_read_file(three, &n3);
-            assert_int_equal(n1, n3);
-            assert_memory_equal(p1, p3, n1);
-            free(p1);
-            free(p3);
+            run_ok(cmd, "on 3 ranks)");
+            same_bytes(one, three);
         }
     }
 
