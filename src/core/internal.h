@@ -44,6 +44,11 @@ void vv_volume_set_allocator(void *(*alloc)(size_t bytes), void (*release)(void 
  */
 int vv_memory_cgroup_root(char *buf, size_t cap);
 
+/* vv_volume_check_size without the memory budget: the dims, voxel count and
+ * byte limits only, for readers that never hold the whole volume (bricks,
+ * pyramids, out-of-core NRRD and raw). */
+vv_status vv_volume_check_limits(const int dims[3], vv_voxel_type t, uint64_t *bytes);
+
 /** Opens the temporary file. Errors: VV_ERR_IO (with path and strerror), VV_ERR_NOMEM. */
 vv_status vv_atomic_file_open(vv_atomic_file *af, const char *path);
 /** Flushes, closes and renames. Errors: VV_ERR_IO (the temporary is removed). */

@@ -92,7 +92,7 @@ vv_voxel_type_parse(const char *name, vv_voxel_type *out) {
 }
 
 vv_status
-vv_volume_check_size(const int dims[3], vv_voxel_type t, uint64_t *bytes) {
+vv_volume_check_limits(const int dims[3], vv_voxel_type t, uint64_t *bytes) {
     for (int a = 0; a < 3; a++)
         if (dims[a] < 1 || dims[a] > VV_VOLUME_MAX_DIM)
             return vv_error_set(VV_ERR_LIMIT, "volume size %d x %d x %d: axis %d is outside 1..%d",
@@ -112,11 +112,21 @@ vv_volume_check_size(const int dims[3], vv_voxel_type t, uint64_t *bytes) {
                             "volume size %d x %d x %d %s = %llu bytes is over the limit of %llu",
                             dims[0], dims[1], dims[2], vv_voxel_type_name(t), (unsigned long long)b,
                             (unsigned long long)VV_VOLUME_MAX_BYTES);
+    if (bytes)
+        *bytes = b;
+    return VV_OK;
+}
+
+vv_status
+vv_volume_check_size(const int dims[3], vv_voxel_type t, uint64_t *bytes) {
+    uint64_t b = 0;
+    vv_status s = vv_volume_check_limits(dims, t, &b);
+    if (s != VV_OK)
+        return s;
     char what[96];
     snprintf(what, sizeof what, "volume of %d x %d x %d %s", dims[0], dims[1], dims[2],
              vv_voxel_type_name(t));
-    vv_status s = vv_memory_budget_check(b, what);
-    if (s != VV_OK)
+    if ((s = vv_memory_budget_check(b, what)) != VV_OK)
         return s;
     if (bytes)
         *bytes = b;

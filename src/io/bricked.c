@@ -592,7 +592,7 @@ open_vvb(vv_bricked *b) {
     if (type > VV_F64)
         return vv_error_set(VV_ERR_FORMAT, "voxel type %u", type);
     uint64_t vbytes;
-    if ((s = vv_volume_check_size(dims, (vv_voxel_type)type, &vbytes)) != VV_OK)
+    if ((s = vv_volume_check_limits(dims, (vv_voxel_type)type, &vbytes)) != VV_OK)
         return s;
     const int one[3] = {1, 1, 1};
     if ((s = vv_volume_new(&b->header, one, (vv_voxel_type)type)) != VV_OK)
@@ -701,7 +701,7 @@ bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw, uint6
         s = b->data_path ? vv_volume_new(&b->header, one, raw->type)
                          : vv_error_set(VV_ERR_NOMEM, "out of memory");
         if (s == VV_OK) {
-            if ((s = vv_volume_check_size(raw->dims, raw->type, NULL)) == VV_OK) {
+            if ((s = vv_volume_check_limits(raw->dims, raw->type, NULL)) == VV_OK) {
                 memcpy(b->header->dims, raw->dims, sizeof raw->dims);
                 memcpy(b->header->spacing, raw->spacing, sizeof raw->spacing);
                 memcpy(b->header->origin, raw->origin, sizeof raw->origin);

@@ -192,9 +192,10 @@ pick_axes(const Nrrd *n, unsigned int ax[3], int *nax, int *c_axis, int *t_axis)
 }
 
 /* The spatial dims and voxel type; the channel and time axes' sizes in
- * @p nc and @p nt (1 when absent). */
+ * @p nc and @p nt (1 when absent). @p whole: the volume is to be read
+ * whole (the memory budget applies), else by boxes (the limits only). */
 static vv_status
-header_dims(const Nrrd *n, int dims[3], vv_voxel_type *type, int *nc, int *nt) {
+header_dims(const Nrrd *n, int dims[3], vv_voxel_type *type, int *nc, int *nt, int whole) {
     unsigned int ax[3];
     int nax = 0, c_axis, t_axis;
     vv_status s = pick_axes(n, ax, &nax, &c_axis, &t_axis);
@@ -217,7 +218,8 @@ header_dims(const Nrrd *n, int dims[3], vv_voxel_type *type, int *nc, int *nt) {
                                 VV_VOLUME_MAX_DIM);
         dims[i] = (int)sz;
     }
-    return vv_volume_check_size(dims, *type, NULL);
+    return whole ? vv_volume_check_size(dims, *type, NULL)
+                 : vv_volume_check_limits(dims, *type, NULL);
 }
 
 static void
@@ -755,7 +757,7 @@ read_locked(vv_volume **out, const char *path, const header_scan *hs, int channe
         s = teem_error(VV_ERR_FORMAT, "cannot read header");
         goto done;
     }
-    s = header_dims(n, dims, &type, &nc, &nt);
+    s = header_dims(n, dims, &type, &nc, &nt, 1);
     if (s != VV_OK)
         goto done;
     if (ch >= nc || tp >= nt) {
@@ -799,7 +801,7 @@ read_locked(vv_volume **out, const char *path, const header_scan *hs, int channe
     /* the file may have changed between the passes: check again */
     int dims2[3], nc2, nt2;
     vv_voxel_type type2;
-    s = header_dims(n, dims2, &type2, &nc2, &nt2);
+    s = header_dims(n, dims2, &type2, &nc2, &nt2, 1);
     if (s != VV_OK)
         goto done;
     if (dims2[0] != dims[0] || dims2[1] != dims[1] || dims2[2] != dims[2] || type2 != type ||
@@ -1048,7 +1050,7 @@ raw_layout_locked(const char *path, vv_volume **header, char **data_path, uint64
     }
     int dims[3], nc, nt;
     vv_voxel_type type;
-    if ((s = header_dims(n, dims, &type, &nc, &nt)) != VV_OK)
+    if ((s = header_dims(n, dims, &type, &nc, &nt, 0)) != VV_OK)
         goto done;
     if (nc * nt > 1) {
         s = vv_error_set(VV_ERR_UNSUPPORTED,

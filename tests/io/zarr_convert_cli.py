@@ -15,8 +15,9 @@ vv_ome_zarr_write. Checks:
   CT head), and a BigDataViewer file written by h5py;
 - zarr-python reads every level of the chunk-by-chunk store as numpy's
   2x2x2 means of the level before (an independent reader and reduction);
-- memory: the peak resident set of converting a 128 MiB raw volume is
-  under half of it (the whole-volume writer needs all of it);
+- memory: a 128 MiB raw volume converts under a memory budget
+  (VOLVIS_MAX_MEMORY) of a quarter of it, which a whole-volume read would
+  exceed, and its peak resident set is under half of it;
 - bad input: a raw file shorter than its size says, and a BigDataViewer
   file with a corrupt chunk met half way through, are one line naming the
   file, a non-zero exit, and no store (not even the temporary folder) left;
@@ -151,9 +152,13 @@ with open(big, "wb") as f:
     row = (np.arange(side[0] * side[1], dtype=np.uint32) % 3001).astype(np.uint16)
     for k in range(side[2]):
         (row + k).tofile(f)
+# under a memory budget of a quarter of the volume (VOLVIS_MAX_MEMORY), which
+# a whole-volume read would exceed
+budget = side[0] * side[1] * side[2] * 2 // 4
 proc = subprocess.Popen([VOLVIS, "convert", "--raw", "%dx%dx%d:u16" % side, big,
                          os.path.join(OUT, "big.zarr")], stdout=subprocess.PIPE,
-                        stderr=subprocess.PIPE, text=True)
+                        stderr=subprocess.PIPE, text=True,
+                        env=dict(os.environ, VOLVIS_MAX_MEMORY=str(budget)))
 # The child's own high-water mark (VmHWM, after exec: not this interpreter's
 # pages that a fork carries, which its ru_maxrss would count), read until it
 # exits; it only grows.
@@ -171,7 +176,8 @@ out, err = proc.communicate()
 p = subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
 size_mib = os.path.getsize(big) / 2**20
 check(p.returncode == 0 and "chunk by chunk" in p.stdout,
-      f"a {size_mib:.0f} MiB raw volume converted chunk by chunk {p.stderr.strip()}")
+      f"a {size_mib:.0f} MiB raw volume converted chunk by chunk under a memory budget of "
+      f"{budget / 2**20:.0f} MiB {p.stderr.strip()}")
 if SANITIZER:
     print(f"note peak resident set {peak / 1024:.0f} MiB: not bounded under the sanitizers "
           "(the release suite checks it)")
