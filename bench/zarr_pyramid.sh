@@ -8,8 +8,8 @@
 # at full resolution decoded in-process; the folder is deleted after. Needs root (cgroup)
 # and about 2 SIDE^3 bytes of free disk. The conversion runs chunk by chunk
 # (vv_ome_zarr_write_boxes) inside the same cgroup limit: its time and its
-# peak resident set (GNU time) are printed; the cgroup's own peak counts the
-# page cache of the files read and written, so it is reset before the renders.
+# peak resident set (GNU time) are printed, in a cgroup of its own: the page
+# cache of the files it reads and writes stays charged to its cgroup.
 # usage: bench/zarr_pyramid.sh [BUILD_DIR] [SIDE] [LIMIT_MIB] [CGROUP_MIB] [FRAMES]
 #   (from the repo root; defaults 1024, 128, 256, 3)
 set -euo pipefail
@@ -25,20 +25,24 @@ tmp=$(mktemp -d "${TMPDIR:-/tmp}/vv_pyr.XXXXXX")
 cg=/sys/fs/cgroup/memory/vv_pyr_$$
 cleanup() {
   rm -rf "$tmp"
-  if [ -d "$cg" ]; then rmdir "$cg" 2>/dev/null || true; fi
+  for d in "$cg" "$cg-convert"; do
+    if [ -d "$d" ]; then rmdir "$d" 2>/dev/null || true; fi
+  done
 }
 trap cleanup EXIT
 echo "# $(date -u +%FT%TZ) load: $(cut -d' ' -f1-3 /proc/loadavg); ${side}^3 u8 in $tmp"
 "$gen" --generate "$side" "$tmp/big.raw"
-mkdir "$cg"
+# the conversion in a cgroup of its own (the page cache of the files it
+# reads and writes stays charged to it), with the same limit
+mkdir "$cg" "$cg-convert"
 echo $((cgmib * 1024 * 1024)) > "$cg/memory.limit_in_bytes"
+echo $((cgmib * 1024 * 1024)) > "$cg-convert/memory.limit_in_bytes"
 timer=""
 [ -x /usr/bin/time ] && timer="/usr/bin/time -f '# convert (chunk by chunk): %e s, peak resident set %M KiB'"
-sh -c "echo \$\$ > $cg/cgroup.procs && exec $timer $volvis convert $tmp/big.raw \
+sh -c "echo \$\$ > $cg-convert/cgroup.procs && exec $timer $volvis convert $tmp/big.raw \
   --raw ${side}x${side}x${side}:u8 $tmp/big.ome.zarr --quiet"
 rm "$tmp/big.raw"
-echo "# store: $(du -sm "$tmp/big.ome.zarr" | cut -f1) MiB on disk; load: $(cut -d' ' -f1-3 /proc/loadavg)"
-echo 0 > "$cg/memory.max_usage_in_bytes" # the renders' peak from here
+echo "# store: $(du -sm "$tmp/big.ome.zarr" | cut -f1) MiB on disk; convert cgroup failcnt $(cat "$cg-convert/memory.failcnt"); load: $(cut -d' ' -f1-3 /proc/loadavg)"
 # the chunks are decoded by the sandboxed readers (the default); the last
 # run decodes them in-process (VOLVIS_SANDBOX=0), the sandbox's cost
 for run in "1 --lod 1" "1 --level 0" "0 --level 0"; do
