@@ -44,7 +44,7 @@ cli_convert_usage(FILE *out) {
             "either; OME-Zarr (.ome.zarr, .zarr: a Zarr v2 folder with a pyramid of\n"
             "2x2x2 means, labels by nearest, and each level's scale and translation;\n"
             "read back at any level with --level) has none either; it is written\n"
-            "chunk by chunk, with memory bounded by a few 64^3 chunks, when IN is raw,\n"
+            "chunk by chunk, with memory bounded by a row of 64^3 chunks, when IN is raw,\n"
             "an uncompressed NRRD or a pyramid (OME-Zarr, BigDataViewer, Imaris);\n"
             "SLC (.slc; VolVis's own 8-bit format)\n"
             "holds 8-bit data only: other voxel types are rescaled from the value\n"

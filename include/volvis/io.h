@@ -369,12 +369,13 @@ vv_status vv_ome_zarr_write(const vv_volume *v, const char *path, const vv_save_
 typedef vv_status (*vv_box_reader)(void *ctx, const int lo[3], const int hi[3], vv_volume **out);
 /**
  * Writes the OME-Zarr store of vv_ome_zarr_write (the same levels, chunks
- * and bytes) from a volume that need not fit in memory: level 0 one chunk
- * (64^3 voxels at most) at a time from @p read, called from one thread at a
- * time, and each further level from the level before, read back from the
- * store being written (the 2x2x2 blocks under each of its chunks). Memory:
- * about nine chunks a thread (128^3 voxels of the level before, one chunk
- * and their compressed bytes), whatever the volume's size. @p hdr gives the
+ * and bytes) from a volume that need not fit in memory: level 0 a row of
+ * chunks (the volume's width x 64 x 64 voxels) at a time from @p read,
+ * called from one thread at a time, and each further level from the level
+ * before, read back from the store being written (the 2x2x2 blocks under
+ * each of its chunks). Memory a thread: one row of chunks for level 0, about
+ * nine chunks for the others (128^3 voxels of the level before, one chunk
+ * and their compressed bytes), whatever the volume's depth. @p hdr gives the
  * dims, type, spacing, origin and unit (its voxels are never read); the
  * omero window is the range of the voxels read. Chunks are compressed and
  * written on every core. Atomic as vv_ome_zarr_write. Errors: those of

@@ -317,9 +317,10 @@ next_level(const zarr_level *src, zarr_level *dst, vv_voxel_type t, int label) {
 /* ---- chunks ------------------------------------------------------------------- */
 
 /* Where a level's voxels come from when they are not in memory: level 0
- * from the caller's box reader (one box a chunk, one call at a time), a
- * further level from the level before it, read back from the store being
- * written (the 2x2x2 blocks under one chunk) and reduced as next_level does. */
+ * from the caller's box reader (one box a row of chunks, one call at a
+ * time: row_body), a further level from the level before it, read back from
+ * the store being written (the 2x2x2 blocks under one chunk) and reduced as
+ * next_level does (feed_chunk). */
 typedef struct box_feed {
     vv_box_reader read; /* level 0; NULL: the level before */
     void *ctx;
@@ -413,49 +414,15 @@ read_prev_box(const box_feed *f, vv_voxel_type t, const int lo[3], const int n[3
     return 0;
 }
 
-/* The chunk at x0, y0, z0 (w x h x d voxels inside the level) into @p raw
- * (chunk-shaped, cleared) from the feed; @p work: a buffer of the level
- * before's box and one of its chunks (further levels). 0, an errno, -1 out
- * of memory or -2 (the reader's failure, in f->status). */
+/* The chunk at @p o (@p e voxels inside the level) of a level after the
+ * first into @p raw (chunk-shaped, cleared): the 2x2x2 blocks under it read
+ * back from the level before into @p work (@p cbuf and @p z hold one of its
+ * chunks). 0 or an errno (EILSEQ: a chunk read back is not the one written). */
 static int
 feed_chunk(chunk_job *j, const int o[3], const int e[3], unsigned char *raw, unsigned char *work,
            unsigned char *cbuf, unsigned char *z, size_t zcap) {
     box_feed *f = j->feed;
     const size_t es = vv_voxel_type_size(j->type);
-    if (f->read) {
-        const int hi[3] = {o[0] + e[0] - 1, o[1] + e[1] - 1, o[2] + e[2] - 1};
-        vv_volume *v = NULL;
-        pthread_mutex_lock(&f->lock);
-        vv_status s = f->status == VV_OK ? f->read(f->ctx, o, hi, &v) : f->status;
-        if (s == VV_OK && (!v || v->type != j->type || v->dims[0] != e[0] || v->dims[1] != e[1] ||
-                           v->dims[2] != e[2]))
-            s = vv_error_set(VV_ERR_INVALID, "the reader gave a box of another shape or type");
-        if (s == VV_OK)
-            for (size_t i = 0, n = (size_t)e[0] * e[1] * e[2]; i < n; i++) {
-                const double x = load_voxel(v->data, j->type, i);
-                if (!f->have_range || x < f->range[0])
-                    f->range[0] = x;
-                if (!f->have_range || x > f->range[1])
-                    f->range[1] = x;
-                f->have_range = 1;
-            }
-        if (s != VV_OK && f->status == VV_OK) {
-            f->status = s;
-            snprintf(f->message, sizeof f->message, "%s", vv_error_message());
-        }
-        pthread_mutex_unlock(&f->lock);
-        if (s != VV_OK) {
-            vv_volume_free(v);
-            return -2;
-        }
-        for (int k = 0; k < e[2]; k++)
-            for (int y = 0; y < e[1]; y++)
-                memcpy(raw + ((size_t)k * j->chunk[1] + y) * j->chunk[0] * es,
-                       (const char *)v->data + ((size_t)k * e[1] + y) * e[0] * es,
-                       (size_t)e[0] * es);
-        vv_volume_free(v);
-        return 0;
-    }
     /* the blocks under the chunk, in the level before */
     const int *sd = f->prev->dims, *st = f->step;
     int plo[3], pn[3];
@@ -490,6 +457,108 @@ feed_chunk(chunk_job *j, const int o[3], const int e[3], unsigned char *raw, uns
                 store_voxel(raw, j->type, out, sum / n);
             }
     return 0;
+}
+
+/* Chunk @p raw (chunk-shaped) compressed into @p z (when the job
+ * compresses) and written as cz/cy/cx of the level; 0, an errno or -1 (out
+ * of memory). */
+static int
+put_chunk(const chunk_job *j, int cx, int cy, int cz, const unsigned char *raw, size_t raw_n,
+          unsigned char *z, uLong cap) {
+    const unsigned char *out = raw;
+    size_t out_n = raw_n;
+    if (j->compress) {
+        uLongf zn = cap;
+        if (compress2(z, &zn, raw, (uLong)raw_n, 1) != Z_OK)
+            return -1;
+        out = z;
+        out_n = zn;
+    }
+    char p[ZARR_PATH_MAX];
+    store_path(p, "%s/%d/%d/%d", j->dir, cz, cy, cx);
+    int fd = open(p, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    size_t done = 0;
+    while (fd >= 0 && done < out_n) {
+        ssize_t r = write(fd, out + done, out_n - done);
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r <= 0)
+            break;
+        done += (size_t)r;
+    }
+    int err = fd < 0 || done < out_n ? (errno ? errno : EIO) : 0;
+    if (fd >= 0 && close(fd) != 0 && !err)
+        err = errno;
+    return err;
+}
+
+/* Level 0 from the box reader, a row of chunks (all x, one y and z) at a
+ * time: one read of the row's box (the reader's rows are the volume's full
+ * width, so one pread a row of voxels rather than one a chunk's row), then
+ * each chunk cut from it. Rows [r0, r1) of n[1] x n[2]. */
+static void
+row_body(void *ctx, long r0, long r1, int worker) {
+    (void)worker;
+    chunk_job *j = ctx;
+    box_feed *f = j->feed;
+    const size_t es = vv_voxel_type_size(j->type);
+    const size_t raw_n = (size_t)j->chunk[0] * j->chunk[1] * j->chunk[2] * es;
+    const uLong cap = compressBound((uLong)raw_n);
+    unsigned char *raw = malloc(raw_n), *z = j->compress ? malloc(cap) : NULL;
+    if (!raw || (j->compress && !z))
+        j->failed = -1;
+    const int *D = j->l->dims;
+    for (long r = r0; r < r1 && !j->failed; r++) {
+        const int cy = (int)(r % j->n[1]), cz = (int)(r / j->n[1]);
+        const int y0 = cy * j->chunk[1], z0 = cz * j->chunk[2];
+        const int h = D[1] - y0 < j->chunk[1] ? D[1] - y0 : j->chunk[1];
+        const int d = D[2] - z0 < j->chunk[2] ? D[2] - z0 : j->chunk[2];
+        const int lo[3] = {0, y0, z0}, hi[3] = {D[0] - 1, y0 + h - 1, z0 + d - 1};
+        vv_volume *v = NULL;
+        pthread_mutex_lock(&f->lock);
+        vv_status s = f->status == VV_OK ? f->read(f->ctx, lo, hi, &v) : f->status;
+        if (s == VV_OK &&
+            (!v || v->type != j->type || v->dims[0] != D[0] || v->dims[1] != h || v->dims[2] != d))
+            s = vv_error_set(VV_ERR_INVALID, "the reader gave a box of another shape or type");
+        if (s != VV_OK && f->status == VV_OK) {
+            f->status = s;
+            snprintf(f->message, sizeof f->message, "%s", vv_error_message());
+        }
+        pthread_mutex_unlock(&f->lock);
+        if (s != VV_OK) {
+            vv_volume_free(v);
+            j->failed = -2;
+            break;
+        }
+        /* the range of the voxels read, merged under the lock */
+        double mn = INFINITY, mx = -INFINITY;
+        for (size_t i = 0, n = (size_t)D[0] * h * d; i < n; i++) {
+            const double x = load_voxel(v->data, j->type, i);
+            mn = x < mn ? x : mn;
+            mx = x > mx ? x : mx;
+        }
+        pthread_mutex_lock(&f->lock);
+        f->range[0] = !f->have_range || mn < f->range[0] ? mn : f->range[0];
+        f->range[1] = !f->have_range || mx > f->range[1] ? mx : f->range[1];
+        f->have_range = 1;
+        pthread_mutex_unlock(&f->lock);
+        for (int cx = 0; cx < j->n[0] && !j->failed; cx++) {
+            const int x0 = cx * j->chunk[0];
+            const int w = D[0] - x0 < j->chunk[0] ? D[0] - x0 : j->chunk[0];
+            memset(raw, 0, raw_n); /* the padding of edge chunks: the fill value */
+            for (int k = 0; k < d; k++)
+                for (int y = 0; y < h; y++)
+                    memcpy(raw + ((size_t)k * j->chunk[1] + y) * j->chunk[0] * es,
+                           (const char *)v->data + (((size_t)k * h + y) * D[0] + x0) * es,
+                           (size_t)w * es);
+            int err = put_chunk(j, cx, cy, cz, raw, raw_n, z, cap);
+            if (err)
+                j->failed = err;
+        }
+        vv_volume_free(v);
+    }
+    free(raw);
+    free(z);
 }
 
 static void
@@ -538,32 +607,7 @@ chunk_body(void *ctx, long c0, long c1, int worker) {
                                (((size_t)(z0 + k) * j->l->dims[1] + y0 + y) * j->l->dims[0] + x0) *
                                    es,
                            (size_t)w * es);
-        const unsigned char *out = raw;
-        size_t out_n = raw_n;
-        if (j->compress) {
-            uLongf zn = cap;
-            if (compress2(z, &zn, raw, (uLong)raw_n, 1) != Z_OK) {
-                j->failed = -1;
-                break;
-            }
-            out = z;
-            out_n = zn;
-        }
-        char p[ZARR_PATH_MAX];
-        store_path(p, "%s/%d/%d/%d", j->dir, cz, cy, cx);
-        int fd = open(p, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-        size_t done = 0;
-        while (fd >= 0 && done < out_n) {
-            ssize_t r = write(fd, out + done, out_n - done);
-            if (r < 0 && errno == EINTR)
-                continue;
-            if (r <= 0)
-                break;
-            done += (size_t)r;
-        }
-        int err = fd < 0 || done < out_n ? (errno ? errno : EIO) : 0;
-        if (fd >= 0 && close(fd) != 0 && !err)
-            err = errno;
+        int err = put_chunk(j, cx, cy, cz, raw, raw_n, z, cap);
         if (err) {
             j->failed = err;
             break;
@@ -604,7 +648,10 @@ write_level(const char *root, int index, const vv_volume *v, const zarr_level *l
     }
     if (s != VV_OK)
         return s;
-    vv_parallel_for((long)j.n[0] * j.n[1] * j.n[2], 4, 0, chunk_body, &j, NULL);
+    if (feed && feed->read) /* level 0 from the reader: by rows of chunks */
+        vv_parallel_for((long)j.n[1] * j.n[2], 1, 0, row_body, &j, NULL);
+    else
+        vv_parallel_for((long)j.n[0] * j.n[1] * j.n[2], 4, 0, chunk_body, &j, NULL);
     if (j.failed == -2)
         return vv_error_set(feed->status, "%s", feed->message);
     if (j.failed == -1)
