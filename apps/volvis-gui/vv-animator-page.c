@@ -543,9 +543,13 @@ record_tick(gpointer data) {
     return G_SOURCE_CONTINUE;
 }
 
-/* Stops recording; @p finish makes the samples the current animation. */
+/* Stops recording; @p finish makes the samples the current animation,
+ * ending with the view as it is now: the 30 Hz samples may miss the last
+ * moves of a drag (a busy machine delays the timer past them). */
 static void
 stop_recording(VvAnimatorPage *self, gboolean finish) {
+    if (finish && self->recorder)
+        record_tick(self);
     if (self->record_source) {
         g_source_remove(self->record_source);
         self->record_source = 0;
