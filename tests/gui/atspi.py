@@ -534,11 +534,32 @@ class Session:
             self.focus_main()
 
     def set_spin(self, o, value):
-        """Types a value into a spin button: click, select all, type, Enter."""
-        self.click(o)
-        self.key("ctrl+a")
-        self.type(str(value))
-        self.key("Return")
+        """Types a value into a spin button: click, select all, type, Enter;
+        again (at most three times) until the spin button holds the value, as
+        its accessible Value says: a busy GUI may miss the click that focuses
+        it. A spin button without a Value, or a value that is not a number,
+        is typed once."""
+        try:
+            want = float(value)
+        except (TypeError, ValueError):
+            want = None
+        for _ in range(3):
+            self.click(o)
+            self.key("ctrl+a")
+            self.type(str(value))
+            self.key("Return")
+            if want is None:
+                return
+            t0 = time.time()
+            while time.time() - t0 < 8:
+                try:
+                    v = o.queryValue()
+                    tol = max(1e-6 * abs(want), 0.51 * (v.minimumIncrement or 0), 1e-9)
+                    if abs(v.currentValue - want) <= tol:
+                        return
+                except Exception:  # no Value interface: as typed
+                    return
+                time.sleep(0.2)
 
     def page(self, title, timeout=10):
         """Shows the side-bar page @p title (a row of the stack sidebar)."""
