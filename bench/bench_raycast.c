@@ -10,7 +10,7 @@
  *
  * usage: bench_raycast VOLUME [--iso V] [--tf-lo A] [--tf-hi B] [--size N]
  *                      [--runs N] [--threads N] [--outdir DIR] [--step-vox S]
- *                      [--opacity O] [--modes composite,mip,iso]
+ *                      [--opacity O] [--modes composite,mip,iso] [--quality Q]
  *                      [--option KEY=VALUE]...   (renderer options, e.g. early_termination=0.98)
  */
 #include <math.h>
@@ -29,7 +29,7 @@ static const char *dataset;
 
 typedef struct bench_cfg {
     double iso, tf_lo, tf_hi, step_vox, opacity;
-    int size, runs, threads;
+    int size, runs, threads, quality;
     const char *outdir;
     const char *modes;      /* comma list of modes to run */
     const char *options[8]; /* renderer options KEY=VALUE */
@@ -156,8 +156,8 @@ peak_shaded_rate(const vv_volume *like, const bench_cfg *cfg) {
 
 int
 main(int argc, char **argv) {
-    bench_cfg cfg = {NAN,    NAN, NAN, 0.5, 0.5, 512, 5, 0, "build/bench-out", "composite,mip,iso",
-                     {NULL}, 0};
+    bench_cfg cfg = {
+        NAN, NAN, NAN, 0.5, 0.5, 512, 5, 0, 2, "build/bench-out", "composite,mip,iso", {NULL}, 0};
     const char *path = NULL;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
@@ -182,6 +182,8 @@ main(int argc, char **argv) {
             cfg.runs = atoi(val);
         else if (!strcmp(a, "--threads"))
             cfg.threads = atoi(val);
+        else if (!strcmp(a, "--quality"))
+            cfg.quality = atoi(val);
         else if (!strcmp(a, "--outdir"))
             cfg.outdir = val;
         else if (!strcmp(a, "--step-vox"))
@@ -198,11 +200,11 @@ main(int argc, char **argv) {
         }
         i++;
     }
-    if (!path || cfg.size < 1 || cfg.runs < 1) {
+    if (!path || cfg.size < 1 || cfg.runs < 1 || cfg.quality < 0 || cfg.quality > 2) {
         fprintf(stderr,
                 "usage: bench_raycast VOLUME [--iso V] [--tf-lo A] [--tf-hi B] "
                 "[--size N] [--runs N] [--threads N] [--outdir DIR] [--modes composite,mip,iso] "
-                "[--option KEY=VALUE]\n");
+                "[--quality Q] [--option KEY=VALUE]\n");
         return 2;
     }
     dataset = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
@@ -232,9 +234,9 @@ main(int argc, char **argv) {
     char *dot = strchr(stem, '.');
     if (dot)
         *dot = 0;
-    printf("# %s %dx%dx%d %s, iso %g, ramp [%g, %g], threads %d\n", dataset, vol->dims[0],
-           vol->dims[1], vol->dims[2], vv_voxel_type_name(vol->type), cfg.iso, cfg.tf_lo, cfg.tf_hi,
-           vv_threads_get());
+    printf("# %s %dx%dx%d %s, iso %g, ramp [%g, %g], threads %d, quality %d\n", dataset,
+           vol->dims[0], vol->dims[1], vol->dims[2], vv_voxel_type_name(vol->type), cfg.iso,
+           cfg.tf_lo, cfg.tf_hi, vv_threads_get(), cfg.quality);
 
     vv_world *w;
     vv_object *obj;
@@ -247,6 +249,7 @@ main(int argc, char **argv) {
     vv_render_options opt;
     vv_render_options_init(&opt);
     opt.threads = cfg.threads;
+    opt.quality = cfg.quality;
 
     static const struct {
         vv_render_mode mode;

@@ -12,6 +12,7 @@ average before each pair.
 
 usage: bench/pairs_vtk.py VOLUME [--pairs N] [--runs N] [--threads N]
                           [--iso V] [--tf-lo A] [--tf-hi B]
+                          [--quality Q] [--option KEY=VALUE]...
                           [--bench PATH] [--anchors DIR]
 
 Use Debian's /usr/bin/python3 (it has vtk and numpy). Output lines are the
@@ -37,6 +38,9 @@ def parse_args():
     ap.add_argument("--iso", type=float)
     ap.add_argument("--tf-lo", type=float)
     ap.add_argument("--tf-hi", type=float)
+    ap.add_argument("--quality", type=int, default=2, help="VolVis quality level (0..2)")
+    ap.add_argument("--option", action="append", default=[],
+                    help="VolVis renderer option KEY=VALUE (repeatable)")
     ap.add_argument("--bench", default=os.path.join(ROOT, "build/release/bench/bench_raycast"))
     ap.add_argument("--anchors", default=os.path.join(os.path.dirname(ROOT), "shared/anchors"))
     return ap.parse_args()
@@ -77,7 +81,10 @@ def main():
     vtk_cmd = [sys.executable, os.path.join(a.anchors, "bench_vtk.py"), a.volume, "--mappers",
                "fixedpoint", "--threads", str(a.threads), "--no-iso", "--runs", str(a.runs)] + common
     vv_cmd = [a.bench, a.volume, "--threads", str(a.threads), "--runs", str(a.runs),
-              "--modes", "composite,mip,iso", "--outdir", out_dir] + common
+              "--modes", "composite,mip,iso", "--outdir", out_dir,
+              "--quality", str(a.quality)] + common
+    for o in a.option:
+        vv_cmd += ["--option", o]
     ratios = {"composite": [], "mip": [], "composite_first": []}
     iso = []
     for i in range(a.pairs):

@@ -23,7 +23,9 @@
  * independent of tiling and thread count. The single-volume composite
  * kernel classifies a subvolume's samples first (SSE2, or AVX2 where the
  * processor has it) and then shades and composites the visible ones.
- * docs/rendering.md describes the method and its measurements. */
+ * At quality 0 and 1 pixels come from adaptive image-space refinement
+ * (Levoy 1990; render_tile_adaptive). docs/rendering.md describes the
+ * method and its measurements. */
 #include <math.h>
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -40,10 +42,12 @@
 #define RC_MAX_OBJ 64 /* objects handled in one render (<= VV_VC_MAX) */
 
 typedef struct rc_state {
-    vv_vcache_set vc;         /* per-volume caches (src/render/volume_cache.h) */
-    double early_termination; /* accumulated opacity that ends a ray */
-    int skipping;             /* empty-space skipping on/off (for tests) */
-    int simd;                 /* use AVX2 when the processor has it (for tests) */
+    vv_vcache_set vc;          /* per-volume caches (src/render/volume_cache.h) */
+    double early_termination;  /* accumulated opacity that ends a ray */
+    int skipping;              /* empty-space skipping on/off (for tests) */
+    int simd;                  /* use AVX2 when the processor has it (for tests) */
+    int adaptive;              /* adaptive refinement: 0 auto (quality <= 1), 1 on, 2 off */
+    double adaptive_tolerance; /* tolerance of a lattice cell (< 0: by quality) */
 } rc_state;
 
 /* One object prepared for this render. */
@@ -102,6 +106,8 @@ typedef struct rc_frame {
     vv_camera_rays cam; /* primary rays */
     vv_image *out;      /* the image being written */
     float *key;         /* region renders of projections: the key per pixel, else NULL */
+    int adaptive;       /* adaptive image-space refinement (render_tile_adaptive) */
+    float tolerance;    /* its tolerance, in colour and opacity */
 } rc_frame;
 
 /* ---------------------------------------------------------------------- */
@@ -756,8 +762,11 @@ prepare_lights(rc_frame *fr, const vv_world *w, const vv_view *view) {
 /* ---------------------------------------------------------------------- */
 /* The renderer                                                             */
 
+/* Casts the ray of pixel (x, y): px gets the pixel's colour and opacity
+ * over the background, and its depth (px[4]); key (region renders of
+ * projections) the projected value. */
 static void
-render_pixel(const rc_frame *fr, int x, int y, vv_render_stats *work) {
+cast_pixel(const rc_frame *fr, int x, int y, vv_render_stats *work, float px[5], float *key_out) {
     /* inline: this runs for every pixel, most of which miss the volume */
     const vv_ray wr = vv_camera_ray(&fr->cam, x, y);
     rc_result res = {{0, 0, 0}, 0, INFINITY, 0, 0};
@@ -795,20 +804,35 @@ render_pixel(const rc_frame *fr, int x, int y, vv_render_stats *work) {
         PA = e[0] > PA ? e[0] : PA;
         pdepth = dep < pdepth ? dep : pdepth;
     }
-    const size_t at = (size_t)y * (size_t)fr->out->width + (size_t)x;
-    float *pix = fr->out->rgba + 4 * at;
     float A = res.a;
     float rest = 1 - A;
     float A2 = A + rest * PA;
     /* (a region render's background is black: the driver adds it once) */
     for (int ch = 0; ch < 3; ch++)
-        pix[ch] = res.rgb[ch] + rest * P[ch] + (1 - A2) * fr->bg[ch];
-    pix[3] = A2;
-    fr->out->depth[at] = res.depth < pdepth ? res.depth : pdepth;
-    if (fr->key)
-        fr->key[at] = key;
+        px[ch] = res.rgb[ch] + rest * P[ch] + (1 - A2) * fr->bg[ch];
+    px[3] = A2;
+    px[4] = res.depth < pdepth ? res.depth : pdepth;
+    if (key_out)
+        *key_out = key;
     work->samples += res.samples;
     work->shaded += res.shaded;
+}
+
+static inline void
+store_pixel(const rc_frame *fr, int x, int y, const float px[5]) {
+    const size_t at = (size_t)y * (size_t)fr->out->width + (size_t)x;
+    memcpy(fr->out->rgba + 4 * at, px, 4 * sizeof(float));
+    fr->out->depth[at] = px[4];
+}
+
+static inline void
+tile_stats(const rc_frame *fr, const vv_render_stats *work) {
+    if (fr->stats) {
+#pragma omp atomic
+        fr->stats->samples += work->samples;
+#pragma omp atomic
+        fr->stats->shaded += work->shaded;
+    }
 }
 
 static vv_status
@@ -816,14 +840,165 @@ render_tile(void *user, const vv_frame_tile *t) {
     const rc_frame *fr = user;
     vv_render_stats work = {0, 0};
     for (int y = t->y0; y < t->y1; y++)
-        for (int x = t->x0; x < t->x1; x++)
-            render_pixel(fr, x, y, &work);
-    if (fr->stats) {
-#pragma omp atomic
-        fr->stats->samples += work.samples;
-#pragma omp atomic
-        fr->stats->shaded += work.shaded;
+        for (int x = t->x0; x < t->x1; x++) {
+            float px[5], key;
+            cast_pixel(fr, x, y, &work, px, &key);
+            store_pixel(fr, x, y, px);
+            if (fr->key)
+                fr->key[(size_t)y * (size_t)fr->out->width + (size_t)x] = key;
+        }
+    tile_stats(fr, &work);
+    return VV_OK;
+}
+
+/* ---------------------------------------------------------------------- */
+/* Adaptive image-space refinement (Levoy, "Volume Rendering by Adaptive
+ * Refinement", The Visual Computer 6(1), 1990): rays are cast at a lattice
+ * of every RC_LATTICE-th pixel; a lattice cell whose four corners differ by
+ * more than the tolerance in a colour or opacity channel is cut in four
+ * and its edge midpoints and centre are cast, down to single pixels; the
+ * pixels of a cell whose corners agree are bilinear interpolations of
+ * them. A tile casts the corners on its right and bottom edges itself (the
+ * next tile's first row and column), so a pixel depends on its tile alone
+ * and the image is the same for any thread count. A pixel interpolated
+ * from a cell of side s is replaced by an interpolation from a smaller
+ * cell sharing it, and never replaces a cast pixel. */
+
+#define RC_LATTICE 4
+#define RC_RANGE 8          /* corners may differ by this many tolerances when the centre agrees */
+#define RC_TS VV_FRAME_TILE /* the frame runner's tiles (multiple of RC_LATTICE) */
+#define RC_TL (RC_TS + 1)   /* the tile plus the next tile's first row and column */
+
+typedef struct rc_tile_buf {
+    int x0, y0;
+    float px[RC_TL * RC_TL][5];  /* colour and opacity, depth */
+    int8_t level[RC_TL * RC_TL]; /* 0 cast; s interpolated from a cell of side s; -1 not yet */
+} rc_tile_buf;
+
+static inline float *
+tb_cast(const rc_frame *fr, rc_tile_buf *tb, int x, int y, vv_render_stats *work) {
+    const int i = (y - tb->y0) * RC_TL + (x - tb->x0);
+    if (tb->level[i] != 0) {
+        cast_pixel(fr, x, y, work, tb->px[i], NULL);
+        tb->level[i] = 0;
     }
+    return tb->px[i];
+}
+
+/* Whether four corners differ by at most @p limit in every channel. */
+static inline int
+corners_within(const float *c00, const float *c10, const float *c01, const float *c11,
+               float limit) {
+    for (int ch = 0; ch < 4; ch++) {
+        float lo = c00[ch], hi = c00[ch];
+        lo = c10[ch] < lo ? c10[ch] : lo;
+        hi = c10[ch] > hi ? c10[ch] : hi;
+        lo = c01[ch] < lo ? c01[ch] : lo;
+        hi = c01[ch] > hi ? c01[ch] : hi;
+        lo = c11[ch] < lo ? c11[ch] : lo;
+        hi = c11[ch] > hi ? c11[ch] : hi;
+        if (hi - lo > limit)
+            return 0;
+    }
+    return 1;
+}
+
+static void
+refine_cell(const rc_frame *fr, rc_tile_buf *tb, int xa, int ya, int xb, int yb,
+            vv_render_stats *work) {
+    const int w = xb - xa, h = yb - ya;
+    const float *c00 = tb_cast(fr, tb, xa, ya, work), *c10 = tb_cast(fr, tb, xb, ya, work);
+    const float *c01 = tb_cast(fr, tb, xa, yb, work), *c11 = tb_cast(fr, tb, xb, yb, work);
+    if (w <= 1 && h <= 1)
+        return; /* every pixel is a corner */
+    /* the cell's centre against the corners' bilinear prediction, and
+     * the corners' range against RC_RANGE tolerances */
+    const int xc = xa + w / 2, yc = ya + h / 2;
+    const float *cc = tb_cast(fr, tb, xc, yc, work);
+    const float fxc = (float)(xc - xa) / (float)w, fyc = (float)(yc - ya) / (float)h;
+    int agree = corners_within(c00, c10, c01, c11, RC_RANGE * fr->tolerance);
+    for (int ch = 0; ch < 4 && agree; ch++) {
+        const float pred = (1 - fxc) * ((1 - fyc) * c00[ch] + fyc * c01[ch]) +
+                           fxc * ((1 - fyc) * c10[ch] + fyc * c11[ch]);
+        agree = fabsf(cc[ch] - pred) <= fr->tolerance;
+    }
+    if (!agree) {
+        const int xm = w > 1 ? xa + w / 2 : xb, ym = h > 1 ? ya + h / 2 : yb;
+        refine_cell(fr, tb, xa, ya, xm, ym, work);
+        if (xm < xb)
+            refine_cell(fr, tb, xm, ya, xb, ym, work);
+        if (ym < yb)
+            refine_cell(fr, tb, xa, ym, xm, yb, work);
+        if (xm < xb && ym < yb)
+            refine_cell(fr, tb, xm, ym, xb, yb, work);
+        return;
+    }
+    /* interpolate; the depth is the corners' where they all hit, else the
+     * nearest corner's */
+    const int s = w > h ? w : h;
+    float dmin = c00[4];
+    dmin = c10[4] < dmin ? c10[4] : dmin;
+    dmin = c01[4] < dmin ? c01[4] : dmin;
+    dmin = c11[4] < dmin ? c11[4] : dmin;
+    const int finite = isfinite(c00[4]) && isfinite(c10[4]) && isfinite(c01[4]) && isfinite(c11[4]);
+    for (int y = ya; y <= yb; y++) {
+        const float fy = (float)(y - ya) / (float)h;
+        for (int x = xa; x <= xb; x++) {
+            const int i = (y - tb->y0) * RC_TL + (x - tb->x0);
+            if (tb->level[i] >= 0 && tb->level[i] <= s)
+                continue; /* cast, or from a cell no larger */
+            const float fx = (float)(x - xa) / (float)w;
+            const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy);
+            const float w01 = (1 - fx) * fy, w11 = fx * fy;
+            float *p = tb->px[i];
+            for (int ch = 0; ch < 4; ch++)
+                p[ch] = w00 * c00[ch] + w10 * c10[ch] + w01 * c01[ch] + w11 * c11[ch];
+            p[4] = finite ? w00 * c00[4] + w10 * c10[4] + w01 * c01[4] + w11 * c11[4] : dmin;
+            tb->level[i] = (int8_t)s;
+        }
+    }
+}
+
+static vv_status
+render_tile_adaptive(void *user, const vv_frame_tile *t) {
+    const rc_frame *fr = user;
+    const int W = fr->out->width, H = fr->out->height;
+    /* the corners this tile reaches: the next tile's first column and row,
+     * or the image's last */
+    const int ex = t->x1 < W ? t->x1 : W - 1, ey = t->y1 < H ? t->y1 : H - 1;
+    if (ex <= t->x0 || ey <= t->y0 || t->x1 - t->x0 > RC_TS || t->y1 - t->y0 > RC_TS)
+        return render_tile(user, t); /* a one-pixel strip at the image's edge */
+    rc_tile_buf *tb = t->scratch;
+    tb->x0 = t->x0;
+    tb->y0 = t->y0;
+    memset(tb->level, -1, sizeof tb->level);
+    vv_render_stats work = {0, 0};
+    /* the lattice first: a tile where most cells' corners differ beyond
+     * the range is cast whole (refining it would cast more rays) */
+    int cells = 0, calm = 0;
+    for (int ya = t->y0; ya < ey; ya += RC_LATTICE)
+        for (int xa = t->x0; xa < ex; xa += RC_LATTICE) {
+            const int xb = xa + RC_LATTICE < ex ? xa + RC_LATTICE : ex;
+            const int yb = ya + RC_LATTICE < ey ? ya + RC_LATTICE : ey;
+            cells++;
+            calm += corners_within(tb_cast(fr, tb, xa, ya, &work), tb_cast(fr, tb, xb, ya, &work),
+                                   tb_cast(fr, tb, xa, yb, &work), tb_cast(fr, tb, xb, yb, &work),
+                                   RC_RANGE * fr->tolerance);
+        }
+    if (2 * calm < cells) {
+        for (int y = t->y0; y < t->y1; y++)
+            for (int x = t->x0; x < t->x1; x++)
+                tb_cast(fr, tb, x, y, &work);
+    } else {
+        for (int ya = t->y0; ya < ey; ya += RC_LATTICE)
+            for (int xa = t->x0; xa < ex; xa += RC_LATTICE)
+                refine_cell(fr, tb, xa, ya, xa + RC_LATTICE < ex ? xa + RC_LATTICE : ex,
+                            ya + RC_LATTICE < ey ? ya + RC_LATTICE : ey, &work);
+    }
+    for (int y = t->y0; y < t->y1; y++)
+        for (int x = t->x0; x < t->x1; x++)
+            store_pixel(fr, x, y, tb->px[(y - t->y0) * RC_TL + (x - t->x0)]);
+    tile_stats(fr, &work);
     return VV_OK;
 }
 
@@ -920,8 +1095,21 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
             objs[i].ch_extras |= objs[i].ch[k].extras;
     if (s == VV_OK) {
         fr.key = region && fr.n_comp == 0 ? key : NULL;
+        /* adaptive refinement: whole renders only (a region's pixels are
+         * composited with other ranks' by their depth and key) */
+        const int quality = opt ? opt->quality : 2;
+        fr.adaptive = !region && (st->adaptive == 1 || (st->adaptive == 0 && quality <= 1));
+        static const float by_quality[3] = {1.0f / 16, 1.0f / 64, 1.0f / 512};
+        fr.tolerance = st->adaptive_tolerance >= 0 ? (float)st->adaptive_tolerance
+                                                   : by_quality[quality < 0   ? 0
+                                                                : quality > 2 ? 2
+                                                                              : quality];
         vv_frame_job job;
-        vv_frame_job_init(&job, view->width, view->height, render_tile, &fr);
+        vv_frame_job_init(&job, view->width, view->height,
+                          fr.adaptive ? render_tile_adaptive : render_tile, &fr);
+        job.tile = RC_TS;
+        if (fr.adaptive)
+            job.scratch_bytes = sizeof(rc_tile_buf);
         vv_frame_job_region(&job, region); /* the rest stays empty */
         s = vv_frame_run(&job, opt);
     }
@@ -974,6 +1162,7 @@ rc_create(void **state) {
     vv_vcache_set_init(&st->vc);
     st->skipping = 1;
     st->simd = 1;
+    st->adaptive_tolerance = -1;
     *state = st;
     return VV_OK;
 }
@@ -993,6 +1182,10 @@ rc_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v)
         st->skipping = v->b;
     } else if (strcmp(spec->key, "simd") == 0) {
         st->simd = v->b;
+    } else if (strcmp(spec->key, "adaptive") == 0) {
+        st->adaptive = v->word;
+    } else if (strcmp(spec->key, "adaptive_tolerance") == 0) {
+        st->adaptive_tolerance = v->word >= 0 ? -1 : v->r;
     }
     return VV_OK;
 }
@@ -1007,6 +1200,7 @@ rc_destroy(void *state) {
 }
 
 static const char *const rc_auto[] = {"auto", NULL};
+static const char *const rc_adaptive[] = {"auto", "on", "off", NULL};
 
 /* The ray caster's options (docs/rendering.md); gradient_budget_mb is
  * shared with splat (vv_vcache_options_budget in volume_cache.h). */
@@ -1019,6 +1213,12 @@ static const vv_option_spec rc_options[] = {
      "leap over subvolumes the transfer function hides (0 for tests; same image)"},
     {"simd", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
      "AVX2 classification where the processor has it (0: the portable path)"},
+    {"adaptive", VV_OPTION_ENUM, "auto", 0, 0, 0, rc_adaptive,
+     "adaptive image-space refinement from a lattice of every 4th pixel (auto: at quality 0 "
+     "and 1)"},
+    {"adaptive_tolerance", VV_OPTION_REAL, "auto", 0, 1, 0, rc_auto,
+     "colour or opacity error of a lattice cell's interpolation that casts its inner rays "
+     "(auto: 1/16, 1/64, 1/512 at quality 0, 1, 2)"},
 };
 
 const vv_renderer_ops vv_raycast_ops = {
@@ -1030,8 +1230,10 @@ const vv_renderer_ops vv_raycast_ops = {
                            "subvolume skipping",
             .draws = VV_DRAWS(VV_OBJECT_VOLUME),
             .modes = VV_MODES_ALL,
-            .caps = VV_RENDERER_REGION | VV_RENDERER_PREVIEW | VV_RENDERER_CHANNELS,
-            .quality = "ignored: every level casts one ray a pixel at the objects' step",
+            .caps = VV_RENDERER_REGION | VV_RENDERER_QUALITY | VV_RENDERER_PREVIEW |
+                    VV_RENDERER_CHANNELS,
+            .quality = "0 and 1: adaptive refinement from a lattice of every 4th pixel "
+                       "(option adaptive); 2: one ray a pixel; all at the objects' step",
             .options = rc_options,
             .n_options = VV_OPTIONS_COUNT(rc_options),
         },
