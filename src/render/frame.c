@@ -13,6 +13,7 @@
 #include <math.h>
 #include <omp.h>
 #include <stdatomic.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -138,6 +139,179 @@ vv_frame_run(const vv_frame_job *job, const vv_render_options *opt) {
 int
 vv_frame_cancelled(const vv_frame_tile *t) {
     return atomic_load_explicit((const atomic_int *)t->run, memory_order_relaxed) != 0;
+}
+
+/* ---- adaptive image-space refinement --------------------------------------------- */
+
+/* Levoy, "Volume Rendering by Adaptive Refinement" (1990), as
+ * vv_frame_refine_tile says. A pixel interpolated from a cell of side s is
+ * replaced by an interpolation from a smaller cell sharing it, and never
+ * replaces a cast pixel; the order of the cells is fixed, so a tile always
+ * gives the same pixels. */
+
+#define RF_LATTICE VV_FRAME_REFINE_LATTICE
+#define RF_RANGE 8          /* corners may differ by this many tolerances when the centre agrees */
+#define RF_TS VV_FRAME_TILE /* the largest tile (a multiple of RF_LATTICE) */
+#define RF_TL (RF_TS + 1)   /* the tile plus the next tile's first row and column */
+
+typedef struct rf_tile {
+    int x0, y0;
+    vv_frame_pixel_fn fn;
+    void *user, *work;
+    float tolerance;
+    float px[RF_TL * RF_TL][5];  /* colour and opacity, depth */
+    int8_t level[RF_TL * RF_TL]; /* 0 cast; s interpolated from a cell of side s; -1 not yet */
+} rf_tile;
+
+size_t
+vv_frame_refine_scratch_bytes(void) {
+    return sizeof(rf_tile);
+}
+
+float
+vv_frame_refine_tolerance(int quality) {
+    static const float by_quality[3] = {1.0f / 16, 1.0f / 64, 1.0f / 512};
+    return by_quality[quality < 0 ? 0 : quality > 2 ? 2 : quality];
+}
+
+static inline float *
+rf_cast(rf_tile *tb, int x, int y) {
+    const int i = (y - tb->y0) * RF_TL + (x - tb->x0);
+    if (tb->level[i] != 0) {
+        tb->fn(tb->user, x, y, tb->px[i], tb->work);
+        tb->level[i] = 0;
+    }
+    return tb->px[i];
+}
+
+/* Whether four corners differ by at most @p limit in every channel. */
+static inline int
+corners_within(const float *c00, const float *c10, const float *c01, const float *c11,
+               float limit) {
+    for (int ch = 0; ch < 4; ch++) {
+        float lo = c00[ch], hi = c00[ch];
+        lo = c10[ch] < lo ? c10[ch] : lo;
+        hi = c10[ch] > hi ? c10[ch] : hi;
+        lo = c01[ch] < lo ? c01[ch] : lo;
+        hi = c01[ch] > hi ? c01[ch] : hi;
+        lo = c11[ch] < lo ? c11[ch] : lo;
+        hi = c11[ch] > hi ? c11[ch] : hi;
+        if (hi - lo > limit)
+            return 0;
+    }
+    return 1;
+}
+
+static void
+refine_cell(rf_tile *tb, int xa, int ya, int xb, int yb) {
+    const int w = xb - xa, h = yb - ya;
+    const float *c00 = rf_cast(tb, xa, ya), *c10 = rf_cast(tb, xb, ya);
+    const float *c01 = rf_cast(tb, xa, yb), *c11 = rf_cast(tb, xb, yb);
+    if (w <= 1 && h <= 1)
+        return; /* every pixel is a corner */
+    /* the cell's centre against the corners' bilinear prediction, and
+     * the corners' range against RF_RANGE tolerances */
+    const int xc = xa + w / 2, yc = ya + h / 2;
+    const float *cc = rf_cast(tb, xc, yc);
+    const float fxc = (float)(xc - xa) / (float)w, fyc = (float)(yc - ya) / (float)h;
+    int agree = corners_within(c00, c10, c01, c11, RF_RANGE * tb->tolerance);
+    for (int ch = 0; ch < 4 && agree; ch++) {
+        const float pred = (1 - fxc) * ((1 - fyc) * c00[ch] + fyc * c01[ch]) +
+                           fxc * ((1 - fyc) * c10[ch] + fyc * c11[ch]);
+        agree = fabsf(cc[ch] - pred) <= tb->tolerance;
+    }
+    if (!agree) {
+        const int xm = w > 1 ? xa + w / 2 : xb, ym = h > 1 ? ya + h / 2 : yb;
+        refine_cell(tb, xa, ya, xm, ym);
+        if (xm < xb)
+            refine_cell(tb, xm, ya, xb, ym);
+        if (ym < yb)
+            refine_cell(tb, xa, ym, xm, yb);
+        if (xm < xb && ym < yb)
+            refine_cell(tb, xm, ym, xb, yb);
+        return;
+    }
+    /* interpolate; the depth is the corners' where they all hit, else the
+     * nearest corner's */
+    const int s = w > h ? w : h;
+    float dmin = c00[4];
+    dmin = c10[4] < dmin ? c10[4] : dmin;
+    dmin = c01[4] < dmin ? c01[4] : dmin;
+    dmin = c11[4] < dmin ? c11[4] : dmin;
+    const int finite = isfinite(c00[4]) && isfinite(c10[4]) && isfinite(c01[4]) && isfinite(c11[4]);
+    for (int y = ya; y <= yb; y++) {
+        const float fy = (float)(y - ya) / (float)h;
+        for (int x = xa; x <= xb; x++) {
+            const int i = (y - tb->y0) * RF_TL + (x - tb->x0);
+            if (tb->level[i] >= 0 && tb->level[i] <= s)
+                continue; /* cast, or from a cell no larger */
+            const float fx = (float)(x - xa) / (float)w;
+            const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy);
+            const float w01 = (1 - fx) * fy, w11 = fx * fy;
+            float *p = tb->px[i];
+            for (int ch = 0; ch < 4; ch++)
+                p[ch] = w00 * c00[ch] + w10 * c10[ch] + w01 * c01[ch] + w11 * c11[ch];
+            p[4] = finite ? w00 * c00[4] + w10 * c10[4] + w01 * c01[4] + w11 * c11[4] : dmin;
+            tb->level[i] = (int8_t)s;
+        }
+    }
+}
+
+void
+vv_frame_refine_tile(const vv_frame_tile *t, int width, int height, float tolerance,
+                     vv_frame_pixel_fn fn, void *user, void *work, float *rgba, float *depth) {
+    if (t->x1 - t->x0 > RF_TS || t->y1 - t->y0 > RF_TS || !t->scratch) {
+        /* not a tile this can hold: every pixel cast */
+        for (int y = t->y0; y < t->y1; y++)
+            for (int x = t->x0; x < t->x1; x++) {
+                float p[5];
+                fn(user, x, y, p, work);
+                const size_t at = (size_t)y * (size_t)width + (size_t)x;
+                memcpy(rgba + 4 * at, p, 4 * sizeof(float));
+                depth[at] = p[4];
+            }
+        return;
+    }
+    rf_tile *tb = t->scratch;
+    tb->x0 = t->x0;
+    tb->y0 = t->y0;
+    tb->fn = fn;
+    tb->user = user;
+    tb->work = work;
+    tb->tolerance = tolerance;
+    memset(tb->level, -1, sizeof tb->level);
+    /* the corners this tile reaches: the next tile's first column and row,
+     * or the image's last */
+    const int ex = t->x1 < width ? t->x1 : width - 1, ey = t->y1 < height ? t->y1 : height - 1;
+    const int whole = ex <= t->x0 || ey <= t->y0; /* a one-pixel strip at the image's edge */
+    int cells = 0, calm = 0;
+    /* the lattice first: a tile where most cells' corners differ beyond
+     * the range is cast whole (refining it would cast more rays) */
+    for (int ya = t->y0; ya < ey && !whole; ya += RF_LATTICE)
+        for (int xa = t->x0; xa < ex; xa += RF_LATTICE) {
+            const int xb = xa + RF_LATTICE < ex ? xa + RF_LATTICE : ex;
+            const int yb = ya + RF_LATTICE < ey ? ya + RF_LATTICE : ey;
+            cells++;
+            calm += corners_within(rf_cast(tb, xa, ya), rf_cast(tb, xb, ya), rf_cast(tb, xa, yb),
+                                   rf_cast(tb, xb, yb), RF_RANGE * tolerance);
+        }
+    if (whole || 2 * calm < cells) {
+        for (int y = t->y0; y < t->y1; y++)
+            for (int x = t->x0; x < t->x1; x++)
+                rf_cast(tb, x, y);
+    } else {
+        for (int ya = t->y0; ya < ey; ya += RF_LATTICE)
+            for (int xa = t->x0; xa < ex; xa += RF_LATTICE)
+                refine_cell(tb, xa, ya, xa + RF_LATTICE < ex ? xa + RF_LATTICE : ex,
+                            ya + RF_LATTICE < ey ? ya + RF_LATTICE : ey);
+    }
+    for (int y = t->y0; y < t->y1; y++)
+        for (int x = t->x0; x < t->x1; x++) {
+            const float *p = tb->px[(y - t->y0) * RF_TL + (x - t->x0)];
+            const size_t at = (size_t)y * (size_t)width + (size_t)x;
+            memcpy(rgba + 4 * at, p, 4 * sizeof(float));
+            depth[at] = p[4];
+        }
 }
 
 /* ---- camera rays ------------------------------------------------------------------ */

@@ -85,6 +85,8 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
                 vv_renderer *mem = NULL, *ooc = NULL;
                 vt_ok(vv_renderer_new(&mem, renderers[ri]));
                 vt_ok(vv_renderer_new(&ooc, renderers[ri]));
+                /* region renders cast every pixel (no adaptive refinement) */
+                vt_ok(vv_renderer_set_option(mem, "refinement", "off"));
                 vv_render_options ro;
                 vv_render_options_init(&ro);
                 /* region renders trace one ray a pixel: the ray tracer's quality 1 */

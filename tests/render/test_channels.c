@@ -402,14 +402,15 @@ test_composite_mix(void **state) {
     vv_volume_free(v[1]);
 }
 
-/* The ray tracer's image of @p w at quality 1 (one ray a pixel), its
- * shadows on or off, no reflected rays. */
+/* The ray tracer's image of @p w at quality 1 (one ray a pixel: no
+ * adaptive refinement), its shadows on or off, no reflected rays. */
 static vv_image *
 render_rt(const vv_world *w, const vv_view *view, int shadows) {
     vv_renderer *r = NULL;
     vt_ok(vv_renderer_new(&r, "raytrace"));
     vt_ok(vv_renderer_set_option(r, "shadows", shadows ? "1" : "0"));
     vt_ok(vv_renderer_set_option(r, "max_depth", "0"));
+    vt_ok(vv_renderer_set_option(r, "refinement", "off"));
     vv_image *img = NULL;
     vt_ok(vv_image_new(&img, view->width, view->height));
     vv_render_options opt;

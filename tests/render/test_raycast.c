@@ -948,12 +948,12 @@ test_simd_matches_portable(void **state) {
     vv_volume_free(v);
 }
 
-/* Adaptive image-space refinement (Levoy 1990; option adaptive, on by
+/* Adaptive image-space refinement (Levoy 1990; option refinement, on by
  * default at quality 0 and 1). Against a converged reference (step 1/16 of
  * the object's, 4 x 4 rays a pixel, box-filtered), the quality-2 image
  * with refinement forced on is as accurate as without it (within 0.1 dB);
  * quality 1 is within a few dB with far fewer samples; any thread count
- * gives the same image; adaptive=off at quality 1 is the quality-2 image. */
+ * gives the same image; refinement=off at quality 1 is the quality-2 image. */
 static vv_image *
 render_q(vv_renderer *r, const vv_world *w, int quality, int threads, vv_render_stats *st) {
     vv_image *img = NULL;
@@ -976,7 +976,7 @@ converged_reference(const vv_world *world, int k) {
     w->view.width *= k;
     w->view.height *= k;
     vv_renderer *r = new_raycaster();
-    vt_ok(vv_renderer_set_option(r, "adaptive", "off"));
+    vt_ok(vv_renderer_set_option(r, "refinement", "off"));
     vv_image *big = render_q(r, w, 2, 0, NULL), *img = NULL;
     vt_ok(vv_image_new(&img, world->view.width, world->view.height));
     for (int y = 0; y < img->height; y++)
@@ -1013,8 +1013,8 @@ test_adaptive_refinement(void **state) {
         vt_ok(vv_world_new_for_volume(&w, v, &so));
         vv_image *ref = converged_reference(w, 4);
         vv_renderer *r = new_raycaster(), *on = new_raycaster(), *off = new_raycaster();
-        vt_ok(vv_renderer_set_option(on, "adaptive", "on"));
-        vt_ok(vv_renderer_set_option(off, "adaptive", "off"));
+        vt_ok(vv_renderer_set_option(on, "refinement", "on"));
+        vt_ok(vv_renderer_set_option(off, "refinement", "off"));
         vv_render_stats s2 = {0, 0}, s2a = {0, 0}, s1 = {0, 0};
         vv_image *q2 = render_q(r, w, 2, 0, &s2);
         vv_image *q2a = render_q(on, w, 2, 0, &s2a);

@@ -315,6 +315,47 @@ void vv_frame_job_region(vv_frame_job *job, const vv_render_region *rg);
  */
 vv_status vv_frame_run(const vv_frame_job *job, const vv_render_options *opt);
 
+/* ---- adaptive image-space refinement (src/render/frame.c) ------------------------- */
+
+/**
+ * One pixel of a refined tile: @p px gets the colour and opacity of pixel
+ * centre (x, y) over the background (px[0..3], the image's layout) and its
+ * depth (px[4]); @p work is the tile's own accumulator, passed through
+ * (vv_frame_refine_tile). Called on the tile's thread; a pure function of
+ * (x, y) for the frame, so that the image is the same for any thread count.
+ */
+typedef void (*vv_frame_pixel_fn)(void *user, int x, int y, float px[5], void *work);
+
+/** The lattice of vv_frame_refine_tile: every 4th pixel in x and y. */
+#define VV_FRAME_REFINE_LATTICE 4
+
+/** Per-thread scratch vv_frame_refine_tile needs (vv_frame_job.scratch_bytes). */
+size_t vv_frame_refine_scratch_bytes(void);
+
+/** The tolerance the renderers use at @p quality (0, 1, 2): 1/16, 1/64, 1/512. */
+float vv_frame_refine_tolerance(int quality);
+
+/**
+ * Fills tile @p t of a @p width x @p height image (@p rgba: 4 floats a
+ * pixel, @p depth: one; row-major, the vv_image layout) by adaptive
+ * image-space refinement (Levoy, "Volume Rendering by Adaptive
+ * Refinement", The Visual Computer 6(1), 1990): @p fn casts the pixels of
+ * a lattice of every VV_FRAME_REFINE_LATTICE-th pixel; a lattice cell whose
+ * corners differ by at most 8 x @p tolerance in every channel gets its
+ * centre cast, and if the centre is within @p tolerance of the corners'
+ * bilinear interpolation the cell's other pixels are that interpolation;
+ * otherwise the cell is cut in four and each quarter is tested the same
+ * way, down to single pixels. A tile where most lattice cells differ
+ * beyond the range is cast whole. The tile casts its own right and bottom
+ * lattice corners (the next tile's first column and row), so its pixels
+ * depend on it alone. The tile must be at most VV_FRAME_TILE square (the
+ * default) and t->scratch hold vv_frame_refine_scratch_bytes(); it writes
+ * the tile's pixels only (a larger tile, or no scratch: every pixel cast).
+ * Thread-safe for disjoint tiles.
+ */
+void vv_frame_refine_tile(const vv_frame_tile *t, int width, int height, float tolerance,
+                          vv_frame_pixel_fn fn, void *user, void *work, float *rgba, float *depth);
+
 /* ---- camera rays ------------------------------------------------------------------ */
 
 /**

@@ -24,7 +24,7 @@
  * kernel classifies a subvolume's samples first (SSE2, or AVX2 where the
  * processor has it) and then shades and composites the visible ones.
  * At quality 0 and 1 pixels come from adaptive image-space refinement
- * (Levoy 1990; render_tile_adaptive). docs/rendering.md describes the
+ * (Levoy 1990; vv_frame_refine_tile). docs/rendering.md describes the
  * method and its measurements. */
 #include <math.h>
 #ifdef __SSE2__
@@ -851,153 +851,19 @@ render_tile(void *user, const vv_frame_tile *t) {
     return VV_OK;
 }
 
-/* ---------------------------------------------------------------------- */
-/* Adaptive image-space refinement (Levoy, "Volume Rendering by Adaptive
- * Refinement", The Visual Computer 6(1), 1990): rays are cast at a lattice
- * of every RC_LATTICE-th pixel; a lattice cell whose four corners differ by
- * more than the tolerance in a colour or opacity channel is cut in four
- * and its edge midpoints and centre are cast, down to single pixels; the
- * pixels of a cell whose corners agree are bilinear interpolations of
- * them. A tile casts the corners on its right and bottom edges itself (the
- * next tile's first row and column), so a pixel depends on its tile alone
- * and the image is the same for any thread count. A pixel interpolated
- * from a cell of side s is replaced by an interpolation from a smaller
- * cell sharing it, and never replaces a cast pixel. */
-
-#define RC_LATTICE 4
-#define RC_RANGE 8          /* corners may differ by this many tolerances when the centre agrees */
-#define RC_TS VV_FRAME_TILE /* the frame runner's tiles (multiple of RC_LATTICE) */
-#define RC_TL (RC_TS + 1)   /* the tile plus the next tile's first row and column */
-
-typedef struct rc_tile_buf {
-    int x0, y0;
-    float px[RC_TL * RC_TL][5];  /* colour and opacity, depth */
-    int8_t level[RC_TL * RC_TL]; /* 0 cast; s interpolated from a cell of side s; -1 not yet */
-} rc_tile_buf;
-
-static inline float *
-tb_cast(const rc_frame *fr, rc_tile_buf *tb, int x, int y, vv_render_stats *work) {
-    const int i = (y - tb->y0) * RC_TL + (x - tb->x0);
-    if (tb->level[i] != 0) {
-        cast_pixel(fr, x, y, work, tb->px[i], NULL);
-        tb->level[i] = 0;
-    }
-    return tb->px[i];
-}
-
-/* Whether four corners differ by at most @p limit in every channel. */
-static inline int
-corners_within(const float *c00, const float *c10, const float *c01, const float *c11,
-               float limit) {
-    for (int ch = 0; ch < 4; ch++) {
-        float lo = c00[ch], hi = c00[ch];
-        lo = c10[ch] < lo ? c10[ch] : lo;
-        hi = c10[ch] > hi ? c10[ch] : hi;
-        lo = c01[ch] < lo ? c01[ch] : lo;
-        hi = c01[ch] > hi ? c01[ch] : hi;
-        lo = c11[ch] < lo ? c11[ch] : lo;
-        hi = c11[ch] > hi ? c11[ch] : hi;
-        if (hi - lo > limit)
-            return 0;
-    }
-    return 1;
-}
-
+/* Adaptive refinement at quality 0 and 1 (vv_frame_refine_tile): the
+ * frame runner's lattice asks for single pixels. */
 static void
-refine_cell(const rc_frame *fr, rc_tile_buf *tb, int xa, int ya, int xb, int yb,
-            vv_render_stats *work) {
-    const int w = xb - xa, h = yb - ya;
-    const float *c00 = tb_cast(fr, tb, xa, ya, work), *c10 = tb_cast(fr, tb, xb, ya, work);
-    const float *c01 = tb_cast(fr, tb, xa, yb, work), *c11 = tb_cast(fr, tb, xb, yb, work);
-    if (w <= 1 && h <= 1)
-        return; /* every pixel is a corner */
-    /* the cell's centre against the corners' bilinear prediction, and
-     * the corners' range against RC_RANGE tolerances */
-    const int xc = xa + w / 2, yc = ya + h / 2;
-    const float *cc = tb_cast(fr, tb, xc, yc, work);
-    const float fxc = (float)(xc - xa) / (float)w, fyc = (float)(yc - ya) / (float)h;
-    int agree = corners_within(c00, c10, c01, c11, RC_RANGE * fr->tolerance);
-    for (int ch = 0; ch < 4 && agree; ch++) {
-        const float pred = (1 - fxc) * ((1 - fyc) * c00[ch] + fyc * c01[ch]) +
-                           fxc * ((1 - fyc) * c10[ch] + fyc * c11[ch]);
-        agree = fabsf(cc[ch] - pred) <= fr->tolerance;
-    }
-    if (!agree) {
-        const int xm = w > 1 ? xa + w / 2 : xb, ym = h > 1 ? ya + h / 2 : yb;
-        refine_cell(fr, tb, xa, ya, xm, ym, work);
-        if (xm < xb)
-            refine_cell(fr, tb, xm, ya, xb, ym, work);
-        if (ym < yb)
-            refine_cell(fr, tb, xa, ym, xm, yb, work);
-        if (xm < xb && ym < yb)
-            refine_cell(fr, tb, xm, ym, xb, yb, work);
-        return;
-    }
-    /* interpolate; the depth is the corners' where they all hit, else the
-     * nearest corner's */
-    const int s = w > h ? w : h;
-    float dmin = c00[4];
-    dmin = c10[4] < dmin ? c10[4] : dmin;
-    dmin = c01[4] < dmin ? c01[4] : dmin;
-    dmin = c11[4] < dmin ? c11[4] : dmin;
-    const int finite = isfinite(c00[4]) && isfinite(c10[4]) && isfinite(c01[4]) && isfinite(c11[4]);
-    for (int y = ya; y <= yb; y++) {
-        const float fy = (float)(y - ya) / (float)h;
-        for (int x = xa; x <= xb; x++) {
-            const int i = (y - tb->y0) * RC_TL + (x - tb->x0);
-            if (tb->level[i] >= 0 && tb->level[i] <= s)
-                continue; /* cast, or from a cell no larger */
-            const float fx = (float)(x - xa) / (float)w;
-            const float w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy);
-            const float w01 = (1 - fx) * fy, w11 = fx * fy;
-            float *p = tb->px[i];
-            for (int ch = 0; ch < 4; ch++)
-                p[ch] = w00 * c00[ch] + w10 * c10[ch] + w01 * c01[ch] + w11 * c11[ch];
-            p[4] = finite ? w00 * c00[4] + w10 * c10[4] + w01 * c01[4] + w11 * c11[4] : dmin;
-            tb->level[i] = (int8_t)s;
-        }
-    }
+refine_pixel(void *user, int x, int y, float px[5], void *work) {
+    cast_pixel(user, x, y, work, px, NULL);
 }
 
 static vv_status
 render_tile_adaptive(void *user, const vv_frame_tile *t) {
     const rc_frame *fr = user;
-    const int W = fr->out->width, H = fr->out->height;
-    /* the corners this tile reaches: the next tile's first column and row,
-     * or the image's last */
-    const int ex = t->x1 < W ? t->x1 : W - 1, ey = t->y1 < H ? t->y1 : H - 1;
-    if (ex <= t->x0 || ey <= t->y0 || t->x1 - t->x0 > RC_TS || t->y1 - t->y0 > RC_TS)
-        return render_tile(user, t); /* a one-pixel strip at the image's edge */
-    rc_tile_buf *tb = t->scratch;
-    tb->x0 = t->x0;
-    tb->y0 = t->y0;
-    memset(tb->level, -1, sizeof tb->level);
     vv_render_stats work = {0, 0};
-    /* the lattice first: a tile where most cells' corners differ beyond
-     * the range is cast whole (refining it would cast more rays) */
-    int cells = 0, calm = 0;
-    for (int ya = t->y0; ya < ey; ya += RC_LATTICE)
-        for (int xa = t->x0; xa < ex; xa += RC_LATTICE) {
-            const int xb = xa + RC_LATTICE < ex ? xa + RC_LATTICE : ex;
-            const int yb = ya + RC_LATTICE < ey ? ya + RC_LATTICE : ey;
-            cells++;
-            calm += corners_within(tb_cast(fr, tb, xa, ya, &work), tb_cast(fr, tb, xb, ya, &work),
-                                   tb_cast(fr, tb, xa, yb, &work), tb_cast(fr, tb, xb, yb, &work),
-                                   RC_RANGE * fr->tolerance);
-        }
-    if (2 * calm < cells) {
-        for (int y = t->y0; y < t->y1; y++)
-            for (int x = t->x0; x < t->x1; x++)
-                tb_cast(fr, tb, x, y, &work);
-    } else {
-        for (int ya = t->y0; ya < ey; ya += RC_LATTICE)
-            for (int xa = t->x0; xa < ex; xa += RC_LATTICE)
-                refine_cell(fr, tb, xa, ya, xa + RC_LATTICE < ex ? xa + RC_LATTICE : ex,
-                            ya + RC_LATTICE < ey ? ya + RC_LATTICE : ey, &work);
-    }
-    for (int y = t->y0; y < t->y1; y++)
-        for (int x = t->x0; x < t->x1; x++)
-            store_pixel(fr, x, y, tb->px[(y - t->y0) * RC_TL + (x - t->x0)]);
+    vv_frame_refine_tile(t, fr->out->width, fr->out->height, fr->tolerance, refine_pixel,
+                         (void *)fr, &work, fr->out->rgba, fr->out->depth);
     tile_stats(fr, &work);
     return VV_OK;
 }
@@ -1099,17 +965,13 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
          * composited with other ranks' by their depth and key) */
         const int quality = opt ? opt->quality : 2;
         fr.adaptive = !region && (st->adaptive == 1 || (st->adaptive == 0 && quality <= 1));
-        static const float by_quality[3] = {1.0f / 16, 1.0f / 64, 1.0f / 512};
         fr.tolerance = st->adaptive_tolerance >= 0 ? (float)st->adaptive_tolerance
-                                                   : by_quality[quality < 0   ? 0
-                                                                : quality > 2 ? 2
-                                                                              : quality];
+                                                   : vv_frame_refine_tolerance(quality);
         vv_frame_job job;
         vv_frame_job_init(&job, view->width, view->height,
                           fr.adaptive ? render_tile_adaptive : render_tile, &fr);
-        job.tile = RC_TS;
         if (fr.adaptive)
-            job.scratch_bytes = sizeof(rc_tile_buf);
+            job.scratch_bytes = vv_frame_refine_scratch_bytes();
         vv_frame_job_region(&job, region); /* the rest stays empty */
         s = vv_frame_run(&job, opt);
     }
@@ -1182,9 +1044,9 @@ rc_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v)
         st->skipping = v->b;
     } else if (strcmp(spec->key, "simd") == 0) {
         st->simd = v->b;
-    } else if (strcmp(spec->key, "adaptive") == 0) {
+    } else if (strcmp(spec->key, "refinement") == 0) {
         st->adaptive = v->word;
-    } else if (strcmp(spec->key, "adaptive_tolerance") == 0) {
+    } else if (strcmp(spec->key, "refinement_tolerance") == 0) {
         st->adaptive_tolerance = v->word >= 0 ? -1 : v->r;
     }
     return VV_OK;
@@ -1200,7 +1062,7 @@ rc_destroy(void *state) {
 }
 
 static const char *const rc_auto[] = {"auto", NULL};
-static const char *const rc_adaptive[] = {"auto", "on", "off", NULL};
+static const char *const rc_refinement[] = {"auto", "on", "off", NULL};
 
 /* The ray caster's options (docs/rendering.md); gradient_budget_mb is
  * shared with splat (vv_vcache_options_budget in volume_cache.h). */
@@ -1213,10 +1075,10 @@ static const vv_option_spec rc_options[] = {
      "leap over subvolumes the transfer function hides (0 for tests; same image)"},
     {"simd", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
      "AVX2 classification where the processor has it (0: the portable path)"},
-    {"adaptive", VV_OPTION_ENUM, "auto", 0, 0, 0, rc_adaptive,
+    {"refinement", VV_OPTION_ENUM, "auto", 0, 0, 0, rc_refinement,
      "adaptive image-space refinement from a lattice of every 4th pixel (auto: at quality 0 "
      "and 1)"},
-    {"adaptive_tolerance", VV_OPTION_REAL, "auto", 0, 1, 0, rc_auto,
+    {"refinement_tolerance", VV_OPTION_REAL, "auto", 0, 1, 0, rc_auto,
      "colour or opacity error of a lattice cell's interpolation that casts its inner rays "
      "(auto: 1/16, 1/64, 1/512 at quality 0, 1, 2)"},
 };
@@ -1233,7 +1095,7 @@ const vv_renderer_ops vv_raycast_ops = {
             .caps = VV_RENDERER_REGION | VV_RENDERER_QUALITY | VV_RENDERER_PREVIEW |
                     VV_RENDERER_CHANNELS,
             .quality = "0 and 1: adaptive refinement from a lattice of every 4th pixel "
-                       "(option adaptive); 2: one ray a pixel; all at the objects' step",
+                       "(option refinement); 2: one ray a pixel; all at the objects' step",
             .options = rc_options,
             .n_options = VV_OPTIONS_COUNT(rc_options),
         },

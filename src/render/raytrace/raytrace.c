@@ -318,6 +318,26 @@ pass_first(void *user, const vv_frame_tile *t) {
     return VV_OK;
 }
 
+/* Adaptive image-space refinement at quality 0 and 1 (vv_frame_refine_tile):
+ * one pixel, its centre ray (supersampled at quality 2 with refinement on). */
+static void
+refine_pixel(void *user, int x, int y, float px[5], void *work) {
+    const rt_frame *fr = user;
+    (void)work;
+    if (fr->nss > 1)
+        supersample(fr, x, y, fr->nss, px, &px[4]);
+    else
+        trace_primary(fr, x, y, px, &px[4], NULL);
+}
+
+static vv_status
+pass_refined(void *user, const vv_frame_tile *t) {
+    const rt_frame *fr = user;
+    vv_frame_refine_tile(t, fr->out->width, fr->out->height, fr->tolerance, refine_pixel,
+                         (void *)fr, NULL, fr->out->rgba, fr->out->depth);
+    return VV_OK;
+}
+
 /* Pass 2 (adaptive): supersample the pixels that differ from a neighbour
  * in the image of pass 1 by more than the threshold. */
 static vv_status
@@ -499,7 +519,12 @@ render_frame(rt_state *st, const vv_world *w, const vv_view *view, const vv_rend
     fr.shadows = opt->quality >= 1 && st->shadows;
     fr.max_depth = opt->quality >= 1 ? st->max_depth : 0;
     fr.nss = opt->quality >= 2 && !region ? st->samples : 1;
-    fr.adaptive = fr.nss > 1 && st->adaptive;
+    /* adaptive image-space refinement: whole renders only (a region's
+     * pixels are composited with other ranks' by depth and key) */
+    fr.refine = !region && (st->refinement == 1 || (st->refinement == 0 && opt->quality <= 1));
+    fr.tolerance = st->refine_tolerance >= 0 ? (float)st->refine_tolerance
+                                             : vv_frame_refine_tolerance(opt->quality);
+    fr.adaptive = fr.nss > 1 && st->adaptive && !fr.refine;
     fr.view = view;
     fr.out = out;
     fr.key = key;
@@ -513,7 +538,9 @@ render_frame(rt_state *st, const vv_world *w, const vv_view *view, const vv_rend
         return s;
     }
     vv_frame_job job;
-    vv_frame_job_init(&job, view->width, view->height, pass_first, &fr);
+    vv_frame_job_init(&job, view->width, view->height, fr.refine ? pass_refined : pass_first, &fr);
+    if (fr.refine)
+        job.scratch_bytes = vv_frame_refine_scratch_bytes();
     vv_frame_job_region(&job, region);
     job.progress_to = fr.adaptive ? 0.5 : 1.0;
     s = vv_frame_run(&job, opt);
@@ -587,6 +614,7 @@ rt_create(void **state) {
     st->jitter = 0;
     st->adaptive = 1;
     st->threshold = 0.05;
+    st->refine_tolerance = -1;
     st->seed = 1;
     st->early_termination = 0.99;
     st->shadow_grid = 1;
@@ -618,6 +646,10 @@ rt_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v)
         st->adaptive = v->b;
     else if (strcmp(key, "adaptive_threshold") == 0)
         st->threshold = v->r;
+    else if (strcmp(key, "refinement") == 0)
+        st->refinement = v->word;
+    else if (strcmp(key, "refinement_tolerance") == 0)
+        st->refine_tolerance = v->word >= 0 ? -1 : v->r;
     else if (strcmp(key, "seed") == 0)
         st->seed = (uint64_t)v->i;
     else if (strcmp(key, "early_termination") == 0)
@@ -638,6 +670,9 @@ rt_destroy(void *state) {
     free(st);
 }
 
+static const char *const rt_refinement[] = {"auto", "on", "off", NULL};
+static const char *const rt_auto[] = {"auto", NULL};
+
 static const vv_option_spec rt_options[] = {
     {"shadows", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
      "shadow rays (0: every light reaches every point)"},
@@ -651,6 +686,12 @@ static const vv_option_spec rt_options[] = {
      "supersample only pixels that differ from a neighbour"},
     {"adaptive_threshold", VV_OPTION_REAL, "0.05", 0, INFINITY, 0, NULL,
      "channel difference that triggers supersampling"},
+    {"refinement", VV_OPTION_ENUM, "auto", 0, 0, 0, rt_refinement,
+     "adaptive image-space refinement from a lattice of every 4th pixel (auto: at quality 0 "
+     "and 1)"},
+    {"refinement_tolerance", VV_OPTION_REAL, "auto", 0, 1, 0, rt_auto,
+     "colour or opacity error of a lattice cell's interpolation that casts its inner rays "
+     "(auto: 1/16, 1/64, 1/512 at quality 0, 1, 2)"},
     {"parc", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
      "leap over empty subvolumes on every ray (0 for measurements; same image)"},
     {"shadow_grid", VV_OPTION_INT, "1", 0, 2, 0, NULL,
@@ -675,9 +716,10 @@ const vv_renderer_ops vv_raytrace_ops = {
             .modes = VV_MODES_ALL,
             .caps = VV_RENDERER_REGION | VV_RENDERER_QUALITY | VV_RENDERER_GLOBAL |
                     VV_RENDERER_CHANNELS,
-            .quality = "0: one ray a pixel, no shadow or secondary rays; 1: one ray a pixel "
-                       "with every effect; 2: supersampled (samples, adaptive); region renders "
-                       "(out of core, MPI) trace one ray a pixel",
+            .quality = "0: no shadow or secondary rays; 1: every effect; both adaptive "
+                       "refinement from a lattice of every 4th pixel (option refinement); 2: "
+                       "supersampled (samples, adaptive); region renders (out of core, MPI) "
+                       "trace one ray a pixel",
             .options = rt_options,
             .n_options = VV_OPTIONS_COUNT(rt_options),
         },

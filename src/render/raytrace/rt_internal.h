@@ -120,7 +120,9 @@ typedef struct rt_state {
     int jitter;       /* jittered supersampling */
     int adaptive;     /* supersample only where neighbours differ */
     double threshold; /* adaptive: channel difference that triggers supersampling */
-    uint64_t seed;    /* jitter seed */
+    int refinement;   /* adaptive image-space refinement: 0 auto (quality <= 1), 1 on, 2 off */
+    double refine_tolerance; /* its tolerance (< 0: vv_frame_refine_tolerance of the quality) */
+    uint64_t seed;           /* jitter seed */
     double early_termination;
     int shadow_grid;   /* volume samples: cached shadow rays (1) or exact (0) */
     int light_volumes; /* shadow rays of directional lights through volumes: light volumes */
@@ -229,6 +231,8 @@ typedef struct rt_frame {
     float *key;         /* region renders of projections: the key per pixel, else NULL */
     int nss;            /* supersamples per pixel side */
     int adaptive;       /* pass 1 traces pixel centres, pass 2 supersamples where they differ */
+    int refine;         /* pixels by vv_frame_refine_tile (pass_refined) */
+    float tolerance;    /* its tolerance */
     const float *first; /* pass 2: the image of pass 1 */
     /* the shadow-grid cache's key of what casts shadows (rt_cache.c) */
     const vv_render_region *region; /* a region render (keeps no shadow grid) */
