@@ -47,8 +47,7 @@ typedef struct vv_render_options {
     vv_progress progress; /**< reports the fraction of image tiles done; may cancel */
     /** NULL, or where the render adds the work it did. Counted by the ray
      * caster's march of one composite volume (the common case and the
-     * speed anchor) and its projections (MIP, MinIP, X-ray: samples only,
-     * retraces included); other renderers and paths add nothing. Counting
+     * speed anchor); other renderers and paths add nothing. Counting
      * neither changes the image nor costs measurable time. */
     vv_render_stats *stats;
 } vv_render_options;

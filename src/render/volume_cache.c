@@ -1077,11 +1077,10 @@ project_block(const vv_vcache *c, const vv_vray *r, double k, double klast, doub
 static float
 project_from(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, double dt, double k,
              double kend, float sg, float floor0, float stop, int skipping, int avx2,
-             double *tbest_out, uint64_t *samples) {
+             double *tbest_out) {
     const float *bext = sg > 0 ? c->bmax : c->bmin, *gext = sg > 0 ? c->gmax : c->gmin;
     float best = floor0;
     double tbest = r->t0;
-    uint64_t n = 0;
     const int gsize = VV_VC_BLOCK * VV_VC_GROUP;
     while (k <= kend && best < stop) {
         float p[3];
@@ -1110,20 +1109,15 @@ project_from(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, double 
         }
         const double klast = proj_block_last(r, p, k, kend, dt);
         project_block(c, r, k, klast, dt, sg, avx2, &best, &tbest);
-        n += (uint64_t)(klast - k) + 1;
         k = klast + 1;
     }
     *tbest_out = tbest;
-    if (samples)
-        *samples += n;
     return best;
 }
 
-/* vv_vray_project_guess; without a guess (NAN) it never retraces. */
-static int
+static void
 project(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, vv_render_mode mode, double dt,
-        int skipping, int avx2, float lo, float hi, float guess, float *value, float *depth,
-        uint64_t *samples) {
+        int skipping, int avx2, float lo, float hi, float *value, float *depth) {
     double k = vv_ceil_pos(r->t0 / dt);
     const double kend = vv_floor_pos(r->t1 / dt);
     if (k > kend) {
@@ -1133,9 +1127,7 @@ project(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, vv_render_mo
         vv_vray_point(r, tm, p);
         *value = vv_vcache_sample(c, p);
         *depth = (float)tm;
-        if (samples)
-            (*samples)++;
-        return 0;
+        return;
     }
     if (mode == VV_MODE_XRAY) {
         double sum = 0;
@@ -1149,63 +1141,35 @@ project(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, vv_render_mo
         }
         *value = (float)(sum / (double)n);
         *depth = (float)r->t0;
-        if (samples)
-            *samples += (uint64_t)n;
-        return 0;
+        return;
     }
     const int mip = mode == VV_MODE_MIP;
     /* work on the maximum of +-value, so MinIP is MIP of the negation */
     const float sg = mip ? 1.0f : -1.0f;
     const float floor0 = mip ? lo : -hi; /* what nothing below can change */
     const float stop = mip ? hi : -lo;   /* what nothing above can change */
-    const int vec = avx2 && c->q16 && c->sz * (size_t)c->nz < ((size_t)1 << 30);
     double tbest;
-    /* A guessed floor: every group and subvolume whose extreme does not
-     * beat it is skipped from the start. When the ray's extreme beats it,
-     * the skipped samples could not have been the extreme nor come before
-     * its first sample, so value and depth are those of the march from
-     * floor0 (vv_vray_project_guess); otherwise the ray is traced again. */
-    const float gfloor = sg * guess;
-    if (skipping && gfloor > floor0 && gfloor < stop) {
-        const float best = project_from(c, pdist, r, dt, k, kend, sg, gfloor, stop, skipping, vec,
-                                        &tbest, samples);
-        if (best > gfloor) {
-            *value = sg * best;
-            *depth = (float)tbest;
-            return 0;
-        }
-    } else {
-        guess = NAN;
-    }
     const float best =
-        project_from(c, pdist, r, dt, k, kend, sg, floor0, stop, skipping, vec, &tbest, samples);
+        project_from(c, pdist, r, dt, k, kend, sg, floor0, stop, skipping,
+                     avx2 && c->q16 && c->sz * (size_t)c->nz < ((size_t)1 << 30), &tbest);
     *value = sg * best;
     *depth = (float)tbest;
-    return !isnan(guess);
 }
 
 void
 vv_vray_project(const vv_vcache *c, const vv_vray *r, vv_render_mode mode, double dt, int skipping,
                 float lo, float hi, float *value, float *depth) {
-    project(c, NULL, r, mode, dt, skipping, 0, lo, hi, NAN, value, depth, NULL);
+    project(c, NULL, r, mode, dt, skipping, 0, lo, hi, value, depth);
 }
 
 void
 vv_vray_project_tables(const vv_vcache *c, const vv_vtables *t, const vv_vray *r,
                        vv_render_mode mode, double dt, int skipping, int avx2, float *value,
                        float *depth) {
-    vv_vray_project_guess(c, t, r, mode, dt, skipping, avx2, NAN, value, depth, NULL);
-}
-
-int
-vv_vray_project_guess(const vv_vcache *c, const vv_vtables *t, const vv_vray *r,
-                      vv_render_mode mode, double dt, int skipping, int avx2, float guess,
-                      float *value, float *depth, uint64_t *samples) {
     if (t->pdist)
-        return project(c, t->pdist, r, mode, dt, skipping, avx2, t->plo, t->phi, guess, value,
-                       depth, samples);
-    return project(c, NULL, r, mode, dt, skipping, avx2, -INFINITY, INFINITY, guess, value, depth,
-                   samples);
+        project(c, t->pdist, r, mode, dt, skipping, avx2, t->plo, t->phi, value, depth);
+    else
+        project(c, NULL, r, mode, dt, skipping, avx2, -INFINITY, INFINITY, value, depth);
 }
 
 void

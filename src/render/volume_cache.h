@@ -708,21 +708,6 @@ void vv_vray_project(const vv_vcache *c, const vv_vray *r, vv_render_mode mode, 
 void vv_vray_project_tables(const vv_vcache *c, const vv_vtables *t, const vv_vray *r,
                             vv_render_mode mode, double dt, int skipping, int avx2, float *value,
                             float *depth);
-/* vv_vray_project_tables with a guessed bound (MIP and MinIP with
- * @p skipping; NAN: none): the ray is first marched as if its extreme
- * started at @p guess (stored units: a MIP guess below the ray's maximum,
- * a MinIP guess above its minimum), so that every group and subvolume
- * that cannot beat the guess is skipped from the first sample. When the
- * ray's extreme beats the guess, *value and *depth are exactly those of
- * vv_vray_project_tables (the skipped samples could neither be the extreme
- * nor precede its first sample); otherwise the ray is marched again
- * without it and 1 is returned (else 0). @p samples (NULL: not counted)
- * gets the samples taken added, retrace included. The guess is the caller's
- * choice (the ray caster takes it from neighbouring rays, the MIP bound of
- * issue 32); a wrong guess costs time, never accuracy. */
-int vv_vray_project_guess(const vv_vcache *c, const vv_vtables *t, const vv_vray *r,
-                          vv_render_mode mode, double dt, int skipping, int avx2, float guess,
-                          float *value, float *depth, uint64_t *samples);
 /* The maximum intensity projections of @p n channels (1..VV_MAX_CHANNELS;
  * one, or a ray shorter than a step: vv_vray_project_tables per channel)
  * on one ray, in one pass: cs[ch], ts[ch] each channel's cache and MIP

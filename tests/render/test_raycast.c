@@ -1062,71 +1062,6 @@ test_adaptive_refinement(void **state) {
     }
 }
 
-/* The MIP bound (option projection_bound, on by default): a MIP or MinIP
- * ray starts from the least extreme of its lattice neighbours in the tile
- * and is cast again when that guess fails, so the image and depth are the
- * ones without it bit for bit, for any thread count, in fewer samples
- * (MIP on the head, where rays cross soft tissue below the bone's maximum
- * before they reach it). */
-static void
-test_projection_bound(void **state) {
-    (void)state;
-    static const char *files[] = {"neghip.slc", "headsq/quarter.nhdr"};
-    for (size_t f = 0; f < sizeof files / sizeof files[0]; f++) {
-        char rel[256];
-        snprintf(rel, sizeof rel, "volumes/%s", files[f]);
-        vv_volume *v = NULL;
-        vt_ok(vv_volume_load(&v, vt_data(rel), NULL));
-        vv_default_scene_options so;
-        vv_default_scene_options_init(&so);
-        so.width = so.height = 128;
-        so.azimuth = vv_deg_to_rad(30);
-        so.elevation = vv_deg_to_rad(20);
-        vv_world *w = NULL;
-        vt_ok(vv_world_new_for_volume(&w, v, &so));
-        vv_renderer *on = new_raycaster(), *off = new_raycaster();
-        vt_ok(vv_renderer_set_option(off, "projection_bound", "0"));
-        const double fov = w->view.fov;
-        /* a grey ramp over the whole range, opaque: every hit is lit */
-        vv_tf *tf = &w->objects[0]->tf;
-        vv_tf_init(tf);
-        vt_ok(vv_tf_add_opacity(tf, v->range[0], 1.0));
-        vt_ok(vv_tf_add_color(tf, v->range[0], vv_vec3_make(0, 0, 0)));
-        vt_ok(vv_tf_add_color(tf, v->range[1], vv_vec3_make(1, 1, 1)));
-        static const vv_render_mode modes[] = {VV_MODE_MIP, VV_MODE_MINIP};
-        for (int m = 0; m < 2; m++)
-            for (int zoom = 0; zoom < 2; zoom++) {
-                w->objects[0]->mode = modes[m];
-                w->view.fov = zoom ? fov * 0.25 : fov;
-                vv_render_stats sa = {0, 0}, sb = {0, 0};
-                vv_image *a = render_q(on, w, 2, 2, &sa), *b = render_q(off, w, 2, 1, &sb);
-                vv_image *a1 = render_q(on, w, 2, 1, NULL);
-                print_message("%s %s%s: bound %s, %llu samples against %llu without it\n", files[f],
-                              m ? "MinIP" : "MIP", zoom ? " magnified" : "",
-                              images_identical(a, b) ? "identical" : "DIFFERENT",
-                              (unsigned long long)sa.samples, (unsigned long long)sb.samples);
-                if (m == 0 && zoom == 0)
-                    write_png(a, f ? "bound_mip_headsq" : "bound_mip_neghip");
-                long lit = 0;
-                for (size_t i = 0; i < (size_t)b->width * (size_t)b->height; i++)
-                    lit += b->rgba[4 * i + 3] > 0.05f;
-                assert_true(lit > 500);
-                assert_true(images_identical(a, b));
-                assert_true(images_identical(a, a1));
-                assert_true(sb.samples > 0 && sa.samples <= sb.samples + sb.samples / 20);
-                if (m == 0)
-                    assert_true((double)sa.samples < 0.9 * (double)sb.samples);
-                vv_image_free(a);
-                vv_image_free(a1);
-                vv_image_free(b);
-            }
-        vv_renderer_free(on);
-        vv_renderer_free(off);
-        vv_world_free(w);
-        vv_volume_free(v);
-    }
-}
-
 /* A 2-D image (one voxel along z) renders as a slab one voxel thick, face
  * on through the default scene, in composite and MIP modes. */
 static void
@@ -1365,7 +1300,6 @@ main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_denormal_range),
         cmocka_unit_test(test_adaptive_refinement),
-        cmocka_unit_test(test_projection_bound),
         cmocka_unit_test(test_slab_transmittance),
         cmocka_unit_test(test_slab_sample_count),
         cmocka_unit_test(test_early_termination),

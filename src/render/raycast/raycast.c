@@ -48,7 +48,6 @@ typedef struct rc_state {
     int simd;                  /* use AVX2 when the processor has it (for tests) */
     int adaptive;              /* adaptive refinement: 0 auto (quality <= 1), 1 on, 2 off */
     double adaptive_tolerance; /* tolerance of a lattice cell (< 0: by quality) */
-    int projection_bound;      /* MIP/MinIP rays start from their lattice neighbours' bound */
 } rc_state;
 
 /* One object prepared for this render. */
@@ -109,8 +108,6 @@ typedef struct rc_frame {
     float *key;         /* region renders of projections: the key per pixel, else NULL */
     int adaptive;       /* adaptive image-space refinement (render_tile_adaptive) */
     float tolerance;    /* its tolerance, in colour and opacity */
-    int pbound;         /* one MIP or MinIP object: the lattice bound (render_tile_bounded) */
-    float pmargin;      /* how far the bound is set back from the neighbours' extreme */
 } rc_frame;
 
 /* ---------------------------------------------------------------------- */
@@ -629,17 +626,16 @@ done:
 }
 
 /* Maximum / minimum intensity projection and X-ray (mean) of one object
- * (vv_vray_project_guess: @p guess a bound from neighbouring rays, or
- * NAN). Returns 0 when the ray misses the object. */
+ * (vv_vray_project). Returns 0 when the ray misses the object. */
 static int
-trace_projection(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, float guess, float *value,
-                 float *depth, uint64_t *samples) {
+trace_projection(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, float *value,
+                 float *depth) {
     vv_vray r;
     if (!ray_setup(ob, wr, &r))
         return 0;
     /* MIP and MinIP need not tell apart values the table shows alike */
-    vv_vray_project_guess(ob->c, &ob->tab, &r, ob->mode, fr->dt, fr->st->skipping, fr->avx2, guess,
-                          value, depth, samples);
+    vv_vray_project_tables(ob->c, &ob->tab, &r, ob->mode, fr->dt, fr->st->skipping, fr->avx2, value,
+                           depth);
     return 1;
 }
 
@@ -767,12 +763,10 @@ prepare_lights(rc_frame *fr, const vv_world *w, const vv_view *view) {
 /* The renderer                                                             */
 
 /* Casts the ray of pixel (x, y): px gets the pixel's colour and opacity
- * over the background, and its depth (px[4]); key the projected value
- * (NAN: no projection hit). @p guess: the bound of a frame's one
- * projection (render_tile_bounded), or NAN. */
+ * over the background, and its depth (px[4]); key (region renders of
+ * projections) the projected value. */
 static void
-cast_pixel(const rc_frame *fr, int x, int y, vv_render_stats *work, float px[5], float *key_out,
-           float guess) {
+cast_pixel(const rc_frame *fr, int x, int y, vv_render_stats *work, float px[5], float *key_out) {
     /* inline: this runs for every pixel, most of which miss the volume */
     const vv_ray wr = vv_camera_ray(&fr->cam, x, y);
     rc_result res = {{0, 0, 0}, 0, INFINITY, 0, 0};
@@ -799,10 +793,8 @@ cast_pixel(const rc_frame *fr, int x, int y, vv_render_stats *work, float px[5],
             pdepth = g.depth < pdepth ? g.depth : pdepth;
             continue;
         }
-        uint64_t taken = 0;
-        if (!trace_projection(fr, ob, &wr, guess, &val, &dep, &taken))
+        if (!trace_projection(fr, ob, &wr, &val, &dep))
             continue;
-        res.samples += (uint32_t)taken;
         key = val;
         const float *e = ob->lut + 4 * (int)lut_index_f(ob, val);
         for (int ch = 0; ch < 3; ch++) {
@@ -850,7 +842,7 @@ render_tile(void *user, const vv_frame_tile *t) {
     for (int y = t->y0; y < t->y1; y++)
         for (int x = t->x0; x < t->x1; x++) {
             float px[5], key;
-            cast_pixel(fr, x, y, &work, px, &key, NAN);
+            cast_pixel(fr, x, y, &work, px, &key);
             store_pixel(fr, x, y, px);
             if (fr->key)
                 fr->key[(size_t)y * (size_t)fr->out->width + (size_t)x] = key;
@@ -863,7 +855,7 @@ render_tile(void *user, const vv_frame_tile *t) {
  * frame runner's lattice asks for single pixels. */
 static void
 refine_pixel(void *user, int x, int y, float px[5], void *work) {
-    cast_pixel(user, x, y, work, px, NULL, NAN);
+    cast_pixel(user, x, y, work, px, NULL);
 }
 
 static vv_status
@@ -872,61 +864,6 @@ render_tile_adaptive(void *user, const vv_frame_tile *t) {
     vv_render_stats work = {0, 0};
     vv_frame_refine_tile(t, fr->out->width, fr->out->height, fr->tolerance, refine_pixel,
                          (void *)fr, &work, fr->out->rgba, fr->out->depth);
-    tile_stats(fr, &work);
-    return VV_OK;
-}
-
-/* The MIP bound of issue 32 for a frame of one MIP or MinIP object: the
- * tile's lattice of every VV_FRAME_REFINE_LATTICE-th pixel is cast first;
- * every other ray starts its projection from the least extreme of its
- * lattice corners in the tile (set back by pmargin), so it skips from its
- * first sample the subvolumes that cannot beat its neighbours. The bound
- * is a guess: a ray whose extreme does not beat it is cast again without
- * it (vv_vray_project_guess), so the image is the one of render_tile bit
- * for bit. The corners are the tile's own, so the image is the same for
- * any thread count. */
-static vv_status
-render_tile_bounded(void *user, const vv_frame_tile *t) {
-    enum { L = VV_FRAME_REFINE_LATTICE, NL = VV_FRAME_TILE / L };
-    const rc_frame *fr = user;
-    if (t->x1 - t->x0 > VV_FRAME_TILE || t->y1 - t->y0 > VV_FRAME_TILE)
-        return render_tile(user, t);
-    vv_render_stats work = {0, 0};
-    const int nx = (t->x1 - t->x0 + L - 1) / L, ny = (t->y1 - t->y0 + L - 1) / L;
-    const int mip = fr->objs[0].mode == VV_MODE_MIP;
-    float lat[NL][NL];
-    float px[5], key;
-    for (int j = 0; j < ny; j++)
-        for (int i = 0; i < nx; i++) {
-            const int x = t->x0 + L * i, y = t->y0 + L * j;
-            cast_pixel(fr, x, y, &work, px, &key, NAN);
-            store_pixel(fr, x, y, px);
-            if (fr->key)
-                fr->key[(size_t)y * (size_t)fr->out->width + (size_t)x] = key;
-            lat[j][i] = key;
-        }
-    for (int y = t->y0; y < t->y1; y++) {
-        const int j0 = (y - t->y0) / L, on_j = (y - t->y0) % L == 0;
-        const int j1 = !on_j && j0 + 1 < ny ? j0 + 1 : j0;
-        for (int x = t->x0; x < t->x1; x++) {
-            const int i0 = (x - t->x0) / L, on_i = (x - t->x0) % L == 0;
-            if (on_i && on_j)
-                continue; /* a lattice ray */
-            const int i1 = !on_i && i0 + 1 < nx ? i0 + 1 : i0;
-            const float c[4] = {lat[j0][i0], lat[j0][i1], lat[j1][i0], lat[j1][i1]};
-            float guess = c[0];
-            for (int q = 1; q < 4; q++)
-                guess = mip ? fminf(guess, c[q]) : fmaxf(guess, c[q]);
-            if (isnan(c[0]) || isnan(c[1]) || isnan(c[2]) || isnan(c[3]))
-                guess = NAN; /* a corner missed the volume */
-            else
-                guess += mip ? -fr->pmargin : fr->pmargin;
-            cast_pixel(fr, x, y, &work, px, &key, guess);
-            store_pixel(fr, x, y, px);
-            if (fr->key)
-                fr->key[(size_t)y * (size_t)fr->out->width + (size_t)x] = key;
-        }
-    }
     tile_stats(fr, &work);
     return VV_OK;
 }
@@ -1030,17 +967,9 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
         fr.adaptive = !region && (st->adaptive == 1 || (st->adaptive == 0 && quality <= 1));
         fr.tolerance = st->adaptive_tolerance >= 0 ? (float)st->adaptive_tolerance
                                                    : vv_frame_refine_tolerance(quality);
-        /* the MIP bound: one projection object, nothing composited */
-        fr.pbound = !fr.adaptive && st->projection_bound && st->skipping && fr.n_comp == 0 &&
-                    fr.n_obj == 1 && !objs[0].nch &&
-                    (objs[0].mode == VV_MODE_MIP || objs[0].mode == VV_MODE_MINIP);
-        fr.pmargin = fr.pbound ? 1.0f / objs[0].lut_scale : 0;
         vv_frame_job job;
         vv_frame_job_init(&job, view->width, view->height,
-                          fr.adaptive ? render_tile_adaptive
-                          : fr.pbound ? render_tile_bounded
-                                      : render_tile,
-                          &fr);
+                          fr.adaptive ? render_tile_adaptive : render_tile, &fr);
         if (fr.adaptive)
             job.scratch_bytes = vv_frame_refine_scratch_bytes();
         vv_frame_job_region(&job, region); /* the rest stays empty */
@@ -1096,7 +1025,6 @@ rc_create(void **state) {
     st->skipping = 1;
     st->simd = 1;
     st->adaptive_tolerance = -1;
-    st->projection_bound = 1;
     *state = st;
     return VV_OK;
 }
@@ -1120,8 +1048,6 @@ rc_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v)
         st->adaptive = v->word;
     } else if (strcmp(spec->key, "refinement_tolerance") == 0) {
         st->adaptive_tolerance = v->word >= 0 ? -1 : v->r;
-    } else if (strcmp(spec->key, "projection_bound") == 0) {
-        st->projection_bound = v->b;
     }
     return VV_OK;
 }
@@ -1155,9 +1081,6 @@ static const vv_option_spec rc_options[] = {
     {"refinement_tolerance", VV_OPTION_REAL, "auto", 0, 1, 0, rc_auto,
      "colour or opacity error of a lattice cell's interpolation that casts its inner rays "
      "(auto: 1/16, 1/64, 1/512 at quality 0, 1, 2)"},
-    {"projection_bound", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
-     "MIP/MinIP rays skip from their first sample what cannot beat their lattice neighbours "
-     "(0 for tests; same image)"},
 };
 
 const vv_renderer_ops vv_raycast_ops = {
