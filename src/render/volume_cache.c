@@ -944,6 +944,78 @@ pair_lerp_avx2(const int32_t pairs[8], __m256 wx) {
     return _mm256_add_ps(a, _mm256_mul_ps(_mm256_sub_ps(b, a), wx));
 }
 
+/* vv_vshade8: eight lanes of vv_vshade, in its order of operations. */
+__attribute__((target("avx2"))) void
+vv_vshade8(const vv_vshading *o, const vv_vlight *lights, int n_lights, const float v[3], int n,
+           const float gx[8], const float gy[8], const float gz[8], const float a[8],
+           const float cr[8], const float cg[8], const float cb[8], float out_r[8], float out_g[8],
+           float out_b[8]) {
+    (void)n; /* lanes past n hold the caller's zeros or stale values: never read back */
+    const __m256 g0 = _mm256_loadu_ps(gx), g1 = _mm256_loadu_ps(gy), g2 = _mm256_loadu_ps(gz);
+#define VS_MUL(x, y) _mm256_mul_ps((x), (y))
+#define VS_ADD(x, y) _mm256_add_ps((x), (y))
+#define VS_B(x) _mm256_set1_ps(x)
+    /* n_k = (nrm[k][0] g0 + nrm[k][1] g1) + nrm[k][2] g2 */
+    __m256 nn[3];
+    for (int k = 0; k < 3; k++)
+        nn[k] = VS_ADD(VS_ADD(VS_MUL(VS_B(o->nrm[k][0]), g0), VS_MUL(VS_B(o->nrm[k][1]), g1)),
+                       VS_MUL(VS_B(o->nrm[k][2]), g2));
+    const __m256 len2 =
+        VS_ADD(VS_ADD(VS_MUL(nn[0], nn[0]), VS_MUL(nn[1], nn[1])), VS_MUL(nn[2], nn[2]));
+    const __m256 lit = _mm256_cmp_ps(len2, VS_B(1e-12f), _CMP_GT_OQ);
+    const __m256 inv = _mm256_div_ps(VS_B(1.0f), _mm256_sqrt_ps(len2));
+    const __m256 nv = VS_MUL(VS_ADD(VS_ADD(VS_MUL(nn[0], VS_B(v[0])), VS_MUL(nn[1], VS_B(v[1]))),
+                                    VS_MUL(nn[2], VS_B(v[2]))),
+                             inv);
+    const __m256 sign = VS_B(-0.0f), zero = _mm256_setzero_ps();
+    __m256 d0 = VS_B(o->amb[0]), d1 = VS_B(o->amb[1]), d2 = VS_B(o->amb[2]);
+    __m256 s0 = zero, s1 = zero, s2 = zero;
+    for (int l = 0; l < n_lights; l++) {
+        const vv_vlight *lt = &lights[l];
+        const float L0 = lt->dir[0], L1 = lt->dir[1], L2 = lt->dir[2];
+        __m256 ndl = VS_MUL(VS_ADD(VS_ADD(VS_MUL(nn[0], VS_B(L0)), VS_MUL(nn[1], VS_B(L1))),
+                                   VS_MUL(nn[2], VS_B(L2))),
+                            inv);
+        /* two-sided: where ndl < 0 both ndv and ndl change sign */
+        const __m256 back = _mm256_cmp_ps(ndl, zero, _CMP_LT_OQ);
+        const __m256 ndv = _mm256_blendv_ps(nv, _mm256_xor_ps(nv, sign), back);
+        ndl = _mm256_blendv_ps(ndl, _mm256_xor_ps(ndl, sign), back);
+        const float lv = L0 * v[0] + L1 * v[1] + L2 * v[2];
+        const __m256 rv = _mm256_sub_ps(VS_MUL(VS_MUL(VS_B(2.0f), ndl), ndv), VS_B(lv));
+        const __m256 on = _mm256_and_ps(_mm256_cmp_ps(rv, zero, _CMP_GT_OQ), lit);
+        const __m256i at =
+            _mm256_cvttps_epi32(VS_ADD(VS_MUL(rv, VS_B((float)VV_VC_SPEC)), VS_B(0.5f)));
+        int32_t ix[8];
+        float sv[8];
+        _mm256_storeu_si256((__m256i *)(void *)ix, at);
+        const int onm = _mm256_movemask_ps(on);
+        for (int q = 0; q < 8; q++)
+            sv[q] = onm >> q & 1 ? o->spec[ix[q]] : 0.0f;
+        const __m256 sp = _mm256_loadu_ps(sv);
+        const __m256 wd = _mm256_and_ps(ndl, lit);
+        d0 = VS_ADD(d0, VS_MUL(wd, VS_B(o->kd_col[l][0])));
+        d1 = VS_ADD(d1, VS_MUL(wd, VS_B(o->kd_col[l][1])));
+        d2 = VS_ADD(d2, VS_MUL(wd, VS_B(o->kd_col[l][2])));
+        s0 = VS_ADD(s0, VS_MUL(sp, VS_B(o->ks_col[l][0])));
+        s1 = VS_ADD(s1, VS_MUL(sp, VS_B(o->ks_col[l][1])));
+        s2 = VS_ADD(s2, VS_MUL(sp, VS_B(o->ks_col[l][2])));
+    }
+    /* unlit lanes (a gradient of length 0): vv_vshade's d = amb, s = 0 */
+    d0 = _mm256_blendv_ps(VS_B(o->amb[0]), d0, lit);
+    d1 = _mm256_blendv_ps(VS_B(o->amb[1]), d1, lit);
+    d2 = _mm256_blendv_ps(VS_B(o->amb[2]), d2, lit);
+    s0 = _mm256_and_ps(s0, lit);
+    s1 = _mm256_and_ps(s1, lit);
+    s2 = _mm256_and_ps(s2, lit);
+    const __m256 al = _mm256_loadu_ps(a);
+    _mm256_storeu_ps(out_r, VS_ADD(VS_MUL(d0, _mm256_loadu_ps(cr)), VS_MUL(al, s0)));
+    _mm256_storeu_ps(out_g, VS_ADD(VS_MUL(d1, _mm256_loadu_ps(cg)), VS_MUL(al, s1)));
+    _mm256_storeu_ps(out_b, VS_ADD(VS_MUL(d2, _mm256_loadu_ps(cb)), VS_MUL(al, s2)));
+#undef VS_MUL
+#undef VS_ADD
+#undef VS_B
+}
+
 __attribute__((target("avx2"))) static void
 values_chunk_avx2(const vv_vcache *c, const vv_vray *r, double kfirst, double dt, int m,
                   float *val) {

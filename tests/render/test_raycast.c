@@ -16,6 +16,8 @@
  */
 #include "testutil.h"
 
+#include "render/volume_cache.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -1062,6 +1064,83 @@ test_adaptive_refinement(void **state) {
     }
 }
 
+/* The composite kernel shades eight samples at a time with AVX2
+ * (vv_vshade8); its results must be vv_vshade's bit for bit (the images of
+ * both paths are compared bit for bit elsewhere: raytrace against raycast):
+ * random normal matrices, gradients (a quarter of length 0, so unlit),
+ * one to three directional lights, colours and opacities, and every
+ * lane. */
+static void
+test_shade8_matches_scalar(void **state) {
+    (void)state;
+    if (!vv_vc_have_avx2())
+        vt_skip("this processor has no AVX2: the kernel shades with vv_vshade only");
+    uint64_t seed = 0x243f6a8885a308d3ULL;
+    vv_vshading sh;
+    memset(&sh, 0, sizeof sh);
+    for (int i = 0; i <= VV_VC_SPEC; i++)
+        sh.spec[i] = powf((float)i / VV_VC_SPEC, 30.0f);
+    long lanes = 0, unlit = 0;
+    for (int round = 0; round < 200; round++) {
+        for (int i = 0; i < 3; i++) {
+            sh.amb[i] = (float)rnd(&seed) * 0.3f;
+            for (int j = 0; j < 3; j++)
+                sh.nrm[i][j] = (float)(rnd(&seed) * 4 - 2);
+        }
+        vv_vlight lights[3];
+        memset(lights, 0, sizeof lights);
+        const int nl = 1 + round % 3;
+        for (int l = 0; l < nl; l++) {
+            double d[3], n = 0;
+            for (int a = 0; a < 3; a++) {
+                d[a] = rnd(&seed) * 2 - 1;
+                n += d[a] * d[a];
+            }
+            for (int a = 0; a < 3; a++) {
+                lights[l].dir[a] = (float)(d[a] / sqrt(n));
+                sh.kd_col[l][a] = (float)rnd(&seed) * 0.7f;
+                sh.ks_col[l][a] = (float)rnd(&seed) * 0.3f;
+            }
+        }
+        float v[3];
+        double vn = 0, vd[3];
+        for (int a = 0; a < 3; a++) {
+            vd[a] = rnd(&seed) * 2 - 1;
+            vn += vd[a] * vd[a];
+        }
+        for (int a = 0; a < 3; a++)
+            v[a] = (float)(vd[a] / sqrt(vn));
+        float gx[8], gy[8], gz[8], al[8], cr[8], cg[8], cb[8], orr[8], org[8], orb[8];
+        for (int q = 0; q < 8; q++) {
+            const int zero = rnd(&seed) < 0.25;
+            gx[q] = zero ? 0 : (float)(rnd(&seed) * 254 - 127);
+            gy[q] = zero ? 0 : (float)(rnd(&seed) * 254 - 127);
+            gz[q] = zero ? 0 : (float)(rnd(&seed) * 254 - 127);
+            al[q] = (float)rnd(&seed);
+            cr[q] = al[q] * (float)rnd(&seed);
+            cg[q] = al[q] * (float)rnd(&seed);
+            cb[q] = al[q] * (float)rnd(&seed);
+            unlit += zero;
+        }
+        vv_vshade8(&sh, lights, nl, v, 8, gx, gy, gz, al, cr, cg, cb, orr, org, orb);
+        for (int q = 0; q < 8; q++) {
+            const float g[3] = {gx[q], gy[q], gz[q]}, col[3] = {cr[q], cg[q], cb[q]};
+            const float pw[3] = {0, 0, 0};
+            float out[3];
+            vv_vshade(&sh, lights, nl, g, pw, v, col, al[q], NULL, NULL, out);
+            const float got[3] = {orr[q], org[q], orb[q]};
+            if (memcmp(out, got, sizeof out) != 0)
+                fail_msg("round %d lane %d: vv_vshade (%.9g, %.9g, %.9g), vv_vshade8 (%.9g, "
+                         "%.9g, %.9g)",
+                         round, q, (double)out[0], (double)out[1], (double)out[2], (double)got[0],
+                         (double)got[1], (double)got[2]);
+            lanes++;
+        }
+    }
+    print_message("vv_vshade8 against vv_vshade: %ld lanes (%ld unlit) bit for bit\n", lanes,
+                  unlit);
+}
+
 /* A 2-D image (one voxel along z) renders as a slab one voxel thick, face
  * on through the default scene, in composite and MIP modes. */
 static void
@@ -1300,6 +1379,7 @@ main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_denormal_range),
         cmocka_unit_test(test_adaptive_refinement),
+        cmocka_unit_test(test_shade8_matches_scalar),
         cmocka_unit_test(test_slab_transmittance),
         cmocka_unit_test(test_slab_sample_count),
         cmocka_unit_test(test_early_termination),
