@@ -1143,9 +1143,57 @@ project_block(const vv_vcache *c, const vv_vray *r, double k, double klast, doub
     }
 }
 
+/* Subvolumes to march, batched (project_from): consecutive samples
+ * k0 .. last[n - 1], the subvolume i ending at sample last[i]. */
+typedef struct proj_batch {
+    double k0;
+    double last[VV_VC_CHUNK];
+    int n;
+} proj_batch;
+
+/* Marches a batch in one pass of up to VV_VC_CHUNK samples (AVX2), as
+ * project_block would one subvolume after the other: the running extreme
+ * is checked against @p stop at the end of each subvolume, and the rest of
+ * the batch is dropped once it is reached (as the loop of project_from
+ * stops there). Returns 1 when it stopped. */
+static int
+proj_batch_flush(const vv_vcache *c, const vv_vray *r, double dt, float sg, float stop,
+                 proj_batch *pb, float *best, double *tbest) {
+    if (pb->n == 0)
+        return 0;
+    const int m = (int)(pb->last[pb->n - 1] - pb->k0) + 1;
+    int stopped = 0;
+#if VV_VC_HAVE_AVX2
+    float val[VV_VC_CHUNK];
+    values_chunk_avx2(c, r, pb->k0, dt, m, val);
+    for (int bi = 0, s = 0; bi < pb->n && !stopped; bi++) {
+        const int end = (int)(pb->last[bi] - pb->k0);
+        for (; s <= end; s++) {
+            const float x = sg * val[s];
+            if (x > *best) {
+                *best = x;
+                *tbest = (pb->k0 + s) * dt;
+            }
+        }
+        stopped = *best >= stop;
+    }
+#else
+    (void)c, (void)r, (void)dt, (void)sg, (void)stop, (void)m, (void)best, (void)tbest;
+#endif
+    pb->n = 0;
+    return stopped;
+}
+
 /* The maximum of sg * value over the samples k .. kend of r that exceed
  * @p floor0 (floor0 itself when none does, at parameter t0), stopping once
- * it reaches @p stop; *tbest: the parameter of its first sample. */
+ * it reaches @p stop; *tbest: the parameter of its first sample. With
+ * @p avx2 the subvolumes to march are batched, up to VV_VC_CHUNK
+ * consecutive samples interpolated at once (a subvolume holds about eight
+ * at the usual half-voxel step): the skip tests then compare with an
+ * extreme that may lag behind (it is updated when a batch is marched), so
+ * they skip no more than before, and a subvolume they keep that would have
+ * been skipped holds nothing above the extreme, so value and depth are
+ * those of one subvolume at a time. */
 static float
 project_from(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, double dt, double k,
              double kend, float sg, float floor0, float stop, int skipping, int avx2,
@@ -1154,6 +1202,10 @@ project_from(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, double 
     float best = floor0;
     double tbest = r->t0;
     const int gsize = VV_VC_BLOCK * VV_VC_GROUP;
+    proj_batch pb;
+    pb.k0 = 0;
+    pb.n = 0;
+    int stopped = 0;
     while (k <= kend && best < stop) {
         float p[3];
         vv_vray_point(r, k * dt, p);
@@ -1180,9 +1232,23 @@ project_from(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, double 
             }
         }
         const double klast = proj_block_last(r, p, k, kend, dt);
-        project_block(c, r, k, klast, dt, sg, avx2, &best, &tbest);
+        if (avx2 && klast - k + 1 <= VV_VC_CHUNK) {
+            /* joins the batch when it continues it and fits */
+            if (pb.n > 0 && (k != pb.last[pb.n - 1] + 1 || klast - pb.k0 + 1 > VV_VC_CHUNK) &&
+                (stopped = proj_batch_flush(c, r, dt, sg, stop, &pb, &best, &tbest)))
+                break;
+            if (pb.n == 0)
+                pb.k0 = k;
+            pb.last[pb.n++] = klast;
+        } else {
+            if ((stopped = proj_batch_flush(c, r, dt, sg, stop, &pb, &best, &tbest)))
+                break;
+            project_block(c, r, k, klast, dt, sg, avx2, &best, &tbest);
+        }
         k = klast + 1;
     }
+    if (!stopped)
+        proj_batch_flush(c, r, dt, sg, stop, &pb, &best, &tbest);
     *tbest_out = tbest;
     return best;
 }
