@@ -7,8 +7,12 @@
  *
  * ops: raytrace_frame (PARC on), raytrace_frame_noparc, raytrace_rays_per_s
  * (primary rays, i.e. pixels, per second of raytrace_frame), raycast_frame
- * (the plain ray caster on the same World and view: it shows the volume
- * only), and the ratios raytrace_parc_speedup and raytrace_vs_raycast.
+ * (the plain ray caster on the same World and view at quality 2: it shows
+ * the volume only), and the ratios raytrace_parc_speedup and
+ * raytrace_vs_raycast. These ray-trace one ray a pixel (refinement=off),
+ * as the ray caster at quality 2 does; raytrace_refined_frame and
+ * raytrace_refined_vs_raycast are quality 1 as the renderer's default has
+ * it, with adaptive image-space refinement (fewer primary rays).
  * Each time is the median of --runs renders after one warm-up render
  * (caches built). raytrace_orbit_frame: the median frame of the view
  * turned by 2 degrees a frame, 8 frames (a drag in the GUI: the shadow
@@ -97,15 +101,16 @@ main(int argc, char **argv) {
     if (vv_image_new(&img, size, size) != VV_OK)
         bench_die("bench_raytrace", "image");
 
-    vv_renderer *rt = NULL, *rn = NULL, *rc = NULL;
+    vv_renderer *rt = NULL, *rn = NULL, *rr = NULL, *rc = NULL;
     if (vv_renderer_new(&rt, "raytrace") != VV_OK || vv_renderer_new(&rn, "raytrace") != VV_OK ||
-        vv_renderer_new(&rc, "raycast") != VV_OK)
+        vv_renderer_new(&rr, "raytrace") != VV_OK || vv_renderer_new(&rc, "raycast") != VV_OK)
         bench_die("bench_raytrace", "renderer");
-    vv_renderer *both[2] = {rt, rn};
-    for (int i = 0; i < 2; i++)
-        if (vv_renderer_set_option(both[i], "samples", "1") != VV_OK ||
-            vv_renderer_set_option(both[i], "max_depth", depth) != VV_OK ||
-            vv_renderer_set_option(both[i], "parc", i ? "0" : "1") != VV_OK)
+    vv_renderer *all[3] = {rt, rn, rr};
+    for (int i = 0; i < 3; i++)
+        if (vv_renderer_set_option(all[i], "samples", "1") != VV_OK ||
+            vv_renderer_set_option(all[i], "max_depth", depth) != VV_OK ||
+            vv_renderer_set_option(all[i], "parc", i == 1 ? "0" : "1") != VV_OK ||
+            vv_renderer_set_option(all[i], "refinement", i == 2 ? "auto" : "off") != VV_OK)
             bench_die("bench_raytrace", "option");
 
     /* interleaved, so that a slow phase of a shared machine hits both */
@@ -115,6 +120,8 @@ main(int argc, char **argv) {
     save(img, outdir, "raycast.png");
     double t_rn = time_renders(rn, w, 1, threads, runs, img);
     save(img, outdir, "raytrace_noparc.png");
+    double t_rr = time_renders(rr, w, 1, threads, runs, img);
+    save(img, outdir, "raytrace_refined.png");
     /* a drag: the view turned 2 degrees a frame */
     double t_orbit[8];
     {
@@ -138,7 +145,8 @@ main(int argc, char **argv) {
         vv_renderer *r1 = NULL;
         if (vv_renderer_new(&r1, "raytrace") != VV_OK ||
             vv_renderer_set_option(r1, "samples", "1") != VV_OK ||
-            vv_renderer_set_option(r1, "max_depth", depth) != VV_OK)
+            vv_renderer_set_option(r1, "max_depth", depth) != VV_OK ||
+            vv_renderer_set_option(r1, "refinement", "off") != VV_OK)
             bench_die("bench_raytrace", "renderer");
         vv_render_options opt;
         vv_render_options_init(&opt);
@@ -159,8 +167,11 @@ main(int argc, char **argv) {
     emit("raytrace_parc_speedup", t_rn / t_rt, "x");
     emit("raytrace_vs_raycast", t_rt / t_rc, "x");
     emit("raytrace_orbit_vs_raycast", t_orbit[4] / t_rc, "x");
+    emit("raytrace_refined_frame", t_rr, "s");
+    emit("raytrace_refined_vs_raycast", t_rr / t_rc, "x");
     vv_renderer_free(rt);
     vv_renderer_free(rn);
+    vv_renderer_free(rr);
     vv_renderer_free(rc);
     vv_image_free(img);
     vv_world_free(w);

@@ -60,10 +60,10 @@ ray_et(const rt_frame *fr, float weight) {
     return weight >= 1 ? fr->et : 1 - (1 - fr->et) / weight;
 }
 
-/* The common case, one composite volume on the ray: subvolume by
- * subvolume, leaping over empty ones, the same samples t = k dt as the
- * general loop below, classified a chunk at a time (vv_vray_classify, the
- * ray caster's kernel) before the visible ones are shaded. */
+/* The common case, one composite volume on the ray: run of visible
+ * subvolumes by run, leaping over empty ones, the same samples t = k dt as
+ * the general loop below, classified a chunk at a time (vv_vray_classify,
+ * the ray caster's kernel) before the visible ones are shaded. */
 static void
 march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray *wr,
           const float v[3], float et, float C[3], float *Aout, float *dep) {
@@ -87,6 +87,22 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
         double klast = floor(block_exit(r, p, k * dt) * inv_dt);
         klast = klast < kend ? klast : kend;
         klast = klast < k ? k : klast;
+        /* the visible subvolumes that follow join, whole, while their
+         * samples fit a chunk (as in the ray caster's trace_composite_one:
+         * the same samples in the same order, in fuller vectors) */
+        while (klast < kend && klast - k + 1 < VV_VC_CHUNK) {
+            const double kn = klast + 1;
+            float pn[3];
+            vv_vray_point(r, kn * dt, pn);
+            if (!ob->bvis[vv_vcache_block(ob->c, pn)])
+                break;
+            double kl = floor(block_exit(r, pn, kn * dt) * inv_dt);
+            kl = kl < kend ? kl : kend;
+            kl = kl < kn ? kn : kl;
+            if (kl - k + 1 > VV_VC_CHUNK)
+                break;
+            klast = kl;
+        }
         const int n = (int)(klast - k) + 1;
         for (int s0 = 0; s0 < n; s0 += VV_VC_CHUNK) {
             const int m = n - s0 < VV_VC_CHUNK ? n - s0 : VV_VC_CHUNK;
