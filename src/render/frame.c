@@ -163,6 +163,9 @@ typedef struct rf_tile {
     int8_t level[RF_TL * RF_TL]; /* 0 cast; s interpolated from a cell of side s; -1 not yet */
 } rf_tile;
 
+const char *const vv_frame_refine_modes[] = {"auto", "on", "off", NULL};
+const char *const vv_frame_refine_auto[] = {"auto", NULL};
+
 size_t
 vv_frame_refine_scratch_bytes(void) {
     return sizeof(rf_tile);

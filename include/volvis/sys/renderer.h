@@ -332,6 +332,27 @@ typedef void (*vv_frame_pixel_fn)(void *user, int x, int y, float px[5], void *w
 /** Per-thread scratch vv_frame_refine_tile needs (vv_frame_job.scratch_bytes). */
 size_t vv_frame_refine_scratch_bytes(void);
 
+/** The words of the refinement options (VV_FRAME_REFINE_OPTIONS):
+ * {"auto", "on", "off"} (the option's values 0, 1, 2) and {"auto"}. */
+extern const char *const vv_frame_refine_modes[];
+extern const char *const vv_frame_refine_auto[];
+
+/**
+ * The two option specs of a renderer that refines (its option table's
+ * rows): `refinement` (enum auto/on/off: value 0 auto, at quality 0 and 1;
+ * 1 on; 2 off) and `refinement_tolerance` (real in [0, 1], or auto: word
+ * >= 0, vv_frame_refine_tolerance of the quality).
+ */
+/* clang-format off */
+#define VV_FRAME_REFINE_OPTIONS                                                                    \
+    {"refinement", VV_OPTION_ENUM, "auto", 0, 0, 0, vv_frame_refine_modes,                         \
+     "adaptive image-space refinement from a lattice of every 4th pixel (auto: at quality 0 "     \
+     "and 1)"},                                                                                    \
+    {"refinement_tolerance", VV_OPTION_REAL, "auto", 0, 1, 0, vv_frame_refine_auto,                \
+     "colour or opacity error of a lattice cell's interpolation that casts its inner rays "       \
+     "(auto: 1/16, 1/64, 1/512 at quality 0, 1, 2)"}
+/* clang-format on */
+
 /** The tolerance the renderers use at @p quality (0, 1, 2): 1/16, 1/64, 1/512. */
 float vv_frame_refine_tolerance(int quality);
 

@@ -1127,7 +1127,6 @@ rc_destroy(void *state) {
 }
 
 static const char *const rc_auto[] = {"auto", NULL};
-static const char *const rc_refinement[] = {"auto", "on", "off", NULL};
 
 /* The ray caster's options (docs/rendering.md); gradient_budget_mb is
  * shared with splat (vv_vcache_options_budget in volume_cache.h). */
@@ -1140,12 +1139,7 @@ static const vv_option_spec rc_options[] = {
      "leap over subvolumes the transfer function hides (0 for tests; same image)"},
     {"simd", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
      "AVX2 classification where the processor has it (0: the portable path)"},
-    {"refinement", VV_OPTION_ENUM, "auto", 0, 0, 0, rc_refinement,
-     "adaptive image-space refinement from a lattice of every 4th pixel (auto: at quality 0 "
-     "and 1)"},
-    {"refinement_tolerance", VV_OPTION_REAL, "auto", 0, 1, 0, rc_auto,
-     "colour or opacity error of a lattice cell's interpolation that casts its inner rays "
-     "(auto: 1/16, 1/64, 1/512 at quality 0, 1, 2)"},
+    VV_FRAME_REFINE_OPTIONS,
 };
 
 const vv_renderer_ops vv_raycast_ops = {

@@ -670,9 +670,6 @@ rt_destroy(void *state) {
     free(st);
 }
 
-static const char *const rt_refinement[] = {"auto", "on", "off", NULL};
-static const char *const rt_auto[] = {"auto", NULL};
-
 static const vv_option_spec rt_options[] = {
     {"shadows", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
      "shadow rays (0: every light reaches every point)"},
@@ -686,12 +683,7 @@ static const vv_option_spec rt_options[] = {
      "supersample only pixels that differ from a neighbour"},
     {"adaptive_threshold", VV_OPTION_REAL, "0.05", 0, INFINITY, 0, NULL,
      "channel difference that triggers supersampling"},
-    {"refinement", VV_OPTION_ENUM, "auto", 0, 0, 0, rt_refinement,
-     "adaptive image-space refinement from a lattice of every 4th pixel (auto: at quality 0 "
-     "and 1)"},
-    {"refinement_tolerance", VV_OPTION_REAL, "auto", 0, 1, 0, rt_auto,
-     "colour or opacity error of a lattice cell's interpolation that casts its inner rays "
-     "(auto: 1/16, 1/64, 1/512 at quality 0, 1, 2)"},
+    VV_FRAME_REFINE_OPTIONS,
     {"parc", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
      "leap over empty subvolumes on every ray (0 for measurements; same image)"},
     {"shadow_grid", VV_OPTION_INT, "1", 0, 2, 0, NULL,
