@@ -226,3 +226,53 @@ vt_png_psnr(const char *a, const char *b) {
     vv_image_free(y);
     return se > 0 ? 10 * log10(1.0 / (se / (double)n)) : INFINITY;
 }
+
+vv_image *
+vt_render_q(vv_renderer *r, const vv_world *w, int quality, int threads, vv_render_stats *st) {
+    vv_image *img = NULL;
+    vt_ok(vv_image_new(&img, w->view.width, w->view.height));
+    vv_render_options opt;
+    vv_render_options_init(&opt);
+    opt.threads = threads;
+    opt.quality = quality;
+    opt.stats = st;
+    vt_ok(vv_renderer_render(r, w, &w->view, &opt, img));
+    return img;
+}
+
+vv_image *
+vt_converged_reference(vv_renderer *r, const vv_world *world, int step_div, int k) {
+    vv_world *w = NULL;
+    vt_ok(vv_world_clone(&w, world));
+    for (int i = 0; i < w->n_objects; i++)
+        w->objects[i]->step /= step_div;
+    w->view.width *= k;
+    w->view.height *= k;
+    vv_image *big = vt_render_q(r, w, 2, 0, NULL), *img = NULL;
+    vt_ok(vv_image_new(&img, world->view.width, world->view.height));
+    for (int y = 0; y < img->height; y++)
+        for (int x = 0; x < img->width; x++)
+            for (int c = 0; c < 4; c++) {
+                double sum = 0;
+                for (int j = 0; j < k; j++)
+                    for (int i = 0; i < k; i++)
+                        sum += big->rgba[4 * ((size_t)(y * k + j) * (size_t)big->width +
+                                              (size_t)(x * k + i)) +
+                                         (size_t)c];
+                img->rgba[4 * ((size_t)y * (size_t)img->width + (size_t)x) + (size_t)c] =
+                    (float)(sum / (k * k));
+            }
+    vv_image_free(big);
+    vv_world_free(w);
+    return img;
+}
+
+vv_default_scene_options
+vt_scene_options(int size) {
+    vv_default_scene_options so;
+    vv_default_scene_options_init(&so);
+    so.width = so.height = size;
+    so.azimuth = vv_deg_to_rad(30);
+    so.elevation = vv_deg_to_rad(20);
+    return so;
+}

@@ -104,6 +104,26 @@ const char *vt_path(const char *dir, const char *name);
  * [0, 1] (INFINITY when identical); asserts both read and match in size. */
 double vt_png_psnr(const char *a, const char *b);
 
+/** Default-scene options (vv_world_new_for_volume, _for_grid) of a
+ * @p size x @p size view from azimuth 30 and elevation 20 degrees, the
+ * renderer tests' usual view. */
+vv_default_scene_options vt_scene_options(int size);
+
+/**
+ * The converged reference of a renderer's image (issue 32's accuracy
+ * check): @p r renders a copy of @p w with every object's step divided by
+ * @p step_div, at @p k times the view's width and height, quality 2, one
+ * thread count of the machine's; the result is box-filtered (k x k pixels
+ * a pixel, RGBA averaged) to the view's size. The caller sets @p r's
+ * options (no refinement, one sample a pixel). Returns a new image.
+ */
+vv_image *vt_converged_reference(vv_renderer *r, const vv_world *w, int step_div, int k);
+
+/** Renders @p w's own view with @p r at @p quality on @p threads (0: all);
+ * @p st (may be NULL) gets the work counted. Returns a new image. */
+vv_image *vt_render_q(vv_renderer *r, const vv_world *w, int quality, int threads,
+                      vv_render_stats *st);
+
 /** Asserts |a - b| <= eps, printing both values on failure. */
 #define assert_near(a, b, eps)                                                                     \
     do {                                                                                           \

@@ -24,6 +24,8 @@ vtables_clear(vv_vtables *t) {
     free(t->bdist);
     free(t->pdist);
     free(t->lut2d);
+    free(t->pre);
+    free(t->pre_nz);
     memset(t, 0, sizeof *t);
 }
 
@@ -479,10 +481,20 @@ build_tables(const vv_vcache *c, const vv_object *obj, const vv_vtables_key *key
             t->bvis[b] = !(c->bmax[b] < (float)key->iso) || !key->skipping;
     } else {
         t->lut = malloc(sizeof(float) * 4 * VV_VC_LUT);
-        if (key->ext)
+        const int ext = key->flags & VV_VT_EXT;
+        if (ext)
             t->ext = malloc(sizeof(float) * VV_VC_LUT);
+        /* pre-integration: composite mode, a 1-D transfer function or a
+         * threshold (labels take the nearest label's colour instead) */
+        const int pre = (key->flags & VV_VT_PREINT) && key->mode == VV_MODE_COMPOSITE &&
+                        (key->segmentation == VV_SEG_TRANSFER_FUNCTION ||
+                         key->segmentation == VV_SEG_THRESHOLD);
+        if (pre) {
+            t->pre = malloc(sizeof(double) * 8 * VV_VC_LUT);
+            t->pre_nz = malloc(sizeof(int32_t) * (VV_VC_LUT + 1));
+        }
         int *nz = malloc(sizeof(int) * (VV_VC_LUT + 1));
-        if (!t->lut || (key->ext && !t->ext) || !nz) {
+        if (!t->lut || (ext && !t->ext) || (pre && (!t->pre || !t->pre_nz)) || !nz) {
             free(nz);
             vtables_clear(t);
             return vv_error_set(VV_ERR_NOMEM, "out of memory");
@@ -533,6 +545,18 @@ build_tables(const vv_vcache *c, const vv_object *obj, const vv_vtables_key *key
                 col = vv_tf_eval_color(&obj->tf, x);
             }
             a = a <= 0 ? 0 : a >= 1 ? 1 : a;
+            if (t->pre) {
+                /* extinction per world unit, bounded so that a step's optical
+                 * depth stays finite (40: opacity 1 in double) */
+                const double cap = 40.0 / key->dt;
+                double tau = a >= 1 ? cap : -log1p(-a) / unit;
+                tau = tau < cap ? tau : cap;
+                double *e = t->pre + 8 * (size_t)i;
+                e[1] = tau;
+                e[5] = tau * col.x;
+                e[6] = tau * col.y;
+                e[7] = tau * col.z;
+            }
             if (t->ext)
                 /* extinction: exp(-ext * unit) = 1 - a */
                 t->ext[i] = a >= 1 ? 1e30f : (float)(-log1p(-a) / unit);
@@ -551,9 +575,26 @@ build_tables(const vv_vcache *c, const vv_object *obj, const vv_vtables_key *key
             }
             nz[i + 1] = nz[i] + (t->lut[4 * i] > 0);
         }
+        if (t->pre) {
+            /* the prefix integrals: the trapezoid rule is exact for tau
+             * and tau c linear between entries */
+            double *e = t->pre;
+            e[0] = e[2] = e[3] = e[4] = 0;
+            for (int i = 1; i < VV_VC_LUT; i++, e += 8)
+                for (int q = 0; q < 4; q++) {
+                    const int at = q ? 1 + q : 0, of = q ? 4 + q : 1;
+                    e[8 + at] = e[at] + 0.5 * (e[of] + e[8 + of]);
+                }
+            t->pre_nz[0] = 0;
+            for (int i = 0; i < VV_VC_LUT; i++)
+                t->pre_nz[i + 1] = t->pre_nz[i] + (t->pre[8 * i + 1] > 0);
+        }
         for (size_t b = 0; b < nb; b++) {
-            int i0 = (int)vv_vtables_index(t, c->bmin[b]),
-                i1 = (int)vv_vtables_index(t, c->bmax[b]);
+            const float xhi = vv_vtables_index(t, c->bmax[b]);
+            int i0 = (int)vv_vtables_index(t, c->bmin[b]), i1 = (int)xhi;
+            /* pre-integration interpolates between entries: the entry
+             * above the largest value counts too (vv_vpre_visible) */
+            i1 += t->pre && (float)i1 < xhi && i1 < VV_VC_LUT - 1;
             t->bvis[b] = nz[i1 + 1] - nz[i0] > 0 || !key->skipping;
         }
         free(nz);
@@ -621,13 +662,13 @@ key_equal(const vv_vtables_key *a, const vv_vtables_key *b) {
     return a->mode == b->mode && a->segmentation == b->segmentation &&
            a->threshold == b->threshold && a->iso == b->iso && a->dt == b->dt &&
            a->base.x == b->base.x && a->base.y == b->base.y && a->base.z == b->base.z &&
-           a->skipping == b->skipping && a->ext == b->ext && tf_equal(&a->tf, &b->tf) &&
+           a->skipping == b->skipping && a->flags == b->flags && tf_equal(&a->tf, &b->tf) &&
            tf2d_equal(&a->tf2d, &b->tf2d);
 }
 
 vv_status
 vv_vtables_get(vv_vcache_set *s, vv_vcache *c, const vv_object *obj, vv_render_mode mode, double dt,
-               float iso, int skipping, int ext, vv_vtables *out, int *owned) {
+               float iso, int skipping, int flags, vv_vtables *out, int *owned) {
     vv_vtables_key key;
     memset(&key, 0, sizeof key);
     key.mode = mode;
@@ -637,7 +678,7 @@ vv_vtables_get(vv_vcache_set *s, vv_vcache *c, const vv_object *obj, vv_render_m
     key.dt = dt;
     key.base = obj->material.color;
     key.skipping = skipping;
-    key.ext = ext;
+    key.flags = flags;
     key.tf = obj->tf;
     if (obj->segmentation == VV_SEG_TRANSFER_FUNCTION_2D && mode == VV_MODE_COMPOSITE) {
         vv_status sg = vv_vcache_need_gmag(c);
@@ -1412,7 +1453,7 @@ vv_vtables_flat_ends(const vv_vtables *t, float *lo, float *hi) {
  * and is used only for grids of fewer than 2^30 voxels. */
 static void
 classify_chunk(const vv_vcache *c, const vv_vtables *ob, const vv_vray *r, double kfirst, double dt,
-               int m, size_t *cell, float *fx, float *fy, float *fz, int32_t *entry) {
+               int m, size_t *cell, float *fx, float *fy, float *fz, int32_t *entry, float *x) {
     for (int s = 0; s < m; s++) {
         float p[3], f[3];
         vv_vray_point(r, (kfirst + s) * dt, p);
@@ -1421,7 +1462,10 @@ classify_chunk(const vv_vcache *c, const vv_vtables *ob, const vv_vray *r, doubl
         fx[s] = f[0];
         fy[s] = f[1];
         fz[s] = f[2];
-        entry[s] = 4 * (int)vv_vtables_index(ob, vv_vcache_value_at(c, o, f));
+        const float xs = vv_vtables_index(ob, vv_vcache_value_at(c, o, f));
+        entry[s] = 4 * (int)xs;
+        if (x)
+            x[s] = xs;
     }
 }
 
@@ -1432,8 +1476,8 @@ classify_chunk(const vv_vcache *c, const vv_vtables *ob, const vv_vray *r, doubl
  * fused multiply-adds, and one render uses one version throughout. */
 __attribute__((target("avx2,fma"))) static void
 classify_chunk_avx2(const vv_vcache *c, const vv_vtables *ob, const vv_vray *r, double kfirst,
-                    double dt, int m, size_t *cell, float *fx, float *fy, float *fz,
-                    int32_t *entry) {
+                    double dt, int m, size_t *cell, float *fx, float *fy, float *fz, int32_t *entry,
+                    float *x) {
     float u[VV_VC_CHUNK + 8];
     for (int s = 0; s < m; s++)
         u[s] = (float)((kfirst + s) * dt - r->tb);
@@ -1474,7 +1518,8 @@ classify_chunk_avx2(const vv_vcache *c, const vv_vtables *ob, const vv_vray *r, 
         li = _mm256_min_ps(_mm256_max_ps(li, fzero), lmax);
         const __m256i e = _mm256_slli_epi32(_mm256_cvttps_epi32(li), 2);
         int32_t ob8[8], eb8[8];
-        float xb[8], yb[8], zb[8];
+        float xb[8], yb[8], zb[8], lb[8];
+        _mm256_storeu_ps(lb, li);
         _mm256_storeu_si256((__m256i *)(void *)ob8, o);
         _mm256_storeu_si256((__m256i *)(void *)eb8, e);
         _mm256_storeu_ps(xb, wx);
@@ -1488,6 +1533,8 @@ classify_chunk_avx2(const vv_vcache *c, const vv_vtables *ob, const vv_vray *r, 
             fy[s + l] = yb[l];
             fz[s + l] = zb[l];
         }
+        for (int l = 0; x && l < lanes; l++)
+            x[s + l] = lb[l];
     }
 }
 #endif
@@ -1495,16 +1542,16 @@ classify_chunk_avx2(const vv_vcache *c, const vv_vtables *ob, const vv_vray *r, 
 void
 vv_vray_classify(const vv_vcache *c, const vv_vtables *t, const vv_vray *r, double kfirst,
                  double dt, int m, int avx2, size_t *cell, float *fx, float *fy, float *fz,
-                 int32_t *entry) {
+                 int32_t *entry, float *x) {
 #if VV_VC_HAVE_AVX2
     if (avx2 && c->q16 && c->sz * (size_t)c->nz < ((size_t)1 << 30)) {
-        classify_chunk_avx2(c, t, r, kfirst, dt, m, cell, fx, fy, fz, entry);
+        classify_chunk_avx2(c, t, r, kfirst, dt, m, cell, fx, fy, fz, entry, x);
         return;
     }
 #else
     (void)avx2;
 #endif
-    classify_chunk(c, t, r, kfirst, dt, m, cell, fx, fy, fz, entry);
+    classify_chunk(c, t, r, kfirst, dt, m, cell, fx, fy, fz, entry, x);
 }
 
 int

@@ -58,7 +58,7 @@ typedef struct vv_vtables_key {
     vv_segmentation segmentation;
     double threshold, iso, dt;
     vv_vec3 base;
-    int skipping, ext;
+    int skipping, flags; /* VV_VT_EXT, VV_VT_PREINT */
     vv_tf tf;
     vv_tf2d tf2d; /* VV_SEG_TRANSFER_FUNCTION_2D in composite mode */
 } vv_vtables_key;
@@ -89,7 +89,21 @@ typedef struct vv_vtables {
     uint8_t *pdist;
     float *lut2d;
     float g_scale; /* gradient magnitude (data units per volume world unit) -> bin */
+    /* pre-integrated classification (VV_VT_PREINT, composite mode with a
+     * 1-D transfer function or a threshold; else NULL): VV_VC_LUT rows of 8
+     * doubles over the table position x, {T, tau, K[3], tau c[3]}: tau the
+     * extinction per world unit at the entry (-ln(1 - opacity) /
+     * opacity_unit_distance, at most 40 / dt), c its colour, and T, K the
+     * integrals over x from 0 to the entry of tau and of tau c, with tau
+     * and tau c linear between entries (vv_vpre_at) */
+    double *pre;
+    int32_t *pre_nz; /* VV_VC_LUT + 1: entries below i with tau > 0 */
 } vv_vtables;
+
+/* vv_vtables_get flags: also build the extinction table (ext), the
+ * pre-integration table (pre). */
+#define VV_VT_EXT 1
+#define VV_VT_PREINT 2
 
 /* Everything derived from one volume that does not depend on the TF. */
 typedef struct vv_vcache {
@@ -146,12 +160,15 @@ vv_status vv_vcache_get(vv_vcache_set *s, vv_volume *vol, vv_vcache **out);
 
 /* The tables of object @p obj on cache @p c for step @p dt (world units)
  * in @p mode; @p iso in stored units; @p skipping 0 marks every subvolume
- * visible; @p ext 1 also builds the extinction table. Borrowed from the
+ * visible; @p flags VV_VT_EXT also builds the extinction table, VV_VT_PREINT
+ * the pre-integration table where the object's classification allows it
+ * (composite mode, a 1-D transfer function or a threshold). Borrowed from the
  * cache when nothing they depend on changed (*owned = 0: do not free), else
  * built (*owned = 1 unless handed to the cache; free with
  * vv_vtables_free). Errors: VV_ERR_NOMEM. */
 vv_status vv_vtables_get(vv_vcache_set *s, vv_vcache *c, const vv_object *obj, vv_render_mode mode,
-                         double dt, float iso, int skipping, int ext, vv_vtables *out, int *owned);
+                         double dt, float iso, int skipping, int flags, vv_vtables *out,
+                         int *owned);
 void vv_vtables_free(vv_vtables *t);
 
 /* Builds c->nrm once, when a shaded object first needs it and it fits
@@ -747,9 +764,85 @@ void vv_vtables_flat_ends(const vv_vtables *t, float *lo, float *hi);
  * samples overlap in the pipeline. With @p avx2 (vv_vc_have_avx2) and
  * 16-bit values, eight samples at a time with AVX2 and FMA; the two differ
  * only in the rounding of fused multiply-adds. */
+/* With @p x not NULL, x[s] gets each sample's table position (the entry's
+ * index before truncation, in [0, VV_VC_LUT - 1]). */
 void vv_vray_classify(const vv_vcache *c, const vv_vtables *t, const vv_vray *r, double kfirst,
                       double dt, int m, int avx2, size_t *cell, float *fx, float *fy, float *fz,
-                      int32_t *entry);
+                      int32_t *entry, float *x);
+
+/* Pre-integrated classification (Engel, Kraus and Ertl, "High-quality
+ * pre-integrated volume rendering using hardware-accelerated pixel
+ * shading", Graphics Hardware 2001; the prefix-integral form): between two
+ * samples the value is taken to run linearly, and the segment's opacity
+ * and emission are the exact integrals of the transfer function along that
+ * ramp, from the prefix integrals of vv_vtables.pre. vv_vpre: those
+ * integrals and the extinction at one table position. */
+typedef struct vv_vpre {
+    double T, K[3];    /* prefix integrals of tau and tau c */
+    double tau, tk[3]; /* tau and tau c at the position */
+} vv_vpre;
+
+/* vv_vpre at table position @p x in [0, VV_VC_LUT - 1] of tables @p t
+ * (t->pre not NULL): tau and tau c interpolated linearly between the
+ * entries, T and K integrated exactly under that interpolation. */
+static inline void
+vv_vpre_at(const vv_vtables *t, float x, vv_vpre *p) {
+    int i = (int)x;
+    i = i > VV_VC_LUT - 2 ? VV_VC_LUT - 2 : i;
+    const double f = (double)x - i;
+    const double *a = t->pre + 8 * (size_t)i, *b = a + 8;
+    const double dtau = b[1] - a[1];
+    p->tau = a[1] + f * dtau;
+    p->T = a[0] + f * (a[1] + 0.5 * f * dtau);
+    for (int c = 0; c < 3; c++) {
+        const double dk = b[5 + c] - a[5 + c];
+        p->tk[c] = a[5 + c] + f * dk;
+        p->K[c] = a[2 + c] + f * (a[5 + c] + 0.5 * f * dk);
+    }
+}
+
+/* Whether the transfer function is anywhere non-transparent between table
+ * positions @p xa and @p xb (the entries around both, inclusive): a
+ * segment that is not has opacity 0. */
+static inline int
+vv_vpre_visible(const vv_vtables *t, float xa, float xb) {
+    const float lo = xa < xb ? xa : xb, hi = xa < xb ? xb : xa;
+    const int i0 = (int)lo;
+    int i1 = (int)hi;
+    i1 += (float)i1 < hi && i1 < VV_VC_LUT - 1;
+    return t->pre_nz[i1 + 1] > t->pre_nz[i0];
+}
+
+/* The segment of length @p len (world units) over which the table position
+ * runs linearly from @p xf (integrals @p f) to @p xb (@p b): its opacity
+ * 1 - exp(-len * mean tau) and its colour times that opacity, the colour
+ * being the mean of c weighted by tau (the emission without attenuation
+ * inside the segment, Engel et al.'s approximation). Returns 0 (and sets
+ * nothing) when the segment is transparent. */
+static inline int
+vv_vpre_segment(const vv_vpre *f, float xf, const vv_vpre *b, float xb, double len, float *alpha,
+                float col[3]) {
+    const double d = (double)xb - (double)xf;
+    double tau, k[3];
+    if (fabs(d) > 1e-3) {
+        const double inv = 1.0 / d;
+        tau = (b->T - f->T) * inv;
+        for (int c = 0; c < 3; c++)
+            k[c] = (b->K[c] - f->K[c]) * inv;
+    } else { /* nearly constant: the trapezoid rule */
+        tau = 0.5 * (f->tau + b->tau);
+        for (int c = 0; c < 3; c++)
+            k[c] = 0.5 * (f->tk[c] + b->tk[c]);
+    }
+    if (!(tau > 1e-12))
+        return 0;
+    const float a = -expm1f((float)(-tau * len));
+    const double s = a / tau;
+    *alpha = a;
+    for (int c = 0; c < 3; c++)
+        col[c] = (float)(k[c] * s);
+    return 1;
+}
 /* The processor has AVX2 and FMA. */
 int vv_vc_have_avx2(void);
 

@@ -190,6 +190,21 @@ write_png(const vv_image *img, const char *name) {
     vt_ok(vv_image_write_png(img, path, 1.0, 0));
 }
 
+/* The default scene (vv_world_new_for_volume) of the shared volume
+ * volumes/@p file, @p size pixels square, seen from azimuth 30 and
+ * elevation 20 degrees; *vol gets the volume (freed by the caller, after
+ * the World). */
+static vv_world *
+real_scene(const char *file, int size, vv_volume **vol) {
+    char rel[256];
+    snprintf(rel, sizeof rel, "volumes/%s", file);
+    vt_ok(vv_volume_load(vol, vt_data(rel), NULL));
+    vv_default_scene_options so = vt_scene_options(size);
+    vv_world *w = NULL;
+    vt_ok(vv_world_new_for_volume(&w, *vol, &so));
+    return w;
+}
+
 /* ---------------------------------------------------------------------- */
 /* Analytic: transmittance of a constant slab                               */
 
@@ -795,14 +810,7 @@ test_local_cut_plane(void **state) {
 
 static vv_world *
 headsq_world(int size, vv_volume **vol) {
-    vt_ok(vv_volume_load(vol, vt_data("volumes/headsq/quarter.nhdr"), NULL));
-    vv_default_scene_options so;
-    vv_default_scene_options_init(&so);
-    so.width = so.height = size;
-    so.azimuth = vv_deg_to_rad(30);
-    so.elevation = vv_deg_to_rad(20);
-    vv_world *w = NULL;
-    vt_ok(vv_world_new_for_volume(&w, *vol, &so));
+    vv_world *w = real_scene("headsq/quarter.nhdr", size, vol);
     assert_int_equal(w->n_objects, 1);
     assert_int_equal(w->objects[0]->mode, VV_MODE_COMPOSITE);
     assert_true(w->objects[0]->shading);
@@ -956,44 +964,14 @@ test_simd_matches_portable(void **state) {
  * with refinement forced on is as accurate as without it (within 0.1 dB);
  * quality 1 is within a few dB with far fewer samples; any thread count
  * gives the same image; refinement=off at quality 1 is the quality-2 image. */
-static vv_image *
-render_q(vv_renderer *r, const vv_world *w, int quality, int threads, vv_render_stats *st) {
-    vv_image *img = NULL;
-    vt_ok(vv_image_new(&img, w->view.width, w->view.height));
-    vv_render_options opt;
-    vv_render_options_init(&opt);
-    opt.threads = threads;
-    opt.quality = quality;
-    opt.stats = st;
-    vt_ok(vv_renderer_render(r, w, &w->view, &opt, img));
-    return img;
-}
-
+/* The ray caster's converged reference: step 1/16 of the objects', k x k
+ * rays a pixel, box-filtered, no refinement (vt_converged_reference). */
 static vv_image *
 converged_reference(const vv_world *world, int k) {
-    vv_world *w = NULL;
-    vt_ok(vv_world_clone(&w, world));
-    const double step = w->objects[0]->step;
-    w->objects[0]->step = step / 16;
-    w->view.width *= k;
-    w->view.height *= k;
     vv_renderer *r = new_raycaster();
     vt_ok(vv_renderer_set_option(r, "refinement", "off"));
-    vv_image *big = render_q(r, w, 2, 0, NULL), *img = NULL;
-    vt_ok(vv_image_new(&img, world->view.width, world->view.height));
-    for (int y = 0; y < img->height; y++)
-        for (int x = 0; x < img->width; x++)
-            for (int c = 0; c < 4; c++) {
-                double sum = 0;
-                for (int j = 0; j < k; j++)
-                    for (int i = 0; i < k; i++)
-                        sum += px(big, x * k + i, y * k + j)[c];
-                img->rgba[4 * ((size_t)y * (size_t)img->width + (size_t)x) + (size_t)c] =
-                    (float)(sum / (k * k));
-            }
-    vv_image_free(big);
+    vv_image *img = vt_converged_reference(r, world, 16, k);
     vv_renderer_free(r);
-    vv_world_free(w);
     return img;
 }
 
@@ -1002,27 +980,18 @@ test_adaptive_refinement(void **state) {
     (void)state;
     static const char *files[] = {"neghip.slc", "headsq/quarter.nhdr"};
     for (size_t f = 0; f < sizeof files / sizeof files[0]; f++) {
-        char rel[256];
-        snprintf(rel, sizeof rel, "volumes/%s", files[f]);
         vv_volume *v = NULL;
-        vt_ok(vv_volume_load(&v, vt_data(rel), NULL));
-        vv_default_scene_options so;
-        vv_default_scene_options_init(&so);
-        so.width = so.height = 128;
-        so.azimuth = vv_deg_to_rad(30);
-        so.elevation = vv_deg_to_rad(20);
-        vv_world *w = NULL;
-        vt_ok(vv_world_new_for_volume(&w, v, &so));
+        vv_world *w = real_scene(files[f], 128, &v);
         vv_image *ref = converged_reference(w, 4);
         vv_renderer *r = new_raycaster(), *on = new_raycaster(), *off = new_raycaster();
         vt_ok(vv_renderer_set_option(on, "refinement", "on"));
         vt_ok(vv_renderer_set_option(off, "refinement", "off"));
         vv_render_stats s2 = {0, 0}, s2a = {0, 0}, s1 = {0, 0};
-        vv_image *q2 = render_q(r, w, 2, 0, &s2);
-        vv_image *q2a = render_q(on, w, 2, 0, &s2a);
-        vv_image *q1 = render_q(r, w, 1, 1, &s1);
-        vv_image *q1t = render_q(r, w, 1, 2, NULL);
-        vv_image *q1off = render_q(off, w, 1, 2, NULL);
+        vv_image *q2 = vt_render_q(r, w, 2, 0, &s2);
+        vv_image *q2a = vt_render_q(on, w, 2, 0, &s2a);
+        vv_image *q1 = vt_render_q(r, w, 1, 1, &s1);
+        vv_image *q1t = vt_render_q(r, w, 1, 2, NULL);
+        vv_image *q1off = vt_render_q(off, w, 1, 2, NULL);
         const double p2 = vv_image_psnr(q2, ref), p2a = vv_image_psnr(q2a, ref),
                      p1 = vv_image_psnr(q1, ref);
         print_message("%s against the converged reference: quality 2 %.2f dB (%llu samples), "
@@ -1032,6 +1001,7 @@ test_adaptive_refinement(void **state) {
         write_png(q1, f ? "adaptive_q1_headsq" : "adaptive_q1_neghip");
         assert_true(count_hits(q2, 0, 128).n > 500);
         assert_true(p2a >= p2 - 0.1);
+        assert_true(p2 >= (f ? 45.2 : 51.5)); /* measured 46.26 and 52.58 dB */
         assert_true(p1 >= p2 - 6);
         assert_true(p1 >= 30);
         /* at about two pixels a voxel most tiles refine whole: the lattice
@@ -1046,8 +1016,8 @@ test_adaptive_refinement(void **state) {
          * benchmark's view): far fewer samples for nearly the same image */
         w->view.fov *= 0.25;
         s1 = s2 = (vv_render_stats){0, 0};
-        q2 = render_q(r, w, 2, 0, &s2);
-        q1 = render_q(r, w, 1, 0, &s1);
+        q2 = vt_render_q(r, w, 2, 0, &s2);
+        q1 = vt_render_q(r, w, 1, 0, &s1);
         const double pz = vv_image_psnr(q1, q2);
         print_message("%s magnified: quality 1 adaptive against quality 2: %.2f dB, %llu of %llu "
                       "samples\n",
@@ -1062,6 +1032,151 @@ test_adaptive_refinement(void **state) {
         vv_world_free(w);
         vv_volume_free(v);
     }
+}
+
+/* Pre-integrated classification (option preintegration): the segments
+ * between samples cover a ray's whole path through the volume, entry and
+ * exit included, and integrate the transfer function exactly along the
+ * linear value ramp between two samples. Seen straight down z at any
+ * offset of the sample grid: (1) a constant slab of length L gives
+ * 1 - alpha = exp(-tau L); (2) a ramp (value = z) under a transfer
+ * function stepping from 0 to opacity a at value 10.5 gives
+ * exp(-tau (L - 10.5)), where point sampling's count of samples above the
+ * step, and so its result, varies with the offset. White, unshaded: the
+ * colour equals the opacity. */
+static double
+preint_transmittance(vv_world *w, vv_renderer *r, double top, double dt, double phase) {
+    const double eye_z = top + (floor(40.0 / dt) + phase) * dt;
+    vv_view view = ortho_z(1.5, 1.5, eye_z, 2.0, 2, 2);
+    vv_image *img = render(r, w, &view);
+    const float *p = px(img, 1, 1);
+    assert_float_equal(p[0], p[3], 1e-5);
+    const double trans = 1.0 - p[3];
+    vv_image_free(img);
+    return trans;
+}
+
+static void
+test_preintegration_analytic(void **state) {
+    (void)state;
+    vv_renderer *pre = new_raycaster(), *point = new_raycaster();
+    vt_ok(vv_renderer_set_option(pre, "preintegration", "1"));
+    vt_ok(vv_renderer_set_option(pre, "early_termination", "1"));
+    vt_ok(vv_renderer_set_option(point, "early_termination", "1"));
+    static const double phases[] = {0.0, 0.13, 0.37, 0.5, 0.71, 0.96};
+    /* (1) a constant slab, 8 voxels long */
+    vv_volume *v = constant_volume(4, 4, 9, VV_F32, 1, 1, 1, 5.0);
+    vv_world *w = new_world();
+    vv_object *o = add_object(w, v, VV_MODE_COMPOSITE);
+    vv_tf_init(&o->tf);
+    vt_ok(vv_tf_add_opacity(&o->tf, 5.0, 0.3));
+    o->tf.opacity_unit_distance = 1.0;
+    o->step = 0.7;
+    double worst = 0;
+    for (size_t i = 0; i < sizeof phases / sizeof phases[0]; i++) {
+        const double t = preint_transmittance(w, pre, 8.0, 0.7, phases[i]);
+        const double e = fabs(t / pow(0.7, 8.0) - 1);
+        worst = e > worst ? e : worst;
+    }
+    print_message("pre-integrated slab: worst relative error %.2e over %zu offsets\n", worst,
+                  sizeof phases / sizeof phases[0]);
+    assert_true(worst < 1e-5);
+    vv_world_free(w);
+    vv_volume_free(v);
+    /* (2) a ramp along z, 31 voxels long */
+    v = new_volume(4, 4, 32, VV_F32, 1, 1, 1);
+    for (int k = 0; k < 32; k++)
+        for (int j = 0; j < 4; j++)
+            for (int i = 0; i < 4; i++)
+                vv_volume_set(v, i, j, k, k);
+    vv_volume_update_range(v);
+    w = new_world();
+    o = add_object(w, v, VV_MODE_COMPOSITE);
+    vv_tf_init(&o->tf);
+    vt_ok(vv_tf_add_opacity(&o->tf, 0, 0));
+    vt_ok(vv_tf_add_opacity(&o->tf, 10.49, 0));
+    vt_ok(vv_tf_add_opacity(&o->tf, 10.51, 0.1));
+    vt_ok(vv_tf_add_opacity(&o->tf, 31, 0.1));
+    o->tf.opacity_unit_distance = 1.0;
+    const double expect = pow(0.9, 31 - 10.5);
+    for (int st = 0; st < 2; st++) {
+        const double step = st ? 1.0 : 0.5;
+        o->step = step;
+        double wp = 0, wq = 0;
+        for (size_t i = 0; i < sizeof phases / sizeof phases[0]; i++) {
+            const double tp = preint_transmittance(w, pre, 31.0, step, phases[i]);
+            const double tq = preint_transmittance(w, point, 31.0, step, phases[i]);
+            wp = fabs(tp / expect - 1) > wp ? fabs(tp / expect - 1) : wp;
+            wq = fabs(tq / expect - 1) > wq ? fabs(tq / expect - 1) : wq;
+        }
+        print_message("ramp under a step transfer function, step %.1f: worst relative error "
+                      "pre-integrated %.2e, point-sampled %.2e\n",
+                      step, wp, wq);
+        assert_true(wp < 1e-3);
+        assert_true(wq > 10 * wp);
+    }
+    vv_world_free(w);
+    vv_volume_free(v);
+    vv_renderer_free(pre);
+    vv_renderer_free(point);
+}
+
+/* Pre-integration on a real volume under a sharp transfer function (neghip,
+ * opacity rising over 4 of its 256 values): against the converged ray
+ * integral (point sampling at 1/16 of the step, one ray a pixel) it is
+ * several dB more accurate than point sampling at the same step (measured
+ * +7.7 dB at step 0.5, +4.8 at step 1), and still ahead against the
+ * converged image (4 x 4 rays a pixel, where the pixel sampling dominates);
+ * any thread count and skipping on or off give the same image; the
+ * portable classification agrees with AVX2's. */
+static void
+test_preintegration_real(void **state) {
+    (void)state;
+    vv_volume *v = NULL;
+    vv_world *w = real_scene("neghip.slc", 128, &v);
+    vv_object *o = w->objects[0];
+    vv_tf_set_ramp(&o->tf, 60, 64, 0.5, vv_vec3_make(1, 0.85, 0.7), o->tf.opacity_unit_distance);
+    vv_renderer *pre = new_raycaster(), *point = new_raycaster();
+    vt_ok(vv_renderer_set_option(pre, "preintegration", "1"));
+    for (int st = 0; st < 2; st++) {
+        o->step = st ? 1.0 : 0.5;
+        vv_image *ref = converged_reference(w, 1), *ref4 = converged_reference(w, 4);
+        vv_image *a = vt_render_q(pre, w, 2, 0, NULL), *b = vt_render_q(point, w, 2, 0, NULL);
+        const double pa = vv_image_psnr(a, ref), pb = vv_image_psnr(b, ref);
+        const double pa4 = vv_image_psnr(a, ref4), pb4 = vv_image_psnr(b, ref4);
+        print_message("neghip, sharp transfer function, step %.1f, against the converged ray "
+                      "integral: pre-integrated %.2f dB, point-sampled %.2f dB; against 4 x 4 "
+                      "rays a pixel: %.2f and %.2f dB\n",
+                      o->step, pa, pb, pa4, pb4);
+        write_png(a, st ? "preint_neghip_step1" : "preint_neghip_step05");
+        assert_true(count_hits(a, 0, 128).n > 300);
+        assert_true(pa >= pb + 3);
+        assert_true(pa4 >= pb4 + 0.3);
+        vv_image_free(ref4);
+        if (st == 0) {
+            vv_image *t1 = vt_render_q(pre, w, 2, 1, NULL), *t2 = vt_render_q(pre, w, 2, 2, NULL);
+            assert_true(images_identical(a, t1));
+            assert_true(images_identical(a, t2));
+            vt_ok(vv_renderer_set_option(pre, "empty_space_skipping", "0"));
+            vv_image *ns = vt_render_q(pre, w, 2, 0, NULL);
+            assert_true(images_identical(a, ns));
+            vt_ok(vv_renderer_set_option(pre, "empty_space_skipping", "1"));
+            vt_ok(vv_renderer_set_option(pre, "simd", "0"));
+            vv_image *portable = vt_render_q(pre, w, 2, 0, NULL);
+            assert_true(vv_image_psnr(a, portable) >= 60);
+            vt_ok(vv_renderer_set_option(pre, "simd", "1"));
+            vv_image *q[] = {t1, t2, ns, portable};
+            for (size_t i = 0; i < sizeof q / sizeof q[0]; i++)
+                vv_image_free(q[i]);
+        }
+        vv_image_free(a);
+        vv_image_free(b);
+        vv_image_free(ref);
+    }
+    vv_renderer_free(pre);
+    vv_renderer_free(point);
+    vv_world_free(w);
+    vv_volume_free(v);
 }
 
 /* The composite kernel shades eight samples at a time with AVX2
@@ -1304,17 +1419,8 @@ test_real_files(void **state) {
     };
     vv_renderer *r = new_raycaster();
     for (size_t f = 0; f < sizeof files / sizeof files[0]; f++) {
-        char rel[256];
-        snprintf(rel, sizeof rel, "volumes/%s", files[f]);
         vv_volume *v = NULL;
-        vt_ok(vv_volume_load(&v, vt_data(rel), NULL));
-        vv_default_scene_options so;
-        vv_default_scene_options_init(&so);
-        so.width = so.height = 64;
-        so.azimuth = vv_deg_to_rad(30);
-        so.elevation = vv_deg_to_rad(20);
-        vv_world *w = NULL;
-        vt_ok(vv_world_new_for_volume(&w, v, &so));
+        vv_world *w = real_scene(files[f], 64, &v);
         vv_image *img = render(r, w, &w->view);
         long lit = 0;
         for (int y = 0; y < 64; y++)
@@ -1379,6 +1485,8 @@ main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_denormal_range),
         cmocka_unit_test(test_adaptive_refinement),
+        cmocka_unit_test(test_preintegration_analytic),
+        cmocka_unit_test(test_preintegration_real),
         cmocka_unit_test(test_shade8_matches_scalar),
         cmocka_unit_test(test_slab_transmittance),
         cmocka_unit_test(test_slab_sample_count),

@@ -357,6 +357,36 @@ extern const char *const vv_frame_refine_auto[];
 float vv_frame_refine_tolerance(int quality);
 
 /**
+ * A renderer's refinement settings, the values of its
+ * VV_FRAME_REFINE_OPTIONS: mode 0 auto (at quality 0 and 1), 1 on, 2 off;
+ * tolerance < 0 by quality (vv_frame_refine_tolerance). Part of the
+ * renderer's state: set from its set_option, read when a frame starts.
+ */
+typedef struct vv_frame_refine_settings {
+    int mode;
+    double tolerance;
+} vv_frame_refine_settings;
+
+/** Defaults: auto, tolerance by quality. */
+void vv_frame_refine_settings_init(vv_frame_refine_settings *s);
+
+/**
+ * Applies option @p key with value @p v (already checked against
+ * VV_FRAME_REFINE_OPTIONS) when it is `refinement` or
+ * `refinement_tolerance`; returns 1 when it was one of them, else 0.
+ */
+int vv_frame_refine_set_option(vv_frame_refine_settings *s, const char *key,
+                               const vv_option_value *v);
+
+/**
+ * Whether a frame at @p quality refines (never a region render, @p region
+ * not 0: its pixels are composited with other ranks' by depth and key),
+ * and with what tolerance (*tolerance, set either way).
+ */
+int vv_frame_refine_for(const vv_frame_refine_settings *s, int quality, int region,
+                        float *tolerance);
+
+/**
  * Fills tile @p t of a @p width x @p height image (@p rgba: 4 floats a
  * pixel, @p depth: one; row-major, the vv_image layout) by adaptive
  * image-space refinement (Levoy, "Volume Rendering by Adaptive

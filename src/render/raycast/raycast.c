@@ -42,12 +42,12 @@
 #define RC_MAX_OBJ 64 /* objects handled in one render (<= VV_VC_MAX) */
 
 typedef struct rc_state {
-    vv_vcache_set vc;          /* per-volume caches (src/render/volume_cache.h) */
-    double early_termination;  /* accumulated opacity that ends a ray */
-    int skipping;              /* empty-space skipping on/off (for tests) */
-    int simd;                  /* use AVX2 when the processor has it (for tests) */
-    int adaptive;              /* adaptive refinement: 0 auto (quality <= 1), 1 on, 2 off */
-    double adaptive_tolerance; /* tolerance of a lattice cell (< 0: by quality) */
+    vv_vcache_set vc;                /* per-volume caches (src/render/volume_cache.h) */
+    double early_termination;        /* accumulated opacity that ends a ray */
+    int skipping;                    /* empty-space skipping on/off (for tests) */
+    int simd;                        /* use AVX2 when the processor has it (for tests) */
+    vv_frame_refine_settings refine; /* adaptive refinement (options refinement...) */
+    int preint;                      /* pre-integrated classification (option preintegration) */
 } rc_state;
 
 /* One object prepared for this render. */
@@ -106,8 +106,9 @@ typedef struct rc_frame {
     vv_camera_rays cam; /* primary rays */
     vv_image *out;      /* the image being written */
     float *key;         /* region renders of projections: the key per pixel, else NULL */
-    int adaptive;       /* adaptive image-space refinement (render_tile_adaptive) */
+    int refine;         /* adaptive image-space refinement (render_tile_refined) */
     float tolerance;    /* its tolerance, in colour and opacity */
+    int preint;         /* pre-integrated classification (trace_composite_preint) */
 } rc_frame;
 
 /* ---------------------------------------------------------------------- */
@@ -147,6 +148,16 @@ typedef struct rc_result {
     float depth;
     uint32_t samples, shaded; /* work counted (vv_render_stats) */
 } rc_result;
+
+/* A composite kernel's result: colour C, opacity A (at most 1), depth. */
+static inline void
+result_set(rc_result *res, const float C[3], float A, float depth) {
+    res->rgb[0] = C[0];
+    res->rgb[1] = C[1];
+    res->rgb[2] = C[2];
+    res->a = A > 1 ? 1 : A;
+    res->depth = depth;
+}
 
 /* Composites one classified sample (table entry e: opacity, then colour
  * times opacity) at ray parameter t under the accumulated C, A. g is the
@@ -205,6 +216,59 @@ leap(const vv_vray *r, const float p[3], double t, const unsigned bc[3], int dis
     }
     double ks = vv_ceil_pos((t + te) * inv_dt);
     return ks > k + 1 ? ks : k + 1;
+}
+
+/* The next run of samples of ray r in visible subvolumes (bdist 0) from
+ * sample *k on, up to kend: *k and *klast get its first and last sample;
+ * returns 0 when none is left. Empty cubes of subvolumes are leapt over;
+ * the visible subvolumes that follow the first join, whole, while their
+ * samples fit a chunk (VV_VC_CHUNK): the same samples in the same order as
+ * one subvolume at a time (which subvolumes are visible does not depend on
+ * what was composited), in fuller vectors. Without skipping every
+ * subvolume is marked visible and at distance 0, so both cases run this
+ * same code and produce the same samples. */
+static inline int
+visible_run(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double dt, double kend,
+            double *kp, double *klastp) {
+    const double inv_dt = 1.0 / dt;
+    const unsigned bxm = (unsigned)c->bx - 1, bym = (unsigned)c->by - 1, bzm = (unsigned)c->bz - 1;
+    double k = *kp;
+    while (k <= kend) {
+        const double t = k * dt;
+        float p[3];
+        vv_vray_point(r, t, p);
+        unsigned bc[3];
+        const size_t b = block_of(c, p, bxm, bym, bzm, bc);
+        const int dist = bdist[b];
+        if (dist) {
+            k = leap(r, p, t, bc, dist, inv_dt, k);
+            continue;
+        }
+        double te = vv_vray_cube_exit(r, p, t, VV_VC_BLOCK);
+        /* march to the last sample inside this subvolume */
+        double klast = vv_floor_pos(te * inv_dt);
+        klast = klast < kend ? klast : kend;
+        klast = klast < k ? k : klast;
+        while (klast < kend && klast - k + 1 < VV_VC_CHUNK) {
+            const double kn = klast + 1, tn = kn * dt;
+            float pn[3];
+            vv_vray_point(r, tn, pn);
+            unsigned bcn[3];
+            if (bdist[block_of(c, pn, bxm, bym, bzm, bcn)])
+                break;
+            double kl = vv_floor_pos(vv_vray_cube_exit(r, pn, tn, VV_VC_BLOCK) * inv_dt);
+            kl = kl < kend ? kl : kend;
+            kl = kl < kn ? kn : kl;
+            if (kl - k + 1 > VV_VC_CHUNK)
+                break;
+            klast = kl;
+        }
+        *kp = k;
+        *klastp = klast;
+        return 1;
+    }
+    *kp = k;
+    return 0;
 }
 
 /* Shades and composites one classified sample of channel co (table entry
@@ -325,7 +389,7 @@ trace_channels(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result
                     shows[ch] = co->bvis[b] && A[additive ? ch : 0] < et;
                     if (shows[ch])
                         vv_vray_classify(co->c, &co->tab, &r, kfirst, dt, m, fr->avx2, cell, fx, fy,
-                                         fz, entry[ch]);
+                                         fz, entry[ch], NULL);
                 }
                 for (int s = 0; s < m && live > 0; s++) {
                     t = (kfirst + s) * dt;
@@ -394,136 +458,277 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
     const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
     double k = vv_ceil_pos(r.t0 * inv_dt);
     const double kend = vv_floor_pos(r.t1 * inv_dt);
-    const unsigned bxm = (unsigned)c->bx - 1, bym = (unsigned)c->by - 1, bzm = (unsigned)c->bz - 1;
     /* shading eight samples at a time: cached gradients, directional lights */
     const int shade8 = VV_VC_HAVE_AVX2 && fr->avx2 && ob->shading && c->nrm && !fr->point_lights;
-    while (k <= kend) {
-        double t = k * dt;
-        float p[3];
-        vv_vray_point(&r, t, p);
-        {
-            /* Without skipping every subvolume is marked visible and at
-             * distance 0, so both cases run this same code and produce the
-             * same samples. */
-            unsigned bc[3];
-            const size_t b = block_of(c, p, bxm, bym, bzm, bc);
-            const int dist = ob->bdist[b];
-            if (dist) {
-                k = leap(&r, p, t, bc, dist, inv_dt, k);
+    double klast;
+    while (visible_run(c, ob->bdist, &r, dt, kend, &k, &klast)) {
+        int n = (int)(klast - k) + 1;
+        k = klast + 1;
+        /* Two passes per chunk of samples: first every value and its
+         * table entry, with no branches, so that the independent samples
+         * overlap in the pipeline; then shading and compositing of the
+         * non-transparent ones only. */
+        for (int s0 = 0; s0 < n; s0 += VV_VC_CHUNK) {
+            const int m = n - s0 < VV_VC_CHUNK ? n - s0 : VV_VC_CHUNK;
+            size_t cell[VV_VC_CHUNK];
+            int32_t entry[VV_VC_CHUNK];
+            float fx[VV_VC_CHUNK], fy[VV_VC_CHUNK], fz[VV_VC_CHUNK];
+            const double kfirst = klast - (n - 1 - s0);
+            vv_vray_classify(c, &ob->tab, &r, kfirst, dt, m, fr->avx2, cell, fx, fy, fz, entry,
+                             NULL);
+            res->samples += (uint32_t)m;
+            if (shade8) {
+                /* the visible samples shaded eight at a time
+                 * (vv_vshade8: vv_vshade's results bit for bit), then
+                 * composited one by one as below */
+                int vis[VV_VC_CHUNK], nvis = 0;
+                for (int s = 0; s < m; s++)
+                    if (ob->lut[entry[s]] > 0)
+                        vis[nvis++] = s;
+                for (int i0 = 0; i0 < nvis; i0 += 8) {
+                    const int n8 = nvis - i0 < 8 ? nvis - i0 : 8;
+                    float gx[8] = {0}, gy[8] = {0}, gz[8] = {0}, al[8] = {0};
+                    float cr[8] = {0}, cg[8] = {0}, cb[8] = {0};
+                    float orr[8], org[8], orb[8];
+                    for (int q = 0; q < n8; q++) {
+                        const int s = vis[i0 + q];
+                        const float *e = ob->lut + entry[s];
+                        const float f[3] = {fx[s], fy[s], fz[s]};
+                        float g[3];
+                        vv_vcache_gradient_at(c, cell[s], f, g);
+                        gx[q] = g[0];
+                        gy[q] = g[1];
+                        gz[q] = g[2];
+                        al[q] = e[0];
+                        cr[q] = e[1];
+                        cg[q] = e[2];
+                        cb[q] = e[3];
+                    }
+                    vv_vshade8(&ob->sh, fr->lights, fr->n_lights, v, n8, gx, gy, gz, al, cr, cg, cb,
+                               orr, org, orb);
+                    for (int q = 0; q < n8; q++) {
+                        res->shaded++;
+                        const float w = 1 - A;
+                        C[0] += w * orr[q];
+                        C[1] += w * org[q];
+                        C[2] += w * orb[q];
+                        A += w * al[q];
+                        if (depth == INFINITY)
+                            depth = (float)((klast - (n - 1 - (s0 + vis[i0 + q]))) * dt);
+                        if (A >= et)
+                            goto done;
+                    }
+                }
                 continue;
             }
-            double te = vv_vray_cube_exit(&r, p, t, VV_VC_BLOCK);
-            /* march to the last sample inside this subvolume */
-            double klast = vv_floor_pos(te * inv_dt);
-            klast = klast < kend ? klast : kend;
-            klast = klast < k ? k : klast;
-            /* the visible subvolumes that follow join, whole, while their
-             * samples fit a chunk: the same samples in the same order as
-             * one subvolume at a time (which subvolumes are visible does
-             * not depend on what was composited), in fuller vectors */
-            while (klast < kend && klast - k + 1 < VV_VC_CHUNK) {
-                const double kn = klast + 1, tn = kn * dt;
-                float pn[3];
-                vv_vray_point(&r, tn, pn);
-                unsigned bcn[3];
-                if (ob->bdist[block_of(c, pn, bxm, bym, bzm, bcn)])
-                    break;
-                double kl = vv_floor_pos(vv_vray_cube_exit(&r, pn, tn, VV_VC_BLOCK) * inv_dt);
-                kl = kl < kend ? kl : kend;
-                kl = kl < kn ? kn : kl;
-                if (kl - k + 1 > VV_VC_CHUNK)
-                    break;
-                klast = kl;
-            }
-            int n = (int)(klast - k) + 1;
-            k = klast + 1;
-            /* Two passes per chunk of samples: first every value and its
-             * table entry, with no branches, so that the independent samples
-             * overlap in the pipeline; then shading and compositing of the
-             * non-transparent ones only. */
-            for (int s0 = 0; s0 < n; s0 += VV_VC_CHUNK) {
-                const int m = n - s0 < VV_VC_CHUNK ? n - s0 : VV_VC_CHUNK;
-                size_t cell[VV_VC_CHUNK];
-                int32_t entry[VV_VC_CHUNK];
-                float fx[VV_VC_CHUNK], fy[VV_VC_CHUNK], fz[VV_VC_CHUNK];
-                const double kfirst = klast - (n - 1 - s0);
-                vv_vray_classify(c, &ob->tab, &r, kfirst, dt, m, fr->avx2, cell, fx, fy, fz, entry);
-                res->samples += (uint32_t)m;
-                if (shade8) {
-                    /* the visible samples shaded eight at a time
-                     * (vv_vshade8: vv_vshade's results bit for bit), then
-                     * composited one by one as below */
-                    int vis[VV_VC_CHUNK], nvis = 0;
-                    for (int s = 0; s < m; s++)
-                        if (ob->lut[entry[s]] > 0)
-                            vis[nvis++] = s;
-                    for (int i0 = 0; i0 < nvis; i0 += 8) {
-                        const int n8 = nvis - i0 < 8 ? nvis - i0 : 8;
-                        float gx[8] = {0}, gy[8] = {0}, gz[8] = {0}, al[8] = {0};
-                        float cr[8] = {0}, cg[8] = {0}, cb[8] = {0};
-                        float orr[8], org[8], orb[8];
-                        for (int q = 0; q < n8; q++) {
-                            const int s = vis[i0 + q];
-                            const float *e = ob->lut + entry[s];
-                            const float f[3] = {fx[s], fy[s], fz[s]};
-                            float g[3];
-                            vv_vcache_gradient_at(c, cell[s], f, g);
-                            gx[q] = g[0];
-                            gy[q] = g[1];
-                            gz[q] = g[2];
-                            al[q] = e[0];
-                            cr[q] = e[1];
-                            cg[q] = e[2];
-                            cb[q] = e[3];
-                        }
-                        vv_vshade8(&ob->sh, fr->lights, fr->n_lights, v, n8, gx, gy, gz, al, cr, cg,
-                                   cb, orr, org, orb);
-                        for (int q = 0; q < n8; q++) {
-                            res->shaded++;
-                            const float w = 1 - A;
-                            C[0] += w * orr[q];
-                            C[1] += w * org[q];
-                            C[2] += w * orb[q];
-                            A += w * al[q];
-                            if (depth == INFINITY)
-                                depth = (float)((klast - (n - 1 - (s0 + vis[i0 + q]))) * dt);
-                            if (A >= et)
-                                goto done;
-                        }
-                    }
+            for (int s = 0; s < m; s++) {
+                const float *e = ob->lut + entry[s];
+                const float alpha = e[0];
+                if (alpha <= 0)
                     continue;
+                res->shaded++;
+                const double t = (klast - (n - 1 - (s0 + s))) * dt;
+                float g[3] = {0, 0, 0};
+                if (ob->shading && c->nrm) {
+                    const float f[3] = {fx[s], fy[s], fz[s]};
+                    vv_vcache_gradient_at(c, cell[s], f, g);
+                } else if (ob->shading) {
+                    float p[3];
+                    vv_vray_point(&r, t, p);
+                    vv_vcache_gradient(c, p, g);
                 }
-                for (int s = 0; s < m; s++) {
-                    const float *e = ob->lut + entry[s];
-                    const float alpha = e[0];
-                    if (alpha <= 0)
-                        continue;
-                    res->shaded++;
-                    t = (klast - (n - 1 - (s0 + s))) * dt;
-                    float g[3] = {0, 0, 0};
-                    if (ob->shading && c->nrm) {
-                        const float f[3] = {fx[s], fy[s], fz[s]};
-                        vv_vcache_gradient_at(c, cell[s], f, g);
-                    } else if (ob->shading) {
-                        vv_vray_point(&r, t, p);
-                        vv_vcache_gradient(c, p, g);
-                    }
-                    composite_sample(fr, ob, wr, v, e, t, g, C, &A);
-                    if (depth == INFINITY)
-                        depth = (float)t;
-                    if (A >= et)
-                        goto done;
-                }
+                composite_sample(fr, ob, wr, v, e, t, g, C, &A);
+                if (depth == INFINITY)
+                    depth = (float)t;
+                if (A >= et)
+                    goto done;
             }
-            continue;
         }
     }
 done:
-    res->rgb[0] = C[0];
-    res->rgb[1] = C[1];
-    res->rgb[2] = C[2];
-    res->a = A > 1 ? 1 : A;
-    res->depth = depth;
+    result_set(res, C, A, depth);
+}
+
+/* Pre-integrated classification (Engel, Kraus and Ertl 2001; option
+ * preintegration, vv_vpre_segment): the one-volume composite kernel over
+ * segments rather than samples. Segment j runs from sample j - 1 to sample
+ * j (the ray's first one from its entry point, at the value of sample
+ * k0); its opacity and colour are the transfer function integrated along
+ * the linear value ramp between the two samples' values, and it is shaded
+ * with the gradient at its middle (the ends' mean gradient, a trapezoid
+ * rule, lost up to 2.7 dB against the converged image; docs/rendering.md).
+ * The runs of visible subvolumes are those of trace_composite_one; a run
+ * evaluates the sample before its first (unless the previous run ended
+ * there) and the one after its last, so that the segments crossing into
+ * hidden subvolumes count, and no segment is composited twice. Per chunk:
+ * the values, then which segments are visible (vv_vpre_visible) and their
+ * opacity and colour, then their shading (eight at a time with AVX2), then
+ * compositing in order. */
+static void
+trace_composite_preint(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result *res) {
+    vv_vray r;
+    float C[3] = {0, 0, 0}, A = 0;
+    float depth = INFINITY;
+    if (!ray_setup(ob, wr, &r))
+        goto done;
+    const vv_vcache *c = ob->c;
+    const vv_vtables *tab = &ob->tab;
+    const double dt = fr->dt, inv_dt = 1.0 / fr->dt;
+    const float et = fr->et;
+    const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
+    const double k0 = vv_ceil_pos(r.t0 * inv_dt);
+    double k = k0, klast;
+    const double kend = vv_floor_pos(r.t1 * inv_dt);
+    const int shade8 = VV_VC_HAVE_AVX2 && fr->avx2 && ob->shading && !fr->point_lights;
+    /* the front of the next segment: sample kf and its table position */
+    int have_f = 0;
+    double kf = -1;
+    float xf = 0;
+    /* and its integrals, when the last segment computed them */
+    int have_pf = 0;
+    vv_vpre pf;
+    memset(&pf, 0, sizeof pf);
+    while (visible_run(c, ob->bdist, &r, dt, kend, &k, &klast)) {
+        /* the samples to evaluate: from the front of the run's first
+         * segment to the end of the segment after its last sample */
+        double ja;
+        if (have_f && kf >= k - 1) {
+            ja = kf + 1;
+        } else {
+            ja = k > k0 ? k - 1 : k;
+            have_f = 0;
+        }
+        const double jb = klast + 1 <= kend ? klast + 1 : kend;
+        k = klast + 1;
+        for (double j0 = ja; j0 <= jb; j0 += VV_VC_CHUNK) {
+            const int m = jb - j0 + 1 < VV_VC_CHUNK ? (int)(jb - j0) + 1 : VV_VC_CHUNK;
+            size_t cell[VV_VC_CHUNK];
+            int32_t entry[VV_VC_CHUNK];
+            float fx[VV_VC_CHUNK], fy[VV_VC_CHUNK], fz[VV_VC_CHUNK], x[VV_VC_CHUNK];
+            vv_vray_classify(c, tab, &r, j0, dt, m, fr->avx2, cell, fx, fy, fz, entry, x);
+            res->samples += (uint32_t)m;
+            /* the visible segments of the chunk: their opacity, colour
+             * times opacity, middle, and (below) the gradient there */
+            int nvis = 0;
+            float al[VV_VC_CHUNK + 8], cr[VV_VC_CHUNK + 8], cg[VV_VC_CHUNK + 8],
+                cb[VV_VC_CHUNK + 8];
+            float gx[VV_VC_CHUNK + 8], gy[VV_VC_CHUNK + 8], gz[VV_VC_CHUNK + 8];
+            double tm[VV_VC_CHUNK];
+            for (int s = 0; s < m; s++) {
+                const double j = j0 + s;
+                const int front = have_f;
+                const float xa = front ? xf : x[s];
+                have_f = 1;
+                xf = x[s];
+                kf = j;
+                double len = dt;
+                if (!front) {
+                    have_pf = 0;
+                    /* only the front of the run's first segment, unless it
+                     * is the ray's first sample: then the segment from the
+                     * entry point, at its value */
+                    len = j * dt - r.t0;
+                    if (j != k0 || !(len > 0))
+                        continue;
+                }
+                if (!vv_vpre_visible(tab, xa, x[s])) {
+                    have_pf = 0;
+                    continue;
+                }
+                vv_vpre pb;
+                if (!have_pf || !front)
+                    vv_vpre_at(tab, xa, &pf);
+                vv_vpre_at(tab, x[s], &pb);
+                float col[3];
+                const int lit = vv_vpre_segment(&pf, xa, &pb, x[s], len, &al[nvis], col);
+                pf = pb; /* the next segment's front */
+                have_pf = 1;
+                if (!lit)
+                    continue;
+                cr[nvis] = col[0];
+                cg[nvis] = col[1];
+                cb[nvis] = col[2];
+                tm[nvis++] = j * dt - 0.5 * len;
+            }
+            res->shaded += (uint32_t)nvis;
+            float orr[VV_VC_CHUNK + 8], org[VV_VC_CHUNK + 8], orb[VV_VC_CHUNK + 8];
+            if (ob->shading) {
+                for (int q = 0; q < nvis; q++) {
+                    float p[3], g[3];
+                    vv_vray_point(&r, tm[q], p);
+                    vv_vcache_gradient(c, p, g);
+                    gx[q] = g[0];
+                    gy[q] = g[1];
+                    gz[q] = g[2];
+                }
+                for (int q = 0; shade8 && q < nvis; q += 8)
+                    vv_vshade8(&ob->sh, fr->lights, fr->n_lights, v, nvis - q < 8 ? nvis - q : 8,
+                               gx + q, gy + q, gz + q, al + q, cr + q, cg + q, cb + q, orr + q,
+                               org + q, orb + q);
+                for (int q = 0; !shade8 && q < nvis; q++) {
+                    const float g[3] = {gx[q], gy[q], gz[q]}, col[3] = {cr[q], cg[q], cb[q]};
+                    float pw[3] = {0, 0, 0}, out[3];
+                    if (fr->point_lights) {
+                        pw[0] = (float)(wr->origin.x + tm[q] * wr->dir.x);
+                        pw[1] = (float)(wr->origin.y + tm[q] * wr->dir.y);
+                        pw[2] = (float)(wr->origin.z + tm[q] * wr->dir.z);
+                    }
+                    shade(fr, ob, g, pw, v, col, al[q], out);
+                    orr[q] = out[0];
+                    org[q] = out[1];
+                    orb[q] = out[2];
+                }
+            } else {
+                memcpy(orr, cr, sizeof(float) * (size_t)nvis);
+                memcpy(org, cg, sizeof(float) * (size_t)nvis);
+                memcpy(orb, cb, sizeof(float) * (size_t)nvis);
+            }
+            for (int q = 0; q < nvis; q++) {
+                const float w = 1 - A;
+                C[0] += w * orr[q];
+                C[1] += w * org[q];
+                C[2] += w * orb[q];
+                A += w * al[q];
+                if (depth == INFINITY)
+                    depth = (float)tm[q];
+                if (A >= et)
+                    goto done;
+            }
+        }
+    }
+    /* the ray's last segment, from its last sample to the exit point, at
+     * that sample's value */
+    if (have_f && kf == kend && r.t1 > kend * dt && vv_vpre_visible(tab, xf, xf)) {
+        const double len = r.t1 - kend * dt, tm = kend * dt + 0.5 * len;
+        vv_vpre pa;
+        vv_vpre_at(tab, xf, &pa);
+        float alpha, col[3], out[3];
+        if (vv_vpre_segment(&pa, xf, &pa, xf, len, &alpha, col)) {
+            res->shaded++;
+            if (ob->shading) {
+                float p[3], g[3], pw[3] = {0, 0, 0};
+                vv_vray_point(&r, tm, p);
+                vv_vcache_gradient(c, p, g);
+                if (fr->point_lights) {
+                    pw[0] = (float)(wr->origin.x + tm * wr->dir.x);
+                    pw[1] = (float)(wr->origin.y + tm * wr->dir.y);
+                    pw[2] = (float)(wr->origin.z + tm * wr->dir.z);
+                }
+                shade(fr, ob, g, pw, v, col, alpha, out);
+            } else {
+                memcpy(out, col, sizeof out);
+            }
+            const float w = 1 - A;
+            C[0] += w * out[0];
+            C[1] += w * out[1];
+            C[2] += w * out[2];
+            A += w * alpha;
+            if (depth == INFINITY)
+                depth = (float)tm;
+        }
+    }
+done:
+    result_set(res, C, A, depth);
 }
 
 /* Front-to-back compositing of all composite and iso objects along one ray. */
@@ -683,11 +888,7 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
         k = next_k;
     }
 done:
-    res->rgb[0] = C[0];
-    res->rgb[1] = C[1];
-    res->rgb[2] = C[2];
-    res->a = A > 1 ? 1 : A;
-    res->depth = depth;
+    result_set(res, C, A, depth);
 }
 
 /* Maximum / minimum intensity projection and X-ray (mean) of one object
@@ -803,8 +1004,9 @@ prepare_channels(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world 
  * when nothing they depend on changed). */
 static vv_status
 prepare_tables(rc_frame *fr, rc_obj *ro) {
-    vv_status s = vv_vtables_get(&fr->st->vc, ro->c, ro->obj, ro->mode, fr->dt, ro->iso,
-                                 fr->st->skipping, 0, &ro->tab, &ro->owns_tables);
+    vv_status s =
+        vv_vtables_get(&fr->st->vc, ro->c, ro->obj, ro->mode, fr->dt, ro->iso, fr->st->skipping,
+                       fr->preint ? VV_VT_PREINT : 0, &ro->tab, &ro->owns_tables);
     if (s != VV_OK)
         return s;
     ro->lut_lo = ro->tab.lut_lo;
@@ -837,6 +1039,8 @@ cast_pixel(const rc_frame *fr, int x, int y, vv_render_stats *work, float px[5],
     rc_result res = {{0, 0, 0}, 0, INFINITY, 0, 0};
     if (fr->n_comp == 1 && fr->objs[0].nch)
         trace_channels(fr, &fr->objs[0], &wr, &res);
+    else if (fr->preint)
+        trace_composite_preint(fr, &fr->objs[0], &wr, &res);
     else if (fr->n_comp == 1 && fr->objs[0].mode == VV_MODE_COMPOSITE && !fr->objs[0].extras)
         trace_composite_one(fr, &fr->objs[0], &wr, &res);
     else if (fr->n_comp > 0)
@@ -924,13 +1128,24 @@ refine_pixel(void *user, int x, int y, float px[5], void *work) {
 }
 
 static vv_status
-render_tile_adaptive(void *user, const vv_frame_tile *t) {
+render_tile_refined(void *user, const vv_frame_tile *t) {
     const rc_frame *fr = user;
     vv_render_stats work = {0, 0};
     vv_frame_refine_tile(t, fr->out->width, fr->out->height, fr->tolerance, refine_pixel,
                          (void *)fr, &work, fr->out->rgba, fr->out->depth);
     tile_stats(fr, &work);
     return VV_OK;
+}
+
+/* The classification of @p obj has a pre-integrated form
+ * (trace_composite_preint): composite mode, a 1-D transfer function or a
+ * threshold, no solid texture. */
+static int
+preint_applies(const vv_object *obj) {
+    return obj->mode == VV_MODE_COMPOSITE &&
+           (obj->segmentation == VV_SEG_TRANSFER_FUNCTION ||
+            obj->segmentation == VV_SEG_THRESHOLD) &&
+           obj->solid_texture.kind == VV_SOLID_TEXTURE_NONE;
 }
 
 /* A whole render, or with @p region only its samples (the World then has
@@ -1008,6 +1223,11 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
             if (pass == 0)
                 fr.n_comp = fr.n_obj;
         }
+    /* pre-integration: one volume in composite mode with a 1-D transfer
+     * function or a threshold, whole renders only (a region's first
+     * segment would need the sample before it, in another region) */
+    fr.preint = st->preint && s == VV_OK && !region && fr.n_obj == 1 && fr.n_comp == 1 &&
+                !objs[0].nch && preint_applies(objs[0].obj);
     fr.dt = (float)(dt < INFINITY ? dt : 1.0);
     for (int i = 0; i < fr.n_obj && s == VV_OK; i++) {
         objs[i].dt = fr.dt;
@@ -1028,14 +1248,12 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
         fr.key = region && fr.n_comp == 0 ? key : NULL;
         /* adaptive refinement: whole renders only (a region's pixels are
          * composited with other ranks' by their depth and key) */
-        const int quality = opt ? opt->quality : 2;
-        fr.adaptive = !region && (st->adaptive == 1 || (st->adaptive == 0 && quality <= 1));
-        fr.tolerance = st->adaptive_tolerance >= 0 ? (float)st->adaptive_tolerance
-                                                   : vv_frame_refine_tolerance(quality);
+        fr.refine =
+            vv_frame_refine_for(&st->refine, opt ? opt->quality : 2, region != NULL, &fr.tolerance);
         vv_frame_job job;
         vv_frame_job_init(&job, view->width, view->height,
-                          fr.adaptive ? render_tile_adaptive : render_tile, &fr);
-        if (fr.adaptive)
+                          fr.refine ? render_tile_refined : render_tile, &fr);
+        if (fr.refine)
             job.scratch_bytes = vv_frame_refine_scratch_bytes();
         vv_frame_job_region(&job, region); /* the rest stays empty */
         s = vv_frame_run(&job, opt);
@@ -1089,7 +1307,7 @@ rc_create(void **state) {
     vv_vcache_set_init(&st->vc);
     st->skipping = 1;
     st->simd = 1;
-    st->adaptive_tolerance = -1;
+    vv_frame_refine_settings_init(&st->refine);
     *state = st;
     return VV_OK;
 }
@@ -1097,6 +1315,8 @@ rc_create(void **state) {
 static vv_status
 rc_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
     rc_state *st = state;
+    if (vv_frame_refine_set_option(&st->refine, spec->key, v))
+        return VV_OK;
     if (strcmp(spec->key, "early_termination") == 0) {
         st->early_termination = v->r;
     } else if (strcmp(spec->key, "gradient_budget_mb") == 0) {
@@ -1109,10 +1329,8 @@ rc_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v)
         st->skipping = v->b;
     } else if (strcmp(spec->key, "simd") == 0) {
         st->simd = v->b;
-    } else if (strcmp(spec->key, "refinement") == 0) {
-        st->adaptive = v->word;
-    } else if (strcmp(spec->key, "refinement_tolerance") == 0) {
-        st->adaptive_tolerance = v->word >= 0 ? -1 : v->r;
+    } else if (strcmp(spec->key, "preintegration") == 0) {
+        st->preint = v->b;
     }
     return VV_OK;
 }
@@ -1140,6 +1358,10 @@ static const vv_option_spec rc_options[] = {
     {"simd", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
      "AVX2 classification where the processor has it (0: the portable path)"},
     VV_FRAME_REFINE_OPTIONS,
+    {"preintegration", VV_OPTION_BOOL, "0", 0, 1, 0, NULL,
+     "pre-integrated classification (Engel et al. 2001) for one volume in composite mode with "
+     "a 1-D transfer function: sharp transfer functions without slab artefacts, at about "
+     "1.5-2x the time a step"},
 };
 
 const vv_renderer_ops vv_raycast_ops = {

@@ -90,8 +90,9 @@ prepare_volume(rt_frame *fr, rt_vobj *ro, const vv_object *obj) {
 static vv_status
 build_tables(rt_frame *fr, rt_vobj *ro) {
     const vv_object *obj = ro->obj;
-    vv_status s = vv_vtables_get(&fr->st->vc, ro->c, obj, ro->mode, fr->dt, ro->iso, fr->st->parc,
-                                 ro->mode == VV_MODE_COMPOSITE, &ro->tab, &ro->owns_tables);
+    vv_status s =
+        vv_vtables_get(&fr->st->vc, ro->c, obj, ro->mode, fr->dt, ro->iso, fr->st->parc,
+                       ro->mode == VV_MODE_COMPOSITE ? VV_VT_EXT : 0, &ro->tab, &ro->owns_tables);
     if (s != VV_OK)
         return s;
     ro->lut = ro->tab.lut;
@@ -521,9 +522,7 @@ render_frame(rt_state *st, const vv_world *w, const vv_view *view, const vv_rend
     fr.nss = opt->quality >= 2 && !region ? st->samples : 1;
     /* adaptive image-space refinement: whole renders only (a region's
      * pixels are composited with other ranks' by depth and key) */
-    fr.refine = !region && (st->refinement == 1 || (st->refinement == 0 && opt->quality <= 1));
-    fr.tolerance = st->refine_tolerance >= 0 ? (float)st->refine_tolerance
-                                             : vv_frame_refine_tolerance(opt->quality);
+    fr.refine = vv_frame_refine_for(&st->refine, opt->quality, region != NULL, &fr.tolerance);
     fr.adaptive = fr.nss > 1 && st->adaptive && !fr.refine;
     fr.view = view;
     fr.out = out;
@@ -614,7 +613,7 @@ rt_create(void **state) {
     st->jitter = 0;
     st->adaptive = 1;
     st->threshold = 0.05;
-    st->refine_tolerance = -1;
+    vv_frame_refine_settings_init(&st->refine);
     st->seed = 1;
     st->early_termination = 0.99;
     st->shadow_grid = 1;
@@ -628,6 +627,8 @@ static vv_status
 rt_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
     rt_state *st = state;
     const char *key = spec->key;
+    if (vv_frame_refine_set_option(&st->refine, key, v))
+        return VV_OK;
     if (strcmp(key, "parc") == 0)
         st->parc = v->b;
     else if (strcmp(key, "shadows") == 0)
@@ -646,10 +647,6 @@ rt_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v)
         st->adaptive = v->b;
     else if (strcmp(key, "adaptive_threshold") == 0)
         st->threshold = v->r;
-    else if (strcmp(key, "refinement") == 0)
-        st->refinement = v->word;
-    else if (strcmp(key, "refinement_tolerance") == 0)
-        st->refine_tolerance = v->word >= 0 ? -1 : v->r;
     else if (strcmp(key, "seed") == 0)
         st->seed = (uint64_t)v->i;
     else if (strcmp(key, "early_termination") == 0)

@@ -112,17 +112,16 @@ typedef struct rt_state {
     rt_lv lv[RT_LV_CACHE];
     rt_sg sg[RT_SG_CACHE];
     uint64_t frame;
-    vv_vcache_set vc; /* per-volume caches (src/render/volume_cache.h) */
-    int parc;         /* PARC skipping on primary and secondary rays */
-    int shadows;      /* shadow rays */
-    int max_depth;    /* reflection / refraction depth */
-    int samples;      /* supersamples per pixel side at quality 2 */
-    int jitter;       /* jittered supersampling */
-    int adaptive;     /* supersample only where neighbours differ */
-    double threshold; /* adaptive: channel difference that triggers supersampling */
-    int refinement;   /* adaptive image-space refinement: 0 auto (quality <= 1), 1 on, 2 off */
-    double refine_tolerance; /* its tolerance (< 0: vv_frame_refine_tolerance of the quality) */
-    uint64_t seed;           /* jitter seed */
+    vv_vcache_set vc;                /* per-volume caches (src/render/volume_cache.h) */
+    int parc;                        /* PARC skipping on primary and secondary rays */
+    int shadows;                     /* shadow rays */
+    int max_depth;                   /* reflection / refraction depth */
+    int samples;                     /* supersamples per pixel side at quality 2 */
+    int jitter;                      /* jittered supersampling */
+    int adaptive;                    /* supersample only where neighbours differ */
+    double threshold;                /* adaptive: channel difference that triggers supersampling */
+    vv_frame_refine_settings refine; /* adaptive image-space refinement (its options) */
+    uint64_t seed;                   /* jitter seed */
     double early_termination;
     int shadow_grid;   /* volume samples: cached shadow rays (1) or exact (0) */
     int light_volumes; /* shadow rays of directional lights through volumes: light volumes */

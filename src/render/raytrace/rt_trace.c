@@ -110,7 +110,8 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
             size_t cell[VV_VC_CHUNK];
             int32_t entry[VV_VC_CHUNK];
             float fx[VV_VC_CHUNK], fy[VV_VC_CHUNK], fz[VV_VC_CHUNK];
-            vv_vray_classify(c, &ob->tab, r, kfirst, dt, m, fr->avx2, cell, fx, fy, fz, entry);
+            vv_vray_classify(c, &ob->tab, r, kfirst, dt, m, fr->avx2, cell, fx, fy, fz, entry,
+                             NULL);
             for (int s = 0; s < m; s++) {
                 const float *e = ob->lut + entry[s];
                 if (e[0] <= 0)
