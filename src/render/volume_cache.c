@@ -987,11 +987,10 @@ pair_lerp_avx2(const int32_t pairs[8], __m256 wx) {
 
 /* vv_vshade8: eight lanes of vv_vshade, in its order of operations. */
 __attribute__((target("avx2"))) void
-vv_vshade8(const vv_vshading *o, const vv_vlight *lights, int n_lights, const float v[3], int n,
-           const float gx[8], const float gy[8], const float gz[8], const float a[8],
-           const float cr[8], const float cg[8], const float cb[8], float out_r[8], float out_g[8],
-           float out_b[8]) {
-    (void)n; /* lanes past n hold the caller's zeros or stale values: never read back */
+vv_vshade8(const vv_vshading *o, const vv_vlight *lights, int n_lights, const float v[3],
+           const float *shadow, const float gx[8], const float gy[8], const float gz[8],
+           const float a[8], const float cr[8], const float cg[8], const float cb[8],
+           float out_r[8], float out_g[8], float out_b[8]) {
     const __m256 g0 = _mm256_loadu_ps(gx), g1 = _mm256_loadu_ps(gy), g2 = _mm256_loadu_ps(gz);
 #define VS_MUL(x, y) _mm256_mul_ps((x), (y))
 #define VS_ADD(x, y) _mm256_add_ps((x), (y))
@@ -1032,8 +1031,13 @@ vv_vshade8(const vv_vshading *o, const vv_vlight *lights, int n_lights, const fl
         const int onm = _mm256_movemask_ps(on);
         for (int q = 0; q < 8; q++)
             sv[q] = onm >> q & 1 ? o->spec[ix[q]] : 0.0f;
-        const __m256 sp = _mm256_loadu_ps(sv);
-        const __m256 wd = _mm256_and_ps(ndl, lit);
+        __m256 sp = _mm256_loadu_ps(sv);
+        __m256 wd = _mm256_and_ps(ndl, lit);
+        if (shadow) { /* vv_vshade's wd = sh ndl, sp = sh sp */
+            const __m256 sh = _mm256_loadu_ps(shadow + 8 * l);
+            wd = VS_MUL(sh, wd);
+            sp = VS_MUL(sh, sp);
+        }
         d0 = VS_ADD(d0, VS_MUL(wd, VS_B(o->kd_col[l][0])));
         d1 = VS_ADD(d1, VS_MUL(wd, VS_B(o->kd_col[l][1])));
         d2 = VS_ADD(d2, VS_MUL(wd, VS_B(o->kd_col[l][2])));

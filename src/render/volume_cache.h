@@ -663,18 +663,20 @@ vv_vshade(const vv_vshading *o, const vv_vlight *lights, int n_lights, const flo
     out[2] = d2 * col[2] + alpha * s2;
 }
 
-/* vv_vshade of @p n (1..8) samples at once with AVX2 (the caller checks
- * vv_vc_have_avx2; directional lights only, no shadow function): sample i
- * has the index-space gradient (gx[i], gy[i], gz[i]), opacity a[i] and
- * colour times opacity (cr[i], cg[i], cb[i]); its shaded colour goes to
- * (out_r[i], out_g[i], out_b[i]). The arithmetic is vv_vshade's, operation
- * for operation (separate multiplies and adds, IEEE square root and
- * division), so each result is bit-identical to vv_vshade's. Inputs past
- * @p n are ignored; the arrays hold 8. */
+/* vv_vshade of eight samples at once with AVX2 (the caller checks
+ * vv_vc_have_avx2; directional lights only): sample i has the index-space
+ * gradient (gx[i], gy[i], gz[i]), opacity a[i] and colour times opacity
+ * (cr[i], cg[i], cb[i]); its shaded colour goes to (out_r[i], out_g[i],
+ * out_b[i]). @p shadow: NULL, or n_lights rows of 8 transmittances (light
+ * l of sample i at shadow[8 l + i]), vv_vshade's shadow(ctx, l). The
+ * arithmetic is vv_vshade's, operation for operation (separate multiplies
+ * and adds, IEEE square root and division), so each result is
+ * bit-identical to vv_vshade's. Every lane is computed: lanes the caller
+ * does not use may hold anything finite. */
 void vv_vshade8(const vv_vshading *o, const vv_vlight *lights, int n_lights, const float v[3],
-                int n, const float gx[8], const float gy[8], const float gz[8], const float a[8],
-                const float cr[8], const float cg[8], const float cb[8], float out_r[8],
-                float out_g[8], float out_b[8]);
+                const float *shadow, const float gx[8], const float gy[8], const float gz[8],
+                const float a[8], const float cr[8], const float cg[8], const float cb[8],
+                float out_r[8], float out_g[8], float out_b[8]);
 
 /* World parameter at which the ray leaves the cube of side @p size cells
  * (aligned to multiples of size) containing p. */

@@ -1183,8 +1183,19 @@ test_preintegration_real(void **state) {
  * (vv_vshade8); its results must be vv_vshade's bit for bit (the images of
  * both paths are compared bit for bit elsewhere: raytrace against raycast):
  * random normal matrices, gradients (a quarter of length 0, so unlit),
- * one to three directional lights, colours and opacities, and every
- * lane. */
+ * one to three directional lights, shadows (every other round), colours
+ * and opacities, and every lane. */
+typedef struct shade8_lane {
+    const float *shadow; /* light l of lane q at shadow[8 l + q] */
+    int q;
+} shade8_lane;
+
+static float
+lane_shadow(const void *ctx, int light) {
+    const shade8_lane *s = ctx;
+    return s->shadow[8 * light + s->q];
+}
+
 static void
 test_shade8_matches_scalar(void **state) {
     (void)state;
@@ -1237,12 +1248,23 @@ test_shade8_matches_scalar(void **state) {
             cb[q] = al[q] * (float)rnd(&seed);
             unlit += zero;
         }
-        vv_vshade8(&sh, lights, nl, v, 8, gx, gy, gz, al, cr, cg, cb, orr, org, orb);
+        /* every other round with shadows: transmittances in [0, 1], some
+         * exactly 0 or 1 */
+        float shadow[3 * 8];
+        const int with_shadow = round % 2;
+        for (int i = 0; i < 3 * 8; i++) {
+            const double x = rnd(&seed);
+            shadow[i] = x < 0.1 ? 0.0f : x > 0.9 ? 1.0f : (float)rnd(&seed);
+        }
+        vv_vshade8(&sh, lights, nl, v, with_shadow ? shadow : NULL, gx, gy, gz, al, cr, cg, cb, orr,
+                   org, orb);
         for (int q = 0; q < 8; q++) {
             const float g[3] = {gx[q], gy[q], gz[q]}, col[3] = {cr[q], cg[q], cb[q]};
             const float pw[3] = {0, 0, 0};
             float out[3];
-            vv_vshade(&sh, lights, nl, g, pw, v, col, al[q], NULL, NULL, out);
+            const shade8_lane lane = {shadow, q};
+            vv_vshade(&sh, lights, nl, g, pw, v, col, al[q], with_shadow ? lane_shadow : NULL,
+                      &lane, out);
             const float got[3] = {orr[q], org[q], orb[q]};
             if (memcmp(out, got, sizeof out) != 0)
                 fail_msg("round %d lane %d: vv_vshade (%.9g, %.9g, %.9g), vv_vshade8 (%.9g, "

@@ -14,6 +14,8 @@
  */
 #include "testutil.h"
 
+#include "render/volume_cache.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -655,6 +657,36 @@ test_equals_raycast(void **state) {
     compare_with_raycast("volumes/neghip.slc", VV_MODE_XRAY, 0, 128, "neghip_xray");
 }
 
+/* With AVX2 the one-volume march classifies a chunk of samples at once and
+ * shades the visible ones eight at a time, shadows included (vv_vshade8:
+ * vv_vshade's results bit for bit, test_shade8_matches_scalar in
+ * test_raycast.c); option simd=0 takes the portable path. The two differ
+ * only in the classification's fused multiply-adds: neghip with shadows
+ * from the default lights agrees within 60 dB. */
+static void
+test_simd_matches_portable(void **state) {
+    (void)state;
+    if (!vv_vc_have_avx2())
+        vt_skip("this processor has no AVX2: both paths are the portable one");
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_load(&v, vt_data("volumes/neghip.slc"), NULL));
+    vv_default_scene_options so = vt_scene_options(96);
+    vv_world *w = NULL;
+    vt_ok(vv_world_new_for_volume(&w, v, &so));
+    vv_renderer *simd = new_tracer((const char *const[]){"samples", "1", NULL});
+    vv_renderer *plain = new_tracer((const char *const[]){"samples", "1", "simd", "0", NULL});
+    vv_image *a = vt_render_q(simd, w, 2, 0, NULL), *b = vt_render_q(plain, w, 2, 0, NULL);
+    const double p = vv_image_psnr(a, b);
+    print_message("raytrace, neghip with shadows: AVX2 against the portable path %.2f dB\n", p);
+    assert_true(p >= 60);
+    vv_image_free(a);
+    vv_image_free(b);
+    vv_renderer_free(simd);
+    vv_renderer_free(plain);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
 /* Issue 32's accuracy check: the quality-2 image, and quality 1's (refined),
  * against the converged reference, the same renderer at 1/16 of the step
  * with 4 x 4 rays a pixel and no supersampling or refinement of its own
@@ -1174,6 +1206,7 @@ main(void) {
         cmocka_unit_test(test_refraction_sphere),
         cmocka_unit_test(test_supersampling),
         cmocka_unit_test(test_converged_reference),
+        cmocka_unit_test(test_simd_matches_portable),
         cmocka_unit_test(test_progress_and_cancel),
         cmocka_unit_test(test_bad_input),
     };

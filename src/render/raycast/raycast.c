@@ -504,8 +504,8 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
                         cg[q] = e[2];
                         cb[q] = e[3];
                     }
-                    vv_vshade8(&ob->sh, fr->lights, fr->n_lights, v, n8, gx, gy, gz, al, cr, cg, cb,
-                               orr, org, orb);
+                    vv_vshade8(&ob->sh, fr->lights, fr->n_lights, v, NULL, gx, gy, gz, al, cr, cg,
+                               cb, orr, org, orb);
                     for (int q = 0; q < n8; q++) {
                         res->shaded++;
                         const float w = 1 - A;
@@ -651,6 +651,8 @@ trace_composite_preint(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, r
                 tm[nvis++] = j * dt - 0.5 * len;
             }
             res->shaded += (uint32_t)nvis;
+            for (int q = nvis; q < nvis + 8; q++) /* the last vector's unused lanes */
+                gx[q] = gy[q] = gz[q] = al[q] = cr[q] = cg[q] = cb[q] = 0;
             float orr[VV_VC_CHUNK + 8], org[VV_VC_CHUNK + 8], orb[VV_VC_CHUNK + 8];
             if (ob->shading) {
                 for (int q = 0; q < nvis; q++) {
@@ -662,9 +664,8 @@ trace_composite_preint(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, r
                     gz[q] = g[2];
                 }
                 for (int q = 0; shade8 && q < nvis; q += 8)
-                    vv_vshade8(&ob->sh, fr->lights, fr->n_lights, v, nvis - q < 8 ? nvis - q : 8,
-                               gx + q, gy + q, gz + q, al + q, cr + q, cg + q, cb + q, orr + q,
-                               org + q, orb + q);
+                    vv_vshade8(&ob->sh, fr->lights, fr->n_lights, v, NULL, gx + q, gy + q, gz + q,
+                               al + q, cr + q, cg + q, cb + q, orr + q, org + q, orb + q);
                 for (int q = 0; !shade8 && q < nvis; q++) {
                     const float g[3] = {gx[q], gy[q], gz[q]}, col[3] = {cr[q], cg[q], cb[q]};
                     float pw[3] = {0, 0, 0}, out[3];

@@ -511,7 +511,7 @@ render_frame(rt_state *st, const vv_world *w, const vv_view *view, const vv_rend
     fr.st = st;
     fr.w = w;
     st->vc.frame++;
-    fr.avx2 = vv_vc_have_avx2();
+    fr.avx2 = st->simd && vv_vc_have_avx2();
     st->frame++;
     fr.et = (float)st->early_termination;
     vv_frame_colours(w, region != NULL, fr.ambient, fr.bg);
@@ -616,6 +616,7 @@ rt_create(void **state) {
     vv_frame_refine_settings_init(&st->refine);
     st->seed = 1;
     st->early_termination = 0.99;
+    st->simd = 1;
     st->shadow_grid = 1;
     st->light_volumes = 1;
     vv_vcache_set_init(&st->vc);
@@ -651,6 +652,8 @@ rt_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v)
         st->seed = (uint64_t)v->i;
     else if (strcmp(key, "early_termination") == 0)
         st->early_termination = v->r;
+    else if (strcmp(key, "simd") == 0)
+        st->simd = v->b;
     return VV_OK;
 }
 
@@ -692,6 +695,9 @@ static const vv_option_spec rt_options[] = {
     {"early_termination", VV_OPTION_REAL, "0.99", 0, 1, VV_OPTION_MIN_OPEN, NULL,
      "accumulated opacity that ends compositing (a secondary ray of weight w: 1 - (1 - "
      "value) / w)"},
+    {"simd", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
+     "AVX2 classification and eight-sample shading where the processor has it (0: the portable "
+     "path)"},
 };
 
 const vv_renderer_ops vv_raytrace_ops = {

@@ -123,6 +123,7 @@ typedef struct rt_state {
     vv_frame_refine_settings refine; /* adaptive image-space refinement (its options) */
     uint64_t seed;                   /* jitter seed */
     double early_termination;
+    int simd;          /* AVX2 classification and shading where the processor has it */
     int shadow_grid;   /* volume samples: cached shadow rays (1) or exact (0) */
     int light_volumes; /* shadow rays of directional lights through volumes: light volumes */
 } rt_state;
@@ -370,6 +371,13 @@ void rt_lv_release(rt_lv *e);
  * function match, else swept with nt threads and cached (least recently
  * used slot replaced). */
 vv_status rt_build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt);
+
+/* The shadows rt_shade_volume gives a sample of object @p o (its lead) at
+ * index point @p pi, world point @p pw: each light's transmittance into
+ * sh[stride * l], l < n_lights; returns 0 (sh untouched) when the sample
+ * receives none (shadows off, or the object does not receive them). */
+int rt_volume_shadows(const rt_frame *fr, const rt_vobj *o, const float pi[3], const float pw[3],
+                      rt_scache *sc, float *sh, int stride);
 
 /* The ray caster's volume Phong (vv_vshade: reflection vector, two-sided,
  * specular weighted by the sample opacity), each light scaled by its

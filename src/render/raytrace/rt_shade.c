@@ -685,6 +685,16 @@ sample_shadow(const void *ctx, int l) {
     return volume_sample_shadow(c->fr, c->ob, l, c->pi, c->pw, c->sc);
 }
 
+int
+rt_volume_shadows(const rt_frame *fr, const rt_vobj *o, const float pi[3], const float pw[3],
+                  rt_scache *sc, float *sh, int stride) {
+    if (!(fr->shadows && o->obj->receives_shadows))
+        return 0;
+    for (int l = 0; l < fr->n_lights; l++)
+        sh[(size_t)stride * (size_t)l] = volume_sample_shadow(fr, o, l, pi, pw, sc);
+    return 1;
+}
+
 /* The ray caster's volume Phong (vv_vshade: reflection vector, two-sided,
  * specular weighted by the sample opacity), each light scaled by its
  * shadow. */

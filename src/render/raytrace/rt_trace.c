@@ -60,6 +60,66 @@ ray_et(const rt_frame *fr, float weight) {
     return weight >= 1 ? fr->et : 1 - (1 - fr->et) / weight;
 }
 
+/* march_one's shading of a classified chunk (samples kfirst .. kfirst + m
+ * - 1) eight visible samples at a time: their gradients and shadows, then
+ * vv_vshade8 (vv_vshade's results bit for bit, shadows included), then
+ * compositing one by one under C, A as composite_sample does. Returns 1
+ * when the ray ended (A >= et). */
+static int
+march_chunk8(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray *wr,
+             const float v[3], float et, double kfirst, int m, const size_t *cell, const float *fx,
+             const float *fy, const float *fz, const int32_t *entry, rt_scache *sc, float C[3],
+             float *A, float *dep) {
+    const vv_vcache *c = ob->c;
+    const double dt = fr->dt;
+    int vis[VV_VC_CHUNK], nvis = 0;
+    for (int s = 0; s < m; s++)
+        if (ob->lut[entry[s]] > 0)
+            vis[nvis++] = s;
+    for (int i0 = 0; i0 < nvis; i0 += 8) {
+        const int n8 = nvis - i0 < 8 ? nvis - i0 : 8;
+        float gx[8] = {0}, gy[8] = {0}, gz[8] = {0}, al[8] = {0};
+        float cr[8] = {0}, cg[8] = {0}, cb[8] = {0}, sh[VV_MAX_LIGHTS * 8];
+        memset(sh, 0, sizeof(float) * 8 * (size_t)fr->n_lights);
+        float orr[8], org[8], orb[8];
+        int shadowed = 0;
+        for (int q = 0; q < n8; q++) {
+            const int s = vis[i0 + q];
+            const float *e = ob->lut + entry[s];
+            const float f[3] = {fx[s], fy[s], fz[s]};
+            float g[3], p[3], pw[3];
+            const double t = (kfirst + s) * dt;
+            vv_vcache_gradient_at(c, cell[s], f, g);
+            vv_vray_point(r, t, p);
+            pw[0] = (float)(wr->origin.x + t * wr->dir.x);
+            pw[1] = (float)(wr->origin.y + t * wr->dir.y);
+            pw[2] = (float)(wr->origin.z + t * wr->dir.z);
+            shadowed = rt_volume_shadows(fr, ob->lead, p, pw, sc, sh + q, 8);
+            gx[q] = g[0];
+            gy[q] = g[1];
+            gz[q] = g[2];
+            al[q] = e[0];
+            cr[q] = e[1];
+            cg[q] = e[2];
+            cb[q] = e[3];
+        }
+        vv_vshade8(&ob->lead->sh, fr->vlights, fr->n_lights, v, shadowed ? sh : NULL, gx, gy, gz,
+                   al, cr, cg, cb, orr, org, orb);
+        for (int q = 0; q < n8; q++) {
+            const float w = 1 - *A;
+            C[0] += w * orr[q];
+            C[1] += w * org[q];
+            C[2] += w * orb[q];
+            *A += w * al[q];
+            if (*dep == INFINITY)
+                *dep = (float)((kfirst + vis[i0 + q]) * dt);
+            if (*A >= et)
+                return 1;
+        }
+    }
+    return 0;
+}
+
 /* The common case, one composite volume on the ray: run of visible
  * subvolumes by run, leaping over empty ones, the same samples t = k dt as
  * the general loop below, classified a chunk at a time (vv_vray_classify,
@@ -73,6 +133,11 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
     rt_scache sc;
     sc.ob = NULL; /* the rest is filled when first used */
     float A = 0;
+    /* shading eight samples at a time: cached gradients, directional lights,
+     * no label colours */
+    int shade8 = VV_VC_HAVE_AVX2 && fr->avx2 && shading && c->nrm && !ob->extras;
+    for (int l = 0; l < fr->n_lights; l++)
+        shade8 &= !fr->vlights[l].point;
     double k = vv_ceil_pos(r->t0 * inv_dt);
     const double kend = floor(r->t1 * inv_dt);
     while (k <= kend) {
@@ -112,6 +177,14 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
             float fx[VV_VC_CHUNK], fy[VV_VC_CHUNK], fz[VV_VC_CHUNK];
             vv_vray_classify(c, &ob->tab, r, kfirst, dt, m, fr->avx2, cell, fx, fy, fz, entry,
                              NULL);
+            if (shade8) {
+                if (march_chunk8(fr, ob, r, wr, v, et, kfirst, m, cell, fx, fy, fz, entry, &sc, C,
+                                 &A, dep)) {
+                    *Aout = A > 1 ? 1 : A;
+                    return;
+                }
+                continue;
+            }
             for (int s = 0; s < m; s++) {
                 const float *e = ob->lut + entry[s];
                 if (e[0] <= 0)
