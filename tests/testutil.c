@@ -276,3 +276,12 @@ vt_scene_options(int size) {
     so.elevation = vv_deg_to_rad(20);
     return so;
 }
+
+vv_world *
+vt_volume_scene(const char *rel, int size, vv_volume **vol) {
+    vt_ok(vv_volume_load(vol, vt_data(rel), NULL));
+    vv_default_scene_options so = vt_scene_options(size);
+    vv_world *w = NULL;
+    vt_ok(vv_world_new_for_volume(&w, *vol, &so));
+    return w;
+}

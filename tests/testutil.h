@@ -109,6 +109,11 @@ double vt_png_psnr(const char *a, const char *b);
  * renderer tests' usual view. */
 vv_default_scene_options vt_scene_options(int size);
 
+/** The default scene (vv_world_new_for_volume, vt_scene_options) of the
+ * shared volume @p rel (under ../shared/data, as vt_data), @p size pixels
+ * square; *vol gets the volume (freed by the caller, after the World). */
+vv_world *vt_volume_scene(const char *rel, int size, vv_volume **vol);
+
 /**
  * The converged reference of a renderer's image (issue 32's accuracy
  * check): @p r renders a copy of @p w with every object's step divided by

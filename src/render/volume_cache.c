@@ -1061,6 +1061,58 @@ vv_vshade8(const vv_vshading *o, const vv_vlight *lights, int n_lights, const fl
 #undef VS_B
 }
 
+int
+vv_vchunk_shade8(const vv_vcache *c, const float *lut, const vv_vshading *o,
+                 const vv_vlight *lights, int n_lights, const float v[3], int m, const size_t *cell,
+                 const float *fx, const float *fy, const float *fz, const int32_t *entry,
+                 vv_vshadow8_fn shadow, void *ctx, float et, float C[3], float *A, int *first,
+                 uint32_t *shaded) {
+    int vis[VV_VC_CHUNK], nvis = 0;
+    for (int s = 0; s < m; s++)
+        if (lut[entry[s]] > 0)
+            vis[nvis++] = s;
+    for (int i0 = 0; i0 < nvis; i0 += 8) {
+        const int n8 = nvis - i0 < 8 ? nvis - i0 : 8;
+        float gx[8] = {0}, gy[8] = {0}, gz[8] = {0}, al[8] = {0};
+        float cr[8] = {0}, cg[8] = {0}, cb[8] = {0}, sh[VV_MAX_LIGHTS * 8];
+        float orr[8], org[8], orb[8];
+        int shadowed = 0;
+        if (shadow)
+            memset(sh, 0, sizeof(float) * 8 * (size_t)n_lights);
+        for (int q = 0; q < n8; q++) {
+            const int s = vis[i0 + q];
+            const float *e = lut + entry[s];
+            const float f[3] = {fx[s], fy[s], fz[s]};
+            float g[3];
+            vv_vcache_gradient_at(c, cell[s], f, g);
+            if (shadow)
+                shadowed = shadow(ctx, s, sh + q, 8);
+            gx[q] = g[0];
+            gy[q] = g[1];
+            gz[q] = g[2];
+            al[q] = e[0];
+            cr[q] = e[1];
+            cg[q] = e[2];
+            cb[q] = e[3];
+        }
+        vv_vshade8(o, lights, n_lights, v, shadowed ? sh : NULL, gx, gy, gz, al, cr, cg, cb, orr,
+                   org, orb);
+        for (int q = 0; q < n8; q++) {
+            ++*shaded;
+            const float w = 1 - *A;
+            C[0] += w * orr[q];
+            C[1] += w * org[q];
+            C[2] += w * orb[q];
+            *A += w * al[q];
+            if (*first < 0)
+                *first = vis[i0 + q];
+            if (*A >= et)
+                return 1;
+        }
+    }
+    return 0;
+}
+
 __attribute__((target("avx2"))) static void
 values_chunk_avx2(const vv_vcache *c, const vv_vray *r, double kfirst, double dt, int m,
                   float *val) {

@@ -678,6 +678,25 @@ void vv_vshade8(const vv_vshading *o, const vv_vlight *lights, int n_lights, con
                 const float a[8], const float cr[8], const float cg[8], const float cb[8],
                 float out_r[8], float out_g[8], float out_b[8]);
 
+/* The lights' transmittances at sample @p s of a chunk (vv_vchunk_shade8):
+ * light l's into sh[stride * l]; returns 0 (sh untouched) when the sample
+ * receives no shadows. */
+typedef int (*vv_vshadow8_fn)(void *ctx, int s, float *sh, int stride);
+
+/* The second pass of a composite kernel with AVX2 (the caller checks
+ * vv_vc_have_avx2, cached gradients, directional lights): the visible
+ * samples of a classified chunk of @p m (vv_vray_classify: cell, fractions,
+ * entries into @p lut) shaded eight at a time (vv_vshade8, with @p shadow's
+ * transmittances when not NULL), then composited one by one under C, A in
+ * order, stopping when A reaches @p et. *first (when still < 0) gets the
+ * chunk index of the first sample composited; *shaded counts them.
+ * Returns 1 when the ray ended. */
+int vv_vchunk_shade8(const vv_vcache *c, const float *lut, const vv_vshading *o,
+                     const vv_vlight *lights, int n_lights, const float v[3], int m,
+                     const size_t *cell, const float *fx, const float *fy, const float *fz,
+                     const int32_t *entry, vv_vshadow8_fn shadow, void *ctx, float et, float C[3],
+                     float *A, int *first, uint32_t *shaded);
+
 /* World parameter at which the ray leaves the cube of side @p size cells
  * (aligned to multiples of size) containing p. */
 static inline double

@@ -190,19 +190,12 @@ write_png(const vv_image *img, const char *name) {
     vt_ok(vv_image_write_png(img, path, 1.0, 0));
 }
 
-/* The default scene (vv_world_new_for_volume) of the shared volume
- * volumes/@p file, @p size pixels square, seen from azimuth 30 and
- * elevation 20 degrees; *vol gets the volume (freed by the caller, after
- * the World). */
+/* The default scene of the shared volume volumes/@p file (vt_volume_scene). */
 static vv_world *
 real_scene(const char *file, int size, vv_volume **vol) {
     char rel[256];
     snprintf(rel, sizeof rel, "volumes/%s", file);
-    vt_ok(vv_volume_load(vol, vt_data(rel), NULL));
-    vv_default_scene_options so = vt_scene_options(size);
-    vv_world *w = NULL;
-    vt_ok(vv_world_new_for_volume(&w, *vol, &so));
-    return w;
+    return vt_volume_scene(rel, size, vol);
 }
 
 /* ---------------------------------------------------------------------- */

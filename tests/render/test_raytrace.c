@@ -672,10 +672,7 @@ test_simd_matches_portable(void **state) {
     if (!vv_vc_have_avx2())
         vt_skip("this processor has no AVX2: both paths are the portable one");
     vv_volume *v = NULL;
-    vt_ok(vv_volume_load(&v, vt_data("volumes/neghip.slc"), NULL));
-    vv_default_scene_options so = vt_scene_options(96);
-    vv_world *w = NULL;
-    vt_ok(vv_world_new_for_volume(&w, v, &so));
+    vv_world *w = vt_volume_scene("volumes/neghip.slc", 96, &v);
     vv_renderer *simd = new_tracer((const char *const[]){"samples", "1", NULL});
     vv_renderer *plain = new_tracer((const char *const[]){"samples", "1", "simd", "0", NULL});
     vv_image *a = vt_render_q(simd, w, 2, 0, NULL), *b = vt_render_q(plain, w, 2, 0, NULL);
@@ -700,10 +697,7 @@ static void
 test_converged_reference(void **state) {
     (void)state;
     vv_volume *v = NULL;
-    vt_ok(vv_volume_load(&v, vt_data("volumes/neghip.slc"), NULL));
-    vv_default_scene_options so = vt_scene_options(64);
-    vv_world *w = NULL;
-    vt_ok(vv_world_new_for_volume(&w, v, &so));
+    vv_world *w = vt_volume_scene("volumes/neghip.slc", 64, &v);
     vv_renderer *rr = new_tracer(
         (const char *const[]){"samples", "1", "adaptive", "0", "refinement", "off", NULL});
     vv_image *ref = vt_converged_reference(rr, w, 16, 4);

@@ -478,47 +478,17 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
                              NULL);
             res->samples += (uint32_t)m;
             if (shade8) {
-                /* the visible samples shaded eight at a time
-                 * (vv_vshade8: vv_vshade's results bit for bit), then
-                 * composited one by one as below */
-                int vis[VV_VC_CHUNK], nvis = 0;
-                for (int s = 0; s < m; s++)
-                    if (ob->lut[entry[s]] > 0)
-                        vis[nvis++] = s;
-                for (int i0 = 0; i0 < nvis; i0 += 8) {
-                    const int n8 = nvis - i0 < 8 ? nvis - i0 : 8;
-                    float gx[8] = {0}, gy[8] = {0}, gz[8] = {0}, al[8] = {0};
-                    float cr[8] = {0}, cg[8] = {0}, cb[8] = {0};
-                    float orr[8], org[8], orb[8];
-                    for (int q = 0; q < n8; q++) {
-                        const int s = vis[i0 + q];
-                        const float *e = ob->lut + entry[s];
-                        const float f[3] = {fx[s], fy[s], fz[s]};
-                        float g[3];
-                        vv_vcache_gradient_at(c, cell[s], f, g);
-                        gx[q] = g[0];
-                        gy[q] = g[1];
-                        gz[q] = g[2];
-                        al[q] = e[0];
-                        cr[q] = e[1];
-                        cg[q] = e[2];
-                        cb[q] = e[3];
-                    }
-                    vv_vshade8(&ob->sh, fr->lights, fr->n_lights, v, NULL, gx, gy, gz, al, cr, cg,
-                               cb, orr, org, orb);
-                    for (int q = 0; q < n8; q++) {
-                        res->shaded++;
-                        const float w = 1 - A;
-                        C[0] += w * orr[q];
-                        C[1] += w * org[q];
-                        C[2] += w * orb[q];
-                        A += w * al[q];
-                        if (depth == INFINITY)
-                            depth = (float)((klast - (n - 1 - (s0 + vis[i0 + q]))) * dt);
-                        if (A >= et)
-                            goto done;
-                    }
-                }
+                /* the visible samples shaded eight at a time (vv_vshade8:
+                 * vv_vshade's results bit for bit), then composited one by
+                 * one as below */
+                int first = -1;
+                const int end =
+                    vv_vchunk_shade8(c, ob->lut, &ob->sh, fr->lights, fr->n_lights, v, m, cell, fx,
+                                     fy, fz, entry, NULL, NULL, et, C, &A, &first, &res->shaded);
+                if (depth == INFINITY && first >= 0)
+                    depth = (float)((kfirst + first) * dt);
+                if (end)
+                    goto done;
                 continue;
             }
             for (int s = 0; s < m; s++) {

@@ -60,64 +60,26 @@ ray_et(const rt_frame *fr, float weight) {
     return weight >= 1 ? fr->et : 1 - (1 - fr->et) / weight;
 }
 
-/* march_one's shading of a classified chunk (samples kfirst .. kfirst + m
- * - 1) eight visible samples at a time: their gradients and shadows, then
- * vv_vshade8 (vv_vshade's results bit for bit, shadows included), then
- * compositing one by one under C, A as composite_sample does. Returns 1
- * when the ray ended (A >= et). */
+/* march_one's shadows of sample s of a chunk (vv_vchunk_shade8). */
+typedef struct rt_chunk_ctx {
+    const rt_frame *fr;
+    const rt_vobj *ob;
+    const vv_vray *r;
+    const vv_ray *wr;
+    double kfirst;
+    rt_scache *sc;
+} rt_chunk_ctx;
+
 static int
-march_chunk8(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray *wr,
-             const float v[3], float et, double kfirst, int m, const size_t *cell, const float *fx,
-             const float *fy, const float *fz, const int32_t *entry, rt_scache *sc, float C[3],
-             float *A, float *dep) {
-    const vv_vcache *c = ob->c;
-    const double dt = fr->dt;
-    int vis[VV_VC_CHUNK], nvis = 0;
-    for (int s = 0; s < m; s++)
-        if (ob->lut[entry[s]] > 0)
-            vis[nvis++] = s;
-    for (int i0 = 0; i0 < nvis; i0 += 8) {
-        const int n8 = nvis - i0 < 8 ? nvis - i0 : 8;
-        float gx[8] = {0}, gy[8] = {0}, gz[8] = {0}, al[8] = {0};
-        float cr[8] = {0}, cg[8] = {0}, cb[8] = {0}, sh[VV_MAX_LIGHTS * 8];
-        memset(sh, 0, sizeof(float) * 8 * (size_t)fr->n_lights);
-        float orr[8], org[8], orb[8];
-        int shadowed = 0;
-        for (int q = 0; q < n8; q++) {
-            const int s = vis[i0 + q];
-            const float *e = ob->lut + entry[s];
-            const float f[3] = {fx[s], fy[s], fz[s]};
-            float g[3], p[3], pw[3];
-            const double t = (kfirst + s) * dt;
-            vv_vcache_gradient_at(c, cell[s], f, g);
-            vv_vray_point(r, t, p);
-            pw[0] = (float)(wr->origin.x + t * wr->dir.x);
-            pw[1] = (float)(wr->origin.y + t * wr->dir.y);
-            pw[2] = (float)(wr->origin.z + t * wr->dir.z);
-            shadowed = rt_volume_shadows(fr, ob->lead, p, pw, sc, sh + q, 8);
-            gx[q] = g[0];
-            gy[q] = g[1];
-            gz[q] = g[2];
-            al[q] = e[0];
-            cr[q] = e[1];
-            cg[q] = e[2];
-            cb[q] = e[3];
-        }
-        vv_vshade8(&ob->lead->sh, fr->vlights, fr->n_lights, v, shadowed ? sh : NULL, gx, gy, gz,
-                   al, cr, cg, cb, orr, org, orb);
-        for (int q = 0; q < n8; q++) {
-            const float w = 1 - *A;
-            C[0] += w * orr[q];
-            C[1] += w * org[q];
-            C[2] += w * orb[q];
-            *A += w * al[q];
-            if (*dep == INFINITY)
-                *dep = (float)((kfirst + vis[i0 + q]) * dt);
-            if (*A >= et)
-                return 1;
-        }
-    }
-    return 0;
+chunk_shadows(void *ctx, int s, float *sh, int stride) {
+    const rt_chunk_ctx *x = ctx;
+    const double t = (x->kfirst + s) * x->fr->dt;
+    float p[3], pw[3];
+    vv_vray_point(x->r, t, p);
+    pw[0] = (float)(x->wr->origin.x + t * x->wr->dir.x);
+    pw[1] = (float)(x->wr->origin.y + t * x->wr->dir.y);
+    pw[2] = (float)(x->wr->origin.z + t * x->wr->dir.z);
+    return rt_volume_shadows(x->fr, x->ob->lead, p, pw, x->sc, sh, stride);
 }
 
 /* The common case, one composite volume on the ray: run of visible
@@ -178,8 +140,17 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
             vv_vray_classify(c, &ob->tab, r, kfirst, dt, m, fr->avx2, cell, fx, fy, fz, entry,
                              NULL);
             if (shade8) {
-                if (march_chunk8(fr, ob, r, wr, v, et, kfirst, m, cell, fx, fy, fz, entry, &sc, C,
-                                 &A, dep)) {
+                /* eight at a time, shadows included (vv_vchunk_shade8: the
+                 * loop below's results bit for bit) */
+                rt_chunk_ctx x = {fr, ob, r, wr, kfirst, &sc};
+                int first = -1;
+                uint32_t shaded = 0;
+                const int end = vv_vchunk_shade8(c, ob->lut, &ob->lead->sh, fr->vlights,
+                                                 fr->n_lights, v, m, cell, fx, fy, fz, entry,
+                                                 chunk_shadows, &x, et, C, &A, &first, &shaded);
+                if (*dep == INFINITY && first >= 0)
+                    *dep = (float)((kfirst + first) * dt);
+                if (end) {
                     *Aout = A > 1 ? 1 : A;
                     return;
                 }
