@@ -58,8 +58,9 @@ cli_convert_usage(FILE *out) {
             "(docs/file-formats.md; rendered with 'volvis render --memory-limit'):\n"
             "raw input (--raw) and uncompressed NRRD are read a brick at a time by\n"
             "pread, so memory stays bounded by a brick; other formats are read whole\n"
-            "first. Each brick gets a coarse level (every 4th voxel) unless\n"
-            "--no-coarse.\n"
+            "first. Each brick is one zstd frame unless --no-compress, and gets a\n"
+            "coarse level (every 4th voxel) unless --no-coarse (zstd bricks always\n"
+            "keep it).\n"
             "\n"
             "Options:\n"
             "  --format %s|vvb  output format (default: from OUT's extension)\n"
@@ -67,8 +68,8 @@ cli_convert_usage(FILE *out) {
             "  --strict           refuse what the format cannot hold as it is (SLC: a\n"
             "                     voxel type other than 8 bits; VTK legacy: a direction\n"
             "                     matrix) instead of converting it (exit 1)\n"
-            "  --no-compress      NRRD, MetaImage, .vti, TIFF, OME-Zarr: write the voxels\n"
-            "                     uncompressed\n"
+            "  --no-compress      NRRD, MetaImage, .vti, TIFF, OME-Zarr, .vvb: write the\n"
+            "                     voxels uncompressed\n"
             "                     (NIfTI follows the name: .nii or .nii.gz)\n"
             "  --label            the voxels are labels (segment ids): NIfTI intent\n"
             "                     NIFTI_INTENT_LABEL, OME-Zarr levels by nearest (never\n"
@@ -108,11 +109,11 @@ cli_convert_usage(FILE *out) {
                  "  volvis convert --raw 2048x2048x2048:u8 big.raw big.vvb\n");
 }
 
-/* IN to OUT.vvb: by bricks when IN is raw or uncompressed NRRD, else read
- * whole first. */
+/* IN to OUT.vvb (@p flags: VV_VVB_COARSE, VV_VVB_ZSTD): by bricks when IN
+ * is raw or uncompressed NRRD, else read whole first. */
 static int
 convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int series, int channel,
-            int time, int coarse, int quiet) {
+            int time, unsigned flags, int quiet) {
     vv_bricked *b = NULL;
     vv_error_clear();
     vv_status s = VV_ERR_FORMAT;
@@ -123,7 +124,7 @@ convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int serie
     if (s == VV_OK) {
         cli_progress pr;
         cli_progress_begin(&pr, quiet);
-        s = vv_bricked_write_vvb(b, out, coarse, &pr.p);
+        s = vv_bricked_write_vvb(b, out, flags, &pr.p);
         cli_progress_end(&pr);
         memcpy(dims, vv_bricked_header(b)->dims, sizeof dims);
         type = vv_voxel_type_name(vv_bricked_header(b)->type);
@@ -137,7 +138,7 @@ convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int serie
         if (rc)
             return rc;
         vv_error_clear();
-        s = vv_volume_write_vvb(v, out, coarse);
+        s = vv_volume_write_vvb(v, out, flags);
         memcpy(dims, v->dims, sizeof dims);
         type = vv_voxel_type_name(v->type);
         vv_volume_free(v);
@@ -145,8 +146,8 @@ convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int serie
             return cli_fail(s, out);
     }
     if (!quiet)
-        printf("wrote %s (vvb, %d x %d x %d, %s, bricks of %d^3 cells)\n", out, dims[0], dims[1],
-               dims[2], type, VV_BRICK_CELLS);
+        printf("wrote %s (vvb, %d x %d x %d, %s, bricks of %d^3 cells%s)\n", out, dims[0], dims[1],
+               dims[2], type, VV_BRICK_CELLS, flags & VV_VVB_ZSTD ? ", zstd" : "");
     return CLI_EXIT_OK;
 }
 
@@ -265,9 +266,16 @@ cli_convert_main(int argc, char **argv) {
         return rc;
     if (format == VV_FORMAT_AUTO && level > 0)
         return cli_usage_error(&a, "--level: a .vvb is written from level 0");
-    if (format == VV_FORMAT_AUTO)
-        return convert_vvb(in, out, raw_spec ? &raw : NULL, series, channel, time,
-                           cli_count(&a, "no-coarse") == 0, quiet);
+    if (format == VV_FORMAT_AUTO) {
+        const int zstd = cli_count(&a, "no-compress") == 0;
+        if (zstd && cli_count(&a, "no-coarse") > 0 && !quiet)
+            cli_error("note: %s: zstd bricks keep their coarse levels (--no-coarse takes effect "
+                      "with --no-compress)",
+                      out);
+        const unsigned flags =
+            (zstd ? VV_VVB_ZSTD : 0u) | (cli_count(&a, "no-coarse") == 0 ? VV_VVB_COARSE : 0u);
+        return convert_vvb(in, out, raw_spec ? &raw : NULL, series, channel, time, flags, quiet);
+    }
     vv_save_options so;
     vv_save_options_init(&so);
     so.format = format;

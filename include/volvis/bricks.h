@@ -55,8 +55,9 @@ typedef struct vv_bricked_stats {
  * detached. @p memory_limit (bytes, 0: 1 GiB) bounds the voxels held: the
  * cached bricks and the working set of the brick being rendered. Errors:
  * VV_ERR_IO, VV_ERR_FORMAT (bad header or index: a brick past the end of
- * the file, a size that does not match its box; a compressed NRRD, which
- * must be converted first), VV_ERR_LIMIT (a memory limit smaller than one
+ * the file, a size that does not match its box (zstd bricks: 0 or more
+ * than the bound of its box), an unknown brick codec; a compressed NRRD,
+ * which must be converted first), VV_ERR_LIMIT (a memory limit smaller than one
  * brick and its working set), VV_ERR_NOMEM.
  */
 vv_status vv_bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw,
@@ -111,21 +112,29 @@ vv_status vv_bricked_proxy(vv_bricked *b, int max_side, vv_volume **out);
 /** Its counts since opening. */
 void vv_bricked_stats_get(const vv_bricked *b, vv_bricked_stats *s);
 
+/** vv_bricked_write_vvb flags: each brick also gets its coarse level
+ * (every 4th voxel; previews read those). */
+#define VV_VVB_COARSE 1u
+/** Each brick's voxels are one zstd frame (level 3), decoded when the brick
+ * is read; implies VV_VVB_COARSE (docs/file-formats.md). */
+#define VV_VVB_ZSTD 2u
+
 /**
  * Writes @p src (a bricked volume opened from any source) as a .vvb file at
- * @p path, written to a temporary file beside it and renamed; with
- * @p coarse, each brick also gets its coarse level (every 4th voxel). Reads
- * one brick at a time: memory is bounded by a brick, not the volume.
+ * @p path, written to a temporary file beside it and renamed; @p flags
+ * VV_VVB_COARSE, VV_VVB_ZSTD (0: raw bricks, no coarse levels). Reads one
+ * brick at a time: memory is bounded by a brick, not the volume.
  * Errors: VV_ERR_IO, VV_ERR_NOMEM.
  */
-vv_status vv_bricked_write_vvb(vv_bricked *src, const char *path, int coarse,
+vv_status vv_bricked_write_vvb(vv_bricked *src, const char *path, unsigned flags,
                                const vv_progress *progress);
 
 /**
  * Writes the in-memory volume @p v as a .vvb file (for formats that cannot
- * be read by bricks: compressed NRRD, SLC, NIfTI, ...). Errors: VV_ERR_IO.
+ * be read by bricks: compressed NRRD, SLC, NIfTI, ...); @p flags as
+ * vv_bricked_write_vvb. Errors: VV_ERR_IO, VV_ERR_NOMEM.
  */
-vv_status vv_volume_write_vvb(const vv_volume *v, const char *path, int coarse);
+vv_status vv_volume_write_vvb(const vv_volume *v, const char *path, unsigned flags);
 
 /** Bricks in all (nb[0] nb[1] nb[2], i fastest). */
 int vv_bricked_count(const vv_bricked *b);
@@ -135,7 +144,8 @@ void vv_bricked_info(const vv_bricked *b, int index, vv_brick_info *info);
  * Brick @p index as a volume of its voxels read (the box slo .. shi) with
  * the whole volume's geometry and value range, from the cache or the file;
  * a new reference (free it). Errors: VV_ERR_IO, VV_ERR_FORMAT (short
- * read), VV_ERR_NOMEM.
+ * read; a zstd brick that does not decode to its box's size, naming the
+ * brick and its offset), VV_ERR_NOMEM.
  */
 vv_status vv_bricked_load(vv_bricked *b, int index, vv_volume **out);
 /** Counts a brick skipped unread (vv_bricked_stats.skipped). */

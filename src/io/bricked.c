@@ -10,6 +10,9 @@
  * (float64), coarse level offset and size; then the bricks, each the voxels
  * of its box with one ghost voxel beyond each face (clipped to the volume),
  * i fastest, and its coarse level (every 4th voxel of its cells, from lo).
+ * With codec 1 (header offset 200) every brick's voxels are one zstd frame,
+ * decoded in-process (libzstd, into a buffer of the box's size, checked
+ * before and after), and every brick has its coarse level, uncompressed.
  */
 #include <errno.h>
 #include <fcntl.h>
@@ -21,6 +24,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <zstd.h>
+
 #include "core/internal.h"
 #include "io/bricked_internal.h"
 
@@ -28,6 +33,8 @@
 #define VVB_HEADER 256
 #define VVB_RECORD 48
 #define VVB_COARSE 4 /* coarse level: every 4th voxel */
+#define VVB_CODEC_ZSTD 1
+#define VVB_ZSTD_LEVEL 3
 
 typedef struct brick_entry {
     uint64_t offset, bytes;               /* .vvb: the brick's voxels in the file */
@@ -51,6 +58,7 @@ struct vv_bricked {
     int n;
     brick_entry *e;
     int has_coarse;
+    int zstd; /* .vvb: bricks are zstd frames */
     uint64_t limit, capacity, held, clock;
     vv_bricked_stats st;
 };
@@ -252,6 +260,44 @@ vv_bricked_free(vv_bricked *b) {
 
 /* ---- reading a brick ------------------------------------------------------- */
 
+/* Brick @p index of a .vvb, its stored box of @p want bytes, into @p dst
+ * (as stored: little-endian): one pread, then with zstd bricks one frame
+ * decoded into exactly @p want bytes. */
+static vv_status
+read_vvb_brick(vv_bricked *b, int index, void *dst, uint64_t want, const char *what) {
+    const brick_entry *e = &b->e[index];
+    if (!b->zstd)
+        return read_at(b, dst, (size_t)want, e->offset, what);
+    void *z = malloc((size_t)e->bytes);
+    if (!z)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    vv_status s = read_at(b, z, (size_t)e->bytes, e->offset, what);
+    if (s == VV_OK) {
+        const unsigned long long fs = ZSTD_getFrameContentSize(z, (size_t)e->bytes);
+        const unsigned long long zb = e->bytes, zo = e->offset;
+        if (fs == ZSTD_CONTENTSIZE_ERROR)
+            s = vv_error_set(VV_ERR_FORMAT, "%s: %llu bytes at offset %llu are not a zstd frame",
+                             what, zb, zo);
+        else if (fs == ZSTD_CONTENTSIZE_UNKNOWN)
+            s = vv_error_set(VV_ERR_FORMAT,
+                             "%s: the zstd frame at offset %llu does not give its size", what, zo);
+        else if (fs != (unsigned long long)want)
+            s = vv_error_set(VV_ERR_FORMAT,
+                             "%s: the zstd frame at offset %llu holds %llu bytes; its box needs "
+                             "%llu",
+                             what, zo, fs, (unsigned long long)want);
+        else {
+            const size_t r = ZSTD_decompress(dst, (size_t)want, z, (size_t)e->bytes);
+            if (ZSTD_isError(r) || r != (size_t)want)
+                s = vv_error_set(VV_ERR_FORMAT,
+                                 "%s: the zstd frame of %llu bytes at offset %llu: %s", what, zb,
+                                 zo, ZSTD_isError(r) ? ZSTD_getErrorName(r) : "short");
+        }
+    }
+    free(z);
+    return s;
+}
+
 /* The voxels of box slo..shi into v (dims the box's). */
 static vv_status
 read_box(vv_bricked *b, int index, const vv_brick_info *in, vv_volume *v) {
@@ -265,7 +311,7 @@ read_box(vv_bricked *b, int index, const vv_brick_info *in, vv_volume *v) {
                  in->slo[1], in->shi[1], in->slo[2], in->shi[2]);
     vv_status s = VV_OK;
     if (b->vvb) {
-        s = read_at(b, v->data, (size_t)(n * vs), b->e[index].offset, what);
+        s = read_vvb_brick(b, index, v->data, n * vs, what);
     } else {
         const int *d = b->header->dims;
         const size_t row = (size_t)(in->shi[0] - in->slo[0] + 1) * vs;
@@ -352,7 +398,7 @@ vv_bricked_load(vv_bricked *b, int index, vv_volume **out) {
 /* ---- opening ---------------------------------------------------------------- */
 
 static vv_status
-alloc_bricks(vv_bricked *b) {
+brick_grid(vv_bricked *b) {
     for (int a = 0; a < 3; a++) {
         const int cells = b->header->dims[a] > 1 ? b->header->dims[a] - 1 : 1;
         b->nb[a] = (cells + VV_BRICK_CELLS - 1) / VV_BRICK_CELLS;
@@ -361,7 +407,16 @@ alloc_bricks(vv_bricked *b) {
     if (n > (uint64_t)1 << 26)
         return vv_error_set(VV_ERR_LIMIT, "bricks: %llu bricks", (unsigned long long)n);
     b->n = (int)n;
-    b->e = calloc((size_t)n, sizeof *b->e);
+    return VV_OK;
+}
+
+/* brick_grid, then the bricks' entries. */
+static vv_status
+alloc_bricks(vv_bricked *b) {
+    vv_status s = brick_grid(b);
+    if (s != VV_OK)
+        return s;
+    b->e = calloc((size_t)b->n, sizeof *b->e);
     if (!b->e)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     return VV_OK;
@@ -600,6 +655,12 @@ open_vvb(vv_bricked *b) {
     vv_volume *v = b->header;
     memcpy(v->dims, dims, sizeof dims);
     b->has_coarse = get_u32(h + 32) != 0;
+    const uint32_t codec = get_u32(h + 200);
+    if (codec > VVB_CODEC_ZSTD)
+        return vv_error_set(VV_ERR_FORMAT, "unknown brick codec %u (0 raw, 1 zstd)", codec);
+    b->zstd = codec == VVB_CODEC_ZSTD;
+    if (b->zstd && !b->has_coarse)
+        return vv_error_set(VV_ERR_FORMAT, "zstd bricks without coarse levels");
     v->unit = (vv_unit)get_u32(h + 36);
     v->space = (vv_space)get_u32(h + 40);
     for (int a = 0; a < 3; a++) {
@@ -616,7 +677,8 @@ open_vvb(vv_bricked *b) {
     if (!(v->range[0] <= v->range[1]))
         return vv_error_set(VV_ERR_FORMAT, "bad value range %g..%g", v->range[0], v->range[1]);
     const uint64_t index_off = get_u64(h + 184), count = get_u64(h + 192);
-    if ((s = alloc_bricks(b)) != VV_OK)
+    /* the entries are allocated once the file is known to hold the index */
+    if ((s = brick_grid(b)) != VV_OK)
         return s;
     if (count != (uint64_t)b->n)
         return vv_error_set(VV_ERR_FORMAT, "index of %llu bricks; %dx%dx%d voxels need %d",
@@ -628,6 +690,8 @@ open_vvb(vv_bricked *b) {
                             "(%llu bytes)",
                             (unsigned long long)ibytes, (unsigned long long)index_off,
                             (unsigned long long)b->file_size);
+    if (!(b->e = calloc((size_t)b->n, sizeof *b->e)))
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
     unsigned char *idx = malloc((size_t)ibytes);
     if (!idx)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
@@ -648,14 +712,17 @@ open_vvb(vv_bricked *b) {
         int cd[3];
         coarse_dims(&in, cd);
         const uint64_t cwant = b->has_coarse ? (uint64_t)cd[0] * cd[1] * cd[2] * vs : 0;
-        if (e->bytes != want)
+        if (b->zstd ? e->bytes == 0 || e->bytes > ZSTD_compressBound((size_t)want)
+                    : e->bytes != want)
             s = vv_error_set(VV_ERR_FORMAT,
                              "index: brick %d (%d,%d,%d) has %llu bytes; its box %d..%d x "
-                             "%d..%d x %d..%d needs %llu",
+                             "%d..%d x %d..%d needs %s%llu",
                              i, in.lo[0] / VV_BRICK_CELLS, in.lo[1] / VV_BRICK_CELLS,
                              in.lo[2] / VV_BRICK_CELLS, (unsigned long long)e->bytes, in.slo[0],
                              in.shi[0], in.slo[1], in.shi[1], in.slo[2], in.shi[2],
-                             (unsigned long long)want);
+                             b->zstd ? "compressed 1 to " : "",
+                             b->zstd ? (unsigned long long)ZSTD_compressBound((size_t)want)
+                                     : (unsigned long long)want);
         else if (e->offset < VVB_HEADER || e->offset > b->file_size ||
                  b->file_size - e->offset < e->bytes)
             s = vv_error_set(VV_ERR_FORMAT,
@@ -787,16 +854,17 @@ vv_bricked_read_box(vv_bricked *b, const int lo[3], const int hi[3], vv_volume *
                 continue;
             const int bd[3] = {in.shi[0] - in.slo[0] + 1, in.shi[1] - in.slo[1] + 1,
                                in.shi[2] - in.slo[2] + 1};
-            char *buf = malloc((size_t)b->e[i].bytes);
+            const uint64_t bbytes = box_voxels(in.slo, in.shi) * vs;
+            char *buf = malloc((size_t)bbytes);
             if (!buf) {
                 s = vv_error_set(VV_ERR_NOMEM, "out of memory");
                 break;
             }
             char what[64];
             snprintf(what, sizeof what, "brick %d", i);
-            s = read_at(b, buf, (size_t)b->e[i].bytes, b->e[i].offset, what);
+            s = read_vvb_brick(b, i, buf, bbytes, what);
             if (s == VV_OK && b->swap && vs > 1)
-                swap_bytes(buf, (size_t)(b->e[i].bytes / vs), vs);
+                swap_bytes(buf, (size_t)(bbytes / vs), vs);
             const size_t row = (size_t)(oh[0] - ol[0] + 1) * vs;
             for (int k = ol[2]; s == VV_OK && k <= oh[2]; k++)
                 for (int j = ol[1]; j <= oh[1]; j++)
@@ -837,6 +905,15 @@ vv_bricked_proxy(vv_bricked *b, int max_side, vv_volume **out) {
     while ((d[0] - 1) / f + 1 > max_side || (d[1] - 1) / f + 1 > max_side ||
            (d[2] - 1) / f + 1 > max_side)
         f++;
+    if (b->vvb && b->zstd && f == 1) {
+        /* small enough whole, and zstd bricks cannot be read voxel by
+         * voxel: the whole volume by bricks */
+        const int lo[3] = {0, 0, 0}, hi[3] = {d[0] - 1, d[1] - 1, d[2] - 1};
+        vv_status s = vv_bricked_read_box(b, lo, hi, out);
+        if (s == VV_OK)
+            vv_volume_update_range(*out);
+        return s;
+    }
     /* coarse levels hold every 4th voxel from each brick's corner */
     if (b->vvb && b->has_coarse && f > 1)
         f = (f + VVB_COARSE - 1) / VVB_COARSE * VVB_COARSE;
@@ -943,9 +1020,12 @@ vv_bricked_proxy(vv_bricked *b, int max_side, vv_volume **out) {
 typedef vv_status (*brick_source)(void *ctx, int index, const vv_brick_info *in, void *buf);
 
 static vv_status
-write_vvb(const char *path, const vv_volume *hdr, const int nb[3], int n, int coarse,
+write_vvb(const char *path, const vv_volume *hdr, const int nb[3], int n, unsigned flags,
           brick_source src, void *ctx, const vv_progress *progress) {
     const size_t vs = vv_voxel_type_size(hdr->type);
+    /* zstd bricks always come with coarse levels (previews read those) */
+    const int zstd = (flags & VV_VVB_ZSTD) != 0;
+    const int coarse = zstd || (flags & VV_VVB_COARSE);
     char *tmp = malloc(strlen(path) + 16);
     if (!tmp)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
@@ -964,7 +1044,7 @@ write_vvb(const char *path, const vv_volume *hdr, const int nb[3], int n, int co
     vv_status s = index ? VV_OK : vv_error_set(VV_ERR_NOMEM, "out of memory");
     uint64_t pos = VVB_HEADER + (uint64_t)n * VVB_RECORD;
     double lo = INFINITY, hi = -INFINITY;
-    void *buf = NULL, *cbuf = NULL;
+    void *buf = NULL, *cbuf = NULL, *zbuf = NULL;
     if (s == VV_OK && fseeko(f, (off_t)pos, SEEK_SET) != 0)
         s = vv_error_set(VV_ERR_IO, "%s: %s", path, strerror(errno));
     for (int i = 0; i < n && s == VV_OK; i++) {
@@ -1001,17 +1081,36 @@ write_vvb(const char *path, const vv_volume *hdr, const int nb[3], int n, int co
         lo = mn < lo ? mn : lo;
         hi = mx > hi ? mx : hi;
         unsigned char *r = index + (size_t)i * VVB_RECORD;
-        put_u64(r, pos);
-        put_u64(r + 8, nv * vs);
         put_f64(r + 16, mn);
         put_f64(r + 24, mx);
         if (!vv_host_is_little_endian())
             swap_bytes(buf, (size_t)nv, vs);
-        if (fwrite(buf, vs, (size_t)nv, f) != (size_t)nv) {
+        const void *out = buf;
+        size_t out_bytes = (size_t)(nv * vs);
+        if (zstd) {
+            const size_t bound = ZSTD_compressBound(out_bytes);
+            free(zbuf);
+            zbuf = malloc(bound);
+            if (!zbuf) {
+                s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+                break;
+            }
+            const size_t zn = ZSTD_compress(zbuf, bound, buf, out_bytes, VVB_ZSTD_LEVEL);
+            if (ZSTD_isError(zn)) {
+                s = vv_error_set(VV_ERR_IO, "%s: brick %d: zstd: %s", path, i,
+                                 ZSTD_getErrorName(zn));
+                break;
+            }
+            out = zbuf;
+            out_bytes = zn;
+        }
+        put_u64(r, pos);
+        put_u64(r + 8, out_bytes);
+        if (fwrite(out, 1, out_bytes, f) != out_bytes) {
             s = vv_error_set(VV_ERR_IO, "%s: write failed: %s", path, strerror(errno));
             break;
         }
-        pos += nv * vs;
+        pos += out_bytes;
         if (coarse) {
             int cd[3];
             coarse_dims(&in, cd);
@@ -1045,6 +1144,7 @@ write_vvb(const char *path, const vv_volume *hdr, const int nb[3], int n, int co
     }
     free(buf);
     free(cbuf);
+    free(zbuf);
     if (s == VV_OK) {
         unsigned char h[VVB_HEADER];
         memset(h, 0, sizeof h);
@@ -1069,6 +1169,7 @@ write_vvb(const char *path, const vv_volume *hdr, const int nb[3], int n, int co
         put_f64(h + 176, hi);
         put_u64(h + 184, VVB_HEADER);
         put_u64(h + 192, (uint64_t)n);
+        put_u32(h + 200, zstd ? VVB_CODEC_ZSTD : 0);
         if (fseeko(f, 0, SEEK_SET) != 0 || fwrite(h, 1, sizeof h, f) != sizeof h ||
             fwrite(index, VVB_RECORD, (size_t)n, f) != (size_t)n)
             s = vv_error_set(VV_ERR_IO, "%s: write failed: %s", path, strerror(errno));
@@ -1095,8 +1196,9 @@ source_bricked(void *ctx, int index, const vv_brick_info *in, void *buf) {
 }
 
 vv_status
-vv_bricked_write_vvb(vv_bricked *src, const char *path, int coarse, const vv_progress *progress) {
-    return write_vvb(path, src->header, src->nb, src->n, coarse, source_bricked, src, progress);
+vv_bricked_write_vvb(vv_bricked *src, const char *path, unsigned flags,
+                     const vv_progress *progress) {
+    return write_vvb(path, src->header, src->nb, src->n, flags, source_bricked, src, progress);
 }
 
 static vv_status
@@ -1118,7 +1220,7 @@ source_memory(void *ctx, int index, const vv_brick_info *in, void *buf) {
 }
 
 vv_status
-vv_volume_write_vvb(const vv_volume *v, const char *path, int coarse) {
+vv_volume_write_vvb(const vv_volume *v, const char *path, unsigned flags) {
     vv_bricked geo;
     memset(&geo, 0, sizeof geo);
     geo.header = (vv_volume *)v;
@@ -1126,5 +1228,5 @@ vv_volume_write_vvb(const vv_volume *v, const char *path, int coarse) {
     if (s != VV_OK)
         return s;
     free(geo.e);
-    return write_vvb(path, v, geo.nb, geo.n, coarse, source_memory, (void *)v, NULL);
+    return write_vvb(path, v, geo.nb, geo.n, flags, source_memory, (void *)v, NULL);
 }

@@ -1,6 +1,7 @@
 /*
  * The CLI out of core: `volvis convert IN OUT.vvb` (by bricks from an
- * uncompressed NRRD, whole from other formats), `volvis render OUT.vvb`
+ * uncompressed NRRD, whole from other formats; zstd bricks unless
+ * --no-compress), `volvis render OUT.vvb`
  * and `volvis render --memory-limit` (the same image as in memory with the
  * same transfer function; the `wrote` line counts the bricks read), with
  * raycast and raytrace (region renders trace one ray a pixel: the ray
@@ -40,6 +41,25 @@ test_convert_render(void **state) {
     vt_run_result r = run_cli("convert", nut, vvb);
     assert_int_equal(r.status, 0);
     assert_non_null(strstr(r.out, "(vvb, "));
+    assert_non_null(strstr(r.out, ", zstd)")); /* zstd bricks by default */
+    vt_run_result_free(&r);
+    /* --no-compress: raw bricks, a larger file; --no-coarse alone keeps the
+     * coarse levels of zstd bricks, with a note */
+    char raw_vvb[1200];
+    snprintf(raw_vvb, sizeof raw_vvb, "%s/nut_raw.vvb", outdir());
+    r = run_cli("convert", "--no-compress", nut, raw_vvb);
+    assert_int_equal(r.status, 0);
+    assert_null(strstr(r.out, "zstd"));
+    vt_run_result_free(&r);
+    struct stat sz, sr;
+    assert_int_equal(stat(vvb, &sz), 0);
+    assert_int_equal(stat(raw_vvb, &sr), 0);
+    printf("nut.vvb: %lld bytes with zstd bricks, %lld raw\n", (long long)sz.st_size,
+           (long long)sr.st_size);
+    assert_true(sz.st_size < sr.st_size);
+    r = run_cli("convert", "--no-coarse", nut, raw_vvb);
+    assert_int_equal(r.status, 0);
+    assert_non_null(strstr(r.err, "keep their coarse levels"));
     vt_run_result_free(&r);
     /* an uncompressed NRRD: converted brick by brick */
     vv_volume *v = NULL;

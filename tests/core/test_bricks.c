@@ -179,6 +179,17 @@ test_ct_head(void **state) {
     assert_int_equal(fwrite(head->data, 2, n, f), n);
     fclose(f);
     check_source(head, vvb, NULL, "vvb", 1);
+    /* zstd bricks: the same voxels and images, a smaller file */
+    char vvbz[1200];
+    snprintf(vvbz, sizeof vvbz, "%s/head_zstd.vvb", dir);
+    vt_ok(vv_volume_write_vvb(head, vvbz, VV_VVB_ZSTD));
+    struct stat sr, sz;
+    assert_int_equal(stat(vvb, &sr), 0);
+    assert_int_equal(stat(vvbz, &sz), 0);
+    printf("head.vvb %lld bytes raw, %lld with zstd bricks\n", (long long)sr.st_size,
+           (long long)sz.st_size);
+    assert_true(sz.st_size < sr.st_size * 3 / 4);
+    check_source(head, vvbz, NULL, "vvb zstd", 0);
     vv_raw_params rp;
     vv_raw_params_init(&rp);
     memcpy(rp.dims, head->dims, sizeof rp.dims);
@@ -211,13 +222,24 @@ synthetic(void) {
     return v;
 }
 
+static void round_trip(unsigned flags);
+
+/* Raw bricks without coarse levels, then zstd bricks (which keep theirs):
+ * every brick, a box across bricks and the proxies read the volume's
+ * voxels. */
 static void
 test_round_trip(void **state) {
     (void)state;
+    for (int z = 0; z < 2; z++)
+        round_trip(z ? VV_VVB_ZSTD : 0);
+}
+
+static void
+round_trip(unsigned flags) {
     vv_volume *v = synthetic();
     char path[1200];
-    snprintf(path, sizeof path, "%s/syn.vvb", outdir());
-    vt_ok(vv_volume_write_vvb(v, path, 0));
+    snprintf(path, sizeof path, "%s/syn%u.vvb", outdir(), flags);
+    vt_ok(vv_volume_write_vvb(v, path, flags));
     vv_bricked *b = NULL;
     vt_ok(vv_bricked_open(&b, path, NULL, 0));
     int nb[3];
@@ -237,11 +259,26 @@ test_round_trip(void **state) {
                     assert_true(vv_volume_get(bv, x, j, k) == vv_volume_get(v, x0 + x, y0 + j, k));
         vv_volume_free(bv);
     }
-    /* no coarse levels: the proxy reads voxels from the bricks */
+    /* the proxy: from the voxels of the bricks (no coarse levels) or from
+     * the coarse levels, every 4th voxel either way */
     vv_volume *p = NULL;
     vt_ok(vv_bricked_proxy(b, 40, &p));
     assert_int_equal(p->dims[1], 33); /* every 4th of 131 */
     assert_true(vv_volume_get(p, 5, 7, 2) == vv_volume_get(v, 20, 28, 8));
+    vv_volume_free(p);
+    /* a proxy of every voxel (zstd: the bricks read whole) */
+    vt_ok(vv_bricked_proxy(b, 200, &p));
+    assert_int_equal(p->dims[1], 131);
+    assert_memory_equal(p->data, v->data, (size_t)70 * 131 * 9);
+    vv_volume_free(p);
+    /* a box across four bricks */
+    const int lo[3] = {50, 60, 2}, hi[3] = {69, 70, 8};
+    vt_ok(vv_bricked_read_box(b, lo, hi, &p));
+    for (int k = lo[2]; k <= hi[2]; k++)
+        for (int j = lo[1]; j <= hi[1]; j++)
+            for (int i = lo[0]; i <= hi[0]; i++)
+                assert_true(vv_volume_get(p, i - lo[0], j - lo[1], k - lo[2]) ==
+                            vv_volume_get(v, i, j, k));
     vv_volume_free(p);
     vv_bricked_free(b);
     vv_volume_free(v);
@@ -300,6 +337,66 @@ test_bad_vvb(void **state) {
     rp.type = VV_U8;
     assert_int_equal(vv_bricked_open(&b, good, &rp, 0), VV_ERR_FORMAT);
     assert_non_null(strstr(vv_error_message(), "past the end of the file"));
+    /* zstd bricks */
+    char goodz[1200];
+    snprintf(goodz, sizeof goodz, "%s/goodz.vvb", outdir());
+    vt_ok(vv_volume_write_vvb(v, goodz, VV_VVB_ZSTD));
+    vt_ok(vv_bricked_open(&b, goodz, NULL, 0));
+    vv_brick_info bi;
+    vv_bricked_info(b, 2, &bi);
+    vv_bricked_free(b);
+    size_t zlen;
+    unsigned char *zf = vt_read_file(goodz, &zlen);
+    uint64_t off2 = 0, bytes2 = 0;
+    for (int q = 0; q < 8; q++) {
+        off2 |= (uint64_t)zf[256 + 2 * 48 + q] << (8 * q);
+        bytes2 |= (uint64_t)zf[256 + 2 * 48 + 8 + q] << (8 * q);
+    }
+    free(zf);
+    /* brick 2's frame scribbled over in its middle: opens, fails to load */
+    const unsigned char junk[16] = {0xde, 0xad, 0xbe, 0xef, 0xde, 0xad, 0xbe, 0xef,
+                                    0xde, 0xad, 0xbe, 0xef, 0xde, 0xad, 0xbe, 0xef};
+    patched(goodz, bad, (long)(off2 + bytes2 / 2), junk, 16, -1);
+    vt_ok(vv_bricked_open(&b, bad, NULL, 0));
+    vv_volume *bv = NULL;
+    assert_int_equal(vv_bricked_load(b, 2, &bv), VV_ERR_FORMAT);
+    assert_null(bv);
+    printf("%s\n", vv_error_message());
+    assert_non_null(strstr(vv_error_message(), "brick 2"));
+    assert_non_null(strstr(vv_error_message(), "zstd"));
+    vv_bricked_free(b);
+    /* brick 1's frame cut to 5 bytes: not a frame */
+    patched(goodz, bad, 256 + 1 * 48 + 8, size, 8, -1);
+    vt_ok(vv_bricked_open(&b, bad, NULL, 0));
+    assert_int_equal(vv_bricked_load(b, 1, &bv), VV_ERR_FORMAT);
+    printf("%s\n", vv_error_message());
+    assert_non_null(strstr(vv_error_message(), "brick 1"));
+    vv_bricked_free(b);
+    /* brick 0 pointing at brick 2's frame: a frame of another size */
+    unsigned char rec[16];
+    for (int q = 0; q < 8; q++) {
+        rec[q] = (unsigned char)(off2 >> (8 * q));
+        rec[8 + q] = (unsigned char)(bytes2 >> (8 * q));
+    }
+    patched(goodz, bad, 256, rec, 16, -1);
+    vt_ok(vv_bricked_open(&b, bad, NULL, 0));
+    assert_int_equal(vv_bricked_load(b, 0, &bv), VV_ERR_FORMAT);
+    printf("%s\n", vv_error_message());
+    assert_non_null(strstr(vv_error_message(), "its box needs"));
+    vv_bricked_free(b);
+    /* an empty frame, an unknown codec, zstd without coarse levels */
+    const unsigned char zero8[8] = {0};
+    patched(goodz, bad, 256 + 3 * 48 + 8, zero8, 8, -1);
+    assert_int_equal(vv_bricked_open(&b, bad, NULL, 0), VV_ERR_FORMAT);
+    assert_non_null(strstr(vv_error_message(), "brick 3"));
+    const unsigned char codec[4] = {7, 0, 0, 0};
+    patched(goodz, bad, 200, codec, 4, -1);
+    assert_int_equal(vv_bricked_open(&b, bad, NULL, 0), VV_ERR_FORMAT);
+    assert_non_null(strstr(vv_error_message(), "unknown brick codec 7"));
+    patched(goodz, bad, 32, zero8, 4, -1);
+    assert_int_equal(vv_bricked_open(&b, bad, NULL, 0), VV_ERR_FORMAT);
+    assert_non_null(strstr(vv_error_message(), "without coarse levels"));
+    assert_null(b);
     vv_volume_free(v);
 }
 

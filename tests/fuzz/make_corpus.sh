@@ -11,7 +11,7 @@ cd "$(dirname "$0")/../.."
 D=../shared/data
 C=tests/fuzz/corpus
 PY=/usr/bin/python3
-mkdir -p $C/{slc,nrrd,nifti,mhd,vtk,raw,scene,vvc,mesh,grid,dicom,tiff,animation,replay}
+mkdir -p $C/{slc,nrrd,nifti,mhd,vtk,raw,scene,vvc,vvb,mesh,grid,dicom,tiff,animation,replay}
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 
@@ -33,6 +33,11 @@ V=${VOLVIS:-build/release/apps/volvis/volvis}
 "$V" convert $T/crop.nrrd $C/slc/crop.slc
 "$V" convert --rle $T/crop.nrrd $C/slc/crop_rle.slc 2>/dev/null || true
 "$V" compress --quality 50 --block 8 $T/crop.nrrd $C/vvc/crop.vvc
+# .vvb: one brick raw and zstd; two bricks (70 voxels along x) zstd
+"$V" convert -q --no-compress $T/crop.nrrd $C/vvb/crop_raw.vvb
+"$V" convert -q $T/crop.nrrd $C/vvb/crop_zstd.vvb
+teem-unu crop -i $D/volumes/ct_head.nrrd -min 90 120 50 -max 159 121 51 -o $T/row.nrrd
+"$V" convert -q $T/row.nrrd $C/vvb/two_bricks_zstd.vvb
 $PY - "$T/crop.nrrd" "$C" <<'PYEOF'
 import sys, struct, gzip, zlib, numpy as np
 src, C = sys.argv[1], sys.argv[2]

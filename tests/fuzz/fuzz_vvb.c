@@ -1,0 +1,41 @@
+/*
+ * libFuzzer harness: .vvb bricked volumes (src/io/bricked.c): the header
+ * and index checks of vv_bricked_open, then up to 8 bricks read (raw or
+ * zstd frames decoded), a box across bricks and a small proxy (from the
+ * coarse levels when the file has them). The input is the file.
+ */
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "fuzz_util.h"
+#include "volvis/volvis.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+int
+LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+    vv_bricked *b = NULL;
+    if (vv_bricked_open(&b, fuzz_write("in.vvb", data, size), NULL, (uint64_t)64 << 20) != VV_OK)
+        return 0;
+    const int n = vv_bricked_count(b);
+    for (int i = 0; i < n && i < 8; i++) {
+        vv_volume *v = NULL;
+        if (vv_bricked_load(b, i, &v) == VV_OK)
+            fuzz_check_volume(v);
+    }
+    const vv_volume *h = vv_bricked_header(b);
+    int lo[3], hi[3];
+    for (int a = 0; a < 3; a++) {
+        lo[a] = h->dims[a] > 70 ? 60 : 0;
+        hi[a] = h->dims[a] - 1 < lo[a] + 9 ? h->dims[a] - 1 : lo[a] + 9;
+    }
+    vv_volume *v = NULL;
+    if (vv_bricked_read_box(b, lo, hi, &v) == VV_OK)
+        fuzz_check_volume(v);
+    v = NULL;
+    if (vv_bricked_proxy(b, 16, &v) == VV_OK)
+        fuzz_check_volume(v);
+    vv_bricked_free(b);
+    return 0;
+}
