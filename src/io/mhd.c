@@ -19,6 +19,7 @@
 
 #define MHD_LINE_MAX 4096
 #define MHD_MAX_FILES 65536
+#define MHD_MAX_WIDTH 64 /* field width of an ElementDataFile pattern */
 /* zlib's deflate cannot compress better than about 1032:1. */
 #define MHD_ZLIB_MAX_RATIO 1100
 
@@ -145,9 +146,18 @@ mhd_expand_pattern(mhd_header *h, const char *value) {
     const char *pc = strchr(fmt, '%');
     if (!pc || strchr(pc + 1, '%'))
         return vv_error_set(VV_ERR_FORMAT, "bad ElementDataFile pattern \"%s\"", fmt);
+    /* flags, then a field width of at most MHD_MAX_WIDTH (a width of
+     * hundreds of millions made snprintf pad for seconds: found by
+     * fuzz_mhd) */
     const char *q = pc + 1;
-    while (*q && strchr("0123456789-+ #", *q))
+    while (*q && strchr("-+ #0", *q))
         q++;
+    long width = 0;
+    for (; *q >= '0' && *q <= '9'; q++)
+        if ((width = width * 10 + (*q - '0')) > MHD_MAX_WIDTH)
+            return vv_error_set(VV_ERR_FORMAT,
+                                "ElementDataFile pattern \"%s\": field width over %d", fmt,
+                                MHD_MAX_WIDTH);
     if (*q != 'd' && *q != 'i')
         return vv_error_set(VV_ERR_FORMAT, "bad ElementDataFile pattern \"%s\"", fmt);
     /* Bounded first so that the arithmetic below cannot overflow. */

@@ -244,6 +244,14 @@ test_data_files(void **state) {
                                      "ElementDataFile = s%s.raw 1 3 1\n",
                                      NULL, 0)));
     assert_null(v);
+    /* a field width of half a billion: refused at once (fuzz_mhd found
+     * snprintf padding it for seconds) */
+    vt_err(vv_mhd_read(&v, write_mha("pattern4.mhd",
+                                     "NDims = 3\nDimSize = 2 2 3\nElementType = MET_UCHAR\n"
+                                     "ElementDataFile = s%0581530138d.raw 1 3 1\n",
+                                     NULL, 0)));
+    assert_non_null(strstr(vv_error_message(), "field width"));
+    assert_null(v);
     /* A list naming a missing file. */
     vt_err(vv_mhd_read(&v, write_mha("list2.mhd",
                                      "NDims = 3\nDimSize = 2 2 3\nElementType = MET_UCHAR\n"
