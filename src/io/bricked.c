@@ -397,6 +397,8 @@ vv_bricked_load(vv_bricked *b, int index, vv_volume **out) {
 
 /* ---- opening ---------------------------------------------------------------- */
 
+/* The brick grid of b's header dims into b->nb and b->n (no entries yet);
+ * VV_ERR_LIMIT over 2^26 bricks. */
 static vv_status
 brick_grid(vv_bricked *b) {
     for (int a = 0; a < 3; a++) {
@@ -1224,9 +1226,8 @@ vv_volume_write_vvb(const vv_volume *v, const char *path, unsigned flags) {
     vv_bricked geo;
     memset(&geo, 0, sizeof geo);
     geo.header = (vv_volume *)v;
-    vv_status s = alloc_bricks(&geo);
+    vv_status s = brick_grid(&geo); /* the grid only: no entries */
     if (s != VV_OK)
         return s;
-    free(geo.e);
     return write_vvb(path, v, geo.nb, geo.n, flags, source_memory, (void *)v, NULL);
 }

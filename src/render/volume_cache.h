@@ -715,6 +715,101 @@ vv_vray_cube_exit(const vv_vray *r, const float p[3], double t, int size) {
     return t + te;
 }
 
+/* The world point of ray @p wr at parameter @p t (world units), in float:
+ * where point lights and shadows are evaluated for a sample. */
+static inline void
+vv_ray_world_point(const vv_ray *wr, double t, float pw[3]) {
+    pw[0] = (float)(wr->origin.x + t * wr->dir.x);
+    pw[1] = (float)(wr->origin.y + t * wr->dir.y);
+    pw[2] = (float)(wr->origin.z + t * wr->dir.z);
+}
+
+/* The subvolume of index point p: its index, and its coordinates in bc.
+ * p >= 0 up to rounding: a negative index would wrap and clamp high, so the
+ * float is clamped instead. bxm, bym, bzm: the grid's last subvolume. */
+static inline size_t
+vv_vblock_of(const vv_vcache *c, const float p[3], unsigned bxm, unsigned bym, unsigned bzm,
+             unsigned bc[3]) {
+    unsigned bi = (unsigned)(int)((p[0] > 0 ? p[0] : 0) * (1.0f / VV_VC_BLOCK));
+    unsigned bj = (unsigned)(int)((p[1] > 0 ? p[1] : 0) * (1.0f / VV_VC_BLOCK));
+    unsigned bk = (unsigned)(int)((p[2] > 0 ? p[2] : 0) * (1.0f / VV_VC_BLOCK));
+    bc[0] = bi > bxm ? bxm : bi;
+    bc[1] = bj > bym ? bym : bj;
+    bc[2] = bk > bzm ? bzm : bk;
+    return ((size_t)bc[2] * (size_t)c->by + (size_t)bc[1]) * (size_t)c->bx + (size_t)bc[0];
+}
+
+/* The sample index after leaving the empty cube of 2 dist - 1 subvolumes
+ * around subvolume bc (p, at ray parameter t, in it; k its sample index). */
+static inline double
+vv_vray_leap(const vv_vray *r, const float p[3], double t, const unsigned bc[3], int dist,
+             double inv_dt, double k) {
+    float te = INFINITY;
+    for (int a = 0; a < 3; a++) {
+        if (r->inv[a] == 0)
+            continue;
+        float bound = r->d[a] > 0 ? (float)((int)bc[a] + dist) * VV_VC_BLOCK
+                                  : (float)((int)bc[a] - dist + 1) * VV_VC_BLOCK;
+        float ta = (bound - p[a]) * r->inv[a];
+        te = ta < te ? ta : te;
+    }
+    double ks = vv_ceil_pos((t + te) * inv_dt);
+    return ks > k + 1 ? ks : k + 1;
+}
+
+/* The next run of samples of ray r in visible subvolumes (bdist 0: vv_vtables.bdist) from
+ * sample *k on, up to kend: *k and *klast get its first and last sample;
+ * returns 0 when none is left. Empty cubes of subvolumes are leapt over;
+ * the visible subvolumes that follow the first join, whole, while their
+ * samples fit a chunk (VV_VC_CHUNK): the same samples in the same order as
+ * one subvolume at a time (which subvolumes are visible does not depend on
+ * what was composited), in fuller vectors. Without skipping every
+ * subvolume is marked visible and at distance 0, so both cases run this
+ * same code and produce the same samples. */
+static inline int
+vv_vray_visible_run(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double dt,
+                    double kend, double *kp, double *klastp) {
+    const double inv_dt = 1.0 / dt;
+    const unsigned bxm = (unsigned)c->bx - 1, bym = (unsigned)c->by - 1, bzm = (unsigned)c->bz - 1;
+    double k = *kp;
+    while (k <= kend) {
+        const double t = k * dt;
+        float p[3];
+        vv_vray_point(r, t, p);
+        unsigned bc[3];
+        const size_t b = vv_vblock_of(c, p, bxm, bym, bzm, bc);
+        const int dist = bdist[b];
+        if (dist) {
+            k = vv_vray_leap(r, p, t, bc, dist, inv_dt, k);
+            continue;
+        }
+        double te = vv_vray_cube_exit(r, p, t, VV_VC_BLOCK);
+        /* march to the last sample inside this subvolume */
+        double klast = vv_floor_pos(te * inv_dt);
+        klast = klast < kend ? klast : kend;
+        klast = klast < k ? k : klast;
+        while (klast < kend && klast - k + 1 < VV_VC_CHUNK) {
+            const double kn = klast + 1, tn = kn * dt;
+            float pn[3];
+            vv_vray_point(r, tn, pn);
+            unsigned bcn[3];
+            if (bdist[vv_vblock_of(c, pn, bxm, bym, bzm, bcn)])
+                break;
+            double kl = vv_floor_pos(vv_vray_cube_exit(r, pn, tn, VV_VC_BLOCK) * inv_dt);
+            kl = kl < kend ? kl : kend;
+            kl = kl < kn ? kn : kl;
+            if (kl - k + 1 > VV_VC_CHUNK)
+                break;
+            klast = kl;
+        }
+        *kp = k;
+        *klastp = klast;
+        return 1;
+    }
+    *kp = k;
+    return 0;
+}
+
 /* The isosurface crossing between ray parameters ta (value va, on one side
  * of iso) and tb (on the other), by ten bisection steps. */
 static inline double
@@ -784,9 +879,9 @@ void vv_vtables_flat_ends(const vv_vtables *t, float *lo, float *hi);
  * table entry (4 * index), with no branches so that the independent
  * samples overlap in the pipeline. With @p avx2 (vv_vc_have_avx2) and
  * 16-bit values, eight samples at a time with AVX2 and FMA; the two differ
- * only in the rounding of fused multiply-adds. */
-/* With @p x not NULL, x[s] gets each sample's table position (the entry's
- * index before truncation, in [0, VV_VC_LUT - 1]). */
+ * only in the rounding of fused multiply-adds. With @p x not NULL, x[s]
+ * gets each sample's table position (the entry's index before truncation,
+ * in [0, VV_VC_LUT - 1]). */
 void vv_vray_classify(const vv_vcache *c, const vv_vtables *t, const vv_vray *r, double kfirst,
                       double dt, int m, int avx2, size_t *cell, float *fx, float *fy, float *fz,
                       int32_t *entry, float *x);

@@ -159,116 +159,43 @@ result_set(rc_result *res, const float C[3], float A, float depth) {
     res->depth = depth;
 }
 
+/* The colour a sample (or a pre-integrated segment) adds, before
+ * attenuation: its colour times opacity @p col, opacity @p alpha, shaded
+ * with gradient g at ray parameter t (the world point there is read for
+ * point lights); an unshaded object's is col itself. */
+static inline void
+sample_colour(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, const float v[3], double t,
+              const float g[3], const float col[3], float alpha, float out[3]) {
+    if (!ob->shading) {
+        memcpy(out, col, 3 * sizeof(float));
+        return;
+    }
+    float pw[3] = {0, 0, 0};
+    if (fr->point_lights)
+        vv_ray_world_point(wr, t, pw);
+    shade(fr, ob, g, pw, v, col, alpha, out);
+}
+
+/* Front-to-back "over": colour @p out (already times its opacity) and
+ * opacity @p alpha under the accumulated C, A. */
+static inline void
+over(float C[3], float *A, const float out[3], float alpha) {
+    const float w = 1 - *A;
+    C[0] += w * out[0];
+    C[1] += w * out[1];
+    C[2] += w * out[2];
+    *A += w * alpha;
+}
+
 /* Composites one classified sample (table entry e: opacity, then colour
  * times opacity) at ray parameter t under the accumulated C, A. g is the
  * index-space gradient there (read only when the object is shaded). */
 static inline void
 composite_sample(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, const float v[3],
                  const float *e, double t, const float g[3], float C[3], float *A) {
-    const float w = 1 - *A;
-    if (ob->shading) {
-        float pw[3] = {0, 0, 0}, out[3];
-        if (fr->point_lights) {
-            pw[0] = (float)(wr->origin.x + t * wr->dir.x);
-            pw[1] = (float)(wr->origin.y + t * wr->dir.y);
-            pw[2] = (float)(wr->origin.z + t * wr->dir.z);
-        }
-        shade(fr, ob, g, pw, v, e + 1, e[0], out);
-        C[0] += w * out[0];
-        C[1] += w * out[1];
-        C[2] += w * out[2];
-    } else {
-        C[0] += w * e[1];
-        C[1] += w * e[2];
-        C[2] += w * e[3];
-    }
-    *A += w * e[0];
-}
-
-/* The subvolume of index point p: its index, and its coordinates in bc.
- * p >= 0 up to rounding: a negative index would wrap and clamp high, so the
- * float is clamped instead. bxm, bym, bzm: the grid's last subvolume. */
-static inline size_t
-block_of(const vv_vcache *c, const float p[3], unsigned bxm, unsigned bym, unsigned bzm,
-         unsigned bc[3]) {
-    unsigned bi = (unsigned)(int)((p[0] > 0 ? p[0] : 0) * (1.0f / VV_VC_BLOCK));
-    unsigned bj = (unsigned)(int)((p[1] > 0 ? p[1] : 0) * (1.0f / VV_VC_BLOCK));
-    unsigned bk = (unsigned)(int)((p[2] > 0 ? p[2] : 0) * (1.0f / VV_VC_BLOCK));
-    bc[0] = bi > bxm ? bxm : bi;
-    bc[1] = bj > bym ? bym : bj;
-    bc[2] = bk > bzm ? bzm : bk;
-    return ((size_t)bc[2] * (size_t)c->by + (size_t)bc[1]) * (size_t)c->bx + (size_t)bc[0];
-}
-
-/* The sample index after leaving the empty cube of 2 dist - 1 subvolumes
- * around subvolume bc (p, at ray parameter t, in it; k its sample index). */
-static inline double
-leap(const vv_vray *r, const float p[3], double t, const unsigned bc[3], int dist, double inv_dt,
-     double k) {
-    float te = INFINITY;
-    for (int a = 0; a < 3; a++) {
-        if (r->inv[a] == 0)
-            continue;
-        float bound = r->d[a] > 0 ? (float)((int)bc[a] + dist) * VV_VC_BLOCK
-                                  : (float)((int)bc[a] - dist + 1) * VV_VC_BLOCK;
-        float ta = (bound - p[a]) * r->inv[a];
-        te = ta < te ? ta : te;
-    }
-    double ks = vv_ceil_pos((t + te) * inv_dt);
-    return ks > k + 1 ? ks : k + 1;
-}
-
-/* The next run of samples of ray r in visible subvolumes (bdist 0) from
- * sample *k on, up to kend: *k and *klast get its first and last sample;
- * returns 0 when none is left. Empty cubes of subvolumes are leapt over;
- * the visible subvolumes that follow the first join, whole, while their
- * samples fit a chunk (VV_VC_CHUNK): the same samples in the same order as
- * one subvolume at a time (which subvolumes are visible does not depend on
- * what was composited), in fuller vectors. Without skipping every
- * subvolume is marked visible and at distance 0, so both cases run this
- * same code and produce the same samples. */
-static inline int
-visible_run(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double dt, double kend,
-            double *kp, double *klastp) {
-    const double inv_dt = 1.0 / dt;
-    const unsigned bxm = (unsigned)c->bx - 1, bym = (unsigned)c->by - 1, bzm = (unsigned)c->bz - 1;
-    double k = *kp;
-    while (k <= kend) {
-        const double t = k * dt;
-        float p[3];
-        vv_vray_point(r, t, p);
-        unsigned bc[3];
-        const size_t b = block_of(c, p, bxm, bym, bzm, bc);
-        const int dist = bdist[b];
-        if (dist) {
-            k = leap(r, p, t, bc, dist, inv_dt, k);
-            continue;
-        }
-        double te = vv_vray_cube_exit(r, p, t, VV_VC_BLOCK);
-        /* march to the last sample inside this subvolume */
-        double klast = vv_floor_pos(te * inv_dt);
-        klast = klast < kend ? klast : kend;
-        klast = klast < k ? k : klast;
-        while (klast < kend && klast - k + 1 < VV_VC_CHUNK) {
-            const double kn = klast + 1, tn = kn * dt;
-            float pn[3];
-            vv_vray_point(r, tn, pn);
-            unsigned bcn[3];
-            if (bdist[block_of(c, pn, bxm, bym, bzm, bcn)])
-                break;
-            double kl = vv_floor_pos(vv_vray_cube_exit(r, pn, tn, VV_VC_BLOCK) * inv_dt);
-            kl = kl < kend ? kl : kend;
-            kl = kl < kn ? kn : kl;
-            if (kl - k + 1 > VV_VC_CHUNK)
-                break;
-            klast = kl;
-        }
-        *kp = k;
-        *klastp = klast;
-        return 1;
-    }
-    *kp = k;
-    return 0;
+    float out[3];
+    sample_colour(fr, ob, wr, v, t, g, e + 1, e[0], out);
+    over(C, A, out, e[0]);
 }
 
 /* Shades and composites one classified sample of channel co (table entry
@@ -364,13 +291,13 @@ trace_channels(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result
             float p[3];
             vv_vray_point(&r, t, p);
             unsigned bc[3];
-            const size_t b = block_of(c, p, bxm, bym, bzm, bc);
+            const size_t b = vv_vblock_of(c, p, bxm, bym, bzm, bc);
             int dist = 255;
             for (int ch = 0; ch < nch; ch++)
                 if (A[additive ? ch : 0] < et && ob->ch[ch].bdist[b] < dist)
                     dist = ob->ch[ch].bdist[b];
             if (dist) {
-                k = leap(&r, p, t, bc, dist, inv_dt, k);
+                k = vv_vray_leap(&r, p, t, bc, dist, inv_dt, k);
                 continue;
             }
             double klast = vv_floor_pos(vv_vray_cube_exit(&r, p, t, VV_VC_BLOCK) * inv_dt);
@@ -461,7 +388,7 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
     /* shading eight samples at a time: cached gradients, directional lights */
     const int shade8 = VV_VC_HAVE_AVX2 && fr->avx2 && ob->shading && c->nrm && !fr->point_lights;
     double klast;
-    while (visible_run(c, ob->bdist, &r, dt, kend, &k, &klast)) {
+    while (vv_vray_visible_run(c, ob->bdist, &r, dt, kend, &k, &klast)) {
         int n = (int)(klast - k) + 1;
         k = klast + 1;
         /* Two passes per chunk of samples: first every value and its
@@ -527,7 +454,8 @@ done:
  * the linear value ramp between the two samples' values, and it is shaded
  * with the gradient at its middle (the ends' mean gradient, a trapezoid
  * rule, lost up to 2.7 dB against the converged image; docs/rendering.md).
- * The runs of visible subvolumes are those of trace_composite_one; a run
+ * The runs of visible subvolumes are those of trace_composite_one
+ * (vv_vray_visible_run); a run
  * evaluates the sample before its first (unless the previous run ended
  * there) and the one after its last, so that the segments crossing into
  * hidden subvolumes count, and no segment is composited twice. Per chunk:
@@ -558,7 +486,7 @@ trace_composite_preint(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, r
     int have_pf = 0;
     vv_vpre pf;
     memset(&pf, 0, sizeof pf);
-    while (visible_run(c, ob->bdist, &r, dt, kend, &k, &klast)) {
+    while (vv_vray_visible_run(c, ob->bdist, &r, dt, kend, &k, &klast)) {
         /* the samples to evaluate: from the front of the run's first
          * segment to the end of the segment after its last sample */
         double ja;
@@ -638,13 +566,8 @@ trace_composite_preint(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, r
                                al + q, cr + q, cg + q, cb + q, orr + q, org + q, orb + q);
                 for (int q = 0; !shade8 && q < nvis; q++) {
                     const float g[3] = {gx[q], gy[q], gz[q]}, col[3] = {cr[q], cg[q], cb[q]};
-                    float pw[3] = {0, 0, 0}, out[3];
-                    if (fr->point_lights) {
-                        pw[0] = (float)(wr->origin.x + tm[q] * wr->dir.x);
-                        pw[1] = (float)(wr->origin.y + tm[q] * wr->dir.y);
-                        pw[2] = (float)(wr->origin.z + tm[q] * wr->dir.z);
-                    }
-                    shade(fr, ob, g, pw, v, col, al[q], out);
+                    float out[3];
+                    sample_colour(fr, ob, wr, v, tm[q], g, col, al[q], out);
                     orr[q] = out[0];
                     org[q] = out[1];
                     orb[q] = out[2];
@@ -655,11 +578,8 @@ trace_composite_preint(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, r
                 memcpy(orb, cb, sizeof(float) * (size_t)nvis);
             }
             for (int q = 0; q < nvis; q++) {
-                const float w = 1 - A;
-                C[0] += w * orr[q];
-                C[1] += w * org[q];
-                C[2] += w * orb[q];
-                A += w * al[q];
+                const float out[3] = {orr[q], org[q], orb[q]};
+                over(C, &A, out, al[q]);
                 if (depth == INFINITY)
                     depth = (float)tm[q];
                 if (A >= et)
@@ -676,24 +596,14 @@ trace_composite_preint(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, r
         float alpha, col[3], out[3];
         if (vv_vpre_segment(&pa, xf, &pa, xf, len, &alpha, col)) {
             res->shaded++;
+            float g[3] = {0, 0, 0};
             if (ob->shading) {
-                float p[3], g[3], pw[3] = {0, 0, 0};
+                float p[3];
                 vv_vray_point(&r, tm, p);
                 vv_vcache_gradient(c, p, g);
-                if (fr->point_lights) {
-                    pw[0] = (float)(wr->origin.x + tm * wr->dir.x);
-                    pw[1] = (float)(wr->origin.y + tm * wr->dir.y);
-                    pw[2] = (float)(wr->origin.z + tm * wr->dir.z);
-                }
-                shade(fr, ob, g, pw, v, col, alpha, out);
-            } else {
-                memcpy(out, col, sizeof out);
             }
-            const float w = 1 - A;
-            C[0] += w * out[0];
-            C[1] += w * out[1];
-            C[2] += w * out[2];
-            A += w * alpha;
+            sample_colour(fr, ob, wr, v, tm, g, col, alpha, out);
+            over(C, &A, out, alpha);
             if (depth == INFINITY)
                 depth = (float)tm;
         }
@@ -811,9 +721,7 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
                     float ph[3], g[3], pw[3], col[3];
                     vv_vray_point(r, th, ph);
                     vv_vcache_gradient(c, ph, g);
-                    pw[0] = (float)(wr->origin.x + th * wr->dir.x);
-                    pw[1] = (float)(wr->origin.y + th * wr->dir.y);
-                    pw[2] = (float)(wr->origin.z + th * wr->dir.z);
+                    vv_ray_world_point(wr, th, pw);
                     float base[3] = {ob->sh.base[0], ob->sh.base[1], ob->sh.base[2]};
                     if (ob->textured) {
                         const vv_vec3 tc = vv_texture_map_eval(&ob->obj->texture,

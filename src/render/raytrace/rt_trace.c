@@ -35,9 +35,7 @@ composite_sample(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, const 
             memcpy(g, gin, sizeof g);
         else
             vv_vcache_gradient(ob->c, p, g);
-        pw[0] = (float)(wr->origin.x + t * wr->dir.x);
-        pw[1] = (float)(wr->origin.y + t * wr->dir.y);
-        pw[2] = (float)(wr->origin.z + t * wr->dir.z);
+        vv_ray_world_point(wr, t, pw);
         rt_shade_volume(fr, ob->lead, g, p, pw, v, e + 1, e[0], sc, o3);
         C[0] += w * o3[0];
         C[1] += w * o3[1];
@@ -76,9 +74,7 @@ chunk_shadows(void *ctx, int s, float *sh, int stride) {
     const double t = (x->kfirst + s) * x->fr->dt;
     float p[3], pw[3];
     vv_vray_point(x->r, t, p);
-    pw[0] = (float)(x->wr->origin.x + t * x->wr->dir.x);
-    pw[1] = (float)(x->wr->origin.y + t * x->wr->dir.y);
-    pw[2] = (float)(x->wr->origin.z + t * x->wr->dir.z);
+    vv_ray_world_point(x->wr, t, pw);
     return rt_volume_shadows(x->fr, x->ob->lead, p, pw, x->sc, sh, stride);
 }
 
@@ -102,34 +98,9 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
         shade8 &= !fr->vlights[l].point;
     double k = vv_ceil_pos(r->t0 * inv_dt);
     const double kend = floor(r->t1 * inv_dt);
-    while (k <= kend) {
-        float p[3];
-        vv_vray_point(r, k * dt, p);
-        const size_t b = vv_vcache_block(ob->c, p);
-        if (!ob->bvis[b]) {
-            const double ks = vv_ceil_pos(leap_exit(ob, r, p, k * dt, ob->bdist[b]) * inv_dt);
-            k = ks > k + 1 ? ks : k + 1;
-            continue;
-        }
-        double klast = floor(block_exit(r, p, k * dt) * inv_dt);
-        klast = klast < kend ? klast : kend;
-        klast = klast < k ? k : klast;
-        /* the visible subvolumes that follow join, whole, while their
-         * samples fit a chunk (as in the ray caster's trace_composite_one:
-         * the same samples in the same order, in fuller vectors) */
-        while (klast < kend && klast - k + 1 < VV_VC_CHUNK) {
-            const double kn = klast + 1;
-            float pn[3];
-            vv_vray_point(r, kn * dt, pn);
-            if (!ob->bvis[vv_vcache_block(ob->c, pn)])
-                break;
-            double kl = floor(block_exit(r, pn, kn * dt) * inv_dt);
-            kl = kl < kend ? kl : kend;
-            kl = kl < kn ? kn : kl;
-            if (kl - k + 1 > VV_VC_CHUNK)
-                break;
-            klast = kl;
-        }
+    double klast;
+    /* the ray caster's runs of visible subvolumes (trace_composite_one) */
+    while (vv_vray_visible_run(c, ob->bdist, r, dt, kend, &k, &klast)) {
         const int n = (int)(klast - k) + 1;
         for (int s0 = 0; s0 < n; s0 += VV_VC_CHUNK) {
             const int m = n - s0 < VV_VC_CHUNK ? n - s0 : VV_VC_CHUNK;
@@ -161,7 +132,7 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
                 if (e[0] <= 0)
                     continue;
                 const double t = (kfirst + s) * dt;
-                float ebuf[4];
+                float ebuf[4], p[3] = {0, 0, 0};
                 if (ob->extras) { /* a label channel (channel_overlay): colours by label */
                     vv_vray_point(r, t, p);
                     const float val = ob->x.lut2d ? vv_vcache_sample(c, p) : 0;
@@ -320,9 +291,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                     float ph[3], g[3], pw[3], col[3];
                     vv_vray_point(r, th, ph);
                     vv_vcache_gradient(c, ph, g);
-                    pw[0] = (float)(wr->origin.x + th * wr->dir.x);
-                    pw[1] = (float)(wr->origin.y + th * wr->dir.y);
-                    pw[2] = (float)(wr->origin.z + th * wr->dir.z);
+                    vv_ray_world_point(wr, th, pw);
                     float base[3] = {ob->sh.base[0], ob->sh.base[1], ob->sh.base[2]};
                     if (ob->textured) {
                         const vv_vec3 tc = vv_texture_map_eval(&ob->obj->texture,
