@@ -10,7 +10,7 @@
  *
  * usage: bench_raycast VOLUME [--iso V] [--tf-lo A] [--tf-hi B] [--size N]
  *                      [--runs N] [--threads N] [--outdir DIR] [--step-vox S]
- *                      [--opacity O] [--modes composite,mip,iso] [--quality Q]
+ *                      [--opacity O] [--modes composite,mip,iso,minip,xray] [--quality Q]
  *                      [--option KEY=VALUE]...   (renderer options, e.g. early_termination=0.98)
  */
 #include <math.h>
@@ -201,10 +201,10 @@ main(int argc, char **argv) {
         i++;
     }
     if (!path || cfg.size < 1 || cfg.runs < 1 || cfg.quality < 0 || cfg.quality > 2) {
-        fprintf(stderr,
-                "usage: bench_raycast VOLUME [--iso V] [--tf-lo A] [--tf-hi B] "
-                "[--size N] [--runs N] [--threads N] [--outdir DIR] [--modes composite,mip,iso] "
-                "[--quality Q] [--option KEY=VALUE]\n");
+        fprintf(stderr, "usage: bench_raycast VOLUME [--iso V] [--tf-lo A] [--tf-hi B] "
+                        "[--size N] [--runs N] [--threads N] [--outdir DIR] [--modes "
+                        "composite,mip,iso,minip,xray] "
+                        "[--quality Q] [--option KEY=VALUE]\n");
         return 2;
     }
     dataset = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
@@ -254,7 +254,11 @@ main(int argc, char **argv) {
     static const struct {
         vv_render_mode mode;
         const char *name;
-    } modes[] = {{VV_MODE_COMPOSITE, "composite"}, {VV_MODE_MIP, "mip"}, {VV_MODE_ISO, "iso"}};
+    } modes[] = {{VV_MODE_COMPOSITE, "composite"},
+                 {VV_MODE_MIP, "mip"},
+                 {VV_MODE_ISO, "iso"},
+                 {VV_MODE_MINIP, "minip"},
+                 {VV_MODE_XRAY, "xray"}};
     for (size_t m = 0; m < sizeof modes / sizeof modes[0]; m++) {
         if (!strstr(cfg.modes, modes[m].name))
             continue;

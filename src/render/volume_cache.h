@@ -849,8 +849,12 @@ void vv_vray_project(const vv_vcache *c, const vv_vray *r, vv_render_mode mode, 
 /* vv_vray_project with the bounds of tables @p t (plo, phi) and, with
  * @p skipping, their distances pdist to leap through subvolumes that hold
  * nothing beyond the starting bound. With @p avx2 (vv_vc_have_avx2) and
- * 16-bit values, MIP and MinIP interpolate eight samples at a time, with
- * the same arithmetic (the same values) as the scalar path. */
+ * 16-bit values, MIP and MinIP march in chunks of samples, testing their
+ * subvolumes and interpolating them eight at a time with the scalar
+ * path's arithmetic: the same value, except that a ray reaching @p hi
+ * (MinIP: @p lo) may stop a few samples later, at a value that classifies
+ * the same, and its depth may differ; X-ray adds the same values in the
+ * same order (the same result). */
 void vv_vray_project_tables(const vv_vcache *c, const vv_vtables *t, const vv_vray *r,
                             vv_render_mode mode, double dt, int skipping, int avx2, float *value,
                             float *depth);

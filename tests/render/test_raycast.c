@@ -920,6 +920,71 @@ test_skipping_exact(void **state) {
     assert_true(same2);
 }
 
+/* MIP and MinIP march a ray one subvolume at a time (the portable path)
+ * or in chunks of samples whose subvolumes are tested eight at a time
+ * (AVX2, 16-bit values): both are exact, so on real data, where
+ * subvolumes are skipped, they must give the same colours, with one
+ * thread or several. MIP keeps the default transfer function, flat above
+ * a ramp: a ray stops once it reaches the flat top, at a point that
+ * depends on the path, so only its depth may differ (an earlier sample of
+ * the same colour, vv_vray_project). MinIP and X-ray (whose AVX2 path adds
+ * the same values in the same order) get a ramp with no flat end: every
+ * ray is marched to its end and the depths must agree too. On a processor
+ * without AVX2 both take the portable path. */
+static void
+test_projection_paths_identical(void **state) {
+    (void)state;
+    const char *files[2] = {"neghip.slc", "headsq/quarter.nhdr"};
+    const vv_render_mode modes[3] = {VV_MODE_MIP, VV_MODE_MINIP, VV_MODE_XRAY};
+    const char *names[3] = {"mip", "minip", "xray"};
+    for (int f = 0; f < 2; f++)
+        for (int m = 0; m < 3; m++) {
+            vv_volume *v = NULL;
+            vv_world *w = real_scene(files[f], 160, &v);
+            vv_object *o = w->objects[0];
+            o->mode = modes[m];
+            if (modes[m] != VV_MODE_MIP) {
+                /* opaque, a grey ramp that starts below the data: no
+                 * flat end to stop at, every ray marched to its end */
+                const double lo = v->range[0], hi = v->range[1];
+                vv_tf_init(&o->tf);
+                vt_ok(vv_tf_add_opacity(&o->tf, lo, 1.0));
+                vt_ok(vv_tf_add_color(&o->tf, lo - (hi - lo), vv_vec3_make(0, 0, 0)));
+                vt_ok(vv_tf_add_color(&o->tf, hi, vv_vec3_make(1, 1, 1)));
+            }
+            vv_image *img[3]; /* portable; AVX2; AVX2 on one thread */
+            for (int path = 0; path < 3; path++) {
+                vv_renderer *r = new_raycaster();
+                vt_ok(vv_renderer_set_option(r, "simd", path ? "1" : "0"));
+                img[path] = render_t(r, w, &w->view, path == 2 ? 1 : 0);
+                vv_renderer_free(r);
+            }
+            long lit = 0;
+            for (size_t i = 0; i < 160 * 160; i++)
+                lit += img[0]->rgba[4 * i + 3] > 0.02f;
+            long depths = 0; /* pixels whose depths differ, any two paths */
+            for (size_t i = 0; i < 160 * 160; i++)
+                for (int path = 1; path < 3; path++)
+                    if (memcmp(&img[0]->depth[i], &img[path]->depth[i], sizeof(float))) {
+                        depths++;
+                        break;
+                    }
+            const double diff = fmax(max_abs_diff(img[0], img[1]), max_abs_diff(img[0], img[2]));
+            print_message("%s %s: %ld pixels lit; portable and AVX2: colours differ by %g, %ld "
+                          "depths differ\n",
+                          files[f], names[m], lit, diff, depths);
+            assert_true(lit > 2000);
+            assert_true(diff == 0);
+            assert_true(images_identical(img[1], img[2])); /* any thread count */
+            if (modes[m] != VV_MODE_MIP)
+                assert_int_equal(depths, 0);
+            for (int path = 0; path < 3; path++)
+                vv_image_free(img[path]);
+            vv_world_free(w);
+            vv_volume_free(v);
+        }
+}
+
 /* The AVX2 classification pass (chosen at run time) and the portable one
  * differ only in fused multiply-add rounding: the images must agree to far
  * better than any visible difference, with and without skipping. On a
@@ -1522,6 +1587,7 @@ main(void) {
         cmocka_unit_test(test_determinism),
         cmocka_unit_test(test_skipping_exact),
         cmocka_unit_test(test_simd_matches_portable),
+        cmocka_unit_test(test_projection_paths_identical),
         cmocka_unit_test(test_single_slice),
         cmocka_unit_test(test_progress_and_cancel),
         cmocka_unit_test(test_bad_input),
