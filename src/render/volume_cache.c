@@ -1254,6 +1254,75 @@ project_block(const vv_vcache *c, const vv_vray *r, double k, double klast, doub
  * subvolume, which dominated magnified views (a subvolume holds about
  * eight samples at the usual half-voxel step), becomes a few vector
  * instructions per eight samples. */
+/* The subvolumes (proj_block's, vv_vblock_of's) of the samples k .. k + 7
+ * of r, their points computed as vv_vray_point does. */
+__attribute__((target("avx2"))) static inline __m256i
+blocks8_avx2(const vv_vcache *c, const vv_vray *r, double k, double dt) {
+    float u[8];
+    for (int l = 0; l < 8; l++)
+        u[l] = (float)((k + l) * dt - r->tb);
+    const __m256 t = _mm256_loadu_ps(u), zero = _mm256_setzero_ps(),
+                 quarter = _mm256_set1_ps(1.0f / VV_VC_BLOCK);
+    const __m256 px = _mm256_sub_ps(
+        _mm256_add_ps(_mm256_set1_ps(r->o[0]), _mm256_mul_ps(t, _mm256_set1_ps(r->d[0]))),
+        _mm256_set1_ps(r->off[0]));
+    const __m256 py = _mm256_sub_ps(
+        _mm256_add_ps(_mm256_set1_ps(r->o[1]), _mm256_mul_ps(t, _mm256_set1_ps(r->d[1]))),
+        _mm256_set1_ps(r->off[1]));
+    const __m256 pz = _mm256_sub_ps(
+        _mm256_add_ps(_mm256_set1_ps(r->o[2]), _mm256_mul_ps(t, _mm256_set1_ps(r->d[2]))),
+        _mm256_set1_ps(r->off[2]));
+    const __m256i bi =
+        _mm256_min_epi32(_mm256_cvttps_epi32(_mm256_mul_ps(_mm256_max_ps(px, zero), quarter)),
+                         _mm256_set1_epi32(c->bx - 1));
+    const __m256i bj =
+        _mm256_min_epi32(_mm256_cvttps_epi32(_mm256_mul_ps(_mm256_max_ps(py, zero), quarter)),
+                         _mm256_set1_epi32(c->by - 1));
+    const __m256i bk =
+        _mm256_min_epi32(_mm256_cvttps_epi32(_mm256_mul_ps(_mm256_max_ps(pz, zero), quarter)),
+                         _mm256_set1_epi32(c->bz - 1));
+    return _mm256_add_epi32(
+        _mm256_mullo_epi32(_mm256_add_epi32(_mm256_mullo_epi32(bk, _mm256_set1_epi32(c->by)), bj),
+                           _mm256_set1_epi32(c->bx)),
+        bi);
+}
+
+__attribute__((target("avx2"))) int
+vv_vray_visible_run_avx2(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double dt,
+                         double kend, double *kp, double *klastp) {
+    const double inv_dt = 1.0 / dt;
+    const unsigned bxm = (unsigned)c->bx - 1, bym = (unsigned)c->by - 1, bzm = (unsigned)c->bz - 1;
+    double k = *kp;
+    while (k <= kend) {
+        const double t = k * dt;
+        float p[3];
+        vv_vray_point(r, t, p);
+        unsigned bc[3];
+        const size_t b = vv_vblock_of(c, p, bxm, bym, bzm, bc);
+        const int dist = bdist[b];
+        if (dist) {
+            k = vv_vray_leap(r, p, t, bc, dist, inv_dt, k);
+            continue;
+        }
+        /* the run goes on while its samples lie in visible subvolumes */
+        const int n = kend - k + 1 < VV_VC_CHUNK ? (int)(kend - k + 1) : VV_VC_CHUNK;
+        int len = 1; /* sample k's subvolume is visible */
+        for (int s = 0, open = 1; open && s < n; s += 8) {
+            int32_t id[8];
+            _mm256_storeu_si256((__m256i *)(void *)id, blocks8_avx2(c, r, k + s, dt));
+            for (int l = s == 0; open && l < 8 && s + l < n; l++) {
+                open = !bdist[id[l]];
+                len += open;
+            }
+        }
+        *kp = k;
+        *klastp = k + len - 1;
+        return 1;
+    }
+    *kp = k;
+    return 0;
+}
+
 #ifndef PROJ_CHUNK
 #define PROJ_CHUNK 64
 #endif

@@ -810,6 +810,34 @@ vv_vray_visible_run(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, 
     return 0;
 }
 
+#if VV_VC_HAVE_AVX2
+/* vv_vray_visible_run with AVX2: from a sample in a visible subvolume the
+ * run goes on, up to VV_VC_CHUNK samples, while the subvolume of each
+ * sample (found eight lanes at a time, from the point its interpolation
+ * uses) is visible, rather than by whole subvolumes from their exits. The
+ * samples it leaves out lie in hidden subvolumes, their cells' values in
+ * those subvolumes' ranges, so they are transparent: a kernel that
+ * composites the runs gives the image of vv_vray_visible_run (and of no
+ * skipping) bit for bit, with one traversal step a run instead of one a
+ * subvolume. */
+int vv_vray_visible_run_avx2(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double dt,
+                             double kend, double *kp, double *klastp);
+#endif
+
+/* vv_vray_visible_run, or with @p avx2 (vv_vc_have_avx2) its vector form:
+ * the same image from a kernel that composites the runs. */
+static inline int
+vv_vray_visible_run_simd(int avx2, const vv_vcache *c, const uint8_t *bdist, const vv_vray *r,
+                         double dt, double kend, double *kp, double *klastp) {
+#if VV_VC_HAVE_AVX2
+    if (avx2)
+        return vv_vray_visible_run_avx2(c, bdist, r, dt, kend, kp, klastp);
+#else
+    (void)avx2;
+#endif
+    return vv_vray_visible_run(c, bdist, r, dt, kend, kp, klastp);
+}
+
 /* The isosurface crossing between ray parameters ta (value va, on one side
  * of iso) and tb (on the other), by ten bisection steps. */
 static inline double

@@ -388,7 +388,7 @@ trace_composite_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_r
     /* shading eight samples at a time: cached gradients, directional lights */
     const int shade8 = VV_VC_HAVE_AVX2 && fr->avx2 && ob->shading && c->nrm && !fr->point_lights;
     double klast;
-    while (vv_vray_visible_run(c, ob->bdist, &r, dt, kend, &k, &klast)) {
+    while (vv_vray_visible_run_simd(fr->avx2, c, ob->bdist, &r, dt, kend, &k, &klast)) {
         int n = (int)(klast - k) + 1;
         k = klast + 1;
         /* Two passes per chunk of samples: first every value and its

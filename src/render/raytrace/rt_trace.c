@@ -100,7 +100,7 @@ march_one(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray 
     const double kend = floor(r->t1 * inv_dt);
     double klast;
     /* the ray caster's runs of visible subvolumes (trace_composite_one) */
-    while (vv_vray_visible_run(c, ob->bdist, r, dt, kend, &k, &klast)) {
+    while (vv_vray_visible_run_simd(fr->avx2, c, ob->bdist, r, dt, kend, &k, &klast)) {
         const int n = (int)(klast - k) + 1;
         for (int s0 = 0; s0 < n; s0 += VV_VC_CHUNK) {
             const int m = n - s0 < VV_VC_CHUNK ? n - s0 : VV_VC_CHUNK;
