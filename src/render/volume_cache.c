@@ -1287,6 +1287,9 @@ blocks8_avx2(const vv_vcache *c, const vv_vray *r, double k, double dt) {
         bi);
 }
 
+#ifndef VRUN_LEAP
+#define VRUN_LEAP 2
+#endif
 __attribute__((target("avx2"))) int
 vv_vray_visible_run_avx2(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double dt,
                          double kend, double *kp, double *klastp) {
@@ -1300,21 +1303,31 @@ vv_vray_visible_run_avx2(const vv_vcache *c, const uint8_t *bdist, const vv_vray
         unsigned bc[3];
         const size_t b = vv_vblock_of(c, p, bxm, bym, bzm, bc);
         const int dist = bdist[b];
-        if (dist) {
+        if (dist >= VRUN_LEAP) {
             k = vv_vray_leap(r, p, t, bc, dist, inv_dt, k);
             continue;
         }
-        /* the run goes on while its samples lie in visible subvolumes */
+        /* near a visible subvolume: the first sample of the next VV_VC_CHUNK
+         * in a visible subvolume, and the run on from it while they are */
         const int n = kend - k + 1 < VV_VC_CHUNK ? (int)(kend - k + 1) : VV_VC_CHUNK;
-        int len = 1; /* sample k's subvolume is visible */
+        int first = -1, len = 0;
         for (int s = 0, open = 1; open && s < n; s += 8) {
             int32_t id[8];
             _mm256_storeu_si256((__m256i *)(void *)id, blocks8_avx2(c, r, k + s, dt));
-            for (int l = s == 0; open && l < 8 && s + l < n; l++) {
-                open = !bdist[id[l]];
-                len += open;
+            for (int l = 0; open && l < 8 && s + l < n; l++) {
+                const int vis = !bdist[id[l]];
+                if (first >= 0)
+                    open = vis;
+                else if (vis)
+                    first = s + l;
+                len += first >= 0 && open;
             }
         }
+        if (first < 0) {
+            k += n;
+            continue;
+        }
+        k += first;
         *kp = k;
         *klastp = k + len - 1;
         return 1;

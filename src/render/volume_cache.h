@@ -814,7 +814,10 @@ vv_vray_visible_run(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, 
 /* vv_vray_visible_run with AVX2: from a sample in a visible subvolume the
  * run goes on, up to VV_VC_CHUNK samples, while the subvolume of each
  * sample (found eight lanes at a time, from the point its interpolation
- * uses) is visible, rather than by whole subvolumes from their exits. The
+ * uses) is visible, rather than by whole subvolumes from their exits; in
+ * a hidden subvolume at chessboard distance 1 the next VV_VC_CHUNK
+ * samples are scanned so for the first visible one instead of leaping
+ * (distance 2 and more: vv_vray_leap). The
  * samples it leaves out lie in hidden subvolumes, their cells' values in
  * those subvolumes' ranges, so they are transparent: a kernel that
  * composites the runs gives the image of vv_vray_visible_run (and of no
