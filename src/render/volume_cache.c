@@ -1146,6 +1146,33 @@ values_chunk_avx2(const vv_vcache *c, const vv_vray *r, double kfirst, double dt
 }
 #endif
 
+/* values_chunk_avx2 of the eight samples kfirst .. kfirst + 7, in a
+ * register. */
+__attribute__((target("avx2"))) static inline __m256
+values8_avx2(const vv_vcache *c, const vv_vray *r, double kfirst, double dt) {
+    float u[8];
+    for (int s = 0; s < 8; s++)
+        u[s] = (float)((kfirst + s) * dt - r->tb);
+    const __m256 t = _mm256_loadu_ps(u);
+    const __m256 px = _mm256_sub_ps(
+        _mm256_add_ps(_mm256_set1_ps(r->o[0]), _mm256_mul_ps(t, _mm256_set1_ps(r->d[0]))),
+        _mm256_set1_ps(r->off[0]));
+    const __m256 py = _mm256_sub_ps(
+        _mm256_add_ps(_mm256_set1_ps(r->o[1]), _mm256_mul_ps(t, _mm256_set1_ps(r->d[1]))),
+        _mm256_set1_ps(r->off[1]));
+    const __m256 pz = _mm256_sub_ps(
+        _mm256_add_ps(_mm256_set1_ps(r->o[2]), _mm256_mul_ps(t, _mm256_set1_ps(r->d[2]))),
+        _mm256_set1_ps(r->off[2]));
+    __m256 wx, wy, wz;
+    int32_t p00[8], p10[8], p01[8], p11[8];
+    (void)cell_pairs_avx2(c, px, py, pz, &wx, &wy, &wz, p00, p10, p01, p11);
+    const __m256 c00 = pair_lerp_avx2(p00, wx), c10 = pair_lerp_avx2(p10, wx);
+    const __m256 c01 = pair_lerp_avx2(p01, wx), c11 = pair_lerp_avx2(p11, wx);
+    const __m256 c0 = _mm256_add_ps(c00, _mm256_mul_ps(_mm256_sub_ps(c10, c00), wy));
+    const __m256 c1 = _mm256_add_ps(c01, _mm256_mul_ps(_mm256_sub_ps(c11, c01), wy));
+    return _mm256_add_ps(c0, _mm256_mul_ps(_mm256_sub_ps(c1, c0), wz));
+}
+
 /* The subvolume of index point p: its grid coordinates in bc (clamped)
  * and its index. */
 static inline size_t
@@ -1412,14 +1439,22 @@ project_from_avx2(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, do
             if (!(live & ((uint64_t)1 << (s / 8))))
                 continue;
             const int n = m - s < 8 ? m - s : 8;
-            float val[8];
-            values_chunk_avx2(c, r, k + s, dt, n, val);
-            for (int l = 0; l < n; l++) {
-                const float x = sg * val[l];
-                if (x > best) {
-                    best = x;
-                    tbest = (k + s + l) * dt;
-                }
+            /* the run's largest sg * value, at its first lane: where a
+             * sample-by-sample scan would leave the maximum */
+            __m256 x = _mm256_mul_ps(vsg, values8_avx2(c, r, k + s, dt));
+            if (n < 8)
+                x = _mm256_blendv_ps(
+                    _mm256_set1_ps(-INFINITY), x,
+                    _mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(n), lane)));
+            __m256 h = _mm256_max_ps(x, _mm256_permute2f128_ps(x, x, 1));
+            h = _mm256_max_ps(h, _mm256_shuffle_ps(h, h, _MM_SHUFFLE(1, 0, 3, 2)));
+            h = _mm256_max_ps(h, _mm256_shuffle_ps(h, h, _MM_SHUFFLE(2, 3, 0, 1)));
+            const float top = _mm256_cvtss_f32(h);
+            if (top > best) {
+                const int at =
+                    __builtin_ctz((unsigned)_mm256_movemask_ps(_mm256_cmp_ps(x, h, _CMP_EQ_OQ)));
+                best = top;
+                tbest = (k + s + at) * dt;
             }
         }
         k += m;
