@@ -1754,24 +1754,17 @@ classify_chunk_avx2(const vv_vcache *c, const vv_vtables *ob, const vv_vray *r, 
         __m256 li = _mm256_mul_ps(_mm256_sub_ps(val, llo), lsc);
         li = _mm256_min_ps(_mm256_max_ps(li, fzero), lmax);
         const __m256i e = _mm256_slli_epi32(_mm256_cvttps_epi32(li), 2);
-        int32_t ob8[8], eb8[8];
-        float xb[8], yb[8], zb[8], lb[8];
-        _mm256_storeu_ps(lb, li);
-        _mm256_storeu_si256((__m256i *)(void *)ob8, o);
-        _mm256_storeu_si256((__m256i *)(void *)eb8, e);
-        _mm256_storeu_ps(xb, wx);
-        _mm256_storeu_ps(yb, wy);
-        _mm256_storeu_ps(zb, wz);
-        const int lanes = m - s < 8 ? m - s : 8;
-        for (int l = 0; l < lanes; l++) {
-            cell[s + l] = (size_t)ob8[l];
-            entry[s + l] = eb8[l];
-            fx[s + l] = xb[l];
-            fy[s + l] = yb[l];
-            fz[s + l] = zb[l];
-        }
-        for (int l = 0; x && l < lanes; l++)
-            x[s + l] = lb[l];
+        /* all eight lanes (s + 8 <= VV_VC_CHUNK); offsets >= 0, widened */
+        _mm256_storeu_si256((__m256i *)(void *)(entry + s), e);
+        _mm256_storeu_ps(fx + s, wx);
+        _mm256_storeu_ps(fy + s, wy);
+        _mm256_storeu_ps(fz + s, wz);
+        _mm256_storeu_si256((__m256i *)(void *)(cell + s),
+                            _mm256_cvtepi32_epi64(_mm256_castsi256_si128(o)));
+        _mm256_storeu_si256((__m256i *)(void *)(cell + s + 4),
+                            _mm256_cvtepi32_epi64(_mm256_extracti128_si256(o, 1)));
+        if (x)
+            _mm256_storeu_ps(x + s, li);
     }
 }
 #endif

@@ -910,7 +910,9 @@ void vv_vray_project_channels(const vv_vcache *const *cs, const vv_vtables *cons
 void vv_vtables_flat_ends(const vv_vtables *t, float *lo, float *hi);
 
 /* Pass 1 of a composite kernel: for the samples k = kfirst .. kfirst + m - 1
- * (m <= VV_VC_CHUNK) of ray r, the cell offset, the fractions and the
+ * (m <= VV_VC_CHUNK; every array holds VV_VC_CHUNK, and the entries from m
+ * up to the next multiple of 8 may be overwritten) of ray r, the cell
+ * offset, the fractions and the
  * table entry (4 * index), with no branches so that the independent
  * samples overlap in the pipeline. With @p avx2 (vv_vc_have_avx2) and
  * 16-bit values, eight samples at a time with AVX2 and FMA; the two differ
