@@ -1572,6 +1572,61 @@ project(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, vv_render_mo
     *depth = (float)tbest;
 }
 
+double
+vv_vray_iso_first(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double dt, float iso,
+                  int avx2) {
+    const double k0 = vv_ceil_pos(r->t0 / dt), kend = vv_floor_pos(r->t1 / dt);
+    const int vec = avx2 && c->q16 && c->sz * (size_t)c->nz < ((size_t)1 << 30);
+    double k = k0, klast, kprev = k0 - 2; /* the last sample of the previous run */
+    float pv = 0;                         /* the value at pt (one side of iso) */
+    double pt = 0;
+    int have = 0;
+    while (vv_vray_visible_run_simd(avx2, c, bdist, r, dt, kend, &k, &klast)) {
+        if (k > k0 && k != kprev + 1) {
+            /* after hidden samples (all on one side of iso): the crossing
+             * search restarts where the ray leaves the subvolume of the
+             * sample before the run, as the per-sample march does */
+            const double tp = (k - 1) * dt;
+            float p[3];
+            vv_vray_point(r, tp, p);
+            const double te = vv_vray_cube_exit(r, p, tp, VV_VC_BLOCK);
+            pt = te < r->t1 ? te : r->t1;
+            pt = pt < k * dt ? pt : tp;
+            vv_vray_point(r, pt, p);
+            pv = vv_vcache_sample(c, p);
+            have = 1;
+        }
+        const int n = (int)(klast - k) + 1;
+        float val[VV_VC_CHUNK];
+#if VV_VC_HAVE_AVX2
+        if (vec)
+            values_chunk_avx2(c, r, k, dt, n, val);
+#else
+        (void)vec;
+#endif
+        for (int s = 0; s < n; s++) {
+            const double t = (k + s) * dt;
+            if (!vec) {
+                float p[3];
+                vv_vray_point(r, t, p);
+                val[s] = vv_vcache_sample(c, p);
+            }
+            if (!have) {
+                if (val[s] >= iso && t - r->t0 < dt)
+                    return t; /* entered already inside (a cut face) */
+            } else if ((pv < iso) != (val[s] < iso)) {
+                return vv_vray_iso_refine(c, r, pt, pv, t, iso);
+            }
+            pv = val[s];
+            pt = t;
+            have = 1;
+        }
+        kprev = klast;
+        k = klast + 1;
+    }
+    return -1;
+}
+
 void
 vv_vray_project(const vv_vcache *c, const vv_vray *r, vv_render_mode mode, double dt, int skipping,
                 float lo, float hi, float *value, float *depth) {

@@ -903,6 +903,19 @@ void vv_vray_project_channels(const vv_vcache *const *cs, const vv_vtables *cons
                               const vv_vray *r, double dt, int skipping, int avx2, float *value,
                               float *depth);
 
+/* The first crossing of @p iso along ray r (step dt) through the runs of
+ * visible subvolumes (@p bdist of tables made for iso mode: a subvolume is
+ * visible when its values reach both sides of iso): the sample values in
+ * order (eight at a time with @p avx2 and 16-bit values: the same values),
+ * a crossing between two consecutive ones refined by vv_vray_iso_refine;
+ * after a stretch of hidden subvolumes the search restarts at the exit of
+ * the subvolume before the run, and the ray's first sample counts as a hit
+ * when it is already at or above iso (a cut face). Returns the crossing's
+ * ray parameter, or -1 for none. Shared by the ray caster and the ray
+ * tracer, so that their isosurfaces agree bit for bit. Thread-safe. */
+double vv_vray_iso_first(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double dt,
+                         float iso, int avx2);
+
 /* The bounds @p lo, @p hi of vv_vray_project for a projection table @p t
  * ({alpha, r, g, b} entries): the largest stored value below which every
  * entry equals the first, and the smallest above which every entry equals

@@ -985,6 +985,64 @@ test_projection_paths_identical(void **state) {
         }
 }
 
+/* One volume in iso mode takes its own kernel (vv_vray_iso_first: runs of
+ * visible subvolumes, values eight at a time); with a second object in the
+ * World (here out of sight, so that it adds nothing) the per-sample march
+ * of several objects draws it instead. Both search the same samples for
+ * the first crossing and refine it the same way, so on real data, with a
+ * cut plane through the surface, they must agree to rounding, with and
+ * without skipping. */
+static void
+test_iso_kernels_agree(void **state) {
+    (void)state;
+    const char *files[2] = {"neghip.slc", "headsq/quarter.nhdr"};
+    for (int f = 0; f < 2; f++)
+        for (int skipping = 0; skipping < 2; skipping++) {
+            vv_volume *v = NULL;
+            vv_world *w = real_scene(files[f], 128, &v);
+            vv_object *o = w->objects[0];
+            o->mode = VV_MODE_ISO;
+            o->isovalue = v->range[0] + 0.4 * (v->range[1] - v->range[0]);
+            o->n_cut_planes = 1;
+            o->cut_planes[0].point = vv_vec3_make(0, 0, 0);
+            o->cut_planes[0].normal = vv_vec3_normalize(vv_vec3_make(0.3, 0.2, 1));
+            vv_renderer *r = new_raycaster();
+            vt_ok(vv_renderer_set_option(r, "empty_space_skipping", skipping ? "1" : "0"));
+            vv_image *one = render(r, w, &w->view);
+            vv_object *far = NULL;
+            vt_ok(vv_object_new_volume(&far, v, "far"));
+            far->mode = VV_MODE_ISO;
+            far->isovalue = o->isovalue;
+            far->position = vv_vec3_make(0, 0, -1e6);
+            vt_ok(vv_world_add_object(w, far));
+            vv_image *two = render(r, w, &w->view);
+            long lit = 0, depths = 0;
+            double dmax = 0;
+            for (size_t i = 0; i < 128 * 128; i++) {
+                lit += one->rgba[4 * i + 3] > 0.5f;
+                if (one->depth[i] != two->depth[i]) {
+                    depths++;
+                    dmax = fmax(dmax, fabs((double)one->depth[i] - (double)two->depth[i]));
+                }
+            }
+            const double diff = max_abs_diff(one, two);
+            print_message("%s iso %.1f, skipping %d: %ld pixels hit; one object's kernel against "
+                          "the march of several: colours differ by %.3g, %ld depths by up to "
+                          "%.3g\n",
+                          files[f], o->isovalue, skipping, lit, diff, depths, dmax);
+            if (skipping)
+                write_png(one, f ? "iso_kernel_headsq" : "iso_kernel_neghip");
+            assert_true(lit > 300);
+            assert_true(diff < 1e-3);
+            assert_true(dmax < 1e-3);
+            vv_image_free(one);
+            vv_image_free(two);
+            vv_renderer_free(r);
+            vv_world_free(w);
+            vv_volume_free(v);
+        }
+}
+
 /* The AVX2 classification pass (chosen at run time) and the portable one
  * differ only in fused multiply-add rounding: the images must agree to far
  * better than any visible difference, with and without skipping. On a
@@ -1580,6 +1638,7 @@ main(void) {
         cmocka_unit_test(test_object_translate_scale),
         cmocka_unit_test(test_object_orientation),
         cmocka_unit_test(test_iso_enter_inside),
+        cmocka_unit_test(test_iso_kernels_agree),
         cmocka_unit_test(test_global_cut_plane),
         cmocka_unit_test(test_local_cut_plane),
         cmocka_unit_test(test_step_halving),

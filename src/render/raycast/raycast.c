@@ -613,6 +613,51 @@ done:
 }
 
 /* Front-to-back compositing of all composite and iso objects along one ray. */
+/* The isosurface of object ob hit at ray parameter th: its colour
+ * (shaded, textured) composited under C, A, which becomes opaque. */
+static void
+iso_hit(const rc_frame *fr, const rc_obj *ob, const vv_vray *r, const vv_ray *wr, const float v[3],
+        double th, float C[3], float *A) {
+    float ph[3], g[3], pw[3], col[3];
+    vv_vray_point(r, th, ph);
+    vv_vcache_gradient(ob->c, ph, g);
+    vv_ray_world_point(wr, th, pw);
+    float base[3] = {ob->sh.base[0], ob->sh.base[1], ob->sh.base[2]};
+    if (ob->textured) {
+        const vv_vec3 tc =
+            vv_texture_map_eval(&ob->obj->texture, vv_vextra_object_point(&ob->x, ph));
+        base[0] *= (float)tc.x;
+        base[1] *= (float)tc.y;
+        base[2] *= (float)tc.z;
+    }
+    if (ob->shading)
+        shade(fr, ob, g, pw, v, base, 1.0f, col);
+    else
+        memcpy(col, base, sizeof col);
+    const float w = 1 - *A;
+    C[0] += w * col[0];
+    C[1] += w * col[1];
+    C[2] += w * col[2];
+    *A = 1;
+}
+
+/* One volume in iso mode: the first crossing along its runs of visible
+ * subvolumes (vv_vray_iso_first, shared with the ray tracer). */
+static void
+trace_iso_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result *res) {
+    vv_vray r;
+    float C[3] = {0, 0, 0}, A = 0, depth = INFINITY;
+    if (ray_setup(ob, wr, &r)) {
+        const double th = vv_vray_iso_first(ob->c, ob->bdist, &r, fr->dt, ob->iso, fr->avx2);
+        if (th >= 0) {
+            const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
+            iso_hit(fr, ob, &r, wr, v, th, C, &A);
+            depth = (float)th;
+        }
+    }
+    result_set(res, C, A, depth);
+}
+
 static void
 trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
     vv_vray rays[RC_MAX_OBJ];
@@ -718,27 +763,7 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
                 prev_t[ai] = t;
                 has_prev[ai] = 1;
                 if (th >= 0) {
-                    float ph[3], g[3], pw[3], col[3];
-                    vv_vray_point(r, th, ph);
-                    vv_vcache_gradient(c, ph, g);
-                    vv_ray_world_point(wr, th, pw);
-                    float base[3] = {ob->sh.base[0], ob->sh.base[1], ob->sh.base[2]};
-                    if (ob->textured) {
-                        const vv_vec3 tc = vv_texture_map_eval(&ob->obj->texture,
-                                                               vv_vextra_object_point(&ob->x, ph));
-                        base[0] *= (float)tc.x;
-                        base[1] *= (float)tc.y;
-                        base[2] *= (float)tc.z;
-                    }
-                    if (ob->shading)
-                        shade(fr, ob, g, pw, v, base, 1.0f, col);
-                    else
-                        memcpy(col, base, sizeof col);
-                    float w = 1 - A;
-                    C[0] += w * col[0];
-                    C[1] += w * col[1];
-                    C[2] += w * col[2];
-                    A = 1;
+                    iso_hit(fr, ob, r, wr, v, th, C, &A);
                     if (th < depth)
                         depth = (float)th;
                 }
@@ -922,6 +947,8 @@ cast_pixel(const rc_frame *fr, int x, int y, vv_render_stats *work, float px[5],
         trace_composite_preint(fr, &fr->objs[0], &wr, &res);
     else if (fr->n_comp == 1 && fr->objs[0].mode == VV_MODE_COMPOSITE && !fr->objs[0].extras)
         trace_composite_one(fr, &fr->objs[0], &wr, &res);
+    else if (fr->n_comp == 1 && fr->objs[0].mode == VV_MODE_ISO)
+        trace_iso_one(fr, &fr->objs[0], &wr, &res);
     else if (fr->n_comp > 0)
         trace_composite(fr, &wr, &res);
     /* projection objects: combined behind the composited ones */

@@ -192,6 +192,59 @@ mix_flush(rt_mix *m, double t, float C[3], float *A, float *dep) {
 /* Over 150 lines on purpose: the multi-volume march keeps per-object ray
  * state (iso crossings, leaps) in arrays on the stack across the samples of
  * one ray, the ray caster's trace_composite for the ray tracer. */
+/* The isosurface of object ob hit at ray parameter th (ray r, world ray
+ * wr, towards the eye v): shaded with shadows, as a mirror or a window
+ * where its material says, composited under C, A, which becomes opaque. */
+static void
+iso_hit(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray *wr, const float v[3],
+        double th, int depth, float weight, float C[3], float *Ap) {
+    const vv_vcache *c = ob->c;
+    float A = *Ap;
+    float ph[3], g[3], pw[3], col[3];
+    vv_vray_point(r, th, ph);
+    vv_vcache_gradient(c, ph, g);
+    vv_ray_world_point(wr, th, pw);
+    float base[3] = {ob->sh.base[0], ob->sh.base[1], ob->sh.base[2]};
+    if (ob->textured) {
+        const vv_vec3 tc =
+            vv_texture_map_eval(&ob->obj->texture, vv_vextra_object_point(&ob->x, ph));
+        base[0] *= (float)tc.x;
+        base[1] *= (float)tc.y;
+        base[2] *= (float)tc.z;
+    }
+    if (ob->obj->shading)
+        rt_shade_volume(fr, ob, g, ph, pw, v, base, 1.0f, NULL, col);
+    else
+        memcpy(col, base, sizeof col);
+    const vv_material *m = &ob->obj->material;
+    float kr = ob->obj->reflects ? (float)m->reflectance : 0.0f;
+    float kt = (float)m->transparency;
+    if ((kr > 0 || kt > 0) && fr->max_depth > depth) {
+        /* the isosurface as a mirror or a window: world
+         * normal from the gradient, facing the ray */
+        vv_vec3 nw =
+            v3(ob->sh.nrm[0][0] * g[0] + ob->sh.nrm[0][1] * g[1] + ob->sh.nrm[0][2] * g[2],
+               ob->sh.nrm[1][0] * g[0] + ob->sh.nrm[1][1] * g[1] + ob->sh.nrm[1][2] * g[2],
+               ob->sh.nrm[2][0] * g[0] + ob->sh.nrm[2][1] * g[1] + ob->sh.nrm[2][2] * g[2]);
+        nw = v3norm(nw);
+        /* gradients point to higher values: inside; outward is minus */
+        vv_vec3 outward = v3scale(nw, -1);
+        vv_vec3 nf = v3dot(outward, wr->dir) > 0 ? nw : outward;
+        float kl = 1 - kr - kt;
+        kl = kl < 0 ? 0 : kl;
+        for (int ch = 0; ch < 3; ch++)
+            col[ch] *= kl;
+        rt_shade_secondary(fr, wr, ray_at(wr, th), nf, outward, kr, kt, m->ior, 1, depth,
+                           weight * (1 - A), col);
+    }
+    const float w = 1 - A;
+    C[0] += w * col[0];
+    C[1] += w * col[1];
+    C[2] += w * col[2];
+    A = 1;
+    *Ap = A;
+}
+
 /* Front-to-back compositing of the composite and iso volumes along the ray
  * over [0, tlim] on the samples t = k dt (the ray caster's grid). An iso
  * hit is a surface: shaded with shadows and reflections, it ends the ray. */
@@ -229,6 +282,17 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
     const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
     if (na == 1 && fr->vobjs[act[0]].mode == VV_MODE_COMPOSITE && !fr->vobjs[act[0]].extras) {
         march_one(fr, &fr->vobjs[act[0]], &rays[0], wr, v, et, C, Aout, dep);
+        return;
+    }
+    if (na == 1 && fr->vobjs[act[0]].mode == VV_MODE_ISO && fr->vobjs[act[0]].group < 0) {
+        /* one isosurface: the ray caster's search (vv_vray_iso_first) */
+        const rt_vobj *ob = &fr->vobjs[act[0]];
+        const double th = vv_vray_iso_first(ob->c, ob->bdist, &rays[0], dt, ob->iso, fr->avx2);
+        if (th >= 0) {
+            iso_hit(fr, ob, &rays[0], wr, v, th, depth, weight, C, &A);
+            *dep = th < *dep ? (float)th : *dep;
+        }
+        *Aout = A;
         return;
     }
     float prev_v[RT_MAX_OBJ];
@@ -288,50 +352,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                 prev_t[ai] = t;
                 has_prev[ai] = 1;
                 if (th >= 0) {
-                    float ph[3], g[3], pw[3], col[3];
-                    vv_vray_point(r, th, ph);
-                    vv_vcache_gradient(c, ph, g);
-                    vv_ray_world_point(wr, th, pw);
-                    float base[3] = {ob->sh.base[0], ob->sh.base[1], ob->sh.base[2]};
-                    if (ob->textured) {
-                        const vv_vec3 tc = vv_texture_map_eval(&ob->obj->texture,
-                                                               vv_vextra_object_point(&ob->x, ph));
-                        base[0] *= (float)tc.x;
-                        base[1] *= (float)tc.y;
-                        base[2] *= (float)tc.z;
-                    }
-                    if (ob->obj->shading)
-                        rt_shade_volume(fr, ob, g, ph, pw, v, base, 1.0f, NULL, col);
-                    else
-                        memcpy(col, base, sizeof col);
-                    const vv_material *m = &ob->obj->material;
-                    float kr = ob->obj->reflects ? (float)m->reflectance : 0.0f;
-                    float kt = (float)m->transparency;
-                    if ((kr > 0 || kt > 0) && fr->max_depth > depth) {
-                        /* the isosurface as a mirror or a window: world
-                         * normal from the gradient, facing the ray */
-                        vv_vec3 nw = v3(ob->sh.nrm[0][0] * g[0] + ob->sh.nrm[0][1] * g[1] +
-                                            ob->sh.nrm[0][2] * g[2],
-                                        ob->sh.nrm[1][0] * g[0] + ob->sh.nrm[1][1] * g[1] +
-                                            ob->sh.nrm[1][2] * g[2],
-                                        ob->sh.nrm[2][0] * g[0] + ob->sh.nrm[2][1] * g[1] +
-                                            ob->sh.nrm[2][2] * g[2]);
-                        nw = v3norm(nw);
-                        /* gradients point to higher values: inside; outward is minus */
-                        vv_vec3 outward = v3scale(nw, -1);
-                        vv_vec3 nf = v3dot(outward, wr->dir) > 0 ? nw : outward;
-                        float kl = 1 - kr - kt;
-                        kl = kl < 0 ? 0 : kl;
-                        for (int ch = 0; ch < 3; ch++)
-                            col[ch] *= kl;
-                        rt_shade_secondary(fr, wr, ray_at(wr, th), nf, outward, kr, kt, m->ior, 1,
-                                           depth, weight * (1 - A), col);
-                    }
-                    const float w = 1 - A;
-                    C[0] += w * col[0];
-                    C[1] += w * col[1];
-                    C[2] += w * col[2];
-                    A = 1;
+                    iso_hit(fr, ob, r, wr, v, th, depth, weight, C, &A);
                     if (th < *dep)
                         *dep = (float)th;
                 }
