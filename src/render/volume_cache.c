@@ -1113,56 +1113,29 @@ vv_vchunk_shade8(const vv_vcache *c, const float *lut, const vv_vshading *o,
     return 0;
 }
 
-__attribute__((target("avx2"))) static void
-values_chunk_avx2(const vv_vcache *c, const vv_vray *r, double kfirst, double dt, int m,
-                  float *val) {
-    float u[VV_VC_CHUNK + 8];
-    for (int s = 0; s < m; s++)
-        u[s] = (float)((kfirst + s) * dt - r->tb);
-    for (int s = m; s < m + 8; s++)
-        u[s] = u[m - 1];
-    const __m256 ox = _mm256_set1_ps(r->o[0]), oy = _mm256_set1_ps(r->o[1]),
-                 oz = _mm256_set1_ps(r->o[2]);
-    const __m256 dx = _mm256_set1_ps(r->d[0]), dy = _mm256_set1_ps(r->d[1]),
-                 dz = _mm256_set1_ps(r->d[2]);
-    const __m256 offx = _mm256_set1_ps(r->off[0]), offy = _mm256_set1_ps(r->off[1]),
-                 offz = _mm256_set1_ps(r->off[2]);
-    float out[VV_VC_CHUNK + 8];
-    for (int s = 0; s < m; s += 8) {
-        const __m256 t = _mm256_loadu_ps(u + s);
-        const __m256 px = _mm256_sub_ps(_mm256_add_ps(ox, _mm256_mul_ps(t, dx)), offx);
-        const __m256 py = _mm256_sub_ps(_mm256_add_ps(oy, _mm256_mul_ps(t, dy)), offy);
-        const __m256 pz = _mm256_sub_ps(_mm256_add_ps(oz, _mm256_mul_ps(t, dz)), offz);
-        __m256 wx, wy, wz;
-        int32_t p00[8], p10[8], p01[8], p11[8];
-        (void)cell_pairs_avx2(c, px, py, pz, &wx, &wy, &wz, p00, p10, p01, p11);
-        const __m256 c00 = pair_lerp_avx2(p00, wx), c10 = pair_lerp_avx2(p10, wx);
-        const __m256 c01 = pair_lerp_avx2(p01, wx), c11 = pair_lerp_avx2(p11, wx);
-        const __m256 c0 = _mm256_add_ps(c00, _mm256_mul_ps(_mm256_sub_ps(c10, c00), wy));
-        const __m256 c1 = _mm256_add_ps(c01, _mm256_mul_ps(_mm256_sub_ps(c11, c01), wy));
-        _mm256_storeu_ps(out + s, _mm256_add_ps(c0, _mm256_mul_ps(_mm256_sub_ps(c1, c0), wz)));
-    }
-    memcpy(val, out, (size_t)m * sizeof *val);
-}
-#endif
-
-/* values_chunk_avx2 of the eight samples kfirst .. kfirst + 7, in a
- * register. */
-__attribute__((target("avx2"))) static inline __m256
-values8_avx2(const vv_vcache *c, const vv_vray *r, double kfirst, double dt) {
+/* The index points of the samples k .. k + 7 of r, as vv_vray_point
+ * computes them (no fused multiply-add). */
+__attribute__((target("avx2"))) static inline void
+points8_avx2(const vv_vray *r, double k, double dt, __m256 *px, __m256 *py, __m256 *pz) {
     float u[8];
-    for (int s = 0; s < 8; s++)
-        u[s] = (float)((kfirst + s) * dt - r->tb);
+    for (int l = 0; l < 8; l++)
+        u[l] = (float)((k + l) * dt - r->tb);
     const __m256 t = _mm256_loadu_ps(u);
-    const __m256 px = _mm256_sub_ps(
+    *px = _mm256_sub_ps(
         _mm256_add_ps(_mm256_set1_ps(r->o[0]), _mm256_mul_ps(t, _mm256_set1_ps(r->d[0]))),
         _mm256_set1_ps(r->off[0]));
-    const __m256 py = _mm256_sub_ps(
+    *py = _mm256_sub_ps(
         _mm256_add_ps(_mm256_set1_ps(r->o[1]), _mm256_mul_ps(t, _mm256_set1_ps(r->d[1]))),
         _mm256_set1_ps(r->off[1]));
-    const __m256 pz = _mm256_sub_ps(
+    *pz = _mm256_sub_ps(
         _mm256_add_ps(_mm256_set1_ps(r->o[2]), _mm256_mul_ps(t, _mm256_set1_ps(r->d[2]))),
         _mm256_set1_ps(r->off[2]));
+}
+
+/* The trilinear values at index points px, py, pz (16-bit values), in the
+ * lerp order of vv_vcache_value_at. */
+__attribute__((target("avx2"))) static inline __m256
+values_at8_avx2(const vv_vcache *c, __m256 px, __m256 py, __m256 pz) {
     __m256 wx, wy, wz;
     int32_t p00[8], p10[8], p01[8], p11[8];
     (void)cell_pairs_avx2(c, px, py, pz, &wx, &wy, &wz, p00, p10, p01, p11);
@@ -1172,6 +1145,27 @@ values8_avx2(const vv_vcache *c, const vv_vray *r, double kfirst, double dt) {
     const __m256 c1 = _mm256_add_ps(c01, _mm256_mul_ps(_mm256_sub_ps(c11, c01), wy));
     return _mm256_add_ps(c0, _mm256_mul_ps(_mm256_sub_ps(c1, c0), wz));
 }
+
+/* values_chunk_avx2 of the eight samples kfirst .. kfirst + 7, in a
+ * register. */
+__attribute__((target("avx2"))) static inline __m256
+values8_avx2(const vv_vcache *c, const vv_vray *r, double kfirst, double dt) {
+    __m256 px, py, pz;
+    points8_avx2(r, kfirst, dt, &px, &py, &pz);
+    return values_at8_avx2(c, px, py, pz);
+}
+
+/* The trilinear values of the samples kfirst .. kfirst + m - 1 (m <=
+ * VV_VC_CHUNK) of r, eight at a time: the scalar path's arithmetic. */
+__attribute__((target("avx2"))) static void
+values_chunk_avx2(const vv_vcache *c, const vv_vray *r, double kfirst, double dt, int m,
+                  float *val) {
+    float out[VV_VC_CHUNK + 8];
+    for (int s = 0; s < m; s += 8)
+        _mm256_storeu_ps(out + s, values8_avx2(c, r, kfirst + s, dt));
+    memcpy(val, out, (size_t)m * sizeof *val);
+}
+#endif
 
 /* The subvolume of index point p: its grid coordinates in bc (clamped)
  * and its index. */
@@ -1285,20 +1279,9 @@ project_block(const vv_vcache *c, const vv_vray *r, double k, double klast, doub
  * of r, their points computed as vv_vray_point does. */
 __attribute__((target("avx2"))) static inline __m256i
 blocks8_avx2(const vv_vcache *c, const vv_vray *r, double k, double dt) {
-    float u[8];
-    for (int l = 0; l < 8; l++)
-        u[l] = (float)((k + l) * dt - r->tb);
-    const __m256 t = _mm256_loadu_ps(u), zero = _mm256_setzero_ps(),
-                 quarter = _mm256_set1_ps(1.0f / VV_VC_BLOCK);
-    const __m256 px = _mm256_sub_ps(
-        _mm256_add_ps(_mm256_set1_ps(r->o[0]), _mm256_mul_ps(t, _mm256_set1_ps(r->d[0]))),
-        _mm256_set1_ps(r->off[0]));
-    const __m256 py = _mm256_sub_ps(
-        _mm256_add_ps(_mm256_set1_ps(r->o[1]), _mm256_mul_ps(t, _mm256_set1_ps(r->d[1]))),
-        _mm256_set1_ps(r->off[1]));
-    const __m256 pz = _mm256_sub_ps(
-        _mm256_add_ps(_mm256_set1_ps(r->o[2]), _mm256_mul_ps(t, _mm256_set1_ps(r->d[2]))),
-        _mm256_set1_ps(r->off[2]));
+    const __m256 zero = _mm256_setzero_ps(), quarter = _mm256_set1_ps(1.0f / VV_VC_BLOCK);
+    __m256 px, py, pz;
+    points8_avx2(r, k, dt, &px, &py, &pz);
     const __m256i bi =
         _mm256_min_epi32(_mm256_cvttps_epi32(_mm256_mul_ps(_mm256_max_ps(px, zero), quarter)),
                          _mm256_set1_epi32(c->bx - 1));
@@ -1320,20 +1303,13 @@ blocks8_avx2(const vv_vcache *c, const vv_vray *r, double k, double dt) {
 __attribute__((target("avx2"))) int
 vv_vray_visible_run_avx2(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double dt,
                          double kend, double *kp, double *klastp) {
-    const double inv_dt = 1.0 / dt;
-    const unsigned bxm = (unsigned)c->bx - 1, bym = (unsigned)c->by - 1, bzm = (unsigned)c->bz - 1;
     double k = *kp;
     while (k <= kend) {
-        const double t = k * dt;
         float p[3];
-        vv_vray_point(r, t, p);
+        double t;
         unsigned bc[3];
-        const size_t b = vv_vblock_of(c, p, bxm, bym, bzm, bc);
-        const int dist = bdist[b];
-        if (dist >= VRUN_LEAP) {
-            k = vv_vray_leap(r, p, t, bc, dist, inv_dt, k);
+        if (vv_vray_leap_from(c, bdist, r, dt, VRUN_LEAP, &k, p, &t, bc))
             continue;
-        }
         /* near a visible subvolume: the first sample of the next VV_VC_CHUNK
          * in a visible subvolume, and the run on from it while they are */
         const int n = kend - k + 1 < VV_VC_CHUNK ? (int)(kend - k + 1) : VV_VC_CHUNK;
@@ -1374,17 +1350,7 @@ project_from_avx2(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, do
     const int gsize = VV_VC_BLOCK * VV_VC_GROUP;
     float best = floor0;
     double tbest = r->t0;
-    const __m256 ox = _mm256_set1_ps(r->o[0]), oy = _mm256_set1_ps(r->o[1]),
-                 oz = _mm256_set1_ps(r->o[2]);
-    const __m256 dx = _mm256_set1_ps(r->d[0]), dy = _mm256_set1_ps(r->d[1]),
-                 dz = _mm256_set1_ps(r->d[2]);
-    const __m256 offx = _mm256_set1_ps(r->off[0]), offy = _mm256_set1_ps(r->off[1]),
-                 offz = _mm256_set1_ps(r->off[2]);
-    const __m256 zero = _mm256_setzero_ps(), quarter = _mm256_set1_ps(1.0f / VV_VC_BLOCK),
-                 vsg = _mm256_set1_ps(sg);
-    const __m256i bxm = _mm256_set1_epi32(c->bx - 1), bym = _mm256_set1_epi32(c->by - 1),
-                  bzm = _mm256_set1_epi32(c->bz - 1), bxv = _mm256_set1_epi32(c->bx),
-                  byv = _mm256_set1_epi32(c->by);
+    const __m256 zero = _mm256_setzero_ps(), vsg = _mm256_set1_ps(sg);
     const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
     int dead = 1; /* the last chunk had nothing to interpolate (or this is the first) */
     while (k <= kend && best < stop) {
@@ -1408,22 +1374,7 @@ project_from_avx2(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, do
             const __m256 vbest = _mm256_set1_ps(best);
             live = 0;
             for (int s = 0; s < m; s += 8) {
-                float u[8];
-                for (int l = 0; l < 8; l++)
-                    u[l] = (float)((k + s + l) * dt - r->tb);
-                const __m256 t = _mm256_loadu_ps(u);
-                const __m256 px = _mm256_sub_ps(_mm256_add_ps(ox, _mm256_mul_ps(t, dx)), offx);
-                const __m256 py = _mm256_sub_ps(_mm256_add_ps(oy, _mm256_mul_ps(t, dy)), offy);
-                const __m256 pz = _mm256_sub_ps(_mm256_add_ps(oz, _mm256_mul_ps(t, dz)), offz);
-                /* proj_block, eight at a time */
-                const __m256i bi = _mm256_min_epi32(
-                    _mm256_cvttps_epi32(_mm256_mul_ps(_mm256_max_ps(px, zero), quarter)), bxm);
-                const __m256i bj = _mm256_min_epi32(
-                    _mm256_cvttps_epi32(_mm256_mul_ps(_mm256_max_ps(py, zero), quarter)), bym);
-                const __m256i bk = _mm256_min_epi32(
-                    _mm256_cvttps_epi32(_mm256_mul_ps(_mm256_max_ps(pz, zero), quarter)), bzm);
-                const __m256i idx = _mm256_add_epi32(
-                    _mm256_mullo_epi32(_mm256_add_epi32(_mm256_mullo_epi32(bk, byv), bj), bxv), bi);
+                const __m256i idx = blocks8_avx2(c, r, k + s, dt); /* proj_block's */
                 const __m256i in = _mm256_cmpgt_epi32(_mm256_set1_epi32(m - s), lane);
                 const __m256 ext =
                     _mm256_mask_i32gather_ps(zero, bext, idx, _mm256_castsi256_ps(in), 4);

@@ -757,6 +757,24 @@ vv_vray_leap(const vv_vray *r, const float p[3], double t, const unsigned bc[3],
     return ks > k + 1 ? ks : k + 1;
 }
 
+/* At sample *k of ray r: its point p and subvolume; when the subvolume's
+ * chessboard distance (bdist) is at least @p min_dist, *k moves past the
+ * empty cube around it (vv_vray_leap) and 1 is returned, else 0 (p, t
+ * and bc then describe sample *k). */
+static inline int
+vv_vray_leap_from(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double dt,
+                  int min_dist, double *k, float p[3], double *t, unsigned bc[3]) {
+    *t = *k * dt;
+    vv_vray_point(r, *t, p);
+    const size_t b =
+        vv_vblock_of(c, p, (unsigned)c->bx - 1, (unsigned)c->by - 1, (unsigned)c->bz - 1, bc);
+    const int dist = bdist[b];
+    if (dist < min_dist)
+        return 0;
+    *k = vv_vray_leap(r, p, *t, bc, dist, 1.0 / dt, *k);
+    return 1;
+}
+
 /* The next run of samples of ray r in visible subvolumes (bdist 0: vv_vtables.bdist) from
  * sample *k on, up to kend: *k and *klast get its first and last sample;
  * returns 0 when none is left. Empty cubes of subvolumes are leapt over;
@@ -773,16 +791,11 @@ vv_vray_visible_run(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, 
     const unsigned bxm = (unsigned)c->bx - 1, bym = (unsigned)c->by - 1, bzm = (unsigned)c->bz - 1;
     double k = *kp;
     while (k <= kend) {
-        const double t = k * dt;
         float p[3];
-        vv_vray_point(r, t, p);
+        double t;
         unsigned bc[3];
-        const size_t b = vv_vblock_of(c, p, bxm, bym, bzm, bc);
-        const int dist = bdist[b];
-        if (dist) {
-            k = vv_vray_leap(r, p, t, bc, dist, inv_dt, k);
+        if (vv_vray_leap_from(c, bdist, r, dt, 1, &k, p, &t, bc))
             continue;
-        }
         double te = vv_vray_cube_exit(r, p, t, VV_VC_BLOCK);
         /* march to the last sample inside this subvolume */
         double klast = vv_floor_pos(te * inv_dt);
@@ -839,6 +852,28 @@ vv_vray_visible_run_simd(int avx2, const vv_vcache *c, const uint8_t *bdist, con
     (void)avx2;
 #endif
     return vv_vray_visible_run(c, bdist, r, dt, kend, kp, klastp);
+}
+
+/* An isosurface hit at ray parameter th of ray r (world ray wr): its index
+ * point ph, gradient g (vv_vcache_gradient), world point pw, and its
+ * material colour base0 times the texture @p tex at its object point
+ * (x: vv_vextra_object_point) where there is one (NULL: none). */
+static inline void
+vv_viso_hit_point(const vv_vcache *c, const vv_vray *r, const vv_ray *wr, double th,
+                  const float base0[3], const vv_texture_map *tex, const vv_vextra *x, float ph[3],
+                  float g[3], float pw[3], float base[3]) {
+    vv_vray_point(r, th, ph);
+    vv_vcache_gradient(c, ph, g);
+    vv_ray_world_point(wr, th, pw);
+    base[0] = base0[0];
+    base[1] = base0[1];
+    base[2] = base0[2];
+    if (tex) {
+        const vv_vec3 tc = vv_texture_map_eval(tex, vv_vextra_object_point(x, ph));
+        base[0] *= (float)tc.x;
+        base[1] *= (float)tc.y;
+        base[2] *= (float)tc.z;
+    }
 }
 
 /* The isosurface crossing between ray parameters ta (value va, on one side

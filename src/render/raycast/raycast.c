@@ -618,18 +618,9 @@ done:
 static void
 iso_hit(const rc_frame *fr, const rc_obj *ob, const vv_vray *r, const vv_ray *wr, const float v[3],
         double th, float C[3], float *A) {
-    float ph[3], g[3], pw[3], col[3];
-    vv_vray_point(r, th, ph);
-    vv_vcache_gradient(ob->c, ph, g);
-    vv_ray_world_point(wr, th, pw);
-    float base[3] = {ob->sh.base[0], ob->sh.base[1], ob->sh.base[2]};
-    if (ob->textured) {
-        const vv_vec3 tc =
-            vv_texture_map_eval(&ob->obj->texture, vv_vextra_object_point(&ob->x, ph));
-        base[0] *= (float)tc.x;
-        base[1] *= (float)tc.y;
-        base[2] *= (float)tc.z;
-    }
+    float ph[3], g[3], pw[3], col[3], base[3];
+    vv_viso_hit_point(ob->c, r, wr, th, ob->sh.base, ob->textured ? &ob->obj->texture : NULL,
+                      &ob->x, ph, g, pw, base);
     if (ob->shading)
         shade(fr, ob, g, pw, v, base, 1.0f, col);
     else

@@ -198,20 +198,10 @@ mix_flush(rt_mix *m, double t, float C[3], float *A, float *dep) {
 static void
 iso_hit(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray *wr, const float v[3],
         double th, int depth, float weight, float C[3], float *Ap) {
-    const vv_vcache *c = ob->c;
-    float A = *Ap;
-    float ph[3], g[3], pw[3], col[3];
-    vv_vray_point(r, th, ph);
-    vv_vcache_gradient(c, ph, g);
-    vv_ray_world_point(wr, th, pw);
-    float base[3] = {ob->sh.base[0], ob->sh.base[1], ob->sh.base[2]};
-    if (ob->textured) {
-        const vv_vec3 tc =
-            vv_texture_map_eval(&ob->obj->texture, vv_vextra_object_point(&ob->x, ph));
-        base[0] *= (float)tc.x;
-        base[1] *= (float)tc.y;
-        base[2] *= (float)tc.z;
-    }
+    const float A = *Ap;
+    float ph[3], g[3], pw[3], col[3], base[3];
+    vv_viso_hit_point(ob->c, r, wr, th, ob->sh.base, ob->textured ? &ob->obj->texture : NULL,
+                      &ob->x, ph, g, pw, base);
     if (ob->obj->shading)
         rt_shade_volume(fr, ob, g, ph, pw, v, base, 1.0f, NULL, col);
     else
@@ -241,8 +231,7 @@ iso_hit(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray *w
     C[0] += w * col[0];
     C[1] += w * col[1];
     C[2] += w * col[2];
-    A = 1;
-    *Ap = A;
+    *Ap = 1;
 }
 
 /* Front-to-back compositing of the composite and iso volumes along the ray
