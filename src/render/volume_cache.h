@@ -928,8 +928,11 @@ void vv_vray_project_tables(const vv_vcache *c, const vv_vtables *t, const vv_vr
  * one, or a ray shorter than a step: vv_vray_project_tables per channel)
  * on one ray, in one pass: cs[ch], ts[ch] each channel's cache and MIP
  * tables (every channel has the same grid), value[ch] and depth[ch] what
- * vv_vray_project_tables gives channel ch alone, the same samples and the
- * same results. With @p skipping the rays leap over the cubes of
+ * vv_vray_project_tables gives channel ch alone (a channel that reaches
+ * its table's flat top stops at the end of a subvolume here, at the end of
+ * a run of eight samples there: the same colour, the depth of a sample of
+ * it that may differ), marching one subvolume at a time with the same
+ * arithmetic. With @p skipping the rays leap over the cubes of
  * subvolumes where no channel still short of its upper bound holds
  * anything beyond its starting bound, skip groups and subvolumes where none
  * can beat its maximum, and inside a subvolume only the channels that can
