@@ -612,7 +612,6 @@ done:
     result_set(res, C, A, depth);
 }
 
-/* Front-to-back compositing of all composite and iso objects along one ray. */
 /* The isosurface of object ob hit at ray parameter th: its colour
  * (shaded, textured) composited under C, A, which becomes opaque. */
 static void
@@ -649,6 +648,7 @@ trace_iso_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result 
     result_set(res, C, A, depth);
 }
 
+/* Front-to-back compositing of all composite and iso objects along one ray. */
 static void
 trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
     vv_vray rays[RC_MAX_OBJ];

@@ -189,9 +189,6 @@ mix_flush(rt_mix *m, double t, float C[3], float *A, float *dep) {
     m->T = 1;
 }
 
-/* Over 150 lines on purpose: the multi-volume march keeps per-object ray
- * state (iso crossings, leaps) in arrays on the stack across the samples of
- * one ray, the ray caster's trace_composite for the ray tracer. */
 /* The isosurface of object ob hit at ray parameter th (ray r, world ray
  * wr, towards the eye v): shaded with shadows, as a mirror or a window
  * where its material says, composited under C, A, which becomes opaque. */
@@ -234,6 +231,9 @@ iso_hit(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray *w
     *Ap = 1;
 }
 
+/* Over 150 lines on purpose: the multi-volume march keeps per-object ray
+ * state (iso crossings, leaps) in arrays on the stack across the samples of
+ * one ray, the ray caster's trace_composite for the ray tracer. */
 /* Front-to-back compositing of the composite and iso volumes along the ray
  * over [0, tlim] on the samples t = k dt (the ray caster's grid). An iso
  * hit is a surface: shaded with shadows and reflections, it ends the ray. */
