@@ -1263,18 +1263,21 @@ project_block(const vv_vcache *c, const vv_vray *r, double k, double klast, doub
 
 #if VV_VC_HAVE_AVX2
 /* project_from's AVX2 path (16-bit values): the ray is marched in chunks of
- * VV_VC_CHUNK consecutive samples instead of one subvolume at a time. At a
- * chunk's first sample the leaps of project_from are tried (the distance
- * map, then the group); then every sample's subvolume is found eight lanes
- * at a time and its extreme gathered, and only the runs of eight holding a
+ * PROJ_CHUNK consecutive samples instead of one subvolume at a time. At
+ * the first chunk, and after a chunk that had nothing to interpolate, the
+ * leaps of project_from are tried at its first sample (the distance map,
+ * then the group); then every sample's subvolume is found eight lanes at a
+ * time and its extreme gathered, and only the runs of eight holding a
  * sample whose subvolume can beat the running extreme (as of the chunk's
- * start) are interpolated. A sample in a subvolume that cannot beat it
+ * start) are interpolated, each reduced in registers to its extreme and
+ * the first lane holding it. A sample in a subvolume that cannot beat it
  * cannot change the result, so the value is project_from's, at its first
  * sample (the same arithmetic); only a ray that reaches @p stop may stop
- * later, with a value beyond the stop as well. The traversal's cost per
- * subvolume, which dominated magnified views (a subvolume holds about
- * eight samples at the usual half-voxel step), becomes a few vector
- * instructions per eight samples. */
+ * later (at the end of a run of eight), with a value beyond the stop as
+ * well. The traversal's cost per subvolume, which dominated magnified
+ * views (a subvolume holds about eight samples at the usual half-voxel
+ * step), becomes a few vector instructions per eight samples. 64 samples
+ * a chunk measured faster than 16, 32, 128 or 256 (docs/rendering.md). */
 /* The subvolumes (proj_block's, vv_vblock_of's) of the samples k .. k + 7
  * of r, their points computed as vv_vray_point does. */
 __attribute__((target("avx2"))) static inline __m256i
@@ -1297,9 +1300,10 @@ blocks8_avx2(const vv_vcache *c, const vv_vray *r, double k, double dt) {
         bi);
 }
 
-#ifndef VRUN_LEAP
+/* vv_vray_visible_run_avx2 leaps from a hidden subvolume at this chessboard
+ * distance or more, and scans the samples ahead from one closer (1 measured
+ * faster than 2 or 4, docs/rendering.md). */
 #define VRUN_LEAP 2
-#endif
 __attribute__((target("avx2"))) int
 vv_vray_visible_run_avx2(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double dt,
                          double kend, double *kp, double *klastp) {
@@ -1339,9 +1343,7 @@ vv_vray_visible_run_avx2(const vv_vcache *c, const uint8_t *bdist, const vv_vray
     return 0;
 }
 
-#ifndef PROJ_CHUNK
-#define PROJ_CHUNK 64
-#endif
+#define PROJ_CHUNK 64 /* samples a chunk of project_from_avx2 */
 __attribute__((target("avx2"))) static float
 project_from_avx2(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, double dt, double k,
                   double kend, float sg, float floor0, float stop, int skipping,
