@@ -202,9 +202,9 @@ main(int argc, char **argv) {
     }
     if (!path || cfg.size < 1 || cfg.runs < 1 || cfg.quality < 0 || cfg.quality > 2) {
         fprintf(stderr, "usage: bench_raycast VOLUME [--iso V] [--tf-lo A] [--tf-hi B] "
-                        "[--size N] [--runs N] [--threads N] [--outdir DIR] [--modes "
-                        "composite,mip,iso,minip,xray] "
-                        "[--quality Q] [--option KEY=VALUE]\n");
+                        "[--size N] [--runs N] [--threads N] [--outdir DIR]\n"
+                        "       [--modes composite,mip,iso,minip,xray] [--quality Q] "
+                        "[--option KEY=VALUE]\n");
         return 2;
     }
     dataset = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;

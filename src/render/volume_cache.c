@@ -1262,22 +1262,6 @@ project_block(const vv_vcache *c, const vv_vray *r, double k, double klast, doub
 }
 
 #if VV_VC_HAVE_AVX2
-/* project_from's AVX2 path (16-bit values): the ray is marched in chunks of
- * PROJ_CHUNK consecutive samples instead of one subvolume at a time. At
- * the first chunk, and after a chunk that had nothing to interpolate, the
- * leaps of project_from are tried at its first sample (the distance map,
- * then the group); then every sample's subvolume is found eight lanes at a
- * time and its extreme gathered, and only the runs of eight holding a
- * sample whose subvolume can beat the running extreme (as of the chunk's
- * start) are interpolated, each reduced in registers to its extreme and
- * the first lane holding it. A sample in a subvolume that cannot beat it
- * cannot change the result, so the value is project_from's, at its first
- * sample (the same arithmetic); only a ray that reaches @p stop may stop
- * later (at the end of a run of eight), with a value beyond the stop as
- * well. The traversal's cost per subvolume, which dominated magnified
- * views (a subvolume holds about eight samples at the usual half-voxel
- * step), becomes a few vector instructions per eight samples. 64 samples
- * a chunk measured faster than 16, 32, 128 or 256 (docs/rendering.md). */
 /* The subvolumes (proj_block's, vv_vblock_of's) of the samples k .. k + 7
  * of r, their points computed as vv_vray_point does. */
 __attribute__((target("avx2"))) static inline __m256i
@@ -1344,6 +1328,22 @@ vv_vray_visible_run_avx2(const vv_vcache *c, const uint8_t *bdist, const vv_vray
 }
 
 #define PROJ_CHUNK 64 /* samples a chunk of project_from_avx2 */
+/* project_from's AVX2 path (16-bit values): the ray is marched in chunks of
+ * PROJ_CHUNK consecutive samples instead of one subvolume at a time. At
+ * the first chunk, and after a chunk that had nothing to interpolate, the
+ * leaps of project_from are tried at its first sample (the distance map,
+ * then the group); then every sample's subvolume is found eight lanes at a
+ * time and its extreme gathered, and only the runs of eight holding a
+ * sample whose subvolume can beat the running extreme (as of the chunk's
+ * start) are interpolated, each reduced in registers to its extreme and
+ * the first lane holding it. A sample in a subvolume that cannot beat it
+ * cannot change the result, so the value is project_from's, at its first
+ * sample (the same arithmetic); only a ray that reaches @p stop may stop
+ * later (at the end of a run of eight), with a value beyond the stop as
+ * well. The traversal's cost per subvolume, which dominated magnified
+ * views (a subvolume holds about eight samples at the usual half-voxel
+ * step), becomes a few vector instructions per eight samples. 64 samples
+ * a chunk measured faster than 16, 32, 128 or 256 (docs/rendering.md). */
 __attribute__((target("avx2"))) static float
 project_from_avx2(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, double dt, double k,
                   double kend, float sg, float floor0, float stop, int skipping,
@@ -1549,30 +1549,35 @@ vv_vray_iso_first(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, do
             pv = vv_vcache_sample(c, p);
             have = 1;
         }
-        const int n = (int)(klast - k) + 1;
-        float val[VV_VC_CHUNK];
+        /* a run of the portable traversal may exceed a chunk (its first
+         * subvolume is whole, and holds more than VV_VC_CHUNK samples at a
+         * step under 1/8 voxel) */
+        for (double j = k; j <= klast; j += VV_VC_CHUNK) {
+            const int n = klast - j + 1 < VV_VC_CHUNK ? (int)(klast - j) + 1 : VV_VC_CHUNK;
+            float val[VV_VC_CHUNK];
 #if VV_VC_HAVE_AVX2
-        if (vec)
-            values_chunk_avx2(c, r, k, dt, n, val);
+            if (vec)
+                values_chunk_avx2(c, r, j, dt, n, val);
 #else
-        (void)vec;
+            (void)vec;
 #endif
-        for (int s = 0; s < n; s++) {
-            const double t = (k + s) * dt;
-            if (!vec) {
-                float p[3];
-                vv_vray_point(r, t, p);
-                val[s] = vv_vcache_sample(c, p);
+            for (int s = 0; s < n; s++) {
+                const double t = (j + s) * dt;
+                if (!vec) {
+                    float p[3];
+                    vv_vray_point(r, t, p);
+                    val[s] = vv_vcache_sample(c, p);
+                }
+                if (!have) {
+                    if (val[s] >= iso && t - r->t0 < dt)
+                        return t; /* entered already inside (a cut face) */
+                } else if ((pv < iso) != (val[s] < iso)) {
+                    return vv_vray_iso_refine(c, r, pt, pv, t, iso);
+                }
+                pv = val[s];
+                pt = t;
+                have = 1;
             }
-            if (!have) {
-                if (val[s] >= iso && t - r->t0 < dt)
-                    return t; /* entered already inside (a cut face) */
-            } else if ((pv < iso) != (val[s] < iso)) {
-                return vv_vray_iso_refine(c, r, pt, pv, t, iso);
-            }
-            pv = val[s];
-            pt = t;
-            have = 1;
         }
         kprev = klast;
         k = klast + 1;

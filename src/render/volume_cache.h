@@ -830,8 +830,8 @@ vv_vray_visible_run(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, 
  * uses) is visible, rather than by whole subvolumes from their exits; in
  * a hidden subvolume at chessboard distance 1 the next VV_VC_CHUNK
  * samples are scanned so for the first visible one instead of leaping
- * (distance 2 and more: vv_vray_leap). The
- * samples it leaves out lie in hidden subvolumes, their cells' values in
+ * (distance 2 and more: vv_vray_leap). A run holds at most VV_VC_CHUNK
+ * samples. The samples it leaves out lie in hidden subvolumes, their cells' values in
  * those subvolumes' ranges, so they are transparent: a kernel that
  * composites the runs gives the image of vv_vray_visible_run (and of no
  * skipping) bit for bit, with one traversal step a run instead of one a
@@ -943,7 +943,7 @@ void vv_vray_project_channels(const vv_vcache *const *cs, const vv_vtables *cons
 
 /* The first crossing of @p iso along ray r (step dt) through the runs of
  * visible subvolumes (@p bdist of tables made for iso mode: a subvolume is
- * visible when its values reach both sides of iso): the sample values in
+ * hidden when its values all lie below iso): the sample values in
  * order (eight at a time with @p avx2 and 16-bit values: the same values),
  * a crossing between two consecutive ones refined by vv_vray_iso_refine;
  * after a stretch of hidden subvolumes the search restarts at the exit of
