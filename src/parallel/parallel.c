@@ -19,13 +19,15 @@
  * rank with digit d keeps piece d, sends piece c to the group member with
  * digit c and receives piece d from each of them, and composites the k_j
  * pieces in the node's visibility order (Porter-Duff over of premultiplied
- * colour; for projections the extreme value). For k = 2 throughout this is
- * binary swap; radix-k with k = n is direct send. After the last round each
- * core rank holds 1/R of the image, gathered to rank 0.
+ * colour; for projections the extreme value; for isosurfaces the nearest).
+ * For k = 2 throughout this is binary swap; radix-k with k = n is direct
+ * send. After the last round each core rank holds 1/R of the image,
+ * gathered to rank 0.
  *
  * Bricks. A rank keeps the voxels of its box and one ghost voxel beyond each
  * face (gradients by central differences and trilinear samples at the box
- * faces then read the same voxels as in the whole volume), as a volume with
+ * faces then read the same voxels as in the whole volume; iso two, for a
+ * crossing up to a step before the box, VV_REGION_NEAREST), as a volume with
  * the whole volume's geometry and value range
  * (a region's voxels, include/volvis/sys/renderer.h), cut from the World's volume or read
  * from a source of boxes (vv_parallel_set_source, vv_parallel_set_box_source:
@@ -66,6 +68,7 @@ struct vv_parallel {
     vv_volume *brick;
     vv_render_region rg; /* the region the brick is (voxels, rectangle: set per frame) */
     int box_lo[3], box_hi[3];
+    int ghost; /* the brick's voxels beyond each face of the box: 1, iso 2 */
 };
 
 /* One cut of the decomposition tree on a rank's path. */
@@ -591,22 +594,23 @@ composite(const par_plan *pl, float *img, size_t P, vv_region_op mode, int ortho
 /* The brick                                                                */
 
 static vv_status
-make_brick(vv_parallel *p, const vv_volume *v, const par_plan *pl) {
+make_brick(vv_parallel *p, const vv_volume *v, const par_plan *pl, int ghost) {
     const vv_volume *g = p->source ? &p->hdr : v;
     const void *key = p->source ? (const void *)p->source : (const void *)v;
     const uint64_t mod = p->source ? 0 : v->modified;
     int same = p->brick && p->src == key && p->src_modified == mod;
+    same = same && p->ghost == ghost;
     for (int a = 0; a < 3 && same; a++)
         same = p->box_lo[a] == pl->lo[a] && p->box_hi[a] == pl->hi[a];
     if (same)
         return VV_OK;
     vv_volume_free(p->brick);
     p->brick = NULL;
-    /* the box, one ghost voxel beyond each face (within the volume) */
+    /* the box, @p ghost voxels beyond each face (within the volume) */
     int off[3], end[3], dims[3];
     for (int a = 0; a < 3; a++) {
-        off[a] = pl->lo[a] > 0 ? pl->lo[a] - 1 : 0;
-        end[a] = pl->hi[a] + 1 < g->dims[a] - 1 ? pl->hi[a] + 1 : g->dims[a] - 1;
+        off[a] = pl->lo[a] > ghost ? pl->lo[a] - ghost : 0;
+        end[a] = pl->hi[a] + ghost < g->dims[a] - 1 ? pl->hi[a] + ghost : g->dims[a] - 1;
         if (end[a] < off[a])
             end[a] = off[a];
         dims[a] = end[a] - off[a] + 1;
@@ -649,6 +653,7 @@ make_brick(vv_parallel *p, const vv_volume *v, const par_plan *pl) {
     p->src = key;
     p->src_modified = mod;
     memcpy(p->box_lo, pl->lo, sizeof p->box_lo);
+    p->ghost = ghost;
     memcpy(p->box_hi, pl->hi, sizeof p->box_hi);
     memset(&p->rg, 0, sizeof p->rg);
     for (int a = 0; a < 3; a++) {
@@ -713,14 +718,6 @@ find_object(const vv_world *w) {
                      "parallel: %d visible volume objects; distributed rendering draws one", n);
         return -1;
     }
-    const vv_render_mode m = w->objects[found]->mode;
-    if (m != VV_MODE_COMPOSITE && m != VV_MODE_MIP && m != VV_MODE_MINIP) {
-        vv_error_set(VV_ERR_UNSUPPORTED,
-                     "parallel: object '%s': distributed rendering draws composite, mip or "
-                     "minip, not xray or iso",
-                     w->objects[found]->name);
-        return -1;
-    }
     return found;
 }
 
@@ -728,7 +725,7 @@ find_object(const vv_world *w) {
 static vv_status
 render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *view,
             const vv_render_options *opt, par_plan *pl, int *obj_index, float **img_out,
-            vv_region_op *op, vv_parallel_stats *st, int *agreed) {
+            vv_region_op *op, vv_region_image *classify, vv_parallel_stats *st, int *agreed) {
     /* collective: every rank calls this once a frame, whatever failed */
     vv_status s = pre;
     const int oi = s == VV_OK ? find_object(w) : -1;
@@ -741,7 +738,7 @@ render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *vie
         s = plan_build(pl, p->rank, p->size, dims, &p->opt);
     }
     if (s == VV_OK)
-        s = make_brick(p, obj->volume, pl);
+        s = make_brick(p, obj->volume, pl, obj->mode == VV_MODE_ISO ? 2 : 1);
     /* every rank learns of a failure to cut or read a brick here */
     s = vv_parallel_agree(s);
     *agreed = s != VV_OK; /* the same on every rank */
@@ -782,15 +779,16 @@ render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *vie
     float *key = malloc(sizeof(float) * (P ? P : 1));
     s = key ? vv_image_new(&img, view->width, view->height)
             : vv_error_set(VV_ERR_NOMEM, "out of memory");
-    vv_region_image ri = {img, key, VV_REGION_OVER, 0};
+    vv_region_image ri = {.image = img, .key = key, .op = VV_REGION_OVER};
     double t0 = MPI_Wtime();
     struct timespec c0, c1;
     clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &c0);
-    if (s == VV_OK && rg.x1 > rg.x0 && rg.y1 <= rg.y0) {
+    /* rank 0 renders its region even off screen in xray mode: the render
+     * gives the table that classifies the summed means at the end */
+    const int sum = obj->mode == VV_MODE_XRAY && p->rank == 0;
+    if (s == VV_OK && rg.x1 > rg.x0 && rg.y1 <= rg.y0 && !sum) {
         vv_region_image_clear(&ri); /* off screen */
-        ri.op = obj->mode == VV_MODE_MIP     ? VV_REGION_MAX
-                : obj->mode == VV_MODE_MINIP ? VV_REGION_MIN
-                                             : VV_REGION_OVER;
+        ri.op = vv_region_op_for(obj->mode);
     } else if (s == VV_OK) {
         s = vv_renderer_render_region(p->ren, w, view, &rg, opt, &ri);
     }
@@ -798,6 +796,7 @@ render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *vie
     st->render = MPI_Wtime() - t0;
     st->render_cpu = (double)(c1.tv_sec - c0.tv_sec) + 1e-9 * (double)(c1.tv_nsec - c0.tv_nsec);
     *op = ri.op;
+    *classify = ri;
     float *buf = NULL;
     if (s == VV_OK) {
         buf = malloc(sizeof(float) * PAR_REC * (P ? P : 1));
@@ -840,7 +839,9 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
                          view->height);
     int agreed = 0;
     vv_region_op op = VV_REGION_OVER;
-    s = render_part(p, s, w, view, opt, &pl, &oi, &img, &op, &st, &agreed);
+    vv_region_image cls; /* its classify (xray), from rank 0's region render */
+    memset(&cls, 0, sizeof cls);
+    s = render_part(p, s, w, view, opt, &pl, &oi, &img, &op, &cls, &st, &agreed);
     /* every rank learns of any failure here, before the exchanges */
     if (!agreed)
         s = vv_parallel_agree(s);
@@ -901,16 +902,24 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
     st.max_render = gmx[0];
     st.max_composite = gmx[1];
     st.max_render_cpu = gmx[2];
+    float *keys = NULL;
+    if (s == VV_OK && p->rank == 0 && op == VV_REGION_SUM &&
+        !(keys = malloc(sizeof(float) * (P ? P : 1))))
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
     if (s == VV_OK && p->rank == 0) {
         for (size_t i = 0; i < P; i++) {
             const float *r = whole + PAR_REC * i;
             memcpy(out->rgba + 4 * i, r, 4 * sizeof(float));
             out->depth[i] = r[4];
+            if (keys)
+                keys[i] = r[5];
         }
-        /* the background once, as the whole render adds it */
-        vv_region_image fin = {out, NULL, op, 0};
+        /* the background once, as the whole render adds it (xray: the means
+         * classified first) */
+        vv_region_image fin = {out, keys, op, 0, cls.classify, cls.classify_ctx};
         vv_region_image_finish(&fin, w->background);
     }
+    free(keys);
     free(counts);
     free(displs);
     free(whole);

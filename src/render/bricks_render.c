@@ -107,18 +107,22 @@ check_args(vv_renderer *r, const vv_world *w, int object, const vv_view *view,
                             "bricks: %s renders no regions; out-of-core rendering needs a "
                             "renderer with the region contract (`volvis renderers`)",
                             info->name);
-    const vv_render_mode mode = obj->mode;
-    if (mode != VV_MODE_COMPOSITE && mode != VV_MODE_MIP && mode != VV_MODE_MINIP)
-        return vv_error_set(VV_ERR_UNSUPPORTED,
-                            "bricks: object '%s': out-of-core rendering draws composite, mip or "
-                            "minip, not xray or iso (they do not split into bricks)",
-                            obj->name);
     for (int i = 0; i < w->n_objects; i++)
         if (i != object && w->objects[i]->visible)
             return vv_error_set(VV_ERR_UNSUPPORTED,
                                 "bricks: object '%s': out-of-core rendering draws one object",
                                 w->objects[i]->name);
     return VV_OK;
+}
+
+/* An iso object's brick or node whose voxels (ghosts included) all lie
+ * below the isovalue holds no crossing it owns (each is between a sample
+ * of its own and the one before, read from its ghosts): skipped unread.
+ * The margin covers the rounding of a trilinear sample above its corners. */
+static int
+iso_below(const vv_object *obj, const vv_volume *hdr, double vmax) {
+    const double margin = 1e-5 * (fabs(hdr->range[0]) + fabs(hdr->range[1]) + 1);
+    return obj->mode == VV_MODE_ISO && vmax < obj->isovalue - margin;
 }
 
 /* The frame's images: @p whole (the output, cleared, combined by the
@@ -130,11 +134,10 @@ frame_images(const vv_view *view, vv_image *out, vv_render_mode mode, vv_region_
              vv_region_image *piece) {
     const size_t np = (size_t)view->width * (size_t)view->height;
     float *keys = malloc(sizeof(float) * 2 * (np ? np : 1));
-    const vv_region_op op = mode == VV_MODE_MIP     ? VV_REGION_MAX
-                            : mode == VV_MODE_MINIP ? VV_REGION_MIN
-                                                    : VV_REGION_OVER;
-    *whole = (vv_region_image){out, keys, op, 0};
-    *piece = (vv_region_image){NULL, keys ? keys + np : NULL, VV_REGION_OVER, 1};
+    const vv_region_op op = vv_region_op_for(mode);
+    *whole = (vv_region_image){.image = out, .key = keys, .op = op};
+    *piece =
+        (vv_region_image){.key = keys ? keys + np : NULL, .op = VV_REGION_OVER, .clear_outside = 1};
     if (!keys)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     vv_status s = vv_image_new(&piece->image, view->width, view->height);
@@ -158,6 +161,11 @@ render_piece(vv_renderer *r, const vv_world *w, const vv_view *view, const vv_re
     if (s == VV_OK && piece->op != whole->op)
         s = vv_error_set(VV_ERR_INVALID, "bricks: %s combined its regions by %d, not %d",
                          vv_renderer_name(r), (int)piece->op, (int)whole->op);
+    if (s == VV_OK && whole->op == VV_REGION_SUM) {
+        /* the renderer's table classifies the summed means at the end */
+        whole->classify = piece->classify;
+        whole->classify_ctx = piece->classify_ctx;
+    }
     if (s == VV_OK)
         vv_region_image_combine_rect(whole, piece, x0, y0, x1, y1); /* in front over it */
     vv_region_image_clear_rect(piece, x0, y0, x1, y1);
@@ -219,7 +227,8 @@ vv_renderer_render_bricks(vv_renderer *r, const vv_world *w, int object, const v
         /* the ray caster's table maps a value to the entry at or below it:
          * one entry's width lower too (src/render/volume_cache.h) */
         const double bin = (hdr->range[1] - hdr->range[0]) / (VV_VC_LUT - 1);
-        if (skip && !(tf_max_opacity(&obj->tf, in.vmin - bin, in.vmax) > 0)) {
+        if ((skip && !(tf_max_opacity(&obj->tf, in.vmin - bin, in.vmax) > 0)) ||
+            iso_below(obj, hdr, in.vmax)) {
             if (src->note_skip)
                 src->note_skip(src->user);
             continue;
@@ -274,7 +283,8 @@ typedef struct mr_frame {
     vv_lod *lod;
     const vv_object *obj;
     int object, n_levels, cells[3], ortho, skip;
-    int leaf; /* the octree leaves' side, level-0 cells */
+    int leaf;  /* the octree leaves' side, level-0 cells */
+    int ghost; /* voxels read beyond a node's box: 1, iso 2 (vv_render_region.voxels) */
     vv_mat4 i2w[VV_LOD_MAX_LEVELS];
     double a[VV_LOD_MAX_LEVELS][3], b[VV_LOD_MAX_LEVELS][3]; /* level L index = (x0 - b) / a */
     double vox[VV_LOD_MAX_LEVELS]; /* a level's smallest voxel edge, world units */
@@ -321,8 +331,8 @@ node_region(const mr_frame *f, int L, const int n0[3], const int n1[3], vv_rende
     rg->object = f->object;
     for (int k = 0; k < 3; k++) {
         const double lo = (n0[k] - f->b[L][k]) / f->a[L][k], hi = (n1[k] - f->b[L][k]) / f->a[L][k];
-        slo[k] = (int)floor(lo) - 1;
-        shi[k] = (int)ceil(hi) + 1;
+        slo[k] = (int)floor(lo) - f->ghost;
+        shi[k] = (int)ceil(hi) + f->ghost;
         slo[k] = slo[k] < 0 ? 0 : slo[k];
         shi[k] = shi[k] > h->dims[k] - 1 ? h->dims[k] - 1 : shi[k];
         if (slo[k] > shi[k])
@@ -344,9 +354,10 @@ plan_node(mr_frame *f, int L, const int n0[3], const int n1[3]) {
     if (!node_region(f, L, n0, n1, &rg, slo, shi))
         return VV_OK; /* beyond this level's voxels */
     float vmin, vmax;
-    if (f->skip && f->src->box_range &&
+    if ((f->skip || f->obj->mode == VV_MODE_ISO) && f->src->box_range &&
         f->src->box_range(f->src->user, L, slo, shi, &vmin, &vmax) &&
-        !(tf_max_opacity(&f->obj->tf, vmin - f->bin, vmax) > 0)) {
+        (f->skip ? !(tf_max_opacity(&f->obj->tf, vmin - f->bin, vmax) > 0)
+                 : iso_below(f->obj, f->src->level(f->src->user, L), vmax))) {
         f->lod->skipped++;
         return VV_OK;
     }
@@ -573,6 +584,7 @@ vv_renderer_render_multires(vv_renderer *r, const vv_world *w, int object,
     if ((s = setup_levels(&f)) != VV_OK)
         return s;
     f.skip = f.obj->mode == VV_MODE_COMPOSITE && f.obj->segmentation == VV_SEG_TRANSFER_FUNCTION;
+    f.ghost = f.obj->mode == VV_MODE_ISO ? 2 : 1;
 
     vv_region_image whole, piece;
     s = frame_images(view, out, f.obj->mode, &whole, &piece);

@@ -375,17 +375,10 @@ vv_render_region_check(const vv_world *w, const vv_render_region *rg, vv_region_
             return vv_error_set(VV_ERR_UNSUPPORTED,
                                 "object '%s': a region render draws one object, not '%s' too",
                                 obj->name, w->objects[i]->name);
-    if (obj->mode != VV_MODE_COMPOSITE && obj->mode != VV_MODE_MIP && obj->mode != VV_MODE_MINIP)
-        return vv_error_set(VV_ERR_UNSUPPORTED,
-                            "object '%s': regions are rendered in composite, mip or minip mode "
-                            "(xray and iso do not split)",
-                            obj->name);
     if (obj->solid_texture.kind != VV_SOLID_TEXTURE_NONE)
         return vv_error_set(VV_ERR_UNSUPPORTED,
                             "object '%s': solid textures are not rendered by regions", obj->name);
-    *op = obj->mode == VV_MODE_MIP     ? VV_REGION_MAX
-          : obj->mode == VV_MODE_MINIP ? VV_REGION_MIN
-                                       : VV_REGION_OVER;
+    *op = vv_region_op_for(obj->mode);
     return VV_OK;
 }
 
@@ -450,6 +443,19 @@ vv_region_image_finish(vv_region_image *img, vv_vec3 background) {
     const float bg[3] = {(float)background.x, (float)background.y, (float)background.z};
     for (size_t i = 0; i < n; i++) {
         float *pix = img->image->rgba + 4 * i;
+        if (img->op == VV_REGION_SUM) {
+            /* the mean of the pixel's samples, classified as the whole
+             * render classifies it (raycast: cast_pixel's projections) */
+            const float k = img->key ? img->key[i] : NAN;
+            float e[4] = {0, 0, 0, 0};
+            if (k == k && img->classify && pix[1] > 0)
+                img->classify(img->classify_ctx,
+                              (float)(((double)k + (double)pix[0]) / (double)pix[1]), e);
+            pix[0] = e[1] * e[0];
+            pix[1] = e[2] * e[0];
+            pix[2] = e[3] * e[0];
+            pix[3] = e[0];
+        }
         /* as the whole render writes a pixel: C + (1 - A) background */
         const float A = pix[3] > 1 ? 1 : pix[3];
         for (int ch = 0; ch < 3; ch++)

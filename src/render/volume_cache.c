@@ -816,13 +816,15 @@ region_range(const vv_vray *r, const vv_render_region *b, double dt, int64_t kg0
 }
 
 int
-vv_vray_clip_region(vv_vray *r, const vv_render_region *b, double dt, int inv_form) {
+vv_vray_clip_region(vv_vray *r, const vv_render_region *b, double dt, int inv_form, int *cont) {
     const int64_t kg0 =
         (int64_t)(inv_form ? vv_ceil_pos(r->t0 * (1.0 / dt)) : vv_ceil_pos(r->t0 / dt));
     const int64_t kg1 =
         (int64_t)(inv_form ? vv_floor_pos(r->t1 * (1.0 / dt)) : vv_floor_pos(r->t1 / dt));
     for (int a = 0; a < 3; a++)
         r->off[a] = (float)b->offset[a];
+    if (cont)
+        *cont = 0;
     if (kg0 > kg1) {
         /* shorter than a step: a projection takes one sample in the middle,
          * which belongs to the region that holds it */
@@ -838,6 +840,8 @@ vv_vray_clip_region(vv_vray *r, const vv_render_region *b, double dt, int inv_fo
     int64_t ka, kb;
     if (!region_range(r, b, dt, kg0, kg1, &ka, &kb))
         return 0;
+    if (cont)
+        *cont = ka > kg0;
     const double t0 = ((double)ka - 0.5) * dt, t1 = ((double)kb + 0.5) * dt;
     r->t0 = t0 > r->t0 ? t0 : r->t0;
     r->t1 = t1 < r->t1 ? t1 : r->t1;
@@ -1474,9 +1478,57 @@ march(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, double dt, dou
     return project_from(c, pdist, r, dt, k, kend, sg, floor0, stop, skipping, tbest);
 }
 
+long
+vv_vray_xray_sum(const vv_vcache *c, const vv_vray *r, double dt, int avx2, double *sum,
+                 float *depth) {
+    double k = vv_ceil_pos(r->t0 / dt);
+    const double kend = vv_floor_pos(r->t1 / dt);
+    if (k > kend) {
+        /* shorter than one step: one sample in the middle */
+        float p[3];
+        double tm = 0.5 * (r->t0 + r->t1);
+        vv_vray_point(r, tm, p);
+        *sum = vv_vcache_sample(c, p);
+        *depth = (float)tm;
+        return 1;
+    }
+    const int vec = avx2 && c->q16 && c->sz * (size_t)c->nz < ((size_t)1 << 30);
+    double acc = 0;
+    long n = 0;
+#if VV_VC_HAVE_AVX2
+    /* the same values, eight at a time, added in the same order */
+    for (; vec && k <= kend; k += VV_VC_CHUNK) {
+        const int m = kend - k + 1 < VV_VC_CHUNK ? (int)(kend - k + 1) : VV_VC_CHUNK;
+        float val[VV_VC_CHUNK];
+        values_chunk_avx2(c, r, k, dt, m, val);
+        for (int s = 0; s < m; s++)
+            acc += val[s];
+        n += m;
+    }
+#else
+    (void)vec;
+#endif
+    for (; k <= kend; k++) {
+        float p[3], f[3];
+        vv_vray_point(r, k * dt, p);
+        const size_t o = vv_vcache_cell_in(c, p, f);
+        acc += vv_vcache_value_at(c, o, f);
+        n++;
+    }
+    *sum = acc;
+    *depth = (float)r->t0;
+    return n;
+}
+
 static void
 project(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, vv_render_mode mode, double dt,
         int skipping, int avx2, float lo, float hi, float *value, float *depth) {
+    if (mode == VV_MODE_XRAY) {
+        double sum;
+        const long n = vv_vray_xray_sum(c, r, dt, avx2, &sum, depth);
+        *value = (float)(sum / (double)n);
+        return;
+    }
     double k = vv_ceil_pos(r->t0 / dt);
     const double kend = vv_floor_pos(r->t1 / dt);
     if (k > kend) {
@@ -1489,31 +1541,6 @@ project(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, vv_render_mo
         return;
     }
     const int vec = avx2 && c->q16 && c->sz * (size_t)c->nz < ((size_t)1 << 30);
-    if (mode == VV_MODE_XRAY) {
-        double sum = 0;
-        long n = 0;
-#if VV_VC_HAVE_AVX2
-        /* the same values, eight at a time, added in the same order */
-        for (; vec && k <= kend; k += VV_VC_CHUNK) {
-            const int m = kend - k + 1 < VV_VC_CHUNK ? (int)(kend - k + 1) : VV_VC_CHUNK;
-            float val[VV_VC_CHUNK];
-            values_chunk_avx2(c, r, k, dt, m, val);
-            for (int s = 0; s < m; s++)
-                sum += val[s];
-            n += m;
-        }
-#endif
-        for (; k <= kend; k++) {
-            float p[3], f[3];
-            vv_vray_point(r, k * dt, p);
-            const size_t o = vv_vcache_cell_in(c, p, f);
-            sum += vv_vcache_value_at(c, o, f);
-            n++;
-        }
-        *value = (float)(sum / (double)n);
-        *depth = (float)r->t0;
-        return;
-    }
     const int mip = mode == VV_MODE_MIP;
     /* work on the maximum of +-value, so MinIP is MIP of the negation */
     const float sg = mip ? 1.0f : -1.0f;
@@ -1527,24 +1554,32 @@ project(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, vv_render_mo
 
 double
 vv_vray_iso_first(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double dt, float iso,
-                  int avx2) {
+                  int avx2, int cont) {
     const double k0 = vv_ceil_pos(r->t0 / dt), kend = vv_floor_pos(r->t1 / dt);
     const int vec = avx2 && c->q16 && c->sz * (size_t)c->nz < ((size_t)1 << 30);
     double k = k0, klast, kprev = k0 - 2; /* the last sample of the previous run */
     float pv = 0;                         /* the value at pt (one side of iso) */
     double pt = 0;
     int have = 0;
+    if (cont && k0 <= kend) {
+        /* a region's search starts at the whole ray's sample before it */
+        float p[3];
+        pt = (k0 - 1) * dt;
+        vv_vray_point(r, pt, p);
+        pv = vv_vcache_sample(c, p);
+        if (pv >= iso)
+            return pt;
+        have = 1;
+        kprev = k0 - 1;
+    }
     while (vv_vray_visible_run_simd(avx2, c, bdist, r, dt, kend, &k, &klast)) {
         if (k > k0 && k != kprev + 1) {
-            /* after hidden samples (all on one side of iso): the crossing
-             * search restarts where the ray leaves the subvolume of the
-             * sample before the run, as the per-sample march does */
-            const double tp = (k - 1) * dt;
+            /* after hidden samples (all below iso): the crossing search
+             * restarts at the sample before the run, as a march of every
+             * sample has it, so that the crossing does not depend on the
+             * subvolume grid (skipping on or off, a region's voxels) */
             float p[3];
-            vv_vray_point(r, tp, p);
-            const double te = vv_vray_cube_exit(r, p, tp, VV_VC_BLOCK);
-            pt = te < r->t1 ? te : r->t1;
-            pt = pt < k * dt ? pt : tp;
+            pt = (k - 1) * dt;
             vv_vray_point(r, pt, p);
             pv = vv_vcache_sample(c, p);
             have = 1;

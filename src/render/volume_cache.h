@@ -220,9 +220,11 @@ int vv_vray_setup(const double w2i[3][4], const int dims[3], const vv_plane *pla
  * the whole ray's samples are counted as the whole render counts them. A
  * ray shorter than a step keeps its one middle sample when the region owns
  * it. The cut ends lie half a step beyond the first and last owned
- * samples, so any kernel rounding finds them again. Returns 0 when the
+ * samples, so any kernel rounding finds them again. *cont (may be NULL):
+ * 1 when the region's first sample is not the whole ray's (an iso search
+ * then starts at the one before it: vv_vray_iso_first). Returns 0 when the
  * region owns no sample of the ray. */
-int vv_vray_clip_region(vv_vray *r, const vv_render_region *rg, double dt, int inv_form);
+int vv_vray_clip_region(vv_vray *r, const vv_render_region *rg, double dt, int inv_form, int *cont);
 
 static inline void
 vv_vray_point(const vv_vray *r, double t, float p[3]) {
@@ -896,6 +898,20 @@ vv_vray_iso_refine(const vv_vcache *c, const vv_vray *r, double ta, float va, do
     return 0.5 * (ta + tb);
 }
 
+/* A march of several objects (the ray caster's and the ray tracer's) meets
+ * an iso object's visible sample k after skipping hidden ones (*has == 2):
+ * its crossing search restarts at sample k - 1 (below iso, being hidden),
+ * as a march of every sample and vv_vray_iso_first have it. */
+static inline void
+vv_vray_iso_restart(const vv_vcache *c, const vv_vray *r, double k, double dt, float *pv,
+                    double *pt, int *has) {
+    float p[3];
+    *pt = (k - 1) * dt;
+    vv_vray_point(r, *pt, p);
+    *pv = vv_vcache_sample(c, p);
+    *has = 1;
+}
+
 /* Maximum (VV_MODE_MIP) or minimum (VV_MODE_MINIP) intensity projection or
  * mean (VV_MODE_XRAY) of the samples t = k dt of the clipped ray r, one
  * sample in the middle when it is shorter than a step; *depth: the
@@ -912,6 +928,14 @@ vv_vray_iso_refine(const vv_vcache *c, const vv_vray *r, double ta, float va, do
  * name an earlier sample of the same colour. */
 void vv_vray_project(const vv_vcache *c, const vv_vray *r, vv_render_mode mode, double dt,
                      int skipping, float lo, float hi, float *value, float *depth);
+/* The X-ray sum of ray r: the values of its samples t = k dt added in
+ * order (eight at a time with @p avx2 and 16-bit values: the same values
+ * and order) into *sum, their number returned, *depth its entry; a ray
+ * shorter than a step has one sample, in the middle (its depth).
+ * vv_vray_project's X-ray mean is *sum / n; region renders (VV_REGION_SUM)
+ * add up the sums of their rays' pieces. Thread-safe. */
+long vv_vray_xray_sum(const vv_vcache *c, const vv_vray *r, double dt, int avx2, double *sum,
+                      float *depth);
 /* vv_vray_project with the bounds of tables @p t (plo, phi) and, with
  * @p skipping, their distances pdist to leap through subvolumes that hold
  * nothing beyond the starting bound. With @p avx2 (vv_vc_have_avx2) and
@@ -946,13 +970,22 @@ void vv_vray_project_channels(const vv_vcache *const *cs, const vv_vtables *cons
  * hidden when its values all lie below iso): the sample values in
  * order (eight at a time with @p avx2 and 16-bit values: the same values),
  * a crossing between two consecutive ones refined by vv_vray_iso_refine;
- * after a stretch of hidden subvolumes the search restarts at the exit of
- * the subvolume before the run, and the ray's first sample counts as a hit
- * when it is already at or above iso (a cut face). Returns the crossing's
- * ray parameter, or -1 for none. Shared by the ray caster and the ray
- * tracer, so that their isosurfaces agree bit for bit. Thread-safe. */
+ * after a stretch of hidden subvolumes the search restarts at the sample
+ * before the run (so the crossing is the same with skipping on or off, and
+ * in a region's voxels), and the ray's first sample counts as a hit
+ * when it is already at or above iso (a cut face). With @p cont (a region
+ * render whose first sample is not the whole ray's: vv_vray_clip_region
+ * said so) the search starts from the sample before the region's first,
+ * read from its ghost voxels, so that the crossing between them is found
+ * here (VV_REGION_NEAREST); when that sample is already at or above iso
+ * the whole ray crossed before it, and it is returned as a hit (the
+ * region in front holds a crossing at most as deep, which the combine
+ * keeps; a neighbour of another level may not, and this hit then closes
+ * the crack). Returns the crossing's ray parameter, or -1 for none.
+ * Shared by the ray caster and the ray tracer, so that their isosurfaces
+ * agree bit for bit. Thread-safe. */
 double vv_vray_iso_first(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double dt,
-                         float iso, int avx2);
+                         float iso, int avx2, int cont);
 
 /* The bounds @p lo, @p hi of vv_vray_project for a projection table @p t
  * ({alpha, r, g, b} entries): the largest stored value below which every

@@ -9,6 +9,8 @@
  *   render, MIP and MinIP bit for bit; each brick read at most once a frame
  *   (counted), bricks outside the transfer function skipped unread, the
  *   cache within its budget; a renderer without the contract is refused;
+ *   an isosurface by raycast >= 60 dB against memory (bricks below the
+ *   isovalue skipped unread), refused by raytrace; X-ray bit for bit;
  * - the proxy (coarse whole volume) spans the same world box;
  * - a small synthetic volume: .vvb round trip voxel for voxel;
  * - bad input: a .vvb whose index sends a brick past the end of the file,
@@ -129,6 +131,77 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
                 vv_renderer_free(ooc);
                 vv_world_free(w);
             }
+    {
+        /* an isosurface: each brick finds the crossings between its samples
+         * and the one before them (read from its ghost voxels), the nearest
+         * wins; a brick's one ghost voxel leaves the gradient of a crossing
+         * just before its box one-sided, so shading may differ in the last
+         * bits there; bricks wholly below the isovalue are skipped unread */
+        vv_world *w = head_world(head, VV_MODE_ISO, 0.6);
+        w->objects[0]->isovalue = 600;
+        vv_renderer *mem = NULL, *ooc = NULL, *rt = NULL;
+        vt_ok(vv_renderer_new(&mem, "raycast"));
+        vt_ok(vv_renderer_new(&ooc, "raycast"));
+        vt_ok(vv_renderer_new(&rt, "raytrace"));
+        vt_ok(vv_renderer_set_option(mem, "refinement", "off"));
+        vv_image *ref = NULL, *img = NULL;
+        vt_ok(vv_image_new(&ref, w->view.width, w->view.height));
+        vt_ok(vv_image_new(&img, w->view.width, w->view.height));
+        vt_ok(vv_renderer_render(mem, w, &w->view, NULL, ref));
+        vv_bricked_stats before, after;
+        vv_bricked_stats_get(b, &before);
+        vt_ok(vv_renderer_render_bricks(ooc, w, 0, &src, &w->view, NULL, img));
+        frames++;
+        vv_bricked_stats_get(b, &after);
+        int same = 0, lit = 0;
+        const double db = psnr(ref, img, &same);
+        for (size_t i = 0; i < (size_t)img->width * img->height; i++)
+            lit += img->rgba[4 * i + 3] > 0.5f;
+        printf("%s raycast iso 600: %s %.1f dB, %d pixels of surface; %llu bricks skipped\n", what,
+               same ? "bit-identical" : "differs", db, lit,
+               (unsigned long long)(after.skipped - before.skipped));
+        assert_true(db >= 60);
+        assert_true(lit > 1000);
+        assert_true(after.skipped > before.skipped);
+        /* the ray tracer draws no iso regions (it refuses the first brick,
+         * read by then) */
+        assert_int_equal(vv_renderer_render_bricks(rt, w, 0, &src, &w->view, NULL, img),
+                         VV_ERR_UNSUPPORTED);
+        frames++;
+        assert_non_null(strstr(vv_error_message(), "iso regions are drawn by raycast"));
+        /* X-ray: each brick's sums and counts add up, the mean classified at
+         * the end as the whole render classifies it */
+        vv_default_scene_options xo; /* the default X-ray ramp over the range */
+        vv_default_scene_options_init(&xo);
+        xo.mode = VV_MODE_XRAY;
+        xo.width = 96;
+        xo.height = 88;
+        xo.azimuth = 0.6;
+        xo.elevation = 0.3;
+        vv_world *wx = NULL;
+        vt_ok(vv_world_new_for_volume(&wx, head, &xo));
+        vt_ok(vv_renderer_render(mem, wx, &wx->view, NULL, ref));
+        vt_ok(vv_renderer_render_bricks(ooc, wx, 0, &src, &wx->view, NULL, img));
+        vv_world_free(wx);
+        frames++;
+        const double dbx = psnr(ref, img, &same);
+        int depths = 1;
+        for (size_t i = 0; i < (size_t)img->width * img->height; i++)
+            depths &= ref->depth[i] == img->depth[i];
+        int shown = 0; /* pixels of the head, not a black image */
+        for (size_t i = 0; i < (size_t)img->width * img->height; i++)
+            shown += img->rgba[4 * i] > 0.01f;
+        printf("%s raycast xray: %s %.1f dB, depths %s, %d pixels of the head\n", what,
+               same ? "bit-identical" : "differs", dbx, depths ? "the same" : "differ", shown);
+        assert_true(same && depths);
+        assert_true(shown > 1000);
+        vv_image_free(ref);
+        vv_image_free(img);
+        vv_renderer_free(mem);
+        vv_renderer_free(ooc);
+        vv_renderer_free(rt);
+        vv_world_free(w);
+    }
     {
         /* a renderer without the region contract is refused, naming it */
         vv_world *w = head_world(head, VV_MODE_COMPOSITE, 0.6);

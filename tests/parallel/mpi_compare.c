@@ -5,12 +5,12 @@
  * (raycast; raytrace at quality 1 without adaptive refinement, one ray a
  * pixel with its shadows, which
  * every rank traces through the World's whole volume), and compares the
- * float images: maximum and minimum intensity projection bit for bit,
- * composite >= 50 dB PSNR. The volumes are a synthetic 70x66x60 u16 volume whose
- * objects straddle the brick faces (they sit around the middle of every
- * axis, where the first cuts fall) and, when ../shared is there, the CT
- * head. Then a World that one rank cannot render (rank 1's object hidden)
- * must fail on every rank with rank 1's error, without hanging.
+ * float images: maximum and minimum intensity projection, X-ray and the
+ * isosurface (raycast) bit for bit, composite >= 50 dB PSNR. The volumes are a synthetic 70x66x60
+ * u16 volume whose objects straddle the brick faces (they sit around the middle of every axis,
+ * where the first cuts fall) and, when ../shared is there, the CT head. Then a World that one rank
+ * cannot render (rank 1's object hidden) must fail on every rank with rank 1's error, without
+ * hanging.
  *
  * usage: mpi_compare [DATA_DIR]; prints one line per case on rank 0 and
  * exits 0 when all pass (the same exit code on every rank).
@@ -97,6 +97,8 @@ run_case_with(const char *renderer, const char *name, vv_volume *vol, vv_render_
     if (rank == 0) {
         const char *what = mode == VV_MODE_MIP     ? "mip"
                            : mode == VV_MODE_MINIP ? "minip"
+                           : mode == VV_MODE_ISO   ? "iso"
+                           : mode == VV_MODE_XRAY  ? "xray"
                                                    : "composite";
         const char *how = method == VV_COMPOSITING_BINARY_SWAP ? "binary-swap" : "radix-k";
         if (s != VV_OK) {
@@ -116,9 +118,15 @@ run_case_with(const char *renderer, const char *name, vv_volume *vol, vv_render_
             vv_renderer_free(ren);
             int same = 0;
             const double db = s == VV_OK ? psnr(one, dist, &same) : 0;
-            const int ok = s == VV_OK && (mode == VV_MODE_COMPOSITE ? db >= 50 : same);
-            printf("%s %s %s %s %s%s np %d: %s, %.1f dB\n", ok ? "ok" : "FAIL", renderer, name,
-                   what, how, ortho ? " ortho" : "", size, same ? "bit-identical" : "differs", db);
+            int lit = 0; /* an isosurface (an X-ray image) that is there */
+            const float seen = mode == VV_MODE_XRAY ? 0.02f : 0.5f;
+            for (size_t i = 0; s == VV_OK && i < (size_t)one->width * one->height; i++)
+                lit += one->rgba[4 * i + 3] > seen;
+            const int ok = s == VV_OK && (mode == VV_MODE_COMPOSITE ? db >= 50 : same) &&
+                           ((mode != VV_MODE_ISO && mode != VV_MODE_XRAY) || lit > 200);
+            printf("%s %s %s %s %s%s np %d: %s, %.1f dB, %d pixels seen\n", ok ? "ok" : "FAIL",
+                   renderer, name, what, how, ortho ? " ortho" : "", size,
+                   same ? "bit-identical" : "differs", db, lit);
             failures += !ok;
         }
     } else if (s != VV_OK) {
@@ -177,6 +185,12 @@ main(int argc, char **argv) {
         run_case_with("raytrace", "synthetic", syn, modes[m], 30, 20, 0, VV_COMPOSITING_BINARY_SWAP,
                       4);
     }
+    /* isosurfaces: each rank's crossings, the nearest kept (two ghost voxels) */
+    run_case("synthetic", syn, VV_MODE_ISO, 30, 20, 0, VV_COMPOSITING_BINARY_SWAP, 4);
+    run_case("synthetic", syn, VV_MODE_ISO, 110, -35, 1, VV_COMPOSITING_RADIX_K, 2);
+    /* X-ray: the ranks' sums and counts add up, rank 0 classifies the means */
+    run_case("synthetic", syn, VV_MODE_XRAY, 30, 20, 0, VV_COMPOSITING_BINARY_SWAP, 4);
+    run_case("synthetic", syn, VV_MODE_XRAY, 110, -35, 1, VV_COMPOSITING_RADIX_K, 2);
     if (argc > 1) {
         char path[4096];
         snprintf(path, sizeof path, "%s/volumes/ct_head.nrrd", argv[1]);
@@ -184,6 +198,8 @@ main(int argc, char **argv) {
         if (vv_volume_load(&head, path, NULL) == VV_OK) {
             run_case("ct_head", head, VV_MODE_COMPOSITE, 200, 15, 0, VV_COMPOSITING_BINARY_SWAP, 4);
             run_case("ct_head", head, VV_MODE_MIP, 200, 15, 0, VV_COMPOSITING_RADIX_K, 3);
+            run_case("ct_head", head, VV_MODE_ISO, 200, 15, 0, VV_COMPOSITING_RADIX_K, 3);
+            run_case("ct_head", head, VV_MODE_XRAY, 200, 15, 0, VV_COMPOSITING_BINARY_SWAP, 4);
             run_case_with("raytrace", "ct_head", head, VV_MODE_COMPOSITE, 200, 15, 0,
                           VV_COMPOSITING_BINARY_SWAP, 4);
             run_case_with("raytrace", "ct_head", head, VV_MODE_MIP, 200, 15, 0,

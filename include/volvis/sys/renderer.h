@@ -49,15 +49,27 @@ extern "C" {
  * one region, at the same point, with the same classification and shading,
  * so MAX and MIN give the whole render's image bit for bit and OVER up to
  * the rounding of re-associating the over operator (≥ 50 dB; tests).
- * X-ray (a mean along the ray: a sum and a count) and iso (a crossing
- * between two samples that may lie in two regions) are not split.
+ * NEAREST (isosurfaces): a crossing between samples k - 1 and k belongs to
+ * the region that owns sample k, which reads sample k - 1 from its ghost
+ * voxels, so each region finds the crossings of the whole render; the
+ * nearest wins (shading and the refinement's start may differ in the last
+ * bits at region faces: ≥ 50 dB; tests). SUM (X-ray): each region sums
+ * the values of its samples and counts them; the sums add up, and the mean
+ * is classified once at the end (vv_region_image_finish, through the
+ * image's classify), so the image is the whole render's up to the
+ * rounding of adding the sums in another order.
  */
 typedef enum vv_region_op {
-    VV_REGION_OVER = 0, /**< composite: premultiplied colour and opacity, Porter-Duff over;
-                             depth: the front region's unless it saw nothing */
-    VV_REGION_MAX = 1,  /**< maximum intensity projection: the pixel of the larger key;
-                             equal keys keep the front one */
-    VV_REGION_MIN = 2,  /**< minimum intensity projection: the pixel of the smaller key */
+    VV_REGION_OVER = 0,    /**< composite: premultiplied colour and opacity, Porter-Duff over;
+                                depth: the front region's unless it saw nothing */
+    VV_REGION_MAX = 1,     /**< maximum intensity projection: the pixel of the larger key;
+                                equal keys keep the front one */
+    VV_REGION_MIN = 2,     /**< minimum intensity projection: the pixel of the smaller key */
+    VV_REGION_NEAREST = 3, /**< isosurface: the pixel of the smaller depth (its surface's
+                                crossing); equal depths keep the front one; no key (NAN) */
+    VV_REGION_SUM = 4,     /**< X-ray: the sums of the sample values add up (a partial pixel
+                                holds no colour until vv_region_image_finish; see
+                                vv_region_image.key) */
 } vv_region_op;
 
 /**
@@ -76,7 +88,9 @@ typedef struct vv_render_region {
     /**
      * The region's voxels: the box plus at least one voxel beyond each
      * owned face (within the volume), so that trilinear samples and
-     * central-difference gradients are the whole volume's; with the whole
+     * central-difference gradients are the whole volume's (iso mode: two,
+     * since a crossing may lie up to a step before the box; with one its
+     * gradient there is one-sided); with the whole
      * volume's spacing, origin, direction and value range; its voxel
      * (0, 0, 0) is the whole volume's voxel `offset`. Borrowed.
      */
@@ -100,7 +114,11 @@ typedef struct vv_region_image {
      * pixel, in units that order like the data and are the same in every
      * region of one render; NAN where the region took no sample. The colour
      * of the pixel is the classification of this value, so the pixel of the
-     * winning key is the whole render's pixel.
+     * winning key is the whole render's pixel. SUM: the sum s of the
+     * pixel's sample values (in such units) as key = (float)s and the
+     * remainder s - key in the pixel's red, the number of samples in its
+     * green (blue and opacity 0), depth the whole ray's entry in the region
+     * holding its first sample (else INFINITY); NAN where none.
      */
     float *key;
     vv_region_op op; /**< set by the renderer */
@@ -111,7 +129,26 @@ typedef struct vv_region_image {
      * initializer's default): the whole image is cleared.
      */
     int clear_outside;
+    /**
+     * SUM: set by the renderer's region render: the colour {opacity, r, g,
+     * b} (not premultiplied) that its whole render gives the mean value
+     * @p v (key units), for vv_region_image_finish; @p ctx is
+     * classify_ctx, owned by the renderer and valid until its next render
+     * or its destruction. NULL otherwise (an initializer's default).
+     */
+    void (*classify)(const void *ctx, float v, float entry[4]);
+    const void *classify_ctx;
 } vv_region_image;
+
+/** How the region renders of an object in @p mode combine. */
+static inline vv_region_op
+vv_region_op_for(vv_render_mode mode) {
+    return mode == VV_MODE_MIP     ? VV_REGION_MAX
+           : mode == VV_MODE_MINIP ? VV_REGION_MIN
+           : mode == VV_MODE_ISO   ? VV_REGION_NEAREST
+           : mode == VV_MODE_XRAY  ? VV_REGION_SUM
+                                   : VV_REGION_OVER;
+}
 
 /** Combines one pixel: @p f (front, updated) and @p b (behind). */
 static inline void
@@ -127,8 +164,28 @@ vv_region_pixel_combine(vv_region_op op, float f[4], float *fdepth, float *fkey,
             *fdepth = bdepth;
         return;
     }
+    if (op == VV_REGION_NEAREST) {
+        if (bdepth < *fdepth) {
+            f[0] = b[0];
+            f[1] = b[1];
+            f[2] = b[2];
+            f[3] = b[3];
+            *fdepth = bdepth;
+        }
+        return;
+    }
     if (bkey != bkey) /* behind took no sample */
         return;
+    if (op == VV_REGION_SUM && *fkey == *fkey) {
+        /* the sums, each kept as a float and its remainder */
+        const double sum = ((double)*fkey + (double)f[0]) + ((double)bkey + (double)b[0]);
+        *fkey = (float)sum;
+        f[0] = (float)(sum - (double)*fkey);
+        f[1] += b[1];
+        if (*fdepth == INFINITY)
+            *fdepth = bdepth;
+        return;
+    }
     if (*fkey != *fkey || (op == VV_REGION_MAX ? bkey > *fkey : bkey < *fkey)) {
         f[0] = b[0];
         f[1] = b[1];
@@ -151,14 +208,17 @@ void vv_region_image_combine_rect(vv_region_image *front, const vv_region_image 
 /**
  * Turns a combined partial image into the final one: colour + (1 -
  * opacity) × @p background, opacity clamped to 1 (exactly as the whole
- * render writes a pixel).
+ * render writes a pixel). SUM: each pixel's colour is first its mean
+ * (key + red) / green, classified by img->classify (opacity times colour,
+ * and the opacity; a pixel without samples or an image without classify
+ * is transparent).
  */
 void vv_region_image_finish(vv_region_image *img, vv_vec3 background);
 
 /**
  * The checks every region method starts with: @p rg->object is the World's
- * only visible object, in composite, mip or minip mode, without a solid
- * texture; *op receives how its partial images combine (over, max, min).
+ * only visible object, without a solid texture; *op receives how its
+ * partial images combine (vv_region_op_for its mode).
  * Errors: VV_ERR_UNSUPPORTED naming the object.
  */
 vv_status vv_render_region_check(const vv_world *w, const vv_render_region *rg, vv_region_op *op);
@@ -228,8 +288,8 @@ typedef struct vv_renderer_ops {
     /**
      * Optional (VV_RENDERER_REGION): renders only @p region of the World's
      * object region->object into @p out (vv_region_image), on one ray
-     * through each pixel centre. The World has that one visible object, in
-     * composite, mip or minip mode; its own volume spans the same world box
+     * through each pixel centre. The World has that one visible object
+     * (vv_render_region_check); its own volume spans the same world box
      * and holds real voxels: the whole volume (distributed rendering of an
      * in-memory volume) or a coarse proxy (out of core): a method with
      * global effects traces them through it, so they are exact only with

@@ -48,6 +48,12 @@ typedef struct rc_state {
     int simd;                        /* use AVX2 when the processor has it (for tests) */
     vv_frame_refine_settings refine; /* adaptive refinement (options refinement...) */
     int preint;                      /* pre-integrated classification (option preintegration) */
+    /* the X-ray table of the last region render in xray mode, which
+     * classifies the summed regions' means (vv_region_image.classify) */
+    struct rc_xray {
+        float lut_lo, lut_scale;
+        float lut[4 * VV_VC_LUT];
+    } xray;
 } rc_state;
 
 /* One object prepared for this render. */
@@ -109,6 +115,7 @@ typedef struct rc_frame {
     int refine;         /* adaptive image-space refinement (render_tile_refined) */
     float tolerance;    /* its tolerance, in colour and opacity */
     int preint;         /* pre-integrated classification (trace_composite_preint) */
+    int xsum;           /* a region render in xray mode: sums and counts (VV_REGION_SUM) */
 } rc_frame;
 
 /* ---------------------------------------------------------------------- */
@@ -130,7 +137,7 @@ static inline int
 ray_setup(const rc_obj *ob, const vv_ray *wr, vv_vray *r) {
     if (!vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, wr, 0, INFINITY, r))
         return 0;
-    return !ob->region || vv_vray_clip_region(r, ob->region, ob->dt, ob->inv_form);
+    return !ob->region || vv_vray_clip_region(r, ob->region, ob->dt, ob->inv_form, NULL);
 }
 
 static inline float
@@ -632,13 +639,17 @@ iso_hit(const rc_frame *fr, const rc_obj *ob, const vv_vray *r, const vv_ray *wr
 }
 
 /* One volume in iso mode: the first crossing along its runs of visible
- * subvolumes (vv_vray_iso_first, shared with the ray tracer). */
+ * subvolumes (vv_vray_iso_first, shared with the ray tracer); in a region
+ * render the crossings between the region's samples and the one before
+ * them (VV_REGION_NEAREST). */
 static void
 trace_iso_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result *res) {
     vv_vray r;
     float C[3] = {0, 0, 0}, A = 0, depth = INFINITY;
-    if (ray_setup(ob, wr, &r)) {
-        const double th = vv_vray_iso_first(ob->c, ob->bdist, &r, fr->dt, ob->iso, fr->avx2);
+    int cont = 0;
+    if (vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, wr, 0, INFINITY, &r) &&
+        (!ob->region || vv_vray_clip_region(&r, ob->region, ob->dt, ob->inv_form, &cont))) {
+        const double th = vv_vray_iso_first(ob->c, ob->bdist, &r, fr->dt, ob->iso, fr->avx2, cont);
         if (th >= 0) {
             const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
             iso_hit(fr, ob, &r, wr, v, th, C, &A);
@@ -727,15 +738,8 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
                 double te = vv_vray_cube_exit(r, p, t, VV_VC_BLOCK);
                 if (te < skip_to)
                     skip_to = te;
-                if (ob->mode == VV_MODE_ISO) {
-                    /* restart the crossing search at the block exit */
-                    double tx = te < r->t1 ? te : r->t1;
-                    float px[3];
-                    vv_vray_point(r, tx, px);
-                    prev_v[ai] = vv_vcache_sample(c, px);
-                    prev_t[ai] = tx;
-                    has_prev[ai] = 1;
-                }
+                if (ob->mode == VV_MODE_ISO)
+                    has_prev[ai] = 2; /* restart at the sample before the next visible one */
                 continue;
             }
             sampled = 1;
@@ -743,6 +747,8 @@ trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
             if (ob->mode == VV_MODE_ISO) {
                 float iso = ob->iso;
                 double th = -1;
+                if (has_prev[ai] == 2)
+                    vv_vray_iso_restart(c, r, k, dt, &prev_v[ai], &prev_t[ai], &has_prev[ai]);
                 if (!has_prev[ai]) {
                     if (val >= iso && t - r->t0 < dt)
                         th = t; /* entered already inside (cut face) */
@@ -1001,10 +1007,59 @@ tile_stats(const rc_frame *fr, const vv_render_stats *work) {
     }
 }
 
+/* A region render in xray mode: pixel (x, y)'s sum of the region's
+ * sample values and their count (vv_region_image.key, VV_REGION_SUM), the
+ * whole ray's entry as the depth where the region holds its first sample. */
+static void
+xray_sum_pixel(const rc_frame *fr, int x, int y, vv_render_stats *work) {
+    const rc_obj *ob = &fr->objs[0];
+    const vv_ray wr = vv_camera_ray(&fr->cam, x, y);
+    const size_t at = (size_t)y * (size_t)fr->out->width + (size_t)x;
+    float *px = fr->out->rgba + 4 * at;
+    px[0] = px[1] = px[2] = px[3] = 0;
+    fr->out->depth[at] = INFINITY;
+    fr->key[at] = NAN;
+    vv_vray r;
+    int cont = 0;
+    if (!vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, &wr, 0, INFINITY, &r))
+        return;
+    const float entry = (float)r.t0;
+    const int shortray = vv_ceil_pos(r.t0 / fr->dt) > vv_floor_pos(r.t1 / fr->dt);
+    if (!vv_vray_clip_region(&r, ob->region, ob->dt, ob->inv_form, &cont))
+        return;
+    double sum;
+    float depth;
+    const long n = vv_vray_xray_sum(ob->c, &r, fr->dt, fr->avx2, &sum, &depth);
+    if (n <= 0)
+        return;
+    const float hi = (float)sum;
+    fr->key[at] = hi;
+    px[0] = (float)(sum - (double)hi);
+    px[1] = (float)n;
+    /* the whole ray's depth: its entry, or its one middle sample */
+    fr->out->depth[at] = shortray ? depth : cont ? INFINITY : entry;
+    work->samples += (uint64_t)n;
+}
+
+static void
+xray_classify(const void *ctx, float v, float e[4]) {
+    const struct rc_xray *x = ctx;
+    float i = (v - x->lut_lo) * x->lut_scale;
+    i = i < 0 ? 0 : i > VV_VC_LUT - 1 ? VV_VC_LUT - 1 : i;
+    memcpy(e, x->lut + 4 * (int)i, 4 * sizeof(float));
+}
+
 static vv_status
 render_tile(void *user, const vv_frame_tile *t) {
     const rc_frame *fr = user;
     vv_render_stats work = {0, 0};
+    if (fr->xsum) {
+        for (int y = t->y0; y < t->y1; y++)
+            for (int x = t->x0; x < t->x1; x++)
+                xray_sum_pixel(fr, x, y, &work);
+        tile_stats(fr, &work);
+        return VV_OK;
+    }
     for (int y = t->y0; y < t->y1; y++)
         for (int x = t->x0; x < t->x1; x++) {
             float px[5], key;
@@ -1141,6 +1196,17 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
     for (int i = 0; i < fr.n_obj && s == VV_OK; i++)
         for (int k = 0; k < objs[i].nch; k++)
             objs[i].ch_extras |= objs[i].ch[k].extras;
+    fr.xsum = region && fr.n_obj == 1 && objs[0].mode == VV_MODE_XRAY;
+    if (s == VV_OK && fr.xsum && objs[0].nch)
+        s = vv_error_set(VV_ERR_UNSUPPORTED,
+                         "object '%s': xray regions of a multi-channel object are not rendered",
+                         objs[0].obj->name);
+    if (s == VV_OK && fr.xsum) {
+        /* the table that classifies the summed means (xray_classify) */
+        st->xray.lut_lo = objs[0].lut_lo;
+        st->xray.lut_scale = objs[0].lut_scale;
+        memcpy(st->xray.lut, objs[0].lut, sizeof st->xray.lut);
+    }
     if (s == VV_OK) {
         fr.key = region && fr.n_comp == 0 ? key : NULL;
         /* adaptive refinement: whole renders only (a region's pixels are
@@ -1192,7 +1258,11 @@ rc_render_region(void *state, const vv_world *w, const vv_view *view,
     vv_world tmp = *w;
     tmp.objects = objs;
     tmp.n_objects = 1;
-    return render_frame(state, &tmp, view, opt, region, out->image, out->key);
+    rc_state *st = state;
+    s = render_frame(st, &tmp, view, opt, region, out->image, out->key);
+    out->classify = out->op == VV_REGION_SUM ? xray_classify : NULL;
+    out->classify_ctx = out->op == VV_REGION_SUM ? &st->xray : NULL;
+    return s;
 }
 
 static vv_status

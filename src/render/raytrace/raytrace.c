@@ -597,6 +597,11 @@ rt_render_region(void *state, const vv_world *w, const vv_view *view,
     vv_status s = vv_render_region_part(w, region, &out->op, &part);
     if (s != VV_OK)
         return s;
+    if (part.mode == VV_MODE_ISO || part.mode == VV_MODE_XRAY)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "raytrace: object '%s': %s regions are drawn by raycast, not by the "
+                            "ray tracer",
+                            part.name, part.mode == VV_MODE_ISO ? "iso" : "xray");
     return render_frame(state, w, view, opt, region, &part, out->image,
                         part.mode == VV_MODE_COMPOSITE ? NULL : out->key);
 }

@@ -267,7 +267,7 @@ static inline int
 vray_setup(const rt_vobj *ob, const vv_ray *wr, double tmin, double tmax, vv_vray *r) {
     if (!vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, wr, tmin, tmax, r))
         return 0;
-    return !ob->region || vv_vray_clip_region(r, ob->region, ob->region_dt, ob->inv_form);
+    return !ob->region || vv_vray_clip_region(r, ob->region, ob->region_dt, ob->inv_form, NULL);
 }
 
 static inline float

@@ -276,7 +276,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
     if (na == 1 && fr->vobjs[act[0]].mode == VV_MODE_ISO && fr->vobjs[act[0]].group < 0) {
         /* one isosurface: the ray caster's search (vv_vray_iso_first) */
         const rt_vobj *ob = &fr->vobjs[act[0]];
-        const double th = vv_vray_iso_first(ob->c, ob->bdist, &rays[0], dt, ob->iso, fr->avx2);
+        const double th = vv_vray_iso_first(ob->c, ob->bdist, &rays[0], dt, ob->iso, fr->avx2, 0);
         if (th >= 0) {
             iso_hit(fr, ob, &rays[0], wr, v, th, depth, weight, C, &A);
             *dep = th < *dep ? (float)th : *dep;
@@ -316,14 +316,8 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
                 double te = leap_exit(ob, r, p, t, ob->bdist[b]);
                 if (te < skip_to)
                     skip_to = te;
-                if (ob->mode == VV_MODE_ISO) {
-                    double tx = te < r->t1 ? te : r->t1;
-                    float px[3];
-                    vv_vray_point(r, tx, px);
-                    prev_v[ai] = vv_vcache_sample(c, px);
-                    prev_t[ai] = tx;
-                    has_prev[ai] = 1;
-                }
+                if (ob->mode == VV_MODE_ISO)
+                    has_prev[ai] = 2; /* restart at the sample before the next visible one */
                 continue;
             }
             sampled = 1;
@@ -331,6 +325,8 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
             if (ob->mode == VV_MODE_ISO) {
                 const float iso = ob->iso;
                 double th = -1;
+                if (has_prev[ai] == 2)
+                    vv_vray_iso_restart(c, r, k, dt, &prev_v[ai], &prev_t[ai], &has_prev[ai]);
                 if (!has_prev[ai]) {
                     if (val >= iso && t - r->t0 < dt)
                         th = t;
