@@ -277,19 +277,23 @@ int vv_object_surface_value(const vv_object *obj, double *iso, vv_vec3 *color);
 struct vv_brick_source; /* include/volvis/sys/source.h */
 
 /**
- * Renders object @p object of @p w (a volume object in composite, mip or
- * minip mode; no other visible object) with the voxels of @p src, brick by
- * brick in front-to-back order through @p view, with renderer @p r, which
- * must declare VV_RENDERER_REGION (its options apply): each brick is one
- * region render (include/volvis/sys/renderer.h) and the partial images are
- * composited in that order (over; max or min for mip and minip). The
+ * Renders object @p object of @p w (a volume object in any mode; no other
+ * visible object) with the voxels of @p src, brick by brick in
+ * front-to-back order through @p view, with renderer @p r, which must
+ * declare VV_RENDERER_REGION (its options apply; raycast draws every mode,
+ * raytrace no iso or xray): each brick is one region render
+ * (include/volvis/sys/renderer.h) and the partial images are combined in
+ * that order (over; max or min for mip and minip; the nearest crossing for
+ * iso; the sums, then the mean classified, for xray). The
  * object's own volume gives the World's defaults and the renderer's
  * whole-volume context (raytrace traces shadows through it: exact when it is
  * the whole volume, from a coarse proxy otherwise); the geometry comes from
  * the source's header. Bricks whose min/max the transfer function makes
- * transparent are skipped unread (composite); every other brick is read at
- * most once a frame. The image is the in-memory render's up to the rounding
- * of compositing (bit for bit for mip and minip). Errors:
+ * transparent are skipped unread (composite), and so are those wholly below
+ * the isovalue (iso); every other brick is read at most once a frame. The
+ * image is the in-memory render's up to the rounding of compositing (bit
+ * for bit for mip, minip and xray; iso up to the gradient of a crossing
+ * just before a brick, whose one ghost voxel makes it one-sided). Errors:
  * VV_ERR_UNSUPPORTED (the renderer has no region method, a mode it cannot
  * split, other visible objects), VV_ERR_INVALID, those of reading and
  * rendering.
@@ -337,16 +341,17 @@ void vv_lod_init(vv_lod *lod);
  * whose chosen level (lod) is at least its depth is one region render
  * (include/volvis/sys/renderer.h) of that level's voxels -- the node's box
  * mapped into the level's index space through the levels' scale and
- * translation, one voxel beyond each face read -- else its eight children
+ * translation, one voxel beyond each face read (two for iso) -- else its eight children
  * are, nearest first. Nodes tile level 0's box exactly, so neighbours at
  * different levels meet without cracks (the values on the two sides of a
  * face are those of two levels). Each level samples at the object's step
  * in its own voxels, opacity corrected for the step's world length. A node
  * whose min/max the source knows and the transfer function makes
- * transparent is skipped unread (composite). The object's own volume gives
+ * transparent (composite), or wholly below the isovalue (iso), is skipped
+ * unread. The object's own volume gives
  * the World's defaults (a proxy); the geometry comes from the source. With
  * level 0 everywhere the image is vv_renderer_render_bricks's of level 0
- * (bit for bit for mip and minip against the in-memory render). The
+ * (bit for bit for mip, minip, xray and iso against the in-memory render). The
  * object's transform and level 0's direction apply to every level.
  * Thread-safety: as the renderer; @p src is used from this thread. Errors
  * as vv_renderer_render_bricks; those of the source's reads.

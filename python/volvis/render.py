@@ -183,7 +183,9 @@ def render(scene, renderer=None, mode=None, size=None, quality=None, view=None, 
     """Renders a World or a Volume and returns the image as a numpy array.
 
     scene: a :class:`World`, a :class:`Volume` or a numpy array (shown in
-    the default scene of ``volvis render FILE``, World.for_volume).
+    the default scene of ``volvis render FILE``, World.for_volume), or a
+    :class:`Pyramid` (rendered out of core by level of detail:
+    :meth:`Pyramid.render`).
     renderer: a registry name (``volvis.renderers``), a :class:`Renderer`
     (keeps its caches between calls), or None: the World's render settings,
     else "raycast". mode: "composite", "mip", "minip", "xray" or "iso" for
@@ -206,6 +208,26 @@ def render(scene, renderer=None, mode=None, size=None, quality=None, view=None, 
     array a volume shares is checked for writes first (see Volume).
     Errors: InvalidError (unknown renderer or option, bad size), NoMemoryError,
     and the renderer's own errors, with the library's message."""
+    from .pyramid import Pyramid
+    if isinstance(scene, Pyramid):
+        return scene.render(renderer=renderer, mode=mode, size=size, quality=quality, view=view,
+                            dtype=dtype, depth=depth, gamma=gamma, alpha=alpha, threads=threads,
+                            progress=progress, **options)
+    frame = _prepare(scene, renderer, mode, size, quality, view, dtype, threads, options)
+    world, r, vc, img, ro = frame
+
+    def run(prog):
+        ro.progress = prog
+        return lib.vv_renderer_render(r._c, world._c, vc, ro, img)
+
+    with r._lock:
+        _lib.call_long(run, progress, desc="render")
+    return _finish(img, vc, dtype, depth, gamma, alpha)
+
+
+def _prepare(scene, renderer, mode, size, quality, view, dtype, threads, options):
+    """What a render call sets up: (world, renderer, view, image, options),
+    as :func:`render` documents its arguments."""
     dtype = np.dtype(dtype)
     if dtype not in (np.dtype(np.uint8), np.dtype(np.float32)):
         raise InvalidError("render: dtype must be uint8 or float32, got %s" % dtype)
@@ -255,13 +277,12 @@ def render(scene, renderer=None, mode=None, size=None, quality=None, view=None, 
     ro.quality = lib.vv_render_settings_quality(rs) if quality is None else int(quality)
     if not 0 <= ro.quality <= 2:
         raise InvalidError("render: quality %d is outside 0..2" % ro.quality)
+    return world, r, vc, img, ro
 
-    def run(prog):
-        ro.progress = prog
-        return lib.vv_renderer_render(r._c, wc, vc, ro, img)
 
-    with r._lock:
-        _lib.call_long(run, progress, desc="render")
+def _finish(img, vc, dtype, depth, gamma, alpha):
+    """The rendered vv_image as :func:`render` returns it."""
+    dtype = np.dtype(dtype)
     hgt, wid = vc.height, vc.width
     if dtype == np.uint8:
         ch = 4 if alpha else 3

@@ -1,0 +1,230 @@
+"""Multiresolution volumes out of core: OME-Zarr stores and BigDataViewer /
+Imaris HDF5 pyramids read by chunks within a memory limit (vv_pyramid,
+include/volvis/bricks.h; docs/parallel.md "OME-Zarr pyramids by level of
+detail"), rendered by level of detail (vv_renderer_render_multires).
+
+    pyr = volvis.Pyramid("cells.ome.zarr", memory_limit="512M")
+    pyr.levels                      # [Level(shape=(z, y, x), spacing=..., ...), ...]
+    block = pyr.read(1, (0, 0, 0), (63, 63, 63))   # a box of level 1, numpy [k, j, i]
+    img = pyr.render(mode="mip", size=(512, 512))  # level of detail: 1 voxel a pixel
+    img = volvis.render(pyr, mode="iso", isovalue=...)  # the same through volvis.render
+"""
+import collections
+import os
+
+import numpy as np
+
+from . import _lib
+from ._lib import check, cstr, ffi, lib, pystr
+from .errors import InvalidError
+from .volume import Volume
+from .world import World
+
+__all__ = ["Pyramid", "Level"]
+
+Level = collections.namedtuple("Level", "shape dtype spacing origin")
+Level.__doc__ = """One level of a :class:`Pyramid`: ``shape`` (k, j, i) voxels, numpy
+``dtype``, ``spacing`` and ``origin`` (i, j, k, world units; the level's
+scale and translation)."""
+
+_SUFFIX = {"": 1, "K": 1 << 10, "M": 1 << 20, "G": 1 << 30}
+
+
+def _bytes(limit):
+    """A memory limit: an int (bytes) or text with a K, M or G suffix."""
+    if isinstance(limit, (int, np.integer)):
+        n = int(limit)
+    else:
+        text = str(limit).strip().upper().rstrip("B").rstrip("I")
+        unit = text[-1:] if text[-1:] in "KMG" else ""
+        try:
+            n = int(float(text[:-1] if unit else text) * _SUFFIX[unit])
+        except ValueError:
+            raise InvalidError("Pyramid: memory_limit %r is not a size (bytes, or a number with "
+                               "K, M or G)" % (limit,)) from None
+    if n <= 0:
+        raise InvalidError("Pyramid: memory_limit must be positive, got %r" % (limit,))
+    return n
+
+
+class Pyramid:
+    """A multiresolution volume read by boxes within ``memory_limit`` bytes
+    of decoded chunks (an int, or text such as "512M"; default "1G"):
+    an OME-Zarr store or plain Zarr v2 array (a folder), or a BigDataViewer
+    HDF5 or Imaris ``.ims`` file; channel ``channel`` at time step ``time``
+    of every level. Opening reads the metadata and the coarsest level only.
+
+    Errors: FileError, FormatError (inconsistent multiscales, neither HDF5
+    layout), LimitError (a limit below one box's working set), with the
+    library's message naming the store. One Pyramid is used from one thread
+    at a time (a lock serialises its calls)."""
+
+    def __init__(self, path, channel=0, time=None, memory_limit="1G"):
+        import threading
+        self.path = os.fspath(path)
+        out = ffi.new("vv_pyramid **")
+        info = ffi.new("vv_load_info *")
+        limit = _bytes(memory_limit)
+        t = -1 if time is None else int(time)
+        _lib.call_long(lambda prog: lib.vv_pyramid_open(out, cstr(self.path), int(channel), t,
+                                                        limit, info), None)
+        self._c = ffi.gc(out[0], lib.vv_pyramid_free)
+        self._lock = threading.Lock()
+        self.memory_limit = limit
+        self.channels = int(info.n_channels)  # in the file
+        self.times = int(info.n_times)
+        self._proxy = None
+
+    # ---- what it holds
+    @property
+    def levels(self):
+        """The levels, finest first, as :class:`Level` tuples."""
+        from .volume import VOXEL_TYPES
+        out = []
+        for L in range(lib.vv_pyramid_levels(self._c)):
+            h = lib.vv_pyramid_level(self._c, L)
+            out.append(Level(shape=(h.dims[2], h.dims[1], h.dims[0]),
+                             dtype=VOXEL_TYPES[pystr(lib.vv_voxel_type_name(h.type))],
+                             spacing=tuple(h.spacing[a] for a in range(3)),
+                             origin=tuple(h.origin[a] for a in range(3))))
+        return out
+
+    @property
+    def range(self):
+        """(min, max) of the values: the omero window, else the coarsest level's."""
+        h = lib.vv_pyramid_level(self._c, 0)
+        return (h.range[0], h.range[1])
+
+    @property
+    def stats(self):
+        """What the pyramid did since it was opened (vv_pyramid_stats): chunk
+        reads per level, cache hits, missing chunks, evictions, bytes read,
+        the cache's peak, frames and the most reads of one chunk in a frame."""
+        st = ffi.new("vv_pyramid_stats *")
+        lib.vv_pyramid_stats_get(self._c, st)
+        n = lib.vv_pyramid_levels(self._c)
+        return {"chunk_reads": [int(st.chunk_reads[L]) for L in range(n)],
+                "chunk_hits": int(st.chunk_hits), "missing": int(st.missing),
+                "evictions": int(st.evictions), "bytes_read": int(st.bytes_read),
+                "peak_bytes": int(st.peak_bytes), "frames": int(st.frames),
+                "max_reads_per_frame": int(st.max_reads_per_frame)}
+
+    # ---- voxels
+    def read(self, level=0, lo=(0, 0, 0), hi=None):
+        """Voxels ``lo`` .. ``hi`` (inclusive, (i, j, k); default the whole
+        level) of level ``level`` as a numpy array [k, j, i] (a copy),
+        assembled from the cached chunks and those read for it. Errors:
+        InvalidError (a box outside the level), LimitError (it does not fit
+        the memory limit), those of reading a chunk."""
+        vol = self._read(level, lo, hi)
+        return np.array(vol.array, copy=True)
+
+    def _read(self, level, lo, hi):
+        n = lib.vv_pyramid_levels(self._c)
+        if not 0 <= int(level) < n:
+            raise InvalidError("Pyramid.read: level %d of %d" % (int(level), n))
+        h = lib.vv_pyramid_level(self._c, int(level))
+        if hi is None:
+            hi = (h.dims[0] - 1, h.dims[1] - 1, h.dims[2] - 1)
+        clo = ffi.new("int[3]", [int(x) for x in lo])
+        chi = ffi.new("int[3]", [int(x) for x in hi])
+        out = ffi.new("vv_volume **")
+        with self._lock:
+            _lib.call_long(lambda prog: lib.vv_pyramid_read_box(self._c, int(level), clo, chi,
+                                                                out), None)
+        return Volume._own(out[0])
+
+    def proxy(self):
+        """The coarsest level as a :class:`Volume` stretched over level 0's
+        box (what ``volvis render STORE`` frames the view and chooses the
+        default transfer function from); kept after the first call."""
+        if self._proxy is None:
+            top = lib.vv_pyramid_levels(self._c) - 1
+            v = self._read(top, (0, 0, 0), None)
+            h, f = lib.vv_pyramid_level(self._c, top), lib.vv_pyramid_level(self._c, 0)
+            sp = []
+            for a in range(3):
+                sp.append(f.spacing[a] * (f.dims[a] - 1) / (h.dims[a] - 1) if h.dims[a] > 1
+                          else f.spacing[a])
+            v.spacing = sp
+            v.origin = [f.origin[a] for a in range(3)]
+            self._proxy = v
+        return self._proxy
+
+    def world(self, mode="composite", tf_range=None, isovalue=None, size=None, azimuth=0.0,
+              elevation=0.0, zoom=1.0):
+        """The default scene of ``volvis render STORE``: World.for_volume of
+        the :meth:`proxy`, its default transfer function's opacity per level
+        0's smallest voxel spacing (as the CLI sets it)."""
+        proxy = self.proxy()
+        w = World.for_volume(proxy, mode=mode, tf_range=tf_range, isovalue=isovalue, size=size,
+                             azimuth=azimuth, elevation=elevation, zoom=zoom)
+        f = lib.vv_pyramid_level(self._c, 0)
+        ph = min(f.spacing[a] for a in range(3))
+        pp = min(proxy.spacing)
+        for i in range(w._c.n_objects):
+            tf = w._c.objects[i].tf
+            if abs(tf.opacity_unit_distance - pp) <= 1e-12 * pp:
+                tf.opacity_unit_distance = ph
+        return w
+
+    # ---- rendering
+    def render(self, world=None, renderer=None, mode=None, size=None, lod=1.0, level=None,
+               quality=None, view=None, dtype=np.uint8, depth=False, gamma=1.0, alpha=True,
+               threads=0, progress=None, return_lod=False, **options):
+        """Renders the pyramid out of core by level of detail
+        (vv_renderer_render_multires) and returns the image as
+        :func:`volvis.render` does.
+
+        world: a :class:`World` whose object 0 is the volume object to draw
+        (its own volume gives the defaults, the geometry comes from the
+        pyramid; no other visible object), default :meth:`world` (``mode``
+        and ``size`` applied). lod: each node of the volume at the coarsest
+        level whose voxel projects to at most ``lod`` pixels; level: every
+        node at this level instead (0: full resolution, which equals the
+        in-memory render of level 0: MIP, MinIP, X-ray and the isosurface
+        bit for bit, composite to the rounding of compositing). renderer:
+        one with the region contract ("raycast", the default, draws every
+        mode; "raytrace"). return_lod: also return a dict of the nodes
+        drawn per level and the nodes skipped unread.
+
+        Errors: UnsupportedError (a renderer without regions, other visible
+        objects), those of reading chunks and rendering."""
+        from .render import _finish, _prepare
+        if world is None:
+            world = self.world(mode=mode or "composite", size=size)
+            mode = None
+        if renderer is None:
+            renderer = "raycast"
+        w, r, vc, img, ro = _prepare(world, renderer, mode, size, quality, view, dtype, threads,
+                                     options)
+        src = ffi.new("vv_multires_source *")
+        lib.vv_pyramid_source(self._c, src)
+        lodc = ffi.new("vv_lod *")
+        lib.vv_lod_init(lodc)
+        if level is not None:
+            lodc.level = int(level)
+        else:
+            if not float(lod) > 0:
+                raise InvalidError("Pyramid.render: lod must be > 0, got %r" % (lod,))
+            lodc.voxel_pixels = float(lod)
+
+        def run(prog):
+            ro.progress = prog
+            return lib.vv_renderer_render_multires(r._c, w._c, 0, src, vc, ro, lodc, img)
+
+        with self._lock, r._lock:
+            _lib.call_long(run, progress, desc="render")
+        out = _finish(img, vc, dtype, depth, gamma, alpha)
+        if return_lod:
+            n = lib.vv_pyramid_levels(self._c)
+            info = {"nodes": [int(lodc.nodes[L]) for L in range(n)],
+                    "skipped": int(lodc.skipped)}
+            return out, info
+        return out
+
+    def __repr__(self):
+        lv = self.levels
+        return "<volvis.Pyramid %r: %d levels, %s %s, limit %d MiB>" % (
+            self.path, len(lv), "x".join(str(x) for x in lv[0].shape[::-1]), lv[0].dtype,
+            self.memory_limit >> 20)

@@ -1,0 +1,127 @@
+"""volvis.Pyramid: OME-Zarr pyramids written by zarr-python (an independent
+writer) read by box and rendered out of core by level of detail.
+
+- every level's voxels are zarr-python's, with the level's scale and
+  translation;
+- level 0 out of core within 256 KiB of chunks (the level is 279 KiB) against the in-memory render
+  of level 0 (the same World, one ray a pixel): MIP, MinIP, X-ray and the
+  isosurface bit for bit in float, composite >= 50 dB; the cache within
+  the limit;
+- by level of detail the nodes take coarser levels, and volvis.render(pyr)
+  draws the store's default scene;
+- bad input: a missing store, a memory limit that is not a size, a box
+  outside a level, a renderer without regions: the library's errors.
+"""
+import numpy as np
+import pytest
+
+import volvis
+
+zarr = pytest.importorskip("zarr")
+numcodecs = pytest.importorskip("numcodecs")
+
+
+def levels_of(arr, n):
+    """Level 0 and n - 1 levels of 2x2x2 means (rounded), each axis halved (floor)."""
+    out = [arr]
+    for _ in range(1, n):
+        p = out[-1]
+        z, y, x = [s // 2 * 2 for s in p.shape]
+        q = p[:z, :y, :x].astype(np.float64).reshape(z // 2, 2, y // 2, 2, x // 2, 2)
+        out.append(np.rint(q.mean(axis=(1, 3, 5))).astype(arr.dtype))
+    return out
+
+
+@pytest.fixture(scope="module")
+def store(tmp_path_factory):
+    """A 3-level OME-Zarr 0.4 store of an analytic u16 phantom (a shell, a
+    ball and a ramp across odd-sized axes) in 16^3 Blosc-lz4 chunks."""
+    z, y, x = np.mgrid[0:45, 0:52, 0:61].astype(np.float64)
+    r = np.sqrt((x - 30.3) ** 2 + (y - 25.8) ** 2 + ((z - 22.1) * 1.2) ** 2)
+    arr = (1500 * np.exp(-(r - 17) ** 2 / 6.0) + 3000 * (r < 7) + 20 * x).astype(np.uint16)
+    spacing = [1.5, 0.8, 0.7]  # z, y, x
+    root = tmp_path_factory.mktemp("pyr") / "ph.ome.zarr"
+    g = zarr.open_group(zarr.DirectoryStore(str(root), dimension_separator="/"), mode="w")
+    lv = levels_of(arr, 3)
+    ds = []
+    for k, a in enumerate(lv):
+        g.create_dataset(str(k), data=a, chunks=(16, 16, 16), dimension_separator="/",
+                         compressor=numcodecs.Blosc("lz4", shuffle=numcodecs.Blosc.SHUFFLE))
+        f = 2 ** k
+        ds.append({"path": str(k), "coordinateTransformations": [
+            {"type": "scale", "scale": [s * f for s in spacing]},
+            {"type": "translation", "translation": [s * (f - 1) / 2 for s in spacing]}]})
+    g.attrs["multiscales"] = [{"version": "0.4", "axes": [
+        {"name": a, "type": "space", "unit": "millimeter"} for a in "zyx"], "datasets": ds}]
+    # the omero window gives the value range (without it, the coarsest level's)
+    lo, hi = float(arr.min()), float(arr.max())
+    g.attrs["omero"] = {"channels": [{"label": "v", "color": "FFFFFF", "window": {
+        "min": lo, "max": hi, "start": lo, "end": hi}}]}
+    return str(root), lv, spacing
+
+
+def test_levels_read_as_zarr_wrote_them(store):
+    path, lv, spacing = store
+    p = volvis.Pyramid(path, memory_limit="16M")
+    assert len(p.levels) == 3
+    for k, want in enumerate(lv):
+        L = p.levels[k]
+        assert L.shape == want.shape and L.dtype == np.uint16
+        f = 2 ** k
+        assert np.allclose(L.spacing, [s * f for s in spacing[::-1]])
+        assert np.allclose(L.origin, [s * (f - 1) / 2 for s in spacing[::-1]])
+        assert np.array_equal(p.read(k), want)
+    # a box across chunks
+    box = p.read(0, (5, 9, 13), (40, 30, 33))
+    assert np.array_equal(box, lv[0][13:34, 9:31, 5:41])
+    assert "3 levels" in repr(p)
+
+
+def test_level0_out_of_core_equals_memory(store):
+    path, lv, spacing = store
+    p = volvis.Pyramid(path, memory_limit="256K")
+    vol = volvis.Volume(lv[0], spacing=spacing[::-1], origin=(0, 0, 0))
+    ray = volvis.Renderer("raycast", refinement="off")  # regions cast every pixel
+    for mode in ["mip", "minip", "xray", "iso", "composite"]:
+        w = volvis.World.for_volume(vol, mode=mode, isovalue=1200, size=(96, 80), azimuth=30,
+                                    elevation=20)
+        ref = volvis.render(w, renderer=ray, dtype=np.float32)
+        img, info = p.render(world=w, level=0, dtype=np.float32, return_lod=True)
+        assert info["nodes"][0] > 1 and info["nodes"][1:] == [0, 0]
+        seen = int((ref[..., 3] > 0.02).sum())
+        assert seen > 500, (mode, seen)
+        if mode == "composite":
+            mse = float(np.mean((ref.astype(np.float64) - img) ** 2))
+            assert 10 * np.log10(1 / mse) >= 50, mode
+        else:
+            assert np.array_equal(ref, img), mode
+    st = p.stats
+    assert st["peak_bytes"] <= 256 << 10
+    assert st["evictions"] > 0 and sum(st["chunk_reads"]) > 0
+
+
+def test_level_of_detail(store):
+    path, lv, _ = store
+    p = volvis.Pyramid(path, memory_limit="8M")
+    img, info = p.render(mode="mip", size=(32, 32), lod=1.0, return_lod=True)
+    assert info["nodes"][0] == 0 and sum(info["nodes"]) > 0  # minified: coarser levels
+    assert img.shape == (32, 32, 4) and img[..., :3].max() > 0
+    img = volvis.render(p, mode="iso", size=(64, 48))
+    assert img.shape == (48, 64, 4) and int((img[..., 3] == 255).sum()) > 200
+    w = p.world(mode="composite", size=(40, 40))
+    assert w.objects[0].volume.dims == tuple(p.levels[-1].shape[::-1])
+
+
+def test_bad_input(store, tmp_path):
+    path, _, _ = store
+    with pytest.raises(volvis.Error, match="nothing.zarr"):
+        volvis.Pyramid(str(tmp_path / "nothing.zarr"))
+    with pytest.raises(volvis.InvalidError, match="not a size"):
+        volvis.Pyramid(path, memory_limit="lots")
+    p = volvis.Pyramid(path, memory_limit="8M")
+    with pytest.raises(volvis.InvalidError):
+        p.read(1, (0, 0, 0), (999, 0, 0))
+    with pytest.raises(volvis.InvalidError, match="level 5 of 3"):
+        p.read(5)
+    with pytest.raises(volvis.UnsupportedError, match="splat renders no regions"):
+        p.render(renderer="splat", size=(16, 16))
