@@ -211,6 +211,13 @@ typedef struct vv_renderer vv_renderer;
 vv_status vv_renderer_new(vv_renderer **out, const char *name);
 /** Releases a renderer and its caches (and their volume references). Accepts NULL. */
 void vv_renderer_free(vv_renderer *r);
+/**
+ * A new renderer of @p r's method with the options set on @p r so far
+ * (vv_renderer_set_option, in the order first set, the last value of each),
+ * without its caches: one for another thread. On failure *out is NULL.
+ * Errors: those of vv_renderer_new and of setting the options.
+ */
+vv_status vv_renderer_clone(vv_renderer **out, const vv_renderer *r);
 /** The method's registry name ("raycast"); owned by the library. */
 const char *vv_renderer_name(const vv_renderer *r);
 /** The method's info record; owned by the library. */

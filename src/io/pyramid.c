@@ -80,6 +80,7 @@ struct vv_pyramid {
     py_level lv[VV_PYRAMID_MAX_LEVELS];
     double range[2];
     uint64_t limit, capacity, held;
+    int boxes;      /* boxes held at once (vv_multires_source.boxes) */
     int node_cells; /* the octree leaves' side the limit holds */
     py_chunk *bucket[PY_BUCKETS];
     py_chunk *mru, *lru; /* the LRU list, most recent first */
@@ -655,6 +656,7 @@ vv_pyramid_source(vv_pyramid *p, vv_multires_source *out) {
     out->frame = src_frame;
     out->plan = src_plan;
     out->missing_chunks = src_missing;
+    out->boxes = p->boxes;
 }
 
 /* ---- opening ------------------------------------------------------------------ */
@@ -807,7 +809,15 @@ pyramid_open(vv_pyramid *p, uint64_t memory_limit, vv_load_info *info) {
                             "working set and its chunks (%llu bytes)",
                             (unsigned long long)p->limit, (unsigned long long)(ws + chunks));
     p->node_cells = cells;
-    p->capacity = p->limit - ws;
+    /* boxes held at once (the driver renders that many nodes at a time, one
+     * a thread): as many working sets as an eighth of the limit holds, at
+     * most 8; the cache gets the rest */
+    uint64_t boxes = ws > 0 ? p->limit / 8 / ws : 1;
+    boxes = boxes < 1 ? 1 : boxes > 8 ? 8 : boxes;
+    if (ws * boxes + chunks > p->limit)
+        boxes = 1;
+    p->boxes = (int)boxes;
+    p->capacity = p->limit - ws * boxes;
     /* the range: the store's (an omero window), else the coarsest level's */
     p->range[0] = 0;
     p->range[1] = 1;

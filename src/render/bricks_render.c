@@ -14,6 +14,9 @@
  * is read.
  */
 #include <math.h>
+#include <omp.h>
+#include <sched.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -263,6 +266,8 @@ vv_renderer_render_bricks(vv_renderer *r, const vv_world *w, int object, const v
 
 /* ---- multiresolution sources: level of detail per node ------------------------ */
 
+#define MR_MAX_THREADS 8 /* nodes rendered at a time (render_nodes_concurrent) */
+
 /* A node to render: its level, region (voxels unset) and box of voxels. */
 typedef struct mr_node {
     int level;
@@ -293,6 +298,9 @@ typedef struct mr_frame {
     double ppw;                    /* pixels a world unit at depth 1 (perspective) or anywhere */
     double bin;                    /* a transfer-function table entry's width */
     vv_region_image *whole, *piece;
+    /* render_nodes_concurrent: the renderers of threads 1.. (clones of r;
+     * freed after the frame is finished: whole->classify may be theirs) */
+    vv_renderer *clones[MR_MAX_THREADS];
 } mr_frame;
 
 /* The coarsest level whose voxel projects to at most lod->voxel_pixels at
@@ -404,6 +412,149 @@ coarser_resident(const mr_frame *f, mr_node *nd) {
     return 0;
 }
 
+/* Node @p nd of a progressive frame: 1 when it is drawn at its own level
+ * (its chunks are held, or fit in what is left of *budget, which they
+ * then use up), else redrawn coarser (coarser_resident) and counted as
+ * pending; 0 when it is then not drawn at all. */
+static int
+progressive_level(mr_frame *f, mr_node *nd, int *budget) {
+    const int miss = f->src->missing_chunks(f->src->user, nd->level, nd->lo, nd->hi);
+    if (miss > *budget && nd->level < f->n_levels - 1) {
+        f->lod->pending++;
+        return coarser_resident(f, nd);
+    }
+    *budget -= miss;
+    return 1;
+}
+
+/* How many nodes render_nodes_concurrent draws at a time: the source's
+ * boxes, the threads the frame may use, at most MR_MAX_THREADS; 1 (render
+ * them in turn, each on every thread) for a renderer with global effects
+ * (its whole-volume context would be built once per thread) or when nested
+ * parallel regions are active (each node's own loops would then fork). */
+static int
+node_threads(const mr_frame *f) {
+    const int boxes = f->src->boxes > 1 ? f->src->boxes : 1;
+    int t = f->opt && f->opt->threads > 0 ? f->opt->threads : omp_get_max_threads();
+    t = t < boxes ? t : boxes;
+    t = t < MR_MAX_THREADS ? t : MR_MAX_THREADS;
+    if (t < 2 || f->n_nodes < 2 || omp_get_max_active_levels() > 1 || omp_in_parallel() ||
+        (vv_renderer_get_info(f->r)->caps & VV_RENDERER_GLOBAL))
+        return 1;
+    return t;
+}
+
+/* The planned nodes rendered several at a time, one a thread (each node's
+ * region render then runs on its thread alone: its own parallel loops are
+ * nested, hence serial), with a renderer a thread (f->r and its clones):
+ * the boxes are read one at a time in the plan's order (a ticket), and the
+ * partial images are combined into the frame in that order (ordered), so
+ * the image is the one render_nodes makes in turn, bit for bit. Per node
+ * the ray caster spends most of a small node's time setting up its caches
+ * (16-bit values, gradients, min/max) in short parallel loops, between
+ * which the other thread waited (spinning, which on this project's 2-core
+ * machine also slowed the serial reads 4-fold); a node a thread keeps both
+ * busy. */
+static vv_status
+render_nodes_concurrent(mr_frame *f, int T) {
+    const int n = f->n_nodes;
+    const int progressive = f->lod->progressive && f->src->missing_chunks;
+    const int W = f->view->width, H = f->view->height;
+    const size_t np = (size_t)W * (size_t)H;
+    vv_region_image pieces[MR_MAX_THREADS];
+    vv_renderer *rs[MR_MAX_THREADS];
+    memset(pieces, 0, sizeof pieces);
+    rs[0] = f->r;
+    vv_status s = VV_OK;
+    for (int t = 1; t < T && s == VV_OK; t++)
+        if ((s = vv_renderer_clone(&f->clones[t], f->r)) == VV_OK)
+            rs[t] = f->clones[t];
+    for (int t = 0; t < T && s == VV_OK; t++) {
+        pieces[t].op = VV_REGION_OVER;
+        pieces[t].clear_outside = 1;
+        pieces[t].key = malloc(sizeof(float) * (np ? np : 1));
+        s = pieces[t].key ? vv_image_new(&pieces[t].image, W, H)
+                          : vv_error_set(VV_ERR_NOMEM, "out of memory");
+        if (s == VV_OK)
+            vv_region_image_clear(&pieces[t]);
+    }
+    /* the nodes' renders report no progress of their own (several at once) */
+    vv_render_options o;
+    vv_render_options_init(&o);
+    if (f->opt)
+        o = *f->opt;
+    o.progress.fn = NULL;
+    int next_read = 0, failed = 0, budget = f->lod->load_budget;
+    vv_status first = VV_OK;
+    char msg[1024] = "";
+    if (s == VV_OK) {
+#pragma omp parallel for ordered schedule(dynamic, 1) num_threads(T)
+        for (int i = 0; i < n; i++) {
+            const int t = omp_get_thread_num();
+            mr_node *nd = &f->nodes[i];
+            vv_volume *bv = NULL;
+            vv_status ns = VV_OK;
+            int draw = 0;
+            /* the reads one at a time, in the plan's order */
+            while (__atomic_load_n(&next_read, __ATOMIC_ACQUIRE) != i)
+                sched_yield();
+            if (!__atomic_load_n(&failed, __ATOMIC_ACQUIRE)) {
+                draw = !progressive || progressive_level(f, nd, &budget);
+                if (draw)
+                    ns = f->src->read_box(f->src->user, nd->level, nd->lo, nd->hi, &bv);
+            }
+            __atomic_store_n(&next_read, i + 1, __ATOMIC_RELEASE);
+            vv_region_image *pc = &pieces[t];
+            if (draw && ns == VV_OK) {
+                nd->rg.voxels = bv;
+                ns = vv_renderer_render_region(rs[t], f->w, f->view, &nd->rg, &o, pc);
+                nd->rg.voxels = NULL;
+                if (ns == VV_OK && pc->op != f->whole->op)
+                    ns = vv_error_set(VV_ERR_INVALID,
+                                      "bricks: %s combined its regions by %d, not %d",
+                                      vv_renderer_name(rs[t]), (int)pc->op, (int)f->whole->op);
+            }
+            const int x0 = nd->rg.x1 > nd->rg.x0 ? nd->rg.x0 : 0;
+            const int y0 = nd->rg.x1 > nd->rg.x0 ? nd->rg.y0 : 0;
+            const int x1 = nd->rg.x1 > nd->rg.x0 ? nd->rg.x1 : W;
+            const int y1 = nd->rg.x1 > nd->rg.x0 ? nd->rg.y1 : H;
+#pragma omp ordered
+            {
+                if (ns != VV_OK && !failed) {
+                    first = ns;
+                    snprintf(msg, sizeof msg, "%s", vv_error_message());
+                    __atomic_store_n(&failed, 1, __ATOMIC_RELEASE);
+                }
+                if (draw && ns == VV_OK && !failed) {
+                    if (f->whole->op == VV_REGION_SUM) {
+                        f->whole->classify = pc->classify;
+                        f->whole->classify_ctx = pc->classify_ctx;
+                    }
+                    vv_region_image_combine_rect(f->whole, pc, x0, y0, x1, y1);
+                    f->lod->nodes[nd->level]++;
+                }
+                /* progress by nodes combined; cancelling stops the frame */
+                if (!failed && f->opt &&
+                    vv_progress_report(&f->opt->progress, (double)(i + 1) / n)) {
+                    first = vv_error_set(VV_ERR_CANCELLED, "cancelled");
+                    snprintf(msg, sizeof msg, "%s", vv_error_message());
+                    __atomic_store_n(&failed, 1, __ATOMIC_RELEASE);
+                }
+            }
+            if (draw)
+                vv_region_image_clear_rect(pc, x0, y0, x1, y1);
+            vv_volume_free(bv);
+        }
+        if (failed)
+            s = vv_error_set(first, "%s", msg);
+    }
+    for (int t = 0; t < T; t++) {
+        vv_image_free(pieces[t].image);
+        free(pieces[t].key);
+    }
+    return s;
+}
+
 /* The planned nodes read and rendered in order. */
 static vv_status
 render_nodes(mr_frame *f) {
@@ -425,21 +576,16 @@ render_nodes(mr_frame *f) {
         free(lo);
         free(hi);
     }
+    const int T = node_threads(f);
+    if (T > 1)
+        return render_nodes_concurrent(f, T);
     int budget = f->lod->load_budget;
     for (int i = 0; i < n; i++) {
         mr_node *nd = &f->nodes[i];
-        if (progressive) {
-            /* its own level when resident or within the chunks left to read
-             * (the nearest nodes come first), else a coarser resident one */
-            const int miss = f->src->missing_chunks(f->src->user, nd->level, nd->lo, nd->hi);
-            if (miss > budget && nd->level < f->n_levels - 1) {
-                f->lod->pending++;
-                if (!coarser_resident(f, nd))
-                    continue;
-            } else {
-                budget -= miss;
-            }
-        }
+        /* progressive: its own level when resident or within the chunks left
+         * to read (the nearest nodes come first), else a coarser resident one */
+        if (progressive && !progressive_level(f, nd, &budget))
+            continue;
         vv_volume *bv = NULL;
         vv_status s = f->src->read_box(f->src->user, nd->level, nd->lo, nd->hi, &bv);
         if (s != VV_OK)
@@ -608,6 +754,8 @@ vv_renderer_render_multires(vv_renderer *r, const vv_world *w, int object,
     free(f.nodes);
     if (s == VV_OK)
         vv_region_image_finish(&whole, w->background);
+    for (int t = 0; t < MR_MAX_THREADS; t++)
+        vv_renderer_free(f.clones[t]); /* after the finish: classify may be theirs */
     vv_image_free(piece.image);
     free(whole.key);
     return s;

@@ -12,9 +12,17 @@
 #include "volvis/render.h"
 #include "volvis/sys/renderer.h"
 
+/* An option set on a renderer, kept for vv_renderer_clone. */
+typedef struct rn_option {
+    const char *key; /* the option table's own key */
+    char *value;
+} rn_option;
+
 struct vv_renderer {
     const vv_renderer_ops *ops;
     void *state;
+    rn_option *opts; /* the options set, each key once, in the order first set */
+    int n_opts;
 };
 
 /* Every rendering method built in, in registry order: --help lists them so,
@@ -371,7 +379,46 @@ vv_renderer_free(vv_renderer *r) {
     if (!r)
         return;
     r->ops->destroy(r->state);
+    for (int i = 0; i < r->n_opts; i++)
+        free(r->opts[i].value);
+    free(r->opts);
     free(r);
+}
+
+/* Keeps @p value as the option @p key's (vv_renderer_clone). */
+static vv_status
+remember_option(vv_renderer *r, const char *key, const char *value) {
+    char *v = strdup(value);
+    if (!v)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < r->n_opts; i++)
+        if (r->opts[i].key == key) {
+            free(r->opts[i].value);
+            r->opts[i].value = v;
+            return VV_OK;
+        }
+    rn_option *o = realloc(r->opts, sizeof *o * (size_t)(r->n_opts + 1));
+    if (!o) {
+        free(v);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    r->opts = o;
+    r->opts[r->n_opts++] = (rn_option){key, v};
+    return VV_OK;
+}
+
+vv_status
+vv_renderer_clone(vv_renderer **out, const vv_renderer *r) {
+    if (!out || !r)
+        return vv_error_set(VV_ERR_INVALID, "clone: NULL renderer");
+    vv_status s = vv_renderer_new(out, r->ops->info.name);
+    for (int i = 0; i < r->n_opts && s == VV_OK; i++)
+        s = vv_renderer_set_option(*out, r->opts[i].key, r->opts[i].value);
+    if (s != VV_OK) {
+        vv_renderer_free(*out);
+        *out = NULL;
+    }
+    return s;
 }
 
 const char *
@@ -407,6 +454,8 @@ vv_renderer_set_option(vv_renderer *r, const char *key, const char *value) {
         s = vv_option_parse(spec, value, &v);
         if (s == VV_OK)
             s = r->ops->set_option(r->state, spec, &v);
+        if (s == VV_OK)
+            s = remember_option(r, spec->key, value);
     }
     return s == VV_OK ? s : vv_error_prefix(s, "%s", r->ops->info.name);
 }

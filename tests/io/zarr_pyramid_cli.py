@@ -26,6 +26,8 @@ then checks:
 - the phantom at levels 1 and 2 out of core (4M) against the in-memory
   render of the same level: MIP bit-identical (the boxes of coarser
   levels, their placement);
+- nodes rendered two at a time (a thread each) make the image one thread
+  makes in turn, byte for byte;
 - progressive frames (--progressive 40 chunks a step): the first step from
   the coarsest level, each step no farther from the converged image (PSNR
   non-decreasing), the last (and OUT) the converged image bit for bit;
@@ -176,6 +178,15 @@ for mode in ["composite", "mip", "iso", "xray"]:
               f"head {mode} out of core (4 MiB) is the in-memory image bit for bit ({q})")
     else:
         check(q >= 50, f"head composite out of core (4 MiB): {q:.1f} dB >= 50 against in memory")
+# the nodes rendered two at a time, one a thread (64 MiB holds two nodes' working sets beside
+# the cache), make the image one thread makes in turn, byte for byte
+one = os.path.join(OUT, "head_one_thread.png")
+two = os.path.join(OUT, "head_two_threads.png")
+ps = [render(head_store, out, *TF, "--memory-limit", "64M", "--lod", "0.7", env=env)
+      for out, env in [(one, {"OMP_NUM_THREADS": "1"}), (two, {"OMP_NUM_THREADS": "2"})]]
+check(all(q.returncode == 0 for q in ps) and open(one, "rb").read() == open(two, "rb").read(),
+      f"composite out of core: 1 and 2 threads make the same image "
+      f"({' '.join(q.stderr.strip() for q in ps)})")
 p = render(head_store, os.path.join(OUT, "head_16m.png"), *TF, "--memory-limit", "16M",
            "--level", "0")
 peak, most, _ = stats(p)

@@ -126,6 +126,13 @@ typedef struct vv_multires_source {
      * for progressive frames (vv_lod.progressive).
      */
     int (*missing_chunks)(void *user, int level, const int lo[3], const int hi[3]);
+    /**
+     * The boxes (read_box results, each with the renderer's working set for
+     * it) the source's memory limit holds at once besides its cache: the
+     * driver renders up to that many nodes at a time, one a thread (reads
+     * stay one at a time and in the plan's order). 0 or 1: one.
+     */
+    int boxes;
 } vv_multires_source;
 
 #ifdef __cplusplus
