@@ -1478,18 +1478,23 @@ march(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, double dt, dou
     return project_from(c, pdist, r, dt, k, kend, sg, floor0, stop, skipping, tbest);
 }
 
+/* A ray shorter than one step: its one sample, in the middle (*depth). */
+static float
+middle_sample(const vv_vcache *c, const vv_vray *r, float *depth) {
+    float p[3];
+    const double tm = 0.5 * (r->t0 + r->t1);
+    vv_vray_point(r, tm, p);
+    *depth = (float)tm;
+    return vv_vcache_sample(c, p);
+}
+
 long
 vv_vray_xray_sum(const vv_vcache *c, const vv_vray *r, double dt, int avx2, double *sum,
                  float *depth) {
     double k = vv_ceil_pos(r->t0 / dt);
     const double kend = vv_floor_pos(r->t1 / dt);
     if (k > kend) {
-        /* shorter than one step: one sample in the middle */
-        float p[3];
-        double tm = 0.5 * (r->t0 + r->t1);
-        vv_vray_point(r, tm, p);
-        *sum = vv_vcache_sample(c, p);
-        *depth = (float)tm;
+        *sum = middle_sample(c, r, depth);
         return 1;
     }
     const int vec = avx2 && c->q16 && c->sz * (size_t)c->nz < ((size_t)1 << 30);
@@ -1532,12 +1537,7 @@ project(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, vv_render_mo
     double k = vv_ceil_pos(r->t0 / dt);
     const double kend = vv_floor_pos(r->t1 / dt);
     if (k > kend) {
-        /* shorter than one step: one sample in the middle */
-        float p[3];
-        double tm = 0.5 * (r->t0 + r->t1);
-        vv_vray_point(r, tm, p);
-        *value = vv_vcache_sample(c, p);
-        *depth = (float)tm;
+        *value = middle_sample(c, r, depth);
         return;
     }
     const int vec = avx2 && c->q16 && c->sz * (size_t)c->nz < ((size_t)1 << 30);

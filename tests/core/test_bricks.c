@@ -42,6 +42,8 @@ psnr(const vv_image *a, const vv_image *b, int *identical) {
     return se > 0 ? 10 * log10(1.0 / (se / (double)n)) : INFINITY;
 }
 
+/* The head's World at azimuth @p az: the transfer function 100..1500, or
+ * (X-ray) the default ramp over the range. */
 static vv_world *
 head_world(vv_volume *v, vv_render_mode mode, double az) {
     vv_default_scene_options o;
@@ -51,7 +53,7 @@ head_world(vv_volume *v, vv_render_mode mode, double az) {
     o.height = 88;
     o.azimuth = az;
     o.elevation = 0.3;
-    o.has_tf_range = 1;
+    o.has_tf_range = mode != VV_MODE_XRAY;
     o.tf_lo = 100;
     o.tf_hi = 1500;
     vv_world *w = NULL;
@@ -171,15 +173,7 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
         assert_non_null(strstr(vv_error_message(), "iso regions are drawn by raycast"));
         /* X-ray: each brick's sums and counts add up, the mean classified at
          * the end as the whole render classifies it */
-        vv_default_scene_options xo; /* the default X-ray ramp over the range */
-        vv_default_scene_options_init(&xo);
-        xo.mode = VV_MODE_XRAY;
-        xo.width = 96;
-        xo.height = 88;
-        xo.azimuth = 0.6;
-        xo.elevation = 0.3;
-        vv_world *wx = NULL;
-        vt_ok(vv_world_new_for_volume(&wx, head, &xo));
+        vv_world *wx = head_world(head, VV_MODE_XRAY, 0.6);
         vt_ok(vv_renderer_render(mem, wx, &wx->view, NULL, ref));
         vt_ok(vv_renderer_render_bricks(ooc, wx, 0, &src, &wx->view, NULL, img));
         vv_world_free(wx);

@@ -1,4 +1,5 @@
-"""Helpers shared by the pyramid tests (zarr_pyramid_cli.py, hdf5_pyramid_cli.py)."""
+"""Helpers shared by the pyramid tests (zarr_pyramid_cli.py, hdf5_pyramid_cli.py,
+tests/python/test_pyramid.py)."""
 import re
 
 import numpy as np
@@ -14,6 +15,33 @@ def levels_of(arr, n=3):
         q = p[:z, :y, :x].astype(np.float64).reshape(z // 2, 2, y // 2, 2, x // 2, 2)
         out.append(np.rint(q.mean(axis=(1, 3, 5))).astype(arr.dtype))
     return out
+
+
+def write_ome_zarr(root, arr, spacing, chunks, compressor, sep, n=3, window=True):
+    """An OME-Zarr 0.4 store at @root written by zarr-python: n levels of
+    levels_of(arr), each with its scale and the translation of its voxel
+    centres (spacing z, y, x), chunks, compressor (numcodecs) and dimension
+    separator sep; with window, the omero window of the data's min and max.
+    Returns the levels."""
+    import zarr
+    store = zarr.DirectoryStore(str(root), dimension_separator=sep)
+    g = zarr.open_group(store, mode="w")
+    lv = levels_of(arr, n)
+    ds = []
+    for k, a in enumerate(lv):
+        g.create_dataset(str(k), data=a, chunks=chunks, compressor=compressor,
+                         dimension_separator=sep)
+        f = 2 ** k
+        ds.append({"path": str(k), "coordinateTransformations": [
+            {"type": "scale", "scale": [s * f for s in spacing]},
+            {"type": "translation", "translation": [s * (f - 1) / 2 for s in spacing]}]})
+    g.attrs["multiscales"] = [{"version": "0.4", "axes": [
+        {"name": a, "type": "space", "unit": "millimeter"} for a in "zyx"], "datasets": ds}]
+    if window:
+        lo, hi = float(arr.min()), float(arr.max())
+        g.attrs["omero"] = {"channels": [{"label": "v", "color": "FFFFFF", "window": {
+            "min": lo, "max": hi, "start": lo, "end": hi}}]}
+    return lv
 
 
 def image(path):

@@ -63,7 +63,7 @@ except ImportError as e:  # pragma: no cover
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import pyramid_common  # noqa: E402
-from pyramid_common import cracks, levels_of, psnr, stats  # noqa: E402
+from pyramid_common import cracks, psnr, stats, write_ome_zarr  # noqa: E402
 
 VOLVIS, OUT = sys.argv[1], sys.argv[2]
 HEAD = os.path.abspath("../shared/data/volumes/ct_head.nrrd")
@@ -84,26 +84,9 @@ def volvis(*args, env=None):
 
 
 def pyramid(name, arr, spacing, chunks, compressor, sep, n=3, window=True):
-    """An OME-Zarr 0.4 store of n levels; returns (path, levels)."""
+    """An OME-Zarr 0.4 store of n levels in OUT; returns (path, levels)."""
     root = os.path.join(OUT, name)
-    store = zarr.DirectoryStore(root, dimension_separator=sep)
-    g = zarr.open_group(store, mode="w")
-    lv = levels_of(arr, n)
-    ds = []
-    for k, a in enumerate(lv):
-        g.create_dataset(str(k), data=a, chunks=chunks, compressor=compressor,
-                         dimension_separator=sep)
-        f = 2 ** k
-        ds.append({"path": str(k), "coordinateTransformations": [
-            {"type": "scale", "scale": [s * f for s in spacing]},
-            {"type": "translation", "translation": [s * (f - 1) / 2 for s in spacing]}]})
-    g.attrs["multiscales"] = [{"version": "0.4", "axes": [
-        {"name": a, "type": "space", "unit": "millimeter"} for a in "zyx"], "datasets": ds}]
-    if window:
-        lo, hi = float(arr.min()), float(arr.max())
-        g.attrs["omero"] = {"channels": [{"label": "v", "color": "FFFFFF", "window": {
-            "min": lo, "max": hi, "start": lo, "end": hi}}]}
-    return root, lv
+    return root, write_ome_zarr(root, arr, spacing, chunks, compressor, sep, n, window)
 
 
 def read_level(store, level):

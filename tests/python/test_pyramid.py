@@ -12,6 +12,9 @@ writer) read by box and rendered out of core by level of detail.
 - bad input: a missing store, a memory limit that is not a size, a box
   outside a level, a renderer without regions: the library's errors.
 """
+import pathlib
+import sys
+
 import numpy as np
 import pytest
 
@@ -19,17 +22,9 @@ import volvis
 
 zarr = pytest.importorskip("zarr")
 numcodecs = pytest.importorskip("numcodecs")
-
-
-def levels_of(arr, n):
-    """Level 0 and n - 1 levels of 2x2x2 means (rounded), each axis halved (floor)."""
-    out = [arr]
-    for _ in range(1, n):
-        p = out[-1]
-        z, y, x = [s // 2 * 2 for s in p.shape]
-        q = p[:z, :y, :x].astype(np.float64).reshape(z // 2, 2, y // 2, 2, x // 2, 2)
-        out.append(np.rint(q.mean(axis=(1, 3, 5))).astype(arr.dtype))
-    return out
+pytest.importorskip("PIL")
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "io"))
+from pyramid_common import write_ome_zarr  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -41,22 +36,9 @@ def store(tmp_path_factory):
     arr = (1500 * np.exp(-(r - 17) ** 2 / 6.0) + 3000 * (r < 7) + 20 * x).astype(np.uint16)
     spacing = [1.5, 0.8, 0.7]  # z, y, x
     root = tmp_path_factory.mktemp("pyr") / "ph.ome.zarr"
-    g = zarr.open_group(zarr.DirectoryStore(str(root), dimension_separator="/"), mode="w")
-    lv = levels_of(arr, 3)
-    ds = []
-    for k, a in enumerate(lv):
-        g.create_dataset(str(k), data=a, chunks=(16, 16, 16), dimension_separator="/",
-                         compressor=numcodecs.Blosc("lz4", shuffle=numcodecs.Blosc.SHUFFLE))
-        f = 2 ** k
-        ds.append({"path": str(k), "coordinateTransformations": [
-            {"type": "scale", "scale": [s * f for s in spacing]},
-            {"type": "translation", "translation": [s * (f - 1) / 2 for s in spacing]}]})
-    g.attrs["multiscales"] = [{"version": "0.4", "axes": [
-        {"name": a, "type": "space", "unit": "millimeter"} for a in "zyx"], "datasets": ds}]
     # the omero window gives the value range (without it, the coarsest level's)
-    lo, hi = float(arr.min()), float(arr.max())
-    g.attrs["omero"] = {"channels": [{"label": "v", "color": "FFFFFF", "window": {
-        "min": lo, "max": hi, "start": lo, "end": hi}}]}
+    lv = write_ome_zarr(root, arr, spacing, (16, 16, 16),
+                        numcodecs.Blosc("lz4", shuffle=numcodecs.Blosc.SHUFFLE), "/")
     return str(root), lv, spacing
 
 
