@@ -288,11 +288,10 @@ struct vv_brick_source; /* include/volvis/sys/source.h */
  * visible object) with the voxels of @p src, brick by brick in
  * front-to-back order through @p view, with renderer @p r, which must
  * declare VV_RENDERER_REGION (its options apply; raycast draws every mode,
- * raytrace no iso or xray): each brick is one region render
- * (include/volvis/sys/renderer.h) and the partial images are combined in
- * that order (over; max or min for mip and minip; the nearest crossing for
- * iso; the sums, then the mean classified, for xray). The
- * object's own volume gives the World's defaults and the renderer's
+ * raytrace no xray, and iso only with the whole volume as the object's own): each brick is one
+ * region render (include/volvis/sys/renderer.h) and the partial images are combined in that order
+ * (over; max or min for mip and minip; the nearest crossing for iso; the sums, then the mean
+ * classified, for xray). The object's own volume gives the World's defaults and the renderer's
  * whole-volume context (raytrace traces shadows through it: exact when it is
  * the whole volume, from a coarse proxy otherwise); the geometry comes from
  * the source's header. Bricks whose min/max the transfer function makes

@@ -5,8 +5,8 @@
  * (raycast; raytrace at quality 1 without adaptive refinement, one ray a
  * pixel with its shadows, which
  * every rank traces through the World's whole volume), and compares the
- * float images: maximum and minimum intensity projection, X-ray and the
- * isosurface (raycast) bit for bit, composite >= 50 dB PSNR. The volumes are a synthetic 70x66x60
+ * float images: maximum and minimum intensity projection, X-ray (raycast)
+ * and the isosurface bit for bit, composite >= 50 dB PSNR. The volumes are a synthetic 70x66x60
  * u16 volume whose objects straddle the brick faces (they sit around the middle of every axis,
  * where the first cuts fall) and, when ../shared is there, the CT head. Then a World that one rank
  * cannot render (rank 1's object hidden) must fail on every rank with rank 1's error, without
@@ -188,6 +188,8 @@ main(int argc, char **argv) {
     /* isosurfaces: each rank's crossings, the nearest kept (two ghost voxels) */
     run_case("synthetic", syn, VV_MODE_ISO, 30, 20, 0, VV_COMPOSITING_BINARY_SWAP, 4);
     run_case("synthetic", syn, VV_MODE_ISO, 110, -35, 1, VV_COMPOSITING_RADIX_K, 2);
+    run_case_with("raytrace", "synthetic", syn, VV_MODE_ISO, 30, 20, 0, VV_COMPOSITING_BINARY_SWAP,
+                  4);
     /* X-ray: the ranks' sums and counts add up, rank 0 classifies the means */
     run_case("synthetic", syn, VV_MODE_XRAY, 30, 20, 0, VV_COMPOSITING_BINARY_SWAP, 4);
     run_case("synthetic", syn, VV_MODE_XRAY, 110, -35, 1, VV_COMPOSITING_RADIX_K, 2);

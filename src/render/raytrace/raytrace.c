@@ -597,11 +597,22 @@ rt_render_region(void *state, const vv_world *w, const vv_view *view,
     vv_status s = vv_render_region_part(w, region, &out->op, &part);
     if (s != VV_OK)
         return s;
-    if (part.mode == VV_MODE_ISO || part.mode == VV_MODE_XRAY)
+    if (part.mode == VV_MODE_XRAY)
         return vv_error_set(VV_ERR_UNSUPPORTED,
-                            "raytrace: object '%s': %s regions are drawn by raycast, not by the "
+                            "object '%s': xray regions are drawn by raycast, not by the "
                             "ray tracer",
-                            part.name, part.mode == VV_MODE_ISO ? "iso" : "xray");
+                            part.name);
+    /* an isosurface shadowed by a coarse proxy's surface shows the proxy's
+     * steps as shadow bands: iso regions only with the whole volume as the
+     * context (distributed rendering of a volume every rank holds) */
+    const vv_volume *ctx = w->objects[region->object]->volume;
+    if (part.mode == VV_MODE_ISO &&
+        (ctx->dims[0] != region->dims[0] || ctx->dims[1] != region->dims[1] ||
+         ctx->dims[2] != region->dims[2]))
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "object '%s': iso regions need the whole volume for their "
+                            "shadows, not a coarse proxy; draw it out of core with raycast",
+                            part.name);
     return render_frame(state, w, view, opt, region, &part, out->image,
                         part.mode == VV_MODE_COMPOSITE ? NULL : out->key);
 }

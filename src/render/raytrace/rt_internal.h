@@ -262,12 +262,22 @@ typedef struct rt_scache {
 /* ---------------------------------------------------------------------- */
 /* Volume rays (the caches and sampling are src/render/volume_cache.h)      */
 
-/* The world ray over [tmin, tmax] clipped to a volume in its index space. */
+/* The world ray over [tmin, tmax] clipped to a volume in its index space;
+ * *cont as vv_vray_clip_region's (0 outside region renders). */
 static inline int
-vray_setup(const rt_vobj *ob, const vv_ray *wr, double tmin, double tmax, vv_vray *r) {
+vray_setup_cont(const rt_vobj *ob, const vv_ray *wr, double tmin, double tmax, vv_vray *r,
+                int *cont) {
+    *cont = 0;
     if (!vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, wr, tmin, tmax, r))
         return 0;
-    return !ob->region || vv_vray_clip_region(r, ob->region, ob->region_dt, ob->inv_form, NULL);
+    return !ob->region || vv_vray_clip_region(r, ob->region, ob->region_dt, ob->inv_form, cont);
+}
+
+/* vray_setup_cont without *cont. */
+static inline int
+vray_setup(const rt_vobj *ob, const vv_ray *wr, double tmin, double tmax, vv_vray *r) {
+    int cont;
+    return vray_setup_cont(ob, wr, tmin, tmax, r, &cont);
 }
 
 static inline float

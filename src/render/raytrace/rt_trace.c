@@ -241,7 +241,7 @@ static void
 march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int primary,
               float weight, float C[3], float *Aout, float *dep) {
     vv_vray rays[RT_MAX_OBJ];
-    int act[RT_MAX_OBJ];
+    int act[RT_MAX_OBJ], cont[RT_MAX_OBJ];
     rt_scache sc;
     sc.ob = NULL; /* the rest is filled when first used */
     int na = 0;
@@ -254,7 +254,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
             continue; /* additive channels: channel_overlay */
         if (!primary && !ob->obj->visible_in_reflections)
             continue;
-        if (vray_setup(ob, wr, 0, tlim, &rays[na])) {
+        if (vray_setup_cont(ob, wr, 0, tlim, &rays[na], &cont[na])) {
             act[na] = i;
             tmin = rays[na].t0 < tmin ? rays[na].t0 : tmin;
             tmax = rays[na].t1 > tmax ? rays[na].t1 : tmax;
@@ -274,9 +274,11 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
         return;
     }
     if (na == 1 && fr->vobjs[act[0]].mode == VV_MODE_ISO && fr->vobjs[act[0]].group < 0) {
-        /* one isosurface: the ray caster's search (vv_vray_iso_first) */
+        /* one isosurface: the ray caster's search (vv_vray_iso_first; in a
+         * region render from the sample before the region's: VV_REGION_NEAREST) */
         const rt_vobj *ob = &fr->vobjs[act[0]];
-        const double th = vv_vray_iso_first(ob->c, ob->bdist, &rays[0], dt, ob->iso, fr->avx2, 0);
+        const double th =
+            vv_vray_iso_first(ob->c, ob->bdist, &rays[0], dt, ob->iso, fr->avx2, cont[0]);
         if (th >= 0) {
             iso_hit(fr, ob, &rays[0], wr, v, th, depth, weight, C, &A);
             *dep = th < *dep ? (float)th : *dep;
