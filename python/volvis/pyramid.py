@@ -11,6 +11,7 @@ detail"), rendered by level of detail (vv_renderer_render_multires).
 """
 import collections
 import os
+import threading
 
 import numpy as np
 
@@ -60,7 +61,6 @@ class Pyramid:
     at a time (a lock serialises its calls)."""
 
     def __init__(self, path, channel=0, time=None, memory_limit="1G"):
-        import threading
         self.path = os.fspath(path)
         out = ffi.new("vv_pyramid **")
         info = ffi.new("vv_load_info *")

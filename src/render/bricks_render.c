@@ -151,27 +151,40 @@ frame_images(const vv_view *view, vv_image *out, vv_render_mode mode, vv_region_
     return VV_OK;
 }
 
+/* The pixels region @p rg can touch in a @p W x @p H view (its rectangle,
+ * or the whole image when it has none): r = {x0, y0, x1, y1}. */
+static void
+piece_rect(const vv_render_region *rg, int W, int H, int r[4]) {
+    const int has = rg->x1 > rg->x0;
+    r[0] = has ? rg->x0 : 0;
+    r[1] = has ? rg->y0 : 0;
+    r[2] = has ? rg->x1 : W;
+    r[3] = has ? rg->y1 : H;
+}
+
+/* Region @p rg rendered by @p r into @p piece, which must combine by @p op. */
+static vv_status
+render_into(vv_renderer *r, const vv_world *w, const vv_view *view, const vv_render_region *rg,
+            const vv_render_options *opt, vv_region_image *piece, vv_region_op op) {
+    vv_status s = vv_renderer_render_region(r, w, view, rg, opt, piece);
+    if (s == VV_OK && piece->op != op)
+        s = vv_error_set(VV_ERR_INVALID, "bricks: %s combined its regions by %d, not %d",
+                         vv_renderer_name(r), (int)piece->op, (int)op);
+    return s;
+}
+
 /* One region render, composited under the image so far over its
  * rectangle; the piece is cleared there again after (it stays clear
  * outside every rectangle: the renderer clears only the next one). */
 static vv_status
 render_piece(vv_renderer *r, const vv_world *w, const vv_view *view, const vv_render_region *rg,
              const vv_render_options *opt, vv_region_image *piece, vv_region_image *whole) {
-    const int W = view->width, H = view->height;
-    const int x0 = rg->x1 > rg->x0 ? rg->x0 : 0, y0 = rg->x1 > rg->x0 ? rg->y0 : 0;
-    const int x1 = rg->x1 > rg->x0 ? rg->x1 : W, y1 = rg->x1 > rg->x0 ? rg->y1 : H;
-    vv_status s = vv_renderer_render_region(r, w, view, rg, opt, piece);
-    if (s == VV_OK && piece->op != whole->op)
-        s = vv_error_set(VV_ERR_INVALID, "bricks: %s combined its regions by %d, not %d",
-                         vv_renderer_name(r), (int)piece->op, (int)whole->op);
-    if (s == VV_OK && whole->op == VV_REGION_SUM) {
-        /* the renderer's table classifies the summed means at the end */
-        whole->classify = piece->classify;
-        whole->classify_ctx = piece->classify_ctx;
-    }
-    if (s == VV_OK)
-        vv_region_image_combine_rect(whole, piece, x0, y0, x1, y1); /* in front over it */
-    vv_region_image_clear_rect(piece, x0, y0, x1, y1);
+    int rc[4];
+    piece_rect(rg, view->width, view->height, rc);
+    vv_status s = render_into(r, w, view, rg, opt, piece, whole->op);
+    if (s == VV_OK) /* in front over it */
+        vv_region_image_combine_rect(whole, piece, rc[0], rc[1], rc[2], rc[3]);
+    vv_region_image_clear_rect(piece, rc[0], rc[1], rc[2], rc[3]);
     return s;
 }
 
@@ -469,7 +482,8 @@ render_nodes_concurrent(mr_frame *f, int T) {
     for (int t = 1; t < T && s == VV_OK; t++)
         if ((s = vv_renderer_clone(&f->clones[t], f->r)) == VV_OK)
             rs[t] = f->clones[t];
-    for (int t = 0; t < T && s == VV_OK; t++) {
+    pieces[0] = *f->piece; /* the frame's own (clear); the others made here */
+    for (int t = 1; t < T && s == VV_OK; t++) {
         pieces[t].op = VV_REGION_OVER;
         pieces[t].clear_outside = 1;
         pieces[t].key = malloc(sizeof(float) * (np ? np : 1));
@@ -507,17 +521,11 @@ render_nodes_concurrent(mr_frame *f, int T) {
             vv_region_image *pc = &pieces[t];
             if (draw && ns == VV_OK) {
                 nd->rg.voxels = bv;
-                ns = vv_renderer_render_region(rs[t], f->w, f->view, &nd->rg, &o, pc);
+                ns = render_into(rs[t], f->w, f->view, &nd->rg, &o, pc, f->whole->op);
                 nd->rg.voxels = NULL;
-                if (ns == VV_OK && pc->op != f->whole->op)
-                    ns = vv_error_set(VV_ERR_INVALID,
-                                      "bricks: %s combined its regions by %d, not %d",
-                                      vv_renderer_name(rs[t]), (int)pc->op, (int)f->whole->op);
             }
-            const int x0 = nd->rg.x1 > nd->rg.x0 ? nd->rg.x0 : 0;
-            const int y0 = nd->rg.x1 > nd->rg.x0 ? nd->rg.y0 : 0;
-            const int x1 = nd->rg.x1 > nd->rg.x0 ? nd->rg.x1 : W;
-            const int y1 = nd->rg.x1 > nd->rg.x0 ? nd->rg.y1 : H;
+            int rc[4];
+            piece_rect(&nd->rg, W, H, rc);
 #pragma omp ordered
             {
                 if (ns != VV_OK && !failed) {
@@ -526,11 +534,7 @@ render_nodes_concurrent(mr_frame *f, int T) {
                     __atomic_store_n(&failed, 1, __ATOMIC_RELEASE);
                 }
                 if (draw && ns == VV_OK && !failed) {
-                    if (f->whole->op == VV_REGION_SUM) {
-                        f->whole->classify = pc->classify;
-                        f->whole->classify_ctx = pc->classify_ctx;
-                    }
-                    vv_region_image_combine_rect(f->whole, pc, x0, y0, x1, y1);
+                    vv_region_image_combine_rect(f->whole, pc, rc[0], rc[1], rc[2], rc[3]);
                     f->lod->nodes[nd->level]++;
                 }
                 /* progress by nodes combined; cancelling stops the frame */
@@ -542,13 +546,13 @@ render_nodes_concurrent(mr_frame *f, int T) {
                 }
             }
             if (draw)
-                vv_region_image_clear_rect(pc, x0, y0, x1, y1);
+                vv_region_image_clear_rect(pc, rc[0], rc[1], rc[2], rc[3]);
             vv_volume_free(bv);
         }
         if (failed)
             s = vv_error_set(first, "%s", msg);
     }
-    for (int t = 0; t < T; t++) {
+    for (int t = 1; t < T; t++) {
         vv_image_free(pieces[t].image);
         free(pieces[t].key);
     }

@@ -420,6 +420,10 @@ vv_region_image_combine_rect(vv_region_image *front, const vv_region_image *back
                              int x1, int y1) {
     const int W = front->image->width;
     const vv_region_op op = front->op;
+    if (back->classify) { /* the renderer's table for the summed means */
+        front->classify = back->classify;
+        front->classify_ctx = back->classify_ctx;
+    }
     x0 = x0 < 0 ? 0 : x0;
     y0 = y0 < 0 ? 0 : y0;
     x1 = x1 > W ? W : x1;

@@ -1563,13 +1563,9 @@ vv_vray_iso_first(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, do
     int have = 0;
     if (cont && k0 <= kend) {
         /* a region's search starts at the whole ray's sample before it */
-        float p[3];
-        pt = (k0 - 1) * dt;
-        vv_vray_point(r, pt, p);
-        pv = vv_vcache_sample(c, p);
+        vv_vray_iso_restart(c, r, k0, dt, &pv, &pt, &have);
         if (pv >= iso)
             return pt;
-        have = 1;
         kprev = k0 - 1;
     }
     while (vv_vray_visible_run_simd(avx2, c, bdist, r, dt, kend, &k, &klast)) {
@@ -1578,11 +1574,7 @@ vv_vray_iso_first(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, do
              * restarts at the sample before the run, as a march of every
              * sample has it, so that the crossing does not depend on the
              * subvolume grid (skipping on or off, a region's voxels) */
-            float p[3];
-            pt = (k - 1) * dt;
-            vv_vray_point(r, pt, p);
-            pv = vv_vcache_sample(c, p);
-            have = 1;
+            vv_vray_iso_restart(c, r, k, dt, &pv, &pt, &have);
         }
         /* a run of the portable traversal may exceed a chunk (its first
          * subvolume is whole, and holds more than VV_VC_CHUNK samples at a

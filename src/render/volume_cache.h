@@ -898,10 +898,11 @@ vv_vray_iso_refine(const vv_vcache *c, const vv_vray *r, double ta, float va, do
     return 0.5 * (ta + tb);
 }
 
-/* A march of several objects (the ray caster's and the ray tracer's) meets
- * an iso object's visible sample k after skipping hidden ones (*has == 2):
- * its crossing search restarts at sample k - 1 (below iso, being hidden),
- * as a march of every sample and vv_vray_iso_first have it. */
+/* An iso crossing search meets visible sample k after skipping hidden ones
+ * (the multi-object marches of the ray caster and the ray tracer: *has ==
+ * 2), or starts a region's samples at k (vv_vray_iso_first): it restarts
+ * at sample k - 1, *pt its parameter, *pv its value, as a march of every
+ * sample has it. */
 static inline void
 vv_vray_iso_restart(const vv_vcache *c, const vv_vray *r, double k, double dt, float *pv,
                     double *pt, int *has) {

@@ -198,7 +198,9 @@ vv_region_pixel_combine(vv_region_op op, float f[4], float *fdepth, float *fkey,
 
 /**
  * Combines whole partial images: @p front becomes front combined with
- * @p back (same size and op). Thread-safe for distinct images.
+ * @p back (same size and op); a back that has a classify (SUM) gives it to
+ * front, which vv_region_image_finish then classifies with. Thread-safe
+ * for distinct images.
  */
 void vv_region_image_combine(vv_region_image *front, const vv_region_image *back);
 /** vv_region_image_combine over pixels x0 <= x < x1, y0 <= y < y1 only. */

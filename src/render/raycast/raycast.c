@@ -132,12 +132,21 @@ shade(const rc_frame *fr, const rc_obj *o, const float g[3], const float pw[3], 
 /* Ray set-up per object                                                    */
 
 /* The ray clipped to the object in its index space; in a region render,
- * set up in the whole volume's index space and cut to the region's samples. */
+ * set up in the whole volume's index space and cut to the region's samples
+ * (*cont: vv_vray_clip_region's, 0 outside region renders). */
 static inline int
-ray_setup(const rc_obj *ob, const vv_ray *wr, vv_vray *r) {
+ray_setup_cont(const rc_obj *ob, const vv_ray *wr, vv_vray *r, int *cont) {
+    *cont = 0;
     if (!vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, wr, 0, INFINITY, r))
         return 0;
-    return !ob->region || vv_vray_clip_region(r, ob->region, ob->dt, ob->inv_form, NULL);
+    return !ob->region || vv_vray_clip_region(r, ob->region, ob->dt, ob->inv_form, cont);
+}
+
+/* ray_setup_cont without *cont (vv_vray_clip_region's). */
+static inline int
+ray_setup(const rc_obj *ob, const vv_ray *wr, vv_vray *r) {
+    int cont;
+    return ray_setup_cont(ob, wr, r, &cont);
 }
 
 static inline float
@@ -646,9 +655,8 @@ static void
 trace_iso_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result *res) {
     vv_vray r;
     float C[3] = {0, 0, 0}, A = 0, depth = INFINITY;
-    int cont = 0;
-    if (vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, wr, 0, INFINITY, &r) &&
-        (!ob->region || vv_vray_clip_region(&r, ob->region, ob->dt, ob->inv_form, &cont))) {
+    int cont;
+    if (ray_setup_cont(ob, wr, &r, &cont)) {
         const double th = vv_vray_iso_first(ob->c, ob->bdist, &r, fr->dt, ob->iso, fr->avx2, cont);
         if (th >= 0) {
             const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
