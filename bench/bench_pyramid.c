@@ -3,7 +3,7 @@
  * (vv_pyramid, vv_renderer_render_multires), run by bench/zarr_pyramid.sh
  * on a generated store under a cgroup memory limit:
  *   bench_pyramid STORE [--memory-limit MiB] [--size N] [--frames F]
- *                 [--tf LO:HI] [--lod PIXELS | --level L] [--dataset NAME]
+ *                 [--tf LO:HI] [--lod PIXELS | --level L] [--dataset NAME] [--sharpen]
  * Opens STORE with the memory limit (default 1024 MiB), builds the default
  * World from its coarsest level (the proxy, over level 0's box) with a
  * transfer function ramp LO..HI, and renders F frames (default 4) at N x N
@@ -11,7 +11,13 @@
  * level within PIXELS (default 1) or every node at level L. Prints, as
  * anchor lines: the open time (metadata and the coarsest level), the first
  * image (open plus a progressive frame that reads nothing: every node from
- * what the cache holds, the coarsest level at worst), the first
+ * what the cache holds, the coarsest level at worst); with --sharpen, the
+ * time until the image is converged by progressive frames that leave the
+ * reading to the pyramid's background loader (each frame drawn from what
+ * is resident, then a wait for the next chunk: what the GUI and Python do
+ * while the view stands still; when the view needs more chunks than the
+ * limit holds, the loader stalls and one converged frame streams the rest)
+ * and the frames drawn meanwhile; the first
  * frame (chunks cold in the cache; the files as the page cache has them),
  * the median of the next frames, the chunks read and the nodes per level,
  * the most reads of one chunk in a frame, the peak cache and the process's
@@ -56,7 +62,7 @@ int
 main(int argc, char **argv) {
     const char *path = NULL, *dataset = "store";
     double limit_mib = 1024, tf_lo = 60, tf_hi = 255, lod_px = 1;
-    int size = 512, frames = 4, level = -1;
+    int size = 512, frames = 4, level = -1, sharpen = 0;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--memory-limit") == 0 && i + 1 < argc)
             limit_mib = atof(argv[++i]);
@@ -73,12 +79,14 @@ main(int argc, char **argv) {
                 return 2;
         } else if (strcmp(argv[i], "--dataset") == 0 && i + 1 < argc)
             dataset = argv[++i];
+        else if (strcmp(argv[i], "--sharpen") == 0)
+            sharpen = 1;
         else
             path = argv[i];
     }
     if (!path || size < 1 || frames < 1 || frames > 100 || !(limit_mib > 0)) {
         fprintf(stderr, "usage: bench_pyramid STORE [--memory-limit MiB] [--size N] [--frames F] "
-                        "[--tf LO:HI] [--lod PIXELS | --level L] [--dataset NAME]\n");
+                        "[--tf LO:HI] [--lod PIXELS | --level L] [--dataset NAME] [--sharpen]\n");
         return 2;
     }
     double t0 = bench_now();
@@ -113,6 +121,7 @@ main(int argc, char **argv) {
     lod.level = level;
     lod.voxel_pixels = lod_px;
     lod.progressive = 1;
+    lod.background = sharpen;
     lod.load_budget = 0;
     if (vv_renderer_render_multires(ren, w, 0, &src, &w->view, NULL, &lod, img) != VV_OK)
         bench_die("bench_pyramid", "first image");
@@ -120,6 +129,31 @@ main(int argc, char **argv) {
     bench_emit("pyramid_first_image", dataset, first, "s");
     fprintf(stderr, "bench_pyramid: first image %.2f s after opening began, %d nodes pending\n",
             first, lod.pending);
+    if (sharpen) {
+        const double ts = bench_now();
+        int n = 1;
+        for (; lod.pending > 0 && n < 100000; n++) {
+            const int stalled = lod.stalled;
+            if (!stalled)
+                vv_pyramid_wait(p, 1.0);
+            lod.progressive = !stalled; /* stalled: the converged frame streams the rest */
+            if (vv_renderer_render_multires(ren, w, 0, &src, &w->view, NULL, &lod, img) != VV_OK)
+                bench_die("bench_pyramid", "progressive frame");
+            if (n % 10 == 0 || lod.pending == 0 || stalled)
+                fprintf(stderr,
+                        "bench_pyramid: sharpening frame %d at %.2f s: %d nodes pending%s\n", n,
+                        bench_now() - ts, lod.pending,
+                        stalled ? " (the loader stalled: a converged frame)" : "");
+        }
+        vv_pyramid_stats_get(p, &st0);
+        bench_emit("pyramid_sharpened", dataset, bench_now() - ts, "s");
+        bench_emit("pyramid_sharpening_frames", dataset, n, "frames");
+        fprintf(stderr,
+                "bench_pyramid: the loader read %llu chunks, %llu cancelled, %llu left "
+                "when the cache was full\n",
+                (unsigned long long)st0.loaded, (unsigned long long)st0.cancelled,
+                (unsigned long long)st0.load_stopped);
+    }
     for (int f = 0; f < frames; f++) {
         if (f > 0)
             vv_view_orbit(&w->view, 10 * 3.14159265358979 / 180, 0);

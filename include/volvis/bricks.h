@@ -174,6 +174,17 @@ typedef struct vv_pyramid_stats {
     uint64_t peak_bytes;     /**< the cache's largest size, bytes of voxels */
     uint64_t frames;         /**< frames begun (vv_multires_source.frame) */
     int max_reads_per_frame; /**< the most times one chunk was read within one frame */
+    uint64_t loaded;         /**< chunks the loader read (vv_pyramid_request; in chunk_reads too) */
+    uint64_t cancelled;      /**< queued chunks a newer request dropped */
+    uint64_t load_stopped;   /**< queued chunks left when the cache was full of wanted ones */
+    uint64_t load_errors;    /**< the loader's failed reads (a frame reading them reports why) */
+    int loading;             /**< chunks queued or being read now */
+    /**
+     * 1: the loader stopped short of the newest request because the cache
+     * is full of chunks it wants (the view needs more than the limit holds:
+     * a converged frame must stream, see vv_lod.stalled)
+     */
+    int stalled;
 } vv_pyramid_stats;
 
 /**
@@ -194,7 +205,11 @@ typedef struct vv_pyramid_stats {
  * vv_ome_zarr_read or the HDF5 reader, VV_ERR_FORMAT (inconsistent
  * multiscales; neither HDF5 layout), VV_ERR_LIMIT (over
  * VV_PYRAMID_MAX_LEVELS levels; a limit below one box's working set).
- * Thread-safety: one vv_pyramid is used from one thread at a time.
+ * Thread-safety: vv_pyramid_read_box and the source's methods from one
+ * thread at a time; vv_pyramid_request, vv_pyramid_loading,
+ * vv_pyramid_wait and vv_pyramid_stats_get from any thread, also while a
+ * frame reads. The pyramid's loader threads (started by the first
+ * request) share its cache under a lock.
  */
 vv_status vv_pyramid_open(vv_pyramid **out, const char *path, int channel, int time,
                           uint64_t memory_limit, vv_load_info *info);
@@ -224,6 +239,32 @@ const vv_volume *vv_pyramid_level(const vv_pyramid *p, int level);
 vv_status vv_pyramid_read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3],
                               vv_volume **out);
 void vv_pyramid_stats_get(const vv_pyramid *p, vv_pyramid_stats *st);
+/**
+ * Asynchronous loading: asks the pyramid's loader -- a few I/O threads
+ * (vv_threads_get(), at most 4; one when the store reads a chunk at a
+ * time), started at the first request -- to read the chunks of boxes
+ * 0 .. n-1 (box i: level @p level[i], voxels lo[3i .. 3i+2] ..
+ * hi[3i .. 3i+2], inclusive) into the cache in the background, soonest
+ * first in this order (each chunk once; the caller orders by priority:
+ * vv_renderer_render_multires's progressive frames ask for coarse levels
+ * first, then the nodes nearest the eye). The request replaces what an
+ * earlier one left queued (counted in cancelled: a new view made it
+ * stale); chunks being read finish. n 0 cancels. Chunks already held are
+ * marked wanted: the loader makes room by dropping only chunks the newest
+ * request does not want (least recently used first), and stops when the
+ * cache is full of wanted ones (counted in load_stopped). A frame needing a
+ * chunk being loaded waits for it rather than reading it twice. Returns
+ * at once. Errors: VV_ERR_INVALID (a box outside its level), VV_ERR_LIMIT
+ * (over 2^24 chunks), VV_ERR_NOMEM.
+ */
+vv_status vv_pyramid_request(vv_pyramid *p, int n, const int *level, const int *lo, const int *hi);
+/** Chunks queued or being read by the loader now (0: idle). */
+int vv_pyramid_loading(vv_pyramid *p);
+/**
+ * Waits up to @p seconds until the loader finishes a chunk or has nothing
+ * left to do; returns vv_pyramid_loading's count then.
+ */
+int vv_pyramid_wait(vv_pyramid *p, double seconds);
 /**
  * @p p as a multiresolution source (sys/source.h) for
  * vv_renderer_render_multires: box ranges from the chunks decoded so far.

@@ -331,10 +331,30 @@ typedef struct vv_lod {
      * at its level, read as needed.
      */
     int progressive;
-    int load_budget;              /**< in: chunks a progressive frame may read (>= 0) */
+    int load_budget; /**< in: chunks a progressive frame may read (>= 0) */
+    /**
+     * In: 1 (with progressive, when the source loads in the background: its
+     * request method, a vv_pyramid's): the frame then asks the source for
+     * its pending nodes' chunks -- at their own level and every coarser one
+     * short of the coarsest, coarse levels first, then front to back --
+     * replacing the previous frame's request (none pending: cancelled), so
+     * that a later frame draws them finer: draw, wait (vv_pyramid_wait),
+     * draw again until pending is 0 (what the GUI and Python do while the
+     * view stands still). 0: no request (the frames depend on the budget
+     * alone).
+     */
+    int background;
     int nodes[VV_LOD_MAX_LEVELS]; /**< out: nodes rendered at each level */
-    int skipped; /**< out: nodes skipped unread (their known min/max is transparent) */
-    int pending; /**< out: nodes drawn coarser than their level (0: the converged image) */
+    int skipped;   /**< out: nodes skipped unread (their known min/max is transparent) */
+    int pending;   /**< out: nodes drawn coarser than their level (0: the converged image) */
+    int requested; /**< out: boxes a progressive frame asked the source to load */
+    /**
+     * Out: 1 when a background frame found the previous request stalled
+     * (the source's cache is full of the chunks the view wants, and nodes
+     * are still pending): waiting will not sharpen it further; a frame with
+     * progressive 0 streams the converged image through the cache.
+     */
+    int stalled;
 } vv_lod;
 
 /** level -1 (screen-space error), voxel_pixels 1, counts 0. */

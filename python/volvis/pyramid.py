@@ -8,6 +8,14 @@ detail"), rendered by level of detail (vv_renderer_render_multires).
     block = pyr.read(1, (0, 0, 0), (63, 63, 63))   # a box of level 1, numpy [k, j, i]
     img = pyr.render(mode="mip", size=(512, 512))  # level of detail: 1 voxel a pixel
     img = volvis.render(pyr, mode="iso", isovalue=...)  # the same through volvis.render
+
+    # progressive: draw what is resident now, let the loader fetch the rest
+    img, info = pyr.render(size=(512, 512), progressive=True, return_lod=True)
+    while info["pending"] and not info["stalled"]:
+        pyr.wait(1.0)                   # a chunk arrived (or the loader is idle)
+        img, info = pyr.render(size=(512, 512), progressive=True, return_lod=True)
+    if info["pending"]:                 # more than the limit holds: stream the rest
+        img = pyr.render(size=(512, 512))
 """
 import collections
 import os
@@ -58,7 +66,9 @@ class Pyramid:
     Errors: FileError, FormatError (inconsistent multiscales, neither HDF5
     layout), LimitError (a limit below one box's working set), with the
     library's message naming the store. One Pyramid is used from one thread
-    at a time (a lock serialises its calls)."""
+    at a time (a lock serialises its calls); its background loader's
+    methods (:attr:`loading`, :meth:`wait`, :meth:`cancel`, :attr:`stats`)
+    from any."""
 
     def __init__(self, path, channel=0, time=None, memory_limit="1G"):
         self.path = os.fspath(path)
@@ -99,7 +109,10 @@ class Pyramid:
     def stats(self):
         """What the pyramid did since it was opened (vv_pyramid_stats): chunk
         reads per level, cache hits, missing chunks, evictions, bytes read,
-        the cache's peak, frames and the most reads of one chunk in a frame."""
+        the cache's peak, frames and the most reads of one chunk in a frame;
+        the background loader's chunks read, cancelled (a newer request
+        dropped them), stopped (the cache was full of wanted chunks) and
+        failed, and how many it has queued or in flight now."""
         st = ffi.new("vv_pyramid_stats *")
         lib.vv_pyramid_stats_get(self._c, st)
         n = lib.vv_pyramid_levels(self._c)
@@ -107,7 +120,28 @@ class Pyramid:
                 "chunk_hits": int(st.chunk_hits), "missing": int(st.missing),
                 "evictions": int(st.evictions), "bytes_read": int(st.bytes_read),
                 "peak_bytes": int(st.peak_bytes), "frames": int(st.frames),
-                "max_reads_per_frame": int(st.max_reads_per_frame)}
+                "max_reads_per_frame": int(st.max_reads_per_frame),
+                "loaded": int(st.loaded), "cancelled": int(st.cancelled),
+                "load_stopped": int(st.load_stopped), "load_errors": int(st.load_errors),
+                "loading": int(st.loading), "stalled": int(st.stalled)}
+
+    # ---- the background loader
+    @property
+    def loading(self):
+        """Chunks the background loader has queued or is reading (0: idle).
+        Thread-safe."""
+        return int(lib.vv_pyramid_loading(self._c))
+
+    def wait(self, seconds=1.0):
+        """Waits up to ``seconds`` until the background loader finishes a
+        chunk or has nothing left to do (vv_pyramid_wait), with the GIL
+        released; returns :attr:`loading` then. Thread-safe."""
+        return int(lib.vv_pyramid_wait(self._c, float(seconds)))
+
+    def cancel(self):
+        """Drops what the background loader has queued (chunks being read
+        finish). Thread-safe."""
+        check(lib.vv_pyramid_request(self._c, 0, ffi.NULL, ffi.NULL, ffi.NULL))
 
     # ---- voxels
     def read(self, level=0, lo=(0, 0, 0), hi=None):
@@ -171,7 +205,7 @@ class Pyramid:
     # ---- rendering
     def render(self, world=None, renderer=None, mode=None, size=None, lod=1.0, level=None,
                quality=None, view=None, dtype=np.uint8, depth=False, gamma=1.0, alpha=True,
-               threads=0, progress=None, return_lod=False, **options):
+               threads=0, progress=None, return_lod=False, progressive=False, **options):
         """Renders the pyramid out of core by level of detail
         (vv_renderer_render_multires) and returns the image as
         :func:`volvis.render` does.
@@ -186,7 +220,20 @@ class Pyramid:
         bit for bit, composite to the rounding of compositing). renderer:
         one with the region contract ("raycast", the default, draws every
         mode; "raytrace"). return_lod: also return a dict of the nodes
-        drawn per level and the nodes skipped unread.
+        drawn per level, the nodes skipped unread, the nodes drawn coarser
+        than their level ("pending"), the boxes asked of the loader
+        ("requested") and "stalled" (1: the loader stopped because the view
+        needs more chunks than the memory limit holds; waiting will not
+        sharpen the image, a render without progressive streams the
+        converged one).
+
+        progressive: draw at once from what the cache holds -- a node whose
+        chunks are not resident at its level is drawn at the finest coarser
+        level that is -- reading nothing, and ask the background loader for
+        the missing chunks (coarse levels first, then the nodes nearest the
+        eye; replacing the previous request, so a new view cancels what the
+        old one still wanted). Render again after :meth:`wait` to see them;
+        when "pending" is 0 the image is the converged one, bit for bit.
 
         Errors: UnsupportedError (a renderer without regions, other visible
         objects), those of reading chunks and rendering."""
@@ -202,6 +249,10 @@ class Pyramid:
         lib.vv_pyramid_source(self._c, src)
         lodc = ffi.new("vv_lod *")
         lib.vv_lod_init(lodc)
+        if progressive:
+            lodc.progressive = 1
+            lodc.background = 1
+            lodc.load_budget = 0
         if level is not None:
             lodc.level = int(level)
         else:
@@ -219,7 +270,8 @@ class Pyramid:
         if return_lod:
             n = lib.vv_pyramid_levels(self._c)
             info = {"nodes": [int(lodc.nodes[L]) for L in range(n)],
-                    "skipped": int(lodc.skipped)}
+                    "skipped": int(lodc.skipped), "pending": int(lodc.pending),
+                    "requested": int(lodc.requested), "stalled": int(lodc.stalled)}
             return out, info
         return out
 

@@ -24,15 +24,24 @@
  * few boxes that are not cached are asked of the store ahead (when it can
  * fetch in the background: the sandboxed readers), so that they are
  * decoded while the renderer draws.
+ *
+ * The loader (vv_pyramid_request): a few threads read a queue of chunks
+ * into the same cache, soonest first; a new request replaces the queue.
+ * A chunk being read by anyone sits in the cache reserved and pinned
+ * (PY_LOADING): a frame needing it waits on the arrival condition rather
+ * than reading it twice. One mutex guards the cache, the plan, the queue
+ * and the statistics; reading and decoding run outside it.
  */
 #include <limits.h>
 #include <math.h>
 #include <omp.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 
 #include "core/internal.h"
 #include "io/pyramid.h"
@@ -41,7 +50,12 @@
 
 #define PY_BUCKETS 4096u
 #define PY_MAX_LEVEL_CHUNKS ((uint64_t)1 << 26)
+#define PY_LOADERS_MAX 4
 
+/* A cache entry's state: its voxels decoded, or being decoded by the
+ * frame's thread or a loader (its bytes reserved, pinned), or a loader's
+ * decode failed (no voxels; whoever needs it next decodes it again). */
+enum { PY_READY, PY_NEW, PY_LOADING, PY_FAILED };
 /* A chunk's uses in the frame's plan: the boxes (their order) needing it. */
 typedef struct py_use {
     int level;
@@ -57,9 +71,17 @@ typedef struct py_chunk {
     int org[3], n[3]; /* the block's first voxel in the level, its size */
     vv_volume *blk;   /* the chunk's voxels inside the array */
     uint64_t bytes;
-    int pins; /* boxes being assembled from it */
+    int pins;      /* boxes being assembled from it, and its loader while loading */
+    int state;     /* PY_READY, ... */
+    uint32_t want; /* the request that last asked for it (the loader keeps those) */
     struct py_chunk *prev, *next, *hnext;
 } py_chunk;
+
+/* A chunk a request asked the loader for. */
+typedef struct py_req {
+    int level;
+    uint64_t L;
+} py_req;
 
 typedef struct py_level {
     int dims[3], cdims[3], nchunks[3];
@@ -90,6 +112,19 @@ struct vv_pyramid {
     int planned, cursor;
     int plan_n, *plan_box; /* the plan's boxes in order: level, lo[3], hi[3] each */
     vv_pyramid_stats st;
+    /* the loader (vv_pyramid_request): threads reading the queue's chunks
+     * into the cache. lock guards everything above and below; store_lock
+     * serializes read_chunk when the store is not parallel. */
+    pthread_mutex_t lock, store_lock;
+    pthread_cond_t work;    /* the queue got chunks, or quit */
+    pthread_cond_t arrived; /* a chunk's decode ended (any thread) */
+    int n_loaders, quit, in_flight;
+    pthread_t loader[PY_LOADERS_MAX];
+    py_req *queue; /* the chunks asked for and not yet taken, soonest first */
+    int q_n, q_pos;
+    uint32_t want; /* the newest request */
+    int stalled;   /* the loader stopped short of the newest request: the cache is full */
+    uint64_t arrivals;
 };
 
 static unsigned
@@ -257,6 +292,24 @@ count_read(vv_pyramid *p, int level, uint64_t L, uint64_t file_bytes) {
         p->st.max_reads_per_frame = l->frame_reads[L];
 }
 
+/* Chunk entry @p c (position @p cc) read from the store into its block,
+ * one reader at a time when the store is not parallel; any thread, the
+ * pyramid's lock not held. */
+static vv_status
+read_chunk(vv_pyramid *p, py_chunk *c, const int cc[3], unsigned char *scratch, int *missing,
+           uint64_t *file_bytes) {
+    const pyr_store *st = &p->store;
+    if (!st->parallel)
+        pthread_mutex_lock(&p->store_lock);
+    const vv_status s = st->read_chunk(st->ctx, c->level, cc, scratch, c->blk->data, c->org,
+                                       c->blk->dims, missing, file_bytes);
+    if (!st->parallel)
+        pthread_mutex_unlock(&p->store_lock);
+    if (s == VV_OK)
+        vv_volume_update_range(c->blk);
+    return s;
+}
+
 /* Fetches the chunks in @p todo (n >= 1 of them, their blocks allocated)
  * from the store, on every core when it allows, file bytes and missing
  * flags per chunk into @p file_bytes and @p missing; the first failing
@@ -282,13 +335,10 @@ decode_chunks(vv_pyramid *p, py_chunk **todo, int n, uint64_t *file_bytes, int *
                 cc[k] = c->org[k] / cl->cdims[k];
             vv_status cs =
                 buf || !st->scratch
-                    ? st->read_chunk(st->ctx, c->level, cc, buf, c->blk->data, c->org, c->blk->dims,
-                                     &missing[i], &file_bytes[i])
+                    ? read_chunk(p, c, cc, buf, &missing[i], &file_bytes[i])
                     : vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk of %zu bytes",
                                    st->scratch);
-            if (cs == VV_OK)
-                vv_volume_update_range(c->blk);
-            else {
+            if (cs != VV_OK) {
 #pragma omp critical(vv_pyramid_err)
                 if (first < 0 || i < first) {
                     first = i;
@@ -341,6 +391,63 @@ chunk_span(const py_level *l, const int lo[3], const int hi[3], int c0[3], int c
     }
 }
 
+/* A new cache entry for chunk @p c (position) of level @p level in state
+ * PY_NEW, pinned once, not yet in the cache; NULL when out of memory. */
+static py_chunk *
+new_entry(const vv_pyramid *p, int level, const int c[3]) {
+    const py_level *l = &p->lv[level];
+    py_chunk *e = calloc(1, sizeof *e);
+    if (!e)
+        return NULL;
+    e->level = level;
+    e->L = chunk_linear(l, c);
+    chunk_box(l, c, e->org, e->n);
+    e->bytes = (uint64_t)e->n[0] * (uint64_t)e->n[1] * (uint64_t)e->n[2] * l->esize;
+    e->state = PY_NEW;
+    e->pins = 1;
+    return e;
+}
+
+/* Entry @p e into the cache (its bytes held, most recently used). */
+static void
+insert_entry(vv_pyramid *p, py_chunk *e) {
+    const unsigned b = bucket_of(e->level, e->L);
+    e->use = p->planned ? find_use(p, e->level, e->L) : NULL;
+    e->hnext = p->bucket[b];
+    p->bucket[b] = e;
+    lru_push_front(p, e);
+    p->held += e->bytes;
+    if (p->held > p->st.peak_bytes)
+        p->st.peak_bytes = p->held;
+}
+
+/* Entry @p e decoded (by this thread or a loader; lock held): ready, its
+ * range known, the read counted. */
+static void
+entry_ready(vv_pyramid *p, py_chunk *e, uint64_t file_bytes, int missing) {
+    py_level *l = &p->lv[e->level];
+    e->state = PY_READY;
+    count_read(p, e->level, e->L, file_bytes);
+    p->st.missing += (uint64_t)missing;
+    if (l->known) {
+        l->cmin[e->L] = (float)e->blk->range[0];
+        l->cmax[e->L] = (float)e->blk->range[1];
+        l->known[e->L] = 1;
+    }
+    p->arrivals++;
+}
+
+/* Unpins entry @p e; a failed one nobody holds leaves the cache. */
+static void
+unpin(vv_pyramid *p, py_chunk *e) {
+    if (--e->pins == 0 && e->state == PY_FAILED)
+        drop_chunk(p, e);
+}
+
+/* Box lo .. hi of @p level into @p out from the cache (lock held; it is
+ * released while chunks are decoded): the chunks missing are reserved in
+ * the cache (PY_NEW) and decoded here, those a loader is decoding are
+ * waited for, and one whose loader failed is decoded again here. */
 static vv_status
 assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *out) {
     py_level *l = &p->lv[level];
@@ -354,31 +461,24 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
         use && todo && fbytes && missing ? VV_OK : vv_error_set(VV_ERR_NOMEM, "out of memory");
     int nu = 0, nt = 0;
     uint64_t need = 0;
-    const size_t vs = l->esize;
+    /* the chunks: those held pinned, new entries for the others */
     for (int z = c0[2]; z <= c1[2] && s == VV_OK; z++)
-        for (int y = c0[1]; y <= c1[1]; y++)
+        for (int y = c0[1]; y <= c1[1] && s == VV_OK; y++)
             for (int x = c0[0]; x <= c1[0]; x++) {
                 const int c[3] = {x, y, z};
-                const uint64_t L = chunk_linear(l, c);
-                py_chunk *e = find_chunk(p, level, L);
+                py_chunk *e = find_chunk(p, level, chunk_linear(l, c));
                 if (e) {
                     lru_unlink(p, e);
                     lru_push_front(p, e);
-                    p->st.chunk_hits++;
-                } else {
-                    e = calloc(1, sizeof *e);
-                    if (!e) {
-                        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
-                        break;
-                    }
-                    e->level = level;
-                    e->L = L;
-                    chunk_box(l, c, e->org, e->n);
-                    e->bytes = (uint64_t)e->n[0] * (uint64_t)e->n[1] * (uint64_t)e->n[2] * vs;
+                    p->st.chunk_hits += e->state == PY_READY;
+                    e->pins++;
+                } else if ((e = new_entry(p, level, c))) {
                     need += e->bytes;
                     todo[nt++] = e;
+                } else {
+                    s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+                    break;
                 }
-                e->pins++;
                 use[nu++] = e;
             }
     if (s == VV_OK && !make_room(p, need))
@@ -386,37 +486,59 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
                          "memory limit of %llu bytes: the %d chunks of a box of level %d do not "
                          "fit",
                          (unsigned long long)p->limit, n, level);
-    for (int i = 0; i < nt && s == VV_OK; i++)
-        s = vv_volume_new(&todo[i]->blk, todo[i]->n, l->type);
-    if (s == VV_OK && nt > 0)
-        s = decode_chunks(p, todo, nt, fbytes, missing);
-    for (int i = 0; i < nu; i++)
-        use[i]->pins--;
-    for (int i = 0; i < nt; i++) {
-        py_chunk *e = todo[i];
-        if (s != VV_OK) {
-            vv_volume_free(e->blk);
-            free(e);
-            continue;
-        }
-        const unsigned b = bucket_of(e->level, e->L);
-        e->use = p->planned ? find_use(p, e->level, e->L) : NULL;
-        e->hnext = p->bucket[b];
-        p->bucket[b] = e;
-        lru_push_front(p, e);
-        p->held += e->bytes;
-        count_read(p, level, e->L, fbytes[i]);
-        p->st.missing += (uint64_t)missing[i];
-        if (l->known) {
-            l->cmin[e->L] = (float)e->blk->range[0];
-            l->cmax[e->L] = (float)e->blk->range[1];
-            l->known[e->L] = 1;
-        }
+    for (int i = 0; i < nu; i++) {
+        if (s == VV_OK && use[i]->state == PY_NEW)
+            insert_entry(p, use[i]);
+        else if (s != VV_OK && use[i]->state == PY_NEW)
+            free(use[i]); /* never in the cache */
+        else if (s != VV_OK)
+            unpin(p, use[i]);
     }
-    if (p->held > p->st.peak_bytes)
-        p->st.peak_bytes = p->held;
+    if (s != VV_OK)
+        nu = 0;
+    /* decode the new and failed entries here; wait for the loaders' */
+    while (s == VV_OK) {
+        nt = 0;
+        int waiting = 0;
+        for (int i = 0; i < nu; i++) {
+            py_chunk *e = use[i];
+            if (e->state == PY_NEW || e->state == PY_FAILED) {
+                e->state = PY_LOADING;
+                vv_volume_free(e->blk);
+                e->blk = NULL;
+                if ((s = vv_volume_new(&e->blk, e->n, l->type)) != VV_OK)
+                    e->state = PY_FAILED;
+                todo[nt++] = e;
+            } else if (e->state == PY_LOADING) {
+                waiting = 1;
+            }
+        }
+        if (s == VV_OK && nt > 0) {
+            pthread_mutex_unlock(&p->lock);
+            s = decode_chunks(p, todo, nt, fbytes, missing);
+            pthread_mutex_lock(&p->lock);
+        }
+        for (int i = 0; i < nt; i++) {
+            py_chunk *e = todo[i];
+            if (s == VV_OK) {
+                entry_ready(p, e, fbytes[i], missing[i]);
+            } else {
+                e->state = PY_FAILED;
+                vv_volume_free(e->blk);
+                e->blk = NULL;
+            }
+        }
+        if (nt > 0)
+            pthread_cond_broadcast(&p->arrived);
+        if (s != VV_OK || (!waiting && nt == 0))
+            break;
+        if (waiting && nt == 0)
+            pthread_cond_wait(&p->arrived, &p->lock);
+    }
     for (int i = 0; i < nu && s == VV_OK; i++)
         copy_block(use[i], lo, out);
+    for (int i = 0; i < nu; i++)
+        unpin(p, use[i]);
     free(use);
     free(todo);
     free(fbytes);
@@ -476,12 +598,14 @@ vv_pyramid_read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3], 
     }
     vv_volume *v = NULL;
     vv_status s = vv_volume_new(&v, dims, l->type);
+    pthread_mutex_lock(&p->lock);
     if (s == VV_OK)
         s = assemble(p, level, lo, hi, v);
     if (s == VV_OK)
         prefetch_ahead(p);
     if (p->planned)
         p->cursor++;
+    pthread_mutex_unlock(&p->lock);
     if (s != VV_OK) {
         vv_volume_free(v);
         return prefix_once(s, p->store.name, p->path);
@@ -500,7 +624,8 @@ missing_chunks(const vv_pyramid *p, int level, const int lo[3], const int hi[3])
         for (int y = c0[1]; y <= c1[1]; y++)
             for (int x = c0[0]; x <= c1[0]; x++) {
                 const int c[3] = {x, y, z};
-                n += !find_chunk(p, level, chunk_linear(l, c));
+                const py_chunk *e = find_chunk(p, level, chunk_linear(l, c));
+                n += !e || e->state != PY_READY;
             }
     return n;
 }
@@ -541,8 +666,245 @@ vv_pyramid_level(const vv_pyramid *p, int level) {
 
 void
 vv_pyramid_stats_get(const vv_pyramid *p, vv_pyramid_stats *st) {
-    if (p && st)
-        *st = p->st;
+    if (!p || !st)
+        return;
+    vv_pyramid *q = (vv_pyramid *)p; /* the lock only */
+    pthread_mutex_lock(&q->lock);
+    *st = p->st;
+    st->loading = p->q_n - p->q_pos + p->in_flight;
+    st->stalled = p->stalled;
+    pthread_mutex_unlock(&q->lock);
+}
+
+/* ---- the loader ------------------------------------------------------------------ */
+
+/* Room for @p need more bytes made by a loader (lock held): drops ready
+ * chunks nobody holds that the newest request did not ask for, least
+ * recently used first; 0 when the cache is full of wanted chunks. */
+static int
+loader_room(vv_pyramid *p, uint64_t need) {
+    while (p->held + need > p->capacity) {
+        py_chunk *victim = NULL;
+        for (py_chunk *c = p->lru; c && !victim; c = c->prev)
+            if (!c->pins && c->state == PY_READY && c->want != p->want)
+                victim = c;
+        if (!victim)
+            return 0;
+        drop_chunk(p, victim);
+        p->st.evictions++;
+    }
+    return 1;
+}
+
+/* A loader thread: takes the queue's chunks soonest first, reserves each in
+ * the cache (PY_LOADING, so that a frame needing it waits instead of
+ * reading it twice), decodes it without the lock and makes it ready; stops
+ * taking when the cache is full of chunks the request wants (the rest
+ * stay missing: a frame draws them coarser). */
+static void *
+loader_main(void *arg) {
+    vv_pyramid *p = arg;
+    unsigned char *scratch = p->store.scratch ? malloc(p->store.scratch) : NULL;
+    pthread_mutex_lock(&p->lock);
+    while (!p->quit) {
+        if (p->q_pos >= p->q_n || (p->store.scratch && !scratch)) {
+            pthread_cond_wait(&p->work, &p->lock);
+            continue;
+        }
+        const py_req q = p->queue[p->q_pos++];
+        const py_level *l = &p->lv[q.level];
+        if (find_chunk(p, q.level, q.L))
+            continue; /* held, or being read */
+        int c[3];
+        c[0] = (int)(q.L % (uint64_t)l->nchunks[0]);
+        c[1] = (int)(q.L / (uint64_t)l->nchunks[0] % (uint64_t)l->nchunks[1]);
+        c[2] = (int)(q.L / ((uint64_t)l->nchunks[0] * (uint64_t)l->nchunks[1]));
+        py_chunk *e = new_entry(p, q.level, c);
+        if (!e || !loader_room(p, e->bytes) || vv_volume_new(&e->blk, e->n, l->type) != VV_OK) {
+            if (e)
+                vv_volume_free(e->blk);
+            free(e);
+            vv_error_clear();
+            p->st.load_stopped += (uint64_t)(p->q_n - p->q_pos + 1);
+            p->q_pos = p->q_n; /* full: the rest waits for the next request */
+            p->stalled = 1;
+            pthread_cond_broadcast(&p->arrived);
+            continue;
+        }
+        e->state = PY_LOADING;
+        e->want = p->want;
+        insert_entry(p, e);
+        p->in_flight++;
+        pthread_mutex_unlock(&p->lock);
+        int missing = 0;
+        uint64_t fbytes = 0;
+        const vv_status s = read_chunk(p, e, c, scratch, &missing, &fbytes);
+        pthread_mutex_lock(&p->lock);
+        p->in_flight--;
+        if (s == VV_OK) {
+            entry_ready(p, e, fbytes, missing);
+            p->st.loaded++;
+        } else {
+            vv_error_clear(); /* a frame reading it reports the error */
+            e->state = PY_FAILED;
+            vv_volume_free(e->blk);
+            e->blk = NULL;
+            p->st.load_errors++;
+            p->arrivals++;
+        }
+        unpin(p, e);
+        pthread_cond_broadcast(&p->arrived);
+    }
+    pthread_mutex_unlock(&p->lock);
+    free(scratch);
+    return NULL;
+}
+
+/* The loader's threads, started at the first request (lock held): a few,
+ * one when the store reads one chunk at a time. */
+static vv_status
+start_loaders(vv_pyramid *p) {
+    int n = p->store.parallel ? vv_threads_get() : 1;
+    n = n < 1 ? 1 : n > PY_LOADERS_MAX ? PY_LOADERS_MAX : n;
+    if (p->store.scratch > ((size_t)64 << 20))
+        n = 1;
+    for (int i = 0; i < n; i++) {
+        if (pthread_create(&p->loader[i], NULL, loader_main, p) != 0)
+            return p->n_loaders ? VV_OK
+                                : vv_error_set(VV_ERR_NOMEM, "cannot start the loader's threads");
+        p->n_loaders++;
+    }
+    return VV_OK;
+}
+
+/* A small open-addressed set of (level, L) keys, to queue each chunk once. */
+static int
+seen_add(uint64_t *set, uint64_t mask, int level, uint64_t L) {
+    const uint64_t key = (L << 4 | (uint64_t)level) + 1;
+    for (uint64_t h = (key * 0x9E3779B97F4A7C15ull) >> 20 & mask;; h = (h + 1) & mask) {
+        if (set[h] == key)
+            return 0;
+        if (!set[h]) {
+            set[h] = key;
+            return 1;
+        }
+    }
+}
+
+vv_status
+vv_pyramid_request(vv_pyramid *p, int n, const int *level, const int *lo, const int *hi) {
+    if (!p || n < 0 || (n > 0 && (!level || !lo || !hi)))
+        return vv_error_set(VV_ERR_INVALID, "pyramid: bad request arguments");
+    /* the chunks, each once, in the boxes' order */
+    uint64_t count = 0;
+    for (int i = 0; i < n; i++) {
+        if (level[i] < 0 || level[i] >= p->n_levels)
+            return vv_error_set(VV_ERR_INVALID, "pyramid: request of level %d (0 .. %d)", level[i],
+                                p->n_levels - 1);
+        const py_level *l = &p->lv[level[i]];
+        uint64_t m = 1;
+        for (int k = 0; k < 3; k++) {
+            if (lo[3 * i + k] < 0 || hi[3 * i + k] < lo[3 * i + k] || hi[3 * i + k] >= l->dims[k])
+                return vv_error_set(VV_ERR_INVALID,
+                                    "pyramid: request box %d..%d outside level %d's %d voxels",
+                                    lo[3 * i + k], hi[3 * i + k], level[i], l->dims[k]);
+            m *= (uint64_t)(hi[3 * i + k] / l->cdims[k] - lo[3 * i + k] / l->cdims[k] + 1);
+        }
+        count += m;
+    }
+    if (count > (uint64_t)1 << 24)
+        return vv_error_set(VV_ERR_LIMIT, "pyramid: a request of %llu chunks (at most %d)",
+                            (unsigned long long)count, 1 << 24);
+    uint64_t slots = 16;
+    while (slots < 2 * count)
+        slots *= 2;
+    uint64_t *seen = calloc((size_t)slots, sizeof *seen);
+    py_req *q = malloc(sizeof *q * (size_t)(count ? count : 1));
+    if (!seen || !q) {
+        free(seen);
+        free(q);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    pthread_mutex_lock(&p->lock);
+    p->want++;
+    int nq = 0;
+    for (int i = 0; i < n; i++) {
+        const py_level *l = &p->lv[level[i]];
+        int c0[3], c1[3];
+        chunk_span(l, lo + 3 * i, hi + 3 * i, c0, c1);
+        for (int z = c0[2]; z <= c1[2]; z++)
+            for (int y = c0[1]; y <= c1[1]; y++)
+                for (int x = c0[0]; x <= c1[0]; x++) {
+                    const int c[3] = {x, y, z};
+                    const uint64_t L = chunk_linear(l, c);
+                    if (!seen_add(seen, slots - 1, level[i], L))
+                        continue;
+                    py_chunk *e = find_chunk(p, level[i], L);
+                    if (e && e->state != PY_FAILED)
+                        e->want = p->want; /* held: kept by the loader */
+                    else
+                        q[nq++] = (py_req){level[i], L};
+                }
+    }
+    p->st.cancelled += (uint64_t)(p->q_n - p->q_pos); /* what the view made stale */
+    p->stalled = 0;
+    free(p->queue);
+    p->queue = q;
+    p->q_n = nq;
+    p->q_pos = 0;
+    vv_status s = VV_OK;
+    if (nq > 0 && p->n_loaders == 0)
+        s = start_loaders(p);
+    pthread_cond_broadcast(&p->work);
+    pthread_mutex_unlock(&p->lock);
+    free(seen);
+    return s;
+}
+
+int
+vv_pyramid_loading(vv_pyramid *p) {
+    if (!p)
+        return 0;
+    pthread_mutex_lock(&p->lock);
+    const int n = p->q_n - p->q_pos + p->in_flight;
+    pthread_mutex_unlock(&p->lock);
+    return n;
+}
+
+int
+vv_pyramid_wait(vv_pyramid *p, double seconds) {
+    if (!p)
+        return 0;
+    struct timespec until;
+    clock_gettime(CLOCK_REALTIME, &until);
+    const double t = seconds > 0 ? seconds : 0;
+    until.tv_sec += (time_t)t;
+    until.tv_nsec += (long)((t - floor(t)) * 1e9);
+    if (until.tv_nsec >= 1000000000L) {
+        until.tv_sec++;
+        until.tv_nsec -= 1000000000L;
+    }
+    pthread_mutex_lock(&p->lock);
+    const uint64_t seen = p->arrivals;
+    while (p->q_n - p->q_pos + p->in_flight > 0 && p->arrivals == seen)
+        if (pthread_cond_timedwait(&p->arrived, &p->lock, &until) != 0)
+            break;
+    const int n = p->q_n - p->q_pos + p->in_flight;
+    pthread_mutex_unlock(&p->lock);
+    return n;
+}
+
+/* Stops the loader: the queue dropped, the chunks in flight finished. */
+static void
+stop_loaders(vv_pyramid *p) {
+    pthread_mutex_lock(&p->lock);
+    p->quit = 1;
+    p->q_pos = p->q_n;
+    pthread_cond_broadcast(&p->work);
+    pthread_mutex_unlock(&p->lock);
+    for (int i = 0; i < p->n_loaders; i++)
+        pthread_join(p->loader[i], NULL);
+    p->n_loaders = 0;
 }
 
 /* ---- the source interface ----------------------------------------------------- */
@@ -559,22 +921,32 @@ src_read_box(void *user, int level, const int lo[3], const int hi[3], vv_volume 
 
 static int
 src_box_range(void *user, int level, const int lo[3], const int hi[3], float *vmin, float *vmax) {
-    return box_range(user, level, lo, hi, vmin, vmax);
+    vv_pyramid *p = user;
+    pthread_mutex_lock(&p->lock);
+    const int r = box_range(p, level, lo, hi, vmin, vmax);
+    pthread_mutex_unlock(&p->lock);
+    return r;
 }
 
 static int
 src_missing(void *user, int level, const int lo[3], const int hi[3]) {
-    return missing_chunks(user, level, lo, hi);
+    vv_pyramid *p = user;
+    pthread_mutex_lock(&p->lock);
+    const int n = missing_chunks(p, level, lo, hi);
+    pthread_mutex_unlock(&p->lock);
+    return n;
 }
 
 static void
 src_frame(void *user, int begin) {
     vv_pyramid *p = user;
+    pthread_mutex_lock(&p->lock);
     clear_plan(p);
     if (begin) {
         p->frame++;
         p->st.frames++;
     }
+    pthread_mutex_unlock(&p->lock);
 }
 
 /* Notes box @p seq's use of chunk (level, L). */
@@ -603,8 +975,7 @@ add_use(vv_pyramid *p, int level, uint64_t L, int seq) {
 }
 
 static vv_status
-src_plan(void *user, int n, const int *level, const int *lo, const int *hi) {
-    vv_pyramid *p = user;
+plan_locked(vv_pyramid *p, int n, const int *level, const int *lo, const int *hi) {
     clear_plan(p);
     vv_status s = VV_OK;
     for (int i = 0; i < n && s == VV_OK; i++) {
@@ -643,6 +1014,29 @@ src_plan(void *user, int n, const int *level, const int *lo, const int *hi) {
     return VV_OK;
 }
 
+static vv_status
+src_plan(void *user, int n, const int *level, const int *lo, const int *hi) {
+    vv_pyramid *p = user;
+    pthread_mutex_lock(&p->lock);
+    const vv_status s = plan_locked(p, n, level, lo, hi);
+    pthread_mutex_unlock(&p->lock);
+    return s;
+}
+
+static vv_status
+src_request(void *user, int n, const int *level, const int *lo, const int *hi) {
+    return vv_pyramid_request(user, n, level, lo, hi);
+}
+
+static int
+src_stalled(void *user) {
+    vv_pyramid *p = user;
+    pthread_mutex_lock(&p->lock);
+    const int r = p->stalled;
+    pthread_mutex_unlock(&p->lock);
+    return r;
+}
+
 void
 vv_pyramid_source(vv_pyramid *p, vv_multires_source *out) {
     memset(out, 0, sizeof *out);
@@ -657,6 +1051,8 @@ vv_pyramid_source(vv_pyramid *p, vv_multires_source *out) {
     out->plan = src_plan;
     out->missing_chunks = src_missing;
     out->boxes = p->boxes;
+    out->request = src_request;
+    out->stalled = src_stalled;
 }
 
 /* ---- opening ------------------------------------------------------------------ */
@@ -665,6 +1061,8 @@ void
 vv_pyramid_free(vv_pyramid *p) {
     if (!p)
         return;
+    stop_loaders(p);
+    free(p->queue);
     clear_plan(p);
     while (p->mru)
         drop_chunk(p, p->mru);
@@ -678,6 +1076,10 @@ vv_pyramid_free(vv_pyramid *p) {
         free(l->frame_reads);
     }
     vv_pyr_store_close(&p->store);
+    pthread_mutex_destroy(&p->lock);
+    pthread_mutex_destroy(&p->store_lock);
+    pthread_cond_destroy(&p->work);
+    pthread_cond_destroy(&p->arrived);
     free(p);
 }
 
@@ -858,6 +1260,10 @@ vv_pyramid_open_store(vv_pyramid **out, pyr_store *st, const char *path, uint64_
         return vv_error_set(VV_ERR_NOMEM, "%s: %s: out of memory", name, vv_path_basename(path));
     }
     snprintf(p->path, sizeof p->path, "%s", path);
+    pthread_mutex_init(&p->lock, NULL);
+    pthread_mutex_init(&p->store_lock, NULL);
+    pthread_cond_init(&p->work, NULL);
+    pthread_cond_init(&p->arrived, NULL);
     p->store = *st; /* taken */
     memset(st, 0, sizeof *st);
     vv_status s = pyramid_open(p, memory_limit, info);

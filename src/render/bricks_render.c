@@ -314,6 +314,9 @@ typedef struct mr_frame {
     /* render_nodes_concurrent: the renderers of threads 1.. (clones of r;
      * freed after the frame is finished: whole->classify may be theirs) */
     vv_renderer *clones[MR_MAX_THREADS];
+    /* progressive frames: the boxes its pending nodes want loaded (level,
+     * lo[3], hi[3] each), front to back (vv_multires_source.request) */
+    int *want, n_want, cap_want;
 } mr_frame;
 
 /* The coarsest level whose voxel projects to at most lod->voxel_pixels at
@@ -425,6 +428,74 @@ coarser_resident(const mr_frame *f, mr_node *nd) {
     return 0;
 }
 
+/* Pending node @p nd's boxes at its own level and every coarser one short of
+ * the coarsest, onto the frame's wanted boxes (when the source loads in
+ * the background). A box that cannot be added is left out: the request is
+ * a hint. */
+static void
+want_levels(mr_frame *f, const mr_node *nd) {
+    if (!f->lod->background || f->src->version < 2 || !f->src->request)
+        return;
+    for (int L = nd->level; L < f->n_levels - 1; L++) {
+        vv_render_region rg;
+        int lo[3], hi[3];
+        if (L == nd->level) {
+            memcpy(lo, nd->lo, sizeof lo);
+            memcpy(hi, nd->hi, sizeof hi);
+        } else if (!node_region(f, L, nd->n0, nd->n1, &rg, lo, hi)) {
+            return;
+        }
+        if (f->n_want == f->cap_want) {
+            const int cap = f->cap_want ? 2 * f->cap_want : 256;
+            int *nw = realloc(f->want, sizeof(int) * 7 * (size_t)cap);
+            if (!nw)
+                return;
+            f->want = nw;
+            f->cap_want = cap;
+        }
+        int *b = f->want + 7 * f->n_want++;
+        b[0] = L;
+        memcpy(b + 1, lo, sizeof lo);
+        memcpy(b + 4, hi, sizeof hi);
+    }
+}
+
+/* The frame's wanted boxes asked of the source, coarse levels first and
+ * within a level front to back (the order they were noted); none cancels
+ * what an earlier frame asked. A request that fails is dropped: the frame
+ * is drawn, and the next one asks again. */
+static void
+request_wanted(mr_frame *f) {
+    if (f->src->version < 2 || !f->src->request)
+        return;
+    /* the previous request's fate, before this one replaces it */
+    f->lod->stalled = f->lod->pending > 0 && f->src->stalled && f->src->stalled(f->src->user);
+    const int n = f->n_want;
+    int *lv = malloc(sizeof(int) * (size_t)(n ? n : 1));
+    int *lo = malloc(sizeof(int) * 3 * (size_t)(n ? n : 1));
+    int *hi = malloc(sizeof(int) * 3 * (size_t)(n ? n : 1));
+    if (lv && lo && hi) {
+        int m = 0;
+        for (int L = f->n_levels - 1; L >= 0; L--)
+            for (int i = 0; i < n; i++) {
+                const int *b = f->want + 7 * i;
+                if (b[0] != L)
+                    continue;
+                lv[m] = L;
+                memcpy(lo + 3 * m, b + 1, sizeof(int) * 3);
+                memcpy(hi + 3 * m, b + 4, sizeof(int) * 3);
+                m++;
+            }
+        if (f->src->request(f->src->user, m, lv, lo, hi) == VV_OK)
+            f->lod->requested = m;
+        else
+            vv_error_clear();
+    }
+    free(lv);
+    free(lo);
+    free(hi);
+}
+
 /* Node @p nd of a progressive frame: 1 when it is drawn at its own level
  * (its chunks are held, or fit in what is left of *budget, which they
  * then use up), else redrawn coarser (coarser_resident) and counted as
@@ -434,6 +505,7 @@ progressive_level(mr_frame *f, mr_node *nd, int *budget) {
     const int miss = f->src->missing_chunks(f->src->user, nd->level, nd->lo, nd->hi);
     if (miss > *budget && nd->level < f->n_levels - 1) {
         f->lod->pending++;
+        want_levels(f, nd);
         return coarser_resident(f, nd);
     }
     *budget -= miss;
@@ -707,9 +779,10 @@ vv_renderer_render_multires(vv_renderer *r, const vv_world *w, int object,
                             const vv_render_options *opt, vv_lod *lod, vv_image *out) {
     if (!src || !lod)
         return vv_error_set(VV_ERR_INVALID, "multires: no source or level-of-detail options");
-    if (src->version != VV_MULTIRES_SOURCE_VERSION)
-        return vv_error_set(VV_ERR_UNSUPPORTED, "multires: source interface version %d, not %d",
-                            src->version, VV_MULTIRES_SOURCE_VERSION);
+    if (src->version < 1 || src->version > VV_MULTIRES_SOURCE_VERSION)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "multires: source interface version %d, not 1 .. %d", src->version,
+                            VV_MULTIRES_SOURCE_VERSION);
     if (src->n_levels < 1 || src->n_levels > VV_LOD_MAX_LEVELS || !src->level || !src->read_box)
         return vv_error_set(VV_ERR_INVALID, "multires: a source of %d levels (1 to %d)",
                             src->n_levels, VV_LOD_MAX_LEVELS);
@@ -719,6 +792,8 @@ vv_renderer_render_multires(vv_renderer *r, const vv_world *w, int object,
     memset(lod->nodes, 0, sizeof lod->nodes);
     lod->skipped = 0;
     lod->pending = 0;
+    lod->requested = 0;
+    lod->stalled = 0;
     mr_frame f;
     memset(&f, 0, sizeof f);
     f.r = r;
@@ -754,8 +829,11 @@ vv_renderer_render_multires(vv_renderer *r, const vv_world *w, int object,
             s = render_nodes(&f);
         if (src->frame)
             src->frame(src->user, 0);
+        if (s == VV_OK && lod->progressive && lod->background)
+            request_wanted(&f);
     }
     free(f.nodes);
+    free(f.want);
     if (s == VV_OK)
         vv_region_image_finish(&whole, w->background);
     for (int t = 0; t < MR_MAX_THREADS; t++)

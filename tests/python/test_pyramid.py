@@ -9,6 +9,8 @@ writer) read by box and rendered out of core by level of detail.
   the limit;
 - by level of detail the nodes take coarser levels, and volvis.render(pyr)
   draws the store's default scene;
+- progressive frames with the background loader converge on the
+  converged image (PSNR non-decreasing, the last bit for bit);
 - bad input: a missing store, a memory limit that is not a size, a box
   outside a level, a renderer without regions: the library's errors.
 """
@@ -92,6 +94,35 @@ def test_level_of_detail(store):
     assert img.shape == (48, 64, 4) and int((img[..., 3] == 255).sum()) > 200
     w = p.world(mode="composite", size=(40, 40))
     assert w.objects[0].volume.dims == tuple(p.levels[-1].shape[::-1])
+
+
+def test_progressive_background_loading(store):
+    """Progressive frames draw what is resident and leave the rest to the
+    background loader: each frame is at least as close to the converged one,
+    the last is it bit for bit, and no chunk is read twice."""
+    path, lv, _ = store
+    conv = volvis.Pyramid(path, memory_limit="8M")
+    w = conv.world(mode="composite", size=(96, 96))
+    ref = conv.render(w, lod=0.5, dtype=np.float32)
+    p = volvis.Pyramid(path, memory_limit="8M")
+    psnr, info = [], {"pending": 1}
+    for _ in range(200):
+        img, info = p.render(w, lod=0.5, dtype=np.float32, progressive=True, return_lod=True)
+        err = float(np.mean((img - ref) ** 2))
+        psnr.append(99.0 if err == 0 else 10 * np.log10(1.0 / err))
+        if not info["pending"]:
+            break
+        p.wait(10.0)
+    st = p.stats
+    print("PSNR per frame", [round(q, 1) for q in psnr], st["loaded"], "chunks loaded")
+    assert len(psnr) >= 2 and psnr[0] < 99.0  # the first frame came from coarser levels
+    assert all(b >= a for a, b in zip(psnr, psnr[1:]))
+    assert info["pending"] == 0 and np.array_equal(img, ref)
+    assert st["loaded"] > 0 and st["load_errors"] == 0
+    nchunks = sum(int(np.prod([-(-n // 16) for n in a.shape])) for a in lv)
+    assert sum(st["chunk_reads"]) <= nchunks  # none read twice
+    p.cancel()
+    assert p.wait(5.0) == 0 and p.loading == 0
 
 
 def test_bad_input(store, tmp_path):

@@ -64,7 +64,7 @@ typedef struct vv_brick_source {
 } vv_brick_source;
 
 /** The version of vv_multires_source this header describes. */
-#define VV_MULTIRES_SOURCE_VERSION 1
+#define VV_MULTIRES_SOURCE_VERSION 2
 
 /**
  * A multiresolution (pyramid) volume as its consumers see it: levels 0
@@ -133,6 +133,21 @@ typedef struct vv_multires_source {
      * stay one at a time and in the plan's order). 0 or 1: one.
      */
     int boxes;
+    /* ---- version 2 ---- */
+    /**
+     * Optional (NULL): asks the source to load the chunks of these boxes in
+     * the background (box i as in plan), soonest first in this order,
+     * replacing whatever an earlier request left queued (a new view made it
+     * stale); n 0 cancels. Returns at once; a later progressive frame finds
+     * them resident (missing_chunks). Errors: VV_ERR_INVALID, VV_ERR_LIMIT,
+     * VV_ERR_NOMEM.
+     */
+    vv_status (*request)(void *user, int n, const int *level, const int *lo, const int *hi);
+    /**
+     * Optional (NULL): 1 when the background loading of the newest request
+     * stopped short because the source's cache is full of chunks it wants.
+     */
+    int (*stalled)(void *user);
 } vv_multires_source;
 
 #ifdef __cplusplus

@@ -1,0 +1,405 @@
+/*
+ * The pyramid's asynchronous loader (vv_pyramid_request; issue 29): an
+ * OME-Zarr pyramid of the real CT head (256 x 256 x 108, int16; levels of
+ * 32, 4 and 1 chunks of 64^3) read in this process and through the
+ * sandboxed readers.
+ *
+ * - Progressive frames that ask the loader for their pending chunks
+ *   (vv_lod.background) and wait between frames get closer to the
+ *   converged image frame by frame (PSNR non-decreasing) and end on it bit
+ *   for bit; no chunk is read twice, and the last frame reads nothing.
+ * - A frame drawn while the loader reads the chunks it needs waits for them
+ *   instead of reading them again: the level-0 image is the cold one bit
+ *   for bit, each chunk read once.
+ * - A new request cancels what the old one left queued (counted), and
+ *   chunks in flight finish: loaded + cancelled is what was asked.
+ * - A cache too small for the request: the loader stops at the limit
+ *   (load_stopped), the peak stays under it; progressive frames then
+ *   report the loader stalled, and a converged frame streams the cold
+ *   frame's image bit for bit.
+ * - A chunk that does not decode: the loader counts it and goes on; the
+ *   frame that needs it fails with the store's one-line error.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "testutil.h"
+#include "volvis/volvis.h"
+
+#define MIB (1024u * 1024u)
+
+static char g_store[4096], g_broken[4096];
+
+/* The CT head written as an OME-Zarr pyramid by the library's writer, and a
+ * copy with one level-0 chunk overwritten with garbage. */
+static int
+setup(void **state) {
+    (void)state;
+    if (!vt_have_data("volumes/ct_head.nrrd"))
+        return 0;
+    const char *dir = vt_outdir("pyramid_loader");
+    snprintf(g_store, sizeof g_store, "%s/head.ome.zarr", dir);
+    snprintf(g_broken, sizeof g_broken, "%s/broken.ome.zarr", dir);
+    vv_volume *v = NULL;
+    vv_status s = vv_volume_load(&v, vt_data("volumes/ct_head.nrrd"), NULL);
+    if (s == VV_OK)
+        s = vv_ome_zarr_write(v, g_store, NULL);
+    if (s == VV_OK)
+        s = vv_ome_zarr_write(v, g_broken, NULL);
+    vv_volume_free(v);
+    if (s != VV_OK) {
+        fprintf(stderr, "setup: %s\n", vv_error_message());
+        return -1;
+    }
+    char chunk[4200];
+    snprintf(chunk, sizeof chunk, "%s/0/1/1/1", g_broken);
+    FILE *f = fopen(chunk, "wb");
+    if (!f)
+        return -1;
+    fputs("this is not a zlib stream", f);
+    fclose(f);
+    return 0;
+}
+
+/* A pyramid of @p path under @p limit bytes, through the sandbox or not. */
+static vv_pyramid *
+open_pyramid(const char *path, uint64_t limit, int sandbox) {
+    setenv("VOLVIS_SANDBOX", sandbox ? "1" : "0", 1);
+    vv_pyramid *p = NULL;
+    vt_ok(vv_pyramid_open(&p, path, 0, -1, limit, NULL));
+    unsetenv("VOLVIS_SANDBOX");
+    return p;
+}
+
+/* The scene of `volvis render STORE`: the coarsest level as the proxy,
+ * placed over level 0's box, 192 pixels square. */
+static vv_world *
+scene(vv_pyramid *p) {
+    const int top = vv_pyramid_levels(p) - 1;
+    const vv_volume *h = vv_pyramid_level(p, top), *f = vv_pyramid_level(p, 0);
+    const int lo[3] = {0, 0, 0}, hi[3] = {h->dims[0] - 1, h->dims[1] - 1, h->dims[2] - 1};
+    vv_volume *proxy = NULL;
+    vt_ok(vv_pyramid_read_box(p, top, lo, hi, &proxy));
+    for (int k = 0; k < 3; k++) {
+        proxy->origin[k] = f->origin[k];
+        proxy->spacing[k] = f->spacing[k] * (f->dims[k] - 1) / (h->dims[k] - 1);
+    }
+    vv_default_scene_options so = vt_scene_options(192);
+    so.has_tf_range = 1;
+    so.tf_lo = 100;
+    so.tf_hi = 1500;
+    vv_world *w = NULL;
+    vt_ok(vv_world_new_for_volume(&w, proxy, &so));
+    vv_volume_free(proxy);
+    return w;
+}
+
+static uint64_t
+reads(vv_pyramid *p) {
+    vv_pyramid_stats st;
+    vv_pyramid_stats_get(p, &st);
+    uint64_t n = 0;
+    for (int l = 0; l < VV_PYRAMID_MAX_LEVELS; l++)
+        n += st.chunk_reads[l];
+    return n;
+}
+
+/* One frame of @p p (progressive with the loader when @p progressive). */
+static vv_status
+frame(vv_pyramid *p, vv_world *w, int level, int progressive, vv_lod *lod, vv_image *img) {
+    vv_renderer *r = NULL;
+    vt_ok(vv_renderer_new(&r, "raycast"));
+    vv_multires_source src;
+    vv_pyramid_source(p, &src);
+    vv_lod_init(lod);
+    lod->level = level;
+    lod->progressive = progressive;
+    lod->background = progressive;
+    lod->load_budget = 0;
+    vv_render_options ro;
+    vv_render_options_init(&ro);
+    const vv_status s = vv_renderer_render_multires(r, w, 0, &src, &w->view, &ro, lod, img);
+    vv_renderer_free(r);
+    return s;
+}
+
+static int
+same_image(const vv_image *a, const vv_image *b) {
+    return a->width == b->width && a->height == b->height &&
+           !memcmp(a->rgba, b->rgba, sizeof(float) * 4 * (size_t)a->width * (size_t)a->height);
+}
+
+static void
+progressive_converges(int sandbox) {
+    if (!g_store[0])
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    /* the converged frame, every node at its level, read as needed */
+    vv_pyramid *p = open_pyramid(g_store, 64 * MIB, sandbox);
+    vv_world *w = scene(p);
+    vv_image *ref = NULL, *img = NULL;
+    vt_ok(vv_image_new(&ref, 192, 192));
+    vt_ok(vv_image_new(&img, 192, 192));
+    vv_lod lod;
+    vt_ok(frame(p, w, -1, 0, &lod, ref));
+    vv_pyramid_free(p);
+
+    p = open_pyramid(g_store, 64 * MIB, sandbox);
+    double last = -1;
+    int frames = 0, requested0 = 0, pending0 = 0;
+    uint64_t frame_reads = 0;
+    for (; frames < 400; frames++) {
+        vv_pyramid_stats st0, st1;
+        vv_pyramid_stats_get(p, &st0);
+        const uint64_t r0 = reads(p);
+        vt_ok(frame(p, w, -1, 1, &lod, img));
+        vv_pyramid_stats_get(p, &st1);
+        frame_reads = reads(p) - r0 - (st1.loaded - st0.loaded); /* the loader may still read */
+        const double q = vv_image_psnr(img, ref);
+        if (frames == 0) {
+            requested0 = lod.requested;
+            pending0 = lod.pending;
+            printf("first frame: %d nodes pending, %d boxes requested, %.1f dB\n", lod.pending,
+                   lod.requested, q);
+        }
+        assert_true(q >= last);
+        last = q;
+        if (lod.pending == 0)
+            break;
+        vv_pyramid_wait(p, 10.0);
+    }
+    vv_pyramid_stats st;
+    vv_pyramid_stats_get(p, &st);
+    printf("%s: %d frames; the loader read %llu chunks, %llu chunk reads in all, %llu "
+           "cancelled\n",
+           sandbox ? "sandboxed" : "in process", frames + 1, (unsigned long long)st.loaded,
+           (unsigned long long)reads(p), (unsigned long long)st.cancelled);
+    assert_true(pending0 > 0 && requested0 > 0);
+    assert_int_equal(lod.pending, 0);
+    assert_true(same_image(img, ref));
+    assert_true(st.loaded > 0);
+    assert_true(reads(p) <= 37); /* 32 + 4 + 1 chunks, none read twice */
+    assert_int_equal(st.evictions, 0);
+    assert_int_equal(frame_reads, 0); /* the last frame found everything resident */
+    assert_int_equal(vv_pyramid_loading(p), 0);
+    vv_image_free(ref);
+    vv_image_free(img);
+    vv_world_free(w);
+    vv_pyramid_free(p);
+}
+
+static void
+test_progressive_in_process(void **state) {
+    (void)state;
+    progressive_converges(0);
+}
+
+static void
+test_progressive_sandboxed(void **state) {
+    (void)state;
+    progressive_converges(1);
+}
+
+/* Every level-0 chunk asked of the loader (32 boxes of one chunk each). */
+static void
+request_level0(vv_pyramid *p) {
+    int lv[32], lo[96], hi[96], n = 0;
+    for (int z = 0; z < 2; z++)
+        for (int y = 0; y < 4; y++)
+            for (int x = 0; x < 4; x++, n++) {
+                lv[n] = 0;
+                const int c[3] = {x, y, z};
+                for (int k = 0; k < 3; k++) {
+                    lo[3 * n + k] = 64 * c[k];
+                    hi[3 * n + k] = 64 * c[k] + (k == 2 && c[k] == 1 ? 43 : 63);
+                }
+            }
+    vt_ok(vv_pyramid_request(p, n, lv, lo, hi));
+}
+
+/* A level-0 frame while the loader reads the same chunks: it waits for them. */
+static void
+frame_during_loading(int sandbox) {
+    if (!g_store[0])
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    vv_pyramid *p = open_pyramid(g_store, 64 * MIB, sandbox);
+    vv_world *w = scene(p);
+    vv_image *ref = NULL, *img = NULL;
+    vt_ok(vv_image_new(&ref, 192, 192));
+    vt_ok(vv_image_new(&img, 192, 192));
+    vv_lod lod;
+    vt_ok(frame(p, w, 0, 0, &lod, ref));
+    vv_pyramid_free(p);
+
+    p = open_pyramid(g_store, 64 * MIB, sandbox);
+    const uint64_t opened = reads(p);
+    request_level0(p);
+    vt_ok(frame(p, w, 0, 0, &lod, img));
+    while (vv_pyramid_loading(p) > 0)
+        vv_pyramid_wait(p, 10.0);
+    vv_pyramid_stats st;
+    vv_pyramid_stats_get(p, &st);
+    printf("%s: the loader read %llu of the 32 level-0 chunks, the frame the rest\n",
+           sandbox ? "sandboxed" : "in process", (unsigned long long)st.loaded);
+    assert_true(same_image(img, ref));
+    assert_int_equal(st.chunk_reads[0], 32);
+    assert_int_equal(reads(p) - opened, 32);
+    assert_true(st.max_reads_per_frame <= 1);
+    vv_image_free(ref);
+    vv_image_free(img);
+    vv_world_free(w);
+    vv_pyramid_free(p);
+}
+
+static void
+test_frame_during_loading(void **state) {
+    (void)state;
+    frame_during_loading(0);
+}
+
+static void
+test_frame_during_loading_sandboxed(void **state) {
+    (void)state;
+    frame_during_loading(1);
+}
+
+static void
+test_cancel(void **state) {
+    (void)state;
+    if (!g_store[0])
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    vv_pyramid *p = open_pyramid(g_store, 64 * MIB, 0);
+    request_level0(p);
+    vt_ok(vv_pyramid_request(p, 0, NULL, NULL, NULL)); /* the view changed: nothing wanted */
+    while (vv_pyramid_loading(p) > 0)
+        vv_pyramid_wait(p, 10.0);
+    vv_pyramid_stats st;
+    vv_pyramid_stats_get(p, &st);
+    printf("cancelled %llu of 32 queued, %llu read (in flight)\n", (unsigned long long)st.cancelled,
+           (unsigned long long)st.loaded);
+    assert_int_equal(st.loaded + st.cancelled, 32);
+    assert_true(st.cancelled >= 16);
+    /* asked again: everything arrives, and the second request queues only
+     * what is not held */
+    request_level0(p);
+    while (vv_pyramid_loading(p) > 0)
+        vv_pyramid_wait(p, 10.0);
+    vv_pyramid_stats_get(p, &st);
+    assert_int_equal(st.loaded, 32);
+    assert_int_equal(st.chunk_reads[0], 32);
+    assert_int_equal(st.load_errors, 0);
+    /* bad requests */
+    const int lv = 5, lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1}, big[3] = {0, 0, 200};
+    assert_int_equal(vv_pyramid_request(p, 1, &lv, lo, hi), VV_ERR_INVALID);
+    const int l0 = 0;
+    assert_int_equal(vv_pyramid_request(p, 1, &l0, lo, big), VV_ERR_INVALID);
+    vv_pyramid_free(p);
+}
+
+static void
+test_full_cache(void **state) {
+    (void)state;
+    if (!g_store[0])
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    const uint64_t limit = 8 * MIB; /* level 0 alone is 13.5 MiB */
+    vv_pyramid *p = open_pyramid(g_store, limit, 0);
+    request_level0(p);
+    while (vv_pyramid_loading(p) > 0)
+        vv_pyramid_wait(p, 10.0);
+    vv_pyramid_stats st;
+    vv_pyramid_stats_get(p, &st);
+    printf("limit 8 MiB: the loader read %llu chunks and stopped with %llu left; peak %.1f MiB\n",
+           (unsigned long long)st.loaded, (unsigned long long)st.load_stopped,
+           (double)st.peak_bytes / MIB);
+    assert_true(st.loaded > 0 && st.loaded < 32);
+    assert_int_equal(st.loaded + st.load_stopped, 32);
+    assert_true(st.peak_bytes <= limit);
+    assert_int_equal(st.stalled, 1);
+    /* a new request clears it until the loader stops again */
+    vt_ok(vv_pyramid_request(p, 0, NULL, NULL, NULL));
+    vv_pyramid_stats_get(p, &st);
+    assert_int_equal(st.stalled, 0);
+    vv_pyramid_free(p);
+}
+
+/* Level 0 everywhere within 8 MiB: the view needs more than the cache
+ * holds, the frames report the loader stalled, and a converged frame then
+ * streams the image of a cold converged frame, bit for bit. */
+static void
+test_progressive_stalls(void **state) {
+    (void)state;
+    if (!g_store[0])
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    vv_pyramid *p = open_pyramid(g_store, 8 * MIB, 0);
+    vv_world *w = scene(p);
+    vv_image *ref = NULL, *img = NULL;
+    vt_ok(vv_image_new(&ref, 192, 192));
+    vt_ok(vv_image_new(&img, 192, 192));
+    vv_lod lod;
+    vt_ok(frame(p, w, 0, 0, &lod, ref));
+    vv_pyramid_free(p);
+
+    p = open_pyramid(g_store, 8 * MIB, 0);
+    int frames = 0;
+    for (; frames < 100; frames++) {
+        vt_ok(frame(p, w, 0, 1, &lod, img));
+        if (lod.pending == 0 || lod.stalled)
+            break;
+        vv_pyramid_wait(p, 10.0);
+    }
+    printf("stalled after %d frames with %d nodes pending\n", frames + 1, lod.pending);
+    assert_int_equal(lod.stalled, 1);
+    assert_true(lod.pending > 0);
+    vt_ok(frame(p, w, 0, 0, &lod, img));
+    assert_int_equal(lod.pending, 0);
+    assert_true(same_image(img, ref));
+    vv_image_free(ref);
+    vv_image_free(img);
+    vv_world_free(w);
+    vv_pyramid_free(p);
+}
+
+static void
+test_broken_chunk(void **state) {
+    (void)state;
+    if (!g_store[0])
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    vv_pyramid *p = open_pyramid(g_broken, 64 * MIB, 0);
+    vv_world *w = scene(p);
+    request_level0(p);
+    while (vv_pyramid_loading(p) > 0)
+        vv_pyramid_wait(p, 10.0);
+    vv_pyramid_stats st;
+    vv_pyramid_stats_get(p, &st);
+    assert_int_equal(st.load_errors, 1);
+    assert_int_equal(st.loaded, 31);
+    vv_image *img = NULL;
+    vt_ok(vv_image_new(&img, 192, 192));
+    vv_lod lod;
+    const vv_status s = frame(p, w, 0, 0, &lod, img);
+    printf("the frame: %s\n", vv_error_message());
+    assert_int_equal(s, VV_ERR_FORMAT);
+    assert_non_null(strstr(vv_error_message(), "broken.ome.zarr"));
+    assert_non_null(strstr(vv_error_message(), "1/1/1"));
+    assert_null(strchr(vv_error_message(), '\n'));
+    vv_image_free(img);
+    vv_world_free(w);
+    vv_pyramid_free(p);
+}
+
+int
+main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_progressive_in_process),
+        cmocka_unit_test(test_progressive_sandboxed),
+        cmocka_unit_test(test_frame_during_loading),
+        cmocka_unit_test(test_frame_during_loading_sandboxed),
+        cmocka_unit_test(test_cancel),
+        cmocka_unit_test(test_full_cache),
+        cmocka_unit_test(test_progressive_stalls),
+        cmocka_unit_test(test_broken_chunk),
+    };
+    return vt_run_tests(tests, setup, NULL);
+}
