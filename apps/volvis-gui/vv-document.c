@@ -5,6 +5,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <ftw.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -28,6 +29,7 @@ struct _VvDocument {
     char *merge_label;         /* vv_document_begin_edit_merging: the last merged edit */
     gint64 merge_time;
     GHashTable *time_steps; /* source path -> the file's time steps (GINT_TO_POINTER) */
+    GHashTable *pyramids;   /* source path -> VvGuiPyramid (opened out of core) */
     GHashTable *series;     /* "channel\npath" -> vv_time_series* */
     /* vv_document_request_time: a read in flight, the step asked for since */
     gboolean time_busy;
@@ -77,6 +79,7 @@ vv_document_finalize(GObject *o) {
     g_ptr_array_unref(doc->autosaved);
     g_free(doc->merge_label);
     g_hash_table_unref(doc->time_steps);
+    g_hash_table_unref(doc->pyramids);
     g_hash_table_unref(doc->series);
     G_OBJECT_CLASS(vv_document_parent_class)->finalize(o);
 }
@@ -99,6 +102,8 @@ vv_document_init(VvDocument *doc) {
     doc->selected = -1;
     doc->autosaved = g_ptr_array_new_with_free_func(autosaved_volume_free);
     doc->time_steps = g_hash_table_new_full(g_str_hash, g_str_equal, g_free, NULL);
+    doc->pyramids = g_hash_table_new_full(g_str_hash, g_str_equal, g_free,
+                                          (GDestroyNotify)vv_gui_pyramid_unref);
     doc->series = vv_time_cache_new();
     doc->time_want = -1;
 }
@@ -418,6 +423,143 @@ vv_document_add_volume(VvDocument *doc, vv_volume *v, const char *name, const ch
     return add_volume_channels(doc, &v, 1, NULL, name, source, error);
 }
 
+/* ---- multiresolution files out of core ---------------------------------------- */
+
+static void
+gui_pyramid_clear(gpointer data) {
+    VvGuiPyramid *p = data;
+    vv_pyramid_free(p->pyramid);
+    vv_volume_free(p->proxy);
+    g_free(p->path);
+}
+
+VvGuiPyramid *
+vv_gui_pyramid_ref(VvGuiPyramid *p) {
+    return p ? g_atomic_rc_box_acquire(p) : NULL;
+}
+
+void
+vv_gui_pyramid_unref(VvGuiPyramid *p) {
+    if (p)
+        g_atomic_rc_box_release_full(p, gui_pyramid_clear);
+}
+
+VvGuiPyramid *
+vv_document_pyramid(VvDocument *doc, const vv_object *o) {
+    if (!o || o->type != VV_OBJECT_VOLUME || !o->geometry.source || !o->volume)
+        return NULL;
+    VvGuiPyramid *p = g_hash_table_lookup(doc->pyramids, o->geometry.source);
+    return p && p->proxy == o->volume ? p : NULL;
+}
+
+uint64_t
+vv_document_memory_limit(void) {
+    const char *e = g_getenv("VOLVIS_MEMORY_LIMIT");
+    if (!e || !*e)
+        return (uint64_t)1 << 30;
+    char *end = NULL;
+    double v = g_ascii_strtod(e, &end);
+    const char u = end ? g_ascii_toupper(*end) : '\0';
+    v *= u == 'K' ? 1024.0 : u == 'M' ? 1048576.0 : u == 'G' ? 1073741824.0 : 1.0;
+    if (!(v >= 1048576.0) || v > 1e15) {
+        g_warning("volvis-gui: VOLVIS_MEMORY_LIMIT=%s is not a size of at least 1M; 1G is used", e);
+        return (uint64_t)1 << 30;
+    }
+    return (uint64_t)v;
+}
+
+/* For saving a World @p w (a clone of the document's, or the document's
+ * own; doc->pyramids are looked up on the original @p orig): the objects
+ * shown from a pyramid get, in @p w, a header volume of level 0's geometry
+ * instead of the proxy, so that the scene names the file with level 0's
+ * origin and spacing (its loader reads level 0). */
+static void
+pyramid_geometry_for_save(VvDocument *doc, const vv_world *orig, vv_world *w) {
+    for (int i = 0; i < w->n_objects && i < orig->n_objects; i++) {
+        VvGuiPyramid *p = vv_document_pyramid(doc, orig->objects[i]);
+        if (!p)
+            continue;
+        const vv_volume *h0 = vv_pyramid_level(p->pyramid, 0);
+        const int one[3] = {1, 1, 1};
+        vv_volume *h = NULL;
+        if (vv_volume_new(&h, one, h0->type) != VV_OK) {
+            vv_error_clear();
+            continue;
+        }
+        memcpy(h->spacing, h0->spacing, sizeof h->spacing);
+        memcpy(h->origin, h0->origin, sizeof h->origin);
+        memcpy(h->direction, h0->direction, sizeof h->direction);
+        h->range[0] = h0->range[0];
+        h->range[1] = h0->range[1];
+        vv_volume_free(w->objects[i]->volume);
+        w->objects[i]->volume = h;
+    }
+}
+
+/* Opens the multiresolution file @p path out of core when its level 0 holds
+ * more than a quarter of the memory limit: the object shows the coarsest
+ * level stretched over level 0's box, its opacity per level 0's voxel (as
+ * `volvis render STORE`). 1: opened; 0: small enough to read whole; -1:
+ * an error. */
+static int
+open_out_of_core(VvDocument *doc, const char *path, GError **error) {
+    const uint64_t limit = vv_document_memory_limit();
+    vv_pyramid *p = NULL;
+    vv_error_clear();
+    if (vv_pyramid_open(&p, path, 0, -1, limit, NULL) != VV_OK) {
+        set_error(error, "cannot open the multiresolution file");
+        return -1;
+    }
+    const int top = vv_pyramid_levels(p) - 1;
+    const vv_volume *h0 = vv_pyramid_level(p, 0), *h = vv_pyramid_level(p, top);
+    const double bytes =
+        (double)h0->dims[0] * h0->dims[1] * h0->dims[2] * (double)vv_voxel_type_size(h0->type);
+    if (top == 0 || bytes <= (double)limit / 4) {
+        vv_pyramid_free(p);
+        return 0;
+    }
+    const int lo[3] = {0, 0, 0}, hi[3] = {h->dims[0] - 1, h->dims[1] - 1, h->dims[2] - 1};
+    vv_volume *proxy = NULL;
+    if (vv_pyramid_read_box(p, top, lo, hi, &proxy) != VV_OK) {
+        set_error(error, "cannot read the coarsest level");
+        vv_pyramid_free(p);
+        return -1;
+    }
+    for (int k = 0; k < 3; k++) {
+        proxy->origin[k] = h0->origin[k];
+        if (h->dims[k] > 1)
+            proxy->spacing[k] = h0->spacing[k] * (h0->dims[k] - 1) / (h->dims[k] - 1);
+    }
+    g_autofree char *base = g_path_get_basename(path);
+    char *dot = strchr(base, '.');
+    if (dot && dot != base)
+        *dot = '\0';
+    VvGuiPyramid *gp = g_atomic_rc_box_new0(VvGuiPyramid);
+    gp->pyramid = p;
+    gp->proxy = vv_volume_ref(proxy);
+    gp->path = g_canonicalize_filename(path, NULL);
+    gp->limit = limit;
+    g_hash_table_replace(doc->pyramids, g_strdup(gp->path), gp);
+    g_hash_table_replace(doc->time_steps, g_strdup(gp->path), GINT_TO_POINTER(1));
+    const int before = doc->world->n_objects;
+    const gboolean ok = add_volume_channels(doc, &proxy, 1, NULL, base, path, error);
+    /* opacity per level 0's smallest voxel edge, not the proxy's */
+    if (ok && doc->world->n_objects > before) {
+        vv_object *o = doc->world->objects[doc->world->n_objects - 1];
+        const double ps = fmin(proxy->spacing[0], fmin(proxy->spacing[1], proxy->spacing[2]));
+        const double fs = fmin(h0->spacing[0], fmin(h0->spacing[1], h0->spacing[2]));
+        if (fabs(o->tf.opacity_unit_distance - ps) <= 1e-12 * ps)
+            o->tf.opacity_unit_distance = fs;
+        vv_document_changed(doc);
+    }
+    vv_volume_free(proxy);
+    if (!ok) {
+        g_autofree char *key = g_canonicalize_filename(path, NULL);
+        g_hash_table_remove(doc->pyramids, key);
+    }
+    return ok ? 1 : -1;
+}
+
 gboolean
 vv_document_open(VvDocument *doc, const char *path, GError **error) {
     static const char *const scene_suffixes[] = {".json", NULL};
@@ -426,6 +568,19 @@ vv_document_open(VvDocument *doc, const char *path, GError **error) {
     vv_error_clear();
     if (has_suffix(path, mesh_suffixes))
         return open_mesh(doc, path, error);
+    /* a Zarr store chosen by its metadata file (a file chooser picks no folder) */
+    g_autofree char *leaf = g_path_get_basename(path);
+    g_autofree char *store =
+        !strcmp(leaf, ".zattrs") || !strcmp(leaf, ".zgroup") || !strcmp(leaf, ".zarray")
+            ? g_path_get_dirname(path)
+            : NULL;
+    if (store && vv_pyramid_probe(store))
+        path = store;
+    if (vv_pyramid_probe(path)) {
+        const int r = open_out_of_core(doc, path, error);
+        if (r != 0)
+            return r > 0;
+    }
     /* every channel of the file (the first VV_MAX_CHANNELS), each at time step 0 */
     vv_volume *v[VV_MAX_CHANNELS] = {NULL};
     vv_load_info info[VV_MAX_CHANNELS];
@@ -735,6 +890,13 @@ vv_document_dirty(VvDocument *doc) {
 gboolean
 vv_document_save(VvDocument *doc, const char *path, GError **error) {
     vv_world *w = doc->kept ? doc->kept : doc->world; /* never a transient World */
+    vv_world *ws = NULL; /* the World as saved: pyramids' objects with level 0's geometry */
+    vv_error_clear();
+    if (vv_world_clone(&ws, w) != VV_OK) {
+        set_error(error, "cannot take a snapshot of the World");
+        return FALSE;
+    }
+    pyramid_geometry_for_save(doc, w, ws);
     g_autofree char *dir = g_path_get_dirname(path);
     g_autofree char *stem = g_path_get_basename(path);
     char *dot = strrchr(stem, '.');
@@ -774,10 +936,11 @@ vv_document_save(VvDocument *doc, const char *path, GError **error) {
         files[i] = slash ? slash + 1 : full; /* beside the scene: relative to it */
     }
     vv_error_clear();
-    if (ok && vv_scene_save(w, path, files) != VV_OK) {
+    if (ok && vv_scene_save(ws, path, files) != VV_OK) {
         set_error(error, "cannot write the scene");
         ok = FALSE;
     }
+    vv_world_free(ws);
     if (ok) {
         for (int i = 0, k = 0; i < w->n_objects; i++)
             if (files[i])
@@ -889,6 +1052,7 @@ vv_document_autosave_begin(VvDocument *doc, const char *dir, GError **error) {
         g_free(job);
         return NULL;
     }
+    pyramid_geometry_for_save(doc, w, job->world);
     job->dir = g_strdup(dir);
     job->prev = g_ptr_array_new_with_free_func(autosaved_volume_free);
     for (guint i = 0; i < doc->autosaved->len; i++) {

@@ -142,6 +142,35 @@ void vv_document_set_edited_channel(VvDocument *doc, int channel);
  * a volume made in the session), else >= 1.
  */
 int vv_document_time_steps(VvDocument *doc, const vv_object *o);
+
+/**
+ * A multiresolution file (OME-Zarr, BigDataViewer / Imaris HDF5) opened
+ * out of core (vv_document_open): its object's volume is the coarsest
+ * level stretched over level 0's box (the proxy), and the scene view draws
+ * the pyramid by level of detail. Reference-counted (vv_gui_pyramid_ref,
+ * _unref: any thread); the pyramid's reads and source belong to the
+ * render thread, its loader's calls and statistics to any.
+ */
+typedef struct VvGuiPyramid {
+    vv_pyramid *pyramid;
+    vv_volume *proxy; /* the object's volume when opened (a reference) */
+    char *path;       /* canonical */
+    uint64_t limit;   /* bytes */
+} VvGuiPyramid;
+VvGuiPyramid *vv_gui_pyramid_ref(VvGuiPyramid *p);
+void vv_gui_pyramid_unref(VvGuiPyramid *p);
+/**
+ * The pyramid object @p o shows: its file's, when @p o is a volume object
+ * whose volume is still that pyramid's proxy (not replaced by a filter);
+ * NULL otherwise. Borrowed (vv_gui_pyramid_ref to keep it).
+ */
+VvGuiPyramid *vv_document_pyramid(VvDocument *doc, const vv_object *o);
+/**
+ * The out-of-core memory limit: VOLVIS_MEMORY_LIMIT (bytes, or a number
+ * with K, M or G), default 1 GiB. A multiresolution file whose level 0
+ * holds more than a quarter of it opens out of core.
+ */
+uint64_t vv_document_memory_limit(void);
 /**
  * Shows time step @p t of the selected object's file: every channel's
  * voxels replaced by that step's (vv_time_series, opened once a session and

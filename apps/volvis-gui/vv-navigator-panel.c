@@ -2,10 +2,14 @@
 #include "vv-navigator-panel.h"
 #include "vvg-widgets.h"
 
+#include <string.h>
+
 struct _VvNavigatorPanel {
     GtkBox parent;
     VvSceneView *scene; /* borrowed */
     GtkWidget *target;
+    GtkWidget *cache; /* what the frame on screen drew out of core */
+    guint cache_tick;
 };
 
 G_DEFINE_TYPE(VvNavigatorPanel, vv_navigator_panel, GTK_TYPE_BOX)
@@ -38,9 +42,30 @@ flight_toggled(GtkCheckButton *b, gpointer user) {
     gtk_widget_grab_focus(GTK_WIDGET(self->scene));
 }
 
+/* The cache's state, four times a second (the loader fills it meanwhile). */
+static gboolean
+cache_tick(gpointer user) {
+    VvNavigatorPanel *self = user;
+    g_autofree char *t = vv_scene_view_cache_status(self->scene);
+    if (strcmp(gtk_label_get_text(GTK_LABEL(self->cache)), t) != 0)
+        gtk_label_set_text(GTK_LABEL(self->cache), t);
+    gtk_widget_set_visible(self->cache, t[0] != '\0');
+    return G_SOURCE_CONTINUE;
+}
+
+static void
+vv_navigator_panel_dispose(GObject *o) {
+    VvNavigatorPanel *self = VV_NAVIGATOR_PANEL(o);
+    if (self->cache_tick) {
+        g_source_remove(self->cache_tick);
+        self->cache_tick = 0;
+    }
+    G_OBJECT_CLASS(vv_navigator_panel_parent_class)->dispose(o);
+}
+
 static void
 vv_navigator_panel_class_init(VvNavigatorPanelClass *klass) {
-    (void)klass;
+    G_OBJECT_CLASS(klass)->dispose = vv_navigator_panel_dispose;
 }
 
 static void
@@ -67,6 +92,14 @@ vv_navigator_panel_new(VvSceneView *scene) {
     GtkWidget *fl = gtk_check_button_new_with_label("flight simulator keys (arrows, Q/E, W/S)");
     g_signal_connect(fl, "toggled", G_CALLBACK(flight_toggled), self);
     gtk_grid_attach(GTK_GRID(g), fl, 0, vvg_grid_rows(g), 2, 1);
+    /* a file out of core: the cache, the levels drawn, what is pending */
+    self->cache = gtk_label_new("");
+    gtk_label_set_xalign(GTK_LABEL(self->cache), 0);
+    gtk_label_set_wrap(GTK_LABEL(self->cache), TRUE);
+    gtk_label_set_max_width_chars(GTK_LABEL(self->cache), 40);
+    gtk_widget_set_visible(self->cache, FALSE);
+    gtk_grid_attach(GTK_GRID(g), self->cache, 0, vvg_grid_rows(g), 2, 1);
+    self->cache_tick = g_timeout_add(250, cache_tick, self);
     return GTK_WIDGET(self);
 }
 

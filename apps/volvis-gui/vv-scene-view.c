@@ -4,6 +4,7 @@
 #include "vv-scene-overlay.h"
 #include "vvg-widgets.h"
 
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -45,6 +46,8 @@ typedef struct job {
     vv_preview_kind kinds[3];
     gboolean refine; /* cancelled by any newer state */
     gint64 posted_us;
+    VvGuiPyramid *pyr; /* object pyr_object drawn from its pyramid (a reference), or NULL */
+    int pyr_object;
 } job;
 
 /* One finished frame, posted to the UI thread. */
@@ -61,6 +64,10 @@ typedef struct frame {
     gint64 posted_us;
     gint64 rendered_us; /* when the renderer finished */
     char error[512];
+    /* drawn from a pyramid: the nodes per level, those pending, stalled */
+    VvGuiPyramid *pyr; /* a reference, or NULL */
+    int nodes[VV_LOD_MAX_LEVELS], pending, stalled;
+    char lod_note[128]; /* why the pyramid was not used ("" when it was) */
 } frame;
 
 struct _VvSceneView {
@@ -107,6 +114,10 @@ struct _VvSceneView {
     double full_ms;
     FILE *frame_log;
     char last_error[512];
+    /* the frame on screen's pyramid (a reference) and what it drew */
+    VvGuiPyramid *shown_pyr;
+    int shown_nodes[VV_LOD_MAX_LEVELS], shown_pending, shown_stalled;
+    char shown_lod_note[128];
 
     /* flight */
     gboolean flight;
@@ -128,6 +139,7 @@ job_free(job *j) {
     if (!j)
         return;
     vv_world_free(j->world);
+    vv_gui_pyramid_unref(j->pyr);
     g_free(j);
 }
 
@@ -137,6 +149,7 @@ frame_free(frame *f) {
     if (f->pixels)
         g_bytes_unref(f->pixels);
     g_free(f->depth);
+    vv_gui_pyramid_unref(f->pyr);
     g_free(f);
 }
 
@@ -162,9 +175,48 @@ cancel_cb(void *user, double fraction) {
 static gboolean show_frame(gpointer data);
 static gboolean tick_cb(GtkWidget *widget, GdkFrameClock *clock, gpointer user);
 
-/* Draws one representation of a job; NULL when cancelled. */
+/* Object j->pyr_object of the job's World drawn from its pyramid by level of
+ * detail (vv_renderer_render_multires) at the kind's image size with the
+ * World's renderer (its settings applied): a progressive frame from what
+ * the cache holds, asking the pyramid's loader for the rest (converged 0),
+ * or the converged frame, which reads what it needs (1). VV_ERR_UNSUPPORTED
+ * when the renderer has no region method or refuses the mode: the caller
+ * then draws the proxy in memory. */
+static vv_status
+render_pyramid(VvSceneView *self, const job *j, frame *f, int converged, vv_render_options *ro,
+               vv_image *img) {
+    const vv_world *w = j->world;
+    vv_renderer *r = vv_preview_final_renderer(self->preview);
+    vv_status s = vv_renderer_apply_settings(r, &w->render);
+    if (s != VV_OK)
+        return s;
+    if (!(vv_renderer_get_info(r)->caps & VV_RENDERER_REGION))
+        return vv_error_set(VV_ERR_UNSUPPORTED, "%s draws no regions",
+                            vv_renderer_get_info(r)->name);
+    vv_view v = w->view;
+    v.width = img->width;
+    v.height = img->height;
+    vv_multires_source src;
+    vv_pyramid_source(j->pyr->pyramid, &src);
+    vv_lod lod;
+    vv_lod_init(&lod);
+    lod.progressive = !converged;
+    lod.background = 1;
+    lod.load_budget = 0;
+    s = vv_renderer_render_multires(r, w, j->pyr_object, &src, &v, ro, &lod, img);
+    if (s == VV_OK) {
+        memcpy(f->nodes, lod.nodes, sizeof f->nodes);
+        f->pending = lod.pending;
+        f->stalled = lod.stalled;
+        f->pyr = vv_gui_pyramid_ref(j->pyr);
+    }
+    return s;
+}
+
+/* Draws one representation of a job (a pyramid's converged frame when
+ * @p converged); NULL when cancelled. */
 static frame *
-render_one(VvSceneView *self, const job *j, vv_preview_kind kind) {
+render_one(VvSceneView *self, const job *j, vv_preview_kind kind, int converged) {
     frame *f = g_new0(frame, 1);
     f->view = g_object_ref(self);
     f->gen = j->gen;
@@ -205,7 +257,17 @@ render_one(VvSceneView *self, const job *j, vv_preview_kind kind) {
     }
 #endif
     gint64 t0 = g_get_monotonic_time();
-    if (s == VV_OK)
+    gboolean drawn = FALSE;
+    if (s == VV_OK && j->pyr) {
+        s = render_pyramid(self, j, f, converged, &ro, img);
+        drawn = s == VV_OK || s == VV_ERR_CANCELLED;
+        if (s == VV_ERR_UNSUPPORTED) { /* the proxy in memory, and why */
+            g_strlcpy(f->lod_note, vv_error_message(), sizeof f->lod_note);
+            vv_error_clear();
+            s = VV_OK;
+        }
+    }
+    if (s == VV_OK && !drawn)
         s = vv_preview_render(self->preview, w, &w->view, kind, &ro, img);
     gint64 t1 = g_get_monotonic_time();
     f->rendered_us = t1;
@@ -274,7 +336,7 @@ warm_previews(VvSceneView *self) {
         j.gen = 0;
         /* twice: the first builds, the second is timed and learnt */
         for (int r = 0; r < 2; r++) {
-            frame *f = render_one(self, &j, kinds[i]);
+            frame *f = render_one(self, &j, kinds[i], 0);
             if (f) {
                 TSAN_COUNT(warmed);
                 frame_free(f);
@@ -288,6 +350,39 @@ warm_previews(VvSceneView *self) {
         else
             vv_world_free(w);
         g_mutex_unlock(&self->lock);
+    }
+}
+
+/* A pyramid's full frame with nodes pending: while the state stands, the
+ * frame is drawn again each time the loader brings chunks (the image
+ * sharpens), until nothing is pending; when the loader stalls (the view
+ * needs more than the memory limit holds) or makes no progress, the
+ * converged frame streams the rest. A newer request ends it. */
+static void
+sharpen_pyramid(VvSceneView *self, const job *j) {
+    int last = INT_MAX, idle = 0;
+    for (;;) {
+        const int loading = vv_pyramid_wait(j->pyr->pyramid, 0.25);
+        g_mutex_lock(&self->lock);
+        const gboolean newer = self->pending != NULL || self->quit;
+        g_mutex_unlock(&self->lock);
+        if (newer || cancel_cb(&(cancel_ctx){self, j->gen, j->refine}, 0))
+            return;
+        frame *f = render_one(self, j, VV_PREVIEW_FULL, 0);
+        if (!f)
+            return;
+        const int pending = f->pending, stalled = f->stalled, ok = f->pyr != NULL;
+        g_idle_add_full(G_PRIORITY_DEFAULT, show_frame, f, NULL);
+        if (!ok || pending == 0)
+            return;
+        idle = loading == 0 && pending >= last ? idle + 1 : 0;
+        last = pending;
+        if (stalled || idle >= 3) {
+            f = render_one(self, j, VV_PREVIEW_FULL, 1);
+            if (f)
+                g_idle_add_full(G_PRIORITY_DEFAULT, show_frame, f, NULL);
+            return;
+        }
     }
 }
 
@@ -315,11 +410,12 @@ worker_main(gpointer data) {
         for (int k = 0; k < j->n_kinds; k++) {
             if (cancel_cb(&(cancel_ctx){self, j->gen, j->refine}, 0))
                 break;
-            frame *f = render_one(self, j, j->kinds[k]);
+            frame *f = render_one(self, j, j->kinds[k], 0);
             if (!f) {
                 TSAN_COUNT(cancelled);
                 break;
             }
+            const gboolean sharpen = j->kinds[k] == VV_PREVIEW_FULL && f->pyr && f->pending > 0;
             TSAN_COUNT(posted);
             /* at the priority of input events: a stream of motion events
              * must not hold back the frames they cause */
@@ -330,6 +426,8 @@ worker_main(gpointer data) {
             g_mutex_unlock(&self->lock);
             if (newer)
                 break;
+            if (sharpen)
+                sharpen_pyramid(self, j);
         }
         gboolean refined = j->refine;
         if (refined) {
@@ -427,6 +525,13 @@ show_frame(gpointer data) {
     g_free(self->shown_depth);
     self->shown_depth = NULL;
     self->shown_view = f->camera;
+    vv_gui_pyramid_unref(self->shown_pyr);
+    self->shown_pyr = f->pyr;
+    f->pyr = NULL;
+    memcpy(self->shown_nodes, f->nodes, sizeof self->shown_nodes);
+    self->shown_pending = f->pending;
+    self->shown_stalled = f->stalled;
+    g_strlcpy(self->shown_lod_note, f->lod_note, sizeof self->shown_lod_note);
     if (f->kind == VV_PREVIEW_FULL) {
         self->full_ms = f->render_ms;
         save_shown(self, f);
@@ -449,6 +554,22 @@ new_job(VvSceneView *self, gboolean refine) {
     j->world = w;
     j->refine = refine;
     j->posted_us = g_get_monotonic_time();
+    /* one visible object, a volume shown from a pyramid out of core: drawn
+     * by level of detail (the driver draws one object alone) */
+    int visible = 0, at = -1;
+    for (int i = 0; i < w->n_objects; i++)
+        if (w->objects[i]->visible) {
+            visible++;
+            at = i;
+        }
+    const vv_world *dw = vv_document_world(self->doc);
+    if (visible == 1 && at < dw->n_objects) {
+        VvGuiPyramid *p = vv_document_pyramid(self->doc, dw->objects[at]);
+        if (p && w->objects[at]->volume == p->proxy) {
+            j->pyr = vv_gui_pyramid_ref(p);
+            j->pyr_object = at;
+        }
+    }
     return j;
 }
 
@@ -966,6 +1087,8 @@ vv_scene_view_dispose(GObject *o) {
     g_clear_object(&self->texture);
     g_free(self->shown_depth);
     self->shown_depth = NULL;
+    vv_gui_pyramid_unref(self->shown_pyr);
+    self->shown_pyr = NULL;
     if (self->frame_log) {
         fclose(self->frame_log);
         self->frame_log = NULL;
@@ -1094,6 +1217,34 @@ vv_scene_view_set_flight(VvSceneView *self, gboolean on) {
 double
 vv_scene_view_full_ms(VvSceneView *self) {
     return self->full_ms;
+}
+
+char *
+vv_scene_view_cache_status(VvSceneView *self) {
+    if (self->shown_lod_note[0])
+        return g_strdup_printf("the coarsest level in memory: %s", self->shown_lod_note);
+    if (!self->shown_pyr)
+        return g_strdup("");
+    vv_pyramid_stats st;
+    vv_pyramid_stats_get(self->shown_pyr->pyramid, &st);
+    guint64 reads = 0;
+    for (int l = 0; l < VV_PYRAMID_MAX_LEVELS; l++)
+        reads += st.chunk_reads[l];
+    GString *s = g_string_new(NULL);
+    g_string_append_printf(s,
+                           "out of core: %" G_GUINT64_FORMAT " chunks resident (%.1f of %.0f MiB), "
+                           "%d loading, %" G_GUINT64_FORMAT " read; level in use:",
+                           st.resident, st.held_bytes / 1048576.0, st.limit_bytes / 1048576.0,
+                           st.loading, reads);
+    for (int l = 0; l < VV_LOD_MAX_LEVELS; l++)
+        if (self->shown_nodes[l] > 0)
+            g_string_append_printf(s, " %d (%d nodes)", l, self->shown_nodes[l]);
+    if (self->shown_pending > 0)
+        g_string_append_printf(s, "; %d nodes still coarser%s", self->shown_pending,
+                               self->shown_stalled ? " (more than the memory limit holds)" : "");
+    else
+        g_string_append(s, "; converged");
+    return g_string_free(s, FALSE);
 }
 
 const char *

@@ -59,6 +59,15 @@ void vv_scene_view_set_flight(VvSceneView *view, gboolean on);
 double vv_scene_view_full_ms(VvSceneView *view);
 /** Representation name of the frame on screen ("" before the first). */
 const char *vv_scene_view_shown(VvSceneView *view);
+/**
+ * What the frame on screen drew from a multiresolution file out of core
+ * (VvGuiPyramid), for the Navigator: the chunks resident, the cache's size
+ * against the memory limit, the chunks loading and read, the levels the
+ * frame used (nodes per level) and how many nodes are still drawn coarser
+ * than their level ("converged" when none); "" when the frame on screen
+ * is not a pyramid's. Newly allocated (g_free).
+ */
+char *vv_scene_view_cache_status(VvSceneView *view);
 /** Re-renders now (the World changed outside a drag). */
 void vv_scene_view_refresh(VvSceneView *view);
 

@@ -185,6 +185,9 @@ typedef struct vv_pyramid_stats {
      * a converged frame must stream, see vv_lod.stalled)
      */
     int stalled;
+    uint64_t held_bytes;  /**< the cache's size now, bytes of voxels (and chunks being read) */
+    uint64_t resident;    /**< chunks decoded in the cache now */
+    uint64_t limit_bytes; /**< the memory limit */
 } vv_pyramid_stats;
 
 /**

@@ -337,6 +337,8 @@ typedef struct vv_lod {
      * request method, a vv_pyramid's): the frame then asks the source for
      * its pending nodes' chunks -- at their own level and every coarser one
      * short of the coarsest, coarse levels first, then front to back --
+     * and for those of the nodes drawn at their level (held: so that the
+     * loader keeps them while it makes room for the others),
      * replacing the previous frame's request (none pending: cancelled), so
      * that a later frame draws them finer: draw, wait (vv_pyramid_wait),
      * draw again until pending is 0 (what the GUI and Python do while the

@@ -101,7 +101,7 @@ struct vv_pyramid {
     int n_levels;
     py_level lv[VV_PYRAMID_MAX_LEVELS];
     double range[2];
-    uint64_t limit, capacity, held;
+    uint64_t limit, capacity, held, n_ready;
     int boxes;      /* boxes held at once (vv_multires_source.boxes) */
     int node_cells; /* the octree leaves' side the limit holds */
     py_chunk *bucket[PY_BUCKETS];
@@ -191,6 +191,7 @@ drop_chunk(vv_pyramid *p, py_chunk *c) {
         pp = &(*pp)->hnext;
     *pp = c->hnext;
     p->held -= c->bytes;
+    p->n_ready -= c->state == PY_READY;
     vv_volume_free(c->blk);
     free(c);
 }
@@ -427,6 +428,7 @@ static void
 entry_ready(vv_pyramid *p, py_chunk *e, uint64_t file_bytes, int missing) {
     py_level *l = &p->lv[e->level];
     e->state = PY_READY;
+    p->n_ready++;
     count_read(p, e->level, e->L, file_bytes);
     p->st.missing += (uint64_t)missing;
     if (l->known) {
@@ -673,6 +675,9 @@ vv_pyramid_stats_get(const vv_pyramid *p, vv_pyramid_stats *st) {
     *st = p->st;
     st->loading = p->q_n - p->q_pos + p->in_flight;
     st->stalled = p->stalled;
+    st->held_bytes = p->held;
+    st->resident = p->n_ready;
+    st->limit_bytes = p->limit;
     pthread_mutex_unlock(&q->lock);
 }
 

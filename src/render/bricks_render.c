@@ -428,15 +428,17 @@ coarser_resident(const mr_frame *f, mr_node *nd) {
     return 0;
 }
 
-/* Pending node @p nd's boxes at its own level and every coarser one short of
- * the coarsest, onto the frame's wanted boxes (when the source loads in
- * the background). A box that cannot be added is left out: the request is
- * a hint. */
+/* Node @p nd's boxes onto the frame's wanted boxes (when the source loads
+ * in the background): a pending node's at its own level and every coarser
+ * one short of the coarsest, a node drawn at its level its own box (held:
+ * asking for it keeps it from being evicted for the others). A box that
+ * cannot be added is left out: the request is a hint. */
 static void
-want_levels(mr_frame *f, const mr_node *nd) {
+want_levels(mr_frame *f, const mr_node *nd, int pending) {
     if (!f->lod->background || f->src->version < 2 || !f->src->request)
         return;
-    for (int L = nd->level; L < f->n_levels - 1; L++) {
+    const int last = pending ? f->n_levels - 2 : nd->level;
+    for (int L = nd->level; L <= last; L++) {
         vv_render_region rg;
         int lo[3], hi[3];
         if (L == nd->level) {
@@ -505,9 +507,10 @@ progressive_level(mr_frame *f, mr_node *nd, int *budget) {
     const int miss = f->src->missing_chunks(f->src->user, nd->level, nd->lo, nd->hi);
     if (miss > *budget && nd->level < f->n_levels - 1) {
         f->lod->pending++;
-        want_levels(f, nd);
+        want_levels(f, nd, 1);
         return coarser_resident(f, nd);
     }
+    want_levels(f, nd, 0); /* held: kept, so that loading the others does not evict it */
     *budget -= miss;
     return 1;
 }

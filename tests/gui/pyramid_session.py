@@ -1,0 +1,110 @@
+#!/usr/bin/python3
+"""A multiresolution file out of core in the GUI (CTest test_gui_pyramid).
+
+The CT head written as a 3-level OME-Zarr pyramid by zarr-python (32^3
+Blosc-lz4 chunks) is opened with VOLVIS_MEMORY_LIMIT=16M, so that its
+13.5 MiB level 0 is not read whole: the object shows the coarsest level,
+and the scene view draws the pyramid by level of detail. The Navigator's
+cache line names the chunks resident within the 16 MiB, the levels in use
+and what is still coarser; it reaches "converged", and that full frame is
+the one `volvis render STORE --memory-limit 16M` draws of the same view
+(the session's camera) within rounding. A drag shows ray-cast previews
+of the data (the frame log's representation column), never boxes, and the
+image sharpens again when the drag stops.
+
+usage: pyramid_session.py GUI CLI OUTDIR
+"""
+import os
+import re
+import subprocess
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "io"))
+from atspi import Session, check, psnr, run, skip  # noqa: E402
+
+GUI, CLI, OUT = sys.argv[1:4]
+os.makedirs(OUT, exist_ok=True)
+HEAD = os.path.abspath("../shared/data/volumes/ct_head.nrrd")
+
+
+def make_store():
+    try:
+        import nibabel
+        import numcodecs
+        import numpy as np
+        from pyramid_common import write_ome_zarr
+    except ImportError as e:
+        skip(f"zarr-python, numcodecs, nibabel or numpy missing: {e}")
+    store = os.path.join(OUT, "head.ome.zarr")
+    nii = os.path.join(OUT, "head.nii")
+    subprocess.run([CLI, "convert", HEAD, nii, "--quiet"], check=True)
+    arr = np.ascontiguousarray(np.asarray(nibabel.load(nii).dataobj).transpose(2, 1, 0))
+    write_ome_zarr(store, arr, [1.5, 0.957, 0.957], (32, 32, 32),
+                   numcodecs.Blosc("lz4", shuffle=numcodecs.Blosc.SHUFFLE), "/")
+    return store
+
+
+def cache_line(s):
+    return s.text(s.find_label(lambda n: n.startswith("out of core:")))
+
+
+def main():
+    store = make_store()
+    env = {"VOLVIS_MEMORY_LIMIT": "16M"}
+    with Session(GUI, [store], OUT, env=env, window=(1100, 720)) as s:
+        s.wait_full(0, "opening the pyramid")
+        s.page("View")
+        nav = s.find_label(lambda n: n.startswith("out of core:"), timeout=20)
+        first = s.text(nav)
+        print(f"first: {first!r}")
+        check("of 16 MiB" in first, f"the cache line does not name the limit: {first!r}")
+        s.wait_for(lambda: "converged" in cache_line(s), f"never converged: {cache_line(s)!r}",
+                   timeout=120)
+        line = cache_line(s)
+        print(f"converged: {line!r}")
+        opening = [f for f in s.frames_log() if f["state"] == s.frames_log()[-1]["state"]]
+        fulls = [f for f in opening if f["kind"] == "full"]
+        print(f"opening: {[(f['kind'], f['render_ms']) for f in opening]}")
+        check(len(fulls) >= 2, "the full frame did not sharpen (one full frame at opening)")
+        m = re.search(r"\(([0-9.]+) of 16 MiB\)", line)
+        check(m and float(m.group(1)) <= 16, f"the cache exceeds its limit: {line!r}")
+        levels = [int(x) for x in re.findall(r" (\d+) \(\d+ nodes\)", line)]
+        check(levels and min(levels) <= 1, f"no fine level in use: {line!r}")
+        time.sleep(1)
+        shot = s.full_png(copy_to="converged.png")
+        s.screenshot("converged_window.png")
+        # the same view through the CLI: the session's camera, the store out of core
+        session = os.path.join(OUT, "session.json")
+        s.save_as(session)
+        # a drag: previews of the data, then the image sharpens again
+        s.focus_main()
+        n0 = len(s.frames_log())
+        view = s.find("3-D view")
+        s.drag(view, (0.5, 0.5), (0.65, 0.45), steps=20, delay=0.03)
+        t = time.time()
+        s.wait_for(lambda: "converged" in cache_line(s) and s.frames_log()[-1]["kind"] == "full",
+                   f"not converged after the drag: {cache_line(s)!r}", timeout=120)
+        print(f"after the drag ({time.time() - t:.1f} s): {cache_line(s)!r}")
+        kinds = [f["kind"] for f in s.frames_log()[n0:]]
+        print(f"frames during and after the drag: {kinds}")
+        check(not any(k in ("bbox", "boxes", "coarse_mc") for k in kinds),
+              f"the drag drew boxes or surfaces, not the data: {kinds}")
+        check(any(k.startswith("raycast") for k in kinds), f"no ray-cast preview: {kinds}")
+        s.screenshot("after_drag.png")
+        s.quit_discard()
+    cli = os.path.join(OUT, "cli.png")
+    import json
+    scene = json.load(open(session))
+    w, h = scene["view"]["width"], scene["view"]["height"]
+    r = subprocess.run([CLI, "render", session, "-o", cli, "--quiet"], capture_output=True,
+                       text=True)
+    print(f"session {w}x{h}: {r.stderr.strip()}")
+    check(r.returncode == 0, f"volvis render of the session failed: {r.stderr}")
+    q = psnr(shot, cli)
+    print(f"the GUI's converged frame against volvis render of the session: {q:.1f} dB")
+    check(q >= 30, f"the GUI's converged frame is not the CLI's ({q:.1f} dB)")
+
+
+run(main)
