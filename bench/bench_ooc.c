@@ -4,7 +4,8 @@
  * limit:
  *   bench_ooc VOLUME [--raw WxHxD:u8] [--memory-limit MiB] [--size N]
  *             [--frames F] [--tf LO:HI] [--dataset NAME]
- *   bench_ooc --generate N OUT.raw   (the synthetic N^3 u8 volume)
+ *   bench_ooc --generate N OUT.raw [u16]   (the synthetic N^3 u8 volume;
+ *                                           u16: the same, 16 times the values)
  * Opens VOLUME (.vvb, raw with --raw, or uncompressed NRRD) as a bricked
  * volume with the memory limit (default 1024 MiB), builds the default World
  * from its coarse proxy with a transfer function ramp LO..HI, and renders F
@@ -16,6 +17,7 @@
  * $VV_BENCH_OUT/ooc.png when that is set.
  */
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -26,12 +28,14 @@
 
 /* Writes the synthetic n^3 u8 volume of bench/ooc_2048.sh to @p path, one
  * slice at a time: a sphere of tissue (radius 0.45 n) with a shell of bone
- * and ripples, air around. */
+ * and ripples, air around; with @p u16, little-endian u16 voxels of 16
+ * times the values (0 .. 4080, a 12-bit scanner's range). */
 static int
-generate(const char *path, int n) {
+generate(const char *path, int n, int u16) {
     FILE *f = fopen(path, "wb");
     unsigned char *sl = malloc((size_t)n * (size_t)n);
-    if (!f || !sl)
+    uint16_t *wide = u16 ? malloc(sizeof(uint16_t) * (size_t)n * (size_t)n) : NULL;
+    if (!f || !sl || (u16 && !wide))
         return 1;
     const double c = (n - 1) / 2.0, R = 0.45 * n;
     for (int k = 0; k < n; k++) {
@@ -44,17 +48,28 @@ generate(const char *path, int n) {
                     v = r > 0.9 ? 230 : 90 + 40 * sin(i * 0.05) * cos(j * 0.07 + k * 0.03);
                 sl[(size_t)j * n + i] = (unsigned char)(v < 0 ? 0 : v > 255 ? 255 : v);
             }
-        if (fwrite(sl, 1, (size_t)n * n, f) != (size_t)n * n)
+        if (u16) {
+            for (size_t q = 0; q < (size_t)n * n; q++) {
+                const uint16_t w = (uint16_t)(sl[q] * 16u);
+                unsigned char *b = (unsigned char *)&wide[q];
+                b[0] = (unsigned char)(w & 0xff); /* little-endian on any host */
+                b[1] = (unsigned char)(w >> 8);
+            }
+            if (fwrite(wide, 2, (size_t)n * n, f) != (size_t)n * n)
+                return 1;
+        } else if (fwrite(sl, 1, (size_t)n * n, f) != (size_t)n * n) {
             return 1;
+        }
     }
     free(sl);
+    free(wide);
     return fclose(f) != 0;
 }
 
 int
 main(int argc, char **argv) {
-    if (argc == 4 && strcmp(argv[1], "--generate") == 0)
-        return generate(argv[3], atoi(argv[2]));
+    if ((argc == 4 || argc == 5) && strcmp(argv[1], "--generate") == 0)
+        return generate(argv[3], atoi(argv[2]), argc == 5 && strcmp(argv[4], "u16") == 0);
     const char *path = NULL, *dataset = "ooc";
     vv_raw_params raw;
     vv_raw_params_init(&raw);

@@ -10,14 +10,22 @@
 # (vv_ome_zarr_write_boxes) inside the same cgroup limit: its time and its
 # peak resident set (GNU time) are printed, in a cgroup of its own: the page
 # cache of the files it reads and writes stays charged to its cgroup.
-# usage: bench/zarr_pyramid.sh [BUILD_DIR] [SIDE] [LIMIT_MIB] [CGROUP_MIB] [FRAMES]
-#   (from the repo root; defaults 1024, 128, 256, 3)
+# With TYPE u16 the volume holds 16 times the values as u16 (issue 29's
+# 2048^3 u16 target: 16 GiB raw), the transfer function likewise.
+# usage: bench/zarr_pyramid.sh [BUILD_DIR] [SIDE] [LIMIT_MIB] [CGROUP_MIB] [FRAMES] [TYPE]
+#   (from the repo root; defaults 1024, 128, 256, 3, u8)
 set -euo pipefail
 build=${1:-build/release}
 side=${2:-1024}
 limit=${3:-128}
 cgmib=${4:-256}
 frames=${5:-3}
+type=${6:-u8}
+case "$type" in
+  u8) tf=60:255 ;;
+  u16) tf=960:4080 ;;
+  *) echo "zarr_pyramid.sh: TYPE is u8 or u16" >&2; exit 2 ;;
+esac
 gen=$(readlink -f "$build/bench/bench_ooc")
 bin=$(readlink -f "$build/bench/bench_pyramid")
 volvis=$(readlink -f "$build/volvis")
@@ -30,8 +38,8 @@ cleanup() {
   done
 }
 trap cleanup EXIT
-echo "# $(date -u +%FT%TZ) load: $(cut -d' ' -f1-3 /proc/loadavg); ${side}^3 u8 in $tmp"
-"$gen" --generate "$side" "$tmp/big.raw"
+echo "# $(date -u +%FT%TZ) load: $(cut -d' ' -f1-3 /proc/loadavg); ${side}^3 $type in $tmp"
+"$gen" --generate "$side" "$tmp/big.raw" "$type"
 # the conversion in a cgroup of its own (the page cache of the files it
 # reads and writes stays charged to it), with the same limit
 mkdir "$cg" "$cg-convert"
@@ -40,7 +48,7 @@ echo $((cgmib * 1024 * 1024)) > "$cg-convert/memory.limit_in_bytes"
 timer=""
 [ -x /usr/bin/time ] && timer="/usr/bin/time -f '# convert (chunk by chunk): %e s, peak resident set %M KiB'"
 sh -c "echo \$\$ > $cg-convert/cgroup.procs && exec $timer $volvis convert $tmp/big.raw \
-  --raw ${side}x${side}x${side}:u8 $tmp/big.ome.zarr --quiet"
+  --raw ${side}x${side}x${side}:$type $tmp/big.ome.zarr --quiet"
 rm "$tmp/big.raw"
 echo "# store: $(du -sm "$tmp/big.ome.zarr" | cut -f1) MiB on disk; convert cgroup failcnt $(cat "$cg-convert/memory.failcnt"); load: $(cut -d' ' -f1-3 /proc/loadavg)"
 # the chunks are decoded by the sandboxed readers (the default); the last
@@ -48,9 +56,9 @@ echo "# store: $(du -sm "$tmp/big.ome.zarr" | cut -f1) MiB on disk; convert cgro
 for run in "1 --lod 1" "1 --level 0" "0 --level 0"; do
   sbx=${run%% *}
   mode=${run#* }
-  name=synthetic_${side}_u8_$(echo "$mode" | tr -d ' -')$([ "$sbx" = 0 ] && echo _inprocess || true)
+  name=synthetic_${side}_${type}_$(echo "$mode" | tr -d ' -')$([ "$sbx" = 0 ] && echo _inprocess || true)
   echo "# $mode (VOLVIS_SANDBOX=$sbx)"
   sh -c "echo \$\$ > $cg/cgroup.procs && VOLVIS_SANDBOX=$sbx exec $bin $tmp/big.ome.zarr \
-    --memory-limit $limit --size 512 --frames $frames --tf 60:255 $mode --dataset $name"
+    --memory-limit $limit --size 512 --frames $frames --tf $tf $mode --dataset $name"
 done
 echo "# cgroup: peak $(( $(cat "$cg/memory.max_usage_in_bytes") / 1048576 )) MiB of $cgmib, failcnt $(cat "$cg/memory.failcnt"); load: $(cut -d' ' -f1-3 /proc/loadavg)"

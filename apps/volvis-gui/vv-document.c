@@ -428,6 +428,7 @@ vv_document_add_volume(VvDocument *doc, vv_volume *v, const char *name, const ch
 static void
 gui_pyramid_clear(gpointer data) {
     VvGuiPyramid *p = data;
+    vv_pyramid_free(p->slices);
     vv_pyramid_free(p->pyramid);
     vv_volume_free(p->proxy);
     g_free(p->path);
@@ -436,6 +437,20 @@ gui_pyramid_clear(gpointer data) {
 VvGuiPyramid *
 vv_gui_pyramid_ref(VvGuiPyramid *p) {
     return p ? g_atomic_rc_box_acquire(p) : NULL;
+}
+
+vv_pyramid *
+vv_gui_pyramid_slices(VvGuiPyramid *p) {
+    if (!p->slices) {
+        const uint64_t limit =
+            p->limit / 4 > ((uint64_t)16 << 20) ? p->limit / 4 : (uint64_t)16 << 20;
+        vv_error_clear();
+        if (vv_pyramid_open(&p->slices, p->path, 0, -1, limit, NULL) != VV_OK) {
+            g_warning("volvis-gui: slice views: %s", vv_error_message());
+            p->slices = NULL;
+        }
+    }
+    return p->slices;
 }
 
 void

@@ -153,11 +153,19 @@ int vv_document_time_steps(VvDocument *doc, const vv_object *o);
  */
 typedef struct VvGuiPyramid {
     vv_pyramid *pyramid;
-    vv_volume *proxy; /* the object's volume when opened (a reference) */
-    char *path;       /* canonical */
-    uint64_t limit;   /* bytes */
+    vv_volume *proxy;   /* the object's volume when opened (a reference) */
+    char *path;         /* canonical */
+    uint64_t limit;     /* bytes */
+    vv_pyramid *slices; /* the slice views' own (UI thread; vv_gui_pyramid_slices) */
 } VvGuiPyramid;
 VvGuiPyramid *vv_gui_pyramid_ref(VvGuiPyramid *p);
+/**
+ * The slice views' pyramid of the same file (UI thread only): opened at the
+ * first call, with its own cache of a quarter of the limit (at least 16
+ * MiB), so that slicing never waits for the render thread; NULL when it
+ * cannot be opened (the slice views then sample the proxy).
+ */
+vv_pyramid *vv_gui_pyramid_slices(VvGuiPyramid *p);
 void vv_gui_pyramid_unref(VvGuiPyramid *p);
 /**
  * The pyramid object @p o shows: its file's, when @p o is a volume object

@@ -10,7 +10,9 @@ and what is still coarser; it reaches "converged", and that full frame is
 the one `volvis render STORE --memory-limit 16M` draws of the same view
 (the session's camera) within rounding. A drag shows ray-cast previews
 of the data (the frame log's representation column), never boxes, and the
-image sharpens again when the drag stops.
+image sharpens again when the drag stops. The slice views sample the
+pyramid: the axial readout's value at a clicked point is level 0's, as
+`volvis slice --probe` of the saved session reads it.
 
 usage: pyramid_session.py GUI CLI OUTDIR
 """
@@ -27,6 +29,8 @@ from atspi import Session, check, psnr, run, skip  # noqa: E402
 GUI, CLI, OUT = sys.argv[1:4]
 os.makedirs(OUT, exist_ok=True)
 HEAD = os.path.abspath("../shared/data/volumes/ct_head.nrrd")
+NUM = r"(-?[0-9.]+(?:e[-+]?[0-9]+)?)"
+READ = re.compile(rf"value {NUM} at voxel \({NUM}, {NUM}, {NUM}\), \({NUM}, {NUM}, {NUM}\)")
 
 
 def make_store():
@@ -93,6 +97,17 @@ def main():
               f"the drag drew boxes or surfaces, not the data: {kinds}")
         check(any(k.startswith("raycast") for k in kinds), f"no ray-cast preview: {kinds}")
         s.screenshot("after_drag.png")
+        # the slice views sample the pyramid (level 0 at the cursor), not the proxy
+        s.click(s.find("4 views"))
+        time.sleep(1.5)
+        axial = s.find("axial view")
+        s.click(axial, at=(0.45, 0.55))
+        time.sleep(1.0)
+        t = s.text(s.find_label(lambda n: n.startswith("axial:")))
+        m = READ.search(t)
+        check(m, f"axial readout {t!r}")
+        v, i, j, k, x, y, z = (float(g) for g in m.groups())
+        s.screenshot("four_up.png")
         s.quit_discard()
     cli = os.path.join(OUT, "cli.png")
     import json
@@ -102,6 +117,13 @@ def main():
                        text=True)
     print(f"session {w}x{h}: {r.stderr.strip()}")
     check(r.returncode == 0, f"volvis render of the session failed: {r.stderr}")
+    r = subprocess.run([CLI, "slice", session, "--probe", f"{x!r},{y!r},{z!r}"],
+                       capture_output=True, text=True)
+    check(r.returncode == 0, f"volvis slice --probe: {r.stderr}")
+    probe = r.stdout.split()
+    print(f"readout {t!r}; volvis slice --probe of the session: {r.stdout.strip()}")
+    check(abs(float(probe[1]) - v) <= 1e-3 * (1 + abs(v)),
+          f"the readout's value {v} is not level 0's {probe[1]}")
     q = psnr(shot, cli)
     print(f"the GUI's converged frame against volvis render of the session: {q:.1f} dB")
     check(q >= 30, f"the GUI's converged frame is not the CLI's ({q:.1f} dB)")
