@@ -33,6 +33,7 @@
  * and the statistics; reading and decoding run outside it.
  */
 #include <limits.h>
+#include <malloc.h>
 #include <math.h>
 #include <omp.h>
 #include <pthread.h>
@@ -101,7 +102,7 @@ struct vv_pyramid {
     int n_levels;
     py_level lv[VV_PYRAMID_MAX_LEVELS];
     double range[2];
-    uint64_t limit, capacity, held, n_ready;
+    uint64_t limit, capacity, held, n_ready, trim_due;
     int boxes;      /* boxes held at once (vv_multires_source.boxes) */
     int node_cells; /* the octree leaves' side the limit holds */
     py_chunk *bucket[PY_BUCKETS];
@@ -234,6 +235,30 @@ next_use(const vv_pyramid *p, py_chunk *c) {
     return u->pos < u->n ? u->seq[u->pos] : INT_MAX;
 }
 
+/* Chunk @p c dropped to make room. Every PY_TRIM_BYTES of chunks dropped,
+ * the free memory of glibc's arenas goes back to the system
+ * (malloc_trim): the chunks (long-lived, dropped in LRU order) and the
+ * nodes' short-lived buffers of similar sizes share the arenas once glibc's
+ * dynamic mmap threshold has risen past a chunk, and the holes they left
+ * made a 2048^3 u16 level-0 frame's resident set 1151 MiB under a 768 MiB
+ * limit (killed in a 1 GiB cgroup); trimmed, 906 MiB, at no cost in time
+ * (48.2 s against 48.2 s). Mapping each chunk on its own (mmap/munmap)
+ * held it to 811 MiB but doubled the frame's time (munmap's TLB
+ * shootdowns against the render threads' page faults). */
+#define PY_TRIM_BYTES ((uint64_t)16 << 20)
+static void
+evict(vv_pyramid *p, py_chunk *c) {
+    p->trim_due += c->bytes;
+    drop_chunk(p, c);
+    p->st.evictions++;
+#ifdef __GLIBC__
+    if (p->trim_due >= PY_TRIM_BYTES) {
+        p->trim_due = 0;
+        malloc_trim(0);
+    }
+#endif
+}
+
 /* Drops unpinned chunks until @p need more bytes fit: with a plan the one
  * needed farthest ahead (or never) first, else the least recently used;
  * 0 when they cannot fit. */
@@ -259,8 +284,7 @@ make_room(vv_pyramid *p, uint64_t need) {
         }
         if (!victim)
             return 0;
-        drop_chunk(p, victim);
-        p->st.evictions++;
+        evict(p, victim);
     }
     return 1;
 }
@@ -695,8 +719,7 @@ loader_room(vv_pyramid *p, uint64_t need) {
                 victim = c;
         if (!victim)
             return 0;
-        drop_chunk(p, victim);
-        p->st.evictions++;
+        evict(p, victim);
     }
     return 1;
 }

@@ -39,7 +39,8 @@ typedef struct pyr_store {
     int has_range;           /**< 1: range is the data's (an omero window) */
     double range[2];
     size_t scratch; /**< bytes of scratch each read_chunk call needs (0: none) */
-    int parallel;   /**< 1: read_chunk may run on several threads at once */
+    int parallel;   /**< 1: read_chunk may run on several threads at once (else the pyramid
+                         serializes it, its loader's reads included) */
     /**
      * Chunk @p c (chunk indices along x, y, z) of @p level: its voxels
      * inside the level, box org .. org + dims - 1, written to @p dst (x
@@ -57,8 +58,10 @@ typedef struct pyr_store {
      * Optional (NULL): start fetching chunk @p c of @p level ahead of its
      * read_chunk, without waiting (a later read_chunk of it takes the
      * result; one of another chunk may drop it). 1: asked (or already
-     * asked); 0: nothing free to ask, stop. Called from one thread, never
-     * during read_chunk.
+     * asked); 0: nothing free to ask, stop. Called from the frame's thread,
+     * never during its own read_chunk calls (the pyramid's loader threads
+     * may be reading meanwhile: read_chunk may then take a reader asked
+     * ahead and drop what it fetched).
      */
     int (*prefetch)(void *ctx, int level, const int c[3]);
 } pyr_store;
