@@ -7,20 +7,23 @@
 # memory with its gradients), 512^2 composite with the transfer-function
 # ramp 60..255, an orbit of 10 degrees for the second frame:
 #   - ParaView: an ImageReader of the raw file, volume representation
-#     (VolumeRenderingMode MODE: "Smart" (default) or "Ray Cast Only"),
-#     the load, the first frame and the next, peak resident set (GNU time);
+#     (VolumeRenderingMode, each of MODES, comma-separated: "Smart" (the
+#     default: here the GPU mapper on Mesa's llvmpipe) and "Ray Cast Only"
+#     (the CPU fixed-point ray caster)), the load, the first frame and the
+#     next, peak resident set (GNU time);
 #   - VolVis in memory: `volvis render RAW` (load and render, peak RSS);
 #   - VolVis out of core: bench_pyramid on the OME-Zarr written by `volvis
 #     convert` (128 MiB limit, --lod 1 and --level 0), peak RSS.
 # python3-paraview replaces python3-vtk9 (the VTK the other anchors use):
 # with --install the script installs paraview, and puts python3-vtk9 back
 # when it ends. Needs xvfb-run (pvbatch renders through X here) and about
-# 2 SIDE^3 bytes of free disk; the files are deleted after.
-# usage: bench/paraview_peer.sh [BUILD_DIR] [SIDE] [MODE] [--install]
+# 2 SIDE^3 bytes of free disk; the volumes are deleted after, the images
+# kept in $VV_BENCH_OUT when that is set.
+# usage: bench/paraview_peer.sh [BUILD_DIR] [SIDE] [MODES] [--install]
 set -euo pipefail
 build=${1:-build/release}
 side=${2:-1024}
-mode=${3:-Smart}
+modes=${3:-Smart}
 install=${4:-}
 gen=$(readlink -f "$build/bench/bench_ooc")
 bench=$(readlink -f "$build/bench/bench_pyramid")
@@ -28,6 +31,10 @@ volvis=$(readlink -f "$build/volvis")
 tmp=$(mktemp -d "${TMPDIR:-/tmp}/vv_pv.XXXXXX")
 restore=0
 cleanup() {
+  if [ -n "${VV_BENCH_OUT:-}" ]; then
+    mkdir -p "$VV_BENCH_OUT"
+    cp "$tmp"/*.png "$VV_BENCH_OUT"/ 2>/dev/null || true
+  fi
   rm -rf "$tmp"
   if [ "$restore" = 1 ]; then
     echo "# putting python3-vtk9 back"
@@ -35,12 +42,14 @@ cleanup() {
   fi
 }
 trap cleanup EXIT
-if ! command -v pvbatch > /dev/null; then
+# pvbatch needs python3-paraview, which python3-vtk9 replaces
+if ! command -v pvbatch > /dev/null ||
+   ! dpkg-query -W -f '${Status}' python3-paraview 2>/dev/null | grep -q "ok installed"; then
   if [ "$install" = "--install" ]; then
-    DEBIAN_FRONTEND=noninteractive apt-get install -y -q paraview > /dev/null
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -q paraview python3-paraview > /dev/null
     restore=1
   else
-    echo "paraview_peer.sh: pvbatch is missing (Debian's paraview; --install installs it and" \
+    echo "paraview_peer.sh: pvbatch or python3-paraview is missing (Debian's paraview; --install installs them and" \
          "puts python3-vtk9 back after)" >&2
     exit 77
   fi
@@ -50,6 +59,9 @@ timer=/usr/bin/time
 echo "# $(date -u +%FT%TZ) load: $(cut -d' ' -f1-3 /proc/loadavg); ${side}^3 u8 in $tmp;" \
      "$(pvbatch --version 2>/dev/null | head -1)"
 "$gen" --generate "$side" "$tmp/big.raw"
+IFS=, read -r -a mode_list <<< "$modes"
+for mode in "${mode_list[@]}"; do
+tag=$(echo "$mode" | tr -d ' ' | tr 'A-Z' 'a-z')
 cat > "$tmp/pv.py" <<EOF
 import time
 t0 = time.time()
@@ -77,13 +89,14 @@ v.GetActiveCamera().Azimuth(10)
 t2 = time.time()
 Render(v)
 t_next = time.time() - t2
-SaveScreenshot("$tmp/paraview.png", v)
+SaveScreenshot("$tmp/paraview_$tag.png", v)
 for op, val in (("load", t_load), ("first_frame", t_first), ("next_frame", t_next)):
-    print(f"anchor=paraview op=pvbatch_{op} dataset=synthetic_${side}_u8 value={val:.3f} unit=s")
+    print(f"anchor=paraview op=pvbatch_{op} dataset=synthetic_${side}_u8_$tag value={val:.3f} unit=s")
 EOF
 echo "# ParaView pvbatch (VolumeRenderingMode $mode)"
-$timer -f "anchor=paraview op=pvbatch_peak_rss dataset=synthetic_${side}_u8 value=%M unit=KiB" \
+$timer -f "anchor=paraview op=pvbatch_peak_rss dataset=synthetic_${side}_u8_$tag value=%M unit=KiB" \
   xvfb-run -a -s "-screen 0 1024x768x24" pvbatch "$tmp/pv.py" 2>&1 | grep -E "^anchor|rror" || true
+done
 echo "# VolVis in memory (volvis render of the raw file: load, gradients and one frame)"
 start=$(date +%s.%N)
 $timer -f "anchor=volvis op=memory_peak_rss dataset=synthetic_${side}_u8 value=%M unit=KiB" \
