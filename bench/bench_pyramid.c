@@ -33,23 +33,6 @@
 #include "util.h"
 #include "volvis/volvis.h"
 
-/* The coarsest level, placed over level 0's box (the World's proxy). */
-static vv_volume *
-proxy_of(vv_pyramid *p) {
-    const int top = vv_pyramid_levels(p) - 1;
-    const vv_volume *h = vv_pyramid_level(p, top), *h0 = vv_pyramid_level(p, 0);
-    const int lo[3] = {0, 0, 0}, hi[3] = {h->dims[0] - 1, h->dims[1] - 1, h->dims[2] - 1};
-    vv_volume *v = NULL;
-    if (vv_pyramid_read_box(p, top, lo, hi, &v) != VV_OK)
-        bench_die("bench_pyramid", "proxy");
-    for (int k = 0; k < 3; k++) {
-        v->origin[k] = h0->origin[k];
-        if (h->dims[k] > 1)
-            v->spacing[k] = h0->spacing[k] * (h0->dims[k] - 1) / (h->dims[k] - 1);
-    }
-    return v;
-}
-
 static uint64_t
 chunks_read(const vv_pyramid_stats *st) {
     uint64_t n = 0;
@@ -93,7 +76,9 @@ main(int argc, char **argv) {
     vv_pyramid *p = NULL;
     if (vv_pyramid_open(&p, path, -1, -1, (uint64_t)(limit_mib * 1048576.0), NULL) != VV_OK)
         bench_die("bench_pyramid", path);
-    vv_volume *proxy = proxy_of(p);
+    vv_volume *proxy = NULL;
+    if (vv_pyramid_proxy(p, 0, &proxy) != VV_OK)
+        bench_die("bench_pyramid", "proxy");
     bench_emit("pyramid_open", dataset, bench_now() - t0, "s");
     vv_default_scene_options o;
     vv_default_scene_options_init(&o);

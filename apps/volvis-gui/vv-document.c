@@ -526,24 +526,18 @@ open_out_of_core(VvDocument *doc, const char *path, GError **error) {
         return -1;
     }
     const int top = vv_pyramid_levels(p) - 1;
-    const vv_volume *h0 = vv_pyramid_level(p, 0), *h = vv_pyramid_level(p, top);
+    const vv_volume *h0 = vv_pyramid_level(p, 0);
     const double bytes =
         (double)h0->dims[0] * h0->dims[1] * h0->dims[2] * (double)vv_voxel_type_size(h0->type);
     if (top == 0 || bytes <= (double)limit / 4) {
         vv_pyramid_free(p);
         return 0;
     }
-    const int lo[3] = {0, 0, 0}, hi[3] = {h->dims[0] - 1, h->dims[1] - 1, h->dims[2] - 1};
     vv_volume *proxy = NULL;
-    if (vv_pyramid_read_box(p, top, lo, hi, &proxy) != VV_OK) {
+    if (vv_pyramid_proxy(p, 0, &proxy) != VV_OK) {
         set_error(error, "cannot read the coarsest level");
         vv_pyramid_free(p);
         return -1;
-    }
-    for (int k = 0; k < 3; k++) {
-        proxy->origin[k] = h0->origin[k];
-        if (h->dims[k] > 1)
-            proxy->spacing[k] = h0->spacing[k] * (h0->dims[k] - 1) / (h->dims[k] - 1);
     }
     g_autofree char *base = g_path_get_basename(path);
     char *dot = strchr(base, '.');

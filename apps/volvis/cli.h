@@ -353,10 +353,6 @@ int cli_load_volume_sc(const char *path, const vv_raw_params *raw, int series, i
 /** OUT with _TNNNN before its .png (or at its end): T the tag ('t' time steps, 'p'
  *  progressive steps), NNNN @p n. */
 void cli_numbered_path(const char *out, char tag, int n, char *buf, size_t cap);
-/** The coarsest level of @p p as the World's volume, its box stretched over
- * the box of level @p frame (the view frames it, the histogram sets the
- * transfer function); a new volume. Errors: vv_pyramid_read_box's. */
-vv_status cli_pyramid_proxy(vv_pyramid *p, int frame, vv_volume **out);
 /** cli_load_volume_sc of resolution level @p level (OME-Zarr multiscales; 0 the finest). */
 int cli_load_volume_level(const char *path, const vv_raw_params *raw, int series, int channel,
                           int time, int level, vv_load_info *info, vv_volume **out);

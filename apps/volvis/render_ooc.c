@@ -59,23 +59,6 @@ frame_setup(cli_args *a, cli_render_args *r, vv_volume *proxy, const vv_volume *
     return 0;
 }
 
-vv_status
-cli_pyramid_proxy(vv_pyramid *p, int frame, vv_volume **out) {
-    const int top = vv_pyramid_levels(p) - 1;
-    const vv_volume *h = vv_pyramid_level(p, top), *f = vv_pyramid_level(p, frame);
-    const int lo[3] = {0, 0, 0}, hi[3] = {h->dims[0] - 1, h->dims[1] - 1, h->dims[2] - 1};
-    vv_status s = vv_pyramid_read_box(p, top, lo, hi, out);
-    if (s != VV_OK)
-        return s;
-    vv_volume *v = *out;
-    for (int k = 0; k < 3; k++) {
-        v->origin[k] = f->origin[k];
-        v->spacing[k] =
-            h->dims[k] > 1 ? f->spacing[k] * (f->dims[k] - 1) / (h->dims[k] - 1) : f->spacing[k];
-    }
-    return VV_OK;
-}
-
 static int
 render_pyramid(cli_args *a, cli_render_args *r) {
     vv_pyramid *p = NULL;
@@ -97,7 +80,7 @@ render_pyramid(cli_args *a, cli_render_args *r) {
         goto done;
     }
     const int frame = r->has_level ? r->level : 0;
-    if ((s = cli_pyramid_proxy(p, frame, &proxy)) != VV_OK) {
+    if ((s = vv_pyramid_proxy(p, frame, &proxy)) != VV_OK) {
         rc = cli_fail(s, r->input);
         goto done;
     }

@@ -139,7 +139,7 @@ shared_proxy(const par_source *src, int rank, vv_volume **out) {
     double geo[16];
     if (rank == 0) {
         vv_status s =
-            src->b ? vv_bricked_proxy(src->b, 128, &p) : cli_pyramid_proxy(src->p, src->level, &p);
+            src->b ? vv_bricked_proxy(src->b, 128, &p) : vv_pyramid_proxy(src->p, src->level, &p);
         if (s == VV_OK) {
             memcpy(meta, p->dims, sizeof p->dims);
             meta[3] = (int)p->type;

@@ -243,6 +243,17 @@ vv_status vv_pyramid_read_box(vv_pyramid *p, int level, const int lo[3], const i
                               vv_volume **out);
 void vv_pyramid_stats_get(const vv_pyramid *p, vv_pyramid_stats *st);
 /**
+ * The proxy of @p p: its coarsest level (read through the cache) as a new
+ * volume stretched over the box of level @p level (0: the finest), its
+ * origin that level's and its spacing the level's extent over the coarsest
+ * level's voxels, so that it spans the same world box: what a World shows
+ * in place of the whole (the view frames it, its histogram sets the
+ * default transfer function, vv_renderer_render_multires takes the
+ * geometry from the pyramid). Errors: VV_ERR_INVALID (no such level),
+ * those of vv_pyramid_read_box.
+ */
+vv_status vv_pyramid_proxy(vv_pyramid *p, int level, vv_volume **out);
+/**
  * Asynchronous loading: asks the pyramid's loader -- a few I/O threads
  * (vv_threads_get(), at most 4; one when the store reads a chunk at a
  * time), started at the first request -- to read the chunks of boxes

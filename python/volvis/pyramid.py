@@ -173,16 +173,10 @@ class Pyramid:
         box (what ``volvis render STORE`` frames the view and chooses the
         default transfer function from); kept after the first call."""
         if self._proxy is None:
-            top = lib.vv_pyramid_levels(self._c) - 1
-            v = self._read(top, (0, 0, 0), None)
-            h, f = lib.vv_pyramid_level(self._c, top), lib.vv_pyramid_level(self._c, 0)
-            sp = []
-            for a in range(3):
-                sp.append(f.spacing[a] * (f.dims[a] - 1) / (h.dims[a] - 1) if h.dims[a] > 1
-                          else f.spacing[a])
-            v.spacing = sp
-            v.origin = [f.origin[a] for a in range(3)]
-            self._proxy = v
+            out = ffi.new("vv_volume **")
+            with self._lock:
+                _lib.call_long(lambda prog: lib.vv_pyramid_proxy(self._c, 0, out), None)
+            self._proxy = Volume._own(out[0])
         return self._proxy
 
     def world(self, mode="composite", tf_range=None, isovalue=None, size=None, azimuth=0.0,

@@ -680,6 +680,25 @@ box_range(const vv_pyramid *p, int level, const int lo[3], const int hi[3], floa
     return 1;
 }
 
+vv_status
+vv_pyramid_proxy(vv_pyramid *p, int level, vv_volume **out) {
+    if (!p || !out || level < 0 || level >= p->n_levels)
+        return vv_error_set(VV_ERR_INVALID, "pyramid: no level %d for a proxy", level);
+    const int top = p->n_levels - 1;
+    const vv_volume *h = p->lv[top].hdr, *f = p->lv[level].hdr;
+    const int lo[3] = {0, 0, 0}, hi[3] = {h->dims[0] - 1, h->dims[1] - 1, h->dims[2] - 1};
+    const vv_status s = vv_pyramid_read_box(p, top, lo, hi, out);
+    if (s != VV_OK)
+        return s;
+    vv_volume *v = *out;
+    for (int k = 0; k < 3; k++) {
+        v->origin[k] = f->origin[k];
+        v->spacing[k] =
+            h->dims[k] > 1 ? f->spacing[k] * (f->dims[k] - 1) / (h->dims[k] - 1) : f->spacing[k];
+    }
+    return VV_OK;
+}
+
 int
 vv_pyramid_levels(const vv_pyramid *p) {
     return p ? p->n_levels : 0;

@@ -78,15 +78,8 @@ open_pyramid(const char *path, uint64_t limit, int sandbox) {
  * placed over level 0's box, 192 pixels square. */
 static vv_world *
 scene(vv_pyramid *p) {
-    const int top = vv_pyramid_levels(p) - 1;
-    const vv_volume *h = vv_pyramid_level(p, top), *f = vv_pyramid_level(p, 0);
-    const int lo[3] = {0, 0, 0}, hi[3] = {h->dims[0] - 1, h->dims[1] - 1, h->dims[2] - 1};
     vv_volume *proxy = NULL;
-    vt_ok(vv_pyramid_read_box(p, top, lo, hi, &proxy));
-    for (int k = 0; k < 3; k++) {
-        proxy->origin[k] = f->origin[k];
-        proxy->spacing[k] = f->spacing[k] * (f->dims[k] - 1) / (h->dims[k] - 1);
-    }
+    vt_ok(vv_pyramid_proxy(p, 0, &proxy));
     vv_default_scene_options so = vt_scene_options(192);
     so.has_tf_range = 1;
     so.tf_lo = 100;
