@@ -125,21 +125,50 @@ same_image(const vv_image *a, const vv_image *b) {
            !memcmp(a->rgba, b->rgba, sizeof(float) * 4 * (size_t)a->width * (size_t)a->height);
 }
 
+/* The scene of a store, its cold frame from a fresh pyramid (every node at
+ * level @p level, or by level of detail: -1), and an image for the test's. */
+typedef struct fixture {
+    vv_world *w;
+    vv_image *ref, *img;
+} fixture;
+
+static void
+fixture_init(fixture *fx, const char *path, uint64_t limit, int sandbox, int level) {
+    vv_pyramid *p = open_pyramid(path, limit, sandbox);
+    fx->w = scene(p);
+    fx->ref = fx->img = NULL;
+    vt_ok(vv_image_new(&fx->ref, 192, 192));
+    vt_ok(vv_image_new(&fx->img, 192, 192));
+    vv_lod lod;
+    vt_ok(frame(p, fx->w, level, 0, &lod, fx->ref));
+    vv_pyramid_free(p);
+}
+
+static void
+fixture_free(fixture *fx) {
+    vv_image_free(fx->ref);
+    vv_image_free(fx->img);
+    vv_world_free(fx->w);
+}
+
+/* Until the loader has nothing queued or in flight. */
+static void
+wait_idle(vv_pyramid *p) {
+    while (vv_pyramid_loading(p) > 0)
+        vv_pyramid_wait(p, 10.0);
+}
+
 static void
 progressive_converges(int sandbox) {
     if (!g_store[0])
         vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
     /* the converged frame, every node at its level, read as needed */
-    vv_pyramid *p = open_pyramid(g_store, 64 * MIB, sandbox);
-    vv_world *w = scene(p);
-    vv_image *ref = NULL, *img = NULL;
-    vt_ok(vv_image_new(&ref, 192, 192));
-    vt_ok(vv_image_new(&img, 192, 192));
+    fixture fx;
+    fixture_init(&fx, g_store, 64 * MIB, sandbox, -1);
+    vv_world *w = fx.w;
+    vv_image *ref = fx.ref, *img = fx.img;
     vv_lod lod;
-    vt_ok(frame(p, w, -1, 0, &lod, ref));
-    vv_pyramid_free(p);
-
-    p = open_pyramid(g_store, 64 * MIB, sandbox);
+    vv_pyramid *p = open_pyramid(g_store, 64 * MIB, sandbox);
     double last = -1;
     int frames = 0, requested0 = 0, pending0 = 0;
     uint64_t frame_reads = 0;
@@ -177,9 +206,7 @@ progressive_converges(int sandbox) {
     assert_int_equal(st.evictions, 0);
     assert_int_equal(frame_reads, 0); /* the last frame found everything resident */
     assert_int_equal(vv_pyramid_loading(p), 0);
-    vv_image_free(ref);
-    vv_image_free(img);
-    vv_world_free(w);
+    fixture_free(&fx);
     vv_pyramid_free(p);
 }
 
@@ -217,32 +244,23 @@ static void
 frame_during_loading(int sandbox) {
     if (!g_store[0])
         vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
-    vv_pyramid *p = open_pyramid(g_store, 64 * MIB, sandbox);
-    vv_world *w = scene(p);
-    vv_image *ref = NULL, *img = NULL;
-    vt_ok(vv_image_new(&ref, 192, 192));
-    vt_ok(vv_image_new(&img, 192, 192));
+    fixture fx;
+    fixture_init(&fx, g_store, 64 * MIB, sandbox, 0);
     vv_lod lod;
-    vt_ok(frame(p, w, 0, 0, &lod, ref));
-    vv_pyramid_free(p);
-
-    p = open_pyramid(g_store, 64 * MIB, sandbox);
+    vv_pyramid *p = open_pyramid(g_store, 64 * MIB, sandbox);
     const uint64_t opened = reads(p);
     request_level0(p);
-    vt_ok(frame(p, w, 0, 0, &lod, img));
-    while (vv_pyramid_loading(p) > 0)
-        vv_pyramid_wait(p, 10.0);
+    vt_ok(frame(p, fx.w, 0, 0, &lod, fx.img));
+    wait_idle(p);
     vv_pyramid_stats st;
     vv_pyramid_stats_get(p, &st);
     printf("%s: the loader read %llu of the 32 level-0 chunks, the frame the rest\n",
            sandbox ? "sandboxed" : "in process", (unsigned long long)st.loaded);
-    assert_true(same_image(img, ref));
+    assert_true(same_image(fx.img, fx.ref));
     assert_int_equal(st.chunk_reads[0], 32);
     assert_int_equal(reads(p) - opened, 32);
     assert_true(st.max_reads_per_frame <= 1);
-    vv_image_free(ref);
-    vv_image_free(img);
-    vv_world_free(w);
+    fixture_free(&fx);
     vv_pyramid_free(p);
 }
 
@@ -266,8 +284,7 @@ test_cancel(void **state) {
     vv_pyramid *p = open_pyramid(g_store, 64 * MIB, 0);
     request_level0(p);
     vt_ok(vv_pyramid_request(p, 0, NULL, NULL, NULL)); /* the view changed: nothing wanted */
-    while (vv_pyramid_loading(p) > 0)
-        vv_pyramid_wait(p, 10.0);
+    wait_idle(p);
     vv_pyramid_stats st;
     vv_pyramid_stats_get(p, &st);
     printf("cancelled %llu of 32 queued, %llu read (in flight)\n", (unsigned long long)st.cancelled,
@@ -277,8 +294,7 @@ test_cancel(void **state) {
     /* asked again: everything arrives, and the second request queues only
      * what is not held */
     request_level0(p);
-    while (vv_pyramid_loading(p) > 0)
-        vv_pyramid_wait(p, 10.0);
+    wait_idle(p);
     vv_pyramid_stats_get(p, &st);
     assert_int_equal(st.loaded, 32);
     assert_int_equal(st.chunk_reads[0], 32);
@@ -299,8 +315,7 @@ test_full_cache(void **state) {
     const uint64_t limit = 8 * MIB; /* level 0 alone is 13.5 MiB */
     vv_pyramid *p = open_pyramid(g_store, limit, 0);
     request_level0(p);
-    while (vv_pyramid_loading(p) > 0)
-        vv_pyramid_wait(p, 10.0);
+    wait_idle(p);
     vv_pyramid_stats st;
     vv_pyramid_stats_get(p, &st);
     printf("limit 8 MiB: the loader read %llu chunks and stopped with %llu left; peak %.1f MiB\n",
@@ -325,19 +340,13 @@ test_progressive_stalls(void **state) {
     (void)state;
     if (!g_store[0])
         vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
-    vv_pyramid *p = open_pyramid(g_store, 8 * MIB, 0);
-    vv_world *w = scene(p);
-    vv_image *ref = NULL, *img = NULL;
-    vt_ok(vv_image_new(&ref, 192, 192));
-    vt_ok(vv_image_new(&img, 192, 192));
+    fixture fx;
+    fixture_init(&fx, g_store, 8 * MIB, 0, 0);
     vv_lod lod;
-    vt_ok(frame(p, w, 0, 0, &lod, ref));
-    vv_pyramid_free(p);
-
-    p = open_pyramid(g_store, 8 * MIB, 0);
+    vv_pyramid *p = open_pyramid(g_store, 8 * MIB, 0);
     int frames = 0;
     for (; frames < 100; frames++) {
-        vt_ok(frame(p, w, 0, 1, &lod, img));
+        vt_ok(frame(p, fx.w, 0, 1, &lod, fx.img));
         if (lod.pending == 0 || lod.stalled)
             break;
         vv_pyramid_wait(p, 10.0);
@@ -345,12 +354,10 @@ test_progressive_stalls(void **state) {
     printf("stalled after %d frames with %d nodes pending\n", frames + 1, lod.pending);
     assert_int_equal(lod.stalled, 1);
     assert_true(lod.pending > 0);
-    vt_ok(frame(p, w, 0, 0, &lod, img));
+    vt_ok(frame(p, fx.w, 0, 0, &lod, fx.img));
     assert_int_equal(lod.pending, 0);
-    assert_true(same_image(img, ref));
-    vv_image_free(ref);
-    vv_image_free(img);
-    vv_world_free(w);
+    assert_true(same_image(fx.img, fx.ref));
+    fixture_free(&fx);
     vv_pyramid_free(p);
 }
 
@@ -362,8 +369,7 @@ test_broken_chunk(void **state) {
     vv_pyramid *p = open_pyramid(g_broken, 64 * MIB, 0);
     vv_world *w = scene(p);
     request_level0(p);
-    while (vv_pyramid_loading(p) > 0)
-        vv_pyramid_wait(p, 10.0);
+    wait_idle(p);
     vv_pyramid_stats st;
     vv_pyramid_stats_get(p, &st);
     assert_int_equal(st.load_errors, 1);
