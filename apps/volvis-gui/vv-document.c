@@ -516,9 +516,23 @@ pyramid_geometry_for_save(VvDocument *doc, const vv_world *orig, vv_world *w) {
  * level stretched over level 0's box, its opacity per level 0's voxel (as
  * `volvis render STORE`). 1: opened; 0: small enough to read whole; -1:
  * an error. */
+static gboolean
+pyramid_unused(gpointer key, gpointer value, gpointer user) {
+    (void)key;
+    const VvGuiPyramid *p = value;
+    const vv_world *w = user;
+    for (int i = 0; i < w->n_objects; i++)
+        if (w->objects[i]->volume == p->proxy)
+            return FALSE;
+    return TRUE;
+}
+
 static int
 open_out_of_core(VvDocument *doc, const char *path, GError **error) {
     const uint64_t limit = vv_document_memory_limit();
+    /* each pyramid holds up to the limit: those no object of the World shows
+     * any more go (an undo back to one draws its proxy in memory) */
+    g_hash_table_foreach_remove(doc->pyramids, pyramid_unused, doc->world);
     vv_pyramid *p = NULL;
     vv_error_clear();
     if (vv_pyramid_open(&p, path, 0, -1, limit, NULL) != VV_OK) {

@@ -346,6 +346,62 @@ time_failed(VvDocument *doc, const char *message, gpointer user) {
  * vv_world_apply_time puts a frame's step into a World evaluated from the
  * document's (an Animator's objects[i].time track) and names what it
  * cannot read. */
+/* A multiresolution file larger than a quarter of VOLVIS_MEMORY_LIMIT opens
+ * out of core: the object shows the proxy (the coarsest level over level
+ * 0's box), the document keeps the pyramid; a smaller limit's quarter
+ * holds it whole; a session saves level 0's geometry; a file deleted and
+ * opened again gets a pyramid of its own. */
+static void
+test_pyramid_out_of_core(void **state) {
+    (void)state;
+    if (!vt_have_data("volumes/ct_head.nrrd"))
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    const char *dir = vt_outdir("gui_document");
+    const char *store = vt_path(dir, "head.ome.zarr");
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_load(&v, vt_data("volumes/ct_head.nrrd"), NULL));
+    vt_ok(vv_ome_zarr_write(v, store, NULL));
+    GError *err = NULL;
+    /* 64 MiB: level 0 (13.5 MiB) fits a quarter: read whole */
+    g_setenv("VOLVIS_MEMORY_LIMIT", "64M", TRUE);
+    VvDocument *doc = vv_document_new();
+    assert_true(vv_document_open(doc, store, &err));
+    vv_object *o = vv_document_selected_object(doc);
+    assert_non_null(o);
+    assert_null(vv_document_pyramid(doc, o));
+    assert_int_equal(o->volume->dims[0], 256);
+    g_object_unref(doc);
+    /* 16 MiB: out of core */
+    g_setenv("VOLVIS_MEMORY_LIMIT", "16M", TRUE);
+    doc = vv_document_new();
+    assert_true(vv_document_open(doc, store, &err));
+    o = vv_document_selected_object(doc);
+    VvGuiPyramid *p = vv_document_pyramid(doc, o);
+    assert_non_null(p);
+    assert_int_equal(p->limit, 16u << 20);
+    assert_int_equal(o->volume->dims[0], 64); /* the coarsest level */
+    const vv_box b = vv_object_world_box(o);
+    assert_near(b.max.x - b.min.x, 255 * v->spacing[0], 1e-6);
+    /* a session names the store with level 0's spacing */
+    const char *scene = vt_path(dir, "pyramid_session.json");
+    assert_true(vv_document_save(doc, scene, &err));
+    vv_world *w = NULL;
+    vt_ok(vv_scene_load(&w, scene));
+    assert_int_equal(w->objects[0]->volume->dims[0], 256);
+    assert_near(w->objects[0]->volume->spacing[0], v->spacing[0], 1e-9);
+    vv_world_free(w);
+    /* deleted, then opened again: the unused pyramid gives way to a new one */
+    vv_document_delete_object(doc, 0);
+    assert_true(vv_document_open(doc, store, &err));
+    o = vv_document_selected_object(doc);
+    p = vv_document_pyramid(doc, o);
+    assert_non_null(p);
+    assert_true(o->volume == p->proxy);
+    g_object_unref(doc);
+    g_unsetenv("VOLVIS_MEMORY_LIMIT");
+    vv_volume_free(v);
+}
+
 static void
 test_channels_and_time(void **state) {
     (void)state;
@@ -431,6 +487,7 @@ main(void) {
         cmocka_unit_test(test_autosave_and_restore),
         cmocka_unit_test(test_save_all_or_nothing),
         cmocka_unit_test(test_channels_and_time),
+        cmocka_unit_test(test_pyramid_out_of_core),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
