@@ -90,11 +90,12 @@ typedef struct ir_obj {
     double iso;
     /* pre-integration tables over [vlo, vhi] */
     double vlo, vhi, vscale;
-    double *T;       /* IR_BINS prefix integrals of extinction over the value */
-    double *K;       /* 3 * IR_BINS prefix integrals of extinction times colour */
-    float *ext;      /* IR_BINS extinction per world unit */
-    float *col;      /* 3 * IR_BINS colour */
-    int const_color; /* one colour over the table: no colour-change term */
+    double inv_vscale; /* 1 / vscale: a table bin's width in value */
+    double *T;         /* IR_BINS prefix integrals of extinction over the value */
+    double *K;         /* 3 * IR_BINS prefix integrals of extinction times colour */
+    float *ext;        /* IR_BINS extinction per world unit */
+    float *col;        /* 3 * IR_BINS colour */
+    int const_color;   /* one colour over the table: no colour-change term */
 } ir_obj;
 
 typedef struct ir_frame {
@@ -103,6 +104,7 @@ typedef struct ir_frame {
     ir_obj *objs;
     int n_obj;
     const vv_view *view;
+    vv_camera_rays cam; /* the view's primary rays */
     float bg[3];
     vv_vlight lights[VV_MAX_LIGHTS];
     int n_lights;
@@ -224,7 +226,8 @@ mesh_clear(ir_mesh *im) {
 /* The object-space ray o + t d. */
 typedef struct ir_ray {
     double o[3], d[3];
-    double dd; /* d . d */
+    double dd;     /* d . d */
+    double inv_dd; /* 1 / (d . d) */
     float inv[3];
 } ir_ray;
 
@@ -300,6 +303,7 @@ tables_build(ir_obj *ob) {
     ob->vlo = lo;
     ob->vhi = hi;
     ob->vscale = (IR_BINS - 1) / (hi - lo);
+    ob->inv_vscale = (hi - lo) / (IR_BINS - 1);
     ob->T = malloc(IR_BINS * sizeof *ob->T);
     ob->K = malloc(3 * IR_BINS * sizeof *ob->K);
     ob->ext = malloc(IR_BINS * sizeof *ob->ext);
@@ -336,6 +340,19 @@ tables_build(ir_obj *ob) {
     return VV_OK;
 }
 
+/* The prefix integral of extinction at value v (prefix_eval's T). */
+static inline double
+prefix_T(const ir_obj *ob, double v) {
+    const double x = (v - ob->vlo) * ob->vscale;
+    if (x <= 0)
+        return (v - ob->vlo) * ob->ext[0];
+    if (x >= IR_BINS - 1)
+        return ob->T[IR_BINS - 1] + (v - ob->vhi) * ob->ext[IR_BINS - 1];
+    const int i = (int)x;
+    const double f = x - i, e0 = ob->ext[i], e1 = ob->ext[i + 1];
+    return ob->T[i] + f * (e0 + 0.5 * f * (e1 - e0)) * ob->inv_vscale;
+}
+
 /* Prefix integrals at value v: T (extinction) and K (extinction x colour),
  * continued linearly with the end values outside the table. */
 static inline void
@@ -343,15 +360,7 @@ prefix_eval(const ir_obj *ob, double v, double *T, double K[3]) {
     double x = (v - ob->vlo) * ob->vscale;
     if (ob->const_color) {
         /* one colour: K = c T, only T is integrated */
-        if (x <= 0) {
-            *T = (v - ob->vlo) * ob->ext[0];
-        } else if (x >= IR_BINS - 1) {
-            *T = ob->T[IR_BINS - 1] + (v - ob->vhi) * ob->ext[IR_BINS - 1];
-        } else {
-            const int i = (int)x;
-            const double f = x - i, e0 = ob->ext[i], e1 = ob->ext[i + 1];
-            *T = ob->T[i] + f * (e0 + 0.5 * f * (e1 - e0)) / ob->vscale;
-        }
+        *T = prefix_T(ob, v);
         K[0] = *T * ob->col[0];
         K[1] = *T * ob->col[1];
         K[2] = *T * ob->col[2];
@@ -373,7 +382,7 @@ prefix_eval(const ir_obj *ob, double v, double *T, double K[3]) {
         return;
     }
     const int i = (int)x;
-    const double f = x - i, dvb = 1.0 / ob->vscale;
+    const double f = x - i, dvb = ob->inv_vscale;
     /* exact integral of the linear extinction within the bin */
     const double e0 = ob->ext[i], e1 = ob->ext[i + 1];
     *T = ob->T[i] + dvb * f * (e0 + 0.5 * f * (e1 - e0));
@@ -401,6 +410,10 @@ ext_at(const ir_obj *ob, double v, double col[3]) {
 typedef struct ir_acc {
     double C[3], A;
     double depth;
+    /* one-colour unshaded composite: the optical depth of the segments not
+     * yet composited into C and A, and the depth at which A reaches the
+     * early termination (segment_thin) */
+    double tau, tau_stop;
     /* projections */
     double best, tbest;
     double sum, len;
@@ -435,6 +448,68 @@ typedef struct ir_pre {
     int valid;
     double s, T, K[3];
 } ir_pre;
+
+/* The optical depth after which the opacity A of @p acc reaches @p et. */
+static inline double
+stop_depth(double A, double et) {
+    return A >= et ? 0 : log((1 - A) / (1 - et));
+}
+
+/* Composites the pending optical depth of one-colour segments: with one
+ * colour c and no shading, compositing pieces of opacity 1 - e^-tau_i front
+ * to back gives c (1 - e^-sum tau_i), so a run of them is one piece. */
+static inline void
+acc_flush(const ir_frame *fr, const ir_obj *ob, ir_acc *acc) {
+    if (!(acc->tau > 0))
+        return;
+    const double alpha = -expm1(-acc->tau);
+    const double w = 1 - acc->A;
+    for (int k = 0; k < 3; k++)
+        acc->C[k] += w * ob->col[k] * alpha;
+    acc->A += w * alpha;
+    acc->tau = 0;
+    acc->tau_stop = stop_depth(acc->A, fr->et);
+}
+
+/* Composite of one colour, unshaded (segment's common case): only the
+ * optical depth is integrated, and added to the pending depth that
+ * acc_flush composites. A segment thin enough to be one piece is done
+ * here, with segment's arithmetic; returns 0 for a thicker one, which
+ * segment then cuts into pieces. */
+static inline int
+segment_thin(const ir_frame *fr, const ir_obj *ob, double t0, double L, double s0, double s1,
+             ir_acc *acc, ir_pre *pre) {
+    const double Ta = pre->valid && pre->s == s0 ? pre->T : prefix_T(ob, s0);
+    const double Tb = prefix_T(ob, s1);
+    if (!(L > 0)) {
+        pre->valid = 1;
+        pre->s = s1;
+        pre->T = Tb;
+        return 1;
+    }
+    const double dsv = s1 - s0;
+    const int ramp = fabs(dsv) * ob->vscale > 1e-3;
+    double c[3], tau;
+    if (ramp)
+        tau = L / dsv * (Tb - Ta);
+    else
+        tau = L * ext_at(ob, 0.5 * (s0 + s1), c);
+    if (tau > 1e-7 && 1 + (int)(tau * (1.0 / IR_PIECE_TAU)) > 1)
+        return 0;
+    pre->valid = 1;
+    pre->s = s1;
+    pre->T = Tb;
+    if (!(tau > 1e-7))
+        return 1;
+    acc->tau += tau;
+    if (acc->depth == INFINITY)
+        acc->depth = t0;
+    if (acc->tau >= acc->tau_stop) {
+        acc_flush(fr, ob, acc);
+        acc->done = 1;
+    }
+    return 1;
+}
 
 /* Over 150 lines on purpose: the per-segment integration of every mode
  * (pre-integrated composite with shading, projections, iso crossings) on
@@ -504,6 +579,9 @@ segment(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, const uint32_t *
         break;
     }
     /* composite */
+    if (ob->const_color && !ob->shading && segment_thin(fr, ob, t0, L, s0, s1, acc, pre))
+        return;
+    acc_flush(fr, ob, acc);
     double Ta, Tb, Ka[3], Kb[3];
     if (pre->valid && pre->s == s0) {
         Ta = pre->T;
@@ -534,7 +612,7 @@ segment(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, const uint32_t *
         return;
     int n = 1 + (int)(tau_all * (1.0 / IR_PIECE_TAU));
     n = n > IR_MAX_PIECES ? IR_MAX_PIECES : n;
-    const double inv_n = 1.0 / n;
+    const double inv_n = n == 1 ? 1.0 : 1.0 / n;
     const float v[3] = {(float)-wr->d[0], (float)-wr->d[1], (float)-wr->d[2]};
     double Tp = Ta, Kp[3] = {Ka[0], Ka[1], Ka[2]};
     for (int k = 0; k < n; k++) {
@@ -615,29 +693,41 @@ segment(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, const uint32_t *
     }
 }
 
+/* d x q: a point's part of the ray's sides against its edges. */
+static inline void
+point_cross(const ir_ray *r, const double q[3], double u[3]) {
+    u[0] = r->d[1] * q[2] - r->d[2] * q[1];
+    u[1] = r->d[2] * q[0] - r->d[0] * q[2];
+    u[2] = r->d[0] * q[1] - r->d[1] * q[0];
+}
+
 /* Canonical side of the ray against the edge between points a and b
- * (relative to the ray origin), from the lower global index to the higher. */
+ * (relative to the ray origin), d . (a x b) = (d x a) . b from the lower
+ * global index to the higher (ua = d x a, ub = d x b), so every tetrahedron
+ * with the edge gets the same value. */
 static inline double
-edge_canon(const ir_ray *r, const double *a, const double *b, uint32_t ga, uint32_t gb) {
-    if (ga > gb) {
-        const double *x = a;
-        a = b;
-        b = x;
-    }
-    const double cx = a[1] * b[2] - a[2] * b[1], cy = a[2] * b[0] - a[0] * b[2],
-                 cz = a[0] * b[1] - a[1] * b[0];
-    const double v = r->d[0] * cx + r->d[1] * cy + r->d[2] * cz;
-    return ga > gb ? -v : v;
+edge_canon(const double *a, const double *ua, const double *b, const double *ub, uint32_t ga,
+           uint32_t gb) {
+    const int lo_a = ga < gb;
+    const double *u = lo_a ? ua : ub, *q = lo_a ? b : a;
+    const double v = u[0] * q[0] + u[1] * q[1] + u[2] * q[2];
+    return lo_a ? v : -v;
 }
 
 /* Over 150 lines on purpose: the cell-to-cell walk of one ray, whose
  * carried state (the shared face's points and edge sides, the entry
  * record, the restart after a gap) is what makes each step cost one point
- * and three edge sides; splitting it would spill that state per cell. */
+ * and three edge sides; splitting it would spill that state per cell (a
+ * walker struct stepped by functions, tried, was 3 % slower, and four
+ * such walkers interleaved 30 % slower: the walk is bound by its
+ * instructions, not by latency). */
 /* Walks one object along the ray, clipped to [tc0, tc1]. The points
- * (relative to the ray origin) and edge sides of the three points a
- * tetrahedron shares with the one before are carried over, so each step
- * fetches one point and computes three edge sides. */
+ * (relative to the ray origin), d x point, values and edge sides of the
+ * current tetrahedron sit in four slots; a step replaces the slot of the
+ * point opposite the exit face with the neighbour's fourth point, so the
+ * three shared points keep their slots, edge sides and weights, each step
+ * fetches one point and computes three edge sides, and the slots'
+ * orientation flips (sg: the exit test reads every side times sg). */
 static void
 trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0, double tc1,
              ir_acc *acc) {
@@ -662,6 +752,7 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
             r.o[a] += 100 * im->eps * jitter[a];
     }
     r.dd = r.d[0] * r.d[0] + r.d[1] * r.d[1] + r.d[2] * r.d[2];
+    r.inv_dd = 1.0 / r.dd;
     for (int a = 0; a < 3; a++)
         r.inv[a] = (float)(1.0 / r.d[a]);
     /* Entering again after leaving through a boundary face at tsearch: a
@@ -675,6 +766,8 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
     long steps = 0;
     const long max_steps = (long)m->n_tets + 1024;
     const int cell_data = m->tval != NULL;
+    /* segments of one colour, unshaded: thin ones composited here */
+    const int thin = ob->mode == VV_MODE_COMPOSITE && ob->const_color && !ob->shading;
     ir_pre pre = {0, 0, 0, {0, 0, 0}};
     (void)tc0;
     while (!acc->done && steps < max_steps && entries++ < 100000) {
@@ -700,17 +793,26 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
         double s_prev = 0;
         int have_s = 0;
         pre.valid = 0;
-        /* the first tetrahedron: all four points and six edges */
-        const uint32_t *t = m->tet + 4 * (size_t)cur;
-        double q[4][3], es[4][4], qv[4] = {0, 0, 0, 0}; /* points, edge sides, values */
-        for (int i = 0; i < 4; i++)
+        /* The first tetrahedron: all four points and six edges. The walk
+         * keeps four slots of points; a step replaces the slot of the point
+         * opposite the exit face with the neighbour's fourth point, so the
+         * three shared points keep their slots, edge sides and weights, and
+         * the slots' orientation flips (sg). */
+        uint32_t gid[4];
+        double q[4][3], u[4][3], es[4][4], qv[4] = {0, 0, 0, 0}; /* points, d x points, edge
+                                                                  sides, values */
+        double sg = 1;
+        for (int i = 0; i < 4; i++) {
+            gid[i] = m->tet[4 * (size_t)cur + (size_t)i];
             for (int a = 0; a < 3; a++)
-                q[i][a] = m->p[3 * (size_t)t[i] + (size_t)a] - r.o[a];
-        for (int i = 0; i < 4 && !cell_data; i++)
-            qv[i] = m->val[t[i]];
+                q[i][a] = m->p[3 * (size_t)gid[i] + (size_t)a] - r.o[a];
+            point_cross(&r, q[i], u[i]);
+            if (!cell_data)
+                qv[i] = m->val[gid[i]];
+        }
         for (int i = 0; i < 4; i++)
             for (int j = i + 1; j < 4; j++) {
-                es[i][j] = edge_canon(&r, q[i], q[j], t[i], t[j]);
+                es[i][j] = edge_canon(q[i], u[i], q[j], u[j], gid[i], gid[j]);
                 es[j][i] = -es[i][j];
             }
         for (;;) {
@@ -722,7 +824,8 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
                 if (fi == face_in)
                     continue;
                 const int *fv = vv_tet_face[fi];
-                const double sab = es[fv[0]][fv[1]], sbc = es[fv[1]][fv[2]], sca = es[fv[2]][fv[0]];
+                const double sab = sg * es[fv[0]][fv[1]], sbc = sg * es[fv[1]][fv[2]],
+                             sca = sg * es[fv[2]][fv[0]];
                 double mn = sab < sbc ? sab : sbc;
                 mn = sca < mn ? sca : mn;
                 if (mn >= 0 && sab + sbc + sca > 0) {
@@ -754,7 +857,7 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
                 for (int a = 0; a < 3; a++)
                     pt[a] += b_out[vi] * q[vi][a];
             }
-            double t_out = (pt[0] * r.d[0] + pt[1] * r.d[1] + pt[2] * r.d[2]) / r.dd;
+            double t_out = (pt[0] * r.d[0] + pt[1] * r.d[1] + pt[2] * r.d[2]) * r.inv_dd;
             t_out = t_out > t_prev ? t_out : t_prev;
             /* the segment, clipped to the cut planes */
             double s0, s1;
@@ -785,11 +888,12 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
                         c1[i] = b_in[i] + u1 * (b_out[i] - b_in[i]);
                     }
                     pre.valid = 0;
-                    segment(fr, ob, wr, t, a0 + u0 * len, a0 + u1 * len, c0, c1,
+                    segment(fr, ob, wr, gid, a0 + u0 * len, a0 + u1 * len, c0, c1,
                             s0 + u0 * (s1 - s0), s0 + u1 * (s1 - s0), acc, &pre);
                     pre.valid = 0;
                 } else {
-                    segment(fr, ob, wr, t, t_prev, t_out, b_in, b_out, s0, s1, acc, &pre);
+                    if (!thin || !segment_thin(fr, ob, t_prev, t_out - t_prev, s0, s1, acc, &pre))
+                        segment(fr, ob, wr, gid, t_prev, t_out, b_in, b_out, s0, s1, acc, &pre);
                 }
                 if (acc->done)
                     return;
@@ -798,55 +902,33 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
             }
             if (t_out >= tc1)
                 return;
-            const int32_t nb = m->nb[4 * (size_t)cur + (size_t)exit];
+            /* the exit face in the mesh's numbering: opposite the same point */
+            const uint32_t *t = m->tet + 4 * (size_t)cur;
+            const uint32_t gx = gid[exit];
+            const int k = (t[1] == gx) + 2 * (t[2] == gx) + 3 * (t[3] == gx);
+            const int32_t nb = m->nb[4 * (size_t)cur + (size_t)k];
             if (nb < 0 || (ob->vis && !ob->vis[nb >> 2]) || steps >= max_steps) {
                 strict = !(t_out > t_entry);
                 tsearch = t_out;
                 break;
             }
-            /* the neighbour: carry the shared points, their edges and weights */
-            const int32_t ncur = nb >> 2;
-            const int nface = nb & 3;
-            const uint32_t *nt = m->tet + 4 * (size_t)ncur;
-            int map[4];
-            double nq[4][3], nes[4][4], nbw[4], nqv[4];
-            for (int k = 0; k < 4; k++) {
-                map[k] = -1;
-                nbw[k] = 0;
-                if (k == nface)
-                    continue;
-                for (int i = 0; i < 4; i++)
-                    if (nt[k] == t[i]) {
-                        map[k] = i;
-                        break;
-                    }
-                if (map[k] < 0) { /* cannot happen with consistent adjacency */
-                    map[k] = 0;
-                }
-                memcpy(nq[k], q[map[k]], sizeof nq[k]);
-                nqv[k] = qv[map[k]];
-                nbw[k] = b_out[map[k]];
-            }
+            /* the neighbour: its fourth point takes the exit slot */
+            cur = nb >> 2;
+            const uint32_t gn = m->tet[(size_t)nb];
+            gid[exit] = gn;
             for (int a = 0; a < 3; a++)
-                nq[nface][a] = m->p[3 * (size_t)nt[nface] + (size_t)a] - r.o[a];
-            nqv[nface] = cell_data ? 0 : m->val[nt[nface]];
-            for (int k = 0; k < 4; k++) {
-                nes[k][k] = 0;
-                for (int l = k + 1; l < 4; l++) {
-                    if (k == nface || l == nface)
-                        nes[k][l] = edge_canon(&r, nq[k], nq[l], nt[k], nt[l]);
-                    else
-                        nes[k][l] = es[map[k]][map[l]];
-                    nes[l][k] = -nes[k][l];
-                }
+                q[exit][a] = m->p[3 * (size_t)gn + (size_t)a] - r.o[a];
+            qv[exit] = cell_data ? 0 : m->val[gn];
+            point_cross(&r, q[exit], u[exit]);
+            for (int j = 0; j < 4; j++) {
+                if (j == exit)
+                    continue;
+                es[exit][j] = edge_canon(q[exit], u[exit], q[j], u[j], gn, gid[j]);
+                es[j][exit] = -es[exit][j];
             }
-            memcpy(q, nq, sizeof q);
-            memcpy(qv, nqv, sizeof qv);
-            memcpy(es, nes, sizeof es);
-            memcpy(b_in, nbw, sizeof b_in);
-            cur = ncur;
-            t = nt;
-            face_in = nface;
+            memcpy(b_in, b_out, sizeof b_in);
+            face_in = exit;
+            sg = -sg;
             t_prev = t_out;
         }
     }
@@ -857,7 +939,7 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
 
 static void
 render_pixel(const ir_frame *fr, int x, int y, vv_image *out) {
-    const vv_ray vr = vv_view_ray(fr->view, x, y);
+    const vv_ray vr = vv_camera_ray(&fr->cam, x, y);
     ir_ray wr;
     wr.o[0] = vr.origin.x;
     wr.o[1] = vr.origin.y;
@@ -881,7 +963,9 @@ render_pixel(const ir_frame *fr, int x, int y, vv_image *out) {
         ir_acc *acc = &accs[i];
         memset(acc, 0, sizeof *acc);
         acc->depth = INFINITY;
+        acc->tau_stop = stop_depth(0, fr->et);
         trace_object(fr, ob, &wr, t0, t1, acc);
+        acc_flush(fr, ob, acc);
         if (ob->mode == VV_MODE_COMPOSITE || ob->mode == VV_MODE_ISO) {
             if (acc->A > 0)
                 order[n++] = i;
@@ -1098,6 +1182,7 @@ ir_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     memset(&fr, 0, sizeof fr);
     fr.st = st;
     fr.view = view;
+    vv_camera_rays_init(&fr.cam, view);
     fr.et = st->early_termination;
     float ambient[3];
     vv_frame_colours(w, 0, ambient, fr.bg);
