@@ -527,6 +527,17 @@ pyramid_unused(gpointer key, gpointer value, gpointer user) {
     return TRUE;
 }
 
+/* A volume object's name from its file: the file name up to its first dot
+ * ("brain.nii.gz" is "brain"). Free with g_free. */
+static char *
+volume_name(const char *path) {
+    char *base = g_path_get_basename(path);
+    char *dot = strchr(base, '.');
+    if (dot && dot != base)
+        *dot = '\0';
+    return base;
+}
+
 static int
 open_out_of_core(VvDocument *doc, const char *path, GError **error) {
     const uint64_t limit = vv_document_memory_limit();
@@ -553,10 +564,7 @@ open_out_of_core(VvDocument *doc, const char *path, GError **error) {
         vv_pyramid_free(p);
         return -1;
     }
-    g_autofree char *base = g_path_get_basename(path);
-    char *dot = strchr(base, '.');
-    if (dot && dot != base)
-        *dot = '\0';
+    g_autofree char *base = volume_name(path);
     VvGuiPyramid *gp = g_atomic_rc_box_new0(VvGuiPyramid);
     gp->pyramid = p;
     gp->proxy = vv_volume_ref(proxy);
@@ -623,10 +631,7 @@ vv_document_open(VvDocument *doc, const char *path, GError **error) {
     if (ok && info[0].n_channels > VV_MAX_CHANNELS)
         g_message("volvis-gui: %s has %d channels; the first %d are shown", path,
                   info[0].n_channels, VV_MAX_CHANNELS);
-    g_autofree char *base = g_path_get_basename(path);
-    char *dot = strchr(base, '.');
-    if (dot && dot != base)
-        *dot = '\0';
+    g_autofree char *base = volume_name(path);
     if (ok) /* before the object, whose "changed" the pages fill from; keyed as
              * remember_source names the file */
         g_hash_table_replace(doc->time_steps, g_canonicalize_filename(path, NULL),
