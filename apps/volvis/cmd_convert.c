@@ -45,7 +45,8 @@ cli_convert_usage(FILE *out) {
             "2x2x2 means, labels by nearest, and each level's scale and translation;\n"
             "read back at any level with --level) has none either; it is written\n"
             "chunk by chunk, with memory bounded by a row of 64^3 chunks, when IN is raw,\n"
-            "an uncompressed NRRD or a pyramid (OME-Zarr, BigDataViewer, Imaris);\n"
+            "an uncompressed NRRD or a pyramid (OME-Zarr, BigDataViewer, Imaris), and\n"
+            "by 64 slices when IN is a TIFF stack (read slab by slab, each slab once);\n"
             "SLC (.slc; VolVis's own 8-bit format)\n"
             "holds 8-bit data only: other voxel types are rescaled from the value\n"
             "range to 0..255, with a note on stderr. What a format cannot hold is\n"
@@ -162,27 +163,41 @@ read_pyramid_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
 }
 
 /* IN to OUT.zarr chunk by chunk (vv_ome_zarr_write_boxes), never holding
- * IN whole: raw or uncompressed NRRD (read by rows, vv_bricked) and
+ * IN whole: raw or uncompressed NRRD (read by rows, vv_bricked), TIFF
+ * stacks (a slab of a row of chunks' slices at a time, vv_slabs) and
  * pyramids (OME-Zarr, BigDataViewer, Imaris: level 0 through the chunk
- * cache). -1: IN is neither (the caller reads it whole). */
+ * cache). -1: IN is none of these (the caller reads it whole). */
 static int
 convert_zarr_boxes(const char *in, const char *out, const vv_raw_params *raw, int channel, int time,
                    const vv_save_options *so, int strict, int quiet) {
     vv_bricked *b = NULL;
     vv_pyramid *p = NULL;
+    vv_slabs *sl = NULL;
     vv_error_clear();
-    if ((raw || vv_format_detect(in) == VV_FORMAT_NRRD) && channel <= 0 && time <= 0) {
+    const vv_format f = raw ? VV_FORMAT_RAW : vv_format_detect(in);
+    if ((raw || f == VV_FORMAT_NRRD) && channel <= 0 && time <= 0) {
         if (vv_bricked_open_header(&b, in, raw, 0) != VV_OK) {
             vv_error_clear(); /* a compressed NRRD: read whole */
             return -1;
         }
+    } else if (f == VV_FORMAT_TIFF) {
+        vv_load_options lo;
+        vv_load_options_init(&lo);
+        lo.format = f;
+        lo.channel = channel;
+        lo.time = time;
+        vv_status s = vv_slabs_open(&sl, in, &lo);
+        if (s != VV_OK)
+            return cli_fail(s, in);
     } else if (!raw && vv_pyramid_probe(in)) {
         vv_status s = vv_pyramid_open(&p, in, channel, time, (uint64_t)256 << 20, NULL);
         if (s != VV_OK)
             return cli_fail(s, in);
     } else
         return -1;
-    const vv_volume *hdr = b ? vv_bricked_header(b) : vv_pyramid_level(p, 0);
+    const vv_volume *hdr = b    ? vv_bricked_header(b)
+                           : sl ? vv_slabs_header(sl)
+                                : vv_pyramid_level(p, 0);
     const vv_volume_format *rec = vv_volume_format_table(NULL)[VV_FORMAT_OME_ZARR - 1];
     char why[256];
     const int convert = rec->fits && !rec->fits(hdr, why, sizeof why);
@@ -191,20 +206,26 @@ convert_zarr_boxes(const char *in, const char *out, const vv_raw_params *raw, in
         cli_error("%s: %s; refusing to convert it (--strict)", out, why);
         rc = CLI_EXIT_FAIL;
     } else {
-        vv_status s = b ? vv_ome_zarr_write_boxes(hdr, read_bricked_box, b, out, so)
-                        : vv_ome_zarr_write_boxes(hdr, read_pyramid_box, p, out, so);
+        vv_status s = b    ? vv_ome_zarr_write_boxes(hdr, read_bricked_box, b, out, so)
+                      : sl ? vv_ome_zarr_write_boxes(hdr, vv_slabs_read_box, sl, out, so)
+                           : vv_ome_zarr_write_boxes(hdr, read_pyramid_box, p, out, so);
         if (s != VV_OK)
             rc = cli_fail(s, out);
         else if (!quiet) {
             if (convert)
                 cli_error("warning: %s: %s", out, why);
-            printf("wrote %s (%s, %d x %d x %d, %s, chunk by chunk)\n", out,
+            char slabs[64] = "";
+            if (sl)
+                snprintf(slabs, sizeof slabs, " from %llu slabs of slices",
+                         (unsigned long long)vv_slabs_loads(sl));
+            printf("wrote %s (%s, %d x %d x %d, %s, chunk by chunk%s)\n", out,
                    vv_format_name(VV_FORMAT_OME_ZARR), hdr->dims[0], hdr->dims[1], hdr->dims[2],
-                   vv_voxel_type_name(hdr->type));
+                   vv_voxel_type_name(hdr->type), slabs);
         }
     }
     vv_bricked_free(b);
     vv_pyramid_free(p);
+    vv_slabs_free(sl);
     return rc;
 }
 

@@ -122,6 +122,9 @@ typedef struct vv_load_info {
     int has_raw_layout;
     int raw_big_endian;
     uint64_t raw_offset, raw_step_bytes, raw_channel_bytes;
+    /** The file's slices along z (the volume's dims[2] when every slice was
+     *  read; the whole stack's count when a range was, vv_load_options.z_count). */
+    int n_slices;
 } vv_load_info;
 
 /** Options for vv_volume_load. */
@@ -159,6 +162,16 @@ typedef struct vv_load_options {
      */
     int level;
     /**
+     * Which slices: z_count > 0 reads slices z_first .. z_first + z_count - 1
+     * only (a slab of a volume larger than memory, read slab by slab: what
+     * vv_slabs does), as a volume of z_count slices whose origin is that of
+     * slice z_first; 0 (the default): every slice. Formats with
+     * VV_FORMAT_FLAG_SLICES only (TIFF stacks: those pages alone are
+     * decoded); others are VV_ERR_UNSUPPORTED, and a range past the file's
+     * slices is VV_ERR_INVALID naming the count (vv_load_info.n_slices).
+     */
+    int z_first, z_count;
+    /**
      * Out, may be NULL: what the file holds besides the volume read (its
      * channels and time steps, the read channel's name and colour). Filled
      * on success; through the sandbox too. Borrowed for the call.
@@ -167,7 +180,7 @@ typedef struct vv_load_options {
 } vv_load_options;
 
 /** Format VV_FORMAT_AUTO, no raw parameters (has_raw 0, raw as vv_raw_params_init),
- * series 0, channel -1, time -1, level 0, info NULL. */
+ * series 0, channel -1, time -1, level 0, every slice (z_first 0, z_count 0), info NULL. */
 void vv_load_options_init(vv_load_options *o);
 
 /**
@@ -367,6 +380,42 @@ vv_status vv_ome_zarr_write(const vv_volume *v, const char *path, const vv_save_
  * vv_pyramid_read_box (level 0) fit it with a one-line adapter.
  */
 typedef vv_status (*vv_box_reader)(void *ctx, const int lo[3], const int hi[3], vv_volume **out);
+/**
+ * A volume read slab by slab: boxes of a file larger than memory in a
+ * format whose reader decodes a range of slices (VV_FORMAT_FLAG_SLICES:
+ * TIFF stacks), each through vv_volume_load with z_first and z_count (so
+ * through the reader sandbox where the format is a third party's). The
+ * slices of the last box read are kept, and a box within them is cut from
+ * them: the boxes of one slab asked for in turn (what
+ * vv_ome_zarr_write_boxes does: every row of chunks of a slab before the
+ * next slab) decode each slice once. Memory: the slices of one box, of the
+ * volume's width x height. Not thread-safe: one call at a time (the
+ * writer's reads are).
+ */
+typedef struct vv_slabs vv_slabs;
+/**
+ * Opens @p path with @p opt's format, raw parameters, channel and time
+ * step (NULL: the defaults; its slices and info are not used): slice 0 is
+ * read for the geometry and the count of slices. Errors: those of
+ * vv_volume_load (VV_ERR_UNSUPPORTED for a format read whole only),
+ * VV_ERR_LIMIT (a volume past the size limits), VV_ERR_NOMEM.
+ */
+vv_status vv_slabs_open(vv_slabs **out, const char *path, const vv_load_options *opt);
+/** The volume's dims, type and geometry (its voxels are not read), owned by @p s. */
+const vv_volume *vv_slabs_header(const vv_slabs *s);
+/** Slabs read so far (a slab is read once when the boxes come slab by slab). */
+uint64_t vv_slabs_loads(const vv_slabs *s);
+/**
+ * A vv_box_reader over @p slabs (a vv_slabs): voxels lo .. hi (inclusive)
+ * as a new volume with the volume's geometry (its voxel (0, 0, 0) is voxel
+ * lo), from the slices held or, when the box leaves them, from its own
+ * slices read anew. Errors: VV_ERR_INVALID (a box outside the volume),
+ * those of vv_volume_load, VV_ERR_FORMAT (slices that read back in another
+ * shape or type: a file changed under the reader), VV_ERR_NOMEM.
+ */
+vv_status vv_slabs_read_box(void *slabs, const int lo[3], const int hi[3], vv_volume **out);
+/** Frees @p s (NULL accepted). */
+void vv_slabs_free(vv_slabs *s);
 /**
  * Writes the OME-Zarr store of vv_ome_zarr_write (the same levels, chunks
  * and bytes) from a volume that need not fit in memory: level 0 a row of

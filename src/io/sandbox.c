@@ -47,7 +47,7 @@
 
 extern char **environ;
 
-#define SBX_VERSION 4
+#define SBX_VERSION 5
 #define SBX_FD 3
 #define SBX_MAX_PATH 4096
 #define SBX_MAX_SERIES 200000 /* as many as the files a listing reads */
@@ -77,6 +77,7 @@ typedef struct sbx_request {
     int32_t format, has_raw;
     vv_raw_params raw;
     int32_t series, channel, time, level;
+    int32_t z_first, z_count;
     uint64_t budget;
     int32_t threads;
     int32_t inject;
@@ -978,6 +979,8 @@ vv_sandbox_reader_main(int argc, char **argv) {
         o.channel = rq.channel;
         o.time = rq.time;
         o.level = rq.level;
+        o.z_first = rq.z_first;
+        o.z_count = rq.z_count;
         o.info = &info;
         s = vv_volume_load(&v, rq.path, &o);
     }
@@ -994,6 +997,7 @@ vv_sandbox_reader_main(int argc, char **argv) {
         r.n_channels = info.n_channels;
         r.n_times = info.n_times;
         r.n_levels = info.n_levels;
+        r.n_slices = info.n_slices;
         r.has_color = info.has_color;
         memcpy(r.color, info.color, sizeof r.color);
         r.time_step = info.time_step;
@@ -1171,6 +1175,7 @@ volume_from_reply(vv_volume **out, vv_load_info *info, const sbx_reply *r, int f
                          fmt_name, file);
     else if (r->n_channels < 0 || r->n_channels > VV_VOLUME_MAX_DIM || r->n_times < 0 ||
              r->n_times > VV_VOLUME_MAX_DIM || r->n_levels < 0 || r->n_levels > 64 ||
+             r->n_slices < 0 || r->n_slices > VV_VOLUME_MAX_DIM ||
              !memchr(r->channel_name, 0, sizeof r->channel_name) ||
              !(r->time_step >= 0 && r->time_step < 1e12) ||
              !(r->color[0] >= 0 && r->color[0] <= 1 && r->color[1] >= 0 && r->color[1] <= 1 &&
@@ -1218,6 +1223,7 @@ volume_from_reply(vv_volume **out, vv_load_info *info, const sbx_reply *r, int f
     info->n_channels = r->n_channels;
     info->n_times = r->n_times;
     info->n_levels = r->n_levels;
+    info->n_slices = r->n_slices;
     info->has_color = r->has_color != 0;
     memcpy(info->color, r->color, sizeof info->color);
     info->time_step = r->time_step;
@@ -1795,6 +1801,8 @@ new_request(int op, const char *path, vv_format f, const vv_load_options *opt) {
     rq->channel = opt->channel;
     rq->time = opt->time;
     rq->level = opt->level;
+    rq->z_first = opt->z_first;
+    rq->z_count = opt->z_count;
     rq->budget = vv_memory_budget_get();
     rq->threads = vv_threads_get();
     rq->cpu_seconds = time_limit(path);

@@ -53,7 +53,7 @@ typedef struct sbx_reply {
     double spacing[3], origin[3], direction[9];
     int32_t unit, data_origin, modification, space;
     /* a volume's vv_load_info (checked: counts in range, the name ended) */
-    int32_t n_channels, n_times, has_color, n_levels;
+    int32_t n_channels, n_times, has_color, n_levels, n_slices;
     float color[3];
     double time_step;
     int32_t has_raw_layout, raw_big_endian;

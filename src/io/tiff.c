@@ -652,9 +652,16 @@ typedef struct page_ref {
     long page;
 } page_ref;
 
+/* Which stack and slices read_stack reads: a channel and a time step (-1:
+ * the first), slices z_first .. z_first + z_count - 1 (z_count 0: all). */
+typedef struct stack_pick {
+    int channel, time, z_first, z_count;
+} stack_pick;
+
 static vv_status
-read_stack(vv_volume **out, char **files, int n_files, int channel, int time, vv_load_info *info,
+read_stack(vv_volume **out, char **files, int n_files, const stack_pick *pick, vv_load_info *info,
            const char **bad_file) {
+    const int channel = pick->channel, time = pick->time;
     tiff_msg msg;
     *bad_file = files[0];
     TIFF *t = tiff_open(files[0], &msg);
@@ -722,7 +729,13 @@ read_stack(vv_volume **out, char **files, int n_files, int channel, int time, vv
     if (tp >= m.size_t_)
         return vv_error_set(VV_ERR_INVALID, "time step %d asked, the stack has %d time step%s", tp,
                             m.size_t_, m.size_t_ == 1 ? "" : "s");
-    int dims[3] = {(int)f0.w, (int)f0.h, nz};
+    /* the slices read: all, or the range asked */
+    const int z0 = pick->z_count > 0 ? pick->z_first : 0;
+    const int nread = pick->z_count > 0 ? pick->z_count : nz;
+    if (pick->z_count > 0 && (z0 > nz - nread || nread > nz))
+        return vv_error_set(VV_ERR_INVALID, "slices %d to %d asked, the stack has %d (from 0)", z0,
+                            z0 + nread - 1, nz);
+    int dims[3] = {(int)f0.w, (int)f0.h, nread};
     s = vv_volume_check_size(dims, f0.type, NULL);
     if (s != VV_OK)
         return s;
@@ -750,7 +763,7 @@ read_stack(vv_volume **out, char **files, int n_files, int channel, int time, vv
     size_t slice = (size_t)f0.w * f0.h * vv_voxel_type_size(f0.type);
     int open_file = -1;
     t = NULL;
-    for (int z = 0; z < nz && s == VV_OK; z++) {
+    for (int z = z0; z < z0 + nread && s == VV_OK; z++) {
         if (refs[z].file != open_file) {
             if (t)
                 TIFFClose(t);
@@ -776,7 +789,7 @@ read_stack(vv_volume **out, char **files, int n_files, int channel, int time, vv
                              vv_voxel_type_name(f.type), f.spp, f0.w, f0.h,
                              vv_voxel_type_name(f0.type), f0.spp);
         if (s == VV_OK)
-            s = read_page(t, &f, sample, (unsigned char *)v->data + (size_t)z * slice, &msg);
+            s = read_page(t, &f, sample, (unsigned char *)v->data + (size_t)(z - z0) * slice, &msg);
         if (s != VV_OK)
             s = vv_error_prefix(s, "page %ld", refs[z].page);
     }
@@ -796,6 +809,7 @@ read_stack(vv_volume **out, char **files, int n_files, int channel, int time, vv
         v->origin[i] = m.has_origin[i]      ? m.origin[i]
                        : m.has_ij_origin[i] ? -m.ij_origin[i] * v->spacing[i]
                                             : 0;
+    v->origin[2] += z0 * v->spacing[2]; /* the first slice read (TIFF has no direction) */
     v->unit = (m.is_ome || m.is_imagej) ? m.unit : VV_UNIT_UNKNOWN;
     v->modification = VV_MOD_ORIGINAL;
     vv_volume_update_range(v);
@@ -804,13 +818,14 @@ read_stack(vv_volume **out, char **files, int n_files, int channel, int time, vv
         info->n_channels = nc;
         info->n_times = m.size_t_;
         info->time_step = m.time_step;
+        info->n_slices = nz;
     }
     *out = v;
     return VV_OK;
 }
 
 static vv_status
-tiff_read_at(vv_volume **out, const char *path, int channel, int time, vv_load_info *info) {
+tiff_read_at(vv_volume **out, const char *path, const stack_pick *pick, vv_load_info *info) {
     if (!out || !path)
         return vv_error_set(VV_ERR_INVALID, "tiff: NULL argument");
     *out = NULL;
@@ -836,7 +851,7 @@ tiff_read_at(vv_volume **out, const char *path, int channel, int time, vv_load_i
         n = 1;
     }
     const char *bad = path;
-    s = read_stack(out, files, n, channel, time, info, &bad);
+    s = read_stack(out, files, n, pick, info, &bad);
     if (s != VV_OK)
         s = vv_error_prefix(s, "tiff: %s", n > 1 || S_ISDIR(st.st_mode) ? bad : path);
     free_list(files, n);
@@ -845,7 +860,8 @@ tiff_read_at(vv_volume **out, const char *path, int channel, int time, vv_load_i
 
 vv_status
 vv_tiff_read(vv_volume **out, const char *path, int channel) {
-    return tiff_read_at(out, path, channel, -1, NULL);
+    const stack_pick pick = {channel, -1, 0, 0};
+    return tiff_read_at(out, path, &pick, NULL);
 }
 
 /* ---- writing ---------------------------------------------------------------- */
@@ -1261,7 +1277,8 @@ tiff_looks_like(const vv_format_probe *p, int deep) {
 
 static vv_status
 tiff_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
-    return tiff_read_at(out, path, opt->channel, opt->time, opt->info);
+    const stack_pick pick = {opt->channel, opt->time, opt->z_first, opt->z_count};
+    return tiff_read_at(out, path, &pick, opt->info);
 }
 
 /* TIFF holds no direction matrix. */
@@ -1293,7 +1310,7 @@ const vv_volume_format vv_volume_format_tiff = {
     .doc = "TIFF through libtiff: pages or a folder of pages, BigTIFF, OME-TIFF, ImageJ; written "
            "as one page per slice (OME-XML for .ome.tif, ImageJ's keys otherwise), deflate "
            "unless --codec or --no-compress",
-    .flags = VV_FORMAT_FLAG_THIRD_PARTY | VV_FORMAT_FLAG_FOLDER,
+    .flags = VV_FORMAT_FLAG_THIRD_PARTY | VV_FORMAT_FLAG_FOLDER | VV_FORMAT_FLAG_SLICES,
     .looks_like = tiff_looks_like,
     .fits = tiff_fits,
     .read = tiff_read_record,

@@ -26,6 +26,7 @@ vv_load_options_init(vv_load_options *o) {
     o->channel = -1;
     o->time = -1;
     o->level = 0;
+    o->z_first = o->z_count = 0;
     o->info = NULL;
 }
 
@@ -115,6 +116,8 @@ finish_axes(vv_volume **out, const char *path, const vv_load_options *opt, vv_lo
         info->n_times = 1;
     if (info->n_levels < 1)
         info->n_levels = 1;
+    if (info->n_slices < 1)
+        info->n_slices = (*out)->dims[2];
     info->channel_name[VV_CHANNEL_NAME_MAX - 1] = '\0';
     const char *what = NULL;
     int asked = 0, have = 0;
@@ -140,6 +143,14 @@ finish_axes(vv_volume **out, const char *path, const vv_load_options *opt, vv_lo
     if (want)
         *want = *info;
     return VV_OK;
+}
+
+/* A range of slices asked of a format that reads whole volumes only. */
+static vv_status
+slices_unsupported(const char *path, const vv_volume_format *r) {
+    return vv_error_set(VV_ERR_UNSUPPORTED,
+                        "load: %s: %s is read whole, not a range of slices (TIFF stacks are)",
+                        vv_path_basename(path), r->title);
 }
 
 vv_status
@@ -169,6 +180,11 @@ vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
         return vv_error_set(VV_ERR_INVALID,
                             "load: %s: %s format needs the dimensions and voxel type",
                             vv_path_basename(path), r->name);
+    if (opt->z_first < 0 || opt->z_count < 0 || (opt->z_first > 0 && opt->z_count == 0))
+        return vv_error_set(VV_ERR_INVALID, "load: %s: slices from %d, %d of them",
+                            vv_path_basename(path), opt->z_first, opt->z_count);
+    if (opt->z_count > 0 && r && !(r->flags & VV_FORMAT_FLAG_SLICES))
+        return slices_unsupported(path, r);
     int is_dir = 0;
     vv_status s = check_input(path, f, &is_dir);
     if (s != VV_OK)
@@ -207,6 +223,8 @@ vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
     if (!r->read)
         return vv_error_set(VV_ERR_UNSUPPORTED, "load: %s: VolVis writes %s but does not read it",
                             vv_path_basename(path), r->title);
+    if (opt->z_count > 0 && !(r->flags & VV_FORMAT_FLAG_SLICES))
+        return slices_unsupported(path, r);
     s = r->read(out, path, opt);
     if (s != VV_OK) {
         vv_volume_free(*out);

@@ -515,6 +515,98 @@ test_bad_input(void **state) {
     assert_one_line_naming("a2.tif");
 }
 
+/* A range of slices (vv_load_options.z_first, z_count): only those pages,
+ * the origin of the first, the stack's count in n_slices; in this process
+ * and through the reader sandbox. vv_slabs cuts boxes from the slabs it
+ * reads, each slab once when the boxes come slab by slab. A range past the
+ * stack, and a range asked of a format read whole, are refused. */
+static void
+test_slice_range(void **state) {
+    (void)state;
+    const char *desc = "ImageJ=1.53t\nimages=9\nslices=9\nunit=micron\nspacing=2.5\n";
+    wopt o = {.w = 11,
+              .h = 7,
+              .pages = 9,
+              .spp = 1,
+              .type = VV_U16,
+              .compression = COMPRESSION_ADOBE_DEFLATE,
+              .rows_per_strip = 3,
+              .description = desc};
+    const char *p = out_path("slices.tif");
+    write_tiff(p, &o);
+    vv_volume *whole = NULL;
+    vt_ok(vv_volume_load(&whole, p, NULL));
+    for (int sandbox = 0; sandbox < 2; sandbox++) {
+        if (sandbox)
+            unsetenv("VOLVIS_SANDBOX");
+        else
+            setenv("VOLVIS_SANDBOX", "0", 1);
+        vv_load_info info;
+        vv_load_options lo;
+        vv_load_options_init(&lo);
+        lo.z_first = 3;
+        lo.z_count = 4;
+        lo.info = &info;
+        vv_volume *v = NULL;
+        vt_ok(vv_volume_load(&v, p, &lo));
+        assert_int_equal(v->dims[2], 4);
+        assert_int_equal(info.n_slices, 9);
+        assert_near(v->origin[2], whole->origin[2] + 3 * 2.5, 1e-12);
+        for (int z = 0; z < 4; z++)
+            for (int y = 0; y < 7; y++)
+                for (int x = 0; x < 11; x++)
+                    assert_true(vv_volume_get(v, x, y, z) == vv_volume_get(whole, x, y, z + 3));
+        vv_volume_free(v);
+        lo.z_first = 6; /* 6 .. 9: one past the stack */
+        vt_err(vv_volume_load(&v, p, &lo));
+        assert_null(v);
+        assert_non_null(strstr(vv_error_message(), "the stack has 9"));
+    }
+    unsetenv("VOLVIS_SANDBOX");
+    /* boxes of slabs: each slab read once when asked slab by slab */
+    vv_slabs *sl = NULL;
+    vt_ok(vv_slabs_open(&sl, p, NULL));
+    assert_int_equal(vv_slabs_header(sl)->dims[2], 9);
+    const int slab_z[3][2] = {{0, 3}, {4, 7}, {8, 8}};
+    for (int k = 0; k < 3; k++)
+        for (int y0 = 0; y0 < 7; y0 += 4) {
+            const int lo[3] = {2, y0, slab_z[k][0]};
+            const int hi[3] = {9, y0 + 3 < 6 ? y0 + 3 : 6, slab_z[k][1]};
+            vv_volume *b = NULL;
+            vt_ok(vv_slabs_read_box(sl, lo, hi, &b));
+            for (int z = 0; z < b->dims[2]; z++)
+                for (int y = 0; y < b->dims[1]; y++)
+                    for (int x = 0; x < b->dims[0]; x++)
+                        assert_true(vv_volume_get(b, x, y, z) ==
+                                    vv_volume_get(whole, x + lo[0], y + lo[1], z + lo[2]));
+            assert_near(b->origin[2], whole->origin[2] + lo[2] * whole->spacing[2], 1e-12);
+            vv_volume_free(b);
+        }
+    assert_int_equal((int)vv_slabs_loads(sl), 3);
+    const int lo[3] = {0, 0, 5}, hi[3] = {10, 7, 5}; /* y past the volume */
+    vv_volume *b = NULL;
+    vt_err(vv_slabs_read_box(sl, lo, hi, &b));
+    assert_null(b);
+    vv_slabs_free(sl);
+    vv_volume_free(whole);
+    /* a format read whole refuses a range, naming the file */
+    vv_volume *head = NULL;
+    vt_ok(vv_volume_load(&head, "../shared/data/volumes/neghip.slc", NULL));
+    const char *nrrd = out_path("whole.nrrd");
+    vt_ok(vv_volume_save(head, nrrd, VV_FORMAT_NRRD, 0));
+    vv_volume_free(head);
+    vv_load_options lo2;
+    vv_load_options_init(&lo2);
+    lo2.z_first = 1;
+    lo2.z_count = 2;
+    vt_err(vv_volume_load(&head, nrrd, &lo2));
+    assert_null(head);
+    assert_non_null(strstr(vv_error_message(), "whole.nrrd"));
+    assert_non_null(strstr(vv_error_message(), "TIFF stacks are"));
+    vt_err(vv_slabs_open(&sl, nrrd, NULL));
+    assert_null(sl);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
@@ -528,6 +620,7 @@ main(void) {
         cmocka_unit_test(test_nrrd_twin),
         cmocka_unit_test(test_strips_past_end),
         cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_slice_range),
     };
     return vt_run_tests(tests, NULL, NULL);
 }

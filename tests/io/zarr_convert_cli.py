@@ -3,24 +3,27 @@
 
   zarr_convert_cli.py VOLVIS OUTDIR
 
-Inputs that can be read by boxes (raw, uncompressed NRRD, and pyramids:
-OME-Zarr, BigDataViewer HDF5) are written chunk by chunk
-(vv_ome_zarr_write_boxes); everything else is read whole and written by
-vv_ome_zarr_write. Checks:
+Inputs that can be read by boxes (raw, uncompressed NRRD, TIFF stacks
+slab by slab, and pyramids: OME-Zarr, BigDataViewer HDF5) are written
+chunk by chunk (vv_ome_zarr_write_boxes); everything else is read whole and
+written by vv_ome_zarr_write. Checks:
 
 - the two writers make the same store, byte for byte (every chunk, the
   .zarray and .zattrs files): raw f32 and u16 of odd sizes (edge chunks,
   an axis of one level shorter than a chunk), a label volume (the first
   voxel of each block), an uncompressed NRRD against its gzip twin (the
-  CT head), and a BigDataViewer file written by h5py;
+  CT head), a BigDataViewer file written by h5py, and TIFF stacks written by
+  tifffile (an ImageJ stack of three slabs, deflate, each slab read once;
+  channel 1 at time step 1 of an OME-TIFF hyperstack; a folder of pages);
 - zarr-python reads every level of the chunk-by-chunk store as numpy's
   2x2x2 means of the level before (an independent reader and reduction);
-- memory: a 128 MiB raw volume converts under a memory budget
-  (VOLVIS_MAX_MEMORY) of a quarter of it, which a whole-volume read would
-  exceed, and its peak resident set is under half of it;
+- memory: a 128 MiB raw volume and a 128 MiB TIFF stack convert under a
+  memory budget (VOLVIS_MAX_MEMORY) of a quarter of them, which a
+  whole-volume read would exceed, and their peak resident set is under half;
 - bad input: a raw file shorter than its size says, and a BigDataViewer
-  file with a corrupt chunk met half way through, are one line naming the
-  file, a non-zero exit, and no store (not even the temporary folder) left;
+  file with a corrupt chunk met half way through, and a TIFF stack cut in
+  its last slab, are one line naming the file, a non-zero exit, and no store
+  (not even the temporary folder) left;
   an existing path that is not a Zarr store is refused and left as it is.
 """
 import os
@@ -32,9 +35,10 @@ import time
 try:
     import h5py
     import numpy as np
+    import tifffile
     import zarr
 except ImportError as e:  # pragma: no cover
-    print(f"skipped: {e} (python3-numpy, python3-h5py, python3-zarr)")
+    print(f"skipped: {e} (python3-numpy, python3-h5py, python3-tifffile, python3-zarr)")
     sys.exit(77)
 
 VOLVIS, OUT = sys.argv[1], sys.argv[2]
@@ -72,17 +76,22 @@ def same_store(a, b, what):
           f"{', differing: ' + ', '.join(diff[:5]) if diff else ''})")
 
 
-def both(name, src, raw=None, extra=()):
-    """IN -> OUT.zarr chunk by chunk, and IN -> NIfTI -> OUT.zarr whole."""
+def both(name, src, raw=None, extra=(), pick=(), slabs=None):
+    """IN -> OUT.zarr chunk by chunk, and IN -> NIfTI -> OUT.zarr whole;
+    pick: options choosing IN's channel and time step; slabs: the count of
+    slabs of slices a TIFF stack must be read in (each once)."""
     rawopt = ["--raw", raw] if raw else []
     a, b = os.path.join(OUT, "stream", name), os.path.join(OUT, "whole", name)
     for d in (a, b):
         os.makedirs(os.path.dirname(d), exist_ok=True)
-    p = volvis("convert", *rawopt, src, a, *extra)
+    p = volvis("convert", *rawopt, *pick, src, a, *extra)
     check(p.returncode == 0 and "chunk by chunk" in p.stdout,
           f"{name}: written chunk by chunk ({p.stdout.strip()} {p.stderr.strip()})")
+    if slabs is not None:
+        check(f"from {slabs} slabs of slices" in p.stdout,
+              f"{name}: {slabs} slabs of slices, each read once ({p.stdout.strip()})")
     nii = os.path.join(OUT, name + ".nii")
-    p1 = volvis("convert", *rawopt, src, nii, "--quiet")
+    p1 = volvis("convert", *rawopt, *pick, src, nii, "--quiet")
     p2 = volvis("convert", nii, b, *extra)
     check(p1.returncode == 0 and p2.returncode == 0 and "chunk by chunk" not in p2.stdout,
           f"{name}: written whole ({p1.stderr.strip()} {p2.stderr.strip()})")
@@ -123,6 +132,24 @@ with h5py.File(bdv, "w") as f:
     f.create_dataset("t00000/s00/0/cells", data=u16, chunks=(32, 32, 32), compression="gzip")
     f.create_dataset("t00000/s00/1/cells", data=u16[::2, ::2, ::2], chunks=(32, 32, 32))
 both("bdv.zarr", bdv)
+
+# TIFF stacks by tifffile, read slab by slab (64 slices each)
+zt, yt, xt = np.mgrid[0:150, 0:131, 0:97]
+u16t = ((xt * 37 + yt * 11 + zt * 101) % 4099).astype(np.uint16)
+stack = os.path.join(OUT, "stack.tif")
+tifffile.imwrite(stack, u16t, imagej=True, compression="zlib", resolution=(2.0, 2.0),
+                 metadata={"spacing": 1.5, "unit": "um", "axes": "ZYX"})
+both("tiff.zarr", stack, slabs=3)
+hyper = os.path.join(OUT, "hyper.ome.tif")
+tzcyx = np.stack([np.stack([(u16t[:70] + 7 * t + 1000 * c) for c in range(2)], axis=1)
+                  for t in range(2)])  # T, Z, C, Y, X
+tifffile.imwrite(hyper, tzcyx.astype(np.float32), ome=True, metadata={"axes": "TZCYX"})
+both("ome_c1_t1.zarr", hyper, pick=("--channel", "1", "--time", "1"), slabs=2)
+pages = os.path.join(OUT, "pages")
+os.makedirs(pages)
+for k in range(70):
+    tifffile.imwrite(os.path.join(pages, f"z{k}.tif"), u16t[k])
+both("pages.zarr", pages, slabs=2)
 
 # ---- zarr-python reads it; each level the 2x2x2 means of the one before -----------------
 g = zarr.open_group(store, mode="r")
@@ -187,6 +214,46 @@ else:
 os.remove(big)
 shutil.rmtree(os.path.join(OUT, "big.zarr"), ignore_errors=True)
 
+# a TIFF stack of the same size, slab by slab: besides the writer's rows it
+# holds one slab of 64 slices (from the sandboxed reader's memfd), a
+# sixteenth of this deeper stack (a quarter of the raw volume's shape)
+side = (128, 128, 512) if SANITIZER else (256, 256, 1024)
+bigtif = os.path.join(OUT, "big.tif")
+with tifffile.TiffWriter(bigtif) as tw:  # plain pages: one slice each
+    row = (np.arange(side[0] * side[1], dtype=np.uint32) % 3001).astype(np.uint16)
+    for k in range(side[2]):
+        tw.write((row + k).reshape(side[1], side[0]), metadata=None)
+size_mib = side[0] * side[1] * side[2] * 2 / 2**20
+proc = subprocess.Popen([VOLVIS, "convert", bigtif, os.path.join(OUT, "bigtif.zarr")],
+                        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                        env=dict(os.environ, VOLVIS_MAX_MEMORY=str(budget)))
+peak = 0
+while proc.poll() is None:
+    try:
+        with open(f"/proc/{proc.pid}/status") as f:
+            for line in f:
+                if line.startswith("VmHWM:"):
+                    peak = max(peak, int(line.split()[1]))
+    except OSError:
+        pass
+    time.sleep(0.005)
+out, err = proc.communicate()
+check(proc.returncode == 0 and f"x {side[2]}, u16, chunk by chunk from {side[2] // 64} slabs" in out,
+      f"a {size_mib:.0f} MiB TIFF stack converted slab by slab under a memory budget of "
+      f"{budget / 2**20:.0f} MiB ({out.strip()} {err.strip()})")
+if SANITIZER:
+    print(f"note peak resident set {peak / 1024:.0f} MiB: not bounded under the sanitizers")
+else:
+    check(0 < peak / 1024 < size_mib / 2,
+          f"TIFF: peak resident set {peak / 1024:.0f} MiB < half the volume's {size_mib:.0f} MiB")
+g = zarr.open_group(os.path.join(OUT, "bigtif.zarr"), mode="r")
+lvl = g["0"]
+check(lvl.shape == (side[2], side[1], side[0]) and int(lvl[side[2] - 1, side[1] - 1, side[0] - 1])
+      == int((side[0] * side[1] - 1) % 3001 + side[2] - 1),
+      f"zarr-python reads the TIFF stack's last voxel from the store {lvl.shape}")
+os.remove(bigtif)
+shutil.rmtree(os.path.join(OUT, "bigtif.zarr"), ignore_errors=True)
+
 # ---- bad input ---------------------------------------------------------------------------
 short = os.path.join(OUT, "short.raw")
 with open(short, "wb") as f:
@@ -209,6 +276,17 @@ err = p.stderr.strip()
 left = [n for n in os.listdir(OUT) if n.startswith("bad.zarr")]
 check(p.returncode != 0 and len(err.splitlines()) == 1 and "bad.h5" in err and "chunk" in err
       and not left, f"a corrupt chunk met half way: one line naming it, nothing left ({err})")
+cut = os.path.join(OUT, "cut.tif")
+with open(stack, "rb") as f:
+    data = f.read()
+# the last pages' strips zeroed: the first slabs read, the last one fails
+with open(cut, "wb") as f:
+    f.write(data[: len(data) * 9 // 10] + b"\0" * (len(data) - len(data) * 9 // 10))
+p = volvis("convert", cut, os.path.join(OUT, "cut.zarr"))
+err = p.stderr.strip()
+left = [n for n in os.listdir(OUT) if n.startswith("cut.zarr")]
+check(p.returncode != 0 and len(err.splitlines()) == 1 and "cut.tif" in err and not left,
+      f"a TIFF stack broken in its last slab: one line naming it, nothing left ({err}; left {left})")
 keep = os.path.join(OUT, "notzarr")
 os.makedirs(keep)
 with open(os.path.join(keep, "mine.txt"), "w") as f:

@@ -49,7 +49,10 @@ enum {
     VV_FORMAT_FLAG_DESCRIBED = 1u << 2,
     /** Also read gzip-compressed (looks_like sees the decompressed head;
      *  the other formats are not asked about a gzip-compressed file). */
-    VV_FORMAT_FLAG_GZIP = 1u << 3
+    VV_FORMAT_FLAG_GZIP = 1u << 3,
+    /** The reader honours vv_load_options.z_first and z_count, decoding
+     *  only the slices asked for (a volume read slab by slab). */
+    VV_FORMAT_FLAG_SLICES = 1u << 4
 };
 
 /** What detection knows of a path, for the looks_like tests. */
