@@ -46,7 +46,7 @@ cli_convert_usage(FILE *out) {
             "read back at any level with --level) has none either; it is written\n"
             "chunk by chunk, with memory bounded by a row of 64^3 chunks, when IN is raw,\n"
             "an uncompressed NRRD or a pyramid (OME-Zarr, BigDataViewer, Imaris), and\n"
-            "by 64 slices when IN is a TIFF stack (read slab by slab, each slab once);\n"
+            "by 64 slices when IN is a TIFF stack or a gzip NRRD (read slab by slab);\n"
             "SLC (.slc; VolVis's own 8-bit format)\n"
             "holds 8-bit data only: other voxel types are rescaled from the value\n"
             "range to 0..255, with a note on stderr. What a format cannot hold is\n"
@@ -164,7 +164,8 @@ read_pyramid_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
 
 /* IN to OUT.zarr chunk by chunk (vv_ome_zarr_write_boxes), never holding
  * IN whole: raw or uncompressed NRRD (read by rows, vv_bricked), TIFF
- * stacks (a slab of a row of chunks' slices at a time, vv_slabs) and
+ * stacks and gzip NRRD (a slab of a row of chunks' slices at a time,
+ * vv_slabs) and
  * pyramids (OME-Zarr, BigDataViewer, Imaris: level 0 through the chunk
  * cache). -1: IN is none of these (the caller reads it whole). */
 static int
@@ -177,8 +178,12 @@ convert_zarr_boxes(const char *in, const char *out, const vv_raw_params *raw, in
     const vv_format f = raw ? VV_FORMAT_RAW : vv_format_detect(in);
     if ((raw || f == VV_FORMAT_NRRD) && channel <= 0 && time <= 0) {
         if (vv_bricked_open_header(&b, in, raw, 0) != VV_OK) {
-            vv_error_clear(); /* a compressed NRRD: read whole */
-            return -1;
+            /* a gzip NRRD: inflated slab by slab; other encodings read whole */
+            vv_error_clear();
+            if (raw || vv_slabs_open(&sl, in, NULL) != VV_OK) {
+                vv_error_clear();
+                return -1;
+            }
         }
     } else if (f == VV_FORMAT_TIFF) {
         vv_load_options lo;

@@ -384,7 +384,10 @@ typedef vv_status (*vv_box_reader)(void *ctx, const int lo[3], const int hi[3], 
  * A volume read slab by slab: boxes of a file larger than memory in a
  * format whose reader decodes a range of slices (VV_FORMAT_FLAG_SLICES:
  * TIFF stacks), each through vv_volume_load with z_first and z_count (so
- * through the reader sandbox where the format is a third party's). The
+ * through the reader sandbox where the format is a third party's), or of a
+ * gzip-encoded NRRD (its header read as the bricked reader reads an
+ * uncompressed one; its data inflated here by zlib as one stream, forward
+ * from slab to slab, from its start again only when a box goes back). The
  * slices of the last box read are kept, and a box within them is cut from
  * them: the boxes of one slab asked for in turn (what
  * vv_ome_zarr_write_boxes does: every row of chunks of a slab before the
@@ -395,8 +398,8 @@ typedef vv_status (*vv_box_reader)(void *ctx, const int lo[3], const int hi[3], 
 typedef struct vv_slabs vv_slabs;
 /**
  * Opens @p path with @p opt's format, raw parameters, channel and time
- * step (NULL: the defaults; its slices and info are not used): slice 0 is
- * read for the geometry and the count of slices. Errors: those of
+ * step (NULL: the defaults; its slices and info are not used): a gzip NRRD's
+ * header, else slice 0 for the geometry and the count of slices. Errors: those of
  * vv_volume_load (VV_ERR_UNSUPPORTED for a format read whole only),
  * VV_ERR_LIMIT (a volume past the size limits), VV_ERR_NOMEM.
  */

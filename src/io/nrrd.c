@@ -1034,7 +1034,7 @@ attached_offset(const char *path, uint64_t *off) {
 
 static vv_status
 raw_layout_locked(const char *path, vv_volume **header, char **data_path, uint64_t *offset,
-                  int *big_endian) {
+                  int *big_endian, int *gzip) {
     vv_status s = VV_OK;
     Nrrd *n = nrrdNew();
     NrrdIoState *nio = nrrdIoStateNew();
@@ -1065,11 +1065,17 @@ raw_layout_locked(const char *path, vv_volume **header, char **data_path, uint64
                                         "first (volvis convert IN OUT.vvb)");
         goto done;
     }
-    if (nio->encoding != nrrdEncodingRaw) {
+    *gzip = *gzip && nio->encoding == nrrdEncodingGzip;
+    if (nio->encoding != nrrdEncodingRaw && !*gzip) {
         s = vv_error_set(VV_ERR_FORMAT,
                          "encoding %s is not raw: it cannot be read by bricks; convert it "
                          "to .vvb first (volvis convert IN OUT.vvb)",
                          nio->encoding ? nio->encoding->name : "?");
+        goto done;
+    }
+    if (*gzip && nio->byteSkip != 0) {
+        s = vv_error_set(VV_ERR_FORMAT, "a byte skip in gzip-encoded data is not supported for "
+                                        "reading slab by slab");
         goto done;
     }
     if (nio->lineSkip != 0 || nio->dataFSkip) {
@@ -1104,7 +1110,7 @@ raw_layout_locked(const char *path, vv_volume **header, char **data_path, uint64
         (uint64_t)dims[0] * (uint64_t)dims[1] * (uint64_t)dims[2] * vv_voxel_type_size(type);
     uint64_t off = 0;
     if (nfiles == 1 && strcmp(nio->dataFN[0], "-") != 0) {
-        if (nio->byteSkip >= 0) {
+        if (nio->byteSkip >= 0 || *gzip) {
             off = (uint64_t)nio->byteSkip;
         } else {
             FILE *f = fopen(dp, "rb");
@@ -1148,8 +1154,8 @@ done:
 }
 
 vv_status
-vv_nrrd_raw_layout(const char *path, vv_volume **header, char **data_path, uint64_t *offset,
-                   int *big_endian) {
+vv_nrrd_data_layout(const char *path, vv_volume **header, char **data_path, uint64_t *offset,
+                    int *big_endian, int *gzip) {
     *header = NULL;
     *data_path = NULL;
     /* the same header checks and detached-data policy as vv_nrrd_read */
@@ -1158,12 +1164,19 @@ vv_nrrd_raw_layout(const char *path, vv_volume **header, char **data_path, uint6
     if (s == VV_OK) {
         header_scan_free(&hs);
         pthread_mutex_lock(&teem_lock);
-        s = raw_layout_locked(path, header, data_path, offset, big_endian);
+        s = raw_layout_locked(path, header, data_path, offset, big_endian, gzip);
         pthread_mutex_unlock(&teem_lock);
     }
     if (s != VV_OK)
         return vv_error_prefix(s, "nrrd: %s", vv_path_basename(path));
     return VV_OK;
+}
+
+vv_status
+vv_nrrd_raw_layout(const char *path, vv_volume **header, char **data_path, uint64_t *offset,
+                   int *big_endian) {
+    int gzip = 0;
+    return vv_nrrd_data_layout(path, header, data_path, offset, big_endian, &gzip);
 }
 
 /* ---- the format record ------------------------------------------------------ */

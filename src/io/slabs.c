@@ -2,15 +2,23 @@
  * A volume read slab by slab (vv_slabs, volvis/io.h): boxes of a volume
  * larger than memory from a format whose reader decodes a range of slices
  * (VV_FORMAT_FLAG_SLICES: TIFF stacks), through vv_volume_load and so
- * through the reader sandbox. The slices of the last box are kept, so the
- * boxes of one slab that a writer asks for in turn (vv_ome_zarr_write_boxes:
- * a row of chunks at a time, every row of a slab before the next slab)
+ * through the reader sandbox; or from a gzip-encoded NRRD, whose header
+ * Teem reads here as for the bricked reader and whose data zlib inflates
+ * here as one stream, forward from slab to slab (back to its start only
+ * when a box goes back). The slices of the last box are kept, so the boxes
+ * of one slab that a writer asks for in turn (vv_ome_zarr_write_boxes: a
+ * row of chunks at a time, every row of a slab before the next slab)
  * decode each slice once.
  */
+#include <errno.h>
+#include <fcntl.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
+#include <zlib.h>
 
 #include "core/internal.h"
+#include "io/bricked_internal.h"
 #include "volvis/io.h"
 
 struct vv_slabs {
@@ -20,7 +28,116 @@ struct vv_slabs {
     vv_volume *slab;     /* the slices z0 .. z0 + slab->dims[2] - 1, or NULL */
     int z0;
     uint64_t loads; /* slabs read */
+    /* a gzip NRRD: its data stream, the bytes inflated so far, the byte order */
+    gzFile gz;
+    uint64_t at;
+    int swap;
 };
+
+/* A gzip NRRD's header and data stream, or 0 when @p path is no gzip NRRD
+ * (vv_volume_load then reads its slabs). -1: an error. */
+static int
+open_gzip_nrrd(vv_slabs *s) {
+    if (s->opt.has_raw || vv_format_detect(s->path) != VV_FORMAT_NRRD)
+        return 0;
+    vv_volume *h = NULL;
+    char *data = NULL;
+    uint64_t off = 0;
+    int big = 0, gzip = 1;
+    vv_error_clear();
+    if (vv_nrrd_data_layout(s->path, &h, &data, &off, &big, &gzip) != VV_OK || !gzip) {
+        vv_volume_free(h);
+        free(data);
+        vv_error_clear(); /* raw NRRD and the rest: vv_volume_load's errors */
+        return 0;
+    }
+    const int fd = open(data, O_RDONLY | O_CLOEXEC);
+    if (fd < 0 || lseek(fd, (off_t)off, SEEK_SET) != (off_t)off || !(s->gz = gzdopen(fd, "rb"))) {
+        const int e = errno;
+        if (fd >= 0)
+            close(fd);
+        vv_error_set(VV_ERR_IO, "slabs: %s: cannot open its data %s: %s", vv_path_basename(s->path),
+                     vv_path_basename(data), strerror(e));
+        vv_volume_free(h);
+        free(data);
+        return -1;
+    }
+    free(data);
+    gzbuffer(s->gz, 1 << 20);
+    s->header = h;
+    s->swap = big == vv_host_is_little_endian();
+    return 1;
+}
+
+/* Slices z0 .. z0 + n - 1 of a gzip NRRD inflated into @p v. */
+static vv_status
+read_gzip_slices(vv_slabs *s, int z0, int n, vv_volume *v) {
+    const int *D = s->header->dims;
+    const size_t es = vv_voxel_type_size(v->type);
+    const uint64_t slice = (uint64_t)D[0] * (uint64_t)D[1] * es, from = (uint64_t)z0 * slice;
+    if (from < s->at) { /* back: from the stream's start again */
+        if (gzrewind(s->gz) != 0)
+            return vv_error_set(VV_ERR_IO, "cannot rewind the gzip data");
+        s->at = 0;
+    }
+    /* forward, inflating what lies between */
+    unsigned char *skip = NULL;
+    while (s->at < from) {
+        if (!skip && !(skip = malloc(1 << 20)))
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        const uint64_t want = from - s->at < (1u << 20) ? from - s->at : (1u << 20);
+        const int got = gzread(s->gz, skip, (unsigned)want);
+        if (got <= 0)
+            break;
+        s->at += (uint64_t)got;
+    }
+    free(skip);
+    unsigned char *dst = v->data;
+    const uint64_t bytes = slice * (uint64_t)n;
+    uint64_t done = s->at == from ? 0 : bytes + 1;
+    while (done < bytes) {
+        const uint64_t want = bytes - done < (1u << 30) ? bytes - done : (1u << 30);
+        const int got = gzread(s->gz, dst + done, (unsigned)want);
+        if (got <= 0)
+            break;
+        done += (uint64_t)got;
+        s->at += (uint64_t)got;
+    }
+    if (done != bytes) {
+        int zerr = Z_OK;
+        const char *msg = gzerror(s->gz, &zerr);
+        return vv_error_set(VV_ERR_FORMAT, "the gzip data ends before slice %d of %d (%s)",
+                            done > bytes ? (int)(s->at / slice) : z0 + (int)(done / slice), D[2],
+                            zerr != Z_OK && msg && msg[0] ? msg : "truncated");
+    }
+    if (s->swap && es > 1)
+        vv_byteswap(dst, (uint64_t)D[0] * D[1] * (uint64_t)n, es);
+    return VV_OK;
+}
+
+/* Slices lo .. hi as a new volume: inflated here (a gzip NRRD; into the
+ * slab held, @p reuse, when it has as many slices: one allocation for the
+ * whole stream) or through vv_volume_load. */
+static vv_status
+load_slab(vv_slabs *s, int lo, int hi, vv_volume *reuse, vv_volume **out) {
+    if (s->gz) {
+        const int dims[3] = {s->header->dims[0], s->header->dims[1], hi - lo + 1};
+        vv_status st = VV_OK;
+        if (reuse && reuse->dims[2] == dims[2])
+            *out = vv_volume_ref(reuse);
+        else
+            st = vv_volume_new(out, dims, s->header->type);
+        if (st == VV_OK && (st = read_gzip_slices(s, lo, hi - lo + 1, *out)) != VV_OK) {
+            vv_volume_free(*out);
+            *out = NULL;
+        }
+        return st == VV_OK ? VV_OK : vv_error_prefix(st, "nrrd: %s", vv_path_basename(s->path));
+    }
+    vv_load_options o = s->opt;
+    o.z_first = lo;
+    o.z_count = hi - lo + 1;
+    return vv_volume_load(out, s->path, &o);
+}
 
 vv_status
 vv_slabs_open(vv_slabs **out, const char *path, const vv_load_options *opt) {
@@ -37,6 +154,17 @@ vv_slabs_open(vv_slabs **out, const char *path, const vv_load_options *opt) {
     else
         vv_load_options_init(&s->opt);
     s->opt.info = NULL;
+    const int g = open_gzip_nrrd(s);
+    if (g != 0) {
+        vv_status st =
+            g > 0 ? vv_volume_check_limits(s->header->dims, s->header->type, NULL) : VV_ERR_IO;
+        if (st != VV_OK) {
+            vv_slabs_free(s);
+            return st;
+        }
+        *out = s;
+        return VV_OK;
+    }
     /* the geometry and the count of slices, from slice 0 */
     vv_load_info info;
     vv_load_options first = s->opt;
@@ -94,15 +222,16 @@ vv_slabs_read_box(void *slabs, const int lo[3], const int hi[3], vv_volume **out
                                 vv_path_basename(s->path), lo[a], hi[a], D[a] - 1, a);
     if (!s->slab || lo[2] < s->z0 || hi[2] >= s->z0 + s->slab->dims[2]) {
         /* the box's slices replace the slab held */
-        vv_volume_free(s->slab);
+        vv_volume *v = NULL, *old = s->slab;
         s->slab = NULL;
-        vv_load_options o = s->opt;
-        o.z_first = lo[2];
-        o.z_count = hi[2] - lo[2] + 1;
-        vv_volume *v = NULL;
-        vv_status st = vv_volume_load(&v, s->path, &o);
+        if (!s->gz) { /* freed before the next is read: one slab at a time */
+            vv_volume_free(old);
+            old = NULL;
+        }
+        vv_status st = load_slab(s, lo[2], hi[2], old, &v);
+        vv_volume_free(old);
         if (st == VV_OK && (v->type != s->header->type || v->dims[0] != D[0] ||
-                            v->dims[1] != D[1] || v->dims[2] != o.z_count)) {
+                            v->dims[1] != D[1] || v->dims[2] != hi[2] - lo[2] + 1)) {
             st = vv_error_set(VV_ERR_FORMAT, "slabs: %s: slices %d..%d read as %d x %d x %d %s",
                               vv_path_basename(s->path), lo[2], hi[2], v->dims[0], v->dims[1],
                               v->dims[2], vv_voxel_type_name(v->type));
@@ -148,6 +277,8 @@ vv_slabs_free(vv_slabs *s) {
         return;
     vv_volume_free(s->slab);
     vv_volume_free(s->header);
+    if (s->gz)
+        gzclose(s->gz);
     free(s->path);
     free(s);
 }

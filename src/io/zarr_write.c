@@ -325,7 +325,13 @@ typedef struct box_feed {
     vv_box_reader read; /* level 0; NULL: the level before */
     void *ctx;
     pthread_mutex_t lock; /* read and range */
-    double range[2];      /* of the voxels read (level 0) */
+    /* level 0's rows are read in order (a reader of slabs of slices, or a
+     * stream, sees each slab once): row r waits for next_row == r, or for
+     * abandon (a worker stopped early: the write fails) */
+    pthread_cond_t turn;
+    long next_row;
+    int abandon;
+    double range[2]; /* of the voxels read (level 0) */
     int have_range;
     vv_status status;       /* the reader's first failure */
     char message[1024];     /* its text (the error is the reading thread's) */
@@ -516,7 +522,15 @@ row_body(void *ctx, long r0, long r1, int worker) {
         const int lo[3] = {0, y0, z0}, hi[3] = {D[0] - 1, y0 + h - 1, z0 + d - 1};
         vv_volume *v = NULL;
         pthread_mutex_lock(&f->lock);
+        while (f->next_row < r && !f->abandon)
+            pthread_cond_wait(&f->turn, &f->lock);
+        if (f->abandon) { /* the write failed (j->failed is set) */
+            pthread_mutex_unlock(&f->lock);
+            break;
+        }
         vv_status s = f->status == VV_OK ? f->read(f->ctx, lo, hi, &v) : f->status;
+        f->next_row = r + 1;
+        pthread_cond_broadcast(&f->turn);
         if (s == VV_OK &&
             (!v || v->type != j->type || v->dims[0] != D[0] || v->dims[1] != h || v->dims[2] != d))
             s = vv_error_set(VV_ERR_INVALID, "the reader gave a box of another shape or type");
@@ -556,6 +570,12 @@ row_body(void *ctx, long r0, long r1, int worker) {
                 j->failed = err;
         }
         vv_volume_free(v);
+    }
+    if (j->failed) { /* rows this worker will not read: nobody waits for them */
+        pthread_mutex_lock(&f->lock);
+        f->abandon = 1;
+        pthread_cond_broadcast(&f->turn);
+        pthread_mutex_unlock(&f->lock);
     }
     free(raw);
     free(z);
@@ -760,7 +780,9 @@ write_store_boxes(const vv_volume *hdr, vv_box_reader read, void *ctx, const cha
     f0.read = read;
     f0.ctx = ctx;
     pthread_mutex_init(&f0.lock, NULL);
+    pthread_cond_init(&f0.turn, NULL);
     vv_status s = write_level(tmp, 0, hdr, &lv[0], opt->compress != 0, &f0);
+    pthread_cond_destroy(&f0.turn);
     pthread_mutex_destroy(&f0.lock);
     char prev_dir[ZARR_PATH_MAX];
     for (int l = 1; s == VV_OK && l < n; l++) {

@@ -14,18 +14,22 @@ written by vv_ome_zarr_write. Checks:
   voxel of each block), an uncompressed NRRD against its gzip twin (the
   CT head), a BigDataViewer file written by h5py, and TIFF stacks written by
   tifffile (an ImageJ stack of three slabs, deflate, each slab read once;
-  channel 1 at time step 1 of an OME-TIFF hyperstack; a folder of pages);
+  channel 1 at time step 1 of an OME-TIFF hyperstack; a folder of pages),
+  and gzip NRRDs (the CT head, a big-endian one, a detached .nhdr);
 - zarr-python reads every level of the chunk-by-chunk store as numpy's
   2x2x2 means of the level before (an independent reader and reduction);
-- memory: a 128 MiB raw volume and a 128 MiB TIFF stack convert under a
+- memory: a 128 MiB raw volume, TIFF stack and gzip NRRD convert under a
   memory budget (VOLVIS_MAX_MEMORY) of a quarter of them, which a
-  whole-volume read would exceed, and their peak resident set is under half;
+  whole-volume read would exceed, and their peak resident set is under half
+  of it (the TIFF stack and the gzip NRRD: and one slab of 64 slices);
 - bad input: a raw file shorter than its size says, and a BigDataViewer
-  file with a corrupt chunk met half way through, and a TIFF stack cut in
-  its last slab, are one line naming the file, a non-zero exit, and no store
+  file with a corrupt chunk met half way through, a TIFF stack broken in its
+  last slab and a gzip NRRD cut short, are one line naming the file, a
+  non-zero exit, and no store
   (not even the temporary folder) left;
   an existing path that is not a Zarr store is refused and left as it is.
 """
+import gzip
 import os
 import shutil
 import subprocess
@@ -118,12 +122,39 @@ p = volvis("convert", HEAD, head_raw, "--no-compress", "--quiet")
 check(p.returncode == 0, f"the CT head as an uncompressed NRRD {p.stderr.strip()}")
 a, b = os.path.join(OUT, "stream", "head.zarr"), os.path.join(OUT, "whole", "head.zarr")
 p1 = volvis("convert", head_raw, a)
-p2 = volvis("convert", HEAD, b)  # gzip: read whole
+p2 = volvis("convert", HEAD, b)  # gzip: inflated slab by slab
 check(p1.returncode == 0 and "chunk by chunk" in p1.stdout and p2.returncode == 0
-      and "chunk by chunk" not in p2.stdout,
-      f"CT head: raw NRRD chunk by chunk, gzip NRRD whole ({p1.stderr.strip()} "
-      f"{p2.stderr.strip()})")
+      and "chunk by chunk from 2 slabs of slices" in p2.stdout,
+      f"CT head: raw NRRD chunk by chunk, gzip NRRD slab by slab ({p2.stdout.strip()} "
+      f"{p1.stderr.strip()} {p2.stderr.strip()})")
 same_store(a, b, "CT head")
+
+
+def nrrd_gzip(path, arr, ntype, endian, detached=False):
+    """A gzip-encoded NRRD written here (its header as the NRRD format says)."""
+    data = gzip.compress(arr.astype(arr.dtype.newbyteorder(">" if endian == "big" else "<"))
+                         .tobytes(), compresslevel=1)
+    head = (f"NRRD0004\ntype: {ntype}\ndimension: 3\n"
+            f"sizes: {arr.shape[2]} {arr.shape[1]} {arr.shape[0]}\n"
+            f"endian: {endian}\nencoding: gzip\nspacings: 0.5 0.75 2\n")
+    if detached:
+        with open(path + ".raw.gz", "wb") as f:
+            f.write(data)
+        with open(path, "w") as f:
+            f.write(head + f"data file: {os.path.basename(path)}.raw.gz\n\n")
+    else:
+        with open(path, "wb") as f:
+            f.write(head.encode() + b"\n" + data)
+
+
+# gzip NRRD slab by slab: big-endian (swapped here), detached (.nhdr)
+zg, yg, xg = np.mgrid[0:150, 0:131, 0:97]
+i16g = ((xg * 37 + yg * 11 + zg * 101) % 4099 - 2000).astype(np.int16)
+nrrd_gzip(os.path.join(OUT, "big_endian.nrrd"), i16g, "short", "big")
+both("nrrd_be.zarr", os.path.join(OUT, "big_endian.nrrd"), slabs=3)
+nrrd_gzip(os.path.join(OUT, "detached.nhdr"), i16g.astype(np.float32) * 0.5, "float", "little",
+          detached=True)
+both("nrrd_nhdr.zarr", os.path.join(OUT, "detached.nhdr"), slabs=3)
 
 bdv = os.path.join(OUT, "bdv.h5")
 with h5py.File(bdv, "w") as f:
@@ -224,6 +255,7 @@ with tifffile.TiffWriter(bigtif) as tw:  # plain pages: one slice each
     for k in range(side[2]):
         tw.write((row + k).reshape(side[1], side[0]), metadata=None)
 size_mib = side[0] * side[1] * side[2] * 2 / 2**20
+slab_mib = side[0] * side[1] * 64 * 2 / 2**20
 proc = subprocess.Popen([VOLVIS, "convert", bigtif, os.path.join(OUT, "bigtif.zarr")],
                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                         env=dict(os.environ, VOLVIS_MAX_MEMORY=str(budget)))
@@ -244,8 +276,9 @@ check(proc.returncode == 0 and f"x {side[2]}, u16, chunk by chunk from {side[2] 
 if SANITIZER:
     print(f"note peak resident set {peak / 1024:.0f} MiB: not bounded under the sanitizers")
 else:
-    check(0 < peak / 1024 < size_mib / 2,
-          f"TIFF: peak resident set {peak / 1024:.0f} MiB < half the volume's {size_mib:.0f} MiB")
+    check(0 < peak / 1024 < size_mib / 2 + slab_mib,
+          f"TIFF: peak resident set {peak / 1024:.0f} MiB < half the volume's {size_mib:.0f} MiB "
+          f"and one slab's {slab_mib:.0f} MiB")
 g = zarr.open_group(os.path.join(OUT, "bigtif.zarr"), mode="r")
 lvl = g["0"]
 check(lvl.shape == (side[2], side[1], side[0]) and int(lvl[side[2] - 1, side[1] - 1, side[0] - 1])
@@ -253,6 +286,42 @@ check(lvl.shape == (side[2], side[1], side[0]) and int(lvl[side[2] - 1, side[1] 
       f"zarr-python reads the TIFF stack's last voxel from the store {lvl.shape}")
 os.remove(bigtif)
 shutil.rmtree(os.path.join(OUT, "bigtif.zarr"), ignore_errors=True)
+
+# the same as a gzip NRRD, inflated as one stream slab by slab
+bignrrd = os.path.join(OUT, "big.nrrd")
+vol = (np.arange(side[0] * side[1], dtype=np.uint32) % 3001).astype(np.uint16).reshape(
+    1, side[1], side[0]) + np.arange(side[2], dtype=np.uint16).reshape(side[2], 1, 1)
+nrrd_gzip(bignrrd, vol, "ushort", "little")
+del vol
+proc = subprocess.Popen([VOLVIS, "convert", bignrrd, os.path.join(OUT, "bignrrd.zarr")],
+                        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                        env=dict(os.environ, VOLVIS_MAX_MEMORY=str(budget)))
+peak = 0
+while proc.poll() is None:
+    try:
+        with open(f"/proc/{proc.pid}/status") as f:
+            for line in f:
+                if line.startswith("VmHWM:"):
+                    peak = max(peak, int(line.split()[1]))
+    except OSError:
+        pass
+    time.sleep(0.005)
+out, err = proc.communicate()
+check(proc.returncode == 0 and f"chunk by chunk from {side[2] // 64} slabs" in out,
+      f"a {size_mib:.0f} MiB gzip NRRD converted slab by slab under a memory budget of "
+      f"{budget / 2**20:.0f} MiB ({out.strip()} {err.strip()})")
+if SANITIZER:
+    print(f"note peak resident set {peak / 1024:.0f} MiB: not bounded under the sanitizers")
+else:
+    check(0 < peak / 1024 < size_mib / 2 + slab_mib,
+          f"gzip NRRD: peak resident set {peak / 1024:.0f} MiB < half the volume's "
+          f"{size_mib:.0f} MiB and one slab's {slab_mib:.0f} MiB")
+lvl = zarr.open_group(os.path.join(OUT, "bignrrd.zarr"), mode="r")["0"]
+check(int(lvl[side[2] - 1, side[1] - 1, side[0] - 1])
+      == int((side[0] * side[1] - 1) % 3001 + side[2] - 1),
+      "zarr-python reads the gzip NRRD's last voxel from the store")
+os.remove(bignrrd)
+shutil.rmtree(os.path.join(OUT, "bignrrd.zarr"), ignore_errors=True)
 
 # ---- bad input ---------------------------------------------------------------------------
 short = os.path.join(OUT, "short.raw")
@@ -287,6 +356,16 @@ err = p.stderr.strip()
 left = [n for n in os.listdir(OUT) if n.startswith("cut.zarr")]
 check(p.returncode != 0 and len(err.splitlines()) == 1 and "cut.tif" in err and not left,
       f"a TIFF stack broken in its last slab: one line naming it, nothing left ({err}; left {left})")
+cutn = os.path.join(OUT, "cut.nrrd")
+with open(os.path.join(OUT, "big_endian.nrrd"), "rb") as f:
+    data = f.read()
+with open(cutn, "wb") as f:
+    f.write(data[: len(data) * 3 // 4])  # the gzip stream ends in the last slab
+p = volvis("convert", cutn, os.path.join(OUT, "cutn.zarr"))
+err = p.stderr.strip()
+left = [n for n in os.listdir(OUT) if n.startswith("cutn.zarr")]
+check(p.returncode != 0 and len(err.splitlines()) == 1 and "cut.nrrd" in err and "slice" in err
+      and not left, f"a gzip NRRD cut short: one line naming it, nothing left ({err}; left {left})")
 keep = os.path.join(OUT, "notzarr")
 os.makedirs(keep)
 with open(os.path.join(keep, "mine.txt"), "w") as f:
