@@ -58,7 +58,8 @@ cli_convert_usage(FILE *out) {
             "OUT.vvb is VolVis's bricked format for volumes larger than memory\n"
             "(docs/file-formats.md; rendered with 'volvis render --memory-limit'):\n"
             "raw input (--raw) and uncompressed NRRD are read a brick at a time by\n"
-            "pread, so memory stays bounded by a brick; other formats are read whole\n"
+            "pread, so memory stays bounded by a brick; TIFF stacks and gzip NRRD a\n"
+            "slab of 66 slices at a time (a layer of bricks); other formats are read whole\n"
             "first. Each brick is one zstd frame unless --no-compress, and gets a\n"
             "coarse level (every 4th voxel) unless --no-coarse (zstd bricks always\n"
             "keep it).\n"
@@ -111,18 +112,49 @@ cli_convert_usage(FILE *out) {
 }
 
 /* IN to OUT.vvb (@p flags: VV_VVB_COARSE, VV_VVB_ZSTD): by bricks when IN
- * is raw or uncompressed NRRD, else read whole first. */
+ * is raw or uncompressed NRRD, slab by slab when it is a TIFF stack or a
+ * gzip NRRD (vv_slabs), else read whole first. */
 static int
 convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int series, int channel,
             int time, unsigned flags, int quiet) {
     vv_bricked *b = NULL;
+    vv_slabs *sl = NULL;
     vv_error_clear();
     vv_status s = VV_ERR_FORMAT;
-    if ((raw || vv_format_detect(in) == VV_FORMAT_NRRD) && channel <= 0 && time <= 0)
+    const vv_format f = raw ? VV_FORMAT_RAW : vv_format_detect(in);
+    if ((raw || f == VV_FORMAT_NRRD) && channel <= 0 && time <= 0)
         s = vv_bricked_open(&b, in, raw, 0);
+    if (s != VV_OK && !raw &&
+        ((f == VV_FORMAT_NRRD && channel <= 0 && time <= 0) || f == VV_FORMAT_TIFF)) {
+        vv_load_options lo;
+        vv_load_options_init(&lo);
+        lo.format = f;
+        lo.channel = channel;
+        lo.time = time;
+        vv_error_clear();
+        if (vv_slabs_open(&sl, in, &lo) != VV_OK) {
+            if (f == VV_FORMAT_TIFF)
+                return cli_fail(VV_ERR_FORMAT, in);
+            vv_error_clear(); /* an NRRD neither raw nor gzip: read whole */
+        }
+    }
     int dims[3];
     const char *type;
-    if (s == VV_OK) {
+    char slabs[64] = "";
+    if (sl) {
+        const vv_volume *hdr = vv_slabs_header(sl);
+        cli_progress pr;
+        cli_progress_begin(&pr, quiet);
+        s = vv_boxes_write_vvb(hdr, vv_slabs_read_box, sl, out, flags, &pr.p);
+        cli_progress_end(&pr);
+        memcpy(dims, hdr->dims, sizeof dims);
+        type = vv_voxel_type_name(hdr->type);
+        snprintf(slabs, sizeof slabs, ", from %llu slabs of slices",
+                 (unsigned long long)vv_slabs_loads(sl));
+        vv_slabs_free(sl);
+        if (s != VV_OK)
+            return cli_fail(s, out);
+    } else if (s == VV_OK) {
         cli_progress pr;
         cli_progress_begin(&pr, quiet);
         s = vv_bricked_write_vvb(b, out, flags, &pr.p);
@@ -147,8 +179,8 @@ convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int serie
             return cli_fail(s, out);
     }
     if (!quiet)
-        printf("wrote %s (vvb, %d x %d x %d, %s, bricks of %d^3 cells%s)\n", out, dims[0], dims[1],
-               dims[2], type, VV_BRICK_CELLS, flags & VV_VVB_ZSTD ? ", zstd" : "");
+        printf("wrote %s (vvb, %d x %d x %d, %s, bricks of %d^3 cells%s%s)\n", out, dims[0],
+               dims[1], dims[2], type, VV_BRICK_CELLS, flags & VV_VVB_ZSTD ? ", zstd" : "", slabs);
     return CLI_EXIT_OK;
 }
 

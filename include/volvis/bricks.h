@@ -136,6 +136,19 @@ vv_status vv_bricked_write_vvb(vv_bricked *src, const char *path, unsigned flags
  */
 vv_status vv_volume_write_vvb(const vv_volume *v, const char *path, unsigned flags);
 
+/**
+ * Writes a .vvb file of the volume @p hdr describes (dims, type, geometry;
+ * its voxels are not read) from a box reader, one brick (with its ghost
+ * voxels) at a time in brick order (i fastest, then j, then k): memory is
+ * the reader's and a brick's (vv_slabs: one slab of 66 slices, the ghost
+ * slices the next layer of bricks shares kept). @p flags as
+ * vv_bricked_write_vvb. Atomic as it: on failure nothing is left. Errors:
+ * VV_ERR_IO, VV_ERR_NOMEM, the reader's, VV_ERR_INVALID (a box of another
+ * shape or type from @p read).
+ */
+vv_status vv_boxes_write_vvb(const vv_volume *hdr, vv_box_reader read, void *ctx, const char *path,
+                             unsigned flags, const vv_progress *progress);
+
 /** Bricks in all (nb[0] nb[1] nb[2], i fastest). */
 int vv_bricked_count(const vv_bricked *b);
 /** Brick @p index's boxes and min/max (@p index in 0 .. vv_bricked_count - 1). */

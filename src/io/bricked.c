@@ -1221,6 +1221,44 @@ source_memory(void *ctx, int index, const vv_brick_info *in, void *buf) {
     return VV_OK;
 }
 
+/* A box reader's box of a brick (ghosts included) copied into @p buf. */
+typedef struct box_source {
+    vv_box_reader read;
+    void *ctx;
+    vv_voxel_type type;
+} box_source;
+
+static vv_status
+source_boxes(void *ctx, int index, const vv_brick_info *in, void *buf) {
+    (void)index;
+    const box_source *bs = ctx;
+    vv_volume *v = NULL;
+    vv_status s = bs->read(bs->ctx, in->slo, in->shi, &v);
+    if (s == VV_OK &&
+        (!v || v->type != bs->type || v->dims[0] != in->shi[0] - in->slo[0] + 1 ||
+         v->dims[1] != in->shi[1] - in->slo[1] + 1 || v->dims[2] != in->shi[2] - in->slo[2] + 1))
+        s = vv_error_set(VV_ERR_INVALID, "the reader gave a box of another shape or type");
+    if (s == VV_OK)
+        memcpy(buf, v->data, box_voxels(in->slo, in->shi) * vv_voxel_type_size(v->type));
+    vv_volume_free(v);
+    return s;
+}
+
+vv_status
+vv_boxes_write_vvb(const vv_volume *hdr, vv_box_reader read, void *ctx, const char *path,
+                   unsigned flags, const vv_progress *progress) {
+    if (!hdr || !read || !path)
+        return vv_error_set(VV_ERR_INVALID, "vvb: NULL argument");
+    vv_bricked geo;
+    memset(&geo, 0, sizeof geo);
+    geo.header = (vv_volume *)hdr;
+    vv_status s = brick_grid(&geo); /* the grid only: no entries */
+    if (s != VV_OK)
+        return s;
+    box_source bs = {read, ctx, hdr->type};
+    return write_vvb(path, hdr, geo.nb, geo.n, flags, source_boxes, &bs, progress);
+}
+
 vv_status
 vv_volume_write_vvb(const vv_volume *v, const char *path, unsigned flags) {
     vv_bricked geo;

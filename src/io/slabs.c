@@ -69,11 +69,11 @@ open_gzip_nrrd(vv_slabs *s) {
     return 1;
 }
 
-/* Slices z0 .. z0 + n - 1 of a gzip NRRD inflated into @p v. */
+/* Slices z0 .. z0 + n - 1 of a gzip NRRD inflated into @p dst. */
 static vv_status
-read_gzip_slices(vv_slabs *s, int z0, int n, vv_volume *v) {
+read_gzip_slices(vv_slabs *s, int z0, int n, unsigned char *dst) {
     const int *D = s->header->dims;
-    const size_t es = vv_voxel_type_size(v->type);
+    const size_t es = vv_voxel_type_size(s->header->type);
     const uint64_t slice = (uint64_t)D[0] * (uint64_t)D[1] * es, from = (uint64_t)z0 * slice;
     if (from < s->at) { /* back: from the stream's start again */
         if (gzrewind(s->gz) != 0)
@@ -92,7 +92,6 @@ read_gzip_slices(vv_slabs *s, int z0, int n, vv_volume *v) {
         s->at += (uint64_t)got;
     }
     free(skip);
-    unsigned char *dst = v->data;
     const uint64_t bytes = slice * (uint64_t)n;
     uint64_t done = s->at == from ? 0 : bytes + 1;
     while (done < bytes) {
@@ -115,28 +114,95 @@ read_gzip_slices(vv_slabs *s, int z0, int n, vv_volume *v) {
     return VV_OK;
 }
 
-/* Slices lo .. hi as a new volume: inflated here (a gzip NRRD; into the
- * slab held, @p reuse, when it has as many slices: one allocation for the
- * whole stream) or through vv_volume_load. */
+/* Slices lo .. hi as a new volume through vv_volume_load. */
 static vv_status
-load_slab(vv_slabs *s, int lo, int hi, vv_volume *reuse, vv_volume **out) {
-    if (s->gz) {
-        const int dims[3] = {s->header->dims[0], s->header->dims[1], hi - lo + 1};
-        vv_status st = VV_OK;
-        if (reuse && reuse->dims[2] == dims[2])
-            *out = vv_volume_ref(reuse);
-        else
-            st = vv_volume_new(out, dims, s->header->type);
-        if (st == VV_OK && (st = read_gzip_slices(s, lo, hi - lo + 1, *out)) != VV_OK) {
-            vv_volume_free(*out);
-            *out = NULL;
-        }
-        return st == VV_OK ? VV_OK : vv_error_prefix(st, "nrrd: %s", vv_path_basename(s->path));
-    }
+load_slices(vv_slabs *s, int lo, int hi, vv_volume **out) {
+    const int *D = s->header->dims;
     vv_load_options o = s->opt;
     o.z_first = lo;
     o.z_count = hi - lo + 1;
-    return vv_volume_load(out, s->path, &o);
+    vv_volume *v = NULL;
+    vv_status st = vv_volume_load(&v, s->path, &o);
+    if (st == VV_OK && (v->type != s->header->type || v->dims[0] != D[0] || v->dims[1] != D[1] ||
+                        v->dims[2] != o.z_count))
+        st = vv_error_set(VV_ERR_FORMAT, "slabs: %s: slices %d..%d read as %d x %d x %d %s",
+                          vv_path_basename(s->path), lo, hi, v->dims[0], v->dims[1], v->dims[2],
+                          vv_voxel_type_name(v->type));
+    if (st != VV_OK) {
+        vv_volume_free(v);
+        return st;
+    }
+    *out = v;
+    return VV_OK;
+}
+
+/* Slices lo .. hi read into @p dst: inflated here (a gzip NRRD) or through
+ * vv_volume_load. */
+static vv_status
+read_slices(vv_slabs *s, int lo, int hi, unsigned char *dst) {
+    if (s->gz) {
+        vv_status st = read_gzip_slices(s, lo, hi - lo + 1, dst);
+        return st == VV_OK ? VV_OK : vv_error_prefix(st, "nrrd: %s", vv_path_basename(s->path));
+    }
+    vv_volume *v = NULL;
+    vv_status st = load_slices(s, lo, hi, &v);
+    if (st == VV_OK)
+        memcpy(dst, v->data,
+               (size_t)v->dims[0] * v->dims[1] * v->dims[2] * vv_voxel_type_size(v->type));
+    vv_volume_free(v);
+    return st;
+}
+
+/* Makes the slab held cover slices lo .. hi: the slices of the slab held
+ * from lo on are kept when the box starts within it (the ghost slices the
+ * next layer of .vvb bricks shares with the one before: a stream never
+ * goes back for them), and the rest read; the buffer of a slab of as many
+ * slices is reused. One slab at a time besides the one being filled. */
+static vv_status
+ensure_slab(vv_slabs *s, int lo, int hi) {
+    vv_volume *old = s->slab;
+    const int n = hi - lo + 1;
+    if (old && lo >= s->z0 && hi < s->z0 + old->dims[2])
+        return VV_OK;
+    const int *D = s->header->dims;
+    const size_t slice = (size_t)D[0] * (size_t)D[1] * vv_voxel_type_size(s->header->type);
+    const int keep =
+        old && lo >= s->z0 && lo < s->z0 + old->dims[2] ? s->z0 + old->dims[2] - lo : 0;
+    vv_volume *v = NULL;
+    vv_status st = VV_OK;
+    s->slab = NULL;
+    if (!s->gz && !keep) { /* the reader's volume is the slab (one at a time) */
+        vv_volume_free(old);
+        if ((st = load_slices(s, lo, hi, &v)) != VV_OK)
+            return st;
+    } else if (old && old->dims[2] == n && old->refcount == 1) {
+        v = old; /* the same buffer: the kept slices moved to its start */
+        if (keep)
+            memmove(v->data, (unsigned char *)v->data + (size_t)(lo - s->z0) * slice,
+                    (size_t)keep * slice);
+        old = NULL;
+    } else {
+        if (!keep) { /* freed first: one slab at a time */
+            vv_volume_free(old);
+            old = NULL;
+        }
+        const int dims[3] = {D[0], D[1], n};
+        st = vv_volume_new(&v, dims, s->header->type);
+        if (st == VV_OK && keep)
+            memcpy(v->data, (unsigned char *)old->data + (size_t)(lo - s->z0) * slice,
+                   (size_t)keep * slice);
+        vv_volume_free(old);
+    }
+    if (st == VV_OK && (s->gz || keep))
+        st = read_slices(s, lo + keep, hi, (unsigned char *)v->data + (size_t)keep * slice);
+    if (st != VV_OK) {
+        vv_volume_free(v);
+        return st;
+    }
+    s->slab = v;
+    s->z0 = lo;
+    s->loads++;
+    return VV_OK;
 }
 
 vv_status
@@ -220,33 +286,12 @@ vv_slabs_read_box(void *slabs, const int lo[3], const int hi[3], vv_volume **out
         if (lo[a] < 0 || hi[a] < lo[a] || hi[a] >= D[a])
             return vv_error_set(VV_ERR_INVALID, "slabs: %s: box %d..%d outside 0..%d on axis %d",
                                 vv_path_basename(s->path), lo[a], hi[a], D[a] - 1, a);
-    if (!s->slab || lo[2] < s->z0 || hi[2] >= s->z0 + s->slab->dims[2]) {
-        /* the box's slices replace the slab held */
-        vv_volume *v = NULL, *old = s->slab;
-        s->slab = NULL;
-        if (!s->gz) { /* freed before the next is read: one slab at a time */
-            vv_volume_free(old);
-            old = NULL;
-        }
-        vv_status st = load_slab(s, lo[2], hi[2], old, &v);
-        vv_volume_free(old);
-        if (st == VV_OK && (v->type != s->header->type || v->dims[0] != D[0] ||
-                            v->dims[1] != D[1] || v->dims[2] != hi[2] - lo[2] + 1)) {
-            st = vv_error_set(VV_ERR_FORMAT, "slabs: %s: slices %d..%d read as %d x %d x %d %s",
-                              vv_path_basename(s->path), lo[2], hi[2], v->dims[0], v->dims[1],
-                              v->dims[2], vv_voxel_type_name(v->type));
-            vv_volume_free(v);
-        }
-        if (st != VV_OK)
-            return st;
-        s->slab = v;
-        s->z0 = lo[2];
-        s->loads++;
-    }
+    vv_status st = ensure_slab(s, lo[2], hi[2]);
+    if (st != VV_OK)
+        return st;
     const int dims[3] = {hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, hi[2] - lo[2] + 1};
     vv_volume *b = NULL;
-    vv_status st = vv_volume_new(&b, dims, s->header->type);
-    if (st != VV_OK)
+    if ((st = vv_volume_new(&b, dims, s->header->type)) != VV_OK)
         return st;
     const size_t es = vv_voxel_type_size(b->type), row = (size_t)dims[0] * es;
     for (int k = 0; k < dims[2]; k++)

@@ -15,7 +15,9 @@ written by vv_ome_zarr_write. Checks:
   CT head), a BigDataViewer file written by h5py, and TIFF stacks written by
   tifffile (an ImageJ stack of three slabs, deflate, each slab read once;
   channel 1 at time step 1 of an OME-TIFF hyperstack; a folder of pages),
-  and gzip NRRDs (the CT head, a big-endian one, a detached .nhdr);
+  and gzip NRRDs (the CT head, a big-endian one, a detached .nhdr); a TIFF
+  stack and a gzip NRRD written as .vvb slab by slab equal, byte for byte,
+  the .vvb the bricked reader writes from their uncompressed NRRD twins;
 - zarr-python reads every level of the chunk-by-chunk store as numpy's
   2x2x2 means of the level before (an independent reader and reduction);
 - memory: a 128 MiB raw volume, TIFF stack and gzip NRRD convert under a
@@ -156,6 +158,24 @@ nrrd_gzip(os.path.join(OUT, "detached.nhdr"), i16g.astype(np.float32) * 0.5, "fl
           detached=True)
 both("nrrd_nhdr.zarr", os.path.join(OUT, "detached.nhdr"), slabs=3)
 
+
+def same_vvb(src, name, layers):
+    """SRC -> .vvb slab by slab (a layer of bricks a slab, the ghost slices
+    the layers share kept: each slab read once) equals the .vvb the bricked
+    reader writes from SRC's uncompressed NRRD twin, byte for byte."""
+    a, twin, b = (os.path.join(OUT, name + ".vvb"), os.path.join(OUT, name + "_twin.nrrd"),
+                  os.path.join(OUT, name + "_twin.vvb"))
+    p = volvis("convert", src, a)
+    p1 = volvis("convert", src, twin, "--no-compress", "--quiet")
+    p2 = volvis("convert", twin, b)
+    with open(a, "rb") as fa, open(b, "rb") as fb:
+        same = fa.read() == fb.read()
+    check(p.returncode == 0 and p1.returncode == 0 and p2.returncode == 0
+          and f"from {layers} slabs of slices" in p.stdout and same,
+          f"{name}: .vvb slab by slab equals the bricked reader's from the raw NRRD twin "
+          f"({p.stdout.strip()} {p.stderr.strip()} {p2.stderr.strip()})")
+
+
 bdv = os.path.join(OUT, "bdv.h5")
 with h5py.File(bdv, "w") as f:
     f["s00/resolutions"] = np.array([[1.0, 1.0, 1.0], [2.0, 2.0, 2.0]])
@@ -181,6 +201,8 @@ os.makedirs(pages)
 for k in range(70):
     tifffile.imwrite(os.path.join(pages, f"z{k}.tif"), u16t[k])
 both("pages.zarr", pages, slabs=2)
+same_vvb(stack, "tiff_vvb", 3)
+same_vvb(os.path.join(OUT, "big_endian.nrrd"), "nrrd_vvb", 3)
 
 # ---- zarr-python reads it; each level the 2x2x2 means of the one before -----------------
 g = zarr.open_group(store, mode="r")
