@@ -1244,28 +1244,30 @@ source_boxes(void *ctx, int index, const vv_brick_info *in, void *buf) {
     return s;
 }
 
+/* write_vvb of the volume @p hdr describes, its brick grid made here (the
+ * grid only: no entries). */
+static vv_status
+write_vvb_of(const vv_volume *hdr, const char *path, unsigned flags, brick_source src, void *ctx,
+             const vv_progress *progress) {
+    vv_bricked geo;
+    memset(&geo, 0, sizeof geo);
+    geo.header = (vv_volume *)hdr;
+    vv_status s = brick_grid(&geo);
+    if (s != VV_OK)
+        return s;
+    return write_vvb(path, hdr, geo.nb, geo.n, flags, src, ctx, progress);
+}
+
 vv_status
 vv_boxes_write_vvb(const vv_volume *hdr, vv_box_reader read, void *ctx, const char *path,
                    unsigned flags, const vv_progress *progress) {
     if (!hdr || !read || !path)
         return vv_error_set(VV_ERR_INVALID, "vvb: NULL argument");
-    vv_bricked geo;
-    memset(&geo, 0, sizeof geo);
-    geo.header = (vv_volume *)hdr;
-    vv_status s = brick_grid(&geo); /* the grid only: no entries */
-    if (s != VV_OK)
-        return s;
     box_source bs = {read, ctx, hdr->type};
-    return write_vvb(path, hdr, geo.nb, geo.n, flags, source_boxes, &bs, progress);
+    return write_vvb_of(hdr, path, flags, source_boxes, &bs, progress);
 }
 
 vv_status
 vv_volume_write_vvb(const vv_volume *v, const char *path, unsigned flags) {
-    vv_bricked geo;
-    memset(&geo, 0, sizeof geo);
-    geo.header = (vv_volume *)v;
-    vv_status s = brick_grid(&geo); /* the grid only: no entries */
-    if (s != VV_OK)
-        return s;
-    return write_vvb(path, v, geo.nb, geo.n, flags, source_memory, (void *)v, NULL);
+    return write_vvb_of(v, path, flags, source_memory, (void *)v, NULL);
 }

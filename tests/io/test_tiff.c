@@ -515,6 +515,18 @@ test_bad_input(void **state) {
     assert_one_line_naming("a2.tif");
 }
 
+/* @p b holds the voxels of @p whole from @p lo on. */
+static void
+assert_box_of(const vv_volume *b, const vv_volume *whole, const int lo[3]) {
+    for (int z = 0; z < b->dims[2]; z++)
+        for (int y = 0; y < b->dims[1]; y++)
+            for (int x = 0; x < b->dims[0]; x++)
+                if (vv_volume_get(b, x, y, z) !=
+                    vv_volume_get(whole, x + lo[0], y + lo[1], z + lo[2]))
+                    fail_msg("voxel (%d, %d, %d) of the box from (%d, %d, %d)", x, y, z, lo[0],
+                             lo[1], lo[2]);
+}
+
 /* A range of slices (vv_load_options.z_first, z_count): only those pages,
  * the origin of the first, the stack's count in n_slices; in this process
  * and through the reader sandbox. vv_slabs cuts boxes from the slabs it
@@ -552,10 +564,8 @@ test_slice_range(void **state) {
         assert_int_equal(v->dims[2], 4);
         assert_int_equal(info.n_slices, 9);
         assert_near(v->origin[2], whole->origin[2] + 3 * 2.5, 1e-12);
-        for (int z = 0; z < 4; z++)
-            for (int y = 0; y < 7; y++)
-                for (int x = 0; x < 11; x++)
-                    assert_true(vv_volume_get(v, x, y, z) == vv_volume_get(whole, x, y, z + 3));
+        const int from[3] = {0, 0, 3};
+        assert_box_of(v, whole, from);
         vv_volume_free(v);
         lo.z_first = 6; /* 6 .. 9: one past the stack */
         vt_err(vv_volume_load(&v, p, &lo));
@@ -574,11 +584,7 @@ test_slice_range(void **state) {
             const int hi[3] = {9, y0 + 3 < 6 ? y0 + 3 : 6, slab_z[k][1]};
             vv_volume *b = NULL;
             vt_ok(vv_slabs_read_box(sl, lo, hi, &b));
-            for (int z = 0; z < b->dims[2]; z++)
-                for (int y = 0; y < b->dims[1]; y++)
-                    for (int x = 0; x < b->dims[0]; x++)
-                        assert_true(vv_volume_get(b, x, y, z) ==
-                                    vv_volume_get(whole, x + lo[0], y + lo[1], z + lo[2]));
+            assert_box_of(b, whole, lo);
             assert_near(b->origin[2], whole->origin[2] + lo[2] * whole->spacing[2], 1e-12);
             vv_volume_free(b);
         }
@@ -626,11 +632,7 @@ test_slabs_gzip_nrrd(void **state) {
         const int lo[3] = {3, 5, z0s[k]}, hi[3] = {60, 40, z0s[k] + 9};
         vv_volume *b = NULL;
         vt_ok(vv_slabs_read_box(sl, lo, hi, &b));
-        for (int z = 0; z < b->dims[2]; z++)
-            for (int y = 0; y < b->dims[1]; y++)
-                for (int x = 0; x < b->dims[0]; x++)
-                    assert_true(vv_volume_get(b, x, y, z) ==
-                                vv_volume_get(whole, x + lo[0], y + lo[1], z + lo[2]));
+        assert_box_of(b, whole, lo);
         vv_volume_free(b);
     }
     assert_int_equal((int)vv_slabs_loads(sl), 4);

@@ -82,6 +82,27 @@ def same_store(a, b, what):
           f"{', differing: ' + ', '.join(diff[:5]) if diff else ''})")
 
 
+def convert_peak(*args, budget):
+    """volvis ARGS under the memory budget VOLVIS_MAX_MEMORY: the completed
+    process and its own high-water mark in KiB (VmHWM, after exec: not this
+    interpreter's pages that a fork carries, which its ru_maxrss would
+    count), read until it exits; it only grows."""
+    proc = subprocess.Popen([VOLVIS, *args], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, env=dict(os.environ, VOLVIS_MAX_MEMORY=str(budget)))
+    peak = 0
+    while proc.poll() is None:
+        try:
+            with open(f"/proc/{proc.pid}/status") as f:
+                for line in f:
+                    if line.startswith("VmHWM:"):
+                        peak = max(peak, int(line.split()[1]))
+        except OSError:
+            pass
+        time.sleep(0.005)
+    out, err = proc.communicate()
+    return subprocess.CompletedProcess(proc.args, proc.returncode, out, err), peak
+
+
 def both(name, src, raw=None, extra=(), pick=(), slabs=None):
     """IN -> OUT.zarr chunk by chunk, and IN -> NIfTI -> OUT.zarr whole;
     pick: options choosing IN's channel and time step; slabs: the count of
@@ -235,25 +256,8 @@ with open(big, "wb") as f:
 # under a memory budget of a quarter of the volume (VOLVIS_MAX_MEMORY), which
 # a whole-volume read would exceed
 budget = side[0] * side[1] * side[2] * 2 // 4
-proc = subprocess.Popen([VOLVIS, "convert", "--raw", "%dx%dx%d:u16" % side, big,
-                         os.path.join(OUT, "big.zarr")], stdout=subprocess.PIPE,
-                        stderr=subprocess.PIPE, text=True,
-                        env=dict(os.environ, VOLVIS_MAX_MEMORY=str(budget)))
-# The child's own high-water mark (VmHWM, after exec: not this interpreter's
-# pages that a fork carries, which its ru_maxrss would count), read until it
-# exits; it only grows.
-peak = 0
-while proc.poll() is None:
-    try:
-        with open(f"/proc/{proc.pid}/status") as f:
-            for line in f:
-                if line.startswith("VmHWM:"):
-                    peak = max(peak, int(line.split()[1]))
-    except OSError:
-        pass
-    time.sleep(0.005)
-out, err = proc.communicate()
-p = subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
+p, peak = convert_peak("convert", "--raw", "%dx%dx%d:u16" % side, big,
+                       os.path.join(OUT, "big.zarr"), budget=budget)
 size_mib = os.path.getsize(big) / 2**20
 check(p.returncode == 0 and "chunk by chunk" in p.stdout,
       f"a {size_mib:.0f} MiB raw volume converted chunk by chunk under a memory budget of "
@@ -278,36 +282,33 @@ with tifffile.TiffWriter(bigtif) as tw:  # plain pages: one slice each
         tw.write((row + k).reshape(side[1], side[0]), metadata=None)
 size_mib = side[0] * side[1] * side[2] * 2 / 2**20
 slab_mib = side[0] * side[1] * 64 * 2 / 2**20
-proc = subprocess.Popen([VOLVIS, "convert", bigtif, os.path.join(OUT, "bigtif.zarr")],
-                        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                        env=dict(os.environ, VOLVIS_MAX_MEMORY=str(budget)))
-peak = 0
-while proc.poll() is None:
-    try:
-        with open(f"/proc/{proc.pid}/status") as f:
-            for line in f:
-                if line.startswith("VmHWM:"):
-                    peak = max(peak, int(line.split()[1]))
-    except OSError:
-        pass
-    time.sleep(0.005)
-out, err = proc.communicate()
-check(proc.returncode == 0 and f"x {side[2]}, u16, chunk by chunk from {side[2] // 64} slabs" in out,
-      f"a {size_mib:.0f} MiB TIFF stack converted slab by slab under a memory budget of "
-      f"{budget / 2**20:.0f} MiB ({out.strip()} {err.strip()})")
-if SANITIZER:
-    print(f"note peak resident set {peak / 1024:.0f} MiB: not bounded under the sanitizers")
-else:
-    check(0 < peak / 1024 < size_mib / 2 + slab_mib,
-          f"TIFF: peak resident set {peak / 1024:.0f} MiB < half the volume's {size_mib:.0f} MiB "
-          f"and one slab's {slab_mib:.0f} MiB")
-g = zarr.open_group(os.path.join(OUT, "bigtif.zarr"), mode="r")
-lvl = g["0"]
-check(lvl.shape == (side[2], side[1], side[0]) and int(lvl[side[2] - 1, side[1] - 1, side[0] - 1])
-      == int((side[0] * side[1] - 1) % 3001 + side[2] - 1),
-      f"zarr-python reads the TIFF stack's last voxel from the store {lvl.shape}")
-os.remove(bigtif)
-shutil.rmtree(os.path.join(OUT, "bigtif.zarr"), ignore_errors=True)
+
+
+def bounded_slabs(src, what):
+    """SRC (side's u16 ramp) converted slab by slab within the budget: the
+    peak resident set under half the volume and one slab, and zarr-python
+    reads its last voxel from the store."""
+    store = os.path.join(OUT, "bounded.zarr")
+    proc, peak = convert_peak("convert", src, store, budget=budget)
+    check(proc.returncode == 0 and f"x {side[2]}, u16, chunk by chunk from {side[2] // 64} slabs"
+          in proc.stdout, f"a {size_mib:.0f} MiB {what} converted slab by slab under a memory "
+          f"budget of {budget / 2**20:.0f} MiB ({proc.stdout.strip()} {proc.stderr.strip()})")
+    if SANITIZER:
+        print(f"note peak resident set {peak / 1024:.0f} MiB: not bounded under the sanitizers")
+    else:
+        check(0 < peak / 1024 < size_mib / 2 + slab_mib,
+              f"{what}: peak resident set {peak / 1024:.0f} MiB < half the volume's "
+              f"{size_mib:.0f} MiB and one slab's {slab_mib:.0f} MiB")
+    lvl = zarr.open_group(store, mode="r")["0"]
+    check(lvl.shape == (side[2], side[1], side[0]) and int(lvl[side[2] - 1, side[1] - 1,
+                                                               side[0] - 1])
+          == int((side[0] * side[1] - 1) % 3001 + side[2] - 1),
+          f"zarr-python reads the {what}'s last voxel from the store {lvl.shape}")
+    os.remove(src)
+    shutil.rmtree(store, ignore_errors=True)
+
+
+bounded_slabs(bigtif, "TIFF stack")
 
 # the same as a gzip NRRD, inflated as one stream slab by slab
 bignrrd = os.path.join(OUT, "big.nrrd")
@@ -315,35 +316,7 @@ vol = (np.arange(side[0] * side[1], dtype=np.uint32) % 3001).astype(np.uint16).r
     1, side[1], side[0]) + np.arange(side[2], dtype=np.uint16).reshape(side[2], 1, 1)
 nrrd_gzip(bignrrd, vol, "ushort", "little")
 del vol
-proc = subprocess.Popen([VOLVIS, "convert", bignrrd, os.path.join(OUT, "bignrrd.zarr")],
-                        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                        env=dict(os.environ, VOLVIS_MAX_MEMORY=str(budget)))
-peak = 0
-while proc.poll() is None:
-    try:
-        with open(f"/proc/{proc.pid}/status") as f:
-            for line in f:
-                if line.startswith("VmHWM:"):
-                    peak = max(peak, int(line.split()[1]))
-    except OSError:
-        pass
-    time.sleep(0.005)
-out, err = proc.communicate()
-check(proc.returncode == 0 and f"chunk by chunk from {side[2] // 64} slabs" in out,
-      f"a {size_mib:.0f} MiB gzip NRRD converted slab by slab under a memory budget of "
-      f"{budget / 2**20:.0f} MiB ({out.strip()} {err.strip()})")
-if SANITIZER:
-    print(f"note peak resident set {peak / 1024:.0f} MiB: not bounded under the sanitizers")
-else:
-    check(0 < peak / 1024 < size_mib / 2 + slab_mib,
-          f"gzip NRRD: peak resident set {peak / 1024:.0f} MiB < half the volume's "
-          f"{size_mib:.0f} MiB and one slab's {slab_mib:.0f} MiB")
-lvl = zarr.open_group(os.path.join(OUT, "bignrrd.zarr"), mode="r")["0"]
-check(int(lvl[side[2] - 1, side[1] - 1, side[0] - 1])
-      == int((side[0] * side[1] - 1) % 3001 + side[2] - 1),
-      "zarr-python reads the gzip NRRD's last voxel from the store")
-os.remove(bignrrd)
-shutil.rmtree(os.path.join(OUT, "bignrrd.zarr"), ignore_errors=True)
+bounded_slabs(bignrrd, "gzip NRRD")
 
 # ---- bad input ---------------------------------------------------------------------------
 short = os.path.join(OUT, "short.raw")
