@@ -402,7 +402,7 @@ def _mat4(m):
     return np.array([[m.m[r][c] for c in range(4)] for r in range(4)], dtype=np.float64)
 
 
-def open(path, series=None, channel=None, format=None, raw=None, time=None):
+def open(path, series=None, channel=None, format=None, raw=None, time=None, slices=None):
     """Loads a volume file of any format the library reads (vv_volume_load):
     SLC, NRRD, NIfTI, MetaImage, VTK legacy, TIFF stacks, DICOM series
     (folders, DICOMDIR), raw files, and .vvc compressed volumes (decoded).
@@ -415,6 +415,10 @@ def open(path, series=None, channel=None, format=None, raw=None, time=None):
     "slc", "nrrd", "nifti", "mhd", "vtk", "raw", "tiff", "dicom" or None
     (detect). raw: for raw files, a dict with dims (i, j, k), dtype, and
     optionally spacing, origin, big_endian, header_skip (bytes).
+    slices: ``(first, count)``, slices first .. first + count - 1 only (0-based;
+    None: all) of a TIFF stack, whose other pages are not decoded: a
+    sub-stack of a stack larger than memory, its origin that of slice first;
+    other formats raise UnsupportedError, a range past the stack InvalidError.
 
     Returns a :class:`Volume` that owns its voxels. Errors: FileError,
     FormatError, LimitError, UnsupportedError, InvalidError with the
@@ -435,6 +439,12 @@ def open(path, series=None, channel=None, format=None, raw=None, time=None):
         opt.channel = int(channel)
     if time is not None:
         opt.time = int(time)
+    if slices is not None:
+        first, count = (int(x) for x in slices)
+        if first < 0 or count < 1:
+            raise InvalidError("volvis.open: slices (%d, %d): first >= 0 and count >= 1"
+                               % (first, count))
+        opt.z_first, opt.z_count = first, count
     if raw is not None:
         raw = dict(raw)
         opt.has_raw = 1
