@@ -458,6 +458,57 @@ test_converged_reference(void **state) {
     vv_grid_free(g);
 }
 
+/* A frame through a renderer's first entries kept from the frame before
+ * equals a new renderer's, bit for bit; the entries are searched again
+ * when what they depend on changes: the transfer function (its visible
+ * layer), the view, a cut plane, the object's transform. */
+static void
+test_kept_entries(void **state) {
+    (void)state;
+    if (!vt_have_data("grids/hyper.dx"))
+        vt_skip("../shared/data/grids is missing");
+    vv_grid *g = NULL;
+    vt_ok(vv_grid_load(&g, vt_data("grids/hyper.dx")));
+    vv_default_scene_options so = vt_scene_options(64);
+    vv_world *w = NULL;
+    vt_ok(vv_world_new_for_grid(&w, g, NULL, 5, &so));
+    vv_object *o = w->objects[0];
+    vv_renderer *kept = NULL;
+    vt_ok(vv_renderer_new(&kept, "irregular"));
+    vv_image *img = NULL;
+    vt_ok(vv_image_new(&img, 64, 64));
+    for (int change = 0; change < 5; change++) {
+        if (change == 1) { /* the transfer function: the upper 40 % of the values only */
+            const double lo = o->tf.opacity[0].value;
+            const double hi = o->tf.opacity[o->tf.n_opacity - 1].value;
+            o->tf.n_opacity = 0;
+            vt_ok(vv_tf_add_opacity(&o->tf, lo, 0));
+            vt_ok(vv_tf_add_opacity(&o->tf, lo + 0.6 * (hi - lo), 0));
+            vt_ok(vv_tf_add_opacity(&o->tf, hi, 0.8));
+        }
+        if (change == 2)
+            w->view.eye = vv_vec3_add(w->view.eye, vv_vec3_make(0.7, -0.4, 0.3));
+        if (change == 3) {
+            w->n_cut_planes = 1;
+            w->cut_planes[0].point = o->position;
+            w->cut_planes[0].normal = vv_vec3_normalize(vv_vec3_make(1, 1, 0.2));
+        }
+        if (change == 4)
+            o->scale = vv_vec3_make(1.1, 0.9, 1.0);
+        vv_image *fresh = render_with("irregular", w, 2);
+        for (int rep = 0; rep < 2; rep++) { /* the entries searched, then read */
+            vt_ok(vv_renderer_render(kept, w, &w->view, NULL, img));
+            assert_memory_equal(img->rgba, fresh->rgba, 4 * 64 * 64 * sizeof(float));
+            assert_memory_equal(img->depth, fresh->depth, 64 * 64 * sizeof(float));
+        }
+        vv_image_free(fresh);
+    }
+    vv_image_free(img);
+    vv_renderer_free(kept);
+    vv_world_free(w);
+    vv_grid_free(g);
+}
+
 static void
 test_all_files_render(void **state) {
     (void)state;
@@ -517,6 +568,7 @@ main(void) {
         cmocka_unit_test(test_two_blocks_and_degenerate),
         cmocka_unit_test(test_ring),
         cmocka_unit_test(test_all_files_render),
+        cmocka_unit_test(test_kept_entries),
         cmocka_unit_test(test_converged_reference),
     };
     return vt_run_tests(tests, NULL, NULL);

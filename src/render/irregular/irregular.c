@@ -43,6 +43,8 @@
 #define IR_BINS 4096     /* pre-integration table entries */
 #define IR_PIECE_TAU 0.1 /* optical depth of one piece of a cell segment */
 #define IR_MAX_PIECES 64 /* pieces of one segment */
+/* bytes of first entries kept between frames, every object's together */
+#define IR_ENTRY_CACHE_MAX ((size_t)64 << 20)
 
 /* Entering faces and their bounding volume hierarchy (core/bvh.h): the
  * mesh's boundary faces, or those of the tetrahedra a transfer function
@@ -61,6 +63,7 @@ typedef struct ir_mesh {
     ir_layer all; /* the boundary of the mesh */
     double eps;   /* ray-parameter tolerance of a re-entry: 1e-9 of the bounding-box diagonal */
     uint64_t last_used;
+    uint64_t serial; /* which build: a slot built again is another mesh */
     /* empty-space skipping for composite: the tetrahedra the transfer
      * function (hashed into vis_key) makes visible, and their boundary */
     uint8_t *vis;
@@ -68,8 +71,39 @@ typedef struct ir_mesh {
     ir_layer vis_layer;
 } ir_mesh;
 
+/* A ray's first entry into an object: the face (-1: none) at t with the
+ * barycentric weights of its points, what bvh_enter found. */
+typedef struct ir_entry {
+    int32_t face;
+    double t, w[3];
+} ir_entry;
+
+/* What a pixel's first entry depends on: its ray, the object's transform,
+ * mesh and entering layer, and the cut planes that end the search. */
+typedef struct ir_entry_key {
+    vv_vec3 o00, ox, oy, d00, dx, dy; /* the camera rays (vv_camera_rays) */
+    int ortho, width, height;
+    double w2o[3][4];
+    const void *mesh, *layer;
+    uint64_t serial, vis_key;
+    int n_planes;
+    vv_plane planes[2 * VV_MAX_CUT_PLANES];
+} ir_entry_key;
+
+/* The first entries of every pixel of the last frame of an object (the
+ * issue's BVH entry points cached between frames): a frame of the same view
+ * and layer (a transfer function edited, a progressive frame drawn again)
+ * reads them instead of searching the hierarchy. */
+typedef struct ir_entry_cache {
+    ir_entry_key key;
+    ir_entry *e; /* width x height, row-major */
+    int valid;
+} ir_entry_cache;
+
 typedef struct ir_state {
     ir_mesh cache[IR_MAX_OBJ];
+    ir_entry_cache entries[IR_MAX_OBJ];
+    uint64_t serial; /* meshes built */
     uint64_t frame;
     double early_termination;
     int skipping; /* empty-space skipping in composite (option, for tests) */
@@ -79,6 +113,8 @@ typedef struct ir_obj {
     const vv_object *obj;
     const ir_mesh *mesh;
     const ir_layer *layer; /* entering faces: the mesh's, or the visible part's */
+    ir_entry *entries;     /* the pixels' first entries (NULL: searched every frame) */
+    int fill;              /* 1: search and store them; 0: read them */
     const uint8_t *vis;    /* visible tetrahedra (composite), or NULL: all */
     vv_render_mode mode;
     double w2o[3][4]; /* world -> object (grid coordinates) */
@@ -730,7 +766,7 @@ edge_canon(const double *a, const double *ua, const double *b, const double *ub,
  * orientation flips (sg: the exit test reads every side times sg). */
 static void
 trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0, double tc1,
-             ir_acc *acc) {
+             ir_acc *acc, ir_entry *first) {
     const ir_mesh *im = ob->mesh;
     const vv_tetmesh *m = &im->m;
     ir_ray r;
@@ -778,7 +814,19 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
         const double from = strict                ? nextafter(tsearch, INFINITY)
                             : tsearch > -INFINITY ? tsearch - im->eps
                                                   : -INFINITY;
-        const int32_t f = bvh_enter(im, ob->layer, &r, from, tc1, skip, &t_in, w3);
+        int32_t f;
+        if (first && entries == 1 && !ob->fill) { /* the entry this view found before */
+            f = first->face;
+            t_in = first->t;
+            memcpy(w3, first->w, sizeof w3);
+        } else {
+            f = bvh_enter(im, ob->layer, &r, from, tc1, skip, &t_in, w3);
+            if (first && entries == 1) {
+                first->face = f;
+                first->t = t_in;
+                memcpy(first->w, w3, sizeof first->w);
+            }
+        }
         if (f < 0)
             break;
         skip = f;
@@ -964,7 +1012,8 @@ render_pixel(const ir_frame *fr, int x, int y, vv_image *out) {
         memset(acc, 0, sizeof *acc);
         acc->depth = INFINITY;
         acc->tau_stop = stop_depth(0, fr->et);
-        trace_object(fr, ob, &wr, t0, t1, acc);
+        trace_object(fr, ob, &wr, t0, t1, acc,
+                     ob->entries ? ob->entries + (size_t)y * fr->view->width + (size_t)x : NULL);
         acc_flush(fr, ob, acc);
         if (ob->mode == VV_MODE_COMPOSITE || ob->mode == VV_MODE_ISO) {
             if (acc->A > 0)
@@ -1027,6 +1076,7 @@ mesh_get(ir_state *st, const vv_grid *g, int field, int component, const ir_mesh
     if (s != VV_OK)
         return s;
     st->cache[slot].last_used = st->frame;
+    st->cache[slot].serial = ++st->serial;
     *out = &st->cache[slot];
     return VV_OK;
 }
@@ -1173,6 +1223,72 @@ render_tile(void *user, const vv_frame_tile *t) {
     return VV_OK;
 }
 
+static int
+entry_key_same(const ir_entry_key *a, const ir_entry_key *b) {
+    const vv_vec3 *va[6] = {&a->o00, &a->ox, &a->oy, &a->d00, &a->dx, &a->dy};
+    const vv_vec3 *vb[6] = {&b->o00, &b->ox, &b->oy, &b->d00, &b->dx, &b->dy};
+    for (int i = 0; i < 6; i++)
+        if (va[i]->x != vb[i]->x || va[i]->y != vb[i]->y || va[i]->z != vb[i]->z)
+            return 0;
+    if (a->ortho != b->ortho || a->width != b->width || a->height != b->height ||
+        a->mesh != b->mesh || a->layer != b->layer || a->serial != b->serial ||
+        a->vis_key != b->vis_key || a->n_planes != b->n_planes ||
+        memcmp(a->w2o, b->w2o, sizeof a->w2o) != 0)
+        return 0;
+    for (int p = 0; p < a->n_planes; p++)
+        if (a->planes[p].n.x != b->planes[p].n.x || a->planes[p].n.y != b->planes[p].n.y ||
+            a->planes[p].n.z != b->planes[p].n.z || a->planes[p].d != b->planes[p].d)
+            return 0;
+    return 1;
+}
+
+/* Object @p i's first entries: read from the last frame's when its key is
+ * this frame's, else searched and stored (within IR_ENTRY_CACHE_MAX for
+ * every object: beyond it, searched every frame). */
+static void
+entries_prepare(ir_frame *fr, int i) {
+    ir_obj *ob = &fr->objs[i];
+    ir_entry_cache *ec = &fr->st->entries[i];
+    ir_entry_key k;
+    memset(&k, 0, sizeof k);
+    const vv_camera_rays *c = &fr->cam;
+    k.o00 = c->o00;
+    k.ox = c->ox;
+    k.oy = c->oy;
+    k.d00 = c->d00;
+    k.dx = c->dx;
+    k.dy = c->dy;
+    k.ortho = c->ortho;
+    k.width = fr->view->width;
+    k.height = fr->view->height;
+    memcpy(k.w2o, ob->w2o, sizeof k.w2o);
+    k.mesh = ob->mesh;
+    k.layer = ob->layer;
+    k.serial = ob->mesh->serial;
+    k.vis_key = ob->layer == &ob->mesh->all ? 0 : ob->mesh->vis_key;
+    k.n_planes = ob->n_planes;
+    memcpy(k.planes, ob->planes, (size_t)ob->n_planes * sizeof k.planes[0]);
+    if (ec->valid && ec->e && entry_key_same(&ec->key, &k)) {
+        ob->entries = ec->e;
+        ob->fill = 0;
+        return;
+    }
+    const size_t n = (size_t)k.width * (size_t)k.height;
+    ec->valid = 0;
+    ir_entry *e = n * sizeof *e * (size_t)fr->n_obj <= IR_ENTRY_CACHE_MAX
+                      ? realloc(ec->e, (n ? n : 1) * sizeof *e)
+                      : NULL;
+    if (!e) {
+        free(ec->e);
+        ec->e = NULL;
+        return; /* searched every frame */
+    }
+    ec->e = e;
+    ec->key = k;
+    ob->entries = e;
+    ob->fill = 1;
+}
+
 static vv_status
 ir_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
           vv_image *out) {
@@ -1206,12 +1322,18 @@ ir_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
         s = prepare_object(&fr, &objs[fr.n_obj], o, w, ambient);
         fr.n_obj++;
     }
+    for (int i = 0; i < fr.n_obj && s == VV_OK; i++)
+        entries_prepare(&fr, i);
     if (s == VV_OK) {
         fr.out = out;
         vv_frame_job job;
         vv_frame_job_init(&job, view->width, view->height, render_tile, &fr);
         s = vv_frame_run(&job, opt);
     }
+    /* entries filled by a whole frame serve the next of the same key */
+    for (int i = 0; i < fr.n_obj; i++)
+        if (objs[i].entries && objs[i].fill)
+            st->entries[i].valid = s == VV_OK;
     for (int i = 0; i < fr.n_obj; i++)
         obj_clear(&objs[i]);
     return s;
@@ -1243,8 +1365,10 @@ ir_destroy(void *state) {
     ir_state *st = state;
     if (!st)
         return;
-    for (int i = 0; i < IR_MAX_OBJ; i++)
+    for (int i = 0; i < IR_MAX_OBJ; i++) {
         mesh_clear(&st->cache[i]);
+        free(st->entries[i].e);
+    }
     free(st);
 }
 
