@@ -111,6 +111,29 @@ cli_convert_usage(FILE *out) {
                  "  volvis convert --raw 2048x2048x2048:u8 big.raw big.vvb\n");
 }
 
+/* IN (of format @p f, detected) as a vv_slabs when it reads slab by slab:
+ * a TIFF stack (at @p channel and @p time), or a gzip NRRD of one 3-D
+ * volume. *@p out stays NULL for other input (an NRRD neither raw nor gzip
+ * among them: read whole). Errors: a TIFF stack's, for the caller to report. */
+static vv_status
+open_slabs(const char *in, vv_format f, int channel, int time, vv_slabs **out) {
+    *out = NULL;
+    if (f != VV_FORMAT_TIFF && (f != VV_FORMAT_NRRD || channel > 0 || time > 0))
+        return VV_OK;
+    vv_load_options lo;
+    vv_load_options_init(&lo);
+    lo.format = f;
+    lo.channel = channel;
+    lo.time = time;
+    vv_error_clear();
+    vv_status s = vv_slabs_open(out, in, &lo);
+    if (s != VV_OK && f == VV_FORMAT_NRRD) {
+        vv_error_clear();
+        s = VV_OK;
+    }
+    return s;
+}
+
 /* IN to OUT.vvb (@p flags: VV_VVB_COARSE, VV_VVB_ZSTD): by bricks when IN
  * is raw or uncompressed NRRD, slab by slab when it is a TIFF stack or a
  * gzip NRRD (vv_slabs), else read whole first. */
@@ -124,19 +147,10 @@ convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int serie
     const vv_format f = raw ? VV_FORMAT_RAW : vv_format_detect(in);
     if ((raw || f == VV_FORMAT_NRRD) && channel <= 0 && time <= 0)
         s = vv_bricked_open(&b, in, raw, 0);
-    if (s != VV_OK && !raw &&
-        ((f == VV_FORMAT_NRRD && channel <= 0 && time <= 0) || f == VV_FORMAT_TIFF)) {
-        vv_load_options lo;
-        vv_load_options_init(&lo);
-        lo.format = f;
-        lo.channel = channel;
-        lo.time = time;
-        vv_error_clear();
-        if (vv_slabs_open(&sl, in, &lo) != VV_OK) {
-            if (f == VV_FORMAT_TIFF)
-                return cli_fail(VV_ERR_FORMAT, in);
-            vv_error_clear(); /* an NRRD neither raw nor gzip: read whole */
-        }
+    if (s != VV_OK && !raw) {
+        const vv_status so = open_slabs(in, f, channel, time, &sl);
+        if (so != VV_OK)
+            return cli_fail(so, in);
     }
     int dims[3];
     const char *type;
@@ -208,29 +222,18 @@ convert_zarr_boxes(const char *in, const char *out, const vv_raw_params *raw, in
     vv_slabs *sl = NULL;
     vv_error_clear();
     const vv_format f = raw ? VV_FORMAT_RAW : vv_format_detect(in);
-    if ((raw || f == VV_FORMAT_NRRD) && channel <= 0 && time <= 0) {
-        if (vv_bricked_open_header(&b, in, raw, 0) != VV_OK) {
-            /* a gzip NRRD: inflated slab by slab; other encodings read whole */
-            vv_error_clear();
-            if (raw || vv_slabs_open(&sl, in, NULL) != VV_OK) {
-                vv_error_clear();
-                return -1;
-            }
-        }
-    } else if (f == VV_FORMAT_TIFF) {
-        vv_load_options lo;
-        vv_load_options_init(&lo);
-        lo.format = f;
-        lo.channel = channel;
-        lo.time = time;
-        vv_status s = vv_slabs_open(&sl, in, &lo);
-        if (s != VV_OK)
+    vv_status s = VV_ERR_FORMAT;
+    if ((raw || f == VV_FORMAT_NRRD) && channel <= 0 && time <= 0)
+        s = vv_bricked_open_header(&b, in, raw, 0);
+    vv_error_clear(); /* a bricked reader's refusal: a gzip NRRD reads by slabs */
+    if (s != VV_OK && !raw) {
+        if ((s = open_slabs(in, f, channel, time, &sl)) != VV_OK)
             return cli_fail(s, in);
-    } else if (!raw && vv_pyramid_probe(in)) {
-        vv_status s = vv_pyramid_open(&p, in, channel, time, (uint64_t)256 << 20, NULL);
-        if (s != VV_OK)
+        if (!sl && vv_pyramid_probe(in) &&
+            (s = vv_pyramid_open(&p, in, channel, time, (uint64_t)256 << 20, NULL)) != VV_OK)
             return cli_fail(s, in);
-    } else
+    }
+    if (!b && !sl && !p)
         return -1;
     const vv_volume *hdr = b    ? vv_bricked_header(b)
                            : sl ? vv_slabs_header(sl)
@@ -243,9 +246,9 @@ convert_zarr_boxes(const char *in, const char *out, const vv_raw_params *raw, in
         cli_error("%s: %s; refusing to convert it (--strict)", out, why);
         rc = CLI_EXIT_FAIL;
     } else {
-        vv_status s = b    ? vv_ome_zarr_write_boxes(hdr, read_bricked_box, b, out, so)
-                      : sl ? vv_ome_zarr_write_boxes(hdr, vv_slabs_read_box, sl, out, so)
-                           : vv_ome_zarr_write_boxes(hdr, read_pyramid_box, p, out, so);
+        s = b    ? vv_ome_zarr_write_boxes(hdr, read_bricked_box, b, out, so)
+            : sl ? vv_ome_zarr_write_boxes(hdr, vv_slabs_read_box, sl, out, so)
+                 : vv_ome_zarr_write_boxes(hdr, read_pyramid_box, p, out, so);
         if (s != VV_OK)
             rc = cli_fail(s, out);
         else if (!quiet) {

@@ -409,12 +409,13 @@ const vv_volume *vv_slabs_header(const vv_slabs *s);
 /** Slabs read so far (a slab is read once when the boxes come slab by slab). */
 uint64_t vv_slabs_loads(const vv_slabs *s);
 /**
- * A vv_box_reader over @p slabs (a vv_slabs): voxels lo .. hi (inclusive)
- * as a new volume with the volume's geometry (its voxel (0, 0, 0) is voxel
- * lo), from the slices held or, when the box leaves them, from its own
- * slices read anew. Errors: VV_ERR_INVALID (a box outside the volume),
- * those of vv_volume_load, VV_ERR_FORMAT (slices that read back in another
- * shape or type: a file changed under the reader), VV_ERR_NOMEM.
+ * A vv_box_reader over @p slabs (a vv_slabs): voxels lo .. hi (inclusive,
+ * x fastest) as a new volume of hi - lo + 1 voxels a side that the caller
+ * frees, with the volume's spacing and direction and its origin moved to
+ * voxel lo, from the slices held or, when the box leaves them, from its own
+ * slices read anew (a gzip stream inflated forward). Errors: VV_ERR_INVALID (a box outside the
+ * volume), those of vv_volume_load, VV_ERR_FORMAT (slices that read back in another shape or type:
+ * a file changed under the reader), VV_ERR_NOMEM.
  */
 vv_status vv_slabs_read_box(void *slabs, const int lo[3], const int hi[3], vv_volume **out);
 /** Frees @p s (NULL accepted). */

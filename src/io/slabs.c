@@ -69,6 +69,15 @@ open_gzip_nrrd(vv_slabs *s) {
     return 1;
 }
 
+/* A gzip NRRD's data stream ended (or broke) inside slice @p z. */
+static vv_status
+gzip_short(vv_slabs *s, int z) {
+    int zerr = Z_OK;
+    const char *msg = gzerror(s->gz, &zerr);
+    return vv_error_set(VV_ERR_FORMAT, "the gzip data ends before slice %d of %d (%s)", z,
+                        s->header->dims[2], zerr != Z_OK && msg && msg[0] ? msg : "truncated");
+}
+
 /* Slices z0 .. z0 + n - 1 of a gzip NRRD inflated into @p dst. */
 static vv_status
 read_gzip_slices(vv_slabs *s, int z0, int n, unsigned char *dst) {
@@ -92,8 +101,10 @@ read_gzip_slices(vv_slabs *s, int z0, int n, unsigned char *dst) {
         s->at += (uint64_t)got;
     }
     free(skip);
+    if (s->at < from)
+        return gzip_short(s, (int)(s->at / slice));
     const uint64_t bytes = slice * (uint64_t)n;
-    uint64_t done = s->at == from ? 0 : bytes + 1;
+    uint64_t done = 0;
     while (done < bytes) {
         const uint64_t want = bytes - done < (1u << 30) ? bytes - done : (1u << 30);
         const int got = gzread(s->gz, dst + done, (unsigned)want);
@@ -102,13 +113,8 @@ read_gzip_slices(vv_slabs *s, int z0, int n, unsigned char *dst) {
         done += (uint64_t)got;
         s->at += (uint64_t)got;
     }
-    if (done != bytes) {
-        int zerr = Z_OK;
-        const char *msg = gzerror(s->gz, &zerr);
-        return vv_error_set(VV_ERR_FORMAT, "the gzip data ends before slice %d of %d (%s)",
-                            done > bytes ? (int)(s->at / slice) : z0 + (int)(done / slice), D[2],
-                            zerr != Z_OK && msg && msg[0] ? msg : "truncated");
-    }
+    if (done != bytes)
+        return gzip_short(s, z0 + (int)(done / slice));
     if (s->swap && es > 1)
         vv_byteswap(dst, (uint64_t)D[0] * D[1] * (uint64_t)n, es);
     return VV_OK;

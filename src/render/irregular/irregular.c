@@ -81,11 +81,12 @@ typedef struct ir_entry {
 /* What a pixel's first entry depends on: its ray, the object's transform,
  * mesh and entering layer, and the cut planes that end the search. */
 typedef struct ir_entry_key {
-    vv_vec3 o00, ox, oy, d00, dx, dy; /* the camera rays (vv_camera_rays) */
-    int ortho, width, height;
+    vv_camera_rays cam;
+    int width, height;
     double w2o[3][4];
-    const void *mesh, *layer;
-    uint64_t serial, vis_key;
+    const void *layer; /* the mesh's boundary or its visible part */
+    uint64_t serial;   /* the mesh build (ir_mesh.serial) */
+    uint64_t vis_key;  /* the visible part's table hash (0: the boundary) */
     int n_planes;
     vv_plane planes[2 * VV_MAX_CUT_PLANES];
 } ir_entry_key;
@@ -614,9 +615,8 @@ segment(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, const uint32_t *
     default:
         break;
     }
-    /* composite */
-    if (ob->const_color && !ob->shading && segment_thin(fr, ob, t0, L, s0, s1, acc, pre))
-        return;
+    /* composite (one-colour unshaded segments thin enough: segment_thin,
+     * which the walk calls first) */
     acc_flush(fr, ob, acc);
     double Ta, Tb, Ka[3], Kb[3];
     if (pre->valid && pre->s == s0) {
@@ -802,7 +802,8 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
     long steps = 0;
     const long max_steps = (long)m->n_tets + 1024;
     const int cell_data = m->tval != NULL;
-    /* segments of one colour, unshaded: thin ones composited here */
+    /* segments of one colour, unshaded: thin ones composited here, the
+     * rest by segment */
     const int thin = ob->mode == VV_MODE_COMPOSITE && ob->const_color && !ob->shading;
     ir_pre pre = {0, 0, 0, {0, 0, 0}};
     (void)tc0;
@@ -841,11 +842,7 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
         double s_prev = 0;
         int have_s = 0;
         pre.valid = 0;
-        /* The first tetrahedron: all four points and six edges. The walk
-         * keeps four slots of points; a step replaces the slot of the point
-         * opposite the exit face with the neighbour's fourth point, so the
-         * three shared points keep their slots, edge sides and weights, and
-         * the slots' orientation flips (sg). */
+        /* the first tetrahedron: all four points and six edges */
         uint32_t gid[4];
         double q[4][3], u[4][3], es[4][4], qv[4] = {0, 0, 0, 0}; /* points, d x points, edge
                                                                   sides, values */
@@ -936,8 +933,10 @@ trace_object(const ir_frame *fr, const ir_obj *ob, const ir_ray *wr, double tc0,
                         c1[i] = b_in[i] + u1 * (b_out[i] - b_in[i]);
                     }
                     pre.valid = 0;
-                    segment(fr, ob, wr, gid, a0 + u0 * len, a0 + u1 * len, c0, c1,
-                            s0 + u0 * (s1 - s0), s0 + u1 * (s1 - s0), acc, &pre);
+                    const double ta = a0 + u0 * len, sa = s0 + u0 * (s1 - s0),
+                                 sb = s0 + u1 * (s1 - s0);
+                    if (!thin || !segment_thin(fr, ob, ta, a0 + u1 * len - ta, sa, sb, acc, &pre))
+                        segment(fr, ob, wr, gid, ta, a0 + u1 * len, c0, c1, sa, sb, acc, &pre);
                     pre.valid = 0;
                 } else {
                     if (!thin || !segment_thin(fr, ob, t_prev, t_out - t_prev, s0, s1, acc, &pre))
@@ -1225,15 +1224,16 @@ render_tile(void *user, const vv_frame_tile *t) {
 
 static int
 entry_key_same(const ir_entry_key *a, const ir_entry_key *b) {
-    const vv_vec3 *va[6] = {&a->o00, &a->ox, &a->oy, &a->d00, &a->dx, &a->dy};
-    const vv_vec3 *vb[6] = {&b->o00, &b->ox, &b->oy, &b->d00, &b->dx, &b->dy};
+    const vv_vec3 *va[6] = {&a->cam.o00, &a->cam.ox, &a->cam.oy,
+                            &a->cam.d00, &a->cam.dx, &a->cam.dy};
+    const vv_vec3 *vb[6] = {&b->cam.o00, &b->cam.ox, &b->cam.oy,
+                            &b->cam.d00, &b->cam.dx, &b->cam.dy};
     for (int i = 0; i < 6; i++)
         if (va[i]->x != vb[i]->x || va[i]->y != vb[i]->y || va[i]->z != vb[i]->z)
             return 0;
-    if (a->ortho != b->ortho || a->width != b->width || a->height != b->height ||
-        a->mesh != b->mesh || a->layer != b->layer || a->serial != b->serial ||
-        a->vis_key != b->vis_key || a->n_planes != b->n_planes ||
-        memcmp(a->w2o, b->w2o, sizeof a->w2o) != 0)
+    if (a->cam.ortho != b->cam.ortho || a->width != b->width || a->height != b->height ||
+        a->layer != b->layer || a->serial != b->serial || a->vis_key != b->vis_key ||
+        a->n_planes != b->n_planes || memcmp(a->w2o, b->w2o, sizeof a->w2o) != 0)
         return 0;
     for (int p = 0; p < a->n_planes; p++)
         if (a->planes[p].n.x != b->planes[p].n.x || a->planes[p].n.y != b->planes[p].n.y ||
@@ -1251,18 +1251,10 @@ entries_prepare(ir_frame *fr, int i) {
     ir_entry_cache *ec = &fr->st->entries[i];
     ir_entry_key k;
     memset(&k, 0, sizeof k);
-    const vv_camera_rays *c = &fr->cam;
-    k.o00 = c->o00;
-    k.ox = c->ox;
-    k.oy = c->oy;
-    k.d00 = c->d00;
-    k.dx = c->dx;
-    k.dy = c->dy;
-    k.ortho = c->ortho;
+    k.cam = fr->cam;
     k.width = fr->view->width;
     k.height = fr->view->height;
     memcpy(k.w2o, ob->w2o, sizeof k.w2o);
-    k.mesh = ob->mesh;
     k.layer = ob->layer;
     k.serial = ob->mesh->serial;
     k.vis_key = ob->layer == &ob->mesh->all ? 0 : ob->mesh->vis_key;
