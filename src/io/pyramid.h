@@ -97,6 +97,30 @@ vv_status vv_zr_pyramid_store(pyr_store *st, const char *path, int channel, int 
 vv_status vv_pyr_store_open_local(pyr_store *st, const char *path, int channel, int time,
                                   vv_load_info *info);
 
+/** Voxel @p i of @p d (of type @p t) as a double. */
+double vv_pyr_voxel(const void *d, vv_voxel_type t, size_t i);
+
+/** A box of a pyramid's next level and the voxels under it (vv_pyr_reduce). */
+typedef struct vv_pyr_reduce_box {
+    const void *src;    /**< the level before's voxels src_lo .. src_lo + src_n - 1, x fastest */
+    vv_voxel_type type; /**< of both levels */
+    int src_dims[3];    /**< the level before's dims (blocks at its edges are cut) */
+    int src_lo[3], src_n[3];
+    int step[3];     /**< 2 on halved axes, 1 on axes of one voxel */
+    int label;       /**< 1: the first voxel of a block instead of the mean (labels) */
+    int lo[3], n[3]; /**< the box, in voxels of the next level */
+    int dst_dims[2]; /**< dst's row length and rows a slice (dst holds voxel lo at 0) */
+} vv_pyr_reduce_box;
+
+/**
+ * The box @p b of a pyramid's next level into @p dst: each voxel the mean
+ * of the step[0] x step[1] x step[2] voxels under it that lie inside the
+ * level before (summed in z, y, x order as doubles; integer types rounded to
+ * nearest), or with label the first of them. What the OME-Zarr and .vvb
+ * writers store, voxel for voxel the same. Thread-safe.
+ */
+void vv_pyr_reduce(const vv_pyr_reduce_box *b, void *dst);
+
 /** 1 when @p path is an HDF5 file (its signature at offset 0). */
 int vv_h5_is_hdf5(const char *path);
 

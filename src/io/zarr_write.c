@@ -51,6 +51,7 @@
 
 #include "core/internal.h"
 #include "core/parallel_for.h"
+#include "io/pyramid.h"
 #include "io/zarr.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
@@ -206,60 +207,6 @@ write_zarray(const char *dir, const vv_volume *v, const zarr_level *l, const int
 
 /* ---- levels ------------------------------------------------------------------- */
 
-static double
-load_voxel(const void *d, vv_voxel_type t, size_t i) {
-    switch (t) {
-    case VV_U8:
-        return ((const uint8_t *)d)[i];
-    case VV_I8:
-        return ((const int8_t *)d)[i];
-    case VV_U16:
-        return ((const uint16_t *)d)[i];
-    case VV_I16:
-        return ((const int16_t *)d)[i];
-    case VV_U32:
-        return ((const uint32_t *)d)[i];
-    case VV_I32:
-        return ((const int32_t *)d)[i];
-    case VV_F32:
-        return ((const float *)d)[i];
-    default:
-        return ((const double *)d)[i];
-    }
-}
-
-static void
-store_voxel(void *d, vv_voxel_type t, size_t i, double x) {
-    if (t != VV_F32 && t != VV_F64)
-        x = floor(x + 0.5); /* the mean of integers, rounded to nearest */
-    switch (t) {
-    case VV_U8:
-        ((uint8_t *)d)[i] = (uint8_t)x;
-        break;
-    case VV_I8:
-        ((int8_t *)d)[i] = (int8_t)x;
-        break;
-    case VV_U16:
-        ((uint16_t *)d)[i] = (uint16_t)x;
-        break;
-    case VV_I16:
-        ((int16_t *)d)[i] = (int16_t)x;
-        break;
-    case VV_U32:
-        ((uint32_t *)d)[i] = (uint32_t)x;
-        break;
-    case VV_I32:
-        ((int32_t *)d)[i] = (int32_t)x;
-        break;
-    case VV_F32:
-        ((float *)d)[i] = (float)x;
-        break;
-    default:
-        ((double *)d)[i] = x;
-        break;
-    }
-}
-
 typedef struct down_job {
     const zarr_level *src;
     zarr_level *dst;
@@ -274,27 +221,17 @@ down_body(void *ctx, long k0, long k1, int worker) {
     (void)worker;
     const down_job *j = ctx;
     const int *sd = j->src->dims, *dd = j->dst->dims;
-    size_t es = vv_voxel_type_size(j->type);
-    for (long k = k0; k < k1; k++)
-        for (int y = 0; y < dd[1]; y++)
-            for (int x = 0; x < dd[0]; x++) {
-                size_t o = ((size_t)k * dd[1] + y) * dd[0] + x;
-                int x0 = x * j->step[0], y0 = y * j->step[1], z0 = (int)k * j->step[2];
-                if (j->label) {
-                    size_t i = ((size_t)z0 * sd[1] + y0) * sd[0] + x0;
-                    memcpy((char *)j->dst->owned + o * es, (const char *)j->src->data + i * es, es);
-                    continue;
-                }
-                double sum = 0;
-                int n = 0;
-                for (int dz = 0; dz < j->step[2] && z0 + dz < sd[2]; dz++)
-                    for (int dy = 0; dy < j->step[1] && y0 + dy < sd[1]; dy++)
-                        for (int dx = 0; dx < j->step[0] && x0 + dx < sd[0]; dx++, n++)
-                            sum +=
-                                load_voxel(j->src->data, j->type,
-                                           ((size_t)(z0 + dz) * sd[1] + y0 + dy) * sd[0] + x0 + dx);
-                store_voxel(j->dst->owned, j->type, o, sum / n);
-            }
+    vv_pyr_reduce_box b = {.src = j->src->data,
+                           .type = j->type,
+                           .src_dims = {sd[0], sd[1], sd[2]},
+                           .src_n = {sd[0], sd[1], sd[2]},
+                           .step = {j->step[0], j->step[1], j->step[2]},
+                           .label = j->label,
+                           .lo = {0, 0, (int)k0},
+                           .n = {dd[0], dd[1], (int)(k1 - k0)},
+                           .dst_dims = {dd[0], dd[1]}};
+    vv_pyr_reduce(&b,
+                  (char *)j->dst->owned + (size_t)k0 * dd[0] * dd[1] * vv_voxel_type_size(j->type));
 }
 
 /* The level after @p src. */
@@ -428,7 +365,6 @@ static int
 feed_chunk(chunk_job *j, const int o[3], const int e[3], unsigned char *raw, unsigned char *work,
            unsigned char *cbuf, unsigned char *z, size_t zcap) {
     box_feed *f = j->feed;
-    const size_t es = vv_voxel_type_size(j->type);
     /* the blocks under the chunk, in the level before */
     const int *sd = f->prev->dims, *st = f->step;
     int plo[3], pn[3];
@@ -440,28 +376,17 @@ feed_chunk(chunk_job *j, const int o[3], const int e[3], unsigned char *raw, uns
     if (err)
         return err;
     /* as down_body: the same voxels summed in the same order */
-    for (int k = 0; k < e[2]; k++)
-        for (int y = 0; y < e[1]; y++)
-            for (int x = 0; x < e[0]; x++) {
-                const size_t out = ((size_t)k * j->chunk[1] + y) * j->chunk[0] + x;
-                const int x0 = (o[0] + x) * st[0], y0 = (o[1] + y) * st[1], z0 = (o[2] + k) * st[2];
-                if (f->label) {
-                    const size_t i =
-                        ((size_t)(z0 - plo[2]) * pn[1] + (y0 - plo[1])) * pn[0] + (x0 - plo[0]);
-                    memcpy(raw + out * es, work + i * es, es);
-                    continue;
-                }
-                double sum = 0;
-                int n = 0;
-                for (int dz = 0; dz < st[2] && z0 + dz < sd[2]; dz++)
-                    for (int dy = 0; dy < st[1] && y0 + dy < sd[1]; dy++)
-                        for (int dx = 0; dx < st[0] && x0 + dx < sd[0]; dx++, n++)
-                            sum += load_voxel(
-                                work, j->type,
-                                ((size_t)(z0 + dz - plo[2]) * pn[1] + (y0 + dy - plo[1])) * pn[0] +
-                                    (x0 + dx - plo[0]));
-                store_voxel(raw, j->type, out, sum / n);
-            }
+    vv_pyr_reduce_box b = {.src = work,
+                           .type = j->type,
+                           .src_dims = {sd[0], sd[1], sd[2]},
+                           .src_lo = {plo[0], plo[1], plo[2]},
+                           .src_n = {pn[0], pn[1], pn[2]},
+                           .step = {st[0], st[1], st[2]},
+                           .label = f->label,
+                           .lo = {o[0], o[1], o[2]},
+                           .n = {e[0], e[1], e[2]},
+                           .dst_dims = {j->chunk[0], j->chunk[1]}};
+    vv_pyr_reduce(&b, raw);
     return 0;
 }
 
@@ -547,7 +472,7 @@ row_body(void *ctx, long r0, long r1, int worker) {
         /* the range of the voxels read, merged under the lock */
         double mn = INFINITY, mx = -INFINITY;
         for (size_t i = 0, n = (size_t)D[0] * h * d; i < n; i++) {
-            const double x = load_voxel(v->data, j->type, i);
+            const double x = vv_pyr_voxel(v->data, j->type, i);
             mn = x < mn ? x : mn;
             mx = x > mx ? x : mx;
         }
