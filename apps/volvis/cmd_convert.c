@@ -10,6 +10,7 @@
 static const cli_opt_spec convert_opts[] = {
     {"format", 0, "nrrd|slc|vvb"},
     {"no-coarse", 0, NULL},
+    {"no-levels", 0, NULL},
     {"strict", 0, NULL},
     {"label", 0, NULL},
     {"nifti2", 0, NULL},
@@ -29,44 +30,49 @@ void
 cli_convert_usage(FILE *out) {
     char names[128];
     cli_writable_formats(names, sizeof names, "|", 0);
+    fprintf(out, "usage: volvis convert [OPTIONS] IN OUT\n"
+                 "\n"
+                 "Converts any readable volume (the formats below, or raw with --raw) to one\n"
+                 "of the formats that write (below), chosen from OUT's extension or --format.\n"
+                 "NRRD (.nrrd, .nhdr), NIfTI (.nii, .nii.gz), MetaImage (.mha, .mhd) and\n"
+                 "VTK XML image data (.vti) keep the voxel type, spacing, origin and\n"
+                 "direction (NIfTI in RAS, MetaImage in LPS: the frame is converted);\n"
+                 "VTK legacy (.vtk) has no direction matrix: an oblique volume is written\n"
+                 "axis-aligned, with a warning; TIFF (.tif, .tiff: one page per slice in\n"
+                 "the voxel type, ImageJ's spacing, unit and origin; .ome.tif, .ome.tiff:\n"
+                 "OME-XML with physical sizes and plane positions) has no direction matrix\n"
+                 "either; OME-Zarr (.ome.zarr, .zarr: a Zarr v2 folder with a pyramid of\n"
+                 "2x2x2 means, labels by nearest, and each level's scale and translation;\n"
+                 "read back at any level with --level) has none either; it is written\n"
+                 "chunk by chunk, with memory bounded by a row of 64^3 chunks, when IN is raw,\n"
+                 "an uncompressed NRRD or a pyramid (OME-Zarr, BigDataViewer, Imaris), and\n"
+                 "by 64 slices when IN is a TIFF stack or a gzip NRRD (read slab by slab);\n"
+                 "SLC (.slc; VolVis's own 8-bit format)\n"
+                 "holds 8-bit data only: other voxel types are rescaled from the value\n"
+                 "range to 0..255, with a note on stderr. What a format cannot hold is\n"
+                 "never changed silently (--strict: an error instead). The output is\n"
+                 "written atomically: on failure an existing OUT is left untouched. Prints\n"
+                 "what was written. No patient identifier of a DICOM series is written (a\n"
+                 "volume keeps none).\n"
+                 "\n"
+                 "OUT.vvb is VolVis's bricked format for volumes larger than memory\n"
+                 "(docs/file-formats.md; rendered with 'volvis render --memory-limit'):\n"
+                 "raw input (--raw) and uncompressed NRRD are read a brick at a time by\n"
+                 "pread, so memory stays bounded by a brick; TIFF stacks and gzip NRRD a\n"
+                 "slab of 66 slices at a time (a layer of bricks); other formats are read whole\n"
+                 "first (a pyramid -- OME-Zarr, BigDataViewer, Imaris -- by boxes of its\n"
+                 "level 0). Each brick is one zstd frame unless --no-compress, and gets a\n"
+                 "coarse level (every 4th voxel) unless --no-coarse (zstd bricks always\n"
+                 "keep it). After the bricks come the pyramid levels unless --no-levels:\n"
+                 "each half the one before (2x2x2 means, OME-Zarr's levels) until it fits\n"
+                 "one 64^3 chunk, written from the bricks read back, so memory stays\n"
+                 "bounded; 'volvis render --lod' and the GUI read them.\n"
+                 "\n");
     fprintf(out,
-            "usage: volvis convert [OPTIONS] IN OUT\n"
-            "\n"
-            "Converts any readable volume (the formats below, or raw with --raw) to one\n"
-            "of the formats that write (below), chosen from OUT's extension or --format.\n"
-            "NRRD (.nrrd, .nhdr), NIfTI (.nii, .nii.gz), MetaImage (.mha, .mhd) and\n"
-            "VTK XML image data (.vti) keep the voxel type, spacing, origin and\n"
-            "direction (NIfTI in RAS, MetaImage in LPS: the frame is converted);\n"
-            "VTK legacy (.vtk) has no direction matrix: an oblique volume is written\n"
-            "axis-aligned, with a warning; TIFF (.tif, .tiff: one page per slice in\n"
-            "the voxel type, ImageJ's spacing, unit and origin; .ome.tif, .ome.tiff:\n"
-            "OME-XML with physical sizes and plane positions) has no direction matrix\n"
-            "either; OME-Zarr (.ome.zarr, .zarr: a Zarr v2 folder with a pyramid of\n"
-            "2x2x2 means, labels by nearest, and each level's scale and translation;\n"
-            "read back at any level with --level) has none either; it is written\n"
-            "chunk by chunk, with memory bounded by a row of 64^3 chunks, when IN is raw,\n"
-            "an uncompressed NRRD or a pyramid (OME-Zarr, BigDataViewer, Imaris), and\n"
-            "by 64 slices when IN is a TIFF stack or a gzip NRRD (read slab by slab);\n"
-            "SLC (.slc; VolVis's own 8-bit format)\n"
-            "holds 8-bit data only: other voxel types are rescaled from the value\n"
-            "range to 0..255, with a note on stderr. What a format cannot hold is\n"
-            "never changed silently (--strict: an error instead). The output is\n"
-            "written atomically: on failure an existing OUT is left untouched. Prints\n"
-            "what was written. No patient identifier of a DICOM series is written (a\n"
-            "volume keeps none).\n"
-            "\n"
-            "OUT.vvb is VolVis's bricked format for volumes larger than memory\n"
-            "(docs/file-formats.md; rendered with 'volvis render --memory-limit'):\n"
-            "raw input (--raw) and uncompressed NRRD are read a brick at a time by\n"
-            "pread, so memory stays bounded by a brick; TIFF stacks and gzip NRRD a\n"
-            "slab of 66 slices at a time (a layer of bricks); other formats are read whole\n"
-            "first. Each brick is one zstd frame unless --no-compress, and gets a\n"
-            "coarse level (every 4th voxel) unless --no-coarse (zstd bricks always\n"
-            "keep it).\n"
-            "\n"
             "Options:\n"
             "  --format %s|vvb  output format (default: from OUT's extension)\n"
             "  --no-coarse        .vvb: no coarse level per brick\n"
+            "  --no-levels        .vvb: no pyramid levels after the bricks\n"
             "  --strict           refuse what the format cannot hold as it is (SLC: a\n"
             "                     voxel type other than 8 bits; VTK legacy: a direction\n"
             "                     matrix) instead of converting it (exit 1)\n"
@@ -134,14 +140,21 @@ open_slabs(const char *in, vv_format f, int channel, int time, vv_slabs **out) {
     return s;
 }
 
-/* IN to OUT.vvb (@p flags: VV_VVB_COARSE, VV_VVB_ZSTD): by bricks when IN
- * is raw or uncompressed NRRD, slab by slab when it is a TIFF stack or a
- * gzip NRRD (vv_slabs), else read whole first. */
+static vv_status
+read_pyramid_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
+    return vv_pyramid_read_box(ctx, 0, lo, hi, out);
+}
+
+/* IN to OUT.vvb (@p flags: VV_VVB_COARSE, VV_VVB_ZSTD, VV_VVB_LEVELS): by
+ * bricks when IN is raw or uncompressed NRRD, slab by slab when it is a
+ * TIFF stack or a gzip NRRD (vv_slabs), by boxes of level 0 when it is a
+ * pyramid, else read whole first. */
 static int
 convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int series, int channel,
             int time, unsigned flags, int quiet) {
     vv_bricked *b = NULL;
     vv_slabs *sl = NULL;
+    vv_pyramid *p = NULL;
     vv_error_clear();
     vv_status s = VV_ERR_FORMAT;
     const vv_format f = raw ? VV_FORMAT_RAW : vv_format_detect(in);
@@ -151,21 +164,27 @@ convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int serie
         const vv_status so = open_slabs(in, f, channel, time, &sl);
         if (so != VV_OK)
             return cli_fail(so, in);
+        if (!sl && vv_pyramid_probe(in) &&
+            (s = vv_pyramid_open(&p, in, channel, time, (uint64_t)256 << 20, NULL)) != VV_OK)
+            return cli_fail(s, in);
     }
     int dims[3];
     const char *type;
     char slabs[64] = "";
-    if (sl) {
-        const vv_volume *hdr = vv_slabs_header(sl);
+    if (sl || p) { /* a box reader: slabs of slices, or level 0 of a pyramid */
+        const vv_volume *hdr = sl ? vv_slabs_header(sl) : vv_pyramid_level(p, 0);
         cli_progress pr;
         cli_progress_begin(&pr, quiet);
-        s = vv_boxes_write_vvb(hdr, vv_slabs_read_box, sl, out, flags, &pr.p);
+        s = sl ? vv_boxes_write_vvb(hdr, vv_slabs_read_box, sl, out, flags, &pr.p)
+               : vv_boxes_write_vvb(hdr, read_pyramid_box, p, out, flags, &pr.p);
         cli_progress_end(&pr);
         memcpy(dims, hdr->dims, sizeof dims);
         type = vv_voxel_type_name(hdr->type);
-        snprintf(slabs, sizeof slabs, ", from %llu slabs of slices",
-                 (unsigned long long)vv_slabs_loads(sl));
+        if (sl)
+            snprintf(slabs, sizeof slabs, ", from %llu slabs of slices",
+                     (unsigned long long)vv_slabs_loads(sl));
         vv_slabs_free(sl);
+        vv_pyramid_free(p);
         if (s != VV_OK)
             return cli_fail(s, out);
     } else if (s == VV_OK) {
@@ -192,20 +211,24 @@ convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int serie
         if (s != VV_OK)
             return cli_fail(s, out);
     }
-    if (!quiet)
-        printf("wrote %s (vvb, %d x %d x %d, %s, bricks of %d^3 cells%s%s)\n", out, dims[0],
-               dims[1], dims[2], type, VV_BRICK_CELLS, flags & VV_VVB_ZSTD ? ", zstd" : "", slabs);
+    if (!quiet) {
+        char levels[64] = "";
+        vv_bricked *w = NULL;
+        if ((flags & VV_VVB_LEVELS) && vv_bricked_open_header(&w, out, NULL, 0) == VV_OK &&
+            vv_bricked_levels(w) > 1)
+            snprintf(levels, sizeof levels, ", %d pyramid levels", vv_bricked_levels(w));
+        vv_bricked_free(w);
+        vv_error_clear();
+        printf("wrote %s (vvb, %d x %d x %d, %s, bricks of %d^3 cells%s%s%s)\n", out, dims[0],
+               dims[1], dims[2], type, VV_BRICK_CELLS, flags & VV_VVB_ZSTD ? ", zstd" : "", levels,
+               slabs);
+    }
     return CLI_EXIT_OK;
 }
 
 static vv_status
 read_bricked_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
     return vv_bricked_read_box(ctx, lo, hi, out);
-}
-
-static vv_status
-read_pyramid_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
-    return vv_pyramid_read_box(ctx, 0, lo, hi, out);
 }
 
 /* IN to OUT.zarr chunk by chunk (vv_ome_zarr_write_boxes), never holding
@@ -333,8 +356,9 @@ cli_convert_main(int argc, char **argv) {
             cli_error("note: %s: zstd bricks keep their coarse levels (--no-coarse takes effect "
                       "with --no-compress)",
                       out);
-        const unsigned flags =
-            (zstd ? VV_VVB_ZSTD : 0u) | (cli_count(&a, "no-coarse") == 0 ? VV_VVB_COARSE : 0u);
+        const unsigned flags = (zstd ? VV_VVB_ZSTD : 0u) |
+                               (cli_count(&a, "no-coarse") == 0 ? VV_VVB_COARSE : 0u) |
+                               (cli_count(&a, "no-levels") == 0 ? VV_VVB_LEVELS : 0u);
         return convert_vvb(in, out, raw_spec ? &raw : NULL, series, channel, time, flags, quiet);
     }
     vv_save_options so;

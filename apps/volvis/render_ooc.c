@@ -171,11 +171,13 @@ cli_render_out_of_core(cli_args *a, cli_render_args *r) {
     int rc = cli_check_readable_input(r->input);
     if (rc)
         return rc;
-    if (!r->has_raw && vv_pyramid_probe(r->input))
+    /* a .vvb with pyramid levels reads by bricks unless asked for its levels */
+    const int multires = r->has_lod || r->progressive > 0 || r->has_level;
+    if (!r->has_raw && vv_pyramid_probe(r->input) && (multires || !cli_ends_with(r->input, ".vvb")))
         return render_pyramid(a, r);
-    if (r->has_lod || r->progressive > 0 || (r->has_level && r->level > 0)) {
+    if (multires && (r->has_lod || r->progressive > 0 || r->level > 0)) {
         cli_error("%s: --lod, --level and --progressive need a multiresolution file (OME-Zarr, "
-                  "BigDataViewer or Imaris HDF5)",
+                  "BigDataViewer or Imaris HDF5, or a .vvb with pyramid levels)",
                   r->input);
         return CLI_EXIT_USAGE;
     }

@@ -118,6 +118,14 @@ void vv_bricked_stats_get(const vv_bricked *b, vv_bricked_stats *s);
 /** Each brick's voxels are one zstd frame (level 3), decoded when the brick
  * is read; implies VV_VVB_COARSE (docs/file-formats.md). */
 #define VV_VVB_ZSTD 2u
+/** The pyramid levels after the bricks: each level half the one before
+ * along every axis longer than one voxel (rounding up; each voxel the mean
+ * of the 2x2x2 under it, as the OME-Zarr writer's levels) until every axis
+ * fits one chunk of 64 voxels, stored as chunks of 64^3 (raw, or zstd
+ * frames with VV_VVB_ZSTD) with their min/max; vv_pyramid_open reads them
+ * (docs/file-formats.md). Written from level 0 read back, a chunk at a
+ * time: memory stays bounded. */
+#define VV_VVB_LEVELS 4u
 
 /**
  * Writes @p src (a bricked volume opened from any source) as a .vvb file at
@@ -149,6 +157,12 @@ vv_status vv_volume_write_vvb(const vv_volume *v, const char *path, unsigned fla
 vv_status vv_boxes_write_vvb(const vv_volume *hdr, vv_box_reader read, void *ctx, const char *path,
                              unsigned flags, const vv_progress *progress);
 
+/**
+ * Pyramid levels of a .vvb, level 0 (the bricks) included: 1 when it has
+ * none (written without VV_VVB_LEVELS) and for raw layouts. vv_pyramid_open
+ * reads a .vvb of more than one.
+ */
+int vv_bricked_levels(const vv_bricked *b);
 /** Bricks in all (nb[0] nb[1] nb[2], i fastest). */
 int vv_bricked_count(const vv_bricked *b);
 /** Brick @p index's boxes and min/max (@p index in 0 .. vv_bricked_count - 1). */
@@ -205,8 +219,9 @@ typedef struct vv_pyramid_stats {
 
 /**
  * Opens the multiresolution file at @p path for reading by boxes: an
- * OME-Zarr store (or plain Zarr v2 array: one level; a folder), or a
- * BigDataViewer HDF5 or Imaris .ims file (an HDF5 file), channel
+ * OME-Zarr store (or plain Zarr v2 array: one level; a folder), a
+ * BigDataViewer HDF5 or Imaris .ims file (an HDF5 file), or a .vvb file
+ * (its pyramid levels, VV_VVB_LEVELS; one level without them), channel
  * @p channel (BigDataViewer: setup) at time step @p time (-1: 0) of every
  * level. Only the metadata and the coarsest level's chunks are read. The
  * value range is the omero window's min and max of the channel, else the
@@ -216,9 +231,13 @@ typedef struct vv_pyramid_stats {
  * channel, step and level counts and the omero name and colour. Every level
  * must have level 0's axes, type, channels and steps. Zarr chunks are
  * decoded in this process on every core; HDF5 chunks are read by libhdf5
- * in a long-lived sandboxed reader (docs/security.md), one at a time.
- * Errors (prefixed "zarr: NAME" or "hdf5: NAME"): those of
- * vv_ome_zarr_read or the HDF5 reader, VV_ERR_FORMAT (inconsistent
+ * in a long-lived sandboxed reader (docs/security.md), one at a time; a
+ * .vvb's chunks are read in this process (a level-0 chunk of 64^3 from the
+ * brick holding it) on every core, as vv_bricked reads them.
+ * Errors (prefixed "zarr: NAME", "hdf5: NAME" or "vvb: NAME"): those of
+ * vv_ome_zarr_read, the HDF5 reader or the .vvb reader (naming the level
+ * and chunk or brick), VV_ERR_INVALID (a channel or step of a .vvb other
+ * than 0), VV_ERR_FORMAT (inconsistent
  * multiscales; neither HDF5 layout), VV_ERR_LIMIT (over
  * VV_PYRAMID_MAX_LEVELS levels; a limit below one box's working set).
  * Thread-safety: vv_pyramid_read_box and the source's methods from one
@@ -232,8 +251,9 @@ vv_status vv_pyramid_open(vv_pyramid **out, const char *path, int channel, int t
 void vv_pyramid_free(vv_pyramid *p);
 /**
  * 1 when @p path is what vv_pyramid_open reads: a folder holding .zattrs
- * or .zarray, or a file starting with HDF5's signature; 0 otherwise (not
- * a promise that it opens). Thread-safe.
+ * or .zarray, a file starting with HDF5's signature, or a .vvb whose
+ * header gives pyramid levels (a .vvb without them: 0, it reads by bricks);
+ * 0 otherwise (not a promise that it opens). Thread-safe.
  */
 int vv_pyramid_probe(const char *path);
 /** Levels (>= 1). */

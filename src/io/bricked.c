@@ -28,6 +28,8 @@
 
 #include "core/internal.h"
 #include "io/bricked_internal.h"
+#include "io/pyramid.h"
+#include "volvis/sys/format.h"
 
 #define VVB_MAGIC "VOLVISB1"
 #define VVB_HEADER 256
@@ -35,6 +37,21 @@
 #define VVB_COARSE 4 /* coarse level: every 4th voxel */
 #define VVB_CODEC_ZSTD 1
 #define VVB_ZSTD_LEVEL 3
+#define VVB_CHUNK 64        /* a pyramid level's chunk side, voxels */
+#define VVB_LEVEL_RECORD 32 /* the level table: dims, chunk side, index offset, count */
+#define VVB_CHUNK_RECORD 32 /* a level's index: offset, size, min, max */
+
+/* A chunk of a pyramid level (levels 1 and up; level 0 is the bricks). */
+typedef struct vvb_chunk {
+    uint64_t offset, bytes;
+    double vmin, vmax;
+} vvb_chunk;
+
+typedef struct vvb_level {
+    int dims[3], nc[3]; /* voxels, chunks along each axis */
+    int n;              /* chunks */
+    vvb_chunk *c;       /* i fastest */
+} vvb_level;
 
 typedef struct brick_entry {
     uint64_t offset, bytes;               /* .vvb: the brick's voxels in the file */
@@ -58,7 +75,9 @@ struct vv_bricked {
     int n;
     brick_entry *e;
     int has_coarse;
-    int zstd; /* .vvb: bricks are zstd frames */
+    int zstd;                            /* .vvb: bricks are zstd frames */
+    int n_levels;                        /* .vvb: pyramid levels, level 0 (the bricks) included */
+    vvb_level lv[VV_PYRAMID_MAX_LEVELS]; /* lv[1 .. n_levels - 1] */
     uint64_t limit, capacity, held, clock;
     vv_bricked_stats st;
 };
@@ -114,9 +133,9 @@ swap_bytes(void *data, size_t count, size_t vs) {
         }
 }
 
-/* pread of exactly n bytes at off. */
+/* pread of exactly n bytes at off (uncounted: any thread). */
 static vv_status
-read_at(vv_bricked *b, void *buf, size_t n, uint64_t off, const char *what) {
+pread_exact(const vv_bricked *b, void *buf, size_t n, uint64_t off, const char *what) {
     size_t done = 0;
     while (done < n) {
         ssize_t r = pread(b->fd, (char *)buf + done, n - done, (off_t)(off + done));
@@ -132,8 +151,16 @@ read_at(vv_bricked *b, void *buf, size_t n, uint64_t off, const char *what) {
                                 (unsigned long long)(off + done), n, (unsigned long long)off);
         done += (size_t)r;
     }
-    b->st.bytes_read += n;
     return VV_OK;
+}
+
+/* pread_exact, counted in the statistics. */
+static vv_status
+read_at(vv_bricked *b, void *buf, size_t n, uint64_t off, const char *what) {
+    const vv_status s = pread_exact(b, buf, n, off, what);
+    if (s == VV_OK)
+        b->st.bytes_read += n;
+    return s;
 }
 
 /* ---- geometry -------------------------------------------------------------- */
@@ -169,6 +196,11 @@ static uint64_t
 working_set(const vv_bricked *b, uint64_t voxels) {
     const uint64_t vs = vv_voxel_type_size(b->header->type);
     return voxels * (vs + 4 + 4);
+}
+
+int
+vv_bricked_levels(const vv_bricked *b) {
+    return b->n_levels > 1 ? b->n_levels : 1;
 }
 
 int
@@ -250,6 +282,8 @@ vv_bricked_free(vv_bricked *b) {
     for (int i = 0; b->e && i < b->n; i++)
         vv_volume_free(b->e[i].vol);
     free(b->e);
+    for (int l = 1; l < VV_PYRAMID_MAX_LEVELS; l++)
+        free(b->lv[l].c);
     if (b->fd >= 0)
         close(b->fd);
     vv_volume_free(b->header);
@@ -260,21 +294,22 @@ vv_bricked_free(vv_bricked *b) {
 
 /* ---- reading a brick ------------------------------------------------------- */
 
-/* Brick @p index of a .vvb, its stored box of @p want bytes, into @p dst
- * (as stored: little-endian): one pread, then with zstd bricks one frame
- * decoded into exactly @p want bytes. */
+/* The @p bytes at @p off of a .vvb -- a brick's stored box or a level's
+ * chunk, of @p want bytes -- into @p dst (as stored: little-endian): one
+ * pread, then with zstd one frame decoded into exactly @p want bytes.
+ * Uncounted: any thread. */
 static vv_status
-read_vvb_brick(vv_bricked *b, int index, void *dst, uint64_t want, const char *what) {
-    const brick_entry *e = &b->e[index];
+read_piece(const vv_bricked *b, uint64_t off, uint64_t bytes, void *dst, uint64_t want,
+           const char *what) {
     if (!b->zstd)
-        return read_at(b, dst, (size_t)want, e->offset, what);
-    void *z = malloc((size_t)e->bytes);
+        return pread_exact(b, dst, (size_t)want, off, what);
+    void *z = malloc((size_t)bytes);
     if (!z)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    vv_status s = read_at(b, z, (size_t)e->bytes, e->offset, what);
+    vv_status s = pread_exact(b, z, (size_t)bytes, off, what);
     if (s == VV_OK) {
-        const unsigned long long fs = ZSTD_getFrameContentSize(z, (size_t)e->bytes);
-        const unsigned long long zb = e->bytes, zo = e->offset;
+        const unsigned long long fs = ZSTD_getFrameContentSize(z, (size_t)bytes);
+        const unsigned long long zb = bytes, zo = off;
         if (fs == ZSTD_CONTENTSIZE_ERROR)
             s = vv_error_set(VV_ERR_FORMAT, "%s: %llu bytes at offset %llu are not a zstd frame",
                              what, zb, zo);
@@ -287,7 +322,7 @@ read_vvb_brick(vv_bricked *b, int index, void *dst, uint64_t want, const char *w
                              "%llu",
                              what, zo, fs, (unsigned long long)want);
         else {
-            const size_t r = ZSTD_decompress(dst, (size_t)want, z, (size_t)e->bytes);
+            const size_t r = ZSTD_decompress(dst, (size_t)want, z, (size_t)bytes);
             if (ZSTD_isError(r) || r != (size_t)want)
                 s = vv_error_set(VV_ERR_FORMAT,
                                  "%s: the zstd frame of %llu bytes at offset %llu: %s", what, zb,
@@ -295,6 +330,17 @@ read_vvb_brick(vv_bricked *b, int index, void *dst, uint64_t want, const char *w
         }
     }
     free(z);
+    return s;
+}
+
+/* Brick @p index of a .vvb, its stored box of @p want bytes, into @p dst
+ * (as stored), counted. */
+static vv_status
+read_vvb_brick(vv_bricked *b, int index, void *dst, uint64_t want, const char *what) {
+    const brick_entry *e = &b->e[index];
+    const vv_status s = read_piece(b, e->offset, e->bytes, dst, want, what);
+    if (s == VV_OK)
+        b->st.bytes_read += e->bytes;
     return s;
 }
 
@@ -329,6 +375,146 @@ read_box(vv_bricked *b, int index, const vv_brick_info *in, vv_volume *v) {
     if (s == VV_OK && b->swap && vs > 1)
         swap_bytes(v->data, (size_t)n, vs);
     return s;
+}
+
+/* One zstd frame of @p n bytes at @p src into @p dst (@p cap bytes): level 3,
+ * its content size and a checksum in the frame (a scribbled frame fails to
+ * decode rather than giving other voxels). The size, or a zstd error code. */
+static size_t
+zstd_frame(void *dst, size_t cap, const void *src, size_t n) {
+    ZSTD_CCtx *c = ZSTD_createCCtx();
+    if (!c)
+        return (size_t)-1; /* ZSTD_isError: a generic error */
+    size_t r = ZSTD_CCtx_setParameter(c, ZSTD_c_compressionLevel, VVB_ZSTD_LEVEL);
+    if (!ZSTD_isError(r))
+        r = ZSTD_CCtx_setParameter(c, ZSTD_c_checksumFlag, 1);
+    if (!ZSTD_isError(r))
+        r = ZSTD_compress2(c, dst, cap, src, n);
+    ZSTD_freeCCtx(c);
+    return r;
+}
+
+/* ---- pyramid levels ------------------------------------------------------ */
+
+/* The dims of each level of a volume of @p d voxels: level 0 is the volume,
+ * each next level halves every axis longer than 1 (rounding up) until every
+ * axis fits one chunk, as the OME-Zarr writer's levels; at most
+ * VV_PYRAMID_MAX_LEVELS. Returns the count. */
+static int
+level_dims(const int d[3], int dims[VV_PYRAMID_MAX_LEVELS][3]) {
+    memcpy(dims[0], d, sizeof dims[0]);
+    int n = 1;
+    while (n < VV_PYRAMID_MAX_LEVELS && (dims[n - 1][0] > VVB_CHUNK || dims[n - 1][1] > VVB_CHUNK ||
+                                         dims[n - 1][2] > VVB_CHUNK)) {
+        for (int a = 0; a < 3; a++)
+            dims[n][a] = dims[n - 1][a] > 1 ? (dims[n - 1][a] + 1) / 2 : 1;
+        n++;
+    }
+    return n;
+}
+
+/* Level @p l's geometry (l >= 1) from its dims, with its chunk grid. */
+static void
+level_grid(vvb_level *L, const int dims[3]) {
+    L->n = 1;
+    for (int a = 0; a < 3; a++) {
+        L->dims[a] = dims[a];
+        L->nc[a] = (dims[a] + VVB_CHUNK - 1) / VVB_CHUNK;
+        L->n *= L->nc[a];
+    }
+}
+
+/* Chunk @p i of level @p L: its first voxel and voxel counts. */
+static void
+chunk_box(const vvb_level *L, int i, int org[3], int n[3]) {
+    const int c[3] = {i % L->nc[0], (i / L->nc[0]) % L->nc[1], i / (L->nc[0] * L->nc[1])};
+    for (int a = 0; a < 3; a++) {
+        org[a] = c[a] * VVB_CHUNK;
+        n[a] = L->dims[a] - org[a] < VVB_CHUNK ? L->dims[a] - org[a] : VVB_CHUNK;
+    }
+}
+
+/* The bytes of the largest piece of a level (a brick's stored box at level
+ * 0, a chunk above): what read_level_box's @p piece holds. */
+static uint64_t
+piece_bytes(const vv_bricked *b) {
+    uint64_t n = 1;
+    for (int a = 0; a < 3; a++) {
+        const int d = b->header->dims[a], side = VV_BRICK_CELLS + 3;
+        n *= (uint64_t)(d < side ? d : side);
+    }
+    return n * vv_voxel_type_size(b->header->type);
+}
+
+/* Voxels lo .. lo + n - 1 of level @p level into @p dst (x fastest, host
+ * byte order), from the bricks (level 0: each brick's own voxels lo .. hi)
+ * or the level's chunks that the box overlaps, each read once into
+ * @p piece (piece_bytes); *bytes adds the bytes read. Uncounted in the
+ * statistics: any thread. */
+static vv_status
+read_level_box(const vv_bricked *b, int level, const int lo[3], const int n[3], unsigned char *dst,
+               unsigned char *piece, uint64_t *bytes) {
+    const size_t vs = vv_voxel_type_size(b->header->type);
+    const vvb_level *L = level > 0 ? &b->lv[level] : NULL;
+    const int *grid = L ? L->nc : b->nb;
+    int c0[3], c1[3];
+    for (int a = 0; a < 3; a++) {
+        const int side = L ? VVB_CHUNK : VV_BRICK_CELLS;
+        c0[a] = lo[a] / side < grid[a] - 1 ? lo[a] / side : grid[a] - 1;
+        c1[a] = (lo[a] + n[a] - 1) / side < grid[a] - 1 ? (lo[a] + n[a] - 1) / side : grid[a] - 1;
+    }
+    for (int ck = c0[2]; ck <= c1[2]; ck++)
+        for (int cj = c0[1]; cj <= c1[1]; cj++)
+            for (int ci = c0[0]; ci <= c1[0]; ci++) {
+                const int i = (ck * grid[1] + cj) * grid[0] + ci;
+                int own0[3], own1[3], st0[3], sn[3]; /* its own voxels; what is stored */
+                uint64_t off, zbytes;
+                char what[64];
+                if (L) {
+                    chunk_box(L, i, st0, sn);
+                    for (int a = 0; a < 3; a++) {
+                        own0[a] = st0[a];
+                        own1[a] = st0[a] + sn[a] - 1;
+                    }
+                    off = L->c[i].offset;
+                    zbytes = L->c[i].bytes;
+                    snprintf(what, sizeof what, "level %d chunk %d", level, i);
+                } else {
+                    vv_brick_info in;
+                    brick_boxes(b, i, &in);
+                    for (int a = 0; a < 3; a++) {
+                        own0[a] = in.lo[a];
+                        own1[a] = in.hi[a];
+                        st0[a] = in.slo[a];
+                        sn[a] = in.shi[a] - in.slo[a] + 1;
+                    }
+                    off = b->e[i].offset;
+                    zbytes = b->e[i].bytes;
+                    snprintf(what, sizeof what, "brick %d", i);
+                }
+                const uint64_t nv = (uint64_t)sn[0] * sn[1] * sn[2];
+                vv_status s = read_piece(b, off, zbytes, piece, nv * vs, what);
+                if (s != VV_OK)
+                    return s;
+                *bytes += zbytes;
+                if (b->swap && vs > 1)
+                    swap_bytes(piece, (size_t)nv, vs);
+                int g0[3], g1[3]; /* the overlap, inclusive */
+                for (int a = 0; a < 3; a++) {
+                    g0[a] = lo[a] > own0[a] ? lo[a] : own0[a];
+                    g1[a] = lo[a] + n[a] - 1 < own1[a] ? lo[a] + n[a] - 1 : own1[a];
+                }
+                for (int k = g0[2]; k <= g1[2]; k++)
+                    for (int j = g0[1]; j <= g1[1]; j++)
+                        memcpy(dst + (((size_t)(k - lo[2]) * n[1] + (j - lo[1])) * n[0] +
+                                      (g0[0] - lo[0])) *
+                                         vs,
+                               piece + (((size_t)(k - st0[2]) * sn[1] + (j - st0[1])) * sn[0] +
+                                        (g0[0] - st0[0])) *
+                                           vs,
+                               (size_t)(g1[0] - g0[0] + 1) * vs);
+            }
+    return VV_OK;
 }
 
 /* Drops least recently used bricks until @p need more bytes fit. */
@@ -625,6 +811,103 @@ open_raw_layout(vv_bricked *b, int scan) {
     return VV_OK;
 }
 
+/* What is wrong with a piece of a .vvb -- a brick's voxels or a level's
+ * chunk -- of @p bytes at @p off, whose box (@p box names it) holds @p want
+ * bytes: 0 when nothing, else 1 and the phrase in @p why: its size against
+ * the box's (raw: equal; zstd: 1 to the compression bound), or where it
+ * runs past the end of the file. */
+static int
+piece_problem(const vv_bricked *b, uint64_t off, uint64_t bytes, uint64_t want, const char *box,
+              char *why, size_t cap) {
+    const uint64_t bound = b->zstd ? ZSTD_compressBound((size_t)want) : want;
+    if (b->zstd ? bytes == 0 || bytes > bound : bytes != want)
+        snprintf(why, cap, " has %llu bytes; its box %s needs %s%llu", (unsigned long long)bytes,
+                 box, b->zstd ? "compressed 1 to " : "", (unsigned long long)bound);
+    else if (off < VVB_HEADER || off > b->file_size || b->file_size - off < bytes)
+        snprintf(why, cap, ": %llu bytes at offset %llu run past the end of the file (%llu bytes)",
+                 (unsigned long long)bytes, (unsigned long long)off,
+                 (unsigned long long)b->file_size);
+    else
+        return 0;
+    return 1;
+}
+
+/* The pyramid levels of a .vvb: @p n levels in all (0 and 1: the bricks
+ * only), the table at @p table_off; each level's dims must be the halving
+ * rule's (level_dims), its index and chunks inside the file. */
+static vv_status
+open_levels(vv_bricked *b, uint32_t n, uint64_t table_off) {
+    b->n_levels = 1;
+    if (n <= 1)
+        return VV_OK;
+    int dims[VV_PYRAMID_MAX_LEVELS][3];
+    const int want = level_dims(b->header->dims, dims);
+    if (n != (uint32_t)want)
+        return vv_error_set(VV_ERR_FORMAT, "%u pyramid levels; %dx%dx%d voxels make %d", n,
+                            dims[0][0], dims[0][1], dims[0][2], want);
+    const uint64_t tbytes = (uint64_t)(n - 1) * VVB_LEVEL_RECORD;
+    if (table_off < VVB_HEADER || table_off > b->file_size || b->file_size - table_off < tbytes)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "level table of %llu bytes at offset %llu runs past the end of the "
+                            "file (%llu bytes)",
+                            (unsigned long long)tbytes, (unsigned long long)table_off,
+                            (unsigned long long)b->file_size);
+    unsigned char t[VV_PYRAMID_MAX_LEVELS * VVB_LEVEL_RECORD];
+    vv_status s = read_at(b, t, (size_t)tbytes, table_off, "level table");
+    const size_t vs = vv_voxel_type_size(b->header->type);
+    for (int l = 1; l < want && s == VV_OK; l++) {
+        const unsigned char *r = t + (size_t)(l - 1) * VVB_LEVEL_RECORD;
+        vvb_level *L = &b->lv[l];
+        level_grid(L, dims[l]);
+        const uint64_t ioff = get_u64(r + 16), count = get_u64(r + 24);
+        if (get_u32(r) != (uint32_t)dims[l][0] || get_u32(r + 4) != (uint32_t)dims[l][1] ||
+            get_u32(r + 8) != (uint32_t)dims[l][2] || get_u32(r + 12) != VVB_CHUNK ||
+            count != (uint64_t)L->n)
+            return vv_error_set(VV_ERR_FORMAT,
+                                "level %d: %ux%ux%u voxels in %llu chunks of %u (expected "
+                                "%dx%dx%d in %d of %d)",
+                                l, get_u32(r), get_u32(r + 4), get_u32(r + 8),
+                                (unsigned long long)count, get_u32(r + 12), dims[l][0], dims[l][1],
+                                dims[l][2], L->n, VVB_CHUNK);
+        const uint64_t ibytes = count * VVB_CHUNK_RECORD;
+        if (ioff < VVB_HEADER || ioff > b->file_size || b->file_size - ioff < ibytes)
+            return vv_error_set(VV_ERR_FORMAT,
+                                "level %d: index of %llu bytes at offset %llu runs past the end "
+                                "of the file (%llu bytes)",
+                                l, (unsigned long long)ibytes, (unsigned long long)ioff,
+                                (unsigned long long)b->file_size);
+        unsigned char *idx = malloc((size_t)ibytes);
+        L->c = calloc((size_t)L->n, sizeof *L->c);
+        if (!idx || !L->c) {
+            free(idx);
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        }
+        s = read_at(b, idx, (size_t)ibytes, ioff, "level index");
+        for (int i = 0; i < L->n && s == VV_OK; i++) {
+            const unsigned char *e = idx + (size_t)i * VVB_CHUNK_RECORD;
+            vvb_chunk *c = &L->c[i];
+            c->offset = get_u64(e);
+            c->bytes = get_u64(e + 8);
+            c->vmin = get_f64(e + 16);
+            c->vmax = get_f64(e + 24);
+            int o[3], cn[3];
+            chunk_box(L, i, o, cn);
+            const uint64_t cw = (uint64_t)cn[0] * cn[1] * cn[2] * vs;
+            char box[64], why[256];
+            snprintf(box, sizeof box, "of %dx%dx%d voxels", cn[0], cn[1], cn[2]);
+            if (piece_problem(b, c->offset, c->bytes, cw, box, why, sizeof why))
+                s = vv_error_set(VV_ERR_FORMAT, "level %d: chunk %d%s", l, i, why);
+            else if (!(c->vmin <= c->vmax))
+                s = vv_error_set(VV_ERR_FORMAT, "level %d: chunk %d: min %g > max %g", l, i,
+                                 c->vmin, c->vmax);
+        }
+        free(idx);
+    }
+    if (s == VV_OK)
+        b->n_levels = want;
+    return s;
+}
+
 static vv_status
 open_vvb(vv_bricked *b) {
     vv_status s = open_data(b, b->data_path);
@@ -714,24 +997,13 @@ open_vvb(vv_bricked *b) {
         int cd[3];
         coarse_dims(&in, cd);
         const uint64_t cwant = b->has_coarse ? (uint64_t)cd[0] * cd[1] * cd[2] * vs : 0;
-        if (b->zstd ? e->bytes == 0 || e->bytes > ZSTD_compressBound((size_t)want)
-                    : e->bytes != want)
-            s = vv_error_set(VV_ERR_FORMAT,
-                             "index: brick %d (%d,%d,%d) has %llu bytes; its box %d..%d x "
-                             "%d..%d x %d..%d needs %s%llu",
-                             i, in.lo[0] / VV_BRICK_CELLS, in.lo[1] / VV_BRICK_CELLS,
-                             in.lo[2] / VV_BRICK_CELLS, (unsigned long long)e->bytes, in.slo[0],
-                             in.shi[0], in.slo[1], in.shi[1], in.slo[2], in.shi[2],
-                             b->zstd ? "compressed 1 to " : "",
-                             b->zstd ? (unsigned long long)ZSTD_compressBound((size_t)want)
-                                     : (unsigned long long)want);
-        else if (e->offset < VVB_HEADER || e->offset > b->file_size ||
-                 b->file_size - e->offset < e->bytes)
-            s = vv_error_set(VV_ERR_FORMAT,
-                             "index: brick %d: %llu bytes at offset %llu run past the end of "
-                             "the file (%llu bytes)",
-                             i, (unsigned long long)e->bytes, (unsigned long long)e->offset,
-                             (unsigned long long)b->file_size);
+        char box[96], why[256];
+        snprintf(box, sizeof box, "%d..%d x %d..%d x %d..%d", in.slo[0], in.shi[0], in.slo[1],
+                 in.shi[1], in.slo[2], in.shi[2]);
+        if (piece_problem(b, e->offset, e->bytes, want, box, why, sizeof why))
+            s = vv_error_set(VV_ERR_FORMAT, "index: brick %d (%d,%d,%d)%s", i,
+                             in.lo[0] / VV_BRICK_CELLS, in.lo[1] / VV_BRICK_CELLS,
+                             in.lo[2] / VV_BRICK_CELLS, why);
         else if (e->coarse_bytes != cwant ||
                  (cwant && (e->coarse_offset > b->file_size ||
                             b->file_size - e->coarse_offset < e->coarse_bytes)))
@@ -745,6 +1017,8 @@ open_vvb(vv_bricked *b) {
                              e->vmax);
     }
     free(idx);
+    if (s == VV_OK)
+        s = open_levels(b, get_u32(h + 204), get_u64(h + 208));
     return s;
 }
 
@@ -1018,6 +1292,157 @@ vv_bricked_proxy(vv_bricked *b, int max_side, vv_volume **out) {
 
 /* ---- writing .vvb --------------------------------------------------------- */
 
+/* The pyramid levels after level 0's bricks (written to @p f, their
+ * records in @p index): each level's chunks from the level before read
+ * back from @p f and reduced (vv_pyr_reduce: OME-Zarr's levels, voxel for
+ * voxel), each followed by its index; then the level table. *pos is the
+ * file's end; *n_levels and *table_off get what the header says. Memory: a
+ * chunk's 2x2x2 blocks (128^3 voxels) and one piece. */
+static vv_status
+write_levels(FILE *f, const char *path, const vv_volume *hdr, const int nb[3], int n, int zstd,
+             const unsigned char *index, uint64_t *pos, int *n_levels, uint64_t *table_off,
+             const vv_progress *progress) {
+    int dims[VV_PYRAMID_MAX_LEVELS][3];
+    const int nl = level_dims(hdr->dims, dims);
+    *n_levels = 1;
+    if (nl < 2)
+        return VV_OK;
+    vv_bricked rd; /* level 0 and the levels written so far, read back */
+    memset(&rd, 0, sizeof rd);
+    rd.fd = fileno(f);
+    rd.data_path = (char *)path;
+    rd.header = (vv_volume *)hdr;
+    memcpy(rd.nb, nb, sizeof rd.nb);
+    rd.n = n;
+    rd.zstd = zstd;
+    rd.swap = !vv_host_is_little_endian();
+    const size_t vs = vv_voxel_type_size(hdr->type);
+    const size_t work_n = (size_t)8 * VVB_CHUNK * VVB_CHUNK * VVB_CHUNK * vs,
+                 chunk_n = (size_t)VVB_CHUNK * VVB_CHUNK * VVB_CHUNK * vs,
+                 zcap = ZSTD_compressBound(chunk_n);
+    rd.e = calloc((size_t)n, sizeof *rd.e);
+    unsigned char *piece = malloc((size_t)piece_bytes(&rd)), *work = malloc(work_n),
+                  *chunk = malloc(chunk_n), *z = zstd ? malloc(zcap) : NULL;
+    unsigned char table[VV_PYRAMID_MAX_LEVELS * VVB_LEVEL_RECORD];
+    memset(table, 0, sizeof table);
+    vv_status s = rd.e && piece && work && chunk && (z || !zstd)
+                      ? VV_OK
+                      : vv_error_set(VV_ERR_NOMEM, "out of memory");
+    for (int i = 0; i < n && s == VV_OK; i++) {
+        rd.e[i].offset = get_u64(index + (size_t)i * VVB_RECORD);
+        rd.e[i].bytes = get_u64(index + (size_t)i * VVB_RECORD + 8);
+    }
+    uint64_t total = 0, done = 0;
+    for (int l = 1; l < nl; l++) {
+        vvb_level t;
+        level_grid(&t, dims[l]);
+        total += (uint64_t)t.n;
+    }
+    for (int l = 1; l < nl && s == VV_OK; l++) {
+        if (fflush(f) != 0) {
+            s = vv_error_set(VV_ERR_IO, "%s: write failed: %s", path, strerror(errno));
+            break;
+        }
+        vvb_level *L = &rd.lv[l];
+        level_grid(L, dims[l]);
+        if (!(L->c = calloc((size_t)L->n, sizeof *L->c))) {
+            s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+            break;
+        }
+        const int *sd = dims[l - 1];
+        for (int i = 0; i < L->n && s == VV_OK; i++) {
+            vv_pyr_reduce_box rb;
+            memset(&rb, 0, sizeof rb);
+            rb.src = work;
+            rb.type = hdr->type;
+            chunk_box(L, i, rb.lo, rb.n);
+            for (int a = 0; a < 3; a++) {
+                rb.src_dims[a] = sd[a];
+                rb.step[a] = sd[a] > 1 ? 2 : 1;
+                rb.src_lo[a] = rb.lo[a] * rb.step[a];
+                rb.src_n[a] = (rb.lo[a] + rb.n[a]) * rb.step[a] < sd[a] ? rb.n[a] * rb.step[a]
+                                                                        : sd[a] - rb.src_lo[a];
+            }
+            rb.dst_dims[0] = rb.n[0];
+            rb.dst_dims[1] = rb.n[1];
+            uint64_t got = 0;
+            if ((s = read_level_box(&rd, l - 1, rb.src_lo, rb.src_n, work, piece, &got)) != VV_OK)
+                break;
+            vv_pyr_reduce(&rb, chunk);
+            const size_t nv = (size_t)rb.n[0] * rb.n[1] * rb.n[2];
+            double mn = INFINITY, mx = -INFINITY;
+            for (size_t k = 0; k < nv; k++) {
+                const double x = vv_pyr_voxel(chunk, hdr->type, k);
+                if (x == x) {
+                    mn = x < mn ? x : mn;
+                    mx = x > mx ? x : mx;
+                }
+            }
+            if (!(mn <= mx))
+                mn = mx = 0;
+            if (rd.swap)
+                swap_bytes(chunk, nv, vs);
+            const unsigned char *out = chunk;
+            size_t out_n = nv * vs;
+            if (zstd) {
+                const size_t zn = zstd_frame(z, zcap, chunk, out_n);
+                if (ZSTD_isError(zn)) {
+                    s = vv_error_set(VV_ERR_IO, "%s: level %d chunk %d: zstd: %s", path, l, i,
+                                     ZSTD_getErrorName(zn));
+                    break;
+                }
+                out = z;
+                out_n = zn;
+            }
+            if (fwrite(out, 1, out_n, f) != out_n) {
+                s = vv_error_set(VV_ERR_IO, "%s: write failed: %s", path, strerror(errno));
+                break;
+            }
+            L->c[i] = (vvb_chunk){*pos, out_n, mn, mx};
+            *pos += out_n;
+            if (progress && vv_progress_report(progress, 0.875 + 0.125 * (double)++done / total))
+                s = vv_error_set(VV_ERR_CANCELLED, "cancelled");
+        }
+        /* the level's index, and its record in the table */
+        unsigned char *idx = s == VV_OK ? malloc((size_t)L->n * VVB_CHUNK_RECORD) : NULL;
+        if (s == VV_OK && !idx)
+            s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+        for (int i = 0; i < L->n && s == VV_OK; i++) {
+            unsigned char *e = idx + (size_t)i * VVB_CHUNK_RECORD;
+            put_u64(e, L->c[i].offset);
+            put_u64(e + 8, L->c[i].bytes);
+            put_f64(e + 16, L->c[i].vmin);
+            put_f64(e + 24, L->c[i].vmax);
+        }
+        if (s == VV_OK && fwrite(idx, VVB_CHUNK_RECORD, (size_t)L->n, f) != (size_t)L->n)
+            s = vv_error_set(VV_ERR_IO, "%s: write failed: %s", path, strerror(errno));
+        free(idx);
+        unsigned char *r = table + (size_t)(l - 1) * VVB_LEVEL_RECORD;
+        for (int a = 0; a < 3; a++)
+            put_u32(r + 4 * a, (uint32_t)L->dims[a]);
+        put_u32(r + 12, VVB_CHUNK);
+        put_u64(r + 16, *pos);
+        put_u64(r + 24, (uint64_t)L->n);
+        *pos += (uint64_t)L->n * VVB_CHUNK_RECORD;
+    }
+    const size_t tbytes = (size_t)(nl - 1) * VVB_LEVEL_RECORD;
+    if (s == VV_OK && fwrite(table, 1, tbytes, f) != tbytes)
+        s = vv_error_set(VV_ERR_IO, "%s: write failed: %s", path, strerror(errno));
+    if (s == VV_OK) {
+        *table_off = *pos;
+        *pos += tbytes;
+        *n_levels = nl;
+    }
+    for (int l = 1; l < VV_PYRAMID_MAX_LEVELS; l++)
+        free(rd.lv[l].c);
+    free(rd.e);
+    free(piece);
+    free(work);
+    free(chunk);
+    free(z);
+    return s;
+}
+
 /* Where a brick's voxels come from while writing. */
 typedef vv_status (*brick_source)(void *ctx, int index, const vv_brick_info *in, void *buf);
 
@@ -1028,11 +1453,12 @@ write_vvb(const char *path, const vv_volume *hdr, const int nb[3], int n, unsign
     /* zstd bricks always come with coarse levels (previews read those) */
     const int zstd = (flags & VV_VVB_ZSTD) != 0;
     const int coarse = zstd || (flags & VV_VVB_COARSE);
+    const int levels = (flags & VV_VVB_LEVELS) != 0;
     char *tmp = malloc(strlen(path) + 16);
     if (!tmp)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     sprintf(tmp, "%s.tmp%d", path, (int)getpid());
-    FILE *f = fopen(tmp, "wb");
+    FILE *f = fopen(tmp, "w+b"); /* the levels read the bricks back */
     if (!f) {
         vv_status s = vv_error_set(VV_ERR_IO, "%s: %s", path, strerror(errno));
         free(tmp);
@@ -1097,7 +1523,7 @@ write_vvb(const char *path, const vv_volume *hdr, const int nb[3], int n, unsign
                 s = vv_error_set(VV_ERR_NOMEM, "out of memory");
                 break;
             }
-            const size_t zn = ZSTD_compress(zbuf, bound, buf, out_bytes, VVB_ZSTD_LEVEL);
+            const size_t zn = zstd_frame(zbuf, bound, buf, out_bytes);
             if (ZSTD_isError(zn)) {
                 s = vv_error_set(VV_ERR_IO, "%s: brick %d: zstd: %s", path, i,
                                  ZSTD_getErrorName(zn));
@@ -1141,12 +1567,16 @@ write_vvb(const char *path, const vv_volume *hdr, const int nb[3], int n, unsign
             }
             pos += cn * vs;
         }
-        if (progress && vv_progress_report(progress, (double)(i + 1) / n))
+        if (progress && vv_progress_report(progress, (levels ? 0.875 : 1.0) * (double)(i + 1) / n))
             s = vv_error_set(VV_ERR_CANCELLED, "cancelled");
     }
     free(buf);
     free(cbuf);
     free(zbuf);
+    int n_levels = 1;
+    uint64_t table_off = 0;
+    if (s == VV_OK && levels)
+        s = write_levels(f, path, hdr, nb, n, zstd, index, &pos, &n_levels, &table_off, progress);
     if (s == VV_OK) {
         unsigned char h[VVB_HEADER];
         memset(h, 0, sizeof h);
@@ -1172,6 +1602,10 @@ write_vvb(const char *path, const vv_volume *hdr, const int nb[3], int n, unsign
         put_u64(h + 184, VVB_HEADER);
         put_u64(h + 192, (uint64_t)n);
         put_u32(h + 200, zstd ? VVB_CODEC_ZSTD : 0);
+        if (n_levels > 1) {
+            put_u32(h + 204, (uint32_t)n_levels);
+            put_u64(h + 208, table_off);
+        }
         if (fseeko(f, 0, SEEK_SET) != 0 || fwrite(h, 1, sizeof h, f) != sizeof h ||
             fwrite(index, VVB_RECORD, (size_t)n, f) != (size_t)n)
             s = vv_error_set(VV_ERR_IO, "%s: write failed: %s", path, strerror(errno));
@@ -1271,3 +1705,163 @@ vv_status
 vv_volume_write_vvb(const vv_volume *v, const char *path, unsigned flags) {
     return write_vvb_of(v, path, flags, source_memory, (void *)v, NULL);
 }
+
+/* ---- a .vvb as a pyramid's store ------------------------------------------- */
+
+int
+vv_vvb_probe(const char *path) {
+    unsigned char h[VVB_HEADER];
+    const int fd = open(path, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return 0;
+    const ssize_t r = pread(fd, h, sizeof h, 0);
+    close(fd);
+    if (r != (ssize_t)sizeof h || memcmp(h, VVB_MAGIC, 8) != 0)
+        return 0;
+    const uint32_t n = get_u32(h + 204);
+    return n > 1 && n <= VV_PYRAMID_MAX_LEVELS ? (int)n : 1;
+}
+
+static vv_status
+vvb_store_read(void *ctx, int level, const int c[3], unsigned char *scratch, unsigned char *dst,
+               const int org[3], const int dims[3], int *missing, uint64_t *file_bytes) {
+    (void)c;
+    *missing = 0;
+    uint64_t got = 0;
+    const vv_status s = read_level_box(ctx, level, org, dims, dst, scratch, &got);
+    *file_bytes = got;
+    return s;
+}
+
+static void
+vvb_store_close(void *ctx) {
+    vv_bricked_free(ctx);
+}
+
+vv_status
+vv_vvb_pyramid_store(pyr_store *st, const char *path, int channel, int time) {
+    memset(st, 0, sizeof *st);
+    st->name = "vvb";
+    if (channel > 0 || time > 0)
+        return vv_error_set(VV_ERR_INVALID,
+                            "a .vvb holds one channel at one time step (asked "
+                            "for channel %d, time step %d)",
+                            channel, time);
+    vv_bricked *b = calloc(1, sizeof *b);
+    if (!b)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    b->fd = -1;
+    b->vvb = 1;
+    b->swap = !vv_host_is_little_endian();
+    b->path = strdup(path);
+    b->data_path = strdup(path);
+    st->ctx = b;
+    st->close = vvb_store_close;
+    st->read_chunk = vvb_store_read;
+    st->parallel = 1; /* pread and zstd into the caller's buffers */
+    vv_status s =
+        b->path && b->data_path ? open_vvb(b) : vv_error_set(VV_ERR_NOMEM, "out of memory");
+    if (s != VV_OK)
+        return s;
+    st->scratch = (size_t)piece_bytes(b);
+    st->n_levels = b->n_levels;
+    const vv_volume *h = b->header;
+    int f[3] = {1, 1, 1}; /* level-0 voxels per voxel of level l */
+    for (int l = 0; l < b->n_levels && s == VV_OK; l++) {
+        const int *d = l ? b->lv[l].dims : h->dims;
+        int cd[3];
+        for (int a = 0; a < 3; a++) {
+            cd[a] = d[a] < VVB_CHUNK ? d[a] : VVB_CHUNK;
+            if (l > 0 && (l > 1 ? b->lv[l - 1].dims[a] : h->dims[a]) > 1)
+                f[a] *= 2;
+        }
+        if ((s = vv_pyr_store_level(st, l, h->type, d, cd)) != VV_OK)
+            break;
+        /* each voxel's centre at the centre of the level-0 voxels it
+         * summarises, along the volume's axes */
+        vv_volume *v = st->lv[l].hdr;
+        memcpy(v->direction, h->direction, sizeof v->direction);
+        memcpy(v->origin, h->origin, sizeof v->origin);
+        for (int a = 0; a < 3; a++) {
+            v->spacing[a] = h->spacing[a] * f[a];
+            const double t = 0.5 * (f[a] - 1) * h->spacing[a];
+            for (int r = 0; r < 3; r++)
+                v->origin[r] += h->direction[3 * r + a] * t;
+        }
+        v->unit = h->unit;
+        v->space = h->space;
+        v->range[0] = h->range[0];
+        v->range[1] = h->range[1];
+        v->modification = VV_MOD_ORIGINAL;
+    }
+    st->n_channels = st->n_times = 1;
+    st->has_range = 1;
+    st->range[0] = h->range[0];
+    st->range[1] = h->range[1];
+    return s;
+}
+
+/* ---- a .vvb as a volume format (vv_volume_load) ------------------------------ */
+
+/* Level opt->level of the .vvb at @p path, whole, through its pyramid store. */
+static vv_status
+vvb_read(vv_volume **out, const char *path, const vv_load_options *opt) {
+    *out = NULL;
+    pyr_store st;
+    vv_status s = vv_vvb_pyramid_store(&st, path, opt->channel, opt->time);
+    const int level = opt->level > 0 ? opt->level : 0;
+    if (s == VV_OK && level >= st.n_levels)
+        s = vv_error_set(VV_ERR_INVALID, "level %d asked, the file has %d", level, st.n_levels);
+    vv_volume *v = NULL;
+    if (s == VV_OK)
+        s = vv_volume_new(&v, st.lv[level].hdr->dims, st.lv[level].hdr->type);
+    unsigned char *piece = s == VV_OK ? malloc(st.scratch) : NULL;
+    if (s == VV_OK && !piece)
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+    const int zero[3] = {0, 0, 0};
+    uint64_t bytes = 0;
+    if (s == VV_OK)
+        s = read_level_box(st.ctx, level, zero, v->dims, v->data, piece, &bytes);
+    free(piece);
+    if (s == VV_OK) {
+        const vv_volume *h = st.lv[level].hdr;
+        memcpy(v->spacing, h->spacing, sizeof v->spacing);
+        memcpy(v->origin, h->origin, sizeof v->origin);
+        memcpy(v->direction, h->direction, sizeof v->direction);
+        v->unit = h->unit;
+        v->space = h->space;
+        v->modification = VV_MOD_ORIGINAL;
+        vv_volume_update_range(v);
+        if (opt->info) {
+            opt->info->n_channels = opt->info->n_times = 1;
+            opt->info->n_levels = st.n_levels;
+        }
+    }
+    vv_pyr_store_close(&st);
+    if (s != VV_OK) {
+        vv_volume_free(v);
+        return vv_error_prefix(s, "vvb: %s", vv_path_basename(path));
+    }
+    *out = v;
+    return VV_OK;
+}
+
+static int
+vvb_looks_like(const vv_format_probe *p, int deep) {
+    (void)deep;
+    return !p->is_dir && p->n >= 8 && !memcmp(p->head, VVB_MAGIC, 8);
+}
+
+static const char *const vvb_extensions[] = {"vvb", NULL};
+
+const vv_volume_format vv_volume_format_vvb = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "vvb",
+    .title = ".vvb",
+    .extensions = vvb_extensions,
+    .doc = "VolVis's bricked volumes (volvis convert IN OUT.vvb): read whole, any pyramid level "
+           "(--level); rendered out of core by bricks (volvis render) or by level of detail "
+           "(--lod)",
+    .looks_like = vvb_looks_like,
+    .read = vvb_read,
+};

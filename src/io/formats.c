@@ -35,7 +35,8 @@
     X(dicom)                                                                                       \
     X(vti)                                                                                         \
     X(ome_zarr)                                                                                    \
-    X(hdf5)
+    X(hdf5)                                                                                        \
+    X(vvb)
 
 #define DECLARE(name) extern const vv_volume_format vv_volume_format_##name;
 VV_VOLUME_FORMAT_TABLE(DECLARE)

@@ -1325,6 +1325,8 @@ vv_pyramid_open_store(vv_pyramid **out, pyr_store *st, const char *path, uint64_
 vv_status
 vv_pyr_store_open_local(pyr_store *st, const char *path, int channel, int time,
                         vv_load_info *info) {
+    if (vv_vvb_probe(path))
+        return vv_vvb_pyramid_store(st, path, channel, time);
     return vv_h5_is_hdf5(path) ? vv_h5_pyramid_store(st, path, channel, time)
                                : vv_zr_pyramid_store(st, path, channel, time, info);
 }
@@ -1336,7 +1338,7 @@ vv_pyramid_probe(const char *path) {
     if (!path || stat(path, &st) != 0)
         return 0;
     if (!S_ISDIR(st.st_mode))
-        return S_ISREG(st.st_mode) && vv_h5_is_hdf5(path);
+        return S_ISREG(st.st_mode) && (vv_h5_is_hdf5(path) || vv_vvb_probe(path) > 1);
     snprintf(f, sizeof f, "%s/.zattrs", path);
     if (stat(f, &st) == 0)
         return 1;
@@ -1350,16 +1352,21 @@ vv_pyramid_open(vv_pyramid **out, const char *path, int channel, int time, uint6
     if (!out || !path)
         return vv_error_set(VV_ERR_INVALID, "pyramid: NULL argument");
     *out = NULL;
-    const int h5 = vv_h5_is_hdf5(path);
+    /* a .vvb is our own format, read in this process as the bricked reader
+     * reads it (docs/security.md); the others through their libraries in a
+     * sandboxed reader */
+    const int vvb = vv_vvb_probe(path) > 0, h5 = !vvb && vv_h5_is_hdf5(path);
+    const char *name = vvb ? "vvb" : h5 ? "hdf5" : "zarr";
     if (strlen(path) >= 4096)
-        return vv_error_set(VV_ERR_LIMIT, "%s: path too long", h5 ? "hdf5" : "zarr");
+        return vv_error_set(VV_ERR_LIMIT, "%s: path too long", name);
     pyr_store st;
     memset(&st, 0, sizeof st);
-    vv_status s = vv_sandbox_wanted(NULL) ? vv_sandbox_store_open(&st, path, channel, time, info)
-                                          : vv_pyr_store_open_local(&st, path, channel, time, info);
+    vv_status s = !vvb && vv_sandbox_wanted(NULL)
+                      ? vv_sandbox_store_open(&st, path, channel, time, info)
+                      : vv_pyr_store_open_local(&st, path, channel, time, info);
     if (s != VV_OK) {
         vv_pyr_store_close(&st);
-        return prefix_once(s, h5 ? "hdf5" : "zarr", path);
+        return prefix_once(s, name, path);
     }
     return vv_pyramid_open_store(out, &st, path, memory_limit, info);
 }

@@ -121,6 +121,21 @@ typedef struct vv_pyr_reduce_box {
  */
 void vv_pyr_reduce(const vv_pyr_reduce_box *b, void *dst);
 
+/**
+ * 0 when @p path is no .vvb file (its magic), else the pyramid levels its
+ * header gives (1: the bricks only). Unchecked beyond that: a probe.
+ */
+int vv_vvb_probe(const char *path);
+
+/**
+ * The store of the .vvb file @p path (src/io/bricked.c), read in this
+ * process: level 0 from its bricks, a chunk of 64^3 voxels from the brick
+ * holding it, the levels above from their chunks. Channel and time step
+ * must be 0 or -1. Errors: those of opening a .vvb (VV_ERR_FORMAT,
+ * VV_ERR_IO, VV_ERR_LIMIT, VV_ERR_NOMEM), VV_ERR_INVALID.
+ */
+vv_status vv_vvb_pyramid_store(pyr_store *st, const char *path, int channel, int time);
+
 /** 1 when @p path is an HDF5 file (its signature at offset 0). */
 int vv_h5_is_hdf5(const char *path);
 

@@ -10,7 +10,8 @@
  * on the CT head, a 4x coarser proxy (the .vvb's coarse level), exact
  * without shadows and measured with them), and its errors: a memory limit
  * smaller than one brick, a bad size, a scene file, a renderer without the
- * region contract.
+ * region contract; the pyramid levels convert writes (render --level and
+ * --lod read them: OME-Zarr's images bit for bit).
  */
 #include "testutil.h"
 
@@ -41,7 +42,7 @@ test_convert_render(void **state) {
     vt_run_result r = run_cli("convert", nut, vvb);
     assert_int_equal(r.status, 0);
     assert_non_null(strstr(r.out, "(vvb, "));
-    assert_non_null(strstr(r.out, ", zstd)")); /* zstd bricks by default */
+    assert_non_null(strstr(r.out, ", zstd, 2 pyramid levels)")); /* by default */
     vt_run_result_free(&r);
     /* --no-compress: raw bricks, a larger file; --no-coarse alone keeps the
      * coarse levels of zstd bricks, with a note */
@@ -148,6 +149,67 @@ test_renderers(void **state) {
     assert_true(mem_vs_ooc(head, hvvb, "raycast", "composite", "simd=1", "100:1500") >= 50);
 }
 
+/* The .vvb's pyramid levels from the CLI: `convert` writes them (3 for the
+ * CT head) unless --no-levels; `render --level L` and `--lod` read them
+ * (the image of OME-Zarr's level L, bit for bit), without them those
+ * options are refused; a .vvb from an OME-Zarr pyramid (read by boxes of
+ * its level 0) is the bytes of the one from the NRRD. */
+static void
+test_levels(void **state) {
+    (void)state;
+    const char *head = vt_data("volumes/ct_head.nrrd");
+    if (!vt_have_data("volumes/ct_head.nrrd"))
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    char vvb[1200], flat[1200], zarr[1200], back[1200], a[1200], b[1200];
+    snprintf(vvb, sizeof vvb, "%s/head_l.vvb", outdir());
+    snprintf(flat, sizeof flat, "%s/head_flat.vvb", outdir());
+    snprintf(zarr, sizeof zarr, "%s/head_l.ome.zarr", outdir());
+    snprintf(back, sizeof back, "%s/head_z.vvb", outdir());
+    snprintf(a, sizeof a, "%s/level_vvb.png", outdir());
+    snprintf(b, sizeof b, "%s/level_zarr.png", outdir());
+    vt_run_result r = run_cli("convert", head, vvb);
+    assert_int_equal(r.status, 0);
+    assert_non_null(strstr(r.out, ", zstd, 3 pyramid levels"));
+    vt_run_result_free(&r);
+    r = run_cli("convert", "-q", head, zarr);
+    assert_int_equal(r.status, 0);
+    vt_run_result_free(&r);
+    r = run_cli("convert", "-q", zarr, back);
+    assert_int_equal(r.status, 0);
+    vt_run_result_free(&r);
+    size_t n1, n2;
+    unsigned char *x = vt_read_file(vvb, &n1), *y = vt_read_file(back, &n2);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(x, y, n1);
+    free(x);
+    free(y);
+    for (int level = 1; level <= 2; level++) {
+        char ls[8];
+        snprintf(ls, sizeof ls, "%d", level);
+        r = run_cli("render", vvb, "--level", ls, "--mode", "mip", "--size", "96x80", "-o", a);
+        assert_int_equal(r.status, 0);
+        assert_non_null(strstr(r.out, "out of core from 3 levels"));
+        vt_run_result_free(&r);
+        r = run_cli("render", zarr, "--level", ls, "--memory-limit", "64M", "--mode", "mip",
+                    "--size", "96x80", "-q", "-o", b);
+        assert_int_equal(r.status, 0);
+        vt_run_result_free(&r);
+        assert_true(isinf(vt_png_psnr(a, b)));
+    }
+    r = run_cli("render", vvb, "--lod", "1", "--size", "96x80", "-o", a);
+    assert_int_equal(r.status, 0);
+    assert_non_null(strstr(r.out, "out of core from 3 levels"));
+    vt_run_result_free(&r);
+    r = run_cli("convert", "--no-levels", head, flat);
+    assert_int_equal(r.status, 0);
+    assert_null(strstr(r.out, "pyramid levels"));
+    vt_run_result_free(&r);
+    r = run_cli("render", flat, "--lod", "1", "-o", a);
+    assert_int_equal(r.status, 2);
+    assert_non_null(strstr(r.err, "a .vvb with pyramid levels"));
+    vt_run_result_free(&r);
+}
+
 static void
 test_errors(void **state) {
     (void)state;
@@ -188,6 +250,7 @@ main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_convert_render),
         cmocka_unit_test(test_renderers),
+        cmocka_unit_test(test_levels),
         cmocka_unit_test(test_errors),
     };
     return vt_run_tests(tests, NULL, NULL);

@@ -37,7 +37,10 @@ V=${VOLVIS:-build/release/apps/volvis/volvis}
 "$V" convert -q --no-compress $T/crop.nrrd $C/vvb/crop_raw.vvb
 "$V" convert -q $T/crop.nrrd $C/vvb/crop_zstd.vvb
 teem-unu crop -i $D/volumes/ct_head.nrrd -min 90 120 50 -max 159 121 51 -o $T/row.nrrd
-"$V" convert -q $T/row.nrrd $C/vvb/two_bricks_zstd.vvb
+"$V" convert -q --no-levels $T/row.nrrd $C/vvb/two_bricks_zstd.vvb
+# ... and with pyramid levels (70 x 2 x 2: a level of 35 x 1 x 1), zstd and raw
+"$V" convert -q $T/row.nrrd $C/vvb/levels_zstd.vvb
+"$V" convert -q --no-compress $T/row.nrrd $C/vvb/levels_raw.vvb
 $PY - "$T/crop.nrrd" "$C" <<'PYEOF'
 import sys, struct, gzip, zlib, numpy as np
 src, C = sys.argv[1], sys.argv[2]

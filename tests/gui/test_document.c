@@ -350,17 +350,10 @@ time_failed(VvDocument *doc, const char *message, gpointer user) {
  * out of core: the object shows the proxy (the coarsest level over level
  * 0's box), the document keeps the pyramid; a smaller limit's quarter
  * holds it whole; a session saves level 0's geometry; a file deleted and
- * opened again gets a pyramid of its own. */
+ * opened again gets a pyramid of its own. The same for an OME-Zarr store
+ * and a .vvb with pyramid levels. */
 static void
-test_pyramid_out_of_core(void **state) {
-    (void)state;
-    if (!vt_have_data("volumes/ct_head.nrrd"))
-        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
-    const char *dir = vt_outdir("gui_document");
-    const char *store = vt_path(dir, "head.ome.zarr");
-    vv_volume *v = NULL;
-    vt_ok(vv_volume_load(&v, vt_data("volumes/ct_head.nrrd"), NULL));
-    vt_ok(vv_ome_zarr_write(v, store, NULL));
+pyramid_out_of_core(const char *dir, const char *store, const vv_volume *v) {
     GError *err = NULL;
     /* 64 MiB: level 0 (13.5 MiB) fits a quarter: read whole */
     g_setenv("VOLVIS_MEMORY_LIMIT", "64M", TRUE);
@@ -399,6 +392,22 @@ test_pyramid_out_of_core(void **state) {
     assert_true(o->volume == p->proxy);
     g_object_unref(doc);
     g_unsetenv("VOLVIS_MEMORY_LIMIT");
+}
+
+static void
+test_pyramid_out_of_core(void **state) {
+    (void)state;
+    if (!vt_have_data("volumes/ct_head.nrrd"))
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    const char *dir = vt_outdir("gui_document");
+    const char *store = vt_path(dir, "head.ome.zarr");
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_load(&v, vt_data("volumes/ct_head.nrrd"), NULL));
+    vt_ok(vv_ome_zarr_write(v, store, NULL));
+    pyramid_out_of_core(dir, store, v);
+    const char *vvb = vt_path(dir, "head.vvb");
+    vt_ok(vv_volume_write_vvb(v, vvb, VV_VVB_ZSTD | VV_VVB_LEVELS));
+    pyramid_out_of_core(dir, vvb, v);
     vv_volume_free(v);
 }
 

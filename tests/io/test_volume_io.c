@@ -68,7 +68,7 @@ test_format_names(void **state) {
     /* the message lists the table's names */
     assert_non_null(
         strstr(vv_error_message(),
-               "auto, slc, nrrd, nifti, mhd, vtk, raw, tiff, dicom, vti, zarr or hdf5"));
+               "auto, slc, nrrd, nifti, mhd, vtk, raw, tiff, dicom, vti, zarr, hdf5 or vvb"));
 }
 
 /* The records (include/volvis/sys/format.h): complete, the version of the
