@@ -158,8 +158,9 @@ convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int serie
     vv_error_clear();
     vv_status s = VV_ERR_FORMAT;
     const vv_format f = raw ? VV_FORMAT_RAW : vv_format_detect(in);
+    /* the header only: the writer takes each brick's range as it reads it */
     if ((raw || f == VV_FORMAT_NRRD) && channel <= 0 && time <= 0)
-        s = vv_bricked_open(&b, in, raw, 0);
+        s = vv_bricked_open_header(&b, in, raw, 0);
     if (s != VV_OK && !raw) {
         const vv_status so = open_slabs(in, f, channel, time, &sl);
         if (so != VV_OK)

@@ -1370,16 +1370,13 @@ write_levels(FILE *f, const char *path, const vv_volume *hdr, const int nb[3], i
                 break;
             vv_pyr_reduce(&rb, chunk);
             const size_t nv = (size_t)rb.n[0] * rb.n[1] * rb.n[2];
-            double mn = INFINITY, mx = -INFINITY;
-            for (size_t k = 0; k < nv; k++) {
-                const double x = vv_pyr_voxel(chunk, hdr->type, k);
-                if (x == x) {
-                    mn = x < mn ? x : mn;
-                    mx = x > mx ? x : mx;
-                }
-            }
-            if (!(mn <= mx))
-                mn = mx = 0;
+            vv_volume cv; /* the chunk, for its range (NaN left out) */
+            memset(&cv, 0, sizeof cv);
+            cv.type = hdr->type;
+            cv.data = chunk;
+            memcpy(cv.dims, rb.n, sizeof cv.dims);
+            vv_volume_update_range(&cv);
+            const double mn = cv.range[0], mx = cv.range[1];
             if (rd.swap)
                 swap_bytes(chunk, nv, vs);
             const unsigned char *out = chunk;
@@ -1494,18 +1491,8 @@ write_vvb(const char *path, const vv_volume *hdr, const int nb[3], int n, unsign
         tmpv.dims[0] = in.shi[0] - in.slo[0] + 1;
         tmpv.dims[1] = in.shi[1] - in.slo[1] + 1;
         tmpv.dims[2] = in.shi[2] - in.slo[2] + 1;
-        double mn = INFINITY, mx = -INFINITY;
-        for (int k = 0; k < tmpv.dims[2]; k++)
-            for (int j = 0; j < tmpv.dims[1]; j++)
-                for (int ii = 0; ii < tmpv.dims[0]; ii++) {
-                    const double x = vv_volume_get(&tmpv, ii, j, k);
-                    if (x == x) {
-                        mn = x < mn ? x : mn;
-                        mx = x > mx ? x : mx;
-                    }
-                }
-        if (!(mn <= mx))
-            mn = mx = 0;
+        vv_volume_update_range(&tmpv); /* NaN left out; 0 and 0 when nothing else */
+        const double mn = tmpv.range[0], mx = tmpv.range[1];
         lo = mn < lo ? mn : lo;
         hi = mx > hi ? mx : hi;
         unsigned char *r = index + (size_t)i * VVB_RECORD;
@@ -1621,20 +1608,73 @@ write_vvb(const char *path, const vv_volume *hdr, const int nb[3], int n, unsign
     return s;
 }
 
+/* A bricked source being written as .vvb: a .vvb's bricks read one by one;
+ * a raw layout's read a row of bricks at a time (every brick of one j and
+ * k: one pread a row of the volume instead of one a row of each brick),
+ * when that row is under 64 MiB. */
+typedef struct bricked_feed {
+    vv_bricked *b;
+    vv_volume row; /* the row of bricks held: data NULL, or voxels 0 .. N-1 x slo .. shi */
+    int rj, rk;    /* its brick j and k */
+} bricked_feed;
+
 static vv_status
 source_bricked(void *ctx, int index, const vv_brick_info *in, void *buf) {
-    vv_bricked *b = ctx;
-    vv_volume v;
-    memset(&v, 0, sizeof v);
-    v.data = buf;
-    v.type = b->header->type;
-    return read_box(b, index, in, &v);
+    bricked_feed *f = ctx;
+    vv_bricked *b = f->b;
+    const size_t vs = vv_voxel_type_size(b->header->type);
+    const int *d = b->header->dims;
+    const uint64_t row_bytes =
+        (uint64_t)d[0] * (uint64_t)(VV_BRICK_CELLS + 3) * (uint64_t)(VV_BRICK_CELLS + 3) * vs;
+    if (b->vvb || row_bytes > ((uint64_t)64 << 20)) {
+        vv_volume v;
+        memset(&v, 0, sizeof v);
+        v.data = buf;
+        v.type = b->header->type;
+        return read_box(b, index, in, &v);
+    }
+    const int bj = (index / b->nb[0]) % b->nb[1], bk = index / (b->nb[0] * b->nb[1]);
+    if (!f->row.data || f->rj != bj || f->rk != bk) {
+        free(f->row.data);
+        f->row.data = malloc((size_t)row_bytes);
+        if (!f->row.data)
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        vv_brick_info r = *in;
+        r.slo[0] = 0;
+        r.shi[0] = d[0] - 1;
+        f->row.type = b->header->type;
+        for (int a = 0; a < 3; a++)
+            f->row.dims[a] = r.shi[a] - r.slo[a] + 1;
+        f->rj = bj;
+        f->rk = bk;
+        const vv_status s = read_box(b, -1, &r, &f->row);
+        if (s != VV_OK) {
+            free(f->row.data);
+            f->row.data = NULL;
+            return s;
+        }
+    }
+    const size_t n = (size_t)(in->shi[0] - in->slo[0] + 1) * vs;
+    char *dst = buf;
+    for (int k = 0; k < f->row.dims[2]; k++)
+        for (int j = 0; j < f->row.dims[1]; j++, dst += n)
+            memcpy(dst,
+                   (const char *)f->row.data +
+                       (((size_t)k * f->row.dims[1] + j) * f->row.dims[0] + in->slo[0]) * vs,
+                   n);
+    return VV_OK;
 }
 
 vv_status
 vv_bricked_write_vvb(vv_bricked *src, const char *path, unsigned flags,
                      const vv_progress *progress) {
-    return write_vvb(path, src->header, src->nb, src->n, flags, source_bricked, src, progress);
+    bricked_feed f;
+    memset(&f, 0, sizeof f);
+    f.b = src;
+    const vv_status s =
+        write_vvb(path, src->header, src->nb, src->n, flags, source_bricked, &f, progress);
+    free(f.row.data);
+    return s;
 }
 
 static vv_status
