@@ -257,11 +257,40 @@ static const char *const mesh_suffixes[] = {".obj", ".ply", ".stl",  ".off", ".d
                                             ".3ds", ".fbx", ".gltf", ".glb", NULL};
 
 /* A scene replaces the World; its volumes' files are the scene's. */
+static int pyramid_proxy(VvDocument *doc, const char *path, const char *key, VvGuiPyramid **out,
+                         vv_volume **proxy, GError **error);
+
+/* A scene's volume file (vv_scene_load_with): a multiresolution file too
+ * large to read whole (pyramid_proxy) stands in as its proxy, kept under
+ * the path the object will name; anything else is read whole. */
+static vv_status
+scene_volume(void *user, const char *path, int time, vv_scene_volume *out) {
+    VvDocument *doc = user;
+    if (time > 0 || !vv_pyramid_probe(path))
+        return VV_ERR_UNSUPPORTED;
+    VvGuiPyramid *gp = NULL;
+    vv_volume *proxy = NULL;
+    GError *err = NULL;
+    const int r = pyramid_proxy(doc, path, path, &gp, &proxy, &err);
+    if (r < 0) { /* the pyramid's one-line error, for the scene to place */
+        const vv_status s = vv_error_set(VV_ERR_FORMAT, "%s", err->message);
+        g_clear_error(&err);
+        return s;
+    }
+    if (r == 0)
+        return VV_ERR_UNSUPPORTED;
+    const vv_volume *h0 = vv_pyramid_level(gp->pyramid, 0);
+    out->volume = proxy;
+    for (int a = 0; a < 3; a++)
+        out->scale[a] = proxy->spacing[a] / h0->spacing[a];
+    return VV_OK;
+}
+
 static gboolean
 open_scene(VvDocument *doc, const char *path, GError **error) {
     vv_world *w = NULL;
     vv_error_clear();
-    if (vv_scene_load_cached(&w, path, NULL, doc->filtered) != VV_OK) {
+    if (vv_scene_load_with(&w, path, NULL, doc->filtered, scene_volume, doc) != VV_OK) {
         set_error(error, "cannot read the scene");
         return FALSE;
     }
@@ -538,12 +567,15 @@ volume_name(const char *path) {
     return base;
 }
 
+/* The pyramid of the multiresolution file @p path when its level 0 holds
+ * more than a quarter of the memory limit: opened, kept in doc->pyramids
+ * under @p key (what objects showing it name as their source), *proxy its
+ * proxy (a new reference). 1: so; 0: not needed (nothing kept); -1: an
+ * error, in @p error. */
 static int
-open_out_of_core(VvDocument *doc, const char *path, GError **error) {
+pyramid_proxy(VvDocument *doc, const char *path, const char *key, VvGuiPyramid **out,
+              vv_volume **proxy, GError **error) {
     const uint64_t limit = vv_document_memory_limit();
-    /* each pyramid holds up to the limit: those no object of the World shows
-     * any more go (an undo back to one draws its proxy in memory) */
-    g_hash_table_foreach_remove(doc->pyramids, pyramid_unused, doc->world);
     vv_pyramid *p = NULL;
     vv_error_clear();
     if (vv_pyramid_open(&p, path, 0, -1, limit, NULL) != VV_OK) {
@@ -558,20 +590,35 @@ open_out_of_core(VvDocument *doc, const char *path, GError **error) {
         vv_pyramid_free(p);
         return 0;
     }
-    vv_volume *proxy = NULL;
-    if (vv_pyramid_proxy(p, 0, &proxy) != VV_OK) {
+    if (vv_pyramid_proxy(p, 0, proxy) != VV_OK) {
         set_error(error, "cannot read the coarsest level");
         vv_pyramid_free(p);
         return -1;
     }
-    g_autofree char *base = volume_name(path);
     VvGuiPyramid *gp = g_atomic_rc_box_new0(VvGuiPyramid);
     gp->pyramid = p;
-    gp->proxy = vv_volume_ref(proxy);
+    gp->proxy = vv_volume_ref(*proxy);
     gp->path = g_canonicalize_filename(path, NULL);
     gp->limit = limit;
-    g_hash_table_replace(doc->pyramids, g_strdup(gp->path), gp);
-    g_hash_table_replace(doc->time_steps, g_strdup(gp->path), GINT_TO_POINTER(1));
+    g_hash_table_replace(doc->pyramids, g_strdup(key), gp);
+    g_hash_table_replace(doc->time_steps, g_strdup(key), GINT_TO_POINTER(1));
+    *out = gp;
+    return 1;
+}
+
+static int
+open_out_of_core(VvDocument *doc, const char *path, GError **error) {
+    /* each pyramid holds up to the limit: those no object of the World shows
+     * any more go (an undo back to one draws its proxy in memory) */
+    g_hash_table_foreach_remove(doc->pyramids, pyramid_unused, doc->world);
+    g_autofree char *key = g_canonicalize_filename(path, NULL);
+    VvGuiPyramid *gp = NULL;
+    vv_volume *proxy = NULL;
+    const int r = pyramid_proxy(doc, path, key, &gp, &proxy, error);
+    if (r <= 0)
+        return r;
+    const vv_volume *h0 = vv_pyramid_level(gp->pyramid, 0);
+    g_autofree char *base = volume_name(path);
     const int before = doc->world->n_objects;
     const gboolean ok = add_volume_channels(doc, &proxy, 1, NULL, base, path, error);
     /* opacity per level 0's smallest voxel edge, not the proxy's */
@@ -584,10 +631,8 @@ open_out_of_core(VvDocument *doc, const char *path, GError **error) {
         vv_document_changed(doc);
     }
     vv_volume_free(proxy);
-    if (!ok) {
-        g_autofree char *key = g_canonicalize_filename(path, NULL);
+    if (!ok)
         g_hash_table_remove(doc->pyramids, key);
-    }
     return ok ? 1 : -1;
 }
 

@@ -57,6 +57,36 @@ vv_status vv_scene_load_progress(vv_world **out, const char *path, const vv_prog
 vv_status vv_scene_load_cached(vv_world **out, const char *path, const vv_progress *progress,
                                vv_filter_cache *cache);
 
+/** What a scene's volume loader gives for a file (vv_scene_load_with). */
+typedef struct vv_scene_volume {
+    /** a new reference, owned by the scene then: the file's voxels, or a
+     * volume that stands for them over the same world box (a pyramid's proxy) */
+    vv_volume *volume;
+    /** its voxel size over the file's, per axis (1: the file's own voxels):
+     * a "spacing" the scene gives is multiplied by it */
+    double scale[3];
+} vv_scene_volume;
+
+/**
+ * Loads the volume file @p path (time step @p time, -1 or 0: the first) of
+ * a scene into *@p out; VV_ERR_UNSUPPORTED (nothing set): the scene reads
+ * it with vv_volume_load instead. Other errors fail the load, prefixed
+ * with the position of the object's "file" key.
+ */
+typedef vv_status (*vv_scene_volume_loader)(void *user, const char *path, int time,
+                                            vv_scene_volume *out);
+
+/**
+ * vv_scene_load_cached with @p loader (may be NULL) asked first for the
+ * volume file of each volume object without "filters" -- so that a program
+ * can stand a proxy in for a file larger than memory, as the GUI does for
+ * pyramids (docs/gui.md). The scene's "origin" applies to what it gives,
+ * its "spacing" times the loader's scale. Called on the loading thread, in
+ * the scene's order. Errors as vv_scene_load, and the loader's.
+ */
+vv_status vv_scene_load_with(vv_world **out, const char *path, const vv_progress *progress,
+                             vv_filter_cache *cache, vv_scene_volume_loader loader, void *user);
+
 /**
  * Writes a World as a scene file, atomically. Volumes are referred to by
  * @p volume_files[i] for object i (relative to the scene file); a mesh

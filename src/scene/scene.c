@@ -317,6 +317,12 @@ vv_scene_load_progress(vv_world **out, const char *path, const vv_progress *prog
 vv_status
 vv_scene_load_cached(vv_world **out, const char *path, const vv_progress *progress,
                      vv_filter_cache *cache) {
+    return vv_scene_load_with(out, path, progress, cache, NULL, NULL);
+}
+
+vv_status
+vv_scene_load_with(vv_world **out, const char *path, const vv_progress *progress,
+                   vv_filter_cache *cache, vv_scene_volume_loader loader, void *user) {
     if (!out)
         return vv_error_set(VV_ERR_INVALID, "scene: NULL output");
     *out = NULL;
@@ -327,7 +333,7 @@ vv_scene_load_cached(vv_world **out, const char *path, const vv_progress *progre
     vv_status st = vv_read_file(path, SCENE_MAX_BYTES, &data, &size);
     if (st != VV_OK)
         return vv_error_prefix(st, "scene");
-    sctx c = {path, (const char *)data, (size_t)size, progress, cache};
+    sctx c = {path, (const char *)data, (size_t)size, progress, cache, loader, user};
     json_error_t jerr;
     json_t *root = json_loadb((const char *)data, (size_t)size,
                               JSON_REJECT_DUPLICATES | JSON_DECODE_INT_AS_REAL, &jerr);

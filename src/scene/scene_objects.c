@@ -191,6 +191,7 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     if (!full)
         return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
     vv_volume *vol = NULL;
+    double scale[3] = {1, 1, 1}; /* the volume's voxel over the file's */
     /* "filters": a filter chain applied at load (src/filter), the result cached */
     json_t *fj = json_object_get(e, "filters");
     vv_filter_chain *chain = NULL;
@@ -213,10 +214,21 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
         st = vv_filter_load_cached(c->fcache, full, has_origin ? o3 : NULL, has_spacing ? s3 : NULL,
                                    chain, &fo, &vol);
     } else {
-        vv_load_options lo;
-        vv_load_options_init(&lo);
-        lo.time = time;
-        st = vv_volume_load(&vol, full, &lo);
+        /* the caller's loader first (a proxy of a pyramid), else the file whole */
+        vv_scene_volume sv = {NULL, {1, 1, 1}};
+        st = c->loader ? c->loader(c->loader_user, full, time, &sv) : VV_ERR_UNSUPPORTED;
+        if (st == VV_OK && !sv.volume)
+            st = vv_error_set(VV_ERR_INVALID, "%s: the scene's loader gave no volume", full);
+        if (st == VV_OK) {
+            vol = sv.volume;
+            memcpy(scale, sv.scale, sizeof scale);
+        } else if (st == VV_ERR_UNSUPPORTED) {
+            vv_load_options lo;
+            vv_load_options_init(&lo);
+            lo.time = time;
+            vv_error_clear();
+            st = vv_volume_load(&vol, full, &lo);
+        }
     }
     if (st != VV_OK) {
         vv_filter_chain_free(chain);
@@ -233,10 +245,10 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
         vol->origin[1] = origin.y;
         vol->origin[2] = origin.z;
     }
-    if (has_spacing && !fj) {
-        vol->spacing[0] = spacing.x;
-        vol->spacing[1] = spacing.y;
-        vol->spacing[2] = spacing.z;
+    if (has_spacing && !fj) { /* scaled for a loader's proxy */
+        vol->spacing[0] = spacing.x * scale[0];
+        vol->spacing[1] = spacing.y * scale[1];
+        vol->spacing[2] = spacing.z * scale[2];
     }
     char defname[VV_NAME_MAX];
     vv_scene_name_from_file(defname, file);

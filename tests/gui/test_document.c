@@ -349,7 +349,8 @@ time_failed(VvDocument *doc, const char *message, gpointer user) {
 /* A multiresolution file larger than a quarter of VOLVIS_MEMORY_LIMIT opens
  * out of core: the object shows the proxy (the coarsest level over level
  * 0's box), the document keeps the pyramid; a smaller limit's quarter
- * holds it whole; a session saves level 0's geometry; a file deleted and
+ * holds it whole; a session saves level 0's geometry, and opened again
+ * shows the proxy over the same box with level 0 unread; a file deleted and
  * opened again gets a pyramid of its own. The same for an OME-Zarr store
  * and a .vvb with pyramid levels. */
 static void
@@ -383,6 +384,22 @@ pyramid_out_of_core(const char *dir, const char *store, const vv_volume *v) {
     assert_int_equal(w->objects[0]->volume->dims[0], 256);
     assert_near(w->objects[0]->volume->spacing[0], v->spacing[0], 1e-9);
     vv_world_free(w);
+    /* the session opened again: the store out of core again, never read
+     * whole, over the same world box */
+    VvDocument *again = vv_document_new();
+    assert_true(vv_document_open(again, scene, &err));
+    vv_object *o2 = vv_document_selected_object(again);
+    assert_non_null(o2);
+    VvGuiPyramid *p2 = vv_document_pyramid(again, o2);
+    assert_non_null(p2);
+    assert_int_equal(o2->volume->dims[0], 64);
+    const vv_box b2 = vv_object_world_box(o2);
+    assert_near(b2.max.x - b2.min.x, b.max.x - b.min.x, 1e-6);
+    assert_near(b2.max.z - b2.min.z, b.max.z - b.min.z, 1e-6);
+    vv_pyramid_stats ps;
+    vv_pyramid_stats_get(p2->pyramid, &ps);
+    assert_int_equal(ps.chunk_reads[0], 0); /* level 0 unread */
+    g_object_unref(again);
     /* deleted, then opened again: the unused pyramid gives way to a new one */
     vv_document_delete_object(doc, 0);
     assert_true(vv_document_open(doc, store, &err));
