@@ -13,7 +13,7 @@
 #   bench  VTK, numpy, pydicom, Xvfb, Teem's tools and the zfp CLI, to measure the peers side by side
 set -euo pipefail
 
-pkgs=(build-essential cmake pkg-config libteem-dev libnifti2-dev libjansson-dev libblosc-dev libzstd-dev
+pkgs=(build-essential cmake pkg-config libteem-dev libnifti2-dev libjansson-dev libblosc-dev libzstd-dev libbz2-dev
       libpng-dev zlib1g-dev libassimp-dev libfftw3-dev libcairo2-dev libgtk-4-dev
       libspnav-dev libsdl2-dev libxml2-dev libnetcdf-dev libavformat-dev libavcodec-dev
       libswscale-dev libavutil-dev libtiff-dev libgdcm-dev libseccomp-dev libhdf5-dev libopenmpi-dev openmpi-bin

@@ -46,7 +46,7 @@ cli_convert_usage(FILE *out) {
                  "read back at any level with --level) has none either; it is written\n"
                  "chunk by chunk, with memory bounded by a row of 64^3 chunks, when IN is raw,\n"
                  "an uncompressed NRRD or a pyramid (OME-Zarr, BigDataViewer, Imaris), and\n"
-                 "by 64 slices when IN is a TIFF stack or a gzip NRRD (read slab by slab);\n"
+                 "by 64 slices when IN is a TIFF stack or a gzip or bzip2 NRRD (slab by slab);\n"
                  "SLC (.slc; VolVis's own 8-bit format)\n"
                  "holds 8-bit data only: other voxel types are rescaled from the value\n"
                  "range to 0..255, with a note on stderr. What a format cannot hold is\n"
@@ -58,7 +58,7 @@ cli_convert_usage(FILE *out) {
                  "OUT.vvb is VolVis's bricked format for volumes larger than memory\n"
                  "(docs/file-formats.md; rendered with 'volvis render --memory-limit'):\n"
                  "raw input (--raw) and uncompressed NRRD are read a brick at a time by\n"
-                 "pread, so memory stays bounded by a brick; TIFF stacks and gzip NRRD a\n"
+                 "pread, so memory stays bounded by a brick; TIFF stacks and gzip/bzip2 NRRD a\n"
                  "slab of 66 slices at a time (a layer of bricks); other formats are read whole\n"
                  "first (a pyramid -- OME-Zarr, BigDataViewer, Imaris -- by boxes of its\n"
                  "level 0). Each brick is one zstd frame unless --no-compress, and gets a\n"
@@ -118,7 +118,7 @@ cli_convert_usage(FILE *out) {
 }
 
 /* IN (of format @p f, detected) as a vv_slabs when it reads slab by slab:
- * a TIFF stack (at @p channel and @p time), or a gzip NRRD of one 3-D
+ * a TIFF stack (at @p channel and @p time), or a gzip or bzip2 NRRD of one 3-D
  * volume. *@p out stays NULL for other input (an NRRD neither raw nor gzip
  * among them: read whole). Errors: a TIFF stack's, for the caller to report. */
 static vv_status

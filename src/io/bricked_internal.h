@@ -14,9 +14,10 @@
  * raw encoding, several data files, line skips), VV_ERR_IO. */
 vv_status vv_nrrd_raw_layout(const char *path, vv_volume **header, char **data_path,
                              uint64_t *offset, int *big_endian);
-/* vv_nrrd_raw_layout that also takes gzip encoding when *@p gzip is 1 on
- * entry (a byte skip refused): *@p gzip then says which it is, and the
- * offset is where the gzip stream starts (vv_slabs streams it). */
+/* vv_nrrd_raw_layout that also takes gzip and bzip2 encodings when
+ * *@p gzip is 1 on entry (a byte skip refused): *@p gzip then says which
+ * it is (0 raw, 1 gzip, 2 bzip2), and the offset is where the compressed
+ * stream starts (vv_slabs streams it). */
 vv_status vv_nrrd_data_layout(const char *path, vv_volume **header, char **data_path,
                               uint64_t *offset, int *big_endian, int *gzip);
 

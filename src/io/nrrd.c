@@ -1065,7 +1065,11 @@ raw_layout_locked(const char *path, vv_volume **header, char **data_path, uint64
                                         "first (volvis convert IN OUT.vvb)");
         goto done;
     }
-    *gzip = *gzip && nio->encoding == nrrdEncodingGzip;
+    /* a stream: 1 gzip, 2 bzip2 (when the caller takes one) */
+    *gzip = !*gzip                               ? 0
+            : nio->encoding == nrrdEncodingGzip  ? 1
+            : nio->encoding == nrrdEncodingBzip2 ? 2
+                                                 : 0;
     if (nio->encoding != nrrdEncodingRaw && !*gzip) {
         s = vv_error_set(VV_ERR_FORMAT,
                          "encoding %s is not raw: it cannot be read by bricks; convert it "
@@ -1074,8 +1078,10 @@ raw_layout_locked(const char *path, vv_volume **header, char **data_path, uint64
         goto done;
     }
     if (*gzip && nio->byteSkip != 0) {
-        s = vv_error_set(VV_ERR_FORMAT, "a byte skip in gzip-encoded data is not supported for "
-                                        "reading slab by slab");
+        s = vv_error_set(VV_ERR_FORMAT,
+                         "a byte skip in %s-encoded data is not supported for "
+                         "reading slab by slab",
+                         *gzip == 2 ? "bzip2" : "gzip");
         goto done;
     }
     if (nio->lineSkip != 0 || nio->dataFSkip) {

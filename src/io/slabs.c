@@ -2,16 +2,18 @@
  * A volume read slab by slab (vv_slabs, volvis/io.h): boxes of a volume
  * larger than memory from a format whose reader decodes a range of slices
  * (VV_FORMAT_FLAG_SLICES: TIFF stacks), through vv_volume_load and so
- * through the reader sandbox; or from a gzip-encoded NRRD, whose header
- * Teem reads here as for the bricked reader and whose data zlib inflates
- * here as one stream, forward from slab to slab (back to its start only
- * when a box goes back). The slices of the last box are kept, so the boxes
+ * through the reader sandbox; or from a gzip- or bzip2-encoded NRRD, whose
+ * header Teem reads here as for the bricked reader and whose data zlib or
+ * libbz2 decodes here as one stream, forward from slab to slab (back to its
+ * start only when a box goes back). The slices of the last box are kept, so the boxes
  * of one slab that a writer asks for in turn (vv_ome_zarr_write_boxes: a
  * row of chunks at a time, every row of a slab before the next slab)
  * decode each slice once.
  */
+#include <bzlib.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -28,16 +30,135 @@ struct vv_slabs {
     vv_volume *slab;     /* the slices z0 .. z0 + slab->dims[2] - 1, or NULL */
     int z0;
     uint64_t loads; /* slabs read */
-    /* a gzip NRRD: its data stream, the bytes inflated so far, the byte order */
+    /* a compressed NRRD: its data stream (kind 1: gzip through gz; 2: bzip2
+     * through bz over bzf, from data_off), the bytes decoded so far, the byte
+     * order */
+    int kind;
     gzFile gz;
+    FILE *bzf;
+    BZFILE *bz;
+    int bz_error; /* libbz2's last error (BZ_OK: none), or 1 at the stream's end */
+    uint64_t data_off;
     uint64_t at;
     int swap;
 };
 
-/* A gzip NRRD's header and data stream, or 0 when @p path is no gzip NRRD
- * (vv_volume_load then reads its slabs). -1: an error. */
+/* ---- the compressed data stream ---------------------------------------------- */
+
+/* Opens the bzip2 reader at data_off (again). 0 or -1. */
 static int
-open_gzip_nrrd(vv_slabs *s) {
+bz_open(vv_slabs *s) {
+    int e = BZ_OK;
+    if (fseeko(s->bzf, (off_t)s->data_off, SEEK_SET) != 0)
+        return -1;
+    s->bz = BZ2_bzReadOpen(&e, s->bzf, 0, 0, NULL, 0);
+    s->bz_error = e;
+    if (e != BZ_OK) {
+        BZ2_bzReadClose(&e, s->bz);
+        s->bz = NULL;
+        return -1;
+    }
+    return 0;
+}
+
+/* Up to @p n decoded bytes into @p buf: the count (0 at the end) or -1. A
+ * bzip2 stream followed by another (pbzip2 writes several) goes on into it. */
+static int
+stream_read(vv_slabs *s, void *buf, unsigned n) {
+    if (s->kind == 1)
+        return gzread(s->gz, buf, n);
+    if (!s->bz)
+        return s->bz_error == 1 ? 0 : -1;
+    int e = BZ_OK;
+    const int r = BZ2_bzRead(&e, s->bz, buf, (int)n);
+    if (e == BZ_OK)
+        return r;
+    if (e != BZ_STREAM_END) {
+        s->bz_error = e;
+        return -1;
+    }
+    /* the end of a stream: another may follow in the bytes read ahead */
+    void *unused = NULL;
+    int nu = 0, e2 = BZ_OK;
+    BZ2_bzReadGetUnused(&e2, s->bz, &unused, &nu);
+    char rest[BZ_MAX_UNUSED];
+    if (e2 == BZ_OK && nu > 0)
+        memcpy(rest, unused, (size_t)nu);
+    BZ2_bzReadClose(&e2, s->bz);
+    s->bz = NULL;
+    s->bz_error = 1;
+    if (nu > 0 || !feof(s->bzf)) {
+        int c = nu > 0 ? 1 : fgetc(s->bzf);
+        if (nu == 0 && c != EOF)
+            ungetc(c, s->bzf);
+        if (c != EOF) {
+            s->bz = BZ2_bzReadOpen(&e2, s->bzf, 0, 0, nu > 0 ? rest : NULL, nu);
+            s->bz_error = e2;
+            if (e2 != BZ_OK) {
+                BZ2_bzReadClose(&e2, s->bz);
+                s->bz = NULL;
+                return r > 0 ? r : -1;
+            }
+            if (r == 0) /* nothing left of the last stream: read the next */
+                return stream_read(s, buf, n);
+        }
+    }
+    return r;
+}
+
+/* Back to the data's first byte. 0 or -1. */
+static int
+stream_rewind(vv_slabs *s) {
+    if (s->kind == 1)
+        return gzrewind(s->gz);
+    int e = BZ_OK;
+    if (s->bz)
+        BZ2_bzReadClose(&e, s->bz);
+    s->bz = NULL;
+    return bz_open(s);
+}
+
+/* Why the stream stopped short: its library's words, or "truncated". */
+static const char *
+stream_why(vv_slabs *s) {
+    if (s->kind == 1) {
+        int zerr = Z_OK;
+        const char *msg = gzerror(s->gz, &zerr);
+        return zerr != Z_OK && msg && msg[0] ? msg : "truncated";
+    }
+    switch (s->bz_error) {
+    case BZ_DATA_ERROR:
+        return "bzip2 data integrity error";
+    case BZ_DATA_ERROR_MAGIC:
+        return "not bzip2 data";
+    case BZ_MEM_ERROR:
+        return "out of memory";
+    case BZ_IO_ERROR:
+        return "read error";
+    default:
+        return "truncated";
+    }
+}
+
+static void
+stream_close(vv_slabs *s) {
+    if (s->gz)
+        gzclose(s->gz);
+    int e = BZ_OK;
+    if (s->bz)
+        BZ2_bzReadClose(&e, s->bz);
+    if (s->bzf)
+        fclose(s->bzf);
+    s->gz = NULL;
+    s->bz = NULL;
+    s->bzf = NULL;
+    s->kind = 0;
+}
+
+/* A gzip or bzip2 NRRD's header and data stream, or 0 when @p path is no
+ * such NRRD (vv_volume_load then reads its slabs). -1: an error. */
+static int
+open_stream_nrrd(vv_slabs *s) {
     if (s->opt.has_raw || vv_format_detect(s->path) != VV_FORMAT_NRRD)
         return 0;
     vv_volume *h = NULL;
@@ -52,41 +173,50 @@ open_gzip_nrrd(vv_slabs *s) {
         return 0;
     }
     const int fd = open(data, O_RDONLY | O_CLOEXEC);
-    if (fd < 0 || lseek(fd, (off_t)off, SEEK_SET) != (off_t)off || !(s->gz = gzdopen(fd, "rb"))) {
+    int ok = fd >= 0 && lseek(fd, (off_t)off, SEEK_SET) == (off_t)off;
+    if (ok && gzip == 1) {
+        ok = (s->gz = gzdopen(fd, "rb")) != NULL;
+        if (ok)
+            gzbuffer(s->gz, 1 << 20);
+    } else if (ok) {
+        s->data_off = off;
+        ok = (s->bzf = fdopen(fd, "rb")) != NULL && bz_open(s) == 0;
+    }
+    if (!ok) {
         const int e = errno;
-        if (fd >= 0)
+        if (fd >= 0 && !s->gz && !s->bzf)
             close(fd);
+        stream_close(s);
         vv_error_set(VV_ERR_IO, "slabs: %s: cannot open its data %s: %s", vv_path_basename(s->path),
-                     vv_path_basename(data), strerror(e));
+                     vv_path_basename(data), e ? strerror(e) : "not a bzip2 stream");
         vv_volume_free(h);
         free(data);
         return -1;
     }
     free(data);
-    gzbuffer(s->gz, 1 << 20);
+    s->kind = gzip;
     s->header = h;
     s->swap = big == vv_host_is_little_endian();
     return 1;
 }
 
-/* A gzip NRRD's data stream ended (or broke) inside slice @p z. */
+/* A compressed NRRD's data stream ended (or broke) inside slice @p z. */
 static vv_status
-gzip_short(vv_slabs *s, int z) {
-    int zerr = Z_OK;
-    const char *msg = gzerror(s->gz, &zerr);
-    return vv_error_set(VV_ERR_FORMAT, "the gzip data ends before slice %d of %d (%s)", z,
-                        s->header->dims[2], zerr != Z_OK && msg && msg[0] ? msg : "truncated");
+stream_short(vv_slabs *s, int z) {
+    return vv_error_set(VV_ERR_FORMAT, "the %s data ends before slice %d of %d (%s)",
+                        s->kind == 1 ? "gzip" : "bzip2", z, s->header->dims[2], stream_why(s));
 }
 
-/* Slices z0 .. z0 + n - 1 of a gzip NRRD inflated into @p dst. */
+/* Slices z0 .. z0 + n - 1 of a compressed NRRD decoded into @p dst. */
 static vv_status
-read_gzip_slices(vv_slabs *s, int z0, int n, unsigned char *dst) {
+read_stream_slices(vv_slabs *s, int z0, int n, unsigned char *dst) {
     const int *D = s->header->dims;
     const size_t es = vv_voxel_type_size(s->header->type);
     const uint64_t slice = (uint64_t)D[0] * (uint64_t)D[1] * es, from = (uint64_t)z0 * slice;
     if (from < s->at) { /* back: from the stream's start again */
-        if (gzrewind(s->gz) != 0)
-            return vv_error_set(VV_ERR_IO, "cannot rewind the gzip data");
+        if (stream_rewind(s) != 0)
+            return vv_error_set(VV_ERR_IO, "cannot rewind the %s data",
+                                s->kind == 1 ? "gzip" : "bzip2");
         s->at = 0;
     }
     /* forward, inflating what lies between */
@@ -95,26 +225,26 @@ read_gzip_slices(vv_slabs *s, int z0, int n, unsigned char *dst) {
         if (!skip && !(skip = malloc(1 << 20)))
             return vv_error_set(VV_ERR_NOMEM, "out of memory");
         const uint64_t want = from - s->at < (1u << 20) ? from - s->at : (1u << 20);
-        const int got = gzread(s->gz, skip, (unsigned)want);
+        const int got = stream_read(s, skip, (unsigned)want);
         if (got <= 0)
             break;
         s->at += (uint64_t)got;
     }
     free(skip);
     if (s->at < from)
-        return gzip_short(s, (int)(s->at / slice));
+        return stream_short(s, (int)(s->at / slice));
     const uint64_t bytes = slice * (uint64_t)n;
     uint64_t done = 0;
     while (done < bytes) {
         const uint64_t want = bytes - done < (1u << 30) ? bytes - done : (1u << 30);
-        const int got = gzread(s->gz, dst + done, (unsigned)want);
+        const int got = stream_read(s, dst + done, (unsigned)want);
         if (got <= 0)
             break;
         done += (uint64_t)got;
         s->at += (uint64_t)got;
     }
     if (done != bytes)
-        return gzip_short(s, z0 + (int)(done / slice));
+        return stream_short(s, z0 + (int)(done / slice));
     if (s->swap && es > 1)
         vv_byteswap(dst, (uint64_t)D[0] * D[1] * (uint64_t)n, es);
     return VV_OK;
@@ -142,12 +272,12 @@ load_slices(vv_slabs *s, int lo, int hi, vv_volume **out) {
     return VV_OK;
 }
 
-/* Slices lo .. hi read into @p dst: inflated here (a gzip NRRD) or through
- * vv_volume_load. */
+/* Slices lo .. hi read into @p dst: decoded here (a gzip or bzip2 NRRD) or
+ * through vv_volume_load. */
 static vv_status
 read_slices(vv_slabs *s, int lo, int hi, unsigned char *dst) {
-    if (s->gz) {
-        vv_status st = read_gzip_slices(s, lo, hi - lo + 1, dst);
+    if (s->kind) {
+        vv_status st = read_stream_slices(s, lo, hi - lo + 1, dst);
         return st == VV_OK ? VV_OK : vv_error_prefix(st, "nrrd: %s", vv_path_basename(s->path));
     }
     vv_volume *v = NULL;
@@ -177,7 +307,7 @@ ensure_slab(vv_slabs *s, int lo, int hi) {
     vv_volume *v = NULL;
     vv_status st = VV_OK;
     s->slab = NULL;
-    if (!s->gz && !keep) { /* the reader's volume is the slab (one at a time) */
+    if (!s->kind && !keep) { /* the reader's volume is the slab (one at a time) */
         vv_volume_free(old);
         if ((st = load_slices(s, lo, hi, &v)) != VV_OK)
             return st;
@@ -199,7 +329,7 @@ ensure_slab(vv_slabs *s, int lo, int hi) {
                    (size_t)keep * slice);
         vv_volume_free(old);
     }
-    if (st == VV_OK && (s->gz || keep))
+    if (st == VV_OK && (s->kind || keep))
         st = read_slices(s, lo + keep, hi, (unsigned char *)v->data + (size_t)keep * slice);
     if (st != VV_OK) {
         vv_volume_free(v);
@@ -226,7 +356,7 @@ vv_slabs_open(vv_slabs **out, const char *path, const vv_load_options *opt) {
     else
         vv_load_options_init(&s->opt);
     s->opt.info = NULL;
-    const int g = open_gzip_nrrd(s);
+    const int g = open_stream_nrrd(s);
     if (g != 0) {
         vv_status st =
             g > 0 ? vv_volume_check_limits(s->header->dims, s->header->type, NULL) : VV_ERR_IO;
@@ -328,8 +458,7 @@ vv_slabs_free(vv_slabs *s) {
         return;
     vv_volume_free(s->slab);
     vv_volume_free(s->header);
-    if (s->gz)
-        gzclose(s->gz);
+    stream_close(s);
     free(s->path);
     free(s);
 }

@@ -15,9 +15,11 @@ written by vv_ome_zarr_write. Checks:
   CT head), a BigDataViewer file written by h5py, and TIFF stacks written by
   tifffile (an ImageJ stack of three slabs, deflate, each slab read once;
   channel 1 at time step 1 of an OME-TIFF hyperstack; a folder of pages),
-  and gzip NRRDs (the CT head, a big-endian one, a detached .nhdr); a TIFF
-  stack and a gzip NRRD written as .vvb slab by slab equal, byte for byte,
-  the .vvb the bricked reader writes from their uncompressed NRRD twins;
+  and gzip NRRDs (the CT head, a big-endian one, a detached .nhdr) and
+  bzip2 NRRDs (two streams one after the other, written here; the CT head
+  by teem-unu); a TIFF stack and a gzip or bzip2 NRRD written as .vvb slab
+  by slab equal, byte for byte, the .vvb the bricked reader writes from
+  their uncompressed NRRD twins;
 - zarr-python reads every level of the chunk-by-chunk store as numpy's
   2x2x2 means of the level before (an independent reader and reduction);
 - memory: a 128 MiB raw volume, TIFF stack and gzip NRRD convert under a
@@ -26,11 +28,12 @@ written by vv_ome_zarr_write. Checks:
   of it (the TIFF stack and the gzip NRRD: and one slab of 64 slices);
 - bad input: a raw file shorter than its size says, and a BigDataViewer
   file with a corrupt chunk met half way through, a TIFF stack broken in its
-  last slab and a gzip NRRD cut short, are one line naming the file, a
+  last slab and a gzip or bzip2 NRRD cut short, are one line naming the file, a
   non-zero exit, and no store
   (not even the temporary folder) left;
   an existing path that is not a Zarr store is refused and left as it is.
 """
+import bz2
 import gzip
 import os
 import shutil
@@ -153,13 +156,19 @@ check(p1.returncode == 0 and "chunk by chunk" in p1.stdout and p2.returncode == 
 same_store(a, b, "CT head")
 
 
-def nrrd_gzip(path, arr, ntype, endian, detached=False):
-    """A gzip-encoded NRRD written here (its header as the NRRD format says)."""
-    data = gzip.compress(arr.astype(arr.dtype.newbyteorder(">" if endian == "big" else "<"))
-                         .tobytes(), compresslevel=1)
+def nrrd_gzip(path, arr, ntype, endian, detached=False, codec="gzip", streams=1):
+    """A gzip- or bzip2-encoded NRRD written here (its header as the NRRD
+    format says); bzip2 in @p streams streams one after the other (as
+    pbzip2 writes them: a reader must go on into the next; Teem cannot)."""
+    raw = arr.astype(arr.dtype.newbyteorder(">" if endian == "big" else "<")).tobytes()
+    if codec == "gzip":
+        data = gzip.compress(raw, compresslevel=1)
+    else:
+        cut = [len(raw) * i // streams + (i > 0) for i in range(streams)] + [len(raw)]
+        data = b"".join(bz2.compress(raw[cut[i]:cut[i + 1]], 1) for i in range(streams))
     head = (f"NRRD0004\ntype: {ntype}\ndimension: 3\n"
             f"sizes: {arr.shape[2]} {arr.shape[1]} {arr.shape[0]}\n"
-            f"endian: {endian}\nencoding: gzip\nspacings: 0.5 0.75 2\n")
+            f"endian: {endian}\nencoding: {codec}\nspacings: 0.5 0.75 2\n")
     if detached:
         with open(path + ".raw.gz", "wb") as f:
             f.write(data)
@@ -178,6 +187,27 @@ both("nrrd_be.zarr", os.path.join(OUT, "big_endian.nrrd"), slabs=3)
 nrrd_gzip(os.path.join(OUT, "detached.nhdr"), i16g.astype(np.float32) * 0.5, "float", "little",
           detached=True)
 both("nrrd_nhdr.zarr", os.path.join(OUT, "detached.nhdr"), slabs=3)
+# bzip2 NRRD slab by slab (libbz2), Teem's own bzip2 NRRD, and one of two
+# streams (which Teem cannot read whole: its voxels against numpy's)
+nrrd_gzip(os.path.join(OUT, "bzip2.nrrd"), i16g, "short", "big", codec="bzip2")
+both("nrrd_bz2.zarr", os.path.join(OUT, "bzip2.nrrd"), slabs=3)
+nrrd_gzip(os.path.join(OUT, "bzip2x2.nrrd"), i16g, "short", "little", codec="bzip2", streams=2)
+a3 = os.path.join(OUT, "stream", "bz2x2.zarr")
+p3 = volvis("convert", os.path.join(OUT, "bzip2x2.nrrd"), a3)
+check(p3.returncode == 0 and "from 3 slabs of slices" in p3.stdout
+      and np.array_equal(zarr.open_group(a3, mode="r")["0"][:], i16g),
+      f"a bzip2 NRRD of two streams read slab by slab: numpy's voxels ({p3.stdout.strip()} "
+      f"{p3.stderr.strip()})")
+teem_bz2 = os.path.join(OUT, "head_bz2.nrrd")
+subprocess.run(["teem-unu", "save", "-f", "nrrd", "-e", "bz2", "-i", HEAD, "-o", teem_bz2],
+               check=True)
+a2 = os.path.join(OUT, "stream", "head_bz2.zarr")
+p3 = volvis("convert", teem_bz2, a2)
+check(p3.returncode == 0 and "chunk by chunk from 2 slabs of slices" in p3.stdout,
+      f"teem-unu's bzip2 CT head read slab by slab ({p3.stdout.strip()} {p3.stderr.strip()})")
+l0a = zarr.open_group(a2, mode="r")["0"]
+l0b = zarr.open_group(os.path.join(OUT, "stream", "head.zarr"), mode="r")["0"]
+check(np.array_equal(l0a[:], l0b[:]), "teem-unu's bzip2 CT head: level 0 is the CT head's")
 
 
 def same_vvb(src, name, layers):
@@ -224,6 +254,7 @@ for k in range(70):
 both("pages.zarr", pages, slabs=2)
 same_vvb(stack, "tiff_vvb", 3)
 same_vvb(os.path.join(OUT, "big_endian.nrrd"), "nrrd_vvb", 3)
+same_vvb(os.path.join(OUT, "bzip2.nrrd"), "bz2_vvb", 3)
 
 # ---- zarr-python reads it; each level the 2x2x2 means of the one before -----------------
 g = zarr.open_group(store, mode="r")
@@ -361,6 +392,16 @@ err = p.stderr.strip()
 left = [n for n in os.listdir(OUT) if n.startswith("cutn.zarr")]
 check(p.returncode != 0 and len(err.splitlines()) == 1 and "cut.nrrd" in err and "slice" in err
       and not left, f"a gzip NRRD cut short: one line naming it, nothing left ({err}; left {left})")
+cutb = os.path.join(OUT, "cutb.nrrd")
+with open(os.path.join(OUT, "bzip2.nrrd"), "rb") as f:
+    data = f.read()
+with open(cutb, "wb") as f:
+    f.write(data[: len(data) * 3 // 4])  # the second bzip2 stream cut in its middle
+p = volvis("convert", cutb, os.path.join(OUT, "cutb.zarr"))
+err = p.stderr.strip()
+left = [n for n in os.listdir(OUT) if n.startswith("cutb.zarr")]
+check(p.returncode != 0 and len(err.splitlines()) == 1 and "cutb.nrrd" in err and "bzip2" in err
+      and not left, f"a bzip2 NRRD cut short: one line naming it, nothing left ({err}; left {left})")
 keep = os.path.join(OUT, "notzarr")
 os.makedirs(keep)
 with open(os.path.join(keep, "mine.txt"), "w") as f:
