@@ -103,9 +103,10 @@ source_close(par_source *src) {
 }
 
 /* A volume readable by boxes, opened on every rank (nothing opened when
- * it is not such a file): a pyramid (OME-Zarr, BigDataViewer, Imaris; its
- * level --level, chunks cached within --memory-limit, 1 GiB when not
- * given) or a bricked file (.vvb, --raw, uncompressed NRRD; header only).
+ * it is not such a file): a pyramid (OME-Zarr, BigDataViewer, Imaris, a
+ * .vvb with levels given --level; its level --level, chunks cached within
+ * --memory-limit, 1 GiB when not given) or a bricked file (.vvb, --raw,
+ * uncompressed NRRD; header only).
  * The status of the attempt, VV_ERR_UNSUPPORTED when not tried. */
 static vv_status
 open_source(const cli_render_args *r, par_source *src) {
@@ -113,7 +114,9 @@ open_source(const cli_render_args *r, par_source *src) {
     if (cli_ends_with(r->input, ".json"))
         return VV_ERR_UNSUPPORTED;
     vv_error_clear();
-    if (!r->has_raw && vv_pyramid_probe(r->input)) {
+    /* a .vvb with pyramid levels reads by bricks unless --level asks for one */
+    if (!r->has_raw && vv_pyramid_probe(r->input) &&
+        (r->has_level || !cli_ends_with(r->input, ".vvb"))) {
         vv_status s = vv_pyramid_open(&src->p, r->input, r->channel, r->has_time ? r->time : -1,
                                       r->memory_limit ? r->memory_limit : (uint64_t)1 << 30, NULL);
         src->level = r->has_level ? r->level : 0;
