@@ -1773,6 +1773,27 @@ vvb_store_read(void *ctx, int level, const int c[3], unsigned char *scratch, uns
     return s;
 }
 
+/* A chunk's range from the index: level 0's from the brick holding it (its
+ * stored box: a superset), the others' their own. */
+static int
+vvb_store_range(void *ctx, int level, const int c[3], double *lo, double *hi) {
+    const vv_bricked *b = ctx;
+    if (level > 0) {
+        const vvb_level *L = &b->lv[level];
+        const vvb_chunk *e = &L->c[(c[2] * L->nc[1] + c[1]) * L->nc[0] + c[0]];
+        *lo = e->vmin;
+        *hi = e->vmax;
+        return 1;
+    }
+    int bc[3];
+    for (int a = 0; a < 3; a++)
+        bc[a] = c[a] < b->nb[a] - 1 ? c[a] : b->nb[a] - 1;
+    const brick_entry *e = &b->e[(bc[2] * b->nb[1] + bc[1]) * b->nb[0] + bc[0]];
+    *lo = e->vmin;
+    *hi = e->vmax;
+    return 1;
+}
+
 static void
 vvb_store_close(void *ctx) {
     vv_bricked_free(ctx);
@@ -1798,6 +1819,7 @@ vv_vvb_pyramid_store(pyr_store *st, const char *path, int channel, int time) {
     st->ctx = b;
     st->close = vvb_store_close;
     st->read_chunk = vvb_store_read;
+    st->chunk_range = vvb_store_range;
     st->parallel = 1; /* pread and zstd into the caller's buffers */
     vv_status s =
         b->path && b->data_path ? open_vvb(b) : vv_error_set(VV_ERR_NOMEM, "out of memory");

@@ -1197,6 +1197,18 @@ open_level(vv_pyramid *p, int i) {
         l->frame_reads = calloc(n, sizeof(uint16_t));
         if (!l->cmin || !l->cmax || !l->known || !l->read_frame || !l->frame_reads)
             return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        /* ranges the store's index gives before any chunk is read */
+        for (uint64_t L = 0; p->store.chunk_range && L < n; L++) {
+            const int c[3] = {(int)(L % (uint64_t)l->nchunks[0]),
+                              (int)(L / (uint64_t)l->nchunks[0] % (uint64_t)l->nchunks[1]),
+                              (int)(L / ((uint64_t)l->nchunks[0] * (uint64_t)l->nchunks[1]))};
+            double lo, hi;
+            if (p->store.chunk_range(p->store.ctx, i, c, &lo, &hi) && lo <= hi) {
+                l->cmin[L] = (float)lo;
+                l->cmax[L] = (float)hi;
+                l->known[L] = 1;
+            }
+        }
     }
     l->hdr = sl->hdr; /* taken */
     sl->hdr = NULL;

@@ -64,6 +64,15 @@ typedef struct pyr_store {
      * ahead and drop what it fetched).
      */
     int (*prefetch)(void *ctx, int level, const int c[3]);
+    /**
+     * Optional (NULL): the range of chunk @p c of @p level's voxels as the
+     * store's index gives it before any voxel is read (a .vvb: its chunks'
+     * min and max; level 0's from its bricks, a superset); 1 when known.
+     * Asked once per chunk when the pyramid opens, so that empty space is
+     * skipped before its chunks are read; a chunk decoded later gives its
+     * own range.
+     */
+    int (*chunk_range)(void *ctx, int level, const int c[3], double *lo, double *hi);
 } pyr_store;
 
 /**

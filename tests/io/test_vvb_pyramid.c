@@ -11,6 +11,9 @@
  *   of the bricks) and an axis of one voxel; level 0 read through the
  *   pyramid is the volume voxel for voxel, each level the means of the one
  *   before.
+ * - Empty space skipped unread: a ball in a corner of a volume of zeros,
+ *   rendered at level 0, reads only the chunks near the ball (the others'
+ *   ranges from the index: 27 of 125 chunks read), and the image is the one drawn with every chunk read.
  * - A .vvb without levels is no pyramid (vv_pyramid_probe 0, one level),
  *   with levels it is; the box writer gives the in-memory writer's bytes.
  * - Bad input: a level table past the end of the file, a wrong level
@@ -180,6 +183,83 @@ test_odd_shapes(void **state) {
     check_odd((const int[3]){40, 30, 20}, 1); /* fits one chunk: no levels */
 }
 
+/* Empty space skipped before a voxel is read: a 320^3 volume of zeros but
+ * for a ball in one corner, rendered at level 0 (composite, a transfer
+ * function that hides 0): the chunks' ranges come from the .vvb's index,
+ * so the empty nodes are skipped unread and only the ball's chunks are
+ * read; the image is the one from a cache that read every chunk. */
+static vv_image *
+render_level0(vv_pyramid *p, int *skipped) {
+    vv_volume *proxy = NULL;
+    vt_ok(vv_pyramid_proxy(p, 0, &proxy));
+    vv_default_scene_options o;
+    vv_default_scene_options_init(&o);
+    o.width = o.height = 64;
+    o.has_tf_range = 1;
+    o.tf_lo = 50;
+    o.tf_hi = 255;
+    vv_world *w = NULL;
+    vt_ok(vv_world_new_for_volume(&w, proxy, &o));
+    vv_renderer *ren = NULL;
+    vv_image *img = NULL;
+    vt_ok(vv_renderer_new(&ren, "raycast"));
+    vt_ok(vv_image_new(&img, 64, 64));
+    vv_multires_source src;
+    vv_pyramid_source(p, &src);
+    vv_lod lod;
+    vv_lod_init(&lod);
+    lod.level = 0;
+    vt_ok(vv_renderer_render_multires(ren, w, 0, &src, &w->view, NULL, &lod, img));
+    *skipped = lod.skipped;
+    vv_renderer_free(ren);
+    vv_world_free(w);
+    vv_volume_free(proxy);
+    return img;
+}
+
+static void
+test_skip_unread(void **state) {
+    (void)state;
+    const int d[3] = {320, 320, 320};
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_new(&v, d, VV_U8));
+    unsigned char *u = v->data;
+    for (int k = 0; k < 40; k++)
+        for (int j = 0; j < 40; j++)
+            for (int i = 0; i < 40; i++)
+                if ((i - 20) * (i - 20) + (j - 20) * (j - 20) + (k - 20) * (k - 20) < 18 * 18)
+                    u[((size_t)k * d[1] + j) * d[0] + i] = 200;
+    vv_volume_update_range(v);
+    char path[1200];
+    snprintf(path, sizeof path, "%s/ball.vvb", outdir());
+    vt_ok(vv_volume_write_vvb(v, path, VV_VVB_ZSTD | VV_VVB_LEVELS));
+    vv_pyramid *p = NULL;
+    vt_ok(vv_pyramid_open(&p, path, -1, -1, 0, NULL));
+    vv_pyramid_stats st0, st1;
+    vv_pyramid_stats_get(p, &st0);
+    int skipped = 0;
+    vv_image *a = render_level0(p, &skipped);
+    vv_pyramid_stats_get(p, &st1);
+    const uint64_t read0 = st1.chunk_reads[0] - st0.chunk_reads[0];
+    printf("level 0: %llu of 125 chunks read, %d of 125 nodes skipped unread\n",
+           (unsigned long long)read0, skipped);
+    /* the 8 nodes next to the ball are drawn: their boxes and ghosts lie
+     * in the 27 chunks nearest the corner; nothing else is read */
+    assert_int_equal(skipped, 125 - 8);
+    assert_true(read0 <= 27);
+    /* every chunk read into the cache first: the same image */
+    const int lo[3] = {0, 0, 0}, hi[3] = {319, 319, 319};
+    vv_volume *all = NULL;
+    vt_ok(vv_pyramid_read_box(p, 0, lo, hi, &all));
+    vv_volume_free(all);
+    vv_image *b = render_level0(p, &skipped);
+    assert_memory_equal(a->rgba, b->rgba, sizeof(float) * 4 * 64 * 64);
+    vv_image_free(a);
+    vv_image_free(b);
+    vv_pyramid_free(p);
+    vv_volume_free(v);
+}
+
 /* A .vvb without levels is no pyramid; the box writer writes the same bytes. */
 static vv_status
 read_mem_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
@@ -307,6 +387,7 @@ main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_ct_head),
         cmocka_unit_test(test_odd_shapes),
+        cmocka_unit_test(test_skip_unread),
         cmocka_unit_test(test_probe_and_writers),
         cmocka_unit_test(test_bad_levels),
     };
