@@ -1488,6 +1488,44 @@ middle_sample(const vv_vcache *c, const vv_vray *r, float *depth) {
     return vv_vcache_sample(c, p);
 }
 
+void
+vv_xray_table_classify(const void *ctx, float v, float e[4]) {
+    const vv_xray_table *x = ctx;
+    float i = (v - x->lut_lo) * x->lut_scale;
+    i = i < 0 ? 0 : i > VV_VC_LUT - 1 ? VV_VC_LUT - 1 : i;
+    memcpy(e, x->lut + 4 * (int)i, 4 * sizeof(float));
+}
+
+long
+vv_vray_xray_region_pixel(const vv_vcache *c, const double w2i[3][4], const int dims[3],
+                          const vv_plane *planes, int n_planes, const vv_render_region *rg,
+                          double dt, int inv_form, const vv_ray *wr, int avx2, float px[4],
+                          float *depth, float *key) {
+    px[0] = px[1] = px[2] = px[3] = 0;
+    *depth = INFINITY;
+    *key = NAN;
+    vv_vray r;
+    int cont = 0;
+    if (!vv_vray_setup(w2i, dims, planes, n_planes, wr, 0, INFINITY, &r))
+        return 0;
+    const float entry = (float)r.t0;
+    const int shortray = vv_ceil_pos(r.t0 / dt) > vv_floor_pos(r.t1 / dt);
+    if (!vv_vray_clip_region(&r, rg, dt, inv_form, &cont))
+        return 0;
+    double sum;
+    float mid;
+    const long n = vv_vray_xray_sum(c, &r, dt, avx2, &sum, &mid);
+    if (n <= 0)
+        return 0;
+    const float hi = (float)sum;
+    *key = hi;
+    px[0] = (float)(sum - (double)hi);
+    px[1] = (float)n;
+    /* the whole ray's depth: its entry, or its one middle sample */
+    *depth = shortray ? mid : cont ? INFINITY : entry;
+    return n;
+}
+
 long
 vv_vray_xray_sum(const vv_vcache *c, const vv_vray *r, double dt, int avx2, double *sum,
                  float *depth) {

@@ -937,6 +937,33 @@ void vv_vray_project(const vv_vcache *c, const vv_vray *r, vv_render_mode mode, 
  * add up the sums of their rays' pieces. Thread-safe. */
 long vv_vray_xray_sum(const vv_vcache *c, const vv_vray *r, double dt, int avx2, double *sum,
                       float *depth);
+/* A region render's X-ray pixel (VV_REGION_SUM, include/volvis/sys/renderer.h)
+ * along primary ray @p wr (world space) through the volume of cache @p c
+ * (@p w2i, @p dims and cut planes as vv_vray_setup takes them; @p inv_form as
+ * vv_vray_clip_region): the sum of the region's sample values at t = k dt,
+ * split into *key (the sum rounded to float) and px[0] (the rest), their
+ * count in px[1], px[2] = px[3] = 0, and *depth the whole ray's depth -- its
+ * entry, or on a ray too short for a sample its one middle sample, and
+ * +inf when the region is not where the ray enters. Nothing taken: px 0,
+ * *key NAN, *depth +inf. Returns the samples taken. The ray caster's and the
+ * ray tracer's region renders in xray mode share it, so their sums are the
+ * same bit for bit. Thread-safe. */
+/* The table that classifies the means of a region render's X-ray sums
+ * (vv_region_image.classify): a copy of the object's transfer-function
+ * table, its entries {alpha, r alpha, g alpha, b alpha}. */
+typedef struct vv_xray_table {
+    float lut_lo, lut_scale; /* value -> entry */
+    float lut[4 * VV_VC_LUT];
+} vv_xray_table;
+
+/* vv_region_image.classify over a vv_xray_table (@p ctx): the entry of
+ * value @p v (clamped to the table) into @p e. */
+void vv_xray_table_classify(const void *ctx, float v, float e[4]);
+
+long vv_vray_xray_region_pixel(const vv_vcache *c, const double w2i[3][4], const int dims[3],
+                               const vv_plane *planes, int n_planes, const vv_render_region *rg,
+                               double dt, int inv_form, const vv_ray *wr, int avx2, float px[4],
+                               float *depth, float *key);
 /* vv_vray_project with the bounds of tables @p t (plo, phi) and, with
  * @p skipping, their distances pdist to leap through subvolumes that hold
  * nothing beyond the starting bound. With @p avx2 (vv_vc_have_avx2) and

@@ -8,7 +8,7 @@
  * tracer's quality 1; MIP byte for byte; composite with its shadows traced
  * through the proxy: >= 50 dB where the proxy is the whole volume, the nut;
  * on the CT head, a 4x coarser proxy (the .vvb's coarse level), exact
- * without shadows and measured with them), and its errors: a memory limit
+ * without shadows and measured with them; X-ray bit for bit by both), and its errors: a memory limit
  * smaller than one brick, a bad size, a scene file, a renderer without the
  * region contract; the pyramid levels convert writes (render --level and
  * --lod read them: OME-Zarr's images bit for bit).
@@ -147,6 +147,10 @@ test_renderers(void **state) {
     assert_true(mem_vs_ooc(head, hvvb, "raytrace", "composite", "shadows=0", "100:1500") >= 50);
     assert_true(mem_vs_ooc(head, hvvb, "raytrace", "composite", "shadows=1", "100:1500") >= 30);
     assert_true(mem_vs_ooc(head, hvvb, "raycast", "composite", "simd=1", "100:1500") >= 50);
+    /* X-ray: the regions' sums add up and their mean is classified once, by
+     * either renderer (the ray tracer's regions sum as the ray caster's) */
+    assert_true(isinf(mem_vs_ooc(head, hvvb, "raytrace", "xray", "shadows=1", "100:1500")));
+    assert_true(isinf(mem_vs_ooc(head, hvvb, "raycast", "xray", "simd=1", "100:1500")));
 }
 
 /* The .vvb's pyramid levels from the CLI: `convert` writes them (3 for the

@@ -50,10 +50,7 @@ typedef struct rc_state {
     int preint;                      /* pre-integrated classification (option preintegration) */
     /* the X-ray table of the last region render in xray mode, which
      * classifies the summed regions' means (vv_region_image.classify) */
-    struct rc_xray {
-        float lut_lo, lut_scale;
-        float lut[4 * VV_VC_LUT];
-    } xray;
+    vv_xray_table xray;
 } rc_state;
 
 /* One object prepared for this render. */
@@ -1023,38 +1020,9 @@ xray_sum_pixel(const rc_frame *fr, int x, int y, vv_render_stats *work) {
     const rc_obj *ob = &fr->objs[0];
     const vv_ray wr = vv_camera_ray(&fr->cam, x, y);
     const size_t at = (size_t)y * (size_t)fr->out->width + (size_t)x;
-    float *px = fr->out->rgba + 4 * at;
-    px[0] = px[1] = px[2] = px[3] = 0;
-    fr->out->depth[at] = INFINITY;
-    fr->key[at] = NAN;
-    vv_vray r;
-    int cont = 0;
-    if (!vv_vray_setup(ob->w2i, ob->dims, ob->planes, ob->n_planes, &wr, 0, INFINITY, &r))
-        return;
-    const float entry = (float)r.t0;
-    const int shortray = vv_ceil_pos(r.t0 / fr->dt) > vv_floor_pos(r.t1 / fr->dt);
-    if (!vv_vray_clip_region(&r, ob->region, ob->dt, ob->inv_form, &cont))
-        return;
-    double sum;
-    float depth;
-    const long n = vv_vray_xray_sum(ob->c, &r, fr->dt, fr->avx2, &sum, &depth);
-    if (n <= 0)
-        return;
-    const float hi = (float)sum;
-    fr->key[at] = hi;
-    px[0] = (float)(sum - (double)hi);
-    px[1] = (float)n;
-    /* the whole ray's depth: its entry, or its one middle sample */
-    fr->out->depth[at] = shortray ? depth : cont ? INFINITY : entry;
-    work->samples += (uint64_t)n;
-}
-
-static void
-xray_classify(const void *ctx, float v, float e[4]) {
-    const struct rc_xray *x = ctx;
-    float i = (v - x->lut_lo) * x->lut_scale;
-    i = i < 0 ? 0 : i > VV_VC_LUT - 1 ? VV_VC_LUT - 1 : i;
-    memcpy(e, x->lut + 4 * (int)i, 4 * sizeof(float));
+    work->samples += (uint64_t)vv_vray_xray_region_pixel(
+        ob->c, ob->w2i, ob->dims, ob->planes, ob->n_planes, ob->region, fr->dt, ob->inv_form, &wr,
+        fr->avx2, fr->out->rgba + 4 * at, &fr->out->depth[at], &fr->key[at]);
 }
 
 static vv_status
@@ -1210,7 +1178,7 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
                          "object '%s': xray regions of a multi-channel object are not rendered",
                          objs[0].obj->name);
     if (s == VV_OK && fr.xsum) {
-        /* the table that classifies the summed means (xray_classify) */
+        /* the table that classifies the summed means (vv_xray_table_classify) */
         st->xray.lut_lo = objs[0].lut_lo;
         st->xray.lut_scale = objs[0].lut_scale;
         memcpy(st->xray.lut, objs[0].lut, sizeof st->xray.lut);
@@ -1268,7 +1236,7 @@ rc_render_region(void *state, const vv_world *w, const vv_view *view,
     tmp.n_objects = 1;
     rc_state *st = state;
     s = render_frame(st, &tmp, view, opt, region, out->image, out->key);
-    out->classify = out->op == VV_REGION_SUM ? xray_classify : NULL;
+    out->classify = out->op == VV_REGION_SUM ? vv_xray_table_classify : NULL;
     out->classify_ctx = out->op == VV_REGION_SUM ? &st->xray : NULL;
     return s;
 }

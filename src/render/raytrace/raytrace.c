@@ -311,7 +311,13 @@ pass_first(void *user, const vv_frame_tile *t) {
             const size_t at = (size_t)y * (size_t)W + (size_t)x;
             float *pix = fr->out->rgba + 4 * at;
             float *dp = fr->out->depth + at;
-            if (fr->nss > 1 && !fr->adaptive)
+            if (fr->xsum) { /* a region in xray mode: the ray caster's sums, bit for bit */
+                const rt_vobj *ob = fr->xsum;
+                const vv_ray wr = vv_camera_ray(&fr->cam, x, y);
+                vv_vray_xray_region_pixel(ob->c, ob->w2i, ob->dims, ob->planes, ob->n_planes,
+                                          ob->region, fr->dt, ob->inv_form, &wr, fr->avx2, pix, dp,
+                                          fr->key + at);
+            } else if (fr->nss > 1 && !fr->adaptive)
                 supersample(fr, x, y, fr->nss, pix, dp);
             else
                 trace_primary(fr, x, y, pix, dp, fr->key ? fr->key + at : NULL);
@@ -532,6 +538,27 @@ render_frame(rt_state *st, const vv_world *w, const vv_view *view, const vv_rend
     vv_camera_rays_init(&fr.cam, view);
     const int nt = opt->threads > 0 ? opt->threads : vv_threads_get();
     vv_status s = prepare_frame(&fr, w, view, region, part, nt);
+    /* a region in xray mode: the sums of its samples, classified by its
+     * table when the regions are combined (rt_render_region) */
+    for (int i = 0;
+         s == VV_OK && region && key && part && part->mode == VV_MODE_XRAY && i < fr.n_vobj; i++) {
+        const rt_vobj *ob = &fr.vobjs[i];
+        if (!ob->region || ob->context)
+            continue;
+        if (ob->group >= 0) {
+            s = vv_error_set(VV_ERR_UNSUPPORTED,
+                             "object '%s': xray regions of a multi-channel object are not "
+                             "rendered",
+                             part->name);
+            break;
+        }
+        fr.xsum = ob;
+        st->xray.lut_lo = ob->tab.lut_lo;
+        st->xray.lut_scale = ob->tab.lut_scale;
+        memcpy(st->xray.lut, ob->lut, sizeof st->xray.lut);
+    }
+    if (s == VV_OK && region && key && part && part->mode == VV_MODE_XRAY && !fr.xsum)
+        s = vv_error_set(VV_ERR_INVALID, "object '%s': no region part to sum", part->name);
     if (s != VV_OK) {
         frame_release(&fr);
         return s;
@@ -597,11 +624,6 @@ rt_render_region(void *state, const vv_world *w, const vv_view *view,
     vv_status s = vv_render_region_part(w, region, &out->op, &part);
     if (s != VV_OK)
         return s;
-    if (part.mode == VV_MODE_XRAY)
-        return vv_error_set(VV_ERR_UNSUPPORTED,
-                            "object '%s': xray regions are drawn by raycast, not by the "
-                            "ray tracer",
-                            part.name);
     /* an isosurface shadowed by a coarse proxy's surface shows the proxy's
      * steps as shadow bands: iso regions only with the whole volume as the
      * context (distributed rendering of a volume every rank holds) */
@@ -613,8 +635,13 @@ rt_render_region(void *state, const vv_world *w, const vv_view *view,
                             "object '%s': iso regions need the whole volume for their "
                             "shadows, not a coarse proxy; draw it out of core with raycast",
                             part.name);
-    return render_frame(state, w, view, opt, region, &part, out->image,
-                        part.mode == VV_MODE_COMPOSITE ? NULL : out->key);
+    rt_state *st = state;
+    s = render_frame(st, w, view, opt, region, &part, out->image,
+                     part.mode == VV_MODE_COMPOSITE ? NULL : out->key);
+    /* xray: the regions' sums add up, their mean classified once */
+    out->classify = out->op == VV_REGION_SUM ? vv_xray_table_classify : NULL;
+    out->classify_ctx = out->op == VV_REGION_SUM ? &st->xray : NULL;
+    return s;
 }
 
 static vv_status

@@ -126,6 +126,9 @@ typedef struct rt_state {
     int simd;          /* AVX2 classification and shading where the processor has it */
     int shadow_grid;   /* volume samples: cached shadow rays (1) or exact (0) */
     int light_volumes; /* shadow rays of directional lights through volumes: light volumes */
+    /* the X-ray table of the last region render in xray mode, which
+     * classifies the summed regions' means (vv_region_image.classify) */
+    vv_xray_table xray;
 } rt_state;
 
 typedef struct rt_light {
@@ -236,6 +239,9 @@ typedef struct rt_frame {
     const float *first; /* pass 2: the image of pass 1 */
     /* the shadow-grid cache's key of what casts shadows (rt_cache.c) */
     const vv_render_region *region; /* a region render (keeps no shadow grid) */
+    /* a region render in xray mode: its object, whose primary rays give
+     * their sums and counts (vv_vray_xray_region_pixel), else NULL */
+    const struct rt_vobj *xsum;
     unsigned char *skey;
     size_t skey_len;
     int skey_failed;
