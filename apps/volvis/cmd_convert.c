@@ -158,8 +158,9 @@ convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int serie
     vv_error_clear();
     vv_status s = VV_ERR_FORMAT;
     const vv_format f = raw ? VV_FORMAT_RAW : vv_format_detect(in);
-    /* the header only: the writer takes each brick's range as it reads it */
-    if ((raw || f == VV_FORMAT_NRRD) && channel <= 0 && time <= 0)
+    /* the header only: the writer takes each brick's range as it reads it (a
+     * .vvb: its bricks one by one) */
+    if ((raw || f == VV_FORMAT_NRRD || cli_ends_with(in, ".vvb")) && channel <= 0 && time <= 0)
         s = vv_bricked_open_header(&b, in, raw, 0);
     if (s != VV_OK && !raw) {
         const vv_status so = open_slabs(in, f, channel, time, &sl);
@@ -247,7 +248,7 @@ convert_zarr_boxes(const char *in, const char *out, const vv_raw_params *raw, in
     vv_error_clear();
     const vv_format f = raw ? VV_FORMAT_RAW : vv_format_detect(in);
     vv_status s = VV_ERR_FORMAT;
-    if ((raw || f == VV_FORMAT_NRRD) && channel <= 0 && time <= 0)
+    if ((raw || f == VV_FORMAT_NRRD || cli_ends_with(in, ".vvb")) && channel <= 0 && time <= 0)
         s = vv_bricked_open_header(&b, in, raw, 0);
     vv_error_clear(); /* a bricked reader's refusal: a gzip NRRD reads by slabs */
     if (s != VV_OK && !raw) {

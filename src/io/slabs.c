@@ -37,7 +37,8 @@ struct vv_slabs {
     gzFile gz;
     FILE *bzf;
     BZFILE *bz;
-    int bz_error; /* libbz2's last error (BZ_OK: none), or 1 at the stream's end */
+    int bz_error; /* libbz2's last error (BZ_OK: none) */
+    int bz_end;   /* 1: the last stream ended and no other follows */
     uint64_t data_off;
     uint64_t at;
     int swap;
@@ -53,6 +54,7 @@ bz_open(vv_slabs *s) {
         return -1;
     s->bz = BZ2_bzReadOpen(&e, s->bzf, 0, 0, NULL, 0);
     s->bz_error = e;
+    s->bz_end = 0;
     if (e != BZ_OK) {
         BZ2_bzReadClose(&e, s->bz);
         s->bz = NULL;
@@ -68,7 +70,7 @@ stream_read(vv_slabs *s, void *buf, unsigned n) {
     if (s->kind == 1)
         return gzread(s->gz, buf, n);
     if (!s->bz)
-        return s->bz_error == 1 ? 0 : -1;
+        return s->bz_end ? 0 : -1;
     int e = BZ_OK;
     const int r = BZ2_bzRead(&e, s->bz, buf, (int)n);
     if (e == BZ_OK)
@@ -86,7 +88,7 @@ stream_read(vv_slabs *s, void *buf, unsigned n) {
         memcpy(rest, unused, (size_t)nu);
     BZ2_bzReadClose(&e2, s->bz);
     s->bz = NULL;
-    s->bz_error = 1;
+    s->bz_end = 1;
     if (nu > 0 || !feof(s->bzf)) {
         int c = nu > 0 ? 1 : fgetc(s->bzf);
         if (nu == 0 && c != EOF)
@@ -94,6 +96,7 @@ stream_read(vv_slabs *s, void *buf, unsigned n) {
         if (c != EOF) {
             s->bz = BZ2_bzReadOpen(&e2, s->bzf, 0, 0, nu > 0 ? rest : NULL, nu);
             s->bz_error = e2;
+            s->bz_end = 0;
             if (e2 != BZ_OK) {
                 BZ2_bzReadClose(&e2, s->bz);
                 s->bz = NULL;

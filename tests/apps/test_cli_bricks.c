@@ -157,7 +157,8 @@ test_renderers(void **state) {
  * CT head) unless --no-levels; `render --level L` and `--lod` read them
  * (the image of OME-Zarr's level L, bit for bit), without them those
  * options are refused; a .vvb from an OME-Zarr pyramid (read by boxes of
- * its level 0) is the bytes of the one from the NRRD. */
+ * its level 0), or from a .vvb without levels (brick by brick), is the bytes
+ * of the one from the NRRD. */
 static void
 test_levels(void **state) {
     (void)state;
@@ -212,6 +213,16 @@ test_levels(void **state) {
     assert_int_equal(r.status, 2);
     assert_non_null(strstr(r.err, "a .vvb with pyramid levels"));
     vt_run_result_free(&r);
+    /* a .vvb read brick by brick into another: levels added back, the same bytes */
+    r = run_cli("convert", "-q", flat, back);
+    assert_int_equal(r.status, 0);
+    vt_run_result_free(&r);
+    x = vt_read_file(vvb, &n1);
+    y = vt_read_file(back, &n2);
+    assert_int_equal(n1, n2);
+    assert_memory_equal(x, y, n1);
+    free(x);
+    free(y);
 }
 
 static void
