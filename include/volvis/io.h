@@ -374,13 +374,6 @@ vv_status vv_vti_write(const vv_volume *v, const char *path, int compress);
  */
 vv_status vv_ome_zarr_write(const vv_volume *v, const char *path, const vv_save_options *opt);
 /**
- * A volume read box by box: voxels lo .. hi (inclusive, x, y, z) as a new
- * volume of hi - lo + 1 voxels a side and the volume's type (voxel
- * (0, 0, 0) is voxel lo), which the caller frees. vv_bricked_read_box and
- * vv_pyramid_read_box (level 0) fit it with a one-line adapter.
- */
-typedef vv_status (*vv_box_reader)(void *ctx, const int lo[3], const int hi[3], vv_volume **out);
-/**
  * A volume read slab by slab: boxes of a file larger than memory in a
  * format whose reader decodes a range of slices (VV_FORMAT_FLAG_SLICES:
  * TIFF stacks), each through vv_volume_load with z_first and z_count (so

@@ -62,6 +62,22 @@ typedef struct vv_histogram {
  */
 vv_status vv_measure_histogram(vv_histogram **out, const vv_volume *v, int nbins, double lo,
                                double hi, const vv_region *region);
+/**
+ * vv_measure_histogram of the whole volume @p hdr describes (dims, type; its
+ * voxels are not read), read box by box through @p read (boxes of at most
+ * 128 x 128 x 64 voxels, x fastest, each read twice: the statistics, then
+ * the bins), so that a volume larger than memory is measured at full
+ * resolution: a pyramid's level 0 (vv_pyramid_read_box), a bricked file
+ * (vv_bricked_read_box), slabs of a stack (vv_slabs_read_box). The counts,
+ * min and max are vv_measure_histogram's of the whole volume exactly; the
+ * mean and standard deviation may differ in the last bits (sums in another
+ * order). @p progress (may be NULL) reports 0 to 1 and can cancel. Errors:
+ * VV_ERR_INVALID (as vv_measure_histogram; a box of another shape from
+ * @p read), VV_ERR_NOMEM, VV_ERR_CANCELLED, the reader's.
+ */
+vv_status vv_measure_histogram_boxes(vv_histogram **out, const vv_volume *hdr, vv_box_reader read,
+                                     void *ctx, int nbins, double lo, double hi,
+                                     const vv_progress *progress);
 /** Releases a histogram. Accepts NULL. */
 void vv_histogram_free(vv_histogram *h);
 /**

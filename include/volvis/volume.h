@@ -285,6 +285,16 @@ vv_status vv_minmax_grid_build(vv_minmax_grid **out, const vv_volume *v, int blo
 /** Releases a grid. Accepts NULL. */
 void vv_minmax_grid_free(vv_minmax_grid *g);
 
+/**
+ * A volume read box by box: voxels lo .. hi (inclusive, x, y, z) as a new
+ * volume of hi - lo + 1 voxels a side and the volume's type (voxel
+ * (0, 0, 0) is voxel lo), which the caller frees. vv_bricked_read_box and
+ * vv_pyramid_read_box (level 0) fit it with a one-line adapter; the writers
+ * of OME-Zarr and .vvb (io.h, bricks.h) and vv_measure_histogram_boxes
+ * (measure.h) take one.
+ */
+typedef vv_status (*vv_box_reader)(void *ctx, const int lo[3], const int hi[3], vv_volume **out);
+
 #ifdef __cplusplus
 }
 #endif

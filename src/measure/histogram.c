@@ -66,32 +66,31 @@ vv_histogram_free(vv_histogram *h) {
     free(h);
 }
 
-vv_status
-vv_measure_histogram(vv_histogram **out, const vv_volume *v, int nbins, double lo, double hi,
-                     const vv_region *region) {
-    if (out)
-        *out = NULL;
-    if (!out || !v || !v->data)
-        return vv_error_set(VV_ERR_INVALID, "histogram: NULL argument");
-    if (nbins < 1 || nbins > (1 << 20))
-        return vv_error_set(VV_ERR_INVALID, "histogram: %d bins (1..1048576)", nbins);
-    if (!isfinite(lo) || !isfinite(hi))
-        return vv_error_set(VV_ERR_INVALID, "histogram: range [%g, %g] is not finite", lo, hi);
-    region_box rb;
-    vv_status s = region_resolve(v, region, &rb);
-    if (s != VV_OK)
-        return vv_error_prefix(s, "histogram");
+/* What the passes add up: the statistics (pass 1) and the bins (pass 2). */
+typedef struct hist_acc {
+    double vmin, vmax, sum, sum2;
+    uint64_t total, nan, outside;
+} hist_acc;
+
+static void
+hist_acc_init(hist_acc *a) {
+    memset(a, 0, sizeof *a);
+    a->vmin = INFINITY;
+    a->vmax = -INFINITY;
+}
+
+/* Pass 1 over the voxels of @p v in @p rb: added to @p a. */
+static void
+stats_pass(const vv_volume *v, const region_box *rb, int nt, hist_acc *a) {
     const size_t sy = (size_t)v->dims[0], sz = sy * (size_t)v->dims[1];
-    const int nt = vv_threads_get();
-    /* pass 1: statistics over the region */
     double vmin = INFINITY, vmax = -INFINITY, sum = 0, sum2 = 0;
     uint64_t total = 0, nan = 0;
 #pragma omp parallel for num_threads(nt) schedule(static) reduction(min : vmin)                 \
     reduction(max : vmax) reduction(+ : sum, sum2, total, nan)
-    for (int k = rb.lo[2]; k <= rb.hi[2]; k++)
-        for (int j = rb.lo[1]; j <= rb.hi[1]; j++)
-            for (int i = rb.lo[0]; i <= rb.hi[0]; i++) {
-                if (rb.n_planes && !region_keeps(&rb, i, j, k))
+    for (int k = rb->lo[2]; k <= rb->hi[2]; k++)
+        for (int j = rb->lo[1]; j <= rb->hi[1]; j++)
+            for (int i = rb->lo[0]; i <= rb->hi[0]; i++) {
+                if (rb->n_planes && !region_keeps(rb, i, j, k))
                     continue;
                 double x = vv_voxel_at(v, (size_t)k * sz + (size_t)j * sy + (size_t)i);
                 if (isnan(x)) {
@@ -104,31 +103,31 @@ vv_measure_histogram(vv_histogram **out, const vv_volume *v, int nbins, double l
                 sum += x;
                 sum2 += x * x;
             }
-    if (total == 0 && nan == 0)
-        return vv_error_set(VV_ERR_INVALID, "histogram: the region holds no voxel");
-    if (lo >= hi) {
-        lo = total ? vmin : 0;
-        hi = total ? vmax : 1;
-        if (hi <= lo)
-            hi = lo + 1;
-    }
-    vv_histogram *h = calloc(1, sizeof *h);
-    uint64_t *local = calloc((size_t)nt * (size_t)nbins, sizeof(uint64_t));
-    if (!h || !local || !(h->counts = calloc((size_t)nbins, sizeof(uint64_t)))) {
-        free(local);
-        vv_histogram_free(h);
-        return vv_error_set(VV_ERR_NOMEM, "histogram: out of memory for %d bins", nbins);
-    }
+    a->vmin = vmin < a->vmin ? vmin : a->vmin;
+    a->vmax = vmax > a->vmax ? vmax : a->vmax;
+    a->sum += sum;
+    a->sum2 += sum2;
+    a->total += total;
+    a->nan += nan;
+}
+
+/* Pass 2 over the voxels of @p v in @p rb: their bins added to @p counts
+ * (@p local: nt x nbins of scratch), those outside [lo, hi] to a->outside. */
+static void
+bins_pass(const vv_volume *v, const region_box *rb, int nt, double lo, double hi, int nbins,
+          uint64_t *counts, uint64_t *local, hist_acc *a) {
+    const size_t sy = (size_t)v->dims[0], sz = sy * (size_t)v->dims[1];
+    memset(local, 0, sizeof(uint64_t) * (size_t)nt * (size_t)nbins);
     uint64_t outside = 0;
     const double scale = nbins / (hi - lo);
 #pragma omp parallel num_threads(nt) reduction(+ : outside)
     {
         uint64_t *mine = local + (size_t)omp_get_thread_num() * (size_t)nbins;
 #pragma omp for schedule(static)
-        for (int k = rb.lo[2]; k <= rb.hi[2]; k++)
-            for (int j = rb.lo[1]; j <= rb.hi[1]; j++)
-                for (int i = rb.lo[0]; i <= rb.hi[0]; i++) {
-                    if (rb.n_planes && !region_keeps(&rb, i, j, k))
+        for (int k = rb->lo[2]; k <= rb->hi[2]; k++)
+            for (int j = rb->lo[1]; j <= rb->hi[1]; j++)
+                for (int i = rb->lo[0]; i <= rb->hi[0]; i++) {
+                    if (rb->n_planes && !region_keeps(rb, i, j, k))
                         continue;
                     double x = vv_voxel_at(v, (size_t)k * sz + (size_t)j * sy + (size_t)i);
                     if (isnan(x))
@@ -143,19 +142,164 @@ vv_measure_histogram(vv_histogram **out, const vv_volume *v, int nbins, double l
     }
     for (int t = 0; t < nt; t++)
         for (int b = 0; b < nbins; b++)
-            h->counts[b] += local[(size_t)t * (size_t)nbins + (size_t)b];
-    free(local);
+            counts[b] += local[(size_t)t * (size_t)nbins + (size_t)b];
+    a->outside += outside;
+}
+
+/* The bins' range: [lo, hi] as asked, or with lo >= hi the voxels' own. */
+static void
+bins_range(const hist_acc *a, double *lo, double *hi) {
+    if (*lo >= *hi) {
+        *lo = a->total ? a->vmin : 0;
+        *hi = a->total ? a->vmax : 1;
+        if (*hi <= *lo)
+            *hi = *lo + 1;
+    }
+}
+
+static vv_status
+hist_new(vv_histogram **out, int nbins, int nt, uint64_t **local) {
+    vv_histogram *h = calloc(1, sizeof *h);
+    *local = calloc((size_t)nt * (size_t)nbins, sizeof(uint64_t));
+    if (!h || !*local || !(h->counts = calloc((size_t)nbins, sizeof(uint64_t)))) {
+        free(*local);
+        *local = NULL;
+        vv_histogram_free(h);
+        return vv_error_set(VV_ERR_NOMEM, "histogram: out of memory for %d bins", nbins);
+    }
+    *out = h;
+    return VV_OK;
+}
+
+static void
+hist_finish(vv_histogram *h, const hist_acc *a, int nbins, double lo, double hi) {
     h->nbins = nbins;
     h->lo = lo;
     h->hi = hi;
-    h->total = total;
-    h->outside = outside;
-    h->nan = nan;
-    h->min = total ? vmin : NAN;
-    h->max = total ? vmax : NAN;
-    h->mean = total ? sum / (double)total : NAN;
-    double var = total ? sum2 / (double)total - h->mean * h->mean : NAN;
-    h->sd = total ? sqrt(var > 0 ? var : 0) : NAN;
+    h->total = a->total;
+    h->outside = a->outside;
+    h->nan = a->nan;
+    h->min = a->total ? a->vmin : NAN;
+    h->max = a->total ? a->vmax : NAN;
+    h->mean = a->total ? a->sum / (double)a->total : NAN;
+    double var = a->total ? a->sum2 / (double)a->total - h->mean * h->mean : NAN;
+    h->sd = a->total ? sqrt(var > 0 ? var : 0) : NAN;
+}
+
+static vv_status
+check_args(int nbins, double lo, double hi) {
+    if (nbins < 1 || nbins > (1 << 20))
+        return vv_error_set(VV_ERR_INVALID, "histogram: %d bins (1..1048576)", nbins);
+    if (!isfinite(lo) || !isfinite(hi))
+        return vv_error_set(VV_ERR_INVALID, "histogram: range [%g, %g] is not finite", lo, hi);
+    return VV_OK;
+}
+
+vv_status
+vv_measure_histogram(vv_histogram **out, const vv_volume *v, int nbins, double lo, double hi,
+                     const vv_region *region) {
+    if (out)
+        *out = NULL;
+    if (!out || !v || !v->data)
+        return vv_error_set(VV_ERR_INVALID, "histogram: NULL argument");
+    vv_status s = check_args(nbins, lo, hi);
+    if (s != VV_OK)
+        return s;
+    region_box rb;
+    if ((s = region_resolve(v, region, &rb)) != VV_OK)
+        return vv_error_prefix(s, "histogram");
+    const int nt = vv_threads_get();
+    hist_acc a;
+    hist_acc_init(&a);
+    stats_pass(v, &rb, nt, &a);
+    if (a.total == 0 && a.nan == 0)
+        return vv_error_set(VV_ERR_INVALID, "histogram: the region holds no voxel");
+    bins_range(&a, &lo, &hi);
+    vv_histogram *h = NULL;
+    uint64_t *local = NULL;
+    if ((s = hist_new(&h, nbins, nt, &local)) != VV_OK)
+        return s;
+    bins_pass(v, &rb, nt, lo, hi, nbins, h->counts, local, &a);
+    free(local);
+    hist_finish(h, &a, nbins, lo, hi);
+    *out = h;
+    return VV_OK;
+}
+
+/* Box @p b of the boxes vv_measure_histogram_boxes reads (HB_X x HB_Y x
+ * HB_Z voxels, x fastest): voxels lo .. hi. */
+#define HB_X 128
+#define HB_Y 128
+#define HB_Z 64
+static void
+hist_box(const vv_volume *hdr, long b, int lo[3], int hi[3]) {
+    const int *d = hdr->dims;
+    const long nx = (d[0] + HB_X - 1) / HB_X, ny = (d[1] + HB_Y - 1) / HB_Y;
+    const int c[3] = {(int)(b % nx), (int)(b / nx % ny), (int)(b / (nx * ny))};
+    const int side[3] = {HB_X, HB_Y, HB_Z};
+    for (int a = 0; a < 3; a++) {
+        lo[a] = c[a] * side[a];
+        hi[a] = lo[a] + side[a] - 1 < d[a] - 1 ? lo[a] + side[a] - 1 : d[a] - 1;
+    }
+}
+
+vv_status
+vv_measure_histogram_boxes(vv_histogram **out, const vv_volume *hdr, vv_box_reader read, void *ctx,
+                           int nbins, double lo, double hi, const vv_progress *progress) {
+    if (out)
+        *out = NULL;
+    if (!out || !hdr || !read)
+        return vv_error_set(VV_ERR_INVALID, "histogram: NULL argument");
+    vv_status s = check_args(nbins, lo, hi);
+    if (s != VV_OK)
+        return s;
+    const int *d = hdr->dims;
+    const long nb =
+        (long)((d[0] + HB_X - 1) / HB_X) * ((d[1] + HB_Y - 1) / HB_Y) * ((d[2] + HB_Z - 1) / HB_Z);
+    const int nt = vv_threads_get();
+    hist_acc a;
+    hist_acc_init(&a);
+    vv_histogram *h = NULL;
+    uint64_t *local = NULL;
+    /* pass 1 (the statistics, and the range when not given), then pass 2 */
+    for (int pass = 1; pass <= 2 && s == VV_OK; pass++) {
+        if (pass == 2) {
+            bins_range(&a, &lo, &hi);
+            if ((s = hist_new(&h, nbins, nt, &local)) != VV_OK)
+                break;
+        }
+        for (long b = 0; b < nb && s == VV_OK; b++) {
+            int blo[3], bhi[3];
+            hist_box(hdr, b, blo, bhi);
+            vv_volume *v = NULL;
+            if ((s = read(ctx, blo, bhi, &v)) != VV_OK)
+                break;
+            if (!v || v->dims[0] != bhi[0] - blo[0] + 1 || v->dims[1] != bhi[1] - blo[1] + 1 ||
+                v->dims[2] != bhi[2] - blo[2] + 1) {
+                vv_volume_free(v);
+                s = vv_error_set(VV_ERR_INVALID, "histogram: the reader gave a box of another "
+                                                 "shape");
+                break;
+            }
+            region_box rb;
+            memset(&rb, 0, sizeof rb);
+            for (int k = 0; k < 3; k++)
+                rb.hi[k] = v->dims[k] - 1;
+            if (pass == 1)
+                stats_pass(v, &rb, nt, &a);
+            else
+                bins_pass(v, &rb, nt, lo, hi, nbins, h->counts, local, &a);
+            vv_volume_free(v);
+            if (progress && vv_progress_report(progress, (pass - 1 + (double)(b + 1) / nb) / 2))
+                s = vv_error_set(VV_ERR_CANCELLED, "histogram: cancelled");
+        }
+    }
+    free(local);
+    if (s != VV_OK) {
+        vv_histogram_free(h);
+        return s;
+    }
+    hist_finish(h, &a, nbins, lo, hi);
     *out = h;
     return VV_OK;
 }

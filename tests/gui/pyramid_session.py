@@ -12,7 +12,9 @@ the one `volvis render STORE --memory-limit 16M` draws of the same view
 of the data (the frame log's representation column), never boxes, and the
 image sharpens again when the drag stops. The slice views sample the
 pyramid: the axial readout's value at a clicked point is level 0's, as
-`volvis slice --probe` of the saved session reads it.
+`volvis slice --probe` of the saved session reads it. The Measurement
+page's histogram is level 0's, read box by box out of core (every voxel
+of the 256 x 256 x 108 volume counted), not the proxy's.
 
 usage: pyramid_session.py GUI CLI OUTDIR
 """
@@ -108,6 +110,17 @@ def main():
         check(m, f"axial readout {t!r}")
         v, i, j, k, x, y, z = (float(g) for g in m.groups())
         s.screenshot("four_up.png")
+        # the histogram of level 0, read out of core (not the 64 x 64 x 27 proxy's)
+        s.click(s.find("1 view"))
+        s.page("Measurement")
+        mpage = s.find("Measurement page")
+        s.click(s.find("Histogram", "push button", root=mpage))
+        hist = s.find_label(lambda n: n.startswith("histogram of"), root=mpage, timeout=60)
+        ht = s.text(hist)
+        print(f"histogram: {ht!r}")
+        check("256 x 256 x 108, read out of core): 7077888 voxels" in ht,
+              f"the histogram is not level 0's: {ht!r}")
+        s.screenshot("histogram.png")
         s.quit_discard()
     cli = os.path.join(OUT, "cli.png")
     import json

@@ -106,6 +106,79 @@ test_histogram(void **state) {
     vv_volume_free(v);
 }
 
+/* The histogram of a volume read box by box (vv_measure_histogram_boxes):
+ * the CT head from memory by boxes, and from a .vvb pyramid's level 0 under
+ * an 8 MiB cache: the counts, min and max of the whole volume's histogram
+ * exactly, the mean and sd to 1e-9; cancelling stops it. */
+static vv_status
+crop_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
+    return vv_filter_crop(ctx, lo, hi, NULL, out);
+}
+
+static vv_status
+level0_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
+    return vv_pyramid_read_box(ctx, 0, lo, hi, out);
+}
+
+static int
+cancel_half(void *user, double f) {
+    (void)user;
+    return f >= 0.5;
+}
+
+static void
+same_histogram(const vv_histogram *a, const vv_histogram *b) {
+    assert_int_equal(a->nbins, b->nbins);
+    assert_true(a->lo == b->lo && a->hi == b->hi && a->min == b->min && a->max == b->max);
+    assert_int_equal(a->total, b->total);
+    assert_int_equal(a->outside, b->outside);
+    assert_memory_equal(a->counts, b->counts, sizeof(uint64_t) * (size_t)a->nbins);
+    assert_near(a->mean, b->mean, 1e-9 * fabs(b->mean));
+    assert_near(a->sd, b->sd, 1e-9 * b->sd);
+}
+
+static void
+test_histogram_boxes(void **state) {
+    (void)state;
+    if (!vt_have_data("volumes/ct_head.nrrd"))
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_load(&v, vt_data("volumes/ct_head.nrrd"), NULL));
+    vv_histogram *whole = NULL, *boxed = NULL, *fixed = NULL, *fixed_b = NULL;
+    vt_ok(vv_measure_histogram(&whole, v, 128, 0, 0, NULL));
+    vt_ok(vv_measure_histogram_boxes(&boxed, v, crop_box, v, 128, 0, 0, NULL));
+    same_histogram(boxed, whole);
+    vt_ok(vv_measure_histogram(&fixed, v, 50, -500, 1500, NULL));
+    vt_ok(vv_measure_histogram_boxes(&fixed_b, v, crop_box, v, 50, -500, 1500, NULL));
+    same_histogram(fixed_b, fixed);
+    vv_histogram_free(boxed);
+    boxed = NULL;
+    char path[1200];
+    snprintf(path, sizeof path, "%s/head.vvb", vt_outdir("measure"));
+    vt_ok(vv_volume_write_vvb(v, path, VV_VVB_ZSTD | VV_VVB_LEVELS));
+    vv_pyramid *p = NULL;
+    vt_ok(vv_pyramid_open(&p, path, -1, -1, (uint64_t)8 << 20, NULL));
+    vt_ok(
+        vv_measure_histogram_boxes(&boxed, vv_pyramid_level(p, 0), level0_box, p, 128, 0, 0, NULL));
+    same_histogram(boxed, whole);
+    vv_pyramid_stats st;
+    vv_pyramid_stats_get(p, &st);
+    printf("histogram of level 0 by boxes: %llu chunk reads, peak cache %.1f MiB\n",
+           (unsigned long long)st.chunk_reads[0], (double)st.peak_bytes / 1048576.0);
+    assert_true(st.peak_bytes <= (uint64_t)8 << 20);
+    vv_histogram_free(boxed);
+    boxed = NULL;
+    const vv_progress pr = {cancel_half, NULL};
+    assert_int_equal(vv_measure_histogram_boxes(&boxed, v, crop_box, v, 128, 0, 0, &pr),
+                     VV_ERR_CANCELLED);
+    assert_null(boxed);
+    vv_pyramid_free(p);
+    vv_histogram_free(whole);
+    vv_histogram_free(fixed);
+    vv_histogram_free(fixed_b);
+    vv_volume_free(v);
+}
+
 static void
 test_histogram_plot(void **state) {
     (void)state;
@@ -801,12 +874,19 @@ test_colocalisation(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_colocalisation),    cmocka_unit_test(test_histogram),
-        cmocka_unit_test(test_histogram_plot),    cmocka_unit_test(test_sphere_mc_and_voxels),
-        cmocka_unit_test(test_cut_sphere_volume), cmocka_unit_test(test_cut_planes_mc),
-        cmocka_unit_test(test_surface_tracking),  cmocka_unit_test(test_ct_head),
-        cmocka_unit_test(test_distance),          cmocka_unit_test(test_mesh_measures),
-        cmocka_unit_test(test_object_measures),   cmocka_unit_test(test_geodesic),
+        cmocka_unit_test(test_colocalisation),
+        cmocka_unit_test(test_histogram),
+        cmocka_unit_test(test_histogram_plot),
+        cmocka_unit_test(test_histogram_boxes),
+        cmocka_unit_test(test_sphere_mc_and_voxels),
+        cmocka_unit_test(test_cut_sphere_volume),
+        cmocka_unit_test(test_cut_planes_mc),
+        cmocka_unit_test(test_surface_tracking),
+        cmocka_unit_test(test_ct_head),
+        cmocka_unit_test(test_distance),
+        cmocka_unit_test(test_mesh_measures),
+        cmocka_unit_test(test_object_measures),
+        cmocka_unit_test(test_geodesic),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
