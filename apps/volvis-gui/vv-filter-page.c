@@ -27,6 +27,7 @@ typedef struct filter_job {
     vv_filter_chain *chain;
     int object; /* index of the object in the World */
     char name[VV_NAME_MAX];
+    char proxy[192]; /* out of core: what was filtered instead of level 0 (else empty) */
     vv_status status;
     char error[512];
     double seconds;
@@ -99,7 +100,7 @@ filter_done(GObject *src, GAsyncResult *res, gpointer user) {
     if (!page->doc)
         return; /* the page went away (window closed) while the filter ran */
     set_running(page, FALSE);
-    char t[768];
+    char t[1024];
     if (j->status != VV_OK) {
         snprintf(t, sizeof t, "%s: %s", j->status == VV_ERR_CANCELLED ? "cancelled" : "failed",
                  j->error);
@@ -152,9 +153,9 @@ filter_done(GObject *src, GAsyncResult *res, gpointer user) {
             o->isovalue = 0.5 * (lo + hi);
     }
     vv_document_changed(page->doc);
-    snprintf(t, sizeof t, "%s: %s -> %d x %d x %d %s, values %g..%g, in %.2f s", j->name, text,
+    snprintf(t, sizeof t, "%s: %s -> %d x %d x %d %s, values %g..%g, in %.2f s%s", j->name, text,
              j->out->dims[0], j->out->dims[1], j->out->dims[2], vv_voxel_type_name(j->out->type),
-             lo, hi, j->seconds);
+             lo, hi, j->seconds, j->proxy);
     set_status(page, t);
     gtk_progress_bar_set_fraction(GTK_PROGRESS_BAR(page->progress), 1);
     /* scripts and tests read what happened from stderr */
@@ -195,6 +196,14 @@ apply_clicked(GtkButton *b, gpointer user) {
         return;
     }
     filter_job *j = g_new0(filter_job, 1);
+    VvGuiPyramid *gp = vv_document_pyramid(page->doc, o);
+    if (gp) { /* said with the result: the proxy, not level 0 */
+        const vv_volume *h0 = vv_pyramid_level(gp->pyramid, 0);
+        snprintf(j->proxy, sizeof j->proxy,
+                 " -- the coarse proxy (level 0, %d x %d x %d, is out of core; a saved session "
+                 "keeps the chain for the whole file)",
+                 h0->dims[0], h0->dims[1], h0->dims[2]);
+    }
     j->page = g_object_ref(page);
     j->in = vv_volume_ref(o->volume);
     j->chain = chain;

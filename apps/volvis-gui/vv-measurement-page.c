@@ -185,6 +185,7 @@ typedef struct measure_job {
     vv_isosurface_measure_options opt;
     vv_isosurface_measure result;
     char name[VV_NAME_MAX];
+    char proxy[160]; /* out of core: what was measured instead of level 0 (else empty) */
     vv_status status;
     char error[512];
 } measure_job;
@@ -232,13 +233,13 @@ measure_done(GObject *src, GAsyncResult *res, gpointer user) {
         return;
     }
     const char *u = j->units;
-    char t[512];
+    char t[704];
     snprintf(t, sizeof t,
              "%s isovalue %g (%s%s): area %.6g %s², volume %.6g %s³, %llu voxels, %zu "
-             "triangles\n",
+             "triangles%s\n",
              j->name, j->iso, j->result.method == VV_MEASURE_MC ? "marching cubes" : "voxel count",
              j->opt.has_seed ? ", surface-tracked" : "", j->result.area, u, j->result.volume, u,
-             (unsigned long long)j->result.voxels, j->result.n_triangles);
+             (unsigned long long)j->result.voxels, j->result.n_triangles, j->proxy);
     measure_print(self, self->iso_result, t);
     vv_marks_set_region(self->marks, j->region);
 }
@@ -267,6 +268,15 @@ act_measure(GSimpleAction *a, GVariant *p, gpointer user) {
     if (!o->volume)
         return;
     measure_job *j = g_new0(measure_job, 1);
+    VvGuiPyramid *gp = vv_document_pyramid(self->doc, o);
+    if (gp) { /* said with the result: the proxy, not level 0 */
+        const vv_volume *h0 = vv_pyramid_level(gp->pyramid, 0);
+        snprintf(j->proxy, sizeof j->proxy,
+                 " -- of the coarse proxy (%d x %d x %d voxels); level 0 (%d x %d x %d) is out "
+                 "of core",
+                 o->volume->dims[0], o->volume->dims[1], o->volume->dims[2], h0->dims[0],
+                 h0->dims[1], h0->dims[2]);
+    }
     j->volume = vv_volume_ref(o->volume);
     j->placed = vv_object_matrix(o);
     j->units = vvg_unit_label(o->volume);

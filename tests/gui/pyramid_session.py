@@ -14,7 +14,8 @@ image sharpens again when the drag stops. The slice views sample the
 pyramid: the axial readout's value at a clicked point is level 0's, as
 `volvis slice --probe` of the saved session reads it. The Measurement
 page's histogram is level 0's, read box by box out of core (every voxel
-of the 256 x 256 x 108 volume counted), not the proxy's.
+of the 256 x 256 x 108 volume counted), not the proxy's; its isosurface
+measurement is still the proxy's, and says so.
 
 usage: pyramid_session.py GUI CLI OUTDIR
 """
@@ -121,6 +122,13 @@ def main():
         check("256 x 256 x 108, read out of core): 7077888 voxels" in ht,
               f"the histogram is not level 0's: {ht!r}")
         s.screenshot("histogram.png")
+        # an isosurface measurement still runs on the proxy, and says so
+        s.click(s.find("Measure", "push button", root=mpage))
+        iso = s.find_label(lambda n: n.startswith("head isovalue"), root=mpage, timeout=60)
+        it = s.text(iso)
+        print(f"isosurface: {it!r}")
+        check("of the coarse proxy (64 x 64 x 27 voxels); level 0 (256 x 256 x 108) is out of "
+              "core" in it, f"the measurement does not say it measured the proxy: {it!r}")
         s.quit_discard()
     cli = os.path.join(OUT, "cli.png")
     import json
