@@ -186,6 +186,8 @@ typedef struct measure_job {
     vv_isosurface_measure result;
     char name[VV_NAME_MAX];
     char proxy[160]; /* out of core: what was measured instead of level 0 (else empty) */
+    char *path;      /* out of core, voxel counting: level 0 of this file, read box by box */
+    uint64_t limit;  /* its pyramid's memory limit */
     vv_status status;
     char error[512];
 } measure_job;
@@ -197,6 +199,17 @@ measure_thread(GTask *task, gpointer src, gpointer data, GCancellable *c) {
     (void)c;
     measure_job *j = data;
     vv_error_clear();
+    if (j->path) { /* level 0 out of core, through a pyramid of its own */
+        vv_pyramid *p = NULL;
+        j->status = vv_pyramid_open(&p, j->path, 0, -1, j->limit, NULL);
+        if (j->status == VV_OK)
+            j->status = vv_measure_isosurface_boxes(&j->result, vv_pyramid_level(p, 0), level0_box,
+                                                    p, j->iso, NULL);
+        if (j->status != VV_OK)
+            g_strlcpy(j->error, vv_error_message(), sizeof j->error);
+        vv_pyramid_free(p);
+        return;
+    }
     j->status = vv_measure_isosurface(&j->result, j->volume, j->iso, &j->opt);
     /* the surface-tracked section is drawn in the views */
     if (j->status == VV_OK && j->opt.has_seed && j->opt.method == VV_MEASURE_MC &&
@@ -216,6 +229,7 @@ measure_thread(GTask *task, gpointer src, gpointer data, GCancellable *c) {
 static void
 measure_job_free(gpointer p) {
     measure_job *j = p;
+    g_free(j->path);
     vv_volume_free(j->volume);
     vv_mesh_free(j->region);
     g_free(j);
@@ -268,15 +282,6 @@ act_measure(GSimpleAction *a, GVariant *p, gpointer user) {
     if (!o->volume)
         return;
     measure_job *j = g_new0(measure_job, 1);
-    VvGuiPyramid *gp = vv_document_pyramid(self->doc, o);
-    if (gp) { /* said with the result: the proxy, not level 0 */
-        const vv_volume *h0 = vv_pyramid_level(gp->pyramid, 0);
-        snprintf(j->proxy, sizeof j->proxy,
-                 " -- of the coarse proxy (%d x %d x %d voxels); level 0 (%d x %d x %d) is out "
-                 "of core",
-                 o->volume->dims[0], o->volume->dims[1], o->volume->dims[2], h0->dims[0],
-                 h0->dims[1], h0->dims[2]);
-    }
     j->volume = vv_volume_ref(o->volume);
     j->placed = vv_object_matrix(o);
     j->units = vvg_unit_label(o->volume);
@@ -294,6 +299,22 @@ act_measure(GSimpleAction *a, GVariant *p, gpointer user) {
         j->opt.seed[0] = vvg_spin_value(self->seed_i);
         j->opt.seed[1] = vvg_spin_value(self->seed_j);
         j->opt.seed[2] = vvg_spin_value(self->seed_k);
+    }
+    VvGuiPyramid *gp = vv_document_pyramid(self->doc, o);
+    if (gp) { /* out of core: voxel counting reads level 0 box by box; the rest the proxy */
+        const vv_volume *h0 = vv_pyramid_level(gp->pyramid, 0);
+        if (j->opt.method == VV_MEASURE_VOXEL && !j->opt.has_seed) {
+            j->path = g_strdup(gp->path);
+            j->limit = gp->limit / 4 > ((uint64_t)64 << 20) ? gp->limit / 4 : (uint64_t)64 << 20;
+            snprintf(j->proxy, sizeof j->proxy, " -- level 0 (%d x %d x %d), read out of core",
+                     h0->dims[0], h0->dims[1], h0->dims[2]);
+        } else {
+            snprintf(j->proxy, sizeof j->proxy,
+                     " -- of the coarse proxy (%d x %d x %d voxels); level 0 (%d x %d x %d) is "
+                     "out of core",
+                     o->volume->dims[0], o->volume->dims[1], o->volume->dims[2], h0->dims[0],
+                     h0->dims[1], h0->dims[2]);
+        }
     }
     GTask *task = g_task_new(self, NULL, measure_done, NULL);
     g_task_set_task_data(task, j, measure_job_free);

@@ -192,6 +192,23 @@ vv_status vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, 
                                 const vv_isosurface_measure_options *opt);
 
 /**
+ * vv_measure_isosurface by voxel counting (VV_MEASURE_VOXEL) of the whole
+ * volume @p hdr describes (dims, spacing, value range; its voxels are not
+ * read), read box by box through @p read (boxes of 128 x 128 x 64 voxels
+ * with a ghost voxel beyond each inner face), so that a volume larger than
+ * memory is measured at full resolution: the voxels counted, the volume,
+ * the faces between inside and outside voxels and those on the volume's
+ * boundary (cut_area) of the whole volume (the areas to rounding: sums in
+ * another order). No region or seed: a surface-tracked section needs the
+ * whole volume. @p progress (may be NULL) reports and can cancel. Errors:
+ * VV_ERR_INVALID (an isovalue outside the range; a box of another shape),
+ * VV_ERR_CANCELLED, the reader's.
+ */
+vv_status vv_measure_isosurface_boxes(vv_isosurface_measure *out, const vv_volume *hdr,
+                                      vv_box_reader read, void *ctx, double isovalue,
+                                      const vv_progress *progress);
+
+/**
  * The Marching Cubes surface that vv_measure_isosurface measures with
  * VV_MEASURE_MC (method ignored): the whole surface in the region, or the
  * surface-tracked section when seeded, with normals; cut planes clip it.

@@ -163,10 +163,14 @@ flood_fill(const vv_volume *v, double iso, const region_box *rb, const int s[3],
     return VV_OK;
 }
 
-/* Voxel counting over the region (mask NULL) or the section (mask set). */
+/* Voxel counting over the region (mask NULL) or the section (mask set):
+ * the voxels of @p rb counted; a face whose neighbour lies outside the box
+ * @p olo .. @p ohi (the region's boundary; the volume's, for a box of it
+ * with its ghost voxels) is cut, others are area when the neighbour is
+ * outside the surface. Adds to *m's counts. */
 static void
-voxel_measure(const vv_volume *v, double iso, const region_box *rb, const uint8_t *mask,
-              vv_isosurface_measure *m) {
+voxel_measure(const vv_volume *v, double iso, const region_box *rb, const int olo[3],
+              const int ohi[3], const uint8_t *mask, vv_isosurface_measure *m) {
     const size_t sy = (size_t)v->dims[0], sz = sy * (size_t)v->dims[1];
     const double fa[3] = {v->spacing[1] * v->spacing[2], v->spacing[0] * v->spacing[2],
                           v->spacing[0] * v->spacing[1]};
@@ -186,7 +190,7 @@ voxel_measure(const vv_volume *v, double iso, const region_box *rb, const uint8_
                     for (int d = -1; d <= 1; d += 2) {
                         int q[3] = {i, j, k};
                         q[a] += d;
-                        if (q[a] < rb->lo[a] || q[a] > rb->hi[a]) {
+                        if (q[a] < olo[a] || q[a] > ohi[a]) {
                             cut += fa[a]; /* the region's boundary cuts here */
                             continue;
                         }
@@ -198,10 +202,10 @@ voxel_measure(const vv_volume *v, double iso, const region_box *rb, const uint8_
                             area += fa[a];
                     }
             }
-    m->voxels = count;
-    m->volume = (double)count * v->spacing[0] * v->spacing[1] * v->spacing[2];
-    m->area = area;
-    m->cut_area = cut;
+    m->voxels += count;
+    m->volume = (double)m->voxels * v->spacing[0] * v->spacing[1] * v->spacing[2];
+    m->area += area;
+    m->cut_area += cut;
     m->area_bias = 1.5;
 }
 
@@ -610,6 +614,70 @@ masked_copy(const vv_volume *v, double isovalue, const region_box *rbp, const ui
     return VV_OK;
 }
 
+/* The boxes vv_measure_isosurface_boxes counts: IB_X x IB_Y x IB_Z voxels
+ * of their own, read with a ghost voxel beyond each face inside the volume. */
+#define IB_X 128
+#define IB_Y 128
+#define IB_Z 64
+
+vv_status
+vv_measure_isosurface_boxes(vv_isosurface_measure *out, const vv_volume *hdr, vv_box_reader read,
+                            void *ctx, double isovalue, const vv_progress *progress) {
+    if (!out || !hdr || !read)
+        return vv_error_set(VV_ERR_INVALID, "measure: NULL argument");
+    memset(out, 0, sizeof *out);
+    if (!isfinite(isovalue) || !(isovalue > hdr->range[0]) || !(isovalue <= hdr->range[1]))
+        return vv_error_set(VV_ERR_INVALID,
+                            "measure: isovalue %g is outside the volume's range (%g, %g]: there "
+                            "is no isosurface",
+                            isovalue, hdr->range[0], hdr->range[1]);
+    out->method = VV_MEASURE_VOXEL;
+    out->isovalue = isovalue;
+    out->unit = hdr->unit;
+    const int *d = hdr->dims, side[3] = {IB_X, IB_Y, IB_Z};
+    int nb[3];
+    for (int a = 0; a < 3; a++)
+        nb[a] = (d[a] + side[a] - 1) / side[a];
+    const long n = (long)nb[0] * nb[1] * nb[2];
+    for (long b = 0; b < n; b++) {
+        const int c[3] = {(int)(b % nb[0]), (int)(b / nb[0] % nb[1]),
+                          (int)(b / ((long)nb[0] * nb[1]))};
+        int lo[3], hi[3], glo[3], ghi[3];
+        for (int a = 0; a < 3; a++) {
+            lo[a] = c[a] * side[a];
+            hi[a] = lo[a] + side[a] - 1 < d[a] - 1 ? lo[a] + side[a] - 1 : d[a] - 1;
+            glo[a] = lo[a] > 0 ? lo[a] - 1 : 0;
+            ghi[a] = hi[a] < d[a] - 1 ? hi[a] + 1 : hi[a];
+        }
+        vv_volume *v = NULL;
+        vv_status s = read(ctx, glo, ghi, &v);
+        if (s != VV_OK)
+            return vv_error_prefix(s, "measure");
+        if (!v || v->dims[0] != ghi[0] - glo[0] + 1 || v->dims[1] != ghi[1] - glo[1] + 1 ||
+            v->dims[2] != ghi[2] - glo[2] + 1) {
+            vv_volume_free(v);
+            return vv_error_set(VV_ERR_INVALID, "measure: the reader gave a box of another shape");
+        }
+        memcpy(v->spacing, hdr->spacing, sizeof v->spacing);
+        /* the box's own voxels, and the volume's extent, in the box's indices */
+        region_box rb;
+        memset(&rb, 0, sizeof rb);
+        int olo[3], ohi[3];
+        for (int a = 0; a < 3; a++) {
+            rb.lo[a] = lo[a] - glo[a];
+            rb.hi[a] = hi[a] - glo[a];
+            olo[a] = -glo[a];
+            ohi[a] = d[a] - 1 - glo[a];
+        }
+        voxel_measure(v, isovalue, &rb, olo, ohi, NULL, out);
+        vv_volume_free(v);
+        if (progress && vv_progress_report(progress, (double)(b + 1) / n))
+            return vv_error_set(VV_ERR_CANCELLED, "measure: cancelled");
+    }
+    out->volume = (double)out->voxels * hdr->spacing[0] * hdr->spacing[1] * hdr->spacing[2];
+    return VV_OK;
+}
+
 vv_status
 vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, double isovalue,
                       const vv_isosurface_measure_options *opt) {
@@ -645,7 +713,7 @@ vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, double iso
     const int threads = opt->threads > 0 ? opt->threads : vv_threads_get();
     if (!opt->has_seed) {
         if (opt->method == VV_MEASURE_VOXEL) {
-            voxel_measure(v, isovalue, &rb, NULL, out);
+            voxel_measure(v, isovalue, &rb, rb.lo, rb.hi, NULL, out);
             return VV_OK;
         }
         s = rb.n_planes ? mc_measure_cut(v, isovalue, rb.lo, rb.hi, rb.n_planes,
@@ -685,7 +753,7 @@ vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, double iso
         return vv_error_prefix(s, "measure");
     }
     if (opt->method == VV_MEASURE_VOXEL) {
-        voxel_measure(v, isovalue, &rb, mask, out);
+        voxel_measure(v, isovalue, &rb, rb.lo, rb.hi, mask, out);
         free(mask);
         return VV_OK;
     }

@@ -129,6 +129,16 @@ def main():
         print(f"isosurface: {it!r}")
         check("of the coarse proxy (64 x 64 x 27 voxels); level 0 (256 x 256 x 108) is out of "
               "core" in it, f"the measurement does not say it measured the proxy: {it!r}")
+        # voxel counting reads level 0 box by box: volvis measure's count of the whole file
+        s.choose(s.find("method", "combo box", root=mpage), ["marching cubes", "voxel counting"],
+                 "voxel counting")
+        s.click(s.find("Measure", "push button", root=mpage))
+        vox = s.find_label(lambda n: n.startswith("head isovalue") and "voxel count" in n,
+                           root=mpage, timeout=60)
+        vt = s.text(vox)
+        print(f"voxel counting: {vt!r}")
+        check("level 0 (256 x 256 x 108), read out of core" in vt,
+              f"voxel counting did not read level 0: {vt!r}")
         s.quit_discard()
     cli = os.path.join(OUT, "cli.png")
     import json
@@ -145,6 +155,12 @@ def main():
     print(f"readout {t!r}; volvis slice --probe of the session: {r.stdout.strip()}")
     check(abs(float(probe[1]) - v) <= 1e-3 * (1 + abs(v)),
           f"the readout's value {v} is not level 0's {probe[1]}")
+    r = subprocess.run([CLI, "measure", HEAD, "--iso", "0", "--method", "voxel"],
+                       capture_output=True, text=True)
+    print(f"volvis measure of the CT head: {r.stdout.strip()} {r.stderr.strip()}")
+    m = re.search(r"(\d+) voxels", r.stdout)
+    check(r.returncode == 0 and m and f"{m.group(1)} voxels" in vt,
+          f"the GUI's level-0 voxel count is not volvis measure's: {vt!r}")
     q = psnr(shot, cli)
     print(f"the GUI's converged frame against volvis render of the session: {q:.1f} dB")
     check(q >= 30, f"the GUI's converged frame is not the CLI's ({q:.1f} dB)")

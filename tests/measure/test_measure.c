@@ -109,7 +109,9 @@ test_histogram(void **state) {
 /* The histogram of a volume read box by box (vv_measure_histogram_boxes):
  * the CT head from memory by boxes, and from a .vvb pyramid's level 0 under
  * an 8 MiB cache: the counts, min and max of the whole volume's histogram
- * exactly, the mean and sd to 1e-9; cancelling stops it. */
+ * exactly, the mean and sd to 1e-9; cancelling stops it. Voxel counting by
+ * boxes (vv_measure_isosurface_boxes) likewise: the count and volume
+ * exactly, the areas to 1e-9. */
 static vv_status
 crop_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
     return vv_filter_crop(ctx, lo, hi, NULL, out);
@@ -172,6 +174,29 @@ test_histogram_boxes(void **state) {
     assert_int_equal(vv_measure_histogram_boxes(&boxed, v, crop_box, v, 128, 0, 0, &pr),
                      VV_ERR_CANCELLED);
     assert_null(boxed);
+    /* voxel counting by boxes (ghost voxels across their faces): the whole
+     * volume's count, volume, area and cut area, in memory and from level 0 */
+    vv_isosurface_measure_options mo;
+    vv_isosurface_measure_options_init(&mo);
+    mo.method = VV_MEASURE_VOXEL;
+    vv_isosurface_measure m0, m1, m2;
+    vt_ok(vv_measure_isosurface(&m0, v, 300, &mo));
+    vt_ok(vv_measure_isosurface_boxes(&m1, v, crop_box, v, 300, NULL));
+    vv_pyramid *p32 = NULL; /* a box and its ghosts: up to 4 x 4 x 3 chunks */
+    vt_ok(vv_pyramid_open(&p32, path, -1, -1, (uint64_t)32 << 20, NULL));
+    vt_ok(vv_measure_isosurface_boxes(&m2, vv_pyramid_level(p32, 0), level0_box, p32, 300, NULL));
+    vv_pyramid_free(p32);
+    printf("voxel counting at 300: %llu voxels, area %.6g, cut %.6g (by boxes: %.6g, %.6g)\n",
+           (unsigned long long)m0.voxels, m0.area, m0.cut_area, m1.area, m1.cut_area);
+    const vv_isosurface_measure *ms[2] = {&m1, &m2};
+    for (int q = 0; q < 2; q++) {
+        assert_int_equal(ms[q]->voxels, m0.voxels);
+        assert_true(ms[q]->volume == m0.volume);
+        assert_near(ms[q]->area, m0.area, 1e-9 * m0.area);
+        assert_near(ms[q]->cut_area, m0.cut_area, 1e-9 * m0.cut_area + 1e-12);
+        assert_int_equal(ms[q]->method, VV_MEASURE_VOXEL);
+    }
+    assert_true(m0.voxels > 0 && m0.cut_area > 0); /* the head touches the volume's faces */
     vv_pyramid_free(p);
     vv_histogram_free(whole);
     vv_histogram_free(fixed);
