@@ -8,10 +8,11 @@
  * tracer's quality 1; MIP byte for byte; composite with its shadows traced
  * through the proxy: >= 50 dB where the proxy is the whole volume, the nut;
  * on the CT head, a 4x coarser proxy (the .vvb's coarse level), exact
- * without shadows and measured with them; X-ray bit for bit by both), and its errors: a memory limit
- * smaller than one brick, a bad size, a scene file, a renderer without the
- * region contract; the pyramid levels convert writes (render --level and
- * --lod read them: OME-Zarr's images bit for bit).
+ * without shadows and measured with them; X-ray bit for bit by both), and
+ * its errors: a memory limit smaller than one brick, a bad size, a scene
+ * file, a renderer without the region contract; the pyramid levels convert
+ * writes (render --level and --lod read them: OME-Zarr's images bit for
+ * bit).
  */
 #include "testutil.h"
 

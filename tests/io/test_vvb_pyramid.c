@@ -13,7 +13,8 @@
  *   before.
  * - Empty space skipped unread: a ball in a corner of a volume of zeros,
  *   rendered at level 0, reads only the chunks near the ball (the others'
- *   ranges from the index: 27 of 125 chunks read), and the image is the one drawn with every chunk read.
+ *   ranges from the index: 27 of 125 chunks read), and the image is the
+ *   one drawn with every chunk read.
  * - A .vvb without levels is no pyramid (vv_pyramid_probe 0, one level),
  *   with levels it is; the box writer gives the in-memory writer's bytes.
  * - Bad input: a level table past the end of the file, a wrong level
@@ -385,10 +386,8 @@ test_bad_levels(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_ct_head),
-        cmocka_unit_test(test_odd_shapes),
-        cmocka_unit_test(test_skip_unread),
-        cmocka_unit_test(test_probe_and_writers),
+        cmocka_unit_test(test_ct_head),     cmocka_unit_test(test_odd_shapes),
+        cmocka_unit_test(test_skip_unread), cmocka_unit_test(test_probe_and_writers),
         cmocka_unit_test(test_bad_levels),
     };
     return vt_run_tests(tests, NULL, NULL);
