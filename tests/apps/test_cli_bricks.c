@@ -190,7 +190,7 @@ test_levels(void **state) {
     free(x);
     free(y);
     for (int level = 1; level <= 2; level++) {
-        char ls[8];
+        char ls[16];
         snprintf(ls, sizeof ls, "%d", level);
         r = run_cli("render", vvb, "--level", ls, "--mode", "mip", "--size", "96x80", "-o", a);
         assert_int_equal(r.status, 0);
