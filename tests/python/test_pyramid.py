@@ -12,8 +12,13 @@ writer) read by box and rendered out of core by level of detail.
 - progressive frames with the background loader converge on the
   converged image (PSNR non-decreasing, the last bit for bit);
 - bad input: a missing store, a memory limit that is not a size, a box
-  outside a level, a renderer without regions: the library's errors.
+  outside a level, a renderer without regions: the library's errors;
+- a .vvb with pyramid levels (`volvis convert` of the phantom) opens as a
+  Pyramid: level 0 is the phantom, each level numpy's 2x2x2 means (axes
+  halved rounding up, means rounded half up), its spacing and origin the
+  level's.
 """
+import subprocess
 import pathlib
 import sys
 
@@ -27,6 +32,7 @@ numcodecs = pytest.importorskip("numcodecs")
 pytest.importorskip("PIL")
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "io"))
 from pyramid_common import write_ome_zarr  # noqa: E402
+from conftest import cli  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -138,3 +144,45 @@ def test_bad_input(store, tmp_path):
         p.read(5)
     with pytest.raises(volvis.UnsupportedError, match="splat renders no regions"):
         p.render(renderer="splat", size=(16, 16))
+
+
+def next_level(a):
+    """The .vvb writer's next level, by numpy: every axis longer than one
+    voxel halved rounding up, each voxel the mean of the voxels under it
+    (fewer at an odd edge), rounded half up."""
+    f = a.astype(np.float64)
+    for ax in range(3):
+        n = f.shape[ax]
+        if n < 2:
+            continue
+        if n % 2:
+            pad = [(0, 0)] * 3
+            pad[ax] = (0, 1)
+            f = np.pad(f, pad, constant_values=np.nan)
+        shape = list(f.shape)
+        shape[ax:ax + 1] = [shape[ax] // 2, 2]
+        f = np.nanmean(f.reshape(shape), axis=ax + 1)
+    return np.floor(f + 0.5).astype(a.dtype)
+
+
+def test_vvb_levels(tmp_path):
+    z, y, x = np.mgrid[0:67, 0:70, 0:131].astype(np.float64)
+    arr = (1000 * np.sin(x / 9) * np.cos(y / 7) + 13 * z + 2000).astype(np.uint16)
+    spacing = [1.5, 0.8, 0.7]  # z, y, x
+    raw, vvb = tmp_path / "ph.raw", tmp_path / "ph.vvb"
+    arr.tofile(raw)
+    dims = f"{arr.shape[2]}x{arr.shape[1]}x{arr.shape[0]}"
+    sp = f"{spacing[2]}x{spacing[1]}x{spacing[0]}"
+    r = subprocess.run([cli(), "convert", "--raw", f"{dims}:u16:{sp}", str(raw), str(vvb)],
+                       capture_output=True, text=True)
+    assert r.returncode == 0 and "3 pyramid levels" in r.stdout, r.stdout + r.stderr
+    p = volvis.Pyramid(str(vvb), memory_limit="16M")
+    assert len(p.levels) == 3  # 131 x 70 x 67, 66 x 35 x 34, 33 x 18 x 17
+    want = arr
+    for k, L in enumerate(p.levels):
+        f = 2 ** k
+        assert L.shape == want.shape and L.dtype == np.uint16
+        assert np.allclose(L.spacing, [s * f for s in spacing[::-1]])
+        assert np.allclose(L.origin, [s * (f - 1) / 2 for s in spacing[::-1]])
+        assert np.array_equal(p.read(k), want)
+        want = next_level(want)
