@@ -388,6 +388,53 @@ vv_status vv_renderer_render_multires(vv_renderer *r, const vv_world *w, int obj
                                       const struct vv_multires_source *src, const vv_view *view,
                                       const vv_render_options *opt, vv_lod *lod, vv_image *out);
 
+#define VV_SOURCES_MAX 16 /**< visible objects vv_renderer_render_sources draws */
+
+/**
+ * Where one volume object's voxels come from in vv_renderer_render_sources:
+ * a brick source or a multiresolution one (at most one; neither: the
+ * object's own volume, in memory). The sources are borrowed.
+ */
+typedef struct vv_object_source {
+    int object;                                /**< index into the World's objects */
+    const struct vv_brick_source *bricks;      /**< or NULL */
+    const struct vv_multires_source *multires; /**< or NULL */
+} vv_object_source;
+
+/** Object @p object, no source (its own volume). */
+void vv_object_source_init(vv_object_source *s, int object);
+
+/**
+ * Renders every visible object of @p w, several volume objects out of core
+ * and in memory side by side: each object alone (the others hidden, on a
+ * black background) into a layer of its own -- vv_renderer_render_bricks
+ * of its brick source, vv_renderer_render_multires of its multiresolution
+ * source (with a copy of @p lod's inputs; may be NULL: vv_lod_init's), or
+ * one region over its whole in-memory volume when @p src (n_src entries,
+ * each object at most once; may be NULL with 0) names none -- then the
+ * layers combined per pixel as the ray caster combines objects along a ray:
+ * the composite and iso objects' layers composited front to back (ordered
+ * by their depth), the MIP, MinIP and X-ray layers by the largest
+ * classified colour and opacity behind them, the background last. The
+ * image equals the in-memory render of the World (vv_renderer_render) up
+ * to each object being sampled at its own step (the in-memory ray caster
+ * takes the smallest step of all) and the rounding of compositing: bit for
+ * bit when every object is a projection. Layers are of the view's size,
+ * 20 bytes a pixel each. @p lod's outputs are the sums over the objects
+ * (stalled: any). Needs, besides what the two functions need: volume
+ * objects only, single-channel, at most VV_SOURCES_MAX visible; the boxes
+ * of the composite and iso objects apart (they are then apart along every
+ * ray, and compositing one object after the other is exact); with several
+ * visible objects a renderer without VV_RENDERER_GLOBAL (raycast: the ray
+ * tracer's shadows fall between objects). Thread-safety: as the renderer.
+ * Errors: VV_ERR_INVALID (bad arguments, an object with two entries),
+ * VV_ERR_UNSUPPORTED (what is needed above, naming the objects),
+ * VV_ERR_LIMIT, VV_ERR_NOMEM, and those of the two functions.
+ */
+vv_status vv_renderer_render_sources(vv_renderer *r, const vv_world *w, const vv_object_source *src,
+                                     int n_src, const vv_view *view, const vv_render_options *opt,
+                                     vv_lod *lod, vv_image *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,0 +1,355 @@
+/*
+ * Several volume objects out of core (vv_renderer_render_sources,
+ * include/volvis/render.h): each visible volume object is rendered alone
+ * into a layer of its own -- from its brick source (vv_renderer_render_bricks),
+ * its pyramid (vv_renderer_render_multires) or its in-memory volume (one
+ * region over the whole volume) -- on a black background, and the layers are
+ * combined per pixel as the ray caster combines objects along a ray
+ * (src/render/raycast/raycast.c, cast_pixel): the composite and iso objects
+ * composited front to back, the projections (MIP, MinIP, X-ray) by the
+ * largest classified value behind them, the background last. The
+ * composite and iso objects' boxes must not overlap: along any ray their
+ * stretches are then apart, and a layer's first depth orders them exactly.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/internal.h"
+#include "volvis/render.h"
+#include "volvis/sys/renderer.h"
+#include "volvis/sys/source.h"
+
+/* ---- an in-memory volume as a brick source of one brick ---------------------- */
+
+static const vv_volume *
+mem_header(void *user) {
+    return user;
+}
+
+static void
+mem_grid(void *user, int nb[3]) {
+    (void)user;
+    nb[0] = nb[1] = nb[2] = 1;
+}
+
+static void
+mem_info(void *user, int index, vv_brick_info *out) {
+    const vv_volume *v = user;
+    (void)index;
+    memset(out, 0, sizeof *out);
+    for (int a = 0; a < 3; a++) {
+        out->lo[a] = out->slo[a] = 0;
+        out->hi[a] = out->shi[a] = v->dims[a] - 1;
+    }
+    out->vmin = v->range[0];
+    out->vmax = v->range[1];
+}
+
+static vv_status
+mem_load(void *user, int index, vv_volume **out) {
+    (void)index;
+    *out = vv_volume_ref(user);
+    return VV_OK;
+}
+
+/* ---- the objects' boxes -------------------------------------------------------- */
+
+/* The eight corners of @p obj's index box (0 .. dims - 1 of @p geo, its
+ * voxels' geometry) in world space. */
+static void
+box_corners(const vv_object *obj, const vv_volume *geo, vv_vec3 c[8]) {
+    vv_object placed = *obj; /* shallow: nothing in it is released */
+    placed.volume = (vv_volume *)geo;
+    const vv_mat4 m = vv_object_index_to_world(&placed);
+    for (int i = 0; i < 8; i++) {
+        const vv_vec3 p = {(i & 1) ? geo->dims[0] - 1 : 0, (i & 2) ? geo->dims[1] - 1 : 0,
+                           (i & 4) ? geo->dims[2] - 1 : 0};
+        c[i] = vv_mat4_mul_point(m, p);
+    }
+}
+
+/* 1 when a plane normal to @p axis separates the corner sets (touching
+ * counts as apart: the two boxes then share no inside point). */
+static int
+separated_along(vv_vec3 axis, const vv_vec3 a[8], const vv_vec3 b[8]) {
+    const double len = vv_vec3_length(axis);
+    if (!(len > 1e-12))
+        return 0;
+    double a0 = INFINITY, a1 = -INFINITY, b0 = INFINITY, b1 = -INFINITY;
+    for (int i = 0; i < 8; i++) {
+        const double pa = vv_vec3_dot(a[i], axis) / len, pb = vv_vec3_dot(b[i], axis) / len;
+        a0 = pa < a0 ? pa : a0;
+        a1 = pa > a1 ? pa : a1;
+        b0 = pb < b0 ? pb : b0;
+        b1 = pb > b1 ? pb : b1;
+    }
+    const double tol = 1e-9 * (fabs(a0) + fabs(a1) + fabs(b0) + fabs(b1) + 1);
+    return a1 <= b0 + tol || b1 <= a0 + tol;
+}
+
+/* 1 when the boxes (parallelepipeds) with corners @p a and @p b overlap:
+ * no separating axis among their edge directions and the cross products
+ * of pairs of them (the separating axis theorem). */
+static int
+boxes_overlap(const vv_vec3 a[8], const vv_vec3 b[8]) {
+    vv_vec3 ea[3], eb[3];
+    for (int k = 0; k < 3; k++) {
+        ea[k] = vv_vec3_sub(a[1 << k], a[0]);
+        eb[k] = vv_vec3_sub(b[1 << k], b[0]);
+    }
+    /* the faces' normals of each, then the edge pairs */
+    for (int k = 0; k < 3; k++) {
+        if (separated_along(vv_vec3_cross(ea[(k + 1) % 3], ea[(k + 2) % 3]), a, b) ||
+            separated_along(vv_vec3_cross(eb[(k + 1) % 3], eb[(k + 2) % 3]), a, b))
+            return 0;
+    }
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            if (separated_along(vv_vec3_cross(ea[i], eb[j]), a, b))
+                return 0;
+    /* flat boxes (a dimension of one voxel) have no face normal there:
+     * the edge axes themselves */
+    for (int k = 0; k < 3; k++)
+        if (separated_along(ea[k], a, b) || separated_along(eb[k], a, b))
+            return 0;
+    return 1;
+}
+
+/* ---- the frame ----------------------------------------------------------------- */
+
+typedef struct src_layer {
+    int object;
+    const vv_brick_source *bricks;
+    const vv_multires_source *multires;
+    vv_brick_source mem; /* neither: the object's own volume */
+    const vv_volume *geo;
+    int comp; /* composite or iso: composited front to back */
+    vv_image *img;
+} src_layer;
+
+/* Adds the counts of one object's multiresolution frame to the caller's. */
+static void
+lod_add(vv_lod *sum, const vv_lod *one) {
+    for (int l = 0; l < VV_LOD_MAX_LEVELS; l++)
+        sum->nodes[l] += one->nodes[l];
+    sum->skipped += one->skipped;
+    sum->pending += one->pending;
+    sum->requested += one->requested;
+    sum->stalled |= one->stalled;
+}
+
+/* Object @p L->object alone (the others hidden) on a black background
+ * into L->img. */
+static vv_status
+render_layer(vv_renderer *r, const vv_world *w, src_layer *L, const vv_view *view,
+             const vv_render_options *opt, vv_lod *lod, vv_lod *sum) {
+    vv_object *copies = malloc(sizeof *copies * (size_t)w->n_objects);
+    vv_object **ptrs = malloc(sizeof *ptrs * (size_t)w->n_objects);
+    if (!copies || !ptrs) {
+        free(copies);
+        free(ptrs);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    for (int i = 0; i < w->n_objects; i++) {
+        copies[i] = *w->objects[i]; /* shallow: nothing in it is released */
+        copies[i].visible = i == L->object;
+        ptrs[i] = &copies[i];
+    }
+    vv_world lw = *w;
+    lw.objects = ptrs;
+    lw.background = (vv_vec3){0, 0, 0};
+    vv_status s;
+    if (L->multires) {
+        vv_lod one = *lod;
+        memset(one.nodes, 0, sizeof one.nodes);
+        one.skipped = one.pending = one.requested = one.stalled = 0;
+        s = vv_renderer_render_multires(r, &lw, L->object, L->multires, view, opt, &one, L->img);
+        lod_add(sum, &one);
+    } else {
+        s = vv_renderer_render_bricks(r, &lw, L->object, L->bricks ? L->bricks : &L->mem, view, opt,
+                                      L->img);
+    }
+    free(copies);
+    free(ptrs);
+    return s;
+}
+
+/* The layers combined into @p out as cast_pixel combines objects along a
+ * ray, the background last. */
+static void
+combine_layers(const vv_world *w, src_layer *L, int n, vv_image *out) {
+    const size_t np = (size_t)out->width * (size_t)out->height;
+    const float bg[3] = {(float)w->background.x, (float)w->background.y, (float)w->background.z};
+    int order[VV_SOURCES_MAX];
+    for (size_t i = 0; i < np; i++) {
+        /* the composite layers seen here, nearest first */
+        int m = 0;
+        for (int k = 0; k < n; k++) {
+            if (!L[k].comp || !(L[k].img->rgba[4 * i + 3] > 0))
+                continue;
+            const float d = L[k].img->depth[i];
+            int at = m++;
+            while (at > 0 && L[order[at - 1]].img->depth[i] > d) {
+                order[at] = order[at - 1];
+                at--;
+            }
+            order[at] = k;
+        }
+        float C[3] = {0, 0, 0}, A = 0, depth = INFINITY;
+        for (int j = 0; j < m; j++) {
+            const float *p = L[order[j]].img->rgba + 4 * i;
+            const float rest = 1 - A;
+            for (int ch = 0; ch < 3; ch++)
+                C[ch] += rest * p[ch];
+            A += rest * p[3];
+        }
+        /* the projections: the largest classified colour and opacity */
+        float P[3] = {0, 0, 0}, PA = 0;
+        for (int k = 0; k < n; k++) {
+            const float *p = L[k].img->rgba + 4 * i;
+            const float d = L[k].img->depth[i];
+            depth = d < depth ? d : depth;
+            if (L[k].comp)
+                continue;
+            for (int ch = 0; ch < 3; ch++)
+                P[ch] = p[ch] > P[ch] ? p[ch] : P[ch];
+            PA = p[3] > PA ? p[3] : PA;
+        }
+        const float rest = 1 - A;
+        const float A2 = A + rest * PA;
+        float *o = out->rgba + 4 * i;
+        for (int ch = 0; ch < 3; ch++)
+            o[ch] = C[ch] + rest * P[ch] + (1 - A2) * bg[ch];
+        o[3] = A2;
+        out->depth[i] = depth;
+    }
+}
+
+void
+vv_object_source_init(vv_object_source *s, int object) {
+    memset(s, 0, sizeof *s);
+    s->object = object;
+}
+
+vv_status
+vv_renderer_render_sources(vv_renderer *r, const vv_world *w, const vv_object_source *src,
+                           int n_src, const vv_view *view, const vv_render_options *opt,
+                           vv_lod *lod, vv_image *out) {
+    if (!r || !w || !view || !out || n_src < 0 || (n_src > 0 && !src))
+        return vv_error_set(VV_ERR_INVALID, "sources: bad arguments");
+    if (out->width != view->width || out->height != view->height)
+        return vv_error_set(VV_ERR_INVALID, "sources: image %dx%d for a %dx%d view", out->width,
+                            out->height, view->width, view->height);
+    for (int i = 0; i < n_src; i++) {
+        const vv_object_source *s = &src[i];
+        if (s->object < 0 || s->object >= w->n_objects || (s->bricks && s->multires))
+            return vv_error_set(VV_ERR_INVALID,
+                                "sources: entry %d: object %d of %d, and one source at most", i,
+                                s->object, w->n_objects);
+        for (int j = 0; j < i; j++)
+            if (src[j].object == s->object)
+                return vv_error_set(VV_ERR_INVALID, "sources: object %d has two entries",
+                                    s->object);
+        if (s->bricks && s->bricks->version != VV_BRICK_SOURCE_VERSION)
+            return vv_error_set(VV_ERR_UNSUPPORTED, "sources: brick source version %d, not %d",
+                                s->bricks->version, VV_BRICK_SOURCE_VERSION);
+        if (s->multires && s->multires->version != VV_MULTIRES_SOURCE_VERSION)
+            return vv_error_set(VV_ERR_UNSUPPORTED,
+                                "sources: multiresolution source version %d, not %d",
+                                s->multires->version, VV_MULTIRES_SOURCE_VERSION);
+    }
+    /* the layers: every visible object, a volume object */
+    src_layer L[VV_SOURCES_MAX];
+    int n = 0;
+    for (int i = 0; i < w->n_objects; i++) {
+        const vv_object *o = w->objects[i];
+        if (!o->visible)
+            continue;
+        if (o->type != VV_OBJECT_VOLUME || !o->volume)
+            return vv_error_set(VV_ERR_UNSUPPORTED,
+                                "sources: object '%s': out-of-core rendering draws volume "
+                                "objects only",
+                                o->name);
+        if (o->n_channels > 1)
+            return vv_error_set(VV_ERR_UNSUPPORTED,
+                                "sources: object '%s': a multi-channel object is drawn in memory "
+                                "(out of core, one channel an object)",
+                                o->name);
+        if (n == VV_SOURCES_MAX)
+            return vv_error_set(VV_ERR_LIMIT, "sources: more than %d visible objects",
+                                VV_SOURCES_MAX);
+        src_layer *l = &L[n++];
+        memset(l, 0, sizeof *l);
+        l->object = i;
+        for (int k = 0; k < n_src; k++)
+            if (src[k].object == i) {
+                l->bricks = src[k].bricks;
+                l->multires = src[k].multires;
+            }
+        l->mem = (vv_brick_source){.version = VV_BRICK_SOURCE_VERSION,
+                                   .user = o->volume,
+                                   .header = mem_header,
+                                   .grid = mem_grid,
+                                   .info = mem_info,
+                                   .load = mem_load};
+        l->geo = l->multires ? l->multires->level(l->multires->user, 0)
+                 : l->bricks ? l->bricks->header(l->bricks->user)
+                             : o->volume;
+        l->comp = o->mode == VV_MODE_COMPOSITE || o->mode == VV_MODE_ISO;
+    }
+    if (n > 1 && (vv_renderer_get_info(r)->caps & VV_RENDERER_GLOBAL))
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "sources: %s draws light between objects (shadows); out of core "
+                            "it draws one object (several: raycast)",
+                            vv_renderer_name(r));
+    /* composited objects one after another: their boxes apart */
+    for (int a = 0; a < n; a++)
+        for (int b = a + 1; b < n; b++) {
+            if (!L[a].comp || !L[b].comp)
+                continue;
+            vv_vec3 ca[8], cb[8];
+            box_corners(w->objects[L[a].object], L[a].geo, ca);
+            box_corners(w->objects[L[b].object], L[b].geo, cb);
+            if (boxes_overlap(ca, cb))
+                return vv_error_set(VV_ERR_UNSUPPORTED,
+                                    "sources: objects '%s' and '%s' overlap; out of core, "
+                                    "composite and iso objects are drawn one after another, so "
+                                    "their boxes must be apart (MIP, MinIP and X-ray objects may "
+                                    "overlap)",
+                                    w->objects[L[a].object]->name, w->objects[L[b].object]->name);
+        }
+    vv_lod def, sum;
+    vv_lod_init(&def);
+    if (!lod)
+        lod = &def;
+    sum = *lod;
+    memset(sum.nodes, 0, sizeof sum.nodes);
+    sum.skipped = sum.pending = sum.requested = sum.stalled = 0;
+    if (n == 0) {
+        /* nothing visible: the background */
+        for (size_t i = 0; i < (size_t)out->width * (size_t)out->height; i++) {
+            float *o = out->rgba + 4 * i;
+            o[0] = (float)w->background.x;
+            o[1] = (float)w->background.y;
+            o[2] = (float)w->background.z;
+            o[3] = 0;
+            out->depth[i] = INFINITY;
+        }
+        *lod = sum;
+        return VV_OK;
+    }
+    vv_status s = VV_OK;
+    for (int k = 0; k < n && s == VV_OK; k++) {
+        s = vv_image_new(&L[k].img, view->width, view->height);
+        if (s == VV_OK)
+            s = render_layer(r, w, &L[k], view, opt, lod, &sum);
+    }
+    if (s == VV_OK) {
+        combine_layers(w, L, n, out);
+        *lod = sum;
+    }
+    for (int k = 0; k < n; k++)
+        vv_image_free(L[k].img);
+    return s;
+}
