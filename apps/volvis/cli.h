@@ -259,6 +259,15 @@ void cli_proxy_opacity_unit(vv_world *w, const vv_volume *whole, const vv_volume
  * cli_render_turn. 0 or CLI_EXIT_FAIL after printing the error.
  */
 int cli_render_world(const cli_render_args *r, vv_world **out);
+/**
+ * cli_render_world of the scene r->input, its volume files given to
+ * @p loader first (vv_scene_load_with). 0 or CLI_EXIT_FAIL after printing
+ * the error.
+ */
+int cli_render_scene_world(const cli_render_args *r, vv_scene_volume_loader loader, void *user,
+                           vv_world **out);
+/** 1 when @p path is a scene file (by its name, or a JSON object inside). */
+int cli_is_scene_file(const char *path);
 /** The time steps of a volume file's object: a vv_time_series per channel. */
 typedef struct cli_time_source {
     int n;                               /**< channels (1 for an object of one) */

@@ -53,8 +53,8 @@ renderer_known(const char *name) {
 }
 
 /* A scene file: extension .json, or content that starts with '{' after whitespace. */
-static int
-is_scene_file(const char *path) {
+int
+cli_is_scene_file(const char *path) {
     size_t n = strlen(path);
     if (n >= 5 && strcasecmp(path + n - 5, ".json") == 0)
         return 1;
@@ -543,13 +543,16 @@ cli_render_world_volume(const cli_render_args *r, vv_volume *v, vv_world **out) 
     return 0;
 }
 
-/* Loads a scene file and applies the overrides given on the command line. */
+/* Loads a scene file (its volume files through @p loader first, when
+ * given) and applies the overrides given on the command line. */
 static int
-world_for_scene(const cli_render_args *r, vv_world **out) {
+world_for_scene(const cli_render_args *r, vv_scene_volume_loader loader, void *user,
+                vv_world **out) {
     vv_error_clear();
     cli_progress pr; /* geometry objects are voxelized while loading */
     cli_progress_begin(&pr, r->quiet);
-    vv_status s = vv_scene_load_progress(out, r->input, &pr.p);
+    vv_status s = loader ? vv_scene_load_with(out, r->input, &pr.p, NULL, loader, user)
+                         : vv_scene_load_progress(out, r->input, &pr.p);
     cli_progress_end(&pr);
     if (s != VV_OK)
         return cli_fail(s, r->input);
@@ -577,13 +580,40 @@ world_for_scene(const cli_render_args *r, vv_world **out) {
     }
     return 0;
 }
+/* The overrides of every World: step, labels. */
+static void
+world_overrides(const cli_render_args *r, vv_world *w) {
+    if (r->has_step)
+        for (int i = 0; i < w->n_objects; i++)
+            if (w->objects[i])
+                w->objects[i]->step = r->step;
+    if (r->labels)
+        for (int i = 0; i < w->n_objects; i++)
+            if (w->objects[i] && w->objects[i]->type == VV_OBJECT_VOLUME)
+                w->objects[i]->segmentation = VV_SEG_LABELS;
+}
+
+int
+cli_render_scene_world(const cli_render_args *r, vv_scene_volume_loader loader, void *user,
+                       vv_world **out) {
+    *out = NULL;
+    int rc = world_for_scene(r, loader, user, out);
+    if (rc) {
+        vv_world_free(*out);
+        *out = NULL;
+        return rc;
+    }
+    world_overrides(r, *out);
+    return 0;
+}
+
 int
 cli_render_world(const cli_render_args *r, vv_world **out) {
     *out = NULL;
     int rc = cli_check_readable_input(r->input);
     if (rc)
         return rc;
-    int scene = !r->has_raw && is_scene_file(r->input);
+    int scene = !r->has_raw && cli_is_scene_file(r->input);
     const int grid = !scene && !r->has_raw && vv_grid_file_detect(r->input, NULL);
     if ((scene || grid) && (r->n_channels || r->time_range)) {
         fprintf(stderr, "volvis: %s: %s is for a volume file's %s, not a %s\n", r->input,
@@ -591,20 +621,15 @@ cli_render_world(const cli_render_args *r, vv_world **out) {
                 r->n_channels ? "channels" : "time steps", scene ? "scene" : "grid");
         return CLI_EXIT_FAIL;
     }
-    rc = scene ? world_for_scene(r, out) : grid ? world_for_grid(r, out) : world_for_volume(r, out);
+    rc = scene  ? world_for_scene(r, NULL, NULL, out)
+         : grid ? world_for_grid(r, out)
+                : world_for_volume(r, out);
     if (rc) {
         vv_world_free(*out);
         *out = NULL;
         return rc;
     }
-    if (r->has_step)
-        for (int i = 0; i < (*out)->n_objects; i++)
-            if ((*out)->objects[i])
-                (*out)->objects[i]->step = r->step;
-    if (r->labels)
-        for (int i = 0; i < (*out)->n_objects; i++)
-            if ((*out)->objects[i] && (*out)->objects[i]->type == VV_OBJECT_VOLUME)
-                (*out)->objects[i]->segmentation = VV_SEG_LABELS;
+    world_overrides(r, *out);
     return 0;
 }
 
@@ -762,7 +787,10 @@ cli_render_print_options(FILE *out) {
                  "                   a .vvb INPUT is always rendered so (default 1G);\n"
                  "                   an OME-Zarr store, BigDataViewer .h5 or Imaris .ims\n"
                  "                   file is rendered from its pyramid by level of detail\n"
-                 "                   (--lod), its chunks cached within SIZE\n"
+                 "                   (--lod), its chunks cached within SIZE; a scene:\n"
+                 "                   each of its volume files so (SIZE shared among\n"
+                 "                   them; others read whole), side by side (composite\n"
+                 "                   and iso objects apart), by raycast\n"
                  "  --lod PIXELS     a pyramid out of core: each 64^3 node of the volume at\n"
                  "                   the coarsest level whose voxel covers at most PIXELS\n"
                  "                   pixels (default 1; larger is coarser and faster);\n"

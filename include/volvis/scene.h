@@ -88,6 +88,14 @@ vv_status vv_scene_load_with(vv_world **out, const char *path, const vv_progress
                              vv_filter_cache *cache, vv_scene_volume_loader loader, void *user);
 
 /**
+ * How many times vv_scene_load_with of scene @p path would call its loader:
+ * its volume objects read from a file without "filters" (so that a program
+ * can share a memory budget among them before loading). 0 for a file that
+ * cannot be read or parsed (vv_scene_load_with then says why). Thread-safe.
+ */
+int vv_scene_loader_files(const char *path);
+
+/**
  * Writes a World as a scene file, atomically. Volumes are referred to by
  * @p volume_files[i] for object i (relative to the scene file); a mesh
  * object by volume_files[i] when given, else by its geometry.source; the

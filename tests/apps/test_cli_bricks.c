@@ -9,10 +9,12 @@
  * through the proxy: >= 50 dB where the proxy is the whole volume, the nut;
  * on the CT head, a 4x coarser proxy (the .vvb's coarse level), exact
  * without shadows and measured with them; X-ray bit for bit by both), and
- * its errors: a memory limit smaller than one brick, a bad size, a scene
- * file, a renderer without the region contract; the pyramid levels convert
+ * its errors: a memory limit smaller than one brick, a bad size, a
+ * renderer without the region contract; the pyramid levels convert
  * writes (render --level and --lod read them: OME-Zarr's images bit for
- * bit).
+ * bit); a scene of three heads side by side out of core (by bricks, from
+ * the levels, one read whole): the in-memory image >= 50 dB, and its
+ * refusals.
  */
 #include "testutil.h"
 
@@ -226,6 +228,97 @@ test_levels(void **state) {
     free(y);
 }
 
+/* Writes @p text to @p path. */
+static void
+write_text(const char *path, const char *text) {
+    vt_write_file(path, text, strlen(text));
+}
+
+/* A scene of three CT heads side by side out of core: the left and right
+ * by bricks from a .vvb (or from its levels with --lod), the middle from
+ * the gzip NRRD read whole; the same image as in memory. Overlapping
+ * composite objects, a scene's "origin" for a file read out of core and
+ * the ray tracer with several objects: one-line errors, nothing written. */
+static void
+test_scene(void **state) {
+    (void)state;
+    if (!vt_have_data("volumes/ct_head.nrrd"))
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    const char *head = vt_data("volumes/ct_head.nrrd");
+    char vvb[1200], scene[1200], bad[1200], a[1200], b[1200], c[8192];
+    snprintf(vvb, sizeof vvb, "%s/head_s.vvb", outdir());
+    snprintf(scene, sizeof scene, "%s/three.json", outdir());
+    snprintf(bad, sizeof bad, "%s/bad.json", outdir());
+    snprintf(a, sizeof a, "%s/scene_ooc.png", outdir());
+    snprintf(b, sizeof b, "%s/scene_mem.png", outdir());
+    vt_run_result r = run_cli("convert", "-q", head, vvb);
+    assert_int_equal(r.status, 0);
+    vt_run_result_free(&r);
+    const char *tf = "\"transfer_function\": {\"opacity\": [[100, 0], [1500, 0.8]]}";
+    snprintf(c, sizeof c,
+             "{\"view\": {\"width\": 240, \"height\": 100, \"eye\": [392, -1300, 400],\n"
+             "  \"at\": [392, 122, 80], \"up\": [0, 0, 1], \"fov\": 30},\n"
+             " \"objects\": [\n"
+             "  {\"name\": \"left\", \"file\": \"%s\", %s},\n"
+             "  {\"name\": \"middle\", \"file\": \"%s\", \"position\": [270, 0, 0], %s},\n"
+             "  {\"name\": \"right\", \"file\": \"%s\", \"mode\": \"mip\", "
+             "\"position\": [540, 0, 0], %s}]}\n",
+             vvb, tf, head, tf, vvb, tf);
+    write_text(scene, c);
+    r = run_cli("render", scene, "--memory-limit", "16M", "-o", a);
+    assert_int_equal(r.status, 0);
+    printf("%s", r.out);
+    assert_non_null(strstr(r.out, "2 objects out of core"));
+    assert_non_null(strstr(r.out, "left: 29 of 32 bricks read, 3 skipped"));
+    assert_non_null(strstr(r.out, "middle: in memory"));
+    assert_non_null(strstr(r.out, "right: 32 of 32 bricks read"));
+    vt_run_result_free(&r);
+    r = run_cli("render", scene, "-q", "-o", b);
+    assert_int_equal(r.status, 0);
+    vt_run_result_free(&r);
+    const double db = vt_png_psnr(a, b);
+    printf("three heads out of core against in memory: %.1f dB\n", db);
+    assert_true(db >= 50);
+    /* the .vvb's levels, level 0 everywhere: the same image */
+    r = run_cli("render", scene, "--level", "0", "--memory-limit", "16M", "-o", a);
+    assert_int_equal(r.status, 0);
+    printf("%s", r.out);
+    assert_non_null(strstr(r.out, "left: "));
+    assert_non_null(strstr(r.out, " chunks read from 3 levels"));
+    vt_run_result_free(&r);
+    printf("from the levels against in memory: %.1f dB\n", vt_png_psnr(a, b));
+    assert_true(vt_png_psnr(a, b) >= 50);
+
+    remove(a);
+    struct stat st;
+    /* composite objects overlapping */
+    snprintf(c, sizeof c,
+             "{\"objects\": [{\"name\": \"one\", \"file\": \"%s\"},\n"
+             "  {\"name\": \"two\", \"file\": \"%s\", \"position\": [100, 0, 0]}]}\n",
+             vvb, vvb);
+    write_text(bad, c);
+    r = run_cli("render", bad, "--memory-limit", "16M", "-o", a);
+    assert_int_equal(r.status, 1);
+    assert_non_null(strstr(r.err, "objects 'one' and 'two' overlap"));
+    vt_run_result_free(&r);
+    /* several objects by the ray tracer */
+    r = run_cli("render", scene, "--memory-limit", "16M", "--renderer", "raytrace", "-o", a);
+    assert_int_equal(r.status, 1);
+    assert_non_null(strstr(r.err, "raytrace draws light between objects"));
+    vt_run_result_free(&r);
+    /* a file read out of core keeps its own origin */
+    snprintf(c, sizeof c,
+             "{\"objects\": [{\"name\": \"moved\", \"file\": \"%s\", "
+             "\"origin\": [5, 0, 0]}]}\n",
+             vvb);
+    write_text(bad, c);
+    r = run_cli("render", bad, "--memory-limit", "16M", "-o", a);
+    assert_int_equal(r.status, 1);
+    assert_non_null(strstr(r.err, "object 'moved': out of core its file's own origin"));
+    vt_run_result_free(&r);
+    assert_int_not_equal(stat(a, &st), 0);
+}
+
 static void
 test_errors(void **state) {
     (void)state;
@@ -264,9 +357,8 @@ test_errors(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_convert_render),
-        cmocka_unit_test(test_renderers),
-        cmocka_unit_test(test_levels),
+        cmocka_unit_test(test_convert_render), cmocka_unit_test(test_renderers),
+        cmocka_unit_test(test_levels),         cmocka_unit_test(test_scene),
         cmocka_unit_test(test_errors),
     };
     return vt_run_tests(tests, NULL, NULL);
