@@ -38,6 +38,31 @@ vv_scene_view_set_start_time(gint64 us) {
 
 /* ---- the worker --------------------------------------------------------- */
 
+/* The pyramids a frame draws objects from (a reference each) and the
+ * objects they stand for. */
+typedef struct pyr_set {
+    VvGuiPyramid *p[VV_SOURCES_MAX];
+    int object[VV_SOURCES_MAX];
+    int n;
+} pyr_set;
+
+static void
+pyr_set_clear(pyr_set *s) {
+    for (int i = 0; i < s->n; i++)
+        vv_gui_pyramid_unref(s->p[i]);
+    s->n = 0;
+}
+
+/* @p dst (empty) holding its own references to @p src's pyramids. */
+static void
+pyr_set_ref(pyr_set *dst, const pyr_set *src) {
+    for (int i = 0; i < src->n; i++) {
+        dst->p[i] = vv_gui_pyramid_ref(src->p[i]);
+        dst->object[i] = src->object[i];
+    }
+    dst->n = src->n;
+}
+
 /* One request: a snapshot and the representations to draw in turn. */
 typedef struct job {
     guint64 gen;
@@ -46,8 +71,7 @@ typedef struct job {
     vv_preview_kind kinds[3];
     gboolean refine; /* cancelled by any newer state */
     gint64 posted_us;
-    VvGuiPyramid *pyr; /* object pyr_object drawn from its pyramid (a reference), or NULL */
-    int pyr_object;
+    pyr_set pyr; /* the objects drawn from their pyramids (none: in memory) */
 } job;
 
 /* One finished frame, posted to the UI thread. */
@@ -64,8 +88,8 @@ typedef struct frame {
     gint64 posted_us;
     gint64 rendered_us; /* when the renderer finished */
     char error[512];
-    /* drawn from a pyramid: the nodes per level, those pending, stalled */
-    VvGuiPyramid *pyr; /* a reference, or NULL */
+    /* drawn from pyramids: the nodes per level, those pending, stalled */
+    pyr_set pyr;
     int nodes[VV_LOD_MAX_LEVELS], pending, stalled;
     char lod_note[128]; /* why the pyramid was not used ("" when it was) */
 } frame;
@@ -114,8 +138,8 @@ struct _VvSceneView {
     double full_ms;
     FILE *frame_log;
     char last_error[512];
-    /* the frame on screen's pyramid (a reference) and what it drew */
-    VvGuiPyramid *shown_pyr;
+    /* the frame on screen's pyramids and what it drew */
+    pyr_set shown_pyr;
     int shown_nodes[VV_LOD_MAX_LEVELS], shown_pending, shown_stalled;
     char shown_lod_note[128];
 
@@ -139,7 +163,7 @@ job_free(job *j) {
     if (!j)
         return;
     vv_world_free(j->world);
-    vv_gui_pyramid_unref(j->pyr);
+    pyr_set_clear(&j->pyr);
     g_free(j);
 }
 
@@ -149,7 +173,7 @@ frame_free(frame *f) {
     if (f->pixels)
         g_bytes_unref(f->pixels);
     g_free(f->depth);
-    vv_gui_pyramid_unref(f->pyr);
+    pyr_set_clear(&f->pyr);
     g_free(f);
 }
 
@@ -175,13 +199,15 @@ cancel_cb(void *user, double fraction) {
 static gboolean show_frame(gpointer data);
 static gboolean tick_cb(GtkWidget *widget, GdkFrameClock *clock, gpointer user);
 
-/* Object j->pyr_object of the job's World drawn from its pyramid by level of
- * detail (vv_renderer_render_multires) at the kind's image size with the
- * World's renderer (its settings applied): a progressive frame from what
- * the cache holds, asking the pyramid's loader for the rest (converged 0),
- * or the converged frame, which reads what it needs (1). VV_ERR_UNSUPPORTED
- * when the renderer has no region method or refuses the mode: the caller
- * then draws the proxy in memory. */
+/* The job's World with the objects j->pyr names drawn from their pyramids
+ * by level of detail, the others in memory (vv_renderer_render_sources),
+ * at the kind's image size with the World's renderer (its settings
+ * applied): a progressive frame from what the caches hold, asking the
+ * pyramids' loaders for the rest (converged 0), or the converged frame,
+ * which reads what it needs (1). VV_ERR_UNSUPPORTED when the renderer has
+ * no region method or refuses the mode, or the World is not one that
+ * layers draw (overlapping composite objects, geometry, several objects by
+ * the ray tracer): the caller then draws the proxies in memory. */
 static vv_status
 render_pyramid(VvSceneView *self, const job *j, frame *f, int converged, vv_render_options *ro,
                vv_image *img) {
@@ -196,19 +222,24 @@ render_pyramid(VvSceneView *self, const job *j, frame *f, int converged, vv_rend
     vv_view v = w->view;
     v.width = img->width;
     v.height = img->height;
-    vv_multires_source src;
-    vv_pyramid_source(j->pyr->pyramid, &src);
+    vv_multires_source src[VV_SOURCES_MAX];
+    vv_object_source os[VV_SOURCES_MAX];
+    for (int i = 0; i < j->pyr.n; i++) {
+        vv_pyramid_source(j->pyr.p[i]->pyramid, &src[i]);
+        vv_object_source_init(&os[i], j->pyr.object[i]);
+        os[i].multires = &src[i];
+    }
     vv_lod lod;
     vv_lod_init(&lod);
     lod.progressive = !converged;
     lod.background = 1;
     lod.load_budget = 0;
-    s = vv_renderer_render_multires(r, w, j->pyr_object, &src, &v, ro, &lod, img);
+    s = vv_renderer_render_sources(r, w, os, j->pyr.n, &v, ro, &lod, img);
     if (s == VV_OK) {
         memcpy(f->nodes, lod.nodes, sizeof f->nodes);
         f->pending = lod.pending;
         f->stalled = lod.stalled;
-        f->pyr = vv_gui_pyramid_ref(j->pyr);
+        pyr_set_ref(&f->pyr, &j->pyr);
     }
     return s;
 }
@@ -258,7 +289,7 @@ render_one(VvSceneView *self, const job *j, vv_preview_kind kind, int converged)
 #endif
     gint64 t0 = g_get_monotonic_time();
     gboolean drawn = FALSE;
-    if (s == VV_OK && j->pyr) {
+    if (s == VV_OK && j->pyr.n > 0) {
         s = render_pyramid(self, j, f, converged, &ro, img);
         drawn = s == VV_OK || s == VV_ERR_CANCELLED;
         if (s == VV_ERR_UNSUPPORTED) { /* the proxy in memory, and why */
@@ -362,7 +393,9 @@ static void
 sharpen_pyramid(VvSceneView *self, const job *j) {
     int last = INT_MAX, idle = 0;
     for (;;) {
-        const int loading = vv_pyramid_wait(j->pyr->pyramid, 0.25);
+        int loading = 0;
+        for (int i = 0; i < j->pyr.n; i++)
+            loading += vv_pyramid_wait(j->pyr.p[i]->pyramid, 0.25 / j->pyr.n);
         g_mutex_lock(&self->lock);
         const gboolean newer = self->pending != NULL || self->quit;
         g_mutex_unlock(&self->lock);
@@ -371,7 +404,7 @@ sharpen_pyramid(VvSceneView *self, const job *j) {
         frame *f = render_one(self, j, VV_PREVIEW_FULL, 0);
         if (!f)
             return;
-        const int pending = f->pending, stalled = f->stalled, ok = f->pyr != NULL;
+        const int pending = f->pending, stalled = f->stalled, ok = f->pyr.n > 0;
         g_idle_add_full(G_PRIORITY_DEFAULT, show_frame, f, NULL);
         if (!ok || pending == 0)
             return;
@@ -415,7 +448,8 @@ worker_main(gpointer data) {
                 TSAN_COUNT(cancelled);
                 break;
             }
-            const gboolean sharpen = j->kinds[k] == VV_PREVIEW_FULL && f->pyr && f->pending > 0;
+            const gboolean sharpen =
+                j->kinds[k] == VV_PREVIEW_FULL && f->pyr.n > 0 && f->pending > 0;
             TSAN_COUNT(posted);
             /* at the priority of input events: a stream of motion events
              * must not hold back the frames they cause */
@@ -525,9 +559,9 @@ show_frame(gpointer data) {
     g_free(self->shown_depth);
     self->shown_depth = NULL;
     self->shown_view = f->camera;
-    vv_gui_pyramid_unref(self->shown_pyr);
+    pyr_set_clear(&self->shown_pyr);
     self->shown_pyr = f->pyr;
-    f->pyr = NULL;
+    f->pyr.n = 0;
     memcpy(self->shown_nodes, f->nodes, sizeof self->shown_nodes);
     self->shown_pending = f->pending;
     self->shown_stalled = f->stalled;
@@ -554,20 +588,16 @@ new_job(VvSceneView *self, gboolean refine) {
     j->world = w;
     j->refine = refine;
     j->posted_us = g_get_monotonic_time();
-    /* one visible object, a volume shown from a pyramid out of core: drawn
-     * by level of detail (the driver draws one object alone) */
-    int visible = 0, at = -1;
-    for (int i = 0; i < w->n_objects; i++)
-        if (w->objects[i]->visible) {
-            visible++;
-            at = i;
-        }
+    /* the visible volumes shown from pyramids out of core: drawn by level
+     * of detail, the other objects in memory beside them */
     const vv_world *dw = vv_document_world(self->doc);
-    if (visible == 1 && at < dw->n_objects) {
-        VvGuiPyramid *p = vv_document_pyramid(self->doc, dw->objects[at]);
-        if (p && w->objects[at]->volume == p->proxy) {
-            j->pyr = vv_gui_pyramid_ref(p);
-            j->pyr_object = at;
+    for (int i = 0; i < w->n_objects && i < dw->n_objects && j->pyr.n < VV_SOURCES_MAX; i++) {
+        if (!w->objects[i]->visible)
+            continue;
+        VvGuiPyramid *p = vv_document_pyramid(self->doc, dw->objects[i]);
+        if (p && w->objects[i]->volume == p->proxy) {
+            j->pyr.p[j->pyr.n] = vv_gui_pyramid_ref(p);
+            j->pyr.object[j->pyr.n++] = i;
         }
     }
     return j;
@@ -1087,8 +1117,7 @@ vv_scene_view_dispose(GObject *o) {
     g_clear_object(&self->texture);
     g_free(self->shown_depth);
     self->shown_depth = NULL;
-    vv_gui_pyramid_unref(self->shown_pyr);
-    self->shown_pyr = NULL;
+    pyr_set_clear(&self->shown_pyr);
     if (self->frame_log) {
         fclose(self->frame_log);
         self->frame_log = NULL;
@@ -1223,19 +1252,34 @@ char *
 vv_scene_view_cache_status(VvSceneView *self) {
     if (self->shown_lod_note[0])
         return g_strdup_printf("the coarsest level in memory: %s", self->shown_lod_note);
-    if (!self->shown_pyr)
+    if (self->shown_pyr.n == 0)
         return g_strdup("");
-    vv_pyramid_stats st;
-    vv_pyramid_stats_get(self->shown_pyr->pyramid, &st);
-    guint64 reads = 0;
-    for (int l = 0; l < VV_PYRAMID_MAX_LEVELS; l++)
-        reads += st.chunk_reads[l];
+    /* the sums over the pyramids drawn */
+    guint64 reads = 0, resident = 0;
+    double held = 0, limit = 0;
+    int loading = 0;
+    for (int i = 0; i < self->shown_pyr.n; i++) {
+        int seen = 0; /* two objects of one pyramid: counted once */
+        for (int k = 0; k < i; k++)
+            seen |= self->shown_pyr.p[k] == self->shown_pyr.p[i];
+        if (seen)
+            continue;
+        vv_pyramid_stats st;
+        vv_pyramid_stats_get(self->shown_pyr.p[i]->pyramid, &st);
+        for (int l = 0; l < VV_PYRAMID_MAX_LEVELS; l++)
+            reads += st.chunk_reads[l];
+        resident += st.resident;
+        held += (double)st.held_bytes;
+        limit += (double)st.limit_bytes;
+        loading += st.loading;
+    }
     GString *s = g_string_new(NULL);
+    if (self->shown_pyr.n > 1)
+        g_string_append_printf(s, "%d objects ", self->shown_pyr.n);
     g_string_append_printf(s,
                            "out of core: %" G_GUINT64_FORMAT " chunks resident (%.1f of %.0f MiB), "
                            "%d loading, %" G_GUINT64_FORMAT " read; level in use:",
-                           st.resident, st.held_bytes / 1048576.0, st.limit_bytes / 1048576.0,
-                           st.loading, reads);
+                           resident, held / 1048576.0, limit / 1048576.0, loading, reads);
     for (int l = 0; l < VV_LOD_MAX_LEVELS; l++)
         if (self->shown_nodes[l] > 0)
             g_string_append_printf(s, " %d (%d nodes)", l, self->shown_nodes[l]);

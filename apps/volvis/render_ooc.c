@@ -266,7 +266,11 @@ render_scene(cli_args *a, cli_render_args *r) {
         if (!f)
             continue;
         for (int k = 0; k < 3; k++)
-            if (o->volume->origin[k] != f->origin[k] || o->volume->spacing[k] != f->spacing[k]) {
+            /* (a saved session gives the file's own values back: equal up
+             * to the rounding of the loader's scale) */
+            if (fabs(o->volume->origin[k] - f->origin[k]) >
+                    1e-9 * (fabs(f->origin[k]) + f->spacing[k]) ||
+                fabs(o->volume->spacing[k] - f->spacing[k]) > 1e-9 * f->spacing[k]) {
                 cli_error("%s: object '%s': out of core its file's own origin and spacing place "
                           "it; leave out \"origin\" and \"spacing\" (\"position\" and "
                           "\"scale\" move it)",
