@@ -27,9 +27,9 @@ from . import _lib
 from ._lib import check, cstr, ffi, lib, pystr
 from .errors import InvalidError
 from .volume import Volume
-from .world import World
+from .world import VolumeObject, World
 
-__all__ = ["Pyramid", "Level"]
+__all__ = ["Pyramid", "Level", "render_out_of_core"]
 
 Level = collections.namedtuple("Level", "shape dtype spacing origin")
 Level.__doc__ = """One level of a :class:`Pyramid`: ``shape`` (k, j, i) voxels, numpy
@@ -37,6 +37,32 @@ Level.__doc__ = """One level of a :class:`Pyramid`: ``shape`` (k, j, i) voxels, 
 scale and translation)."""
 
 _SUFFIX = {"": 1, "K": 1 << 10, "M": 1 << 20, "G": 1 << 30}
+
+
+def _lod(lod, level, progressive, what):
+    """The vv_lod of a render: every node at ``level``, or by ``lod``
+    pixels a voxel; progressive: from what is resident, loading the rest
+    in the background."""
+    lodc = ffi.new("vv_lod *")
+    lib.vv_lod_init(lodc)
+    if progressive:
+        lodc.progressive = 1
+        lodc.background = 1
+        lodc.load_budget = 0
+    if level is not None:
+        lodc.level = int(level)
+    else:
+        if not float(lod) > 0:
+            raise InvalidError("%s: lod must be > 0, got %r" % (what, lod))
+        lodc.voxel_pixels = float(lod)
+    return lodc
+
+
+def _lod_info(lodc, n_levels):
+    """What a frame drew (return_lod)."""
+    return {"nodes": [int(lodc.nodes[L]) for L in range(n_levels)],
+            "skipped": int(lodc.skipped), "pending": int(lodc.pending),
+            "requested": int(lodc.requested), "stalled": int(lodc.stalled)}
 
 
 def _bytes(limit):
@@ -196,6 +222,26 @@ class Pyramid:
                 tf.opacity_unit_distance = ph
         return w
 
+    def object(self, name=None, **properties):
+        """A :class:`VolumeObject` of the :meth:`proxy` for a World of
+        several objects, which :func:`render_out_of_core` draws from this
+        pyramid: its default transfer function's opacity per level 0's
+        smallest voxel spacing (as :meth:`world`), then ``properties`` as
+        VolumeObject takes them (position, mode, tf, ...)."""
+        proxy = self.proxy()
+        obj = VolumeObject(proxy, name)
+        f = lib.vv_pyramid_level(self._c, 0)
+        ph = min(f.spacing[a] for a in range(3))
+        pp = min(proxy.spacing)
+        if abs(obj._c.tf.opacity_unit_distance - pp) <= 1e-12 * pp:
+            obj._c.tf.opacity_unit_distance = ph
+        for k, v in properties.items():
+            if not hasattr(VolumeObject, k) or k.startswith("_"):
+                raise InvalidError("Pyramid.object: unknown property %r" % (k,))
+            if v is not None:
+                setattr(obj, k, v)
+        return obj
+
     # ---- rendering
     def render(self, world=None, renderer=None, mode=None, size=None, lod=1.0, level=None,
                quality=None, view=None, dtype=np.uint8, depth=False, gamma=1.0, alpha=True,
@@ -241,18 +287,7 @@ class Pyramid:
                                      options)
         src = ffi.new("vv_multires_source *")
         lib.vv_pyramid_source(self._c, src)
-        lodc = ffi.new("vv_lod *")
-        lib.vv_lod_init(lodc)
-        if progressive:
-            lodc.progressive = 1
-            lodc.background = 1
-            lodc.load_budget = 0
-        if level is not None:
-            lodc.level = int(level)
-        else:
-            if not float(lod) > 0:
-                raise InvalidError("Pyramid.render: lod must be > 0, got %r" % (lod,))
-            lodc.voxel_pixels = float(lod)
+        lodc = _lod(lod, level, progressive, "Pyramid.render")
 
         def run(prog):
             ro.progress = prog
@@ -262,11 +297,7 @@ class Pyramid:
             _lib.call_long(run, progress, desc="render")
         out = _finish(img, vc, dtype, depth, gamma, alpha)
         if return_lod:
-            n = lib.vv_pyramid_levels(self._c)
-            info = {"nodes": [int(lodc.nodes[L]) for L in range(n)],
-                    "skipped": int(lodc.skipped), "pending": int(lodc.pending),
-                    "requested": int(lodc.requested), "stalled": int(lodc.stalled)}
-            return out, info
+            return out, _lod_info(lodc, lib.vv_pyramid_levels(self._c))
         return out
 
     def __repr__(self):
@@ -274,3 +305,75 @@ class Pyramid:
         return "<volvis.Pyramid %r: %d levels, %s %s, limit %d MiB>" % (
             self.path, len(lv), "x".join(str(x) for x in lv[0].shape[::-1]), lv[0].dtype,
             self.memory_limit >> 20)
+
+
+def render_out_of_core(world, pyramids, renderer=None, lod=1.0, level=None, progressive=False,
+                       return_lod=False, mode=None, size=None, quality=None, view=None,
+                       dtype=np.uint8, depth=False, gamma=1.0, alpha=True, threads=0,
+                       progress=None, **options):
+    """Renders a World of several volume objects, those made by
+    :meth:`Pyramid.object` (or :meth:`Pyramid.world`) of the ``pyramids``
+    drawn from them out of core by level of detail, every other visible
+    volume object from its own volume in memory
+    (vv_renderer_render_sources): each object alone into a layer, the
+    layers combined as the ray caster combines objects along a ray
+    (composite and iso objects front to back, MIP, MinIP and X-ray by the
+    largest colour behind them). lod, level, progressive and return_lod as
+    :meth:`Pyramid.render` (the counts summed over the objects); the other
+    arguments as :func:`volvis.render`.
+
+        a, b = volvis.Pyramid("left.ome.zarr"), volvis.Pyramid("right.ome.zarr")
+        w = a.world(size=(800, 400))
+        w.add(b.object(position=(300, 0, 0), mode="mip"))
+        v = w.view
+        w.view = v.frame(*w.bounds())
+        img = volvis.render_out_of_core(w, [a, b])
+
+    Errors: InvalidError (a pyramid that no object of the World shows),
+    UnsupportedError (overlapping composite or iso objects, a geometric
+    object, several objects by the ray tracer, a renderer without regions:
+    the library's message names them), those of reading and rendering."""
+    from .render import _finish, _prepare
+    pyramids = list(pyramids)
+    w, r, vc, img, ro = _prepare(world, renderer, mode, size, quality, view, dtype, threads,
+                                 options)
+    entries = []
+    for p in pyramids:
+        if not isinstance(p, Pyramid):
+            raise InvalidError("render_out_of_core: expected Pyramid objects, got %s"
+                               % type(p).__name__)
+        ptr = p.proxy()._ptr
+        shown = [i for i in range(w._c.n_objects) if w._c.objects[i].volume == ptr]
+        if not shown:
+            raise InvalidError("render_out_of_core: no object of the World shows %s (add "
+                               "pyramid.object())" % (p.path,))
+        entries += [(i, p) for i in shown]
+    n = len(entries)
+    src = ffi.new("vv_object_source[]", max(n, 1))
+    ms = ffi.new("vv_multires_source[]", max(n, 1))
+    for k, (i, p) in enumerate(entries):
+        lib.vv_pyramid_source(p._c, ffi.addressof(ms, k))
+        lib.vv_object_source_init(ffi.addressof(src, k), i)
+        src[k].multires = ffi.addressof(ms, k)
+    lodc = _lod(lod, level, progressive, "render_out_of_core")
+
+    def run(prog):
+        ro.progress = prog
+        return lib.vv_renderer_render_sources(r._c, w._c, src, n, vc, ro, lodc, img)
+
+    # each pyramid's lock once, in one order
+    locks = list({id(p): p._lock for p in pyramids}.items())
+    locks.sort()
+    for _, lk in locks:
+        lk.acquire()
+    try:
+        with r._lock:
+            _lib.call_long(run, progress, desc="render")
+    finally:
+        for _, lk in reversed(locks):
+            lk.release()
+    out = _finish(img, vc, dtype, depth, gamma, alpha)
+    if return_lod:
+        levels = max([lib.vv_pyramid_levels(p._c) for p in pyramids] + [1])
+        return out, _lod_info(lodc, levels)
+    return out

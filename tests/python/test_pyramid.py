@@ -90,6 +90,55 @@ def test_level0_out_of_core_equals_memory(store):
     assert st["evictions"] > 0 and sum(st["chunk_reads"]) > 0
 
 
+def test_two_pyramids_out_of_core(store):
+    """Two objects from two pyramids side by side, drawn out of core in one
+    frame (render_out_of_core), against the World of their level-0 volumes
+    in memory: MIP bit for bit, composite >= 50 dB; overlapping composite
+    objects and a pyramid no object shows are refused."""
+    path, lv, spacing = store
+    a = volvis.Pyramid(path, memory_limit="1M")
+    b = volvis.Pyramid(path, memory_limit="1M")
+    vol = volvis.Volume(lv[0], spacing=spacing[::-1], origin=(0, 0, 0))
+    ray = volvis.Renderer("raycast", refinement="off")  # regions cast every pixel
+    for mode in ["mip", "composite"]:
+        tf = volvis.TransferFunction.ramp(200, 3000, 0.6, unit_distance=1.0)
+        ref_w = volvis.World.for_volume(vol, mode=mode, size=(120, 64), azimuth=20,
+                                        elevation=25)
+        ref_w.objects[0].tf = tf
+        ref_w.add(volvis.VolumeObject(vol, "b", position=(50, 0, 0), mode=mode, tf=tf))
+        v = ref_w.view
+        ref_w.view = v.frame(*ref_w.bounds())
+        w = a.world(mode=mode, size=(120, 64))
+        w.objects[0].tf = tf
+        w.add(b.object("b", position=(50, 0, 0), mode=mode, tf=tf))
+        w.view = ref_w.view
+        ref = volvis.render(ref_w, renderer=ray, dtype=np.float32)
+        img, info = volvis.render_out_of_core(w, [a, b], level=0, dtype=np.float32,
+                                              return_lod=True)
+        assert info["nodes"][0] > 2 and info["pending"] == 0
+        # both objects on screen, apart: two runs of columns
+        cols = np.nonzero((ref[..., 3] > 0.05).any(axis=0))[0]
+        assert cols.size > 20 and int((np.diff(cols) > 3).sum()) == 1, (mode, cols)
+        if mode == "composite":
+            mse = float(np.mean((ref.astype(np.float64) - img) ** 2))
+            print("two pyramids, composite: %.1f dB against memory" % (10 * np.log10(1 / mse)))
+            assert 10 * np.log10(1 / mse) >= 50, mode
+        else:
+            assert np.array_equal(ref, img), mode
+    # overlapping composite objects: refused, both named
+    w = a.world(mode="composite", size=(48, 48))
+    w.add(b.object("b", position=(10, 0, 0)))
+    with pytest.raises(volvis.UnsupportedError, match="overlap"):
+        volvis.render_out_of_core(w, [a, b])
+    # a pyramid that no object shows
+    w = a.world(size=(48, 48))
+    c = volvis.Pyramid(path, memory_limit="1M")
+    with pytest.raises(volvis.InvalidError, match="no object of the World shows"):
+        volvis.render_out_of_core(w, [a, c])
+    with pytest.raises(volvis.InvalidError, match="unknown property"):
+        b.object(colour=1)
+
+
 def test_level_of_detail(store):
     path, lv, _ = store
     p = volvis.Pyramid(path, memory_limit="8M")
