@@ -186,7 +186,7 @@ typedef struct measure_job {
     vv_isosurface_measure result;
     char name[VV_NAME_MAX];
     char proxy[160]; /* out of core: what was measured instead of level 0 (else empty) */
-    char *path;      /* out of core, voxel counting: level 0 of this file, read box by box */
+    char *path;      /* out of core, no seed: level 0 of this file, read box by box */
     uint64_t limit;  /* its pyramid's memory limit */
     vv_status status;
     char error[512];
@@ -204,7 +204,7 @@ measure_thread(GTask *task, gpointer src, gpointer data, GCancellable *c) {
         j->status = vv_pyramid_open(&p, j->path, 0, -1, j->limit, NULL);
         if (j->status == VV_OK)
             j->status = vv_measure_isosurface_boxes(&j->result, vv_pyramid_level(p, 0), level0_box,
-                                                    p, j->iso, NULL);
+                                                    p, j->iso, j->opt.method, NULL);
         if (j->status != VV_OK)
             g_strlcpy(j->error, vv_error_message(), sizeof j->error);
         vv_pyramid_free(p);
@@ -301,9 +301,9 @@ act_measure(GSimpleAction *a, GVariant *p, gpointer user) {
         j->opt.seed[2] = vvg_spin_value(self->seed_k);
     }
     VvGuiPyramid *gp = vv_document_pyramid(self->doc, o);
-    if (gp) { /* out of core: voxel counting reads level 0 box by box; the rest the proxy */
+    if (gp) { /* out of core: the whole surface by level 0 box by box; a section the proxy */
         const vv_volume *h0 = vv_pyramid_level(gp->pyramid, 0);
-        if (j->opt.method == VV_MEASURE_VOXEL && !j->opt.has_seed) {
+        if (!j->opt.has_seed) {
             j->path = g_strdup(gp->path);
             j->limit = gp->limit / 4 > ((uint64_t)64 << 20) ? gp->limit / 4 : (uint64_t)64 << 20;
             snprintf(j->proxy, sizeof j->proxy, " -- level 0 (%d x %d x %d), read out of core",

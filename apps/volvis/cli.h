@@ -112,6 +112,8 @@ int cli_parse_double(const cli_args *a, const char *opt, const char *text, doubl
                      double *out);
 /** An integer in [lo, hi]. */
 int cli_parse_int(const cli_args *a, const char *opt, const char *text, long lo, long hi, int *out);
+/** A size in bytes, with a K, M or G suffix (1024-based): "512M", "1.5G". */
+int cli_parse_bytes(const cli_args *a, const char *opt, const char *text, uint64_t *out);
 /** "WxH" with each side in 1..VV_IMAGE_MAX_SIDE. */
 int cli_parse_size(const cli_args *a, const char *opt, const char *text, int *w, int *h);
 /** "LO:HI", finite, LO < HI. */

@@ -40,6 +40,7 @@ static const cli_opt_spec measure_opts[] = {
     {"coloc", 0, "C1,C2"},
     {"mask", 0, "FILE"},
     {"thresholds", 0, "TA,TB"},
+    {"memory-limit", 0, "SIZE"},
     {"quiet", 'q', NULL},
 };
 #define N_MEASURE_OPTS ((int)(sizeof measure_opts / sizeof measure_opts[0]))
@@ -77,6 +78,12 @@ cli_measure_usage(FILE *out) {
             "                   --mask FILE (a volume of the same size) is non-zero\n"
             "  --thresholds TA,TB  Manders: the channels' values above these count as\n"
             "                   signal (default 0,0: Manders' original coefficients)\n"
+            "  --memory-limit SIZE  measure a volume larger than memory box by box within\n"
+            "                   SIZE bytes (K, M, G): --iso (both --method) and --histogram\n"
+            "                   of level 0 of a pyramid (OME-Zarr, BigDataViewer, Imaris, a\n"
+            "                   .vvb with levels) or of a .vvb, raw (--raw) or uncompressed\n"
+            "                   NRRD read by bricks; the whole volume's numbers (to rounding);\n"
+            "                   not with --seed, --roi, --cut, --geodesic, --labels, --coloc\n"
             "  --roi I0,J0,K0:I1,J1,K1  restrict to this voxel box (inclusive)\n"
             "  --cut PX,PY,PZ:NX,NY,NZ  keep the side of this world plane the normal points to\n"
             "                   (repeatable, up to 8; histogram and both --method)\n"
@@ -102,6 +109,7 @@ cli_measure_usage(FILE *out) {
             "  volvis measure ct_head.nrrd --distance voxel:0,0,0 voxel:255,255,107\n"
             "  volvis measure ../shared/data/meshes/bunny.ply --to other.stl\n"
             "  volvis measure cells.ome.tif --channel 1 --histogram\n"
+            "  volvis measure big.ome.zarr --memory-limit 1G --iso 300 --histogram\n"
             "  volvis measure cells.ome.tif --coloc 0,1 --thresholds 120,90 --mask nuclei.nrrd\n");
 }
 
@@ -204,6 +212,7 @@ measure_labels(const char *in, const vv_raw_params *raw, int json) {
 
 typedef struct measure_req {
     int json, histogram, log, bins, threads, want_volume;
+    uint64_t memory_limit;     /* --memory-limit: box by box (0: in memory) */
     int series, channel, time; /* which series, channel and time step of INPUT (-1: 0) */
     int coloc[2];              /* --coloc C1,C2 (-1: none) */
     double thresholds[2];
@@ -360,6 +369,25 @@ measure_geodesic(const measure_req *r, const vv_volume *v, volume_results *res) 
     return s;
 }
 
+/* --distance: the two points in world units (from @p v's voxels when so
+ * given) and their distance. */
+static void
+measure_points(const measure_req *r, const vv_volume *v, volume_results *res) {
+    if (!r->has_distance)
+        return;
+    vv_mat4 M = vv_volume_index_to_world(v);
+    for (int i = 0; i < 2; i++) {
+        vv_vec3 p = vv_vec3_make(r->dp[i][0], r->dp[i][1], r->dp[i][2]);
+        if (r->dvox[i])
+            p = vv_mat4_mul_point(M, p);
+        res->dw[i][0] = p.x;
+        res->dw[i][1] = p.y;
+        res->dw[i][2] = p.z;
+    }
+    vv_measure_distance(NULL, vv_vec3_make(res->dw[0][0], res->dw[0][1], res->dw[0][2]), 0,
+                        vv_vec3_make(res->dw[1][0], res->dw[1][1], res->dw[1][2]), 0, &res->dist);
+}
+
 /* The measurements @p r asks of @p v; on failure the message names the
  * file that failed in *@p fail_path. */
 static vv_status
@@ -386,20 +414,7 @@ measure_compute(const char *in, const measure_req *r, const vv_volume *v, volume
             return s;
         }
     }
-    if (r->has_distance) {
-        vv_mat4 M = vv_volume_index_to_world(v);
-        for (int i = 0; i < 2; i++) {
-            vv_vec3 p = vv_vec3_make(r->dp[i][0], r->dp[i][1], r->dp[i][2]);
-            if (r->dvox[i])
-                p = vv_mat4_mul_point(M, p);
-            res->dw[i][0] = p.x;
-            res->dw[i][1] = p.y;
-            res->dw[i][2] = p.z;
-        }
-        vv_measure_distance(NULL, vv_vec3_make(res->dw[0][0], res->dw[0][1], res->dw[0][2]), 0,
-                            vv_vec3_make(res->dw[1][0], res->dw[1][1], res->dw[1][2]), 0,
-                            &res->dist);
-    }
+    measure_points(r, v, res);
     return VV_OK;
 }
 
@@ -539,8 +554,94 @@ print_volume_text(const char *in, const measure_req *r, const vv_volume *v,
                u, dw[0][0], dw[0][1], dw[0][2], dw[1][0], dw[1][1], dw[1][2]);
 }
 
+/* Level 0 of a pyramid, or a bricked file, as a box reader. */
+static vv_status
+pyramid_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
+    return vv_pyramid_read_box(ctx, 0, lo, hi, out);
+}
+
+static vv_status
+bricked_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
+    return vv_bricked_read_box(ctx, lo, hi, out);
+}
+
+/* --memory-limit: the isosurface and the histogram of the whole volume read
+ * box by box, through its pyramid (level 0) or by bricks. */
+static int
+measure_out_of_core(const char *in, const vv_raw_params *raw, const measure_req *r) {
+    vv_pyramid *p = NULL;
+    vv_bricked *b = NULL;
+    vv_status s;
+    vv_error_clear();
+    if (!raw && vv_pyramid_probe(in))
+        s = vv_pyramid_open(&p, in, r->channel < 0 ? 0 : r->channel, r->time, r->memory_limit,
+                            NULL);
+    else
+        s = vv_bricked_open(&b, in, raw, r->memory_limit);
+    if (s != VV_OK)
+        return cli_fail(s, in);
+    if (b && (r->channel > 0 || r->time > 0)) {
+        vv_bricked_free(b);
+        cli_error("%s: one channel and time step, read by bricks (--channel and --time are a "
+                  "pyramid's)",
+                  in);
+        return CLI_EXIT_FAIL;
+    }
+    const vv_volume *hdr = p ? vv_pyramid_level(p, 0) : vv_bricked_header(b);
+    vv_box_reader read = p ? pyramid_box : bricked_box;
+    void *ctx = p ? (void *)p : (void *)b;
+    volume_results res;
+    memset(&res, 0, sizeof res);
+    res.dist = res.geo = NAN;
+    const char *fail_path = in;
+    if (r->threads > 0)
+        vv_threads_set(r->threads);
+    if (r->has_iso)
+        s = vv_measure_isosurface_boxes(&res.im, hdr, read, ctx, r->iso, r->method, NULL);
+    if (s == VV_OK && r->histogram)
+        s = vv_measure_histogram_boxes(&res.h, hdr, read, ctx, r->bins, r->has_range ? r->lo : 0,
+                                       r->has_range ? r->hi : 0, NULL);
+    if (s == VV_OK && r->histogram && r->plot &&
+        (s = vv_histogram_plot_png(res.h, r->plot, 900, 560,
+                                   strrchr(in, '/') ? strrchr(in, '/') + 1 : in, "value",
+                                   r->log)) != VV_OK)
+        fail_path = r->plot;
+    int rc;
+    if (s != VV_OK) {
+        rc = cli_fail(s, fail_path);
+    } else {
+        measure_points(r, hdr, &res);
+        double mib = 0, peak = 0;
+        if (p) {
+            vv_pyramid_stats st;
+            vv_pyramid_stats_get(p, &st);
+            mib = (double)st.bytes_read / 1048576.0;
+            peak = (double)st.peak_bytes / 1048576.0;
+        } else {
+            vv_bricked_stats st;
+            vv_bricked_stats_get(b, &st);
+            mib = (double)st.bytes_read / 1048576.0;
+            peak = (double)st.peak_bytes / 1048576.0;
+        }
+        if (r->json) {
+            print_volume_json(in, r, hdr, &res);
+        } else {
+            print_volume_text(in, r, hdr, &res);
+            printf("%-22s out of core, box by box: %.1f MiB read, peak cache %.1f of %.0f MiB\n",
+                   "read", mib, peak, (double)r->memory_limit / 1048576.0);
+        }
+        rc = CLI_EXIT_OK;
+    }
+    vv_histogram_free(res.h);
+    vv_pyramid_free(p);
+    vv_bricked_free(b);
+    return rc;
+}
+
 static int
 measure_volume(const char *in, const vv_raw_params *raw, const measure_req *r) {
+    if (r->memory_limit)
+        return measure_out_of_core(in, raw, r);
     vv_volume *v;
     int rc;
     if ((rc = cli_load_volume_sc(in, raw, r->series, r->channel, r->time, NULL, &v)))
@@ -805,6 +906,9 @@ measure_input(cli_args *a, measure_req *r) {
         return cli_usage_error(a, "--to and --volume measure meshes (.ply .obj .stl .off)");
     vv_raw_params raw;
     const char *raw_spec = cli_get(a, "raw");
+    if (cli_get(a, "memory-limit") && (cli_count(a, "labels") > 0 || r->coloc[0] >= 0))
+        return cli_usage_error(a, "--memory-limit measures --iso and --histogram (not --labels "
+                                  "or --coloc)");
     if (cli_count(a, "labels") > 0) {
         if (r->has_iso || r->histogram || r->has_distance)
             return cli_usage_error(a, "--labels measures the labels alone (not with --iso, "
@@ -826,6 +930,13 @@ measure_input(cli_args *a, measure_req *r) {
     if (!r->has_iso && !r->histogram && !r->has_distance)
         return cli_usage_error(a, "nothing to measure: give --iso V, --histogram, --distance P1 "
                                   "P2 or --coloc C1,C2");
+    const char *ml = cli_get(a, "memory-limit");
+    if (ml && (rc = cli_parse_bytes(a, "memory-limit", ml, &r->memory_limit)))
+        return rc;
+    if (ml && (r->has_seed || cli_get(a, "roi") || r->region.n_cut_planes || r->has_geodesic ||
+               cli_get(a, "series")))
+        return cli_usage_error(a, "--memory-limit measures the whole volume box by box: not with "
+                                  "--seed, --roi, --cut, --geodesic or --series");
     if (raw_spec && (rc = cli_parse_raw(a, "raw", raw_spec, &raw)))
         return rc;
     return measure_volume(in, raw_spec ? &raw : NULL, r);

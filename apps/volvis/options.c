@@ -186,6 +186,23 @@ cli_parse_int(const cli_args *a, const char *opt, const char *text, long lo, lon
 }
 
 int
+cli_parse_bytes(const cli_args *a, const char *opt, const char *text, uint64_t *out) {
+    char *end = NULL;
+    const double x = strtod(text, &end);
+    double mul = 1;
+    if (end && (*end == 'K' || *end == 'k'))
+        mul = 1024.0, end++;
+    else if (end && (*end == 'M' || *end == 'm'))
+        mul = 1048576.0, end++;
+    else if (end && (*end == 'G' || *end == 'g'))
+        mul = 1073741824.0, end++;
+    if (!end || end == text || *end || !(x > 0) || x * mul > 1e18)
+        return cli_usage_error(a, "--%s: '%s' is not a size (e.g. 512M, 1G)", opt, text);
+    *out = (uint64_t)(x * mul);
+    return 0;
+}
+
+int
 cli_parse_size(const cli_args *a, const char *opt, const char *text, int *w, int *h) {
     const char *p = text, *end;
     long v[2];

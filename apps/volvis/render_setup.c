@@ -309,20 +309,9 @@ cli_render_parse(cli_args *a, cli_render_args *r) {
             return cli_usage_error(a, "--compositing: '%s' is not binary-swap or radix-k[:K]", s);
         }
     }
-    if ((s = cli_get(a, "memory-limit"))) {
-        char *end = NULL;
-        const double x = strtod(s, &end);
-        double mul = 1;
-        if (end && (*end == 'K' || *end == 'k'))
-            mul = 1024.0, end++;
-        else if (end && (*end == 'M' || *end == 'm'))
-            mul = 1048576.0, end++;
-        else if (end && (*end == 'G' || *end == 'g'))
-            mul = 1073741824.0, end++;
-        if (!end || end == s || *end || !(x > 0) || x * mul > 1e18)
-            return cli_usage_error(a, "--memory-limit: '%s' is not a size (e.g. 512M, 1G)", s);
-        r->memory_limit = (uint64_t)(x * mul);
-    }
+    if ((s = cli_get(a, "memory-limit")) &&
+        (rc = cli_parse_bytes(a, "memory-limit", s, &r->memory_limit)))
+        return rc;
     if ((s = cli_get(a, "level"))) {
         if ((rc = cli_parse_int(a, "level", s, 0, 64, &r->level)))
             return rc;

@@ -192,21 +192,28 @@ vv_status vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, 
                                 const vv_isosurface_measure_options *opt);
 
 /**
- * vv_measure_isosurface by voxel counting (VV_MEASURE_VOXEL) of the whole
- * volume @p hdr describes (dims, spacing, value range; its voxels are not
- * read), read box by box through @p read (boxes of 128 x 128 x 64 voxels
- * with a ghost voxel beyond each inner face), so that a volume larger than
- * memory is measured at full resolution: the voxels counted, the volume,
- * the faces between inside and outside voxels and those on the volume's
- * boundary (cut_area) of the whole volume (the areas to rounding: sums in
- * another order). No region or seed: a surface-tracked section needs the
+ * vv_measure_isosurface by @p method of the whole volume @p hdr describes
+ * (dims, spacing, direction, value range; its voxels are not read), read
+ * box by box through @p read (boxes of 128 x 128 x 64 voxels; voxel
+ * counting reads a ghost voxel beyond each inner face, Marching Cubes one
+ * beyond each upper inner face, so that the boxes' cells tile the
+ * volume's), so that a volume larger than memory is measured at full
+ * resolution. Voxel counting: the voxels counted, the volume, the faces
+ * between inside and outside voxels and those on the volume's boundary
+ * (cut_area) of the whole volume. Marching Cubes: the triangles' area and
+ * count; each box's inside volume by the divergence theorem closed by caps
+ * on its six faces (the caps of a face two boxes share cancel), summed;
+ * cut_area the caps on the volume's own faces; the voxels inside. Equal to
+ * vv_measure_isosurface of the whole volume up to the rounding of sums in
+ * another order. No region or seed: a surface-tracked section needs the
  * whole volume. @p progress (may be NULL) reports and can cancel. Errors:
- * VV_ERR_INVALID (an isovalue outside the range; a box of another shape),
- * VV_ERR_CANCELLED, the reader's.
+ * VV_ERR_INVALID (an isovalue outside the range, an unknown method, fewer
+ * than 2 voxels along an axis for Marching Cubes, a box of another shape),
+ * VV_ERR_CANCELLED, VV_ERR_NOMEM, the reader's.
  */
 vv_status vv_measure_isosurface_boxes(vv_isosurface_measure *out, const vv_volume *hdr,
                                       vv_box_reader read, void *ctx, double isovalue,
-                                      const vv_progress *progress);
+                                      vv_measure_method method, const vv_progress *progress);
 
 /**
  * The Marching Cubes surface that vv_measure_isosurface measures with

@@ -481,10 +481,14 @@ mc_measure_cut(const vv_volume *w, double iso, const int lo[3], const int hi[3],
     return VV_OK;
 }
 
-/* Marching Cubes area and capped divergence volume of volume w over its box lo..hi. */
+/* Marching Cubes area and capped divergence volume of volume w over its box lo..hi.
+ * Caps close the volume on all six faces; cut_area counts those on the faces
+ * whose bit is set in @p outer (bit 2a: the low face of axis a, 2a + 1 the
+ * high one; a box measured as part of a larger one leaves its inner faces
+ * out: their caps cancel between the two boxes sharing them). */
 static vv_status
 mc_measure(const vv_volume *w, double iso, const int lo[3], const int hi[3], int threads,
-           const vv_progress *progress, vv_isosurface_measure *m) {
+           const vv_progress *progress, unsigned outer, vv_isosurface_measure *m) {
     vv_isosurface_options o;
     vv_isosurface_options_init(&o);
     o.threads = threads;
@@ -546,7 +550,8 @@ mc_measure(const vv_volume *w, double iso, const int lo[3], const int hi[3], int
             vv_vec3 xf = vv_vec3_sub(vv_mat4_mul_point(M, vv_vec3_make(x[0], x[1], x[2])), c);
             vv_vec3 n = side ? nrm : vv_vec3_scale(nrm, -1);
             vol += vv_vec3_dot(xf, n) * A / 3;
-            cut += A;
+            if (outer & (1u << (2 * a + side)))
+                cut += A;
         }
     }
     m->volume = vol;
@@ -614,15 +619,19 @@ masked_copy(const vv_volume *v, double isovalue, const region_box *rbp, const ui
     return VV_OK;
 }
 
-/* The boxes vv_measure_isosurface_boxes counts: IB_X x IB_Y x IB_Z voxels
- * of their own, read with a ghost voxel beyond each face inside the volume. */
+/* The boxes vv_measure_isosurface_boxes measures: IB_X x IB_Y x IB_Z voxels
+ * of their own, read with a ghost voxel beyond each face inside the volume
+ * (voxel counting: the faces to the neighbours), or beyond each upper face
+ * (Marching Cubes: the cells of the box's own voxels, so that the boxes'
+ * cells tile the volume's). */
 #define IB_X 128
 #define IB_Y 128
 #define IB_Z 64
 
 vv_status
 vv_measure_isosurface_boxes(vv_isosurface_measure *out, const vv_volume *hdr, vv_box_reader read,
-                            void *ctx, double isovalue, const vv_progress *progress) {
+                            void *ctx, double isovalue, vv_measure_method method,
+                            const vv_progress *progress) {
     if (!out || !hdr || !read)
         return vv_error_set(VV_ERR_INVALID, "measure: NULL argument");
     memset(out, 0, sizeof *out);
@@ -631,9 +640,18 @@ vv_measure_isosurface_boxes(vv_isosurface_measure *out, const vv_volume *hdr, vv
                             "measure: isovalue %g is outside the volume's range (%g, %g]: there "
                             "is no isosurface",
                             isovalue, hdr->range[0], hdr->range[1]);
-    out->method = VV_MEASURE_VOXEL;
+    if (method != VV_MEASURE_MC && method != VV_MEASURE_VOXEL)
+        return vv_error_set(VV_ERR_INVALID, "measure: unknown method %d", (int)method);
+    const int mc = method == VV_MEASURE_MC;
+    for (int a = 0; mc && a < 3; a++)
+        if (hdr->dims[a] < 2)
+            return vv_error_set(VV_ERR_INVALID,
+                                "measure: Marching Cubes needs at least 2 voxels along %c",
+                                "ijk"[a]);
+    out->method = method;
     out->isovalue = isovalue;
     out->unit = hdr->unit;
+    out->area_bias = mc ? 1 : 0;
     const int *d = hdr->dims, side[3] = {IB_X, IB_Y, IB_Z};
     int nb[3];
     for (int a = 0; a < 3; a++)
@@ -642,13 +660,16 @@ vv_measure_isosurface_boxes(vv_isosurface_measure *out, const vv_volume *hdr, vv
     for (long b = 0; b < n; b++) {
         const int c[3] = {(int)(b % nb[0]), (int)(b / nb[0] % nb[1]),
                           (int)(b / ((long)nb[0] * nb[1]))};
-        int lo[3], hi[3], glo[3], ghi[3];
+        int lo[3], hi[3], glo[3], ghi[3], cells = 1;
         for (int a = 0; a < 3; a++) {
             lo[a] = c[a] * side[a];
             hi[a] = lo[a] + side[a] - 1 < d[a] - 1 ? lo[a] + side[a] - 1 : d[a] - 1;
-            glo[a] = lo[a] > 0 ? lo[a] - 1 : 0;
+            glo[a] = lo[a] > 0 && !mc ? lo[a] - 1 : lo[a];
             ghi[a] = hi[a] < d[a] - 1 ? hi[a] + 1 : hi[a];
+            cells &= ghi[a] > glo[a];
         }
+        if (mc && !cells) /* a last layer of one voxel: its cells are the box before's */
+            continue;
         vv_volume *v = NULL;
         vv_status s = read(ctx, glo, ghi, &v);
         if (s != VV_OK)
@@ -659,6 +680,36 @@ vv_measure_isosurface_boxes(vv_isosurface_measure *out, const vv_volume *hdr, vv
             return vv_error_set(VV_ERR_INVALID, "measure: the reader gave a box of another shape");
         }
         memcpy(v->spacing, hdr->spacing, sizeof v->spacing);
+        memcpy(v->direction, hdr->direction, sizeof v->direction);
+        if (mc) {
+            /* its cells' surface, closed by caps on its faces (which cancel
+             * between neighbours: the volumes add up); the caps on the
+             * volume's own faces are its cut */
+            unsigned outer = 0;
+            for (int a = 0; a < 3; a++)
+                outer |= (glo[a] == 0 ? 1u : 0u) << (2 * a) | (ghi[a] == d[a] - 1 ? 1u : 0u)
+                                                                  << (2 * a + 1);
+            const int blo[3] = {0, 0, 0}, bhi[3] = {v->dims[0] - 1, v->dims[1] - 1, v->dims[2] - 1};
+            vv_isosurface_measure m;
+            memset(&m, 0, sizeof m);
+            s = mc_measure(v, isovalue, blo, bhi, 0, NULL, outer, &m);
+            /* the voxels inside: the box's own (not the layer after it) */
+            const size_t sy = (size_t)v->dims[0], sz = sy * (size_t)v->dims[1];
+            for (int k = 0; s == VV_OK && k <= hi[2] - glo[2]; k++)
+                for (int j = 0; j <= hi[1] - glo[1]; j++)
+                    out->voxels +=
+                        count_run(v, (size_t)k * sz + (size_t)j * sy, hi[0] - glo[0] + 1, isovalue);
+            vv_volume_free(v);
+            if (s != VV_OK)
+                return vv_error_prefix(s, "measure");
+            out->area += m.area;
+            out->volume += m.volume;
+            out->cut_area += m.cut_area;
+            out->n_triangles += m.n_triangles;
+            if (progress && vv_progress_report(progress, (double)(b + 1) / n))
+                return vv_error_set(VV_ERR_CANCELLED, "measure: cancelled");
+            continue;
+        }
         /* the box's own voxels, and the volume's extent, in the box's indices */
         region_box rb;
         memset(&rb, 0, sizeof rb);
@@ -674,7 +725,8 @@ vv_measure_isosurface_boxes(vv_isosurface_measure *out, const vv_volume *hdr, vv
         if (progress && vv_progress_report(progress, (double)(b + 1) / n))
             return vv_error_set(VV_ERR_CANCELLED, "measure: cancelled");
     }
-    out->volume = (double)out->voxels * hdr->spacing[0] * hdr->spacing[1] * hdr->spacing[2];
+    if (!mc)
+        out->volume = (double)out->voxels * hdr->spacing[0] * hdr->spacing[1] * hdr->spacing[2];
     return VV_OK;
 }
 
@@ -718,7 +770,7 @@ vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, double iso
         }
         s = rb.n_planes ? mc_measure_cut(v, isovalue, rb.lo, rb.hi, rb.n_planes,
                                          opt->region.cut_planes, threads, &opt->progress, out)
-                        : mc_measure(v, isovalue, rb.lo, rb.hi, threads, &opt->progress, out);
+                        : mc_measure(v, isovalue, rb.lo, rb.hi, threads, &opt->progress, 0x3f, out);
         if (s != VV_OK)
             return vv_error_prefix(s, "measure");
         /* voxel count for the report */
@@ -766,7 +818,7 @@ vv_measure_isosurface(vv_isosurface_measure *out, const vv_volume *v, double iso
     const int wlo[3] = {0, 0, 0}, whi[3] = {dims[0] - 1, dims[1] - 1, dims[2] - 1};
     s = rb.n_planes ? mc_measure_cut(w, isovalue, wlo, whi, rb.n_planes, opt->region.cut_planes,
                                      threads, &opt->progress, out)
-                    : mc_measure(w, isovalue, wlo, whi, threads, &opt->progress, out);
+                    : mc_measure(w, isovalue, wlo, whi, threads, &opt->progress, 0x3f, out);
     vv_volume_free(w);
     if (s != VV_OK)
         return vv_error_prefix(s, "measure");

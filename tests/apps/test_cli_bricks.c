@@ -14,7 +14,8 @@
  * writes (render --level and --lod read them: OME-Zarr's images bit for
  * bit); a scene of three heads side by side out of core (by bricks, from
  * the levels, one read whole): the in-memory image >= 50 dB, and its
- * refusals.
+ * refusals; `volvis measure --memory-limit` (box by box) against the whole
+ * volume's measurements.
  */
 #include "testutil.h"
 
@@ -319,6 +320,91 @@ test_scene(void **state) {
     assert_int_not_equal(stat(a, &st), 0);
 }
 
+/* The text between @p key and the next ']' or '}' of @p json (a JSON
+ * field's value, for comparing two outputs), in @p buf. */
+static const char *
+json_field(const char *json, const char *key, char *buf, size_t cap) {
+    const char *p = strstr(json, key);
+    assert_non_null(p);
+    size_t n = strcspn(p, "]}");
+    n = n < cap - 1 ? n : cap - 1;
+    memcpy(buf, p, n);
+    buf[n] = '\0';
+    return buf;
+}
+
+/* `volvis measure --memory-limit`: the CT head's isosurface (both methods)
+ * and histogram, read box by box from a .vvb's pyramid level 0 and from an
+ * uncompressed NRRD by bricks, are those of the whole volume in memory:
+ * voxel counting and the histogram's counts digit for digit, Marching
+ * Cubes' voxels and triangles exactly and its area and volume to 1e-7
+ * (the triangles' float32 vertices); what needs the whole volume is
+ * refused. */
+static void
+test_measure(void **state) {
+    (void)state;
+    if (!vt_have_data("volumes/ct_head.nrrd"))
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    const char *head = vt_data("volumes/ct_head.nrrd");
+    char vvb[1200], nrrd[1200];
+    snprintf(vvb, sizeof vvb, "%s/head_m.vvb", outdir());
+    snprintf(nrrd, sizeof nrrd, "%s/head_m.nrrd", outdir());
+    vt_run_result r = run_cli("convert", "-q", head, vvb);
+    assert_int_equal(r.status, 0);
+    vt_run_result_free(&r);
+    r = run_cli("convert", "-q", "--no-compress", head, nrrd);
+    assert_int_equal(r.status, 0);
+    vt_run_result_free(&r);
+    const char *methods[2] = {"voxel", "mc"};
+    for (int m = 0; m < 2; m++) {
+        vt_run_result mem = run_cli("measure", head, "--iso", "300", "--method", methods[m],
+                                    "--histogram", "--bins", "16", "--json");
+        assert_int_equal(mem.status, 0);
+        const char *files[2] = {vvb, nrrd};
+        for (int f = 0; f < 2; f++) {
+            r = run_cli("measure", files[f], "--iso", "300", "--method", methods[m], "--histogram",
+                        "--bins", "16", "--memory-limit", "16M", "--json");
+            printf("%s", r.out);
+            assert_int_equal(r.status, 0);
+            char a[4096], b[4096];
+            assert_string_equal(json_field(r.out, "\"counts\"", a, sizeof a),
+                                json_field(mem.out, "\"counts\"", b, sizeof b));
+            assert_string_equal(json_field(r.out, "\"voxels\"", a, sizeof a),
+                                json_field(mem.out, "\"voxels\"", b, sizeof b));
+            if (m == 0) {
+                assert_string_equal(json_field(r.out, "\"isosurface\"", a, sizeof a),
+                                    json_field(mem.out, "\"isosurface\"", b, sizeof b));
+            } else {
+                const char *keys[2] = {"\"area\": ", "\"volume\": "};
+                for (int k = 0; k < 2; k++) {
+                    const double x = atof(strstr(r.out, keys[k]) + strlen(keys[k]));
+                    const double y = atof(strstr(mem.out, keys[k]) + strlen(keys[k]));
+                    assert_true(x > 0 && fabs(x - y) <= 1e-7 * y);
+                }
+            }
+            vt_run_result_free(&r);
+        }
+        vt_run_result_free(&mem);
+    }
+    r = run_cli("measure", vvb, "--iso", "300", "--memory-limit", "16M");
+    assert_int_equal(r.status, 0);
+    assert_non_null(strstr(r.out, "out of core, box by box"));
+    vt_run_result_free(&r);
+    r = run_cli("measure", vvb, "--iso", "300", "--seed", "voxel:128,128,50", "--memory-limit",
+                "16M");
+    assert_int_equal(r.status, 2);
+    assert_non_null(strstr(r.err, "not with --seed"));
+    vt_run_result_free(&r);
+    r = run_cli("measure", vvb, "--iso", "300", "--memory-limit", "lots");
+    assert_int_equal(r.status, 2);
+    vt_run_result_free(&r);
+    /* a gzip NRRD cannot be read by bricks */
+    r = run_cli("measure", head, "--iso", "300", "--memory-limit", "16M");
+    assert_int_equal(r.status, 1);
+    assert_non_null(strstr(r.err, "convert it to .vvb first"));
+    vt_run_result_free(&r);
+}
+
 static void
 test_errors(void **state) {
     (void)state;
@@ -359,7 +445,7 @@ main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_convert_render), cmocka_unit_test(test_renderers),
         cmocka_unit_test(test_levels),         cmocka_unit_test(test_scene),
-        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_measure),        cmocka_unit_test(test_errors),
     };
     return vt_run_tests(tests, NULL, NULL);
 }

@@ -14,8 +14,9 @@ image sharpens again when the drag stops. The slice views sample the
 pyramid: the axial readout's value at a clicked point is level 0's, as
 `volvis slice --probe` of the saved session reads it. The Measurement
 page's histogram is level 0's, read box by box out of core (every voxel
-of the 256 x 256 x 108 volume counted), not the proxy's; its isosurface
-measurement is still the proxy's, and says so. A scene of two objects from
+of the 256 x 256 x 108 volume counted), not the proxy's, and so are its
+isosurface measurements by Marching Cubes and voxel counting (the
+triangles and voxels `volvis measure` finds in the whole file). A scene of two objects from
 the pyramid side by side (composite and MIP) is drawn out of core in one
 frame (the cache line counts both), and its converged frame is what
 `volvis render SCENE --memory-limit` draws of the saved session.
@@ -125,13 +126,13 @@ def main():
         check("256 x 256 x 108, read out of core): 7077888 voxels" in ht,
               f"the histogram is not level 0's: {ht!r}")
         s.screenshot("histogram.png")
-        # an isosurface measurement still runs on the proxy, and says so
+        # Marching Cubes reads level 0 box by box too
         s.click(s.find("Measure", "push button", root=mpage))
         iso = s.find_label(lambda n: n.startswith("head isovalue"), root=mpage, timeout=60)
         it = s.text(iso)
         print(f"isosurface: {it!r}")
-        check("of the coarse proxy (64 x 64 x 27 voxels); level 0 (256 x 256 x 108) is out of "
-              "core" in it, f"the measurement does not say it measured the proxy: {it!r}")
+        check("marching cubes" in it and "level 0 (256 x 256 x 108), read out of core" in it,
+              f"Marching Cubes did not read level 0: {it!r}")
         # voxel counting reads level 0 box by box: volvis measure's count of the whole file
         s.choose(s.find("method", "combo box", root=mpage), ["marching cubes", "voxel counting"],
                  "voxel counting")
@@ -164,6 +165,10 @@ def main():
     m = re.search(r"(\d+) voxels", r.stdout)
     check(r.returncode == 0 and m and f"{m.group(1)} voxels" in vt,
           f"the GUI's level-0 voxel count is not volvis measure's: {vt!r}")
+    r = subprocess.run([CLI, "measure", HEAD, "--iso", "0"], capture_output=True, text=True)
+    m = re.search(r"Marching Cubes \((\d+) triangles\)", r.stdout)
+    check(r.returncode == 0 and m and f" {m.group(1)} triangles" in it,
+          f"the GUI's level-0 Marching Cubes is not volvis measure's: {it!r} / {r.stdout}")
     q = psnr(shot, cli)
     print(f"the GUI's converged frame against volvis render of the session: {q:.1f} dB")
     check(q >= 30, f"the GUI's converged frame is not the CLI's ({q:.1f} dB)")

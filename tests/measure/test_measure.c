@@ -111,7 +111,9 @@ test_histogram(void **state) {
  * an 8 MiB cache: the counts, min and max of the whole volume's histogram
  * exactly, the mean and sd to 1e-9; cancelling stops it. Voxel counting by
  * boxes (vv_measure_isosurface_boxes) likewise: the count and volume
- * exactly, the areas to 1e-9. */
+ * exactly, the areas to 1e-9; Marching Cubes by boxes: the voxels and
+ * triangles exactly, the cut area to 1e-9, the area and capped volume to
+ * 1e-7 (the triangles' float32 vertices). */
 static vv_status
 crop_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
     return vv_filter_crop(ctx, lo, hi, NULL, out);
@@ -174,28 +176,42 @@ test_histogram_boxes(void **state) {
     assert_int_equal(vv_measure_histogram_boxes(&boxed, v, crop_box, v, 128, 0, 0, &pr),
                      VV_ERR_CANCELLED);
     assert_null(boxed);
-    /* voxel counting by boxes (ghost voxels across their faces): the whole
-     * volume's count, volume, area and cut area, in memory and from level 0 */
-    vv_isosurface_measure_options mo;
-    vv_isosurface_measure_options_init(&mo);
-    mo.method = VV_MEASURE_VOXEL;
-    vv_isosurface_measure m0, m1, m2;
-    vt_ok(vv_measure_isosurface(&m0, v, 300, &mo));
-    vt_ok(vv_measure_isosurface_boxes(&m1, v, crop_box, v, 300, NULL));
+    /* voxel counting by boxes (ghost voxels across their faces) and Marching
+     * Cubes by boxes (their cells tiling the volume's, caps cancelling
+     * between them): the whole volume's count, volume, area and cut area,
+     * in memory and from level 0 */
     vv_pyramid *p32 = NULL; /* a box and its ghosts: up to 4 x 4 x 3 chunks */
     vt_ok(vv_pyramid_open(&p32, path, -1, -1, (uint64_t)32 << 20, NULL));
-    vt_ok(vv_measure_isosurface_boxes(&m2, vv_pyramid_level(p32, 0), level0_box, p32, 300, NULL));
-    vv_pyramid_free(p32);
-    printf("voxel counting at 300: %llu voxels, area %.6g, cut %.6g (by boxes: %.6g, %.6g)\n",
-           (unsigned long long)m0.voxels, m0.area, m0.cut_area, m1.area, m1.cut_area);
-    const vv_isosurface_measure *ms[2] = {&m1, &m2};
-    for (int q = 0; q < 2; q++) {
-        assert_int_equal(ms[q]->voxels, m0.voxels);
-        assert_true(ms[q]->volume == m0.volume);
-        assert_near(ms[q]->area, m0.area, 1e-9 * m0.area);
-        assert_near(ms[q]->cut_area, m0.cut_area, 1e-9 * m0.cut_area + 1e-12);
-        assert_int_equal(ms[q]->method, VV_MEASURE_VOXEL);
+    vv_isosurface_measure m0, m1, m2;
+    for (int mc = 0; mc < 2; mc++) {
+        vv_isosurface_measure_options mo;
+        vv_isosurface_measure_options_init(&mo);
+        mo.method = mc ? VV_MEASURE_MC : VV_MEASURE_VOXEL;
+        vt_ok(vv_measure_isosurface(&m0, v, 300, &mo));
+        vt_ok(vv_measure_isosurface_boxes(&m1, v, crop_box, v, 300, mo.method, NULL));
+        vt_ok(vv_measure_isosurface_boxes(&m2, vv_pyramid_level(p32, 0), level0_box, p32, 300,
+                                          mo.method, NULL));
+        printf("%s at 300: %llu voxels, area %.10g, volume %.10g, cut %.10g, %zu triangles (by "
+               "boxes: %.10g, %.10g, %.10g)\n",
+               mc ? "marching cubes" : "voxel counting", (unsigned long long)m0.voxels, m0.area,
+               m0.volume, m0.cut_area, m0.n_triangles, m1.area, m1.volume, m1.cut_area);
+        const vv_isosurface_measure *ms[2] = {&m1, &m2};
+        for (int q = 0; q < 2; q++) {
+            assert_int_equal(ms[q]->voxels, m0.voxels);
+            assert_int_equal(ms[q]->n_triangles, m0.n_triangles);
+            /* Marching Cubes: the triangles' float32 vertices (a relative
+             * rounding of 6e-8) placed from another origin */
+            if (mc)
+                assert_near(ms[q]->volume, m0.volume, 1e-7 * m0.volume);
+            else
+                assert_true(ms[q]->volume == m0.volume);
+            assert_near(ms[q]->area, m0.area, (mc ? 1e-7 : 1e-9) * m0.area);
+            assert_near(ms[q]->cut_area, m0.cut_area, 1e-9 * m0.cut_area + 1e-12);
+            assert_int_equal(ms[q]->method, mo.method);
+            assert_true(ms[q]->area_bias == m0.area_bias);
+        }
     }
+    vv_pyramid_free(p32);
     assert_true(m0.voxels > 0 && m0.cut_area > 0); /* the head touches the volume's faces */
     vv_pyramid_free(p);
     vv_histogram_free(whole);
