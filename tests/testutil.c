@@ -212,19 +212,29 @@ vt_rnd(uint64_t *s, double lo, double hi) {
 }
 
 double
+vt_image_psnr(const vv_image *a, const vv_image *b, int *identical) {
+    assert_int_equal(a->width, b->width);
+    assert_int_equal(a->height, b->height);
+    const size_t n = 4 * (size_t)a->width * (size_t)a->height;
+    if (identical)
+        *identical = memcmp(a->rgba, b->rgba, n * sizeof(float)) == 0;
+    double se = 0;
+    for (size_t i = 0; i < n; i++) {
+        const double e = (double)a->rgba[i] - (double)b->rgba[i];
+        se += e * e;
+    }
+    return se > 0 ? 10 * log10(1.0 / (se / (double)n)) : INFINITY;
+}
+
+double
 vt_png_psnr(const char *a, const char *b) {
     vv_image *x = NULL, *y = NULL;
     vt_ok(vv_image_read_png(&x, a));
     vt_ok(vv_image_read_png(&y, b));
-    assert_int_equal(x->width, y->width);
-    assert_int_equal(x->height, y->height);
-    const size_t n = 4 * (size_t)x->width * (size_t)x->height;
-    double se = 0;
-    for (size_t i = 0; i < n; i++)
-        se += ((double)x->rgba[i] - y->rgba[i]) * ((double)x->rgba[i] - y->rgba[i]);
+    const double db = vt_image_psnr(x, y, NULL);
     vv_image_free(x);
     vv_image_free(y);
-    return se > 0 ? 10 * log10(1.0 / (se / (double)n)) : INFINITY;
+    return db;
 }
 
 vv_image *

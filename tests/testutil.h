@@ -103,6 +103,9 @@ const char *vt_path(const char *dir, const char *name);
 /** PSNR in dB of two PNG files of one size over their RGBA channels in
  * [0, 1] (INFINITY when identical); asserts both read and match in size. */
 double vt_png_psnr(const char *a, const char *b);
+/** PSNR in dB of two images of one size over their float RGBA channels
+ * (INFINITY when equal); *@p identical (may be NULL): 1 when bit for bit. */
+double vt_image_psnr(const vv_image *a, const vv_image *b, int *identical);
 
 /** Default-scene options (vv_world_new_for_volume, _for_grid) of a
  * @p size x @p size view from azimuth 30 and elevation 20 degrees, the

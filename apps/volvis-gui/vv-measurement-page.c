@@ -82,11 +82,6 @@ typedef struct hist_job {
     char error[512];
 } hist_job;
 
-static vv_status
-level0_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
-    return vv_pyramid_read_box(ctx, 0, lo, hi, out);
-}
-
 static void
 hist_thread(GTask *task, gpointer src, gpointer data, GCancellable *c) {
     (void)task;
@@ -99,7 +94,8 @@ hist_thread(GTask *task, gpointer src, gpointer data, GCancellable *c) {
     if (j->status == VV_OK) {
         const vv_volume *h0 = vv_pyramid_level(p, 0);
         memcpy(j->dims, h0->dims, sizeof j->dims);
-        j->status = vv_measure_histogram_boxes(&j->hist, h0, level0_box, p, 128, 0, 0, NULL);
+        j->status =
+            vv_measure_histogram_boxes(&j->hist, h0, vv_pyramid_level0_box, p, 128, 0, 0, NULL);
     }
     if (j->status != VV_OK)
         g_strlcpy(j->error, vv_error_message(), sizeof j->error);
@@ -203,8 +199,9 @@ measure_thread(GTask *task, gpointer src, gpointer data, GCancellable *c) {
         vv_pyramid *p = NULL;
         j->status = vv_pyramid_open(&p, j->path, 0, -1, j->limit, NULL);
         if (j->status == VV_OK)
-            j->status = vv_measure_isosurface_boxes(&j->result, vv_pyramid_level(p, 0), level0_box,
-                                                    p, j->iso, j->opt.method, NULL);
+            j->status =
+                vv_measure_isosurface_boxes(&j->result, vv_pyramid_level(p, 0),
+                                            vv_pyramid_level0_box, p, j->iso, j->opt.method, NULL);
         if (j->status != VV_OK)
             g_strlcpy(j->error, vv_error_message(), sizeof j->error);
         vv_pyramid_free(p);

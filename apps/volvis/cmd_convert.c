@@ -140,11 +140,6 @@ open_slabs(const char *in, vv_format f, int channel, int time, vv_slabs **out) {
     return s;
 }
 
-static vv_status
-read_pyramid_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
-    return vv_pyramid_read_box(ctx, 0, lo, hi, out);
-}
-
 /* IN to OUT.vvb (@p flags: VV_VVB_COARSE, VV_VVB_ZSTD, VV_VVB_LEVELS): by
  * bricks when IN is raw or uncompressed NRRD, slab by slab when it is a
  * TIFF stack or a gzip NRRD (vv_slabs), by boxes of level 0 when it is a
@@ -178,7 +173,7 @@ convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int serie
         cli_progress pr;
         cli_progress_begin(&pr, quiet);
         s = sl ? vv_boxes_write_vvb(hdr, vv_slabs_read_box, sl, out, flags, &pr.p)
-               : vv_boxes_write_vvb(hdr, read_pyramid_box, p, out, flags, &pr.p);
+               : vv_boxes_write_vvb(hdr, vv_pyramid_level0_box, p, out, flags, &pr.p);
         cli_progress_end(&pr);
         memcpy(dims, hdr->dims, sizeof dims);
         type = vv_voxel_type_name(hdr->type);
@@ -228,11 +223,6 @@ convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int serie
     return CLI_EXIT_OK;
 }
 
-static vv_status
-read_bricked_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
-    return vv_bricked_read_box(ctx, lo, hi, out);
-}
-
 /* IN to OUT.zarr chunk by chunk (vv_ome_zarr_write_boxes), never holding
  * IN whole: raw or uncompressed NRRD (read by rows, vv_bricked), TIFF
  * stacks and gzip NRRD (a slab of a row of chunks' slices at a time,
@@ -271,9 +261,9 @@ convert_zarr_boxes(const char *in, const char *out, const vv_raw_params *raw, in
         cli_error("%s: %s; refusing to convert it (--strict)", out, why);
         rc = CLI_EXIT_FAIL;
     } else {
-        s = b    ? vv_ome_zarr_write_boxes(hdr, read_bricked_box, b, out, so)
+        s = b    ? vv_ome_zarr_write_boxes(hdr, vv_bricked_box, b, out, so)
             : sl ? vv_ome_zarr_write_boxes(hdr, vv_slabs_read_box, sl, out, so)
-                 : vv_ome_zarr_write_boxes(hdr, read_pyramid_box, p, out, so);
+                 : vv_ome_zarr_write_boxes(hdr, vv_pyramid_level0_box, p, out, so);
         if (s != VV_OK)
             rc = cli_fail(s, out);
         else if (!quiet) {

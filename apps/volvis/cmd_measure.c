@@ -554,17 +554,6 @@ print_volume_text(const char *in, const measure_req *r, const vv_volume *v,
                u, dw[0][0], dw[0][1], dw[0][2], dw[1][0], dw[1][1], dw[1][2]);
 }
 
-/* Level 0 of a pyramid, or a bricked file, as a box reader. */
-static vv_status
-pyramid_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
-    return vv_pyramid_read_box(ctx, 0, lo, hi, out);
-}
-
-static vv_status
-bricked_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
-    return vv_bricked_read_box(ctx, lo, hi, out);
-}
-
 /* --memory-limit: the isosurface and the histogram of the whole volume read
  * box by box, through its pyramid (level 0) or by bricks. */
 static int
@@ -588,7 +577,7 @@ measure_out_of_core(const char *in, const vv_raw_params *raw, const measure_req 
         return CLI_EXIT_FAIL;
     }
     const vv_volume *hdr = p ? vv_pyramid_level(p, 0) : vv_bricked_header(b);
-    vv_box_reader read = p ? pyramid_box : bricked_box;
+    vv_box_reader read = p ? vv_pyramid_level0_box : vv_bricked_box;
     void *ctx = p ? (void *)p : (void *)b;
     volume_results res;
     memset(&res, 0, sizeof res);

@@ -12,6 +12,11 @@
  * detail (vv_renderer_render_multires): --lod PIXELS, or --level L for
  * every node at one level; the proxy is its coarsest level, placed over the
  * box of level 0 (or of --level L), which the view frames.
+ *
+ * A scene has each of its volume files out of core in the same way, side
+ * by side with those read whole. Every frame goes through
+ * vv_renderer_render_sources (draw_frames), which for one object is the
+ * brick or multiresolution driver's image.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -59,6 +64,45 @@ frame_setup(cli_args *a, cli_render_args *r, vv_volume *proxy, const vv_volume *
     return 0;
 }
 
+/* The frame of @p w's objects from @p src (vv_renderer_render_sources) into
+ * @p img, timed in *@p seconds; with --progressive its steps too, each
+ * written as OUT_pNNNN.png, counted in *@p steps. 0 or an exit code (the
+ * error printed). */
+static int
+draw_frames(const cli_render_args *r, vv_renderer *ren, const vv_world *w,
+            const vv_object_source *src, int n_src, const vv_render_options *ro, vv_lod *lod,
+            vv_image *img, int *steps, double *seconds) {
+    const double t0 = cli_now();
+    vv_status s;
+    *steps = 0;
+    /* --progressive: step 0 from what is resident (the coarsest level), each
+     * next step reading at most N chunks more, until nothing is pending */
+    lod->progressive = r->progressive > 0;
+    for (;;) {
+        lod->load_budget = *steps == 0 ? 0 : r->progressive;
+        vv_error_clear();
+        s = vv_renderer_render_sources(ren, w, src, n_src, &w->view, ro, lod, img);
+        if (s != VV_OK || !lod->progressive)
+            break;
+        char step[4200];
+        cli_numbered_path(r->output, 'p', *steps, step, sizeof step);
+        if ((s = vv_image_write_png(img, step, r->gamma, r->alpha)) != VV_OK)
+            return cli_fail(s, step);
+        (*steps)++;
+        if (lod->pending == 0)
+            break;
+    }
+    *seconds = cli_now() - t0;
+    if (s != VV_OK)
+        return cli_fail(s, r->input);
+    vv_error_clear();
+    if ((s = vv_image_write_png(img, r->output, r->gamma, r->alpha)) != VV_OK)
+        return cli_fail(s, r->output);
+    if (*steps > 0 && !r->quiet)
+        printf("wrote %d progressive steps (_p0000 .. _p%04d)\n", *steps, *steps - 1);
+    return 0;
+}
+
 static int
 render_pyramid(cli_args *a, cli_render_args *r) {
     vv_pyramid *p = NULL;
@@ -91,39 +135,15 @@ render_pyramid(cli_args *a, cli_render_args *r) {
     vv_lod_init(&lod);
     lod.level = r->has_level ? r->level : -1;
     lod.voxel_pixels = r->lod;
-    vv_multires_source src;
-    vv_pyramid_source(p, &src);
-    double t0 = cli_now();
-    vv_error_clear();
-    /* --progressive: step 0 from what is resident (the coarsest level), each
-     * next step reading at most N chunks more, until nothing is pending */
-    lod.progressive = r->progressive > 0;
+    vv_multires_source ms;
+    vv_pyramid_source(p, &ms);
+    vv_object_source src;
+    vv_object_source_init(&src, 0);
+    src.multires = &ms;
     int steps = 0;
-    for (;;) {
-        lod.load_budget = steps == 0 ? 0 : r->progressive;
-        s = vv_renderer_render_multires(ren, w, 0, &src, &w->view, &ro, &lod, img);
-        if (s != VV_OK || !lod.progressive)
-            break;
-        char step[4200];
-        cli_numbered_path(r->output, 'p', steps, step, sizeof step);
-        if ((s = vv_image_write_png(img, step, r->gamma, r->alpha)) != VV_OK) {
-            rc = cli_fail(s, step);
-            goto done;
-        }
-        steps++;
-        if (lod.pending == 0)
-            break;
-    }
-    double seconds = cli_now() - t0;
-    if (s != VV_OK) {
-        rc = cli_fail(s, NULL);
+    double seconds = 0;
+    if ((rc = draw_frames(r, ren, w, &src, 1, &ro, &lod, img, &steps, &seconds)))
         goto done;
-    }
-    vv_error_clear();
-    if ((s = vv_image_write_png(img, r->output, r->gamma, r->alpha)) != VV_OK) {
-        rc = cli_fail(s, r->output);
-        goto done;
-    }
     if (!r->quiet) {
         vv_pyramid_stats st;
         vv_pyramid_stats_get(p, &st);
@@ -132,8 +152,6 @@ render_pyramid(cli_args *a, cli_render_args *r) {
         for (int l = 0; l < vv_pyramid_levels(p) && len < (int)sizeof levels - 64; l++)
             len += snprintf(levels + len, sizeof levels - (size_t)len, "%s%d: %d nodes %llu chunks",
                             l ? ", " : "", l, lod.nodes[l], (unsigned long long)st.chunk_reads[l]);
-        if (steps > 0)
-            printf("wrote %d progressive steps (_p0000 .. _p%04d)\n", steps, steps - 1);
         printf("wrote %s (%dx%d, %.2f s; out of core from %d levels: %s; %d nodes skipped, "
                "%.1f MiB read, peak cache %.1f MiB, a chunk read at most %d times a frame)\n",
                r->output, img->width, img->height, seconds, vv_pyramid_levels(p), levels,
@@ -318,38 +336,11 @@ render_scene(cli_args *a, cli_render_args *r) {
     vv_lod_init(&lod);
     lod.level = r->has_level ? r->level : -1;
     lod.voxel_pixels = r->lod;
-    lod.progressive = r->progressive > 0;
-    double t0 = cli_now();
     int steps = 0;
-    for (;;) {
-        lod.load_budget = steps == 0 ? 0 : r->progressive;
-        vv_error_clear();
-        s = vv_renderer_render_sources(ren, w, src, n_src, &w->view, &ro, &lod, img);
-        if (s != VV_OK || !lod.progressive)
-            break;
-        char step[4200];
-        cli_numbered_path(r->output, 'p', steps, step, sizeof step);
-        if ((s = vv_image_write_png(img, step, r->gamma, r->alpha)) != VV_OK) {
-            rc = cli_fail(s, step);
-            goto done;
-        }
-        steps++;
-        if (lod.pending == 0)
-            break;
-    }
-    const double seconds = cli_now() - t0;
-    if (s != VV_OK) {
-        rc = cli_fail(s, r->input);
+    double seconds = 0;
+    if ((rc = draw_frames(r, ren, w, src, n_src, &ro, &lod, img, &steps, &seconds)))
         goto done;
-    }
-    vv_error_clear();
-    if ((s = vv_image_write_png(img, r->output, r->gamma, r->alpha)) != VV_OK) {
-        rc = cli_fail(s, r->output);
-        goto done;
-    }
     if (!r->quiet) {
-        if (steps > 0)
-            printf("wrote %d progressive steps (_p0000 .. _p%04d)\n", steps, steps - 1);
         printf("wrote %s (%dx%d, %.2f s; %d objects out of core, %.1f MiB each):\n", r->output,
                img->width, img->height, seconds, sc.n, (double)sc.limit / 1048576.0);
         for (int i = 0; i < w->n_objects; i++) {
@@ -430,21 +421,17 @@ cli_render_out_of_core(cli_args *a, cli_render_args *r) {
     vv_render_options ro;
     if ((rc = frame_setup(a, r, proxy, vv_bricked_header(b), &w, &ren, &img, &ro)))
         goto done;
-    double t0 = cli_now();
-    vv_error_clear();
-    vv_brick_source src;
-    vv_bricked_source(b, &src);
-    s = vv_renderer_render_bricks(ren, w, 0, &src, &w->view, &ro, img);
-    double seconds = cli_now() - t0;
-    if (s != VV_OK) {
-        rc = cli_fail(s, NULL);
+    vv_brick_source bs;
+    vv_bricked_source(b, &bs);
+    vv_object_source src;
+    vv_object_source_init(&src, 0);
+    src.bricks = &bs;
+    vv_lod lod;
+    vv_lod_init(&lod);
+    int steps = 0;
+    double seconds = 0;
+    if ((rc = draw_frames(r, ren, w, &src, 1, &ro, &lod, img, &steps, &seconds)))
         goto done;
-    }
-    vv_error_clear();
-    if ((s = vv_image_write_png(img, r->output, r->gamma, r->alpha)) != VV_OK) {
-        rc = cli_fail(s, r->output);
-        goto done;
-    }
     if (!r->quiet) {
         vv_bricked_stats st;
         vv_bricked_stats_get(b, &st);

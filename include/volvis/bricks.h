@@ -82,6 +82,8 @@ vv_status vv_bricked_open_header(vv_bricked **out, const char *path, const vv_ra
  * VV_ERR_NOMEM.
  */
 vv_status vv_bricked_read_box(vv_bricked *b, const int lo[3], const int hi[3], vv_volume **out);
+/** vv_bricked_read_box as a vv_box_reader (volume.h) with the bricked volume as @p bricked. */
+vv_status vv_bricked_box(void *bricked, const int lo[3], const int hi[3], vv_volume **out);
 
 /** Sets the value range (after vv_bricked_open_header). */
 void vv_bricked_set_range(vv_bricked *b, double lo, double hi);
@@ -274,6 +276,14 @@ const vv_volume *vv_pyramid_level(const vv_pyramid *p, int level);
  */
 vv_status vv_pyramid_read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3],
                               vv_volume **out);
+/**
+ * vv_pyramid_read_box of level 0 as a vv_box_reader (volume.h) with the
+ * pyramid as its @p pyramid context: what the box-by-box consumers
+ * (vv_measure_histogram_boxes, vv_measure_isosurface_boxes,
+ * vv_ome_zarr_write_boxes, vv_boxes_write_vvb) read a pyramid's full
+ * resolution through.
+ */
+vv_status vv_pyramid_level0_box(void *pyramid, const int lo[3], const int hi[3], vv_volume **out);
 void vv_pyramid_stats_get(const vv_pyramid *p, vv_pyramid_stats *st);
 /**
  * The proxy of @p p: its coarsest level (read through the cache) as a new

@@ -242,6 +242,57 @@ class Pyramid:
                 setattr(obj, k, v)
         return obj
 
+    # ---- measurement
+    def measure(self, isovalue=None, method="mc", bins=256, histogram_range=None, progress=None):
+        """The Measurement component of level 0, read box by box through the
+        cache (vv_measure_histogram_boxes, vv_measure_isosurface_boxes), so
+        that a volume larger than memory is measured at full resolution:
+        the histogram (``bins`` bins over ``histogram_range`` or the values'
+        range; the counts those of the whole volume exactly) and, with an
+        ``isovalue``, the isosurface's area and enclosed volume by Marching
+        Cubes (``method="mc"``: each box's surface closed by caps on its
+        faces, which cancel between neighbours) or voxel counting
+        ("voxel"), to the rounding of :func:`volvis.measure` of the whole
+        volume in memory. No region or seed (a surface-tracked section
+        needs the whole volume). Returns a :class:`volvis.Measurement`.
+        Errors: InvalidError (no surface at that isovalue, an unknown
+        method), LimitError (a box and its chunks exceed the memory limit),
+        CancelledError, those of reading chunks."""
+        from .components import Measurement
+        from .volume import _histogram_from
+        if method not in ("mc", "voxel"):
+            raise InvalidError("Pyramid.measure: method must be 'mc' or 'voxel', got %r"
+                               % (method,))
+        hdr = lib.vv_pyramid_level(self._c, 0)
+        read = ffi.addressof(lib, "vv_pyramid_level0_box")
+        lo, hi = (0.0, 0.0) if histogram_range is None else map(float, histogram_range)
+        hp = ffi.new("vv_histogram **")
+        res = ffi.new("vv_isosurface_measure *")
+        code = lib.VV_MEASURE_MC if method == "mc" else lib.VV_MEASURE_VOXEL
+
+        def run(prog):
+            pp = ffi.new("vv_progress *", prog)
+            st = lib.vv_measure_histogram_boxes(hp, hdr, read, self._c, int(bins), lo, hi, pp)
+            if st == 0 and isovalue is not None:
+                st = lib.vv_measure_isosurface_boxes(res, hdr, read, self._c, float(isovalue),
+                                                     code, pp)
+            return st
+
+        try:
+            with self._lock:
+                _lib.call_long(run, progress, desc="measure")
+            hist = _histogram_from(hp[0])
+        finally:
+            lib.vv_histogram_free(hp[0])
+        unit = pystr(lib.vv_unit_name(hdr.unit))
+        m = Measurement(unit=unit, histogram=hist, counts=hist.counts, edges=hist.edges)
+        if isovalue is not None:
+            m.isovalue, m.method = res.isovalue, method
+            m.area, m.volume, m.cut_area = res.area, res.volume, res.cut_area
+            m.voxels, m.n_triangles = int(res.voxels), int(res.n_triangles)
+            m.area_bias = res.area_bias
+        return m
+
     # ---- rendering
     def render(self, world=None, renderer=None, mode=None, size=None, lod=1.0, level=None,
                quality=None, view=None, dtype=np.uint8, depth=False, gamma=1.0, alpha=True,

@@ -1095,6 +1095,11 @@ vv_bricked_set_range(vv_bricked *b, double lo, double hi) {
 }
 
 vv_status
+vv_bricked_box(void *bricked, const int lo[3], const int hi[3], vv_volume **out) {
+    return vv_bricked_read_box(bricked, lo, hi, out);
+}
+
+vv_status
 vv_bricked_read_box(vv_bricked *b, const int lo[3], const int hi[3], vv_volume **out) {
     *out = NULL;
     const int *d = b->header->dims;

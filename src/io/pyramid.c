@@ -699,6 +699,11 @@ vv_pyramid_proxy(vv_pyramid *p, int level, vv_volume **out) {
     return VV_OK;
 }
 
+vv_status
+vv_pyramid_level0_box(void *pyramid, const int lo[3], const int hi[3], vv_volume **out) {
+    return vv_pyramid_read_box(pyramid, 0, lo, hi, out);
+}
+
 int
 vv_pyramid_levels(const vv_pyramid *p) {
     return p ? p->n_levels : 0;

@@ -31,18 +31,6 @@
 
 #define outdir() vt_outdir("bricks")
 
-static double
-psnr(const vv_image *a, const vv_image *b, int *identical) {
-    const size_t n = 4 * (size_t)a->width * (size_t)a->height;
-    double se = 0;
-    *identical = memcmp(a->rgba, b->rgba, n * sizeof(float)) == 0;
-    for (size_t i = 0; i < n; i++) {
-        const double e = (double)a->rgba[i] - (double)b->rgba[i];
-        se += e * e;
-    }
-    return se > 0 ? 10 * log10(1.0 / (se / (double)n)) : INFINITY;
-}
-
 /* The head's World at azimuth @p az: the transfer function 100..1500, or
  * (X-ray) the default ramp over the range. */
 static vv_world *
@@ -107,7 +95,7 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
                 vv_bricked_stats after;
                 vv_bricked_stats_get(b, &after);
                 int same = 0;
-                const double db = psnr(ref, img, &same);
+                const double db = vt_image_psnr(ref, img, &same);
                 printf("%s %s %s view %d: %s %.1f dB; read %llu bricks, %llu from the cache, "
                        "%llu skipped (of %d)\n",
                        what, renderers[ri],
@@ -157,7 +145,7 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
         frames++;
         vv_bricked_stats_get(b, &after);
         int same = 0, lit = 0;
-        const double db = psnr(ref, img, &same);
+        const double db = vt_image_psnr(ref, img, &same);
         for (size_t i = 0; i < (size_t)img->width * img->height; i++)
             lit += img->rgba[4 * i + 3] > 0.5f;
         printf("%s raycast iso 600: %s %.1f dB, %d pixels of surface; %llu bricks skipped\n", what,
@@ -178,7 +166,7 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
         vt_ok(vv_renderer_render(rtm, w, &w->view, &ro, ref));
         vt_ok(vv_renderer_render_bricks(rt, w, 0, &src, &w->view, &ro, img));
         frames++;
-        const double dbr = psnr(ref, img, &same);
+        const double dbr = vt_image_psnr(ref, img, &same);
         printf("%s raytrace iso 600: %s %.1f dB\n", what, same ? "bit-identical" : "differs", dbr);
         assert_true(dbr >= 60);
         vv_renderer_free(rtm);
@@ -202,7 +190,7 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
         vt_ok(vv_renderer_render_bricks(ooc, wx, 0, &src, &wx->view, NULL, img));
         vv_world_free(wx);
         frames++;
-        const double dbx = psnr(ref, img, &same);
+        const double dbx = vt_image_psnr(ref, img, &same);
         int depths = 1;
         for (size_t i = 0; i < (size_t)img->width * img->height; i++)
             depths &= ref->depth[i] == img->depth[i];

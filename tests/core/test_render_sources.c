@@ -24,18 +24,6 @@
 
 #define outdir() vt_outdir("render_sources")
 
-static double
-psnr(const vv_image *a, const vv_image *b, int *identical) {
-    const size_t n = 4 * (size_t)a->width * (size_t)a->height;
-    double se = 0;
-    *identical = memcmp(a->rgba, b->rgba, n * sizeof(float)) == 0;
-    for (size_t i = 0; i < n; i++) {
-        const double e = (double)a->rgba[i] - (double)b->rgba[i];
-        se += e * e;
-    }
-    return se > 0 ? 10 * log10(1.0 / (se / (double)n)) : INFINITY;
-}
-
 /* Two heads in mode @p m0 and @p m1, the second moved along x by @p dx
  * times the head's width (1.1: apart; 0.5: overlapping), the view framing
  * both. */
@@ -155,7 +143,7 @@ test_two_heads(void **state) {
             vt_ok(render_sources(w, src, 2, &img));
             vv_bricked_stats_get(b, &after);
             int same = 0;
-            const double db = psnr(ref, img, &same);
+            const double db = vt_image_psnr(ref, img, &same);
             const int proj = pairs[pi][0] != VV_MODE_COMPOSITE && pairs[pi][0] != VV_MODE_ISO &&
                              pairs[pi][1] != VV_MODE_COMPOSITE && pairs[pi][1] != VV_MODE_ISO;
             printf("%s + %s, right %s: %s %.1f dB; %llu bricks read, %llu skipped (of %d)\n",
@@ -196,7 +184,7 @@ test_two_heads(void **state) {
         vv_image *img = NULL;
         vt_ok(render_sources(w, src, 2, &img));
         int same = 0;
-        psnr(ref, img, &same);
+        vt_image_psnr(ref, img, &same);
         assert_true(same);
         save(img, "mip_overlapping");
         vv_image_free(img);
@@ -231,7 +219,7 @@ test_two_heads(void **state) {
         vt_ok(vv_image_new(&one, w->view.width, w->view.height));
         vt_ok(vv_renderer_render_bricks(r, w, 0, &bs, &w->view, &ro, one));
         int same = 0;
-        psnr(one, img, &same);
+        vt_image_psnr(one, img, &same);
         assert_true(same);
         /* refusals: the ray tracer with two objects; an object named twice */
         w->objects[1]->visible = 1;

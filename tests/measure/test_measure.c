@@ -119,11 +119,6 @@ crop_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
     return vv_filter_crop(ctx, lo, hi, NULL, out);
 }
 
-static vv_status
-level0_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
-    return vv_pyramid_read_box(ctx, 0, lo, hi, out);
-}
-
 static int
 cancel_half(void *user, double f) {
     (void)user;
@@ -162,8 +157,8 @@ test_histogram_boxes(void **state) {
     vt_ok(vv_volume_write_vvb(v, path, VV_VVB_ZSTD | VV_VVB_LEVELS));
     vv_pyramid *p = NULL;
     vt_ok(vv_pyramid_open(&p, path, -1, -1, (uint64_t)8 << 20, NULL));
-    vt_ok(
-        vv_measure_histogram_boxes(&boxed, vv_pyramid_level(p, 0), level0_box, p, 128, 0, 0, NULL));
+    vt_ok(vv_measure_histogram_boxes(&boxed, vv_pyramid_level(p, 0), vv_pyramid_level0_box, p, 128,
+                                     0, 0, NULL));
     same_histogram(boxed, whole);
     vv_pyramid_stats st;
     vv_pyramid_stats_get(p, &st);
@@ -189,8 +184,8 @@ test_histogram_boxes(void **state) {
         mo.method = mc ? VV_MEASURE_MC : VV_MEASURE_VOXEL;
         vt_ok(vv_measure_isosurface(&m0, v, 300, &mo));
         vt_ok(vv_measure_isosurface_boxes(&m1, v, crop_box, v, 300, mo.method, NULL));
-        vt_ok(vv_measure_isosurface_boxes(&m2, vv_pyramid_level(p32, 0), level0_box, p32, 300,
-                                          mo.method, NULL));
+        vt_ok(vv_measure_isosurface_boxes(&m2, vv_pyramid_level(p32, 0), vv_pyramid_level0_box, p32,
+                                          300, mo.method, NULL));
         printf("%s at 300: %llu voxels, area %.10g, volume %.10g, cut %.10g, %zu triangles (by "
                "boxes: %.10g, %.10g, %.10g)\n",
                mc ? "marching cubes" : "voxel counting", (unsigned long long)m0.voxels, m0.area,

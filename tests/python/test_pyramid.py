@@ -139,6 +139,29 @@ def test_two_pyramids_out_of_core(store):
         b.object(colour=1)
 
 
+def test_measure_level0_by_boxes(store):
+    """Pyramid.measure: level 0's histogram and isosurface read box by box
+    equal volvis.measure of the level-0 array in memory (the counts, voxels
+    and triangles exactly, areas and volumes to 1e-7)."""
+    path, lv, spacing = store
+    p = volvis.Pyramid(path, memory_limit="8M")
+    vol = volvis.Volume(lv[0], spacing=spacing[::-1], origin=(0, 0, 0))
+    for method in ["mc", "voxel"]:
+        a = p.measure(isovalue=1200, method=method, bins=64)
+        b = volvis.measure(vol, isovalue=1200, method=method, bins=64)
+        assert np.array_equal(a.counts, b.counts) and np.allclose(a.edges, b.edges)
+        assert a.voxels == b.voxels > 0 and a.n_triangles == b.n_triangles
+        for k in ("area", "volume", "cut_area"):
+            assert abs(getattr(a, k) - getattr(b, k)) <= 1e-7 * abs(getattr(b, k)) + 1e-9, k
+        assert a.method == method and a.area_bias == b.area_bias
+    h = p.measure(bins=16)
+    assert h.isovalue is None and int(h.counts.sum()) == lv[0].size
+    with pytest.raises(volvis.InvalidError):
+        p.measure(isovalue=1e9)
+    with pytest.raises(volvis.InvalidError):
+        p.measure(isovalue=1200, method="count")
+
+
 def test_level_of_detail(store):
     path, lv, _ = store
     p = volvis.Pyramid(path, memory_limit="8M")
