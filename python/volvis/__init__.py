@@ -20,7 +20,7 @@ from .world import (Box, CutPlane, Cylinder, GridObject, Light, Material, MeshOb
                     Plane, Polygon, Sphere, TransferFunction, TransferFunction2D, View, VolumeObject,
                     World, load_scene, tf_presets)
 from .render import Image, Renderer, RendererInfo, render, renderers
-from .pyramid import Level, Pyramid, render_out_of_core
+from .pyramid import Level, Pyramid, pyramids_of, render_out_of_core
 from .mesh import Grid, Mesh, load_grid, load_mesh
 from .components import (Colocalisation, Compressed, Measurement, Shape, colocalisation,
                          compress, decompress, filter, filters, isosurface, measure, voxelize)

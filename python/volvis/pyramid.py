@@ -20,6 +20,7 @@ detail"), rendered by level of detail (vv_renderer_render_multires).
 import collections
 import os
 import threading
+import weakref
 
 import numpy as np
 
@@ -29,7 +30,7 @@ from .errors import InvalidError
 from .volume import Volume
 from .world import VolumeObject, World
 
-__all__ = ["Pyramid", "Level", "render_out_of_core"]
+__all__ = ["Pyramid", "Level", "pyramids_of", "render_out_of_core"]
 
 Level = collections.namedtuple("Level", "shape dtype spacing origin")
 Level.__doc__ = """One level of a :class:`Pyramid`: ``shape`` (k, j, i) voxels, numpy
@@ -37,6 +38,29 @@ Level.__doc__ = """One level of a :class:`Pyramid`: ``shape`` (k, j, i) voxels, 
 scale and translation)."""
 
 _SUFFIX = {"": 1, "K": 1 << 10, "M": 1 << 20, "G": 1 << 30}
+
+
+# the pyramids whose proxies objects may show, by the proxy's address:
+# volvis.render of a World draws those objects from their pyramids
+_BY_PROXY = {}
+
+
+def _address(ptr):
+    return int(ffi.cast("uintptr_t", ptr))
+
+
+def pyramids_of(world):
+    """The pyramids (each once) whose proxies the objects of ``world`` show
+    (:meth:`Pyramid.object`, :meth:`Pyramid.world`), in the objects' order."""
+    found = []
+    for i in range(world._c.n_objects):
+        v = world._c.objects[i].volume
+        ref = _BY_PROXY.get(_address(v)) if v != ffi.NULL else None
+        p = ref() if ref is not None else None
+        if p is not None and p._proxy is not None and _address(p._proxy._ptr) == _address(v) \
+                and all(q is not p for q in found):
+            found.append(p)
+    return found
 
 
 def _lod(lod, level, progressive, what):
@@ -203,6 +227,9 @@ class Pyramid:
             with self._lock:
                 _lib.call_long(lambda prog: lib.vv_pyramid_proxy(self._c, 0, out), None)
             self._proxy = Volume._own(out[0])
+            for k in [k for k, r in _BY_PROXY.items() if r() is None]:
+                del _BY_PROXY[k]
+            _BY_PROXY[_address(self._proxy._ptr)] = weakref.ref(self)
         return self._proxy
 
     def world(self, mode="composite", tf_range=None, isovalue=None, size=None, azimuth=0.0,

@@ -185,7 +185,10 @@ def render(scene, renderer=None, mode=None, size=None, quality=None, view=None, 
     scene: a :class:`World`, a :class:`Volume` or a numpy array (shown in
     the default scene of ``volvis render FILE``, World.for_volume), or a
     :class:`Pyramid` (rendered out of core by level of detail:
-    :meth:`Pyramid.render`).
+    :meth:`Pyramid.render`). A World with objects of pyramids
+    (:meth:`Pyramid.object`, :meth:`Pyramid.world`) draws them from their
+    pyramids out of core (:func:`volvis.render_out_of_core`, by level of
+    detail at one voxel a pixel), not from their coarse proxies.
     renderer: a registry name (``volvis.renderers``), a :class:`Renderer`
     (keeps its caches between calls), or None: the World's render settings,
     else "raycast". mode: "composite", "mip", "minip", "xray" or "iso" for
@@ -208,11 +211,17 @@ def render(scene, renderer=None, mode=None, size=None, quality=None, view=None, 
     array a volume shares is checked for writes first (see Volume).
     Errors: InvalidError (unknown renderer or option, bad size), NoMemoryError,
     and the renderer's own errors, with the library's message."""
-    from .pyramid import Pyramid
+    from .pyramid import Pyramid, pyramids_of, render_out_of_core
     if isinstance(scene, Pyramid):
         return scene.render(renderer=renderer, mode=mode, size=size, quality=quality, view=view,
                             dtype=dtype, depth=depth, gamma=gamma, alpha=alpha, threads=threads,
                             progress=progress, **options)
+    pyramids = pyramids_of(scene) if isinstance(scene, World) else []
+    if pyramids:
+        return render_out_of_core(scene, pyramids, renderer=renderer, mode=mode, size=size,
+                                  quality=quality, view=view, dtype=dtype, depth=depth,
+                                  gamma=gamma, alpha=alpha, threads=threads, progress=progress,
+                                  **options)
     frame = _prepare(scene, renderer, mode, size, quality, view, dtype, threads, options)
     world, r, vc, img, ro = frame
 

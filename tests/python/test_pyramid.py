@@ -125,6 +125,11 @@ def test_two_pyramids_out_of_core(store):
             assert 10 * np.log10(1 / mse) >= 50, mode
         else:
             assert np.array_equal(ref, img), mode
+        # volvis.render of the World draws the pyramids' objects from them
+        # (by level of detail), not from their proxies
+        lod1 = volvis.render_out_of_core(w, [a, b], dtype=np.float32)
+        assert np.array_equal(volvis.render(w, dtype=np.float32), lod1)
+        assert volvis.pyramids_of(w) == [a, b]
     # overlapping composite objects: refused, both named
     w = a.world(mode="composite", size=(48, 48))
     w.add(b.object("b", position=(10, 0, 0)))
