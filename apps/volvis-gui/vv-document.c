@@ -570,11 +570,23 @@ volume_name(const char *path) {
 /* The pyramid of the multiresolution file @p path when its level 0 holds
  * more than a quarter of the memory limit: opened, kept in doc->pyramids
  * under @p key (what objects showing it name as their source), *proxy its
- * proxy (a new reference). 1: so; 0: not needed (nothing kept); -1: an
- * error, in @p error. */
+ * proxy (a new reference); the one kept under @p key already when it is
+ * of the same file (another object of it). 1: so; 0: not needed (nothing
+ * kept); -1: an error, in @p error. */
 static int
 pyramid_proxy(VvDocument *doc, const char *path, const char *key, VvGuiPyramid **out,
               vv_volume **proxy, GError **error) {
+    /* a file some object already shows out of core: its pyramid and proxy
+     * again (one cache for both objects) */
+    VvGuiPyramid *have = g_hash_table_lookup(doc->pyramids, key);
+    if (have) {
+        g_autofree char *canon = g_canonicalize_filename(path, NULL);
+        if (strcmp(have->path, canon) == 0) {
+            *proxy = vv_volume_ref(have->proxy);
+            *out = have;
+            return 1;
+        }
+    }
     const uint64_t limit = vv_document_memory_limit();
     vv_pyramid *p = NULL;
     vv_error_clear();

@@ -16,10 +16,11 @@ pyramid: the axial readout's value at a clicked point is level 0's, as
 page's histogram is level 0's, read box by box out of core (every voxel
 of the 256 x 256 x 108 volume counted), not the proxy's, and so are its
 isosurface measurements by Marching Cubes and voxel counting (the
-triangles and voxels `volvis measure` finds in the whole file). A scene of two objects from
-the pyramid side by side (composite and MIP) is drawn out of core in one
-frame (the cache line counts both), and its converged frame is what
-`volvis render SCENE --memory-limit` draws of the saved session.
+triangles and voxels `volvis measure` finds in the whole file). A scene of three objects side
+by side (composite and MIP; two of one store, sharing its pyramid, and one
+of a copy) is drawn out of core in one frame (the cache line counts them),
+and its converged frame is what `volvis render SCENE --memory-limit` draws
+of the saved session.
 
 usage: pyramid_session.py GUI CLI OUTDIR [two]
 """
@@ -179,9 +180,9 @@ def main():
 
 
 def two_pyramids():
-    """Two objects from the pyramid side by side (a scene): both drawn out of
-    core by level of detail in one frame, as volvis render of the scene out
-    of core draws them."""
+    """Three objects side by side (a scene): two of one store (sharing its
+    pyramid) and one of a copy, all drawn out of core by level of detail in
+    one frame, as volvis render of the scene out of core draws them."""
     import json
     import shutil
     store = os.path.abspath(os.path.join(OUT, "head.ome.zarr"))
@@ -193,20 +194,23 @@ def two_pyramids():
     shutil.copytree(store, second)
     tf = {"opacity": [[100, 0], [1500, 0.6]], "opacity_unit_distance": 1}
     scene = os.path.join(out, "two.json")
-    json.dump({"view": {"width": 320, "height": 200, "eye": [260, -900, 250],
-                        "at": [260, 122, 80], "up": [0, 0, 1], "fov": 30},
+    json.dump({"view": {"width": 320, "height": 200, "eye": [392, -1300, 300],
+                        "at": [392, 122, 80], "up": [0, 0, 1], "fov": 30},
                "objects": [{"name": "left", "file": store, "transfer_function": tf},
                            {"name": "right", "file": second, "position": [270, 0, 0],
+                            "mode": "mip", "transfer_function": tf},
+                           # a second object of the first file: its pyramid shared
+                           {"name": "far", "file": store, "position": [540, 0, 0],
                             "mode": "mip", "transfer_function": tf}]},
               open(scene, "w"))
     with Session(GUI, [scene], out, env={"VOLVIS_MEMORY_LIMIT": "16M"},
                  window=(1100, 720)) as s:
         s.wait_full(0, "opening the scene")
         s.page("View")
-        s.find_label(lambda n: n.startswith("2 objects out of core:"), timeout=30)
-        line = lambda: s.text(s.find_label(lambda n: n.startswith("2 objects out of core:")))
+        s.find_label(lambda n: n.startswith("3 objects out of core:"), timeout=30)
+        line = lambda: s.text(s.find_label(lambda n: n.startswith("3 objects out of core:")))
         s.wait_for(lambda: "converged" in line(), f"never converged: {line()!r}", timeout=120)
-        print(f"two pyramids: {line()!r}")
+        print(f"three objects of two pyramids: {line()!r}")
         time.sleep(1)
         shot = s.full_png(copy_to="two_converged.png")
         s.screenshot("two_window.png")
@@ -217,11 +221,11 @@ def two_pyramids():
     r = subprocess.run([CLI, "render", session, "--memory-limit", "32M", "-o", cli],
                        capture_output=True, text=True)
     print(f"volvis render of the session out of core: {r.stdout.strip()} {r.stderr.strip()}")
-    check(r.returncode == 0 and "2 objects out of core" in r.stdout,
+    check(r.returncode == 0 and "3 objects out of core" in r.stdout,
           f"volvis render of the session out of core failed: {r.stderr}")
     q = psnr(shot, cli)
-    print(f"the GUI's two pyramids against volvis render of the session: {q:.1f} dB")
-    check(q >= 30, f"the GUI's frame of two pyramids is not the CLI's ({q:.1f} dB)")
+    print(f"the GUI's three objects against volvis render of the session: {q:.1f} dB")
+    check(q >= 30, f"the GUI's frame of three objects is not the CLI's ({q:.1f} dB)")
 
 
 run(two_pyramids if sys.argv[4:] == ["two"] else main)
