@@ -16,11 +16,11 @@ pyramid: the axial readout's value at a clicked point is level 0's, as
 page's histogram is level 0's, read box by box out of core (every voxel
 of the 256 x 256 x 108 volume counted), not the proxy's, and so are its
 isosurface measurements by Marching Cubes and voxel counting (the
-triangles and voxels `volvis measure` finds in the whole file). A scene of three objects side
-by side (composite and MIP; two of one store, sharing its pyramid, and one
-of a copy) is drawn out of core in one frame (the cache line counts them),
-and its converged frame is what `volvis render SCENE --memory-limit` draws
-of the saved session.
+triangles and voxels `volvis measure` finds in the whole file). A scene
+of three objects side by side (composite and MIP; two of one store,
+sharing its pyramid, and one of a copy) is drawn out of core in one frame
+(the cache line counts them), and its converged frame is what `volvis
+render SCENE --memory-limit` draws of the saved session.
 
 usage: pyramid_session.py GUI CLI OUTDIR [two]
 """
