@@ -1,5 +1,7 @@
 /*
- * libFuzzer harness: scene files (JSON; vv_scene_load; src/model/scene.c).
+ * libFuzzer harness: scene files (JSON; vv_scene_load, and
+ * vv_scene_loader_files, which counts a scene's volume files before
+ * loading it; src/scene/scene.c).
  * Volume and mesh files a scene names are resolved beside it, in the
  * harness's private folder, where only the scene itself lies.
  */
@@ -26,7 +28,11 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         once = 1;
     }
     vv_world *w = NULL;
-    if (vv_scene_load(&w, fuzz_write("in.json", data, size)) == VV_OK)
+    const char *path = fuzz_write("in.json", data, size);
+    const int files = vv_scene_loader_files(path);
+    if (files < 0)
+        __builtin_trap();
+    if (vv_scene_load(&w, path) == VV_OK)
         vv_world_free(w);
     return 0;
 }
