@@ -4,6 +4,7 @@
  * on a generated store under a cgroup memory limit:
  *   bench_pyramid STORE [--memory-limit MiB] [--size N] [--frames F]
  *                 [--tf LO:HI] [--lod PIXELS | --level L] [--dataset NAME] [--sharpen]
+ *                 [--set KEY=VALUE]...
  * Opens STORE with the memory limit (default 1024 MiB), builds the default
  * World from its coarsest level (the proxy, over level 0's box) with a
  * transfer function ramp LO..HI, and renders F frames (default 4) at N x N
@@ -22,7 +23,9 @@
  * the median of the next frames, the chunks read and the nodes per level,
  * the most reads of one chunk in a frame, the peak cache and the process's
  * peak resident size (getrusage); writes the last frame to
- * $VV_BENCH_OUT/pyramid.png when that is set.
+ * $VV_BENCH_OUT/pyramid.png when that is set. --set passes a ray-caster
+ * option (up to 8: gradient_budget_mb=0 computes gradients at the samples
+ * instead of for every voxel of every node).
  */
 #include <math.h>
 #include <stdio.h>
@@ -45,7 +48,8 @@ int
 main(int argc, char **argv) {
     const char *path = NULL, *dataset = "store";
     double limit_mib = 1024, tf_lo = 60, tf_hi = 255, lod_px = 1;
-    int size = 512, frames = 4, level = -1, sharpen = 0;
+    int size = 512, frames = 4, level = -1, sharpen = 0, n_set = 0;
+    const char *set[8]; /* --set KEY=VALUE: renderer options */
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--memory-limit") == 0 && i + 1 < argc)
             limit_mib = atof(argv[++i]);
@@ -64,12 +68,15 @@ main(int argc, char **argv) {
             dataset = argv[++i];
         else if (strcmp(argv[i], "--sharpen") == 0)
             sharpen = 1;
+        else if (strcmp(argv[i], "--set") == 0 && i + 1 < argc && n_set < 8)
+            set[n_set++] = argv[++i];
         else
             path = argv[i];
     }
     if (!path || size < 1 || frames < 1 || frames > 100 || !(limit_mib > 0)) {
         fprintf(stderr, "usage: bench_pyramid STORE [--memory-limit MiB] [--size N] [--frames F] "
-                        "[--tf LO:HI] [--lod PIXELS | --level L] [--dataset NAME] [--sharpen]\n");
+                        "[--tf LO:HI] [--lod PIXELS | --level L] [--dataset NAME] [--sharpen] "
+                        "[--set KEY=VALUE]...\n");
         return 2;
     }
     double t0 = bench_now();
@@ -96,6 +103,16 @@ main(int argc, char **argv) {
     vv_image *img = NULL;
     if (vv_renderer_new(&ren, "raycast") != VV_OK || vv_image_new(&img, size, size) != VV_OK)
         bench_die("bench_pyramid", "renderer");
+    for (int i = 0; i < n_set; i++) {
+        char key[128];
+        const char *eq = strchr(set[i], '=');
+        if (!eq || (size_t)(eq - set[i]) >= sizeof key)
+            bench_die("bench_pyramid", "--set KEY=VALUE");
+        memcpy(key, set[i], (size_t)(eq - set[i]));
+        key[eq - set[i]] = '\0';
+        if (vv_renderer_set_option(ren, key, eq + 1) != VV_OK)
+            bench_die("bench_pyramid", set[i]);
+    }
     double times[100];
     vv_multires_source src;
     vv_pyramid_source(p, &src);
