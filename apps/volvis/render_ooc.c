@@ -25,18 +25,44 @@
 
 #include "cli.h"
 
-void
-cli_proxy_opacity_unit(vv_world *w, const vv_volume *whole, const vv_volume *proxy) {
-    /* the default transfer function's opacity is per smallest voxel spacing:
-     * the volume's, not the proxy's */
+/* The default transfer function's opacity is per smallest voxel spacing:
+ * the volume's (@p whole), not its proxy's (@p proxy) that @p o was made
+ * from. */
+static void
+object_opacity_unit(vv_object *o, const double whole[3], const double proxy[3]) {
     double ph = INFINITY, pp = INFINITY;
     for (int k = 0; k < 3; k++) {
-        ph = whole->spacing[k] < ph ? whole->spacing[k] : ph;
-        pp = proxy->spacing[k] < pp ? proxy->spacing[k] : pp;
+        ph = whole[k] < ph ? whole[k] : ph;
+        pp = proxy[k] < pp ? proxy[k] : pp;
     }
+    if (fabs(o->tf.opacity_unit_distance - pp) <= 1e-12 * pp)
+        o->tf.opacity_unit_distance = ph;
+}
+
+void
+cli_proxy_opacity_unit(vv_world *w, const vv_volume *whole, const vv_volume *proxy) {
     for (int i = 0; i < w->n_objects; i++)
-        if (fabs(w->objects[i]->tf.opacity_unit_distance - pp) <= 1e-12 * pp)
-            w->objects[i]->tf.opacity_unit_distance = ph;
+        object_opacity_unit(w->objects[i], whole->spacing, proxy->spacing);
+}
+
+/* The renderer of @p w (with --renderer, --set), the image of its view and
+ * the options of the frame. 0 or an exit code. */
+static int
+frame_tools(cli_args *a, cli_render_args *r, const vv_world *w, vv_renderer **ren, vv_image **img,
+            vv_render_options *ro) {
+    int quality = 2;
+    int rc = cli_render_renderer(a, r, w, ren, &quality);
+    if (rc)
+        return rc;
+    vv_status s = vv_image_new(img, w->view.width, w->view.height);
+    if (s != VV_OK)
+        return cli_fail(s, NULL);
+    if (r->threads > 0)
+        vv_threads_set(r->threads);
+    vv_render_options_init(ro);
+    ro->threads = r->threads;
+    ro->quality = quality;
+    return 0;
 }
 
 /* The World from the proxy (its transfer function's opacity per @p whole's
@@ -50,45 +76,34 @@ frame_setup(cli_args *a, cli_render_args *r, vv_volume *proxy, const vv_volume *
         return rc;
     cli_proxy_opacity_unit(*w, whole, proxy);
     cli_render_turn(r, *w);
-    int quality = 2;
-    if ((rc = cli_render_renderer(a, r, *w, ren, &quality)))
-        return rc;
-    vv_status s = vv_image_new(img, (*w)->view.width, (*w)->view.height);
-    if (s != VV_OK)
-        return cli_fail(s, NULL);
-    if (r->threads > 0)
-        vv_threads_set(r->threads);
-    vv_render_options_init(ro);
-    ro->threads = r->threads;
-    ro->quality = quality;
-    return 0;
+    return frame_tools(a, r, *w, ren, img, ro);
 }
 
 /* The frame of @p w's objects from @p src (vv_renderer_render_sources) into
  * @p img, timed in *@p seconds; with --progressive its steps too, each
- * written as OUT_pNNNN.png, counted in *@p steps. 0 or an exit code (the
+ * written as OUT_pNNNN.png. 0 or an exit code (the
  * error printed). */
 static int
 draw_frames(const cli_render_args *r, vv_renderer *ren, const vv_world *w,
             const vv_object_source *src, int n_src, const vv_render_options *ro, vv_lod *lod,
-            vv_image *img, int *steps, double *seconds) {
+            vv_image *img, double *seconds) {
     const double t0 = cli_now();
     vv_status s;
-    *steps = 0;
+    int steps = 0;
     /* --progressive: step 0 from what is resident (the coarsest level), each
      * next step reading at most N chunks more, until nothing is pending */
     lod->progressive = r->progressive > 0;
     for (;;) {
-        lod->load_budget = *steps == 0 ? 0 : r->progressive;
+        lod->load_budget = steps == 0 ? 0 : r->progressive;
         vv_error_clear();
         s = vv_renderer_render_sources(ren, w, src, n_src, &w->view, ro, lod, img);
         if (s != VV_OK || !lod->progressive)
             break;
         char step[4200];
-        cli_numbered_path(r->output, 'p', *steps, step, sizeof step);
+        cli_numbered_path(r->output, 'p', steps, step, sizeof step);
         if ((s = vv_image_write_png(img, step, r->gamma, r->alpha)) != VV_OK)
             return cli_fail(s, step);
-        (*steps)++;
+        steps++;
         if (lod->pending == 0)
             break;
     }
@@ -98,8 +113,8 @@ draw_frames(const cli_render_args *r, vv_renderer *ren, const vv_world *w,
     vv_error_clear();
     if ((s = vv_image_write_png(img, r->output, r->gamma, r->alpha)) != VV_OK)
         return cli_fail(s, r->output);
-    if (*steps > 0 && !r->quiet)
-        printf("wrote %d progressive steps (_p0000 .. _p%04d)\n", *steps, *steps - 1);
+    if (steps > 0 && !r->quiet)
+        printf("wrote %d progressive steps (_p0000 .. _p%04d)\n", steps, steps - 1);
     return 0;
 }
 
@@ -140,9 +155,8 @@ render_pyramid(cli_args *a, cli_render_args *r) {
     vv_object_source src;
     vv_object_source_init(&src, 0);
     src.multires = &ms;
-    int steps = 0;
     double seconds = 0;
-    if ((rc = draw_frames(r, ren, w, &src, 1, &ro, &lod, img, &steps, &seconds)))
+    if ((rc = draw_frames(r, ren, w, &src, 1, &ro, &lod, img, &seconds)))
         goto done;
     if (!r->quiet) {
         vv_pyramid_stats st;
@@ -307,38 +321,19 @@ render_scene(cli_args *a, cli_render_args *r) {
             src[n_src].bricks = &bs[n_src];
             h = vv_bricked_header(f->b);
         }
-        /* the default opacity is per the file's smallest voxel, not the proxy's */
-        double ph = INFINITY, pp = INFINITY;
-        for (int k = 0; k < 3; k++) {
-            ph = h->spacing[k] < ph ? h->spacing[k] : ph;
-            pp = f->spacing[k] < pp ? f->spacing[k] : pp;
-        }
-        if (fabs(o->tf.opacity_unit_distance - pp) <= 1e-12 * pp)
-            o->tf.opacity_unit_distance = ph;
+        object_opacity_unit(o, h->spacing, f->spacing);
         n_src++;
     }
     cli_render_turn(r, w);
-    int quality = 2;
-    if ((rc = cli_render_renderer(a, r, w, &ren, &quality)))
-        goto done;
-    vv_status s = vv_image_new(&img, w->view.width, w->view.height);
-    if (s != VV_OK) {
-        rc = cli_fail(s, NULL);
-        goto done;
-    }
-    if (r->threads > 0)
-        vv_threads_set(r->threads);
     vv_render_options ro;
-    vv_render_options_init(&ro);
-    ro.threads = r->threads;
-    ro.quality = quality;
+    if ((rc = frame_tools(a, r, w, &ren, &img, &ro)))
+        goto done;
     vv_lod lod;
     vv_lod_init(&lod);
     lod.level = r->has_level ? r->level : -1;
     lod.voxel_pixels = r->lod;
-    int steps = 0;
     double seconds = 0;
-    if ((rc = draw_frames(r, ren, w, src, n_src, &ro, &lod, img, &steps, &seconds)))
+    if ((rc = draw_frames(r, ren, w, src, n_src, &ro, &lod, img, &seconds)))
         goto done;
     if (!r->quiet) {
         printf("wrote %s (%dx%d, %.2f s; %d objects out of core, %.1f MiB each):\n", r->output,
@@ -428,9 +423,8 @@ cli_render_out_of_core(cli_args *a, cli_render_args *r) {
     src.bricks = &bs;
     vv_lod lod;
     vv_lod_init(&lod);
-    int steps = 0;
     double seconds = 0;
-    if ((rc = draw_frames(r, ren, w, &src, 1, &ro, &lod, img, &steps, &seconds)))
+    if ((rc = draw_frames(r, ren, w, &src, 1, &ro, &lod, img, &seconds)))
         goto done;
     if (!r->quiet) {
         vv_bricked_stats st;

@@ -695,10 +695,14 @@ vv_measure_isosurface_boxes(vv_isosurface_measure *out, const vv_volume *hdr, vv
             s = mc_measure(v, isovalue, blo, bhi, 0, NULL, outer, &m);
             /* the voxels inside: the box's own (not the layer after it) */
             const size_t sy = (size_t)v->dims[0], sz = sy * (size_t)v->dims[1];
-            for (int k = 0; s == VV_OK && k <= hi[2] - glo[2]; k++)
-                for (int j = 0; j <= hi[1] - glo[1]; j++)
-                    out->voxels +=
-                        count_run(v, (size_t)k * sz + (size_t)j * sy, hi[0] - glo[0] + 1, isovalue);
+            const int nk = s == VV_OK ? hi[2] - glo[2] + 1 : 0, nj = hi[1] - glo[1] + 1,
+                      ni = hi[0] - glo[0] + 1;
+            uint64_t cnt = 0;
+#pragma omp parallel for num_threads(vv_threads_get()) reduction(+ : cnt)
+            for (int k = 0; k < nk; k++)
+                for (int j = 0; j < nj; j++)
+                    cnt += count_run(v, (size_t)k * sz + (size_t)j * sy, ni, isovalue);
+            out->voxels += cnt;
             vv_volume_free(v);
             if (s != VV_OK)
                 return vv_error_prefix(s, "measure");
