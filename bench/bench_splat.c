@@ -20,7 +20,9 @@
  * considered).
  *
  * usage: bench_splat [--size N] [--threads N] [--runs N] [--quality Q] [--outdir DIR]
- *                    [--only nut_bolt|neghip|ct_head] [--option KEY=VALUE]...
+ *                    [--only nut_bolt|neghip|ct_head] [--volume FILE] [--option KEY=VALUE]...
+ * --volume FILE measures that volume alone, in its default scene (shaded
+ * composite): a large volume at a small --size is a minified view.
  * Run from the repository root (reads ../shared/data and examples/).
  */
 #include <math.h>
@@ -35,6 +37,7 @@
 typedef struct cfg {
     int size, threads, runs, quality;
     const char *outdir, *only;
+    const char *volume; /* --volume: this file instead of the three datasets */
     const char *options[8];
     int n_options;
 } cfg;
@@ -154,10 +157,9 @@ bench_nut_bolt(const cfg *c) {
     vv_world_free(w);
 }
 
+/* The default scene of the volume file @p path turned 30 degrees and 20. */
 static vv_world *
-default_world(const char *rel) {
-    char path[512];
-    snprintf(path, sizeof path, "../shared/data/volumes/%s", rel);
+default_world_at(const char *path) {
     vv_volume *v = NULL;
     if (vv_volume_load(&v, path, NULL) != VV_OK)
         bench_die("bench_splat", path);
@@ -170,6 +172,13 @@ default_world(const char *rel) {
         bench_die("bench_splat", path);
     vv_volume_free(v);
     return w;
+}
+
+static vv_world *
+default_world(const char *rel) {
+    char path[512];
+    snprintf(path, sizeof path, "../shared/data/volumes/%s", rel);
+    return default_world_at(path);
 }
 
 static void
@@ -212,9 +221,20 @@ bench_ct_head(const cfg *c) {
     vv_world_free(w);
 }
 
+/* --volume PATH: any volume file, its default scene, shaded composite
+ * (for minified views: a large volume at a small image size). */
+static void
+bench_volume(const cfg *c) {
+    vv_world *w = default_world_at(c->volume);
+    shaded(w->objects[0]);
+    const char *name = strrchr(c->volume, '/');
+    run(name ? name + 1 : c->volume, w, c);
+    vv_world_free(w);
+}
+
 int
 main(int argc, char **argv) {
-    cfg c = {512, 2, 5, 2, NULL, NULL, {0}, 0};
+    cfg c = {512, 2, 5, 2, NULL, NULL, NULL, {0}, 0};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
         if (!val) {
@@ -233,11 +253,13 @@ main(int argc, char **argv) {
             c.outdir = val;
         else if (!strcmp(a, "--only"))
             c.only = val;
+        else if (!strcmp(a, "--volume"))
+            c.volume = val;
         else if (!strcmp(a, "--option") && c.n_options < 8)
             c.options[c.n_options++] = val;
         else {
             fprintf(stderr, "usage: bench_splat [--size N] [--threads N] [--runs N] [--quality Q] "
-                            "[--outdir DIR] [--only nut_bolt|neghip|ct_head] "
+                            "[--outdir DIR] [--only nut_bolt|neghip|ct_head] [--volume FILE] "
                             "[--option KEY=VALUE]...\n");
             return 2;
         }
@@ -250,6 +272,10 @@ main(int argc, char **argv) {
     vv_threads_set(c.threads);
     printf("# bench_splat: %d x %d, %d threads, quality %d (both renderers), median of %d runs\n",
            c.size, c.size, c.threads, c.quality, c.runs);
+    if (c.volume) {
+        bench_volume(&c);
+        return 0;
+    }
     if (!c.only || !strcmp(c.only, "nut_bolt"))
         bench_nut_bolt(&c);
     if (!c.only || !strcmp(c.only, "neghip"))
