@@ -28,15 +28,22 @@ def main():
     n = a.size
     ax = np.linspace(-1, 1, n, dtype=np.float32)
     y, x = ax[:, None], ax[None, :]
+    if n < 2 or not a.sigma > 0:
+        ap.error("--size must be at least 2 and --sigma above 0")
     tmp = a.out + ".part"
-    with open(tmp, "wb") as f:
-        f.write(("NRRD0004\ntype: ushort\ndimension: 3\nsizes: %d %d %d\n"
-                 "spacings: 1 1 1\nendian: little\nencoding: raw\n\n" % (n, n, n)).encode())
-        for z in ax:  # one slice at a time: bounded memory
-            blob = np.exp(-(x * x + y * y + z * z) / (2 * a.sigma ** 2))
-            tex = 0.6 + 0.4 * np.sin(18 * x) * np.sin(18 * y) * np.sin(18 * z)
-            f.write((blob * tex * 30000).astype("<u2").tobytes())
-    os.replace(tmp, a.out)
+    try:
+        with open(tmp, "wb") as f:
+            f.write(("NRRD0004\ntype: ushort\ndimension: 3\nsizes: %d %d %d\n"
+                     "spacings: 1 1 1\nendian: little\nencoding: raw\n\n" % (n, n, n)).encode())
+            for z in ax:  # one slice at a time: bounded memory
+                blob = np.exp(-(x * x + y * y + z * z) / (2 * a.sigma ** 2))
+                tex = 0.6 + 0.4 * np.sin(18 * x) * np.sin(18 * y) * np.sin(18 * z)
+                f.write((blob * tex * 30000).astype("<u2").tobytes())
+        os.replace(tmp, a.out)  # never a partial OUT
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
     print(a.out)
 
 
