@@ -153,6 +153,14 @@ vt_run_cli_v(const char *dir, const char *const *args) {
 }
 
 void
+vt_run_cli_expect(const char *dir, int status, const char *err_has, const char *const *args) {
+    vt_run_result r = vt_run_cli_v(dir, args);
+    if (r.status != status || (err_has && !strstr(r.err, err_has)))
+        fail_msg("volvis %s: exit %d (expected %d), stderr: %s", args[0], r.status, status, r.err);
+    vt_run_result_free(&r);
+}
+
+void
 vt_run_result_free(vt_run_result *r) {
     free(r->out);
     free(r->err);

@@ -97,6 +97,12 @@ typedef struct vt_run_result {
 vt_run_result vt_run_cli_v(const char *dir, const char *const *args);
 /** Frees the captured output. */
 void vt_run_result_free(vt_run_result *r);
+/**
+ * vt_run_cli_v, then asserts that it exited with @p status and, when
+ * @p err_has is not NULL, that its stderr contains @p err_has; frees the
+ * output (for runs whose output the test does not read further).
+ */
+void vt_run_cli_expect(const char *dir, int status, const char *err_has, const char *const *args);
 /** "@p dir/@p name" in one of 8 rotating buffers. */
 const char *vt_path(const char *dir, const char *name);
 

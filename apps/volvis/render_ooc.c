@@ -79,6 +79,22 @@ frame_setup(cli_args *a, cli_render_args *r, vv_volume *proxy, const vv_volume *
     return frame_tools(a, r, *w, ren, img, ro);
 }
 
+/* --lod, --level or --progressive: draw from a multiresolution file's
+ * levels (a .vvb with levels is otherwise read by bricks). */
+static int
+wants_levels(const cli_render_args *r) {
+    return r->has_lod || r->progressive > 0 || r->has_level;
+}
+
+/* The level of detail of --lod and --level (vv_renderer_render_multires;
+ * a brick source ignores it). */
+static void
+frame_lod(const cli_render_args *r, vv_lod *lod) {
+    vv_lod_init(lod);
+    lod->level = r->has_level ? r->level : -1;
+    lod->voxel_pixels = r->lod;
+}
+
 /* The frame of @p w's objects from @p src (vv_renderer_render_sources) into
  * @p img, timed in *@p seconds; with --progressive its steps too, each
  * written as OUT_pNNNN.png. 0 or an exit code (the
@@ -147,9 +163,7 @@ render_pyramid(cli_args *a, cli_render_args *r) {
     if ((rc = frame_setup(a, r, proxy, vv_pyramid_level(p, frame), &w, &ren, &img, &ro)))
         goto done;
     vv_lod lod;
-    vv_lod_init(&lod);
-    lod.level = r->has_level ? r->level : -1;
-    lod.voxel_pixels = r->lod;
+    frame_lod(r, &lod);
     vv_multires_source ms;
     vv_pyramid_source(p, &ms);
     vv_object_source src;
@@ -278,7 +292,7 @@ render_scene(cli_args *a, cli_render_args *r) {
     ooc_scene sc;
     memset(&sc, 0, sizeof sc);
     sc.r = r;
-    sc.multires = r->has_lod || r->progressive > 0 || r->has_level;
+    sc.multires = wants_levels(r);
     const int nf = vv_scene_loader_files(r->input);
     const uint64_t limit = r->memory_limit ? r->memory_limit : (uint64_t)1 << 30;
     sc.limit = limit / (uint64_t)(nf > 1 ? nf : 1);
@@ -329,9 +343,7 @@ render_scene(cli_args *a, cli_render_args *r) {
     if ((rc = frame_tools(a, r, w, &ren, &img, &ro)))
         goto done;
     vv_lod lod;
-    vv_lod_init(&lod);
-    lod.level = r->has_level ? r->level : -1;
-    lod.voxel_pixels = r->lod;
+    frame_lod(r, &lod);
     double seconds = 0;
     if ((rc = draw_frames(r, ren, w, src, n_src, &ro, &lod, img, &seconds)))
         goto done;
@@ -389,7 +401,7 @@ cli_render_out_of_core(cli_args *a, cli_render_args *r) {
     if (!r->has_raw && cli_is_scene_file(r->input))
         return render_scene(a, r);
     /* a .vvb with pyramid levels reads by bricks unless asked for its levels */
-    const int multires = r->has_lod || r->progressive > 0 || r->has_level;
+    const int multires = wants_levels(r);
     if (!r->has_raw && vv_pyramid_probe(r->input) && (multires || !cli_ends_with(r->input, ".vvb")))
         return render_pyramid(a, r);
     if (multires && (r->has_lod || r->progressive > 0 || r->level > 0)) {
@@ -422,7 +434,7 @@ cli_render_out_of_core(cli_args *a, cli_render_args *r) {
     vv_object_source_init(&src, 0);
     src.bricks = &bs;
     vv_lod lod;
-    vv_lod_init(&lod);
+    frame_lod(r, &lod);
     double seconds = 0;
     if ((rc = draw_frames(r, ren, w, &src, 1, &ro, &lod, img, &seconds)))
         goto done;

@@ -569,9 +569,18 @@ world_for_scene(const cli_render_args *r, vv_scene_volume_loader loader, void *u
     }
     return 0;
 }
-/* The overrides of every World: step, labels. */
-static void
-world_overrides(const cli_render_args *r, vv_world *w) {
+
+/* The end of every World's set-up: on failure (@p rc) *@p out freed and
+ * NULL; else the overrides of the command line (step, labels). Returns
+ * @p rc. */
+static int
+world_done(const cli_render_args *r, int rc, vv_world **out) {
+    if (rc) {
+        vv_world_free(*out);
+        *out = NULL;
+        return rc;
+    }
+    vv_world *w = *out;
     if (r->has_step)
         for (int i = 0; i < w->n_objects; i++)
             if (w->objects[i])
@@ -580,20 +589,14 @@ world_overrides(const cli_render_args *r, vv_world *w) {
         for (int i = 0; i < w->n_objects; i++)
             if (w->objects[i] && w->objects[i]->type == VV_OBJECT_VOLUME)
                 w->objects[i]->segmentation = VV_SEG_LABELS;
+    return 0;
 }
 
 int
 cli_render_scene_world(const cli_render_args *r, vv_scene_volume_loader loader, void *user,
                        vv_world **out) {
     *out = NULL;
-    int rc = world_for_scene(r, loader, user, out);
-    if (rc) {
-        vv_world_free(*out);
-        *out = NULL;
-        return rc;
-    }
-    world_overrides(r, *out);
-    return 0;
+    return world_done(r, world_for_scene(r, loader, user, out), out);
 }
 
 int
@@ -613,13 +616,7 @@ cli_render_world(const cli_render_args *r, vv_world **out) {
     rc = scene  ? world_for_scene(r, NULL, NULL, out)
          : grid ? world_for_grid(r, out)
                 : world_for_volume(r, out);
-    if (rc) {
-        vv_world_free(*out);
-        *out = NULL;
-        return rc;
-    }
-    world_overrides(r, *out);
-    return 0;
+    return world_done(r, rc, out);
 }
 
 void

@@ -240,14 +240,18 @@ class Pyramid:
         proxy = self.proxy()
         w = World.for_volume(proxy, mode=mode, tf_range=tf_range, isovalue=isovalue, size=size,
                              azimuth=azimuth, elevation=elevation, zoom=zoom)
+        for i in range(w._c.n_objects):
+            self._level0_opacity_unit(w._c.objects[i].tf)
+        return w
+
+    def _level0_opacity_unit(self, tf):
+        """A default transfer function made from the proxy (its opacity per
+        the proxy's smallest voxel spacing) made per level 0's instead."""
         f = lib.vv_pyramid_level(self._c, 0)
         ph = min(f.spacing[a] for a in range(3))
-        pp = min(proxy.spacing)
-        for i in range(w._c.n_objects):
-            tf = w._c.objects[i].tf
-            if abs(tf.opacity_unit_distance - pp) <= 1e-12 * pp:
-                tf.opacity_unit_distance = ph
-        return w
+        pp = min(self.proxy().spacing)
+        if abs(tf.opacity_unit_distance - pp) <= 1e-12 * pp:
+            tf.opacity_unit_distance = ph
 
     def object(self, name=None, **properties):
         """A :class:`VolumeObject` of the :meth:`proxy` for a World of
@@ -255,13 +259,8 @@ class Pyramid:
         pyramid: its default transfer function's opacity per level 0's
         smallest voxel spacing (as :meth:`world`), then ``properties`` as
         VolumeObject takes them (position, mode, tf, ...)."""
-        proxy = self.proxy()
-        obj = VolumeObject(proxy, name)
-        f = lib.vv_pyramid_level(self._c, 0)
-        ph = min(f.spacing[a] for a in range(3))
-        pp = min(proxy.spacing)
-        if abs(obj._c.tf.opacity_unit_distance - pp) <= 1e-12 * pp:
-            obj._c.tf.opacity_unit_distance = ph
+        obj = VolumeObject(self.proxy(), name)
+        self._level0_opacity_unit(obj._c.tf)
         for k, v in properties.items():
             if not hasattr(VolumeObject, k) or k.startswith("_"):
                 raise InvalidError("Pyramid.object: unknown property %r" % (k,))

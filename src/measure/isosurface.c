@@ -628,6 +628,61 @@ masked_copy(const vv_volume *v, double isovalue, const region_box *rbp, const ui
 #define IB_Y 128
 #define IB_Z 64
 
+/* vv_measure_isosurface_boxes by Marching Cubes, one box: @p v holds
+ * voxels glo .. ghi of a volume of @p d voxels (its own hi, and a layer
+ * beyond each upper inner face). Its cells' surface is closed by caps on
+ * its faces, which cancel between neighbours, so that the volumes add up;
+ * the caps on the volume's own faces are its cut. Adds to @p out the area,
+ * volume, cut and triangles, and the inside voxels of the box's own. */
+static vv_status
+box_mc(const vv_volume *v, double iso, const int glo[3], const int hi[3], const int ghi[3],
+       const int d[3], vv_isosurface_measure *out) {
+    unsigned outer = 0;
+    for (int a = 0; a < 3; a++)
+        outer |= (glo[a] == 0 ? 1u : 0u) << (2 * a) | (ghi[a] == d[a] - 1 ? 1u : 0u) << (2 * a + 1);
+    const int blo[3] = {0, 0, 0}, bhi[3] = {v->dims[0] - 1, v->dims[1] - 1, v->dims[2] - 1};
+    vv_isosurface_measure m;
+    memset(&m, 0, sizeof m);
+    vv_status s = mc_measure(v, iso, blo, bhi, 0, NULL, outer, &m);
+    if (s != VV_OK)
+        return s;
+    out->area += m.area;
+    out->volume += m.volume;
+    out->cut_area += m.cut_area;
+    out->n_triangles += m.n_triangles;
+    /* the voxels inside: the box's own (not the layer after it) */
+    const size_t sy = (size_t)v->dims[0], sz = sy * (size_t)v->dims[1];
+    const int nk = hi[2] - glo[2] + 1, nj = hi[1] - glo[1] + 1, ni = hi[0] - glo[0] + 1;
+    uint64_t cnt = 0;
+#pragma omp parallel for num_threads(vv_threads_get()) reduction(+ : cnt)
+    for (int k = 0; k < nk; k++)
+        for (int j = 0; j < nj; j++)
+            cnt += count_run(v, (size_t)k * sz + (size_t)j * sy, ni, iso);
+    out->voxels += cnt;
+    return VV_OK;
+}
+
+/* vv_measure_isosurface_boxes by voxel counting, one box: @p v holds
+ * voxels glo .. of a volume of @p d voxels, its own lo .. hi and a ghost
+ * layer beyond each inner face; adds its own voxels' counts and faces
+ * to @p out. */
+static vv_status
+box_voxels(const vv_volume *v, double iso, const int lo[3], const int hi[3], const int glo[3],
+           const int d[3], vv_isosurface_measure *out) {
+    /* the box's own voxels, and the volume's extent, in the box's indices */
+    region_box rb;
+    memset(&rb, 0, sizeof rb);
+    int olo[3], ohi[3];
+    for (int a = 0; a < 3; a++) {
+        rb.lo[a] = lo[a] - glo[a];
+        rb.hi[a] = hi[a] - glo[a];
+        olo[a] = -glo[a];
+        ohi[a] = d[a] - 1 - glo[a];
+    }
+    voxel_measure(v, iso, &rb, olo, ohi, NULL, out);
+    return VV_OK;
+}
+
 vv_status
 vv_measure_isosurface_boxes(vv_isosurface_measure *out, const vv_volume *hdr, vv_box_reader read,
                             void *ctx, double isovalue, vv_measure_method method,
@@ -681,51 +736,11 @@ vv_measure_isosurface_boxes(vv_isosurface_measure *out, const vv_volume *hdr, vv
         }
         memcpy(v->spacing, hdr->spacing, sizeof v->spacing);
         memcpy(v->direction, hdr->direction, sizeof v->direction);
-        if (mc) {
-            /* its cells' surface, closed by caps on its faces (which cancel
-             * between neighbours: the volumes add up); the caps on the
-             * volume's own faces are its cut */
-            unsigned outer = 0;
-            for (int a = 0; a < 3; a++)
-                outer |= (glo[a] == 0 ? 1u : 0u) << (2 * a) | (ghi[a] == d[a] - 1 ? 1u : 0u)
-                                                                  << (2 * a + 1);
-            const int blo[3] = {0, 0, 0}, bhi[3] = {v->dims[0] - 1, v->dims[1] - 1, v->dims[2] - 1};
-            vv_isosurface_measure m;
-            memset(&m, 0, sizeof m);
-            s = mc_measure(v, isovalue, blo, bhi, 0, NULL, outer, &m);
-            /* the voxels inside: the box's own (not the layer after it) */
-            const size_t sy = (size_t)v->dims[0], sz = sy * (size_t)v->dims[1];
-            const int nk = s == VV_OK ? hi[2] - glo[2] + 1 : 0, nj = hi[1] - glo[1] + 1,
-                      ni = hi[0] - glo[0] + 1;
-            uint64_t cnt = 0;
-#pragma omp parallel for num_threads(vv_threads_get()) reduction(+ : cnt)
-            for (int k = 0; k < nk; k++)
-                for (int j = 0; j < nj; j++)
-                    cnt += count_run(v, (size_t)k * sz + (size_t)j * sy, ni, isovalue);
-            out->voxels += cnt;
-            vv_volume_free(v);
-            if (s != VV_OK)
-                return vv_error_prefix(s, "measure");
-            out->area += m.area;
-            out->volume += m.volume;
-            out->cut_area += m.cut_area;
-            out->n_triangles += m.n_triangles;
-            if (progress && vv_progress_report(progress, (double)(b + 1) / n))
-                return vv_error_set(VV_ERR_CANCELLED, "measure: cancelled");
-            continue;
-        }
-        /* the box's own voxels, and the volume's extent, in the box's indices */
-        region_box rb;
-        memset(&rb, 0, sizeof rb);
-        int olo[3], ohi[3];
-        for (int a = 0; a < 3; a++) {
-            rb.lo[a] = lo[a] - glo[a];
-            rb.hi[a] = hi[a] - glo[a];
-            olo[a] = -glo[a];
-            ohi[a] = d[a] - 1 - glo[a];
-        }
-        voxel_measure(v, isovalue, &rb, olo, ohi, NULL, out);
+        s = mc ? box_mc(v, isovalue, glo, hi, ghi, d, out)
+               : box_voxels(v, isovalue, lo, hi, glo, d, out);
         vv_volume_free(v);
+        if (s != VV_OK)
+            return vv_error_prefix(s, "measure");
         if (progress && vv_progress_report(progress, (double)(b + 1) / n))
             return vv_error_set(VV_ERR_CANCELLED, "measure: cancelled");
     }

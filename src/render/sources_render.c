@@ -161,9 +161,7 @@ render_layer(vv_renderer *r, const vv_world *w, src_layer *L, const vv_view *vie
     lw.background = (vv_vec3){0, 0, 0};
     vv_status s;
     if (L->multires) {
-        vv_lod one = *lod;
-        memset(one.nodes, 0, sizeof one.nodes);
-        one.skipped = one.pending = one.requested = one.stalled = 0;
+        vv_lod one = *lod; /* the inputs; the frame sets the counts */
         s = vv_renderer_render_multires(r, &lw, L->object, L->multires, view, opt, &one, L->img);
         lod_add(sum, &one);
     } else {
@@ -326,20 +324,7 @@ vv_renderer_render_sources(vv_renderer *r, const vv_world *w, const vv_object_so
     sum = *lod;
     memset(sum.nodes, 0, sizeof sum.nodes);
     sum.skipped = sum.pending = sum.requested = sum.stalled = 0;
-    if (n == 0) {
-        /* nothing visible: the background */
-        for (size_t i = 0; i < (size_t)out->width * (size_t)out->height; i++) {
-            float *o = out->rgba + 4 * i;
-            o[0] = (float)w->background.x;
-            o[1] = (float)w->background.y;
-            o[2] = (float)w->background.z;
-            o[3] = 0;
-            out->depth[i] = INFINITY;
-        }
-        *lod = sum;
-        return VV_OK;
-    }
-    vv_status s = VV_OK;
+    vv_status s = VV_OK; /* (no layer: combine_layers gives the background) */
     for (int k = 0; k < n && s == VV_OK; k++) {
         s = vv_image_new(&L[k].img, view->width, view->height);
         if (s == VV_OK)

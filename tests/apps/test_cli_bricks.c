@@ -27,6 +27,13 @@
 
 #define outdir() vt_outdir("cli_bricks")
 #define run_cli(...) vt_run_cli_v(outdir(), (const char *const[]){__VA_ARGS__, NULL})
+/* a run that must exit with @p status (and, with @p msg, say it on
+ * stderr); cli_ok: exit 0, cli_fails: exit 1 saying @p msg
+ * (vt_run_cli_expect) */
+#define cli_expect(status, msg, ...)                                                               \
+    vt_run_cli_expect(outdir(), status, msg, (const char *const[]){__VA_ARGS__, NULL})
+#define cli_ok(...) cli_expect(0, NULL, __VA_ARGS__)
+#define cli_fails(msg, ...) cli_expect(1, msg, __VA_ARGS__)
 
 static void
 test_convert_render(void **state) {
@@ -71,20 +78,14 @@ test_convert_render(void **state) {
     vt_ok(vv_volume_load(&v, nut, NULL));
     vt_ok(vv_nrrd_write(v, nrrd, 0));
     vv_volume_free(v);
-    r = run_cli("convert", nrrd, vvb2);
-    assert_int_equal(r.status, 0);
-    vt_run_result_free(&r);
-    r = run_cli("render", nut, "--tf", "40:200", "--size", "96x80", "--mode", "mip", "-o", mem);
-    assert_int_equal(r.status, 0);
-    vt_run_result_free(&r);
+    cli_ok("convert", nrrd, vvb2);
+    cli_ok("render", nut, "--tf", "40:200", "--size", "96x80", "--mode", "mip", "-o", mem);
     r = run_cli("render", vvb, "--tf", "40:200", "--size", "96x80", "--mode", "mip", "-o", ooc);
     assert_int_equal(r.status, 0);
     assert_non_null(strstr(r.out, "out of core: "));
     vt_run_result_free(&r);
-    r = run_cli("render", nrrd, "--memory-limit", "8M", "--tf", "40:200", "--size", "96x80",
-                "--mode", "mip", "-o", ooc2);
-    assert_int_equal(r.status, 0);
-    vt_run_result_free(&r);
+    cli_ok("render", nrrd, "--memory-limit", "8M", "--tf", "40:200", "--size", "96x80", "--mode",
+           "mip", "-o", ooc2);
     /* MIP out of core is the in-memory image, bit for bit */
     size_t n1, n2, n3;
     unsigned char *a = vt_read_file(mem, &n1), *b = vt_read_file(ooc, &n2),
@@ -135,12 +136,8 @@ test_renderers(void **state) {
     char nvvb[1200], hvvb[1200];
     snprintf(nvvb, sizeof nvvb, "%s/nut_r.vvb", outdir());
     snprintf(hvvb, sizeof hvvb, "%s/head_r.vvb", outdir());
-    vt_run_result r = run_cli("convert", "-q", nut, nvvb);
-    assert_int_equal(r.status, 0);
-    vt_run_result_free(&r);
-    r = run_cli("convert", "-q", head, hvvb);
-    assert_int_equal(r.status, 0);
-    vt_run_result_free(&r);
+    cli_ok("convert", "-q", nut, nvvb);
+    cli_ok("convert", "-q", head, hvvb);
     /* the nut (68 x 41 x 59) is its own proxy: shadows exact */
     assert_true(isinf(mem_vs_ooc(nut, nvvb, "raytrace", "mip", "shadows=1", "40:200")));
     assert_true(mem_vs_ooc(nut, nvvb, "raytrace", "composite", "shadows=1", "40:200") >= 50);
@@ -180,12 +177,8 @@ test_levels(void **state) {
     assert_int_equal(r.status, 0);
     assert_non_null(strstr(r.out, ", zstd, 3 pyramid levels"));
     vt_run_result_free(&r);
-    r = run_cli("convert", "-q", head, zarr);
-    assert_int_equal(r.status, 0);
-    vt_run_result_free(&r);
-    r = run_cli("convert", "-q", zarr, back);
-    assert_int_equal(r.status, 0);
-    vt_run_result_free(&r);
+    cli_ok("convert", "-q", head, zarr);
+    cli_ok("convert", "-q", zarr, back);
     size_t n1, n2;
     unsigned char *x = vt_read_file(vvb, &n1), *y = vt_read_file(back, &n2);
     assert_int_equal(n1, n2);
@@ -199,10 +192,8 @@ test_levels(void **state) {
         assert_int_equal(r.status, 0);
         assert_non_null(strstr(r.out, "out of core from 3 levels"));
         vt_run_result_free(&r);
-        r = run_cli("render", zarr, "--level", ls, "--memory-limit", "64M", "--mode", "mip",
-                    "--size", "96x80", "-q", "-o", b);
-        assert_int_equal(r.status, 0);
-        vt_run_result_free(&r);
+        cli_ok("render", zarr, "--level", ls, "--memory-limit", "64M", "--mode", "mip", "--size",
+               "96x80", "-q", "-o", b);
         assert_true(isinf(vt_png_psnr(a, b)));
     }
     r = run_cli("render", vvb, "--lod", "1", "--size", "96x80", "-o", a);
@@ -213,14 +204,9 @@ test_levels(void **state) {
     assert_int_equal(r.status, 0);
     assert_null(strstr(r.out, "pyramid levels"));
     vt_run_result_free(&r);
-    r = run_cli("render", flat, "--lod", "1", "-o", a);
-    assert_int_equal(r.status, 2);
-    assert_non_null(strstr(r.err, "a .vvb with pyramid levels"));
-    vt_run_result_free(&r);
+    cli_expect(2, "a .vvb with pyramid levels", "render", flat, "--lod", "1", "-o", a);
     /* a .vvb read brick by brick into another: levels added back, the same bytes */
-    r = run_cli("convert", "-q", flat, back);
-    assert_int_equal(r.status, 0);
-    vt_run_result_free(&r);
+    cli_ok("convert", "-q", flat, back);
     x = vt_read_file(vvb, &n1);
     y = vt_read_file(back, &n2);
     assert_int_equal(n1, n2);
@@ -252,9 +238,7 @@ test_scene(void **state) {
     snprintf(bad, sizeof bad, "%s/bad.json", outdir());
     snprintf(a, sizeof a, "%s/scene_ooc.png", outdir());
     snprintf(b, sizeof b, "%s/scene_mem.png", outdir());
-    vt_run_result r = run_cli("convert", "-q", head, vvb);
-    assert_int_equal(r.status, 0);
-    vt_run_result_free(&r);
+    cli_ok("convert", "-q", head, vvb);
     const char *tf = "\"transfer_function\": {\"opacity\": [[100, 0], [1500, 0.8]]}";
     snprintf(c, sizeof c,
              "{\"view\": {\"width\": 240, \"height\": 100, \"eye\": [392, -1300, 400],\n"
@@ -266,7 +250,7 @@ test_scene(void **state) {
              "\"position\": [540, 0, 0], %s}]}\n",
              vvb, tf, head, tf, vvb, tf);
     write_text(scene, c);
-    r = run_cli("render", scene, "--memory-limit", "16M", "-o", a);
+    vt_run_result r = run_cli("render", scene, "--memory-limit", "16M", "-o", a);
     assert_int_equal(r.status, 0);
     printf("%s", r.out);
     assert_non_null(strstr(r.out, "2 objects out of core"));
@@ -274,9 +258,7 @@ test_scene(void **state) {
     assert_non_null(strstr(r.out, "middle: in memory"));
     assert_non_null(strstr(r.out, "right: 32 of 32 bricks read"));
     vt_run_result_free(&r);
-    r = run_cli("render", scene, "-q", "-o", b);
-    assert_int_equal(r.status, 0);
-    vt_run_result_free(&r);
+    cli_ok("render", scene, "-q", "-o", b);
     const double db = vt_png_psnr(a, b);
     printf("three heads out of core against in memory: %.1f dB\n", db);
     assert_true(db >= 50);
@@ -298,25 +280,18 @@ test_scene(void **state) {
              "  {\"name\": \"two\", \"file\": \"%s\", \"position\": [100, 0, 0]}]}\n",
              vvb, vvb);
     write_text(bad, c);
-    r = run_cli("render", bad, "--memory-limit", "16M", "-o", a);
-    assert_int_equal(r.status, 1);
-    assert_non_null(strstr(r.err, "objects 'one' and 'two' overlap"));
-    vt_run_result_free(&r);
+    cli_fails("objects 'one' and 'two' overlap", "render", bad, "--memory-limit", "16M", "-o", a);
     /* several objects by the ray tracer */
-    r = run_cli("render", scene, "--memory-limit", "16M", "--renderer", "raytrace", "-o", a);
-    assert_int_equal(r.status, 1);
-    assert_non_null(strstr(r.err, "raytrace draws light between objects"));
-    vt_run_result_free(&r);
+    cli_fails("raytrace draws light between objects", "render", scene, "--memory-limit", "16M",
+              "--renderer", "raytrace", "-o", a);
     /* a file read out of core keeps its own origin */
     snprintf(c, sizeof c,
              "{\"objects\": [{\"name\": \"moved\", \"file\": \"%s\", "
              "\"origin\": [5, 0, 0]}]}\n",
              vvb);
     write_text(bad, c);
-    r = run_cli("render", bad, "--memory-limit", "16M", "-o", a);
-    assert_int_equal(r.status, 1);
-    assert_non_null(strstr(r.err, "object 'moved': out of core its file's own origin"));
-    vt_run_result_free(&r);
+    cli_fails("object 'moved': out of core its file's own origin", "render", bad, "--memory-limit",
+              "16M", "-o", a);
     assert_int_not_equal(stat(a, &st), 0);
 }
 
@@ -349,12 +324,8 @@ test_measure(void **state) {
     char vvb[1200], nrrd[1200];
     snprintf(vvb, sizeof vvb, "%s/head_m.vvb", outdir());
     snprintf(nrrd, sizeof nrrd, "%s/head_m.nrrd", outdir());
-    vt_run_result r = run_cli("convert", "-q", head, vvb);
-    assert_int_equal(r.status, 0);
-    vt_run_result_free(&r);
-    r = run_cli("convert", "-q", "--no-compress", head, nrrd);
-    assert_int_equal(r.status, 0);
-    vt_run_result_free(&r);
+    cli_ok("convert", "-q", head, vvb);
+    cli_ok("convert", "-q", "--no-compress", head, nrrd);
     const char *methods[2] = {"voxel", "mc"};
     for (int m = 0; m < 2; m++) {
         vt_run_result mem = run_cli("measure", head, "--iso", "300", "--method", methods[m],
@@ -362,7 +333,8 @@ test_measure(void **state) {
         assert_int_equal(mem.status, 0);
         const char *files[2] = {vvb, nrrd};
         for (int f = 0; f < 2; f++) {
-            r = run_cli("measure", files[f], "--iso", "300", "--method", methods[m], "--histogram",
+            vt_run_result r =
+                run_cli("measure", files[f], "--iso", "300", "--method", methods[m], "--histogram",
                         "--bins", "16", "--memory-limit", "16M", "--json");
             printf("%s", r.out);
             assert_int_equal(r.status, 0);
@@ -386,23 +358,15 @@ test_measure(void **state) {
         }
         vt_run_result_free(&mem);
     }
-    r = run_cli("measure", vvb, "--iso", "300", "--memory-limit", "16M");
+    vt_run_result r = run_cli("measure", vvb, "--iso", "300", "--memory-limit", "16M");
     assert_int_equal(r.status, 0);
     assert_non_null(strstr(r.out, "out of core, box by box"));
     vt_run_result_free(&r);
-    r = run_cli("measure", vvb, "--iso", "300", "--seed", "voxel:128,128,50", "--memory-limit",
-                "16M");
-    assert_int_equal(r.status, 2);
-    assert_non_null(strstr(r.err, "not with --seed"));
-    vt_run_result_free(&r);
-    r = run_cli("measure", vvb, "--iso", "300", "--memory-limit", "lots");
-    assert_int_equal(r.status, 2);
-    vt_run_result_free(&r);
+    cli_expect(2, "not with --seed", "measure", vvb, "--iso", "300", "--seed", "voxel:128,128,50",
+               "--memory-limit", "16M");
+    cli_expect(2, NULL, "measure", vvb, "--iso", "300", "--memory-limit", "lots");
     /* a gzip NRRD cannot be read by bricks */
-    r = run_cli("measure", head, "--iso", "300", "--memory-limit", "16M");
-    assert_int_equal(r.status, 1);
-    assert_non_null(strstr(r.err, "convert it to .vvb first"));
-    vt_run_result_free(&r);
+    cli_fails("convert it to .vvb first", "measure", head, "--iso", "300", "--memory-limit", "16M");
 }
 
 static void
@@ -415,28 +379,15 @@ test_errors(void **state) {
     char vvb[1200], png[1200];
     snprintf(vvb, sizeof vvb, "%s/nut_e.vvb", outdir());
     snprintf(png, sizeof png, "%s/never.png", outdir());
-    vt_run_result r = run_cli("convert", "-q", nut, vvb);
-    assert_int_equal(r.status, 0);
-    vt_run_result_free(&r);
+    cli_ok("convert", "-q", nut, vvb);
     remove(png);
-    r = run_cli("render", vvb, "--memory-limit", "64K", "-o", png);
-    assert_int_equal(r.status, 1);
-    assert_non_null(strstr(r.err, "smaller than one brick"));
-    vt_run_result_free(&r);
-    r = run_cli("render", vvb, "--memory-limit", "lots", "-o", png);
-    assert_int_equal(r.status, 2);
-    assert_non_null(strstr(r.err, "--memory-limit"));
-    vt_run_result_free(&r);
+    cli_fails("smaller than one brick", "render", vvb, "--memory-limit", "64K", "-o", png);
+    cli_expect(2, "--memory-limit", "render", vvb, "--memory-limit", "lots", "-o", png);
     /* a gzip NRRD cannot be read by bricks */
-    r = run_cli("render", vt_data("volumes/ct_head.nrrd"), "--memory-limit", "8M", "-o", png);
-    assert_int_equal(r.status, 1);
-    assert_non_null(strstr(r.err, "convert it to .vvb first"));
-    vt_run_result_free(&r);
+    cli_fails("convert it to .vvb first", "render", vt_data("volumes/ct_head.nrrd"),
+              "--memory-limit", "8M", "-o", png);
     /* a renderer without the region contract */
-    r = run_cli("render", vvb, "--renderer", "splat", "-o", png);
-    assert_int_equal(r.status, 1);
-    assert_non_null(strstr(r.err, "splat renders no regions"));
-    vt_run_result_free(&r);
+    cli_fails("splat renders no regions", "render", vvb, "--renderer", "splat", "-o", png);
     assert_int_not_equal(stat(png, &st), 0);
 }
 

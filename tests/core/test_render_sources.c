@@ -221,6 +221,15 @@ test_two_heads(void **state) {
         int same = 0;
         vt_image_psnr(one, img, &same);
         assert_true(same);
+        /* nothing visible: the background, transparent, at no depth */
+        w->objects[0]->visible = 0;
+        vt_ok(vv_renderer_render_sources(r, w, src, 1, &w->view, &ro, NULL, one));
+        for (size_t i = 0; i < (size_t)one->width * (size_t)one->height; i++) {
+            assert_float_equal(one->rgba[4 * i + 2], 0.3f, 1e-7);
+            assert_float_equal(one->rgba[4 * i + 3], 0.0f, 0);
+            assert_true(isinf(one->depth[i]));
+        }
+        w->objects[0]->visible = 1;
         /* refusals: the ray tracer with two objects; an object named twice */
         w->objects[1]->visible = 1;
         vv_renderer *rt = NULL;
