@@ -8,8 +8,8 @@
 
 #include <volvis/volvis.h>
 
-#include "vv-application.h"
-#include "vv-scene-view.h"
+#include "vvg-application.h"
+#include "vvg-scene-view.h"
 
 static void
 usage(FILE *out) {

@@ -26,7 +26,7 @@ from atspi import Failure, Session, ae, check, psnr, run  # noqa: E402
 
 GUI, CLI, OUT = sys.argv[1:4]
 os.makedirs(OUT, exist_ok=True)
-LANE = (115, 191, 115)  # sequences on the timeline (vv-animator-page.c)
+LANE = (115, 191, 115)  # sequences on the timeline (vvg-animator-page.c)
 
 
 def find_timeline(s, timeout=60):

@@ -3,7 +3,7 @@
  * kept aside; an edit keeps the World shown; undo restores first; saving
  * writes the kept World. Autosave and restore. */
 #include "testutil.h"
-#include "vv-document.h"
+#include "vvg-document.h"
 
 #include <sys/stat.h>
 #include <unistd.h>

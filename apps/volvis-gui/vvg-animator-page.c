@@ -1,0 +1,1288 @@
+/* VvAnimatorPage: the Animator page (vvg-animator-page.h). */
+#include "vvg-animator-page.h"
+#include "vvg-widgets.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Play and flight recording both run at 30 frames a second. */
+#define TICK_MS 33
+/* Play asks for a frame at the display's rate; the scene view shows as many
+ * as its previews can draw (at least 30 a second), each at its own time */
+#define PLAY_TICK_MS 16
+
+/* The timeline's background: also what tests/gui/animator_session.sh looks
+ * for in a screenshot to find the page's controls. */
+#define TIMELINE_R 31
+#define TIMELINE_G 42
+#define TIMELINE_B 51
+
+/* A final render on the worker thread; the UI reads the atomics on a timer. */
+typedef struct render_job {
+    VvAnimatorPage *page; /* not a reference: the page joins the thread before it goes */
+    vv_animation *anim;   /* owned snapshots */
+    vv_world *world;
+    GHashTable *series; /* the time steps of objects[i].time tracks (vv_world_apply_time) */
+    char *output;
+    int resume;
+    int frames;
+    GThread *thread;
+    int cancel;      /* atomic */
+    double fraction; /* atomic: overall fraction done */
+    int frames_done; /* atomic */
+    gint64 start_us;
+    vv_status status;
+    vv_anim_render_stats stats;
+    char error[1024];
+} render_job;
+
+struct _VvAnimatorPage {
+    GtkBox parent;
+    VvDocument *doc;
+    gulong changed_id;
+    vv_animation *anim; /* the current animation, owned */
+    gboolean updating;  /* set while widgets are filled from the animation */
+    gboolean disposed;
+
+    GtkWidget *timeline, *play, *stop, *record, *loop, *time_label;
+    GtkWidget *fps, *frames;
+    GtkWidget *output, *resume, *render_info, *render, *cancel, *progress, *render_status;
+    GtkWidget *list, *anim_status;
+    GtkWidget *seq_type, *seq_stack;
+    GtkWidget *orbit_degrees, *orbit_elevation, *rot_axis, *rot_degrees, *fly[3], *sweep_axis;
+    GtkWidget *key_time;
+
+    /* Play */
+    guint play_source;
+    vv_animation *playing; /* the copy being played */
+    vv_world *base;        /* the World at Play: every frame is evaluated from it */
+    GHashTable *series;    /* time series of objects[i].time tracks, kept a session */
+    gint64 play_start_us;
+    double play_time;
+
+    /* flight recording */
+    vv_flight_recorder *recorder;
+    guint record_source;
+    gint64 record_start_us;
+
+    /* final render */
+    render_job *job;
+    guint render_timer;
+};
+
+G_DEFINE_TYPE(VvAnimatorPage, vv_animator_page, GTK_TYPE_BOX)
+
+/* ---- small helpers --------------------------------------------------------- */
+
+static double
+spin_value(GtkWidget *s) {
+    return gtk_spin_button_get_value(GTK_SPIN_BUTTON(s));
+}
+
+/* A row of buttons of equal width spanning the page (the GUI test clicks
+ * them at fractions of the timeline's width). */
+static GtkWidget *
+button_row(GtkWidget *box) {
+    GtkWidget *r = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 4);
+    gtk_box_set_homogeneous(GTK_BOX(r), TRUE);
+    gtk_box_append(GTK_BOX(box), r);
+    return r;
+}
+
+static GtkWidget *
+add_button(GtkWidget *row_box, GtkWidget *b, GCallback cb, gpointer user) {
+    g_signal_connect(b, GTK_IS_TOGGLE_BUTTON(b) ? "toggled" : "clicked", cb, user);
+    gtk_widget_set_hexpand(b, TRUE);
+    gtk_box_append(GTK_BOX(row_box), b);
+    return b;
+}
+
+/* A one-line label: the rows below it stay where they are. */
+static GtkWidget *
+line_label(void) {
+    GtkWidget *l = gtk_label_new("");
+    gtk_label_set_xalign(GTK_LABEL(l), 0);
+    gtk_label_set_ellipsize(GTK_LABEL(l), PANGO_ELLIPSIZE_END);
+    return l;
+}
+
+static GtkWindow *
+parent_window(VvAnimatorPage *self) {
+    GtkRoot *root = gtk_widget_get_root(GTK_WIDGET(self));
+    return root && GTK_IS_WINDOW(root) ? GTK_WINDOW(root) : NULL;
+}
+
+static void
+show_error(VvAnimatorPage *self, const char *what, const char *message) {
+    vvg_show_error(GTK_WIDGET(self), what, message);
+}
+
+/* A copy of the library's message before anything else can replace it. */
+static void
+show_library_error(VvAnimatorPage *self, const char *what) {
+    char m[1024];
+    g_strlcpy(m, vv_error_message(), sizeof m);
+    show_error(self, what, m);
+}
+
+static char *
+dup_malloc(const char *s) {
+    /* strings the library frees with free() */
+    size_t n = strlen(s) + 1;
+    char *d = malloc(n);
+    if (d)
+        memcpy(d, s, n);
+    return d;
+}
+
+/* A one-line label's text; the tooltip holds the whole text when the line is cut. */
+static void
+set_label_tip(GtkWidget *label, const char *text) {
+    gtk_label_set_text(GTK_LABEL(label), text);
+    gtk_widget_set_tooltip_text(label, text[0] ? text : NULL);
+}
+
+/* The page's status line: what was opened, saved or recorded. */
+static void
+set_status(VvAnimatorPage *self, const char *text) {
+    set_label_tip(self->anim_status, text);
+}
+
+/* ---- the animation and its summary ---------------------------------------------- */
+
+static char *
+track_text(const vv_anim_track *t) {
+    static const char *const interp[] = {"spline", "linear", "step"};
+    GString *s = g_string_new(NULL);
+    g_string_append_printf(s, "%s (%s%s): %d key%s at", t->property,
+                           t->interp >= 0 && t->interp <= 2 ? interp[t->interp] : "?",
+                           t->closed ? ", closed" : "", t->n_keys, t->n_keys == 1 ? "" : "s");
+    for (int k = 0; k < t->n_keys && k < 12; k++)
+        g_string_append_printf(s, "%s %.4g", k ? "," : "", t->keys[k].time);
+    if (t->n_keys > 12)
+        g_string_append(s, ", …");
+    g_string_append(s, " s");
+    return g_string_free(s, FALSE);
+}
+
+static char *
+sequence_text(const vv_anim_sequence *q) {
+    switch (q->type) {
+    case VV_SEQ_ORBIT:
+        return g_strdup_printf("orbit the camera by %g° (from azimuth %g°, elevation %g°, zoom %g)",
+                               q->degrees, q->azimuth, q->elevation, q->zoom);
+    case VV_SEQ_ROTATE_OBJECT:
+        return g_strdup_printf("rotate %s by %g° about (%g, %g, %g)", q->object, q->degrees,
+                               q->axis.x, q->axis.y, q->axis.z);
+    case VV_SEQ_FLY:
+        return g_strdup_printf("fly by (%g, %g, %g) world units", q->offset.x, q->offset.y,
+                               q->offset.z);
+    case VV_SEQ_SWEEP_CUT:
+        return g_strdup_printf("sweep a cut plane from (%g, %g, %g) along (%g, %g, %g) by %g "
+                               "world units",
+                               q->point.x, q->point.y, q->point.z, q->normal.x, q->normal.y,
+                               q->normal.z, q->distance);
+    }
+    return g_strdup("unknown sequence");
+}
+
+static void
+rebuild_list(VvAnimatorPage *self) {
+    GtkWidget *c;
+    while ((c = gtk_widget_get_first_child(self->list)))
+        gtk_list_box_remove(GTK_LIST_BOX(self->list), c);
+    const vv_animation *a = self->anim;
+    for (int i = 0; i < a->n_tracks + a->n_sequences; i++) {
+        char *text = i < a->n_tracks ? track_text(&a->tracks[i])
+                                     : sequence_text(&a->sequences[i - a->n_tracks]);
+        GtkWidget *l = gtk_label_new(text);
+        gtk_label_set_xalign(GTK_LABEL(l), 0);
+        gtk_label_set_wrap(GTK_LABEL(l), TRUE);
+        gtk_label_set_wrap_mode(GTK_LABEL(l), PANGO_WRAP_WORD_CHAR);
+        gtk_list_box_append(GTK_LIST_BOX(self->list), l);
+        g_free(text);
+    }
+    if (a->n_tracks + a->n_sequences == 0) {
+        GtkWidget *l = gtk_label_new("empty: add a sequence, camera keys or a flight");
+        gtk_list_box_append(GTK_LIST_BOX(self->list), l);
+        GtkListBoxRow *r = gtk_list_box_get_row_at_index(GTK_LIST_BOX(self->list), 0);
+        gtk_list_box_row_set_selectable(r, FALSE);
+        gtk_list_box_row_set_activatable(r, FALSE);
+    }
+}
+
+/* The time the timeline's head shows: Play's, else the key time. */
+static double
+head_time(VvAnimatorPage *self) {
+    return self->playing ? self->play_time : spin_value(self->key_time);
+}
+
+static void
+update_time_label(VvAnimatorPage *self) {
+    const vv_animation *a = self->playing ? self->playing : self->anim;
+    int n = vv_animation_frame_count(a);
+    double t = head_time(self);
+    double fd = floor(t * a->fps + 1e-9);
+    int f = fd < 0 ? 0 : fd >= n - 1 ? n - 1 : (int)fd;
+    char text[160];
+    snprintf(text, sizeof text, "%st = %.2f s of %.2f s, frame %d of %d",
+             self->playing ? "playing: " : "", t, a->duration, f, n);
+    gtk_label_set_text(GTK_LABEL(self->time_label), text);
+    gtk_widget_queue_draw(self->timeline);
+}
+
+static void
+fill_timing(VvAnimatorPage *self) {
+    self->updating = TRUE;
+    gtk_spin_button_set_value(GTK_SPIN_BUTTON(self->fps), self->anim->fps);
+    gtk_spin_button_set_value(GTK_SPIN_BUTTON(self->frames), vv_animation_frame_count(self->anim));
+    self->updating = FALSE;
+}
+
+static void
+refresh(VvAnimatorPage *self) {
+    fill_timing(self);
+    rebuild_list(self);
+    update_time_label(self);
+}
+
+/* Takes @p a as the current animation. */
+static void
+set_animation(VvAnimatorPage *self, vv_animation *a) {
+    vv_animation_free(self->anim);
+    self->anim = a;
+    refresh(self);
+}
+
+/* A copy of @p a without track @p skip_track and sequence @p skip_seq (-1:
+ * none), through the public API (the library owns the keys' memory). */
+static vv_status
+copy_without(const vv_animation *a, int skip_track, int skip_seq, vv_animation **out) {
+    *out = NULL;
+    vv_animation *c = NULL;
+    vv_status s = vv_animation_new(&c);
+    if (s != VV_OK)
+        return s;
+    c->fps = a->fps;
+    c->duration = a->duration;
+    if (a->scene && !(c->scene = dup_malloc(a->scene)))
+        s = VV_ERR_NOMEM;
+    for (int i = 0; s == VV_OK && i < a->n_tracks; i++) {
+        if (i == skip_track)
+            continue;
+        const vv_anim_track *t = &a->tracks[i];
+        int idx = -1;
+        s = vv_animation_add_track(c, t->property, &idx);
+        for (int k = 0; s == VV_OK && k < t->n_keys; k++)
+            s = vv_anim_track_add_key(&c->tracks[idx], &t->keys[k]);
+        if (s == VV_OK) {
+            c->tracks[idx].interp = t->interp;
+            c->tracks[idx].closed = t->closed;
+        }
+    }
+    for (int i = 0; s == VV_OK && i < a->n_sequences; i++)
+        if (i != skip_seq)
+            s = vv_animation_add_sequence(c, &a->sequences[i]);
+    if (s != VV_OK) {
+        vv_animation_free(c);
+        return s;
+    }
+    *out = c;
+    return VV_OK;
+}
+
+static void
+remove_clicked(GtkButton *b, gpointer user) {
+    (void)b;
+    VvAnimatorPage *self = user;
+    GtkListBoxRow *r = gtk_list_box_get_selected_row(GTK_LIST_BOX(self->list));
+    int i = r ? gtk_list_box_row_get_index(r) : -1;
+    int nt = self->anim->n_tracks;
+    if (i < 0 || i >= nt + self->anim->n_sequences)
+        return;
+    vv_animation *c = NULL;
+    vv_error_clear();
+    if (copy_without(self->anim, i < nt ? i : -1, i < nt ? -1 : i - nt, &c) != VV_OK) {
+        show_library_error(self, "Cannot remove it");
+        return;
+    }
+    set_animation(self, c);
+}
+
+static void
+fps_changed(GtkSpinButton *s, gpointer user) {
+    VvAnimatorPage *self = user;
+    if (self->updating)
+        return;
+    /* the keys are in seconds: the duration stays, the frame count follows */
+    self->anim->fps = gtk_spin_button_get_value(s);
+    fill_timing(self);
+    update_time_label(self);
+}
+
+static void
+frames_changed(GtkSpinButton *s, gpointer user) {
+    VvAnimatorPage *self = user;
+    if (self->updating)
+        return;
+    self->anim->duration = gtk_spin_button_get_value(s) / self->anim->fps;
+    update_time_label(self);
+}
+
+/* ---- the timeline ------------------------------------------------------------------- */
+
+static void
+timeline_draw(GtkDrawingArea *area, cairo_t *cr, int W, int H, gpointer user) {
+    (void)area;
+    VvAnimatorPage *self = user;
+    const vv_animation *a = self->anim;
+    cairo_set_source_rgb(cr, TIMELINE_R / 255.0, TIMELINE_G / 255.0, TIMELINE_B / 255.0);
+    cairo_paint(cr);
+    double dur = a->duration > 0 ? a->duration : 1;
+    /* second marks (or coarser) along the bottom */
+    double step = pow(10, ceil(log10(dur / 20)));
+    step = step < 1 ? 1 : step;
+    cairo_set_source_rgb(cr, 0.40, 0.47, 0.53);
+    cairo_set_line_width(cr, 1);
+    for (double t = 0; t <= dur + 1e-9; t += step) {
+        double x = floor(t / dur * (W - 1)) + 0.5;
+        cairo_move_to(cr, x, H - 6);
+        cairo_line_to(cr, x, H);
+    }
+    cairo_stroke(cr);
+    /* one lane per sequence (a bar: it runs over the whole animation) and
+     * per track (a mark at each key) */
+    int lanes = a->n_tracks + a->n_sequences;
+    double lh = lanes > 0 ? fmin(8, (H - 10.0) / lanes) : 8;
+    double y = 2;
+    cairo_set_source_rgb(cr, 115 / 255.0, 191 / 255.0, 115 / 255.0); /* the test looks for it */
+    for (int i = 0; i < a->n_sequences; i++, y += lh)
+        cairo_rectangle(cr, 0, y, W, fmax(1, lh - 1));
+    cairo_fill(cr);
+    cairo_set_source_rgb(cr, 242 / 255.0, 209 / 255.0, 77 / 255.0);
+    for (int i = 0; i < a->n_tracks; i++, y += lh)
+        for (int k = 0; k < a->tracks[i].n_keys; k++) {
+            double x = a->tracks[i].keys[k].time / dur * (W - 1);
+            cairo_rectangle(cr, x - 1.5, y, 3, fmax(1, lh - 1));
+        }
+    cairo_fill(cr);
+    /* the head */
+    double x = floor(fmin(fmax(head_time(self) / dur, 0), 1) * (W - 1)) + 0.5;
+    cairo_set_source_rgb(cr, 1.0, 0.45, 0.1);
+    cairo_move_to(cr, x, 0);
+    cairo_line_to(cr, x, H);
+    cairo_stroke(cr);
+}
+
+/* A click on the timeline sets the key time (to a frame's time). */
+static void
+timeline_pressed(GtkGestureClick *g, int n, double x, double y, gpointer user) {
+    (void)g;
+    (void)n;
+    (void)y;
+    VvAnimatorPage *self = user;
+    int W = gtk_widget_get_width(self->timeline);
+    if (W < 2)
+        return;
+    double t = fmin(fmax(x / (W - 1), 0), 1) * self->anim->duration;
+    t = round(t * self->anim->fps) / self->anim->fps;
+    gtk_spin_button_set_value(GTK_SPIN_BUTTON(self->key_time), t);
+    update_time_label(self);
+}
+
+/* ---- Play ------------------------------------------------------------------------------ */
+
+static void
+update_sensitivity(VvAnimatorPage *self) {
+    if (self->disposed)
+        return;
+    gboolean playing = self->play_source != 0, recording = self->recorder != NULL;
+    gtk_widget_set_sensitive(self->play, !playing && !recording);
+    gtk_widget_set_sensitive(self->stop, playing);
+    gtk_widget_set_sensitive(self->record, !playing);
+    gtk_widget_set_sensitive(self->render, self->job == NULL);
+    gtk_widget_set_sensitive(self->cancel, self->job != NULL);
+}
+
+/* Ends Play: @p restore puts the World back as it was at Play, else the
+ * World keeps the frame shown (an edit took over). */
+static void
+stop_playback(VvAnimatorPage *self, gboolean restore) {
+    if (self->play_source) {
+        g_source_remove(self->play_source);
+        self->play_source = 0;
+    }
+    if (self->doc && vv_document_transient(self->doc))
+        vv_document_end_transient(self->doc, restore);
+    vv_world_free(self->base);
+    self->base = NULL;
+    vv_animation_free(self->playing);
+    self->playing = NULL;
+    if (!self->disposed) {
+        update_sensitivity(self);
+        update_time_label(self);
+    }
+}
+
+/* Shows the animation at time @p t; on failure the message is in @p err. */
+static gboolean
+show_play_frame(VvAnimatorPage *self, double t, char *err, size_t cap) {
+    vv_world *w = NULL;
+    vv_error_clear();
+    if (vv_animation_eval(self->playing, self->base, t, &w) != VV_OK) {
+        g_strlcpy(err, vv_error_message(), cap);
+        return FALSE;
+    }
+    g_autoptr(GError) terr = NULL;
+    if (!vv_world_apply_time(self->series, w, self->base, &terr)) { /* objects[i].time */
+        g_strlcpy(err, terr->message, cap);
+        vv_world_free(w);
+        return FALSE;
+    }
+    self->play_time = t;
+    vv_document_show_transient(self->doc, w);
+    update_time_label(self);
+    return TRUE;
+}
+
+static gboolean
+play_tick(gpointer data) {
+    VvAnimatorPage *self = data;
+    if (!vv_document_transient(self->doc)) {
+        /* an edit, undo or redo ended the transient World: it wins */
+        self->play_source = 0;
+        stop_playback(self, FALSE);
+        return G_SOURCE_REMOVE;
+    }
+    double t = (g_get_monotonic_time() - self->play_start_us) * 1e-6;
+    double dur = self->playing->duration;
+    if (t >= dur) {
+        if (!gtk_check_button_get_active(GTK_CHECK_BUTTON(self->loop))) {
+            self->play_source = 0;
+            stop_playback(self, TRUE);
+            return G_SOURCE_REMOVE;
+        }
+        t = fmod(t, dur);
+    }
+    char err[1024];
+    if (!show_play_frame(self, t, err, sizeof err)) {
+        self->play_source = 0;
+        stop_playback(self, TRUE);
+        show_error(self, "Cannot play the animation", err);
+        return G_SOURCE_REMOVE;
+    }
+    return G_SOURCE_CONTINUE;
+}
+
+static void
+play_clicked(GtkButton *b, gpointer user) {
+    (void)b;
+    VvAnimatorPage *self = user;
+    if (self->play_source || self->recorder)
+        return;
+    vv_world *w = vv_document_world(self->doc);
+    vv_error_clear();
+    if (vv_animation_validate(self->anim) != VV_OK ||
+        vv_animation_check_world(self->anim, w) != VV_OK) {
+        show_library_error(self, "Cannot play the animation");
+        return;
+    }
+    vv_error_clear();
+    if (vv_animation_clone(&self->playing, self->anim) != VV_OK ||
+        !(self->base = vv_document_snapshot(self->doc))) {
+        show_library_error(self, "Cannot play the animation");
+        stop_playback(self, TRUE);
+        return;
+    }
+    self->play_start_us = g_get_monotonic_time();
+    char err[1024];
+    if (!show_play_frame(self, 0, err, sizeof err)) {
+        stop_playback(self, TRUE);
+        show_error(self, "Cannot play the animation", err);
+        return;
+    }
+    self->play_source = g_timeout_add(PLAY_TICK_MS, play_tick, self);
+    update_sensitivity(self);
+}
+
+static void
+stop_clicked(GtkButton *b, gpointer user) {
+    (void)b;
+    stop_playback(user, TRUE);
+}
+
+/* The World changed: Play stops when an edit ended its transient World. */
+static void
+doc_changed(VvDocument *doc, gpointer user) {
+    VvAnimatorPage *self = user;
+    if (self->play_source && !vv_document_transient(doc))
+        stop_playback(self, FALSE);
+    const vv_world *w = vv_document_world(doc);
+    const vv_render_settings *rs = &w->render;
+    char text[256];
+    snprintf(text, sizeof text, "%s, quality %d, %d×%d pixels (Rendering page)",
+             rs->renderer[0] ? rs->renderer : "raycast", rs->quality >= 0 ? rs->quality : 2,
+             w->view.width, w->view.height);
+    gtk_label_set_text(GTK_LABEL(self->render_info), text);
+}
+
+/* ---- flight recording ------------------------------------------------------------ */
+
+static gboolean
+record_tick(gpointer data) {
+    VvAnimatorPage *self = data;
+    double t = (g_get_monotonic_time() - self->record_start_us) * 1e-6;
+    /* a sample the recorder refuses (a non-finite view) is skipped */
+    vv_flight_recorder_add(self->recorder, t, &vv_document_world(self->doc)->view);
+    char text[96];
+    snprintf(text, sizeof text, "recording the view: %d samples, %.1f s",
+             vv_flight_recorder_count(self->recorder), t);
+    gtk_label_set_text(GTK_LABEL(self->time_label), text);
+    return G_SOURCE_CONTINUE;
+}
+
+/* Stops recording; @p finish makes the samples the current animation,
+ * ending with the view as it is now: the 30 Hz samples may miss the last
+ * moves of a drag (a busy machine delays the timer past them). */
+static void
+stop_recording(VvAnimatorPage *self, gboolean finish) {
+    if (finish && self->recorder)
+        record_tick(self);
+    if (self->record_source) {
+        g_source_remove(self->record_source);
+        self->record_source = 0;
+    }
+    if (!self->recorder)
+        return;
+    if (finish) {
+        /* thinning tolerances: a thousandth of the scene, a quarter degree */
+        vv_box b = vv_world_bounds(vv_document_world(self->doc));
+        double size = vv_vec3_length(vv_vec3_sub(b.max, b.min));
+        double pos_tol = size > 0 && isfinite(size) ? 1e-3 * size : 1e-3;
+        vv_animation *a = NULL;
+        int n = vv_flight_recorder_count(self->recorder);
+        vv_error_clear();
+        if (vv_flight_recorder_finish(self->recorder, pos_tol, vv_deg_to_rad(0.25), self->anim->fps,
+                                      &a) != VV_OK) {
+            show_library_error(self, "No flight path");
+        } else {
+            int keys = a->n_tracks > 0 ? a->tracks[0].n_keys : 0;
+            set_animation(self, a);
+            char text[128];
+            snprintf(text, sizeof text, "recorded flight: %d samples, %d keys kept", n, keys);
+            set_status(self, text);
+        }
+    }
+    vv_flight_recorder_free(self->recorder);
+    self->recorder = NULL;
+    if (!self->disposed) {
+        update_time_label(self);
+        self->updating = TRUE;
+        gtk_toggle_button_set_active(GTK_TOGGLE_BUTTON(self->record), FALSE);
+        self->updating = FALSE;
+        update_sensitivity(self);
+    }
+}
+
+static void
+record_toggled(GtkToggleButton *b, gpointer user) {
+    VvAnimatorPage *self = user;
+    if (self->updating)
+        return;
+    if (!gtk_toggle_button_get_active(b)) {
+        stop_recording(self, TRUE);
+        return;
+    }
+    if (self->recorder || self->play_source)
+        return;
+    vv_error_clear();
+    if (vv_flight_recorder_new(&self->recorder) != VV_OK) {
+        show_library_error(self, "Cannot record");
+        stop_recording(self, FALSE);
+        return;
+    }
+    self->record_start_us = g_get_monotonic_time();
+    record_tick(self);
+    self->record_source = g_timeout_add(TICK_MS, record_tick, self);
+    update_sensitivity(self);
+}
+
+/* ---- sequences and keys --------------------------------------------------------------- */
+
+static const char *const seq_names[] = {"orbit the camera", "rotate the selected object",
+                                        "fly along a line", "sweep a cut plane", NULL};
+static const char *const seq_pages[] = {"orbit", "rotate", "fly", "sweep"};
+
+static void
+seq_type_changed(GObject *o, GParamSpec *p, gpointer user) {
+    (void)p;
+    VvAnimatorPage *self = user;
+    guint i = gtk_drop_down_get_selected(GTK_DROP_DOWN(o));
+    if (i < G_N_ELEMENTS(seq_pages))
+        gtk_stack_set_visible_child_name(GTK_STACK(self->seq_stack), seq_pages[i]);
+}
+
+static vv_vec3
+axis_vector(guint i) {
+    vv_vec3 a = vv_vec3_make(i % 3 == 0, i % 3 == 1, i % 3 == 2);
+    return i >= 3 ? vv_vec3_scale(a, -1) : a;
+}
+
+static void
+add_sequence_clicked(GtkButton *b, gpointer user) {
+    (void)b;
+    VvAnimatorPage *self = user;
+    vv_anim_sequence q;
+    memset(&q, 0, sizeof q);
+    q.zoom = 1;
+    const vv_world *w = vv_document_world(self->doc);
+    switch (gtk_drop_down_get_selected(GTK_DROP_DOWN(self->seq_type))) {
+    case 0:
+        q.type = VV_SEQ_ORBIT;
+        q.degrees = spin_value(self->orbit_degrees);
+        q.elevation = spin_value(self->orbit_elevation);
+        break;
+    case 1: {
+        const vv_object *o = vv_document_selected_object(self->doc);
+        if (!o) {
+            show_error(self, "No object to rotate", "select an object on the Manipulation page");
+            return;
+        }
+        q.type = VV_SEQ_ROTATE_OBJECT;
+        g_strlcpy(q.object, o->name, sizeof q.object);
+        q.axis = axis_vector(gtk_drop_down_get_selected(GTK_DROP_DOWN(self->rot_axis)));
+        q.degrees = spin_value(self->rot_degrees);
+        break;
+    }
+    case 2:
+        q.type = VV_SEQ_FLY;
+        q.offset = vv_vec3_make(spin_value(self->fly[0]), spin_value(self->fly[1]),
+                                spin_value(self->fly[2]));
+        break;
+    default: {
+        /* a plane facing +axis (or -axis) swept across the World's bounds, as
+         * `volvis animate --sweep-cut AXIS` does */
+        guint i = gtk_drop_down_get_selected(GTK_DROP_DOWN(self->sweep_axis));
+        vv_box bx = vv_world_bounds(w);
+        double lo[3] = {bx.min.x, bx.min.y, bx.min.z}, hi[3] = {bx.max.x, bx.max.y, bx.max.z};
+        double c[3];
+        int ax = (int)(i % 3);
+        for (int k = 0; k < 3; k++)
+            c[k] = 0.5 * (lo[k] + hi[k]);
+        c[ax] = i >= 3 ? hi[ax] : lo[ax];
+        q.type = VV_SEQ_SWEEP_CUT;
+        q.point = vv_vec3_make(c[0], c[1], c[2]);
+        q.normal = axis_vector(i);
+        q.distance = hi[ax] - lo[ax];
+        break;
+    }
+    }
+    vv_error_clear();
+    if (vv_animation_add_sequence(self->anim, &q) != VV_OK) {
+        show_library_error(self, "Cannot add the sequence");
+        return;
+    }
+    refresh(self);
+}
+
+static vv_anim_track *
+find_or_add_track(vv_animation *a, const char *property) {
+    for (int i = 0; i < a->n_tracks; i++)
+        if (strcmp(a->tracks[i].property, property) == 0)
+            return &a->tracks[i];
+    int idx = -1;
+    if (vv_animation_add_track(a, property, &idx) != VV_OK)
+        return NULL;
+    return &a->tracks[idx];
+}
+
+/* Sets the key at @p time (replacing one at the same time). */
+static vv_status
+set_key(vv_anim_track *t, double time, const double v[4]) {
+    t->closed = 0; /* a new key breaks a loop's first = last */
+    for (int k = 0; k < t->n_keys; k++)
+        if (fabs(t->keys[k].time - time) < 1e-9) {
+            memcpy(t->keys[k].value, v, sizeof t->keys[k].value);
+            return VV_OK;
+        }
+    vv_anim_key key;
+    vv_anim_key_init(&key, time);
+    memcpy(key.value, v, sizeof key.value);
+    return vv_anim_track_add_key(t, &key);
+}
+
+static void
+add_key_clicked(GtkButton *b, gpointer user) {
+    (void)b;
+    VvAnimatorPage *self = user;
+    const vv_view *v = &vv_document_world(self->doc)->view;
+    double t = spin_value(self->key_time);
+    const char *props[] = {"view.eye", "view.at", "view.up", "view.fov"};
+    const double values[4][4] = {{v->eye.x, v->eye.y, v->eye.z, 0},
+                                 {v->at.x, v->at.y, v->at.z, 0},
+                                 {v->up.x, v->up.y, v->up.z, 0},
+                                 {v->fov, 0, 0, 0}};
+    for (int i = 0; i < 4; i++) {
+        vv_error_clear();
+        vv_anim_track *tr = find_or_add_track(self->anim, props[i]);
+        if (!tr || set_key(tr, t, values[i]) != VV_OK) {
+            show_library_error(self, "Cannot add the camera key");
+            refresh(self);
+            return;
+        }
+    }
+    /* the key at t is a frame of the animation */
+    double end = t + 1.0 / self->anim->fps;
+    if (end > self->anim->duration + 1e-9)
+        self->anim->duration = end;
+    /* the next key a second later: navigate, add, navigate, add ... */
+    gtk_spin_button_set_value(GTK_SPIN_BUTTON(self->key_time), t + 1.0);
+    refresh(self);
+}
+
+/* The selected volume object's time step (the Channels and time page's) as
+ * a key of its objects[i].time track at the key time: linear between keys,
+ * so that the steps between two keys play in order. */
+static void
+add_time_key_clicked(GtkButton *b, gpointer user) {
+    (void)b;
+    VvAnimatorPage *self = user;
+    int i = vv_document_selected(self->doc);
+    vv_object *o = vv_document_selected_object(self->doc);
+    if (!o || o->type != VV_OBJECT_VOLUME || vv_document_time_steps(self->doc, o) < 2) {
+        vvg_show_error(GTK_WIDGET(self), "Cannot add a time-step key",
+                       "Select a volume object read from a file with time steps (its step is set "
+                       "on the Channels and time page).");
+        return;
+    }
+    char prop[64];
+    snprintf(prop, sizeof prop, "objects[%d].time", i);
+    double t = spin_value(self->key_time);
+    const double v[4] = {o->time, 0, 0, 0};
+    vv_error_clear();
+    vv_anim_track *tr = find_or_add_track(self->anim, prop);
+    if (!tr || set_key(tr, t, v) != VV_OK) {
+        show_library_error(self, "Cannot add the time-step key");
+        refresh(self);
+        return;
+    }
+    tr->interp = VV_INTERP_LINEAR;
+    double end = t + 1.0 / self->anim->fps;
+    if (end > self->anim->duration + 1e-9)
+        self->anim->duration = end;
+    gtk_spin_button_set_value(GTK_SPIN_BUTTON(self->key_time), t + 1.0);
+    refresh(self);
+}
+
+/* ---- New, Open, Save ------------------------------------------------------------------- */
+
+static void
+new_clicked(GtkButton *b, gpointer user) {
+    (void)b;
+    VvAnimatorPage *self = user;
+    vv_animation *a = NULL;
+    vv_error_clear();
+    if (vv_animation_new(&a) != VV_OK) {
+        show_library_error(self, "Cannot make an animation");
+        return;
+    }
+    a->fps = spin_value(self->fps);
+    a->duration = spin_value(self->frames) / a->fps;
+    set_animation(self, a);
+    gtk_spin_button_set_value(GTK_SPIN_BUTTON(self->key_time), 0);
+    set_status(self, "");
+}
+
+static void
+open_response(GtkNativeDialog *d, int response, gpointer user) {
+    VvAnimatorPage *self = user;
+    if (response == GTK_RESPONSE_ACCEPT && !self->disposed) {
+        GFile *f = gtk_file_chooser_get_file(GTK_FILE_CHOOSER(d));
+        char *path = f ? g_file_get_path(f) : NULL;
+        if (path) {
+            vv_animation *a = NULL;
+            vv_error_clear();
+            if (vv_animation_load(&a, path) != VV_OK) {
+                g_autofree char *base = g_path_get_basename(path);
+                g_autofree char *what = g_strdup_printf("Cannot open %s", base);
+                show_library_error(self, what);
+            } else {
+                set_animation(self, a);
+                g_autofree char *base = g_path_get_basename(path);
+                g_autofree char *m = g_strdup_printf("opened %s", base);
+                set_status(self, m);
+                gtk_widget_set_tooltip_text(self->anim_status, path);
+            }
+        }
+        g_free(path);
+        if (f)
+            g_object_unref(f);
+    }
+    g_object_unref(d);
+    g_object_unref(self);
+}
+
+static void
+open_clicked(GtkButton *b, gpointer user) {
+    (void)b;
+    VvAnimatorPage *self = user;
+    GtkFileChooserNative *d = gtk_file_chooser_native_new(
+        "Open animation", parent_window(self), GTK_FILE_CHOOSER_ACTION_OPEN, "_Open", "_Cancel");
+    GtkFileFilter *ff = gtk_file_filter_new();
+    gtk_file_filter_set_name(ff, "Animation files (*.json)");
+    gtk_file_filter_add_pattern(ff, "*.json");
+    gtk_file_chooser_add_filter(GTK_FILE_CHOOSER(d), ff);
+    g_object_unref(ff);
+    g_signal_connect(d, "response", G_CALLBACK(open_response), g_object_ref(self));
+    gtk_native_dialog_show(GTK_NATIVE_DIALOG(d));
+}
+
+/* The animation names the session's scene file (relative when beside it), so
+ * that `volvis animate --animation FILE` renders it without an INPUT. */
+static void
+set_scene(vv_animation *a, const char *anim_path, const char *scene_path) {
+    free(a->scene);
+    a->scene = NULL;
+    if (!scene_path)
+        return;
+    g_autofree char *adir = g_path_get_dirname(anim_path);
+    g_autofree char *acanon = g_canonicalize_filename(adir, NULL);
+    g_autofree char *sdir = g_path_get_dirname(scene_path);
+    g_autofree char *sbase = g_path_get_basename(scene_path);
+    a->scene = dup_malloc(strcmp(acanon, sdir) == 0 ? sbase : scene_path);
+}
+
+static void
+save_response(GtkNativeDialog *d, int response, gpointer user) {
+    VvAnimatorPage *self = user;
+    if (response == GTK_RESPONSE_ACCEPT && !self->disposed) {
+        GFile *f = gtk_file_chooser_get_file(GTK_FILE_CHOOSER(d));
+        char *path = f ? g_file_get_path(f) : NULL;
+        if (path) {
+            if (!g_str_has_suffix(path, ".json")) {
+                char *p = g_strconcat(path, ".json", NULL);
+                g_free(path);
+                path = p;
+            }
+            set_scene(self->anim, path, vv_document_path(self->doc));
+            vv_error_clear();
+            if (vv_animation_save(self->anim, path) != VV_OK) {
+                show_library_error(self, "Cannot save the animation");
+            } else {
+                g_autofree char *base = g_path_get_basename(path);
+                g_autofree char *m = g_strdup_printf("saved %s", base);
+                set_status(self, m);
+                gtk_widget_set_tooltip_text(self->anim_status, path);
+            }
+        }
+        g_free(path);
+        if (f)
+            g_object_unref(f);
+    }
+    g_object_unref(d);
+    g_object_unref(self);
+}
+
+static void
+save_clicked(GtkButton *b, gpointer user) {
+    (void)b;
+    VvAnimatorPage *self = user;
+    GtkFileChooserNative *d = gtk_file_chooser_native_new(
+        "Save animation", parent_window(self), GTK_FILE_CHOOSER_ACTION_SAVE, "_Save", "_Cancel");
+    gtk_file_chooser_set_current_name(GTK_FILE_CHOOSER(d), "animation.json");
+    g_signal_connect(d, "response", G_CALLBACK(save_response), g_object_ref(self));
+    gtk_native_dialog_show(GTK_NATIVE_DIALOG(d));
+}
+
+/* ---- the final render ----------------------------------------------------------------- */
+
+static void
+job_free(render_job *j) {
+    if (!j)
+        return;
+    vv_animation_free(j->anim);
+    vv_world_free(j->world);
+    if (j->series)
+        g_hash_table_unref(j->series);
+    g_free(j->output);
+    g_free(j);
+}
+
+static int
+render_progress(void *user, double fraction) {
+    render_job *j = user;
+    __atomic_store(&j->fraction, &fraction, __ATOMIC_RELAXED);
+    return __atomic_load_n(&j->cancel, __ATOMIC_RELAXED);
+}
+
+static void
+render_frame_done(void *user, int frame, const vv_image *img, int reused) {
+    (void)img;
+    (void)reused;
+    render_job *j = user;
+    __atomic_store_n(&j->frames_done, frame + 1, __ATOMIC_RELAXED);
+}
+
+static gboolean render_done(gpointer data);
+
+/* A frame's World before it is drawn: the time steps its objects[i].time
+ * tracks ask for (the worker thread's own series). */
+static vv_status
+render_prepare(void *user, int frame, vv_world *w) {
+    (void)frame;
+    render_job *j = user;
+    g_autoptr(GError) err = NULL;
+    if (!vv_world_apply_time(j->series, w, j->world, &err))
+        return vv_error_set(VV_ERR_IO, "%s", err->message);
+    return VV_OK;
+}
+
+static gpointer
+render_main(gpointer data) {
+    render_job *j = data;
+    const vv_world *w = j->world;
+    vv_renderer *r = NULL;
+    vv_error_clear();
+    /* the World's renderer with its options and quality, as `volvis animate` */
+    vv_status s = vv_renderer_new_for_world(&r, w);
+    if (s == VV_OK) {
+        vv_anim_render_options o;
+        vv_anim_render_options_init(&o);
+        o.output = j->output;
+        o.render.quality = vv_render_settings_quality(&w->render);
+        o.resume = j->resume;
+        o.progress.fn = render_progress;
+        o.progress.user = j;
+        o.on_frame = render_frame_done;
+        o.on_frame_user = j;
+        o.prepare_frame = render_prepare;
+        o.prepare_frame_user = j;
+        j->series = vv_time_cache_new();
+        s = vv_animation_render(j->anim, w, r, &o, &j->stats);
+    }
+    j->status = s;
+    if (s != VV_OK)
+        g_strlcpy(j->error, vv_error_message(), sizeof j->error);
+    vv_renderer_free(r);
+    g_idle_add(render_done, g_object_ref(j->page));
+    return NULL;
+}
+
+static gboolean
+render_tick(gpointer data) {
+    VvAnimatorPage *self = data;
+    render_job *j = self->job;
+    if (!j)
+        return G_SOURCE_CONTINUE;
+    double f;
+    __atomic_load(&j->fraction, &f, __ATOMIC_RELAXED);
+    int done = __atomic_load_n(&j->frames_done, __ATOMIC_RELAXED);
+    double el = (g_get_monotonic_time() - j->start_us) * 1e-6;
+    char text[128];
+    if (f > 0.02)
+        snprintf(text, sizeof text, "frame %d of %d, %.0f %%, %.1f s left", done, j->frames,
+                 100 * f, el * (1 - f) / f);
+    else
+        snprintf(text, sizeof text, "frame %d of %d, %.0f %%", done, j->frames, 100 * f);
+    gtk_progress_bar_set_fraction(GTK_PROGRESS_BAR(self->progress), f);
+    gtk_progress_bar_set_text(GTK_PROGRESS_BAR(self->progress), text);
+    return G_SOURCE_CONTINUE;
+}
+
+static gboolean
+render_done(gpointer data) {
+    VvAnimatorPage *self = data;
+    render_job *j = self->job;
+    if (self->disposed || !j) {
+        g_object_unref(self);
+        return G_SOURCE_REMOVE;
+    }
+    g_thread_join(j->thread);
+    self->job = NULL;
+    if (self->render_timer) {
+        g_source_remove(self->render_timer);
+        self->render_timer = 0;
+    }
+    const vv_anim_render_stats *st = &j->stats;
+    char text[1280];
+    if (j->status == VV_OK) {
+        gtk_progress_bar_set_fraction(GTK_PROGRESS_BAR(self->progress), 1);
+        snprintf(text, sizeof text, "done in %.1f s", st->total_s);
+        gtk_progress_bar_set_text(GTK_PROGRESS_BAR(self->progress), text);
+        snprintf(text, sizeof text, "wrote %s: %d frames (%d rendered, %d kept from before)",
+                 j->output, st->frames, st->rendered, st->reused);
+        set_label_tip(self->render_status, text);
+    } else if (j->status == VV_ERR_CANCELLED) {
+        gtk_progress_bar_set_text(GTK_PROGRESS_BAR(self->progress), "cancelled");
+        snprintf(text, sizeof text,
+                 "cancelled after %d of %d frames; Render again resumes (finished frames are "
+                 "kept)",
+                 st->rendered + st->reused, st->frames);
+        set_label_tip(self->render_status, text);
+    } else {
+        gtk_progress_bar_set_text(GTK_PROGRESS_BAR(self->progress), "failed");
+        set_label_tip(self->render_status, j->error);
+        show_error(self, "Cannot render the animation", j->error);
+    }
+    job_free(j);
+    update_sensitivity(self);
+    g_object_unref(self);
+    return G_SOURCE_REMOVE;
+}
+
+static void
+render_clicked(GtkButton *b, gpointer user) {
+    (void)b;
+    VvAnimatorPage *self = user;
+    if (self->job)
+        return;
+    const char *out = gtk_editable_get_text(GTK_EDITABLE(self->output));
+    if (!out[0]) {
+        show_error(self, "Cannot render the animation", "no output file");
+        return;
+    }
+    render_job *j = g_new0(render_job, 1);
+    j->page = self;
+    j->output = g_strdup(out);
+    j->resume = gtk_check_button_get_active(GTK_CHECK_BUTTON(self->resume));
+    vv_error_clear();
+    /* during Play, the World as it was at Play */
+    vv_status s = vv_world_clone(&j->world, self->base ? self->base : vv_document_world(self->doc));
+    if (s == VV_OK)
+        s = vv_animation_clone(&j->anim, self->anim);
+    if (s != VV_OK) {
+        show_library_error(self, "Cannot render the animation");
+        job_free(j);
+        return;
+    }
+    j->frames = vv_animation_frame_count(j->anim);
+    j->start_us = g_get_monotonic_time();
+    self->job = j;
+    gtk_progress_bar_set_fraction(GTK_PROGRESS_BAR(self->progress), 0);
+    gtk_progress_bar_set_text(GTK_PROGRESS_BAR(self->progress), "starting");
+    set_label_tip(self->render_status, "");
+    self->render_timer = g_timeout_add(100, render_tick, self);
+    j->thread = g_thread_new("volvis-animate", render_main, j);
+    update_sensitivity(self);
+}
+
+static void
+cancel_clicked(GtkButton *b, gpointer user) {
+    (void)b;
+    VvAnimatorPage *self = user;
+    if (self->job)
+        __atomic_store_n(&self->job->cancel, 1, __ATOMIC_RELAXED);
+}
+
+/* ---- building the page -------------------------------------------------------------- */
+
+static GtkWidget *
+stack_grid(GtkWidget *stack, const char *name) {
+    GtkWidget *g = gtk_grid_new();
+    gtk_grid_set_row_spacing(GTK_GRID(g), 3);
+    gtk_grid_set_column_spacing(GTK_GRID(g), 6);
+    gtk_stack_add_named(GTK_STACK(stack), g, name);
+    return g;
+}
+
+static void
+build(VvAnimatorPage *self) {
+    GtkWidget *box = gtk_box_new(GTK_ORIENTATION_VERTICAL, 4);
+    gtk_widget_set_margin_start(box, 8);
+    gtk_widget_set_margin_end(box, 8);
+    gtk_widget_set_margin_bottom(box, 8);
+    gtk_widget_set_margin_top(box, 8);
+
+    /* the animation's file, the timeline, Play, Stop, Record flight: the
+     * rows of buttons span the page in equal parts (the GUI test finds them
+     * from the timeline) */
+    GtkWidget *r = button_row(box);
+    add_button(r, gtk_button_new_with_label("New"), G_CALLBACK(new_clicked), self);
+    add_button(r, gtk_button_new_with_label("Open…"), G_CALLBACK(open_clicked), self);
+    add_button(r, gtk_button_new_with_label("Save…"), G_CALLBACK(save_clicked), self);
+    self->timeline = gtk_drawing_area_new();
+    gtk_widget_set_size_request(self->timeline, 280, 44);
+    vvg_name(self->timeline, "timeline");
+    gtk_drawing_area_set_draw_func(GTK_DRAWING_AREA(self->timeline), timeline_draw, self, NULL);
+    GtkGesture *click = gtk_gesture_click_new();
+    g_signal_connect(click, "pressed", G_CALLBACK(timeline_pressed), self);
+    gtk_widget_add_controller(self->timeline, GTK_EVENT_CONTROLLER(click));
+    gtk_widget_set_tooltip_text(self->timeline, "keys (yellow), sequences (green); a click sets "
+                                                "the key time");
+    gtk_box_append(GTK_BOX(box), self->timeline);
+    r = button_row(box);
+    self->play = add_button(r, gtk_button_new_with_label("Play"), G_CALLBACK(play_clicked), self);
+    self->stop = add_button(r, gtk_button_new_with_label("Stop"), G_CALLBACK(stop_clicked), self);
+    self->record = add_button(r, gtk_toggle_button_new_with_label("Record flight"),
+                              G_CALLBACK(record_toggled), self);
+    gtk_widget_set_tooltip_text(self->record, "samples the view at 30 Hz while you navigate; "
+                                              "off: the flight path becomes the animation");
+    self->time_label = line_label();
+    gtk_box_append(GTK_BOX(box), self->time_label);
+    self->anim_status = line_label();
+    gtk_label_set_ellipsize(GTK_LABEL(self->anim_status), PANGO_ELLIPSIZE_START);
+    gtk_box_append(GTK_BOX(box), self->anim_status);
+    GtkWidget *g = gtk_grid_new();
+    gtk_grid_set_row_spacing(GTK_GRID(g), 3);
+    gtk_grid_set_column_spacing(GTK_GRID(g), 6);
+    gtk_box_append(GTK_BOX(box), g);
+    self->fps = vvg_row(g, "frames per second", vvg_spin(0.01, 1000, 1, 2, 30));
+    g_signal_connect(self->fps, "value-changed", G_CALLBACK(fps_changed), self);
+    self->frames = vvg_row(g, "frames", vvg_spin(1, 1000000, 1, 0, 60));
+    g_signal_connect(self->frames, "value-changed", G_CALLBACK(frames_changed), self);
+    self->loop = gtk_check_button_new_with_label("loop Play");
+    gtk_check_button_set_active(GTK_CHECK_BUTTON(self->loop), TRUE);
+    gtk_grid_attach(GTK_GRID(g), self->loop, 0, vvg_grid_rows(g), 2, 1);
+
+    /* final render */
+    g = vvg_section(box, "Final render");
+    self->output = vvg_row(g, "output", gtk_entry_new());
+    gtk_widget_set_tooltip_text(self->output,
+                                "NAME.mp4 (H.264), NAME.webm (VP9), a PNG pattern such as "
+                                "frames/f_%04d.png, or an existing folder");
+    g_autofree char *cwd = g_get_current_dir();
+    g_autofree char *def = g_build_filename(cwd, "animation.mp4", NULL);
+    gtk_editable_set_text(GTK_EDITABLE(self->output), def);
+    self->resume = gtk_check_button_new_with_label("resume: keep the finished frames of an "
+                                                   "interrupted render");
+    gtk_check_button_set_active(GTK_CHECK_BUTTON(self->resume), TRUE);
+    gtk_grid_attach(GTK_GRID(g), self->resume, 0, vvg_grid_rows(g), 2, 1);
+    self->render_info = line_label();
+    gtk_box_append(GTK_BOX(box), self->render_info);
+    r = button_row(box);
+    self->render =
+        add_button(r, gtk_button_new_with_label("Render"), G_CALLBACK(render_clicked), self);
+    self->cancel =
+        add_button(r, gtk_button_new_with_label("Cancel"), G_CALLBACK(cancel_clicked), self);
+    self->progress = gtk_progress_bar_new();
+    gtk_progress_bar_set_show_text(GTK_PROGRESS_BAR(self->progress), TRUE);
+    gtk_box_append(GTK_BOX(box), self->progress);
+    self->render_status = line_label();
+    gtk_label_set_ellipsize(GTK_LABEL(self->render_status), PANGO_ELLIPSIZE_MIDDLE);
+    gtk_box_append(GTK_BOX(box), self->render_status);
+
+    /* sequences without keyframes */
+    g = vvg_section(box, "Sequence without keyframes (over the whole animation)");
+    self->seq_type = vvg_row(g, "sequence", gtk_drop_down_new_from_strings(seq_names));
+    g_signal_connect(self->seq_type, "notify::selected", G_CALLBACK(seq_type_changed), self);
+    self->seq_stack = gtk_stack_new();
+    gtk_box_append(GTK_BOX(box), self->seq_stack);
+    g = stack_grid(self->seq_stack, "orbit");
+    self->orbit_degrees = vvg_row(g, "degrees", vvg_spin(-1e5, 1e5, 15, 1, 360));
+    self->orbit_elevation = vvg_row(g, "elevation (°)", vvg_spin(-89, 89, 5, 1, 0));
+    g = stack_grid(self->seq_stack, "rotate");
+    static const char *const axes3[] = {"x", "y", "z", NULL};
+    self->rot_axis = vvg_row(g, "axis", gtk_drop_down_new_from_strings(axes3));
+    gtk_drop_down_set_selected(GTK_DROP_DOWN(self->rot_axis), 2);
+    self->rot_degrees = vvg_row(g, "degrees", vvg_spin(-1e5, 1e5, 15, 1, 360));
+    g = stack_grid(self->seq_stack, "fly");
+    static const char *const xyz[] = {"offset x", "offset y", "offset z"};
+    for (int i = 0; i < 3; i++)
+        self->fly[i] = vvg_row(g, xyz[i], vvg_spin(-1e7, 1e7, 10, 2, 0));
+    g = stack_grid(self->seq_stack, "sweep");
+    static const char *const axes6[] = {"x", "y", "z", "-x", "-y", "-z", NULL};
+    self->sweep_axis = vvg_row(g, "across the World along", gtk_drop_down_new_from_strings(axes6));
+    r = button_row(box);
+    add_button(r, gtk_button_new_with_label("Add sequence"), G_CALLBACK(add_sequence_clicked),
+               self);
+
+    /* camera keys */
+    g = vvg_section(box, "Keyframes (camera, time step)");
+    self->key_time = vvg_row(g, "time (s)", vvg_spin(0, 1e5, 0.1, 2, 0));
+    g_signal_connect_swapped(self->key_time, "value-changed", G_CALLBACK(update_time_label), self);
+    r = button_row(box);
+    add_button(r, gtk_button_new_with_label("Add camera key"), G_CALLBACK(add_key_clicked), self);
+    add_button(r, gtk_button_new_with_label("Add time-step key"), G_CALLBACK(add_time_key_clicked),
+               self);
+
+    /* the animation: last, as it grows */
+    vvg_section(box, "Tracks and sequences of the animation");
+    self->list = gtk_list_box_new();
+    GtkWidget *frame = gtk_frame_new(NULL);
+    gtk_frame_set_child(GTK_FRAME(frame), self->list);
+    gtk_box_append(GTK_BOX(box), frame);
+    r = button_row(box);
+    add_button(r, gtk_button_new_with_label("Remove selected"), G_CALLBACK(remove_clicked), self);
+
+    GtkWidget *scroll = gtk_scrolled_window_new();
+    gtk_scrolled_window_set_policy(GTK_SCROLLED_WINDOW(scroll), GTK_POLICY_NEVER,
+                                   GTK_POLICY_AUTOMATIC);
+    gtk_scrolled_window_set_child(GTK_SCROLLED_WINDOW(scroll), box);
+    gtk_widget_set_vexpand(scroll, TRUE);
+    gtk_box_append(GTK_BOX(self), scroll);
+}
+
+/* ---- life cycle --------------------------------------------------------------------- */
+
+static void
+vv_animator_page_dispose(GObject *o) {
+    VvAnimatorPage *self = VV_ANIMATOR_PAGE(o);
+    self->disposed = TRUE;
+    if (self->job) {
+        /* going away cancels the render; its finished frames stay for a resume */
+        __atomic_store_n(&self->job->cancel, 1, __ATOMIC_RELAXED);
+        g_thread_join(self->job->thread);
+        job_free(self->job);
+        self->job = NULL;
+    }
+    if (self->render_timer) {
+        g_source_remove(self->render_timer);
+        self->render_timer = 0;
+    }
+    stop_recording(self, FALSE);
+    if (self->doc) {
+        g_signal_handler_disconnect(self->doc, self->changed_id);
+        /* the World as it was at Play, should the page go while playing */
+        stop_playback(self, TRUE);
+        g_clear_object(&self->doc);
+    }
+    G_OBJECT_CLASS(vv_animator_page_parent_class)->dispose(o);
+}
+
+static void
+vv_animator_page_finalize(GObject *o) {
+    VvAnimatorPage *self = VV_ANIMATOR_PAGE(o);
+    vv_animation_free(self->anim);
+    g_hash_table_unref(self->series);
+    G_OBJECT_CLASS(vv_animator_page_parent_class)->finalize(o);
+}
+
+static void
+vv_animator_page_class_init(VvAnimatorPageClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vv_animator_page_dispose;
+    G_OBJECT_CLASS(klass)->finalize = vv_animator_page_finalize;
+}
+
+static void
+vv_animator_page_init(VvAnimatorPage *self) {
+    gtk_orientable_set_orientation(GTK_ORIENTABLE(self), GTK_ORIENTATION_VERTICAL);
+    if (vv_animation_new(&self->anim) != VV_OK)
+        g_error("volvis-gui: out of memory");
+    self->anim->fps = 30;
+    self->anim->duration = 2; /* 60 frames */
+    self->series = vv_time_cache_new();
+    build(self);
+}
+
+GtkWidget *
+vv_animator_page_new(VvDocument *doc) {
+    VvAnimatorPage *self = g_object_new(VV_TYPE_ANIMATOR_PAGE, NULL);
+    self->doc = g_object_ref(doc);
+    self->changed_id = g_signal_connect(doc, "changed", G_CALLBACK(doc_changed), self);
+    refresh(self);
+    doc_changed(doc, self);
+    update_sensitivity(self);
+    return GTK_WIDGET(self);
+}
+
+const vv_animation *
+vv_animator_page_animation(VvAnimatorPage *self) {
+    return self->anim;
+}
+
+gboolean
+vv_animator_page_playing(VvAnimatorPage *self) {
+    return self->play_source != 0;
+}

@@ -1,0 +1,143 @@
+/* VvApplication: start-up, files from the command line, quit (vvg-application.h). */
+#include "vvg-application.h"
+
+#include "vvg-window.h"
+
+struct _VvApplication {
+    GtkApplication parent;
+};
+
+G_DEFINE_TYPE(VvApplication, vv_application, GTK_TYPE_APPLICATION)
+
+/* Quit: each window with unsaved changes asks in turn (Cancel stops the
+ * quit), then every window goes as a closed one does: its render thread
+ * ends and its autosave folder is removed. GtkApplication's quit alone
+ * leaves the windows undisposed, and an autosave folder left behind would
+ * be offered as a crashed session at the next start. A quit's serial marks
+ * the windows whose question it has had answered. */
+static guint quit_serial;
+
+static gboolean quit_next(gpointer user);
+
+static void
+quit_answered(void *user) {
+    GtkWindow *w = user;
+    g_object_set_data(G_OBJECT(w), "vv-quit-answered", GUINT_TO_POINTER(quit_serial));
+    /* not from inside the dialog's or the save's own handlers */
+    g_idle_add(quit_next, g_object_ref(gtk_window_get_application(w)));
+}
+
+static gpointer
+ref_window(gconstpointer w, gpointer unused) {
+    (void)unused;
+    return g_object_ref((gpointer)w);
+}
+
+static gboolean
+quit_next(gpointer user) {
+    GtkApplication *app = user;
+    for (GList *l = gtk_application_get_windows(app); l; l = l->next) {
+        if (!VV_IS_WINDOW(l->data) ||
+            GPOINTER_TO_UINT(g_object_get_data(G_OBJECT(l->data), "vv-quit-answered")) ==
+                quit_serial ||
+            !vv_document_dirty(vv_window_document(l->data)))
+            continue;
+        gtk_window_present(GTK_WINDOW(l->data));
+        vv_window_confirm_close(VV_WINDOW(l->data), quit_answered, l->data);
+        g_object_unref(app);
+        return G_SOURCE_REMOVE;
+    }
+    GList *all = g_list_copy_deep(gtk_application_get_windows(app), ref_window, NULL);
+    for (GList *l = all; l; l = l->next)
+        gtk_window_destroy(GTK_WINDOW(l->data));
+    g_list_free_full(all, g_object_unref);
+    g_application_quit(G_APPLICATION(app));
+    g_object_unref(app);
+    return G_SOURCE_REMOVE;
+}
+
+static void
+act_quit(GSimpleAction *a, GVariant *p, gpointer user) {
+    (void)a;
+    (void)p;
+    quit_serial++;
+    quit_next(g_object_ref(user));
+}
+
+static void
+vv_application_startup(GApplication *app) {
+    G_APPLICATION_CLASS(vv_application_parent_class)->startup(app);
+    static const GActionEntry entries[] = {{"quit", act_quit, NULL, NULL, NULL, {0}}};
+    g_action_map_add_action_entries(G_ACTION_MAP(app), entries, 1, app);
+    static const struct {
+        const char *action;
+        const char *accels[3];
+    } keys[] = {
+        {"app.quit", {"<Control>q", NULL}},
+        {"win.open", {"<Control>o", NULL}},
+        {"win.import-raw", {"<Control>i", NULL}},
+        {"win.browse-dicom", {"<Control>d", NULL}},
+        {"win.close", {"<Control>w", NULL}},
+        {"win.layout::1", {"<Control>1", NULL}},
+        {"win.layout::4", {"<Control>4", NULL}},
+        {"win.save", {"<Control>s", NULL}},
+        {"win.save-as", {"<Control><Shift>s", NULL}},
+        {"win.save-volume", {"<Control><Shift>e", NULL}},
+        {"win.undo", {"<Control>z", NULL}},
+        {"win.redo", {"<Control><Shift>z", "<Control>y", NULL}},
+        {"win.render", {"<Control>r", NULL}},
+        {"win.delete-object", {"Delete", NULL}},
+        {"win.view-reset", {"<Control>0", NULL}},
+        {"win.drag-target::view", {"<Alt>1", NULL}},
+        {"win.drag-target::object", {"<Alt>2", NULL}},
+        {"win.drag-target::light", {"<Alt>3", NULL}},
+        {"win.drag-target::cut", {"<Alt>4", NULL}},
+    };
+    for (size_t i = 0; i < G_N_ELEMENTS(keys); i++)
+        gtk_application_set_accels_for_action(GTK_APPLICATION(app), keys[i].action, keys[i].accels);
+}
+
+static VvWindow *
+new_window(GApplication *app) {
+    VvWindow *w = vv_window_new(GTK_APPLICATION(app));
+    gtk_window_set_default_size(GTK_WINDOW(w), 1100, 720);
+    gtk_window_present(GTK_WINDOW(w));
+    return w;
+}
+
+static void
+vv_application_activate(GApplication *app) {
+    vv_window_offer_restore(new_window(app));
+}
+
+static void
+vv_application_open(GApplication *app, GFile **files, int n, const char *hint) {
+    (void)hint;
+    VvWindow *w = new_window(app);
+    for (int i = 0; i < n; i++) {
+        char *p = g_file_get_path(files[i]);
+        if (p)
+            vv_window_open(w, p);
+        g_free(p);
+    }
+    vv_window_offer_restore(w);
+}
+
+static void
+vv_application_class_init(VvApplicationClass *klass) {
+    G_APPLICATION_CLASS(klass)->startup = vv_application_startup;
+    G_APPLICATION_CLASS(klass)->activate = vv_application_activate;
+    G_APPLICATION_CLASS(klass)->open = vv_application_open;
+}
+
+static void
+vv_application_init(VvApplication *app) {
+    (void)app;
+}
+
+VvApplication *
+vv_application_new(void) {
+    /* NON_UNIQUE: every start is its own process (tests run several at once) */
+    return g_object_new(VV_TYPE_APPLICATION, "application-id", "org.volvis.VolVis", "flags",
+                        G_APPLICATION_HANDLES_OPEN | G_APPLICATION_NON_UNIQUE, NULL);
+}

@@ -1,0 +1,1314 @@
+/* VvDocument: the edited World, undo, sources and selection (vvg-document.h). */
+#define _GNU_SOURCE /* renameat2 */
+#include "vvg-document.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <ftw.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "volvis/filter.h"
+#include "vvg-models.h"
+
+struct _VvDocument {
+    GObject parent;
+    vv_world *world;
+    vv_world *kept; /* the World while a transient one is shown, else NULL */
+    vvg_undo *undo;
+    char *path;
+    gboolean dirty;
+    int selected;
+    vv_filter_cache *filtered; /* filtered volumes of scene objects, kept across reopenings */
+    GPtrArray *autosaved;      /* autosaved_volume: what the last autosave wrote */
+    int edited_channel;        /* the channel the Transfer function page edits */
+    char *merge_label;         /* vv_document_begin_edit_merging: the last merged edit */
+    gint64 merge_time;
+    GHashTable *time_steps; /* source path -> the file's time steps (GINT_TO_POINTER) */
+    GHashTable *pyramids;   /* source path -> VvGuiPyramid (opened out of core) */
+    GHashTable *series;     /* "channel\npath" -> vv_time_series* */
+    /* vv_document_request_time: a read in flight, the step asked for since */
+    gboolean time_busy;
+    int time_want; /* -1: none */
+    VvTimeFailed time_failed;
+    gpointer time_failed_user;
+};
+
+/* A volume the last autosave wrote, by identity (a reference of its own) and
+ * its modification count: an autosave links the file instead of writing it
+ * again while both are the same. */
+typedef struct autosaved_volume {
+    vv_volume *volume;
+    uint64_t modified;
+    char *file; /* base name in the autosave folder */
+} autosaved_volume;
+
+static void
+autosaved_volume_free(gpointer p) {
+    autosaved_volume *a = p;
+    vv_volume_free(a->volume);
+    g_free(a->file);
+    g_free(a);
+}
+
+G_DEFINE_TYPE(VvDocument, vv_document, G_TYPE_OBJECT)
+
+enum { SIGNAL_CHANGED, SIGNAL_SELECTION_CHANGED, N_SIGNALS };
+static guint signals[N_SIGNALS];
+
+G_DEFINE_QUARK(vv - gui - error - quark, vv_gui_error)
+
+static void
+set_error(GError **error, const char *fallback) {
+    const char *m = vv_error_message();
+    g_set_error_literal(error, VV_GUI_ERROR, 1, m && *m ? m : fallback);
+}
+
+static void
+vv_document_finalize(GObject *o) {
+    VvDocument *doc = VV_DOCUMENT(o);
+    vv_world_free(doc->world);
+    vv_world_free(doc->kept);
+    vvg_undo_free(doc->undo);
+    vv_filter_cache_free(doc->filtered);
+    g_free(doc->path);
+    g_ptr_array_unref(doc->autosaved);
+    g_free(doc->merge_label);
+    g_hash_table_unref(doc->time_steps);
+    g_hash_table_unref(doc->pyramids);
+    g_hash_table_unref(doc->series);
+    G_OBJECT_CLASS(vv_document_parent_class)->finalize(o);
+}
+
+static void
+vv_document_class_init(VvDocumentClass *klass) {
+    G_OBJECT_CLASS(klass)->finalize = vv_document_finalize;
+    signals[SIGNAL_CHANGED] = g_signal_new("changed", G_TYPE_FROM_CLASS(klass), G_SIGNAL_RUN_LAST,
+                                           0, NULL, NULL, NULL, G_TYPE_NONE, 0);
+    signals[SIGNAL_SELECTION_CHANGED] =
+        g_signal_new("selection-changed", G_TYPE_FROM_CLASS(klass), G_SIGNAL_RUN_LAST, 0, NULL,
+                     NULL, NULL, G_TYPE_NONE, 0);
+}
+
+static void
+vv_document_init(VvDocument *doc) {
+    if (vv_world_new(&doc->world) != VV_OK || vvg_undo_new(&doc->undo, 200) != VV_OK ||
+        vv_filter_cache_new(&doc->filtered, 8) != VV_OK)
+        g_error("volvis-gui: out of memory");
+    doc->selected = -1;
+    doc->autosaved = g_ptr_array_new_with_free_func(autosaved_volume_free);
+    doc->time_steps = g_hash_table_new_full(g_str_hash, g_str_equal, g_free, NULL);
+    doc->pyramids = g_hash_table_new_full(g_str_hash, g_str_equal, g_free,
+                                          (GDestroyNotify)vv_gui_pyramid_unref);
+    doc->series = vv_time_cache_new();
+    doc->time_want = -1;
+}
+
+VvDocument *
+vv_document_new(void) {
+    return g_object_new(VV_TYPE_DOCUMENT, NULL);
+}
+
+vv_world *
+vv_document_world(VvDocument *doc) {
+    return doc->world;
+}
+
+vv_world *
+vv_document_snapshot(VvDocument *doc) {
+    vv_world *w = NULL;
+    if (vv_world_clone(&w, doc->world) != VV_OK)
+        return NULL;
+    return w;
+}
+
+static void
+clamp_selection(VvDocument *doc) {
+    if (doc->selected >= doc->world->n_objects)
+        doc->selected = doc->world->n_objects - 1;
+    if (doc->selected < 0 && doc->world->n_objects > 0)
+        doc->selected = 0;
+}
+
+/* Drops the World kept aside: the transient World shown becomes the World. */
+static void
+keep_transient(VvDocument *doc) {
+    vv_world_free(doc->kept);
+    doc->kept = NULL;
+}
+
+/* Puts the World kept aside back, without a signal. */
+static void
+restore_kept(VvDocument *doc) {
+    if (!doc->kept)
+        return;
+    vv_world_free(doc->world);
+    doc->world = doc->kept;
+    doc->kept = NULL;
+    clamp_selection(doc);
+}
+
+void
+vv_document_begin_edit(VvDocument *doc, const char *label) {
+    /* callers may hold pointers into the World shown: the edit changes it */
+    keep_transient(doc);
+    if (vvg_undo_push(doc->undo, doc->world, label) != VV_OK)
+        g_warning("volvis-gui: no undo step for '%s': %s", label, vv_error_message());
+    doc->dirty = TRUE;
+    g_clear_pointer(&doc->merge_label, g_free);
+}
+
+void
+vv_document_begin_edit_merging(VvDocument *doc, const char *label) {
+    gint64 now = g_get_monotonic_time();
+    if (doc->merge_label && !strcmp(doc->merge_label, label) && now - doc->merge_time < 1000000 &&
+        !doc->kept && vvg_undo_can_undo(doc->undo)) {
+        doc->merge_time = now;
+        doc->dirty = TRUE;
+        return;
+    }
+    vv_document_begin_edit(doc, label);
+    doc->merge_label = g_strdup(label);
+    doc->merge_time = now;
+}
+
+void
+vv_document_changed(VvDocument *doc) {
+    g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
+}
+
+static void
+world_replaced(VvDocument *doc) {
+    clamp_selection(doc);
+    g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
+    g_signal_emit(doc, signals[SIGNAL_SELECTION_CHANGED], 0);
+}
+
+gboolean
+vv_document_undo(VvDocument *doc) {
+    g_clear_pointer(&doc->merge_label, g_free);
+    gboolean restored = doc->kept != NULL;
+    restore_kept(doc);
+    if (vvg_undo_undo(doc->undo, &doc->world) != VV_OK) {
+        if (restored)
+            g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
+        return FALSE;
+    }
+    doc->dirty = TRUE;
+    world_replaced(doc);
+    return TRUE;
+}
+
+gboolean
+vv_document_redo(VvDocument *doc) {
+    g_clear_pointer(&doc->merge_label, g_free);
+    gboolean restored = doc->kept != NULL;
+    restore_kept(doc);
+    if (vvg_undo_redo(doc->undo, &doc->world) != VV_OK) {
+        if (restored)
+            g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
+        return FALSE;
+    }
+    doc->dirty = TRUE;
+    world_replaced(doc);
+    return TRUE;
+}
+
+gboolean
+vv_document_can_undo(VvDocument *doc) {
+    return vvg_undo_can_undo(doc->undo);
+}
+
+gboolean
+vv_document_can_redo(VvDocument *doc) {
+    return vvg_undo_can_redo(doc->undo);
+}
+
+/* The file an object's volume came from, kept in geometry.source as scene
+ * loading does, so saving refers to it. */
+static void
+remember_source(vv_object *o, const char *path) {
+    if (!o || !path)
+        return;
+    free(o->geometry.source);
+    /* malloc'ed: the library frees it with free() */
+    char *abs = g_canonicalize_filename(path, NULL);
+    size_t n = strlen(abs) + 1;
+    o->geometry.source = malloc(n);
+    if (o->geometry.source)
+        memcpy(o->geometry.source, abs, n);
+    g_free(abs);
+}
+
+static gboolean
+has_suffix(const char *path, const char *const *suffixes) {
+    g_autofree char *lower = g_ascii_strdown(path, -1);
+    for (int i = 0; suffixes[i]; i++)
+        if (g_str_has_suffix(lower, suffixes[i]))
+            return TRUE;
+    return FALSE;
+}
+
+static const char *const mesh_suffixes[] = {".obj", ".ply", ".stl",  ".off", ".dae",
+                                            ".3ds", ".fbx", ".gltf", ".glb", NULL};
+
+/* A scene replaces the World; its volumes' files are the scene's. */
+static int pyramid_proxy(VvDocument *doc, const char *path, const char *key, VvGuiPyramid **out,
+                         vv_volume **proxy, GError **error);
+
+/* A scene's volume file (vv_scene_load_with): a multiresolution file too
+ * large to read whole (pyramid_proxy) stands in as its proxy, kept under
+ * the path the object will name; anything else is read whole. */
+static vv_status
+scene_volume(void *user, const char *path, int time, vv_scene_volume *out) {
+    VvDocument *doc = user;
+    if (time > 0 || !vv_pyramid_probe(path))
+        return VV_ERR_UNSUPPORTED;
+    VvGuiPyramid *gp = NULL;
+    vv_volume *proxy = NULL;
+    GError *err = NULL;
+    const int r = pyramid_proxy(doc, path, path, &gp, &proxy, &err);
+    if (r < 0) { /* the pyramid's one-line error, for the scene to place */
+        const vv_status s = vv_error_set(VV_ERR_FORMAT, "%s", err->message);
+        g_clear_error(&err);
+        return s;
+    }
+    if (r == 0)
+        return VV_ERR_UNSUPPORTED;
+    const vv_volume *h0 = vv_pyramid_level(gp->pyramid, 0);
+    out->volume = proxy;
+    for (int a = 0; a < 3; a++)
+        out->scale[a] = proxy->spacing[a] / h0->spacing[a];
+    return VV_OK;
+}
+
+static gboolean
+open_scene(VvDocument *doc, const char *path, GError **error) {
+    vv_world *w = NULL;
+    vv_error_clear();
+    if (vv_scene_load_with(&w, path, NULL, doc->filtered, scene_volume, doc) != VV_OK) {
+        set_error(error, "cannot read the scene");
+        return FALSE;
+    }
+    vv_document_begin_edit(doc, "open scene");
+    /* the view fills the window: the scene's camera at the window's size */
+    if (doc->world->view.width > 0 && doc->world->view.height > 0) {
+        w->view.width = doc->world->view.width;
+        w->view.height = doc->world->view.height;
+    }
+    vv_world_free(doc->world);
+    doc->world = w;
+    /* the scene names its volumes relative to itself; without the names at
+     * hand, saving writes them beside the new scene unless found below */
+    g_free(doc->path);
+    doc->path = g_canonicalize_filename(path, NULL);
+    doc->selected = w->n_objects > 0 ? 0 : -1;
+    world_replaced(doc);
+    doc->dirty = FALSE;
+    return TRUE;
+}
+
+/* The renderer that draws every object of @p w: a renderer the user chose
+ * that draws them is kept, else the World's default (vv_world_renderer:
+ * the first renderer whose capabilities cover every object), named in the
+ * settings so the saved scene renders the same through the CLI. */
+static void
+choose_renderer(vv_world *w) {
+    const vv_renderer_info *info = vv_renderer_info_find(vv_render_settings_renderer(&w->render));
+    gboolean all = info != NULL;
+    for (int i = 0; all && i < w->n_objects; i++)
+        all = !w->objects[i]->visible || (info->draws & VV_DRAWS(w->objects[i]->type));
+    if (all)
+        return;
+    w->render.renderer[0] = '\0';
+    w->render.n_options = 0; /* the options belong to the other renderer */
+    g_strlcpy(w->render.renderer, vv_world_renderer(w), sizeof w->render.renderer);
+}
+
+gboolean
+vv_document_mesh_is_y_up(const char *path) {
+    /* the exporters' conventions: OBJ, PLY, glTF, COLLADA and FBX are
+     * usually Y-up; STL, OFF and 3DS (CAD, printing) Z-up */
+    static const char *const y_up[] = {".obj", ".ply", ".gltf", ".glb", ".dae", ".fbx", NULL};
+    return has_suffix(path, y_up);
+}
+
+/* The object added beside others: the view frames the whole World (same
+ * undo step), and the renderer is one that draws everything. */
+static void
+added_beside(VvDocument *doc) {
+    vv_world *w = doc->world;
+    choose_renderer(w);
+    vv_view_frame_box(&w->view, vv_world_bounds(w));
+    vv_document_changed(doc);
+}
+
+static gboolean
+open_mesh(VvDocument *doc, const char *path, GError **error) {
+    vv_mesh *m = NULL;
+    vv_object *o = NULL;
+    if (vv_mesh_load(&m, path) != VV_OK) {
+        set_error(error, "cannot read the mesh");
+        return FALSE;
+    }
+    g_autofree char *base = g_path_get_basename(path);
+    vv_status s = vv_object_new_geometry(&o, VV_OBJECT_MESH, base);
+    g_autofree char *abs = g_canonicalize_filename(path, NULL);
+    if (s == VV_OK)
+        s = vv_object_set_mesh(o, m, abs);
+    vv_mesh_free(m);
+    if (s != VV_OK) {
+        vv_object_free(o);
+        set_error(error, "cannot use the mesh");
+        return FALSE;
+    }
+    if (vv_document_mesh_is_y_up(path)) /* its Y turned to the World's Z (up) */
+        o->orientation = vv_quat_from_axis_angle(vv_vec3_make(1, 0, 0), VV_PI / 2);
+    gboolean fresh = doc->world->n_objects == 0 && !doc->dirty;
+    if (doc->world->n_objects == 0 && doc->world->n_lights == 0) {
+        vv_light l = {VV_LIGHT_DIRECTIONAL, 1, {0, 1, 0}, {0, 0, 0}, {1, 1, 1}, 1.0};
+        vv_world_add_light(doc->world, &l);
+    }
+    vv_document_add_object(doc, o, NULL);
+    added_beside(doc);
+    doc->dirty = !fresh;
+    return TRUE;
+}
+
+/* Adds the @p n channels @p v of one file (n == 1: a volume of one channel)
+ * as one object; @p info[c]: what the read of channel c said (names,
+ * colours), may be NULL. */
+static gboolean
+add_volume_channels(VvDocument *doc, vv_volume *const *v, int n, const vv_load_info *info,
+                    const char *name, const char *source, GError **error) {
+    vv_world *w = NULL;
+    vv_error_clear();
+    if (vv_world_new_for_volume(&w, v[0], NULL) != VV_OK) {
+        set_error(error, "cannot show the volume");
+        return FALSE;
+    }
+    /* the object as `volvis render FILE` shows it */
+    vv_object *obj = NULL;
+    vv_world_take_object(w, 0, &obj);
+    g_strlcpy(obj->name, name, sizeof obj->name);
+    if (n > 1) { /* as `volvis render FILE --channels 0,1,..`: the file's names and colours */
+        const char *names[VV_MAX_CHANNELS] = {NULL};
+        for (int c = 0; c < n && info; c++)
+            names[c] = info[c].channel_name[0] ? info[c].channel_name : NULL;
+        if (vv_object_set_channels(obj, n, v, names) != VV_OK) {
+            set_error(error, "cannot make the channels");
+            vv_object_free(obj);
+            vv_world_free(w);
+            return FALSE;
+        }
+        for (int c = 0; c < n && info; c++) {
+            vv_channel *ch = &obj->channels[c];
+            double lo, hi, g, op;
+            if (info[c].has_color && vv_tf_get_contrast(&ch->tf, &lo, &hi, &g, &op, NULL))
+                (void)vv_tf_set_contrast(
+                    &ch->tf, lo, hi, g, op,
+                    vv_vec3_make(info[c].color[0], info[c].color[1], info[c].color[2]),
+                    ch->tf.opacity_unit_distance);
+        }
+    }
+    if (source)
+        remember_source(obj, source);
+    if (doc->world->n_objects == 0) {
+        gboolean fresh = !doc->dirty;
+        vv_document_begin_edit(doc, "open volume");
+        /* the default scene's view, lights and shading; the session's
+         * render settings and view size stay */
+        w->render = doc->world->render;
+        gboolean resized = FALSE;
+        if (doc->world->view.width > 0 && doc->world->view.height > 0) {
+            resized = w->view.width != doc->world->view.width ||
+                      w->view.height != doc->world->view.height;
+            w->view.width = doc->world->view.width;
+            w->view.height = doc->world->view.height;
+        }
+        vv_world_free(doc->world);
+        doc->world = w;
+        vv_world_add_object(doc->world, obj);
+        if (resized) /* framed for the window's shape */
+            vv_view_frame_box(&w->view, vv_world_bounds(w));
+        doc->selected = 0;
+        doc->dirty = !fresh; /* a file just opened is not "unsaved" */
+        world_replaced(doc);
+        return TRUE;
+    }
+    vv_world_free(w);
+    vv_document_add_object(doc, obj, NULL);
+    added_beside(doc);
+    return TRUE;
+}
+
+gboolean
+vv_document_add_volume(VvDocument *doc, vv_volume *v, const char *name, const char *source,
+                       GError **error) {
+    return add_volume_channels(doc, &v, 1, NULL, name, source, error);
+}
+
+/* ---- multiresolution files out of core ---------------------------------------- */
+
+static void
+gui_pyramid_clear(gpointer data) {
+    VvGuiPyramid *p = data;
+    vv_pyramid_free(p->slices);
+    vv_pyramid_free(p->pyramid);
+    vv_volume_free(p->proxy);
+    g_free(p->path);
+}
+
+VvGuiPyramid *
+vv_gui_pyramid_ref(VvGuiPyramid *p) {
+    return p ? g_atomic_rc_box_acquire(p) : NULL;
+}
+
+vv_pyramid *
+vv_gui_pyramid_slices(VvGuiPyramid *p) {
+    if (!p->slices) {
+        const uint64_t limit =
+            p->limit / 4 > ((uint64_t)16 << 20) ? p->limit / 4 : (uint64_t)16 << 20;
+        vv_error_clear();
+        if (vv_pyramid_open(&p->slices, p->path, 0, -1, limit, NULL) != VV_OK) {
+            g_warning("volvis-gui: slice views: %s", vv_error_message());
+            p->slices = NULL;
+        }
+    }
+    return p->slices;
+}
+
+void
+vv_gui_pyramid_unref(VvGuiPyramid *p) {
+    if (p)
+        g_atomic_rc_box_release_full(p, gui_pyramid_clear);
+}
+
+VvGuiPyramid *
+vv_document_pyramid(VvDocument *doc, const vv_object *o) {
+    if (!o || o->type != VV_OBJECT_VOLUME || !o->geometry.source || !o->volume)
+        return NULL;
+    VvGuiPyramid *p = g_hash_table_lookup(doc->pyramids, o->geometry.source);
+    return p && p->proxy == o->volume ? p : NULL;
+}
+
+uint64_t
+vv_document_memory_limit(void) {
+    const char *e = g_getenv("VOLVIS_MEMORY_LIMIT");
+    if (!e || !*e)
+        return (uint64_t)1 << 30;
+    char *end = NULL;
+    double v = g_ascii_strtod(e, &end);
+    const char u = end ? g_ascii_toupper(*end) : '\0';
+    v *= u == 'K' ? 1024.0 : u == 'M' ? 1048576.0 : u == 'G' ? 1073741824.0 : 1.0;
+    if (!(v >= 1048576.0) || v > 1e15) {
+        g_warning("volvis-gui: VOLVIS_MEMORY_LIMIT=%s is not a size of at least 1M; 1G is used", e);
+        return (uint64_t)1 << 30;
+    }
+    return (uint64_t)v;
+}
+
+/* For saving a World @p w (a clone of the document's, or the document's
+ * own; doc->pyramids are looked up on the original @p orig): the objects
+ * shown from a pyramid get, in @p w, a header volume of level 0's geometry
+ * instead of the proxy, so that the scene names the file with level 0's
+ * origin and spacing (its loader reads level 0). */
+static void
+pyramid_geometry_for_save(VvDocument *doc, const vv_world *orig, vv_world *w) {
+    for (int i = 0; i < w->n_objects && i < orig->n_objects; i++) {
+        VvGuiPyramid *p = vv_document_pyramid(doc, orig->objects[i]);
+        if (!p)
+            continue;
+        const vv_volume *h0 = vv_pyramid_level(p->pyramid, 0);
+        const int one[3] = {1, 1, 1};
+        vv_volume *h = NULL;
+        if (vv_volume_new(&h, one, h0->type) != VV_OK) {
+            vv_error_clear();
+            continue;
+        }
+        memcpy(h->spacing, h0->spacing, sizeof h->spacing);
+        memcpy(h->origin, h0->origin, sizeof h->origin);
+        memcpy(h->direction, h0->direction, sizeof h->direction);
+        h->range[0] = h0->range[0];
+        h->range[1] = h0->range[1];
+        vv_volume_free(w->objects[i]->volume);
+        w->objects[i]->volume = h;
+    }
+}
+
+/* Opens the multiresolution file @p path out of core when its level 0 holds
+ * more than a quarter of the memory limit: the object shows the coarsest
+ * level stretched over level 0's box, its opacity per level 0's voxel (as
+ * `volvis render STORE`). 1: opened; 0: small enough to read whole; -1:
+ * an error. */
+static gboolean
+pyramid_unused(gpointer key, gpointer value, gpointer user) {
+    (void)key;
+    const VvGuiPyramid *p = value;
+    const vv_world *w = user;
+    for (int i = 0; i < w->n_objects; i++)
+        if (w->objects[i]->volume == p->proxy)
+            return FALSE;
+    return TRUE;
+}
+
+/* A volume object's name from its file: the file name up to its first dot
+ * ("brain.nii.gz" is "brain"). Free with g_free. */
+static char *
+volume_name(const char *path) {
+    char *base = g_path_get_basename(path);
+    char *dot = strchr(base, '.');
+    if (dot && dot != base)
+        *dot = '\0';
+    return base;
+}
+
+/* The pyramid of the multiresolution file @p path when its level 0 holds
+ * more than a quarter of the memory limit: opened, kept in doc->pyramids
+ * under @p key (what objects showing it name as their source), *proxy its
+ * proxy (a new reference); the one kept under @p key already when it is
+ * of the same file (another object of it). 1: so; 0: not needed (nothing
+ * kept); -1: an error, in @p error. */
+static int
+pyramid_proxy(VvDocument *doc, const char *path, const char *key, VvGuiPyramid **out,
+              vv_volume **proxy, GError **error) {
+    /* a file some object already shows out of core: its pyramid and proxy
+     * again (one cache for both objects) */
+    VvGuiPyramid *have = g_hash_table_lookup(doc->pyramids, key);
+    if (have) {
+        g_autofree char *canon = g_canonicalize_filename(path, NULL);
+        if (strcmp(have->path, canon) == 0) {
+            *proxy = vv_volume_ref(have->proxy);
+            *out = have;
+            return 1;
+        }
+    }
+    const uint64_t limit = vv_document_memory_limit();
+    vv_pyramid *p = NULL;
+    vv_error_clear();
+    if (vv_pyramid_open(&p, path, 0, -1, limit, NULL) != VV_OK) {
+        set_error(error, "cannot open the multiresolution file");
+        return -1;
+    }
+    const int top = vv_pyramid_levels(p) - 1;
+    const vv_volume *h0 = vv_pyramid_level(p, 0);
+    const double bytes =
+        (double)h0->dims[0] * h0->dims[1] * h0->dims[2] * (double)vv_voxel_type_size(h0->type);
+    if (top == 0 || bytes <= (double)limit / 4) {
+        vv_pyramid_free(p);
+        return 0;
+    }
+    if (vv_pyramid_proxy(p, 0, proxy) != VV_OK) {
+        set_error(error, "cannot read the coarsest level");
+        vv_pyramid_free(p);
+        return -1;
+    }
+    VvGuiPyramid *gp = g_atomic_rc_box_new0(VvGuiPyramid);
+    gp->pyramid = p;
+    gp->proxy = vv_volume_ref(*proxy);
+    gp->path = g_canonicalize_filename(path, NULL);
+    gp->limit = limit;
+    g_hash_table_replace(doc->pyramids, g_strdup(key), gp);
+    g_hash_table_replace(doc->time_steps, g_strdup(key), GINT_TO_POINTER(1));
+    *out = gp;
+    return 1;
+}
+
+static int
+open_out_of_core(VvDocument *doc, const char *path, GError **error) {
+    /* each pyramid holds up to the limit: those no object of the World shows
+     * any more go (an undo back to one draws its proxy in memory) */
+    g_hash_table_foreach_remove(doc->pyramids, pyramid_unused, doc->world);
+    g_autofree char *key = g_canonicalize_filename(path, NULL);
+    VvGuiPyramid *gp = NULL;
+    vv_volume *proxy = NULL;
+    const int r = pyramid_proxy(doc, path, key, &gp, &proxy, error);
+    if (r <= 0)
+        return r;
+    const vv_volume *h0 = vv_pyramid_level(gp->pyramid, 0);
+    g_autofree char *base = volume_name(path);
+    const int before = doc->world->n_objects;
+    const gboolean ok = add_volume_channels(doc, &proxy, 1, NULL, base, path, error);
+    /* opacity per level 0's smallest voxel edge, not the proxy's */
+    if (ok && doc->world->n_objects > before) {
+        vv_object *o = doc->world->objects[doc->world->n_objects - 1];
+        const double ps = fmin(proxy->spacing[0], fmin(proxy->spacing[1], proxy->spacing[2]));
+        const double fs = fmin(h0->spacing[0], fmin(h0->spacing[1], h0->spacing[2]));
+        if (fabs(o->tf.opacity_unit_distance - ps) <= 1e-12 * ps)
+            o->tf.opacity_unit_distance = fs;
+        vv_document_changed(doc);
+    }
+    vv_volume_free(proxy);
+    if (!ok)
+        g_hash_table_remove(doc->pyramids, key);
+    return ok ? 1 : -1;
+}
+
+gboolean
+vv_document_open(VvDocument *doc, const char *path, GError **error) {
+    static const char *const scene_suffixes[] = {".json", NULL};
+    if (has_suffix(path, scene_suffixes))
+        return open_scene(doc, path, error);
+    vv_error_clear();
+    if (has_suffix(path, mesh_suffixes))
+        return open_mesh(doc, path, error);
+    /* a Zarr store chosen by its metadata file (a file chooser picks no folder) */
+    g_autofree char *leaf = g_path_get_basename(path);
+    g_autofree char *store =
+        !strcmp(leaf, ".zattrs") || !strcmp(leaf, ".zgroup") || !strcmp(leaf, ".zarray")
+            ? g_path_get_dirname(path)
+            : NULL;
+    if (store && vv_pyramid_probe(store))
+        path = store;
+    if (vv_pyramid_probe(path)) {
+        const int r = open_out_of_core(doc, path, error);
+        if (r != 0)
+            return r > 0;
+    }
+    /* every channel of the file (the first VV_MAX_CHANNELS), each at time step 0 */
+    vv_volume *v[VV_MAX_CHANNELS] = {NULL};
+    vv_load_info info[VV_MAX_CHANNELS];
+    int n = 1;
+    gboolean ok = TRUE;
+    for (int c = 0; c < n && ok; c++) {
+        vv_load_options opt;
+        vv_load_options_init(&opt);
+        opt.channel = c == 0 ? -1 : c; /* -1: the format's default for files of one */
+        opt.info = &info[c];
+        ok = vv_volume_load(&v[c], path, &opt) == VV_OK;
+        if (ok && c == 0)
+            n = info[0].n_channels < VV_MAX_CHANNELS ? info[0].n_channels : VV_MAX_CHANNELS;
+        if (!ok)
+            set_error(error, "cannot read the volume");
+    }
+    if (ok && info[0].n_channels > VV_MAX_CHANNELS)
+        g_message("volvis-gui: %s has %d channels; the first %d are shown", path,
+                  info[0].n_channels, VV_MAX_CHANNELS);
+    g_autofree char *base = volume_name(path);
+    if (ok) /* before the object, whose "changed" the pages fill from; keyed as
+             * remember_source names the file */
+        g_hash_table_replace(doc->time_steps, g_canonicalize_filename(path, NULL),
+                             GINT_TO_POINTER(info[0].n_times > 1 ? info[0].n_times : 1));
+    if (ok)
+        ok = add_volume_channels(doc, v, n, info, base, path, error);
+    for (int c = 0; c < n; c++)
+        vv_volume_free(v[c]);
+    return ok;
+}
+
+int
+vv_document_edited_channel(VvDocument *doc) {
+    vv_object *o = vv_document_selected_object(doc);
+    if (!o || o->n_channels < 1)
+        return -1;
+    return doc->edited_channel < o->n_channels ? doc->edited_channel : 0;
+}
+
+void
+vv_document_set_edited_channel(VvDocument *doc, int channel) {
+    doc->edited_channel = channel > 0 ? channel : 0;
+    g_signal_emit(doc, signals[SIGNAL_SELECTION_CHANGED], 0);
+}
+
+int
+vv_document_time_steps(VvDocument *doc, const vv_object *o) {
+    if (!o || o->type != VV_OBJECT_VOLUME || !o->geometry.source)
+        return 0;
+    return GPOINTER_TO_INT(g_hash_table_lookup(doc->time_steps, o->geometry.source));
+}
+
+GHashTable *
+vv_time_cache_new(void) {
+    return g_hash_table_new_full(g_str_hash, g_str_equal, g_free,
+                                 (GDestroyNotify)vv_time_series_free);
+}
+
+/* The time series of channel @p index of @p path in @p cache, opened once. */
+static vv_time_series *
+series_for(GHashTable *cache, const char *path, int index) {
+    g_autofree char *key = g_strdup_printf("%d\n%s", index, path);
+    vv_time_series *ts = g_hash_table_lookup(cache, key);
+    if (ts)
+        return ts;
+    vv_load_options opt;
+    vv_load_options_init(&opt);
+    opt.channel = index;
+    vv_error_clear();
+    if (vv_time_series_open(&ts, path, &opt, 0) != VV_OK)
+        return NULL;
+    g_hash_table_replace(cache, g_steal_pointer(&key), ts);
+    return ts;
+}
+
+/* Step @p t of every channel of @p o's file into @p v (new references), the
+ * step after read ahead. */
+static vv_status
+read_step(GHashTable *cache, const vv_object *o, int t, vv_volume **v) {
+    const int n = o->n_channels > 0 ? o->n_channels : 1;
+    vv_status s = VV_OK;
+    for (int c = 0; c < n && s == VV_OK; c++) {
+        vv_time_series *ts =
+            series_for(cache, o->geometry.source, o->n_channels > 0 ? o->channels[c].index : -1);
+        s = ts ? vv_time_series_get(ts, t, &v[c]) : vv_error_prefix(VV_ERR_IO, "%s", o->name);
+        if (ts && s == VV_OK && t + 1 < vv_time_series_count(ts))
+            vv_time_series_prefetch(ts, t + 1); /* the next step while this one draws */
+    }
+    if (s != VV_OK)
+        for (int c = 0; c < n; c++)
+            g_clear_pointer(&v[c], vv_volume_free);
+    return s;
+}
+
+gboolean
+vv_world_apply_time(GHashTable *cache, vv_world *w, const vv_world *base, GError **error) {
+    for (int i = 0; i < w->n_objects && i < base->n_objects; i++) {
+        vv_object *o = w->objects[i];
+        if (o->type != VV_OBJECT_VOLUME || !o->volume || o->time == base->objects[i]->time)
+            continue;
+        if (!o->geometry.source) {
+            g_set_error(error, VV_GUI_ERROR, 1,
+                        "%s: time step %d: the volume was not read from a file", o->name, o->time);
+            return FALSE;
+        }
+        vv_volume *v[VV_MAX_CHANNELS] = {NULL};
+        vv_error_clear();
+        vv_status s = read_step(cache, o, o->time, v);
+        if (s == VV_OK)
+            s = vv_object_replace_volumes(o, o->n_channels > 0 ? o->n_channels : 1, v);
+        for (int c = 0; c < VV_MAX_CHANNELS; c++)
+            vv_volume_free(v[c]);
+        if (s != VV_OK) {
+            set_error(error, "cannot read the time step");
+            return FALSE;
+        }
+    }
+    return TRUE;
+}
+
+/* Step @p t of the selected object @p o exists; else @p error says not. */
+static gboolean
+check_step(VvDocument *doc, const vv_object *o, int t, GError **error) {
+    const int steps = vv_document_time_steps(doc, o);
+    if (steps >= 2 && t >= 0 && t < steps)
+        return TRUE;
+    g_set_error(error, VV_GUI_ERROR, 1, "%s: no time step %d (%d steps)", o ? o->name : "no object",
+                t, steps);
+    return FALSE;
+}
+
+gboolean
+vv_document_set_time(VvDocument *doc, int t, GError **error) {
+    vv_object *o = vv_document_selected_object(doc);
+    if (!check_step(doc, o, t, error))
+        return FALSE;
+    if (o->time == t)
+        return TRUE;
+    const int n = o->n_channels > 0 ? o->n_channels : 1;
+    vv_volume *v[VV_MAX_CHANNELS] = {NULL};
+    vv_error_clear();
+    vv_status s = read_step(doc->series, o, t, v);
+    if (s == VV_OK) {
+        vv_document_begin_edit_merging(doc, "time step");
+        o = vv_document_selected_object(doc);
+        vv_error_clear();
+        if ((s = vv_object_replace_volumes(o, n, v)) == VV_OK)
+            o->time = t;
+    }
+    for (int c = 0; c < n; c++)
+        vv_volume_free(v[c]);
+    if (s != VV_OK) {
+        set_error(error, "cannot read the time step");
+        return FALSE;
+    }
+    vv_document_changed(doc);
+    return TRUE;
+}
+
+/* One asynchronous step read (vv_document_request_time): the series are
+ * resolved on the main thread, read on a worker. */
+typedef struct time_job {
+    int t, n;
+    char *source; /* the object's file: the result goes to an object of it */
+    vv_time_series *ts[VV_MAX_CHANNELS];
+    vv_volume *v[VV_MAX_CHANNELS];
+    char *message; /* the read's error, or NULL */
+} time_job;
+
+static void
+time_job_free(gpointer p) {
+    time_job *j = p;
+    for (int c = 0; c < j->n; c++)
+        vv_volume_free(j->v[c]);
+    g_free(j->source);
+    g_free(j->message);
+    g_free(j);
+}
+
+static void
+time_job_run(GTask *task, gpointer src, gpointer data, GCancellable *cancel) {
+    (void)src;
+    (void)cancel;
+    time_job *j = data;
+    for (int c = 0; c < j->n && !j->message; c++) {
+        vv_error_clear();
+        if (vv_time_series_get(j->ts[c], j->t, &j->v[c]) != VV_OK)
+            j->message = g_strdup(vv_error_message());
+        else if (j->t + 1 < vv_time_series_count(j->ts[c]))
+            vv_time_series_prefetch(j->ts[c], j->t + 1); /* the next step while this one draws */
+    }
+    g_task_return_boolean(task, TRUE);
+}
+
+static void time_job_start(VvDocument *doc);
+
+static void
+time_job_done(GObject *src, GAsyncResult *res, gpointer data) {
+    (void)data;
+    VvDocument *doc = VV_DOCUMENT(src);
+    time_job *j = g_task_get_task_data(G_TASK(res));
+    doc->time_busy = FALSE;
+    vv_object *o = vv_document_selected_object(doc);
+    const int n = o && o->n_channels > 0 ? o->n_channels : 1;
+    if (j->message) {
+        doc->time_want = -1;
+        if (doc->time_failed)
+            doc->time_failed(doc, j->message, doc->time_failed_user);
+    } else if (o && o->geometry.source && !strcmp(o->geometry.source, j->source) && n == j->n &&
+               o->time != j->t) {
+        vv_document_begin_edit_merging(doc, "time step");
+        o = vv_document_selected_object(doc);
+        vv_error_clear();
+        if (vv_object_replace_volumes(o, n, j->v) == VV_OK) {
+            o->time = j->t;
+            vv_document_changed(doc);
+        } else if (doc->time_failed) {
+            doc->time_failed(doc, vv_error_message(), doc->time_failed_user);
+        }
+    }
+    if (doc->time_want >= 0)
+        time_job_start(doc);
+}
+
+/* Starts reading doc->time_want of the selected object, unless it is shown. */
+static void
+time_job_start(VvDocument *doc) {
+    vv_object *o = vv_document_selected_object(doc);
+    const int t = doc->time_want;
+    doc->time_want = -1;
+    if (!o || !o->geometry.source || o->time == t)
+        return;
+    time_job *j = g_new0(time_job, 1);
+    j->t = t;
+    j->n = o->n_channels > 0 ? o->n_channels : 1;
+    j->source = g_strdup(o->geometry.source);
+    for (int c = 0; c < j->n; c++) {
+        j->ts[c] = series_for(doc->series, o->geometry.source,
+                              o->n_channels > 0 ? o->channels[c].index : -1);
+        if (!j->ts[c]) {
+            if (doc->time_failed)
+                doc->time_failed(doc, vv_error_message(), doc->time_failed_user);
+            time_job_free(j);
+            return;
+        }
+    }
+    doc->time_busy = TRUE;
+    GTask *task = g_task_new(doc, NULL, time_job_done, NULL);
+    g_task_set_task_data(task, j, time_job_free);
+    g_task_run_in_thread(task, time_job_run);
+    g_object_unref(task);
+}
+
+void
+vv_document_request_time(VvDocument *doc, int t, VvTimeFailed failed, gpointer user) {
+    g_autoptr(GError) err = NULL;
+    doc->time_failed = failed;
+    doc->time_failed_user = user;
+    if (!check_step(doc, vv_document_selected_object(doc), t, &err)) {
+        if (failed)
+            failed(doc, err->message, user);
+        return;
+    }
+    doc->time_want = t;
+    if (!doc->time_busy)
+        time_job_start(doc);
+}
+
+gboolean
+vv_document_time_pending(VvDocument *doc) {
+    return doc->time_busy || doc->time_want >= 0;
+}
+
+void
+vv_document_forget_time_listener(VvDocument *doc, gpointer user) {
+    if (doc->time_failed_user == user) {
+        doc->time_failed = NULL;
+        doc->time_failed_user = NULL;
+    }
+}
+
+void
+vv_document_set_view_size(VvDocument *doc, int width, int height) {
+    if (width < 1 || height < 1)
+        return;
+    doc->world->view.width = width;
+    doc->world->view.height = height;
+    if (doc->kept) {
+        doc->kept->view.width = width;
+        doc->kept->view.height = height;
+    }
+}
+
+const char *
+vv_document_path(VvDocument *doc) {
+    return doc->path;
+}
+
+gboolean
+vv_document_dirty(VvDocument *doc) {
+    return doc->dirty;
+}
+
+gboolean
+vv_document_save(VvDocument *doc, const char *path, GError **error) {
+    vv_world *w = doc->kept ? doc->kept : doc->world; /* never a transient World */
+    vv_world *ws = NULL; /* the World as saved: pyramids' objects with level 0's geometry */
+    vv_error_clear();
+    if (vv_world_clone(&ws, w) != VV_OK) {
+        set_error(error, "cannot take a snapshot of the World");
+        return FALSE;
+    }
+    pyramid_geometry_for_save(doc, w, ws);
+    g_autofree char *dir = g_path_get_dirname(path);
+    g_autofree char *stem = g_path_get_basename(path);
+    char *dot = strrchr(stem, '.');
+    if (dot && dot != stem)
+        *dot = '\0';
+    /* All or nothing: the volumes made in the session are written under
+     * names no file has yet (an older save's files stay as its scene needs
+     * them), then the scene; when the scene cannot be written, the volumes
+     * of this save are removed again and no object takes their names. */
+    const char **files = g_new0(const char *, w->n_objects > 0 ? w->n_objects : 1);
+    GPtrArray *written = g_ptr_array_new_with_free_func(g_free);
+    gboolean ok = TRUE;
+    for (int i = 0; ok && i < w->n_objects; i++) {
+        vv_object *o = w->objects[i];
+        if (o->type != VV_OBJECT_VOLUME || !o->volume || o->geometry.source)
+            continue; /* vv_scene_save refers to the file it came from */
+        g_autofree char *base = g_strdup_printf("%s_%d_%s", stem, i, o->name);
+        for (char *c = base; *c; c++)
+            if (!g_ascii_isalnum(*c) && *c != '.' && *c != '_' && *c != '-')
+                *c = '_';
+        char *full = NULL;
+        for (int k = 1; !full || g_file_test(full, G_FILE_TEST_EXISTS); k++) {
+            g_free(full);
+            g_autofree char *name =
+                k == 1 ? g_strdup_printf("%s.nrrd", base) : g_strdup_printf("%s-%d.nrrd", base, k);
+            full = g_build_filename(dir, name, NULL);
+        }
+        vv_error_clear();
+        if (vv_volume_save(o->volume, full, VV_FORMAT_NRRD, 0) != VV_OK) {
+            set_error(error, "cannot write a volume");
+            g_free(full);
+            ok = FALSE;
+            break;
+        }
+        g_ptr_array_add(written, full);
+        const char *slash = strrchr(full, '/');
+        files[i] = slash ? slash + 1 : full; /* beside the scene: relative to it */
+    }
+    vv_error_clear();
+    if (ok && vv_scene_save(ws, path, files) != VV_OK) {
+        set_error(error, "cannot write the scene");
+        ok = FALSE;
+    }
+    vv_world_free(ws);
+    if (ok) {
+        for (int i = 0, k = 0; i < w->n_objects; i++)
+            if (files[i])
+                remember_source(w->objects[i], g_ptr_array_index(written, k++));
+    } else {
+        for (guint i = 0; i < written->len; i++)
+            unlink(g_ptr_array_index(written, i));
+    }
+    g_free(files);
+    g_ptr_array_unref(written);
+    if (!ok)
+        return FALSE;
+    /* @p path may be doc->path itself (Save): canonicalize before freeing */
+    char *saved = g_canonicalize_filename(path, NULL);
+    g_free(doc->path);
+    doc->path = saved;
+    doc->dirty = FALSE;
+    return TRUE;
+}
+
+/* ---- autosave ---------------------------------------------------------------- */
+
+static int
+remove_entry(const char *p, const struct stat *st, int flag, struct FTW *ftw) {
+    (void)st;
+    (void)flag;
+    (void)ftw;
+    return remove(p) != 0 && errno != ENOENT ? -1 : 0;
+}
+
+void
+vv_document_remove_folder(const char *dir) {
+    if (dir)
+        nftw(dir, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
+}
+
+/* The file the autosave @p prev lists for @p v as it is now, or NULL. */
+static const char *
+autosaved_file(const GPtrArray *prev, const vv_volume *v) {
+    for (guint i = 0; i < prev->len; i++) {
+        const autosaved_volume *a = g_ptr_array_index(prev, i);
+        if (a->volume == v && a->modified == v->modified)
+            return a->file;
+    }
+    return NULL;
+}
+
+/* An autosave in the making: a snapshot of the World (the objects share
+ * their volumes, referenced) and what the last autosave wrote, so that it
+ * can be written on another thread while the session goes on. */
+struct vv_autosave_job {
+    vv_world *world;
+    char *dir;
+    GPtrArray *prev; /* autosaved_volume: the last autosave's, references of their own */
+    GPtrArray *done; /* autosaved_volume: what this one wrote */
+};
+
+/* Writes the staged session into @p stage: volume_<i>.nrrd for each volume
+ * made in the session (linked from the job's folder when unchanged), then
+ * session.json. */
+static gboolean
+autosave_stage(vv_autosave_job *job, const char *stage, GError **error) {
+    const vv_world *w = job->world;
+    const char **files = g_new0(const char *, w->n_objects > 0 ? w->n_objects : 1);
+    GPtrArray *names = g_ptr_array_new_with_free_func(g_free);
+    gboolean ok = TRUE;
+    for (int i = 0; ok && i < w->n_objects; i++) {
+        vv_object *o = w->objects[i];
+        if (o->type != VV_OBJECT_VOLUME || !o->volume || o->geometry.source)
+            continue;
+        char *name = g_strdup_printf("volume_%d.nrrd", i);
+        g_ptr_array_add(names, name);
+        files[i] = name;
+        g_autofree char *to = g_build_filename(stage, name, NULL);
+        const char *old = autosaved_file(job->prev, o->volume);
+        g_autofree char *from = old ? g_build_filename(job->dir, old, NULL) : NULL;
+        if (!from || link(from, to) != 0) {
+            vv_error_clear();
+            if (vv_volume_save(o->volume, to, VV_FORMAT_NRRD, 0) != VV_OK) {
+                set_error(error, "cannot write a volume");
+                ok = FALSE;
+                break;
+            }
+        }
+        autosaved_volume *a = g_new0(autosaved_volume, 1);
+        a->volume = vv_volume_ref(o->volume);
+        a->modified = o->volume->modified;
+        a->file = g_strdup(name);
+        g_ptr_array_add(job->done, a);
+    }
+    g_autofree char *scene = g_build_filename(stage, "session.json", NULL);
+    vv_error_clear();
+    if (ok && vv_scene_save(w, scene, files) != VV_OK) {
+        set_error(error, "cannot write the scene");
+        ok = FALSE;
+    }
+    g_free(files);
+    g_ptr_array_unref(names);
+    return ok;
+}
+
+vv_autosave_job *
+vv_document_autosave_begin(VvDocument *doc, const char *dir, GError **error) {
+    const vv_world *w = doc->kept ? doc->kept : doc->world; /* never a transient World */
+    vv_autosave_job *job = g_new0(vv_autosave_job, 1);
+    vv_error_clear();
+    if (vv_world_clone(&job->world, w) != VV_OK) {
+        set_error(error, "cannot take a snapshot of the World");
+        g_free(job);
+        return NULL;
+    }
+    pyramid_geometry_for_save(doc, w, job->world);
+    job->dir = g_strdup(dir);
+    job->prev = g_ptr_array_new_with_free_func(autosaved_volume_free);
+    for (guint i = 0; i < doc->autosaved->len; i++) {
+        const autosaved_volume *a = g_ptr_array_index(doc->autosaved, i);
+        autosaved_volume *c = g_new0(autosaved_volume, 1);
+        c->volume = vv_volume_ref(a->volume);
+        c->modified = a->modified;
+        c->file = g_strdup(a->file);
+        g_ptr_array_add(job->prev, c);
+    }
+    job->done = g_ptr_array_new_with_free_func(autosaved_volume_free);
+    return job;
+}
+
+gboolean
+vv_autosave_job_run(vv_autosave_job *job, GError **error) {
+    const char *dir = job->dir;
+    g_autofree char *stage = g_strconcat(dir, ".tmp", NULL);
+    vv_document_remove_folder(stage); /* a stage an earlier crash left */
+    if (g_mkdir_with_parents(stage, 0700) != 0) {
+        g_set_error(error, VV_GUI_ERROR, 1, "%s: %s", stage, g_strerror(errno));
+        return FALSE;
+    }
+    gboolean ok = autosave_stage(job, stage, error);
+    /* one unit: the stage takes the folder's place in one step */
+    if (ok && g_file_test(dir, G_FILE_TEST_IS_DIR)) {
+        if (renameat2(AT_FDCWD, stage, AT_FDCWD, dir, RENAME_EXCHANGE) != 0) {
+            g_set_error(error, VV_GUI_ERROR, 1, "%s: %s", dir, g_strerror(errno));
+            ok = FALSE;
+        }
+    } else if (ok && rename(stage, dir) != 0) {
+        g_set_error(error, VV_GUI_ERROR, 1, "%s: %s", dir, g_strerror(errno));
+        ok = FALSE;
+    }
+    vv_document_remove_folder(stage); /* the old autosave, or what failed */
+    if (!ok)
+        g_ptr_array_set_size(job->done, 0);
+    return ok;
+}
+
+const char *
+vv_autosave_job_folder(const vv_autosave_job *job) {
+    return job->dir;
+}
+
+void
+vv_document_autosave_end(VvDocument *doc, vv_autosave_job *job, gboolean ok) {
+    if (!ok)
+        return;
+    g_ptr_array_unref(doc->autosaved);
+    doc->autosaved = job->done;
+    job->done = g_ptr_array_new_with_free_func(autosaved_volume_free);
+}
+
+void
+vv_autosave_job_free(vv_autosave_job *job) {
+    if (!job)
+        return;
+    vv_world_free(job->world);
+    g_free(job->dir);
+    g_ptr_array_unref(job->prev);
+    g_ptr_array_unref(job->done);
+    g_free(job);
+}
+
+gboolean
+vv_document_autosave(VvDocument *doc, const char *dir, GError **error) {
+    vv_autosave_job *job = vv_document_autosave_begin(doc, dir, error);
+    if (!job)
+        return FALSE;
+    gboolean ok = vv_autosave_job_run(job, error);
+    vv_document_autosave_end(doc, job, ok);
+    vv_autosave_job_free(job);
+    return ok;
+}
+
+gboolean
+vv_document_restore(VvDocument *doc, const char *dir, GError **error) {
+    g_autofree char *scene = g_build_filename(dir, "session.json", NULL);
+    if (!open_scene(doc, scene, error))
+        return FALSE;
+    /* the autosave's own volumes are volumes of the session again: saving
+     * writes them (the folder goes away once the new autosave stands) */
+    g_autofree char *prefix = g_canonicalize_filename(dir, NULL);
+    for (int i = 0; i < doc->world->n_objects; i++) {
+        vv_object *o = doc->world->objects[i];
+        if (o->geometry.source && g_str_has_prefix(o->geometry.source, prefix) &&
+            o->geometry.source[strlen(prefix)] == '/') {
+            free(o->geometry.source);
+            o->geometry.source = NULL;
+        }
+    }
+    g_free(doc->path);
+    doc->path = NULL;
+    doc->dirty = TRUE;
+    g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
+    return TRUE;
+}
+
+void
+vv_document_add_object(VvDocument *doc, vv_object *obj, const char *source) {
+    vv_document_begin_edit(doc, "add object");
+    if (source && obj->type == VV_OBJECT_VOLUME)
+        remember_source(obj, source);
+    if (vv_world_add_object(doc->world, obj) != VV_OK) {
+        g_warning("volvis-gui: %s", vv_error_message());
+        return;
+    }
+    doc->selected = doc->world->n_objects - 1;
+    world_replaced(doc);
+}
+
+void
+vv_document_delete_object(VvDocument *doc, int index) {
+    if (index < 0 || index >= doc->world->n_objects)
+        return;
+    vv_document_begin_edit(doc, "delete object");
+    vv_object *o = NULL;
+    if (vv_world_take_object(doc->world, index, &o) == VV_OK)
+        vv_object_free(o);
+    if (doc->selected >= doc->world->n_objects)
+        doc->selected = doc->world->n_objects - 1;
+    world_replaced(doc);
+}
+
+int
+vv_document_selected(VvDocument *doc) {
+    return doc->selected;
+}
+
+vv_object *
+vv_document_selected_object(VvDocument *doc) {
+    if (doc->selected < 0 || doc->selected >= doc->world->n_objects)
+        return NULL;
+    return doc->world->objects[doc->selected];
+}
+
+void
+vv_document_select(VvDocument *doc, int index) {
+    if (index < -1 || index >= doc->world->n_objects)
+        index = -1;
+    doc->selected = index;
+    g_signal_emit(doc, signals[SIGNAL_SELECTION_CHANGED], 0);
+}
+
+void
+vv_document_show_transient(VvDocument *doc, vv_world *world) {
+    if (!world)
+        return;
+    if (doc->kept)
+        vv_world_free(doc->world);
+    else
+        doc->kept = doc->world;
+    doc->world = world;
+    clamp_selection(doc);
+    g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
+}
+
+void
+vv_document_end_transient(VvDocument *doc, gboolean restore) {
+    if (!doc->kept)
+        return;
+    if (!restore) {
+        keep_transient(doc);
+        return;
+    }
+    restore_kept(doc);
+    g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
+}
+
+gboolean
+vv_document_transient(VvDocument *doc) {
+    return doc->kept != NULL;
+}
