@@ -7,6 +7,9 @@ every vv_ function an object file of the build uses must be defined in its
 own component or below, and a function of another component (core excepted)
 must be declared in include/volvis/ (a header can be avoided by declaring
 a function by hand; a call cannot).
+The GUI's names are checked too: apps/volvis-gui/ names its own functions,
+types and macros vvg_/Vvg/VVG_ (DESIGN.md), so every vv_, Vv or VV_ name
+its files use must be one the library declares in include/volvis/.
 
     apps, python -> scene -> manipulate, parallel -> render, modeling, filter,
     measure, surface, compress, input, io, sandbox -> model -> core
@@ -23,6 +26,10 @@ Rules (docs/architecture.md, "Layers"; python/ and apps/ are programs):
    not (they see the installed API only).
 3. Inside src/render, a renderer (src/render/<name>/) includes the shared
    render code (src/render/*.h), never another renderer's files.
+4. The GUI (apps/volvis-gui/) defines no name with the library's prefix:
+   a vv_/Vv/VV_ name in its files (code or comment) is the library's,
+   declared in include/volvis/; its own are vvg_/Vvg/VVG_, in files named
+   vvg-*.c/.h.
 
 The layer map is the LAYERS and PUBLIC tables below: the one place that says
 which component sits where. Known violations that another piece of work is
@@ -180,6 +187,50 @@ def scan(root):
     return len(files), found
 
 
+# The GUI's own prefix is vvg_ (Vvg types, VVG_ macros); vv_ is the library's.
+GUI_DIR = os.path.join("apps", "volvis-gui")
+LIB_NAME_RE = re.compile(r"\b(?:vv_|VV_|Vv(?!g[A-Z0-9]))\w+")
+
+
+def public_names(root):
+    """Every vv_/Vv/VV_ name in include/volvis/ (comments removed first):
+    functions, types, enum values and macros."""
+    names = set()
+    for d, _, files in os.walk(os.path.join(root, "include", "volvis")):
+        for n in files:
+            if n.endswith(".h"):
+                with open(os.path.join(d, n), encoding="utf-8", errors="replace") as f:
+                    text = re.sub(r"/\*.*?\*/|//[^\n]*", " ", f.read(), flags=re.S)
+                names.update(LIB_NAME_RE.findall(text))
+    return names
+
+
+def scan_gui_names(root):
+    """(rel, name, message) for every vv_/Vv/VV_ name in the GUI's files that
+    the library does not declare: a GUI name with the library's prefix."""
+    public = public_names(root)
+    found = []
+    for d, _, names in os.walk(os.path.join(root, GUI_DIR)):
+        for n in sorted(names):
+            if not n.endswith(SOURCE_EXT):
+                continue
+            rel = os.path.relpath(os.path.join(d, n), root).replace(os.sep, "/")
+            if n.startswith("vv-"):
+                found.append((rel, n, "%s: the GUI's files are vvg-*.c/.h" % rel))
+            with open(os.path.join(root, rel), encoding="utf-8", errors="replace") as f:
+                text = f.read()
+            seen = set()
+            for m in LIB_NAME_RE.finditer(text):
+                name = m.group(0)
+                if name in public or name in seen:
+                    continue
+                seen.add(name)
+                line = text.count("\n", 0, m.start()) + 1
+                found.append((rel, name, "%s:%d: %s is not the library's (include/volvis/): "
+                              "the GUI's own names are vvg_/Vvg/VVG_" % (rel, line, name)))
+    return found
+
+
 def public_functions(root):
     """Names declared in include/volvis/ (comments removed first)."""
     names = set()
@@ -272,6 +323,7 @@ def main():
     n_files, found = scan(root)
     failures = []
     n_pending = sort_out(found, PENDING, "includes", failures, a.quiet)
+    failures += [msg for _, _, msg in scan_gui_names(root)]
     summary = "%d files" % n_files
     if a.objects:
         n_objs, calls = scan_objects(root, os.path.abspath(a.objects))

@@ -50,7 +50,7 @@ usage(FILE *out) {
 
 int
 main(int argc, char **argv) {
-    vv_scene_view_set_start_time(g_get_monotonic_time());
+    vvg_scene_view_set_start_time(g_get_monotonic_time());
     /* The renderers' OpenMP threads share the cores with the UI thread and
      * the display server: threads that spin while they wait for work take
      * the time the UI needs to show frames. Unless the user says otherwise,
@@ -70,7 +70,7 @@ main(int argc, char **argv) {
             return 2;
         }
     }
-    VvApplication *app = vv_application_new();
+    VvgApplication *app = vvg_application_new();
     int status = g_application_run(G_APPLICATION(app), argc, argv);
     g_object_unref(app);
     return status;

@@ -1,4 +1,4 @@
-/* VvAnimatorPage: the Animator page (vvg-animator-page.h). */
+/* VvgAnimatorPage: the Animator page (vvg-animator-page.h). */
 #include "vvg-animator-page.h"
 #include "vvg-widgets.h"
 
@@ -21,10 +21,10 @@
 
 /* A final render on the worker thread; the UI reads the atomics on a timer. */
 typedef struct render_job {
-    VvAnimatorPage *page; /* not a reference: the page joins the thread before it goes */
-    vv_animation *anim;   /* owned snapshots */
+    VvgAnimatorPage *page; /* not a reference: the page joins the thread before it goes */
+    vv_animation *anim;    /* owned snapshots */
     vv_world *world;
-    GHashTable *series; /* the time steps of objects[i].time tracks (vv_world_apply_time) */
+    GHashTable *series; /* the time steps of objects[i].time tracks (vvg_world_apply_time) */
     char *output;
     int resume;
     int frames;
@@ -38,9 +38,9 @@ typedef struct render_job {
     char error[1024];
 } render_job;
 
-struct _VvAnimatorPage {
+struct _VvgAnimatorPage {
     GtkBox parent;
-    VvDocument *doc;
+    VvgDocument *doc;
     gulong changed_id;
     vv_animation *anim; /* the current animation, owned */
     gboolean updating;  /* set while widgets are filled from the animation */
@@ -72,7 +72,7 @@ struct _VvAnimatorPage {
     guint render_timer;
 };
 
-G_DEFINE_TYPE(VvAnimatorPage, vv_animator_page, GTK_TYPE_BOX)
+G_DEFINE_TYPE(VvgAnimatorPage, vvg_animator_page, GTK_TYPE_BOX)
 
 /* ---- small helpers --------------------------------------------------------- */
 
@@ -109,19 +109,19 @@ line_label(void) {
 }
 
 static GtkWindow *
-parent_window(VvAnimatorPage *self) {
+parent_window(VvgAnimatorPage *self) {
     GtkRoot *root = gtk_widget_get_root(GTK_WIDGET(self));
     return root && GTK_IS_WINDOW(root) ? GTK_WINDOW(root) : NULL;
 }
 
 static void
-show_error(VvAnimatorPage *self, const char *what, const char *message) {
+show_error(VvgAnimatorPage *self, const char *what, const char *message) {
     vvg_show_error(GTK_WIDGET(self), what, message);
 }
 
 /* A copy of the library's message before anything else can replace it. */
 static void
-show_library_error(VvAnimatorPage *self, const char *what) {
+show_library_error(VvgAnimatorPage *self, const char *what) {
     char m[1024];
     g_strlcpy(m, vv_error_message(), sizeof m);
     show_error(self, what, m);
@@ -146,7 +146,7 @@ set_label_tip(GtkWidget *label, const char *text) {
 
 /* The page's status line: what was opened, saved or recorded. */
 static void
-set_status(VvAnimatorPage *self, const char *text) {
+set_status(VvgAnimatorPage *self, const char *text) {
     set_label_tip(self->anim_status, text);
 }
 
@@ -189,7 +189,7 @@ sequence_text(const vv_anim_sequence *q) {
 }
 
 static void
-rebuild_list(VvAnimatorPage *self) {
+rebuild_list(VvgAnimatorPage *self) {
     GtkWidget *c;
     while ((c = gtk_widget_get_first_child(self->list)))
         gtk_list_box_remove(GTK_LIST_BOX(self->list), c);
@@ -215,12 +215,12 @@ rebuild_list(VvAnimatorPage *self) {
 
 /* The time the timeline's head shows: Play's, else the key time. */
 static double
-head_time(VvAnimatorPage *self) {
+head_time(VvgAnimatorPage *self) {
     return self->playing ? self->play_time : spin_value(self->key_time);
 }
 
 static void
-update_time_label(VvAnimatorPage *self) {
+update_time_label(VvgAnimatorPage *self) {
     const vv_animation *a = self->playing ? self->playing : self->anim;
     int n = vv_animation_frame_count(a);
     double t = head_time(self);
@@ -234,7 +234,7 @@ update_time_label(VvAnimatorPage *self) {
 }
 
 static void
-fill_timing(VvAnimatorPage *self) {
+fill_timing(VvgAnimatorPage *self) {
     self->updating = TRUE;
     gtk_spin_button_set_value(GTK_SPIN_BUTTON(self->fps), self->anim->fps);
     gtk_spin_button_set_value(GTK_SPIN_BUTTON(self->frames), vv_animation_frame_count(self->anim));
@@ -242,7 +242,7 @@ fill_timing(VvAnimatorPage *self) {
 }
 
 static void
-refresh(VvAnimatorPage *self) {
+refresh(VvgAnimatorPage *self) {
     fill_timing(self);
     rebuild_list(self);
     update_time_label(self);
@@ -250,7 +250,7 @@ refresh(VvAnimatorPage *self) {
 
 /* Takes @p a as the current animation. */
 static void
-set_animation(VvAnimatorPage *self, vv_animation *a) {
+set_animation(VvgAnimatorPage *self, vv_animation *a) {
     vv_animation_free(self->anim);
     self->anim = a;
     refresh(self);
@@ -296,7 +296,7 @@ copy_without(const vv_animation *a, int skip_track, int skip_seq, vv_animation *
 static void
 remove_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvAnimatorPage *self = user;
+    VvgAnimatorPage *self = user;
     GtkListBoxRow *r = gtk_list_box_get_selected_row(GTK_LIST_BOX(self->list));
     int i = r ? gtk_list_box_row_get_index(r) : -1;
     int nt = self->anim->n_tracks;
@@ -313,7 +313,7 @@ remove_clicked(GtkButton *b, gpointer user) {
 
 static void
 fps_changed(GtkSpinButton *s, gpointer user) {
-    VvAnimatorPage *self = user;
+    VvgAnimatorPage *self = user;
     if (self->updating)
         return;
     /* the keys are in seconds: the duration stays, the frame count follows */
@@ -324,7 +324,7 @@ fps_changed(GtkSpinButton *s, gpointer user) {
 
 static void
 frames_changed(GtkSpinButton *s, gpointer user) {
-    VvAnimatorPage *self = user;
+    VvgAnimatorPage *self = user;
     if (self->updating)
         return;
     self->anim->duration = gtk_spin_button_get_value(s) / self->anim->fps;
@@ -336,7 +336,7 @@ frames_changed(GtkSpinButton *s, gpointer user) {
 static void
 timeline_draw(GtkDrawingArea *area, cairo_t *cr, int W, int H, gpointer user) {
     (void)area;
-    VvAnimatorPage *self = user;
+    VvgAnimatorPage *self = user;
     const vv_animation *a = self->anim;
     cairo_set_source_rgb(cr, TIMELINE_R / 255.0, TIMELINE_G / 255.0, TIMELINE_B / 255.0);
     cairo_paint(cr);
@@ -382,7 +382,7 @@ timeline_pressed(GtkGestureClick *g, int n, double x, double y, gpointer user) {
     (void)g;
     (void)n;
     (void)y;
-    VvAnimatorPage *self = user;
+    VvgAnimatorPage *self = user;
     int W = gtk_widget_get_width(self->timeline);
     if (W < 2)
         return;
@@ -395,7 +395,7 @@ timeline_pressed(GtkGestureClick *g, int n, double x, double y, gpointer user) {
 /* ---- Play ------------------------------------------------------------------------------ */
 
 static void
-update_sensitivity(VvAnimatorPage *self) {
+update_sensitivity(VvgAnimatorPage *self) {
     if (self->disposed)
         return;
     gboolean playing = self->play_source != 0, recording = self->recorder != NULL;
@@ -409,13 +409,13 @@ update_sensitivity(VvAnimatorPage *self) {
 /* Ends Play: @p restore puts the World back as it was at Play, else the
  * World keeps the frame shown (an edit took over). */
 static void
-stop_playback(VvAnimatorPage *self, gboolean restore) {
+stop_playback(VvgAnimatorPage *self, gboolean restore) {
     if (self->play_source) {
         g_source_remove(self->play_source);
         self->play_source = 0;
     }
-    if (self->doc && vv_document_transient(self->doc))
-        vv_document_end_transient(self->doc, restore);
+    if (self->doc && vvg_document_transient(self->doc))
+        vvg_document_end_transient(self->doc, restore);
     vv_world_free(self->base);
     self->base = NULL;
     vv_animation_free(self->playing);
@@ -428,7 +428,7 @@ stop_playback(VvAnimatorPage *self, gboolean restore) {
 
 /* Shows the animation at time @p t; on failure the message is in @p err. */
 static gboolean
-show_play_frame(VvAnimatorPage *self, double t, char *err, size_t cap) {
+show_play_frame(VvgAnimatorPage *self, double t, char *err, size_t cap) {
     vv_world *w = NULL;
     vv_error_clear();
     if (vv_animation_eval(self->playing, self->base, t, &w) != VV_OK) {
@@ -436,21 +436,21 @@ show_play_frame(VvAnimatorPage *self, double t, char *err, size_t cap) {
         return FALSE;
     }
     g_autoptr(GError) terr = NULL;
-    if (!vv_world_apply_time(self->series, w, self->base, &terr)) { /* objects[i].time */
+    if (!vvg_world_apply_time(self->series, w, self->base, &terr)) { /* objects[i].time */
         g_strlcpy(err, terr->message, cap);
         vv_world_free(w);
         return FALSE;
     }
     self->play_time = t;
-    vv_document_show_transient(self->doc, w);
+    vvg_document_show_transient(self->doc, w);
     update_time_label(self);
     return TRUE;
 }
 
 static gboolean
 play_tick(gpointer data) {
-    VvAnimatorPage *self = data;
-    if (!vv_document_transient(self->doc)) {
+    VvgAnimatorPage *self = data;
+    if (!vvg_document_transient(self->doc)) {
         /* an edit, undo or redo ended the transient World: it wins */
         self->play_source = 0;
         stop_playback(self, FALSE);
@@ -479,10 +479,10 @@ play_tick(gpointer data) {
 static void
 play_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvAnimatorPage *self = user;
+    VvgAnimatorPage *self = user;
     if (self->play_source || self->recorder)
         return;
-    vv_world *w = vv_document_world(self->doc);
+    vv_world *w = vvg_document_world(self->doc);
     vv_error_clear();
     if (vv_animation_validate(self->anim) != VV_OK ||
         vv_animation_check_world(self->anim, w) != VV_OK) {
@@ -491,7 +491,7 @@ play_clicked(GtkButton *b, gpointer user) {
     }
     vv_error_clear();
     if (vv_animation_clone(&self->playing, self->anim) != VV_OK ||
-        !(self->base = vv_document_snapshot(self->doc))) {
+        !(self->base = vvg_document_snapshot(self->doc))) {
         show_library_error(self, "Cannot play the animation");
         stop_playback(self, TRUE);
         return;
@@ -515,11 +515,11 @@ stop_clicked(GtkButton *b, gpointer user) {
 
 /* The World changed: Play stops when an edit ended its transient World. */
 static void
-doc_changed(VvDocument *doc, gpointer user) {
-    VvAnimatorPage *self = user;
-    if (self->play_source && !vv_document_transient(doc))
+doc_changed(VvgDocument *doc, gpointer user) {
+    VvgAnimatorPage *self = user;
+    if (self->play_source && !vvg_document_transient(doc))
         stop_playback(self, FALSE);
-    const vv_world *w = vv_document_world(doc);
+    const vv_world *w = vvg_document_world(doc);
     const vv_render_settings *rs = &w->render;
     char text[256];
     snprintf(text, sizeof text, "%s, quality %d, %d×%d pixels (Rendering page)",
@@ -532,10 +532,10 @@ doc_changed(VvDocument *doc, gpointer user) {
 
 static gboolean
 record_tick(gpointer data) {
-    VvAnimatorPage *self = data;
+    VvgAnimatorPage *self = data;
     double t = (g_get_monotonic_time() - self->record_start_us) * 1e-6;
     /* a sample the recorder refuses (a non-finite view) is skipped */
-    vv_flight_recorder_add(self->recorder, t, &vv_document_world(self->doc)->view);
+    vv_flight_recorder_add(self->recorder, t, &vvg_document_world(self->doc)->view);
     char text[96];
     snprintf(text, sizeof text, "recording the view: %d samples, %.1f s",
              vv_flight_recorder_count(self->recorder), t);
@@ -547,7 +547,7 @@ record_tick(gpointer data) {
  * ending with the view as it is now: the 30 Hz samples may miss the last
  * moves of a drag (a busy machine delays the timer past them). */
 static void
-stop_recording(VvAnimatorPage *self, gboolean finish) {
+stop_recording(VvgAnimatorPage *self, gboolean finish) {
     if (finish && self->recorder)
         record_tick(self);
     if (self->record_source) {
@@ -558,7 +558,7 @@ stop_recording(VvAnimatorPage *self, gboolean finish) {
         return;
     if (finish) {
         /* thinning tolerances: a thousandth of the scene, a quarter degree */
-        vv_box b = vv_world_bounds(vv_document_world(self->doc));
+        vv_box b = vv_world_bounds(vvg_document_world(self->doc));
         double size = vv_vec3_length(vv_vec3_sub(b.max, b.min));
         double pos_tol = size > 0 && isfinite(size) ? 1e-3 * size : 1e-3;
         vv_animation *a = NULL;
@@ -588,7 +588,7 @@ stop_recording(VvAnimatorPage *self, gboolean finish) {
 
 static void
 record_toggled(GtkToggleButton *b, gpointer user) {
-    VvAnimatorPage *self = user;
+    VvgAnimatorPage *self = user;
     if (self->updating)
         return;
     if (!gtk_toggle_button_get_active(b)) {
@@ -618,7 +618,7 @@ static const char *const seq_pages[] = {"orbit", "rotate", "fly", "sweep"};
 static void
 seq_type_changed(GObject *o, GParamSpec *p, gpointer user) {
     (void)p;
-    VvAnimatorPage *self = user;
+    VvgAnimatorPage *self = user;
     guint i = gtk_drop_down_get_selected(GTK_DROP_DOWN(o));
     if (i < G_N_ELEMENTS(seq_pages))
         gtk_stack_set_visible_child_name(GTK_STACK(self->seq_stack), seq_pages[i]);
@@ -633,11 +633,11 @@ axis_vector(guint i) {
 static void
 add_sequence_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvAnimatorPage *self = user;
+    VvgAnimatorPage *self = user;
     vv_anim_sequence q;
     memset(&q, 0, sizeof q);
     q.zoom = 1;
-    const vv_world *w = vv_document_world(self->doc);
+    const vv_world *w = vvg_document_world(self->doc);
     switch (gtk_drop_down_get_selected(GTK_DROP_DOWN(self->seq_type))) {
     case 0:
         q.type = VV_SEQ_ORBIT;
@@ -645,7 +645,7 @@ add_sequence_clicked(GtkButton *b, gpointer user) {
         q.elevation = spin_value(self->orbit_elevation);
         break;
     case 1: {
-        const vv_object *o = vv_document_selected_object(self->doc);
+        const vv_object *o = vvg_document_selected_object(self->doc);
         if (!o) {
             show_error(self, "No object to rotate", "select an object on the Manipulation page");
             return;
@@ -716,8 +716,8 @@ set_key(vv_anim_track *t, double time, const double v[4]) {
 static void
 add_key_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvAnimatorPage *self = user;
-    const vv_view *v = &vv_document_world(self->doc)->view;
+    VvgAnimatorPage *self = user;
+    const vv_view *v = &vvg_document_world(self->doc)->view;
     double t = spin_value(self->key_time);
     const char *props[] = {"view.eye", "view.at", "view.up", "view.fov"};
     const double values[4][4] = {{v->eye.x, v->eye.y, v->eye.z, 0},
@@ -748,10 +748,10 @@ add_key_clicked(GtkButton *b, gpointer user) {
 static void
 add_time_key_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvAnimatorPage *self = user;
-    int i = vv_document_selected(self->doc);
-    vv_object *o = vv_document_selected_object(self->doc);
-    if (!o || o->type != VV_OBJECT_VOLUME || vv_document_time_steps(self->doc, o) < 2) {
+    VvgAnimatorPage *self = user;
+    int i = vvg_document_selected(self->doc);
+    vv_object *o = vvg_document_selected_object(self->doc);
+    if (!o || o->type != VV_OBJECT_VOLUME || vvg_document_time_steps(self->doc, o) < 2) {
         vvg_show_error(GTK_WIDGET(self), "Cannot add a time-step key",
                        "Select a volume object read from a file with time steps (its step is set "
                        "on the Channels and time page).");
@@ -781,7 +781,7 @@ add_time_key_clicked(GtkButton *b, gpointer user) {
 static void
 new_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvAnimatorPage *self = user;
+    VvgAnimatorPage *self = user;
     vv_animation *a = NULL;
     vv_error_clear();
     if (vv_animation_new(&a) != VV_OK) {
@@ -797,7 +797,7 @@ new_clicked(GtkButton *b, gpointer user) {
 
 static void
 open_response(GtkNativeDialog *d, int response, gpointer user) {
-    VvAnimatorPage *self = user;
+    VvgAnimatorPage *self = user;
     if (response == GTK_RESPONSE_ACCEPT && !self->disposed) {
         GFile *f = gtk_file_chooser_get_file(GTK_FILE_CHOOSER(d));
         char *path = f ? g_file_get_path(f) : NULL;
@@ -827,7 +827,7 @@ open_response(GtkNativeDialog *d, int response, gpointer user) {
 static void
 open_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvAnimatorPage *self = user;
+    VvgAnimatorPage *self = user;
     GtkFileChooserNative *d = gtk_file_chooser_native_new(
         "Open animation", parent_window(self), GTK_FILE_CHOOSER_ACTION_OPEN, "_Open", "_Cancel");
     GtkFileFilter *ff = gtk_file_filter_new();
@@ -856,7 +856,7 @@ set_scene(vv_animation *a, const char *anim_path, const char *scene_path) {
 
 static void
 save_response(GtkNativeDialog *d, int response, gpointer user) {
-    VvAnimatorPage *self = user;
+    VvgAnimatorPage *self = user;
     if (response == GTK_RESPONSE_ACCEPT && !self->disposed) {
         GFile *f = gtk_file_chooser_get_file(GTK_FILE_CHOOSER(d));
         char *path = f ? g_file_get_path(f) : NULL;
@@ -866,7 +866,7 @@ save_response(GtkNativeDialog *d, int response, gpointer user) {
                 g_free(path);
                 path = p;
             }
-            set_scene(self->anim, path, vv_document_path(self->doc));
+            set_scene(self->anim, path, vvg_document_path(self->doc));
             vv_error_clear();
             if (vv_animation_save(self->anim, path) != VV_OK) {
                 show_library_error(self, "Cannot save the animation");
@@ -888,7 +888,7 @@ save_response(GtkNativeDialog *d, int response, gpointer user) {
 static void
 save_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvAnimatorPage *self = user;
+    VvgAnimatorPage *self = user;
     GtkFileChooserNative *d = gtk_file_chooser_native_new(
         "Save animation", parent_window(self), GTK_FILE_CHOOSER_ACTION_SAVE, "_Save", "_Cancel");
     gtk_file_chooser_set_current_name(GTK_FILE_CHOOSER(d), "animation.json");
@@ -934,7 +934,7 @@ render_prepare(void *user, int frame, vv_world *w) {
     (void)frame;
     render_job *j = user;
     g_autoptr(GError) err = NULL;
-    if (!vv_world_apply_time(j->series, w, j->world, &err))
+    if (!vvg_world_apply_time(j->series, w, j->world, &err))
         return vv_error_set(VV_ERR_IO, "%s", err->message);
     return VV_OK;
 }
@@ -959,7 +959,7 @@ render_main(gpointer data) {
         o.on_frame_user = j;
         o.prepare_frame = render_prepare;
         o.prepare_frame_user = j;
-        j->series = vv_time_cache_new();
+        j->series = vvg_time_cache_new();
         s = vv_animation_render(j->anim, w, r, &o, &j->stats);
     }
     j->status = s;
@@ -972,7 +972,7 @@ render_main(gpointer data) {
 
 static gboolean
 render_tick(gpointer data) {
-    VvAnimatorPage *self = data;
+    VvgAnimatorPage *self = data;
     render_job *j = self->job;
     if (!j)
         return G_SOURCE_CONTINUE;
@@ -993,7 +993,7 @@ render_tick(gpointer data) {
 
 static gboolean
 render_done(gpointer data) {
-    VvAnimatorPage *self = data;
+    VvgAnimatorPage *self = data;
     render_job *j = self->job;
     if (self->disposed || !j) {
         g_object_unref(self);
@@ -1035,7 +1035,7 @@ render_done(gpointer data) {
 static void
 render_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvAnimatorPage *self = user;
+    VvgAnimatorPage *self = user;
     if (self->job)
         return;
     const char *out = gtk_editable_get_text(GTK_EDITABLE(self->output));
@@ -1049,7 +1049,8 @@ render_clicked(GtkButton *b, gpointer user) {
     j->resume = gtk_check_button_get_active(GTK_CHECK_BUTTON(self->resume));
     vv_error_clear();
     /* during Play, the World as it was at Play */
-    vv_status s = vv_world_clone(&j->world, self->base ? self->base : vv_document_world(self->doc));
+    vv_status s =
+        vv_world_clone(&j->world, self->base ? self->base : vvg_document_world(self->doc));
     if (s == VV_OK)
         s = vv_animation_clone(&j->anim, self->anim);
     if (s != VV_OK) {
@@ -1071,7 +1072,7 @@ render_clicked(GtkButton *b, gpointer user) {
 static void
 cancel_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvAnimatorPage *self = user;
+    VvgAnimatorPage *self = user;
     if (self->job)
         __atomic_store_n(&self->job->cancel, 1, __ATOMIC_RELAXED);
 }
@@ -1088,7 +1089,7 @@ stack_grid(GtkWidget *stack, const char *name) {
 }
 
 static void
-build(VvAnimatorPage *self) {
+build(VvgAnimatorPage *self) {
     GtkWidget *box = gtk_box_new(GTK_ORIENTATION_VERTICAL, 4);
     gtk_widget_set_margin_start(box, 8);
     gtk_widget_set_margin_end(box, 8);
@@ -1217,8 +1218,8 @@ build(VvAnimatorPage *self) {
 /* ---- life cycle --------------------------------------------------------------------- */
 
 static void
-vv_animator_page_dispose(GObject *o) {
-    VvAnimatorPage *self = VV_ANIMATOR_PAGE(o);
+vvg_animator_page_dispose(GObject *o) {
+    VvgAnimatorPage *self = VVG_ANIMATOR_PAGE(o);
     self->disposed = TRUE;
     if (self->job) {
         /* going away cancels the render; its finished frames stay for a resume */
@@ -1238,37 +1239,37 @@ vv_animator_page_dispose(GObject *o) {
         stop_playback(self, TRUE);
         g_clear_object(&self->doc);
     }
-    G_OBJECT_CLASS(vv_animator_page_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_animator_page_parent_class)->dispose(o);
 }
 
 static void
-vv_animator_page_finalize(GObject *o) {
-    VvAnimatorPage *self = VV_ANIMATOR_PAGE(o);
+vvg_animator_page_finalize(GObject *o) {
+    VvgAnimatorPage *self = VVG_ANIMATOR_PAGE(o);
     vv_animation_free(self->anim);
     g_hash_table_unref(self->series);
-    G_OBJECT_CLASS(vv_animator_page_parent_class)->finalize(o);
+    G_OBJECT_CLASS(vvg_animator_page_parent_class)->finalize(o);
 }
 
 static void
-vv_animator_page_class_init(VvAnimatorPageClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_animator_page_dispose;
-    G_OBJECT_CLASS(klass)->finalize = vv_animator_page_finalize;
+vvg_animator_page_class_init(VvgAnimatorPageClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_animator_page_dispose;
+    G_OBJECT_CLASS(klass)->finalize = vvg_animator_page_finalize;
 }
 
 static void
-vv_animator_page_init(VvAnimatorPage *self) {
+vvg_animator_page_init(VvgAnimatorPage *self) {
     gtk_orientable_set_orientation(GTK_ORIENTABLE(self), GTK_ORIENTATION_VERTICAL);
     if (vv_animation_new(&self->anim) != VV_OK)
         g_error("volvis-gui: out of memory");
     self->anim->fps = 30;
     self->anim->duration = 2; /* 60 frames */
-    self->series = vv_time_cache_new();
+    self->series = vvg_time_cache_new();
     build(self);
 }
 
 GtkWidget *
-vv_animator_page_new(VvDocument *doc) {
-    VvAnimatorPage *self = g_object_new(VV_TYPE_ANIMATOR_PAGE, NULL);
+vvg_animator_page_new(VvgDocument *doc) {
+    VvgAnimatorPage *self = g_object_new(VVG_TYPE_ANIMATOR_PAGE, NULL);
     self->doc = g_object_ref(doc);
     self->changed_id = g_signal_connect(doc, "changed", G_CALLBACK(doc_changed), self);
     refresh(self);
@@ -1278,11 +1279,11 @@ vv_animator_page_new(VvDocument *doc) {
 }
 
 const vv_animation *
-vv_animator_page_animation(VvAnimatorPage *self) {
+vvg_animator_page_animation(VvgAnimatorPage *self) {
     return self->anim;
 }
 
 gboolean
-vv_animator_page_playing(VvAnimatorPage *self) {
+vvg_animator_page_playing(VvgAnimatorPage *self) {
     return self->play_source != 0;
 }

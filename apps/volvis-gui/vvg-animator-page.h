@@ -1,5 +1,5 @@
 /*
- * VvAnimatorPage: the Animator page of the side bar (VolVis paper, section 4
+ * VvgAnimatorPage: the Animator page of the side bar (VolVis paper, section 4
  * "Manipulation": the Animator; library in include/volvis/animate.h). It
  * owns the current animation (vv_animation) and shows its keyframe tracks
  * and sequences; makes it from transformation sequences without keyframes
@@ -11,7 +11,7 @@
  *
  * Play previews the animation in real time at 30 frames a second: each
  * frame is vv_animation_eval of the World as it was at Play, shown with
- * vv_document_show_transient (no undo steps), so the scene view draws its
+ * vvg_document_show_transient (no undo steps), so the scene view draws its
  * Navigator previews; Stop puts the World back exactly. An edit during Play
  * stops it, keeping the frame shown.
  *
@@ -22,22 +22,22 @@
  * interrupted render resumes (the library keeps finished frames).
  * UI thread only.
  */
-#ifndef VV_ANIMATOR_PAGE_H
-#define VV_ANIMATOR_PAGE_H
+#ifndef VVG_ANIMATOR_PAGE_H
+#define VVG_ANIMATOR_PAGE_H
 
 #include "vvg-document.h"
 
 G_BEGIN_DECLS
 
-#define VV_TYPE_ANIMATOR_PAGE (vv_animator_page_get_type())
-G_DECLARE_FINAL_TYPE(VvAnimatorPage, vv_animator_page, VV, ANIMATOR_PAGE, GtkBox)
+#define VVG_TYPE_ANIMATOR_PAGE (vvg_animator_page_get_type())
+G_DECLARE_FINAL_TYPE(VvgAnimatorPage, vvg_animator_page, VVG, ANIMATOR_PAGE, GtkBox)
 
 /** The page for the World of @p doc (a reference is held). */
-GtkWidget *vv_animator_page_new(VvDocument *doc);
+GtkWidget *vvg_animator_page_new(VvgDocument *doc);
 /** The current animation (owned by the page; valid until it is replaced). */
-const vv_animation *vv_animator_page_animation(VvAnimatorPage *page);
+const vv_animation *vvg_animator_page_animation(VvgAnimatorPage *page);
 /** TRUE while Play runs. */
-gboolean vv_animator_page_playing(VvAnimatorPage *page);
+gboolean vvg_animator_page_playing(VvgAnimatorPage *page);
 
 G_END_DECLS
 #endif

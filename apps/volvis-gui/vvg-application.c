@@ -1,13 +1,13 @@
-/* VvApplication: start-up, files from the command line, quit (vvg-application.h). */
+/* VvgApplication: start-up, files from the command line, quit (vvg-application.h). */
 #include "vvg-application.h"
 
 #include "vvg-window.h"
 
-struct _VvApplication {
+struct _VvgApplication {
     GtkApplication parent;
 };
 
-G_DEFINE_TYPE(VvApplication, vv_application, GTK_TYPE_APPLICATION)
+G_DEFINE_TYPE(VvgApplication, vvg_application, GTK_TYPE_APPLICATION)
 
 /* Quit: each window with unsaved changes asks in turn (Cancel stops the
  * quit), then every window goes as a closed one does: its render thread
@@ -22,7 +22,7 @@ static gboolean quit_next(gpointer user);
 static void
 quit_answered(void *user) {
     GtkWindow *w = user;
-    g_object_set_data(G_OBJECT(w), "vv-quit-answered", GUINT_TO_POINTER(quit_serial));
+    g_object_set_data(G_OBJECT(w), "vvg-quit-answered", GUINT_TO_POINTER(quit_serial));
     /* not from inside the dialog's or the save's own handlers */
     g_idle_add(quit_next, g_object_ref(gtk_window_get_application(w)));
 }
@@ -37,13 +37,13 @@ static gboolean
 quit_next(gpointer user) {
     GtkApplication *app = user;
     for (GList *l = gtk_application_get_windows(app); l; l = l->next) {
-        if (!VV_IS_WINDOW(l->data) ||
-            GPOINTER_TO_UINT(g_object_get_data(G_OBJECT(l->data), "vv-quit-answered")) ==
+        if (!VVG_IS_WINDOW(l->data) ||
+            GPOINTER_TO_UINT(g_object_get_data(G_OBJECT(l->data), "vvg-quit-answered")) ==
                 quit_serial ||
-            !vv_document_dirty(vv_window_document(l->data)))
+            !vvg_document_dirty(vvg_window_document(l->data)))
             continue;
         gtk_window_present(GTK_WINDOW(l->data));
-        vv_window_confirm_close(VV_WINDOW(l->data), quit_answered, l->data);
+        vvg_window_confirm_close(VVG_WINDOW(l->data), quit_answered, l->data);
         g_object_unref(app);
         return G_SOURCE_REMOVE;
     }
@@ -65,8 +65,8 @@ act_quit(GSimpleAction *a, GVariant *p, gpointer user) {
 }
 
 static void
-vv_application_startup(GApplication *app) {
-    G_APPLICATION_CLASS(vv_application_parent_class)->startup(app);
+vvg_application_startup(GApplication *app) {
+    G_APPLICATION_CLASS(vvg_application_parent_class)->startup(app);
     static const GActionEntry entries[] = {{"quit", act_quit, NULL, NULL, NULL, {0}}};
     g_action_map_add_action_entries(G_ACTION_MAP(app), entries, 1, app);
     static const struct {
@@ -97,47 +97,47 @@ vv_application_startup(GApplication *app) {
         gtk_application_set_accels_for_action(GTK_APPLICATION(app), keys[i].action, keys[i].accels);
 }
 
-static VvWindow *
+static VvgWindow *
 new_window(GApplication *app) {
-    VvWindow *w = vv_window_new(GTK_APPLICATION(app));
+    VvgWindow *w = vvg_window_new(GTK_APPLICATION(app));
     gtk_window_set_default_size(GTK_WINDOW(w), 1100, 720);
     gtk_window_present(GTK_WINDOW(w));
     return w;
 }
 
 static void
-vv_application_activate(GApplication *app) {
-    vv_window_offer_restore(new_window(app));
+vvg_application_activate(GApplication *app) {
+    vvg_window_offer_restore(new_window(app));
 }
 
 static void
-vv_application_open(GApplication *app, GFile **files, int n, const char *hint) {
+vvg_application_open(GApplication *app, GFile **files, int n, const char *hint) {
     (void)hint;
-    VvWindow *w = new_window(app);
+    VvgWindow *w = new_window(app);
     for (int i = 0; i < n; i++) {
         char *p = g_file_get_path(files[i]);
         if (p)
-            vv_window_open(w, p);
+            vvg_window_open(w, p);
         g_free(p);
     }
-    vv_window_offer_restore(w);
+    vvg_window_offer_restore(w);
 }
 
 static void
-vv_application_class_init(VvApplicationClass *klass) {
-    G_APPLICATION_CLASS(klass)->startup = vv_application_startup;
-    G_APPLICATION_CLASS(klass)->activate = vv_application_activate;
-    G_APPLICATION_CLASS(klass)->open = vv_application_open;
+vvg_application_class_init(VvgApplicationClass *klass) {
+    G_APPLICATION_CLASS(klass)->startup = vvg_application_startup;
+    G_APPLICATION_CLASS(klass)->activate = vvg_application_activate;
+    G_APPLICATION_CLASS(klass)->open = vvg_application_open;
 }
 
 static void
-vv_application_init(VvApplication *app) {
+vvg_application_init(VvgApplication *app) {
     (void)app;
 }
 
-VvApplication *
-vv_application_new(void) {
+VvgApplication *
+vvg_application_new(void) {
     /* NON_UNIQUE: every start is its own process (tests run several at once) */
-    return g_object_new(VV_TYPE_APPLICATION, "application-id", "org.volvis.VolVis", "flags",
+    return g_object_new(VVG_TYPE_APPLICATION, "application-id", "org.volvis.VolVis", "flags",
                         G_APPLICATION_HANDLES_OPEN | G_APPLICATION_NON_UNIQUE, NULL);
 }

@@ -1,4 +1,4 @@
-/* VvChannelPanel: channels and time steps of the selected object (vvg-channel-panel.h). */
+/* VvgChannelPanel: channels and time steps of the selected object (vvg-channel-panel.h). */
 #include "vvg-channel-panel.h"
 #include "vvg-widgets.h"
 
@@ -10,7 +10,7 @@
 #define PLAY_MS 100 /* 10 time steps a second */
 
 typedef struct channel_row {
-    VvChannelPanel *panel;
+    VvgChannelPanel *panel;
     int c;
     GtkWidget *show, *color, *edit, *hist, *lo, *hi, *gamma;
     const vv_volume *hist_volume;
@@ -18,9 +18,9 @@ typedef struct channel_row {
     double bins[HIST_BINS], hist_lo, hist_hi; /* log counts, 0..1 */
 } channel_row;
 
-struct _VvChannelPanel {
+struct _VvgChannelPanel {
     GtkBox parent;
-    VvDocument *doc;
+    VvgDocument *doc;
     gboolean updating; /* set while widgets are filled from the World */
     GtkWidget *summary, *blend_box, *blend, *rows;
     channel_row *row; /* VV_MAX_CHANNELS (GObject instances stay under 64 KiB) */
@@ -30,11 +30,11 @@ struct _VvChannelPanel {
     guint play_source;
 };
 
-G_DEFINE_TYPE(VvChannelPanel, vv_channel_panel, GTK_TYPE_BOX)
+G_DEFINE_TYPE(VvgChannelPanel, vvg_channel_panel, GTK_TYPE_BOX)
 
 static vv_object *
-volume_object(VvChannelPanel *self) {
-    vv_object *o = vv_document_selected_object(self->doc);
+volume_object(VvgChannelPanel *self) {
+    vv_object *o = vvg_document_selected_object(self->doc);
     return o && o->type == VV_OBJECT_VOLUME && o->volume ? o : NULL;
 }
 
@@ -45,7 +45,7 @@ row_channel(channel_row *r) {
     return o && r->c < o->n_channels ? &o->channels[r->c] : NULL;
 }
 
-static void fill(VvChannelPanel *self);
+static void fill(VvgChannelPanel *self);
 
 /* ---- the histogram under the contrast sliders ------------------------------------- */
 
@@ -129,10 +129,10 @@ show_toggled(GtkCheckButton *b, gpointer user) {
     channel_row *r = user;
     if (r->panel->updating || !row_channel(r))
         return;
-    vv_document_begin_edit(r->panel->doc, "channel visibility");
+    vvg_document_begin_edit(r->panel->doc, "channel visibility");
     vv_channel *ch = row_channel(r);
     ch->visible = gtk_check_button_get_active(b);
-    vv_document_changed(r->panel->doc);
+    vvg_document_changed(r->panel->doc);
 }
 
 /* A new colour for every colour point: the contrast shape stays. */
@@ -143,13 +143,13 @@ color_set(GtkColorButton *b, gpointer user) {
         return;
     GdkRGBA c;
     gtk_color_chooser_get_rgba(GTK_COLOR_CHOOSER(b), &c);
-    vv_document_begin_edit(r->panel->doc, "channel colour");
+    vvg_document_begin_edit(r->panel->doc, "channel colour");
     vv_tf *tf = &row_channel(r)->tf;
     if (tf->n_color == 0)
         (void)vv_tf_add_color(tf, 0, vvg_vec3(&c));
     for (int i = 0; i < tf->n_color; i++)
         tf->color[i].color = vvg_vec3(&c);
-    vv_document_changed(r->panel->doc);
+    vvg_document_changed(r->panel->doc);
     gtk_widget_queue_draw(r->hist);
 }
 
@@ -171,7 +171,7 @@ contrast_changed(GtkWidget *w, gpointer user) {
     vv_tf_get_contrast(&ch->tf, NULL, NULL, NULL, &op, &col);
     if (!(op > 0))
         op = 0.5;
-    vv_document_begin_edit_merging(r->panel->doc, "channel contrast");
+    vvg_document_begin_edit_merging(r->panel->doc, "channel contrast");
     ch = row_channel(r);
     vv_error_clear();
     if (vv_tf_set_contrast(&ch->tf, lo, hi, gamma, op, col, ch->tf.opacity_unit_distance) !=
@@ -179,7 +179,7 @@ contrast_changed(GtkWidget *w, gpointer user) {
         vvg_show_error(GTK_WIDGET(r->panel), "Cannot set the contrast", vv_error_message());
         return;
     }
-    vv_document_changed(r->panel->doc);
+    vvg_document_changed(r->panel->doc);
     gtk_widget_queue_draw(r->hist);
 }
 
@@ -188,51 +188,51 @@ edit_toggled(GtkCheckButton *b, gpointer user) {
     channel_row *r = user;
     if (r->panel->updating || !gtk_check_button_get_active(b))
         return;
-    vv_document_set_edited_channel(r->panel->doc, r->c);
+    vvg_document_set_edited_channel(r->panel->doc, r->c);
 }
 
 static void
 blend_changed(GObject *d, GParamSpec *p, gpointer user) {
     (void)p;
-    VvChannelPanel *self = user;
+    VvgChannelPanel *self = user;
     vv_object *o = volume_object(self);
     guint b = gtk_drop_down_get_selected(GTK_DROP_DOWN(d));
     if (self->updating || !o || o->n_channels < 1 || b > VV_BLEND_MAXIMUM || (guint)o->blend == b)
         return;
-    vv_document_begin_edit(self->doc, "channel blend");
+    vvg_document_begin_edit(self->doc, "channel blend");
     volume_object(self)->blend = (vv_channel_blend)b;
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
 }
 
 /* ---- time ------------------------------------------------------------------------- */
 
-static void stop_playing(VvChannelPanel *self);
+static void stop_playing(VvgChannelPanel *self);
 
 /* A step that could not be read: said once, Play stopped, the slider back
  * at the step shown. */
 static void
-step_failed(VvDocument *doc, const char *message, gpointer user) {
+step_failed(VvgDocument *doc, const char *message, gpointer user) {
     (void)doc;
-    VvChannelPanel *self = user;
+    VvgChannelPanel *self = user;
     stop_playing(self);
     vvg_show_error(GTK_WIDGET(self), "Cannot show the time step", message);
     fill(self);
 }
 
 /* The slider asks for a step; it is read off the interface's thread and
- * shown when it arrives (vv_document_request_time: the latest ask wins). */
+ * shown when it arrives (vvg_document_request_time: the latest ask wins). */
 static void
 time_changed(GtkRange *range, gpointer user) {
-    VvChannelPanel *self = user;
+    VvgChannelPanel *self = user;
     vv_object *o = volume_object(self);
     int t = (int)lrint(gtk_range_get_value(range));
     if (self->updating || !o)
         return;
-    vv_document_request_time(self->doc, t, step_failed, self);
+    vvg_document_request_time(self->doc, t, step_failed, self);
 }
 
 static void
-stop_playing(VvChannelPanel *self) {
+stop_playing(VvgChannelPanel *self) {
     if (self->play_source) {
         g_source_remove(self->play_source);
         self->play_source = 0;
@@ -250,9 +250,9 @@ stop_playing(VvChannelPanel *self) {
 
 static gboolean
 play_tick(gpointer user) {
-    VvChannelPanel *self = user;
+    VvgChannelPanel *self = user;
     vv_object *o = volume_object(self);
-    int steps = vv_document_time_steps(self->doc, o);
+    int steps = vvg_document_time_steps(self->doc, o);
     if (steps < 2) {
         self->play_source = 0;
         stop_playing(self);
@@ -260,14 +260,14 @@ play_tick(gpointer user) {
     }
     /* the next step after the one shown, once the last one asked is in
      * (a step slower to read than a tick holds Play back, never queues) */
-    if (!vv_document_time_pending(self->doc))
-        vv_document_request_time(self->doc, (o->time + 1) % steps, step_failed, self);
+    if (!vvg_document_time_pending(self->doc))
+        vvg_document_request_time(self->doc, (o->time + 1) % steps, step_failed, self);
     return G_SOURCE_CONTINUE;
 }
 
 static void
 play_toggled(GtkToggleButton *b, gpointer user) {
-    VvChannelPanel *self = user;
+    VvgChannelPanel *self = user;
     if (self->updating)
         return;
     if (gtk_toggle_button_get_active(b) && !self->play_source)
@@ -295,7 +295,7 @@ limit_scale(channel_row *r, const char *what, const char *name) {
 /* One channel: its name (visibility), colour, "edit" (the Transfer function
  * page's channel), histogram, limits and gamma. */
 static GtkWidget *
-build_row(VvChannelPanel *self, int c, const vv_channel *ch, GtkWidget *group) {
+build_row(VvgChannelPanel *self, int c, const vv_channel *ch, GtkWidget *group) {
     channel_row *r = &self->row[c];
     memset(r, 0, sizeof *r);
     r->panel = self;
@@ -361,7 +361,7 @@ signature(const vv_object *o) {
 }
 
 static void
-rebuild(VvChannelPanel *self, const vv_object *o) {
+rebuild(VvgChannelPanel *self, const vv_object *o) {
     GtkWidget *child;
     while ((child = gtk_widget_get_first_child(self->rows)))
         gtk_box_remove(GTK_BOX(self->rows), child);
@@ -411,7 +411,7 @@ fill_row(channel_row *r, const vv_object *o, int edited) {
 }
 
 static void
-fill(VvChannelPanel *self) {
+fill(VvgChannelPanel *self) {
     vv_object *o = volume_object(self);
     g_autofree char *sig = signature(o);
     if (g_strcmp0(sig, self->signature)) {
@@ -436,17 +436,17 @@ fill(VvChannelPanel *self) {
     if (o && o->n_channels > 0) {
         if (gtk_drop_down_get_selected(GTK_DROP_DOWN(self->blend)) != (guint)o->blend)
             gtk_drop_down_set_selected(GTK_DROP_DOWN(self->blend), (guint)o->blend);
-        int edited = vv_document_edited_channel(self->doc);
+        int edited = vvg_document_edited_channel(self->doc);
         for (int c = 0; c < self->n_rows; c++)
             fill_row(&self->row[c], o, edited);
     }
-    int steps = vv_document_time_steps(self->doc, o);
+    int steps = vvg_document_time_steps(self->doc, o);
     gtk_widget_set_visible(self->time_box, steps > 1);
     if (steps > 1) {
         gtk_range_set_range(GTK_RANGE(self->time_scale), 0, steps - 1);
         /* while a step asked for is being read the slider stays where the
          * user put it; the label says the step shown */
-        if (!vv_document_time_pending(self->doc) &&
+        if (!vvg_document_time_pending(self->doc) &&
             lrint(gtk_range_get_value(GTK_RANGE(self->time_scale))) != o->time)
             gtk_range_set_value(GTK_RANGE(self->time_scale), o->time);
         snprintf(text, sizeof text, "step %d of %d", o->time + 1, steps);
@@ -458,47 +458,47 @@ fill(VvChannelPanel *self) {
 }
 
 static void
-doc_changed(VvDocument *doc, gpointer user) {
+doc_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
     fill(user);
 }
 
 static void
-selection_changed(VvDocument *doc, gpointer user) {
+selection_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
-    VvChannelPanel *self = user;
+    VvgChannelPanel *self = user;
     stop_playing(self); /* time plays for the object it was started on */
     fill(self);
 }
 
 static void
-vv_channel_panel_dispose(GObject *o) {
-    VvChannelPanel *self = VV_CHANNEL_PANEL(o);
+vvg_channel_panel_dispose(GObject *o) {
+    VvgChannelPanel *self = VVG_CHANNEL_PANEL(o);
     stop_playing(self);
     if (self->doc) {
         g_signal_handlers_disconnect_by_data(self->doc, self);
-        vv_document_forget_time_listener(self->doc, self); /* a read in flight tells no one */
+        vvg_document_forget_time_listener(self->doc, self); /* a read in flight tells no one */
         g_clear_object(&self->doc);
     }
     g_clear_pointer(&self->signature, g_free);
     g_clear_pointer(&self->row, g_free);
-    G_OBJECT_CLASS(vv_channel_panel_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_channel_panel_parent_class)->dispose(o);
 }
 
 static void
-vv_channel_panel_class_init(VvChannelPanelClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_channel_panel_dispose;
+vvg_channel_panel_class_init(VvgChannelPanelClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_channel_panel_dispose;
 }
 
 static void
-vv_channel_panel_init(VvChannelPanel *self) {
+vvg_channel_panel_init(VvgChannelPanel *self) {
     vvg_vbox_init(GTK_WIDGET(self));
     self->row = g_new0(channel_row, VV_MAX_CHANNELS);
 }
 
 /* The time-step slider, Play and the step shown. */
 static void
-build_time(VvChannelPanel *self) {
+build_time(VvgChannelPanel *self) {
     self->time_box = gtk_box_new(GTK_ORIENTATION_VERTICAL, 4);
     GtkWidget *g = vvg_section(self->time_box, "Time");
     self->time_scale = gtk_scale_new_with_range(GTK_ORIENTATION_HORIZONTAL, 0, 1, 1);
@@ -520,8 +520,8 @@ build_time(VvChannelPanel *self) {
 }
 
 GtkWidget *
-vv_channel_panel_new(VvDocument *doc) {
-    VvChannelPanel *self = g_object_new(VV_TYPE_CHANNEL_PANEL, NULL);
+vvg_channel_panel_new(VvgDocument *doc) {
+    VvgChannelPanel *self = g_object_new(VVG_TYPE_CHANNEL_PANEL, NULL);
     self->doc = g_object_ref(doc);
     build_time(self); /* first: in reach above any number of channels */
     GtkWidget *g = vvg_section(GTK_WIDGET(self), "Channels");

@@ -1,4 +1,4 @@
-/* VvCutPanel: the list of global and per-object cut planes (vvg-cut-panel.h). */
+/* VvgCutPanel: the list of global and per-object cut planes (vvg-cut-panel.h). */
 #include "vvg-cut-panel.h"
 #include "vvg-widgets.h"
 
@@ -13,10 +13,10 @@ typedef struct off_plane {
     vv_cut_plane plane;
 } off_plane;
 
-struct _VvCutPanel {
+struct _VvgCutPanel {
     GtkBox parent;
-    VvDocument *doc;
-    VvSceneView *scene; /* borrowed */
+    VvgDocument *doc;
+    VvgSceneView *scene; /* borrowed */
     GtkWidget *list, *scope, *px, *py, *pz, *nx, *ny, *nz, *edit_title;
     gboolean updating;
     guint refresh_source;
@@ -26,12 +26,12 @@ struct _VvCutPanel {
     char shown[4096]; /* the list as last built, to rebuild only on a change */
 };
 
-G_DEFINE_TYPE(VvCutPanel, vv_cut_panel, GTK_TYPE_BOX)
+G_DEFINE_TYPE(VvgCutPanel, vvg_cut_panel, GTK_TYPE_BOX)
 
 /* The list of planes (object -1: global), or NULL. */
 static vv_cut_plane *
-planes_of(VvCutPanel *self, int object, int *n) {
-    vv_world *w = vv_document_world(self->doc);
+planes_of(VvgCutPanel *self, int object, int *n) {
+    vv_world *w = vvg_document_world(self->doc);
     if (object < 0) {
         *n = w->n_cut_planes;
         return w->cut_planes;
@@ -43,7 +43,7 @@ planes_of(VvCutPanel *self, int object, int *n) {
 }
 
 static vv_cut_plane *
-selected(VvCutPanel *self) {
+selected(VvgCutPanel *self) {
     int n = 0;
     vv_cut_plane *l = planes_of(self, self->sel_object, &n);
     return l && self->sel_plane >= 0 && self->sel_plane < n ? &l[self->sel_plane] : NULL;
@@ -51,7 +51,7 @@ selected(VvCutPanel *self) {
 
 /* The numbers of the selected plane (they follow its handle in the view). */
 static void
-fill_numbers(VvCutPanel *self) {
+fill_numbers(VvgCutPanel *self) {
     const vv_cut_plane *p = selected(self);
     gboolean was = self->updating;
     self->updating = TRUE;
@@ -66,15 +66,15 @@ fill_numbers(VvCutPanel *self) {
     gtk_label_set_text(GTK_LABEL(self->edit_title),
                        p ? "Selected plane (the handle moves it too)" : "New plane");
     self->updating = was;
-    vv_scene_view_set_cut_plane(self->scene, self->sel_object, p ? self->sel_plane : -1);
+    vvg_scene_view_set_cut_plane(self->scene, self->sel_object, p ? self->sel_plane : -1);
 }
 
-static void rebuild(VvCutPanel *self);
+static void rebuild(VvgCutPanel *self);
 
 static void
 row_selected(GtkListBox *box, GtkListBoxRow *r, gpointer user) {
     (void)box;
-    VvCutPanel *self = user;
+    VvgCutPanel *self = user;
     if (self->updating || !r)
         return;
     int plane = GPOINTER_TO_INT(g_object_get_data(G_OBJECT(r), "plane"));
@@ -86,25 +86,25 @@ row_selected(GtkListBox *box, GtkListBoxRow *r, gpointer user) {
 }
 
 static void
-remove_plane(VvCutPanel *self, int object, int plane) {
+remove_plane(VvgCutPanel *self, int object, int plane) {
     int n = 0;
     vv_cut_plane *l = planes_of(self, object, &n);
     if (!l || plane < 0 || plane >= n)
         return;
-    vv_document_begin_edit(self->doc, "remove cut plane");
+    vvg_document_begin_edit(self->doc, "remove cut plane");
     l = planes_of(self, object, &n);
     memmove(&l[plane], &l[plane + 1], (size_t)(n - plane - 1) * sizeof *l);
     if (object < 0)
-        vv_document_world(self->doc)->n_cut_planes--;
+        vvg_document_world(self->doc)->n_cut_planes--;
     else
-        vv_document_world(self->doc)->objects[object]->n_cut_planes--;
+        vvg_document_world(self->doc)->objects[object]->n_cut_planes--;
     self->sel_plane = -1;
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
 }
 
 static void
 remove_clicked(GtkButton *b, gpointer user) {
-    VvCutPanel *self = user;
+    VvgCutPanel *self = user;
     int object = GPOINTER_TO_INT(g_object_get_data(G_OBJECT(b), "object"));
     int plane = GPOINTER_TO_INT(g_object_get_data(G_OBJECT(b), "plane"));
     int off = GPOINTER_TO_INT(g_object_get_data(G_OBJECT(b), "off"));
@@ -120,8 +120,8 @@ remove_clicked(GtkButton *b, gpointer user) {
 
 /* Adds @p p to the World's or object @p object's planes (no undo step of its own). */
 static gboolean
-add_to(VvCutPanel *self, int object, vv_cut_plane p) {
-    vv_world *w = vv_document_world(self->doc);
+add_to(VvgCutPanel *self, int object, vv_cut_plane p) {
+    vv_world *w = vvg_document_world(self->doc);
     if (object >= 0 && object < w->n_objects) {
         vv_object *o = w->objects[object];
         if (o->n_cut_planes >= VV_MAX_CUT_PLANES)
@@ -135,7 +135,7 @@ add_to(VvCutPanel *self, int object, vv_cut_plane p) {
 /* On: the plane goes back into the World; off: out of it, kept here. */
 static void
 enable_toggled(GtkCheckButton *b, gpointer user) {
-    VvCutPanel *self = user;
+    VvgCutPanel *self = user;
     if (self->updating)
         return;
     int object = GPOINTER_TO_INT(g_object_get_data(G_OBJECT(b), "object"));
@@ -143,13 +143,13 @@ enable_toggled(GtkCheckButton *b, gpointer user) {
     int off = GPOINTER_TO_INT(g_object_get_data(G_OBJECT(b), "off"));
     if (gtk_check_button_get_active(b) && off >= 0 && off < self->n_off) {
         off_plane op = self->off[off];
-        vv_document_begin_edit(self->doc, "switch a cut plane on");
+        vvg_document_begin_edit(self->doc, "switch a cut plane on");
         if (add_to(self, op.object, op.plane)) {
             memmove(&self->off[off], &self->off[off + 1],
                     (size_t)(self->n_off - off - 1) * sizeof self->off[0]);
             self->n_off--;
         }
-        vv_document_changed(self->doc);
+        vvg_document_changed(self->doc);
     } else if (!gtk_check_button_get_active(b) && plane >= 0 && self->n_off < MAX_OFF) {
         int n = 0;
         vv_cut_plane *l = planes_of(self, object, &n);
@@ -161,7 +161,7 @@ enable_toggled(GtkCheckButton *b, gpointer user) {
 }
 
 static void
-add_row(VvCutPanel *self, const char *owner, int k, const vv_cut_plane *p, int object, int plane,
+add_row(VvgCutPanel *self, const char *owner, int k, const vv_cut_plane *p, int object, int plane,
         int off) {
     GtkWidget *row = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 4);
     GtkWidget *on = gtk_check_button_new();
@@ -204,8 +204,8 @@ add_row(VvCutPanel *self, const char *owner, int k, const vv_cut_plane *p, int o
 
 /* The list's text, to rebuild it only when a plane changed. */
 static void
-describe(VvCutPanel *self, char *out, size_t size) {
-    vv_world *w = vv_document_world(self->doc);
+describe(VvgCutPanel *self, char *out, size_t size) {
+    vv_world *w = vvg_document_world(self->doc);
     GString *s = g_string_new(NULL);
     for (int i = 0; i < w->n_cut_planes; i++)
         g_string_append_printf(s, "g%a,%a,%a,%a,%a,%a;", w->cut_planes[i].point.x,
@@ -224,7 +224,7 @@ describe(VvCutPanel *self, char *out, size_t size) {
 }
 
 static void
-rebuild(VvCutPanel *self) {
+rebuild(VvgCutPanel *self) {
     char now[sizeof self->shown];
     describe(self, now, sizeof now);
     if (!strcmp(now, self->shown))
@@ -234,7 +234,7 @@ rebuild(VvCutPanel *self) {
     GtkWidget *c;
     while ((c = gtk_widget_get_first_child(self->list)))
         gtk_list_box_remove(GTK_LIST_BOX(self->list), c);
-    vv_world *w = vv_document_world(self->doc);
+    vv_world *w = vvg_document_world(self->doc);
     if (!selected(self))
         self->sel_plane = -1;
     for (int i = 0; i < w->n_cut_planes; i++)
@@ -254,7 +254,7 @@ rebuild(VvCutPanel *self) {
 
 static gboolean
 refresh_due(gpointer user) {
-    VvCutPanel *self = user;
+    VvgCutPanel *self = user;
     self->refresh_source = 0;
     rebuild(self);
     fill_numbers(self);
@@ -262,9 +262,9 @@ refresh_due(gpointer user) {
 }
 
 static void
-doc_changed(VvDocument *doc, gpointer user) {
+doc_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
-    VvCutPanel *self = user;
+    VvgCutPanel *self = user;
     /* a handle drag changes the plane a hundred times a second: the list and
      * the numbers follow ten times a second */
     if (!self->refresh_source)
@@ -275,29 +275,29 @@ doc_changed(VvDocument *doc, gpointer user) {
 static void
 numbers_changed(GtkSpinButton *s, gpointer user) {
     (void)s;
-    VvCutPanel *self = user;
+    VvgCutPanel *self = user;
     if (self->updating || !selected(self))
         return;
     vv_vec3 n =
         vv_vec3_make(vvg_spin_value(self->nx), vvg_spin_value(self->ny), vvg_spin_value(self->nz));
     if (!(vv_vec3_length(n) > 0))
         return;
-    vv_document_begin_edit(self->doc, "move cut plane");
+    vvg_document_begin_edit(self->doc, "move cut plane");
     vv_cut_plane *p = selected(self);
     p->point =
         vv_vec3_make(vvg_spin_value(self->px), vvg_spin_value(self->py), vvg_spin_value(self->pz));
     p->normal = vv_vec3_normalize(n);
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
 }
 
 static void
 act_add_cut(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    VvCutPanel *self = user;
-    vv_world *w = vv_document_world(self->doc);
+    VvgCutPanel *self = user;
+    vv_world *w = vvg_document_world(self->doc);
     gboolean local = gtk_drop_down_get_selected(GTK_DROP_DOWN(self->scope)) == 1;
-    int object = local ? vv_document_selected(self->doc) : -1;
+    int object = local ? vvg_document_selected(self->doc) : -1;
     /* through the World's centre facing +z, unless numbers were typed for a new plane */
     vv_box b = vv_world_bounds(w);
     vv_cut_plane cp = {vv_vec3_scale(vv_vec3_add(b.min, b.max), 0.5), vv_vec3_make(0, 0, 1)};
@@ -312,7 +312,7 @@ act_add_cut(GSimpleAction *a, GVariant *p, gpointer user) {
         }
         cp.normal = vv_vec3_normalize(n);
     }
-    vv_document_begin_edit(self->doc, "add cut plane");
+    vvg_document_begin_edit(self->doc, "add cut plane");
     if (!add_to(self, object, cp))
         vvg_show_error(GTK_WIDGET(self), "Cannot add the cut plane",
                        "the list of cut planes is full");
@@ -320,7 +320,7 @@ act_add_cut(GSimpleAction *a, GVariant *p, gpointer user) {
     planes_of(self, object, &n);
     self->sel_object = object;
     self->sel_plane = n - 1;
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
     rebuild(self);
 }
 
@@ -328,50 +328,50 @@ static void
 act_clear_cuts(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    VvCutPanel *self = user;
-    vv_document_begin_edit(self->doc, "remove cut planes");
-    vv_world *w = vv_document_world(self->doc);
+    VvgCutPanel *self = user;
+    vvg_document_begin_edit(self->doc, "remove cut planes");
+    vv_world *w = vvg_document_world(self->doc);
     w->n_cut_planes = 0;
     for (int o = 0; o < w->n_objects; o++)
         w->objects[o]->n_cut_planes = 0;
     self->n_off = 0;
     self->sel_plane = -1;
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
 }
 
 static void
-vv_cut_panel_dispose(GObject *o) {
-    VvCutPanel *self = VV_CUT_PANEL(o);
+vvg_cut_panel_dispose(GObject *o) {
+    VvgCutPanel *self = VVG_CUT_PANEL(o);
     if (self->doc) {
         g_signal_handlers_disconnect_by_data(self->doc, self);
         g_clear_object(&self->doc);
     }
     g_clear_handle_id(&self->refresh_source, g_source_remove);
-    G_OBJECT_CLASS(vv_cut_panel_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_cut_panel_parent_class)->dispose(o);
 }
 
 static void
-vv_cut_panel_class_init(VvCutPanelClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_cut_panel_dispose;
+vvg_cut_panel_class_init(VvgCutPanelClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_cut_panel_dispose;
 }
 
 static void
-vv_cut_panel_init(VvCutPanel *self) {
+vvg_cut_panel_init(VvgCutPanel *self) {
     vvg_vbox_init(GTK_WIDGET(self));
     self->sel_plane = -1;
     self->sel_object = -1;
 }
 
 static GtkWidget *
-number(VvCutPanel *self, GtkWidget *g, const char *label, double lo, double hi, double v) {
+number(VvgCutPanel *self, GtkWidget *g, const char *label, double lo, double hi, double v) {
     GtkWidget *s = vvg_row(g, label, vvg_spin(lo, hi, hi > 1 ? 1 : 0.1, hi > 1 ? 2 : 3, v));
     g_signal_connect(s, "value-changed", G_CALLBACK(numbers_changed), self);
     return s;
 }
 
 GtkWidget *
-vv_cut_panel_new(VvDocument *doc, VvSceneView *scene, GActionMap *actions) {
-    VvCutPanel *self = g_object_new(VV_TYPE_CUT_PANEL, NULL);
+vvg_cut_panel_new(VvgDocument *doc, VvgSceneView *scene, GActionMap *actions) {
+    VvgCutPanel *self = g_object_new(VVG_TYPE_CUT_PANEL, NULL);
     self->doc = g_object_ref(doc);
     self->scene = scene;
     const GActionEntry entries[] = {

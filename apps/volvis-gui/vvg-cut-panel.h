@@ -1,5 +1,5 @@
 /*
- * VvCutPanel: cut planes (VolVis paper, section 4: global cut planes and
+ * VvgCutPanel: cut planes (VolVis paper, section 4: global cut planes and
  * per-object ones) as a list: each plane with its point and normal, a check
  * that switches it on or off (a plane switched off leaves the World, so it
  * is neither drawn nor saved, and is kept in the list until switched on or
@@ -11,21 +11,21 @@
  * step. Installs the actions "add-cut-plane" and "clear-cut-planes" in the
  * given action map. UI thread only.
  */
-#ifndef VV_CUT_PANEL_H
-#define VV_CUT_PANEL_H
+#ifndef VVG_CUT_PANEL_H
+#define VVG_CUT_PANEL_H
 
 #include "vvg-scene-view.h"
 
 G_BEGIN_DECLS
 
-#define VV_TYPE_CUT_PANEL (vv_cut_panel_get_type())
-G_DECLARE_FINAL_TYPE(VvCutPanel, vv_cut_panel, VV, CUT_PANEL, GtkBox)
+#define VVG_TYPE_CUT_PANEL (vvg_cut_panel_get_type())
+G_DECLARE_FINAL_TYPE(VvgCutPanel, vvg_cut_panel, VVG, CUT_PANEL, GtkBox)
 
 /**
  * The panel for @p doc (a reference is held); the selected plane is the one
  * @p scene's cut-plane drag moves; actions go into @p actions (both borrowed).
  */
-GtkWidget *vv_cut_panel_new(VvDocument *doc, VvSceneView *scene, GActionMap *actions);
+GtkWidget *vvg_cut_panel_new(VvgDocument *doc, VvgSceneView *scene, GActionMap *actions);
 
 G_END_DECLS
 #endif

@@ -1,4 +1,4 @@
-/* VvDevicesPage: the "Input devices" page (vvg-devices-page.h). */
+/* VvgDevicesPage: the "Input devices" page (vvg-devices-page.h). */
 #define _DEFAULT_SOURCE /* S_ISSOCK */
 #include "vvg-devices-page.h"
 #include "vvg-widgets.h"
@@ -9,9 +9,9 @@
 
 #include "vvg-devices.h"
 
-struct _VvDevicesPage {
+struct _VvgDevicesPage {
     GtkWidget parent;
-    VvDevices *devices; /* a reference; the window owns it too */
+    VvgDevices *devices; /* a reference; the window owns it too */
     gulong changed_id;
     GtkWidget *scroll;
     GtkWidget *list;
@@ -20,7 +20,7 @@ struct _VvDevicesPage {
     guint rebuild_idle, start_idle, auto_source;
 };
 
-G_DEFINE_TYPE(VvDevicesPage, vv_devices_page, GTK_TYPE_WIDGET)
+G_DEFINE_TYPE(VvgDevicesPage, vvg_devices_page, GTK_TYPE_WIDGET)
 
 /* The application choices; "" is every application (unassigned). */
 static const char *const app_names[] = {"all applications", "navigator", "none", NULL};
@@ -35,14 +35,14 @@ static const char *const method_names[] = {"direct mapping", "dominant axis", "s
 
 /* A dialog with the library's message; also on stderr, for scripts and tests. */
 static void
-show_error(VvDevicesPage *self, const char *what, const char *message) {
+show_error(VvgDevicesPage *self, const char *what, const char *message) {
     vvg_show_error(GTK_WIDGET(self), what, message);
 }
 
 /* Shows *err (cleared) under @p what when @p ok is FALSE; returns ok. A
  * pointer, not the GError itself: arguments are evaluated in any order. */
 static gboolean
-check(VvDevicesPage *self, gboolean ok, GError **err, const char *what) {
+check(VvgDevicesPage *self, gboolean ok, GError **err, const char *what) {
     if (!ok)
         show_error(self, what, *err ? (*err)->message : "unknown error");
     g_clear_error(err);
@@ -83,30 +83,30 @@ device_id(gpointer widget) {
 }
 
 static void
-update_status(VvDevicesPage *self) {
+update_status(VvgDevicesPage *self) {
     GString *s = g_string_new(NULL);
-    const char *sock = vv_devices_listen_path(self->devices);
+    const char *sock = vvg_devices_listen_path(self->devices);
     if (sock)
         g_string_append_printf(s, "listening on %s", sock);
-    if (vv_devices_recording(self->devices))
+    if (vvg_devices_recording(self->devices))
         g_string_append_printf(s, "%srecording to %s", s->len ? "; " : "",
                                gtk_editable_get_text(GTK_EDITABLE(self->record_entry)));
-    vv_input_manager *m = vv_devices_manager(self->devices);
+    vv_input_manager *m = vvg_devices_manager(self->devices);
     if (m && vv_input_manager_replay_pending(m))
         g_string_append_printf(s, "%sreplaying", s->len ? "; " : "");
     gtk_label_set_text(GTK_LABEL(self->status), s->str);
     g_string_free(s, TRUE);
     gtk_button_set_label(GTK_BUTTON(self->record_button),
-                         vv_devices_recording(self->devices) ? "Stop" : "Record");
+                         vvg_devices_recording(self->devices) ? "Stop" : "Record");
 }
 
 /* ---- the device list ------------------------------------------------------------ */
 
-static void rebuild(VvDevicesPage *self);
+static void rebuild(VvgDevicesPage *self);
 
 static gboolean
 rebuild_idle_cb(gpointer user) {
-    VvDevicesPage *self = user;
+    VvgDevicesPage *self = user;
     self->rebuild_idle = 0;
     rebuild(self);
     return G_SOURCE_REMOVE;
@@ -114,7 +114,7 @@ rebuild_idle_cb(gpointer user) {
 
 /* Later: never destroy the widget whose signal is being handled. */
 static void
-queue_rebuild(VvDevicesPage *self) {
+queue_rebuild(VvgDevicesPage *self) {
     if (!self->rebuild_idle)
         self->rebuild_idle = g_idle_add(rebuild_idle_cb, self);
 }
@@ -122,39 +122,39 @@ queue_rebuild(VvDevicesPage *self) {
 static void
 app_changed(GObject *o, GParamSpec *p, gpointer user) {
     (void)p;
-    VvDevicesPage *self = user;
+    VvgDevicesPage *self = user;
     guint i = gtk_drop_down_get_selected(GTK_DROP_DOWN(o));
     if (i >= G_N_ELEMENTS(app_values))
         return;
     GError *err = NULL;
-    check(self, vv_devices_assign(self->devices, device_id(o), app_values[i], &err), &err,
+    check(self, vvg_devices_assign(self->devices, device_id(o), app_values[i], &err), &err,
           "Cannot assign the device");
 }
 
 /* The method of device @p id as the page shows it. */
 static gboolean
-get_method(VvDevicesPage *self, int id, vv_input_method *mt) {
-    vv_input_manager *m = vv_devices_manager(self->devices);
+get_method(VvgDevicesPage *self, int id, vv_input_method *mt) {
+    vv_input_manager *m = vvg_devices_manager(self->devices);
     return m && vv_input_manager_get_method(m, id, mt) == VV_OK;
 }
 
 /* A device leaving two-hand mode takes its partner out of it too. */
 static void
-unpair(VvDevicesPage *self, int id, const vv_input_method *old) {
+unpair(VvgDevicesPage *self, int id, const vv_input_method *old) {
     vv_input_method pm;
     if (old->kind != VV_METHOD_TWO_HAND || !get_method(self, old->partner, &pm) ||
         pm.kind != VV_METHOD_TWO_HAND || pm.partner != id)
         return;
     pm.kind = VV_METHOD_DIRECT;
     GError *err = NULL;
-    check(self, vv_devices_set_method(self->devices, old->partner, &pm, &err), &err,
+    check(self, vvg_devices_set_method(self->devices, old->partner, &pm, &err), &err,
           "Cannot change the partner's simulation method");
 }
 
 static void
 method_changed(GObject *o, GParamSpec *p, gpointer user) {
     (void)p;
-    VvDevicesPage *self = user;
+    VvgDevicesPage *self = user;
     int id = device_id(o);
     vv_input_method mt, old;
     if (!get_method(self, id, &mt))
@@ -172,7 +172,7 @@ method_changed(GObject *o, GParamSpec *p, gpointer user) {
         break;
     case M_TWO_HAND:
         if (old.kind != VV_METHOD_TWO_HAND)
-            check(self, vv_devices_pair(self->devices, id, NULL, &err), &err,
+            check(self, vvg_devices_pair(self->devices, id, NULL, &err), &err,
                   "Cannot use two-hand gestures");
         queue_rebuild(self); /* the partner's row, or back to what it was */
         return;
@@ -180,7 +180,7 @@ method_changed(GObject *o, GParamSpec *p, gpointer user) {
         return;
     }
     unpair(self, id, &old);
-    check(self, vv_devices_set_method(self->devices, id, &mt, &err), &err,
+    check(self, vvg_devices_set_method(self->devices, id, &mt, &err), &err,
           "Cannot set the simulation method");
     if (old.kind == VV_METHOD_TWO_HAND)
         queue_rebuild(self);
@@ -188,7 +188,7 @@ method_changed(GObject *o, GParamSpec *p, gpointer user) {
 
 static void
 sensitivity_changed(GtkSpinButton *s, gpointer user) {
-    VvDevicesPage *self = user;
+    VvgDevicesPage *self = user;
     int id = device_id(s);
     vv_input_method mt;
     if (!get_method(self, id, &mt))
@@ -202,7 +202,7 @@ sensitivity_changed(GtkSpinButton *s, gpointer user) {
     else
         mt.gain = v;
     GError *err = NULL;
-    check(self, vv_devices_set_method(self->devices, id, &mt, &err), &err,
+    check(self, vvg_devices_set_method(self->devices, id, &mt, &err), &err,
           "Cannot set the sensitivity");
 }
 
@@ -217,7 +217,7 @@ grid_row(GtkWidget *grid, int r, const char *label, GtkWidget *w) {
 }
 
 static GtkWidget *
-sensitivity_spin(VvDevicesPage *self, int id, const char *field, double lo, double hi, double step,
+sensitivity_spin(VvgDevicesPage *self, int id, const char *field, double lo, double hi, double step,
                  int digits, double value) {
     GtkWidget *s = gtk_spin_button_new_with_range(lo, hi, step);
     gtk_spin_button_set_digits(GTK_SPIN_BUTTON(s), (guint)digits);
@@ -229,7 +229,7 @@ sensitivity_spin(VvDevicesPage *self, int id, const char *field, double lo, doub
 }
 
 static GtkWidget *
-device_row(VvDevicesPage *self, const vv_input_device_desc *d) {
+device_row(VvgDevicesPage *self, const vv_input_device_desc *d) {
     GtkWidget *box = gtk_box_new(GTK_ORIENTATION_VERTICAL, 2);
     gtk_widget_set_margin_top(box, 4);
     gtk_widget_set_margin_bottom(box, 4);
@@ -293,11 +293,11 @@ device_row(VvDevicesPage *self, const vv_input_device_desc *d) {
 }
 
 static void
-rebuild(VvDevicesPage *self) {
+rebuild(VvgDevicesPage *self) {
     GtkWidget *c;
     while ((c = gtk_widget_get_first_child(self->list)))
         gtk_list_box_remove(GTK_LIST_BOX(self->list), c);
-    vv_input_manager *m = vv_devices_manager(self->devices);
+    vv_input_manager *m = vvg_devices_manager(self->devices);
     int n = m ? vv_input_manager_device_count(m) : 0;
     for (int i = 0; i < n; i++) {
         vv_input_device_desc d;
@@ -308,7 +308,7 @@ rebuild(VvDevicesPage *self) {
 }
 
 static void
-devices_changed(VvDevices *devices, gpointer user) {
+devices_changed(VvgDevices *devices, gpointer user) {
     (void)devices;
     queue_rebuild(user);
 }
@@ -318,51 +318,51 @@ devices_changed(VvDevices *devices, gpointer user) {
 static void
 spacenav_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvDevicesPage *self = user;
+    VvgDevicesPage *self = user;
     GError *err = NULL;
-    check(self, vv_devices_open_spacenav(self->devices, &err), &err, "No 3-D mouse");
+    check(self, vvg_devices_open_spacenav(self->devices, &err), &err, "No 3-D mouse");
 }
 
 static void
 controllers_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvDevicesPage *self = user;
+    VvgDevicesPage *self = user;
     GError *err = NULL;
-    check(self, vv_devices_open_controllers(self->devices, &err), &err,
+    check(self, vvg_devices_open_controllers(self->devices, &err), &err,
           "Cannot open game controllers");
 }
 
 static void
 listen_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvDevicesPage *self = user;
+    VvgDevicesPage *self = user;
     GError *err = NULL;
     const char *path = gtk_editable_get_text(GTK_EDITABLE(self->socket_entry));
-    check(self, vv_devices_listen(self->devices, path, &err), &err, "Cannot listen");
+    check(self, vvg_devices_listen(self->devices, path, &err), &err, "Cannot listen");
     update_status(self);
 }
 
 static void
 replay_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvDevicesPage *self = user;
+    VvgDevicesPage *self = user;
     GError *err = NULL;
     const char *path = gtk_editable_get_text(GTK_EDITABLE(self->replay_entry));
-    check(self, vv_devices_replay(self->devices, path, &err), &err, "Cannot replay the recording");
+    check(self, vvg_devices_replay(self->devices, path, &err), &err, "Cannot replay the recording");
     update_status(self);
 }
 
 static void
 record_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvDevicesPage *self = user;
+    VvgDevicesPage *self = user;
     GError *err = NULL;
-    if (vv_devices_recording(self->devices))
-        check(self, vv_devices_record_stop(self->devices, &err), &err,
+    if (vvg_devices_recording(self->devices))
+        check(self, vvg_devices_record_stop(self->devices, &err), &err,
               "Cannot write the recording");
     else
         check(self,
-              vv_devices_record_start(
+              vvg_devices_record_start(
                   self->devices, gtk_editable_get_text(GTK_EDITABLE(self->record_entry)), &err),
               &err, "Cannot record");
     update_status(self);
@@ -499,17 +499,17 @@ controller_present(void) {
  * Blender and FreeCAD do; a failure is a warning, not a dialog. */
 static gboolean
 auto_start_cb(gpointer user) {
-    VvDevicesPage *self = user;
+    VvgDevicesPage *self = user;
     self->auto_source = 0;
     GError *err = NULL;
     if (spacenav_present()) {
-        if (vv_devices_open_spacenav(self->devices, &err))
+        if (vvg_devices_open_spacenav(self->devices, &err))
             update_status(self);
         else
             g_warning("volvis-gui: the 3-D mouse present at start: %s", err->message);
         g_clear_error(&err);
     }
-    if (controller_present() && !vv_devices_open_controllers(self->devices, &err)) {
+    if (controller_present() && !vvg_devices_open_controllers(self->devices, &err)) {
         g_warning("volvis-gui: the game controllers present at start: %s", err->message);
         g_clear_error(&err);
     }
@@ -519,7 +519,7 @@ auto_start_cb(gpointer user) {
 /* VOLVIS_INPUT_SOCKET and VOLVIS_INPUT_REPLAY, once the window is up (errors in a dialog). */
 static gboolean
 start_cb(gpointer user) {
-    VvDevicesPage *self = user;
+    VvgDevicesPage *self = user;
     self->start_idle = 0;
     const char *sock = g_getenv("VOLVIS_INPUT_SOCKET");
     if (sock && *sock) {
@@ -540,8 +540,8 @@ start_cb(gpointer user) {
 /* ---- life cycle ------------------------------------------------------------------------- */
 
 static void
-vv_devices_page_dispose(GObject *o) {
-    VvDevicesPage *self = VV_DEVICES_PAGE(o);
+vvg_devices_page_dispose(GObject *o) {
+    VvgDevicesPage *self = VVG_DEVICES_PAGE(o);
     g_clear_handle_id(&self->rebuild_idle, g_source_remove);
     g_clear_handle_id(&self->start_idle, g_source_remove);
     g_clear_handle_id(&self->auto_source, g_source_remove);
@@ -550,23 +550,23 @@ vv_devices_page_dispose(GObject *o) {
         g_clear_object(&self->devices);
     }
     g_clear_pointer(&self->scroll, gtk_widget_unparent);
-    G_OBJECT_CLASS(vv_devices_page_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_devices_page_parent_class)->dispose(o);
 }
 
 static void
-vv_devices_page_class_init(VvDevicesPageClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_devices_page_dispose;
+vvg_devices_page_class_init(VvgDevicesPageClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_devices_page_dispose;
     gtk_widget_class_set_layout_manager_type(GTK_WIDGET_CLASS(klass), GTK_TYPE_BIN_LAYOUT);
 }
 
 static void
-vv_devices_page_init(VvDevicesPage *self) {
+vvg_devices_page_init(VvgDevicesPage *self) {
     (void)self;
 }
 
 GtkWidget *
-vv_devices_page_new(VvWindow *win) {
-    VvDevicesPage *self = g_object_new(VV_TYPE_DEVICES_PAGE, NULL);
+vvg_devices_page_new(VvgWindow *win) {
+    VvgDevicesPage *self = g_object_new(VVG_TYPE_DEVICES_PAGE, NULL);
     GtkWidget *box = gtk_box_new(GTK_ORIENTATION_VERTICAL, 4);
     gtk_widget_set_margin_start(box, 8);
     gtk_widget_set_margin_end(box, 8);
@@ -579,7 +579,7 @@ vv_devices_page_new(VvWindow *win) {
     gtk_widget_set_parent(self->scroll, GTK_WIDGET(self));
 
     GError *err = NULL;
-    self->devices = vv_devices_new(GTK_WINDOW(win), vv_window_document(win), &err);
+    self->devices = vvg_devices_new(GTK_WINDOW(win), vvg_window_document(win), &err);
     if (!self->devices) {
         heading(box, "Input devices");
         char *t = g_strdup_printf("No input devices: %s", err->message);
@@ -589,7 +589,7 @@ vv_devices_page_new(VvWindow *win) {
         return GTK_WIDGET(self);
     }
     /* the window owns the devices; the page keeps its own reference */
-    g_object_set_data_full(G_OBJECT(win), "vv-devices", g_object_ref(self->devices),
+    g_object_set_data_full(G_OBJECT(win), "vvg-devices", g_object_ref(self->devices),
                            g_object_unref);
     self->changed_id =
         g_signal_connect(self->devices, "devices-changed", G_CALLBACK(devices_changed), self);
@@ -619,7 +619,7 @@ vv_devices_page_new(VvWindow *win) {
     gtk_box_append(GTK_BOX(box), self->auto_start);
 
     heading(box, "Network socket");
-    char *sock = vv_devices_default_socket_path();
+    char *sock = vvg_devices_default_socket_path();
     self->socket_entry = gtk_entry_new();
     vvg_name(self->socket_entry, "socket path");
     gtk_editable_set_text(GTK_EDITABLE(self->socket_entry), sock);

@@ -1,4 +1,4 @@
-/* VvDevices: input devices driving the GUI through the DUI (vvg-devices.h). */
+/* VvgDevices: input devices driving the GUI through the DUI (vvg-devices.h). */
 #include "vvg-devices.h"
 
 #include <glib-unix.h>
@@ -20,10 +20,10 @@
 /* Device ids are 1..64 (VV_ERR_LIMIT beyond). */
 #define MAX_ID 64
 
-struct _VvDevices {
+struct _VvgDevices {
     GObject parent;
     GtkWindow *window; /* weak */
-    VvDocument *doc;   /* a reference */
+    VvgDocument *doc;  /* a reference */
     gulong changed_id, destroy_id;
     GApplication *app; /* a reference: quitting shuts the devices down */
     gulong shutdown_id;
@@ -45,7 +45,7 @@ struct _VvDevices {
     GHashTable *warned; /* command names without an action, warned once */
 };
 
-G_DEFINE_TYPE(VvDevices, vv_devices, G_TYPE_OBJECT)
+G_DEFINE_TYPE(VvgDevices, vvg_devices, G_TYPE_OBJECT)
 
 enum { SIGNAL_DEVICES_CHANGED, N_SIGNALS };
 static guint signals[N_SIGNALS];
@@ -53,16 +53,16 @@ static guint signals[N_SIGNALS];
 static gboolean
 fail(GError **error, const char *fallback) {
     const char *msg = vv_error_message();
-    g_set_error_literal(error, VV_GUI_ERROR, 1, msg && *msg ? msg : fallback);
+    g_set_error_literal(error, VVG_ERROR, 1, msg && *msg ? msg : fallback);
     vv_error_clear();
     return FALSE;
 }
 
 static gboolean
-stopped(VvDevices *self, GError **error) {
+stopped(VvgDevices *self, GError **error) {
     if (self->m)
         return FALSE;
-    g_set_error_literal(error, VV_GUI_ERROR, 1, "the input devices are closed");
+    g_set_error_literal(error, VVG_ERROR, 1, "the input devices are closed");
     return TRUE;
 }
 
@@ -71,17 +71,17 @@ stopped(VvDevices *self, GError **error) {
 /* Opens an undo step when device motion starts after a quiet spell or after
  * any other edit of the World. */
 static void
-begin_burst(VvDevices *self, gint64 now_us) {
+begin_burst(VvgDevices *self, gint64 now_us) {
     if (!self->burst_open || now_us - self->last_move_us > BURST_GAP_US)
-        vv_document_begin_edit(self->doc, "device motion");
+        vvg_document_begin_edit(self->doc, "device motion");
     self->burst_open = TRUE;
     self->last_move_us = now_us;
 }
 
 static void
-emit_changed(VvDevices *self) {
+emit_changed(VvgDevices *self) {
     self->emitting = TRUE;
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
     self->emitting = FALSE;
 }
 
@@ -96,14 +96,14 @@ nav_view(vv_world *w, vv_nav_motion m) {
 /* Moves the view for motion v (tx ty tz rx ry rz): rates applied over dt
  * seconds, or (dt < 0) a mouse's drag distance in units of ppu pixels. */
 static void
-move_view(VvDevices *self, const double v[6], double dt, double ppu) {
+move_view(VvgDevices *self, const double v[6], double dt, double ppu) {
     int any = 0;
     for (int i = 0; i < 6; i++)
         any |= v[i] != 0;
     if (!any)
         return;
     begin_burst(self, g_get_monotonic_time());
-    vv_world *w = vv_document_world(self->doc);
+    vv_world *w = vvg_document_world(self->doc);
     double h = w->view.height > 0 ? w->view.height : 512;
     if (dt < 0) {
         /* the mouse's own mapping (docs/input.md) undone: dx -> ry, dy -> rx,
@@ -136,7 +136,7 @@ move_view(VvDevices *self, const double v[6], double dt, double ppu) {
 }
 
 static gboolean
-any_held(const VvDevices *self) {
+any_held(const VvgDevices *self) {
     for (int id = 0; id <= MAX_ID; id++)
         for (int i = 0; i < 6; i++)
             if (self->held[id][i] != 0)
@@ -146,7 +146,7 @@ any_held(const VvDevices *self) {
 
 /* Applies the held rates from the last integration up to now. */
 static void
-integrate(VvDevices *self) {
+integrate(VvgDevices *self) {
     gint64 now = g_get_monotonic_time();
     double dt = (now - self->held_since_us) * 1e-6;
     self->held_since_us = now;
@@ -163,7 +163,7 @@ integrate(VvDevices *self) {
 
 static gboolean
 tick_cb(gpointer user) {
-    VvDevices *self = user;
+    VvgDevices *self = user;
     integrate(self);
     if (any_held(self))
         return G_SOURCE_CONTINUE;
@@ -172,7 +172,7 @@ tick_cb(gpointer user) {
 }
 
 static void
-set_held(VvDevices *self, int id, const double v[6]) {
+set_held(VvgDevices *self, int id, const double v[6]) {
     if (id < 0 || id > MAX_ID)
         return;
     integrate(self); /* the previous rates up to now */
@@ -185,13 +185,13 @@ set_held(VvDevices *self, int id, const double v[6]) {
  * the view's: x right, y up, z towards the viewer) and scales with their
  * distance. */
 static void
-two_hand(VvDevices *self, const vv_input_action *a) {
+two_hand(VvgDevices *self, const vv_input_action *a) {
     gboolean turn = fabs(a->rotation.w) < 1 - 1e-12;
     gboolean zoom = isfinite(a->scale) && a->scale > 0 && a->scale != 1;
     if (!turn && !zoom)
         return;
     begin_burst(self, g_get_monotonic_time());
-    vv_world *w = vv_document_world(self->doc);
+    vv_world *w = vvg_document_world(self->doc);
     if (turn)
         nav_view(w, (vv_nav_motion){.kind = VV_NAV_TURN, .rotation = a->rotation});
     if (zoom)
@@ -200,7 +200,7 @@ two_hand(VvDevices *self, const vv_input_action *a) {
 }
 
 static void
-command(VvDevices *self, const char *name) {
+command(VvgDevices *self, const char *name) {
     char action[VV_INPUT_COMMAND_MAX];
     g_strlcpy(action, name, sizeof action);
     for (char *p = action; *p; p++)
@@ -222,7 +222,7 @@ command(VvDevices *self, const char *name) {
 /* Subscriber for application "navigator". */
 static void
 on_navigator(void *user, const vv_input_action *a) {
-    VvDevices *self = user;
+    VvgDevices *self = user;
     switch (a->kind) {
     case VV_ACTION_MOTION: {
         vv_input_device_desc d;
@@ -251,7 +251,7 @@ on_navigator(void *user, const vv_input_action *a) {
 /* Subscriber for every application: the device list. */
 static void
 on_any(void *user, const vv_input_action *a) {
-    VvDevices *self = user;
+    VvgDevices *self = user;
     if (a->kind == VV_ACTION_DEVICE_REMOVED) {
         static const double zero[6] = {0};
         set_held(self, a->device, zero);
@@ -261,7 +261,7 @@ on_any(void *user, const vv_input_action *a) {
 }
 
 static void
-flush_list(VvDevices *self) {
+flush_list(VvgDevices *self) {
     if (!self->list_dirty)
         return;
     self->list_dirty = FALSE;
@@ -274,7 +274,7 @@ static gboolean timeout_cb(gpointer user);
 
 /* The manager's next deadline as a GLib timeout (none: only its descriptor). */
 static void
-rearm(VvDevices *self) {
+rearm(VvgDevices *self) {
     if (self->timeout_source) {
         g_source_remove(self->timeout_source);
         self->timeout_source = 0;
@@ -290,7 +290,7 @@ rearm(VvDevices *self) {
 }
 
 static void
-dispatch(VvDevices *self) {
+dispatch(VvgDevices *self) {
     if (!self->m)
         return;
     g_object_ref(self);
@@ -298,7 +298,7 @@ dispatch(VvDevices *self) {
     vv_input_manager_dispatch(self->m, vv_input_now());
     self->dispatching = FALSE;
     if (self->shutdown_pending)
-        vv_devices_shutdown(self);
+        vvg_devices_shutdown(self);
     if (self->m && self->replaying && !vv_input_manager_replay_pending(self->m))
         self->list_dirty = TRUE; /* the page's status: the replay is over */
     self->replaying = self->m && vv_input_manager_replay_pending(self->m);
@@ -309,7 +309,7 @@ dispatch(VvDevices *self) {
 
 static gboolean
 timeout_cb(gpointer user) {
-    VvDevices *self = user;
+    VvgDevices *self = user;
     self->timeout_source = 0;
     dispatch(self);
     return G_SOURCE_REMOVE;
@@ -326,9 +326,9 @@ fd_cb(int fd, GIOCondition cond, gpointer user) {
 /* ---- life cycle ------------------------------------------------------------------- */
 
 static void
-doc_changed(VvDocument *doc, gpointer user) {
+doc_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
-    VvDevices *self = user;
+    VvgDevices *self = user;
     /* an edit not ours (undo, a drag, a command) ends the motion's undo step */
     if (!self->emitting)
         self->burst_open = FALSE;
@@ -337,7 +337,7 @@ doc_changed(VvDocument *doc, gpointer user) {
 static void
 window_destroyed(GtkWidget *w, gpointer user) {
     (void)w;
-    vv_devices_shutdown(user);
+    vvg_devices_shutdown(user);
 }
 
 /* Quitting does not destroy the windows: shut down here too, so that a
@@ -345,11 +345,11 @@ window_destroyed(GtkWidget *w, gpointer user) {
 static void
 app_shutdown(GApplication *app, gpointer user) {
     (void)app;
-    vv_devices_shutdown(user);
+    vvg_devices_shutdown(user);
 }
 
 void
-vv_devices_shutdown(VvDevices *self) {
+vvg_devices_shutdown(VvgDevices *self) {
     if (self->dispatching) { /* the manager is in use: free it when dispatch returns */
         self->shutdown_pending = TRUE;
         return;
@@ -383,23 +383,23 @@ vv_devices_shutdown(VvDevices *self) {
 }
 
 static void
-vv_devices_dispose(GObject *o) {
-    vv_devices_shutdown(VV_DEVICES(o));
-    G_OBJECT_CLASS(vv_devices_parent_class)->dispose(o);
+vvg_devices_dispose(GObject *o) {
+    vvg_devices_shutdown(VVG_DEVICES(o));
+    G_OBJECT_CLASS(vvg_devices_parent_class)->dispose(o);
 }
 
 static void
-vv_devices_finalize(GObject *o) {
-    VvDevices *self = VV_DEVICES(o);
+vvg_devices_finalize(GObject *o) {
+    VvgDevices *self = VVG_DEVICES(o);
     g_free(self->listen_path);
     g_hash_table_destroy(self->warned);
-    G_OBJECT_CLASS(vv_devices_parent_class)->finalize(o);
+    G_OBJECT_CLASS(vvg_devices_parent_class)->finalize(o);
 }
 
 static void
-vv_devices_class_init(VvDevicesClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_devices_dispose;
-    G_OBJECT_CLASS(klass)->finalize = vv_devices_finalize;
+vvg_devices_class_init(VvgDevicesClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_devices_dispose;
+    G_OBJECT_CLASS(klass)->finalize = vvg_devices_finalize;
     /* devices were added or removed (the list to show changed) */
     signals[SIGNAL_DEVICES_CHANGED] =
         g_signal_new("devices-changed", G_TYPE_FROM_CLASS(klass), G_SIGNAL_RUN_LAST, 0, NULL, NULL,
@@ -407,14 +407,14 @@ vv_devices_class_init(VvDevicesClass *klass) {
 }
 
 static void
-vv_devices_init(VvDevices *self) {
+vvg_devices_init(VvgDevices *self) {
     self->warned = g_hash_table_new_full(g_str_hash, g_str_equal, g_free, NULL);
     self->held_since_us = g_get_monotonic_time();
 }
 
-VvDevices *
-vv_devices_new(GtkWindow *window, VvDocument *doc, GError **error) {
-    VvDevices *self = g_object_new(VV_TYPE_DEVICES, NULL);
+VvgDevices *
+vvg_devices_new(GtkWindow *window, VvgDocument *doc, GError **error) {
+    VvgDevices *self = g_object_new(VVG_TYPE_DEVICES, NULL);
     if (vv_input_manager_new(&self->m, NULL) != VV_OK ||
         vv_input_manager_subscribe(self->m, "navigator", on_navigator, self, NULL) != VV_OK ||
         vv_input_manager_subscribe(self->m, NULL, on_any, self, NULL) != VV_OK) {
@@ -438,13 +438,13 @@ vv_devices_new(GtkWindow *window, VvDocument *doc, GError **error) {
 }
 
 vv_input_manager *
-vv_devices_manager(VvDevices *self) {
+vvg_devices_manager(VvgDevices *self) {
     return self->m;
 }
 
 /* After a call that may add devices or change the manager's deadlines. */
 static gboolean
-after_call(VvDevices *self, vv_status s, GError **error, const char *fallback) {
+after_call(VvgDevices *self, vv_status s, GError **error, const char *fallback) {
     self->replaying = vv_input_manager_replay_pending(self->m);
     rearm(self);
     self->list_dirty = TRUE;
@@ -453,7 +453,7 @@ after_call(VvDevices *self, vv_status s, GError **error, const char *fallback) {
 }
 
 gboolean
-vv_devices_open_spacenav(VvDevices *self, GError **error) {
+vvg_devices_open_spacenav(VvgDevices *self, GError **error) {
     if (stopped(self, error))
         return FALSE;
     return after_call(self, vv_input_manager_open_spacenav(self->m, NULL), error,
@@ -461,7 +461,7 @@ vv_devices_open_spacenav(VvDevices *self, GError **error) {
 }
 
 gboolean
-vv_devices_open_controllers(VvDevices *self, GError **error) {
+vvg_devices_open_controllers(VvgDevices *self, GError **error) {
     if (stopped(self, error))
         return FALSE;
     return after_call(self, vv_input_manager_open_controllers(self->m), error,
@@ -469,7 +469,7 @@ vv_devices_open_controllers(VvDevices *self, GError **error) {
 }
 
 gboolean
-vv_devices_listen(VvDevices *self, const char *path, GError **error) {
+vvg_devices_listen(VvgDevices *self, const char *path, GError **error) {
     if (stopped(self, error))
         return FALSE;
     vv_status s = vv_input_manager_listen(self->m, path);
@@ -481,12 +481,12 @@ vv_devices_listen(VvDevices *self, const char *path, GError **error) {
 }
 
 const char *
-vv_devices_listen_path(VvDevices *self) {
+vvg_devices_listen_path(VvgDevices *self) {
     return self->listen_path;
 }
 
 gboolean
-vv_devices_replay(VvDevices *self, const char *path, GError **error) {
+vvg_devices_replay(VvgDevices *self, const char *path, GError **error) {
     if (stopped(self, error))
         return FALSE;
     return after_call(self,
@@ -495,7 +495,7 @@ vv_devices_replay(VvDevices *self, const char *path, GError **error) {
 }
 
 gboolean
-vv_devices_record_start(VvDevices *self, const char *path, GError **error) {
+vvg_devices_record_start(VvgDevices *self, const char *path, GError **error) {
     if (stopped(self, error))
         return FALSE;
     if (vv_input_manager_record_start(self->m, path) != VV_OK)
@@ -505,7 +505,7 @@ vv_devices_record_start(VvDevices *self, const char *path, GError **error) {
 }
 
 gboolean
-vv_devices_record_stop(VvDevices *self, GError **error) {
+vvg_devices_record_stop(VvgDevices *self, GError **error) {
     if (stopped(self, error))
         return FALSE;
     self->recording = FALSE;
@@ -515,12 +515,12 @@ vv_devices_record_stop(VvDevices *self, GError **error) {
 }
 
 gboolean
-vv_devices_recording(VvDevices *self) {
+vvg_devices_recording(VvgDevices *self) {
     return self->recording;
 }
 
 gboolean
-vv_devices_assign(VvDevices *self, int id, const char *app, GError **error) {
+vvg_devices_assign(VvgDevices *self, int id, const char *app, GError **error) {
     if (stopped(self, error))
         return FALSE;
     if (vv_input_manager_assign(self->m, id, app) != VV_OK)
@@ -534,7 +534,7 @@ vv_devices_assign(VvDevices *self, int id, const char *app, GError **error) {
 }
 
 gboolean
-vv_devices_set_method(VvDevices *self, int id, const vv_input_method *method, GError **error) {
+vvg_devices_set_method(VvgDevices *self, int id, const vv_input_method *method, GError **error) {
     if (stopped(self, error))
         return FALSE;
     if (vv_input_manager_set_method(self->m, id, method) != VV_OK)
@@ -543,7 +543,7 @@ vv_devices_set_method(VvDevices *self, int id, const vv_input_method *method, GE
 }
 
 gboolean
-vv_devices_pair(VvDevices *self, int id, int *partner, GError **error) {
+vvg_devices_pair(VvgDevices *self, int id, int *partner, GError **error) {
     if (stopped(self, error))
         return FALSE;
     vv_input_device_desc me, d;
@@ -551,7 +551,7 @@ vv_devices_pair(VvDevices *self, int id, int *partner, GError **error) {
     for (int i = 0; i < n && !have_me; i++)
         have_me = vv_input_manager_device_get(self->m, i, &me) == VV_OK && me.id == id;
     if (!have_me) {
-        g_set_error(error, VV_GUI_ERROR, 1, "no device %d", id);
+        g_set_error(error, VVG_ERROR, 1, "no device %d", id);
         return FALSE;
     }
     int best = -1;
@@ -561,7 +561,7 @@ vv_devices_pair(VvDevices *self, int id, int *partner, GError **error) {
                 strcmp(d.driver, "gui") != 0 && (pass == 1 || d.kind == me.kind))
                 best = d.id;
     if (best < 0) {
-        g_set_error(error, VV_GUI_ERROR, 1,
+        g_set_error(error, VVG_ERROR, 1,
                     "two-hand gestures need a second device to pair %s with (a replayed or "
                     "network data glove, for instance)",
                     me.name);
@@ -575,7 +575,7 @@ vv_devices_pair(VvDevices *self, int id, int *partner, GError **error) {
 }
 
 char *
-vv_devices_default_socket_path(void) {
+vvg_devices_default_socket_path(void) {
     const char *run = g_getenv("XDG_RUNTIME_DIR");
     if (run && *run && g_file_test(run, G_FILE_TEST_IS_DIR))
         return g_build_filename(run, "volvis-input.sock", NULL);

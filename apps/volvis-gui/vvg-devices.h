@@ -1,5 +1,5 @@
 /*
- * VvDevices: the GUI's side of the Device Unified Interface (include/volvis/input.h,
+ * VvgDevices: the GUI's side of the Device Unified Interface (include/volvis/input.h,
  * docs/input.md). It owns a vv_input_manager, watches its one descriptor in
  * the GLib main loop (g_unix_fd_add) and re-arms a timeout from
  * vv_input_manager_timeout after each dispatch, so an idle GUI sleeps. It
@@ -28,15 +28,15 @@
  * UI thread only. The keyboard and mouse devices the manager always has are
  * not fed: the scene view handles its own input (docs/gui.md).
  */
-#ifndef VV_DEVICES_H
-#define VV_DEVICES_H
+#ifndef VVG_DEVICES_H
+#define VVG_DEVICES_H
 
 #include "vvg-document.h"
 
 G_BEGIN_DECLS
 
-#define VV_TYPE_DEVICES (vv_devices_get_type())
-G_DECLARE_FINAL_TYPE(VvDevices, vv_devices, VV, DEVICES, GObject)
+#define VVG_TYPE_DEVICES (vvg_devices_get_type())
+G_DECLARE_FINAL_TYPE(VvgDevices, vvg_devices, VVG, DEVICES, GObject)
 
 /**
  * A manager with the information base of the default search (installed
@@ -44,42 +44,42 @@ G_DECLARE_FINAL_TYPE(VvDevices, vv_devices, VV, DEVICES, GObject)
  * devices drive @p doc; commands activate the actions of @p window. Both are
  * borrowed: the window owns the result, and it stops (closes every driver,
  * writes a recording in progress) when the window is destroyed or
- * vv_devices_shutdown is called. NULL with @p error set when the manager
+ * vvg_devices_shutdown is called. NULL with @p error set when the manager
  * cannot be created.
  */
-VvDevices *vv_devices_new(GtkWindow *window, VvDocument *doc, GError **error);
+VvgDevices *vvg_devices_new(GtkWindow *window, VvgDocument *doc, GError **error);
 /** Closes every driver and stops (idempotent); later calls fail or do nothing. */
-void vv_devices_shutdown(VvDevices *self);
+void vvg_devices_shutdown(VvgDevices *self);
 /** The manager (borrowed), or NULL after shutdown. */
-vv_input_manager *vv_devices_manager(VvDevices *self);
+vv_input_manager *vvg_devices_manager(VvgDevices *self);
 
 /** The 3-D mouse through spacenavd. */
-gboolean vv_devices_open_spacenav(VvDevices *self, GError **error);
+gboolean vvg_devices_open_spacenav(VvgDevices *self, GError **error);
 /** SDL2 game controllers (attached now or later). */
-gboolean vv_devices_open_controllers(VvDevices *self, GError **error);
+gboolean vvg_devices_open_controllers(VvgDevices *self, GError **error);
 /** Listens on a Unix-domain socket for the network protocol (docs/input.md). */
-gboolean vv_devices_listen(VvDevices *self, const char *path, GError **error);
+gboolean vvg_devices_listen(VvgDevices *self, const char *path, GError **error);
 /** The socket path listened on, or NULL. */
-const char *vv_devices_listen_path(VvDevices *self);
+const char *vvg_devices_listen_path(VvgDevices *self);
 /** Replays a recording at real speed, starting now. */
-gboolean vv_devices_replay(VvDevices *self, const char *path, GError **error);
+gboolean vvg_devices_replay(VvgDevices *self, const char *path, GError **error);
 /** Starts recording every raw event to @p path (written when recording stops). */
-gboolean vv_devices_record_start(VvDevices *self, const char *path, GError **error);
-gboolean vv_devices_record_stop(VvDevices *self, GError **error);
-gboolean vv_devices_recording(VvDevices *self);
+gboolean vvg_devices_record_start(VvgDevices *self, const char *path, GError **error);
+gboolean vvg_devices_record_stop(VvgDevices *self, GError **error);
+gboolean vvg_devices_recording(VvgDevices *self);
 /** vv_input_manager_assign: @p app "" means every application. */
-gboolean vv_devices_assign(VvDevices *self, int id, const char *app, GError **error);
+gboolean vvg_devices_assign(VvgDevices *self, int id, const char *app, GError **error);
 /** vv_input_manager_set_method. */
-gboolean vv_devices_set_method(VvDevices *self, int id, const vv_input_method *method,
-                               GError **error);
+gboolean vvg_devices_set_method(VvgDevices *self, int id, const vv_input_method *method,
+                                GError **error);
 /**
  * Pairs device @p id for two-hand gestures with another present device
  * (one of the same kind first); *partner receives its id.
  */
-gboolean vv_devices_pair(VvDevices *self, int id, int *partner, GError **error);
+gboolean vvg_devices_pair(VvgDevices *self, int id, int *partner, GError **error);
 
 /** $XDG_RUNTIME_DIR/volvis-input.sock, else /tmp/volvis-input-UID.sock (g_free). */
-char *vv_devices_default_socket_path(void);
+char *vvg_devices_default_socket_path(void);
 
 G_END_DECLS
 #endif

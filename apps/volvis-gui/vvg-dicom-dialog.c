@@ -7,7 +7,7 @@
 
 typedef struct dicom_dialog {
     GtkWidget *window, *folder, *list, *show_phi, *status, *open;
-    VvDocument *doc;
+    VvgDocument *doc;
     vv_dicom_series *series;
     int n;
     char *path; /* the folder listed */
@@ -159,7 +159,7 @@ open_series(dicom_dialog *d, int series) {
     GError *err = NULL;
     /* a scene names a folder, not one of its series: one series is read again
      * from the folder, one of several is written beside the scene */
-    if (!vv_document_add_volume(d->doc, v, name, d->n == 1 ? d->path : NULL, &err)) {
+    if (!vvg_document_add_volume(d->doc, v, name, d->n == 1 ? d->path : NULL, &err)) {
         vvg_show_error(d->window, "Cannot open the series", err->message);
         g_error_free(err);
     } else {
@@ -196,7 +196,7 @@ dialog_free(gpointer p) {
 }
 
 void
-vv_dicom_dialog_present(GtkWindow *parent, VvDocument *doc) {
+vvg_dicom_dialog_present(GtkWindow *parent, VvgDocument *doc) {
     dicom_dialog *d = g_new0(dicom_dialog, 1);
     d->doc = g_object_ref(doc);
     d->window = gtk_window_new();

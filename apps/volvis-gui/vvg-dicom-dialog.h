@@ -7,15 +7,15 @@
  * Open reads the selected series (vv_volume_load with its series number)
  * into the document. UI thread only.
  */
-#ifndef VV_DICOM_DIALOG_H
-#define VV_DICOM_DIALOG_H
+#ifndef VVG_DICOM_DIALOG_H
+#define VVG_DICOM_DIALOG_H
 
 #include "vvg-document.h"
 
 G_BEGIN_DECLS
 
 /** Opens the browser over @p parent for @p doc. */
-void vv_dicom_dialog_present(GtkWindow *parent, VvDocument *doc);
+void vvg_dicom_dialog_present(GtkWindow *parent, VvgDocument *doc);
 
 G_END_DECLS
 #endif

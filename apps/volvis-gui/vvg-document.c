@@ -1,4 +1,4 @@
-/* VvDocument: the edited World, undo, sources and selection (vvg-document.h). */
+/* VvgDocument: the edited World, undo, sources and selection (vvg-document.h). */
 #define _GNU_SOURCE /* renameat2 */
 #include "vvg-document.h"
 
@@ -15,7 +15,7 @@
 #include "volvis/filter.h"
 #include "vvg-models.h"
 
-struct _VvDocument {
+struct _VvgDocument {
     GObject parent;
     vv_world *world;
     vv_world *kept; /* the World while a transient one is shown, else NULL */
@@ -26,15 +26,15 @@ struct _VvDocument {
     vv_filter_cache *filtered; /* filtered volumes of scene objects, kept across reopenings */
     GPtrArray *autosaved;      /* autosaved_volume: what the last autosave wrote */
     int edited_channel;        /* the channel the Transfer function page edits */
-    char *merge_label;         /* vv_document_begin_edit_merging: the last merged edit */
+    char *merge_label;         /* vvg_document_begin_edit_merging: the last merged edit */
     gint64 merge_time;
     GHashTable *time_steps; /* source path -> the file's time steps (GINT_TO_POINTER) */
-    GHashTable *pyramids;   /* source path -> VvGuiPyramid (opened out of core) */
+    GHashTable *pyramids;   /* source path -> VvgPyramid (opened out of core) */
     GHashTable *series;     /* "channel\npath" -> vv_time_series* */
-    /* vv_document_request_time: a read in flight, the step asked for since */
+    /* vvg_document_request_time: a read in flight, the step asked for since */
     gboolean time_busy;
     int time_want; /* -1: none */
-    VvTimeFailed time_failed;
+    VvgTimeFailed time_failed;
     gpointer time_failed_user;
 };
 
@@ -55,22 +55,22 @@ autosaved_volume_free(gpointer p) {
     g_free(a);
 }
 
-G_DEFINE_TYPE(VvDocument, vv_document, G_TYPE_OBJECT)
+G_DEFINE_TYPE(VvgDocument, vvg_document, G_TYPE_OBJECT)
 
 enum { SIGNAL_CHANGED, SIGNAL_SELECTION_CHANGED, N_SIGNALS };
 static guint signals[N_SIGNALS];
 
-G_DEFINE_QUARK(vv - gui - error - quark, vv_gui_error)
+G_DEFINE_QUARK(vvg - error - quark, vvg_error)
 
 static void
 set_error(GError **error, const char *fallback) {
     const char *m = vv_error_message();
-    g_set_error_literal(error, VV_GUI_ERROR, 1, m && *m ? m : fallback);
+    g_set_error_literal(error, VVG_ERROR, 1, m && *m ? m : fallback);
 }
 
 static void
-vv_document_finalize(GObject *o) {
-    VvDocument *doc = VV_DOCUMENT(o);
+vvg_document_finalize(GObject *o) {
+    VvgDocument *doc = VVG_DOCUMENT(o);
     vv_world_free(doc->world);
     vv_world_free(doc->kept);
     vvg_undo_free(doc->undo);
@@ -81,12 +81,12 @@ vv_document_finalize(GObject *o) {
     g_hash_table_unref(doc->time_steps);
     g_hash_table_unref(doc->pyramids);
     g_hash_table_unref(doc->series);
-    G_OBJECT_CLASS(vv_document_parent_class)->finalize(o);
+    G_OBJECT_CLASS(vvg_document_parent_class)->finalize(o);
 }
 
 static void
-vv_document_class_init(VvDocumentClass *klass) {
-    G_OBJECT_CLASS(klass)->finalize = vv_document_finalize;
+vvg_document_class_init(VvgDocumentClass *klass) {
+    G_OBJECT_CLASS(klass)->finalize = vvg_document_finalize;
     signals[SIGNAL_CHANGED] = g_signal_new("changed", G_TYPE_FROM_CLASS(klass), G_SIGNAL_RUN_LAST,
                                            0, NULL, NULL, NULL, G_TYPE_NONE, 0);
     signals[SIGNAL_SELECTION_CHANGED] =
@@ -95,31 +95,31 @@ vv_document_class_init(VvDocumentClass *klass) {
 }
 
 static void
-vv_document_init(VvDocument *doc) {
+vvg_document_init(VvgDocument *doc) {
     if (vv_world_new(&doc->world) != VV_OK || vvg_undo_new(&doc->undo, 200) != VV_OK ||
         vv_filter_cache_new(&doc->filtered, 8) != VV_OK)
         g_error("volvis-gui: out of memory");
     doc->selected = -1;
     doc->autosaved = g_ptr_array_new_with_free_func(autosaved_volume_free);
     doc->time_steps = g_hash_table_new_full(g_str_hash, g_str_equal, g_free, NULL);
-    doc->pyramids = g_hash_table_new_full(g_str_hash, g_str_equal, g_free,
-                                          (GDestroyNotify)vv_gui_pyramid_unref);
-    doc->series = vv_time_cache_new();
+    doc->pyramids =
+        g_hash_table_new_full(g_str_hash, g_str_equal, g_free, (GDestroyNotify)vvg_pyramid_unref);
+    doc->series = vvg_time_cache_new();
     doc->time_want = -1;
 }
 
-VvDocument *
-vv_document_new(void) {
-    return g_object_new(VV_TYPE_DOCUMENT, NULL);
+VvgDocument *
+vvg_document_new(void) {
+    return g_object_new(VVG_TYPE_DOCUMENT, NULL);
 }
 
 vv_world *
-vv_document_world(VvDocument *doc) {
+vvg_document_world(VvgDocument *doc) {
     return doc->world;
 }
 
 vv_world *
-vv_document_snapshot(VvDocument *doc) {
+vvg_document_snapshot(VvgDocument *doc) {
     vv_world *w = NULL;
     if (vv_world_clone(&w, doc->world) != VV_OK)
         return NULL;
@@ -127,7 +127,7 @@ vv_document_snapshot(VvDocument *doc) {
 }
 
 static void
-clamp_selection(VvDocument *doc) {
+clamp_selection(VvgDocument *doc) {
     if (doc->selected >= doc->world->n_objects)
         doc->selected = doc->world->n_objects - 1;
     if (doc->selected < 0 && doc->world->n_objects > 0)
@@ -136,14 +136,14 @@ clamp_selection(VvDocument *doc) {
 
 /* Drops the World kept aside: the transient World shown becomes the World. */
 static void
-keep_transient(VvDocument *doc) {
+keep_transient(VvgDocument *doc) {
     vv_world_free(doc->kept);
     doc->kept = NULL;
 }
 
 /* Puts the World kept aside back, without a signal. */
 static void
-restore_kept(VvDocument *doc) {
+restore_kept(VvgDocument *doc) {
     if (!doc->kept)
         return;
     vv_world_free(doc->world);
@@ -153,7 +153,7 @@ restore_kept(VvDocument *doc) {
 }
 
 void
-vv_document_begin_edit(VvDocument *doc, const char *label) {
+vvg_document_begin_edit(VvgDocument *doc, const char *label) {
     /* callers may hold pointers into the World shown: the edit changes it */
     keep_transient(doc);
     if (vvg_undo_push(doc->undo, doc->world, label) != VV_OK)
@@ -163,7 +163,7 @@ vv_document_begin_edit(VvDocument *doc, const char *label) {
 }
 
 void
-vv_document_begin_edit_merging(VvDocument *doc, const char *label) {
+vvg_document_begin_edit_merging(VvgDocument *doc, const char *label) {
     gint64 now = g_get_monotonic_time();
     if (doc->merge_label && !strcmp(doc->merge_label, label) && now - doc->merge_time < 1000000 &&
         !doc->kept && vvg_undo_can_undo(doc->undo)) {
@@ -171,25 +171,25 @@ vv_document_begin_edit_merging(VvDocument *doc, const char *label) {
         doc->dirty = TRUE;
         return;
     }
-    vv_document_begin_edit(doc, label);
+    vvg_document_begin_edit(doc, label);
     doc->merge_label = g_strdup(label);
     doc->merge_time = now;
 }
 
 void
-vv_document_changed(VvDocument *doc) {
+vvg_document_changed(VvgDocument *doc) {
     g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
 }
 
 static void
-world_replaced(VvDocument *doc) {
+world_replaced(VvgDocument *doc) {
     clamp_selection(doc);
     g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
     g_signal_emit(doc, signals[SIGNAL_SELECTION_CHANGED], 0);
 }
 
 gboolean
-vv_document_undo(VvDocument *doc) {
+vvg_document_undo(VvgDocument *doc) {
     g_clear_pointer(&doc->merge_label, g_free);
     gboolean restored = doc->kept != NULL;
     restore_kept(doc);
@@ -204,7 +204,7 @@ vv_document_undo(VvDocument *doc) {
 }
 
 gboolean
-vv_document_redo(VvDocument *doc) {
+vvg_document_redo(VvgDocument *doc) {
     g_clear_pointer(&doc->merge_label, g_free);
     gboolean restored = doc->kept != NULL;
     restore_kept(doc);
@@ -219,12 +219,12 @@ vv_document_redo(VvDocument *doc) {
 }
 
 gboolean
-vv_document_can_undo(VvDocument *doc) {
+vvg_document_can_undo(VvgDocument *doc) {
     return vvg_undo_can_undo(doc->undo);
 }
 
 gboolean
-vv_document_can_redo(VvDocument *doc) {
+vvg_document_can_redo(VvgDocument *doc) {
     return vvg_undo_can_redo(doc->undo);
 }
 
@@ -257,7 +257,7 @@ static const char *const mesh_suffixes[] = {".obj", ".ply", ".stl",  ".off", ".d
                                             ".3ds", ".fbx", ".gltf", ".glb", NULL};
 
 /* A scene replaces the World; its volumes' files are the scene's. */
-static int pyramid_proxy(VvDocument *doc, const char *path, const char *key, VvGuiPyramid **out,
+static int pyramid_proxy(VvgDocument *doc, const char *path, const char *key, VvgPyramid **out,
                          vv_volume **proxy, GError **error);
 
 /* A scene's volume file (vv_scene_load_with): a multiresolution file too
@@ -265,10 +265,10 @@ static int pyramid_proxy(VvDocument *doc, const char *path, const char *key, VvG
  * the path the object will name; anything else is read whole. */
 static vv_status
 scene_volume(void *user, const char *path, int time, vv_scene_volume *out) {
-    VvDocument *doc = user;
+    VvgDocument *doc = user;
     if (time > 0 || !vv_pyramid_probe(path))
         return VV_ERR_UNSUPPORTED;
-    VvGuiPyramid *gp = NULL;
+    VvgPyramid *gp = NULL;
     vv_volume *proxy = NULL;
     GError *err = NULL;
     const int r = pyramid_proxy(doc, path, path, &gp, &proxy, &err);
@@ -287,14 +287,14 @@ scene_volume(void *user, const char *path, int time, vv_scene_volume *out) {
 }
 
 static gboolean
-open_scene(VvDocument *doc, const char *path, GError **error) {
+open_scene(VvgDocument *doc, const char *path, GError **error) {
     vv_world *w = NULL;
     vv_error_clear();
     if (vv_scene_load_with(&w, path, NULL, doc->filtered, scene_volume, doc) != VV_OK) {
         set_error(error, "cannot read the scene");
         return FALSE;
     }
-    vv_document_begin_edit(doc, "open scene");
+    vvg_document_begin_edit(doc, "open scene");
     /* the view fills the window: the scene's camera at the window's size */
     if (doc->world->view.width > 0 && doc->world->view.height > 0) {
         w->view.width = doc->world->view.width;
@@ -330,7 +330,7 @@ choose_renderer(vv_world *w) {
 }
 
 gboolean
-vv_document_mesh_is_y_up(const char *path) {
+vvg_document_mesh_is_y_up(const char *path) {
     /* the exporters' conventions: OBJ, PLY, glTF, COLLADA and FBX are
      * usually Y-up; STL, OFF and 3DS (CAD, printing) Z-up */
     static const char *const y_up[] = {".obj", ".ply", ".gltf", ".glb", ".dae", ".fbx", NULL};
@@ -340,15 +340,15 @@ vv_document_mesh_is_y_up(const char *path) {
 /* The object added beside others: the view frames the whole World (same
  * undo step), and the renderer is one that draws everything. */
 static void
-added_beside(VvDocument *doc) {
+added_beside(VvgDocument *doc) {
     vv_world *w = doc->world;
     choose_renderer(w);
     vv_view_frame_box(&w->view, vv_world_bounds(w));
-    vv_document_changed(doc);
+    vvg_document_changed(doc);
 }
 
 static gboolean
-open_mesh(VvDocument *doc, const char *path, GError **error) {
+open_mesh(VvgDocument *doc, const char *path, GError **error) {
     vv_mesh *m = NULL;
     vv_object *o = NULL;
     if (vv_mesh_load(&m, path) != VV_OK) {
@@ -366,14 +366,14 @@ open_mesh(VvDocument *doc, const char *path, GError **error) {
         set_error(error, "cannot use the mesh");
         return FALSE;
     }
-    if (vv_document_mesh_is_y_up(path)) /* its Y turned to the World's Z (up) */
+    if (vvg_document_mesh_is_y_up(path)) /* its Y turned to the World's Z (up) */
         o->orientation = vv_quat_from_axis_angle(vv_vec3_make(1, 0, 0), VV_PI / 2);
     gboolean fresh = doc->world->n_objects == 0 && !doc->dirty;
     if (doc->world->n_objects == 0 && doc->world->n_lights == 0) {
         vv_light l = {VV_LIGHT_DIRECTIONAL, 1, {0, 1, 0}, {0, 0, 0}, {1, 1, 1}, 1.0};
         vv_world_add_light(doc->world, &l);
     }
-    vv_document_add_object(doc, o, NULL);
+    vvg_document_add_object(doc, o, NULL);
     added_beside(doc);
     doc->dirty = !fresh;
     return TRUE;
@@ -383,7 +383,7 @@ open_mesh(VvDocument *doc, const char *path, GError **error) {
  * as one object; @p info[c]: what the read of channel c said (names,
  * colours), may be NULL. */
 static gboolean
-add_volume_channels(VvDocument *doc, vv_volume *const *v, int n, const vv_load_info *info,
+add_volume_channels(VvgDocument *doc, vv_volume *const *v, int n, const vv_load_info *info,
                     const char *name, const char *source, GError **error) {
     vv_world *w = NULL;
     vv_error_clear();
@@ -419,7 +419,7 @@ add_volume_channels(VvDocument *doc, vv_volume *const *v, int n, const vv_load_i
         remember_source(obj, source);
     if (doc->world->n_objects == 0) {
         gboolean fresh = !doc->dirty;
-        vv_document_begin_edit(doc, "open volume");
+        vvg_document_begin_edit(doc, "open volume");
         /* the default scene's view, lights and shading; the session's
          * render settings and view size stay */
         w->render = doc->world->render;
@@ -441,14 +441,14 @@ add_volume_channels(VvDocument *doc, vv_volume *const *v, int n, const vv_load_i
         return TRUE;
     }
     vv_world_free(w);
-    vv_document_add_object(doc, obj, NULL);
+    vvg_document_add_object(doc, obj, NULL);
     added_beside(doc);
     return TRUE;
 }
 
 gboolean
-vv_document_add_volume(VvDocument *doc, vv_volume *v, const char *name, const char *source,
-                       GError **error) {
+vvg_document_add_volume(VvgDocument *doc, vv_volume *v, const char *name, const char *source,
+                        GError **error) {
     return add_volume_channels(doc, &v, 1, NULL, name, source, error);
 }
 
@@ -456,20 +456,20 @@ vv_document_add_volume(VvDocument *doc, vv_volume *v, const char *name, const ch
 
 static void
 gui_pyramid_clear(gpointer data) {
-    VvGuiPyramid *p = data;
+    VvgPyramid *p = data;
     vv_pyramid_free(p->slices);
     vv_pyramid_free(p->pyramid);
     vv_volume_free(p->proxy);
     g_free(p->path);
 }
 
-VvGuiPyramid *
-vv_gui_pyramid_ref(VvGuiPyramid *p) {
+VvgPyramid *
+vvg_pyramid_ref(VvgPyramid *p) {
     return p ? g_atomic_rc_box_acquire(p) : NULL;
 }
 
 vv_pyramid *
-vv_gui_pyramid_slices(VvGuiPyramid *p) {
+vvg_pyramid_slices(VvgPyramid *p) {
     if (!p->slices) {
         const uint64_t limit =
             p->limit / 4 > ((uint64_t)16 << 20) ? p->limit / 4 : (uint64_t)16 << 20;
@@ -483,21 +483,21 @@ vv_gui_pyramid_slices(VvGuiPyramid *p) {
 }
 
 void
-vv_gui_pyramid_unref(VvGuiPyramid *p) {
+vvg_pyramid_unref(VvgPyramid *p) {
     if (p)
         g_atomic_rc_box_release_full(p, gui_pyramid_clear);
 }
 
-VvGuiPyramid *
-vv_document_pyramid(VvDocument *doc, const vv_object *o) {
+VvgPyramid *
+vvg_document_pyramid(VvgDocument *doc, const vv_object *o) {
     if (!o || o->type != VV_OBJECT_VOLUME || !o->geometry.source || !o->volume)
         return NULL;
-    VvGuiPyramid *p = g_hash_table_lookup(doc->pyramids, o->geometry.source);
+    VvgPyramid *p = g_hash_table_lookup(doc->pyramids, o->geometry.source);
     return p && p->proxy == o->volume ? p : NULL;
 }
 
 uint64_t
-vv_document_memory_limit(void) {
+vvg_document_memory_limit(void) {
     const char *e = g_getenv("VOLVIS_MEMORY_LIMIT");
     if (!e || !*e)
         return (uint64_t)1 << 30;
@@ -518,9 +518,9 @@ vv_document_memory_limit(void) {
  * instead of the proxy, so that the scene names the file with level 0's
  * origin and spacing (its loader reads level 0). */
 static void
-pyramid_geometry_for_save(VvDocument *doc, const vv_world *orig, vv_world *w) {
+pyramid_geometry_for_save(VvgDocument *doc, const vv_world *orig, vv_world *w) {
     for (int i = 0; i < w->n_objects && i < orig->n_objects; i++) {
-        VvGuiPyramid *p = vv_document_pyramid(doc, orig->objects[i]);
+        VvgPyramid *p = vvg_document_pyramid(doc, orig->objects[i]);
         if (!p)
             continue;
         const vv_volume *h0 = vv_pyramid_level(p->pyramid, 0);
@@ -548,7 +548,7 @@ pyramid_geometry_for_save(VvDocument *doc, const vv_world *orig, vv_world *w) {
 static gboolean
 pyramid_unused(gpointer key, gpointer value, gpointer user) {
     (void)key;
-    const VvGuiPyramid *p = value;
+    const VvgPyramid *p = value;
     const vv_world *w = user;
     for (int i = 0; i < w->n_objects; i++)
         if (w->objects[i]->volume == p->proxy)
@@ -574,11 +574,11 @@ volume_name(const char *path) {
  * of the same file (another object of it). 1: so; 0: not needed (nothing
  * kept); -1: an error, in @p error. */
 static int
-pyramid_proxy(VvDocument *doc, const char *path, const char *key, VvGuiPyramid **out,
+pyramid_proxy(VvgDocument *doc, const char *path, const char *key, VvgPyramid **out,
               vv_volume **proxy, GError **error) {
     /* a file some object already shows out of core: its pyramid and proxy
      * again (one cache for both objects) */
-    VvGuiPyramid *have = g_hash_table_lookup(doc->pyramids, key);
+    VvgPyramid *have = g_hash_table_lookup(doc->pyramids, key);
     if (have) {
         g_autofree char *canon = g_canonicalize_filename(path, NULL);
         if (strcmp(have->path, canon) == 0) {
@@ -587,7 +587,7 @@ pyramid_proxy(VvDocument *doc, const char *path, const char *key, VvGuiPyramid *
             return 1;
         }
     }
-    const uint64_t limit = vv_document_memory_limit();
+    const uint64_t limit = vvg_document_memory_limit();
     vv_pyramid *p = NULL;
     vv_error_clear();
     if (vv_pyramid_open(&p, path, 0, -1, limit, NULL) != VV_OK) {
@@ -607,7 +607,7 @@ pyramid_proxy(VvDocument *doc, const char *path, const char *key, VvGuiPyramid *
         vv_pyramid_free(p);
         return -1;
     }
-    VvGuiPyramid *gp = g_atomic_rc_box_new0(VvGuiPyramid);
+    VvgPyramid *gp = g_atomic_rc_box_new0(VvgPyramid);
     gp->pyramid = p;
     gp->proxy = vv_volume_ref(*proxy);
     gp->path = g_canonicalize_filename(path, NULL);
@@ -619,12 +619,12 @@ pyramid_proxy(VvDocument *doc, const char *path, const char *key, VvGuiPyramid *
 }
 
 static int
-open_out_of_core(VvDocument *doc, const char *path, GError **error) {
+open_out_of_core(VvgDocument *doc, const char *path, GError **error) {
     /* each pyramid holds up to the limit: those no object of the World shows
      * any more go (an undo back to one draws its proxy in memory) */
     g_hash_table_foreach_remove(doc->pyramids, pyramid_unused, doc->world);
     g_autofree char *key = g_canonicalize_filename(path, NULL);
-    VvGuiPyramid *gp = NULL;
+    VvgPyramid *gp = NULL;
     vv_volume *proxy = NULL;
     const int r = pyramid_proxy(doc, path, key, &gp, &proxy, error);
     if (r <= 0)
@@ -640,7 +640,7 @@ open_out_of_core(VvDocument *doc, const char *path, GError **error) {
         const double fs = fmin(h0->spacing[0], fmin(h0->spacing[1], h0->spacing[2]));
         if (fabs(o->tf.opacity_unit_distance - ps) <= 1e-12 * ps)
             o->tf.opacity_unit_distance = fs;
-        vv_document_changed(doc);
+        vvg_document_changed(doc);
     }
     vv_volume_free(proxy);
     if (!ok)
@@ -649,7 +649,7 @@ open_out_of_core(VvDocument *doc, const char *path, GError **error) {
 }
 
 gboolean
-vv_document_open(VvDocument *doc, const char *path, GError **error) {
+vvg_document_open(VvgDocument *doc, const char *path, GError **error) {
     static const char *const scene_suffixes[] = {".json", NULL};
     if (has_suffix(path, scene_suffixes))
         return open_scene(doc, path, error);
@@ -701,28 +701,28 @@ vv_document_open(VvDocument *doc, const char *path, GError **error) {
 }
 
 int
-vv_document_edited_channel(VvDocument *doc) {
-    vv_object *o = vv_document_selected_object(doc);
+vvg_document_edited_channel(VvgDocument *doc) {
+    vv_object *o = vvg_document_selected_object(doc);
     if (!o || o->n_channels < 1)
         return -1;
     return doc->edited_channel < o->n_channels ? doc->edited_channel : 0;
 }
 
 void
-vv_document_set_edited_channel(VvDocument *doc, int channel) {
+vvg_document_set_edited_channel(VvgDocument *doc, int channel) {
     doc->edited_channel = channel > 0 ? channel : 0;
     g_signal_emit(doc, signals[SIGNAL_SELECTION_CHANGED], 0);
 }
 
 int
-vv_document_time_steps(VvDocument *doc, const vv_object *o) {
+vvg_document_time_steps(VvgDocument *doc, const vv_object *o) {
     if (!o || o->type != VV_OBJECT_VOLUME || !o->geometry.source)
         return 0;
     return GPOINTER_TO_INT(g_hash_table_lookup(doc->time_steps, o->geometry.source));
 }
 
 GHashTable *
-vv_time_cache_new(void) {
+vvg_time_cache_new(void) {
     return g_hash_table_new_full(g_str_hash, g_str_equal, g_free,
                                  (GDestroyNotify)vv_time_series_free);
 }
@@ -764,13 +764,13 @@ read_step(GHashTable *cache, const vv_object *o, int t, vv_volume **v) {
 }
 
 gboolean
-vv_world_apply_time(GHashTable *cache, vv_world *w, const vv_world *base, GError **error) {
+vvg_world_apply_time(GHashTable *cache, vv_world *w, const vv_world *base, GError **error) {
     for (int i = 0; i < w->n_objects && i < base->n_objects; i++) {
         vv_object *o = w->objects[i];
         if (o->type != VV_OBJECT_VOLUME || !o->volume || o->time == base->objects[i]->time)
             continue;
         if (!o->geometry.source) {
-            g_set_error(error, VV_GUI_ERROR, 1,
+            g_set_error(error, VVG_ERROR, 1,
                         "%s: time step %d: the volume was not read from a file", o->name, o->time);
             return FALSE;
         }
@@ -791,18 +791,18 @@ vv_world_apply_time(GHashTable *cache, vv_world *w, const vv_world *base, GError
 
 /* Step @p t of the selected object @p o exists; else @p error says not. */
 static gboolean
-check_step(VvDocument *doc, const vv_object *o, int t, GError **error) {
-    const int steps = vv_document_time_steps(doc, o);
+check_step(VvgDocument *doc, const vv_object *o, int t, GError **error) {
+    const int steps = vvg_document_time_steps(doc, o);
     if (steps >= 2 && t >= 0 && t < steps)
         return TRUE;
-    g_set_error(error, VV_GUI_ERROR, 1, "%s: no time step %d (%d steps)", o ? o->name : "no object",
-                t, steps);
+    g_set_error(error, VVG_ERROR, 1, "%s: no time step %d (%d steps)", o ? o->name : "no object", t,
+                steps);
     return FALSE;
 }
 
 gboolean
-vv_document_set_time(VvDocument *doc, int t, GError **error) {
-    vv_object *o = vv_document_selected_object(doc);
+vvg_document_set_time(VvgDocument *doc, int t, GError **error) {
+    vv_object *o = vvg_document_selected_object(doc);
     if (!check_step(doc, o, t, error))
         return FALSE;
     if (o->time == t)
@@ -812,8 +812,8 @@ vv_document_set_time(VvDocument *doc, int t, GError **error) {
     vv_error_clear();
     vv_status s = read_step(doc->series, o, t, v);
     if (s == VV_OK) {
-        vv_document_begin_edit_merging(doc, "time step");
-        o = vv_document_selected_object(doc);
+        vvg_document_begin_edit_merging(doc, "time step");
+        o = vvg_document_selected_object(doc);
         vv_error_clear();
         if ((s = vv_object_replace_volumes(o, n, v)) == VV_OK)
             o->time = t;
@@ -824,11 +824,11 @@ vv_document_set_time(VvDocument *doc, int t, GError **error) {
         set_error(error, "cannot read the time step");
         return FALSE;
     }
-    vv_document_changed(doc);
+    vvg_document_changed(doc);
     return TRUE;
 }
 
-/* One asynchronous step read (vv_document_request_time): the series are
+/* One asynchronous step read (vvg_document_request_time): the series are
  * resolved on the main thread, read on a worker. */
 typedef struct time_job {
     int t, n;
@@ -863,15 +863,15 @@ time_job_run(GTask *task, gpointer src, gpointer data, GCancellable *cancel) {
     g_task_return_boolean(task, TRUE);
 }
 
-static void time_job_start(VvDocument *doc);
+static void time_job_start(VvgDocument *doc);
 
 static void
 time_job_done(GObject *src, GAsyncResult *res, gpointer data) {
     (void)data;
-    VvDocument *doc = VV_DOCUMENT(src);
+    VvgDocument *doc = VVG_DOCUMENT(src);
     time_job *j = g_task_get_task_data(G_TASK(res));
     doc->time_busy = FALSE;
-    vv_object *o = vv_document_selected_object(doc);
+    vv_object *o = vvg_document_selected_object(doc);
     const int n = o && o->n_channels > 0 ? o->n_channels : 1;
     if (j->message) {
         doc->time_want = -1;
@@ -879,12 +879,12 @@ time_job_done(GObject *src, GAsyncResult *res, gpointer data) {
             doc->time_failed(doc, j->message, doc->time_failed_user);
     } else if (o && o->geometry.source && !strcmp(o->geometry.source, j->source) && n == j->n &&
                o->time != j->t) {
-        vv_document_begin_edit_merging(doc, "time step");
-        o = vv_document_selected_object(doc);
+        vvg_document_begin_edit_merging(doc, "time step");
+        o = vvg_document_selected_object(doc);
         vv_error_clear();
         if (vv_object_replace_volumes(o, n, j->v) == VV_OK) {
             o->time = j->t;
-            vv_document_changed(doc);
+            vvg_document_changed(doc);
         } else if (doc->time_failed) {
             doc->time_failed(doc, vv_error_message(), doc->time_failed_user);
         }
@@ -895,8 +895,8 @@ time_job_done(GObject *src, GAsyncResult *res, gpointer data) {
 
 /* Starts reading doc->time_want of the selected object, unless it is shown. */
 static void
-time_job_start(VvDocument *doc) {
-    vv_object *o = vv_document_selected_object(doc);
+time_job_start(VvgDocument *doc) {
+    vv_object *o = vvg_document_selected_object(doc);
     const int t = doc->time_want;
     doc->time_want = -1;
     if (!o || !o->geometry.source || o->time == t)
@@ -923,11 +923,11 @@ time_job_start(VvDocument *doc) {
 }
 
 void
-vv_document_request_time(VvDocument *doc, int t, VvTimeFailed failed, gpointer user) {
+vvg_document_request_time(VvgDocument *doc, int t, VvgTimeFailed failed, gpointer user) {
     g_autoptr(GError) err = NULL;
     doc->time_failed = failed;
     doc->time_failed_user = user;
-    if (!check_step(doc, vv_document_selected_object(doc), t, &err)) {
+    if (!check_step(doc, vvg_document_selected_object(doc), t, &err)) {
         if (failed)
             failed(doc, err->message, user);
         return;
@@ -938,12 +938,12 @@ vv_document_request_time(VvDocument *doc, int t, VvTimeFailed failed, gpointer u
 }
 
 gboolean
-vv_document_time_pending(VvDocument *doc) {
+vvg_document_time_pending(VvgDocument *doc) {
     return doc->time_busy || doc->time_want >= 0;
 }
 
 void
-vv_document_forget_time_listener(VvDocument *doc, gpointer user) {
+vvg_document_forget_time_listener(VvgDocument *doc, gpointer user) {
     if (doc->time_failed_user == user) {
         doc->time_failed = NULL;
         doc->time_failed_user = NULL;
@@ -951,7 +951,7 @@ vv_document_forget_time_listener(VvDocument *doc, gpointer user) {
 }
 
 void
-vv_document_set_view_size(VvDocument *doc, int width, int height) {
+vvg_document_set_view_size(VvgDocument *doc, int width, int height) {
     if (width < 1 || height < 1)
         return;
     doc->world->view.width = width;
@@ -963,17 +963,17 @@ vv_document_set_view_size(VvDocument *doc, int width, int height) {
 }
 
 const char *
-vv_document_path(VvDocument *doc) {
+vvg_document_path(VvgDocument *doc) {
     return doc->path;
 }
 
 gboolean
-vv_document_dirty(VvDocument *doc) {
+vvg_document_dirty(VvgDocument *doc) {
     return doc->dirty;
 }
 
 gboolean
-vv_document_save(VvDocument *doc, const char *path, GError **error) {
+vvg_document_save(VvgDocument *doc, const char *path, GError **error) {
     vv_world *w = doc->kept ? doc->kept : doc->world; /* never a transient World */
     vv_world *ws = NULL; /* the World as saved: pyramids' objects with level 0's geometry */
     vv_error_clear();
@@ -1057,7 +1057,7 @@ remove_entry(const char *p, const struct stat *st, int flag, struct FTW *ftw) {
 }
 
 void
-vv_document_remove_folder(const char *dir) {
+vvg_document_remove_folder(const char *dir) {
     if (dir)
         nftw(dir, remove_entry, 16, FTW_DEPTH | FTW_PHYS);
 }
@@ -1076,7 +1076,7 @@ autosaved_file(const GPtrArray *prev, const vv_volume *v) {
 /* An autosave in the making: a snapshot of the World (the objects share
  * their volumes, referenced) and what the last autosave wrote, so that it
  * can be written on another thread while the session goes on. */
-struct vv_autosave_job {
+struct vvg_autosave_job {
     vv_world *world;
     char *dir;
     GPtrArray *prev; /* autosaved_volume: the last autosave's, references of their own */
@@ -1087,7 +1087,7 @@ struct vv_autosave_job {
  * made in the session (linked from the job's folder when unchanged), then
  * session.json. */
 static gboolean
-autosave_stage(vv_autosave_job *job, const char *stage, GError **error) {
+autosave_stage(vvg_autosave_job *job, const char *stage, GError **error) {
     const vv_world *w = job->world;
     const char **files = g_new0(const char *, w->n_objects > 0 ? w->n_objects : 1);
     GPtrArray *names = g_ptr_array_new_with_free_func(g_free);
@@ -1127,10 +1127,10 @@ autosave_stage(vv_autosave_job *job, const char *stage, GError **error) {
     return ok;
 }
 
-vv_autosave_job *
-vv_document_autosave_begin(VvDocument *doc, const char *dir, GError **error) {
+vvg_autosave_job *
+vvg_document_autosave_begin(VvgDocument *doc, const char *dir, GError **error) {
     const vv_world *w = doc->kept ? doc->kept : doc->world; /* never a transient World */
-    vv_autosave_job *job = g_new0(vv_autosave_job, 1);
+    vvg_autosave_job *job = g_new0(vvg_autosave_job, 1);
     vv_error_clear();
     if (vv_world_clone(&job->world, w) != VV_OK) {
         set_error(error, "cannot take a snapshot of the World");
@@ -1153,38 +1153,38 @@ vv_document_autosave_begin(VvDocument *doc, const char *dir, GError **error) {
 }
 
 gboolean
-vv_autosave_job_run(vv_autosave_job *job, GError **error) {
+vvg_autosave_job_run(vvg_autosave_job *job, GError **error) {
     const char *dir = job->dir;
     g_autofree char *stage = g_strconcat(dir, ".tmp", NULL);
-    vv_document_remove_folder(stage); /* a stage an earlier crash left */
+    vvg_document_remove_folder(stage); /* a stage an earlier crash left */
     if (g_mkdir_with_parents(stage, 0700) != 0) {
-        g_set_error(error, VV_GUI_ERROR, 1, "%s: %s", stage, g_strerror(errno));
+        g_set_error(error, VVG_ERROR, 1, "%s: %s", stage, g_strerror(errno));
         return FALSE;
     }
     gboolean ok = autosave_stage(job, stage, error);
     /* one unit: the stage takes the folder's place in one step */
     if (ok && g_file_test(dir, G_FILE_TEST_IS_DIR)) {
         if (renameat2(AT_FDCWD, stage, AT_FDCWD, dir, RENAME_EXCHANGE) != 0) {
-            g_set_error(error, VV_GUI_ERROR, 1, "%s: %s", dir, g_strerror(errno));
+            g_set_error(error, VVG_ERROR, 1, "%s: %s", dir, g_strerror(errno));
             ok = FALSE;
         }
     } else if (ok && rename(stage, dir) != 0) {
-        g_set_error(error, VV_GUI_ERROR, 1, "%s: %s", dir, g_strerror(errno));
+        g_set_error(error, VVG_ERROR, 1, "%s: %s", dir, g_strerror(errno));
         ok = FALSE;
     }
-    vv_document_remove_folder(stage); /* the old autosave, or what failed */
+    vvg_document_remove_folder(stage); /* the old autosave, or what failed */
     if (!ok)
         g_ptr_array_set_size(job->done, 0);
     return ok;
 }
 
 const char *
-vv_autosave_job_folder(const vv_autosave_job *job) {
+vvg_autosave_job_folder(const vvg_autosave_job *job) {
     return job->dir;
 }
 
 void
-vv_document_autosave_end(VvDocument *doc, vv_autosave_job *job, gboolean ok) {
+vvg_document_autosave_end(VvgDocument *doc, vvg_autosave_job *job, gboolean ok) {
     if (!ok)
         return;
     g_ptr_array_unref(doc->autosaved);
@@ -1193,7 +1193,7 @@ vv_document_autosave_end(VvDocument *doc, vv_autosave_job *job, gboolean ok) {
 }
 
 void
-vv_autosave_job_free(vv_autosave_job *job) {
+vvg_autosave_job_free(vvg_autosave_job *job) {
     if (!job)
         return;
     vv_world_free(job->world);
@@ -1204,18 +1204,18 @@ vv_autosave_job_free(vv_autosave_job *job) {
 }
 
 gboolean
-vv_document_autosave(VvDocument *doc, const char *dir, GError **error) {
-    vv_autosave_job *job = vv_document_autosave_begin(doc, dir, error);
+vvg_document_autosave(VvgDocument *doc, const char *dir, GError **error) {
+    vvg_autosave_job *job = vvg_document_autosave_begin(doc, dir, error);
     if (!job)
         return FALSE;
-    gboolean ok = vv_autosave_job_run(job, error);
-    vv_document_autosave_end(doc, job, ok);
-    vv_autosave_job_free(job);
+    gboolean ok = vvg_autosave_job_run(job, error);
+    vvg_document_autosave_end(doc, job, ok);
+    vvg_autosave_job_free(job);
     return ok;
 }
 
 gboolean
-vv_document_restore(VvDocument *doc, const char *dir, GError **error) {
+vvg_document_restore(VvgDocument *doc, const char *dir, GError **error) {
     g_autofree char *scene = g_build_filename(dir, "session.json", NULL);
     if (!open_scene(doc, scene, error))
         return FALSE;
@@ -1238,8 +1238,8 @@ vv_document_restore(VvDocument *doc, const char *dir, GError **error) {
 }
 
 void
-vv_document_add_object(VvDocument *doc, vv_object *obj, const char *source) {
-    vv_document_begin_edit(doc, "add object");
+vvg_document_add_object(VvgDocument *doc, vv_object *obj, const char *source) {
+    vvg_document_begin_edit(doc, "add object");
     if (source && obj->type == VV_OBJECT_VOLUME)
         remember_source(obj, source);
     if (vv_world_add_object(doc->world, obj) != VV_OK) {
@@ -1251,10 +1251,10 @@ vv_document_add_object(VvDocument *doc, vv_object *obj, const char *source) {
 }
 
 void
-vv_document_delete_object(VvDocument *doc, int index) {
+vvg_document_delete_object(VvgDocument *doc, int index) {
     if (index < 0 || index >= doc->world->n_objects)
         return;
-    vv_document_begin_edit(doc, "delete object");
+    vvg_document_begin_edit(doc, "delete object");
     vv_object *o = NULL;
     if (vv_world_take_object(doc->world, index, &o) == VV_OK)
         vv_object_free(o);
@@ -1264,19 +1264,19 @@ vv_document_delete_object(VvDocument *doc, int index) {
 }
 
 int
-vv_document_selected(VvDocument *doc) {
+vvg_document_selected(VvgDocument *doc) {
     return doc->selected;
 }
 
 vv_object *
-vv_document_selected_object(VvDocument *doc) {
+vvg_document_selected_object(VvgDocument *doc) {
     if (doc->selected < 0 || doc->selected >= doc->world->n_objects)
         return NULL;
     return doc->world->objects[doc->selected];
 }
 
 void
-vv_document_select(VvDocument *doc, int index) {
+vvg_document_select(VvgDocument *doc, int index) {
     if (index < -1 || index >= doc->world->n_objects)
         index = -1;
     doc->selected = index;
@@ -1284,7 +1284,7 @@ vv_document_select(VvDocument *doc, int index) {
 }
 
 void
-vv_document_show_transient(VvDocument *doc, vv_world *world) {
+vvg_document_show_transient(VvgDocument *doc, vv_world *world) {
     if (!world)
         return;
     if (doc->kept)
@@ -1297,7 +1297,7 @@ vv_document_show_transient(VvDocument *doc, vv_world *world) {
 }
 
 void
-vv_document_end_transient(VvDocument *doc, gboolean restore) {
+vvg_document_end_transient(VvgDocument *doc, gboolean restore) {
     if (!doc->kept)
         return;
     if (!restore) {
@@ -1309,6 +1309,6 @@ vv_document_end_transient(VvDocument *doc, gboolean restore) {
 }
 
 gboolean
-vv_document_transient(VvDocument *doc) {
+vvg_document_transient(VvgDocument *doc) {
     return doc->kept != NULL;
 }

@@ -1,55 +1,55 @@
 /*
- * VvDocument: the World a VolVis window edits, with its undo stack, the file
+ * VvgDocument: the World a VolVis window edits, with its undo stack, the file
  * each volume came from, the selection and the session's file name.
  *
- * Every edit of the World goes through vv_document_begin_edit (an undo step)
- * and vv_document_changed (the "changed" signal, so views re-render). The
+ * Every edit of the World goes through vvg_document_begin_edit (an undo step)
+ * and vvg_document_changed (the "changed" signal, so views re-render). The
  * World is read by the UI thread; renderers read snapshots of it
- * (vv_document_snapshot), never the World itself. UI thread only.
+ * (vvg_document_snapshot), never the World itself. UI thread only.
  */
-#ifndef VV_DOCUMENT_H
-#define VV_DOCUMENT_H
+#ifndef VVG_DOCUMENT_H
+#define VVG_DOCUMENT_H
 
 #include <gtk/gtk.h>
 #include <volvis/volvis.h>
 
 G_BEGIN_DECLS
 
-#define VV_TYPE_DOCUMENT (vv_document_get_type())
-G_DECLARE_FINAL_TYPE(VvDocument, vv_document, VV, DOCUMENT, GObject)
+#define VVG_TYPE_DOCUMENT (vvg_document_get_type())
+G_DECLARE_FINAL_TYPE(VvgDocument, vvg_document, VVG, DOCUMENT, GObject)
 
 /** The error domain of the GUI: messages are the library's error trace. */
-#define VV_GUI_ERROR (vv_gui_error_quark())
-GQuark vv_gui_error_quark(void);
+#define VVG_ERROR (vvg_error_quark())
+GQuark vvg_error_quark(void);
 
 /** An empty World (vv_world_new). */
-VvDocument *vv_document_new(void);
+VvgDocument *vvg_document_new(void);
 /** The World being edited (owned by the document; valid until the next undo, redo or open). */
-vv_world *vv_document_world(VvDocument *doc);
+vv_world *vvg_document_world(VvgDocument *doc);
 /** A snapshot of the World for a renderer (caller frees with vv_world_free), or NULL. */
-vv_world *vv_document_snapshot(VvDocument *doc);
+vv_world *vvg_document_snapshot(VvgDocument *doc);
 
 /** Records an undo step called @p label before the World is changed, and marks it unsaved. */
-void vv_document_begin_edit(VvDocument *doc, const char *label);
+void vvg_document_begin_edit(VvgDocument *doc, const char *label);
 /**
- * As vv_document_begin_edit, but edits of the same @p label less than a
+ * As vvg_document_begin_edit, but edits of the same @p label less than a
  * second apart (a slider dragged, time played) make one undo step; any other
  * edit, undo or redo ends the run.
  */
-void vv_document_begin_edit_merging(VvDocument *doc, const char *label);
+void vvg_document_begin_edit_merging(VvgDocument *doc, const char *label);
 /** Emits "changed": the World was changed (live, during a drag too). */
-void vv_document_changed(VvDocument *doc);
-gboolean vv_document_undo(VvDocument *doc);
-gboolean vv_document_redo(VvDocument *doc);
-gboolean vv_document_can_undo(VvDocument *doc);
-gboolean vv_document_can_redo(VvDocument *doc);
+void vvg_document_changed(VvgDocument *doc);
+gboolean vvg_document_undo(VvgDocument *doc);
+gboolean vvg_document_redo(VvgDocument *doc);
+gboolean vvg_document_can_undo(VvgDocument *doc);
+gboolean vvg_document_can_redo(VvgDocument *doc);
 
 /**
  * Opens a volume (any format vv_volume_load reads), a mesh (any format
  * Assimp reads: .obj .ply .stl .off ...) or a scene file (.json). The first
  * volume into an empty World gets the default scene of `volvis render FILE`;
  * later objects are added beside it and the view frames them all; a mesh
- * whose format is usually Y-up (vv_document_mesh_is_y_up) is turned so that
+ * whose format is usually Y-up (vvg_document_mesh_is_y_up) is turned so that
  * its Y is the World's up (Z); a renderer that would not draw a mesh (the
  * ray caster) is replaced by one that does (raytrace beside volumes, else
  * surface); a scene replaces the World (keeping the view's size: the view
@@ -58,7 +58,7 @@ gboolean vv_document_can_redo(VvDocument *doc);
  * On failure the World is unchanged and @p error holds the library's message
  * naming the file.
  */
-gboolean vv_document_open(VvDocument *doc, const char *path, GError **error);
+gboolean vvg_document_open(VvgDocument *doc, const char *path, GError **error);
 /**
  * Saves the World as a scene file that `volvis render` renders to the same
  * image. Volumes that came from files are referred to by path; volumes made
@@ -69,7 +69,7 @@ gboolean vv_document_open(VvDocument *doc, const char *path, GError **error);
  * volumes of this save are removed and the objects keep no reference to
  * them. On failure @p error holds the message.
  */
-gboolean vv_document_save(VvDocument *doc, const char *path, GError **error);
+gboolean vvg_document_save(VvgDocument *doc, const char *path, GError **error);
 /**
  * Adds volume @p v (borrowed; the World takes a reference) as an object
  * named @p name, read from @p source (NULL: made in the session, written
@@ -77,16 +77,16 @@ gboolean vv_document_save(VvDocument *doc, const char *path, GError **error);
  * scene of `volvis render FILE` (and the session stays unsaved only if it
  * was); beside other objects the view frames them all. One undo step.
  */
-gboolean vv_document_add_volume(VvDocument *doc, vv_volume *v, const char *name, const char *source,
-                                GError **error);
+gboolean vvg_document_add_volume(VvgDocument *doc, vv_volume *v, const char *name,
+                                 const char *source, GError **error);
 /** TRUE for mesh files whose exporters usually write Y up (OBJ, PLY, glTF, COLLADA, FBX). */
-gboolean vv_document_mesh_is_y_up(const char *path);
+gboolean vvg_document_mesh_is_y_up(const char *path);
 /**
  * Sets the view's image size (pixels) without an undo step and without
  * marking the session unsaved: the scene view renders at its own size, and
  * a saved session renders through the CLI at that size. No signal.
  */
-void vv_document_set_view_size(VvDocument *doc, int width, int height);
+void vvg_document_set_view_size(VvgDocument *doc, int width, int height);
 /**
  * Autosave (issue 33): writes the World (the kept one while a transient
  * World is shown) into the folder @p dir as one unit: session.json and
@@ -98,87 +98,87 @@ void vv_document_set_view_size(VvDocument *doc, int width, int height);
  * they are. On failure @p dir keeps the previous autosave and @p error the
  * message.
  */
-gboolean vv_document_autosave(VvDocument *doc, const char *dir, GError **error);
+gboolean vvg_document_autosave(VvgDocument *doc, const char *dir, GError **error);
 /**
  * The same in three steps, so that the writing runs on a worker thread:
- * vv_document_autosave_begin takes a snapshot of the World (a clone whose
+ * vvg_document_autosave_begin takes a snapshot of the World (a clone whose
  * objects share the volumes) and of what the last autosave wrote, on the
  * main thread (NULL with @p error when the snapshot fails);
- * vv_autosave_job_run writes it into the folder on any thread, touching
- * nothing of the document; vv_document_autosave_end, on the main thread,
+ * vvg_autosave_job_run writes it into the folder on any thread, touching
+ * nothing of the document; vvg_document_autosave_end, on the main thread,
  * makes the document remember what a successful run wrote (for the links
- * of the next one). vv_autosave_job_free releases the job (NULL is fine).
+ * of the next one). vvg_autosave_job_free releases the job (NULL is fine).
  */
-typedef struct vv_autosave_job vv_autosave_job;
-vv_autosave_job *vv_document_autosave_begin(VvDocument *doc, const char *dir, GError **error);
-gboolean vv_autosave_job_run(vv_autosave_job *job, GError **error);
+typedef struct vvg_autosave_job vvg_autosave_job;
+vvg_autosave_job *vvg_document_autosave_begin(VvgDocument *doc, const char *dir, GError **error);
+gboolean vvg_autosave_job_run(vvg_autosave_job *job, GError **error);
 /** The folder the job writes (owned by the job). */
-const char *vv_autosave_job_folder(const vv_autosave_job *job);
-void vv_document_autosave_end(VvDocument *doc, vv_autosave_job *job, gboolean ok);
-void vv_autosave_job_free(vv_autosave_job *job);
+const char *vvg_autosave_job_folder(const vvg_autosave_job *job);
+void vvg_document_autosave_end(VvgDocument *doc, vvg_autosave_job *job, gboolean ok);
+void vvg_autosave_job_free(vvg_autosave_job *job);
 /**
  * Opens the autosave in @p dir as an untitled session with unsaved
  * changes; its volumes become volumes of the session again (written by the
  * next save or autosave, so the folder can go). Emits "changed".
  */
-gboolean vv_document_restore(VvDocument *doc, const char *dir, GError **error);
+gboolean vvg_document_restore(VvgDocument *doc, const char *dir, GError **error);
 /** Removes the folder @p dir and all in it (an autosave); NULL is ignored. */
-void vv_document_remove_folder(const char *dir);
+void vvg_document_remove_folder(const char *dir);
 /** The scene file the session was opened from or saved to, or NULL. */
-const char *vv_document_path(VvDocument *doc);
+const char *vvg_document_path(VvgDocument *doc);
 /** TRUE when the World has changed since it was opened or saved. */
-gboolean vv_document_dirty(VvDocument *doc);
+gboolean vvg_document_dirty(VvgDocument *doc);
 
 /**
  * The channel of the selected object that the Transfer function page edits
  * (0..n_channels-1), or -1 for an object of one channel (its own tf).
  */
-int vv_document_edited_channel(VvDocument *doc);
+int vvg_document_edited_channel(VvgDocument *doc);
 /** Picks the channel the Transfer function page edits; emits "selection-changed". */
-void vv_document_set_edited_channel(VvDocument *doc, int channel);
+void vvg_document_set_edited_channel(VvgDocument *doc, int channel);
 /**
  * The time steps of the file volume object @p o came from, as its read in
- * this session said (vv_document_open): 0 when unknown (a scene's object,
+ * this session said (vvg_document_open): 0 when unknown (a scene's object,
  * a volume made in the session), else >= 1.
  */
-int vv_document_time_steps(VvDocument *doc, const vv_object *o);
+int vvg_document_time_steps(VvgDocument *doc, const vv_object *o);
 
 /**
  * A multiresolution file (OME-Zarr, BigDataViewer / Imaris HDF5) opened
- * out of core (vv_document_open): its object's volume is the coarsest
+ * out of core (vvg_document_open): its object's volume is the coarsest
  * level stretched over level 0's box (the proxy), and the scene view draws
- * the pyramid by level of detail. Reference-counted (vv_gui_pyramid_ref,
+ * the pyramid by level of detail. Reference-counted (vvg_pyramid_ref,
  * _unref: any thread); the pyramid's reads and source belong to the
  * render thread, its loader's calls and statistics to any.
  */
-typedef struct VvGuiPyramid {
+typedef struct VvgPyramid {
     vv_pyramid *pyramid;
     vv_volume *proxy;   /* the object's volume when opened (a reference) */
     char *path;         /* canonical */
     uint64_t limit;     /* bytes */
-    vv_pyramid *slices; /* the slice views' own (UI thread; vv_gui_pyramid_slices) */
-} VvGuiPyramid;
-VvGuiPyramid *vv_gui_pyramid_ref(VvGuiPyramid *p);
+    vv_pyramid *slices; /* the slice views' own (UI thread; vvg_pyramid_slices) */
+} VvgPyramid;
+VvgPyramid *vvg_pyramid_ref(VvgPyramid *p);
 /**
  * The slice views' pyramid of the same file (UI thread only): opened at the
  * first call, with its own cache of a quarter of the limit (at least 16
  * MiB), so that slicing never waits for the render thread; NULL when it
  * cannot be opened (the slice views then sample the proxy).
  */
-vv_pyramid *vv_gui_pyramid_slices(VvGuiPyramid *p);
-void vv_gui_pyramid_unref(VvGuiPyramid *p);
+vv_pyramid *vvg_pyramid_slices(VvgPyramid *p);
+void vvg_pyramid_unref(VvgPyramid *p);
 /**
  * The pyramid object @p o shows: its file's, when @p o is a volume object
  * whose volume is still that pyramid's proxy (not replaced by a filter);
- * NULL otherwise. Borrowed (vv_gui_pyramid_ref to keep it).
+ * NULL otherwise. Borrowed (vvg_pyramid_ref to keep it).
  */
-VvGuiPyramid *vv_document_pyramid(VvDocument *doc, const vv_object *o);
+VvgPyramid *vvg_document_pyramid(VvgDocument *doc, const vv_object *o);
 /**
  * The out-of-core memory limit: VOLVIS_MEMORY_LIMIT (bytes, or a number
  * with K, M or G), default 1 GiB. A multiresolution file whose level 0
  * holds more than a quarter of it opens out of core.
  */
-uint64_t vv_document_memory_limit(void);
+uint64_t vvg_document_memory_limit(void);
 /**
  * Shows time step @p t of the selected object's file: every channel's
  * voxels replaced by that step's (vv_time_series, opened once a session and
@@ -187,30 +187,30 @@ uint64_t vv_document_memory_limit(void);
  * step. Emits "changed". On failure the World is unchanged and @p error
  * holds the message naming the file.
  */
-gboolean vv_document_set_time(VvDocument *doc, int t, GError **error);
+gboolean vvg_document_set_time(VvgDocument *doc, int t, GError **error);
 
 /** Called on the main thread when a requested step could not be shown. */
-typedef void (*VvTimeFailed)(VvDocument *doc, const char *message, gpointer user);
+typedef void (*VvgTimeFailed)(VvgDocument *doc, const char *message, gpointer user);
 /**
- * vv_document_set_time without blocking the interface: the step's voxels
+ * vvg_document_set_time without blocking the interface: the step's voxels
  * are read on a worker thread (the time series are thread-safe; the main
  * thread only opens them) and put in when they arrive, as set_time puts
  * them, if the selected object is still the one asked for and not at that
  * step already. One read is in flight at a time: asks while it reads
  * replace the step to show next (the latest wins), so dragging the slider
  * shows the steps it can keep up with and ends on the last. @p failed
- * (may be NULL) hears of a read that failed. vv_document_time_pending says
+ * (may be NULL) hears of a read that failed. vvg_document_time_pending says
  * whether a read or a next step is outstanding (tests wait on it).
  */
-void vv_document_request_time(VvDocument *doc, int t, VvTimeFailed failed, gpointer user);
-/** 1 while vv_document_request_time has a read in flight or a step waiting. */
-gboolean vv_document_time_pending(VvDocument *doc);
-/** Drops @p user as the listener of vv_document_request_time's failures
+void vvg_document_request_time(VvgDocument *doc, int t, VvgTimeFailed failed, gpointer user);
+/** 1 while vvg_document_request_time has a read in flight or a step waiting. */
+gboolean vvg_document_time_pending(VvgDocument *doc);
+/** Drops @p user as the listener of vvg_document_request_time's failures
  *  (call it when @p user goes away with a read in flight). */
-void vv_document_forget_time_listener(VvDocument *doc, gpointer user);
+void vvg_document_forget_time_listener(VvgDocument *doc, gpointer user);
 
-/** A cache of time series by (file, channel) for vv_world_apply_time (g_hash_table_unref it). */
-GHashTable *vv_time_cache_new(void);
+/** A cache of time series by (file, channel) for vvg_world_apply_time (g_hash_table_unref it). */
+GHashTable *vvg_time_cache_new(void);
 /**
  * Puts into every volume object of @p w whose time step differs from the
  * same object's of @p base (the World @p w was evaluated from: the same
@@ -222,39 +222,39 @@ GHashTable *vv_time_cache_new(void);
  * file: a volume made in the session, a step the file does not have, a
  * read error.
  */
-gboolean vv_world_apply_time(GHashTable *cache, vv_world *w, const vv_world *base, GError **error);
+gboolean vvg_world_apply_time(GHashTable *cache, vv_world *w, const vv_world *base, GError **error);
 
 /** Adds @p obj (the World takes it), remembering @p source (may be NULL); one undo step. */
-void vv_document_add_object(VvDocument *doc, vv_object *obj, const char *source);
+void vvg_document_add_object(VvgDocument *doc, vv_object *obj, const char *source);
 /** Deletes object @p index; one undo step. */
-void vv_document_delete_object(VvDocument *doc, int index);
+void vvg_document_delete_object(VvgDocument *doc, int index);
 /** Index of the selected object, or -1. */
-int vv_document_selected(VvDocument *doc);
+int vvg_document_selected(VvgDocument *doc);
 /** The selected object, or NULL. */
-vv_object *vv_document_selected_object(VvDocument *doc);
+vv_object *vvg_document_selected_object(VvgDocument *doc);
 /** Selects object @p index (-1: none) and emits "selection-changed". */
-void vv_document_select(VvDocument *doc, int index);
+void vvg_document_select(VvgDocument *doc, int index);
 
 /**
  * Shows @p world (taken) in place of the World for a while, with no undo step
  * and without marking the session unsaved, and emits "changed": the
  * Animator's Play puts each evaluated frame here so that the views draw it.
  * The first call keeps the World aside; later calls replace the previous
- * transient World. Meanwhile vv_document_world returns the transient World
+ * transient World. Meanwhile vvg_document_world returns the transient World
  * (a pointer valid until the next call, as after an undo). Any edit
- * (vv_document_begin_edit) ends it keeping the World shown, which the edit
+ * (vvg_document_begin_edit) ends it keeping the World shown, which the edit
  * then changes; undo and redo end it putting the kept World back first;
  * saving writes the kept World. The selection index is kept.
  */
-void vv_document_show_transient(VvDocument *doc, vv_world *world);
+void vvg_document_show_transient(VvgDocument *doc, vv_world *world);
 /**
  * Ends a transient World: @p restore puts the World kept aside back exactly
  * as it was and emits "changed"; otherwise the transient World becomes the
  * World. Does nothing when no transient World is shown.
  */
-void vv_document_end_transient(VvDocument *doc, gboolean restore);
-/** TRUE while a transient World is shown (vv_document_show_transient). */
-gboolean vv_document_transient(VvDocument *doc);
+void vvg_document_end_transient(VvgDocument *doc, gboolean restore);
+/** TRUE while a transient World is shown (vvg_document_show_transient). */
+gboolean vvg_document_transient(VvgDocument *doc);
 
 G_END_DECLS
 #endif

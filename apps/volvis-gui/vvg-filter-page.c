@@ -1,4 +1,4 @@
-/* VvFilterPage: the Filtering page (vvg-filter-page.h). */
+/* VvgFilterPage: the Filtering page (vvg-filter-page.h). */
 #include "vvg-filter-page.h"
 
 #include <math.h>
@@ -8,9 +8,9 @@
 
 #include "vvg-widgets.h"
 
-struct _VvFilterPage {
+struct _VvgFilterPage {
     GtkBox parent;
-    VvDocument *doc;
+    VvgDocument *doc;
     GtkWidget *chain, *apply, *cancel, *progress, *status, *adapt;
     GtkWidget *which, *arg, *help;
     GTask *task;     /* the running filter, or NULL */
@@ -19,10 +19,10 @@ struct _VvFilterPage {
     _Atomic double fraction;
 };
 
-G_DEFINE_FINAL_TYPE(VvFilterPage, vv_filter_page, GTK_TYPE_BOX)
+G_DEFINE_FINAL_TYPE(VvgFilterPage, vvg_filter_page, GTK_TYPE_BOX)
 
 typedef struct filter_job {
-    VvFilterPage *page;  /* a reference */
+    VvgFilterPage *page; /* a reference */
     vv_volume *in, *out; /* in: a reference to the object's volume */
     vv_filter_chain *chain;
     int object; /* index of the object in the World */
@@ -45,7 +45,7 @@ filter_job_free(gpointer p) {
 
 static int
 job_progress(void *user, double f) {
-    VvFilterPage *page = user;
+    VvgFilterPage *page = user;
     atomic_store(&page->fraction, f);
     return atomic_load(&page->stop);
 }
@@ -69,12 +69,12 @@ filter_thread(GTask *task, gpointer src, gpointer data, GCancellable *c) {
 }
 
 static void
-set_status(VvFilterPage *page, const char *text) {
+set_status(VvgFilterPage *page, const char *text) {
     gtk_label_set_text(GTK_LABEL(page->status), text);
 }
 
 static void
-set_running(VvFilterPage *page, gboolean running) {
+set_running(VvgFilterPage *page, gboolean running) {
     gtk_widget_set_sensitive(page->apply, !running);
     gtk_widget_set_sensitive(page->cancel, running);
     if (!running && page->tick) {
@@ -95,7 +95,7 @@ filter_done(GObject *src, GAsyncResult *res, gpointer user) {
     (void)src;
     (void)user;
     filter_job *j = g_task_get_task_data(G_TASK(res));
-    VvFilterPage *page = j->page;
+    VvgFilterPage *page = j->page;
     page->task = NULL;
     if (!page->doc)
         return; /* the page went away (window closed) while the filter ran */
@@ -111,13 +111,13 @@ filter_done(GObject *src, GAsyncResult *res, gpointer user) {
         return;
     }
     /* the object may have gone (deleted, undone) while the filter ran */
-    vv_world *w = vv_document_world(page->doc);
+    vv_world *w = vvg_document_world(page->doc);
     if (j->object >= w->n_objects || w->objects[j->object]->volume != j->in) {
         set_status(page, "the object changed while filtering: result dropped");
         return;
     }
-    vv_document_begin_edit(page->doc, "Filter");
-    w = vv_document_world(page->doc);
+    vvg_document_begin_edit(page->doc, "Filter");
+    w = vvg_document_world(page->doc);
     vv_object *o = w->objects[j->object];
     const vv_volume *old = o->volume;
     double olo = old->range[0], ohi = old->range[1];
@@ -126,7 +126,7 @@ filter_done(GObject *src, GAsyncResult *res, gpointer user) {
     o->volume = vv_volume_ref(j->out);
     const char *text = vv_filter_chain_text(j->chain);
     /* a volume from a file is saved as the file and its filters; one made in
-     * the session is saved as it is (vv_document_save) */
+     * the session is saved as it is (vvg_document_save) */
     if (o->geometry.source) {
         char *f = o->geometry.filters ? g_strdup_printf("%s %s", o->geometry.filters, text)
                                       : g_strdup(text);
@@ -152,7 +152,7 @@ filter_done(GObject *src, GAsyncResult *res, gpointer user) {
         if (o->mode == VV_MODE_ISO)
             o->isovalue = 0.5 * (lo + hi);
     }
-    vv_document_changed(page->doc);
+    vvg_document_changed(page->doc);
     snprintf(t, sizeof t, "%s: %s -> %d x %d x %d %s, values %g..%g, in %.2f s%s", j->name, text,
              j->out->dims[0], j->out->dims[1], j->out->dims[2], vv_voxel_type_name(j->out->type),
              lo, hi, j->seconds, j->proxy);
@@ -164,7 +164,7 @@ filter_done(GObject *src, GAsyncResult *res, gpointer user) {
 
 static gboolean
 tick(gpointer user) {
-    VvFilterPage *page = user;
+    VvgFilterPage *page = user;
     gtk_progress_bar_set_fraction(GTK_PROGRESS_BAR(page->progress), atomic_load(&page->fraction));
     return G_SOURCE_CONTINUE;
 }
@@ -172,11 +172,11 @@ tick(gpointer user) {
 static void
 apply_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvFilterPage *page = user;
+    VvgFilterPage *page = user;
     if (page->task)
         return;
-    int idx = vv_document_selected(page->doc);
-    vv_object *o = vv_document_selected_object(page->doc);
+    int idx = vvg_document_selected(page->doc);
+    vv_object *o = vvg_document_selected_object(page->doc);
     if (!o || o->type != VV_OBJECT_VOLUME || !o->volume) {
         vvg_show_error(GTK_WIDGET(page), "Nothing to filter", "select a volume object first");
         return;
@@ -196,7 +196,7 @@ apply_clicked(GtkButton *b, gpointer user) {
         return;
     }
     filter_job *j = g_new0(filter_job, 1);
-    VvGuiPyramid *gp = vv_document_pyramid(page->doc, o);
+    VvgPyramid *gp = vvg_document_pyramid(page->doc, o);
     if (gp) { /* said with the result: the proxy, not level 0 */
         const vv_volume *h0 = vv_pyramid_level(gp->pyramid, 0);
         snprintf(j->proxy, sizeof j->proxy,
@@ -223,11 +223,11 @@ apply_clicked(GtkButton *b, gpointer user) {
 static void
 cancel_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    atomic_store(&VV_FILTER_PAGE(user)->stop, 1);
+    atomic_store(&VVG_FILTER_PAGE(user)->stop, 1);
 }
 
 static void
-show_help(VvFilterPage *page) {
+show_help(VvgFilterPage *page) {
     const vv_filter_info *f =
         vv_filter_info_get((int)gtk_drop_down_get_selected(GTK_DROP_DOWN(page->which)));
     if (!f)
@@ -241,14 +241,14 @@ static void
 which_changed(GObject *o, GParamSpec *p, gpointer user) {
     (void)o;
     (void)p;
-    show_help(VV_FILTER_PAGE(user));
+    show_help(VVG_FILTER_PAGE(user));
 }
 
 /* Appends the chosen filter and its argument to the chain, checked first. */
 static void
 add_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvFilterPage *page = user;
+    VvgFilterPage *page = user;
     const vv_filter_info *f =
         vv_filter_info_get((int)gtk_drop_down_get_selected(GTK_DROP_DOWN(page->which)));
     if (!f)
@@ -276,35 +276,35 @@ add_clicked(GtkButton *b, gpointer user) {
 static void
 clear_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    gtk_editable_set_text(GTK_EDITABLE(VV_FILTER_PAGE(user)->chain), "");
+    gtk_editable_set_text(GTK_EDITABLE(VVG_FILTER_PAGE(user)->chain), "");
 }
 
 static void
-vv_filter_page_dispose(GObject *obj) {
-    VvFilterPage *page = VV_FILTER_PAGE(obj);
+vvg_filter_page_dispose(GObject *obj) {
+    VvgFilterPage *page = VVG_FILTER_PAGE(obj);
     atomic_store(&page->stop, 1);
     if (page->tick) {
         g_source_remove(page->tick);
         page->tick = 0;
     }
     g_clear_object(&page->doc);
-    G_OBJECT_CLASS(vv_filter_page_parent_class)->dispose(obj);
+    G_OBJECT_CLASS(vvg_filter_page_parent_class)->dispose(obj);
 }
 
 static void
-vv_filter_page_class_init(VvFilterPageClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_filter_page_dispose;
+vvg_filter_page_class_init(VvgFilterPageClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_filter_page_dispose;
 }
 
 static void
-vv_filter_page_init(VvFilterPage *page) {
+vvg_filter_page_init(VvgFilterPage *page) {
     (void)page;
 }
 
 GtkWidget *
-vv_filter_page_new(VvDocument *doc) {
-    VvFilterPage *page = g_object_new(VV_TYPE_FILTER_PAGE, "orientation", GTK_ORIENTATION_VERTICAL,
-                                      "spacing", 4, NULL);
+vvg_filter_page_new(VvgDocument *doc) {
+    VvgFilterPage *page = g_object_new(VVG_TYPE_FILTER_PAGE, "orientation",
+                                       GTK_ORIENTATION_VERTICAL, "spacing", 4, NULL);
     page->doc = g_object_ref(doc);
     GtkWidget *box = GTK_WIDGET(page);
     gtk_widget_set_margin_start(box, 8);

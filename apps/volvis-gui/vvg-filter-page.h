@@ -1,5 +1,5 @@
 /*
- * VvFilterPage: the Filtering page of the side bar (the paper's "Modeling
+ * VvgFilterPage: the Filtering page of the side bar (the paper's "Modeling
  * and Filtering" stage, Figure 1; library in include/volvis/filter.h). A
  * filter chain in the command line's syntax ("--gaussian 1.5 --threshold
  * 300: --largest 1"), typed or built a step at a time from the list of
@@ -12,18 +12,18 @@
  * mask or a new value range gets a ramp over its values only when "adapt the
  * transfer function" is on. UI thread only.
  */
-#ifndef VV_FILTER_PAGE_H
-#define VV_FILTER_PAGE_H
+#ifndef VVG_FILTER_PAGE_H
+#define VVG_FILTER_PAGE_H
 
 #include "vvg-document.h"
 
 G_BEGIN_DECLS
 
-#define VV_TYPE_FILTER_PAGE (vv_filter_page_get_type())
-G_DECLARE_FINAL_TYPE(VvFilterPage, vv_filter_page, VV, FILTER_PAGE, GtkBox)
+#define VVG_TYPE_FILTER_PAGE (vvg_filter_page_get_type())
+G_DECLARE_FINAL_TYPE(VvgFilterPage, vvg_filter_page, VVG, FILTER_PAGE, GtkBox)
 
 /** The page for the World of @p doc (a reference is held). */
-GtkWidget *vv_filter_page_new(VvDocument *doc);
+GtkWidget *vvg_filter_page_new(VvgDocument *doc);
 
 G_END_DECLS
 #endif

@@ -1,11 +1,11 @@
-/* VvImageWindow: a final render with progress, Cancel and Save (vvg-image-window.h). */
+/* VvgImageWindow: a final render with progress, Cancel and Save (vvg-image-window.h). */
 #include "vvg-image-window.h"
 #include "vvg-widgets.h"
 
 #include <stdio.h>
 #include <string.h>
 
-struct _VvImageWindow {
+struct _VvgImageWindow {
     GtkWindow parent;
     vv_world *world;
     vv_image *image;
@@ -23,15 +23,15 @@ struct _VvImageWindow {
 };
 
 typedef struct done_msg {
-    VvImageWindow *win; /* a reference */
+    VvgImageWindow *win; /* a reference */
     guint gen;
 } done_msg;
 
-G_DEFINE_TYPE(VvImageWindow, vv_image_window, GTK_TYPE_WINDOW)
+G_DEFINE_TYPE(VvgImageWindow, vvg_image_window, GTK_TYPE_WINDOW)
 
 static int
 progress_cb(void *user, double fraction) {
-    VvImageWindow *win = user;
+    VvgImageWindow *win = user;
     __atomic_store(&win->fraction, &fraction, __ATOMIC_RELAXED);
     return __atomic_load_n(&win->cancel, __ATOMIC_RELAXED);
 }
@@ -40,7 +40,7 @@ static gboolean render_done(gpointer data);
 
 static gpointer
 render_main(gpointer data) {
-    VvImageWindow *win = data;
+    VvgImageWindow *win = data;
     guint gen = win->gen; /* set before this thread started */
     const vv_world *w = win->world;
     vv_renderer *r = NULL;
@@ -69,7 +69,7 @@ render_main(gpointer data) {
 
 static gboolean
 tick(gpointer data) {
-    VvImageWindow *win = data;
+    VvgImageWindow *win = data;
     double f;
     __atomic_load(&win->fraction, &f, __ATOMIC_RELAXED);
     gtk_progress_bar_set_fraction(GTK_PROGRESS_BAR(win->progress), f);
@@ -86,7 +86,7 @@ tick(gpointer data) {
 static gboolean
 render_done(gpointer data) {
     done_msg *m = data;
-    VvImageWindow *win = m->win;
+    VvgImageWindow *win = m->win;
     gboolean stale = m->gen != win->gen;
     g_free(m);
     if (win->disposed || stale) {
@@ -132,7 +132,7 @@ render_done(gpointer data) {
 /* Renders the snapshot again at the size typed (the same camera: the
  * vertical field of view is kept), after stopping a render under way. */
 static void
-start_render(VvImageWindow *win) {
+start_render(VvgImageWindow *win) {
     if (win->thread) {
         __atomic_store_n(&win->cancel, 1, __ATOMIC_RELAXED);
         g_thread_join(win->thread);
@@ -164,19 +164,19 @@ rerender_clicked(GtkButton *b, gpointer user) {
 static void
 cancel_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvImageWindow *win = user;
+    VvgImageWindow *win = user;
     __atomic_store_n(&win->cancel, 1, __ATOMIC_RELAXED);
 }
 
 gboolean
-vv_image_window_save(VvImageWindow *win, const char *path, GError **error) {
+vvg_image_window_save(VvgImageWindow *win, const char *path, GError **error) {
     if (!win->image || win->status != VV_OK) {
-        g_set_error_literal(error, VV_GUI_ERROR, 1, "no finished image to save");
+        g_set_error_literal(error, VVG_ERROR, 1, "no finished image to save");
         return FALSE;
     }
     vv_error_clear();
     if (vv_image_write_png(win->image, path, 1.0, 0) != VV_OK) {
-        g_set_error(error, VV_GUI_ERROR, 1, "%s", vv_error_message());
+        g_set_error(error, VVG_ERROR, 1, "%s", vv_error_message());
         return FALSE;
     }
     return TRUE;
@@ -184,12 +184,12 @@ vv_image_window_save(VvImageWindow *win, const char *path, GError **error) {
 
 static void
 save_response(GtkNativeDialog *d, int response, gpointer user) {
-    VvImageWindow *win = user;
+    VvgImageWindow *win = user;
     if (response == GTK_RESPONSE_ACCEPT) {
         GFile *f = gtk_file_chooser_get_file(GTK_FILE_CHOOSER(d));
         char *path = g_file_get_path(f);
         GError *err = NULL;
-        if (!vv_image_window_save(win, path, &err)) {
+        if (!vvg_image_window_save(win, path, &err)) {
             gtk_label_set_text(GTK_LABEL(win->status_label), err->message);
             g_error_free(err);
         } else {
@@ -206,7 +206,7 @@ save_response(GtkNativeDialog *d, int response, gpointer user) {
 static void
 save_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvImageWindow *win = user;
+    VvgImageWindow *win = user;
     GtkFileChooserNative *d = gtk_file_chooser_native_new(
         "Save image as PNG", GTK_WINDOW(win), GTK_FILE_CHOOSER_ACTION_SAVE, "_Save", "_Cancel");
     gtk_file_chooser_set_current_name(GTK_FILE_CHOOSER(d), "render.png");
@@ -215,8 +215,8 @@ save_clicked(GtkButton *b, gpointer user) {
 }
 
 static void
-vv_image_window_dispose(GObject *o) {
-    VvImageWindow *win = VV_IMAGE_WINDOW(o);
+vvg_image_window_dispose(GObject *o) {
+    VvgImageWindow *win = VVG_IMAGE_WINDOW(o);
     win->disposed = TRUE;
     if (win->thread) {
         /* closing cancels the render cleanly */
@@ -228,25 +228,25 @@ vv_image_window_dispose(GObject *o) {
         g_source_remove(win->timer);
         win->timer = 0;
     }
-    G_OBJECT_CLASS(vv_image_window_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_image_window_parent_class)->dispose(o);
 }
 
 static void
-vv_image_window_finalize(GObject *o) {
-    VvImageWindow *win = VV_IMAGE_WINDOW(o);
+vvg_image_window_finalize(GObject *o) {
+    VvgImageWindow *win = VVG_IMAGE_WINDOW(o);
     vv_world_free(win->world);
     vv_image_free(win->image);
-    G_OBJECT_CLASS(vv_image_window_parent_class)->finalize(o);
+    G_OBJECT_CLASS(vvg_image_window_parent_class)->finalize(o);
 }
 
 static void
-vv_image_window_class_init(VvImageWindowClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_image_window_dispose;
-    G_OBJECT_CLASS(klass)->finalize = vv_image_window_finalize;
+vvg_image_window_class_init(VvgImageWindowClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_image_window_dispose;
+    G_OBJECT_CLASS(klass)->finalize = vvg_image_window_finalize;
 }
 
 static void
-vv_image_window_init(VvImageWindow *win) {
+vvg_image_window_init(VvgImageWindow *win) {
     gtk_window_set_title(GTK_WINDOW(win), "VolVis — render");
     GtkWidget *box = gtk_box_new(GTK_ORIENTATION_VERTICAL, 6);
     win->picture = gtk_picture_new();
@@ -291,9 +291,9 @@ vv_image_window_init(VvImageWindow *win) {
     vvg_close_on_escape(GTK_WINDOW(win));
 }
 
-VvImageWindow *
-vv_image_window_new(GtkWindow *parent, vv_world *world) {
-    VvImageWindow *win = g_object_new(VV_TYPE_IMAGE_WINDOW, NULL);
+VvgImageWindow *
+vvg_image_window_new(GtkWindow *parent, vv_world *world) {
+    VvgImageWindow *win = g_object_new(VVG_TYPE_IMAGE_WINDOW, NULL);
     if (parent) {
         gtk_window_set_transient_for(GTK_WINDOW(win), parent);
         /* one of the application's windows: its shortcuts (Ctrl+Q) work here too */

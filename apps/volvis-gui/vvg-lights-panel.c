@@ -1,29 +1,29 @@
-/* VvLightsPanel: lights, ambient light and background (vvg-lights-panel.h). */
+/* VvgLightsPanel: lights, ambient light and background (vvg-lights-panel.h). */
 #include "vvg-lights-panel.h"
 #include "vvg-widgets.h"
 
 #include <string.h>
 
-struct _VvLightsPanel {
+struct _VvgLightsPanel {
     GtkBox parent;
-    VvDocument *doc;
-    VvSceneView *scene; /* borrowed */
+    VvgDocument *doc;
+    VvgSceneView *scene; /* borrowed */
     gboolean updating;
     GtkWidget *light_index, *light_type, *light_color, *light_intensity;
     GtkWidget *ambient_color, *background_color;
 };
 
-G_DEFINE_TYPE(VvLightsPanel, vv_lights_panel, GTK_TYPE_BOX)
+G_DEFINE_TYPE(VvgLightsPanel, vvg_lights_panel, GTK_TYPE_BOX)
 
 static void
-fill(VvLightsPanel *self) {
+fill(VvgLightsPanel *self) {
     self->updating = TRUE;
-    vv_world *w = vv_document_world(self->doc);
+    vv_world *w = vvg_document_world(self->doc);
     int li = (int)vvg_spin_value(self->light_index);
     gtk_spin_button_set_range(GTK_SPIN_BUTTON(self->light_index), 0,
                               w->n_lights > 0 ? w->n_lights - 1 : 0);
     li = (int)vvg_spin_value(self->light_index);
-    vv_scene_view_set_light(self->scene, li);
+    vvg_scene_view_set_light(self->scene, li);
     if (li < w->n_lights) {
         gtk_drop_down_set_selected(GTK_DROP_DOWN(self->light_type),
                                    w->lights[li].headlight ? 2u : (guint)w->lights[li].type);
@@ -38,11 +38,11 @@ fill(VvLightsPanel *self) {
 }
 
 static void
-apply(VvLightsPanel *self, const char *label) {
+apply(VvgLightsPanel *self, const char *label) {
     if (self->updating)
         return;
-    vv_world *w = vv_document_world(self->doc);
-    vv_document_begin_edit(self->doc, label);
+    vv_world *w = vvg_document_world(self->doc);
+    vvg_document_begin_edit(self->doc, label);
     int li = (int)vvg_spin_value(self->light_index);
     if (li < w->n_lights) {
         vv_light *l = &w->lights[li];
@@ -59,7 +59,7 @@ apply(VvLightsPanel *self, const char *label) {
     w->ambient = vvg_vec3(&c);
     gtk_color_chooser_get_rgba(GTK_COLOR_CHOOSER(self->background_color), &c);
     w->background = vvg_vec3(&c);
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
 }
 
 static void
@@ -83,8 +83,8 @@ on_color(GtkColorButton *b, gpointer user) {
 
 static void
 light_index_changed(GtkSpinButton *s, gpointer user) {
-    VvLightsPanel *self = user;
-    vv_scene_view_set_light(self->scene, (int)gtk_spin_button_get_value(s));
+    VvgLightsPanel *self = user;
+    vvg_scene_view_set_light(self->scene, (int)gtk_spin_button_get_value(s));
     if (!self->updating)
         fill(self);
 }
@@ -93,71 +93,71 @@ static void
 act_add_light(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    VvLightsPanel *self = user;
-    vv_world *w = vv_document_world(self->doc);
-    vv_document_begin_edit(self->doc, "add light");
+    VvgLightsPanel *self = user;
+    vv_world *w = vvg_document_world(self->doc);
+    vvg_document_begin_edit(self->doc, "add light");
     vv_box b = vv_world_bounds(w);
     vv_light l = {VV_LIGHT_POINT, 0, {0, 1, 0}, b.max, {1, 1, 1}, 0.5};
     if (vv_world_add_light(w, &l) != VV_OK)
         vvg_show_error(GTK_WIDGET(self), "Cannot add a light", vv_error_message());
     fill(self);
     vvg_set_spin(self->light_index, w->n_lights - 1);
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
 }
 
 static void
 act_remove_light(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    VvLightsPanel *self = user;
-    vv_world *w = vv_document_world(self->doc);
+    VvgLightsPanel *self = user;
+    vv_world *w = vvg_document_world(self->doc);
     int li = (int)vvg_spin_value(self->light_index);
     if (li >= w->n_lights)
         return;
-    vv_document_begin_edit(self->doc, "remove light");
+    vvg_document_begin_edit(self->doc, "remove light");
     memmove(&w->lights[li], &w->lights[li + 1],
             (size_t)(w->n_lights - li - 1) * sizeof w->lights[0]);
     w->n_lights--;
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
     fill(self);
 }
 
 static void
-selection_changed(VvDocument *doc, gpointer user) {
+selection_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
     fill(user);
 }
 
 static void
-vv_lights_panel_dispose(GObject *o) {
-    VvLightsPanel *self = VV_LIGHTS_PANEL(o);
+vvg_lights_panel_dispose(GObject *o) {
+    VvgLightsPanel *self = VVG_LIGHTS_PANEL(o);
     if (self->doc) {
         g_signal_handlers_disconnect_by_data(self->doc, self);
         g_clear_object(&self->doc);
     }
-    G_OBJECT_CLASS(vv_lights_panel_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_lights_panel_parent_class)->dispose(o);
 }
 
 static void
-vv_lights_panel_class_init(VvLightsPanelClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_lights_panel_dispose;
+vvg_lights_panel_class_init(VvgLightsPanelClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_lights_panel_dispose;
 }
 
 static void
-vv_lights_panel_init(VvLightsPanel *self) {
+vvg_lights_panel_init(VvgLightsPanel *self) {
     vvg_vbox_init(GTK_WIDGET(self));
 }
 
 static GtkWidget *
-color_button(VvLightsPanel *self) {
+color_button(VvgLightsPanel *self) {
     GtkWidget *b = gtk_color_button_new();
     g_signal_connect(b, "color-set", G_CALLBACK(on_color), self);
     return b;
 }
 
 GtkWidget *
-vv_lights_panel_new(VvDocument *doc, VvSceneView *scene, GActionMap *actions) {
-    VvLightsPanel *self = g_object_new(VV_TYPE_LIGHTS_PANEL, NULL);
+vvg_lights_panel_new(VvgDocument *doc, VvgSceneView *scene, GActionMap *actions) {
+    VvgLightsPanel *self = g_object_new(VVG_TYPE_LIGHTS_PANEL, NULL);
     self->doc = g_object_ref(doc);
     self->scene = scene;
     const GActionEntry entries[] = {

@@ -1,5 +1,5 @@
 /*
- * VvMarks: what the scene view and the slice views show on top of the
+ * VvgMarks: what the scene view and the slice views show on top of the
  * data, linked between them: the slice cursor (the world point the three
  * orthogonal slices pass through, moved by a click in any slice view), the
  * slice views' window and level, and the measurement marks (picked points
@@ -7,45 +7,50 @@
  * region as a mesh). No undo: these are views of the World, not part of
  * it. Emits "changed" when anything changes. UI thread only.
  */
-#ifndef VV_MARKS_H
-#define VV_MARKS_H
+#ifndef VVG_MARKS_H
+#define VVG_MARKS_H
 
 #include <gtk/gtk.h>
 #include <volvis/volvis.h>
 
 G_BEGIN_DECLS
 
-#define VV_TYPE_MARKS (vv_marks_get_type())
-G_DECLARE_FINAL_TYPE(VvMarks, vv_marks, VV, MARKS, GObject)
+#define VVG_TYPE_MARKS (vvg_marks_get_type())
+G_DECLARE_FINAL_TYPE(VvgMarks, vvg_marks, VVG, MARKS, GObject)
 
 /** Which measurement point. */
-typedef enum VvMark { VV_MARK_A = 0, VV_MARK_B = 1, VV_MARK_SEED = 2, VV_MARK_COUNT = 3 } VvMark;
+typedef enum VvgMark {
+    VVG_MARK_A = 0,
+    VVG_MARK_B = 1,
+    VVG_MARK_SEED = 2,
+    VVG_MARK_COUNT = 3
+} VvgMark;
 
-VvMarks *vv_marks_new(void);
+VvgMarks *vvg_marks_new(void);
 
 /** The slice cursor, world units; FALSE (and @p out untouched) before one is set. */
-gboolean vv_marks_cursor(VvMarks *m, vv_vec3 *out);
-void vv_marks_set_cursor(VvMarks *m, vv_vec3 p);
+gboolean vvg_marks_cursor(VvgMarks *m, vv_vec3 *out);
+void vvg_marks_set_cursor(VvgMarks *m, vv_vec3 p);
 /** Forgets the cursor and the window (a new volume): the views start again from its centre. */
-void vv_marks_reset(VvMarks *m);
+void vvg_marks_reset(VvgMarks *m);
 /** The slice views' window and level; FALSE before they are set. */
-gboolean vv_marks_window(VvMarks *m, double *window, double *level);
-void vv_marks_set_window(VvMarks *m, double window, double level);
+gboolean vvg_marks_window(VvgMarks *m, double *window, double *level);
+void vvg_marks_set_window(VvgMarks *m, double window, double level);
 
 /**
  * The cut plane chosen in the Cut planes list (object -1: global), which
  * the oblique slice view shows and a cut-plane drag moves; *plane -1: none.
  */
-void vv_marks_cut_plane(VvMarks *m, int *object, int *plane);
-void vv_marks_set_cut_plane(VvMarks *m, int object, int plane);
+void vvg_marks_cut_plane(VvgMarks *m, int *object, int *plane);
+void vvg_marks_set_cut_plane(VvgMarks *m, int object, int plane);
 /** Measurement point @p which (world), or FALSE when it is not set. */
-gboolean vv_marks_point(VvMarks *m, VvMark which, vv_vec3 *out);
-void vv_marks_set_point(VvMarks *m, VvMark which, vv_vec3 p);
-void vv_marks_clear_point(VvMarks *m, VvMark which);
+gboolean vvg_marks_point(VvgMarks *m, VvgMark which, vv_vec3 *out);
+void vvg_marks_set_point(VvgMarks *m, VvgMark which, vv_vec3 p);
+void vvg_marks_clear_point(VvgMarks *m, VvgMark which);
 /** The surface-tracked region (world coordinates; a reference is held), or NULL. */
-const vv_mesh *vv_marks_region(VvMarks *m);
+const vv_mesh *vvg_marks_region(VvgMarks *m);
 /** Replaces the region (@p mesh may be NULL; a reference is taken). */
-void vv_marks_set_region(VvMarks *m, vv_mesh *mesh);
+void vvg_marks_set_region(VvgMarks *m, vv_mesh *mesh);
 
 G_END_DECLS
 #endif

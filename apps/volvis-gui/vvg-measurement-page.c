@@ -1,4 +1,4 @@
-/* VvMeasurementPage: histograms, areas, volumes and distances (vvg-measurement-page.h). */
+/* VvgMeasurementPage: histograms, areas, volumes and distances (vvg-measurement-page.h). */
 #include "vvg-measurement-page.h"
 #include "vvg-widgets.h"
 
@@ -6,23 +6,23 @@
 #include <stdio.h>
 #include <string.h>
 
-struct _VvMeasurementPage {
+struct _VvgMeasurementPage {
     GtkBox parent;
-    VvDocument *doc;
-    VvSceneView *scene; /* borrowed */
-    VvMarks *marks;
+    VvgDocument *doc;
+    VvgSceneView *scene; /* borrowed */
+    VvgMarks *marks;
     GtkWidget *hist_result, *iso_result, *dist_result, *iso_button;
     GtkWidget *measure_iso, *measure_method, *measure_seed, *seed_i, *seed_j, *seed_k;
     GtkWidget *pa[3], *pb[3], *measure_text, *histogram, *hist_log;
     vv_histogram *hist;
 };
 
-G_DEFINE_TYPE(VvMeasurementPage, vv_measurement_page, GTK_TYPE_BOX)
+G_DEFINE_TYPE(VvgMeasurementPage, vvg_measurement_page, GTK_TYPE_BOX)
 
 /* A result: under its button (@p where, may be NULL) and appended to the
  * page's log, where all results can be selected and copied. */
 static void
-measure_print(VvMeasurementPage *self, GtkWidget *where, const char *text) {
+measure_print(VvgMeasurementPage *self, GtkWidget *where, const char *text) {
     GtkTextBuffer *b = gtk_text_view_get_buffer(GTK_TEXT_VIEW(self->measure_text));
     GtkTextIter end;
     gtk_text_buffer_get_end_iter(b, &end);
@@ -37,7 +37,7 @@ measure_print(VvMeasurementPage *self, GtkWidget *where, const char *text) {
 static void
 copy_results(GtkButton *b, gpointer user) {
     (void)b;
-    VvMeasurementPage *self = user;
+    VvgMeasurementPage *self = user;
     GtkTextBuffer *buf = gtk_text_view_get_buffer(GTK_TEXT_VIEW(self->measure_text));
     GtkTextIter s0, s1;
     gtk_text_buffer_get_bounds(buf, &s0, &s1);
@@ -48,7 +48,7 @@ copy_results(GtkButton *b, gpointer user) {
 static void
 hist_draw(GtkDrawingArea *area, cairo_t *cr, int W, int H, gpointer user) {
     (void)area;
-    VvMeasurementPage *self = user;
+    VvgMeasurementPage *self = user;
     cairo_set_source_rgb(cr, 1, 1, 1);
     cairo_paint(cr);
     if (!self->hist)
@@ -113,7 +113,7 @@ hist_job_free(gpointer p) {
 static void
 hist_done(GObject *src, GAsyncResult *res, gpointer user) {
     (void)user;
-    VvMeasurementPage *self = VV_MEASUREMENT_PAGE(src);
+    VvgMeasurementPage *self = VVG_MEASUREMENT_PAGE(src);
     hist_job *j = g_task_get_task_data(G_TASK(res));
     if (j->status != VV_OK) {
         gtk_label_set_text(GTK_LABEL(self->hist_result), "failed");
@@ -137,13 +137,13 @@ static void
 act_histogram(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    VvMeasurementPage *self = user;
-    vv_object *o = vv_document_selected_object(self->doc);
+    VvgMeasurementPage *self = user;
+    vv_object *o = vvg_document_selected_object(self->doc);
     if (!o || !o->volume) {
         vvg_show_error(GTK_WIDGET(self), "No histogram", "select a volume object first");
         return;
     }
-    VvGuiPyramid *gp = vv_document_pyramid(self->doc, o);
+    VvgPyramid *gp = vvg_document_pyramid(self->doc, o);
     if (gp) { /* out of core: level 0, not the proxy */
         hist_job *j = g_new0(hist_job, 1);
         j->path = g_strdup(gp->path);
@@ -235,7 +235,7 @@ measure_job_free(gpointer p) {
 static void
 measure_done(GObject *src, GAsyncResult *res, gpointer user) {
     (void)user;
-    VvMeasurementPage *self = VV_MEASUREMENT_PAGE(src);
+    VvgMeasurementPage *self = VVG_MEASUREMENT_PAGE(src);
     measure_job *j = g_task_get_task_data(G_TASK(res));
     gtk_widget_set_sensitive(self->iso_button, TRUE);
     if (j->status != VV_OK) {
@@ -252,15 +252,15 @@ measure_done(GObject *src, GAsyncResult *res, gpointer user) {
              j->opt.has_seed ? ", surface-tracked" : "", j->result.area, u, j->result.volume, u,
              (unsigned long long)j->result.voxels, j->result.n_triangles, j->proxy);
     measure_print(self, self->iso_result, t);
-    vv_marks_set_region(self->marks, j->region);
+    vvg_marks_set_region(self->marks, j->region);
 }
 
 static void
 act_measure(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    VvMeasurementPage *self = user;
-    vv_object *o = vv_document_selected_object(self->doc);
+    VvgMeasurementPage *self = user;
+    vv_object *o = vvg_document_selected_object(self->doc);
     if (!o) {
         vvg_show_error(GTK_WIDGET(self), "Nothing to measure", "select an object first");
         return;
@@ -297,7 +297,7 @@ act_measure(GSimpleAction *a, GVariant *p, gpointer user) {
         j->opt.seed[1] = vvg_spin_value(self->seed_j);
         j->opt.seed[2] = vvg_spin_value(self->seed_k);
     }
-    VvGuiPyramid *gp = vv_document_pyramid(self->doc, o);
+    VvgPyramid *gp = vvg_document_pyramid(self->doc, o);
     if (gp) { /* out of core: the whole surface by level 0 box by box; a section the proxy */
         const vv_volume *h0 = vv_pyramid_level(gp->pyramid, 0);
         if (!j->opt.has_seed) {
@@ -322,8 +322,8 @@ act_measure(GSimpleAction *a, GVariant *p, gpointer user) {
 /* Picking in the view: the next click sets the seed voxel or a point. */
 static void
 picked_seed(gpointer user, vv_vec3 p) {
-    VvMeasurementPage *self = user;
-    vv_object *o = vv_document_selected_object(self->doc);
+    VvgMeasurementPage *self = user;
+    vv_object *o = vvg_document_selected_object(self->doc);
     if (!o || !o->volume)
         return;
     int ok = 0;
@@ -335,7 +335,7 @@ picked_seed(gpointer user, vv_vec3 p) {
     vvg_set_spin(self->seed_j, round(ijk.y));
     vvg_set_spin(self->seed_k, round(ijk.z));
     gtk_check_button_set_active(GTK_CHECK_BUTTON(self->measure_seed), TRUE);
-    vv_marks_set_point(self->marks, VV_MARK_SEED, p);
+    vvg_marks_set_point(self->marks, VVG_MARK_SEED, p);
     char t[200];
     snprintf(t, sizeof t, "picked voxel (%.0f, %.0f, %.0f) at (%g, %g, %g) %s\n", round(ijk.x),
              round(ijk.y), round(ijk.z), p.x, p.y, p.z, vvg_unit_label(o->volume));
@@ -344,72 +344,72 @@ picked_seed(gpointer user, vv_vec3 p) {
 
 static void
 picked_a(gpointer user, vv_vec3 p) {
-    VvMeasurementPage *self = user;
+    VvgMeasurementPage *self = user;
     vvg_set_spin(self->pa[0], p.x);
     vvg_set_spin(self->pa[1], p.y);
     vvg_set_spin(self->pa[2], p.z);
-    vv_marks_set_point(self->marks, VV_MARK_A, p);
+    vvg_marks_set_point(self->marks, VVG_MARK_A, p);
 }
 
 static void
 picked_b(gpointer user, vv_vec3 p) {
-    VvMeasurementPage *self = user;
+    VvgMeasurementPage *self = user;
     vvg_set_spin(self->pb[0], p.x);
     vvg_set_spin(self->pb[1], p.y);
     vvg_set_spin(self->pb[2], p.z);
-    vv_marks_set_point(self->marks, VV_MARK_B, p);
+    vvg_marks_set_point(self->marks, VVG_MARK_B, p);
 }
 
 static void
 act_pick_seed(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    vv_scene_view_pick_next(VV_MEASUREMENT_PAGE(user)->scene, picked_seed, user);
+    vvg_scene_view_pick_next(VVG_MEASUREMENT_PAGE(user)->scene, picked_seed, user);
 }
 
 static void
 act_pick_a(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    vv_scene_view_pick_next(VV_MEASUREMENT_PAGE(user)->scene, picked_a, user);
+    vvg_scene_view_pick_next(VVG_MEASUREMENT_PAGE(user)->scene, picked_a, user);
 }
 
 static void
 act_pick_b(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    vv_scene_view_pick_next(VV_MEASUREMENT_PAGE(user)->scene, picked_b, user);
+    vvg_scene_view_pick_next(VVG_MEASUREMENT_PAGE(user)->scene, picked_b, user);
 }
 
 static void
 act_distance(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    VvMeasurementPage *self = user;
+    VvgMeasurementPage *self = user;
     vv_vec3 pa = vv_vec3_make(vvg_spin_value(self->pa[0]), vvg_spin_value(self->pa[1]),
                               vvg_spin_value(self->pa[2]));
     vv_vec3 pb = vv_vec3_make(vvg_spin_value(self->pb[0]), vvg_spin_value(self->pb[1]),
                               vvg_spin_value(self->pb[2]));
-    vv_object *o = vv_document_selected_object(self->doc);
+    vv_object *o = vvg_document_selected_object(self->doc);
     char t[256];
     snprintf(t, sizeof t, "distance (%g, %g, %g) - (%g, %g, %g): %.6g %s\n", pa.x, pa.y, pa.z, pb.x,
              pb.y, pb.z, vv_vec3_length(vv_vec3_sub(pa, pb)), vvg_unit_label(o ? o->volume : NULL));
     measure_print(self, self->dist_result, t);
-    vv_marks_set_point(self->marks, VV_MARK_A, pa);
-    vv_marks_set_point(self->marks, VV_MARK_B, pb);
+    vvg_marks_set_point(self->marks, VVG_MARK_A, pa);
+    vvg_marks_set_point(self->marks, VVG_MARK_B, pb);
 }
 
 static void
 hist_log_toggled(GtkCheckButton *b, gpointer user) {
     (void)b;
-    gtk_widget_queue_draw(VV_MEASUREMENT_PAGE(user)->histogram);
+    gtk_widget_queue_draw(VVG_MEASUREMENT_PAGE(user)->histogram);
 }
 
 static void
-selection_changed(VvDocument *doc, gpointer user) {
+selection_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
-    VvMeasurementPage *self = user;
-    vv_object *o = vv_document_selected_object(self->doc);
+    VvgMeasurementPage *self = user;
+    vv_object *o = vvg_document_selected_object(self->doc);
     if (o && o->volume) {
         double lo = o->volume->range[0], hi = o->volume->range[1];
         gtk_spin_button_set_range(GTK_SPIN_BUTTON(self->measure_iso), lo, hi > lo ? hi : lo + 1);
@@ -417,8 +417,8 @@ selection_changed(VvDocument *doc, gpointer user) {
 }
 
 static void
-vv_measurement_page_dispose(GObject *o) {
-    VvMeasurementPage *self = VV_MEASUREMENT_PAGE(o);
+vvg_measurement_page_dispose(GObject *o) {
+    VvgMeasurementPage *self = VVG_MEASUREMENT_PAGE(o);
     if (self->doc) {
         g_signal_handlers_disconnect_by_data(self->doc, self);
         g_clear_object(&self->doc);
@@ -426,16 +426,16 @@ vv_measurement_page_dispose(GObject *o) {
     g_clear_object(&self->marks);
     vv_histogram_free(self->hist);
     self->hist = NULL;
-    G_OBJECT_CLASS(vv_measurement_page_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_measurement_page_parent_class)->dispose(o);
 }
 
 static void
-vv_measurement_page_class_init(VvMeasurementPageClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_measurement_page_dispose;
+vvg_measurement_page_class_init(VvgMeasurementPageClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_measurement_page_dispose;
 }
 
 static void
-vv_measurement_page_init(VvMeasurementPage *self) {
+vvg_measurement_page_init(VvgMeasurementPage *self) {
     vvg_vbox_init(GTK_WIDGET(self));
     gtk_widget_set_margin_start(GTK_WIDGET(self), 8);
     gtk_widget_set_margin_end(GTK_WIDGET(self), 8);
@@ -457,7 +457,7 @@ result_label(GtkWidget *box, const char *name) {
 }
 
 static void
-build_isosurface(VvMeasurementPage *self) {
+build_isosurface(VvgMeasurementPage *self) {
     GtkWidget *box = GTK_WIDGET(self);
     GtkWidget *g = vvg_section(box, "Isosurface area and volume");
     self->measure_iso = vvg_row(g, "isovalue", vvg_spin0(-1e9, 1e9, 1, 2));
@@ -476,7 +476,7 @@ build_isosurface(VvMeasurementPage *self) {
 }
 
 static void
-build_distance(VvMeasurementPage *self) {
+build_distance(VvgMeasurementPage *self) {
     GtkWidget *box = GTK_WIDGET(self);
     GtkWidget *g = vvg_section(box, "Distance (world units)");
     const char *ax[] = {"A x", "A y", "A z", "B x", "B y", "B z"};
@@ -493,8 +493,9 @@ build_distance(VvMeasurementPage *self) {
 }
 
 GtkWidget *
-vv_measurement_page_new(VvDocument *doc, VvSceneView *scene, VvMarks *marks, GActionMap *actions) {
-    VvMeasurementPage *self = g_object_new(VV_TYPE_MEASUREMENT_PAGE, NULL);
+vvg_measurement_page_new(VvgDocument *doc, VvgSceneView *scene, VvgMarks *marks,
+                         GActionMap *actions) {
+    VvgMeasurementPage *self = g_object_new(VVG_TYPE_MEASUREMENT_PAGE, NULL);
     self->doc = g_object_ref(doc);
     self->scene = scene;
     self->marks = g_object_ref(marks);

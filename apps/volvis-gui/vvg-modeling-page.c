@@ -1,19 +1,19 @@
-/* VvModelingPage: voxelized primitives, meshes and CSG (vvg-modeling-page.h). */
+/* VvgModelingPage: voxelized primitives, meshes and CSG (vvg-modeling-page.h). */
 #include "vvg-modeling-page.h"
 #include "vvg-widgets.h"
 
 #include <string.h>
 
-struct _VvModelingPage {
+struct _VvgModelingPage {
     GtkBox parent;
-    VvDocument *doc;
+    VvgDocument *doc;
     GtkWidget *prim_kind, *prim_size, *prim_res, *model_progress, *prim_mesh, *prim_pos[3];
     GtkWidget *prim_axis, *prim_angle, *csg_a, *csg_b, *csg_op;
     GHashTable *recipes;      /* vv_volume * -> model_recipe * of the objects made here */
     GPtrArray *model_volumes; /* the volumes listed in csg_a and csg_b, in order */
 };
 
-G_DEFINE_TYPE(VvModelingPage, vv_modeling_page, GTK_TYPE_BOX)
+G_DEFINE_TYPE(VvgModelingPage, vvg_modeling_page, GTK_TYPE_BOX)
 
 /* ---- Modeling page ------------------------------------------------------------ */
 
@@ -130,7 +130,7 @@ typedef struct model_job {
     vv_status status;
     char error[512];
     double fraction;              /* atomic */
-    VvModelingPage *page;         /* the page the progress bar is on */
+    VvgModelingPage *page;        /* the page the progress bar is on */
     const vv_volume *operands[2]; /* CSG: the volumes of A and B (compared only) */
 } model_job;
 
@@ -180,11 +180,11 @@ model_tick(gpointer user) {
     return G_SOURCE_CONTINUE;
 }
 
-static void rebuild_model_lists(VvModelingPage *self);
+static void rebuild_model_lists(VvgModelingPage *self);
 
 static void
 model_done(GObject *src, GAsyncResult *res, gpointer user) {
-    VvModelingPage *self = VV_MODELING_PAGE(src);
+    VvgModelingPage *self = VVG_MODELING_PAGE(src);
     g_source_remove(GPOINTER_TO_UINT(user));
     model_job *j = g_task_get_task_data(G_TASK(res));
     gtk_progress_bar_set_fraction(GTK_PROGRESS_BAR(self->model_progress), 1);
@@ -205,29 +205,29 @@ model_done(GObject *src, GAsyncResult *res, gpointer user) {
     o->isovalue = 127.5;
     if (!g_hash_table_contains(self->recipes, j->result))
         g_hash_table_insert(self->recipes, vv_volume_ref(j->result), recipe_copy(j->recipe));
-    vv_world *w = vv_document_world(self->doc);
+    vv_world *w = vvg_document_world(self->doc);
     gboolean first = w->n_objects == 0;
-    vv_document_add_object(self->doc, o, NULL);
+    vvg_document_add_object(self->doc, o, NULL);
     /* a CSG result stands in for its operands: they are hidden (same undo step) */
     for (int i = 0; i < w->n_objects; i++)
         if (w->objects[i]->volume &&
             (w->objects[i]->volume == j->operands[0] || w->objects[i]->volume == j->operands[1]))
             w->objects[i]->visible = 0;
     if (j->operands[0])
-        vv_document_changed(self->doc);
+        vvg_document_changed(self->doc);
     if (first) {
         if (w->n_lights == 0) {
             vv_light l = {VV_LIGHT_DIRECTIONAL, 1, {0, 1, 0}, {0, 0, 0}, {1, 1, 1}, 1.0};
             vv_world_add_light(w, &l);
         }
         vv_view_frame_box(&w->view, vv_world_bounds(w));
-        vv_document_changed(self->doc);
+        vvg_document_changed(self->doc);
     }
     rebuild_model_lists(self);
 }
 
 static model_job *
-start_model(VvModelingPage *self, model_recipe *r) {
+start_model(VvgModelingPage *self, model_recipe *r) {
     model_job *j = g_new0(model_job, 1);
     j->recipe = r;
     j->res = (int)vvg_spin_value(self->prim_res);
@@ -245,7 +245,7 @@ static void
 act_voxelize(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    VvModelingPage *self = user;
+    VvgModelingPage *self = user;
     model_recipe *r = g_new0(model_recipe, 1);
     r->kind = (int)gtk_drop_down_get_selected(GTK_DROP_DOWN(self->prim_kind));
     r->size = vvg_spin_value(self->prim_size);
@@ -267,10 +267,10 @@ act_voxelize(GSimpleAction *a, GVariant *p, gpointer user) {
 
 /* The objects made on this page (their recipes), in World order, into the CSG lists. */
 static void
-rebuild_model_lists(VvModelingPage *self) {
+rebuild_model_lists(VvgModelingPage *self) {
     GtkStringList *names = gtk_string_list_new(NULL);
     g_ptr_array_set_size(self->model_volumes, 0);
-    vv_world *w = vv_document_world(self->doc);
+    vv_world *w = vvg_document_world(self->doc);
     for (int i = 0; i < w->n_objects; i++) {
         vv_object *o = w->objects[i];
         if (o->volume && g_hash_table_contains(self->recipes, o->volume)) {
@@ -289,7 +289,7 @@ static void
 act_csg(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    VvModelingPage *self = user;
+    VvgModelingPage *self = user;
     guint ia = gtk_drop_down_get_selected(GTK_DROP_DOWN(self->csg_a));
     guint ib = gtk_drop_down_get_selected(GTK_DROP_DOWN(self->csg_b));
     if (ia >= self->model_volumes->len || ib >= self->model_volumes->len) {
@@ -311,11 +311,11 @@ act_csg(GSimpleAction *a, GVariant *p, gpointer user) {
 }
 
 static void
-model_doc_changed(VvDocument *doc, gpointer user) {
+model_doc_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
-    VvModelingPage *self = user;
+    VvgModelingPage *self = user;
     /* names and objects change with renames, deletes and undo */
-    vv_world *w = vv_document_world(self->doc);
+    vv_world *w = vvg_document_world(self->doc);
     guint n = 0;
     for (int i = 0; i < w->n_objects; i++)
         n += w->objects[i]->volume && g_hash_table_contains(self->recipes, w->objects[i]->volume);
@@ -324,7 +324,7 @@ model_doc_changed(VvDocument *doc, gpointer user) {
 }
 
 static void
-build(VvModelingPage *self) {
+build(VvgModelingPage *self) {
     GtkWidget *box = GTK_WIDGET(self);
     GtkWidget *g = vvg_section(box, "Voxelized primitive or mesh (volume sampling)");
     self->prim_kind = vvg_row(g, "model", gtk_drop_down_new_from_strings(prim_names));
@@ -353,24 +353,24 @@ build(VvModelingPage *self) {
 }
 
 static void
-vv_modeling_page_dispose(GObject *o) {
-    VvModelingPage *self = VV_MODELING_PAGE(o);
+vvg_modeling_page_dispose(GObject *o) {
+    VvgModelingPage *self = VVG_MODELING_PAGE(o);
     if (self->doc) {
         g_signal_handlers_disconnect_by_data(self->doc, self);
         g_clear_object(&self->doc);
     }
     g_clear_pointer(&self->recipes, g_hash_table_destroy);
     g_clear_pointer(&self->model_volumes, g_ptr_array_unref);
-    G_OBJECT_CLASS(vv_modeling_page_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_modeling_page_parent_class)->dispose(o);
 }
 
 static void
-vv_modeling_page_class_init(VvModelingPageClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_modeling_page_dispose;
+vvg_modeling_page_class_init(VvgModelingPageClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_modeling_page_dispose;
 }
 
 static void
-vv_modeling_page_init(VvModelingPage *self) {
+vvg_modeling_page_init(VvgModelingPage *self) {
     vvg_vbox_init(GTK_WIDGET(self));
     gtk_widget_set_margin_start(GTK_WIDGET(self), 8);
     gtk_widget_set_margin_end(GTK_WIDGET(self), 8);
@@ -382,8 +382,8 @@ vv_modeling_page_init(VvModelingPage *self) {
 }
 
 GtkWidget *
-vv_modeling_page_new(VvDocument *doc, GActionMap *actions) {
-    VvModelingPage *self = g_object_new(VV_TYPE_MODELING_PAGE, NULL);
+vvg_modeling_page_new(VvgDocument *doc, GActionMap *actions) {
+    VvgModelingPage *self = g_object_new(VVG_TYPE_MODELING_PAGE, NULL);
     self->doc = g_object_ref(doc);
     const GActionEntry entries[] = {
         {"voxelize", act_voxelize, NULL, NULL, NULL, {0}},

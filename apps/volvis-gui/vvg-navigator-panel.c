@@ -1,52 +1,52 @@
-/* VvNavigatorPanel: the Navigator's settings (vvg-navigator-panel.h). */
+/* VvgNavigatorPanel: the Navigator's settings (vvg-navigator-panel.h). */
 #include "vvg-navigator-panel.h"
 #include "vvg-widgets.h"
 
 #include <string.h>
 
-struct _VvNavigatorPanel {
+struct _VvgNavigatorPanel {
     GtkBox parent;
-    VvSceneView *scene; /* borrowed */
+    VvgSceneView *scene; /* borrowed */
     GtkWidget *target;
     GtkWidget *cache; /* what the frame on screen drew out of core */
     guint cache_tick;
 };
 
-G_DEFINE_TYPE(VvNavigatorPanel, vv_navigator_panel, GTK_TYPE_BOX)
+G_DEFINE_TYPE(VvgNavigatorPanel, vvg_navigator_panel, GTK_TYPE_BOX)
 
 static void
 target_changed(GObject *o, GParamSpec *p, gpointer user) {
     (void)p;
-    VvNavigatorPanel *self = user;
-    vv_scene_view_set_target(self->scene,
-                             (VvNavTarget)gtk_drop_down_get_selected(GTK_DROP_DOWN(o)));
+    VvgNavigatorPanel *self = user;
+    vvg_scene_view_set_target(self->scene,
+                              (VvgNavTarget)gtk_drop_down_get_selected(GTK_DROP_DOWN(o)));
 }
 
 static void
 preview_changed(GObject *o, GParamSpec *p, gpointer user) {
     (void)p;
-    VvNavigatorPanel *self = user;
-    vv_scene_view_set_preview(self->scene, (int)gtk_drop_down_get_selected(GTK_DROP_DOWN(o)) - 1);
+    VvgNavigatorPanel *self = user;
+    vvg_scene_view_set_preview(self->scene, (int)gtk_drop_down_get_selected(GTK_DROP_DOWN(o)) - 1);
 }
 
 static void
 delay_changed(GtkSpinButton *s, gpointer user) {
-    VvNavigatorPanel *self = user;
-    vv_scene_view_set_refine_delay(self->scene, (int)gtk_spin_button_get_value(s));
+    VvgNavigatorPanel *self = user;
+    vvg_scene_view_set_refine_delay(self->scene, (int)gtk_spin_button_get_value(s));
 }
 
 static void
 flight_toggled(GtkCheckButton *b, gpointer user) {
-    VvNavigatorPanel *self = user;
-    vv_scene_view_set_flight(self->scene, gtk_check_button_get_active(b));
+    VvgNavigatorPanel *self = user;
+    vvg_scene_view_set_flight(self->scene, gtk_check_button_get_active(b));
     gtk_widget_grab_focus(GTK_WIDGET(self->scene));
 }
 
 /* The cache's state, four times a second (the loader fills it meanwhile). */
 static gboolean
 cache_tick(gpointer user) {
-    VvNavigatorPanel *self = user;
-    g_autofree char *t = vv_scene_view_cache_status(self->scene);
+    VvgNavigatorPanel *self = user;
+    g_autofree char *t = vvg_scene_view_cache_status(self->scene);
     if (strcmp(gtk_label_get_text(GTK_LABEL(self->cache)), t) != 0)
         gtk_label_set_text(GTK_LABEL(self->cache), t);
     gtk_widget_set_visible(self->cache, t[0] != '\0');
@@ -54,28 +54,28 @@ cache_tick(gpointer user) {
 }
 
 static void
-vv_navigator_panel_dispose(GObject *o) {
-    VvNavigatorPanel *self = VV_NAVIGATOR_PANEL(o);
+vvg_navigator_panel_dispose(GObject *o) {
+    VvgNavigatorPanel *self = VVG_NAVIGATOR_PANEL(o);
     if (self->cache_tick) {
         g_source_remove(self->cache_tick);
         self->cache_tick = 0;
     }
-    G_OBJECT_CLASS(vv_navigator_panel_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_navigator_panel_parent_class)->dispose(o);
 }
 
 static void
-vv_navigator_panel_class_init(VvNavigatorPanelClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_navigator_panel_dispose;
+vvg_navigator_panel_class_init(VvgNavigatorPanelClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_navigator_panel_dispose;
 }
 
 static void
-vv_navigator_panel_init(VvNavigatorPanel *self) {
+vvg_navigator_panel_init(VvgNavigatorPanel *self) {
     vvg_vbox_init(GTK_WIDGET(self));
 }
 
 GtkWidget *
-vv_navigator_panel_new(VvSceneView *scene) {
-    VvNavigatorPanel *self = g_object_new(VV_TYPE_NAVIGATOR_PANEL, NULL);
+vvg_navigator_panel_new(VvgSceneView *scene) {
+    VvgNavigatorPanel *self = g_object_new(VVG_TYPE_NAVIGATOR_PANEL, NULL);
     self->scene = scene;
     GtkWidget *g = vvg_section(GTK_WIDGET(self), "Navigator");
     static const char *const targets[] = {"view", "selected object", "selected light", "cut plane",
@@ -104,6 +104,6 @@ vv_navigator_panel_new(VvSceneView *scene) {
 }
 
 void
-vv_navigator_panel_set_target(VvNavigatorPanel *self, VvNavTarget target) {
+vvg_navigator_panel_set_target(VvgNavigatorPanel *self, VvgNavTarget target) {
     gtk_drop_down_set_selected(GTK_DROP_DOWN(self->target), (guint)target);
 }

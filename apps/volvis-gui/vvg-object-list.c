@@ -1,61 +1,61 @@
-/* VvObjectList: the World's objects, visibility, names, selection (vvg-object-list.h). */
+/* VvgObjectList: the World's objects, visibility, names, selection (vvg-object-list.h). */
 #include "vvg-object-list.h"
 #include "vvg-widgets.h"
 
-struct _VvObjectList {
+struct _VvgObjectList {
     GtkBox parent;
-    VvDocument *doc;
+    VvgDocument *doc;
     GtkWidget *list, *buttons;
     gboolean updating; /* set while the rows are rebuilt */
 };
 
-G_DEFINE_TYPE(VvObjectList, vv_object_list, GTK_TYPE_BOX)
+G_DEFINE_TYPE(VvgObjectList, vvg_object_list, GTK_TYPE_BOX)
 
 static void
 visible_toggled(GtkCheckButton *b, gpointer user) {
-    VvObjectList *self = user;
+    VvgObjectList *self = user;
     if (self->updating)
         return;
     int i = GPOINTER_TO_INT(g_object_get_data(G_OBJECT(b), "index"));
-    vv_world *w = vv_document_world(self->doc);
+    vv_world *w = vvg_document_world(self->doc);
     if (i >= w->n_objects)
         return;
-    vv_document_begin_edit(self->doc, "visibility");
+    vvg_document_begin_edit(self->doc, "visibility");
     w->objects[i]->visible = gtk_check_button_get_active(b);
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
 }
 
 static void
 name_activated(GtkEntry *e, gpointer user) {
-    VvObjectList *self = user;
+    VvgObjectList *self = user;
     int i = GPOINTER_TO_INT(g_object_get_data(G_OBJECT(e), "index"));
-    vv_world *w = vv_document_world(self->doc);
+    vv_world *w = vvg_document_world(self->doc);
     if (i >= w->n_objects)
         return;
-    vv_document_begin_edit(self->doc, "rename");
+    vvg_document_begin_edit(self->doc, "rename");
     g_strlcpy(w->objects[i]->name, gtk_editable_get_text(GTK_EDITABLE(e)),
               sizeof w->objects[i]->name);
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
 }
 
 static void
 row_selected(GtkListBox *box, GtkListBoxRow *r, gpointer user) {
     (void)box;
-    VvObjectList *self = user;
+    VvgObjectList *self = user;
     if (self->updating || !r)
         return;
     int i = gtk_list_box_row_get_index(r);
-    if (i != vv_document_selected(self->doc))
-        vv_document_select(self->doc, i);
+    if (i != vvg_document_selected(self->doc))
+        vvg_document_select(self->doc, i);
 }
 
 static void
-rebuild(VvObjectList *self) {
+rebuild(VvgObjectList *self) {
     self->updating = TRUE;
     GtkWidget *c;
     while ((c = gtk_widget_get_first_child(self->list)))
         gtk_list_box_remove(GTK_LIST_BOX(self->list), c);
-    vv_world *w = vv_document_world(self->doc);
+    vv_world *w = vvg_document_world(self->doc);
     for (int i = 0; i < w->n_objects; i++) {
         GtkWidget *r = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 4);
         GtkWidget *vis = gtk_check_button_new();
@@ -78,7 +78,7 @@ rebuild(VvObjectList *self) {
         gtk_box_append(GTK_BOX(r), type);
         gtk_list_box_append(GTK_LIST_BOX(self->list), r);
     }
-    int sel = vv_document_selected(self->doc);
+    int sel = vvg_document_selected(self->doc);
     if (sel >= 0)
         gtk_list_box_select_row(GTK_LIST_BOX(self->list),
                                 gtk_list_box_get_row_at_index(GTK_LIST_BOX(self->list), sel));
@@ -86,28 +86,28 @@ rebuild(VvObjectList *self) {
 }
 
 static void
-selection_changed(VvDocument *doc, gpointer user) {
+selection_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
     rebuild(user);
 }
 
 static void
-vv_object_list_dispose(GObject *o) {
-    VvObjectList *self = VV_OBJECT_LIST(o);
+vvg_object_list_dispose(GObject *o) {
+    VvgObjectList *self = VVG_OBJECT_LIST(o);
     if (self->doc) {
         g_signal_handlers_disconnect_by_data(self->doc, self);
         g_clear_object(&self->doc);
     }
-    G_OBJECT_CLASS(vv_object_list_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_object_list_parent_class)->dispose(o);
 }
 
 static void
-vv_object_list_class_init(VvObjectListClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_object_list_dispose;
+vvg_object_list_class_init(VvgObjectListClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_object_list_dispose;
 }
 
 static void
-vv_object_list_init(VvObjectList *self) {
+vvg_object_list_init(VvgObjectList *self) {
     vvg_vbox_init(GTK_WIDGET(self));
     GtkWidget *l = gtk_label_new(NULL);
     gtk_label_set_markup(GTK_LABEL(l), "<b>Objects</b>");
@@ -124,8 +124,8 @@ vv_object_list_init(VvObjectList *self) {
 }
 
 GtkWidget *
-vv_object_list_new(VvDocument *doc) {
-    VvObjectList *self = g_object_new(VV_TYPE_OBJECT_LIST, NULL);
+vvg_object_list_new(VvgDocument *doc) {
+    VvgObjectList *self = g_object_new(VVG_TYPE_OBJECT_LIST, NULL);
     self->doc = g_object_ref(doc);
     g_signal_connect(doc, "selection-changed", G_CALLBACK(selection_changed), self);
     rebuild(self);
@@ -133,6 +133,6 @@ vv_object_list_new(VvDocument *doc) {
 }
 
 void
-vv_object_list_add_button(VvObjectList *self, GtkWidget *button) {
+vvg_object_list_add_button(VvgObjectList *self, GtkWidget *button) {
     gtk_box_append(GTK_BOX(self->buttons), button);
 }

@@ -1,12 +1,12 @@
-/* VvObjectPanel: placement, material, textures and shading flags (vvg-object-panel.h). */
+/* VvgObjectPanel: placement, material, textures and shading flags (vvg-object-panel.h). */
 #include "vvg-object-panel.h"
 #include "vvg-widgets.h"
 
 #include <math.h>
 
-struct _VvObjectPanel {
+struct _VvgObjectPanel {
     GtkBox parent;
-    VvDocument *doc;
+    VvgDocument *doc;
     gboolean updating; /* set while widgets are filled from the World */
     guint placement_source;
     GtkWidget *obj_pos[3], *obj_scale, *up_axis;
@@ -15,14 +15,14 @@ struct _VvObjectPanel {
     GtkWidget *shading, *casts, *receives, *in_reflections, *reflects;
 };
 
-G_DEFINE_TYPE(VvObjectPanel, vv_object_panel, GTK_TYPE_BOX)
+G_DEFINE_TYPE(VvgObjectPanel, vvg_object_panel, GTK_TYPE_BOX)
 
 /* The numbers the Navigator changes, refreshed on every change of the World. */
 static void
-fill_placement(VvObjectPanel *self) {
+fill_placement(VvgObjectPanel *self) {
     gboolean was = self->updating;
     self->updating = TRUE;
-    vv_object *o = vv_document_selected_object(self->doc);
+    vv_object *o = vvg_document_selected_object(self->doc);
     if (o) {
         double pv[3] = {o->position.x, o->position.y, o->position.z};
         for (int i = 0; i < 3; i++)
@@ -41,9 +41,9 @@ fill_placement(VvObjectPanel *self) {
 }
 
 static void
-fill(VvObjectPanel *self) {
+fill(VvgObjectPanel *self) {
     self->updating = TRUE;
-    vv_object *o = vv_document_selected_object(self->doc);
+    vv_object *o = vvg_document_selected_object(self->doc);
     if (o) {
         GdkRGBA c = vvg_rgba(o->material.color);
         gtk_color_chooser_set_rgba(GTK_COLOR_CHOOSER(self->color), &c);
@@ -77,11 +77,11 @@ fill(VvObjectPanel *self) {
 static void
 on_placement(GtkSpinButton *sb, gpointer user) {
     (void)sb;
-    VvObjectPanel *self = user;
-    vv_object *o = vv_document_selected_object(self->doc);
+    VvgObjectPanel *self = user;
+    vv_object *o = vvg_document_selected_object(self->doc);
     if (self->updating || !o)
         return;
-    vv_document_begin_edit(self->doc, "placement");
+    vvg_document_begin_edit(self->doc, "placement");
     o->position = vv_vec3_make(vvg_spin_value(self->obj_pos[0]), vvg_spin_value(self->obj_pos[1]),
                                vvg_spin_value(self->obj_pos[2]));
     /* a uniform scale typed here (a non-uniform one from a scene keeps its
@@ -95,17 +95,17 @@ on_placement(GtkSpinButton *sb, gpointer user) {
         vv_vec3 c1 = vv_vec3_scale(vv_vec3_add(b.min, b.max), 0.5);
         o->position = vv_vec3_add(o->position, vv_vec3_sub(c0, c1));
     }
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
     fill_placement(self);
 }
 
 /* The material and shading widgets applied to the selected object: one undo step. */
 static void
-apply(VvObjectPanel *self, const char *label) {
-    vv_object *o = vv_document_selected_object(self->doc);
+apply(VvgObjectPanel *self, const char *label) {
+    vv_object *o = vvg_document_selected_object(self->doc);
     if (self->updating || !o)
         return;
-    vv_document_begin_edit(self->doc, label);
+    vvg_document_begin_edit(self->doc, label);
     GdkRGBA c;
     gtk_color_chooser_get_rgba(GTK_COLOR_CHOOSER(self->color), &c);
     o->material.color = vvg_vec3(&c);
@@ -120,7 +120,7 @@ apply(VvObjectPanel *self, const char *label) {
     o->receives_shadows = gtk_check_button_get_active(GTK_CHECK_BUTTON(self->receives));
     o->visible_in_reflections = gtk_check_button_get_active(GTK_CHECK_BUTTON(self->in_reflections));
     o->reflects = gtk_check_button_get_active(GTK_CHECK_BUTTON(self->reflects));
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
 }
 
 /* Z up (the object as stored) or Y up (its Y turned to the World's Z, the
@@ -128,12 +128,12 @@ apply(VvObjectPanel *self, const char *label) {
 static void
 up_axis_changed(GObject *d, GParamSpec *p, gpointer user) {
     (void)p;
-    VvObjectPanel *self = user;
-    vv_object *o = vv_document_selected_object(self->doc);
+    VvgObjectPanel *self = user;
+    vv_object *o = vvg_document_selected_object(self->doc);
     guint k = gtk_drop_down_get_selected(GTK_DROP_DOWN(d));
     if (self->updating || !o || k > 1)
         return;
-    vv_document_begin_edit(self->doc, "up axis");
+    vvg_document_begin_edit(self->doc, "up axis");
     vv_box before = vv_object_world_box(o);
     o->orientation =
         k == 1 ? vv_quat_from_axis_angle(vv_vec3_make(1, 0, 0), VV_PI / 2) : vv_quat_identity();
@@ -142,7 +142,7 @@ up_axis_changed(GObject *d, GParamSpec *p, gpointer user) {
     vv_vec3 shift = vv_vec3_scale(
         vv_vec3_sub(vv_vec3_add(before.min, before.max), vv_vec3_add(after.min, after.max)), 0.5);
     o->position = vv_vec3_add(o->position, shift);
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
 }
 
 static void
@@ -165,8 +165,8 @@ on_color(GtkColorButton *b, gpointer user) {
 
 /* Applies the texture widgets to the selected object (one undo step). */
 static void
-texture_update(VvObjectPanel *self, gboolean load_image) {
-    vv_object *o = vv_document_selected_object(self->doc);
+texture_update(VvgObjectPanel *self, gboolean load_image) {
+    vv_object *o = vvg_document_selected_object(self->doc);
     if (self->updating || !o)
         return;
     vv_texture_image *img = NULL;
@@ -178,7 +178,7 @@ texture_update(VvObjectPanel *self, gboolean load_image) {
             return;
         }
     }
-    vv_document_begin_edit(self->doc, "texture");
+    vvg_document_begin_edit(self->doc, "texture");
     if (load_image)
         vv_object_set_texture_image(o, img); /* NULL removes it */
     vv_texture_image_free(img);
@@ -206,7 +206,7 @@ texture_update(VvObjectPanel *self, gboolean load_image) {
             o->solid_texture.center = vv_vec3_scale(vv_vec3_add(b.min, b.max), 0.5);
         }
     }
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
 }
 
 static void
@@ -230,16 +230,16 @@ texture_spin(GtkSpinButton *s, gpointer user) {
 
 static gboolean
 placement_due(gpointer user) {
-    VvObjectPanel *self = user;
+    VvgObjectPanel *self = user;
     self->placement_source = 0;
     fill_placement(self);
     return G_SOURCE_REMOVE;
 }
 
 static void
-doc_changed(VvDocument *doc, gpointer user) {
+doc_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
-    VvObjectPanel *self = user;
+    VvgObjectPanel *self = user;
     /* during a drag the World changes a hundred times a second: the numbers
      * follow ten times a second, which costs the view no frames */
     if (!self->placement_source)
@@ -247,14 +247,14 @@ doc_changed(VvDocument *doc, gpointer user) {
 }
 
 static void
-selection_changed(VvDocument *doc, gpointer user) {
+selection_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
     fill(user);
 }
 
 static void
-vv_object_panel_dispose(GObject *o) {
-    VvObjectPanel *self = VV_OBJECT_PANEL(o);
+vvg_object_panel_dispose(GObject *o) {
+    VvgObjectPanel *self = VVG_OBJECT_PANEL(o);
     if (self->doc) {
         g_signal_handlers_disconnect_by_data(self->doc, self);
         g_clear_object(&self->doc);
@@ -263,34 +263,34 @@ vv_object_panel_dispose(GObject *o) {
         g_source_remove(self->placement_source);
         self->placement_source = 0;
     }
-    G_OBJECT_CLASS(vv_object_panel_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_object_panel_parent_class)->dispose(o);
 }
 
 static void
-vv_object_panel_class_init(VvObjectPanelClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_object_panel_dispose;
+vvg_object_panel_class_init(VvgObjectPanelClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_object_panel_dispose;
 }
 
 static void
-vv_object_panel_init(VvObjectPanel *self) {
+vvg_object_panel_init(VvgObjectPanel *self) {
     vvg_vbox_init(GTK_WIDGET(self));
 }
 
 static GtkWidget *
-wire_spin(VvObjectPanel *self, GtkWidget *s) {
+wire_spin(VvgObjectPanel *self, GtkWidget *s) {
     g_signal_connect(s, "value-changed", G_CALLBACK(on_spin), self);
     return s;
 }
 
 static GtkWidget *
-wire_check(VvObjectPanel *self, const char *label) {
+wire_check(VvgObjectPanel *self, const char *label) {
     GtkWidget *b = gtk_check_button_new_with_label(label);
     g_signal_connect(b, "toggled", G_CALLBACK(on_toggle), self);
     return b;
 }
 
 static void
-build_material(VvObjectPanel *self) {
+build_material(VvgObjectPanel *self) {
     GtkWidget *g = vvg_section(GTK_WIDGET(self), "Colour and material");
     self->color = vvg_row(g, "colour", gtk_color_button_new());
     g_signal_connect(self->color, "color-set", G_CALLBACK(on_color), self);
@@ -303,7 +303,7 @@ build_material(VvObjectPanel *self) {
 }
 
 static void
-build_texture(VvObjectPanel *self) {
+build_texture(VvgObjectPanel *self) {
     GtkWidget *g = vvg_section(GTK_WIDGET(self), "Texture");
     self->tex_file = vvg_row(g, "image (PNG)", gtk_entry_new());
     gtk_entry_set_placeholder_text(GTK_ENTRY(self->tex_file), "path, Enter to apply; empty: none");
@@ -321,8 +321,8 @@ build_texture(VvObjectPanel *self) {
 }
 
 GtkWidget *
-vv_object_panel_new(VvDocument *doc) {
-    VvObjectPanel *self = g_object_new(VV_TYPE_OBJECT_PANEL, NULL);
+vvg_object_panel_new(VvgDocument *doc) {
+    VvgObjectPanel *self = g_object_new(VVG_TYPE_OBJECT_PANEL, NULL);
     self->doc = g_object_ref(doc);
     GtkWidget *g = vvg_section(GTK_WIDGET(self), "Placement of the object (world units)");
     const char *posn[] = {"position x", "position y", "position z"};

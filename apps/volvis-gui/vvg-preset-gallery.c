@@ -1,4 +1,4 @@
-/* VvPresetGallery: presets with thumbnails from the current volume (vvg-preset-gallery.h). */
+/* VvgPresetGallery: presets with thumbnails from the current volume (vvg-preset-gallery.h). */
 #include "vvg-preset-gallery.h"
 #include "vvg-widgets.h"
 
@@ -8,9 +8,9 @@
 #define THUMB 80
 #define MAX_PRESETS 64
 
-struct _VvPresetGallery {
+struct _VvgPresetGallery {
     GtkBox parent;
-    VvDocument *doc;
+    VvgDocument *doc;
     GtkWidget *active_label, *flow;
     GtkWidget *buttons[MAX_PRESETS], *pictures[MAX_PRESETS];
     int n;
@@ -26,11 +26,11 @@ struct _VvPresetGallery {
     GCancellable *cancel;
 };
 
-G_DEFINE_TYPE(VvPresetGallery, vv_preset_gallery, GTK_TYPE_BOX)
+G_DEFINE_TYPE(VvgPresetGallery, vvg_preset_gallery, GTK_TYPE_BOX)
 
 static vv_object *
-volume_object(VvPresetGallery *self) {
-    vv_object *o = vv_document_selected_object(self->doc);
+volume_object(VvgPresetGallery *self) {
+    vv_object *o = vvg_document_selected_object(self->doc);
     return o && o->type == VV_OBJECT_VOLUME && o->volume ? o : NULL;
 }
 
@@ -58,7 +58,7 @@ tf_equal(const vv_tf *a, const vv_tf *b) {
 }
 
 static void
-show_active(VvPresetGallery *self) {
+show_active(VvgPresetGallery *self) {
     vv_object *o = volume_object(self);
     int active = -1;
     for (int i = 0; o && i < self->n && active < 0; i++)
@@ -85,7 +85,7 @@ show_active(VvPresetGallery *self) {
 /* ---- thumbnails ------------------------------------------------------------------ */
 
 typedef struct thumb_job {
-    VvPresetGallery *gallery; /* a reference */
+    VvgPresetGallery *gallery; /* a reference */
     guint gen;
     vv_world *world; /* the selected object alone, its lights, the view at THUMB x THUMB */
     vv_tf *tfs;      /* MAX_PRESETS */
@@ -95,7 +95,7 @@ typedef struct thumb_job {
 } thumb_job;
 
 typedef struct thumb_done {
-    VvPresetGallery *gallery; /* a reference */
+    VvgPresetGallery *gallery; /* a reference */
     guint gen;
     int index;
     GdkTexture *texture;
@@ -104,7 +104,7 @@ typedef struct thumb_done {
 static gboolean
 thumb_show(gpointer data) {
     thumb_done *d = data;
-    VvPresetGallery *self = d->gallery;
+    VvgPresetGallery *self = d->gallery;
     if (self->doc && d->gen == self->gen && d->index < self->n) {
         gtk_picture_set_paintable(GTK_PICTURE(self->pictures[d->index]), GDK_PAINTABLE(d->texture));
         self->rendered++;
@@ -175,8 +175,8 @@ thumb_job_free(gpointer p) {
 /* The World a thumbnail shows: the object alone, as the 3-D view sees it
  * (a square image framing it), composite unless it is projected. */
 static vv_world *
-thumb_world(VvPresetGallery *self, const vv_object *o) {
-    vv_world *src = vv_document_world(self->doc), *w = NULL;
+thumb_world(VvgPresetGallery *self, const vv_object *o) {
+    vv_world *src = vvg_document_world(self->doc), *w = NULL;
     vv_object *copy = NULL;
     if (vv_world_new(&w) != VV_OK)
         return NULL;
@@ -202,7 +202,7 @@ thumb_world(VvPresetGallery *self, const vv_object *o) {
 /* The presets on a newly selected (or changed) volume: their functions for
  * "active", and their thumbnails. */
 static void
-volume_changed(VvPresetGallery *self, const vv_object *o) {
+volume_changed(VvgPresetGallery *self, const vv_object *o) {
     self->volume = o ? o->volume : NULL;
     self->modified = o ? o->volume->modified : 0;
     self->gen++;
@@ -238,9 +238,9 @@ volume_changed(VvPresetGallery *self, const vv_object *o) {
 }
 
 static void
-doc_changed(VvDocument *doc, gpointer user) {
+doc_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
-    VvPresetGallery *self = user;
+    VvgPresetGallery *self = user;
     vv_object *o = volume_object(self);
     if ((o ? o->volume : NULL) != self->volume || (o && o->volume->modified != self->modified))
         volume_changed(self, o);
@@ -250,19 +250,19 @@ doc_changed(VvDocument *doc, gpointer user) {
 static void
 mapped(GtkWidget *w, gpointer user) {
     (void)user;
-    VvPresetGallery *self = VV_PRESET_GALLERY(w);
+    VvgPresetGallery *self = VVG_PRESET_GALLERY(w);
     if (self->stale)
         volume_changed(self, volume_object(self));
 }
 
 static void
 preset_clicked(GtkButton *b, gpointer user) {
-    VvPresetGallery *self = user;
+    VvgPresetGallery *self = user;
     int i = GPOINTER_TO_INT(g_object_get_data(G_OBJECT(b), "index"));
     vv_object *o = volume_object(self);
     if (!o || i < 0 || i >= self->n)
         return;
-    vv_document_begin_edit(self->doc, "transfer-function preset");
+    vvg_document_begin_edit(self->doc, "transfer-function preset");
     o = volume_object(self);
     vv_error_clear();
     if (vv_tf_preset(&o->tf, vv_tf_preset_names()[i], o->volume) != VV_OK) {
@@ -270,13 +270,13 @@ preset_clicked(GtkButton *b, gpointer user) {
         return;
     }
     o->segmentation = VV_SEG_TRANSFER_FUNCTION;
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
     show_active(self);
 }
 
 static void
-vv_preset_gallery_dispose(GObject *obj) {
-    VvPresetGallery *self = VV_PRESET_GALLERY(obj);
+vvg_preset_gallery_dispose(GObject *obj) {
+    VvgPresetGallery *self = VVG_PRESET_GALLERY(obj);
     if (self->cancel)
         g_cancellable_cancel(self->cancel);
     g_clear_object(&self->cancel);
@@ -284,23 +284,23 @@ vv_preset_gallery_dispose(GObject *obj) {
         g_signal_handlers_disconnect_by_data(self->doc, self);
         g_clear_object(&self->doc);
     }
-    G_OBJECT_CLASS(vv_preset_gallery_parent_class)->dispose(obj);
+    G_OBJECT_CLASS(vvg_preset_gallery_parent_class)->dispose(obj);
 }
 
 static void
-vv_preset_gallery_finalize(GObject *obj) {
-    g_free(VV_PRESET_GALLERY(obj)->tfs);
-    G_OBJECT_CLASS(vv_preset_gallery_parent_class)->finalize(obj);
+vvg_preset_gallery_finalize(GObject *obj) {
+    g_free(VVG_PRESET_GALLERY(obj)->tfs);
+    G_OBJECT_CLASS(vvg_preset_gallery_parent_class)->finalize(obj);
 }
 
 static void
-vv_preset_gallery_class_init(VvPresetGalleryClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_preset_gallery_dispose;
-    G_OBJECT_CLASS(klass)->finalize = vv_preset_gallery_finalize;
+vvg_preset_gallery_class_init(VvgPresetGalleryClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_preset_gallery_dispose;
+    G_OBJECT_CLASS(klass)->finalize = vvg_preset_gallery_finalize;
 }
 
 static void
-vv_preset_gallery_init(VvPresetGallery *self) {
+vvg_preset_gallery_init(VvgPresetGallery *self) {
     vvg_vbox_init(GTK_WIDGET(self));
     self->active = -2;
     self->tfs = g_new0(vv_tf, MAX_PRESETS);
@@ -341,8 +341,8 @@ vv_preset_gallery_init(VvPresetGallery *self) {
 }
 
 GtkWidget *
-vv_preset_gallery_new(VvDocument *doc) {
-    VvPresetGallery *self = g_object_new(VV_TYPE_PRESET_GALLERY, NULL);
+vvg_preset_gallery_new(VvgDocument *doc) {
+    VvgPresetGallery *self = g_object_new(VVG_TYPE_PRESET_GALLERY, NULL);
     self->doc = g_object_ref(doc);
     g_signal_connect(doc, "changed", G_CALLBACK(doc_changed), self);
     g_signal_connect(doc, "selection-changed", G_CALLBACK(doc_changed), self);
@@ -351,11 +351,11 @@ vv_preset_gallery_new(VvDocument *doc) {
 }
 
 const char *
-vv_preset_gallery_active(VvPresetGallery *self) {
+vvg_preset_gallery_active(VvgPresetGallery *self) {
     return self->active >= 0 ? vv_tf_preset_names()[self->active] : NULL;
 }
 
 int
-vv_preset_gallery_thumbnails(VvPresetGallery *self) {
+vvg_preset_gallery_thumbnails(VvgPresetGallery *self) {
     return self->rendered;
 }

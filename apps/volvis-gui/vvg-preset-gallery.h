@@ -1,5 +1,5 @@
 /*
- * VvPresetGallery: the transfer-function presets of the library
+ * VvgPresetGallery: the transfer-function presets of the library
  * (vv_tf_preset_names) as a gallery of buttons, each with a thumbnail
  * rendered from the selected volume with that preset (the ray caster at
  * 80 x 80 pixels and quality 0, seen as the 3-D view sees it, on a worker
@@ -9,22 +9,22 @@
  * is shown as active (highlighted, and named in the line above); after an
  * edit none is. UI thread only.
  */
-#ifndef VV_PRESET_GALLERY_H
-#define VV_PRESET_GALLERY_H
+#ifndef VVG_PRESET_GALLERY_H
+#define VVG_PRESET_GALLERY_H
 
 #include "vvg-document.h"
 
 G_BEGIN_DECLS
 
-#define VV_TYPE_PRESET_GALLERY (vv_preset_gallery_get_type())
-G_DECLARE_FINAL_TYPE(VvPresetGallery, vv_preset_gallery, VV, PRESET_GALLERY, GtkBox)
+#define VVG_TYPE_PRESET_GALLERY (vvg_preset_gallery_get_type())
+G_DECLARE_FINAL_TYPE(VvgPresetGallery, vvg_preset_gallery, VVG, PRESET_GALLERY, GtkBox)
 
 /** The gallery for the selected object of @p doc (a reference is held). */
-GtkWidget *vv_preset_gallery_new(VvDocument *doc);
+GtkWidget *vvg_preset_gallery_new(VvgDocument *doc);
 /** The active preset's name, or NULL when the function is no preset's. */
-const char *vv_preset_gallery_active(VvPresetGallery *gallery);
+const char *vvg_preset_gallery_active(VvgPresetGallery *gallery);
 /** How many thumbnails have been rendered for the current volume. */
-int vv_preset_gallery_thumbnails(VvPresetGallery *gallery);
+int vvg_preset_gallery_thumbnails(VvgPresetGallery *gallery);
 
 G_END_DECLS
 #endif

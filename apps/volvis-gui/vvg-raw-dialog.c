@@ -12,7 +12,7 @@
 typedef struct raw_dialog {
     GtkWidget *window, *file, *dims[3], *type, *endian, *spacing[3], *skip, *preview, *status;
     GtkWidget *import;
-    VvDocument *doc;
+    VvgDocument *doc;
     float *slice;
     int sw, sh;
     gboolean ok;
@@ -78,8 +78,8 @@ type_index(vv_voxel_type t) {
 }
 
 gboolean
-vv_raw_preview_slice(const char *path, const vv_raw_params *p, float *out, char *why,
-                     size_t why_size) {
+vvg_raw_preview_slice(const char *path, const vv_raw_params *p, float *out, char *why,
+                      size_t why_size) {
     int t = type_index(p->type), n = type_bytes[t];
     size_t row = (size_t)p->dims[0] * n, plane = row * p->dims[1];
     uint64_t need = p->header_skip + (uint64_t)plane * p->dims[2];
@@ -144,7 +144,7 @@ update(raw_dialog *d) {
     d->sw = p.dims[0];
     d->sh = p.dims[1];
     char why[256];
-    d->ok = path[0] && vv_raw_preview_slice(path, &p, d->slice, why, sizeof why);
+    d->ok = path[0] && vvg_raw_preview_slice(path, &p, d->slice, why, sizeof why);
     if (!path[0])
         g_strlcpy(why, "choose a file", sizeof why);
     gtk_label_set_text(GTK_LABEL(d->status), why);
@@ -246,7 +246,7 @@ import_clicked(GtkButton *b, gpointer user) {
     g_autofree char *base = g_path_get_basename(path);
     GError *err = NULL;
     /* a scene cannot describe raw data: saved as NRRD beside the scene */
-    if (!vv_document_add_volume(d->doc, v, base, NULL, &err)) {
+    if (!vvg_document_add_volume(d->doc, v, base, NULL, &err)) {
         vvg_show_error(d->window, "Cannot import the raw file", err->message);
         g_error_free(err);
     } else {
@@ -300,7 +300,7 @@ form(raw_dialog *d, const char *path) {
 }
 
 void
-vv_raw_dialog_present(GtkWindow *parent, VvDocument *doc, const char *path) {
+vvg_raw_dialog_present(GtkWindow *parent, VvgDocument *doc, const char *path) {
     raw_dialog *d = g_new0(raw_dialog, 1);
     d->doc = g_object_ref(doc);
     d->window = gtk_window_new();

@@ -8,23 +8,23 @@
  * volume made in the session (a saved session writes it as NRRD beside the
  * scene, since a scene file cannot describe raw data). UI thread only.
  */
-#ifndef VV_RAW_DIALOG_H
-#define VV_RAW_DIALOG_H
+#ifndef VVG_RAW_DIALOG_H
+#define VVG_RAW_DIALOG_H
 
 #include "vvg-document.h"
 
 G_BEGIN_DECLS
 
 /** Opens the dialog over @p parent for @p doc; @p path (may be NULL) is the file. */
-void vv_raw_dialog_present(GtkWindow *parent, VvDocument *doc, const char *path);
+void vvg_raw_dialog_present(GtkWindow *parent, VvgDocument *doc, const char *path);
 
 /**
  * The middle slice (k = dims[2] / 2) of raw file @p path as described by
  * @p p: dims[0] x dims[1] floats into @p out. FALSE with a message in
  * @p why (why_size bytes) when the file is too short or cannot be read.
  */
-gboolean vv_raw_preview_slice(const char *path, const vv_raw_params *p, float *out, char *why,
-                              size_t why_size);
+gboolean vvg_raw_preview_slice(const char *path, const vv_raw_params *p, float *out, char *why,
+                               size_t why_size);
 
 G_END_DECLS
 #endif

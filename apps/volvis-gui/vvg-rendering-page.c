@@ -1,26 +1,26 @@
-/* VvRenderingPage: renderer, options and quality (vvg-rendering-page.h). */
+/* VvgRenderingPage: renderer, options and quality (vvg-rendering-page.h). */
 #include "vvg-rendering-page.h"
 #include "vvg-widgets.h"
 
 #include <string.h>
 
-struct _VvRenderingPage {
+struct _VvgRenderingPage {
     GtkBox parent;
-    VvDocument *doc;
+    VvgDocument *doc;
     gboolean updating;
     GtkWidget *renderer, *quality, *options_box;
 };
 
-G_DEFINE_TYPE(VvRenderingPage, vv_rendering_page, GTK_TYPE_BOX)
+G_DEFINE_TYPE(VvgRenderingPage, vvg_rendering_page, GTK_TYPE_BOX)
 
 static void
 option_changed(GtkEntry *e, gpointer user) {
-    VvRenderingPage *self = user;
+    VvgRenderingPage *self = user;
     if (self->updating)
         return;
     const char *key = g_object_get_data(G_OBJECT(e), "key");
     const char *text = gtk_editable_get_text(GTK_EDITABLE(e));
-    vv_world *w = vv_document_world(self->doc);
+    vv_world *w = vvg_document_world(self->doc);
     /* check the value against the renderer's option table before taking it */
     const vv_renderer_info *info = vv_renderer_info_find(vv_world_renderer(w));
     vv_error_clear();
@@ -28,7 +28,7 @@ option_changed(GtkEntry *e, gpointer user) {
         vvg_show_error(GTK_WIDGET(self), "Bad renderer option", vv_error_message());
         return;
     }
-    vv_document_begin_edit(self->doc, "renderer option");
+    vvg_document_begin_edit(self->doc, "renderer option");
     vv_render_settings *rs = &w->render;
     if (text[0]) {
         vv_render_settings_set_option(rs, key, text);
@@ -43,11 +43,11 @@ option_changed(GtkEntry *e, gpointer user) {
                 break;
             }
     }
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
 }
 
 static void
-rebuild_options(VvRenderingPage *self) {
+rebuild_options(VvgRenderingPage *self) {
     GtkWidget *c;
     while ((c = gtk_widget_get_first_child(self->options_box)))
         gtk_grid_remove(GTK_GRID(self->options_box), c);
@@ -56,7 +56,7 @@ rebuild_options(VvRenderingPage *self) {
     const vv_renderer_info *info = vv_renderer_info_at((int)sel);
     if (!info)
         info = vv_renderer_info_at(0);
-    vv_world *w = vv_document_world(self->doc);
+    vv_world *w = vvg_document_world(self->doc);
     for (int i = 0; i < info->n_options; i++) {
         const vv_option_spec *o = &info->options[i];
         char what[256];
@@ -77,9 +77,9 @@ rebuild_options(VvRenderingPage *self) {
 }
 
 static void
-fill(VvRenderingPage *self) {
+fill(VvgRenderingPage *self) {
     self->updating = TRUE;
-    vv_world *w = vv_document_world(self->doc);
+    vv_world *w = vvg_document_world(self->doc);
     for (int i = 0; i < vv_renderer_count(); i++)
         if (!strcmp(vv_renderer_info_at(i)->name, vv_world_renderer(w)))
             gtk_drop_down_set_selected(GTK_DROP_DOWN(self->renderer), (guint)i);
@@ -92,16 +92,16 @@ static void
 renderer_changed(GObject *o, GParamSpec *p, gpointer user) {
     (void)o;
     (void)p;
-    VvRenderingPage *self = user;
+    VvgRenderingPage *self = user;
     if (!self->updating) {
         guint sel = gtk_drop_down_get_selected(GTK_DROP_DOWN(self->renderer));
         const vv_renderer_info *info = vv_renderer_info_at((int)sel);
-        vv_world *w = vv_document_world(self->doc);
+        vv_world *w = vvg_document_world(self->doc);
         if (info && strcmp(info->name, w->render.renderer)) {
-            vv_document_begin_edit(self->doc, "renderer");
+            vvg_document_begin_edit(self->doc, "renderer");
             g_strlcpy(w->render.renderer, info->name, sizeof w->render.renderer);
             w->render.n_options = 0; /* the options belong to the other renderer */
-            vv_document_changed(self->doc);
+            vvg_document_changed(self->doc);
         }
     }
     rebuild_options(self);
@@ -109,37 +109,37 @@ renderer_changed(GObject *o, GParamSpec *p, gpointer user) {
 
 static void
 quality_changed(GtkSpinButton *s, gpointer user) {
-    VvRenderingPage *self = user;
+    VvgRenderingPage *self = user;
     if (self->updating)
         return;
-    vv_document_begin_edit(self->doc, "quality");
-    vv_document_world(self->doc)->render.quality = (int)gtk_spin_button_get_value(s);
-    vv_document_changed(self->doc);
+    vvg_document_begin_edit(self->doc, "quality");
+    vvg_document_world(self->doc)->render.quality = (int)gtk_spin_button_get_value(s);
+    vvg_document_changed(self->doc);
 }
 
 static void
-selection_changed(VvDocument *doc, gpointer user) {
+selection_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
     fill(user);
 }
 
 static void
-vv_rendering_page_dispose(GObject *o) {
-    VvRenderingPage *self = VV_RENDERING_PAGE(o);
+vvg_rendering_page_dispose(GObject *o) {
+    VvgRenderingPage *self = VVG_RENDERING_PAGE(o);
     if (self->doc) {
         g_signal_handlers_disconnect_by_data(self->doc, self);
         g_clear_object(&self->doc);
     }
-    G_OBJECT_CLASS(vv_rendering_page_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_rendering_page_parent_class)->dispose(o);
 }
 
 static void
-vv_rendering_page_class_init(VvRenderingPageClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_rendering_page_dispose;
+vvg_rendering_page_class_init(VvgRenderingPageClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_rendering_page_dispose;
 }
 
 static void
-vv_rendering_page_init(VvRenderingPage *self) {
+vvg_rendering_page_init(VvgRenderingPage *self) {
     vvg_vbox_init(GTK_WIDGET(self));
     gtk_widget_set_margin_start(GTK_WIDGET(self), 8);
     gtk_widget_set_margin_end(GTK_WIDGET(self), 8);
@@ -147,8 +147,8 @@ vv_rendering_page_init(VvRenderingPage *self) {
 }
 
 GtkWidget *
-vv_rendering_page_new(VvDocument *doc) {
-    VvRenderingPage *self = g_object_new(VV_TYPE_RENDERING_PAGE, NULL);
+vvg_rendering_page_new(VvgDocument *doc) {
+    VvgRenderingPage *self = g_object_new(VVG_TYPE_RENDERING_PAGE, NULL);
     self->doc = g_object_ref(doc);
     GtkWidget *box = GTK_WIDGET(self);
     GtkWidget *g = vvg_section(box, "Renderer");

@@ -7,7 +7,7 @@
 
 /* Widget position of world point @p p; FALSE behind the eye. */
 static gboolean
-widget_xy(const VvSceneOverlay *o, vv_vec3 p, double *x, double *y) {
+widget_xy(const VvgSceneOverlay *o, vv_vec3 p, double *x, double *y) {
     double px, py;
     if (!vv_nav_view_project(o->view, p, &px, &py))
         return FALSE;
@@ -17,7 +17,7 @@ widget_xy(const VvSceneOverlay *o, vv_vec3 p, double *x, double *y) {
 }
 
 int
-vv_scene_overlay_plane_polygon(vv_vec3 point, vv_vec3 normal, vv_box b, vv_vec3 out[6]) {
+vvg_scene_overlay_plane_polygon(vv_vec3 point, vv_vec3 normal, vv_box b, vv_vec3 out[6]) {
     vv_vec3 n = vv_vec3_normalize(normal);
     vv_vec3 c[8];
     double d[8];
@@ -69,7 +69,7 @@ vv_scene_overlay_plane_polygon(vv_vec3 point, vv_vec3 normal, vv_box b, vv_vec3 
 }
 
 double
-vv_scene_overlay_nice_length(double target) {
+vvg_scene_overlay_nice_length(double target) {
     if (!(target > 0) || !isfinite(target))
         return 1;
     double p = pow(10.0, floor(log10(target)));
@@ -78,9 +78,9 @@ vv_scene_overlay_nice_length(double target) {
 }
 
 static void
-draw_plane(cairo_t *cr, const VvSceneOverlay *o, const vv_cut_plane *pl, vv_box box) {
+draw_plane(cairo_t *cr, const VvgSceneOverlay *o, const vv_cut_plane *pl, vv_box box) {
     vv_vec3 poly[6];
-    int n = vv_scene_overlay_plane_polygon(pl->point, pl->normal, box, poly);
+    int n = vvg_scene_overlay_plane_polygon(pl->point, pl->normal, box, poly);
     double x[6], y[6];
     for (int i = 0; i < n; i++)
         if (!widget_xy(o, poly[i], &x[i], &y[i]))
@@ -100,7 +100,7 @@ draw_plane(cairo_t *cr, const VvSceneOverlay *o, const vv_cut_plane *pl, vv_box 
 
 /* Every cut plane, global and local, where it crosses the World's box. */
 static void
-draw_planes(cairo_t *cr, const VvSceneOverlay *o) {
+draw_planes(cairo_t *cr, const VvgSceneOverlay *o) {
     const vv_world *w = o->world;
     vv_box box = vv_world_bounds(w);
     /* a little larger, so that a plane on a face still shows */
@@ -116,7 +116,7 @@ draw_planes(cairo_t *cr, const VvSceneOverlay *o) {
 
 /* The handle of the plane a drag moves: a ring at its point, its normal. */
 static void
-draw_plane_handle(cairo_t *cr, const VvSceneOverlay *o) {
+draw_plane_handle(cairo_t *cr, const VvgSceneOverlay *o) {
     const vv_cut_plane *pl = o->moving_plane;
     const vv_view *v = o->view;
     double dist = vv_vec3_length(vv_vec3_sub(v->at, v->eye));
@@ -137,7 +137,7 @@ draw_plane_handle(cairo_t *cr, const VvSceneOverlay *o) {
 
 /* The selected light: a sun at a point light, an arrow for a directional one. */
 static void
-draw_light_handle(cairo_t *cr, const VvSceneOverlay *o) {
+draw_light_handle(cairo_t *cr, const VvgSceneOverlay *o) {
     const vv_world *w = o->world;
     const vv_view *v = o->view;
     if (o->light < 0 || o->light >= w->n_lights)
@@ -171,10 +171,10 @@ draw_light_handle(cairo_t *cr, const VvSceneOverlay *o) {
 
 /* Points A and B with the distance between them, the seed, the region. */
 static void
-draw_marks(cairo_t *cr, const VvSceneOverlay *o) {
+draw_marks(cairo_t *cr, const VvgSceneOverlay *o) {
     if (!o->marks)
         return;
-    const vv_mesh *m = vv_marks_region(o->marks);
+    const vv_mesh *m = vvg_marks_region(o->marks);
     if (m && m->n_vertices > 0) {
         size_t step = m->n_vertices / 6000 + 1;
         cairo_set_source_rgba(cr, 1.0, 0.4, 1.0, 0.5);
@@ -186,15 +186,15 @@ draw_marks(cairo_t *cr, const VvSceneOverlay *o) {
         }
         cairo_fill(cr);
     }
-    static const double rgb[VV_MARK_COUNT][3] = {{0.2, 1, 0.4}, {1, 0.6, 0.2}, {1, 0.3, 1}};
-    static const char *const names[VV_MARK_COUNT] = {"A", "B", "seed"};
-    vv_vec3 p[VV_MARK_COUNT];
-    double x[VV_MARK_COUNT], y[VV_MARK_COUNT];
-    gboolean on[VV_MARK_COUNT];
+    static const double rgb[VVG_MARK_COUNT][3] = {{0.2, 1, 0.4}, {1, 0.6, 0.2}, {1, 0.3, 1}};
+    static const char *const names[VVG_MARK_COUNT] = {"A", "B", "seed"};
+    vv_vec3 p[VVG_MARK_COUNT];
+    double x[VVG_MARK_COUNT], y[VVG_MARK_COUNT];
+    gboolean on[VVG_MARK_COUNT];
     cairo_select_font_face(cr, "Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_BOLD);
     cairo_set_font_size(cr, 12);
-    for (int k = 0; k < VV_MARK_COUNT; k++) {
-        on[k] = vv_marks_point(o->marks, (VvMark)k, &p[k]) && widget_xy(o, p[k], &x[k], &y[k]);
+    for (int k = 0; k < VVG_MARK_COUNT; k++) {
+        on[k] = vvg_marks_point(o->marks, (VvgMark)k, &p[k]) && widget_xy(o, p[k], &x[k], &y[k]);
         if (!on[k])
             continue;
         cairo_set_source_rgb(cr, rgb[k][0], rgb[k][1], rgb[k][2]);
@@ -203,7 +203,7 @@ draw_marks(cairo_t *cr, const VvSceneOverlay *o) {
         cairo_move_to(cr, x[k] + 7, y[k] - 7);
         cairo_show_text(cr, names[k]);
     }
-    if (on[VV_MARK_A] && on[VV_MARK_B]) {
+    if (on[VVG_MARK_A] && on[VVG_MARK_B]) {
         cairo_set_source_rgba(cr, 1, 1, 0.3, 0.9);
         cairo_set_line_width(cr, 1.5);
         cairo_move_to(cr, x[0], y[0]);
@@ -220,7 +220,7 @@ draw_marks(cairo_t *cr, const VvSceneOverlay *o) {
 /* Axes at the bottom left turning with the camera, labelled by the
  * anatomical direction of their positive end (or x, y, z). */
 static void
-draw_orientation(cairo_t *cr, const VvSceneOverlay *o) {
+draw_orientation(cairo_t *cr, const VvgSceneOverlay *o) {
     const vv_view *v = o->view;
     vv_vec3 f = vv_vec3_normalize(vv_vec3_sub(v->at, v->eye));
     vv_vec3 r = vv_vec3_normalize(vv_vec3_cross(f, v->up));
@@ -263,7 +263,7 @@ draw_orientation(cairo_t *cr, const VvSceneOverlay *o) {
 
 /* A bar of a round length at the look-at distance, bottom right. */
 static void
-draw_scale_bar(cairo_t *cr, const VvSceneOverlay *o) {
+draw_scale_bar(cairo_t *cr, const VvgSceneOverlay *o) {
     const vv_view *v = o->view;
     double wpp; /* world units per view pixel at the look-at point */
     if (v->projection == VV_PROJECTION_ORTHOGRAPHIC)
@@ -273,7 +273,7 @@ draw_scale_bar(cairo_t *cr, const VvSceneOverlay *o) {
     wpp /= o->scale; /* per widget pixel */
     if (!(wpp > 0) || !isfinite(wpp))
         return;
-    double len = vv_scene_overlay_nice_length(120 * wpp), px = len / wpp;
+    double len = vvg_scene_overlay_nice_length(120 * wpp), px = len / wpp;
     double x1 = o->width - 16, x0 = x1 - px, y = o->height - 18;
     cairo_set_source_rgba(cr, 0, 0, 0, 0.45);
     cairo_rectangle(cr, x0 - 6, y - 20, px + 12, 28);
@@ -296,7 +296,7 @@ draw_scale_bar(cairo_t *cr, const VvSceneOverlay *o) {
 }
 
 void
-vv_scene_overlay_draw(cairo_t *cr, const VvSceneOverlay *o) {
+vvg_scene_overlay_draw(cairo_t *cr, const VvgSceneOverlay *o) {
     if (!o->world || !o->view || !vv_nav_view_valid(o->view) || o->view->height < 1)
         return;
     draw_planes(cr, o);

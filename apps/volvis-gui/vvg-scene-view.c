@@ -1,4 +1,4 @@
-/* VvSceneView: the scene view and the Navigator (vvg-scene-view.h). */
+/* VvgSceneView: the scene view and the Navigator (vvg-scene-view.h). */
 #define _GNU_SOURCE /* syscall(SYS_gettid) for the render thread's priority */
 #include "vvg-scene-view.h"
 #include "vvg-scene-overlay.h"
@@ -23,7 +23,7 @@
 
 /* ThreadSanitizer builds (VOLVIS_TSAN, scripts/tsan.sh) count the frames
  * for the report and can inject a race; other builds have neither. */
-#ifdef VV_TSAN
+#ifdef VVG_TSAN
 #define TSAN_COUNT(counter) (self->tsan_##counter++)
 #else
 #define TSAN_COUNT(counter) ((void)0)
@@ -32,7 +32,7 @@
 static gint64 start_us;
 
 void
-vv_scene_view_set_start_time(gint64 us) {
+vvg_scene_view_set_start_time(gint64 us) {
     start_us = us;
 }
 
@@ -41,7 +41,7 @@ vv_scene_view_set_start_time(gint64 us) {
 /* The pyramids a frame draws objects from (a reference each) and the
  * objects they stand for. */
 typedef struct pyr_set {
-    VvGuiPyramid *p[VV_SOURCES_MAX];
+    VvgPyramid *p[VV_SOURCES_MAX];
     int object[VV_SOURCES_MAX];
     int n;
 } pyr_set;
@@ -49,7 +49,7 @@ typedef struct pyr_set {
 static void
 pyr_set_clear(pyr_set *s) {
     for (int i = 0; i < s->n; i++)
-        vv_gui_pyramid_unref(s->p[i]);
+        vvg_pyramid_unref(s->p[i]);
     s->n = 0;
 }
 
@@ -57,7 +57,7 @@ pyr_set_clear(pyr_set *s) {
 static void
 pyr_set_ref(pyr_set *dst, const pyr_set *src) {
     for (int i = 0; i < src->n; i++) {
-        dst->p[i] = vv_gui_pyramid_ref(src->p[i]);
+        dst->p[i] = vvg_pyramid_ref(src->p[i]);
         dst->object[i] = src->object[i];
     }
     dst->n = src->n;
@@ -76,7 +76,7 @@ typedef struct job {
 
 /* One finished frame, posted to the UI thread. */
 typedef struct frame {
-    VvSceneView *view; /* a reference is held */
+    VvgSceneView *view; /* a reference is held */
     guint64 gen;
     vv_preview_kind kind;
     gboolean refine;
@@ -94,10 +94,10 @@ typedef struct frame {
     char lod_note[128]; /* why the pyramid was not used ("" when it was) */
 } frame;
 
-struct _VvSceneView {
+struct _VvgSceneView {
     GtkWidget parent;
-    VvDocument *doc;
-    VvMarks *marks;
+    VvgDocument *doc;
+    VvgMarks *marks;
     gulong changed_id;
 
     /* worker */
@@ -121,7 +121,7 @@ struct _VvSceneView {
     double shown_render_ms;
     float *shown_depth; /* of the full frame on screen, or NULL */
     vv_view shown_view;
-    VvPickFunc pick_fn;
+    VvgPickFunc pick_fn;
     gpointer pick_user;
     gboolean dragged;
     gint64 shown_latency_us;
@@ -129,9 +129,9 @@ struct _VvSceneView {
     guint refine_source;
     int refine_delay_ms;
     gboolean moving;
-    VvNavTarget target;
+    VvgNavTarget target;
     int light;
-    int cut_object, cut_plane; /* vv_scene_view_set_cut_plane */
+    int cut_object, cut_plane; /* vvg_scene_view_set_cut_plane */
     double drag_last_x, drag_last_y;
     int drag_button;
     GdkModifierType drag_mods;
@@ -149,14 +149,14 @@ struct _VvSceneView {
     guint tick_id;
     gint64 last_tick_us;
 
-#ifdef VV_TSAN
+#ifdef VVG_TSAN
     gboolean tsan_inject_race;                        /* VOLVIS_TSAN_INJECT_RACE=1 */
     guint64 tsan_posted, tsan_cancelled, tsan_warmed; /* worker only */
     guint64 tsan_shown, tsan_dropped;                 /* UI only */
 #endif
 };
 
-G_DEFINE_TYPE(VvSceneView, vv_scene_view, GTK_TYPE_WIDGET)
+G_DEFINE_TYPE(VvgSceneView, vvg_scene_view, GTK_TYPE_WIDGET)
 
 static void
 job_free(job *j) {
@@ -178,7 +178,7 @@ frame_free(frame *f) {
 }
 
 typedef struct cancel_ctx {
-    VvSceneView *view;
+    VvgSceneView *view;
     guint64 gen;
     gboolean refine;
 } cancel_ctx;
@@ -209,7 +209,7 @@ static gboolean tick_cb(GtkWidget *widget, GdkFrameClock *clock, gpointer user);
  * layers draw (overlapping composite objects, geometry, several objects by
  * the ray tracer): the caller then draws the proxies in memory. */
 static vv_status
-render_pyramid(VvSceneView *self, const job *j, frame *f, int converged, vv_render_options *ro,
+render_pyramid(VvgSceneView *self, const job *j, frame *f, int converged, vv_render_options *ro,
                vv_image *img) {
     const vv_world *w = j->world;
     vv_renderer *r = vv_preview_final_renderer(self->preview);
@@ -247,7 +247,7 @@ render_pyramid(VvSceneView *self, const job *j, frame *f, int converged, vv_rend
 /* Draws one representation of a job (a pyramid's converged frame when
  * @p converged); NULL when cancelled. */
 static frame *
-render_one(VvSceneView *self, const job *j, vv_preview_kind kind, int converged) {
+render_one(VvgSceneView *self, const job *j, vv_preview_kind kind, int converged) {
     frame *f = g_new0(frame, 1);
     f->view = g_object_ref(self);
     f->gen = j->gen;
@@ -279,7 +279,7 @@ render_one(VvSceneView *self, const job *j, vv_preview_kind kind, int converged)
     ro.quality = vv_render_settings_quality(&w->render);
     ro.progress.fn = cancel_cb;
     ro.progress.user = &cc;
-#ifdef VV_TSAN
+#ifdef VVG_TSAN
     /* the injected race: the policy entry of this kind written without
      * the lock while the UI thread reads the policy under it */
     if (self->tsan_inject_race) {
@@ -340,7 +340,7 @@ render_one(VvSceneView *self, const job *j, vv_preview_kind kind, int converged)
  * timed off screen, so that the first drag does not stall on building them
  * and the policy knows their times. */
 static void
-warm_previews(VvSceneView *self) {
+warm_previews(VvgSceneView *self) {
     static const vv_preview_kind kinds[] = {VV_PREVIEW_COARSE_MC, VV_PREVIEW_BOXES};
     for (size_t i = 0; i < G_N_ELEMENTS(kinds); i++) {
         g_mutex_lock(&self->lock);
@@ -390,7 +390,7 @@ warm_previews(VvSceneView *self) {
  * needs more than the memory limit holds) or makes no progress, the
  * converged frame streams the rest. A newer request ends it. */
 static void
-sharpen_pyramid(VvSceneView *self, const job *j) {
+sharpen_pyramid(VvgSceneView *self, const job *j) {
     int last = INT_MAX, idle = 0;
     for (;;) {
         int loading = 0;
@@ -421,7 +421,7 @@ sharpen_pyramid(VvSceneView *self, const job *j) {
 
 static gpointer
 worker_main(gpointer data) {
-    VvSceneView *self = data;
+    VvgSceneView *self = data;
 #ifdef __linux__
     /* The renderer's threads (OpenMP's, created from this one, inherit it)
      * yield to the UI thread and the display server, which have a frame to
@@ -481,7 +481,7 @@ worker_main(gpointer data) {
 }
 
 static void
-post_job(VvSceneView *self, job *j) {
+post_job(VvgSceneView *self, job *j) {
     if (!self->thread) { /* stopped */
         job_free(j);
         return;
@@ -499,7 +499,7 @@ post_job(VvSceneView *self, job *j) {
  * screen are written to DIR/full.png (atomically), for tests that compare
  * them with `volvis render` of the saved session. */
 static void
-save_shown(VvSceneView *self, const frame *f) {
+save_shown(VvgSceneView *self, const frame *f) {
     (void)self;
     const char *dir = g_getenv("VOLVIS_FRAME_DIR");
     if (!dir || !*dir)
@@ -520,7 +520,7 @@ save_shown(VvSceneView *self, const frame *f) {
 static gboolean
 show_frame(gpointer data) {
     frame *f = data;
-    VvSceneView *self = f->view;
+    VvgSceneView *self = f->view;
     if (!self->doc) { /* disposed */
         frame_free(f);
         return G_SOURCE_REMOVE;
@@ -579,8 +579,8 @@ show_frame(gpointer data) {
 }
 
 static job *
-new_job(VvSceneView *self, gboolean refine) {
-    vv_world *w = vv_document_snapshot(self->doc);
+new_job(VvgSceneView *self, gboolean refine) {
+    vv_world *w = vvg_document_snapshot(self->doc);
     if (!w)
         return NULL;
     job *j = g_new0(job, 1);
@@ -590,13 +590,13 @@ new_job(VvSceneView *self, gboolean refine) {
     j->posted_us = g_get_monotonic_time();
     /* the visible volumes shown from pyramids out of core: drawn by level
      * of detail, the other objects in memory beside them */
-    const vv_world *dw = vv_document_world(self->doc);
+    const vv_world *dw = vvg_document_world(self->doc);
     for (int i = 0; i < w->n_objects && i < dw->n_objects && j->pyr.n < VV_SOURCES_MAX; i++) {
         if (!w->objects[i]->visible)
             continue;
-        VvGuiPyramid *p = vv_document_pyramid(self->doc, dw->objects[i]);
+        VvgPyramid *p = vvg_document_pyramid(self->doc, dw->objects[i]);
         if (p && w->objects[i]->volume == p->proxy) {
-            j->pyr.p[j->pyr.n] = vv_gui_pyramid_ref(p);
+            j->pyr.p[j->pyr.n] = vvg_pyramid_ref(p);
             j->pyr.object[j->pyr.n++] = i;
         }
     }
@@ -605,7 +605,7 @@ new_job(VvSceneView *self, gboolean refine) {
 
 static gboolean
 refine_cb(gpointer data) {
-    VvSceneView *self = data;
+    VvgSceneView *self = data;
     self->refine_source = 0;
     self->moving = FALSE;
     job *j = new_job(self, TRUE);
@@ -627,15 +627,15 @@ refine_cb(gpointer data) {
 }
 
 /* The World changed: draw a preview now and refine after the delay. */
-static gboolean sync_size(VvSceneView *self);
+static gboolean sync_size(VvgSceneView *self);
 
 static void
-state_changed(VvSceneView *self) {
+state_changed(VvgSceneView *self) {
     sync_size(self);
     self->gen++;
     __atomic_store_n(&self->cancel_below, self->gen, __ATOMIC_RELAXED);
     self->moving = TRUE;
-    if (vv_document_world(self->doc)->n_objects == 0) {
+    if (vvg_document_world(self->doc)->n_objects == 0) {
         /* nothing to render: the background alone */
         g_clear_object(&self->texture);
         self->shown_gen = self->gen;
@@ -644,7 +644,7 @@ state_changed(VvSceneView *self) {
     }
     /* volumes up to 256^3 are always cast (at 1/8 size at worst): boxes and
      * surfaces only stand in for larger ones whose 1/8 cast misses the budget */
-    const vv_world *wd = vv_document_world(self->doc);
+    const vv_world *wd = vvg_document_world(self->doc);
     double voxels = 0;
     for (int i = 0; i < wd->n_objects; i++) {
         const vv_volume *v = wd->objects[i]->volume;
@@ -667,13 +667,13 @@ state_changed(VvSceneView *self) {
 }
 
 static void
-doc_changed(VvDocument *doc, gpointer user) {
+doc_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
-    state_changed(VV_SCENE_VIEW(user));
+    state_changed(VVG_SCENE_VIEW(user));
 }
 
 void
-vv_scene_view_refresh(VvSceneView *self) {
+vvg_scene_view_refresh(VvgSceneView *self) {
     state_changed(self);
 }
 
@@ -681,8 +681,8 @@ vv_scene_view_refresh(VvSceneView *self) {
 
 /* Where the image is drawn: its top-left corner and scale (<= 1) in the widget. */
 static void
-image_rect(VvSceneView *self, double *x0, double *y0, double *scale) {
-    const vv_world *w = vv_document_world(self->doc);
+image_rect(VvgSceneView *self, double *x0, double *y0, double *scale) {
+    const vv_world *w = vvg_document_world(self->doc);
     int ww = gtk_widget_get_width(GTK_WIDGET(self)), wh = gtk_widget_get_height(GTK_WIDGET(self));
     double vw = w->view.width, vh = w->view.height;
     double s = fmin(1.0, fmin(ww / vw, wh / vh));
@@ -692,7 +692,7 @@ image_rect(VvSceneView *self, double *x0, double *y0, double *scale) {
 }
 
 gboolean
-vv_scene_view_pick(VvSceneView *self, double x, double y, vv_vec3 *world) {
+vvg_scene_view_pick(VvgSceneView *self, double x, double y, vv_vec3 *world) {
     if (!self->shown_depth || self->shown_gen != self->gen || !self->texture)
         return FALSE;
     double x0, y0, s;
@@ -710,19 +710,19 @@ vv_scene_view_pick(VvSceneView *self, double x, double y, vv_vec3 *world) {
 }
 
 void
-vv_scene_view_pick_next(VvSceneView *self, VvPickFunc fn, gpointer user) {
+vvg_scene_view_pick_next(VvgSceneView *self, VvgPickFunc fn, gpointer user) {
     self->pick_fn = fn;
     self->pick_user = user;
     gtk_widget_set_cursor_from_name(GTK_WIDGET(self), fn ? "crosshair" : NULL);
 }
 
-/* The cut plane a VV_NAV_CUT drag moves: the selected object's last local
+/* The cut plane a VVG_NAV_CUT drag moves: the selected object's last local
  * one, else the World's last global one; NULL when there is none. With
  * @p t, also its vv_nav_apply target. */
 static vv_cut_plane *
-target_plane(VvSceneView *self, vv_nav_target *t) {
-    vv_world *w = vv_document_world(self->doc);
-    vv_object *o = vv_document_selected_object(self->doc);
+target_plane(VvgSceneView *self, vv_nav_target *t) {
+    vv_world *w = vvg_document_world(self->doc);
+    vv_object *o = vvg_document_selected_object(self->doc);
     vv_nav_target nt = {VV_NAV_TARGET_CUT, -1, -1};
     vv_cut_plane *pl = NULL;
     int co = self->cut_object, cp = self->cut_plane;
@@ -732,7 +732,7 @@ target_plane(VvSceneView *self, vv_nav_target *t) {
         nt.plane = cp;
         pl = co < 0 ? &w->cut_planes[cp] : &w->objects[co]->cut_planes[cp];
     } else if (o && o->n_cut_planes > 0) {
-        nt.index = vv_document_selected(self->doc);
+        nt.index = vvg_document_selected(self->doc);
         pl = &o->cut_planes[o->n_cut_planes - 1];
     } else if (w->n_cut_planes > 0) {
         pl = &w->cut_planes[w->n_cut_planes - 1];
@@ -745,7 +745,7 @@ target_plane(VvSceneView *self, vv_nav_target *t) {
 /* ---- drawing -------------------------------------------------------------- */
 
 static void
-log_frame(VvSceneView *self) {
+log_frame(VvgSceneView *self) {
     if (!self->frame_log || self->texture_logged || !self->texture)
         return;
     self->texture_logged = TRUE;
@@ -762,9 +762,9 @@ log_frame(VvSceneView *self) {
 
 /* The anatomical frame and unit of the selected volume (else the first). */
 static void
-volume_frame(VvSceneView *self, vv_space *space, const char **units) {
-    const vv_world *w = vv_document_world(self->doc);
-    const vv_object *o = vv_document_selected_object(self->doc);
+volume_frame(VvgSceneView *self, vv_space *space, const char **units) {
+    const vv_world *w = vvg_document_world(self->doc);
+    const vv_object *o = vvg_document_selected_object(self->doc);
     for (int i = 0; (!o || !o->volume) && i < w->n_objects; i++)
         o = w->objects[i];
     *space = o && o->volume ? o->volume->space : VV_SPACE_UNKNOWN;
@@ -772,29 +772,29 @@ volume_frame(VvSceneView *self, vv_space *space, const char **units) {
 }
 
 static void
-draw_overlays(VvSceneView *self, GtkSnapshot *snapshot, int ww, int wh) {
-    VvSceneOverlay ov;
+draw_overlays(VvgSceneView *self, GtkSnapshot *snapshot, int ww, int wh) {
+    VvgSceneOverlay ov;
     memset(&ov, 0, sizeof ov);
-    ov.world = vv_document_world(self->doc);
+    ov.world = vvg_document_world(self->doc);
     ov.view = &ov.world->view;
     image_rect(self, &ov.x0, &ov.y0, &ov.scale);
     ov.width = ww;
     ov.height = wh;
     ov.target = self->target;
-    ov.moving_plane = self->target == VV_NAV_CUT ? target_plane(self, NULL) : NULL;
+    ov.moving_plane = self->target == VVG_NAV_CUT ? target_plane(self, NULL) : NULL;
     ov.light = self->light;
     ov.marks = self->marks;
     volume_frame(self, &ov.space, &ov.units);
     cairo_t *cr = gtk_snapshot_append_cairo(snapshot, &GRAPHENE_RECT_INIT(0, 0, ww, wh));
-    vv_scene_overlay_draw(cr, &ov);
+    vvg_scene_overlay_draw(cr, &ov);
     cairo_destroy(cr);
 }
 
 static void
-vv_scene_view_snapshot(GtkWidget *widget, GtkSnapshot *snapshot) {
-    VvSceneView *self = VV_SCENE_VIEW(widget);
+vvg_scene_view_snapshot(GtkWidget *widget, GtkSnapshot *snapshot) {
+    VvgSceneView *self = VVG_SCENE_VIEW(widget);
     int ww = gtk_widget_get_width(widget), wh = gtk_widget_get_height(widget);
-    const vv_world *w = vv_document_world(self->doc);
+    const vv_world *w = vvg_document_world(self->doc);
     vv_vec3 bg = w->background;
     GdkRGBA bgc = {(float)bg.x, (float)bg.y, (float)bg.z, 1};
     gtk_snapshot_append_color(snapshot, &bgc, &GRAPHENE_RECT_INIT(0, 0, ww, wh));
@@ -814,30 +814,30 @@ vv_scene_view_snapshot(GtkWidget *widget, GtkSnapshot *snapshot) {
  * follows it (no undo step, the session stays saved; a saved session
  * renders through the CLI at this size). TRUE when it changed. */
 static gboolean
-sync_size(VvSceneView *self) {
+sync_size(VvgSceneView *self) {
     int scale = gtk_widget_get_scale_factor(GTK_WIDGET(self));
     int w = gtk_widget_get_width(GTK_WIDGET(self)) * scale;
     int h = gtk_widget_get_height(GTK_WIDGET(self)) * scale;
     if (w < 16 || h < 16)
         return FALSE;
-    const vv_view *v = &vv_document_world(self->doc)->view;
+    const vv_view *v = &vvg_document_world(self->doc)->view;
     if (v->width == w && v->height == h)
         return FALSE;
-    vv_document_set_view_size(self->doc, w, h);
+    vvg_document_set_view_size(self->doc, w, h);
     return TRUE;
 }
 
 static void
-vv_scene_view_size_allocate(GtkWidget *widget, int width, int height, int baseline) {
-    GTK_WIDGET_CLASS(vv_scene_view_parent_class)->size_allocate(widget, width, height, baseline);
-    VvSceneView *self = VV_SCENE_VIEW(widget);
+vvg_scene_view_size_allocate(GtkWidget *widget, int width, int height, int baseline) {
+    GTK_WIDGET_CLASS(vvg_scene_view_parent_class)->size_allocate(widget, width, height, baseline);
+    VvgSceneView *self = VVG_SCENE_VIEW(widget);
     if (self->doc && sync_size(self))
         state_changed(self);
 }
 
 static void
-vv_scene_view_measure(GtkWidget *widget, GtkOrientation o, int for_size, int *min, int *nat,
-                      int *min_base, int *nat_base) {
+vvg_scene_view_measure(GtkWidget *widget, GtkOrientation o, int for_size, int *min, int *nat,
+                       int *min_base, int *nat_base) {
     (void)widget;
     (void)for_size;
     /* small: the view takes what the window gives it */
@@ -849,8 +849,8 @@ vv_scene_view_measure(GtkWidget *widget, GtkOrientation o, int for_size, int *mi
 /* ---- input ------------------------------------------------------------------ */
 
 static void
-begin_interaction(VvSceneView *self, const char *label) {
-    vv_document_begin_edit(self->doc, label);
+begin_interaction(VvgSceneView *self, const char *label) {
+    vvg_document_begin_edit(self->doc, label);
 }
 
 /* A drag of (dx, dy) widget pixels, through the Navigator (vv_nav_apply):
@@ -858,8 +858,8 @@ begin_interaction(VvSceneView *self, const char *label) {
  * (an object scales); Alt moves the selected object. A cut plane slides
  * along its normal, Shift turns it. */
 static void
-apply_motion(VvSceneView *self, double dx, double dy) {
-    vv_world *w = vv_document_world(self->doc);
+apply_motion(VvgSceneView *self, double dx, double dy) {
+    vv_world *w = vvg_document_world(self->doc);
     /* widget pixels to view pixels (the image may be shown scaled down) */
     double x0, y0, s;
     image_rect(self, &x0, &y0, &s);
@@ -868,9 +868,9 @@ apply_motion(VvSceneView *self, double dx, double dy) {
     gboolean shift = (self->drag_mods & GDK_SHIFT_MASK) != 0;
     gboolean pan = self->drag_button == 3 || self->drag_button == 2 || shift;
     gboolean zoom = (self->drag_mods & GDK_CONTROL_MASK) != 0;
-    VvNavTarget target = self->target;
+    VvgNavTarget target = self->target;
     if (self->drag_mods & GDK_ALT_MASK)
-        target = VV_NAV_OBJECT;
+        target = VVG_NAV_OBJECT;
     vv_nav_target t = {VV_NAV_TARGET_VIEW, 0, -1};
     vv_nav_motion m = {.kind = zoom  ? VV_NAV_ZOOM
                                : pan ? VV_NAV_PAN
@@ -878,14 +878,14 @@ apply_motion(VvSceneView *self, double dx, double dy) {
                        .dx = dx,
                        .dy = dy,
                        .factor = exp(-dy / 200.0)};
-    if (target == VV_NAV_OBJECT && vv_document_selected(self->doc) >= 0) {
+    if (target == VVG_NAV_OBJECT && vvg_document_selected(self->doc) >= 0) {
         t.kind = VV_NAV_TARGET_OBJECT;
-        t.index = vv_document_selected(self->doc);
-    } else if (target == VV_NAV_CUT) {
+        t.index = vvg_document_selected(self->doc);
+    } else if (target == VVG_NAV_CUT) {
         if (!target_plane(self, &t))
             return;
         m.kind = shift ? VV_NAV_ROTATE : VV_NAV_PAN;
-    } else if (target == VV_NAV_LIGHT) {
+    } else if (target == VVG_NAV_LIGHT) {
         if (self->light < 0 || self->light >= w->n_lights)
             return;
         t.kind = VV_NAV_TARGET_LIGHT;
@@ -894,12 +894,12 @@ apply_motion(VvSceneView *self, double dx, double dy) {
     }
     if (vv_nav_apply(w, &t, &m) != VV_OK)
         return;
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
 }
 
 static void
 drag_begin(GtkGestureDrag *g, double x, double y, gpointer user) {
-    VvSceneView *self = user;
+    VvgSceneView *self = user;
     self->drag_last_x = 0;
     self->drag_last_y = 0;
     self->drag_button = (int)gtk_gesture_single_get_current_button(GTK_GESTURE_SINGLE(g));
@@ -912,7 +912,7 @@ drag_begin(GtkGestureDrag *g, double x, double y, gpointer user) {
 
 static void
 drag_end(GtkGestureDrag *g, double ox, double oy, gpointer user) {
-    VvSceneView *self = user;
+    VvgSceneView *self = user;
     if (self->flight && self->drag_button == 1) /* the mouse stick is let go */
         self->yaw_rate = self->pitch_rate = 0;
     if (self->dragged || !self->pick_fn || fabs(ox) > 3 || fabs(oy) > 3)
@@ -920,18 +920,18 @@ drag_end(GtkGestureDrag *g, double ox, double oy, gpointer user) {
     double sx, sy;
     gtk_gesture_drag_get_start_point(g, &sx, &sy);
     vv_vec3 p;
-    if (!vv_scene_view_pick(self, sx, sy, &p))
+    if (!vvg_scene_view_pick(self, sx, sy, &p))
         return; /* stays armed: nothing under the pointer yet */
-    VvPickFunc fn = self->pick_fn;
+    VvgPickFunc fn = self->pick_fn;
     gpointer u = self->pick_user;
-    vv_scene_view_pick_next(self, NULL, NULL);
+    vvg_scene_view_pick_next(self, NULL, NULL);
     fn(u, p);
 }
 
 static void
 drag_update(GtkGestureDrag *g, double ox, double oy, gpointer user) {
     (void)g;
-    VvSceneView *self = user;
+    VvgSceneView *self = user;
     double dx = ox - self->drag_last_x, dy = oy - self->drag_last_y;
     self->drag_last_x = ox;
     self->drag_last_y = oy;
@@ -957,10 +957,10 @@ drag_update(GtkGestureDrag *g, double ox, double oy, gpointer user) {
     }
     if (!self->dragged) {
         self->dragged = TRUE;
-        begin_interaction(self, self->target == VV_NAV_OBJECT  ? "move object"
-                                : self->target == VV_NAV_LIGHT ? "move light"
-                                : self->target == VV_NAV_CUT   ? "move cut plane"
-                                                               : "move view");
+        begin_interaction(self, self->target == VVG_NAV_OBJECT  ? "move object"
+                                : self->target == VVG_NAV_LIGHT ? "move light"
+                                : self->target == VVG_NAV_CUT   ? "move cut plane"
+                                                                : "move view");
     }
     apply_motion(self, dx, dy);
 }
@@ -969,21 +969,21 @@ static gboolean
 scroll_cb(GtkEventControllerScroll *c, double dx, double dy, gpointer user) {
     (void)c;
     (void)dx;
-    VvSceneView *self = user;
+    VvgSceneView *self = user;
     if (!isfinite(dy) || dy == 0)
         return FALSE;
     begin_interaction(self, "zoom");
     vv_nav_motion m = {.kind = VV_NAV_ZOOM, .factor = pow(1.1, -dy)};
     vv_nav_target t = {VV_NAV_TARGET_VIEW, 0, -1};
-    if (vv_nav_apply(vv_document_world(self->doc), &t, &m) == VV_OK)
-        vv_document_changed(self->doc);
+    if (vv_nav_apply(vvg_document_world(self->doc), &t, &m) == VV_OK)
+        vvg_document_changed(self->doc);
     return TRUE;
 }
 
 static gboolean
 tick_cb(GtkWidget *widget, GdkFrameClock *clock, gpointer user) {
     (void)widget;
-    VvSceneView *self = user;
+    VvgSceneView *self = user;
     gint64 now = gdk_frame_clock_get_frame_time(clock);
     double dt = self->last_tick_us ? (now - self->last_tick_us) * 1e-6 : 0.0;
     self->last_tick_us = now;
@@ -993,7 +993,7 @@ tick_cb(GtkWidget *widget, GdkFrameClock *clock, gpointer user) {
         self->last_tick_us = 0;
         return G_SOURCE_REMOVE;
     }
-    vv_world *w = vv_document_world(self->doc);
+    vv_world *w = vvg_document_world(self->doc);
     /* throttle in scene sizes a second */
     vv_box b = vv_world_bounds(w);
     double size = vv_vec3_length(vv_vec3_sub(b.max, b.min));
@@ -1007,12 +1007,12 @@ tick_cb(GtkWidget *widget, GdkFrameClock *clock, gpointer user) {
                        .dt = dt};
     vv_nav_target t = {VV_NAV_TARGET_VIEW, 0, -1};
     if (vv_nav_apply(w, &t, &m) == VV_OK)
-        vv_document_changed(self->doc);
+        vvg_document_changed(self->doc);
     return G_SOURCE_CONTINUE;
 }
 
 static gboolean
-flight_key(VvSceneView *self, guint key, gboolean down) {
+flight_key(VvgSceneView *self, guint key, gboolean down) {
     double rate = down ? 0.6 : 0.0; /* radians a second */
     switch (key) {
     case GDK_KEY_Left:
@@ -1054,7 +1054,7 @@ static gboolean
 key_pressed(GtkEventControllerKey *c, guint key, guint code, GdkModifierType mods, gpointer user) {
     (void)c;
     (void)code;
-    VvSceneView *self = user;
+    VvgSceneView *self = user;
     if (!self->flight || (mods & (GDK_CONTROL_MASK | GDK_ALT_MASK)))
         return FALSE;
     return flight_key(self, key, TRUE);
@@ -1065,7 +1065,7 @@ key_released(GtkEventControllerKey *c, guint key, guint code, GdkModifierType mo
     (void)c;
     (void)code;
     (void)mods;
-    VvSceneView *self = user;
+    VvgSceneView *self = user;
     if (self->flight)
         flight_key(self, key, FALSE);
 }
@@ -1073,7 +1073,7 @@ key_released(GtkEventControllerKey *c, guint key, guint code, GdkModifierType mo
 /* ---- life cycle ---------------------------------------------------------- */
 
 void
-vv_scene_view_stop(VvSceneView *self) {
+vvg_scene_view_stop(VvgSceneView *self) {
     if (self->thread) {
         g_mutex_lock(&self->lock);
         /* atomic: cancel_cb reads it without the lock, on the renderer's threads */
@@ -1083,7 +1083,7 @@ vv_scene_view_stop(VvSceneView *self) {
         g_mutex_unlock(&self->lock);
         g_thread_join(self->thread);
         self->thread = NULL;
-#ifdef VV_TSAN
+#ifdef VVG_TSAN
         g_printerr("volvis-gui: render thread: %" G_GUINT64_FORMAT
                    " frames posted, %" G_GUINT64_FORMAT " cancelled, %" G_GUINT64_FORMAT
                    " drawn off screen; UI: %" G_GUINT64_FORMAT " shown, %" G_GUINT64_FORMAT
@@ -1099,9 +1099,9 @@ vv_scene_view_stop(VvSceneView *self) {
 }
 
 static void
-vv_scene_view_dispose(GObject *o) {
-    VvSceneView *self = VV_SCENE_VIEW(o);
-    vv_scene_view_stop(self);
+vvg_scene_view_dispose(GObject *o) {
+    VvgSceneView *self = VVG_SCENE_VIEW(o);
+    vvg_scene_view_stop(self);
     if (self->refine_source) {
         g_source_remove(self->refine_source);
         self->refine_source = 0;
@@ -1122,35 +1122,35 @@ vv_scene_view_dispose(GObject *o) {
         fclose(self->frame_log);
         self->frame_log = NULL;
     }
-    G_OBJECT_CLASS(vv_scene_view_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_scene_view_parent_class)->dispose(o);
 }
 
 static void
-vv_scene_view_finalize(GObject *o) {
-    VvSceneView *self = VV_SCENE_VIEW(o);
+vvg_scene_view_finalize(GObject *o) {
+    VvgSceneView *self = VVG_SCENE_VIEW(o);
     g_mutex_clear(&self->lock);
     g_cond_clear(&self->cond);
-    G_OBJECT_CLASS(vv_scene_view_parent_class)->finalize(o);
+    G_OBJECT_CLASS(vvg_scene_view_parent_class)->finalize(o);
 }
 
 static void
-vv_scene_view_class_init(VvSceneViewClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_scene_view_dispose;
-    G_OBJECT_CLASS(klass)->finalize = vv_scene_view_finalize;
-    GTK_WIDGET_CLASS(klass)->snapshot = vv_scene_view_snapshot;
-    GTK_WIDGET_CLASS(klass)->measure = vv_scene_view_measure;
-    GTK_WIDGET_CLASS(klass)->size_allocate = vv_scene_view_size_allocate;
+vvg_scene_view_class_init(VvgSceneViewClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_scene_view_dispose;
+    G_OBJECT_CLASS(klass)->finalize = vvg_scene_view_finalize;
+    GTK_WIDGET_CLASS(klass)->snapshot = vvg_scene_view_snapshot;
+    GTK_WIDGET_CLASS(klass)->measure = vvg_scene_view_measure;
+    GTK_WIDGET_CLASS(klass)->size_allocate = vvg_scene_view_size_allocate;
 }
 
 static void
-vv_scene_view_init(VvSceneView *self) {
+vvg_scene_view_init(VvgSceneView *self) {
     g_mutex_init(&self->lock);
     g_cond_init(&self->cond);
     vv_preview_policy_init(&self->policy);
     self->refine_delay_ms = 100;
     self->shown_kind = -1;
     self->cut_plane = -1;
-#ifdef VV_TSAN
+#ifdef VVG_TSAN
     self->tsan_inject_race = g_strcmp0(g_getenv("VOLVIS_TSAN_INJECT_RACE"), "1") == 0;
     if (self->tsan_inject_race)
         g_printerr("volvis-gui: VOLVIS_TSAN_INJECT_RACE=1: the render thread writes the preview "
@@ -1186,14 +1186,14 @@ vv_scene_view_init(VvSceneView *self) {
 }
 
 static void
-marks_changed(VvMarks *m, gpointer user) {
+marks_changed(VvgMarks *m, gpointer user) {
     (void)m;
     gtk_widget_queue_draw(GTK_WIDGET(user));
 }
 
-VvSceneView *
-vv_scene_view_new(VvDocument *doc, VvMarks *marks) {
-    VvSceneView *self = g_object_new(VV_TYPE_SCENE_VIEW, NULL);
+VvgSceneView *
+vvg_scene_view_new(VvgDocument *doc, VvgMarks *marks) {
+    VvgSceneView *self = g_object_new(VVG_TYPE_SCENE_VIEW, NULL);
     self->doc = g_object_ref(doc);
     self->marks = g_object_ref(marks);
     g_signal_connect(marks, "changed", G_CALLBACK(marks_changed), self);
@@ -1204,52 +1204,52 @@ vv_scene_view_new(VvDocument *doc, VvMarks *marks) {
 }
 
 void
-vv_scene_view_set_target(VvSceneView *self, VvNavTarget target) {
+vvg_scene_view_set_target(VvgSceneView *self, VvgNavTarget target) {
     self->target = target;
     gtk_widget_queue_draw(GTK_WIDGET(self));
 }
 
 void
-vv_scene_view_set_cut_plane(VvSceneView *self, int object, int plane) {
+vvg_scene_view_set_cut_plane(VvgSceneView *self, int object, int plane) {
     self->cut_object = object;
     self->cut_plane = plane;
     if (self->marks)
-        vv_marks_set_cut_plane(self->marks, object, plane);
+        vvg_marks_set_cut_plane(self->marks, object, plane);
     gtk_widget_queue_draw(GTK_WIDGET(self));
 }
 
 void
-vv_scene_view_set_light(VvSceneView *self, int index) {
+vvg_scene_view_set_light(VvgSceneView *self, int index) {
     self->light = index;
     gtk_widget_queue_draw(GTK_WIDGET(self));
 }
 
 void
-vv_scene_view_set_preview(VvSceneView *self, int kind) {
+vvg_scene_view_set_preview(VvgSceneView *self, int kind) {
     g_mutex_lock(&self->lock);
     self->policy.forced = kind >= 0 && kind < VV_PREVIEW_COUNT ? kind : -1;
     g_mutex_unlock(&self->lock);
 }
 
 void
-vv_scene_view_set_refine_delay(VvSceneView *self, int ms) {
+vvg_scene_view_set_refine_delay(VvgSceneView *self, int ms) {
     self->refine_delay_ms = ms < 0 ? 0 : ms > 2000 ? 2000 : ms;
 }
 
 void
-vv_scene_view_set_flight(VvSceneView *self, gboolean on) {
+vvg_scene_view_set_flight(VvgSceneView *self, gboolean on) {
     self->flight = on;
     if (!on)
         self->yaw_rate = self->pitch_rate = self->roll_rate = self->throttle = 0;
 }
 
 double
-vv_scene_view_full_ms(VvSceneView *self) {
+vvg_scene_view_full_ms(VvgSceneView *self) {
     return self->full_ms;
 }
 
 char *
-vv_scene_view_cache_status(VvSceneView *self) {
+vvg_scene_view_cache_status(VvgSceneView *self) {
     if (self->shown_lod_note[0])
         return g_strdup_printf("the coarsest level in memory: %s", self->shown_lod_note);
     if (self->shown_pyr.n == 0)
@@ -1292,6 +1292,6 @@ vv_scene_view_cache_status(VvSceneView *self) {
 }
 
 const char *
-vv_scene_view_shown(VvSceneView *self) {
+vvg_scene_view_shown(VvgSceneView *self) {
     return self->shown_kind < 0 ? "" : vv_preview_kind_name((vv_preview_kind)self->shown_kind);
 }

@@ -1,5 +1,5 @@
 /*
- * VvSceneView: the window's scene view and the Navigator (VolVis paper,
+ * VvgSceneView: the window's scene view and the Navigator (VolVis paper,
  * section 4). It shows the document's World, turns mouse, scroll and key
  * input into view, object and light manipulation, and keeps the frame rate
  * by drawing reduced-resolution previews while things move
@@ -17,59 +17,59 @@
  * shows, the GUI time runs from the renderer's end to the paint
  * (docs/gui.md). UI thread only, except where noted.
  */
-#ifndef VV_SCENE_VIEW_H
-#define VV_SCENE_VIEW_H
+#ifndef VVG_SCENE_VIEW_H
+#define VVG_SCENE_VIEW_H
 
 #include "vvg-document.h"
 #include "vvg-marks.h"
 
 G_BEGIN_DECLS
 
-#define VV_TYPE_SCENE_VIEW (vv_scene_view_get_type())
-G_DECLARE_FINAL_TYPE(VvSceneView, vv_scene_view, VV, SCENE_VIEW, GtkWidget)
+#define VVG_TYPE_SCENE_VIEW (vvg_scene_view_get_type())
+G_DECLARE_FINAL_TYPE(VvgSceneView, vvg_scene_view, VVG, SCENE_VIEW, GtkWidget)
 
 /** What a drag moves. */
-typedef enum VvNavTarget {
-    VV_NAV_VIEW = 0,   /**< the camera (trackball, pan, zoom) */
-    VV_NAV_OBJECT = 1, /**< the selected object */
-    VV_NAV_LIGHT = 2,  /**< the selected light */
-    VV_NAV_CUT = 3     /**< the cut plane chosen with vv_scene_view_set_cut_plane (else the
+typedef enum VvgNavTarget {
+    VVG_NAV_VIEW = 0,   /**< the camera (trackball, pan, zoom) */
+    VVG_NAV_OBJECT = 1, /**< the selected object */
+    VVG_NAV_LIGHT = 2,  /**< the selected light */
+    VVG_NAV_CUT = 3     /**< the cut plane chosen with vvg_scene_view_set_cut_plane (else the
                             selected object's last one, else the last global one): a drag
                             moves it along its normal, Shift+drag turns the normal */
-} VvNavTarget;
+} VvgNavTarget;
 
 /** The view of @p doc with the marks of @p marks drawn over it (references are held). */
-VvSceneView *vv_scene_view_new(VvDocument *doc, VvMarks *marks);
-void vv_scene_view_set_target(VvSceneView *view, VvNavTarget target);
+VvgSceneView *vvg_scene_view_new(VvgDocument *doc, VvgMarks *marks);
+void vvg_scene_view_set_target(VvgSceneView *view, VvgNavTarget target);
 /**
- * The cut plane a VV_NAV_CUT drag moves: plane @p plane of object @p object
+ * The cut plane a VVG_NAV_CUT drag moves: plane @p plane of object @p object
  * (-1: the World's global planes); @p plane -1 (or a plane that no longer
  * exists): the selected object's last one, else the last global one.
  */
-void vv_scene_view_set_cut_plane(VvSceneView *view, int object, int plane);
-/** The light a VV_NAV_LIGHT drag moves. */
-void vv_scene_view_set_light(VvSceneView *view, int index);
+void vvg_scene_view_set_cut_plane(VvgSceneView *view, int object, int plane);
+/** The light a VVG_NAV_LIGHT drag moves. */
+void vvg_scene_view_set_light(VvgSceneView *view, int index);
 /** Forces a representation while moving (a vv_preview_kind), or -1 for automatic. */
-void vv_scene_view_set_preview(VvSceneView *view, int kind);
+void vvg_scene_view_set_preview(VvgSceneView *view, int kind);
 /** Delay in milliseconds after the last input before refinement starts (0..2000). */
-void vv_scene_view_set_refine_delay(VvSceneView *view, int ms);
+void vvg_scene_view_set_refine_delay(VvgSceneView *view, int ms);
 /** Flight-simulator keys (arrows: yaw and pitch, Q/E: roll, W/S: throttle) on or off. */
-void vv_scene_view_set_flight(VvSceneView *view, gboolean on);
+void vvg_scene_view_set_flight(VvgSceneView *view, gboolean on);
 /** Milliseconds the last full-quality frame took to render (0 before the first). */
-double vv_scene_view_full_ms(VvSceneView *view);
+double vvg_scene_view_full_ms(VvgSceneView *view);
 /** Representation name of the frame on screen ("" before the first). */
-const char *vv_scene_view_shown(VvSceneView *view);
+const char *vvg_scene_view_shown(VvgSceneView *view);
 /**
  * What the frame on screen drew from a multiresolution file out of core
- * (VvGuiPyramid), for the Navigator: the chunks resident, the cache's size
+ * (VvgPyramid), for the Navigator: the chunks resident, the cache's size
  * against the memory limit, the chunks loading and read, the levels the
  * frame used (nodes per level) and how many nodes are still drawn coarser
  * than their level ("converged" when none); "" when the frame on screen
  * is not a pyramid's. Newly allocated (g_free).
  */
-char *vv_scene_view_cache_status(VvSceneView *view);
+char *vvg_scene_view_cache_status(VvgSceneView *view);
 /** Re-renders now (the World changed outside a drag). */
-void vv_scene_view_refresh(VvSceneView *view);
+void vvg_scene_view_refresh(VvgSceneView *view);
 
 /**
  * The world point under widget position (x, y) on the frame on screen: the
@@ -77,14 +77,14 @@ void vv_scene_view_refresh(VvSceneView *view);
  * full-quality frame. FALSE when nothing is there or the frame on screen is
  * not a full-quality one of the current state.
  */
-gboolean vv_scene_view_pick(VvSceneView *view, double x, double y, vv_vec3 *world);
+gboolean vvg_scene_view_pick(VvgSceneView *view, double x, double y, vv_vec3 *world);
 /** Called with the picked world point by the next click in the view (instead of a drag). */
-typedef void (*VvPickFunc)(gpointer user, vv_vec3 world);
+typedef void (*VvgPickFunc)(gpointer user, vv_vec3 world);
 /** Arms a one-shot pick: the next click in the view calls @p fn (NULL disarms). */
-void vv_scene_view_pick_next(VvSceneView *view, VvPickFunc fn, gpointer user);
+void vvg_scene_view_pick_next(VvgSceneView *view, VvgPickFunc fn, gpointer user);
 
 /** Microseconds of g_get_monotonic_time() at which the process started (for the frame log). */
-void vv_scene_view_set_start_time(gint64 us);
+void vvg_scene_view_set_start_time(gint64 us);
 
 /**
  * Stops the render thread: the frame being drawn is cancelled and the
@@ -93,7 +93,7 @@ void vv_scene_view_set_start_time(gint64 us);
  * to the view, so the view's own dispose (which stops the thread too) can
  * come after the window's, or never before the process exits. Idempotent.
  */
-void vv_scene_view_stop(VvSceneView *view);
+void vvg_scene_view_stop(VvgSceneView *view);
 
 G_END_DECLS
 #endif

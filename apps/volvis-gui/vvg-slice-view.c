@@ -1,4 +1,4 @@
-/* VvSliceView: an axial, coronal, sagittal or oblique slice view (vvg-slice-view.h). */
+/* VvgSliceView: an axial, coronal, sagittal or oblique slice view (vvg-slice-view.h). */
 #include "vvg-slice-view.h"
 #include "vvg-widgets.h"
 
@@ -6,10 +6,10 @@
 #include <stdio.h>
 #include <string.h>
 
-struct _VvSliceView {
+struct _VvgSliceView {
     GtkBox parent;
-    VvDocument *doc;
-    VvMarks *marks;
+    VvgDocument *doc;
+    VvgMarks *marks;
     vv_slice_axis axis;
     GtkWidget *orientation, *canvas, *readout;
     gboolean updating;
@@ -41,7 +41,7 @@ struct _VvSliceView {
     double wl_start[2], drag_x, drag_y;
 };
 
-G_DEFINE_TYPE(VvSliceView, vv_slice_view, GTK_TYPE_BOX)
+G_DEFINE_TYPE(VvgSliceView, vvg_slice_view, GTK_TYPE_BOX)
 
 /* Slicer's colours: axial red, coronal green, sagittal yellow; oblique cyan. */
 static const double axis_rgb[4][3] = {
@@ -49,11 +49,11 @@ static const double axis_rgb[4][3] = {
 
 /* The volume object shown: the selected one, else the first volume. */
 static const vv_object *
-shown_object(VvSliceView *self) {
-    vv_object *o = vv_document_selected_object(self->doc);
+shown_object(VvgSliceView *self) {
+    vv_object *o = vvg_document_selected_object(self->doc);
     if (o && o->volume && o->type == VV_OBJECT_VOLUME)
         return o;
-    vv_world *w = vv_document_world(self->doc);
+    vv_world *w = vvg_document_world(self->doc);
     for (int i = 0; i < w->n_objects; i++)
         if (w->objects[i]->volume && w->objects[i]->type == VV_OBJECT_VOLUME)
             return w->objects[i];
@@ -70,11 +70,11 @@ box_centre(const vv_object *o) {
  * list, else the selected object's last local one, else the World's last
  * global one. */
 static const vv_cut_plane *
-oblique_plane(VvSliceView *self) {
-    vv_world *w = vv_document_world(self->doc);
-    vv_object *o = vv_document_selected_object(self->doc);
+oblique_plane(VvgSliceView *self) {
+    vv_world *w = vvg_document_world(self->doc);
+    vv_object *o = vvg_document_selected_object(self->doc);
     int co, cp;
-    vv_marks_cut_plane(self->marks, &co, &cp); /* the one chosen in the Cut planes list */
+    vvg_marks_cut_plane(self->marks, &co, &cp); /* the one chosen in the Cut planes list */
     if (cp >= 0 && co < w->n_objects &&
         cp < (co < 0 ? w->n_cut_planes : w->objects[co]->n_cut_planes))
         return co < 0 ? &w->cut_planes[cp] : &w->objects[co]->cut_planes[cp];
@@ -85,14 +85,14 @@ oblique_plane(VvSliceView *self) {
 
 /* The plane of this view at the canvas's size; FALSE when there is none. */
 static gboolean
-current_plane(VvSliceView *self, const vv_object *obj, vv_slice_plane *p) {
+current_plane(VvgSliceView *self, const vv_object *obj, vv_slice_plane *p) {
     int scale = gtk_widget_get_scale_factor(self->canvas);
     int w = gtk_widget_get_width(self->canvas) * scale,
         h = gtk_widget_get_height(self->canvas) * scale;
     if (w < 8 || h < 8)
         return FALSE;
     vv_vec3 c;
-    if (!vv_marks_cursor(self->marks, &c))
+    if (!vvg_marks_cursor(self->marks, &c))
         c = box_centre(obj);
     vv_status s;
     if (self->axis == VV_SLICE_OBLIQUE) {
@@ -226,7 +226,7 @@ probe_pyramid(vv_pyramid *py, const vv_object *obj, vv_vec3 c, double ijk[3]) {
 
 /* Samples again when the plane, the volume or its placement changed. */
 static void
-update_samples(VvSliceView *self, const vv_object *obj, const vv_slice_plane *p) {
+update_samples(VvgSliceView *self, const vv_object *obj, const vv_slice_plane *p) {
     vv_mat4 m = vv_object_index_to_world(obj);
     gboolean same_channels = obj->n_channels == self->n_channels;
     for (int c = 0; same_channels && c < obj->n_channels; c++)
@@ -247,8 +247,8 @@ update_samples(VvSliceView *self, const vv_object *obj, const vv_slice_plane *p)
         self->n_channels = obj->n_channels;
     }
     gint64 t0 = g_get_monotonic_time();
-    VvGuiPyramid *gp = vv_document_pyramid(self->doc, obj);
-    vv_pyramid *py = gp && obj->n_channels == 0 ? vv_gui_pyramid_slices(gp) : NULL;
+    VvgPyramid *gp = vvg_document_pyramid(self->doc, obj);
+    vv_pyramid *py = gp && obj->n_channels == 0 ? vvg_pyramid_slices(gp) : NULL;
     gboolean ok = py ? sample_pyramid(py, obj, p, self->values)
                      : vv_slice_sample(obj, p, self->values) == VV_OK;
     for (int c = 0; ok && c < obj->n_channels; c++) {
@@ -277,7 +277,7 @@ update_samples(VvSliceView *self, const vv_object *obj, const vv_slice_plane *p)
 
 /* A new image of the plane's size in place of the last; its pixels and row stride. */
 static unsigned char *
-new_surface(VvSliceView *self, int *stride) {
+new_surface(VvgSliceView *self, int *stride) {
     g_clear_pointer(&self->surface, cairo_surface_destroy);
     self->surface =
         cairo_image_surface_create(CAIRO_FORMAT_RGB24, self->plane.width, self->plane.height);
@@ -289,7 +289,7 @@ new_surface(VvSliceView *self, int *stride) {
 /* The channels of a multi-channel object blended by their transfer
  * functions (vv_slice_blend_channels), again only when one changed. */
 static void
-update_channel_surface(VvSliceView *self, const vv_object *obj) {
+update_channel_surface(VvgSliceView *self, const vv_object *obj) {
     gboolean same = self->surface != NULL && self->channel_tf != NULL;
     for (int c = 0; same && c < obj->n_channels; c++)
         same = obj->channels[c].visible == self->channel_visible[c] &&
@@ -323,13 +323,13 @@ update_channel_surface(VvSliceView *self, const vv_object *obj) {
 /* The grey image of the samples at the marks' window and level; a
  * multi-channel object's channels blended in their colours. */
 static void
-update_surface(VvSliceView *self, const vv_object *obj) {
+update_surface(VvgSliceView *self, const vv_object *obj) {
     if (obj->n_channels > 0) {
         update_channel_surface(self, obj);
         return;
     }
     double win, lev;
-    if (!vv_marks_window(self->marks, &win, &lev))
+    if (!vvg_marks_window(self->marks, &win, &lev))
         vv_slice_auto_window(obj->volume, &win, &lev);
     if (self->surface && win == self->surface_window && lev == self->surface_level)
         return;
@@ -345,7 +345,7 @@ update_surface(VvSliceView *self, const vv_object *obj) {
 
 /* "value 43 at voxel (125, 102, 54), (120.5, 98, 60) mm" for the cursor. */
 static void
-update_readout(VvSliceView *self, const vv_object *obj) {
+update_readout(VvgSliceView *self, const vv_object *obj) {
     char text[320];
     vv_vec3 c;
     if (!obj) {
@@ -353,11 +353,11 @@ update_readout(VvSliceView *self, const vv_object *obj) {
     } else if (self->axis == VV_SLICE_OBLIQUE && !oblique_plane(self)) {
         snprintf(text, sizeof text, "oblique: add a cut plane (Cut planes page)");
     } else {
-        if (!vv_marks_cursor(self->marks, &c))
+        if (!vvg_marks_cursor(self->marks, &c))
             c = box_centre(obj);
         double ijk[3];
-        VvGuiPyramid *gp = vv_document_pyramid(self->doc, obj);
-        vv_pyramid *py = gp && obj->n_channels == 0 ? vv_gui_pyramid_slices(gp) : NULL;
+        VvgPyramid *gp = vvg_document_pyramid(self->doc, obj);
+        vv_pyramid *py = gp && obj->n_channels == 0 ? vvg_pyramid_slices(gp) : NULL;
         double v = py ? probe_pyramid(py, obj, c, ijk) : vv_slice_probe(obj, c, ijk);
         const char *unit = vvg_unit_label(obj->volume);
         if (isnan(v))
@@ -375,7 +375,7 @@ update_readout(VvSliceView *self, const vv_object *obj) {
 
 /* Where world point @p w is in the canvas (widget pixels). */
 static void
-to_canvas(VvSliceView *self, vv_vec3 w, double *x, double *y) {
+to_canvas(VvgSliceView *self, vv_vec3 w, double *x, double *y) {
     int scale = gtk_widget_get_scale_factor(self->canvas);
     vv_slice_plane_from_world(&self->plane, w, x, y, NULL);
     *x /= scale;
@@ -383,7 +383,7 @@ to_canvas(VvSliceView *self, vv_vec3 w, double *x, double *y) {
 }
 
 static void
-draw_mark(cairo_t *cr, VvSliceView *self, vv_vec3 p, double r, double g, double b) {
+draw_mark(cairo_t *cr, VvgSliceView *self, vv_vec3 p, double r, double g, double b) {
     double x, y, d;
     vv_slice_plane_from_world(&self->plane, p, &x, &y, &d);
     int scale = gtk_widget_get_scale_factor(self->canvas);
@@ -396,7 +396,7 @@ draw_mark(cairo_t *cr, VvSliceView *self, vv_vec3 p, double r, double g, double 
 
 /* Where the surface-tracked region cuts the slice: a segment per triangle. */
 static void
-draw_region(cairo_t *cr, VvSliceView *self, const vv_mesh *m) {
+draw_region(cairo_t *cr, VvgSliceView *self, const vv_mesh *m) {
     vv_vec3 n = vv_slice_plane_normal(&self->plane);
     double off = vv_vec3_dot(n, self->plane.center);
     cairo_set_source_rgba(cr, 1.0, 0.4, 1.0, 0.9);
@@ -430,7 +430,7 @@ draw_region(cairo_t *cr, VvSliceView *self, const vv_mesh *m) {
 }
 
 static void
-draw_labels(cairo_t *cr, VvSliceView *self, int W, int H) {
+draw_labels(cairo_t *cr, VvgSliceView *self, int W, int H) {
     cairo_set_source_rgb(cr, axis_rgb[self->axis][0], axis_rgb[self->axis][1],
                          axis_rgb[self->axis][2]);
     cairo_select_font_face(cr, "Sans", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_BOLD);
@@ -445,9 +445,9 @@ draw_labels(cairo_t *cr, VvSliceView *self, int W, int H) {
 
 /* The crosshair, marks, region and edge labels over the image. */
 static void
-draw_overlays(cairo_t *cr, VvSliceView *self, const vv_object *obj, int W, int H) {
+draw_overlays(cairo_t *cr, VvgSliceView *self, const vv_object *obj, int W, int H) {
     vv_vec3 c;
-    if (!vv_marks_cursor(self->marks, &c))
+    if (!vvg_marks_cursor(self->marks, &c))
         c = box_centre(obj);
     double cx, cy;
     to_canvas(self, c, &cx, &cy);
@@ -463,21 +463,21 @@ draw_overlays(cairo_t *cr, VvSliceView *self, const vv_object *obj, int W, int H
     cairo_move_to(cr, floor(cx) + 0.5, cy + 8);
     cairo_line_to(cr, floor(cx) + 0.5, H);
     cairo_stroke(cr);
-    const vv_mesh *region = vv_marks_region(self->marks);
+    const vv_mesh *region = vvg_marks_region(self->marks);
     if (region)
         draw_region(cr, self, region);
-    static const double mark_rgb[VV_MARK_COUNT][3] = {{0.2, 1, 0.4}, {1, 0.6, 0.2}, {1, 0.3, 1}};
-    vv_vec3 p[VV_MARK_COUNT];
-    gboolean has[VV_MARK_COUNT];
-    for (int k = 0; k < VV_MARK_COUNT; k++) {
-        has[k] = vv_marks_point(self->marks, (VvMark)k, &p[k]);
+    static const double mark_rgb[VVG_MARK_COUNT][3] = {{0.2, 1, 0.4}, {1, 0.6, 0.2}, {1, 0.3, 1}};
+    vv_vec3 p[VVG_MARK_COUNT];
+    gboolean has[VVG_MARK_COUNT];
+    for (int k = 0; k < VVG_MARK_COUNT; k++) {
+        has[k] = vvg_marks_point(self->marks, (VvgMark)k, &p[k]);
         if (has[k])
             draw_mark(cr, self, p[k], mark_rgb[k][0], mark_rgb[k][1], mark_rgb[k][2]);
     }
-    if (has[VV_MARK_A] && has[VV_MARK_B]) {
+    if (has[VVG_MARK_A] && has[VVG_MARK_B]) {
         double ax, ay, bx, by;
-        to_canvas(self, p[VV_MARK_A], &ax, &ay);
-        to_canvas(self, p[VV_MARK_B], &bx, &by);
+        to_canvas(self, p[VVG_MARK_A], &ax, &ay);
+        to_canvas(self, p[VVG_MARK_B], &bx, &by);
         cairo_set_source_rgba(cr, 1, 1, 0.3, 0.8);
         cairo_move_to(cr, ax, ay);
         cairo_line_to(cr, bx, by);
@@ -489,7 +489,7 @@ draw_overlays(cairo_t *cr, VvSliceView *self, const vv_object *obj, int W, int H
 static void
 canvas_draw(GtkDrawingArea *area, cairo_t *cr, int W, int H, gpointer user) {
     (void)area;
-    VvSliceView *self = user;
+    VvgSliceView *self = user;
     cairo_set_source_rgb(cr, 0, 0, 0);
     cairo_paint(cr);
     const vv_object *obj = shown_object(self);
@@ -518,7 +518,7 @@ canvas_draw(GtkDrawingArea *area, cairo_t *cr, int W, int H, gpointer user) {
 }
 
 static void
-redraw(VvSliceView *self) {
+redraw(VvgSliceView *self) {
     gtk_widget_queue_draw(self->canvas);
     update_readout(self, shown_object(self));
 }
@@ -527,7 +527,7 @@ redraw(VvSliceView *self) {
 
 /* The world point under canvas position (x, y), in the plane on screen. */
 static gboolean
-canvas_world(VvSliceView *self, double x, double y, vv_vec3 *out) {
+canvas_world(VvgSliceView *self, double x, double y, vv_vec3 *out) {
     if (!self->have_plane)
         return FALSE;
     int scale = gtk_widget_get_scale_factor(self->canvas);
@@ -537,7 +537,7 @@ canvas_world(VvSliceView *self, double x, double y, vv_vec3 *out) {
 
 static void
 drag_begin(GtkGestureDrag *g, double x, double y, gpointer user) {
-    VvSliceView *self = user;
+    VvgSliceView *self = user;
     self->drag_button = (int)gtk_gesture_single_get_current_button(GTK_GESTURE_SINGLE(g));
     GdkModifierType mods = gtk_event_controller_get_current_event_state(GTK_EVENT_CONTROLLER(g));
     self->drag_wl = self->drag_button == 3 || (mods & GDK_CONTROL_MASK);
@@ -547,70 +547,70 @@ drag_begin(GtkGestureDrag *g, double x, double y, gpointer user) {
     if (!obj)
         return;
     if (self->drag_wl) {
-        if (!vv_marks_window(self->marks, &self->wl_start[0], &self->wl_start[1]))
+        if (!vvg_marks_window(self->marks, &self->wl_start[0], &self->wl_start[1]))
             vv_slice_auto_window(obj->volume, &self->wl_start[0], &self->wl_start[1]);
         return;
     }
     vv_vec3 w;
     if (canvas_world(self, x, y, &w))
-        vv_marks_set_cursor(self->marks, w);
+        vvg_marks_set_cursor(self->marks, w);
 }
 
 static void
 drag_update(GtkGestureDrag *g, double ox, double oy, gpointer user) {
     (void)g;
-    VvSliceView *self = user;
+    VvgSliceView *self = user;
     if (self->drag_wl) {
         /* right: a wider window (twice as wide for 150 pixels); up: a higher level */
         double win = self->wl_start[0] * exp(ox / 150.0);
         double lev = self->wl_start[1] - oy * self->wl_start[0] / 300.0;
-        vv_marks_set_window(self->marks, win, lev);
+        vvg_marks_set_window(self->marks, win, lev);
         return;
     }
     vv_vec3 w;
     if (canvas_world(self, self->drag_x + ox, self->drag_y + oy, &w))
-        vv_marks_set_cursor(self->marks, w);
+        vvg_marks_set_cursor(self->marks, w);
 }
 
 static gboolean
 scroll_cb(GtkEventControllerScroll *ctl, double dx, double dy, gpointer user) {
     (void)ctl;
     (void)dx;
-    VvSliceView *self = user;
+    VvgSliceView *self = user;
     const vv_object *obj = shown_object(self);
     if (!obj || !self->have_plane || !isfinite(dy) || dy == 0)
         return FALSE;
     vv_vec3 n = vv_slice_plane_normal(&self->plane);
     double step = vv_slice_step(obj, n);
     vv_vec3 c;
-    if (!vv_marks_cursor(self->marks, &c))
+    if (!vvg_marks_cursor(self->marks, &c))
         c = box_centre(obj);
     if (self->axis == VV_SLICE_OBLIQUE)
         return FALSE; /* the cut plane moves it (Cut planes page, or its handle) */
     /* wheel up: towards the viewer of the image, one slice a notch */
-    vv_marks_set_cursor(self->marks, vv_vec3_add(c, vv_vec3_scale(n, -dy * step)));
+    vvg_marks_set_cursor(self->marks, vv_vec3_add(c, vv_vec3_scale(n, -dy * step)));
     return TRUE;
 }
 
-static void set_names(VvSliceView *self);
+static void set_names(VvgSliceView *self);
 
 static void
 orientation_changed(GObject *o, GParamSpec *p, gpointer user) {
     (void)p;
-    VvSliceView *self = user;
+    VvgSliceView *self = user;
     if (self->updating)
         return;
-    vv_slice_view_set_axis(self, (vv_slice_axis)gtk_drop_down_get_selected(GTK_DROP_DOWN(o)));
+    vvg_slice_view_set_axis(self, (vv_slice_axis)gtk_drop_down_get_selected(GTK_DROP_DOWN(o)));
 }
 
 static void
-marks_changed(VvMarks *m, gpointer user) {
+marks_changed(VvgMarks *m, gpointer user) {
     (void)m;
     redraw(user);
 }
 
 static void
-doc_changed(VvDocument *doc, gpointer user) {
+doc_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
     redraw(user);
 }
@@ -618,8 +618,8 @@ doc_changed(VvDocument *doc, gpointer user) {
 /* ---- life cycle ---------------------------------------------------------------- */
 
 static void
-vv_slice_view_dispose(GObject *o) {
-    VvSliceView *self = VV_SLICE_VIEW(o);
+vvg_slice_view_dispose(GObject *o) {
+    VvgSliceView *self = VVG_SLICE_VIEW(o);
     if (self->doc) {
         g_signal_handlers_disconnect_by_data(self->doc, self);
         g_clear_object(&self->doc);
@@ -634,16 +634,16 @@ vv_slice_view_dispose(GObject *o) {
         g_clear_pointer(&self->channel_values[c], g_free);
     g_clear_pointer(&self->channel_tf, g_free);
     g_clear_pointer(&self->log, fclose);
-    G_OBJECT_CLASS(vv_slice_view_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_slice_view_parent_class)->dispose(o);
 }
 
 static void
-vv_slice_view_class_init(VvSliceViewClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_slice_view_dispose;
+vvg_slice_view_class_init(VvgSliceViewClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_slice_view_dispose;
 }
 
 static void
-vv_slice_view_init(VvSliceView *self) {
+vvg_slice_view_init(VvgSliceView *self) {
     gtk_orientable_set_orientation(GTK_ORIENTABLE(self), GTK_ORIENTATION_VERTICAL);
     gtk_box_set_spacing(GTK_BOX(self), 2);
     static const char *const axes[] = {"axial", "coronal", "sagittal", "oblique (cut plane)", NULL};
@@ -679,7 +679,7 @@ vv_slice_view_init(VvSliceView *self) {
 }
 
 static void
-set_names(VvSliceView *self) {
+set_names(VvgSliceView *self) {
     const char *n = vv_slice_axis_name(self->axis);
     g_autofree char *view = g_strdup_printf("%s view", n);
     g_autofree char *orient = g_strdup_printf("orientation of the %s view", n);
@@ -692,11 +692,11 @@ set_names(VvSliceView *self) {
 }
 
 GtkWidget *
-vv_slice_view_new(VvDocument *doc, VvMarks *marks, vv_slice_axis axis) {
-    VvSliceView *self = g_object_new(VV_TYPE_SLICE_VIEW, NULL);
+vvg_slice_view_new(VvgDocument *doc, VvgMarks *marks, vv_slice_axis axis) {
+    VvgSliceView *self = g_object_new(VVG_TYPE_SLICE_VIEW, NULL);
     self->doc = g_object_ref(doc);
     self->marks = g_object_ref(marks);
-    vv_slice_view_set_axis(self, axis);
+    vvg_slice_view_set_axis(self, axis);
     g_signal_connect(doc, "changed", G_CALLBACK(doc_changed), self);
     g_signal_connect(doc, "selection-changed", G_CALLBACK(doc_changed), self);
     g_signal_connect(marks, "changed", G_CALLBACK(marks_changed), self);
@@ -704,7 +704,7 @@ vv_slice_view_new(VvDocument *doc, VvMarks *marks, vv_slice_axis axis) {
 }
 
 void
-vv_slice_view_set_axis(VvSliceView *self, vv_slice_axis axis) {
+vvg_slice_view_set_axis(VvgSliceView *self, vv_slice_axis axis) {
     self->axis = (int)axis >= 0 && axis <= VV_SLICE_OBLIQUE ? axis : VV_SLICE_AXIAL;
     self->updating = TRUE;
     gtk_drop_down_set_selected(GTK_DROP_DOWN(self->orientation), (guint)self->axis);
@@ -715,16 +715,16 @@ vv_slice_view_set_axis(VvSliceView *self, vv_slice_axis axis) {
 }
 
 vv_slice_axis
-vv_slice_view_axis(VvSliceView *self) {
+vvg_slice_view_axis(VvgSliceView *self) {
     return self->axis;
 }
 
 const char *
-vv_slice_view_readout(VvSliceView *self) {
+vvg_slice_view_readout(VvgSliceView *self) {
     return gtk_label_get_text(GTK_LABEL(self->readout));
 }
 
 double
-vv_slice_view_sample_ms(VvSliceView *self) {
+vvg_slice_view_sample_ms(VvgSliceView *self) {
     return self->sample_ms;
 }

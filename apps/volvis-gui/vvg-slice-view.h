@@ -1,11 +1,11 @@
 /*
- * VvSliceView: one slice view of multiplanar reconstruction beside the 3-D
+ * VvgSliceView: one slice view of multiplanar reconstruction beside the 3-D
  * view (3D Slicer's red, yellow and green views): the axial, coronal,
  * sagittal or oblique slice (the selected cut plane's) of the selected
  * volume object, sampled by the library (include/volvis/slice.h: what
  * `volvis slice` writes) at the widget's size and scale, windowed to grey.
  *
- * Linked through VvMarks: the three orthogonal slices pass through one
+ * Linked through VvgMarks: the three orthogonal slices pass through one
  * cursor, drawn as a crosshair in each; a click or drag with the left
  * button moves it (the other views follow) and the line under the image
  * reads the voxel value there with its voxel index and world position in
@@ -18,26 +18,26 @@
  * view samples its slice again: "<monotonic ms> <axis> <W>x<H> <sample ms>
  * <position along the normal>" (bench/bench_gui.py reads it). UI thread only.
  */
-#ifndef VV_SLICE_VIEW_H
-#define VV_SLICE_VIEW_H
+#ifndef VVG_SLICE_VIEW_H
+#define VVG_SLICE_VIEW_H
 
 #include "vvg-document.h"
 #include "vvg-marks.h"
 
 G_BEGIN_DECLS
 
-#define VV_TYPE_SLICE_VIEW (vv_slice_view_get_type())
-G_DECLARE_FINAL_TYPE(VvSliceView, vv_slice_view, VV, SLICE_VIEW, GtkBox)
+#define VVG_TYPE_SLICE_VIEW (vvg_slice_view_get_type())
+G_DECLARE_FINAL_TYPE(VvgSliceView, vvg_slice_view, VVG, SLICE_VIEW, GtkBox)
 
 /** A view of @p axis for @p doc, linked by @p marks (references are held). */
-GtkWidget *vv_slice_view_new(VvDocument *doc, VvMarks *marks, vv_slice_axis axis);
+GtkWidget *vvg_slice_view_new(VvgDocument *doc, VvgMarks *marks, vv_slice_axis axis);
 /** Shows another orientation. */
-void vv_slice_view_set_axis(VvSliceView *view, vv_slice_axis axis);
-vv_slice_axis vv_slice_view_axis(VvSliceView *view);
+void vvg_slice_view_set_axis(VvgSliceView *view, vv_slice_axis axis);
+vv_slice_axis vvg_slice_view_axis(VvgSliceView *view);
 /** The readout line (for tests and the screen reader: the label's text). */
-const char *vv_slice_view_readout(VvSliceView *view);
+const char *vvg_slice_view_readout(VvgSliceView *view);
 /** Milliseconds the last resampling took (0 before the first). */
-double vv_slice_view_sample_ms(VvSliceView *view);
+double vvg_slice_view_sample_ms(VvgSliceView *view);
 
 G_END_DECLS
 #endif

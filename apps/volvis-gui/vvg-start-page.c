@@ -1,15 +1,15 @@
-/* VvStartPage: Open, Import raw, Browse DICOM and the recent files (vvg-start-page.h). */
+/* VvgStartPage: Open, Import raw, Browse DICOM and the recent files (vvg-start-page.h). */
 #include "vvg-start-page.h"
 
 #define MAX_RECENT 8
 
-struct _VvStartPage {
+struct _VvgStartPage {
     GtkBox parent;
     GtkWidget *recent_box, *recent_title;
     gulong changed_id;
 };
 
-G_DEFINE_TYPE(VvStartPage, vv_start_page, GTK_TYPE_BOX)
+G_DEFINE_TYPE(VvgStartPage, vvg_start_page, GTK_TYPE_BOX)
 
 static gint
 by_time(gconstpointer a, gconstpointer b) {
@@ -19,7 +19,7 @@ by_time(gconstpointer a, gconstpointer b) {
 }
 
 void
-vv_start_page_refresh(VvStartPage *self) {
+vvg_start_page_refresh(VvgStartPage *self) {
     GtkWidget *c;
     while ((c = gtk_widget_get_first_child(self->recent_box)))
         gtk_box_remove(GTK_BOX(self->recent_box), c);
@@ -48,7 +48,7 @@ vv_start_page_refresh(VvStartPage *self) {
 }
 
 void
-vv_start_page_add_recent(const char *path) {
+vvg_start_page_add_recent(const char *path) {
     g_autofree char *uri = g_filename_to_uri(path, NULL, NULL);
     if (uri)
         gtk_recent_manager_add_item(gtk_recent_manager_get_default(), uri);
@@ -57,22 +57,22 @@ vv_start_page_add_recent(const char *path) {
 static void
 recent_changed(GtkRecentManager *rm, gpointer user) {
     (void)rm;
-    vv_start_page_refresh(user);
+    vvg_start_page_refresh(user);
 }
 
 static void
-vv_start_page_dispose(GObject *o) {
-    VvStartPage *self = VV_START_PAGE(o);
+vvg_start_page_dispose(GObject *o) {
+    VvgStartPage *self = VVG_START_PAGE(o);
     if (self->changed_id) {
         g_signal_handler_disconnect(gtk_recent_manager_get_default(), self->changed_id);
         self->changed_id = 0;
     }
-    G_OBJECT_CLASS(vv_start_page_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_start_page_parent_class)->dispose(o);
 }
 
 static void
-vv_start_page_class_init(VvStartPageClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_start_page_dispose;
+vvg_start_page_class_init(VvgStartPageClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_start_page_dispose;
 }
 
 static GtkWidget *
@@ -84,7 +84,7 @@ big_button(const char *label, const char *action) {
 }
 
 static void
-vv_start_page_init(VvStartPage *self) {
+vvg_start_page_init(VvgStartPage *self) {
     GtkBox *box = GTK_BOX(self);
     gtk_orientable_set_orientation(GTK_ORIENTABLE(self), GTK_ORIENTATION_VERTICAL);
     gtk_box_set_spacing(box, 10);
@@ -117,10 +117,10 @@ vv_start_page_init(VvStartPage *self) {
     gtk_box_append(box, self->recent_box);
     self->changed_id = g_signal_connect(gtk_recent_manager_get_default(), "changed",
                                         G_CALLBACK(recent_changed), self);
-    vv_start_page_refresh(self);
+    vvg_start_page_refresh(self);
 }
 
 GtkWidget *
-vv_start_page_new(void) {
-    return g_object_new(VV_TYPE_START_PAGE, NULL);
+vvg_start_page_new(void) {
+    return g_object_new(VVG_TYPE_START_PAGE, NULL);
 }

@@ -1,4 +1,4 @@
-/* VvTfEditor: transfer-function editing over the histogram, with axes (vvg-tf-editor.h). */
+/* VvgTfEditor: transfer-function editing over the histogram, with axes (vvg-tf-editor.h). */
 #include "vvg-tf-editor.h"
 #include "vvg-widgets.h"
 
@@ -16,9 +16,9 @@
 #define RADIUS 6.0 /* pick radius of a point, pixels */
 #define HIST_BINS 256
 
-struct _VvTfEditor {
+struct _VvgTfEditor {
     GtkBox parent;
-    VvDocument *doc;
+    VvgDocument *doc;
     GtkWidget *canvas, *readout;
     GtkWidget *sel_box, *sel_title, *sel_value, *sel_opacity, *sel_color, *sel_delete;
     vv_tf drawn; /* the function last drawn, to skip redraws of unchanged ones */
@@ -34,33 +34,33 @@ struct _VvTfEditor {
     uint64_t hist[HIST_BINS];
 };
 
-G_DEFINE_TYPE(VvTfEditor, vv_tf_editor, GTK_TYPE_BOX)
+G_DEFINE_TYPE(VvgTfEditor, vvg_tf_editor, GTK_TYPE_BOX)
 
 static vv_object *
-volume_object(VvTfEditor *ed) {
-    vv_object *o = vv_document_selected_object(ed->doc);
+volume_object(VvgTfEditor *ed) {
+    vv_object *o = vvg_document_selected_object(ed->doc);
     return o && o->type == VV_OBJECT_VOLUME && o->volume ? o : NULL;
 }
 
 /* The transfer function edited: the channel picked on the Channels page
- * (vv_document_edited_channel) of a multi-channel object, else the object's. */
+ * (vvg_document_edited_channel) of a multi-channel object, else the object's. */
 static vv_tf *
-edited_tf(VvTfEditor *ed, vv_object *o) {
-    int c = vv_document_edited_channel(ed->doc);
+edited_tf(VvgTfEditor *ed, vv_object *o) {
+    int c = vvg_document_edited_channel(ed->doc);
     return c >= 0 && c < o->n_channels ? &o->channels[c].tf : &o->tf;
 }
 
 /* The voxels under the edited function (its histogram and value axis). */
 static const vv_volume *
-edited_volume(VvTfEditor *ed, const vv_object *o) {
-    int c = vv_document_edited_channel(ed->doc);
+edited_volume(VvgTfEditor *ed, const vv_object *o) {
+    int c = vvg_document_edited_channel(ed->doc);
     return c >= 0 && c < o->n_channels ? o->channels[c].volume : o->volume;
 }
 
 /* The plot's axes: data values along x, opacity up, in plot coordinates
  * (the canvas translated by LEFT, TOP). */
 static vvg_tf_axes
-axes(VvTfEditor *ed, const vv_object *o) {
+axes(VvgTfEditor *ed, const vv_object *o) {
     double W = gtk_widget_get_width(ed->canvas), H = gtk_widget_get_height(ed->canvas);
     const vv_volume *v = edited_volume(ed, o);
     vvg_tf_axes a = {v->range[0], v->range[1], fmax(W - LEFT - RIGHT, 8),
@@ -71,7 +71,7 @@ axes(VvTfEditor *ed, const vv_object *o) {
 }
 
 static void
-update_histogram(VvTfEditor *ed, const vv_volume *v) {
+update_histogram(VvgTfEditor *ed, const vv_volume *v) {
     if (ed->hist_volume == v && ed->hist_modified == v->modified)
         return;
     memset(ed->hist, 0, sizeof ed->hist);
@@ -86,7 +86,7 @@ update_histogram(VvTfEditor *ed, const vv_volume *v) {
 }
 
 static void
-draw_histogram(VvTfEditor *ed, cairo_t *cr, const vvg_tf_axes *a) {
+draw_histogram(VvgTfEditor *ed, cairo_t *cr, const vvg_tf_axes *a) {
     /* the largest bin but the first (background) sets the scale */
     double maxc = 1;
     for (int i = 1; i < HIST_BINS; i++) {
@@ -143,7 +143,7 @@ draw_axes(cairo_t *cr, const vvg_tf_axes *a) {
 }
 
 static void
-draw_function(VvTfEditor *ed, cairo_t *cr, const vvg_tf_axes *a, const vv_tf *tf) {
+draw_function(VvgTfEditor *ed, cairo_t *cr, const vvg_tf_axes *a, const vv_tf *tf) {
     for (int x = 0; x < (int)a->width; x++) { /* the colour strip */
         vv_vec3 c = vv_tf_eval_color(tf, vvg_tf_value(a, x + 0.5));
         cairo_set_source_rgb(cr, c.x, c.y, c.z);
@@ -182,7 +182,7 @@ draw_function(VvTfEditor *ed, cairo_t *cr, const vvg_tf_axes *a, const vv_tf *tf
 static void
 canvas_draw(GtkDrawingArea *area, cairo_t *cr, int W, int H, gpointer user) {
     (void)area;
-    VvTfEditor *ed = user;
+    VvgTfEditor *ed = user;
     cairo_set_source_rgb(cr, 0.12, 0.12, 0.14);
     cairo_paint(cr);
     vv_object *o = volume_object(ed);
@@ -206,7 +206,7 @@ canvas_draw(GtkDrawingArea *area, cairo_t *cr, int W, int H, gpointer user) {
 /* ---- the selected point's numbers ---------------------------------------------------- */
 
 static void
-fill_selection(VvTfEditor *ed) {
+fill_selection(VvgTfEditor *ed) {
     vv_object *o = volume_object(ed);
     const vv_tf *tf = o ? edited_tf(ed, o) : NULL;
     int n = !tf ? 0 : ed->sel_is_color ? tf->n_color : tf->n_opacity;
@@ -240,11 +240,11 @@ fill_selection(VvTfEditor *ed) {
 /* Typed numbers of the selected point: one undo step each, the point kept
  * between its neighbours as a drag keeps it. */
 static void
-selection_edited(VvTfEditor *ed) {
+selection_edited(VvgTfEditor *ed) {
     vv_object *o = volume_object(ed);
     if (ed->updating || !o || ed->sel_point < 0)
         return;
-    vv_document_begin_edit(ed->doc, "edit transfer-function point");
+    vvg_document_begin_edit(ed->doc, "edit transfer-function point");
     o = volume_object(ed);
     vv_tf *tf = edited_tf(ed, o);
     double v = vvg_spin_value(ed->sel_value);
@@ -263,7 +263,7 @@ selection_edited(VvTfEditor *ed) {
         tf->opacity[i].value = fmin(fmax(v, lo), hi);
         tf->opacity[i].opacity = fmin(fmax(vvg_spin_value(ed->sel_opacity), 0), 1);
     }
-    vv_document_changed(ed->doc);
+    vvg_document_changed(ed->doc);
     fill_selection(ed);
     gtk_widget_queue_draw(ed->canvas);
 }
@@ -283,18 +283,18 @@ sel_color_set(GtkColorButton *b, gpointer user) {
 static void
 sel_delete_clicked(GtkButton *b, gpointer user) {
     (void)b;
-    VvTfEditor *ed = user;
+    VvgTfEditor *ed = user;
     vv_object *o = volume_object(ed);
     if (!o || ed->sel_point < 0)
         return;
-    vv_document_begin_edit(ed->doc, "delete transfer-function point");
+    vvg_document_begin_edit(ed->doc, "delete transfer-function point");
     o = volume_object(ed);
     if (ed->sel_is_color)
         vvg_tf_delete_color(edited_tf(ed, o), ed->sel_point);
     else
         vvg_tf_delete_point(edited_tf(ed, o), ed->sel_point);
     ed->sel_point = -1;
-    vv_document_changed(ed->doc);
+    vvg_document_changed(ed->doc);
     fill_selection(ed);
     gtk_widget_queue_draw(ed->canvas);
 }
@@ -304,7 +304,7 @@ sel_delete_clicked(GtkButton *b, gpointer user) {
 static void
 pressed(GtkGestureClick *g, int n_press, double x, double y, gpointer user) {
     (void)n_press;
-    VvTfEditor *ed = user;
+    VvgTfEditor *ed = user;
     vv_object *o = volume_object(ed);
     ed->drag_point = ed->drag_color = -1;
     if (!o)
@@ -314,7 +314,7 @@ pressed(GtkGestureClick *g, int n_press, double x, double y, gpointer user) {
     guint button = gtk_gesture_single_get_current_button(GTK_GESTURE_SINGLE(g));
     vvg_tf_axes a = axes(ed, o);
     gboolean in_strip = y > a.height;
-    vv_document_begin_edit(ed->doc, "edit transfer function");
+    vvg_document_begin_edit(ed->doc, "edit transfer function");
     o = volume_object(ed); /* unchanged by begin_edit, which copies */
     vv_tf *tf = edited_tf(ed, o);
     if (in_strip) {
@@ -340,7 +340,7 @@ pressed(GtkGestureClick *g, int n_press, double x, double y, gpointer user) {
         ed->sel_is_color = FALSE;
         ed->sel_point = button == 3 ? -1 : ed->drag_point;
     }
-    vv_document_changed(ed->doc);
+    vvg_document_changed(ed->doc);
     fill_selection(ed);
     gtk_widget_queue_draw(ed->canvas);
 }
@@ -348,7 +348,7 @@ pressed(GtkGestureClick *g, int n_press, double x, double y, gpointer user) {
 static void
 drag_begin(GtkGestureDrag *g, double x, double y, gpointer user) {
     (void)g;
-    VvTfEditor *ed = user;
+    VvgTfEditor *ed = user;
     ed->drag_x0 = x - LEFT;
     ed->drag_y0 = y - TOP;
 }
@@ -356,7 +356,7 @@ drag_begin(GtkGestureDrag *g, double x, double y, gpointer user) {
 static void
 drag_update(GtkGestureDrag *g, double ox, double oy, gpointer user) {
     (void)g;
-    VvTfEditor *ed = user;
+    VvgTfEditor *ed = user;
     vv_object *o = volume_object(ed);
     if (!o)
         return;
@@ -367,7 +367,7 @@ drag_update(GtkGestureDrag *g, double ox, double oy, gpointer user) {
         vvg_tf_move_color(edited_tf(ed, o), ed->drag_color, &a, ed->drag_x0 + ox);
     else
         return;
-    vv_document_changed(ed->doc);
+    vvg_document_changed(ed->doc);
     fill_selection(ed);
     gtk_widget_queue_draw(ed->canvas);
 }
@@ -378,7 +378,7 @@ static void
 motion(GtkEventControllerMotion *c, double x, double y, gpointer user) {
     (void)c;
     (void)y;
-    VvTfEditor *ed = user;
+    VvgTfEditor *ed = user;
     vv_object *o = volume_object(ed);
     if (!o)
         return;
@@ -396,9 +396,9 @@ motion(GtkEventControllerMotion *c, double x, double y, gpointer user) {
 }
 
 static void
-doc_changed(VvDocument *doc, gpointer user) {
+doc_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
-    VvTfEditor *ed = VV_TF_EDITOR(user);
+    VvgTfEditor *ed = VVG_TF_EDITOR(user);
     /* the World changes on every motion event of a drag in the view: redraw
      * only when this object's function did */
     vv_object *o = volume_object(ed);
@@ -411,23 +411,23 @@ doc_changed(VvDocument *doc, gpointer user) {
 }
 
 static void
-vv_tf_editor_dispose(GObject *obj) {
-    VvTfEditor *ed = VV_TF_EDITOR(obj);
+vvg_tf_editor_dispose(GObject *obj) {
+    VvgTfEditor *ed = VVG_TF_EDITOR(obj);
     if (ed->doc) {
         g_signal_handlers_disconnect_by_data(ed->doc, ed);
         g_clear_object(&ed->doc);
     }
-    G_OBJECT_CLASS(vv_tf_editor_parent_class)->dispose(obj);
+    G_OBJECT_CLASS(vvg_tf_editor_parent_class)->dispose(obj);
 }
 
 static void
-vv_tf_editor_class_init(VvTfEditorClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_tf_editor_dispose;
+vvg_tf_editor_class_init(VvgTfEditorClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_tf_editor_dispose;
 }
 
 /* Value, opacity, colour and Delete of the selected point. */
 static void
-build_selection(VvTfEditor *ed) {
+build_selection(VvgTfEditor *ed) {
     ed->sel_title = gtk_label_new("");
     gtk_label_set_xalign(GTK_LABEL(ed->sel_title), 0);
     gtk_box_append(GTK_BOX(ed), ed->sel_title);
@@ -447,7 +447,7 @@ build_selection(VvTfEditor *ed) {
 }
 
 static void
-vv_tf_editor_init(VvTfEditor *ed) {
+vvg_tf_editor_init(VvgTfEditor *ed) {
     gtk_orientable_set_orientation(GTK_ORIENTABLE(ed), GTK_ORIENTATION_VERTICAL);
     gtk_box_set_spacing(GTK_BOX(ed), 3);
     ed->drag_point = ed->drag_color = ed->sel_point = -1;
@@ -477,9 +477,9 @@ vv_tf_editor_init(VvTfEditor *ed) {
     gtk_widget_add_controller(ed->canvas, mo);
 }
 
-VvTfEditor *
-vv_tf_editor_new(VvDocument *doc) {
-    VvTfEditor *ed = g_object_new(VV_TYPE_TF_EDITOR, NULL);
+VvgTfEditor *
+vvg_tf_editor_new(VvgDocument *doc) {
+    VvgTfEditor *ed = g_object_new(VVG_TYPE_TF_EDITOR, NULL);
     ed->doc = g_object_ref(doc);
     g_signal_connect(doc, "changed", G_CALLBACK(doc_changed), ed);
     g_signal_connect(doc, "selection-changed", G_CALLBACK(doc_changed), ed);
@@ -488,12 +488,12 @@ vv_tf_editor_new(VvDocument *doc) {
 }
 
 void
-vv_tf_editor_set_log(VvTfEditor *ed, gboolean log) {
+vvg_tf_editor_set_log(VvgTfEditor *ed, gboolean log) {
     ed->log = log;
     gtk_widget_queue_draw(ed->canvas);
 }
 
 void
-vv_tf_editor_set_color(VvTfEditor *ed, const GdkRGBA *color) {
+vvg_tf_editor_set_color(VvgTfEditor *ed, const GdkRGBA *color) {
     ed->color = *color;
 }

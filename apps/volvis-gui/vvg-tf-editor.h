@@ -1,5 +1,5 @@
 /*
- * VvTfEditor: the 1-D transfer-function editor of Object Control (VolVis
+ * VvgTfEditor: the 1-D transfer-function editor of Object Control (VolVis
  * paper, section 4), drawn over the selected volume's histogram (linear or
  * log scale) with axes: opacity 0 .. 1 up the left, data values along the
  * bottom. Opacity points: click on empty space adds one, drag moves it,
@@ -11,21 +11,21 @@
  * Every press or typed number is one undo step of the document; the view
  * updates live while dragging. UI thread only.
  */
-#ifndef VV_TF_EDITOR_H
-#define VV_TF_EDITOR_H
+#ifndef VVG_TF_EDITOR_H
+#define VVG_TF_EDITOR_H
 
 #include "vvg-document.h"
 
 G_BEGIN_DECLS
 
-#define VV_TYPE_TF_EDITOR (vv_tf_editor_get_type())
-G_DECLARE_FINAL_TYPE(VvTfEditor, vv_tf_editor, VV, TF_EDITOR, GtkBox)
+#define VVG_TYPE_TF_EDITOR (vvg_tf_editor_get_type())
+G_DECLARE_FINAL_TYPE(VvgTfEditor, vvg_tf_editor, VVG, TF_EDITOR, GtkBox)
 
-VvTfEditor *vv_tf_editor_new(VvDocument *doc);
+VvgTfEditor *vvg_tf_editor_new(VvgDocument *doc);
 /** Logarithmic histogram on or off. */
-void vv_tf_editor_set_log(VvTfEditor *ed, gboolean log);
+void vvg_tf_editor_set_log(VvgTfEditor *ed, gboolean log);
 /** The colour new colour points get. */
-void vv_tf_editor_set_color(VvTfEditor *ed, const GdkRGBA *color);
+void vvg_tf_editor_set_color(VvgTfEditor *ed, const GdkRGBA *color);
 
 G_END_DECLS
 #endif

@@ -1,4 +1,4 @@
-/* VvTfPanel: segmentation and transfer functions of the selected object (vvg-tf-panel.h). */
+/* VvgTfPanel: segmentation and transfer functions of the selected object (vvg-tf-panel.h). */
 #include "vvg-tf-panel.h"
 #include "vvg-widgets.h"
 
@@ -6,23 +6,23 @@
 #include "vvg-tf-editor.h"
 #include "vvg-tf2d-editor.h"
 
-struct _VvTfPanel {
+struct _VvgTfPanel {
     GtkBox parent;
-    VvDocument *doc;
+    VvgDocument *doc;
     gboolean updating; /* set while widgets are filled from the World */
     GtkWidget *seg_mode, *threshold, *render_mode, *isovalue, *step;
-    VvTfEditor *tf_editor;
-    VvTf2dEditor *tf2d_editor;
+    VvgTfEditor *tf_editor;
+    VvgTf2dEditor *tf2d_editor;
     GtkWidget *w2d_color, *w2d_opacity;
     GtkWidget *editing; /* which channel of a multi-channel object the editor edits */
 };
 
-G_DEFINE_TYPE(VvTfPanel, vv_tf_panel, GTK_TYPE_BOX)
+G_DEFINE_TYPE(VvgTfPanel, vvg_tf_panel, GTK_TYPE_BOX)
 
 static void
-fill(VvTfPanel *self) {
+fill(VvgTfPanel *self) {
     self->updating = TRUE;
-    vv_object *o = vv_document_selected_object(self->doc);
+    vv_object *o = vvg_document_selected_object(self->doc);
     if (o) {
         gtk_drop_down_set_selected(GTK_DROP_DOWN(self->seg_mode), o->segmentation);
         if (o->volume) {
@@ -35,7 +35,7 @@ fill(VvTfPanel *self) {
         vvg_set_spin(self->isovalue, o->isovalue);
         vvg_set_spin(self->step, o->step);
     }
-    int c = vv_document_edited_channel(self->doc);
+    int c = vvg_document_edited_channel(self->doc);
     gtk_widget_set_visible(self->editing, c >= 0);
     if (c >= 0) {
         g_autofree char *t = g_strdup_printf(
@@ -48,17 +48,17 @@ fill(VvTfPanel *self) {
 
 /* The segmentation widgets applied to the selected object: one undo step. */
 static void
-apply(VvTfPanel *self) {
-    vv_object *o = vv_document_selected_object(self->doc);
+apply(VvgTfPanel *self) {
+    vv_object *o = vvg_document_selected_object(self->doc);
     if (self->updating || !o)
         return;
-    vv_document_begin_edit(self->doc, "segmentation");
+    vvg_document_begin_edit(self->doc, "segmentation");
     o->segmentation = (vv_segmentation)gtk_drop_down_get_selected(GTK_DROP_DOWN(self->seg_mode));
     o->threshold = vvg_spin_value(self->threshold);
     o->mode = (vv_render_mode)gtk_drop_down_get_selected(GTK_DROP_DOWN(self->render_mode));
     o->isovalue = vvg_spin_value(self->isovalue);
     o->step = vvg_spin_value(self->step);
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
 }
 
 static void
@@ -76,43 +76,43 @@ on_dropdown(GObject *o, GParamSpec *p, gpointer user) {
 
 static void
 log_toggled(GtkCheckButton *b, gpointer user) {
-    VvTfPanel *self = user;
-    vv_tf_editor_set_log(self->tf_editor, gtk_check_button_get_active(b));
+    VvgTfPanel *self = user;
+    vvg_tf_editor_set_log(self->tf_editor, gtk_check_button_get_active(b));
 }
 
 static void
 tf_color_set(GtkColorButton *b, gpointer user) {
-    VvTfPanel *self = user;
+    VvgTfPanel *self = user;
     GdkRGBA c;
     gtk_color_chooser_get_rgba(GTK_COLOR_CHOOSER(b), &c);
-    vv_tf_editor_set_color(self->tf_editor, &c);
+    vvg_tf_editor_set_color(self->tf_editor, &c);
 }
 
 static void
 add_rectangle(GtkButton *b, gpointer user) {
     (void)b;
-    VvTfPanel *self = user;
-    vv_tf2d_editor_add(self->tf2d_editor, VV_TF2D_RECTANGLE);
+    VvgTfPanel *self = user;
+    vvg_tf2d_editor_add(self->tf2d_editor, VV_TF2D_RECTANGLE);
     fill(self);
 }
 
 static void
 add_triangle(GtkButton *b, gpointer user) {
     (void)b;
-    VvTfPanel *self = user;
-    vv_tf2d_editor_add(self->tf2d_editor, VV_TF2D_TRIANGLE);
+    VvgTfPanel *self = user;
+    vvg_tf2d_editor_add(self->tf2d_editor, VV_TF2D_TRIANGLE);
     fill(self);
 }
 
 static void
 w2d_style(GtkColorButton *b, gpointer user) {
     (void)b;
-    VvTfPanel *self = user;
+    VvgTfPanel *self = user;
     if (self->updating)
         return;
     GdkRGBA c;
     gtk_color_chooser_get_rgba(GTK_COLOR_CHOOSER(self->w2d_color), &c);
-    vv_tf2d_editor_set_style(self->tf2d_editor, &c, vvg_spin_value(self->w2d_opacity));
+    vvg_tf2d_editor_set_style(self->tf2d_editor, &c, vvg_spin_value(self->w2d_opacity));
 }
 
 static void
@@ -122,39 +122,39 @@ w2d_style_spin(GtkSpinButton *s, gpointer user) {
 }
 
 static void
-selection_changed(VvDocument *doc, gpointer user) {
+selection_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
     fill(user);
 }
 
 static void
-vv_tf_panel_dispose(GObject *o) {
-    VvTfPanel *self = VV_TF_PANEL(o);
+vvg_tf_panel_dispose(GObject *o) {
+    VvgTfPanel *self = VVG_TF_PANEL(o);
     if (self->doc) {
         g_signal_handlers_disconnect_by_data(self->doc, self);
         g_clear_object(&self->doc);
     }
-    G_OBJECT_CLASS(vv_tf_panel_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_tf_panel_parent_class)->dispose(o);
 }
 
 static void
-vv_tf_panel_class_init(VvTfPanelClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_tf_panel_dispose;
+vvg_tf_panel_class_init(VvgTfPanelClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_tf_panel_dispose;
 }
 
 static void
-vv_tf_panel_init(VvTfPanel *self) {
+vvg_tf_panel_init(VvgTfPanel *self) {
     vvg_vbox_init(GTK_WIDGET(self));
 }
 
 static GtkWidget *
-wire_spin(VvTfPanel *self, GtkWidget *s) {
+wire_spin(VvgTfPanel *self, GtkWidget *s) {
     g_signal_connect(s, "value-changed", G_CALLBACK(on_spin), self);
     return s;
 }
 
 static GtkWidget *
-wire_drop(VvTfPanel *self, const char *const *items) {
+wire_drop(VvgTfPanel *self, const char *const *items) {
     GtkWidget *d = gtk_drop_down_new_from_strings(items);
     g_signal_connect(d, "notify::selected", G_CALLBACK(on_dropdown), self);
     return d;
@@ -162,13 +162,13 @@ wire_drop(VvTfPanel *self, const char *const *items) {
 
 /* The 1-D editor, its switches and its presets. */
 static void
-build_tf(VvTfPanel *self) {
+build_tf(VvgTfPanel *self) {
     GtkWidget *box = GTK_WIDGET(self);
     self->editing = gtk_label_new("");
     gtk_label_set_wrap(GTK_LABEL(self->editing), TRUE);
     gtk_label_set_xalign(GTK_LABEL(self->editing), 0);
     gtk_box_append(GTK_BOX(box), self->editing);
-    self->tf_editor = vv_tf_editor_new(self->doc);
+    self->tf_editor = vvg_tf_editor_new(self->doc);
     gtk_box_append(GTK_BOX(box), GTK_WIDGET(self->tf_editor));
     GtkWidget *tb = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 4);
     GtkWidget *lg = gtk_check_button_new_with_label("log histogram");
@@ -184,15 +184,15 @@ build_tf(VvTfPanel *self) {
     gtk_box_append(GTK_BOX(tb), tc);
     gtk_box_append(GTK_BOX(box), tb);
     vvg_section(box, "Presets (thumbnails of this volume)");
-    gtk_box_append(GTK_BOX(box), vv_preset_gallery_new(self->doc));
+    gtk_box_append(GTK_BOX(box), vvg_preset_gallery_new(self->doc));
 }
 
 /* The 2-D transfer function over value x gradient magnitude. */
 static void
-build_tf2d(VvTfPanel *self) {
+build_tf2d(VvgTfPanel *self) {
     GtkWidget *g =
         vvg_section(GTK_WIDGET(self), "2-D transfer function (value × gradient magnitude)");
-    self->tf2d_editor = vv_tf2d_editor_new(self->doc);
+    self->tf2d_editor = vvg_tf2d_editor_new(self->doc);
     gtk_grid_attach(GTK_GRID(g), GTK_WIDGET(self->tf2d_editor), 0, 0, 2, 1);
     GtkWidget *wb = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 4);
     GtkWidget *add_r = gtk_button_new_with_label("Add rectangle");
@@ -209,8 +209,8 @@ build_tf2d(VvTfPanel *self) {
 }
 
 GtkWidget *
-vv_tf_panel_new(VvDocument *doc) {
-    VvTfPanel *self = g_object_new(VV_TYPE_TF_PANEL, NULL);
+vvg_tf_panel_new(VvgDocument *doc) {
+    VvgTfPanel *self = g_object_new(VVG_TYPE_TF_PANEL, NULL);
     self->doc = g_object_ref(doc);
     GtkWidget *g = vvg_section(GTK_WIDGET(self), "Segmentation");
     /* in vv_segmentation's order; "labels": a label volume (Filtering) */

@@ -1,5 +1,5 @@
 /*
- * VvTfPanel: segmentation of the selected object (VolVis paper, section 4,
+ * VvgTfPanel: segmentation of the selected object (VolVis paper, section 4,
  * Object Control): by transfer function, threshold, 2-D transfer function or
  * labels; the render mode (composite, MIP, MinIP, X-ray, isosurface), the
  * isovalue and the sample step; the 1-D transfer-function editor over the
@@ -7,18 +7,18 @@
  * value x gradient magnitude. Every edit is one undo step of the document.
  * UI thread only.
  */
-#ifndef VV_TF_PANEL_H
-#define VV_TF_PANEL_H
+#ifndef VVG_TF_PANEL_H
+#define VVG_TF_PANEL_H
 
 #include "vvg-document.h"
 
 G_BEGIN_DECLS
 
-#define VV_TYPE_TF_PANEL (vv_tf_panel_get_type())
-G_DECLARE_FINAL_TYPE(VvTfPanel, vv_tf_panel, VV, TF_PANEL, GtkBox)
+#define VVG_TYPE_TF_PANEL (vvg_tf_panel_get_type())
+G_DECLARE_FINAL_TYPE(VvgTfPanel, vvg_tf_panel, VVG, TF_PANEL, GtkBox)
 
 /** The panel for the selected object of @p doc (a reference is held). */
-GtkWidget *vv_tf_panel_new(VvDocument *doc);
+GtkWidget *vvg_tf_panel_new(VvgDocument *doc);
 
 G_END_DECLS
 #endif

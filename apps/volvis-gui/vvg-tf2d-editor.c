@@ -1,4 +1,4 @@
-/* VvTf2dEditor: 2-D transfer-function widgets over the joint histogram (vvg-tf2d-editor.h). */
+/* VvgTf2dEditor: 2-D transfer-function widgets over the joint histogram (vvg-tf2d-editor.h). */
 #include "vvg-tf2d-editor.h"
 
 #include <math.h>
@@ -8,9 +8,9 @@
 #define HIST_G 128
 #define PICK 6.0
 
-struct _VvTf2dEditor {
+struct _VvgTf2dEditor {
     GtkWidget parent;
-    VvDocument *doc;
+    VvgDocument *doc;
     vv_tf2d drawn; /* the function last drawn, to skip redraws of unchanged ones */
     const vv_object *drawn_object;
     int selected;
@@ -24,17 +24,17 @@ struct _VvTf2dEditor {
     guint hist_idle;       /* the joint histogram is waited for */
 };
 
-G_DEFINE_TYPE(VvTf2dEditor, vv_tf2d_editor, GTK_TYPE_WIDGET)
+G_DEFINE_TYPE(VvgTf2dEditor, vvg_tf2d_editor, GTK_TYPE_WIDGET)
 
 static vv_object *
-volume_object(VvTf2dEditor *ed) {
-    vv_object *o = vv_document_selected_object(ed->doc);
+volume_object(VvgTf2dEditor *ed) {
+    vv_object *o = vvg_document_selected_object(ed->doc);
     return o && o->type == VV_OBJECT_VOLUME && o->volume ? o : NULL;
 }
 
 /* Draws the joint histogram @p h (log counts) into the editor's image. */
 static void
-set_histogram(VvTf2dEditor *ed, const vv_volume *v, const vv_histogram2d *h) {
+set_histogram(VvgTf2dEditor *ed, const vv_volume *v, const vv_histogram2d *h) {
     if (ed->hist)
         cairo_surface_destroy(ed->hist);
     ed->hist = cairo_image_surface_create(CAIRO_FORMAT_RGB24, HIST_V, HIST_G);
@@ -61,7 +61,7 @@ set_histogram(VvTf2dEditor *ed, const vv_volume *v, const vv_histogram2d *h) {
 }
 
 static void
-update_histogram(VvTf2dEditor *ed, const vv_volume *v) {
+update_histogram(VvgTf2dEditor *ed, const vv_volume *v) {
     if (ed->hist && ed->hist_volume == v && ed->hist_modified == v->modified)
         return;
     vv_histogram2d *h = NULL;
@@ -99,7 +99,7 @@ hist_thread(GTask *task, gpointer src, gpointer data, GCancellable *c) {
 static void
 hist_done(GObject *src, GAsyncResult *res, gpointer user) {
     (void)user;
-    VvTf2dEditor *ed = VV_TF2D_EDITOR(src);
+    VvgTf2dEditor *ed = VVG_TF2D_EDITOR(src);
     hist_job *j = g_task_get_task_data(G_TASK(res));
     ed->hist_idle = 0;
     if (!ed->doc)
@@ -110,30 +110,31 @@ hist_done(GObject *src, GAsyncResult *res, gpointer user) {
 
 /* Widget coordinates <-> data value and gradient magnitude. */
 static double
-px_x(VvTf2dEditor *ed, const vv_object *o, double value) {
+px_x(VvgTf2dEditor *ed, const vv_object *o, double value) {
     double lo = o->volume->range[0], hi = o->volume->range[1];
     return (value - lo) / (hi > lo ? hi - lo : 1) * gtk_widget_get_width(GTK_WIDGET(ed));
 }
 
 static double
-px_y(VvTf2dEditor *ed, double grad) {
+px_y(VvgTf2dEditor *ed, double grad) {
     return (1.0 - grad / ed->gmax) * gtk_widget_get_height(GTK_WIDGET(ed));
 }
 
 static double
-data_dv(VvTf2dEditor *ed, const vv_object *o, double dx) {
+data_dv(VvgTf2dEditor *ed, const vv_object *o, double dx) {
     double lo = o->volume->range[0], hi = o->volume->range[1];
     return dx / fmax(1, gtk_widget_get_width(GTK_WIDGET(ed))) * (hi > lo ? hi - lo : 1);
 }
 
 static double
-data_dg(VvTf2dEditor *ed, double dy) {
+data_dg(VvgTf2dEditor *ed, double dy) {
     return -dy / fmax(1, gtk_widget_get_height(GTK_WIDGET(ed))) * ed->gmax;
 }
 
 /* The widget's outline as a polygon of up to 4 points. */
 static int
-outline(VvTf2dEditor *ed, const vv_object *o, const vv_tf2d_widget *w, double xs[4], double ys[4]) {
+outline(VvgTf2dEditor *ed, const vv_object *o, const vv_tf2d_widget *w, double xs[4],
+        double ys[4]) {
     if (w->shape == VV_TF2D_RECTANGLE) {
         xs[0] = xs[3] = px_x(ed, o, w->value[0]);
         xs[1] = xs[2] = px_x(ed, o, w->value[1]);
@@ -150,8 +151,8 @@ outline(VvTf2dEditor *ed, const vv_object *o, const vv_tf2d_widget *w, double xs
 }
 
 static void
-vv_tf2d_editor_snapshot(GtkWidget *widget, GtkSnapshot *snapshot) {
-    VvTf2dEditor *ed = VV_TF2D_EDITOR(widget);
+vvg_tf2d_editor_snapshot(GtkWidget *widget, GtkSnapshot *snapshot) {
+    VvgTf2dEditor *ed = VVG_TF2D_EDITOR(widget);
     double W = gtk_widget_get_width(widget), H = gtk_widget_get_height(widget);
     cairo_t *cr = gtk_snapshot_append_cairo(snapshot, &GRAPHENE_RECT_INIT(0, 0, W, H));
     cairo_set_source_rgb(cr, 0.12, 0.12, 0.14);
@@ -205,7 +206,7 @@ vv_tf2d_editor_snapshot(GtkWidget *widget, GtkSnapshot *snapshot) {
 
 /* The widget under (x, y): inside its outline's box (grown by PICK), the last drawn first. */
 static int
-hit(VvTf2dEditor *ed, const vv_object *o, double x, double y) {
+hit(VvgTf2dEditor *ed, const vv_object *o, double x, double y) {
     for (int i = o->tf2d.n_widgets - 1; i >= 0; i--) {
         double xs[4], ys[4];
         int n = outline(ed, o, &o->tf2d.widgets[i], xs, ys);
@@ -225,7 +226,7 @@ hit(VvTf2dEditor *ed, const vv_object *o, double x, double y) {
 static void
 pressed(GtkGestureClick *g, int n, double x, double y, gpointer user) {
     (void)n;
-    VvTf2dEditor *ed = user;
+    VvgTf2dEditor *ed = user;
     vv_object *o = volume_object(ed);
     if (!o)
         return;
@@ -234,14 +235,14 @@ pressed(GtkGestureClick *g, int n, double x, double y, gpointer user) {
     int i = hit(ed, o, x, y);
     ed->selected = i;
     if (i >= 0) {
-        vv_document_begin_edit(ed->doc, "edit 2-D transfer function");
+        vvg_document_begin_edit(ed->doc, "edit 2-D transfer function");
         if (button == 3) {
             vv_tf2d *tf = &o->tf2d;
             memmove(&tf->widgets[i], &tf->widgets[i + 1],
                     (size_t)(tf->n_widgets - i - 1) * sizeof tf->widgets[0]);
             tf->n_widgets--;
             ed->selected = -1;
-            vv_document_changed(ed->doc);
+            vvg_document_changed(ed->doc);
         } else {
             ed->start = o->tf2d.widgets[i];
             ed->resize = (mods & GDK_SHIFT_MASK) != 0;
@@ -255,7 +256,7 @@ pressed(GtkGestureClick *g, int n, double x, double y, gpointer user) {
 static void
 drag_update(GtkGestureDrag *g, double ox, double oy, gpointer user) {
     (void)g;
-    VvTf2dEditor *ed = user;
+    VvgTf2dEditor *ed = user;
     vv_object *o = volume_object(ed);
     if (!o || ed->selected < 0 || ed->selected >= o->tf2d.n_widgets)
         return;
@@ -282,12 +283,12 @@ drag_update(GtkGestureDrag *g, double ox, double oy, gpointer user) {
     if (vv_tf2d_widget_check(&w) != VV_OK)
         return;
     o->tf2d.widgets[ed->selected] = w;
-    vv_document_changed(ed->doc);
+    vvg_document_changed(ed->doc);
     gtk_widget_queue_draw(GTK_WIDGET(ed));
 }
 
 void
-vv_tf2d_editor_add(VvTf2dEditor *ed, vv_tf2d_shape shape) {
+vvg_tf2d_editor_add(VvgTf2dEditor *ed, vv_tf2d_shape shape) {
     vv_object *o = volume_object(ed);
     if (!o)
         return;
@@ -300,39 +301,39 @@ vv_tf2d_editor_add(VvTf2dEditor *ed, vv_tf2d_shape shape) {
                                       0.5);
     else
         vv_tf2d_widget_init_triangle(&w, lo + 0.5 * span, 0.2 * span, 0.8 * ed->gmax, c, 0.5);
-    vv_document_begin_edit(ed->doc, "add 2-D transfer-function widget");
+    vvg_document_begin_edit(ed->doc, "add 2-D transfer-function widget");
     if (o->segmentation != VV_SEG_TRANSFER_FUNCTION_2D && o->tf2d.n_widgets == 0)
         o->tf2d.opacity_unit_distance = o->tf.opacity_unit_distance;
     if (vv_tf2d_add_widget(&o->tf2d, &w) == VV_OK) {
         o->segmentation = VV_SEG_TRANSFER_FUNCTION_2D;
         ed->selected = o->tf2d.n_widgets - 1;
     }
-    vv_document_changed(ed->doc);
+    vvg_document_changed(ed->doc);
     gtk_widget_queue_draw(GTK_WIDGET(ed));
 }
 
 void
-vv_tf2d_editor_set_style(VvTf2dEditor *ed, const GdkRGBA *color, double opacity) {
+vvg_tf2d_editor_set_style(VvgTf2dEditor *ed, const GdkRGBA *color, double opacity) {
     vv_object *o = volume_object(ed);
     if (!o || ed->selected < 0 || ed->selected >= o->tf2d.n_widgets)
         return;
-    vv_document_begin_edit(ed->doc, "2-D transfer-function widget style");
+    vvg_document_begin_edit(ed->doc, "2-D transfer-function widget style");
     vv_tf2d_widget *w = &o->tf2d.widgets[ed->selected];
     w->color = vv_vec3_make(color->red, color->green, color->blue);
     w->opacity = opacity < 0 ? 0 : opacity > 1 ? 1 : opacity;
-    vv_document_changed(ed->doc);
+    vvg_document_changed(ed->doc);
     gtk_widget_queue_draw(GTK_WIDGET(ed));
 }
 
 int
-vv_tf2d_editor_selected(VvTf2dEditor *ed) {
+vvg_tf2d_editor_selected(VvgTf2dEditor *ed) {
     return ed->selected;
 }
 
 static void
-doc_changed(VvDocument *doc, gpointer user) {
+doc_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
-    VvTf2dEditor *ed = VV_TF2D_EDITOR(user);
+    VvgTf2dEditor *ed = VVG_TF2D_EDITOR(user);
     /* the World changes on every motion event of a drag in the view: redraw
      * only when this object's function did */
     vv_object *o = volume_object(ed);
@@ -342,15 +343,15 @@ doc_changed(VvDocument *doc, gpointer user) {
 }
 
 static void
-selection_changed(VvDocument *doc, gpointer user) {
+selection_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
-    VV_TF2D_EDITOR(user)->selected = -1;
+    VVG_TF2D_EDITOR(user)->selected = -1;
     gtk_widget_queue_draw(GTK_WIDGET(user));
 }
 
 static void
-vv_tf2d_editor_dispose(GObject *obj) {
-    VvTf2dEditor *ed = VV_TF2D_EDITOR(obj);
+vvg_tf2d_editor_dispose(GObject *obj) {
+    VvgTf2dEditor *ed = VVG_TF2D_EDITOR(obj);
     if (ed->doc) {
         g_signal_handlers_disconnect_by_data(ed->doc, ed);
         g_clear_object(&ed->doc);
@@ -359,17 +360,17 @@ vv_tf2d_editor_dispose(GObject *obj) {
         cairo_surface_destroy(ed->hist);
         ed->hist = NULL;
     }
-    G_OBJECT_CLASS(vv_tf2d_editor_parent_class)->dispose(obj);
+    G_OBJECT_CLASS(vvg_tf2d_editor_parent_class)->dispose(obj);
 }
 
 static void
-vv_tf2d_editor_class_init(VvTf2dEditorClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_tf2d_editor_dispose;
-    GTK_WIDGET_CLASS(klass)->snapshot = vv_tf2d_editor_snapshot;
+vvg_tf2d_editor_class_init(VvgTf2dEditorClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_tf2d_editor_dispose;
+    GTK_WIDGET_CLASS(klass)->snapshot = vvg_tf2d_editor_snapshot;
 }
 
 static void
-vv_tf2d_editor_init(VvTf2dEditor *ed) {
+vvg_tf2d_editor_init(VvgTf2dEditor *ed) {
     ed->selected = -1;
     ed->gmax = 1;
     gtk_widget_set_size_request(GTK_WIDGET(ed), 300, 140);
@@ -383,9 +384,9 @@ vv_tf2d_editor_init(VvTf2dEditor *ed) {
     gtk_widget_add_controller(GTK_WIDGET(ed), GTK_EVENT_CONTROLLER(drag));
 }
 
-VvTf2dEditor *
-vv_tf2d_editor_new(VvDocument *doc) {
-    VvTf2dEditor *ed = g_object_new(VV_TYPE_TF2D_EDITOR, NULL);
+VvgTf2dEditor *
+vvg_tf2d_editor_new(VvgDocument *doc) {
+    VvgTf2dEditor *ed = g_object_new(VVG_TYPE_TF2D_EDITOR, NULL);
     ed->doc = g_object_ref(doc);
     g_signal_connect(doc, "changed", G_CALLBACK(doc_changed), ed);
     g_signal_connect(doc, "selection-changed", G_CALLBACK(selection_changed), ed);

@@ -1,23 +1,23 @@
-/* VvViewPanel: the view as numbers (vvg-view-panel.h). */
+/* VvgViewPanel: the view as numbers (vvg-view-panel.h). */
 #include "vvg-view-panel.h"
 #include "vvg-widgets.h"
 
-struct _VvViewPanel {
+struct _VvgViewPanel {
     GtkBox parent;
-    VvDocument *doc;
+    VvgDocument *doc;
     gboolean updating;
     guint placement_source;
     GtkWidget *eye[3], *at[3];
     GtkWidget *fov, *projection;
 };
 
-G_DEFINE_TYPE(VvViewPanel, vv_view_panel, GTK_TYPE_BOX)
+G_DEFINE_TYPE(VvgViewPanel, vvg_view_panel, GTK_TYPE_BOX)
 
 static void
-fill(VvViewPanel *self) {
+fill(VvgViewPanel *self) {
     gboolean was = self->updating;
     self->updating = TRUE;
-    const vv_view *v = &vv_document_world(self->doc)->view;
+    const vv_view *v = &vvg_document_world(self->doc)->view;
     double ev[3] = {v->eye.x, v->eye.y, v->eye.z};
     double av[3] = {v->at.x, v->at.y, v->at.z};
     for (int i = 0; i < 3; i++) {
@@ -31,11 +31,11 @@ fill(VvViewPanel *self) {
 
 /* The widgets applied to the view: one undo step. */
 static void
-apply(VvViewPanel *self) {
+apply(VvgViewPanel *self) {
     if (self->updating)
         return;
-    vv_world *w = vv_document_world(self->doc);
-    vv_document_begin_edit(self->doc, "view");
+    vv_world *w = vvg_document_world(self->doc);
+    vvg_document_begin_edit(self->doc, "view");
     vv_view nv = w->view;
     nv.eye = vv_vec3_make(vvg_spin_value(self->eye[0]), vvg_spin_value(self->eye[1]),
                           vvg_spin_value(self->eye[2]));
@@ -45,7 +45,7 @@ apply(VvViewPanel *self) {
     nv.projection = (vv_projection)gtk_drop_down_get_selected(GTK_DROP_DOWN(self->projection));
     if (vv_nav_view_valid(&nv)) /* an eye on the look-at point is refused */
         w->view = nv;
-    vv_document_changed(self->doc);
+    vvg_document_changed(self->doc);
 }
 
 static void
@@ -63,16 +63,16 @@ on_dropdown(GObject *o, GParamSpec *p, gpointer user) {
 
 static gboolean
 placement_due(gpointer user) {
-    VvViewPanel *self = user;
+    VvgViewPanel *self = user;
     self->placement_source = 0;
     fill(self);
     return G_SOURCE_REMOVE;
 }
 
 static void
-doc_changed(VvDocument *doc, gpointer user) {
+doc_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
-    VvViewPanel *self = user;
+    VvgViewPanel *self = user;
     /* during a drag the World changes a hundred times a second: the numbers
      * follow ten times a second */
     if (!self->placement_source)
@@ -80,8 +80,8 @@ doc_changed(VvDocument *doc, gpointer user) {
 }
 
 static void
-vv_view_panel_dispose(GObject *o) {
-    VvViewPanel *self = VV_VIEW_PANEL(o);
+vvg_view_panel_dispose(GObject *o) {
+    VvgViewPanel *self = VVG_VIEW_PANEL(o);
     if (self->doc) {
         g_signal_handlers_disconnect_by_data(self->doc, self);
         g_clear_object(&self->doc);
@@ -90,28 +90,28 @@ vv_view_panel_dispose(GObject *o) {
         g_source_remove(self->placement_source);
         self->placement_source = 0;
     }
-    G_OBJECT_CLASS(vv_view_panel_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_view_panel_parent_class)->dispose(o);
 }
 
 static void
-vv_view_panel_class_init(VvViewPanelClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_view_panel_dispose;
+vvg_view_panel_class_init(VvgViewPanelClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_view_panel_dispose;
 }
 
 static void
-vv_view_panel_init(VvViewPanel *self) {
+vvg_view_panel_init(VvgViewPanel *self) {
     vvg_vbox_init(GTK_WIDGET(self));
 }
 
 static GtkWidget *
-wire_spin(VvViewPanel *self, GtkWidget *s) {
+wire_spin(VvgViewPanel *self, GtkWidget *s) {
     g_signal_connect(s, "value-changed", G_CALLBACK(on_spin), self);
     return s;
 }
 
 GtkWidget *
-vv_view_panel_new(VvDocument *doc) {
-    VvViewPanel *self = g_object_new(VV_TYPE_VIEW_PANEL, NULL);
+vvg_view_panel_new(VvgDocument *doc) {
+    VvgViewPanel *self = g_object_new(VVG_TYPE_VIEW_PANEL, NULL);
     self->doc = g_object_ref(doc);
     GtkWidget *g = vvg_section(GTK_WIDGET(self), "View");
     const char *en[] = {"eye x", "eye y", "eye z"}, *an[] = {"look at x", "look at y", "look at z"};

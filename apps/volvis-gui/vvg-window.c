@@ -1,4 +1,4 @@
-/* VvWindow: the main window, its layout and its actions (vvg-window.h). */
+/* VvgWindow: the main window, its layout and its actions (vvg-window.h). */
 #include "vvg-window.h"
 #include "vvg-widgets.h"
 
@@ -34,13 +34,13 @@
 #include "vvg-view-area.h"
 #include "vvg-view-panel.h"
 
-struct _VvWindow {
+struct _VvgWindow {
     GtkApplicationWindow parent;
-    VvDocument *doc;
-    VvSceneView *scene;
-    VvMarks *marks;
-    GtkWidget *navigator; /* VvNavigatorPanel */
-    GtkWidget *area;      /* VvViewArea */
+    VvgDocument *doc;
+    VvgSceneView *scene;
+    VvgMarks *marks;
+    GtkWidget *navigator; /* VvgNavigatorPanel */
+    GtkWidget *area;      /* VvgViewArea */
     GtkWidget *pages;     /* the side bar's GtkStack */
     /* a close or quit waiting for Save (As) to finish */
     void (*after_save)(void *user);
@@ -64,33 +64,33 @@ struct _VvWindow {
     guint autosave_gen;
 };
 
-G_DEFINE_TYPE(VvWindow, vv_window, GTK_TYPE_APPLICATION_WINDOW)
+G_DEFINE_TYPE(VvgWindow, vvg_window, GTK_TYPE_APPLICATION_WINDOW)
 
 static void
-show_error(VvWindow *win, const char *what, const char *message) {
+show_error(VvgWindow *win, const char *what, const char *message) {
     vvg_show_error(GTK_WIDGET(win), what, message);
 }
 
 static void
-update_title(VvWindow *win) {
-    const char *p = vv_document_path(win->doc);
+update_title(VvgWindow *win) {
+    const char *p = vvg_document_path(win->doc);
     g_autofree char *base = p ? g_path_get_basename(p) : g_strdup("untitled");
-    char *t = g_strdup_printf("VolVis — %s%s", base, vv_document_dirty(win->doc) ? " *" : "");
+    char *t = g_strdup_printf("VolVis — %s%s", base, vvg_document_dirty(win->doc) ? " *" : "");
     /* called for every change, also during drags: the X server is told only of new titles */
     if (g_strcmp0(t, gtk_window_get_title(GTK_WINDOW(win))) != 0)
         gtk_window_set_title(GTK_WINDOW(win), t);
     g_free(t);
     GAction *a = g_action_map_lookup_action(G_ACTION_MAP(win), "undo");
-    g_simple_action_set_enabled(G_SIMPLE_ACTION(a), vv_document_can_undo(win->doc));
+    g_simple_action_set_enabled(G_SIMPLE_ACTION(a), vvg_document_can_undo(win->doc));
     a = g_action_map_lookup_action(G_ACTION_MAP(win), "redo");
-    g_simple_action_set_enabled(G_SIMPLE_ACTION(a), vv_document_can_redo(win->doc));
+    g_simple_action_set_enabled(G_SIMPLE_ACTION(a), vvg_document_can_redo(win->doc));
 }
 
 /* ---- autosave -----------------------------------------------------------------
  * After an edit (a few seconds after the last one) and every 60 s while
  * there are unsaved changes, the session goes to
  * $XDG_STATE_HOME/volvis/session-<pid>-<n> as one unit
- * (vv_document_autosave). A saved or closed session removes its folder; a
+ * (vvg_document_autosave). A saved or closed session removes its folder; a
  * folder whose process is gone is a crash, offered for restoring at the
  * next start. VOLVIS_AUTOSAVE_DELAY and VOLVIS_AUTOSAVE_SECONDS set the two
  * times (tests). */
@@ -108,7 +108,7 @@ env_seconds(const char *name, guint fallback) {
 }
 
 typedef struct autosave_task {
-    vv_autosave_job *job;
+    vvg_autosave_job *job;
     guint gen;
     gboolean ok;
     char *error;
@@ -117,7 +117,7 @@ typedef struct autosave_task {
 static void
 autosave_task_free(gpointer p) {
     autosave_task *t = p;
-    vv_autosave_job_free(t->job);
+    vvg_autosave_job_free(t->job);
     g_free(t->error);
     g_free(t);
 }
@@ -126,10 +126,10 @@ autosave_task_free(gpointer p) {
 static void
 autosave_thread(GTask *task, gpointer source, gpointer data, GCancellable *cancel) {
     (void)cancel;
-    VvWindow *win = source;
+    VvgWindow *win = source;
     autosave_task *t = data;
     GError *err = NULL;
-    t->ok = vv_autosave_job_run(t->job, &err);
+    t->ok = vvg_autosave_job_run(t->job, &err);
     if (err) {
         t->error = g_strdup(err->message);
         g_error_free(err);
@@ -141,7 +141,7 @@ autosave_thread(GTask *task, gpointer source, gpointer data, GCancellable *cance
     g_task_return_boolean(task, TRUE);
 }
 
-static void do_autosave(VvWindow *win);
+static void do_autosave(VvgWindow *win);
 
 /* Back on the main thread: the document remembers what was written; a
  * folder that should be gone by now (the session was saved or the window
@@ -149,17 +149,17 @@ static void do_autosave(VvWindow *win);
 static void
 autosave_finished(GObject *source, GAsyncResult *res, gpointer user) {
     (void)user;
-    VvWindow *win = VV_WINDOW(source);
+    VvgWindow *win = VVG_WINDOW(source);
     autosave_task *t = g_task_get_task_data(G_TASK(res));
-    const char *dir = vv_autosave_job_folder(t->job);
+    const char *dir = vvg_autosave_job_folder(t->job);
     win->autosave_running = FALSE;
     if (t->gen != win->autosave_gen || !win->doc) {
-        vv_document_remove_folder(dir);
+        vvg_document_remove_folder(dir);
         if (win->doc && win->autosave_pending) /* edited again since the save */
             do_autosave(win);
         return;
     }
-    vv_document_autosave_end(win->doc, t->job, t->ok);
+    vvg_document_autosave_end(win->doc, t->job, t->ok);
     if (!t->ok) {
         g_printerr("volvis-gui: autosave failed: %s\n", t->error ? t->error : "unknown error");
         win->autosave_pending = TRUE; /* again at the next tick */
@@ -167,7 +167,7 @@ autosave_finished(GObject *source, GAsyncResult *res, gpointer user) {
     }
     g_printerr("volvis-gui: autosaved %s\n", dir);
     if (win->restore_from) {
-        vv_document_remove_folder(win->restore_from);
+        vvg_document_remove_folder(win->restore_from);
         g_clear_pointer(&win->restore_from, g_free);
     }
     if (win->autosave_pending) /* edits while it was written */
@@ -176,7 +176,7 @@ autosave_finished(GObject *source, GAsyncResult *res, gpointer user) {
 
 /* Waits for an autosave being written (the window is going). */
 static void
-autosave_wait(VvWindow *win) {
+autosave_wait(VvgWindow *win) {
     g_mutex_lock(&win->autosave_lock);
     while (win->autosave_writing)
         g_cond_wait(&win->autosave_done, &win->autosave_lock);
@@ -190,22 +190,22 @@ autosave_wait(VvWindow *win) {
  * would be offered after a later crash as a session newer than the file,
  * and it is older. */
 static void
-autosave_drop(VvWindow *win) {
+autosave_drop(VvgWindow *win) {
     win->autosave_pending = FALSE;
     win->autosave_gen++;
     if (win->autosave_dir && !win->autosave_running)
-        vv_document_remove_folder(win->autosave_dir);
+        vvg_document_remove_folder(win->autosave_dir);
     if (win->restore_from) {
-        vv_document_remove_folder(win->restore_from);
+        vvg_document_remove_folder(win->restore_from);
         g_clear_pointer(&win->restore_from, g_free);
     }
 }
 
 static void
-do_autosave(VvWindow *win) {
+do_autosave(VvgWindow *win) {
     if (!win->doc || !win->autosave_dir)
         return;
-    if (!vv_document_dirty(win->doc)) { /* nothing unsaved: nothing to restore */
+    if (!vvg_document_dirty(win->doc)) { /* nothing unsaved: nothing to restore */
         autosave_drop(win);
         return;
     }
@@ -215,7 +215,7 @@ do_autosave(VvWindow *win) {
     }
     win->autosave_pending = FALSE;
     GError *err = NULL;
-    vv_autosave_job *job = vv_document_autosave_begin(win->doc, win->autosave_dir, &err);
+    vvg_autosave_job *job = vvg_document_autosave_begin(win->doc, win->autosave_dir, &err);
     if (!job) {
         g_printerr("volvis-gui: autosave failed: %s\n", err->message);
         g_error_free(err);
@@ -237,7 +237,7 @@ do_autosave(VvWindow *win) {
 
 static gboolean
 autosave_delay_cb(gpointer user) {
-    VvWindow *win = user;
+    VvgWindow *win = user;
     win->autosave_delay = 0;
     do_autosave(win);
     return G_SOURCE_REMOVE;
@@ -245,16 +245,16 @@ autosave_delay_cb(gpointer user) {
 
 static gboolean
 autosave_tick_cb(gpointer user) {
-    VvWindow *win = user;
+    VvgWindow *win = user;
     if (win->autosave_pending)
         do_autosave(win);
     return G_SOURCE_CONTINUE;
 }
 
 static void
-doc_changed(VvDocument *doc, gpointer user) {
+doc_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
-    VvWindow *win = user;
+    VvgWindow *win = user;
     update_title(win);
     win->autosave_pending = TRUE;
     if (win->autosave_delay)
@@ -287,7 +287,7 @@ stale_autosaves(void) {
             continue;
         char *dir = g_build_filename(root, name, NULL);
         if (g_str_has_suffix(name, ".tmp")) { /* a stage the crash interrupted */
-            vv_document_remove_folder(dir);
+            vvg_document_remove_folder(dir);
             g_free(dir);
             continue;
         }
@@ -307,12 +307,12 @@ session_mtime(const char *dir) {
 
 static void
 restore_response(GtkDialog *d, int response, gpointer user) {
-    VvWindow *win = user;
+    VvgWindow *win = user;
     GPtrArray *stale = g_object_get_data(G_OBJECT(d), "stale");
     const char *newest = g_ptr_array_index(stale, 0);
     if (response == GTK_RESPONSE_ACCEPT) {
         GError *err = NULL;
-        if (vv_document_restore(win->doc, newest, &err)) {
+        if (vvg_document_restore(win->doc, newest, &err)) {
             win->restore_from = g_strdup(newest);
             do_autosave(win); /* the restored volumes into this window's own folder */
         } else {
@@ -321,13 +321,13 @@ restore_response(GtkDialog *d, int response, gpointer user) {
         }
     } else {
         for (guint i = 0; i < stale->len; i++)
-            vv_document_remove_folder(g_ptr_array_index(stale, i));
+            vvg_document_remove_folder(g_ptr_array_index(stale, i));
     }
     gtk_window_destroy(GTK_WINDOW(d));
 }
 
 void
-vv_window_offer_restore(VvWindow *win) {
+vvg_window_offer_restore(VvgWindow *win) {
     GPtrArray *stale = stale_autosaves();
     guint best = 0;
     for (guint i = 0; i < stale->len; i++)
@@ -336,7 +336,7 @@ vv_window_offer_restore(VvWindow *win) {
             best = i;
     if (stale->len == 0 || session_mtime(g_ptr_array_index(stale, best)) == 0) {
         for (guint i = 0; i < stale->len; i++) /* no session in it: nothing to offer */
-            vv_document_remove_folder(g_ptr_array_index(stale, i));
+            vvg_document_remove_folder(g_ptr_array_index(stale, i));
         g_ptr_array_unref(stale);
         return;
     }
@@ -361,13 +361,13 @@ vv_window_offer_restore(VvWindow *win) {
 
 /* A new volume selected: the slice views start again from its centre. */
 static void
-selection_changed(VvDocument *doc, gpointer user) {
+selection_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
-    VvWindow *win = user;
-    vv_object *o = vv_document_selected_object(win->doc);
+    VvgWindow *win = user;
+    vv_object *o = vvg_document_selected_object(win->doc);
     if (o && o->volume && o->volume != win->marks_volume) {
         win->marks_volume = o->volume;
-        vv_marks_reset(win->marks);
+        vvg_marks_reset(win->marks);
     }
 }
 
@@ -377,14 +377,14 @@ static void
 raw_error_response(GtkDialog *d, int response, gpointer user) {
     char *path = g_object_get_data(G_OBJECT(d), "path");
     if (response == GTK_RESPONSE_ACCEPT && path)
-        vv_raw_dialog_present(GTK_WINDOW(user), vv_window_document(user), path);
+        vvg_raw_dialog_present(GTK_WINDOW(user), vvg_window_document(user), path);
     gtk_window_destroy(GTK_WINDOW(d));
 }
 
 /* A file of no known format: the error, and the raw-import dialog on offer
  * (the library's hint names the CLI's --raw, which means nothing here). */
 static void
-offer_raw_import(VvWindow *win, const char *path, const char *message) {
+offer_raw_import(VvgWindow *win, const char *path, const char *message) {
     g_autofree char *base = g_path_get_basename(path);
     g_autofree char *msg = g_strdup(message);
     char *hint = strstr(msg, "; use --raw for raw data");
@@ -404,9 +404,9 @@ offer_raw_import(VvWindow *win, const char *path, const char *message) {
 }
 
 void
-vv_window_open(VvWindow *win, const char *path) {
+vvg_window_open(VvgWindow *win, const char *path) {
     GError *err = NULL;
-    if (!vv_document_open(win->doc, path, &err)) {
+    if (!vvg_document_open(win->doc, path, &err)) {
         if (strstr(err->message, "use --raw for raw data")) {
             offer_raw_import(win, path, err->message);
         } else {
@@ -417,8 +417,8 @@ vv_window_open(VvWindow *win, const char *path) {
         }
         g_error_free(err);
     } else {
-        vv_start_page_add_recent(path);
-        if (!vv_document_dirty(win->doc))
+        vvg_start_page_add_recent(path);
+        if (!vvg_document_dirty(win->doc))
             autosave_drop(win);
     }
     update_title(win);
@@ -427,33 +427,33 @@ vv_window_open(VvWindow *win, const char *path) {
 static void
 act_open_file(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
-    vv_window_open(user, g_variant_get_string(p, NULL));
+    vvg_window_open(user, g_variant_get_string(p, NULL));
 }
 
 static void
 act_import_raw(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    vv_raw_dialog_present(GTK_WINDOW(user), VV_WINDOW(user)->doc, NULL);
+    vvg_raw_dialog_present(GTK_WINDOW(user), VVG_WINDOW(user)->doc, NULL);
 }
 
 static void
 act_browse_dicom(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    vv_dicom_dialog_present(GTK_WINDOW(user), VV_WINDOW(user)->doc);
+    vvg_dicom_dialog_present(GTK_WINDOW(user), VVG_WINDOW(user)->doc);
 }
 
 static void
 open_response(GtkNativeDialog *d, int response, gpointer user) {
-    VvWindow *win = user;
+    VvgWindow *win = user;
     if (response == GTK_RESPONSE_ACCEPT) {
         GListModel *files = gtk_file_chooser_get_files(GTK_FILE_CHOOSER(d));
         for (guint i = 0; i < g_list_model_get_n_items(files); i++) {
             GFile *f = g_list_model_get_item(files, i);
             char *p = g_file_get_path(f);
             if (p)
-                vv_window_open(win, p);
+                vvg_window_open(win, p);
             g_free(p);
             g_object_unref(f);
         }
@@ -474,15 +474,15 @@ act_open(GSimpleAction *a, GVariant *p, gpointer user) {
 }
 
 static gboolean
-save_to(VvWindow *win, const char *path) {
+save_to(VvgWindow *win, const char *path) {
     GError *err = NULL;
-    gboolean ok = vv_document_save(win->doc, path, &err);
+    gboolean ok = vvg_document_save(win->doc, path, &err);
     if (!ok) {
         show_error(win, "Cannot save the session", err->message);
         g_error_free(err);
     } else {
-        vv_start_page_add_recent(path);
-        if (!vv_document_dirty(win->doc))
+        vvg_start_page_add_recent(path);
+        if (!vvg_document_dirty(win->doc))
             autosave_drop(win);
     }
     update_title(win);
@@ -513,7 +513,7 @@ save_response(GtkNativeDialog *d, int response, gpointer user) {
         g_free(p);
         g_object_unref(f);
     } else {
-        VV_WINDOW(user)->after_save = NULL; /* a close waiting for the save is cancelled */
+        VVG_WINDOW(user)->after_save = NULL; /* a close waiting for the save is cancelled */
     }
     g_object_unref(d);
 }
@@ -531,8 +531,8 @@ act_save_as(GSimpleAction *a, GVariant *p, gpointer user) {
 
 static void
 act_save(GSimpleAction *a, GVariant *p, gpointer user) {
-    VvWindow *win = user;
-    const char *path = vv_document_path(win->doc);
+    VvgWindow *win = user;
+    const char *path = vvg_document_path(win->doc);
     if (path)
         save_to(win, path);
     else
@@ -575,7 +575,7 @@ save_volume_thread(GTask *task, gpointer source, gpointer data, GCancellable *ca
 static void
 save_volume_done(GObject *source, GAsyncResult *res, gpointer user) {
     (void)user;
-    VvWindow *win = VV_WINDOW(source);
+    VvgWindow *win = VVG_WINDOW(source);
     save_volume_job *j = g_task_get_task_data(G_TASK(res));
     g_autofree char *base = g_path_get_basename(j->path);
     GError *err = NULL;
@@ -599,11 +599,11 @@ save_volume_done(GObject *source, GAsyncResult *res, gpointer user) {
 
 /* The volume Save volume as… writes: the selected object's, else the first. */
 static vv_object *
-volume_to_save(VvWindow *win) {
-    vv_object *o = vv_document_selected_object(win->doc);
+volume_to_save(VvgWindow *win) {
+    vv_object *o = vvg_document_selected_object(win->doc);
     if (o && o->type == VV_OBJECT_VOLUME && o->volume)
         return o;
-    vv_world *w = vv_document_world(win->doc);
+    vv_world *w = vvg_document_world(win->doc);
     for (int i = 0; i < w->n_objects; i++)
         if (w->objects[i]->type == VV_OBJECT_VOLUME && w->objects[i]->volume)
             return w->objects[i];
@@ -611,7 +611,7 @@ volume_to_save(VvWindow *win) {
 }
 
 void
-vv_window_save_volume(VvWindow *win, const char *path) {
+vvg_window_save_volume(VvgWindow *win, const char *path) {
     vv_object *o = volume_to_save(win);
     g_autofree char *base = g_path_get_basename(path);
     g_autofree char *what = g_strdup_printf("Cannot save %s", base);
@@ -652,7 +652,7 @@ save_volume_response(GtkNativeDialog *d, int response, gpointer user) {
         GFile *f = gtk_file_chooser_get_file(GTK_FILE_CHOOSER(d));
         char *p = g_file_get_path(f);
         if (p)
-            vv_window_save_volume(user, p);
+            vvg_window_save_volume(user, p);
         g_free(p);
         g_object_unref(f);
     }
@@ -663,7 +663,7 @@ static void
 act_save_volume(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    VvWindow *win = user;
+    VvgWindow *win = user;
     vv_object *o = volume_to_save(win);
     if (!o) {
         show_error(win, "Cannot save a volume", "there is no volume in the scene");
@@ -681,8 +681,8 @@ static void
 act_undo(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    VvWindow *win = user;
-    vv_document_undo(win->doc);
+    VvgWindow *win = user;
+    vvg_document_undo(win->doc);
     update_title(win);
 }
 
@@ -690,8 +690,8 @@ static void
 act_redo(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    VvWindow *win = user;
-    vv_document_redo(win->doc);
+    VvgWindow *win = user;
+    vvg_document_redo(win->doc);
     update_title(win);
 }
 
@@ -699,32 +699,32 @@ static void
 act_delete(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    VvWindow *win = user;
-    vv_document_delete_object(win->doc, vv_document_selected(win->doc));
+    VvgWindow *win = user;
+    vvg_document_delete_object(win->doc, vvg_document_selected(win->doc));
 }
 
 static void
 act_render(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    VvWindow *win = user;
-    vv_world *snap = vv_document_snapshot(win->doc);
+    VvgWindow *win = user;
+    vv_world *snap = vvg_document_snapshot(win->doc);
     if (!snap)
         return;
-    VvImageWindow *iw = vv_image_window_new(GTK_WINDOW(win), snap);
+    VvgImageWindow *iw = vvg_image_window_new(GTK_WINDOW(win), snap);
     gtk_window_present(GTK_WINDOW(iw));
 }
 
 /* Camera presets: the view direction set, the scene framed again. */
 static void
-camera_preset(VvWindow *win, vv_vec3 dir, vv_vec3 up, const char *label) {
-    vv_document_begin_edit(win->doc, label);
-    vv_world *w = vv_document_world(win->doc);
+camera_preset(VvgWindow *win, vv_vec3 dir, vv_vec3 up, const char *label) {
+    vvg_document_begin_edit(win->doc, label);
+    vv_world *w = vvg_document_world(win->doc);
     w->view.at = vv_vec3_make(0, 0, 0);
     w->view.eye = vv_vec3_scale(dir, -1);
     w->view.up = up;
     vv_view_frame_box(&w->view, vv_world_bounds(w));
-    vv_document_changed(win->doc);
+    vvg_document_changed(win->doc);
 }
 
 static void
@@ -752,11 +752,11 @@ static void
 act_view_reset(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
     (void)p;
-    VvWindow *win = user;
-    vv_world *w = vv_document_world(win->doc);
-    vv_document_begin_edit(win->doc, "frame all");
+    VvgWindow *win = user;
+    vv_world *w = vvg_document_world(win->doc);
+    vvg_document_begin_edit(win->doc, "frame all");
     vv_view_frame_box(&w->view, vv_world_bounds(w));
-    vv_document_changed(win->doc);
+    vvg_document_changed(win->doc);
 }
 
 static void
@@ -768,25 +768,25 @@ act_frame_all(GSimpleAction *a, GVariant *p, gpointer user) {
 static void
 act_drag_target(GSimpleAction *a, GVariant *p, gpointer user) {
     (void)a;
-    VvWindow *win = user;
+    VvgWindow *win = user;
     const char *t = g_variant_get_string(p, NULL);
     guint k = !strcmp(t, "object") ? 1u : !strcmp(t, "light") ? 2u : !strcmp(t, "cut") ? 3u : 0u;
-    vv_navigator_panel_set_target(VV_NAVIGATOR_PANEL(win->navigator), (VvNavTarget)k);
+    vvg_navigator_panel_set_target(VVG_NAVIGATOR_PANEL(win->navigator), (VvgNavTarget)k);
 }
 
 /* 1-up or 4-up (a stateful action: the header bar's toggles and the menu follow). */
 static void
 act_layout(GSimpleAction *a, GVariant *p, gpointer user) {
-    VvWindow *win = user;
+    VvgWindow *win = user;
     const char *s = g_variant_get_string(p, NULL);
-    vv_view_area_set_layout(VV_VIEW_AREA(win->area), !strcmp(s, "4") ? 4 : 1);
+    vvg_view_area_set_layout(VVG_VIEW_AREA(win->area), !strcmp(s, "4") ? 4 : 1);
     g_simple_action_set_state(a, p);
 }
 
 /* ---- closing ------------------------------------------------------------------- */
 
 typedef struct close_ctx {
-    VvWindow *win;
+    VvgWindow *win;
     void (*done)(void *user);
     void *user;
 } close_ctx;
@@ -806,12 +806,12 @@ close_response(GtkDialog *d, int response, gpointer data) {
 }
 
 void
-vv_window_confirm_close(VvWindow *win, void (*done)(void *user), void *user) {
-    if (!vv_document_dirty(win->doc)) {
+vvg_window_confirm_close(VvgWindow *win, void (*done)(void *user), void *user) {
+    if (!vvg_document_dirty(win->doc)) {
         done(user);
         return;
     }
-    const char *p = vv_document_path(win->doc);
+    const char *p = vvg_document_path(win->doc);
     g_autofree char *base = p ? g_path_get_basename(p) : g_strdup("the session");
     GtkWidget *d = gtk_message_dialog_new(GTK_WINDOW(win), GTK_DIALOG_MODAL, GTK_MESSAGE_QUESTION,
                                           GTK_BUTTONS_NONE, "Save the changes to %s?", base);
@@ -832,7 +832,7 @@ vv_window_confirm_close(VvWindow *win, void (*done)(void *user), void *user) {
 
 static void
 close_now(void *user) {
-    VvWindow *win = user;
+    VvgWindow *win = user;
     win->closing = TRUE;
     gtk_window_close(GTK_WINDOW(win));
 }
@@ -840,10 +840,10 @@ close_now(void *user) {
 static gboolean
 close_request(GtkWindow *w, gpointer user) {
     (void)user;
-    VvWindow *win = VV_WINDOW(w);
-    if (win->closing || !vv_document_dirty(win->doc))
+    VvgWindow *win = VVG_WINDOW(w);
+    if (win->closing || !vvg_document_dirty(win->doc))
         return FALSE;
-    vv_window_confirm_close(win, close_now, win);
+    vvg_window_confirm_close(win, close_now, win);
     return TRUE; /* the dialog decides */
 }
 
@@ -861,13 +861,13 @@ drop_cb(GtkDropTarget *t, const GValue *value, double x, double y, gpointer user
     (void)t;
     (void)x;
     (void)y;
-    VvWindow *win = user;
+    VvgWindow *win = user;
     if (!G_VALUE_HOLDS(value, GDK_TYPE_FILE_LIST))
         return FALSE;
     for (GSList *l = g_value_get_boxed(value); l; l = l->next) {
         char *p = g_file_get_path(l->data);
         if (p)
-            vv_window_open(win, p);
+            vvg_window_open(win, p);
         g_free(p);
     }
     return TRUE;
@@ -960,7 +960,7 @@ header_bar(void) {
 }
 
 static void
-add_page(VvWindow *win, GtkWidget *content, const char *name, const char *title) {
+add_page(VvgWindow *win, GtkWidget *content, const char *name, const char *title) {
     gtk_stack_add_titled(GTK_STACK(win->pages), content, name, title);
     /* "Objects page": tests and screen readers find a page's widgets under it */
     g_autofree char *a11y = g_strdup_printf("%s page", title);
@@ -984,24 +984,24 @@ one(GtkWidget *a) {
 
 /* The side bar: one page per component, each scrolling on its own. */
 static GtkWidget *
-side_bar(VvWindow *win) {
+side_bar(VvgWindow *win) {
     GActionMap *am = G_ACTION_MAP(win);
     win->pages = gtk_stack_new();
-    add_page(win, two(vv_object_list_new(win->doc), vv_object_panel_new(win->doc)), "objects",
+    add_page(win, two(vvg_object_list_new(win->doc), vvg_object_panel_new(win->doc)), "objects",
              "Objects");
-    add_page(win, one(vv_tf_panel_new(win->doc)), "transfer", "Transfer function");
-    add_page(win, one(vv_channel_panel_new(win->doc)), "channels", "Channels and time");
-    win->navigator = vv_navigator_panel_new(win->scene);
-    add_page(win, two(win->navigator, vv_view_panel_new(win->doc)), "view", "View");
-    add_page(win, one(vv_lights_panel_new(win->doc, win->scene, am)), "lights", "Lights");
-    add_page(win, one(vv_cut_panel_new(win->doc, win->scene, am)), "cut", "Cut planes");
-    add_page(win, vvg_scrolled(vv_rendering_page_new(win->doc)), "rendering", "Rendering");
-    add_page(win, vvg_scrolled(vv_measurement_page_new(win->doc, win->scene, win->marks, am)),
+    add_page(win, one(vvg_tf_panel_new(win->doc)), "transfer", "Transfer function");
+    add_page(win, one(vvg_channel_panel_new(win->doc)), "channels", "Channels and time");
+    win->navigator = vvg_navigator_panel_new(win->scene);
+    add_page(win, two(win->navigator, vvg_view_panel_new(win->doc)), "view", "View");
+    add_page(win, one(vvg_lights_panel_new(win->doc, win->scene, am)), "lights", "Lights");
+    add_page(win, one(vvg_cut_panel_new(win->doc, win->scene, am)), "cut", "Cut planes");
+    add_page(win, vvg_scrolled(vvg_rendering_page_new(win->doc)), "rendering", "Rendering");
+    add_page(win, vvg_scrolled(vvg_measurement_page_new(win->doc, win->scene, win->marks, am)),
              "measurement", "Measurement");
-    add_page(win, vvg_scrolled(vv_modeling_page_new(win->doc, am)), "modeling", "Modeling");
-    add_page(win, vv_filter_page_new(win->doc), "filtering", "Filtering");
-    add_page(win, vv_animator_page_new(win->doc), "animator", "Animator");
-    add_page(win, vv_devices_page_new(win), "devices", "Input devices");
+    add_page(win, vvg_scrolled(vvg_modeling_page_new(win->doc, am)), "modeling", "Modeling");
+    add_page(win, vvg_filter_page_new(win->doc), "filtering", "Filtering");
+    add_page(win, vvg_animator_page_new(win->doc), "animator", "Animator");
+    add_page(win, vvg_devices_page_new(win), "devices", "Input devices");
     GtkWidget *switcher = gtk_stack_sidebar_new();
     gtk_stack_sidebar_set_stack(GTK_STACK_SIDEBAR(switcher), GTK_STACK(win->pages));
     GtkWidget *side = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 0);
@@ -1015,18 +1015,18 @@ side_bar(VvWindow *win) {
 /* ---- life cycle --------------------------------------------------------------------- */
 
 static void
-vv_window_dispose(GObject *o) {
-    VvWindow *win = VV_WINDOW(o);
+vvg_window_dispose(GObject *o) {
+    VvgWindow *win = VVG_WINDOW(o);
     /* the render thread ends with the window, not with the last frame
-     * that holds the view (vv_scene_view_stop) */
+     * that holds the view (vvg_scene_view_stop) */
     if (win->scene)
-        vv_scene_view_stop(win->scene);
+        vvg_scene_view_stop(win->scene);
     g_clear_handle_id(&win->autosave_delay, g_source_remove);
     g_clear_handle_id(&win->autosave_tick, g_source_remove);
     autosave_wait(win); /* an autosave being written ends first */
     win->autosave_gen++;
     if (win->autosave_dir) { /* closed as the user chose: no crash to restore */
-        vv_document_remove_folder(win->autosave_dir);
+        vvg_document_remove_folder(win->autosave_dir);
         g_clear_pointer(&win->autosave_dir, g_free);
     }
     g_clear_pointer(&win->restore_from, g_free);
@@ -1035,21 +1035,21 @@ vv_window_dispose(GObject *o) {
         g_clear_object(&win->doc);
     }
     g_clear_object(&win->marks);
-    G_OBJECT_CLASS(vv_window_parent_class)->dispose(o);
+    G_OBJECT_CLASS(vvg_window_parent_class)->dispose(o);
 }
 
 static void
-vv_window_finalize(GObject *o) {
-    VvWindow *win = VV_WINDOW(o);
+vvg_window_finalize(GObject *o) {
+    VvgWindow *win = VVG_WINDOW(o);
     g_mutex_clear(&win->autosave_lock);
     g_cond_clear(&win->autosave_done);
-    G_OBJECT_CLASS(vv_window_parent_class)->finalize(o);
+    G_OBJECT_CLASS(vvg_window_parent_class)->finalize(o);
 }
 
 static void
-vv_window_class_init(VvWindowClass *klass) {
-    G_OBJECT_CLASS(klass)->dispose = vv_window_dispose;
-    G_OBJECT_CLASS(klass)->finalize = vv_window_finalize;
+vvg_window_class_init(VvgWindowClass *klass) {
+    G_OBJECT_CLASS(klass)->dispose = vvg_window_dispose;
+    G_OBJECT_CLASS(klass)->finalize = vvg_window_finalize;
 }
 
 static const GActionEntry win_actions[] = {
@@ -1075,14 +1075,14 @@ static const GActionEntry win_actions[] = {
 };
 
 static void
-vv_window_init(VvWindow *win) {
+vvg_window_init(VvgWindow *win) {
     g_mutex_init(&win->autosave_lock);
     g_cond_init(&win->autosave_done);
-    win->doc = vv_document_new();
-    win->marks = vv_marks_new();
+    win->doc = vvg_document_new();
+    win->marks = vvg_marks_new();
     g_action_map_add_action_entries(G_ACTION_MAP(win), win_actions, G_N_ELEMENTS(win_actions), win);
-    win->scene = vv_scene_view_new(win->doc, win->marks);
-    win->area = vv_view_area_new(win->doc, win->scene, win->marks);
+    win->scene = vvg_scene_view_new(win->doc, win->marks);
+    win->area = vvg_view_area_new(win->doc, win->scene, win->marks);
     gtk_window_set_titlebar(GTK_WINDOW(win), header_bar());
 
     GtkWidget *paned = gtk_paned_new(GTK_ORIENTATION_HORIZONTAL);
@@ -1111,17 +1111,17 @@ vv_window_init(VvWindow *win) {
         g_timeout_add_seconds(env_seconds("VOLVIS_AUTOSAVE_SECONDS", 60), autosave_tick_cb, win);
 }
 
-VvWindow *
-vv_window_new(GtkApplication *app) {
-    return g_object_new(VV_TYPE_WINDOW, "application", app, NULL);
+VvgWindow *
+vvg_window_new(GtkApplication *app) {
+    return g_object_new(VVG_TYPE_WINDOW, "application", app, NULL);
 }
 
-VvDocument *
-vv_window_document(VvWindow *win) {
+VvgDocument *
+vvg_window_document(VvgWindow *win) {
     return win->doc;
 }
 
-VvSceneView *
-vv_window_scene_view(VvWindow *win) {
+VvgSceneView *
+vvg_window_scene_view(VvgWindow *win) {
     return win->scene;
 }

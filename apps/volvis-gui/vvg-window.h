@@ -1,5 +1,5 @@
 /*
- * VvWindow: the VolVis main window (the paper's Figure 3): a header bar
+ * VvgWindow: the VolVis main window (the paper's Figure 3): a header bar
  * (Open, Save, Undo, Redo, the layout, the application menu), the view area
  * (the 3-D scene view of the Navigator that fills it, alone or beside three
  * slice views; a start page while the World is empty) and a side bar with a
@@ -9,43 +9,43 @@
  * ("win.open", "win.save", "win.undo", ...), so menus, shortcuts, devices
  * and tests drive the same code. UI thread only.
  */
-#ifndef VV_WINDOW_H
-#define VV_WINDOW_H
+#ifndef VVG_WINDOW_H
+#define VVG_WINDOW_H
 
 #include "vvg-document.h"
 #include "vvg-scene-view.h"
 
 G_BEGIN_DECLS
 
-#define VV_TYPE_WINDOW (vv_window_get_type())
-G_DECLARE_FINAL_TYPE(VvWindow, vv_window, VV, WINDOW, GtkApplicationWindow)
+#define VVG_TYPE_WINDOW (vvg_window_get_type())
+G_DECLARE_FINAL_TYPE(VvgWindow, vvg_window, VVG, WINDOW, GtkApplicationWindow)
 
-VvWindow *vv_window_new(GtkApplication *app);
+VvgWindow *vvg_window_new(GtkApplication *app);
 /** Opens a file into the window's World; on failure shows an error dialog. */
-void vv_window_open(VvWindow *win, const char *path);
+void vvg_window_open(VvgWindow *win, const char *path);
 /**
  * Save volume as… without the chooser: writes the selected volume object
  * (else the first volume) to @p path in the format of its extension, on a
  * worker thread, atomically; errors and what the format could not hold
  * are shown in dialogs.
  */
-void vv_window_save_volume(VvWindow *win, const char *path);
+void vvg_window_save_volume(VvgWindow *win, const char *path);
 /**
  * Offers to restore the newest autosave whose process is gone (a crash or
  * a kill): a dialog "Restore the last session?" with Restore (the World as
  * it was, untitled, unsaved) and Discard (the folders removed). Nothing
  * when there is none. Called once at start.
  */
-void vv_window_offer_restore(VvWindow *win);
-VvDocument *vv_window_document(VvWindow *win);
+void vvg_window_offer_restore(VvgWindow *win);
+VvgDocument *vvg_window_document(VvgWindow *win);
 /** The window's 3-D view (owned by the window). */
-VvSceneView *vv_window_scene_view(VvWindow *win);
+VvgSceneView *vvg_window_scene_view(VvgWindow *win);
 /**
  * Asks before unsaved changes are lost (Save, Close without saving,
  * Cancel), then calls @p done(user) when the window may close: at once when
  * there is nothing unsaved, after a successful save with Save.
  */
-void vv_window_confirm_close(VvWindow *win, void (*done)(void *user), void *user);
+void vvg_window_confirm_close(VvgWindow *win, void (*done)(void *user), void *user);
 
 G_END_DECLS
 #endif

@@ -1,4 +1,4 @@
-/* VvDocument's transient Worlds (the Animator's Play), without a display:
+/* VvgDocument's transient Worlds (the Animator's Play), without a display:
  * no undo steps and nothing unsaved; ending one puts back the very World
  * kept aside; an edit keeps the World shown; undo restores first; saving
  * writes the kept World. Autosave and restore. */
@@ -11,19 +11,19 @@
 static int changed;
 
 static void
-on_changed(VvDocument *doc, gpointer user) {
+on_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
     (void)user;
     changed++;
 }
 
 /* A document with one sphere at x = 0 (one undo step: adding it). */
-static VvDocument *
+static VvgDocument *
 doc_with_sphere(void) {
-    VvDocument *doc = vv_document_new();
+    VvgDocument *doc = vvg_document_new();
     vv_object *o = NULL;
     vt_ok(vv_object_new_geometry(&o, VV_OBJECT_SPHERE, "s"));
-    vv_document_add_object(doc, o, NULL);
+    vvg_document_add_object(doc, o, NULL);
     g_signal_connect(doc, "changed", G_CALLBACK(on_changed), NULL);
     changed = 0;
     return doc;
@@ -31,8 +31,8 @@ doc_with_sphere(void) {
 
 /* A frame of an animation: the World with the eye and the sphere moved. */
 static vv_world *
-frame(VvDocument *doc, double x) {
-    vv_world *w = vv_document_snapshot(doc);
+frame(VvgDocument *doc, double x) {
+    vv_world *w = vvg_document_snapshot(doc);
     assert_non_null(w);
     w->view.eye.x = x;
     w->objects[0]->position.x = x;
@@ -42,94 +42,94 @@ frame(VvDocument *doc, double x) {
 static void
 test_restore(void **state) {
     (void)state;
-    VvDocument *doc = doc_with_sphere();
-    vv_world *kept = vv_document_world(doc);
+    VvgDocument *doc = doc_with_sphere();
+    vv_world *kept = vvg_document_world(doc);
     vv_vec3 eye = kept->view.eye;
     vv_world *f1 = frame(doc, 11);
-    vv_document_show_transient(doc, f1);
-    assert_ptr_equal(vv_document_world(doc), f1);
-    assert_true(vv_document_transient(doc));
+    vvg_document_show_transient(doc, f1);
+    assert_ptr_equal(vvg_document_world(doc), f1);
+    assert_true(vvg_document_transient(doc));
     vv_world *f2 = frame(doc, 22);
-    vv_document_show_transient(doc, f2); /* frees f1 */
-    assert_ptr_equal(vv_document_world(doc), f2);
+    vvg_document_show_transient(doc, f2); /* frees f1 */
+    assert_ptr_equal(vvg_document_world(doc), f2);
     assert_int_equal(changed, 2);
-    vv_document_end_transient(doc, TRUE);
+    vvg_document_end_transient(doc, TRUE);
     /* the very World kept aside, unchanged */
-    assert_ptr_equal(vv_document_world(doc), kept);
-    assert_false(vv_document_transient(doc));
+    assert_ptr_equal(vvg_document_world(doc), kept);
+    assert_false(vvg_document_transient(doc));
     assert_near(kept->view.eye.x, eye.x, 0);
     assert_near(kept->objects[0]->position.x, 0, 0);
     assert_int_equal(changed, 3);
-    vv_document_end_transient(doc, TRUE); /* nothing shown: nothing happens */
+    vvg_document_end_transient(doc, TRUE); /* nothing shown: nothing happens */
     assert_int_equal(changed, 3);
     /* no undo step was added: one undo empties the World */
-    assert_true(vv_document_undo(doc));
-    assert_int_equal(vv_document_world(doc)->n_objects, 0);
-    assert_false(vv_document_can_undo(doc));
+    assert_true(vvg_document_undo(doc));
+    assert_int_equal(vvg_document_world(doc)->n_objects, 0);
+    assert_false(vvg_document_can_undo(doc));
     g_object_unref(doc);
 }
 
 static void
 test_edit_keeps_the_frame(void **state) {
     (void)state;
-    VvDocument *doc = doc_with_sphere();
+    VvgDocument *doc = doc_with_sphere();
     vv_world *f = frame(doc, 7);
-    vv_document_show_transient(doc, f);
+    vvg_document_show_transient(doc, f);
     /* an edit during Play: the World shown is the one it changes */
-    vv_document_begin_edit(doc, "move");
-    assert_false(vv_document_transient(doc));
-    assert_ptr_equal(vv_document_world(doc), f);
+    vvg_document_begin_edit(doc, "move");
+    assert_false(vvg_document_transient(doc));
+    assert_ptr_equal(vvg_document_world(doc), f);
     f->objects[0]->position.x = 8;
-    vv_document_changed(doc);
-    vv_document_end_transient(doc, TRUE); /* too late: nothing to restore */
-    assert_ptr_equal(vv_document_world(doc), f);
+    vvg_document_changed(doc);
+    vvg_document_end_transient(doc, TRUE); /* too late: nothing to restore */
+    assert_ptr_equal(vvg_document_world(doc), f);
     /* undo goes back to the frame that was shown, then to before it */
-    assert_true(vv_document_undo(doc));
-    assert_near(vv_document_world(doc)->objects[0]->position.x, 7, 0);
-    assert_true(vv_document_undo(doc));
-    assert_int_equal(vv_document_world(doc)->n_objects, 0);
+    assert_true(vvg_document_undo(doc));
+    assert_near(vvg_document_world(doc)->objects[0]->position.x, 7, 0);
+    assert_true(vvg_document_undo(doc));
+    assert_int_equal(vvg_document_world(doc)->n_objects, 0);
     g_object_unref(doc);
 }
 
 static void
 test_undo_restores_first(void **state) {
     (void)state;
-    VvDocument *doc = doc_with_sphere();
-    vv_document_begin_edit(doc, "move");
-    vv_document_world(doc)->objects[0]->position.x = 1;
-    vv_document_changed(doc);
-    vv_document_show_transient(doc, frame(doc, 5));
+    VvgDocument *doc = doc_with_sphere();
+    vvg_document_begin_edit(doc, "move");
+    vvg_document_world(doc)->objects[0]->position.x = 1;
+    vvg_document_changed(doc);
+    vvg_document_show_transient(doc, frame(doc, 5));
     /* undo is of the kept World's last edit: x 1 -> 0 */
-    assert_true(vv_document_undo(doc));
-    assert_false(vv_document_transient(doc));
-    assert_near(vv_document_world(doc)->objects[0]->position.x, 0, 0);
-    assert_near(vv_document_world(doc)->view.eye.x, 0, 0);
+    assert_true(vvg_document_undo(doc));
+    assert_false(vvg_document_transient(doc));
+    assert_near(vvg_document_world(doc)->objects[0]->position.x, 0, 0);
+    assert_near(vvg_document_world(doc)->view.eye.x, 0, 0);
     /* redo brings x = 1 back, not the frame */
-    assert_true(vv_document_redo(doc));
-    assert_near(vv_document_world(doc)->objects[0]->position.x, 1, 0);
+    assert_true(vvg_document_redo(doc));
+    assert_near(vvg_document_world(doc)->objects[0]->position.x, 1, 0);
     g_object_unref(doc);
 }
 
 static void
 test_save_writes_the_kept_world(void **state) {
     (void)state;
-    VvDocument *doc = doc_with_sphere();
+    VvgDocument *doc = doc_with_sphere();
     const char *path = vt_path(vt_outdir("gui_document"), "transient.json");
-    double eye_x = vv_document_world(doc)->view.eye.x;
+    double eye_x = vvg_document_world(doc)->view.eye.x;
     vv_world *f = frame(doc, 99);
-    vv_document_show_transient(doc, f);
+    vvg_document_show_transient(doc, f);
     GError *err = NULL;
-    assert_true(vv_document_save(doc, path, &err));
-    assert_false(vv_document_dirty(doc));
-    assert_ptr_equal(vv_document_world(doc), f); /* still shown */
+    assert_true(vvg_document_save(doc, path, &err));
+    assert_false(vvg_document_dirty(doc));
+    assert_ptr_equal(vvg_document_world(doc), f); /* still shown */
     vv_world *saved = NULL;
     vt_ok(vv_scene_load(&saved, path));
     assert_near(saved->view.eye.x, eye_x, 1e-9);
     assert_near(saved->objects[0]->position.x, 0, 1e-9);
     vv_world_free(saved);
     /* showing frames leaves the session saved */
-    vv_document_end_transient(doc, TRUE);
-    assert_false(vv_document_dirty(doc));
+    vvg_document_end_transient(doc, TRUE);
+    assert_false(vvg_document_dirty(doc));
     g_object_unref(doc);
 }
 
@@ -142,7 +142,7 @@ inode_of(const char *path) {
 
 static gpointer
 autosave_job_thread(gpointer job) {
-    return GINT_TO_POINTER(vv_autosave_job_run(job, NULL));
+    return GINT_TO_POINTER(vvg_autosave_job_run(job, NULL));
 }
 
 /* Autosave (issue 33) of a volume made in the session: session.json and
@@ -155,7 +155,7 @@ autosave_job_thread(gpointer job) {
 static void
 test_autosave_and_restore(void **state) {
     (void)state;
-    VvDocument *doc = doc_with_sphere();
+    VvgDocument *doc = doc_with_sphere();
     int dims[3] = {20, 16, 12};
     vv_volume *v = NULL;
     vt_ok(vv_volume_new(&v, dims, VV_U16));
@@ -163,63 +163,63 @@ test_autosave_and_restore(void **state) {
         ((uint16_t *)v->data)[i] = (uint16_t)(i * 7);
     vv_volume_update_range(v);
     GError *err = NULL;
-    assert_true(vv_document_add_volume(doc, v, "made", NULL, &err));
+    assert_true(vvg_document_add_volume(doc, v, "made", NULL, &err));
     char dir[512];
     snprintf(dir, sizeof dir, "%s/autosave", vt_outdir("gui_document"));
-    vv_document_remove_folder(dir);
-    assert_true(vv_document_autosave(doc, dir, &err));
-    assert_true(vv_document_dirty(doc));
-    assert_null(vv_document_path(doc));
+    vvg_document_remove_folder(dir);
+    assert_true(vvg_document_autosave(doc, dir, &err));
+    assert_true(vvg_document_dirty(doc));
+    assert_null(vvg_document_path(doc));
     char vol[700], stage[600];
     snprintf(vol, sizeof vol, "%s/volume_1.nrrd", dir);
     snprintf(stage, sizeof stage, "%s.tmp", dir);
     ino_t first = inode_of(vol);
-    assert_true(vv_document_autosave(doc, dir, &err));
+    assert_true(vvg_document_autosave(doc, dir, &err));
     assert_int_equal(inode_of(vol), first);
     assert_int_not_equal(access(stage, F_OK), 0);
-    vv_object *o = vv_document_world(doc)->objects[1];
+    vv_object *o = vvg_document_world(doc)->objects[1];
     o->volume->modified++;
-    assert_true(vv_document_autosave(doc, dir, &err));
+    assert_true(vvg_document_autosave(doc, dir, &err));
     assert_int_not_equal(inode_of(vol), first);
     /* a folder that cannot be made: an error, the autosave as it was */
     char bad[600];
     snprintf(bad, sizeof bad, "%s/session.json/x", dir);
-    assert_false(vv_document_autosave(doc, bad, &err));
+    assert_false(vvg_document_autosave(doc, bad, &err));
     assert_non_null(err);
     g_clear_error(&err);
     assert_int_equal(access(vol, F_OK), 0);
 
     /* in three steps (the GUI runs the middle one on a worker thread): the
      * snapshot is what gets written, whatever the document does meanwhile */
-    vv_autosave_job *job = vv_document_autosave_begin(doc, dir, &err);
+    vvg_autosave_job *job = vvg_document_autosave_begin(doc, dir, &err);
     assert_non_null(job);
-    vv_document_delete_object(doc, 1);
-    assert_int_equal(vv_document_world(doc)->n_objects, 1);
+    vvg_document_delete_object(doc, 1);
+    assert_int_equal(vvg_document_world(doc)->n_objects, 1);
     GThread *worker = g_thread_new("autosave", autosave_job_thread, job);
     assert_true(GPOINTER_TO_INT(g_thread_join(worker)));
-    vv_document_autosave_end(doc, job, TRUE);
-    vv_autosave_job_free(job);
+    vvg_document_autosave_end(doc, job, TRUE);
+    vvg_autosave_job_free(job);
     assert_int_equal(access(vol, F_OK), 0);
-    vv_document_undo(doc); /* the volume back, for what follows */
-    assert_int_equal(vv_document_world(doc)->n_objects, 2);
+    vvg_document_undo(doc); /* the volume back, for what follows */
+    assert_int_equal(vvg_document_world(doc)->n_objects, 2);
 
-    VvDocument *back = vv_document_new();
-    assert_true(vv_document_restore(back, dir, &err));
-    assert_null(vv_document_path(back));
-    assert_true(vv_document_dirty(back));
-    vv_world *w = vv_document_world(back);
+    VvgDocument *back = vvg_document_new();
+    assert_true(vvg_document_restore(back, dir, &err));
+    assert_null(vvg_document_path(back));
+    assert_true(vvg_document_dirty(back));
+    vv_world *w = vvg_document_world(back);
     assert_int_equal(w->n_objects, 2);
     assert_null(w->objects[1]->geometry.source);
     assert_memory_equal(w->objects[1]->volume->data, v->data, (size_t)20 * 16 * 12 * 2);
     /* its own autosave writes the volume again: the old folder can go */
     char dir2[600];
     snprintf(dir2, sizeof dir2, "%s2", dir);
-    vv_document_remove_folder(dir2);
-    assert_true(vv_document_autosave(back, dir2, &err));
-    vv_document_remove_folder(dir);
+    vvg_document_remove_folder(dir2);
+    assert_true(vvg_document_autosave(back, dir2, &err));
+    vvg_document_remove_folder(dir);
     snprintf(vol, sizeof vol, "%s/volume_1.nrrd", dir2);
     assert_int_equal(access(vol, F_OK), 0);
-    vv_document_remove_folder(dir2);
+    vvg_document_remove_folder(dir2);
     g_object_unref(back);
     vv_volume_free(v);
     g_object_unref(doc);
@@ -233,20 +233,20 @@ test_autosave_and_restore(void **state) {
 static void
 test_save_all_or_nothing(void **state) {
     (void)state;
-    VvDocument *doc = doc_with_sphere();
+    VvgDocument *doc = doc_with_sphere();
     int dims[3] = {8, 8, 8};
     vv_volume *v = NULL;
     vt_ok(vv_volume_new(&v, dims, VV_U8));
     GError *err = NULL;
-    assert_true(vv_document_add_volume(doc, v, "made", NULL, &err));
+    assert_true(vvg_document_add_volume(doc, v, "made", NULL, &err));
     char dir[512];
     snprintf(dir, sizeof dir, "%s/all_or_nothing", vt_outdir("gui_document"));
-    vv_document_remove_folder(dir);
+    vvg_document_remove_folder(dir);
     g_mkdir_with_parents(dir, 0755);
     char scene[600];
     snprintf(scene, sizeof scene, "%s/s.json", dir);
     g_mkdir_with_parents(scene, 0755); /* a folder where the scene goes */
-    assert_false(vv_document_save(doc, scene, &err));
+    assert_false(vvg_document_save(doc, scene, &err));
     g_clear_error(&err);
     GDir *d = g_dir_open(dir, 0, NULL);
     const char *name;
@@ -255,10 +255,10 @@ test_save_all_or_nothing(void **state) {
         n++;
     g_dir_close(d);
     assert_int_equal(n, 1); /* the folder named s.json only */
-    assert_null(vv_document_world(doc)->objects[1]->geometry.source);
-    assert_true(vv_document_dirty(doc));
+    assert_null(vvg_document_world(doc)->objects[1]->geometry.source);
+    assert_true(vvg_document_dirty(doc));
     rmdir(scene);
-    assert_true(vv_document_save(doc, scene, &err));
+    assert_true(vvg_document_save(doc, scene, &err));
     char vol[700];
     snprintf(vol, sizeof vol, "%s/s_1_made.nrrd", dir);
     assert_int_equal(access(vol, F_OK), 0);
@@ -274,12 +274,12 @@ test_save_all_or_nothing(void **state) {
      * same scene name gets a name of its own */
     vv_volume_free(v);
     vt_ok(vv_volume_new(&v, dims, VV_U8));
-    vv_document_delete_object(doc, 1);
-    assert_true(vv_document_add_volume(doc, v, "made", NULL, &err));
-    assert_true(vv_document_save(doc, scene, &err));
+    vvg_document_delete_object(doc, 1);
+    assert_true(vvg_document_add_volume(doc, v, "made", NULL, &err));
+    assert_true(vvg_document_save(doc, scene, &err));
     snprintf(vol, sizeof vol, "%s/s_1_made-2.nrrd", dir);
     assert_int_equal(access(vol, F_OK), 0);
-    vv_document_remove_folder(dir);
+    vvg_document_remove_folder(dir);
     vv_volume_free(v);
     g_object_unref(doc);
 }
@@ -333,17 +333,17 @@ assert_step(const vv_volume *v, int t, int c) {
 }
 
 static void
-time_failed(VvDocument *doc, const char *message, gpointer user) {
+time_failed(VvgDocument *doc, const char *message, gpointer user) {
     (void)doc;
     snprintf(user, 256, "%s", message);
 }
 
 /* A 4-D NIfTI of two channels opens as one object of two channels with its
- * time steps known; vv_document_set_time puts step 2 of both channels in,
+ * time steps known; vvg_document_set_time puts step 2 of both channels in,
  * steps shown within a second make one undo step, which undo takes back;
- * vv_document_request_time reads off the main thread and shows the last
+ * vvg_document_request_time reads off the main thread and shows the last
  * step asked;
- * vv_world_apply_time puts a frame's step into a World evaluated from the
+ * vvg_world_apply_time puts a frame's step into a World evaluated from the
  * document's (an Animator's objects[i].time track) and names what it
  * cannot read. */
 /* A multiresolution file larger than a quarter of VOLVIS_MEMORY_LIMIT opens
@@ -358,19 +358,19 @@ pyramid_out_of_core(const char *dir, const char *store, const vv_volume *v) {
     GError *err = NULL;
     /* 64 MiB: level 0 (13.5 MiB) fits a quarter: read whole */
     g_setenv("VOLVIS_MEMORY_LIMIT", "64M", TRUE);
-    VvDocument *doc = vv_document_new();
-    assert_true(vv_document_open(doc, store, &err));
-    vv_object *o = vv_document_selected_object(doc);
+    VvgDocument *doc = vvg_document_new();
+    assert_true(vvg_document_open(doc, store, &err));
+    vv_object *o = vvg_document_selected_object(doc);
     assert_non_null(o);
-    assert_null(vv_document_pyramid(doc, o));
+    assert_null(vvg_document_pyramid(doc, o));
     assert_int_equal(o->volume->dims[0], 256);
     g_object_unref(doc);
     /* 16 MiB: out of core */
     g_setenv("VOLVIS_MEMORY_LIMIT", "16M", TRUE);
-    doc = vv_document_new();
-    assert_true(vv_document_open(doc, store, &err));
-    o = vv_document_selected_object(doc);
-    VvGuiPyramid *p = vv_document_pyramid(doc, o);
+    doc = vvg_document_new();
+    assert_true(vvg_document_open(doc, store, &err));
+    o = vvg_document_selected_object(doc);
+    VvgPyramid *p = vvg_document_pyramid(doc, o);
     assert_non_null(p);
     assert_int_equal(p->limit, 16u << 20);
     assert_int_equal(o->volume->dims[0], 64); /* the coarsest level */
@@ -378,7 +378,7 @@ pyramid_out_of_core(const char *dir, const char *store, const vv_volume *v) {
     assert_near(b.max.x - b.min.x, 255 * v->spacing[0], 1e-6);
     /* a session names the store with level 0's spacing */
     const char *scene = vt_path(dir, "pyramid_session.json");
-    assert_true(vv_document_save(doc, scene, &err));
+    assert_true(vvg_document_save(doc, scene, &err));
     vv_world *w = NULL;
     vt_ok(vv_scene_load(&w, scene));
     assert_int_equal(w->objects[0]->volume->dims[0], 256);
@@ -386,11 +386,11 @@ pyramid_out_of_core(const char *dir, const char *store, const vv_volume *v) {
     vv_world_free(w);
     /* the session opened again: the store out of core again, never read
      * whole, over the same world box */
-    VvDocument *again = vv_document_new();
-    assert_true(vv_document_open(again, scene, &err));
-    vv_object *o2 = vv_document_selected_object(again);
+    VvgDocument *again = vvg_document_new();
+    assert_true(vvg_document_open(again, scene, &err));
+    vv_object *o2 = vvg_document_selected_object(again);
     assert_non_null(o2);
-    VvGuiPyramid *p2 = vv_document_pyramid(again, o2);
+    VvgPyramid *p2 = vvg_document_pyramid(again, o2);
     assert_non_null(p2);
     assert_int_equal(o2->volume->dims[0], 64);
     const vv_box b2 = vv_object_world_box(o2);
@@ -401,10 +401,10 @@ pyramid_out_of_core(const char *dir, const char *store, const vv_volume *v) {
     assert_int_equal(ps.chunk_reads[0], 0); /* level 0 unread */
     g_object_unref(again);
     /* deleted, then opened again: the unused pyramid gives way to a new one */
-    vv_document_delete_object(doc, 0);
-    assert_true(vv_document_open(doc, store, &err));
-    o = vv_document_selected_object(doc);
-    p = vv_document_pyramid(doc, o);
+    vvg_document_delete_object(doc, 0);
+    assert_true(vvg_document_open(doc, store, &err));
+    o = vvg_document_selected_object(doc);
+    p = vvg_document_pyramid(doc, o);
     assert_non_null(p);
     assert_true(o->volume == p->proxy);
     g_object_unref(doc);
@@ -433,29 +433,29 @@ test_channels_and_time(void **state) {
     (void)state;
     const char *path = vt_path(vt_outdir("gui_document"), "cells.nii");
     write_nifti(path, 4, 2);
-    VvDocument *doc = vv_document_new();
+    VvgDocument *doc = vvg_document_new();
     GError *err = NULL;
-    assert_true(vv_document_open(doc, path, &err));
-    vv_object *o = vv_document_selected_object(doc);
+    assert_true(vvg_document_open(doc, path, &err));
+    vv_object *o = vvg_document_selected_object(doc);
     assert_non_null(o);
     assert_int_equal(o->n_channels, 2);
-    assert_int_equal(vv_document_time_steps(doc, o), 4);
-    assert_int_equal(vv_document_edited_channel(doc), 0);
-    vv_document_set_edited_channel(doc, 1);
-    assert_int_equal(vv_document_edited_channel(doc), 1);
+    assert_int_equal(vvg_document_time_steps(doc, o), 4);
+    assert_int_equal(vvg_document_edited_channel(doc), 0);
+    vvg_document_set_edited_channel(doc, 1);
+    assert_int_equal(vvg_document_edited_channel(doc), 1);
     assert_step(o->channels[1].volume, 0, 1);
-    assert_true(vv_document_set_time(doc, 1, &err));
-    assert_true(vv_document_set_time(doc, 2, &err));
-    o = vv_document_selected_object(doc);
+    assert_true(vvg_document_set_time(doc, 1, &err));
+    assert_true(vvg_document_set_time(doc, 2, &err));
+    o = vvg_document_selected_object(doc);
     assert_int_equal(o->time, 2);
     assert_step(o->channels[0].volume, 2, 0);
     assert_step(o->channels[1].volume, 2, 1);
     assert_true(o->volume == o->channels[0].volume);
-    assert_false(vv_document_set_time(doc, 4, &err));
+    assert_false(vvg_document_set_time(doc, 4, &err));
     assert_non_null(strstr(err->message, "no time step 4 (4 steps)"));
     g_clear_error(&err);
-    assert_true(vv_document_undo(doc)); /* both steps at once: back to step 0 */
-    o = vv_document_selected_object(doc);
+    assert_true(vvg_document_undo(doc)); /* both steps at once: back to step 0 */
+    o = vvg_document_selected_object(doc);
     assert_int_equal(o->time, 0);
     assert_step(o->channels[1].volume, 0, 1);
 
@@ -463,38 +463,38 @@ test_channels_and_time(void **state) {
      * step to show next, and the last one asked ends shown; a step out of
      * range is heard of, the World unchanged */
     char heard[256] = "";
-    vv_document_request_time(doc, 1, time_failed, heard);
-    vv_document_request_time(doc, 3, time_failed, heard);
-    vv_document_request_time(doc, 2, time_failed, heard);
-    while (vv_document_time_pending(doc))
+    vvg_document_request_time(doc, 1, time_failed, heard);
+    vvg_document_request_time(doc, 3, time_failed, heard);
+    vvg_document_request_time(doc, 2, time_failed, heard);
+    while (vvg_document_time_pending(doc))
         g_main_context_iteration(NULL, TRUE);
-    o = vv_document_selected_object(doc);
+    o = vvg_document_selected_object(doc);
     assert_int_equal(o->time, 2);
     assert_step(o->channels[0].volume, 2, 0);
     assert_step(o->channels[1].volume, 2, 1);
     assert_string_equal(heard, "");
-    vv_document_request_time(doc, 9, time_failed, heard);
-    assert_false(vv_document_time_pending(doc));
+    vvg_document_request_time(doc, 9, time_failed, heard);
+    assert_false(vvg_document_time_pending(doc));
     assert_non_null(strstr(heard, "no time step 9"));
-    assert_int_equal(vv_document_selected_object(doc)->time, 2);
-    assert_true(vv_document_undo(doc)); /* back to step 0 */
-    assert_int_equal(vv_document_selected_object(doc)->time, 0);
+    assert_int_equal(vvg_document_selected_object(doc)->time, 2);
+    assert_true(vvg_document_undo(doc)); /* back to step 0 */
+    assert_int_equal(vvg_document_selected_object(doc)->time, 0);
 
     /* an Animator frame: the object at step 3, the base World's at step 0 */
-    GHashTable *cache = vv_time_cache_new();
-    vv_world *base = vv_document_snapshot(doc), *w = vv_document_snapshot(doc);
+    GHashTable *cache = vvg_time_cache_new();
+    vv_world *base = vvg_document_snapshot(doc), *w = vvg_document_snapshot(doc);
     w->objects[0]->time = 3;
-    assert_true(vv_world_apply_time(cache, w, base, &err));
+    assert_true(vvg_world_apply_time(cache, w, base, &err));
     assert_step(w->objects[0]->channels[0].volume, 3, 0);
     assert_step(w->objects[0]->channels[1].volume, 3, 1);
     assert_step(base->objects[0]->channels[1].volume, 0, 1);
     w->objects[0]->time = 7;
-    assert_false(vv_world_apply_time(cache, w, base, &err));
+    assert_false(vvg_world_apply_time(cache, w, base, &err));
     assert_non_null(strstr(err->message, "time step 7"));
     g_clear_error(&err);
     free(w->objects[0]->geometry.source);
     w->objects[0]->geometry.source = NULL;
-    assert_false(vv_world_apply_time(cache, w, base, &err));
+    assert_false(vvg_world_apply_time(cache, w, base, &err));
     assert_non_null(strstr(err->message, "not read from a file"));
     g_clear_error(&err);
     vv_world_free(w);
