@@ -132,7 +132,7 @@ cli_voxelize_main(int argc, char **argv) {
             goto fail_usage;
         o.voxel_spacing = d;
     }
-    if ((s = cli_get(&a, "filter")) && vv_filter_parse(s, &o.filter) != VV_OK) {
+    if ((s = cli_get(&a, "filter")) && vv_sampling_kernel_parse(s, &o.kernel) != VV_OK) {
         rc = cli_usage_error(&a, "--filter: unknown filter '%s' (box, tent or gauss)", s);
         goto fail_usage;
     }
@@ -193,8 +193,8 @@ cli_voxelize_main(int argc, char **argv) {
     if (!quiet)
         printf("wrote %s (%s, %d x %d x %d, %s, spacing %g, %s filter radius %g, %.3f s)\n", out,
                vv_format_name(format), v->dims[0], v->dims[1], v->dims[2],
-               vv_voxel_type_name(v->type), v->spacing[0], vv_filter_name(o.filter), o.radius,
-               seconds);
+               vv_voxel_type_name(v->type), v->spacing[0], vv_sampling_kernel_name(o.kernel),
+               o.radius, seconds);
     vv_volume_free(v);
     return CLI_EXIT_OK;
 fail_usage:

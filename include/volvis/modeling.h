@@ -10,7 +10,7 @@
  * the leaves and CSG operations (union, intersection, difference) inside.
  * Every node has a transform from its own coordinates to its parent's (the
  * root's parent is world space). vv_voxelize samples the tree onto a grid:
- * the density of a voxel is a filter weight looked up by the signed distance
+ * the density of a voxel is a sampling-kernel weight looked up by the signed distance
  * d from the voxel centre to the surface (negative inside), so the density
  * is 1 deep inside, 0 far outside and exactly 0.5 on the surface.
  *
@@ -34,64 +34,68 @@
 extern "C" {
 #endif
 
-/* ---- filters ----------------------------------------------------------- */
+/* ---- sampling kernels ---------------------------------------------------- */
 
 /**
- * Spherically symmetric 3-D reconstruction filters of radius R (in voxels):
+ * The sampling kernels of volume sampling: spherically symmetric 3-D
+ * reconstruction kernels of radius R (in voxels):
  *   box:   h(r) = 1                      for r <= R
  *   tent:  h(r) = 1 - r / R              (a cone; Wang and Kaufman's choice)
  *   gauss: h(r) = exp(-r^2 / (2 s^2)) - exp(-R^2 / (2 s^2)), s = R / 2
  *          (a Gaussian truncated smoothly to zero at R)
- * each normalised to unit integral.
+ * each normalised to unit integral. (Not Filtering's filters, filter.h: scene
+ * files and `volvis voxelize` still choose a kernel by the key "filter" and
+ * the option --filter.)
  */
-typedef enum vv_filter_kind {
-    VV_FILTER_BOX = 0,
-    VV_FILTER_TENT = 1,
-    VV_FILTER_GAUSS = 2
-} vv_filter_kind;
+typedef enum vv_sampling_kernel_kind {
+    VV_SAMPLING_KERNEL_BOX = 0,
+    VV_SAMPLING_KERNEL_TENT = 1,
+    VV_SAMPLING_KERNEL_GAUSS = 2
+} vv_sampling_kernel_kind;
 
 /** "box", "tent", "gauss"; "unknown" out of range. Never NULL. */
-const char *vv_filter_name(vv_filter_kind k);
-/** Parses a filter name ("box", "tent" or "linear", "gauss" or "gaussian").
+const char *vv_sampling_kernel_name(vv_sampling_kernel_kind k);
+/** Parses a kernel name ("box", "tent" or "linear", "gauss" or "gaussian").
  * Errors: VV_ERR_INVALID with the accepted names. */
-vv_status vv_filter_parse(const char *name, vv_filter_kind *out);
+vv_status vv_sampling_kernel_parse(const char *name, vv_sampling_kernel_kind *out);
 
 /**
- * A precomputed density table of a filter: entry i holds the integral of the
- * filter over the half-space lying beyond a plane at signed distance
+ * A precomputed density table of a kernel: entry i holds the integral of the
+ * kernel over the half-space lying beyond a plane at signed distance
  *   d_i = -radius + 2 radius i / (n - 1)   (voxels; negative inside)
- * from the filter centre, i.e. the density of a voxel whose centre is at
+ * from the kernel centre, i.e. the density of a voxel whose centre is at
  * signed distance d from a locally flat surface. The table is computed by
- * numerical integration of the 3-D filter (not from the closed forms), so
- * vv_filter_integral checks it. density[0] = 1, density[n-1] = 0 and
+ * numerical integration of the 3-D kernel (not from the closed forms), so
+ * vv_sampling_kernel_integral checks it. density[0] = 1, density[n-1] = 0 and
  * density(-d) = 1 - density(d); the 0.5 entry is at d = 0.
  */
-typedef struct vv_filter_table {
-    vv_filter_kind kind;
+typedef struct vv_sampling_kernel_table {
+    vv_sampling_kernel_kind kind;
     double radius; /**< voxels, > 0 */
     int n;         /**< entries, >= 2 */
     float *density;
-} vv_filter_table;
+} vv_sampling_kernel_table;
 
 /** Default number of table entries. */
-#define VV_FILTER_TABLE_SIZE 2048
+#define VV_SAMPLING_KERNEL_TABLE_SIZE 2048
 
 /**
  * Builds the table of @p kind with @p radius voxels (0.25 to 16) and @p n
- * entries (2 to 1<<20; n <= 0 means VV_FILTER_TABLE_SIZE). Errors:
+ * entries (2 to 1<<20; n <= 0 means VV_SAMPLING_KERNEL_TABLE_SIZE). Errors:
  * VV_ERR_INVALID, VV_ERR_NOMEM.
  */
-vv_status vv_filter_table_new(vv_filter_table **out, vv_filter_kind kind, double radius, int n);
+vv_status vv_sampling_kernel_table_new(vv_sampling_kernel_table **out, vv_sampling_kernel_kind kind,
+                                       double radius, int n);
 /** Releases a table. Accepts NULL. */
-void vv_filter_table_free(vv_filter_table *t);
+void vv_sampling_kernel_table_free(vv_sampling_kernel_table *t);
 /** Density at signed distance @p d voxels, linearly interpolated; 1 below -radius, 0 above. */
-double vv_filter_table_eval(const vv_filter_table *t, double d);
+double vv_sampling_kernel_table_eval(const vv_sampling_kernel_table *t, double d);
 /**
  * The same density from the closed-form integral (spherical-cap volumes for
  * the box, their analogues for the tent and the truncated Gaussian), for
  * checking the tables.
  */
-double vv_filter_integral(vv_filter_kind kind, double radius, double d);
+double vv_sampling_kernel_integral(vv_sampling_kernel_kind kind, double radius, double d);
 
 /* ---- shapes -------------------------------------------------------------- */
 
@@ -219,9 +223,9 @@ vv_box vv_shape_bounds(const vv_shape *s);
 /* ---- voxelization -------------------------------------------------------- */
 
 typedef struct vv_voxelize_options {
-    vv_filter_kind filter; /**< default VV_FILTER_TENT */
-    double radius;         /**< filter radius in voxels (of the largest spacing); default 1.5 */
-    vv_voxel_type type;    /**< VV_U8 (density * 255) or VV_F32 (density); default VV_U8 */
+    vv_sampling_kernel_kind kernel; /**< scene key "filter"; default VV_SAMPLING_KERNEL_TENT */
+    double radius;      /**< kernel radius in voxels (of the largest spacing); default 1.5 */
+    vv_voxel_type type; /**< VV_U8 (density * 255) or VV_F32 (density); default VV_U8 */
     /** Explicit grid when dims[0] > 0: dims, spacing (> 0), origin; axis-aligned. */
     int dims[3];
     double spacing[3];
@@ -239,10 +243,10 @@ void vv_voxelize_options_init(vv_voxelize_options *o);
 
 /**
  * Volume-samples the model @p shape (world coordinates = the root's parent
- * space) onto a grid: each voxel gets the filter-table density of its signed
+ * space) onto a grid: each voxel gets the kernel-table density of its signed
  * distance to each primitive, combined through the tree per voxel (union =
  * max, intersection = min, difference = min(a, 1 - b)). Only voxels within
- * the filter radius of a primitive's surface are evaluated one by one:
+ * the kernel radius of a primitive's surface are evaluated one by one:
  * the grid is walked in 4^3 subvolumes classified as inside, outside or
  * near the surface from a lower bound of the distance at the subvolume
  * centre; inside ones are filled, outside ones skipped, and a mesh is scan

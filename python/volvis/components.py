@@ -433,19 +433,19 @@ class Shape:
 def voxelize(model, size=None, voxel_spacing=None, dims=None, spacing=None, origin=None,
              filter=None, radius=None, dtype=None, margin=None, threads=0, progress=None):
     """Volume-samples a geometric model into a Volume (vv_voxelize; Wang and
-    Kaufman's method, docs/modeling.md): each voxel gets the filter-table
-    density of its signed distance to the surface (1 inside, 0 outside, 0.5
-    on it; u8 stores 255 * density, surface at 127.5).
+    Kaufman's method, docs/modeling.md): each voxel gets the sampling-kernel
+    table density of its signed distance to the surface (1 inside, 0
+    outside, 0.5 on it; u8 stores 255 * density, surface at 127.5).
 
     model: a :class:`Shape`, a :class:`Mesh` (or (vertices, triangles)), or
     a file: a mesh Assimp reads or a scene file whose "geometry" objects are
     united (their voxelization keys apply unless given here). Grid: ``dims``
     with ``spacing`` and ``origin`` (explicit), else the model's bounding
     box plus ``margin`` voxels, with ``voxel_spacing`` world units or
-    ``size`` voxels along the longest axis (default 128). filter: "box",
-    "tent" (default) or "gauss" of ``radius`` voxels (default 1.5); dtype:
-    "u8" (default) or "f32". Errors: InvalidError, LimitError,
-    CancelledError."""
+    ``size`` voxels along the longest axis (default 128). filter: the
+    sampling kernel, "box", "tent" (default) or "gauss" of ``radius``
+    voxels (default 1.5); dtype: "u8" (default) or "f32". Errors:
+    InvalidError, LimitError, CancelledError."""
     o = ffi.new("vv_voxelize_options *")
     lib.vv_voxelize_options_init(o)
     if isinstance(model, (str, os.PathLike)):
@@ -460,9 +460,9 @@ def voxelize(model, size=None, voxel_spacing=None, dims=None, spacing=None, orig
                                % type(model).__name__)
         shape = ffi.gc(model._build(), lib.vv_shape_free)
     if filter is not None:
-        f = ffi.new("vv_filter_kind *")
-        check(lib.vv_filter_parse(cstr(filter), f))
-        o.filter = f[0]
+        f = ffi.new("vv_sampling_kernel_kind *")
+        check(lib.vv_sampling_kernel_parse(cstr(filter), f))
+        o.kernel = f[0]
     if radius is not None:
         o.radius = float(radius)
     if dtype is not None:

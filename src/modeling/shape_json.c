@@ -515,7 +515,8 @@ voxelize_options_from_json(vv_voxelize_options *opt, json_t *o, const char *path
     json_t *f = json_object_get(o, "filter");
     if (f) {
         kpath(kp, path, "filter");
-        if (!json_is_string(f) || vv_filter_parse(json_string_value(f), &opt->filter) != VV_OK)
+        if (!json_is_string(f) ||
+            vv_sampling_kernel_parse(json_string_value(f), &opt->kernel) != VV_OK)
             return jfail(&c, kp, VV_ERR_FORMAT, "expected \"box\", \"tent\" or \"gauss\"");
     }
     json_t *t = json_object_get(o, "voxel_type");

@@ -5,11 +5,11 @@
  * The grid is walked in subvolumes of 4^3 voxels. For each subvolume every
  * node of the tree is classified as inside, outside or near its surface,
  * from a lower bound of the primitive's distance at the subvolume centre
- * (with the subvolume's half diagonal plus the filter radius as margin) and
+ * (with the subvolume's half diagonal plus the kernel radius as margin) and
  * the CSG rules; a subvolume whose root is inside is filled, one outside is
  * skipped, and only the others are sampled voxel by voxel, evaluating the
  * primitives that are near there. A voxel's density from one primitive is
- * the filter table at its signed distance; CSG combines densities with
+ * the kernel table at its signed distance; CSG combines densities with
  * max / min / min(a, 1 - b). Meshes are scan converted onto the grid first
  * (mesh_scan.c).
  */
@@ -39,12 +39,12 @@ typedef struct vctx {
     int n_nodes, cap_nodes;
     int *kids;
     int n_kids, cap_kids;
-    const vv_filter_table *table;
+    const vv_sampling_kernel_table *table;
     const float *tab;          /* table->density */
     double tab_scale, tab_off; /* entry = d_world * tab_scale + tab_off */
     int tab_last;
-    double inv_h; /* voxels of the filter table per world unit */
-    double rw;    /* filter radius, world units */
+    double inv_h; /* voxels of the kernel table per world unit */
+    double rw;    /* kernel radius, world units */
     int dims[3];
     double spacing[3], origin[3];
     int nb[3]; /* bricks per axis */
@@ -226,7 +226,7 @@ classify(const vctx *c, int idx, const double lo[3], const double hi[3], vv_vec3
     return r;
 }
 
-/* the filter table at signed world distance d (vv_filter_table_eval, inlined) */
+/* the kernel table at signed world distance d (vv_sampling_kernel_table_eval, inlined) */
 static inline double
 table_at(const vctx *c, double d) {
     double x = d * c->tab_scale + c->tab_off;
@@ -272,7 +272,7 @@ density(const vctx *c, int idx, vv_vec3 p, size_t voxel, const unsigned char *cl
 void
 vv_voxelize_options_init(vv_voxelize_options *o) {
     memset(o, 0, sizeof *o);
-    o->filter = VV_FILTER_TENT;
+    o->kernel = VV_SAMPLING_KERNEL_TENT;
     o->radius = 1.5;
     o->type = VV_U8;
     o->size = 128;
@@ -373,15 +373,15 @@ vv_voxelize(vv_volume **out, const vv_shape *shape, const vv_voxelize_options *o
     vctx c;
     memset(&c, 0, sizeof c);
     double vmin_all = 1.0, vmax_all = 0.0;
-    vv_filter_table *table = NULL;
+    vv_sampling_kernel_table *table = NULL;
     vv_volume *vol = NULL;
-    vv_status st = vv_filter_table_new(&table, opt->filter, opt->radius, 0);
+    vv_status st = vv_sampling_kernel_table_new(&table, opt->kernel, opt->radius, 0);
     if (st != VV_OK)
         return vv_error_prefix(st, "voxelize");
     c.table = table;
     int depth = tree_depth(shape);
     if (depth < 0 || depth > MAX_DEPTH) {
-        vv_filter_table_free(table);
+        vv_sampling_kernel_table_free(table);
         return depth < 0
                    ? vv_error_set(VV_ERR_NOMEM, "voxelize: out of memory")
                    : vv_error_set(VV_ERR_LIMIT, "voxelize: the model tree is deeper than %d levels",
@@ -585,7 +585,7 @@ done:
     }
     free(c.nodes);
     free(c.kids);
-    vv_filter_table_free(table);
+    vv_sampling_kernel_table_free(table);
     if (st != VV_OK) {
         vv_volume_free(vol);
         return st;

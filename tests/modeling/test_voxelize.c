@@ -1,12 +1,12 @@
 /*
- * Volume-sampled voxelization (src/modeling): filter tables against their
+ * Volume-sampled voxelization (src/modeling): sampling-kernel tables against their
  * closed-form integrals; the 0.5-level volume and the surface area of
  * voxelized solids against analytic values (sphere r = 5..100, boxes with
  * and without rounded edges, torus, cylinder, cone, ellipsoid, extrusion,
  * thick polygon, revolution, helix sweep, transforms); CSG identities;
  * closed and open meshes; bad input.
  *
- * Measures: measure_volume_k from the closed-form filter integrals,
+ * Measures: measure_volume_k from the closed-form kernel integrals,
  * independently of the library's tables, and Marching Cubes
  * (vv_measure_isosurface at the 0.5 level).
  */
@@ -24,11 +24,11 @@ typedef struct measure {
 } measure;
 
 static double
-invert_density(vv_filter_kind k, double R, double rho) {
+invert_density(vv_sampling_kernel_kind k, double R, double rho) {
     double lo = -R, hi = R;
     for (int it = 0; it < 50; it++) {
         double mid = 0.5 * (lo + hi);
-        if (vv_filter_integral(k, R, mid) > rho)
+        if (vv_sampling_kernel_integral(k, R, mid) > rho)
             lo = mid;
         else
             hi = mid;
@@ -38,7 +38,7 @@ invert_density(vv_filter_kind k, double R, double rho) {
 
 /*
  * Volume inside the 0.5 level and area of an f32 density volume made with
- * filter k of radius R (isotropic spacing h), from the closed-form filter
+ * kernel k of radius R (isotropic spacing h), from the closed-form kernel
  * integral, not the library's tables:
  *  - each voxel's signed distance d (voxels) is recovered by inverting the
  *    integral; the sum of the inside fractions clamp(1/2 - d, 0, 1) is the
@@ -49,14 +49,14 @@ invert_density(vv_filter_kind k, double R, double rho) {
  *    differences), the density falling from 1 to 0 across the surface.
  */
 static measure
-measure_volume_k(const vv_volume *v, vv_filter_kind k, double R) {
+measure_volume_k(const vv_volume *v, vv_sampling_kernel_kind k, double R) {
     const float *rho = v->data;
     int nx = v->dims[0], ny = v->dims[1], nz = v->dims[2];
     size_t n = vv_volume_voxel_count(v), sy = (size_t)nx, sz = (size_t)nx * ny;
     double h = v->spacing[0], vol = 0, area = 0, curv = 0;
     enum { NL = 1 << 16 };
     static double inv[NL + 1];
-    static vv_filter_kind inv_k = (vv_filter_kind)-1;
+    static vv_sampling_kernel_kind inv_k = (vv_sampling_kernel_kind)-1;
     static double inv_r = 0;
     double *d = malloc(n * sizeof *d);
     assert_non_null(d);
@@ -101,7 +101,7 @@ measure_volume_k(const vv_volume *v, vv_filter_kind k, double R) {
 
 static measure
 measure_volume(const vv_volume *v) {
-    return measure_volume_k(v, VV_FILTER_TENT, 1.5);
+    return measure_volume_k(v, VV_SAMPLING_KERNEL_TENT, 1.5);
 }
 
 /* The 0.5-level volume and area by Marching Cubes (vv_measure_isosurface,
@@ -117,10 +117,10 @@ measure_mc(const vv_volume *v) {
 }
 
 static void
-opts_f32(vv_voxelize_options *o, vv_filter_kind k, double R) {
+opts_f32(vv_voxelize_options *o, vv_sampling_kernel_kind k, double R) {
     vv_voxelize_options_init(o);
     o->type = VV_F32;
-    o->filter = k;
+    o->kernel = k;
     o->radius = R;
 }
 
@@ -141,43 +141,44 @@ check_rel(const char *what, double got, double want, double tol) {
 /* ---------------------------------------------------------------------- */
 
 static void
-test_filter_tables(void **state) {
+test_sampling_kernel_tables(void **state) {
     (void)state;
-    const vv_filter_kind kinds[3] = {VV_FILTER_BOX, VV_FILTER_TENT, VV_FILTER_GAUSS};
+    const vv_sampling_kernel_kind kinds[3] = {VV_SAMPLING_KERNEL_BOX, VV_SAMPLING_KERNEL_TENT,
+                                              VV_SAMPLING_KERNEL_GAUSS};
     const double radii[5] = {0.5, 1.0, 1.5, 2.0, 3.5};
     for (int k = 0; k < 3; k++)
         for (int r = 0; r < 5; r++) {
-            vv_filter_table *t = NULL;
-            vt_ok(vv_filter_table_new(&t, kinds[k], radii[r], 0));
-            assert_float_equal(vv_filter_table_eval(t, 0.0), 0.5, 1e-6);
-            assert_float_equal(vv_filter_table_eval(t, -radii[r] - 1), 1.0, 0.0);
-            assert_float_equal(vv_filter_table_eval(t, radii[r] + 1), 0.0, 0.0);
+            vv_sampling_kernel_table *t = NULL;
+            vt_ok(vv_sampling_kernel_table_new(&t, kinds[k], radii[r], 0));
+            assert_float_equal(vv_sampling_kernel_table_eval(t, 0.0), 0.5, 1e-6);
+            assert_float_equal(vv_sampling_kernel_table_eval(t, -radii[r] - 1), 1.0, 0.0);
+            assert_float_equal(vv_sampling_kernel_table_eval(t, radii[r] + 1), 0.0, 0.0);
             double worst = 0, prev = 2;
             for (int i = 0; i <= 1000; i++) {
                 double d = -1.2 * radii[r] + 2.4 * radii[r] * i / 1000.0;
-                double a = vv_filter_table_eval(t, d),
-                       b = vv_filter_integral(kinds[k], radii[r], d);
+                double a = vv_sampling_kernel_table_eval(t, d),
+                       b = vv_sampling_kernel_integral(kinds[k], radii[r], d);
                 worst = fmax(worst, fabs(a - b));
                 assert_true(a <= prev + 1e-7); /* monotone */
                 prev = a;
             }
             if (!(worst < 2e-5))
-                fail_msg("%s R=%g: table differs from the integral by %g", vv_filter_name(kinds[k]),
-                         radii[r], worst);
-            vv_filter_table_free(t);
+                fail_msg("%s R=%g: table differs from the integral by %g",
+                         vv_sampling_kernel_name(kinds[k]), radii[r], worst);
+            vv_sampling_kernel_table_free(t);
         }
     /* the closed forms themselves: the box is the spherical cap volume */
     double R = 2.0, d = 0.7, hcap = R - d;
-    assert_float_equal(vv_filter_integral(VV_FILTER_BOX, R, d),
+    assert_float_equal(vv_sampling_kernel_integral(VV_SAMPLING_KERNEL_BOX, R, d),
                        VT_PI * hcap * hcap * (3 * R - hcap) / 3 / (4.0 / 3 * VT_PI * R * R * R),
                        1e-12);
-    vv_filter_table *t = NULL;
-    vt_err(vv_filter_table_new(&t, VV_FILTER_TENT, 0.0, 0));
-    vt_err(vv_filter_table_new(&t, (vv_filter_kind)7, 1.0, 0));
-    vv_filter_kind fk;
-    vt_ok(vv_filter_parse("gauss", &fk));
-    assert_int_equal(fk, VV_FILTER_GAUSS);
-    vt_err(vv_filter_parse("sinc", &fk));
+    vv_sampling_kernel_table *t = NULL;
+    vt_err(vv_sampling_kernel_table_new(&t, VV_SAMPLING_KERNEL_TENT, 0.0, 0));
+    vt_err(vv_sampling_kernel_table_new(&t, (vv_sampling_kernel_kind)7, 1.0, 0));
+    vv_sampling_kernel_kind fk;
+    vt_ok(vv_sampling_kernel_parse("gauss", &fk));
+    assert_int_equal(fk, VV_SAMPLING_KERNEL_GAUSS);
+    vt_err(vv_sampling_kernel_parse("sinc", &fk));
 }
 
 static void
@@ -191,7 +192,7 @@ test_sphere_radii(void **state) {
         /* off the lattice symmetry */
         vv_shape_transform(s, vv_mat4_translate(vv_vec3_make(0.31, -0.17, 0.43)));
         vv_voxelize_options o;
-        opts_f32(&o, VV_FILTER_TENT, 1.5);
+        opts_f32(&o, VV_SAMPLING_KERNEL_TENT, 1.5);
         o.voxel_spacing = 1.0;
         vv_volume *v = vox(s, &o);
         measure m = measure_volume(v);
@@ -215,8 +216,9 @@ test_sphere_radii(void **state) {
         vv_volume_free(v);
         vv_shape_free(s);
     }
-    /* every filter, u8 output: the u8 volume scaled back agrees */
-    const vv_filter_kind kinds[3] = {VV_FILTER_BOX, VV_FILTER_TENT, VV_FILTER_GAUSS};
+    /* every kernel, u8 output: the u8 volume scaled back agrees */
+    const vv_sampling_kernel_kind kinds[3] = {VV_SAMPLING_KERNEL_BOX, VV_SAMPLING_KERNEL_TENT,
+                                              VV_SAMPLING_KERNEL_GAUSS};
     for (int k = 0; k < 3; k++) {
         vv_shape *s = NULL;
         vt_ok(vv_shape_sphere(&s, 12.0));
@@ -225,7 +227,8 @@ test_sphere_radii(void **state) {
         o.voxel_spacing = 1.0;
         vv_volume *v = vox(s, &o);
         measure m = measure_volume_k(v, kinds[k], 2.0);
-        check_rel(vv_filter_name(kinds[k]), m.volume, 4.0 / 3 * VT_PI * 12 * 12 * 12, 0.01);
+        check_rel(vv_sampling_kernel_name(kinds[k]), m.volume, 4.0 / 3 * VT_PI * 12 * 12 * 12,
+                  0.01);
         o.type = VV_U8;
         vv_volume *u = vox(s, &o);
         assert_int_equal(u->dims[0], v->dims[0]);
@@ -243,7 +246,7 @@ test_sphere_radii(void **state) {
 static void
 check_shape(vv_shape *s, double want_vol, double want_area, double h, const char *what) {
     vv_voxelize_options o;
-    opts_f32(&o, VV_FILTER_TENT, 1.5);
+    opts_f32(&o, VV_SAMPLING_KERNEL_TENT, 1.5);
     o.voxel_spacing = h;
     vv_volume *v = vox(s, &o);
     measure m = measure_volume(v);
@@ -341,7 +344,7 @@ test_world_objects(void **state) {
     check_shape(s, 4.0 / 3 * VT_PI * 12 * 12 * 12, 4 * VT_PI * 144, 0.5, "object sphere");
     /* voxel for voxel the same as Modeling's sphere there */
     vv_voxelize_options opt;
-    opts_f32(&opt, VV_FILTER_TENT, 1.5);
+    opts_f32(&opt, VV_SAMPLING_KERNEL_TENT, 1.5);
     opt.voxel_spacing = 1.0;
     vt_ok(vv_shape_object(&s, o));
     vv_volume *a = vox(s, &opt);
@@ -421,7 +424,7 @@ static void
 test_csg(void **state) {
     (void)state;
     vv_voxelize_options o;
-    opts_f32(&o, VV_FILTER_TENT, 1.5);
+    opts_f32(&o, VV_SAMPLING_KERNEL_TENT, 1.5);
     o.dims[0] = o.dims[1] = o.dims[2] = 72;
     o.spacing[0] = o.spacing[1] = o.spacing[2] = 1.0;
     o.origin[0] = o.origin[1] = o.origin[2] = -35.5;
@@ -517,7 +520,7 @@ test_meshes(void **state) {
     vv_shape *s = NULL;
     vt_ok(vv_shape_mesh(&s, m, VV_MESH_AUTO, 0));
     vv_voxelize_options o;
-    opts_f32(&o, VV_FILTER_TENT, 1.5);
+    opts_f32(&o, VV_SAMPLING_KERNEL_TENT, 1.5);
     o.voxel_spacing = 0.5;
     vv_volume *v = vox(s, &o);
     measure ms = measure_volume(v);
@@ -575,7 +578,7 @@ test_meshes(void **state) {
     /* turned about z only: the hole stays across the z rows (a tilted hole
      * would make the solid itself ambiguous) */
     vv_shape_transform(s, vv_mat4_rotate(vv_vec3_make(0, 0, 1), 0.3));
-    opts_f32(&o, VV_FILTER_TENT, 1.5);
+    opts_f32(&o, VV_SAMPLING_KERNEL_TENT, 1.5);
     o.voxel_spacing = 0.5;
     v = vox(s, &o);
     /* the missing face has no distance band (no triangles): its level is
@@ -597,7 +600,7 @@ test_meshes(void **state) {
     vt_ok(vv_mesh_topology_compute(knot, &topo));
     assert_true(topo.closed);
     vt_ok(vv_shape_mesh(&s, knot, VV_MESH_AUTO, 0));
-    opts_f32(&o, VV_FILTER_TENT, 1.5);
+    opts_f32(&o, VV_SAMPLING_KERNEL_TENT, 1.5);
     o.size = 160;
     v = vox(s, &o);
     measure mk = measure_volume(v);
@@ -660,7 +663,7 @@ mesh_volume_voxelized(vv_mesh *m, vv_mesh_mode mode, float *centre) {
     vv_shape *s = NULL;
     vt_ok(vv_shape_mesh(&s, m, mode, 0));
     vv_voxelize_options o;
-    opts_f32(&o, VV_FILTER_TENT, 1.5);
+    opts_f32(&o, VV_SAMPLING_KERNEL_TENT, 1.5);
     o.voxel_spacing = 0.5;
     vv_volume *v = vox(s, &o);
     if (centre)
@@ -776,7 +779,7 @@ test_imperfect_meshes(void **state) {
     vv_shape *s = NULL;
     vt_ok(vv_shape_mesh(&s, bunny, VV_MESH_AUTO, 0));
     vv_voxelize_options o;
-    opts_f32(&o, VV_FILTER_TENT, 1.5);
+    opts_f32(&o, VV_SAMPLING_KERNEL_TENT, 1.5);
     o.size = 128;
     vv_volume *v = vox(s, &o);
     double vb = measure_volume(v).volume;
@@ -835,7 +838,7 @@ test_winding_number(void **state) {
     vv_shape *s = NULL;
     vt_ok(vv_shape_mesh(&s, m, VV_MESH_SOLID, 0));
     vv_voxelize_options o;
-    opts_f32(&o, VV_FILTER_TENT, 1.5);
+    opts_f32(&o, VV_SAMPLING_KERNEL_TENT, 1.5);
     o.voxel_spacing = 1.0;
     vv_volume *v = vox(s, &o);
     const float *rho = v->data;
@@ -1006,11 +1009,16 @@ test_threads_progress(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_filter_tables),    cmocka_unit_test(test_sphere_radii),
-        cmocka_unit_test(test_primitives),       cmocka_unit_test(test_csg),
-        cmocka_unit_test(test_meshes),           cmocka_unit_test(test_imperfect_meshes),
-        cmocka_unit_test(test_winding_number),   cmocka_unit_test(test_bad_input),
-        cmocka_unit_test(test_threads_progress), cmocka_unit_test(test_world_objects),
+        cmocka_unit_test(test_sampling_kernel_tables),
+        cmocka_unit_test(test_sphere_radii),
+        cmocka_unit_test(test_primitives),
+        cmocka_unit_test(test_csg),
+        cmocka_unit_test(test_meshes),
+        cmocka_unit_test(test_imperfect_meshes),
+        cmocka_unit_test(test_winding_number),
+        cmocka_unit_test(test_bad_input),
+        cmocka_unit_test(test_threads_progress),
+        cmocka_unit_test(test_world_objects),
     };
     return vt_run_tests(tests, NULL, NULL);
 }

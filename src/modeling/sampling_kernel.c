@@ -1,13 +1,13 @@
 /*
- * Filter tables of volume sampling (Wang and Kaufman, "Volume Sampled
+ * Sampling-kernel tables of volume sampling (Wang and Kaufman, "Volume Sampled
  * Voxelization of Geometric Primitives", IEEE Visualization '93): the
  * density of a voxel whose centre lies at signed distance d from a locally
- * flat surface is the integral of the 3-D filter over the half-space beyond
- * the plane at distance d. For a spherically symmetric filter h(r) that
- * integral only depends on d, through the filter's projection onto a line,
+ * flat surface is the integral of the 3-D kernel over the half-space beyond
+ * the plane at distance d. For a spherically symmetric kernel h(r) that
+ * integral only depends on d, through the kernel's projection onto a line,
  *   p(t) = 2 pi * integral_{|t|}^{R} h(r) r dr,
  * so the table is F(d) = integral_{d}^{R} p(t) dt / integral_{-R}^{R} p(t) dt.
- * Both integrals are done numerically here; vv_filter_integral gives the
+ * Both integrals are done numerically here; vv_sampling_kernel_integral gives the
  * closed forms the tests compare against.
  */
 #include <math.h>
@@ -17,28 +17,28 @@
 #include "volvis/modeling.h"
 
 const char *
-vv_filter_name(vv_filter_kind k) {
+vv_sampling_kernel_name(vv_sampling_kernel_kind k) {
     switch (k) {
-    case VV_FILTER_BOX:
+    case VV_SAMPLING_KERNEL_BOX:
         return "box";
-    case VV_FILTER_TENT:
+    case VV_SAMPLING_KERNEL_TENT:
         return "tent";
-    case VV_FILTER_GAUSS:
+    case VV_SAMPLING_KERNEL_GAUSS:
         return "gauss";
     }
     return "unknown";
 }
 
 vv_status
-vv_filter_parse(const char *name, vv_filter_kind *out) {
+vv_sampling_kernel_parse(const char *name, vv_sampling_kernel_kind *out) {
     if (!name || !out)
-        return vv_error_set(VV_ERR_INVALID, "filter: NULL argument");
+        return vv_error_set(VV_ERR_INVALID, "sampling kernel: NULL argument");
     if (strcmp(name, "box") == 0)
-        *out = VV_FILTER_BOX;
+        *out = VV_SAMPLING_KERNEL_BOX;
     else if (strcmp(name, "tent") == 0 || strcmp(name, "linear") == 0)
-        *out = VV_FILTER_TENT;
+        *out = VV_SAMPLING_KERNEL_TENT;
     else if (strcmp(name, "gauss") == 0 || strcmp(name, "gaussian") == 0)
-        *out = VV_FILTER_GAUSS;
+        *out = VV_SAMPLING_KERNEL_GAUSS;
     else
         return vv_error_set(VV_ERR_INVALID, "unknown filter \"%s\"; expected box, tent or gauss",
                             name);
@@ -47,15 +47,15 @@ vv_filter_parse(const char *name, vv_filter_kind *out) {
 
 /* The radial profile h(r), r in [0, R]. */
 static double
-radial(vv_filter_kind k, double R, double r) {
+radial(vv_sampling_kernel_kind k, double R, double r) {
     if (r > R)
         return 0.0;
     switch (k) {
-    case VV_FILTER_BOX:
+    case VV_SAMPLING_KERNEL_BOX:
         return 1.0;
-    case VV_FILTER_TENT:
+    case VV_SAMPLING_KERNEL_TENT:
         return 1.0 - r / R;
-    case VV_FILTER_GAUSS: {
+    case VV_SAMPLING_KERNEL_GAUSS: {
         double s = 0.5 * R;
         return exp(-r * r / (2 * s * s)) - exp(-R * R / (2 * s * s));
     }
@@ -65,7 +65,7 @@ radial(vv_filter_kind k, double R, double r) {
 
 /* Projection p(t) = 2 pi * integral_{|t|}^R h(r) r dr by composite Simpson. */
 static double
-projection(vv_filter_kind k, double R, double t) {
+projection(vv_sampling_kernel_kind k, double R, double t) {
     double a = fabs(t);
     if (a >= R)
         return 0.0;
@@ -80,20 +80,24 @@ projection(vv_filter_kind k, double R, double t) {
 }
 
 vv_status
-vv_filter_table_new(vv_filter_table **out, vv_filter_kind kind, double radius, int n) {
+vv_sampling_kernel_table_new(vv_sampling_kernel_table **out, vv_sampling_kernel_kind kind,
+                             double radius, int n) {
     if (!out)
-        return vv_error_set(VV_ERR_INVALID, "filter table: NULL output");
+        return vv_error_set(VV_ERR_INVALID, "sampling kernel table: NULL output");
     *out = NULL;
-    if (kind != VV_FILTER_BOX && kind != VV_FILTER_TENT && kind != VV_FILTER_GAUSS)
-        return vv_error_set(VV_ERR_INVALID, "filter table: unknown filter %d", (int)kind);
+    if (kind != VV_SAMPLING_KERNEL_BOX && kind != VV_SAMPLING_KERNEL_TENT &&
+        kind != VV_SAMPLING_KERNEL_GAUSS)
+        return vv_error_set(VV_ERR_INVALID, "sampling kernel table: unknown kernel %d", (int)kind);
     if (!(radius >= 0.25 && radius <= 16.0))
-        return vv_error_set(VV_ERR_INVALID, "filter table: radius %g voxels is outside [0.25, 16]",
+        return vv_error_set(VV_ERR_INVALID,
+                            "sampling kernel table: radius %g voxels is outside [0.25, 16]",
                             radius);
     if (n <= 0)
-        n = VV_FILTER_TABLE_SIZE;
+        n = VV_SAMPLING_KERNEL_TABLE_SIZE;
     if (n < 2 || n > (1 << 20))
-        return vv_error_set(VV_ERR_INVALID, "filter table: %d entries is outside [2, 2^20]", n);
-    vv_filter_table *t = calloc(1, sizeof *t);
+        return vv_error_set(VV_ERR_INVALID,
+                            "sampling kernel table: %d entries is outside [2, 2^20]", n);
+    vv_sampling_kernel_table *t = calloc(1, sizeof *t);
     /* cumulative integral on a grid 8x finer than the table, trapezoid rule */
     int fine = 8 * (n - 1);
     double *cum = malloc((size_t)(fine + 1) * sizeof *cum);
@@ -101,8 +105,8 @@ vv_filter_table_new(vv_filter_table **out, vv_filter_kind kind, double radius, i
         t->density = malloc((size_t)n * sizeof *t->density);
     if (!t || !cum || !t->density) {
         free(cum);
-        vv_filter_table_free(t);
-        return vv_error_set(VV_ERR_NOMEM, "filter table: out of memory");
+        vv_sampling_kernel_table_free(t);
+        return vv_error_set(VV_ERR_NOMEM, "sampling kernel table: out of memory");
     }
     t->kind = kind;
     t->radius = radius;
@@ -137,7 +141,7 @@ vv_filter_table_new(vv_filter_table **out, vv_filter_kind kind, double radius, i
 }
 
 void
-vv_filter_table_free(vv_filter_table *t) {
+vv_sampling_kernel_table_free(vv_sampling_kernel_table *t) {
     if (!t)
         return;
     free(t->density);
@@ -145,7 +149,7 @@ vv_filter_table_free(vv_filter_table *t) {
 }
 
 double
-vv_filter_table_eval(const vv_filter_table *t, double d) {
+vv_sampling_kernel_table_eval(const vv_sampling_kernel_table *t, double d) {
     double x = (d / t->radius + 1.0) * 0.5 * (t->n - 1);
     if (!(x > 0.0))
         return 1.0;
@@ -158,13 +162,13 @@ vv_filter_table_eval(const vv_filter_table *t, double d) {
 
 /* Closed-form integral beyond d >= 0 (unnormalised) of each projection. */
 static double
-beyond(vv_filter_kind k, double R, double d) {
+beyond(vv_sampling_kernel_kind k, double R, double d) {
     switch (k) {
-    case VV_FILTER_BOX: /* p ~ R^2 - t^2 */
+    case VV_SAMPLING_KERNEL_BOX: /* p ~ R^2 - t^2 */
         return R * R * (R - d) - (R * R * R - d * d * d) / 3.0;
-    case VV_FILTER_TENT: /* p ~ R^2/6 - t^2/2 + |t|^3/(3R) */
+    case VV_SAMPLING_KERNEL_TENT: /* p ~ R^2/6 - t^2/2 + |t|^3/(3R) */
         return R * R * R / 12.0 - R * R * d / 6.0 + d * d * d / 6.0 - d * d * d * d / (12.0 * R);
-    case VV_FILTER_GAUSS: {
+    case VV_SAMPLING_KERNEL_GAUSS: {
         /* p ~ s^2 (exp(-t^2/2s^2) - E) - E (R^2 - t^2) / 2, E = exp(-R^2/2s^2) */
         double s = 0.5 * R, c = s * sqrt(2.0), E = exp(-R * R / (2 * s * s));
         return s * s * (s * sqrt(VV_PI / 2.0) * (erf(R / c) - erf(d / c)) - E * (R - d)) -
@@ -175,7 +179,7 @@ beyond(vv_filter_kind k, double R, double d) {
 }
 
 double
-vv_filter_integral(vv_filter_kind kind, double radius, double d) {
+vv_sampling_kernel_integral(vv_sampling_kernel_kind kind, double radius, double d) {
     if (d <= -radius)
         return 1.0;
     if (d >= radius)
