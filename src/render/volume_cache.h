@@ -34,76 +34,21 @@
 #include <emmintrin.h>
 #endif
 
+#include "render/tf_tables.h"
 #include "volvis/render.h"
 #include "volvis/sys/renderer.h"
 
-#define VV_VC_BLOCK 4  /* subvolume side in cells */
-#define VV_VC_GROUP 4  /* subvolumes per side of a group (the pyramid's second level) */
-#define VV_VC_LUT 4096 /* transfer-function table entries */
+#define VV_VC_BLOCK 4 /* subvolume side in cells */
+#define VV_VC_GROUP 4 /* subvolumes per side of a group (the pyramid's second level) */
 /* cached volumes per renderer: >= the objects of one render, so none in use
  * is evicted */
 #define VV_VC_MAX 64
-#define VV_VC_CHUNK 32    /* samples classified at a time (vv_vray_classify) */
-#define VV_VC_LUT2_V 1024 /* 2-D transfer-function table: value bins */
-#define VV_VC_LUT2_G 128  /* 2-D transfer-function table: gradient-magnitude bins */
+#define VV_VC_CHUNK 32 /* samples classified at a time (vv_vray_classify) */
 #if defined(__x86_64__) && defined(__GNUC__)
 #define VV_VC_HAVE_AVX2 1
 #else
 #define VV_VC_HAVE_AVX2 0
 #endif
-
-/* What an object's tables depend on besides the volume. */
-typedef struct vv_vtables_key {
-    vv_render_mode mode;
-    vv_segmentation segmentation;
-    double threshold, iso, dt;
-    vv_vec3 base;
-    int skipping, flags; /* VV_VT_EXT, VV_VT_PREINT */
-    vv_tf tf;
-    vv_tf2d tf2d; /* VV_SEG_TRANSFER_FUNCTION_2D in composite mode */
-} vv_vtables_key;
-
-/* An object's tables. lut: VV_VC_LUT x {alpha, r*alpha, g*alpha, b*alpha}
- * with alpha corrected for the step (composite), or {alpha, r, g, b}
- * (projections); NULL in iso mode. ext: VV_VC_LUT extinctions per world
- * unit, -ln(1 - alpha) / opacity_unit_distance, or NULL when not asked
- * for. bvis: per subvolume, visible; bdist: chessboard distance in
- * subvolumes to the nearest visible one, at most 255 (0: visible). */
-/* lut2d (2-D transfer function, composite mode only; else NULL):
- * VV_VC_LUT2_G rows (gradient magnitude) of VV_VC_LUT2_V entries (value) of
- * {alpha, r*alpha, g*alpha, b*alpha}; value bin = nearest of table index *
- * (LUT2_V - 1) / (LUT - 1); gradient bin = nearest of gm * g_scale, the
- * last bin lying beyond every widget (transparent). lut (and ext) then hold,
- * per value, the entry of the largest opacity over all gradient
- * magnitudes: the subvolume flags, shadows and light volumes use that
- * conservative bound. */
-typedef struct vv_vtables {
-    float lut_lo, lut_scale; /* stored value -> table index */
-    float *lut, *ext;
-    uint8_t *bvis, *bdist;
-    /* MIP and MinIP: the table's flat ends (vv_vtables_flat_ends) and, per
-     * subvolume, the chessboard distance to the nearest one holding a value
-     * beyond the flat end the projection starts from (vv_vray_project); 0
-     * and NULL in other modes */
-    float plo, phi;
-    uint8_t *pdist;
-    float *lut2d;
-    float g_scale; /* gradient magnitude (data units per volume world unit) -> bin */
-    /* pre-integrated classification (VV_VT_PREINT, composite mode with a
-     * 1-D transfer function or a threshold; else NULL): VV_VC_LUT rows of 8
-     * doubles over the table position x, {T, tau, K[3], tau c[3]}: tau the
-     * extinction per world unit at the entry (-ln(1 - opacity) /
-     * opacity_unit_distance, at most 40 / dt), c its colour, and T, K the
-     * integrals over x from 0 to the entry of tau and of tau c, with tau
-     * and tau c linear between entries (vv_vpre_at) */
-    double *pre;
-    int32_t *pre_nz; /* VV_VC_LUT + 1: entries below i with tau > 0 */
-} vv_vtables;
-
-/* vv_vtables_get flags: also build the extinction table (ext), the
- * pre-integration table (pre). */
-#define VV_VT_EXT 1
-#define VV_VT_PREINT 2
 
 /* Everything derived from one volume that does not depend on the TF. */
 typedef struct vv_vcache {
@@ -169,7 +114,6 @@ vv_status vv_vcache_get(vv_vcache_set *s, vv_volume *vol, vv_vcache **out);
 vv_status vv_vtables_get(vv_vcache_set *s, vv_vcache *c, const vv_object *obj, vv_render_mode mode,
                          double dt, float iso, int skipping, int flags, vv_vtables *out,
                          int *owned);
-void vv_vtables_free(vv_vtables *t);
 
 /* Builds c->nrm once, when a shaded object first needs it and it fits
  * @p s's gradient budget and half of the memory left (else, or without memory, it stays NULL and
