@@ -191,7 +191,7 @@ coarse_dims(const vv_brick_info *in, int cd[3]) {
 }
 
 /* The bytes one brick holds while rendered: its voxels, the ray caster's
- * 16-bit or float copy and cached gradients (src/render/volume_cache.h). */
+ * 16-bit or float copy and cached gradients (src/render/sample.h). */
 static uint64_t
 working_set(const vv_bricked *b, uint64_t voxels) {
     const uint64_t vs = vv_voxel_type_size(b->header->type);

@@ -1223,7 +1223,7 @@ open_level(vv_pyramid *p, int i) {
 /* The bytes a node of @p cells cells a side holds while rendered (its box:
  * the cells, a ghost voxel beyond each face and the half-voxel shifts of
  * coarser levels): the box, the ray caster's 16-bit or float copy and
- * cached gradients (src/render/volume_cache.h); and in *chunks the bytes of
+ * cached gradients (src/render/sample.h); and in *chunks the bytes of
  * the decoded chunks such a box overlaps at most (any level). */
 static uint64_t
 working_set(const vv_pyramid *p, int cells, uint64_t *chunks) {

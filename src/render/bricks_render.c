@@ -21,7 +21,7 @@
 #include <string.h>
 
 #include "core/internal.h"
-#include "render/volume_cache.h"
+#include "render/tf_tables.h"
 #include "volvis/bricks.h"
 #include "volvis/render.h"
 #include "volvis/sys/renderer.h"
@@ -241,7 +241,7 @@ vv_renderer_render_bricks(vv_renderer *r, const vv_world *w, int object, const v
         vv_brick_info in;
         src->info(src->user, idx, &in);
         /* the ray caster's table maps a value to the entry at or below it:
-         * one entry's width lower too (src/render/volume_cache.h) */
+         * one entry's width lower too (src/render/classify.h) */
         const double bin = (hdr->range[1] - hdr->range[0]) / (VV_VC_LUT - 1);
         if ((skip && !(tf_max_opacity(&obj->tf, in.vmin - bin, in.vmax) > 0)) ||
             iso_below(obj, hdr, in.vmax)) {

@@ -16,7 +16,9 @@
  */
 #include "testutil.h"
 
-#include "render/volume_cache.h"
+#include "render/kernels_avx2.h"
+#include "render/project.h"
+#include "render/shade.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -14,7 +14,8 @@
  */
 #include "testutil.h"
 
-#include "render/volume_cache.h"
+#include "render/kernels_avx2.h"
+#include "render/shade.h"
 
 #include <math.h>
 #include <stdio.h>

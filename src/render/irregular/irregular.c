@@ -35,7 +35,7 @@
 #include "core/geom.h"
 #include "core/grid_internal.h"
 #include "render/registry.h"
-#include "render/volume_cache.h"
+#include "render/shade.h"
 #include "volvis/render.h"
 #include "volvis/sys/renderer.h"
 

@@ -18,8 +18,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "render/classify.h"
 #include "render/registry.h"
-#include "render/volume_cache.h"
 #include "volvis/raster.h"
 #include "volvis/render.h"
 #include "volvis/surface.h"

@@ -13,7 +13,7 @@
  * rays leap over empty cubes of subvolumes. These tables are kept between
  * frames while nothing they depend on changes. The caches, tables, trilinear
  * sampling and ray clipping are shared with the raytrace renderer
- * (src/render/volume_cache.h).
+ * (src/render/sample.h, ray.h, classify.h, shade.h, project.h).
  *
  * Rays are traced in each object's index space: the world ray (unit
  * direction, parameter t in world units) is mapped by the object's
@@ -34,15 +34,21 @@
 #include <string.h>
 
 #include "core/internal.h"
+#include "render/classify.h"
+#include "render/kernels_avx2.h"
+#include "render/project.h"
+#include "render/ray.h"
 #include "render/registry.h"
-#include "render/volume_cache.h"
+#include "render/sample.h"
+#include "render/shade.h"
+#include "render/tf_tables.h"
 #include "volvis/render.h"
 #include "volvis/sys/renderer.h"
 
 #define RC_MAX_OBJ 64 /* objects handled in one render (<= VV_VC_MAX) */
 
 typedef struct rc_state {
-    vv_vcache_set vc;                /* per-volume caches (src/render/volume_cache.h) */
+    vv_vcache_set vc;                /* per-volume caches (src/render/sample.h) */
     double early_termination;        /* accumulated opacity that ends a ray */
     int skipping;                    /* empty-space skipping on/off (for tests) */
     int simd;                        /* use AVX2 when the processor has it (for tests) */
@@ -1290,7 +1296,7 @@ rc_destroy(void *state) {
 static const char *const rc_auto[] = {"auto", NULL};
 
 /* The ray caster's options (docs/rendering.md); gradient_budget_mb is
- * shared with splat (vv_vcache_options_budget in volume_cache.h). */
+ * shared with splat (vv_vcache_set.gradient_budget, sample.h). */
 static const vv_option_spec rc_options[] = {
     {"early_termination", VV_OPTION_REAL, "0.99", 0, 1, VV_OPTION_MIN_OPEN, NULL,
      "accumulated opacity that ends a composite ray"},

@@ -42,9 +42,15 @@
 #include <string.h>
 #include <time.h>
 
+#include "render/classify.h"
+#include "render/kernels_avx2.h"
+#include "render/project.h"
+#include "render/ray.h"
 #include "render/raytrace/rt_internal.h"
 #include "render/registry.h"
-#include "render/volume_cache.h"
+#include "render/sample.h"
+#include "render/shade.h"
+#include "render/tf_tables.h"
 #include "volvis/render.h"
 #include "volvis/sys/renderer.h"
 
@@ -86,7 +92,7 @@ prepare_volume(rt_frame *fr, rt_vobj *ro, const vv_object *obj) {
 
 /* The TF table (opacity corrected for dt, colour premultiplied), the
  * extinction table and the PARC flags and distances (shared with the ray
- * caster, src/render/volume_cache.h), and the shadow grids. */
+ * caster, src/render/classify.h), and the shadow grids. */
 static vv_status
 build_tables(rt_frame *fr, rt_vobj *ro) {
     const vv_object *obj = ro->obj;

@@ -14,7 +14,6 @@
 
 #include "render/raytrace/rt_internal.h"
 #include "render/registry.h"
-#include "render/volume_cache.h"
 #include "volvis/render.h"
 
 /* ---------------------------------------------------------------------- */

@@ -14,8 +14,13 @@
 #include <string.h>
 
 #include "core/geom.h"
+#include "render/classify.h"
+#include "render/project.h"
+#include "render/ray.h"
 #include "render/registry.h"
-#include "render/volume_cache.h"
+#include "render/sample.h"
+#include "render/shade.h"
+#include "render/tf_tables.h"
 #include "volvis/render.h"
 #include "volvis/sys/geometry.h"
 #include "volvis/sys/renderer.h"
@@ -112,7 +117,7 @@ typedef struct rt_state {
     rt_lv lv[RT_LV_CACHE];
     rt_sg sg[RT_SG_CACHE];
     uint64_t frame;
-    vv_vcache_set vc;                /* per-volume caches (src/render/volume_cache.h) */
+    vv_vcache_set vc;                /* per-volume caches (src/render/sample.h) */
     int parc;                        /* PARC skipping on primary and secondary rays */
     int shadows;                     /* shadow rays */
     int max_depth;                   /* reflection / refraction depth */
@@ -266,7 +271,7 @@ typedef struct rt_scache {
 } rt_scache;
 
 /* ---------------------------------------------------------------------- */
-/* Volume rays (the caches and sampling are src/render/volume_cache.h)      */
+/* Volume rays (the caches and sampling are src/render/sample.h)           */
 
 /* The world ray over [tmin, tmax] clipped to a volume in its index space;
  * *cont as vv_vray_clip_region's (0 outside region renders). */

@@ -13,9 +13,11 @@
 #include <string.h>
 #include <time.h>
 
+#include "render/ray.h"
 #include "render/raytrace/rt_internal.h"
 #include "render/registry.h"
-#include "render/volume_cache.h"
+#include "render/sample.h"
+#include "render/shade.h"
 #include "volvis/render.h"
 
 /* ---------------------------------------------------------------------- */

@@ -11,9 +11,13 @@
 #include <string.h>
 #include <time.h>
 
+#include "render/classify.h"
+#include "render/project.h"
+#include "render/ray.h"
 #include "render/raytrace/rt_internal.h"
 #include "render/registry.h"
-#include "render/volume_cache.h"
+#include "render/sample.h"
+#include "render/shade.h"
 #include "volvis/render.h"
 
 /* ---------------------------------------------------------------------- */

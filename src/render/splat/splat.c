@@ -45,7 +45,7 @@
  * ray's clipped interval (volume box and cut planes, vv_vray_setup), so in
  * parallel projection the samples are exactly the ray caster's and only
  * the reconstruction differs. Opacity uses the ray caster's tables
- * (src/render/volume_cache.h), corrected per pixel for the slant of
+ * (src/render/classify.h), corrected per pixel for the slant of
  * perspective rays.
  *
  * Cost: a voxel is listed only when its subvolume lies within the kernel's

@@ -15,9 +15,13 @@
 #include <stdatomic.h>
 #include <stdint.h>
 
+#include "render/classify.h"
+#include "render/ray.h"
 #include "render/registry.h"
+#include "render/sample.h"
+#include "render/shade.h"
 #include "render/splat/splat.h"
-#include "render/volume_cache.h"
+#include "render/tf_tables.h"
 #include "volvis/render.h"
 #include "volvis/sys/renderer.h"
 

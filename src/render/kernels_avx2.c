@@ -1,0 +1,500 @@
+/*
+ * The AVX2 kernels of the volume renderers: the vector paths of the
+ * sampling (eight trilinear samples at a time), classification (a chunk of
+ * samples, with FMA), shading (Phong, eight samples at a time), ray (runs
+ * of visible subvolumes found by sample) and projection (the MIP and MinIP
+ * march in chunks of samples) stages. They are compiled for AVX2 through
+ * target attributes, the rest of the library keeping the x86-64 baseline,
+ * and chosen at run time (vv_vc_have_avx2). Each keeps its scalar path's
+ * arithmetic, so that the images are the portable code's; where they may
+ * differ (the rounding of classification's fused multiply-adds, where a
+ * projection stops) the functions say so. The methods are their stages'
+ * (sample.h, classify.h, shade.h, ray.h, project.h); docs/rendering.md
+ * ("SIMD", "Runs by sample", "MIP and MinIP") gives the measurements.
+ */
+#include "render/kernels_avx2.h"
+
+#include <math.h>
+#include <string.h>
+#if VV_VC_HAVE_AVX2
+#include <immintrin.h>
+#endif
+
+#include "render/classify.h"
+#include "render/project.h"
+#include "render/ray.h"
+#include "render/sample.h"
+#include "render/shade.h"
+
+#if VV_VC_HAVE_AVX2
+/* ---------------------------------------------------------------------- */
+/* Sampling: the cells of eight points */
+
+/* The trilinear values of samples k = kfirst .. kfirst + m - 1 (m <=
+ * VV_VC_CHUNK) of ray r through 16-bit values, eight at a time with AVX2,
+ * in exactly the arithmetic of vv_vray_point, vv_vcache_cell_in and
+ * vv_vcache_value_at (separate multiplies and adds, no fused ones), so the
+ * values are bit-identical to the scalar path's. */
+/* The cells of eight index points (px, py, pz) inside the grid box, as
+ * vv_vcache_cell_in computes them: their offsets (returned), fractions
+ * (*wx, *wy, *wz) and the four x-pairs (v[o], v[o + 1]) of each cell's
+ * edges, 16-bit values packed in 32-bit lanes, read by plain loads
+ * (hardware gathers are microcoded and slow on processors with the Gather
+ * Data Sampling mitigation). Needs c->q16. */
+__attribute__((target("avx2"))) static inline __m256i
+cell_pairs_avx2(const vv_vcache *c, __m256 px, __m256 py, __m256 pz, __m256 *wx, __m256 *wy,
+                __m256 *wz, int32_t p00[8], int32_t p10[8], int32_t p01[8], int32_t p11[8]) {
+    const __m256i zero = _mm256_setzero_si256();
+    __m256i i = _mm256_cvttps_epi32(px), j = _mm256_cvttps_epi32(py), k = _mm256_cvttps_epi32(pz);
+    i = _mm256_max_epi32(_mm256_min_epi32(i, _mm256_set1_epi32(c->nx - 2)), zero);
+    j = _mm256_max_epi32(_mm256_min_epi32(j, _mm256_set1_epi32(c->ny - 2)), zero);
+    k = _mm256_max_epi32(_mm256_min_epi32(k, _mm256_set1_epi32(c->nz - 2)), zero);
+    *wx = _mm256_sub_ps(px, _mm256_cvtepi32_ps(i));
+    *wy = _mm256_sub_ps(py, _mm256_cvtepi32_ps(j));
+    *wz = _mm256_sub_ps(pz, _mm256_cvtepi32_ps(k));
+    const __m256i o =
+        _mm256_add_epi32(_mm256_add_epi32(_mm256_mullo_epi32(k, _mm256_set1_epi32((int)c->sz)),
+                                          _mm256_mullo_epi32(j, _mm256_set1_epi32((int)c->sy))),
+                         i);
+    int32_t oo[8];
+    _mm256_storeu_si256((__m256i *)(void *)oo, o);
+    for (int l = 0; l < 8; l++) {
+        const uint16_t *v = c->q16 + oo[l];
+        memcpy(&p00[l], v, 4);
+        memcpy(&p10[l], v + c->sy, 4);
+        memcpy(&p01[l], v + c->sz, 4);
+        memcpy(&p11[l], v + c->sz + c->sy, 4);
+    }
+    return o;
+}
+
+/* Eight x-pairs of 16-bit values (low and high halves of each 32-bit
+ * lane) lerped by wx: a + (b - a) * wx. */
+__attribute__((target("avx2"))) static inline __m256
+pair_lerp_avx2(const int32_t pairs[8], __m256 wx) {
+    const __m256i g = _mm256_loadu_si256((const __m256i *)(const void *)pairs);
+    const __m256 a = _mm256_cvtepi32_ps(_mm256_and_si256(g, _mm256_set1_epi32(0xFFFF)));
+    const __m256 b = _mm256_cvtepi32_ps(_mm256_srli_epi32(g, 16));
+    return _mm256_add_ps(a, _mm256_mul_ps(_mm256_sub_ps(b, a), wx));
+}
+
+/* ---------------------------------------------------------------------- */
+/* Shading: eight samples at a time (shade.h) */
+
+/* vv_vshade8: eight lanes of vv_vshade, in its order of operations. */
+__attribute__((target("avx2"))) void
+vv_vshade8(const vv_vshading *o, const vv_vlight *lights, int n_lights, const float v[3],
+           const float *shadow, const float gx[8], const float gy[8], const float gz[8],
+           const float a[8], const float cr[8], const float cg[8], const float cb[8],
+           float out_r[8], float out_g[8], float out_b[8]) {
+    const __m256 g0 = _mm256_loadu_ps(gx), g1 = _mm256_loadu_ps(gy), g2 = _mm256_loadu_ps(gz);
+#define VS_MUL(x, y) _mm256_mul_ps((x), (y))
+#define VS_ADD(x, y) _mm256_add_ps((x), (y))
+#define VS_B(x) _mm256_set1_ps(x)
+    /* n_k = (nrm[k][0] g0 + nrm[k][1] g1) + nrm[k][2] g2 */
+    __m256 nn[3];
+    for (int k = 0; k < 3; k++)
+        nn[k] = VS_ADD(VS_ADD(VS_MUL(VS_B(o->nrm[k][0]), g0), VS_MUL(VS_B(o->nrm[k][1]), g1)),
+                       VS_MUL(VS_B(o->nrm[k][2]), g2));
+    const __m256 len2 =
+        VS_ADD(VS_ADD(VS_MUL(nn[0], nn[0]), VS_MUL(nn[1], nn[1])), VS_MUL(nn[2], nn[2]));
+    const __m256 lit = _mm256_cmp_ps(len2, VS_B(1e-12f), _CMP_GT_OQ);
+    const __m256 inv = _mm256_div_ps(VS_B(1.0f), _mm256_sqrt_ps(len2));
+    const __m256 nv = VS_MUL(VS_ADD(VS_ADD(VS_MUL(nn[0], VS_B(v[0])), VS_MUL(nn[1], VS_B(v[1]))),
+                                    VS_MUL(nn[2], VS_B(v[2]))),
+                             inv);
+    const __m256 sign = VS_B(-0.0f), zero = _mm256_setzero_ps();
+    __m256 d0 = VS_B(o->amb[0]), d1 = VS_B(o->amb[1]), d2 = VS_B(o->amb[2]);
+    __m256 s0 = zero, s1 = zero, s2 = zero;
+    for (int l = 0; l < n_lights; l++) {
+        const vv_vlight *lt = &lights[l];
+        const float L0 = lt->dir[0], L1 = lt->dir[1], L2 = lt->dir[2];
+        __m256 ndl = VS_MUL(VS_ADD(VS_ADD(VS_MUL(nn[0], VS_B(L0)), VS_MUL(nn[1], VS_B(L1))),
+                                   VS_MUL(nn[2], VS_B(L2))),
+                            inv);
+        /* two-sided: where ndl < 0 both ndv and ndl change sign */
+        const __m256 back = _mm256_cmp_ps(ndl, zero, _CMP_LT_OQ);
+        const __m256 ndv = _mm256_blendv_ps(nv, _mm256_xor_ps(nv, sign), back);
+        ndl = _mm256_blendv_ps(ndl, _mm256_xor_ps(ndl, sign), back);
+        const float lv = L0 * v[0] + L1 * v[1] + L2 * v[2];
+        const __m256 rv = _mm256_sub_ps(VS_MUL(VS_MUL(VS_B(2.0f), ndl), ndv), VS_B(lv));
+        const __m256 on = _mm256_and_ps(_mm256_cmp_ps(rv, zero, _CMP_GT_OQ), lit);
+        const __m256i at =
+            _mm256_cvttps_epi32(VS_ADD(VS_MUL(rv, VS_B((float)VV_VC_SPEC)), VS_B(0.5f)));
+        int32_t ix[8];
+        float sv[8];
+        _mm256_storeu_si256((__m256i *)(void *)ix, at);
+        const int onm = _mm256_movemask_ps(on);
+        for (int q = 0; q < 8; q++)
+            sv[q] = onm >> q & 1 ? o->spec[ix[q]] : 0.0f;
+        __m256 sp = _mm256_loadu_ps(sv);
+        __m256 wd = _mm256_and_ps(ndl, lit);
+        if (shadow) { /* vv_vshade's wd = sh ndl, sp = sh sp */
+            const __m256 sh = _mm256_loadu_ps(shadow + 8 * l);
+            wd = VS_MUL(sh, wd);
+            sp = VS_MUL(sh, sp);
+        }
+        d0 = VS_ADD(d0, VS_MUL(wd, VS_B(o->kd_col[l][0])));
+        d1 = VS_ADD(d1, VS_MUL(wd, VS_B(o->kd_col[l][1])));
+        d2 = VS_ADD(d2, VS_MUL(wd, VS_B(o->kd_col[l][2])));
+        s0 = VS_ADD(s0, VS_MUL(sp, VS_B(o->ks_col[l][0])));
+        s1 = VS_ADD(s1, VS_MUL(sp, VS_B(o->ks_col[l][1])));
+        s2 = VS_ADD(s2, VS_MUL(sp, VS_B(o->ks_col[l][2])));
+    }
+    /* unlit lanes (a gradient of length 0): vv_vshade's d = amb, s = 0 */
+    d0 = _mm256_blendv_ps(VS_B(o->amb[0]), d0, lit);
+    d1 = _mm256_blendv_ps(VS_B(o->amb[1]), d1, lit);
+    d2 = _mm256_blendv_ps(VS_B(o->amb[2]), d2, lit);
+    s0 = _mm256_and_ps(s0, lit);
+    s1 = _mm256_and_ps(s1, lit);
+    s2 = _mm256_and_ps(s2, lit);
+    const __m256 al = _mm256_loadu_ps(a);
+    _mm256_storeu_ps(out_r, VS_ADD(VS_MUL(d0, _mm256_loadu_ps(cr)), VS_MUL(al, s0)));
+    _mm256_storeu_ps(out_g, VS_ADD(VS_MUL(d1, _mm256_loadu_ps(cg)), VS_MUL(al, s1)));
+    _mm256_storeu_ps(out_b, VS_ADD(VS_MUL(d2, _mm256_loadu_ps(cb)), VS_MUL(al, s2)));
+#undef VS_MUL
+#undef VS_ADD
+#undef VS_B
+}
+
+int
+vv_vchunk_shade8(const vv_vcache *c, const float *lut, const vv_vshading *o,
+                 const vv_vlight *lights, int n_lights, const float v[3], int m, const size_t *cell,
+                 const float *fx, const float *fy, const float *fz, const int32_t *entry,
+                 vv_vshadow8_fn shadow, void *ctx, float et, float C[3], float *A, int *first,
+                 uint32_t *shaded) {
+    int vis[VV_VC_CHUNK], nvis = 0;
+    for (int s = 0; s < m; s++)
+        if (lut[entry[s]] > 0)
+            vis[nvis++] = s;
+    for (int i0 = 0; i0 < nvis; i0 += 8) {
+        const int n8 = nvis - i0 < 8 ? nvis - i0 : 8;
+        float gx[8] = {0}, gy[8] = {0}, gz[8] = {0}, al[8] = {0};
+        float cr[8] = {0}, cg[8] = {0}, cb[8] = {0}, sh[VV_MAX_LIGHTS * 8];
+        float orr[8], org[8], orb[8];
+        int shadowed = 0;
+        if (shadow)
+            memset(sh, 0, sizeof(float) * 8 * (size_t)n_lights);
+        for (int q = 0; q < n8; q++) {
+            const int s = vis[i0 + q];
+            const float *e = lut + entry[s];
+            const float f[3] = {fx[s], fy[s], fz[s]};
+            float g[3];
+            vv_vcache_gradient_at(c, cell[s], f, g);
+            if (shadow)
+                shadowed = shadow(ctx, s, sh + q, 8);
+            gx[q] = g[0];
+            gy[q] = g[1];
+            gz[q] = g[2];
+            al[q] = e[0];
+            cr[q] = e[1];
+            cg[q] = e[2];
+            cb[q] = e[3];
+        }
+        vv_vshade8(o, lights, n_lights, v, shadowed ? sh : NULL, gx, gy, gz, al, cr, cg, cb, orr,
+                   org, orb);
+        for (int q = 0; q < n8; q++) {
+            ++*shaded;
+            const float w = 1 - *A;
+            C[0] += w * orr[q];
+            C[1] += w * org[q];
+            C[2] += w * orb[q];
+            *A += w * al[q];
+            if (*first < 0)
+                *first = vis[i0 + q];
+            if (*A >= et)
+                return 1;
+        }
+    }
+    return 0;
+}
+
+/* ---------------------------------------------------------------------- */
+/* Sampling along a ray: eight samples at a time */
+
+/* The index points of the samples k .. k + 7 of r, as vv_vray_point
+ * computes them (no fused multiply-add). */
+__attribute__((target("avx2"))) static inline void
+points8_avx2(const vv_vray *r, double k, double dt, __m256 *px, __m256 *py, __m256 *pz) {
+    float u[8];
+    for (int l = 0; l < 8; l++)
+        u[l] = (float)((k + l) * dt - r->tb);
+    const __m256 t = _mm256_loadu_ps(u);
+    *px = _mm256_sub_ps(
+        _mm256_add_ps(_mm256_set1_ps(r->o[0]), _mm256_mul_ps(t, _mm256_set1_ps(r->d[0]))),
+        _mm256_set1_ps(r->off[0]));
+    *py = _mm256_sub_ps(
+        _mm256_add_ps(_mm256_set1_ps(r->o[1]), _mm256_mul_ps(t, _mm256_set1_ps(r->d[1]))),
+        _mm256_set1_ps(r->off[1]));
+    *pz = _mm256_sub_ps(
+        _mm256_add_ps(_mm256_set1_ps(r->o[2]), _mm256_mul_ps(t, _mm256_set1_ps(r->d[2]))),
+        _mm256_set1_ps(r->off[2]));
+}
+
+/* The trilinear values at index points px, py, pz (16-bit values), in the
+ * lerp order of vv_vcache_value_at. */
+__attribute__((target("avx2"))) static inline __m256
+values_at8_avx2(const vv_vcache *c, __m256 px, __m256 py, __m256 pz) {
+    __m256 wx, wy, wz;
+    int32_t p00[8], p10[8], p01[8], p11[8];
+    (void)cell_pairs_avx2(c, px, py, pz, &wx, &wy, &wz, p00, p10, p01, p11);
+    const __m256 c00 = pair_lerp_avx2(p00, wx), c10 = pair_lerp_avx2(p10, wx);
+    const __m256 c01 = pair_lerp_avx2(p01, wx), c11 = pair_lerp_avx2(p11, wx);
+    const __m256 c0 = _mm256_add_ps(c00, _mm256_mul_ps(_mm256_sub_ps(c10, c00), wy));
+    const __m256 c1 = _mm256_add_ps(c01, _mm256_mul_ps(_mm256_sub_ps(c11, c01), wy));
+    return _mm256_add_ps(c0, _mm256_mul_ps(_mm256_sub_ps(c1, c0), wz));
+}
+
+/* vv_vray_values_avx2 of the eight samples kfirst .. kfirst + 7, in a
+ * register. */
+__attribute__((target("avx2"))) static inline __m256
+values8_avx2(const vv_vcache *c, const vv_vray *r, double kfirst, double dt) {
+    __m256 px, py, pz;
+    points8_avx2(r, kfirst, dt, &px, &py, &pz);
+    return values_at8_avx2(c, px, py, pz);
+}
+
+/* The trilinear values of the samples kfirst .. kfirst + m - 1 (m <=
+ * VV_VC_CHUNK) of r, eight at a time: the scalar path's arithmetic. */
+__attribute__((target("avx2"))) void
+vv_vray_values_avx2(const vv_vcache *c, const vv_vray *r, double kfirst, double dt, int m,
+                    float *val) {
+    float out[VV_VC_CHUNK + 8];
+    for (int s = 0; s < m; s += 8)
+        _mm256_storeu_ps(out + s, values8_avx2(c, r, kfirst + s, dt));
+    memcpy(val, out, (size_t)m * sizeof *val);
+}
+
+/* The subvolumes (vv_vproj_block's, vv_vblock_of's) of the samples k .. k + 7
+ * of r, their points computed as vv_vray_point does. */
+__attribute__((target("avx2"))) static inline __m256i
+blocks8_avx2(const vv_vcache *c, const vv_vray *r, double k, double dt) {
+    const __m256 zero = _mm256_setzero_ps(), quarter = _mm256_set1_ps(1.0f / VV_VC_BLOCK);
+    __m256 px, py, pz;
+    points8_avx2(r, k, dt, &px, &py, &pz);
+    const __m256i bi =
+        _mm256_min_epi32(_mm256_cvttps_epi32(_mm256_mul_ps(_mm256_max_ps(px, zero), quarter)),
+                         _mm256_set1_epi32(c->bx - 1));
+    const __m256i bj =
+        _mm256_min_epi32(_mm256_cvttps_epi32(_mm256_mul_ps(_mm256_max_ps(py, zero), quarter)),
+                         _mm256_set1_epi32(c->by - 1));
+    const __m256i bk =
+        _mm256_min_epi32(_mm256_cvttps_epi32(_mm256_mul_ps(_mm256_max_ps(pz, zero), quarter)),
+                         _mm256_set1_epi32(c->bz - 1));
+    return _mm256_add_epi32(
+        _mm256_mullo_epi32(_mm256_add_epi32(_mm256_mullo_epi32(bk, _mm256_set1_epi32(c->by)), bj),
+                           _mm256_set1_epi32(c->bx)),
+        bi);
+}
+
+/* ---------------------------------------------------------------------- */
+/* Ray: runs of visible subvolumes by sample (ray.h) */
+
+/* vv_vray_visible_run_avx2 leaps from a hidden subvolume at this chessboard
+ * distance or more, and scans the samples ahead from one closer (1 measured
+ * faster than 2 or 4, docs/rendering.md). */
+#define VRUN_LEAP 2
+__attribute__((target("avx2"))) int
+vv_vray_visible_run_avx2(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double dt,
+                         double kend, double *kp, double *klastp) {
+    double k = *kp;
+    while (k <= kend) {
+        float p[3];
+        double t;
+        unsigned bc[3];
+        if (vv_vray_leap_from(c, bdist, r, dt, VRUN_LEAP, &k, p, &t, bc))
+            continue;
+        /* near a visible subvolume: the first sample of the next VV_VC_CHUNK
+         * in a visible subvolume, and the run on from it while they are */
+        const int n = kend - k + 1 < VV_VC_CHUNK ? (int)(kend - k + 1) : VV_VC_CHUNK;
+        int first = -1, len = 0;
+        for (int s = 0, open = 1; open && s < n; s += 8) {
+            int32_t id[8];
+            _mm256_storeu_si256((__m256i *)(void *)id, blocks8_avx2(c, r, k + s, dt));
+            for (int l = 0; open && l < 8 && s + l < n; l++) {
+                const int vis = !bdist[id[l]];
+                if (first >= 0)
+                    open = vis;
+                else if (vis)
+                    first = s + l;
+                len += first >= 0 && open;
+            }
+        }
+        if (first < 0) {
+            k += n;
+            continue;
+        }
+        k += first;
+        *kp = k;
+        *klastp = k + len - 1;
+        return 1;
+    }
+    *kp = k;
+    return 0;
+}
+
+/* ---------------------------------------------------------------------- */
+/* Projection: the MIP and MinIP march (project.c) */
+
+#define PROJ_CHUNK 64 /* samples a chunk of vv_vproj_from_avx2 */
+/* project_from's AVX2 path (project.c; 16-bit values): the ray is marched in chunks of
+ * PROJ_CHUNK consecutive samples instead of one subvolume at a time. At
+ * the first chunk, and after a chunk that had nothing to interpolate, the
+ * leaps of project_from are tried at its first sample (the distance map,
+ * then the group); then every sample's subvolume is found eight lanes at a
+ * time and its extreme gathered, and only the runs of eight holding a
+ * sample whose subvolume can beat the running extreme (as of the chunk's
+ * start) are interpolated, each reduced in registers to its extreme and
+ * the first lane holding it. A sample in a subvolume that cannot beat it
+ * cannot change the result, so the value is project_from's, at its first
+ * sample (the same arithmetic); only a ray that reaches @p stop may stop
+ * later (at the end of a run of eight), with a value beyond the stop as
+ * well. The traversal's cost per subvolume, which dominated magnified
+ * views (a subvolume holds about eight samples at the usual half-voxel
+ * step), becomes a few vector instructions per eight samples. 64 samples
+ * a chunk measured faster than 16, 32, 128 or 256 (docs/rendering.md). */
+__attribute__((target("avx2"))) float
+vv_vproj_from_avx2(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, double dt, double k,
+                   double kend, float sg, float floor0, float stop, int skipping,
+                   double *tbest_out) {
+    const float *bext = sg > 0 ? c->bmax : c->bmin, *gext = sg > 0 ? c->gmax : c->gmin;
+    const int gsize = VV_VC_BLOCK * VV_VC_GROUP;
+    float best = floor0;
+    double tbest = r->t0;
+    const __m256 zero = _mm256_setzero_ps(), vsg = _mm256_set1_ps(sg);
+    const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    int dead = 1; /* the last chunk had nothing to interpolate (or this is the first) */
+    while (k <= kend && best < stop) {
+        if (skipping && dead) {
+            float p[3];
+            vv_vray_point(r, k * dt, p);
+            int bc[3];
+            const size_t b = vv_vproj_block(c, p, bc);
+            if (pdist && pdist[b]) {
+                k = vv_vproj_leap(r, p, bc, pdist[b], k, dt);
+                continue;
+            }
+            if (sg * gext[vv_vproj_group(c, p)] <= best) {
+                k = vv_vproj_after_cube(r, p, k, dt, gsize);
+                continue;
+            }
+        }
+        const int m = kend - k + 1 < PROJ_CHUNK ? (int)(kend - k + 1) : PROJ_CHUNK;
+        uint64_t live = ~(uint64_t)0 >> (64 - (m + 7) / 8); /* runs of eight to interpolate */
+        if (skipping) {
+            const __m256 vbest = _mm256_set1_ps(best);
+            live = 0;
+            for (int s = 0; s < m; s += 8) {
+                const __m256i idx = blocks8_avx2(c, r, k + s, dt); /* vv_vproj_block's */
+                const __m256i in = _mm256_cmpgt_epi32(_mm256_set1_epi32(m - s), lane);
+                const __m256 ext =
+                    _mm256_mask_i32gather_ps(zero, bext, idx, _mm256_castsi256_ps(in), 4);
+                const __m256 beat =
+                    _mm256_and_ps(_mm256_cmp_ps(_mm256_mul_ps(vsg, ext), vbest, _CMP_GT_OQ),
+                                  _mm256_castsi256_ps(in));
+                if (_mm256_movemask_ps(beat))
+                    live |= (uint64_t)1 << (s / 8);
+            }
+        }
+        dead = !live;
+        for (int s = 0; live && s < m && best < stop; s += 8) {
+            if (!(live & ((uint64_t)1 << (s / 8))))
+                continue;
+            const int n = m - s < 8 ? m - s : 8;
+            /* the run's largest sg * value, at its first lane: where a
+             * sample-by-sample scan would leave the maximum */
+            __m256 x = _mm256_mul_ps(vsg, values8_avx2(c, r, k + s, dt));
+            if (n < 8)
+                x = _mm256_blendv_ps(
+                    _mm256_set1_ps(-INFINITY), x,
+                    _mm256_castsi256_ps(_mm256_cmpgt_epi32(_mm256_set1_epi32(n), lane)));
+            __m256 h = _mm256_max_ps(x, _mm256_permute2f128_ps(x, x, 1));
+            h = _mm256_max_ps(h, _mm256_shuffle_ps(h, h, _MM_SHUFFLE(1, 0, 3, 2)));
+            h = _mm256_max_ps(h, _mm256_shuffle_ps(h, h, _MM_SHUFFLE(2, 3, 0, 1)));
+            const float top = _mm256_cvtss_f32(h);
+            if (top > best) {
+                const int at =
+                    __builtin_ctz((unsigned)_mm256_movemask_ps(_mm256_cmp_ps(x, h, _CMP_EQ_OQ)));
+                best = top;
+                tbest = (k + s + at) * dt;
+            }
+        }
+        k += m;
+    }
+    *tbest_out = tbest;
+    return best;
+}
+
+/* ---------------------------------------------------------------------- */
+/* Classification: a chunk of samples (classify.c) */
+
+/* classify_chunk (classify.c) for 16-bit values, eight samples at a time with AVX2
+ * gathers and FMA; chosen at run time when the processor has them. The
+ * arithmetic differs from the portable version only in the rounding of
+ * fused multiply-adds, and one render uses one version throughout. */
+__attribute__((target("avx2,fma"))) void
+vv_vray_classify_avx2(const vv_vcache *c, const vv_vtables *ob, const vv_vray *r, double kfirst,
+                      double dt, int m, size_t *cell, float *fx, float *fy, float *fz,
+                      int32_t *entry, float *x) {
+    float u[VV_VC_CHUNK + 8];
+    for (int s = 0; s < m; s++)
+        u[s] = (float)((kfirst + s) * dt - r->tb);
+    for (int s = m; s < m + 8; s++)
+        u[s] = u[m - 1]; /* padding lanes repeat the last sample */
+    const __m256 ox = _mm256_set1_ps(r->o[0]), oy = _mm256_set1_ps(r->o[1]),
+                 oz = _mm256_set1_ps(r->o[2]);
+    const __m256 dx = _mm256_set1_ps(r->d[0]), dy = _mm256_set1_ps(r->d[1]),
+                 dz = _mm256_set1_ps(r->d[2]);
+    const __m256 offx = _mm256_set1_ps(r->off[0]), offy = _mm256_set1_ps(r->off[1]),
+                 offz = _mm256_set1_ps(r->off[2]);
+    const __m256i lo16 = _mm256_set1_epi32(0xFFFF);
+    const __m256 llo = _mm256_set1_ps(ob->lut_lo), lsc = _mm256_set1_ps(ob->lut_scale);
+    const __m256 lmax = _mm256_set1_ps((float)(VV_VC_LUT - 1)), fzero = _mm256_setzero_ps();
+    for (int s = 0; s < m; s += 8) {
+        const __m256 t = _mm256_loadu_ps(u + s);
+        const __m256 px = _mm256_sub_ps(_mm256_fmadd_ps(t, dx, ox), offx),
+                     py = _mm256_sub_ps(_mm256_fmadd_ps(t, dy, oy), offy),
+                     pz = _mm256_sub_ps(_mm256_fmadd_ps(t, dz, oz), offz);
+        __m256 wx, wy, wz;
+        int32_t p00[8], p10[8], p01[8], p11[8];
+        const __m256i o = cell_pairs_avx2(c, px, py, pz, &wx, &wy, &wz, p00, p10, p01, p11);
+        const __m256i g00 = _mm256_loadu_si256((const __m256i *)(const void *)p00);
+        const __m256i g10 = _mm256_loadu_si256((const __m256i *)(const void *)p10);
+        const __m256i g01 = _mm256_loadu_si256((const __m256i *)(const void *)p01);
+        const __m256i g11 = _mm256_loadu_si256((const __m256i *)(const void *)p11);
+#define VV_PAIR_LERP(g)                                                                            \
+    _mm256_fmadd_ps(_mm256_sub_ps(_mm256_cvtepi32_ps(_mm256_srli_epi32(g, 16)),                    \
+                                  _mm256_cvtepi32_ps(_mm256_and_si256(g, lo16))),                  \
+                    wx, _mm256_cvtepi32_ps(_mm256_and_si256(g, lo16)))
+        const __m256 c00 = VV_PAIR_LERP(g00), c10 = VV_PAIR_LERP(g10);
+        const __m256 c01 = VV_PAIR_LERP(g01), c11 = VV_PAIR_LERP(g11);
+#undef VV_PAIR_LERP
+        const __m256 c0 = _mm256_fmadd_ps(_mm256_sub_ps(c10, c00), wy, c00);
+        const __m256 c1 = _mm256_fmadd_ps(_mm256_sub_ps(c11, c01), wy, c01);
+        const __m256 val = _mm256_fmadd_ps(_mm256_sub_ps(c1, c0), wz, c0);
+        __m256 li = _mm256_mul_ps(_mm256_sub_ps(val, llo), lsc);
+        li = _mm256_min_ps(_mm256_max_ps(li, fzero), lmax);
+        const __m256i e = _mm256_slli_epi32(_mm256_cvttps_epi32(li), 2);
+        /* all eight lanes (s + 8 <= VV_VC_CHUNK); offsets >= 0, widened */
+        _mm256_storeu_si256((__m256i *)(void *)(entry + s), e);
+        _mm256_storeu_ps(fx + s, wx);
+        _mm256_storeu_ps(fy + s, wy);
+        _mm256_storeu_ps(fz + s, wz);
+        _mm256_storeu_si256((__m256i *)(void *)(cell + s),
+                            _mm256_cvtepi32_epi64(_mm256_castsi256_si128(o)));
+        _mm256_storeu_si256((__m256i *)(void *)(cell + s + 4),
+                            _mm256_cvtepi32_epi64(_mm256_extracti128_si256(o, 1)));
+        if (x)
+            _mm256_storeu_ps(x + s, li);
+    }
+}
+#endif
+
+int
+vv_vc_have_avx2(void) {
+#if VV_VC_HAVE_AVX2
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#else
+    return 0;
+#endif
+}

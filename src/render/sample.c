@@ -1,0 +1,359 @@
+/*
+ * The sampling stage: building the per-volume voxel caches of sample.h (the
+ * 16-bit or float values, the quantised gradients, the gradient magnitudes
+ * and the subvolume min/max pyramid) and the sets that hold them. The
+ * method is described in sample.h and docs/rendering.md ("Caching").
+ */
+#include "render/sample.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <unistd.h>
+
+#include "core/internal.h"
+#include "render/tf_tables.h"
+
+static void
+cache_release(vv_vcache *c) {
+    vv_volume_free(c->vol);
+    if (!c->q16_borrowed)
+        free(c->q16);
+    free(c->f32);
+    free(c->nrm);
+    free(c->gmag);
+    free(c->bmin);
+    free(c->bmax);
+    free(c->gmin);
+    free(c->gmax);
+    vv_vtables_free(&c->tables);
+    memset(c, 0, sizeof *c);
+}
+
+static int
+is_integer_type(vv_voxel_type t) {
+    return t != VV_F32 && t != VV_F64;
+}
+
+/* Fills one row of stored values from the source volume (clamping indices
+ * of duplicated axes). */
+static void
+fill_row(vv_vcache *c, const vv_volume *vol, int j, int k, size_t base) {
+    int sj = j < vol->dims[1] ? j : vol->dims[1] - 1;
+    int sk = k < vol->dims[2] ? k : vol->dims[2] - 1;
+    const int snx = vol->dims[0];
+    for (int i = 0; i < c->nx; i++) {
+        const double x = vv_volume_get(vol, i < snx ? i : snx - 1, sj, sk);
+        if (c->q16)
+            c->q16[base + (size_t)i] = (uint16_t)(x - c->qoff);
+        else
+            c->f32[base + (size_t)i] = x == x ? (float)x : (float)vol->range[0]; /* NaN: minimum */
+    }
+}
+
+/* Unit gradients by central differences in index units, one-sided at the
+ * borders, quantised to int8. */
+static void
+fill_gradients(vv_vcache *c) {
+    const int nx = c->nx, ny = c->ny, nz = c->nz;
+#pragma omp parallel for schedule(static)
+    for (int k = 0; k < nz; k++)
+        for (int j = 0; j < ny; j++) {
+            size_t base = (size_t)k * c->sz + (size_t)j * c->sy;
+            int j0 = j > 0 ? j - 1 : j, j1 = j < ny - 1 ? j + 1 : j;
+            int k0 = k > 0 ? k - 1 : k, k1 = k < nz - 1 ? k + 1 : k;
+            float fy = 1.0f / (float)(j1 - j0), fz = 1.0f / (float)(k1 - k0);
+            size_t by0 = (size_t)k * c->sz + (size_t)j0 * c->sy;
+            size_t by1 = (size_t)k * c->sz + (size_t)j1 * c->sy;
+            size_t bz0 = (size_t)k0 * c->sz + (size_t)j * c->sy;
+            size_t bz1 = (size_t)k1 * c->sz + (size_t)j * c->sy;
+            for (int i = 0; i < nx; i++) {
+                int i0 = i > 0 ? i - 1 : i, i1 = i < nx - 1 ? i + 1 : i;
+                float gx = (vv_vcache_value(c, base + (size_t)i1) -
+                            vv_vcache_value(c, base + (size_t)i0)) /
+                           (float)(i1 - i0);
+                float gy =
+                    (vv_vcache_value(c, by1 + (size_t)i) - vv_vcache_value(c, by0 + (size_t)i)) *
+                    fy;
+                float gz =
+                    (vv_vcache_value(c, bz1 + (size_t)i) - vv_vcache_value(c, bz0 + (size_t)i)) *
+                    fz;
+                float g = sqrtf(gx * gx + gy * gy + gz * gz);
+                int8_t *o = c->nrm + 3 * (base + (size_t)i);
+                if (g > 0) {
+                    float sc = 127.0f / g;
+                    o[0] = (int8_t)lrintf(gx * sc);
+                    o[1] = (int8_t)lrintf(gy * sc);
+                    o[2] = (int8_t)lrintf(gz * sc);
+                } else {
+                    o[0] = o[1] = o[2] = 0;
+                }
+            }
+        }
+}
+
+vv_status
+vv_vcache_need_gmag(vv_vcache *c) {
+    if (c->gmag)
+        return VV_OK;
+    vv_mat4 m = vv_volume_index_to_world(c->vol);
+    int ok = 0;
+    vv_mat4 inv = vv_mat4_inverse(m, &ok);
+    if (!ok)
+        return vv_error_set(VV_ERR_INVALID, "singular index-to-world matrix");
+    float g2w[3][3];
+    for (int r = 0; r < 3; r++)
+        for (int cc = 0; cc < 3; cc++)
+            g2w[r][cc] = (float)inv.m[cc][r];
+    const size_t n = c->sz * (size_t)c->nz;
+    uint64_t left = vv_memory_available();
+    if ((uint64_t)n * sizeof(float) > left)
+        return vv_error_set(VV_ERR_LIMIT,
+                            "gradient magnitudes of %zu voxels need %llu bytes, more than the %llu "
+                            "bytes of memory left (the machine's or the memory cgroup's)",
+                            n, (unsigned long long)(n * sizeof(float)), (unsigned long long)left);
+    float *gm = malloc(n * sizeof *gm);
+    if (!gm)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for gradient magnitudes of %zu voxels", n);
+    /* the volume's own dims: a duplicated single-voxel axis has no gradient */
+    const int dims[3] = {c->vol->dims[0], c->vol->dims[1], c->vol->dims[2]};
+    const int nx = c->nx, ny = c->ny, nz = c->nz;
+#pragma omp parallel for schedule(static)
+    for (int k = 0; k < nz; k++)
+        for (int j = 0; j < ny; j++)
+            for (int i = 0; i < nx; i++) {
+                const int idx[3] = {i, j, k};
+                const size_t st[3] = {1, c->sy, c->sz};
+                const size_t at = (size_t)k * c->sz + (size_t)j * c->sy + (size_t)i;
+                float g[3];
+                for (int a = 0; a < 3; a++) {
+                    const int lo = idx[a] > 0 ? idx[a] - 1 : idx[a];
+                    const int hi = idx[a] < dims[a] - 1 ? idx[a] + 1 : idx[a];
+                    if (hi <= lo || idx[a] >= dims[a]) {
+                        g[a] = 0;
+                        continue;
+                    }
+                    const size_t base = at - (size_t)idx[a] * st[a];
+                    g[a] = (vv_vcache_value(c, base + (size_t)hi * st[a]) -
+                            vv_vcache_value(c, base + (size_t)lo * st[a])) /
+                           (float)(hi - lo);
+                }
+                float w[3];
+                for (int r = 0; r < 3; r++)
+                    w[r] = g2w[r][0] * g[0] + g2w[r][1] * g[1] + g2w[r][2] * g[2];
+                gm[at] = sqrtf(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+            }
+    c->gmag = gm;
+    return VV_OK;
+}
+
+/* Min and max of the stored values of every subvolume (its cells' corners). */
+static void
+fill_minmax(vv_vcache *c) {
+    const int nx = c->nx, ny = c->ny, nz = c->nz;
+#pragma omp parallel for schedule(static) collapse(2)
+    for (int bk = 0; bk < c->bz; bk++)
+        for (int bj = 0; bj < c->by; bj++)
+            for (int bi = 0; bi < c->bx; bi++) {
+                float lo = INFINITY, hi = -INFINITY;
+                int k1 = bk * VV_VC_BLOCK + VV_VC_BLOCK, j1 = bj * VV_VC_BLOCK + VV_VC_BLOCK,
+                    i1 = bi * VV_VC_BLOCK + VV_VC_BLOCK;
+                k1 = k1 > nz - 1 ? nz - 1 : k1;
+                j1 = j1 > ny - 1 ? ny - 1 : j1;
+                i1 = i1 > nx - 1 ? nx - 1 : i1;
+                for (int k = bk * VV_VC_BLOCK; k <= k1; k++)
+                    for (int j = bj * VV_VC_BLOCK; j <= j1; j++) {
+                        size_t base = (size_t)k * c->sz + (size_t)j * c->sy;
+                        for (int i = bi * VV_VC_BLOCK; i <= i1; i++) {
+                            float x = vv_vcache_value(c, base + (size_t)i);
+                            lo = x < lo ? x : lo;
+                            hi = x > hi ? x : hi;
+                        }
+                    }
+                size_t b = ((size_t)bk * (size_t)c->by + (size_t)bj) * (size_t)c->bx + (size_t)bi;
+                c->bmin[b] = lo;
+                c->bmax[b] = hi;
+            }
+    /* the groups of subvolumes: the pyramid's second level */
+    for (int gk = 0; gk < c->gz; gk++)
+        for (int gj = 0; gj < c->gy; gj++)
+            for (int gi = 0; gi < c->gx; gi++) {
+                float lo = INFINITY, hi = -INFINITY;
+                for (int bk = gk * VV_VC_GROUP; bk < (gk + 1) * VV_VC_GROUP && bk < c->bz; bk++)
+                    for (int bj = gj * VV_VC_GROUP; bj < (gj + 1) * VV_VC_GROUP && bj < c->by; bj++)
+                        for (int bi = gi * VV_VC_GROUP; bi < (gi + 1) * VV_VC_GROUP && bi < c->bx;
+                             bi++) {
+                            size_t b = ((size_t)bk * (size_t)c->by + (size_t)bj) * (size_t)c->bx +
+                                       (size_t)bi;
+                            lo = c->bmin[b] < lo ? c->bmin[b] : lo;
+                            hi = c->bmax[b] > hi ? c->bmax[b] : hi;
+                        }
+                size_t g = ((size_t)gk * (size_t)c->gy + (size_t)gj) * (size_t)c->gx + (size_t)gi;
+                c->gmin[g] = lo;
+                c->gmax[g] = hi;
+            }
+}
+
+static vv_status
+cache_build(const vv_vcache_set *s, vv_vcache *c, vv_volume *vol) {
+    memset(c, 0, sizeof *c);
+    c->nx = vol->dims[0] < 2 ? 2 : vol->dims[0];
+    c->ny = vol->dims[1] < 2 ? 2 : vol->dims[1];
+    c->nz = vol->dims[2] < 2 ? 2 : vol->dims[2];
+    c->sy = (size_t)c->nx;
+    c->sz = (size_t)c->nx * (size_t)c->ny;
+    const size_t n = c->sz * (size_t)c->nz;
+    const int ny = c->ny, nz = c->nz;
+    const int whole = c->nx == vol->dims[0] && c->ny == vol->dims[1] && c->nz == vol->dims[2];
+    if (vol->type == VV_U16 && whole) {
+        /* the volume's own array serves: no copy (memory: issue 14) */
+        c->qoff = 0;
+        c->q16 = vol->data;
+        c->q16_borrowed = 1;
+    } else {
+        /* the renderers' copy: refused when the memory left cannot hold it
+         * (under a cgroup's limit the allocation would succeed and the OOM
+         * killer end the process when the copy is filled) */
+        int q = is_integer_type(vol->type) && vol->range[1] - vol->range[0] <= 65535.0;
+        uint64_t bytes = (uint64_t)n * (q ? sizeof *c->q16 : sizeof *c->f32);
+        uint64_t left = vv_memory_available();
+        if (bytes > left)
+            return vv_error_set(VV_ERR_LIMIT,
+                                "the renderers' copy of a %d x %d x %d volume needs %llu bytes, "
+                                "more than the %llu bytes of memory left (the machine's or the "
+                                "memory cgroup's)",
+                                vol->dims[0], vol->dims[1], vol->dims[2], (unsigned long long)bytes,
+                                (unsigned long long)left);
+        if (q) {
+            c->qoff = vol->range[0];
+            c->q16 = malloc(n * sizeof *c->q16);
+        } else {
+            c->f32 = malloc(n * sizeof *c->f32);
+        }
+    }
+    c->bx = (c->nx - 2) / VV_VC_BLOCK + 1;
+    c->by = (c->ny - 2) / VV_VC_BLOCK + 1;
+    c->bz = (c->nz - 2) / VV_VC_BLOCK + 1;
+    size_t nb = (size_t)c->bx * (size_t)c->by * (size_t)c->bz;
+    c->bmin = malloc(nb * sizeof(float));
+    c->bmax = malloc(nb * sizeof(float));
+    c->gx = (c->bx + VV_VC_GROUP - 1) / VV_VC_GROUP;
+    c->gy = (c->by + VV_VC_GROUP - 1) / VV_VC_GROUP;
+    c->gz = (c->bz + VV_VC_GROUP - 1) / VV_VC_GROUP;
+    size_t ng = (size_t)c->gx * (size_t)c->gy * (size_t)c->gz;
+    c->gmin = malloc(ng * sizeof(float));
+    c->gmax = malloc(ng * sizeof(float));
+    if ((!c->q16 && !c->f32) || !c->bmin || !c->bmax || !c->gmin || !c->gmax) {
+        cache_release(c);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for %zu voxels", n);
+    }
+    if (!c->q16_borrowed) {
+#pragma omp parallel for schedule(static)
+        for (int k = 0; k < nz; k++)
+            for (int j = 0; j < ny; j++)
+                fill_row(c, vol, j, k, (size_t)k * c->sz + (size_t)j * c->sy);
+    }
+    (void)s;
+    fill_minmax(c);
+    c->vol = vv_volume_ref(vol);
+    c->modified = vol->modified;
+    return VV_OK;
+}
+
+void
+vv_vcache_need_normals(const vv_vcache_set *s, vv_vcache *c) {
+    if (c->nrm || c->nrm_tried)
+        return;
+    c->nrm_tried = 1;
+    const size_t n = c->sz * (size_t)c->nz;
+    /* within the set's budget and half of the memory left now (a cgroup's
+     * limit included): the cache is an optimisation, never a reason for the
+     * OOM killer */
+    uint64_t left = vv_memory_available();
+    if ((uint64_t)n * 3 <= s->gradient_budget && (uint64_t)n * 3 <= left / 2)
+        c->nrm = malloc(n * 3 + 1); /* NULL: gradients on the fly */
+    if (c->nrm) {
+        c->nrm[n * 3] = 0; /* the padding byte vv_vcache_normal reads past the last voxel */
+        fill_gradients(c);
+    }
+}
+
+void
+vv_vcache_set_init(vv_vcache_set *s) {
+    memset(s, 0, sizeof *s);
+    vv_vcache_set_default_budget(s);
+}
+
+void
+vv_vcache_set_default_budget(vv_vcache_set *s) {
+    /* cached gradients take 3 bytes a voxel: allow them up to a quarter of
+     * physical memory (at most 8 GiB); beyond, gradients are computed on the
+     * fly from the values */
+    uint64_t budget = (uint64_t)8 << 30;
+    long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+    if (pages > 0 && page > 0 && (uint64_t)pages * (uint64_t)page / 4 < budget)
+        budget = (uint64_t)pages * (uint64_t)page / 4;
+    s->gradient_budget = budget;
+}
+
+void
+vv_vcache_set_clear(vv_vcache_set *s) {
+    for (int i = 0; i < s->n; i++)
+        cache_release(&s->cache[i]);
+    s->n = 0;
+}
+
+void
+vv_vcache_set_prune(vv_vcache_set *s, const vv_world *w) {
+    for (int i = 0; i < s->n;) {
+        int used = 0;
+        for (int j = 0; j < w->n_objects; j++) {
+            const vv_object *o = w->objects[j];
+            used |= o && o->volume == s->cache[i].vol;
+            for (int c = 0; o && c < o->n_channels; c++)
+                used |= o->channels[c].volume == s->cache[i].vol;
+        }
+        if (!used) {
+            cache_release(&s->cache[i]);
+            s->cache[i] = s->cache[--s->n];
+        } else {
+            i++;
+        }
+    }
+}
+
+vv_status
+vv_vcache_get(vv_vcache_set *s, vv_volume *vol, vv_vcache **out) {
+    s->clock++;
+    for (int i = 0; i < s->n; i++)
+        if (s->cache[i].vol == vol) {
+            if (s->cache[i].modified != vol->modified) {
+                cache_release(&s->cache[i]);
+                vv_status st = cache_build(s, &s->cache[i], vol);
+                if (st != VV_OK) {
+                    s->cache[i] = s->cache[--s->n];
+                    return st;
+                }
+            }
+            s->cache[i].last_used = s->clock;
+            *out = &s->cache[i];
+            return VV_OK;
+        }
+    int slot = s->n;
+    if (slot == VV_VC_MAX) {
+        slot = 0;
+        for (int i = 1; i < s->n; i++)
+            if (s->cache[i].last_used < s->cache[slot].last_used)
+                slot = i;
+        cache_release(&s->cache[slot]);
+    } else {
+        s->n++;
+    }
+    vv_status st = cache_build(s, &s->cache[slot], vol);
+    if (st != VV_OK) {
+        s->cache[slot] = s->cache[--s->n];
+        return st;
+    }
+    s->cache[slot].last_used = s->clock;
+    *out = &s->cache[slot];
+    return VV_OK;
+}

@@ -1,0 +1,330 @@
+/*
+ * The sampling stage of the volume renderers (raycast, raytrace, splat;
+ * internal, not part of the public API): the per-volume voxel cache and the
+ * trilinear sampling of its values, gradients and gradient magnitudes.
+ *
+ * Per volume, a cache holds the voxels as 16-bit offsets from the minimum
+ * when the data are integers spanning at most 65535 (exact, and half the
+ * memory traffic of float), else as float; all values inside the renderers
+ * ("stored units") are real value - qoff. The unit gradient direction of
+ * every voxel (central differences, computed once) is quantised to 3 x int8
+ * in a separate array, touched only where a sample is shaded, and every
+ * subvolume of 4^3 cells has the min/max of its stored values (the PARC
+ * grid of the VolVis paper's Navigator, section 4; computed from the stored
+ * values rather than with vv_minmax_grid_build so that it agrees exactly
+ * with the samples: NaN voxels are stored as the minimum, a single-voxel
+ * axis is held twice).
+ *
+ * The cache also keeps the last transfer-function tables built for its
+ * volume (tf_tables.h) while nothing they depend on changes. Values are
+ * interpolated trilinearly and normals are gradients by central
+ * differences, as in Levoy's volume ray casting ("Display of surfaces from
+ * volume data", IEEE CG&A 1988).
+ *
+ * Not thread-safe while building; the sampling functions below only read
+ * and may run on many threads. docs/rendering.md describes the method.
+ */
+#ifndef VV_RENDER_SAMPLE_H
+#define VV_RENDER_SAMPLE_H
+
+#include <stddef.h>
+#include <stdint.h>
+#include <string.h>
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
+#include "render/tf_tables.h"
+#include "volvis/render.h"
+
+#define VV_VC_BLOCK 4 /* subvolume side in cells */
+#define VV_VC_GROUP 4 /* subvolumes per side of a group (the pyramid's second level) */
+/* cached volumes per renderer: >= the objects of one render, so none in use
+ * is evicted */
+#define VV_VC_MAX 64
+#define VV_VC_CHUNK 32 /* samples classified at a time (vv_vray_classify) */
+#if defined(__x86_64__) && defined(__GNUC__)
+#define VV_VC_HAVE_AVX2 1
+#else
+#define VV_VC_HAVE_AVX2 0
+#endif
+
+/* Everything derived from one volume that does not depend on the TF. */
+typedef struct vv_vcache {
+    vv_volume *vol; /* reference held */
+    uint64_t modified;
+    int nx, ny, nz;     /* cached grid (each >= 2; a 1-voxel axis is duplicated) */
+    size_t sy, sz;      /* strides in voxels */
+    uint16_t *q16;      /* values as uint16 (real = q + qoff), or NULL */
+    int q16_borrowed;   /* q16 is the volume's own u16 array (qoff 0), not a copy */
+    float *f32;         /* values as float (qoff = 0), or NULL */
+    double qoff;        /* offset of stored values */
+    int8_t *nrm;        /* unit gradients * 127 (index space), 3 bytes a voxel and one
+                           byte of padding at the end, or NULL: on the fly */
+    int nrm_tried;      /* vv_vcache_need_normals ran (nrm NULL: over the budget) */
+    float *gmag;        /* gradient magnitudes per voxel (vv_vcache_need_gmag), or NULL */
+    int bx, by, bz;     /* subvolume grid */
+    float *bmin, *bmax; /* per subvolume, stored units */
+    /* the next level of the min/max pyramid: per group of VV_VC_GROUP^3
+     * subvolumes (cubes of VV_VC_BLOCK * VV_VC_GROUP cells), the min/max of
+     * its subvolumes' */
+    int gx, gy, gz;
+    float *gmin, *gmax;
+    /* the last object tables built for this volume */
+    int tables_valid;
+    vv_vtables_key key;
+    vv_vtables tables;
+    uint64_t tables_frame; /* the frame that last borrowed them */
+    uint64_t last_used;
+} vv_vcache;
+
+/* The caches of one renderer. */
+typedef struct vv_vcache_set {
+    vv_vcache cache[VV_VC_MAX];
+    int n;
+    uint64_t clock;
+    uint64_t frame;           /* renders so far (vv_vcache_set_begin_frame) */
+    uint64_t gradient_budget; /* bytes allowed for one volume's cached gradients */
+} vv_vcache_set;
+
+/* Empty set; gradients allowed up to a quarter of physical memory, at most
+ * 8 GiB. */
+void vv_vcache_set_init(vv_vcache_set *s);
+/* The gradient budget of a new set (the option value "auto"). */
+void vv_vcache_set_default_budget(vv_vcache_set *s);
+/* Releases every cached volume (the set stays usable). */
+void vv_vcache_set_clear(vv_vcache_set *s);
+/* Drops the cached volumes that no object of @p w shows. */
+void vv_vcache_set_prune(vv_vcache_set *s, const vv_world *w);
+/* The cache of @p vol, built (or rebuilt when the volume was modified) on
+ * demand; the least recently used one is evicted when the set is full.
+ * Errors: VV_ERR_NOMEM; VV_ERR_LIMIT when the copy of the values is more
+ * than the memory left (vv_memory_available: a cgroup's limit included). */
+vv_status vv_vcache_get(vv_vcache_set *s, vv_volume *vol, vv_vcache **out);
+
+/* Builds c->nrm once, when a shaded object first needs it and it fits
+ * @p s's gradient budget and half of the memory left (else, or without memory, it stays NULL and
+ * gradients are computed at each sample: slower, never wrong). A volume
+ * shown only as MIP, MinIP or X-ray never pays for it. */
+void vv_vcache_need_normals(const vv_vcache_set *s, vv_vcache *c);
+
+/* Builds c->gmag once: the gradient magnitude of every cached voxel, in
+ * data units per world unit of the volume's own coordinates (central
+ * differences, one-sided at the faces, mapped by the inverse transpose of
+ * the volume's index-to-world matrix; vv_histogram2d_compute's definition).
+ * Errors: VV_ERR_NOMEM, VV_ERR_LIMIT (more than the memory left),
+ * VV_ERR_INVALID (singular matrix). */
+vv_status vv_vcache_need_gmag(vv_vcache *c);
+
+static inline float
+vv_lerpf(float a, float b, float t) {
+    return a + (b - a) * t;
+}
+
+static inline float
+vv_vcache_value(const vv_vcache *c, size_t idx) {
+    return c->q16 ? (float)c->q16[idx] : c->f32[idx];
+}
+
+/* Cell and fractions of index-space point p, clamped so that the cell's far
+ * corner is inside the cached grid. */
+static inline size_t
+vv_vcache_cell_of(const vv_vcache *c, const float p[3], float f[3]) {
+    float x = p[0], y = p[1], z = p[2];
+    x = x < 0 ? 0 : x;
+    y = y < 0 ? 0 : y;
+    z = z < 0 ? 0 : z;
+    int i = (int)x, j = (int)y, k = (int)z;
+    if (i > c->nx - 2)
+        i = c->nx - 2;
+    if (j > c->ny - 2)
+        j = c->ny - 2;
+    if (k > c->nz - 2)
+        k = c->nz - 2;
+    f[0] = x - (float)i;
+    f[1] = y - (float)j;
+    f[2] = z - (float)k;
+    f[0] = f[0] > 1 ? 1 : f[0];
+    f[1] = f[1] > 1 ? 1 : f[1];
+    f[2] = f[2] > 1 ? 1 : f[2];
+    return (size_t)k * c->sz + (size_t)j * c->sy + (size_t)i;
+}
+
+/* vv_vcache_cell_of for points inside the grid box (a clipped ray), up to
+ * float rounding: no float clamps, only the integer clamps that keep every
+ * read inside the grid. A point a rounding error outside extrapolates by
+ * that error, which is harmless. */
+static inline size_t
+vv_vcache_cell_in(const vv_vcache *c, const float p[3], float f[3]) {
+    int i = (int)p[0], j = (int)p[1], k = (int)p[2];
+    i = i < c->nx - 2 ? i : c->nx - 2;
+    j = j < c->ny - 2 ? j : c->ny - 2;
+    k = k < c->nz - 2 ? k : c->nz - 2;
+    i = i > 0 ? i : 0;
+    j = j > 0 ? j : 0;
+    k = k > 0 ? k : 0;
+    f[0] = p[0] - (float)i;
+    f[1] = p[1] - (float)j;
+    f[2] = p[2] - (float)k;
+    return (size_t)k * c->sz + (size_t)j * c->sy + (size_t)i;
+}
+
+/* Trilinear value in the cell at offset o with fractions f. */
+static inline float
+vv_vcache_value_at(const vv_vcache *c, size_t o, const float f[3]) {
+    const size_t sy = c->sy, sz = c->sz;
+    float c00, c10, c01, c11;
+#ifdef __SSE2__
+    if (c->q16) {
+        /* the four x-pairs of the cell in one register, both corners of each
+         * pair lerped at once */
+        const uint16_t *v = c->q16 + o;
+        int32_t a0, a1, a2, a3;
+        memcpy(&a0, v, 4);
+        memcpy(&a1, v + sy, 4);
+        memcpy(&a2, v + sz, 4);
+        memcpy(&a3, v + sz + sy, 4);
+        const __m128i x = _mm_set_epi32(a3, a2, a1, a0);
+        const __m128 lo = _mm_cvtepi32_ps(_mm_and_si128(x, _mm_set1_epi32(0xFFFF)));
+        const __m128 hi = _mm_cvtepi32_ps(_mm_srli_epi32(x, 16));
+        const __m128 cx = _mm_add_ps(lo, _mm_mul_ps(_mm_sub_ps(hi, lo), _mm_set1_ps(f[0])));
+        /* cx = (c00, c10, c01, c11): lerp (c00, c01) towards (c10, c11) in y */
+        const __m128 y0 = _mm_shuffle_ps(cx, cx, _MM_SHUFFLE(2, 0, 2, 0));
+        const __m128 y1 = _mm_shuffle_ps(cx, cx, _MM_SHUFFLE(3, 1, 3, 1));
+        const __m128 cy = _mm_add_ps(y0, _mm_mul_ps(_mm_sub_ps(y1, y0), _mm_set1_ps(f[1])));
+        const float z0 = _mm_cvtss_f32(cy);
+        const float z1 = _mm_cvtss_f32(_mm_shuffle_ps(cy, cy, _MM_SHUFFLE(1, 1, 1, 1)));
+        return vv_lerpf(z0, z1, f[2]);
+    }
+#endif
+    if (c->q16) {
+        const uint16_t *v = c->q16 + o;
+        c00 = vv_lerpf(v[0], v[1], f[0]);
+        c10 = vv_lerpf(v[sy], v[sy + 1], f[0]);
+        c01 = vv_lerpf(v[sz], v[sz + 1], f[0]);
+        c11 = vv_lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
+    } else {
+        const float *v = c->f32 + o;
+        c00 = vv_lerpf(v[0], v[1], f[0]);
+        c10 = vv_lerpf(v[sy], v[sy + 1], f[0]);
+        c01 = vv_lerpf(v[sz], v[sz + 1], f[0]);
+        c11 = vv_lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
+    }
+    return vv_lerpf(vv_lerpf(c00, c10, f[1]), vv_lerpf(c01, c11, f[1]), f[2]);
+}
+
+/* Trilinear value at index point p (clamped to the grid). */
+static inline float
+vv_vcache_sample(const vv_vcache *c, const float p[3]) {
+    float f[3];
+    size_t o = vv_vcache_cell_of(c, p, f);
+    return vv_vcache_value_at(c, o, f);
+}
+
+typedef float vv_v4f __attribute__((vector_size(16)));
+
+/* The cached unit gradient of voxel idx as 4 floats (x, y, z, w), times
+ * 127; w is the next voxel's x and must be ignored: one 32-bit load (the
+ * array has a byte of padding for the last voxel), sign-extended in
+ * registers (compilers scalarise the generic int8 -> float vector
+ * conversion). */
+static inline vv_v4f
+vv_vcache_normal(const vv_vcache *c, size_t idx) {
+#ifdef __SSE2__
+    int32_t word;
+    memcpy(&word, c->nrm + 3 * idx, sizeof word);
+    __m128i x = _mm_cvtsi32_si128(word);
+    x = _mm_unpacklo_epi8(x, x);
+    x = _mm_unpacklo_epi16(x, x);
+    x = _mm_srai_epi32(x, 24);
+    return (vv_v4f)_mm_cvtepi32_ps(x);
+#else
+    const int8_t *n = c->nrm + 3 * idx;
+    vv_v4f r = {n[0], n[1], n[2], 0};
+    return r;
+#endif
+}
+
+/* Index-space gradient direction (not normalised) in the cell at offset o
+ * with fractions f: trilinear interpolation of the cached unit gradients,
+ * the same lerp tree as vv_vcache_value_at, four lanes at a time. Needs
+ * c->nrm. */
+static inline void
+vv_vcache_gradient_at(const vv_vcache *c, size_t o, const float f[3], float g[3]) {
+    const size_t sy = c->sy, sz = c->sz;
+    vv_v4f c00 = vv_vcache_normal(c, o), c01 = vv_vcache_normal(c, o + 1);
+    vv_v4f c10 = vv_vcache_normal(c, o + sy), c11 = vv_vcache_normal(c, o + sy + 1);
+    vv_v4f c20 = vv_vcache_normal(c, o + sz), c21 = vv_vcache_normal(c, o + sz + 1);
+    vv_v4f c30 = vv_vcache_normal(c, o + sz + sy), c31 = vv_vcache_normal(c, o + sz + sy + 1);
+    c00 += (c01 - c00) * f[0];
+    c10 += (c11 - c10) * f[0];
+    c20 += (c21 - c20) * f[0];
+    c30 += (c31 - c30) * f[0];
+    c00 += (c10 - c00) * f[1];
+    c20 += (c30 - c20) * f[1];
+    c00 += (c20 - c00) * f[2];
+    g[0] = c00[0];
+    g[1] = c00[1];
+    g[2] = c00[2];
+}
+
+/* Index-space gradient direction at p (not normalised): cached gradients
+ * when there are, else central differences of trilinear samples half a
+ * voxel apart. */
+static inline void
+vv_vcache_gradient(const vv_vcache *c, const float p[3], float g[3]) {
+    if (c->nrm) {
+        float f[3];
+        size_t o = vv_vcache_cell_of(c, p, f);
+        vv_vcache_gradient_at(c, o, f, g);
+        return;
+    }
+    for (int a = 0; a < 3; a++) {
+        float pa[3] = {p[0], p[1], p[2]}, pb[3] = {p[0], p[1], p[2]};
+        pa[a] -= 0.5f;
+        pb[a] += 0.5f;
+        g[a] = vv_vcache_sample(c, pb) - vv_vcache_sample(c, pa);
+    }
+}
+
+/* Trilinear gradient magnitude at index point p (needs c->gmag). */
+static inline float
+vv_vcache_gmag(const vv_vcache *c, const float p[3]) {
+    float f[3];
+    const size_t o = vv_vcache_cell_of(c, p, f);
+    const float *v = c->gmag + o;
+    const size_t sy = c->sy, sz = c->sz;
+    const float c00 = vv_lerpf(v[0], v[1], f[0]), c10 = vv_lerpf(v[sy], v[sy + 1], f[0]);
+    const float c01 = vv_lerpf(v[sz], v[sz + 1], f[0]);
+    const float c11 = vv_lerpf(v[sz + sy], v[sz + sy + 1], f[0]);
+    return vv_lerpf(vv_lerpf(c00, c10, f[1]), vv_lerpf(c01, c11, f[1]), f[2]);
+}
+
+/* The subvolume containing index point p (clamped to the grid). */
+static inline size_t
+vv_vcache_block(const vv_vcache *c, const float p[3]) {
+    int bi = (int)((p[0] > 0 ? p[0] : 0) * (1.0f / VV_VC_BLOCK));
+    int bj = (int)((p[1] > 0 ? p[1] : 0) * (1.0f / VV_VC_BLOCK));
+    int bk = (int)((p[2] > 0 ? p[2] : 0) * (1.0f / VV_VC_BLOCK));
+    bi = bi >= c->bx ? c->bx - 1 : bi;
+    bj = bj >= c->by ? c->by - 1 : bj;
+    bk = bk >= c->bz ? c->bz - 1 : bk;
+    return ((size_t)bk * (size_t)c->by + (size_t)bj) * (size_t)c->bx + (size_t)bi;
+}
+
+/* The subvolume of index point p: its index, and its coordinates in bc.
+ * p >= 0 up to rounding: a negative index would wrap and clamp high, so the
+ * float is clamped instead. bxm, bym, bzm: the grid's last subvolume. */
+static inline size_t
+vv_vblock_of(const vv_vcache *c, const float p[3], unsigned bxm, unsigned bym, unsigned bzm,
+             unsigned bc[3]) {
+    unsigned bi = (unsigned)(int)((p[0] > 0 ? p[0] : 0) * (1.0f / VV_VC_BLOCK));
+    unsigned bj = (unsigned)(int)((p[1] > 0 ? p[1] : 0) * (1.0f / VV_VC_BLOCK));
+    unsigned bk = (unsigned)(int)((p[2] > 0 ? p[2] : 0) * (1.0f / VV_VC_BLOCK));
+    bc[0] = bi > bxm ? bxm : bi;
+    bc[1] = bj > bym ? bym : bj;
+    bc[2] = bk > bzm ? bzm : bk;
+    return ((size_t)bc[2] * (size_t)c->by + (size_t)bc[1]) * (size_t)c->bx + (size_t)bc[0];
+}
+
+#endif
