@@ -70,12 +70,16 @@ typedef enum vv_option_type {
 #define VV_OPTION_MIN_OPEN 1u /**< the value must be > min (not >=) */
 #define VV_OPTION_MAX_OPEN 2u /**< the value must be < max (not <=) */
 
+/** Where a renderer keeps an option's value: the implementor's side (sys/renderer.h). */
+typedef struct vv_option_binding vv_option_binding;
+
 /**
  * One option of a renderer: what `--set KEY=VALUE` accepts. For INT and
  * REAL, `words` (may be NULL) lists words accepted besides numbers (e.g.
  * "auto", "exact"); for ENUM it lists every value. `def` is the default as
  * the text --set would take, and it passes the option's own validator
- * (tests/render/test_registry.c checks every table).
+ * (tests/render/test_registry.c checks every table). A new renderer starts
+ * with every option at its `def`, set as vv_renderer_set_option sets it.
  */
 typedef struct vv_option_spec {
     const char *key;          /**< [a-z0-9_]+ */
@@ -85,6 +89,9 @@ typedef struct vv_option_spec {
     unsigned flags;           /**< VV_OPTION_MIN_OPEN, VV_OPTION_MAX_OPEN */
     const char *const *words; /**< NULL-terminated (see above), or NULL */
     const char *doc;          /**< one line: meaning and unit */
+    /** The field of the renderer's state that holds the value, and how
+     * (sys/renderer.h); readers of the table leave it alone. */
+    const vv_option_binding *bind;
 } vv_option_spec;
 
 /** A validated option value (vv_option_parse). */

@@ -177,23 +177,6 @@ vv_frame_refine_tolerance(int quality) {
     return by_quality[quality < 0 ? 0 : quality > 2 ? 2 : quality];
 }
 
-void
-vv_frame_refine_settings_init(vv_frame_refine_settings *s) {
-    s->mode = 0;
-    s->tolerance = -1;
-}
-
-int
-vv_frame_refine_set_option(vv_frame_refine_settings *s, const char *key, const vv_option_value *v) {
-    if (strcmp(key, "refinement") == 0)
-        s->mode = v->word;
-    else if (strcmp(key, "refinement_tolerance") == 0)
-        s->tolerance = v->word >= 0 ? -1 : v->r;
-    else
-        return 0;
-    return 1;
-}
-
 int
 vv_frame_refine_for(const vv_frame_refine_settings *s, int quality, int region, float *tolerance) {
     *tolerance = s->tolerance >= 0 ? (float)s->tolerance : vv_frame_refine_tolerance(quality);

@@ -1,7 +1,9 @@
 /*
  * The renderer registry, the generic renderer object, option validation
- * from the renderers' typed tables, the World checks and the default
- * renderer of a World (include/volvis/render.h, include/volvis/sys/renderer.h).
+ * from the renderers' typed tables and the one setter that stores an
+ * option in the field its row binds (defaults included), the World checks
+ * and the default renderer of a World (include/volvis/render.h,
+ * include/volvis/sys/renderer.h).
  */
 #include <errno.h>
 #include <stdio.h>
@@ -344,7 +346,131 @@ vv_world_renderer(const vv_world *w) {
     return best >= 0 ? registry[best]->info.name : "raycast";
 }
 
+/* ---- options: the one setter ---------------------------------------------------- */
+
+/* The number a value stands for: the word's value, else the parsed number
+ * (BOOL 0 or 1). */
+static double
+option_number(const vv_option_binding *b, const vv_option_value *v) {
+    if (v->word >= 0)
+        return b->word_values[v->word];
+    return v->type == VV_OPTION_BOOL ? (double)v->b : v->r;
+}
+
+/* Stores @p v into the field @p b binds (vv_option_binding). */
+static vv_status
+option_store(unsigned char *field, const vv_option_spec *spec, const vv_option_binding *b,
+             const vv_option_value *v) {
+    /* a word without a value of its own is the hook's, except an index */
+    const int hooked = v->word >= 0 && !b->word_values;
+    switch (b->store) {
+    case VV_OPTION_STORE_NONE:
+        return VV_OK;
+    case VV_OPTION_STORE_DOUBLE: {
+        if (hooked)
+            return VV_OK;
+        const double x = option_number(b, v) * b->scale;
+        memcpy(field, &x, sizeof x);
+        return VV_OK;
+    }
+    case VV_OPTION_STORE_FLOAT: {
+        if (hooked)
+            return VV_OK;
+        const float x = (float)(option_number(b, v) * b->scale);
+        memcpy(field, &x, sizeof x);
+        return VV_OK;
+    }
+    case VV_OPTION_STORE_INT: {
+        const int x = hooked                      ? v->word
+                      : v->word >= 0              ? (int)b->word_values[v->word]
+                      : v->type == VV_OPTION_BOOL ? v->b
+                                                  : (int)v->i;
+        memcpy(field, &x, sizeof x);
+        return VV_OK;
+    }
+    case VV_OPTION_STORE_UINT64: {
+        if (hooked)
+            return VV_OK;
+        const uint64_t x = (uint64_t)(option_number(b, v) * b->scale);
+        memcpy(field, &x, sizeof x);
+        return VV_OK;
+    }
+    case VV_OPTION_STORE_CHARS: {
+        const size_t n = strlen(v->text);
+        if (n >= b->size)
+            return vv_error_set(VV_ERR_INVALID, "%s: value of %zu bytes (at most %zu)", spec->key,
+                                n, b->size - 1);
+        memset(field, 0, b->size);
+        memcpy(field, v->text, n);
+        return VV_OK;
+    }
+    }
+    return vv_error_set(VV_ERR_UNSUPPORTED, "%s: option stored as unknown kind %d", spec->key,
+                        (int)b->store);
+}
+
+/* Sets option @p spec of a method's @p state from @p text: parsed and
+ * validated, stored in its bound field, then its hook; a failing hook
+ * gives the field its previous bytes back. The one setter of every
+ * option, defaults included. */
+static vv_status
+option_apply(void *state, const vv_option_spec *spec, const char *text) {
+    vv_option_value v;
+    vv_status s = vv_option_parse(spec, text, &v);
+    if (s != VV_OK)
+        return s;
+    const vv_option_binding *b = spec->bind;
+    if (!b)
+        return vv_error_set(VV_ERR_UNSUPPORTED, "%s: option bound to no field", spec->key);
+    unsigned char *field = (unsigned char *)state + b->offset;
+    unsigned char small[64], *old = NULL;
+    const size_t bytes = b->store == VV_OPTION_STORE_NONE ? 0 : b->size;
+    if (b->hook && bytes) {
+        old = bytes <= sizeof small ? small : malloc(bytes);
+        if (!old)
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        memcpy(old, field, bytes);
+    }
+    s = option_store(field, spec, b, &v);
+    if (s == VV_OK && b->hook && (s = b->hook(state, spec, &v)) != VV_OK && old)
+        memcpy(field, old, bytes);
+    if (old != small)
+        free(old);
+    return s;
+}
+
 /* ---- renderer objects ---------------------------------------------------------- */
+
+/* Frees a method's state (release first). */
+static void
+state_free(const vv_renderer_ops *ops, void *state) {
+    if (!state)
+        return;
+    if (ops->release)
+        ops->release(state);
+    free(state);
+}
+
+/* A new state of @p ops: zeroed, init, every option at its default. */
+static vv_status
+state_new(const vv_renderer_ops *ops, void **out) {
+    *out = NULL;
+    void *st = calloc(1, ops->state_size ? ops->state_size : 1);
+    if (!st)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    vv_status s = ops->init ? ops->init(st) : VV_OK;
+    for (int i = 0; s == VV_OK && i < ops->info.n_options; i++) {
+        const vv_option_spec *spec = &ops->info.options[i];
+        if ((s = option_apply(st, spec, spec->def)) != VV_OK)
+            vv_error_prefix(s, "default of %s", spec->key);
+    }
+    if (s != VV_OK) {
+        state_free(ops, st);
+        return s;
+    }
+    *out = st;
+    return VV_OK;
+}
 
 vv_status
 vv_renderer_new(vv_renderer **out, const char *name) {
@@ -359,7 +485,7 @@ vv_renderer_new(vv_renderer **out, const char *name) {
         if (!r)
             return vv_error_set(VV_ERR_NOMEM, "out of memory");
         r->ops = registry[i];
-        vv_status s = r->ops->create(&r->state);
+        vv_status s = state_new(r->ops, &r->state);
         if (s != VV_OK) {
             free(r);
             return vv_error_prefix(s, "%s", name);
@@ -378,7 +504,7 @@ void
 vv_renderer_free(vv_renderer *r) {
     if (!r)
         return;
-    r->ops->destroy(r->state);
+    state_free(r->ops, r->state);
     for (int i = 0; i < r->n_opts; i++)
         free(r->opts[i].value);
     free(r->opts);
@@ -450,10 +576,7 @@ vv_renderer_set_option(vv_renderer *r, const char *key, const char *value) {
     if (!spec) {
         s = unknown_key(&r->ops->info, key);
     } else {
-        vv_option_value v;
-        s = vv_option_parse(spec, value, &v);
-        if (s == VV_OK)
-            s = r->ops->set_option(r->state, spec, &v);
+        s = option_apply(r->state, spec, value);
         if (s == VV_OK)
             s = remember_option(r, spec->key, value);
     }

@@ -5,6 +5,15 @@
  *   every entry has a key, a type and a default that its own validator
  *   accepts (and that setting it on a new renderer is accepted), the region
  *   capability exactly when a region method exists;
+ * - options are data: every row binds to a field of the renderer's state
+ *   (inside it, of the size its store kind writes, no two rows the same
+ *   field); a new renderer's bound fields hold the parsed defaults, setting
+ *   a default again changes no byte of the state, another value lands in
+ *   its field and the default puts it back; a clone's fields are its
+ *   original's; radiosity's defaults are vv_radiosity_options_init's;
+ * - an unknown key, a bad value and a refused value (a hook's error) give
+ *   the one-line errors they gave before the tables were bound, and leave
+ *   the field as it was;
  * - `volvis renderers --json` lists the same tables (parsed with Jansson):
  *   names, types, defaults, capabilities;
  * - option validation: types, ranges with open and closed ends, words,
@@ -27,6 +36,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "render/registry.h"
+#include "volvis/radiosity.h"
 #include "volvis/sys/renderer.h"
 
 static void
@@ -44,7 +55,7 @@ test_tables(void **state) {
         assert_non_null(in->description);
         assert_non_null(in->quality);
         assert_true(in->draws != 0);
-        assert_true(ops->create && ops->destroy && ops->set_option && ops->render);
+        assert_true(ops->state_size > 0 && ops->render);
         /* the region capability exactly when a region method exists */
         assert_int_equal((in->caps & VV_RENDERER_REGION) != 0, ops->render_region != NULL);
         vv_renderer *r = NULL;
@@ -177,6 +188,309 @@ test_validation(void **state) {
     char buf[128];
     const vv_option_spec *o = vv_renderer_info_option(vv_renderer_info_find("splat"), "radius");
     assert_string_equal(vv_option_describe(o, buf, sizeof buf), "real in (0, 8]");
+}
+
+/* ---- options are data: the bindings ------------------------------------------- */
+
+/* The bytes the binding of @p o stores for @p text into @p buf (this
+ * test's own reading of vv_option_binding); 0 when it stores nothing (a
+ * word left to the hook, or no field). */
+static int
+expected_field(const vv_option_spec *o, const char *text, unsigned char *buf) {
+    const vv_option_binding *b = o->bind;
+    vv_option_value v;
+    vt_ok(vv_option_parse(o, text, &v));
+    const int word = v.word >= 0;
+    if (b->store == VV_OPTION_STORE_NONE ||
+        (word && !b->word_values && b->store != VV_OPTION_STORE_INT))
+        return 0;
+    const double x = word && b->word_values      ? b->word_values[v.word]
+                     : o->type == VV_OPTION_BOOL ? v.b
+                                                 : v.r;
+    switch (b->store) {
+    case VV_OPTION_STORE_DOUBLE: {
+        const double d = x * b->scale;
+        memcpy(buf, &d, sizeof d);
+        return 1;
+    }
+    case VV_OPTION_STORE_FLOAT: {
+        const float f = (float)(x * b->scale);
+        memcpy(buf, &f, sizeof f);
+        return 1;
+    }
+    case VV_OPTION_STORE_INT: {
+        const int i = word ? (b->word_values ? (int)b->word_values[v.word] : v.word) : (int)v.i;
+        memcpy(buf, &i, sizeof i);
+        return 1;
+    }
+    case VV_OPTION_STORE_UINT64: {
+        const uint64_t u = (uint64_t)(x * b->scale);
+        memcpy(buf, &u, sizeof u);
+        return 1;
+    }
+    case VV_OPTION_STORE_CHARS:
+        memset(buf, 0, b->size);
+        memcpy(buf, text, strlen(text));
+        return 1;
+    default:
+        fail_msg("%s: store kind %d", o->key, (int)b->store);
+    }
+    return 0;
+}
+
+/* A valid value of @p o other than its default, into buf; 0 when there is
+ * none to try (a string: a file name). */
+static int
+other_value(const vv_option_spec *o, char *buf, size_t cap) {
+    switch (o->type) {
+    case VV_OPTION_BOOL:
+        snprintf(buf, cap, "%s", strcmp(o->def, "1") == 0 ? "0" : "1");
+        break;
+    case VV_OPTION_INT:
+        snprintf(buf, cap, "%.17g", strtod(o->def, NULL) != o->min ? o->min : o->max);
+        break;
+    case VV_OPTION_REAL:
+        snprintf(buf, cap, "%.17g", o->max == INFINITY ? o->min + 1 : (o->min + o->max) / 2);
+        break;
+    case VV_OPTION_ENUM:
+        snprintf(buf, cap, "%s", strcmp(o->def, o->words[0]) == 0 ? o->words[1] : o->words[0]);
+        break;
+    case VV_OPTION_STRING:
+        return 0;
+    }
+    vv_option_value v;
+    vt_ok(vv_option_parse(o, buf, &v));
+    assert_string_not_equal(buf, o->def);
+    return 1;
+}
+
+/* The binding of row @p o of @p ops agrees with the row and the state. */
+static void
+check_binding(const vv_renderer_ops *ops, const vv_option_spec *o) {
+    const vv_option_binding *b = o->bind;
+    const char *name = ops->info.name;
+    if (!b)
+        fail_msg("%s %s: no binding", name, o->key);
+    assert_true(b->scale > 0);
+    int nw = 0;
+    while (o->words && o->words[nw])
+        nw++;
+    size_t size = 0;
+    int ok = 0;
+    switch (b->store) {
+    case VV_OPTION_STORE_NONE:
+        ok = b->hook != NULL;
+        break;
+    case VV_OPTION_STORE_DOUBLE:
+        size = sizeof(double);
+        ok = o->type != VV_OPTION_STRING && (o->type != VV_OPTION_ENUM || b->word_values);
+        break;
+    case VV_OPTION_STORE_FLOAT:
+        size = sizeof(float);
+        ok = o->type != VV_OPTION_STRING && (o->type != VV_OPTION_ENUM || b->word_values);
+        break;
+    case VV_OPTION_STORE_INT:
+        size = sizeof(int);
+        ok = o->type != VV_OPTION_STRING && o->type != VV_OPTION_REAL && b->scale == 1;
+        break;
+    case VV_OPTION_STORE_UINT64:
+        size = sizeof(uint64_t);
+        ok = (o->type == VV_OPTION_INT || o->type == VV_OPTION_REAL) && o->min >= 0;
+        break;
+    case VV_OPTION_STORE_CHARS:
+        size = b->size;
+        ok = o->type == VV_OPTION_STRING && b->size >= VV_RENDER_OPTION_VALUE_MAX && b->scale == 1;
+        break;
+    }
+    if (!ok)
+        fail_msg("%s %s: a %s option cannot be stored as kind %d", name, o->key,
+                 vv_option_type_name(o->type), (int)b->store);
+    if (b->store != VV_OPTION_STORE_NONE &&
+        (b->size != size || b->offset + b->size > ops->state_size))
+        fail_msg("%s %s: field of %zu bytes at %zu (kind %d: %zu bytes; state %zu)", name, o->key,
+                 b->size, b->offset, (int)b->store, size, ops->state_size);
+    /* word values: one per word, and only where there are words */
+    if (b->word_values && !nw)
+        fail_msg("%s %s: word values without words", name, o->key);
+    /* a number's word without a value of its own is the hook's */
+    if (nw && !b->word_values && o->type != VV_OPTION_ENUM && !b->hook)
+        fail_msg("%s %s: its words store nothing and no hook takes them", name, o->key);
+}
+
+/* 1 when rows @p a and @p b bind overlapping bytes. */
+static int
+overlap(const vv_option_binding *a, const vv_option_binding *b) {
+    if (a->store == VV_OPTION_STORE_NONE || b->store == VV_OPTION_STORE_NONE)
+        return 0;
+    return a->offset < b->offset + b->size && b->offset < a->offset + a->size;
+}
+
+/* Compares the field of @p o in two states. */
+static void
+expect_field(const vv_option_spec *o, const unsigned char *st, const unsigned char *want,
+             const char *what, const char *value) {
+    const vv_option_binding *b = o->bind;
+    if (memcmp(st + b->offset, want, b->size) != 0)
+        fail_msg("%s=%s: the field is not %s", o->key, value, what);
+}
+
+static void
+test_bindings(void **state) {
+    (void)state;
+    const vv_renderer_ops *const *reg = vv_renderer_registry();
+    for (int n = 0; reg[n]; n++) {
+        const vv_renderer_ops *ops = reg[n];
+        const vv_renderer_info *in = &ops->info;
+        for (int k = 0; k < in->n_options; k++) {
+            check_binding(ops, &in->options[k]);
+            for (int j = 0; j < k; j++)
+                if (overlap(in->options[j].bind, in->options[k].bind))
+                    fail_msg("%s: %s and %s bind the same bytes", in->name, in->options[j].key,
+                             in->options[k].key);
+        }
+        vv_renderer *r = NULL;
+        vt_ok(vv_renderer_new(&r, in->name));
+        unsigned char *st = vv_renderer_state(r);
+        unsigned char *fresh = malloc(ops->state_size);
+        assert_non_null(fresh);
+        memcpy(fresh, st, ops->state_size);
+        unsigned char want[VV_RENDER_OPTION_VALUE_MAX + 64];
+        /* a new renderer's fields hold the parsed defaults */
+        for (int k = 0; k < in->n_options; k++) {
+            const vv_option_spec *o = &in->options[k];
+            assert_true(o->bind->size <= sizeof want);
+            if (expected_field(o, o->def, want))
+                expect_field(o, st, want, "the default's", o->def);
+        }
+        /* the default set again changes no byte of the state */
+        for (int k = 0; k < in->n_options; k++)
+            vt_ok(vv_renderer_set_option(r, in->options[k].key, in->options[k].def));
+        for (size_t i = 0; i < ops->state_size; i++)
+            if (st[i] != fresh[i])
+                fail_msg("%s: setting the defaults changed byte %zu of the state", in->name, i);
+        /* another value lands in its field; the default puts it back */
+        for (int k = 0; k < in->n_options; k++) {
+            const vv_option_spec *o = &in->options[k];
+            char other[64];
+            if (!other_value(o, other, sizeof other))
+                continue;
+            vt_ok(vv_renderer_set_option(r, o->key, other));
+            if (expected_field(o, other, want))
+                expect_field(o, st, want, "the value's", other);
+            vt_ok(vv_renderer_set_option(r, o->key, o->def));
+            expect_field(o, st, fresh + o->bind->offset, "the default's again", o->def);
+        }
+        if (memcmp(st, fresh, ops->state_size) != 0)
+            fail_msg("%s: the defaults again do not give a new renderer's state", in->name);
+        free(fresh);
+        vv_renderer_free(r);
+    }
+}
+
+/* vv_renderer_clone: the options set so far, in the clone's fields. */
+static void
+test_clone_fields(void **state) {
+    (void)state;
+    for (int n = 0; n < vv_renderer_count(); n++) {
+        const vv_renderer_info *in = vv_renderer_info_at(n);
+        vv_renderer *r = NULL, *c = NULL;
+        vt_ok(vv_renderer_new(&r, in->name));
+        for (int k = 0; k < in->n_options; k++) {
+            char other[64];
+            if (other_value(&in->options[k], other, sizeof other))
+                vt_ok(vv_renderer_set_option(r, in->options[k].key, other));
+        }
+        vt_ok(vv_renderer_clone(&c, r));
+        const unsigned char *a = vv_renderer_state(r), *b = vv_renderer_state(c);
+        for (int k = 0; k < in->n_options; k++) {
+            const vv_option_binding *bd = in->options[k].bind;
+            if (bd->store != VV_OPTION_STORE_NONE &&
+                memcmp(a + bd->offset, b + bd->offset, bd->size) != 0)
+                fail_msg("%s clone: option %s differs", in->name, in->options[k].key);
+        }
+        vv_renderer_free(c);
+        vv_renderer_free(r);
+    }
+}
+
+/* The radiosity renderer's defaults (its table) are the solver's own. */
+static void
+test_radiosity_defaults(void **state) {
+    (void)state;
+    const vv_renderer_info *in = vv_renderer_info_find("radiosity");
+    const vv_option_spec *tol = vv_renderer_info_option(in, "tolerance");
+    assert_non_null(tol);
+    /* the rows bind into a vv_radiosity_options member of the state */
+    const size_t at = tol->bind->offset - offsetof(vv_radiosity_options, tolerance);
+    vv_radiosity_options want;
+    vv_radiosity_options_init(&want);
+    vv_renderer *r = NULL;
+    vt_ok(vv_renderer_new(&r, "radiosity"));
+    const unsigned char *st = vv_renderer_state(r);
+    assert_memory_equal(st + at, &want, sizeof want);
+    vv_renderer_free(r);
+}
+
+/* Expects vv_renderer_set_option(r, key, value) to fail with exactly @p says. */
+static void
+expect_refused(vv_renderer *r, const char *key, const char *value, vv_status status,
+               const char *says) {
+    vv_error_clear();
+    assert_int_equal(vv_renderer_set_option(r, key, value), status);
+    assert_string_equal(vv_error_message(), says);
+}
+
+/* Unknown keys, bad values and values a hook refuses: the one-line errors
+ * of before, and nothing changed. */
+static void
+test_option_errors(void **state) {
+    (void)state;
+    vv_renderer *r = NULL;
+    vt_ok(vv_renderer_new(&r, "raycast"));
+    expect_refused(r, "no_such", "1", VV_ERR_INVALID,
+                   "raycast: unknown option 'no_such' (early_termination, gradient_budget_mb, "
+                   "empty_space_skipping, simd, refinement, refinement_tolerance, "
+                   "preintegration)");
+    expect_refused(r, "early_termination", "2", VV_ERR_INVALID,
+                   "raycast: early_termination: '2' is not real in (0, 1]");
+    expect_refused(r, "refinement", "sometimes", VV_ERR_INVALID,
+                   "raycast: refinement: 'sometimes' is not one of auto|on|off");
+    expect_refused(r, "gradient_budget_mb", "-1", VV_ERR_INVALID,
+                   "raycast: gradient_budget_mb: '-1' is not real >= 0 or auto");
+    vv_renderer_free(r);
+    vt_ok(vv_renderer_new(&r, "irregular"));
+    expect_refused(r, "samples", "2", VV_ERR_INVALID,
+                   "irregular: unknown option 'samples' (early_termination, "
+                   "empty_space_skipping)");
+    vv_renderer_free(r);
+
+    /* a hook's refusal: the field keeps its value */
+    vt_ok(vv_renderer_new(&r, "splat"));
+    const vv_option_spec *o = vv_renderer_info_option(vv_renderer_get_info(r), "sheet_spacing");
+    const unsigned char *st = vv_renderer_state(r);
+    vt_ok(vv_renderer_set_option(r, "sheet_spacing", "2"));
+    double was, now;
+    memcpy(&was, st + o->bind->offset, sizeof was);
+    assert_true(was == 2);
+    expect_refused(r, "sheet_spacing", "0.1", VV_ERR_INVALID,
+                   "splat: sheet_spacing must be 0 (by quality) or in [0.25, 8] steps");
+    memcpy(&now, st + o->bind->offset, sizeof now);
+    assert_true(now == 2);
+    vv_renderer_free(r);
+
+    vt_ok(vv_renderer_new(&r, "fourier"));
+    o = vv_renderer_info_option(vv_renderer_get_info(r), "vvc");
+    st = vv_renderer_state(r);
+    vv_error_clear();
+    assert_int_equal(vv_renderer_set_option(r, "vvc", "/nonexistent.vvc"), VV_ERR_IO);
+    assert_non_null(strstr(vv_error_message(), "fourier: vvc: /nonexistent.vvc: "));
+    assert_null(strchr(vv_error_message(), '\n'));
+    assert_int_equal(st[o->bind->offset], 0); /* still none */
+    /* a clone re-applies only what was accepted */
+    vv_renderer *c = NULL;
+    vt_ok(vv_renderer_clone(&c, r));
+    vv_renderer_free(c);
+    vv_renderer_free(r);
 }
 
 /* A World of one volume (neghip-like sphere), one grid, or both. */
@@ -425,9 +739,11 @@ test_region_ops(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_tables),       cmocka_unit_test(test_cli_json),
-        cmocka_unit_test(test_validation),   cmocka_unit_test(test_world_checks),
-        cmocka_unit_test(test_frame_runner), cmocka_unit_test(test_camera_rays),
+        cmocka_unit_test(test_tables),        cmocka_unit_test(test_cli_json),
+        cmocka_unit_test(test_validation),    cmocka_unit_test(test_bindings),
+        cmocka_unit_test(test_clone_fields),  cmocka_unit_test(test_radiosity_defaults),
+        cmocka_unit_test(test_option_errors), cmocka_unit_test(test_world_checks),
+        cmocka_unit_test(test_frame_runner),  cmocka_unit_test(test_camera_rays),
         cmocka_unit_test(test_region_ops),
     };
     return vt_run_tests(tests, NULL, NULL);

@@ -8,10 +8,16 @@
  * and distribution is a named contract (renderRegion), not a back channel.
  *
  * Adding a method: fill a vv_renderer_ops (version VV_RENDERER_OPS_VERSION,
- * a vv_renderer_info with its capabilities and option table, create,
- * destroy, set_option, render; render_region optional), declare it in
- * src/render/registry.h and list it in src/render/registry.c. Nothing else
- * names it: the CLI, the GUI, scene files and Python read the registry.
+ * a vv_renderer_info with its capabilities and option table, the size of
+ * its state, render; init, release and render_region optional), declare it
+ * in src/render/registry.h and list it in src/render/registry.c. Nothing
+ * else names it: the CLI, the GUI, scene files and Python read the
+ * registry. Options are data: each row of the option table binds to its
+ * field of the state (VV_OPTION_BIND and its kin below), and the registry
+ * allocates the state, sets every option to its default from the table's
+ * text and stores each value set later, the same way for every method; a
+ * method writes no default and no setter of its own, only a hook for an
+ * option whose change has a side effect (a cache to drop, a file to read).
  *
  * Room for what comes next (issues 29, 30, 32): a volume source
  * (sys/source.h) feeds region renders brick by brick today and levels of
@@ -39,7 +45,7 @@ extern "C" {
 #endif
 
 /** The version of vv_renderer_ops this header describes. */
-#define VV_RENDERER_OPS_VERSION 1
+#define VV_RENDERER_OPS_VERSION 2
 
 /* ---- regions ---------------------------------------------------------------- */
 
@@ -264,6 +270,84 @@ void vv_region_image_clear_rect(vv_region_image *img, int x0, int y0, int x1, in
 void vv_region_rect(vv_render_region *rg, vv_mat4 index_to_world, const vv_view *view,
                     const int lo[3], const int hi[3]);
 
+/* ---- option rows: where a method keeps each option ----------------------------- */
+
+/**
+ * How a bound option's value is stored in its field of the method's state
+ * (vv_option_binding.store). A number is the parsed value (BOOL: 0 or 1)
+ * times the binding's scale, or the value of the word given
+ * (vv_option_binding.word_values).
+ */
+typedef enum vv_option_store {
+    VV_OPTION_STORE_NONE = 0,   /**< nothing: the row's hook applies the value */
+    VV_OPTION_STORE_DOUBLE = 1, /**< double: BOOL, INT, REAL */
+    VV_OPTION_STORE_FLOAT = 2,  /**< float: BOOL, INT, REAL, rounded to float */
+    VV_OPTION_STORE_INT = 3,    /**< int: BOOL 0 or 1, INT, ENUM (the word's index, or its
+                                     value where word_values are given); never scaled */
+    VV_OPTION_STORE_UINT64 = 4, /**< uint64_t: INT, REAL >= 0, times scale, truncated */
+    VV_OPTION_STORE_CHARS = 5,  /**< char[size]: STRING's text, NUL-padded (size >=
+                                     VV_RENDER_OPTION_VALUE_MAX holds any value) */
+} vv_option_store;
+
+/**
+ * An option's side effect, called after its value is stored (also when a
+ * new renderer takes the default): drop a cache the value invalidates,
+ * read the file it names, reset an option it overrides. @p v is the
+ * validated value (v->word >= 0: one of the row's words). An error undoes
+ * the store (the field gets its previous bytes back) and is what
+ * vv_renderer_set_option returns; the hook itself leaves things as they
+ * were where it can.
+ */
+typedef vv_status (*vv_option_hook)(void *state, const vv_option_spec *spec,
+                                    const vv_option_value *v);
+
+/**
+ * An option row's binding (vv_option_spec.bind): the field of the method's
+ * state that holds its value, how it is stored and its side effect. The
+ * registry's one setter parses the text (vv_option_parse), stores it here
+ * and calls the hook, for the defaults of a new renderer and for every
+ * vv_renderer_set_option alike. A word (v->word >= 0) stores
+ * word_values[v->word] as if that number had been given (sentinels such
+ * as -1 for "auto"); without word_values an INT store takes the word's
+ * index (ENUM), and any other store keeps its value and leaves the word
+ * to the hook (e.g. gradient_budget_mb=auto). tests/render/test_registry.c
+ * checks every binding against its row and the state's size.
+ */
+struct vv_option_binding {
+    vv_option_store store;
+    size_t offset;             /**< offsetof(state type, field) */
+    size_t size;               /**< sizeof the field */
+    double scale;              /**< numbers (not INT stores) are stored times this (1: as given) */
+    const double *word_values; /**< one per entry of the row's words, or NULL (above) */
+    vv_option_hook hook;       /**< or NULL */
+};
+
+/** The binding of the field @p field of state type @p type (as
+ * offsetof takes it: `refine.mode` reaches into a member), stored as
+ * VV_OPTION_STORE_##kind (DOUBLE, FLOAT, INT, UINT64, CHARS), with
+ * @p scale, @p word_values (VV_OPTION_WORD_VALUES, or NULL) and @p hook
+ * (or NULL). The shorter forms below fill the rest. */
+#define VV_OPTION_BIND_FULL(type, field, kind, scale_, word_values_, hook_)                        \
+    (&(const vv_option_binding){.store = VV_OPTION_STORE_##kind,                                   \
+                                .offset = offsetof(type, field),                                   \
+                                .size = sizeof(((type *)0)->field),                                \
+                                .scale = (scale_),                                                 \
+                                .word_values = (word_values_),                                     \
+                                .hook = (hook_)})
+/** A plain binding: the value as given, no side effect. */
+#define VV_OPTION_BIND(type, field, kind) VV_OPTION_BIND_FULL(type, field, kind, 1, NULL, NULL)
+/** A binding with a side effect. */
+#define VV_OPTION_BIND_HOOK(type, field, kind, hook_)                                              \
+    VV_OPTION_BIND_FULL(type, field, kind, 1, NULL, hook_)
+/** A binding whose words stand for numbers (VV_OPTION_WORD_VALUES(...)), and a hook or NULL. */
+#define VV_OPTION_BIND_WORDS(type, field, kind, word_values_, hook_)                               \
+    VV_OPTION_BIND_FULL(type, field, kind, 1, word_values_, hook_)
+/** Nothing stored: @p hook_ applies the value. */
+#define VV_OPTION_BIND_NONE(hook_)                                                                 \
+    (&(const vv_option_binding){.store = VV_OPTION_STORE_NONE, .scale = 1, .hook = (hook_)})
+/** The numbers the words of a row stand for, in the order of its words. */
+#define VV_OPTION_WORD_VALUES(...) ((const double[]){__VA_ARGS__})
+
 /* ---- the table a method fills in ---------------------------------------------- */
 
 /**
@@ -271,19 +355,26 @@ void vv_region_rect(vv_render_region *rg, vv_mat4 index_to_world, const vv_view 
  * go through render.h, which checks the version, validates options against
  * info.options and checks the World against info.draws and info.modes
  * before a method sees them.
+ *
+ * A new renderer: the registry allocates state_size bytes, zeroed; calls
+ * init; then sets every option of info.options, in table order, to its
+ * default (the row's text, through the same setter as
+ * vv_renderer_set_option: stored in the bound field, then the row's hook).
+ * Freeing it: release, then the registry frees the state.
  */
 typedef struct vv_renderer_ops {
     int version;           /**< VV_RENDERER_OPS_VERSION */
-    vv_renderer_info info; /**< name, capabilities, option table */
-    /** A new state with every option at its default. Errors: VV_ERR_NOMEM. */
-    vv_status (*create)(void **state);
-    /** Frees the state (NULL allowed). */
-    void (*destroy)(void *state);
+    vv_renderer_info info; /**< name, capabilities, option table (every row bound) */
+    size_t state_size;     /**< sizeof the method's state */
     /**
-     * Applies option @p spec (an entry of info.options) with value @p v,
-     * already validated. Errors: those of applying it (reading a file).
+     * Optional: sets up what is not an option (caches, structs), before the
+     * options' defaults are set. Errors: VV_ERR_NOMEM (release is called
+     * all the same).
      */
-    vv_status (*set_option)(void *state, const vv_option_spec *spec, const vv_option_value *v);
+    vv_status (*init)(void *state);
+    /** Optional: releases what the state holds (never the state itself); also after a
+     * failed init, so it takes zeroed members. */
+    void (*release)(void *state);
     /** Renders the whole image (render.h: vv_renderer_render). */
     vv_status (*render)(void *state, const vv_world *world, const vv_view *view,
                         const vv_render_options *opt, vv_image *out);
@@ -400,45 +491,38 @@ extern const char *const vv_frame_refine_modes[];
 extern const char *const vv_frame_refine_auto[];
 
 /**
- * The two option specs of a renderer that refines (its option table's
- * rows): `refinement` (enum auto/on/off: value 0 auto, at quality 0 and 1;
- * 1 on; 2 off) and `refinement_tolerance` (real in [0, 1], or auto: word
- * >= 0, vv_frame_refine_tolerance of the quality).
- */
-/* clang-format off */
-#define VV_FRAME_REFINE_OPTIONS                                                                    \
-    {"refinement", VV_OPTION_ENUM, "auto", 0, 0, 0, vv_frame_refine_modes,                         \
-     "adaptive image-space refinement from a lattice of every 4th pixel (auto: at quality 0 "     \
-     "and 1)"},                                                                                    \
-    {"refinement_tolerance", VV_OPTION_REAL, "auto", 0, 1, 0, vv_frame_refine_auto,                \
-     "colour or opacity error of a lattice cell's interpolation that casts its inner rays "       \
-     "(auto: 1/16, 1/64, 1/512 at quality 0, 1, 2)"}
-/* clang-format on */
-
-/** The tolerance the renderers use at @p quality (0, 1, 2): 1/16, 1/64, 1/512. */
-float vv_frame_refine_tolerance(int quality);
-
-/**
  * A renderer's refinement settings, the values of its
  * VV_FRAME_REFINE_OPTIONS: mode 0 auto (at quality 0 and 1), 1 on, 2 off;
- * tolerance < 0 by quality (vv_frame_refine_tolerance). Part of the
- * renderer's state: set from its set_option, read when a frame starts.
+ * tolerance < 0 by quality (vv_frame_refine_tolerance). A member of the
+ * renderer's state that the two option rows bind to, read when a frame
+ * starts.
  */
 typedef struct vv_frame_refine_settings {
     int mode;
     double tolerance;
 } vv_frame_refine_settings;
 
-/** Defaults: auto, tolerance by quality. */
-void vv_frame_refine_settings_init(vv_frame_refine_settings *s);
-
 /**
- * Applies option @p key with value @p v (already checked against
- * VV_FRAME_REFINE_OPTIONS) when it is `refinement` or
- * `refinement_tolerance`; returns 1 when it was one of them, else 0.
+ * The two option rows of a renderer that refines (its option table's
+ * rows), bound to the vv_frame_refine_settings member @p field of its
+ * state type @p type: `refinement` (enum auto/on/off: mode 0 auto, at
+ * quality 0 and 1; 1 on; 2 off) and `refinement_tolerance` (real in
+ * [0, 1], or auto: tolerance -1, vv_frame_refine_tolerance of the
+ * quality).
  */
-int vv_frame_refine_set_option(vv_frame_refine_settings *s, const char *key,
-                               const vv_option_value *v);
+/* clang-format off */
+#define VV_FRAME_REFINE_OPTIONS(type, field)                                                       \
+    {"refinement", VV_OPTION_ENUM, "auto", 0, 0, 0, vv_frame_refine_modes,                         \
+     "adaptive image-space refinement from a lattice of every 4th pixel (auto: at quality 0 "     \
+     "and 1)", VV_OPTION_BIND(type, field.mode, INT)},                                            \
+    {"refinement_tolerance", VV_OPTION_REAL, "auto", 0, 1, 0, vv_frame_refine_auto,                \
+     "colour or opacity error of a lattice cell's interpolation that casts its inner rays "       \
+     "(auto: 1/16, 1/64, 1/512 at quality 0, 1, 2)",                                              \
+     VV_OPTION_BIND_WORDS(type, field.tolerance, DOUBLE, VV_OPTION_WORD_VALUES(-1), NULL)}
+/* clang-format on */
+
+/** The tolerance the renderers use at @p quality (0, 1, 2): 1/16, 1/64, 1/512. */
+float vv_frame_refine_tolerance(int quality);
 
 /**
  * Whether a frame at @p quality refines (never a region render, @p region

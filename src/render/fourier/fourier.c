@@ -72,10 +72,11 @@ typedef struct fr_state {
     fr_source cache[FR_MAX_CACHE];
     int n_cache;
     uint64_t clock;
-    char *vvc_path; /* option vvc */
-    vv_vvc *vvc;    /* loaded from vvc_path */
-    double quality; /* < 0: exact spectra (no quantisation) */
-    double rate;    /* > 0: compress to this rate instead */
+    /* the options (fr_options) */
+    char vvc_path[VV_RENDER_OPTION_VALUE_MAX]; /* vvc ("": none) */
+    vv_vvc *vvc;                               /* loaded from vvc_path */
+    double quality;                            /* < 0: exact spectra (no quantisation) */
+    double rate;                               /* > 0: compress to this rate instead */
     int block;
     double attenuation;
     vv_renderer *raycast; /* for the modes other than xray, on the decoded volume */
@@ -83,19 +84,7 @@ typedef struct fr_state {
 } fr_state;
 
 /* ---------------------------------------------------------------------- */
-/* Options                                                                  */
-
-static vv_status
-fr_create(void **state) {
-    fr_state *st = calloc(1, sizeof *st);
-    if (!st)
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    st->quality = -1;
-    st->rate = -1;
-    st->block = 16;
-    *state = st;
-    return VV_OK;
-}
+/* The state: releasing it, and the options' side effects                 */
 
 static void
 source_release(fr_source *s) {
@@ -110,23 +99,20 @@ source_release(fr_source *s) {
 }
 
 static void
-fr_destroy(void *state) {
+fr_release(void *state) {
     fr_state *st = state;
-    if (!st)
-        return;
     for (int i = 0; i < st->n_cache; i++)
         source_release(&st->cache[i]);
     vv_renderer_free(st->raycast);
-    free(st->vvc_path);
     vv_vvc_free(st->vvc);
     vv_fftw_lock();
     for (int i = 0; i < 3; i++)
         if (st->plan2d[i])
             fftwf_destroy_plan(st->plan2d[i]);
     vv_fftw_unlock();
-    free(st);
 }
 
+/* A new source of spectra: nothing cached from the old one is valid. */
 static void
 drop_cache(fr_state *st) {
     for (int i = 0; i < st->n_cache; i++)
@@ -134,48 +120,51 @@ drop_cache(fr_state *st) {
     st->n_cache = 0;
 }
 
+/* vvc: the file named (stored in vvc_path) is read, or none for "". */
 static vv_status
-fr_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
+fr_vvc_changed(void *state, const vv_option_spec *spec, const vv_option_value *v) {
+    (void)spec;
+    (void)v;
     fr_state *st = state;
-    const char *key = spec->key;
-    /* a new source of spectra: nothing cached from the old one is valid */
-    if (strcmp(key, "vvc") == 0 || strcmp(key, "quality") == 0 || strcmp(key, "rate") == 0 ||
-        strcmp(key, "block") == 0)
-        drop_cache(st);
-    if (strcmp(key, "vvc") == 0) {
-        const char *value = v->text;
-        vv_vvc *c = NULL;
-        if (*value) {
-            vv_status s = vv_vvc_load(&c, value);
-            if (s != VV_OK)
-                return s;
-        }
-        char *p = *value ? malloc(strlen(value) + 1) : NULL;
-        if (*value && !p) {
-            vv_vvc_free(c);
-            return vv_error_set(VV_ERR_NOMEM, "out of memory");
-        }
-        if (p)
-            strcpy(p, value);
-        free(st->vvc_path);
-        vv_vvc_free(st->vvc);
-        st->vvc_path = p;
-        st->vvc = c;
-    } else if (strcmp(key, "quality") == 0) {
-        st->quality = v->word >= 0 ? -1 : v->r; /* "exact" */
-        st->rate = -1;
-    } else if (strcmp(key, "rate") == 0) {
-        if (v->word >= 0) {
-            st->rate = -1;
-        } else {
-            st->rate = v->r;
-            st->quality = -1;
-        }
-    } else if (strcmp(key, "block") == 0) {
-        st->block = v->word == 0 ? 8 : v->word == 1 ? 16 : 32;
-    } else if (strcmp(key, "attenuation") == 0) {
-        st->attenuation = v->r;
+    drop_cache(st);
+    vv_vvc *c = NULL;
+    if (st->vvc_path[0]) {
+        vv_status s = vv_vvc_load(&c, st->vvc_path);
+        if (s != VV_OK)
+            return s;
     }
+    vv_vvc_free(st->vvc);
+    st->vvc = c;
+    return VV_OK;
+}
+
+/* quality (exact: -1) overrides rate. */
+static vv_status
+fr_quality_changed(void *state, const vv_option_spec *spec, const vv_option_value *v) {
+    (void)spec;
+    (void)v;
+    fr_state *st = state;
+    drop_cache(st);
+    st->rate = -1;
+    return VV_OK;
+}
+
+/* rate (none: -1): a rate overrides quality. */
+static vv_status
+fr_rate_changed(void *state, const vv_option_spec *spec, const vv_option_value *v) {
+    (void)spec;
+    fr_state *st = state;
+    drop_cache(st);
+    if (v->word < 0)
+        st->quality = -1;
+    return VV_OK;
+}
+
+static vv_status
+fr_block_changed(void *state, const vv_option_spec *spec, const vv_option_value *v) {
+    (void)spec;
+    (void)v;
+    drop_cache(state);
     return VV_OK;
 }
 
@@ -1114,16 +1103,25 @@ static const char *const fr_exact[] = {"exact", NULL};
 static const char *const fr_blocks[] = {"8", "16", "32", NULL};
 static const char *const fr_none[] = {"none", NULL};
 
+/* The options, each bound to its field of fr_state; the spectra depend on
+ * the first four (their hooks drop them). */
 static const vv_option_spec fr_options[] = {
     {"vvc", VV_OPTION_STRING, "", 0, 0, 0, NULL,
-     "a .vvc file of the volume: its coded spectra are projected (empty: none)"},
+     "a .vvc file of the volume: its coded spectra are projected (empty: none)",
+     VV_OPTION_BIND_HOOK(fr_state, vvc_path, CHARS, fr_vvc_changed)},
     {"quality", VV_OPTION_REAL, "exact", 0, 100, 0, fr_exact,
-     "exact: the volume's own spectra; 0..100: compressed in memory at this quality first"},
+     "exact: the volume's own spectra; 0..100: compressed in memory at this quality first",
+     VV_OPTION_BIND_WORDS(fr_state, quality, DOUBLE, VV_OPTION_WORD_VALUES(-1),
+                          fr_quality_changed)},
     {"rate", VV_OPTION_REAL, "none", 0, 64, VV_OPTION_MIN_OPEN, fr_none,
-     "compressed in memory at this many bits per voxel first (none: by quality)"},
-    {"block", VV_OPTION_ENUM, "16", 0, 0, 0, fr_blocks, "subcube side, voxels"},
+     "compressed in memory at this many bits per voxel first (none: by quality)",
+     VV_OPTION_BIND_WORDS(fr_state, rate, DOUBLE, VV_OPTION_WORD_VALUES(-1), fr_rate_changed)},
+    {"block", VV_OPTION_ENUM, "16", 0, 0, 0, fr_blocks, "subcube side, voxels",
+     VV_OPTION_BIND_WORDS(fr_state, block, INT, VV_OPTION_WORD_VALUES(8, 16, 32),
+                          fr_block_changed)},
     {"attenuation", VV_OPTION_REAL, "0", 0, 1e6, 0, NULL,
-     "attenuation of the projection per world unit (0: a plain X-ray)"},
+     "attenuation of the projection per world unit (0: a plain X-ray)",
+     VV_OPTION_BIND(fr_state, attenuation, DOUBLE)},
 };
 
 const vv_renderer_ops vv_fourier_ops = {
@@ -1142,9 +1140,8 @@ const vv_renderer_ops vv_fourier_ops = {
             .options = fr_options,
             .n_options = VV_OPTIONS_COUNT(fr_options),
         },
-    .create = fr_create,
-    .destroy = fr_destroy,
-    .set_option = fr_set_option,
+    .state_size = sizeof(fr_state),
+    .release = fr_release,
     .render = fr_render,
     .render_region = NULL,
 };

@@ -1331,44 +1331,23 @@ ir_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     return s;
 }
 
-static vv_status
-ir_create(void **state) {
-    ir_state *st = calloc(1, sizeof *st);
-    if (!st)
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    st->early_termination = 0.99;
-    st->skipping = 1;
-    *state = st;
-    return VV_OK;
-}
-
-static vv_status
-ir_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
-    ir_state *st = state;
-    if (strcmp(spec->key, "early_termination") == 0)
-        st->early_termination = v->r;
-    else if (strcmp(spec->key, "empty_space_skipping") == 0)
-        st->skipping = v->b;
-    return VV_OK;
-}
-
 static void
-ir_destroy(void *state) {
+ir_release(void *state) {
     ir_state *st = state;
-    if (!st)
-        return;
     for (int i = 0; i < IR_MAX_OBJ; i++) {
         mesh_clear(&st->cache[i]);
         free(st->entries[i].e);
     }
-    free(st);
 }
 
+/* The options, each bound to its field of ir_state. */
 static const vv_option_spec ir_options[] = {
     {"early_termination", VV_OPTION_REAL, "0.99", 0, 1, VV_OPTION_MIN_OPEN, NULL,
-     "accumulated opacity that ends a composite ray"},
+     "accumulated opacity that ends a composite ray",
+     VV_OPTION_BIND(ir_state, early_termination, DOUBLE)},
     {"empty_space_skipping", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
-     "skip tetrahedra the transfer function hides (0 for tests; same image)"},
+     "skip tetrahedra the transfer function hides (0 for tests; same image)",
+     VV_OPTION_BIND(ir_state, skipping, INT)},
 };
 
 const vv_renderer_ops vv_irregular_ops = {
@@ -1385,9 +1364,8 @@ const vv_renderer_ops vv_irregular_ops = {
             .options = ir_options,
             .n_options = VV_OPTIONS_COUNT(ir_options),
         },
-    .create = ir_create,
-    .destroy = ir_destroy,
-    .set_option = ir_set_option,
+    .state_size = sizeof(ir_state),
+    .release = ir_release,
     .render = ir_render,
     .render_region = NULL,
 };

@@ -487,41 +487,6 @@ world_key(const vv_world *w, const vv_radiosity_options *o) {
 }
 
 static vv_status
-rad_create(void **state) {
-    rad_state *st = calloc(1, sizeof *st);
-    if (!st)
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    vv_radiosity_options_init(&st->opt);
-    *state = st;
-    return VV_OK;
-}
-
-static vv_status
-rad_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
-    rad_state *st = state;
-    vv_radiosity_options o = st->opt;
-    const char *key = spec->key;
-    if (!strcmp(key, "tolerance"))
-        o.tolerance = v->r;
-    else if (!strcmp(key, "error"))
-        o.error = v->r;
-    else if (!strcmp(key, "near"))
-        o.near = v->r;
-    else if (!strcmp(key, "patch_size"))
-        o.patch_size = v->r;
-    else if (!strcmp(key, "grid"))
-        o.grid = (int)v->i;
-    else if (!strcmp(key, "diffuse_voxels"))
-        o.diffuse_voxels = v->b;
-    else if (!strcmp(key, "max_shots"))
-        o.max_shots = (int)v->i;
-    else if (!strcmp(key, "levels"))
-        o.levels = (int)v->i;
-    st->opt = o;
-    return VV_OK;
-}
-
-static vv_status
 rad_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
            vv_image *out) {
     rad_state *st = state;
@@ -538,30 +503,37 @@ rad_render(void *state, const vv_world *w, const vv_view *view, const vv_render_
 }
 
 static void
-rad_destroy(void *state) {
+rad_release(void *state) {
     rad_state *st = state;
-    if (!st)
-        return;
     vv_radiosity_free(st->sol);
-    free(st);
 }
 
+/* The options, each bound to its field of the solver's options in
+ * rad_state (their defaults those of vv_radiosity_options_init). */
 static const vv_option_spec rad_options[] = {
     {"tolerance", VV_OPTION_REAL, "0.001", 0, 1, VV_OPTION_MIN_OPEN | VV_OPTION_MAX_OPEN, NULL,
-     "stop when the unshot power is below this fraction of the power received"},
+     "stop when the unshot power is below this fraction of the power received",
+     VV_OPTION_BIND(rad_state, opt.tolerance, DOUBLE)},
     {"error", VV_OPTION_REAL, "0.0001", 0, INFINITY, 0, NULL,
-     "hierarchical refinement bound, fraction of the power in (0: element to element)"},
+     "hierarchical refinement bound, fraction of the power in (0: element to element)",
+     VV_OPTION_BIND(rad_state, opt.error, DOUBLE)},
     {"near", VV_OPTION_REAL, "0.5", 0, INFINITY, VV_OPTION_MIN_OPEN, NULL,
-     "a pair is near when (radius + radius) > near x distance"},
+     "a pair is near when (radius + radius) > near x distance",
+     VV_OPTION_BIND(rad_state, opt.near, DOUBLE)},
     {"patch_size", VV_OPTION_REAL, "0", 0, INFINITY, 0, NULL,
-     "longest patch edge, world units (0: the World's diagonal / 48)"},
-    {"grid", VV_OPTION_INT, "128", 2, 1024, 0, NULL, "voxels along a volume's longest axis"},
+     "longest patch edge, world units (0: the World's diagonal / 48)",
+     VV_OPTION_BIND(rad_state, opt.patch_size, DOUBLE)},
+    {"grid", VV_OPTION_INT, "128", 2, 1024, 0, NULL, "voxels along a volume's longest axis",
+     VV_OPTION_BIND(rad_state, opt.grid, INT)},
     {"diffuse_voxels", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
-     "voxels scatter diffusely about their gradient (0: isotropically)"},
+     "voxels scatter diffusely about their gradient (0: isotropically)",
+     VV_OPTION_BIND(rad_state, opt.diffuse_voxels, INT)},
     {"max_shots", VV_OPTION_INT, "20000", 1, 100000000, 0, NULL,
-     "shots at most (then it stops with power left unshot)"},
+     "shots at most (then it stops with power left unshot)",
+     VV_OPTION_BIND(rad_state, opt.max_shots, INT)},
     {"levels", VV_OPTION_INT, "0", 0, 30, 0, NULL,
-     "hierarchy levels used (0: all; 1: element to element)"},
+     "hierarchy levels used (0: all; 1: element to element)",
+     VV_OPTION_BIND(rad_state, opt.levels, INT)},
 };
 
 const vv_renderer_ops vv_radiosity_ops = {
@@ -580,9 +552,8 @@ const vv_renderer_ops vv_radiosity_ops = {
             .options = rad_options,
             .n_options = VV_OPTIONS_COUNT(rad_options),
         },
-    .create = rad_create,
-    .destroy = rad_destroy,
-    .set_option = rad_set_option,
+    .state_size = sizeof(rad_state),
+    .release = rad_release,
     .render = rad_render,
     .render_region = NULL,
 };

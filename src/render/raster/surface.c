@@ -51,9 +51,10 @@ typedef enum sf_cull { SF_CULL_AUTO = 0, SF_CULL_BACK = 1, SF_CULL_NONE = 2 } sf
 typedef struct sf_state {
     vv_raster *ras;
     int ras_width, ras_height; /* the context's size */
-    vv_raster_shading shading;
+    /* the options (sf_options) */
+    int shading; /* vv_raster_shading */
     int wireframe;
-    sf_cull cull;
+    int cull; /* sf_cull */
     int segments;
     int caps;
     sf_iso cache[SF_MAX_CACHE];
@@ -192,49 +193,12 @@ mesh_topo(sf_state *st, const vv_mesh *m, sf_topo **out) {
 /* ---------------------------------------------------------------------- */
 /* The renderer                                                             */
 
-static vv_status
-sf_create(void **state) {
-    sf_state *st = calloc(1, sizeof *st);
-    if (!st)
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    st->shading = VV_RASTER_PHONG;
-    st->cull = SF_CULL_AUTO;
-    st->segments = 64;
-    st->caps = 1;
-    *state = st;
-    return VV_OK;
-}
-
 static void
-sf_destroy(void *state) {
+sf_release(void *state) {
     sf_state *st = state;
-    if (!st)
-        return;
     for (int i = 0; i < st->n_cache; i++)
         iso_release(&st->cache[i]);
     vv_raster_free(st->ras);
-    free(st);
-}
-
-static vv_status
-sf_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
-    sf_state *st = state;
-    const char *key = spec->key;
-    if (!strcmp(key, "shading")) {
-        static const vv_raster_shading shadings[] = {VV_RASTER_FLAT, VV_RASTER_GOURAUD,
-                                                     VV_RASTER_PHONG};
-        st->shading = shadings[v->word];
-    } else if (!strcmp(key, "wireframe")) {
-        st->wireframe = v->b;
-    } else if (!strcmp(key, "cull")) {
-        static const sf_cull culls[] = {SF_CULL_AUTO, SF_CULL_BACK, SF_CULL_NONE};
-        st->cull = culls[v->word];
-    } else if (!strcmp(key, "caps")) {
-        st->caps = v->b;
-    } else if (!strcmp(key, "segments")) {
-        st->segments = (int)v->i;
-    }
-    return VV_OK;
 }
 
 /* The geometric object's triangles in object coordinates (a plane: in world
@@ -695,15 +659,25 @@ sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
 static const char *const sf_shadings[] = {"flat", "gouraud", "phong", NULL};
 static const char *const sf_culls[] = {"auto", "back", "none", NULL};
 
+/* The options, each bound to its field of sf_state; shading and cull store
+ * the word's index, which is the vv_raster_shading and sf_cull value. */
+_Static_assert(VV_RASTER_FLAT == 0 && VV_RASTER_GOURAUD == 1 && VV_RASTER_PHONG == 2,
+               "shading: the words' indices are the shadings");
+_Static_assert(SF_CULL_AUTO == 0 && SF_CULL_BACK == 1 && SF_CULL_NONE == 2,
+               "cull: the words' indices are the modes");
 static const vv_option_spec sf_options[] = {
     {"shading", VV_OPTION_ENUM, "phong", 0, 0, 0, sf_shadings,
-     "flat: a normal a triangle; gouraud: colours at vertices; phong: normals at pixels"},
-    {"wireframe", VV_OPTION_BOOL, "0", 0, 1, 0, NULL, "triangle edges only"},
+     "flat: a normal a triangle; gouraud: colours at vertices; phong: normals at pixels",
+     VV_OPTION_BIND(sf_state, shading, INT)},
+    {"wireframe", VV_OPTION_BOOL, "0", 0, 1, 0, NULL, "triangle edges only",
+     VV_OPTION_BIND(sf_state, wireframe, INT)},
     {"cull", VV_OPTION_ENUM, "auto", 0, 0, 0, sf_culls,
-     "auto: back faces of closed surfaces; back: every back face; none"},
-    {"caps", VV_OPTION_BOOL, "1", 0, 1, 0, NULL, "close surfaces cut by cut planes"},
+     "auto: back faces of closed surfaces; back: every back face; none",
+     VV_OPTION_BIND(sf_state, cull, INT)},
+    {"caps", VV_OPTION_BOOL, "1", 0, 1, 0, NULL, "close surfaces cut by cut planes",
+     VV_OPTION_BIND(sf_state, caps, INT)},
     {"segments", VV_OPTION_INT, "64", 3, 4096, 0, NULL,
-     "meridians of spheres and sides of cylinders"},
+     "meridians of spheres and sides of cylinders", VV_OPTION_BIND(sf_state, segments, INT)},
 };
 
 const vv_renderer_ops vv_surface_ops = {
@@ -721,9 +695,8 @@ const vv_renderer_ops vv_surface_ops = {
             .options = sf_options,
             .n_options = VV_OPTIONS_COUNT(sf_options),
         },
-    .create = sf_create,
-    .destroy = sf_destroy,
-    .set_option = sf_set_option,
+    .state_size = sizeof(sf_state),
+    .release = sf_release,
     .render = sf_render,
     .render_region = NULL,
 };

@@ -48,10 +48,11 @@
 #define RC_MAX_OBJ 64 /* objects handled in one render (<= VV_VC_MAX) */
 
 typedef struct rc_state {
-    vv_vcache_set vc;                /* per-volume caches (src/render/sample.h) */
-    double early_termination;        /* accumulated opacity that ends a ray */
-    int skipping;                    /* empty-space skipping on/off (for tests) */
-    int simd;                        /* use AVX2 when the processor has it (for tests) */
+    vv_vcache_set vc;                /* per-volume caches (src/render/sample.h); its
+                                        gradient_budget: option gradient_budget_mb */
+    double early_termination;        /* accumulated opacity that ends a ray (option) */
+    int skipping;                    /* option empty_space_skipping (for tests) */
+    int simd;                        /* use AVX2 when the processor has it (option simd) */
     vv_frame_refine_settings refine; /* adaptive refinement (options refinement...) */
     int preint;                      /* pre-integrated classification (option preintegration) */
     /* the X-ray table of the last region render in xray mode, which
@@ -1248,69 +1249,54 @@ rc_render_region(void *state, const vv_world *w, const vv_view *view,
 }
 
 static vv_status
-rc_create(void **state) {
-    rc_state *st = calloc(1, sizeof *st);
-    if (!st)
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    st->early_termination = 0.99;
-    vv_vcache_set_init(&st->vc);
-    st->skipping = 1;
-    st->simd = 1;
-    vv_frame_refine_settings_init(&st->refine);
-    *state = st;
-    return VV_OK;
-}
-
-static vv_status
-rc_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
+rc_init(void *state) {
     rc_state *st = state;
-    if (vv_frame_refine_set_option(&st->refine, spec->key, v))
-        return VV_OK;
-    if (strcmp(spec->key, "early_termination") == 0) {
-        st->early_termination = v->r;
-    } else if (strcmp(spec->key, "gradient_budget_mb") == 0) {
-        if (v->word >= 0)
-            vv_vcache_set_default_budget(&st->vc);
-        else
-            st->vc.gradient_budget = (uint64_t)(v->r * 1048576.0);
-        vv_vcache_set_clear(&st->vc);
-    } else if (strcmp(spec->key, "empty_space_skipping") == 0) {
-        st->skipping = v->b;
-    } else if (strcmp(spec->key, "simd") == 0) {
-        st->simd = v->b;
-    } else if (strcmp(spec->key, "preintegration") == 0) {
-        st->preint = v->b;
-    }
+    vv_vcache_set_init(&st->vc);
     return VV_OK;
 }
 
 static void
-rc_destroy(void *state) {
+rc_release(void *state) {
     rc_state *st = state;
-    if (!st)
-        return;
     vv_vcache_set_clear(&st->vc);
-    free(st);
+}
+
+/* gradient_budget_mb: the number is stored (bytes); auto is the cache's
+ * default; either way the cached gradients go. */
+static vv_status
+rc_budget_changed(void *state, const vv_option_spec *spec, const vv_option_value *v) {
+    (void)spec;
+    rc_state *st = state;
+    if (v->word >= 0)
+        vv_vcache_set_default_budget(&st->vc);
+    vv_vcache_set_clear(&st->vc);
+    return VV_OK;
 }
 
 static const char *const rc_auto[] = {"auto", NULL};
 
-/* The ray caster's options (docs/rendering.md); gradient_budget_mb is
- * shared with splat (vv_vcache_set.gradient_budget, sample.h). */
+/* The ray caster's options (docs/rendering.md), each bound to its field of
+ * rc_state; gradient_budget_mb is splat's too (vv_vcache_set.gradient_budget,
+ * sample.h). */
 static const vv_option_spec rc_options[] = {
     {"early_termination", VV_OPTION_REAL, "0.99", 0, 1, VV_OPTION_MIN_OPEN, NULL,
-     "accumulated opacity that ends a composite ray"},
+     "accumulated opacity that ends a composite ray",
+     VV_OPTION_BIND(rc_state, early_termination, DOUBLE)},
     {"gradient_budget_mb", VV_OPTION_REAL, "auto", 0, INFINITY, 0, rc_auto,
-     "MiB allowed for cached gradients (auto: a quarter of RAM, at most 8192; 0: on the fly)"},
+     "MiB allowed for cached gradients (auto: a quarter of RAM, at most 8192; 0: on the fly)",
+     VV_OPTION_BIND_FULL(rc_state, vc.gradient_budget, UINT64, 1048576.0, NULL, rc_budget_changed)},
     {"empty_space_skipping", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
-     "leap over subvolumes the transfer function hides (0 for tests; same image)"},
+     "leap over subvolumes the transfer function hides (0 for tests; same image)",
+     VV_OPTION_BIND(rc_state, skipping, INT)},
     {"simd", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
-     "AVX2 classification where the processor has it (0: the portable path)"},
-    VV_FRAME_REFINE_OPTIONS,
+     "AVX2 classification where the processor has it (0: the portable path)",
+     VV_OPTION_BIND(rc_state, simd, INT)},
+    VV_FRAME_REFINE_OPTIONS(rc_state, refine),
     {"preintegration", VV_OPTION_BOOL, "0", 0, 1, 0, NULL,
      "pre-integrated classification (Engel et al. 2001) for one volume in composite mode with "
      "a 1-D transfer function: sharp transfer functions without slab artefacts, at about "
-     "1.5-2x the time a step"},
+     "1.5-2x the time a step",
+     VV_OPTION_BIND(rc_state, preint, INT)},
 };
 
 const vv_renderer_ops vv_raycast_ops = {
@@ -1329,9 +1315,9 @@ const vv_renderer_ops vv_raycast_ops = {
             .options = rc_options,
             .n_options = VV_OPTIONS_COUNT(rc_options),
         },
-    .create = rc_create,
-    .destroy = rc_destroy,
-    .set_option = rc_set_option,
+    .state_size = sizeof(rc_state),
+    .init = rc_init,
+    .release = rc_release,
     .render = rc_render,
     .render_region = rc_render_region,
 };

@@ -651,102 +651,59 @@ rt_render_region(void *state, const vv_world *w, const vv_view *view,
 }
 
 static vv_status
-rt_create(void **state) {
-    rt_state *st = calloc(1, sizeof *st);
-    if (!st)
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    st->parc = 1;
-    st->shadows = 1;
-    st->max_depth = 3;
-    st->samples = 2;
-    st->jitter = 0;
-    st->adaptive = 1;
-    st->threshold = 0.05;
-    vv_frame_refine_settings_init(&st->refine);
-    st->seed = 1;
-    st->early_termination = 0.99;
-    st->simd = 1;
-    st->shadow_grid = 1;
-    st->light_volumes = 1;
-    vv_vcache_set_init(&st->vc);
-    *state = st;
-    return VV_OK;
-}
-
-static vv_status
-rt_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
+rt_init(void *state) {
     rt_state *st = state;
-    const char *key = spec->key;
-    if (vv_frame_refine_set_option(&st->refine, key, v))
-        return VV_OK;
-    if (strcmp(key, "parc") == 0)
-        st->parc = v->b;
-    else if (strcmp(key, "shadows") == 0)
-        st->shadows = v->b;
-    else if (strcmp(key, "shadow_grid") == 0)
-        st->shadow_grid = (int)v->i;
-    else if (strcmp(key, "light_volumes") == 0)
-        st->light_volumes = v->b;
-    else if (strcmp(key, "max_depth") == 0)
-        st->max_depth = (int)v->i;
-    else if (strcmp(key, "samples") == 0)
-        st->samples = (int)v->i;
-    else if (strcmp(key, "jitter") == 0)
-        st->jitter = v->b;
-    else if (strcmp(key, "adaptive") == 0)
-        st->adaptive = v->b;
-    else if (strcmp(key, "adaptive_threshold") == 0)
-        st->threshold = v->r;
-    else if (strcmp(key, "seed") == 0)
-        st->seed = (uint64_t)v->i;
-    else if (strcmp(key, "early_termination") == 0)
-        st->early_termination = v->r;
-    else if (strcmp(key, "simd") == 0)
-        st->simd = v->b;
+    vv_vcache_set_init(&st->vc);
     return VV_OK;
 }
 
 static void
-rt_destroy(void *state) {
+rt_release(void *state) {
     rt_state *st = state;
-    if (!st)
-        return;
     vv_vcache_set_clear(&st->vc);
     for (int i = 0; i < RT_LV_CACHE; i++)
         rt_lv_release(&st->lv[i]);
     for (int i = 0; i < RT_SG_CACHE; i++)
         rt_sg_release(&st->sg[i]);
-    free(st);
 }
 
+/* The ray tracer's options, each bound to its field of rt_state. */
 static const vv_option_spec rt_options[] = {
     {"shadows", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
-     "shadow rays (0: every light reaches every point)"},
-    {"max_depth", VV_OPTION_INT, "3", 0, 64, 0, NULL, "reflection and transmission depth"},
+     "shadow rays (0: every light reaches every point)", VV_OPTION_BIND(rt_state, shadows, INT)},
+    {"max_depth", VV_OPTION_INT, "3", 0, 64, 0, NULL, "reflection and transmission depth",
+     VV_OPTION_BIND(rt_state, max_depth, INT)},
     {"samples", VV_OPTION_INT, "2", 1, 16, 0, NULL,
-     "rays per pixel side at quality 2 (2: 2 x 2 a pixel)"},
-    {"jitter", VV_OPTION_BOOL, "0", 0, 1, 0, NULL, "jittered supersampling"},
+     "rays per pixel side at quality 2 (2: 2 x 2 a pixel)", VV_OPTION_BIND(rt_state, samples, INT)},
+    {"jitter", VV_OPTION_BOOL, "0", 0, 1, 0, NULL, "jittered supersampling",
+     VV_OPTION_BIND(rt_state, jitter, INT)},
     {"seed", VV_OPTION_INT, "1", 0, 9007199254740992.0, 0, NULL,
-     "seed of the jitter (a hash of it and the pixel)"},
+     "seed of the jitter (a hash of it and the pixel)", VV_OPTION_BIND(rt_state, seed, UINT64)},
     {"adaptive", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
-     "supersample only pixels that differ from a neighbour"},
+     "supersample only pixels that differ from a neighbour",
+     VV_OPTION_BIND(rt_state, adaptive, INT)},
     {"adaptive_threshold", VV_OPTION_REAL, "0.05", 0, INFINITY, 0, NULL,
-     "channel difference that triggers supersampling"},
-    VV_FRAME_REFINE_OPTIONS,
+     "channel difference that triggers supersampling", VV_OPTION_BIND(rt_state, threshold, DOUBLE)},
+    VV_FRAME_REFINE_OPTIONS(rt_state, refine),
     {"parc", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
-     "leap over empty subvolumes on every ray (0 for measurements; same image)"},
+     "leap over empty subvolumes on every ray (0 for measurements; same image)",
+     VV_OPTION_BIND(rt_state, parc, INT)},
     {"shadow_grid", VV_OPTION_INT, "1", 0, 2, 0, NULL,
      "volume samples' shadows: 1 a lazily traced grid of shadow rays, 0 an exact ray per "
-     "sample, 2 a swept light volume for directional lights"},
+     "sample, 2 a swept light volume for directional lights",
+     VV_OPTION_BIND(rt_state, shadow_grid, INT)},
     {"light_volumes", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
      "shadow rays through composite volumes from a light volume, directional and point "
-     "lights (0: marched)"},
+     "lights (0: marched)",
+     VV_OPTION_BIND(rt_state, light_volumes, INT)},
     {"early_termination", VV_OPTION_REAL, "0.99", 0, 1, VV_OPTION_MIN_OPEN, NULL,
      "accumulated opacity that ends compositing (a secondary ray of weight w: 1 - (1 - "
-     "value) / w)"},
+     "value) / w)",
+     VV_OPTION_BIND(rt_state, early_termination, DOUBLE)},
     {"simd", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
      "AVX2 classification and eight-sample shading where the processor has it (0: the portable "
-     "path)"},
+     "path)",
+     VV_OPTION_BIND(rt_state, simd, INT)},
 };
 
 const vv_renderer_ops vv_raytrace_ops = {
@@ -767,9 +724,9 @@ const vv_renderer_ops vv_raytrace_ops = {
             .options = rt_options,
             .n_options = VV_OPTIONS_COUNT(rt_options),
         },
-    .create = rt_create,
-    .destroy = rt_destroy,
-    .set_option = rt_set_option,
+    .state_size = sizeof(rt_state),
+    .init = rt_init,
+    .release = rt_release,
     .render = rt_render,
     .render_region = rt_render_region,
 };

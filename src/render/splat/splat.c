@@ -336,18 +336,9 @@ sp_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
 /* Options and the operation table                                          */
 
 static vv_status
-sp_create(void **state) {
-    sp_state *st = calloc(1, sizeof *st);
-    if (!st)
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+sp_init(void *state) {
+    sp_state *st = state;
     vv_vcache_set_init(&st->vc);
-    st->radius = 1.2;
-    st->sigma = 0.55;
-    st->ewa_var = 0.25;
-    st->early_termination = 0.99;
-    st->skipping = 1;
-    st->occlusion = 1;
-    *state = st;
     return VV_OK;
 }
 
@@ -360,50 +351,36 @@ lists_clear(sp_state *st) {
     }
 }
 
+/* sheet_spacing: 0 (by quality) or at least a quarter step. */
 static vv_status
-sp_set_option(void *state, const vv_option_spec *spec, const vv_option_value *v) {
+sp_spacing_check(void *state, const vv_option_spec *spec, const vv_option_value *v) {
+    (void)spec;
+    (void)v;
+    const sp_state *st = state;
+    if (!(st->rate == 0 || st->rate >= 0.25))
+        return vv_error_set(VV_ERR_INVALID,
+                            "sheet_spacing must be 0 (by quality) or in [0.25, 8] steps");
+    return VV_OK;
+}
+
+/* gradient_budget_mb: the number is stored (bytes); auto is the cache's
+ * default; either way the cached gradients go. */
+static vv_status
+sp_budget_changed(void *state, const vv_option_spec *spec, const vv_option_value *v) {
+    (void)spec;
     sp_state *st = state;
-    const char *key = spec->key;
-    if (strcmp(key, "classification") == 0) {
-        st->pre = v->word == 1;
-    } else if (strcmp(key, "sheets") == 0) {
-        st->axis = v->word == 1;
-    } else if (strcmp(key, "radius") == 0) {
-        st->radius = v->r;
-    } else if (strcmp(key, "sigma") == 0) {
-        st->sigma = v->r;
-    } else if (strcmp(key, "ewa_variance") == 0) {
-        st->ewa_var = v->r;
-    } else if (strcmp(key, "early_termination") == 0) {
-        st->early_termination = v->r;
-    } else if (strcmp(key, "sheet_spacing") == 0) {
-        if (!(v->r == 0 || v->r >= 0.25))
-            return vv_error_set(VV_ERR_INVALID,
-                                "sheet_spacing must be 0 (by quality) or in [0.25, 8] steps");
-        st->rate = v->r;
-    } else if (strcmp(key, "empty_space_skipping") == 0) {
-        st->skipping = v->b;
-    } else if (strcmp(key, "occlusion_culling") == 0) {
-        st->occlusion = v->b;
-    } else if (strcmp(key, "gradient_budget_mb") == 0) {
-        if (v->word >= 0)
-            vv_vcache_set_default_budget(&st->vc);
-        else
-            st->vc.gradient_budget = (uint64_t)(v->r * 1048576.0);
-        vv_vcache_set_clear(&st->vc);
-    }
+    if (v->word >= 0)
+        vv_vcache_set_default_budget(&st->vc);
+    vv_vcache_set_clear(&st->vc);
     return VV_OK;
 }
 
 static void
-sp_destroy(void *state) {
+sp_release(void *state) {
     sp_state *st = state;
-    if (!st)
-        return;
     lists_clear(st);
     vv_vcache_set_clear(&st->vc);
     free(st->xray);
-    free(st);
 }
 
 const vv_splat_stats *
@@ -426,27 +403,37 @@ static const char *const sp_classification[] = {"post", "pre", NULL};
 static const char *const sp_sheets[] = {"image", "axis", NULL};
 static const char *const sp_auto[] = {"auto", NULL};
 
+/* The splatter's options, each bound to its field of sp_state. */
 static const vv_option_spec sp_options[] = {
     {"radius", VV_OPTION_REAL, "1.2", 0, 8, VV_OPTION_MIN_OPEN, NULL,
-     "kernel cut-off, voxels (quality 1 shrinks it to 0.85 of it, quality 0 to 1 voxel)"},
-    {"sigma", VV_OPTION_REAL, "0.55", 0, 4, VV_OPTION_MIN_OPEN, NULL, "Gaussian sigma, voxels"},
+     "kernel cut-off, voxels (quality 1 shrinks it to 0.85 of it, quality 0 to 1 voxel)",
+     VV_OPTION_BIND(sp_state, radius, DOUBLE)},
+    {"sigma", VV_OPTION_REAL, "0.55", 0, 4, VV_OPTION_MIN_OPEN, NULL, "Gaussian sigma, voxels",
+     VV_OPTION_BIND(sp_state, sigma, DOUBLE)},
     {"ewa_variance", VV_OPTION_REAL, "0.25", 0, 16, 0, NULL,
-     "least footprint variance, pixel^2 (0: no EWA antialiasing)"},
+     "least footprint variance, pixel^2 (0: no EWA antialiasing)",
+     VV_OPTION_BIND(sp_state, ewa_var, DOUBLE)},
     {"classification", VV_OPTION_ENUM, "post", 0, 0, 0, sp_classification,
      "post: classify sheet samples; pre: classify and shade voxels, splat colours (faster, "
-     "blurrier)"},
+     "blurrier)",
+     VV_OPTION_BIND(sp_state, pre, INT)},
     {"sheet_spacing", VV_OPTION_REAL, "0", 0, 8, 0, NULL,
-     "sheet spacing in ray-caster steps, 0 or in [0.25, 8] (0: 1, 1.5, 2 at quality 2, 1, 0)"},
+     "sheet spacing in ray-caster steps, 0 or in [0.25, 8] (0: 1, 1.5, 2 at quality 2, 1, 0)",
+     VV_OPTION_BIND_HOOK(sp_state, rate, DOUBLE, sp_spacing_check)},
     {"early_termination", VV_OPTION_REAL, "0.99", 0, 1, VV_OPTION_MIN_OPEN, NULL,
-     "opacity at which a pixel is finished"},
+     "opacity at which a pixel is finished", VV_OPTION_BIND(sp_state, early_termination, DOUBLE)},
     {"empty_space_skipping", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
-     "list only voxels that can be visible (0 lists every voxel; same image)"},
+     "list only voxels that can be visible (0 lists every voxel; same image)",
+     VV_OPTION_BIND(sp_state, skipping, INT)},
     {"occlusion_culling", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
-     "skip footprints on finished pixels (0 splats every footprint; same image)"},
+     "skip footprints on finished pixels (0 splats every footprint; same image)",
+     VV_OPTION_BIND(sp_state, occlusion, INT)},
     {"gradient_budget_mb", VV_OPTION_REAL, "auto", 0, INFINITY, 0, sp_auto,
-     "MiB allowed for cached gradients (auto: a quarter of RAM, at most 8192)"},
+     "MiB allowed for cached gradients (auto: a quarter of RAM, at most 8192)",
+     VV_OPTION_BIND_FULL(sp_state, vc.gradient_budget, UINT64, 1048576.0, NULL, sp_budget_changed)},
     {"sheets", VV_OPTION_ENUM, "image", 0, 0, 0, sp_sheets,
-     "image-aligned sheets; axis: Westover's axis-aligned sheets (for the popping test)"},
+     "image-aligned sheets; axis: Westover's axis-aligned sheets (for the popping test)",
+     VV_OPTION_BIND(sp_state, axis, INT)},
 };
 
 const vv_renderer_ops vv_splat_ops = {
@@ -464,9 +451,9 @@ const vv_renderer_ops vv_splat_ops = {
             .options = sp_options,
             .n_options = VV_OPTIONS_COUNT(sp_options),
         },
-    .create = sp_create,
-    .destroy = sp_destroy,
-    .set_option = sp_set_option,
+    .state_size = sizeof(sp_state),
+    .init = sp_init,
+    .release = sp_release,
     .render = sp_render,
     .render_region = NULL,
 };

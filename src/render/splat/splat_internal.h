@@ -45,16 +45,18 @@ typedef struct sp_list {
     uint64_t last_used;
 } sp_list;
 
+/* The options (sp_options in splat.c) are bound to their fields here. */
 typedef struct sp_state {
-    vv_vcache_set vc;
+    vv_vcache_set vc;     /* its gradient_budget: option gradient_budget_mb */
     double radius, sigma; /* kernel, voxels */
-    double ewa_var;       /* image low-pass filter variance, pixel^2; 0: off */
+    double ewa_var;       /* image low-pass filter variance, pixel^2; 0: off (ewa_variance) */
     double early_termination;
-    int pre;      /* pre-classified splatting */
-    int skipping; /* empty-voxel skipping */
-    int occlusion;
-    int axis;    /* internal: axis-aligned sheets (the popping method, for tests) */
-    double rate; /* sheet spacing in ray-caster steps (0: by quality) */
+    int pre;       /* pre-classified splatting (classification: post 0, pre 1) */
+    int skipping;  /* empty-voxel skipping (empty_space_skipping) */
+    int occlusion; /* occlusion_culling */
+    int axis;      /* internal: axis-aligned sheets (the popping method, for tests; sheets:
+                      image 0, axis 1) */
+    double rate;   /* sheet spacing in ray-caster steps (0: by quality; sheet_spacing) */
     sp_list lists[SP_LISTS];
     uint64_t clock;
     vv_splat_stats stats;
