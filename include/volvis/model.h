@@ -20,6 +20,7 @@
 #include "image.h"
 #include "math.h"
 #include "mesh.h"
+#include "source.h"
 #include "volume.h"
 
 #ifdef __cplusplus
@@ -604,6 +605,15 @@ typedef struct vv_object {
     int n_channels;
     vv_channel *channels;   /**< n_channels entries, owned (freed and cloned with the object) */
     vv_channel_blend blend; /**< how the channels combine */
+    /**
+     * Where the voxels come from when they are not all in memory: a
+     * bricked file or a pyramid read out of core (include/volvis/source.h;
+     * one reference held); `volume` is then its proxy (a coarse volume over
+     * the same world box: the defaults, previews and global effects are
+     * drawn from it) and vv_renderer_render reads the voxels from here.
+     * NULL: `volume` holds them all (in memory). An object of one channel.
+     */
+    vv_source *source;
 } vv_object;
 
 /**
@@ -616,6 +626,39 @@ typedef struct vv_object {
  * to VV_NAME_MAX - 1 bytes. Errors: VV_ERR_NOMEM, VV_ERR_INVALID.
  */
 vv_status vv_object_new_volume(vv_object **out, vv_volume *volume, const char *name);
+/**
+ * A new volume object showing @p source (a reference is taken), framed by
+ * the box of its level @p level (0: the finest): a memory source's volume
+ * becomes the object's own (no source kept); any other source is kept in
+ * `source` and its proxy (vv_source_proxy of @p level) becomes `volume`,
+ * with the defaults of vv_object_new_volume taken from the proxy except
+ * the transfer function's opacity_unit_distance, which is the smallest
+ * voxel spacing of the level (so an image does not change with the level
+ * drawn). @p name as vv_object_new_volume. Errors: VV_ERR_INVALID (NULL, no
+ * such level), those of reading the proxy, VV_ERR_NOMEM.
+ */
+vv_status vv_object_new_source(vv_object **out, vv_source *source, int level, const char *name);
+
+/**
+ * Makes volume object @p obj (of one channel), whose `volume` is
+ * @p source's proxy over level @p level (vv_source_proxy), show @p source
+ * (a reference is taken; a memory source: nothing changes): its transfer
+ * functions' opacity_unit_distance, where it is the proxy's default (its
+ * smallest voxel spacing), becomes the level's. What vv_object_new_source
+ * does after making the object from the proxy; for a World made from the
+ * proxy (vv_world_new_for_volume). Errors: VV_ERR_INVALID (not such an
+ * object, no such level). Not thread-safe on the same object.
+ */
+vv_status vv_object_attach_source(vv_object *obj, vv_source *source, int level);
+
+/**
+ * Replaces the voxels of volume object @p obj by @p volume (a reference is
+ * taken) and drops its source: the object is then in memory (a filter's
+ * result, a proxy edited). Errors: VV_ERR_INVALID (not a volume object of
+ * one channel, NULL). Not thread-safe on the same object.
+ */
+vv_status vv_object_set_volume(vv_object *obj, vv_volume *volume);
+
 /**
  * Makes @p obj (a volume object) an object of @p n channels (2..16): channel
  * c holds a reference to @p volumes[c] (borrowed), is named @p names[c]
@@ -836,6 +879,16 @@ void vv_default_scene_options_init(vv_default_scene_options *o);
  * VV_ERR_INVALID (bad options), VV_ERR_NOMEM.
  */
 vv_status vv_world_new_for_volume(vv_world **out, vv_volume *volume,
+                                  const vv_default_scene_options *opt);
+
+/**
+ * vv_world_new_for_volume of @p source: a memory source's volume, or
+ * another source's proxy over level @p level (vv_source_proxy: the
+ * transfer function from its histogram, the view framing level @p level's
+ * box) with the object showing the source (vv_object_attach_source).
+ * Errors: those of both, of reading the proxy.
+ */
+vv_status vv_world_new_for_source(vv_world **out, vv_source *source, int level,
                                   const vv_default_scene_options *opt);
 
 /**

@@ -26,6 +26,7 @@
 #include "render.h"
 #include "scene.h"
 #include "slice.h"
+#include "source.h"
 #include "surface.h"
 #include "video.h"
 #include "volume.h"

@@ -130,6 +130,8 @@ vv_object_set_channels(vv_object *obj, int n, vv_volume *const *volumes, const c
     obj->volume = volumes[0];
     obj->channels = ch;
     obj->n_channels = n;
+    vv_source_free(obj->source); /* in memory now */
+    obj->source = NULL;
     return VV_OK;
 }
 
@@ -181,6 +183,8 @@ vv_object_replace_volumes(vv_object *obj, int n, vv_volume *const *volumes) {
     vv_volume_ref(volumes[0]);
     vv_volume_free(obj->volume);
     obj->volume = volumes[0];
+    vv_source_free(obj->source); /* in memory now */
+    obj->source = NULL;
     return VV_OK;
 }
 

@@ -471,3 +471,25 @@ vv_world_new_for_grid(vv_world **out, vv_grid *grid, const char *field, int time
     *out = w;
     return VV_OK;
 }
+
+vv_status
+vv_world_new_for_source(vv_world **out, vv_source *source, int level,
+                        const vv_default_scene_options *opt) {
+    if (!out || !source)
+        return vv_error_set(VV_ERR_INVALID, "default scene: NULL argument");
+    *out = NULL;
+    vv_volume *whole = vv_source_volume(source);
+    if (whole)
+        return vv_world_new_for_volume(out, whole, opt);
+    vv_volume *proxy = NULL;
+    vv_status s = vv_source_proxy(source, level, &proxy);
+    if (s != VV_OK)
+        return s;
+    s = vv_world_new_for_volume(out, proxy, opt);
+    vv_volume_free(proxy);
+    if (s == VV_OK && (s = vv_object_attach_source((*out)->objects[0], source, level)) != VV_OK) {
+        vv_world_free(*out);
+        *out = NULL;
+    }
+    return s;
+}

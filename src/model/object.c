@@ -108,6 +108,68 @@ vv_object_new_volume(vv_object **out, vv_volume *volume, const char *name) {
 }
 
 vv_status
+vv_object_attach_source(vv_object *obj, vv_source *source, int level) {
+    if (!obj || !source || obj->type != VV_OBJECT_VOLUME || !obj->volume || obj->n_channels > 0)
+        return vv_error_set(VV_ERR_INVALID, "object: %s: not a volume object of one channel",
+                            obj ? obj->name : "(null)");
+    if (vv_source_volume(source)) /* in memory: the object's own volume */
+        return VV_OK;
+    const vv_volume *h = vv_source_level(source, level);
+    if (!h)
+        return vv_error_set(VV_ERR_INVALID, "object: %s has no level %d (it has %d)",
+                            vv_path_basename(vv_source_path(source)), level,
+                            vv_source_levels(source));
+    /* opacity per the level's smallest voxel edge where it was the proxy's
+     * (a default transfer function): an image does not change with the
+     * proxy */
+    const double pu = vv_tf_default_unit_distance(obj->volume), lu = vv_tf_default_unit_distance(h);
+    if (fabs(obj->tf.opacity_unit_distance - pu) <= 1e-12 * pu)
+        obj->tf.opacity_unit_distance = lu;
+    if (fabs(obj->tf2d.opacity_unit_distance - pu) <= 1e-12 * pu)
+        obj->tf2d.opacity_unit_distance = lu;
+    vv_source_ref(source);
+    vv_source_free(obj->source);
+    obj->source = source;
+    return VV_OK;
+}
+
+vv_status
+vv_object_new_source(vv_object **out, vv_source *source, int level, const char *name) {
+    if (!out)
+        return vv_error_set(VV_ERR_INVALID, "object: NULL output");
+    *out = NULL;
+    if (!source)
+        return vv_error_set(VV_ERR_INVALID, "object: NULL source");
+    vv_volume *whole = vv_source_volume(source);
+    if (whole)
+        return vv_object_new_volume(out, whole, name);
+    vv_volume *proxy = NULL;
+    vv_status s = vv_source_proxy(source, level, &proxy);
+    if (s != VV_OK)
+        return s;
+    s = vv_object_new_volume(out, proxy, name);
+    vv_volume_free(proxy);
+    if (s == VV_OK && (s = vv_object_attach_source(*out, source, level)) != VV_OK) {
+        vv_object_free(*out);
+        *out = NULL;
+    }
+    return s;
+}
+
+vv_status
+vv_object_set_volume(vv_object *obj, vv_volume *volume) {
+    if (!obj || !volume || obj->type != VV_OBJECT_VOLUME || obj->n_channels > 0)
+        return vv_error_set(VV_ERR_INVALID, "object: %s: not a volume object of one channel",
+                            obj ? obj->name : "(null)");
+    vv_volume_ref(volume);
+    vv_volume_free(obj->volume);
+    obj->volume = volume;
+    vv_source_free(obj->source);
+    obj->source = NULL;
+    return VV_OK;
+}
+
+vv_status
 vv_object_new_grid(vv_object **out, vv_grid *grid, const char *field, const char *name) {
     if (!out)
         return vv_error_set(VV_ERR_INVALID, "object: NULL output");
@@ -277,6 +339,7 @@ vv_object_free(vv_object *obj) {
     for (int c = 0; c < obj->n_channels; c++)
         vv_volume_free(obj->channels[c].volume);
     free(obj->channels);
+    vv_source_free(obj->source);
     free(obj);
 }
 
@@ -333,6 +396,7 @@ vv_object_clone(vv_object **out, const vv_object *obj) {
         vv_volume_ref(c->solid_texture.volume);
     for (int k = 0; k < c->n_channels; k++)
         vv_volume_ref(c->channels[k].volume);
+    vv_source_ref(c->source);
     *out = c;
     return VV_OK;
 nomem:

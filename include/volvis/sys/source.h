@@ -1,33 +1,40 @@
 /*
- * VolVis volume sources, the implementor's side: what a bricked (and later
- * multiresolution) volume offers its consumers, so that the render driver
- * (src/render/bricks_render.c, vv_renderer_render_bricks) reads voxels
- * without knowing the file format, and a format reader (src/io: .vvb, raw,
- * NRRD; OME-Zarr and HDF5 pyramids next) serves them without knowing the
- * renderers. A version field first, as libgit2's plug-in structs.
+ * VolVis volume sources, the implementor's side (include/volvis/source.h is
+ * the user's): the table a source fills in (vv_source_ops: its levels,
+ * boxes, proxy, statistics and background loader), and the two views of its
+ * voxels that the render drivers read (src/render/drivers.c, chosen by
+ * vv_renderer_render): a grid of bricks (vv_brick_source: the region driver
+ * renders them front to back) and a pyramid of levels read by boxes
+ * (vv_multires_source: the level-of-detail driver). The drivers read
+ * voxels without knowing the file format, and a format's reader (src/io:
+ * .vvb, raw, NRRD, OME-Zarr, HDF5) serves them without knowing the
+ * renderers. Version fields first, as libgit2's plug-in structs.
  *
- * A source is a grid of bricks over a volume's index box. Brick b covers
- * the cells lo .. hi (voxel indices of its faces, shared with its
+ * A brick source is a grid of bricks over a volume's index box. Brick b
+ * covers the cells lo .. hi (voxel indices of its faces, shared with its
  * neighbours) and is read with one voxel more beyond each face (slo ..
  * shi, within the volume), so that trilinear samples and central
  * differences at its faces are the whole volume's; each brick has the min
  * and max of the voxels read (empty-space skipping before reading).
  *
  * A multiresolution source (vv_multires_source, below) serves a pyramid
- * of levels by boxes of voxels instead, for the level-of-detail driver
- * (vv_renderer_render_multires).
+ * of levels by boxes of voxels instead, for the level-of-detail driver.
  *
- * Thread-safety: a source is used from one thread at a time.
+ * Thread-safety: a brick or multiresolution view is used from one thread
+ * at a time (the frame's); vv_source's functions as source.h says.
  */
 #ifndef VOLVIS_SYS_SOURCE_H
 #define VOLVIS_SYS_SOURCE_H
 
 #include "../core.h"
+#include "../source.h"
 #include "../volume.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
+
+#define VV_BRICK_CELLS 64 /**< brick side in cells (the last brick of an axis may be shorter) */
 
 /** The version of vv_brick_source this header describes. */
 #define VV_BRICK_SOURCE_VERSION 1
@@ -149,6 +156,134 @@ typedef struct vv_multires_source {
      */
     int (*stalled)(void *user);
 } vv_multires_source;
+
+/* ---- chunked stores: a multiresolution format's side of a pyramid ------------------ */
+
+/** Levels a store holds at most. */
+#define VV_STORE_MAX_LEVELS VV_SOURCE_MAX_LEVELS
+
+/** One level of a store. */
+typedef struct vv_store_level {
+    /**
+     * The level's geometry as a volume of one voxel whose dims are set to
+     * the level's (dims, type, spacing, origin of its voxel 0, direction,
+     * unit); owned by the store until the pyramid takes it
+     * (vv_store_set_level makes it).
+     */
+    vv_volume *hdr;
+    int cdims[3]; /**< the chunk box (voxels along x, y, z), >= 1 */
+} vv_store_level;
+
+/**
+ * A multiresolution file's store, filled by its record's open_store: what
+ * its levels are and how to fetch one chunk's voxels. The pyramid over it
+ * (src/io/pyramid.c: the cache, the frame's plan, the background loader,
+ * the source the renderers read) is the library's.
+ */
+typedef struct vv_store {
+    const char *name; /**< the format's name for errors ("zarr", "hdf5") */
+    void *ctx;        /**< the store's state, freed by close */
+    int n_levels;     /**< 1 .. VV_STORE_MAX_LEVELS, finest first */
+    vv_store_level lv[VV_STORE_MAX_LEVELS];
+    int n_channels, n_times; /**< for vv_load_info */
+    int has_range;           /**< 1: range is the data's (an omero window) */
+    double range[2];
+    size_t scratch; /**< bytes of scratch each read_chunk call needs (0: none) */
+    int parallel;   /**< 1: read_chunk may run on several threads at once (else the pyramid
+                         serializes it, its loader's reads included) */
+    /**
+     * Chunk @p c (chunk indices along x, y, z) of @p level: its voxels
+     * inside the level, box org .. org + dims - 1, written to @p dst (x
+     * fastest, the level's type); @p scratch holds the store's scratch
+     * bytes. *missing: 1 when the chunk is absent and was filled with the
+     * fill value; *file_bytes: the bytes read from storage. Errors:
+     * VV_ERR_IO, VV_ERR_FORMAT, VV_ERR_NOMEM, VV_ERR_LIMIT (naming the
+     * chunk).
+     */
+    vv_status (*read_chunk)(void *ctx, int level, const int c[3], unsigned char *scratch,
+                            unsigned char *dst, const int org[3], const int dims[3], int *missing,
+                            uint64_t *file_bytes);
+    void (*close)(void *ctx);
+    /**
+     * Optional (NULL): start fetching chunk @p c of @p level ahead of its
+     * read_chunk, without waiting (a later read_chunk of it takes the
+     * result; one of another chunk may drop it). 1: asked (or already
+     * asked); 0: nothing free to ask, stop. Called from the frame's thread,
+     * never during its own read_chunk calls.
+     */
+    int (*prefetch)(void *ctx, int level, const int c[3]);
+    /**
+     * Optional (NULL): the range of chunk @p c of @p level's voxels as the
+     * store's index gives it before any voxel is read (a .vvb: its chunks'
+     * min and max); 1 when known. Asked once per chunk when the pyramid
+     * opens, so that empty space is skipped before its chunks are read.
+     */
+    int (*chunk_range)(void *ctx, int level, const int c[3], double *lo, double *hi);
+} vv_store;
+
+/**
+ * Level @p level's header in @p st (one voxel of @p type, its dims set to
+ * @p dims; the caller sets its geometry) and chunk box @p cdims. Errors:
+ * VV_ERR_NOMEM.
+ */
+vv_status vv_store_set_level(vv_store *st, int level, vv_voxel_type type, const int dims[3],
+                             const int cdims[3]);
+
+/** Frees what a store holds (its headers and, through close, its state); zeroes it. */
+void vv_store_close(vv_store *st);
+
+/* ---- the table a source fills in ------------------------------------------------- */
+
+/** The version of vv_source_ops this header describes. */
+#define VV_SOURCE_OPS_VERSION 1
+
+/**
+ * One kind of source. Every method takes the @p user given to
+ * vv_source_new. Required: version, kind, format, levels, level, read_box,
+ * proxy, stats, close; bricks for VV_SOURCE_BRICKS, multires for
+ * VV_SOURCE_PYRAMID; loading, wait and cancel optional (NULL: no loader).
+ * read_box, stats, loading, wait and cancel must be thread-safe.
+ */
+typedef struct vv_source_ops {
+    int version;         /**< VV_SOURCE_OPS_VERSION */
+    vv_source_kind kind; /**< what it reads from */
+    const char *format;  /**< its name for messages when vv_source_new names no format */
+    int (*levels)(void *user);
+    const vv_volume *(*level)(void *user, int level);
+    vv_status (*read_box)(void *user, int level, const int lo[3], const int hi[3], vv_volume **out);
+    vv_status (*proxy)(void *user, int level, vv_volume **out);
+    /** VV_SOURCE_BRICKS: its bricks as a brick source (borrowing @p user). */
+    void (*bricks)(void *user, vv_brick_source *out);
+    /** VV_SOURCE_PYRAMID: its levels as a multiresolution source (borrowing @p user). */
+    void (*multires)(void *user, vv_multires_source *out);
+    void (*stats)(void *user, vv_source_stats *out);
+    int (*loading)(void *user);
+    int (*wait)(void *user, double seconds);
+    void (*cancel)(void *user);
+    /** Closes the file and frees @p user (its pieces leave the cache). */
+    void (*close)(void *user);
+} vv_source_ops;
+
+/**
+ * A source of @p ops over @p user (taken: closed by the last
+ * vv_source_free, and on error here), opened from @p path (copied; may be
+ * NULL) of format @p format (copied, at most 31 bytes; NULL: ops->format),
+ * its pieces held in @p cache (may be NULL: a memory source; a reference is
+ * taken). Errors: VV_ERR_INVALID (a table of another version, a required
+ * method missing), VV_ERR_NOMEM.
+ */
+vv_status vv_source_new(vv_source **out, const vv_source_ops *ops, void *user, const char *path,
+                        const char *format, vv_cache *cache);
+
+/**
+ * The region driver's view of @p s: its bricks (a memory source: one brick,
+ * the whole volume). 1 and *@p out filled; 0 for a pyramid. The view
+ * borrows @p s.
+ */
+int vv_source_brick_view(vv_source *s, vv_brick_source *out);
+/** The level-of-detail driver's view of @p s: 1 and *@p out filled for a
+ *  pyramid, else 0. The view borrows @p s. */
+int vv_source_multires_view(vv_source *s, vv_multires_source *out);
 
 #ifdef __cplusplus
 }
