@@ -25,8 +25,10 @@
 #include <stdint.h>
 
 #include "core.h"
+#include "grid.h"
 #include "mesh.h"
 #include "model.h"
+#include "source.h"
 #include "volume.h"
 
 #ifdef __cplusplus
@@ -50,11 +52,15 @@ typedef enum vv_format {
     VV_FORMAT_RAW,
     VV_FORMAT_TIFF,
     VV_FORMAT_DICOM,
-    VV_FORMAT_VTI,     /**< VTK XML image data: written, not read */
-    VV_FORMAT_OME_ZARR /**< OME-Zarr 0.4 (Zarr v2 folder), every multiscales level */
+    VV_FORMAT_VTI,      /**< VTK XML image data: written, not read */
+    VV_FORMAT_OME_ZARR, /**< OME-Zarr 0.4 (Zarr v2 folder), every multiscales level */
+    VV_FORMAT_HDF5,     /**< BigDataViewer / Imaris HDF5 pyramids */
+    VV_FORMAT_VVB,      /**< VolVis's bricked volumes, with pyramid levels or without */
+    VV_FORMAT_BDV_XML   /**< BigDataViewer's dataset XML (its HDF5 file beside it) */
+    /* then the grid and mesh formats, by name (vv_format_parse) */
 } vv_format;
 
-/** Number of volume formats: their ids run from 1 to this. */
+/** Number of formats of every kind (volumes, grids, meshes): their ids run from 1 to this. */
 int vv_format_count(void);
 /** Lower-case format name ("slc", "nrrd", ...); "auto" and "unknown" for those. */
 const char *vv_format_name(vv_format f);
@@ -177,6 +183,12 @@ typedef struct vv_load_options {
      * on success; through the sandbox too. Borrowed for the call.
      */
     vv_load_info *info;
+    /**
+     * 1: the process ends after this read (the reader sandbox): checks that
+     * exist only to keep a long-lived process from a library's leaks on a
+     * malformed file may be skipped. 0 (the default) everywhere else.
+     */
+    int one_shot;
 } vv_load_options;
 
 /** Format VV_FORMAT_AUTO, no raw parameters (has_raw 0, raw as vv_raw_params_init),
@@ -190,6 +202,92 @@ void vv_load_options_init(vv_load_options *o);
  * VV_ERR_NOMEM; the trace starts with the format and file name.
  */
 vv_status vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt);
+
+/* ---- opening: one call for everything that opens ----------------------------------- */
+
+/** How vv_open reads a volume file. */
+typedef enum vv_open_mode {
+    /** The format's way: out of core for formats made for it (.vvb), whole otherwise. */
+    VV_OPEN_DEFAULT = 0,
+    /** Whole, into memory (a .vvb too), whatever its size. */
+    VV_OPEN_WHOLE = 1,
+    /**
+     * Out of core wherever the format allows: a pyramid (OME-Zarr,
+     * BigDataViewer HDF5 or XML, Imaris, a .vvb with levels when
+     * vv_open_options.levels) by its chunks, a .vvb, raw file or raw-encoded
+     * NRRD by bricks; a file that cannot be (a compressed NRRD, TIFF,
+     * NIfTI, ...) is read whole.
+     */
+    VV_OPEN_OUT_OF_CORE = 2,
+    /**
+     * VV_OPEN_DEFAULT, and out of core too when the volume's level 0 holds
+     * more than a quarter of the cache's budget (what the GUI, Python and
+     * the browser server do).
+     */
+    VV_OPEN_AUTO = 3,
+    /**
+     * VV_OPEN_OUT_OF_CORE, and VV_ERR_UNSUPPORTED (nothing read) where the
+     * file cannot be: for a consumer that reads it box by box (volvis
+     * convert, measure) and otherwise another way. No error is kept, except
+     * where a chunked store's format says why (an OME-Zarr level with an
+     * unknown compressor, an HDF5 file that is no pyramid): then
+     * vv_error_message gives its reason.
+     */
+    VV_OPEN_OUT_OF_CORE_ONLY = 4,
+} vv_open_mode;
+
+/** Options of vv_open. */
+typedef struct vv_open_options {
+    /** format (VV_FORMAT_AUTO: detected, once), raw parameters, DICOM series, channel,
+     *  time step; the level read whole (level: 0 the finest) */
+    vv_load_options load;
+    vv_open_mode mode;
+    /** 1: a file with pyramid levels and bricks (a .vvb with levels) opens as its pyramid
+     *  (level of detail: --lod, --level, --progressive); 0: by bricks */
+    int levels;
+    /** 1: by bricks without the pass over a raw or NRRD file for the value range and the
+     *  bricks' min/max (the range is then 0 .. 0: the ranks of a distributed render learn
+     *  it from their bricks) */
+    int header_only;
+    /** where the pieces read out of core are held; NULL: the process's (vv_cache_process) */
+    vv_cache *cache;
+} vv_open_options;
+
+/** The defaults: vv_load_options_init, VV_OPEN_DEFAULT, bricks, the whole pass, the
+ *  process's cache. */
+void vv_open_options_init(vv_open_options *o);
+
+/** What a file holds, as vv_open opened it. */
+typedef struct vv_opened {
+    int kind;          /**< vv_data_kind (sys/format.h): 0 volume, 1 grid, 2 mesh */
+    vv_format format;  /**< its row of the format table */
+    vv_source *source; /**< a volume: the channel and step asked for (in memory or out of
+                            core); owned (vv_opened_clear frees it) */
+    vv_grid *grid;     /**< a grid, owned */
+    vv_mesh *mesh;     /**< a mesh, owned */
+    vv_load_info info; /**< a volume's channels, steps, levels, name and colour */
+} vv_opened;
+
+/**
+ * Opens any file the build reads, through the format table: detects its
+ * format once (a signature in its head, else the deep tests, which for the
+ * formats of third-party parsers run in the reader sandbox), and returns
+ * what it holds: a volume as a source (include/volvis/source.h) -- read
+ * whole into memory, or out of core as @p opt->mode says (bricks or a
+ * pyramid, its pieces in @p opt->cache under one budget) -- a grid, or a
+ * mesh. Third-party parsers run in the reader sandbox (docs/security.md).
+ * @p opt may be NULL (the defaults). On failure @p out holds nothing.
+ * Errors: those of the format's reader, prefixed with its name and the
+ * file's ("nrrd: head.nrrd: ..."); VV_ERR_FORMAT ("cannot tell the format
+ * of F"), VV_ERR_INVALID (a channel, time step or level past the file's,
+ * a raw file without its description), VV_ERR_LIMIT (a budget smaller than
+ * one brick or node and its working set), VV_ERR_IO, VV_ERR_NOMEM.
+ * Thread-safe.
+ */
+vv_status vv_open(vv_opened *out, const char *path, const vv_open_options *opt);
+
+/** Frees what @p o holds and zeroes it (its source keeps living where an object holds it). */
+void vv_opened_clear(vv_opened *o);
 
 /**
  * The time steps of one channel of a file (vv_load_info.n_times), read step
@@ -270,6 +368,10 @@ typedef struct vv_save_options {
     /** TIFF: 1 writes BigTIFF (64-bit offsets) whatever the size; 0:
      *  BigTIFF only when the voxels come near classic TIFF's 4 GiB */
     int bigtiff;
+    /** .vvb: VV_VVB_COARSE, VV_VVB_ZSTD, VV_VVB_LEVELS (bricks.h); 0: raw bricks */
+    unsigned vvb_flags;
+    /** Long work (a box-by-box write) reports here and may be cancelled; may be zeroed. */
+    vv_progress progress;
 } vv_save_options;
 
 /** Format VV_FORMAT_AUTO, strict 0, compress -1. */
@@ -430,6 +532,19 @@ void vv_slabs_free(vv_slabs *s);
  */
 vv_status vv_ome_zarr_write_boxes(const vv_volume *hdr, vv_box_reader read, void *ctx,
                                   const char *path, const vv_save_options *opt);
+/**
+ * Writes the volume @p hdr describes (dims, type, spacing, origin, unit;
+ * its voxels are never read) from a box reader (@p read, called with @p ctx
+ * from one thread at a time), in memory bounded by the format's pieces
+ * rather than the volume: the format from opt->format, or from the
+ * extension (formats that write box by box: OME-Zarr, .vvb; opt->vvb_flags
+ * for a .vvb). Atomic: on failure nothing is left. Errors: VV_ERR_INVALID
+ * (no format from the extension), VV_ERR_UNSUPPORTED (a format that does
+ * not write box by box), those of the reader and the writer.
+ */
+vv_status vv_volume_save_boxes(const vv_volume *hdr, vv_box_reader read, void *ctx,
+                               const char *path, const vv_save_options *opt);
+
 /**
  * Writes @p m as VTK XML PolyData (.vtp): Float32 points, per-vertex normals
  * ("Normals") and scalars (named @p scalar_name, "scalars" when NULL: the

@@ -16,7 +16,9 @@
  */
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -26,7 +28,9 @@
 
 #include <zstd.h>
 
+#include "core/cache.h"
 #include "core/internal.h"
+#include "io/bricked.h"
 #include "io/bricked_internal.h"
 #include "io/pyramid.h"
 #include "volvis/sys/format.h"
@@ -57,8 +61,8 @@ typedef struct brick_entry {
     uint64_t offset, bytes;               /* .vvb: the brick's voxels in the file */
     uint64_t coarse_offset, coarse_bytes; /* .vvb: its coarse level (0 bytes: none) */
     double vmin, vmax;
-    vv_volume *vol; /* cached, or NULL */
-    uint64_t last_used;
+    vv_volume *vol;    /* cached, or NULL */
+    vv_cache_entry ce; /* its place in the process's cache while vol is held */
     int loads;
 } brick_entry;
 
@@ -78,7 +82,10 @@ struct vv_bricked {
     int zstd;                            /* .vvb: bricks are zstd frames */
     int n_levels;                        /* .vvb: pyramid levels, level 0 (the bricks) included */
     vvb_level lv[VV_PYRAMID_MAX_LEVELS]; /* lv[1 .. n_levels - 1] */
-    uint64_t limit, capacity, held, clock;
+    /* the cached bricks live in the process's cache (src/core/cache.h);
+     * its lock guards them and the counts */
+    vv_cache *cache;
+    vv_cache_client cl;
     vv_bricked_stats st;
 };
 
@@ -159,7 +166,7 @@ static vv_status
 read_at(vv_bricked *b, void *buf, size_t n, uint64_t off, const char *what) {
     const vv_status s = pread_exact(b, buf, n, off, what);
     if (s == VV_OK)
-        b->st.bytes_read += n;
+        __atomic_fetch_add(&b->st.bytes_read, (uint64_t)n, __ATOMIC_RELAXED);
     return s;
 }
 
@@ -217,7 +224,7 @@ vv_bricked_info(const vv_bricked *b, int index, vv_brick_info *info) {
 
 void
 vv_bricked_note_skip(vv_bricked *b) {
-    b->st.skipped++;
+    __atomic_fetch_add(&b->st.skipped, (uint64_t)1, __ATOMIC_RELAXED);
 }
 
 const vv_volume *
@@ -269,18 +276,42 @@ vv_bricked_source(vv_bricked *b, vv_brick_source *out) {
 
 void
 vv_bricked_stats_get(const vv_bricked *b, vv_bricked_stats *s) {
+    vv_cache_lock(b->cache);
     *s = b->st;
+    s->evictions = b->cl.evictions;
+    s->peak_bytes = b->cl.peak;
+    s->held_bytes = b->cl.held;
+    vv_cache_unlock(b->cache);
     s->max_loads = 0;
     for (int i = 0; i < b->n; i++)
         s->max_loads = b->e[i].loads > s->max_loads ? b->e[i].loads : s->max_loads;
+}
+
+const char *
+vv_bricked_path(const vv_bricked *b) {
+    return b->path;
+}
+
+vv_cache *
+vv_bricked_cache(const vv_bricked *b) {
+    return b->cache;
 }
 
 void
 vv_bricked_free(vv_bricked *b) {
     if (!b)
         return;
-    for (int i = 0; b->e && i < b->n; i++)
-        vv_volume_free(b->e[i].vol);
+    if (b->cache) {
+        vv_cache_lock(b->cache);
+        for (int i = 0; b->e && i < b->n; i++)
+            if (b->e[i].vol) {
+                vv_cache_remove(b->cache, &b->e[i].ce);
+                vv_volume_free(b->e[i].vol);
+            }
+        vv_cache_unlock(b->cache);
+        vv_cache_client_remove(&b->cl);
+        vv_cache_free(b->cache);
+    }
     free(b->e);
     for (int l = 1; l < VV_PYRAMID_MAX_LEVELS; l++)
         free(b->lv[l].c);
@@ -340,7 +371,7 @@ read_vvb_brick(vv_bricked *b, int index, void *dst, uint64_t want, const char *w
     const brick_entry *e = &b->e[index];
     const vv_status s = read_piece(b, e->offset, e->bytes, dst, want, what);
     if (s == VV_OK)
-        b->st.bytes_read += e->bytes;
+        __atomic_fetch_add(&b->st.bytes_read, e->bytes, __ATOMIC_RELAXED);
     return s;
 }
 
@@ -517,23 +548,21 @@ read_level_box(const vv_bricked *b, int level, const int lo[3], const int n[3], 
     return VV_OK;
 }
 
-/* Drops least recently used bricks until @p need more bytes fit. */
+/* The cache drops brick @p e's voxels to make room (lock held). */
 static void
-make_room(vv_bricked *b, uint64_t need) {
-    while (b->held + need > b->capacity) {
-        int victim = -1;
-        for (int i = 0; i < b->n; i++)
-            if (b->e[i].vol && (victim < 0 || b->e[i].last_used < b->e[victim].last_used))
-                victim = i;
-        if (victim < 0)
-            return;
-        vv_brick_info in;
-        brick_boxes(b, victim, &in);
-        b->held -= box_voxels(in.slo, in.shi) * vv_voxel_type_size(b->header->type);
-        vv_volume_free(b->e[victim].vol);
-        b->e[victim].vol = NULL;
-        b->st.evictions++;
-    }
+client_drop(vv_cache_client *cl, vv_cache_entry *ce) {
+    (void)cl;
+    brick_entry *e = (brick_entry *)((char *)ce - offsetof(brick_entry, ce));
+    vv_volume_free(e->vol);
+    e->vol = NULL;
+}
+
+/* Bricks are read in no planned order: the cache never asks (planned stays 0). */
+static int
+client_next_use(vv_cache_client *cl, vv_cache_entry *ce) {
+    (void)cl;
+    (void)ce;
+    return INT_MAX;
 }
 
 vv_status
@@ -542,16 +571,19 @@ vv_bricked_load(vv_bricked *b, int index, vv_volume **out) {
     if (index < 0 || index >= b->n)
         return vv_error_set(VV_ERR_INVALID, "bricks: no brick %d", index);
     brick_entry *e = &b->e[index];
-    e->last_used = ++b->clock;
+    vv_cache_lock(b->cache);
     if (e->vol) {
+        vv_cache_touch(b->cache, &e->ce);
         b->st.hits++;
         *out = vv_volume_ref(e->vol);
+        vv_cache_unlock(b->cache);
         return VV_OK;
     }
     vv_brick_info in;
     brick_boxes(b, index, &in);
     const uint64_t bytes = box_voxels(in.slo, in.shi) * vv_voxel_type_size(b->header->type);
-    make_room(b, bytes);
+    vv_cache_make_room(b->cache, bytes, 0);
+    vv_cache_unlock(b->cache);
     int dims[3];
     for (int a = 0; a < 3; a++)
         dims[a] = in.shi[a] - in.slo[a] + 1;
@@ -571,13 +603,20 @@ vv_bricked_load(vv_bricked *b, int index, vv_volume **out) {
     v->range[1] = b->header->range[1];
     v->unit = b->header->unit;
     v->space = b->header->space;
-    e->vol = v;
-    e->loads++;
-    b->st.loads++;
-    b->held += bytes;
-    if (b->held > b->st.peak_bytes)
-        b->st.peak_bytes = b->held;
+    vv_cache_lock(b->cache);
+    if (e->vol) { /* another thread read it meanwhile */
+        vv_volume_free(v);
+        v = e->vol;
+    } else {
+        vv_cache_make_room(b->cache, bytes, 0);
+        e->vol = v;
+        e->loads++;
+        b->st.loads++;
+        e->ce.ready = 1;
+        vv_cache_insert(b->cache, &b->cl, &e->ce, bytes);
+    }
     *out = vv_volume_ref(v);
+    vv_cache_unlock(b->cache);
     return VV_OK;
 }
 
@@ -610,10 +649,11 @@ alloc_bricks(vv_bricked *b) {
     return VV_OK;
 }
 
-/* The budget: the largest brick's working set is reserved, the rest caches. */
+/* The budget: the largest brick's working set is reserved, the cache holds
+ * the rest with every other source's pieces. */
 static vv_status
-set_budget(vv_bricked *b, uint64_t limit) {
-    b->limit = limit ? limit : (uint64_t)1 << 30;
+set_budget(vv_bricked *b) {
+    const uint64_t limit = vv_cache_limit(b->cache);
     uint64_t biggest = 0;
     for (int i = 0; i < b->n; i++) {
         vv_brick_info in;
@@ -623,13 +663,16 @@ set_budget(vv_bricked *b, uint64_t limit) {
     }
     const uint64_t vs = vv_voxel_type_size(b->header->type);
     const uint64_t need = biggest * vs + working_set(b, biggest);
-    if (b->limit < need)
+    if (limit < need)
         return vv_error_set(VV_ERR_LIMIT,
                             "bricks: memory limit of %llu bytes is smaller than one brick (%llu "
                             "bytes of voxels and %llu to render it)",
-                            (unsigned long long)b->limit, (unsigned long long)(biggest * vs),
+                            (unsigned long long)limit, (unsigned long long)(biggest * vs),
                             (unsigned long long)working_set(b, biggest));
-    b->capacity = b->limit - working_set(b, biggest);
+    b->cl.reserve = working_set(b, biggest);
+    b->cl.next_use = client_next_use;
+    b->cl.drop = client_drop;
+    vv_cache_client_add(b->cache, &b->cl);
     return VV_OK;
 }
 
@@ -794,12 +837,16 @@ open_raw_layout(vv_bricked *b, int scan) {
         return s;
     const uint64_t bytes = (uint64_t)b->header->dims[0] * (uint64_t)b->header->dims[1] *
                            (uint64_t)b->header->dims[2] * vv_voxel_type_size(b->header->type);
-    if (b->data_off > b->file_size || b->file_size - b->data_off < bytes)
+    if (b->data_off > b->file_size || b->file_size - b->data_off < bytes) {
+        /* the data file named when it is not the file opened (a detached NRRD) */
+        const char *dn = vv_path_basename(b->data_path);
+        const int other = strcmp(dn, vv_path_basename(b->path)) != 0;
         return vv_error_set(VV_ERR_FORMAT,
-                            "%s: %llu bytes of voxels from offset %llu run past the end of the "
+                            "%s%s%llu bytes of voxels from offset %llu run past the end of the "
                             "file (%llu bytes)",
-                            vv_path_basename(b->data_path), (unsigned long long)bytes,
+                            other ? dn : "", other ? ": " : "", (unsigned long long)bytes,
                             (unsigned long long)b->data_off, (unsigned long long)b->file_size);
+    }
     if ((s = alloc_bricks(b)) != VV_OK)
         return s;
     if (scan)
@@ -1022,52 +1069,28 @@ open_vvb(vv_bricked *b) {
     return s;
 }
 
-static int
-ends_with(const char *s, const char *suffix) {
-    const size_t n = strlen(s), m = strlen(suffix);
-    return n >= m && strcasecmp(s + n - m, suffix) == 0;
-}
-
+/* A new bricked volume of @p path in @p cache, nothing opened yet. */
 static vv_status
-bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw, uint64_t memory_limit,
-             int scan) {
+bricked_new(vv_bricked **out, const char *path, vv_cache *cache) {
     *out = NULL;
     vv_bricked *b = calloc(1, sizeof *b);
     if (!b)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    b->cache = vv_cache_ref(cache ? cache : vv_cache_process());
     b->fd = -1;
-    b->path = strdup(path);
-    vv_status s = b->path ? VV_OK : vv_error_set(VV_ERR_NOMEM, "out of memory");
-    if (s == VV_OK && raw) {
-        const int one[3] = {1, 1, 1};
-        b->data_path = strdup(path);
-        s = b->data_path ? vv_volume_new(&b->header, one, raw->type)
-                         : vv_error_set(VV_ERR_NOMEM, "out of memory");
-        if (s == VV_OK) {
-            if ((s = vv_volume_check_limits(raw->dims, raw->type, NULL)) == VV_OK) {
-                memcpy(b->header->dims, raw->dims, sizeof raw->dims);
-                memcpy(b->header->spacing, raw->spacing, sizeof raw->spacing);
-                memcpy(b->header->origin, raw->origin, sizeof raw->origin);
-                b->data_off = raw->header_skip;
-                b->swap = (raw->big_endian ? 1 : 0) == vv_host_is_little_endian();
-                s = open_raw_layout(b, scan);
-            }
-        }
-    } else if (s == VV_OK && ends_with(path, ".vvb")) {
-        b->vvb = 1;
-        b->data_path = strdup(path);
-        s = b->data_path ? open_vvb(b) : vv_error_set(VV_ERR_NOMEM, "out of memory");
-        b->swap = !vv_host_is_little_endian();
-    } else if (s == VV_OK) {
-        int big = 0;
-        s = vv_nrrd_raw_layout(path, &b->header, &b->data_path, &b->data_off, &big);
-        if (s == VV_OK) {
-            b->swap = big == vv_host_is_little_endian();
-            s = open_raw_layout(b, scan);
-        }
+    if (!(b->path = strdup(path))) {
+        vv_bricked_free(b);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
     }
+    *out = b;
+    return VV_OK;
+}
+
+/* @p b opened (budget set) or freed with the error named after @p path. */
+static vv_status
+bricked_done(vv_bricked **out, vv_bricked *b, vv_status s, const char *path) {
     if (s == VV_OK)
-        s = set_budget(b, memory_limit);
+        s = set_budget(b);
     if (s != VV_OK) {
         vv_bricked_free(b);
         return vv_error_prefix(s, "bricks: %s", vv_path_basename(path));
@@ -1077,15 +1100,89 @@ bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw, uint6
 }
 
 vv_status
-vv_bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw,
-                uint64_t memory_limit) {
-    return bricked_open(out, path, raw, memory_limit, 1);
+vv_bricked_open_layout(vv_bricked **out, const char *path, vv_volume *header, char *data_path,
+                       uint64_t offset, int big_endian, vv_cache *cache, int scan) {
+    *out = NULL;
+    vv_bricked *b = NULL;
+    vv_status s = bricked_new(&b, path, cache);
+    if (s != VV_OK) {
+        vv_volume_free(header);
+        free(data_path);
+        return s;
+    }
+    b->header = header;
+    b->data_path = data_path;
+    b->data_off = offset;
+    b->swap = (big_endian ? 1 : 0) == vv_host_is_little_endian();
+    if ((s = vv_volume_check_limits(header->dims, header->type, NULL)) == VV_OK)
+        s = open_raw_layout(b, scan);
+    return bricked_done(out, b, s, path);
+}
+
+/* A .vvb file by its bricks. */
+static vv_status
+vvb_open(vv_bricked **out, const char *path, vv_cache *cache) {
+    vv_bricked *b = NULL;
+    vv_status s = bricked_new(&b, path, cache);
+    if (s != VV_OK)
+        return s;
+    b->vvb = 1;
+    b->swap = !vv_host_is_little_endian();
+    s = (b->data_path = strdup(path)) ? open_vvb(b) : vv_error_set(VV_ERR_NOMEM, "out of memory");
+    return bricked_done(out, b, s, path);
+}
+
+/* The .vvb row's open_bricks. */
+static vv_status
+vvb_open_bricks(vv_source **out, const char *path, int header_only, vv_cache *cache) {
+    (void)header_only; /* its index has the ranges */
+    vv_bricked *b = NULL;
+    vv_status s = vvb_open(&b, path, cache);
+    return s == VV_OK ? vv_bricked_source_new(out, b, "vvb") : s;
+}
+
+/* @p path by bricks: a .vvb (its magic), a raw file when @p raw, else the
+ * raw layout of the row detection finds (an uncompressed NRRD). */
+static vv_status
+bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw, vv_cache *cache,
+             int scan) {
+    *out = NULL;
+    const size_t n = strlen(path);
+    if (!raw && (vv_vvb_probe(path) || (n > 4 && strcmp(path + n - 4, ".vvb") == 0)))
+        return vvb_open(out, path, cache); /* named .vvb: its magic checked */
+    vv_volume *h = NULL;
+    char *data = NULL;
+    uint64_t off = 0;
+    int big = 0;
+    vv_status s;
+    if (raw) {
+        s = vv_raw_layout(path, raw, &h, &data, &off, &big);
+    } else {
+        const vv_format_record *r =
+            vv_format_record_of(vv_format_detect_kind(path, VV_DATA_VOLUME, 0));
+        vv_load_options lo;
+        vv_load_options_init(&lo);
+        s = !r || !r->raw_layout
+                ? vv_error_set(VV_ERR_FORMAT, "%s: not a file read by bricks (.vvb, raw, raw NRRD)",
+                               vv_path_basename(path))
+                : r->raw_layout(path, &lo, &h, &data, &off, &big);
+        if (s == VV_ERR_UNSUPPORTED)
+            s = VV_ERR_FORMAT; /* "must be converted first" */
+    }
+    if (s != VV_OK)
+        return vv_error_prefix(s, "bricks: %s", vv_path_basename(path));
+    return vv_bricked_open_layout(out, path, h, data, off, big, cache, scan);
+}
+
+vv_status
+vv_bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw, vv_cache *cache) {
+    return bricked_open(out, path, raw, cache, 1);
 }
 
 vv_status
 vv_bricked_open_header(vv_bricked **out, const char *path, const vv_raw_params *raw,
-                       uint64_t memory_limit) {
-    return bricked_open(out, path, raw, memory_limit, 0);
+                       vv_cache *cache) {
+    return bricked_open(out, path, raw, cache, 0);
 }
 
 void
@@ -1805,7 +1902,7 @@ vvb_store_close(void *ctx) {
 }
 
 vv_status
-vv_vvb_pyramid_store(pyr_store *st, const char *path, int channel, int time) {
+vv_vvb_pyramid_store(vv_store *st, const char *path, int channel, int time) {
     memset(st, 0, sizeof *st);
     st->name = "vvb";
     if (channel > 0 || time > 0)
@@ -1842,7 +1939,7 @@ vv_vvb_pyramid_store(pyr_store *st, const char *path, int channel, int time) {
             if (l > 0 && (l > 1 ? b->lv[l - 1].dims[a] : h->dims[a]) > 1)
                 f[a] *= 2;
         }
-        if ((s = vv_pyr_store_level(st, l, h->type, d, cd)) != VV_OK)
+        if ((s = vv_store_set_level(st, l, h->type, d, cd)) != VV_OK)
             break;
         /* each voxel's centre at the centre of the level-0 voxels it
          * summarises, along the volume's axes */
@@ -1874,7 +1971,7 @@ vv_vvb_pyramid_store(pyr_store *st, const char *path, int channel, int time) {
 static vv_status
 vvb_read(vv_volume **out, const char *path, const vv_load_options *opt) {
     *out = NULL;
-    pyr_store st;
+    vv_store st;
     vv_status s = vv_vvb_pyramid_store(&st, path, opt->channel, opt->time);
     const int level = opt->level > 0 ? opt->level : 0;
     if (s == VV_OK && level >= st.n_levels)
@@ -1904,13 +2001,32 @@ vvb_read(vv_volume **out, const char *path, const vv_load_options *opt) {
             opt->info->n_levels = st.n_levels;
         }
     }
-    vv_pyr_store_close(&st);
+    vv_store_close(&st);
     if (s != VV_OK) {
         vv_volume_free(v);
         return vv_error_prefix(s, "vvb: %s", vv_path_basename(path));
     }
     *out = v;
     return VV_OK;
+}
+
+/* The .vvb row's store (its levels). */
+static vv_status
+vvb_open_store(vv_store *st, const char *path, int channel, int time, vv_load_info *info) {
+    (void)info;
+    return vv_vvb_pyramid_store(st, path, channel, time);
+}
+
+static vv_status
+vvb_write_record(const vv_volume *v, const char *path, const vv_save_options *opt) {
+    return vv_volume_write_vvb(v, path, opt->vvb_flags);
+}
+
+static vv_status
+vvb_write_boxes_record(const vv_volume *hdr, vv_box_reader read, void *ctx, const char *path,
+                       const vv_save_options *opt) {
+    return vv_boxes_write_vvb(hdr, read, ctx, path, opt->vvb_flags,
+                              opt->progress.fn ? &opt->progress : NULL);
 }
 
 static int
@@ -1921,7 +2037,7 @@ vvb_looks_like(const vv_format_probe *p, int deep) {
 
 static const char *const vvb_extensions[] = {"vvb", NULL};
 
-const vv_volume_format vv_volume_format_vvb = {
+const vv_format_record vv_format_vvb = {
     .version = VV_FORMAT_RECORD_VERSION,
     .name = "vvb",
     .title = ".vvb",
@@ -1929,6 +2045,11 @@ const vv_volume_format vv_volume_format_vvb = {
     .doc = "VolVis's bricked volumes (volvis convert IN OUT.vvb): read whole, any pyramid level "
            "(--level); rendered out of core by bricks (volvis render) or by level of detail "
            "(--lod)",
+    .flags = VV_FORMAT_FLAG_OUT_OF_CORE,
     .looks_like = vvb_looks_like,
     .read = vvb_read,
+    .write = vvb_write_record,
+    .write_boxes = vvb_write_boxes_record,
+    .open_store = vvb_open_store,
+    .open_bricks = vvb_open_bricks,
 };

@@ -33,7 +33,7 @@
 #include "core/internal.h"
 #include "io/dicom.h"
 #include "io/prescan.h"
-#include "io/sandbox.h"
+#include "io/transport.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 
@@ -66,7 +66,7 @@ vv_dicom_sniff(const char *path) {
 #ifndef VV_HAVE_GDCM
 
 vv_status
-vv_dicom_list(vv_dicom_series **out, int *n, const char *path) {
+io_dicom_list_local(vv_dicom_series **out, int *n, const char *path) {
     if (out)
         *out = NULL;
     if (n)
@@ -82,7 +82,7 @@ vv_dicom_read(vv_volume **out, const char *path, int series, int channel) {
     (void)channel;
     if (out)
         *out = NULL;
-    return vv_dicom_list(NULL, NULL, path);
+    return io_dicom_list_local(NULL, NULL, path);
 }
 
 vv_status
@@ -91,7 +91,7 @@ vv_dicom_read_files(vv_volume **out, const char *const *files, int n, int series
     (void)channel;
     if (out)
         *out = NULL;
-    return vv_dicom_list(NULL, NULL, n > 0 && files ? files[0] : "");
+    return io_dicom_list_local(NULL, NULL, n > 0 && files ? files[0] : "");
 }
 
 static vv_status
@@ -386,13 +386,11 @@ describe(const scan *sc, int si, vv_dicom_series *d) {
 }
 
 vv_status
-vv_dicom_list(vv_dicom_series **out, int *n, const char *path) {
+io_dicom_list_local(vv_dicom_series **out, int *n, const char *path) {
     if (!out || !n || !path)
         return vv_error_set(VV_ERR_INVALID, "dicom: NULL argument");
     *out = NULL;
     *n = 0;
-    if (vv_sandbox_wanted(NULL)) /* GDCM reads the headers in volvis-reader */
-        return vv_sandbox_dicom_list(out, n, path);
     scan sc;
     vv_status s = scan_path(&sc, path);
     if (s == VV_OK) {
@@ -1284,7 +1282,7 @@ dicom_read_record(vv_volume **out, const char *path, const vv_load_options *opt)
 static const char *const dicom_extensions[] = {"dcm", NULL};
 static const char *const dicom_aliases[] = {"dcm", NULL};
 
-const vv_volume_format vv_volume_format_dicom = {
+const vv_format_record vv_format_dicom = {
     .version = VV_FORMAT_RECORD_VERSION,
     .name = "dicom",
     .title = "DICOM",

@@ -1,9 +1,11 @@
 /*
- * The volume format table (after Teem's nrrd/format.c): one record per
- * format, defined in the format's own file (include/volvis/sys/format.h
- * says what a record holds), listed once below. A format's id (vv_format)
- * is its row. Detection, the names --format takes, loading and saving
- * (volume_io.c) and the lists in --help all read this table.
+ * The format table (after Teem's nrrd/format.c): one record per format of
+ * every kind -- volumes, pyramids, grids, meshes -- defined in the
+ * format's own file (include/volvis/sys/format.h says what a record holds),
+ * listed once below. A format's id (vv_format) is its row. Detection (one
+ * probe of a file's head, asked of every row), the names --format takes,
+ * vv_open, loading and saving (volume_io.c, open.c) and the lists in
+ * --help all read this table.
  */
 #include <ctype.h>
 #include <dirent.h>
@@ -17,14 +19,13 @@
 #include <zlib.h>
 
 #include "core/internal.h"
-#include "io/sandbox.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 
 /* The table: one row per format, in the order of the vv_format ids (the
- * named ones first). Adding a format: its file defines
- * vv_volume_format_<name>, and one X(<name>) row goes here. */
-#define VV_VOLUME_FORMAT_TABLE(X)                                                                  \
+ * named volume formats first, then grids and meshes). Adding a format: its
+ * file defines vv_format_<name>, and one X(<name>) row goes here. */
+#define VV_FORMAT_TABLE(X)                                                                         \
     X(slc)                                                                                         \
     X(nrrd)                                                                                        \
     X(nifti)                                                                                       \
@@ -36,28 +37,40 @@
     X(vti)                                                                                         \
     X(ome_zarr)                                                                                    \
     X(hdf5)                                                                                        \
-    X(vvb)
+    X(vvb)                                                                                         \
+    X(bdv_xml)                                                                                     \
+    X(vtk_grid)                                                                                    \
+    X(vtu)                                                                                         \
+    X(dx)                                                                                          \
+    X(plot3d)                                                                                      \
+    X(netcdf)                                                                                      \
+    X(mesh)
 
-#define DECLARE(name) extern const vv_volume_format vv_volume_format_##name;
-VV_VOLUME_FORMAT_TABLE(DECLARE)
+#define DECLARE(name) extern const vv_format_record vv_format_##name;
+VV_FORMAT_TABLE(DECLARE)
 #undef DECLARE
 
-#define ROW(name) &vv_volume_format_##name,
-static const vv_volume_format *const table[] = {VV_VOLUME_FORMAT_TABLE(ROW)};
+#define ROW(name) &vv_format_##name,
+static const vv_format_record *const table[] = {VV_FORMAT_TABLE(ROW)};
 #undef ROW
 
 #define N_FORMATS ((int)(sizeof table / sizeof table[0]))
 
-const vv_volume_format *const *
-vv_volume_format_table(int *n) {
+const vv_format_record *const *
+vv_format_table(int *n) {
     if (n)
         *n = N_FORMATS;
     return table;
 }
 
+const vv_format_record *
+vv_format_record_of(vv_format f) {
+    return (int)f >= 1 && (int)f <= N_FORMATS ? table[(int)f - 1] : NULL;
+}
+
 const char *const *
-vv_volume_format_write_extensions(const vv_volume_format *f) {
-    if (!f || !f->write)
+vv_format_record_write_extensions(const vv_format_record *f) {
+    if (!f || !(f->write || f->write_grid))
         return NULL;
     return f->write_extensions ? f->write_extensions : f->extensions;
 }
@@ -68,16 +81,16 @@ vv_format_count(void) {
 }
 
 /* The record of id @p f, or NULL. */
-static const vv_volume_format *
+static const vv_format_record *
 record(vv_format f) {
-    return (int)f >= 1 && (int)f <= N_FORMATS ? table[(int)f - 1] : NULL;
+    return vv_format_record_of(f);
 }
 
 const char *
 vv_format_name(vv_format f) {
     if (f == VV_FORMAT_AUTO)
         return "auto";
-    const vv_volume_format *r = record(f);
+    const vv_format_record *r = record(f);
     return r ? r->name : "unknown";
 }
 
@@ -98,7 +111,7 @@ vv_format_parse(const char *name, vv_format *out) {
             return VV_OK;
         }
     }
-    char list[512] = "auto";
+    char list[768] = "auto";
     for (int i = 0; i < N_FORMATS; i++) {
         size_t k = strlen(list);
         snprintf(list + k, sizeof list - k, "%s%s", i + 1 < N_FORMATS ? ", " : " or ",
@@ -181,13 +194,15 @@ vv_format_folder_any(const char *path,
     return found;
 }
 
-/* The first format, in table order, whose looks_like says yes at @p deep;
- * a gzip-compressed file is asked of the formats read compressed only. */
+/* The first format holding @p kind (-1: any), in table order, whose
+ * looks_like says yes at @p deep; a gzip-compressed file is asked of the
+ * formats read compressed only. */
 static vv_format
-ask(const vv_format_probe *p, int deep) {
+ask(const vv_format_probe *p, int kind, int deep) {
     for (int i = 0; i < N_FORMATS; i++) {
-        const vv_volume_format *r = table[i];
-        if (!r->looks_like || (p->gzip && !(r->flags & VV_FORMAT_FLAG_GZIP)))
+        const vv_format_record *r = table[i];
+        if (!r->looks_like || (p->gzip && !(r->flags & VV_FORMAT_FLAG_GZIP)) ||
+            (kind >= 0 && (int)r->holds != kind))
             continue;
         if (r->looks_like(p, deep))
             return (vv_format)(i + 1);
@@ -195,28 +210,21 @@ ask(const vv_format_probe *p, int deep) {
     return VV_FORMAT_UNKNOWN;
 }
 
-/* Detection's first pass (signatures) and, when @p deep and it found
- * nothing, the second. */
-static vv_format
-detect(const char *path, int deep) {
+vv_format
+vv_format_detect_kind(const char *path, int kind, int deep) {
     if (!path)
         return VV_FORMAT_UNKNOWN;
     unsigned char buf[VV_FORMAT_PROBE_BYTES + 1];
     char text[VV_FORMAT_PROBE_BYTES + 1];
     vv_format_probe p;
     int err = vv_format_probe_fill(&p, path, buf, text);
-    vv_format f = ask(&p, 0);
+    vv_format f = ask(&p, kind, 0);
     if (f != VV_FORMAT_UNKNOWN || err || !deep)
         return f;
-    return ask(&p, 1);
-}
-
-vv_format
-vv_format_detect_signature(const char *path) {
-    return detect(path, 0);
+    return ask(&p, kind, 1);
 }
 
 vv_format
 vv_format_detect(const char *path) {
-    return detect(path, 1);
+    return vv_format_detect_kind(path, -1, 1);
 }

@@ -434,12 +434,13 @@ dx_looks_like(const vv_format_probe *p, int deep) {
 
 static const char *const dx_extensions[] = {"dx", NULL};
 
-const vv_grid_format_record vv_grid_format_dx = {
+const vv_format_record vv_format_dx = {
     .version = VV_FORMAT_RECORD_VERSION,
     .name = "dx",
     .title = "OpenDX",
     .extensions = dx_extensions,
     .doc = "OpenDX native: positions, tetrahedra/cubes/triangles/quads, data; text or binary",
+    .holds = VV_DATA_GRID,
     .looks_like = dx_looks_like,
-    .read = vv_grid_read_dx,
+    .read_grid = vv_grid_read_dx,
 };

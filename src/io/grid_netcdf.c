@@ -350,13 +350,14 @@ netcdf_looks_like(const vv_format_probe *p, int deep) {
 
 static const char *const netcdf_extensions[] = {"nc", "cdf", NULL};
 
-const vv_grid_format_record vv_grid_format_netcdf = {
+const vv_format_record vv_format_netcdf = {
     .version = VV_FORMAT_RECORD_VERSION,
     .name = "netcdf",
     .title = "NetCDF",
     .extensions = netcdf_extensions,
     .doc = "NetCDF (CF conventions) through libnetcdf: cells on longitude, latitude, depth",
     .flags = VV_FORMAT_FLAG_THIRD_PARTY,
+    .holds = VV_DATA_GRID,
     .looks_like = netcdf_looks_like,
-    .read = vv_grid_read_netcdf,
+    .read_grid = vv_grid_read_netcdf,
 };

@@ -300,12 +300,13 @@ plot3d_read_record(vv_grid **out, const char *path) {
 
 static const char *const plot3d_extensions[] = {"xyz", "bin", NULL};
 
-const vv_grid_format_record vv_grid_format_plot3d = {
+const vv_format_record vv_format_plot3d = {
     .version = VV_FORMAT_RECORD_VERSION,
     .name = "plot3d",
     .title = "PLOT3D",
     .extensions = plot3d_extensions,
     .doc = "PLOT3D grid with its solution beside it (*.q, *q.bin): blocks, IBLANK",
+    .holds = VV_DATA_GRID,
     .looks_like = plot3d_looks_like,
-    .read = plot3d_read_record,
+    .read_grid = plot3d_read_record,
 };

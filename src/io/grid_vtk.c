@@ -460,12 +460,13 @@ vtk_grid_looks_like(const vv_format_probe *p, int deep) {
 
 static const char *const vtk_extensions[] = {"vtk", NULL};
 
-const vv_grid_format_record vv_grid_format_vtk = {
+const vv_format_record vv_format_vtk_grid = {
     .version = VV_FORMAT_RECORD_VERSION,
-    .name = "vtk",
+    .name = "vtk_grid",
     .title = "VTK UNSTRUCTURED_GRID",
     .extensions = vtk_extensions,
     .doc = "VTK legacy UNSTRUCTURED_GRID, ASCII or binary (also 5.1 OFFSETS/CONNECTIVITY)",
+    .holds = VV_DATA_GRID,
     .looks_like = vtk_grid_looks_like,
-    .read = vv_grid_read_vtk,
+    .read_grid = vv_grid_read_vtk,
 };

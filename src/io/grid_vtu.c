@@ -705,13 +705,14 @@ vtu_looks_like(const vv_format_probe *p, int deep) {
 
 static const char *const vtu_extensions[] = {"vtu", NULL};
 
-const vv_grid_format_record vv_grid_format_vtu = {
+const vv_format_record vv_format_vtu = {
     .version = VV_FORMAT_RECORD_VERSION,
     .name = "vtu",
     .title = ".vtu",
     .extensions = vtu_extensions,
     .doc = "VTK XML UnstructuredGrid through libxml2: inline or appended, base64, zlib",
     .flags = VV_FORMAT_FLAG_THIRD_PARTY,
+    .holds = VV_DATA_GRID,
     .looks_like = vtu_looks_like,
-    .read = vv_grid_read_vtu,
+    .read_grid = vv_grid_read_vtu,
 };

@@ -165,10 +165,22 @@ read_table(hid_t fid, const char *path, hid_t mtype, void *buf, int max_rows, in
     return ok;
 }
 
+/* BigDataViewer's layout: setup @p channel (s%02d) at time point @p time
+ * (t%05d); @p ids 1: the setup and time point are ids the caller has (a
+ * dataset XML's), not counted from s00 and t00000 (the store then holds one
+ * of each). */
 static vv_status
-open_bdv(h5p *h, int channel, int time) {
+open_bdv(h5p *h, int channel, int time, int ids) {
     const int setup = channel < 0 ? 0 : channel, t = time < 0 ? 0 : time;
     char path[256];
+    if (ids) {
+        h->n_channels = h->n_times = 1;
+        snprintf(path, sizeof path, "t%05d/s%02d", t, setup);
+        if (setup > 99 || t > 99999 || !link_exists(h->fid, path))
+            return vv_error_set(VV_ERR_FORMAT, "no setup %d at time point %d (t%05d/s%02d)", setup,
+                                t, t, setup);
+        goto levels;
+    }
     h->n_channels = 0;
     for (int s = 0; s < 100; s++) {
         snprintf(path, sizeof path, "s%02d", s);
@@ -189,6 +201,7 @@ open_bdv(h5p *h, int channel, int time) {
     if (t >= h->n_times)
         return vv_error_set(VV_ERR_INVALID, "time step %d asked, the file has %d (t00000 ..)", t,
                             h->n_times);
+levels:;
     double res[VV_PYRAMID_MAX_LEVELS][3];
     int sub[VV_PYRAMID_MAX_LEVELS][3], nr = 0, ns = 0;
     snprintf(path, sizeof path, "s%02d/resolutions", setup);
@@ -465,7 +478,7 @@ h5p_close(h5p *h) {
 }
 
 static vv_status
-h5p_open(h5p **out, const char *path, int channel, int time) {
+h5p_open(h5p **out, const char *path, int channel, int time, int ids) {
     *out = NULL;
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL); /* errors are ours to report */
     h5p *h = calloc(1, sizeof *h);
@@ -478,15 +491,15 @@ h5p_open(h5p **out, const char *path, int channel, int time) {
         s = vv_error_set(VV_ERR_IO, "cannot open it as an HDF5 file");
     else if (link_exists(h->fid, "DataSet") && link_exists(h->fid, "DataSet/ResolutionLevel 0"))
         h->kind = 2;
-    else if (link_exists(h->fid, "s00") && link_exists(h->fid, "t00000"))
+    else if (ids || (link_exists(h->fid, "s00") && link_exists(h->fid, "t00000")))
         h->kind = 1;
     else
-        s = vv_error_set(VV_ERR_FORMAT,
+        s = vv_error_set(VV_ERR_UNSUPPORTED, /* a plain HDF5 file: read whole */
                          "neither a BigDataViewer file (t00000/s00/0/cells) nor an Imaris one "
                          "(DataSet/ResolutionLevel 0)");
     if (s == VV_OK)
-        s = h->kind == 1 ? open_bdv(h, channel, time) : open_ims(h, channel, time);
-    if (s == VV_OK && h->kind == 1)
+        s = h->kind == 1 ? open_bdv(h, channel, time, ids) : open_ims(h, channel, time);
+    if (s == VV_OK && h->kind == 1 && !ids) /* a dataset XML gives the geometry itself */
         s = bdv_voxel_size(h, path, channel < 0 ? 0 : channel);
     for (int l = 0; l < h->n_levels && s == VV_OK; l++) {
         hid_t ft = H5Dget_type(h->dset[l]);
@@ -569,7 +582,7 @@ static vv_status
 h5_read(vv_volume **out, const char *path, const vv_load_options *opt) {
     *out = NULL;
     h5p *h = NULL;
-    vv_status s = h5p_open(&h, path, opt->channel, opt->time);
+    vv_status s = h5p_open(&h, path, opt->channel, opt->time, 0);
     const int level = opt->level > 0 ? opt->level : 0;
     if (s == VV_OK && level >= h->n_levels)
         s = vv_error_set(VV_ERR_INVALID, "level %d asked, the file has %d", level, h->n_levels);
@@ -602,22 +615,22 @@ static const unsigned char h5_signature[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0
 static int
 h5_looks_like(const vv_format_probe *p, int deep) {
     (void)deep;
-    return !p->is_dir && p->n >= 8 && !memcmp(p->head, h5_signature, 8);
-}
-
-int
-vv_h5_is_hdf5(const char *path) {
-    FILE *f = fopen(path, "rb");
-    unsigned char b[8];
-    const int ok = f && fread(b, 1, 8, f) == 8 && !memcmp(b, h5_signature, 8);
-    if (f)
-        fclose(f);
-    return ok;
+    /* NetCDF-4 files are HDF5 files too: the grid row (grid_netcdf.c) reads them */
+    return !p->is_dir && p->n >= 8 && !memcmp(p->head, h5_signature, 8) &&
+           !vv_format_path_has_ext(p->path, "nc") && !vv_format_path_has_ext(p->path, "cdf");
 }
 
 static const char *const h5_extensions[] = {"h5", "ims", "hdf5", NULL};
 
-const vv_volume_format vv_volume_format_hdf5 = {
+/* The row's store: the file's levels of setup (channel) @p channel at
+ * time point @p time. */
+static vv_status
+h5_open_store(vv_store *st, const char *path, int channel, int time, vv_load_info *info) {
+    (void)info;
+    return vv_h5_pyramid_store(st, path, channel, time);
+}
+
+const vv_format_record vv_format_hdf5 = {
     .version = VV_FORMAT_RECORD_VERSION,
     .name = "hdf5",
     .title = "BigDataViewer / Imaris HDF5",
@@ -629,6 +642,7 @@ const vv_volume_format vv_volume_format_hdf5 = {
     .flags = VV_FORMAT_FLAG_THIRD_PARTY,
     .looks_like = h5_looks_like,
     .read = h5_read,
+    .open_store = h5_open_store,
 };
 
 /* ---- the pyramid's store ------------------------------------------------------ */
@@ -678,12 +692,13 @@ h5s_close(void *ctx) {
     h5p_close(ctx);
 }
 
-vv_status
-vv_h5_pyramid_store(pyr_store *st, const char *path, int channel, int time) {
+/* The store of @p path (@p ids: as vv_h5_bdv_store). */
+static vv_status
+h5_store(vv_store *st, const char *path, int channel, int time, int ids) {
     memset(st, 0, sizeof *st);
     st->name = "hdf5";
     h5p *h = NULL;
-    vv_status s = h5p_open(&h, path, channel, time);
+    vv_status s = h5p_open(&h, path, channel, time, ids);
     if (s != VV_OK)
         return s;
     st->ctx = h;
@@ -697,9 +712,19 @@ vv_h5_pyramid_store(pyr_store *st, const char *path, int channel, int time) {
     st->range[0] = h->lv[0].range[0];
     st->range[1] = h->lv[0].range[1];
     for (int l = 0; l < h->n_levels; l++) {
-        if ((s = vv_pyr_store_level(st, l, h->type, h->lv[l].dims, h->lv[l].cdims)) != VV_OK)
+        if ((s = vv_store_set_level(st, l, h->type, h->lv[l].dims, h->lv[l].cdims)) != VV_OK)
             return s;
         h5p_geometry(&h->lv[l], st->lv[l].hdr);
     }
     return VV_OK;
+}
+
+vv_status
+vv_h5_pyramid_store(vv_store *st, const char *path, int channel, int time) {
+    return h5_store(st, path, channel, time, 0);
+}
+
+vv_status
+vv_h5_bdv_store(vv_store *st, const char *path, int setup, int timepoint) {
+    return h5_store(st, path, setup, timepoint, 1);
 }

@@ -18,7 +18,6 @@
 
 #include "core/internal.h"
 #include "io/prescan.h"
-#include "io/sandbox.h"
 #include "volvis/io.h"
 #include "volvis/mesh.h"
 #include "volvis/sys/format.h"
@@ -412,17 +411,14 @@ vv_mesh_prescan(const char *path) {
     return VV_OK;
 }
 
-vv_status
-vv_mesh_load(vv_mesh **out, const char *path) {
-    if (!out || !path)
-        return vv_error_set(VV_ERR_INVALID, "mesh: NULL argument");
+/* The mesh row's read: our own checks (vv_mesh_prescan), then Assimp. */
+static vv_status
+mesh_read_record(vv_mesh **out, const char *path) {
     *out = NULL;
     const char *name = vv_path_basename(path);
     vv_status s = vv_mesh_prescan(path);
     if (s != VV_OK)
         return s;
-    if (vv_sandbox_wanted(NULL)) /* Assimp reads it in volvis-reader */
-        return vv_sandbox_mesh_load(out, path);
 
     /* Drop every attribute but positions before joining vertices, so facet
      * normals (STL) or texture seams do not split a closed surface; normals
@@ -616,3 +612,32 @@ vv_mesh_save(const vv_mesh *m, const char *path) {
     free(am.mFaces);
     return s;
 }
+
+/* ---- the format record ------------------------------------------------------ */
+
+static const char *const mesh_extensions[] = {"obj",  "ply", "stl", "off", "glb",
+                                              "gltf", "dae", "fbx", "3ds", NULL};
+
+/* Meshes have no common signature: a mesh is a file of a mesh extension
+ * that no other row claimed (Assimp decides when it reads it). */
+static int
+mesh_looks_like(const vv_format_probe *p, int deep) {
+    if (!deep || p->is_dir)
+        return 0;
+    for (const char *const *e = mesh_extensions; *e; e++)
+        if (vv_format_path_has_ext(p->path, *e))
+            return 1;
+    return 0;
+}
+
+const vv_format_record vv_format_mesh = {
+    .version = VV_FORMAT_RECORD_VERSION,
+    .name = "mesh",
+    .title = "mesh",
+    .extensions = mesh_extensions,
+    .doc = "triangle meshes through Assimp (OBJ, PLY, STL, OFF, glTF, COLLADA, FBX, 3DS, ...)",
+    .flags = VV_FORMAT_FLAG_THIRD_PARTY,
+    .holds = VV_DATA_MESH,
+    .looks_like = mesh_looks_like,
+    .read_mesh = mesh_read_record,
+};

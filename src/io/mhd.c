@@ -700,7 +700,7 @@ mhd_write_record(const vv_volume *v, const char *path, const vv_save_options *op
 static const char *const mhd_extensions[] = {"mhd", "mha", NULL};
 static const char *const mhd_aliases[] = {"mha", "metaimage", NULL};
 
-const vv_volume_format vv_volume_format_mhd = {
+const vv_format_record vv_format_mhd = {
     .version = VV_FORMAT_RECORD_VERSION,
     .name = "mhd",
     .title = "MetaImage",

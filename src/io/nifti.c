@@ -872,7 +872,7 @@ static const char *const nifti_extensions[] = {"nii", "nii.gz", "hdr", "img", NU
 static const char *const nifti_aliases[] = {"nii", "hdr", NULL};
 static const char *const nifti_write_extensions[] = {"nii", "nii.gz", NULL};
 
-const vv_volume_format vv_volume_format_nifti = {
+const vv_format_record vv_format_nifti = {
     .version = VV_FORMAT_RECORD_VERSION,
     .name = "nifti",
     .title = "NIfTI",

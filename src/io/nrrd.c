@@ -41,7 +41,6 @@
 #include "core/internal.h"
 #include "io/bricked_internal.h"
 #include "io/prescan.h"
-#include "io/sandbox.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 
@@ -674,8 +673,8 @@ check_gzip_stream(const char *path, uint64_t offset, uint64_t need) {
  * ascii two a value. bzip2 has no such bound (the memory budget holds).
  */
 static vv_status
-check_promise(const char *path, const NrrdIoState *nio, const header_scan *hs, uint64_t count,
-              size_t esize) {
+check_promise(const char *path, const NrrdIoState *nio, const header_scan *hs, int one_shot,
+              uint64_t count, size_t esize) {
     uint64_t need = count * esize, have = hs->data_bytes;
     const char *what = NULL;
     int ok = 1;
@@ -700,11 +699,11 @@ check_promise(const char *path, const NrrdIoState *nio, const header_scan *hs, u
             what, (unsigned long long)have, (unsigned long long)count, (unsigned long long)need);
     /* a gzip stream without skipped lines starts right at the data: it must
      * inflate to the promised size (each file its share). Not in the
-     * sandboxed reader: the check inflates the whole stream once more only
+     * sandboxed reader (one_shot): the check inflates the whole stream once more only
      * to keep Teem's leak on a broken stream out of a long-lived process,
      * and the reader's leaks end with it (Teem reports the broken stream
      * itself and inflates no more than the header promises) */
-    if (nio->encoding == nrrdEncodingGzip && nio->lineSkip == 0 && !vv_sandbox_in_reader()) {
+    if (nio->encoding == nrrdEncodingGzip && nio->lineSkip == 0 && !one_shot) {
         /* Teem skips byteSkip bytes of the inflated stream of each file */
         uint64_t skip = nio->byteSkip > 0 ? (uint64_t)nio->byteSkip : 0;
         if (hs->n_files == 0)
@@ -738,7 +737,7 @@ slice_axis(Nrrd **n, int axis, int pos) {
 /* The body of vv_nrrd_read, under teem_lock. */
 static vv_status
 read_locked(vv_volume **out, const char *path, const header_scan *hs, int channel, int time,
-            vv_load_info *info) {
+            vv_load_info *info, int one_shot) {
     vv_status s = VV_OK;
     vv_volume *v = NULL;
     int dims[3], nc = 1, nt = 1;
@@ -781,7 +780,7 @@ read_locked(vv_volume **out, const char *path, const header_scan *hs, int channe
     if (steps > 1 && (s = vv_memory_budget_check(count3 * steps * nrrdTypeSize[n->type],
                                                  "NRRD channels and time steps")) != VV_OK)
         goto done;
-    s = check_promise(path, nio, hs, count3 * steps, nrrdTypeSize[n->type]);
+    s = check_promise(path, nio, hs, one_shot, count3 * steps, nrrdTypeSize[n->type]);
     if (s != VV_OK)
         goto done;
     nrrdNuke(n);
@@ -870,7 +869,8 @@ vv_nrrd_prescan(const char *path) {
 }
 
 static vv_status
-nrrd_read_at(vv_volume **out, const char *path, int channel, int time, vv_load_info *info) {
+nrrd_read_at(vv_volume **out, const char *path, int channel, int time, vv_load_info *info,
+             int one_shot) {
     if (!out || !path) {
         return vv_error_set(VV_ERR_INVALID, "nrrd: NULL argument");
     }
@@ -879,7 +879,7 @@ nrrd_read_at(vv_volume **out, const char *path, int channel, int time, vv_load_i
     vv_status s = scan_header(path, &hs);
     if (s == VV_OK) {
         pthread_mutex_lock(&teem_lock);
-        s = read_locked(out, path, &hs, channel, time, info);
+        s = read_locked(out, path, &hs, channel, time, info, one_shot);
         pthread_mutex_unlock(&teem_lock);
         header_scan_free(&hs);
     }
@@ -890,7 +890,7 @@ nrrd_read_at(vv_volume **out, const char *path, int channel, int time, vv_load_i
 
 vv_status
 vv_nrrd_read(vv_volume **out, const char *path) {
-    return nrrd_read_at(out, path, -1, -1, NULL);
+    return nrrd_read_at(out, path, -1, -1, NULL, 0);
 }
 
 /* The body of vv_nrrd_write, under teem_lock, writing into af->fp. */
@@ -1194,7 +1194,17 @@ nrrd_looks_like(const vv_format_probe *p, int deep) {
 
 static vv_status
 nrrd_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
-    return nrrd_read_at(out, path, opt->channel, opt->time, opt->info);
+    return nrrd_read_at(out, path, opt->channel, opt->time, opt->info, opt->one_shot);
+}
+
+/* An uncompressed NRRD's layout, for reading it out of core by bricks; a
+ * compressed one is read whole (VV_ERR_UNSUPPORTED). */
+static vv_status
+nrrd_raw_layout_record(const char *path, const vv_load_options *opt, vv_volume **header,
+                       char **data_path, uint64_t *offset, int *big_endian) {
+    (void)opt;
+    vv_status s = vv_nrrd_raw_layout(path, header, data_path, offset, big_endian);
+    return s == VV_ERR_FORMAT ? VV_ERR_UNSUPPORTED : s;
 }
 
 /* gzip-compressed unless asked otherwise; NRRD holds every volume. */
@@ -1206,7 +1216,7 @@ nrrd_write_record(const vv_volume *v, const char *path, const vv_save_options *o
 static const char *const nrrd_extensions[] = {"nrrd", "nhdr", NULL};
 static const char *const nrrd_aliases[] = {"nhdr", NULL};
 
-const vv_volume_format vv_volume_format_nrrd = {
+const vv_format_record vv_format_nrrd = {
     .version = VV_FORMAT_RECORD_VERSION,
     .name = "nrrd",
     .title = "NRRD",
@@ -1217,4 +1227,5 @@ const vv_volume_format vv_volume_format_nrrd = {
     .looks_like = nrrd_looks_like,
     .read = nrrd_read_record,
     .write = nrrd_write_record,
+    .raw_layout = nrrd_raw_layout_record,
 };

@@ -1,9 +1,10 @@
 /*
- * Multiresolution pyramids out of core (include/volvis/bricks.h,
- * vv_pyramid): the levels of one channel at one time step of an OME-Zarr
- * store or a BigDataViewer / Imaris HDF5 file (their stores:
- * src/io/pyramid.h), read by boxes of voxels through a cache of decoded
- * chunks within a memory limit.
+ * Multiresolution pyramids out of core (src/io/pyramid.h, vv_pyramid; a
+ * source of kind VV_SOURCE_PYRAMID, include/volvis/source.h): the levels
+ * of one channel at one time step of an OME-Zarr store, a BigDataViewer /
+ * Imaris HDF5 file or a .vvb with levels (their stores, src/io/pyramid.h),
+ * read by boxes of voxels through the process's one cache of decoded
+ * pieces (src/core/cache.h), within its budget.
  *
  * Opening reads the metadata only (the store's) and the coarsest level,
  * whose voxels give the proxy and, without a window in the metadata, the
@@ -29,8 +30,8 @@
  * into the same cache, soonest first; a new request replaces the queue.
  * A chunk being read by anyone sits in the cache reserved and pinned
  * (PY_LOADING): a frame needing it waits on the arrival condition rather
- * than reading it twice. One mutex guards the cache, the plan, the queue
- * and the statistics; reading and decoding run outside it.
+ * than reading it twice. One mutex, the cache's, guards the chunks, the
+ * plan, the queue and the statistics; reading and decoding run outside it.
  */
 #include <limits.h>
 #include <malloc.h>
@@ -44,9 +45,9 @@
 #include <sys/stat.h>
 #include <time.h>
 
+#include "core/cache.h"
 #include "core/internal.h"
 #include "io/pyramid.h"
-#include "io/sandbox.h"
 #include "volvis/bricks.h"
 
 #define PY_BUCKETS 4096u
@@ -65,17 +66,20 @@ typedef struct py_use {
     struct py_use *hnext;
 } py_use;
 
+/* A chunk in the cache: its entry there (ce: first, so that the cache's
+ * entry is the chunk) holds its pins (boxes being assembled from it, and
+ * its loader while loading) and the request that last asked for it (the
+ * loader keeps those). */
 typedef struct py_chunk {
+    vv_cache_entry ce;
     int level;
     uint64_t L;
     py_use *use;      /* its uses in the plan, or NULL */
     int org[3], n[3]; /* the block's first voxel in the level, its size */
     vv_volume *blk;   /* the chunk's voxels inside the array */
     uint64_t bytes;
-    int pins;      /* boxes being assembled from it, and its loader while loading */
-    int state;     /* PY_READY, ... */
-    uint32_t want; /* the request that last asked for it (the loader keeps those) */
-    struct py_chunk *prev, *next, *hnext;
+    int state; /* PY_READY, ... */
+    struct py_chunk *hnext;
 } py_chunk;
 
 /* A chunk a request asked the loader for. */
@@ -96,35 +100,39 @@ typedef struct py_level {
     uint16_t *frame_reads; /* its reads in that frame */
 } py_level;
 
+/* The pyramid: its chunks live in the process's cache (src/core/cache.h)
+ * as entries of its client there; the cache's lock (p->lock) guards its
+ * index of them, the plan, the queue and the statistics, so that another
+ * source evicting one of its chunks needs no lock of its own. */
 struct vv_pyramid {
     char path[4096];
-    pyr_store store;
+    vv_store store;
     int n_levels;
     py_level lv[VV_PYRAMID_MAX_LEVELS];
     double range[2];
-    uint64_t limit, capacity, held, n_ready, trim_due;
+    uint64_t limit, n_ready;
     int boxes;      /* boxes held at once (vv_multires_source.boxes) */
     int node_cells; /* the octree leaves' side the limit holds */
+    vv_cache *cache;
+    vv_cache_client cl; /* its side of the cache: reserve, planned, want, held */
     py_chunk *bucket[PY_BUCKETS];
-    py_chunk *mru, *lru; /* the LRU list, most recent first */
     uint32_t frame;
     /* the frame's plan: uses by chunk, the box being read */
     py_use *ubucket[PY_BUCKETS];
-    int planned, cursor;
+    int cursor;
     int plan_n, *plan_box; /* the plan's boxes in order: level, lo[3], hi[3] each */
     vv_pyramid_stats st;
     /* the loader (vv_pyramid_request): threads reading the queue's chunks
-     * into the cache. lock guards everything above and below; store_lock
-     * serializes read_chunk when the store is not parallel. */
-    pthread_mutex_t lock, store_lock;
+     * into the cache. lock (the cache's) guards everything above and below;
+     * store_lock serializes read_chunk when the store is not parallel. */
+    pthread_mutex_t *lock, store_lock;
     pthread_cond_t work;    /* the queue got chunks, or quit */
     pthread_cond_t arrived; /* a chunk's decode ended (any thread) */
     int n_loaders, quit, in_flight;
     pthread_t loader[PY_LOADERS_MAX];
     py_req *queue; /* the chunks asked for and not yet taken, soonest first */
     int q_n, q_pos;
-    uint32_t want; /* the newest request */
-    int stalled;   /* the loader stopped short of the newest request: the cache is full */
+    int stalled; /* the loader stopped short of the newest request: the cache is full */
     uint64_t arrivals;
 };
 
@@ -160,41 +168,44 @@ find_chunk(const vv_pyramid *p, int level, uint64_t L) {
     return NULL;
 }
 
+/* Calls @p fn with each chunk of the pyramid's index (lock held; @p fn may
+ * drop the chunk it is given). */
 static void
-lru_unlink(vv_pyramid *p, py_chunk *c) {
-    if (c->prev)
-        c->prev->next = c->next;
-    else
-        p->mru = c->next;
-    if (c->next)
-        c->next->prev = c->prev;
-    else
-        p->lru = c->prev;
-    c->prev = c->next = NULL;
+each_chunk(vv_pyramid *p, void (*fn)(vv_pyramid *p, py_chunk *c)) {
+    for (unsigned b = 0; b < PY_BUCKETS; b++)
+        for (py_chunk *c = p->bucket[b], *next; c; c = next) {
+            next = c->hnext;
+            fn(p, c);
+        }
 }
 
+/* Chunk @p c out of the pyramid's index and freed (out of the cache
+ * already). */
 static void
-lru_push_front(vv_pyramid *p, py_chunk *c) {
-    c->prev = NULL;
-    c->next = p->mru;
-    if (p->mru)
-        p->mru->prev = c;
-    p->mru = c;
-    if (!p->lru)
-        p->lru = c;
-}
-
-static void
-drop_chunk(vv_pyramid *p, py_chunk *c) {
-    lru_unlink(p, c);
+free_chunk(vv_pyramid *p, py_chunk *c) {
     py_chunk **pp = &p->bucket[bucket_of(c->level, c->L)];
     while (*pp != c)
         pp = &(*pp)->hnext;
     *pp = c->hnext;
-    p->held -= c->bytes;
     p->n_ready -= c->state == PY_READY;
     vv_volume_free(c->blk);
     free(c);
+}
+
+/* Chunk @p c out of the cache and the index (lock held). */
+static void
+drop_chunk(vv_pyramid *p, py_chunk *c) {
+    vv_cache_remove(p->cache, &c->ce);
+    free_chunk(p, c);
+}
+
+/* The cache evicts chunk @p e to make room (for this pyramid or another
+ * source): out of the index (lock held). */
+static void
+client_drop(vv_cache_client *cl, vv_cache_entry *e) {
+    vv_pyramid *p = (vv_pyramid *)((char *)cl - offsetof(vv_pyramid, cl));
+    free_chunk(p, (py_chunk *)e);
+    p->st.evictions++;
 }
 
 static py_use *
@@ -206,6 +217,12 @@ find_use(const vv_pyramid *p, int level, uint64_t L) {
 }
 
 static void
+forget_use(vv_pyramid *p, py_chunk *c) {
+    (void)p;
+    c->use = NULL;
+}
+
+static void
 clear_plan(vv_pyramid *p) {
     for (unsigned b = 0; b < PY_BUCKETS; b++)
         while (p->ubucket[b]) {
@@ -214,9 +231,8 @@ clear_plan(vv_pyramid *p) {
             free(u->seq);
             free(u);
         }
-    for (py_chunk *c = p->mru; c; c = c->next)
-        c->use = NULL;
-    p->planned = 0;
+    each_chunk(p, forget_use);
+    p->cl.planned = 0;
     p->cursor = 0;
     free(p->plan_box);
     p->plan_box = NULL;
@@ -235,58 +251,11 @@ next_use(const vv_pyramid *p, py_chunk *c) {
     return u->pos < u->n ? u->seq[u->pos] : INT_MAX;
 }
 
-/* Chunk @p c dropped to make room. Every PY_TRIM_BYTES of chunks dropped,
- * the free memory of glibc's arenas goes back to the system
- * (malloc_trim): the chunks (long-lived, dropped in LRU order) and the
- * nodes' short-lived buffers of similar sizes share the arenas once glibc's
- * dynamic mmap threshold has risen past a chunk, and the holes they left
- * made a 2048^3 u16 level-0 frame's resident set 1151 MiB under a 768 MiB
- * limit (killed in a 1 GiB cgroup); trimmed, 906 MiB, at no cost in time
- * (48.2 s against 48.2 s). Mapping each chunk on its own (mmap/munmap)
- * held it to 811 MiB but doubled the frame's time (munmap's TLB
- * shootdowns against the render threads' page faults). */
-#define PY_TRIM_BYTES ((uint64_t)16 << 20)
-static void
-evict(vv_pyramid *p, py_chunk *c) {
-    p->trim_due += c->bytes;
-    drop_chunk(p, c);
-    p->st.evictions++;
-#ifdef __GLIBC__
-    if (p->trim_due >= PY_TRIM_BYTES) {
-        p->trim_due = 0;
-        malloc_trim(0);
-    }
-#endif
-}
-
-/* Drops unpinned chunks until @p need more bytes fit: with a plan the one
- * needed farthest ahead (or never) first, else the least recently used;
- * 0 when they cannot fit. */
+/* The cache asks when the plan needs chunk @p e next (lock held). */
 static int
-make_room(vv_pyramid *p, uint64_t need) {
-    while (p->held + need > p->capacity) {
-        py_chunk *victim = NULL;
-        int far = -1;
-        for (py_chunk *c = p->lru; c; c = c->prev) {
-            if (c->pins)
-                continue;
-            if (!p->planned) {
-                victim = c;
-                break;
-            }
-            const int nu = next_use(p, c);
-            if (nu > far) {
-                far = nu;
-                victim = c;
-                if (nu == INT_MAX)
-                    break;
-            }
-        }
-        if (!victim)
-            return 0;
-        evict(p, victim);
-    }
-    return 1;
+client_next_use(vv_cache_client *cl, vv_cache_entry *e) {
+    vv_pyramid *p = (vv_pyramid *)((char *)cl - offsetof(vv_pyramid, cl));
+    return next_use(p, (py_chunk *)e);
 }
 
 /* The chunk box of chunk position c: its first voxel and size inside the level. */
@@ -323,7 +292,7 @@ count_read(vv_pyramid *p, int level, uint64_t L, uint64_t file_bytes) {
 static vv_status
 read_chunk(vv_pyramid *p, py_chunk *c, const int cc[3], unsigned char *scratch, int *missing,
            uint64_t *file_bytes) {
-    const pyr_store *st = &p->store;
+    const vv_store *st = &p->store;
     if (!st->parallel)
         pthread_mutex_lock(&p->store_lock);
     const vv_status s = st->read_chunk(st->ctx, c->level, cc, scratch, c->blk->data, c->org,
@@ -341,7 +310,7 @@ read_chunk(vv_pyramid *p, py_chunk *c, const int cc[3], unsigned char *scratch, 
  * chunk's error in order. */
 static vv_status
 decode_chunks(vv_pyramid *p, py_chunk **todo, int n, uint64_t *file_bytes, int *missing) {
-    const pyr_store *st = &p->store;
+    const vv_store *st = &p->store;
     long long first = -1;
     vv_status first_status = VV_OK;
     char first_msg[1024] = "";
@@ -429,21 +398,20 @@ new_entry(const vv_pyramid *p, int level, const int c[3]) {
     chunk_box(l, c, e->org, e->n);
     e->bytes = (uint64_t)e->n[0] * (uint64_t)e->n[1] * (uint64_t)e->n[2] * l->esize;
     e->state = PY_NEW;
-    e->pins = 1;
+    e->ce.pins = 1;
     return e;
 }
 
-/* Entry @p e into the cache (its bytes held, most recently used). */
+/* Entry @p e into the cache (its bytes held, most recently used) and the
+ * pyramid's index. */
 static void
 insert_entry(vv_pyramid *p, py_chunk *e) {
     const unsigned b = bucket_of(e->level, e->L);
-    e->use = p->planned ? find_use(p, e->level, e->L) : NULL;
+    e->use = p->cl.planned ? find_use(p, e->level, e->L) : NULL;
     e->hnext = p->bucket[b];
     p->bucket[b] = e;
-    lru_push_front(p, e);
-    p->held += e->bytes;
-    if (p->held > p->st.peak_bytes)
-        p->st.peak_bytes = p->held;
+    e->ce.ready = 1; /* a chunk being read stays pinned by its reader */
+    vv_cache_insert(p->cache, &p->cl, &e->ce, e->bytes);
 }
 
 /* Entry @p e decoded (by this thread or a loader; lock held): ready, its
@@ -466,7 +434,7 @@ entry_ready(vv_pyramid *p, py_chunk *e, uint64_t file_bytes, int missing) {
 /* Unpins entry @p e; a failed one nobody holds leaves the cache. */
 static void
 unpin(vv_pyramid *p, py_chunk *e) {
-    if (--e->pins == 0 && e->state == PY_FAILED)
+    if (--e->ce.pins == 0 && e->state == PY_FAILED)
         drop_chunk(p, e);
 }
 
@@ -494,10 +462,9 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
                 const int c[3] = {x, y, z};
                 py_chunk *e = find_chunk(p, level, chunk_linear(l, c));
                 if (e) {
-                    lru_unlink(p, e);
-                    lru_push_front(p, e);
+                    vv_cache_touch(p->cache, &e->ce);
                     p->st.chunk_hits += e->state == PY_READY;
-                    e->pins++;
+                    e->ce.pins++;
                 } else if ((e = new_entry(p, level, c))) {
                     need += e->bytes;
                     todo[nt++] = e;
@@ -507,7 +474,7 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
                 }
                 use[nu++] = e;
             }
-    if (s == VV_OK && !make_room(p, need))
+    if (s == VV_OK && !vv_cache_make_room(p->cache, need, 0))
         s = vv_error_set(VV_ERR_LIMIT,
                          "memory limit of %llu bytes: the %d chunks of a box of level %d do not "
                          "fit",
@@ -540,9 +507,9 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
             }
         }
         if (s == VV_OK && nt > 0) {
-            pthread_mutex_unlock(&p->lock);
+            pthread_mutex_unlock(p->lock);
             s = decode_chunks(p, todo, nt, fbytes, missing);
-            pthread_mutex_lock(&p->lock);
+            pthread_mutex_lock(p->lock);
         }
         for (int i = 0; i < nt; i++) {
             py_chunk *e = todo[i];
@@ -559,7 +526,7 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
         if (s != VV_OK || (!waiting && nt == 0))
             break;
         if (waiting && nt == 0)
-            pthread_cond_wait(&p->arrived, &p->lock);
+            pthread_cond_wait(&p->arrived, p->lock);
     }
     for (int i = 0; i < nu && s == VV_OK; i++)
         copy_block(use[i], lo, out);
@@ -591,7 +558,7 @@ set_geometry(vv_volume *v, const vv_pyramid *p, const py_level *l) {
 #define PY_LOOKAHEAD 4
 static void
 prefetch_ahead(vv_pyramid *p) {
-    if (!p->planned || !p->store.prefetch || !p->plan_box)
+    if (!p->cl.planned || !p->store.prefetch || !p->plan_box)
         return;
     for (int b = p->cursor + 1; b < p->plan_n && b <= p->cursor + PY_LOOKAHEAD; b++) {
         const int *box = p->plan_box + 7 * b, level = box[0];
@@ -609,8 +576,13 @@ prefetch_ahead(vv_pyramid *p) {
     }
 }
 
-vv_status
-vv_pyramid_read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume **out) {
+/* Box lo .. hi of @p level into a new volume; @p planned: a read of the
+ * frame's plan (the renderer's, through the multiresolution view), which
+ * moves the plan on and asks the store for the next boxes' chunks ahead;
+ * any other read (a slice, a measurement, another thread) leaves the plan
+ * as it is. */
+static vv_status
+read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume **out, int planned) {
     if (!p || !out || level < 0 || level >= p->n_levels)
         return vv_error_set(VV_ERR_INVALID, "pyramid: bad arguments");
     *out = NULL;
@@ -624,14 +596,14 @@ vv_pyramid_read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3], 
     }
     vv_volume *v = NULL;
     vv_status s = vv_volume_new(&v, dims, l->type);
-    pthread_mutex_lock(&p->lock);
+    pthread_mutex_lock(p->lock);
     if (s == VV_OK)
         s = assemble(p, level, lo, hi, v);
-    if (s == VV_OK)
+    if (s == VV_OK && planned)
         prefetch_ahead(p);
-    if (p->planned)
+    if (planned && p->cl.planned)
         p->cursor++;
-    pthread_mutex_unlock(&p->lock);
+    pthread_mutex_unlock(p->lock);
     if (s != VV_OK) {
         vv_volume_free(v);
         return prefix_once(s, p->store.name, p->path);
@@ -639,6 +611,11 @@ vv_pyramid_read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3], 
     set_geometry(v, p, l);
     *out = v;
     return VV_OK;
+}
+
+vv_status
+vv_pyramid_read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume **out) {
+    return read_box(p, level, lo, hi, out, 0);
 }
 
 static int
@@ -704,6 +681,16 @@ vv_pyramid_level0_box(void *pyramid, const int lo[3], const int hi[3], vv_volume
     return vv_pyramid_read_box(pyramid, 0, lo, hi, out);
 }
 
+const char *
+vv_pyramid_path(const vv_pyramid *p) {
+    return p->path;
+}
+
+vv_cache *
+vv_pyramid_cache(const vv_pyramid *p) {
+    return p->cache;
+}
+
 int
 vv_pyramid_levels(const vv_pyramid *p) {
     return p ? p->n_levels : 0;
@@ -719,34 +706,18 @@ vv_pyramid_stats_get(const vv_pyramid *p, vv_pyramid_stats *st) {
     if (!p || !st)
         return;
     vv_pyramid *q = (vv_pyramid *)p; /* the lock only */
-    pthread_mutex_lock(&q->lock);
+    pthread_mutex_lock(q->lock);
     *st = p->st;
     st->loading = p->q_n - p->q_pos + p->in_flight;
     st->stalled = p->stalled;
-    st->held_bytes = p->held;
+    st->held_bytes = p->cl.held;
+    st->peak_bytes = p->cl.peak;
     st->resident = p->n_ready;
-    st->limit_bytes = p->limit;
-    pthread_mutex_unlock(&q->lock);
+    st->limit_bytes = vv_cache_capacity(p->cache) + p->cl.reserve;
+    pthread_mutex_unlock(q->lock);
 }
 
 /* ---- the loader ------------------------------------------------------------------ */
-
-/* Room for @p need more bytes made by a loader (lock held): drops ready
- * chunks nobody holds that the newest request did not ask for, least
- * recently used first; 0 when the cache is full of wanted chunks. */
-static int
-loader_room(vv_pyramid *p, uint64_t need) {
-    while (p->held + need > p->capacity) {
-        py_chunk *victim = NULL;
-        for (py_chunk *c = p->lru; c && !victim; c = c->prev)
-            if (!c->pins && c->state == PY_READY && c->want != p->want)
-                victim = c;
-        if (!victim)
-            return 0;
-        evict(p, victim);
-    }
-    return 1;
-}
 
 /* A loader thread: takes the queue's chunks soonest first, reserves each in
  * the cache (PY_LOADING, so that a frame needing it waits instead of
@@ -757,10 +728,10 @@ static void *
 loader_main(void *arg) {
     vv_pyramid *p = arg;
     unsigned char *scratch = p->store.scratch ? malloc(p->store.scratch) : NULL;
-    pthread_mutex_lock(&p->lock);
+    pthread_mutex_lock(p->lock);
     while (!p->quit) {
         if (p->q_pos >= p->q_n || (p->store.scratch && !scratch)) {
-            pthread_cond_wait(&p->work, &p->lock);
+            pthread_cond_wait(&p->work, p->lock);
             continue;
         }
         const py_req q = p->queue[p->q_pos++];
@@ -772,7 +743,8 @@ loader_main(void *arg) {
         c[1] = (int)(q.L / (uint64_t)l->nchunks[0] % (uint64_t)l->nchunks[1]);
         c[2] = (int)(q.L / ((uint64_t)l->nchunks[0] * (uint64_t)l->nchunks[1]));
         py_chunk *e = new_entry(p, q.level, c);
-        if (!e || !loader_room(p, e->bytes) || vv_volume_new(&e->blk, e->n, l->type) != VV_OK) {
+        if (!e || !vv_cache_make_room(p->cache, e->bytes, 1) ||
+            vv_volume_new(&e->blk, e->n, l->type) != VV_OK) {
             if (e)
                 vv_volume_free(e->blk);
             free(e);
@@ -784,14 +756,14 @@ loader_main(void *arg) {
             continue;
         }
         e->state = PY_LOADING;
-        e->want = p->want;
+        e->ce.want = p->cl.want;
         insert_entry(p, e);
         p->in_flight++;
-        pthread_mutex_unlock(&p->lock);
+        pthread_mutex_unlock(p->lock);
         int missing = 0;
         uint64_t fbytes = 0;
         const vv_status s = read_chunk(p, e, c, scratch, &missing, &fbytes);
-        pthread_mutex_lock(&p->lock);
+        pthread_mutex_lock(p->lock);
         p->in_flight--;
         if (s == VV_OK) {
             entry_ready(p, e, fbytes, missing);
@@ -807,7 +779,7 @@ loader_main(void *arg) {
         unpin(p, e);
         pthread_cond_broadcast(&p->arrived);
     }
-    pthread_mutex_unlock(&p->lock);
+    pthread_mutex_unlock(p->lock);
     free(scratch);
     return NULL;
 }
@@ -877,8 +849,8 @@ vv_pyramid_request(vv_pyramid *p, int n, const int *level, const int *lo, const 
         free(q);
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     }
-    pthread_mutex_lock(&p->lock);
-    p->want++;
+    pthread_mutex_lock(p->lock);
+    p->cl.want++;
     int nq = 0;
     for (int i = 0; i < n; i++) {
         const py_level *l = &p->lv[level[i]];
@@ -893,7 +865,7 @@ vv_pyramid_request(vv_pyramid *p, int n, const int *level, const int *lo, const 
                         continue;
                     py_chunk *e = find_chunk(p, level[i], L);
                     if (e && e->state != PY_FAILED)
-                        e->want = p->want; /* held: kept by the loader */
+                        e->ce.want = p->cl.want; /* held: kept by the loader */
                     else
                         q[nq++] = (py_req){level[i], L};
                 }
@@ -908,7 +880,7 @@ vv_pyramid_request(vv_pyramid *p, int n, const int *level, const int *lo, const 
     if (nq > 0 && p->n_loaders == 0)
         s = start_loaders(p);
     pthread_cond_broadcast(&p->work);
-    pthread_mutex_unlock(&p->lock);
+    pthread_mutex_unlock(p->lock);
     free(seen);
     return s;
 }
@@ -917,9 +889,9 @@ int
 vv_pyramid_loading(vv_pyramid *p) {
     if (!p)
         return 0;
-    pthread_mutex_lock(&p->lock);
+    pthread_mutex_lock(p->lock);
     const int n = p->q_n - p->q_pos + p->in_flight;
-    pthread_mutex_unlock(&p->lock);
+    pthread_mutex_unlock(p->lock);
     return n;
 }
 
@@ -936,24 +908,24 @@ vv_pyramid_wait(vv_pyramid *p, double seconds) {
         until.tv_sec++;
         until.tv_nsec -= 1000000000L;
     }
-    pthread_mutex_lock(&p->lock);
+    pthread_mutex_lock(p->lock);
     const uint64_t seen = p->arrivals;
     while (p->q_n - p->q_pos + p->in_flight > 0 && p->arrivals == seen)
-        if (pthread_cond_timedwait(&p->arrived, &p->lock, &until) != 0)
+        if (pthread_cond_timedwait(&p->arrived, p->lock, &until) != 0)
             break;
     const int n = p->q_n - p->q_pos + p->in_flight;
-    pthread_mutex_unlock(&p->lock);
+    pthread_mutex_unlock(p->lock);
     return n;
 }
 
 /* Stops the loader: the queue dropped, the chunks in flight finished. */
 static void
 stop_loaders(vv_pyramid *p) {
-    pthread_mutex_lock(&p->lock);
+    pthread_mutex_lock(p->lock);
     p->quit = 1;
     p->q_pos = p->q_n;
     pthread_cond_broadcast(&p->work);
-    pthread_mutex_unlock(&p->lock);
+    pthread_mutex_unlock(p->lock);
     for (int i = 0; i < p->n_loaders; i++)
         pthread_join(p->loader[i], NULL);
     p->n_loaders = 0;
@@ -968,37 +940,37 @@ src_level(void *user, int level) {
 
 static vv_status
 src_read_box(void *user, int level, const int lo[3], const int hi[3], vv_volume **out) {
-    return vv_pyramid_read_box(user, level, lo, hi, out);
+    return read_box(user, level, lo, hi, out, 1);
 }
 
 static int
 src_box_range(void *user, int level, const int lo[3], const int hi[3], float *vmin, float *vmax) {
     vv_pyramid *p = user;
-    pthread_mutex_lock(&p->lock);
+    pthread_mutex_lock(p->lock);
     const int r = box_range(p, level, lo, hi, vmin, vmax);
-    pthread_mutex_unlock(&p->lock);
+    pthread_mutex_unlock(p->lock);
     return r;
 }
 
 static int
 src_missing(void *user, int level, const int lo[3], const int hi[3]) {
     vv_pyramid *p = user;
-    pthread_mutex_lock(&p->lock);
+    pthread_mutex_lock(p->lock);
     const int n = missing_chunks(p, level, lo, hi);
-    pthread_mutex_unlock(&p->lock);
+    pthread_mutex_unlock(p->lock);
     return n;
 }
 
 static void
 src_frame(void *user, int begin) {
     vv_pyramid *p = user;
-    pthread_mutex_lock(&p->lock);
+    pthread_mutex_lock(p->lock);
     clear_plan(p);
     if (begin) {
         p->frame++;
         p->st.frames++;
     }
-    pthread_mutex_unlock(&p->lock);
+    pthread_mutex_unlock(p->lock);
 }
 
 /* Notes box @p seq's use of chunk (level, L). */
@@ -1026,6 +998,11 @@ add_use(vv_pyramid *p, int level, uint64_t L, int seq) {
     return VV_OK;
 }
 
+static void
+find_uses(vv_pyramid *p, py_chunk *c) {
+    c->use = find_use(p, c->level, c->L);
+}
+
 static vv_status
 plan_locked(vv_pyramid *p, int n, const int *level, const int *lo, const int *hi) {
     clear_plan(p);
@@ -1047,8 +1024,7 @@ plan_locked(vv_pyramid *p, int n, const int *level, const int *lo, const int *hi
         clear_plan(p);
         return s;
     }
-    for (py_chunk *c = p->mru; c; c = c->next)
-        c->use = find_use(p, c->level, c->L);
+    each_chunk(p, find_uses);
     if (p->store.prefetch && n > 0 && (p->plan_box = malloc(sizeof(int) * 7 * (size_t)n))) {
         for (int i = 0; i < n; i++) {
             const int ok = level[i] >= 0 && level[i] < p->n_levels;
@@ -1061,7 +1037,7 @@ plan_locked(vv_pyramid *p, int n, const int *level, const int *lo, const int *hi
         }
         p->plan_n = n;
     }
-    p->planned = 1;
+    p->cl.planned = 1;
     p->cursor = 0;
     return VV_OK;
 }
@@ -1069,9 +1045,9 @@ plan_locked(vv_pyramid *p, int n, const int *level, const int *lo, const int *hi
 static vv_status
 src_plan(void *user, int n, const int *level, const int *lo, const int *hi) {
     vv_pyramid *p = user;
-    pthread_mutex_lock(&p->lock);
+    pthread_mutex_lock(p->lock);
     const vv_status s = plan_locked(p, n, level, lo, hi);
-    pthread_mutex_unlock(&p->lock);
+    pthread_mutex_unlock(p->lock);
     return s;
 }
 
@@ -1083,9 +1059,9 @@ src_request(void *user, int n, const int *level, const int *lo, const int *hi) {
 static int
 src_stalled(void *user) {
     vv_pyramid *p = user;
-    pthread_mutex_lock(&p->lock);
+    pthread_mutex_lock(p->lock);
     const int r = p->stalled;
-    pthread_mutex_unlock(&p->lock);
+    pthread_mutex_unlock(p->lock);
     return r;
 }
 
@@ -1115,9 +1091,12 @@ vv_pyramid_free(vv_pyramid *p) {
         return;
     stop_loaders(p);
     free(p->queue);
+    pthread_mutex_lock(p->lock);
     clear_plan(p);
-    while (p->mru)
-        drop_chunk(p, p->mru);
+    each_chunk(p, drop_chunk);
+    pthread_mutex_unlock(p->lock);
+    vv_cache_client_remove(&p->cl);
+    vv_cache_free(p->cache);
     for (int i = 0; i < p->n_levels; i++) {
         py_level *l = &p->lv[i];
         vv_volume_free(l->hdr);
@@ -1127,35 +1106,11 @@ vv_pyramid_free(vv_pyramid *p) {
         free(l->read_frame);
         free(l->frame_reads);
     }
-    vv_pyr_store_close(&p->store);
-    pthread_mutex_destroy(&p->lock);
+    vv_store_close(&p->store);
     pthread_mutex_destroy(&p->store_lock);
     pthread_cond_destroy(&p->work);
     pthread_cond_destroy(&p->arrived);
     free(p);
-}
-
-vv_status
-vv_pyr_store_level(pyr_store *st, int level, vv_voxel_type type, const int dims[3],
-                   const int cdims[3]) {
-    const int one[3] = {1, 1, 1};
-    const vv_status s = vv_volume_new(&st->lv[level].hdr, one, type);
-    if (s != VV_OK)
-        return s;
-    memcpy(st->lv[level].hdr->dims, dims, sizeof st->lv[level].hdr->dims); /* geometry only */
-    memcpy(st->lv[level].cdims, cdims, sizeof st->lv[level].cdims);
-    return VV_OK;
-}
-
-void
-vv_pyr_store_close(pyr_store *st) {
-    for (int i = 0; i < VV_PYRAMID_MAX_LEVELS; i++) {
-        vv_volume_free(st->lv[i].hdr);
-        st->lv[i].hdr = NULL;
-    }
-    if (st->close && st->ctx)
-        st->close(st->ctx);
-    st->ctx = NULL;
 }
 
 /* Level @p i's layout, header and chunk tables from the store's level;
@@ -1163,7 +1118,7 @@ vv_pyr_store_close(pyr_store *st) {
 static vv_status
 open_level(vv_pyramid *p, int i) {
     py_level *l = &p->lv[i];
-    pyr_store_level *sl = &p->store.lv[i];
+    vv_store_level *sl = &p->store.lv[i];
     if (!sl->hdr)
         return vv_error_set(VV_ERR_FORMAT, "level %d: no geometry", i);
     l->type = sl->hdr->type;
@@ -1248,7 +1203,7 @@ working_set(const vv_pyramid *p, int cells, uint64_t *chunks) {
 }
 
 static vv_status
-pyramid_open(vv_pyramid *p, uint64_t memory_limit, vv_load_info *info) {
+pyramid_open(vv_pyramid *p, vv_load_info *info) {
     vv_status s = VV_OK;
     if (p->store.n_levels < 1 || p->store.n_levels > VV_PYRAMID_MAX_LEVELS)
         return vv_error_set(VV_ERR_LIMIT, "%d levels (1 .. %d are read)", p->store.n_levels,
@@ -1259,7 +1214,7 @@ pyramid_open(vv_pyramid *p, uint64_t memory_limit, vv_load_info *info) {
         if (s != VV_OK)
             return s;
     }
-    p->limit = memory_limit ? memory_limit : (uint64_t)1 << 30;
+    p->limit = vv_cache_limit(p->cache);
     /* the largest node (64, 32, 16 or 8 cells) whose box, working set and
      * chunks fit the limit */
     uint64_t ws = 0, chunks = 0;
@@ -1283,7 +1238,11 @@ pyramid_open(vv_pyramid *p, uint64_t memory_limit, vv_load_info *info) {
     if (ws * boxes + chunks > p->limit)
         boxes = 1;
     p->boxes = (int)boxes;
-    p->capacity = p->limit - ws * boxes;
+    /* the cache holds the rest, with every other source's pieces */
+    p->cl.reserve = ws * boxes;
+    p->cl.next_use = client_next_use;
+    p->cl.drop = client_drop;
+    vv_cache_client_add(p->cache, &p->cl);
     /* the range: the store's (an omero window), else the coarsest level's */
     p->range[0] = 0;
     p->range[1] = 1;
@@ -1314,23 +1273,25 @@ pyramid_open(vv_pyramid *p, uint64_t memory_limit, vv_load_info *info) {
 }
 
 vv_status
-vv_pyramid_open_store(vv_pyramid **out, pyr_store *st, const char *path, uint64_t memory_limit,
+vv_pyramid_open_store(vv_pyramid **out, vv_store *st, const char *path, vv_cache *cache,
                       vv_load_info *info) {
     *out = NULL;
-    const char *name = st->name ? st->name : "pyramid";
+    char name[64]; /* st->name is the store's, closed on failure */
+    snprintf(name, sizeof name, "%s", st->name ? st->name : "pyramid");
     vv_pyramid *p = strlen(path) < sizeof(((vv_pyramid *)0)->path) ? calloc(1, sizeof *p) : NULL;
     if (!p) {
-        vv_pyr_store_close(st);
+        vv_store_close(st);
         return vv_error_set(VV_ERR_NOMEM, "%s: %s: out of memory", name, vv_path_basename(path));
     }
     snprintf(p->path, sizeof p->path, "%s", path);
-    pthread_mutex_init(&p->lock, NULL);
+    p->cache = vv_cache_ref(cache ? cache : vv_cache_process());
+    p->lock = vv_cache_mutex(p->cache);
     pthread_mutex_init(&p->store_lock, NULL);
     pthread_cond_init(&p->work, NULL);
     pthread_cond_init(&p->arrived, NULL);
     p->store = *st; /* taken */
     memset(st, 0, sizeof *st);
-    vv_status s = pyramid_open(p, memory_limit, info);
+    vv_status s = pyramid_open(p, info);
     if (s != VV_OK) {
         vv_pyramid_free(p);
         return prefix_once(s, name, path);
@@ -1340,50 +1301,57 @@ vv_pyramid_open_store(vv_pyramid **out, pyr_store *st, const char *path, uint64_
 }
 
 vv_status
-vv_pyr_store_open_local(pyr_store *st, const char *path, int channel, int time,
-                        vv_load_info *info) {
-    if (vv_vvb_probe(path))
-        return vv_vvb_pyramid_store(st, path, channel, time);
-    return vv_h5_is_hdf5(path) ? vv_h5_pyramid_store(st, path, channel, time)
-                               : vv_zr_pyramid_store(st, path, channel, time, info);
-}
-
-int
-vv_pyramid_probe(const char *path) {
-    struct stat st;
-    char f[4200];
-    if (!path || stat(path, &st) != 0)
-        return 0;
-    if (!S_ISDIR(st.st_mode))
-        return S_ISREG(st.st_mode) && (vv_h5_is_hdf5(path) || vv_vvb_probe(path) > 1);
-    snprintf(f, sizeof f, "%s/.zattrs", path);
-    if (stat(f, &st) == 0)
-        return 1;
-    snprintf(f, sizeof f, "%s/.zarray", path);
-    return stat(f, &st) == 0;
-}
-
-vv_status
-vv_pyramid_open(vv_pyramid **out, const char *path, int channel, int time, uint64_t memory_limit,
-                vv_load_info *info) {
-    if (!out || !path)
-        return vv_error_set(VV_ERR_INVALID, "pyramid: NULL argument");
+vv_store_read_level(vv_store *st, int level, vv_volume **out) {
     *out = NULL;
-    /* a .vvb is our own format, read in this process as the bricked reader
-     * reads it (docs/security.md); the others through their libraries in a
-     * sandboxed reader */
-    const int vvb = vv_vvb_probe(path) > 0, h5 = !vvb && vv_h5_is_hdf5(path);
-    const char *name = vvb ? "vvb" : h5 ? "hdf5" : "zarr";
-    if (strlen(path) >= 4096)
-        return vv_error_set(VV_ERR_LIMIT, "%s: path too long", name);
-    pyr_store st;
-    memset(&st, 0, sizeof st);
-    vv_status s = !vvb && vv_sandbox_wanted(NULL)
-                      ? vv_sandbox_store_open(&st, path, channel, time, info)
-                      : vv_pyr_store_open_local(&st, path, channel, time, info);
+    if (!st || level < 0 || level >= st->n_levels || !st->lv[level].hdr)
+        return vv_error_set(VV_ERR_INVALID, "store: no level %d", level);
+    const vv_volume *h = st->lv[level].hdr;
+    const int *cd = st->lv[level].cdims;
+    vv_volume *v = NULL;
+    vv_status s = vv_volume_new(&v, h->dims, h->type);
+    if (s != VV_OK)
+        return s;
+    size_t chunk = vv_voxel_type_size(h->type);
+    for (int k = 0; k < 3; k++)
+        chunk *= (size_t)(cd[k] < h->dims[k] ? cd[k] : h->dims[k]);
+    unsigned char *buf = malloc(chunk), *scratch = st->scratch ? malloc(st->scratch) : NULL;
+    if (!buf || (st->scratch && !scratch))
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+    const size_t vs = vv_voxel_type_size(h->type);
+    for (int z = 0; s == VV_OK && z * cd[2] < h->dims[2]; z++)
+        for (int y = 0; s == VV_OK && y * cd[1] < h->dims[1]; y++)
+            for (int x = 0; s == VV_OK && x * cd[0] < h->dims[0]; x++) {
+                const int c[3] = {x, y, z}, org[3] = {x * cd[0], y * cd[1], z * cd[2]};
+                int n[3];
+                for (int k = 0; k < 3; k++)
+                    n[k] = (org[k] + cd[k] > h->dims[k] ? h->dims[k] : org[k] + cd[k]) - org[k];
+                int missing = 0;
+                uint64_t bytes = 0;
+                s = st->read_chunk(st->ctx, level, c, scratch, buf, org, n, &missing, &bytes);
+                for (int kz = 0; s == VV_OK && kz < n[2]; kz++)
+                    for (int ky = 0; ky < n[1]; ky++)
+                        memcpy((unsigned char *)v->data +
+                                   (((size_t)(org[2] + kz) * (size_t)h->dims[1] +
+                                     (size_t)(org[1] + ky)) *
+                                        (size_t)h->dims[0] +
+                                    (size_t)org[0]) *
+                                       vs,
+                               buf + ((size_t)kz * (size_t)n[1] + (size_t)ky) * (size_t)n[0] * vs,
+                               (size_t)n[0] * vs);
+            }
+    free(buf);
+    free(scratch);
     if (s != VV_OK) {
-        vv_pyr_store_close(&st);
-        return prefix_once(s, name, path);
+        vv_volume_free(v);
+        return s;
     }
-    return vv_pyramid_open_store(out, &st, path, memory_limit, info);
+    memcpy(v->spacing, h->spacing, sizeof v->spacing);
+    memcpy(v->origin, h->origin, sizeof v->origin);
+    memcpy(v->direction, h->direction, sizeof v->direction);
+    v->unit = h->unit;
+    v->space = h->space;
+    v->modification = VV_MOD_ORIGINAL;
+    vv_volume_update_range(v);
+    *out = v;
+    return VV_OK;
 }

@@ -5,11 +5,13 @@
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/types.h>
 
 #include "core/internal.h"
+#include "io/bricked.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 
@@ -103,11 +105,47 @@ raw_read_record(vv_volume **out, const char *path, const vv_load_options *opt) {
     return vv_raw_read(out, path, &opt->raw);
 }
 
-const vv_volume_format vv_volume_format_raw = {
+/* A raw file's layout from its description (the raw row's raw_layout). */
+vv_status
+vv_raw_layout(const char *path, const vv_raw_params *raw, vv_volume **header, char **data_path,
+              uint64_t *offset, int *big_endian) {
+    const int one[3] = {1, 1, 1};
+    *header = NULL;
+    *data_path = NULL;
+    vv_status s = vv_volume_check_limits(raw->dims, raw->type, NULL);
+    if (s == VV_OK)
+        s = vv_volume_new(header, one, raw->type);
+    if (s == VV_OK && !(*data_path = strdup(path)))
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+    if (s != VV_OK) {
+        vv_volume_free(*header);
+        *header = NULL;
+        return s;
+    }
+    vv_volume *h = *header;
+    memcpy(h->dims, raw->dims, sizeof raw->dims);
+    memcpy(h->spacing, raw->spacing, sizeof raw->spacing);
+    memcpy(h->origin, raw->origin, sizeof raw->origin);
+    *offset = raw->header_skip;
+    *big_endian = raw->big_endian != 0;
+    return VV_OK;
+}
+
+static vv_status
+raw_layout_record(const char *path, const vv_load_options *opt, vv_volume **header,
+                  char **data_path, uint64_t *offset, int *big_endian) {
+    if (!opt->has_raw)
+        return vv_error_set(VV_ERR_INVALID, "raw: %s: the dimensions and voxel type are needed",
+                            vv_path_basename(path));
+    return vv_raw_layout(path, &opt->raw, header, data_path, offset, big_endian);
+}
+
+const vv_format_record vv_format_raw = {
     .version = VV_FORMAT_RECORD_VERSION,
     .name = "raw",
     .title = "raw",
     .doc = "raw voxels described by --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]",
     .flags = VV_FORMAT_FLAG_DESCRIBED,
     .read = raw_read_record,
+    .raw_layout = raw_layout_record,
 };

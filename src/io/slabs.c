@@ -162,7 +162,9 @@ stream_close(vv_slabs *s) {
  * such NRRD (vv_volume_load then reads its slabs). -1: an error. */
 static int
 open_stream_nrrd(vv_slabs *s) {
-    if (s->opt.has_raw || vv_format_detect(s->path) != VV_FORMAT_NRRD)
+    /* one 3-D volume: a channel or step of a compressed NRRD is read whole */
+    if (s->opt.has_raw || s->opt.channel > 0 || s->opt.time > 0 ||
+        vv_format_detect(s->path) != VV_FORMAT_NRRD)
         return 0;
     vv_volume *h = NULL;
     char *data = NULL;

@@ -545,7 +545,7 @@ slc_write_record(const vv_volume *v, const char *path, const vv_save_options *op
 
 static const char *const slc_extensions[] = {"slc", NULL};
 
-const vv_volume_format vv_volume_format_slc = {
+const vv_format_record vv_format_slc = {
     .version = VV_FORMAT_RECORD_VERSION,
     .name = "slc",
     .title = "SLC",

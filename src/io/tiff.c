@@ -1301,7 +1301,7 @@ tiff_write_record(const vv_volume *v, const char *path, const vv_save_options *o
 static const char *const tiff_extensions[] = {"tif", "tiff", NULL};
 static const char *const tiff_aliases[] = {"tif", NULL};
 
-const vv_volume_format vv_volume_format_tiff = {
+const vv_format_record vv_format_tiff = {
     .version = VV_FORMAT_RECORD_VERSION,
     .name = "tiff",
     .title = "TIFF",

@@ -1,7 +1,7 @@
 /*
- * The generic load and save entry points, over the format table
- * (formats.c): a format's record reads, fits and writes; nothing here knows
- * a particular format.
+ * The generic load and save entry points of volumes, over the format table
+ * (formats.c): a format's record reads (here or in the reader sandbox:
+ * transport.c), fits and writes; nothing here knows a particular format.
  */
 #include <errno.h>
 #include <stdio.h>
@@ -10,7 +10,7 @@
 #include <sys/stat.h>
 
 #include "core/internal.h"
-#include "io/sandbox.h"
+#include "io/transport.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 
@@ -40,34 +40,11 @@ vv_save_options_init(vv_save_options *o) {
     o->compress = -1;
 }
 
-/* "A, B or C" of the titles of the formats with (@p with) or without the
- * flags in @p mask, among those that can be detected when @p detectable. */
-static void
-title_list(char *buf, size_t cap, unsigned mask, int with, int detectable) {
-    int n;
-    const vv_volume_format *const *t = vv_volume_format_table(&n);
-    const vv_volume_format *pick[64];
-    int k = 0;
-    for (int i = 0; i < n && k < 64; i++)
-        if (!!(t[i]->flags & mask) == with && (!detectable || t[i]->looks_like))
-            pick[k++] = t[i];
-    buf[0] = '\0';
-    for (int i = 0; i < k; i++) {
-        size_t len = strlen(buf);
-        snprintf(buf + len, cap - len, "%s%s",
-                 i == 0      ? ""
-                 : i + 1 < k ? ", "
-                             : " or ",
-                 pick[i]->title);
-    }
-}
-
-/* The record of @p f (a valid id). */
-static const vv_volume_format *
+/* The record of volume format @p f, or NULL. */
+static const vv_format_record *
 format_of(vv_format f) {
-    int n;
-    const vv_volume_format *const *t = vv_volume_format_table(&n);
-    return (int)f >= 1 && (int)f <= n ? t[(int)f - 1] : NULL;
+    const vv_format_record *r = vv_format_record_of(f);
+    return r && r->holds == VV_DATA_VOLUME ? r : NULL;
 }
 
 /* Checks @p path can be opened (a folder only by a format that reads folders). */
@@ -87,10 +64,10 @@ check_input(const char *path, vv_format f, int *is_dir) {
         }
         fclose(fp);
     }
-    const vv_volume_format *r = format_of(f);
+    const vv_format_record *r = format_of(f);
     if (*is_dir && r && !(r->flags & VV_FORMAT_FLAG_FOLDER)) {
         char list[256];
-        title_list(list, sizeof list, VV_FORMAT_FLAG_FOLDER, 1, 0);
+        io_format_titles(list, sizeof list, VV_FORMAT_FLAG_FOLDER, 1, 0);
         return vv_error_set(VV_ERR_INVALID,
                             "load: %s is a folder (only %s stacks are read from "
                             "folders)",
@@ -147,7 +124,7 @@ finish_axes(vv_volume **out, const char *path, const vv_load_options *opt, vv_lo
 
 /* A range of slices asked of a format that reads whole volumes only. */
 static vv_status
-slices_unsupported(const char *path, const vv_volume_format *r) {
+slices_unsupported(const char *path, const vv_format_record *r) {
     return vv_error_set(VV_ERR_UNSUPPORTED,
                         "load: %s: %s is read whole, not a range of slices (TIFF stacks are)",
                         vv_path_basename(path), r->title);
@@ -175,7 +152,7 @@ vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
     if (f != VV_FORMAT_AUTO && !format_of(f))
         return vv_error_set(VV_ERR_INVALID, "load: %s: no format of id %d", vv_path_basename(path),
                             (int)f);
-    const vv_volume_format *r = format_of(f);
+    const vv_format_record *r = format_of(f);
     if (r && (r->flags & VV_FORMAT_FLAG_DESCRIBED) && !opt->has_raw)
         return vv_error_set(VV_ERR_INVALID,
                             "load: %s: %s format needs the dimensions and voxel type",
@@ -189,51 +166,39 @@ vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
     vv_status s = check_input(path, f, &is_dir);
     if (s != VV_OK)
         return s;
-    if (f == VV_FORMAT_AUTO && vv_sandbox_wanted(NULL)) {
-        /* signatures here; the deep tests, which may call a third-party
-         * parser, in the sandbox with the read */
-        vv_format g = vv_format_detect_signature(path);
-        if (!format_of(g) || vv_sandbox_wanted(format_of(g))) {
-            s = vv_sandbox_volume_load(out, path, format_of(g) ? g : VV_FORMAT_AUTO, opt);
-            return s == VV_OK ? finish_axes(out, path, &with_info, want) : s;
-        }
-        f = g;
-        r = format_of(f);
-    } else if (r && vv_sandbox_wanted(r)) {
-        s = vv_sandbox_volume_load(out, path, f, opt);
-        return s == VV_OK ? finish_axes(out, path, &with_info, want) : s;
-    }
     if (f == VV_FORMAT_AUTO) {
-        f = vv_format_detect(path);
+        /* signatures here; the deep tests, which may call a third-party
+         * parser, in the reader sandbox with the read */
+        f = vv_format_detect_kind(path, VV_DATA_VOLUME, 0);
+        if (f == VV_FORMAT_UNKNOWN && io_sandboxed(NULL)) {
+            const vv_format_record *used = NULL;
+            s = io_read_volume(NULL, out, path, opt, &used);
+            r = used;
+            goto read;
+        }
+        if (f == VV_FORMAT_UNKNOWN)
+            f = vv_format_detect_kind(path, VV_DATA_VOLUME, 1);
         if (f == VV_FORMAT_UNKNOWN && opt->has_raw)
             f = VV_FORMAT_RAW;
         r = format_of(f);
     }
-    if (!r) {
-        char list[512];
-        if (is_dir) {
-            title_list(list, sizeof list, VV_FORMAT_FLAG_FOLDER, 1, 0);
-            return vv_error_set(VV_ERR_FORMAT, "%s: no %s files in the folder", path, list);
-        }
-        title_list(list, sizeof list, VV_FORMAT_FLAG_DESCRIBED, 0, 1);
-        return vv_error_set(VV_ERR_FORMAT,
-                            "cannot tell the format of %s (not %s; use --raw for raw data)", path,
-                            list);
-    }
+    if (!r)
+        return io_unknown_volume_format(path, is_dir);
     if (!r->read)
         return vv_error_set(VV_ERR_UNSUPPORTED, "load: %s: VolVis writes %s but does not read it",
                             vv_path_basename(path), r->title);
     if (opt->z_count > 0 && !(r->flags & VV_FORMAT_FLAG_SLICES))
         return slices_unsupported(path, r);
-    s = r->read(out, path, opt);
+    s = io_read_volume(r, out, path, opt, NULL);
+read:
     if (s != VV_OK) {
         vv_volume_free(*out);
         *out = NULL;
         return s;
     }
     if (!*out)
-        return vv_error_set(VV_ERR_FORMAT, "%s: %s: reader returned no volume", r->name,
-                            vv_path_basename(path));
+        return vv_error_set(VV_ERR_FORMAT, "%s: %s: reader returned no volume",
+                            r ? r->name : "load", vv_path_basename(path));
     /* every reader computes range[]; a reader that left it unset gets it here
      * (a second pass over a large volume costs as much as a fast reader) */
     if ((*out)->range[0] == 0 && (*out)->range[1] == 0)
@@ -244,9 +209,10 @@ vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
 vv_format
 vv_format_from_extension(const char *path) {
     int n;
-    const vv_volume_format *const *t = vv_volume_format_table(&n);
+    const vv_format_record *const *t = vv_format_table(&n);
     for (int i = 0; i < n; i++)
-        for (const char *const *e = t[i]->extensions; t[i]->write && e && *e; e++)
+        for (const char *const *e = t[i]->extensions;
+             t[i]->holds == VV_DATA_VOLUME && t[i]->write && e && *e; e++)
             if (vv_format_path_has_ext(path, *e))
                 return (vv_format)(i + 1);
     return VV_FORMAT_UNKNOWN;
@@ -256,13 +222,15 @@ vv_format_from_extension(const char *path) {
 static void
 writable_extensions(char *buf, size_t cap) {
     int n, k = 0, total = 0;
-    const vv_volume_format *const *t = vv_volume_format_table(&n);
+    const vv_format_record *const *t = vv_format_table(&n);
     for (int i = 0; i < n; i++)
-        for (const char *const *e = vv_volume_format_write_extensions(t[i]); e && *e; e++)
+        for (const char *const *e = vv_format_record_write_extensions(t[i]);
+             t[i]->holds == VV_DATA_VOLUME && e && *e; e++)
             total++;
     buf[0] = '\0';
     for (int i = 0; i < n; i++)
-        for (const char *const *e = vv_volume_format_write_extensions(t[i]); e && *e; e++, k++) {
+        for (const char *const *e = vv_format_record_write_extensions(t[i]);
+             t[i]->holds == VV_DATA_VOLUME && e && *e; e++, k++) {
             size_t len = strlen(buf);
             snprintf(buf + len, cap - len, "%s.%s",
                      k == 0          ? ""
@@ -290,7 +258,7 @@ vv_volume_save_with(const vv_volume *v, const char *path, const vv_save_options 
                                 vv_path_basename(path), list);
         }
     }
-    const vv_volume_format *r = format_of(o.format);
+    const vv_format_record *r = format_of(o.format);
     if (!r || !r->write)
         return vv_error_set(VV_ERR_UNSUPPORTED, "save: %s: writing %s is not supported",
                             vv_path_basename(path), vv_format_name(o.format));
@@ -307,4 +275,36 @@ vv_volume_save(const vv_volume *v, const char *path, vv_format format, int stric
     o.format = format;
     o.strict = strict;
     return vv_volume_save_with(v, path, &o);
+}
+
+vv_status
+vv_volume_save_boxes(const vv_volume *hdr, vv_box_reader read, void *ctx, const char *path,
+                     const vv_save_options *opt) {
+    if (!hdr || !read || !path)
+        return vv_error_set(VV_ERR_INVALID, "save: NULL argument");
+    vv_save_options o;
+    vv_save_options_init(&o);
+    if (opt)
+        o = *opt;
+    vv_format f = o.format;
+    if (f == VV_FORMAT_AUTO) {
+        int n;
+        const vv_format_record *const *t = vv_format_table(&n);
+        f = VV_FORMAT_UNKNOWN;
+        for (int i = 0; i < n && f == VV_FORMAT_UNKNOWN; i++)
+            for (const char *const *e = t[i]->extensions; t[i]->write_boxes && e && *e; e++)
+                if (vv_format_path_has_ext(path, *e))
+                    f = (vv_format)(i + 1);
+        if (f == VV_FORMAT_UNKNOWN)
+            return vv_error_set(VV_ERR_INVALID,
+                                "save: %s: cannot tell a format that writes box by box from the "
+                                "extension (.zarr, .ome.zarr or .vvb)",
+                                vv_path_basename(path));
+    }
+    const vv_format_record *r = format_of(f);
+    if (!r || !r->write_boxes)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "save: %s: %s is written from a volume in memory, not box by box",
+                            vv_path_basename(path), r ? r->title : vv_format_name(f));
+    return r->write_boxes(hdr, read, ctx, path, &o);
 }

@@ -449,7 +449,9 @@ vtk_looks_like(const vv_format_probe *p, int deep) {
     size_t i = 0;
     while (i < p->n && isspace(p->head[i]))
         i++;
-    return p->n - i >= 14 && !memcmp(p->head + i, "# vtk DataFile", 14);
+    /* the grid row (grid_vtk.c) reads the unstructured ones */
+    return p->n - i >= 14 && !memcmp(p->head + i, "# vtk DataFile", 14) &&
+           !strstr(p->text, "UNSTRUCTURED_GRID");
 }
 
 static vv_status
@@ -477,7 +479,7 @@ vtk_write_record(const vv_volume *v, const char *path, const vv_save_options *op
 
 static const char *const vtk_extensions[] = {"vtk", NULL};
 
-const vv_volume_format vv_volume_format_vtk = {
+const vv_format_record vv_format_vtk = {
     .version = VV_FORMAT_RECORD_VERSION,
     .name = "vtk",
     .title = "VTK legacy",

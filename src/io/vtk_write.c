@@ -344,7 +344,7 @@ vti_write_record(const vv_volume *v, const char *path, const vv_save_options *op
 
 static const char *const vti_extensions[] = {"vti", NULL};
 
-const vv_volume_format vv_volume_format_vti = {
+const vv_format_record vv_format_vti = {
     .version = VV_FORMAT_RECORD_VERSION,
     .name = "vti",
     .title = "VTK XML image data",

@@ -86,7 +86,7 @@ omero_range(const char *path, int channel, double r[2]) {
 }
 
 vv_status
-vv_zr_pyramid_store(pyr_store *st, const char *path, int channel, int time, vv_load_info *info) {
+vv_zr_pyramid_store(vv_store *st, const char *path, int channel, int time, vv_load_info *info) {
     memset(st, 0, sizeof *st);
     st->name = "zarr";
     int n_levels = 1;
@@ -110,7 +110,7 @@ vv_zr_pyramid_store(pyr_store *st, const char *path, int channel, int time, vv_l
             return s;
         z->n_levels = st->n_levels = i + 1;
         const zp_level *l = &z->lv[i];
-        if ((s = vv_pyr_store_level(st, i, l->a.type, l->J.dims, l->J.cdims)) != VV_OK)
+        if ((s = vv_store_set_level(st, i, l->a.type, l->J.dims, l->J.cdims)) != VV_OK)
             return s;
         vv_zr_geometry(&l->J, st->lv[i].hdr);
         st->scratch = l->J.cbytes > st->scratch ? l->J.cbytes : st->scratch;

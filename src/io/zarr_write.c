@@ -831,7 +831,13 @@ zarr_write_record(const vv_volume *v, const char *path, const vv_save_options *o
 
 static const char *const zarr_extensions[] = {"ome.zarr", "zarr", NULL};
 
-const vv_volume_format vv_volume_format_ome_zarr = {
+static vv_status
+zarr_write_boxes_record(const vv_volume *hdr, vv_box_reader read, void *ctx, const char *path,
+                        const vv_save_options *opt) {
+    return vv_ome_zarr_write_boxes(hdr, read, ctx, path, opt);
+}
+
+const vv_format_record vv_format_ome_zarr = {
     .version = VV_FORMAT_RECORD_VERSION,
     .name = "zarr",
     .title = "OME-Zarr",
@@ -844,4 +850,6 @@ const vv_volume_format vv_volume_format_ome_zarr = {
     .fits = zarr_fits,
     .read = vv_ome_zarr_read,
     .write = zarr_write_record,
+    .write_boxes = zarr_write_boxes_record,
+    .open_store = vv_zr_pyramid_store,
 };

@@ -1,22 +1,30 @@
 /*
  * VolVis format records: the implementor's side of file formats (the user's
- * side is include/volvis/io.h and grid.h). Every volume format and every
- * grid format is one record in one table (src/io/formats.c and
- * src/io/grid_formats.c), after Teem's nrrd/format.c: a name, the extensions,
- * a looks-like test, a fits-into test, read and write. Detection, loading,
- * saving, the names --format accepts and the lists printed by
- * `volvis convert --help` and `volvis info --help` all come from the tables.
+ * side is vv_open and vv_volume_load in include/volvis/io.h, vv_grid_load
+ * in grid.h, vv_mesh_load in mesh.h). Everything that opens is one record
+ * in ONE table (src/io/formats.c), after Teem's nrrd/format.c: a name, the
+ * extensions, a looks-like test by signature, what it holds (a volume, a
+ * grid, a mesh), and what it can do: read whole, write, write box by box,
+ * open a chunked store (a pyramid: OME-Zarr, .vvb levels, BigDataViewer
+ * HDF5 and its XML, Imaris), open by bricks (.vvb, raw, raw NRRD).
+ * Detection (once a file: vv_format_detect), vv_open, loading, saving, the
+ * names --format accepts and the lists printed by --help all come from the
+ * table. A record flagged VV_FORMAT_FLAG_THIRD_PARTY is read through the
+ * reader sandbox (src/sandbox: the row's read runs in volvis-reader); its
+ * reader never knows it.
  *
- * Adding a volume format: write src/io/<format>.c defining
- *     const vv_volume_format vv_volume_format_<name> = {VV_FORMAT_RECORD_VERSION, ...};
- * and add one row, X(<name>), to VV_VOLUME_FORMAT_TABLE in src/io/formats.c.
- * Its id (vv_format) is its row; `--format <name>` and vv_format_parse
- * find it by name. Grids alike (vv_grid_format_record, grid_formats.c).
+ * Adding a format: write src/io/<format>.c defining
+ *     const vv_format_record vv_format_<name> = {VV_FORMAT_RECORD_VERSION, ...};
+ * and add one row, X(<name>), to VV_FORMAT_TABLE in src/io/formats.c. Its id
+ * (vv_format) is its row; `--format <name>` and vv_format_parse find it by
+ * name. A multiresolution format fills open_store (a vv_store: its levels
+ * and one chunk's voxels); the pyramid, its cache and the renderers do the
+ * rest (tests/io/test_toy_format.c adds one in one file).
  *
  * Versioning (libgit2's sys/ structs): a record starts with the version of
  * this header it was written against; optional members may be NULL.
  *
- * Thread-safety: the tables are immutable; the functions of a record are
+ * Thread-safety: the table is immutable; the functions of a record are
  * reentrant.
  */
 #ifndef VOLVIS_SYS_FORMAT_H
@@ -26,15 +34,18 @@
 
 #include "../grid.h"
 #include "../io.h"
+#include "../mesh.h"
+#include "../source.h"
+#include "source.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
 /** The version of the records of this header. */
-#define VV_FORMAT_RECORD_VERSION 1
+#define VV_FORMAT_RECORD_VERSION 2
 
-/** What a format record says about its format (vv_volume_format.flags). */
+/** What a format record says about its format (vv_format_record.flags). */
 enum {
     /**
      * Parsed by a third-party library (Teem, nifti_clib, libtiff, GDCM,
@@ -52,7 +63,10 @@ enum {
     VV_FORMAT_FLAG_GZIP = 1u << 3,
     /** The reader honours vv_load_options.z_first and z_count, decoding
      *  only the slices asked for (a volume read slab by slab). */
-    VV_FORMAT_FLAG_SLICES = 1u << 4
+    VV_FORMAT_FLAG_SLICES = 1u << 4,
+    /** Made to be read out of core: vv_open's VV_OPEN_DEFAULT opens it so
+     *  (.vvb), where other formats are read whole. */
+    VV_FORMAT_FLAG_OUT_OF_CORE = 1u << 5
 };
 
 /** What detection knows of a path, for the looks_like tests. */
@@ -68,12 +82,22 @@ typedef struct vv_format_probe {
 /** Bytes of a file's head given to the looks_like tests. */
 #define VV_FORMAT_PROBE_BYTES 1024
 
+/* ---- the record --------------------------------------------------------------------- */
+
+/** What a format's files hold. */
+typedef enum vv_data_kind {
+    VV_DATA_VOLUME = 0, /**< a volume (vv_volume; channels, time steps, levels) */
+    VV_DATA_GRID = 1,   /**< an irregular grid (vv_grid) */
+    VV_DATA_MESH = 2,   /**< a triangle mesh (vv_mesh) */
+} vv_data_kind;
+
 /**
- * A volume format. Required: version, name, title, doc, and read or write.
- * looks_like NULL: never detected (raw). fits and write NULL: not written.
- * read NULL: written only (no built-in format is, today).
+ * One format. Required: version, name, title, doc, and for what it holds
+ * (holds) a way in or out: a volume format read or write (or open_store);
+ * a grid format read_grid; a mesh format read_mesh. looks_like NULL: never
+ * detected (raw). Everything else optional (NULL: it cannot).
  */
-typedef struct vv_volume_format {
+typedef struct vv_format_record {
     int version;                   /**< VV_FORMAT_RECORD_VERSION */
     const char *name;              /**< lower-case, as --format takes it: "nrrd" */
     const char *title;             /**< as people write it, for messages: "NRRD", "MetaImage" */
@@ -82,6 +106,7 @@ typedef struct vv_volume_format {
     const char *const *aliases;    /**< other names --format takes; NULL-terminated, may be NULL */
     const char *doc;               /**< one line: what it is and what it holds */
     unsigned flags;                /**< VV_FORMAT_FLAG_* */
+    vv_data_kind holds;            /**< a volume (the default), a grid or a mesh */
     /**
      * 1 when @p p looks like this format. Detection asks every format in
      * table order with @p deep 0 (a signature in the head, a folder's
@@ -91,55 +116,99 @@ typedef struct vv_volume_format {
      * or the header beside an Analyze .img). Never fails.
      */
     int (*looks_like)(const vv_format_probe *p, int deep);
+
+    /* ---- volumes ---- */
     /**
      * 1 when the format holds @p v as it is; else 0 with what it cannot
      * hold in @p why (@p cap bytes, one phrase: "SLC holds 8-bit voxels
      * only, the volume is i16"). NULL: holds every volume.
      */
     int (*fits)(const vv_volume *v, char *why, size_t cap);
-    /** Reads @p path (@p opt never NULL) with the contract of vv_volume_load;
-     *  NULL: the format is written only. */
+    /** Reads @p path (@p opt never NULL) with the contract of vv_volume_load. */
     vv_status (*read)(vv_volume **out, const char *path, const vv_load_options *opt);
     /**
      * Writes @p v to @p path (@p opt never NULL) atomically, converting
      * what the format cannot hold as fits says (the caller has already
-     * refused that when opt->strict). NULL: the format is read only.
+     * refused that when opt->strict).
      */
     vv_status (*write)(const vv_volume *v, const char *path, const vv_save_options *opt);
     /** The extensions write takes, when fewer than extensions (NIfTI writes
      *  .nii and .nii.gz, not the .hdr/.img pair it reads); NULL: extensions.
      *  For the lists of names that write (messages, --help, the GUI). */
     const char *const *write_extensions;
-} vv_volume_format;
+    /**
+     * Writes the volume @p hdr describes (dims, type, geometry; its voxels
+     * are never read) from @p read, box by box, in memory bounded by the
+     * format's pieces, atomically (vv_volume_save_boxes).
+     */
+    vv_status (*write_boxes)(const vv_volume *hdr, vv_box_reader read, void *ctx, const char *path,
+                             const vv_save_options *opt);
+    /**
+     * Opens @p path's levels of channel @p channel at step @p time (-1: the
+     * first) as a chunked store (the file's metadata only: no voxel read);
+     * @p info (may be NULL) gets its channel, step and level counts and the
+     * channel's name and colour. What vv_open reads a pyramid through.
+     */
+    vv_status (*open_store)(vv_store *st, const char *path, int channel, int time,
+                            vv_load_info *info);
+    /**
+     * Where the voxels of @p path lie raw (uncompressed, one piece, x
+     * fastest) in a file, for reading it out of core by bricks with pread:
+     * the geometry as a volume of one voxel whose dims are set to the
+     * file's (*@p header, new), the file holding the voxels (*@p data_path,
+     * malloc'd), the byte offset of voxel (0, 0, 0), the byte order. @p opt
+     * (never NULL): the raw parameters of a described format. Errors:
+     * VV_ERR_UNSUPPORTED (not raw in this file: a compressed NRRD; vv_open
+     * reads it whole instead), the format's own.
+     */
+    vv_status (*raw_layout)(const char *path, const vv_load_options *opt, vv_volume **header,
+                            char **data_path, uint64_t *offset, int *big_endian);
+    /**
+     * Opens @p path out of core by the format's own bricks (a .vvb: its
+     * index) in @p cache: a source of kind VV_SOURCE_BRICKS (@p header_only:
+     * the ranges left unknown where they cost a pass).
+     */
+    vv_status (*open_bricks)(vv_source **out, const char *path, int header_only, vv_cache *cache);
+
+    /* ---- grids ---- */
+    /** Reads @p path with the contract of vv_grid_load. */
+    vv_status (*read_grid)(vv_grid **out, const char *path);
+    /** Writes @p g to @p path atomically. */
+    vv_status (*write_grid)(const vv_grid *g, const char *path);
+
+    /* ---- meshes ---- */
+    /** Reads @p path with the contract of vv_mesh_load. */
+    vv_status (*read_mesh)(vv_mesh **out, const char *path);
+} vv_format_record;
 
 /** The extensions @p f writes (write_extensions, else extensions); NULL
  *  when it writes none. */
-const char *const *vv_volume_format_write_extensions(const vv_volume_format *f);
+const char *const *vv_format_record_write_extensions(const vv_format_record *f);
 
-/** The volume formats in table order (id 1 first); *@p n their number. */
-const vv_volume_format *const *vv_volume_format_table(int *n);
+/** Every format in table order (id 1 first: vv_format); *@p n their number. */
+const vv_format_record *const *vv_format_table(int *n);
+
+/** The record of format @p f (an id of the table), or NULL. */
+const vv_format_record *vv_format_record_of(vv_format f);
 
 /**
- * A grid format (include/volvis/grid.h). Required: version, name, title,
- * doc, looks_like, read. write NULL: not written.
+ * The format of @p path among those holding @p kind (-1: any), by asking
+ * the records' looks_like once (signatures, then the deep tests unless
+ * @p deep is 0): its id, or VV_FORMAT_UNKNOWN. The deep tests of
+ * third-party formats may call their parsers: vv_open runs those in the
+ * reader sandbox.
  */
-typedef struct vv_grid_format_record {
-    int version;                   /**< VV_FORMAT_RECORD_VERSION */
-    const char *name;              /**< lower-case: "vtu" */
-    const char *title;             /**< for messages: "VTK XML UnstructuredGrid" */
-    const char *const *extensions; /**< NULL-terminated, lower-case, no dot; may be NULL */
-    const char *doc;               /**< one line */
-    unsigned flags;                /**< VV_FORMAT_FLAG_* */
-    /** As vv_volume_format.looks_like (files only: grids are never folders). */
-    int (*looks_like)(const vv_format_probe *p, int deep);
-    /** Reads @p path with the contract of vv_grid_load. */
-    vv_status (*read)(vv_grid **out, const char *path);
-    /** Writes @p g to @p path atomically; NULL: read only. */
-    vv_status (*write)(const vv_grid *g, const char *path);
-} vv_grid_format_record;
+vv_format vv_format_detect_kind(const char *path, int kind, int deep);
 
-/** The grid formats in table order (VV_GRID_FORMAT_VTK first); *@p n their number. */
-const vv_grid_format_record *const *vv_grid_format_table(int *n);
+/**
+ * The reader process (apps/volvis-reader; a program of one's own that
+ * embeds the library and ships its own reader calls this from its main and
+ * points VOLVIS_READER at it): serves the format table's rows to the
+ * library through the reader sandbox (include/volvis/sys/sandbox.h,
+ * vv_sandbox_serve). Returns (2) only when it was not started by the
+ * library.
+ */
+int vv_format_reader_main(int argc, char **argv);
 
 /**
  * Fills @p p for @p path: whether it is a folder, and for a file its first

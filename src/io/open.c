@@ -1,0 +1,330 @@
+/*
+ * Opening anything (include/volvis/io.h, vv_open): one probe of the file
+ * through the format table (formats.c), then the row does what the file
+ * holds and the options ask -- a volume read whole or opened out of core
+ * (a pyramid through the row's store, a bricked file through its raw layout
+ * or its own bricks), a grid, a mesh -- each here or in the reader sandbox
+ * as the row's flag says (transport.c). Also the entry points of grids and
+ * meshes, and the pyramid opener the tests use, over the same table.
+ */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "core/internal.h"
+#include "io/bricked.h"
+#include "io/pyramid.h"
+#include "io/transport.h"
+
+void
+vv_open_options_init(vv_open_options *o) {
+    if (!o)
+        return;
+    memset(o, 0, sizeof *o);
+    vv_load_options_init(&o->load);
+    o->mode = VV_OPEN_DEFAULT;
+}
+
+void
+vv_opened_clear(vv_opened *o) {
+    if (!o)
+        return;
+    vv_source_free(o->source);
+    vv_grid_free(o->grid);
+    vv_mesh_free(o->mesh);
+    memset(o, 0, sizeof *o);
+}
+
+/* The id of row @p r in the table, or VV_FORMAT_UNKNOWN. */
+static vv_format
+id_of(const vv_format_record *r) {
+    int n;
+    const vv_format_record *const *t = vv_format_table(&n);
+    for (int i = 0; r && i < n; i++)
+        if (t[i] == r)
+            return (vv_format)(i + 1);
+    return VV_FORMAT_UNKNOWN;
+}
+
+/* The row of @p path: the caller's @p f, else detected (signatures; the
+ * deep tests of grids and meshes, which read names only, here; those of
+ * volumes run where the volume is read); NULL when unknown. */
+static const vv_format_record *
+row_of(const char *path, vv_format f, int *deep_volume) {
+    *deep_volume = 0;
+    if (f != VV_FORMAT_AUTO)
+        return vv_format_record_of(f);
+    vv_format g = vv_format_detect_kind(path, -1, 0);
+    if (g == VV_FORMAT_UNKNOWN)
+        g = vv_format_detect_kind(path, VV_DATA_GRID, 1);
+    if (g == VV_FORMAT_UNKNOWN)
+        g = vv_format_detect_kind(path, VV_DATA_MESH, 1);
+    if (g == VV_FORMAT_UNKNOWN)
+        *deep_volume = 1; /* vv_volume_load's detection, in the sandbox when wanted */
+    return vv_format_record_of(g);
+}
+
+/* The store of row @p r over @p path as a pyramid in @p cache. */
+static vv_status
+open_pyramid(vv_pyramid **out, const vv_format_record *r, const char *path, int channel, int time,
+             vv_cache *cache, vv_load_info *info) {
+    *out = NULL;
+    if (strlen(path) >= 4096)
+        return vv_error_set(VV_ERR_LIMIT, "%s: path too long", r->name);
+    vv_store st;
+    vv_status s = io_open_store(r, &st, path, channel, time, info);
+    if (s != VV_OK) {
+        vv_store_close(&st);
+        /* the row's reader names the file already, or here */
+        const char *base = vv_path_basename(path);
+        char head[512];
+        const int n = snprintf(head, sizeof head, "%s: %s:", r->name, base);
+        if (n > 0 && n < (int)sizeof head && !strncmp(vv_error_message(), head, (size_t)n))
+            return s;
+        return vv_error_prefix(s, "%s: %s", r->name, base);
+    }
+    return vv_pyramid_open_store(out, &st, path, cache, info);
+}
+
+vv_status
+vv_pyramid_open(vv_pyramid **out, const char *path, int channel, int time, vv_cache *cache,
+                vv_load_info *info) {
+    if (!out || !path)
+        return vv_error_set(VV_ERR_INVALID, "pyramid: NULL argument");
+    *out = NULL;
+    const vv_format_record *r = vv_format_record_of(vv_format_detect_kind(path, VV_DATA_VOLUME, 0));
+    if (!r || !r->open_store)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: not a multiresolution file (OME-Zarr, BigDataViewer or Imaris "
+                            "HDF5, a .vvb)",
+                            vv_path_basename(path));
+    return open_pyramid(out, r, path, channel, time, cache, info);
+}
+
+/* Bytes of a volume of @p h's dims and type. */
+static uint64_t
+bytes_of(const vv_volume *h) {
+    return (uint64_t)h->dims[0] * (uint64_t)h->dims[1] * (uint64_t)h->dims[2] *
+           vv_voxel_type_size(h->type);
+}
+
+/* @p path opened out of core as row @p r can: a pyramid (its store) when
+ * the row has one and either the caller prefers levels or the row has no
+ * bricks; else by bricks (the row's own, or its raw layout). VV_ERR_UNSUPPORTED
+ * (nothing set, no error kept): the row cannot, or not this file (a
+ * compressed NRRD): read it whole. With @p auto_small, a volume whose level
+ * 0 holds at most a quarter of the cache's budget is VV_ERR_UNSUPPORTED too. */
+static vv_status
+open_out_of_core(vv_opened *out, const vv_format_record *r, const char *path,
+                 const vv_open_options *opt, vv_cache *cache, int auto_small) {
+    const vv_load_options *lo = &opt->load;
+    const uint64_t quarter = vv_cache_limit(cache) / 4;
+    const int bricks = r->open_bricks || r->raw_layout;
+    if (r->open_store && (opt->levels || !bricks)) {
+        vv_pyramid *p = NULL;
+        vv_load_info info;
+        memset(&info, 0, sizeof info);
+        vv_status s = open_pyramid(&p, r, path, lo->channel, lo->time, cache, &info);
+        if (s != VV_OK)
+            return s;
+        const int level = lo->level > 0 ? lo->level : 0;
+        if (level >= vv_pyramid_levels(p)) {
+            s = vv_error_set(VV_ERR_INVALID, "%s: level %d asked, the store has %d",
+                             vv_path_basename(path), level, vv_pyramid_levels(p));
+            vv_pyramid_free(p);
+            return s;
+        }
+        if (auto_small && bytes_of(vv_pyramid_level(p, 0)) <= quarter) {
+            vv_pyramid_free(p);
+            return VV_ERR_UNSUPPORTED;
+        }
+        if (bricks && vv_pyramid_levels(p) == 1) { /* no levels (a .vvb without): by bricks */
+            vv_pyramid_free(p);
+            goto by_bricks;
+        }
+        if ((s = vv_pyramid_source_new(&out->source, p, r->name)) != VV_OK)
+            return s;
+        info.n_levels = vv_pyramid_levels(p);
+        out->info = info;
+        return VV_OK;
+    }
+    if (!bricks)
+        return VV_ERR_UNSUPPORTED;
+by_bricks:
+    if (lo->channel > 0 || lo->time > 0) /* bricks hold channel 0 at step 0: read whole */
+        return VV_ERR_UNSUPPORTED;
+    vv_status s;
+    vv_bricked *b = NULL;
+    if (r->open_bricks) {
+        if (auto_small) { /* its index gives the size: open it to know */
+            vv_source *src = NULL;
+            if ((s = r->open_bricks(&src, path, opt->header_only, cache)) != VV_OK)
+                return s;
+            if (bytes_of(vv_source_level(src, 0)) <= quarter) {
+                vv_source_free(src);
+                return VV_ERR_UNSUPPORTED;
+            }
+            out->source = src;
+        } else if ((s = r->open_bricks(&out->source, path, opt->header_only, cache)) != VV_OK) {
+            return s;
+        }
+    } else {
+        vv_volume *h = NULL;
+        char *data = NULL;
+        uint64_t off = 0;
+        int big = 0;
+        s = r->raw_layout(path, lo, &h, &data, &off, &big);
+        if (s == VV_ERR_UNSUPPORTED) {
+            vv_error_clear();
+            return VV_ERR_UNSUPPORTED;
+        }
+        if (s != VV_OK)
+            return s;
+        if (auto_small && bytes_of(h) <= quarter) {
+            vv_volume_free(h);
+            free(data);
+            return VV_ERR_UNSUPPORTED;
+        }
+        s = vv_bricked_open_layout(&b, path, h, data, off, big, cache, !opt->header_only);
+        if (s == VV_OK)
+            s = vv_bricked_source_new(&out->source, b, r->name);
+        if (s != VV_OK)
+            return s;
+    }
+    out->info.n_channels = out->info.n_times = 1;
+    out->info.n_levels = 1;
+    return VV_OK;
+}
+
+vv_status
+vv_open(vv_opened *out, const char *path, const vv_open_options *opt) {
+    if (!out || !path)
+        return vv_error_set(VV_ERR_INVALID, "open: NULL argument");
+    memset(out, 0, sizeof *out);
+    vv_open_options def;
+    if (!opt) {
+        vv_open_options_init(&def);
+        opt = &def;
+    }
+    struct stat st;
+    if (stat(path, &st) != 0) {
+        const int e = errno;
+        return vv_error_set(VV_ERR_IO, "cannot open %s: %s", path, strerror(e));
+    }
+    int deep = 0;
+    const vv_format_record *r = row_of(path, opt->load.format, &deep);
+    if (opt->load.format != VV_FORMAT_AUTO && !r)
+        return vv_error_set(VV_ERR_INVALID, "open: %s: no format of id %d", vv_path_basename(path),
+                            (int)opt->load.format);
+    out->format = id_of(r);
+    if (r && r->holds == VV_DATA_GRID) {
+        out->kind = VV_DATA_GRID;
+        return io_read_grid(r, &out->grid, path);
+    }
+    if (r && r->holds == VV_DATA_MESH) {
+        out->kind = VV_DATA_MESH;
+        return io_read_mesh(r, &out->mesh, path);
+    }
+    out->kind = VV_DATA_VOLUME;
+    vv_cache *cache = opt->cache ? opt->cache : vv_cache_process();
+    const vv_open_mode mode = opt->mode;
+    if (!r && opt->load.has_raw)
+        r = vv_format_record_of(VV_FORMAT_RAW);
+    const int only = mode == VV_OPEN_OUT_OF_CORE_ONLY;
+    const int ooc = r && mode != VV_OPEN_WHOLE &&
+                    (mode == VV_OPEN_OUT_OF_CORE || mode == VV_OPEN_AUTO || only ||
+                     (r->flags & VV_FORMAT_FLAG_OUT_OF_CORE));
+    vv_status s = VV_ERR_UNSUPPORTED;
+    if (ooc)
+        s = open_out_of_core(out, r, path, opt, cache,
+                             mode == VV_OPEN_AUTO && !(r->flags & VV_FORMAT_FLAG_OUT_OF_CORE));
+    if (s == VV_ERR_UNSUPPORTED && only) {
+        /* a store row's own reason is kept (an unknown compressor) */
+        if (!r || !r->open_store || r->open_bricks || r->raw_layout)
+            vv_error_clear();
+        vv_opened_clear(out);
+        return VV_ERR_UNSUPPORTED;
+    }
+    if (s == VV_ERR_UNSUPPORTED) { /* whole, into memory */
+        vv_load_options lo = opt->load;
+        lo.info = &out->info;
+        if (r && !deep)
+            lo.format = out->format; /* detected once */
+        vv_volume *v = NULL;
+        s = vv_volume_load(&v, path, &lo);
+        if (s == VV_OK) {
+            s = vv_source_new_memory(&out->source, v);
+            vv_volume_free(v);
+        }
+    }
+    if (s != VV_OK) {
+        vv_opened_clear(out);
+        return s;
+    }
+    if (out->format == VV_FORMAT_UNKNOWN) /* detected by the reader: ask again, cheaply */
+        out->format = vv_format_detect_kind(path, VV_DATA_VOLUME, 0);
+    return VV_OK;
+}
+
+/* ---- grids and meshes ---------------------------------------------------------------- */
+
+int
+vv_grid_file_detect(const char *path, vv_grid_format *fmt) {
+    if (fmt)
+        *fmt = VV_GRID_FORMAT_AUTO;
+    struct stat st;
+    if (!path || stat(path, &st) != 0 || S_ISDIR(st.st_mode))
+        return 0;
+    const vv_format f = vv_format_detect_kind(path, VV_DATA_GRID, 1);
+    if (f == VV_FORMAT_UNKNOWN)
+        return 0;
+    /* the grid formats' own ids: their order among the grid rows */
+    int n, k = 0;
+    const vv_format_record *const *t = vv_format_table(&n);
+    for (int i = 0; i < (int)f - 1; i++)
+        k += t[i]->holds == VV_DATA_GRID;
+    if (fmt)
+        *fmt = (vv_grid_format)(k + 1);
+    return 1;
+}
+
+vv_status
+vv_grid_load(vv_grid **out, const char *path) {
+    *out = NULL;
+    const vv_format_record *r =
+        path ? vv_format_record_of(vv_format_detect_kind(path, VV_DATA_GRID, 1)) : NULL;
+    if (!r) {
+        FILE *fp = path ? fopen(path, "rb") : NULL;
+        if (!fp)
+            return vv_error_set(VV_ERR_IO, "%s: %s", path ? path : "(null)", strerror(errno));
+        fclose(fp);
+        char list[256] = "";
+        int n;
+        const vv_format_record *const *t = vv_format_table(&n);
+        for (int i = 0; i < n; i++) {
+            if (t[i]->holds != VV_DATA_GRID)
+                continue;
+            size_t k = strlen(list);
+            snprintf(list + k, sizeof list - k, "%s%s", k ? ", " : "", t[i]->title);
+        }
+        return vv_error_set(VV_ERR_FORMAT, "%s: not a grid file this build reads (%s)", path, list);
+    }
+    /* libxml2 and libnetcdf read in volvis-reader (transport.c) */
+    return io_read_grid(r, out, path);
+}
+
+vv_status
+vv_mesh_load(vv_mesh **out, const char *path) {
+    if (!out || !path)
+        return vv_error_set(VV_ERR_INVALID, "mesh: NULL argument");
+    *out = NULL;
+    /* every file is asked of Assimp's row: the meshes it reads have no common signature */
+    const vv_format_record *r = io_row_named("mesh");
+    if (!r)
+        return vv_error_set(VV_ERR_UNSUPPORTED, "mesh: %s: this build reads no meshes",
+                            vv_path_basename(path));
+    /* Assimp reads it in volvis-reader (transport.c) */
+    return io_read_mesh(r, out, path);
+}
