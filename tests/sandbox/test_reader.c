@@ -1,5 +1,6 @@
 /*
- * The reader sandbox (issue 33; src/io/sandbox.c): a file read through a
+ * The reader sandbox (issue 33; src/sandbox, a transport under the format
+ * table): a file read through a
  * third-party parser comes back from volvis-reader with the same voxels and
  * geometry as read in-process; whatever the reader does wrong (an abort, a
  * crash, a file outside its folder, a socket, execve, fork, a write, an
@@ -14,7 +15,8 @@
 #define _GNU_SOURCE /* memfd_create, the seals */
 #include "testutil.h"
 
-#include "io/sandbox.h"
+#include "io/transport.h"
+#include "sandbox/sandbox_internal.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -504,15 +506,13 @@ static uint16_t g_vox[64];
 static void
 hostile(const char *what, const sbx_reply *r, size_t len, size_t fd_bytes, int seals, int expect_k,
         const char *expect) {
-    vv_format seen = VV_FORMAT_NRRD;
-    vv_volume *v = NULL;
-    vv_status s = VV_OK;
+    char name[VV_SANDBOX_NAME_MAX] = "nrrd", title[64] = "NRRD";
     vv_error_clear();
     int fd = fd_bytes ? memfd_with(g_vox, fd_bytes, seals) : -1;
-    vv_sandbox_answer a;
-    int k = vv_sandbox_take_message(SBX_OP_VOLUME, r, len, fd, &seen, "a.nrrd", &a);
-    v = a.volume;
-    s = a.status;
+    vv_sandbox_result a;
+    vv_status s = VV_OK;
+    int k = sbx_take_message(VV_SANDBOX_VOLUME, r, len, fd, name, title, "a.nrrd", &a, &s);
+    vv_volume *v = a.volume;
     printf("# %s: %d %s\n", what, k, k > 0 && s != VV_OK ? vv_error_message() : "");
     if (k != expect_k)
         fail_msg("%s: %d, not %d", what, k, expect_k);
@@ -553,15 +553,13 @@ test_hostile_replies(void **state) {
     const int sealed = F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_WRITE;
 
     /* the well-formed result: the voxels, their range computed again */
-    vv_format seen = VV_FORMAT_NRRD;
-    vv_volume *v = NULL;
+    char name[VV_SANDBOX_NAME_MAX] = "nrrd", title[64] = "NRRD";
+    vv_sandbox_result a;
     vv_status s;
-    vv_sandbox_answer a;
-    assert_int_equal(vv_sandbox_take_message(SBX_OP_VOLUME, &ok, len,
-                                             memfd_with(g_vox, all, sealed), &seen, "a.nrrd", &a),
+    assert_int_equal(sbx_take_message(VV_SANDBOX_VOLUME, &ok, len, memfd_with(g_vox, all, sealed),
+                                      name, title, "a.nrrd", &a, &s),
                      1);
-    v = a.volume;
-    s = a.status;
+    vv_volume *v = a.volume;
     vt_ok(s);
     assert_non_null(v);
     assert_int_equal(((uint16_t *)v->data)[63], 1063);
@@ -614,14 +612,24 @@ test_hostile_replies(void **state) {
     memcpy(r.err, lines, r.err_len);
     hostile("an error of several lines", &r, len + r.err_len, 0, 0, 1,
             "nrrd: a.nrrd: first second  [2J");
+    /* the row a reader names: taken when printable and ended in its field */
     r = ok;
     r.kind = SBX_FORMAT;
-    r.format = 9999;
-    hostile("an unknown format", &r, len, all, sealed, 0, NULL);
-    r.format = VV_FORMAT_TIFF;
-    seen = VV_FORMAT_NRRD;
-    assert_int_equal(vv_sandbox_take_message(SBX_OP_VOLUME, &r, len, -1, &seen, "a.nrrd", &a), 0);
-    assert_int_equal(seen, VV_FORMAT_TIFF);
+    snprintf(r.format, sizeof r.format, "tiff");
+    snprintf(r.title, sizeof r.title, "TIFF");
+    assert_int_equal(
+        sbx_take_message(VV_SANDBOX_VOLUME, &r, len, -1, name, title, "a.nrrd", &a, &s), 0);
+    assert_string_equal(name, "tiff");
+    assert_string_equal(title, "TIFF");
+    memset(r.format, 'x', sizeof r.format); /* not ended: not taken */
+    assert_int_equal(
+        sbx_take_message(VV_SANDBOX_VOLUME, &r, len, -1, name, title, "a.nrrd", &a, &s), 0);
+    assert_string_equal(name, "tiff");
+    snprintf(r.format, sizeof r.format, "a\nb");
+    assert_int_equal(
+        sbx_take_message(VV_SANDBOX_VOLUME, &r, len, -1, name, title, "a.nrrd", &a, &s), 0);
+    assert_string_equal(name, "a b"); /* one printable line */
+    snprintf(name, sizeof name, "nrrd");
 
     /* a mesh: a well-formed one (a tetrahedron), an index past the
      * vertices, a vertex that is not finite, counts past the memfd */
@@ -645,12 +653,12 @@ test_hostile_replies(void **state) {
             t.p[5] = NAN;
         if (c == 3)
             q.n_vertices = 1u << 20;
-        int k = vv_sandbox_take_message(SBX_OP_MESH, &q, len, memfd_with(&t, sizeof t, sealed),
-                                        &seen, "t.ply", &a);
-        printf("# mesh case %d: %d %s\n", c, k, a.status ? vv_error_message() : "");
+        int k = sbx_take_message(VV_SANDBOX_MESH, &q, len, memfd_with(&t, sizeof t, sealed), name,
+                                 title, "t.ply", &a, &s);
+        printf("# mesh case %d: %d %s\n", c, k, s ? vv_error_message() : "");
         assert_int_equal(k, 1);
         if (!expect[c]) {
-            vt_ok(a.status);
+            vt_ok(s);
             assert_int_equal(a.mesh->n_triangles, 4);
             assert_non_null(a.mesh->normals);
             vv_mesh_free(a.mesh);
@@ -659,38 +667,48 @@ test_hostile_replies(void **state) {
             assert_non_null(strstr(vv_error_message(), expect[c]));
         }
     }
-    /* a series list: strings without their end are ended in their field */
+    /* a series list: the listing's bytes come back as they are (their
+     * memfd checked), then each entry is checked by the format's side
+     * (io_dicom_series_from_wire): strings without their end are ended in
+     * their field, a negative size refused */
     vv_dicom_series list[2];
     memset(list, 'x', sizeof list);
     list[0].number = 1;
     list[0].dims[0] = list[0].dims[1] = list[0].dims[2] = list[0].n_files = 4;
+    list[0].time_steps = 1;
     list[1] = list[0];
     sbx_reply lr = ok;
-    lr.dims[0] = 2;
     lr.bytes = sizeof list;
-    assert_int_equal(vv_sandbox_take_message(SBX_OP_DICOM_LIST, &lr, len,
-                                             memfd_with(list, sizeof list, sealed), &seen, "ct",
-                                             &a),
+    assert_int_equal(sbx_take_message(VV_SANDBOX_LIST, &lr, len,
+                                      memfd_with(list, sizeof list, sealed), name, title, "ct", &a,
+                                      &s),
                      1);
-    vt_ok(a.status);
-    assert_int_equal(a.n_series, 2);
-    assert_int_equal(strlen(a.series[1].uid), sizeof a.series[1].uid - 1);
-    assert_int_equal(strlen(a.series[1].patient_id), sizeof a.series[1].patient_id - 1);
-    free(a.series);
-    lr.dims[0] = 3; /* more than the memfd holds */
-    assert_int_equal(vv_sandbox_take_message(SBX_OP_DICOM_LIST, &lr, len,
-                                             memfd_with(list, sizeof list, sealed), &seen, "ct",
-                                             &a),
+    vt_ok(s);
+    assert_int_equal(a.blob_len, sizeof list);
+    vv_dicom_series *got = NULL;
+    int n_got = 0;
+    vt_ok(io_dicom_series_from_wire(&got, &n_got, a.blob, a.blob_len, "ct"));
+    assert_int_equal(n_got, 2);
+    assert_int_equal(strlen(got[1].uid), sizeof got[1].uid - 1);
+    assert_int_equal(strlen(got[1].patient_id), sizeof got[1].patient_id - 1);
+    free(got);
+    lr.bytes = 3 * sizeof list[0]; /* more than the memfd holds */
+    assert_int_equal(sbx_take_message(VV_SANDBOX_LIST, &lr, len,
+                                      memfd_with(list, sizeof list, sealed), name, title, "ct", &a,
+                                      &s),
                      1);
-    assert_null(a.series);
-    assert_non_null(strstr(vv_error_message(), "the reader's list of series is malformed"));
+    assert_null(a.blob);
+    assert_non_null(strstr(vv_error_message(), "the reader's listing is malformed"));
     list[1].n_files = -1;
-    lr.dims[0] = 2;
-    assert_int_equal(vv_sandbox_take_message(SBX_OP_DICOM_LIST, &lr, len,
-                                             memfd_with(list, sizeof list, sealed), &seen, "ct",
-                                             &a),
-                     1);
-    assert_null(a.series);
+    void *bytes = malloc(sizeof list);
+    memcpy(bytes, list, sizeof list);
+    assert_int_equal(io_dicom_series_from_wire(&got, &n_got, bytes, sizeof list, "ct"),
+                     VV_ERR_FORMAT);
+    assert_non_null(strstr(vv_error_message(), "the reader's list of series is malformed"));
+    bytes = malloc(sizeof list - 1); /* not whole entries */
+    memcpy(bytes, list, sizeof list - 1);
+    assert_int_equal(io_dicom_series_from_wire(&got, &n_got, bytes, sizeof list - 1, "ct"),
+                     VV_ERR_FORMAT);
     assert_no_child();
 }
 
@@ -716,16 +734,17 @@ hostile_grid(const char *what, const tet_grid *t, uint64_t bytes, const char *ex
     r.magic = SBX_MAGIC;
     r.kind = SBX_RESULT;
     r.bytes = bytes;
-    vv_format seen = VV_FORMAT_UNKNOWN;
-    vv_sandbox_answer a;
+    char name[VV_SANDBOX_NAME_MAX] = "vtu", title[64] = ".vtu";
+    vv_sandbox_result a;
+    vv_status st = VV_OK;
     vv_error_clear();
-    int k = vv_sandbox_take_message(SBX_OP_GRID, &r, offsetof(sbx_reply, err),
-                                    memfd_with(t, sizeof *t, F_SEAL_SHRINK | F_SEAL_GROW), &seen,
-                                    "t.vtu", &a);
-    printf("# grid, %s: %d %s\n", what, k, a.status ? vv_error_message() : "");
+    int k = sbx_take_message(VV_SANDBOX_GRID, &r, offsetof(sbx_reply, err),
+                             memfd_with(t, sizeof *t, F_SEAL_SHRINK | F_SEAL_GROW), name, title,
+                             "t.vtu", &a, &st);
+    printf("# grid, %s: %d %s\n", what, k, st ? vv_error_message() : "");
     assert_int_equal(k, 1);
     if (!expect) {
-        vt_ok(a.status);
+        vt_ok(st);
         assert_non_null(a.grid);
         assert_int_equal(a.grid->n_cells, 1);
         assert_true(a.grid->fields[0].range[0] == 1 && a.grid->fields[0].range[1] == 4);
@@ -733,7 +752,7 @@ hostile_grid(const char *what, const tet_grid *t, uint64_t bytes, const char *ex
         return;
     }
     assert_null(a.grid);
-    assert_true(a.status < 0);
+    assert_true(st < 0);
     assert_null(strchr(vv_error_message(), '\n'));
     if (!strstr(vv_error_message(), expect))
         fail_msg("grid, %s: \"%s\" does not say \"%s\"", what, vv_error_message(), expect);
