@@ -133,38 +133,17 @@ vv_renderer *vv_parallel_renderer(vv_parallel *p);
 void vv_parallel_free(vv_parallel *p);
 
 /**
- * Makes each rank read its brick from @p source (borrowed: keep it open
- * until vv_parallel_free; NULL: cut it from the World's volume again)
- * instead of cutting it from the object's volume, which may then be a
- * coarse proxy (vv_bricked_proxy) giving only the object's defaults: every
- * rank reads only its own box (and its ghost voxels) from the file. Opened
- * with vv_bricked_open_header, the value range is learnt from the ranks'
- * bricks at the first render (a reduction over the ranks). Not collective.
- */
-struct vv_bricked;
-vv_status vv_parallel_set_source(vv_parallel *p, struct vv_bricked *source);
-/**
- * Makes each rank read its brick through @p read (io.h's box reader, called
- * with @p ctx from this rank's thread; borrowed until vv_parallel_free), as
- * vv_parallel_set_source does for a bricked file: a pyramid's level
- * (vv_pyramid_read_box), any volume read by boxes. @p header gives the
- * volume's dims, type, spacing, origin, direction, unit and space (copied;
- * its voxels are never read); the value range is learnt from the ranks'
- * bricks at the first render. NULL @p read: cut the brick from the World's
- * volume again. Errors: VV_ERR_INVALID (a reader without a header). Not
- * collective.
- */
-vv_status vv_parallel_set_box_source(vv_parallel *p, const vv_volume *header, vv_box_reader read,
-                                     void *ctx);
-
-/**
  * Collective: renders @p w (one visible volume object, composite, mip or
  * minip; the same World on every rank) through @p view. Each rank cuts its
- * brick from the object's volume (kept between frames while the volume is
- * unchanged), renders it as a region (the World, with the object's own
- * volume, is the renderer's context: raytrace traces its shadows through
- * it, exactly when it is the whole volume, from the proxy when the ranks
- * read a bricked source), and the partial images are composited; rank 0
+ * brick from the object's volume, or reads only its box from the object's
+ * source when the object shows a file out of core (vv_object_new_source:
+ * a bricked file, or a pyramid's level opt->lod->level, 0 without one; a
+ * source opened without the range, VV_OPEN_HEADER_ONLY, learns it from
+ * the ranks' bricks at the first render); the brick is kept between frames
+ * while the volume is unchanged. It renders the brick as a region (the
+ * World, with the object's own volume, is the renderer's context: raytrace
+ * traces its shadows through it, exactly when it is the whole volume, from
+ * the proxy out of core), and the partial images are composited; rank 0
  * receives the whole image in @p out (view->width x view->height, RGBA
  * float and depth, as vv_renderer_render draws it; a region is traced one
  * ray a pixel, so raytrace gives its quality-1 sampling), the other ranks leave

@@ -40,6 +40,64 @@ typedef struct vv_render_stats {
     uint64_t shaded;  /**< of those, the samples that contributed: shaded and composited */
 } vv_render_stats;
 
+#define VV_LOD_MAX_LEVELS 16 /**< levels a level-of-detail frame draws from */
+
+/**
+ * Level of detail of a frame that draws objects from pyramids
+ * (vv_render_options.lod), and what the frame used (summed over the
+ * objects).
+ */
+typedef struct vv_lod {
+    /**
+     * In: >= 0: every node at this level (the coarsest when past it); -1:
+     * each node at the coarsest level whose voxel projects to at most
+     * voxel_pixels pixels at the node's point nearest the eye (screen-space
+     * error).
+     */
+    int level;
+    double voxel_pixels; /**< in: > 0 (default 1; larger is coarser and faster) */
+    /**
+     * In: 1: a progressive frame -- a node is drawn at its level when the
+     * source holds its chunks, or when they fit in what is left of
+     * load_budget chunks (nodes nearest the eye first); otherwise at the
+     * finest coarser level the source holds (the coarsest at worst), and
+     * counted in pending. Needs the source's missing_chunks. 0: every node
+     * at its level, read as needed.
+     */
+    int progressive;
+    int load_budget; /**< in: chunks a progressive frame may read (>= 0) */
+    /**
+     * In: 1 (with progressive, when the source loads in the background, as
+     * pyramids do): the frame then asks the source for
+     * its pending nodes' chunks -- at their own level and every coarser one
+     * short of the coarsest, coarse levels first, then front to back --
+     * and for those of the nodes drawn at their level (held: so that the
+     * loader keeps them while it makes room for the others),
+     * replacing the previous frame's request (none pending: cancelled), so
+     * that a later frame draws them finer: draw, wait (vv_source_wait),
+     * draw again until pending is 0 (what the GUI and Python do while the
+     * view stands still). 0: no request (the frames depend on the budget
+     * alone).
+     */
+    int background;
+    int nodes[VV_LOD_MAX_LEVELS]; /**< out: nodes rendered at each level */
+    int skipped;   /**< out: nodes skipped unread (their known min/max is transparent) */
+    int pending;   /**< out: nodes drawn coarser than their level (0: the converged image) */
+    int requested; /**< out: boxes a progressive frame asked the source to load */
+    /**
+     * Out: 1 when a background frame found the previous request stalled
+     * (the source's cache is full of the chunks the view wants, and nodes
+     * are still pending): waiting will not sharpen it further; a frame with
+     * progressive 0 streams the converged image through the cache.
+     */
+    int stalled;
+} vv_lod;
+
+/** level -1 (screen-space error), voxel_pixels 1, counts 0. */
+void vv_lod_init(vv_lod *lod);
+
+#define VV_SOURCES_MAX 16 /**< visible volume objects out of core one frame draws */
+
 /** Options of one render call. */
 typedef struct vv_render_options {
     int threads;          /**< <= 0: vv_threads_get() */
@@ -50,9 +108,16 @@ typedef struct vv_render_options {
      * speed anchor); other renderers and paths add nothing. Counting
      * neither changes the image nor costs measurable time. */
     vv_render_stats *stats;
+    /**
+     * NULL (vv_lod_init's), or the level of detail of the objects drawn
+     * from pyramids, and where the frame writes what it used: its level
+     * (`--level`), its screen-space error (`--lod`), progressive frames.
+     * Ignored by a World held in memory.
+     */
+    vv_lod *lod;
 } vv_render_options;
 
-/** threads 0, quality 2, no progress callback, no stats. */
+/** threads 0, quality 2, no progress callback, no stats, no lod. */
 void vv_render_options_init(vv_render_options *o);
 
 /* ---- typed option tables ------------------------------------------------ */
@@ -241,9 +306,27 @@ vv_status vv_renderer_set_option(vv_renderer *r, const char *key, const char *va
 /**
  * Renders @p world seen through @p view into @p out, which must be
  * view->width x view->height. @p opt may be NULL (defaults). The World is
- * checked first (vv_renderer_check_world). Errors: VV_ERR_INVALID (size
+ * checked first (vv_renderer_check_world). This call alone chooses how
+ * (src/render/drivers.h): a World whose visible objects hold their voxels
+ * in memory is drawn whole by the renderer; one where a volume object
+ * shows a file out of core (its `source`, vv_object_new_source) is drawn
+ * object by object, each into a layer of its own -- a bricked file brick
+ * by brick in front-to-back order, a pyramid by level of detail
+ * (opt->lod), an object in memory as one region -- with the renderer's
+ * region contract (VV_RENDERER_REGION), and the layers combined as the ray
+ * caster combines objects along a ray: the composite and iso objects
+ * composited front to back by depth, the MIP, MinIP and X-ray ones by the
+ * largest classified colour behind them, the background last. Out of core
+ * the image equals the in-memory render up to the rounding of compositing
+ * (bit for bit for MIP, MinIP and X-ray) and to each object being sampled
+ * at its own step; bricks and nodes whose known min/max the transfer
+ * function makes transparent are skipped unread. Out of core needs: volume
+ * objects only, each of one channel, at most VV_SOURCES_MAX visible; the
+ * boxes of composite and iso objects apart; with several visible objects a
+ * renderer without VV_RENDERER_GLOBAL. Errors: VV_ERR_INVALID (size
  * mismatch, bad World), VV_ERR_UNSUPPORTED (nothing it draws, a mode it
- * does not draw), VV_ERR_NOMEM, VV_ERR_CANCELLED.
+ * does not draw, what out of core needs: naming the objects), VV_ERR_LIMIT,
+ * VV_ERR_NOMEM, VV_ERR_CANCELLED, those of reading the sources.
  */
 vv_status vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
                              const vv_render_options *opt, vv_image *out);
@@ -285,162 +368,6 @@ vv_status vv_renderer_new_for_world(vv_renderer **out, const vv_world *w);
  * renderer and the Navigator's previews so they show the same surface.
  */
 int vv_object_surface_value(const vv_object *obj, double *iso, vv_vec3 *color);
-
-/* ---- out-of-core rendering --------------------------------------------------- */
-
-struct vv_brick_source; /* include/volvis/sys/source.h */
-
-/**
- * Renders object @p object of @p w (a volume object in any mode; no other
- * visible object) with the voxels of @p src, brick by brick in
- * front-to-back order through @p view, with renderer @p r, which must
- * declare VV_RENDERER_REGION (its options apply; raycast draws every mode,
- * raytrace no xray, and iso only with the whole volume as the object's own): each brick is one
- * region render (include/volvis/sys/renderer.h) and the partial images are combined in that order
- * (over; max or min for mip and minip; the nearest crossing for iso; the sums, then the mean
- * classified, for xray). The object's own volume gives the World's defaults and the renderer's
- * whole-volume context (raytrace traces shadows through it: exact when it is
- * the whole volume, from a coarse proxy otherwise); the geometry comes from
- * the source's header. Bricks whose min/max the transfer function makes
- * transparent are skipped unread (composite), and so are those wholly below
- * the isovalue (iso); every other brick is read at most once a frame. The
- * image is the in-memory render's up to the rounding of compositing (bit
- * for bit for mip, minip and xray; iso up to the gradient of a crossing
- * just before a brick, whose one ghost voxel makes it one-sided). Errors:
- * VV_ERR_UNSUPPORTED (the renderer has no region method, a mode it cannot
- * split, other visible objects), VV_ERR_INVALID, those of reading and
- * rendering.
- */
-vv_status vv_renderer_render_bricks(vv_renderer *r, const vv_world *w, int object,
-                                    const struct vv_brick_source *src, const vv_view *view,
-                                    const vv_render_options *opt, vv_image *out);
-
-struct vv_multires_source; /* include/volvis/sys/source.h */
-
-#define VV_LOD_MAX_LEVELS 16 /**< levels vv_renderer_render_multires draws from */
-
-/** Level of detail of a multiresolution render, and what the frame used. */
-typedef struct vv_lod {
-    /**
-     * In: >= 0: every node at this level (the coarsest when past it); -1:
-     * each node at the coarsest level whose voxel projects to at most
-     * voxel_pixels pixels at the node's point nearest the eye (screen-space
-     * error).
-     */
-    int level;
-    double voxel_pixels; /**< in: > 0 (default 1; larger is coarser and faster) */
-    /**
-     * In: 1: a progressive frame -- a node is drawn at its level when the
-     * source holds its chunks, or when they fit in what is left of
-     * load_budget chunks (nodes nearest the eye first); otherwise at the
-     * finest coarser level the source holds (the coarsest at worst), and
-     * counted in pending. Needs the source's missing_chunks. 0: every node
-     * at its level, read as needed.
-     */
-    int progressive;
-    int load_budget; /**< in: chunks a progressive frame may read (>= 0) */
-    /**
-     * In: 1 (with progressive, when the source loads in the background: its
-     * request method, a vv_pyramid's): the frame then asks the source for
-     * its pending nodes' chunks -- at their own level and every coarser one
-     * short of the coarsest, coarse levels first, then front to back --
-     * and for those of the nodes drawn at their level (held: so that the
-     * loader keeps them while it makes room for the others),
-     * replacing the previous frame's request (none pending: cancelled), so
-     * that a later frame draws them finer: draw, wait (vv_pyramid_wait),
-     * draw again until pending is 0 (what the GUI and Python do while the
-     * view stands still). 0: no request (the frames depend on the budget
-     * alone).
-     */
-    int background;
-    int nodes[VV_LOD_MAX_LEVELS]; /**< out: nodes rendered at each level */
-    int skipped;   /**< out: nodes skipped unread (their known min/max is transparent) */
-    int pending;   /**< out: nodes drawn coarser than their level (0: the converged image) */
-    int requested; /**< out: boxes a progressive frame asked the source to load */
-    /**
-     * Out: 1 when a background frame found the previous request stalled
-     * (the source's cache is full of the chunks the view wants, and nodes
-     * are still pending): waiting will not sharpen it further; a frame with
-     * progressive 0 streams the converged image through the cache.
-     */
-    int stalled;
-} vv_lod;
-
-/** level -1 (screen-space error), voxel_pixels 1, counts 0. */
-void vv_lod_init(vv_lod *lod);
-
-/**
- * Renders object @p object of @p w from the pyramid @p src by level of
- * detail: an octree over level 0's cells (nodes of src->node_cells << d
- * cells a side at depth d) is walked front to back from the root; a node
- * whose chosen level (lod) is at least its depth is one region render
- * (include/volvis/sys/renderer.h) of that level's voxels -- the node's box
- * mapped into the level's index space through the levels' scale and
- * translation, one voxel beyond each face read (two for iso) -- else its eight children
- * are, nearest first. Nodes tile level 0's box exactly, so neighbours at
- * different levels meet without cracks (the values on the two sides of a
- * face are those of two levels). Each level samples at the object's step
- * in its own voxels, opacity corrected for the step's world length. A node
- * whose min/max the source knows and the transfer function makes
- * transparent (composite), or wholly below the isovalue (iso), is skipped
- * unread. The object's own volume gives
- * the World's defaults (a proxy); the geometry comes from the source. With
- * level 0 everywhere the image is vv_renderer_render_bricks's of level 0
- * (bit for bit for mip, minip, xray and iso against the in-memory render). The
- * object's transform and level 0's direction apply to every level.
- * Thread-safety: as the renderer; @p src is used from this thread. Errors
- * as vv_renderer_render_bricks; those of the source's reads.
- */
-vv_status vv_renderer_render_multires(vv_renderer *r, const vv_world *w, int object,
-                                      const struct vv_multires_source *src, const vv_view *view,
-                                      const vv_render_options *opt, vv_lod *lod, vv_image *out);
-
-#define VV_SOURCES_MAX 16 /**< visible objects vv_renderer_render_sources draws */
-
-/**
- * Where one volume object's voxels come from in vv_renderer_render_sources:
- * a brick source or a multiresolution one (at most one; neither: the
- * object's own volume, in memory). The sources are borrowed.
- */
-typedef struct vv_object_source {
-    int object;                                /**< index into the World's objects */
-    const struct vv_brick_source *bricks;      /**< or NULL */
-    const struct vv_multires_source *multires; /**< or NULL */
-} vv_object_source;
-
-/** Object @p object, no source (its own volume). */
-void vv_object_source_init(vv_object_source *s, int object);
-
-/**
- * Renders every visible object of @p w, several volume objects out of core
- * and in memory side by side: each object alone (the others hidden, on a
- * black background) into a layer of its own -- vv_renderer_render_bricks
- * of its brick source, vv_renderer_render_multires of its multiresolution
- * source (with a copy of @p lod's inputs; may be NULL: vv_lod_init's), or
- * one region over its whole in-memory volume when @p src (n_src entries,
- * each object at most once; may be NULL with 0) names none -- then the
- * layers combined per pixel as the ray caster combines objects along a ray:
- * the composite and iso objects' layers composited front to back (ordered
- * by their depth), the MIP, MinIP and X-ray layers by the largest
- * classified colour and opacity behind them, the background last. The
- * image equals the in-memory render of the World (vv_renderer_render) up
- * to each object being sampled at its own step (the in-memory ray caster
- * takes the smallest step of all) and the rounding of compositing: bit for
- * bit when every object is a projection. Layers are of the view's size,
- * 20 bytes a pixel each. @p lod's outputs are the sums over the objects
- * (stalled: any). Needs, besides what the two functions need: volume
- * objects only, single-channel, at most VV_SOURCES_MAX visible; the boxes
- * of the composite and iso objects apart (they are then apart along every
- * ray, and compositing one object after the other is exact); with several
- * visible objects a renderer without VV_RENDERER_GLOBAL (raycast: the ray
- * tracer's shadows fall between objects). Thread-safety: as the renderer.
- * Errors: VV_ERR_INVALID (bad arguments, an object with two entries),
- * VV_ERR_UNSUPPORTED (what is needed above, naming the objects),
- * VV_ERR_LIMIT, VV_ERR_NOMEM, and those of the two functions.
- */
-vv_status vv_renderer_render_sources(vv_renderer *r, const vv_world *w, const vv_object_source *src,
-                                     int n_src, const vv_view *view, const vv_render_options *opt,
-                                     vv_lod *lod, vv_image *out);
 
 #ifdef __cplusplus
 }

@@ -30,8 +30,8 @@
  * crossing up to a step before the box, VV_REGION_NEAREST), as a volume with
  * the whole volume's geometry and value range
  * (a region's voxels, include/volvis/sys/renderer.h), cut from the World's volume or read
- * from a source of boxes (vv_parallel_set_source, vv_parallel_set_box_source:
- * a bricked file, a pyramid's level; only the box is read).
+ * from the object's source (a bricked file, a pyramid's level: only the box
+ * is read).
  */
 #include <math.h>
 #include <mpi.h>
@@ -42,7 +42,6 @@
 #include <time.h>
 
 #include "core/internal.h"
-#include "volvis/bricks.h"
 #include "volvis/io.h"
 #include "volvis/parallel.h"
 #include "volvis/sys/renderer.h"
@@ -58,10 +57,10 @@ struct vv_parallel {
     int owns_ren;
     int rank, size;
     /* the brick kept between frames */
-    /* read bricks from here (vv_parallel_set_source, _set_box_source), or NULL */
-    void *source;
-    vv_box_reader read;
-    vv_volume hdr;  /* the source's geometry (its voxels never read); range once learnt */
+    /* read bricks from the object's source (vv_object_new_source), or NULL */
+    vv_source *source;
+    int level;      /* the source's level read */
+    vv_volume hdr;  /* the level's geometry (its voxels never read); range once learnt */
     int range_done; /* the source's value range is known (agreed over the ranks) */
     const void *src;
     uint64_t src_modified;
@@ -244,6 +243,7 @@ vv_parallel_free(vv_parallel *p) {
     if (p->owns_ren)
         vv_renderer_free(p->ren);
     vv_volume_free(p->brick);
+    vv_source_free(p->source);
     free(p);
 }
 
@@ -619,7 +619,7 @@ make_brick(vv_parallel *p, const vv_volume *v, const par_plan *pl, int ghost) {
     vv_status s;
     if (p->source) {
         /* only this rank's box is read from the file */
-        if ((s = p->read(p->source, off, end, &b)) != VV_OK)
+        if ((s = vv_source_read_box(p->source, p->level, off, end, &b)) != VV_OK)
             return vv_error_prefix(s, "parallel: brick %d..%d x %d..%d x %d..%d", off[0], end[0],
                                    off[1], end[1], off[2], end[2]);
     } else {
@@ -666,34 +666,31 @@ make_brick(vv_parallel *p, const vv_volume *v, const par_plan *pl, int ghost) {
     return VV_OK;
 }
 
-static vv_status
-read_bricked_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
-    return vv_bricked_read_box(ctx, lo, hi, out);
-}
-
-vv_status
-vv_parallel_set_source(vv_parallel *p, vv_bricked *source) {
-    return source
-               ? vv_parallel_set_box_source(p, vv_bricked_header(source), read_bricked_box, source)
-               : vv_parallel_set_box_source(p, NULL, NULL, NULL);
-}
-
-vv_status
-vv_parallel_set_box_source(vv_parallel *p, const vv_volume *header, vv_box_reader read, void *ctx) {
-    if (read && !header)
-        return vv_error_set(VV_ERR_INVALID, "parallel: a box source without its header");
-    p->source = read ? ctx : NULL;
-    p->read = read;
+/* Reads bricks from @p obj's source (level @p level) from now on, or cuts
+ * them from its volume again (no source): the brick kept is dropped when
+ * the source or the level changes. */
+static void
+use_source(vv_parallel *p, const vv_object *obj, int level) {
+    vv_source *src = obj->source;
+    if (src) {
+        level = level < vv_source_levels(src) ? level : vv_source_levels(src) - 1;
+        level = level > 0 ? level : 0;
+    }
+    if (src == p->source && (!src || level == p->level))
+        return;
+    vv_source_free(p->source);
+    p->source = vv_source_ref(src);
+    p->level = level;
     memset(&p->hdr, 0, sizeof p->hdr);
-    if (read) {
-        p->hdr = *header; /* geometry only: its voxels are never read */
+    if (src) {
+        p->hdr = *vv_source_level(src, level); /* geometry only: its voxels are never read */
         p->hdr.data = NULL;
     }
-    p->range_done = 0;
+    /* a range of 0 .. 0: a file opened without its range; learnt from the bricks */
+    p->range_done = !(p->hdr.range[0] == 0 && p->hdr.range[1] == 0);
     vv_volume_free(p->brick);
     p->brick = NULL;
     p->src = NULL;
-    return VV_OK;
 }
 
 /* The one visible volume object of w, or -1 (with an error). */
@@ -733,6 +730,8 @@ render_part(vv_parallel *p, vv_status pre, const vv_world *w, const vv_view *vie
         s = VV_ERR_UNSUPPORTED;
     *obj_index = oi;
     const vv_object *obj = oi >= 0 ? w->objects[oi] : NULL;
+    if (obj)
+        use_source(p, obj, opt->lod && opt->lod->level > 0 ? opt->lod->level : 0);
     if (s == VV_OK) {
         const int *dims = p->source ? p->hdr.dims : obj->volume->dims;
         s = plan_build(pl, p->rank, p->size, dims, &p->opt);

@@ -94,19 +94,3 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
     (void)stats;
     return vv_error_set(VV_ERR_UNSUPPORTED, "parallel: this build has no MPI");
 }
-
-vv_status
-vv_parallel_set_source(vv_parallel *p, struct vv_bricked *source) {
-    (void)p;
-    (void)source;
-    return vv_error_set(VV_ERR_UNSUPPORTED, "parallel: this build has no MPI");
-}
-
-vv_status
-vv_parallel_set_box_source(vv_parallel *p, const vv_volume *header, vv_box_reader read, void *ctx) {
-    (void)p;
-    (void)header;
-    (void)read;
-    (void)ctx;
-    return vv_error_set(VV_ERR_UNSUPPORTED, "parallel: this build has no MPI");
-}

@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "render/drivers.h"
 #include "render/registry.h"
 #include "volvis/render.h"
 #include "volvis/sys/renderer.h"
@@ -597,6 +598,14 @@ vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
         return vv_error_set(VV_ERR_INVALID, "render: image is %d x %d but the view is %d x %d",
                             out->width, out->height, view->width, view->height);
     vv_status s = vv_renderer_check_world(&r->ops->info, world);
+    if (s == VV_OK && drv_world_out_of_core(world)) {
+        /* objects out of core: object by object through the region
+         * contract (its errors name their driver: "bricks:", "sources:") */
+        vv_lod lod;
+        if (!opt->lod)
+            vv_lod_init(&lod);
+        return drv_render_sources(r, world, view, opt, opt->lod ? opt->lod : &lod, out);
+    }
     if (s == VV_OK)
         s = r->ops->render(r->state, world, view, opt, out);
     return s == VV_OK ? s : vv_error_prefix(s, "%s", r->ops->info.name);

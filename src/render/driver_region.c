@@ -1,8 +1,9 @@
 /*
- * Out-of-core rendering through the region contract
- * (vv_renderer_render_bricks, include/volvis/render.h): a volume source
- * (include/volvis/sys/source.h: .vvb, raw, NRRD read by bricks in src/io)
- * is rendered brick by brick, front to back, each brick one region render
+ * The region drivers (src/render/drivers.h): out-of-core rendering through
+ * the region contract. drv_render_bricks: a brick view of a source
+ * (include/volvis/sys/source.h: .vvb, raw, NRRD read by bricks in src/io;
+ * an object in memory as one brick) is rendered brick by brick, front to
+ * back, each brick one region render
  * (include/volvis/sys/renderer.h) of whichever renderer declares the
  * contract, over the pixels its box projects to, and the partial images
  * are combined in that order (over, or max/min for projections) --
@@ -21,8 +22,8 @@
 #include <string.h>
 
 #include "core/internal.h"
+#include "render/drivers.h"
 #include "render/tf_tables.h"
-#include "volvis/bricks.h"
 #include "volvis/render.h"
 #include "volvis/sys/renderer.h"
 #include "volvis/sys/source.h"
@@ -91,7 +92,7 @@ tf_max_opacity(const vv_tf *tf, double a, double b) {
     return m;
 }
 
-/* The argument checks of vv_renderer_render_bricks and _multires (the
+/* The argument checks of drv_render_bricks and drv_render_multires (the
  * source's own checked by the caller). */
 static vv_status
 check_args(vv_renderer *r, const vv_world *w, int object, const vv_view *view,
@@ -189,8 +190,8 @@ render_piece(vv_renderer *r, const vv_world *w, const vv_view *view, const vv_re
 }
 
 vv_status
-vv_renderer_render_bricks(vv_renderer *r, const vv_world *w, int object, const vv_brick_source *src,
-                          const vv_view *view, const vv_render_options *opt, vv_image *out) {
+drv_render_bricks(vv_renderer *r, const vv_world *w, int object, const vv_brick_source *src,
+                  const vv_view *view, const vv_render_options *opt, vv_image *out) {
     if (src && src->version != VV_BRICK_SOURCE_VERSION)
         return vv_error_set(VV_ERR_UNSUPPORTED, "bricks: source interface version %d, not %d",
                             src->version, VV_BRICK_SOURCE_VERSION);
@@ -777,9 +778,8 @@ vv_lod_init(vv_lod *lod) {
 }
 
 vv_status
-vv_renderer_render_multires(vv_renderer *r, const vv_world *w, int object,
-                            const vv_multires_source *src, const vv_view *view,
-                            const vv_render_options *opt, vv_lod *lod, vv_image *out) {
+drv_render_multires(vv_renderer *r, const vv_world *w, int object, const vv_multires_source *src,
+                    const vv_view *view, const vv_render_options *opt, vv_lod *lod, vv_image *out) {
     if (!src || !lod)
         return vv_error_set(VV_ERR_INVALID, "multires: no source or level-of-detail options");
     if (src->version < 1 || src->version > VV_MULTIRES_SOURCE_VERSION)

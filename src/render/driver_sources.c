@@ -1,9 +1,10 @@
 /*
- * Several volume objects out of core (vv_renderer_render_sources,
- * include/volvis/render.h): each visible volume object is rendered alone
- * into a layer of its own -- from its brick source (vv_renderer_render_bricks),
- * its pyramid (vv_renderer_render_multires) or its in-memory volume (one
- * region over the whole volume) -- on a black background, and the layers are
+ * A World with volume objects out of core (drv_render_sources,
+ * src/render/drivers.h; what vv_renderer_render draws when an object holds
+ * a source): each visible volume object is rendered alone into a layer of
+ * its own -- from its source's bricks (drv_render_bricks), its pyramid
+ * (drv_render_multires) or its in-memory volume (one region over the whole
+ * volume) -- on a black background, and the layers are
  * combined per pixel as the ray caster combines objects along a ray
  * (src/render/raycast/raycast.c, cast_pixel): the composite and iso objects
  * composited front to back, the projections (MIP, MinIP, X-ray) by the
@@ -16,6 +17,7 @@
 #include <string.h>
 
 #include "core/internal.h"
+#include "render/drivers.h"
 #include "volvis/render.h"
 #include "volvis/sys/renderer.h"
 #include "volvis/sys/source.h"
@@ -122,7 +124,9 @@ typedef struct src_layer {
     int object;
     const vv_brick_source *bricks;
     const vv_multires_source *multires;
-    vv_brick_source mem; /* neither: the object's own volume */
+    vv_brick_source bview;    /* the source's bricks (bricks points here) */
+    vv_multires_source mview; /* the source's levels (multires points here) */
+    vv_brick_source mem;      /* no source: the object's own volume */
     const vv_volume *geo;
     int comp; /* composite or iso: composited front to back */
     vv_image *img;
@@ -162,11 +166,11 @@ render_layer(vv_renderer *r, const vv_world *w, src_layer *L, const vv_view *vie
     vv_status s;
     if (L->multires) {
         vv_lod one = *lod; /* the inputs; the frame sets the counts */
-        s = vv_renderer_render_multires(r, &lw, L->object, L->multires, view, opt, &one, L->img);
+        s = drv_render_multires(r, &lw, L->object, L->multires, view, opt, &one, L->img);
         lod_add(sum, &one);
     } else {
-        s = vv_renderer_render_bricks(r, &lw, L->object, L->bricks ? L->bricks : &L->mem, view, opt,
-                                      L->img);
+        s = drv_render_bricks(r, &lw, L->object, L->bricks ? L->bricks : &L->mem, view, opt,
+                              L->img);
     }
     free(copies);
     free(ptrs);
@@ -224,39 +228,24 @@ combine_layers(const vv_world *w, src_layer *L, int n, vv_image *out) {
     }
 }
 
-void
-vv_object_source_init(vv_object_source *s, int object) {
-    memset(s, 0, sizeof *s);
-    s->object = object;
+int
+drv_world_out_of_core(const vv_world *w) {
+    for (int i = 0; w && i < w->n_objects; i++) {
+        const vv_object *o = w->objects[i];
+        if (o->visible && o->type == VV_OBJECT_VOLUME && o->source)
+            return 1;
+    }
+    return 0;
 }
 
 vv_status
-vv_renderer_render_sources(vv_renderer *r, const vv_world *w, const vv_object_source *src,
-                           int n_src, const vv_view *view, const vv_render_options *opt,
-                           vv_lod *lod, vv_image *out) {
-    if (!r || !w || !view || !out || n_src < 0 || (n_src > 0 && !src))
+drv_render_sources(vv_renderer *r, const vv_world *w, const vv_view *view,
+                   const vv_render_options *opt, vv_lod *lod, vv_image *out) {
+    if (!r || !w || !view || !out)
         return vv_error_set(VV_ERR_INVALID, "sources: bad arguments");
     if (out->width != view->width || out->height != view->height)
         return vv_error_set(VV_ERR_INVALID, "sources: image %dx%d for a %dx%d view", out->width,
                             out->height, view->width, view->height);
-    for (int i = 0; i < n_src; i++) {
-        const vv_object_source *s = &src[i];
-        if (s->object < 0 || s->object >= w->n_objects || (s->bricks && s->multires))
-            return vv_error_set(VV_ERR_INVALID,
-                                "sources: entry %d: object %d of %d, and one source at most", i,
-                                s->object, w->n_objects);
-        for (int j = 0; j < i; j++)
-            if (src[j].object == s->object)
-                return vv_error_set(VV_ERR_INVALID, "sources: object %d has two entries",
-                                    s->object);
-        if (s->bricks && s->bricks->version != VV_BRICK_SOURCE_VERSION)
-            return vv_error_set(VV_ERR_UNSUPPORTED, "sources: brick source version %d, not %d",
-                                s->bricks->version, VV_BRICK_SOURCE_VERSION);
-        if (s->multires && s->multires->version != VV_MULTIRES_SOURCE_VERSION)
-            return vv_error_set(VV_ERR_UNSUPPORTED,
-                                "sources: multiresolution source version %d, not %d",
-                                s->multires->version, VV_MULTIRES_SOURCE_VERSION);
-    }
     /* the layers: every visible object, a volume object */
     src_layer L[VV_SOURCES_MAX];
     int n = 0;
@@ -280,11 +269,10 @@ vv_renderer_render_sources(vv_renderer *r, const vv_world *w, const vv_object_so
         src_layer *l = &L[n++];
         memset(l, 0, sizeof *l);
         l->object = i;
-        for (int k = 0; k < n_src; k++)
-            if (src[k].object == i) {
-                l->bricks = src[k].bricks;
-                l->multires = src[k].multires;
-            }
+        if (o->source && vv_source_multires_view(o->source, &l->mview))
+            l->multires = &l->mview;
+        else if (o->source && vv_source_brick_view(o->source, &l->bview))
+            l->bricks = &l->bview;
         l->mem = (vv_brick_source){.version = VV_BRICK_SOURCE_VERSION,
                                    .user = o->volume,
                                    .header = mem_header,
