@@ -107,45 +107,46 @@ main(int argc, char **argv) {
         return 2;
     }
     double t0 = bench_now();
-    vv_bricked *b = NULL;
-    if (vv_bricked_open(&b, path, has_raw ? &raw : NULL, (uint64_t)(limit_mib * 1048576.0)) !=
-        VV_OK)
+    vv_cache_set_limit(vv_cache_process(), (uint64_t)(limit_mib * 1048576.0));
+    vv_open_options oo;
+    vv_open_options_init(&oo);
+    oo.mode = VV_OPEN_OUT_OF_CORE_ONLY;
+    if (has_raw) {
+        oo.load.format = VV_FORMAT_RAW;
+        oo.load.has_raw = 1;
+        oo.load.raw = raw;
+    }
+    vv_opened od;
+    if (vv_open(&od, path, &oo) != VV_OK || vv_source_get_kind(od.source) != VV_SOURCE_BRICKS)
         bench_die("bench_ooc", path);
+    vv_source *b = od.source;
     bench_emit("ooc_open", dataset, bench_now() - t0, "s");
-    vv_volume *proxy = NULL;
-    if (vv_bricked_proxy(b, 128, &proxy) != VV_OK)
-        bench_die("bench_ooc", "proxy");
     vv_default_scene_options o;
     vv_default_scene_options_init(&o);
     o.width = o.height = size;
     o.has_tf_range = 1;
     o.tf_lo = tf_lo;
     o.tf_hi = tf_hi;
-    vv_world *w = NULL;
-    if (vv_world_new_for_volume(&w, proxy, &o) != VV_OK)
+    vv_world *w = NULL; /* from the proxy; opacity per the volume's voxel spacing */
+    if (vv_world_new_for_source(&w, b, 0, &o) != VV_OK)
         bench_die("bench_ooc", "world");
-    /* opacity per voxel spacing of the volume, not of the proxy */
-    const vv_volume *h = vv_bricked_header(b);
-    w->objects[0]->tf.opacity_unit_distance *= h->spacing[0] / proxy->spacing[0];
     vv_renderer *ren = NULL;
     vv_image *img = NULL;
     if (vv_renderer_new(&ren, "raycast") != VV_OK || vv_image_new(&img, size, size) != VV_OK)
         bench_die("bench_ooc", "renderer");
     double times[100];
-    vv_brick_source src;
-    vv_bricked_source(b, &src);
-    vv_bricked_stats st0, st1;
-    vv_bricked_stats_get(b, &st0);
+    vv_source_stats st0, st1;
+    vv_source_stats_get(b, &st0);
     const uint64_t open_bytes = st0.bytes_read;
     for (int f = 0; f < frames; f++) {
         if (f > 0)
             vv_view_orbit(&w->view, 10 * 3.14159265358979 / 180, 0);
-        vv_bricked_stats_get(b, &st0);
+        vv_source_stats_get(b, &st0);
         const double t = bench_now();
-        if (vv_renderer_render_bricks(ren, w, 0, &src, &w->view, NULL, img) != VV_OK)
+        if (vv_renderer_render(ren, w, &w->view, NULL, img) != VV_OK)
             bench_die("bench_ooc", "render");
         times[f] = bench_now() - t;
-        vv_bricked_stats_get(b, &st1);
+        vv_source_stats_get(b, &st1);
         fprintf(stderr,
                 "bench_ooc: frame %d: %.2f s, %llu bricks read, %llu from the cache, %llu "
                 "skipped, %.1f MiB read\n",
@@ -157,8 +158,8 @@ main(int argc, char **argv) {
     bench_emit("ooc_first_frame", dataset, times[0], "s");
     if (frames > 1)
         bench_emit("ooc_next_frames", dataset, bench_median(times + 1, frames - 1), "s");
-    vv_bricked_stats st;
-    vv_bricked_stats_get(b, &st);
+    vv_source_stats st;
+    vv_source_stats_get(b, &st);
     bench_emit("ooc_bytes_read_open", dataset, (double)open_bytes / 1048576.0, "MiB");
     bench_emit("ooc_bytes_read_frames", dataset, (double)(st.bytes_read - open_bytes) / 1048576.0,
                "MiB");
@@ -177,7 +178,6 @@ main(int argc, char **argv) {
     vv_image_free(img);
     vv_renderer_free(ren);
     vv_world_free(w);
-    vv_volume_free(proxy);
-    vv_bricked_free(b);
+    vv_opened_clear(&od);
     return 0;
 }

@@ -1,11 +1,13 @@
 /*
  * bench_pyramid: OME-Zarr pyramids rendered out of core by level of detail
- * (vv_pyramid, vv_renderer_render_multires), run by bench/zarr_pyramid.sh
+ * (vv_open of the store by its levels, an object holding the pyramid
+ * source, vv_renderer_render with vv_render_options.lod), run by
+ * bench/zarr_pyramid.sh
  * on a generated store under a cgroup memory limit:
  *   bench_pyramid STORE [--memory-limit MiB] [--size N] [--frames F]
  *                 [--tf LO:HI] [--lod PIXELS | --level L] [--dataset NAME] [--sharpen]
  *                 [--set KEY=VALUE]...
- * Opens STORE with the memory limit (default 1024 MiB), builds the default
+ * Opens STORE with the process's cache at the memory limit (default 1024 MiB), builds the default
  * World from its coarsest level (the proxy, over level 0's box) with a
  * transfer function ramp LO..HI, and renders F frames (default 4) at N x N
  * (default 512), orbiting 10 degrees a frame, each node at the coarsest
@@ -37,9 +39,9 @@
 #include "volvis/volvis.h"
 
 static uint64_t
-chunks_read(const vv_pyramid_stats *st) {
+chunks_read(const vv_source_stats *st) {
     uint64_t n = 0;
-    for (int l = 0; l < VV_PYRAMID_MAX_LEVELS; l++)
+    for (int l = 0; l < VV_SOURCE_MAX_LEVELS; l++)
         n += st->chunk_reads[l];
     return n;
 }
@@ -80,25 +82,25 @@ main(int argc, char **argv) {
         return 2;
     }
     double t0 = bench_now();
-    vv_pyramid *p = NULL;
-    if (vv_pyramid_open(&p, path, -1, -1, (uint64_t)(limit_mib * 1048576.0), NULL) != VV_OK)
+    vv_cache_set_limit(vv_cache_process(), (uint64_t)(limit_mib * 1048576.0));
+    vv_open_options oo;
+    vv_open_options_init(&oo);
+    oo.mode = VV_OPEN_OUT_OF_CORE_ONLY;
+    oo.levels = 1;
+    vv_opened od;
+    if (vv_open(&od, path, &oo) != VV_OK || vv_source_get_kind(od.source) != VV_SOURCE_PYRAMID)
         bench_die("bench_pyramid", path);
-    vv_volume *proxy = NULL;
-    if (vv_pyramid_proxy(p, 0, &proxy) != VV_OK)
-        bench_die("bench_pyramid", "proxy");
-    bench_emit("pyramid_open", dataset, bench_now() - t0, "s");
+    vv_source *p = od.source;
     vv_default_scene_options o;
     vv_default_scene_options_init(&o);
     o.width = o.height = size;
     o.has_tf_range = 1;
     o.tf_lo = tf_lo;
     o.tf_hi = tf_hi;
-    vv_world *w = NULL;
-    if (vv_world_new_for_volume(&w, proxy, &o) != VV_OK)
+    vv_world *w = NULL; /* from the proxy; opacity per level 0's voxel spacing */
+    if (vv_world_new_for_source(&w, p, 0, &o) != VV_OK)
         bench_die("bench_pyramid", "world");
-    /* opacity per voxel spacing of level 0, not of the proxy */
-    w->objects[0]->tf.opacity_unit_distance *=
-        vv_pyramid_level(p, 0)->spacing[0] / proxy->spacing[0];
+    bench_emit("pyramid_open", dataset, bench_now() - t0, "s");
     vv_renderer *ren = NULL;
     vv_image *img = NULL;
     if (vv_renderer_new(&ren, "raycast") != VV_OK || vv_image_new(&img, size, size) != VV_OK)
@@ -114,10 +116,11 @@ main(int argc, char **argv) {
             bench_die("bench_pyramid", set[i]);
     }
     double times[100];
-    vv_multires_source src;
-    vv_pyramid_source(p, &src);
-    vv_pyramid_stats st0, st1;
+    vv_source_stats st0, st1;
     vv_lod lod;
+    vv_render_options ro;
+    vv_render_options_init(&ro);
+    ro.lod = &lod;
     /* the first image: a progressive frame from what the cache holds */
     vv_lod_init(&lod);
     lod.level = level;
@@ -125,7 +128,7 @@ main(int argc, char **argv) {
     lod.progressive = 1;
     lod.background = sharpen;
     lod.load_budget = 0;
-    if (vv_renderer_render_multires(ren, w, 0, &src, &w->view, NULL, &lod, img) != VV_OK)
+    if (vv_renderer_render(ren, w, &w->view, &ro, img) != VV_OK)
         bench_die("bench_pyramid", "first image");
     const double first = bench_now() - t0;
     bench_emit("pyramid_first_image", dataset, first, "s");
@@ -137,9 +140,9 @@ main(int argc, char **argv) {
         for (; lod.pending > 0 && n < 100000; n++) {
             const int stalled = lod.stalled;
             if (!stalled)
-                vv_pyramid_wait(p, 1.0);
+                vv_source_wait(p, 1.0);
             lod.progressive = !stalled; /* stalled: the converged frame streams the rest */
-            if (vv_renderer_render_multires(ren, w, 0, &src, &w->view, NULL, &lod, img) != VV_OK)
+            if (vv_renderer_render(ren, w, &w->view, &ro, img) != VV_OK)
                 bench_die("bench_pyramid", "progressive frame");
             if (n % 10 == 0 || lod.pending == 0 || stalled)
                 fprintf(stderr,
@@ -147,7 +150,7 @@ main(int argc, char **argv) {
                         bench_now() - ts, lod.pending,
                         stalled ? " (the loader stalled: a converged frame)" : "");
         }
-        vv_pyramid_stats_get(p, &st0);
+        vv_source_stats_get(p, &st0);
         bench_emit("pyramid_sharpened", dataset, bench_now() - ts, "s");
         bench_emit("pyramid_sharpening_frames", dataset, n, "frames");
         fprintf(stderr,
@@ -162,15 +165,15 @@ main(int argc, char **argv) {
         vv_lod_init(&lod);
         lod.level = level;
         lod.voxel_pixels = lod_px;
-        vv_pyramid_stats_get(p, &st0);
+        vv_source_stats_get(p, &st0);
         const double t = bench_now();
-        if (vv_renderer_render_multires(ren, w, 0, &src, &w->view, NULL, &lod, img) != VV_OK)
+        if (vv_renderer_render(ren, w, &w->view, &ro, img) != VV_OK)
             bench_die("bench_pyramid", "render");
         times[f] = bench_now() - t;
-        vv_pyramid_stats_get(p, &st1);
+        vv_source_stats_get(p, &st1);
         char nodes[256] = "";
         int len = 0;
-        for (int l = 0; l < vv_pyramid_levels(p) && len < 200; l++)
+        for (int l = 0; l < vv_source_levels(p) && len < 200; l++)
             len += snprintf(nodes + len, sizeof nodes - (size_t)len, " %d", lod.nodes[l]);
         fprintf(stderr,
                 "bench_pyramid: frame %d: %.2f s, nodes per level%s, %d skipped, %llu chunks "
@@ -183,8 +186,8 @@ main(int argc, char **argv) {
     bench_emit("pyramid_first_frame", dataset, times[0], "s");
     if (frames > 1)
         bench_emit("pyramid_next_frames", dataset, bench_median(times + 1, frames - 1), "s");
-    vv_pyramid_stats st;
-    vv_pyramid_stats_get(p, &st);
+    vv_source_stats st;
+    vv_source_stats_get(p, &st);
     bench_emit("pyramid_chunks_read", dataset, (double)chunks_read(&st), "chunks");
     bench_emit("pyramid_bytes_read", dataset, (double)st.bytes_read / 1048576.0, "MiB");
     bench_emit("pyramid_most_reads_a_frame", dataset, st.max_reads_per_frame, "reads");
@@ -201,7 +204,6 @@ main(int argc, char **argv) {
     vv_image_free(img);
     vv_renderer_free(ren);
     vv_world_free(w);
-    vv_volume_free(proxy);
-    vv_pyramid_free(p);
+    vv_opened_clear(&od);
     return 0;
 }

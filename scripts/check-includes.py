@@ -63,7 +63,8 @@ LAYERS = {
 PUBLIC = {
     "core.h": "core", "math.h": "core", "volume.h": "core", "image.h": "core",
     "mesh.h": "core", "grid.h": "core",
-    "sys/source.h": "core",  # the brick source interface: io serves it, render reads it
+    "source.h": "core",  # volume sources and the cache: io opens them, model holds them
+    "sys/source.h": "core",  # the source table and the drivers' views: io serves, render reads
     "model.h": "model",
     "io.h": "io", "video.h": "io", "sys/format.h": "io", "bricks.h": "io",
     "sys/sandbox.h": "io",  # the sandboxed reader's entry point (apps/volvis-reader)

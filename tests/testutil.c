@@ -71,6 +71,32 @@ mkdir_p(const char *path) {
     mkdir(tmp, 0755);
 }
 
+#define VT_MAX_CACHES 256
+static vv_cache *vt_caches[VT_MAX_CACHES];
+static int vt_n_caches;
+
+static void
+vt_free_caches(void) {
+    for (int i = 0; i < vt_n_caches; i++)
+        vv_cache_free(vt_caches[i]);
+    vt_n_caches = 0;
+}
+
+vv_cache *
+vt_cache(uint64_t limit) {
+    if (!limit)
+        return NULL;
+    if (vt_n_caches == 0)
+        atexit(vt_free_caches);
+    if (vt_n_caches == VT_MAX_CACHES)
+        fail_msg("vt_cache: over %d caches", VT_MAX_CACHES);
+    vv_cache *c = NULL;
+    if (vv_cache_new(&c, limit) != VV_OK)
+        fail_msg("vt_cache: %s", vv_error_message());
+    vt_caches[vt_n_caches++] = c;
+    return c;
+}
+
 const char *
 vt_outdir(const char *name) {
     static char buf[1024];

@@ -58,6 +58,13 @@ const char *vt_data(const char *rel);
  * (not emptied: tests name their files and overwrite them). Static buffer. */
 const char *vt_outdir(const char *name);
 
+/**
+ * A cache of its own with a budget of @p limit bytes for the out-of-core
+ * readers a test opens (freed when the test program ends); NULL for 0:
+ * the process's cache (1 GiB).
+ */
+vv_cache *vt_cache(uint64_t limit);
+
 /** Writes @p n bytes to @p path (overwrites); fails the test on error. */
 void vt_write_file(const char *path, const void *data, size_t n);
 

@@ -621,12 +621,12 @@ vvg_window_save_volume(VvgWindow *win, const char *path) {
     }
     vv_format f = vv_format_from_extension(path);
     int n = 0;
-    const vv_volume_format *const *table = vv_volume_format_table(&n);
-    const vv_volume_format *r = f >= 1 && f <= n ? table[f - 1] : NULL;
+    const vv_format_record *const *table = vv_volume_format_table(&n);
+    const vv_format_record *r = f >= 1 && f <= n ? table[f - 1] : NULL;
     if (!r || !r->write) {
         GString *exts = g_string_new(NULL);
         for (int i = 0; i < n; i++)
-            for (const char *const *e = vv_volume_format_write_extensions(table[i]); e && *e; e++)
+            for (const char *const *e = vv_format_record_write_extensions(table[i]); e && *e; e++)
                 g_string_append_printf(exts, "%s.%s", exts->len ? ", " : "", *e);
         g_autofree char *m =
             g_strdup_printf("no format that writes has this extension (use %s)", exts->str);

@@ -249,25 +249,38 @@ int cli_render_parse(cli_args *a, cli_render_args *r);
 /** The World for an already loaded volume @p v (the defaults of a volume file, with @p r's
  * options); 0 or an exit code. */
 int cli_render_world_volume(const cli_render_args *r, vv_volume *v, vv_world **out);
-/** `volvis render` of a volume larger than memory (--memory-limit, or a .vvb INPUT):
- * brick by brick (include/volvis/bricks.h). Returns the exit code. */
-int cli_render_out_of_core(cli_args *a, cli_render_args *r);
-/** A World built from a coarse proxy of @p whole (vv_bricked_proxy): its default transfer
- * function's opacity unit (the smallest voxel spacing) set to @p whole's. */
-void cli_proxy_opacity_unit(vv_world *w, const vv_volume *whole, const vv_volume *proxy);
+/** The World for an opened file's @p src (vv_world_new_for_source: in memory, or its proxy
+ * showing the source out of core, framed at --level), with @p r's options; 0 or an exit
+ * code. */
+int cli_render_world_source(const cli_render_args *r, vv_source *src, vv_world **out);
+/**
+ * How @p r's input opens (vv_open): out of core with --memory-limit,
+ * --lod or --progressive (a pyramid by its levels with --lod, --level or
+ * --progressive; else a .vvb with levels by its bricks), the format's way
+ * otherwise (a .vvb out of core; under mpirun by bricks, the range left to
+ * the ranks); its channel, time step, level, series and raw description.
+ * Also sets the process's cache budget to --memory-limit (1 GiB unless
+ * given). @p scene: for a scene's files (NULL result: read whole).
+ */
+const vv_open_options *cli_render_open_options(const cli_render_args *r, int scene,
+                                               vv_open_options *o);
+/** The level of detail of --lod, --level and --progressive (vv_render_options.lod). */
+void cli_render_lod(const cli_render_args *r, vv_lod *lod);
+/** 1 when a visible volume object of @p w shows a file out of core. */
+int cli_world_out_of_core(const vv_world *w);
+/**
+ * The `wrote` line of a frame of @p w drawn out of core (what each object's
+ * source read: bricks, or chunks by level, and the cache's peak), or the
+ * plain one; @p lod what the frame used. Not printed with -q.
+ */
+void cli_render_report(const cli_render_args *r, const vv_world *w, const vv_image *img,
+                       double seconds, const vv_lod *lod);
 /**
  * The World for r->input (a scene file or a volume) with the overrides of
  * the options (mode, iso, tf, size, step) but not yet turned: see
  * cli_render_turn. 0 or CLI_EXIT_FAIL after printing the error.
  */
 int cli_render_world(const cli_render_args *r, vv_world **out);
-/**
- * cli_render_world of the scene r->input, its volume files given to
- * @p loader first (vv_scene_load_with). 0 or CLI_EXIT_FAIL after printing
- * the error.
- */
-int cli_render_scene_world(const cli_render_args *r, vv_scene_volume_loader loader, void *user,
-                           vv_world **out);
 /** 1 when @p path is a scene file (by its name, or a JSON object inside). */
 int cli_is_scene_file(const char *path);
 /** The time steps of a volume file's object: a vv_time_series per channel. */

@@ -8,7 +8,7 @@
 #include "volvis/sys/format.h"
 
 static const cli_opt_spec convert_opts[] = {
-    {"format", 0, "nrrd|slc|vvb"},
+    {"format", 0, "nrrd|slc|..."},
     {"no-coarse", 0, NULL},
     {"no-levels", 0, NULL},
     {"strict", 0, NULL},
@@ -70,7 +70,7 @@ cli_convert_usage(FILE *out) {
                  "\n");
     fprintf(out,
             "Options:\n"
-            "  --format %s|vvb  output format (default: from OUT's extension)\n"
+            "  --format %s  output format (default: from OUT's extension)\n"
             "  --no-coarse        .vvb: no coarse level per brick\n"
             "  --no-levels        .vvb: no pyramid levels after the bricks\n"
             "  --strict           refuse what the format cannot hold as it is (SLC: a\n"
@@ -117,91 +117,109 @@ cli_convert_usage(FILE *out) {
                  "  volvis convert --raw 2048x2048x2048:u8 big.raw big.vvb\n");
 }
 
-/* IN (of format @p f, detected) as a vv_slabs when it reads slab by slab:
- * a TIFF stack (at @p channel and @p time), or a gzip or bzip2 NRRD of one 3-D
- * volume. *@p out stays NULL for other input (an NRRD neither raw nor gzip
- * among them: read whole). Errors: a TIFF stack's, for the caller to report. */
-static vv_status
-open_slabs(const char *in, vv_format f, int channel, int time, vv_slabs **out) {
-    *out = NULL;
-    if (f != VV_FORMAT_TIFF && (f != VV_FORMAT_NRRD || channel > 0 || time > 0))
-        return VV_OK;
+/* IN read box by box: out of core (raw, uncompressed NRRD and .vvb by
+ * bricks, a pyramid by level 0's chunks: vv_open), or slab by slab (TIFF
+ * stacks, gzip and bzip2 NRRD: vv_slabs). */
+typedef struct box_input {
+    vv_opened od;
+    vv_slabs *sl;
+    const vv_volume *hdr; /* the volume's dims, type and geometry */
+    vv_box_reader read;
+    void *ctx;
+} box_input;
+
+static void
+box_input_close(box_input *bi) {
+    vv_opened_clear(&bi->od);
+    vv_slabs_free(bi->sl);
+    memset(bi, 0, sizeof *bi);
+}
+
+/* Opens IN as a box reader when it can be one: 0 and bi->read set; -1 when
+ * it reads whole only (the caller reads it so); else an exit code. */
+static int
+open_boxes(const char *in, const vv_raw_params *raw, int channel, int time, box_input *bi) {
+    memset(bi, 0, sizeof *bi);
+    vv_open_options oo;
+    vv_open_options_init(&oo);
+    oo.mode = VV_OPEN_OUT_OF_CORE_ONLY;
+    oo.header_only = 1; /* the writers take each box's range as they read it */
+    oo.load.channel = channel;
+    oo.load.time = time;
+    if (raw) {
+        oo.load.format = VV_FORMAT_RAW;
+        oo.load.has_raw = 1;
+        oo.load.raw = *raw;
+    }
+    vv_error_clear();
+    vv_status s = vv_open(&bi->od, in, &oo);
+    if (s == VV_OK && bi->od.kind == 0) {
+        bi->hdr = vv_source_level(bi->od.source, 0);
+        bi->read = vv_source_box;
+        bi->ctx = bi->od.source;
+        return 0;
+    }
+    if (s != VV_OK && s != VV_ERR_UNSUPPORTED)
+        return cli_fail(s, in);
+    vv_opened_clear(&bi->od);
+    if (raw)
+        return -1;
     vv_load_options lo;
     vv_load_options_init(&lo);
-    lo.format = f;
     lo.channel = channel;
     lo.time = time;
     vv_error_clear();
-    vv_status s = vv_slabs_open(out, in, &lo);
-    if (s != VV_OK && f == VV_FORMAT_NRRD) {
+    s = vv_slabs_open(&bi->sl, in, &lo);
+    if (s == VV_ERR_UNSUPPORTED) { /* a format read whole only */
         vv_error_clear();
-        s = VV_OK;
+        return -1;
     }
-    return s;
+    if (s != VV_OK)
+        return cli_fail(s, in);
+    bi->hdr = vv_slabs_header(bi->sl);
+    bi->read = vv_slabs_read_box;
+    bi->ctx = bi->sl;
+    return 0;
 }
 
-/* IN to OUT.vvb (@p flags: VV_VVB_COARSE, VV_VVB_ZSTD, VV_VVB_LEVELS): by
- * bricks when IN is raw or uncompressed NRRD, slab by slab when it is a
- * TIFF stack or a gzip NRRD (vv_slabs), by boxes of level 0 when it is a
- * pyramid, else read whole first. */
+/* IN to OUT.vvb (@p flags: VV_VVB_COARSE, VV_VVB_ZSTD, VV_VVB_LEVELS) box
+ * by box when IN reads so (open_boxes), else read whole first. */
 static int
 convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int series, int channel,
             int time, unsigned flags, int quiet) {
-    vv_bricked *b = NULL;
-    vv_slabs *sl = NULL;
-    vv_pyramid *p = NULL;
-    vv_error_clear();
-    vv_status s = VV_ERR_FORMAT;
-    const vv_format f = raw ? VV_FORMAT_RAW : vv_format_detect(in);
-    /* the header only: the writer takes each brick's range as it reads it (a
-     * .vvb: its bricks one by one) */
-    if ((raw || f == VV_FORMAT_NRRD || cli_ends_with(in, ".vvb")) && channel <= 0 && time <= 0)
-        s = vv_bricked_open_header(&b, in, raw, 0);
-    if (s != VV_OK && !raw) {
-        const vv_status so = open_slabs(in, f, channel, time, &sl);
-        if (so != VV_OK)
-            return cli_fail(so, in);
-        if (!sl && vv_pyramid_probe(in) &&
-            (s = vv_pyramid_open(&p, in, channel, time, (uint64_t)256 << 20, NULL)) != VV_OK)
-            return cli_fail(s, in);
-    }
+    box_input bi;
+    int rc = open_boxes(in, raw, channel, time, &bi);
+    if (rc > 0)
+        return rc;
+    vv_save_options so;
+    vv_save_options_init(&so);
+    so.format = VV_FORMAT_VVB;
+    so.vvb_flags = flags;
     int dims[3];
     const char *type;
     char slabs[64] = "";
-    if (sl || p) { /* a box reader: slabs of slices, or level 0 of a pyramid */
-        const vv_volume *hdr = sl ? vv_slabs_header(sl) : vv_pyramid_level(p, 0);
+    vv_status s;
+    if (rc == 0) {
         cli_progress pr;
         cli_progress_begin(&pr, quiet);
-        s = sl ? vv_boxes_write_vvb(hdr, vv_slabs_read_box, sl, out, flags, &pr.p)
-               : vv_boxes_write_vvb(hdr, vv_pyramid_level0_box, p, out, flags, &pr.p);
+        so.progress = pr.p;
+        s = vv_volume_save_boxes(bi.hdr, bi.read, bi.ctx, out, &so);
         cli_progress_end(&pr);
-        memcpy(dims, hdr->dims, sizeof dims);
-        type = vv_voxel_type_name(hdr->type);
-        if (sl)
+        memcpy(dims, bi.hdr->dims, sizeof dims);
+        type = vv_voxel_type_name(bi.hdr->type);
+        if (bi.sl)
             snprintf(slabs, sizeof slabs, ", from %llu slabs of slices",
-                     (unsigned long long)vv_slabs_loads(sl));
-        vv_slabs_free(sl);
-        vv_pyramid_free(p);
-        if (s != VV_OK)
-            return cli_fail(s, out);
-    } else if (s == VV_OK) {
-        cli_progress pr;
-        cli_progress_begin(&pr, quiet);
-        s = vv_bricked_write_vvb(b, out, flags, &pr.p);
-        cli_progress_end(&pr);
-        memcpy(dims, vv_bricked_header(b)->dims, sizeof dims);
-        type = vv_voxel_type_name(vv_bricked_header(b)->type);
-        vv_bricked_free(b);
+                     (unsigned long long)vv_slabs_loads(bi.sl));
+        box_input_close(&bi);
         if (s != VV_OK)
             return cli_fail(s, out);
     } else {
-        /* not readable by bricks (compressed NRRD, other formats): whole */
+        /* not readable by boxes (compressed NRRD, other formats): whole */
         vv_volume *v = NULL;
-        int rc = cli_load_volume_sc(in, raw, series, channel, time, NULL, &v);
-        if (rc)
+        if ((rc = cli_load_volume_sc(in, raw, series, channel, time, NULL, &v)))
             return rc;
         vv_error_clear();
-        s = vv_volume_write_vvb(v, out, flags);
+        s = vv_volume_save_with(v, out, &so);
         memcpy(dims, v->dims, sizeof dims);
         type = vv_voxel_type_name(v->type);
         vv_volume_free(v);
@@ -210,11 +228,14 @@ convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int serie
     }
     if (!quiet) {
         char levels[64] = "";
-        vv_bricked *w = NULL;
-        if ((flags & VV_VVB_LEVELS) && vv_bricked_open_header(&w, out, NULL, 0) == VV_OK &&
-            vv_bricked_levels(w) > 1)
-            snprintf(levels, sizeof levels, ", %d pyramid levels", vv_bricked_levels(w));
-        vv_bricked_free(w);
+        vv_open_options oo;
+        vv_open_options_init(&oo);
+        oo.mode = VV_OPEN_OUT_OF_CORE;
+        oo.levels = 1;
+        vv_opened w = {0};
+        if ((flags & VV_VVB_LEVELS) && vv_open(&w, out, &oo) == VV_OK && w.info.n_levels > 1)
+            snprintf(levels, sizeof levels, ", %d pyramid levels", w.info.n_levels);
+        vv_opened_clear(&w);
         vv_error_clear();
         printf("wrote %s (vvb, %d x %d x %d, %s, bricks of %d^3 cells%s%s%s)\n", out, dims[0],
                dims[1], dims[2], type, VV_BRICK_CELLS, flags & VV_VVB_ZSTD ? ", zstd" : "", levels,
@@ -223,64 +244,43 @@ convert_vvb(const char *in, const char *out, const vv_raw_params *raw, int serie
     return CLI_EXIT_OK;
 }
 
-/* IN to OUT.zarr chunk by chunk (vv_ome_zarr_write_boxes), never holding
- * IN whole: raw or uncompressed NRRD (read by rows, vv_bricked), TIFF
- * stacks and gzip NRRD (a slab of a row of chunks' slices at a time,
- * vv_slabs) and
- * pyramids (OME-Zarr, BigDataViewer, Imaris: level 0 through the chunk
- * cache). -1: IN is none of these (the caller reads it whole). */
+/* IN to OUT.zarr chunk by chunk (vv_volume_save_boxes), never holding IN
+ * whole, when IN reads box by box (open_boxes). -1: it does not (the
+ * caller reads it whole). */
 static int
 convert_zarr_boxes(const char *in, const char *out, const vv_raw_params *raw, int channel, int time,
                    const vv_save_options *so, int strict, int quiet) {
-    vv_bricked *b = NULL;
-    vv_pyramid *p = NULL;
-    vv_slabs *sl = NULL;
-    vv_error_clear();
-    const vv_format f = raw ? VV_FORMAT_RAW : vv_format_detect(in);
-    vv_status s = VV_ERR_FORMAT;
-    if ((raw || f == VV_FORMAT_NRRD || cli_ends_with(in, ".vvb")) && channel <= 0 && time <= 0)
-        s = vv_bricked_open_header(&b, in, raw, 0);
-    vv_error_clear(); /* a bricked reader's refusal: a gzip NRRD reads by slabs */
-    if (s != VV_OK && !raw) {
-        if ((s = open_slabs(in, f, channel, time, &sl)) != VV_OK)
-            return cli_fail(s, in);
-        if (!sl && vv_pyramid_probe(in) &&
-            (s = vv_pyramid_open(&p, in, channel, time, (uint64_t)256 << 20, NULL)) != VV_OK)
-            return cli_fail(s, in);
-    }
-    if (!b && !sl && !p)
+    box_input bi;
+    int rc = open_boxes(in, raw, channel, time, &bi);
+    if (rc < 0)
         return -1;
-    const vv_volume *hdr = b    ? vv_bricked_header(b)
-                           : sl ? vv_slabs_header(sl)
-                                : vv_pyramid_level(p, 0);
-    const vv_volume_format *rec = vv_volume_format_table(NULL)[VV_FORMAT_OME_ZARR - 1];
+    if (rc)
+        return rc;
+    const vv_format_record *rec = vv_format_record_of(VV_FORMAT_OME_ZARR);
     char why[256];
-    const int convert = rec->fits && !rec->fits(hdr, why, sizeof why);
-    int rc = CLI_EXIT_OK;
+    const int convert = rec->fits && !rec->fits(bi.hdr, why, sizeof why);
     if (convert && strict) {
         cli_error("%s: %s; refusing to convert it (--strict)", out, why);
         rc = CLI_EXIT_FAIL;
     } else {
-        s = b    ? vv_ome_zarr_write_boxes(hdr, vv_bricked_box, b, out, so)
-            : sl ? vv_ome_zarr_write_boxes(hdr, vv_slabs_read_box, sl, out, so)
-                 : vv_ome_zarr_write_boxes(hdr, vv_pyramid_level0_box, p, out, so);
+        vv_save_options o = *so;
+        o.format = VV_FORMAT_OME_ZARR;
+        vv_status s = vv_volume_save_boxes(bi.hdr, bi.read, bi.ctx, out, &o);
         if (s != VV_OK)
             rc = cli_fail(s, out);
         else if (!quiet) {
             if (convert)
                 cli_error("warning: %s: %s", out, why);
             char slabs[64] = "";
-            if (sl)
+            if (bi.sl)
                 snprintf(slabs, sizeof slabs, " from %llu slabs of slices",
-                         (unsigned long long)vv_slabs_loads(sl));
+                         (unsigned long long)vv_slabs_loads(bi.sl));
             printf("wrote %s (%s, %d x %d x %d, %s, chunk by chunk%s)\n", out,
-                   vv_format_name(VV_FORMAT_OME_ZARR), hdr->dims[0], hdr->dims[1], hdr->dims[2],
-                   vv_voxel_type_name(hdr->type), slabs);
+                   vv_format_name(VV_FORMAT_OME_ZARR), bi.hdr->dims[0], bi.hdr->dims[1],
+                   bi.hdr->dims[2], vv_voxel_type_name(bi.hdr->type), slabs);
         }
     }
-    vv_bricked_free(b);
-    vv_pyramid_free(p);
-    vv_slabs_free(sl);
+    box_input_close(&bi);
     return rc;
 }
 
@@ -300,8 +300,7 @@ cli_convert_main(int argc, char **argv) {
         return cli_usage_error(&a, "expected IN and OUT, got %d arguments", a.n_pos);
     const char *in = a.pos[0], *out = a.pos[1];
 
-    /* the format: --format NAME (one that writes, or vvb), else OUT's extension;
-     * VV_FORMAT_AUTO stands for .vvb below */
+    /* the format: --format NAME (one that writes), else OUT's extension */
     vv_format format;
     const char *s = cli_get(&a, "format");
     char names[128], exts[128];
@@ -309,13 +308,10 @@ cli_convert_main(int argc, char **argv) {
     cli_writable_formats(exts, sizeof exts, "/", 1);
     if (s) {
         vv_error_clear();
-        if (strcmp(s, "vvb") == 0)
-            format = VV_FORMAT_AUTO;
-        else if (vv_format_parse(s, &format) != VV_OK || format == VV_FORMAT_AUTO ||
-                 !vv_volume_format_table(NULL)[format - 1]->write)
-            return cli_usage_error(&a, "--format: cannot write '%s' (%s or vvb)", s, names);
-    } else if (cli_ends_with(out, ".vvb")) {
-        format = VV_FORMAT_AUTO;
+        if (vv_format_parse(s, &format) != VV_OK || format == VV_FORMAT_AUTO ||
+            !vv_format_record_of(format)->write ||
+            vv_format_record_of(format)->holds != VV_DATA_VOLUME)
+            return cli_usage_error(&a, "--format: cannot write '%s' (%s)", s, names);
     } else if ((format = vv_format_from_extension(out)) == VV_FORMAT_UNKNOWN) {
         cli_writable_formats(names, sizeof names, "|", 0);
         return cli_usage_error(&a,
@@ -340,9 +336,9 @@ cli_convert_main(int argc, char **argv) {
     const char *ls = cli_get(&a, "level");
     if (ls && (rc = cli_parse_int(&a, "level", ls, 0, 64, &level)))
         return rc;
-    if (format == VV_FORMAT_AUTO && level > 0)
+    if (format == VV_FORMAT_VVB && level > 0)
         return cli_usage_error(&a, "--level: a .vvb is written from level 0");
-    if (format == VV_FORMAT_AUTO) {
+    if (format == VV_FORMAT_VVB) {
         const int zstd = cli_count(&a, "no-compress") == 0;
         if (zstd && cli_count(&a, "no-coarse") > 0 && !quiet)
             cli_error("note: %s: zstd bricks keep their coarse levels (--no-coarse takes effect "
@@ -372,7 +368,7 @@ cli_convert_main(int argc, char **argv) {
         return rc;
     /* what the format cannot hold as it is (SLC: 8 bits only) is refused with
      * --strict, else converted with a note */
-    const vv_volume_format *rec = vv_volume_format_table(NULL)[format - 1];
+    const vv_format_record *rec = vv_format_record_of(format);
     char why[256];
     const int convert = rec->fits && !rec->fits(v, why, sizeof why);
     if (convert && strict) {

@@ -122,7 +122,7 @@ cli_filter_main(int argc, char **argv) {
     if (s) {
         vv_error_clear();
         if (vv_format_parse(s, &format) != VV_OK || format == VV_FORMAT_AUTO ||
-            !vv_volume_format_table(NULL)[format - 1]->write)
+            !vv_format_record_of(format)->write)
             return cli_usage_error(&a, "--format: cannot write '%s' (%s)", s, names);
     } else if ((format = vv_format_from_extension(out)) == VV_FORMAT_UNKNOWN) {
         cli_writable_formats(names, sizeof names, "|", 0);
@@ -181,7 +181,7 @@ cli_filter_main(int argc, char **argv) {
         vv_filter_chain_free(chain);
         return rc;
     }
-    const vv_volume_format *rec = vv_volume_format_table(NULL)[format - 1];
+    const vv_format_record *rec = vv_format_record_of(format);
     char why[256];
     if (!quiet && rec->fits && !rec->fits(f, why, sizeof why))
         cli_error("warning: %s: %s", out, why);

@@ -558,27 +558,34 @@ print_volume_text(const char *in, const measure_req *r, const vv_volume *v,
  * box by box, through its pyramid (level 0) or by bricks. */
 static int
 measure_out_of_core(const char *in, const vv_raw_params *raw, const measure_req *r) {
-    vv_pyramid *p = NULL;
-    vv_bricked *b = NULL;
-    vv_status s;
+    vv_open_options oo;
+    vv_open_options_init(&oo);
+    oo.mode = VV_OPEN_OUT_OF_CORE_ONLY;
+    oo.levels = 1; /* a pyramid: level 0 through its chunks */
+    oo.load.channel = r->channel < 0 ? 0 : r->channel;
+    oo.load.time = r->time;
+    if (raw) {
+        oo.load.format = VV_FORMAT_RAW;
+        oo.load.has_raw = 1;
+        oo.load.raw = *raw;
+    }
+    vv_cache_set_limit(vv_cache_process(), r->memory_limit);
+    vv_opened od;
     vv_error_clear();
-    if (!raw && vv_pyramid_probe(in))
-        s = vv_pyramid_open(&p, in, r->channel < 0 ? 0 : r->channel, r->time, r->memory_limit,
-                            NULL);
-    else
-        s = vv_bricked_open(&b, in, raw, r->memory_limit);
-    if (s != VV_OK)
-        return cli_fail(s, in);
-    if (b && (r->channel > 0 || r->time > 0)) {
-        vv_bricked_free(b);
-        cli_error("%s: one channel and time step, read by bricks (--channel and --time are a "
-                  "pyramid's)",
+    vv_status s = vv_open(&od, in, &oo);
+    if (s == VV_ERR_UNSUPPORTED || (s == VV_OK && od.kind != 0)) {
+        vv_opened_clear(&od);
+        cli_error("%s: cannot be read out of core (by bricks: .vvb, raw or uncompressed NRRD, "
+                  "channel 0 at step 0; by levels: a pyramid); convert it to .vvb first (volvis "
+                  "convert IN OUT.vvb)",
                   in);
         return CLI_EXIT_FAIL;
     }
-    const vv_volume *hdr = p ? vv_pyramid_level(p, 0) : vv_bricked_header(b);
-    vv_box_reader read = p ? vv_pyramid_level0_box : vv_bricked_box;
-    void *ctx = p ? (void *)p : (void *)b;
+    if (s != VV_OK)
+        return cli_fail(s, in);
+    const vv_volume *hdr = vv_source_level(od.source, 0);
+    vv_box_reader read = vv_source_box;
+    void *ctx = od.source;
     volume_results res;
     memset(&res, 0, sizeof res);
     res.dist = res.geo = NAN;
@@ -600,18 +607,10 @@ measure_out_of_core(const char *in, const vv_raw_params *raw, const measure_req 
         rc = cli_fail(s, fail_path);
     } else {
         measure_points(r, hdr, &res);
-        double mib = 0, peak = 0;
-        if (p) {
-            vv_pyramid_stats st;
-            vv_pyramid_stats_get(p, &st);
-            mib = (double)st.bytes_read / 1048576.0;
-            peak = (double)st.peak_bytes / 1048576.0;
-        } else {
-            vv_bricked_stats st;
-            vv_bricked_stats_get(b, &st);
-            mib = (double)st.bytes_read / 1048576.0;
-            peak = (double)st.peak_bytes / 1048576.0;
-        }
+        vv_source_stats st;
+        vv_source_stats_get(od.source, &st);
+        const double mib = (double)st.bytes_read / 1048576.0;
+        const double peak = (double)st.peak_bytes / 1048576.0;
         if (r->json) {
             print_volume_json(in, r, hdr, &res);
         } else {
@@ -622,8 +621,7 @@ measure_out_of_core(const char *in, const vv_raw_params *raw, const measure_req 
         rc = CLI_EXIT_OK;
     }
     vv_histogram_free(res.h);
-    vv_pyramid_free(p);
-    vv_bricked_free(b);
+    vv_opened_clear(&od);
     return rc;
 }
 

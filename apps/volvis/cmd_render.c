@@ -166,12 +166,18 @@ cli_render_main(int argc, char **argv) {
         r.time = range[0];
         r.time_range = 1;
     }
-    /* under mpirun a .vvb is read by bricks, each rank its own box */
-    if (r.memory_limit > 0 || r.has_lod || r.progressive > 0 ||
-        (cli_ends_with(r.input, ".vvb") && !vv_parallel_launched()))
-        return cli_render_out_of_core(&a, &r);
-    if (vv_parallel_launched())
+    if (vv_parallel_launched()) {
+        int rank = 0, size = 1;
+        vv_parallel_init(NULL, NULL, &rank, &size);
+        if (size > 1 && (r.memory_limit > 0 || r.has_lod || r.progressive > 0)) {
+            cli_error("render: --memory-limit (out of core) runs on one rank, not under mpirun "
+                      "-np %d",
+                      size);
+            return CLI_EXIT_USAGE;
+        }
+        /* each rank reads its own box of a file read by boxes */
         return cli_render_parallel(&a, &r);
+    }
     vv_world *w = NULL;
     if ((rc = cli_render_world(&r, &w)))
         return rc;
@@ -205,9 +211,32 @@ cli_render_main(int argc, char **argv) {
         cli_progress_end(&pr);
         goto done;
     }
+    /* objects out of core: by level of detail (--lod, --level), and with
+     * --progressive every step from what is resident, each next one reading
+     * at most N chunks more, until nothing is pending */
+    vv_lod lod;
+    cli_render_lod(&r, &lod);
+    ro.lod = &lod;
+    lod.progressive = r.progressive > 0 && cli_world_out_of_core(w);
+    int steps = 0;
     double t0 = cli_now();
-    vv_error_clear();
-    s = vv_renderer_render(ren, w, &w->view, &ro, img);
+    for (;;) {
+        lod.load_budget = steps == 0 ? 0 : r.progressive;
+        vv_error_clear();
+        s = vv_renderer_render(ren, w, &w->view, &ro, img);
+        if (s != VV_OK || !lod.progressive)
+            break;
+        char step[4200];
+        cli_numbered_path(r.output, 'p', steps, step, sizeof step);
+        if ((s = vv_image_write_png(img, step, r.gamma, r.alpha)) != VV_OK) {
+            cli_progress_end(&pr);
+            rc = cli_fail(s, step);
+            goto done;
+        }
+        steps++;
+        if (lod.pending == 0)
+            break;
+    }
     double seconds = cli_now() - t0;
     cli_progress_end(&pr);
     if (s == VV_OK && cli_interrupted())
@@ -226,8 +255,9 @@ cli_render_main(int argc, char **argv) {
         rc = cli_fail(s, r.output);
         goto done;
     }
-    if (!r.quiet)
-        printf("wrote %s (%dx%d, %.2f s)\n", r.output, img->width, img->height, seconds);
+    if (steps > 0 && !r.quiet)
+        printf("wrote %d progressive steps (_p0000 .. _p%04d)\n", steps, steps - 1);
+    cli_render_report(&r, w, img, seconds, &lod);
     rc = CLI_EXIT_OK;
 done:
     vv_image_free(img);

@@ -288,37 +288,40 @@ void
 cli_print_formats(FILE *out, int grids) {
     int n = 0;
     char ext[256];
-    const vv_volume_format *const *v = vv_volume_format_table(&n);
+    const vv_format_record *const *t = vv_format_table(&n);
     fprintf(out, "Volume formats (detected from the content; --format NAME where a command "
                  "takes it):\n");
     for (int i = 0; i < n; i++) {
-        extension_list(ext, sizeof ext, v[i]->extensions);
-        fprintf(out, "  %s%s: %s%s\n      %s\n", v[i]->name, ext,
-                !v[i]->read   ? "write"
-                : v[i]->write ? "read and write"
-                              : "read",
-                v[i]->flags & VV_FORMAT_FLAG_FOLDER ? ", files or folders" : "", v[i]->doc);
+        if (t[i]->holds != VV_DATA_VOLUME)
+            continue;
+        extension_list(ext, sizeof ext, t[i]->extensions);
+        fprintf(out, "  %s%s: %s%s\n      %s\n", t[i]->name, ext,
+                !t[i]->read && !t[i]->open_store ? "write"
+                : t[i]->write                    ? "read and write"
+                                                 : "read",
+                t[i]->flags & VV_FORMAT_FLAG_FOLDER ? ", files or folders" : "", t[i]->doc);
     }
     if (!grids)
         return;
-    const vv_grid_format_record *const *g = vv_grid_format_table(&n);
     fprintf(out, "Irregular grid formats (detected from the content or the name):\n");
     for (int i = 0; i < n; i++) {
-        extension_list(ext, sizeof ext, g[i]->extensions);
-        fprintf(out, "  %s%s: %s\n      %s\n", g[i]->name, ext,
-                g[i]->write ? "read and write" : "read", g[i]->doc);
+        if (t[i]->holds != VV_DATA_GRID)
+            continue;
+        extension_list(ext, sizeof ext, t[i]->extensions);
+        fprintf(out, "  %s%s: %s\n      %s\n", t[i]->name, ext,
+                t[i]->write_grid ? "read and write" : "read", t[i]->doc);
     }
 }
 
 void
 cli_writable_formats(char *buf, size_t cap, const char *sep, int extensions) {
     int n = 0, k = 0;
-    const vv_volume_format *const *t = vv_volume_format_table(&n);
+    const vv_format_record *const *t = vv_format_table(&n);
     buf[0] = '\0';
     for (int i = 0; i < n; i++) {
-        if (!t[i]->write)
+        if (!t[i]->write || t[i]->holds != VV_DATA_VOLUME)
             continue;
-        for (const char *const *e = extensions ? vv_volume_format_write_extensions(t[i])
+        for (const char *const *e = extensions ? vv_format_record_write_extensions(t[i])
                                                : &t[i]->name;
              e && *e; e++) {
             size_t len = strlen(buf);

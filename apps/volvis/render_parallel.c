@@ -1,7 +1,8 @@
 /*
  * `volvis render` under mpirun -np N: every rank builds the World from the
- * same command line, checks that it agrees with rank 0 on the command line
- * and the input file, and renders its brick; the partial images are
+ * same command line (a file read by boxes opens out of core, each rank
+ * reading its own box through the object's source), checks that it agrees
+ * with rank 0 on the command line and the input file, and renders its brick; the partial images are
  * composited (binary swap or radix-k) and rank 0 writes the PNG and prints
  * the `wrote` line, which names the number of ranks. A failure on any rank
  * (an unreadable file, a bad option) stops every rank with that rank's
@@ -71,115 +72,6 @@ agree(int rc) {
     return rc ? rc : CLI_EXIT_FAIL;
 }
 
-/* What the ranks read by boxes: a bricked file or one level of a pyramid. */
-typedef struct par_source {
-    vv_bricked *b;
-    vv_pyramid *p;
-    int level;
-} par_source;
-
-static vv_status
-read_level_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
-    const par_source *src = ctx;
-    return vv_pyramid_read_box(src->p, src->level, lo, hi, out);
-}
-
-static vv_status
-read_bricked_box(void *ctx, const int lo[3], const int hi[3], vv_volume **out) {
-    const par_source *src = ctx;
-    return vv_bricked_read_box(src->b, lo, hi, out);
-}
-
-static const vv_volume *
-source_header(const par_source *src) {
-    return src->b ? vv_bricked_header(src->b) : vv_pyramid_level(src->p, src->level);
-}
-
-static void
-source_close(par_source *src) {
-    vv_bricked_free(src->b);
-    vv_pyramid_free(src->p);
-    memset(src, 0, sizeof *src);
-}
-
-/* A volume readable by boxes, opened on every rank (nothing opened when
- * it is not such a file): a pyramid (OME-Zarr, BigDataViewer, Imaris, a
- * .vvb with levels given --level; its level --level, chunks cached within
- * --memory-limit, 1 GiB when not given) or a bricked file (.vvb, --raw,
- * uncompressed NRRD; header only).
- * The status of the attempt, VV_ERR_UNSUPPORTED when not tried. */
-static vv_status
-open_source(const cli_render_args *r, par_source *src) {
-    memset(src, 0, sizeof *src);
-    if (cli_ends_with(r->input, ".json"))
-        return VV_ERR_UNSUPPORTED;
-    vv_error_clear();
-    /* a .vvb with pyramid levels reads by bricks unless --level asks for one */
-    if (!r->has_raw && vv_pyramid_probe(r->input) &&
-        (r->has_level || !cli_ends_with(r->input, ".vvb"))) {
-        vv_status s = vv_pyramid_open(&src->p, r->input, r->channel, r->has_time ? r->time : -1,
-                                      r->memory_limit ? r->memory_limit : (uint64_t)1 << 30, NULL);
-        src->level = r->has_level ? r->level : 0;
-        if (s == VV_OK && src->level >= vv_pyramid_levels(src->p))
-            s = vv_error_set(VV_ERR_INVALID, "%s: level %d asked, the store has %d", r->input,
-                             src->level, vv_pyramid_levels(src->p));
-        if (s != VV_OK)
-            source_close(src);
-        return s;
-    }
-    if (!r->has_raw && !cli_ends_with(r->input, ".vvb") &&
-        vv_format_detect(r->input) != VV_FORMAT_NRRD)
-        return VV_ERR_UNSUPPORTED;
-    return vv_bricked_open_header(&src->b, r->input, r->has_raw ? &r->raw : NULL, 0);
-}
-
-/* Rank 0's coarse proxy of the source, on every rank. */
-static vv_status
-shared_proxy(const par_source *src, int rank, vv_volume **out) {
-    *out = NULL;
-    vv_volume *p = NULL;
-    int meta[5] = {0, 0, 0, 0, 0}; /* dims, type, ok */
-    double geo[16];
-    if (rank == 0) {
-        vv_status s =
-            src->b ? vv_bricked_proxy(src->b, 128, &p) : vv_pyramid_proxy(src->p, src->level, &p);
-        if (s == VV_OK) {
-            memcpy(meta, p->dims, sizeof p->dims);
-            meta[3] = (int)p->type;
-            meta[4] = 1;
-            memcpy(geo, p->spacing, 3 * sizeof(double));
-            memcpy(geo + 3, p->origin, 3 * sizeof(double));
-            memcpy(geo + 6, p->direction, 9 * sizeof(double));
-            geo[15] = 0;
-        }
-    }
-    vv_status s = vv_parallel_broadcast(meta, sizeof meta);
-    if (s == VV_OK)
-        s = vv_parallel_broadcast(geo, sizeof geo);
-    if (s == VV_OK && !meta[4])
-        s = vv_error_set(VV_ERR_IO, "rank 0 could not read the volume's proxy");
-    if (s == VV_OK && rank != 0) {
-        s = vv_volume_new(&p, meta, (vv_voxel_type)meta[3]);
-        if (s == VV_OK) {
-            memcpy(p->spacing, geo, 3 * sizeof(double));
-            memcpy(p->origin, geo + 3, 3 * sizeof(double));
-            memcpy(p->direction, geo + 6, 9 * sizeof(double));
-            p->unit = source_header(src)->unit;
-            p->space = source_header(src)->space;
-        }
-    }
-    if (s == VV_OK)
-        s = vv_parallel_broadcast(p->data, (size_t)meta[0] * meta[1] * meta[2] *
-                                               vv_voxel_type_size((vv_voxel_type)meta[3]));
-    if (s != VV_OK) {
-        vv_volume_free(p);
-        return s;
-    }
-    vv_volume_update_range(p);
-    *out = p;
-    return VV_OK;
-}
-
 int
 cli_render_parallel(cli_args *a, cli_render_args *r) {
     int rank = 0, size = 1, rc;
@@ -187,41 +79,13 @@ cli_render_parallel(cli_args *a, cli_render_args *r) {
     vv_renderer *ren = NULL;
     vv_parallel *par = NULL;
     vv_image *img = NULL;
-    par_source src = {NULL, NULL, 0};
-    vv_volume *proxy = NULL;
     vv_status s = vv_parallel_init(NULL, NULL, &rank, &size);
     if (s != VV_OK)
         return cli_fail(s, NULL);
-    /* a volume readable by boxes: each rank reads only its own box; the
-     * World's defaults come from rank 0's coarse proxy */
-    const vv_status os = open_source(r, &src);
-    char why[2048];
-    snprintf(why, sizeof why, "%s", vv_error_message());
-    const int have = os == VV_OK;
-    const int all = vv_parallel_agree(have ? VV_OK : VV_ERR_UNSUPPORTED) == VV_OK;
-    const int none = vv_parallel_agree(have ? VV_ERR_UNSUPPORTED : VV_OK) == VV_OK;
-    vv_error_clear();
-    if (!all && !none) {
-        /* some ranks can read the volume by bricks and others not: the
-         * first failing rank's error, on every rank */
-        vv_status e = VV_OK;
-        if (!have)
-            e = vv_error_set(os == VV_ERR_UNSUPPORTED ? VV_ERR_INVALID : os, "%s",
-                             why[0] ? why : "cannot read the volume by bricks");
-        s = vv_parallel_agree(e);
-        rc = cli_fail(s, NULL);
-        goto done;
-    }
-    if (!all) {
-        source_close(&src);
-        rc = agree(cli_render_world(r, &w));
-    } else {
-        s = shared_proxy(&src, rank, &proxy);
-        rc = s != VV_OK ? cli_fail(s, r->input) : cli_render_world_volume(r, proxy, &w);
-        if (!rc)
-            cli_proxy_opacity_unit(w, source_header(&src), proxy);
-        rc = agree(rc);
-    }
+    /* every rank builds the same World; a file read by boxes out of core
+     * (cli_render_open_options: the range left to the ranks) is read by
+     * each rank box by box, its own only, through the object's source */
+    rc = agree(cli_render_world(r, &w));
     if (rc)
         goto done;
     vv_error_clear();
@@ -240,9 +104,6 @@ cli_render_parallel(cli_args *a, cli_render_args *r) {
     po.radix = r->radix;
     if (!rc && (s = vv_parallel_new(&par, ren, &po)) != VV_OK)
         rc = cli_fail(s, NULL);
-    if (!rc && (src.b || src.p))
-        vv_parallel_set_box_source(par, source_header(&src),
-                                   src.b ? read_bricked_box : read_level_box, &src);
     if (!rc && rank == 0 && (s = vv_image_new(&img, w->view.width, w->view.height)) != VV_OK)
         rc = cli_fail(s, NULL);
     if ((rc = agree(rc)))
@@ -253,6 +114,9 @@ cli_render_parallel(cli_args *a, cli_render_args *r) {
     vv_render_options_init(&ro);
     ro.threads = r->threads;
     ro.quality = quality;
+    vv_lod lod; /* --level: the pyramid's level the ranks read */
+    cli_render_lod(r, &lod);
+    ro.lod = &lod;
     double t0 = cli_now();
     vv_error_clear();
     vv_parallel_stats st;
@@ -279,8 +143,6 @@ done:
     vv_parallel_free(par);
     vv_renderer_free(ren);
     vv_world_free(w);
-    vv_volume_free(proxy);
-    source_close(&src);
     return rc;
 }
 

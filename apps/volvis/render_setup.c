@@ -484,64 +484,158 @@ world_for_channels(const cli_render_args *r, vv_world **out) {
     return rc;
 }
 
-/* Builds the World for a volume file. */
+const vv_open_options *
+cli_render_open_options(const cli_render_args *r, int scene, vv_open_options *o) {
+    vv_open_options_init(o);
+    vv_cache_set_limit(vv_cache_process(), r->memory_limit); /* 0: the default, 1 GiB */
+    const int ooc = r->memory_limit > 0 || r->has_lod || r->progressive > 0;
+    /* under mpirun a file read by boxes is read so by each rank: its own box */
+    const int ranks = vv_parallel_launched();
+    o->mode = ooc || (ranks && !scene) ? VV_OPEN_OUT_OF_CORE : VV_OPEN_DEFAULT;
+    o->levels = r->has_lod || r->progressive > 0 || r->has_level;
+    o->load.level = r->has_level ? r->level : 0;
+    if (scene)
+        return ooc ? o : NULL; /* a scene's files are read whole unless asked */
+    o->load.series = r->series;
+    o->load.channel = r->channel;
+    o->load.time = r->has_time ? r->time : -1;
+    if (r->has_raw) {
+        o->load.format = VV_FORMAT_RAW;
+        o->load.has_raw = 1;
+        o->load.raw = r->raw;
+    }
+    /* under mpirun each rank reads its own box: the range comes from them */
+    o->header_only = ranks;
+    return o;
+}
+
+void
+cli_render_lod(const cli_render_args *r, vv_lod *lod) {
+    vv_lod_init(lod);
+    lod->level = r->has_level ? r->level : -1;
+    lod->voxel_pixels = r->lod;
+}
+
+int
+cli_world_out_of_core(const vv_world *w) {
+    for (int i = 0; w && i < w->n_objects; i++)
+        if (w->objects[i]->visible && w->objects[i]->source)
+            return 1;
+    return 0;
+}
+
+/* Builds the World for a volume file: opened through the format table
+ * (vv_open), in memory or out of core as the options say. */
 static int
 world_for_volume(const cli_render_args *r, vv_world **out) {
     if (r->n_channels)
         return world_for_channels(r, out);
-    vv_volume *v;
-    int rc =
-        cli_load_volume_level(r->input, r->has_raw ? &r->raw : NULL, r->series, r->channel,
-                              r->has_time ? r->time : -1, r->has_level ? r->level : 0, NULL, &v);
+    int rc = r->has_raw ? cli_check_readable(r->input) : cli_check_readable_input(r->input);
     if (rc)
         return rc;
-    rc = cli_render_world_volume(r, v, out);
-    vv_volume_free(v); /* the World holds its own reference */
+    vv_open_options oo;
+    cli_render_open_options(r, 0, &oo);
+    /* out of core asked for (--memory-limit, --lod, --progressive): a file
+     * that cannot be is refused, not read whole */
+    if (oo.mode == VV_OPEN_OUT_OF_CORE && !vv_parallel_launched())
+        oo.mode = VV_OPEN_OUT_OF_CORE_ONLY;
+    vv_opened od;
+    vv_error_clear();
+    vv_status s = vv_open(&od, r->input, &oo);
+    if (s == VV_ERR_UNSUPPORTED && vv_error_message()[0]) /* the store's reason */
+        return cli_fail(s, r->input);
+    if (s == VV_ERR_UNSUPPORTED) {
+        cli_error("%s: cannot be read out of core (by bricks: .vvb, raw or uncompressed NRRD; by "
+                  "levels: a pyramid); convert it to .vvb first (volvis convert IN OUT.vvb)",
+                  r->input);
+        return CLI_EXIT_FAIL;
+    }
+    if (s == VV_OK && od.kind != 0)
+        s = vv_error_set(VV_ERR_FORMAT, "%s: not a volume file", r->input);
+    if (s != VV_OK) {
+        vv_opened_clear(&od);
+        return cli_fail(s, r->input);
+    }
+    if (oo.levels && (r->has_lod || r->progressive > 0 || r->level > 0) &&
+        vv_source_get_kind(od.source) != VV_SOURCE_PYRAMID && oo.mode == VV_OPEN_OUT_OF_CORE_ONLY) {
+        vv_opened_clear(&od);
+        cli_error("%s: --lod, --level and --progressive need a multiresolution file (OME-Zarr, "
+                  "BigDataViewer or Imaris HDF5, or a .vvb with pyramid levels)",
+                  r->input);
+        return CLI_EXIT_USAGE;
+    }
+    rc = cli_render_world_source(r, od.source, out);
+    vv_opened_clear(&od); /* the World holds its own reference */
     if (!rc && r->has_time)
         (*out)->objects[0]->time = r->time; /* the file's step it shows */
     return rc;
 }
 
+/* @p r's options of a default scene. */
+static void
+default_options(const cli_render_args *r, vv_default_scene_options *o) {
+    vv_default_scene_options_init(o);
+    if (r->has_mode)
+        o->mode = r->mode;
+    if (r->has_tf) {
+        o->has_tf_range = 1;
+        o->tf_lo = r->tf_lo;
+        o->tf_hi = r->tf_hi;
+    }
+    if (r->has_iso) {
+        o->has_isovalue = 1;
+        o->isovalue = r->iso;
+    }
+    if (r->has_size) {
+        o->width = r->width;
+        o->height = r->height;
+    }
+    /* the view turn (--azimuth, --elevation, --zoom) is cli_render_turn's */
+}
+
+/* The step override of --step on every object of *@p out. */
+static void
+apply_step(const cli_render_args *r, vv_world *w) {
+    if (r->has_step)
+        for (int i = 0; i < w->n_objects; i++)
+            w->objects[i]->step = r->step;
+}
+
 int
 cli_render_world_volume(const cli_render_args *r, vv_volume *v, vv_world **out) {
     vv_default_scene_options o;
-    vv_default_scene_options_init(&o);
-    if (r->has_mode)
-        o.mode = r->mode;
-    if (r->has_tf) {
-        o.has_tf_range = 1;
-        o.tf_lo = r->tf_lo;
-        o.tf_hi = r->tf_hi;
-    }
-    if (r->has_iso) {
-        o.has_isovalue = 1;
-        o.isovalue = r->iso;
-    }
-    if (r->has_size) {
-        o.width = r->width;
-        o.height = r->height;
-    }
-    /* the view turn (--azimuth, --elevation, --zoom) is cli_render_turn's */
+    default_options(r, &o);
     vv_error_clear();
     vv_status s = vv_world_new_for_volume(out, v, &o);
     if (s != VV_OK)
         return cli_fail(s, r->input);
-    if (r->has_step)
-        for (int i = 0; i < (*out)->n_objects; i++)
-            (*out)->objects[i]->step = r->step;
+    apply_step(r, *out);
     return 0;
 }
 
-/* Loads a scene file (its volume files through @p loader first, when
- * given) and applies the overrides given on the command line. */
+int
+cli_render_world_source(const cli_render_args *r, vv_source *src, vv_world **out) {
+    vv_default_scene_options o;
+    default_options(r, &o);
+    vv_error_clear();
+    /* out of core, the view frames level --level's box */
+    vv_status s = vv_world_new_for_source(out, src, r->has_level ? r->level : 0, &o);
+    if (s != VV_OK)
+        return cli_fail(s, r->input);
+    apply_step(r, *out);
+    return 0;
+}
+
+/* Loads a scene file (its volume files out of core when the options ask)
+ * and applies the overrides given on the command line. */
 static int
-world_for_scene(const cli_render_args *r, vv_scene_volume_loader loader, void *user,
-                vv_world **out) {
+world_for_scene(const cli_render_args *r, vv_world **out) {
     vv_error_clear();
     cli_progress pr; /* geometry objects are voxelized while loading */
     cli_progress_begin(&pr, r->quiet);
-    vv_status s = loader ? vv_scene_load_with(out, r->input, &pr.p, NULL, loader, user)
-                         : vv_scene_load_progress(out, r->input, &pr.p);
+    vv_open_options oo;
+    const vv_open_options *open = cli_render_open_options(r, 1, &oo);
+    vv_status s = vv_scene_load_open(out, r->input, &pr.p, NULL, open);
     cli_progress_end(&pr);
     if (s != VV_OK)
         return cli_fail(s, r->input);
@@ -593,13 +687,6 @@ world_done(const cli_render_args *r, int rc, vv_world **out) {
 }
 
 int
-cli_render_scene_world(const cli_render_args *r, vv_scene_volume_loader loader, void *user,
-                       vv_world **out) {
-    *out = NULL;
-    return world_done(r, world_for_scene(r, loader, user, out), out);
-}
-
-int
 cli_render_world(const cli_render_args *r, vv_world **out) {
     *out = NULL;
     int rc = cli_check_readable_input(r->input);
@@ -613,9 +700,7 @@ cli_render_world(const cli_render_args *r, vv_world **out) {
                 r->n_channels ? "channels" : "time steps", scene ? "scene" : "grid");
         return CLI_EXIT_FAIL;
     }
-    rc = scene  ? world_for_scene(r, NULL, NULL, out)
-         : grid ? world_for_grid(r, out)
-                : world_for_volume(r, out);
+    rc = scene ? world_for_scene(r, out) : grid ? world_for_grid(r, out) : world_for_volume(r, out);
     return world_done(r, rc, out);
 }
 

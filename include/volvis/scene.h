@@ -21,6 +21,7 @@
 
 #include "core.h"
 #include "filter.h"
+#include "io.h"
 #include "model.h"
 
 #ifdef __cplusplus
@@ -57,46 +58,29 @@ vv_status vv_scene_load_progress(vv_world **out, const char *path, const vv_prog
 vv_status vv_scene_load_cached(vv_world **out, const char *path, const vv_progress *progress,
                                vv_filter_cache *cache);
 
-/** What a scene's volume loader gives for a file (vv_scene_load_with). */
-typedef struct vv_scene_volume {
-    /** a new reference, owned by the scene then: the file's voxels, or a
-     * volume that stands for them over the same world box (a pyramid's proxy) */
-    vv_volume *volume;
-    /** its voxel size over the file's, per axis (1: the file's own voxels):
-     * a "spacing" the scene gives is multiplied by it */
-    double scale[3];
-} vv_scene_volume;
-
 /**
- * Loads the volume file @p path (time step @p time, -1 or 0: the first) of
- * a scene into *@p out; VV_ERR_UNSUPPORTED (nothing set): the scene reads
- * it with vv_volume_load instead. Other errors fail the load, prefixed
- * with the position of the object's "file" key.
+ * vv_scene_load_cached opening each volume file of a volume object without
+ * "filters" as @p open says (vv_open, io.h; NULL: read whole, into memory):
+ * out of core (a bricked file, a pyramid) with VV_OPEN_OUT_OF_CORE or
+ * VV_OPEN_AUTO, every file's pieces in open->cache under one budget (the
+ * CLI's --memory-limit, the GUI's). The object then shows the file's source
+ * (vv_object_new_source; its level open->load.level frames it), and its
+ * file places it: a scene's "origin" and "spacing" for such a file must be
+ * the file's own (as vv_scene_save writes them), else VV_ERR_FORMAT ("object
+ * 'NAME': out of core its file's own origin and spacing place it"); its
+ * "time" a pyramid's time step (a bricked file has step 0 only: another
+ * step is read whole). open->load's format, channel and time are the
+ * scene's; its level and raw parameters are not used but for the level
+ * that frames. Errors as vv_scene_load, and vv_open's.
  */
-typedef vv_status (*vv_scene_volume_loader)(void *user, const char *path, int time,
-                                            vv_scene_volume *out);
+vv_status vv_scene_load_open(vv_world **out, const char *path, const vv_progress *progress,
+                             vv_filter_cache *cache, const vv_open_options *open);
 
 /**
- * vv_scene_load_cached with @p loader (may be NULL) asked first for the
- * volume file of each volume object without "filters" -- so that a program
- * can stand a proxy in for a file larger than memory, as the GUI does for
- * pyramids (docs/gui.md). The scene's "origin" applies to what it gives,
- * its "spacing" times the loader's scale. Called on the loading thread, in
- * the scene's order. Errors as vv_scene_load, and the loader's.
- */
-vv_status vv_scene_load_with(vv_world **out, const char *path, const vv_progress *progress,
-                             vv_filter_cache *cache, vv_scene_volume_loader loader, void *user);
-
-/**
- * How many times vv_scene_load_with of scene @p path would call its loader:
- * its volume objects read from a file without "filters" (so that a program
- * can share a memory budget among them before loading). 0 for a file that
- * cannot be read or parsed (vv_scene_load_with then says why). Thread-safe.
- */
-int vv_scene_loader_files(const char *path);
-
-/**
- * Writes a World as a scene file, atomically. Volumes are referred to by
+ * Writes a World as a scene file, atomically. An object showing a file out
+ * of core (its source) is written with the file's own origin and spacing
+ * (level 0's), so that loading the scene out of core again accepts them.
+ * Volumes are referred to by
  * @p volume_files[i] for object i (relative to the scene file); a mesh
  * object by volume_files[i] when given, else by its geometry.source; the
  * entries of other geometric objects are not read, and @p volume_files may

@@ -20,7 +20,7 @@ from .world import (Box, CutPlane, Cylinder, GridObject, Light, Material, MeshOb
                     Plane, Polygon, Sphere, TransferFunction, TransferFunction2D, View, VolumeObject,
                     World, load_scene, tf_presets)
 from .render import Image, Renderer, RendererInfo, render, renderers
-from .pyramid import Level, Pyramid, pyramids_of, render_out_of_core
+from .pyramid import Level, Pyramid, memory_limit
 from .mesh import Grid, Mesh, load_grid, load_mesh
 from .components import (Colocalisation, Compressed, Measurement, Shape, colocalisation,
                          compress, decompress, filter, filters, isosurface, measure, voxelize)
@@ -48,7 +48,8 @@ __all__ = [
     "View", "Light", "CutPlane", "Material", "TransferFunction", "TransferFunction2D", "tf_presets",
     "Object", "VolumeObject", "GridObject", "Sphere", "Box", "Plane", "Cylinder", "Polygon",
     "MeshObject", "World", "load_scene",
-    "Renderer", "RendererInfo", "renderers", "render", "Image",
+    "Renderer", "RendererInfo", "renderers", "render", "Image", "Pyramid", "Level",
+    "memory_limit",
     "Mesh", "load_mesh", "Grid", "load_grid",
     "filter", "filters", "isosurface", "measure", "Measurement", "colocalisation",
     "Colocalisation", "voxelize", "Shape", "compress",

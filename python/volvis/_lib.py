@@ -118,11 +118,12 @@ class _Reporter:
             self.bar.close()
 
 
-def call_long(fn, progress=None, desc="volvis"):
+def call_long(fn, progress=None, desc="volvis", allow=()):
     """Runs ``fn(vv_progress) -> vv_status`` with progress and Ctrl+C handling
-    (see the module docstring); raises the library's Error on failure,
-    KeyboardInterrupt when interrupted, CancelledError when the progress
-    callable asked to stop. Returns None."""
+    (see the module docstring); raises the library's Error on failure (but
+    for the statuses in ``allow``, returned), KeyboardInterrupt when
+    interrupted, CancelledError when the progress callable asked to stop.
+    Returns the status (0, or one of ``allow``)."""
     reporter = _Reporter(progress, desc)
     on_main = threading.current_thread() is threading.main_thread()
     state = ffi.gc(lib.vvpy_progress_new(), lib.vvpy_progress_free)
@@ -136,8 +137,10 @@ def call_long(fn, progress=None, desc="volvis"):
 
     if not on_main and not reporter.active:
         st, msg = work()
+        if st in allow:
+            return st
         check(st, msg)
-        return
+        return 0
     fut = _pool().submit(work)
     interrupted = False
     asked = False
@@ -166,4 +169,7 @@ def call_long(fn, progress=None, desc="volvis"):
         raise KeyboardInterrupt
     if st == lib.VV_ERR_CANCELLED and asked:
         raise CancelledError(msg or "cancelled by the progress callback")
+    if st in allow:
+        return st
     check(st, msg)
+    return 0

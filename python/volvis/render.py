@@ -179,16 +179,32 @@ def _apply_mode(world, mode):
 
 
 def render(scene, renderer=None, mode=None, size=None, quality=None, view=None, dtype=np.uint8,
-           depth=False, gamma=1.0, alpha=True, threads=0, progress=None, **options):
-    """Renders a World or a Volume and returns the image as a numpy array.
+           depth=False, gamma=1.0, alpha=True, threads=0, progress=None, lod=1.0, level=None,
+           progressive=False, return_lod=False, **options):
+    """Renders a World or a Volume and returns the image as a numpy array,
+    through the library's one render call (vv_renderer_render).
 
     scene: a :class:`World`, a :class:`Volume` or a numpy array (shown in
     the default scene of ``volvis render FILE``, World.for_volume), or a
-    :class:`Pyramid` (rendered out of core by level of detail:
-    :meth:`Pyramid.render`). A World with objects of pyramids
-    (:meth:`Pyramid.object`, :meth:`Pyramid.world`) draws them from their
-    pyramids out of core (:func:`volvis.render_out_of_core`, by level of
-    detail at one voxel a pixel), not from their coarse proxies.
+    :class:`Pyramid` (its :meth:`Pyramid.world`). A World whose objects
+    show files out of core (:meth:`Pyramid.object`, :meth:`Pyramid.world`)
+    draws them from their files, object by object: a pyramid by level of
+    detail, a bricked file brick by brick; every other volume object from
+    its own volume (the library chooses: docs/python.md).
+    lod: each node of a pyramid at the coarsest level whose voxel projects
+    to at most ``lod`` pixels; level: every node at this level instead (0:
+    full resolution, which equals the in-memory render of level 0: MIP,
+    MinIP, X-ray and the isosurface bit for bit, composite to the rounding
+    of compositing). progressive: draw at once from what the cache holds --
+    a node whose chunks are not resident at its level is drawn at the
+    finest coarser level that is -- reading nothing, and ask the background
+    loader for the missing chunks (replacing the previous request); render
+    again after :meth:`Pyramid.wait` to see them; when "pending" is 0 the
+    image is the converged one. return_lod: also return a dict of the nodes
+    drawn per level, the nodes skipped unread, the nodes drawn coarser than
+    their level ("pending"), the boxes asked of the loader ("requested")
+    and "stalled" (1: the loader stopped because the view needs more chunks
+    than the cache holds: a render without progressive streams the rest).
     renderer: a registry name (``volvis.renderers``), a :class:`Renderer`
     (keeps its caches between calls), or None: the World's render settings,
     else "raycast". mode: "composite", "mip", "minip", "xray" or "iso" for
@@ -211,27 +227,28 @@ def render(scene, renderer=None, mode=None, size=None, quality=None, view=None, 
     array a volume shares is checked for writes first (see Volume).
     Errors: InvalidError (unknown renderer or option, bad size), NoMemoryError,
     and the renderer's own errors, with the library's message."""
-    from .pyramid import Pyramid, pyramids_of, render_out_of_core
+    from .pyramid import Pyramid, _lod, _lod_info
     if isinstance(scene, Pyramid):
-        return scene.render(renderer=renderer, mode=mode, size=size, quality=quality, view=view,
-                            dtype=dtype, depth=depth, gamma=gamma, alpha=alpha, threads=threads,
-                            progress=progress, **options)
-    pyramids = pyramids_of(scene) if isinstance(scene, World) else []
-    if pyramids:
-        return render_out_of_core(scene, pyramids, renderer=renderer, mode=mode, size=size,
-                                  quality=quality, view=view, dtype=dtype, depth=depth,
-                                  gamma=gamma, alpha=alpha, threads=threads, progress=progress,
-                                  **options)
+        scene = scene.world(mode=mode or "composite", size=size)
+        mode = None
     frame = _prepare(scene, renderer, mode, size, quality, view, dtype, threads, options)
     world, r, vc, img, ro = frame
+    lodc = _lod(lod, level, progressive, "render")
 
     def run(prog):
         ro.progress = prog
+        ro.lod = lodc
         return lib.vv_renderer_render(r._c, world._c, vc, ro, img)
 
     with r._lock:
         _lib.call_long(run, progress, desc="render")
-    return _finish(img, vc, dtype, depth, gamma, alpha)
+    out = _finish(img, vc, dtype, depth, gamma, alpha)
+    if return_lod:
+        levels = max([lib.vv_source_levels(world._c.objects[i].source)
+                      for i in range(world._c.n_objects)
+                      if world._c.objects[i].source != ffi.NULL] + [1])
+        return out, _lod_info(lodc, levels)
+    return out
 
 
 def _prepare(scene, renderer, mode, size, quality, view, dtype, threads, options):

@@ -8,6 +8,7 @@ volume.h). World position of voxel (i, j, k) = origin + direction @
 """
 import dataclasses
 import itertools
+import os
 import sys
 
 import numpy as np
@@ -398,11 +399,67 @@ class Volume:
         return png_bytes(render(self, size=(256, 256)))
 
 
+def _open_source(path, series, channel, format, raw, time, out_of_core):
+    """volvis.open with out_of_core: vv_open, a Volume or a Pyramid."""
+    from .pyramid import Pyramid
+    oo = ffi.new("vv_open_options *")
+    lib.vv_open_options_init(oo)
+    oo.mode = lib.VV_OPEN_AUTO if out_of_core == "auto" else lib.VV_OPEN_OUT_OF_CORE
+    oo.levels = 1
+    if format is not None:
+        f = ffi.new("vv_format *")
+        check(lib.vv_format_parse(cstr(format), f))
+        oo.load.format = f[0]
+    if series is not None:
+        oo.load.series = int(series)
+    if channel is not None:
+        oo.load.channel = int(channel)
+    if time is not None:
+        oo.load.time = int(time)
+    if raw is not None:
+        oo.load.has_raw = 1
+        oo.load.format = lib.VV_FORMAT_RAW
+        _raw_params(oo.load.raw, raw)
+    od = ffi.new("vv_opened *")
+    _lib.call_long(lambda prog: lib.vv_open(od, cstr(path), oo), None)
+    try:
+        if od.kind != 0:
+            raise InvalidError("volvis.open: %s is not a volume file" % os.fspath(path))
+        whole = lib.vv_source_volume(od.source)
+        if whole != ffi.NULL:
+            return Volume._own(lib.vv_volume_ref(whole))
+        p = Pyramid._own(od.source, path)
+        p.channels, p.times = int(od.info.n_channels), int(od.info.n_times)
+        p.channel_name = pystr(od.info.channel_name)
+        return p
+    finally:
+        lib.vv_opened_clear(od)
+
+
 def _mat4(m):
     return np.array([[m.m[r][c] for c in range(4)] for r in range(4)], dtype=np.float64)
 
 
-def open(path, series=None, channel=None, format=None, raw=None, time=None, slices=None):
+def _raw_params(r, raw):
+    """Fills the vv_raw_params @p r from the dict ``raw`` of :func:`open`."""
+    raw = dict(raw)
+    dims = raw.pop("dims")
+    for a in range(3):
+        r.dims[a] = int(dims[a])
+    r.type = _CODE[_voxel_name(raw.pop("dtype", np.uint8))]
+    r.big_endian = 1 if raw.pop("big_endian", False) else 0
+    for key in ("spacing", "origin"):
+        if key in raw:
+            v = _vec3(raw.pop(key), key)
+            for a in range(3):
+                getattr(r, key)[a] = v[a]
+    r.header_skip = int(raw.pop("header_skip", 0))
+    if raw:
+        raise InvalidError("volvis.open: unknown raw keys %s" % sorted(raw))
+
+
+def open(path, series=None, channel=None, format=None, raw=None, time=None, slices=None,
+         out_of_core=False):
     """Loads a volume file of any format the library reads (vv_volume_load):
     SLC, NRRD, NIfTI, MetaImage, VTK legacy, TIFF stacks, DICOM series
     (folders, DICOMDIR), raw files, and .vvc compressed volumes (decoded).
@@ -420,10 +477,19 @@ def open(path, series=None, channel=None, format=None, raw=None, time=None, slic
     sub-stack of a stack larger than memory, its origin that of slice first;
     other formats raise UnsupportedError, a range past the stack InvalidError.
 
-    Returns a :class:`Volume` that owns its voxels. Errors: FileError,
-    FormatError, LimitError, UnsupportedError, InvalidError with the
-    library's message naming the file."""
+    out_of_core: False (read whole, the default); True: out of core where
+    the file allows -- a pyramid by its levels, a .vvb, raw or uncompressed
+    NRRD file by bricks -- as a :class:`Pyramid`, else whole; "auto": so
+    when the volume's level 0 holds more than a quarter of the process's
+    cache (:func:`volvis.memory_limit`), as the GUI opens files.
+
+    Returns a :class:`Volume` that owns its voxels, or a :class:`Pyramid`
+    (out of core). Errors: FileError, FormatError, LimitError,
+    UnsupportedError, InvalidError with the library's message naming the
+    file."""
     p = cstr(path)
+    if out_of_core:
+        return _open_source(path, series, channel, format, raw, time, out_of_core)
     if raw is None and format is None and lib.vv_vvc_detect(p):
         from .components import decompress
         return decompress(path)
@@ -446,23 +512,9 @@ def open(path, series=None, channel=None, format=None, raw=None, time=None, slic
                                % (first, count))
         opt.z_first, opt.z_count = first, count
     if raw is not None:
-        raw = dict(raw)
         opt.has_raw = 1
         opt.format = lib.VV_FORMAT_RAW
-        r = opt.raw
-        dims = raw.pop("dims")
-        for a in range(3):
-            r.dims[a] = int(dims[a])
-        r.type = _CODE[_voxel_name(raw.pop("dtype", np.uint8))]
-        r.big_endian = 1 if raw.pop("big_endian", False) else 0
-        for key in ("spacing", "origin"):
-            if key in raw:
-                v = _vec3(raw.pop(key), key)
-                for a in range(3):
-                    getattr(r, key)[a] = v[a]
-        r.header_skip = int(raw.pop("header_skip", 0))
-        if raw:
-            raise InvalidError("volvis.open: unknown raw keys %s" % sorted(raw))
+        _raw_params(opt.raw, raw)
     out = ffi.new("vv_volume **")
     _lib.call_long(lambda prog: lib.vv_volume_load(out, p, opt), None)
     return Volume._own(out[0])

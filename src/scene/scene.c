@@ -317,40 +317,12 @@ vv_scene_load_progress(vv_world **out, const char *path, const vv_progress *prog
 vv_status
 vv_scene_load_cached(vv_world **out, const char *path, const vv_progress *progress,
                      vv_filter_cache *cache) {
-    return vv_scene_load_with(out, path, progress, cache, NULL, NULL);
-}
-
-int
-vv_scene_loader_files(const char *path) {
-    unsigned char *data = NULL;
-    uint64_t size = 0;
-    if (!path || vv_read_file(path, SCENE_MAX_BYTES, &data, &size) != VV_OK) {
-        vv_error_clear();
-        return 0;
-    }
-    json_t *root = json_loadb((const char *)data, (size_t)size, 0, NULL);
-    free(data);
-    int n = 0;
-    size_t i;
-    json_t *e;
-    json_t *objects = root ? json_object_get(root, "objects") : NULL;
-    if (json_is_array(objects))
-        json_array_foreach(objects, i, e) {
-            const json_t *type = json_object_get(e, "type");
-            /* an object is a volume unless it says otherwise (vv_scene_parse_object) */
-            if (json_is_object(e) &&
-                (!type ||
-                 (json_is_string(type) && strcmp(json_string_value(type), "volume") == 0)) &&
-                json_is_string(json_object_get(e, "file")) && !json_object_get(e, "filters"))
-                n++;
-        }
-    json_decref(root);
-    return n;
+    return vv_scene_load_open(out, path, progress, cache, NULL);
 }
 
 vv_status
-vv_scene_load_with(vv_world **out, const char *path, const vv_progress *progress,
-                   vv_filter_cache *cache, vv_scene_volume_loader loader, void *user) {
+vv_scene_load_open(vv_world **out, const char *path, const vv_progress *progress,
+                   vv_filter_cache *cache, const vv_open_options *open) {
     if (!out)
         return vv_error_set(VV_ERR_INVALID, "scene: NULL output");
     *out = NULL;
@@ -361,7 +333,7 @@ vv_scene_load_with(vv_world **out, const char *path, const vv_progress *progress
     vv_status st = vv_read_file(path, SCENE_MAX_BYTES, &data, &size);
     if (st != VV_OK)
         return vv_error_prefix(st, "scene");
-    sctx c = {path, (const char *)data, (size_t)size, progress, cache, loader, user};
+    sctx c = {path, (const char *)data, (size_t)size, progress, cache, open};
     json_error_t jerr;
     json_t *root = json_loadb((const char *)data, (size_t)size,
                               JSON_REJECT_DUPLICATES | JSON_DECODE_INT_AS_REAL, &jerr);

@@ -25,10 +25,10 @@ typedef struct sctx {
     const char *path; /* scene file as given */
     const char *text;
     size_t len;
-    const vv_progress *progress;   /* voxelization of geometry objects; may be NULL */
-    vv_filter_cache *fcache;       /* filtered volumes kept between loads; may be NULL */
-    vv_scene_volume_loader loader; /* the caller's loader of unfiltered volumes; may be NULL */
-    void *loader_user;
+    const vv_progress *progress; /* voxelization of geometry objects; may be NULL */
+    vv_filter_cache *fcache;     /* filtered volumes kept between loads; may be NULL */
+    /* how unfiltered volume files open (vv_open); NULL: whole, into memory */
+    const vv_open_options *open;
 } sctx;
 
 /** The render modes' names in scene files, by vv_render_mode. */

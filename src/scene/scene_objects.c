@@ -191,6 +191,8 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     if (!full)
         return vv_error_set(VV_ERR_NOMEM, "%s: out of memory", c->path);
     vv_volume *vol = NULL;
+    vv_source *source = NULL; /* the file out of core (vol its proxy) */
+    int source_level = 0;
     double scale[3] = {1, 1, 1}; /* the volume's voxel over the file's */
     /* "filters": a filter chain applied at load (src/filter), the result cached */
     json_t *fj = json_object_get(e, "filters");
@@ -213,22 +215,33 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
             fo.progress = *c->progress; /* and its cancel */
         st = vv_filter_load_cached(c->fcache, full, has_origin ? o3 : NULL, has_spacing ? s3 : NULL,
                                    chain, &fo, &vol);
-    } else {
-        /* the caller's loader first (a proxy of a pyramid), else the file whole */
-        vv_scene_volume sv = {NULL, {1, 1, 1}};
-        st = c->loader ? c->loader(c->loader_user, full, time, &sv) : VV_ERR_UNSUPPORTED;
-        if (st == VV_OK && !sv.volume)
-            st = vv_error_set(VV_ERR_INVALID, "%s: the scene's loader gave no volume", full);
-        if (st == VV_OK) {
-            vol = sv.volume;
-            memcpy(scale, sv.scale, sizeof scale);
-        } else if (st == VV_ERR_UNSUPPORTED) {
-            vv_load_options lo;
-            vv_load_options_init(&lo);
-            lo.time = time;
-            vv_error_clear();
-            st = vv_volume_load(&vol, full, &lo);
+    } else if (c->open && c->open->mode != VV_OPEN_WHOLE) {
+        /* out of core where the file and the options allow (vv_open) */
+        vv_open_options oo = *c->open;
+        vv_load_options_init(&oo.load);
+        oo.load.time = time;
+        vv_opened od;
+        vv_error_clear();
+        st = vv_open(&od, full, &oo);
+        if (st == VV_OK && od.kind != 0)
+            st = vv_error_set(VV_ERR_FORMAT, "%s: not a volume file", full);
+        const int level = c->open->load.level > 0 ? c->open->load.level : 0;
+        if (st == VV_OK && (vol = vv_source_volume(od.source))) {
+            vv_volume_ref(vol);
+        } else if (st == VV_OK && (st = vv_source_proxy(od.source, level, &vol)) == VV_OK) {
+            const vv_volume *h0 = vv_source_level(od.source, 0);
+            source = vv_source_ref(od.source);
+            source_level = level;
+            for (int k = 0; k < 3; k++) /* a "spacing" is the file's, of its level 0 */
+                scale[k] = vol->spacing[k] / h0->spacing[k];
         }
+        vv_opened_clear(&od);
+    } else {
+        vv_load_options lo;
+        vv_load_options_init(&lo);
+        lo.time = time;
+        vv_error_clear();
+        st = vv_volume_load(&vol, full, &lo);
     }
     if (st != VV_OK) {
         vv_filter_chain_free(chain);
@@ -238,6 +251,28 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
         vv_scene_locate(c, kp, &line, &col);
         return vv_error_prefix(st, "%s:%d:%d: %s", c->path, line, col, kp);
     }
+    /* a file out of core places itself: a scene's origin and spacing must be
+     * its own (a saved session gives them back, equal up to rounding) */
+    for (int k = 0; source && k < 3 && (has_origin || has_spacing); k++) {
+        const double o = k == 0 ? origin.x : k == 1 ? origin.y : origin.z;
+        const double sp = (k == 0 ? spacing.x : k == 1 ? spacing.y : spacing.z) * scale[k];
+        if ((has_origin &&
+             fabs(o - vol->origin[k]) > 1e-9 * (fabs(vol->origin[k]) + vol->spacing[k])) ||
+            (has_spacing && fabs(sp - vol->spacing[k]) > 1e-9 * vol->spacing[k])) {
+            vv_source_free(source);
+            vv_volume_free(vol);
+            vv_filter_chain_free(chain);
+            free(full);
+            vv_scene_path_key(kp, op, has_origin ? "origin" : "spacing");
+            return vv_scene_serr(c, kp,
+                                 "object '%s': out of core its file's own origin and spacing "
+                                 "place it; leave out \"origin\" and \"spacing\" (\"position\" "
+                                 "and \"scale\" move it)",
+                                 name ? name : file);
+        }
+    }
+    if (source)
+        has_origin = has_spacing = 0;
     /* the volume is freshly loaded and ours alone, so overriding is safe (a
      * filtered one is shared with the cache and already has them) */
     if (has_origin && !fj) {
@@ -255,6 +290,11 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     vv_object *o = NULL;
     st = vv_object_new_volume(&o, vol, name ? name : defname);
     vv_volume_free(vol);
+    if (st == VV_OK && source && (st = vv_object_attach_source(o, source, source_level)) != VV_OK) {
+        vv_object_free(o);
+        o = NULL;
+    }
+    vv_source_free(source);
     if (st != VV_OK) {
         vv_filter_chain_free(chain);
         free(full);

@@ -368,7 +368,8 @@ object(wctx *c, const vv_object *o, const char *file) {
         put(c, oj, "component", json_integer(o->component));
         put(c, oj, "time", json_integer(o->time));
     } else {
-        const vv_volume *v = o->volume;
+        /* a file out of core: its own geometry (level 0's), not the proxy's */
+        const vv_volume *v = o->source ? vv_source_level(o->source, 0) : o->volume;
         put_str(c, oj, "type", "volume", "the object's type");
         put_str(c, oj, "file", src, "the volume's file name");
         put(c, oj, "origin", vec3(vv_vec3_make(v->origin[0], v->origin[1], v->origin[2])));

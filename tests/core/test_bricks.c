@@ -20,6 +20,9 @@
  */
 #include "testutil.h"
 
+#include "io/bricked.h"
+#include "render/drivers.h"
+
 #include "volvis/sys/renderer.h"
 
 #include <math.h>
@@ -55,7 +58,7 @@ static void
 check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const char *what,
              int full) {
     vv_bricked *b = NULL;
-    vt_ok(vv_bricked_open(&b, path, raw, 4 << 20));
+    vt_ok(vv_bricked_open(&b, path, raw, vt_cache(4 << 20)));
     const vv_volume *h = vv_bricked_header(b);
     for (int a = 0; a < 3; a++)
         assert_int_equal(h->dims[a], head->dims[a]);
@@ -90,7 +93,7 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
                 vt_ok(vv_renderer_render(mem, w, &w->view, &ro, ref));
                 vv_bricked_stats before;
                 vv_bricked_stats_get(b, &before);
-                vt_ok(vv_renderer_render_bricks(ooc, w, 0, &src, &w->view, &ro, img));
+                vt_ok(drv_render_bricks(ooc, w, 0, &src, &w->view, &ro, img));
                 frames++;
                 vv_bricked_stats after;
                 vv_bricked_stats_get(b, &after);
@@ -141,7 +144,7 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
         vt_ok(vv_renderer_render(mem, w, &w->view, NULL, ref));
         vv_bricked_stats before, after;
         vv_bricked_stats_get(b, &before);
-        vt_ok(vv_renderer_render_bricks(ooc, w, 0, &src, &w->view, NULL, img));
+        vt_ok(drv_render_bricks(ooc, w, 0, &src, &w->view, NULL, img));
         frames++;
         vv_bricked_stats_get(b, &after);
         int same = 0, lit = 0;
@@ -164,7 +167,7 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
         vt_ok(vv_renderer_new(&rtm, "raytrace"));
         vt_ok(vv_renderer_set_option(rtm, "refinement", "off"));
         vt_ok(vv_renderer_render(rtm, w, &w->view, &ro, ref));
-        vt_ok(vv_renderer_render_bricks(rt, w, 0, &src, &w->view, &ro, img));
+        vt_ok(drv_render_bricks(rt, w, 0, &src, &w->view, &ro, img));
         frames++;
         const double dbr = vt_image_psnr(ref, img, &same);
         printf("%s raytrace iso 600: %s %.1f dB\n", what, same ? "bit-identical" : "differs", dbr);
@@ -177,7 +180,7 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
         vt_ok(vv_bricked_proxy(b, 64, &pv));
         vv_world *wp = head_world(pv, VV_MODE_ISO, 0.6);
         wp->objects[0]->isovalue = 600;
-        assert_int_equal(vv_renderer_render_bricks(rt, wp, 0, &src, &wp->view, &ro, img),
+        assert_int_equal(drv_render_bricks(rt, wp, 0, &src, &wp->view, &ro, img),
                          VV_ERR_UNSUPPORTED);
         frames++;
         assert_non_null(strstr(vv_error_message(), "iso regions need the whole volume"));
@@ -187,7 +190,7 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
          * the end as the whole render classifies it */
         vv_world *wx = head_world(head, VV_MODE_XRAY, 0.6);
         vt_ok(vv_renderer_render(mem, wx, &wx->view, NULL, ref));
-        vt_ok(vv_renderer_render_bricks(ooc, wx, 0, &src, &wx->view, NULL, img));
+        vt_ok(drv_render_bricks(ooc, wx, 0, &src, &wx->view, NULL, img));
         vv_world_free(wx);
         frames++;
         const double dbx = vt_image_psnr(ref, img, &same);
@@ -215,7 +218,7 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
         vv_image *img = NULL;
         vt_ok(vv_renderer_new(&sp, "splat"));
         vt_ok(vv_image_new(&img, w->view.width, w->view.height));
-        assert_int_equal(vv_renderer_render_bricks(sp, w, 0, &src, &w->view, NULL, img),
+        assert_int_equal(drv_render_bricks(sp, w, 0, &src, &w->view, NULL, img),
                          VV_ERR_UNSUPPORTED);
         assert_non_null(strstr(vv_error_message(), "splat renders no regions"));
         vv_image_free(img);
@@ -280,11 +283,12 @@ test_ct_head(void **state) {
 
     /* a memory limit smaller than one brick */
     vv_bricked *b = NULL;
-    assert_int_equal(vv_bricked_open(&b, vvb, NULL, 100000), VV_ERR_LIMIT);
+    assert_int_equal(vv_bricked_open(&b, vvb, NULL, vt_cache(100000)), VV_ERR_LIMIT);
     assert_null(b);
     assert_non_null(strstr(vv_error_message(), "smaller than one brick"));
     /* a gzip NRRD cannot be read by bricks */
-    assert_int_equal(vv_bricked_open(&b, vt_data("volumes/ct_head.nrrd"), NULL, 0), VV_ERR_FORMAT);
+    assert_int_equal(vv_bricked_open(&b, vt_data("volumes/ct_head.nrrd"), NULL, vt_cache(0)),
+                     VV_ERR_FORMAT);
     assert_non_null(strstr(vv_error_message(), "convert it to .vvb first"));
     vv_volume_free(head);
 }
@@ -320,7 +324,7 @@ round_trip(unsigned flags) {
     snprintf(path, sizeof path, "%s/syn%u.vvb", outdir(), flags);
     vt_ok(vv_volume_write_vvb(v, path, flags));
     vv_bricked *b = NULL;
-    vt_ok(vv_bricked_open(&b, path, NULL, 0));
+    vt_ok(vv_bricked_open(&b, path, NULL, vt_cache(0)));
     int nb[3];
     vv_bricked_grid(b, nb);
     assert_int_equal(nb[0], 2);
@@ -386,7 +390,7 @@ test_bad_vvb(void **state) {
     /* brick 3's offset past the end of the file (index at 256, 48 bytes a brick) */
     const unsigned char far[8] = {0, 0, 0, 0, 0, 1, 0, 0};
     patched(good, bad, 256 + 3 * 48, far, 8, -1);
-    assert_int_equal(vv_bricked_open(&b, bad, NULL, 0), VV_ERR_FORMAT);
+    assert_int_equal(vv_bricked_open(&b, bad, NULL, vt_cache(0)), VV_ERR_FORMAT);
     assert_null(b);
     printf("%s\n", vv_error_message());
     assert_non_null(strstr(vv_error_message(), "brick 3"));
@@ -394,33 +398,33 @@ test_bad_vvb(void **state) {
     /* a brick size that does not match its box */
     const unsigned char size[8] = {5, 0, 0, 0, 0, 0, 0, 0};
     patched(good, bad, 256 + 1 * 48 + 8, size, 8, -1);
-    assert_int_equal(vv_bricked_open(&b, bad, NULL, 0), VV_ERR_FORMAT);
+    assert_int_equal(vv_bricked_open(&b, bad, NULL, vt_cache(0)), VV_ERR_FORMAT);
     assert_non_null(strstr(vv_error_message(), "brick 1"));
     /* a brick count that does not match the dims */
     const unsigned char count[8] = {7, 0, 0, 0, 0, 0, 0, 0};
     patched(good, bad, 192, count, 8, -1);
-    assert_int_equal(vv_bricked_open(&b, bad, NULL, 0), VV_ERR_FORMAT);
+    assert_int_equal(vv_bricked_open(&b, bad, NULL, vt_cache(0)), VV_ERR_FORMAT);
     assert_non_null(strstr(vv_error_message(), "index of 7 bricks"));
     /* truncated: the last bricks are gone */
     patched(good, bad, -1, NULL, 0, 2000);
-    assert_int_equal(vv_bricked_open(&b, bad, NULL, 0), VV_ERR_FORMAT);
+    assert_int_equal(vv_bricked_open(&b, bad, NULL, vt_cache(0)), VV_ERR_FORMAT);
     assert_non_null(strstr(vv_error_message(), "past the end of the file"));
     /* not a .vvb at all */
     patched(good, bad, 0, "NOTAVVB!", 8, -1);
-    assert_int_equal(vv_bricked_open(&b, bad, NULL, 0), VV_ERR_FORMAT);
+    assert_int_equal(vv_bricked_open(&b, bad, NULL, vt_cache(0)), VV_ERR_FORMAT);
     assert_non_null(strstr(vv_error_message(), "magic"));
     /* a raw file shorter than its dims */
     vv_raw_params rp;
     vv_raw_params_init(&rp);
     rp.dims[0] = rp.dims[1] = rp.dims[2] = 100;
     rp.type = VV_U8;
-    assert_int_equal(vv_bricked_open(&b, good, &rp, 0), VV_ERR_FORMAT);
+    assert_int_equal(vv_bricked_open(&b, good, &rp, vt_cache(0)), VV_ERR_FORMAT);
     assert_non_null(strstr(vv_error_message(), "past the end of the file"));
     /* zstd bricks */
     char goodz[1200];
     snprintf(goodz, sizeof goodz, "%s/goodz.vvb", outdir());
     vt_ok(vv_volume_write_vvb(v, goodz, VV_VVB_ZSTD));
-    vt_ok(vv_bricked_open(&b, goodz, NULL, 0));
+    vt_ok(vv_bricked_open(&b, goodz, NULL, vt_cache(0)));
     vv_brick_info bi;
     vv_bricked_info(b, 2, &bi);
     vv_bricked_free(b);
@@ -436,7 +440,7 @@ test_bad_vvb(void **state) {
     const unsigned char junk[16] = {0xde, 0xad, 0xbe, 0xef, 0xde, 0xad, 0xbe, 0xef,
                                     0xde, 0xad, 0xbe, 0xef, 0xde, 0xad, 0xbe, 0xef};
     patched(goodz, bad, (long)(off2 + bytes2 / 2), junk, 16, -1);
-    vt_ok(vv_bricked_open(&b, bad, NULL, 0));
+    vt_ok(vv_bricked_open(&b, bad, NULL, vt_cache(0)));
     vv_volume *bv = NULL;
     assert_int_equal(vv_bricked_load(b, 2, &bv), VV_ERR_FORMAT);
     assert_null(bv);
@@ -446,7 +450,7 @@ test_bad_vvb(void **state) {
     vv_bricked_free(b);
     /* brick 1's frame cut to 5 bytes: not a frame */
     patched(goodz, bad, 256 + 1 * 48 + 8, size, 8, -1);
-    vt_ok(vv_bricked_open(&b, bad, NULL, 0));
+    vt_ok(vv_bricked_open(&b, bad, NULL, vt_cache(0)));
     assert_int_equal(vv_bricked_load(b, 1, &bv), VV_ERR_FORMAT);
     printf("%s\n", vv_error_message());
     assert_non_null(strstr(vv_error_message(), "brick 1"));
@@ -458,7 +462,7 @@ test_bad_vvb(void **state) {
         rec[8 + q] = (unsigned char)(bytes2 >> (8 * q));
     }
     patched(goodz, bad, 256, rec, 16, -1);
-    vt_ok(vv_bricked_open(&b, bad, NULL, 0));
+    vt_ok(vv_bricked_open(&b, bad, NULL, vt_cache(0)));
     assert_int_equal(vv_bricked_load(b, 0, &bv), VV_ERR_FORMAT);
     printf("%s\n", vv_error_message());
     assert_non_null(strstr(vv_error_message(), "its box needs"));
@@ -466,14 +470,14 @@ test_bad_vvb(void **state) {
     /* an empty frame, an unknown codec, zstd without coarse levels */
     const unsigned char zero8[8] = {0};
     patched(goodz, bad, 256 + 3 * 48 + 8, zero8, 8, -1);
-    assert_int_equal(vv_bricked_open(&b, bad, NULL, 0), VV_ERR_FORMAT);
+    assert_int_equal(vv_bricked_open(&b, bad, NULL, vt_cache(0)), VV_ERR_FORMAT);
     assert_non_null(strstr(vv_error_message(), "brick 3"));
     const unsigned char codec[4] = {7, 0, 0, 0};
     patched(goodz, bad, 200, codec, 4, -1);
-    assert_int_equal(vv_bricked_open(&b, bad, NULL, 0), VV_ERR_FORMAT);
+    assert_int_equal(vv_bricked_open(&b, bad, NULL, vt_cache(0)), VV_ERR_FORMAT);
     assert_non_null(strstr(vv_error_message(), "unknown brick codec 7"));
     patched(goodz, bad, 32, zero8, 4, -1);
-    assert_int_equal(vv_bricked_open(&b, bad, NULL, 0), VV_ERR_FORMAT);
+    assert_int_equal(vv_bricked_open(&b, bad, NULL, vt_cache(0)), VV_ERR_FORMAT);
     assert_non_null(strstr(vv_error_message(), "without coarse levels"));
     assert_null(b);
     vv_volume_free(v);

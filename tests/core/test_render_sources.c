@@ -1,21 +1,26 @@
 /*
- * Several volume objects in one World out of core
- * (vv_renderer_render_sources, src/render/sources_render.c; issue 29:
- * "several bricked volumes (and in-memory ones) in one World"):
- * - two CT heads side by side, the left read by bricks from a .vvb (4 MiB
- *   budget), the right from the levels of a .vvb pyramid at level 0, and
+ * Several volume objects in one World out of core, each holding its source
+ * (vv_object_attach_source), drawn by the one render call
+ * (vv_renderer_render, which chooses the sources driver:
+ * src/render/driver_sources.c; issue 29: "several bricked volumes (and
+ * in-memory ones) in one World"; issue 62: one cache, one render call):
+ * - two CT heads side by side, the left read by bricks from a .vvb, the
+ *   right from the levels of a .vvb pyramid at level 0 (one cache of
+ *   12 MiB for both), and
  *   the same two with the right one in memory: against the in-memory
  *   render of the World (the ray caster, every pixel cast), MIP, MinIP and
  *   X-ray bit for bit, composite and iso >= 50 dB, a composite object
  *   beside a MIP one >= 50 dB; every brick read at most once a frame;
  * - overlapping MIP objects combine by the maximum (bit for bit), while
  *   overlapping composite objects are refused, naming both;
- * - one object alone gives vv_renderer_render_bricks's image bit for bit;
+ * - one object alone gives the region driver's image bit for bit;
  * - refusals: the ray tracer with two objects (its shadows fall between
- *   them), a geometric object, an object named twice, bad arguments.
+ *   them), a geometric object.
  * The images are written under the test's folder (`sources_*.png`).
  */
 #include "testutil.h"
+
+#include "render/drivers.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -76,8 +81,10 @@ reference(vv_world *w) {
     return img;
 }
 
+/* @p w drawn by the one render call with level 0 everywhere; the objects
+ * hold their sources (attach). */
 static vv_status
-render_sources(vv_world *w, const vv_object_source *src, int n, vv_image **out) {
+render_sources(vv_world *w, vv_image **out) {
     vv_renderer *r = NULL;
     vt_ok(vv_renderer_new(&r, "raycast"));
     vv_render_options ro;
@@ -85,9 +92,34 @@ render_sources(vv_world *w, const vv_object_source *src, int n, vv_image **out) 
     vv_lod lod;
     vv_lod_init(&lod);
     lod.level = 0;
+    ro.lod = &lod;
     vt_ok(vv_image_new(out, w->view.width, w->view.height));
-    vv_status s = vv_renderer_render_sources(r, w, src, n, &w->view, &ro, &lod, *out);
+    vv_status s = vv_renderer_render(r, w, &w->view, &ro, *out);
     vv_renderer_free(r);
+    return s;
+}
+
+/* Object @p i of @p w shows @p src (its volume the in-memory head, the
+ * proxy of the same box: the region renders read the source). */
+static void
+attach(vv_world *w, int i, vv_source *src) {
+    if (src)
+        vt_ok(vv_object_attach_source(w->objects[i], src, 0));
+}
+
+/* @p path opened out of core in @p cache, by its levels when @p levels. */
+static vv_source *
+open_ooc(const char *path, int levels, vv_cache *cache) {
+    vv_open_options oo;
+    vv_open_options_init(&oo);
+    oo.mode = VV_OPEN_OUT_OF_CORE;
+    oo.levels = levels;
+    oo.cache = cache;
+    vv_opened od;
+    vt_ok(vv_open(&od, path, &oo));
+    assert_int_equal(vv_source_get_kind(od.source), levels ? VV_SOURCE_PYRAMID : VV_SOURCE_BRICKS);
+    vv_source *s = vv_source_ref(od.source);
+    vv_opened_clear(&od);
     return s;
 }
 
@@ -109,16 +141,15 @@ test_two_heads(void **state) {
     snprintf(levels_path, sizeof levels_path, "%s/head_levels.vvb", outdir());
     vt_ok(vv_volume_write_vvb(head, bricks_path, VV_VVB_ZSTD));
     vt_ok(vv_volume_write_vvb(head, levels_path, VV_VVB_ZSTD | VV_VVB_LEVELS));
-    vv_bricked *b = NULL;
-    vt_ok(vv_bricked_open(&b, bricks_path, NULL, 4 << 20));
-    vv_pyramid *p = NULL;
-    vt_ok(vv_pyramid_open(&p, levels_path, 0, -1, 8 << 20, NULL));
+    vv_cache *cache = NULL;
+    vt_ok(vv_cache_new(&cache, 12 << 20));
+    vv_source *bricks = open_ooc(bricks_path, 0, cache);
+    vv_source *levels = open_ooc(levels_path, 1, cache);
     vv_brick_source bs;
-    vv_bricked_source(b, &bs);
-    vv_multires_source ms;
-    vv_pyramid_source(p, &ms);
-    int nb[3];
-    vv_bricked_grid(b, nb);
+    assert_true(vv_source_brick_view(bricks, &bs));
+    vv_source_stats st0;
+    vv_source_stats_get(bricks, &st0);
+    const int n_bricks = st0.n_bricks;
 
     const vv_render_mode pairs[][2] = {
         {VV_MODE_COMPOSITE, VV_MODE_COMPOSITE},
@@ -132,16 +163,13 @@ test_two_heads(void **state) {
         for (int right_in_memory = 0; right_in_memory < 2; right_in_memory++) {
             vv_world *w = two_heads(head, pairs[pi][0], pairs[pi][1], 1.1);
             vv_image *ref = reference(w);
-            vv_object_source src[2];
-            vv_object_source_init(&src[0], 0);
-            src[0].bricks = &bs;
-            vv_object_source_init(&src[1], 1);
-            src[1].multires = right_in_memory ? NULL : &ms;
-            vv_bricked_stats before, after;
-            vv_bricked_stats_get(b, &before);
+            attach(w, 0, bricks);
+            attach(w, 1, right_in_memory ? NULL : levels);
+            vv_source_stats before, after;
+            vv_source_stats_get(bricks, &before);
             vv_image *img = NULL;
-            vt_ok(render_sources(w, src, 2, &img));
-            vv_bricked_stats_get(b, &after);
+            vt_ok(render_sources(w, &img));
+            vv_source_stats_get(bricks, &after);
             int same = 0;
             const double db = vt_image_psnr(ref, img, &same);
             const int proj = pairs[pi][0] != VV_MODE_COMPOSITE && pairs[pi][0] != VV_MODE_ISO &&
@@ -151,13 +179,13 @@ test_two_heads(void **state) {
                    right_in_memory ? "in memory" : "from the pyramid",
                    same ? "bit-identical" : "differs", db,
                    (unsigned long long)(after.loads - before.loads + after.hits - before.hits),
-                   (unsigned long long)(after.skipped - before.skipped), nb[0] * nb[1] * nb[2]);
+                   (unsigned long long)(after.skipped - before.skipped), n_bricks);
             if (proj)
                 assert_true(same);
             else
                 assert_true(db >= 50);
             assert_true(after.loads - before.loads + after.hits - before.hits <=
-                        (uint64_t)(nb[0] * nb[1] * nb[2]));
+                        (uint64_t)n_bricks);
             if (!right_in_memory) {
                 char name[64];
                 snprintf(name, sizeof name, "%s_%s", mode_name(pairs[pi][0]),
@@ -176,13 +204,10 @@ test_two_heads(void **state) {
     {
         vv_world *w = two_heads(head, VV_MODE_MIP, VV_MODE_MIP, 0.5);
         vv_image *ref = reference(w);
-        vv_object_source src[2];
-        vv_object_source_init(&src[0], 0);
-        src[0].bricks = &bs;
-        vv_object_source_init(&src[1], 1);
-        src[1].multires = &ms;
+        attach(w, 0, bricks);
+        attach(w, 1, levels);
         vv_image *img = NULL;
-        vt_ok(render_sources(w, src, 2, &img));
+        vt_ok(render_sources(w, &img));
         int same = 0;
         vt_image_psnr(ref, img, &same);
         assert_true(same);
@@ -194,60 +219,49 @@ test_two_heads(void **state) {
     /* overlapping composite objects: refused, both named */
     {
         vv_world *w = two_heads(head, VV_MODE_COMPOSITE, VV_MODE_COMPOSITE, 0.5);
-        vv_object_source src[1];
-        vv_object_source_init(&src[0], 0);
-        src[0].bricks = &bs;
+        attach(w, 0, bricks);
         vv_image *img = NULL;
-        assert_int_equal(render_sources(w, src, 1, &img), VV_ERR_UNSUPPORTED);
+        assert_int_equal(render_sources(w, &img), VV_ERR_UNSUPPORTED);
         assert_non_null(strstr(vv_error_message(), "'left' and 'right' overlap"));
         vv_image_free(img);
         vv_world_free(w);
     }
-    /* one object: vv_renderer_render_bricks's image, bit for bit */
+    /* one object: the region driver's image, bit for bit */
     {
         vv_world *w = two_heads(head, VV_MODE_COMPOSITE, VV_MODE_COMPOSITE, 1.1);
         w->objects[1]->visible = 0;
-        vv_object_source src[1];
-        vv_object_source_init(&src[0], 0);
-        src[0].bricks = &bs;
+        attach(w, 0, bricks);
         vv_image *img = NULL, *one = NULL;
-        vt_ok(render_sources(w, src, 1, &img));
+        vt_ok(render_sources(w, &img));
         vv_renderer *r = NULL;
         vt_ok(vv_renderer_new(&r, "raycast"));
         vv_render_options ro;
         vv_render_options_init(&ro);
         vt_ok(vv_image_new(&one, w->view.width, w->view.height));
-        vt_ok(vv_renderer_render_bricks(r, w, 0, &bs, &w->view, &ro, one));
+        vt_ok(drv_render_bricks(r, w, 0, &bs, &w->view, &ro, one));
         int same = 0;
         vt_image_psnr(one, img, &same);
         assert_true(same);
         /* nothing visible: the background, transparent, at no depth */
         w->objects[0]->visible = 0;
-        vt_ok(vv_renderer_render_sources(r, w, src, 1, &w->view, &ro, NULL, one));
+        vt_ok(drv_render_sources(r, w, &w->view, &ro, NULL, one));
         for (size_t i = 0; i < (size_t)one->width * (size_t)one->height; i++) {
             assert_float_equal(one->rgba[4 * i + 2], 0.3f, 1e-7);
             assert_float_equal(one->rgba[4 * i + 3], 0.0f, 0);
             assert_true(isinf(one->depth[i]));
         }
         w->objects[0]->visible = 1;
-        /* refusals: the ray tracer with two objects; an object named twice */
+        /* refusals: the ray tracer with two objects */
         w->objects[1]->visible = 1;
         vv_renderer *rt = NULL;
         vt_ok(vv_renderer_new(&rt, "raytrace"));
-        assert_int_equal(vv_renderer_render_sources(rt, w, src, 1, &w->view, &ro, NULL, one),
-                         VV_ERR_UNSUPPORTED);
+        assert_int_equal(vv_renderer_render(rt, w, &w->view, &ro, one), VV_ERR_UNSUPPORTED);
         assert_non_null(strstr(vv_error_message(), "raytrace"));
-        vv_object_source twice[2] = {src[0], src[0]};
-        assert_int_equal(vv_renderer_render_sources(r, w, twice, 2, &w->view, &ro, NULL, one),
-                         VV_ERR_INVALID);
-        assert_int_equal(vv_renderer_render_sources(r, w, NULL, 1, &w->view, &ro, NULL, one),
-                         VV_ERR_INVALID);
         /* a geometric object */
         vv_object *ball = NULL;
         vt_ok(vv_object_new_geometry(&ball, VV_OBJECT_SPHERE, "ball"));
         vt_ok(vv_world_add_object(w, ball));
-        assert_int_equal(vv_renderer_render_sources(r, w, src, 1, &w->view, &ro, NULL, one),
-                         VV_ERR_UNSUPPORTED);
+        assert_int_equal(vv_renderer_render(r, w, &w->view, &ro, one), VV_ERR_UNSUPPORTED);
         assert_non_null(strstr(vv_error_message(), "'ball'"));
         vv_renderer_free(rt);
         vv_renderer_free(r);
@@ -255,8 +269,16 @@ test_two_heads(void **state) {
         vv_image_free(img);
         vv_world_free(w);
     }
-    vv_pyramid_free(p);
-    vv_bricked_free(b);
+    /* one cache for both files: its peak within its budget */
+    vv_cache_stats cs;
+    vv_cache_stats_get(cache, &cs);
+    printf("one cache for both: peak %.1f MiB of %.1f MiB, %d sources\n", cs.peak / 1048576.0,
+           cs.limit / 1048576.0, cs.sources);
+    assert_int_equal(cs.sources, 2);
+    assert_true(cs.peak <= cs.limit);
+    vv_source_free(levels);
+    vv_source_free(bricks);
+    vv_cache_free(cache);
     vv_volume_free(head);
 }
 

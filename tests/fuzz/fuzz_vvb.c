@@ -12,6 +12,8 @@
 #include <string.h>
 
 #include "fuzz_util.h"
+#include "io/bricked.h"
+#include "io/pyramid.h"
 #include "volvis/volvis.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -20,7 +22,7 @@ int
 LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     vv_bricked *b = NULL;
     const char *path = fuzz_write("in.vvb", data, size);
-    if (vv_bricked_open(&b, path, NULL, (uint64_t)64 << 20) != VV_OK)
+    if (vv_bricked_open(&b, path, NULL, vt_cache((uint64_t)64 << 20)) != VV_OK)
         return 0;
     const int n = vv_bricked_count(b);
     for (int i = 0; i < n && i < 8; i++) {
@@ -42,7 +44,7 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         fuzz_check_volume(v);
     vv_bricked_free(b);
     vv_pyramid *p = NULL;
-    if (vv_pyramid_open(&p, path, -1, -1, (uint64_t)64 << 20, NULL) != VV_OK)
+    if (vv_pyramid_open(&p, path, -1, -1, vt_cache((uint64_t)64 << 20), NULL) != VV_OK)
         return 0;
     for (int l = 0; l < vv_pyramid_levels(p); l++) {
         const vv_volume *lh = vv_pyramid_level(p, l);

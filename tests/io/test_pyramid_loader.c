@@ -27,6 +27,9 @@
 #include <unistd.h>
 
 #include "testutil.h"
+
+#include "io/pyramid.h"
+#include "render/drivers.h"
 #include "volvis/volvis.h"
 
 #define MIB (1024u * 1024u)
@@ -69,7 +72,7 @@ static vv_pyramid *
 open_pyramid(const char *path, uint64_t limit, int sandbox) {
     setenv("VOLVIS_SANDBOX", sandbox ? "1" : "0", 1);
     vv_pyramid *p = NULL;
-    vt_ok(vv_pyramid_open(&p, path, 0, -1, limit, NULL));
+    vt_ok(vv_pyramid_open(&p, path, 0, -1, vt_cache(limit), NULL));
     unsetenv("VOLVIS_SANDBOX");
     return p;
 }
@@ -114,7 +117,7 @@ frame(vv_pyramid *p, vv_world *w, int level, int progressive, vv_lod *lod, vv_im
     lod->load_budget = 0;
     vv_render_options ro;
     vv_render_options_init(&ro);
-    const vv_status s = vv_renderer_render_multires(r, w, 0, &src, &w->view, &ro, lod, img);
+    const vv_status s = drv_render_multires(r, w, 0, &src, &w->view, &ro, lod, img);
     vv_renderer_free(r);
     return s;
 }

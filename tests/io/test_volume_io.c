@@ -68,27 +68,38 @@ test_format_names(void **state) {
     /* the message lists the table's names */
     assert_non_null(
         strstr(vv_error_message(),
-               "auto, slc, nrrd, nifti, mhd, vtk, raw, tiff, dicom, vti, zarr, hdf5 or vvb"));
+               "auto, slc, nrrd, nifti, mhd, vtk, raw, tiff, dicom, vti, zarr, hdf5, vvb, bdv, "
+               "vtk_grid, vtu, dx, plot3d, netcdf or mesh"));
 }
 
-/* The records (include/volvis/sys/format.h): complete, the version of the
- * header, the named ids in their rows, unique names, writers with
- * extensions, and each extension of a writer chosen by vv_volume_save. */
+/* The records (include/volvis/sys/format.h): one table for everything that
+ * opens -- complete, the version of the header, the named ids in their
+ * rows, unique names, a way in for what each holds, writers with
+ * extensions -- and each extension of a writer chosen by vv_volume_save. */
 static void
 test_format_table(void **state) {
     (void)state;
     int n = 0;
-    const vv_volume_format *const *t = vv_volume_format_table(&n);
+    const vv_format_record *const *t = vv_format_table(&n);
     assert_int_equal(n, vv_format_count());
+    int kinds[3] = {0, 0, 0};
     for (int i = 0; i < n; i++) {
-        const vv_volume_format *r = t[i];
+        const vv_format_record *r = t[i];
         assert_int_equal(r->version, VV_FORMAT_RECORD_VERSION);
         assert_non_null(r->name);
         assert_non_null(r->title);
         assert_non_null(r->doc);
-        assert_true(r->read || r->write); /* a written-only format: .vti */
+        assert_true(r->holds >= VV_DATA_VOLUME && r->holds <= VV_DATA_MESH);
+        kinds[r->holds]++;
+        if (r->holds == VV_DATA_VOLUME)
+            assert_true(r->read || r->write); /* a written-only format: .vti */
+        else if (r->holds == VV_DATA_GRID)
+            assert_non_null(r->read_grid);
+        else
+            assert_non_null(r->read_mesh);
         assert_true(strlen(r->doc) > 20);
         assert_string_equal(vv_format_name((vv_format)(i + 1)), r->name);
+        assert_ptr_equal(vv_format_record_of((vv_format)(i + 1)), r);
         for (int j = 0; j < i; j++)
             assert_string_not_equal(t[j]->name, r->name);
         /* a format with no signature is read only when described */
@@ -97,17 +108,33 @@ test_format_table(void **state) {
         if (r->write)
             assert_non_null(r->extensions);
     }
+    assert_true(kinds[VV_DATA_VOLUME] >= 13 && kinds[VV_DATA_GRID] >= 5 &&
+                kinds[VV_DATA_MESH] >= 1);
+    /* the pyramids open a store, the bricked formats by bricks */
+    assert_non_null(t[VV_FORMAT_OME_ZARR - 1]->open_store);
+    assert_non_null(t[VV_FORMAT_HDF5 - 1]->open_store);
+    assert_non_null(t[VV_FORMAT_BDV_XML - 1]->open_store);
+    assert_non_null(t[VV_FORMAT_VVB - 1]->open_store);
+    assert_non_null(t[VV_FORMAT_VVB - 1]->open_bricks);
+    assert_non_null(t[VV_FORMAT_NRRD - 1]->raw_layout);
+    assert_non_null(t[VV_FORMAT_RAW - 1]->raw_layout);
+    assert_true(t[VV_FORMAT_VVB - 1]->flags & VV_FORMAT_FLAG_OUT_OF_CORE);
     static const struct {
         vv_format id;
         const char *name;
-    } named[] = {{VV_FORMAT_SLC, "slc"},   {VV_FORMAT_NRRD, "nrrd"},  {VV_FORMAT_NIFTI, "nifti"},
-                 {VV_FORMAT_MHD, "mhd"},   {VV_FORMAT_VTK, "vtk"},    {VV_FORMAT_RAW, "raw"},
-                 {VV_FORMAT_TIFF, "tiff"}, {VV_FORMAT_DICOM, "dicom"}};
+    } named[] = {
+        {VV_FORMAT_SLC, "slc"},       {VV_FORMAT_NRRD, "nrrd"},   {VV_FORMAT_NIFTI, "nifti"},
+        {VV_FORMAT_MHD, "mhd"},       {VV_FORMAT_VTK, "vtk"},     {VV_FORMAT_RAW, "raw"},
+        {VV_FORMAT_TIFF, "tiff"},     {VV_FORMAT_DICOM, "dicom"}, {VV_FORMAT_VTI, "vti"},
+        {VV_FORMAT_OME_ZARR, "zarr"}, {VV_FORMAT_HDF5, "hdf5"},   {VV_FORMAT_VVB, "vvb"},
+        {VV_FORMAT_BDV_XML, "bdv"}};
     for (size_t i = 0; i < sizeof named / sizeof named[0]; i++)
         assert_string_equal(t[named[i].id - 1]->name, named[i].name);
     /* the third-party parsers are marked for the sandbox */
     assert_true(t[VV_FORMAT_NRRD - 1]->flags & VV_FORMAT_FLAG_THIRD_PARTY);
     assert_true(t[VV_FORMAT_DICOM - 1]->flags & VV_FORMAT_FLAG_THIRD_PARTY);
+    assert_true(t[VV_FORMAT_BDV_XML - 1]->flags & VV_FORMAT_FLAG_THIRD_PARTY);
+    assert_false(t[VV_FORMAT_VVB - 1]->flags & VV_FORMAT_FLAG_THIRD_PARTY);
     assert_false(t[VV_FORMAT_SLC - 1]->flags & VV_FORMAT_FLAG_THIRD_PARTY);
     /* SLC's fits test says what it cannot hold */
     int dims[3] = {2, 2, 2};

@@ -15,13 +15,17 @@
  *   rendered at level 0, reads only the chunks near the ball (the others'
  *   ranges from the index: 27 of 125 chunks read), and the image is the
  *   one drawn with every chunk read.
- * - A .vvb without levels is no pyramid (vv_pyramid_probe 0, one level),
+ * - A .vvb without levels is no pyramid (vv_open by its levels reads it by bricks, one level),
  *   with levels it is; the box writer gives the in-memory writer's bytes.
  * - Bad input: a level table past the end of the file, a wrong level
  *   count, a chunk of the wrong size, a scribbled zstd frame: one-line
  *   errors naming the file and the level or chunk, never a crash.
  */
 #include "testutil.h"
+
+#include "io/bricked.h"
+#include "io/pyramid.h"
+#include "render/drivers.h"
 
 #include <math.h>
 #include <stdint.h>
@@ -30,6 +34,21 @@
 #include <string.h>
 
 #define outdir() vt_outdir("vvb_pyramid")
+
+/* 1 when @p path opens by its levels as a pyramid (vv_open out of core,
+ * levels asked for); a .vvb without levels opens by bricks. */
+static int
+opens_as_pyramid(const char *path) {
+    vv_open_options oo;
+    vv_open_options_init(&oo);
+    oo.mode = VV_OPEN_OUT_OF_CORE;
+    oo.levels = 1;
+    vv_opened od;
+    vt_ok(vv_open(&od, path, &oo));
+    const int p = vv_source_get_kind(od.source) == VV_SOURCE_PYRAMID;
+    vv_opened_clear(&od);
+    return p;
+}
 
 static vv_volume *
 read_level(vv_pyramid *p, int level) {
@@ -83,11 +102,11 @@ test_ct_head(void **state) {
     snprintf(zarr, sizeof zarr, "%s/head.ome.zarr", outdir());
     vt_ok(vv_volume_write_vvb(v, vvb, VV_VVB_ZSTD | VV_VVB_LEVELS));
     vt_ok(vv_ome_zarr_write(v, zarr, NULL));
-    assert_true(vv_pyramid_probe(vvb));
+    assert_true(opens_as_pyramid(vvb));
     vv_pyramid *a = NULL, *b = NULL;
     vv_load_info info;
-    vt_ok(vv_pyramid_open(&a, vvb, -1, -1, 0, &info));
-    vt_ok(vv_pyramid_open(&b, zarr, -1, -1, 0, NULL));
+    vt_ok(vv_pyramid_open(&a, vvb, -1, -1, vt_cache(0), &info));
+    vt_ok(vv_pyramid_open(&b, zarr, -1, -1, vt_cache(0), NULL));
     assert_int_equal(vv_pyramid_levels(a), 3);
     assert_int_equal(vv_pyramid_levels(a), vv_pyramid_levels(b));
     assert_int_equal(info.n_levels, 3);
@@ -150,11 +169,11 @@ check_odd(const int d[3], int want_levels) {
     snprintf(path, sizeof path, "%s/odd_%d_%d_%d.vvb", outdir(), d[0], d[1], d[2]);
     vt_ok(vv_volume_write_vvb(v, path, VV_VVB_LEVELS)); /* raw bricks, no coarse levels */
     vv_bricked *bk = NULL;
-    vt_ok(vv_bricked_open(&bk, path, NULL, 0));
+    vt_ok(vv_bricked_open(&bk, path, NULL, vt_cache(0)));
     assert_int_equal(vv_bricked_levels(bk), want_levels);
     vv_bricked_free(bk);
     vv_pyramid *p = NULL;
-    vt_ok(vv_pyramid_open(&p, path, 0, 0, 0, NULL));
+    vt_ok(vv_pyramid_open(&p, path, 0, 0, vt_cache(0), NULL));
     assert_int_equal(vv_pyramid_levels(p), want_levels);
     vv_volume *prev = read_level(p, 0);
     assert_memory_equal(prev->data, v->data, (size_t)d[0] * d[1] * d[2] * 4);
@@ -210,7 +229,7 @@ render_level0(vv_pyramid *p, int *skipped) {
     vv_lod lod;
     vv_lod_init(&lod);
     lod.level = 0;
-    vt_ok(vv_renderer_render_multires(ren, w, 0, &src, &w->view, NULL, &lod, img));
+    vt_ok(drv_render_multires(ren, w, 0, &src, &w->view, NULL, &lod, img));
     *skipped = lod.skipped;
     vv_renderer_free(ren);
     vv_world_free(w);
@@ -235,7 +254,7 @@ test_skip_unread(void **state) {
     snprintf(path, sizeof path, "%s/ball.vvb", outdir());
     vt_ok(vv_volume_write_vvb(v, path, VV_VVB_ZSTD | VV_VVB_LEVELS));
     vv_pyramid *p = NULL;
-    vt_ok(vv_pyramid_open(&p, path, -1, -1, 0, NULL));
+    vt_ok(vv_pyramid_open(&p, path, -1, -1, vt_cache(0), NULL));
     vv_pyramid_stats st0, st1;
     vv_pyramid_stats_get(p, &st0);
     int skipped = 0;
@@ -278,8 +297,8 @@ test_probe_and_writers(void **state) {
     vt_ok(vv_volume_write_vvb(v, plain, VV_VVB_ZSTD));
     vt_ok(vv_volume_write_vvb(v, lv, VV_VVB_ZSTD | VV_VVB_LEVELS));
     vt_ok(vv_boxes_write_vvb(v, read_mem_box, v, boxes, VV_VVB_ZSTD | VV_VVB_LEVELS, NULL));
-    assert_false(vv_pyramid_probe(plain));
-    assert_true(vv_pyramid_probe(lv));
+    assert_false(opens_as_pyramid(plain));
+    assert_true(opens_as_pyramid(lv));
     size_t n1, n2;
     unsigned char *a = vt_read_file(lv, &n1), *b = vt_read_file(boxes, &n2);
     assert_int_equal(n1, n2);
@@ -288,7 +307,7 @@ test_probe_and_writers(void **state) {
     free(b);
     /* the bricked reader still reads a file with levels, brick for brick */
     vv_bricked *bk = NULL;
-    vt_ok(vv_bricked_open(&bk, lv, NULL, 0));
+    vt_ok(vv_bricked_open(&bk, lv, NULL, vt_cache(0)));
     assert_int_equal(vv_bricked_levels(bk), 3);
     const int lo[3] = {60, 10, 30}, hi[3] = {140, 80, 69};
     vv_volume *box = NULL, *want = NULL;
@@ -324,7 +343,7 @@ patched(const char *src, const char *dst, uint64_t off, const void *bytes, size_
 static void
 refused(const char *path, vv_status code, const char *what) {
     vv_pyramid *p = NULL;
-    assert_int_equal(vv_pyramid_open(&p, path, -1, -1, 0, NULL), code);
+    assert_int_equal(vv_pyramid_open(&p, path, -1, -1, vt_cache(0), NULL), code);
     assert_null(p);
     printf("%s\n", vv_error_message());
     assert_non_null(strstr(vv_error_message(), what));
@@ -366,7 +385,7 @@ test_bad_levels(void **state) {
     const unsigned char junk[8] = {0xde, 0xad, 0xbe, 0xef, 0xde, 0xad, 0xbe, 0xef};
     patched(good, bad, c0off + c0bytes / 2, junk, 8);
     vv_pyramid *p = NULL;
-    if (vv_pyramid_open(&p, bad, -1, -1, 0, NULL) != VV_OK)
+    if (vv_pyramid_open(&p, bad, -1, -1, vt_cache(0), NULL) != VV_OK)
         fail_msg("%s", vv_error_message());
     const int lo[3] = {0, 0, 0}, hi[3] = {10, 10, 10};
     vv_volume *box = NULL;
@@ -378,7 +397,7 @@ test_bad_levels(void **state) {
     vv_pyramid_free(p);
     /* a channel or time step a .vvb does not have */
     vv_pyramid *q = NULL;
-    assert_int_equal(vv_pyramid_open(&q, good, 1, -1, 0, NULL), VV_ERR_INVALID);
+    assert_int_equal(vv_pyramid_open(&q, good, 1, -1, vt_cache(0), NULL), VV_ERR_INVALID);
     printf("%s\n", vv_error_message());
     vv_volume_free(v);
 }

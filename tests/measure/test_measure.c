@@ -8,6 +8,8 @@
  */
 #include "testutil.h"
 
+#include "io/pyramid.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -156,7 +158,7 @@ test_histogram_boxes(void **state) {
     snprintf(path, sizeof path, "%s/head.vvb", vt_outdir("measure"));
     vt_ok(vv_volume_write_vvb(v, path, VV_VVB_ZSTD | VV_VVB_LEVELS));
     vv_pyramid *p = NULL;
-    vt_ok(vv_pyramid_open(&p, path, -1, -1, (uint64_t)8 << 20, NULL));
+    vt_ok(vv_pyramid_open(&p, path, -1, -1, vt_cache((uint64_t)8 << 20), NULL));
     vt_ok(vv_measure_histogram_boxes(&boxed, vv_pyramid_level(p, 0), vv_pyramid_level0_box, p, 128,
                                      0, 0, NULL));
     same_histogram(boxed, whole);
@@ -176,7 +178,7 @@ test_histogram_boxes(void **state) {
      * between them): the whole volume's count, volume, area and cut area,
      * in memory and from level 0 */
     vv_pyramid *p32 = NULL; /* a box and its ghosts: up to 4 x 4 x 3 chunks */
-    vt_ok(vv_pyramid_open(&p32, path, -1, -1, (uint64_t)32 << 20, NULL));
+    vt_ok(vv_pyramid_open(&p32, path, -1, -1, vt_cache((uint64_t)32 << 20), NULL));
     vv_isosurface_measure m0, m1, m2;
     for (int mc = 0; mc < 2; mc++) {
         vv_isosurface_measure_options mo;

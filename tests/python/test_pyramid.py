@@ -92,9 +92,9 @@ def test_level0_out_of_core_equals_memory(store):
 
 def test_two_pyramids_out_of_core(store):
     """Two objects from two pyramids side by side, drawn out of core in one
-    frame (render_out_of_core), against the World of their level-0 volumes
-    in memory: MIP bit for bit, composite >= 50 dB; overlapping composite
-    objects and a pyramid no object shows are refused."""
+    frame (volvis.render of a World whose objects own their pyramids, one
+    cache), against the World of their level-0 volumes in memory: MIP bit
+    for bit, composite >= 50 dB; overlapping composite objects are refused."""
     path, lv, spacing = store
     a = volvis.Pyramid(path, memory_limit="1M")
     b = volvis.Pyramid(path, memory_limit="1M")
@@ -113,8 +113,7 @@ def test_two_pyramids_out_of_core(store):
         w.add(b.object("b", position=(50, 0, 0), mode=mode, tf=tf))
         w.view = ref_w.view
         ref = volvis.render(ref_w, renderer=ray, dtype=np.float32)
-        img, info = volvis.render_out_of_core(w, [a, b], level=0, dtype=np.float32,
-                                              return_lod=True)
+        img, info = volvis.render(w, level=0, dtype=np.float32, return_lod=True)
         assert info["nodes"][0] > 2 and info["pending"] == 0
         # both objects on screen, apart: two runs of columns
         cols = np.nonzero((ref[..., 3] > 0.05).any(axis=0))[0]
@@ -125,21 +124,16 @@ def test_two_pyramids_out_of_core(store):
             assert 10 * np.log10(1 / mse) >= 50, mode
         else:
             assert np.array_equal(ref, img), mode
-        # volvis.render of the World draws the pyramids' objects from them
-        # (by level of detail), not from their proxies
-        lod1 = volvis.render_out_of_core(w, [a, b], dtype=np.float32)
+        # by level of detail the objects are drawn from their pyramids' nodes,
+        # not from their proxies (the coarsest level)
+        lod1, info = volvis.render(w, dtype=np.float32, return_lod=True)
+        assert sum(info["nodes"]) >= 2 and info["pending"] == 0  # a node or more each
         assert np.array_equal(volvis.render(w, dtype=np.float32), lod1)
-        assert volvis.pyramids_of(w) == [a, b]
     # overlapping composite objects: refused, both named
     w = a.world(mode="composite", size=(48, 48))
     w.add(b.object("b", position=(10, 0, 0)))
     with pytest.raises(volvis.UnsupportedError, match="overlap"):
-        volvis.render_out_of_core(w, [a, b])
-    # a pyramid that no object shows
-    w = a.world(size=(48, 48))
-    c = volvis.Pyramid(path, memory_limit="1M")
-    with pytest.raises(volvis.InvalidError, match="no object of the World shows"):
-        volvis.render_out_of_core(w, [a, c])
+        volvis.render(w)
     with pytest.raises(volvis.InvalidError, match="unknown property"):
         b.object(colour=1)
 
