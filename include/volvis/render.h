@@ -234,7 +234,7 @@ typedef struct vv_renderer_info {
     int n_options;
 } vv_renderer_info;
 
-/** Renderers built in. */
+/** Renderers in the registry (built in, then vv_renderer_register's). */
 int vv_renderer_count(void);
 /** Renderer @p i (0 .. vv_renderer_count() - 1) in registry order; NULL out of range. */
 const vv_renderer_info *vv_renderer_info_at(int i);

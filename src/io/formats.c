@@ -10,6 +10,8 @@
 #include <ctype.h>
 #include <dirent.h>
 #include <errno.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -19,6 +21,7 @@
 #include <zlib.h>
 
 #include "core/internal.h"
+#include "io/transport.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 
@@ -50,11 +53,19 @@
 VV_FORMAT_TABLE(DECLARE)
 #undef DECLARE
 
+/* The rows built in, then those vv_format_register adds (at most
+ * VV_FORMATS_REGISTERED_MAX): a row's slot is written before the count that
+ * shows it is raised, so readers without the lock see whole rows only. */
 #define ROW(name) &vv_format_##name,
-static const vv_format_record *const table[] = {VV_FORMAT_TABLE(ROW)};
+#define N_BUILT_IN ((int)(sizeof built_in / sizeof built_in[0]))
+static const vv_format_record *const built_in[] = {VV_FORMAT_TABLE(ROW)};
+static const vv_format_record *table[sizeof built_in / sizeof built_in[0] +
+                                     VV_FORMATS_REGISTERED_MAX] = {VV_FORMAT_TABLE(ROW)};
 #undef ROW
+static atomic_int n_rows = N_BUILT_IN;
+static pthread_mutex_t register_lock = PTHREAD_MUTEX_INITIALIZER;
 
-#define N_FORMATS ((int)(sizeof table / sizeof table[0]))
+#define N_FORMATS atomic_load_explicit(&n_rows, memory_order_acquire)
 
 const vv_format_record *const *
 vv_format_table(int *n) {
@@ -66,6 +77,68 @@ vv_format_table(int *n) {
 const vv_format_record *
 vv_format_record_of(vv_format f) {
     return (int)f >= 1 && (int)f <= N_FORMATS ? table[(int)f - 1] : NULL;
+}
+
+/* 1 when @p name is a name or an alias of row @p r. */
+static int
+names(const vv_format_record *r, const char *name) {
+    if (!strcasecmp(name, r->name))
+        return 1;
+    for (const char *const *a = r->aliases; a && *a; a++)
+        if (!strcasecmp(name, *a))
+            return 1;
+    return 0;
+}
+
+vv_status
+vv_format_register(const vv_format_record *row, vv_format *id) {
+    if (!row || !row->name || !row->title)
+        return vv_error_set(VV_ERR_INVALID, "format register: a row needs a name and a title");
+    if (row->version != VV_FORMAT_RECORD_VERSION)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "format register: %s: record version %d (this library reads %d)",
+                            row->name, row->version, VV_FORMAT_RECORD_VERSION);
+    const int volume = row->read || row->write || row->write_boxes || row->open_store ||
+                       row->raw_layout || row->open_bricks;
+    const int reads = row->holds == VV_DATA_VOLUME ? volume
+                      : row->holds == VV_DATA_GRID ? row->read_grid || row->write_grid
+                      : row->holds == VV_DATA_MESH ? row->read_mesh != NULL
+                                                   : -1;
+    if (reads < 0)
+        return vv_error_set(VV_ERR_INVALID, "format register: %s: holds kind %d", row->name,
+                            (int)row->holds);
+    if (!reads)
+        return vv_error_set(VV_ERR_INVALID,
+                            "format register: %s: the row neither reads nor writes what it holds",
+                            row->name);
+    if (row->flags & VV_FORMAT_FLAG_THIRD_PARTY)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "format register: %s: a row added at run time cannot be read in the "
+                            "reader sandbox (volvis-reader has the built-in rows only); leave "
+                            "VV_FORMAT_FLAG_THIRD_PARTY off",
+                            row->name);
+    pthread_mutex_lock(&register_lock);
+    const int n = atomic_load(&n_rows);
+    vv_status s = VV_OK;
+    for (int i = 0; i < n && s == VV_OK; i++) {
+        int clash = names(table[i], row->name);
+        for (const char *const *a = row->aliases; !clash && a && *a; a++)
+            clash = names(table[i], *a);
+        if (clash)
+            s = vv_error_set(VV_ERR_INVALID, "format register: %s: the name is format %s's",
+                             row->name, table[i]->name);
+    }
+    if (s == VV_OK && n >= (int)(sizeof table / sizeof table[0]))
+        s = vv_error_set(VV_ERR_LIMIT, "format register: %s: over %d rows registered", row->name,
+                         VV_FORMATS_REGISTERED_MAX);
+    if (s == VV_OK) {
+        table[n] = row;
+        atomic_store_explicit(&n_rows, n + 1, memory_order_release);
+        if (id)
+            *id = (vv_format)(n + 1);
+    }
+    pthread_mutex_unlock(&register_lock);
+    return s;
 }
 
 const char *const *
@@ -102,20 +175,17 @@ vv_format_parse(const char *name, vv_format *out) {
         *out = VV_FORMAT_AUTO;
         return VV_OK;
     }
-    for (int i = 0; i < N_FORMATS; i++) {
-        int hit = !strcasecmp(name, table[i]->name);
-        for (const char *const *a = table[i]->aliases; !hit && a && *a; a++)
-            hit = !strcasecmp(name, *a);
-        if (hit) {
+    const int n = N_FORMATS;
+    for (int i = 0; i < n; i++) {
+        if (names(table[i], name)) {
             *out = (vv_format)(i + 1);
             return VV_OK;
         }
     }
     char list[768] = "auto";
-    for (int i = 0; i < N_FORMATS; i++) {
+    for (int i = 0; i < n; i++) {
         size_t k = strlen(list);
-        snprintf(list + k, sizeof list - k, "%s%s", i + 1 < N_FORMATS ? ", " : " or ",
-                 table[i]->name);
+        snprintf(list + k, sizeof list - k, "%s%s", i + 1 < n ? ", " : " or ", table[i]->name);
     }
     return vv_error_set(VV_ERR_INVALID, "unknown format \"%s\" (expected %s)", name, list);
 }
@@ -194,12 +264,12 @@ vv_format_folder_any(const char *path,
     return found;
 }
 
-/* The first format holding @p kind (-1: any), in table order, whose
- * looks_like says yes at @p deep; a gzip-compressed file is asked of the
- * formats read compressed only. */
+/* The first format of rows @p first to @p end - 1 holding @p kind (-1:
+ * any), in table order, whose looks_like says yes at @p deep; a
+ * gzip-compressed file is asked of the formats read compressed only. */
 static vv_format
-ask(const vv_format_probe *p, int kind, int deep) {
-    for (int i = 0; i < N_FORMATS; i++) {
+ask_rows(const vv_format_probe *p, int kind, int deep, int first, int end) {
+    for (int i = first; i < end; i++) {
         const vv_format_record *r = table[i];
         if (!r->looks_like || (p->gzip && !(r->flags & VV_FORMAT_FLAG_GZIP)) ||
             (kind >= 0 && (int)r->holds != kind))
@@ -218,10 +288,26 @@ vv_format_detect_kind(const char *path, int kind, int deep) {
     char text[VV_FORMAT_PROBE_BYTES + 1];
     vv_format_probe p;
     int err = vv_format_probe_fill(&p, path, buf, text);
-    vv_format f = ask(&p, kind, 0);
+    /* signatures, every row; then the deep tests, the registered rows'
+     * first (io_detect_registered asks them alone where the sandbox asks
+     * the built-in rows') */
+    vv_format f = ask_rows(&p, kind, 0, 0, N_FORMATS);
     if (f != VV_FORMAT_UNKNOWN || err || !deep)
         return f;
-    return ask(&p, kind, 1);
+    f = ask_rows(&p, kind, 1, N_BUILT_IN, N_FORMATS);
+    return f != VV_FORMAT_UNKNOWN ? f : ask_rows(&p, kind, 1, 0, N_BUILT_IN);
+}
+
+vv_format
+io_detect_registered(const char *path, int kind) {
+    if (!path || N_FORMATS == N_BUILT_IN)
+        return VV_FORMAT_UNKNOWN;
+    unsigned char buf[VV_FORMAT_PROBE_BYTES + 1];
+    char text[VV_FORMAT_PROBE_BYTES + 1];
+    vv_format_probe p;
+    if (vv_format_probe_fill(&p, path, buf, text))
+        return VV_FORMAT_UNKNOWN;
+    return ask_rows(&p, kind, 1, N_BUILT_IN, N_FORMATS);
 }
 
 vv_format

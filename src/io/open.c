@@ -62,6 +62,8 @@ row_of(const char *path, vv_format f, int *deep_volume) {
     if (g == VV_FORMAT_UNKNOWN)
         g = vv_format_detect_kind(path, VV_DATA_MESH, 1);
     if (g == VV_FORMAT_UNKNOWN)
+        g = io_detect_registered(path, VV_DATA_VOLUME);
+    if (g == VV_FORMAT_UNKNOWN)
         *deep_volume = 1; /* vv_volume_load's detection, in the sandbox when wanted */
     return vv_format_record_of(g);
 }

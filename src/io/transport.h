@@ -72,6 +72,11 @@ typedef struct io_store_args {
  */
 int io_info_from_wire(vv_load_info *info, const unsigned char *bytes, size_t n);
 
+/* The first row vv_format_register added (none built in) whose deep test
+ * says @p path holds @p kind: asked in this process, where the reader
+ * sandbox, which has the built-in rows only, asks the rest. */
+vv_format io_detect_registered(const char *path, int kind);
+
 /* "A, B or C" of the titles of the volume formats with (@p with) or
  * without the flags in @p mask, among those detection can tell when
  * @p detectable, into @p buf of @p cap bytes. */

@@ -170,6 +170,8 @@ vv_volume_load(vv_volume **out, const char *path, const vv_load_options *opt) {
         /* signatures here; the deep tests, which may call a third-party
          * parser, in the reader sandbox with the read */
         f = vv_format_detect_kind(path, VV_DATA_VOLUME, 0);
+        if (f == VV_FORMAT_UNKNOWN)
+            f = io_detect_registered(path, VV_DATA_VOLUME);
         if (f == VV_FORMAT_UNKNOWN && io_sandboxed(NULL)) {
             const vv_format_record *used = NULL;
             s = io_read_volume(NULL, out, path, opt, &used);

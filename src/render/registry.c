@@ -6,6 +6,8 @@
  * include/volvis/sys/renderer.h).
  */
 #include <errno.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -30,12 +32,17 @@ struct vv_renderer {
 
 /* Every rendering method built in, in registry order: --help lists them so,
  * and the default renderer of a World is the first that draws all of it
- * (vv_world_renderer), hence the volume and grid ray casters first. */
-static const vv_renderer_ops *const registry[] = {
+ * (vv_world_renderer), hence the volume and grid ray casters first. Then
+ * those vv_renderer_register adds: a slot is written before the count that
+ * shows it is raised, and the array stays NULL-terminated. */
+#define N_BUILT_IN 7
+static const vv_renderer_ops *registry[N_BUILT_IN + VV_RENDERERS_REGISTERED_MAX + 1] = {
     &vv_raycast_ops, &vv_raytrace_ops,  &vv_irregular_ops, &vv_splat_ops,
     &vv_surface_ops, &vv_radiosity_ops, &vv_fourier_ops,   NULL};
+static atomic_int n_registry = N_BUILT_IN;
+static pthread_mutex_t register_lock = PTHREAD_MUTEX_INITIALIZER;
 
-#define N_REGISTRY ((int)(sizeof registry / sizeof registry[0]) - 1)
+#define N_REGISTRY atomic_load_explicit(&n_registry, memory_order_acquire)
 
 const vv_renderer_ops *const *
 vv_renderer_registry(void) {
@@ -50,6 +57,58 @@ vv_renderer_count(void) {
 const vv_renderer_info *
 vv_renderer_info_at(int i) {
     return i >= 0 && i < N_REGISTRY ? &registry[i]->info : NULL;
+}
+
+/* Why @p ops cannot be registered (VV_ERR_INVALID), or VV_OK: a render
+ * call, a state for its options, every option row bound inside it. */
+static vv_status
+check_ops(const vv_renderer_ops *ops) {
+    const vv_renderer_info *in = &ops->info;
+    if (!ops->render)
+        return vv_error_set(VV_ERR_INVALID, "renderer register: %s: no render call", in->name);
+    if (in->n_options < 0 || (in->n_options > 0 && !in->options))
+        return vv_error_set(VV_ERR_INVALID, "renderer register: %s: %d options without a table",
+                            in->name, in->n_options);
+    for (int i = 0; i < in->n_options; i++) {
+        const vv_option_spec *o = &in->options[i];
+        const vv_option_binding *b = o->bind;
+        if (!o->key || !b ||
+            (b->store != VV_OPTION_STORE_NONE &&
+             (b->size == 0 || b->offset + b->size > ops->state_size)))
+            return vv_error_set(VV_ERR_INVALID,
+                                "renderer register: %s: option %s is not bound to a field of its "
+                                "%zu-byte state",
+                                in->name, o->key ? o->key : "(null)", ops->state_size);
+    }
+    return VV_OK;
+}
+
+vv_status
+vv_renderer_register(const vv_renderer_ops *ops) {
+    if (!ops || !ops->info.name || !ops->info.name[0])
+        return vv_error_set(VV_ERR_INVALID, "renderer register: a method needs a name");
+    if (ops->version != VV_RENDERER_OPS_VERSION)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "renderer register: %s: interface version %d (this library's is %d)",
+                            ops->info.name, ops->version, VV_RENDERER_OPS_VERSION);
+    vv_status s = check_ops(ops);
+    if (s != VV_OK)
+        return s;
+    pthread_mutex_lock(&register_lock);
+    const int n = atomic_load(&n_registry);
+    for (int i = 0; i < n && s == VV_OK; i++)
+        if (!strcmp(registry[i]->info.name, ops->info.name))
+            s = vv_error_set(VV_ERR_INVALID, "renderer register: %s: a method of that name exists",
+                             ops->info.name);
+    if (s == VV_OK && n >= N_BUILT_IN + VV_RENDERERS_REGISTERED_MAX)
+        s = vv_error_set(VV_ERR_LIMIT, "renderer register: %s: over %d methods registered",
+                         ops->info.name, VV_RENDERERS_REGISTERED_MAX);
+    if (s == VV_OK) {
+        registry[n] = ops;
+        atomic_store_explicit(&n_registry, n + 1, memory_order_release);
+    }
+    pthread_mutex_unlock(&register_lock);
+    return s;
 }
 
 const vv_renderer_info *

@@ -111,7 +111,8 @@ typedef struct vv_format_record {
      * 1 when @p p looks like this format. Detection asks every format in
      * table order with @p deep 0 (a signature in the head, a folder's
      * entries: cheap and certain), and only when none said yes, again with
-     * @p deep 1 (weaker evidence: the file name alone, or tests that open
+     * @p deep 1 (rows added by vv_format_register first; weaker evidence:
+     * the file name alone, or tests that open
      * other files, such as a DICOM file without its preamble through GDCM
      * or the header beside an Analyze .img). Never fails.
      */
@@ -190,6 +191,28 @@ const vv_format_record *const *vv_format_table(int *n);
 
 /** The record of format @p f (an id of the table), or NULL. */
 const vv_format_record *vv_format_record_of(vv_format f);
+
+/** The most rows vv_format_register adds to a process's table. */
+#define VV_FORMATS_REGISTERED_MAX 32
+
+/**
+ * Adds @p row to the format table, after the rows built in: from then on
+ * detection asks it (its signature test after the built-in rows', its deep
+ * test before theirs, in this process), --format and vv_format_parse
+ * take its name, and vv_open, vv_volume_load and vv_volume_save use it as
+ * they use any row. A new format is its record in one file and this call
+ * (a plug-in, a test, a program with its own format). @p row is borrowed
+ * for the life of the process (a static record); *@p id (may be NULL) gets
+ * its vv_format id. Thread-safe; rows are never removed.
+ *
+ * Errors: VV_ERR_INVALID (no name or title, a name or alias that is
+ * another row's, a kind it neither reads nor writes), VV_ERR_UNSUPPORTED
+ * (another record version; VV_FORMAT_FLAG_THIRD_PARTY: the sandboxed
+ * reader process knows the built-in rows only, so a registered row is read
+ * in the process that registered it), VV_ERR_LIMIT (over
+ * VV_FORMATS_REGISTERED_MAX rows).
+ */
+vv_status vv_format_register(const vv_format_record *row, vv_format *id);
 
 /**
  * The format of @p path among those holding @p kind (-1: any), by asking

@@ -9,9 +9,10 @@
  *
  * Adding a method: fill a vv_renderer_ops (version VV_RENDERER_OPS_VERSION,
  * a vv_renderer_info with its capabilities and option table, the size of
- * its state, render; init, release and render_region optional), declare it
- * in src/render/registry.h and list it in src/render/registry.c. Nothing
- * else names it: the CLI, the GUI, scene files and Python read the
+ * its state, render; init, release and render_region optional), and either
+ * declare it in src/render/registry.h and list it in src/render/registry.c
+ * (built in) or pass it to vv_renderer_register (a plug-in). Nothing else
+ * names it: the CLI, the GUI, scene files and Python read the
  * registry. Options are data: each row of the option table binds to its
  * field of the state (VV_OPTION_BIND and its kin below), and the registry
  * allocates the state, sets every option to its default from the table's
@@ -25,7 +26,8 @@
  * so a kernel may trace a packet of rays (8 with AVX2) per call instead of
  * one; channels are a property of the object, not of this interface.
  *
- * Thread-safety: the registry and its tables are immutable. A method's
+ * Thread-safety: the tables are immutable and the registry only grows
+ * (vv_renderer_register). A method's
  * state serves one render (or region render) at a time (render.h); within
  * it, vv_frame_run calls the tile function on several threads at once, so
  * a tile writes only its own pixels and reads what the frame prepared.
@@ -394,8 +396,27 @@ typedef struct vv_renderer_ops {
                                vv_region_image *out);
 } vv_renderer_ops;
 
-/** The registry: a NULL-terminated array of every method built in, in registry order. */
+/** The registry: a NULL-terminated array of every method (built in, then
+ *  registered), in registry order. */
 const vv_renderer_ops *const *vv_renderer_registry(void);
+
+/** The most methods vv_renderer_register adds to a process's registry. */
+#define VV_RENDERERS_REGISTERED_MAX 16
+
+/**
+ * Adds the method @p ops to the registry, after those built in: from then
+ * on vv_renderer_new, vv_world_renderer, `volvis renderers`, the CLI's
+ * --renderer, the GUI's list and Python find it by its name as they find
+ * any method. A new method is its table in one file and this call.
+ * @p ops is borrowed for the life of the process (a static table).
+ * Thread-safe; methods are never removed.
+ *
+ * Errors: VV_ERR_INVALID (no name, a name taken, no render call, an option
+ * row not bound inside state_size bytes), VV_ERR_UNSUPPORTED (another
+ * VV_RENDERER_OPS_VERSION), VV_ERR_LIMIT (over
+ * VV_RENDERERS_REGISTERED_MAX methods).
+ */
+vv_status vv_renderer_register(const vv_renderer_ops *ops);
 
 /** The table behind @p r; owned by the library. */
 const vv_renderer_ops *vv_renderer_ops_of(const vv_renderer *r);
