@@ -12,7 +12,7 @@ types and macros vvg_/Vvg/VVG_ (DESIGN.md), so every vv_, Vv or VV_ name
 its files use must be one the library declares in include/volvis/.
 
     apps, python -> scene -> manipulate, parallel -> render, modeling, filter,
-    measure, surface, compress, input, io, sandbox -> model -> core
+    measure, surface, compress, input, io -> model, sandbox -> core
 
 Rules (docs/architecture.md, "Layers"; python/ and apps/ are programs):
 
@@ -50,9 +50,9 @@ import sys
 # ---- the layer map (lower number = lower layer) ---------------------------
 LAYERS = {
     "core": 0,
-    "model": 1,
+    "model": 1, "sandbox": 1,  # the sandbox: a transport under the format table (io)
     "io": 2, "render": 2, "modeling": 2, "filter": 2, "measure": 2,
-    "surface": 2, "compress": 2, "input": 2, "sandbox": 2,
+    "surface": 2, "compress": 2, "input": 2,
     "manipulate": 3, "parallel": 3,
     "scene": 4,
     "apps": 5, "python": 5,
@@ -67,7 +67,7 @@ PUBLIC = {
     "sys/source.h": "core",  # the source table and the drivers' views: io serves, render reads
     "model.h": "model",
     "io.h": "io", "video.h": "io", "sys/format.h": "io", "bricks.h": "io",
-    "sys/sandbox.h": "io",  # the sandboxed reader's entry point (apps/volvis-reader)
+    "sys/sandbox.h": "sandbox",  # the transport io's third-party rows go through
     "render.h": "render", "raster.h": "render", "radiosity.h": "render", "slice.h": "render",
     "sys/renderer.h": "render", "sys/geometry.h": "model",
     "modeling.h": "modeling",
@@ -76,7 +76,6 @@ PUBLIC = {
     "surface.h": "surface",
     "compress.h": "compress",
     "input.h": "input",
-    "sandbox.h": "sandbox",
     "navigator.h": "manipulate", "animate.h": "manipulate",
     "parallel.h": "parallel",
     "scene.h": "scene",

@@ -1,6 +1,6 @@
 /*
  * libFuzzer harness: the parent's side of the reader sandbox
- * (vv_sandbox_take_message; src/io/sandbox.c). Whatever a broken or hostile
+ * (sbx_take_message; src/sandbox/payload.c). Whatever a broken or hostile
  * volvis-reader sends (any message, a memfd of any size and seals, or none),
  * the parent must not crash, leak or hang: it makes a volume that holds all
  * its voxels, an error of one line, or "malformed".
@@ -11,9 +11,10 @@
  * plausible (the magic, a kind, err_len fitting the length, and with 16 the
  * byte count naming the memfd's size), so the fuzzer spends its time past
  * the first checks; 32 a second message follows the format message;
- * 64 and 128 pick the answer asked for: a volume, a DICOM series list, a
- * mesh (with 8, a mesh's counts are made to fill the memfd) or a grid
- * (the memfd's sections as sbx_grid_head lays them out).
+ * 64 and 128 pick the answer asked for: a volume, a listing's bytes (the
+ * caller checks them: a DICOM folder's series, io/transport.c), a mesh
+ * (with 8, a mesh's counts are made to fill the memfd) or a grid (the
+ * memfd's sections as sbx_grid_head lays them out).
  */
 #define _GNU_SOURCE
 #include <fcntl.h>
@@ -25,7 +26,8 @@
 #include <unistd.h>
 
 #include "fuzz_util.h"
-#include "io/sandbox.h"
+#include "io/transport.h"
+#include "sandbox/sandbox_internal.h"
 #include "volvis/volvis.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -74,43 +76,59 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         if (flags & 16)
             msg.bytes = nrest;
     }
-    const int ops[4] = {SBX_OP_VOLUME, SBX_OP_DICOM_LIST, SBX_OP_MESH, SBX_OP_GRID};
+    const int ops[4] = {VV_SANDBOX_VOLUME, VV_SANDBOX_LIST, VV_SANDBOX_MESH, VV_SANDBOX_GRID};
     const int op = ops[(flags >> 6) & 3];
-    if ((flags & 8) && op == SBX_OP_MESH && msg.n_vertices < 1024) {
+    if ((flags & 8) && op == VV_SANDBOX_MESH && msg.n_vertices < 1024) {
         msg.n_triangles = nrest > 36 ? (nrest - 36) / 12 : 1;
         msg.n_vertices = 3;
     }
-    vv_format seen = VV_FORMAT_NRRD;
-    vv_sandbox_answer a;
+    char name[VV_SANDBOX_NAME_MAX] = "nrrd", title[64] = "NRRD";
+    vv_sandbox_result a;
+    memset(&a, 0, sizeof a);
+    vv_status st = VV_OK;
     int fd = flags & 1 ? make_memfd(rest, nrest, flags) : -1;
-    int k = vv_sandbox_take_message(op, &msg, len, fd, &seen, "in.nrrd", &a);
+    int k = sbx_take_message(op, &msg, len, fd, name, title, "in.nrrd", &a, &st);
     if (k == 0 && (flags & 32)) {
         /* the result after the format message: the same bytes as a result */
         msg.kind = SBX_RESULT;
         fd = flags & 1 ? make_memfd(rest, nrest, flags) : -1;
-        k = vv_sandbox_take_message(op, &msg, len, fd, &seen, "in.nrrd", &a);
+        k = sbx_take_message(op, &msg, len, fd, name, title, "in.nrrd", &a, &st);
     }
-    const int got = a.volume || a.series || a.mesh || a.grid;
-    if (k <= 0 || a.status != VV_OK) {
+    if (strnlen(name, sizeof name) == sizeof name || strpbrk(name, "\n\r\x1b") ||
+        strnlen(title, sizeof title) == sizeof title || strpbrk(title, "\n\r\x1b"))
+        __builtin_trap(); /* the reader's names: one line, ended */
+    const int got = a.volume || a.blob || a.mesh || a.grid;
+    if (k <= 0 || st != VV_OK) {
         if (got)
             __builtin_trap(); /* a result with an error or without a result */
         if (k > 0 && strpbrk(vv_error_message(), "\n\r\x1b"))
             __builtin_trap(); /* the error is one line of text */
         return 0;
     }
-    if (op == SBX_OP_VOLUME) {
+    if (op == VV_SANDBOX_VOLUME) {
         fuzz_check_volume(a.volume);
-    } else if (op == SBX_OP_DICOM_LIST) {
-        if (!a.series || a.n_series < 1)
-            __builtin_trap();
-        for (int i = 0; i < a.n_series; i++) /* every string ends in its field */
-            if (strnlen(a.series[i].first_file, sizeof a.series[i].first_file) ==
-                    sizeof a.series[i].first_file ||
-                strnlen(a.series[i].patient_id, sizeof a.series[i].patient_id) ==
-                    sizeof a.series[i].patient_id)
+    } else if (op == VV_SANDBOX_LIST) {
+        if (!a.blob || a.blob_len != msg.bytes)
+            __builtin_trap(); /* the listing's bytes, all of them */
+        volatile unsigned char last = ((unsigned char *)a.blob)[a.blob_len - 1];
+        (void)last;
+        /* as a DICOM folder's series: checked or refused in one line */
+        vv_dicom_series *series = NULL;
+        int n = 0;
+        if (io_dicom_series_from_wire(&series, &n, a.blob, a.blob_len, "in") == VV_OK) {
+            if (!series || n < 1)
                 __builtin_trap();
-        free(a.series);
-    } else if (op == SBX_OP_GRID) {
+            for (int i = 0; i < n; i++) /* every string ends in its field */
+                if (strnlen(series[i].first_file, sizeof series[i].first_file) ==
+                        sizeof series[i].first_file ||
+                    strnlen(series[i].patient_id, sizeof series[i].patient_id) ==
+                        sizeof series[i].patient_id)
+                    __builtin_trap();
+            free(series);
+        } else if (strpbrk(vv_error_message(), "\n\r\x1b")) {
+            __builtin_trap();
+        }
+    } else if (op == VV_SANDBOX_GRID) {
         vv_grid *g = a.grid;
         if (!g || vv_grid_validate(g) != VV_OK)
             __builtin_trap();

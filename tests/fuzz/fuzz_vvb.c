@@ -20,9 +20,12 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 int
 LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+    static vv_cache *cache; /* one budget for every input, as a process has */
+    if (!cache && vv_cache_new(&cache, (uint64_t)64 << 20) != VV_OK)
+        __builtin_trap();
     vv_bricked *b = NULL;
     const char *path = fuzz_write("in.vvb", data, size);
-    if (vv_bricked_open(&b, path, NULL, vt_cache((uint64_t)64 << 20)) != VV_OK)
+    if (vv_bricked_open(&b, path, NULL, cache) != VV_OK)
         return 0;
     const int n = vv_bricked_count(b);
     for (int i = 0; i < n && i < 8; i++) {
