@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Renders every example scene (examples/*.json) and a few plain volumes with
-# every renderer at quality 2 into OUTDIR, one PNG each, so two builds can be
+# every renderer at quality 2, and the CT head out of core (by bricks, by
+# levels, by level of detail, a scene of two files in one cache) with the
+# region renderers, into OUTDIR, one PNG each, so two builds can be
 # compared image by image (refactoring must not change a pixel).
 #
 #   scripts/render-matrix.sh VOLVIS OUTDIR            render
@@ -82,5 +84,49 @@ for in in "${inputs[@]}"; do
       fi
     done
   done
+done
+# Out of core: the CT head read by bricks (.vvb without levels), by levels
+# (.vvb and OME-Zarr pyramids) at level 0, level 1 and by level of detail,
+# and a scene of two of them in one cache, with the region renderers.
+ooc="$out/ooc-files"
+mkdir -p "$ooc"
+head="$data/volumes/ct_head.nrrd"
+"$volvis" convert -q --no-levels "$head" "$ooc/flat.vvb"
+"$volvis" convert -q "$head" "$ooc/levels.vvb"
+"$volvis" convert -q "$head" "$ooc/levels.ome.zarr"
+cat >"$ooc/two.json" <<EOF
+{"view": {"width": 256, "height": 192, "eye": [250, -1100, 300], "at": [250, 122, 54],
+  "up": [0, 0, 1], "fov": 30},
+ "lights": [{"type": "directional", "color": [1, 1, 1], "intensity": 1.0}],
+ "objects": [
+  {"name": "bricks", "file": "flat.vvb", "transfer_function": {"opacity": [[100, 0], [1500, 0.8]]}},
+  {"name": "levels", "file": "levels.ome.zarr", "mode": "mip", "position": [270, 0, 0]}]}
+EOF
+ooc_render() { # NAME INPUT ARGS...
+  local name="$1" in="$2"
+  shift 2
+  rm -f "$out/$name.png" "$out/$name.err"
+  if ! "$volvis" render "$in" --quality 2 --size 256x192 -q -o "$out/$name.png" "$@" \
+      2>"$out/$name.err"; then
+    rm -f "$out/$name.png"
+  else
+    rm -f "$out/$name.err"
+  fi
+}
+for r in raycast raytrace; do
+  for mode in default mip; do
+    m=()
+    if [ "$mode" = mip ]; then m=(--mode mip); fi
+    ooc_render "ooc_bricks_${r}_${mode}" "$ooc/flat.vvb" --renderer "$r" "${m[@]}" \
+      --memory-limit 16M
+    for f in levels.vvb levels.ome.zarr; do
+      stem="ooc_${f//./_}_${r}_${mode}"
+      ooc_render "${stem}_level0" "$ooc/$f" --renderer "$r" "${m[@]}" --memory-limit 16M \
+        --level 0
+      ooc_render "${stem}_level1" "$ooc/$f" --renderer "$r" "${m[@]}" --level 1
+      ooc_render "${stem}_lod" "$ooc/$f" --renderer "$r" "${m[@]}" --lod 1
+    done
+  done
+  ooc_render "ooc_scene_${r}" "$ooc/two.json" --renderer "$r" --memory-limit 16M
 done
 ls "$out" | wc -l
