@@ -666,7 +666,8 @@ vv_status vv_object_set_volume(vv_object *obj, vv_volume *volume);
  * vv_channel_default_color(c) with contrast limits
  * vv_channel_default_contrast and opacity 0.5 per smallest voxel spacing
  * (vv_tf_set_contrast, gamma 1), index c. The object's `volume` becomes
- * volumes[0]; blend stays as it was. Replaces channels set before. Errors:
+ * volumes[0]; blend stays as it was. Replaces channels set before; drops
+ * the object's source (the channels are in memory). Errors:
  * VV_ERR_INVALID (not a volume object, n out of range, a NULL volume, dims
  * differing from channel 0's: named), VV_ERR_NOMEM; on error @p obj is
  * unchanged. Not thread-safe on the same object.
@@ -693,7 +694,8 @@ vv_status vv_object_set_channel_labels(vv_object *obj, int c, int labels);
  * same data (vv_time_series_get): @p volumes[0] for an object of one
  * channel, else one volume per channel in the object's channel order
  * (@p n is max(1, n_channels)); each borrowed, the object takes its own
- * reference. Transfer functions, names and everything else stay. Errors:
+ * reference. Transfer functions, names and everything else stay; the
+ * object's source is dropped (the step is in memory). Errors:
  * VV_ERR_INVALID (not a volume object, @p n not the channel count, a NULL
  * volume, dims differing from the volume it replaces: named); on error
  * @p obj is unchanged. Not thread-safe on the same object (edit a copy,

@@ -57,10 +57,11 @@ VV_FORMAT_TABLE(DECLARE)
  * VV_FORMATS_REGISTERED_MAX): a row's slot is written before the count that
  * shows it is raised, so readers without the lock see whole rows only. */
 #define ROW(name) &vv_format_##name,
-#define N_BUILT_IN ((int)(sizeof built_in / sizeof built_in[0]))
-static const vv_format_record *const built_in[] = {VV_FORMAT_TABLE(ROW)};
-static const vv_format_record *table[sizeof built_in / sizeof built_in[0] +
-                                     VV_FORMATS_REGISTERED_MAX] = {VV_FORMAT_TABLE(ROW)};
+#define ONE(name) +1
+enum { N_BUILT_IN = 0 VV_FORMAT_TABLE(ONE) };
+static const vv_format_record *table[N_BUILT_IN + VV_FORMATS_REGISTERED_MAX] = {
+    VV_FORMAT_TABLE(ROW)};
+#undef ONE
 #undef ROW
 static atomic_int n_rows = N_BUILT_IN;
 static pthread_mutex_t register_lock = PTHREAD_MUTEX_INITIALIZER;

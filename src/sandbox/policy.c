@@ -314,6 +314,9 @@ sbx_set_limits(uint64_t budget, int threads, unsigned cpu_seconds) {
     uint64_t as = sbx_address_limit(budget, threads);
     struct rlimit r_as = {(rlim_t)as, (rlim_t)as};
     setrlimit(RLIMIT_AS, &r_as);
+#else
+    (void)budget;
+    (void)threads;
 #endif
     prctl(PR_SET_DUMPABLE, 0, 0, 0, 0);
 }

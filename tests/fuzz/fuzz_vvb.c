@@ -47,7 +47,7 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         fuzz_check_volume(v);
     vv_bricked_free(b);
     vv_pyramid *p = NULL;
-    if (vv_pyramid_open(&p, path, -1, -1, vt_cache((uint64_t)64 << 20), NULL) != VV_OK)
+    if (vv_pyramid_open(&p, path, -1, -1, cache, NULL) != VV_OK)
         return 0;
     for (int l = 0; l < vv_pyramid_levels(p); l++) {
         const vv_volume *lh = vv_pyramid_level(p, l);
