@@ -31,7 +31,7 @@ extern "C" {
  * along every axis longer than one voxel (rounding up; each voxel the mean
  * of the 2x2x2 under it, as the OME-Zarr writer's levels) until every axis
  * fits one chunk of 64 voxels, stored as chunks of 64^3 (raw, or zstd
- * frames with VV_VVB_ZSTD) with their min/max; vv_pyramid_open reads them
+ * frames with VV_VVB_ZSTD) with their min/max; vv_open reads them
  * (docs/file-formats.md). Written from level 0 read back, a chunk at a
  * time: memory stays bounded. */
 #define VV_VVB_LEVELS 4u

@@ -52,7 +52,7 @@ typedef enum vv_format {
     VV_FORMAT_RAW,
     VV_FORMAT_TIFF,
     VV_FORMAT_DICOM,
-    VV_FORMAT_VTI,      /**< VTK XML image data: written, not read */
+    VV_FORMAT_VTI,      /**< VTK XML image data (ParaView's .vti), read and written */
     VV_FORMAT_OME_ZARR, /**< OME-Zarr 0.4 (Zarr v2 folder), every multiscales level */
     VV_FORMAT_HDF5,     /**< BigDataViewer / Imaris HDF5 pyramids */
     VV_FORMAT_VVB,      /**< VolVis's bricked volumes, with pyramid levels or without */

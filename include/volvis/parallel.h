@@ -138,7 +138,7 @@ void vv_parallel_free(vv_parallel *p);
  * brick from the object's volume, or reads only its box from the object's
  * source when the object shows a file out of core (vv_object_new_source:
  * a bricked file, or a pyramid's level opt->lod->level, 0 without one; a
- * source opened without the range, VV_OPEN_HEADER_ONLY, learns it from
+ * source opened without the range, vv_open_options.header_only, learns it from
  * the ranks' bricks at the first render); the brick is kept between frames
  * while the volume is unchanged. It renders the brick as a region (the
  * World, with the object's own volume, is the renderer's context: raytrace

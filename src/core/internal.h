@@ -33,7 +33,7 @@ typedef struct vv_atomic_file {
  * @p bytes (NULL on failure) and the release vv_volume_free calls with
  * @p user; NULL restores calloc/free. Set once, before any volume is made
  * and before threads start, by the sandboxed reader (voxels in a memfd that
- * goes to the parent: src/io/sandbox.c); never by the library's users.
+ * goes to the parent: src/sandbox/payload.c); never by the library's users.
  */
 void vv_volume_set_allocator(void *(*alloc)(size_t bytes), void (*release)(void *user, void *data));
 

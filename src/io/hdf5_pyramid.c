@@ -7,7 +7,7 @@
  * Two users: the format record "hdf5" (one level read whole, in the
  * reader sandbox like every third-party parser) and the pyramid's store
  * (src/io/pyramid.h), opened in the long-lived sandboxed readers
- * (vv_sandbox_store_open, src/io/sandbox.c) or, with VOLVIS_SANDBOX=0, in
+ * (vv_sandbox_open_store, src/sandbox/store.c) or, with VOLVIS_SANDBOX=0, in
  * this process.
  *
  * Geometry. BigDataViewer: level l of factors f (s00/resolutions) has

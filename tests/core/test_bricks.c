@@ -1,6 +1,6 @@
 /*
  * Out-of-core volumes (the reader src/io/bricked.c, the render driver
- * src/render/bricks_render.c over the region contract):
+ * src/render/driver_region.c over the region contract):
  * - the CT head written as .vvb (with coarse levels), raw and raw-encoded
  *   NRRD, opened as bricked volumes with a 4 MB memory budget and rendered
  *   brick by brick by every renderer with the region contract (raycast;

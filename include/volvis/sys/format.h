@@ -19,7 +19,7 @@
  * (vv_format) is its row; `--format <name>` and vv_format_parse find it by
  * name. A multiresolution format fills open_store (a vv_store: its levels
  * and one chunk's voxels); the pyramid, its cache and the renderers do the
- * rest (tests/io/test_toy_format.c adds one in one file).
+ * rest (tests/plugins/toy_format.c is a whole format in one file).
  *
  * Versioning (libgit2's sys/ structs): a record starts with the version of
  * this header it was written against; optional members may be NULL.

@@ -2,7 +2,7 @@
  * VolVis volume sources, the implementor's side (include/volvis/source.h is
  * the user's): the table a source fills in (vv_source_ops: its levels,
  * boxes, proxy, statistics and background loader), and the two views of its
- * voxels that the render drivers read (src/render/drivers.c, chosen by
+ * voxels that the render drivers read (src/render/drivers.h, chosen by
  * vv_renderer_render): a grid of bricks (vv_brick_source: the region driver
  * renders them front to back) and a pyramid of levels read by boxes
  * (vv_multires_source: the level-of-detail driver). The drivers read
