@@ -76,32 +76,6 @@ def memory_limit(size=None):
     return int(lib.vv_cache_limit(c))
 
 
-def _lod(lod, level, progressive, what):
-    """The vv_lod of a render: every node at ``level``, or by ``lod``
-    pixels a voxel; progressive: from what is resident, loading the rest
-    in the background."""
-    lodc = ffi.new("vv_lod *")
-    lib.vv_lod_init(lodc)
-    if progressive:
-        lodc.progressive = 1
-        lodc.background = 1
-        lodc.load_budget = 0
-    if level is not None:
-        lodc.level = int(level)
-    else:
-        if not float(lod) > 0:
-            raise InvalidError("%s: lod must be > 0, got %r" % (what, lod))
-        lodc.voxel_pixels = float(lod)
-    return lodc
-
-
-def _lod_info(lodc, n_levels):
-    """What a frame drew (return_lod)."""
-    return {"nodes": [int(lodc.nodes[L]) for L in range(n_levels)],
-            "skipped": int(lodc.skipped), "pending": int(lodc.pending),
-            "requested": int(lodc.requested), "stalled": int(lodc.stalled)}
-
-
 class Pyramid:
     """A volume read out of core: a multiresolution pyramid -- an OME-Zarr
     store or plain Zarr v2 array (a folder), a BigDataViewer HDF5 file or

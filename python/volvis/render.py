@@ -227,9 +227,8 @@ def render(scene, renderer=None, mode=None, size=None, quality=None, view=None, 
     array a volume shares is checked for writes first (see Volume).
     Errors: InvalidError (unknown renderer or option, bad size), NoMemoryError,
     and the renderer's own errors, with the library's message."""
-    from .pyramid import Pyramid, _lod, _lod_info
-    if isinstance(scene, Pyramid):
-        scene = scene.world(mode=mode or "composite", size=size)
+    if not isinstance(scene, (World, Volume)) and callable(getattr(scene, "world", None)):
+        scene = scene.world(mode=mode or "composite", size=size)  # a Pyramid
         mode = None
     frame = _prepare(scene, renderer, mode, size, quality, view, dtype, threads, options)
     world, r, vc, img, ro = frame
@@ -249,6 +248,32 @@ def render(scene, renderer=None, mode=None, size=None, quality=None, view=None, 
                       if world._c.objects[i].source != ffi.NULL] + [1])
         return out, _lod_info(lodc, levels)
     return out
+
+
+def _lod(lod, level, progressive, what):
+    """The vv_lod of a render: every node at ``level``, or by ``lod``
+    pixels a voxel; progressive: from what is resident, loading the rest
+    in the background."""
+    lodc = ffi.new("vv_lod *")
+    lib.vv_lod_init(lodc)
+    if progressive:
+        lodc.progressive = 1
+        lodc.background = 1
+        lodc.load_budget = 0
+    if level is not None:
+        lodc.level = int(level)
+    else:
+        if not float(lod) > 0:
+            raise InvalidError("%s: lod must be > 0, got %r" % (what, lod))
+        lodc.voxel_pixels = float(lod)
+    return lodc
+
+
+def _lod_info(lodc, n_levels):
+    """What a frame drew (return_lod)."""
+    return {"nodes": [int(lodc.nodes[L]) for L in range(n_levels)],
+            "skipped": int(lodc.skipped), "pending": int(lodc.pending),
+            "requested": int(lodc.requested), "stalled": int(lodc.stalled)}
 
 
 def _prepare(scene, renderer, mode, size, quality, view, dtype, threads, options):
