@@ -81,11 +81,17 @@ vv_scene_parse_tf(const sctx *c, json_t *tfj, const char *tp, double unit, vv_tf
     return VV_OK;
 }
 
+/* The opacity unit a transfer function without one takes: the object's
+ * smallest voxel edge -- for an object out of core its level's, which
+ * vv_object_attach_source set, not its proxy's. */
+static double
+default_unit(const vv_object *o, double set) {
+    return o->source || !o->volume ? set : vv_tf_default_unit_distance(o->volume);
+}
+
 static vv_status
 parse_tf(const sctx *c, json_t *tfj, const char *tp, vv_object *o) {
-    return vv_scene_parse_tf(
-        c, tfj, tp,
-        o->volume ? vv_tf_default_unit_distance(o->volume) : o->tf.opacity_unit_distance, &o->tf);
+    return vv_scene_parse_tf(c, tfj, tp, default_unit(o, o->tf.opacity_unit_distance), &o->tf);
 }
 
 /* An optional [a, b] pair of numbers. */
@@ -185,7 +191,7 @@ parse_tf2d(const sctx *c, json_t *tj, const char *tp, vv_object *o) {
         return vv_scene_serr(c, ap, "more than %d widgets", VV_TF2D_MAX_WIDGETS);
     vv_tf2d tf;
     vv_tf2d_init(&tf);
-    tf.opacity_unit_distance = o->volume ? vv_tf_default_unit_distance(o->volume) : 1.0;
+    tf.opacity_unit_distance = o->volume ? default_unit(o, o->tf2d.opacity_unit_distance) : 1.0;
     size_t i;
     json_t *e;
     json_array_foreach(arr, i, e) {

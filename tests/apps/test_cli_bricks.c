@@ -261,7 +261,10 @@ test_scene(void **state) {
     cli_ok("render", scene, "-q", "-o", b);
     const double db = vt_png_psnr(a, b);
     printf("three heads out of core against in memory: %.1f dB\n", db);
-    assert_true(db >= 50);
+    /* 83.6 dB: only compositing's rounding differs; a transfer function
+     * whose opacity unit came from the coarse proxy rather than the file's
+     * voxels (the scene gives none) gave 51 dB */
+    assert_true(db >= 75);
     /* the .vvb's levels, level 0 everywhere: the same image */
     r = run_cli("render", scene, "--level", "0", "--memory-limit", "16M", "-o", a);
     assert_int_equal(r.status, 0);
@@ -270,7 +273,7 @@ test_scene(void **state) {
     assert_non_null(strstr(r.out, " chunks read from 3 levels"));
     vt_run_result_free(&r);
     printf("from the levels against in memory: %.1f dB\n", vt_png_psnr(a, b));
-    assert_true(vt_png_psnr(a, b) >= 50);
+    assert_true(vt_png_psnr(a, b) >= 75);
 
     remove(a);
     struct stat st;
