@@ -159,9 +159,10 @@ void vv_bricked_source(vv_bricked *b, vv_brick_source *out);
 
 /**
  * Writes @p src (a bricked volume opened from any source) as a .vvb file at
- * @p path, written to a temporary file beside it and renamed; @p flags
- * VV_VVB_COARSE, VV_VVB_ZSTD (0: raw bricks, no coarse levels). Reads one
- * brick at a time: memory is bounded by a brick, not the volume.
+ * @p path (src/io/vvb_write.c), written to a temporary file beside it and
+ * renamed; @p flags VV_VVB_COARSE, VV_VVB_ZSTD (0: raw bricks, no coarse
+ * levels). Reads one brick at a time: memory is bounded by a brick, not the
+ * volume.
  * Errors: VV_ERR_IO, VV_ERR_NOMEM.
  */
 vv_status vv_bricked_write_vvb(vv_bricked *src, const char *path, unsigned flags,

@@ -16,22 +16,11 @@
  * reads within one frame are counted (frames are marked by the renderer through the source's frame
  * method).
  *
- * When the renderer plans its frame (the boxes it will read, in order),
- * each chunk's uses in the plan are known, and the chunk evicted is the
- * one needed again farthest ahead or never (Belady's optimal policy):
- * ghost voxels pull a node's neighbours' chunks in early, and they stay
- * until their own node when the limit allows. Unplanned reads evict the
- * least recently used. With a plan, after each box the chunks of the next
- * few boxes that are not cached are asked of the store ahead (when it can
- * fetch in the background: the sandboxed readers), so that they are
- * decoded while the renderer draws.
- *
- * The loader (vv_pyramid_request): a few threads read a queue of chunks
- * into the same cache, soonest first; a new request replaces the queue.
- * A chunk being read by anyone sits in the cache reserved and pinned
- * (PY_LOADING): a frame needing it waits on the arrival condition rather
- * than reading it twice. One mutex, the cache's, guards the chunks, the
- * plan, the queue and the statistics; reading and decoding run outside it.
+ * The frame's plan, which chooses the chunk evicted and fetches chunks
+ * ahead, the loader (vv_pyramid_request) and the multiresolution source
+ * interface are in pyramid_load.c; the state both files share, in
+ * pyramid_internal.h. One mutex, the cache's, guards the chunks, the plan,
+ * the queue and the statistics; reading and decoding run outside it.
  */
 #include <limits.h>
 #include <malloc.h>
@@ -48,99 +37,10 @@
 #include "core/cache.h"
 #include "core/internal.h"
 #include "io/pyramid.h"
+#include "io/pyramid_internal.h"
 #include "volvis/bricks.h"
 
-#define PY_BUCKETS 4096u
 #define PY_MAX_LEVEL_CHUNKS ((uint64_t)1 << 26)
-#define PY_LOADERS_MAX 4
-
-/* A cache entry's state: its voxels decoded, or being decoded by the
- * frame's thread or a loader (its bytes reserved, pinned), or a loader's
- * decode failed (no voxels; whoever needs it next decodes it again). */
-enum { PY_READY, PY_NEW, PY_LOADING, PY_FAILED };
-/* A chunk's uses in the frame's plan: the boxes (their order) needing it. */
-typedef struct py_use {
-    int level;
-    uint64_t L;
-    int *seq, n, cap, pos;
-    struct py_use *hnext;
-} py_use;
-
-/* A chunk in the cache: its entry there (ce: first, so that the cache's
- * entry is the chunk) holds its pins (boxes being assembled from it, and
- * its loader while loading) and the request that last asked for it (the
- * loader keeps those). */
-typedef struct py_chunk {
-    vv_cache_entry ce;
-    int level;
-    uint64_t L;
-    py_use *use;      /* its uses in the plan, or NULL */
-    int org[3], n[3]; /* the block's first voxel in the level, its size */
-    vv_volume *blk;   /* the chunk's voxels inside the array */
-    uint64_t bytes;
-    int state; /* PY_READY, ... */
-    struct py_chunk *hnext;
-} py_chunk;
-
-/* A chunk a request asked the loader for. */
-typedef struct py_req {
-    int level;
-    uint64_t L;
-} py_req;
-
-typedef struct py_level {
-    int dims[3], cdims[3], nchunks[3];
-    vv_voxel_type type;
-    size_t esize;
-    vv_volume *hdr; /* geometry only: 1-voxel data, dims set to the level's */
-    uint64_t n_chunks;
-    float *cmin, *cmax;    /* per chunk, when known */
-    uint8_t *known;        /* 1: cmin/cmax hold the chunk's range */
-    uint32_t *read_frame;  /* the frame of the chunk's last read */
-    uint16_t *frame_reads; /* its reads in that frame */
-} py_level;
-
-/* The pyramid: its chunks live in the process's cache (src/core/cache.h)
- * as entries of its client there; the cache's lock (p->lock) guards its
- * index of them, the plan, the queue and the statistics, so that another
- * source evicting one of its chunks needs no lock of its own. */
-struct vv_pyramid {
-    char path[4096];
-    vv_store store;
-    int n_levels;
-    py_level lv[VV_PYRAMID_MAX_LEVELS];
-    double range[2];
-    uint64_t limit, n_ready;
-    int boxes;      /* boxes held at once (vv_multires_source.boxes) */
-    int node_cells; /* the octree leaves' side the limit holds */
-    vv_cache *cache;
-    vv_cache_client cl; /* its side of the cache: reserve, planned, want, held */
-    py_chunk *bucket[PY_BUCKETS];
-    uint32_t frame;
-    /* the frame's plan: uses by chunk, the box being read */
-    py_use *ubucket[PY_BUCKETS];
-    int cursor;
-    int plan_n, *plan_box; /* the plan's boxes in order: level, lo[3], hi[3] each */
-    vv_pyramid_stats st;
-    /* the loader (vv_pyramid_request): threads reading the queue's chunks
-     * into the cache. lock (the cache's) guards everything above and below;
-     * store_lock serializes read_chunk when the store is not parallel. */
-    pthread_mutex_t *lock, store_lock;
-    pthread_cond_t work;    /* the queue got chunks, or quit */
-    pthread_cond_t arrived; /* a chunk's decode ended (any thread) */
-    int n_loaders, quit, in_flight;
-    pthread_t loader[PY_LOADERS_MAX];
-    py_req *queue; /* the chunks asked for and not yet taken, soonest first */
-    int q_n, q_pos;
-    int stalled; /* the loader stopped short of the newest request: the cache is full */
-    uint64_t arrivals;
-};
-
-static unsigned
-bucket_of(int level, uint64_t L) {
-    uint64_t h = (L + 1) * 0x9E3779B97F4A7C15ull ^ (uint64_t)level * 0xBF58476D1CE4E5B9ull;
-    return (unsigned)(h >> 52) & (PY_BUCKETS - 1);
-}
 
 /* @p s prefixed with "NAME: FILE" unless its message starts so already (a
  * store's reader names the file itself). */
@@ -153,37 +53,11 @@ prefix_once(vv_status s, const char *name, const char *path) {
     return vv_error_prefix(s, "%s: %s", name, vv_path_basename(path));
 }
 
-/* The cache's index of chunk position c of level @p l (x fastest). */
-static uint64_t
-chunk_linear(const py_level *l, const int c[3]) {
-    return ((uint64_t)c[2] * (uint64_t)l->nchunks[1] + (uint64_t)c[1]) * (uint64_t)l->nchunks[0] +
-           (uint64_t)c[0];
-}
-
-static py_chunk *
-find_chunk(const vv_pyramid *p, int level, uint64_t L) {
-    for (py_chunk *c = p->bucket[bucket_of(level, L)]; c; c = c->hnext)
-        if (c->level == level && c->L == L)
-            return c;
-    return NULL;
-}
-
-/* Calls @p fn with each chunk of the pyramid's index (lock held; @p fn may
- * drop the chunk it is given). */
-static void
-each_chunk(vv_pyramid *p, void (*fn)(vv_pyramid *p, py_chunk *c)) {
-    for (unsigned b = 0; b < PY_BUCKETS; b++)
-        for (py_chunk *c = p->bucket[b], *next; c; c = next) {
-            next = c->hnext;
-            fn(p, c);
-        }
-}
-
 /* Chunk @p c out of the pyramid's index and freed (out of the cache
  * already). */
 static void
 free_chunk(vv_pyramid *p, py_chunk *c) {
-    py_chunk **pp = &p->bucket[bucket_of(c->level, c->L)];
+    py_chunk **pp = &p->bucket[py_bucket_of(c->level, c->L)];
     while (*pp != c)
         pp = &(*pp)->hnext;
     *pp = c->hnext;
@@ -206,56 +80,6 @@ client_drop(vv_cache_client *cl, vv_cache_entry *e) {
     vv_pyramid *p = (vv_pyramid *)((char *)cl - offsetof(vv_pyramid, cl));
     free_chunk(p, (py_chunk *)e);
     p->st.evictions++;
-}
-
-static py_use *
-find_use(const vv_pyramid *p, int level, uint64_t L) {
-    for (py_use *u = p->ubucket[bucket_of(level, L)]; u; u = u->hnext)
-        if (u->level == level && u->L == L)
-            return u;
-    return NULL;
-}
-
-static void
-forget_use(vv_pyramid *p, py_chunk *c) {
-    (void)p;
-    c->use = NULL;
-}
-
-static void
-clear_plan(vv_pyramid *p) {
-    for (unsigned b = 0; b < PY_BUCKETS; b++)
-        while (p->ubucket[b]) {
-            py_use *u = p->ubucket[b];
-            p->ubucket[b] = u->hnext;
-            free(u->seq);
-            free(u);
-        }
-    each_chunk(p, forget_use);
-    p->cl.planned = 0;
-    p->cursor = 0;
-    free(p->plan_box);
-    p->plan_box = NULL;
-    p->plan_n = 0;
-}
-
-/* The plan's next box needing chunk @p c from the box being read on;
- * INT_MAX: none. */
-static int
-next_use(const vv_pyramid *p, py_chunk *c) {
-    py_use *u = c->use;
-    if (!u)
-        return INT_MAX;
-    while (u->pos < u->n && u->seq[u->pos] < p->cursor)
-        u->pos++;
-    return u->pos < u->n ? u->seq[u->pos] : INT_MAX;
-}
-
-/* The cache asks when the plan needs chunk @p e next (lock held). */
-static int
-client_next_use(vv_cache_client *cl, vv_cache_entry *e) {
-    vv_pyramid *p = (vv_pyramid *)((char *)cl - offsetof(vv_pyramid, cl));
-    return next_use(p, (py_chunk *)e);
 }
 
 /* The chunk box of chunk position c: its first voxel and size inside the level. */
@@ -289,9 +113,9 @@ count_read(vv_pyramid *p, int level, uint64_t L, uint64_t file_bytes) {
 /* Chunk entry @p c (position @p cc) read from the store into its block,
  * one reader at a time when the store is not parallel; any thread, the
  * pyramid's lock not held. */
-static vv_status
-read_chunk(vv_pyramid *p, py_chunk *c, const int cc[3], unsigned char *scratch, int *missing,
-           uint64_t *file_bytes) {
+vv_status
+py_read_chunk(vv_pyramid *p, py_chunk *c, const int cc[3], unsigned char *scratch, int *missing,
+              uint64_t *file_bytes) {
     const vv_store *st = &p->store;
     if (!st->parallel)
         pthread_mutex_lock(&p->store_lock);
@@ -329,7 +153,7 @@ decode_chunks(vv_pyramid *p, py_chunk **todo, int n, uint64_t *file_bytes, int *
                 cc[k] = c->org[k] / cl->cdims[k];
             vv_status cs =
                 buf || !st->scratch
-                    ? read_chunk(p, c, cc, buf, &missing[i], &file_bytes[i])
+                    ? py_read_chunk(p, c, cc, buf, &missing[i], &file_bytes[i])
                     : vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk of %zu bytes",
                                    st->scratch);
             if (cs != VV_OK) {
@@ -376,25 +200,16 @@ copy_block(const py_chunk *c, const int lo[3], vv_volume *out) {
         }
 }
 
-/* The chunk positions c0 .. c1 overlapping voxels lo .. hi of a level. */
-static void
-chunk_span(const py_level *l, const int lo[3], const int hi[3], int c0[3], int c1[3]) {
-    for (int k = 0; k < 3; k++) {
-        c0[k] = lo[k] / l->cdims[k];
-        c1[k] = hi[k] / l->cdims[k];
-    }
-}
-
 /* A new cache entry for chunk @p c (position) of level @p level in state
  * PY_NEW, pinned once, not yet in the cache; NULL when out of memory. */
-static py_chunk *
-new_entry(const vv_pyramid *p, int level, const int c[3]) {
+py_chunk *
+py_new_entry(const vv_pyramid *p, int level, const int c[3]) {
     const py_level *l = &p->lv[level];
     py_chunk *e = calloc(1, sizeof *e);
     if (!e)
         return NULL;
     e->level = level;
-    e->L = chunk_linear(l, c);
+    e->L = py_chunk_linear(l, c);
     chunk_box(l, c, e->org, e->n);
     e->bytes = (uint64_t)e->n[0] * (uint64_t)e->n[1] * (uint64_t)e->n[2] * l->esize;
     e->state = PY_NEW;
@@ -404,10 +219,10 @@ new_entry(const vv_pyramid *p, int level, const int c[3]) {
 
 /* Entry @p e into the cache (its bytes held, most recently used) and the
  * pyramid's index. */
-static void
-insert_entry(vv_pyramid *p, py_chunk *e) {
-    const unsigned b = bucket_of(e->level, e->L);
-    e->use = p->cl.planned ? find_use(p, e->level, e->L) : NULL;
+void
+py_insert_entry(vv_pyramid *p, py_chunk *e) {
+    const unsigned b = py_bucket_of(e->level, e->L);
+    e->use = p->cl.planned ? py_find_use(p, e->level, e->L) : NULL;
     e->hnext = p->bucket[b];
     p->bucket[b] = e;
     e->ce.ready = 1; /* a chunk being read stays pinned by its reader */
@@ -416,8 +231,8 @@ insert_entry(vv_pyramid *p, py_chunk *e) {
 
 /* Entry @p e decoded (by this thread or a loader; lock held): ready, its
  * range known, the read counted. */
-static void
-entry_ready(vv_pyramid *p, py_chunk *e, uint64_t file_bytes, int missing) {
+void
+py_entry_ready(vv_pyramid *p, py_chunk *e, uint64_t file_bytes, int missing) {
     py_level *l = &p->lv[e->level];
     e->state = PY_READY;
     p->n_ready++;
@@ -432,8 +247,8 @@ entry_ready(vv_pyramid *p, py_chunk *e, uint64_t file_bytes, int missing) {
 }
 
 /* Unpins entry @p e; a failed one nobody holds leaves the cache. */
-static void
-unpin(vv_pyramid *p, py_chunk *e) {
+void
+py_unpin(vv_pyramid *p, py_chunk *e) {
     if (--e->ce.pins == 0 && e->state == PY_FAILED)
         drop_chunk(p, e);
 }
@@ -446,7 +261,7 @@ static vv_status
 assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *out) {
     py_level *l = &p->lv[level];
     int c0[3], c1[3];
-    chunk_span(l, lo, hi, c0, c1);
+    py_chunk_span(l, lo, hi, c0, c1);
     const int n = (c1[0] - c0[0] + 1) * (c1[1] - c0[1] + 1) * (c1[2] - c0[2] + 1);
     py_chunk **use = calloc((size_t)n, sizeof *use), **todo = calloc((size_t)n, sizeof *todo);
     uint64_t *fbytes = calloc((size_t)n, sizeof *fbytes);
@@ -460,12 +275,12 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
         for (int y = c0[1]; y <= c1[1] && s == VV_OK; y++)
             for (int x = c0[0]; x <= c1[0]; x++) {
                 const int c[3] = {x, y, z};
-                py_chunk *e = find_chunk(p, level, chunk_linear(l, c));
+                py_chunk *e = py_find_chunk(p, level, py_chunk_linear(l, c));
                 if (e) {
                     vv_cache_touch(p->cache, &e->ce);
                     p->st.chunk_hits += e->state == PY_READY;
                     e->ce.pins++;
-                } else if ((e = new_entry(p, level, c))) {
+                } else if ((e = py_new_entry(p, level, c))) {
                     need += e->bytes;
                     todo[nt++] = e;
                 } else {
@@ -481,11 +296,11 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
                          (unsigned long long)p->limit, n, level);
     for (int i = 0; i < nu; i++) {
         if (s == VV_OK && use[i]->state == PY_NEW)
-            insert_entry(p, use[i]);
+            py_insert_entry(p, use[i]);
         else if (s != VV_OK && use[i]->state == PY_NEW)
             free(use[i]); /* never in the cache */
         else if (s != VV_OK)
-            unpin(p, use[i]);
+            py_unpin(p, use[i]);
     }
     if (s != VV_OK)
         nu = 0;
@@ -514,7 +329,7 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
         for (int i = 0; i < nt; i++) {
             py_chunk *e = todo[i];
             if (s == VV_OK) {
-                entry_ready(p, e, fbytes[i], missing[i]);
+                py_entry_ready(p, e, fbytes[i], missing[i]);
             } else {
                 e->state = PY_FAILED;
                 vv_volume_free(e->blk);
@@ -531,7 +346,7 @@ assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
     for (int i = 0; i < nu && s == VV_OK; i++)
         copy_block(use[i], lo, out);
     for (int i = 0; i < nu; i++)
-        unpin(p, use[i]);
+        py_unpin(p, use[i]);
     free(use);
     free(todo);
     free(fbytes);
@@ -551,38 +366,14 @@ set_geometry(vv_volume *v, const vv_pyramid *p, const py_level *l) {
     v->range[1] = p->range[1];
 }
 
-/* The plan's boxes after the one just read (at most PY_LOOKAHEAD of them):
- * their chunks not cached are asked of the store ahead (its prefetch),
- * nearest in the plan first, until it has no reader free. The store
- * decodes them while the renderer draws this box. */
-#define PY_LOOKAHEAD 4
-static void
-prefetch_ahead(vv_pyramid *p) {
-    if (!p->cl.planned || !p->store.prefetch || !p->plan_box)
-        return;
-    for (int b = p->cursor + 1; b < p->plan_n && b <= p->cursor + PY_LOOKAHEAD; b++) {
-        const int *box = p->plan_box + 7 * b, level = box[0];
-        const py_level *l = &p->lv[level];
-        int c0[3], c1[3];
-        chunk_span(l, box + 1, box + 4, c0, c1);
-        for (int z = c0[2]; z <= c1[2]; z++)
-            for (int y = c0[1]; y <= c1[1]; y++)
-                for (int x = c0[0]; x <= c1[0]; x++) {
-                    const int c[3] = {x, y, z};
-                    if (!find_chunk(p, level, chunk_linear(l, c)) &&
-                        !p->store.prefetch(p->store.ctx, level, c))
-                        return;
-                }
-    }
-}
-
 /* Box lo .. hi of @p level into a new volume; @p planned: a read of the
  * frame's plan (the renderer's, through the multiresolution view), which
  * moves the plan on and asks the store for the next boxes' chunks ahead;
  * any other read (a slice, a measurement, another thread) leaves the plan
  * as it is. */
-static vv_status
-read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume **out, int planned) {
+vv_status
+py_box_read(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume **out,
+            int planned) {
     if (!p || !out || level < 0 || level >= p->n_levels)
         return vv_error_set(VV_ERR_INVALID, "pyramid: bad arguments");
     *out = NULL;
@@ -600,7 +391,7 @@ read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
     if (s == VV_OK)
         s = assemble(p, level, lo, hi, v);
     if (s == VV_OK && planned)
-        prefetch_ahead(p);
+        py_prefetch_ahead(p);
     if (planned && p->cl.planned)
         p->cursor++;
     pthread_mutex_unlock(p->lock);
@@ -615,46 +406,7 @@ read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *
 
 vv_status
 vv_pyramid_read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume **out) {
-    return read_box(p, level, lo, hi, out, 0);
-}
-
-static int
-missing_chunks(const vv_pyramid *p, int level, const int lo[3], const int hi[3]) {
-    const py_level *l = &p->lv[level];
-    int c0[3], c1[3], n = 0;
-    chunk_span(l, lo, hi, c0, c1);
-    for (int z = c0[2]; z <= c1[2]; z++)
-        for (int y = c0[1]; y <= c1[1]; y++)
-            for (int x = c0[0]; x <= c1[0]; x++) {
-                const int c[3] = {x, y, z};
-                const py_chunk *e = find_chunk(p, level, chunk_linear(l, c));
-                n += !e || e->state != PY_READY;
-            }
-    return n;
-}
-
-static int
-box_range(const vv_pyramid *p, int level, const int lo[3], const int hi[3], float *vmin,
-          float *vmax) {
-    const py_level *l = &p->lv[level];
-    if (!l->known)
-        return 0;
-    int c0[3], c1[3];
-    chunk_span(l, lo, hi, c0, c1);
-    float a = INFINITY, b = -INFINITY;
-    for (int z = c0[2]; z <= c1[2]; z++)
-        for (int y = c0[1]; y <= c1[1]; y++)
-            for (int x = c0[0]; x <= c1[0]; x++) {
-                const int c[3] = {x, y, z};
-                const uint64_t L = chunk_linear(l, c);
-                if (!l->known[L])
-                    return 0;
-                a = l->cmin[L] < a ? l->cmin[L] : a;
-                b = l->cmax[L] > b ? l->cmax[L] : b;
-            }
-    *vmin = a;
-    *vmax = b;
-    return 1;
+    return py_box_read(p, level, lo, hi, out, 0);
 }
 
 vv_status
@@ -717,383 +469,17 @@ vv_pyramid_stats_get(const vv_pyramid *p, vv_pyramid_stats *st) {
     pthread_mutex_unlock(q->lock);
 }
 
-/* ---- the loader ------------------------------------------------------------------ */
-
-/* A loader thread: takes the queue's chunks soonest first, reserves each in
- * the cache (PY_LOADING, so that a frame needing it waits instead of
- * reading it twice), decodes it without the lock and makes it ready; stops
- * taking when the cache is full of chunks the request wants (the rest
- * stay missing: a frame draws them coarser). */
-static void *
-loader_main(void *arg) {
-    vv_pyramid *p = arg;
-    unsigned char *scratch = p->store.scratch ? malloc(p->store.scratch) : NULL;
-    pthread_mutex_lock(p->lock);
-    while (!p->quit) {
-        if (p->q_pos >= p->q_n || (p->store.scratch && !scratch)) {
-            pthread_cond_wait(&p->work, p->lock);
-            continue;
-        }
-        const py_req q = p->queue[p->q_pos++];
-        const py_level *l = &p->lv[q.level];
-        if (find_chunk(p, q.level, q.L))
-            continue; /* held, or being read */
-        int c[3];
-        c[0] = (int)(q.L % (uint64_t)l->nchunks[0]);
-        c[1] = (int)(q.L / (uint64_t)l->nchunks[0] % (uint64_t)l->nchunks[1]);
-        c[2] = (int)(q.L / ((uint64_t)l->nchunks[0] * (uint64_t)l->nchunks[1]));
-        py_chunk *e = new_entry(p, q.level, c);
-        if (!e || !vv_cache_make_room(p->cache, e->bytes, 1) ||
-            vv_volume_new(&e->blk, e->n, l->type) != VV_OK) {
-            if (e)
-                vv_volume_free(e->blk);
-            free(e);
-            vv_error_clear();
-            p->st.load_stopped += (uint64_t)(p->q_n - p->q_pos + 1);
-            p->q_pos = p->q_n; /* full: the rest waits for the next request */
-            p->stalled = 1;
-            pthread_cond_broadcast(&p->arrived);
-            continue;
-        }
-        e->state = PY_LOADING;
-        e->ce.want = p->cl.want;
-        insert_entry(p, e);
-        p->in_flight++;
-        pthread_mutex_unlock(p->lock);
-        int missing = 0;
-        uint64_t fbytes = 0;
-        const vv_status s = read_chunk(p, e, c, scratch, &missing, &fbytes);
-        pthread_mutex_lock(p->lock);
-        p->in_flight--;
-        if (s == VV_OK) {
-            entry_ready(p, e, fbytes, missing);
-            p->st.loaded++;
-        } else {
-            vv_error_clear(); /* a frame reading it reports the error */
-            e->state = PY_FAILED;
-            vv_volume_free(e->blk);
-            e->blk = NULL;
-            p->st.load_errors++;
-            p->arrivals++;
-        }
-        unpin(p, e);
-        pthread_cond_broadcast(&p->arrived);
-    }
-    pthread_mutex_unlock(p->lock);
-    free(scratch);
-    return NULL;
-}
-
-/* The loader's threads, started at the first request (lock held): a few,
- * one when the store reads one chunk at a time. */
-static vv_status
-start_loaders(vv_pyramid *p) {
-    int n = p->store.parallel ? vv_threads_get() : 1;
-    n = n < 1 ? 1 : n > PY_LOADERS_MAX ? PY_LOADERS_MAX : n;
-    if (p->store.scratch > ((size_t)64 << 20))
-        n = 1;
-    for (int i = 0; i < n; i++) {
-        if (pthread_create(&p->loader[i], NULL, loader_main, p) != 0)
-            return p->n_loaders ? VV_OK
-                                : vv_error_set(VV_ERR_NOMEM, "cannot start the loader's threads");
-        p->n_loaders++;
-    }
-    return VV_OK;
-}
-
-/* A small open-addressed set of (level, L) keys, to queue each chunk once. */
-static int
-seen_add(uint64_t *set, uint64_t mask, int level, uint64_t L) {
-    const uint64_t key = (L << 4 | (uint64_t)level) + 1;
-    for (uint64_t h = (key * 0x9E3779B97F4A7C15ull) >> 20 & mask;; h = (h + 1) & mask) {
-        if (set[h] == key)
-            return 0;
-        if (!set[h]) {
-            set[h] = key;
-            return 1;
-        }
-    }
-}
-
-vv_status
-vv_pyramid_request(vv_pyramid *p, int n, const int *level, const int *lo, const int *hi) {
-    if (!p || n < 0 || (n > 0 && (!level || !lo || !hi)))
-        return vv_error_set(VV_ERR_INVALID, "pyramid: bad request arguments");
-    /* the chunks, each once, in the boxes' order */
-    uint64_t count = 0;
-    for (int i = 0; i < n; i++) {
-        if (level[i] < 0 || level[i] >= p->n_levels)
-            return vv_error_set(VV_ERR_INVALID, "pyramid: request of level %d (0 .. %d)", level[i],
-                                p->n_levels - 1);
-        const py_level *l = &p->lv[level[i]];
-        uint64_t m = 1;
-        for (int k = 0; k < 3; k++) {
-            if (lo[3 * i + k] < 0 || hi[3 * i + k] < lo[3 * i + k] || hi[3 * i + k] >= l->dims[k])
-                return vv_error_set(VV_ERR_INVALID,
-                                    "pyramid: request box %d..%d outside level %d's %d voxels",
-                                    lo[3 * i + k], hi[3 * i + k], level[i], l->dims[k]);
-            m *= (uint64_t)(hi[3 * i + k] / l->cdims[k] - lo[3 * i + k] / l->cdims[k] + 1);
-        }
-        count += m;
-    }
-    if (count > (uint64_t)1 << 24)
-        return vv_error_set(VV_ERR_LIMIT, "pyramid: a request of %llu chunks (at most %d)",
-                            (unsigned long long)count, 1 << 24);
-    uint64_t slots = 16;
-    while (slots < 2 * count)
-        slots *= 2;
-    uint64_t *seen = calloc((size_t)slots, sizeof *seen);
-    py_req *q = malloc(sizeof *q * (size_t)(count ? count : 1));
-    if (!seen || !q) {
-        free(seen);
-        free(q);
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    }
-    pthread_mutex_lock(p->lock);
-    p->cl.want++;
-    int nq = 0;
-    for (int i = 0; i < n; i++) {
-        const py_level *l = &p->lv[level[i]];
-        int c0[3], c1[3];
-        chunk_span(l, lo + 3 * i, hi + 3 * i, c0, c1);
-        for (int z = c0[2]; z <= c1[2]; z++)
-            for (int y = c0[1]; y <= c1[1]; y++)
-                for (int x = c0[0]; x <= c1[0]; x++) {
-                    const int c[3] = {x, y, z};
-                    const uint64_t L = chunk_linear(l, c);
-                    if (!seen_add(seen, slots - 1, level[i], L))
-                        continue;
-                    py_chunk *e = find_chunk(p, level[i], L);
-                    if (e && e->state != PY_FAILED)
-                        e->ce.want = p->cl.want; /* held: kept by the loader */
-                    else
-                        q[nq++] = (py_req){level[i], L};
-                }
-    }
-    p->st.cancelled += (uint64_t)(p->q_n - p->q_pos); /* what the view made stale */
-    p->stalled = 0;
-    free(p->queue);
-    p->queue = q;
-    p->q_n = nq;
-    p->q_pos = 0;
-    vv_status s = VV_OK;
-    if (nq > 0 && p->n_loaders == 0)
-        s = start_loaders(p);
-    pthread_cond_broadcast(&p->work);
-    pthread_mutex_unlock(p->lock);
-    free(seen);
-    return s;
-}
-
-int
-vv_pyramid_loading(vv_pyramid *p) {
-    if (!p)
-        return 0;
-    pthread_mutex_lock(p->lock);
-    const int n = p->q_n - p->q_pos + p->in_flight;
-    pthread_mutex_unlock(p->lock);
-    return n;
-}
-
-int
-vv_pyramid_wait(vv_pyramid *p, double seconds) {
-    if (!p)
-        return 0;
-    struct timespec until;
-    clock_gettime(CLOCK_REALTIME, &until);
-    const double t = seconds > 0 ? seconds : 0;
-    until.tv_sec += (time_t)t;
-    until.tv_nsec += (long)((t - floor(t)) * 1e9);
-    if (until.tv_nsec >= 1000000000L) {
-        until.tv_sec++;
-        until.tv_nsec -= 1000000000L;
-    }
-    pthread_mutex_lock(p->lock);
-    const uint64_t seen = p->arrivals;
-    while (p->q_n - p->q_pos + p->in_flight > 0 && p->arrivals == seen)
-        if (pthread_cond_timedwait(&p->arrived, p->lock, &until) != 0)
-            break;
-    const int n = p->q_n - p->q_pos + p->in_flight;
-    pthread_mutex_unlock(p->lock);
-    return n;
-}
-
-/* Stops the loader: the queue dropped, the chunks in flight finished. */
-static void
-stop_loaders(vv_pyramid *p) {
-    pthread_mutex_lock(p->lock);
-    p->quit = 1;
-    p->q_pos = p->q_n;
-    pthread_cond_broadcast(&p->work);
-    pthread_mutex_unlock(p->lock);
-    for (int i = 0; i < p->n_loaders; i++)
-        pthread_join(p->loader[i], NULL);
-    p->n_loaders = 0;
-}
-
-/* ---- the source interface ----------------------------------------------------- */
-
-static const vv_volume *
-src_level(void *user, int level) {
-    return vv_pyramid_level(user, level);
-}
-
-static vv_status
-src_read_box(void *user, int level, const int lo[3], const int hi[3], vv_volume **out) {
-    return read_box(user, level, lo, hi, out, 1);
-}
-
-static int
-src_box_range(void *user, int level, const int lo[3], const int hi[3], float *vmin, float *vmax) {
-    vv_pyramid *p = user;
-    pthread_mutex_lock(p->lock);
-    const int r = box_range(p, level, lo, hi, vmin, vmax);
-    pthread_mutex_unlock(p->lock);
-    return r;
-}
-
-static int
-src_missing(void *user, int level, const int lo[3], const int hi[3]) {
-    vv_pyramid *p = user;
-    pthread_mutex_lock(p->lock);
-    const int n = missing_chunks(p, level, lo, hi);
-    pthread_mutex_unlock(p->lock);
-    return n;
-}
-
-static void
-src_frame(void *user, int begin) {
-    vv_pyramid *p = user;
-    pthread_mutex_lock(p->lock);
-    clear_plan(p);
-    if (begin) {
-        p->frame++;
-        p->st.frames++;
-    }
-    pthread_mutex_unlock(p->lock);
-}
-
-/* Notes box @p seq's use of chunk (level, L). */
-static vv_status
-add_use(vv_pyramid *p, int level, uint64_t L, int seq) {
-    py_use *u = find_use(p, level, L);
-    if (!u) {
-        if (!(u = calloc(1, sizeof *u)))
-            return vv_error_set(VV_ERR_NOMEM, "out of memory");
-        u->level = level;
-        u->L = L;
-        const unsigned b = bucket_of(level, L);
-        u->hnext = p->ubucket[b];
-        p->ubucket[b] = u;
-    }
-    if (u->n == u->cap) {
-        const int cap = u->cap ? 2 * u->cap : 4;
-        int *seq2 = realloc(u->seq, sizeof(int) * (size_t)cap);
-        if (!seq2)
-            return vv_error_set(VV_ERR_NOMEM, "out of memory");
-        u->seq = seq2;
-        u->cap = cap;
-    }
-    u->seq[u->n++] = seq;
-    return VV_OK;
-}
-
-static void
-find_uses(vv_pyramid *p, py_chunk *c) {
-    c->use = find_use(p, c->level, c->L);
-}
-
-static vv_status
-plan_locked(vv_pyramid *p, int n, const int *level, const int *lo, const int *hi) {
-    clear_plan(p);
-    vv_status s = VV_OK;
-    for (int i = 0; i < n && s == VV_OK; i++) {
-        if (level[i] < 0 || level[i] >= p->n_levels)
-            continue;
-        const py_level *l = &p->lv[level[i]];
-        int c0[3], c1[3];
-        chunk_span(l, lo + 3 * i, hi + 3 * i, c0, c1);
-        for (int z = c0[2]; z <= c1[2] && s == VV_OK; z++)
-            for (int y = c0[1]; y <= c1[1] && s == VV_OK; y++)
-                for (int x = c0[0]; x <= c1[0] && s == VV_OK; x++) {
-                    const int c[3] = {x, y, z};
-                    s = add_use(p, level[i], chunk_linear(l, c), i);
-                }
-    }
-    if (s != VV_OK) {
-        clear_plan(p);
-        return s;
-    }
-    each_chunk(p, find_uses);
-    if (p->store.prefetch && n > 0 && (p->plan_box = malloc(sizeof(int) * 7 * (size_t)n))) {
-        for (int i = 0; i < n; i++) {
-            const int ok = level[i] >= 0 && level[i] < p->n_levels;
-            int *box = p->plan_box + 7 * i;
-            box[0] = ok ? level[i] : 0;
-            for (int k = 0; k < 3; k++) { /* a box out of range: an empty one at level 0 */
-                box[1 + k] = ok ? lo[3 * i + k] : 0;
-                box[4 + k] = ok ? hi[3 * i + k] : 0;
-            }
-        }
-        p->plan_n = n;
-    }
-    p->cl.planned = 1;
-    p->cursor = 0;
-    return VV_OK;
-}
-
-static vv_status
-src_plan(void *user, int n, const int *level, const int *lo, const int *hi) {
-    vv_pyramid *p = user;
-    pthread_mutex_lock(p->lock);
-    const vv_status s = plan_locked(p, n, level, lo, hi);
-    pthread_mutex_unlock(p->lock);
-    return s;
-}
-
-static vv_status
-src_request(void *user, int n, const int *level, const int *lo, const int *hi) {
-    return vv_pyramid_request(user, n, level, lo, hi);
-}
-
-static int
-src_stalled(void *user) {
-    vv_pyramid *p = user;
-    pthread_mutex_lock(p->lock);
-    const int r = p->stalled;
-    pthread_mutex_unlock(p->lock);
-    return r;
-}
-
-void
-vv_pyramid_source(vv_pyramid *p, vv_multires_source *out) {
-    memset(out, 0, sizeof *out);
-    out->version = VV_MULTIRES_SOURCE_VERSION;
-    out->user = p;
-    out->n_levels = p->n_levels;
-    out->node_cells = p->node_cells;
-    out->level = src_level;
-    out->read_box = src_read_box;
-    out->box_range = src_box_range;
-    out->frame = src_frame;
-    out->plan = src_plan;
-    out->missing_chunks = src_missing;
-    out->boxes = p->boxes;
-    out->request = src_request;
-    out->stalled = src_stalled;
-}
-
 /* ---- opening ------------------------------------------------------------------ */
 
 void
 vv_pyramid_free(vv_pyramid *p) {
     if (!p)
         return;
-    stop_loaders(p);
+    py_stop_loaders(p);
     free(p->queue);
     pthread_mutex_lock(p->lock);
-    clear_plan(p);
-    each_chunk(p, drop_chunk);
+    py_clear_plan(p);
+    py_each_chunk(p, drop_chunk);
     pthread_mutex_unlock(p->lock);
     vv_cache_client_remove(&p->cl);
     vv_cache_free(p->cache);
@@ -1240,7 +626,7 @@ pyramid_open(vv_pyramid *p, vv_load_info *info) {
     p->boxes = (int)boxes;
     /* the cache holds the rest, with every other source's pieces */
     p->cl.reserve = ws * boxes;
-    p->cl.next_use = client_next_use;
+    p->cl.next_use = py_client_next_use;
     p->cl.drop = client_drop;
     vv_cache_client_add(p->cache, &p->cl);
     /* the range: the store's (an omero window), else the coarsest level's */

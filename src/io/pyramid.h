@@ -211,7 +211,7 @@ void vv_pyr_reduce(const vv_pyr_reduce_box *b, void *dst);
 int vv_vvb_probe(const char *path);
 
 /**
- * The store of the .vvb file @p path (src/io/bricked.c), read in this
+ * The store of the .vvb file @p path (src/io/vvb.c), read in this
  * process: level 0 from its bricks, a chunk of 64^3 voxels from the brick
  * holding it, the levels above from their chunks. Channel and time step
  * must be 0 or -1. Errors: those of opening a .vvb (VV_ERR_FORMAT,

@@ -1,6 +1,6 @@
 /*
  * The next level of a pyramid, as the OME-Zarr writer (src/io/zarr_write.c)
- * and the .vvb writer (src/io/bricked.c) make it: each voxel the mean of
+ * and the .vvb writer (src/io/vvb_write.c) make it: each voxel the mean of
  * the 2x2x2 voxels under it (src/io/pyramid.h: vv_pyr_reduce).
  */
 #include <math.h>

@@ -25,7 +25,11 @@
  * processor has it) and then shades and composites the visible ones.
  * At quality 0 and 1 pixels come from adaptive image-space refinement
  * (Levoy 1990; vv_frame_refine_tile). docs/rendering.md describes the
- * method and its measurements. */
+ * method and its measurements.
+ *
+ * This file is one method's kernel, the direct volume ray caster, and is
+ * kept whole on purpose although it is over the 1,200 lines of issue 62's
+ * rule: its set-up, march and compositing are one loop best read together. */
 #include <math.h>
 #ifdef __SSE2__
 #include <emmintrin.h>
