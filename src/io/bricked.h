@@ -5,7 +5,7 @@
  * (src/core/cache.h), served as a source of kind VV_SOURCE_BRICKS
  * (vv_bricked_source_new) through which any renderer with the region
  * contract renders it brick by brick in front-to-back order (the region
- * driver, src/render/drivers.c). Sources: the bricked format .vvb of our
+ * driver, src/render/drivers.h). Sources: the bricked format .vvb of our
  * own (docs/file-formats.md: a header, an index with each brick's offset,
  * size and min/max, each brick's voxels with their ghosts in one piece, and
  * optional coarse levels per brick), raw files and NRRD files with raw
@@ -151,7 +151,7 @@ vv_status vv_bricked_load(vv_bricked *b, int index, vv_volume **out);
 void vv_bricked_note_skip(vv_bricked *b);
 
 /**
- * @p b as a volume source (sys/source.h) for vv_renderer_render_bricks:
+ * @p b as a volume source (sys/source.h) for the region driver (drv_render_bricks):
  * header, grid, info, load and note_skip call the functions above. @p b
  * is borrowed: keep it open while @p out is used.
  */

@@ -6,8 +6,8 @@
  * OME-Zarr (src/io/zarr_pyramid.c) and the HDF5 pyramids of BigDataViewer
  * and Imaris (src/io/hdf5_pyramid.c). Either is opened in long-lived
  * sandboxed readers, two a thread, behind a store that forwards each
- * chunk and fetches the plan's next ones ahead (vv_sandbox_store_open,
- * src/io/sandbox.c), or in this process with VOLVIS_SANDBOX=0. A remote store (HTTP) would be a
+ * chunk and fetches the plan's next ones ahead (vv_sandbox_open_store,
+ * src/sandbox/store.c), or in this process with VOLVIS_SANDBOX=0. A remote store (HTTP) would be a
  * third format: a chunk fetcher behind read_chunk.
  */
 #ifndef VOLVIS_IO_PYRAMID_H
@@ -123,7 +123,7 @@ void vv_pyramid_stats_get(const vv_pyramid *p, vv_pyramid_stats *st);
  * origin that level's and its spacing the level's extent over the coarsest
  * level's voxels, so that it spans the same world box: what a World shows
  * in place of the whole (the view frames it, its histogram sets the
- * default transfer function, vv_renderer_render_multires takes the
+ * default transfer function, the level-of-detail driver (drv_render_multires) takes the
  * geometry from the pyramid). Errors: VV_ERR_INVALID (no such level),
  * those of vv_pyramid_read_box.
  */
@@ -135,7 +135,7 @@ vv_status vv_pyramid_proxy(vv_pyramid *p, int level, vv_volume **out);
  * 0 .. n-1 (box i: level @p level[i], voxels lo[3i .. 3i+2] ..
  * hi[3i .. 3i+2], inclusive) into the cache in the background, soonest
  * first in this order (each chunk once; the caller orders by priority:
- * vv_renderer_render_multires's progressive frames ask for coarse levels
+ * the level-of-detail driver's progressive frames ask for coarse levels
  * first, then the nodes nearest the eye). The request replaces what an
  * earlier one left queued (counted in cancelled: a new view made it
  * stale); chunks being read finish. n 0 cancels. Chunks already held are
@@ -156,7 +156,7 @@ int vv_pyramid_loading(vv_pyramid *p);
 int vv_pyramid_wait(vv_pyramid *p, double seconds);
 /**
  * @p p as a multiresolution source (sys/source.h) for
- * vv_renderer_render_multires: box ranges from the chunks decoded so far.
+ * the level-of-detail driver: box ranges from the chunks decoded so far.
  * @p p is borrowed: keep it open while @p out is used.
  */
 void vv_pyramid_source(vv_pyramid *p, vv_multires_source *out);
