@@ -21,8 +21,10 @@ proj_block_last(const vv_vray *r, const float p[3], double k, double kend, doubl
 }
 
 /* The samples k .. klast of ray r in the running maximum of sg * value
- * (best, tbest: the parameter of its first sample): one subvolume's march. */
-static void
+ * (best, tbest: the parameter of its first sample): one subvolume's march.
+ * inline: GCC inlined it into its callers unasked while they shared a
+ * translation unit with the AVX2 code; alone with them it needs the hint. */
+static inline void
 project_block(const vv_vcache *c, const vv_vray *r, double k, double klast, double dt, float sg,
               int avx2, float *best, double *tbest) {
 #if VV_VC_HAVE_AVX2
