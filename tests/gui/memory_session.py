@@ -18,7 +18,7 @@ What it checks:
   window size -- plus the 64 MiB limit plus a margin for what a frame
   needs outside the cache (MARGIN_FIXED_MIB and MARGIN_BYTES_PER_PIXEL
   below: 51 MiB for the 464 x 664 view of a 1100 x 720 window, where
-  33 to 36 MiB were measured); without the one budget the bricked file
+  28 to 36 MiB were measured); without the one budget the bricked file
   alone (256 bricks of 0.5 MiB, every one read by each frame of its MIP)
   would take the process over that bound;
 - the converged frame shows three objects: three separate runs of columns
@@ -40,7 +40,7 @@ GUI, CLI, OUT = sys.argv[1:4]
 HEAD = os.path.abspath("../shared/data/volumes/ct_head.nrrd")
 LIMIT_MIB = 64
 # What the GUI holds outside the cache while it draws the three objects, a
-# fixed part and a part per pixel of the 3-D view (measured: 33 to 36 MiB
+# fixed part and a part per pixel of the 3-D view (measured: 28 to 36 MiB
 # for a view of 464 x 664 pixels, where this allows 51 MiB): a frame's
 # float image and depth (20 bytes a pixel), a layer of 20 bytes a pixel
 # for each of the three objects, and the 8-bit pixels, depth and texture
