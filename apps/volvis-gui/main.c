@@ -9,6 +9,7 @@
 #include <volvis/volvis.h>
 
 #include "vvg-application.h"
+#include "vvg-document.h"
 #include "vvg-scene-view.h"
 
 static void
@@ -19,9 +20,11 @@ usage(FILE *out) {
             "\n"
             "VolVis %s: the desktop application. Opens volumes (NRRD, NIfTI, MetaImage,\n"
             "VTK, SLC, ...), meshes (OBJ, PLY, STL, OFF, ...) and scene files (.json).\n"
-            "Multiresolution files (OME-Zarr, BigDataViewer, Imaris) whose level 0 holds\n"
-            "more than a quarter of VOLVIS_MEMORY_LIMIT are drawn out of core by level of\n"
-            "detail, sharpening as chunks arrive (the View page's cache line).\n"
+            "Volumes whose level 0 holds more than a quarter of VOLVIS_MEMORY_LIMIT, and\n"
+            ".vvb files, are drawn out of core: multiresolution files (OME-Zarr,\n"
+            "BigDataViewer, Imaris, .vvb with levels) by level of detail, sharpening as\n"
+            "chunks arrive, bricked files brick by brick; all files share the one memory\n"
+            "limit (the View page's cache line).\n"
             "\n"
             "The 3-D view fills the window; \"4 views\" adds axial, coronal and sagittal\n"
             "slice views (click: move the cursor; right drag: window/level; wheel: next\n"
@@ -37,8 +40,9 @@ usage(FILE *out) {
             "Environment (docs/gui.md):\n"
             "  VOLVIS_FRAME_LOG=FILE     append a line per frame shown\n"
             "  VOLVIS_FRAME_DIR=DIR      write each full-quality frame to DIR/full.png\n"
-            "  VOLVIS_MEMORY_LIMIT=SIZE  memory for multiresolution files out of core\n"
-            "                            (bytes, or with K, M or G; default 1G)\n"
+            "  VOLVIS_MEMORY_LIMIT=SIZE  memory for the bricks and chunks of all files out\n"
+            "                            of core together (bytes, or with K, M or G;\n"
+            "                            default 1G)\n"
             "  VOLVIS_INPUT_SOCKET=PATH  listen for input devices on a Unix socket at start\n"
             "                            (protocol: docs/input.md)\n"
             "  VOLVIS_INPUT_REPLAY=FILE  replay a recording of input devices at start\n"
@@ -70,6 +74,9 @@ main(int argc, char **argv) {
             return 2;
         }
     }
+    /* one budget for the bricks and chunks of every file out of core, set
+     * before any file opens (vv_open's VV_OPEN_AUTO reads it) */
+    vv_cache_set_limit(vv_cache_process(), vvg_document_memory_limit());
     VvgApplication *app = vvg_application_new();
     int status = g_application_run(G_APPLICATION(app), argc, argv);
     g_object_unref(app);

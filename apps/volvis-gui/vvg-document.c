@@ -5,7 +5,6 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <ftw.h>
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -29,7 +28,6 @@ struct _VvgDocument {
     char *merge_label;         /* vvg_document_begin_edit_merging: the last merged edit */
     gint64 merge_time;
     GHashTable *time_steps; /* source path -> the file's time steps (GINT_TO_POINTER) */
-    GHashTable *pyramids;   /* source path -> VvgPyramid (opened out of core) */
     GHashTable *series;     /* "channel\npath" -> vv_time_series* */
     /* vvg_document_request_time: a read in flight, the step asked for since */
     gboolean time_busy;
@@ -79,7 +77,6 @@ vvg_document_finalize(GObject *o) {
     g_ptr_array_unref(doc->autosaved);
     g_free(doc->merge_label);
     g_hash_table_unref(doc->time_steps);
-    g_hash_table_unref(doc->pyramids);
     g_hash_table_unref(doc->series);
     G_OBJECT_CLASS(vvg_document_parent_class)->finalize(o);
 }
@@ -102,8 +99,6 @@ vvg_document_init(VvgDocument *doc) {
     doc->selected = -1;
     doc->autosaved = g_ptr_array_new_with_free_func(autosaved_volume_free);
     doc->time_steps = g_hash_table_new_full(g_str_hash, g_str_equal, g_free, NULL);
-    doc->pyramids =
-        g_hash_table_new_full(g_str_hash, g_str_equal, g_free, (GDestroyNotify)vvg_pyramid_unref);
     doc->series = vvg_time_cache_new();
     doc->time_want = -1;
 }
@@ -256,41 +251,27 @@ has_suffix(const char *path, const char *const *suffixes) {
 static const char *const mesh_suffixes[] = {".obj", ".ply", ".stl",  ".off", ".dae",
                                             ".3ds", ".fbx", ".gltf", ".glb", NULL};
 
-/* A scene replaces the World; its volumes' files are the scene's. */
-static int pyramid_proxy(VvgDocument *doc, const char *path, const char *key, VvgPyramid **out,
-                         vv_volume **proxy, GError **error);
-
-/* A scene's volume file (vv_scene_load_with): a multiresolution file too
- * large to read whole (pyramid_proxy) stands in as its proxy, kept under
- * the path the object will name; anything else is read whole. */
-static vv_status
-scene_volume(void *user, const char *path, int time, vv_scene_volume *out) {
-    VvgDocument *doc = user;
-    if (time > 0 || !vv_pyramid_probe(path))
-        return VV_ERR_UNSUPPORTED;
-    VvgPyramid *gp = NULL;
-    vv_volume *proxy = NULL;
-    GError *err = NULL;
-    const int r = pyramid_proxy(doc, path, path, &gp, &proxy, &err);
-    if (r < 0) { /* the pyramid's one-line error, for the scene to place */
-        const vv_status s = vv_error_set(VV_ERR_FORMAT, "%s", err->message);
-        g_clear_error(&err);
-        return s;
-    }
-    if (r == 0)
-        return VV_ERR_UNSUPPORTED;
-    const vv_volume *h0 = vv_pyramid_level(gp->pyramid, 0);
-    out->volume = proxy;
-    for (int a = 0; a < 3; a++)
-        out->scale[a] = proxy->spacing[a] / h0->spacing[a];
-    return VV_OK;
+/* How the GUI opens volume files (vv_open): VV_OPEN_AUTO -- out of core
+ * when level 0 holds more than a quarter of the process's cache budget
+ * (vvg_document_memory_limit, set at start-up), a .vvb always -- and a
+ * file with pyramid levels by its levels (level of detail), not by bricks. */
+static void
+open_options(vv_open_options *oo) {
+    vv_open_options_init(oo);
+    oo->mode = VV_OPEN_AUTO;
+    oo->levels = 1;
 }
 
+/* A scene replaces the World; its volumes' files are the scene's, each
+ * opened as open_options says (the objects out of core own their files'
+ * sources, all in the process's one cache). */
 static gboolean
 open_scene(VvgDocument *doc, const char *path, GError **error) {
     vv_world *w = NULL;
+    vv_open_options oo;
+    open_options(&oo);
     vv_error_clear();
-    if (vv_scene_load_with(&w, path, NULL, doc->filtered, scene_volume, doc) != VV_OK) {
+    if (vv_scene_load_open(&w, path, NULL, doc->filtered, &oo) != VV_OK) {
         set_error(error, "cannot read the scene");
         return FALSE;
     }
@@ -347,20 +328,15 @@ added_beside(VvgDocument *doc) {
     vvg_document_changed(doc);
 }
 
+/* Adds mesh @p m (borrowed) read from @p path as an object. */
 static gboolean
-open_mesh(VvgDocument *doc, const char *path, GError **error) {
-    vv_mesh *m = NULL;
+add_mesh(VvgDocument *doc, const char *path, vv_mesh *m, GError **error) {
     vv_object *o = NULL;
-    if (vv_mesh_load(&m, path) != VV_OK) {
-        set_error(error, "cannot read the mesh");
-        return FALSE;
-    }
     g_autofree char *base = g_path_get_basename(path);
     vv_status s = vv_object_new_geometry(&o, VV_OBJECT_MESH, base);
     g_autofree char *abs = g_canonicalize_filename(path, NULL);
     if (s == VV_OK)
         s = vv_object_set_mesh(o, m, abs);
-    vv_mesh_free(m);
     if (s != VV_OK) {
         vv_object_free(o);
         set_error(error, "cannot use the mesh");
@@ -379,15 +355,29 @@ open_mesh(VvgDocument *doc, const char *path, GError **error) {
     return TRUE;
 }
 
+static gboolean
+open_mesh(VvgDocument *doc, const char *path, GError **error) {
+    vv_mesh *m = NULL;
+    if (vv_mesh_load(&m, path) != VV_OK) {
+        set_error(error, "cannot read the mesh");
+        return FALSE;
+    }
+    const gboolean ok = add_mesh(doc, path, m, error);
+    vv_mesh_free(m);
+    return ok;
+}
+
 /* Adds the @p n channels @p v of one file (n == 1: a volume of one channel)
  * as one object; @p info[c]: what the read of channel c said (names,
- * colours), may be NULL. */
+ * colours), may be NULL. With @p ooc (a file out of core, v unused, n 1)
+ * the object shows its proxy and owns the source (vv_world_new_for_source). */
 static gboolean
 add_volume_channels(VvgDocument *doc, vv_volume *const *v, int n, const vv_load_info *info,
-                    const char *name, const char *source, GError **error) {
+                    const char *name, const char *source, vv_source *ooc, GError **error) {
     vv_world *w = NULL;
     vv_error_clear();
-    if (vv_world_new_for_volume(&w, v[0], NULL) != VV_OK) {
+    if ((ooc ? vv_world_new_for_source(&w, ooc, 0, NULL)
+             : vv_world_new_for_volume(&w, v[0], NULL)) != VV_OK) {
         set_error(error, "cannot show the volume");
         return FALSE;
     }
@@ -449,111 +439,32 @@ add_volume_channels(VvgDocument *doc, vv_volume *const *v, int n, const vv_load_
 gboolean
 vvg_document_add_volume(VvgDocument *doc, vv_volume *v, const char *name, const char *source,
                         GError **error) {
-    return add_volume_channels(doc, &v, 1, NULL, name, source, error);
+    return add_volume_channels(doc, &v, 1, NULL, name, source, NULL, error);
 }
 
-/* ---- multiresolution files out of core ---------------------------------------- */
+/* ---- files out of core -------------------------------------------------------- */
 
-static void
-gui_pyramid_clear(gpointer data) {
-    VvgPyramid *p = data;
-    vv_pyramid_free(p->slices);
-    vv_pyramid_free(p->pyramid);
-    vv_volume_free(p->proxy);
-    g_free(p->path);
-}
-
-VvgPyramid *
-vvg_pyramid_ref(VvgPyramid *p) {
-    return p ? g_atomic_rc_box_acquire(p) : NULL;
-}
-
-vv_pyramid *
-vvg_pyramid_slices(VvgPyramid *p) {
-    if (!p->slices) {
-        const uint64_t limit =
-            p->limit / 4 > ((uint64_t)16 << 20) ? p->limit / 4 : (uint64_t)16 << 20;
-        vv_error_clear();
-        if (vv_pyramid_open(&p->slices, p->path, 0, -1, limit, NULL) != VV_OK) {
-            g_warning("volvis-gui: slice views: %s", vv_error_message());
-            p->slices = NULL;
-        }
-    }
-    return p->slices;
-}
-
-void
-vvg_pyramid_unref(VvgPyramid *p) {
-    if (p)
-        g_atomic_rc_box_release_full(p, gui_pyramid_clear);
-}
-
-VvgPyramid *
-vvg_document_pyramid(VvgDocument *doc, const vv_object *o) {
-    if (!o || o->type != VV_OBJECT_VOLUME || !o->geometry.source || !o->volume)
+vv_source *
+vvg_object_source(const vv_object *o) {
+    if (!o || o->type != VV_OBJECT_VOLUME || !o->source)
         return NULL;
-    VvgPyramid *p = g_hash_table_lookup(doc->pyramids, o->geometry.source);
-    return p && p->proxy == o->volume ? p : NULL;
+    return vv_source_get_kind(o->source) == VV_SOURCE_MEMORY ? NULL : o->source;
 }
 
 uint64_t
 vvg_document_memory_limit(void) {
     const char *e = g_getenv("VOLVIS_MEMORY_LIMIT");
     if (!e || !*e)
-        return (uint64_t)1 << 30;
+        return VV_CACHE_DEFAULT_LIMIT;
     char *end = NULL;
     double v = g_ascii_strtod(e, &end);
     const char u = end ? g_ascii_toupper(*end) : '\0';
     v *= u == 'K' ? 1024.0 : u == 'M' ? 1048576.0 : u == 'G' ? 1073741824.0 : 1.0;
     if (!(v >= 1048576.0) || v > 1e15) {
         g_warning("volvis-gui: VOLVIS_MEMORY_LIMIT=%s is not a size of at least 1M; 1G is used", e);
-        return (uint64_t)1 << 30;
+        return VV_CACHE_DEFAULT_LIMIT;
     }
     return (uint64_t)v;
-}
-
-/* For saving a World @p w (a clone of the document's, or the document's
- * own; doc->pyramids are looked up on the original @p orig): the objects
- * shown from a pyramid get, in @p w, a header volume of level 0's geometry
- * instead of the proxy, so that the scene names the file with level 0's
- * origin and spacing (its loader reads level 0). */
-static void
-pyramid_geometry_for_save(VvgDocument *doc, const vv_world *orig, vv_world *w) {
-    for (int i = 0; i < w->n_objects && i < orig->n_objects; i++) {
-        VvgPyramid *p = vvg_document_pyramid(doc, orig->objects[i]);
-        if (!p)
-            continue;
-        const vv_volume *h0 = vv_pyramid_level(p->pyramid, 0);
-        const int one[3] = {1, 1, 1};
-        vv_volume *h = NULL;
-        if (vv_volume_new(&h, one, h0->type) != VV_OK) {
-            vv_error_clear();
-            continue;
-        }
-        memcpy(h->spacing, h0->spacing, sizeof h->spacing);
-        memcpy(h->origin, h0->origin, sizeof h->origin);
-        memcpy(h->direction, h0->direction, sizeof h->direction);
-        h->range[0] = h0->range[0];
-        h->range[1] = h0->range[1];
-        vv_volume_free(w->objects[i]->volume);
-        w->objects[i]->volume = h;
-    }
-}
-
-/* Opens the multiresolution file @p path out of core when its level 0 holds
- * more than a quarter of the memory limit: the object shows the coarsest
- * level stretched over level 0's box, its opacity per level 0's voxel (as
- * `volvis render STORE`). 1: opened; 0: small enough to read whole; -1:
- * an error. */
-static gboolean
-pyramid_unused(gpointer key, gpointer value, gpointer user) {
-    (void)key;
-    const VvgPyramid *p = value;
-    const vv_world *w = user;
-    for (int i = 0; i < w->n_objects; i++)
-        if (w->objects[i]->volume == p->proxy)
-            return FALSE;
-    return TRUE;
 }
 
 /* A volume object's name from its file: the file name up to its first dot
@@ -567,85 +478,72 @@ volume_name(const char *path) {
     return base;
 }
 
-/* The pyramid of the multiresolution file @p path when its level 0 holds
- * more than a quarter of the memory limit: opened, kept in doc->pyramids
- * under @p key (what objects showing it name as their source), *proxy its
- * proxy (a new reference); the one kept under @p key already when it is
- * of the same file (another object of it). 1: so; 0: not needed (nothing
- * kept); -1: an error, in @p error. */
-static int
-pyramid_proxy(VvgDocument *doc, const char *path, const char *key, VvgPyramid **out,
-              vv_volume **proxy, GError **error) {
-    /* a file some object already shows out of core: its pyramid and proxy
-     * again (one cache for both objects) */
-    VvgPyramid *have = g_hash_table_lookup(doc->pyramids, key);
-    if (have) {
-        g_autofree char *canon = g_canonicalize_filename(path, NULL);
-        if (strcmp(have->path, canon) == 0) {
-            *proxy = vv_volume_ref(have->proxy);
-            *out = have;
-            return 1;
-        }
-    }
-    const uint64_t limit = vvg_document_memory_limit();
-    vv_pyramid *p = NULL;
+/* A volume file through vv_open (open_options): read whole, every channel
+ * (the first VV_MAX_CHANNELS) at time step 0; or out of core, channel 0
+ * alone (the drivers out of core draw objects of one channel), the object
+ * owning the source. A mesh format that vv_open knows is added as a mesh. */
+static gboolean
+open_volume(VvgDocument *doc, const char *path, GError **error) {
+    vv_open_options oo;
+    open_options(&oo);
+    vv_opened od;
     vv_error_clear();
-    if (vv_pyramid_open(&p, path, 0, -1, limit, NULL) != VV_OK) {
-        set_error(error, "cannot open the multiresolution file");
-        return -1;
+    if (vv_open(&od, path, &oo) != VV_OK) {
+        set_error(error, "cannot read the volume");
+        return FALSE;
     }
-    const int top = vv_pyramid_levels(p) - 1;
-    const vv_volume *h0 = vv_pyramid_level(p, 0);
-    const double bytes =
-        (double)h0->dims[0] * h0->dims[1] * h0->dims[2] * (double)vv_voxel_type_size(h0->type);
-    if (top == 0 || bytes <= (double)limit / 4) {
-        vv_pyramid_free(p);
-        return 0;
+    if (od.kind != 0) { /* vv_data_kind: 1 a grid, 2 a mesh */
+        gboolean ok = FALSE;
+        if (od.mesh) {
+            ok = add_mesh(doc, path, od.mesh, error);
+        } else {
+            g_autofree char *base = g_path_get_basename(path);
+            g_set_error(error, VVG_ERROR, 1,
+                        "%s: an irregular grid; the GUI shows volumes and meshes (volvis render "
+                        "draws grids)",
+                        base);
+        }
+        vv_opened_clear(&od);
+        return ok;
     }
-    if (vv_pyramid_proxy(p, 0, proxy) != VV_OK) {
-        set_error(error, "cannot read the coarsest level");
-        vv_pyramid_free(p);
-        return -1;
+    vv_volume *whole = vv_source_volume(od.source);
+    vv_volume *v[VV_MAX_CHANNELS] = {NULL};
+    vv_load_info info[VV_MAX_CHANNELS];
+    info[0] = od.info;
+    int n = 1;
+    gboolean ok = TRUE;
+    if (whole) {
+        v[0] = vv_volume_ref(whole);
+        n = info[0].n_channels < VV_MAX_CHANNELS ? info[0].n_channels : VV_MAX_CHANNELS;
+        for (int c = 1; c < n && ok; c++) {
+            vv_load_options opt;
+            vv_load_options_init(&opt);
+            opt.channel = c;
+            opt.info = &info[c];
+            vv_error_clear();
+            ok = vv_volume_load(&v[c], path, &opt) == VV_OK;
+            if (!ok)
+                set_error(error, "cannot read the volume");
+        }
+        if (ok && info[0].n_channels > VV_MAX_CHANNELS)
+            g_message("volvis-gui: %s has %d channels; the first %d are shown", path,
+                      info[0].n_channels, VV_MAX_CHANNELS);
+    } else if (info[0].n_channels > 1) {
+        g_message("volvis-gui: %s has %d channels; out of core the first is shown", path,
+                  info[0].n_channels);
     }
-    VvgPyramid *gp = g_atomic_rc_box_new0(VvgPyramid);
-    gp->pyramid = p;
-    gp->proxy = vv_volume_ref(*proxy);
-    gp->path = g_canonicalize_filename(path, NULL);
-    gp->limit = limit;
-    g_hash_table_replace(doc->pyramids, g_strdup(key), gp);
-    g_hash_table_replace(doc->time_steps, g_strdup(key), GINT_TO_POINTER(1));
-    *out = gp;
-    return 1;
-}
-
-static int
-open_out_of_core(VvgDocument *doc, const char *path, GError **error) {
-    /* each pyramid holds up to the limit: those no object of the World shows
-     * any more go (an undo back to one draws its proxy in memory) */
-    g_hash_table_foreach_remove(doc->pyramids, pyramid_unused, doc->world);
-    g_autofree char *key = g_canonicalize_filename(path, NULL);
-    VvgPyramid *gp = NULL;
-    vv_volume *proxy = NULL;
-    const int r = pyramid_proxy(doc, path, key, &gp, &proxy, error);
-    if (r <= 0)
-        return r;
-    const vv_volume *h0 = vv_pyramid_level(gp->pyramid, 0);
     g_autofree char *base = volume_name(path);
-    const int before = doc->world->n_objects;
-    const gboolean ok = add_volume_channels(doc, &proxy, 1, NULL, base, path, error);
-    /* opacity per level 0's smallest voxel edge, not the proxy's */
-    if (ok && doc->world->n_objects > before) {
-        vv_object *o = doc->world->objects[doc->world->n_objects - 1];
-        const double ps = fmin(proxy->spacing[0], fmin(proxy->spacing[1], proxy->spacing[2]));
-        const double fs = fmin(h0->spacing[0], fmin(h0->spacing[1], h0->spacing[2]));
-        if (fabs(o->tf.opacity_unit_distance - ps) <= 1e-12 * ps)
-            o->tf.opacity_unit_distance = fs;
-        vvg_document_changed(doc);
-    }
-    vv_volume_free(proxy);
-    if (!ok)
-        g_hash_table_remove(doc->pyramids, key);
-    return ok ? 1 : -1;
+    /* before the object, whose "changed" the pages fill from; keyed as
+     * remember_source names the file; a file out of core shows its step 0 */
+    if (ok)
+        g_hash_table_replace(doc->time_steps, g_canonicalize_filename(path, NULL),
+                             GINT_TO_POINTER(whole && info[0].n_times > 1 ? info[0].n_times : 1));
+    if (ok)
+        ok = add_volume_channels(doc, v, n, info, base, path, whole ? NULL : od.source, error);
+    for (int c = 0; c < n; c++)
+        vv_volume_free(v[c]);
+    vv_opened_clear(&od); /* an object out of core holds its own reference */
+    return ok;
 }
 
 gboolean
@@ -662,42 +560,9 @@ vvg_document_open(VvgDocument *doc, const char *path, GError **error) {
         !strcmp(leaf, ".zattrs") || !strcmp(leaf, ".zgroup") || !strcmp(leaf, ".zarray")
             ? g_path_get_dirname(path)
             : NULL;
-    if (store && vv_pyramid_probe(store))
+    if (store && vv_format_detect(store) == VV_FORMAT_OME_ZARR)
         path = store;
-    if (vv_pyramid_probe(path)) {
-        const int r = open_out_of_core(doc, path, error);
-        if (r != 0)
-            return r > 0;
-    }
-    /* every channel of the file (the first VV_MAX_CHANNELS), each at time step 0 */
-    vv_volume *v[VV_MAX_CHANNELS] = {NULL};
-    vv_load_info info[VV_MAX_CHANNELS];
-    int n = 1;
-    gboolean ok = TRUE;
-    for (int c = 0; c < n && ok; c++) {
-        vv_load_options opt;
-        vv_load_options_init(&opt);
-        opt.channel = c == 0 ? -1 : c; /* -1: the format's default for files of one */
-        opt.info = &info[c];
-        ok = vv_volume_load(&v[c], path, &opt) == VV_OK;
-        if (ok && c == 0)
-            n = info[0].n_channels < VV_MAX_CHANNELS ? info[0].n_channels : VV_MAX_CHANNELS;
-        if (!ok)
-            set_error(error, "cannot read the volume");
-    }
-    if (ok && info[0].n_channels > VV_MAX_CHANNELS)
-        g_message("volvis-gui: %s has %d channels; the first %d are shown", path,
-                  info[0].n_channels, VV_MAX_CHANNELS);
-    g_autofree char *base = volume_name(path);
-    if (ok) /* before the object, whose "changed" the pages fill from; keyed as
-             * remember_source names the file */
-        g_hash_table_replace(doc->time_steps, g_canonicalize_filename(path, NULL),
-                             GINT_TO_POINTER(info[0].n_times > 1 ? info[0].n_times : 1));
-    if (ok)
-        ok = add_volume_channels(doc, v, n, info, base, path, error);
-    for (int c = 0; c < n; c++)
-        vv_volume_free(v[c]);
-    return ok;
+    return open_volume(doc, path, error);
 }
 
 int
@@ -975,13 +840,6 @@ vvg_document_dirty(VvgDocument *doc) {
 gboolean
 vvg_document_save(VvgDocument *doc, const char *path, GError **error) {
     vv_world *w = doc->kept ? doc->kept : doc->world; /* never a transient World */
-    vv_world *ws = NULL; /* the World as saved: pyramids' objects with level 0's geometry */
-    vv_error_clear();
-    if (vv_world_clone(&ws, w) != VV_OK) {
-        set_error(error, "cannot take a snapshot of the World");
-        return FALSE;
-    }
-    pyramid_geometry_for_save(doc, w, ws);
     g_autofree char *dir = g_path_get_dirname(path);
     g_autofree char *stem = g_path_get_basename(path);
     char *dot = strrchr(stem, '.');
@@ -1021,11 +879,11 @@ vvg_document_save(VvgDocument *doc, const char *path, GError **error) {
         files[i] = slash ? slash + 1 : full; /* beside the scene: relative to it */
     }
     vv_error_clear();
-    if (ok && vv_scene_save(ws, path, files) != VV_OK) {
+    /* objects out of core are written with their files' level-0 geometry */
+    if (ok && vv_scene_save(w, path, files) != VV_OK) {
         set_error(error, "cannot write the scene");
         ok = FALSE;
     }
-    vv_world_free(ws);
     if (ok) {
         for (int i = 0, k = 0; i < w->n_objects; i++)
             if (files[i])
@@ -1137,7 +995,6 @@ vvg_document_autosave_begin(VvgDocument *doc, const char *dir, GError **error) {
         g_free(job);
         return NULL;
     }
-    pyramid_geometry_for_save(doc, w, job->world);
     job->dir = g_strdup(dir);
     job->prev = g_ptr_array_new_with_free_func(autosaved_volume_free);
     for (guint i = 0; i < doc->autosaved->len; i++) {
@@ -1217,18 +1074,38 @@ vvg_document_autosave(VvgDocument *doc, const char *dir, GError **error) {
 gboolean
 vvg_document_restore(VvgDocument *doc, const char *dir, GError **error) {
     g_autofree char *scene = g_build_filename(dir, "session.json", NULL);
+    g_autofree char *was_path = g_strdup(doc->path);
+    const gboolean was_dirty = doc->dirty;
     if (!open_scene(doc, scene, error))
         return FALSE;
     /* the autosave's own volumes are volumes of the session again: saving
-     * writes them (the folder goes away once the new autosave stands) */
+     * writes them (the folder goes away once the new autosave stands), so
+     * one opened out of core (larger than a quarter of the budget) is read
+     * whole, as the session that wrote it held it */
     g_autofree char *prefix = g_canonicalize_filename(dir, NULL);
     for (int i = 0; i < doc->world->n_objects; i++) {
         vv_object *o = doc->world->objects[i];
-        if (o->geometry.source && g_str_has_prefix(o->geometry.source, prefix) &&
-            o->geometry.source[strlen(prefix)] == '/') {
-            free(o->geometry.source);
-            o->geometry.source = NULL;
+        if (!o->geometry.source || !g_str_has_prefix(o->geometry.source, prefix) ||
+            o->geometry.source[strlen(prefix)] != '/')
+            continue;
+        if (vvg_object_source(o)) {
+            vv_volume *v = NULL;
+            vv_error_clear();
+            vv_status s = vv_volume_load(&v, o->geometry.source, NULL);
+            if (s == VV_OK)
+                s = vv_object_set_volume(o, v);
+            vv_volume_free(v);
+            if (s != VV_OK) { /* the session as it was before */
+                set_error(error, "cannot read the autosaved volume");
+                vvg_document_undo(doc);
+                g_free(doc->path);
+                doc->path = g_steal_pointer(&was_path);
+                doc->dirty = was_dirty;
+                return FALSE;
+            }
         }
+        free(o->geometry.source);
+        o->geometry.source = NULL;
     }
     g_free(doc->path);
     doc->path = NULL;

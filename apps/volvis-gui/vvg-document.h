@@ -45,8 +45,13 @@ gboolean vvg_document_can_undo(VvgDocument *doc);
 gboolean vvg_document_can_redo(VvgDocument *doc);
 
 /**
- * Opens a volume (any format vv_volume_load reads), a mesh (any format
- * Assimp reads: .obj .ply .stl .off ...) or a scene file (.json). The first
+ * Opens a volume (any format vv_open reads), a mesh (any format Assimp
+ * reads: .obj .ply .stl .off ...) or a scene file (.json). Volumes, and the
+ * volumes of a scene, open with VV_OPEN_AUTO: out of core (by bricks, or a
+ * pyramid by its levels) when level 0 holds more than a quarter of the
+ * process's cache budget (vvg_document_memory_limit), a .vvb always; the
+ * object then owns the file's source (vv_object_attach_source) and shows
+ * its proxy, and every file shares the one cache. The
  * volume into an empty World gets the default scene of `volvis render FILE`;
  * later objects are added beside it and the view frames them all; a mesh
  * whose format is usually Y-up (vvg_document_mesh_is_y_up) is turned so that
@@ -61,9 +66,10 @@ gboolean vvg_document_can_redo(VvgDocument *doc);
 gboolean vvg_document_open(VvgDocument *doc, const char *path, GError **error);
 /**
  * Saves the World as a scene file that `volvis render` renders to the same
- * image. Volumes that came from files are referred to by path; volumes made
- * in the session (Modeling, raw import) are written as NRRD beside the
- * scene, under names no file has yet ("<scene>_<i>_<name>.nrrd", else with
+ * image (vv_scene_save: an object out of core is written with its file's
+ * own level-0 origin and spacing, not its proxy's). Volumes that came from
+ * files are referred to by path; volumes made in the session (Modeling, raw import) are written as
+ * NRRD beside the scene, under names no file has yet ("<scene>_<i>_<name>.nrrd", else with
  * "-2", "-3", ...), referred to relative to it. All or nothing: the scene
  * is written atomically after the volumes, and when it cannot be, the
  * volumes of this save are removed and the objects keep no reference to
@@ -144,39 +150,20 @@ void vvg_document_set_edited_channel(VvgDocument *doc, int channel);
 int vvg_document_time_steps(VvgDocument *doc, const vv_object *o);
 
 /**
- * A multiresolution file (OME-Zarr, BigDataViewer / Imaris HDF5) opened
- * out of core (vvg_document_open): its object's volume is the coarsest
- * level stretched over level 0's box (the proxy), and the scene view draws
- * the pyramid by level of detail. Reference-counted (vvg_pyramid_ref,
- * _unref: any thread); the pyramid's reads and source belong to the
- * render thread, its loader's calls and statistics to any.
+ * The file out of core that volume object @p o shows (vv_object.source: a
+ * bricked file or a multiresolution pyramid, opened by vvg_document_open or
+ * a scene), whose proxy is the object's volume; NULL when its voxels are in
+ * memory (a file read whole, a volume made or filtered in the session).
+ * Borrowed (vv_source_ref to keep it).
  */
-typedef struct VvgPyramid {
-    vv_pyramid *pyramid;
-    vv_volume *proxy;   /* the object's volume when opened (a reference) */
-    char *path;         /* canonical */
-    uint64_t limit;     /* bytes */
-    vv_pyramid *slices; /* the slice views' own (UI thread; vvg_pyramid_slices) */
-} VvgPyramid;
-VvgPyramid *vvg_pyramid_ref(VvgPyramid *p);
+vv_source *vvg_object_source(const vv_object *o);
 /**
- * The slice views' pyramid of the same file (UI thread only): opened at the
- * first call, with its own cache of a quarter of the limit (at least 16
- * MiB), so that slicing never waits for the render thread; NULL when it
- * cannot be opened (the slice views then sample the proxy).
- */
-vv_pyramid *vvg_pyramid_slices(VvgPyramid *p);
-void vvg_pyramid_unref(VvgPyramid *p);
-/**
- * The pyramid object @p o shows: its file's, when @p o is a volume object
- * whose volume is still that pyramid's proxy (not replaced by a filter);
- * NULL otherwise. Borrowed (vvg_pyramid_ref to keep it).
- */
-VvgPyramid *vvg_document_pyramid(VvgDocument *doc, const vv_object *o);
-/**
- * The out-of-core memory limit: VOLVIS_MEMORY_LIMIT (bytes, or a number
- * with K, M or G), default 1 GiB. A multiresolution file whose level 0
- * holds more than a quarter of it opens out of core.
+ * The memory limit of the process's cache (vv_cache_process, one budget
+ * for the bricks and chunks of every file out of core):
+ * VOLVIS_MEMORY_LIMIT (bytes, or a number with K, M or G; at least 1M),
+ * default 1 GiB. main() sets the cache to it at start-up, before any file
+ * is opened; a volume whose level 0 holds more than a quarter of it opens
+ * out of core (vv_open's VV_OPEN_AUTO).
  */
 uint64_t vvg_document_memory_limit(void);
 /**

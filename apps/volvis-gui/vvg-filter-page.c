@@ -122,8 +122,14 @@ filter_done(GObject *src, GAsyncResult *res, gpointer user) {
     const vv_volume *old = o->volume;
     double olo = old->range[0], ohi = old->range[1];
     int same_kind = j->out->type == old->type || (j->out->type == VV_F32 && old->type != VV_U8);
-    vv_volume_free(o->volume);
-    o->volume = vv_volume_ref(j->out);
+    if (o->n_channels == 0) {
+        /* in memory from now on: the object's file out of core, if any, is dropped */
+        if (vv_object_set_volume(o, j->out) != VV_OK)
+            g_warning("volvis-gui: %s", vv_error_message());
+    } else { /* channel 0 of several: the object's volume only */
+        vv_volume_free(o->volume);
+        o->volume = vv_volume_ref(j->out);
+    }
     const char *text = vv_filter_chain_text(j->chain);
     /* a volume from a file is saved as the file and its filters; one made in
      * the session is saved as it is (vvg_document_save) */
@@ -196,9 +202,9 @@ apply_clicked(GtkButton *b, gpointer user) {
         return;
     }
     filter_job *j = g_new0(filter_job, 1);
-    VvgPyramid *gp = vvg_document_pyramid(page->doc, o);
-    if (gp) { /* said with the result: the proxy, not level 0 */
-        const vv_volume *h0 = vv_pyramid_level(gp->pyramid, 0);
+    vv_source *src = vvg_object_source(o);
+    if (src) { /* said with the result: the proxy, not level 0 */
+        const vv_volume *h0 = vv_source_level(src, 0);
         snprintf(j->proxy, sizeof j->proxy,
                  " -- the coarse proxy (level 0, %d x %d x %d, is out of core; a saved session "
                  "keeps the chain for the whole file)",

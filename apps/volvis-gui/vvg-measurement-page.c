@@ -70,11 +70,10 @@ hist_draw(GtkDrawingArea *area, cairo_t *cr, int W, int H, gpointer user) {
 }
 
 /* The histogram of an object out of core: level 0 of its file, read box by
- * box in a thread through a pyramid of its own (the render thread's is not
- * shared), within a quarter of the memory limit. */
+ * box in a thread through the object's source (thread-safe; its pieces in
+ * the process's one cache, within the memory limit). */
 typedef struct hist_job {
-    char *path;
-    uint64_t limit;
+    vv_source *source; /* a reference */
     char name[VV_NAME_MAX];
     vv_histogram *hist;
     int dims[3];
@@ -88,25 +87,19 @@ hist_thread(GTask *task, gpointer src, gpointer data, GCancellable *c) {
     (void)src;
     (void)c;
     hist_job *j = data;
-    vv_pyramid *p = NULL;
+    const vv_volume *h0 = vv_source_level(j->source, 0);
+    memcpy(j->dims, h0->dims, sizeof j->dims);
     vv_error_clear();
-    j->status = vv_pyramid_open(&p, j->path, 0, -1, j->limit, NULL);
-    if (j->status == VV_OK) {
-        const vv_volume *h0 = vv_pyramid_level(p, 0);
-        memcpy(j->dims, h0->dims, sizeof j->dims);
-        j->status =
-            vv_measure_histogram_boxes(&j->hist, h0, vv_pyramid_level0_box, p, 128, 0, 0, NULL);
-    }
+    j->status = vv_measure_histogram_boxes(&j->hist, h0, vv_source_box, j->source, 128, 0, 0, NULL);
     if (j->status != VV_OK)
         g_strlcpy(j->error, vv_error_message(), sizeof j->error);
-    vv_pyramid_free(p);
 }
 
 static void
 hist_job_free(gpointer p) {
     hist_job *j = p;
     vv_histogram_free(j->hist);
-    g_free(j->path);
+    vv_source_free(j->source);
     g_free(j);
 }
 
@@ -143,11 +136,10 @@ act_histogram(GSimpleAction *a, GVariant *p, gpointer user) {
         vvg_show_error(GTK_WIDGET(self), "No histogram", "select a volume object first");
         return;
     }
-    VvgPyramid *gp = vvg_document_pyramid(self->doc, o);
-    if (gp) { /* out of core: level 0, not the proxy */
+    vv_source *src = vvg_object_source(o);
+    if (src) { /* out of core: level 0, not the proxy */
         hist_job *j = g_new0(hist_job, 1);
-        j->path = g_strdup(gp->path);
-        j->limit = gp->limit / 4 > ((uint64_t)16 << 20) ? gp->limit / 4 : (uint64_t)16 << 20;
+        j->source = vv_source_ref(src);
         g_strlcpy(j->name, o->name, sizeof j->name);
         gtk_label_set_text(GTK_LABEL(self->hist_result), "reading level 0…");
         gtk_widget_set_visible(self->hist_result, TRUE);
@@ -181,9 +173,8 @@ typedef struct measure_job {
     vv_isosurface_measure_options opt;
     vv_isosurface_measure result;
     char name[VV_NAME_MAX];
-    char proxy[160]; /* out of core: what was measured instead of level 0 (else empty) */
-    char *path;      /* out of core, no seed: level 0 of this file, read box by box */
-    uint64_t limit;  /* its pyramid's memory limit */
+    char proxy[160];   /* out of core: what was measured instead of level 0 (else empty) */
+    vv_source *source; /* out of core, no seed: level 0 of this file, read box by box */
     vv_status status;
     char error[512];
 } measure_job;
@@ -195,16 +186,12 @@ measure_thread(GTask *task, gpointer src, gpointer data, GCancellable *c) {
     (void)c;
     measure_job *j = data;
     vv_error_clear();
-    if (j->path) { /* level 0 out of core, through a pyramid of its own */
-        vv_pyramid *p = NULL;
-        j->status = vv_pyramid_open(&p, j->path, 0, -1, j->limit, NULL);
-        if (j->status == VV_OK)
-            j->status =
-                vv_measure_isosurface_boxes(&j->result, vv_pyramid_level(p, 0),
-                                            vv_pyramid_level0_box, p, j->iso, j->opt.method, NULL);
+    if (j->source) { /* level 0 out of core, through the object's source */
+        j->status =
+            vv_measure_isosurface_boxes(&j->result, vv_source_level(j->source, 0), vv_source_box,
+                                        j->source, j->iso, j->opt.method, NULL);
         if (j->status != VV_OK)
             g_strlcpy(j->error, vv_error_message(), sizeof j->error);
-        vv_pyramid_free(p);
         return;
     }
     j->status = vv_measure_isosurface(&j->result, j->volume, j->iso, &j->opt);
@@ -226,7 +213,7 @@ measure_thread(GTask *task, gpointer src, gpointer data, GCancellable *c) {
 static void
 measure_job_free(gpointer p) {
     measure_job *j = p;
-    g_free(j->path);
+    vv_source_free(j->source);
     vv_volume_free(j->volume);
     vv_mesh_free(j->region);
     g_free(j);
@@ -297,12 +284,11 @@ act_measure(GSimpleAction *a, GVariant *p, gpointer user) {
         j->opt.seed[1] = vvg_spin_value(self->seed_j);
         j->opt.seed[2] = vvg_spin_value(self->seed_k);
     }
-    VvgPyramid *gp = vvg_document_pyramid(self->doc, o);
-    if (gp) { /* out of core: the whole surface by level 0 box by box; a section the proxy */
-        const vv_volume *h0 = vv_pyramid_level(gp->pyramid, 0);
+    vv_source *src = vvg_object_source(o);
+    if (src) { /* out of core: the whole surface by level 0 box by box; a section the proxy */
+        const vv_volume *h0 = vv_source_level(src, 0);
         if (!j->opt.has_seed) {
-            j->path = g_strdup(gp->path);
-            j->limit = gp->limit / 4 > ((uint64_t)64 << 20) ? gp->limit / 4 : (uint64_t)64 << 20;
+            j->source = vv_source_ref(src);
             snprintf(j->proxy, sizeof j->proxy, " -- level 0 (%d x %d x %d), read out of core",
                      h0->dims[0], h0->dims[1], h0->dims[2]);
         } else {

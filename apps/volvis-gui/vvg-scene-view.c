@@ -38,28 +38,26 @@ vvg_scene_view_set_start_time(gint64 us) {
 
 /* ---- the worker --------------------------------------------------------- */
 
-/* The pyramids a frame draws objects from (a reference each) and the
- * objects they stand for. */
-typedef struct pyr_set {
-    VvgPyramid *p[VV_SOURCES_MAX];
-    int object[VV_SOURCES_MAX];
+/* The files out of core a frame draws objects from (the visible objects'
+ * sources, a reference each): for sharpening (vv_source_wait) and the
+ * Navigator's cache line. */
+typedef struct src_set {
+    vv_source *s[VV_SOURCES_MAX];
     int n;
-} pyr_set;
+} src_set;
 
 static void
-pyr_set_clear(pyr_set *s) {
+src_set_clear(src_set *s) {
     for (int i = 0; i < s->n; i++)
-        vvg_pyramid_unref(s->p[i]);
+        vv_source_free(s->s[i]);
     s->n = 0;
 }
 
-/* @p dst (empty) holding its own references to @p src's pyramids. */
+/* @p dst (empty) holding its own references to @p src's sources. */
 static void
-pyr_set_ref(pyr_set *dst, const pyr_set *src) {
-    for (int i = 0; i < src->n; i++) {
-        dst->p[i] = vvg_pyramid_ref(src->p[i]);
-        dst->object[i] = src->object[i];
-    }
+src_set_ref(src_set *dst, const src_set *src) {
+    for (int i = 0; i < src->n; i++)
+        dst->s[i] = vv_source_ref(src->s[i]);
     dst->n = src->n;
 }
 
@@ -71,7 +69,7 @@ typedef struct job {
     vv_preview_kind kinds[3];
     gboolean refine; /* cancelled by any newer state */
     gint64 posted_us;
-    pyr_set pyr; /* the objects drawn from their pyramids (none: in memory) */
+    src_set src; /* the visible objects' files out of core (none: all in memory) */
 } job;
 
 /* One finished frame, posted to the UI thread. */
@@ -88,10 +86,10 @@ typedef struct frame {
     gint64 posted_us;
     gint64 rendered_us; /* when the renderer finished */
     char error[512];
-    /* drawn from pyramids: the nodes per level, those pending, stalled */
-    pyr_set pyr;
+    /* drawn out of core: the sources, the nodes per level, those pending, stalled */
+    src_set src;
     int nodes[VV_LOD_MAX_LEVELS], pending, stalled;
-    char lod_note[128]; /* why the pyramid was not used ("" when it was) */
+    char lod_note[128]; /* why the files were not drawn out of core ("" when they were) */
 } frame;
 
 struct _VvgSceneView {
@@ -138,8 +136,8 @@ struct _VvgSceneView {
     double full_ms;
     FILE *frame_log;
     char last_error[512];
-    /* the frame on screen's pyramids and what it drew */
-    pyr_set shown_pyr;
+    /* the frame on screen's files out of core and what it drew */
+    src_set shown_src;
     int shown_nodes[VV_LOD_MAX_LEVELS], shown_pending, shown_stalled;
     char shown_lod_note[128];
 
@@ -163,7 +161,7 @@ job_free(job *j) {
     if (!j)
         return;
     vv_world_free(j->world);
-    pyr_set_clear(&j->pyr);
+    src_set_clear(&j->src);
     g_free(j);
 }
 
@@ -173,7 +171,7 @@ frame_free(frame *f) {
     if (f->pixels)
         g_bytes_unref(f->pixels);
     g_free(f->depth);
-    pyr_set_clear(&f->pyr);
+    src_set_clear(&f->src);
     g_free(f);
 }
 
@@ -199,18 +197,19 @@ cancel_cb(void *user, double fraction) {
 static gboolean show_frame(gpointer data);
 static gboolean tick_cb(GtkWidget *widget, GdkFrameClock *clock, gpointer user);
 
-/* The job's World with the objects j->pyr names drawn from their pyramids
- * by level of detail, the others in memory (vv_renderer_render_sources),
- * at the kind's image size with the World's renderer (its settings
- * applied): a progressive frame from what the caches hold, asking the
- * pyramids' loaders for the rest (converged 0), or the converged frame,
- * which reads what it needs (1). VV_ERR_UNSUPPORTED when the renderer has
- * no region method or refuses the mode, or the World is not one that
- * layers draw (overlapping composite objects, geometry, several objects by
- * the ray tracer): the caller then draws the proxies in memory. */
+/* The job's World with its objects out of core drawn from their files
+ * (vv_renderer_render chooses: a pyramid by level of detail, a bricked file
+ * brick by brick, the others from memory, each a layer), at the kind's
+ * image size with the World's renderer (its settings applied): a
+ * progressive frame from what the cache holds, asking the pyramids'
+ * loaders for the rest (converged 0), or the converged frame, which reads
+ * what it needs (1). VV_ERR_UNSUPPORTED when the renderer has no region
+ * method or the World is not one that layers draw (overlapping composite
+ * objects, geometry, several objects by the ray tracer): the caller then
+ * draws the proxies in memory. */
 static vv_status
-render_pyramid(VvgSceneView *self, const job *j, frame *f, int converged, vv_render_options *ro,
-               vv_image *img) {
+render_out_of_core(VvgSceneView *self, const job *j, frame *f, int converged, vv_render_options *ro,
+                   vv_image *img) {
     const vv_world *w = j->world;
     vv_renderer *r = vv_preview_final_renderer(self->preview);
     vv_status s = vv_renderer_apply_settings(r, &w->render);
@@ -222,26 +221,35 @@ render_pyramid(VvgSceneView *self, const job *j, frame *f, int converged, vv_ren
     vv_view v = w->view;
     v.width = img->width;
     v.height = img->height;
-    vv_multires_source src[VV_SOURCES_MAX];
-    vv_object_source os[VV_SOURCES_MAX];
-    for (int i = 0; i < j->pyr.n; i++) {
-        vv_pyramid_source(j->pyr.p[i]->pyramid, &src[i]);
-        vv_object_source_init(&os[i], j->pyr.object[i]);
-        os[i].multires = &src[i];
-    }
     vv_lod lod;
     vv_lod_init(&lod);
     lod.progressive = !converged;
     lod.background = 1;
     lod.load_budget = 0;
-    s = vv_renderer_render_sources(r, w, os, j->pyr.n, &v, ro, &lod, img);
+    ro->lod = &lod;
+    s = vv_renderer_render(r, w, &v, ro, img);
+    ro->lod = NULL;
     if (s == VV_OK) {
         memcpy(f->nodes, lod.nodes, sizeof f->nodes);
         f->pending = lod.pending;
         f->stalled = lod.stalled;
-        pyr_set_ref(&f->pyr, &j->pyr);
+        src_set_ref(&f->src, &j->src);
     }
     return s;
+}
+
+/* @p w with every object's file out of core dropped (vv_object_set_volume
+ * of its own proxy): the proxies drawn in memory. NULL when it cannot be
+ * made. */
+static vv_world *
+world_in_memory(const vv_world *w) {
+    vv_world *m = NULL;
+    if (vv_world_clone(&m, w) != VV_OK)
+        return NULL;
+    for (int i = 0; i < m->n_objects; i++)
+        if (vvg_object_source(m->objects[i]))
+            (void)vv_object_set_volume(m->objects[i], m->objects[i]->volume);
+    return m;
 }
 
 /* Draws one representation of a job (a pyramid's converged frame when
@@ -289,17 +297,20 @@ render_one(VvgSceneView *self, const job *j, vv_preview_kind kind, int converged
 #endif
     gint64 t0 = g_get_monotonic_time();
     gboolean drawn = FALSE;
-    if (s == VV_OK && j->pyr.n > 0) {
-        s = render_pyramid(self, j, f, converged, &ro, img);
+    vv_world *mem = NULL; /* the proxies in memory, when out of core cannot draw w */
+    if (s == VV_OK && j->src.n > 0) {
+        s = render_out_of_core(self, j, f, converged, &ro, img);
         drawn = s == VV_OK || s == VV_ERR_CANCELLED;
-        if (s == VV_ERR_UNSUPPORTED) { /* the proxy in memory, and why */
+        if (s == VV_ERR_UNSUPPORTED) { /* the proxies in memory, and why */
             g_strlcpy(f->lod_note, vv_error_message(), sizeof f->lod_note);
             vv_error_clear();
-            s = VV_OK;
+            mem = world_in_memory(w);
+            s = mem ? VV_OK : VV_ERR_NOMEM;
         }
     }
     if (s == VV_OK && !drawn)
-        s = vv_preview_render(self->preview, w, &w->view, kind, &ro, img);
+        s = vv_preview_render(self->preview, mem ? mem : w, &w->view, kind, &ro, img);
+    vv_world_free(mem);
     gint64 t1 = g_get_monotonic_time();
     f->rendered_us = t1;
     double secs = (t1 - t0) * 1e-6;
@@ -384,18 +395,18 @@ warm_previews(VvgSceneView *self) {
     }
 }
 
-/* A pyramid's full frame with nodes pending: while the state stands, the
- * frame is drawn again each time the loader brings chunks (the image
- * sharpens), until nothing is pending; when the loader stalls (the view
+/* A full frame out of core with nodes pending: while the state stands, the
+ * frame is drawn again each time the pyramids' loaders bring chunks (the
+ * image sharpens), until nothing is pending; when a loader stalls (the view
  * needs more than the memory limit holds) or makes no progress, the
  * converged frame streams the rest. A newer request ends it. */
 static void
-sharpen_pyramid(VvgSceneView *self, const job *j) {
+sharpen_out_of_core(VvgSceneView *self, const job *j) {
     int last = INT_MAX, idle = 0;
     for (;;) {
         int loading = 0;
-        for (int i = 0; i < j->pyr.n; i++)
-            loading += vv_pyramid_wait(j->pyr.p[i]->pyramid, 0.25 / j->pyr.n);
+        for (int i = 0; i < j->src.n; i++)
+            loading += vv_source_wait(j->src.s[i], 0.25 / j->src.n);
         g_mutex_lock(&self->lock);
         const gboolean newer = self->pending != NULL || self->quit;
         g_mutex_unlock(&self->lock);
@@ -404,7 +415,7 @@ sharpen_pyramid(VvgSceneView *self, const job *j) {
         frame *f = render_one(self, j, VV_PREVIEW_FULL, 0);
         if (!f)
             return;
-        const int pending = f->pending, stalled = f->stalled, ok = f->pyr.n > 0;
+        const int pending = f->pending, stalled = f->stalled, ok = f->src.n > 0;
         g_idle_add_full(G_PRIORITY_DEFAULT, show_frame, f, NULL);
         if (!ok || pending == 0)
             return;
@@ -449,7 +460,7 @@ worker_main(gpointer data) {
                 break;
             }
             const gboolean sharpen =
-                j->kinds[k] == VV_PREVIEW_FULL && f->pyr.n > 0 && f->pending > 0;
+                j->kinds[k] == VV_PREVIEW_FULL && f->src.n > 0 && f->pending > 0;
             TSAN_COUNT(posted);
             /* at the priority of input events: a stream of motion events
              * must not hold back the frames they cause */
@@ -461,7 +472,7 @@ worker_main(gpointer data) {
             if (newer)
                 break;
             if (sharpen)
-                sharpen_pyramid(self, j);
+                sharpen_out_of_core(self, j);
         }
         gboolean refined = j->refine;
         if (refined) {
@@ -559,9 +570,9 @@ show_frame(gpointer data) {
     g_free(self->shown_depth);
     self->shown_depth = NULL;
     self->shown_view = f->camera;
-    pyr_set_clear(&self->shown_pyr);
-    self->shown_pyr = f->pyr;
-    f->pyr.n = 0;
+    src_set_clear(&self->shown_src);
+    self->shown_src = f->src;
+    f->src.n = 0;
     memcpy(self->shown_nodes, f->nodes, sizeof self->shown_nodes);
     self->shown_pending = f->pending;
     self->shown_stalled = f->stalled;
@@ -588,17 +599,12 @@ new_job(VvgSceneView *self, gboolean refine) {
     j->world = w;
     j->refine = refine;
     j->posted_us = g_get_monotonic_time();
-    /* the visible volumes shown from pyramids out of core: drawn by level
-     * of detail, the other objects in memory beside them */
-    const vv_world *dw = vvg_document_world(self->doc);
-    for (int i = 0; i < w->n_objects && i < dw->n_objects && j->pyr.n < VV_SOURCES_MAX; i++) {
-        if (!w->objects[i]->visible)
-            continue;
-        VvgPyramid *p = vvg_document_pyramid(self->doc, dw->objects[i]);
-        if (p && w->objects[i]->volume == p->proxy) {
-            j->pyr.p[j->pyr.n] = vvg_pyramid_ref(p);
-            j->pyr.object[j->pyr.n++] = i;
-        }
+    /* the visible volumes that show files out of core: drawn from them (by
+     * level of detail, by bricks), the other objects in memory beside them */
+    for (int i = 0; i < w->n_objects && j->src.n < VV_SOURCES_MAX; i++) {
+        vv_source *src = w->objects[i]->visible ? vvg_object_source(w->objects[i]) : NULL;
+        if (src)
+            j->src.s[j->src.n++] = vv_source_ref(src);
     }
     return j;
 }
@@ -1117,7 +1123,7 @@ vvg_scene_view_dispose(GObject *o) {
     g_clear_object(&self->texture);
     g_free(self->shown_depth);
     self->shown_depth = NULL;
-    pyr_set_clear(&self->shown_pyr);
+    src_set_clear(&self->shown_src);
     if (self->frame_log) {
         fclose(self->frame_log);
         self->frame_log = NULL;
@@ -1251,38 +1257,54 @@ vvg_scene_view_full_ms(VvgSceneView *self) {
 char *
 vvg_scene_view_cache_status(VvgSceneView *self) {
     if (self->shown_lod_note[0])
-        return g_strdup_printf("the coarsest level in memory: %s", self->shown_lod_note);
-    if (self->shown_pyr.n == 0)
+        return g_strdup_printf("the proxies in memory: %s", self->shown_lod_note);
+    if (self->shown_src.n == 0)
         return g_strdup("");
-    /* the sums over the pyramids drawn */
-    guint64 reads = 0, resident = 0;
-    double held = 0, limit = 0;
-    int loading = 0;
-    for (int i = 0; i < self->shown_pyr.n; i++) {
-        int seen = 0; /* two objects of one pyramid: counted once */
+    /* the sums over the files drawn (two objects of one file: counted once) */
+    guint64 chunks = 0, bricks = 0;
+    int loading = 0, pyramids = 0, bricked = 0;
+    for (int i = 0; i < self->shown_src.n; i++) {
+        int seen = 0;
         for (int k = 0; k < i; k++)
-            seen |= self->shown_pyr.p[k] == self->shown_pyr.p[i];
+            seen |= self->shown_src.s[k] == self->shown_src.s[i];
         if (seen)
             continue;
-        vv_pyramid_stats st;
-        vv_pyramid_stats_get(self->shown_pyr.p[i]->pyramid, &st);
-        for (int l = 0; l < VV_PYRAMID_MAX_LEVELS; l++)
-            reads += st.chunk_reads[l];
-        resident += st.resident;
-        held += (double)st.held_bytes;
-        limit += (double)st.limit_bytes;
+        vv_source_stats st;
+        vv_source_stats_get(self->shown_src.s[i], &st);
+        for (int l = 0; l < VV_SOURCE_MAX_LEVELS; l++)
+            chunks += st.chunk_reads[l];
+        bricks += st.loads;
         loading += st.loading;
+        pyramids += st.kind == VV_SOURCE_PYRAMID;
+        bricked += st.kind == VV_SOURCE_BRICKS;
     }
+    /* the one cache every file shares, and its one budget */
+    const vv_cache *cache = vv_source_cache(self->shown_src.s[0]);
+    vv_cache_stats cs;
+    vv_cache_stats_get(cache ? cache : vv_cache_process(), &cs);
     GString *s = g_string_new(NULL);
-    if (self->shown_pyr.n > 1)
-        g_string_append_printf(s, "%d objects ", self->shown_pyr.n);
-    g_string_append_printf(s,
-                           "out of core: %" G_GUINT64_FORMAT " chunks resident (%.1f of %.0f MiB), "
-                           "%d loading, %" G_GUINT64_FORMAT " read; level in use:",
-                           resident, held / 1048576.0, limit / 1048576.0, loading, reads);
+    if (self->shown_src.n > 1)
+        g_string_append_printf(s, "%d objects ", self->shown_src.n);
+    g_string_append_printf(s, "out of core: %" G_GUINT64_FORMAT " %s held (%.1f of %.0f MiB)",
+                           cs.entries,
+                           pyramids && bricked ? "chunks and bricks"
+                           : pyramids          ? "chunks"
+                                               : "bricks",
+                           (double)cs.held / 1048576.0, (double)cs.limit / 1048576.0);
+    if (pyramids)
+        g_string_append_printf(s, ", %d loading, %" G_GUINT64_FORMAT " chunks read", loading,
+                               chunks);
+    if (bricked)
+        g_string_append_printf(s, ", %" G_GUINT64_FORMAT " bricks read", bricks);
+    /* what it held at most, with the working sets reserved (never over the limit) */
+    g_string_append_printf(s, ", at most %.1f MiB", (double)cs.peak / 1048576.0);
+    gboolean levels = FALSE;
     for (int l = 0; l < VV_LOD_MAX_LEVELS; l++)
-        if (self->shown_nodes[l] > 0)
-            g_string_append_printf(s, " %d (%d nodes)", l, self->shown_nodes[l]);
+        if (self->shown_nodes[l] > 0) {
+            g_string_append_printf(s, "%s %d (%d nodes)", levels ? "" : "; level in use:", l,
+                                   self->shown_nodes[l]);
+            levels = TRUE;
+        }
     if (self->shown_pending > 0)
         g_string_append_printf(s, "; %d nodes still coarser%s", self->shown_pending,
                                self->shown_stalled ? " (more than the memory limit holds)" : "");

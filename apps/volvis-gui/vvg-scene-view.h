@@ -60,12 +60,14 @@ double vvg_scene_view_full_ms(VvgSceneView *view);
 /** Representation name of the frame on screen ("" before the first). */
 const char *vvg_scene_view_shown(VvgSceneView *view);
 /**
- * What the frame on screen drew from a multiresolution file out of core
- * (VvgPyramid), for the Navigator: the chunks resident, the cache's size
- * against the memory limit, the chunks loading and read, the levels the
- * frame used (nodes per level) and how many nodes are still drawn coarser
- * than their level ("converged" when none); "" when the frame on screen
- * is not a pyramid's. Newly allocated (g_free).
+ * What the frame on screen drew from files out of core (the objects'
+ * sources: pyramids by level of detail, bricked files by bricks), for the
+ * Navigator: the pieces the process's one cache holds against its one
+ * memory limit (vv_cache_stats), the chunks loading, the chunks and bricks
+ * read, the levels the frame used (nodes per level) and how many nodes are
+ * still drawn coarser than their level ("converged" when none); why the
+ * proxies were drawn in memory instead; "" when the frame on screen drew
+ * nothing out of core. Newly allocated (g_free).
  */
 char *vvg_scene_view_cache_status(VvgSceneView *view);
 /** Re-renders now (the World changed outside a drag). */

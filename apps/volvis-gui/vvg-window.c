@@ -621,12 +621,13 @@ vvg_window_save_volume(VvgWindow *win, const char *path) {
     }
     vv_format f = vv_format_from_extension(path);
     int n = 0;
-    const vv_format_record *const *table = vv_volume_format_table(&n);
-    const vv_format_record *r = f >= 1 && f <= n ? table[f - 1] : NULL;
-    if (!r || !r->write) {
+    const vv_format_record *const *table = vv_format_table(&n);
+    const vv_format_record *r = vv_format_record_of(f);
+    if (!r || !r->write || r->holds != VV_DATA_VOLUME) {
         GString *exts = g_string_new(NULL);
         for (int i = 0; i < n; i++)
-            for (const char *const *e = vv_format_record_write_extensions(table[i]); e && *e; e++)
+            for (const char *const *e = vv_format_record_write_extensions(table[i]);
+                 table[i]->holds == VV_DATA_VOLUME && table[i]->write && e && *e; e++)
                 g_string_append_printf(exts, "%s.%s", exts->len ? ", " : "", *e);
         g_autofree char *m =
             g_strdup_printf("no format that writes has this extension (use %s)", exts->str);

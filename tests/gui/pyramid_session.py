@@ -17,10 +17,11 @@ page's histogram is level 0's, read box by box out of core (every voxel
 of the 256 x 256 x 108 volume counted), not the proxy's, and so are its
 isosurface measurements by Marching Cubes and voxel counting (the
 triangles and voxels `volvis measure` finds in the whole file). A scene
-of three objects side by side (composite and MIP; two of one store,
-sharing its pyramid, and one of a copy) is drawn out of core in one frame
-(the cache line counts them), and its converged frame is what `volvis
-render SCENE --memory-limit` draws of the saved session.
+of three objects side by side (composite and MIP; two of one store and
+one of a copy, each object owning its source) is drawn out of core in one
+frame (the cache line counts them) within the one 16 MiB budget of the
+process's cache, and its converged frame is what `volvis render SCENE
+--memory-limit` draws of the saved session.
 
 usage: pyramid_session.py GUI CLI OUTDIR [two]
 """
@@ -180,15 +181,16 @@ def main():
 
 
 def two_pyramids():
-    """Three objects side by side (a scene): two of one store (sharing its
-    pyramid) and one of a copy, all drawn out of core by level of detail in
-    one frame, as volvis render of the scene out of core draws them."""
+    """Three objects side by side (a scene): two of one store and one of a
+    copy, each object owning its source, all drawn out of core by level of
+    detail in one frame within the process's one budget, as volvis render
+    of the scene out of core draws them."""
     import json
     import shutil
     store = os.path.abspath(os.path.join(OUT, "head.ome.zarr"))
     out = os.path.abspath(os.path.join(OUT, "two"))
     os.makedirs(out, exist_ok=True)
-    # a second store: the GUI keeps a file's pyramid once, for one object
+    # a second store: two files, each with sources of its own
     second = os.path.join(out, "copy.ome.zarr")
     shutil.rmtree(second, ignore_errors=True)
     shutil.copytree(store, second)
@@ -199,7 +201,7 @@ def two_pyramids():
                "objects": [{"name": "left", "file": store, "transfer_function": tf},
                            {"name": "right", "file": second, "position": [270, 0, 0],
                             "mode": "mip", "transfer_function": tf},
-                           # a second object of the first file: its pyramid shared
+                           # a second object of the first file: a source of its own
                            {"name": "far", "file": store, "position": [540, 0, 0],
                             "mode": "mip", "transfer_function": tf}]},
               open(scene, "w"))
@@ -211,6 +213,10 @@ def two_pyramids():
         line = lambda: s.text(s.find_label(lambda n: n.startswith("3 objects out of core:")))
         s.wait_for(lambda: "converged" in line(), f"never converged: {line()!r}", timeout=120)
         print(f"three objects of two pyramids: {line()!r}")
+        m = re.search(r"\(([0-9.]+) of 16 MiB\)", line())
+        most = re.search(r"at most ([0-9.]+) MiB", line())
+        check(m and float(m.group(1)) <= 16 and most and float(most.group(1)) <= 16,
+              f"the three objects' pieces are not within one budget of 16 MiB: {line()!r}")
         time.sleep(1)
         shot = s.full_png(copy_to="two_converged.png")
         s.screenshot("two_window.png")

@@ -346,39 +346,63 @@ time_failed(VvgDocument *doc, const char *message, gpointer user) {
  * vvg_world_apply_time puts a frame's step into a World evaluated from the
  * document's (an Animator's objects[i].time track) and names what it
  * cannot read. */
+/* What main() does at start-up: the process's one cache set to
+ * VOLVIS_MEMORY_LIMIT before any file opens. */
+static void
+set_memory_limit(const char *limit) {
+    g_setenv("VOLVIS_MEMORY_LIMIT", limit, TRUE);
+    vv_cache_set_limit(vv_cache_process(), vvg_document_memory_limit());
+}
+
 /* A multiresolution file larger than a quarter of VOLVIS_MEMORY_LIMIT opens
  * out of core: the object shows the proxy (the coarsest level over level
- * 0's box), the document keeps the pyramid; a smaller limit's quarter
- * holds it whole; a session saves level 0's geometry, and opened again
- * shows the proxy over the same box with level 0 unread; a file deleted and
- * opened again gets a pyramid of its own. The same for an OME-Zarr store
- * and a .vvb with pyramid levels. */
+ * 0's box) and owns the file's source, a pyramid in the process's cache; a
+ * larger limit's quarter holds an OME-Zarr store whole (a .vvb opens out
+ * of core at any size: its format is made for it); a session saves level
+ * 0's geometry, and opened again shows the proxy over the same box with
+ * level 0 unread; a file deleted and opened again gets a source of its own
+ * in the same cache. The same for an OME-Zarr store and a .vvb with
+ * pyramid levels. */
 static void
-pyramid_out_of_core(const char *dir, const char *store, const vv_volume *v) {
+pyramid_out_of_core(const char *dir, const char *store, const vv_volume *v, int always) {
     GError *err = NULL;
-    /* 64 MiB: level 0 (13.5 MiB) fits a quarter: read whole */
-    g_setenv("VOLVIS_MEMORY_LIMIT", "64M", TRUE);
+    /* 64 MiB: level 0 (13.5 MiB) fits a quarter: read whole (not a .vvb) */
+    set_memory_limit("64M");
+    assert_int_equal(vv_cache_limit(vv_cache_process()), 64u << 20);
     VvgDocument *doc = vvg_document_new();
     assert_true(vvg_document_open(doc, store, &err));
     vv_object *o = vvg_document_selected_object(doc);
     assert_non_null(o);
-    assert_null(vvg_document_pyramid(doc, o));
-    assert_int_equal(o->volume->dims[0], 256);
+    if (always) {
+        assert_non_null(vvg_object_source(o));
+        assert_int_equal(o->volume->dims[0], 64);
+    } else {
+        assert_null(vvg_object_source(o));
+        assert_null(o->source);
+        assert_int_equal(o->volume->dims[0], 256);
+    }
     g_object_unref(doc);
     /* 16 MiB: out of core */
-    g_setenv("VOLVIS_MEMORY_LIMIT", "16M", TRUE);
+    set_memory_limit("16M");
     doc = vvg_document_new();
     assert_true(vvg_document_open(doc, store, &err));
     o = vvg_document_selected_object(doc);
-    VvgPyramid *p = vvg_document_pyramid(doc, o);
-    assert_non_null(p);
-    assert_int_equal(p->limit, 16u << 20);
+    vv_source *src = vvg_object_source(o);
+    assert_non_null(src);
+    assert_ptr_equal(src, o->source);
+    assert_int_equal(vv_source_get_kind(src), VV_SOURCE_PYRAMID);
+    assert_int_equal(vv_source_levels(src), 3);
+    assert_ptr_equal(vv_source_cache(src), vv_cache_process()); /* the one cache */
+    assert_int_equal(vv_cache_limit(vv_source_cache(src)), 16u << 20);
     assert_int_equal(o->volume->dims[0], 64); /* the coarsest level */
+    assert_int_equal(vv_source_level(src, 0)->dims[0], 256);
     const vv_box b = vv_object_world_box(o);
     assert_near(b.max.x - b.min.x, 255 * v->spacing[0], 1e-6);
-    /* a session names the store with level 0's spacing */
+    /* a session names the store with level 0's spacing (the library's
+     * scene writer: no geometry patched by the GUI) */
     const char *scene = vt_path(dir, "pyramid_session.json");
     assert_true(vvg_document_save(doc, scene, &err));
+    assert_ptr_equal(vvg_object_source(vvg_document_selected_object(doc)), src);
     vv_world *w = NULL;
     vt_ok(vv_scene_load(&w, scene));
     assert_int_equal(w->objects[0]->volume->dims[0], 256);
@@ -390,24 +414,88 @@ pyramid_out_of_core(const char *dir, const char *store, const vv_volume *v) {
     assert_true(vvg_document_open(again, scene, &err));
     vv_object *o2 = vvg_document_selected_object(again);
     assert_non_null(o2);
-    VvgPyramid *p2 = vvg_document_pyramid(again, o2);
-    assert_non_null(p2);
+    vv_source *src2 = vvg_object_source(o2);
+    assert_non_null(src2);
+    assert_ptr_equal(vv_source_cache(src2), vv_cache_process());
     assert_int_equal(o2->volume->dims[0], 64);
     const vv_box b2 = vv_object_world_box(o2);
     assert_near(b2.max.x - b2.min.x, b.max.x - b.min.x, 1e-6);
     assert_near(b2.max.z - b2.min.z, b.max.z - b.min.z, 1e-6);
-    vv_pyramid_stats ps;
-    vv_pyramid_stats_get(p2->pyramid, &ps);
+    vv_source_stats ps;
+    vv_source_stats_get(src2, &ps);
     assert_int_equal(ps.chunk_reads[0], 0); /* level 0 unread */
     g_object_unref(again);
-    /* deleted, then opened again: the unused pyramid gives way to a new one */
+    /* deleted, then opened again: a source of its own, in the same cache */
     vvg_document_delete_object(doc, 0);
     assert_true(vvg_document_open(doc, store, &err));
     o = vvg_document_selected_object(doc);
-    p = vvg_document_pyramid(doc, o);
-    assert_non_null(p);
-    assert_true(o->volume == p->proxy);
+    assert_non_null(vvg_object_source(o));
+    assert_ptr_not_equal(vvg_object_source(o), src);
+    assert_ptr_equal(vv_source_cache(vvg_object_source(o)), vv_cache_process());
+    /* a filter's result replaces the proxy and drops the source: in memory */
+    vv_volume *proxy = vv_volume_ref(o->volume);
+    vvg_document_begin_edit(doc, "filter");
+    o = vvg_document_selected_object(doc);
+    vt_ok(vv_object_set_volume(o, proxy));
+    assert_null(vvg_object_source(o));
+    assert_true(vvg_document_undo(doc)); /* and undo gives the file back */
+    assert_non_null(vvg_object_source(vvg_document_selected_object(doc)));
+    vv_volume_free(proxy);
     g_object_unref(doc);
+    set_memory_limit("1G");
+    g_unsetenv("VOLVIS_MEMORY_LIMIT");
+}
+
+/* Two files out of core share the process's one cache under the one
+ * memory limit: every voxel of level 0 of both (13.5 MiB each, 27 MiB
+ * together) read box by box (the Measurement page's histograms) through a
+ * 16 MiB budget, the cache never holds more than the limit, it evicts to
+ * stay within it, and both histograms count every voxel. */
+static void
+two_files_share_the_cache(const char *store, const char *vvb, const vv_volume *v) {
+    GError *err = NULL;
+    set_memory_limit("16M");
+    vv_cache_stats before;
+    vv_cache_stats_get(vv_cache_process(), &before);
+    VvgDocument *doc = vvg_document_new();
+    assert_true(vvg_document_open(doc, store, &err));
+    assert_true(vvg_document_open(doc, vvb, &err));
+    vv_world *w = vvg_document_world(doc);
+    assert_int_equal(w->n_objects, 2);
+    vv_source *a = vvg_object_source(w->objects[0]), *b = vvg_object_source(w->objects[1]);
+    assert_non_null(a);
+    assert_non_null(b);
+    assert_ptr_not_equal(a, b);
+    assert_ptr_equal(vv_source_cache(a), vv_cache_process());
+    assert_ptr_equal(vv_source_cache(b), vv_cache_process());
+    const uint64_t limit = 16u << 20;
+    vv_source *both[2] = {a, b};
+    for (int r = 0; r < 2; r++)
+        for (int i = 0; i < 2; i++) {
+            vv_histogram *h = NULL;
+            vt_ok(vv_measure_histogram_boxes(&h, vv_source_level(both[i], 0), vv_source_box,
+                                             both[i], 64, 0, 0, NULL));
+            assert_int_equal(h->total, (uint64_t)v->dims[0] * v->dims[1] * v->dims[2]);
+            vv_histogram_free(h);
+            vv_cache_stats cs;
+            vv_cache_stats_get(vv_cache_process(), &cs);
+            assert_int_equal(cs.limit, limit);
+            assert_true(cs.held <= limit);
+            assert_true(cs.held + cs.reserved <= limit);
+            assert_true(cs.sources >= 2);
+        }
+    vv_cache_stats cs;
+    vv_cache_stats_get(vv_cache_process(), &cs);
+    assert_true(cs.evictions > before.evictions); /* 27 MiB through 16: one budget, shared */
+    vv_source_stats sa, sb;
+    vv_source_stats_get(a, &sa);
+    vv_source_stats_get(b, &sb);
+    assert_true(sa.chunk_reads[0] > 0 && sb.chunk_reads[0] > 0);
+    assert_true(sa.held_bytes + sb.held_bytes <= limit);
+    assert_int_equal(sa.limit_bytes, limit);
+    assert_int_equal(sb.limit_bytes, limit);
+    g_object_unref(doc);
+    set_memory_limit("1G");
     g_unsetenv("VOLVIS_MEMORY_LIMIT");
 }
 
@@ -421,10 +509,11 @@ test_pyramid_out_of_core(void **state) {
     vv_volume *v = NULL;
     vt_ok(vv_volume_load(&v, vt_data("volumes/ct_head.nrrd"), NULL));
     vt_ok(vv_ome_zarr_write(v, store, NULL));
-    pyramid_out_of_core(dir, store, v);
+    pyramid_out_of_core(dir, store, v, 0);
     const char *vvb = vt_path(dir, "head.vvb");
     vt_ok(vv_volume_write_vvb(v, vvb, VV_VVB_ZSTD | VV_VVB_LEVELS));
-    pyramid_out_of_core(dir, vvb, v);
+    pyramid_out_of_core(dir, vvb, v, 1);
+    two_files_share_the_cache(store, vvb, v);
     vv_volume_free(v);
 }
 
