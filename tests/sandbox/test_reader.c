@@ -21,6 +21,7 @@
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -29,6 +30,7 @@
 #include <string.h>
 #include <sys/mman.h>
 #include <sys/resource.h>
+#include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -243,6 +245,66 @@ test_reader_alone_and_missing(void **state) {
     assert_int_equal(s, VV_ERR_IO);
     assert_non_null(strstr(vv_error_message(), "VOLVIS_SANDBOX=0"));
     assert_no_child();
+}
+
+/* This program as a reader of another build (VT_FAKE_READER set, started
+ * by the loader with its socket on descriptor 3): a hello of protocol
+ * VT_FAKE_READER, or ("junk") bytes that are no hello; then it waits for
+ * the loader to close. */
+static int
+fake_reader(const char *what) {
+    char buf[64];
+    if (!strcmp(what, "junk")) {
+        if (send(SBX_FD, "junk", 4, MSG_NOSIGNAL) != 4)
+            return 1;
+    } else {
+        const sbx_hello h = {SBX_MAGIC, SBX_HELLO, (uint32_t)atoi(what), 0};
+        if (send(SBX_FD, &h, sizeof h, MSG_NOSIGNAL) != (ssize_t)sizeof h)
+            return 1;
+    }
+    while (recv(SBX_FD, buf, sizeof buf, 0) > 0)
+        ;
+    return 0;
+}
+
+/* The library starts its own reader and refuses one of another build: a
+ * reader speaking another protocol, or bytes that are no hello, give one
+ * line naming the reader and the way out (issue 62: an asan build's
+ * library started the installed release reader). */
+static void
+test_reader_of_another_build(void **state) {
+    (void)state;
+    if (!vt_have_data("volumes/ct_head.nrrd"))
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    char self[PATH_MAX];
+    const ssize_t n = readlink("/proc/self/exe", self, sizeof self - 1);
+    assert_true(n > 0);
+    self[n] = '\0';
+    setenv("VOLVIS_READER", self, 1);
+    setenv("VOLVIS_SANDBOX_SPARE", "0", 1); /* each load its own reader */
+    vv_sandbox_release_spare();
+    static const char *const cases[][2] = {{"99", "speaks protocol 99, this library"},
+                                           {"junk", "does not speak protocol"}};
+    for (int i = 0; i < 2; i++) {
+        setenv("VT_FAKE_READER", cases[i][0], 1);
+        vv_volume *v = NULL;
+        vv_status s = load(&v, vt_data("volumes/ct_head.nrrd"), 1);
+        printf("# %s: %s\n", cases[i][0], vv_error_message());
+        assert_int_equal(s, VV_ERR_IO);
+        assert_null(v);
+        assert_non_null(strstr(vv_error_message(), cases[i][1]));
+        assert_non_null(strstr(vv_error_message(), "set VOLVIS_READER to this build's"));
+        assert_non_null(strstr(vv_error_message(), "ct_head.nrrd"));
+        assert_null(strchr(vv_error_message(), '\n'));
+    }
+    unsetenv("VT_FAKE_READER");
+    unsetenv("VOLVIS_READER");
+    unsetenv("VOLVIS_SANDBOX_SPARE");
+    assert_no_child();
+    /* this build's own reader again */
+    vv_volume *v = NULL;
+    vt_ok(load(&v, vt_data("volumes/ct_head.nrrd"), 1));
+    vv_volume_free(v);
 }
 
 /* Every kept fuzz input of a sandboxed format, through the sandbox: an
@@ -832,13 +894,22 @@ test_hostile_grids(void **state) {
 
 int
 main(void) {
+    const char *fake = getenv("VT_FAKE_READER");
+    if (fake && fcntl(SBX_FD, F_GETFD) >= 0)
+        return fake_reader(fake);
     snprintf(g_dir, sizeof g_dir, "%s", vt_outdir("sandbox"));
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_same_volume),   cmocka_unit_test(test_injected_faults),
-        cmocka_unit_test(test_cli),           cmocka_unit_test(test_reader_alone_and_missing),
-        cmocka_unit_test(test_fuzz_corpus),   cmocka_unit_test(test_hostile_replies),
-        cmocka_unit_test(test_meshes),        cmocka_unit_test(test_grids),
-        cmocka_unit_test(test_hostile_grids), cmocka_unit_test(test_file_size_limit),
+        cmocka_unit_test(test_same_volume),
+        cmocka_unit_test(test_injected_faults),
+        cmocka_unit_test(test_cli),
+        cmocka_unit_test(test_reader_alone_and_missing),
+        cmocka_unit_test(test_reader_of_another_build),
+        cmocka_unit_test(test_fuzz_corpus),
+        cmocka_unit_test(test_hostile_replies),
+        cmocka_unit_test(test_meshes),
+        cmocka_unit_test(test_grids),
+        cmocka_unit_test(test_hostile_grids),
+        cmocka_unit_test(test_file_size_limit),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
