@@ -49,6 +49,10 @@ int vv_memory_cgroup_root(char *buf, size_t cap);
  * pyramids, out-of-core NRRD and raw). */
 vv_status vv_volume_check_limits(const int dims[3], vv_voxel_type t, uint64_t *bytes);
 
+/* Gives @p v the geometry of @p h (spacing, origin, direction, unit,
+ * anatomical space): a box or level read from a store takes its level's. */
+void vv_volume_take_geometry(vv_volume *v, const vv_volume *h);
+
 /** Opens the temporary file. Errors: VV_ERR_IO (with path and strerror), VV_ERR_NOMEM. */
 vv_status vv_atomic_file_open(vv_atomic_file *af, const char *path);
 /** Flushes, closes and renames. Errors: VV_ERR_IO (the temporary is removed). */

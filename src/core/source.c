@@ -308,15 +308,20 @@ mem_load(void *user, int index, vv_volume **out) {
     return VV_OK;
 }
 
-static void
-mem_bricks(void *user, vv_brick_source *out) {
+void
+vv_volume_brick_view(vv_volume *v, vv_brick_source *out) {
     memset(out, 0, sizeof *out);
     out->version = VV_BRICK_SOURCE_VERSION;
-    out->user = user;
+    out->user = v;
     out->header = mem_header;
     out->grid = mem_grid;
     out->info = mem_info;
     out->load = mem_load;
+}
+
+static void
+mem_bricks(void *user, vv_brick_source *out) {
+    vv_volume_brick_view(user, out);
 }
 
 static void

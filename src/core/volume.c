@@ -556,3 +556,12 @@ vv_minmax_grid_free(vv_minmax_grid *g) {
     free(g->max);
     free(g);
 }
+
+void
+vv_volume_take_geometry(vv_volume *v, const vv_volume *h) {
+    memcpy(v->spacing, h->spacing, sizeof v->spacing);
+    memcpy(v->origin, h->origin, sizeof v->origin);
+    memcpy(v->direction, h->direction, sizeof v->direction);
+    v->unit = h->unit;
+    v->space = h->space;
+}

@@ -79,13 +79,7 @@ open_pyramid(vv_pyramid **out, const vv_format_record *r, const char *path, int 
     vv_status s = io_open_store(r, &st, path, channel, time, info);
     if (s != VV_OK) {
         vv_store_close(&st);
-        /* the row's reader names the file already, or here */
-        const char *base = vv_path_basename(path);
-        char head[512];
-        const int n = snprintf(head, sizeof head, "%s: %s:", r->name, base);
-        if (n > 0 && n < (int)sizeof head && !strncmp(vv_error_message(), head, (size_t)n))
-            return s;
-        return vv_error_prefix(s, "%s: %s", r->name, base);
+        return vv_pyramid_prefix(s, r->name, path);
     }
     return vv_pyramid_open_store(out, &st, path, cache, info);
 }

@@ -42,17 +42,6 @@
 
 #define PY_MAX_LEVEL_CHUNKS ((uint64_t)1 << 26)
 
-/* @p s prefixed with "NAME: FILE" unless its message starts so already (a
- * store's reader names the file itself). */
-static vv_status
-prefix_once(vv_status s, const char *name, const char *path) {
-    char head[512];
-    const int n = snprintf(head, sizeof head, "%s: %s:", name, vv_path_basename(path));
-    if (n > 0 && n < (int)sizeof head && !strncmp(vv_error_message(), head, (size_t)n))
-        return s;
-    return vv_error_prefix(s, "%s: %s", name, vv_path_basename(path));
-}
-
 /* Chunk @p c out of the pyramid's index and freed (out of the cache
  * already). */
 static void
@@ -397,7 +386,7 @@ py_box_read(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volum
     pthread_mutex_unlock(p->lock);
     if (s != VV_OK) {
         vv_volume_free(v);
-        return prefix_once(s, p->store.name, p->path);
+        return vv_pyramid_prefix(s, p->store.name, p->path);
     }
     set_geometry(v, p, l);
     *out = v;
@@ -680,7 +669,7 @@ vv_pyramid_open_store(vv_pyramid **out, vv_store *st, const char *path, vv_cache
     vv_status s = pyramid_open(p, info);
     if (s != VV_OK) {
         vv_pyramid_free(p);
-        return prefix_once(s, name, path);
+        return vv_pyramid_prefix(s, name, path);
     }
     *out = p;
     return VV_OK;
@@ -731,13 +720,18 @@ vv_store_read_level(vv_store *st, int level, vv_volume **out) {
         vv_volume_free(v);
         return s;
     }
-    memcpy(v->spacing, h->spacing, sizeof v->spacing);
-    memcpy(v->origin, h->origin, sizeof v->origin);
-    memcpy(v->direction, h->direction, sizeof v->direction);
-    v->unit = h->unit;
-    v->space = h->space;
+    vv_volume_take_geometry(v, h);
     v->modification = VV_MOD_ORIGINAL;
     vv_volume_update_range(v);
     *out = v;
     return VV_OK;
+}
+
+vv_status
+vv_pyramid_prefix(vv_status s, const char *name, const char *path) {
+    char head[512];
+    const int n = snprintf(head, sizeof head, "%s: %s:", name, vv_path_basename(path));
+    if (n > 0 && n < (int)sizeof head && !strncmp(vv_error_message(), head, (size_t)n))
+        return s;
+    return vv_error_prefix(s, "%s: %s", name, vv_path_basename(path));
 }

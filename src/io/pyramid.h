@@ -240,4 +240,9 @@ vv_status vv_store_read_level(vv_store *st, int level, vv_volume **out);
 /** The store of a BigDataViewer HDF5 or Imaris file @p path, read in this process. */
 vv_status vv_h5_pyramid_store(vv_store *st, const char *path, int channel, int time);
 
+/* @p s prefixed with "NAME: FILE" (@p name a format's, @p path its
+ * file) unless its message starts so already: a store's reader, in the
+ * sandbox or here, names the file itself. */
+vv_status vv_pyramid_prefix(vv_status s, const char *name, const char *path);
+
 #endif

@@ -591,11 +591,7 @@ vvb_read(vv_volume **out, const char *path, const vv_load_options *opt) {
     free(piece);
     if (s == VV_OK) {
         const vv_volume *h = st.lv[level].hdr;
-        memcpy(v->spacing, h->spacing, sizeof v->spacing);
-        memcpy(v->origin, h->origin, sizeof v->origin);
-        memcpy(v->direction, h->direction, sizeof v->direction);
-        v->unit = h->unit;
-        v->space = h->space;
+        vv_volume_take_geometry(v, h);
         v->modification = VV_MOD_ORIGINAL;
         vv_volume_update_range(v);
         if (opt->info) {

@@ -22,39 +22,6 @@
 #include "volvis/sys/renderer.h"
 #include "volvis/sys/source.h"
 
-/* ---- an in-memory volume as a brick source of one brick ---------------------- */
-
-static const vv_volume *
-mem_header(void *user) {
-    return user;
-}
-
-static void
-mem_grid(void *user, int nb[3]) {
-    (void)user;
-    nb[0] = nb[1] = nb[2] = 1;
-}
-
-static void
-mem_info(void *user, int index, vv_brick_info *out) {
-    const vv_volume *v = user;
-    (void)index;
-    memset(out, 0, sizeof *out);
-    for (int a = 0; a < 3; a++) {
-        out->lo[a] = out->slo[a] = 0;
-        out->hi[a] = out->shi[a] = v->dims[a] - 1;
-    }
-    out->vmin = v->range[0];
-    out->vmax = v->range[1];
-}
-
-static vv_status
-mem_load(void *user, int index, vv_volume **out) {
-    (void)index;
-    *out = vv_volume_ref(user);
-    return VV_OK;
-}
-
 /* ---- the objects' boxes -------------------------------------------------------- */
 
 /* The eight corners of @p obj's index box (0 .. dims - 1 of @p geo, its
@@ -273,12 +240,7 @@ drv_render_sources(vv_renderer *r, const vv_world *w, const vv_view *view,
             l->multires = &l->mview;
         else if (o->source && vv_source_brick_view(o->source, &l->bview))
             l->bricks = &l->bview;
-        l->mem = (vv_brick_source){.version = VV_BRICK_SOURCE_VERSION,
-                                   .user = o->volume,
-                                   .header = mem_header,
-                                   .grid = mem_grid,
-                                   .info = mem_info,
-                                   .load = mem_load};
+        vv_volume_brick_view(o->volume, &l->mem);
         l->geo = l->multires ? l->multires->level(l->multires->user, 0)
                  : l->bricks ? l->bricks->header(l->bricks->user)
                              : o->volume;

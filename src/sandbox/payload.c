@@ -630,3 +630,20 @@ sbx_take_message(int op, const void *msg, size_t len, int fd, char name[VV_SANDB
     free(r);
     return 1;
 }
+
+/* The bytes of a store's window: its table, or its largest chunk. 0 when
+ * a chunk is over SBX_MAX_BOX_BYTES. */
+uint64_t
+sbx_window_bytes(const sbx_store_head *h) {
+    uint64_t w = sizeof *h;
+    for (int l = 0; l < h->n_levels; l++) {
+        uint64_t c = vv_voxel_type_size((vv_voxel_type)h->lv[l].type);
+        for (int k = 0; k < 3; k++)
+            c *= (uint64_t)(h->lv[l].cdims[k] < h->lv[l].dims[k] ? h->lv[l].cdims[k]
+                                                                 : h->lv[l].dims[k]);
+        if (c > SBX_MAX_BOX_BYTES)
+            return 0;
+        w = c > w ? c : w;
+    }
+    return w;
+}

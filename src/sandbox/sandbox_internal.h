@@ -215,6 +215,10 @@ vv_status sbx_blob_from_reply(void **out, size_t *len, const sbx_reply *r, int f
 int sbx_take_message(int op, const void *msg, size_t len, int fd, char name[VV_SANDBOX_NAME_MAX],
                      char title[64], const char *file, vv_sandbox_result *out, vv_status *status);
 
+/** The bytes of a store's window (payload.c): its table, or its largest
+ *  chunk; 0 when a chunk is over SBX_MAX_BOX_BYTES. */
+uint64_t sbx_window_bytes(const sbx_store_head *h);
+
 /* ---- client.c (the parent) ---- */
 
 /** The reader to run into @p exe (PATH_MAX bytes), or an error naming @p name: FILE. */

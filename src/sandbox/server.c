@@ -191,23 +191,6 @@ box_reply(vv_sandbox_server *srv, sbx_reply *r, vv_status s, int fd) {
         close(fd);
 }
 
-/* The bytes of a store's window: its table, or its largest chunk. 0 when
- * a chunk is over SBX_MAX_BOX_BYTES. */
-static uint64_t
-window_bytes(const sbx_store_head *h) {
-    uint64_t w = sizeof *h;
-    for (int l = 0; l < h->n_levels; l++) {
-        uint64_t c = vv_voxel_type_size((vv_voxel_type)h->lv[l].type);
-        for (int k = 0; k < 3; k++)
-            c *= (uint64_t)(h->lv[l].cdims[k] < h->lv[l].dims[k] ? h->lv[l].cdims[k]
-                                                                 : h->lv[l].dims[k]);
-        if (c > SBX_MAX_BOX_BYTES)
-            return 0;
-        w = c > w ? c : w;
-    }
-    return w;
-}
-
 /* The reader's answer to a store: the store's table (an sbx_store_head at
  * the start of the reader's window, a memfd sealed against shrinking and
  * growing, handed over once), then one chunk's voxels in the window for
@@ -246,7 +229,7 @@ serve_store(vv_sandbox_server *srv, const vv_sandbox_handler *h, sbx_reply *r) {
         if (st.n_levels < 1 || st.n_levels > VV_STORE_MAX_LEVELS)
             s = vv_error_set(VV_ERR_LIMIT, "%d levels (1 .. %d are read)", st.n_levels,
                              VV_STORE_MAX_LEVELS);
-        else if (!(wbytes = window_bytes(&head)))
+        else if (!(wbytes = sbx_window_bytes(&head)))
             s = vv_error_set(VV_ERR_LIMIT, "chunks of over %llu bytes",
                              (unsigned long long)SBX_MAX_BOX_BYTES);
     }

@@ -26,23 +26,6 @@
 #include "core/internal.h"
 #include "sandbox/sandbox_internal.h"
 
-/* The bytes of a store's window: its table, or its largest chunk. 0 when
- * a chunk is over SBX_MAX_BOX_BYTES. */
-static uint64_t
-window_bytes(const sbx_store_head *h) {
-    uint64_t w = sizeof *h;
-    for (int l = 0; l < h->n_levels; l++) {
-        uint64_t c = vv_voxel_type_size((vv_voxel_type)h->lv[l].type);
-        for (int k = 0; k < 3; k++)
-            c *= (uint64_t)(h->lv[l].cdims[k] < h->lv[l].dims[k] ? h->lv[l].cdims[k]
-                                                                 : h->lv[l].dims[k]);
-        if (c > SBX_MAX_BOX_BYTES)
-            return 0;
-        w = c > w ? c : w;
-    }
-    return w;
-}
-
 #define SBX_MAX_READERS 16
 
 enum { RD_IDLE, RD_BUSY, RD_AHEAD }; /* a reader: free, in a read, asked ahead */
@@ -354,7 +337,7 @@ store_start(sbx_store *b, const char *exe, const sbx_request *rq,
             break;
         if ((s = store_map(b, i, fd, r->bytes)) == VV_OK) {
             memcpy(h, b->rd[i].win, sizeof *h);
-            if (i == 0 && head_ok(h) && window_bytes(h) && window_bytes(h) <= r->bytes &&
+            if (i == 0 && head_ok(h) && sbx_window_bytes(h) && sbx_window_bytes(h) <= r->bytes &&
                 r->info_len <= VV_SANDBOX_INFO_MAX) {
                 b->head = *h;
                 memcpy(info, r->info, r->info_len); /* the caller checks it */

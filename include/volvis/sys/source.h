@@ -281,6 +281,13 @@ vv_status vv_source_new(vv_source **out, const vv_source_ops *ops, void *user, c
  * borrows @p s.
  */
 int vv_source_brick_view(vv_source *s, vv_brick_source *out);
+
+/**
+ * @p v in memory as a brick source of one brick, the whole volume (what a
+ * memory source's brick view is, and how the drivers draw an object in
+ * memory beside objects out of core). The view borrows @p v.
+ */
+void vv_volume_brick_view(vv_volume *v, vv_brick_source *out);
 /** The level-of-detail driver's view of @p s: 1 and *@p out filled for a
  *  pyramid, else 0. The view borrows @p s. */
 int vv_source_multires_view(vv_source *s, vv_multires_source *out);
