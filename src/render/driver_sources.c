@@ -110,11 +110,12 @@ lod_add(vv_lod *sum, const vv_lod *one) {
     sum->stalled |= one->stalled;
 }
 
-/* Object @p L->object alone (the others hidden) on a black background
- * into L->img. */
+/* Object @p L->object alone (the others hidden) into L->img, on a black
+ * background (a layer), or with @p background on the World's (the one
+ * object of a frame). */
 static vv_status
 render_layer(vv_renderer *r, const vv_world *w, src_layer *L, const vv_view *view,
-             const vv_render_options *opt, vv_lod *lod, vv_lod *sum) {
+             const vv_render_options *opt, vv_lod *lod, vv_lod *sum, int background) {
     vv_object *copies = malloc(sizeof *copies * (size_t)w->n_objects);
     vv_object **ptrs = malloc(sizeof *ptrs * (size_t)w->n_objects);
     if (!copies || !ptrs) {
@@ -129,7 +130,8 @@ render_layer(vv_renderer *r, const vv_world *w, src_layer *L, const vv_view *vie
     }
     vv_world lw = *w;
     lw.objects = ptrs;
-    lw.background = (vv_vec3){0, 0, 0};
+    if (!background)
+        lw.background = (vv_vec3){0, 0, 0};
     vv_status s;
     if (L->multires) {
         vv_lod one = *lod; /* the inputs; the frame sets the counts */
@@ -275,10 +277,18 @@ drv_render_sources(vv_renderer *r, const vv_world *w, const vv_view *view,
     memset(sum.nodes, 0, sizeof sum.nodes);
     sum.skipped = sum.pending = sum.requested = sum.stalled = 0;
     vv_status s = VV_OK; /* (no layer: combine_layers gives the background) */
+    if (n == 1) {        /* one object: its image is the frame, the World's background behind it */
+        L[0].img = out;
+        s = render_layer(r, w, &L[0], view, opt, lod, &sum, 1);
+        L[0].img = NULL;
+        if (s == VV_OK)
+            *lod = sum;
+        return s;
+    }
     for (int k = 0; k < n && s == VV_OK; k++) {
         s = vv_image_new(&L[k].img, view->width, view->height);
         if (s == VV_OK)
-            s = render_layer(r, w, &L[k], view, opt, lod, &sum);
+            s = render_layer(r, w, &L[k], view, opt, lod, &sum, 0);
     }
     if (s == VV_OK) {
         combine_layers(w, L, n, out);

@@ -37,7 +37,8 @@ int drv_world_out_of_core(const vv_world *w);
  * its whole volume; the layers combined per pixel as the ray caster
  * combines objects along a ray (render.h, vv_renderer_render), the
  * background last. @p lod's outputs are the sums over the objects
- * (stalled: any). Layers are of the view's size, 20 bytes a pixel each.
+ * (stalled: any). Layers are of the view's size, 20 bytes a pixel each
+ * (one object alone is drawn straight into @p out).
  * Errors: those vv_renderer_render documents for out of core.
  */
 vv_status drv_render_sources(vv_renderer *r, const vv_world *w, const vv_view *view,

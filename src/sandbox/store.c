@@ -311,11 +311,15 @@ store_close(void *ctx) {
 static vv_status
 store_start(sbx_store *b, const char *exe, const sbx_request *rq,
             unsigned char info[VV_SANDBOX_INFO_MAX], size_t *info_len) {
+    /* every reader started first, so that they start side by side (a
+     * reader's start is tens of milliseconds), then each one's hello */
     for (int i = 0; i < b->n; i++) {
         int err = i == 0 ? sbx_take_reader(exe, &b->rd[i].pid, &b->rd[i].sock)
                          : sbx_spawn_reader(exe, &b->rd[i].pid, &b->rd[i].sock);
         if (err != 0)
             return vv_error_set(VV_ERR_IO, "cannot start %s: %s", exe, strerror(err));
+    }
+    for (int i = 0; i < b->n; i++) {
         vv_status hs =
             sbx_hello_wait(b->rd[i].sock, sbx_now() + b->limit + 5, exe, b->name, b->file);
         if (hs != VV_OK) {
