@@ -492,7 +492,7 @@ open_volume(VvgDocument *doc, const char *path, GError **error) {
         set_error(error, "cannot read the volume");
         return FALSE;
     }
-    if (od.kind != 0) { /* vv_data_kind: 1 a grid, 2 a mesh */
+    if (od.kind != VV_DATA_VOLUME) { /* a grid or a mesh */
         gboolean ok = FALSE;
         if (od.mesh) {
             ok = add_mesh(doc, path, od.mesh, error);
@@ -560,7 +560,7 @@ vvg_document_open(VvgDocument *doc, const char *path, GError **error) {
         !strcmp(leaf, ".zattrs") || !strcmp(leaf, ".zgroup") || !strcmp(leaf, ".zarray")
             ? g_path_get_dirname(path)
             : NULL;
-    if (store && vv_format_detect(store) == VV_FORMAT_OME_ZARR)
+    if (store) /* the folder is the store; vv_open says what it holds */
         path = store;
     return open_volume(doc, path, error);
 }

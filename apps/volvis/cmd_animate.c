@@ -357,7 +357,8 @@ render_frames(cli_args *a, const cli_render_args *r, vv_animation *anim, vv_worl
     /* a volume file's time steps, when a track animates them (a grid's
      * time is its field NAME<T>, a scene's volumes have no file axes here) */
     time_frames tf = {.r = r, .base = w, .n = w->n_objects};
-    tf.volume_file = r->input && (r->has_raw || vv_format_detect(r->input) != VV_FORMAT_UNKNOWN);
+    tf.volume_file = r->input && !cli_is_scene_file(r->input) && w->n_objects > 0 &&
+                     w->objects[0]->type == VV_OBJECT_VOLUME; /* the World of a volume file */
     if (has_time_track(anim)) {
         for (int i = 0; i < w->n_objects && tf.volume_file; i++)
             if (w->objects[i]->type == VV_OBJECT_VOLUME)

@@ -153,7 +153,7 @@ open_boxes(const char *in, const vv_raw_params *raw, int channel, int time, box_
     }
     vv_error_clear();
     vv_status s = vv_open(&bi->od, in, &oo);
-    if (s == VV_OK && bi->od.kind == 0) {
+    if (s == VV_OK && bi->od.kind == VV_DATA_VOLUME) {
         bi->hdr = vv_source_level(bi->od.source, 0);
         bi->read = vv_source_box;
         bi->ctx = bi->od.source;

@@ -573,7 +573,7 @@ measure_out_of_core(const char *in, const vv_raw_params *raw, const measure_req 
     vv_opened od;
     vv_error_clear();
     vv_status s = vv_open(&od, in, &oo);
-    if (s == VV_ERR_UNSUPPORTED || (s == VV_OK && od.kind != 0)) {
+    if (s == VV_ERR_UNSUPPORTED || (s == VV_OK && od.kind != VV_DATA_VOLUME)) {
         vv_opened_clear(&od);
         cli_error("%s: cannot be read out of core (by bricks: .vvb, raw or uncompressed NRRD, "
                   "channel 0 at step 0; by levels: a pyramid); convert it to .vvb first (volvis "

@@ -385,12 +385,11 @@ cli_render_parse(cli_args *a, cli_render_args *r) {
 
 /* Builds the World for a grid file (vv_world_new_for_grid). */
 static int
-world_for_grid(const cli_render_args *r, vv_world **out) {
-    vv_grid *g = NULL;
-    vv_error_clear();
-    vv_status s = vv_grid_load(&g, r->input);
-    if (s != VV_OK)
-        return cli_fail(s, NULL);
+world_for_grid(const cli_render_args *r, vv_grid *g, vv_world **out) {
+    if (r->time_range) {
+        cli_error("%s: --time-range is for a volume file's time steps, not a grid", r->input);
+        return CLI_EXIT_FAIL;
+    }
     vv_default_scene_options o;
     vv_default_scene_options_init(&o);
     if (r->has_mode)
@@ -409,8 +408,7 @@ world_for_grid(const cli_render_args *r, vv_world **out) {
         o.height = r->height;
     }
     vv_error_clear();
-    s = vv_world_new_for_grid(out, g, r->field, r->time, &o);
-    vv_grid_free(g);
+    vv_status s = vv_world_new_for_grid(out, g, r->field, r->time, &o);
     if (s != VV_OK)
         return cli_fail(s, r->input);
     return 0;
@@ -524,10 +522,11 @@ cli_world_out_of_core(const vv_world *w) {
     return 0;
 }
 
-/* Builds the World for a volume file: opened through the format table
- * (vv_open), in memory or out of core as the options say. */
+/* Builds the World for a file: opened once through the format table
+ * (vv_open), a volume in memory or out of core as the options say, or an
+ * irregular grid. */
 static int
-world_for_volume(const cli_render_args *r, vv_world **out) {
+world_for_file(const cli_render_args *r, vv_world **out) {
     if (r->n_channels)
         return world_for_channels(r, out);
     int rc = r->has_raw ? cli_check_readable(r->input) : cli_check_readable_input(r->input);
@@ -550,8 +549,13 @@ world_for_volume(const cli_render_args *r, vv_world **out) {
                   r->input);
         return CLI_EXIT_FAIL;
     }
-    if (s == VV_OK && od.kind != 0)
-        s = vv_error_set(VV_ERR_FORMAT, "%s: not a volume file", r->input);
+    if (s == VV_OK && od.kind == VV_DATA_GRID) { /* an irregular grid: its own World */
+        rc = world_for_grid(r, od.grid, out);
+        vv_opened_clear(&od);
+        return rc;
+    }
+    if (s == VV_OK && od.kind != VV_DATA_VOLUME)
+        s = vv_error_set(VV_ERR_FORMAT, "%s: not a volume or grid file", r->input);
     if (s != VV_OK) {
         vv_opened_clear(&od);
         return cli_fail(s, r->input);
@@ -693,14 +697,14 @@ cli_render_world(const cli_render_args *r, vv_world **out) {
     if (rc)
         return rc;
     int scene = !r->has_raw && cli_is_scene_file(r->input);
-    const int grid = !scene && !r->has_raw && vv_grid_file_detect(r->input, NULL);
-    if ((scene || grid) && (r->n_channels || r->time_range)) {
-        fprintf(stderr, "volvis: %s: %s is for a volume file's %s, not a %s\n", r->input,
+    if (scene && (r->n_channels || r->time_range)) {
+        fprintf(stderr, "volvis: %s: %s is for a volume file's %s, not a scene\n", r->input,
                 r->n_channels ? "--channels" : "--time-range",
-                r->n_channels ? "channels" : "time steps", scene ? "scene" : "grid");
+                r->n_channels ? "channels" : "time steps");
         return CLI_EXIT_FAIL;
     }
-    rc = scene ? world_for_scene(r, out) : grid ? world_for_grid(r, out) : world_for_volume(r, out);
+    /* a file: vv_open says what it holds (a volume, or an irregular grid) */
+    rc = scene ? world_for_scene(r, out) : world_for_file(r, out);
     return world_done(r, rc, out);
 }
 

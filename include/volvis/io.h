@@ -257,9 +257,16 @@ typedef struct vv_open_options {
  *  process's cache. */
 void vv_open_options_init(vv_open_options *o);
 
+/** What a format's files hold (vv_opened.kind, vv_format_record.holds). */
+typedef enum vv_data_kind {
+    VV_DATA_VOLUME = 0, /**< a volume (vv_volume; channels, time steps, levels) */
+    VV_DATA_GRID = 1,   /**< an irregular grid (vv_grid) */
+    VV_DATA_MESH = 2,   /**< a triangle mesh (vv_mesh) */
+} vv_data_kind;
+
 /** What a file holds, as vv_open opened it. */
 typedef struct vv_opened {
-    int kind;          /**< vv_data_kind (sys/format.h): 0 volume, 1 grid, 2 mesh */
+    vv_data_kind kind; /**< a volume (source), a grid or a mesh */
     vv_format format;  /**< its row of the format table */
     vv_source *source; /**< a volume: the channel and step asked for (in memory or out of
                             core); owned (vv_opened_clear frees it) */

@@ -423,7 +423,7 @@ def _open_source(path, series, channel, format, raw, time, out_of_core):
     od = ffi.new("vv_opened *")
     _lib.call_long(lambda prog: lib.vv_open(od, cstr(path), oo), None)
     try:
-        if od.kind != 0:
+        if od.kind != lib.VV_DATA_VOLUME:
             raise InvalidError("volvis.open: %s is not a volume file" % os.fspath(path))
         whole = lib.vv_source_volume(od.source)
         if whole != ffi.NULL:

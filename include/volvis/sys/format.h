@@ -84,12 +84,7 @@ typedef struct vv_format_probe {
 
 /* ---- the record --------------------------------------------------------------------- */
 
-/** What a format's files hold. */
-typedef enum vv_data_kind {
-    VV_DATA_VOLUME = 0, /**< a volume (vv_volume; channels, time steps, levels) */
-    VV_DATA_GRID = 1,   /**< an irregular grid (vv_grid) */
-    VV_DATA_MESH = 2,   /**< a triangle mesh (vv_mesh) */
-} vv_data_kind;
+/* What a format's files hold: vv_data_kind (io.h). */
 
 /**
  * One format. Required: version, name, title, doc, and for what it holds
