@@ -91,7 +91,7 @@ for step in $steps; do
         rc=0
         VOLVIS_TSAN_INJECT_RACE=1 gui inject short || rc=$?
         n=$(reports "$out/inject/gui.log")
-        found=$(grep -a -c -E '#0 render_one .*vvg-scene-view\.c' "$out/inject/gui.log" || true)
+        found=$(grep -a -c -E '#0 render_one .*vvg-scene-render\.c' "$out/inject/gui.log" || true)
         say "GUI session, race injected: $n reports, $found in render_one (expected: at least 1)"
         [ "$rc" -eq 0 ] || bad "the session failed ($out/inject/session.log)"
         [ "$found" -gt 0 ] || bad "the injected race was not reported ($out/inject/gui.log)"
