@@ -1,5 +1,8 @@
-/* VvgAnimatorPage: the Animator page (vvg-animator-page.h). */
-#include "vvg-animator-page.h"
+/* VvgAnimatorPage: the Animator page (vvg-animator-page.h): its widgets, the
+ * animation's summary and timeline, sequences, camera and time-step keys, New,
+ * Open and Save. Play, Record flight and the final render are
+ * vvg-animator-play.c. */
+#include "vvg-animator-play.h"
 #include "vvg-widgets.h"
 
 #include <math.h>
@@ -7,70 +10,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Play and flight recording both run at 30 frames a second. */
-#define TICK_MS 33
-/* Play asks for a frame at the display's rate; the scene view shows as many
- * as its previews can draw (at least 30 a second), each at its own time */
-#define PLAY_TICK_MS 16
-
 /* The timeline's background: also what tests/gui/animator_session.sh looks
  * for in a screenshot to find the page's controls. */
 #define TIMELINE_R 31
 #define TIMELINE_G 42
 #define TIMELINE_B 51
-
-/* A final render on the worker thread; the UI reads the atomics on a timer. */
-typedef struct render_job {
-    VvgAnimatorPage *page; /* not a reference: the page joins the thread before it goes */
-    vv_animation *anim;    /* owned snapshots */
-    vv_world *world;
-    GHashTable *series; /* the time steps of objects[i].time tracks (vvg_world_apply_time) */
-    char *output;
-    int resume;
-    int frames;
-    GThread *thread;
-    int cancel;      /* atomic */
-    double fraction; /* atomic: overall fraction done */
-    int frames_done; /* atomic */
-    gint64 start_us;
-    vv_status status;
-    vv_anim_render_stats stats;
-    char error[1024];
-} render_job;
-
-struct _VvgAnimatorPage {
-    GtkBox parent;
-    VvgDocument *doc;
-    gulong changed_id;
-    vv_animation *anim; /* the current animation, owned */
-    gboolean updating;  /* set while widgets are filled from the animation */
-    gboolean disposed;
-
-    GtkWidget *timeline, *play, *stop, *record, *loop, *time_label;
-    GtkWidget *fps, *frames;
-    GtkWidget *output, *resume, *render_info, *render, *cancel, *progress, *render_status;
-    GtkWidget *list, *anim_status;
-    GtkWidget *seq_type, *seq_stack;
-    GtkWidget *orbit_degrees, *orbit_elevation, *rot_axis, *rot_degrees, *fly[3], *sweep_axis;
-    GtkWidget *key_time;
-
-    /* Play */
-    guint play_source;
-    vv_animation *playing; /* the copy being played */
-    vv_world *base;        /* the World at Play: every frame is evaluated from it */
-    GHashTable *series;    /* time series of objects[i].time tracks, kept a session */
-    gint64 play_start_us;
-    double play_time;
-
-    /* flight recording */
-    vv_flight_recorder *recorder;
-    guint record_source;
-    gint64 record_start_us;
-
-    /* final render */
-    render_job *job;
-    guint render_timer;
-};
 
 G_DEFINE_TYPE(VvgAnimatorPage, vvg_animator_page, GTK_TYPE_BOX)
 
@@ -120,8 +64,8 @@ show_error(VvgAnimatorPage *self, const char *what, const char *message) {
 }
 
 /* A copy of the library's message before anything else can replace it. */
-static void
-show_library_error(VvgAnimatorPage *self, const char *what) {
+void
+vvg_animator_show_library_error(VvgAnimatorPage *self, const char *what) {
     char m[1024];
     g_strlcpy(m, vv_error_message(), sizeof m);
     show_error(self, what, m);
@@ -138,16 +82,16 @@ dup_malloc(const char *s) {
 }
 
 /* A one-line label's text; the tooltip holds the whole text when the line is cut. */
-static void
-set_label_tip(GtkWidget *label, const char *text) {
+void
+vvg_animator_set_label_tip(GtkWidget *label, const char *text) {
     gtk_label_set_text(GTK_LABEL(label), text);
     gtk_widget_set_tooltip_text(label, text[0] ? text : NULL);
 }
 
 /* The page's status line: what was opened, saved or recorded. */
-static void
-set_status(VvgAnimatorPage *self, const char *text) {
-    set_label_tip(self->anim_status, text);
+void
+vvg_animator_set_status(VvgAnimatorPage *self, const char *text) {
+    vvg_animator_set_label_tip(self->anim_status, text);
 }
 
 /* ---- the animation and its summary ---------------------------------------------- */
@@ -219,8 +163,8 @@ head_time(VvgAnimatorPage *self) {
     return self->playing ? self->play_time : spin_value(self->key_time);
 }
 
-static void
-update_time_label(VvgAnimatorPage *self) {
+void
+vvg_animator_update_time_label(VvgAnimatorPage *self) {
     const vv_animation *a = self->playing ? self->playing : self->anim;
     int n = vv_animation_frame_count(a);
     double t = head_time(self);
@@ -245,12 +189,12 @@ static void
 refresh(VvgAnimatorPage *self) {
     fill_timing(self);
     rebuild_list(self);
-    update_time_label(self);
+    vvg_animator_update_time_label(self);
 }
 
 /* Takes @p a as the current animation. */
-static void
-set_animation(VvgAnimatorPage *self, vv_animation *a) {
+void
+vvg_animator_set_animation(VvgAnimatorPage *self, vv_animation *a) {
     vv_animation_free(self->anim);
     self->anim = a;
     refresh(self);
@@ -305,10 +249,10 @@ remove_clicked(GtkButton *b, gpointer user) {
     vv_animation *c = NULL;
     vv_error_clear();
     if (copy_without(self->anim, i < nt ? i : -1, i < nt ? -1 : i - nt, &c) != VV_OK) {
-        show_library_error(self, "Cannot remove it");
+        vvg_animator_show_library_error(self, "Cannot remove it");
         return;
     }
-    set_animation(self, c);
+    vvg_animator_set_animation(self, c);
 }
 
 static void
@@ -319,7 +263,7 @@ fps_changed(GtkSpinButton *s, gpointer user) {
     /* the keys are in seconds: the duration stays, the frame count follows */
     self->anim->fps = gtk_spin_button_get_value(s);
     fill_timing(self);
-    update_time_label(self);
+    vvg_animator_update_time_label(self);
 }
 
 static void
@@ -328,7 +272,7 @@ frames_changed(GtkSpinButton *s, gpointer user) {
     if (self->updating)
         return;
     self->anim->duration = gtk_spin_button_get_value(s) / self->anim->fps;
-    update_time_label(self);
+    vvg_animator_update_time_label(self);
 }
 
 /* ---- the timeline ------------------------------------------------------------------- */
@@ -389,224 +333,7 @@ timeline_pressed(GtkGestureClick *g, int n, double x, double y, gpointer user) {
     double t = fmin(fmax(x / (W - 1), 0), 1) * self->anim->duration;
     t = round(t * self->anim->fps) / self->anim->fps;
     gtk_spin_button_set_value(GTK_SPIN_BUTTON(self->key_time), t);
-    update_time_label(self);
-}
-
-/* ---- Play ------------------------------------------------------------------------------ */
-
-static void
-update_sensitivity(VvgAnimatorPage *self) {
-    if (self->disposed)
-        return;
-    gboolean playing = self->play_source != 0, recording = self->recorder != NULL;
-    gtk_widget_set_sensitive(self->play, !playing && !recording);
-    gtk_widget_set_sensitive(self->stop, playing);
-    gtk_widget_set_sensitive(self->record, !playing);
-    gtk_widget_set_sensitive(self->render, self->job == NULL);
-    gtk_widget_set_sensitive(self->cancel, self->job != NULL);
-}
-
-/* Ends Play: @p restore puts the World back as it was at Play, else the
- * World keeps the frame shown (an edit took over). */
-static void
-stop_playback(VvgAnimatorPage *self, gboolean restore) {
-    if (self->play_source) {
-        g_source_remove(self->play_source);
-        self->play_source = 0;
-    }
-    if (self->doc && vvg_document_transient(self->doc))
-        vvg_document_end_transient(self->doc, restore);
-    vv_world_free(self->base);
-    self->base = NULL;
-    vv_animation_free(self->playing);
-    self->playing = NULL;
-    if (!self->disposed) {
-        update_sensitivity(self);
-        update_time_label(self);
-    }
-}
-
-/* Shows the animation at time @p t; on failure the message is in @p err. */
-static gboolean
-show_play_frame(VvgAnimatorPage *self, double t, char *err, size_t cap) {
-    vv_world *w = NULL;
-    vv_error_clear();
-    if (vv_animation_eval(self->playing, self->base, t, &w) != VV_OK) {
-        g_strlcpy(err, vv_error_message(), cap);
-        return FALSE;
-    }
-    g_autoptr(GError) terr = NULL;
-    if (!vvg_world_apply_time(self->series, w, self->base, &terr)) { /* objects[i].time */
-        g_strlcpy(err, terr->message, cap);
-        vv_world_free(w);
-        return FALSE;
-    }
-    self->play_time = t;
-    vvg_document_show_transient(self->doc, w);
-    update_time_label(self);
-    return TRUE;
-}
-
-static gboolean
-play_tick(gpointer data) {
-    VvgAnimatorPage *self = data;
-    if (!vvg_document_transient(self->doc)) {
-        /* an edit, undo or redo ended the transient World: it wins */
-        self->play_source = 0;
-        stop_playback(self, FALSE);
-        return G_SOURCE_REMOVE;
-    }
-    double t = (g_get_monotonic_time() - self->play_start_us) * 1e-6;
-    double dur = self->playing->duration;
-    if (t >= dur) {
-        if (!gtk_check_button_get_active(GTK_CHECK_BUTTON(self->loop))) {
-            self->play_source = 0;
-            stop_playback(self, TRUE);
-            return G_SOURCE_REMOVE;
-        }
-        t = fmod(t, dur);
-    }
-    char err[1024];
-    if (!show_play_frame(self, t, err, sizeof err)) {
-        self->play_source = 0;
-        stop_playback(self, TRUE);
-        show_error(self, "Cannot play the animation", err);
-        return G_SOURCE_REMOVE;
-    }
-    return G_SOURCE_CONTINUE;
-}
-
-static void
-play_clicked(GtkButton *b, gpointer user) {
-    (void)b;
-    VvgAnimatorPage *self = user;
-    if (self->play_source || self->recorder)
-        return;
-    vv_world *w = vvg_document_world(self->doc);
-    vv_error_clear();
-    if (vv_animation_validate(self->anim) != VV_OK ||
-        vv_animation_check_world(self->anim, w) != VV_OK) {
-        show_library_error(self, "Cannot play the animation");
-        return;
-    }
-    vv_error_clear();
-    if (vv_animation_clone(&self->playing, self->anim) != VV_OK ||
-        !(self->base = vvg_document_snapshot(self->doc))) {
-        show_library_error(self, "Cannot play the animation");
-        stop_playback(self, TRUE);
-        return;
-    }
-    self->play_start_us = g_get_monotonic_time();
-    char err[1024];
-    if (!show_play_frame(self, 0, err, sizeof err)) {
-        stop_playback(self, TRUE);
-        show_error(self, "Cannot play the animation", err);
-        return;
-    }
-    self->play_source = g_timeout_add(PLAY_TICK_MS, play_tick, self);
-    update_sensitivity(self);
-}
-
-static void
-stop_clicked(GtkButton *b, gpointer user) {
-    (void)b;
-    stop_playback(user, TRUE);
-}
-
-/* The World changed: Play stops when an edit ended its transient World. */
-static void
-doc_changed(VvgDocument *doc, gpointer user) {
-    VvgAnimatorPage *self = user;
-    if (self->play_source && !vvg_document_transient(doc))
-        stop_playback(self, FALSE);
-    const vv_world *w = vvg_document_world(doc);
-    const vv_render_settings *rs = &w->render;
-    char text[256];
-    snprintf(text, sizeof text, "%s, quality %d, %d×%d pixels (Rendering page)",
-             rs->renderer[0] ? rs->renderer : "raycast", rs->quality >= 0 ? rs->quality : 2,
-             w->view.width, w->view.height);
-    gtk_label_set_text(GTK_LABEL(self->render_info), text);
-}
-
-/* ---- flight recording ------------------------------------------------------------ */
-
-static gboolean
-record_tick(gpointer data) {
-    VvgAnimatorPage *self = data;
-    double t = (g_get_monotonic_time() - self->record_start_us) * 1e-6;
-    /* a sample the recorder refuses (a non-finite view) is skipped */
-    vv_flight_recorder_add(self->recorder, t, &vvg_document_world(self->doc)->view);
-    char text[96];
-    snprintf(text, sizeof text, "recording the view: %d samples, %.1f s",
-             vv_flight_recorder_count(self->recorder), t);
-    gtk_label_set_text(GTK_LABEL(self->time_label), text);
-    return G_SOURCE_CONTINUE;
-}
-
-/* Stops recording; @p finish makes the samples the current animation,
- * ending with the view as it is now: the 30 Hz samples may miss the last
- * moves of a drag (a busy machine delays the timer past them). */
-static void
-stop_recording(VvgAnimatorPage *self, gboolean finish) {
-    if (finish && self->recorder)
-        record_tick(self);
-    if (self->record_source) {
-        g_source_remove(self->record_source);
-        self->record_source = 0;
-    }
-    if (!self->recorder)
-        return;
-    if (finish) {
-        /* thinning tolerances: a thousandth of the scene, a quarter degree */
-        vv_box b = vv_world_bounds(vvg_document_world(self->doc));
-        double size = vv_vec3_length(vv_vec3_sub(b.max, b.min));
-        double pos_tol = size > 0 && isfinite(size) ? 1e-3 * size : 1e-3;
-        vv_animation *a = NULL;
-        int n = vv_flight_recorder_count(self->recorder);
-        vv_error_clear();
-        if (vv_flight_recorder_finish(self->recorder, pos_tol, vv_deg_to_rad(0.25), self->anim->fps,
-                                      &a) != VV_OK) {
-            show_library_error(self, "No flight path");
-        } else {
-            int keys = a->n_tracks > 0 ? a->tracks[0].n_keys : 0;
-            set_animation(self, a);
-            char text[128];
-            snprintf(text, sizeof text, "recorded flight: %d samples, %d keys kept", n, keys);
-            set_status(self, text);
-        }
-    }
-    vv_flight_recorder_free(self->recorder);
-    self->recorder = NULL;
-    if (!self->disposed) {
-        update_time_label(self);
-        self->updating = TRUE;
-        gtk_toggle_button_set_active(GTK_TOGGLE_BUTTON(self->record), FALSE);
-        self->updating = FALSE;
-        update_sensitivity(self);
-    }
-}
-
-static void
-record_toggled(GtkToggleButton *b, gpointer user) {
-    VvgAnimatorPage *self = user;
-    if (self->updating)
-        return;
-    if (!gtk_toggle_button_get_active(b)) {
-        stop_recording(self, TRUE);
-        return;
-    }
-    if (self->recorder || self->play_source)
-        return;
-    vv_error_clear();
-    if (vv_flight_recorder_new(&self->recorder) != VV_OK) {
-        show_library_error(self, "Cannot record");
-        stop_recording(self, FALSE);
-        return;
-    }
-    self->record_start_us = g_get_monotonic_time();
-    record_tick(self);
-    self->record_source = g_timeout_add(TICK_MS, record_tick, self);
-    update_sensitivity(self);
+    vvg_animator_update_time_label(self);
 }
 
 /* ---- sequences and keys --------------------------------------------------------------- */
@@ -681,7 +408,7 @@ add_sequence_clicked(GtkButton *b, gpointer user) {
     }
     vv_error_clear();
     if (vv_animation_add_sequence(self->anim, &q) != VV_OK) {
-        show_library_error(self, "Cannot add the sequence");
+        vvg_animator_show_library_error(self, "Cannot add the sequence");
         return;
     }
     refresh(self);
@@ -728,7 +455,7 @@ add_key_clicked(GtkButton *b, gpointer user) {
         vv_error_clear();
         vv_anim_track *tr = find_or_add_track(self->anim, props[i]);
         if (!tr || set_key(tr, t, values[i]) != VV_OK) {
-            show_library_error(self, "Cannot add the camera key");
+            vvg_animator_show_library_error(self, "Cannot add the camera key");
             refresh(self);
             return;
         }
@@ -764,7 +491,7 @@ add_time_key_clicked(GtkButton *b, gpointer user) {
     vv_error_clear();
     vv_anim_track *tr = find_or_add_track(self->anim, prop);
     if (!tr || set_key(tr, t, v) != VV_OK) {
-        show_library_error(self, "Cannot add the time-step key");
+        vvg_animator_show_library_error(self, "Cannot add the time-step key");
         refresh(self);
         return;
     }
@@ -785,14 +512,14 @@ new_clicked(GtkButton *b, gpointer user) {
     vv_animation *a = NULL;
     vv_error_clear();
     if (vv_animation_new(&a) != VV_OK) {
-        show_library_error(self, "Cannot make an animation");
+        vvg_animator_show_library_error(self, "Cannot make an animation");
         return;
     }
     a->fps = spin_value(self->fps);
     a->duration = spin_value(self->frames) / a->fps;
-    set_animation(self, a);
+    vvg_animator_set_animation(self, a);
     gtk_spin_button_set_value(GTK_SPIN_BUTTON(self->key_time), 0);
-    set_status(self, "");
+    vvg_animator_set_status(self, "");
 }
 
 static void
@@ -807,12 +534,12 @@ open_response(GtkNativeDialog *d, int response, gpointer user) {
             if (vv_animation_load(&a, path) != VV_OK) {
                 g_autofree char *base = g_path_get_basename(path);
                 g_autofree char *what = g_strdup_printf("Cannot open %s", base);
-                show_library_error(self, what);
+                vvg_animator_show_library_error(self, what);
             } else {
-                set_animation(self, a);
+                vvg_animator_set_animation(self, a);
                 g_autofree char *base = g_path_get_basename(path);
                 g_autofree char *m = g_strdup_printf("opened %s", base);
-                set_status(self, m);
+                vvg_animator_set_status(self, m);
                 gtk_widget_set_tooltip_text(self->anim_status, path);
             }
         }
@@ -869,11 +596,11 @@ save_response(GtkNativeDialog *d, int response, gpointer user) {
             set_scene(self->anim, path, vvg_document_path(self->doc));
             vv_error_clear();
             if (vv_animation_save(self->anim, path) != VV_OK) {
-                show_library_error(self, "Cannot save the animation");
+                vvg_animator_show_library_error(self, "Cannot save the animation");
             } else {
                 g_autofree char *base = g_path_get_basename(path);
                 g_autofree char *m = g_strdup_printf("saved %s", base);
-                set_status(self, m);
+                vvg_animator_set_status(self, m);
                 gtk_widget_set_tooltip_text(self->anim_status, path);
             }
         }
@@ -894,187 +621,6 @@ save_clicked(GtkButton *b, gpointer user) {
     gtk_file_chooser_set_current_name(GTK_FILE_CHOOSER(d), "animation.json");
     g_signal_connect(d, "response", G_CALLBACK(save_response), g_object_ref(self));
     gtk_native_dialog_show(GTK_NATIVE_DIALOG(d));
-}
-
-/* ---- the final render ----------------------------------------------------------------- */
-
-static void
-job_free(render_job *j) {
-    if (!j)
-        return;
-    vv_animation_free(j->anim);
-    vv_world_free(j->world);
-    if (j->series)
-        g_hash_table_unref(j->series);
-    g_free(j->output);
-    g_free(j);
-}
-
-static int
-render_progress(void *user, double fraction) {
-    render_job *j = user;
-    __atomic_store(&j->fraction, &fraction, __ATOMIC_RELAXED);
-    return __atomic_load_n(&j->cancel, __ATOMIC_RELAXED);
-}
-
-static void
-render_frame_done(void *user, int frame, const vv_image *img, int reused) {
-    (void)img;
-    (void)reused;
-    render_job *j = user;
-    __atomic_store_n(&j->frames_done, frame + 1, __ATOMIC_RELAXED);
-}
-
-static gboolean render_done(gpointer data);
-
-/* A frame's World before it is drawn: the time steps its objects[i].time
- * tracks ask for (the worker thread's own series). */
-static vv_status
-render_prepare(void *user, int frame, vv_world *w) {
-    (void)frame;
-    render_job *j = user;
-    g_autoptr(GError) err = NULL;
-    if (!vvg_world_apply_time(j->series, w, j->world, &err))
-        return vv_error_set(VV_ERR_IO, "%s", err->message);
-    return VV_OK;
-}
-
-static gpointer
-render_main(gpointer data) {
-    render_job *j = data;
-    const vv_world *w = j->world;
-    vv_renderer *r = NULL;
-    vv_error_clear();
-    /* the World's renderer with its options and quality, as `volvis animate` */
-    vv_status s = vv_renderer_new_for_world(&r, w);
-    if (s == VV_OK) {
-        vv_anim_render_options o;
-        vv_anim_render_options_init(&o);
-        o.output = j->output;
-        o.render.quality = vv_render_settings_quality(&w->render);
-        o.resume = j->resume;
-        o.progress.fn = render_progress;
-        o.progress.user = j;
-        o.on_frame = render_frame_done;
-        o.on_frame_user = j;
-        o.prepare_frame = render_prepare;
-        o.prepare_frame_user = j;
-        j->series = vvg_time_cache_new();
-        s = vv_animation_render(j->anim, w, r, &o, &j->stats);
-    }
-    j->status = s;
-    if (s != VV_OK)
-        g_strlcpy(j->error, vv_error_message(), sizeof j->error);
-    vv_renderer_free(r);
-    g_idle_add(render_done, g_object_ref(j->page));
-    return NULL;
-}
-
-static gboolean
-render_tick(gpointer data) {
-    VvgAnimatorPage *self = data;
-    render_job *j = self->job;
-    if (!j)
-        return G_SOURCE_CONTINUE;
-    double f;
-    __atomic_load(&j->fraction, &f, __ATOMIC_RELAXED);
-    int done = __atomic_load_n(&j->frames_done, __ATOMIC_RELAXED);
-    double el = (g_get_monotonic_time() - j->start_us) * 1e-6;
-    char text[128];
-    if (f > 0.02)
-        snprintf(text, sizeof text, "frame %d of %d, %.0f %%, %.1f s left", done, j->frames,
-                 100 * f, el * (1 - f) / f);
-    else
-        snprintf(text, sizeof text, "frame %d of %d, %.0f %%", done, j->frames, 100 * f);
-    gtk_progress_bar_set_fraction(GTK_PROGRESS_BAR(self->progress), f);
-    gtk_progress_bar_set_text(GTK_PROGRESS_BAR(self->progress), text);
-    return G_SOURCE_CONTINUE;
-}
-
-static gboolean
-render_done(gpointer data) {
-    VvgAnimatorPage *self = data;
-    render_job *j = self->job;
-    if (self->disposed || !j) {
-        g_object_unref(self);
-        return G_SOURCE_REMOVE;
-    }
-    g_thread_join(j->thread);
-    self->job = NULL;
-    if (self->render_timer) {
-        g_source_remove(self->render_timer);
-        self->render_timer = 0;
-    }
-    const vv_anim_render_stats *st = &j->stats;
-    char text[1280];
-    if (j->status == VV_OK) {
-        gtk_progress_bar_set_fraction(GTK_PROGRESS_BAR(self->progress), 1);
-        snprintf(text, sizeof text, "done in %.1f s", st->total_s);
-        gtk_progress_bar_set_text(GTK_PROGRESS_BAR(self->progress), text);
-        snprintf(text, sizeof text, "wrote %s: %d frames (%d rendered, %d kept from before)",
-                 j->output, st->frames, st->rendered, st->reused);
-        set_label_tip(self->render_status, text);
-    } else if (j->status == VV_ERR_CANCELLED) {
-        gtk_progress_bar_set_text(GTK_PROGRESS_BAR(self->progress), "cancelled");
-        snprintf(text, sizeof text,
-                 "cancelled after %d of %d frames; Render again resumes (finished frames are "
-                 "kept)",
-                 st->rendered + st->reused, st->frames);
-        set_label_tip(self->render_status, text);
-    } else {
-        gtk_progress_bar_set_text(GTK_PROGRESS_BAR(self->progress), "failed");
-        set_label_tip(self->render_status, j->error);
-        show_error(self, "Cannot render the animation", j->error);
-    }
-    job_free(j);
-    update_sensitivity(self);
-    g_object_unref(self);
-    return G_SOURCE_REMOVE;
-}
-
-static void
-render_clicked(GtkButton *b, gpointer user) {
-    (void)b;
-    VvgAnimatorPage *self = user;
-    if (self->job)
-        return;
-    const char *out = gtk_editable_get_text(GTK_EDITABLE(self->output));
-    if (!out[0]) {
-        show_error(self, "Cannot render the animation", "no output file");
-        return;
-    }
-    render_job *j = g_new0(render_job, 1);
-    j->page = self;
-    j->output = g_strdup(out);
-    j->resume = gtk_check_button_get_active(GTK_CHECK_BUTTON(self->resume));
-    vv_error_clear();
-    /* during Play, the World as it was at Play */
-    vv_status s =
-        vv_world_clone(&j->world, self->base ? self->base : vvg_document_world(self->doc));
-    if (s == VV_OK)
-        s = vv_animation_clone(&j->anim, self->anim);
-    if (s != VV_OK) {
-        show_library_error(self, "Cannot render the animation");
-        job_free(j);
-        return;
-    }
-    j->frames = vv_animation_frame_count(j->anim);
-    j->start_us = g_get_monotonic_time();
-    self->job = j;
-    gtk_progress_bar_set_fraction(GTK_PROGRESS_BAR(self->progress), 0);
-    gtk_progress_bar_set_text(GTK_PROGRESS_BAR(self->progress), "starting");
-    set_label_tip(self->render_status, "");
-    self->render_timer = g_timeout_add(100, render_tick, self);
-    j->thread = g_thread_new("volvis-animate", render_main, j);
-    update_sensitivity(self);
-}
-
-static void
-cancel_clicked(GtkButton *b, gpointer user) {
-    (void)b;
-    VvgAnimatorPage *self = user;
-    if (self->job)
-        __atomic_store_n(&self->job->cancel, 1, __ATOMIC_RELAXED);
 }
 
 /* ---- building the page -------------------------------------------------------------- */
@@ -1114,10 +660,12 @@ build(VvgAnimatorPage *self) {
                                                 "the key time");
     gtk_box_append(GTK_BOX(box), self->timeline);
     r = button_row(box);
-    self->play = add_button(r, gtk_button_new_with_label("Play"), G_CALLBACK(play_clicked), self);
-    self->stop = add_button(r, gtk_button_new_with_label("Stop"), G_CALLBACK(stop_clicked), self);
+    self->play = add_button(r, gtk_button_new_with_label("Play"),
+                            G_CALLBACK(vvg_animator_play_clicked), self);
+    self->stop = add_button(r, gtk_button_new_with_label("Stop"),
+                            G_CALLBACK(vvg_animator_stop_clicked), self);
     self->record = add_button(r, gtk_toggle_button_new_with_label("Record flight"),
-                              G_CALLBACK(record_toggled), self);
+                              G_CALLBACK(vvg_animator_record_toggled), self);
     gtk_widget_set_tooltip_text(self->record, "samples the view at 30 Hz while you navigate; "
                                               "off: the flight path becomes the animation");
     self->time_label = line_label();
@@ -1153,10 +701,10 @@ build(VvgAnimatorPage *self) {
     self->render_info = line_label();
     gtk_box_append(GTK_BOX(box), self->render_info);
     r = button_row(box);
-    self->render =
-        add_button(r, gtk_button_new_with_label("Render"), G_CALLBACK(render_clicked), self);
-    self->cancel =
-        add_button(r, gtk_button_new_with_label("Cancel"), G_CALLBACK(cancel_clicked), self);
+    self->render = add_button(r, gtk_button_new_with_label("Render"),
+                              G_CALLBACK(vvg_animator_render_clicked), self);
+    self->cancel = add_button(r, gtk_button_new_with_label("Cancel"),
+                              G_CALLBACK(vvg_animator_cancel_clicked), self);
     self->progress = gtk_progress_bar_new();
     gtk_progress_bar_set_show_text(GTK_PROGRESS_BAR(self->progress), TRUE);
     gtk_box_append(GTK_BOX(box), self->progress);
@@ -1192,7 +740,8 @@ build(VvgAnimatorPage *self) {
     /* camera keys */
     g = vvg_section(box, "Keyframes (camera, time step)");
     self->key_time = vvg_row(g, "time (s)", vvg_spin(0, 1e5, 0.1, 2, 0));
-    g_signal_connect_swapped(self->key_time, "value-changed", G_CALLBACK(update_time_label), self);
+    g_signal_connect_swapped(self->key_time, "value-changed",
+                             G_CALLBACK(vvg_animator_update_time_label), self);
     r = button_row(box);
     add_button(r, gtk_button_new_with_label("Add camera key"), G_CALLBACK(add_key_clicked), self);
     add_button(r, gtk_button_new_with_label("Add time-step key"), G_CALLBACK(add_time_key_clicked),
@@ -1221,22 +770,12 @@ static void
 vvg_animator_page_dispose(GObject *o) {
     VvgAnimatorPage *self = VVG_ANIMATOR_PAGE(o);
     self->disposed = TRUE;
-    if (self->job) {
-        /* going away cancels the render; its finished frames stay for a resume */
-        __atomic_store_n(&self->job->cancel, 1, __ATOMIC_RELAXED);
-        g_thread_join(self->job->thread);
-        job_free(self->job);
-        self->job = NULL;
-    }
-    if (self->render_timer) {
-        g_source_remove(self->render_timer);
-        self->render_timer = 0;
-    }
-    stop_recording(self, FALSE);
+    vvg_animator_stop_render(self);
+    vvg_animator_stop_recording(self, FALSE);
     if (self->doc) {
         g_signal_handler_disconnect(self->doc, self->changed_id);
         /* the World as it was at Play, should the page go while playing */
-        stop_playback(self, TRUE);
+        vvg_animator_stop_playback(self, TRUE);
         g_clear_object(&self->doc);
     }
     G_OBJECT_CLASS(vvg_animator_page_parent_class)->dispose(o);
@@ -1271,10 +810,10 @@ GtkWidget *
 vvg_animator_page_new(VvgDocument *doc) {
     VvgAnimatorPage *self = g_object_new(VVG_TYPE_ANIMATOR_PAGE, NULL);
     self->doc = g_object_ref(doc);
-    self->changed_id = g_signal_connect(doc, "changed", G_CALLBACK(doc_changed), self);
+    self->changed_id = g_signal_connect(doc, "changed", G_CALLBACK(vvg_animator_doc_changed), self);
     refresh(self);
-    doc_changed(doc, self);
-    update_sensitivity(self);
+    vvg_animator_doc_changed(doc, self);
+    vvg_animator_update_sensitivity(self);
     return GTK_WIDGET(self);
 }
 
