@@ -265,13 +265,9 @@ vv_bricked_load(vv_bricked *b, int index, vv_volume **out) {
         return vv_error_prefix(s, "bricks: %s", vv_path_basename(b->path));
     }
     /* the whole volume's frame and range (a region's voxels, sys/renderer.h) */
-    memcpy(v->spacing, b->f.header->spacing, sizeof v->spacing);
-    memcpy(v->origin, b->f.header->origin, sizeof v->origin);
-    memcpy(v->direction, b->f.header->direction, sizeof v->direction);
+    vv_volume_take_geometry(v, b->f.header);
     v->range[0] = b->f.header->range[0];
     v->range[1] = b->f.header->range[1];
-    v->unit = b->f.header->unit;
-    v->space = b->f.header->space;
     vv_cache_lock(b->cache);
     if (e->vol) { /* another thread read it meanwhile */
         vv_volume_free(v);
@@ -687,13 +683,9 @@ vv_bricked_read_box(vv_bricked *b, const int lo[3], const int hi[3], vv_volume *
         vv_volume_free(v);
         return vv_error_prefix(s, "bricks: %s", vv_path_basename(b->path));
     }
-    memcpy(v->spacing, b->f.header->spacing, sizeof v->spacing);
-    memcpy(v->origin, b->f.header->origin, sizeof v->origin);
-    memcpy(v->direction, b->f.header->direction, sizeof v->direction);
+    vv_volume_take_geometry(v, b->f.header);
     v->range[0] = b->f.header->range[0];
     v->range[1] = b->f.header->range[1];
-    v->unit = b->f.header->unit;
-    v->space = b->f.header->space;
     *out = v;
     return VV_OK;
 }
