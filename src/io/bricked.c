@@ -1,13 +1,14 @@
 /*
  * Bricked volumes read on demand (include/volvis/bricks.h; src/io/bricked.h):
- * a .vvb (its header, index and levels read by vvb.c), a raw file or a
+ * a .vvb (its header, index and levels read by vvb_read.c), a raw file or a
  * raw-encoded NRRD file read by pread, brick by brick, into the process's
  * cache of pieces (src/core/cache.h) within its budget, and served as a
  * brick source (sys/source.h) to the region driver. Opening a raw layout
  * streams it once, a slice at a time, for the value range and the bricks'
  * min/max; the coarse whole volume (vv_bricked_proxy) comes from a .vvb's
- * coarse levels or from every f-th voxel. The file layout and the state
- * shared with vvb.c and vvb_write.c are in vvb_layout.h.
+ * coarse levels or from every f-th voxel. The file it reads (vvb_file),
+ * the .vvb's layout and the reading of its pieces are vvb_read.c's
+ * (vvb_layout.h); the bricks held in the cache are this file's.
  *
  * Thread-safety: loading bricks and reading boxes from several threads at
  * once (the cache's lock guards the bricks held and the counts).
@@ -32,84 +33,51 @@
 #include "io/vvb_layout.h"
 #include "volvis/sys/format.h"
 
-void
-vvb_swap_bytes(void *data, size_t count, size_t vs) {
-    unsigned char *b = data;
-    for (size_t i = 0; i < count; i++, b += vs)
-        for (size_t k = 0; k < vs / 2; k++) {
-            unsigned char t = b[k];
-            b[k] = b[vs - 1 - k];
-            b[vs - 1 - k] = t;
-        }
-}
+/* A brick's voxels while the cache holds them. */
+typedef struct brick_slot {
+    vv_volume *vol;    /* cached, or NULL */
+    vv_cache_entry ce; /* its place in the process's cache while vol is held */
+    int loads;
+} brick_slot;
 
-/* pread of exactly n bytes at off (uncounted: any thread). */
-vv_status
-vvb_pread(const vv_bricked *b, void *buf, size_t n, uint64_t off, const char *what) {
-    size_t done = 0;
-    while (done < n) {
-        ssize_t r = pread(b->fd, (char *)buf + done, n - done, (off_t)(off + done));
-        if (r < 0 && errno == EINTR)
-            continue;
-        if (r < 0)
-            return vv_error_set(VV_ERR_IO, "%s: %s: %s", vv_path_basename(b->data_path), what,
-                                strerror(errno));
-        if (r == 0)
-            return vv_error_set(VV_ERR_FORMAT,
-                                "%s: %s: the file ends at byte %llu (reading %zu bytes at %llu)",
-                                vv_path_basename(b->data_path), what,
-                                (unsigned long long)(off + done), n, (unsigned long long)off);
-        done += (size_t)r;
-    }
-    return VV_OK;
-}
-
-/* vvb_pread, counted in the statistics. */
-vv_status
-vvb_read_at(vv_bricked *b, void *buf, size_t n, uint64_t off, const char *what) {
-    const vv_status s = vvb_pread(b, buf, n, off, what);
-    if (s == VV_OK)
-        __atomic_fetch_add(&b->st.bytes_read, (uint64_t)n, __ATOMIC_RELAXED);
-    return s;
-}
+struct vv_bricked {
+    char *path;        /* as opened */
+    vvb_file f;        /* the file holding the voxels, its geometry and bricks' min/max */
+    int vvb;           /* 1: .vvb, else raw layout (raw or NRRD) */
+    uint64_t data_off; /* raw layout: offset of voxel (0, 0, 0) */
+    brick_slot *slot;  /* f.n of them, i fastest */
+    /* the cached bricks live in the process's cache (src/core/cache.h);
+     * its lock guards them and the counts */
+    vv_cache *cache;
+    vv_cache_client cl;
+    vv_bricked_stats st; /* bytes_read: f's */
+};
 
 /* ---- geometry -------------------------------------------------------------- */
-
-void
-vvb_brick_boxes(const int dims[3], const int nb[3], int index, vv_brick_info *in) {
-    int c[3] = {index % nb[0], (index / nb[0]) % nb[1], index / (nb[0] * nb[1])};
-    for (int a = 0; a < 3; a++) {
-        const int last = dims[a] - 1;
-        in->lo[a] = c[a] * VV_BRICK_CELLS;
-        in->hi[a] = in->lo[a] + VV_BRICK_CELLS < last ? in->lo[a] + VV_BRICK_CELLS : last;
-        in->slo[a] = in->lo[a] > 0 ? in->lo[a] - 1 : 0;
-        in->shi[a] = in->hi[a] < last ? in->hi[a] + 1 : last;
-    }
-}
 
 /* The bytes one brick holds while rendered: its voxels, the ray caster's
  * 16-bit or float copy and cached gradients (src/render/sample.h). */
 static uint64_t
 working_set(const vv_bricked *b, uint64_t voxels) {
-    const uint64_t vs = vv_voxel_type_size(b->header->type);
+    const uint64_t vs = vv_voxel_type_size(b->f.header->type);
     return voxels * (vs + 4 + 4);
 }
 
 int
 vv_bricked_levels(const vv_bricked *b) {
-    return b->n_levels > 1 ? b->n_levels : 1;
+    return b->f.n_levels > 1 ? b->f.n_levels : 1;
 }
 
 int
 vv_bricked_count(const vv_bricked *b) {
-    return b->n;
+    return b->f.n;
 }
 
 void
 vv_bricked_info(const vv_bricked *b, int index, vv_brick_info *info) {
-    vvb_brick_boxes(b->header->dims, b->nb, index, info);
-    info->vmin = (float)b->e[index].vmin;
-    info->vmax = (float)b->e[index].vmax;
+    vvb_brick_boxes(b->f.header->dims, b->f.nb, index, info);
+    info->vmin = (float)b->f.e[index].vmin;
+    info->vmax = (float)b->f.e[index].vmax;
 }
 
 void
@@ -119,12 +87,12 @@ vv_bricked_note_skip(vv_bricked *b) {
 
 const vv_volume *
 vv_bricked_header(const vv_bricked *b) {
-    return b->header;
+    return b->f.header;
 }
 
 void
 vv_bricked_grid(const vv_bricked *b, int nb[3]) {
-    memcpy(nb, b->nb, sizeof b->nb);
+    memcpy(nb, b->f.nb, sizeof b->f.nb);
 }
 
 static const vv_volume *
@@ -168,13 +136,14 @@ void
 vv_bricked_stats_get(const vv_bricked *b, vv_bricked_stats *s) {
     vv_cache_lock(b->cache);
     *s = b->st;
+    s->bytes_read = __atomic_load_n(&b->f.bytes_read, __ATOMIC_RELAXED);
     s->evictions = b->cl.evictions;
     s->peak_bytes = b->cl.peak;
     s->held_bytes = b->cl.held;
     vv_cache_unlock(b->cache);
     s->max_loads = 0;
-    for (int i = 0; i < b->n; i++)
-        s->max_loads = b->e[i].loads > s->max_loads ? b->e[i].loads : s->max_loads;
+    for (int i = 0; i < b->f.n; i++)
+        s->max_loads = b->slot[i].loads > s->max_loads ? b->slot[i].loads : s->max_loads;
 }
 
 const char *
@@ -193,43 +162,27 @@ vv_bricked_free(vv_bricked *b) {
         return;
     if (b->cache) {
         vv_cache_lock(b->cache);
-        for (int i = 0; b->e && i < b->n; i++)
-            if (b->e[i].vol) {
-                vv_cache_remove(b->cache, &b->e[i].ce);
-                vv_volume_free(b->e[i].vol);
+        for (int i = 0; b->slot && i < b->f.n; i++)
+            if (b->slot[i].vol) {
+                vv_cache_remove(b->cache, &b->slot[i].ce);
+                vv_volume_free(b->slot[i].vol);
             }
         vv_cache_unlock(b->cache);
         vv_cache_client_remove(&b->cl);
         vv_cache_free(b->cache);
     }
-    free(b->e);
-    for (int l = 1; l < VV_PYRAMID_MAX_LEVELS; l++)
-        free(b->lv[l].c);
-    if (b->fd >= 0)
-        close(b->fd);
-    vv_volume_free(b->header);
+    free(b->slot);
+    vvb_file_close(&b->f);
     free(b->path);
-    free(b->data_path);
     free(b);
 }
 
 /* ---- reading a brick ------------------------------------------------------- */
 
-/* Brick @p index of a .vvb, its stored box of @p want bytes, into @p dst
- * (as stored), counted. */
-static vv_status
-read_vvb_brick(vv_bricked *b, int index, void *dst, uint64_t want, const char *what) {
-    const vvb_brick *e = &b->e[index];
-    const vv_status s = vvb_read_piece(b, e->offset, e->bytes, dst, want, what);
-    if (s == VV_OK)
-        __atomic_fetch_add(&b->st.bytes_read, e->bytes, __ATOMIC_RELAXED);
-    return s;
-}
-
 /* The voxels of box slo..shi into dst (dims the box's). */
 vv_status
 vvb_read_stored(vv_bricked *b, int index, const vv_brick_info *in, void *dst) {
-    const size_t vs = vv_voxel_type_size(b->header->type);
+    const size_t vs = vv_voxel_type_size(b->f.header->type);
     const uint64_t n = vvb_box_voxels(in->slo, in->shi);
     char what[96];
     if (index >= 0)
@@ -239,9 +192,9 @@ vvb_read_stored(vv_bricked *b, int index, const vv_brick_info *in, void *dst) {
                  in->slo[1], in->shi[1], in->slo[2], in->shi[2]);
     vv_status s = VV_OK;
     if (b->vvb) {
-        s = read_vvb_brick(b, index, dst, n * vs, what);
+        s = vvb_read_brick(&b->f, index, dst, n * vs, what);
     } else {
-        const int *d = b->header->dims;
+        const int *d = b->f.header->dims;
         const size_t row = (size_t)(in->shi[0] - in->slo[0] + 1) * vs;
         char *row_dst = dst;
         for (int k = in->slo[2]; k <= in->shi[2] && s == VV_OK; k++)
@@ -250,11 +203,11 @@ vvb_read_stored(vv_bricked *b, int index, const vv_brick_info *in, void *dst) {
                     b->data_off + (((uint64_t)k * (uint64_t)d[1] + (uint64_t)j) * (uint64_t)d[0] +
                                    (uint64_t)in->slo[0]) *
                                       vs;
-                s = vvb_read_at(b, row_dst, row, off, what);
+                s = vvb_read_at(&b->f, row_dst, row, off, what);
                 row_dst += row;
             }
     }
-    if (s == VV_OK && b->swap && vs > 1)
+    if (s == VV_OK && b->f.swap && vs > 1)
         vvb_swap_bytes(dst, (size_t)n, vs);
     return s;
 }
@@ -268,7 +221,7 @@ vvb_is_vvb(const vv_bricked *b) {
 static void
 client_drop(vv_cache_client *cl, vv_cache_entry *ce) {
     (void)cl;
-    vvb_brick *e = (vvb_brick *)((char *)ce - offsetof(vvb_brick, ce));
+    brick_slot *e = (brick_slot *)((char *)ce - offsetof(brick_slot, ce));
     vv_volume_free(e->vol);
     e->vol = NULL;
 }
@@ -284,9 +237,9 @@ client_next_use(vv_cache_client *cl, vv_cache_entry *ce) {
 vv_status
 vv_bricked_load(vv_bricked *b, int index, vv_volume **out) {
     *out = NULL;
-    if (index < 0 || index >= b->n)
+    if (index < 0 || index >= b->f.n)
         return vv_error_set(VV_ERR_INVALID, "bricks: no brick %d", index);
-    vvb_brick *e = &b->e[index];
+    brick_slot *e = &b->slot[index];
     vv_cache_lock(b->cache);
     if (e->vol) {
         vv_cache_touch(b->cache, &e->ce);
@@ -296,15 +249,15 @@ vv_bricked_load(vv_bricked *b, int index, vv_volume **out) {
         return VV_OK;
     }
     vv_brick_info in;
-    vvb_brick_boxes(b->header->dims, b->nb, index, &in);
-    const uint64_t bytes = vvb_box_voxels(in.slo, in.shi) * vv_voxel_type_size(b->header->type);
+    vvb_brick_boxes(b->f.header->dims, b->f.nb, index, &in);
+    const uint64_t bytes = vvb_box_voxels(in.slo, in.shi) * vv_voxel_type_size(b->f.header->type);
     vv_cache_make_room(b->cache, bytes, 0);
     vv_cache_unlock(b->cache);
     int dims[3];
     for (int a = 0; a < 3; a++)
         dims[a] = in.shi[a] - in.slo[a] + 1;
     vv_volume *v = NULL;
-    vv_status s = vv_volume_new(&v, dims, b->header->type);
+    vv_status s = vv_volume_new(&v, dims, b->f.header->type);
     if (s == VV_OK)
         s = vvb_read_stored(b, index, &in, v->data);
     if (s != VV_OK) {
@@ -312,13 +265,9 @@ vv_bricked_load(vv_bricked *b, int index, vv_volume **out) {
         return vv_error_prefix(s, "bricks: %s", vv_path_basename(b->path));
     }
     /* the whole volume's frame and range (a region's voxels, sys/renderer.h) */
-    memcpy(v->spacing, b->header->spacing, sizeof v->spacing);
-    memcpy(v->origin, b->header->origin, sizeof v->origin);
-    memcpy(v->direction, b->header->direction, sizeof v->direction);
-    v->range[0] = b->header->range[0];
-    v->range[1] = b->header->range[1];
-    v->unit = b->header->unit;
-    v->space = b->header->space;
+    vv_volume_take_geometry(v, b->f.header);
+    v->range[0] = b->f.header->range[0];
+    v->range[1] = b->f.header->range[1];
     vv_cache_lock(b->cache);
     if (e->vol) { /* another thread read it meanwhile */
         vv_volume_free(v);
@@ -338,29 +287,14 @@ vv_bricked_load(vv_bricked *b, int index, vv_volume **out) {
 
 /* ---- opening ---------------------------------------------------------------- */
 
-/* The brick grid of @p dims into @p nb and *@p n_out (no entries yet);
- * VV_ERR_LIMIT over 2^26 bricks. */
-vv_status
-vvb_brick_grid(const int dims[3], int nb[3], int *n_out) {
-    for (int a = 0; a < 3; a++) {
-        const int cells = dims[a] > 1 ? dims[a] - 1 : 1;
-        nb[a] = (cells + VV_BRICK_CELLS - 1) / VV_BRICK_CELLS;
-    }
-    const uint64_t n = (uint64_t)nb[0] * (uint64_t)nb[1] * (uint64_t)nb[2];
-    if (n > (uint64_t)1 << 26)
-        return vv_error_set(VV_ERR_LIMIT, "bricks: %llu bricks", (unsigned long long)n);
-    *n_out = (int)n;
-    return VV_OK;
-}
-
 /* vvb_brick_grid, then the bricks' entries. */
 static vv_status
 alloc_bricks(vv_bricked *b) {
-    vv_status s = vvb_brick_grid(b->header->dims, b->nb, &b->n);
+    vv_status s = vvb_brick_grid(b->f.header->dims, b->f.nb, &b->f.n);
     if (s != VV_OK)
         return s;
-    b->e = calloc((size_t)b->n, sizeof *b->e);
-    if (!b->e)
+    b->f.e = calloc((size_t)b->f.n, sizeof *b->f.e);
+    if (!b->f.e)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     return VV_OK;
 }
@@ -371,13 +305,13 @@ static vv_status
 set_budget(vv_bricked *b) {
     const uint64_t limit = vv_cache_limit(b->cache);
     uint64_t biggest = 0;
-    for (int i = 0; i < b->n; i++) {
+    for (int i = 0; i < b->f.n; i++) {
         vv_brick_info in;
-        vvb_brick_boxes(b->header->dims, b->nb, i, &in);
+        vvb_brick_boxes(b->f.header->dims, b->f.nb, i, &in);
         const uint64_t v = vvb_box_voxels(in.slo, in.shi);
         biggest = v > biggest ? v : biggest;
     }
-    const uint64_t vs = vv_voxel_type_size(b->header->type);
+    const uint64_t vs = vv_voxel_type_size(b->f.header->type);
     const uint64_t need = biggest * vs + working_set(b, biggest);
     if (limit < need)
         return vv_error_set(VV_ERR_LIMIT,
@@ -423,8 +357,8 @@ get_row(const vv_volume *v, int j, double *row) {
  * and every brick's min/max over the voxels it reads. */
 static vv_status
 scan_raw(vv_bricked *b) {
-    const int *d = b->header->dims;
-    const vv_voxel_type t = b->header->type;
+    const int *d = b->f.header->dims;
+    const vv_voxel_type t = b->f.header->type;
     const size_t vs = vv_voxel_type_size(t);
     const size_t slice = (size_t)d[0] * (size_t)d[1];
     void *buf = malloc(slice * vs);
@@ -434,9 +368,9 @@ scan_raw(vv_bricked *b) {
         free(row);
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     }
-    for (int i = 0; i < b->n; i++) {
-        b->e[i].vmin = INFINITY;
-        b->e[i].vmax = -INFINITY;
+    for (int i = 0; i < b->f.n; i++) {
+        b->f.e[i].vmin = INFINITY;
+        b->f.e[i].vmax = -INFINITY;
     }
     double lo = INFINITY, hi = -INFINITY;
     vv_status s = VV_OK;
@@ -462,7 +396,7 @@ scan_raw(vv_bricked *b) {
             int n = 0;
             cand[a][2 * x] = cand[a][2 * x + 1] = -1;
             for (int c = x / VV_BRICK_CELLS - 1; c <= x / VV_BRICK_CELLS && n < 2; c++) {
-                if (c < 0 || c >= b->nb[a])
+                if (c < 0 || c >= b->f.nb[a])
                     continue;
                 const int blo = c * VV_BRICK_CELLS, last = d[a] - 1;
                 const int bhi = blo + VV_BRICK_CELLS < last ? blo + VV_BRICK_CELLS : last;
@@ -472,23 +406,23 @@ scan_raw(vv_bricked *b) {
             }
             /* the last brick of an axis may reach the end from further back */
             const int c2 = x / VV_BRICK_CELLS + 1;
-            if (n < 2 && c2 < b->nb[a] && x >= c2 * VV_BRICK_CELLS - 1)
+            if (n < 2 && c2 < b->f.nb[a] && x >= c2 * VV_BRICK_CELLS - 1)
                 cand[a][2 * x + n++] = c2;
         }
     }
-    double *bmn = malloc(sizeof(double) * (size_t)b->nb[0]);
-    double *bmx = malloc(sizeof(double) * (size_t)b->nb[0]);
+    double *bmn = malloc(sizeof(double) * (size_t)b->f.nb[0]);
+    double *bmx = malloc(sizeof(double) * (size_t)b->f.nb[0]);
     if (!bmn || !bmx)
         s = vv_error_set(VV_ERR_NOMEM, "out of memory");
     for (int k = 0; k < d[2] && s == VV_OK; k++) {
-        s = vvb_read_at(b, buf, slice * vs, b->data_off + (uint64_t)k * slice * vs, "scan");
+        s = vvb_read_at(&b->f, buf, slice * vs, b->data_off + (uint64_t)k * slice * vs, "scan");
         if (s != VV_OK)
             break;
-        if (b->swap && vs > 1)
+        if (b->f.swap && vs > 1)
             vvb_swap_bytes(buf, slice, vs);
         for (int j = 0; j < d[1]; j++) {
             get_row(&tmp, j, row);
-            for (int bi = 0; bi < b->nb[0]; bi++) {
+            for (int bi = 0; bi < b->f.nb[0]; bi++) {
                 bmn[bi] = INFINITY;
                 bmx[bi] = -INFINITY;
             }
@@ -504,7 +438,7 @@ scan_raw(vv_bricked *b) {
                     bmx[bi] = x > bmx[bi] ? x : bmx[bi];
                 }
             }
-            for (int bi = 0; bi < b->nb[0]; bi++) {
+            for (int bi = 0; bi < b->f.nb[0]; bi++) {
                 lo = bmn[bi] < lo ? bmn[bi] : lo;
                 hi = bmx[bi] > hi ? bmx[bi] : hi;
                 for (int qk = 0; qk < 2; qk++)
@@ -512,7 +446,7 @@ scan_raw(vv_bricked *b) {
                         const int bk = cand[2][2 * k + qk], bj = cand[1][2 * j + qj];
                         if (bk < 0 || bj < 0)
                             continue;
-                        vvb_brick *e = &b->e[(bk * b->nb[1] + bj) * b->nb[0] + bi];
+                        vvb_brick *e = &b->f.e[(bk * b->f.nb[1] + bj) * b->f.nb[0] + bi];
                         e->vmin = bmn[bi] < e->vmin ? bmn[bi] : e->vmin;
                         e->vmax = bmx[bi] > e->vmax ? bmx[bi] : e->vmax;
                     }
@@ -529,47 +463,35 @@ scan_raw(vv_bricked *b) {
         return s;
     if (!(lo <= hi))
         lo = hi = 0;
-    b->header->range[0] = lo;
-    b->header->range[1] = hi;
-    return VV_OK;
-}
-
-vv_status
-vvb_open_data(vv_bricked *b, const char *path) {
-    b->fd = open(path, O_RDONLY);
-    if (b->fd < 0)
-        return vv_error_set(VV_ERR_IO, "%s: %s", vv_path_basename(path), strerror(errno));
-    struct stat st;
-    if (fstat(b->fd, &st) != 0)
-        return vv_error_set(VV_ERR_IO, "%s: %s", vv_path_basename(path), strerror(errno));
-    b->file_size = (uint64_t)st.st_size;
+    b->f.header->range[0] = lo;
+    b->f.header->range[1] = hi;
     return VV_OK;
 }
 
 static vv_status
 open_raw_layout(vv_bricked *b, int scan) {
-    vv_status s = vvb_open_data(b, b->data_path);
+    vv_status s = vvb_open_data(&b->f, b->f.data_path);
     if (s != VV_OK)
         return s;
-    const uint64_t bytes = (uint64_t)b->header->dims[0] * (uint64_t)b->header->dims[1] *
-                           (uint64_t)b->header->dims[2] * vv_voxel_type_size(b->header->type);
-    if (b->data_off > b->file_size || b->file_size - b->data_off < bytes) {
+    const uint64_t bytes = (uint64_t)b->f.header->dims[0] * (uint64_t)b->f.header->dims[1] *
+                           (uint64_t)b->f.header->dims[2] * vv_voxel_type_size(b->f.header->type);
+    if (b->data_off > b->f.file_size || b->f.file_size - b->data_off < bytes) {
         /* the data file named when it is not the file opened (a detached NRRD) */
-        const char *dn = vv_path_basename(b->data_path);
+        const char *dn = vv_path_basename(b->f.data_path);
         const int other = strcmp(dn, vv_path_basename(b->path)) != 0;
         return vv_error_set(VV_ERR_FORMAT,
                             "%s%s%llu bytes of voxels from offset %llu run past the end of the "
                             "file (%llu bytes)",
                             other ? dn : "", other ? ": " : "", (unsigned long long)bytes,
-                            (unsigned long long)b->data_off, (unsigned long long)b->file_size);
+                            (unsigned long long)b->data_off, (unsigned long long)b->f.file_size);
     }
     if ((s = alloc_bricks(b)) != VV_OK)
         return s;
     if (scan)
         return scan_raw(b);
-    for (int i = 0; i < b->n; i++) {
-        b->e[i].vmin = -INFINITY;
-        b->e[i].vmax = INFINITY;
+    for (int i = 0; i < b->f.n; i++) {
+        b->f.e[i].vmin = -INFINITY;
+        b->f.e[i].vmax = INFINITY;
     }
     return VV_OK;
 }
@@ -582,7 +504,7 @@ bricked_new(vv_bricked **out, const char *path, vv_cache *cache) {
     if (!b)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     b->cache = vv_cache_ref(cache ? cache : vv_cache_process());
-    b->fd = -1;
+    b->f.fd = -1;
     if (!(b->path = strdup(path))) {
         vv_bricked_free(b);
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
@@ -591,9 +513,12 @@ bricked_new(vv_bricked **out, const char *path, vv_cache *cache) {
     return VV_OK;
 }
 
-/* @p b opened (budget set) or freed with the error named after @p path. */
+/* @p b opened (its bricks' slots made, budget set) or freed with the
+ * error named after @p path. */
 static vv_status
 bricked_done(vv_bricked **out, vv_bricked *b, vv_status s, const char *path) {
+    if (s == VV_OK && !(b->slot = calloc((size_t)b->f.n, sizeof *b->slot)))
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
     if (s == VV_OK)
         s = set_budget(b);
     if (s != VV_OK) {
@@ -615,10 +540,10 @@ vv_bricked_open_layout(vv_bricked **out, const char *path, vv_volume *header, ch
         free(data_path);
         return s;
     }
-    b->header = header;
-    b->data_path = data_path;
+    b->f.header = header;
+    b->f.data_path = data_path;
     b->data_off = offset;
-    b->swap = (big_endian ? 1 : 0) == vv_host_is_little_endian();
+    b->f.swap = (big_endian ? 1 : 0) == vv_host_is_little_endian();
     if ((s = vv_volume_check_limits(header->dims, header->type, NULL)) == VV_OK)
         s = open_raw_layout(b, scan);
     return bricked_done(out, b, s, path);
@@ -632,9 +557,8 @@ vvb_open_bricked(vv_bricked **out, const char *path, vv_cache *cache) {
     if (s != VV_OK)
         return s;
     b->vvb = 1;
-    b->swap = !vv_host_is_little_endian();
-    s = (b->data_path = strdup(path)) ? vvb_open_file(b)
-                                      : vv_error_set(VV_ERR_NOMEM, "out of memory");
+    s = (b->f.data_path = strdup(path)) ? vvb_open_file(&b->f)
+                                        : vv_error_set(VV_ERR_NOMEM, "out of memory");
     return bricked_done(out, b, s, path);
 }
 
@@ -684,8 +608,8 @@ vv_bricked_open_header(vv_bricked **out, const char *path, const vv_raw_params *
 
 void
 vv_bricked_set_range(vv_bricked *b, double lo, double hi) {
-    b->header->range[0] = lo;
-    b->header->range[1] = hi;
+    b->f.header->range[0] = lo;
+    b->f.header->range[1] = hi;
 }
 
 vv_status
@@ -696,7 +620,7 @@ vv_bricked_box(void *bricked, const int lo[3], const int hi[3], vv_volume **out)
 vv_status
 vv_bricked_read_box(vv_bricked *b, const int lo[3], const int hi[3], vv_volume **out) {
     *out = NULL;
-    const int *d = b->header->dims;
+    const int *d = b->f.header->dims;
     int dims[3];
     for (int a = 0; a < 3; a++) {
         if (lo[a] < 0 || hi[a] >= d[a] || lo[a] > hi[a])
@@ -705,10 +629,10 @@ vv_bricked_read_box(vv_bricked *b, const int lo[3], const int hi[3], vv_volume *
         dims[a] = hi[a] - lo[a] + 1;
     }
     vv_volume *v = NULL;
-    vv_status s = vv_volume_new(&v, dims, b->header->type);
+    vv_status s = vv_volume_new(&v, dims, b->f.header->type);
     if (s != VV_OK)
         return s;
-    const size_t vs = vv_voxel_type_size(b->header->type);
+    const size_t vs = vv_voxel_type_size(b->f.header->type);
     if (!b->vvb) {
         vv_brick_info in;
         memcpy(in.slo, lo, sizeof in.slo);
@@ -716,9 +640,9 @@ vv_bricked_read_box(vv_bricked *b, const int lo[3], const int hi[3], vv_volume *
         s = vvb_read_stored(b, -1, &in, v->data);
     } else {
         /* every brick overlapping the box, read whole, its overlap copied */
-        for (int i = 0; i < b->n && s == VV_OK; i++) {
+        for (int i = 0; i < b->f.n && s == VV_OK; i++) {
             vv_brick_info in;
-            vvb_brick_boxes(b->header->dims, b->nb, i, &in);
+            vvb_brick_boxes(b->f.header->dims, b->f.nb, i, &in);
             int ol[3], oh[3], ok = 1;
             for (int a = 0; a < 3; a++) {
                 ol[a] = in.slo[a] > lo[a] ? in.slo[a] : lo[a];
@@ -737,8 +661,8 @@ vv_bricked_read_box(vv_bricked *b, const int lo[3], const int hi[3], vv_volume *
             }
             char what[64];
             snprintf(what, sizeof what, "brick %d", i);
-            s = read_vvb_brick(b, i, buf, bbytes, what);
-            if (s == VV_OK && b->swap && vs > 1)
+            s = vvb_read_brick(&b->f, i, buf, bbytes, what);
+            if (s == VV_OK && b->f.swap && vs > 1)
                 vvb_swap_bytes(buf, (size_t)(bbytes / vs), vs);
             const size_t row = (size_t)(oh[0] - ol[0] + 1) * vs;
             for (int k = ol[2]; s == VV_OK && k <= oh[2]; k++)
@@ -759,13 +683,9 @@ vv_bricked_read_box(vv_bricked *b, const int lo[3], const int hi[3], vv_volume *
         vv_volume_free(v);
         return vv_error_prefix(s, "bricks: %s", vv_path_basename(b->path));
     }
-    memcpy(v->spacing, b->header->spacing, sizeof v->spacing);
-    memcpy(v->origin, b->header->origin, sizeof v->origin);
-    memcpy(v->direction, b->header->direction, sizeof v->direction);
-    v->range[0] = b->header->range[0];
-    v->range[1] = b->header->range[1];
-    v->unit = b->header->unit;
-    v->space = b->header->space;
+    vv_volume_take_geometry(v, b->f.header);
+    v->range[0] = b->f.header->range[0];
+    v->range[1] = b->f.header->range[1];
     *out = v;
     return VV_OK;
 }
@@ -775,12 +695,12 @@ vv_bricked_read_box(vv_bricked *b, const int lo[3], const int hi[3], vv_volume *
 vv_status
 vv_bricked_proxy(vv_bricked *b, int max_side, vv_volume **out) {
     *out = NULL;
-    const int *d = b->header->dims;
+    const int *d = b->f.header->dims;
     int f = 1;
     while ((d[0] - 1) / f + 1 > max_side || (d[1] - 1) / f + 1 > max_side ||
            (d[2] - 1) / f + 1 > max_side)
         f++;
-    if (b->vvb && b->zstd && f == 1) {
+    if (b->vvb && b->f.zstd && f == 1) {
         /* small enough whole, and zstd bricks cannot be read voxel by
          * voxel: the whole volume by bricks */
         const int lo[3] = {0, 0, 0}, hi[3] = {d[0] - 1, d[1] - 1, d[2] - 1};
@@ -790,40 +710,41 @@ vv_bricked_proxy(vv_bricked *b, int max_side, vv_volume **out) {
         return s;
     }
     /* coarse levels hold every 4th voxel from each brick's corner */
-    if (b->vvb && b->has_coarse && f > 1)
+    if (b->vvb && b->f.has_coarse && f > 1)
         f = (f + VVB_COARSE - 1) / VVB_COARSE * VVB_COARSE;
     int pd[3];
     for (int a = 0; a < 3; a++)
         pd[a] = (d[a] - 1) / f + 1;
     vv_volume *p = NULL;
-    vv_status s = vv_volume_new(&p, pd, b->header->type);
+    vv_status s = vv_volume_new(&p, pd, b->f.header->type);
     if (s != VV_OK)
         return s;
-    const size_t vs = vv_voxel_type_size(b->header->type);
+    const size_t vs = vv_voxel_type_size(b->f.header->type);
     for (int a = 0; a < 3; a++) {
-        p->spacing[a] = pd[a] > 1 ? b->header->spacing[a] * (double)(d[a] - 1) / (pd[a] - 1)
-                                  : b->header->spacing[a];
-        p->origin[a] = b->header->origin[a];
+        p->spacing[a] = pd[a] > 1 ? b->f.header->spacing[a] * (double)(d[a] - 1) / (pd[a] - 1)
+                                  : b->f.header->spacing[a];
+        p->origin[a] = b->f.header->origin[a];
     }
-    memcpy(p->direction, b->header->direction, sizeof p->direction);
-    p->unit = b->header->unit;
-    p->space = b->header->space;
+    memcpy(p->direction, b->f.header->direction, sizeof p->direction);
+    p->unit = b->f.header->unit;
+    p->space = b->f.header->space;
     char *dst = p->data;
-    if (b->vvb && b->has_coarse && f > 1) {
+    if (b->vvb && b->f.has_coarse && f > 1) {
         const int m = f / VVB_COARSE;
-        for (int i = 0; i < b->n && s == VV_OK; i++) {
+        for (int i = 0; i < b->f.n && s == VV_OK; i++) {
             vv_brick_info in;
-            vvb_brick_boxes(b->header->dims, b->nb, i, &in);
+            vvb_brick_boxes(b->f.header->dims, b->f.nb, i, &in);
             int cd[3];
             vvb_coarse_dims(&in, cd);
-            char *cbuf = malloc((size_t)b->e[i].coarse_bytes);
+            char *cbuf = malloc((size_t)b->f.e[i].coarse_bytes);
             if (!cbuf) {
                 s = vv_error_set(VV_ERR_NOMEM, "out of memory");
                 break;
             }
-            s = vvb_read_at(b, cbuf, (size_t)b->e[i].coarse_bytes, b->e[i].coarse_offset, "coarse");
-            if (s == VV_OK && b->swap && vs > 1)
-                vvb_swap_bytes(cbuf, (size_t)(b->e[i].coarse_bytes / vs), vs);
+            s = vvb_read_at(&b->f, cbuf, (size_t)b->f.e[i].coarse_bytes, b->f.e[i].coarse_offset,
+                            "coarse");
+            if (s == VV_OK && b->f.swap && vs > 1)
+                vvb_swap_bytes(cbuf, (size_t)(b->f.e[i].coarse_bytes / vs), vs);
             for (int k = 0; s == VV_OK && k < cd[2]; k += m)
                 for (int j = 0; j < cd[1]; j += m)
                     for (int ii = 0; ii < cd[0]; ii += m) {
@@ -851,19 +772,19 @@ vv_bricked_proxy(vv_bricked *b, int max_side, vv_volume **out) {
                         int c[3];
                         for (int a = 0; a < 3; a++) {
                             c[a] = g[a] / VV_BRICK_CELLS;
-                            c[a] = c[a] < b->nb[a] ? c[a] : b->nb[a] - 1;
+                            c[a] = c[a] < b->f.nb[a] ? c[a] : b->f.nb[a] - 1;
                         }
-                        const int idx = (c[2] * b->nb[1] + c[1]) * b->nb[0] + c[0];
+                        const int idx = (c[2] * b->f.nb[1] + c[1]) * b->f.nb[0] + c[0];
                         vv_brick_info in;
-                        vvb_brick_boxes(b->header->dims, b->nb, idx, &in);
+                        vvb_brick_boxes(b->f.header->dims, b->f.nb, idx, &in);
                         const uint64_t off =
-                            b->e[idx].offset +
+                            b->f.e[idx].offset +
                             ((((uint64_t)(g[2] - in.slo[2]) * (in.shi[1] - in.slo[1] + 1)) +
                               (uint64_t)(g[1] - in.slo[1])) *
                                  (in.shi[0] - in.slo[0] + 1) +
                              (uint64_t)(g[0] - in.slo[0])) *
                                 vs;
-                        s = vvb_read_at(b, dst + (((size_t)k * pd[1] + j) * pd[0] + i) * vs, vs,
+                        s = vvb_read_at(&b->f, dst + (((size_t)k * pd[1] + j) * pd[0] + i) * vs, vs,
                                         off, "proxy");
                     }
                     continue;
@@ -871,13 +792,13 @@ vv_bricked_proxy(vv_bricked *b, int max_side, vv_volume **out) {
                 const uint64_t off =
                     b->data_off +
                     ((uint64_t)k * f * (uint64_t)d[1] + (uint64_t)j * f) * (uint64_t)d[0] * vs;
-                s = vvb_read_at(b, row, (size_t)d[0] * vs, off, "proxy");
+                s = vvb_read_at(&b->f, row, (size_t)d[0] * vs, off, "proxy");
                 for (int i = 0; i < pd[0] && s == VV_OK; i++)
                     memcpy(dst + (((size_t)k * pd[1] + j) * pd[0] + i) * vs,
                            row + (size_t)i * f * vs, vs);
             }
         free(row);
-        if (s == VV_OK && b->swap && vs > 1)
+        if (s == VV_OK && b->f.swap && vs > 1)
             vvb_swap_bytes(p->data, (size_t)pd[0] * pd[1] * pd[2], vs);
     }
     if (s != VV_OK) {

@@ -157,6 +157,17 @@ void vv_bricked_note_skip(vv_bricked *b);
  */
 void vv_bricked_source(vv_bricked *b, vv_brick_source *out);
 
+/* ---- for the .vvb's writer and row (vvb_write.c, vvb.c) ---------------------------- */
+
+/* The voxels of box in->slo .. in->shi into @p dst (host byte order,
+ * counted): brick @p index's stored box of a .vvb, or of a raw layout the
+ * box (index -1: any box) a pread a row. */
+vv_status vvb_read_stored(vv_bricked *b, int index, const vv_brick_info *in, void *dst);
+/* 1 when @p b was opened from a .vvb (its bricks stored whole), 0 for a raw layout. */
+int vvb_is_vvb(const vv_bricked *b);
+/* A .vvb file by its bricks, in @p cache (the .vvb row's open_bricks). */
+vv_status vvb_open_bricked(vv_bricked **out, const char *path, vv_cache *cache);
+
 /**
  * Writes @p src (a bricked volume opened from any source) as a .vvb file at
  * @p path (src/io/vvb_write.c), written to a temporary file beside it and

@@ -6,19 +6,21 @@
  * read by boxes of voxels through the process's one cache of decoded
  * pieces (src/core/cache.h), within its budget.
  *
- * Opening reads the metadata only (the store's) and the coarsest level,
- * whose voxels give the proxy and, without a window in the metadata, the
- * value range. A box of a level is assembled from the chunks it overlaps:
- * those in the cache are used as they are, the others are fetched from the
- * store (decoded on every core when the store allows, one scratch buffer a
- * thread) and kept, least recently used first out. The min and max of every chunk decoded are
- * remembered (a few bytes a chunk), so a later frame skips transparent boxes unread. Each chunk's
- * reads within one frame are counted (frames are marked by the renderer through the source's frame
- * method).
+ * Here, its chunks and boxes: a box of a level is assembled from the
+ * chunks it overlaps: those in the cache are used as they are, the others
+ * are fetched from the store (decoded on every core when the store allows,
+ * one scratch buffer a thread) and kept, least recently used first out.
+ * The min and max of every chunk decoded are remembered (a few bytes a
+ * chunk), so a later frame skips transparent boxes unread. Each chunk's
+ * reads within one frame are counted (frames are marked by the renderer
+ * through the source's frame method). Also the levels' geometry, the
+ * statistics, and a store's level read whole (vv_store_read_level).
  *
- * The frame's plan, which chooses the chunk evicted and fetches chunks
- * ahead, the loader (vv_pyramid_request) and the multiresolution source
- * interface are in pyramid_load.c; the state both files share, in
+ * Above it, calling down: the frame's plan, which chooses the chunk
+ * evicted and fetches chunks ahead, the loader (vv_pyramid_request) and
+ * the multiresolution source interface (pyramid_load.c); opening, which
+ * reads the metadata only (the store's) and the coarsest level, and
+ * freeing (pyramid_open.c). The state the three files share is in
  * pyramid_internal.h. One mutex, the cache's, guards the chunks, the plan,
  * the queue and the statistics; reading and decoding run outside it.
  */
@@ -40,8 +42,6 @@
 #include "io/pyramid_internal.h"
 #include "volvis/bricks.h"
 
-#define PY_MAX_LEVEL_CHUNKS ((uint64_t)1 << 26)
-
 /* Chunk @p c out of the pyramid's index and freed (out of the cache
  * already). */
 static void
@@ -56,16 +56,16 @@ free_chunk(vv_pyramid *p, py_chunk *c) {
 }
 
 /* Chunk @p c out of the cache and the index (lock held). */
-static void
-drop_chunk(vv_pyramid *p, py_chunk *c) {
+void
+py_drop_chunk(vv_pyramid *p, py_chunk *c) {
     vv_cache_remove(p->cache, &c->ce);
     free_chunk(p, c);
 }
 
 /* The cache evicts chunk @p e to make room (for this pyramid or another
  * source): out of the index (lock held). */
-static void
-client_drop(vv_cache_client *cl, vv_cache_entry *e) {
+void
+py_client_drop(vv_cache_client *cl, vv_cache_entry *e) {
     vv_pyramid *p = (vv_pyramid *)((char *)cl - offsetof(vv_pyramid, cl));
     free_chunk(p, (py_chunk *)e);
     p->st.evictions++;
@@ -239,7 +239,7 @@ py_entry_ready(vv_pyramid *p, py_chunk *e, uint64_t file_bytes, int missing) {
 void
 py_unpin(vv_pyramid *p, py_chunk *e) {
     if (--e->ce.pins == 0 && e->state == PY_FAILED)
-        drop_chunk(p, e);
+        py_drop_chunk(p, e);
 }
 
 /* Box lo .. hi of @p level into @p out from the cache (lock held; it is
@@ -355,14 +355,15 @@ set_geometry(vv_volume *v, const vv_pyramid *p, const py_level *l) {
     v->range[1] = p->range[1];
 }
 
-/* Box lo .. hi of @p level into a new volume; @p planned: a read of the
- * frame's plan (the renderer's, through the multiresolution view), which
- * moves the plan on and asks the store for the next boxes' chunks ahead;
- * any other read (a slice, a measurement, another thread) leaves the plan
- * as it is. */
+/* Box lo .. hi of @p level into a new volume; @p planned (not NULL): a
+ * read of the frame's plan (the renderer's, through the multiresolution
+ * view), called with the lock held once the box is assembled, which moves
+ * the plan on and asks the store for the next boxes' chunks ahead
+ * (pyramid_load.c); any other read (a slice, a measurement, another
+ * thread) leaves the plan as it is. */
 vv_status
 py_box_read(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume **out,
-            int planned) {
+            void (*planned)(vv_pyramid *p, vv_status s)) {
     if (!p || !out || level < 0 || level >= p->n_levels)
         return vv_error_set(VV_ERR_INVALID, "pyramid: bad arguments");
     *out = NULL;
@@ -379,10 +380,8 @@ py_box_read(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volum
     pthread_mutex_lock(p->lock);
     if (s == VV_OK)
         s = assemble(p, level, lo, hi, v);
-    if (s == VV_OK && planned)
-        py_prefetch_ahead(p);
-    if (planned && p->cl.planned)
-        p->cursor++;
+    if (planned)
+        planned(p, s);
     pthread_mutex_unlock(p->lock);
     if (s != VV_OK) {
         vv_volume_free(v);
@@ -395,7 +394,7 @@ py_box_read(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volum
 
 vv_status
 vv_pyramid_read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume **out) {
-    return py_box_read(p, level, lo, hi, out, 0);
+    return py_box_read(p, level, lo, hi, out, NULL);
 }
 
 vv_status
@@ -456,223 +455,6 @@ vv_pyramid_stats_get(const vv_pyramid *p, vv_pyramid_stats *st) {
     st->resident = p->n_ready;
     st->limit_bytes = vv_cache_capacity(p->cache) + p->cl.reserve;
     pthread_mutex_unlock(q->lock);
-}
-
-/* ---- opening ------------------------------------------------------------------ */
-
-void
-vv_pyramid_free(vv_pyramid *p) {
-    if (!p)
-        return;
-    py_stop_loaders(p);
-    free(p->queue);
-    pthread_mutex_lock(p->lock);
-    py_clear_plan(p);
-    py_each_chunk(p, drop_chunk);
-    pthread_mutex_unlock(p->lock);
-    vv_cache_client_remove(&p->cl);
-    vv_cache_free(p->cache);
-    for (int i = 0; i < p->n_levels; i++) {
-        py_level *l = &p->lv[i];
-        vv_volume_free(l->hdr);
-        free(l->cmin);
-        free(l->cmax);
-        free(l->known);
-        free(l->read_frame);
-        free(l->frame_reads);
-    }
-    vv_store_close(&p->store);
-    pthread_mutex_destroy(&p->store_lock);
-    pthread_cond_destroy(&p->work);
-    pthread_cond_destroy(&p->arrived);
-    free(p);
-}
-
-/* Level @p i's layout, header and chunk tables from the store's level;
- * each level must have level 0's type and no more voxels. */
-static vv_status
-open_level(vv_pyramid *p, int i) {
-    py_level *l = &p->lv[i];
-    vv_store_level *sl = &p->store.lv[i];
-    if (!sl->hdr)
-        return vv_error_set(VV_ERR_FORMAT, "level %d: no geometry", i);
-    l->type = sl->hdr->type;
-    l->esize = vv_voxel_type_size(l->type);
-    for (int k = 0; k < 3; k++) {
-        l->dims[k] = sl->hdr->dims[k];
-        l->cdims[k] = sl->cdims[k];
-        if (l->dims[k] < 1 || l->cdims[k] < 1)
-            return vv_error_set(VV_ERR_FORMAT, "level %d: %d voxels in chunks of %d along axis %d",
-                                i, l->dims[k], l->cdims[k], k);
-        l->nchunks[k] = (l->dims[k] + l->cdims[k] - 1) / l->cdims[k];
-    }
-    if (i > 0) {
-        const py_level *l0 = &p->lv[0];
-        if (l->type != l0->type)
-            return vv_error_set(VV_ERR_FORMAT,
-                                "level %d: its type differs from level 0's (inconsistent "
-                                "multiscales)",
-                                i);
-        for (int k = 0; k < 3; k++)
-            if (l->dims[k] > l0->dims[k])
-                return vv_error_set(VV_ERR_FORMAT,
-                                    "level %d: %d voxels along axis %d, more than level 0's %d "
-                                    "(inconsistent multiscales)",
-                                    i, l->dims[k], k, l0->dims[k]);
-    }
-    uint64_t n = 1;
-    for (int k = 0; k < 3; k++)
-        n *= (uint64_t)l->nchunks[k];
-    l->n_chunks = n;
-    if (n <= PY_MAX_LEVEL_CHUNKS) {
-        l->cmin = malloc(sizeof(float) * n);
-        l->cmax = malloc(sizeof(float) * n);
-        l->known = calloc(n, 1);
-        l->read_frame = calloc(n, sizeof(uint32_t));
-        l->frame_reads = calloc(n, sizeof(uint16_t));
-        if (!l->cmin || !l->cmax || !l->known || !l->read_frame || !l->frame_reads)
-            return vv_error_set(VV_ERR_NOMEM, "out of memory");
-        /* ranges the store's index gives before any chunk is read */
-        for (uint64_t L = 0; p->store.chunk_range && L < n; L++) {
-            const int c[3] = {(int)(L % (uint64_t)l->nchunks[0]),
-                              (int)(L / (uint64_t)l->nchunks[0] % (uint64_t)l->nchunks[1]),
-                              (int)(L / ((uint64_t)l->nchunks[0] * (uint64_t)l->nchunks[1]))};
-            double lo, hi;
-            if (p->store.chunk_range(p->store.ctx, i, c, &lo, &hi) && lo <= hi) {
-                l->cmin[L] = (float)lo;
-                l->cmax[L] = (float)hi;
-                l->known[L] = 1;
-            }
-        }
-    }
-    l->hdr = sl->hdr; /* taken */
-    sl->hdr = NULL;
-    return VV_OK;
-}
-
-/* The bytes a node of @p cells cells a side holds while rendered (its box:
- * the cells, a ghost voxel beyond each face and the half-voxel shifts of
- * coarser levels): the box, the ray caster's 16-bit or float copy and
- * cached gradients (src/render/sample.h); and in *chunks the bytes of
- * the decoded chunks such a box overlaps at most (any level). */
-static uint64_t
-working_set(const vv_pyramid *p, int cells, uint64_t *chunks) {
-    uint64_t v = 1, worst = 0;
-    for (int k = 0; k < 3; k++) {
-        const int d = p->lv[0].dims[k], box = cells + 5;
-        v *= (uint64_t)(d < box ? d : box);
-    }
-    for (int i = 0; i < p->n_levels; i++) {
-        const py_level *l = &p->lv[i];
-        uint64_t c = l->esize;
-        for (int k = 0; k < 3; k++) {
-            const int box = cells + 5, cd = l->cdims[k];
-            int n = (box + cd - 1) / cd + 1;
-            n = n < l->nchunks[k] ? n : l->nchunks[k];
-            c *= (uint64_t)n * (uint64_t)(cd < l->dims[k] ? cd : l->dims[k]);
-        }
-        worst = c > worst ? c : worst;
-    }
-    *chunks = worst;
-    return v * (p->lv[0].esize + 4 + 4 + p->lv[0].esize);
-}
-
-static vv_status
-pyramid_open(vv_pyramid *p, vv_load_info *info) {
-    vv_status s = VV_OK;
-    if (p->store.n_levels < 1 || p->store.n_levels > VV_PYRAMID_MAX_LEVELS)
-        return vv_error_set(VV_ERR_LIMIT, "%d levels (1 .. %d are read)", p->store.n_levels,
-                            VV_PYRAMID_MAX_LEVELS);
-    for (int i = 0; i < p->store.n_levels; i++) {
-        s = open_level(p, i);
-        p->n_levels = i + 1;
-        if (s != VV_OK)
-            return s;
-    }
-    p->limit = vv_cache_limit(p->cache);
-    /* the largest node (64, 32, 16 or 8 cells) whose box, working set and
-     * chunks fit the limit */
-    uint64_t ws = 0, chunks = 0;
-    int cells = VV_BRICK_CELLS;
-    for (; cells >= 8; cells /= 2) {
-        ws = working_set(p, cells, &chunks);
-        if (ws + chunks <= p->limit)
-            break;
-    }
-    if (cells < 8)
-        return vv_error_set(VV_ERR_LIMIT,
-                            "memory limit of %llu bytes is smaller than a box of 8 cells, its "
-                            "working set and its chunks (%llu bytes)",
-                            (unsigned long long)p->limit, (unsigned long long)(ws + chunks));
-    p->node_cells = cells;
-    /* boxes held at once (the driver renders that many nodes at a time, one
-     * a thread): as many working sets as an eighth of the limit holds, at
-     * most 8; the cache gets the rest */
-    uint64_t boxes = ws > 0 ? p->limit / 8 / ws : 1;
-    boxes = boxes < 1 ? 1 : boxes > 8 ? 8 : boxes;
-    if (ws * boxes + chunks > p->limit)
-        boxes = 1;
-    p->boxes = (int)boxes;
-    /* the cache holds the rest, with every other source's pieces */
-    p->cl.reserve = ws * boxes;
-    p->cl.next_use = py_client_next_use;
-    p->cl.drop = client_drop;
-    vv_cache_client_add(p->cache, &p->cl);
-    /* the range: the store's (an omero window), else the coarsest level's */
-    p->range[0] = 0;
-    p->range[1] = 1;
-    if (p->store.has_range) {
-        p->range[0] = p->store.range[0];
-        p->range[1] = p->store.range[1];
-    } else {
-        const py_level *c = &p->lv[p->n_levels - 1];
-        const int lo[3] = {0, 0, 0}, hi[3] = {c->dims[0] - 1, c->dims[1] - 1, c->dims[2] - 1};
-        vv_volume *v = NULL;
-        if ((s = vv_pyramid_read_box(p, p->n_levels - 1, lo, hi, &v)) != VV_OK)
-            return s;
-        vv_volume_update_range(v);
-        p->range[0] = v->range[0];
-        p->range[1] = v->range[1];
-        vv_volume_free(v);
-    }
-    for (int i = 0; i < p->n_levels; i++) {
-        p->lv[i].hdr->range[0] = p->range[0];
-        p->lv[i].hdr->range[1] = p->range[1];
-    }
-    if (info) {
-        info->n_channels = p->store.n_channels;
-        info->n_times = p->store.n_times;
-        info->n_levels = p->n_levels;
-    }
-    return VV_OK;
-}
-
-vv_status
-vv_pyramid_open_store(vv_pyramid **out, vv_store *st, const char *path, vv_cache *cache,
-                      vv_load_info *info) {
-    *out = NULL;
-    char name[64]; /* st->name is the store's, closed on failure */
-    snprintf(name, sizeof name, "%s", st->name ? st->name : "pyramid");
-    vv_pyramid *p = strlen(path) < sizeof(((vv_pyramid *)0)->path) ? calloc(1, sizeof *p) : NULL;
-    if (!p) {
-        vv_store_close(st);
-        return vv_error_set(VV_ERR_NOMEM, "%s: %s: out of memory", name, vv_path_basename(path));
-    }
-    snprintf(p->path, sizeof p->path, "%s", path);
-    p->cache = vv_cache_ref(cache ? cache : vv_cache_process());
-    p->lock = vv_cache_mutex(p->cache);
-    pthread_mutex_init(&p->store_lock, NULL);
-    pthread_cond_init(&p->work, NULL);
-    pthread_cond_init(&p->arrived, NULL);
-    p->store = *st; /* taken */
-    memset(st, 0, sizeof *st);
-    vv_status s = pyramid_open(p, info);
-    if (s != VV_OK) {
-        vv_pyramid_free(p);
-        return vv_pyramid_prefix(s, name, path);
-    }
-    *out = p;
-    return VV_OK;
 }
 
 vv_status

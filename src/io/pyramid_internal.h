@@ -1,8 +1,9 @@
 /*
  * A pyramid's state (struct vv_pyramid, src/io/pyramid.h), internal to the
- * two files of the pyramid: pyramid.c (opening, levels, chunks in the
- * cache, boxes assembled from them, statistics) and pyramid_load.c (the
- * frame's plan, the loader threads and the multiresolution source). Its
+ * three files of the pyramid, each calling only the ones before it:
+ * pyramid.c (levels, chunks in the cache, boxes assembled from them,
+ * statistics), pyramid_load.c (the frame's plan, the loader threads and
+ * the multiresolution source) and pyramid_open.c (opening, freeing). Its
  * chunks live in the process's cache (src/core/cache.h) as entries of its
  * client there; the cache's lock (p->lock) guards its index of them, the
  * plan, the queue and the statistics, so that another source evicting one
@@ -124,6 +125,15 @@ py_find_chunk(const vv_pyramid *p, int level, uint64_t L) {
     return NULL;
 }
 
+/* Chunk (level, L)'s uses in the frame's plan, or NULL. */
+static inline py_use *
+py_find_use(const vv_pyramid *p, int level, uint64_t L) {
+    for (py_use *u = p->ubucket[py_bucket_of(level, L)]; u; u = u->hnext)
+        if (u->level == level && u->L == L)
+            return u;
+    return NULL;
+}
+
 /* Calls @p fn with each chunk of the pyramid's index (lock held; @p fn may
  * drop the chunk it is given). */
 static inline void
@@ -159,21 +169,22 @@ void py_insert_entry(vv_pyramid *p, py_chunk *e);
 void py_entry_ready(vv_pyramid *p, py_chunk *e, uint64_t file_bytes, int missing);
 /* Unpins entry @p e; a failed one nobody holds leaves the cache. */
 void py_unpin(vv_pyramid *p, py_chunk *e);
-/* Box lo .. hi of @p level into a new volume; @p planned: a read of the
- * frame's plan. Takes the lock itself. */
+/* Chunk @p c out of the cache and the index. */
+void py_drop_chunk(vv_pyramid *p, py_chunk *c);
+/* The pyramid's cache client's drop: the cache evicts chunk @p e. */
+void py_client_drop(vv_cache_client *cl, vv_cache_entry *e);
+/* Box lo .. hi of @p level into a new volume. Takes the lock itself;
+ * @p planned (NULL: a read outside the frame's plan) is called with it
+ * held once the box is assembled, @p s saying how that went. */
 vv_status py_box_read(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume **out,
-                      int planned);
+                      void (*planned)(vv_pyramid *p, vv_status s));
 
 /* ---- pyramid_load.c ------------------------------------------------------------- */
 
-/* Chunk (level, L)'s uses in the frame's plan, or NULL. */
-py_use *py_find_use(const vv_pyramid *p, int level, uint64_t L);
 /* Drops the frame's plan. */
 void py_clear_plan(vv_pyramid *p);
 /* The pyramid's cache client's next_use: when the plan needs chunk @p e next. */
 int py_client_next_use(vv_cache_client *cl, vv_cache_entry *e);
-/* Asks the store for the chunks of the plan's next boxes ahead. */
-void py_prefetch_ahead(vv_pyramid *p);
 /* Stops the loader threads (the lock not held). */
 void py_stop_loaders(vv_pyramid *p);
 

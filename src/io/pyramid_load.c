@@ -1,7 +1,7 @@
 /*
  * The loader, the frame's plan and the multiresolution source of a
- * pyramid (src/io/pyramid.h; its state in pyramid_internal.h, its chunks
- * and boxes in pyramid.c).
+ * pyramid (src/io/pyramid.h; its state in pyramid_internal.h), on its
+ * chunks and boxes (pyramid.c); opened and freed by pyramid_open.c.
  *
  * When the renderer plans its frame (the boxes it will read, in order),
  * each chunk's uses in the plan are known, and the chunk evicted is the
@@ -35,14 +35,6 @@
 #include "volvis/bricks.h"
 
 /* ---- the frame's plan -------------------------------------------------------------- */
-
-py_use *
-py_find_use(const vv_pyramid *p, int level, uint64_t L) {
-    for (py_use *u = p->ubucket[py_bucket_of(level, L)]; u; u = u->hnext)
-        if (u->level == level && u->L == L)
-            return u;
-    return NULL;
-}
 
 static void
 forget_use(vv_pyramid *p, py_chunk *c) {
@@ -91,8 +83,8 @@ py_client_next_use(vv_cache_client *cl, vv_cache_entry *e) {
  * nearest in the plan first, until it has no reader free. The store
  * decodes them while the renderer draws this box. */
 #define PY_LOOKAHEAD 4
-void
-py_prefetch_ahead(vv_pyramid *p) {
+static void
+prefetch_ahead(vv_pyramid *p) {
     if (!p->cl.planned || !p->store.prefetch || !p->plan_box)
         return;
     for (int b = p->cursor + 1; b < p->plan_n && b <= p->cursor + PY_LOOKAHEAD; b++) {
@@ -109,6 +101,16 @@ py_prefetch_ahead(vv_pyramid *p) {
                         return;
                 }
     }
+}
+
+/* py_box_read's @p planned: a box of the plan read (lock held), the next
+ * boxes' chunks asked ahead, the plan moved on to the next box. */
+static void
+plan_box_read(vv_pyramid *p, vv_status s) {
+    if (s == VV_OK)
+        prefetch_ahead(p);
+    if (p->cl.planned)
+        p->cursor++;
 }
 
 /* ---- the loader ------------------------------------------------------------------ */
@@ -373,7 +375,7 @@ src_level(void *user, int level) {
 
 static vv_status
 src_read_box(void *user, int level, const int lo[3], const int hi[3], vv_volume **out) {
-    return py_box_read(user, level, lo, hi, out, 1);
+    return py_box_read(user, level, lo, hi, out, plan_box_read);
 }
 
 static int

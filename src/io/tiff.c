@@ -25,14 +25,13 @@
  * both.
  *
  * libtiff reports errors through handlers; the per-file handlers of
- * TIFFOpenExt (libtiff >= 4.5; tiff.h) keep its first message for our
+ * TIFFOpenExt (libtiff >= 4.5; tiff_msg.c) keep its first message for our
  * trace, so nothing is printed and nothing global is touched.
  */
 #include <ctype.h>
 #include <dirent.h>
 #include <errno.h>
 #include <math.h>
-#include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -45,29 +44,9 @@
 
 #include "core/internal.h"
 #include "io/prescan.h"
-#include "io/tiff.h"
+#include "io/tiff_msg.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
-
-int
-tiff_on_error(TIFF *tif, void *user, const char *module, const char *fmt, va_list ap) {
-    (void)tif;
-    (void)module;
-    tiff_msg *m = user;
-    if (m && !m->text[0])
-        vsnprintf(m->text, sizeof m->text, fmt, ap);
-    return 1; /* handled: libtiff prints nothing */
-}
-
-int
-tiff_on_warning(TIFF *tif, void *user, const char *module, const char *fmt, va_list ap) {
-    (void)tif;
-    (void)user;
-    (void)module;
-    (void)fmt;
-    (void)ap;
-    return 1; /* unknown tags and the like: not our business */
-}
 
 static TIFF *
 tiff_open(const char *path, tiff_msg *msg) {
@@ -82,11 +61,6 @@ tiff_open(const char *path, tiff_msg *msg) {
     TIFF *t = TIFFOpenExt(path, "r", o);
     TIFFOpenOptionsFree(o);
     return t;
-}
-
-const char *
-tiff_msg_or(const tiff_msg *m, const char *fallback) {
-    return m->text[0] ? m->text : fallback;
 }
 
 /* ---- natural order of file names ---------------------------------------- */

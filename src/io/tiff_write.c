@@ -5,7 +5,7 @@
  * deflate/LZW/zstd with a predictor, BigTIFF on request or near 4 GiB.
  * libtiff writes through our own I/O procedures on the atomic file's
  * descriptor, so a failed write leaves the old file as it was; its
- * messages go to the file's own handlers (tiff.h), nothing is printed.
+ * messages go to the file's own handlers (tiff_msg.c), nothing is printed.
  *
  * Thread-safety: reentrant (one libtiff handle and message a call).
  */
@@ -23,7 +23,7 @@
 #include <tiffio.h>
 
 #include "core/internal.h"
-#include "io/tiff.h"
+#include "io/tiff_msg.h"
 #include "volvis/io.h"
 
 /* libtiff's I/O on the atomic file's descriptor: positioned reads and writes

@@ -1,9 +1,11 @@
 /*
- * The .vvb file (docs/file-formats.md) and the bricked reader's state,
- * internal to src/io: what the bricked reader (bricked.c), the .vvb's own
- * reading, pyramid store and format row (vvb.c) and the .vvb writer
- * (vvb_write.c) share. The writer reads a bricked volume through
- * src/io/bricked.h and the functions below only, never the struct's fields.
+ * The .vvb file (docs/file-formats.md) and its reading (vvb_read.c),
+ * internal to src/io: the layout, the geometry of bricks, levels and
+ * chunks, and a file read by bricks with pread (vvb_file): a .vvb's
+ * header, index and levels, or a raw layout's data file. What the bricked
+ * reader (bricked.c), the .vvb writer (vvb_write.c) and the .vvb's pyramid
+ * store and format row (vvb.c) stand on; it knows no bricked volume
+ * (src/io/bricked.h), which holds a vvb_file and its bricks in the cache.
  *
  * Layout, little-endian: a 256-byte header ("VOLVISB1", header size, brick
  * side in cells, dims, voxel type, coarse flag, unit, space, spacing,
@@ -24,7 +26,7 @@
  *
  * Thread-safety: the geometry functions are pure; vvb_pread,
  * vvb_read_piece and vvb_read_level_box only pread (any thread, uncounted);
- * vvb_read_at and vvb_read_stored count in the statistics atomically.
+ * vvb_read_at and vvb_read_brick count the bytes read atomically.
  */
 #ifndef VV_IO_VVB_LAYOUT_H
 #define VV_IO_VVB_LAYOUT_H
@@ -33,8 +35,6 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "core/cache.h"
-#include "io/bricked.h"
 #include "io/pyramid.h"
 
 #define VVB_MAGIC "VOLVISB1"
@@ -58,39 +58,31 @@ typedef struct vvb_level {
     vvb_chunk *c;       /* i fastest */
 } vvb_level;
 
+/* A brick's record in the index (a raw layout: its min/max only). */
 typedef struct vvb_brick {
     uint64_t offset, bytes;               /* .vvb: the brick's voxels in the file */
     uint64_t coarse_offset, coarse_bytes; /* .vvb: its coarse level (0 bytes: none) */
     double vmin, vmax;
-    vv_volume *vol;    /* cached, or NULL */
-    vv_cache_entry ce; /* its place in the process's cache while vol is held */
-    int loads;
 } vvb_brick;
 
-/* A bricked volume (bricked.c; a .vvb's header, index and levels are read
- * by vvb.c). */
-struct vv_bricked {
-    char *path;      /* as opened */
+/* A volume's file read by bricks with pread: a .vvb (vvb_open_file: its
+ * header, index and levels), or the data file of a raw layout (the bricked
+ * reader sets its header, grid and the bricks' min/max; no offsets). */
+typedef struct vvb_file {
     char *data_path; /* the file holding the voxels */
     int fd;
-    int vvb;            /* 1: .vvb, else raw layout (raw or NRRD) */
-    uint64_t data_off;  /* raw layout: offset of voxel (0, 0, 0) */
-    int swap;           /* voxels need byte swapping */
-    uint64_t file_size; /* of data_path */
-    vv_volume *header;  /* one voxel, the geometry and range; dims the volume's */
-    int nb[3];
-    int n;
-    vvb_brick *e;
-    int has_coarse;
-    int zstd;                            /* .vvb: bricks are zstd frames */
+    uint64_t file_size;                  /* of data_path */
+    int swap;                            /* voxels need byte swapping */
+    vv_volume *header;                   /* one voxel, the geometry and range; dims the volume's */
+    int nb[3];                           /* bricks along each axis */
+    int n;                               /* bricks */
+    vvb_brick *e;                        /* the index, i fastest */
+    int has_coarse;                      /* .vvb: every brick has its coarse level */
+    int zstd;                            /* .vvb: bricks and chunks are zstd frames */
     int n_levels;                        /* .vvb: pyramid levels, level 0 (the bricks) included */
     vvb_level lv[VV_PYRAMID_MAX_LEVELS]; /* lv[1 .. n_levels - 1] */
-    /* the cached bricks live in the process's cache (src/core/cache.h);
-     * its lock guards them and the counts */
-    vv_cache *cache;
-    vv_cache_client cl;
-    vv_bricked_stats st;
-};
+    uint64_t bytes_read;                 /* counted by vvb_read_at and vvb_read_brick */
+} vvb_file;
 
 /* ---- little-endian fields ------------------------------------------------ */
 
@@ -148,56 +140,49 @@ vvb_coarse_dims(const vv_brick_info *in, int cd[3]) {
 }
 
 /* Brick @p index's boxes (its cells lo .. hi, its stored box slo .. shi
- * with the ghosts) in a volume of @p dims voxels cut into @p nb bricks
- * (bricked.c). */
+ * with the ghosts) in a volume of @p dims voxels cut into @p nb bricks. */
 void vvb_brick_boxes(const int dims[3], const int nb[3], int index, vv_brick_info *in);
 /* The brick grid of a volume of @p dims voxels into @p nb and *@p n_out;
- * VV_ERR_LIMIT over 2^26 bricks (bricked.c). */
+ * VV_ERR_LIMIT over 2^26 bricks. */
 vv_status vvb_brick_grid(const int dims[3], int nb[3], int *n_out);
 /* The dims of each level of a volume of @p d voxels (the halving rule);
- * returns the count (vvb.c). */
+ * returns the count. */
 int vvb_level_dims(const int d[3], int dims[VV_PYRAMID_MAX_LEVELS][3]);
-/* Level @p L's geometry (levels >= 1) from its dims, with its chunk grid (vvb.c). */
+/* Level @p L's geometry (levels >= 1) from its dims, with its chunk grid. */
 void vvb_level_grid(vvb_level *L, const int dims[3]);
-/* Chunk @p i of level @p L: its first voxel and voxel counts (vvb.c). */
+/* Chunk @p i of level @p L: its first voxel and voxel counts. */
 void vvb_chunk_box(const vvb_level *L, int i, int org[3], int n[3]);
-/* Reverses the bytes of each of @p count values of @p vs bytes (bricked.c). */
-void vvb_swap_bytes(void *data, size_t count, size_t vs);
-
-/* ---- reading (bricked.c) -------------------------------------------------- */
-
-/* pread of exactly @p n bytes at @p off of b's data file; @p what names
- * the piece in messages. Uncounted: any thread. */
-vv_status vvb_pread(const vv_bricked *b, void *buf, size_t n, uint64_t off, const char *what);
-/* vvb_pread, counted in the statistics. */
-vv_status vvb_read_at(vv_bricked *b, void *buf, size_t n, uint64_t off, const char *what);
-/* Opens @p path as b's data file (b->fd) and notes its size. */
-vv_status vvb_open_data(vv_bricked *b, const char *path);
-/* The voxels of box in->slo .. in->shi into @p dst (host byte order,
- * counted): brick @p index's stored box of a .vvb, or of a raw layout the
- * box (index -1: any box) a pread a row. */
-vv_status vvb_read_stored(vv_bricked *b, int index, const vv_brick_info *in, void *dst);
-/* 1 when @p b was opened from a .vvb (its bricks stored whole), 0 for a raw layout. */
-int vvb_is_vvb(const vv_bricked *b);
-/* A .vvb file by its bricks, in @p cache (the .vvb row's open_bricks). */
-vv_status vvb_open_bricked(vv_bricked **out, const char *path, vv_cache *cache);
-
-/* ---- the .vvb's own reading (vvb.c) --------------------------------------- */
-
-/* b's header, index and pyramid levels (b->data_path opened), every piece
- * checked against the file's size. Errors: VV_ERR_FORMAT, VV_ERR_IO,
- * VV_ERR_LIMIT, VV_ERR_NOMEM. */
-vv_status vvb_open_file(vv_bricked *b);
-/* The @p bytes at @p off of a .vvb, a piece of @p want bytes, into @p dst
- * (as stored: little-endian), decoding zstd. Uncounted: any thread. */
-vv_status vvb_read_piece(const vv_bricked *b, uint64_t off, uint64_t bytes, void *dst,
-                         uint64_t want, const char *what);
 /* The bytes of the largest piece of a level: what vvb_read_level_box's
  * @p piece holds. */
-uint64_t vvb_piece_bytes(const vv_bricked *b);
+uint64_t vvb_piece_bytes(const vvb_file *f);
+/* Reverses the bytes of each of @p count values of @p vs bytes. */
+void vvb_swap_bytes(void *data, size_t count, size_t vs);
+
+/* ---- reading ---------------------------------------------------------------- */
+
+/* Opens @p path as f's data file (f->fd) and notes its size. */
+vv_status vvb_open_data(vvb_file *f, const char *path);
+/* f's header, index and pyramid levels (f->data_path opened; f->swap set:
+ * the file is little-endian), every piece checked against the file's size. Errors: VV_ERR_FORMAT,
+ * VV_ERR_IO, VV_ERR_LIMIT, VV_ERR_NOMEM. */
+vv_status vvb_open_file(vvb_file *f);
+/* Releases what @p f holds (not @p f itself). */
+void vvb_file_close(vvb_file *f);
+/* pread of exactly @p n bytes at @p off of f's data file; @p what names
+ * the piece in messages. Uncounted: any thread. */
+vv_status vvb_pread(const vvb_file *f, void *buf, size_t n, uint64_t off, const char *what);
+/* vvb_pread, counted (f->bytes_read). */
+vv_status vvb_read_at(vvb_file *f, void *buf, size_t n, uint64_t off, const char *what);
+/* The @p bytes at @p off of a .vvb, a piece of @p want bytes, into @p dst
+ * (as stored: little-endian), decoding zstd. Uncounted: any thread. */
+vv_status vvb_read_piece(const vvb_file *f, uint64_t off, uint64_t bytes, void *dst, uint64_t want,
+                         const char *what);
+/* Brick @p index of a .vvb, its stored box of @p want bytes, into @p dst
+ * (as stored), counted. */
+vv_status vvb_read_brick(vvb_file *f, int index, void *dst, uint64_t want, const char *what);
 /* Voxels lo .. lo + n - 1 of level @p level into @p dst (x fastest, host
  * byte order); *bytes adds the bytes read. Uncounted: any thread. */
-vv_status vvb_read_level_box(const vv_bricked *b, int level, const int lo[3], const int n[3],
+vv_status vvb_read_level_box(const vvb_file *f, int level, const int lo[3], const int n[3],
                              unsigned char *dst, unsigned char *piece, uint64_t *bytes);
 
 /* A reader of the .vvb being written on @p fd (the writer's levels read
@@ -205,13 +190,13 @@ vv_status vvb_read_level_box(const vv_bricked *b, int level, const int lo[3], co
  * @p index say, of a volume @p hdr cut into @p nb bricks, raw or zstd
  * (@p zstd); @p fd, @p path (in messages) and @p hdr are borrowed.
  * Errors: VV_ERR_NOMEM. */
-vv_status vvb_readback_new(vv_bricked **out, int fd, const char *path, const vv_volume *hdr,
+vv_status vvb_readback_new(vvb_file **out, int fd, const char *path, const vv_volume *hdr,
                            const int nb[3], int n, int zstd, const unsigned char *index);
 /* Level @p l of reader @p rd, its geometry from @p dims and its chunk
  * table allocated for the writer to fill as it writes them; NULL when out
  * of memory. */
-vvb_level *vvb_readback_level(vv_bricked *rd, int l, const int dims[3]);
+vvb_level *vvb_readback_level(vvb_file *rd, int l, const int dims[3]);
 /* Frees a reader of vvb_readback_new (its borrowed file left open). Accepts NULL. */
-void vvb_readback_free(vv_bricked *rd);
+void vvb_readback_free(vvb_file *rd);
 
 #endif

@@ -62,7 +62,7 @@ write_levels(FILE *f, const char *path, const vv_volume *hdr, const int nb[3], i
     *n_levels = 1;
     if (nl < 2)
         return VV_OK;
-    vv_bricked *rd = NULL; /* level 0 and the levels written so far, read back */
+    vvb_file *rd = NULL; /* level 0 and the levels written so far, read back */
     vv_status s = vvb_readback_new(&rd, fileno(f), path, hdr, nb, n, zstd, index);
     if (s != VV_OK)
         return s;

@@ -1,5 +1,5 @@
 /*
- * libFuzzer harness: .vvb bricked volumes (src/io/bricked.c, vvb.c): the header
+ * libFuzzer harness: .vvb bricked volumes (src/io/bricked.c, vvb_read.c): the header
  * and index checks of vv_bricked_open, then up to 8 bricks read (raw or
  * zstd frames decoded), a box across bricks and a small proxy (from the
  * coarse levels when the file has them); then the file as a pyramid

@@ -1,14 +1,14 @@
 /*
- * TIFF through libtiff, internal to src/io: what the reader (tiff.c) and
- * the writer (tiff_write.c) share: libtiff's per-file message handlers,
- * which keep its first message for our trace and print nothing
+ * libtiff's per-file message handlers (src/io/tiff_msg.c), internal to
+ * src/io: what the TIFF reader (tiff.c) and writer (tiff_write.c) share.
+ * They keep libtiff's first message for our trace and print nothing
  * (TIFFOpenExt and TIFFClientOpenExt, libtiff >= 4.5, nothing global
  * touched).
  *
  * Thread-safety: reentrant; each open file has its own tiff_msg.
  */
-#ifndef VV_IO_TIFF_H
-#define VV_IO_TIFF_H
+#ifndef VV_IO_TIFF_MSG_H
+#define VV_IO_TIFF_MSG_H
 
 #include <stdarg.h>
 
