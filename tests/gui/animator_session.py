@@ -250,7 +250,12 @@ def main():
         s.key("ctrl+a")
         s.type(os.path.join(OUT, "cancel", "f_%04d.png"))
         s.click(button("Render"))
-        time.sleep(1)
+        # the first frame written, however slow the machine (a sanitizer
+        # beside other tests), then Cancel
+        for _ in range(600):
+            if pngs(os.path.join(OUT, "cancel")):
+                break
+            time.sleep(0.1)
         s.click(button("Cancel"))
         time.sleep(1)
         c1 = len(pngs(os.path.join(OUT, "cancel")))
