@@ -41,16 +41,16 @@ vv_dicom_sniff(const char *path) {
         return 0;
     /* no preamble: the first element of group 0002 or 0008, either byte order,
      * with an explicit VR (two upper-case letters) or a short implicit length */
-int le = (h[0] == 0x08 || h[0] == 0x02) && h[1] == 0 && h[3] == 0;
-int be = h[0] == 0 && (h[1] == 0x08 || h[1] == 0x02) && h[2] == 0;
-if (!le && !be)
-    return 0;
-if (h[4] >= 'A' && h[4] <= 'Z' && h[5] >= 'A' && h[5] <= 'Z')
-    return 1;
-uint32_t len =
-    le ? (uint32_t)h[4] | (uint32_t)h[5] << 8 | (uint32_t)h[6] << 16 | (uint32_t)h[7] << 24
-       : (uint32_t)h[7] | (uint32_t)h[6] << 8 | (uint32_t)h[5] << 16 | (uint32_t)h[4] << 24;
-return le && len > 0 && len <= 256 && (len % 2) == 0;
+    int le = (h[0] == 0x08 || h[0] == 0x02) && h[1] == 0 && h[3] == 0;
+    int be = h[0] == 0 && (h[1] == 0x08 || h[1] == 0x02) && h[2] == 0;
+    if (!le && !be)
+        return 0;
+    if (h[4] >= 'A' && h[4] <= 'Z' && h[5] >= 'A' && h[5] <= 'Z')
+        return 1;
+    uint32_t len =
+        le ? (uint32_t)h[4] | (uint32_t)h[5] << 8 | (uint32_t)h[6] << 16 | (uint32_t)h[7] << 24
+           : (uint32_t)h[7] | (uint32_t)h[6] << 8 | (uint32_t)h[5] << 16 | (uint32_t)h[4] << 24;
+    return le && len > 0 && len <= 256 && (len % 2) == 0;
 }
 
 #ifndef VV_HAVE_GDCM
