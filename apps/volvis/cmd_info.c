@@ -489,7 +489,7 @@ cli_info_main(int argc, char **argv) {
         vv_volume_free(v);
         return rc;
     }
-    const char *format = raw_spec ? "raw" : is_vvc ? "vvc" : vv_format_name(vv_format_detect(path));
+    const char *format = raw_spec ? "raw" : is_vvc ? "vvc" : vv_format_name(axes.format);
     uint64_t count = vv_volume_voxel_count(v);
     const char *unit = vv_unit_name(v->unit);
     printf("file:         %s\n", path);

@@ -131,6 +131,9 @@ typedef struct vv_load_info {
     /** The file's slices along z (the volume's dims[2] when every slice was
      *  read; the whole stack's count when a range was, vv_load_options.z_count). */
     int n_slices;
+    /** The row of the format table that read the file (set by the loader
+     *  in this process, also when detection ran in the reader sandbox). */
+    vv_format format;
 } vv_load_info;
 
 /** Options for vv_volume_load. */

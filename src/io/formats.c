@@ -80,6 +80,15 @@ vv_format_record_of(vv_format f) {
     return (int)f >= 1 && (int)f <= N_FORMATS ? table[(int)f - 1] : NULL;
 }
 
+vv_format
+io_format_id(const vv_format_record *r) {
+    const int n = N_FORMATS;
+    for (int i = 0; r && i < n; i++)
+        if (table[i] == r)
+            return (vv_format)(i + 1);
+    return VV_FORMAT_UNKNOWN;
+}
+
 /* 1 when @p name is a name or an alias of row @p r. */
 static int
 names(const vv_format_record *r, const char *name) {

@@ -37,17 +37,6 @@ vv_opened_clear(vv_opened *o) {
     memset(o, 0, sizeof *o);
 }
 
-/* The id of row @p r in the table, or VV_FORMAT_UNKNOWN. */
-static vv_format
-id_of(const vv_format_record *r) {
-    int n;
-    const vv_format_record *const *t = vv_format_table(&n);
-    for (int i = 0; r && i < n; i++)
-        if (t[i] == r)
-            return (vv_format)(i + 1);
-    return VV_FORMAT_UNKNOWN;
-}
-
 /* The row of @p path: the caller's @p f, else detected (signatures; the
  * deep tests of grids and meshes, which read names only, here; those of
  * volumes run where the volume is read); NULL when unknown. */
@@ -214,14 +203,14 @@ vv_open(vv_opened *out, const char *path, const vv_open_options *opt) {
     if (opt->load.format != VV_FORMAT_AUTO && !r)
         return vv_error_set(VV_ERR_INVALID, "open: %s: no format of id %d", vv_path_basename(path),
                             (int)opt->load.format);
-    out->format = id_of(r);
-    if (r && r->holds == VV_DATA_GRID) {
-        out->kind = VV_DATA_GRID;
-        return io_read_grid(r, &out->grid, path);
-    }
-    if (r && r->holds == VV_DATA_MESH) {
-        out->kind = VV_DATA_MESH;
-        return io_read_mesh(r, &out->mesh, path);
+    out->format = io_format_id(r);
+    if (r && r->holds != VV_DATA_VOLUME) { /* a grid or a mesh: read whole */
+        out->kind = r->holds;
+        const vv_status s = r->holds == VV_DATA_GRID ? io_read_grid(r, &out->grid, path)
+                                                     : io_read_mesh(r, &out->mesh, path);
+        if (s != VV_OK)
+            vv_opened_clear(out);
+        return s;
     }
     out->kind = VV_DATA_VOLUME;
     vv_cache *cache = opt->cache ? opt->cache : vv_cache_process();
@@ -259,8 +248,8 @@ vv_open(vv_opened *out, const char *path, const vv_open_options *opt) {
         vv_opened_clear(out);
         return s;
     }
-    if (out->format == VV_FORMAT_UNKNOWN) /* detected by the reader: ask again, cheaply */
-        out->format = vv_format_detect_kind(path, VV_DATA_VOLUME, 0);
+    if (out->format == VV_FORMAT_UNKNOWN) /* detected with the read, in the reader */
+        out->format = out->info.format;
     return VV_OK;
 }
 

@@ -72,6 +72,10 @@ typedef struct io_store_args {
  */
 int io_info_from_wire(vv_load_info *info, const unsigned char *bytes, size_t n);
 
+/* The id (vv_format) of row @p r of the table, VV_FORMAT_UNKNOWN for NULL
+ * or a record that is no row. */
+vv_format io_format_id(const vv_format_record *r);
+
 /* The first row vv_format_register added (none built in) whose deep test
  * says @p path holds @p kind: asked in this process, where the reader
  * sandbox, which has the built-in rows only, asks the rest. */

@@ -205,6 +205,7 @@ read:
      * (a second pass over a large volume costs as much as a fast reader) */
     if ((*out)->range[0] == 0 && (*out)->range[1] == 0)
         vv_volume_update_range(*out);
+    info_local.format = io_format_id(r); /* ours, not the reader's word */
     return finish_axes(out, path, &with_info, want);
 }
 
