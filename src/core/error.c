@@ -44,6 +44,52 @@ vv_error_clear(void) {
     trace[0] = '\0';
 }
 
+/*
+ * Copies @p src into @p dst (capacity @p cap, at least 5) as one printable
+ * line: a control byte (below 0x20, or 0x7f) and a byte that is not part of
+ * valid UTF-8 become \xNN (four characters). Messages quote what hostile files hold (names,
+ * paths, keys), and a message is one line that prints only what it meant to.
+ * Truncates at a character boundary. Returns the length written.
+ */
+static size_t
+printable_copy(char *dst, size_t cap, const char *src) {
+    static const char hex[] = "0123456789abcdef";
+    const unsigned char *p = (const unsigned char *)src;
+    size_t o = 0;
+    while (*p) {
+        unsigned c = p[0];
+        size_t n = 0; /* bytes of a valid UTF-8 sequence starting here */
+        if (c >= 0x20 && c < 0x7f)
+            n = 1;
+        else if (c >= 0xc2 && c <= 0xdf && (p[1] & 0xc0) == 0x80)
+            n = 2;
+        else if (c >= 0xe0 && c <= 0xef && (p[1] & 0xc0) == 0x80 && (p[2] & 0xc0) == 0x80 &&
+                 !(c == 0xe0 && p[1] < 0xa0) && !(c == 0xed && p[1] > 0x9f))
+            n = 3;
+        else if (c >= 0xf0 && c <= 0xf4 && (p[1] & 0xc0) == 0x80 && (p[2] & 0xc0) == 0x80 &&
+                 (p[3] & 0xc0) == 0x80 && !(c == 0xf0 && p[1] < 0x90) &&
+                 !(c == 0xf4 && p[1] > 0x8f))
+            n = 4;
+        if (n) {
+            if (o + n >= cap)
+                break;
+            memcpy(dst + o, p, n);
+            o += n;
+            p += n;
+        } else {
+            if (o + 4 >= cap)
+                break;
+            dst[o++] = '\\';
+            dst[o++] = 'x';
+            dst[o++] = hex[c >> 4];
+            dst[o++] = hex[c & 15];
+            p++;
+        }
+    }
+    dst[o] = '\0';
+    return o;
+}
+
 vv_status
 vv_error_set(vv_status s, const char *fmt, ...) {
     /* format into a local buffer: the arguments may point into the trace
@@ -53,32 +99,24 @@ vv_error_set(vv_status s, const char *fmt, ...) {
     va_start(ap, fmt);
     vsnprintf(buf, sizeof buf, fmt, ap);
     va_end(ap);
-    memcpy(trace, buf, sizeof trace);
+    printable_copy(trace, sizeof trace, buf);
     return s;
 }
 
 vv_status
 vv_error_prefix(vv_status s, const char *fmt, ...) {
-    char prefix[VV_TRACE_MAX];
+    char raw[VV_TRACE_MAX];
     char old[VV_TRACE_MAX];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(prefix, sizeof prefix, fmt, ap);
+    vsnprintf(raw, sizeof raw, fmt, ap);
     va_end(ap);
     memcpy(old, trace, sizeof old);
-    size_t np = strlen(prefix);
-    if (np > sizeof trace - 1)
-        np = sizeof trace - 1;
-    memcpy(trace, prefix, np);
-    size_t pos = np;
+    size_t pos = printable_copy(trace, sizeof trace, raw);
     if (old[0] && pos + 2 < sizeof trace) {
         trace[pos++] = ':';
         trace[pos++] = ' ';
-        size_t no = strlen(old);
-        if (no > sizeof trace - 1 - pos)
-            no = sizeof trace - 1 - pos;
-        memcpy(trace + pos, old, no);
-        pos += no;
+        pos += printable_copy(trace + pos, sizeof trace - pos, old);
     }
     trace[pos] = '\0';
     return s;

@@ -228,8 +228,14 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
     if (ds0) {
         const char *p = json_string_value(json_object_get(ds0, "path"));
         if (!p || !*p || strstr(p, "..") || p[0] == '/') {
+            /* the message quotes the path: format it before the JSON that
+             * holds it is freed */
+            s = !p || !*p
+                    ? vv_error_set(VV_ERR_FORMAT, ".zattrs: dataset %d has no path", level)
+                    : vv_error_set(VV_ERR_FORMAT,
+                                   ".zattrs: dataset %d: path \"%s\" leaves the store", level, p);
             json_decref(za);
-            return vv_error_set(VV_ERR_FORMAT, ".zattrs: dataset path \"%s\"", p ? p : "(none)");
+            return s;
         }
         snprintf(a->dir, sizeof a->dir, "%s/%s", root, p);
     }
