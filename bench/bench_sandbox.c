@@ -7,7 +7,12 @@
  *   - a 512 x 512 x 300 DICOM series (scripts/dicom_testdata.py bench,
  *     python3-pydicom and python3-numpy; skipped with a message without).
  *
- *   bench_sandbox [--repeat N] [--keep]
+ *   bench_sandbox [--repeat N] [--keep] [--own]
+ *
+ * --own measures our own parsers instead (issue 67: which of them should
+ * move into the reader): in-process (VOLVIS_SANDBOX unset) against
+ * VOLVIS_SANDBOX=all, on the SLC, MetaImage and VTK legacy files of
+ * ../shared/data/volumes, and a 512^3 u16 MetaImage (.mha) and .vvb read whole.
  *
  * Each way runs in processes of its own (a worker: two loads that warm
  * the process, its page cache and (from the second) its reader started
@@ -54,11 +59,14 @@ worker(const char *path, int n) {
     return 0;
 }
 
-/* The median load time of a worker process of @p sandbox. */
+/* The two ways a run compares: VOLVIS_SANDBOX's values (in-process, reader). */
+static const char *way_in = "0", *way_sb = "1";
+
+/* The median load time of a worker process with VOLVIS_SANDBOX=@p way. */
 static double
-run_worker(const char *self, const char *path, int sandbox, int n) {
+run_worker(const char *self, const char *path, const char *way, int n) {
     char cmd[4096];
-    snprintf(cmd, sizeof cmd, "VOLVIS_SANDBOX=%d '%s' --worker '%s' %d", sandbox, self, path, n);
+    snprintf(cmd, sizeof cmd, "VOLVIS_SANDBOX=%s '%s' --worker '%s' %d", way, self, path, n);
     FILE *p = popen(cmd, "r");
     double t = -1;
     if (!p || fscanf(p, "%lf", &t) != 1 || t < 0)
@@ -72,11 +80,11 @@ measure(const char *self, const char *path, const char *dataset, int repeat) {
     double *in = malloc((size_t)repeat * sizeof *in), *sb = malloc((size_t)repeat * sizeof *sb);
     for (int i = 0; i < repeat; i++) {
         if (i % 2) {
-            in[i] = run_worker(self, path, 0, 3);
-            sb[i] = run_worker(self, path, 1, 3);
+            in[i] = run_worker(self, path, way_in, 3);
+            sb[i] = run_worker(self, path, way_sb, 3);
         } else {
-            sb[i] = run_worker(self, path, 1, 3);
-            in[i] = run_worker(self, path, 0, 3);
+            sb[i] = run_worker(self, path, way_sb, 3);
+            in[i] = run_worker(self, path, way_in, 3);
         }
     }
     double a = bench_median(in, repeat), b = bench_median(sb, repeat);
@@ -92,33 +100,9 @@ measure(const char *self, const char *path, const char *dataset, int repeat) {
     free(sb);
 }
 
-int
-main(int argc, char **argv) {
-    if (argc == 4 && !strcmp(argv[1], "--worker"))
-        return worker(argv[2], atoi(argv[3]));
-    int repeat = 7, keep = 0;
-    for (int i = 1; i < argc; i++) {
-        if (!strcmp(argv[i], "--repeat") && i + 1 < argc)
-            repeat = atoi(argv[++i]);
-        else if (!strcmp(argv[i], "--keep"))
-            keep = 1;
-        else {
-            fprintf(stderr, "usage: %s [--repeat N] [--keep]\n", PROG);
-            return 2;
-        }
-    }
-    if (repeat < 1)
-        repeat = 1;
-    const char *head = VV_SOURCE_DIR "/../shared/data/volumes/ct_head.nrrd";
-    measure(argv[0], head, "ct_head", repeat);
-
-    char tmp[] = "/tmp/vv_bench_sandbox_XXXXXX";
-    if (!mkdtemp(tmp)) {
-        perror(PROG ": mkdtemp");
-        return 1;
-    }
-    char path[1200], cmd[4096];
-    /* 512^3 u16: a smooth field with some structure, written raw */
+/* A 512^3 u16 volume: a smooth field with some structure. */
+static vv_volume *
+cube512(void) {
     int dims[3] = {512, 512, 512};
     vv_volume *v = NULL;
     if (vv_volume_new(&v, dims, VV_U16) != VV_OK)
@@ -128,6 +112,77 @@ main(int argc, char **argv) {
         for (long j = 0; j < 512; j++)
             for (long i = 0; i < 512; i++)
                 d[(k * 512 + j) * 512 + i] = (uint16_t)((i * 7 + j * 13 + k * 29) & 0xfff);
+    return v;
+}
+
+/* --own: our own parsers in this process against in the reader. */
+static int
+measure_own(const char *self, int repeat, int keep) {
+    way_in = "1";
+    way_sb = "all";
+    static const char *const files[][2] = {{"nut.slc", "slc_nut"},
+                                           {"HeadMRVolume.mhd", "mhd_headmr"},
+                                           {"ironProt.vtk", "vtk_ironprot"}};
+    char path[1200], cmd[4096];
+    for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
+        snprintf(path, sizeof path, VV_SOURCE_DIR "/../shared/data/volumes/%s", files[i][0]);
+        measure(self, path, files[i][1], repeat);
+    }
+    char tmp[] = "/tmp/vv_bench_sandbox_XXXXXX";
+    if (!mkdtemp(tmp)) {
+        perror(PROG ": mkdtemp");
+        return 1;
+    }
+    vv_volume *v = cube512();
+    snprintf(path, sizeof path, "%s/cube512.mha", tmp);
+    if (vv_mhd_write(v, path, 0) != VV_OK)
+        bench_die(PROG, path);
+    measure(self, path, "mha512", repeat);
+    snprintf(path, sizeof path, "%s/cube512.vvb", tmp);
+    if (vv_volume_write_vvb(v, path, 0) != VV_OK)
+        bench_die(PROG, path);
+    measure(self, path, "vvb512", repeat);
+    vv_volume_free(v);
+    if (!keep) {
+        snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmp);
+        if (system(cmd) != 0)
+            fprintf(stderr, "%s: could not remove %s\n", PROG, tmp);
+    }
+    return 0;
+}
+
+int
+main(int argc, char **argv) {
+    if (argc == 4 && !strcmp(argv[1], "--worker"))
+        return worker(argv[2], atoi(argv[3]));
+    int repeat = 7, keep = 0, own = 0;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--repeat") && i + 1 < argc)
+            repeat = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--keep"))
+            keep = 1;
+        else if (!strcmp(argv[i], "--own"))
+            own = 1;
+        else {
+            fprintf(stderr, "usage: %s [--repeat N] [--keep] [--own]\n", PROG);
+            return 2;
+        }
+    }
+    if (repeat < 1)
+        repeat = 1;
+    if (own)
+        return measure_own(argv[0], repeat, keep);
+    const char *head = VV_SOURCE_DIR "/../shared/data/volumes/ct_head.nrrd";
+    measure(argv[0], head, "ct_head", repeat);
+
+    char tmp[] = "/tmp/vv_bench_sandbox_XXXXXX";
+    if (!mkdtemp(tmp)) {
+        perror(PROG ": mkdtemp");
+        return 1;
+    }
+    char path[1200], cmd[4096];
+    /* 512^3 u16, written raw */
+    vv_volume *v = cube512();
     snprintf(path, sizeof path, "%s/cube512.nrrd", tmp);
     if (vv_nrrd_write(v, path, 0) != VV_OK)
         bench_die(PROG, path);

@@ -89,6 +89,12 @@ io_format_id(const vv_format_record *r) {
     return VV_FORMAT_UNKNOWN;
 }
 
+int
+io_format_built_in(const vv_format_record *r) {
+    const vv_format f = io_format_id(r);
+    return f != VV_FORMAT_UNKNOWN && (int)f <= N_BUILT_IN;
+}
+
 /* 1 when @p name is a name or an alias of row @p r. */
 static int
 names(const vv_format_record *r, const char *name) {

@@ -15,7 +15,10 @@
 
 int
 io_sandboxed(const vv_format_record *r) {
-    return (!r || (r->flags & VV_FORMAT_FLAG_THIRD_PARTY)) && vv_sandbox_enabled();
+    /* VOLVIS_SANDBOX=all: our own parsers too (the built-in rows only) */
+    return (!r || (r->flags & VV_FORMAT_FLAG_THIRD_PARTY) ||
+            (vv_sandbox_all() && io_format_built_in(r))) &&
+           vv_sandbox_enabled();
 }
 
 const vv_format_record *

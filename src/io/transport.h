@@ -76,6 +76,10 @@ int io_info_from_wire(vv_load_info *info, const unsigned char *bytes, size_t n);
  * or a record that is no row. */
 vv_format io_format_id(const vv_format_record *r);
 
+/* 1 when @p r is a row of the built-in table (not one vv_format_register
+ * added): the rows volvis-reader knows. */
+int io_format_built_in(const vv_format_record *r);
+
 /* The first row vv_format_register added (none built in) whose deep test
  * says @p path holds @p kind: asked in this process, where the reader
  * sandbox, which has the built-in rows only, asks the rest. */

@@ -417,6 +417,12 @@ vv_sandbox_enabled(void) {
     return !(e && !strcmp(e, "0"));
 }
 
+int
+vv_sandbox_all(void) {
+    const char *e = getenv("VOLVIS_SANDBOX");
+    return e && !strcmp(e, "all");
+}
+
 sbx_request *
 sbx_new_request(const vv_sandbox_call *c) {
     static sbx_request proto; /* zeroes for the request's padding */

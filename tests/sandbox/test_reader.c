@@ -123,6 +123,59 @@ test_same_volume(void **state) {
     }
 }
 
+/* VOLVIS_SANDBOX=all (issue 67): our own parsers read in the reader give the
+ * volume they give in this process, and the same one-line refusal. */
+static void
+test_own_parsers_in_reader(void **state) {
+    (void)state;
+    if (!vt_have_data("volumes/nut.slc"))
+        vt_skip("../shared/data/volumes/nut.slc is missing");
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_load(&v, vt_data("volumes/nut.slc"), NULL));
+    vt_ok(vv_volume_write_vvb(v, vt_path(g_dir, "nut.vvb"), 0));
+    vv_volume_free(v);
+    const char *paths[] = {vt_data("volumes/nut.slc"), vt_data("volumes/HeadMRVolume.mhd"),
+                           vt_data("volumes/ironProt.vtk"), vt_path(g_dir, "nut.vvb")};
+    for (size_t i = 0; i < sizeof paths / sizeof paths[0]; i++) {
+        vv_volume *a = NULL, *b = NULL;
+        setenv("VOLVIS_SANDBOX", "1", 1);
+        vt_ok(vv_volume_load(&a, paths[i], NULL));
+        setenv("VOLVIS_SANDBOX", "all", 1);
+        vt_ok(vv_volume_load(&b, paths[i], NULL));
+        unsetenv("VOLVIS_SANDBOX");
+        assert_null(a->release);     /* ours, in this process */
+        assert_non_null(b->release); /* the reader's memfd */
+        assert_memory_equal(a->dims, b->dims, sizeof a->dims);
+        assert_int_equal(a->type, b->type);
+        assert_memory_equal(a->spacing, b->spacing, sizeof a->spacing);
+        assert_memory_equal(a->data, b->data,
+                            vv_volume_voxel_count(a) * vv_voxel_type_size(a->type));
+        vv_volume_free(a);
+        vv_volume_free(b);
+    }
+    /* a truncated SLC: the same refusal from either side */
+    size_t n = 0;
+    unsigned char *bytes = vt_read_file(vt_data("volumes/nut.slc"), &n);
+    vt_write_file(vt_path(g_dir, "short.slc"), bytes, n / 2);
+    free(bytes);
+    char msg[2][1024];
+    const char *ways[2] = {"1", "all"};
+    for (int w = 0; w < 2; w++) {
+        setenv("VOLVIS_SANDBOX", ways[w], 1);
+        vv_error_clear();
+        assert_int_equal(vv_volume_load(&v, vt_path(g_dir, "short.slc"), NULL), VV_ERR_FORMAT);
+        unsetenv("VOLVIS_SANDBOX");
+        assert_null(v);
+        snprintf(msg[w], sizeof msg[w], "%s", vv_error_message());
+        assert_null(strchr(msg[w], '\n'));
+    }
+    assert_non_null(strstr(msg[0], "short.slc"));
+    assert_non_null(strstr(msg[1], "short.slc"));
+    /* the reader's refusal is the parser's, word for word */
+    assert_non_null(strstr(msg[1], strstr(msg[0], "short.slc")));
+    assert_no_child();
+}
+
 /* Loads the CT head with the reader told to do @p what; the error must be
  * one line holding @p expect (NULL: any). */
 static void
@@ -900,6 +953,7 @@ main(void) {
     snprintf(g_dir, sizeof g_dir, "%s", vt_outdir("sandbox"));
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_same_volume),
+        cmocka_unit_test(test_own_parsers_in_reader),
         cmocka_unit_test(test_injected_faults),
         cmocka_unit_test(test_cli),
         cmocka_unit_test(test_reader_alone_and_missing),

@@ -97,6 +97,15 @@ void vv_sandbox_result_clear(vv_sandbox_result *r);
 int vv_sandbox_enabled(void);
 
 /**
+ * 1 when $VOLVIS_SANDBOX is "all": the built-in rows of our own parsers
+ * (SLC, MetaImage, VTK legacy, OpenDX, PLOT3D, raw, .vvc, a .vvb read whole)
+ * are read in the reader too, not only the third parties' (docs/security.md,
+ * "Our own parsers in the reader"). A row added at run time still reads in
+ * this process: the reader knows the built-in rows only.
+ */
+int vv_sandbox_all(void);
+
+/**
  * Runs @p c in a new reader and waits for its result (*@p out zeroed
  * first). Errors: the reader's own (its status and trace); VV_ERR_FORMAT
  * when it crashed, aborted, was killed by the sandbox or sent a malformed
