@@ -244,6 +244,12 @@ vv_open(vv_opened *out, const char *path, const vv_open_options *opt) {
             vv_volume_free(v);
         }
     }
+    /* out of core: each level's geometry, as io_read_volume checks a
+     * volume read whole */
+    for (int l = 0; s == VV_OK && ooc && l < vv_source_levels(out->source); l++) {
+        const vv_volume *lv = vv_source_level(out->source, l);
+        s = lv ? io_geometry_status(r, lv, path) : VV_OK;
+    }
     if (s != VV_OK) {
         vv_opened_clear(out);
         return s;

@@ -63,6 +63,8 @@ h_volume(vv_sandbox_server *srv, const char *format, const char *path, const voi
     o.info = &li;
     o.one_shot = 1; /* this process ends after the read */
     vv_status s = r->read(out, path, &o);
+    if (s == VV_OK)
+        s = io_check_geometry(r, out, path);
     if (s == VV_OK) {
         memcpy(info, &li, sizeof li);
         *info_len = sizeof li;

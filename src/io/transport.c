@@ -66,13 +66,49 @@ io_info_from_wire(vv_load_info *info, const unsigned char *bytes, size_t n) {
 }
 
 vv_status
+io_geometry_status(const vv_format_record *r, const vv_volume *v, const char *path) {
+    static const char axis[3] = {'x', 'y', 'z'};
+    const char *what = NULL;
+    int a = 0;
+    for (int i = 0; i < 3 && !what; i++) {
+        a = i;
+        if (!(v->spacing[i] > 0) || !isfinite(v->spacing[i]))
+            what = "spacing";
+        else if (!isfinite(v->origin[i]))
+            what = "origin";
+        for (int j = 0; j < 3 && !what; j++)
+            if (!isfinite(v->direction[3 * i + j]))
+                what = "direction";
+    }
+    if (!what)
+        return VV_OK;
+    const int spacing = !strcmp(what, "spacing");
+    const double x = spacing ? v->spacing[a] : !strcmp(what, "origin") ? v->origin[a] : NAN;
+    return vv_error_set(VV_ERR_FORMAT, "%s: %s: the %s along %c is %g (a %s must be %s)",
+                        r ? r->name : "load", vv_path_basename(path), what, axis[a], x, what,
+                        spacing ? "positive and finite" : "finite");
+}
+
+vv_status
+io_check_geometry(const vv_format_record *r, vv_volume **v, const char *path) {
+    const vv_status s = io_geometry_status(r, *v, path);
+    if (s != VV_OK) {
+        vv_volume_free(*v);
+        *v = NULL;
+    }
+    return s;
+}
+
+vv_status
 io_read_volume(const vv_format_record *r, vv_volume **out, const char *path,
                const vv_load_options *opt, const vv_format_record **used) {
     *out = NULL;
     if (used)
         *used = r;
-    if (r && !io_sandboxed(r))
-        return r->read(out, path, opt);
+    if (r && !io_sandboxed(r)) {
+        vv_status s = r->read(out, path, opt);
+        return s == VV_OK ? io_check_geometry(r, out, path) : s;
+    }
     io_volume_args a;
     memset(&a, 0, sizeof a);
     a.has_raw = opt->has_raw;

@@ -76,6 +76,16 @@ int io_info_from_wire(vv_load_info *info, const unsigned char *bytes, size_t n);
  * or a record that is no row. */
 vv_format io_format_id(const vv_format_record *r);
 
+/* The backstop behind every reader (in this process and in the reader
+ * sandbox): a volume whose spacing is zero, negative or not finite, or whose
+ * origin or direction is not finite, is freed (*@p v set to NULL) and
+ * refused: VV_ERR_FORMAT "ROW: FILE: the spacing along z is 0 (...)". */
+vv_status io_check_geometry(const vv_format_record *r, vv_volume **v, const char *path);
+
+/* io_check_geometry's test of @p v alone (nothing freed): a source's
+ * levels opened out of core. */
+vv_status io_geometry_status(const vv_format_record *r, const vv_volume *v, const char *path);
+
 /* 1 when @p r is a row of the built-in table (not one vv_format_register
  * added): the rows volvis-reader knows. */
 int io_format_built_in(const vv_format_record *r);

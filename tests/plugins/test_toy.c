@@ -121,6 +121,25 @@ test_format_row(void **state) {
     vv_volume_free(box);
     vv_opened_clear(&od);
     vv_volume_free(v);
+
+    /* the backstop behind every reader (issue 67): the toy row lets an
+     * infinite spacing through ("inf" > 0); the library refuses it, whole
+     * and out of core, in one line naming the file and the field */
+    const char *inf = vt_path(outdir(), "inf.toy");
+    FILE *fp = fopen(inf, "wb");
+    assert_non_null(fp);
+    fputs("TOYVOL\n2 2 2\n1 1 inf\n", fp);
+    fwrite("\0\0\0\0\0\0\0\0", 1, 8, fp);
+    assert_int_equal(fclose(fp), 0);
+    assert_int_equal(vv_volume_load(&back, inf, NULL), VV_ERR_FORMAT);
+    assert_null(back);
+    assert_non_null(strstr(vv_error_message(), "toy: inf.toy: the spacing along z is inf"));
+    oo.mode = VV_OPEN_OUT_OF_CORE;
+    assert_int_equal(vv_open(&od, inf, &oo), VV_ERR_FORMAT);
+    assert_null(od.source);
+    printf("# %s\n", vv_error_message());
+    assert_non_null(strstr(vv_error_message(), "inf.toy"));
+    assert_non_null(strstr(vv_error_message(), "spacing"));
 }
 
 /* The image of @p w by renderer @p name (options "key=value", NULL-ended). */
