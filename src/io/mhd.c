@@ -251,6 +251,9 @@ mhd_parse_header(mhd_header *h, FILE *fp) {
             n = mhd_numbers(val, num, 3);
             if (n < 2)
                 return vv_error_set(VV_ERR_FORMAT, "bad DimSize \"%s\"", val);
+            /* a second DimSize replaces the first, axes it leaves out included */
+            for (int a = 0; a < 3; a++)
+                h->dims[a] = 1;
             for (int a = 0; a < n; a++) {
                 if (!(num[a] >= 1) || num[a] != floor(num[a]))
                     return vv_error_set(VV_ERR_FORMAT, "bad DimSize \"%s\"", val);

@@ -508,6 +508,27 @@ test_mhd_zlib_short(void **state) {
     assert_null(v);
 }
 
+/*
+ * A second DimSize with fewer values kept the third size of the first: a
+ * 2-D image became 2 x 2 x 3 and read three times its data.
+ */
+static void
+test_mhd_dimsize_twice(void **state) {
+    (void)state;
+    const char *dir = outdir();
+    const char hdr[] = "DimSize = 2 2 3\nDimSize = 2 2\nNDims = 2\nElementType = MET_UCHAR\n"
+                       "ElementDataFile = d2.raw\n";
+    const char *path = vt_path(dir, "dims_twice.mhd");
+    vt_write_file(path, hdr, sizeof hdr - 1);
+    vt_write_file(vt_path(dir, "d2.raw"), "abcdefghijkl", 12);
+    vv_volume *v = NULL;
+    vt_ok(vv_mhd_read(&v, path));
+    assert_int_equal(v->dims[0], 2);
+    assert_int_equal(v->dims[1], 2);
+    assert_int_equal(v->dims[2], 1);
+    vv_volume_free(v);
+}
+
 /* A channel past the SCALARS' components. */
 static void
 test_vtk_channel(void **state) {
@@ -732,9 +753,9 @@ main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_volume_table),   cmocka_unit_test(test_not_files),
         cmocka_unit_test(test_mhd_long_list),  cmocka_unit_test(test_mhd_long_line),
-        cmocka_unit_test(test_mhd_zlib_short), cmocka_unit_test(test_vtk_channel),
-        cmocka_unit_test(test_raw_params),     cmocka_unit_test(test_cli_raw),
-        cmocka_unit_test(test_slc_write),
+        cmocka_unit_test(test_mhd_zlib_short), cmocka_unit_test(test_mhd_dimsize_twice),
+        cmocka_unit_test(test_vtk_channel),    cmocka_unit_test(test_raw_params),
+        cmocka_unit_test(test_cli_raw),        cmocka_unit_test(test_slc_write),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
