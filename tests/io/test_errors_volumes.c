@@ -732,6 +732,15 @@ test_slc_write(void **state) {
     vt_ok(vv_volume_new(&v, dims, VV_U8));
     expect_refusal("write folder", vv_slc_write(v, vt_path(dir, "no/such/folder/w.slc"), 1),
                    VV_ERR_IO, NULL, "w.slc");
+    /* the name taken by a folder: the file is written, then cannot be named */
+    char taken[512];
+    snprintf(taken, sizeof taken, "%s/taken.slc", dir);
+    mkdir(taken, 0755);
+    vt_write_file(vt_path(taken, "keep"), "x", 1);
+    expect_refusal("write over a folder", vv_slc_write(v, taken, 1), VV_ERR_IO, NULL, "taken.slc");
+    struct stat st;
+    assert_int_equal(stat(taken, &st), 0);
+    assert_true(S_ISDIR(st.st_mode));
     vv_volume *u = NULL;
     vt_ok(vv_volume_new(&u, dims, VV_U16));
     expect_refusal("write u16", vv_slc_write(u, vt_path(dir, "w16.slc"), 1), VV_ERR_UNSUPPORTED,
