@@ -170,6 +170,10 @@ vtk_points(vtk_reader *r) {
     char ty[64];
     vv_gtype t;
     vv_status s;
+    /* a second POINTS would reallocate the grid under the cells and fields
+       already read for the first (CELL_TYPES then wrote past the types) */
+    if (r->have_points)
+        return vv_error_set(VV_ERR_FORMAT, "%s: POINTS given twice", r->path);
     if ((s = vv_gcur_need_size(&r->c, "POINTS count", VV_GRID_MAX_POINTS, &r->n_points)) != VV_OK ||
         (s = vv_gcur_need(&r->c, ty, sizeof ty, "POINTS type")) != VV_OK)
         return s;
@@ -231,6 +235,8 @@ vtk_cells(vtk_reader *r) {
         return s;
     if (!r->have_points)
         return vv_error_set(VV_ERR_FORMAT, "%s: CELLS before POINTS", r->path);
+    if (r->have_cells)
+        return vv_error_set(VV_ERR_FORMAT, "%s: CELLS given twice", r->path);
     /* VTK 5.1: CELLS n_offsets n_connectivity, then OFFSETS and CONNECTIVITY */
     const unsigned char *save = r->c.p;
     char kw[64];
