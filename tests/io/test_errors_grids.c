@@ -426,6 +426,20 @@ test_plot3d_errors(void **state) {
     assert_int_equal(g->n_points, 8);
     vv_grid_free(g);
     g = NULL;
+
+    /*
+     * 2^20 x 2^20 x 2^20 points with IBLANK in single precision need
+     * 16 * 2^60 bytes, which is 0 modulo 2^64: a 12-byte file of just the
+     * dimensions "fit", and 2^60 bytes were asked for the blanking flags.
+     */
+    const int huge[3] = {1 << 20, 1 << 20, 1 << 20};
+    size_t n = 0;
+    for (int a = 0; a < 3; a++, n += 4)
+        put32(buf + n, (uint32_t)huge[a]);
+    vt_write_file(vt_path(dir, "wrap.xyz"), buf, n);
+    expect_refusal("wrap", vv_grid_read_plot3d(&g, vt_path(dir, "wrap.xyz"), NULL), VV_ERR_FORMAT,
+                   "no PLOT3D layout", "wrap.xyz");
+    assert_null(g);
 }
 
 int
