@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 /* A byte string and its length (the literals may hold NUL bytes). */
 #define B(s) s, sizeof(s) - 1
@@ -355,6 +356,34 @@ test_dx_many_objects(void **state) {
     assert_null(g);
 }
 
+static double
+now_s(void) {
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+/*
+ * "data follows" of 1.8 billion text values in a file of a few bytes: the
+ * reader skipped them one token at a time past the end of the file, for
+ * seconds, before the count was found to lie.
+ */
+static void
+test_dx_follows_lie(void **state) {
+    (void)state;
+    const char text[] = "object 1 class array type float rank 1 shape 9 items 200000000 "
+                        "data follows\n0 0 0\n";
+    const char *path = vt_path(outdir(), "follows.dx");
+    vt_write_file(path, text, sizeof text - 1);
+    vv_grid *g = NULL;
+    const double t0 = now_s();
+    expect_refusal("follows", vv_grid_read_dx(&g, path), VV_ERR_FORMAT, "no field object",
+                   "follows.dx");
+    const double dt = now_s() - t0;
+    if (dt > 2.0)
+        fail_msg("a lying count took %.1f s", dt);
+}
+
 static void
 put32(unsigned char *p, uint32_t v) {
     memcpy(p, &v, 4); /* the host's order: the reader tries both */
@@ -445,9 +474,9 @@ test_plot3d_errors(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_grid_table),    cmocka_unit_test(test_grid_table_base),
-        cmocka_unit_test(test_grid_missing),  cmocka_unit_test(test_dx_many_objects),
-        cmocka_unit_test(test_plot3d_errors),
+        cmocka_unit_test(test_grid_table),     cmocka_unit_test(test_grid_table_base),
+        cmocka_unit_test(test_grid_missing),   cmocka_unit_test(test_dx_many_objects),
+        cmocka_unit_test(test_dx_follows_lie), cmocka_unit_test(test_plot3d_errors),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
