@@ -227,7 +227,10 @@ dx_component(dx_doc *d) {
     dx_field *f = d->curf;
     dx_quoted_or_number(&d->c, cn, sizeof cn, &dummy);
     vv_gcur_token(&d->c, tok, sizeof tok); /* "value" */
-    dx_quoted_or_number(&d->c, val, sizeof val, &id);
+    /* at the end of the file no value is read and id was left unset */
+    if (!dx_quoted_or_number(&d->c, val, sizeof val, &id))
+        return vv_error_set(VV_ERR_FORMAT, "%s: field %s: component %s: no value", d->path, f->name,
+                            cn);
     if (id < 0)
         return vv_error_set(VV_ERR_UNSUPPORTED,
                             "%s: field %s: component %s by name is not supported", d->path, f->name,

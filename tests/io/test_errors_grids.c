@@ -234,6 +234,8 @@ static const gcase grid_cases[] = {
     {"by_name.dx", RD_DX,
      B(DX_POS DX_TET "object \"f\" class field\ncomponent \"positions\" value \"pos\"\n"),
      VV_ERR_UNSUPPORTED, "field f: component positions by name is not supported"},
+    {"comp_value.dx", RD_DX, B(DX_POS DX_TET "object \"f\" class field\ncomponent \"positions\""),
+     VV_ERR_FORMAT, "field f: component positions: no value"},
     {"no_grid.dx", RD_DX, B(DX_POS "object \"f\" class field\ncomponent \"positions\" value 1\n"),
      VV_ERR_FORMAT, "no field has positions and connections"},
     {"missing_array.dx", RD_DX,
