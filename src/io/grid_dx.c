@@ -110,6 +110,28 @@ dx_values(const vv_gcur *c0, const unsigned char *binary_start, const dx_array *
     return vv_gcur_values(&c, !a->text, a->big_endian, a->type, n, out, "array data");
 }
 
+/* Whether the bytes where @p a's values are said to be can hold them: a
+ * binary value takes its size, a text one at least a byte. Checked before
+ * anything is allocated for them; where the data is missing altogether
+ * dx_values says why. */
+static vv_status
+dx_check_fits(const dx_doc *d, const dx_array *a) {
+    size_t left;
+    if (a->follows)
+        left = (size_t)(d->c.end - a->inline_data);
+    else if (d->binary_start && a->offset <= (size_t)(d->c.end - d->binary_start))
+        left = (size_t)(d->c.end - d->binary_start) - a->offset;
+    else
+        return VV_OK;
+    const size_t n = a->items * (size_t)(a->shape > 0 ? a->shape : 1);
+    const size_t each = a->text ? 1 : vv_gtype_size(a->type);
+    if (n > left / each)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: array %d: %zu values cannot fit in the %zu bytes left of the file",
+                            d->path, a->id, n, left);
+    return VV_OK;
+}
+
 /* "data follows": the values start on the next line; skipped here. */
 static vv_status
 dx_data_follows(dx_doc *d, dx_array *a) {
@@ -354,6 +376,8 @@ dx_grid(const dx_doc *d, vv_grid **out) {
                             pos->shape);
     int ctype = 0, per = 0;
     vv_status s = dx_element(d, con, &ctype, &per);
+    if (s == VV_OK && (s = dx_check_fits(d, pos)) == VV_OK)
+        s = dx_check_fits(d, con);
     if (s != VV_OK)
         return s;
     vv_grid *g = NULL;
@@ -379,8 +403,11 @@ dx_fields(const dx_doc *d, vv_grid *g) {
         const int cell = !strcmp(a->dep, "connections");
         if (a->items != (cell ? g->n_cells : g->n_points))
             continue; /* a field on other positions */
+        vv_status s = dx_check_fits(d, a);
+        if (s != VV_OK)
+            return s;
         vv_grid_field *f = NULL;
-        vv_status s = vv_grid_add_field(g, d->fields[i].name, cell, a->shape, &f);
+        s = vv_grid_add_field(g, d->fields[i].name, cell, a->shape, &f);
         if (s != VV_OK)
             return s;
         const size_t nv = a->items * (size_t)a->shape;

@@ -231,6 +231,10 @@ static const gcase grid_cases[] = {
      B("object 1 class array type float shape 3 items 4 msb ieee data 4096\n" DX_TET DX_FIELD
        "end\n0123"),
      VV_ERR_FORMAT, "array 1: data offset 4096 is past the end"},
+    {"bin_past.dx", RD_DX,
+     B("object 1 class array type float shape 3 items 4 msb ieee data 0\n" DX_TET DX_FIELD
+       "end\n0123"),
+     VV_ERR_FORMAT, "array 1: 12 values cannot fit in the 4 bytes left"},
     {"by_name.dx", RD_DX,
      B(DX_POS DX_TET "object \"f\" class field\ncomponent \"positions\" value \"pos\"\n"),
      VV_ERR_UNSUPPORTED, "field f: component positions by name is not supported"},
@@ -263,6 +267,20 @@ static const gcase grid_cases[] = {
      B("object 1 class array type float rank 1 shape 3 items 4 data follows\n0 0 0 1 0 0\n" DX_TET
            DX_FIELD),
      VV_ERR_FORMAT, "field f refers to a missing array"},
+    {"pos_lie.dx", RD_DX,
+     B("object 1 class array type float rank 1 shape 3 items 100000000 ascii data 0\n" DX_TET
+           DX_FIELD "end\n0 0 0  1 0 0  0 1 0  0 0 1\n"),
+     VV_ERR_FORMAT, "array 1: 300000000 values cannot fit in the 27 bytes left"},
+    {"con_lie.dx", RD_DX,
+     B(DX_POS "object 2 class array type int rank 1 shape 4 items 50000000 msb ieee data 0\n"
+              "attribute \"element type\" string \"tetrahedra\"\n" DX_FIELD
+              "end\n0123456789abcdef"),
+     VV_ERR_FORMAT, "array 2: 200000000 values cannot fit in the 16 bytes left"},
+    {"data_lie.dx", RD_DX,
+     B(DX_POS DX_TET "object 3 class array type float rank 0 items 4 msb ieee data 0\n"
+                     "attribute \"dep\" string \"positions\"\n" DX_FIELD
+                     "component \"data\" value 3\nend\n0123"),
+     VV_ERR_FORMAT, "array 3: 4 values cannot fit in the 4 bytes left"},
 };
 
 static vv_status
