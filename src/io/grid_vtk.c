@@ -325,10 +325,13 @@ vtk_attribute(vtk_reader *r, const char *kw) {
         const unsigned char *save = r->c.p;
         char nx[128];
         if (vv_gcur_token(&r->c, nx, sizeof nx) && isdigit((unsigned char)nx[0])) {
-            ncomp = atoi(nx);
-            if (ncomp < 1 || ncomp > 4)
-                return vv_error_set(VV_ERR_FORMAT, "%s: SCALARS %s: %d components", r->path, name,
-                                    ncomp);
+            /* strtol, not atoi: 4294967297 is not 1 */
+            char *end;
+            const long v = strtol(nx, &end, 10);
+            if (*end || v < 1 || v > 4)
+                return vv_error_set(VV_ERR_FORMAT, "%s: SCALARS %s: %s components", r->path, name,
+                                    nx);
+            ncomp = (int)v;
         } else {
             r->c.p = save;
         }
