@@ -12,6 +12,8 @@
  * those positions or connections.
  */
 #include <ctype.h>
+#include <errno.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -56,6 +58,19 @@ typedef struct dx_doc {
     dx_field *curf;
 } dx_doc;
 
+/* @p s as an int: 1, or 0 for anything else (junk, a number out of
+ * range: atoi's behaviour there is undefined). */
+static int
+dx_int(const char *s, int *out) {
+    char *end;
+    errno = 0;
+    const long v = strtol(s, &end, 10);
+    if (end == s || *end || errno || v < INT_MIN || v > INT_MAX)
+        return 0;
+    *out = (int)v;
+    return 1;
+}
+
 static int
 dx_quoted_or_number(vv_gcur *c, char *buf, size_t cap, int *id) {
     while (c->p < c->end && isspace(*c->p) && *c->p != '\n')
@@ -77,7 +92,8 @@ dx_quoted_or_number(vv_gcur *c, char *buf, size_t cap, int *id) {
     }
     if (!vv_gcur_token(c, buf, cap))
         return 0;
-    *id = atoi(buf);
+    if (!dx_int(buf, id))
+        *id = -1; /* not an object number */
     return 1;
 }
 
@@ -174,12 +190,12 @@ dx_array_line(dx_doc *d, dx_array *a) {
                 return vv_error_set(VV_ERR_FORMAT, "%s: array %d: type %s", d->path, id, tok);
         } else if (!strcmp(tok, "rank")) {
             vv_gcur_token(c, tok, sizeof tok);
-            a->rank = atoi(tok);
+            if (!dx_int(tok, &a->rank))
+                return vv_error_set(VV_ERR_FORMAT, "%s: array %d: rank %s", d->path, id, tok);
         } else if (!strcmp(tok, "shape")) {
             vv_gcur_token(c, tok, sizeof tok);
-            a->shape = atoi(tok);
-            if (a->shape < 1 || a->shape > 9)
-                return vv_error_set(VV_ERR_FORMAT, "%s: array %d: shape %d", d->path, id, a->shape);
+            if (!dx_int(tok, &a->shape) || a->shape < 1 || a->shape > 9)
+                return vv_error_set(VV_ERR_FORMAT, "%s: array %d: shape %s", d->path, id, tok);
         } else if (!strcmp(tok, "items")) {
             if ((s = vv_gcur_need_size(c, "items", VV_GRID_MAX_POINTS, &a->items)) != VV_OK)
                 return s;
