@@ -150,7 +150,7 @@ mhd_expand_pattern(mhd_header *h, const char *value) {
      * hundreds of millions made snprintf pad for seconds: found by
      * fuzz_mhd) */
     const char *q = pc + 1;
-    while (*q && strchr("-+ #0", *q))
+    while (*q && strchr("-+ 0", *q)) /* not '#': undefined for %d */
         q++;
     long width = 0;
     for (; *q >= '0' && *q <= '9'; q++)

@@ -208,6 +208,8 @@ static const vcase volume_cases[] = {
      "bad ElementDataFile pattern \"s%d%d.raw\""},
     {"pat_s.mhd", RD_MHD, B("ElementDataFile = s%s.raw 1 2\n"), NULL, NULL, 0, VV_ERR_FORMAT,
      "bad ElementDataFile pattern \"s%s.raw\""},
+    {"pat_hash.mhd", RD_MHD, B("ElementDataFile = s%#d.raw 1 2\n"), NULL, NULL, 0, VV_ERR_FORMAT,
+     "bad ElementDataFile pattern \"s%#d.raw\""},
     {"pat_width.mhd", RD_MHD, B("ElementDataFile = s%0999999999d.raw 1 2\n"), NULL, NULL, 0,
      VV_ERR_FORMAT, "field width over 64"},
     {"pat_big.mhd", RD_MHD, B("ElementDataFile = s%d.raw 1 2000000000\n"), NULL, NULL, 0,
