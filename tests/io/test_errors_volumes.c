@@ -722,6 +722,57 @@ test_cli_raw(void **state) {
     }
 }
 
+/* Bytes the CLI prints: none of them control bytes or invalid UTF-8. */
+static void
+expect_clean(const char *label, const char *what, const char *text) {
+    for (const unsigned char *p = (const unsigned char *)text; *p; p++)
+        if ((*p < 0x20 && *p != '\n') || *p >= 0x7f)
+            fail_msg("%s: %s has byte 0x%02x: '%s'", label, what, *p, text);
+}
+
+/* `volvis info` of hostile files: one clean line on stderr. */
+static void
+test_cli_hostile(void **state) {
+    (void)state;
+    const char *dir = outdir();
+    static const struct {
+        const char *name;
+        const char *data;
+        size_t n;
+        const char *needle;
+    } cases[] = {
+        {"utf8.mha", B("ElementType = MET_\xff\xfe\xc3(\n"), "ElementType MET_\\xff\\xfe\\xc3("},
+        {"esc.mha", B("ElementType = MET_UCHAR\x1b[2J\n"), "byte 0x1b"},
+        {"utf8.vtk",
+         B("# vtk DataFile Version 3.0\nt\nASCII\nDATASET STRUCTURED_POINTS\n"
+           "DIMENSIONS 1 1 1\nPOINT_DATA 1\nSCALARS s \xe2\x28\xa1\n0\n"),
+         "scalar type \\xe2(\\xa1 is not supported"},
+        {"ctl.slc", B("11111 2 2 2 8 1 1 1 0 0 0 0 0 0 X\x1b[2J\x07"), "truncated data"},
+        {"ctl_grid.vtk",
+         B("# vtk DataFile Version 3.0\nt\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+           "\x1b]0;title\x07 4\n"),
+         "unexpected keyword"},
+        {"ctl.dx", B("object 1 class array type \x1b[2J items 1\n"), "array 1: type ?[2J"},
+    };
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        const char *path = vt_path(dir, cases[i].name);
+        vt_write_file(path, cases[i].data, cases[i].n);
+        const char *args[] = {"info", path, NULL};
+        vt_run_result r = vt_run_cli_v(dir, args);
+        if (r.status == 0 || r.status >= 128)
+            fail_msg("%s: exit %d: %s", cases[i].name, r.status, r.err);
+        if (!strstr(r.err, cases[i].needle) || !strstr(r.err, cases[i].name))
+            fail_msg("%s: '%s' lacks '%s' or the file's name", cases[i].name, r.err,
+                     cases[i].needle);
+        const char *nl = strchr(r.err, '\n');
+        if (!nl || nl[1] != '\0')
+            fail_msg("%s: not one line: '%s'", cases[i].name, r.err);
+        expect_clean(cases[i].name, "stderr", r.err);
+        expect_clean(cases[i].name, "stdout", r.out);
+        vt_run_result_free(&r);
+    }
+}
+
 /* The SLC writer's refusals. */
 static void
 test_slc_write(void **state) {
@@ -769,7 +820,8 @@ main(void) {
         cmocka_unit_test(test_mhd_long_list),  cmocka_unit_test(test_mhd_long_line),
         cmocka_unit_test(test_mhd_zlib_short), cmocka_unit_test(test_mhd_dimsize_twice),
         cmocka_unit_test(test_vtk_channel),    cmocka_unit_test(test_raw_params),
-        cmocka_unit_test(test_cli_raw),        cmocka_unit_test(test_slc_write),
+        cmocka_unit_test(test_cli_raw),        cmocka_unit_test(test_cli_hostile),
+        cmocka_unit_test(test_slc_write),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
