@@ -10,9 +10,11 @@
 #include "testutil.h"
 
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 #include <zlib.h>
@@ -794,6 +796,25 @@ test_slc_write(void **state) {
     struct stat st;
     assert_int_equal(stat(taken, &st), 0);
     assert_true(S_ISDIR(st.st_mode));
+    /* a write that fails (a file size limit, as a full disk would):
+       refused, and no file left behind */
+    const int big[3] = {64, 64, 64};
+    vv_volume *b = NULL;
+    vt_ok(vv_volume_new(&b, big, VV_U8));
+    struct rlimit old_limit, limit;
+    assert_int_equal(getrlimit(RLIMIT_FSIZE, &old_limit), 0);
+    limit = old_limit;
+    limit.rlim_cur = 4096;
+    void (*old_handler)(int) = signal(SIGXFSZ, SIG_IGN);
+    assert_int_equal(setrlimit(RLIMIT_FSIZE, &limit), 0);
+    const char *full = vt_path(dir, "full.slc");
+    unlink(full);
+    vv_status sf = vv_slc_write(b, full, 0);
+    assert_int_equal(setrlimit(RLIMIT_FSIZE, &old_limit), 0);
+    signal(SIGXFSZ, old_handler);
+    expect_refusal("write error", sf, VV_ERR_IO, "write error", "full.slc");
+    assert_int_not_equal(access(full, F_OK), 0);
+    vv_volume_free(b);
     vv_volume *u = NULL;
     vt_ok(vv_volume_new(&u, dims, VV_U16));
     expect_refusal("write u16", vv_slc_write(u, vt_path(dir, "w16.slc"), 1), VV_ERR_UNSUPPORTED,
