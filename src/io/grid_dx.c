@@ -447,7 +447,7 @@ vv_grid_read_dx(vv_grid **out, const char *path) {
     uint64_t size = 0;
     vv_status s = vv_read_file(path, VV_GRID_FILE_MAX, &data, &size);
     if (s != VV_OK)
-        return vv_error_prefix(s, "%s", path);
+        return s; /* the message names the file */
     dx_doc *d = calloc(1, sizeof *d);
     dx_array *arr = calloc(DX_MAX_OBJ, sizeof *arr);
     if (!d || !arr) {

@@ -160,7 +160,7 @@ vv_grid_read_plot3d(vv_grid **out, const char *xyz_path, const char *q_path) {
     uint64_t size = 0, qsize = 0;
     vv_status s = vv_read_file(xyz_path, P3D_FILE_MAX, &d, &size);
     if (s != VV_OK)
-        return vv_error_prefix(s, "%s", xyz_path);
+        return s; /* the message names the file */
     p3d_layout L, Q;
     memset(&L, 0, sizeof L);
     memset(&Q, 0, sizeof Q);
@@ -208,10 +208,8 @@ vv_grid_read_plot3d(vv_grid **out, const char *xyz_path, const char *q_path) {
         xyz = NULL;
     }
     if (q_path) {
-        if ((s = vv_read_file(q_path, P3D_FILE_MAX, &qd, &qsize)) != VV_OK) {
-            s = vv_error_prefix(s, "%s", q_path);
-            goto done;
-        }
+        if ((s = vv_read_file(q_path, P3D_FILE_MAX, &qd, &qsize)) != VV_OK)
+            goto done; /* the message names the file */
         if ((s = p3d_layout_find(qd, (size_t)qsize, q_path, 1, &Q)) != VV_OK)
             goto done;
         int same = Q.nb == L.nb;

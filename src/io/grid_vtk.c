@@ -435,7 +435,7 @@ vv_grid_read_vtk(vv_grid **out, const char *path) {
     uint64_t size = 0;
     vv_status s = vv_read_file(path, VV_GRID_FILE_MAX, &data, &size);
     if (s != VV_OK)
-        return vv_error_prefix(s, "%s", path);
+        return s; /* the message names the file */
     vtk_reader r;
     memset(&r, 0, sizeof r);
     r.path = path;

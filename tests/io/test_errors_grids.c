@@ -352,7 +352,15 @@ test_grid_table_base(void **state) {
     vv_grid_free(g);
 }
 
-/* Missing files: the readers name them. */
+/* Asserts the message names @p path once: "p: p: No such file" said it twice. */
+static void
+expect_once(const char *path) {
+    const char *msg = vv_error_message(), *first = strstr(msg, path);
+    if (!first || strstr(first + 1, path))
+        fail_msg("'%s' does not name '%s' once", msg, path);
+}
+
+/* Missing files: the readers name them, once. */
 static void
 test_grid_missing(void **state) {
     (void)state;
@@ -360,9 +368,12 @@ test_grid_missing(void **state) {
     vv_grid *g = NULL;
     expect_refusal("vtk", vv_grid_read_vtk(&g, vt_path(dir, "none.vtk")), VV_ERR_IO, NULL,
                    "none.vtk");
+    expect_once(vt_path(dir, "none.vtk"));
     expect_refusal("dx", vv_grid_read_dx(&g, vt_path(dir, "none.dx")), VV_ERR_IO, NULL, "none.dx");
+    expect_once(vt_path(dir, "none.dx"));
     expect_refusal("plot3d", vv_grid_read_plot3d(&g, vt_path(dir, "none.xyz"), NULL), VV_ERR_IO,
                    NULL, "none.xyz");
+    expect_once(vt_path(dir, "none.xyz"));
     assert_null(g);
 }
 
@@ -474,6 +485,7 @@ test_plot3d_errors(void **state) {
     expect_refusal("q missing",
                    vv_grid_read_plot3d(&g, vt_path(dir, "g.xyz"), vt_path(dir, "none.q")),
                    VV_ERR_IO, NULL, "none.q");
+    expect_once(vt_path(dir, "none.q"));
     vt_write_file(vt_path(dir, "other.q"), buf, plot3d_q(buf, d3));
     expect_refusal("q other",
                    vv_grid_read_plot3d(&g, vt_path(dir, "g.xyz"), vt_path(dir, "other.q")),
