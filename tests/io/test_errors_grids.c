@@ -377,6 +377,37 @@ test_grid_missing(void **state) {
     assert_null(g);
 }
 
+/* A grid file larger than the memory budget is refused before it is read
+ * into memory (the readers hold the whole file). */
+static void
+test_grid_file_budget(void **state) {
+    (void)state;
+    const char *dir = outdir();
+    static unsigned char big[8192];
+    memset(big, ' ', sizeof big);
+    const char *names[] = {"budget.vtk", "budget.dx", "budget.xyz"};
+    for (int i = 0; i < 3; i++)
+        vt_write_file(vt_path(dir, names[i]), big, sizeof big);
+    const uint64_t budget = vv_memory_budget_get();
+    vv_memory_budget_set(4096);
+    vv_grid *g = NULL;
+    vv_status s[3];
+    char msg[3][512];
+    s[0] = vv_grid_read_vtk(&g, vt_path(dir, names[0]));
+    snprintf(msg[0], sizeof msg[0], "%s", vv_error_message());
+    s[1] = vv_grid_read_dx(&g, vt_path(dir, names[1]));
+    snprintf(msg[1], sizeof msg[1], "%s", vv_error_message());
+    s[2] = vv_grid_read_plot3d(&g, vt_path(dir, names[2]), NULL);
+    snprintf(msg[2], sizeof msg[2], "%s", vv_error_message());
+    vv_memory_budget_set(budget);
+    for (int i = 0; i < 3; i++) {
+        if (s[i] != VV_ERR_LIMIT || !strstr(msg[i], "8193 bytes is over the memory budget") ||
+            !strstr(msg[i], names[i]))
+            fail_msg("%s: %s: %s", names[i], vv_status_name(s[i]), msg[i]);
+    }
+    assert_null(g);
+}
+
 /* More objects than the DX reader keeps. */
 static void
 test_dx_many_objects(void **state) {
@@ -518,9 +549,10 @@ test_plot3d_errors(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_grid_table),     cmocka_unit_test(test_grid_table_base),
-        cmocka_unit_test(test_grid_missing),   cmocka_unit_test(test_dx_many_objects),
-        cmocka_unit_test(test_dx_follows_lie), cmocka_unit_test(test_plot3d_errors),
+        cmocka_unit_test(test_grid_table),      cmocka_unit_test(test_grid_table_base),
+        cmocka_unit_test(test_grid_missing),    cmocka_unit_test(test_grid_file_budget),
+        cmocka_unit_test(test_dx_many_objects), cmocka_unit_test(test_dx_follows_lie),
+        cmocka_unit_test(test_plot3d_errors),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
