@@ -250,17 +250,30 @@ scan_triple(const char *s, size_t len, int is_int, double out[3]) {
         return 0;
     memcpy(buf, s, len);
     buf[len] = '\0';
-    const char *p = buf, *end;
+    char *p = buf;
+    const char *end;
     for (int i = 0; i < 3; i++) {
         if (is_int) {
             long v;
             if (!isdigit((unsigned char)*p) || !scan_long(p, &end, &v))
                 return 0;
             out[i] = (double)v;
-        } else if (!scan_double(p, &end, &out[i])) {
-            return 0;
+        } else {
+            /* a number ends at the next 'x': strtod alone read "0x1" of
+               "1x0x1" as one hexadecimal number */
+            char *sep = strpbrk(p, "xX");
+            if (i == 2 && sep)
+                return 0;
+            if (sep)
+                *sep = '\0';
+            if (!scan_double(p, &end, &out[i]) || (sep && *end != '\0'))
+                return 0;
+            if (sep) {
+                *sep = 'x';
+                end = sep;
+            }
         }
-        p = end;
+        p = buf + (end - buf);
         if (i < 2) {
             if (*p != 'x' && *p != 'X')
                 return 0;

@@ -194,6 +194,13 @@ vv_read_file(const char *path, uint64_t max_bytes, unsigned char **data, uint64_
         return vv_error_set(VV_ERR_LIMIT, "%s: file of %lld bytes is over the limit of %llu", path,
                             (long long)st.st_size, (unsigned long long)max_bytes);
     }
+    /* the whole file is held: it counts against the memory budget (the
+       grid readers took files of up to 4 GiB whatever the budget) */
+    vv_status sb = vv_memory_budget_check((uint64_t)st.st_size + 1, path);
+    if (sb != VV_OK) {
+        fclose(f);
+        return sb;
+    }
     size_t n = (size_t)st.st_size;
     unsigned char *buf = malloc(n + 1);
     if (!buf) {

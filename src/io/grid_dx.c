@@ -12,6 +12,8 @@
  * those positions or connections.
  */
 #include <ctype.h>
+#include <errno.h>
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -56,6 +58,19 @@ typedef struct dx_doc {
     dx_field *curf;
 } dx_doc;
 
+/* @p s as an int: 1, or 0 for anything else (junk, a number out of
+ * range: atoi's behaviour there is undefined). */
+static int
+dx_int(const char *s, int *out) {
+    char *end;
+    errno = 0;
+    const long v = strtol(s, &end, 10);
+    if (end == s || *end || errno || v < INT_MIN || v > INT_MAX)
+        return 0;
+    *out = (int)v;
+    return 1;
+}
+
 static int
 dx_quoted_or_number(vv_gcur *c, char *buf, size_t cap, int *id) {
     while (c->p < c->end && isspace(*c->p) && *c->p != '\n')
@@ -77,7 +92,8 @@ dx_quoted_or_number(vv_gcur *c, char *buf, size_t cap, int *id) {
     }
     if (!vv_gcur_token(c, buf, cap))
         return 0;
-    *id = atoi(buf);
+    if (!dx_int(buf, id))
+        *id = -1; /* not an object number */
     return 1;
 }
 
@@ -110,6 +126,28 @@ dx_values(const vv_gcur *c0, const unsigned char *binary_start, const dx_array *
     return vv_gcur_values(&c, !a->text, a->big_endian, a->type, n, out, "array data");
 }
 
+/* Whether the bytes where @p a's values are said to be can hold them: a
+ * binary value takes its size, a text one at least a byte. Checked before
+ * anything is allocated for them; where the data is missing altogether
+ * dx_values says why. */
+static vv_status
+dx_check_fits(const dx_doc *d, const dx_array *a) {
+    size_t left;
+    if (a->follows)
+        left = (size_t)(d->c.end - a->inline_data);
+    else if (d->binary_start && a->offset <= (size_t)(d->c.end - d->binary_start))
+        left = (size_t)(d->c.end - d->binary_start) - a->offset;
+    else
+        return VV_OK;
+    const size_t n = a->items * (size_t)(a->shape > 0 ? a->shape : 1);
+    const size_t each = a->text ? 1 : vv_gtype_size(a->type);
+    if (n > left / each)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: array %d: %zu values cannot fit in the %zu bytes left of the file",
+                            d->path, a->id, n, left);
+    return VV_OK;
+}
+
 /* "data follows": the values start on the next line; skipped here. */
 static vv_status
 dx_data_follows(dx_doc *d, dx_array *a) {
@@ -120,8 +158,12 @@ dx_data_follows(dx_doc *d, dx_array *a) {
     a->inline_data = c->p;
     const size_t n = a->items * (size_t)a->shape;
     if (a->text) {
+        /* a count past the values ends at the end of the file (dx_values
+           says how many are missing): skipping 1.8 billion absent tokens
+           took seconds */
         for (size_t i = 0; i < n; i++)
-            vv_gcur_token(c, tok, sizeof tok);
+            if (!vv_gcur_token(c, tok, sizeof tok))
+                break;
         return VV_OK;
     }
     const size_t nb = n * vv_gtype_size(a->type);
@@ -148,12 +190,12 @@ dx_array_line(dx_doc *d, dx_array *a) {
                 return vv_error_set(VV_ERR_FORMAT, "%s: array %d: type %s", d->path, id, tok);
         } else if (!strcmp(tok, "rank")) {
             vv_gcur_token(c, tok, sizeof tok);
-            a->rank = atoi(tok);
+            if (!dx_int(tok, &a->rank))
+                return vv_error_set(VV_ERR_FORMAT, "%s: array %d: rank %s", d->path, id, tok);
         } else if (!strcmp(tok, "shape")) {
             vv_gcur_token(c, tok, sizeof tok);
-            a->shape = atoi(tok);
-            if (a->shape < 1 || a->shape > 9)
-                return vv_error_set(VV_ERR_FORMAT, "%s: array %d: shape %d", d->path, id, a->shape);
+            if (!dx_int(tok, &a->shape) || a->shape < 1 || a->shape > 9)
+                return vv_error_set(VV_ERR_FORMAT, "%s: array %d: shape %s", d->path, id, tok);
         } else if (!strcmp(tok, "items")) {
             if ((s = vv_gcur_need_size(c, "items", VV_GRID_MAX_POINTS, &a->items)) != VV_OK)
                 return s;
@@ -223,7 +265,10 @@ dx_component(dx_doc *d) {
     dx_field *f = d->curf;
     dx_quoted_or_number(&d->c, cn, sizeof cn, &dummy);
     vv_gcur_token(&d->c, tok, sizeof tok); /* "value" */
-    dx_quoted_or_number(&d->c, val, sizeof val, &id);
+    /* at the end of the file no value is read and id was left unset */
+    if (!dx_quoted_or_number(&d->c, val, sizeof val, &id))
+        return vv_error_set(VV_ERR_FORMAT, "%s: field %s: component %s: no value", d->path, f->name,
+                            cn);
     if (id < 0)
         return vv_error_set(VV_ERR_UNSUPPORTED,
                             "%s: field %s: component %s by name is not supported", d->path, f->name,
@@ -347,6 +392,8 @@ dx_grid(const dx_doc *d, vv_grid **out) {
                             pos->shape);
     int ctype = 0, per = 0;
     vv_status s = dx_element(d, con, &ctype, &per);
+    if (s == VV_OK && (s = dx_check_fits(d, pos)) == VV_OK)
+        s = dx_check_fits(d, con);
     if (s != VV_OK)
         return s;
     vv_grid *g = NULL;
@@ -372,8 +419,11 @@ dx_fields(const dx_doc *d, vv_grid *g) {
         const int cell = !strcmp(a->dep, "connections");
         if (a->items != (cell ? g->n_cells : g->n_points))
             continue; /* a field on other positions */
+        vv_status s = dx_check_fits(d, a);
+        if (s != VV_OK)
+            return s;
         vv_grid_field *f = NULL;
-        vv_status s = vv_grid_add_field(g, d->fields[i].name, cell, a->shape, &f);
+        s = vv_grid_add_field(g, d->fields[i].name, cell, a->shape, &f);
         if (s != VV_OK)
             return s;
         const size_t nv = a->items * (size_t)a->shape;
@@ -397,7 +447,7 @@ vv_grid_read_dx(vv_grid **out, const char *path) {
     uint64_t size = 0;
     vv_status s = vv_read_file(path, VV_GRID_FILE_MAX, &data, &size);
     if (s != VV_OK)
-        return vv_error_prefix(s, "%s", path);
+        return s; /* the message names the file */
     dx_doc *d = calloc(1, sizeof *d);
     dx_array *arr = calloc(DX_MAX_OBJ, sizeof *arr);
     if (!d || !arr) {

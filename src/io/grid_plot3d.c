@@ -63,7 +63,11 @@ p3d_dims(const unsigned char *d, size_t size, int be, int markers, int multi, p3
     int(*dims)[3] = malloc((size_t)nb * sizeof *dims);
     if (!dims)
         return 0;
-    for (int b = 0; b < nb; b++)
+    /* at most VV_GRID_MAX_POINTS points in all, so that p3d_size cannot
+       wrap (2^20 cubed with IBLANK needed 16 * 2^60 bytes: 0 modulo 2^64) */
+    uint64_t points = 0;
+    for (int b = 0; b < nb; b++) {
+        uint64_t n = 1;
         for (int a = 0; a < 3; a++) {
             const uint32_t v = u32(d + o + mk + 12 * (size_t)b + 4 * (size_t)a, be);
             if (v < 1 || v > (1u << 20)) {
@@ -71,7 +75,17 @@ p3d_dims(const unsigned char *d, size_t size, int be, int markers, int multi, p3
                 return 0;
             }
             dims[b][a] = (int)v;
+            n *= v;
+            if (n > VV_GRID_MAX_POINTS) {
+                free(dims);
+                return 0;
+            }
         }
+        if ((points += n) > VV_GRID_MAX_POINTS) {
+            free(dims);
+            return 0;
+        }
+    }
     o += mk + dl + mk;
     L->big_endian = be;
     L->markers = markers;
@@ -146,7 +160,7 @@ vv_grid_read_plot3d(vv_grid **out, const char *xyz_path, const char *q_path) {
     uint64_t size = 0, qsize = 0;
     vv_status s = vv_read_file(xyz_path, P3D_FILE_MAX, &d, &size);
     if (s != VV_OK)
-        return vv_error_prefix(s, "%s", xyz_path);
+        return s; /* the message names the file */
     p3d_layout L, Q;
     memset(&L, 0, sizeof L);
     memset(&Q, 0, sizeof Q);
@@ -194,10 +208,8 @@ vv_grid_read_plot3d(vv_grid **out, const char *xyz_path, const char *q_path) {
         xyz = NULL;
     }
     if (q_path) {
-        if ((s = vv_read_file(q_path, P3D_FILE_MAX, &qd, &qsize)) != VV_OK) {
-            s = vv_error_prefix(s, "%s", q_path);
-            goto done;
-        }
+        if ((s = vv_read_file(q_path, P3D_FILE_MAX, &qd, &qsize)) != VV_OK)
+            goto done; /* the message names the file */
         if ((s = p3d_layout_find(qd, (size_t)qsize, q_path, 1, &Q)) != VV_OK)
             goto done;
         int same = Q.nb == L.nb;

@@ -170,6 +170,10 @@ vtk_points(vtk_reader *r) {
     char ty[64];
     vv_gtype t;
     vv_status s;
+    /* a second POINTS would reallocate the grid under the cells and fields
+       already read for the first (CELL_TYPES then wrote past the types) */
+    if (r->have_points)
+        return vv_error_set(VV_ERR_FORMAT, "%s: POINTS given twice", r->path);
     if ((s = vv_gcur_need_size(&r->c, "POINTS count", VV_GRID_MAX_POINTS, &r->n_points)) != VV_OK ||
         (s = vv_gcur_need(&r->c, ty, sizeof ty, "POINTS type")) != VV_OK)
         return s;
@@ -231,6 +235,8 @@ vtk_cells(vtk_reader *r) {
         return s;
     if (!r->have_points)
         return vv_error_set(VV_ERR_FORMAT, "%s: CELLS before POINTS", r->path);
+    if (r->have_cells)
+        return vv_error_set(VV_ERR_FORMAT, "%s: CELLS given twice", r->path);
     /* VTK 5.1: CELLS n_offsets n_connectivity, then OFFSETS and CONNECTIVITY */
     const unsigned char *save = r->c.p;
     char kw[64];
@@ -319,10 +325,13 @@ vtk_attribute(vtk_reader *r, const char *kw) {
         const unsigned char *save = r->c.p;
         char nx[128];
         if (vv_gcur_token(&r->c, nx, sizeof nx) && isdigit((unsigned char)nx[0])) {
-            ncomp = atoi(nx);
-            if (ncomp < 1 || ncomp > 4)
-                return vv_error_set(VV_ERR_FORMAT, "%s: SCALARS %s: %d components", r->path, name,
-                                    ncomp);
+            /* strtol, not atoi: 4294967297 is not 1 */
+            char *end;
+            const long v = strtol(nx, &end, 10);
+            if (*end || v < 1 || v > 4)
+                return vv_error_set(VV_ERR_FORMAT, "%s: SCALARS %s: %s components", r->path, name,
+                                    nx);
+            ncomp = (int)v;
         } else {
             r->c.p = save;
         }
@@ -426,7 +435,7 @@ vv_grid_read_vtk(vv_grid **out, const char *path) {
     uint64_t size = 0;
     vv_status s = vv_read_file(path, VV_GRID_FILE_MAX, &data, &size);
     if (s != VV_OK)
-        return vv_error_prefix(s, "%s", path);
+        return s; /* the message names the file */
     vtk_reader r;
     memset(&r, 0, sizeof r);
     r.path = path;

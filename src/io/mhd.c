@@ -150,7 +150,7 @@ mhd_expand_pattern(mhd_header *h, const char *value) {
      * hundreds of millions made snprintf pad for seconds: found by
      * fuzz_mhd) */
     const char *q = pc + 1;
-    while (*q && strchr("-+ #0", *q))
+    while (*q && strchr("-+ 0", *q)) /* not '#': undefined for %d */
         q++;
     long width = 0;
     for (; *q >= '0' && *q <= '9'; q++)
@@ -251,6 +251,9 @@ mhd_parse_header(mhd_header *h, FILE *fp) {
             n = mhd_numbers(val, num, 3);
             if (n < 2)
                 return vv_error_set(VV_ERR_FORMAT, "bad DimSize \"%s\"", val);
+            /* a second DimSize replaces the first, axes it leaves out included */
+            for (int a = 0; a < 3; a++)
+                h->dims[a] = 1;
             for (int a = 0; a < n; a++) {
                 if (!(num[a] >= 1) || num[a] != floor(num[a]))
                     return vv_error_set(VV_ERR_FORMAT, "bad DimSize \"%s\"", val);
