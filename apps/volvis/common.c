@@ -29,17 +29,25 @@ cli_errors_quiet(int quiet) {
     errors_quiet = quiet;
 }
 
-/* Writes "volvis: " + message + "\n" as one line: embedded newlines become "; ". */
+/* Writes "volvis: " + message + "\n" as one line: embedded newlines become
+ * "; ", other control bytes (an argument's escape sequence) \xNN. */
 static void
 print_line(const char *msg) {
+    static const char hex[] = "0123456789abcdef";
     char buf[4096];
     size_t n = 0;
-    for (const char *p = msg; *p && n + 3 < sizeof buf; p++) {
-        if (*p == '\n' || *p == '\r') {
+    for (const char *p = msg; *p && n + 5 < sizeof buf; p++) {
+        const unsigned char c = (unsigned char)*p;
+        if (c == '\n' || c == '\r') {
             if (p[1] == '\0')
                 break;
             buf[n++] = ';';
             buf[n++] = ' ';
+        } else if (c < 0x20 || c == 0x7f) {
+            buf[n++] = '\\';
+            buf[n++] = 'x';
+            buf[n++] = hex[c >> 4];
+            buf[n++] = hex[c & 15];
         } else {
             buf[n++] = *p;
         }

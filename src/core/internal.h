@@ -62,7 +62,9 @@ void vv_atomic_file_abort(vv_atomic_file *af);
 
 /**
  * Reads a whole file into memory (NUL-terminated for convenience). Refuses
- * files larger than @p max_bytes with VV_ERR_LIMIT. Errors: VV_ERR_IO.
+ * files larger than @p max_bytes, or than the memory budget allows
+ * (vv_memory_budget_check: the whole file is held), with VV_ERR_LIMIT.
+ * Errors: VV_ERR_IO.
  */
 vv_status vv_read_file(const char *path, uint64_t max_bytes, unsigned char **data, uint64_t *size);
 

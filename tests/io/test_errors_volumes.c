@@ -773,6 +773,15 @@ test_cli_hostile(void **state) {
         expect_clean(cases[i].name, "stdout", r.out);
         vt_run_result_free(&r);
     }
+    /* the CLI's own usage errors quote the command line: an argument's
+       escape sequence is printed as \xNN, not sent to the terminal */
+    const char *args[] = {"info", "--raw", "\x1b[2Jx", vt_path(dir, "utf8.mha"), NULL};
+    vt_run_result r = vt_run_cli_v(dir, args);
+    assert_int_equal(r.status, 2);
+    if (!strstr(r.err, "'\\x1b[2Jx'"))
+        fail_msg("usage error: '%s'", r.err);
+    expect_clean("--raw", "stderr", r.err);
+    vt_run_result_free(&r);
 }
 
 /* The SLC writer's refusals. */
