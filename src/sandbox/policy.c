@@ -45,6 +45,33 @@ struct sbx_landlock_ruleset_attr {
 #define LANDLOCK_SCOPE_SIGNAL (1ULL << 1)
 #endif
 
+/* The coverage build's profile runtime (clang's -fprofile-instr-generate,
+ * the coverage presets): weak, so absent from every other build. */
+void __llvm_profile_set_file_object(FILE *file, int merge) __attribute__((weak));
+void __llvm_profile_set_dumped(void) __attribute__((weak));
+
+void
+sbx_profile_before_lockdown(void) {
+    if (!__llvm_profile_set_file_object)
+        return;
+    /* the profile is written at exit, after the lockdown, which allows
+     * neither creating the file nor locking it: open it now, beside the
+     * ones $LLVM_PROFILE_FILE names, else write none */
+    const char *pattern = getenv("LLVM_PROFILE_FILE");
+    const char *slash = pattern ? strrchr(pattern, '/') : NULL;
+    FILE *f = NULL;
+    if (slash) {
+        char name[4096];
+        snprintf(name, sizeof name, "%.*s/reader-%ld.profraw", (int)(slash - pattern), pattern,
+                 (long)getpid());
+        f = fopen(name, "wb");
+    }
+    if (f)
+        __llvm_profile_set_file_object(f, 0);
+    else if (__llvm_profile_set_dumped)
+        __llvm_profile_set_dumped();
+}
+
 /* Read access beneath the folder of @p path (the folder itself when it is
  * one) and nothing else on any file system; no TCP; no signals to or
  * abstract sockets of processes outside. Returns 0, or -1 with errno (the

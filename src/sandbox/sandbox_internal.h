@@ -178,6 +178,12 @@ int sbx_landlock_restrict(const char *path);
 /** The reader's system-call filter; 0 or -1. */
 int sbx_seccomp_restrict(void);
 
+/* Coverage builds only (clang's profile runtime linked in): opens the
+ * reader's profile file before the lockdown, which would forbid creating
+ * it at exit (beside $LLVM_PROFILE_FILE's, as reader-PID.profraw; none
+ * written when that names no folder). Does nothing in other builds. */
+void sbx_profile_before_lockdown(void);
+
 /* ---- payload.c ---- */
 
 /** The reader's volume allocator: voxels in memfds (vv_volume_set_allocator). */

@@ -393,6 +393,7 @@ vv_sandbox_serve(int argc, char **argv, const vv_sandbox_handler *h) {
     vv_memory_budget_set(rq.budget);
     vv_threads_set(rq.threads);
     sbx_set_limits(rq.budget, rq.threads, rq.cpu_seconds);
+    sbx_profile_before_lockdown();
     if (prctl(PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0) != 0 ||
         (sbx_landlock_restrict(rq.path) != 0 && errno != ENOSYS && errno != EOPNOTSUPP) ||
         sbx_seccomp_restrict() != 0) {
