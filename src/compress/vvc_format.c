@@ -388,6 +388,20 @@ vvc_parse_header(vv_vvc *c, vvc_sections *sec) {
         in->origin[i] = rd_f64(p + 24 + 8 * i);
     for (int i = 0; i < 9; i++)
         in->direction[i] = rd_f64(p + 48 + 8 * i);
+    /* a zero or non-finite spacing would place every voxel at one point
+     * (or nowhere) for the renderers and measurements downstream */
+    for (int i = 0; i < 3; i++) {
+        if (!(in->spacing[i] > 0) || !isfinite(in->spacing[i]))
+            return vv_error_set(VV_ERR_FORMAT, "voxel spacing %g on axis %d (must be finite, > 0)",
+                                in->spacing[i], i);
+        if (!isfinite(in->origin[i]))
+            return vv_error_set(VV_ERR_FORMAT, "origin %g on axis %d is not finite", in->origin[i],
+                                i);
+    }
+    for (int i = 0; i < 9; i++)
+        if (!isfinite(in->direction[i]))
+            return vv_error_set(VV_ERR_FORMAT, "direction matrix entry %d is %g (not finite)", i,
+                                in->direction[i]);
     p += 120;
     in->range[0] = rd_f64(p);
     in->range[1] = rd_f64(p + 8);
