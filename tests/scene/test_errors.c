@@ -504,13 +504,85 @@ test_out_of_core(void **state) {
     assert_null(w);
 }
 
+/* What vv_scene_save checks before it writes (a World the loader would
+ * not read back), each refusal naming the file. */
+static void
+test_save_checks(void **state) {
+    (void)state;
+    const char *path = vt_path(g_dir, "saved.json");
+    vv_world *w = NULL;
+    vt_ok(vv_world_new(&w));
+    check_message(vv_scene_save(NULL, path, NULL), VV_ERR_INVALID, "scene: NULL world", NULL,
+                  "NULL world");
+    check_message(vv_scene_save(w, NULL, NULL), VV_ERR_INVALID, "scene: NULL path", NULL,
+                  "NULL path");
+    vv_render_settings *rs = &w->render;
+    memset(rs->renderer, 'r', sizeof rs->renderer);
+    check_message(vv_scene_save(w, path, NULL), VV_ERR_INVALID, "renderer name not terminated",
+                  "saved.json", "renderer");
+    rs->renderer[0] = '\0';
+    rs->quality = 3;
+    check_message(vv_scene_save(w, path, NULL), VV_ERR_INVALID, "quality 3 outside -1..2",
+                  "saved.json", "quality");
+    rs->quality = -1;
+    rs->n_options = VV_MAX_RENDER_OPTIONS + 1;
+    check_message(vv_scene_save(w, path, NULL), VV_ERR_INVALID, "33 options outside 0..32",
+                  "saved.json", "options");
+    rs->n_options = 2;
+    memset(rs->option_keys[0], 'k', sizeof rs->option_keys[0]);
+    check_message(vv_scene_save(w, path, NULL), VV_ERR_INVALID, "option 0 not terminated",
+                  "saved.json", "key");
+    strcpy(rs->option_keys[0], "");
+    check_message(vv_scene_save(w, path, NULL), VV_ERR_INVALID, "option 0 has an empty key",
+                  "saved.json", "empty key");
+    strcpy(rs->option_keys[0], "k");
+    strcpy(rs->option_keys[1], "k");
+    check_message(vv_scene_save(w, path, NULL), VV_ERR_INVALID, "option k given twice",
+                  "saved.json", "twice");
+    strcpy(rs->option_keys[1], "\xff");
+    check_message(vv_scene_save(w, path, NULL), VV_ERR_INVALID,
+                  "renderer option 1: the key is not valid UTF-8", "saved.json", "UTF-8 key");
+    strcpy(rs->option_keys[1], "j");
+    strcpy(rs->option_values[1], "\xc3");
+    check_message(vv_scene_save(w, path, NULL), VV_ERR_INVALID,
+                  "a renderer option is not valid UTF-8", "saved.json", "UTF-8 value");
+    rs->n_options = 0;
+    w->view.width = 0;
+    check_message(vv_scene_save(w, path, NULL), VV_ERR_INVALID, "view size 0x", "saved.json",
+                  "view");
+    w->view.width = 64;
+    /* objects without the files a scene names them by */
+    vv_object *o = NULL;
+    vt_ok(vv_object_new_geometry(&o, VV_OBJECT_MESH, "m"));
+    vt_ok(vv_world_add_object(w, o));
+    check_message(vv_scene_save(w, path, NULL), VV_ERR_INVALID, "object 0: a mesh without a file",
+                  "saved.json", "mesh");
+    const char *files[2] = {"m.obj", NULL};
+    const int dims[3] = {2, 2, 2};
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_new(&v, dims, VV_U8));
+    vt_ok(vv_object_new_volume(&o, v, "v"));
+    vv_volume_free(v);
+    vt_ok(vv_world_add_object(w, o));
+    check_message(vv_scene_save(w, path, files), VV_ERR_INVALID, "object 1: no volume file name",
+                  "saved.json", "volume");
+    files[1] = "v.nrrd";
+    snprintf(o->name, sizeof o->name, "\xff\xfe");
+    check_message(vv_scene_save(w, path, files), VV_ERR_INVALID, "object 1: ", "saved.json",
+                  "UTF-8 name");
+    snprintf(o->name, sizeof o->name, "v");
+    check_message(vv_scene_save(w, vt_path(g_dir, "no/such/dir/s.json"), files), VV_ERR_IO, "scene",
+                  "s.json", "folder");
+    vt_ok(vv_scene_save(w, path, files));
+    vv_world_free(w);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_refusals),
-        cmocka_unit_test(test_too_many),
-        cmocka_unit_test(test_policy),
-        cmocka_unit_test(test_out_of_core),
+        cmocka_unit_test(test_refusals),    cmocka_unit_test(test_too_many),
+        cmocka_unit_test(test_policy),      cmocka_unit_test(test_out_of_core),
+        cmocka_unit_test(test_save_checks),
     };
     return vt_run_tests(tests, setup, NULL);
 }
