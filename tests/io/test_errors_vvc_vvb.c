@@ -528,6 +528,9 @@ test_vvc_io(void **state) {
 #define H_COARSE 32
 #define H_SPACING 48
 #define H_ORIGIN 72
+#define H_UNIT 36
+#define H_SPACE 40
+#define H_DIRECTION 96
 #define H_RANGE 168
 #define H_INDEX 184
 #define H_COUNT 192
@@ -652,6 +655,11 @@ v_origin_inf(unsigned char *b, size_t *n) {
     putf64(b + H_ORIGIN, -INFINITY);
 }
 static void
+v_direction(unsigned char *b, size_t *n) {
+    (void)n;
+    putf64(b + H_DIRECTION + 8 * 4, INFINITY);
+}
+static void
 v_range(unsigned char *b, size_t *n) {
     (void)n;
     putf64(b + H_RANGE, 10.0);
@@ -756,6 +764,7 @@ static const vvb_case vvb_cases[] = {
     {"spacing 0", K_RAW, v_spacing0, VV_ERR_FORMAT, "bad spacing or origin on axis 1", 0},
     {"spacing NaN", K_ZSTD, v_spacing_nan, VV_ERR_FORMAT, "bad spacing or origin on axis 2", 0},
     {"origin inf", K_RAW, v_origin_inf, VV_ERR_FORMAT, "bad spacing or origin on axis 0", 0},
+    {"direction", K_COARSE, v_direction, VV_ERR_FORMAT, "direction matrix entry 4 is inf", 0},
     {"range", K_RAW, v_range, VV_ERR_FORMAT, "bad value range 10..1", 0},
     {"brick count", K_RAW, v_count, VV_ERR_FORMAT, "index of 3 bricks", 0},
     {"index offset", K_COARSE, v_index_off, VV_ERR_FORMAT, "runs past the end of the file", 0},
@@ -885,6 +894,21 @@ test_vvb_open(void **state) {
     assert_null(brick);
     vv_bricked_free(bk);
     free(good);
+
+    /* a unit and a space past their enumerations are unknown (optional metadata) */
+    good = vvb_bytes(K_RAW, &n);
+    put32(good + H_UNIT, 999);
+    put32(good + H_SPACE, 7);
+    path = vt_path(outdir(), "unit.vvb");
+    vt_write_file(path, good, n);
+    free(good);
+    vt_ok(vv_volume_load(&v, path, NULL));
+    assert_int_equal(v->unit, VV_UNIT_UNKNOWN);
+    assert_int_equal(v->space, VV_SPACE_UNKNOWN);
+    vv_volume_free(v);
+    vt_ok(vv_bricked_open(&bk, path, NULL, vt_cache(0)));
+    assert_int_equal(vv_bricked_header(bk)->unit, VV_UNIT_UNKNOWN);
+    vv_bricked_free(bk);
 
     /* a raw layout past its file's end; a file no brick reader reads */
     unsigned char raw[1000];
