@@ -202,7 +202,16 @@ test_network_protocol(void **state) {
     const char *path = temp_socket("p.sock");
     vv_input_manager *m = new_manager();
     vt_ok(vv_input_manager_listen(m, path));
+    /* a name with terminal escapes (and a tab) is kept printable */
     int fd = connect_to(path);
+    pump(m);
+    assert_string_equal(exchange(m, fd, "device 2 mouse a\x1b[2J\tb\x07\n", 24), "");
+    vv_input_device_desc dd;
+    vt_ok(vv_input_manager_device_get(m, vv_input_manager_device_count(m) - 1, &dd));
+    assert_string_equal(dd.name, "a [2J b ");
+    close(fd);
+    pump(m);
+    fd = connect_to(path);
     pump(m);
     assert_string_equal(exchange(m, fd, "device 1 mouse m\n", 17), "");
     expect_reply(m, fd, "a b c d e f g h i j k l m n o p\n", "error line 2: too many fields");
