@@ -567,6 +567,31 @@ test_save_checks(void **state) {
     check_message(vv_scene_save(w, path, files), VV_ERR_INVALID, "object 1: no volume file name",
                   "saved.json", "volume");
     files[1] = "v.nrrd";
+    /* a NULL object, a volume object without its volume (Worlds made by hand) */
+    vv_object *keep = w->objects[1];
+    w->objects[1] = NULL;
+    check_message(vv_scene_save(w, path, files), VV_ERR_INVALID, "object 1 is NULL", "saved.json",
+                  "NULL object");
+    w->objects[1] = keep;
+    vv_volume *kv = o->volume;
+    o->volume = NULL;
+    check_message(vv_scene_save(w, path, files), VV_ERR_INVALID, "object 1 has no volume",
+                  "saved.json", "no volume");
+    o->volume = kv;
+    /* textures without the files they came from */
+    vv_image *img = NULL;
+    vt_ok(vv_image_new(&img, 2, 2));
+    vv_texture_image *ti = NULL;
+    vt_ok(vv_texture_image_new(&ti, img, NULL)); /* the image's ownership taken */
+    o->texture.image = ti;
+    check_message(vv_scene_save(w, path, files), VV_ERR_INVALID,
+                  "object 1: a texture image without a file name", "saved.json", "texture");
+    o->texture.image = NULL;
+    vv_texture_image_free(ti);
+    o->solid_texture.kind = VV_SOLID_TEXTURE_VOLUME;
+    check_message(vv_scene_save(w, path, files), VV_ERR_INVALID,
+                  "object 1: a solid-texture volume without a file name", "saved.json", "solid");
+    o->solid_texture.kind = VV_SOLID_TEXTURE_NONE;
     snprintf(o->name, sizeof o->name, "\xff\xfe");
     check_message(vv_scene_save(w, path, files), VV_ERR_INVALID, "object 1: ", "saved.json",
                   "UTF-8 name");
