@@ -507,6 +507,26 @@ test_vvc_io(void **state) {
     expect_refusal(vv_vvc_load(&c, vt_path(outdir(), "missing.vvc")), VV_ERR_IO, NULL,
                    "missing.vvc", "missing file");
     assert_null(c);
+    /* a file larger than the memory budget is not read (a sparse file of
+     * 16 MiB under a budget of 1 MiB), a large file without the magic neither */
+    const char *big = vt_path(outdir(), "big.vvc");
+    vt_write_file(big, VVC_MAGIC, 8);
+    assert_int_equal(truncate(big, 16 << 20), 0);
+    vv_memory_budget_set(1 << 20);
+    expect_refusal(vv_vvc_load(&c, big), VV_ERR_LIMIT, "memory budget", "big.vvc", "budget");
+    assert_null(c);
+    unsigned char *bytes = calloc(1, 2 << 20);
+    assert_non_null(bytes);
+    memcpy(bytes, VVC_MAGIC, 8);
+    expect_refusal(vv_vvc_from_memory(&c, bytes, 2 << 20, "copy.vvc"), VV_ERR_LIMIT,
+                   "memory budget", "copy.vvc", "budget copy");
+    free(bytes);
+    vv_memory_budget_set(0);
+    vt_write_file(big, "NOTAVVC!", 8);
+    assert_int_equal(truncate(big, 16 << 20), 0);
+    expect_refusal(vv_vvc_load(&c, big), VV_ERR_FORMAT, "bad magic number", "big.vvc", "magic");
+    assert_null(c);
+    unlink(big);
     /* saving into a folder that is not there */
     vv_volume *v = ramp_volume(9, 9, 9, VV_U8);
     vv_vvc_params p;
