@@ -944,6 +944,20 @@ test_vvb_open(void **state) {
                    "1000 bytes of voxels from offset 24 run past the end of the file (1000 bytes)",
                    "short.raw", "raw layout");
     assert_null(bk);
+    /* the scan of a raw layout reads a slice at a time: a slice over the
+     * memory budget is refused, not allocated (a sparse file of 32 MiB) */
+    path = vt_path(outdir(), "wide.raw");
+    vt_write_file(path, raw, 1);
+    assert_int_equal(truncate(path, 4096 * 4096 * 2), 0);
+    rp.dims[0] = rp.dims[1] = 4096;
+    rp.dims[2] = 2;
+    rp.header_skip = 0;
+    vv_memory_budget_set(1 << 20);
+    expect_refusal(vv_bricked_open(&bk, path, &rp, vt_cache(0)), VV_ERR_LIMIT, "memory budget",
+                   "wide.raw", "slice");
+    vv_memory_budget_set(0);
+    assert_null(bk);
+    unlink(path);
     path = vt_path(outdir(), "notes.txt");
     vt_write_file(path, "hello\n", 6);
     vv_error_clear();
