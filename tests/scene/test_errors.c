@@ -91,6 +91,8 @@ static const scene_case cases[] = {
     {"[1, 2]", "expected a JSON object at the top level, got an array", 0},
     {"{\"view\": ", "end of file", 0},
     {"{\"view\": {\"fov\": 1e400}}", "overflow", 0},
+    {"{\"view\": {\"fov\": NaN}}", "invalid token", 0},
+    {"{\"view\": {\"fov\": -Infinity}}", "invalid token", 0},
     {"{\"view\": {}, \"view\": {}}", "duplicate", 0},
     {"{\"veiw\": {}}", "veiw: unknown key (did you mean view?)", 0},
     {"{\"zzzzzzzzzz\": {}}", "unknown key; expected one of: view, lights", 0},
