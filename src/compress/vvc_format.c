@@ -6,6 +6,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <zlib.h>
 
 #include "compress/rangecoder.h"
@@ -388,6 +389,20 @@ vvc_parse_header(vv_vvc *c, vvc_sections *sec) {
         in->origin[i] = rd_f64(p + 24 + 8 * i);
     for (int i = 0; i < 9; i++)
         in->direction[i] = rd_f64(p + 48 + 8 * i);
+    /* a zero or non-finite spacing would place every voxel at one point
+     * (or nowhere) for the renderers and measurements downstream */
+    for (int i = 0; i < 3; i++) {
+        if (!(in->spacing[i] > 0) || !isfinite(in->spacing[i]))
+            return vv_error_set(VV_ERR_FORMAT, "voxel spacing %g on axis %d (must be finite, > 0)",
+                                in->spacing[i], i);
+        if (!isfinite(in->origin[i]))
+            return vv_error_set(VV_ERR_FORMAT, "origin %g on axis %d is not finite", in->origin[i],
+                                i);
+    }
+    for (int i = 0; i < 9; i++)
+        if (!isfinite(in->direction[i]))
+            return vv_error_set(VV_ERR_FORMAT, "direction matrix entry %d is %g (not finite)", i,
+                                in->direction[i]);
     p += 120;
     in->range[0] = rd_f64(p);
     in->range[1] = rd_f64(p + 8);
@@ -576,6 +591,9 @@ vv_vvc_from_memory(vv_vvc **out, const void *data, size_t size, const char *name
         name = "(memory)";
     if ((uint64_t)size > VVC_MAX_FILE)
         return vv_error_set(VV_ERR_LIMIT, "vvc: %s: %zu bytes is over the limit", name, size);
+    vv_status s = vv_memory_budget_check((uint64_t)size, "a copy of a .vvc");
+    if (s != VV_OK)
+        return vv_error_prefix(s, "vvc: %s", name);
     vv_vvc *c = calloc(1, sizeof *c);
     if (!c || !(c->bytes = malloc(size ? size : 1))) {
         free(c);
@@ -583,7 +601,7 @@ vv_vvc_from_memory(vv_vvc **out, const void *data, size_t size, const char *name
     }
     memcpy(c->bytes, data, size);
     c->size = size;
-    vv_status s = vvc_parse(c, name);
+    s = vvc_parse(c, name);
     if (s != VV_OK) {
         vv_vvc_free(c);
         return vv_error_prefix(s, "vvc: %s", name);
@@ -597,7 +615,18 @@ vv_vvc_load(vv_vvc **out, const char *path) {
     *out = NULL;
     unsigned char *data = NULL;
     uint64_t size = 0;
-    vv_status s = vv_read_file(path, VVC_MAX_FILE, &data, &size);
+    vv_status s = VV_OK;
+    /* the whole file is read into memory: first its magic (a large file that
+     * is no .vvc is not read at all) and its size against the budget */
+    struct stat st;
+    if (stat(path, &st) == 0 && S_ISREG(st.st_mode)) {
+        if (st.st_size >= 8 && !vv_vvc_detect(path))
+            s = vv_error_set(VV_ERR_FORMAT, "not a .vvc file (bad magic number)");
+        else
+            s = vv_memory_budget_check((uint64_t)st.st_size, "a .vvc file read whole");
+    }
+    if (s == VV_OK)
+        s = vv_read_file(path, VVC_MAX_FILE, &data, &size);
     if (s != VV_OK)
         return vv_error_prefix(s, "vvc: %s", path);
     vv_vvc *c = calloc(1, sizeof *c);

@@ -125,9 +125,10 @@ vv_input_device_add_driver(vv_input_manager *m, vv_input_kind kind, const char *
     d->id = m->n_dev + 1;
     d->kind = kind;
     snprintf(d->name, sizeof d->name, "%s", name && *name ? name : vv_input_kind_name(kind));
-    /* names are one token-free line in recordings */
+    /* names are one token-free line in recordings, and printable: a name a
+     * replay file or a network client gives may hold terminal escapes */
     for (char *c = d->name; *c; c++)
-        if (*c == '\n' || *c == '\r')
+        if ((unsigned char)*c < 0x20 || *c == 0x7f)
             *c = ' ';
     snprintf(d->driver, sizeof d->driver, "%s", driver ? driver : "gui");
     d->info = &m->db.e[kind];

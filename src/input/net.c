@@ -258,13 +258,15 @@ vv_input_manager_listen(vv_input_manager *m, const char *path) {
     }
     vv_input_driver drv = {"network", s, net_ready, NULL, NULL, net_close};
     s->index = vv_input_driver_add(m, &drv);
-    if (s->index < 0 || vv_input_watch(m, s->index, s->lfd) != VV_OK) {
+    /* both set the message (no driver left, epoll); it names the socket */
+    vv_status st = s->index < 0 ? VV_ERR_LIMIT : vv_input_watch(m, s->index, s->lfd);
+    if (st != VV_OK) {
         if (s->index >= 0)
             m->n_drivers--;
         close(s->lfd);
         unlink(path);
         free(s);
-        return VV_ERR_LIMIT;
+        return vv_error_prefix(st, "network: %s", path);
     }
     m->listening = 1;
     return VV_OK;

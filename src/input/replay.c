@@ -304,9 +304,9 @@ vv_input_manager_open_replay(vv_input_manager *m, const char *path, double start
     r->speed = speed;
     r->t0 = r->n ? r->ev[0].time : 0;
     vv_input_driver drv = {"replay", r, NULL, replay_poll, replay_timeout, replay_close};
-    if (vv_input_driver_add(m, &drv) < 0) {
+    if (vv_input_driver_add(m, &drv) < 0) { /* its message: no driver left */
         replay_close(m, &drv);
-        return VV_ERR_LIMIT;
+        return vv_error_prefix(VV_ERR_LIMIT, "replay: %s", path);
     }
     for (int i = 0; i < r->n_dev; i++) {
         vv_input_device_add_driver(m, r->dev[i].kind, r->dev[i].name, "replay", &r->dev[i].id);

@@ -361,6 +361,14 @@ scan_raw(vv_bricked *b) {
     const vv_voxel_type t = b->f.header->type;
     const size_t vs = vv_voxel_type_size(t);
     const size_t slice = (size_t)d[0] * (size_t)d[1];
+    /* a slice of a volume of 65536^2 voxels across is gigabytes */
+    char what[96];
+    snprintf(what, sizeof what, "a slice of %d x %d %s (the scan for the value range)", d[0], d[1],
+             vv_voxel_type_name(t));
+    vv_status bs =
+        vv_memory_budget_check((uint64_t)slice * vs + sizeof(double) * (uint64_t)d[0], what);
+    if (bs != VV_OK)
+        return bs;
     void *buf = malloc(slice * vs);
     double *row = malloc(sizeof(double) * (size_t)d[0]);
     if (!buf || !row) {

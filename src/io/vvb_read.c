@@ -423,8 +423,11 @@ vvb_open_file(vvb_file *f) {
     f->zstd = codec == VVB_CODEC_ZSTD;
     if (f->zstd && !f->has_coarse)
         return vv_error_set(VV_ERR_FORMAT, "zstd bricks without coarse levels");
-    v->unit = (vv_unit)vvb_get_u32(h + 36);
-    v->space = (vv_space)vvb_get_u32(h + 40);
+    /* optional metadata: a unit or space this build does not know is unknown,
+     * not a value past the enumeration passed on to writers */
+    const uint32_t unit = vvb_get_u32(h + 36), space = vvb_get_u32(h + 40);
+    v->unit = unit <= VV_UNIT_UNKNOWN ? (vv_unit)unit : VV_UNIT_UNKNOWN;
+    v->space = space <= VV_SPACE_LPS ? (vv_space)space : VV_SPACE_UNKNOWN;
     for (int a = 0; a < 3; a++) {
         v->spacing[a] = vvb_get_f64(h + 48 + 8 * a);
         v->origin[a] = vvb_get_f64(h + 72 + 8 * a);
@@ -436,6 +439,10 @@ vvb_open_file(vvb_file *f) {
     for (int a = 0; a < 3; a++)
         if (!(v->spacing[a] > 0) || !isfinite(v->spacing[a]) || !isfinite(v->origin[a]))
             return vv_error_set(VV_ERR_FORMAT, "bad spacing or origin on axis %d", a);
+    for (int a = 0; a < 9; a++)
+        if (!isfinite(v->direction[a]))
+            return vv_error_set(VV_ERR_FORMAT, "direction matrix entry %d is %g (not finite)", a,
+                                v->direction[a]);
     if (!(v->range[0] <= v->range[1]))
         return vv_error_set(VV_ERR_FORMAT, "bad value range %g..%g", v->range[0], v->range[1]);
     const uint64_t index_off = vvb_get_u64(h + 184), count = vvb_get_u64(h + 192);
