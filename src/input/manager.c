@@ -31,6 +31,11 @@ vv_input_warn(vv_input_manager *m, const char *fmt, ...) {
     va_start(ap, fmt);
     vsnprintf(m->last_warning, sizeof m->last_warning, fmt, ap);
     va_end(ap);
+    /* a warning may quote what a network client or a replay file sent:
+       one printable line */
+    for (char *c = m->last_warning; *c; c++)
+        if ((unsigned char)*c < 0x20 || *c == 0x7f)
+            *c = '?';
     m->warnings++;
 }
 

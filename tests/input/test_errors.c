@@ -194,6 +194,11 @@ expect_reply(vv_input_manager *m, int fd, const char *line, const char *want) {
     assert_int_equal(vv_input_manager_warning_count(m), w0 + 1);
     if (!strstr(vv_input_manager_last_warning(m), "network: line "))
         fail_msg("'%s': warning '%s'", line, vv_input_manager_last_warning(m));
+    /* one printable line, whatever the client sent */
+    for (const char *c = vv_input_manager_last_warning(m); *c; c++)
+        if ((unsigned char)*c < 0x20 || *c == 0x7f)
+            fail_msg("'%s': warning '%s' holds byte 0x%02x", line, vv_input_manager_last_warning(m),
+                     (unsigned char)*c);
 }
 
 static void
@@ -247,6 +252,8 @@ test_network_protocol(void **state) {
         assert_string_equal(exchange(m, fd, line, strlen(line)), "");
     }
     expect_reply(m, fd, "device 9 mouse m9\n", "error line 21: more than 8 devices on one");
+    /* an escape sequence in what the client names: the warning holds '?' */
+    expect_reply(m, fd, "jump\x1b[2J 1 0\n", "error line 22: unknown event kind");
     /* the manager's 64 devices (the keyboard and the mouse among them): more
      * connections of 8 until one is refused */
     int more[8], nmore = 0, refused = 0;
