@@ -186,12 +186,17 @@ mhd_read_list(mhd_header *h, FILE *fp) {
     char line[MHD_LINE_MAX];
     int cap = 0;
     int got, lineno = 0;
+    uint64_t held = 0; /* the names' bytes, against the memory budget */
     while ((got = mhd_getline(fp, line, sizeof line, ++lineno)) > 0) {
         char *t = mhd_trim(line);
         if (!*t)
             continue;
         if (h->nlist >= MHD_MAX_FILES)
             return vv_error_set(VV_ERR_LIMIT, "more than %d files in the LIST", MHD_MAX_FILES);
+        held += strlen(t) + 1 + sizeof *h->list;
+        vv_status sb = vv_memory_budget_check(held, "the LIST's file names");
+        if (sb != VV_OK)
+            return sb;
         if (h->nlist == cap) {
             int nc = cap ? 2 * cap : 64;
             char **nl = realloc(h->list, (size_t)nc * sizeof *nl);

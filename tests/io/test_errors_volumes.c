@@ -475,6 +475,24 @@ test_mhd_long_list(void **state) {
     expect_refusal("long list", vv_mhd_read(&v, path), VV_ERR_LIMIT,
                    "more than 65536 files in the LIST", "long_list.mhd");
     assert_null(v);
+    /* the names count against the memory budget: 1000 names of 2000
+       characters under a 1 MiB budget */
+    f = fopen(path, "wb");
+    assert_non_null(f);
+    fputs("DimSize = 2 2 2\nElementType = MET_UCHAR\nElementDataFile = LIST\n", f);
+    char name[2001];
+    memset(name, 'n', 2000);
+    name[2000] = '\0';
+    for (int i = 0; i < 1000; i++)
+        fprintf(f, "%s\n", name);
+    assert_int_equal(fclose(f), 0);
+    const uint64_t budget = vv_memory_budget_get();
+    vv_memory_budget_set((uint64_t)1 << 20);
+    vv_status s = vv_mhd_read(&v, path);
+    vv_memory_budget_set(budget);
+    expect_refusal("list over the budget", s, VV_ERR_LIMIT, "the LIST's file names",
+                   "long_list.mhd");
+    assert_null(v);
 }
 
 /* A header line longer than the reader's line buffer. */
