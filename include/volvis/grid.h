@@ -150,9 +150,9 @@ int vv_grid_find_field(const vv_grid *g, const char *name, int time);
 vv_status vv_grid_field_scalars(const vv_grid *g, int field, int component, float **out);
 
 /**
- * Checks the grid: every cell's type known and its point count right,
- * every index below n_points, cell offsets increasing, fields sized to
- * their points or cells. Errors: VV_ERR_FORMAT with the first bad cell.
+ * Checks the grid: every point's coordinates finite, every cell's type known and its point count
+ * right, every index below n_points, cell offsets increasing, fields sized to their points or
+ * cells. Errors: VV_ERR_FORMAT with the first bad cell.
  */
 vv_status vv_grid_validate(const vv_grid *g);
 

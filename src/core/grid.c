@@ -267,6 +267,10 @@ vv_grid_field_scalars(const vv_grid *g, int field, int component, float **out) {
 
 vv_status
 vv_grid_validate(const vv_grid *g) {
+    for (size_t i = 0; i < 3 * g->n_points; i++)
+        if (!isfinite(g->points[i]))
+            return vv_error_set(VV_ERR_FORMAT,
+                                "grid: point %zu has a coordinate that is not finite", i / 3);
     if (g->n_cells && (!g->cell_offsets || g->cell_offsets[0] != 0))
         return vv_error_set(VV_ERR_FORMAT, "grid: cell offsets do not start at 0");
     for (size_t c = 0; c < g->n_cells; c++) {

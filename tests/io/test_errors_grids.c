@@ -115,6 +115,16 @@ static const gcase grid_cases[] = {
      "CELLS: cell 0 uses point 4 but there are 4 points"},
     {"cells_negative.vtk", RD_VTK, B(VTK_HEAD VTK_PTS "CELLS 1 5\n4 0 1 -2 3\n"), VV_ERR_FORMAT,
      "CELLS: cell 0 uses point -2"},
+    {"point_nan.vtk", RD_VTK, B(VTK_HEAD "POINTS 4 float\n0 0 0  1 0 0  0 nan 0  0 0 1\n" VTK_TET),
+     VV_ERR_FORMAT, "point 2 has a coordinate that is not finite"},
+    {"point_inf.dx", RD_DX,
+     B("object 1 class array type float rank 1 shape 3 items 4 data follows\n"
+       "0 0 0\n1 0 0\n0 1 0\n0 0 inf\n"
+       "object 2 class array type int rank 1 shape 4 items 1 data follows\n0 1 2 3\n"
+       "attribute \"element type\" string \"tetrahedra\"\n"
+       "object 3 class field\ncomponent \"positions\" value 1\n"
+       "component \"connections\" value 2\n"),
+     VV_ERR_FORMAT, "point 3 has a coordinate that is not finite"},
     {"cells_nan.vtk", RD_VTK, B(VTK_HEAD VTK_PTS "CELLS 1 5\n4 0 1 nan 3\n"), VV_ERR_FORMAT,
      "CELLS: cell 0 uses point nan"},
     {"cells_slack.vtk", RD_VTK, B(VTK_HEAD VTK_PTS "CELLS 1 6\n4 0 1 2 3 3\n"), VV_ERR_FORMAT,
