@@ -74,7 +74,9 @@ usage(FILE *out) {
                  "NRRD, NIfTI, TIFF and DICOM files, meshes, .vtu and NetCDF grids are read\n"
                  "by their libraries in a separate, locked-down process (volvis-reader); a\n"
                  "crash there is one line of error.\n"
-                 "VOLVIS_SANDBOX=0 reads them in this process (docs/security.md).\n"
+                 "VOLVIS_SANDBOX=0 reads them in this process; VOLVIS_SANDBOX=all reads\n"
+                 "our own formats (SLC, MetaImage, VTK, OpenDX, PLOT3D, raw, .vvb) there too\n"
+                 "(docs/security.md).\n"
                  "\n"
                  "Exit status: 0 success, 1 bad input (file, format or render error),\n"
                  "2 bad usage, 130 interrupted. Errors are one line on stderr.\n");

@@ -98,9 +98,10 @@ int vv_sandbox_enabled(void);
 
 /**
  * 1 when $VOLVIS_SANDBOX is "all": the built-in rows of our own parsers
- * (SLC, MetaImage, VTK legacy, OpenDX, PLOT3D, raw, .vvc, a .vvb read whole)
+ * (SLC, MetaImage, VTK legacy, OpenDX, PLOT3D, raw, a .vvb read whole; not
+ * .vvc, which vv_vvc_load reads without the table)
  * are read in the reader too, not only the third parties' (docs/security.md,
- * "Our own parsers in the reader"). A row added at run time still reads in
+ * "Our own parsers under attack"). A row added at run time still reads in
  * this process: the reader knows the built-in rows only.
  */
 int vv_sandbox_all(void);
