@@ -25,6 +25,7 @@
  * over 16 MiB and chunks over 1 GiB are refused.
  */
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -150,10 +151,18 @@ parse_zarray(zr_array *a) {
         else if (sep && !(json_is_string(sep) && !strcmp(json_string_value(sep), ".")))
             s = vv_error_set(VV_ERR_FORMAT, ".zarray: dimension_separator is not \".\" or \"/\"");
         a->fill = 0;
+        const char *fs = json_string_value(fill);
         if (json_is_number(fill))
             a->fill = json_number_value(fill);
-        else if (json_is_string(fill) && !strcmp(json_string_value(fill), "NaN"))
+        else if (fs && !strcmp(fs, "NaN"))
             a->fill = NAN;
+        else if (fs && !strcmp(fs, "Infinity"))
+            a->fill = INFINITY;
+        else if (fs && !strcmp(fs, "-Infinity"))
+            a->fill = -INFINITY;
+        else if (s == VV_OK && fill && !json_is_null(fill))
+            s = vv_error_set(VV_ERR_FORMAT, ".zarray: fill_value is not a number, null, \"NaN\" or "
+                                            "\"Infinity\"");
     }
     json_decref(j);
     return s;
@@ -177,27 +186,45 @@ axis_kind(const char *name, const char *type) {
 }
 
 /* scale (and translation) of one coordinateTransformations list into
- * sc/tr (multiplied, added: nested levels compose). */
-static void
-apply_transforms(json_t *list, int ndim, double *sc, double *tr) {
+ * sc/tr (multiplied, added: nested levels compose). A scale or translation
+ * that is not @p ndim numbers, a scale that is not positive and finite:
+ * VV_ERR_FORMAT naming @p where (a zero or non-finite spacing is never
+ * taken). Other transform types are ignored. */
+static vv_status
+apply_transforms(json_t *list, int ndim, double *sc, double *tr, const char *where) {
     size_t i;
     json_t *t;
     json_array_foreach(list, i, t) {
         const char *type = json_string_value(json_object_get(t, "type"));
-        json_t *v = json_object_get(t, type ? type : "");
-        if (!type || !json_is_array(v) || (int)json_array_size(v) != ndim)
+        if (!type || (strcmp(type, "scale") && strcmp(type, "translation")))
             continue;
+        const int scale = !strcmp(type, "scale");
+        json_t *v = json_object_get(t, type);
+        if (!json_is_array(v) || (int)json_array_size(v) != ndim)
+            return vv_error_set(VV_ERR_FORMAT, ".zattrs: %s: the %s is not %d numbers", where, type,
+                                ndim);
         for (int k = 0; k < ndim; k++) {
-            double x = json_number_value(json_array_get(v, (size_t)k));
+            json_t *n = json_array_get(v, (size_t)k);
+            const double x = json_number_value(n);
+            if (!json_is_number(n) || !isfinite(x) || (scale && !(x > 0)))
+                return vv_error_set(VV_ERR_FORMAT, ".zattrs: %s: %s %d is not a %s number", where,
+                                    type, k, scale ? "positive finite" : "finite");
             /* x' = s x (the translation so far scaled too), x' = x + t */
-            if (!strcmp(type, "scale") && x > 0 && isfinite(x)) {
+            if (scale) {
                 sc[k] *= x;
                 tr[k] *= x;
-            } else if (!strcmp(type, "translation") && isfinite(x)) {
+            } else {
                 tr[k] += x;
             }
+            if (!isfinite(sc[k]) || !(sc[k] > 0) || !isfinite(tr[k]))
+                return vv_error_set(VV_ERR_FORMAT,
+                                    ".zattrs: %s: the composed %s along axis %d is not finite "
+                                    "and positive",
+                                    where, isfinite(sc[k]) && sc[k] > 0 ? "translation" : "scale",
+                                    k);
         }
     }
+    return VV_OK;
 }
 
 /* The OME metadata of the store at @p root (its .zattrs): level @p level's
@@ -238,6 +265,25 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
             return s;
         }
         snprintf(a->dir, sizeof a->dir, "%s/%s", root, p);
+        /* a symbolic link may still lead out of the store: compare the
+         * real paths (a folder that does not exist has no .zarray) */
+        char *rroot = realpath(root, NULL), *rdir = realpath(a->dir, NULL);
+        int inside = 1;
+        if (rroot && rdir) {
+            const size_t n = strlen(rroot);
+            inside = !strncmp(rdir, rroot, n) &&
+                     (rdir[n] == '/' || rdir[n] == '\0' || (n == 1 && rroot[0] == '/'));
+        }
+        free(rroot);
+        free(rdir);
+        if (!inside) {
+            s = vv_error_set(VV_ERR_FORMAT,
+                             ".zattrs: dataset %d: path \"%s\" leaves the store (a link to a "
+                             "folder outside it)",
+                             level, p);
+            json_decref(za);
+            return s;
+        }
     }
     s = parse_zarray(a);
     if (s != VV_OK) {
@@ -280,10 +326,13 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
         a->trans[i] = 0;
     }
     if (s == VV_OK && ds0) {
-        apply_transforms(json_object_get(ds0, "coordinateTransformations"), a->ndim, a->scale,
-                         a->trans);
-        apply_transforms(json_object_get(ms, "coordinateTransformations"), a->ndim, a->scale,
-                         a->trans);
+        char where[64];
+        snprintf(where, sizeof where, "dataset %d", level);
+        s = apply_transforms(json_object_get(ds0, "coordinateTransformations"), a->ndim, a->scale,
+                             a->trans, where);
+        if (s == VV_OK)
+            s = apply_transforms(json_object_get(ms, "coordinateTransformations"), a->ndim,
+                                 a->scale, a->trans, "multiscales");
     }
     /* omero: the channel's label and colour (RRGGBB) */
     json_t *chs = za ? json_object_get(json_object_get(za, "omero"), "channels") : NULL;
@@ -447,6 +496,10 @@ vv_zr_layout(const zr_array *a, int channel, int time, zr_layout *J) {
     }
     J->nc = J->cax >= 0 ? a->shape[J->cax] : 1;
     J->nt = J->tax >= 0 ? a->shape[J->tax] : 1;
+    if (J->nc > INT_MAX || J->nt > INT_MAX) /* counted in ints (vv_load_info) */
+        return vv_error_set(VV_ERR_LIMIT, "%llu %s (limit %d)",
+                            (unsigned long long)(J->nc > INT_MAX ? J->nc : J->nt),
+                            J->nc > INT_MAX ? "channels" : "time steps", INT_MAX);
     const int ch = channel < 0 ? 0 : channel, tp = time < 0 ? 0 : time;
     if ((uint64_t)ch >= J->nc)
         return vv_error_set(VV_ERR_INVALID, "channel %d asked, the store has %llu", ch,
