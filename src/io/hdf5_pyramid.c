@@ -277,11 +277,14 @@ bdv_voxel_size(h5p *h, const char *path, int setup) {
     if (size < 0 || size > (64L << 20))
         return vv_error_set(VV_ERR_FORMAT,
                             "%s: %ld bytes, over the 64 MiB a companion XML may have", xname, size);
-    xmlDoc *doc = xmlReadFile(xml, NULL, XML_PARSE_NONET | XML_PARSE_NOERROR | XML_PARSE_NOWARNING);
+    int doctype = 0;
+    xmlDoc *doc = vv_bdv_xml_read(xml, &doctype);
     xmlNode *root = doc ? xmlDocGetRootElement(doc) : NULL;
     if (!root) {
         xmlFreeDoc(doc);
-        return vv_error_set(VV_ERR_FORMAT, "%s: the companion XML cannot be parsed", xname);
+        return vv_error_set(VV_ERR_FORMAT, "%s: the companion XML %s", xname,
+                            doctype ? "has a <!DOCTYPE> (entities and DTDs are refused)"
+                                    : "cannot be parsed");
     }
     vv_status st = VV_OK;
     xmlNode *seq = xml_child(root, "SequenceDescription");
@@ -338,7 +341,7 @@ attr_text(hid_t obj, const char *name, char *buf, size_t cap) {
     if (ft >= 0 && sp >= 0 && H5Tget_class(ft) == H5T_STRING && !H5Tis_variable_str(ft)) {
         const hssize_t np = H5Sget_simple_extent_npoints(sp);
         const size_t sz = H5Tget_size(ft);
-        if (np >= 1 && sz >= 1 && (size_t)np * sz < cap) {
+        if (np >= 1 && sz >= 1 && (uint64_t)np < cap && sz < cap && (size_t)np * sz < cap) {
             hid_t mt = H5Tcopy(H5T_C_S1);
             H5Tset_size(mt, sz);
             H5Tset_strpad(mt, H5T_STR_NULLPAD);
@@ -453,6 +456,11 @@ open_ims(h5p *h, int channel, int time) {
         for (int k = 0; k < 3; k++) {
             const double sp = has_ext && hi[k] > lo[k] ? (hi[k] - lo[k]) / L->dims[k]
                                                        : (double)h->lv[0].dims[k] / L->dims[k];
+            if (!(sp > 0) || !isfinite(sp))
+                return vv_error_set(VV_ERR_FORMAT,
+                                    "DataSetInfo/Image: ExtMin%d %g .. ExtMax%d %g over %d voxels "
+                                    "is a spacing of %g (not positive and finite)",
+                                    k, lo[k], k, hi[k], L->dims[k], sp);
             L->spacing[k] = sp;
             L->origin[k] = (has_ext ? lo[k] : 0) + 0.5 * sp;
             if (l > 0 && L->dims[k] > h->lv[0].dims[k])
