@@ -42,6 +42,14 @@
 #include "core/internal.h"
 #include "io/zarr.h"
 
+/* 1 when the real path @p real lies in or beneath the real folder @p dir. */
+static int
+zr_beneath(const char *real, const char *dir) {
+    const size_t n = strlen(dir);
+    return !strncmp(real, dir, n) &&
+           (real[n] == '/' || real[n] == '\0' || (n == 1 && dir[0] == '/'));
+}
+
 /* path/name loaded as JSON (at most ZR_JSON_MAX bytes); NULL with the error
  * set, or NULL without an error when the file is absent and @p optional. */
 static json_t *
@@ -238,6 +246,11 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
         return s;
     json_t *ms = za ? json_array_get(json_object_get(za, "multiscales"), 0) : NULL;
     snprintf(a->dir, sizeof a->dir, "%s", root);
+    /* the store's real path: every folder and chunk read must lie beneath
+     * it (a symbolic link may lead out) */
+    char *rroot = realpath(root, NULL);
+    snprintf(a->real, sizeof a->real, "%s", rroot ? rroot : "");
+    free(rroot);
     json_t *axes = ms ? json_object_get(ms, "axes") : NULL;
     json_t *dsl = ms ? json_object_get(ms, "datasets") : NULL;
     json_t *ds0 = ms ? json_array_get(dsl, (size_t)level) : NULL;
@@ -267,14 +280,8 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
         snprintf(a->dir, sizeof a->dir, "%s/%s", root, p);
         /* a symbolic link may still lead out of the store: compare the
          * real paths (a folder that does not exist has no .zarray) */
-        char *rroot = realpath(root, NULL), *rdir = realpath(a->dir, NULL);
-        int inside = 1;
-        if (rroot && rdir) {
-            const size_t n = strlen(rroot);
-            inside = !strncmp(rdir, rroot, n) &&
-                     (rdir[n] == '/' || rdir[n] == '\0' || (n == 1 && rroot[0] == '/'));
-        }
-        free(rroot);
+        char *rdir = realpath(a->dir, NULL);
+        const int inside = !rdir || !a->real[0] || zr_beneath(rdir, a->real);
         free(rdir);
         if (!inside) {
             s = vv_error_set(VV_ERR_FORMAT,
@@ -369,6 +376,17 @@ vv_zr_read_chunk(const zr_array *a, const char *path, unsigned char *out, size_t
             return VV_OK;
         }
         return vv_error_set(VV_ERR_IO, "%s: %s", path, strerror(errno));
+    }
+    /* a chunk (or a folder on its way) that is a link out of the store */
+    if (a->real[0]) {
+        char *real = realpath(path, NULL);
+        const int inside = real && zr_beneath(real, a->real);
+        free(real);
+        if (!inside) {
+            fclose(f);
+            return vv_error_set(VV_ERR_FORMAT, "%s: the chunk file resolves outside the store",
+                                path);
+        }
     }
     struct stat st;
     if (fstat(fileno(f), &st) != 0 || st.st_size < 0 || (uint64_t)st.st_size > ZR_CHUNK_MAX) {

@@ -13,7 +13,8 @@
  * - Zero, negative, non-number or overflowing scales in the
  *   coordinateTransformations (a zero or non-finite spacing is never taken).
  * - Short and corrupt zlib, gzip, zstd and blosc chunks; a chunk file over
- *   1 GiB (sparse), one that is a folder, one below a file.
+ *   1 GiB (sparse), one that is a folder, one below a file; a chunk, or a
+ *   folder of chunks, that is a link out of the store.
  */
 #include "testutil.h"
 
@@ -63,7 +64,7 @@ base(const char *path) {
 /* A fresh empty folder @p name under the test's output folder. */
 static const char *
 fresh(const char *name) {
-    static char p[4200];
+    static char p[4400];
     snprintf(p, sizeof p, "%s/%s", g_dir, name);
     rm_rf(p);
     assert_int_equal(mkdir(p, 0755), 0);
@@ -356,7 +357,7 @@ test_path_symlink(void **state) {
     (void)state;
     const char *out = fresh("outside");
     put_text(out, ".zarray", ZA);
-    char outside[4200];
+    char outside[4400];
     snprintf(outside, sizeof outside, "%s", out);
     const char *dir = fresh("link.zarr");
     put_text(dir, ".zattrs", MS("0", SC3));
@@ -486,6 +487,49 @@ test_chunk_files(void **state) {
              ZA_("[4, 4, 4]", "[4, 4, 4]", "|u1", ", \"dimension_separator\": \"/\""));
     put_text(dir, "0", "not a folder");
     load_expect(dir, 0, -1, -1, VV_ERR_IO, "0/0/0: Not a directory");
+
+    /* a chunk that is a link to a file of its size outside the store, and
+     * a folder of chunks that is a link out of it ("/" separator) */
+    char out[4400]; /* fresh() returns its own buffer */
+    snprintf(out, sizeof out, "%s", fresh("chunk_outside"));
+    unsigned char secret[64];
+    memset(secret, 's', sizeof secret);
+    vt_write_file(vt_path(out, "secret"), secret, sizeof secret);
+    char sub[8400];
+    snprintf(sub, sizeof sub, "%s/0", out);
+    assert_int_equal(mkdir(sub, 0755), 0);
+    snprintf(sub, sizeof sub, "%s/0/0", out);
+    assert_int_equal(mkdir(sub, 0755), 0);
+    vt_write_file(vt_path(out, "0/0/0"), secret, sizeof secret);
+    char target[8400];
+    snprintf(target, sizeof target, "%s/secret", out);
+    dir = fresh("chunk_link.zarr");
+    put_text(dir, ".zarray", ZA);
+    snprintf(p, sizeof p, "%s/0.0.0", dir);
+    assert_int_equal(symlink(target, p), 0);
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "0.0.0: the chunk file resolves outside the store");
+    snprintf(target, sizeof target, "%s/0", out);
+    dir = fresh("chunk_dir_link.zarr");
+    put_text(dir, ".zarray",
+             ZA_("[4, 4, 4]", "[4, 4, 4]", "|u1", ", \"dimension_separator\": \"/\""));
+    snprintf(p, sizeof p, "%s/0", dir);
+    assert_int_equal(symlink(target, p), 0);
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "0/0/0: the chunk file resolves outside the store");
+    /* the pyramid reads its chunks in this process: refused there too */
+    vv_pyramid *py = NULL;
+    expect(vv_pyramid_open(&py, dir, 0, -1, vt_cache(64u << 20), NULL), VV_ERR_FORMAT,
+           "resolves outside the store", "chunk_dir_link.zarr");
+    assert_null(py);
+    /* a chunk linked inside the store is read */
+    dir = fresh("chunk_inner_link.zarr");
+    put_text(dir, ".zarray", ZA);
+    vt_write_file(vt_path(dir, "data"), secret, sizeof secret);
+    snprintf(p, sizeof p, "%s/0.0.0", dir);
+    assert_int_equal(symlink("data", p), 0);
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_load(&v, dir, NULL));
+    assert_int_equal(((unsigned char *)v->data)[0], 's');
+    vv_volume_free(v);
 }
 
 /* The reader's own arguments. */
