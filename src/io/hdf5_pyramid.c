@@ -65,11 +65,39 @@ typedef struct h5p {
     h5p_level lv[VV_PYRAMID_MAX_LEVELS];
     hid_t mtype; /* the memory type read */
     vv_voxel_type type;
+    hid_t lapl, dapl, gapl; /* link, dataset and group access: never through an external link */
+    char elink[256];        /* the file an external link named ("": none met) */
 } h5p;
 
+/* An external link would open another file, anywhere: refused (the name
+ * kept for the message). */
+static herr_t
+refuse_elink(const char *parent_file, const char *parent_group, const char *child_file,
+             const char *child_object, unsigned *acc_flags, hid_t fapl, void *op) {
+    (void)parent_file;
+    (void)parent_group;
+    (void)child_object;
+    (void)acc_flags;
+    (void)fapl;
+    h5p *h = op;
+    snprintf(h->elink, sizeof h->elink, "%s", child_file ? child_file : "?");
+    return -1;
+}
+
 static int
-link_exists(hid_t loc, const char *path) {
-    return H5Lexists(loc, path, H5P_DEFAULT) > 0;
+link_exists(const h5p *h, const char *path) {
+    return H5Lexists(h->fid, path, h->lapl) > 0;
+}
+
+/* 1 when dataset @p d's voxels lie in other files: a virtual dataset or
+ * external raw storage (H5Pset_external), paths the file chooses. */
+static int
+data_elsewhere(hid_t d) {
+    hid_t pl = H5Dget_create_plist(d);
+    const int out = pl < 0 || H5Pget_layout(pl) == H5D_VIRTUAL || H5Pget_external_count(pl) != 0;
+    if (pl >= 0)
+        H5Pclose(pl);
+    return out;
 }
 
 /* The voxel type of a dataset's type, the memory type to read it with;
@@ -112,8 +140,18 @@ type_of(hid_t ftype, int bdv, hid_t *mtype) {
 static vv_status
 open_volume(h5p *h, const char *path, hid_t *d, h5p_level *L) {
     int *dims = L->dims, *cdims = L->cdims;
-    if (!link_exists(h->fid, path) || (*d = H5Dopen2(h->fid, path, H5P_DEFAULT)) < 0)
-        return vv_error_set(VV_ERR_FORMAT, "no dataset %s", path);
+    h->elink[0] = '\0';
+    if (!link_exists(h, path) || (*d = H5Dopen2(h->fid, path, h->dapl)) < 0)
+        return h->elink[0] ? vv_error_set(VV_ERR_FORMAT,
+                                          "%s: an external link to \"%s\" (no other file is "
+                                          "read)",
+                                          path, h->elink)
+                           : vv_error_set(VV_ERR_FORMAT, "no dataset %s", path);
+    if (data_elsewhere(*d))
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: a virtual dataset or external storage (its voxels lie in other "
+                            "files, never read)",
+                            path);
     hid_t sp = H5Dget_space(*d);
     hsize_t sh[4] = {0};
     const int nd = sp >= 0 ? H5Sget_simple_extent_ndims(sp) : -1;
@@ -146,10 +184,14 @@ open_volume(h5p *h, const char *path, hid_t *d, h5p_level *L) {
 
 /* A small dataset of @p n doubles in a row-major (levels, 3) table. */
 static int
-read_table(hid_t fid, const char *path, hid_t mtype, void *buf, int max_rows, int *rows) {
-    hid_t d = link_exists(fid, path) ? H5Dopen2(fid, path, H5P_DEFAULT) : -1;
+read_table(h5p *h, const char *path, hid_t mtype, void *buf, int max_rows, int *rows) {
+    hid_t d = link_exists(h, path) ? H5Dopen2(h->fid, path, h->dapl) : -1;
     if (d < 0)
         return 0;
+    if (data_elsewhere(d)) {
+        H5Dclose(d);
+        return 0;
+    }
     hid_t sp = H5Dget_space(d);
     hsize_t sh[2] = {0, 0};
     int ok = sp >= 0 && H5Sget_simple_extent_ndims(sp) == 2 &&
@@ -176,7 +218,7 @@ open_bdv(h5p *h, int channel, int time, int ids) {
     if (ids) {
         h->n_channels = h->n_times = 1;
         snprintf(path, sizeof path, "t%05d/s%02d", t, setup);
-        if (setup > 99 || t > 99999 || !link_exists(h->fid, path))
+        if (setup > 99 || t > 99999 || !link_exists(h, path))
             return vv_error_set(VV_ERR_FORMAT, "no setup %d at time point %d (t%05d/s%02d)", setup,
                                 t, t, setup);
         goto levels;
@@ -184,14 +226,14 @@ open_bdv(h5p *h, int channel, int time, int ids) {
     h->n_channels = 0;
     for (int s = 0; s < 100; s++) {
         snprintf(path, sizeof path, "s%02d", s);
-        if (!link_exists(h->fid, path))
+        if (!link_exists(h, path))
             break;
         h->n_channels = s + 1;
     }
     h->n_times = 0;
     for (int k = 0; k < 100000; k++) {
         snprintf(path, sizeof path, "t%05d", k);
-        if (!link_exists(h->fid, path))
+        if (!link_exists(h, path))
             break;
         h->n_times = k + 1;
     }
@@ -205,14 +247,14 @@ levels:;
     double res[VV_PYRAMID_MAX_LEVELS][3];
     int sub[VV_PYRAMID_MAX_LEVELS][3], nr = 0, ns = 0;
     snprintf(path, sizeof path, "s%02d/resolutions", setup);
-    if (!read_table(h->fid, path, H5T_NATIVE_DOUBLE, res, VV_PYRAMID_MAX_LEVELS, &nr))
+    if (!read_table(h, path, H5T_NATIVE_DOUBLE, res, VV_PYRAMID_MAX_LEVELS, &nr))
         return vv_error_set(VV_ERR_FORMAT,
                             "%s: missing, or not a table of (x, y, z) factors "
                             "of 1 .. 16 levels",
                             path);
     snprintf(path, sizeof path, "s%02d/subdivisions", setup);
     const int has_sub =
-        read_table(h->fid, path, H5T_NATIVE_INT, sub, VV_PYRAMID_MAX_LEVELS, &ns) && ns == nr;
+        read_table(h, path, H5T_NATIVE_INT, sub, VV_PYRAMID_MAX_LEVELS, &ns) && ns == nr;
     h->n_levels = nr;
     for (int l = 0; l < nr; l++) {
         h5p_level *L = &h->lv[l];
@@ -382,7 +424,7 @@ open_ims(h5p *h, int channel, int time) {
     h->n_levels = 0;
     for (int l = 0; l < VV_PYRAMID_MAX_LEVELS + 1; l++) {
         snprintf(path, sizeof path, "DataSet/ResolutionLevel %d", l);
-        if (!link_exists(h->fid, path))
+        if (!link_exists(h, path))
             break;
         h->n_levels = l + 1;
     }
@@ -391,13 +433,13 @@ open_ims(h5p *h, int channel, int time) {
     h->n_times = h->n_channels = 0;
     for (int k = 0; k < 100000; k++) {
         snprintf(path, sizeof path, "DataSet/ResolutionLevel 0/TimePoint %d", k);
-        if (!link_exists(h->fid, path))
+        if (!link_exists(h, path))
             break;
         h->n_times = k + 1;
     }
     for (int k = 0; k < 1000; k++) {
         snprintf(path, sizeof path, "DataSet/ResolutionLevel 0/TimePoint 0/Channel %d", k);
-        if (!link_exists(h->fid, path))
+        if (!link_exists(h, path))
             break;
         h->n_channels = k + 1;
     }
@@ -407,8 +449,8 @@ open_ims(h5p *h, int channel, int time) {
         return vv_error_set(VV_ERR_INVALID, "time step %d asked, the file has %d", t, h->n_times);
     /* the extent, when the image's attributes give it */
     double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-    int has_ext = link_exists(h->fid, "DataSetInfo") && link_exists(h->fid, "DataSetInfo/Image");
-    hid_t img = has_ext ? H5Gopen2(h->fid, "DataSetInfo/Image", H5P_DEFAULT) : -1;
+    int has_ext = link_exists(h, "DataSetInfo") && link_exists(h, "DataSetInfo/Image");
+    hid_t img = has_ext ? H5Gopen2(h->fid, "DataSetInfo/Image", h->gapl) : -1;
     for (int k = 0; k < 3 && img >= 0; k++) {
         char a[32], b[32];
         snprintf(a, sizeof a, "ExtMin%d", k);
@@ -429,7 +471,7 @@ open_ims(h5p *h, int channel, int time) {
             return s;
         /* the image's size within the padded dataset */
         snprintf(path, sizeof path, "DataSet/ResolutionLevel %d/TimePoint %d/Channel %d", l, t, c);
-        hid_t g = H5Gopen2(h->fid, path, H5P_DEFAULT);
+        hid_t g = H5Gopen2(h->fid, path, h->gapl);
         for (int k = 0; k < 3 && g >= 0; k++) {
             static const char *const names[3] = {"ImageSizeX", "ImageSizeY", "ImageSizeZ"};
             double n;
@@ -482,6 +524,10 @@ h5p_close(h5p *h) {
             H5Dclose(h->dset[l]);
     if (h->fid > 0)
         H5Fclose(h->fid);
+    const hid_t pl[3] = {h->lapl, h->dapl, h->gapl};
+    for (int i = 0; i < 3; i++)
+        if (pl[i] > 0)
+            H5Pclose(pl[i]);
     free(h);
 }
 
@@ -494,12 +540,22 @@ h5p_open(h5p **out, const char *path, int channel, int time, int ids) {
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     snprintf(h->file, sizeof h->file, "%s", vv_path_basename(path));
     vv_status s = VV_OK;
+    h->lapl = H5Pcreate(H5P_LINK_ACCESS);
+    h->dapl = H5Pcreate(H5P_DATASET_ACCESS);
+    h->gapl = H5Pcreate(H5P_GROUP_ACCESS);
+    if (h->lapl < 0 || h->dapl < 0 || h->gapl < 0 ||
+        H5Pset_elink_cb(h->lapl, refuse_elink, h) < 0 ||
+        H5Pset_elink_cb(h->dapl, refuse_elink, h) < 0 ||
+        H5Pset_elink_cb(h->gapl, refuse_elink, h) < 0) {
+        h5p_close(h);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
     h->fid = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
     if (h->fid < 0)
         s = vv_error_set(VV_ERR_IO, "cannot open it as an HDF5 file");
-    else if (link_exists(h->fid, "DataSet") && link_exists(h->fid, "DataSet/ResolutionLevel 0"))
+    else if (link_exists(h, "DataSet") && link_exists(h, "DataSet/ResolutionLevel 0"))
         h->kind = 2;
-    else if (ids || (link_exists(h->fid, "s00") && link_exists(h->fid, "t00000")))
+    else if (ids || (link_exists(h, "s00") && link_exists(h, "t00000")))
         h->kind = 1;
     else
         s = vv_error_set(VV_ERR_UNSUPPORTED, /* a plain HDF5 file: read whole */

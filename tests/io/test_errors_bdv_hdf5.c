@@ -14,7 +14,8 @@
  *   subdivisions, wrong ranks, huge dims, missing datasets, unsupported and
  *   differing voxel types, a companion XML with a bad voxelSize or a
  *   <!DOCTYPE>; Imaris extents whose spacing overflows, image sizes past the
- *   data, a corrupt chunk.
+ *   data, a corrupt chunk; voxels in other files (external links, external
+ *   raw storage, virtual datasets) never read.
  * Everything runs in this process (VOLVIS_SANDBOX=0).
  */
 #include "testutil.h"
@@ -368,6 +369,87 @@ test_hdf5_bdv(void **state) {
     }
 }
 
+/* A BigDataViewer file whose level-0 cells are not its own: an external
+ * link to another file's dataset (@p how 0), a link of the level's group
+ * (1), raw data in an external file (2), a virtual dataset (3). */
+static void
+write_elsewhere(const char *path, const char *other, const char *raw, int how) {
+    hid_t f = h5_new(path);
+    const double res[3] = {1, 1, 1};
+    h5_table(f, "s00/resolutions", 1, 3, res);
+    h5_group(f, "t00000/s00");
+    const hsize_t dims[3] = {4, 4, 4};
+    hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    hid_t sp = H5Screate_simple(3, dims, NULL);
+    if (how == 0) {
+        h5_group(f, "t00000/s00/0");
+        assert_true(H5Lcreate_external(other, "/t00000/s00/0/cells", f, "t00000/s00/0/cells",
+                                       H5P_DEFAULT, H5P_DEFAULT) >= 0);
+    } else if (how == 1) {
+        assert_true(H5Lcreate_external(other, "/t00000/s00/0", f, "t00000/s00/0", H5P_DEFAULT,
+                                       H5P_DEFAULT) >= 0);
+    } else {
+        if (how == 2)
+            assert_true(H5Pset_external(dcpl, raw, 0, 4 * 4 * 4 * 2) >= 0);
+        else
+            assert_true(H5Pset_virtual(dcpl, sp, other, "/t00000/s00/0/cells", sp) >= 0);
+        h5_group(f, "t00000/s00/0");
+        hid_t d =
+            H5Dcreate2(f, "t00000/s00/0/cells", H5T_STD_I16LE, sp, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+        assert_true(d >= 0);
+        H5Dclose(d);
+    }
+    H5Sclose(sp);
+    H5Pclose(dcpl);
+    H5Fclose(f);
+}
+
+/* Voxels in other files (anywhere the file names) are never read. */
+static void
+test_hdf5_elsewhere(void **state) {
+    (void)state;
+    char dir[4200], other[4400], raw[4400];
+    snprintf(dir, sizeof dir, "%s", vt_outdir("errors_bdv_hdf5_outside"));
+    snprintf(other, sizeof other, "%s/other.h5", dir);
+    snprintf(raw, sizeof raw, "%s/secret.raw", dir);
+    const bdv_spec ok = {OK1};
+    write_bdv(other, &ok);
+    unsigned char secret[128];
+    memset(secret, 's', sizeof secret);
+    vt_write_file(raw, secret, sizeof secret);
+    static const struct {
+        const char *name, *needle;
+    } rows[] = {
+        {"elink.h5", "t00000/s00/0/cells: an external link to \""},
+        {"elink_group.h5", "an external link to \""},
+        {"external.h5", "t00000/s00/0/cells: a virtual dataset or external storage"},
+        {"virtual.h5", "a virtual dataset or external storage"},
+    };
+    for (int i = 0; i < 4; i++) {
+        print_message("%s\n", rows[i].name);
+        write_elsewhere(tpath(rows[i].name), other, raw, i);
+        load_expect(tpath(rows[i].name), VV_FORMAT_HDF5, 0, -1, -1, VV_ERR_FORMAT, rows[i].needle,
+                    1);
+    }
+    /* the resolutions table stored outside: not read either */
+    hid_t f = h5_new(tpath("external_table.h5"));
+    const hsize_t td[2] = {1, 3};
+    hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE), lcpl = H5Pcreate(H5P_LINK_CREATE);
+    H5Pset_create_intermediate_group(lcpl, 1);
+    assert_true(H5Pset_external(dcpl, raw, 0, 3 * 8) >= 0);
+    hid_t sp = H5Screate_simple(2, td, NULL);
+    hid_t d = H5Dcreate2(f, "s00/resolutions", H5T_IEEE_F64LE, sp, lcpl, dcpl, H5P_DEFAULT);
+    assert_true(d >= 0);
+    H5Dclose(d);
+    H5Sclose(sp);
+    H5Pclose(dcpl);
+    H5Pclose(lcpl);
+    h5_cells(f, "t00000/s00/0/cells", 4, H5T_STD_I16LE);
+    H5Fclose(f);
+    load_expect(tpath("external_table.h5"), VV_FORMAT_HDF5, 0, -1, -1, VV_ERR_FORMAT,
+                "s00/resolutions: missing, or not a table", 1);
+}
+
 /* Not HDF5; HDF5 of neither layout; 17 Imaris levels. */
 static void
 test_hdf5_files(void **state) {
@@ -587,7 +669,7 @@ static const xcase g_xml[] = {
      -1, VV_ERR_FORMAT, "is not a relative path"},
     {"hdf5_absent",
      XML_("<ImageLoader format=\"bdv.hdf5\"><hdf5>absent.h5</hdf5></ImageLoader>", SETUP0, TP1, ""),
-     0, -1, -1, VV_ERR_IO, "hdf5_absent.xml: absent.h5: cannot open it as an HDF5 file"},
+     0, -1, -1, VV_ERR_IO, "x_hdf5_absent.xml: absent.h5: cannot open it as an HDF5 file"},
     {"setup_no_id", XML_(LOADER, "<ViewSetup><name>x</name></ViewSetup>", TP1, ""), 0, -1, -1,
      VV_ERR_FORMAT, "a ViewSetup without an id"},
     {"setup_bad_id", XML_(LOADER, "<ViewSetup><id>-3</id></ViewSetup>", TP1, ""), 0, -1, -1,
@@ -697,7 +779,7 @@ test_xml(void **state) {
     for (size_t i = 0; i < sizeof g_xml / sizeof g_xml[0]; i++) {
         const xcase *c = &g_xml[i];
         char name[128];
-        snprintf(name, sizeof name, "%s.xml", c->name);
+        snprintf(name, sizeof name, "x_%s.xml", c->name); /* no HDF5 file's companion */
         print_message("%s\n", c->name);
         put_text(tpath(name), c->xml);
         load_expect(tpath(name), VV_FORMAT_BDV_XML, c->level, c->channel, c->time, c->want,
@@ -808,11 +890,11 @@ test_corrupt_chunk(void **state) {
     load_expect(path, VV_FORMAT_HDF5, 0, -1, -1, VV_ERR_FORMAT,
                 "level 0: the chunk at voxel (0, 0, 0) does not read", 1);
     /* the same file through a dataset XML naming it */
-    put_text(tpath("corrupt.xml"),
+    put_text(tpath("x_corrupt.xml"),
              XML_("<ImageLoader format=\"bdv.hdf5\"><hdf5>corrupt.h5</hdf5></ImageLoader>", SETUP0,
                   TP1, ""));
-    load_expect(tpath("corrupt.xml"), VV_FORMAT_BDV_XML, 0, -1, -1, VV_ERR_FORMAT,
-                "bdv: corrupt.xml: level 0: the chunk at voxel (0, 0, 0) does not read", 1);
+    load_expect(tpath("x_corrupt.xml"), VV_FORMAT_BDV_XML, 0, -1, -1, VV_ERR_FORMAT,
+                "bdv: x_corrupt.xml: level 0: the chunk at voxel (0, 0, 0) does not read", 1);
 }
 
 int
@@ -821,10 +903,10 @@ main(void) {
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
     snprintf(g_dir, sizeof g_dir, "%s", vt_outdir("errors_bdv_hdf5"));
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_hdf5_bdv),       cmocka_unit_test(test_hdf5_files),
-        cmocka_unit_test(test_hdf5_companion), cmocka_unit_test(test_imaris),
-        cmocka_unit_test(test_corrupt_chunk),  cmocka_unit_test(test_xml),
-        cmocka_unit_test(test_xml_limits),
+        cmocka_unit_test(test_hdf5_bdv),   cmocka_unit_test(test_hdf5_elsewhere),
+        cmocka_unit_test(test_hdf5_files), cmocka_unit_test(test_hdf5_companion),
+        cmocka_unit_test(test_imaris),     cmocka_unit_test(test_corrupt_chunk),
+        cmocka_unit_test(test_xml),        cmocka_unit_test(test_xml_limits),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
