@@ -655,6 +655,16 @@ read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
     const uint64_t nc = J.nc, nt = J.nt;
     if ((s = vv_volume_check_size(dims, a.type, NULL)) != VV_OK)
         return s;
+    /* each thread decodes into a buffer of a whole chunk (one thread for
+     * chunks over 64 MiB): a store of a few bytes may declare chunks of
+     * 1 GiB, so the buffers count against the budget too (fewer threads
+     * when they would not fit) */
+    int nthreads = J.cbytes > ((size_t)64 << 20) ? 1 : omp_get_max_threads();
+    const uint64_t budget = vv_memory_budget_get();
+    if ((uint64_t)J.cbytes * (uint64_t)nthreads > budget)
+        nthreads = budget / J.cbytes > 1 ? (int)(budget / J.cbytes) : 1;
+    if ((s = vv_memory_budget_check((uint64_t)J.cbytes, "a Zarr chunk's buffer")) != VV_OK)
+        return s;
     vv_volume *v = NULL;
     if ((s = vv_volume_new(&v, dims, a.type)) != VV_OK)
         return s;
@@ -662,12 +672,11 @@ read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
     for (int i = 0; i < a.ndim; i++)
         if (i != cax && i != tax)
             n_spatial *= J.nchunk[i]; /* at most 2^48: each axis is at most 65536 */
-    /* the chunks in parallel, each thread its own buffer (one thread for
-     * chunks over 64 MiB); the error of the first failing chunk in order */
+    /* the chunks in parallel, each thread its own buffer; the error of the
+     * first failing chunk in order */
     long long first = -1;
     vv_status first_status = VV_OK;
     char first_msg[1024] = "";
-    const int nthreads = J.cbytes > ((size_t)64 << 20) ? 1 : omp_get_max_threads();
     const int zero[3] = {0, 0, 0};
 #pragma omp parallel num_threads(nthreads)
     {

@@ -601,6 +601,23 @@ test_pyramid(void **state) {
     pyramid_expect(dir, NULL, VV_ERR_FORMAT, "5 bytes, an uncompressed chunk has 8");
 }
 
+/* Chunks of 512 MiB for an array of 64 voxels, under a budget of 64 MiB:
+ * refused before a chunk buffer is allocated (each was filled whole). */
+static void
+test_chunk_budget(void **state) {
+    (void)state;
+    const char *dir = fresh("chunk_budget.zarr");
+    put_text(dir, ".zarray", ZA_("[4, 4, 4]", "[512, 1024, 1024]", "|u1", ""));
+    vv_memory_budget_set((uint64_t)64 << 20);
+    load_expect(dir, 0, -1, -1, VV_ERR_LIMIT,
+                "a Zarr chunk's buffer: 536870912 bytes is over the memory budget");
+    /* the pyramid's scratch buffers alike */
+    dir = pyramid_store("py_budget.zarr", ZA_("[4, 4, 4]", "[512, 1024, 1024]", "|u1", ""),
+                        ZA_("[2, 2, 2]", "[2, 2, 2]", "|u1", ""));
+    pyramid_expect(dir, NULL, VV_ERR_LIMIT, "level 0: a Zarr chunk's buffer: 536870912 bytes");
+    vv_memory_budget_set(0);
+}
+
 /* Requests outside the pyramid: refused, one line. */
 static void
 test_pyramid_requests(void **state) {
@@ -640,11 +657,11 @@ main(void) {
     setenv("VOLVIS_SANDBOX", "0", 1);
     snprintf(g_dir, sizeof g_dir, "%s", vt_outdir("errors_zarr"));
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_metadata),         cmocka_unit_test(test_path_leaves_store),
-        cmocka_unit_test(test_path_symlink),     cmocka_unit_test(test_json_too_large),
-        cmocka_unit_test(test_chunks),           cmocka_unit_test(test_chunk_files),
-        cmocka_unit_test(test_arguments),        cmocka_unit_test(test_pyramid),
-        cmocka_unit_test(test_pyramid_requests),
+        cmocka_unit_test(test_metadata),     cmocka_unit_test(test_path_leaves_store),
+        cmocka_unit_test(test_path_symlink), cmocka_unit_test(test_json_too_large),
+        cmocka_unit_test(test_chunks),       cmocka_unit_test(test_chunk_files),
+        cmocka_unit_test(test_chunk_budget), cmocka_unit_test(test_arguments),
+        cmocka_unit_test(test_pyramid),      cmocka_unit_test(test_pyramid_requests),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
