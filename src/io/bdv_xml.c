@@ -24,6 +24,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include <libxml/parser.h>
 #include <libxml/tree.h>
@@ -272,6 +273,9 @@ static vv_status
 doc_open(bdv_doc **out, const char *path) {
     *out = NULL;
     const char *xml = vv_path_basename(path);
+    struct stat st;
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) /* a FIFO would block the open */
+        return vv_error_set(VV_ERR_FORMAT, "%s: not a regular file", xml);
     FILE *f = fopen(path, "rb");
     if (!f) {
         const int e = errno;

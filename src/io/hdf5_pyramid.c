@@ -33,6 +33,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include <hdf5.h>
 #include <libxml/parser.h>
@@ -310,6 +311,11 @@ bdv_voxel_size(h5p *h, const char *path, int setup) {
     memcpy(xml, path, stem);
     memcpy(xml + stem, ".xml", 5);
     const char *xname = vv_path_basename(xml);
+    struct stat xs;
+    if (stat(xml, &xs) != 0)
+        return VV_OK;
+    if (!S_ISREG(xs.st_mode)) /* a FIFO would block the open */
+        return vv_error_set(VV_ERR_FORMAT, "%s: the companion XML is not a regular file", xname);
     FILE *f = fopen(xml, "rb");
     if (!f)
         return VV_OK;
@@ -540,6 +546,11 @@ h5p_open(h5p **out, const char *path, int channel, int time, int ids) {
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     snprintf(h->file, sizeof h->file, "%s", vv_path_basename(path));
     vv_status s = VV_OK;
+    struct stat st;
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) { /* libhdf5 would block on a FIFO */
+        h5p_close(h);
+        return vv_error_set(VV_ERR_FORMAT, "not a regular file");
+    }
     h->lapl = H5Pcreate(H5P_LINK_ACCESS);
     h->dapl = H5Pcreate(H5P_DATASET_ACCESS);
     h->gapl = H5Pcreate(H5P_GROUP_ACCESS);

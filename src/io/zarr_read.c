@@ -25,6 +25,7 @@
  * over 16 MiB and chunks over 1 GiB are refused.
  */
 #include <errno.h>
+#include <fcntl.h>
 #include <limits.h>
 #include <math.h>
 #include <stdint.h>
@@ -32,6 +33,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <blosc.h>
 #include <jansson.h>
@@ -61,6 +63,10 @@ load_json(const char *dir, const char *name, int optional, vv_status *s) {
     if (stat(p, &st) != 0) {
         if (!optional)
             *s = vv_error_set(VV_ERR_FORMAT, "no %s (not a Zarr array)", name);
+        return NULL;
+    }
+    if (!S_ISREG(st.st_mode)) { /* a FIFO would block the read forever */
+        *s = vv_error_set(VV_ERR_FORMAT, "%s is not a regular file", name);
         return NULL;
     }
     if (st.st_size > ZR_JSON_MAX) {
@@ -369,13 +375,24 @@ vv_zr_read_chunk(const zr_array *a, const char *path, unsigned char *out, size_t
     *missing = 0;
     if (file_bytes)
         *file_bytes = 0;
-    FILE *f = fopen(path, "rb");
-    if (!f) {
+    /* not blocking: a FIFO would block the open forever */
+    const int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
         if (errno == ENOENT) {
             *missing = 1;
             return VV_OK;
         }
         return vv_error_set(VV_ERR_IO, "%s: %s", path, strerror(errno));
+    }
+    struct stat fst;
+    if (fstat(fd, &fst) != 0 || !S_ISREG(fst.st_mode)) {
+        close(fd);
+        return vv_error_set(VV_ERR_FORMAT, "%s: the chunk is not a regular file", path);
+    }
+    FILE *f = fdopen(fd, "rb");
+    if (!f) {
+        close(fd);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk");
     }
     /* a chunk (or a folder on its way) that is a link out of the store */
     if (a->real[0]) {
@@ -745,6 +762,8 @@ vv_ome_zarr_looks_like(const vv_format_probe *p, int deep) {
     if (stat(f, &st) == 0)
         return 1;
     snprintf(f, sizeof f, "%s/.zattrs", p->path);
+    if (stat(f, &st) != 0 || !S_ISREG(st.st_mode)) /* a FIFO would block the open */
+        return 0;
     FILE *fp = fopen(f, "rb");
     if (!fp)
         return 0;

@@ -15,7 +15,8 @@
  *   differing voxel types, a companion XML with a bad voxelSize or a
  *   <!DOCTYPE>; Imaris extents whose spacing overflows, image sizes past the
  *   data, a corrupt chunk; voxels in other files (external links, external
- *   raw storage, virtual datasets) never read.
+ *   raw storage, virtual datasets) never read; FIFOs for the XML, the
+ *   companion and the HDF5 file (an open would block) refused.
  * Everything runs in this process (VOLVIS_SANDBOX=0).
  */
 #include "testutil.h"
@@ -897,6 +898,37 @@ test_corrupt_chunk(void **state) {
                 "bdv: x_corrupt.xml: level 0: the chunk at voxel (0, 0, 0) does not read", 1);
 }
 
+/* FIFOs where files belong (an open would block until a writer came): a
+ * dataset XML, a companion XML, the HDF5 file an XML names. */
+static void
+test_fifos(void **state) {
+    (void)state;
+    const vv_format_record *r = vv_format_record_of(VV_FORMAT_BDV_XML);
+    vv_load_options o;
+    vv_load_options_init(&o);
+    vv_volume *v = NULL;
+    unlink(tpath("fifo.xml"));
+    assert_int_equal(mkfifo(tpath("fifo.xml"), 0644), 0);
+    expect(r->read(&v, tpath("fifo.xml"), &o), VV_ERR_FORMAT, "bdv: fifo.xml: not a regular file",
+           NULL);
+    assert_null(v);
+
+    const bdv_spec ok = {OK1};
+    write_bdv(tpath("fifo_comp.h5"), &ok);
+    unlink(tpath("fifo_comp.xml"));
+    assert_int_equal(mkfifo(tpath("fifo_comp.xml"), 0644), 0);
+    load_expect(tpath("fifo_comp.h5"), VV_FORMAT_HDF5, 0, -1, -1, VV_ERR_FORMAT,
+                "fifo_comp.xml: the companion XML is not a regular file", 1);
+
+    unlink(tpath("fifo_data.h5"));
+    assert_int_equal(mkfifo(tpath("fifo_data.h5"), 0644), 0);
+    put_text(tpath("x_fifo_data.xml"),
+             XML_("<ImageLoader format=\"bdv.hdf5\"><hdf5>fifo_data.h5</hdf5></ImageLoader>",
+                  SETUP0, TP1, ""));
+    load_expect(tpath("x_fifo_data.xml"), VV_FORMAT_BDV_XML, 0, -1, -1, VV_ERR_FORMAT,
+                "bdv: x_fifo_data.xml: fifo_data.h5: not a regular file", 1);
+}
+
 int
 main(void) {
     setenv("VOLVIS_SANDBOX", "0", 1);
@@ -907,6 +939,7 @@ main(void) {
         cmocka_unit_test(test_hdf5_files), cmocka_unit_test(test_hdf5_companion),
         cmocka_unit_test(test_imaris),     cmocka_unit_test(test_corrupt_chunk),
         cmocka_unit_test(test_xml),        cmocka_unit_test(test_xml_limits),
+        cmocka_unit_test(test_fifos),
     };
     return vt_run_tests(tests, NULL, NULL);
 }

@@ -14,7 +14,8 @@
  *   coordinateTransformations (a zero or non-finite spacing is never taken).
  * - Short and corrupt zlib, gzip, zstd and blosc chunks; a chunk file over
  *   1 GiB (sparse), one that is a folder, one below a file; a chunk, or a
- *   folder of chunks, that is a link out of the store.
+ *   folder of chunks, that is a link out of the store; FIFOs for .zarray,
+ *   .zattrs and a chunk (an open would block).
  */
 #include "testutil.h"
 
@@ -480,7 +481,7 @@ test_chunk_files(void **state) {
     put_text(dir, ".zarray", ZA);
     snprintf(p, sizeof p, "%s/0.0.0", dir);
     assert_int_equal(mkdir(p, 0755), 0);
-    load_expect(dir, 0, -1, -1, VV_ERR_IO, "0.0.0: cannot read the chunk");
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "0.0.0: the chunk is not a regular file");
 
     dir = fresh("chunk_notdir.zarr");
     put_text(dir, ".zarray",
@@ -530,6 +531,31 @@ test_chunk_files(void **state) {
     vt_ok(vv_volume_load(&v, dir, NULL));
     assert_int_equal(((unsigned char *)v->data)[0], 's');
     vv_volume_free(v);
+}
+
+/* FIFOs where files belong: refused at once, never opened for reading
+ * (which would block until a writer came). */
+static void
+test_fifos(void **state) {
+    (void)state;
+    char p[8400];
+    const char *dir = fresh("fifo_zarray.zarr");
+    snprintf(p, sizeof p, "%s/.zarray", dir);
+    assert_int_equal(mkfifo(p, 0644), 0);
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, ".zarray is not a regular file");
+    dir = fresh("fifo_zattrs.zarr");
+    snprintf(p, sizeof p, "%s/.zattrs", dir);
+    assert_int_equal(mkfifo(p, 0644), 0);
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, ".zattrs is not a regular file");
+    /* detection does not open it either: not a store */
+    vv_volume *v = NULL;
+    assert_int_not_equal(vv_volume_load(&v, dir, NULL), VV_OK);
+    assert_null(v);
+    dir = fresh("fifo_chunk.zarr");
+    put_text(dir, ".zarray", ZA);
+    snprintf(p, sizeof p, "%s/0.0.0", dir);
+    assert_int_equal(mkfifo(p, 0644), 0);
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "0.0.0: the chunk is not a regular file");
 }
 
 /* The reader's own arguments. */
@@ -657,11 +683,12 @@ main(void) {
     setenv("VOLVIS_SANDBOX", "0", 1);
     snprintf(g_dir, sizeof g_dir, "%s", vt_outdir("errors_zarr"));
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_metadata),     cmocka_unit_test(test_path_leaves_store),
-        cmocka_unit_test(test_path_symlink), cmocka_unit_test(test_json_too_large),
-        cmocka_unit_test(test_chunks),       cmocka_unit_test(test_chunk_files),
-        cmocka_unit_test(test_chunk_budget), cmocka_unit_test(test_arguments),
-        cmocka_unit_test(test_pyramid),      cmocka_unit_test(test_pyramid_requests),
+        cmocka_unit_test(test_metadata),         cmocka_unit_test(test_path_leaves_store),
+        cmocka_unit_test(test_path_symlink),     cmocka_unit_test(test_json_too_large),
+        cmocka_unit_test(test_chunks),           cmocka_unit_test(test_chunk_files),
+        cmocka_unit_test(test_chunk_budget),     cmocka_unit_test(test_fifos),
+        cmocka_unit_test(test_arguments),        cmocka_unit_test(test_pyramid),
+        cmocka_unit_test(test_pyramid_requests),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
