@@ -227,6 +227,24 @@ resolve_h5(bdv_doc *d, xmlNode *loader, const char *path, const char *xml) {
         return vv_error_set(VV_ERR_LIMIT, "%s: the hdf5 file's path is too long", xml);
     memcpy(d->h5, path, dir);
     memcpy(d->h5 + dir, name, len + 1);
+    /* a symbolic link (the file's or a folder's on its way) may still lead
+     * out of the XML's folder: compare the real paths (a file that does not
+     * exist is refused when opened) */
+    char folder[4096];
+    snprintf(folder, sizeof folder, "%.*s", dir ? (int)dir : 1, dir ? path : ".");
+    char *rdir = realpath(folder, NULL), *rfile = realpath(d->h5, NULL);
+    int inside = 1;
+    if (rdir && rfile) {
+        const size_t n = strlen(rdir);
+        inside = !strncmp(rfile, rdir, n) && (rfile[n] == '/' || (n == 1 && rdir[0] == '/'));
+    }
+    free(rdir);
+    free(rfile);
+    if (!inside)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: the hdf5 file \"%s\" resolves outside the XML's folder (a "
+                            "link)",
+                            xml, name);
     return VV_OK;
 }
 

@@ -8,8 +8,8 @@
  * - XML: a <!DOCTYPE> is refused before anything it declares is read (an
  *   entity bomb, an external entity naming /etc/passwd), a Timepoints
  *   pattern that repeats a long range is read in time, hdf5 paths leaving
- *   the folder, affines that are not 12 finite numbers, singular, or that
- *   put the origin at infinity.
+ *   the folder (by name or by a link), affines that are not 12 finite
+ *   numbers, singular, or that put the origin at infinity.
  * - HDF5: negative, zero, NaN, decreasing and string resolutions,
  *   subdivisions, wrong ranks, huge dims, missing datasets, unsupported and
  *   differing voxel types, a companion XML with a bad voxelSize or a
@@ -898,6 +898,46 @@ test_corrupt_chunk(void **state) {
                 "bdv: x_corrupt.xml: level 0: the chunk at voxel (0, 0, 0) does not read", 1);
 }
 
+/* The HDF5 file an XML names is a link out of the XML's folder (itself, or
+ * a folder on its way): refused; a link inside the folder is read. */
+static void
+test_xml_links(void **state) {
+    (void)state;
+    char out[4200], target[4400];
+    snprintf(out, sizeof out, "%s", vt_outdir("errors_bdv_hdf5_outside"));
+    snprintf(target, sizeof target, "%s/other.h5", out);
+    const bdv_spec ok = {OK1};
+    write_bdv(target, &ok);
+    write_bdv(tpath("ok.h5"), &ok);
+    unlink(tpath("link_out.h5"));
+    assert_int_equal(symlink(target, tpath("link_out.h5")), 0);
+    unlink(tpath("sub_out"));
+    assert_int_equal(symlink(out, tpath("sub_out")), 0);
+    unlink(tpath("link_in.h5"));
+    assert_int_equal(symlink("ok.h5", tpath("link_in.h5")), 0);
+    put_text(tpath("x_link_out.xml"),
+             XML_("<ImageLoader format=\"bdv.hdf5\"><hdf5>link_out.h5</hdf5></ImageLoader>", SETUP0,
+                  TP1, ""));
+    load_expect(tpath("x_link_out.xml"), VV_FORMAT_BDV_XML, 0, -1, -1, VV_ERR_FORMAT,
+                "x_link_out.xml: the hdf5 file \"link_out.h5\" resolves outside the XML's folder",
+                1);
+    put_text(tpath("x_sub_out.xml"),
+             XML_("<ImageLoader format=\"bdv.hdf5\"><hdf5>sub_out/other.h5</hdf5></ImageLoader>",
+                  SETUP0, TP1, ""));
+    load_expect(tpath("x_sub_out.xml"), VV_FORMAT_BDV_XML, 0, -1, -1, VV_ERR_FORMAT,
+                "resolves outside the XML's folder", 1);
+    put_text(tpath("x_link_in.xml"),
+             XML_("<ImageLoader format=\"bdv.hdf5\"><hdf5>link_in.h5</hdf5></ImageLoader>", SETUP0,
+                  TP1, ""));
+    vv_load_options o;
+    vv_load_options_init(&o);
+    o.format = VV_FORMAT_BDV_XML;
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_load(&v, tpath("x_link_in.xml"), &o));
+    assert_int_equal(v->dims[0], 4);
+    vv_volume_free(v);
+}
+
 /* FIFOs where files belong (an open would block until a writer came): a
  * dataset XML, a companion XML, the HDF5 file an XML names. */
 static void
@@ -939,7 +979,7 @@ main(void) {
         cmocka_unit_test(test_hdf5_files), cmocka_unit_test(test_hdf5_companion),
         cmocka_unit_test(test_imaris),     cmocka_unit_test(test_corrupt_chunk),
         cmocka_unit_test(test_xml),        cmocka_unit_test(test_xml_limits),
-        cmocka_unit_test(test_fifos),
+        cmocka_unit_test(test_xml_links),  cmocka_unit_test(test_fifos),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
