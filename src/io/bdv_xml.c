@@ -24,6 +24,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include <libxml/parser.h>
 #include <libxml/tree.h>
@@ -35,6 +36,7 @@
 #define BDV_MAX_SETUPS 1024
 #define BDV_MAX_TIMEPOINTS 100000
 #define BDV_MAX_XML ((long)64 << 20)
+#define BDV_MAX_ID (BDV_MAX_TIMEPOINTS * 10) /* a time point's id at most */
 
 /* What the XML says of the dataset. */
 typedef struct bdv_doc {
@@ -42,8 +44,9 @@ typedef struct bdv_doc {
     int n_setups, n_times;
     int setup_id[BDV_MAX_SETUPS];
     char setup_name[BDV_MAX_SETUPS][VV_CHANNEL_NAME_MAX];
-    int *timepoint; /* n_times ids */
-    vv_unit unit;   /* the voxel size's unit (the first setup's) */
+    int *timepoint;      /* n_times ids */
+    unsigned char *seen; /* a bit per id 0 .. BDV_MAX_ID: which are in timepoint */
+    vv_unit unit;        /* the voxel size's unit (the first setup's) */
     xmlDoc *doc;
     xmlNode *root;
 } bdv_doc;
@@ -94,18 +97,21 @@ parse_int(const char *text, int *v) {
     char *end;
     errno = 0;
     const long x = strtol(text, &end, 10);
-    if (end == text || *end || errno || x < 0 || x > BDV_MAX_TIMEPOINTS * 10L)
+    if (end == text || *end || errno || x < 0 || x > BDV_MAX_ID)
         return 0;
     *v = (int)x;
     return 1;
 }
 
-/* Adds time point @p id to @p d (each once, at most BDV_MAX_TIMEPOINTS). */
+/* Adds time point @p id (0 .. BDV_MAX_ID) to @p d (each once, at most
+ * BDV_MAX_TIMEPOINTS; a bit per id tells which are in: patterns that
+ * repeat a range cost its length each time, never its square). */
 static vv_status
 add_timepoint(bdv_doc *d, int id, const char *xml) {
-    for (int i = 0; i < d->n_times; i++)
-        if (d->timepoint[i] == id)
-            return VV_OK;
+    if (!d->seen && !(d->seen = calloc(BDV_MAX_ID / 8 + 1, 1)))
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    if (d->seen[id / 8] & (1u << (id % 8)))
+        return VV_OK;
     if (d->n_times == BDV_MAX_TIMEPOINTS)
         return vv_error_set(VV_ERR_LIMIT, "%s: over %d time points", xml, BDV_MAX_TIMEPOINTS);
     if (d->n_times % 256 == 0) {
@@ -114,6 +120,7 @@ add_timepoint(bdv_doc *d, int id, const char *xml) {
             return vv_error_set(VV_ERR_NOMEM, "out of memory");
         d->timepoint = t;
     }
+    d->seen[id / 8] |= (unsigned char)(1u << (id % 8));
     d->timepoint[d->n_times++] = id;
     return VV_OK;
 }
@@ -140,7 +147,8 @@ parse_pattern(bdv_doc *d, const char *text, const char *xml) {
             return vv_error_set(VV_ERR_FORMAT, "%s: Timepoints pattern \"%s\" is not integers", xml,
                                 text);
         }
-        if (a < 0 || b < a || step < 1 || (long)(b - a) / step >= BDV_MAX_TIMEPOINTS)
+        if (a < 0 || b < a || b > BDV_MAX_ID || step < 1 ||
+            (long)(b - a) / step >= BDV_MAX_TIMEPOINTS)
             return vv_error_set(VV_ERR_FORMAT, "%s: Timepoints pattern \"%s\" out of range", xml,
                                 text);
         for (int t = a; t <= b && s == VV_OK; t += step)
@@ -219,6 +227,24 @@ resolve_h5(bdv_doc *d, xmlNode *loader, const char *path, const char *xml) {
         return vv_error_set(VV_ERR_LIMIT, "%s: the hdf5 file's path is too long", xml);
     memcpy(d->h5, path, dir);
     memcpy(d->h5 + dir, name, len + 1);
+    /* a symbolic link (the file's or a folder's on its way) may still lead
+     * out of the XML's folder: compare the real paths (a file that does not
+     * exist is refused when opened) */
+    char folder[4096];
+    snprintf(folder, sizeof folder, "%.*s", dir ? (int)dir : 1, dir ? path : ".");
+    char *rdir = realpath(folder, NULL), *rfile = realpath(d->h5, NULL);
+    int inside = 1;
+    if (rdir && rfile) {
+        const size_t n = strlen(rdir);
+        inside = !strncmp(rfile, rdir, n) && (rfile[n] == '/' || (n == 1 && rdir[0] == '/'));
+    }
+    free(rdir);
+    free(rfile);
+    if (!inside)
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: the hdf5 file \"%s\" resolves outside the XML's folder (a "
+                            "link)",
+                            xml, name);
     return VV_OK;
 }
 
@@ -228,7 +254,36 @@ doc_free(bdv_doc *d) {
         return;
     xmlFreeDoc(d->doc);
     free(d->timepoint);
+    free(d->seen);
     free(d);
+}
+
+/* A <!DOCTYPE>: stop before its internal subset declares anything. */
+static void
+stop_at_doctype(void *ctx, const xmlChar *name, const xmlChar *public_id,
+                const xmlChar *system_id) {
+    (void)name;
+    (void)public_id;
+    (void)system_id;
+    xmlStopParser((xmlParserCtxtPtr)ctx);
+}
+
+xmlDoc *
+vv_bdv_xml_read(const char *path, int *doctype) {
+    *doctype = 0;
+    xmlParserCtxtPtr c = xmlNewParserCtxt();
+    if (!c)
+        return NULL;
+    c->sax->internalSubset = stop_at_doctype;
+    xmlDoc *doc =
+        xmlCtxtReadFile(c, path, NULL, XML_PARSE_NONET | XML_PARSE_NOERROR | XML_PARSE_NOWARNING);
+    if (c->errNo == XML_ERR_USER_STOP) {
+        *doctype = 1;
+        xmlFreeDoc(doc);
+        doc = NULL;
+    }
+    xmlFreeParserCtxt(c);
+    return doc;
 }
 
 /* Parses the XML at @p path. */
@@ -236,6 +291,9 @@ static vv_status
 doc_open(bdv_doc **out, const char *path) {
     *out = NULL;
     const char *xml = vv_path_basename(path);
+    struct stat st;
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) /* a FIFO would block the open */
+        return vv_error_set(VV_ERR_FORMAT, "%s: not a regular file", xml);
     FILE *f = fopen(path, "rb");
     if (!f) {
         const int e = errno;
@@ -250,11 +308,15 @@ doc_open(bdv_doc **out, const char *path) {
     bdv_doc *d = calloc(1, sizeof *d);
     if (!d)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
-    /* no network, no external entities, no DTD loading */
-    d->doc = xmlReadFile(path, NULL, XML_PARSE_NONET | XML_PARSE_NOERROR | XML_PARSE_NOWARNING);
+    /* no network, no document type (no entities, no DTD) */
+    int doctype = 0;
+    d->doc = vv_bdv_xml_read(path, &doctype);
     d->root = d->doc ? xmlDocGetRootElement(d->doc) : NULL;
     vv_status s = VV_OK;
-    if (!d->root)
+    if (doctype)
+        s = vv_error_set(VV_ERR_FORMAT,
+                         "%s: a <!DOCTYPE> (entities and DTDs are refused in a dataset XML)", xml);
+    else if (!d->root)
         s = vv_error_set(VV_ERR_FORMAT, "%s: not well-formed XML", xml);
     else if (strcmp((const char *)d->root->name, "SpimData"))
         s = vv_error_set(VV_ERR_FORMAT, "%s: the root element is <%s>, not <SpimData>", xml,
@@ -384,8 +446,14 @@ place_levels(vv_store *st, double A[3][4], vv_unit unit, const char *xml) {
             for (int r = 0; r < 3; r++)
                 h->direction[3 * r + c] = L[r][c] / len;
         }
-        for (int r = 0; r < 3; r++)
+        for (int r = 0; r < 3; r++) {
             h->origin[r] = A[r][3] + A[r][0] * o[0] + A[r][1] * o[1] + A[r][2] * o[2];
+            if (!isfinite(h->origin[r]))
+                return vv_error_set(VV_ERR_FORMAT,
+                                    "%s: the view's affine puts level %d's origin at infinity "
+                                    "(axis %d)",
+                                    xml, l, r);
+        }
         h->unit = unit;
     }
     return VV_OK;

@@ -33,6 +33,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include <hdf5.h>
 #include <libxml/parser.h>
@@ -65,11 +66,39 @@ typedef struct h5p {
     h5p_level lv[VV_PYRAMID_MAX_LEVELS];
     hid_t mtype; /* the memory type read */
     vv_voxel_type type;
+    hid_t lapl, dapl, gapl; /* link, dataset and group access: never through an external link */
+    char elink[256];        /* the file an external link named ("": none met) */
 } h5p;
 
+/* An external link would open another file, anywhere: refused (the name
+ * kept for the message). */
+static herr_t
+refuse_elink(const char *parent_file, const char *parent_group, const char *child_file,
+             const char *child_object, unsigned *acc_flags, hid_t fapl, void *op) {
+    (void)parent_file;
+    (void)parent_group;
+    (void)child_object;
+    (void)acc_flags;
+    (void)fapl;
+    h5p *h = op;
+    snprintf(h->elink, sizeof h->elink, "%s", child_file ? child_file : "?");
+    return -1;
+}
+
 static int
-link_exists(hid_t loc, const char *path) {
-    return H5Lexists(loc, path, H5P_DEFAULT) > 0;
+link_exists(const h5p *h, const char *path) {
+    return H5Lexists(h->fid, path, h->lapl) > 0;
+}
+
+/* 1 when dataset @p d's voxels lie in other files: a virtual dataset or
+ * external raw storage (H5Pset_external), paths the file chooses. */
+static int
+data_elsewhere(hid_t d) {
+    hid_t pl = H5Dget_create_plist(d);
+    const int out = pl < 0 || H5Pget_layout(pl) == H5D_VIRTUAL || H5Pget_external_count(pl) != 0;
+    if (pl >= 0)
+        H5Pclose(pl);
+    return out;
 }
 
 /* The voxel type of a dataset's type, the memory type to read it with;
@@ -112,8 +141,18 @@ type_of(hid_t ftype, int bdv, hid_t *mtype) {
 static vv_status
 open_volume(h5p *h, const char *path, hid_t *d, h5p_level *L) {
     int *dims = L->dims, *cdims = L->cdims;
-    if (!link_exists(h->fid, path) || (*d = H5Dopen2(h->fid, path, H5P_DEFAULT)) < 0)
-        return vv_error_set(VV_ERR_FORMAT, "no dataset %s", path);
+    h->elink[0] = '\0';
+    if (!link_exists(h, path) || (*d = H5Dopen2(h->fid, path, h->dapl)) < 0)
+        return h->elink[0] ? vv_error_set(VV_ERR_FORMAT,
+                                          "%s: an external link to \"%s\" (no other file is "
+                                          "read)",
+                                          path, h->elink)
+                           : vv_error_set(VV_ERR_FORMAT, "no dataset %s", path);
+    if (data_elsewhere(*d))
+        return vv_error_set(VV_ERR_FORMAT,
+                            "%s: a virtual dataset or external storage (its voxels lie in other "
+                            "files, never read)",
+                            path);
     hid_t sp = H5Dget_space(*d);
     hsize_t sh[4] = {0};
     const int nd = sp >= 0 ? H5Sget_simple_extent_ndims(sp) : -1;
@@ -146,10 +185,14 @@ open_volume(h5p *h, const char *path, hid_t *d, h5p_level *L) {
 
 /* A small dataset of @p n doubles in a row-major (levels, 3) table. */
 static int
-read_table(hid_t fid, const char *path, hid_t mtype, void *buf, int max_rows, int *rows) {
-    hid_t d = link_exists(fid, path) ? H5Dopen2(fid, path, H5P_DEFAULT) : -1;
+read_table(h5p *h, const char *path, hid_t mtype, void *buf, int max_rows, int *rows) {
+    hid_t d = link_exists(h, path) ? H5Dopen2(h->fid, path, h->dapl) : -1;
     if (d < 0)
         return 0;
+    if (data_elsewhere(d)) {
+        H5Dclose(d);
+        return 0;
+    }
     hid_t sp = H5Dget_space(d);
     hsize_t sh[2] = {0, 0};
     int ok = sp >= 0 && H5Sget_simple_extent_ndims(sp) == 2 &&
@@ -176,7 +219,7 @@ open_bdv(h5p *h, int channel, int time, int ids) {
     if (ids) {
         h->n_channels = h->n_times = 1;
         snprintf(path, sizeof path, "t%05d/s%02d", t, setup);
-        if (setup > 99 || t > 99999 || !link_exists(h->fid, path))
+        if (setup > 99 || t > 99999 || !link_exists(h, path))
             return vv_error_set(VV_ERR_FORMAT, "no setup %d at time point %d (t%05d/s%02d)", setup,
                                 t, t, setup);
         goto levels;
@@ -184,14 +227,14 @@ open_bdv(h5p *h, int channel, int time, int ids) {
     h->n_channels = 0;
     for (int s = 0; s < 100; s++) {
         snprintf(path, sizeof path, "s%02d", s);
-        if (!link_exists(h->fid, path))
+        if (!link_exists(h, path))
             break;
         h->n_channels = s + 1;
     }
     h->n_times = 0;
     for (int k = 0; k < 100000; k++) {
         snprintf(path, sizeof path, "t%05d", k);
-        if (!link_exists(h->fid, path))
+        if (!link_exists(h, path))
             break;
         h->n_times = k + 1;
     }
@@ -205,14 +248,14 @@ levels:;
     double res[VV_PYRAMID_MAX_LEVELS][3];
     int sub[VV_PYRAMID_MAX_LEVELS][3], nr = 0, ns = 0;
     snprintf(path, sizeof path, "s%02d/resolutions", setup);
-    if (!read_table(h->fid, path, H5T_NATIVE_DOUBLE, res, VV_PYRAMID_MAX_LEVELS, &nr))
+    if (!read_table(h, path, H5T_NATIVE_DOUBLE, res, VV_PYRAMID_MAX_LEVELS, &nr))
         return vv_error_set(VV_ERR_FORMAT,
                             "%s: missing, or not a table of (x, y, z) factors "
                             "of 1 .. 16 levels",
                             path);
     snprintf(path, sizeof path, "s%02d/subdivisions", setup);
     const int has_sub =
-        read_table(h->fid, path, H5T_NATIVE_INT, sub, VV_PYRAMID_MAX_LEVELS, &ns) && ns == nr;
+        read_table(h, path, H5T_NATIVE_INT, sub, VV_PYRAMID_MAX_LEVELS, &ns) && ns == nr;
     h->n_levels = nr;
     for (int l = 0; l < nr; l++) {
         h5p_level *L = &h->lv[l];
@@ -268,6 +311,11 @@ bdv_voxel_size(h5p *h, const char *path, int setup) {
     memcpy(xml, path, stem);
     memcpy(xml + stem, ".xml", 5);
     const char *xname = vv_path_basename(xml);
+    struct stat xs;
+    if (stat(xml, &xs) != 0)
+        return VV_OK;
+    if (!S_ISREG(xs.st_mode)) /* a FIFO would block the open */
+        return vv_error_set(VV_ERR_FORMAT, "%s: the companion XML is not a regular file", xname);
     FILE *f = fopen(xml, "rb");
     if (!f)
         return VV_OK;
@@ -277,11 +325,14 @@ bdv_voxel_size(h5p *h, const char *path, int setup) {
     if (size < 0 || size > (64L << 20))
         return vv_error_set(VV_ERR_FORMAT,
                             "%s: %ld bytes, over the 64 MiB a companion XML may have", xname, size);
-    xmlDoc *doc = xmlReadFile(xml, NULL, XML_PARSE_NONET | XML_PARSE_NOERROR | XML_PARSE_NOWARNING);
+    int doctype = 0;
+    xmlDoc *doc = vv_bdv_xml_read(xml, &doctype);
     xmlNode *root = doc ? xmlDocGetRootElement(doc) : NULL;
     if (!root) {
         xmlFreeDoc(doc);
-        return vv_error_set(VV_ERR_FORMAT, "%s: the companion XML cannot be parsed", xname);
+        return vv_error_set(VV_ERR_FORMAT, "%s: the companion XML %s", xname,
+                            doctype ? "has a <!DOCTYPE> (entities and DTDs are refused)"
+                                    : "cannot be parsed");
     }
     vv_status st = VV_OK;
     xmlNode *seq = xml_child(root, "SequenceDescription");
@@ -338,7 +389,7 @@ attr_text(hid_t obj, const char *name, char *buf, size_t cap) {
     if (ft >= 0 && sp >= 0 && H5Tget_class(ft) == H5T_STRING && !H5Tis_variable_str(ft)) {
         const hssize_t np = H5Sget_simple_extent_npoints(sp);
         const size_t sz = H5Tget_size(ft);
-        if (np >= 1 && sz >= 1 && (size_t)np * sz < cap) {
+        if (np >= 1 && sz >= 1 && (uint64_t)np < cap && sz < cap && (size_t)np * sz < cap) {
             hid_t mt = H5Tcopy(H5T_C_S1);
             H5Tset_size(mt, sz);
             H5Tset_strpad(mt, H5T_STR_NULLPAD);
@@ -379,7 +430,7 @@ open_ims(h5p *h, int channel, int time) {
     h->n_levels = 0;
     for (int l = 0; l < VV_PYRAMID_MAX_LEVELS + 1; l++) {
         snprintf(path, sizeof path, "DataSet/ResolutionLevel %d", l);
-        if (!link_exists(h->fid, path))
+        if (!link_exists(h, path))
             break;
         h->n_levels = l + 1;
     }
@@ -388,13 +439,13 @@ open_ims(h5p *h, int channel, int time) {
     h->n_times = h->n_channels = 0;
     for (int k = 0; k < 100000; k++) {
         snprintf(path, sizeof path, "DataSet/ResolutionLevel 0/TimePoint %d", k);
-        if (!link_exists(h->fid, path))
+        if (!link_exists(h, path))
             break;
         h->n_times = k + 1;
     }
     for (int k = 0; k < 1000; k++) {
         snprintf(path, sizeof path, "DataSet/ResolutionLevel 0/TimePoint 0/Channel %d", k);
-        if (!link_exists(h->fid, path))
+        if (!link_exists(h, path))
             break;
         h->n_channels = k + 1;
     }
@@ -404,8 +455,8 @@ open_ims(h5p *h, int channel, int time) {
         return vv_error_set(VV_ERR_INVALID, "time step %d asked, the file has %d", t, h->n_times);
     /* the extent, when the image's attributes give it */
     double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-    int has_ext = link_exists(h->fid, "DataSetInfo") && link_exists(h->fid, "DataSetInfo/Image");
-    hid_t img = has_ext ? H5Gopen2(h->fid, "DataSetInfo/Image", H5P_DEFAULT) : -1;
+    int has_ext = link_exists(h, "DataSetInfo") && link_exists(h, "DataSetInfo/Image");
+    hid_t img = has_ext ? H5Gopen2(h->fid, "DataSetInfo/Image", h->gapl) : -1;
     for (int k = 0; k < 3 && img >= 0; k++) {
         char a[32], b[32];
         snprintf(a, sizeof a, "ExtMin%d", k);
@@ -426,7 +477,7 @@ open_ims(h5p *h, int channel, int time) {
             return s;
         /* the image's size within the padded dataset */
         snprintf(path, sizeof path, "DataSet/ResolutionLevel %d/TimePoint %d/Channel %d", l, t, c);
-        hid_t g = H5Gopen2(h->fid, path, H5P_DEFAULT);
+        hid_t g = H5Gopen2(h->fid, path, h->gapl);
         for (int k = 0; k < 3 && g >= 0; k++) {
             static const char *const names[3] = {"ImageSizeX", "ImageSizeY", "ImageSizeZ"};
             double n;
@@ -453,6 +504,11 @@ open_ims(h5p *h, int channel, int time) {
         for (int k = 0; k < 3; k++) {
             const double sp = has_ext && hi[k] > lo[k] ? (hi[k] - lo[k]) / L->dims[k]
                                                        : (double)h->lv[0].dims[k] / L->dims[k];
+            if (!(sp > 0) || !isfinite(sp))
+                return vv_error_set(VV_ERR_FORMAT,
+                                    "DataSetInfo/Image: ExtMin%d %g .. ExtMax%d %g over %d voxels "
+                                    "is a spacing of %g (not positive and finite)",
+                                    k, lo[k], k, hi[k], L->dims[k], sp);
             L->spacing[k] = sp;
             L->origin[k] = (has_ext ? lo[k] : 0) + 0.5 * sp;
             if (l > 0 && L->dims[k] > h->lv[0].dims[k])
@@ -474,6 +530,10 @@ h5p_close(h5p *h) {
             H5Dclose(h->dset[l]);
     if (h->fid > 0)
         H5Fclose(h->fid);
+    const hid_t pl[3] = {h->lapl, h->dapl, h->gapl};
+    for (int i = 0; i < 3; i++)
+        if (pl[i] > 0)
+            H5Pclose(pl[i]);
     free(h);
 }
 
@@ -486,12 +546,27 @@ h5p_open(h5p **out, const char *path, int channel, int time, int ids) {
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
     snprintf(h->file, sizeof h->file, "%s", vv_path_basename(path));
     vv_status s = VV_OK;
+    struct stat st;
+    if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) { /* libhdf5 would block on a FIFO */
+        h5p_close(h);
+        return vv_error_set(VV_ERR_FORMAT, "not a regular file");
+    }
+    h->lapl = H5Pcreate(H5P_LINK_ACCESS);
+    h->dapl = H5Pcreate(H5P_DATASET_ACCESS);
+    h->gapl = H5Pcreate(H5P_GROUP_ACCESS);
+    if (h->lapl < 0 || h->dapl < 0 || h->gapl < 0 ||
+        H5Pset_elink_cb(h->lapl, refuse_elink, h) < 0 ||
+        H5Pset_elink_cb(h->dapl, refuse_elink, h) < 0 ||
+        H5Pset_elink_cb(h->gapl, refuse_elink, h) < 0) {
+        h5p_close(h);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
     h->fid = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
     if (h->fid < 0)
         s = vv_error_set(VV_ERR_IO, "cannot open it as an HDF5 file");
-    else if (link_exists(h->fid, "DataSet") && link_exists(h->fid, "DataSet/ResolutionLevel 0"))
+    else if (link_exists(h, "DataSet") && link_exists(h, "DataSet/ResolutionLevel 0"))
         h->kind = 2;
-    else if (ids || (link_exists(h->fid, "s00") && link_exists(h->fid, "t00000")))
+    else if (ids || (link_exists(h, "s00") && link_exists(h, "t00000")))
         h->kind = 1;
     else
         s = vv_error_set(VV_ERR_UNSUPPORTED, /* a plain HDF5 file: read whole */

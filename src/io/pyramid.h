@@ -240,6 +240,13 @@ vv_status vv_store_read_level(vv_store *st, int level, vv_volume **out);
 /** The store of a BigDataViewer HDF5 or Imaris file @p path, read in this process. */
 vv_status vv_h5_pyramid_store(vv_store *st, const char *path, int channel, int time);
 
+/* The XML document at @p path parsed by libxml2 without the network and
+ * without a document type: a <!DOCTYPE> (where entities, external ones
+ * included, and DTDs would be declared) stops the parser before its
+ * internal subset, *doctype = 1 and NULL. NULL with *doctype 0: not
+ * well-formed. BigDataViewer's dataset XML and an HDF5 file's companion. */
+struct _xmlDoc *vv_bdv_xml_read(const char *path, int *doctype);
+
 /* @p s prefixed with "NAME: FILE" (@p name a format's, @p path its
  * file) unless its message starts so already: a store's reader, in the
  * sandbox or here, names the file itself. */

@@ -25,6 +25,7 @@ typedef struct zr_axis {
 /* One level's array and what the metadata says of it. */
 typedef struct zr_array {
     char dir[4096];
+    char real[4096]; /* the store's real path: chunks must resolve beneath it ("": unknown) */
     int ndim;
     uint64_t shape[ZR_MAX_DIM], chunks[ZR_MAX_DIM];
     vv_voxel_type type;

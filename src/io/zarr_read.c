@@ -25,12 +25,15 @@
  * over 16 MiB and chunks over 1 GiB are refused.
  */
 #include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <blosc.h>
 #include <jansson.h>
@@ -40,6 +43,14 @@
 
 #include "core/internal.h"
 #include "io/zarr.h"
+
+/* 1 when the real path @p real lies in or beneath the real folder @p dir. */
+static int
+zr_beneath(const char *real, const char *dir) {
+    const size_t n = strlen(dir);
+    return !strncmp(real, dir, n) &&
+           (real[n] == '/' || real[n] == '\0' || (n == 1 && dir[0] == '/'));
+}
 
 /* path/name loaded as JSON (at most ZR_JSON_MAX bytes); NULL with the error
  * set, or NULL without an error when the file is absent and @p optional. */
@@ -52,6 +63,10 @@ load_json(const char *dir, const char *name, int optional, vv_status *s) {
     if (stat(p, &st) != 0) {
         if (!optional)
             *s = vv_error_set(VV_ERR_FORMAT, "no %s (not a Zarr array)", name);
+        return NULL;
+    }
+    if (!S_ISREG(st.st_mode)) { /* a FIFO would block the read forever */
+        *s = vv_error_set(VV_ERR_FORMAT, "%s is not a regular file", name);
         return NULL;
     }
     if (st.st_size > ZR_JSON_MAX) {
@@ -150,10 +165,18 @@ parse_zarray(zr_array *a) {
         else if (sep && !(json_is_string(sep) && !strcmp(json_string_value(sep), ".")))
             s = vv_error_set(VV_ERR_FORMAT, ".zarray: dimension_separator is not \".\" or \"/\"");
         a->fill = 0;
+        const char *fs = json_string_value(fill);
         if (json_is_number(fill))
             a->fill = json_number_value(fill);
-        else if (json_is_string(fill) && !strcmp(json_string_value(fill), "NaN"))
+        else if (fs && !strcmp(fs, "NaN"))
             a->fill = NAN;
+        else if (fs && !strcmp(fs, "Infinity"))
+            a->fill = INFINITY;
+        else if (fs && !strcmp(fs, "-Infinity"))
+            a->fill = -INFINITY;
+        else if (s == VV_OK && fill && !json_is_null(fill))
+            s = vv_error_set(VV_ERR_FORMAT, ".zarray: fill_value is not a number, null, \"NaN\" or "
+                                            "\"Infinity\"");
     }
     json_decref(j);
     return s;
@@ -177,27 +200,45 @@ axis_kind(const char *name, const char *type) {
 }
 
 /* scale (and translation) of one coordinateTransformations list into
- * sc/tr (multiplied, added: nested levels compose). */
-static void
-apply_transforms(json_t *list, int ndim, double *sc, double *tr) {
+ * sc/tr (multiplied, added: nested levels compose). A scale or translation
+ * that is not @p ndim numbers, a scale that is not positive and finite:
+ * VV_ERR_FORMAT naming @p where (a zero or non-finite spacing is never
+ * taken). Other transform types are ignored. */
+static vv_status
+apply_transforms(json_t *list, int ndim, double *sc, double *tr, const char *where) {
     size_t i;
     json_t *t;
     json_array_foreach(list, i, t) {
         const char *type = json_string_value(json_object_get(t, "type"));
-        json_t *v = json_object_get(t, type ? type : "");
-        if (!type || !json_is_array(v) || (int)json_array_size(v) != ndim)
+        if (!type || (strcmp(type, "scale") && strcmp(type, "translation")))
             continue;
+        const int scale = !strcmp(type, "scale");
+        json_t *v = json_object_get(t, type);
+        if (!json_is_array(v) || (int)json_array_size(v) != ndim)
+            return vv_error_set(VV_ERR_FORMAT, ".zattrs: %s: the %s is not %d numbers", where, type,
+                                ndim);
         for (int k = 0; k < ndim; k++) {
-            double x = json_number_value(json_array_get(v, (size_t)k));
+            json_t *n = json_array_get(v, (size_t)k);
+            const double x = json_number_value(n);
+            if (!json_is_number(n) || !isfinite(x) || (scale && !(x > 0)))
+                return vv_error_set(VV_ERR_FORMAT, ".zattrs: %s: %s %d is not a %s number", where,
+                                    type, k, scale ? "positive finite" : "finite");
             /* x' = s x (the translation so far scaled too), x' = x + t */
-            if (!strcmp(type, "scale") && x > 0 && isfinite(x)) {
+            if (scale) {
                 sc[k] *= x;
                 tr[k] *= x;
-            } else if (!strcmp(type, "translation") && isfinite(x)) {
+            } else {
                 tr[k] += x;
             }
+            if (!isfinite(sc[k]) || !(sc[k] > 0) || !isfinite(tr[k]))
+                return vv_error_set(VV_ERR_FORMAT,
+                                    ".zattrs: %s: the composed %s along axis %d is not finite "
+                                    "and positive",
+                                    where, isfinite(sc[k]) && sc[k] > 0 ? "translation" : "scale",
+                                    k);
         }
     }
+    return VV_OK;
 }
 
 /* The OME metadata of the store at @p root (its .zattrs): level @p level's
@@ -211,6 +252,11 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
         return s;
     json_t *ms = za ? json_array_get(json_object_get(za, "multiscales"), 0) : NULL;
     snprintf(a->dir, sizeof a->dir, "%s", root);
+    /* the store's real path: every folder and chunk read must lie beneath
+     * it (a symbolic link may lead out) */
+    char *rroot = realpath(root, NULL);
+    snprintf(a->real, sizeof a->real, "%s", rroot ? rroot : "");
+    free(rroot);
     json_t *axes = ms ? json_object_get(ms, "axes") : NULL;
     json_t *dsl = ms ? json_object_get(ms, "datasets") : NULL;
     json_t *ds0 = ms ? json_array_get(dsl, (size_t)level) : NULL;
@@ -238,6 +284,19 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
             return s;
         }
         snprintf(a->dir, sizeof a->dir, "%s/%s", root, p);
+        /* a symbolic link may still lead out of the store: compare the
+         * real paths (a folder that does not exist has no .zarray) */
+        char *rdir = realpath(a->dir, NULL);
+        const int inside = !rdir || !a->real[0] || zr_beneath(rdir, a->real);
+        free(rdir);
+        if (!inside) {
+            s = vv_error_set(VV_ERR_FORMAT,
+                             ".zattrs: dataset %d: path \"%s\" leaves the store (a link to a "
+                             "folder outside it)",
+                             level, p);
+            json_decref(za);
+            return s;
+        }
     }
     s = parse_zarray(a);
     if (s != VV_OK) {
@@ -280,10 +339,13 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
         a->trans[i] = 0;
     }
     if (s == VV_OK && ds0) {
-        apply_transforms(json_object_get(ds0, "coordinateTransformations"), a->ndim, a->scale,
-                         a->trans);
-        apply_transforms(json_object_get(ms, "coordinateTransformations"), a->ndim, a->scale,
-                         a->trans);
+        char where[64];
+        snprintf(where, sizeof where, "dataset %d", level);
+        s = apply_transforms(json_object_get(ds0, "coordinateTransformations"), a->ndim, a->scale,
+                             a->trans, where);
+        if (s == VV_OK)
+            s = apply_transforms(json_object_get(ms, "coordinateTransformations"), a->ndim,
+                                 a->scale, a->trans, "multiscales");
     }
     /* omero: the channel's label and colour (RRGGBB) */
     json_t *chs = za ? json_object_get(json_object_get(za, "omero"), "channels") : NULL;
@@ -313,13 +375,35 @@ vv_zr_read_chunk(const zr_array *a, const char *path, unsigned char *out, size_t
     *missing = 0;
     if (file_bytes)
         *file_bytes = 0;
-    FILE *f = fopen(path, "rb");
-    if (!f) {
+    /* not blocking: a FIFO would block the open forever */
+    const int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
         if (errno == ENOENT) {
             *missing = 1;
             return VV_OK;
         }
         return vv_error_set(VV_ERR_IO, "%s: %s", path, strerror(errno));
+    }
+    struct stat fst;
+    if (fstat(fd, &fst) != 0 || !S_ISREG(fst.st_mode)) {
+        close(fd);
+        return vv_error_set(VV_ERR_FORMAT, "%s: the chunk is not a regular file", path);
+    }
+    FILE *f = fdopen(fd, "rb");
+    if (!f) {
+        close(fd);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk");
+    }
+    /* a chunk (or a folder on its way) that is a link out of the store */
+    if (a->real[0]) {
+        char *real = realpath(path, NULL);
+        const int inside = real && zr_beneath(real, a->real);
+        free(real);
+        if (!inside) {
+            fclose(f);
+            return vv_error_set(VV_ERR_FORMAT, "%s: the chunk file resolves outside the store",
+                                path);
+        }
     }
     struct stat st;
     if (fstat(fileno(f), &st) != 0 || st.st_size < 0 || (uint64_t)st.st_size > ZR_CHUNK_MAX) {
@@ -447,6 +531,10 @@ vv_zr_layout(const zr_array *a, int channel, int time, zr_layout *J) {
     }
     J->nc = J->cax >= 0 ? a->shape[J->cax] : 1;
     J->nt = J->tax >= 0 ? a->shape[J->tax] : 1;
+    if (J->nc > INT_MAX || J->nt > INT_MAX) /* counted in ints (vv_load_info) */
+        return vv_error_set(VV_ERR_LIMIT, "%llu %s (limit %d)",
+                            (unsigned long long)(J->nc > INT_MAX ? J->nc : J->nt),
+                            J->nc > INT_MAX ? "channels" : "time steps", INT_MAX);
     const int ch = channel < 0 ? 0 : channel, tp = time < 0 ? 0 : time;
     if ((uint64_t)ch >= J->nc)
         return vv_error_set(VV_ERR_INVALID, "channel %d asked, the store has %llu", ch,
@@ -584,6 +672,16 @@ read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
     const uint64_t nc = J.nc, nt = J.nt;
     if ((s = vv_volume_check_size(dims, a.type, NULL)) != VV_OK)
         return s;
+    /* each thread decodes into a buffer of a whole chunk (one thread for
+     * chunks over 64 MiB): a store of a few bytes may declare chunks of
+     * 1 GiB, so the buffers count against the budget too (fewer threads
+     * when they would not fit) */
+    int nthreads = J.cbytes > ((size_t)64 << 20) ? 1 : omp_get_max_threads();
+    const uint64_t budget = vv_memory_budget_get();
+    if ((uint64_t)J.cbytes * (uint64_t)nthreads > budget)
+        nthreads = budget / J.cbytes > 1 ? (int)(budget / J.cbytes) : 1;
+    if ((s = vv_memory_budget_check((uint64_t)J.cbytes, "a Zarr chunk's buffer")) != VV_OK)
+        return s;
     vv_volume *v = NULL;
     if ((s = vv_volume_new(&v, dims, a.type)) != VV_OK)
         return s;
@@ -591,12 +689,11 @@ read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
     for (int i = 0; i < a.ndim; i++)
         if (i != cax && i != tax)
             n_spatial *= J.nchunk[i]; /* at most 2^48: each axis is at most 65536 */
-    /* the chunks in parallel, each thread its own buffer (one thread for
-     * chunks over 64 MiB); the error of the first failing chunk in order */
+    /* the chunks in parallel, each thread its own buffer; the error of the
+     * first failing chunk in order */
     long long first = -1;
     vv_status first_status = VV_OK;
     char first_msg[1024] = "";
-    const int nthreads = J.cbytes > ((size_t)64 << 20) ? 1 : omp_get_max_threads();
     const int zero[3] = {0, 0, 0};
 #pragma omp parallel num_threads(nthreads)
     {
@@ -665,6 +762,8 @@ vv_ome_zarr_looks_like(const vv_format_probe *p, int deep) {
     if (stat(f, &st) == 0)
         return 1;
     snprintf(f, sizeof f, "%s/.zattrs", p->path);
+    if (stat(f, &st) != 0 || !S_ISREG(st.st_mode)) /* a FIFO would block the open */
+        return 0;
     FILE *fp = fopen(f, "rb");
     if (!fp)
         return 0;

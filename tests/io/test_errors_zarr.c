@@ -1,0 +1,694 @@
+/*
+ * Every refusal of the OME-Zarr reader (src/io/zarr_read.c) and of its
+ * pyramid (src/io/zarr_pyramid.c, src/io/pyramid_open.c,
+ * src/io/pyramid_load.c) on hostile stores written here: each row a store
+ * (.zattrs, .zarray, a chunk), the status and a piece of the message that
+ * names the field; every message one line naming the store, no volume
+ * left behind, nothing for the sanitizers to report.
+ *
+ * - A multiscales dataset path "../../../../etc" is refused with the path
+ *   quoted (it was formatted from freed JSON: a heap use-after-free), here
+ *   and through `volvis info` (VOLVIS_SANDBOX=0).
+ * - A dataset path that is a symbolic link to a folder outside the store.
+ * - Zero, negative, non-number or overflowing scales in the
+ *   coordinateTransformations (a zero or non-finite spacing is never taken).
+ * - Short and corrupt zlib, gzip, zstd and blosc chunks; a chunk file over
+ *   1 GiB (sparse), one that is a folder, one below a file; a chunk, or a
+ *   folder of chunks, that is a link out of the store; FIFOs for .zarray,
+ *   .zattrs and a chunk (an open would block).
+ */
+#include "testutil.h"
+
+#include <dirent.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+#include <zlib.h>
+
+#include "io/pyramid.h"
+#include "io/zarr.h"
+#include "volvis/volvis.h"
+
+static char g_dir[4096];
+
+/* Removes @p path and, when a folder (not a link), what it holds. */
+static void
+rm_rf(const char *path) {
+    struct stat st;
+    if (lstat(path, &st) != 0)
+        return;
+    if (S_ISDIR(st.st_mode)) {
+        DIR *d = opendir(path);
+        for (struct dirent *e = d ? readdir(d) : NULL; e; e = readdir(d)) {
+            if (!strcmp(e->d_name, ".") || !strcmp(e->d_name, ".."))
+                continue;
+            char p[8400];
+            snprintf(p, sizeof p, "%s/%s", path, e->d_name);
+            rm_rf(p);
+        }
+        if (d)
+            closedir(d);
+    }
+    remove(path);
+}
+
+static const char *
+base(const char *path) {
+    const char *s = strrchr(path, '/');
+    return s ? s + 1 : path;
+}
+
+/* A fresh empty folder @p name under the test's output folder. */
+static const char *
+fresh(const char *name) {
+    static char p[4400];
+    snprintf(p, sizeof p, "%s/%s", g_dir, name);
+    rm_rf(p);
+    assert_int_equal(mkdir(p, 0755), 0);
+    return p;
+}
+
+static void
+put(const char *dir, const char *name, const void *data, size_t n) {
+    char p[8400];
+    snprintf(p, sizeof p, "%s/%s", dir, name);
+    char *slash = strrchr(p, '/');
+    if (slash > p + strlen(dir)) { /* a sub-folder first */
+        *slash = '\0';
+        mkdir(p, 0755);
+        *slash = '/';
+    }
+    vt_write_file(p, data, n);
+}
+
+static void
+put_text(const char *dir, const char *name, const char *text) {
+    put(dir, name, text, strlen(text));
+}
+
+/* Asserts a refusal: status @p want, a one-line message holding @p needle
+ * and, when @p file is not NULL, naming it. */
+static void
+expect(vv_status got, vv_status want, const char *needle, const char *file) {
+    const char *msg = vv_error_message();
+    if (got != want)
+        fail_msg("got %s, expected %s: %s", vv_status_name(got), vv_status_name(want), msg);
+    if (needle && !strstr(msg, needle))
+        fail_msg("message '%s' does not mention '%s'", msg, needle);
+    if (file && !strstr(msg, file))
+        fail_msg("message '%s' does not name the file '%s'", msg, file);
+    if (strchr(msg, '\n') || strchr(msg, '\r'))
+        fail_msg("message '%s' is not one line", msg);
+}
+
+/* Loads the store @p dir (as detected) at @p level / @p channel / @p time;
+ * asserts it is refused as expected, with no volume. */
+static void
+load_expect(const char *dir, int level, int channel, int time, vv_status want, const char *needle) {
+    vv_load_options o;
+    vv_load_options_init(&o);
+    o.format = VV_FORMAT_OME_ZARR;
+    o.level = level;
+    o.channel = channel;
+    o.time = time;
+    vv_volume *v = (vv_volume *)(uintptr_t)1;
+    vv_status s = vv_volume_load(&v, dir, &o);
+    assert_null(v);
+    expect(s, want, needle, base(dir));
+}
+
+/* ---- the metadata ----------------------------------------------------------------- */
+
+#define ZA_(shape, chunks, dtype, more)                                                            \
+    "{\"zarr_format\": 2, \"shape\": " shape ", \"chunks\": " chunks ", \"dtype\": \"" dtype       \
+    "\", \"compressor\": null, \"fill_value\": 0, \"order\": \"C\"" more "}"
+#define ZA ZA_("[4, 4, 4]", "[4, 4, 4]", "|u1", "")
+#define AX3                                                                                        \
+    "[{\"name\": \"z\", \"type\": \"space\"}, {\"name\": \"y\", \"type\": \"space\"}, "            \
+    "{\"name\": \"x\", \"type\": \"space\", \"unit\": \"micrometer\"}]"
+#define SC3 "[{\"type\": \"scale\", \"scale\": [1, 1, 1]}]"
+#define MS_(axes, datasets, more)                                                                  \
+    "{\"multiscales\": [{\"version\": \"0.4\", \"axes\": " axes ", \"datasets\": " datasets more   \
+    "}]}"
+#define DS_(path, tr) "[{\"path\": \"" path "\", \"coordinateTransformations\": " tr "}]"
+#define MS(path, tr) MS_(AX3, DS_(path, tr), "")
+
+typedef struct zcase {
+    const char *name;
+    const char *zattrs; /* NULL: none (a plain array at the root) */
+    const char *zarray; /* at "0/" with .zattrs, else at the root; NULL: none */
+    int level, channel, time;
+    vv_status want;
+    const char *needle;
+} zcase;
+
+static const zcase g_meta[] = {
+    {"no_zarray", MS("0", SC3), NULL, 0, -1, -1, VV_ERR_FORMAT, "no .zarray"},
+    {"zattrs_json", "{\"multiscales\": [", ZA, 0, -1, -1, VV_ERR_FORMAT, ".zattrs: line"},
+    {"zarray_json", MS("0", SC3), "{\"zarr_format\": 2,,}", 0, -1, -1, VV_ERR_FORMAT,
+     ".zarray: line"},
+    {"zarray_dup_key", NULL, "{\"zarr_format\": 2, \"zarr_format\": 2}", 0, -1, -1, VV_ERR_FORMAT,
+     "duplicate"},
+    {"no_datasets", MS_(AX3, "[]", ""), ZA, 0, -1, -1, VV_ERR_FORMAT,
+     "multiscales without datasets"},
+    {"level_past", MS("0", SC3), ZA, 3, -1, -1, VV_ERR_INVALID, "level 3 asked, the store has 1"},
+    {"level_plain", NULL, ZA, 1, -1, -1, VV_ERR_INVALID, "level 1 asked"},
+    {"path_none", MS_(AX3, "[{\"coordinateTransformations\": " SC3 "}]", ""), ZA, 0, -1, -1,
+     VV_ERR_FORMAT, "dataset 0 has no path"},
+    {"path_empty", MS("", SC3), ZA, 0, -1, -1, VV_ERR_FORMAT, "dataset 0 has no path"},
+    {"path_number", MS_(AX3, "[{\"path\": 7}]", ""), ZA, 0, -1, -1, VV_ERR_FORMAT, "no path"},
+    {"path_dotdot", MS("../../../../etc", SC3), ZA, 0, -1, -1, VV_ERR_FORMAT,
+     "path \"../../../../etc\" leaves the store"},
+    {"path_absolute", MS("/etc", SC3), ZA, 0, -1, -1, VV_ERR_FORMAT,
+     "path \"/etc\" leaves the store"},
+    {"path_inner_dotdot", MS("0/../../x", SC3), ZA, 0, -1, -1, VV_ERR_FORMAT, "leaves the store"},
+    {"path_control", MS("\\u001b[31m/..", SC3), ZA, 0, -1, -1, VV_ERR_FORMAT, "\\x1b[31m"},
+    {"zarr_format", NULL, "{\"zarr_format\": 3, \"shape\": [4, 4, 4]}", 0, -1, -1,
+     VV_ERR_UNSUPPORTED, "zarr_format is not 2"},
+    {"zarr_format_string", NULL, "{\"zarr_format\": \"2\"}", 0, -1, -1, VV_ERR_UNSUPPORTED,
+     "zarr_format"},
+    {"shape_missing", NULL, "{\"zarr_format\": 2, \"chunks\": [4, 4, 4]}", 0, -1, -1, VV_ERR_FORMAT,
+     "shape and chunks must be arrays"},
+    {"shape_chunks_differ", NULL, ZA_("[4, 4, 4]", "[4, 4]", "|u1", ""), 0, -1, -1, VV_ERR_FORMAT,
+     "shape and chunks"},
+    {"shape_1d", NULL, ZA_("[4]", "[4]", "|u1", ""), 0, -1, -1, VV_ERR_FORMAT, "2 to 5 sizes"},
+    {"shape_6d", NULL, ZA_("[1, 1, 1, 1, 1, 1]", "[1, 1, 1, 1, 1, 1]", "|u1", ""), 0, -1, -1,
+     VV_ERR_FORMAT, "2 to 5 sizes"},
+    {"shape_zero", NULL, ZA_("[4, 0, 4]", "[4, 4, 4]", "|u1", ""), 0, -1, -1, VV_ERR_FORMAT,
+     "axis 1: shape or chunk size not a size"},
+    {"chunk_zero", NULL, ZA_("[4, 4, 4]", "[4, 4, 0]", "|u1", ""), 0, -1, -1, VV_ERR_FORMAT,
+     "axis 2: shape or chunk"},
+    {"chunk_negative", NULL, ZA_("[4, 4, 4]", "[-4, 4, 4]", "|u1", ""), 0, -1, -1, VV_ERR_FORMAT,
+     "axis 0: shape or chunk"},
+    {"shape_huge", NULL, ZA_("[4, 4, 2000000000000]", "[4, 4, 4]", "|u1", ""), 0, -1, -1,
+     VV_ERR_FORMAT, "axis 2: shape or chunk"},
+    {"shape_float", NULL, ZA_("[4, 4.5, 4]", "[4, 4, 4]", "|u1", ""), 0, -1, -1, VV_ERR_FORMAT,
+     "axis 1"},
+    {"order_f", NULL,
+     "{\"zarr_format\": 2, \"shape\": [4, 4, 4], \"chunks\": [4, 4, 4], "
+     "\"order\": \"F\"}",
+     0, -1, -1, VV_ERR_UNSUPPORTED, "order \"F\""},
+    {"order_number", NULL,
+     "{\"zarr_format\": 2, \"shape\": [4, 4, 4], \"chunks\": [4, 4, 4], "
+     "\"order\": 1}",
+     0, -1, -1, VV_ERR_UNSUPPORTED, "order \"?\""},
+    {"filters", NULL, ZA_("[4, 4, 4]", "[4, 4, 4]", "|u1", ", \"filters\": [{\"id\": \"delta\"}]"),
+     0, -1, -1, VV_ERR_UNSUPPORTED, "filters are not supported"},
+    {"dtype_f16", NULL, ZA_("[4, 4, 4]", "[4, 4, 4]", "<f16", ""), 0, -1, -1, VV_ERR_UNSUPPORTED,
+     "dtype \"<f16\""},
+    {"dtype_object", NULL, ZA_("[4, 4, 4]", "[4, 4, 4]", "|O", ""), 0, -1, -1, VV_ERR_UNSUPPORTED,
+     "dtype \"|O\""},
+    {"dtype_unicode", NULL, ZA_("[4, 4, 4]", "[4, 4, 4]", "<U8", ""), 0, -1, -1, VV_ERR_UNSUPPORTED,
+     "dtype \"<U8\""},
+    {"dtype_f2", NULL, ZA_("[4, 4, 4]", "[4, 4, 4]", "<f2", ""), 0, -1, -1, VV_ERR_UNSUPPORTED,
+     "dtype \"<f2\""},
+    {"dtype_order", NULL, ZA_("[4, 4, 4]", "[4, 4, 4]", "=u2", ""), 0, -1, -1, VV_ERR_UNSUPPORTED,
+     "dtype \"=u2\""},
+    {"dtype_none", NULL, "{\"zarr_format\": 2, \"shape\": [4, 4, 4], \"chunks\": [4, 4, 4]}", 0, -1,
+     -1, VV_ERR_UNSUPPORTED, "dtype \"(none)\""},
+    {"dtype_structured", NULL,
+     "{\"zarr_format\": 2, \"shape\": [4, 4, 4], \"chunks\": [4, 4, 4], "
+     "\"dtype\": [[\"a\", \"<u1\"]]}",
+     0, -1, -1, VV_ERR_UNSUPPORTED, "dtype \"(none)\""},
+    {"compressor_lz4", NULL,
+     "{\"zarr_format\": 2, \"shape\": [4, 4, 4], \"chunks\": [4, 4, 4], \"dtype\": \"|u1\", "
+     "\"compressor\": {\"id\": \"lz4\"}}",
+     0, -1, -1, VV_ERR_UNSUPPORTED, "compressor \"lz4\""},
+    {"compressor_no_id", NULL,
+     "{\"zarr_format\": 2, \"shape\": [4, 4, 4], \"chunks\": [4, 4, 4], \"dtype\": \"|u1\", "
+     "\"compressor\": 5}",
+     0, -1, -1, VV_ERR_UNSUPPORTED, "compressor \"?\""},
+    {"separator", NULL, ZA_("[4, 4, 4]", "[4, 4, 4]", "|u1", ", \"dimension_separator\": \"\\\\\""),
+     0, -1, -1, VV_ERR_FORMAT, "dimension_separator"},
+    {"separator_number", NULL, ZA_("[4, 4, 4]", "[4, 4, 4]", "|u1", ", \"dimension_separator\": 0"),
+     0, -1, -1, VV_ERR_FORMAT, "dimension_separator"},
+    {"fill_junk", NULL,
+     "{\"zarr_format\": 2, \"shape\": [4, 4, 4], \"chunks\": [4, 4, 4], \"dtype\": \"|u1\", "
+     "\"fill_value\": \"junk\"}",
+     0, -1, -1, VV_ERR_FORMAT, "fill_value"},
+    {"fill_object", NULL,
+     "{\"zarr_format\": 2, \"shape\": [4, 4, 4], \"chunks\": [4, 4, 4], \"dtype\": \"|u1\", "
+     "\"fill_value\": {\"a\": 1}}",
+     0, -1, -1, VV_ERR_FORMAT, "fill_value"},
+    {"level_prefix", MS("0", SC3), ZA_("[4, 4, 4]", "[4, 4, 4]", "<f16", ""), 0, -1, -1,
+     VV_ERR_UNSUPPORTED, "level 0: .zarray: dtype"},
+    {"axes_count", MS_("[\"y\", \"x\"]", DS_("0", SC3), ""), ZA, 0, -1, -1, VV_ERR_FORMAT,
+     "2 axes for an array of 3 dimensions"},
+    {"plain_2d", NULL, ZA_("[4, 4]", "[4, 4]", "|u1", ""), 0, -1, -1, VV_ERR_FORMAT,
+     "a 2-D array without OME axes"},
+    {"axis_kind",
+     MS_("[{\"name\": \"z\", \"type\": \"space\"}, {\"name\": \"q\", \"type\": \"angle\"}, "
+         "{\"name\": \"x\", \"type\": \"space\"}]",
+         DS_("0", SC3), ""),
+     ZA, 0, -1, -1, VV_ERR_UNSUPPORTED, "axis \"q\" of type \"angle\""},
+    {"axis_name_number", MS_("[\"z\", 5, \"x\"]", DS_("0", SC3), ""), ZA, 0, -1, -1,
+     VV_ERR_UNSUPPORTED, "axis \"?\""},
+    {"scale_zero", MS("0", "[{\"type\": \"scale\", \"scale\": [1, 0, 1]}]"), ZA, 0, -1, -1,
+     VV_ERR_FORMAT, "dataset 0: scale 1 is not a positive finite number"},
+    {"scale_negative", MS("0", "[{\"type\": \"scale\", \"scale\": [-1, 1, 1]}]"), ZA, 0, -1, -1,
+     VV_ERR_FORMAT, "scale 0 is not a positive"},
+    {"scale_string", MS("0", "[{\"type\": \"scale\", \"scale\": [1, 1, \"NaN\"]}]"), ZA, 0, -1, -1,
+     VV_ERR_FORMAT, "scale 2 is not"},
+    {"scale_short", MS("0", "[{\"type\": \"scale\", \"scale\": [1, 1]}]"), ZA, 0, -1, -1,
+     VV_ERR_FORMAT, "the scale is not 3 numbers"},
+    {"scale_not_array", MS("0", "[{\"type\": \"scale\", \"scale\": 2}]"), ZA, 0, -1, -1,
+     VV_ERR_FORMAT, "the scale is not 3 numbers"},
+    {"translation_null", MS("0", "[{\"type\": \"translation\", \"translation\": [0, null, 0]}]"),
+     ZA, 0, -1, -1, VV_ERR_FORMAT, "translation 1 is not a finite number"},
+    {"scale_overflow",
+     MS_(AX3, DS_("0", "[{\"type\": \"scale\", \"scale\": [1e300, 1, 1]}]"),
+         ", \"coordinateTransformations\": [{\"type\": \"scale\", \"scale\": [1e300, 1, 1]}]"),
+     ZA, 0, -1, -1, VV_ERR_FORMAT, "multiscales: the composed scale along axis 0"},
+    {"scale_underflow",
+     MS_(AX3, DS_("0", "[{\"type\": \"scale\", \"scale\": [1, 1e-300, 1]}]"),
+         ", \"coordinateTransformations\": [{\"type\": \"scale\", \"scale\": [1, 1e-300, 1]}]"),
+     ZA, 0, -1, -1, VV_ERR_FORMAT, "the composed scale along axis 1"},
+    {"translation_overflow",
+     MS("0", "[{\"type\": \"translation\", \"translation\": [1e308, 0, 0]}, "
+             "{\"type\": \"scale\", \"scale\": [1e10, 1, 1]}]"),
+     ZA, 0, -1, -1, VV_ERR_FORMAT, "the composed translation along axis 0"},
+    /* the layout */
+    {"two_channels",
+     MS_("[{\"name\": \"c\", \"type\": \"channel\"}, {\"name\": \"d\", \"type\": \"channel\"}, "
+         "{\"name\": \"y\", \"type\": \"space\"}, {\"name\": \"x\", \"type\": \"space\"}]",
+         DS_("0", "[{\"type\": \"scale\", \"scale\": [1, 1, 1, 1]}]"), ""),
+     ZA_("[2, 2, 4, 4]", "[1, 1, 4, 4]", "|u1", ""), 0, -1, -1, VV_ERR_UNSUPPORTED,
+     "two channel axes"},
+    {"two_times", MS_("[\"t\", \"t\", \"y\", \"x\"]", DS_("0", "[]"), ""),
+     ZA_("[2, 2, 4, 4]", "[1, 1, 4, 4]", "|u1", ""), 0, -1, -1, VV_ERR_UNSUPPORTED,
+     "two time axes"},
+    {"four_space", MS_("[\"x\", \"z\", \"y\", \"x\"]", DS_("0", "[]"), ""),
+     ZA_("[2, 2, 4, 4]", "[1, 1, 4, 4]", "|u1", ""), 0, -1, -1, VV_ERR_UNSUPPORTED,
+     "more than three spatial axes"},
+    {"one_space", MS_("[\"c\", \"x\"]", DS_("0", "[]"), ""), ZA_("[2, 4]", "[1, 4]", "|u1", ""), 0,
+     -1, -1, VV_ERR_UNSUPPORTED, "1 spatial axes"},
+    {"axis_too_long", NULL, ZA_("[4, 4, 100000]", "[4, 4, 4]", "|u1", ""), 0, -1, -1, VV_ERR_LIMIT,
+     "axis x has 100000 samples"},
+    {"channel_past", MS_("[\"c\", \"z\", \"y\", \"x\"]", DS_("0", "[]"), ""),
+     ZA_("[2, 4, 4, 4]", "[1, 4, 4, 4]", "|u1", ""), 0, 2, -1, VV_ERR_INVALID,
+     "channel 2 asked, the store has 2"},
+    {"time_past", MS_("[\"t\", \"z\", \"y\", \"x\"]", DS_("0", "[]"), ""),
+     ZA_("[3, 4, 4, 4]", "[1, 4, 4, 4]", "|u1", ""), 0, -1, 3, VV_ERR_INVALID,
+     "time step 3 asked, the store has 3"},
+    {"channels_over_int", MS_("[\"c\", \"z\", \"y\", \"x\"]", DS_("0", "[]"), ""),
+     ZA_("[4294967296, 4, 4, 4]", "[1, 4, 4, 4]", "|u1", ""), 0, -1, -1, VV_ERR_LIMIT,
+     "4294967296 channels"},
+    {"times_over_int", MS_("[\"t\", \"z\", \"y\", \"x\"]", DS_("0", "[]"), ""),
+     ZA_("[4294967296, 4, 4, 4]", "[1, 4, 4, 4]", "|u1", ""), 0, -1, -1, VV_ERR_LIMIT,
+     "4294967296 time steps"},
+    {"chunk_over_limit", NULL, ZA_("[4, 4, 4]", "[1024, 1024, 2048]", "<f8", ""), 0, -1, -1,
+     VV_ERR_LIMIT, "chunks of over 1073741824 bytes"},
+    {"chunk_product_overflow", MS_("[\"t\", \"c\", \"z\", \"y\", \"x\"]", DS_("0", "[]"), ""),
+     ZA_("[1, 1, 4, 4, 4]", "[1099511627776, 1099511627776, 1099511627776, 4, 4]", "<f8", ""), 0,
+     -1, -1, VV_ERR_LIMIT, "chunks of over"},
+};
+
+static void
+test_metadata(void **state) {
+    (void)state;
+    for (size_t i = 0; i < sizeof g_meta / sizeof g_meta[0]; i++) {
+        const zcase *c = &g_meta[i];
+        char name[128];
+        snprintf(name, sizeof name, "%s.zarr", c->name);
+        const char *dir = fresh(name);
+        if (c->zattrs)
+            put_text(dir, ".zattrs", c->zattrs);
+        if (c->zarray)
+            put_text(dir, c->zattrs ? "0/.zarray" : ".zarray", c->zarray);
+        print_message("%s\n", c->name);
+        load_expect(dir, c->level, c->channel, c->time, c->want, c->needle);
+    }
+}
+
+/* The use-after-free: the path quoted in the message was freed JSON. */
+static void
+test_path_leaves_store(void **state) {
+    (void)state;
+    const char *dir = fresh("escape.zarr");
+    put_text(dir, ".zattrs", MS("../../../../etc", SC3));
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "\"../../../../etc\" leaves the store");
+    zr_array a;
+    memset(&a, 0, sizeof a);
+    expect(vv_zr_parse_store(dir, 0, &a, 0, NULL, NULL), VV_ERR_FORMAT,
+           ".zattrs: dataset 0: path \"../../../../etc\" leaves the store", NULL);
+    vv_pyramid *p = NULL;
+    expect(vv_pyramid_open(&p, dir, 0, -1, vt_cache(64u << 20), NULL), VV_ERR_FORMAT,
+           "leaves the store", "escape.zarr");
+    assert_null(p);
+    /* the command line prints that one line, nothing of /etc */
+    const char *args[] = {"info", dir, NULL};
+    vt_run_result r = vt_run_cli_v(g_dir, args);
+    assert_int_not_equal(r.status, 0);
+    if (!strstr(r.err, "\"../../../../etc\" leaves the store") || !strstr(r.err, "escape.zarr"))
+        fail_msg("volvis info printed '%s'", r.err);
+    const char *nl = strchr(r.err, '\n');
+    assert_true(nl == NULL || nl[1] == '\0');
+    assert_null(strstr(r.out, "root:"));
+    vt_run_result_free(&r);
+}
+
+/* A dataset path that is a link to a folder outside the store (holding a
+ * valid array) is refused like "..". */
+static void
+test_path_symlink(void **state) {
+    (void)state;
+    const char *out = fresh("outside");
+    put_text(out, ".zarray", ZA);
+    char outside[4400];
+    snprintf(outside, sizeof outside, "%s", out);
+    const char *dir = fresh("link.zarr");
+    put_text(dir, ".zattrs", MS("0", SC3));
+    char link[8400];
+    snprintf(link, sizeof link, "%s/0", dir);
+    assert_int_equal(symlink(outside, link), 0);
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "path \"0\" leaves the store");
+    /* a link inside the store is read */
+    const char *ok = fresh("inner_link.zarr");
+    put_text(ok, ".zattrs", MS("0", SC3));
+    put_text(ok, "real/.zarray", ZA);
+    snprintf(link, sizeof link, "%s/0", ok);
+    assert_int_equal(symlink("real", link), 0);
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_load(&v, ok, NULL));
+    assert_int_equal(v->dims[0], 4);
+    vv_volume_free(v);
+}
+
+/* A .zattrs or .zarray over 16 MiB (sparse) is refused unread. */
+static void
+test_json_too_large(void **state) {
+    (void)state;
+    const char *dir = fresh("big.zarr");
+    put_text(dir, ".zarray", ZA);
+    char p[8400];
+    snprintf(p, sizeof p, "%s/.zattrs", dir);
+    int fd = open(p, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    assert_true(fd >= 0);
+    assert_int_equal(ftruncate(fd, (off_t)ZR_JSON_MAX + 1), 0);
+    close(fd);
+    load_expect(dir, 0, -1, -1, VV_ERR_LIMIT, ".zattrs is 16777217 bytes (limit 16777216)");
+}
+
+/* ---- chunks --------------------------------------------------------------------------- */
+
+#define ZAC(codec)                                                                                 \
+    "{\"zarr_format\": 2, \"shape\": [4, 4, 4], \"chunks\": [4, 4, 4], \"dtype\": \"|u1\", "       \
+    "\"fill_value\": 0, \"compressor\": " codec "}"
+
+static void
+chunk_expect(const char *name, const char *zarray, const void *chunk, size_t n, vv_status want,
+             const char *needle) {
+    print_message("%s\n", name);
+    const char *dir = fresh(name);
+    put_text(dir, ".zarray", zarray);
+    put(dir, "0.0.0", chunk, n);
+    load_expect(dir, 0, -1, -1, want, needle);
+}
+
+static void
+test_chunks(void **state) {
+    (void)state;
+    unsigned char junk[64], z[256];
+    for (int i = 0; i < 64; i++)
+        junk[i] = (unsigned char)(i * 37 + 11);
+    /* uncompressed: one byte short */
+    chunk_expect("raw_short.zarr", ZA, junk, 63, VV_ERR_FORMAT,
+                 "0.0.0: 63 bytes, an uncompressed chunk has 64");
+    /* zlib: a valid stream of 10 bytes, a stream cut short, junk */
+    uLongf zn = sizeof z;
+    assert_int_equal(compress(z, &zn, junk, 10), Z_OK);
+    chunk_expect("zlib_small.zarr", ZAC("{\"id\": \"zlib\"}"), z, zn, VV_ERR_FORMAT,
+                 "the zlib stream does not decode to 64 bytes");
+    zn = sizeof z;
+    assert_int_equal(compress(z, &zn, junk, 64), Z_OK);
+    chunk_expect("zlib_cut.zarr", ZAC("{\"id\": \"zlib\"}"), z, zn / 2, VV_ERR_FORMAT,
+                 "the zlib stream does not decode");
+    chunk_expect("zlib_junk.zarr", ZAC("{\"id\": \"zlib\"}"), junk, 64, VV_ERR_FORMAT,
+                 "the zlib stream");
+    chunk_expect("gzip_junk.zarr", ZAC("{\"id\": \"gzip\"}"), junk, 64, VV_ERR_FORMAT,
+                 "the gzip stream does not decode to 64 bytes");
+    chunk_expect("zlib_empty.zarr", ZAC("{\"id\": \"zlib\"}"), junk, 0, VV_ERR_FORMAT,
+                 "the zlib stream");
+    /* zstd: junk, a frame that says 64 bytes and a broken block, another size */
+    chunk_expect("zstd_junk.zarr", ZAC("{\"id\": \"zstd\"}"), junk, 64, VV_ERR_FORMAT,
+                 "the zstd frame does not decode to 64 bytes");
+    const unsigned char zf[] = {0x28, 0xb5, 0x2f, 0xfd, 0x20, 64, 0xff, 0xff, 0xff, 1, 2, 3};
+    chunk_expect("zstd_block.zarr", ZAC("{\"id\": \"zstd\"}"), zf, sizeof zf, VV_ERR_FORMAT,
+                 "the zstd frame");
+    const unsigned char zs[] = {0x28, 0xb5, 0x2f, 0xfd, 0x20, 63, 0x01, 0x00, 0x00};
+    chunk_expect("zstd_size.zarr", ZAC("{\"id\": \"zstd\"}"), zs, sizeof zs, VV_ERR_FORMAT,
+                 "the zstd frame");
+    /* blosc: junk, a header of another size, a header whose lz4 stream is junk */
+    chunk_expect("blosc_junk.zarr", ZAC("{\"id\": \"blosc\", \"cname\": \"lz4\"}"), junk, 10,
+                 VV_ERR_FORMAT, "the blosc buffer does not decode to 64 bytes");
+    unsigned char bh[48] = {2, 1, 0x01 | (1 << 5), 1};
+    const uint32_t nbytes = 32, block = 32, cbytes = sizeof bh, start = 20, csize = 40;
+    memcpy(bh + 4, &nbytes, 4);
+    memcpy(bh + 8, &block, 4);
+    memcpy(bh + 12, &cbytes, 4);
+    memcpy(bh + 16, &start, 4);
+    memcpy(bh + 20, &csize, 4);
+    chunk_expect("blosc_size.zarr", ZAC("{\"id\": \"blosc\"}"), bh, sizeof bh, VV_ERR_FORMAT,
+                 "the blosc buffer");
+    const uint32_t n64 = 64, b64 = 64;
+    memcpy(bh + 4, &n64, 4);
+    memcpy(bh + 8, &b64, 4);
+    memset(bh + 24, 0xee, sizeof bh - 24);
+    chunk_expect("blosc_body.zarr", ZAC("{\"id\": \"blosc\"}"), bh, sizeof bh, VV_ERR_FORMAT,
+                 "the blosc buffer");
+}
+
+/* Chunk files that are no files: over 1 GiB (sparse), a folder, one below
+ * a file (ENOTDIR). */
+static void
+test_chunk_files(void **state) {
+    (void)state;
+    const char *dir = fresh("chunk_big.zarr");
+    put_text(dir, ".zarray", ZA);
+    char p[8400];
+    snprintf(p, sizeof p, "%s/0.0.0", dir);
+    int fd = open(p, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    assert_true(fd >= 0);
+    assert_int_equal(ftruncate(fd, (off_t)ZR_CHUNK_MAX + 1), 0);
+    close(fd);
+    load_expect(dir, 0, -1, -1, VV_ERR_LIMIT, "0.0.0: chunk file over 1073741824 bytes");
+
+    dir = fresh("chunk_dir.zarr");
+    put_text(dir, ".zarray", ZA);
+    snprintf(p, sizeof p, "%s/0.0.0", dir);
+    assert_int_equal(mkdir(p, 0755), 0);
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "0.0.0: the chunk is not a regular file");
+
+    dir = fresh("chunk_notdir.zarr");
+    put_text(dir, ".zarray",
+             ZA_("[4, 4, 4]", "[4, 4, 4]", "|u1", ", \"dimension_separator\": \"/\""));
+    put_text(dir, "0", "not a folder");
+    load_expect(dir, 0, -1, -1, VV_ERR_IO, "0/0/0: Not a directory");
+
+    /* a chunk that is a link to a file of its size outside the store, and
+     * a folder of chunks that is a link out of it ("/" separator) */
+    char out[4400]; /* fresh() returns its own buffer */
+    snprintf(out, sizeof out, "%s", fresh("chunk_outside"));
+    unsigned char secret[64];
+    memset(secret, 's', sizeof secret);
+    vt_write_file(vt_path(out, "secret"), secret, sizeof secret);
+    char sub[8400];
+    snprintf(sub, sizeof sub, "%s/0", out);
+    assert_int_equal(mkdir(sub, 0755), 0);
+    snprintf(sub, sizeof sub, "%s/0/0", out);
+    assert_int_equal(mkdir(sub, 0755), 0);
+    vt_write_file(vt_path(out, "0/0/0"), secret, sizeof secret);
+    char target[8400];
+    snprintf(target, sizeof target, "%s/secret", out);
+    dir = fresh("chunk_link.zarr");
+    put_text(dir, ".zarray", ZA);
+    snprintf(p, sizeof p, "%s/0.0.0", dir);
+    assert_int_equal(symlink(target, p), 0);
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "0.0.0: the chunk file resolves outside the store");
+    snprintf(target, sizeof target, "%s/0", out);
+    dir = fresh("chunk_dir_link.zarr");
+    put_text(dir, ".zarray",
+             ZA_("[4, 4, 4]", "[4, 4, 4]", "|u1", ", \"dimension_separator\": \"/\""));
+    snprintf(p, sizeof p, "%s/0", dir);
+    assert_int_equal(symlink(target, p), 0);
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "0/0/0: the chunk file resolves outside the store");
+    /* the pyramid reads its chunks in this process: refused there too */
+    vv_pyramid *py = NULL;
+    expect(vv_pyramid_open(&py, dir, 0, -1, vt_cache(64u << 20), NULL), VV_ERR_FORMAT,
+           "resolves outside the store", "chunk_dir_link.zarr");
+    assert_null(py);
+    /* a chunk linked inside the store is read */
+    dir = fresh("chunk_inner_link.zarr");
+    put_text(dir, ".zarray", ZA);
+    vt_write_file(vt_path(dir, "data"), secret, sizeof secret);
+    snprintf(p, sizeof p, "%s/0.0.0", dir);
+    assert_int_equal(symlink("data", p), 0);
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_load(&v, dir, NULL));
+    assert_int_equal(((unsigned char *)v->data)[0], 's');
+    vv_volume_free(v);
+}
+
+/* FIFOs where files belong: refused at once, never opened for reading
+ * (which would block until a writer came). */
+static void
+test_fifos(void **state) {
+    (void)state;
+    char p[8400];
+    const char *dir = fresh("fifo_zarray.zarr");
+    snprintf(p, sizeof p, "%s/.zarray", dir);
+    assert_int_equal(mkfifo(p, 0644), 0);
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, ".zarray is not a regular file");
+    dir = fresh("fifo_zattrs.zarr");
+    snprintf(p, sizeof p, "%s/.zattrs", dir);
+    assert_int_equal(mkfifo(p, 0644), 0);
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, ".zattrs is not a regular file");
+    /* detection does not open it either: not a store */
+    vv_volume *v = NULL;
+    assert_int_not_equal(vv_volume_load(&v, dir, NULL), VV_OK);
+    assert_null(v);
+    dir = fresh("fifo_chunk.zarr");
+    put_text(dir, ".zarray", ZA);
+    snprintf(p, sizeof p, "%s/0.0.0", dir);
+    assert_int_equal(mkfifo(p, 0644), 0);
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "0.0.0: the chunk is not a regular file");
+}
+
+/* The reader's own arguments. */
+static void
+test_arguments(void **state) {
+    (void)state;
+    vv_load_options o;
+    vv_load_options_init(&o);
+    vv_volume *v = NULL;
+    expect(vv_ome_zarr_read(NULL, "x", &o), VV_ERR_INVALID, "zarr: NULL argument", NULL);
+    expect(vv_ome_zarr_read(&v, NULL, &o), VV_ERR_INVALID, "zarr: NULL argument", NULL);
+    expect(vv_ome_zarr_read(&v, "x", NULL), VV_ERR_INVALID, "zarr: NULL argument", NULL);
+}
+
+/* ---- the pyramid ------------------------------------------------------------------------ */
+
+/* A two-level store: level 0 of @p dims0, level 1 of @p dims1 (|u1 or
+ * @p dtype1, chunks of 4), no chunk files (the fill value). */
+static const char *
+pyramid_store(const char *name, const char *za0, const char *za1) {
+    const char *dir = fresh(name);
+    put_text(dir, ".zattrs",
+             MS_(AX3,
+                 "[{\"path\": \"0\", \"coordinateTransformations\": " SC3 "}, {\"path\": "
+                 "\"1\", \"coordinateTransformations\": "
+                 "[{\"type\": \"scale\", \"scale\": [2, 2, 2]}]}]",
+                 ""));
+    put_text(dir, "0/.zarray", za0);
+    put_text(dir, "1/.zarray", za1);
+    return dir;
+}
+
+static void
+pyramid_expect(const char *dir, vv_cache *cache, vv_status want, const char *needle) {
+    vv_pyramid *p = (vv_pyramid *)(uintptr_t)1;
+    vv_status s = vv_pyramid_open(&p, dir, 0, -1, cache ? cache : vt_cache(64u << 20), NULL);
+    assert_null(p);
+    expect(s, want, needle, base(dir));
+}
+
+static void
+test_pyramid(void **state) {
+    (void)state;
+    /* level 1 of another type, with a channel axis, bigger than level 0 */
+    pyramid_expect(pyramid_store("py_type.zarr", ZA, ZA_("[2, 2, 2]", "[4, 4, 4]", "<u2", "")),
+                   NULL, VV_ERR_FORMAT, "level 1: its axes, channels, steps or type differ");
+    pyramid_expect(pyramid_store("py_big.zarr", ZA, ZA_("[8, 8, 8]", "[4, 4, 4]", "|u1", "")), NULL,
+                   VV_ERR_FORMAT, "level 1: 8 voxels along axis 0, more than level 0's 4");
+    /* a broken level 1: the level is named */
+    pyramid_expect(pyramid_store("py_broken.zarr", ZA, ZA_("[2, 2, 2]", "[4, 4, 4]", "<f16", "")),
+                   NULL, VV_ERR_UNSUPPORTED, "level 1: level 1: .zarray: dtype \"<f16\"");
+    /* 17 levels */
+    const char *dir = fresh("py_levels.zarr");
+    char za[8192];
+    int n = snprintf(za, sizeof za, "{\"multiscales\": [{\"axes\": " AX3 ", \"datasets\": [");
+    for (int i = 0; i <= VV_PYRAMID_MAX_LEVELS; i++)
+        n += snprintf(za + n, sizeof za - (size_t)n, "%s{\"path\": \"0\"}", i ? ", " : "");
+    snprintf(za + n, sizeof za - (size_t)n, "]}]}");
+    put_text(dir, ".zattrs", za);
+    put_text(dir, "0/.zarray", ZA);
+    pyramid_expect(dir, NULL, VV_ERR_LIMIT, "17 levels (at most 16 are read)");
+    /* a cache too small for one box */
+    pyramid_expect(pyramid_store("py_small.zarr", ZA_("[512, 512, 512]", "[64, 64, 64]", "<f8", ""),
+                                 ZA_("[256, 256, 256]", "[64, 64, 64]", "<f8", "")),
+                   vt_cache(1u << 20), VV_ERR_LIMIT, "is smaller than a box of 8 cells");
+    /* the coarsest level's chunk does not decode: opening reads it */
+    dir = pyramid_store("py_chunk.zarr", ZA, ZA_("[2, 2, 2]", "[2, 2, 2]", "|u1", ""));
+    put_text(dir, "1/0.0.0", "short");
+    pyramid_expect(dir, NULL, VV_ERR_FORMAT, "5 bytes, an uncompressed chunk has 8");
+}
+
+/* Chunks of 512 MiB for an array of 64 voxels, under a budget of 64 MiB:
+ * refused before a chunk buffer is allocated (each was filled whole). */
+static void
+test_chunk_budget(void **state) {
+    (void)state;
+    const char *dir = fresh("chunk_budget.zarr");
+    put_text(dir, ".zarray", ZA_("[4, 4, 4]", "[512, 1024, 1024]", "|u1", ""));
+    vv_memory_budget_set((uint64_t)64 << 20);
+    load_expect(dir, 0, -1, -1, VV_ERR_LIMIT,
+                "a Zarr chunk's buffer: 536870912 bytes is over the memory budget");
+    /* the pyramid's scratch buffers alike */
+    dir = pyramid_store("py_budget.zarr", ZA_("[4, 4, 4]", "[512, 1024, 1024]", "|u1", ""),
+                        ZA_("[2, 2, 2]", "[2, 2, 2]", "|u1", ""));
+    pyramid_expect(dir, NULL, VV_ERR_LIMIT, "level 0: a Zarr chunk's buffer: 536870912 bytes");
+    vv_memory_budget_set(0);
+}
+
+/* Requests outside the pyramid: refused, one line. */
+static void
+test_pyramid_requests(void **state) {
+    (void)state;
+    const char *dir = pyramid_store("py_ok.zarr", ZA_("[64, 64, 64]", "[16, 16, 16]", "|u1", ""),
+                                    ZA_("[32, 32, 32]", "[16, 16, 16]", "|u1", ""));
+    vv_pyramid *p = NULL;
+    vt_ok(vv_pyramid_open(&p, dir, 0, -1, vt_cache(64u << 20), NULL));
+    const int lv[1] = {0}, lv2[1] = {2}, lo[3] = {0, 0, 0}, hi[3] = {3, 3, 3};
+    const int blo[3] = {0, 0, 9}, bhi[3] = {0, 0, 4};
+    expect(vv_pyramid_request(p, 1, lv, NULL, hi), VV_ERR_INVALID, "bad request arguments", NULL);
+    expect(vv_pyramid_request(p, -1, lv, lo, hi), VV_ERR_INVALID, "bad request arguments", NULL);
+    expect(vv_pyramid_request(p, 1, lv2, lo, hi), VV_ERR_INVALID, "request of level 2 (0 .. 1)",
+           NULL);
+    expect(vv_pyramid_request(p, 1, lv, blo, bhi), VV_ERR_INVALID, "pyramid:", NULL);
+    vv_volume *v = NULL;
+    expect(vv_pyramid_read_box(p, 0, lo, (const int[3]){64, 0, 0}, &v), VV_ERR_INVALID, NULL, NULL);
+    assert_null(v);
+    /* over 2^24 chunks in one request: 262145 boxes of 64 chunks */
+    const int nb = (1 << 18) + 1;
+    int *blv = calloc((size_t)nb, sizeof(int)), *bl = calloc((size_t)nb * 3, sizeof(int)),
+        *bh = malloc(sizeof(int) * (size_t)nb * 3);
+    assert_true(blv && bl && bh);
+    for (int i = 0; i < 3 * nb; i++)
+        bh[i] = 63;
+    expect(vv_pyramid_request(p, nb, blv, bl, bh), VV_ERR_LIMIT,
+           "a request of 16777280 chunks (at most 16777216)", NULL);
+    free(blv);
+    free(bl);
+    free(bh);
+    vt_ok(vv_pyramid_request(p, 1, lv, lo, hi));
+    vv_pyramid_free(p);
+}
+
+int
+main(void) {
+    setenv("VOLVIS_SANDBOX", "0", 1);
+    snprintf(g_dir, sizeof g_dir, "%s", vt_outdir("errors_zarr"));
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_metadata),         cmocka_unit_test(test_path_leaves_store),
+        cmocka_unit_test(test_path_symlink),     cmocka_unit_test(test_json_too_large),
+        cmocka_unit_test(test_chunks),           cmocka_unit_test(test_chunk_files),
+        cmocka_unit_test(test_chunk_budget),     cmocka_unit_test(test_fifos),
+        cmocka_unit_test(test_arguments),        cmocka_unit_test(test_pyramid),
+        cmocka_unit_test(test_pyramid_requests),
+    };
+    return vt_run_tests(tests, NULL, NULL);
+}
