@@ -53,9 +53,10 @@ zr_beneath(const char *real, const char *dir) {
 }
 
 /* path/name loaded as JSON (at most ZR_JSON_MAX bytes); NULL with the error
- * set, or NULL without an error when the file is absent and @p optional. */
+ * set, or NULL without an error when the file is absent and @p optional.
+ * The file must lie beneath the store's real path @p real ("": unchecked). */
 static json_t *
-load_json(const char *dir, const char *name, int optional, vv_status *s) {
+load_json(const char *dir, const char *name, int optional, const char *real, vv_status *s) {
     char p[4200];
     snprintf(p, sizeof p, "%s/%s", dir, name);
     struct stat st;
@@ -68,6 +69,16 @@ load_json(const char *dir, const char *name, int optional, vv_status *s) {
     if (!S_ISREG(st.st_mode)) { /* a FIFO would block the read forever */
         *s = vv_error_set(VV_ERR_FORMAT, "%s is not a regular file", name);
         return NULL;
+    }
+    if (real && real[0]) { /* a symbolic link may lead out of the store */
+        char *rp = realpath(p, NULL);
+        const int inside = rp && zr_beneath(rp, real);
+        free(rp);
+        if (!inside) {
+            *s = vv_error_set(VV_ERR_FORMAT, "%s leaves the store (a link to a file outside it)",
+                              name);
+            return NULL;
+        }
     }
     if (st.st_size > ZR_JSON_MAX) {
         *s = vv_error_set(VV_ERR_LIMIT, "%s is %lld bytes (limit %u)", name, (long long)st.st_size,
@@ -108,7 +119,7 @@ parse_dtype(const char *d, zr_array *a) {
 static vv_status
 parse_zarray(zr_array *a) {
     vv_status s;
-    json_t *j = load_json(a->dir, ".zarray", 0, &s);
+    json_t *j = load_json(a->dir, ".zarray", 0, a->real, &s);
     if (!j)
         return s;
     json_t *shape = json_object_get(j, "shape"), *chunks = json_object_get(j, "chunks");
@@ -247,16 +258,16 @@ vv_status
 vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load_info *info,
                   int *n_levels) {
     vv_status s;
-    json_t *za = load_json(root, ".zattrs", 1, &s);
+    /* the store's real path: every file, folder and chunk read must lie
+     * beneath it (a symbolic link may lead out) */
+    char *rroot = realpath(root, NULL);
+    snprintf(a->real, sizeof a->real, "%s", rroot ? rroot : "");
+    free(rroot);
+    json_t *za = load_json(root, ".zattrs", 1, a->real, &s);
     if (s != VV_OK)
         return s;
     json_t *ms = za ? json_array_get(json_object_get(za, "multiscales"), 0) : NULL;
     snprintf(a->dir, sizeof a->dir, "%s", root);
-    /* the store's real path: every folder and chunk read must lie beneath
-     * it (a symbolic link may lead out) */
-    char *rroot = realpath(root, NULL);
-    snprintf(a->real, sizeof a->real, "%s", rroot ? rroot : "");
-    free(rroot);
     json_t *axes = ms ? json_object_get(ms, "axes") : NULL;
     json_t *dsl = ms ? json_object_get(ms, "datasets") : NULL;
     json_t *ds0 = ms ? json_array_get(dsl, (size_t)level) : NULL;

@@ -376,6 +376,23 @@ test_path_symlink(void **state) {
     vt_ok(vv_volume_load(&v, ok, NULL));
     assert_int_equal(v->dims[0], 4);
     vv_volume_free(v);
+    /* a .zarray or a .zattrs that is itself a link to a file outside */
+    char target[8400];
+    snprintf(target, sizeof target, "%s/.zarray", outside);
+    char meta[4400], attrs[4400]; /* fresh() answers in one buffer */
+    snprintf(meta, sizeof meta, "%s", fresh("meta_link.zarr"));
+    put_text(meta, ".zattrs", MS("0", SC3));
+    snprintf(link, sizeof link, "%s/0", meta);
+    assert_int_equal(mkdir(link, 0755), 0);
+    snprintf(link, sizeof link, "%s/0/.zarray", meta);
+    assert_int_equal(symlink(target, link), 0);
+    load_expect(meta, 0, -1, -1, VV_ERR_FORMAT, ".zarray leaves the store");
+    snprintf(attrs, sizeof attrs, "%s", fresh("attrs_link.zarr"));
+    put_text(outside, ".zattrs", MS("0", SC3));
+    snprintf(target, sizeof target, "%s/.zattrs", outside);
+    snprintf(link, sizeof link, "%s/.zattrs", attrs);
+    assert_int_equal(symlink(target, link), 0);
+    load_expect(attrs, 0, -1, -1, VV_ERR_FORMAT, ".zattrs leaves the store");
 }
 
 /* A .zattrs or .zarray over 16 MiB (sparse) is refused unread. */
