@@ -374,6 +374,8 @@ header_scan_free(header_scan *hs) {
 #define NRRD_MAX_LINE 768
 /* At most this many detached data files (one per slice of the largest volume). */
 #define NRRD_MAX_FILES VV_VOLUME_MAX_DIM
+/* The widest field a "data file" pattern may ask for (%064d). */
+#define NRRD_MAX_WIDTH 64
 
 /* Checks one detached data file name against the policy (vv_detached_path). */
 static vv_status
@@ -417,8 +419,13 @@ scan_pattern(const char *header, const char *value, header_scan *hs) {
             continue;
         }
         c++;
+        /* a field width of at most 64: snprintf padded a width of
+           hundreds of millions for seconds (found by fuzz_nrrd) */
+        long width = 0;
         while (*c >= '0' && *c <= '9')
-            c++;
+            if ((width = width * 10 + (*c++ - '0')) > NRRD_MAX_WIDTH)
+                return vv_error_set(VV_ERR_FORMAT, "data file pattern '%s': field width over %d",
+                                    fmt, NRRD_MAX_WIDTH);
         if (*c != 'd' && *c != 'u')
             return vv_error_set(VV_ERR_FORMAT,
                                 "data file pattern '%s': only integer conversions (%%d, %%03d) are "

@@ -387,6 +387,12 @@ test_bad_input(void **state) {
                                        "encoding: raw\ndata file: nopat.%d 1 2 1\n");
     write_text(out_path("nopat.1"), "abcd");
     expect_error(out_path("nopat.nhdr"), VV_ERR_IO);
+    /* a pattern's field width of hundreds of millions (fuzz_nrrd: snprintf
+       padded for seconds): refused in one line */
+    write_text(out_path("wide.nhdr"), "NRRD0004\ntype: uchar\ndimension: 3\nsizes: 2 2 2\n"
+                                      "encoding: raw\ndata file: te%777777775d 3 884 5\n");
+    expect_error(out_path("wide.nhdr"), VV_ERR_FORMAT);
+    assert_non_null(strstr(vv_error_message(), "field width over 64"));
 
     /* 4-D data that is not a volume, and an unsupported type */
     write_text(out_path("vec.nrrd"), "NRRD0004\ntype: uchar\ndimension: 4\nsizes: 3 2 2 2\n"
