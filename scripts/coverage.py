@@ -188,7 +188,7 @@ def main():
             # clang's OpenMP runtime sets thread affinity, which the reader
             # sandbox forbids, and keeps its thread descriptors to the end
             env.setdefault("KMP_AFFINITY", "disabled")
-            env.setdefault("LSAN_OPTIONS", "suppressions=" + os.path.join(root, "tests/lsan.supp"))
+            env.setdefault("LSAN_OPTIONS", "suppressions=" + os.path.join(root, "tests/lsan.supp") + ":print_suppressions=0")
             env.setdefault("ASAN_OPTIONS", "detect_leaks=1:abort_on_error=1")
             env.setdefault("UBSAN_OPTIONS", "print_stacktrace=1:halt_on_error=1")
             cmd = ["ctest", "--test-dir", build, "--output-on-failure", "-j2"]
