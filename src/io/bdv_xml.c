@@ -35,6 +35,8 @@
 #define BDV_MAX_SETUPS 1024
 #define BDV_MAX_TIMEPOINTS 100000
 #define BDV_MAX_XML ((long)64 << 20)
+#define BDV_SEEN_BITS 18
+#define BDV_SEEN_SLOTS (1 << BDV_SEEN_BITS) /* over twice BDV_MAX_TIMEPOINTS */
 
 /* What the XML says of the dataset. */
 typedef struct bdv_doc {
@@ -43,6 +45,7 @@ typedef struct bdv_doc {
     int setup_id[BDV_MAX_SETUPS];
     char setup_name[BDV_MAX_SETUPS][VV_CHANNEL_NAME_MAX];
     int *timepoint; /* n_times ids */
+    int *seen;      /* the ids so far, a hash set of BDV_SEEN_SLOTS (-1: empty) */
     vv_unit unit;   /* the voxel size's unit (the first setup's) */
     xmlDoc *doc;
     xmlNode *root;
@@ -100,11 +103,20 @@ parse_int(const char *text, int *v) {
     return 1;
 }
 
-/* Adds time point @p id to @p d (each once, at most BDV_MAX_TIMEPOINTS). */
+/* Adds time point @p id (>= 0) to @p d (each once, at most
+ * BDV_MAX_TIMEPOINTS): a hash set finds a repeat, since a scan of the ids so
+ * far made 10^5 time points take 5 * 10^9 comparisons. */
 static vv_status
 add_timepoint(bdv_doc *d, int id, const char *xml) {
-    for (int i = 0; i < d->n_times; i++)
-        if (d->timepoint[i] == id)
+    if (!d->seen) {
+        d->seen = malloc(sizeof(int) * BDV_SEEN_SLOTS);
+        if (!d->seen)
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        memset(d->seen, 0xff, sizeof(int) * BDV_SEEN_SLOTS);
+    }
+    unsigned h = ((unsigned)id * 2654435761u) >> (32 - BDV_SEEN_BITS); /* Fibonacci hashing */
+    for (; d->seen[h] >= 0; h = (h + 1) & (BDV_SEEN_SLOTS - 1))
+        if (d->seen[h] == id)
             return VV_OK;
     if (d->n_times == BDV_MAX_TIMEPOINTS)
         return vv_error_set(VV_ERR_LIMIT, "%s: over %d time points", xml, BDV_MAX_TIMEPOINTS);
@@ -114,6 +126,7 @@ add_timepoint(bdv_doc *d, int id, const char *xml) {
             return vv_error_set(VV_ERR_NOMEM, "out of memory");
         d->timepoint = t;
     }
+    d->seen[h] = id;
     d->timepoint[d->n_times++] = id;
     return VV_OK;
 }
@@ -229,6 +242,7 @@ doc_free(bdv_doc *d) {
         return;
     xmlFreeDoc(d->doc);
     free(d->timepoint);
+    free(d->seen);
     free(d);
 }
 
