@@ -42,8 +42,8 @@
  *
  * Read as the library reads them (VOLVIS_SANDBOX=0: in this process): the
  * XML (when there is one) and the HDF5 file, each by vv_open whole and out
- * of core, a small box of every level and the coarsest level's proxy; in a
- * cache of the harness's own.
+ * of core (their formats named: no other row's reader is reached), a small box of every level and
+ * the coarsest level's proxy; in a cache of the harness's own.
  */
 #include <errno.h>
 #include <stdint.h>
@@ -340,10 +340,12 @@ read_source(vv_source *s) {
 }
 
 static void
-open_file(const char *path, vv_open_mode mode, const int ask[3], vv_cache *cache) {
+open_file(const char *path, vv_format format, vv_open_mode mode, const int ask[3],
+          vv_cache *cache) {
     vv_open_options oo;
     vv_open_options_init(&oo);
     oo.mode = mode;
+    oo.load.format = format; /* named: no other row's (third-party) reader is reached */
     oo.load.level = ask[0];
     oo.load.channel = ask[1];
     oo.load.time = ask[2];
@@ -390,10 +392,10 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     build_h5(h5, desc, nd, ask);
     if (nx > 0) {
         fuzz_write("in.xml", xml, nx);
-        open_file(xp, VV_OPEN_WHOLE, ask, cache);
-        open_file(xp, VV_OPEN_OUT_OF_CORE, ask, cache);
+        open_file(xp, VV_FORMAT_BDV_XML, VV_OPEN_WHOLE, ask, cache);
+        open_file(xp, VV_FORMAT_BDV_XML, VV_OPEN_OUT_OF_CORE, ask, cache);
     }
-    open_file(h5, VV_OPEN_WHOLE, ask, cache);
-    open_file(h5, VV_OPEN_OUT_OF_CORE, ask, cache);
+    open_file(h5, VV_FORMAT_HDF5, VV_OPEN_WHOLE, ask, cache);
+    open_file(h5, VV_FORMAT_HDF5, VV_OPEN_OUT_OF_CORE, ask, cache);
     return 0;
 }

@@ -22,7 +22,8 @@
  * The store lies in the harness's private folder and is removed after each
  * input. It is read as the library reads one: vv_ome_zarr_read (the level
  * asked for, whole), then vv_open whole and vv_open out of core (the
- * pyramid of zarr_pyramid.c), a small box of every level and the proxy of
+ * pyramid of zarr_pyramid.c; the format named, so that a folder that is no
+ * store never reaches the DICOM row's GDCM), a small box of every level and the proxy of
  * the coarsest read from what opened; in a cache of the harness's own.
  */
 #include <dirent.h>
@@ -205,6 +206,9 @@ open_store(const char *root, vv_open_mode mode, const int ask[3], vv_cache *cach
     vv_open_options oo;
     vv_open_options_init(&oo);
     oo.mode = mode;
+    /* the format named: a folder that is no store is not handed to the
+     * DICOM row (GDCM, a third party's, the sandbox's: fuzz_dicom) */
+    oo.load.format = VV_FORMAT_OME_ZARR;
     oo.load.level = ask[0];
     oo.load.channel = ask[1];
     oo.load.time = ask[2];
