@@ -463,6 +463,12 @@ vv_zr_layout(const zr_array *a, int channel, int time, zr_layout *J) {
                                 (unsigned long long)ZR_CHUNK_MAX);
         cbytes *= a->chunks[i];
     }
+    /* a chunk is decoded whole into a buffer of its own (one a thread),
+     * whatever the array's size: one over the memory budget is refused (a
+     * store of one voxel in chunks of 1024^3 allocated and filled 1 GiB) */
+    vv_status s = vv_memory_budget_check(cbytes, "a chunk");
+    if (s != VV_OK)
+        return s;
     J->cbytes = (size_t)cbytes;
     /* element strides of a chunk (C order), chunks per axis */
     J->cstride[a->ndim - 1] = 1;
