@@ -3,9 +3,10 @@
 # from ../shared/data (cropped to a few voxels with Teem's unu), the repository's
 # examples and test-data script, and hand-written minimal files. Every seed is a
 # few KB at most. Run from the repository root; needs teem-unu, /usr/bin/python3
-# (NumPy, pydicom, vtk9), gdcmimg and ImageMagick's convert. The committed corpus
-# also holds the crash inputs the fuzzers found (crash-*, regression inputs):
-# this script never deletes anything.
+# (NumPy, pydicom, vtk9; zarr, numcodecs and h5py for make_corpus_structured.py),
+# gdcmimg and ImageMagick's convert. The committed corpus also holds the crash
+# inputs the fuzzers found (crash-*, regression inputs): this script never
+# deletes anything.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 D=../shared/data
