@@ -9,6 +9,9 @@
 # tests/fuzz/corpus/<format>/ once fixed: every input ever found stays there
 # as a regression test (the corpus is replayed first by each run).
 #
+# A harness with a dictionary, tests/fuzz/dict/<format>.dict (the keys and
+# magics its parser compares), runs with -dict=.
+#
 # usage: scripts/fuzz.sh [SECONDS] [FORMAT...]
 #   FUZZ_BUILD=0 skips the build; FUZZ_JOBS (default 2) build jobs.
 set -euo pipefail
@@ -40,11 +43,14 @@ run_one() {
   local art="build/fuzz/artifacts/$fmt"
   mkdir -p "$work" "$art" "$seeds"
   local log="build/fuzz/fuzz_$fmt.log"
+  # the keys and magics the parser compares (tests/fuzz/dict/<format>.dict)
+  local dict=()
+  [ -f "tests/fuzz/dict/$fmt.dict" ] && dict=(-dict="tests/fuzz/dict/$fmt.dict")
   # -rss_limit_mb: the library's budget is 256 MiB (tests/fuzz/fuzz_util.h);
   # -timeout: a single input taking longer is a hang
   if "$bin" "$work" "$seeds" -max_total_time="$secs" -timeout=10 \
       -rss_limit_mb=2048 -malloc_limit_mb=1024 -max_len=65536 -print_final_stats=1 \
-      -artifact_prefix="$art/" >"$log" 2>&1; then
+      -artifact_prefix="$art/" "${dict[@]}" >"$log" 2>&1; then
     { echo "== fuzz_$fmt: ${secs} s"
       grep -E '^stat::number_of_executed_units|^#[0-9]+.*DONE' "$log" | tail -2 || true; } >&2
   else

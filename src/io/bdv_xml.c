@@ -151,8 +151,9 @@ parse_pattern(bdv_doc *d, const char *text, const char *xml) {
             (long)(b - a) / step >= BDV_MAX_TIMEPOINTS)
             return vv_error_set(VV_ERR_FORMAT, "%s: Timepoints pattern \"%s\" out of range", xml,
                                 text);
-        for (int t = a; t <= b && s == VV_OK; t += step)
-            s = add_timepoint(d, t, xml);
+        /* long: the step past b near INT_MAX must not overflow an int */
+        for (long t = a; t <= b && s == VV_OK; t += step)
+            s = add_timepoint(d, (int)t, xml);
     }
     return s;
 }

@@ -120,6 +120,11 @@ fuzz_check_volume(vv_volume *v) {
 
 void
 fuzz_check_status(int status) {
+    static int verbose = -1;
+    if (verbose < 0)
+        verbose = getenv("FUZZ_VERBOSE") != NULL;
+    if (verbose) /* to see what a seed reaches: FUZZ_VERBOSE=1 fuzz_<format> SEED */
+        fprintf(stderr, "fuzz: %s\n", status == 0 ? "ok" : vv_error_message());
     if (status > 0)
         __builtin_trap(); /* a status is VV_OK or a negative error */
     if (status < 0) {

@@ -46,6 +46,8 @@ void fuzz_check_volume(struct vv_volume *v);
 /**
  * Checks a status a check returned: VV_OK, or a negative error whose
  * message (vv_error_message) is one line and not empty. Traps otherwise.
+ * With FUZZ_VERBOSE set in the environment, prints "ok" or the message (to
+ * see how far a seed gets).
  */
 void fuzz_check_status(int status);
 

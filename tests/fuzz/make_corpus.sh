@@ -3,9 +3,10 @@
 # from ../shared/data (cropped to a few voxels with Teem's unu), the repository's
 # examples and test-data script, and hand-written minimal files. Every seed is a
 # few KB at most. Run from the repository root; needs teem-unu, /usr/bin/python3
-# (NumPy, pydicom, vtk9), gdcmimg and ImageMagick's convert. The committed corpus
-# also holds the crash inputs the fuzzers found (crash-*, regression inputs):
-# this script never deletes anything.
+# (NumPy, pydicom, vtk9; zarr, numcodecs and h5py for make_corpus_structured.py),
+# gdcmimg and ImageMagick's convert. The committed corpus also holds the crash
+# inputs the fuzzers found (crash-*, regression inputs): this script never
+# deletes anything.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 D=../shared/data
@@ -147,4 +148,6 @@ for f in examples/*.json; do
 done
 printf '{"volvis_animation": 1, "fps": 10, "duration": 2, "tracks": [\n {"property": "view.eye", "closed": false, "keys": [\n  {"time": 0, "value": [0, -700, 0]}, {"time": 2, "value": [700, 0, 100], "easing": "ease-in-out"}]},\n {"property": "view.fov", "interpolation": "linear", "keys": [{"time": 0, "value": 30}, {"time": 1, "value": 40}]}]}\n' > $C/animation/orbit.json
 printf 'volvis-input 1\ndevice 1 mouse m\ndevice 7 dataglove right hand\n0.0 pointer 1 0 10 20\n0.05 button 1 1 1\n0.1 pose 7 0 23 2 0 1 0 0 0\n0.2 button 7 0 1\n0.3 key 1 65 1\n' > $C/replay/mixed.rec
+# ---- OME-Zarr stores and BigDataViewer / Imaris HDF5 (zarr-python, h5py) ----
+$PY tests/fuzz/make_corpus_structured.py
 ls -la $C/*/ | awk '$5 > 8192 {print "big seed:", $0}'
