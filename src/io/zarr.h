@@ -15,6 +15,8 @@
 #define ZR_MAX_DIM 5
 #define ZR_JSON_MAX (16u << 20)
 #define ZR_CHUNK_MAX ((uint64_t)1 << 30)
+/* The most chunks a whole read looks for (each a file to open). */
+#define ZR_READ_CHUNKS_MAX (1 << 20)
 
 typedef struct zr_axis {
     char name[32];

@@ -693,13 +693,21 @@ read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
         nthreads = budget / J.cbytes > 1 ? (int)(budget / J.cbytes) : 1;
     if ((s = vv_memory_budget_check((uint64_t)J.cbytes, "a Zarr chunk's buffer")) != VV_OK)
         return s;
-    vv_volume *v = NULL;
-    if ((s = vv_volume_new(&v, dims, a.type)) != VV_OK)
-        return s;
     uint64_t n_spatial = 1;
     for (int i = 0; i < a.ndim; i++)
         if (i != cax && i != tax)
             n_spatial *= J.nchunk[i]; /* at most 2^48: each axis is at most 65536 */
+    /* each chunk is a file to look for: chunks of a few voxels made a 4 MiB
+     * volume 4 million opens (a read of minutes; fuzz_zarr) */
+    if (n_spatial > ZR_READ_CHUNKS_MAX)
+        return vv_error_set(VV_ERR_LIMIT,
+                            ".zarray: %llu chunks of %d x %d x %d voxels to read whole (at most "
+                            "%d: rechunk the store, or open it out of core)",
+                            (unsigned long long)n_spatial, J.cdims[0], J.cdims[1], J.cdims[2],
+                            ZR_READ_CHUNKS_MAX);
+    vv_volume *v = NULL;
+    if ((s = vv_volume_new(&v, dims, a.type)) != VV_OK)
+        return s;
     /* the chunks in parallel, each thread its own buffer; the error of the
      * first failing chunk in order */
     long long first = -1;

@@ -659,6 +659,11 @@ test_chunk_budget(void **state) {
                         ZA_("[2, 2, 2]", "[2, 2, 2]", "|u1", ""));
     pyramid_expect(dir, NULL, VV_ERR_LIMIT, "level 0: a Zarr chunk's buffer: 536870912 bytes");
     vv_memory_budget_set(0);
+    /* chunks of one voxel: 4 million files to look for, refused unread */
+    dir = fresh("tiny_chunks.zarr");
+    put_text(dir, ".zarray", ZA_("[4, 1024, 1024]", "[1, 1, 1]", "|u1", ""));
+    load_expect(dir, 0, -1, -1, VV_ERR_LIMIT,
+                "4194304 chunks of 1 x 1 x 1 voxels to read whole (at most 1048576");
 }
 
 /* Requests outside the pyramid: refused, one line. */
