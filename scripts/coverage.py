@@ -41,7 +41,11 @@ PARSERS = [
     "src/manipulate/animation_json.c", "src/input/net.c", "src/input/replay.c",
 ]
 
-ERROR_CALL = r"\bvv_error_(set|prefix)\s*\("
+# The calls that format an error: the library's, and the parsers' own
+# helpers (the scene's and the animation's field errors, the replay's
+# lines, the network protocol's replies and warnings).
+ERROR_CALL = (r"\bvv_error_(set|prefix)\s*\(|\bvv_scene_(serr|missing)\s*\(c,|\baerr\s*\(c,"
+              r"|\bbad\s*\(path,|\bvv_input_warn\s*\(m,|snprintf\(err,")
 
 
 def tool(name):
