@@ -16,11 +16,15 @@
   chunks, filters, attributes and values as h5py reads them back), after the
   dataset XML as Fiji's BigDataViewer export writes it (or none: the HDF5
   pyramid alone).
+- tests/fuzz/corpus/tiff/tifffile-*: the ImageDescription that tifffile
+  writes into OME-TIFF files (OME-XML with channels, time points, physical
+  sizes and their units) and ImageJ hyperstacks (images, channels, slices,
+  frames, spacing, unit): fuzz_tiff's input is that text.
 
 The arrays are small crops of ../shared/data/volumes/HeadMRVolume.raw (a
 real MR head, 48 x 62 x 42 u8) and ramps, so every seed is a few hundred
 bytes to a few KB. Needs python3-zarr, python3-numcodecs, python3-h5py
-(scripts/install-deps.sh test). Writes only the files it names (the crash-*
+and python3-tifffile (scripts/install-deps.sh test). Writes only the files it names (the crash-*
 regression inputs stay).
 """
 import json
@@ -32,6 +36,7 @@ import tempfile
 import h5py
 import numcodecs
 import numpy as np
+import tifffile
 import zarr
 
 ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
@@ -360,7 +365,40 @@ def bdv_seeds():
     print(f"bdv: {len(sizes)} seeds, {min(sizes)} .. {max(sizes)} bytes")
 
 
+def tiff_seeds():
+    """The descriptions tifffile writes, read back from its files."""
+    os.makedirs(os.path.join(CORPUS, "tiff"), exist_ok=True)
+    tmp = tempfile.mkdtemp()
+    n = 0
+    try:
+        p = os.path.join(tmp, "t.tif")
+        cases = [
+            ("ome_zyx", dict(ome=True, metadata={"axes": "ZYX", "PhysicalSizeX": 0.5,
+                                                 "PhysicalSizeXUnit": "µm", "PhysicalSizeY": 0.5,
+                                                 "PhysicalSizeZ": 2.0}), (3, 4, 5), np.uint16),
+            ("ome_tczyx", dict(ome=True, metadata={"axes": "TCZYX", "Channel": {"Name": ["DAPI", "GFP"]},
+                                                   "PhysicalSizeZ": 1.5, "PhysicalSizeZUnit": "nm",
+                                                   "TimeIncrement": 2.0}), (2, 2, 3, 4, 5), np.uint8),
+            ("imagej_zcyx", dict(imagej=True, resolution=(2.0, 2.0),
+                                 metadata={"axes": "ZCYX", "spacing": 3.5, "unit": "um"}),
+             (3, 2, 4, 5), np.uint16),
+            ("imagej_tzyx", dict(imagej=True, metadata={"axes": "TZYX", "finterval": 0.5}),
+             (2, 3, 4, 5), np.float32),
+        ]
+        for name, kw, shape, dtype in cases:
+            tifffile.imwrite(p, np.arange(np.prod(shape), dtype=dtype).reshape(shape), **kw)
+            with tifffile.TiffFile(p) as t:
+                desc = t.pages[0].description
+            with open(os.path.join(CORPUS, "tiff", "tifffile-" + name), "w", encoding="utf-8") as f:
+                f.write(desc)
+            n += 1
+    finally:
+        shutil.rmtree(tmp)
+    print(f"tiff: {n} descriptions written by tifffile {tifffile.__version__}")
+
+
 if __name__ == "__main__":
     zarr_seeds()
     bdv_seeds()
+    tiff_seeds()
     sys.exit(0)
