@@ -52,6 +52,11 @@ vv_pyramid_free(vv_pyramid *p) {
     free(p);
 }
 
+/* Chunks of under PY_SMALL_CHUNK_VOXELS voxels: at most PY_SMALL_CHUNKS_MAX
+ * of them a level (real stores chunk by 32^3 to 256^3). */
+#define PY_SMALL_CHUNK_VOXELS 4096
+#define PY_SMALL_CHUNKS_MAX 65536
+
 /* Level @p i's layout, header and chunk tables from the store's level;
  * each level must have level 0's type and no more voxels. */
 static vv_status
@@ -70,6 +75,17 @@ open_level(vv_pyramid *p, int i) {
                                 i, l->dims[k], l->cdims[k], k);
         l->nchunks[k] = (l->dims[k] + l->cdims[k] - 1) / l->cdims[k];
     }
+    /* each chunk is a piece the cache keeps apart, with its bookkeeping:
+     * many chunks of a few voxels held gigabytes of it for a 4 MiB level
+     * (fuzz_zarr: chunks of one voxel) */
+    const uint64_t nch = (uint64_t)l->nchunks[0] * (uint64_t)l->nchunks[1] * l->nchunks[2];
+    const uint64_t cvox = (uint64_t)l->cdims[0] * (uint64_t)l->cdims[1] * l->cdims[2];
+    if (nch > PY_SMALL_CHUNKS_MAX && cvox < PY_SMALL_CHUNK_VOXELS)
+        return vv_error_set(VV_ERR_LIMIT,
+                            "level %d: %llu chunks of %d x %d x %d voxels (chunks of under %d "
+                            "voxels are read only when there are at most %d: rechunk the store)",
+                            i, (unsigned long long)nch, l->cdims[0], l->cdims[1], l->cdims[2],
+                            PY_SMALL_CHUNK_VOXELS, PY_SMALL_CHUNKS_MAX);
     if (i > 0) {
         const py_level *l0 = &p->lv[0];
         if (l->type != l0->type)

@@ -664,6 +664,12 @@ test_chunk_budget(void **state) {
     put_text(dir, ".zarray", ZA_("[4, 1024, 1024]", "[1, 1, 1]", "|u1", ""));
     load_expect(dir, 0, -1, -1, VV_ERR_LIMIT,
                 "4194304 chunks of 1 x 1 x 1 voxels to read whole (at most 1048576");
+    /* and out of core (each chunk a piece of the cache: gigabytes of
+       bookkeeping for a 4 MiB level) */
+    vv_pyramid *p = NULL;
+    expect(vv_pyramid_open(&p, dir, 0, -1, vt_cache(64u << 20), NULL), VV_ERR_LIMIT,
+           "level 0: 4194304 chunks of 1 x 1 x 1 voxels", NULL);
+    assert_null(p);
 }
 
 /* Requests outside the pyramid: refused, one line. */
