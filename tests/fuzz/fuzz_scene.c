@@ -7,6 +7,7 @@
  */
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "fuzz_util.h"
@@ -20,11 +21,41 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
  * every path (the budget's refusal included) at a fraction of the cost. */
 #define SCENE_FUZZ_BUDGET ((uint64_t)4 << 20)
 
+/* The files the error tests' scenes name (tests/scene/test_errors.c, whose
+ * scenes seed the corpus: tests/fuzz/corpus_from_tests.py), beside in.json,
+ * so that mutations reach the fields read after a volume or grid is
+ * loaded (appearance, transfer functions, channels): vol.mhd (+ vol.raw),
+ * vol.vvb (8^3 u8 ramps) and grid.vtk (one tetrahedron). */
+static void
+scene_files(void) {
+    const int dims[3] = {8, 8, 8};
+    vv_volume *v = NULL;
+    if (vv_volume_new(&v, dims, VV_U8) != VV_OK)
+        abort();
+    for (int i = 0; i < 512; i++)
+        ((uint8_t *)v->data)[i] = (uint8_t)(i * 7);
+    vv_volume_update_range(v);
+    char p[1024];
+    snprintf(p, sizeof p, "%s/vol.mhd", fuzz_dir());
+    if (vv_mhd_write(v, p, 0) != VV_OK)
+        abort();
+    snprintf(p, sizeof p, "%s/vol.vvb", fuzz_dir());
+    if (vv_volume_write_vvb(v, p, 0) != VV_OK)
+        abort();
+    vv_volume_free(v);
+    static const char grid[] = "# vtk DataFile Version 3.0\ng\nASCII\nDATASET UNSTRUCTURED_GRID\n"
+                               "POINTS 4 float\n0 0 0 1 0 0 0 1 0 0 0 1\nCELLS 1 5\n4 0 1 2 3\n"
+                               "CELL_TYPES 1\n10\nPOINT_DATA 4\nSCALARS s float\n"
+                               "LOOKUP_TABLE default\n0 1 2 3\n";
+    fuzz_write("grid.vtk", (const uint8_t *)grid, sizeof grid - 1);
+}
+
 int
 LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     static int once;
     if (!once) {
         vv_memory_budget_set(SCENE_FUZZ_BUDGET);
+        scene_files();
         once = 1;
     }
     vv_world *w = NULL;
