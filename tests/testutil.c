@@ -329,3 +329,19 @@ vt_volume_scene(const char *rel, int size, vv_volume **vol) {
     vt_ok(vv_world_new_for_volume(&w, *vol, &so));
     return w;
 }
+
+void
+vt_expect_refusal(const char *label, vv_status got, vv_status want, const char *needle,
+                  const char *name) {
+    const char *msg = vv_error_message();
+    const char *l = label ? label : "refusal";
+    if (got != want)
+        fail_msg("%s: got %s, expected %s: %s", l, vv_status_name(got), vv_status_name(want), msg);
+    if (needle && !strstr(msg, needle))
+        fail_msg("%s: message '%s' does not mention '%s'", l, msg, needle);
+    if (name && !strstr(msg, name))
+        fail_msg("%s: message '%s' does not name '%s'", l, msg, name);
+    for (const unsigned char *c = (const unsigned char *)msg; *c; c++)
+        if (*c < 0x20 || *c == 0x7f)
+            fail_msg("%s: message '%s' is not one printable line (byte 0x%02x)", l, msg, *c);
+}

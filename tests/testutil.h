@@ -104,6 +104,15 @@ typedef struct vt_run_result {
 vt_run_result vt_run_cli_v(const char *dir, const char *const *args);
 /** Frees the captured output. */
 void vt_run_result_free(vt_run_result *r);
+
+/**
+ * Asserts a refusal (issue 67): @p got is @p want, the last error message
+ * (vv_error_message) holds @p needle and names @p name (each unless NULL),
+ * and it is one line of printable bytes (no control byte, no 0x7f).
+ * @p label (may be NULL) begins each failure's text.
+ */
+void vt_expect_refusal(const char *label, vv_status got, vv_status want, const char *needle,
+                       const char *name);
 /**
  * vt_run_cli_v, then asserts that it exited with @p status and, when
  * @p err_has is not NULL, that its stderr contains @p err_has; frees the

@@ -21,6 +21,8 @@
  */
 #include "testutil.h"
 
+#define expect(got, want, needle, file) vt_expect_refusal(NULL, got, want, needle, file)
+
 #include <fcntl.h>
 #include <math.h>
 #include <stdio.h>
@@ -52,19 +54,6 @@ base(const char *path) {
 static void
 put_text(const char *path, const char *text) {
     vt_write_file(path, text, strlen(text));
-}
-
-static void
-expect(vv_status got, vv_status want, const char *needle, const char *file) {
-    const char *msg = vv_error_message();
-    if (got != want)
-        fail_msg("got %s, expected %s: %s", vv_status_name(got), vv_status_name(want), msg);
-    if (needle && !strstr(msg, needle))
-        fail_msg("message '%s' does not mention '%s'", msg, needle);
-    if (file && !strstr(msg, file))
-        fail_msg("message '%s' does not name the file '%s'", msg, file);
-    if (strchr(msg, '\n') || strchr(msg, '\r'))
-        fail_msg("message '%s' is not one line", msg);
 }
 
 /* Loads @p path as @p format (level, channel, time as given): refused as

@@ -21,24 +21,6 @@ outdir(void) {
     return vt_outdir("errors_grids");
 }
 
-/* Asserts @p got is @p want, that the message holds @p needle and
- * @p name, and that it is one line of printable bytes. */
-static void
-expect_refusal(const char *label, vv_status got, vv_status want, const char *needle,
-               const char *name) {
-    const char *msg = vv_error_message();
-    if (got != want)
-        fail_msg("%s: got %s, expected %s: %s", label, vv_status_name(got), vv_status_name(want),
-                 msg);
-    if (needle && !strstr(msg, needle))
-        fail_msg("%s: message '%s' does not mention '%s'", label, msg, needle);
-    if (name && !strstr(msg, name))
-        fail_msg("%s: message '%s' does not name the file '%s'", label, msg, name);
-    for (const unsigned char *p = (const unsigned char *)msg; *p; p++)
-        if (*p < 0x20 || *p == 0x7f)
-            fail_msg("%s: message has byte 0x%02x: '%s'", label, *p, msg);
-}
-
 typedef enum { RD_VTK, RD_DX } reader;
 
 typedef struct gcase {
@@ -326,7 +308,7 @@ test_grid_table(void **state) {
         vt_write_file(path, c->data, c->n);
         vv_grid *g = (vv_grid *)1;
         vv_status s = read_case(c, path, &g);
-        expect_refusal(c->name, s, c->want, c->needle, c->name);
+        vt_expect_refusal(c->name, s, c->want, c->needle, c->name);
         assert_null(g);
     }
 }
@@ -376,13 +358,14 @@ test_grid_missing(void **state) {
     (void)state;
     const char *dir = outdir();
     vv_grid *g = NULL;
-    expect_refusal("vtk", vv_grid_read_vtk(&g, vt_path(dir, "none.vtk")), VV_ERR_IO, NULL,
-                   "none.vtk");
+    vt_expect_refusal("vtk", vv_grid_read_vtk(&g, vt_path(dir, "none.vtk")), VV_ERR_IO, NULL,
+                      "none.vtk");
     expect_once(vt_path(dir, "none.vtk"));
-    expect_refusal("dx", vv_grid_read_dx(&g, vt_path(dir, "none.dx")), VV_ERR_IO, NULL, "none.dx");
+    vt_expect_refusal("dx", vv_grid_read_dx(&g, vt_path(dir, "none.dx")), VV_ERR_IO, NULL,
+                      "none.dx");
     expect_once(vt_path(dir, "none.dx"));
-    expect_refusal("plot3d", vv_grid_read_plot3d(&g, vt_path(dir, "none.xyz"), NULL), VV_ERR_IO,
-                   NULL, "none.xyz");
+    vt_expect_refusal("plot3d", vv_grid_read_plot3d(&g, vt_path(dir, "none.xyz"), NULL), VV_ERR_IO,
+                      NULL, "none.xyz");
     expect_once(vt_path(dir, "none.xyz"));
     assert_null(g);
 }
@@ -429,14 +412,14 @@ test_dx_many_objects(void **state) {
         n += (size_t)snprintf(text + n, sizeof text - n, "object %d class array items 0\n", i + 1);
     vt_write_file(vt_path(dir, "arrays.dx"), text, n);
     vv_grid *g = NULL;
-    expect_refusal("arrays", vv_grid_read_dx(&g, vt_path(dir, "arrays.dx")), VV_ERR_LIMIT,
-                   "more than 256 arrays", "arrays.dx");
+    vt_expect_refusal("arrays", vv_grid_read_dx(&g, vt_path(dir, "arrays.dx")), VV_ERR_LIMIT,
+                      "more than 256 arrays", "arrays.dx");
     n = 0;
     for (int i = 0; i < 257; i++)
         n += (size_t)snprintf(text + n, sizeof text - n, "object \"f%d\" class field\n", i);
     vt_write_file(vt_path(dir, "fields.dx"), text, n);
-    expect_refusal("fields", vv_grid_read_dx(&g, vt_path(dir, "fields.dx")), VV_ERR_LIMIT,
-                   "more than 256 fields", "fields.dx");
+    vt_expect_refusal("fields", vv_grid_read_dx(&g, vt_path(dir, "fields.dx")), VV_ERR_LIMIT,
+                      "more than 256 fields", "fields.dx");
     assert_null(g);
 }
 
@@ -461,8 +444,8 @@ test_dx_follows_lie(void **state) {
     vt_write_file(path, text, sizeof text - 1);
     vv_grid *g = NULL;
     const double t0 = now_s();
-    expect_refusal("follows", vv_grid_read_dx(&g, path), VV_ERR_FORMAT, "no field object",
-                   "follows.dx");
+    vt_expect_refusal("follows", vv_grid_read_dx(&g, path), VV_ERR_FORMAT, "no field object",
+                      "follows.dx");
     const double dt = now_s() - t0;
     if (dt > 2.0)
         fail_msg("a lying count took %.1f s", dt);
@@ -511,29 +494,30 @@ test_plot3d_errors(void **state) {
     /* a 2-D block */
     const int flat[3] = {3, 3, 1};
     vt_write_file(vt_path(dir, "flat.xyz"), buf, plot3d_grid(buf, flat));
-    expect_refusal("flat", vv_grid_read_plot3d(&g, vt_path(dir, "flat.xyz"), NULL),
-                   VV_ERR_UNSUPPORTED, "block 0 is 3x3x1 (2-D blocks are not supported)",
-                   "flat.xyz");
+    vt_expect_refusal("flat", vv_grid_read_plot3d(&g, vt_path(dir, "flat.xyz"), NULL),
+                      VV_ERR_UNSUPPORTED, "block 0 is 3x3x1 (2-D blocks are not supported)",
+                      "flat.xyz");
 
     /* no layout fits */
     vt_write_file(vt_path(dir, "odd.xyz"), "0123456789abcdefg", 17);
-    expect_refusal("odd", vv_grid_read_plot3d(&g, vt_path(dir, "odd.xyz"), NULL), VV_ERR_FORMAT,
-                   "no PLOT3D layout", "odd.xyz");
+    vt_expect_refusal("odd", vv_grid_read_plot3d(&g, vt_path(dir, "odd.xyz"), NULL), VV_ERR_FORMAT,
+                      "no PLOT3D layout", "odd.xyz");
 
     /* a solution missing, of other blocks, or of no layout */
     const int d2[3] = {2, 2, 2}, d3[3] = {2, 2, 3};
     vt_write_file(vt_path(dir, "g.xyz"), buf, plot3d_grid(buf, d2));
-    expect_refusal("q missing",
-                   vv_grid_read_plot3d(&g, vt_path(dir, "g.xyz"), vt_path(dir, "none.q")),
-                   VV_ERR_IO, NULL, "none.q");
+    vt_expect_refusal("q missing",
+                      vv_grid_read_plot3d(&g, vt_path(dir, "g.xyz"), vt_path(dir, "none.q")),
+                      VV_ERR_IO, NULL, "none.q");
     expect_once(vt_path(dir, "none.q"));
     vt_write_file(vt_path(dir, "other.q"), buf, plot3d_q(buf, d3));
-    expect_refusal("q other",
-                   vv_grid_read_plot3d(&g, vt_path(dir, "g.xyz"), vt_path(dir, "other.q")),
-                   VV_ERR_FORMAT, "the solution's blocks differ from the grid's", "other.q");
+    vt_expect_refusal("q other",
+                      vv_grid_read_plot3d(&g, vt_path(dir, "g.xyz"), vt_path(dir, "other.q")),
+                      VV_ERR_FORMAT, "the solution's blocks differ from the grid's", "other.q");
     vt_write_file(vt_path(dir, "odd.q"), "0123456789abcdefg", 17);
-    expect_refusal("q odd", vv_grid_read_plot3d(&g, vt_path(dir, "g.xyz"), vt_path(dir, "odd.q")),
-                   VV_ERR_FORMAT, "no PLOT3D layout", "odd.q");
+    vt_expect_refusal("q odd",
+                      vv_grid_read_plot3d(&g, vt_path(dir, "g.xyz"), vt_path(dir, "odd.q")),
+                      VV_ERR_FORMAT, "no PLOT3D layout", "odd.q");
     /* the same solution, of the grid's blocks, is read */
     vt_write_file(vt_path(dir, "g.q"), buf, plot3d_q(buf, d2));
     vt_ok(vv_grid_read_plot3d(&g, vt_path(dir, "g.xyz"), vt_path(dir, "g.q")));
@@ -551,8 +535,8 @@ test_plot3d_errors(void **state) {
     for (int a = 0; a < 3; a++, n += 4)
         put32(buf + n, (uint32_t)huge[a]);
     vt_write_file(vt_path(dir, "wrap.xyz"), buf, n);
-    expect_refusal("wrap", vv_grid_read_plot3d(&g, vt_path(dir, "wrap.xyz"), NULL), VV_ERR_FORMAT,
-                   "no PLOT3D layout", "wrap.xyz");
+    vt_expect_refusal("wrap", vv_grid_read_plot3d(&g, vt_path(dir, "wrap.xyz"), NULL),
+                      VV_ERR_FORMAT, "no PLOT3D layout", "wrap.xyz");
     assert_null(g);
 }
 

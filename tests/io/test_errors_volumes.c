@@ -29,24 +29,6 @@ outdir(void) {
     return vt_outdir("errors_volumes");
 }
 
-/* Asserts @p got is @p want, that the message holds @p needle and (when
- * not NULL) @p name, and that it is one line of printable bytes. */
-static void
-expect_refusal(const char *label, vv_status got, vv_status want, const char *needle,
-               const char *name) {
-    const char *msg = vv_error_message();
-    if (got != want)
-        fail_msg("%s: got %s, expected %s: %s", label, vv_status_name(got), vv_status_name(want),
-                 msg);
-    if (needle && !strstr(msg, needle))
-        fail_msg("%s: message '%s' does not mention '%s'", label, msg, needle);
-    if (name && !strstr(msg, name))
-        fail_msg("%s: message '%s' does not name the file '%s'", label, msg, name);
-    for (const unsigned char *p = (const unsigned char *)msg; *p; p++)
-        if (*p < 0x20 || *p == 0x7f)
-            fail_msg("%s: message has byte 0x%02x: '%s'", label, *p, msg);
-}
-
 typedef enum { RD_SLC, RD_MHD, RD_VTK } reader;
 
 typedef struct vcase {
@@ -417,7 +399,7 @@ test_volume_table(void **state) {
             vt_write_file(vt_path(dir, c->aux_name), c->aux, c->aux_n);
         vv_volume *v = (vv_volume *)1;
         vv_status s = read_case(c, path, &v);
-        expect_refusal(c->name, s, c->want, c->needle, c->name);
+        vt_expect_refusal(c->name, s, c->want, c->needle, c->name);
         assert_null(v);
         /* and through the loader, which detects the format itself */
         vv_volume *w = NULL;
@@ -437,27 +419,28 @@ test_not_files(void **state) {
     snprintf(sub, sizeof sub, "%s/folder.mha", dir);
     mkdir(sub, 0755);
     vv_volume *v = NULL;
-    expect_refusal("slc missing", vv_slc_read(&v, vt_path(dir, "nothing.slc")), VV_ERR_IO,
-                   "cannot open", "nothing.slc");
-    expect_refusal("slc folder", vv_slc_read(&v, sub), VV_ERR_IO, "not a regular file",
-                   "folder.mha");
-    expect_refusal("mhd missing", vv_mhd_read(&v, vt_path(dir, "nothing.mha")), VV_ERR_IO,
-                   "cannot open", "nothing.mha");
-    expect_refusal("mhd folder", vv_mhd_read(&v, sub), VV_ERR_IO, "read error", "folder.mha");
-    expect_refusal("vtk folder", vv_vtk_read(&v, sub), VV_ERR_IO, "not a regular file",
-                   "folder.mha");
+    vt_expect_refusal("slc missing", vv_slc_read(&v, vt_path(dir, "nothing.slc")), VV_ERR_IO,
+                      "cannot open", "nothing.slc");
+    vt_expect_refusal("slc folder", vv_slc_read(&v, sub), VV_ERR_IO, "not a regular file",
+                      "folder.mha");
+    vt_expect_refusal("mhd missing", vv_mhd_read(&v, vt_path(dir, "nothing.mha")), VV_ERR_IO,
+                      "cannot open", "nothing.mha");
+    vt_expect_refusal("mhd folder", vv_mhd_read(&v, sub), VV_ERR_IO, "read error", "folder.mha");
+    vt_expect_refusal("vtk folder", vv_vtk_read(&v, sub), VV_ERR_IO, "not a regular file",
+                      "folder.mha");
     vv_raw_params p;
     vv_raw_params_init(&p);
     p.dims[0] = p.dims[1] = p.dims[2] = 2;
-    expect_refusal("raw missing", vv_raw_read(&v, vt_path(dir, "nothing.raw"), &p), VV_ERR_IO,
-                   "cannot open", "nothing.raw");
-    expect_refusal("raw folder", vv_raw_read(&v, sub, &p), VV_ERR_IO, "not a regular file",
-                   "folder.mha");
+    vt_expect_refusal("raw missing", vv_raw_read(&v, vt_path(dir, "nothing.raw"), &p), VV_ERR_IO,
+                      "cannot open", "nothing.raw");
+    vt_expect_refusal("raw folder", vv_raw_read(&v, sub, &p), VV_ERR_IO, "not a regular file",
+                      "folder.mha");
     assert_null(v);
-    expect_refusal("slc NULL", vv_slc_read(NULL, "x.slc"), VV_ERR_INVALID, "slc: NULL", NULL);
-    expect_refusal("mhd NULL", vv_mhd_read(&v, NULL), VV_ERR_INVALID, "mhd: NULL", NULL);
-    expect_refusal("vtk NULL", vv_vtk_read(NULL, "x.vtk"), VV_ERR_INVALID, "vtk: NULL", NULL);
-    expect_refusal("raw NULL", vv_raw_read(&v, "x.raw", NULL), VV_ERR_INVALID, "raw: NULL", NULL);
+    vt_expect_refusal("slc NULL", vv_slc_read(NULL, "x.slc"), VV_ERR_INVALID, "slc: NULL", NULL);
+    vt_expect_refusal("mhd NULL", vv_mhd_read(&v, NULL), VV_ERR_INVALID, "mhd: NULL", NULL);
+    vt_expect_refusal("vtk NULL", vv_vtk_read(NULL, "x.vtk"), VV_ERR_INVALID, "vtk: NULL", NULL);
+    vt_expect_refusal("raw NULL", vv_raw_read(&v, "x.raw", NULL), VV_ERR_INVALID, "raw: NULL",
+                      NULL);
 }
 
 /* A MetaImage LIST of more files than the reader takes. */
@@ -472,8 +455,8 @@ test_mhd_long_list(void **state) {
         fputs("a.raw\n", f);
     assert_int_equal(fclose(f), 0);
     vv_volume *v = NULL;
-    expect_refusal("long list", vv_mhd_read(&v, path), VV_ERR_LIMIT,
-                   "more than 65536 files in the LIST", "long_list.mhd");
+    vt_expect_refusal("long list", vv_mhd_read(&v, path), VV_ERR_LIMIT,
+                      "more than 65536 files in the LIST", "long_list.mhd");
     assert_null(v);
     /* the names count against the memory budget: 1000 names of 2000
        characters under a 1 MiB budget */
@@ -490,8 +473,8 @@ test_mhd_long_list(void **state) {
     vv_memory_budget_set((uint64_t)1 << 20);
     vv_status s = vv_mhd_read(&v, path);
     vv_memory_budget_set(budget);
-    expect_refusal("list over the budget", s, VV_ERR_LIMIT, "the LIST's file names",
-                   "long_list.mhd");
+    vt_expect_refusal("list over the budget", s, VV_ERR_LIMIT, "the LIST's file names",
+                      "long_list.mhd");
     assert_null(v);
 }
 
@@ -506,8 +489,8 @@ test_mhd_long_line(void **state) {
     const char *path = vt_path(outdir(), "long_line.mha");
     vt_write_file(path, text, sizeof text);
     vv_volume *v = NULL;
-    expect_refusal("long line", vv_mhd_read(&v, path), VV_ERR_FORMAT, "line 1: too long",
-                   "long_line.mha");
+    vt_expect_refusal("long line", vv_mhd_read(&v, path), VV_ERR_FORMAT, "line 1: too long",
+                      "long_line.mha");
     assert_null(v);
 }
 
@@ -525,8 +508,8 @@ test_mhd_zlib_short(void **state) {
                        "ElementDataFile = zs.raw\n";
     vt_write_file(path, hdr, sizeof hdr - 1);
     vv_volume *v = NULL;
-    expect_refusal("zlib short", vv_mhd_read(&v, path), VV_ERR_FORMAT,
-                   "compressed data gives 4 bytes, expected 8", "zlib_short.mhd");
+    vt_expect_refusal("zlib short", vv_mhd_read(&v, path), VV_ERR_FORMAT,
+                      "compressed data gives 4 bytes, expected 8", "zlib_short.mhd");
     assert_null(v);
 }
 
@@ -564,8 +547,8 @@ test_vtk_channel(void **state) {
     o.format = VV_FORMAT_VTK;
     o.channel = 2;
     vv_volume *v = NULL;
-    expect_refusal("channel", vv_volume_load(&v, path, &o), VV_ERR_INVALID,
-                   "channel 2 asked, the file has 2", "channel.vtk");
+    vt_expect_refusal("channel", vv_volume_load(&v, path, &o), VV_ERR_INVALID,
+                      "channel 2 asked, the file has 2", "channel.vtk");
     assert_null(v);
     o.channel = 1;
     vt_ok(vv_volume_load(&v, path, &o));
@@ -667,8 +650,8 @@ test_raw_params(void **state) {
         memcpy(p.origin, cases[i].org, sizeof p.origin);
         p.header_skip = cases[i].skip;
         vv_volume *v = NULL;
-        expect_refusal(cases[i].label, vv_raw_read(&v, path, &p), cases[i].want, cases[i].needle,
-                       "r.raw");
+        vt_expect_refusal(cases[i].label, vv_raw_read(&v, path, &p), cases[i].want, cases[i].needle,
+                          "r.raw");
         assert_null(v);
     }
     /* the raw row's layout without a description */
@@ -681,8 +664,8 @@ test_raw_params(void **state) {
     char *data = NULL;
     uint64_t off = 0;
     int big = 0;
-    expect_refusal("layout", r->raw_layout(path, &o, &h, &data, &off, &big), VV_ERR_INVALID,
-                   "the dimensions and voxel type are needed", "r.raw");
+    vt_expect_refusal("layout", r->raw_layout(path, &o, &h, &data, &off, &big), VV_ERR_INVALID,
+                      "the dimensions and voxel type are needed", "r.raw");
     assert_null(h);
     assert_null(data);
 }
@@ -807,19 +790,20 @@ static void
 test_slc_write(void **state) {
     (void)state;
     const char *dir = outdir();
-    expect_refusal("write NULL", vv_slc_write(NULL, vt_path(dir, "w.slc"), 1), VV_ERR_INVALID,
-                   "slc: NULL", NULL);
+    vt_expect_refusal("write NULL", vv_slc_write(NULL, vt_path(dir, "w.slc"), 1), VV_ERR_INVALID,
+                      "slc: NULL", NULL);
     const int dims[3] = {8, 8, 8};
     vv_volume *v = NULL;
     vt_ok(vv_volume_new(&v, dims, VV_U8));
-    expect_refusal("write folder", vv_slc_write(v, vt_path(dir, "no/such/folder/w.slc"), 1),
-                   VV_ERR_IO, NULL, "w.slc");
+    vt_expect_refusal("write folder", vv_slc_write(v, vt_path(dir, "no/such/folder/w.slc"), 1),
+                      VV_ERR_IO, NULL, "w.slc");
     /* the name taken by a folder: the file is written, then cannot be named */
     char taken[512];
     snprintf(taken, sizeof taken, "%s/taken.slc", dir);
     mkdir(taken, 0755);
     vt_write_file(vt_path(taken, "keep"), "x", 1);
-    expect_refusal("write over a folder", vv_slc_write(v, taken, 1), VV_ERR_IO, NULL, "taken.slc");
+    vt_expect_refusal("write over a folder", vv_slc_write(v, taken, 1), VV_ERR_IO, NULL,
+                      "taken.slc");
     struct stat st;
     assert_int_equal(stat(taken, &st), 0);
     assert_true(S_ISDIR(st.st_mode));
@@ -839,24 +823,24 @@ test_slc_write(void **state) {
     vv_status sf = vv_slc_write(b, full, 0);
     assert_int_equal(setrlimit(RLIMIT_FSIZE, &old_limit), 0);
     signal(SIGXFSZ, old_handler);
-    expect_refusal("write error", sf, VV_ERR_IO, "write error", "full.slc");
+    vt_expect_refusal("write error", sf, VV_ERR_IO, "write error", "full.slc");
     assert_int_not_equal(access(full, F_OK), 0);
     vv_volume_free(b);
     vv_volume *u = NULL;
     vt_ok(vv_volume_new(&u, dims, VV_U16));
-    expect_refusal("write u16", vv_slc_write(u, vt_path(dir, "w16.slc"), 1), VV_ERR_UNSUPPORTED,
-                   "SLC holds 8-bit voxels only", "w16.slc");
+    vt_expect_refusal("write u16", vv_slc_write(u, vt_path(dir, "w16.slc"), 1), VV_ERR_UNSUPPORTED,
+                      "SLC holds 8-bit voxels only", "w16.slc");
     /* under a budget smaller than the volume: refused before writing */
     const uint64_t budget = vv_memory_budget_get();
     vv_memory_budget_set(100);
     vv_status s = vv_slc_write(v, vt_path(dir, "wb.slc"), 1);
     vv_memory_budget_set(budget);
-    expect_refusal("write budget", s, VV_ERR_LIMIT, "over the memory budget", "wb.slc");
+    vt_expect_refusal("write budget", s, VV_ERR_LIMIT, "over the memory budget", "wb.slc");
     /* a u16 volume is rescaled to 8 bits first: that copy is refused */
     vv_memory_budget_set(100);
     s = vv_volume_save(u, vt_path(dir, "wb16.slc"), VV_FORMAT_SLC, 0);
     vv_memory_budget_set(budget);
-    expect_refusal("write budget u16", s, VV_ERR_LIMIT, "over the memory budget", "wb16.slc");
+    vt_expect_refusal("write budget u16", s, VV_ERR_LIMIT, "over the memory budget", "wb16.slc");
     vv_volume_free(u);
     vv_volume_free(v);
 }

@@ -16,6 +16,9 @@
  */
 #include "testutil.h"
 
+#define expect_refusal(got, want, needle, name, what)                                              \
+    vt_expect_refusal(what, got, want, needle, name)
+
 #include "compress/vvc_internal.h"
 #include "io/bricked.h"
 #include "io/vvb_layout.h"
@@ -31,24 +34,6 @@
 #include <zlib.h>
 
 #define outdir() vt_outdir("errors_vvc_vvb")
-
-/* @p got is @p want, the message holds @p needle (and @p name when not
- * NULL) and is one printable line. */
-static void
-expect_refusal(vv_status got, vv_status want, const char *needle, const char *name,
-               const char *what) {
-    const char *msg = vv_error_message();
-    if (got != want)
-        fail_msg("%s: got %s, expected %s: %s", what, vv_status_name(got), vv_status_name(want),
-                 msg);
-    if (needle && !strstr(msg, needle))
-        fail_msg("%s: message '%s' does not mention '%s'", what, msg, needle);
-    if (name && !strstr(msg, name))
-        fail_msg("%s: message '%s' does not name the file '%s'", what, msg, name);
-    for (const char *p = msg; *p; p++)
-        if ((unsigned char)*p < 0x20 || *p == 0x7f)
-            fail_msg("%s: message '%s' is not one printable line", what, msg);
-}
 
 static void
 put32(unsigned char *p, uint32_t v) {

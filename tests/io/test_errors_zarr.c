@@ -19,6 +19,8 @@
  */
 #include "testutil.h"
 
+#define expect(got, want, needle, file) vt_expect_refusal(NULL, got, want, needle, file)
+
 #include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -88,21 +90,6 @@ put(const char *dir, const char *name, const void *data, size_t n) {
 static void
 put_text(const char *dir, const char *name, const char *text) {
     put(dir, name, text, strlen(text));
-}
-
-/* Asserts a refusal: status @p want, a one-line message holding @p needle
- * and, when @p file is not NULL, naming it. */
-static void
-expect(vv_status got, vv_status want, const char *needle, const char *file) {
-    const char *msg = vv_error_message();
-    if (got != want)
-        fail_msg("got %s, expected %s: %s", vv_status_name(got), vv_status_name(want), msg);
-    if (needle && !strstr(msg, needle))
-        fail_msg("message '%s' does not mention '%s'", msg, needle);
-    if (file && !strstr(msg, file))
-        fail_msg("message '%s' does not name the file '%s'", msg, file);
-    if (strchr(msg, '\n') || strchr(msg, '\r'))
-        fail_msg("message '%s' is not one line", msg);
 }
 
 /* Loads the store @p dir (as detected) at @p level / @p channel / @p time;

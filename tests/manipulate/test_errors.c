@@ -8,27 +8,13 @@
  */
 #include "testutil.h"
 
+#define check_message(st, want, needle, file, what) vt_expect_refusal(what, st, want, needle, file)
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #define outdir() vt_outdir("animation_errors")
-
-static void
-check_message(vv_status st, vv_status want, const char *needle, const char *file,
-              const char *what) {
-    const char *msg = vv_error_message();
-    if (st != want)
-        fail_msg("%s: got %s, expected %s: %s", what, vv_status_name(st), vv_status_name(want),
-                 msg);
-    if (needle && !strstr(msg, needle))
-        fail_msg("%s: message '%s' does not mention '%s'", what, msg, needle);
-    if (file && !strstr(msg, file))
-        fail_msg("%s: message '%s' does not name '%s'", what, msg, file);
-    for (const char *p = msg; *p; p++)
-        if ((unsigned char)*p < 0x20 || *p == 0x7f)
-            fail_msg("%s: message '%s' is not one printable line", what, msg);
-}
 
 /* A track of @p prop with the keys @p keys, in an animation of 2 s. */
 #define TRACK(prop, keys)                                                                          \

@@ -12,6 +12,8 @@
 #define _DEFAULT_SOURCE /* realpath */
 #include "testutil.h"
 
+#define check_message(st, want, needle, file, what) vt_expect_refusal(what, st, want, needle, file)
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -54,24 +56,6 @@ setup(void **state) {
                            "CELL_TYPES 1\n10\nPOINT_DATA 4\nSCALARS t float 1\n"
                            "LOOKUP_TABLE default\n0 1 2 3\n");
     return 0;
-}
-
-/* The message of the last error: @p st is @p want, it holds @p needle and
- * names @p file, and it is one printable line. */
-static void
-check_message(vv_status st, vv_status want, const char *needle, const char *file,
-              const char *what) {
-    const char *msg = vv_error_message();
-    if (st != want)
-        fail_msg("%s: got %s, expected %s: %s", what, vv_status_name(st), vv_status_name(want),
-                 msg);
-    if (needle && !strstr(msg, needle))
-        fail_msg("%s: message '%s' does not mention '%s'", what, msg, needle);
-    if (file && !strstr(msg, file))
-        fail_msg("%s: message '%s' does not name '%s'", what, msg, file);
-    for (const char *p = msg; *p; p++)
-        if ((unsigned char)*p < 0x20 || *p == 0x7f)
-            fail_msg("%s: message '%s' is not one printable line", what, msg);
 }
 
 typedef struct scene_case {
