@@ -312,33 +312,6 @@ build_h5(const char *path, const uint8_t *desc, size_t n, int ask[3]) {
     }
 }
 
-/* A box of at most 10^3 voxels from a third into every level, and the
- * coarsest level's proxy. */
-static void
-read_source(vv_source *s) {
-    const int n = vv_source_levels(s);
-    for (int l = 0; l < n; l++) {
-        const vv_volume *h = vv_source_level(s, l);
-        if (!h)
-            __builtin_trap(); /* a level the source counts has a header */
-        int lo[3], hi[3];
-        for (int a = 0; a < 3; a++) {
-            lo[a] = h->dims[a] / 3;
-            hi[a] = h->dims[a] - 1 < lo[a] + 9 ? h->dims[a] - 1 : lo[a] + 9;
-        }
-        vv_volume *v = NULL;
-        const vv_status st = vv_source_read_box(s, l, lo, hi, &v);
-        fuzz_check_status(st);
-        if (st == VV_OK)
-            fuzz_check_volume(v);
-    }
-    vv_volume *p = NULL;
-    const vv_status st = vv_source_proxy(s, n - 1, &p);
-    fuzz_check_status(st);
-    if (st == VV_OK)
-        fuzz_check_volume(p);
-}
-
 static void
 open_file(const char *path, vv_format format, vv_open_mode mode, const int ask[3],
           vv_cache *cache) {
@@ -360,7 +333,7 @@ open_file(const char *path, vv_format format, vv_open_mode mode, const int ask[3
         __builtin_trap(); /* a pyramid holds a volume */
     if (!memchr(o.info.channel_name, '\0', sizeof o.info.channel_name))
         __builtin_trap();
-    read_source(o.source);
+    fuzz_read_source(o.source);
     vv_opened_clear(&o);
 }
 

@@ -133,3 +133,30 @@ fuzz_check_status(int status) {
             __builtin_trap(); /* an error is one line, never empty */
     }
 }
+
+/* A box of at most 10^3 voxels from a third into every level, and the
+ * coarsest level's proxy. */
+void
+fuzz_read_source(vv_source *s) {
+    const int n = vv_source_levels(s);
+    for (int l = 0; l < n; l++) {
+        const vv_volume *h = vv_source_level(s, l);
+        if (!h)
+            __builtin_trap(); /* a level the source counts has a header */
+        int lo[3], hi[3];
+        for (int a = 0; a < 3; a++) {
+            lo[a] = h->dims[a] / 3;
+            hi[a] = h->dims[a] - 1 < lo[a] + 9 ? h->dims[a] - 1 : lo[a] + 9;
+        }
+        vv_volume *v = NULL;
+        const vv_status st = vv_source_read_box(s, l, lo, hi, &v);
+        fuzz_check_status(st);
+        if (st == VV_OK)
+            fuzz_check_volume(v);
+    }
+    vv_volume *p = NULL;
+    const vv_status st = vv_source_proxy(s, n - 1, &p);
+    fuzz_check_status(st);
+    if (st == VV_OK)
+        fuzz_check_volume(p);
+}

@@ -51,6 +51,14 @@ void fuzz_check_volume(struct vv_volume *v);
  */
 void fuzz_check_status(int status);
 
+struct vv_source;
+/**
+ * Reads a box of at most 10^3 voxels from a third into every level of
+ * @p s, and the coarsest level's proxy, checking each status and volume
+ * (fuzz_zarr, fuzz_bdv: what a renderer asks of a source opened out of core).
+ */
+void fuzz_read_source(struct vv_source *s);
+
 /** The private temporary folder. */
 const char *fuzz_dir(void);
 

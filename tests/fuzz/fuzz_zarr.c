@@ -174,33 +174,6 @@ build_store(const char *root, const uint8_t *data, size_t size, int ask[3]) {
     }
 }
 
-/* A box of at most 10^3 voxels from a third into every level, and the
- * coarsest level's proxy. */
-static void
-read_source(vv_source *s) {
-    const int n = vv_source_levels(s);
-    for (int l = 0; l < n; l++) {
-        const vv_volume *h = vv_source_level(s, l);
-        if (!h)
-            __builtin_trap(); /* a level the source counts has a header */
-        int lo[3], hi[3];
-        for (int a = 0; a < 3; a++) {
-            lo[a] = h->dims[a] / 3;
-            hi[a] = h->dims[a] - 1 < lo[a] + 9 ? h->dims[a] - 1 : lo[a] + 9;
-        }
-        vv_volume *v = NULL;
-        const vv_status st = vv_source_read_box(s, l, lo, hi, &v);
-        fuzz_check_status(st);
-        if (st == VV_OK)
-            fuzz_check_volume(v);
-    }
-    vv_volume *p = NULL;
-    const vv_status st = vv_source_proxy(s, n - 1, &p);
-    fuzz_check_status(st);
-    if (st == VV_OK)
-        fuzz_check_volume(p);
-}
-
 static void
 open_store(const char *root, vv_open_mode mode, const int ask[3], vv_cache *cache) {
     vv_open_options oo;
@@ -221,7 +194,7 @@ open_store(const char *root, vv_open_mode mode, const int ask[3], vv_cache *cach
         return;
     if (o.kind != VV_DATA_VOLUME || !o.source)
         __builtin_trap(); /* a store holds a volume */
-    read_source(o.source);
+    fuzz_read_source(o.source);
     vv_opened_clear(&o);
 }
 
