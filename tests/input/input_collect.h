@@ -2,10 +2,49 @@
 #ifndef VV_TEST_INPUT_COLLECT_H
 #define VV_TEST_INPUT_COLLECT_H
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "testutil.h"
 #include "volvis/input.h"
+
+/* The device information shipped with VolVis (share/devices). */
+#define DEVDIR VV_SOURCE_DIR "/share/devices"
+
+/* A manager over the shipped device information (the caller frees it). */
+static inline vv_input_manager *
+new_manager(void) {
+    const char *dirs[] = {DEVDIR};
+    vv_input_devinfo_db *db = NULL;
+    vt_ok(vv_input_devinfo_db_load(&db, dirs, 1));
+    vv_input_manager *m = NULL;
+    vt_ok(vv_input_manager_new(&m, db));
+    vv_input_devinfo_db_free(db);
+    return m;
+}
+
+/* This program's fresh temporary folder for sockets ("" until the first
+ * temp_socket; short: sun_path is 108 bytes). The test removes it. */
+static inline char *
+socket_dir(void) {
+    static char dir[64];
+    return dir;
+}
+
+/* The path of socket @p name in socket_dir(), made on the first call
+ * (static storage, overwritten by the next call). */
+static inline const char *
+temp_socket(const char *name) {
+    static char path[96];
+    char *dir = socket_dir();
+    if (!dir[0]) {
+        snprintf(dir, 64, "/tmp/vv-input-XXXXXX");
+        assert_non_null(mkdtemp(dir));
+    }
+    snprintf(path, sizeof path, "%.40s/%.40s", dir, name);
+    return path;
+}
 
 typedef struct collect {
     vv_input_action *a;

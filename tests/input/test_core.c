@@ -17,19 +17,7 @@
 
 #include "input_collect.h"
 
-#define DEVDIR VV_SOURCE_DIR "/share/devices"
 #define outdir() vt_outdir("input")
-
-static vv_input_manager *
-new_manager(void) {
-    const char *dirs[] = {DEVDIR};
-    vv_input_devinfo_db *db = NULL;
-    vt_ok(vv_input_devinfo_db_load(&db, dirs, 1));
-    vv_input_manager *m = NULL;
-    vt_ok(vv_input_manager_new(&m, db));
-    vv_input_devinfo_db_free(db);
-    return m;
-}
 
 static void
 write_text(const char *path, const char *text) {

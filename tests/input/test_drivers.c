@@ -25,32 +25,6 @@
 
 #include "input_collect.h"
 
-#define DEVDIR VV_SOURCE_DIR "/share/devices"
-
-static vv_input_manager *
-new_manager(void) {
-    const char *dirs[] = {DEVDIR};
-    vv_input_devinfo_db *db = NULL;
-    vt_ok(vv_input_devinfo_db_load(&db, dirs, 1));
-    vv_input_manager *m = NULL;
-    vt_ok(vv_input_manager_new(&m, db));
-    vv_input_devinfo_db_free(db);
-    return m;
-}
-
-/* A socket path in a fresh temporary directory (short: sun_path is 108 bytes). */
-static char sockdir[64];
-static const char *
-temp_socket(const char *name) {
-    static char path[96];
-    if (!sockdir[0]) {
-        snprintf(sockdir, sizeof sockdir, "/tmp/vv-input-XXXXXX");
-        assert_non_null(mkdtemp(sockdir));
-    }
-    snprintf(path, sizeof path, "%.40s/%.40s", sockdir, name);
-    return path;
-}
-
 static int
 listen_at(const char *path) {
     int fd = socket(AF_UNIX, SOCK_STREAM, 0);
@@ -317,7 +291,7 @@ main(void) {
         cmocka_unit_test(test_network),
     };
     int r = vt_run_tests(tests, NULL, NULL);
-    if (sockdir[0])
-        rmdir(sockdir);
+    if (socket_dir()[0])
+        rmdir(socket_dir());
     return r;
 }

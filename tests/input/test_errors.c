@@ -20,19 +20,9 @@
 #include <sys/un.h>
 #include <unistd.h>
 
-#define DEVDIR VV_SOURCE_DIR "/share/devices"
-#define outdir() vt_outdir("input_errors")
+#include "input_collect.h"
 
-static vv_input_manager *
-new_manager(void) {
-    const char *dirs[] = {DEVDIR};
-    vv_input_devinfo_db *db = NULL;
-    vt_ok(vv_input_devinfo_db_load(&db, dirs, 1));
-    vv_input_manager *m = NULL;
-    vt_ok(vv_input_manager_new(&m, db));
-    vv_input_devinfo_db_free(db);
-    return m;
-}
+#define outdir() vt_outdir("input_errors")
 
 /* ---- replay files ------------------------------------------------------------ */
 
@@ -118,19 +108,6 @@ test_replay_limits(void **state) {
 }
 
 /* ---- the network protocol ---------------------------------------------------- */
-
-static char sockdir[64];
-
-static const char *
-temp_socket(const char *name) {
-    static char path[96];
-    if (!sockdir[0]) {
-        snprintf(sockdir, sizeof sockdir, "/tmp/vv-inerr-XXXXXX");
-        assert_non_null(mkdtemp(sockdir));
-    }
-    snprintf(path, sizeof path, "%.40s/%.40s", sockdir, name);
-    return path;
-}
 
 static int
 connect_to(const char *path) {
@@ -327,11 +304,11 @@ main(void) {
         cmocka_unit_test(test_network_listen),
     };
     int r = vt_run_tests(tests, NULL, NULL);
-    if (sockdir[0]) {
+    if (socket_dir()[0]) {
         unlink(temp_socket("p.sock"));
         unlink(temp_socket("l.sock"));
         unlink(temp_socket("full.sock"));
-        rmdir(sockdir);
+        rmdir(socket_dir());
     }
     return r;
 }
