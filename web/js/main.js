@@ -1,0 +1,130 @@
+// VolVis browser client: connects to `volvis serve` (docs/serve-protocol.md)
+// and wires the 3-D view, the slice views and the panel to the socket.
+
+import { Connection } from './wire.js';
+import { View3D } from './view3d.js';
+import { SliceViews } from './slices.js';
+import { Panel } from './panel.js';
+import { formatNumber } from './util.js';
+
+// The server answered the page with the token in a cookie; the token stays
+// out of the address bar, the history and bookmarks.
+{
+  const url = new URL(location.href);
+  if (url.searchParams.has('token')) {
+    url.searchParams.delete('token');
+    history.replaceState(history.state, '', url.pathname + url.search + url.hash);
+  }
+}
+
+const scheme = location.protocol === 'https:' ? 'wss:' : 'ws:';
+const conn = new Connection(`${scheme}//${location.host}/ws`);
+
+// What tests (tests/web/) read; nothing of the page depends on it.
+const api = {
+  frames: 0, // FRME frames drawn
+  lastFrame: null, // header of the last frame drawn
+  state: null, // the last `state`
+  lastPng: null, // Uint8Array of the last PNG_ payload
+  lastProbe: null, // the last `probe` reply
+  errors: [], // messages of the `error`s received
+  connected: false,
+  closed: null, // {code, reason} once the socket closed
+  send: (msg) => conn.send(msg),
+};
+window.volvis = api;
+
+// ---- status line ----
+
+const statusConn = document.getElementById('status-conn');
+const statusFrame = document.getElementById('status-frame');
+const statusMsg = document.getElementById('status-msg');
+
+function showMessage(text, isError = false) {
+  statusMsg.textContent = text;
+  statusMsg.classList.toggle('error', isError);
+  statusMsg.title = text;
+}
+
+function showError(text) {
+  console.warn('volvis:', text);
+  showMessage(text, true);
+}
+
+function showConnection(text, ok) {
+  statusConn.textContent = text;
+  statusConn.classList.toggle('ok', ok);
+  statusConn.classList.toggle('bad', !ok);
+}
+
+function showFrame(h) {
+  const ms = (v) => (Number.isFinite(v) ? `${formatNumber(v)} ms` : '–');
+  statusFrame.textContent =
+    `${h.kind ?? 'frame'}${h.sharp ? ' (sharp)' : ''} · ${h.width}×${h.height} · ` +
+    `render ${ms(h.render_ms)} · encode ${ms(h.encode_ms)}`;
+  document.getElementById('view3d-info').textContent = h.sharp ? '' : 'preview';
+}
+
+// ---- the parts ----
+
+const view = new View3D(document.getElementById('view3d'), conn, {
+  onFrame(header) {
+    api.frames++;
+    api.lastFrame = header;
+    showFrame(header);
+  },
+  onError: showError,
+});
+
+const slices = new SliceViews(conn, { onError: showError });
+
+const panel = new Panel(conn, {
+  onInfo: (text) => showMessage(text),
+  onPng: (bytes) => {
+    api.lastPng = bytes;
+  },
+});
+
+// ---- messages ----
+
+conn.on('open', () => {
+  api.connected = true;
+  showConnection('connected', true);
+  view.sendSize('hello'); // the first message, as the protocol asks
+  panel.list('');
+  slices.onOpen();
+});
+
+conn.on('close', ({ code, reason }) => {
+  api.connected = false;
+  api.closed = { code, reason };
+  showConnection(`disconnected (${code}${reason ? `: ${reason}` : ''}); reload the page to reconnect`, false);
+});
+
+conn.on('client-error', showError);
+
+conn.on('state', (s) => {
+  api.state = s;
+  panel.onState(s);
+  slices.onState(s);
+});
+
+conn.on('error', (msg) => {
+  const text = typeof msg.message === 'string' ? msg.message : 'error';
+  api.errors.push(text);
+  showError(text);
+});
+
+conn.on('probe', (msg) => {
+  api.lastProbe = msg;
+  slices.onProbe(msg);
+});
+
+conn.on('listing', (msg) => panel.onListing(msg));
+conn.on('saved', (msg) => panel.onSaved(msg));
+conn.on('FRME', (header, payload) => view.onFrame(header, payload));
+conn.on('SLCE', (header, payload) => slices.onSlice(header, payload));
+conn.on('THMB', (header, payload) => panel.onThumb(header, payload));
+conn.on('PNG_', (header, payload) => panel.onPng(header, payload));
+
+conn.connect();

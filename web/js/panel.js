@@ -1,0 +1,268 @@
+// The side panel: render mode, transfer-function presets, channels, time,
+// the file browser, Save session and the PNG download.
+
+import { el, formatBytes, formatNumber, idPart } from './util.js';
+
+const THUMB_SIZE = 96;
+
+export class Panel {
+  /** hooks: {onInfo(text), onPng(bytes)} */
+  constructor(conn, hooks) {
+    this.conn = conn;
+    this.hooks = hooks;
+    this.state = null;
+    this.presetsKey = null;
+    this.thumbsKey = null;
+    this.thumbUrls = new Map(); // preset name -> blob URL of its thumbnail
+    this.channelsKey = null;
+    this.filesPath = '';
+    this.pngUrl = null;
+    this.pngWanted = false;
+    this.$ = (id) => document.getElementById(id);
+    this.bindView();
+    this.bindTime();
+    this.bindSession();
+  }
+
+  // ---- state ----
+
+  onState(s) {
+    this.state = s;
+    this.showDataset(s);
+    this.showMode(s);
+    this.showPresets(s);
+    this.showChannels(s);
+    this.showTime(s);
+  }
+
+  showDataset(s) {
+    const parts = [s.name || '(nothing open)'];
+    if (Array.isArray(s.dims)) parts.push(s.dims.join(' × '));
+    if (Array.isArray(s.spacing)) {
+      parts.push(`${s.spacing.map(formatNumber).join(' × ')}${s.unit ? ` ${s.unit}` : ''}`);
+    }
+    if (s.renderer) parts.push(s.renderer);
+    if (s.shared) parts.push('shared session');
+    this.$('dataset').textContent = parts.join(' · ');
+    document.title = s.name ? `${s.name} — VolVis` : 'VolVis';
+  }
+
+  // ---- mode ----
+
+  bindView() {
+    const mode = this.$('mode');
+    const iso = this.$('isovalue');
+    const send = () => {
+      const msg = { type: 'mode', mode: mode.value };
+      const v = Number(iso.value);
+      if (mode.value === 'iso' && iso.value !== '' && Number.isFinite(v)) msg.isovalue = v;
+      this.$('isovalue-row').hidden = mode.value !== 'iso';
+      this.conn.send(msg);
+    };
+    mode.addEventListener('change', send);
+    iso.addEventListener('change', send);
+    this.$('reset-view').addEventListener('click', () => this.conn.send({ type: 'reset_view' }));
+    this.$('png').addEventListener('click', () => {
+      if (this.conn.send({ type: 'png' })) {
+        this.pngWanted = true;
+        this.hooks.onInfo('rendering the PNG…');
+      }
+    });
+  }
+
+  showMode(s) {
+    const mode = this.$('mode');
+    const iso = this.$('isovalue');
+    if (document.activeElement !== mode && s.mode) mode.value = s.mode;
+    if (document.activeElement !== iso && Number.isFinite(s.isovalue)) iso.value = formatNumber(s.isovalue);
+    if (Array.isArray(s.range)) {
+      iso.min = String(s.range[0]);
+      iso.max = String(s.range[1]);
+    }
+    this.$('isovalue-row').hidden = mode.value !== 'iso';
+  }
+
+  // ---- presets ----
+
+  showPresets(s) {
+    const names = Array.isArray(s.presets) ? s.presets : [];
+    const key = JSON.stringify(names);
+    const box = this.$('presets');
+    if (key !== this.presetsKey) {
+      this.presetsKey = key;
+      box.replaceChildren(...names.map((name) => {
+        const b = el('button', {
+          type: 'button', className: 'preset', id: `preset-${idPart(name)}`, title: name,
+          attrs: { 'aria-label': name, 'aria-pressed': 'false', 'data-name': name },
+        }, el('div', { className: 'thumb-empty' }), el('span', { textContent: name }));
+        b.addEventListener('click', () => this.conn.send({ type: 'preset', name }));
+        const url = this.thumbUrls.get(name);
+        if (url) this.setThumb(b, url);
+        return b;
+      }));
+    }
+    for (const b of box.children) b.setAttribute('aria-pressed', String(b.dataset.name === s.preset));
+    // Thumbnails show the data set: new ones when another one is opened.
+    const thumbsKey = JSON.stringify([key, s.name, s.time]);
+    if (names.length && thumbsKey !== this.thumbsKey) {
+      this.thumbsKey = thumbsKey;
+      this.conn.send({ type: 'thumbnails', size: THUMB_SIZE });
+    }
+  }
+
+  onThumb(header, payload) {
+    const name = header.name;
+    const url = URL.createObjectURL(new Blob([payload], { type: 'image/jpeg' }));
+    const old = this.thumbUrls.get(name);
+    if (old) URL.revokeObjectURL(old);
+    this.thumbUrls.set(name, url);
+    const b = document.getElementById(`preset-${idPart(name)}`);
+    if (b) this.setThumb(b, url);
+  }
+
+  setThumb(button, url) {
+    const img = el('img', { src: url, alt: '', width: THUMB_SIZE, height: THUMB_SIZE });
+    button.firstElementChild.replaceWith(img);
+  }
+
+  // ---- channels ----
+
+  showChannels(s) {
+    const channels = Array.isArray(s.channels) ? s.channels : [];
+    const group = this.$('channels-group');
+    group.hidden = channels.length <= 1;
+    if (channels.length <= 1) return;
+    const box = this.$('channels');
+    const key = JSON.stringify(channels.map((c) => c.name));
+    if (key !== this.channelsKey) {
+      this.channelsKey = key;
+      box.replaceChildren(...channels.map((c, index) => {
+        const name = c.name || `channel ${index}`;
+        const vis = el('input', { type: 'checkbox', id: `channel-${index}-visible` });
+        const color = el('input', {
+          type: 'color', id: `channel-${index}-color`, attrs: { 'aria-label': `${name} colour` },
+        });
+        vis.addEventListener('change', () => this.conn.send({ type: 'channel', index, visible: vis.checked }));
+        color.addEventListener('change', () => this.conn.send({ type: 'channel', index, color: color.value }));
+        return el('div', { className: 'channel' }, vis,
+          el('label', { htmlFor: vis.id, textContent: name, title: name }), color);
+      }));
+    }
+    channels.forEach((c, index) => {
+      const vis = document.getElementById(`channel-${index}-visible`);
+      const color = document.getElementById(`channel-${index}-color`);
+      vis.checked = c.visible !== false;
+      if (typeof c.color === 'string' && /^#[0-9a-fA-F]{6}$/.test(c.color) &&
+          document.activeElement !== color) color.value = c.color.toLowerCase();
+    });
+  }
+
+  // ---- time ----
+
+  bindTime() {
+    const t = this.$('time');
+    let raf = 0;
+    // a slider drag sends at most one step per animation frame
+    t.addEventListener('input', () => {
+      this.$('time-value').value = this.timeLabel(Number(t.value));
+      if (raf) return;
+      raf = requestAnimationFrame(() => {
+        raf = 0;
+        this.conn.send({ type: 'time', step: Number(t.value) });
+      });
+    });
+  }
+
+  timeLabel(step) {
+    return `${step + 1}/${this.state?.time_steps ?? 1}`;
+  }
+
+  showTime(s) {
+    const n = Number.isInteger(s.time_steps) ? s.time_steps : 1;
+    this.$('time-group').hidden = n <= 1;
+    if (n <= 1) return;
+    const t = this.$('time');
+    t.max = String(n - 1);
+    if (document.activeElement !== t && Number.isInteger(s.time)) t.value = String(s.time);
+    this.$('time-value').value = this.timeLabel(Number(t.value));
+  }
+
+  // ---- files ----
+
+  list(path) {
+    this.conn.send({ type: 'list', path });
+  }
+
+  onListing(msg) {
+    const path = typeof msg.path === 'string' ? msg.path : '';
+    this.filesPath = path;
+    const root = this.state?.root || 'root';
+    this.$('files-path').textContent = path ? `${root}/${path}` : `${root}/`;
+    const join = (name) => (path ? `${path}/${name}` : name);
+    const items = [];
+    if (path) {
+      const up = path.split('/').slice(0, -1).join('/');
+      items.push(this.fileItem('..', true, null, () => this.list(up), 'Parent folder'));
+    }
+    for (const e of Array.isArray(msg.entries) ? msg.entries : []) {
+      if (e.dir) {
+        items.push(this.fileItem(`${e.name}/`, true, null, () => this.list(join(e.name)), `Folder ${e.name}`));
+      } else {
+        items.push(this.fileItem(e.name, false, e.size, () => {
+          this.conn.send({ type: 'open', path: join(e.name) });
+          this.hooks.onInfo(`opening ${join(e.name)}…`);
+        }, `Open ${e.name}`));
+      }
+    }
+    if (items.length === 0) items.push(el('li', { className: 'empty', textContent: '(empty)' }));
+    this.$('files').replaceChildren(...items);
+  }
+
+  fileItem(name, dir, size, onClick, label) {
+    const b = el('button', { type: 'button', attrs: { 'aria-label': label, 'data-name': name } },
+      el('span', { className: 'name', textContent: name }),
+      el('span', { className: 'size', textContent: size == null ? '' : formatBytes(size) }));
+    b.addEventListener('click', onClick);
+    return el('li', { className: dir ? 'dir' : 'file' }, b);
+  }
+
+  // ---- session and PNG ----
+
+  bindSession() {
+    const input = this.$('save-path');
+    const save = () => {
+      const path = input.value.trim();
+      if (!path) {
+        this.hooks.onInfo('Save session: give a path ending in .json');
+        return;
+      }
+      if (this.conn.send({ type: 'save', path })) this.hooks.onInfo(`saving ${path}…`);
+    };
+    this.$('save').addEventListener('click', save);
+    input.addEventListener('keydown', (e) => {
+      if (e.key === 'Enter') save();
+    });
+  }
+
+  onSaved(msg) {
+    this.hooks.onInfo(`session saved to ${msg.path}`);
+  }
+
+  onPng(header, payload) {
+    const bytes = payload.slice(); // a copy: the message's buffer is not ours to keep
+    this.hooks.onPng(bytes);
+    if (this.pngUrl) URL.revokeObjectURL(this.pngUrl);
+    this.pngUrl = URL.createObjectURL(new Blob([bytes], { type: 'image/png' }));
+    const a = this.$('png-link');
+    const name = `${(this.state?.name || 'volvis').replace(/\.[^.]*$/, '').replace(/[^\w.-]+/g, '_')}.png`;
+    a.href = this.pngUrl;
+    a.download = name;
+    a.textContent = `${name} (${header.width}×${header.height})`;
+    a.hidden = false;
+    this.hooks.onInfo(`PNG ${header.width}×${header.height}, ${formatBytes(bytes.length)}`);
+    if (this.pngWanted) {
+      this.pngWanted = false;
+      a.click(); // the download the user asked for
+    }
+  }
+}
