@@ -61,6 +61,8 @@ int cli_filter_main(int argc, char **argv);
 void cli_filter_usage(FILE *out);
 int cli_slice_main(int argc, char **argv);
 void cli_slice_usage(FILE *out);
+int cli_serve_main(int argc, char **argv);
+void cli_serve_usage(FILE *out);
 
 /* ---- option parsing ------------------------------------------------------ */
 

@@ -2,7 +2,7 @@
  * volvis: the command-line tool. Dispatches a table of subcommands, one file
  * each (cmd_info.c, cmd_render.c, cmd_renderers.c, cmd_convert.c, cmd_compress.c,
  * cmd_isosurface.c, cmd_measure.c, cmd_voxelize.c, cmd_filter.c, cmd_devices.c, cmd_animate.c,
- * cmd_slice.c). See
+ * cmd_slice.c; serve/ for `volvis serve`). See
  * docs/cli.md.
  */
 #include <signal.h>
@@ -17,6 +17,8 @@ static const cli_command commands[] = {
     {"render", "render a volume or a scene file to a PNG image", cli_render_main, cli_render_usage},
     {"slice", "one axial, coronal, sagittal or oblique slice of a volume to a PNG; probe a value",
      cli_slice_main, cli_slice_usage},
+    {"serve", "serve the browser view: 3-D view, slices, presets, rendered here (prints a URL)",
+     cli_serve_main, cli_serve_usage},
     {"renderers", "list the renderers, what they draw and their options (--json)",
      cli_renderers_main, cli_renderers_usage},
     {"animate", "render an animation (orbit, keyframes, flight path) to PNGs, MP4 or WebM",

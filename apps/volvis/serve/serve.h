@@ -1,0 +1,189 @@
+/*
+ * `volvis serve`: the browser view (docs/serve.md; the wire protocol in
+ * docs/serve-protocol.md). Internal to apps/volvis/serve/; symbols take the
+ * prefix `srv_`.
+ *
+ * Threads: one libwebsockets service thread runs every connection, parses
+ * the clients' messages and edits the sessions' Worlds (under each
+ * session's lock); one render thread per session draws snapshots of its
+ * World (vv_world_clone) and hands finished frames back through the
+ * session's frame slot, waking the service thread with
+ * lws_cancel_service. Nothing else is shared.
+ */
+#ifndef VOLVIS_SERVE_H
+#define VOLVIS_SERVE_H
+
+#include <pthread.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "../cli.h"
+
+/* ---- messages (serve_msg.c: pure, no libwebsockets; fuzzed by fuzz_serve_msg) ---- */
+
+/** Largest text message a client may send, bytes. */
+#define SRV_MSG_MAX 65536
+/** Largest path a message may name, bytes. */
+#define SRV_PATH_MAX 1024
+/** Sides of the 3-D view and of slice images, pixels. */
+#define SRV_VIEW_MIN 16
+#define SRV_VIEW_MAX 4096
+#define SRV_SLICE_MAX 2048
+
+typedef enum srv_msg_type {
+    SRV_HELLO,
+    SRV_RESIZE,
+    SRV_NAV,
+    SRV_RESET_VIEW,
+    SRV_MODE,
+    SRV_PRESET,
+    SRV_CHANNEL,
+    SRV_TIME,
+    SRV_SLICE,
+    SRV_PROBE,
+    SRV_PNG,
+    SRV_THUMBNAILS,
+    SRV_LIST,
+    SRV_OPEN,
+    SRV_SAVE
+} srv_msg_type;
+
+/** One client message, parsed and range-checked (docs/serve-protocol.md). */
+typedef struct srv_msg {
+    srv_msg_type type;
+    int width, height;        /**< HELLO, RESIZE, SLICE, PROBE */
+    int motion;               /**< NAV: VV_NAV_ROTATE, VV_NAV_PAN or VV_NAV_ZOOM */
+    double dx, dy, factor;    /**< NAV */
+    long long seq;            /**< NAV: the client's input counter (0 when absent) */
+    int moving;               /**< NAV: 1 while the motion goes on */
+    vv_render_mode mode;      /**< MODE */
+    int has_isovalue;         /**< MODE */
+    double isovalue;          /**< MODE */
+    char name[64];            /**< PRESET */
+    int index;                /**< CHANNEL, SLICE, PROBE (slice number), TIME (step) */
+    int has_visible, visible; /**< CHANNEL */
+    int has_color;            /**< CHANNEL */
+    vv_vec3 color;            /**< CHANNEL, RGB 0..1 */
+    vv_slice_axis axis;       /**< SLICE, PROBE (not oblique) */
+    int has_window;           /**< SLICE: window and level given */
+    double window, level;     /**< SLICE */
+    double x, y;              /**< PROBE: pixel of the slice image */
+    int size;                 /**< THUMBNAILS */
+    char path[SRV_PATH_MAX];  /**< LIST, OPEN, SAVE: relative to the root */
+} srv_msg;
+
+/**
+ * Parses one text message of @p len bytes (not NUL-terminated). Returns 0,
+ * or -1 with a one-line reason in @p why (the message is refused: the
+ * client is closed). Checks every field's type and range; never allocates
+ * more than Jansson does for @p len bytes. Reentrant.
+ */
+int srv_msg_parse(const char *text, size_t len, srv_msg *out, char *why, size_t cap);
+
+/**
+ * A path of a message resolved inside the root folder @p root (a real path,
+ * no trailing slash): relative, no "..", no empty or "." components, no
+ * control bytes; its real path (symbolic links followed) must lie inside
+ * @p root. @p kind: 0 an existing file or folder, 1 a folder, 2 a new or
+ * existing file to write (its folder must exist inside the root, its name
+ * end in .json, and it must not be a link or a folder). The full path goes
+ * to @p out. Returns 0, or -1 with the reason in @p why.
+ */
+int srv_path_resolve(const char *root, const char *rel, int kind, char *out, size_t cap, char *why,
+                     size_t why_cap);
+
+/* ---- buffers sent to clients ---------------------------------------------------------- */
+
+/** A message ready for lws_write: @p pre bytes of headroom, then @p len bytes. */
+typedef struct srv_buf {
+    int refs; /* atomic */
+    int binary;
+    size_t len;
+    unsigned char *data; /**< data + SRV_PRE is the message */
+} srv_buf;
+
+/** Headroom libwebsockets needs in front of a message (LWS_PRE, checked in serve_main.c). */
+#define SRV_PRE 16
+
+/** A text message (a copy of @p text). NULL when out of memory. */
+srv_buf *srv_buf_text(const char *text, size_t len);
+/**
+ * A binary message: kind (4 ASCII bytes), uint32 LE header length, the JSON
+ * header, then @p payload. NULL when out of memory.
+ */
+srv_buf *srv_buf_binary(const char kind[4], const char *header, const void *payload, size_t n);
+srv_buf *srv_buf_ref(srv_buf *b);
+void srv_buf_unref(srv_buf *b);
+
+/* ---- sessions (serve_session.c) ----------------------------------------------------- */
+
+typedef struct srv_server srv_server;
+typedef struct srv_session srv_session;
+typedef struct srv_client srv_client;
+
+/** Largest number of queued replies for one client; beyond it the client is too slow. */
+#define SRV_QUEUE_MAX 64
+
+struct srv_client {
+    uint64_t id;
+    void *wsi; /**< its struct lws */
+    srv_session *session;
+    srv_buf *queue[SRV_QUEUE_MAX]; /**< replies, oldest first (under the session's lock) */
+    int n_queue;
+    uint64_t sent_frame; /**< seq of the last frame sent */
+    char *rx;            /**< message being received */
+    size_t rx_len;
+    int close_code; /**< != 0: close with this code and reason at the next write */
+    char close_reason[120];
+    int overflowed; /**< the queue overflowed */
+    srv_client *next;
+};
+
+/** The server's settings and state. */
+struct srv_server {
+    char root[4096];    /**< real path of --root */
+    char web_dir[4096]; /**< the client's files */
+    char initial[4096]; /**< the file opened in every new session ("" none) */
+    uint64_t memory_limit;
+    int shared;
+    int threads;
+    void *context;        /**< struct lws_context */
+    pthread_mutex_t lock; /**< the clients list and sessions */
+    srv_client *clients;
+    srv_session *shared_session;
+    uint64_t next_client_id;
+    volatile int stopping;
+    int verbose;
+};
+
+/** A new session of @p srv showing srv->initial (opened by its render thread). */
+srv_session *srv_session_new(srv_server *srv);
+/** Stops the session's render thread and frees it (no client may still point at it). */
+void srv_session_free(srv_session *s);
+/** Attaches a client (under srv->lock). */
+void srv_session_attach(srv_session *s, srv_client *c);
+/** Detaches a client; returns the clients left. */
+int srv_session_detach(srv_session *s, srv_client *c);
+/**
+ * Handles one parsed message of client @p c (service thread). Returns 0, or
+ * -1 when the client must be closed (c->close_code and reason set).
+ */
+int srv_session_handle(srv_session *s, srv_client *c, const srv_msg *m);
+/**
+ * The next message for @p c, or NULL: a queued reply first, then the
+ * session's newest frame when it is newer than the last sent. The caller
+ * owns one reference. Service thread.
+ */
+srv_buf *srv_session_next_out(srv_session *s, srv_client *c);
+/** 1 when @p c has something to send. */
+int srv_session_has_out(srv_session *s, srv_client *c);
+
+/** Wakes the service thread (lws_cancel_service on srv->context). */
+void srv_wake(srv_server *srv);
+
+/** JPEG of @p rgb (3 bytes a pixel, rows top to bottom) at @p quality into a new buffer
+ *  (tjFree); 0 or -1. @p handle: a tjhandle for compression. */
+int srv_jpeg(void *handle, const uint8_t *rgb, int width, int height, int quality, int grey,
+             unsigned char **out, unsigned long *size);
+
+#endif
