@@ -77,6 +77,8 @@ const view = new View3D(document.getElementById('view3d'), conn, {
 });
 
 const slices = new SliceViews(conn, { onError: showError });
+// the `seq` of the last nav message sent: a frame whose input_seq reaches it shows all input
+Object.defineProperty(api, 'navSeq', { get: () => view.seq, enumerable: true });
 
 const panel = new Panel(conn, {
   onInfo: (text) => showMessage(text),

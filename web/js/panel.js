@@ -33,6 +33,7 @@ export class Panel {
     this.showPresets(s);
     this.showChannels(s);
     this.showTime(s);
+    this.showFilesPath();
   }
 
   showDataset(s) {
@@ -73,7 +74,13 @@ export class Panel {
   showMode(s) {
     const mode = this.$('mode');
     const iso = this.$('isovalue');
-    if (document.activeElement !== mode && s.mode) mode.value = s.mode;
+    if (document.activeElement !== mode && s.mode) {
+      // a scene may use a mode the menu does not offer (minip, xray): show it
+      if (![...mode.options].some((o) => o.value === s.mode)) {
+        mode.append(el('option', { value: s.mode, textContent: s.mode, disabled: true }));
+      }
+      mode.value = s.mode;
+    }
     if (document.activeElement !== iso && Number.isFinite(s.isovalue)) iso.value = formatNumber(s.isovalue);
     if (Array.isArray(s.range)) {
       iso.min = String(s.range[0]);
@@ -196,8 +203,7 @@ export class Panel {
   onListing(msg) {
     const path = typeof msg.path === 'string' ? msg.path : '';
     this.filesPath = path;
-    const root = this.state?.root || 'root';
-    this.$('files-path').textContent = path ? `${root}/${path}` : `${root}/`;
+    this.showFilesPath();
     const join = (name) => (path ? `${path}/${name}` : name);
     const items = [];
     if (path) {
@@ -216,6 +222,11 @@ export class Panel {
     }
     if (items.length === 0) items.push(el('li', { className: 'empty', textContent: '(empty)' }));
     this.$('files').replaceChildren(...items);
+  }
+
+  showFilesPath() {
+    const root = this.state?.root || 'root';
+    this.$('files-path').textContent = `${root}/${this.filesPath ? `${this.filesPath}/` : ''}`;
   }
 
   fileItem(name, dir, size, onClick, label) {

@@ -165,6 +165,11 @@ class SliceView {
   onSlice(header, payload) {
     this.slice.shown = this.slice.busy;
     this.sliceDone();
+    if (Number.isInteger(header.count) && header.count > 0 && header.count !== this.count) {
+      this.count = header.count;
+      this.slider.max = String(header.count - 1);
+      this.indexOut.value = this.indexLabel();
+    }
     if (header.index !== this.index) return; // the slider has moved on
     const blob = new Blob([payload], { type: 'image/jpeg' });
     const token = {};
@@ -220,8 +225,8 @@ class SliceView {
     const img = this.image;
     if (!img) return;
     const r = img.rect;
-    const sx = r.w / img.bitmap.width;
-    const sy = r.h / img.bitmap.height;
+    const sx = r.w / (this.size?.width ?? img.bitmap.width);
+    const sy = r.h / (this.size?.height ?? img.bitmap.height);
 
     const edges = img.header.edges;
     if (Array.isArray(edges) && edges.length === 4) {
@@ -251,9 +256,8 @@ class SliceView {
     } else {
       return;
     }
-    // pixel (x, y) of the image covers x..x+1: its centre is where the voxel is
-    const cx = r.x + (p.x + 0.5) * sx;
-    const cy = r.y + (p.y + 0.5) * sy;
+    const cx = r.x + p.x * sx;
+    const cy = r.y + p.y * sy;
     const gap = 6 * (window.devicePixelRatio || 1);
     const lines = this.crosshairColors();
     ctx.lineWidth = Math.max(1, window.devicePixelRatio || 1);
@@ -343,9 +347,9 @@ class SliceView {
       return;
     }
     this.showProbe(msg);
-    if (req.purpose === 'cursor' && Array.isArray(msg.ijk)) {
+    if (req.purpose === 'cursor' && typeof msg.value === 'number' && Array.isArray(msg.ijk)) {
       this.group.cursorPixel = { axis: this.axis, x: req.x, y: req.y };
-      this.group.setCursor(msg.ijk.map(Math.round), this.axis);
+      this.group.setCursor(msg.ijk.map(Math.round), this.axis, msg.indices);
     }
     this.pointerProbeDone();
   }
@@ -375,8 +379,8 @@ class SliceView {
     if (!key || this.maps.has(key) || !this.count) return;
     const { width, height } = this.size;
     const d = Math.max(4, Math.floor(Math.min(width, height) / 8));
-    const cx = Math.floor(width / 2);
-    const cy = Math.floor(height / 2);
+    const cx = Math.floor(width / 2) + 0.5;
+    const cy = Math.floor(height / 2) + 0.5;
     const i0 = this.index;
     const i1 = i0 + 1 < this.count ? i0 + 1 : Math.max(0, i0 - 1);
     this.maps.set(key, 'pending');
@@ -420,17 +424,24 @@ class SliceView {
 
   // ---- pointer ----
 
-  /** Pixel of the slice image under the pointer, or null off the image. */
-  imagePixel(e) {
+  /**
+   * The point of the slice image under the pointer, in the image's pixels
+   * (continuous: pixel (i, j) covers i..i+1, j..j+1, as the server's
+   * vv_slice_plane_to_world takes it), or null off the image. Rounded to
+   * 1/8 pixel so that it comes back in the reply exactly as sent.
+   */
+  imagePoint(e) {
     const img = this.image;
     if (!img?.rect || !this.size) return null;
     const box = this.canvas.getBoundingClientRect();
     const bx = ((e.clientX - box.left) / box.width) * this.canvas.width;
     const by = ((e.clientY - box.top) / box.height) * this.canvas.height;
-    const x = Math.floor(((bx - img.rect.x) / img.rect.w) * img.bitmap.width);
-    const y = Math.floor(((by - img.rect.y) / img.rect.h) * img.bitmap.height);
-    if (x < 0 || y < 0 || x >= img.bitmap.width || y >= img.bitmap.height) return null;
-    return { x, y };
+    // in the coordinates of the image asked for (the one on screen may be
+    // of the size before a resize, and is scaled to the view)
+    const x = ((bx - img.rect.x) / img.rect.w) * this.size.width;
+    const y = ((by - img.rect.y) / img.rect.h) * this.size.height;
+    if (!(x >= 0 && y >= 0 && x < this.size.width && y < this.size.height)) return null;
+    return { x: Math.round(x * 8) / 8, y: Math.round(y * 8) / 8 };
   }
 
   bind() {
@@ -444,7 +455,7 @@ class SliceView {
         this.wl = { id: e.pointerId, x: e.clientX, y: e.clientY, ...cur };
       } else if (e.button === 0) {
         this.cursorDrag = e.pointerId;
-        const p = this.imagePixel(e);
+        const p = this.imagePoint(e);
         if (p) this.pointerProbe(p.x, p.y, true);
       } else {
         return;
@@ -461,7 +472,7 @@ class SliceView {
         this.group.setWl(w, this.wl.level + (e.clientY - this.wl.y) * k);
         return;
       }
-      const p = this.imagePixel(e);
+      const p = this.imagePoint(e);
       if (p) this.pointerProbe(p.x, p.y, this.cursorDrag === e.pointerId);
     });
     const up = (e) => {
@@ -573,13 +584,17 @@ export class SliceViews {
     this.requestAll();
   }
 
-  /** The linked cursor moved to voxel ijk (from view `from`): the other views go through it. */
-  setCursor(ijk, from) {
+  /**
+   * The linked cursor moved to voxel ijk (from view `from`): the other
+   * views go through it, at the slice `indices` of the probe reply when
+   * given (the server's own), else through the learnt maps.
+   */
+  setCursor(ijk, from, indices = null) {
     this.cursor = ijk;
     for (const axis of AXES) {
       if (axis === from) continue;
       const v = this.views[axis];
-      v.setIndex(v.indexThrough(ijk), false);
+      v.setIndex(Number.isInteger(indices?.[axis]) ? indices[axis] : v.indexThrough(ijk), false);
     }
     this.redrawOverlays();
   }

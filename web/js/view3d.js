@@ -14,6 +14,10 @@ const BURST_END_MS = 150;
 const WHEEL_BASE = 1.1;
 // Deltas of one arrow-key press, in pixels.
 const KEY_STEP = 12;
+// What one nav message may carry (the server closes a client for more):
+// VV_NAV_MAX_PIXELS, and a zoom factor in [1/16, 16]. More waits for the next.
+const MAX_PIXELS = 4096;
+const MAX_FACTOR = 16;
 
 export class View3D {
   /**
@@ -161,11 +165,11 @@ export class View3D {
     const msg = { type: 'nav', motion, seq: 0, moving };
     if (motion === 'zoom') {
       if (p.factor === 1 && !force) return;
-      msg.factor = p.factor;
-      p.factor = 1;
+      msg.factor = clamp(p.factor, 1 / MAX_FACTOR, MAX_FACTOR);
+      p.factor /= msg.factor;
     } else {
-      const dx = Math.round(p.dx);
-      const dy = Math.round(p.dy);
+      const dx = clamp(Math.round(p.dx), -MAX_PIXELS, MAX_PIXELS);
+      const dy = clamp(Math.round(p.dy), -MAX_PIXELS, MAX_PIXELS);
       if (dx === 0 && dy === 0 && !force) return;
       msg.dx = dx;
       msg.dy = dy;
