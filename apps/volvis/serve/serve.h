@@ -181,8 +181,8 @@ int srv_session_has_out(srv_session *s, srv_client *c);
 /** Wakes the service thread (lws_cancel_service on srv->context). */
 void srv_wake(srv_server *srv);
 
-/** JPEG of @p rgb (3 bytes a pixel, rows top to bottom) at @p quality into a new buffer
- *  (tjFree); 0 or -1. @p handle: a tjhandle for compression. */
+/** JPEG of @p pixels (RGBX, 4 bytes a pixel, or grey, 1 byte; rows top to bottom) at @p quality
+ * into a new buffer (tjFree); 0 or -1. @p handle: a tjhandle for compression. */
 int srv_jpeg(void *handle, const uint8_t *rgb, int width, int height, int quality, int grey,
              unsigned char **out, unsigned long *size);
 
