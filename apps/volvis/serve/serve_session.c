@@ -41,6 +41,7 @@
 
 struct srv_session {
     srv_server *srv;
+    uint64_t id;
     pthread_mutex_t lock;
     pthread_cond_t cond;
     pthread_t thread;
@@ -383,14 +384,8 @@ state_json(srv_session *s) {
 /* cli_error keeps its last line in one buffer: opens go one at a time. */
 static pthread_mutex_t open_lock = PTHREAD_MUTEX_INITIALIZER;
 
-/*
- * The World of file @p path as `volvis render PATH` builds it (a scene, a
- * volume with the defaults of a volume file, a grid), out of core under
- * the server's --memory-limit; its time steps in s->ts when it is a volume
- * file of more than one. 0, or -1 with the error in @p why.
- */
-static int
-open_world(srv_session *s, const char *path, vv_world **out, char *why, size_t cap) {
+int
+srv_open_world(const srv_server *srv, const char *path, vv_world **out, char *why, size_t cap) {
     static const cli_opt_spec specs[] = {CLI_RENDER_OPT_SPECS};
     char mem[32];
     char *argv[8];
@@ -400,8 +395,8 @@ open_world(srv_session *s, const char *path, vv_world **out, char *why, size_t c
     argv[argc++] = "-o";
     argv[argc++] = "-";
     argv[argc++] = "-q";
-    if (s->srv->memory_limit) {
-        snprintf(mem, sizeof mem, "%llu", (unsigned long long)s->srv->memory_limit);
+    if (srv->memory_limit) {
+        snprintf(mem, sizeof mem, "%llu", (unsigned long long)srv->memory_limit);
         argv[argc++] = "--memory-limit";
         argv[argc++] = mem;
     }
@@ -411,6 +406,7 @@ open_world(srv_session *s, const char *path, vv_world **out, char *why, size_t c
     cli_args a;
     cli_render_args r;
     memset(&r, 0, sizeof r);
+    *out = NULL;
     int rc = cli_parse(&a, "serve", specs, (int)(sizeof specs / sizeof specs[0]), argc, argv);
     if (!rc)
         rc = cli_render_parse(&a, &r);
@@ -418,27 +414,34 @@ open_world(srv_session *s, const char *path, vv_world **out, char *why, size_t c
         rc = cli_render_world(&r, out);
     if (rc)
         snprintf(why, cap, "%s", *cli_last_error() ? cli_last_error() : "cannot open the file");
-    /* a volume file's time steps */
-    s->time_steps = 1;
-    s->time = 0;
-    vv_object *o = rc ? NULL : first_volume(*out);
-    if (o && !o->source && !cli_is_scene_file(path)) {
-        cli_time_source ts;
-        memset(&ts, 0, sizeof ts);
-        vv_error_clear();
-        if (cli_time_source_open(&r, o, &ts) == VV_OK) {
-            int n = vv_time_series_count(ts.ts[0]);
-            if (n > 1) {
-                s->ts = ts;
-                s->time_steps = n;
-            } else {
-                cli_time_source_close(&ts);
-            }
-        }
-    }
     cli_errors_quiet(0);
     pthread_mutex_unlock(&open_lock);
     return rc ? -1 : 0;
+}
+
+/* A volume file's time steps into s->ts (more than one), one process only. */
+static void
+open_time_steps(srv_session *s, const char *path, vv_object *o) {
+    s->time_steps = 1;
+    s->time = 0;
+    if (s->srv->ranks > 1 || !o || o->source || cli_is_scene_file(path))
+        return;
+    cli_render_args r;
+    memset(&r, 0, sizeof r);
+    r.input = path;
+    r.channel = -1;
+    cli_time_source ts;
+    memset(&ts, 0, sizeof ts);
+    vv_error_clear();
+    if (cli_time_source_open(&r, o, &ts) != VV_OK)
+        return;
+    int n = vv_time_series_count(ts.ts[0]);
+    if (n > 1) {
+        s->ts = ts;
+        s->time_steps = n;
+    } else {
+        cli_time_source_close(&ts);
+    }
 }
 
 /* Opens s->open_path for the render thread: called without the lock. */
@@ -448,16 +451,17 @@ do_open(srv_session *s, const char *path, uint64_t client) {
     vv_world *w = NULL;
     cli_time_source_close(&s->ts);
     memset(&s->ts, 0, sizeof s->ts);
-    if (open_world(s, path, &w, why, sizeof why)) {
+    if (srv_open_world(s->srv, path, &w, why, sizeof why)) {
         pthread_mutex_lock(&s->lock);
         reply_error(s, client, "%s", why);
         pthread_mutex_unlock(&s->lock);
         return;
     }
     double win = 1, lev = 0;
-    const vv_object *o = first_volume(w);
+    vv_object *o = first_volume(w);
     if (o)
         vv_slice_auto_window(o->volume, &win, &lev);
+    open_time_steps(s, path, o);
     pthread_mutex_lock(&s->lock);
     vv_world_free(s->world);
     s->world = w;
@@ -539,6 +543,21 @@ draw(srv_session *s, const vv_world *w, vv_preview_kind kind, uint64_t gen, int 
     vv_image *img = NULL;
     if ((st = vv_image_new(&img, iw, ih)) != VV_OK)
         return st;
+    if (s->srv->ranks > 1) {
+        /* every rank draws its brick: a reduced frame is the view at the reduced size */
+        vv_view view = w->view;
+        view.width = iw;
+        view.height = ih;
+        st = srv_mpi_render(s->srv, s->id, s->file, w, &view,
+                            kind == VV_PREVIEW_FULL ? vv_render_settings_quality(&w->render) : 0,
+                            img);
+        if (st != VV_OK) {
+            vv_image_free(img);
+            return st;
+        }
+        *out = img;
+        return VV_OK;
+    }
     cancel_ctx cc = {s, gen, cancellable};
     vv_render_options ro;
     vv_render_options_init(&ro);
@@ -890,6 +909,9 @@ srv_session_new(srv_server *srv) {
     if (!s)
         return NULL;
     s->srv = srv;
+    pthread_mutex_lock(&srv->lock);
+    s->id = ++srv->next_session_id;
+    pthread_mutex_unlock(&srv->lock);
     s->time_pending = -1;
     s->time_steps = 1;
     s->window = 1;
