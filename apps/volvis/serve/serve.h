@@ -154,6 +154,8 @@ struct srv_server {
     uint64_t next_client_id;
     volatile int stopping;
     int verbose;
+    int ranks; /**< MPI ranks rendering every frame (1: this process alone) */
+    uint64_t next_session_id;
 };
 
 /** A new session of @p srv showing srv->initial (opened by its render thread). */
@@ -178,11 +180,38 @@ srv_buf *srv_session_next_out(srv_session *s, srv_client *c);
 /** 1 when @p c has something to send. */
 int srv_session_has_out(srv_session *s, srv_client *c);
 
+/**
+ * The World of file @p path as `volvis render PATH` builds it (a scene, a
+ * volume with the defaults of a volume file, a grid), out of core under
+ * srv->memory_limit. 0, or -1 with the one-line error in @p why. Opens go
+ * one at a time (the CLI keeps its last error line in one buffer).
+ */
+int srv_open_world(const srv_server *srv, const char *path, vv_world **out, char *why, size_t cap);
+
+/* ---- MPI (serve_mpi.c): rank 0 serves, every rank renders every frame ---------------- */
+
+typedef struct srv_mpi_job srv_mpi_job;
+/** Collective start on every rank (vv_parallel_new): VV_OK on all, or the same error. */
+vv_status srv_mpi_start(void);
+/**
+ * Rank 0, any render thread: draws @p w (a snapshot; @p path the file it was
+ * opened from, the same on every rank) through @p view with every rank into
+ * @p out (view's size), waiting for the service thread to run it.
+ */
+vv_status srv_mpi_render(srv_server *srv, uint64_t session, const char *path, const vv_world *w,
+                         const vv_view *view, int quality, vv_image *out);
+/** Rank 0, service thread: runs the frames posted; returns how many. */
+int srv_mpi_service(srv_server *srv);
+/** Rank 0, service thread: tells the other ranks to stop. */
+void srv_mpi_stop(void);
+/** Ranks > 0: draw the frames rank 0 announces until it stops; the exit status. */
+int srv_mpi_worker(srv_server *srv);
+
 /** Wakes the service thread (lws_cancel_service on srv->context). */
 void srv_wake(srv_server *srv);
 
-/** JPEG of @p rgb (3 bytes a pixel, rows top to bottom) at @p quality into a new buffer
- *  (tjFree); 0 or -1. @p handle: a tjhandle for compression. */
+/** JPEG of @p pixels (RGBX, 4 bytes a pixel, or grey, 1 byte; rows top to bottom) at @p quality
+ * into a new buffer (tjFree); 0 or -1. @p handle: a tjhandle for compression. */
 int srv_jpeg(void *handle, const uint8_t *rgb, int width, int height, int quality, int grey,
              unsigned char **out, unsigned long *size);
 

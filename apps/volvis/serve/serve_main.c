@@ -582,10 +582,30 @@ cli_serve_main(int argc, char **argv) {
         if ((rc = cli_check_readable_input(real)))
             return rc;
     }
-    if (find_web_dir(cli_get(&a, "web")))
+    /* under mpirun: rank 0 serves, the others render with it */
+    server.ranks = 1;
+    int rank = 0;
+    if (vv_parallel_launched()) {
+        vv_error_clear();
+        vv_status ps = vv_parallel_init(NULL, NULL, &rank, &server.ranks);
+        if (ps == VV_OK && server.ranks > 1)
+            ps = srv_mpi_start();
+        if (ps != VV_OK)
+            return cli_fail(ps, NULL);
+        if (rank > 0) {
+            cli_errors_quiet(1);
+            return srv_mpi_worker(&server);
+        }
+    }
+    if (find_web_dir(cli_get(&a, "web"))) {
+        if (server.ranks > 1)
+            srv_mpi_stop();
         return CLI_EXIT_FAIL;
+    }
     if (getrandom(token, TOKEN_BYTES, 0) != TOKEN_BYTES) {
         cli_error("serve: no random bytes for the token: %s", strerror(errno));
+        if (server.ranks > 1)
+            srv_mpi_stop();
         return CLI_EXIT_FAIL;
     }
     {
@@ -614,17 +634,21 @@ cli_serve_main(int argc, char **argv) {
         info.ssl_private_key_filepath = key;
     }
     info.timeout_secs = 30;
-    if (server.shared && !(server.shared_session = srv_session_new(&server))) {
-        cli_error("serve: cannot start the shared session");
-        return CLI_EXIT_FAIL;
-    }
     struct lws_context *ctx = lws_create_context(&info);
     if (!ctx) {
         cli_error("serve: cannot listen on %s port %d (in use, or no such address)", bind, port);
-        srv_session_free(server.shared_session);
+        if (server.ranks > 1)
+            srv_mpi_stop();
         return CLI_EXIT_FAIL;
     }
     server.context = ctx;
+    if (server.shared && !(server.shared_session = srv_session_new(&server))) {
+        cli_error("serve: cannot start the shared session");
+        lws_context_destroy(ctx);
+        if (server.ranks > 1)
+            srv_mpi_stop();
+        return CLI_EXIT_FAIL;
+    }
     struct lws_vhost *vh = lws_get_vhost_by_name(ctx, "default");
     int real_port = vh ? lws_get_vhost_listen_port(vh) : port;
     signal(SIGINT, on_signal);
@@ -640,14 +664,26 @@ cli_serve_main(int argc, char **argv) {
                                                       : bind;
     printf("%s://%s:%d/?token=%s\n", cert ? "https" : "http", host, real_port, token);
     fflush(stdout);
-    fprintf(stderr, "volvis: serve: root %s%s%s; Ctrl-C stops\n", server.root,
-            server.initial[0] ? ", showing " : "", server.initial);
-    while (!interrupted)
+    fprintf(stderr, "volvis: serve: root %s%s%s%s; Ctrl-C stops\n", server.root,
+            server.initial[0] ? ", showing " : "", server.initial,
+            server.ranks > 1 ? ", every frame rendered by all MPI ranks" : "");
+    while (!interrupted) {
         if (lws_service(ctx, 0) < 0)
             break;
+        /* frames the render threads posted for all ranks (MPI calls stay on this thread) */
+        if (server.ranks > 1)
+            srv_mpi_service(&server);
+    }
+    pthread_mutex_lock(&server.lock);
+    server.stopping = 1; /* a render thread waiting on a frame of all ranks is released */
+    pthread_mutex_unlock(&server.lock);
+    if (server.ranks > 1)
+        srv_mpi_service(&server);
     lws_context_destroy(ctx);
     server.context = NULL;
     srv_session_free(server.shared_session);
+    if (server.ranks > 1)
+        srv_mpi_stop();
     while (links)
         link_remove(links->c);
     fprintf(stderr, "volvis: serve: stopped\n");

@@ -17,12 +17,17 @@
 
 #include "serve.h"
 
+/* Formats the reason as one printable line: the parser's messages quote
+ * the client's bytes, and the reason is logged and sent back. */
 static int
 fail(char *why, size_t cap, const char *fmt, ...) {
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(why, cap, fmt, ap);
     va_end(ap);
+    for (char *p = why; *p; p++)
+        if ((unsigned char)*p < 0x20 || *p == 0x7f)
+            *p = '?';
     return -1;
 }
 

@@ -31,6 +31,9 @@
 /* Input older than this counts as stopped even without a last "moving":
  * false (a client that vanished mid-drag). */
 #define SRV_STILL_AFTER 0.5
+/* While moving, at most 30 frames a second (as trame adapts between 12 and
+ * 30): more would cost bandwidth and the page shows no more on most displays. */
+#define SRV_MIN_PERIOD (1.0 / 30)
 #define SRV_JPEG_MOVING 60
 #define SRV_JPEG_STILL 90
 /* Chunks a progressive frame of a file out of core may read. */
@@ -38,6 +41,7 @@
 
 struct srv_session {
     srv_server *srv;
+    uint64_t id;
     pthread_mutex_t lock;
     pthread_cond_t cond;
     pthread_t thread;
@@ -72,6 +76,7 @@ struct srv_session {
     uint64_t drawn_gen;  /* the newest frame's */
     uint64_t sharp_gen;  /* the newest full frame's */
     uint64_t cancel_gen; /* a frame of a generation below this stops (atomic) */
+    double last_preview; /* when the last frame drawn while moving began */
 
     srv_client *clients;
     int n_clients;
@@ -81,6 +86,8 @@ struct srv_session {
     char preview_renderer[32];
     vv_preview_policy policy;
     tjhandle tj;
+    uint8_t *pix; /* 8-bit pixels of the frame being encoded */
+    size_t pix_cap;
     cli_time_source ts;
     int time_steps, time;
     vv_image *full; /* the last full frame, of full_gen */
@@ -155,8 +162,8 @@ srv_jpeg(void *handle, const uint8_t *pixels, int width, int height, int quality
          unsigned char **out, unsigned long *size) {
     *out = NULL;
     *size = 0;
-    return tjCompress2((tjhandle)handle, pixels, width, 0, height, grey ? TJPF_GRAY : TJPF_RGB, out,
-                       size, grey ? TJSAMP_GRAY : TJSAMP_420, quality, TJFLAG_FASTDCT) == 0
+    return tjCompress2((tjhandle)handle, pixels, width, 0, height, grey ? TJPF_GRAY : TJPF_RGBX,
+                       out, size, grey ? TJSAMP_GRAY : TJSAMP_420, quality, TJFLAG_FASTDCT) == 0
                ? 0
                : -1;
 }
@@ -377,14 +384,8 @@ state_json(srv_session *s) {
 /* cli_error keeps its last line in one buffer: opens go one at a time. */
 static pthread_mutex_t open_lock = PTHREAD_MUTEX_INITIALIZER;
 
-/*
- * The World of file @p path as `volvis render PATH` builds it (a scene, a
- * volume with the defaults of a volume file, a grid), out of core under
- * the server's --memory-limit; its time steps in s->ts when it is a volume
- * file of more than one. 0, or -1 with the error in @p why.
- */
-static int
-open_world(srv_session *s, const char *path, vv_world **out, char *why, size_t cap) {
+int
+srv_open_world(const srv_server *srv, const char *path, vv_world **out, char *why, size_t cap) {
     static const cli_opt_spec specs[] = {CLI_RENDER_OPT_SPECS};
     char mem[32];
     char *argv[8];
@@ -394,8 +395,8 @@ open_world(srv_session *s, const char *path, vv_world **out, char *why, size_t c
     argv[argc++] = "-o";
     argv[argc++] = "-";
     argv[argc++] = "-q";
-    if (s->srv->memory_limit) {
-        snprintf(mem, sizeof mem, "%llu", (unsigned long long)s->srv->memory_limit);
+    if (srv->memory_limit) {
+        snprintf(mem, sizeof mem, "%llu", (unsigned long long)srv->memory_limit);
         argv[argc++] = "--memory-limit";
         argv[argc++] = mem;
     }
@@ -405,6 +406,7 @@ open_world(srv_session *s, const char *path, vv_world **out, char *why, size_t c
     cli_args a;
     cli_render_args r;
     memset(&r, 0, sizeof r);
+    *out = NULL;
     int rc = cli_parse(&a, "serve", specs, (int)(sizeof specs / sizeof specs[0]), argc, argv);
     if (!rc)
         rc = cli_render_parse(&a, &r);
@@ -412,27 +414,34 @@ open_world(srv_session *s, const char *path, vv_world **out, char *why, size_t c
         rc = cli_render_world(&r, out);
     if (rc)
         snprintf(why, cap, "%s", *cli_last_error() ? cli_last_error() : "cannot open the file");
-    /* a volume file's time steps */
-    s->time_steps = 1;
-    s->time = 0;
-    vv_object *o = rc ? NULL : first_volume(*out);
-    if (o && !o->source && !cli_is_scene_file(path)) {
-        cli_time_source ts;
-        memset(&ts, 0, sizeof ts);
-        vv_error_clear();
-        if (cli_time_source_open(&r, o, &ts) == VV_OK) {
-            int n = vv_time_series_count(ts.ts[0]);
-            if (n > 1) {
-                s->ts = ts;
-                s->time_steps = n;
-            } else {
-                cli_time_source_close(&ts);
-            }
-        }
-    }
     cli_errors_quiet(0);
     pthread_mutex_unlock(&open_lock);
     return rc ? -1 : 0;
+}
+
+/* A volume file's time steps into s->ts (more than one), one process only. */
+static void
+open_time_steps(srv_session *s, const char *path, vv_object *o) {
+    s->time_steps = 1;
+    s->time = 0;
+    if (s->srv->ranks > 1 || !o || o->source || cli_is_scene_file(path))
+        return;
+    cli_render_args r;
+    memset(&r, 0, sizeof r);
+    r.input = path;
+    r.channel = -1;
+    cli_time_source ts;
+    memset(&ts, 0, sizeof ts);
+    vv_error_clear();
+    if (cli_time_source_open(&r, o, &ts) != VV_OK)
+        return;
+    int n = vv_time_series_count(ts.ts[0]);
+    if (n > 1) {
+        s->ts = ts;
+        s->time_steps = n;
+    } else {
+        cli_time_source_close(&ts);
+    }
 }
 
 /* Opens s->open_path for the render thread: called without the lock. */
@@ -442,16 +451,17 @@ do_open(srv_session *s, const char *path, uint64_t client) {
     vv_world *w = NULL;
     cli_time_source_close(&s->ts);
     memset(&s->ts, 0, sizeof s->ts);
-    if (open_world(s, path, &w, why, sizeof why)) {
+    if (srv_open_world(s->srv, path, &w, why, sizeof why)) {
         pthread_mutex_lock(&s->lock);
         reply_error(s, client, "%s", why);
         pthread_mutex_unlock(&s->lock);
         return;
     }
     double win = 1, lev = 0;
-    const vv_object *o = first_volume(w);
+    vv_object *o = first_volume(w);
     if (o)
         vv_slice_auto_window(o->volume, &win, &lev);
+    open_time_steps(s, path, o);
     pthread_mutex_lock(&s->lock);
     vv_world_free(s->world);
     s->world = w;
@@ -533,6 +543,21 @@ draw(srv_session *s, const vv_world *w, vv_preview_kind kind, uint64_t gen, int 
     vv_image *img = NULL;
     if ((st = vv_image_new(&img, iw, ih)) != VV_OK)
         return st;
+    if (s->srv->ranks > 1) {
+        /* every rank draws its brick: a reduced frame is the view at the reduced size */
+        vv_view view = w->view;
+        view.width = iw;
+        view.height = ih;
+        st = srv_mpi_render(s->srv, s->id, s->file, w, &view,
+                            kind == VV_PREVIEW_FULL ? vv_render_settings_quality(&w->render) : 0,
+                            img);
+        if (st != VV_OK) {
+            vv_image_free(img);
+            return st;
+        }
+        *out = img;
+        return VV_OK;
+    }
     cancel_ctx cc = {s, gen, cancellable};
     vv_render_options ro;
     vv_render_options_init(&ro);
@@ -557,21 +582,56 @@ draw(srv_session *s, const vv_world *w, vv_preview_kind kind, uint64_t gen, int 
     return VV_OK;
 }
 
+/* 8-bit RGBX of @p img for JPEG (gamma 1, rounded half up; X is the
+ * alpha, unused): one contiguous loop the compiler vectorizes, 4 times
+ * quicker than vv_image_to_8bit's lrint per component (the PNG, which must
+ * equal the CLI's, goes through vv_image_write_png). */
+static void
+rgbx8(const vv_image *img, uint8_t *out) {
+    const size_t row = 4 * (size_t)img->width;
+    const float *in = img->rgba;
+    /* rows on every core: the frame was just written by all of them, each
+     * holds part of it in its cache */
+#pragma omp parallel for schedule(static)
+    for (int y = 0; y < img->height; y++) {
+        const float *a = in + (size_t)y * row;
+        uint8_t *b = out + (size_t)y * row;
+        for (size_t i = 0; i < row; i++) {
+            float v = a[i] * 255.0f + 0.5f;
+            v = v > 0 ? v : 0;
+            v = v < 255 ? v : 255;
+            b[i] = (uint8_t)v;
+        }
+    }
+}
+
+/* The render thread's 8-bit buffer, grown as needed (no page faults a frame). */
+static uint8_t *
+pixels(srv_session *s, const vv_image *img) {
+    size_t need = 4 * (size_t)img->width * img->height;
+    if (need > s->pix_cap) {
+        uint8_t *p = realloc(s->pix, need);
+        if (!p)
+            return NULL;
+        s->pix = p;
+        s->pix_cap = need;
+    }
+    rgbx8(img, s->pix);
+    return s->pix;
+}
+
 /* Encodes @p img as a FRME and makes it the session's newest frame. */
 static void
 publish(srv_session *s, const vv_image *img, vv_preview_kind kind, long long input_seq,
         double render_s) {
     int quality = kind == VV_PREVIEW_FULL ? SRV_JPEG_STILL : SRV_JPEG_MOVING;
-    size_t n = (size_t)img->width * img->height;
-    uint8_t *rgb = malloc(3 * n);
-    if (!rgb)
-        return;
     double t0 = now_s();
-    vv_image_to_8bit(img, 3, 1.0, rgb);
+    const uint8_t *rgbx = pixels(s, img);
+    if (!rgbx)
+        return;
     unsigned char *jpeg = NULL;
     unsigned long size = 0;
-    int rc = srv_jpeg(s->tj, rgb, img->width, img->height, quality, 0, &jpeg, &size);
-    free(rgb);
+    int rc = srv_jpeg(s->tj, rgbx, img->width, img->height, quality, 0, &jpeg, &size);
     double encode_s = now_s() - t0;
     if (rc) {
         tjFree(jpeg);
@@ -646,13 +706,11 @@ thumbnail(srv_session *s, const vv_world *base, const char *name, int size, uint
     w->view.height = size;
     vv_image *img = NULL;
     if (draw(s, w, VV_PREVIEW_FULL, 0, 0, &img) == VV_OK) {
-        size_t n = (size_t)img->width * img->height;
-        uint8_t *rgb = malloc(3 * n);
+        const uint8_t *rgbx = pixels(s, img);
         unsigned char *jpeg = NULL;
         unsigned long jn = 0;
-        if (rgb) {
-            vv_image_to_8bit(img, 3, 1.0, rgb);
-            if (srv_jpeg(s->tj, rgb, img->width, img->height, 85, 0, &jpeg, &jn) == 0) {
+        if (rgbx) {
+            if (srv_jpeg(s->tj, rgbx, img->width, img->height, 85, 0, &jpeg, &jn) == 0) {
                 char header[256];
                 snprintf(header, sizeof header, "{\"name\":\"%s\",\"width\":%d,\"height\":%d}",
                          name, img->width, img->height);
@@ -666,11 +724,26 @@ thumbnail(srv_session *s, const vv_world *base, const char *name, int size, uint
                 srv_wake(s->srv);
             }
         }
-        free(rgb);
         tjFree(jpeg);
     }
     vv_image_free(img);
     vv_world_free(w);
+}
+
+/* Waits on s->cond (s->lock held) for at most @p seconds. */
+static void
+wait_for(srv_session *s, double seconds) {
+    if (seconds < 0.001)
+        seconds = 0.001;
+    struct timespec ts;
+    clock_gettime(CLOCK_REALTIME, &ts);
+    ts.tv_sec += (time_t)seconds;
+    ts.tv_nsec += (long)((seconds - floor(seconds)) * 1e9);
+    if (ts.tv_nsec >= 1000000000L) {
+        ts.tv_sec++;
+        ts.tv_nsec -= 1000000000L;
+    }
+    pthread_cond_timedwait(&s->cond, &s->lock, &ts);
 }
 
 static void *
@@ -711,9 +784,14 @@ render_main(void *arg) {
         double t = now_s();
         int still = !s->moving || t - s->last_input > SRV_STILL_AFTER;
         vv_preview_kind kind;
-        if (w && s->gen != s->drawn_gen && !still)
+        if (w && s->gen != s->drawn_gen && !still && t < s->last_preview + SRV_MIN_PERIOD) {
+            wait_for(s, s->last_preview + SRV_MIN_PERIOD - t);
+            continue;
+        }
+        if (w && s->gen != s->drawn_gen && !still) {
             kind = vv_preview_policy_choose(&s->policy, SRV_PREVIEW_BUDGET);
-        else if (w && s->gen != s->sharp_gen && still)
+            s->last_preview = t;
+        } else if (w && s->gen != s->sharp_gen && still)
             kind = VV_PREVIEW_FULL;
         else
             kind = VV_PREVIEW_COUNT; /* nothing to draw */
@@ -812,24 +890,14 @@ render_main(void *arg) {
         }
         if (w && s->moving && s->gen != s->sharp_gen) {
             /* wake when the input is old enough to count as stopped */
-            struct timespec ts;
-            clock_gettime(CLOCK_REALTIME, &ts);
-            double wait = s->last_input + SRV_STILL_AFTER - t + 0.005;
-            if (wait < 0.001)
-                wait = 0.001;
-            ts.tv_sec += (time_t)wait;
-            ts.tv_nsec += (long)((wait - floor(wait)) * 1e9);
-            if (ts.tv_nsec >= 1000000000L) {
-                ts.tv_sec++;
-                ts.tv_nsec -= 1000000000L;
-            }
-            pthread_cond_timedwait(&s->cond, &s->lock, &ts);
+            wait_for(s, s->last_input + SRV_STILL_AFTER - t + 0.005);
         } else {
             pthread_cond_wait(&s->cond, &s->lock);
         }
     }
     pthread_mutex_unlock(&s->lock);
     tjDestroy(s->tj);
+    free(s->pix);
     return NULL;
 }
 
@@ -841,6 +909,9 @@ srv_session_new(srv_server *srv) {
     if (!s)
         return NULL;
     s->srv = srv;
+    pthread_mutex_lock(&srv->lock);
+    s->id = ++srv->next_session_id;
+    pthread_mutex_unlock(&srv->lock);
     s->time_pending = -1;
     s->time_steps = 1;
     s->window = 1;
@@ -964,7 +1035,7 @@ send_slice(srv_session *s, srv_client *c, const srv_msg *m) {
     int channels = o->n_channels > 1 ? o->n_channels : 1;
     float *values = malloc((size_t)channels * n * sizeof *values);
     uint8_t *rgba = malloc(n * 4);
-    uint8_t *pix = malloc(n * 3);
+    uint8_t *pix = malloc(n);
     vv_status st = values && rgba && pix ? VV_OK : VV_ERR_NOMEM;
     if (st == VV_OK && channels > 1) {
         const float *per[VV_MAX_CHANNELS];
@@ -983,12 +1054,10 @@ send_slice(srv_session *s, srv_client *c, const srv_msg *m) {
     unsigned long jn = 0;
     int grey = channels == 1;
     if (st == VV_OK) {
-        for (size_t i = 0; i < n; i++)
-            if (grey)
-                pix[i] = rgba[4 * i];
-            else
-                memcpy(pix + 3 * i, rgba + 4 * i, 3);
-        if (srv_jpeg(s->tj_slice, pix, pl.width, pl.height, SRV_JPEG_STILL, grey, &jpeg, &jn))
+        for (size_t i = 0; grey && i < n; i++)
+            pix[i] = rgba[4 * i];
+        if (srv_jpeg(s->tj_slice, grey ? pix : rgba, pl.width, pl.height, SRV_JPEG_STILL, grey,
+                     &jpeg, &jn))
             st = VV_ERR_IO;
     }
     if (st == VV_OK) {
