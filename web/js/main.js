@@ -39,6 +39,7 @@ window.volvis = api;
 const statusConn = document.getElementById('status-conn');
 const statusFrame = document.getElementById('status-frame');
 const statusMsg = document.getElementById('status-msg');
+const viewInfo = document.getElementById('view3d-info');
 
 function showMessage(text, isError = false) {
   statusMsg.textContent = text;
@@ -62,7 +63,7 @@ function showFrame(h) {
   statusFrame.textContent =
     `${h.kind ?? 'frame'}${h.sharp ? ' (sharp)' : ''} · ${h.width}×${h.height} · ` +
     `render ${ms(h.render_ms)} · encode ${ms(h.encode_ms)}`;
-  document.getElementById('view3d-info').textContent = h.sharp ? '' : 'preview';
+  viewInfo.textContent = h.sharp ? '' : 'preview';
 }
 
 // ---- the parts ----
@@ -107,6 +108,7 @@ conn.on('client-error', showError);
 
 conn.on('state', (s) => {
   api.state = s;
+  if (!s.dims && api.frames === 0) viewInfo.textContent = 'Nothing is open: choose a file under Files.';
   panel.onState(s);
   slices.onState(s);
 });
@@ -115,6 +117,7 @@ conn.on('error', (msg) => {
   const text = typeof msg.message === 'string' ? msg.message : 'error';
   api.errors.push(text);
   showError(text);
+  panel.opening = null;
 });
 
 conn.on('probe', (msg) => {

@@ -16,6 +16,7 @@ export class Panel {
     this.thumbUrls = new Map(); // preset name -> blob URL of its thumbnail
     this.channelsKey = null;
     this.filesPath = '';
+    this.opening = null; // the file asked for, until a state shows it
     this.pngUrl = null;
     this.pngWanted = false;
     this.$ = (id) => document.getElementById(id);
@@ -27,6 +28,10 @@ export class Panel {
   // ---- state ----
 
   onState(s) {
+    if (this.opening && s.name && s.name !== this.state?.name) {
+      this.hooks.onInfo(`opened ${this.opening}`);
+      this.opening = null;
+    }
     this.state = s;
     this.showDataset(s);
     this.showMode(s);
@@ -53,15 +58,17 @@ export class Panel {
   bindView() {
     const mode = this.$('mode');
     const iso = this.$('isovalue');
-    const send = () => {
-      const msg = { type: 'mode', mode: mode.value };
-      const v = Number(iso.value);
-      if (mode.value === 'iso' && iso.value !== '' && Number.isFinite(v)) msg.isovalue = v;
+    // The mode alone when it is chosen; the isovalue only once the user gives
+    // one (the field shows the server's, rounded: sending it back would move it).
+    mode.addEventListener('change', () => {
       this.$('isovalue-row').hidden = mode.value !== 'iso';
-      this.conn.send(msg);
-    };
-    mode.addEventListener('change', send);
-    iso.addEventListener('change', send);
+      this.conn.send({ type: 'mode', mode: mode.value });
+    });
+    iso.addEventListener('change', () => {
+      const v = Number(iso.value);
+      if (iso.value === '' || !Number.isFinite(v)) return;
+      this.conn.send({ type: 'mode', mode: 'iso', isovalue: v });
+    });
     this.$('reset-view').addEventListener('click', () => this.conn.send({ type: 'reset_view' }));
     this.$('png').addEventListener('click', () => {
       if (this.conn.send({ type: 'png' })) {
@@ -215,8 +222,10 @@ export class Panel {
         items.push(this.fileItem(`${e.name}/`, true, null, () => this.list(join(e.name)), `Folder ${e.name}`));
       } else {
         items.push(this.fileItem(e.name, false, e.size, () => {
-          this.conn.send({ type: 'open', path: join(e.name) });
-          this.hooks.onInfo(`opening ${join(e.name)}…`);
+          if (this.conn.send({ type: 'open', path: join(e.name) })) {
+            this.opening = join(e.name);
+            this.hooks.onInfo(`opening ${this.opening}…`);
+          }
         }, `Open ${e.name}`));
       }
     }

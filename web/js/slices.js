@@ -105,6 +105,8 @@ class SliceView {
     this.maps.clear();
     this.image?.bitmap.close();
     this.image = null;
+    this.probeText.textContent = '–';
+    this.probeText.classList.remove('has-value');
     this.draw();
   }
 
