@@ -1206,8 +1206,8 @@ srv_session_handle(srv_session *s, srv_client *c, const srv_msg *m) {
             changed(s);
         }
         if (m->type == SRV_HELLO) {
-            if (w)
-                reply_json(s, c->id, state_json(s));
+            /* nothing open (a folder served): the state still names the root and presets */
+            reply_json(s, c->id, state_json(s));
             c->sent_frame = 0; /* the newest frame, even an older one, at once */
         }
         break;
