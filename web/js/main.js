@@ -26,7 +26,7 @@ const api = {
   lastFrame: null, // header of the last frame drawn
   state: null, // the last `state`
   lastPng: null, // Uint8Array of the last PNG_ payload
-  lastProbe: null, // the last `probe` reply
+  lastProbe: null, // the last `probe` reply to the pointer
   errors: [], // messages of the `error`s received
   connected: false,
   closed: null, // {code, reason} once the socket closed
@@ -77,7 +77,12 @@ const view = new View3D(document.getElementById('view3d'), conn, {
   onError: showError,
 });
 
-const slices = new SliceViews(conn, { onError: showError });
+const slices = new SliceViews(conn, {
+  onError: showError,
+  onProbe: (msg) => {
+    api.lastProbe = msg;
+  },
+});
 // the `seq` of the last nav message sent: a frame whose input_seq reaches it shows all input
 Object.defineProperty(api, 'navSeq', { get: () => view.seq, enumerable: true });
 
@@ -120,10 +125,7 @@ conn.on('error', (msg) => {
   panel.opening = null;
 });
 
-conn.on('probe', (msg) => {
-  api.lastProbe = msg;
-  slices.onProbe(msg);
-});
+conn.on('probe', (msg) => slices.onProbe(msg));
 
 conn.on('listing', (msg) => panel.onListing(msg));
 conn.on('saved', (msg) => panel.onSaved(msg));

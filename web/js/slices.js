@@ -349,6 +349,7 @@ class SliceView {
       return;
     }
     this.showProbe(msg);
+    this.group.hooks.onProbe?.(msg);
     if (req.purpose === 'cursor' && typeof msg.value === 'number' && Array.isArray(msg.ijk)) {
       this.group.cursorPixel = { axis: this.axis, x: req.x, y: req.y };
       this.group.setCursor(msg.ijk.map(Math.round), this.axis, msg.indices);
@@ -500,7 +501,7 @@ class SliceView {
 
 /** The three views together: the data set, window/level and the cursor. */
 export class SliceViews {
-  /** hooks: {onError(text)} */
+  /** hooks: {onError(text), onProbe(reply): a reply to a probe of the pointer (not the learning ones)} */
   constructor(conn, hooks) {
     this.conn = conn;
     this.hooks = hooks;
