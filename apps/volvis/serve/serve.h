@@ -92,6 +92,13 @@ int srv_msg_parse(const char *text, size_t len, srv_msg *out, char *why, size_t 
 int srv_path_resolve(const char *root, const char *rel, int kind, char *out, size_t cap, char *why,
                      size_t why_cap);
 
+/**
+ * 1 when folder @p path holds one dataset rather than files to choose from:
+ * a Zarr store (a name ending in .zarr, or a .zgroup, .zarray or .zattrs in
+ * it). The file browser opens it rather than entering it.
+ */
+int srv_folder_is_store(const char *path);
+
 /* ---- buffers sent to clients ---------------------------------------------------------- */
 
 /** A message ready for lws_write: @p pre bytes of headroom, then @p len bytes. */

@@ -548,7 +548,8 @@ cli_serve_main(int argc, char **argv) {
             cli_error("%s: %s", input, strerror(errno));
             return CLI_EXIT_FAIL;
         }
-        folder = S_ISDIR(st.st_mode) && !cli_get(&a, "root");
+        /* a folder that holds one dataset (an OME-Zarr store) opens; any other is the root */
+        folder = S_ISDIR(st.st_mode) && !srv_folder_is_store(real) && !cli_get(&a, "root");
     }
     const char *root = cli_get(&a, "root");
     char root_real[PATH_MAX];

@@ -13,6 +13,7 @@
 #include <dirent.h>
 #include <errno.h>
 #include <jansson.h>
+#include <limits.h>
 #include <math.h>
 #include <stdatomic.h>
 #include <stdio.h>
@@ -36,8 +37,10 @@
 #define SRV_MIN_PERIOD (1.0 / 30)
 #define SRV_JPEG_MOVING 60
 #define SRV_JPEG_STILL 90
-/* Chunks a progressive frame of a file out of core may read. */
+/* Chunks a progressive frame of a file out of core may read, and the steps
+ * of a still frame before the converged one. */
 #define SRV_PROGRESSIVE_CHUNKS 64
+#define SRV_PROGRESSIVE_STEPS 32
 
 struct srv_session {
     srv_server *srv;
@@ -388,30 +391,43 @@ int
 srv_open_world(const srv_server *srv, const char *path, vv_world **out, char *why, size_t cap) {
     static const cli_opt_spec specs[] = {CLI_RENDER_OPT_SPECS};
     char mem[32];
-    char *argv[8];
+    char *argv[12];
     int argc = 0;
     argv[argc++] = "serve";
     argv[argc++] = (char *)path;
     argv[argc++] = "-o";
     argv[argc++] = "-";
     argv[argc++] = "-q";
+    int ooc = argc;
     if (srv->memory_limit) {
+        /* out of core: a pyramid by its levels, level of detail by screen-space error */
         snprintf(mem, sizeof mem, "%llu", (unsigned long long)srv->memory_limit);
         argv[argc++] = "--memory-limit";
         argv[argc++] = mem;
+        argv[argc++] = "--lod";
+        argv[argc++] = "1";
     }
     argv[argc] = NULL;
     pthread_mutex_lock(&open_lock);
     cli_errors_quiet(1);
     cli_args a;
     cli_render_args r;
-    memset(&r, 0, sizeof r);
     *out = NULL;
-    int rc = cli_parse(&a, "serve", specs, (int)(sizeof specs / sizeof specs[0]), argc, argv);
-    if (!rc)
-        rc = cli_render_parse(&a, &r);
-    if (!rc)
-        rc = cli_render_world(&r, out);
+    int rc = 0;
+    for (int tries = 0; tries < 2; tries++) {
+        memset(&r, 0, sizeof r);
+        rc = cli_parse(&a, "serve", specs, (int)(sizeof specs / sizeof specs[0]), argc, argv);
+        if (!rc)
+            rc = cli_render_parse(&a, &r);
+        if (!rc)
+            rc = cli_render_world(&r, out);
+        /* a file that cannot be read out of core (a gzip NRRD) is read whole, into
+         * memory, as `volvis render` without --memory-limit reads it */
+        if (!rc || argc == ooc || !strstr(cli_last_error(), "cannot be read out of core"))
+            break;
+        argc = ooc;
+        argv[argc] = NULL;
+    }
     if (rc)
         snprintf(why, cap, "%s", *cli_last_error() ? cli_last_error() : "cannot open the file");
     cli_errors_quiet(0);
@@ -527,14 +543,18 @@ ensure_preview(srv_session *s, const vv_world *w) {
 }
 
 /*
- * Draws @p w as @p kind into a new image (*out). Full frames of a World
- * out of core are converged (every chunk the view wants read), as `volvis
- * render` draws them; previews draw what is resident.
+ * Draws @p w as @p kind into a new image (*out). A World out of core is
+ * drawn from what is resident plus at most @p progressive chunks read now
+ * (its nodes still drawn coarser than their level in *pending), or with
+ * @p progressive 0 converged (every chunk the view wants read), as `volvis
+ * render` draws it. A World in memory ignores both.
  */
 static vv_status
 draw(srv_session *s, const vv_world *w, vv_preview_kind kind, uint64_t gen, int cancellable,
-     vv_image **out) {
+     int progressive, int *pending, vv_image **out) {
     *out = NULL;
+    if (pending)
+        *pending = 0;
     vv_status st = ensure_preview(s, w);
     if (st != VV_OK)
         return st;
@@ -567,9 +587,9 @@ draw(srv_session *s, const vv_world *w, vv_preview_kind kind, uint64_t gen, int 
     ro.progress.user = &cc;
     vv_lod lod;
     vv_lod_init(&lod);
-    if (kind != VV_PREVIEW_FULL) {
+    if (progressive > 0) {
         lod.progressive = 1;
-        lod.load_budget = SRV_PROGRESSIVE_CHUNKS;
+        lod.load_budget = progressive;
     }
     ro.lod = &lod;
     vv_error_clear();
@@ -578,6 +598,8 @@ draw(srv_session *s, const vv_world *w, vv_preview_kind kind, uint64_t gen, int 
         vv_image_free(img);
         return st;
     }
+    if (pending)
+        *pending = lod.pending;
     *out = img;
     return VV_OK;
 }
@@ -622,7 +644,7 @@ pixels(srv_session *s, const vv_image *img) {
 
 /* Encodes @p img as a FRME and makes it the session's newest frame. */
 static void
-publish(srv_session *s, const vv_image *img, vv_preview_kind kind, long long input_seq,
+publish(srv_session *s, const vv_image *img, vv_preview_kind kind, int sharp, long long input_seq,
         double render_s) {
     int quality = kind == VV_PREVIEW_FULL ? SRV_JPEG_STILL : SRV_JPEG_MOVING;
     double t0 = now_s();
@@ -643,8 +665,8 @@ publish(srv_session *s, const vv_image *img, vv_preview_kind kind, long long inp
              "{\"seq\":%llu,\"input_seq\":%lld,\"kind\":\"%s\",\"sharp\":%s,\"width\":%d,"
              "\"height\":%d,\"render_ms\":%.2f,\"encode_ms\":%.2f,\"quality\":%d}",
              (unsigned long long)(s->frame_seq + 1), input_seq, vv_preview_kind_name(kind),
-             kind == VV_PREVIEW_FULL ? "true" : "false", img->width, img->height, render_s * 1e3,
-             encode_s * 1e3, quality);
+             sharp ? "true" : "false", img->width, img->height, render_s * 1e3, encode_s * 1e3,
+             quality);
     srv_buf *b = srv_buf_binary("FRME", header, jpeg, size);
     if (b) {
         srv_buf_unref(s->frame);
@@ -705,7 +727,7 @@ thumbnail(srv_session *s, const vv_world *base, const char *name, int size, uint
     w->view.width = size;
     w->view.height = size;
     vv_image *img = NULL;
-    if (draw(s, w, VV_PREVIEW_FULL, 0, 0, &img) == VV_OK) {
+    if (draw(s, w, VV_PREVIEW_FULL, 0, 0, 0, NULL, &img) == VV_OK) {
         const uint8_t *rgbx = pixels(s, img);
         unsigned char *jpeg = NULL;
         unsigned long jn = 0;
@@ -802,21 +824,38 @@ render_main(void *arg) {
             vv_status st = vv_world_clone(&snap, w);
             pthread_mutex_unlock(&s->lock);
             vv_image *img = NULL;
-            double t0 = now_s();
-            if (st == VV_OK)
-                st = draw(s, snap, kind, gen, kind == VV_PREVIEW_FULL, &img);
-            double secs = now_s() - t0;
-            if (st == VV_OK) {
+            /* out of core, the still frame comes in progressive steps, each sent, until
+             * nothing is pending: the converged frame is the sharp one */
+            int steps = kind == VV_PREVIEW_FULL && s->srv->ranks == 1 && st == VV_OK &&
+                        cli_world_out_of_core(snap);
+            for (int pending = 1, k = 0; st == VV_OK; k++) {
+                double t0 = now_s();
+                /* after SRV_PROGRESSIVE_STEPS steps (a cache too small for the view
+                 * stalls them), the converged frame at once */
+                int last = steps && k == SRV_PROGRESSIVE_STEPS;
+                st = draw(s, snap, kind, gen, kind == VV_PREVIEW_FULL,
+                          kind != VV_PREVIEW_FULL || (steps && !last) ? SRV_PROGRESSIVE_CHUNKS : 0,
+                          &pending, &img);
+                double secs = now_s() - t0;
+                if (st != VV_OK)
+                    break;
                 if (kind != VV_PREVIEW_FULL && !vv_preview_last_warmup(s->preview))
                     vv_preview_policy_record(&s->policy, kind, secs);
-                publish(s, img, kind, seq, secs);
-                if (kind == VV_PREVIEW_FULL) {
-                    vv_image_free(s->full);
-                    s->full = img;
-                    s->full_gen = gen;
-                    img = NULL;
-                }
-            } else if (st != VV_ERR_CANCELLED) {
+                int sharp = kind == VV_PREVIEW_FULL && (!steps || pending == 0 || last);
+                publish(s, img, kind, sharp, seq, secs);
+                if (kind != VV_PREVIEW_FULL || sharp)
+                    break;
+                vv_image_free(img);
+                img = NULL;
+                if (cancel_cb(&(cancel_ctx){s, gen, 1}, 0))
+                    st = VV_ERR_CANCELLED;
+            }
+            if (st == VV_OK && kind == VV_PREVIEW_FULL) {
+                vv_image_free(s->full);
+                s->full = img;
+                s->full_gen = gen;
+                img = NULL;
+            } else if (st != VV_OK && st != VV_ERR_CANCELLED) {
                 pthread_mutex_lock(&s->lock);
                 reply_error(s, 0, "render: %s", vv_error_message());
                 pthread_mutex_unlock(&s->lock);
@@ -841,7 +880,7 @@ render_main(void *arg) {
             pthread_mutex_unlock(&s->lock);
             if (!fresh && st == VV_OK) {
                 vv_image *img = NULL;
-                st = draw(s, snap, VV_PREVIEW_FULL, gen, 0, &img);
+                st = draw(s, snap, VV_PREVIEW_FULL, gen, 0, 0, NULL, &img);
                 if (st == VV_OK) {
                     vv_image_free(s->full);
                     s->full = img;
@@ -1141,8 +1180,12 @@ send_listing(srv_session *s, srv_client *c, const srv_msg *m) {
             continue;
         if (!S_ISDIR(st.st_mode) && !S_ISREG(st.st_mode))
             continue;
-        json_t *it = json_pack("{s:s, s:b, s:I}", "name", e->d_name, "dir", S_ISDIR(st.st_mode),
-                               "size", (json_int_t)st.st_size);
+        char sub[PATH_MAX + 300];
+        snprintf(sub, sizeof sub, "%s/%s", full, e->d_name);
+        int store = S_ISDIR(st.st_mode) && srv_folder_is_store(sub);
+        json_t *it = json_pack("{s:s, s:b, s:I, s:b}", "name", e->d_name, "dir",
+                               S_ISDIR(st.st_mode) && !store, "size", (json_int_t)st.st_size,
+                               "store", store);
         if (it)
             items[n++] = it;
     }
