@@ -514,6 +514,9 @@ cli_serve_main(int argc, char **argv) {
         return cli_usage_error(&a, "expected at most one FILE, SCENE or FOLDER, got %d", a.n_pos);
     memset(&server, 0, sizeof server);
     pthread_mutex_init(&server.lock, NULL);
+    /* a remote user chooses the files: every parser, our own too, reads them in the
+     * reader sandbox (docs/security.md), unless the environment says otherwise */
+    setenv("VOLVIS_SANDBOX", "all", 0);
     int port = 8765;
     const char *s;
     if ((s = cli_get(&a, "port")) && (rc = cli_parse_int(&a, "port", s, 0, 65535, &port)))
