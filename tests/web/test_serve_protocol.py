@@ -14,12 +14,15 @@ Checks, each on the real binary:
     frames;
   - --shared: two clients see the same frames, and either steers the view;
   - one thumbnail a preset; a listing marks the Zarr store; a refused open
-    or save answers an error and keeps the connection.
+    or save answers an error and keeps the connection;
+  - --cert/--key (a self-signed certificate made with openssl): HTTPS answers
+    200 with the token and 403 without, and a frame arrives over WSS.
 
 usage: test_serve_protocol.py VOLVIS_BINARY DATA_DIR
 Exits 77 (skipped) when python3-websockets or PIL is missing.
 """
-import asyncio, json, os, shutil, struct, subprocess, sys, tempfile, time
+import asyncio, json, os, shutil, ssl, struct, subprocess, sys, tempfile, time
+import urllib.error, urllib.request
 
 SKIP = 77
 try:
@@ -49,9 +52,11 @@ class Server:
             raise SystemExit(f"server did not start: {cmd}\n{self.log.read()}")
         self.base, self.token = line.split("/?token=")
 
-    def connect(self):
+    def connect(self, context=None):
         host = self.base.split("//", 1)[1]
-        return websockets.connect(f"ws://{host}/ws", subprotocols=["volvis"], origin=self.base,
+        scheme = "wss" if context else "ws"
+        return websockets.connect(f"{scheme}://{host}/ws", subprotocols=["volvis"],
+                                  origin=self.base, ssl=context,
                                   extra_headers={"Cookie": "volvis_token=" + self.token},
                                   max_size=1 << 27)
 
@@ -265,11 +270,41 @@ def main():
         finally:
             srv.stop()
 
+    def tls():
+        if not shutil.which("openssl"):
+            raise AssertionError("openssl is missing")
+        key, cert = os.path.join(tmp, "key.pem"), os.path.join(tmp, "cert.pem")
+        subprocess.run(["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-keyout",
+                        key, "-out", cert, "-days", "2", "-subj", "/CN=localhost"], check=True,
+                       capture_output=True)
+        srv = Server(["--cert", cert, "--key", key, head])
+        try:
+            assert srv.base.startswith("https://"), srv.base
+            ctx = ssl.create_default_context()
+            ctx.check_hostname = False
+            ctx.verify_mode = ssl.CERT_NONE
+            r = urllib.request.urlopen(srv.base + "/?token=" + srv.token, context=ctx)
+            assert r.status == 200 and "HttpOnly" in r.headers["Set-Cookie"]
+            try:
+                urllib.request.urlopen(srv.base + "/", context=ctx)
+                raise AssertionError("no 403 without the token over HTTPS")
+            except urllib.error.HTTPError as e:
+                assert e.code == 403, e.code
+
+            async def run():
+                async with srv.connect(ctx) as ws:
+                    await ws.send(json.dumps({"type": "hello", "width": 64, "height": 64}))
+                    await until(ws, sharp, "a frame over WSS")
+            asyncio.run(run())
+        finally:
+            srv.stop()
+
     check("drag and PNG in memory equal volvis render of the saved session", in_memory)
     check("out of core: progressive still frames, PNG equals volvis render", out_of_core)
     check("mpirun -n 2: the PNG within 2 levels of one process", mpi)
     check("--shared: two clients, one view", shared_session)
     check("thumbnails, the listing's store, refusals keep the connection", thumbnails_listing_errors)
+    check("--cert/--key: HTTPS, 403 without the token, frames over WSS", tls)
     if failures == 0:
         shutil.rmtree(tmp, ignore_errors=True)
     else:
