@@ -184,6 +184,8 @@ int srv_session_handle(srv_session *s, srv_client *c, const srv_msg *m);
  * owns one reference. Service thread.
  */
 srv_buf *srv_session_next_out(srv_session *s, srv_client *c);
+/** The close code set for @p c (0 none) and its reason, read under the session's lock. */
+int srv_session_close_code(srv_session *s, srv_client *c, char *reason, size_t cap);
 /** 1 when @p c has something to send. */
 int srv_session_has_out(srv_session *s, srv_client *c);
 

@@ -405,8 +405,9 @@ callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in
     case LWS_CALLBACK_SERVER_WRITEABLE: {
         if (!c || !c->session)
             return -1;
-        if (c->close_code) {
-            close_with(wsi, c, c->close_code, c->close_reason);
+        int code = srv_session_close_code(c->session, c, why, sizeof why);
+        if (code) {
+            close_with(wsi, c, code, why);
             return -1;
         }
         srv_buf *b = srv_session_next_out(c->session, c);

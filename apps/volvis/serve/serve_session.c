@@ -1039,6 +1039,16 @@ srv_session_next_out(srv_session *s, srv_client *c) {
 }
 
 int
+srv_session_close_code(srv_session *s, srv_client *c, char *reason, size_t cap) {
+    pthread_mutex_lock(&s->lock);
+    int code = c->close_code;
+    if (code)
+        snprintf(reason, cap, "%s", c->close_reason);
+    pthread_mutex_unlock(&s->lock);
+    return code;
+}
+
+int
 srv_session_has_out(srv_session *s, srv_client *c) {
     pthread_mutex_lock(&s->lock);
     int r = c->n_queue > 0 || (s->frame && s->frame_seq > c->sent_frame) || c->close_code;
