@@ -197,6 +197,9 @@ int srv_session_has_out(srv_session *s, srv_client *c);
  */
 int srv_open_world(const srv_server *srv, const char *path, vv_world **out, char *why, size_t cap);
 
+/** The World's first volume object with voxels (its data: slices, presets, state), or NULL. */
+vv_object *srv_first_volume(const vv_world *w);
+
 /* ---- MPI (serve_mpi.c): rank 0 serves, every rank renders every frame ---------------- */
 
 typedef struct srv_mpi_job srv_mpi_job;

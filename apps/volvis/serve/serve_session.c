@@ -231,23 +231,12 @@ reply_error(srv_session *s, uint64_t to, const char *fmt, ...) {
 
 /* ---- the World ------------------------------------------------------------------------- */
 
-static vv_object *
-first_volume(const vv_world *w) {
+vv_object *
+srv_first_volume(const vv_world *w) {
     for (int i = 0; w && i < w->n_objects; i++)
         if (w->objects[i]->type == VV_OBJECT_VOLUME && w->objects[i]->volume)
             return w->objects[i];
     return NULL;
-}
-
-static const char *
-length_unit(const vv_volume *v) {
-    if (!v)
-        return "units";
-    if (v->unit != VV_UNIT_UNKNOWN)
-        return vv_unit_name(v->unit);
-    if (v->spacing[0] == 1 && v->spacing[1] == 1 && v->spacing[2] == 1)
-        return "voxel units";
-    return "units";
 }
 
 /* A guess of the voxels' unit: CT in Hounsfield units (as the CT presets take them). */
@@ -333,7 +322,7 @@ channel_color(const vv_channel *ch, char out[8]) {
 static json_t *
 state_json(srv_session *s) {
     const vv_world *w = s->world;
-    const vv_object *o = first_volume(w);
+    const vv_object *o = srv_first_volume(w);
     const vv_volume *v = o ? o->volume : NULL;
     json_t *presets = json_array();
     for (const char *const *p = vv_tf_preset_names(); *p; p++)
@@ -361,7 +350,7 @@ state_json(srv_session *s) {
         json_object_set_new(st, "dims", json_pack("[i, i, i]", v->dims[0], v->dims[1], v->dims[2]));
         json_object_set_new(st, "spacing",
                             json_pack("[f, f, f]", v->spacing[0], v->spacing[1], v->spacing[2]));
-        json_object_set_new(st, "unit", json_string(length_unit(v)));
+        json_object_set_new(st, "unit", json_string(vv_volume_length_unit(v)));
         json_object_set_new(st, "value_unit", json_string(value_unit(v)));
         json_object_set_new(st, "range", json_pack("[f, f]", v->range[0], v->range[1]));
         json_object_set_new(st, "window", json_real(s->window));
@@ -474,7 +463,7 @@ do_open(srv_session *s, const char *path, uint64_t client) {
         return;
     }
     double win = 1, lev = 0;
-    vv_object *o = first_volume(w);
+    vv_object *o = srv_first_volume(w);
     if (o)
         vv_slice_auto_window(o->volume, &win, &lev);
     open_time_steps(s, path, o);
@@ -788,7 +777,7 @@ render_main(void *arg) {
         if (w && s->time_pending >= 0) {
             int t = s->time_pending;
             s->time_pending = -1;
-            vv_object *o = first_volume(w);
+            vv_object *o = srv_first_volume(w);
             if (o && s->time_steps > 1 && t < s->time_steps) {
                 vv_error_clear();
                 vv_status st =
@@ -1067,7 +1056,7 @@ changed(srv_session *s) {
 /* The slice image of @p m for client @p c (service thread, under lock). */
 static void
 send_slice(srv_session *s, srv_client *c, const srv_msg *m) {
-    const vv_object *o = first_volume(s->world);
+    const vv_object *o = srv_first_volume(s->world);
     if (!o) {
         reply_error(s, c->id, "slice: no volume is open");
         return;
@@ -1131,7 +1120,7 @@ send_slice(srv_session *s, srv_client *c, const srv_msg *m) {
 
 static void
 send_probe(srv_session *s, srv_client *c, const srv_msg *m) {
-    const vv_object *o = first_volume(s->world);
+    const vv_object *o = srv_first_volume(s->world);
     vv_slice_plane pl;
     int count = 0;
     if (!o || slice_plane(o, m->axis, m->index, m->width, m->height, &pl, &count)) {
@@ -1144,7 +1133,7 @@ send_probe(srv_session *s, srv_client *c, const srv_msg *m) {
     json_t *r = json_pack("{s:s, s:s, s:f, s:f, s:s, s:[f, f, f], s:[f, f, f], s:s}", "type",
                           "probe", "axis", vv_slice_axis_name(m->axis), "x", m->x, "y", m->y,
                           "value_unit", value_unit(o->volume), "ijk", ijk[0], ijk[1], ijk[2],
-                          "world", p.x, p.y, p.z, "unit", length_unit(o->volume));
+                          "world", p.x, p.y, p.z, "unit", vv_volume_length_unit(o->volume));
     json_object_set_new(r, "value", isnan(v) ? json_null() : json_real(v));
     json_t *idx = json_object();
     static const vv_slice_axis axes[] = {VV_SLICE_AXIAL, VV_SLICE_CORONAL, VV_SLICE_SAGITTAL};
@@ -1332,7 +1321,7 @@ srv_session_handle(srv_session *s, srv_client *c, const srv_msg *m) {
         break;
     }
     case SRV_CHANNEL: {
-        vv_object *o = first_volume(w);
+        vv_object *o = srv_first_volume(w);
         if (!o || m->index >= o->n_channels) {
             reply_error(s, c->id, "channel %d: the object has no such channel", m->index);
             break;
