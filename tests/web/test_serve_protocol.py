@@ -15,6 +15,9 @@ Checks, each on the real binary:
   - --shared: two clients see the same frames, and either steers the view;
   - one thumbnail a preset; a listing marks the Zarr store; a refused open
     or save answers an error and keeps the connection;
+  - a 3-channel OME-TIFF (tifffile) shows its 3 channels, and hiding one or
+    changing its colour changes the frame; a 4-D NIfTI of 3 time steps
+    (nibabel) has the time slider's 3 steps, and a step changes the frame;
   - --cert/--key (a self-signed certificate made with openssl): HTTPS answers
     200 with the token and 403 without, and a frame arrives over WSS.
 
@@ -270,6 +273,60 @@ def main():
         finally:
             srv.stop()
 
+    def channels_and_time():
+        try:
+            import tifffile
+            import nibabel as nib
+        except ImportError as e:
+            raise AssertionError(f"{e} (python3-tifffile, python3-nibabel)")
+        z, y, x = np.mgrid[0:24, 0:32, 0:72]
+        balls = [(((x - cx) ** 2 + (y - 16) ** 2 + (z - 12) ** 2 <= 64) * 900 + 40)
+                 .astype(np.uint16) for cx in (14, 36, 58)]
+        tifffile.imwrite(os.path.join(root, "cells.ome.tif"), np.stack(balls), ome=True,
+                         metadata={"axes": "CZYX", "Channel": {"Name": ["a", "b", "c"]}})
+        steps = np.stack([(((x - 20 - 12 * t) ** 2 + (y - 16) ** 2 + (z - 12) ** 2 <= 64) *
+                           200.0).astype(np.float32) for t in range(3)], axis=-1)
+        nib.save(nib.Nifti1Image(steps.transpose(2, 1, 0, 3), np.eye(4)),
+                 os.path.join(root, "moving.nii.gz"))
+
+        async def frame_after(ws, msg):
+            """The sharp frame after @msg, and the last state sent before it."""
+            await ws.send(json.dumps(msg))
+            seen = {}
+
+            def keep(k, h, p):
+                if k == "TEXT" and h["type"] == "state":
+                    seen["state"] = h
+                return sharp(k, h, p)
+            k, h, p = await until(ws, keep, f"the sharp frame after {msg['type']}")
+            return p, seen.get("state")
+
+        srv = Server(["--root", root, os.path.join(root, "cells.ome.tif")])
+        try:
+            async def run():
+                async with srv.connect() as ws:
+                    await ws.send(json.dumps({"type": "hello", "width": 128, "height": 96}))
+                    k, st, _ = await until(ws, lambda k, h, p: k == "TEXT" and
+                                           h["type"] == "state", "state")
+                    assert [c["name"] for c in st["channels"]] == ["a", "b", "c"], st["channels"]
+                    first = (await until(ws, sharp, "first frame"))[2]
+                    hidden, st = await frame_after(ws, {"type": "channel", "index": 1,
+                                                        "visible": False})
+                    assert hidden != first, "hiding a channel changed nothing"
+                    assert st and st["channels"][1]["visible"] is False, st
+                    recolored, st = await frame_after(ws, {"type": "channel", "index": 0,
+                                                           "color": "#00ff00"})
+                    assert recolored != hidden and st["channels"][0]["color"] == "#00ff00", st
+                    # the whole time series: open it in the same session
+                    t0, st = await frame_after(ws, {"type": "open", "path": "moving.nii.gz"})
+                    assert st and st["time_steps"] == 3 and st["name"] == "moving.nii.gz", st
+                    t2, st = await frame_after(ws, {"type": "time", "step": 2})
+                    assert t2 != t0, "time step 2 looks like step 0"
+                    assert st and st["time"] == 2, st
+            asyncio.run(run())
+        finally:
+            srv.stop()
+
     def tls():
         if not shutil.which("openssl"):
             raise AssertionError("openssl is missing")
@@ -304,6 +361,7 @@ def main():
     check("mpirun -n 2: the PNG within 2 levels of one process", mpi)
     check("--shared: two clients, one view", shared_session)
     check("thumbnails, the listing's store, refusals keep the connection", thumbnails_listing_errors)
+    check("channels (OME-TIFF) and time steps (4-D NIfTI)", channels_and_time)
     check("--cert/--key: HTTPS, 403 without the token, frames over WSS", tls)
     if failures == 0:
         shutil.rmtree(tmp, ignore_errors=True)

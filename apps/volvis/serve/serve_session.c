@@ -402,20 +402,37 @@ srv_open_world(const srv_server *srv, const char *path, vv_world **out, char *wh
     cli_args a;
     cli_render_args r;
     *out = NULL;
-    int rc = 0;
-    for (int tries = 0; tries < 2; tries++) {
+    int rc = 0, channels = 1;
+    char list[8 * VV_MAX_CHANNELS];
+    for (int tries = 0; tries < 3; tries++) {
         memset(&r, 0, sizeof r);
         rc = cli_parse(&a, "serve", specs, (int)(sizeof specs / sizeof specs[0]), argc, argv);
         if (!rc)
             rc = cli_render_parse(&a, &r);
+        r.file_channels = &channels;
         if (!rc)
             rc = cli_render_world(&r, out);
         /* a file that cannot be read out of core (a gzip NRRD) is read whole, into
          * memory, as `volvis render` without --memory-limit reads it */
-        if (!rc || argc == ooc || !strstr(cli_last_error(), "cannot be read out of core"))
-            break;
-        argc = ooc;
-        argv[argc] = NULL;
+        if (rc && argc > ooc && strstr(cli_last_error(), "cannot be read out of core")) {
+            argc = ooc;
+            argv[argc] = NULL;
+            continue;
+        }
+        /* a file of several channels: all of them, as one object (`--channels 0,1,...`) */
+        if (!rc && channels > 1 && channels <= VV_MAX_CHANNELS && argc <= ooc &&
+            srv_first_volume(*out) && srv_first_volume(*out)->n_channels == 0) {
+            size_t k = 0;
+            for (int c = 0; c < channels; c++)
+                k += (size_t)snprintf(list + k, sizeof list - k, c ? ",%d" : "%d", c);
+            vv_world_free(*out);
+            *out = NULL;
+            argv[argc++] = "--channels";
+            argv[argc++] = list;
+            argv[argc] = NULL;
+            continue;
+        }
+        break;
     }
     if (rc)
         snprintf(why, cap, "%s", *cli_last_error() ? cli_last_error() : "cannot open the file");
