@@ -147,13 +147,7 @@ vvg_action_button(const char *label, const char *action) {
 
 const char *
 vvg_unit_label(const vv_volume *v) {
-    if (!v)
-        return "units";
-    if (v->unit != VV_UNIT_UNKNOWN)
-        return vv_unit_name(v->unit);
-    if (v->spacing[0] == 1 && v->spacing[1] == 1 && v->spacing[2] == 1)
-        return "voxel units";
-    return "units";
+    return vv_volume_length_unit(v);
 }
 
 void

@@ -229,6 +229,9 @@ typedef struct cli_render_args {
     int has_lod;           /**< --lod given: a pyramid by level of detail */
     double lod;            /**< --lod: pixels a voxel may cover (default 1) */
     int progressive;       /**< --progressive CHUNKS: chunks read a step (0: not given) */
+    /** Out, when not NULL: the channels of a volume file cli_render_world opened (1 for a
+        scene, a grid or a file of one; `volvis serve` shows them all). */
+    int *file_channels;
 } cli_render_args;
 
 /** Parses the shared options of @p a (one INPUT, -o); 0 or a usage error. */

@@ -568,6 +568,8 @@ world_for_file(const cli_render_args *r, vv_world **out) {
                   r->input);
         return CLI_EXIT_USAGE;
     }
+    if (r->file_channels)
+        *r->file_channels = od.info.n_channels > 1 ? od.info.n_channels : 1;
     rc = cli_render_world_source(r, od.source, out);
     vv_opened_clear(&od); /* the World holds its own reference */
     if (!rc && r->has_time)

@@ -114,6 +114,13 @@ typedef struct vv_volume {
 const char *vv_unit_name(vv_unit u);
 
 /**
+ * The word to print after a length of @p v: its unit's short name when
+ * known, "voxel units" for a volume of unknown unit and unit spacing,
+ * else "units" (also for NULL). Static storage; reentrant.
+ */
+const char *vv_volume_length_unit(const vv_volume *v);
+
+/**
  * Parses a unit name: the short names of vv_unit_name and the usual long
  * forms ("millimeter(s)", "micron(s)", "micrometer(s)", "µm" with the micro
  * sign or the Greek mu, "inch(es)", "foot", "feet", "meter(s)"). Anything

@@ -34,6 +34,17 @@ vv_unit_name(vv_unit u) {
     return (unsigned)u < 5 ? names[u] : "unknown";
 }
 
+const char *
+vv_volume_length_unit(const vv_volume *v) {
+    if (!v)
+        return "units";
+    if (v->unit != VV_UNIT_UNKNOWN)
+        return vv_unit_name(v->unit);
+    if (v->spacing[0] == 1 && v->spacing[1] == 1 && v->spacing[2] == 1)
+        return "voxel units";
+    return "units";
+}
+
 vv_unit
 vv_unit_parse(const char *u) {
     static const struct {

@@ -92,6 +92,13 @@ int srv_msg_parse(const char *text, size_t len, srv_msg *out, char *why, size_t 
 int srv_path_resolve(const char *root, const char *rel, int kind, char *out, size_t cap, char *why,
                      size_t why_cap);
 
+/**
+ * 1 when folder @p path holds one dataset rather than files to choose from:
+ * a Zarr store (a name ending in .zarr, or a .zgroup, .zarray or .zattrs in
+ * it). The file browser opens it rather than entering it.
+ */
+int srv_folder_is_store(const char *path);
+
 /* ---- buffers sent to clients ---------------------------------------------------------- */
 
 /** A message ready for lws_write: @p pre bytes of headroom, then @p len bytes. */
@@ -177,6 +184,8 @@ int srv_session_handle(srv_session *s, srv_client *c, const srv_msg *m);
  * owns one reference. Service thread.
  */
 srv_buf *srv_session_next_out(srv_session *s, srv_client *c);
+/** The close code set for @p c (0 none) and its reason, read under the session's lock. */
+int srv_session_close_code(srv_session *s, srv_client *c, char *reason, size_t cap);
 /** 1 when @p c has something to send. */
 int srv_session_has_out(srv_session *s, srv_client *c);
 
@@ -187,6 +196,9 @@ int srv_session_has_out(srv_session *s, srv_client *c);
  * one at a time (the CLI keeps its last error line in one buffer).
  */
 int srv_open_world(const srv_server *srv, const char *path, vv_world **out, char *why, size_t cap);
+
+/** The World's first volume object with voxels (its data: slices, presets, state), or NULL. */
+vv_object *srv_first_volume(const vv_world *w);
 
 /* ---- MPI (serve_mpi.c): rank 0 serves, every rank renders every frame ---------------- */
 

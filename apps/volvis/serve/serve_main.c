@@ -405,8 +405,9 @@ callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in
     case LWS_CALLBACK_SERVER_WRITEABLE: {
         if (!c || !c->session)
             return -1;
-        if (c->close_code) {
-            close_with(wsi, c, c->close_code, c->close_reason);
+        int code = srv_session_close_code(c->session, c, why, sizeof why);
+        if (code) {
+            close_with(wsi, c, code, why);
             return -1;
         }
         srv_buf *b = srv_session_next_out(c->session, c);
@@ -514,6 +515,9 @@ cli_serve_main(int argc, char **argv) {
         return cli_usage_error(&a, "expected at most one FILE, SCENE or FOLDER, got %d", a.n_pos);
     memset(&server, 0, sizeof server);
     pthread_mutex_init(&server.lock, NULL);
+    /* a remote user chooses the files: every parser, our own too, reads them in the
+     * reader sandbox (docs/security.md), unless the environment says otherwise */
+    setenv("VOLVIS_SANDBOX", "all", 0);
     int port = 8765;
     const char *s;
     if ((s = cli_get(&a, "port")) && (rc = cli_parse_int(&a, "port", s, 0, 65535, &port)))
@@ -548,7 +552,8 @@ cli_serve_main(int argc, char **argv) {
             cli_error("%s: %s", input, strerror(errno));
             return CLI_EXIT_FAIL;
         }
-        folder = S_ISDIR(st.st_mode) && !cli_get(&a, "root");
+        /* a folder that holds one dataset (an OME-Zarr store) opens; any other is the root */
+        folder = S_ISDIR(st.st_mode) && !srv_folder_is_store(real) && !cli_get(&a, "root");
     }
     const char *root = cli_get(&a, "root");
     char root_real[PATH_MAX];

@@ -58,14 +58,6 @@ static pthread_cond_t job_done = PTHREAD_COND_INITIALIZER;
 static srv_mpi_job *jobs, **jobs_tail = &jobs;
 static vv_parallel *par;
 
-static vv_object *
-volume_object(const vv_world *w) {
-    for (int i = 0; w && i < w->n_objects; i++)
-        if (w->objects[i]->type == VV_OBJECT_VOLUME && w->objects[i]->visible)
-            return w->objects[i];
-    return NULL;
-}
-
 vv_status
 srv_mpi_render(srv_server *srv, uint64_t session, const char *path, const vv_world *w,
                const vv_view *view, int quality, vv_image *out) {
@@ -102,7 +94,7 @@ render_frame(const mpi_frame *f, vv_world *w, vv_status local, vv_image *out) {
     if (s != VV_OK)
         return s;
     w->view = f->view;
-    vv_object *o = volume_object(w);
+    vv_object *o = srv_first_volume(w);
     if (o && f->has_object) {
         o->mode = f->mode;
         o->isovalue = f->isovalue;
@@ -154,7 +146,7 @@ srv_mpi_service(srv_server *srv) {
             f->session = (unsigned long long)j->session;
             snprintf(f->path, sizeof f->path, "%s", j->path);
             f->view = j->view;
-            const vv_object *o = volume_object(j->world);
+            const vv_object *o = srv_first_volume(j->world);
             if (o) {
                 f->has_object = 1;
                 f->mode = o->mode;

@@ -379,3 +379,21 @@ srv_path_resolve(const char *root, const char *rel, int kind, char *out, size_t 
         return fail(why, why_cap, "'%s': path too long", rel);
     return 0;
 }
+
+int
+srv_folder_is_store(const char *path) {
+    size_t n = strlen(path);
+    while (n > 1 && path[n - 1] == '/')
+        n--;
+    if (n >= 5 && strncmp(path + n - 5, ".zarr", 5) == 0)
+        return 1;
+    static const char *const marks[] = {".zgroup", ".zarray", ".zattrs"};
+    for (int i = 0; i < 3; i++) {
+        char p[PATH_MAX + 16];
+        struct stat st;
+        if ((size_t)snprintf(p, sizeof p, "%.*s/%s", (int)n, path, marks[i]) < sizeof p &&
+            stat(p, &st) == 0 && S_ISREG(st.st_mode))
+            return 1;
+    }
+    return 0;
+}

@@ -13,6 +13,7 @@
 #include <dirent.h>
 #include <errno.h>
 #include <jansson.h>
+#include <limits.h>
 #include <math.h>
 #include <stdatomic.h>
 #include <stdio.h>
@@ -36,8 +37,10 @@
 #define SRV_MIN_PERIOD (1.0 / 30)
 #define SRV_JPEG_MOVING 60
 #define SRV_JPEG_STILL 90
-/* Chunks a progressive frame of a file out of core may read. */
+/* Chunks a progressive frame of a file out of core may read, and the steps
+ * of a still frame before the converged one. */
 #define SRV_PROGRESSIVE_CHUNKS 64
+#define SRV_PROGRESSIVE_STEPS 32
 
 struct srv_session {
     srv_server *srv;
@@ -228,23 +231,12 @@ reply_error(srv_session *s, uint64_t to, const char *fmt, ...) {
 
 /* ---- the World ------------------------------------------------------------------------- */
 
-static vv_object *
-first_volume(const vv_world *w) {
+vv_object *
+srv_first_volume(const vv_world *w) {
     for (int i = 0; w && i < w->n_objects; i++)
         if (w->objects[i]->type == VV_OBJECT_VOLUME && w->objects[i]->volume)
             return w->objects[i];
     return NULL;
-}
-
-static const char *
-length_unit(const vv_volume *v) {
-    if (!v)
-        return "units";
-    if (v->unit != VV_UNIT_UNKNOWN)
-        return vv_unit_name(v->unit);
-    if (v->spacing[0] == 1 && v->spacing[1] == 1 && v->spacing[2] == 1)
-        return "voxel units";
-    return "units";
 }
 
 /* A guess of the voxels' unit: CT in Hounsfield units (as the CT presets take them). */
@@ -330,7 +322,7 @@ channel_color(const vv_channel *ch, char out[8]) {
 static json_t *
 state_json(srv_session *s) {
     const vv_world *w = s->world;
-    const vv_object *o = first_volume(w);
+    const vv_object *o = srv_first_volume(w);
     const vv_volume *v = o ? o->volume : NULL;
     json_t *presets = json_array();
     for (const char *const *p = vv_tf_preset_names(); *p; p++)
@@ -358,7 +350,7 @@ state_json(srv_session *s) {
         json_object_set_new(st, "dims", json_pack("[i, i, i]", v->dims[0], v->dims[1], v->dims[2]));
         json_object_set_new(st, "spacing",
                             json_pack("[f, f, f]", v->spacing[0], v->spacing[1], v->spacing[2]));
-        json_object_set_new(st, "unit", json_string(length_unit(v)));
+        json_object_set_new(st, "unit", json_string(vv_volume_length_unit(v)));
         json_object_set_new(st, "value_unit", json_string(value_unit(v)));
         json_object_set_new(st, "range", json_pack("[f, f]", v->range[0], v->range[1]));
         json_object_set_new(st, "window", json_real(s->window));
@@ -388,30 +380,60 @@ int
 srv_open_world(const srv_server *srv, const char *path, vv_world **out, char *why, size_t cap) {
     static const cli_opt_spec specs[] = {CLI_RENDER_OPT_SPECS};
     char mem[32];
-    char *argv[8];
+    char *argv[12];
     int argc = 0;
     argv[argc++] = "serve";
     argv[argc++] = (char *)path;
     argv[argc++] = "-o";
     argv[argc++] = "-";
     argv[argc++] = "-q";
+    int ooc = argc;
     if (srv->memory_limit) {
+        /* out of core: a pyramid by its levels, level of detail by screen-space error */
         snprintf(mem, sizeof mem, "%llu", (unsigned long long)srv->memory_limit);
         argv[argc++] = "--memory-limit";
         argv[argc++] = mem;
+        argv[argc++] = "--lod";
+        argv[argc++] = "1";
     }
     argv[argc] = NULL;
     pthread_mutex_lock(&open_lock);
     cli_errors_quiet(1);
     cli_args a;
     cli_render_args r;
-    memset(&r, 0, sizeof r);
     *out = NULL;
-    int rc = cli_parse(&a, "serve", specs, (int)(sizeof specs / sizeof specs[0]), argc, argv);
-    if (!rc)
-        rc = cli_render_parse(&a, &r);
-    if (!rc)
-        rc = cli_render_world(&r, out);
+    int rc = 0, channels = 1;
+    char list[8 * VV_MAX_CHANNELS];
+    for (int tries = 0; tries < 3; tries++) {
+        memset(&r, 0, sizeof r);
+        rc = cli_parse(&a, "serve", specs, (int)(sizeof specs / sizeof specs[0]), argc, argv);
+        if (!rc)
+            rc = cli_render_parse(&a, &r);
+        r.file_channels = &channels;
+        if (!rc)
+            rc = cli_render_world(&r, out);
+        /* a file that cannot be read out of core (a gzip NRRD) is read whole, into
+         * memory, as `volvis render` without --memory-limit reads it */
+        if (rc && argc > ooc && strstr(cli_last_error(), "cannot be read out of core")) {
+            argc = ooc;
+            argv[argc] = NULL;
+            continue;
+        }
+        /* a file of several channels: all of them, as one object (`--channels 0,1,...`) */
+        if (!rc && channels > 1 && channels <= VV_MAX_CHANNELS && argc <= ooc &&
+            srv_first_volume(*out) && srv_first_volume(*out)->n_channels == 0) {
+            size_t k = 0;
+            for (int c = 0; c < channels; c++)
+                k += (size_t)snprintf(list + k, sizeof list - k, c ? ",%d" : "%d", c);
+            vv_world_free(*out);
+            *out = NULL;
+            argv[argc++] = "--channels";
+            argv[argc++] = list;
+            argv[argc] = NULL;
+            continue;
+        }
+        break;
+    }
     if (rc)
         snprintf(why, cap, "%s", *cli_last_error() ? cli_last_error() : "cannot open the file");
     cli_errors_quiet(0);
@@ -458,7 +480,7 @@ do_open(srv_session *s, const char *path, uint64_t client) {
         return;
     }
     double win = 1, lev = 0;
-    vv_object *o = first_volume(w);
+    vv_object *o = srv_first_volume(w);
     if (o)
         vv_slice_auto_window(o->volume, &win, &lev);
     open_time_steps(s, path, o);
@@ -527,14 +549,18 @@ ensure_preview(srv_session *s, const vv_world *w) {
 }
 
 /*
- * Draws @p w as @p kind into a new image (*out). Full frames of a World
- * out of core are converged (every chunk the view wants read), as `volvis
- * render` draws them; previews draw what is resident.
+ * Draws @p w as @p kind into a new image (*out). A World out of core is
+ * drawn from what is resident plus at most @p progressive chunks read now
+ * (its nodes still drawn coarser than their level in *pending), or with
+ * @p progressive 0 converged (every chunk the view wants read), as `volvis
+ * render` draws it. A World in memory ignores both.
  */
 static vv_status
 draw(srv_session *s, const vv_world *w, vv_preview_kind kind, uint64_t gen, int cancellable,
-     vv_image **out) {
+     int progressive, int *pending, vv_image **out) {
     *out = NULL;
+    if (pending)
+        *pending = 0;
     vv_status st = ensure_preview(s, w);
     if (st != VV_OK)
         return st;
@@ -567,9 +593,9 @@ draw(srv_session *s, const vv_world *w, vv_preview_kind kind, uint64_t gen, int 
     ro.progress.user = &cc;
     vv_lod lod;
     vv_lod_init(&lod);
-    if (kind != VV_PREVIEW_FULL) {
+    if (progressive > 0) {
         lod.progressive = 1;
-        lod.load_budget = SRV_PROGRESSIVE_CHUNKS;
+        lod.load_budget = progressive;
     }
     ro.lod = &lod;
     vv_error_clear();
@@ -578,6 +604,8 @@ draw(srv_session *s, const vv_world *w, vv_preview_kind kind, uint64_t gen, int 
         vv_image_free(img);
         return st;
     }
+    if (pending)
+        *pending = lod.pending;
     *out = img;
     return VV_OK;
 }
@@ -622,7 +650,7 @@ pixels(srv_session *s, const vv_image *img) {
 
 /* Encodes @p img as a FRME and makes it the session's newest frame. */
 static void
-publish(srv_session *s, const vv_image *img, vv_preview_kind kind, long long input_seq,
+publish(srv_session *s, const vv_image *img, vv_preview_kind kind, int sharp, long long input_seq,
         double render_s) {
     int quality = kind == VV_PREVIEW_FULL ? SRV_JPEG_STILL : SRV_JPEG_MOVING;
     double t0 = now_s();
@@ -643,8 +671,8 @@ publish(srv_session *s, const vv_image *img, vv_preview_kind kind, long long inp
              "{\"seq\":%llu,\"input_seq\":%lld,\"kind\":\"%s\",\"sharp\":%s,\"width\":%d,"
              "\"height\":%d,\"render_ms\":%.2f,\"encode_ms\":%.2f,\"quality\":%d}",
              (unsigned long long)(s->frame_seq + 1), input_seq, vv_preview_kind_name(kind),
-             kind == VV_PREVIEW_FULL ? "true" : "false", img->width, img->height, render_s * 1e3,
-             encode_s * 1e3, quality);
+             sharp ? "true" : "false", img->width, img->height, render_s * 1e3, encode_s * 1e3,
+             quality);
     srv_buf *b = srv_buf_binary("FRME", header, jpeg, size);
     if (b) {
         srv_buf_unref(s->frame);
@@ -705,7 +733,7 @@ thumbnail(srv_session *s, const vv_world *base, const char *name, int size, uint
     w->view.width = size;
     w->view.height = size;
     vv_image *img = NULL;
-    if (draw(s, w, VV_PREVIEW_FULL, 0, 0, &img) == VV_OK) {
+    if (draw(s, w, VV_PREVIEW_FULL, 0, 0, 0, NULL, &img) == VV_OK) {
         const uint8_t *rgbx = pixels(s, img);
         unsigned char *jpeg = NULL;
         unsigned long jn = 0;
@@ -766,7 +794,7 @@ render_main(void *arg) {
         if (w && s->time_pending >= 0) {
             int t = s->time_pending;
             s->time_pending = -1;
-            vv_object *o = first_volume(w);
+            vv_object *o = srv_first_volume(w);
             if (o && s->time_steps > 1 && t < s->time_steps) {
                 vv_error_clear();
                 vv_status st =
@@ -802,21 +830,38 @@ render_main(void *arg) {
             vv_status st = vv_world_clone(&snap, w);
             pthread_mutex_unlock(&s->lock);
             vv_image *img = NULL;
-            double t0 = now_s();
-            if (st == VV_OK)
-                st = draw(s, snap, kind, gen, kind == VV_PREVIEW_FULL, &img);
-            double secs = now_s() - t0;
-            if (st == VV_OK) {
+            /* out of core, the still frame comes in progressive steps, each sent, until
+             * nothing is pending: the converged frame is the sharp one */
+            int steps = kind == VV_PREVIEW_FULL && s->srv->ranks == 1 && st == VV_OK &&
+                        cli_world_out_of_core(snap);
+            for (int pending = 1, k = 0; st == VV_OK; k++) {
+                double t0 = now_s();
+                /* after SRV_PROGRESSIVE_STEPS steps (a cache too small for the view
+                 * stalls them), the converged frame at once */
+                int last = steps && k == SRV_PROGRESSIVE_STEPS;
+                st = draw(s, snap, kind, gen, kind == VV_PREVIEW_FULL,
+                          kind != VV_PREVIEW_FULL || (steps && !last) ? SRV_PROGRESSIVE_CHUNKS : 0,
+                          &pending, &img);
+                double secs = now_s() - t0;
+                if (st != VV_OK)
+                    break;
                 if (kind != VV_PREVIEW_FULL && !vv_preview_last_warmup(s->preview))
                     vv_preview_policy_record(&s->policy, kind, secs);
-                publish(s, img, kind, seq, secs);
-                if (kind == VV_PREVIEW_FULL) {
-                    vv_image_free(s->full);
-                    s->full = img;
-                    s->full_gen = gen;
-                    img = NULL;
-                }
-            } else if (st != VV_ERR_CANCELLED) {
+                int sharp = kind == VV_PREVIEW_FULL && (!steps || pending == 0 || last);
+                publish(s, img, kind, sharp, seq, secs);
+                if (kind != VV_PREVIEW_FULL || sharp)
+                    break;
+                vv_image_free(img);
+                img = NULL;
+                if (cancel_cb(&(cancel_ctx){s, gen, 1}, 0))
+                    st = VV_ERR_CANCELLED;
+            }
+            if (st == VV_OK && kind == VV_PREVIEW_FULL) {
+                vv_image_free(s->full);
+                s->full = img;
+                s->full_gen = gen;
+                img = NULL;
+            } else if (st != VV_OK && st != VV_ERR_CANCELLED) {
                 pthread_mutex_lock(&s->lock);
                 reply_error(s, 0, "render: %s", vv_error_message());
                 pthread_mutex_unlock(&s->lock);
@@ -841,7 +886,7 @@ render_main(void *arg) {
             pthread_mutex_unlock(&s->lock);
             if (!fresh && st == VV_OK) {
                 vv_image *img = NULL;
-                st = draw(s, snap, VV_PREVIEW_FULL, gen, 0, &img);
+                st = draw(s, snap, VV_PREVIEW_FULL, gen, 0, 0, NULL, &img);
                 if (st == VV_OK) {
                     vv_image_free(s->full);
                     s->full = img;
@@ -1000,6 +1045,16 @@ srv_session_next_out(srv_session *s, srv_client *c) {
 }
 
 int
+srv_session_close_code(srv_session *s, srv_client *c, char *reason, size_t cap) {
+    pthread_mutex_lock(&s->lock);
+    int code = c->close_code;
+    if (code)
+        snprintf(reason, cap, "%s", c->close_reason);
+    pthread_mutex_unlock(&s->lock);
+    return code;
+}
+
+int
 srv_session_has_out(srv_session *s, srv_client *c) {
     pthread_mutex_lock(&s->lock);
     int r = c->n_queue > 0 || (s->frame && s->frame_seq > c->sent_frame) || c->close_code;
@@ -1018,7 +1073,7 @@ changed(srv_session *s) {
 /* The slice image of @p m for client @p c (service thread, under lock). */
 static void
 send_slice(srv_session *s, srv_client *c, const srv_msg *m) {
-    const vv_object *o = first_volume(s->world);
+    const vv_object *o = srv_first_volume(s->world);
     if (!o) {
         reply_error(s, c->id, "slice: no volume is open");
         return;
@@ -1082,7 +1137,7 @@ send_slice(srv_session *s, srv_client *c, const srv_msg *m) {
 
 static void
 send_probe(srv_session *s, srv_client *c, const srv_msg *m) {
-    const vv_object *o = first_volume(s->world);
+    const vv_object *o = srv_first_volume(s->world);
     vv_slice_plane pl;
     int count = 0;
     if (!o || slice_plane(o, m->axis, m->index, m->width, m->height, &pl, &count)) {
@@ -1095,7 +1150,7 @@ send_probe(srv_session *s, srv_client *c, const srv_msg *m) {
     json_t *r = json_pack("{s:s, s:s, s:f, s:f, s:s, s:[f, f, f], s:[f, f, f], s:s}", "type",
                           "probe", "axis", vv_slice_axis_name(m->axis), "x", m->x, "y", m->y,
                           "value_unit", value_unit(o->volume), "ijk", ijk[0], ijk[1], ijk[2],
-                          "world", p.x, p.y, p.z, "unit", length_unit(o->volume));
+                          "world", p.x, p.y, p.z, "unit", vv_volume_length_unit(o->volume));
     json_object_set_new(r, "value", isnan(v) ? json_null() : json_real(v));
     json_t *idx = json_object();
     static const vv_slice_axis axes[] = {VV_SLICE_AXIAL, VV_SLICE_CORONAL, VV_SLICE_SAGITTAL};
@@ -1141,8 +1196,12 @@ send_listing(srv_session *s, srv_client *c, const srv_msg *m) {
             continue;
         if (!S_ISDIR(st.st_mode) && !S_ISREG(st.st_mode))
             continue;
-        json_t *it = json_pack("{s:s, s:b, s:I}", "name", e->d_name, "dir", S_ISDIR(st.st_mode),
-                               "size", (json_int_t)st.st_size);
+        char sub[PATH_MAX + 300];
+        snprintf(sub, sizeof sub, "%s/%s", full, e->d_name);
+        int store = S_ISDIR(st.st_mode) && srv_folder_is_store(sub);
+        json_t *it = json_pack("{s:s, s:b, s:I, s:b}", "name", e->d_name, "dir",
+                               S_ISDIR(st.st_mode) && !store, "size", (json_int_t)st.st_size,
+                               "store", store);
         if (it)
             items[n++] = it;
     }
@@ -1279,7 +1338,7 @@ srv_session_handle(srv_session *s, srv_client *c, const srv_msg *m) {
         break;
     }
     case SRV_CHANNEL: {
-        vv_object *o = first_volume(w);
+        vv_object *o = srv_first_volume(w);
         if (!o || m->index >= o->n_channels) {
             reply_error(s, c->id, "channel %d: the object has no such channel", m->index);
             break;

@@ -1,0 +1,374 @@
+#!/usr/bin/env python3
+"""`volvis serve` at the protocol level (docs/serve-protocol.md), without a
+browser: a client that speaks the page's WebSocket protocol (python3-websockets).
+
+Checks, each on the real binary:
+  - a drag gives reduced frames, each showing a newer input; the stop gives the
+    sharp frame showing the last input;
+  - the PNG of the view equals `volvis render` of the saved session, byte for
+    byte, in memory and out of core (an OME-Zarr pyramid under --memory-limit:
+    its still frame arrives in progressive steps, the last one sharp; the CLI
+    renders the session with the same --memory-limit and --lod 1);
+  - `mpirun -n 2 volvis serve`: the PNG equals the one-process PNG within 2
+    grey levels (the parallel module's compositing), and a drag still gives
+    frames;
+  - --shared: two clients see the same frames, and either steers the view;
+  - one thumbnail a preset; a listing marks the Zarr store; a refused open
+    or save answers an error and keeps the connection;
+  - a 3-channel OME-TIFF (tifffile) shows its 3 channels, and hiding one or
+    changing its colour changes the frame; a 4-D NIfTI of 3 time steps
+    (nibabel) has the time slider's 3 steps, and a step changes the frame;
+  - --cert/--key (a self-signed certificate made with openssl): HTTPS answers
+    200 with the token and 403 without, and a frame arrives over WSS.
+
+usage: test_serve_protocol.py VOLVIS_BINARY DATA_DIR
+Exits 77 (skipped) when python3-websockets or PIL is missing.
+"""
+import asyncio, json, os, shutil, ssl, struct, subprocess, sys, tempfile, time
+import urllib.error, urllib.request
+
+SKIP = 77
+try:
+    import websockets
+    import numpy as np
+    from PIL import Image
+except ImportError as e:
+    print(f"skipped: {e}")
+    sys.exit(SKIP)
+
+BIN, DATA = sys.argv[1], sys.argv[2]
+TIMEOUT = 180  # seconds for any one wait, on a loaded 2-core machine
+
+
+class Server:
+    def __init__(self, args, mpi=0):
+        cmd = [BIN, "serve", "--port", "0"] + args
+        if mpi:
+            cmd = [shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n",
+                   str(mpi)] + cmd
+        self.mpi = mpi
+        self.log = tempfile.TemporaryFile(mode="w+")
+        self.p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=self.log, text=True)
+        line = self.p.stdout.readline().strip()
+        if not line.startswith("http"):
+            self.log.seek(0)
+            raise SystemExit(f"server did not start: {cmd}\n{self.log.read()}")
+        self.base, self.token = line.split("/?token=")
+
+    def connect(self, context=None):
+        host = self.base.split("//", 1)[1]
+        scheme = "wss" if context else "ws"
+        return websockets.connect(f"{scheme}://{host}/ws", subprotocols=["volvis"],
+                                  origin=self.base, ssl=context,
+                                  extra_headers={"Cookie": "volvis_token=" + self.token},
+                                  max_size=1 << 27)
+
+    def stop(self):
+        self.p.terminate()
+        try:
+            self.p.wait(30)
+        except subprocess.TimeoutExpired:
+            self.p.kill()
+        # Ctrl-C and SIGTERM end the server with status 0; mpirun, which signals every
+        # rank itself, reports the signal
+        assert self.mpi or self.p.returncode in (0, -15), self.p.returncode
+
+
+def parse(m):
+    n = struct.unpack("<I", m[4:8])[0]
+    return m[:4].decode(), json.loads(m[8:8 + n]), m[8 + n:]
+
+
+async def until(ws, pred, what):
+    """Reads messages until pred(kind, header, payload) is true; returns that message."""
+    deadline = time.time() + TIMEOUT
+    while time.time() < deadline:
+        m = await asyncio.wait_for(ws.recv(), TIMEOUT)
+        if isinstance(m, str):
+            j = json.loads(m)
+            r = ("TEXT", j, None)
+        else:
+            r = parse(m)
+        if pred(*r):
+            return r
+    raise AssertionError(f"no {what} within {TIMEOUT} s")
+
+
+def sharp(k, h, p):
+    return k == "FRME" and h["sharp"]
+
+
+async def png_of(ws):
+    await ws.send(json.dumps({"type": "png"}))
+    return (await until(ws, lambda k, h, p: k == "PNG_", "PNG"))[2]
+
+
+async def save(ws, path):
+    await ws.send(json.dumps({"type": "save", "path": path}))
+    k, h, _ = await until(ws, lambda k, h, p: k == "TEXT" and h["type"] in ("saved", "error"),
+                          "saved")
+    assert h["type"] == "saved", h
+
+
+def cli_png(scene, out, extra=()):
+    subprocess.run([BIN, "render", scene, "-o", out, "-q", *extra], check=True)
+    return open(out, "rb").read()
+
+
+def pixels(png_bytes, path):
+    open(path, "wb").write(png_bytes)
+    return np.asarray(Image.open(path)).astype(int)
+
+
+async def drag_and_png(srv, root, name, cli_extra=(), steps_expected=False):
+    async with srv.connect() as ws:
+        await ws.send(json.dumps({"type": "hello", "width": 320, "height": 256}))
+        k, h, _ = await until(ws, sharp, "first sharp frame")
+        for i in range(1, 11):
+            await ws.send(json.dumps({"type": "nav", "motion": "rotate", "dx": 6, "dy": 2,
+                                      "seq": i, "moving": True}))
+            await asyncio.sleep(0.02)
+        await ws.send(json.dumps({"type": "nav", "motion": "zoom", "factor": 1.2, "seq": 11,
+                                  "moving": False}))
+        frames = []
+        while True:
+            k, h, p = await until(ws, lambda k, h, p: k == "FRME", "frame")
+            frames.append(h)
+            if h["sharp"] and h["input_seq"] == 11:
+                break
+        reduced = [f for f in frames if f["kind"] != "full"]
+        seqs = [f["input_seq"] for f in frames]
+        assert seqs == sorted(seqs), seqs  # never an older input after a newer one
+        assert reduced or steps_expected, frames
+        if steps_expected:  # progressive steps: full but not sharp before the sharp one
+            assert any(f["kind"] == "full" and not f["sharp"] for f in frames) or \
+                frames[-1]["sharp"], frames
+        png = await png_of(ws)
+        await save(ws, name + ".json")
+    ours = pixels(png, os.path.join(root, name + "_page.png"))
+    cli = cli_png(os.path.join(root, name + ".json"), os.path.join(root, name + "_cli.png"),
+                  cli_extra)
+    return png, cli, ours
+
+
+def main():
+    tmp = tempfile.mkdtemp(prefix="volvis-serve-test-")
+    root = os.path.join(tmp, "root")
+    os.makedirs(root)
+    shutil.copy(os.path.join(DATA, "volumes", "ct_head.nrrd"), root)
+    head = os.path.join(root, "ct_head.nrrd")
+    # an OME-Zarr pyramid of the head, written by our converter
+    subprocess.run([BIN, "convert", head, os.path.join(root, "head.ome.zarr"), "-q"], check=True)
+    failures = 0
+
+    def check(name, fn):
+        nonlocal failures
+        t0 = time.time()
+        try:
+            fn()
+            print(f"ok   {name} ({time.time() - t0:.1f} s)", flush=True)
+        except Exception as e:  # report every check, then fail
+            failures += 1
+            print(f"FAIL {name}: {e!r}", flush=True)
+
+    def in_memory():
+        srv = Server([head])
+        try:
+            png, cli, _ = asyncio.run(drag_and_png(srv, root, "mem"))
+            assert png == cli, "the page's PNG differs from volvis render of the session"
+        finally:
+            srv.stop()
+
+    def out_of_core():
+        srv = Server(["--memory-limit", "16M", os.path.join(root, "head.ome.zarr")])
+        try:
+            png, cli, _ = asyncio.run(drag_and_png(srv, root, "ooc", ("--memory-limit", "16M",
+                                                                      "--lod", "1"), True))
+            assert png == cli, "out of core: the PNG differs from volvis render of the session"
+        finally:
+            srv.stop()
+
+    def mpi():
+        if not shutil.which("mpirun"):
+            raise AssertionError("mpirun is missing (openmpi-bin)")
+        one = pixels(open(os.path.join(root, "mem_page.png"), "rb").read(),
+                     os.path.join(root, "x.png"))
+        srv = Server([head], mpi=2)
+        try:
+            async def run():
+                async with srv.connect() as ws:
+                    await ws.send(json.dumps({"type": "hello", "width": 320, "height": 256}))
+                    await until(ws, sharp, "first sharp frame")
+                    for i in range(1, 11):
+                        await ws.send(json.dumps({"type": "nav", "motion": "rotate", "dx": 6,
+                                                  "dy": 2, "seq": i, "moving": True}))
+                        await asyncio.sleep(0.02)
+                    await ws.send(json.dumps({"type": "nav", "motion": "zoom", "factor": 1.2,
+                                              "seq": 11, "moving": False}))
+                    await until(ws, lambda k, h, p: sharp(k, h, p) and h["input_seq"] == 11,
+                                "sharp frame of the last input")
+                    return await png_of(ws)
+            ranks = pixels(asyncio.run(run()), os.path.join(root, "mpi_page.png"))
+            diff = np.abs(ranks - one)
+            assert diff.max() <= 2, f"2 ranks differ from one process by {diff.max()}"
+        finally:
+            srv.stop()
+
+    def shared_session():
+        srv = Server(["--shared", head])
+        try:
+            async def run():
+                async with srv.connect() as a, srv.connect() as b:
+                    for ws in (a, b):
+                        await ws.send(json.dumps({"type": "hello", "width": 320,
+                                                  "height": 256}))
+                        await until(ws, sharp, "first sharp frame")
+                    await b.send(json.dumps({"type": "nav", "motion": "rotate", "dx": 30,
+                                             "dy": 0, "seq": 7, "moving": False}))
+                    ka = await until(a, lambda k, h, p: sharp(k, h, p) and h["input_seq"] == 7,
+                                     "the other client's steering seen")
+                    kb = await until(b, lambda k, h, p: sharp(k, h, p) and h["input_seq"] == 7,
+                                     "own steering")
+                    assert ka[1]["seq"] == kb[1]["seq"] and ka[2] == kb[2]
+            asyncio.run(run())
+        finally:
+            srv.stop()
+
+    def thumbnails_listing_errors():
+        srv = Server([head])
+        try:
+            async def run():
+                async with srv.connect() as ws:
+                    await ws.send(json.dumps({"type": "hello", "width": 320, "height": 256}))
+                    k, state, _ = await until(ws, lambda k, h, p: k == "TEXT" and
+                                              h["type"] == "state", "state")
+                    await ws.send(json.dumps({"type": "thumbnails", "size": 48}))
+                    names = set()
+                    while len(names) < len(state["presets"]):
+                        k, h, p = await until(ws, lambda k, h, p: k == "THMB", "thumbnail")
+                        assert p[:2] == b"\xff\xd8" and h["width"] == 48
+                        names.add(h["name"])
+                    assert names == set(state["presets"])
+                    await ws.send(json.dumps({"type": "list", "path": ""}))
+                    k, h, _ = await until(ws, lambda k, h, p: k == "TEXT" and
+                                          h["type"] == "listing", "listing")
+                    entries = {e["name"]: e for e in h["entries"]}
+                    assert entries["head.ome.zarr"]["store"] and not entries["head.ome.zarr"]["dir"]
+                    for bad in ({"type": "open", "path": "../etc/passwd"},
+                                {"type": "open", "path": "/etc/passwd"},
+                                {"type": "save", "path": "x.png"},
+                                {"type": "list", "path": "nowhere"}):
+                        await ws.send(json.dumps(bad))
+                        k, h, _ = await until(ws, lambda k, h, p: k == "TEXT" and
+                                              h["type"] == "error", "error")
+                        assert "\n" not in h["message"]
+                    # still served: a slice and a probe with the value's unit
+                    await ws.send(json.dumps({"type": "probe", "axis": "axial", "index": 60,
+                                              "width": 128, "height": 128, "x": 64, "y": 64}))
+                    k, h, _ = await until(ws, lambda k, h, p: k == "TEXT" and
+                                          h["type"] == "probe", "probe")
+                    assert h["value"] is not None and h["value_unit"] == "HU"
+                    assert h["indices"]["axial"] == 60
+            asyncio.run(run())
+        finally:
+            srv.stop()
+
+    def channels_and_time():
+        try:
+            import tifffile
+            import nibabel as nib
+        except ImportError as e:
+            raise AssertionError(f"{e} (python3-tifffile, python3-nibabel)")
+        z, y, x = np.mgrid[0:24, 0:32, 0:72]
+        balls = [(((x - cx) ** 2 + (y - 16) ** 2 + (z - 12) ** 2 <= 64) * 900 + 40)
+                 .astype(np.uint16) for cx in (14, 36, 58)]
+        tifffile.imwrite(os.path.join(root, "cells.ome.tif"), np.stack(balls), ome=True,
+                         metadata={"axes": "CZYX", "Channel": {"Name": ["a", "b", "c"]}})
+        steps = np.stack([(((x - 20 - 12 * t) ** 2 + (y - 16) ** 2 + (z - 12) ** 2 <= 64) *
+                           200.0).astype(np.float32) for t in range(3)], axis=-1)
+        nib.save(nib.Nifti1Image(steps.transpose(2, 1, 0, 3), np.eye(4)),
+                 os.path.join(root, "moving.nii.gz"))
+
+        async def frame_after(ws, msg):
+            """The sharp frame after @msg, and the last state sent before it."""
+            await ws.send(json.dumps(msg))
+            seen = {}
+
+            def keep(k, h, p):
+                if k == "TEXT" and h["type"] == "state":
+                    seen["state"] = h
+                return sharp(k, h, p)
+            k, h, p = await until(ws, keep, f"the sharp frame after {msg['type']}")
+            return p, seen.get("state")
+
+        srv = Server(["--root", root, os.path.join(root, "cells.ome.tif")])
+        try:
+            async def run():
+                async with srv.connect() as ws:
+                    await ws.send(json.dumps({"type": "hello", "width": 128, "height": 96}))
+                    k, st, _ = await until(ws, lambda k, h, p: k == "TEXT" and
+                                           h["type"] == "state", "state")
+                    assert [c["name"] for c in st["channels"]] == ["a", "b", "c"], st["channels"]
+                    first = (await until(ws, sharp, "first frame"))[2]
+                    hidden, st = await frame_after(ws, {"type": "channel", "index": 1,
+                                                        "visible": False})
+                    assert hidden != first, "hiding a channel changed nothing"
+                    assert st and st["channels"][1]["visible"] is False, st
+                    recolored, st = await frame_after(ws, {"type": "channel", "index": 0,
+                                                           "color": "#00ff00"})
+                    assert recolored != hidden and st["channels"][0]["color"] == "#00ff00", st
+                    # the whole time series: open it in the same session
+                    t0, st = await frame_after(ws, {"type": "open", "path": "moving.nii.gz"})
+                    assert st and st["time_steps"] == 3 and st["name"] == "moving.nii.gz", st
+                    t2, st = await frame_after(ws, {"type": "time", "step": 2})
+                    assert t2 != t0, "time step 2 looks like step 0"
+                    assert st and st["time"] == 2, st
+            asyncio.run(run())
+        finally:
+            srv.stop()
+
+    def tls():
+        if not shutil.which("openssl"):
+            raise AssertionError("openssl is missing")
+        key, cert = os.path.join(tmp, "key.pem"), os.path.join(tmp, "cert.pem")
+        subprocess.run(["openssl", "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-keyout",
+                        key, "-out", cert, "-days", "2", "-subj", "/CN=localhost"], check=True,
+                       capture_output=True)
+        srv = Server(["--cert", cert, "--key", key, head])
+        try:
+            assert srv.base.startswith("https://"), srv.base
+            ctx = ssl.create_default_context()
+            ctx.check_hostname = False
+            ctx.verify_mode = ssl.CERT_NONE
+            r = urllib.request.urlopen(srv.base + "/?token=" + srv.token, context=ctx)
+            assert r.status == 200 and "HttpOnly" in r.headers["Set-Cookie"]
+            try:
+                urllib.request.urlopen(srv.base + "/", context=ctx)
+                raise AssertionError("no 403 without the token over HTTPS")
+            except urllib.error.HTTPError as e:
+                assert e.code == 403, e.code
+
+            async def run():
+                async with srv.connect(ctx) as ws:
+                    await ws.send(json.dumps({"type": "hello", "width": 64, "height": 64}))
+                    await until(ws, sharp, "a frame over WSS")
+            asyncio.run(run())
+        finally:
+            srv.stop()
+
+    check("drag and PNG in memory equal volvis render of the saved session", in_memory)
+    check("out of core: progressive still frames, PNG equals volvis render", out_of_core)
+    check("mpirun -n 2: the PNG within 2 levels of one process", mpi)
+    check("--shared: two clients, one view", shared_session)
+    check("thumbnails, the listing's store, refusals keep the connection", thumbnails_listing_errors)
+    check("channels (OME-TIFF) and time steps (4-D NIfTI)", channels_and_time)
+    check("--cert/--key: HTTPS, 403 without the token, frames over WSS", tls)
+    if failures == 0:
+        shutil.rmtree(tmp, ignore_errors=True)
+    else:
+        print(f"outputs kept in {tmp}")
+    sys.exit(1 if failures else 0)
+
+
+if __name__ == "__main__":
+    main()
