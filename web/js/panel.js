@@ -218,15 +218,16 @@ export class Panel {
       items.push(this.fileItem('..', true, null, () => this.list(up), 'Parent folder'));
     }
     for (const e of Array.isArray(msg.entries) ? msg.entries : []) {
-      if (e.dir) {
+      // a folder that is one dataset (an OME-Zarr store) opens like a file
+      if (e.dir && !e.store) {
         items.push(this.fileItem(`${e.name}/`, true, null, () => this.list(join(e.name)), `Folder ${e.name}`));
       } else {
-        items.push(this.fileItem(e.name, false, e.size, () => {
+        items.push(this.fileItem(e.name, false, e.store ? null : e.size, () => {
           if (this.conn.send({ type: 'open', path: join(e.name) })) {
             this.opening = join(e.name);
             this.hooks.onInfo(`opening ${this.opening}…`);
           }
-        }, `Open ${e.name}`));
+        }, `Open ${e.name}`, e.store ? 'store' : 'file'));
       }
     }
     if (items.length === 0) items.push(el('li', { className: 'empty', textContent: '(empty)' }));
@@ -238,12 +239,13 @@ export class Panel {
     this.$('files-path').textContent = `${root}/${this.filesPath ? `${this.filesPath}/` : ''}`;
   }
 
-  fileItem(name, dir, size, onClick, label) {
+  fileItem(name, dir, size, onClick, label, kind = dir ? 'dir' : 'file') {
     const b = el('button', { type: 'button', attrs: { 'aria-label': label, 'data-name': name } },
       el('span', { className: 'name', textContent: name }),
       el('span', { className: 'size', textContent: size == null ? '' : formatBytes(size) }));
     b.addEventListener('click', onClick);
-    return el('li', { className: dir ? 'dir' : 'file' }, b);
+    if (kind === 'store') b.append(el('span', { className: 'size', textContent: 'dataset' }));
+    return el('li', { className: kind }, b);
   }
 
   // ---- session and PNG ----
