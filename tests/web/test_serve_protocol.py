@@ -71,7 +71,11 @@ class Server:
             self.p.kill()
         # Ctrl-C and SIGTERM end the server with status 0; mpirun, which signals every
         # rank itself, reports the signal
-        assert self.mpi or self.p.returncode in (0, -15), self.p.returncode
+        self.log.seek(0)
+        log = self.log.read()
+        for bad in ("Sanitizer", "runtime error:"):  # ASan, LSan, UBSan, TSan reports
+            assert bad not in log, log[-4000:]
+        assert self.mpi or self.p.returncode in (0, -15), (self.p.returncode, log[-2000:])
 
 
 def parse(m):

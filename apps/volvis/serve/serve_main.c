@@ -174,9 +174,9 @@ add_headers(struct lws *wsi, unsigned char **p, unsigned char *end, int set_cook
     return 0;
 }
 
-/* Answers with a bare status (403, 404, 405) and the security headers. */
+/* Writes a bare status (403, 404, 405) with the security headers and a one-line text. */
 static int
-answer_status(struct lws *wsi, unsigned status, const char *text) {
+write_status(struct lws *wsi, unsigned status, const char *text) {
     unsigned char buf[LWS_PRE + 2048], *start = buf + LWS_PRE, *p = start,
                                        *end = buf + sizeof buf - 1;
     size_t n = strlen(text);
@@ -188,7 +188,13 @@ answer_status(struct lws *wsi, unsigned status, const char *text) {
     if (n > sizeof body - LWS_PRE)
         n = sizeof body - LWS_PRE;
     memcpy(body + LWS_PRE, text, n);
-    if (lws_write(wsi, body + LWS_PRE, n, LWS_WRITE_HTTP_FINAL) != (int)n)
+    return lws_write(wsi, body + LWS_PRE, n, LWS_WRITE_HTTP_FINAL) == (int)n ? 0 : -1;
+}
+
+/* Answers a request with a bare status and ends the transaction. */
+static int
+answer_status(struct lws *wsi, unsigned status, const char *text) {
+    if (write_status(wsi, status, text))
         return -1;
     return lws_http_transaction_completed(wsi) ? -1 : 0;
 }
@@ -341,8 +347,8 @@ callback(struct lws *wsi, enum lws_callback_reasons reason, void *user, void *in
     case LWS_CALLBACK_HTTP_CONFIRM_UPGRADE:
         if (!upgrade_allowed(wsi, why, sizeof why)) {
             fprintf(stderr, "volvis: serve: refused: %s\n", why);
-            lws_return_http_status(wsi, HTTP_STATUS_FORBIDDEN, NULL);
-            return 1;
+            /* >0: answered here (libwebsockets ends the transaction) */
+            return write_status(wsi, HTTP_STATUS_FORBIDDEN, "403: refused\n") ? -1 : 1;
         }
         return 0;
     case LWS_CALLBACK_FILTER_PROTOCOL_CONNECTION:
