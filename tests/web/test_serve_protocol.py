@@ -245,7 +245,7 @@ def main():
                 async with srv.connect() as ws:
                     await ws.send(json.dumps({"type": "hello", "width": 320, "height": 256}))
                     k, state, _ = await until(ws, lambda k, h, p: k == "TEXT" and
-                                              h["type"] == "state", "state")
+                                              h["type"] == "state" and h["dims"], "state")
                     await ws.send(json.dumps({"type": "thumbnails", "size": 48}))
                     names = set()
                     while len(names) < len(state["presets"]):
@@ -310,8 +310,9 @@ def main():
             async def run():
                 async with srv.connect() as ws:
                     await ws.send(json.dumps({"type": "hello", "width": 128, "height": 96}))
+                    # the state of the file opened (hello may come before the open ends)
                     k, st, _ = await until(ws, lambda k, h, p: k == "TEXT" and
-                                           h["type"] == "state", "state")
+                                           h["type"] == "state" and h["dims"], "state")
                     assert [c["name"] for c in st["channels"]] == ["a", "b", "c"], st["channels"]
                     first = (await until(ws, sharp, "first frame"))[2]
                     hidden, st = await frame_after(ws, {"type": "channel", "index": 1,
