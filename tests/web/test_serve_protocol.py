@@ -11,7 +11,7 @@ Checks, each on the real binary:
     renders the session with the same --memory-limit and --lod 1);
   - `mpirun -n 2 volvis serve`: the PNG equals the one-process PNG within 2
     grey levels (the parallel module's compositing), and a drag still gives
-    frames;
+    frames, after tabs that left while their frames were being drawn;
   - --shared: two clients see the same frames, and either steers the view;
   - one thumbnail a preset; a listing marks the Zarr store; a refused open
     or save answers an error and keeps the connection;
@@ -200,6 +200,18 @@ def main():
         srv = Server([head], mpi=2)
         try:
             async def run():
+                # a tab that leaves while its frames are drawn by all ranks: its
+                # session ends without holding up the server (its render thread
+                # may wait on the service thread for a frame of all ranks)
+                for _ in range(3):
+                    async with srv.connect() as gone:
+                        await gone.send(json.dumps({"type": "hello", "width": 320,
+                                                    "height": 256}))
+                        for i in range(1, 4):
+                            await gone.send(json.dumps({"type": "nav", "motion": "rotate",
+                                                        "dx": 9, "dy": 0, "seq": i,
+                                                        "moving": True}))
+                        await gone.send(json.dumps({"type": "png"}))
                 async with srv.connect() as ws:
                     await ws.send(json.dumps({"type": "hello", "width": 320, "height": 256}))
                     await until(ws, sharp, "first sharp frame")

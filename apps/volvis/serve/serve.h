@@ -167,7 +167,11 @@ struct srv_server {
 
 /** A new session of @p srv showing srv->initial (opened by its render thread). */
 srv_session *srv_session_new(srv_server *srv);
-/** Stops the session's render thread and frees it (no client may still point at it). */
+/**
+ * Stops the session's render thread and frees it (no client may still point
+ * at it). Service thread only: under MPI it runs the frames the thread may
+ * be waiting for until the thread has ended.
+ */
 void srv_session_free(srv_session *s);
 /** Attaches a client (under srv->lock). */
 void srv_session_attach(srv_session *s, srv_client *c);

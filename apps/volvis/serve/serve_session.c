@@ -50,6 +50,7 @@ struct srv_session {
     pthread_t thread;
     int thread_started;
     int quit;
+    int finished; /* the render thread has ended (atomic) */
 
     /* the World and what the page shows of it (under lock) */
     vv_world *world;
@@ -943,6 +944,8 @@ render_main(void *arg) {
     pthread_mutex_unlock(&s->lock);
     tjDestroy(s->tj);
     free(s->pix);
+    __atomic_store_n(&s->finished, 1, __ATOMIC_RELEASE);
+    srv_wake(s->srv);
     return NULL;
 }
 
@@ -988,6 +991,13 @@ srv_session_free(srv_session *s) {
     __atomic_store_n(&s->quit, 1, __ATOMIC_RELAXED);
     pthread_cond_signal(&s->cond);
     pthread_mutex_unlock(&s->lock);
+    /* under MPI the render thread may wait for a frame of all ranks, which this
+     * thread (the service thread) runs: run them until it has ended */
+    while (s->thread_started && s->srv->ranks > 1 &&
+           !__atomic_load_n(&s->finished, __ATOMIC_ACQUIRE)) {
+        if (srv_mpi_service(s->srv) == 0)
+            usleep(1000);
+    }
     if (s->thread_started)
         pthread_join(s->thread, NULL);
     vv_preview_free(s->preview);
