@@ -678,6 +678,8 @@ cli_serve_main(int argc, char **argv) {
     fprintf(stderr, "volvis: serve: root %s%s%s%s; Ctrl-C stops\n", server.root,
             server.initial[0] ? ", showing " : "", server.initial,
             server.ranks > 1 ? ", every frame rendered by all MPI ranks" : "");
+    if (server.verbose)
+        fprintf(stderr, "volvis: serve: the page's files from %s\n", server.web_dir);
     while (!interrupted) {
         if (lws_service(ctx, 0) < 0)
             break;
