@@ -109,141 +109,6 @@ current_plane(VvgSliceView *self, const vv_object *obj, vv_slice_plane *p) {
     return TRUE;
 }
 
-/* ---- an object out of core: its file sliced ---------------------------------------- */
-
-/* Object @p obj with volume @p v instead (a shallow copy: nothing in it is
- * released). */
-static vv_object
-with_volume(const vv_object *obj, const vv_volume *v) {
-    vv_object o = *obj;
-    o.volume = (vv_volume *)v;
-    o.source = NULL;
-    o.n_channels = 0;
-    o.channels = NULL;
-    return o;
-}
-
-/* The box lo .. hi of level @p L of @p src holding world points @p pts (n
- * of them) with @p margin voxels more each side; FALSE when the points lie
- * outside the level. */
-static gboolean
-level_box(vv_source *src, const vv_object *obj, int L, const vv_vec3 *pts, int n, int margin,
-          int lo[3], int hi[3]) {
-    const vv_volume *h = vv_source_level(src, L);
-    const vv_object geo = with_volume(obj, h);
-    int ok = 0;
-    const vv_mat4 w2i = vv_mat4_inverse(vv_object_index_to_world(&geo), &ok);
-    if (!ok)
-        return FALSE;
-    double a[3] = {INFINITY, INFINITY, INFINITY}, b[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (int i = 0; i < n; i++) {
-        const vv_vec3 q = vv_mat4_mul_point(w2i, pts[i]);
-        const double c[3] = {q.x, q.y, q.z};
-        for (int k = 0; k < 3; k++) {
-            a[k] = fmin(a[k], c[k]);
-            b[k] = fmax(b[k], c[k]);
-        }
-    }
-    for (int k = 0; k < 3; k++) {
-        if (!isfinite(a[k]) || !isfinite(b[k]))
-            return FALSE;
-        lo[k] = (int)fmax(0, floor(a[k]) - margin);
-        hi[k] = (int)fmin(h->dims[k] - 1, ceil(b[k]) + margin);
-        if (lo[k] > hi[k])
-            return FALSE;
-    }
-    return TRUE;
-}
-
-/* Box lo .. hi of level @p L of @p src, read (through the process's one
- * cache) and placed in the world: its origin that of its first voxel. NULL
- * when the read fails. */
-static vv_volume *
-read_level_box(vv_source *src, int L, const int lo[3], const int hi[3]) {
-    const vv_volume *h = vv_source_level(src, L);
-    vv_volume *v = NULL;
-    vv_error_clear();
-    if (vv_source_read_box(src, L, lo, hi, &v) != VV_OK) {
-        g_warning("volvis-gui: slice views: %s", vv_error_message());
-        return NULL;
-    }
-    if (lo[0] == 0 && lo[1] == 0 && lo[2] == 0)
-        return v; /* the level's voxel 0 already (and perhaps the level itself: shared) */
-    for (int r = 0; r < 3; r++) /* its origin: the level's voxel lo */
-        for (int k = 0; k < 3; k++)
-            v->origin[r] += h->direction[3 * r + k] * h->spacing[k] * lo[k];
-    return v;
-}
-
-/* Plane @p p of object @p obj out of core sampled from the coarsest level
- * of its file whose voxel is at most a pixel (level 0 at worst; a coarser
- * one when that box would take more than a quarter of the memory limit):
- * the box the plane crosses, read through the one cache. FALSE when it
- * cannot be read. */
-static gboolean
-sample_source(vv_source *src, const vv_object *obj, const vv_slice_plane *p, float *values) {
-    const int levels = vv_source_levels(src);
-    int L = levels - 1;
-    for (; L > 0; L--) {
-        const vv_object geo = with_volume(obj, vv_source_level(src, L));
-        const vv_mat4 m = vv_object_index_to_world(&geo);
-        double edge = INFINITY;
-        for (int k = 0; k < 3; k++)
-            edge = fmin(
-                edge, sqrt(m.m[0][k] * m.m[0][k] + m.m[1][k] * m.m[1][k] + m.m[2][k] * m.m[2][k]));
-        if (edge <= p->pixel)
-            break;
-    }
-    const vv_cache *cache = vv_source_cache(src);
-    const double most = (double)vv_cache_limit(cache ? cache : vv_cache_process()) / 4;
-    const double hw = p->width * p->pixel / 2, hh = p->height * p->pixel / 2;
-    vv_vec3 pts[4];
-    for (int i = 0; i < 4; i++)
-        pts[i] = vv_vec3_add(p->center, vv_vec3_add(vv_vec3_scale(p->right, i & 1 ? hw : -hw),
-                                                    vv_vec3_scale(p->up, i & 2 ? hh : -hh)));
-    for (; L < levels; L++) {
-        int lo[3], hi[3];
-        if (!level_box(src, obj, L, pts, 4, 1, lo, hi)) {
-            /* the plane misses the volume: nothing to show */
-            for (size_t i = 0; i < (size_t)p->width * p->height; i++)
-                values[i] = NAN;
-            return TRUE;
-        }
-        const double bytes = (double)(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) *
-                             (hi[2] - lo[2] + 1) *
-                             (double)vv_voxel_type_size(vv_source_level(src, L)->type);
-        if (bytes > most && L + 1 < levels)
-            continue;
-        vv_volume *v = read_level_box(src, L, lo, hi);
-        if (!v)
-            return FALSE;
-        const vv_object o = with_volume(obj, v);
-        const gboolean ok = vv_slice_sample(&o, p, values) == VV_OK;
-        vv_volume_free(v);
-        return ok;
-    }
-    return FALSE;
-}
-
-/* The value of object @p obj out of core at world point @p c from level 0
- * of its file (a box of 4^3 voxels around it), its level-0 voxel index in
- * @p ijk; NaN outside or when it cannot be read. */
-static double
-probe_source(vv_source *src, const vv_object *obj, vv_vec3 c, double ijk[3]) {
-    int lo[3], hi[3];
-    if (!level_box(src, obj, 0, &c, 1, 2, lo, hi))
-        return NAN;
-    vv_volume *v = read_level_box(src, 0, lo, hi);
-    if (!v)
-        return NAN;
-    const vv_object o = with_volume(obj, v);
-    const double val = vv_slice_probe(&o, c, ijk);
-    for (int k = 0; k < 3; k++)
-        ijk[k] += lo[k];
-    vv_volume_free(v);
-    return val;
-}
-
 /* Samples again when the plane, the volume or its placement changed. */
 static void
 update_samples(VvgSliceView *self, const vv_object *obj, const vv_slice_plane *p) {
@@ -267,9 +132,11 @@ update_samples(VvgSliceView *self, const vv_object *obj, const vv_slice_plane *p
         self->n_channels = obj->n_channels;
     }
     gint64 t0 = g_get_monotonic_time();
-    vv_source *src = vvg_object_source(obj);
-    gboolean ok = src ? sample_source(src, obj, p, self->values)
-                      : vv_slice_sample(obj, p, self->values) == VV_OK;
+    /* an object out of core is sampled from its file (vv_slice_sample) */
+    vv_error_clear();
+    gboolean ok = vv_slice_sample(obj, p, self->values) == VV_OK;
+    if (!ok && vvg_object_source(obj))
+        g_warning("volvis-gui: slice views: %s", vv_error_message());
     for (int c = 0; ok && c < obj->n_channels; c++) {
         ok = vv_slice_sample_channel(obj, c, p, self->channel_values[c]) == VV_OK;
         self->channel_volume[c] = obj->channels[c].volume;
@@ -375,8 +242,7 @@ update_readout(VvgSliceView *self, const vv_object *obj) {
         if (!vvg_marks_cursor(self->marks, &c))
             c = box_centre(obj);
         double ijk[3];
-        vv_source *src = vvg_object_source(obj);
-        double v = src ? probe_source(src, obj, c, ijk) : vv_slice_probe(obj, c, ijk);
+        double v = vv_slice_probe(obj, c, ijk); /* out of core: from level 0 of the file */
         const char *unit = vvg_unit_label(obj->volume);
         if (isnan(v))
             snprintf(text, sizeof text, "%s: outside the volume at (%.6g, %.6g, %.6g) %s",

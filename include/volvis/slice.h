@@ -120,9 +120,15 @@ double vv_slice_step(const vv_object *obj, vv_vec3 normal);
  * Samples volume object @p obj on plane @p p into @p values (p->width x
  * p->height floats, row-major, row 0 at the top): the trilinear value at
  * each pixel centre, NaN outside the volume's box. Rows are sampled in
- * parallel (OpenMP); the result is the same for any thread count.
- * Errors: VV_ERR_INVALID (NULL argument, an object without a volume, a
- * transform that cannot be inverted).
+ * parallel (OpenMP); the result is the same for any thread count. An object
+ * showing a file out of core (its `source`, vv_object_new_source) is
+ * sampled from the file, not its proxy: the coarsest level whose voxel is at
+ * most a pixel (level 0 at worst; a coarser one when that box would take
+ * more than a quarter of the cache's limit), only the box the plane
+ * crosses, read through the source's cache (vv_source_read_box, which any
+ * thread may call). Errors: VV_ERR_INVALID (NULL
+ * argument, an object without a volume, a transform that cannot be
+ * inverted); out of core, those of vv_source_read_box.
  */
 vv_status vv_slice_sample(const vv_object *obj, const vv_slice_plane *p, float *values);
 
@@ -158,6 +164,9 @@ void vv_slice_blend_channels(const vv_object *obj, const float *const *values, s
  * The voxel value of volume object @p obj at world point @p world
  * (trilinear), with its continuous voxel index in @p ijk (may be NULL).
  * Returns NaN outside the volume's box or for an object without a volume.
+ * An object out of core is probed in level 0 of its file (a box of 4^3
+ * voxels read around the point; NaN when it cannot be read), its level-0
+ * index in @p ijk.
  */
 double vv_slice_probe(const vv_object *obj, vv_vec3 world, double ijk[3]);
 

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "volvis/slice.h"
+#include "volvis/source.h"
 
 static const char *const axis_names[] = {"axial", "coronal", "sagittal", "oblique"};
 
@@ -257,11 +258,157 @@ sample_volume(const vv_object *obj, const vv_volume *v, const vv_slice_plane *p,
     return VV_OK;
 }
 
+/* ---- an object out of core: its file sliced ------------------------------------------- */
+
+/* Object @p obj with volume @p v instead (a shallow copy: nothing in it is
+ * released, and it has no source, so slicing it reads @p v). */
+static vv_object
+with_volume(const vv_object *obj, const vv_volume *v) {
+    vv_object o = *obj;
+    o.volume = (vv_volume *)v;
+    o.source = NULL;
+    o.n_channels = 0;
+    o.channels = NULL;
+    return o;
+}
+
+/* The box lo .. hi of level @p L of @p src holding world points @p pts (n
+ * of them) with @p margin voxels more each side; 0 when the points lie
+ * outside the level. */
+static int
+level_box(vv_source *src, const vv_object *obj, int L, const vv_vec3 *pts, int n, int margin,
+          int lo[3], int hi[3]) {
+    const vv_volume *h = vv_source_level(src, L);
+    const vv_object geo = with_volume(obj, h);
+    int ok = 0;
+    const vv_mat4 w2i = vv_mat4_inverse(vv_object_index_to_world(&geo), &ok);
+    if (!ok)
+        return 0;
+    double a[3] = {INFINITY, INFINITY, INFINITY}, b[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int i = 0; i < n; i++) {
+        const vv_vec3 q = vv_mat4_mul_point(w2i, pts[i]);
+        const double c[3] = {q.x, q.y, q.z};
+        for (int k = 0; k < 3; k++) {
+            a[k] = fmin(a[k], c[k]);
+            b[k] = fmax(b[k], c[k]);
+        }
+    }
+    for (int k = 0; k < 3; k++) {
+        if (!isfinite(a[k]) || !isfinite(b[k]))
+            return 0;
+        lo[k] = (int)fmax(0, floor(a[k]) - margin);
+        hi[k] = (int)fmin(h->dims[k] - 1, ceil(b[k]) + margin);
+        if (lo[k] > hi[k])
+            return 0;
+    }
+    return 1;
+}
+
+/* Box lo .. hi of level @p L of @p src, read (through the source's cache)
+ * and placed in the world: its origin that of its first voxel. */
+static vv_status
+read_level_box(vv_source *src, int L, const int lo[3], const int hi[3], vv_volume **out) {
+    const vv_volume *h = vv_source_level(src, L);
+    vv_volume *v = NULL;
+    vv_status s = vv_source_read_box(src, L, lo, hi, &v);
+    if (s != VV_OK)
+        return s;
+    if (lo[0] != 0 || lo[1] != 0 || lo[2] != 0) /* else perhaps the level itself: shared */
+        for (int r = 0; r < 3; r++)             /* its origin: the level's voxel lo */
+            for (int k = 0; k < 3; k++)
+                v->origin[r] += h->direction[3 * r + k] * h->spacing[k] * lo[k];
+    *out = v;
+    return VV_OK;
+}
+
+/* Plane @p p of object @p obj out of core sampled from the coarsest level of
+ * its file whose voxel is at most a pixel (level 0 at worst; a coarser one
+ * when that box would take more than a quarter of the cache's limit): the
+ * box the plane crosses, read through the source's cache. */
+static vv_status
+sample_source(vv_source *src, const vv_object *obj, const vv_slice_plane *p, float *values) {
+    const int levels = vv_source_levels(src);
+    int L = levels - 1;
+    for (; L > 0; L--) {
+        const vv_object geo = with_volume(obj, vv_source_level(src, L));
+        const vv_mat4 m = vv_object_index_to_world(&geo);
+        double edge = INFINITY;
+        for (int k = 0; k < 3; k++)
+            edge = fmin(
+                edge, sqrt(m.m[0][k] * m.m[0][k] + m.m[1][k] * m.m[1][k] + m.m[2][k] * m.m[2][k]));
+        if (edge <= p->pixel)
+            break;
+    }
+    const vv_cache *cache = vv_source_cache(src);
+    const double most = (double)vv_cache_limit(cache ? cache : vv_cache_process()) / 4;
+    const double hw = p->width * p->pixel / 2, hh = p->height * p->pixel / 2;
+    vv_vec3 pts[4];
+    for (int i = 0; i < 4; i++)
+        pts[i] = vv_vec3_add(p->center, vv_vec3_add(vv_vec3_scale(p->right, i & 1 ? hw : -hw),
+                                                    vv_vec3_scale(p->up, i & 2 ? hh : -hh)));
+    for (; L < levels; L++) {
+        int lo[3], hi[3];
+        if (!level_box(src, obj, L, pts, 4, 1, lo, hi)) {
+            /* the plane misses the volume: nothing to show */
+            for (size_t i = 0; i < (size_t)p->width * p->height; i++)
+                values[i] = NAN;
+            return VV_OK;
+        }
+        const double bytes = (double)(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) *
+                             (hi[2] - lo[2] + 1) *
+                             (double)vv_voxel_type_size(vv_source_level(src, L)->type);
+        if (bytes > most && L + 1 < levels)
+            continue;
+        vv_volume *v = NULL;
+        vv_status s = read_level_box(src, L, lo, hi, &v);
+        if (s != VV_OK)
+            return s;
+        const vv_object o = with_volume(obj, v);
+        s = vv_slice_sample(&o, p, values);
+        vv_volume_free(v);
+        return s;
+    }
+    return vv_error_set(VV_ERR_LIMIT,
+                        "slice: %s: even the coarsest level's box is over the "
+                        "cache's limit",
+                        obj->name);
+}
+
+/* The value of object @p obj out of core at world point @p c from level 0
+ * of its file (a box of 4^3 voxels around it), its level-0 voxel index in
+ * @p ijk; NaN outside or when it cannot be read. */
+static double
+probe_source(vv_source *src, const vv_object *obj, vv_vec3 c, double ijk[3]) {
+    int lo[3], hi[3];
+    if (!level_box(src, obj, 0, &c, 1, 2, lo, hi))
+        return NAN;
+    vv_volume *v = NULL;
+    if (read_level_box(src, 0, lo, hi, &v) != VV_OK)
+        return NAN;
+    const vv_object o = with_volume(obj, v);
+    double q[3];
+    const double val = vv_slice_probe(&o, c, q);
+    if (ijk)
+        for (int k = 0; k < 3; k++)
+            ijk[k] = q[k] + lo[k];
+    vv_volume_free(v);
+    return val;
+}
+
+/* 1 when @p obj shows a file out of core (its voxels come from its source). */
+static int
+out_of_core(const vv_object *obj) {
+    return obj->type == VV_OBJECT_VOLUME && obj->source &&
+           vv_source_get_kind(obj->source) != VV_SOURCE_MEMORY;
+}
+
 vv_status
 vv_slice_sample(const vv_object *obj, const vv_slice_plane *p, float *values) {
     if (!obj || !p || !values || !obj->volume)
         return vv_error_set(VV_ERR_INVALID, "slice: %s",
                             !obj || !obj->volume ? "the object has no volume" : "NULL argument");
+    if (out_of_core(obj))
+        return sample_source(obj->source, obj, p, values);
     return sample_volume(obj, obj->volume, p, 0, values);
 }
 
@@ -339,7 +486,11 @@ vv_slice_blend_channels(const vv_object *obj, const float *const *values, size_t
 double
 vv_slice_probe(const vv_object *obj, vv_vec3 world, double ijk[3]) {
     vv_mat4 m;
-    if (!obj || !obj->volume || !finite3(world) || !world_to_index(obj, &m))
+    if (!obj || !obj->volume || !finite3(world))
+        return NAN;
+    if (out_of_core(obj))
+        return probe_source(obj->source, obj, world, ijk);
+    if (!world_to_index(obj, &m))
         return NAN;
     vv_vec3 q = vv_mat4_mul_point(m, world);
     if (ijk) {

@@ -1,7 +1,8 @@
 /* Multiplanar reconstruction (include/volvis/slice.h): planes in the
  * anatomical frame, exact samples of a linear field, the probe, a rotated
  * and placed volume against vv_volume_sample_world, a real CT slice against
- * Teem's own `unu slice`, window and level, and `volvis slice`. */
+ * Teem's own `unu slice`, window and level, `volvis slice`, and an object
+ * out of core (an OME-Zarr pyramid) sliced and probed from its file. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -272,12 +273,94 @@ test_cli(void **state) {
     vt_run_result_free(&r);
 }
 
+/* An object showing an OME-Zarr pyramid out of core is sliced from the
+ * file, not from its coarse proxy: at a pixel finer than a voxel, level 0's
+ * values (those of the same volume in memory; the field is not linear, so a
+ * coarser level would differ); at a pixel of several voxels, a coarser
+ * level's box; the probe reads level 0. */
+static void
+test_out_of_core(void **state) {
+    (void)state;
+    /* not linear, so that a coarser level (2x2x2 means) differs from level 0 */
+    vv_volume *v = linear_volume(96, 80, 72, VV_SPACE_UNKNOWN);
+    for (int k = 0; k < 72; k++)
+        for (int j = 0; j < 80; j++)
+            for (int i = 0; i < 96; i++)
+                vv_volume_set(v, i, j, k, (double)((i * j + 7 * k) % 23) + 0.1 * i);
+    vv_volume_update_range(v);
+    char path[4096];
+    snprintf(path, sizeof path, "%s/linear.ome.zarr", vt_outdir("slice"));
+    vt_ok(vv_volume_save(v, path, VV_FORMAT_OME_ZARR, 0));
+    vv_object *mem = object_of(v);
+    vv_open_options oo;
+    vv_open_options_init(&oo);
+    oo.mode = VV_OPEN_OUT_OF_CORE;
+    oo.levels = 1;
+    vv_opened od;
+    vt_ok(vv_open(&od, path, &oo));
+    assert_int_equal(vv_source_get_kind(od.source), VV_SOURCE_PYRAMID);
+    assert_true(vv_source_levels(od.source) >= 2);
+    vv_object *ooc = NULL;
+    vt_ok(vv_object_new_source(&ooc, od.source, 0, "file"));
+    vv_opened_clear(&od);
+    assert_non_null(ooc->source);
+    /* the proxy is coarser than level 0: what the file gives must not be it */
+    assert_true(ooc->volume->dims[0] < 96);
+
+    vv_box box = vv_object_world_box(mem);
+    vv_vec3 c = vv_vec3_scale(vv_vec3_add(box.min, box.max), 0.5);
+    vv_slice_plane pl;
+    vt_ok(vv_slice_plane_standard(&pl, VV_SLICE_AXIAL, VV_SPACE_UNKNOWN,
+                                  vv_vec3_add(c, vv_vec3_make(0.3, -0.7, 1.1)), 64, 48, 0.25));
+    size_t n = (size_t)pl.width * pl.height;
+    float *a = malloc(n * sizeof *a), *b = malloc(n * sizeof *b);
+    assert_non_null(a);
+    assert_non_null(b);
+    vt_ok(vv_slice_sample(mem, &pl, a));
+    vt_ok(vv_slice_sample(ooc, &pl, b));
+    int inside = 0;
+    for (size_t i = 0; i < n; i++) {
+        assert_int_equal(isnan(a[i]), isnan(b[i]));
+        if (!isnan(a[i])) {
+            inside++;
+            if (fabsf(a[i] - b[i]) > 1e-3f * fabsf(a[i]))
+                fail_msg("pixel %zu: %g in memory, %g from the file", i, a[i], b[i]);
+        }
+    }
+    assert_true(inside > (int)n / 2);
+    /* a pixel of several voxels: a coarser level, values within the data's range */
+    vt_ok(vv_slice_plane_standard(&pl, VV_SLICE_CORONAL, VV_SPACE_UNKNOWN, c, 40, 30, 2.5));
+    n = (size_t)pl.width * pl.height;
+    vt_ok(vv_slice_sample(ooc, &pl, b));
+    inside = 0;
+    for (size_t i = 0; i < n; i++)
+        if (!isnan(b[i])) {
+            inside++;
+            assert_true(b[i] >= mem->volume->range[0] - 1e-3 &&
+                        b[i] <= mem->volume->range[1] + 1e-3);
+        }
+    assert_true(inside > (int)n / 4);
+    /* the probe: level 0, its index */
+    double ia[3], ib[3];
+    vv_vec3 q = vv_vec3_add(c, vv_vec3_make(1.3, 2.9, -4.4));
+    double va = vv_slice_probe(mem, q, ia), vb = vv_slice_probe(ooc, q, ib);
+    assert_true(fabs(va - vb) < 1e-3 * fabs(va));
+    for (int k = 0; k < 3; k++)
+        assert_true(fabs(ia[k] - ib[k]) < 1e-6);
+    assert_true(isnan(vv_slice_probe(ooc, vv_vec3_make(1e4, 0, 0), NULL)));
+    free(a);
+    free(b);
+    vv_object_free(mem);
+    vv_object_free(ooc);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_orientation),  cmocka_unit_test(test_linear),
         cmocka_unit_test(test_transformed),  cmocka_unit_test(test_ct_against_teem),
         cmocka_unit_test(test_window_level), cmocka_unit_test(test_cli),
+        cmocka_unit_test(test_out_of_core),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
