@@ -20,7 +20,8 @@ struct _VvgDocument {
     vv_world *kept; /* the World while a transient one is shown, else NULL */
     vvg_undo *undo;
     char *path;
-    gboolean dirty;
+    gboolean dirty_untracked; /* changed in a way the undo stack cannot return from (restored
+                                 from an autosave): unsaved until saved or opened */
     int selected;
     vv_filter_cache *filtered; /* filtered volumes of scene objects, kept across reopenings */
     GPtrArray *autosaved;      /* autosaved_volume: what the last autosave wrote */
@@ -147,13 +148,22 @@ restore_kept(VvgDocument *doc) {
     clamp_selection(doc);
 }
 
+/* The state now is the one opened or saved: the undo stack's clean state. */
+static void
+mark_clean(VvgDocument *doc) {
+    vvg_undo_mark_clean(doc->undo);
+    doc->dirty_untracked = FALSE;
+    g_clear_pointer(&doc->merge_label, g_free); /* the next edit is a step of its own */
+}
+
 void
 vvg_document_begin_edit(VvgDocument *doc, const char *label) {
     /* callers may hold pointers into the World shown: the edit changes it */
     keep_transient(doc);
-    if (vvg_undo_push(doc->undo, doc->world, label) != VV_OK)
+    if (vvg_undo_push(doc->undo, doc->world, label) != VV_OK) {
         g_warning("volvis-gui: no undo step for '%s': %s", label, vv_error_message());
-    doc->dirty = TRUE;
+        vvg_undo_mark_unclean(doc->undo); /* changed, and no step returns to the clean state */
+    }
     g_clear_pointer(&doc->merge_label, g_free);
 }
 
@@ -163,7 +173,7 @@ vvg_document_begin_edit_merging(VvgDocument *doc, const char *label) {
     if (doc->merge_label && !strcmp(doc->merge_label, label) && now - doc->merge_time < 1000000 &&
         !doc->kept && vvg_undo_can_undo(doc->undo)) {
         doc->merge_time = now;
-        doc->dirty = TRUE;
+        vvg_undo_mark_unclean(doc->undo); /* merged into the last step: the state moved on */
         return;
     }
     vvg_document_begin_edit(doc, label);
@@ -193,8 +203,7 @@ vvg_document_undo(VvgDocument *doc) {
             g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
         return FALSE;
     }
-    doc->dirty = TRUE;
-    world_replaced(doc);
+    world_replaced(doc); /* back at the opened or saved state: clean (vvg_undo_is_clean) */
     return TRUE;
 }
 
@@ -208,7 +217,6 @@ vvg_document_redo(VvgDocument *doc) {
             g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
         return FALSE;
     }
-    doc->dirty = TRUE;
     world_replaced(doc);
     return TRUE;
 }
@@ -288,8 +296,8 @@ open_scene(VvgDocument *doc, const char *path, GError **error) {
     g_free(doc->path);
     doc->path = g_canonicalize_filename(path, NULL);
     doc->selected = w->n_objects > 0 ? 0 : -1;
+    mark_clean(doc);
     world_replaced(doc);
-    doc->dirty = FALSE;
     return TRUE;
 }
 
@@ -344,14 +352,15 @@ add_mesh(VvgDocument *doc, const char *path, vv_mesh *m, GError **error) {
     }
     if (vvg_document_mesh_is_y_up(path)) /* its Y turned to the World's Z (up) */
         o->orientation = vv_quat_from_axis_angle(vv_vec3_make(1, 0, 0), VV_PI / 2);
-    gboolean fresh = doc->world->n_objects == 0 && !doc->dirty;
+    gboolean fresh = doc->world->n_objects == 0 && !vvg_document_dirty(doc);
     if (doc->world->n_objects == 0 && doc->world->n_lights == 0) {
         vv_light l = {VV_LIGHT_DIRECTIONAL, 1, {0, 1, 0}, {0, 0, 0}, {1, 1, 1}, 1.0};
         vv_world_add_light(doc->world, &l);
     }
     vvg_document_add_object(doc, o, NULL);
     added_beside(doc);
-    doc->dirty = !fresh;
+    if (fresh) /* a file just opened is not "unsaved" */
+        mark_clean(doc);
     return TRUE;
 }
 
@@ -408,7 +417,7 @@ add_volume_channels(VvgDocument *doc, vv_volume *const *v, int n, const vv_load_
     if (source)
         remember_source(obj, source);
     if (doc->world->n_objects == 0) {
-        gboolean fresh = !doc->dirty;
+        gboolean fresh = !vvg_document_dirty(doc);
         vvg_document_begin_edit(doc, "open volume");
         /* the default scene's view, lights and shading; the session's
          * render settings and view size stay */
@@ -426,7 +435,8 @@ add_volume_channels(VvgDocument *doc, vv_volume *const *v, int n, const vv_load_
         if (resized) /* framed for the window's shape */
             vv_view_frame_box(&w->view, vv_world_bounds(w));
         doc->selected = 0;
-        doc->dirty = !fresh; /* a file just opened is not "unsaved" */
+        if (fresh) /* a file just opened is not "unsaved" */
+            mark_clean(doc);
         world_replaced(doc);
         return TRUE;
     }
@@ -834,7 +844,7 @@ vvg_document_path(VvgDocument *doc) {
 
 gboolean
 vvg_document_dirty(VvgDocument *doc) {
-    return doc->dirty;
+    return doc->dirty_untracked || !vvg_undo_is_clean(doc->undo);
 }
 
 gboolean
@@ -900,7 +910,7 @@ vvg_document_save(VvgDocument *doc, const char *path, GError **error) {
     char *saved = g_canonicalize_filename(path, NULL);
     g_free(doc->path);
     doc->path = saved;
-    doc->dirty = FALSE;
+    mark_clean(doc);
     return TRUE;
 }
 
@@ -1075,7 +1085,8 @@ gboolean
 vvg_document_restore(VvgDocument *doc, const char *dir, GError **error) {
     g_autofree char *scene = g_build_filename(dir, "session.json", NULL);
     g_autofree char *was_path = g_strdup(doc->path);
-    const gboolean was_dirty = doc->dirty;
+    const gboolean was_untracked = doc->dirty_untracked;
+    const int was_clean = vvg_undo_clean_index(doc->undo);
     if (!open_scene(doc, scene, error))
         return FALSE;
     /* the autosave's own volumes are volumes of the session again: saving
@@ -1100,7 +1111,8 @@ vvg_document_restore(VvgDocument *doc, const char *dir, GError **error) {
                 vvg_document_undo(doc);
                 g_free(doc->path);
                 doc->path = g_steal_pointer(&was_path);
-                doc->dirty = was_dirty;
+                doc->dirty_untracked = was_untracked;
+                vvg_undo_set_clean_index(doc->undo, was_clean);
                 return FALSE;
             }
         }
@@ -1109,7 +1121,7 @@ vvg_document_restore(VvgDocument *doc, const char *dir, GError **error) {
     }
     g_free(doc->path);
     doc->path = NULL;
-    doc->dirty = TRUE;
+    doc->dirty_untracked = TRUE; /* a restored session is unsaved, whatever is undone */
     g_signal_emit(doc, signals[SIGNAL_CHANGED], 0);
     return TRUE;
 }

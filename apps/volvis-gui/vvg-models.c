@@ -16,6 +16,7 @@ typedef struct undo_step {
 struct vvg_undo {
     int limit;
     int n_undo, n_redo;
+    int clean;       /* n_undo of the clean state; -1 unreachable */
     undo_step *undo; /* oldest first */
     undo_step *redo; /* most recently undone last */
 };
@@ -34,6 +35,7 @@ vvg_undo_new(vvg_undo **out, int limit) {
         return vv_error_set(VV_ERR_NOMEM, "undo: out of memory");
     }
     u->limit = limit;
+    u->clean = 0;
     *out = u;
     return VV_OK;
 }
@@ -53,6 +55,35 @@ vvg_undo_clear(vvg_undo *u) {
         vv_world_free(u->undo[i].world);
     u->n_undo = 0;
     clear_redo(u);
+    u->clean = 0;
+}
+
+void
+vvg_undo_mark_clean(vvg_undo *u) {
+    if (u)
+        u->clean = u->n_undo;
+}
+
+int
+vvg_undo_is_clean(const vvg_undo *u) {
+    return u && u->clean == u->n_undo;
+}
+
+void
+vvg_undo_mark_unclean(vvg_undo *u) {
+    if (u && u->clean == u->n_undo)
+        u->clean = -1;
+}
+
+int
+vvg_undo_clean_index(const vvg_undo *u) {
+    return u ? u->clean : -1;
+}
+
+void
+vvg_undo_set_clean_index(vvg_undo *u, int index) {
+    if (u)
+        u->clean = index;
 }
 
 void
@@ -79,10 +110,14 @@ vvg_undo_push(vvg_undo *u, const vv_world *before, const char *label) {
     if (s != VV_OK)
         return s;
     clear_redo(u);
+    if (u->clean > u->n_undo) /* the clean state was undone past, its redo step is gone */
+        u->clean = -1;
     if (u->n_undo == u->limit) {
         vv_world_free(u->undo[0].world);
         memmove(&u->undo[0], &u->undo[1], (size_t)(u->limit - 1) * sizeof *u->undo);
         u->n_undo--;
+        if (u->clean >= 0) /* its step dropped with the oldest: unreachable at 0 */
+            u->clean = u->clean > 0 ? u->clean - 1 : -1;
     }
     u->undo[u->n_undo].world = snap;
     set_label(&u->undo[u->n_undo], label);
@@ -138,6 +173,7 @@ vv_status
 vvg_undo_redo(vvg_undo *u, vv_world **world) {
     if (!u || !world || !*world)
         return vv_error_set(VV_ERR_INVALID, "undo: NULL argument");
+    /* the undo steps never outgrow the limit here: a redo step was an undo step */
     return swap_step(u->redo, &u->n_redo, u->undo, &u->n_undo, u->limit, world);
 }
 

@@ -41,8 +41,24 @@ const char *vvg_undo_label(const vvg_undo *u, int redo);
  */
 vv_status vvg_undo_undo(vvg_undo *u, vv_world **world);
 vv_status vvg_undo_redo(vvg_undo *u, vv_world **world);
-/** Forgets every step. */
+/** Forgets every step; the state now is the clean one. */
 void vvg_undo_clear(vvg_undo *u);
+/**
+ * Clean-state tracking (Qt's QUndoStack::setClean and isClean, GTK text
+ * buffers' modified flag): marks the state now (the one opened or saved) as
+ * clean. Undoing or redoing back to it makes vvg_undo_is_clean true again;
+ * an edit pushed after undoing past it, or dropping its step off the
+ * bottom of the stack, makes it unreachable (never clean until marked).
+ */
+void vvg_undo_mark_clean(vvg_undo *u);
+/** 1 when the state now is the clean one. */
+int vvg_undo_is_clean(const vvg_undo *u);
+/** The state now changed without a step (an edit merged into the last one):
+ *  the clean state is unreachable until marked again. */
+void vvg_undo_mark_unclean(vvg_undo *u);
+/** Where the clean state is (to put it back with vvg_undo_set_clean_index), -1 nowhere. */
+int vvg_undo_clean_index(const vvg_undo *u);
+void vvg_undo_set_clean_index(vvg_undo *u, int index);
 
 /* ---- transfer-function editing ------------------------------------------ */
 

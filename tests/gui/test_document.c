@@ -133,6 +133,43 @@ test_save_writes_the_kept_world(void **state) {
     g_object_unref(doc);
 }
 
+/* Issue 66: open the CT head, move the view, undo: the document is the
+ * opened one again and not "changed" (Ctrl+Q does not ask); a save marks
+ * the saved state, and undo and redo back to it are clean too. */
+static void
+test_undo_to_clean(void **state) {
+    (void)state;
+    if (!vt_have_data("volumes/ct_head.nrrd"))
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    VvgDocument *doc = vvg_document_new();
+    GError *err = NULL;
+    assert_true(vvg_document_open(doc, vt_data("volumes/ct_head.nrrd"), &err));
+    assert_false(vvg_document_dirty(doc));
+    vvg_document_begin_edit_merging(doc, "rotate the view");
+    vvg_document_world(doc)->view.eye.x += 10;
+    vvg_document_begin_edit_merging(doc, "rotate the view"); /* merged into one step */
+    vvg_document_world(doc)->view.eye.x += 10;
+    assert_true(vvg_document_dirty(doc));
+    assert_true(vvg_document_undo(doc));
+    assert_false(vvg_document_dirty(doc));
+    assert_true(vvg_document_redo(doc));
+    assert_true(vvg_document_dirty(doc));
+    const char *path = vt_path(vt_outdir("gui_document"), "clean.json");
+    assert_true(vvg_document_save(doc, path, &err));
+    assert_false(vvg_document_dirty(doc));
+    /* a drag right after the save is a step of its own, not merged into the saved one */
+    vvg_document_begin_edit_merging(doc, "rotate the view");
+    vvg_document_world(doc)->view.eye.x += 5;
+    assert_true(vvg_document_dirty(doc));
+    assert_true(vvg_document_undo(doc));
+    assert_false(vvg_document_dirty(doc));
+    assert_true(vvg_document_undo(doc)); /* before the drag that was saved */
+    assert_true(vvg_document_dirty(doc));
+    assert_true(vvg_document_redo(doc));
+    assert_false(vvg_document_dirty(doc));
+    g_object_unref(doc);
+}
+
 static ino_t
 inode_of(const char *path) {
     struct stat st;
@@ -599,6 +636,7 @@ main(void) {
         cmocka_unit_test(test_edit_keeps_the_frame),
         cmocka_unit_test(test_undo_restores_first),
         cmocka_unit_test(test_save_writes_the_kept_world),
+        cmocka_unit_test(test_undo_to_clean),
         cmocka_unit_test(test_autosave_and_restore),
         cmocka_unit_test(test_save_all_or_nothing),
         cmocka_unit_test(test_channels_and_time),

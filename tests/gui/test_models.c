@@ -79,10 +79,59 @@ test_tf_editing(void **state) {
     assert_int_equal(tf.n_color, 0);
 }
 
+/* Clean-state tracking (issue 66): undo and redo back to the marked state
+ * are clean; an edit after undoing past it, or its step dropped off the
+ * bottom, make it unreachable; an edit merged into the last step is not clean. */
+static void
+test_undo_clean(void **state) {
+    (void)state;
+    vvg_undo *u = NULL;
+    vt_ok(vvg_undo_new(&u, 3));
+    vv_world *w = NULL;
+    vt_ok(vv_world_new(&w));
+    assert_true(vvg_undo_is_clean(u)); /* a new stack: nothing changed */
+    vt_ok(vvg_undo_push(u, w, "a"));
+    assert_false(vvg_undo_is_clean(u));
+    vt_ok(vvg_undo_undo(u, &w));
+    assert_true(vvg_undo_is_clean(u)); /* undone back to the start */
+    vt_ok(vvg_undo_redo(u, &w));
+    assert_false(vvg_undo_is_clean(u));
+    vvg_undo_mark_clean(u); /* saved after "a" */
+    assert_true(vvg_undo_is_clean(u));
+    vt_ok(vvg_undo_push(u, w, "b"));
+    vt_ok(vvg_undo_undo(u, &w));
+    assert_true(vvg_undo_is_clean(u));
+    vt_ok(vvg_undo_undo(u, &w)); /* before "a": not the saved state */
+    assert_false(vvg_undo_is_clean(u));
+    vt_ok(vvg_undo_push(u, w, "c")); /* the saved state's redo steps are gone */
+    assert_false(vvg_undo_is_clean(u));
+    vt_ok(vvg_undo_undo(u, &w));
+    assert_false(vvg_undo_is_clean(u));
+    assert_int_equal(vvg_undo_clean_index(u), -1);
+    /* the clean state's step dropped off the bottom of a 3-step stack */
+    vvg_undo_mark_clean(u); /* at 0 steps */
+    for (int i = 0; i < 4; i++)
+        vt_ok(vvg_undo_push(u, w, "d"));
+    while (vvg_undo_can_undo(u)) {
+        vt_ok(vvg_undo_undo(u, &w));
+        assert_false(vvg_undo_is_clean(u));
+    }
+    /* a merged edit: the state moved without a step */
+    vvg_undo_clear(u);
+    assert_true(vvg_undo_is_clean(u));
+    vvg_undo_mark_unclean(u);
+    assert_false(vvg_undo_is_clean(u));
+    vvg_undo_set_clean_index(u, 0);
+    assert_true(vvg_undo_is_clean(u));
+    vv_world_free(w);
+    vvg_undo_free(u);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_undo),
+        cmocka_unit_test(test_undo_clean),
         cmocka_unit_test(test_tf_editing),
     };
     return vt_run_tests(tests, NULL, NULL);
