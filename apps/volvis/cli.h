@@ -214,6 +214,8 @@ typedef struct cli_render_args {
     double contrast[VV_MAX_CHANNELS][2]; /**< lower and upper limits, data values */
     int has_blend;                       /**< --blend given */
     int label_channel[VV_MAX_CHANNELS];  /**< --label-channels: 1 where channels[i] holds labels */
+    int all_channels; /**< --colors, --contrast or --blend without --channels: every channel of
+                           the file in order (their count known once it is open) */
     vv_channel_blend blend;
     double gamma;
     int has_quality, quality; /**< --quality given, and its value */

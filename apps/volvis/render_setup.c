@@ -215,24 +215,36 @@ parse_channel_options(cli_args *a, cli_render_args *r) {
             p = end + 1;
         }
     }
-    const char *needs = r->n_colors                    ? "--colors"
-                        : r->n_contrast                ? "--contrast"
-                        : r->has_blend                 ? "--blend"
-                        : cli_get(a, "label-channels") ? "--label-channels"
-                                                       : NULL;
-    if (needs && !r->n_channels)
-        return cli_usage_error(a, "%s: only with --channels LIST", needs);
-    if (r->n_colors > r->n_channels || r->n_contrast > r->n_channels)
+    if (cli_get(a, "label-channels") && !r->n_channels)
+        return cli_usage_error(a, "--label-channels: only with --channels LIST");
+    /* colours, contrast limits or a blend rule alone: every channel of the file in
+     * order (napari's colormap=[...]); how many the file has is known once open */
+    r->all_channels = !r->n_channels && (r->n_colors || r->n_contrast || r->has_blend);
+    if (r->n_channels && (r->n_colors > r->n_channels || r->n_contrast > r->n_channels))
         return cli_usage_error(a, "%s: %d given for %d channel%s",
                                r->n_colors > r->n_channels ? "--colors" : "--contrast",
                                r->n_colors > r->n_channels ? r->n_colors : r->n_contrast,
                                r->n_channels, r->n_channels == 1 ? "" : "s");
-    if (r->n_channels && cli_get(a, "memory-limit"))
-        return cli_usage_error(a, "--channels: volumes larger than memory are drawn one "
-                                  "channel at a time (--channel C with --memory-limit)");
-    if (r->n_channels && (cli_get(a, "mode") || cli_get(a, "iso") || cli_get(a, "tf")))
-        return cli_usage_error(a, "--channels: the channels show by --blend and --contrast, "
-                                  "not --mode, --iso or --tf");
+    const char *chan = r->n_channels   ? "--channels"
+                       : r->n_colors   ? "--colors"
+                       : r->n_contrast ? "--contrast"
+                                       : "--blend";
+    if ((r->n_channels || r->all_channels) && cli_get(a, "memory-limit"))
+        return cli_usage_error(a,
+                               "%s: volumes larger than memory are drawn one "
+                               "channel at a time (--channel C with --memory-limit)",
+                               chan);
+    if ((r->n_channels || r->all_channels) &&
+        (cli_get(a, "mode") || cli_get(a, "iso") || cli_get(a, "tf")))
+        return cli_usage_error(a,
+                               "%s: the channels show by --blend and --contrast, "
+                               "not --mode, --iso or --tf",
+                               chan);
+    if (r->all_channels && cli_get(a, "channel"))
+        return cli_usage_error(a,
+                               "%s: for every channel, not with --channel C (give "
+                               "--channels LIST)",
+                               chan);
     return 0;
 }
 
@@ -549,6 +561,28 @@ world_for_file(const cli_render_args *r, vv_world **out) {
                   r->input);
         return CLI_EXIT_FAIL;
     }
+    if (s == VV_OK && od.kind == VV_DATA_VOLUME && r->all_channels) {
+        /* --colors, --contrast or --blend alone: the file's channels, all of them */
+        const int n = od.info.n_channels > 1 ? od.info.n_channels : 1;
+        vv_opened_clear(&od);
+        const char *opt = r->n_colors > n ? "--colors" : r->n_contrast > n ? "--contrast" : NULL;
+        if (opt) {
+            cli_error("%s: %s: %d given for the file's %d channel%s", r->input, opt,
+                      r->n_colors > n ? r->n_colors : r->n_contrast, n, n == 1 ? "" : "s");
+            return CLI_EXIT_USAGE;
+        }
+        if (n > VV_MAX_CHANNELS) {
+            cli_error("%s: %d channels: at most %d show as one object (--channels LIST)", r->input,
+                      n, VV_MAX_CHANNELS);
+            return CLI_EXIT_FAIL;
+        }
+        cli_render_args every = *r;
+        every.all_channels = 0;
+        every.n_channels = n;
+        for (int c = 0; c < n; c++)
+            every.channels[c] = c;
+        return world_for_channels(&every, out);
+    }
     if (s == VV_OK && od.kind == VV_DATA_GRID) { /* an irregular grid: its own World */
         rc = world_for_grid(r, od.grid, out);
         vv_opened_clear(&od);
@@ -699,10 +733,14 @@ cli_render_world(const cli_render_args *r, vv_world **out) {
     if (rc)
         return rc;
     int scene = !r->has_raw && cli_is_scene_file(r->input);
-    if (scene && (r->n_channels || r->time_range)) {
+    if (scene && (r->n_channels || r->all_channels || r->time_range)) {
         fprintf(stderr, "volvis: %s: %s is for a volume file's %s, not a scene\n", r->input,
-                r->n_channels ? "--channels" : "--time-range",
-                r->n_channels ? "channels" : "time steps");
+                r->n_channels     ? "--channels"
+                : r->all_channels ? (r->n_colors     ? "--colors"
+                                     : r->n_contrast ? "--contrast"
+                                                     : "--blend")
+                                  : "--time-range",
+                r->n_channels || r->all_channels ? "channels" : "time steps");
         return CLI_EXIT_FAIL;
     }
     /* a file: vv_open says what it holds (a volume, or an irregular grid) */
@@ -829,7 +867,9 @@ cli_render_print_options(FILE *out) {
             "                   one pass) or raytrace; docs/rendering.md, \"Channels\"\n"
             "  --colors COLOR,...  the channels' colours: red, green, blue, magenta,\n"
             "                   cyan, yellow, white, gray, orange, sky or #rrggbb\n"
-            "                   (default magenta, green, cyan, yellow, then Okabe-Ito)\n"
+            "                   (default magenta, green, cyan, yellow, then Okabe-Ito);\n"
+            "                   without --channels, every channel of the file in order\n"
+            "                   (so too --contrast and --blend)\n"
             "  --contrast LO:HI,...  the channels' contrast limits in data values:\n"
             "                   transparent up to LO, opacity 0.5 from HI (default: LO\n"
             "                   the background plus 3 deviations of its noise, from the\n"

@@ -153,6 +153,17 @@ check(dominant(both, 0).sum() > 50, "--label-channels: the other channel still i
 two = {tuple(c) for c in alone[box][:, :3] // 16}
 check(len(two) >= 2, f"--label-channels: two labels, two colours ({len(two)} seen)")
 
+# colours alone (issue 66; napari's colormap=[...]): every channel of the file in order,
+# the image of --channels 0,1,2 with the same colours; a blend rule alone too
+alone = render("colors_alone", ome, "--colors", "red,green,blue", "--blend", "maximum")
+listed = render("colors_listed", ome, "--channels", "0,1,2", "--colors", "red,green,blue",
+                "--blend", "maximum")
+check(np.array_equal(alone, listed) and all(dominant(alone, k).sum() > 50 for k in range(3)),
+      "--colors without --channels: every channel, as --channels 0,1,2 draws them")
+check(np.array_equal(render("blend_alone", ome, "--blend", "additive"),
+                     render("blend_listed", ome, "--channels", "0,1,2", "--blend", "additive")),
+      "--blend without --channels: every channel")
+
 # bad input: one line, non-zero exit, no image
 bad = [
     ([lab, "--channels", "0,1", "--label-channels", "5"], "not in --channels", 2),
@@ -162,7 +173,9 @@ bad = [
     ([ome, "--channels", "0,1", "--blend", "sum"], "sum", 2),
     ([ome, "--channel", "1", "--channels", "0,1"], "--channels", 2),
     ([ome, "--channels", "0,1", "--colors", "red,green,blue"], "3 given for 2 channels", 2),
-    ([ome, "--colors", "red"], "only with --channels", 2),
+    ([ome, "--colors", "red,green,blue,white"], "4 given for the file's 3 channels", 2),
+    ([ome, "--colors", "red", "--channel", "1"], "not with --channel C", 2),
+    ([ome, "--blend", "maximum", "--memory-limit", "1G"], "one channel at a time", 2),
     ([ome, "--channels", "0,0"], "twice", 2),
     ([ome, "--channels", "0,1", "--mode", "mip"], "--blend", 2),
 ]
@@ -170,6 +183,7 @@ scene = os.path.join(OUT, "scene.json")
 with open(scene, "w") as f:
     f.write('{"objects": []}')
 bad.append(([scene, "--channels", "0,1"], "not a scene", 1))
+bad.append(([scene, "--colors", "red"], "--colors is for a volume file's channels", 1))
 for args, needle, code in bad:
     out = os.path.join(OUT, "bad.png")
     if os.path.exists(out):
