@@ -43,9 +43,17 @@ def main():
         log = s.frames_log()
         states = [f["state"] for f in log]
         check(all(b >= a for a, b in zip(states, states[1:])), f"a stale frame was shown: {states}")
-        check(not any(f["kind"] == "full" and f["state"] <= before for f in log),
-              "the old state's final frame was shown")
-        print(f"stale frames: none; {len(log)} frames, old state {before}")
+        # The invariant of the docstring, and no stricter: the old state's final
+        # frame may be shown only before every frame of the new state. On a
+        # loaded machine it may finish before the drag's first event reaches the
+        # GUI, and is then rightly shown (issue 66: this check once demanded it
+        # never be shown at all).
+        first_new = next(i for i, f in enumerate(log) if f["state"] > before)
+        old_full = [i for i, f in enumerate(log) if f["kind"] == "full" and f["state"] <= before]
+        check(all(i < first_new for i in old_full),
+              "the old state's final frame was shown after a frame of the new state")
+        print(f"stale frames: none; {len(log)} frames, old state {before}; its final frame "
+              f"{'finished before the drag arrived' if old_full else 'cancelled by the drag'}")
         s.quit_discard()
 
 
