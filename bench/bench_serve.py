@@ -17,7 +17,10 @@ with `moving: false`. It reads every frame as it arrives. Measured, per run
   anchor=volvis op=serve_input_to_frame_p95  first frame that shows it (input_seq >= k)
   anchor=volvis op=serve_sharp_after_stop    ms from the last input to the full frame
   anchor=volvis op=serve_drag_mbit_s         Mbit/s of frames while dragging
-  anchor=volvis op=serve_encode_share        JPEG encoding's share of a frame's time, %
+  anchor=volvis op=serve_encode_share        JPEG encoding's share of a drag frame's server time
+                                             (render + encode), %
+  anchor=volvis op=serve_encode_ms           JPEG encoding (8-bit conversion and libjpeg-turbo)
+                                             of a drag frame, ms
   anchor=volvis op=serve_full_frame_ms       the full frame's render time (server's)
 
 Targets (issue 63, CT head at 1000 x 800 on 2 cores): >= 20 frames a second,
@@ -164,6 +167,7 @@ def main():
                               ("serve_sharp_after_stop", "sharp", "ms"),
                               ("serve_drag_mbit_s", "mbit", "Mbit/s"),
                               ("serve_encode_share", "encode", "%"),
+                              ("serve_encode_ms", "encode_ms", "ms"),
                               ("serve_full_frame_ms", "full_ms", "ms")):
             print(f"anchor=volvis op={op} {tag} value={r[key]:.2f} unit={unit}", flush=True)
 
