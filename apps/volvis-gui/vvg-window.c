@@ -42,6 +42,8 @@ struct _VvgWindow {
     GtkWidget *navigator; /* VvgNavigatorPanel */
     GtkWidget *area;      /* VvgViewArea */
     GtkWidget *pages;     /* the side bar's GtkStack */
+    GtkWidget *chooser;   /* the side bar's page chooser (GtkFlowBox, two columns) */
+    GtkWidget *side;      /* the side bar: hidden by the Controls toggle (F9) */
     /* a close or quit waiting for Save (As) to finish */
     void (*after_save)(void *user);
     void *after_save_user;
@@ -957,6 +959,10 @@ header_bar(void) {
     gtk_box_append(GTK_BOX(layout), one);
     gtk_box_append(GTK_BOX(layout), four);
     gtk_header_bar_pack_end(GTK_HEADER_BAR(hb), layout);
+    GtkWidget *controls = gtk_toggle_button_new_with_label("Controls");
+    gtk_actionable_set_action_name(GTK_ACTIONABLE(controls), "win.controls");
+    gtk_widget_set_tooltip_text(controls, "show or hide the side bar of pages (F9)");
+    gtk_header_bar_pack_end(GTK_HEADER_BAR(hb), controls);
     return hb;
 }
 
@@ -983,7 +989,63 @@ one(GtkWidget *a) {
     return vvg_scrolled(box);
 }
 
-/* The side bar: one page per component, each scrolling on its own. */
+/* The chooser's child for page @p name (its position in the stack). */
+static GtkFlowBoxChild *
+chooser_child(VvgWindow *win, const char *name) {
+    GtkSelectionModel *pages = gtk_stack_get_pages(GTK_STACK(win->pages));
+    guint n = g_list_model_get_n_items(G_LIST_MODEL(pages));
+    GtkFlowBoxChild *found = NULL;
+    for (guint i = 0; i < n && !found; i++) {
+        GtkStackPage *pg = g_list_model_get_item(G_LIST_MODEL(pages), i);
+        if (!g_strcmp0(gtk_stack_page_get_name(pg), name))
+            found = gtk_flow_box_get_child_at_index(GTK_FLOW_BOX(win->chooser), (int)i);
+        g_object_unref(pg);
+    }
+    g_object_unref(pages);
+    return found;
+}
+
+static void
+chooser_activated(GtkFlowBox *box, GtkFlowBoxChild *child, gpointer user) {
+    (void)box;
+    VvgWindow *win = user;
+    const char *name = g_object_get_data(G_OBJECT(child), "vvg-page");
+    if (name)
+        gtk_stack_set_visible_child_name(GTK_STACK(win->pages), name);
+}
+
+/* The chooser follows the stack when code shows a page. */
+static void
+page_shown(GObject *stack, GParamSpec *pspec, gpointer user) {
+    (void)pspec;
+    VvgWindow *win = user;
+    GtkFlowBoxChild *c = chooser_child(win, gtk_stack_get_visible_child_name(GTK_STACK(stack)));
+    if (c && !gtk_flow_box_child_is_selected(c))
+        gtk_flow_box_select_child(GTK_FLOW_BOX(win->chooser), c);
+}
+
+/* Long labels of the side bar wrap (a check button's text, a hint, a
+ * description): their width, not the window's, would set the side bar's. */
+static void
+wrap_long_labels(GtkWidget *w) {
+    if (GTK_IS_LABEL(w)) {
+        const char *t = gtk_label_get_text(GTK_LABEL(w));
+        if (t && g_utf8_strlen(t, -1) > 36 && !gtk_label_get_wrap(GTK_LABEL(w)) &&
+            gtk_label_get_ellipsize(GTK_LABEL(w)) == PANGO_ELLIPSIZE_NONE) {
+            gtk_label_set_wrap(GTK_LABEL(w), TRUE);
+            gtk_label_set_wrap_mode(GTK_LABEL(w), PANGO_WRAP_WORD_CHAR);
+        }
+        if (gtk_label_get_wrap(GTK_LABEL(w)) && gtk_label_get_max_width_chars(GTK_LABEL(w)) < 0)
+            gtk_label_set_max_width_chars(GTK_LABEL(w), 40);
+        return;
+    }
+    for (GtkWidget *c = gtk_widget_get_first_child(w); c; c = gtk_widget_get_next_sibling(c))
+        wrap_long_labels(c);
+}
+
+/* The side bar (issue 66: the views get most of the window): the pages'
+ * titles in two columns above the page, one page per component, each
+ * scrolling on its own, 340 pixels wide; hidden altogether by Controls. */
 static GtkWidget *
 side_bar(VvgWindow *win) {
     GActionMap *am = G_ACTION_MAP(win);
@@ -1003,14 +1065,52 @@ side_bar(VvgWindow *win) {
     add_page(win, vvg_filter_page_new(win->doc), "filtering", "Filtering");
     add_page(win, vvg_animator_page_new(win->doc), "animator", "Animator");
     add_page(win, vvg_devices_page_new(win), "devices", "Input devices");
-    GtkWidget *switcher = gtk_stack_sidebar_new();
-    gtk_stack_sidebar_set_stack(GTK_STACK_SIDEBAR(switcher), GTK_STACK(win->pages));
-    GtkWidget *side = gtk_box_new(GTK_ORIENTATION_HORIZONTAL, 0);
-    gtk_box_append(GTK_BOX(side), switcher);
-    gtk_widget_set_size_request(win->pages, 360, -1);
+    /* the chooser: every page's title, two a row ("Sidebar": tests and screen
+     * readers find the pages there) */
+    win->chooser = gtk_flow_box_new();
+    gtk_flow_box_set_selection_mode(GTK_FLOW_BOX(win->chooser), GTK_SELECTION_SINGLE);
+    gtk_flow_box_set_min_children_per_line(GTK_FLOW_BOX(win->chooser), 2);
+    gtk_flow_box_set_max_children_per_line(GTK_FLOW_BOX(win->chooser), 2);
+    gtk_flow_box_set_homogeneous(GTK_FLOW_BOX(win->chooser), TRUE);
+    gtk_flow_box_set_activate_on_single_click(GTK_FLOW_BOX(win->chooser), TRUE);
+    gtk_widget_add_css_class(win->chooser, "navigation-sidebar");
+    vvg_name(win->chooser, "Sidebar");
+    GtkSelectionModel *pages = gtk_stack_get_pages(GTK_STACK(win->pages));
+    guint n = g_list_model_get_n_items(G_LIST_MODEL(pages));
+    for (guint i = 0; i < n; i++) {
+        GtkStackPage *pg = g_list_model_get_item(G_LIST_MODEL(pages), i);
+        GtkWidget *label = gtk_label_new(gtk_stack_page_get_title(pg));
+        gtk_label_set_xalign(GTK_LABEL(label), 0);
+        gtk_label_set_ellipsize(GTK_LABEL(label), PANGO_ELLIPSIZE_END);
+        GtkWidget *child = gtk_flow_box_child_new();
+        gtk_flow_box_child_set_child(GTK_FLOW_BOX_CHILD(child), label);
+        g_object_set_data_full(G_OBJECT(child), "vvg-page", g_strdup(gtk_stack_page_get_name(pg)),
+                               g_free);
+        gtk_flow_box_append(GTK_FLOW_BOX(win->chooser), child);
+        g_object_unref(pg);
+    }
+    g_object_unref(pages);
+    g_signal_connect(win->chooser, "child-activated", G_CALLBACK(chooser_activated), win);
+    g_signal_connect(win->pages, "notify::visible-child", G_CALLBACK(page_shown), win);
+    page_shown(G_OBJECT(win->pages), NULL, win);
+    GtkWidget *side = gtk_box_new(GTK_ORIENTATION_VERTICAL, 0);
+    gtk_box_append(GTK_BOX(side), win->chooser);
+    gtk_box_append(GTK_BOX(side), gtk_separator_new(GTK_ORIENTATION_HORIZONTAL));
+    gtk_widget_set_size_request(win->pages, 340, -1);
     gtk_widget_set_hexpand(win->pages, FALSE);
+    gtk_widget_set_vexpand(win->pages, TRUE);
     gtk_box_append(GTK_BOX(side), win->pages);
+    wrap_long_labels(win->pages);
+    win->side = side;
     return side;
+}
+
+/* Controls (F9): the side bar shown or hidden; hidden, the views take the window. */
+static void
+act_controls(GSimpleAction *a, GVariant *value, gpointer user) {
+    VvgWindow *win = user;
+    g_simple_action_set_state(a, value);
+    gtk_widget_set_visible(win->side, g_variant_get_boolean(value));
 }
 
 /* ---- life cycle --------------------------------------------------------------------- */
@@ -1073,6 +1173,7 @@ static const GActionEntry win_actions[] = {
     {"frame-all", act_frame_all, NULL, NULL, NULL, {0}},
     {"drag-target", act_drag_target, "s", NULL, NULL, {0}},
     {"layout", NULL, "s", "'1'", act_layout, {0}},
+    {"controls", NULL, NULL, "true", act_controls, {0}},
 };
 
 static void

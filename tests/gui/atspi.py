@@ -562,12 +562,14 @@ class Session:
                 time.sleep(0.2)
 
     def page(self, title, timeout=10):
-        """Shows the side-bar page @p title (a row of the stack sidebar)."""
-        sidebar = self.find("Sidebar", "list", visible=False, timeout=timeout)
+        """Shows the side-bar page @p title (a title in the side bar's page
+        chooser, named "Sidebar")."""
+        sidebar = self.find("Sidebar", visible=False, timeout=timeout)
         t0 = time.time()
         while True:
             rows = [o for o in self.find_all(title, root=sidebar)
-                    if o.getRoleName() in ("label", "list item") and self.on_screen(o)]
+                    if o.getRoleName() in ("label", "list item", "table cell")
+                    and self.on_screen(o)]
             if rows or time.time() - t0 > timeout:
                 break
             time.sleep(0.3)

@@ -179,6 +179,15 @@ xdotool key ctrl+z
 wait_settled "$n" "undo"
 same "$OUT/full.png" "$OUT/full0.png" || fail "undo did not restore the first image ($(ae "$OUT/full.png" "$OUT/full0.png") pixels)"
 echo "undo: identical to the first frame"
+# undone back to the opened state: not "changed" (issue 66: the undo stack's clean state)
+for _ in $(seq 1 50); do case "$(xdotool getwindowname "$wid")" in *' *') sleep 0.1 ;; *) break ;; esac; done
+case "$(xdotool getwindowname "$wid")" in *' *') fail "undone to the opened state, the title still says changed: $(xdotool getwindowname "$wid")" ;; esac
+echo "undo to the opened state: the title shows no change"
+# an edit again (redo the motion), so that the session has something to autosave
+n=$(nfull)
+xdotool key ctrl+shift+z
+wait_settled "$n" "redoing the motion"
+same "$OUT/full.png" "$OUT/full_rot.png" || fail "redo: not the rotated view"
 
 # the client closes its socket: the GUI runs on, its device leaves the list
 touch "$OUT/go.close"
@@ -190,6 +199,11 @@ kill -0 "$pid" || fail "the GUI died when the client closed its socket"
 import -window root "$OUT/devices_closed.png"
 for _ in $(seq 1 300); do [ -n "$(autosaves)" ] && break; sleep 0.1; done
 [ -n "$(autosaves)" ] || fail "no autosave of the edited session within 30 s"
+# back to the opened state, which the save below writes (the next launches start from it)
+n=$(nfull)
+xdotool key ctrl+z
+wait_settled "$n" "undoing the motion again"
+same "$OUT/full.png" "$OUT/full0.png" || fail "undo again: not the first image"
 quit_saved "$pid" "after the client"
 # saved, then quit: no autosave is left to be offered as a crashed session
 # (the next launch below would show that offer and the keys would go to it)
