@@ -42,7 +42,7 @@ struct _VvgWindow {
     GtkWidget *navigator; /* VvgNavigatorPanel */
     GtkWidget *area;      /* VvgViewArea */
     GtkWidget *pages;     /* the side bar's GtkStack */
-    GtkWidget *chooser;   /* the side bar's page chooser (GtkFlowBox, two columns) */
+    GtkWidget *chooser;   /* the side bar's page chooser (GtkDropDown of the titles) */
     GtkWidget *side;      /* the side bar: hidden by the Controls toggle (F9) */
     /* a close or quit waiting for Save (As) to finish */
     void (*after_save)(void *user);
@@ -989,29 +989,19 @@ one(GtkWidget *a) {
     return vvg_scrolled(box);
 }
 
-/* The chooser's child for page @p name (its position in the stack). */
-static GtkFlowBoxChild *
-chooser_child(VvgWindow *win, const char *name) {
+/* The page chooser shows a page: the stack's page at the chosen position. */
+static void
+page_chosen(GObject *dd, GParamSpec *pspec, gpointer user) {
+    (void)pspec;
+    VvgWindow *win = user;
+    guint i = gtk_drop_down_get_selected(GTK_DROP_DOWN(dd));
     GtkSelectionModel *pages = gtk_stack_get_pages(GTK_STACK(win->pages));
-    guint n = g_list_model_get_n_items(G_LIST_MODEL(pages));
-    GtkFlowBoxChild *found = NULL;
-    for (guint i = 0; i < n && !found; i++) {
+    if (i < g_list_model_get_n_items(G_LIST_MODEL(pages))) {
         GtkStackPage *pg = g_list_model_get_item(G_LIST_MODEL(pages), i);
-        if (!g_strcmp0(gtk_stack_page_get_name(pg), name))
-            found = gtk_flow_box_get_child_at_index(GTK_FLOW_BOX(win->chooser), (int)i);
+        gtk_stack_set_visible_child(GTK_STACK(win->pages), gtk_stack_page_get_child(pg));
         g_object_unref(pg);
     }
     g_object_unref(pages);
-    return found;
-}
-
-static void
-chooser_activated(GtkFlowBox *box, GtkFlowBoxChild *child, gpointer user) {
-    (void)box;
-    VvgWindow *win = user;
-    const char *name = g_object_get_data(G_OBJECT(child), "vvg-page");
-    if (name)
-        gtk_stack_set_visible_child_name(GTK_STACK(win->pages), name);
 }
 
 /* The chooser follows the stack when code shows a page. */
@@ -1019,9 +1009,17 @@ static void
 page_shown(GObject *stack, GParamSpec *pspec, gpointer user) {
     (void)pspec;
     VvgWindow *win = user;
-    GtkFlowBoxChild *c = chooser_child(win, gtk_stack_get_visible_child_name(GTK_STACK(stack)));
-    if (c && !gtk_flow_box_child_is_selected(c))
-        gtk_flow_box_select_child(GTK_FLOW_BOX(win->chooser), c);
+    GtkWidget *shown = gtk_stack_get_visible_child(GTK_STACK(stack));
+    GtkSelectionModel *pages = gtk_stack_get_pages(GTK_STACK(stack));
+    guint n = g_list_model_get_n_items(G_LIST_MODEL(pages));
+    for (guint i = 0; i < n; i++) {
+        GtkStackPage *pg = g_list_model_get_item(G_LIST_MODEL(pages), i);
+        if (gtk_stack_page_get_child(pg) == shown &&
+            gtk_drop_down_get_selected(GTK_DROP_DOWN(win->chooser)) != i)
+            gtk_drop_down_set_selected(GTK_DROP_DOWN(win->chooser), i);
+        g_object_unref(pg);
+    }
+    g_object_unref(pages);
 }
 
 /* Long labels of the side bar wrap (a check button's text, a hint, a
@@ -1043,9 +1041,9 @@ wrap_long_labels(GtkWidget *w) {
         wrap_long_labels(c);
 }
 
-/* The side bar (issue 66: the views get most of the window): the pages'
- * titles in two columns above the page, one page per component, each
- * scrolling on its own, 340 pixels wide; hidden altogether by Controls. */
+/* The side bar (issue 66: the views get most of the window): a drop-down
+ * of the pages above the page, one page per component, each scrolling on
+ * its own, 340 pixels wide; hidden altogether by Controls. */
 static GtkWidget *
 side_bar(VvgWindow *win) {
     GActionMap *am = G_ACTION_MAP(win);
@@ -1065,37 +1063,32 @@ side_bar(VvgWindow *win) {
     add_page(win, vvg_filter_page_new(win->doc), "filtering", "Filtering");
     add_page(win, vvg_animator_page_new(win->doc), "animator", "Animator");
     add_page(win, vvg_devices_page_new(win), "devices", "Input devices");
-    /* the chooser: every page's title, two a row ("Sidebar": tests and screen
-     * readers find the pages there) */
-    win->chooser = gtk_flow_box_new();
-    gtk_flow_box_set_selection_mode(GTK_FLOW_BOX(win->chooser), GTK_SELECTION_SINGLE);
-    gtk_flow_box_set_min_children_per_line(GTK_FLOW_BOX(win->chooser), 2);
-    gtk_flow_box_set_max_children_per_line(GTK_FLOW_BOX(win->chooser), 2);
-    gtk_flow_box_set_homogeneous(GTK_FLOW_BOX(win->chooser), TRUE);
-    gtk_flow_box_set_activate_on_single_click(GTK_FLOW_BOX(win->chooser), TRUE);
-    gtk_widget_add_css_class(win->chooser, "navigation-sidebar");
-    vvg_name(win->chooser, "Sidebar");
+    /* the chooser: a drop-down of the pages' titles, one row (3D Slicer's
+     * module selector), so that the page keeps the side bar's height */
     GtkSelectionModel *pages = gtk_stack_get_pages(GTK_STACK(win->pages));
     guint n = g_list_model_get_n_items(G_LIST_MODEL(pages));
+    GtkStringList *titles = gtk_string_list_new(NULL);
     for (guint i = 0; i < n; i++) {
         GtkStackPage *pg = g_list_model_get_item(G_LIST_MODEL(pages), i);
-        GtkWidget *label = gtk_label_new(gtk_stack_page_get_title(pg));
-        gtk_label_set_xalign(GTK_LABEL(label), 0);
-        gtk_label_set_ellipsize(GTK_LABEL(label), PANGO_ELLIPSIZE_END);
-        GtkWidget *child = gtk_flow_box_child_new();
-        gtk_flow_box_child_set_child(GTK_FLOW_BOX_CHILD(child), label);
-        g_object_set_data_full(G_OBJECT(child), "vvg-page", g_strdup(gtk_stack_page_get_name(pg)),
-                               g_free);
-        gtk_flow_box_append(GTK_FLOW_BOX(win->chooser), child);
+        gtk_string_list_append(titles, gtk_stack_page_get_title(pg));
         g_object_unref(pg);
     }
     g_object_unref(pages);
-    g_signal_connect(win->chooser, "child-activated", G_CALLBACK(chooser_activated), win);
+    win->chooser = gtk_drop_down_new(G_LIST_MODEL(titles), NULL);
+    vvg_name(win->chooser, "Pages");
+    GtkWidget *inner = gtk_widget_get_first_child(win->chooser);
+    if (inner) /* the button inside takes the focus: it carries the name too */
+        vvg_name(inner, "Pages");
+    gtk_widget_set_tooltip_text(win->chooser, "the side bar's page");
+    gtk_widget_set_margin_start(win->chooser, 6);
+    gtk_widget_set_margin_end(win->chooser, 6);
+    gtk_widget_set_margin_top(win->chooser, 6);
+    gtk_widget_set_margin_bottom(win->chooser, 4);
+    g_signal_connect(win->chooser, "notify::selected", G_CALLBACK(page_chosen), win);
     g_signal_connect(win->pages, "notify::visible-child", G_CALLBACK(page_shown), win);
     page_shown(G_OBJECT(win->pages), NULL, win);
     GtkWidget *side = gtk_box_new(GTK_ORIENTATION_VERTICAL, 0);
     gtk_box_append(GTK_BOX(side), win->chooser);
-    gtk_box_append(GTK_BOX(side), gtk_separator_new(GTK_ORIENTATION_HORIZONTAL));
     gtk_widget_set_size_request(win->pages, 340, -1);
     gtk_widget_set_hexpand(win->pages, FALSE);
     gtk_widget_set_vexpand(win->pages, TRUE);
