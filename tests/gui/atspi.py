@@ -309,53 +309,13 @@ class Session:
         return e.x, e.y, e.width, e.height
 
     def on_screen(self, o):
-        """Inside the window and not zero-sized (GTK 4.8 sets no SHOWING
-        state); a widget of the shown side-bar page also inside the page's
-        visible part (a page scrolled down hides its top under the page
-        chooser and the header bar, still inside the window)."""
+        """Inside the window and not zero-sized (GTK 4.8 sets no SHOWING state)."""
         try:
             x, y, w, h = self.extents(o)
         except Exception:
             return False
         W, H = self.window_size
-        if not (w > 0 and h > 0 and x >= 0 and y >= 0 and x + w <= W + 2 and y + h <= H + 2):
-            return False
-        clip = self._page_clip()
-        if clip is None:
-            return True
-        pg, px, py, pw, ph = clip
-        if not (px <= x < px + pw) or (py - 2 <= y and y + h <= py + ph + 2):
-            return True
-        # outside the page's visible part: hidden only when it belongs to the page
-        p = o
-        for _ in range(60):
-            try:
-                p = p.parent
-            except Exception:
-                return True
-            if p is None:
-                return True
-            if p == pg:
-                return False
-        return True
-
-    def _page_clip(self):
-        """The shown side-bar page and its extents (a walk of the whole tree:
-        kept until page() or a scroll clears it, or for 5 s)."""
-        now = time.time()
-        cached = getattr(self, "_clip_cache", None)
-        if cached and now - cached[0] < 5:
-            return cached[1]
-        best = None
-        for pg in self.find_all(lambda n: n.endswith(" page"), visible=False):
-            try:
-                x, y, w, h = self.extents(pg)
-            except Exception:
-                continue
-            if w > 0 and h > 0 and (best is None or w * h > best[3] * best[4]):
-                best = (pg, x, y, w, h)
-        self._clip_cache = (now, best)
-        return best
+        return w > 0 and h > 0 and x >= 0 and y >= 0 and x + w <= W + 2 and y + h <= H + 2
 
     def find_all(self, name=None, role=None, root=None, visible=False):
         res = []
@@ -391,72 +351,20 @@ class Session:
                 return r[0]
             if time.time() - t0 > timeout:
                 raise Failure(f"no {role or 'widget'} named {name!r} on screen")
-            if visible:
-                self._scroll_towards(name, role, root)
             time.sleep(0.2)
 
-    def _scroll_towards(self, name, role, root):
-        """A widget of a side-bar page scrolled out of the window is brought
-        in as a person would: the mouse wheel over the page (which scrolls
-        the page: its values take the wheel only when focused)."""
-        W, H = self.window_size
-        for o in self.find_all(name, role, root, visible=False):
-            try:
-                x, y, w, h = self.extents(o)
-            except Exception:
-                continue
-            if w <= 0 or h <= 0 or not (0 <= x < W):
-                continue
-            if y + h > H + 2:
-                button, py = "5", H - 40
-            elif y < 0:
-                button, py = "4", 80
-            else:
-                continue
-            self._scroll_page_at(x, py, button)
-            return
-
-    def _scroll_page_at(self, x, y, button):
-        """Three wheel notches over the right edge of the side-bar page under
-        window column @p x (its scroll bar, clear of any value)."""
-        for pg in self.find_all(lambda n: n.endswith(" page"), visible=False):
-            try:
-                px, py, pw, ph = self.extents(pg)
-            except Exception:
-                continue
-            if pw > 0 and ph > 0 and px <= x < px + pw:
-                self.xdo("mousemove", str(px + pw - 3), str(min(max(y, py + 10), py + ph - 10)))
-                for _ in range(3):
-                    self.xdo("click", button)
-                self._clip_cache = None
-                time.sleep(0.15)
-                return
-
     def find_label(self, pred, root=None, timeout=10):
-        """A label on screen whose name or text satisfies @p pred (one of a
-        side-bar page below the window is scrolled to, as find does)."""
-        def match(o):
-            try:
-                return pred(o.name or "") or pred(self.text(o))
-            except Exception:
-                return False
-
+        """A label on screen whose name or text satisfies @p pred."""
         t0 = time.time()
-        W, H = self.window_size
         while True:
             for o in self.find_all(role="label", root=root, visible=True):
-                if match(o):
-                    return o
-            if time.time() - t0 > timeout:
-                raise Failure("no such label on screen")
-            for o in self.find_all(role="label", root=root, visible=False):
                 try:
-                    x, y, w, h = self.extents(o)
+                    if pred(o.name or "") or pred(self.text(o)):
+                        return o
                 except Exception:
                     continue
-                if w > 0 and h > 0 and 0 <= x < W and y + h > H + 2 and match(o):
-                    self._scroll_page_at(x, H - 40, "5")
-                    break
+            if time.time() - t0 > timeout:
+                raise Failure("no such label on screen")
             time.sleep(0.3)
 
     def _has_extents(self, o):
@@ -653,41 +561,28 @@ class Session:
                     return
                 time.sleep(0.2)
 
-    # the side bar's pages, in the order of its Pages drop-down
-    PAGES = ["Objects", "Transfer function", "Channels and time", "View", "Lights",
-             "Cut planes", "Rendering", "Measurement", "Modeling", "Filtering", "Animator",
-             "Input devices"]
-
     def page(self, title, timeout=10):
-        """Shows the side-bar page @p title: chosen in the side bar's Pages
-        drop-down, then its top scrolled into view (the wheel over it)."""
-        check(title in self.PAGES, f"no side-bar page {title!r}")
-
+        """Shows the side-bar page @p title (a row of the stack sidebar)."""
+        sidebar = self.find("Sidebar", "list", visible=False, timeout=timeout)
+        t0 = time.time()
+        while True:
+            rows = [o for o in self.find_all(title, root=sidebar)
+                    if o.getRoleName() in ("label", "list item") and self.on_screen(o)]
+            if rows or time.time() - t0 > timeout:
+                break
+            time.sleep(0.3)
+        check(rows, f"no side-bar page {title!r}")
         def shown():  # a hidden page of the stack has no extents
             return [o for o in self.find_all(f"{title} page") if self.extents(o)[2] > 0]
 
-        # chosen even when shown: as a click on a page's title did, the choice takes
-        # the keyboard focus off the page's values (their wheel goes to the page)
-        for _ in range(3):  # a choice a busy GUI missed is made again
-            chooser = self.find("Pages", "combo box", timeout=timeout)
-            self.choose(chooser, self.PAGES, title)
+        for _ in range(3):  # a click a busy GUI missed is made again
+            self.click(rows[0])
             t0 = time.time()
-            while time.time() - t0 < 8 and not shown():
+            while time.time() - t0 < 8:
+                if shown():
+                    return
                 time.sleep(0.3)
-            if shown():
-                break
-        else:
-            raise Failure(f"the side bar did not show the page {title!r}")
-        # a page scrolled down earlier (to reach a widget below the window) starts at its
-        # top: the wheel at the page's right edge, over its scroll bar and clear of any
-        # value (a focused one would take the wheel)
-        pg = max(shown(), key=lambda o: self.extents(o)[2] * self.extents(o)[3])
-        x, y, w, h = self.extents(pg)
-        self.xdo("mousemove", str(x + w - 3), str(y + min(h // 2, 200)))
-        for _ in range(8):
-            self.xdo("click", "4")
-        self._clip_cache = None
-        time.sleep(0.2)
+        raise Failure(f"the side bar did not show the page {title!r}")
 
     def title(self):
         return self.xdo("getwindowname", self.wid).strip()
