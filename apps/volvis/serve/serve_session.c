@@ -685,13 +685,18 @@ publish(srv_session *s, const vv_image *img, vv_preview_kind kind, int sharp, lo
     srv_wake(s->srv);
 }
 
-/* PNG bytes of @p img as vv_image_write_png writes them (the CLI's writer). */
+/* PNG bytes of @p img as vv_image_write_png writes them (the CLI's writer,
+ * which writes files only: through a private folder under $TMPDIR, removed
+ * before returning). 0, or -1 with nothing left behind. */
 static int
 png_bytes(const vv_image *img, unsigned char **out, size_t *n) {
-    char dir[] = "/tmp/volvis-serve-XXXXXX";
-    if (!mkdtemp(dir))
+    const char *tmp = getenv("TMPDIR");
+    char dir[4096];
+    if ((size_t)snprintf(dir, sizeof dir, "%s/volvis-serve-XXXXXX", tmp && *tmp ? tmp : "/tmp") >=
+            sizeof dir ||
+        !mkdtemp(dir))
         return -1;
-    char path[64];
+    char path[4096 + 16];
     snprintf(path, sizeof path, "%s/view.png", dir);
     int rc = -1;
     vv_error_clear();
