@@ -80,6 +80,7 @@ vvg_application_startup(GApplication *app) {
         {"win.close", {"<Control>w", NULL}},
         {"win.layout::1", {"<Control>1", NULL}},
         {"win.layout::4", {"<Control>4", NULL}},
+        {"win.controls", {"F9", NULL}},
         {"win.save", {"<Control>s", NULL}},
         {"win.save-as", {"<Control><Shift>s", NULL}},
         {"win.save-volume", {"<Control><Shift>e", NULL}},

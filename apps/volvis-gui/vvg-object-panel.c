@@ -304,7 +304,7 @@ build_material(VvgObjectPanel *self) {
 
 static void
 build_texture(VvgObjectPanel *self) {
-    GtkWidget *g = vvg_section(GTK_WIDGET(self), "Texture");
+    GtkWidget *g = vvg_section_folded(GTK_WIDGET(self), "Texture");
     self->tex_file = vvg_row(g, "image (PNG)", gtk_entry_new());
     gtk_entry_set_placeholder_text(GTK_ENTRY(self->tex_file), "path, Enter to apply; empty: none");
     g_signal_connect(self->tex_file, "activate", G_CALLBACK(texture_apply), self);
@@ -337,7 +337,7 @@ vvg_object_panel_new(VvgDocument *doc) {
     g_signal_connect(self->up_axis, "notify::selected", G_CALLBACK(up_axis_changed), self);
     build_material(self);
     build_texture(self);
-    g = vvg_section(GTK_WIDGET(self), "Shading");
+    g = vvg_section_folded(GTK_WIDGET(self), "Shading and global effects");
     self->shading = wire_check(self, "Phong shading from gradients");
     self->casts = wire_check(self, "casts shadows");
     self->receives = wire_check(self, "receives shadows");

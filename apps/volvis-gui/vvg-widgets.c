@@ -19,6 +19,24 @@ vvg_section(GtkWidget *box, const char *title) {
     return grid;
 }
 
+GtkWidget *
+vvg_section_folded(GtkWidget *box, const char *title) {
+    GtkWidget *grid = gtk_grid_new();
+    gtk_grid_set_row_spacing(GTK_GRID(grid), 3);
+    gtk_grid_set_column_spacing(GTK_GRID(grid), 6);
+    GtkWidget *e = gtk_expander_new(NULL);
+    GtkWidget *l = gtk_label_new(NULL);
+    char *m = g_markup_printf_escaped("<b>%s</b>", title);
+    gtk_label_set_markup(GTK_LABEL(l), m);
+    g_free(m);
+    gtk_expander_set_label_widget(GTK_EXPANDER(e), l);
+    gtk_expander_set_child(GTK_EXPANDER(e), grid);
+    gtk_widget_set_margin_top(e, 8);
+    vvg_name(e, title);
+    gtk_box_append(GTK_BOX(box), e);
+    return grid;
+}
+
 int
 vvg_grid_rows(GtkWidget *grid) {
     int n = 0;
@@ -108,6 +126,10 @@ GtkWidget *
 vvg_spin(double lo, double hi, double step, int digits, double value) {
     GtkWidget *s = gtk_spin_button_new_with_range(lo, hi, step);
     gtk_spin_button_set_digits(GTK_SPIN_BUTTON(s), (guint)digits);
+    /* as wide as a value usually needs, not as the range's widest value: the
+     * side bar stays narrow and the views get the window (issue 66); the
+     * field scrolls a longer value */
+    gtk_editable_set_width_chars(GTK_EDITABLE(s), 7);
     gtk_spin_button_set_value(GTK_SPIN_BUTTON(s), value);
     vvg_wheel_when_focused(s);
     return s;

@@ -286,7 +286,11 @@ class Session:
             time.sleep(0.2)
         raise Failure("volvis-gui did not register with AT-SPI")
 
-    def walk(self, root=None, showing_in=None):
+    def walk(self, root=None, showing_in=None, prune_hidden_pages=False):
+        """Every accessible under @p root, depth first. With
+        @p prune_hidden_pages, the widgets of a side-bar page the stack does
+        not show (a "… page" without extents) are not walked: they are never
+        on screen, and they are most of the tree."""
         root = root or self.app()
         stack = [root]
         while stack:
@@ -295,6 +299,9 @@ class Session:
                 continue
             yield o
             try:
+                if prune_hidden_pages and o is not root and (o.name or "").endswith(" page") \
+                        and not self._has_extents(o):
+                    continue
                 n = o.childCount
             except Exception:
                 continue
@@ -309,17 +316,68 @@ class Session:
         return e.x, e.y, e.width, e.height
 
     def on_screen(self, o):
-        """Inside the window and not zero-sized (GTK 4.8 sets no SHOWING state)."""
+        """Inside the window and not zero-sized (GTK 4.8 sets no SHOWING
+        state); a widget of the shown side-bar page also inside the page's
+        visible part (a page scrolled down hides its top under the page
+        chooser and the header bar, still inside the window)."""
         try:
             x, y, w, h = self.extents(o)
         except Exception:
             return False
         W, H = self.window_size
-        return w > 0 and h > 0 and x >= 0 and y >= 0 and x + w <= W + 2 and y + h <= H + 2
+        if not (w > 0 and h > 0 and x >= 0 and y >= 0 and x + w <= W + 2 and y + h <= H + 2):
+            return False
+        clip = self._page_clip()
+        if clip is None:
+            return True
+        pg, px, py, pw, ph = clip
+        if not (px <= x < px + pw) or (py - 2 <= y and y + h <= py + ph + 2):
+            return True
+        # outside the page's visible part: hidden only when it belongs to the page
+        p = o
+        for _ in range(60):
+            try:
+                p = p.parent
+            except Exception:
+                return True
+            if p is None:
+                return True
+            if p == pg:
+                return False
+        return True
+
+    def _page_clip(self):
+        """The shown side-bar page and its extents (a walk of the whole tree:
+        kept until page() or a scroll clears it, or for 5 s)."""
+        now = time.time()
+        cached = getattr(self, "_clip_cache", None)
+        if cached and now - cached[0] < 5:
+            return cached[1]
+        best = None
+        for pg in self.walk_pages():
+            try:
+                x, y, w, h = self.extents(pg)
+            except Exception:
+                continue
+            if w > 0 and h > 0 and (best is None or w * h > best[3] * best[4]):
+                best = (pg, x, y, w, h)
+        self._clip_cache = (now, best)
+        return best
+
+    def walk_pages(self):
+        """The side-bar pages ("… page"), shown or not (the stack keeps them
+        for the session: found by one walk, then kept while one of them is
+        shown)."""
+        pages = getattr(self, "_pages", None)
+        if pages and any(self._has_extents(o) for o in pages):
+            return pages
+        self._pages = [o for o in self.walk(prune_hidden_pages=True)
+                       if (o.name or "").endswith(" page")]
+        return self._pages
 
     def find_all(self, name=None, role=None, root=None, visible=False):
         res = []
-        for o in self.walk(root):
+        for o in self.walk(root, prune_hidden_pages=visible):
             try:
                 if role and o.getRoleName() != role:
                     continue
@@ -351,20 +409,71 @@ class Session:
                 return r[0]
             if time.time() - t0 > timeout:
                 raise Failure(f"no {role or 'widget'} named {name!r} on screen")
+            if visible:
+                self._scroll_towards(name, role, root)
             time.sleep(0.2)
 
+    def _scroll_towards(self, name, role, root):
+        """A widget of a side-bar page scrolled out of the window is brought
+        in as a person would: the mouse wheel over the page (which scrolls
+        the page: its values take the wheel only when focused)."""
+        W, H = self.window_size
+        for o in self.find_all(name, role, root, visible=False):
+            try:
+                x, y, w, h = self.extents(o)
+            except Exception:
+                continue
+            if w <= 0 or h <= 0 or not (0 <= x < W):
+                continue
+            if y + h > H + 2:
+                button, py = "5", H - 40
+            elif y < 0:
+                button, py = "4", 80
+            else:
+                continue
+            self._scroll_page_at(x, py, button)
+            return
+
+    def _scroll_page_at(self, x, y, button):
+        """Three wheel notches over the right edge of the side-bar page under
+        window column @p x (its scroll bar, clear of any value)."""
+        for pg in self.walk_pages():
+            try:
+                px, py, pw, ph = self.extents(pg)
+            except Exception:
+                continue
+            if pw > 0 and ph > 0 and px <= x < px + pw:
+                self.xdo("mousemove", str(px + pw - 3), str(min(max(y, py + 10), py + ph - 10)))
+                self.xdo("click", "--repeat", "3", "--delay", "20", button)
+                self._clip_cache = None
+                time.sleep(0.15)
+                return
+
     def find_label(self, pred, root=None, timeout=10):
-        """A label on screen whose name or text satisfies @p pred."""
+        """A label on screen whose name or text satisfies @p pred (one of a
+        side-bar page below the window is scrolled to, as find does)."""
+        def match(o):
+            try:
+                return pred(o.name or "") or pred(self.text(o))
+            except Exception:
+                return False
+
         t0 = time.time()
+        W, H = self.window_size
         while True:
             for o in self.find_all(role="label", root=root, visible=True):
-                try:
-                    if pred(o.name or "") or pred(self.text(o)):
-                        return o
-                except Exception:
-                    continue
+                if match(o):
+                    return o
             if time.time() - t0 > timeout:
                 raise Failure("no such label on screen")
+            for o in self.find_all(role="label", root=root, visible=False):
+                try:
+                    x, y, w, h = self.extents(o)
+                except Exception:
+                    continue
+                if w > 0 and h > 0 and 0 <= x < W and y + h > H + 2 and match(o):
+                    self._scroll_page_at(x, H - 40, "5")
+                    break
             time.sleep(0.3)
 
     def _has_extents(self, o):
@@ -452,11 +561,10 @@ class Session:
         check(item in options, f"{item!r} is not one of {options}")
         self.click(combo)
         time.sleep(0.4)
-        self.key("Home")  # the list opens with its first item under the keyboard
-        for _ in range(options.index(item)):
-            self.key("Down")
-        self.key("Return")
-        time.sleep(0.3)
+        # the list opens with its first item under the keyboard
+        self.xdo("key", "--clearmodifiers", "--delay", "40", "Home",
+                 *(["Down"] * options.index(item)), "Return")
+        time.sleep(0.5)
         check(self.shown(combo) == item, f"{combo.name}: chose {self.shown(combo)!r}, not {item!r}")
 
     def _save_dialog(self, keys, title, path):
@@ -561,28 +669,43 @@ class Session:
                     return
                 time.sleep(0.2)
 
-    def page(self, title, timeout=10):
-        """Shows the side-bar page @p title (a row of the stack sidebar)."""
-        sidebar = self.find("Sidebar", "list", visible=False, timeout=timeout)
-        t0 = time.time()
-        while True:
-            rows = [o for o in self.find_all(title, root=sidebar)
-                    if o.getRoleName() in ("label", "list item") and self.on_screen(o)]
-            if rows or time.time() - t0 > timeout:
-                break
-            time.sleep(0.3)
-        check(rows, f"no side-bar page {title!r}")
-        def shown():  # a hidden page of the stack has no extents
-            return [o for o in self.find_all(f"{title} page") if self.extents(o)[2] > 0]
+    # the side bar's pages, in the order of its Pages drop-down
+    PAGES = ["Objects", "Transfer function", "Channels and time", "View", "Lights",
+             "Cut planes", "Rendering", "Measurement", "Modeling", "Filtering", "Animator",
+             "Input devices"]
 
-        for _ in range(3):  # a click a busy GUI missed is made again
-            self.click(rows[0])
+    def page(self, title, timeout=10):
+        """Shows the side-bar page @p title: chosen in the side bar's Pages
+        drop-down, then its top scrolled into view (the wheel over it)."""
+        check(title in self.PAGES, f"no side-bar page {title!r}")
+
+        def shown():  # a hidden page of the stack has no extents
+            return [o for o in self.walk_pages() if o.name == f"{title} page"
+                    and self.extents(o)[2] > 0]
+
+        # chosen even when shown: as a click on a page's title did, the choice takes
+        # the keyboard focus off the page's values (their wheel goes to the page)
+        for _ in range(3):  # a choice a busy GUI missed is made again
+            chooser = getattr(self, "_pages_chooser", None)
+            if chooser is None or not self._has_extents(chooser):
+                chooser = self._pages_chooser = self.find("Pages", "combo box", timeout=timeout)
+            self.choose(chooser, self.PAGES, title)
             t0 = time.time()
-            while time.time() - t0 < 8:
-                if shown():
-                    return
+            while time.time() - t0 < 8 and not shown():
                 time.sleep(0.3)
-        raise Failure(f"the side bar did not show the page {title!r}")
+            if shown():
+                break
+        else:
+            raise Failure(f"the side bar did not show the page {title!r}")
+        # a page scrolled down earlier (to reach a widget below the window) starts at its
+        # top: the wheel at the page's right edge, over its scroll bar and clear of any
+        # value (a focused one would take the wheel)
+        pg = max(shown(), key=lambda o: self.extents(o)[2] * self.extents(o)[3])
+        x, y, w, h = self.extents(pg)
+        self.xdo("mousemove", str(x + w - 3), str(y + min(h // 2, 200)))
+        self.xdo("click", "--repeat", "8", "--delay", "20", "4")
+        self._clip_cache = None
+        time.sleep(0.2)
 
     def title(self):
         return self.xdo("getwindowname", self.wid).strip()
