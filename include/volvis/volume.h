@@ -266,6 +266,15 @@ vv_status vv_volume_histogram(const vv_volume *v, int nbins, double lo, double h
 double vv_volume_quantile(const vv_volume *v, double q);
 
 /**
+ * The @p n quantiles @p q[0..n-1] (each in [0, 1]) of the voxels into
+ * @p out[0..n-1], from one 4096-bin histogram over range[] (one pass over
+ * the voxels: vv_volume_quantile n times makes n). A volume of one value
+ * gives that value; where the histogram cannot be allocated, the linear
+ * interpolation of range[]. Thread-safe for distinct @p out.
+ */
+void vv_volume_quantiles(const vv_volume *v, int n, const double *q, double *out);
+
+/**
  * Minimum and maximum of the voxel values over uniform subvolumes: the
  * subvolume grid behind PARC (polygon-assisted ray casting; VolVis paper,
  * section 4, Navigator) and empty-space skipping. Subvolume (bi, bj, bk)

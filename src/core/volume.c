@@ -479,32 +479,45 @@ vv_volume_histogram(const vv_volume *v, int nbins, double lo, double hi, uint64_
     return VV_OK;
 }
 
-double
-vv_volume_quantile(const vv_volume *v, double q) {
+void
+vv_volume_quantiles(const vv_volume *v, int n, const double *q, double *out) {
     enum { NB = 4096 };
     double lo = v->range[0], hi = v->range[1];
-    if (!(hi > lo))
-        return lo;
+    if (!(hi > lo)) {
+        for (int i = 0; i < n; i++)
+            out[i] = lo;
+        return;
+    }
     uint64_t *bins = malloc(sizeof *bins * NB);
     if (!bins || vv_volume_histogram(v, NB, lo, hi, bins) != VV_OK) {
         free(bins);
-        return lo + q * (hi - lo);
+        for (int i = 0; i < n; i++)
+            out[i] = lo + q[i] * (hi - lo);
+        return;
     }
     uint64_t total = 0;
     for (int b = 0; b < NB; b++)
         total += bins[b];
-    double target = q * (double)total, acc = 0;
-    double result = hi;
-    for (int b = 0; b < NB; b++) {
-        if (acc + (double)bins[b] >= target) {
-            double frac = bins[b] ? (target - acc) / (double)bins[b] : 0;
-            result = lo + (b + frac) * (hi - lo) / NB;
-            break;
+    for (int i = 0; i < n; i++) {
+        double target = q[i] * (double)total, acc = 0;
+        out[i] = hi;
+        for (int b = 0; b < NB; b++) {
+            if (acc + (double)bins[b] >= target) {
+                double frac = bins[b] ? (target - acc) / (double)bins[b] : 0;
+                out[i] = lo + (b + frac) * (hi - lo) / NB;
+                break;
+            }
+            acc += (double)bins[b];
         }
-        acc += (double)bins[b];
     }
     free(bins);
-    return result;
+}
+
+double
+vv_volume_quantile(const vv_volume *v, double q) {
+    double r;
+    vv_volume_quantiles(v, 1, &q, &r);
+    return r;
 }
 
 vv_status

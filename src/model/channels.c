@@ -47,9 +47,12 @@ void
 vv_channel_default_contrast(const vv_volume *v, double *lo, double *hi) {
     /* the background's level and noise from the quartiles: for Gaussian
      * noise of deviation s, q75 - q50 = 0.674 s, so 4.5 (q75 - q50) = 3 s */
-    const double q50 = vv_volume_quantile(v, 0.5), q75 = vv_volume_quantile(v, 0.75);
+    static const double q[3] = {0.5, 0.75, 0.9999};
+    double qv[3];
+    vv_volume_quantiles(v, 3, q, qv);
+    const double q50 = qv[0], q75 = qv[1];
     *lo = q50 + 4.5 * (q75 - q50);
-    *hi = vv_volume_quantile(v, 0.9999);
+    *hi = qv[2];
     if (*hi > q50 && !(*lo < *hi))
         *lo = q50;
     if (!isfinite(*lo) || !isfinite(*hi) || !(*hi > *lo)) {

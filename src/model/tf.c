@@ -482,8 +482,11 @@ hu_map_of(const vv_volume *v) {
  * exactly hi at x = 1 (the offset is lo, the scale hi - lo). */
 static hu_map
 range_map_of(const vv_volume *v, preset_scale scale) {
-    double lo = vv_volume_quantile(v, scale == PRESET_MEDIAN ? 0.5 : 0.01);
-    double hi = vv_volume_quantile(v, scale == PRESET_MEDIAN ? 0.99 : 0.995);
+    const double q[2] = {scale == PRESET_MEDIAN ? 0.5 : 0.01,
+                         scale == PRESET_MEDIAN ? 0.99 : 0.995};
+    double lh[2];
+    vv_volume_quantiles(v, 2, q, lh);
+    double lo = lh[0], hi = lh[1];
     if (!isfinite(lo) || !isfinite(hi) || !(hi > lo)) {
         lo = v->range[0];
         hi = v->range[1] > lo ? v->range[1] : lo + 1.0;

@@ -503,7 +503,10 @@ vv_slice_probe(const vv_object *obj, vv_vec3 world, double ijk[3]) {
 
 void
 vv_slice_auto_window(const vv_volume *v, double *window, double *level) {
-    double lo = vv_volume_quantile(v, 0.01), hi = vv_volume_quantile(v, 0.995);
+    static const double q[2] = {0.01, 0.995};
+    double lh[2];
+    vv_volume_quantiles(v, 2, q, lh);
+    double lo = lh[0], hi = lh[1];
     if (!(hi > lo) || !isfinite(lo) || !isfinite(hi)) {
         lo = v->range[0];
         hi = v->range[1];

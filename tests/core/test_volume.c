@@ -642,6 +642,11 @@ test_quantile(void **state) {
     const double qs[] = {0.1, 0.25, 0.5, 0.9, 0.99};
     for (size_t n = 0; n < sizeof qs / sizeof qs[0]; n++)
         assert_near(vv_volume_quantile(v, qs[n]), qs[n] * 1000, 1.0);
+    /* several in one pass: each the one-at-a-time quantile */
+    double many[5];
+    vv_volume_quantiles(v, 5, qs, many);
+    for (size_t n = 0; n < 5; n++)
+        assert_true(many[n] == vv_volume_quantile(v, qs[n]));
     /* monotone in q */
     double prev = -1;
     for (double q = 0; q <= 1.0; q += 0.01) {
