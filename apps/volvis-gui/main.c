@@ -48,7 +48,9 @@ usage(FILE *out) {
             "  VOLVIS_INPUT_REPLAY=FILE  replay a recording of input devices at start\n"
             "  VOLVIS_DEVICE_DIR=DIR     more device information-base files\n"
             "  VOLVIS_NO_AUTO_DEVICES=1  do not open the devices present at start\n"
-            "  VOLVIS_SLICE_LOG=FILE     append a line each time a slice view resamples\n",
+            "  VOLVIS_SLICE_LOG=FILE     append a line each time a slice view resamples\n"
+            "  GSK_RENDERER=NAME         GTK's renderer (gl, cairo, vulkan); unset, a\n"
+            "                            software OpenGL (llvmpipe) gets cairo\n",
             vv_version());
 }
 
