@@ -2,6 +2,7 @@
 #include "vvg-tf-panel.h"
 #include "vvg-widgets.h"
 
+#include "vvg-marks.h"
 #include "vvg-preset-gallery.h"
 #include "vvg-tf-editor.h"
 #include "vvg-tf2d-editor.h"
@@ -15,9 +16,43 @@ struct _VvgTfPanel {
     VvgTf2dEditor *tf2d_editor;
     GtkWidget *w2d_color, *w2d_opacity;
     GtkWidget *editing; /* which channel of a multi-channel object the editor edits */
+    /* the slice views' window and level (the marks'; before a right drag or
+     * an entry here, the automatic one of auto_volume at auto_modified) */
+    VvgMarks *marks;
+    GtkWidget *wl_title, *wl_grid, *window, *level;
+    const vv_volume *auto_volume;
+    uint64_t auto_modified;
+    double auto_wl[2];
 };
 
 G_DEFINE_TYPE(VvgTfPanel, vvg_tf_panel, GTK_TYPE_BOX)
+
+/* The window and level rows from the marks (the slice views' automatic
+ * values, computed once a version of the volume, until they are set). */
+static void
+fill_window(VvgTfPanel *self, const vv_object *o) {
+    gboolean grey = o && o->volume && o->n_channels == 0;
+    gtk_widget_set_visible(self->wl_title, grey);
+    gtk_widget_set_visible(self->wl_grid, grey);
+    if (!grey)
+        return;
+    double win, lev;
+    if (!vvg_marks_window(self->marks, &win, &lev)) {
+        if (self->auto_volume != o->volume || self->auto_modified != o->volume->modified) {
+            vv_slice_auto_window(o->volume, &self->auto_wl[0], &self->auto_wl[1]);
+            self->auto_volume = o->volume;
+            self->auto_modified = o->volume->modified;
+        }
+        win = self->auto_wl[0];
+        lev = self->auto_wl[1];
+    }
+    double lo = o->volume->range[0], hi = o->volume->range[1];
+    double span = hi > lo ? hi - lo : 1;
+    gtk_spin_button_set_range(GTK_SPIN_BUTTON(self->window), span * 1e-4, span * 4);
+    gtk_spin_button_set_range(GTK_SPIN_BUTTON(self->level), lo - span, hi + span);
+    vvg_set_spin(self->window, win);
+    vvg_set_spin(self->level, lev);
+}
 
 static void
 fill(VvgTfPanel *self) {
@@ -35,6 +70,7 @@ fill(VvgTfPanel *self) {
         vvg_set_spin(self->isovalue, o->isovalue);
         vvg_set_spin(self->step, o->step);
     }
+    fill_window(self, o);
     int c = vvg_document_edited_channel(self->doc);
     gtk_widget_set_visible(self->editing, c >= 0);
     if (c >= 0) {
@@ -121,6 +157,30 @@ w2d_style_spin(GtkSpinButton *s, gpointer user) {
     w2d_style(NULL, user);
 }
 
+/* window or level typed: the slice views' (no undo step: the marks are the
+ * views' display, not the World's) */
+static void
+on_window(GtkSpinButton *s, gpointer user) {
+    (void)s;
+    VvgTfPanel *self = user;
+    if (self->updating)
+        return;
+    self->updating = TRUE;
+    vvg_marks_set_window(self->marks, vvg_spin_value(self->window), vvg_spin_value(self->level));
+    self->updating = FALSE;
+}
+
+static void
+marks_changed(VvgMarks *m, gpointer user) {
+    (void)m;
+    VvgTfPanel *self = user;
+    if (self->updating)
+        return;
+    self->updating = TRUE;
+    fill_window(self, vvg_document_selected_object(self->doc));
+    self->updating = FALSE;
+}
+
 static void
 selection_changed(VvgDocument *doc, gpointer user) {
     (void)doc;
@@ -133,6 +193,10 @@ vvg_tf_panel_dispose(GObject *o) {
     if (self->doc) {
         g_signal_handlers_disconnect_by_data(self->doc, self);
         g_clear_object(&self->doc);
+    }
+    if (self->marks) {
+        g_signal_handlers_disconnect_by_data(self->marks, self);
+        g_clear_object(&self->marks);
     }
     G_OBJECT_CLASS(vvg_tf_panel_parent_class)->dispose(o);
 }
@@ -209,9 +273,10 @@ build_tf2d(VvgTfPanel *self) {
 }
 
 GtkWidget *
-vvg_tf_panel_new(VvgDocument *doc) {
+vvg_tf_panel_new(VvgDocument *doc, VvgMarks *marks) {
     VvgTfPanel *self = g_object_new(VVG_TYPE_TF_PANEL, NULL);
     self->doc = g_object_ref(doc);
+    self->marks = g_object_ref(marks);
     GtkWidget *g = vvg_section(GTK_WIDGET(self), "Segmentation");
     /* in vv_segmentation's order; "labels": a label volume (Filtering) */
     static const char *const segs[] = {"transfer function", "threshold", "2-D transfer function",
@@ -222,6 +287,15 @@ vvg_tf_panel_new(VvgDocument *doc) {
     self->render_mode = vvg_row(g, "mode", wire_drop(self, modes));
     self->isovalue = vvg_row(g, "isovalue", wire_spin(self, vvg_spin0(-1e9, 1e9, 1, 2)));
     self->step = vvg_row(g, "sample step", wire_spin(self, vvg_spin0(0.05, 8, 0.05, 2)));
+    /* what a right drag in a slice view sets, typed */
+    g = vvg_section(GTK_WIDGET(self), "Slice views: window and level");
+    self->wl_grid = g;
+    self->wl_title = gtk_widget_get_prev_sibling(g); /* the section's title */
+    self->window = vvg_row(g, "window", vvg_spin(1e-4, 1e9, 1, 2, 1));
+    self->level = vvg_row(g, "level", vvg_spin0(-1e9, 1e9, 1, 2));
+    g_signal_connect(self->window, "value-changed", G_CALLBACK(on_window), self);
+    g_signal_connect(self->level, "value-changed", G_CALLBACK(on_window), self);
+    g_signal_connect(marks, "changed", G_CALLBACK(marks_changed), self);
     build_tf(self);
     build_tf2d(self);
     g_signal_connect(doc, "selection-changed", G_CALLBACK(selection_changed), self);

@@ -1050,7 +1050,7 @@ side_bar(VvgWindow *win) {
     win->pages = gtk_stack_new();
     add_page(win, two(vvg_object_list_new(win->doc), vvg_object_panel_new(win->doc)), "objects",
              "Objects");
-    add_page(win, one(vvg_tf_panel_new(win->doc)), "transfer", "Transfer function");
+    add_page(win, one(vvg_tf_panel_new(win->doc, win->marks)), "transfer", "Transfer function");
     add_page(win, one(vvg_channel_panel_new(win->doc)), "channels", "Channels and time");
     win->navigator = vvg_navigator_panel_new(win->scene);
     add_page(win, two(win->navigator, vvg_view_panel_new(win->doc)), "view", "View");

@@ -6,7 +6,9 @@ names the same point, and its voxel value equals `volvis slice --probe` of
 the saved session at that world position (the library's probe); the wheel
 over the axial view steps one slice a notch (the voxel index k changes by
 one, i and j stay); a right-button drag changes window and level (the axial
-image changes, the World does not); an oblique view follows the selected
+image changes, the World does not), and the Transfer function page's window
+and level rows follow it; a window typed there changes the image again, not
+the World; an oblique view follows the selected
 cut plane; `volvis slice` of the saved session writes the axial slice.
 
 usage: slices_session.py GUI CLI OUTDIR
@@ -72,7 +74,11 @@ def main():
         check(abs(abs(k2 - k) - 3) < 1e-6 and abs(i2 - i) < 1e-6 and abs(j2 - j) < 1e-6,
               f"three notches: voxel ({i}, {j}, {k}) -> ({i2}, {j2}, {k2})")
         print(f"wheel: slice k {k:g} -> {k2:g}")
-        # window and level: the image changes, the World does not
+        # window and level: the image changes, the World does not; the
+        # Transfer function page's rows show them and take typed ones
+        s.page("Transfer function")
+        win0 = s.value(s.find("window", "spin button"))
+        lev0 = s.value(s.find("level", "spin button"))
         before = s.screenshot("wl_before.png")
         state = s.frames_log()[-1]["state"]
         s.drag(axial, (0.5, 0.5), (0.8, 0.3), steps=8, button=3)
@@ -80,10 +86,25 @@ def main():
         after = s.screenshot("wl_after.png")
         ax, ay, aw, ah = s.extents(axial)
         crop = f"{aw}x{ah}+{ax}+{ay}"
-        d = subprocess.run(["compare", "-metric", "AE", "-extract", crop, before, after, "null:"],
-                           capture_output=True, text=True).stderr.split()[0]
-        check(float(d) > 100, f"window/level drag changed {d} pixels of the axial view")
+
+        def changed(a, b):
+            return float(subprocess.run(["compare", "-metric", "AE", "-extract", crop, a, b,
+                                         "null:"], capture_output=True, text=True).stderr.split()[0])
+        d = changed(before, after)
+        check(d > 100, f"window/level drag changed {d} pixels of the axial view")
         check(s.frames_log()[-1]["state"] == state, "window/level changed the World")
+        win1 = s.value(s.find("window", "spin button"))
+        lev1 = s.value(s.find("level", "spin button"))
+        check(win1 > win0 * 1.2 and lev1 != lev0,
+              f"the page's window/level {win0:g}/{lev0:g} -> {win1:g}/{lev1:g} after the drag")
+        s.set_spin(s.find("window", "spin button"), round(win0 / 4, 2))
+        time.sleep(0.5)
+        typed = s.screenshot("wl_typed.png")
+        d = changed(after, typed)
+        check(d > 100, f"a typed window changed {d} pixels of the axial view")
+        check(s.frames_log()[-1]["state"] == state, "a typed window changed the World")
+        print(f"window/level: automatic {win0:g}/{lev0:g}, dragged {win1:g}/{lev1:g}, "
+              f"typed window {win0 / 4:g}")
         # an oblique view follows the selected cut plane
         s.page("Cut planes")
         s.click(s.find("Add cut plane", "push button"))
