@@ -79,6 +79,7 @@ class Session:
             os.remove(self.frames)
         self.size, self.window_size = size, window
         self.extra_env = dict(env or {})
+        self.scale = int(self.extra_env.get("GDK_SCALE", "1"))
         self.procs = []
         self.app_proc = None
         self._app = None
@@ -138,6 +139,8 @@ class Session:
         self.app_proc = subprocess.Popen([self.gui] + (args if args is not None else self.args),
                                          env=self.env, stdout=self.log, stderr=subprocess.STDOUT,
                                          cwd=cwd or self.cwd)
+        # what was found in an earlier process of the session
+        self._pages = self._pages_chooser = self._clip_cache = None
         self.wid = self.xdo("search", "--sync", "--name", "^VolVis — ").split()[0]
         self.set_window_size()
         # no window manager gives it the keyboard: the keys of a second launch
@@ -280,9 +283,16 @@ class Session:
             desk = pyatspi.Registry.getDesktop(0)
             for i in range(desk.childCount):
                 a = desk.getChildAtIndex(i)
-                if a is not None and "volvis" in (a.name or "").lower():
-                    self._app = a
-                    return a
+                if a is None or "volvis" not in (a.name or "").lower():
+                    continue
+                # after a relaunch the registry can still list the killed process
+                try:
+                    if self.app_proc and a.get_process_id() != self.app_proc.pid:
+                        continue
+                except Exception:
+                    continue
+                self._app = a
+                return a
             time.sleep(0.2)
         raise Failure("volvis-gui did not register with AT-SPI")
 
@@ -312,8 +322,11 @@ class Session:
                     pass
 
     def extents(self, o):
+        """(x, y, width, height) of @p o in X screen pixels: GTK gives them in
+        its logical pixels, GDK_SCALE of the screen's (xdotool's)."""
         e = o.queryComponent().getExtents(pyatspi.DESKTOP_COORDS)
-        return e.x, e.y, e.width, e.height
+        k = self.scale
+        return e.x * k, e.y * k, e.width * k, e.height * k
 
     def on_screen(self, o):
         """Inside the window and not zero-sized (GTK 4.8 sets no SHOWING
