@@ -8,6 +8,12 @@ struct _VvgMarks {
     gboolean has_cursor, has_window;
     vv_vec3 cursor;
     double window, level;
+    /* the automatic window and level of auto_volume as it was at
+     * auto_modified (with its range: a new volume at a freed one's address
+     * differs there) */
+    const vv_volume *auto_volume;
+    uint64_t auto_modified;
+    double auto_range[2], auto_wl[2];
     gboolean has_point[VVG_MARK_COUNT];
     vv_vec3 point[VVG_MARK_COUNT];
     vv_mesh *region;
@@ -76,6 +82,22 @@ vvg_marks_window(VvgMarks *m, double *window, double *level) {
         *level = m->level;
     }
     return m->has_window;
+}
+
+void
+vvg_marks_window_for(VvgMarks *m, const vv_volume *v, double *window, double *level) {
+    if (vvg_marks_window(m, window, level))
+        return;
+    if (m->auto_volume != v || m->auto_modified != v->modified || m->auto_range[0] != v->range[0] ||
+        m->auto_range[1] != v->range[1]) {
+        vv_slice_auto_window(v, &m->auto_wl[0], &m->auto_wl[1]);
+        m->auto_volume = v;
+        m->auto_modified = v->modified;
+        m->auto_range[0] = v->range[0];
+        m->auto_range[1] = v->range[1];
+    }
+    *window = m->auto_wl[0];
+    *level = m->auto_wl[1];
 }
 
 void

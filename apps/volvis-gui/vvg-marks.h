@@ -36,6 +36,13 @@ void vvg_marks_reset(VvgMarks *m);
 /** The slice views' window and level; FALSE before they are set. */
 gboolean vvg_marks_window(VvgMarks *m, double *window, double *level);
 void vvg_marks_set_window(VvgMarks *m, double window, double level);
+/**
+ * The window and level the slice views show for volume @p v: the ones set,
+ * else @p v's automatic ones (vv_slice_auto_window: the 1st to the 99.5th
+ * percentile), computed once a version of @p v (a pass over every voxel) and
+ * kept for every view and page that asks.
+ */
+void vvg_marks_window_for(VvgMarks *m, const vv_volume *v, double *window, double *level);
 
 /**
  * The cut plane chosen in the Cut planes list (object -1: global), which

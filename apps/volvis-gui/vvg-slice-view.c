@@ -30,12 +30,6 @@ struct _VvgSliceView {
     int channel_visible[VV_MAX_CHANNELS];
     cairo_surface_t *surface;
     double surface_window, surface_level;
-    /* the automatic window and level (two quantiles: a pass over the whole
-     * volume) of auto_volume as it was at auto_modified */
-    const vv_volume *auto_volume;
-    uint64_t auto_modified;
-    double auto_range[2]; /* a new volume at a freed one's address differs here */
-    double auto_window, auto_level;
     gboolean have_plane;
     double sample_ms;
 
@@ -212,23 +206,6 @@ update_channel_surface(VvgSliceView *self, const vv_object *obj) {
     }
 }
 
-/* The volume's automatic window and level, computed once a version of the
- * volume (vv_slice_auto_window reads every voxel: 0.3 s on a 512^3 volume,
- * too slow for each slice of a scroll). */
-static void
-auto_window(VvgSliceView *self, const vv_volume *v, double *win, double *lev) {
-    if (self->auto_volume != v || self->auto_modified != v->modified ||
-        self->auto_range[0] != v->range[0] || self->auto_range[1] != v->range[1]) {
-        vv_slice_auto_window(v, &self->auto_window, &self->auto_level);
-        self->auto_volume = v;
-        self->auto_modified = v->modified;
-        self->auto_range[0] = v->range[0];
-        self->auto_range[1] = v->range[1];
-    }
-    *win = self->auto_window;
-    *lev = self->auto_level;
-}
-
 /* The grey image of the samples at the marks' window and level; a
  * multi-channel object's channels blended in their colours. */
 static void
@@ -238,8 +215,7 @@ update_surface(VvgSliceView *self, const vv_object *obj) {
         return;
     }
     double win, lev;
-    if (!vvg_marks_window(self->marks, &win, &lev))
-        auto_window(self, obj->volume, &win, &lev);
+    vvg_marks_window_for(self->marks, obj->volume, &win, &lev);
     if (self->surface && win == self->surface_window && lev == self->surface_level)
         return;
     int w = self->plane.width, h = self->plane.height, stride;
@@ -454,8 +430,7 @@ drag_begin(GtkGestureDrag *g, double x, double y, gpointer user) {
     if (!obj)
         return;
     if (self->drag_wl) {
-        if (!vvg_marks_window(self->marks, &self->wl_start[0], &self->wl_start[1]))
-            auto_window(self, obj->volume, &self->wl_start[0], &self->wl_start[1]);
+        vvg_marks_window_for(self->marks, obj->volume, &self->wl_start[0], &self->wl_start[1]);
         return;
     }
     vv_vec3 w;

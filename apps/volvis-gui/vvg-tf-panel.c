@@ -16,19 +16,14 @@ struct _VvgTfPanel {
     VvgTf2dEditor *tf2d_editor;
     GtkWidget *w2d_color, *w2d_opacity;
     GtkWidget *editing; /* which channel of a multi-channel object the editor edits */
-    /* the slice views' window and level (the marks'; before a right drag or
-     * an entry here, the automatic one of auto_volume at auto_modified) */
-    VvgMarks *marks;
+    VvgMarks *marks;    /* the slice views' window and level */
     GtkWidget *wl_title, *wl_grid, *window, *level;
-    const vv_volume *auto_volume;
-    uint64_t auto_modified;
-    double auto_wl[2];
 };
 
 G_DEFINE_TYPE(VvgTfPanel, vvg_tf_panel, GTK_TYPE_BOX)
 
 /* The window and level rows from the marks (the slice views' automatic
- * values, computed once a version of the volume, until they are set). */
+ * values until they are set). */
 static void
 fill_window(VvgTfPanel *self, const vv_object *o) {
     gboolean grey = o && o->volume && o->n_channels == 0;
@@ -37,15 +32,7 @@ fill_window(VvgTfPanel *self, const vv_object *o) {
     if (!grey)
         return;
     double win, lev;
-    if (!vvg_marks_window(self->marks, &win, &lev)) {
-        if (self->auto_volume != o->volume || self->auto_modified != o->volume->modified) {
-            vv_slice_auto_window(o->volume, &self->auto_wl[0], &self->auto_wl[1]);
-            self->auto_volume = o->volume;
-            self->auto_modified = o->volume->modified;
-        }
-        win = self->auto_wl[0];
-        lev = self->auto_wl[1];
-    }
+    vvg_marks_window_for(self->marks, o->volume, &win, &lev);
     double lo = o->volume->range[0], hi = o->volume->range[1];
     double span = hi > lo ? hi - lo : 1;
     gtk_spin_button_set_range(GTK_SPIN_BUTTON(self->window), span * 1e-4, span * 4);
