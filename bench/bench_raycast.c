@@ -6,7 +6,11 @@
  * Composite also prints the physical anchor: samples and shaded samples a
  * frame (vv_render_stats), shaded samples per second and core, the same
  * kernel's peak on one core (peak_shaded_rate), their ratio, and the frame
- * every shaded sample at the peak would take (docs/rendering.md).
+ * every shaded sample at the peak would take (docs/rendering.md), and the
+ * rate as a fraction of the machine's: trilinear samples a second of one
+ * core along rays through a volume of the same voxel type and largest
+ * dimension, at the widest vector ISA the processor has (common/limit.h,
+ * bench_limit).
  *
  * usage: bench_raycast VOLUME [--iso V] [--tf-lo A] [--tf-hi B] [--size N]
  *                      [--runs N] [--threads N] [--outdir DIR] [--step-vox S]
@@ -21,6 +25,7 @@
 #include <time.h>
 
 #include "common/bench_scene.h"
+#include "common/limit.h"
 #include "util.h"
 #include "volvis/volvis.h"
 
@@ -89,6 +94,27 @@ save(const vv_image *img, const bench_cfg *cfg, const char *stem, const char *mo
     if (vv_image_write_png(img, path, 1.0, 0) != VV_OK)
         bench_die("bench_raycast", "write png");
     printf("# image %s\n", path);
+}
+
+/* The machine's limit for @p v's samples: trilinear samples a second of one
+ * core along rays through a cube of @p v's largest dimension and voxel type
+ * (8-bit as u8, 16-bit as u16, others as f32), at the widest ISA; 0 when
+ * out of memory. */
+static double
+machine_rate(const vv_volume *v) {
+    int n = v->dims[0];
+    n = v->dims[1] > n ? v->dims[1] : n;
+    n = v->dims[2] > n ? v->dims[2] : n;
+    const size_t bytes = vv_voxel_type_size(v->type);
+    bench_limit_type t = bytes == 1   ? BENCH_LIMIT_U8
+                         : bytes == 2 ? BENCH_LIMIT_U16
+                                      : BENCH_LIMIT_F32;
+    bench_limit_case *c = bench_limit_case_new(t, n < 32 ? 32 : n, BENCH_LIMIT_RAYS);
+    if (!c)
+        return 0;
+    double r = bench_limit_trilinear(c, bench_isa_widest(), 0.3);
+    bench_limit_case_free(c);
+    return r;
 }
 
 /* The physical anchor's peak: shaded samples per second of one thread on
@@ -316,6 +342,11 @@ main(int argc, char **argv) {
             emit("dvr_composite_peak_shaded_per_s_per_core", peak, "samples/s");
             emit("dvr_composite_of_peak", rate / peak, "x");
             emit("dvr_composite_floor_frame", (double)work.shaded / peak / nt, "s");
+            const double machine = machine_rate(vol);
+            if (machine > 0) {
+                emit("dvr_composite_machine_trilinear_per_s_per_core", machine, "samples/s");
+                emit("dvr_composite_of_machine", rate / machine, "x");
+            }
         }
         save(img, &cfg, stem, modes[m].name);
         free(times);
