@@ -308,6 +308,9 @@ time_fma(float (*f)(float), int lanes) {
     return best;
 }
 
+/* one pass of a case, by bench_isa */
+static float (*const pass[])(const gather_case *) = {pass_scalar, pass_avx2, pass_avx512};
+
 /* ---- the interface (limit.h) --------------------------------------------------------- */
 
 int
@@ -368,7 +371,6 @@ bench_limit_case_free(bench_limit_case *c) {
 
 double
 bench_limit_trilinear(const bench_limit_case *c, bench_isa isa, double seconds) {
-    float (*const pass[])(const gather_case *) = {pass_scalar, pass_avx2, pass_avx512};
     if (!bench_isa_available(isa))
         return 0;
     return time_gather(pass[isa], c, seconds);
@@ -376,7 +378,6 @@ bench_limit_trilinear(const bench_limit_case *c, bench_isa isa, double seconds) 
 
 double
 bench_limit_agreement(const bench_limit_case *c, bench_isa isa) {
-    float (*const pass[])(const gather_case *) = {pass_scalar, pass_avx2, pass_avx512};
     if (!bench_isa_available(isa))
         return 0;
     double a = pass_scalar(c), b = pass[isa](c);
