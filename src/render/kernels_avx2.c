@@ -157,6 +157,143 @@ vv_vshade8(const vv_vshading *o, const vv_vlight *lights, int n_lights, const fl
 #undef VS_B
 }
 
+/* ---------------------------------------------------------------------- */
+/* Gradients: the octahedral codes of a run of a row */
+
+__attribute__((target("avx2"))) void
+vv_oct_encode_n_avx2(const float *gx, const float *gy, const float *gz, int n, int8_t *out) {
+    const __m256 sign = _mm256_set1_ps(-0.0f), lim = _mm256_set1_ps(127.0f);
+    const __m256 one = _mm256_set1_ps(1.0f), zero = _mm256_setzero_ps();
+    const __m256 nlim = _mm256_set1_ps(-127.0f), off = _mm256_set1_ps(128.0f);
+    const __m256 zc = _mm256_set1_ps((float)VV_OCT_ZERO);
+    int i = 0;
+    for (; i + 8 <= n; i += 8) {
+        const __m256 gx0 = _mm256_loadu_ps(gx + i), gy0 = _mm256_loadu_ps(gy + i);
+        const __m256 gz0 = _mm256_loadu_ps(gz + i);
+        const __m256 l1 =
+            _mm256_add_ps(_mm256_add_ps(_mm256_andnot_ps(sign, gx0), _mm256_andnot_ps(sign, gy0)),
+                          _mm256_andnot_ps(sign, gz0));
+        const __m256 flat = _mm256_cmp_ps(l1, zero, _CMP_EQ_OQ);
+        const __m256 dv = _mm256_or_ps(l1, _mm256_and_ps(flat, one));
+        const __m256 x0 = _mm256_div_ps(gx0, dv), y0 = _mm256_div_ps(gy0, dv);
+        const __m256 z0 = _mm256_div_ps(gz0, dv);
+        __m256 x = _mm256_mul_ps(x0, lim), y = _mm256_mul_ps(y0, lim);
+        const __m256 fx =
+            _mm256_or_ps(_mm256_sub_ps(lim, _mm256_andnot_ps(sign, y)), _mm256_and_ps(x, sign));
+        const __m256 fy =
+            _mm256_or_ps(_mm256_sub_ps(lim, _mm256_andnot_ps(sign, x)), _mm256_and_ps(y, sign));
+        const __m256 low = _mm256_cmp_ps(z0, zero, _CMP_LT_OQ);
+        x = _mm256_blendv_ps(x, fx, low);
+        y = _mm256_blendv_ps(y, fy, low);
+        const __m256 bx =
+            _mm256_sub_ps(_mm256_cvtepi32_ps(_mm256_cvttps_epi32(_mm256_add_ps(x, off))), off);
+        const __m256 by =
+            _mm256_sub_ps(_mm256_cvtepi32_ps(_mm256_cvttps_epi32(_mm256_add_ps(y, off))), off);
+        __m256 bu = bx, bv = by, bnum = _mm256_set1_ps(-1.0f), bden = one;
+        for (int d = 0; d < 4; d++) {
+            const __m256 cu =
+                _mm256_max_ps(_mm256_min_ps(d & 1 ? _mm256_add_ps(bx, one) : bx, lim), nlim);
+            const __m256 cv =
+                _mm256_max_ps(_mm256_min_ps(d >> 1 ? _mm256_add_ps(by, one) : by, lim), nlim);
+            const __m256 nz = _mm256_sub_ps(_mm256_sub_ps(lim, _mm256_andnot_ps(sign, cu)),
+                                            _mm256_andnot_ps(sign, cv));
+            const __m256 t = _mm256_max_ps(_mm256_sub_ps(zero, nz), zero);
+            const __m256 nx = _mm256_sub_ps(cu, _mm256_or_ps(t, _mm256_and_ps(cu, sign)));
+            const __m256 ny = _mm256_sub_ps(cv, _mm256_or_ps(t, _mm256_and_ps(cv, sign)));
+            const __m256 dot = _mm256_add_ps(
+                _mm256_add_ps(_mm256_mul_ps(nx, x0), _mm256_mul_ps(ny, y0)), _mm256_mul_ps(nz, z0));
+            const __m256 num = _mm256_mul_ps(dot, dot);
+            const __m256 den = _mm256_add_ps(
+                _mm256_add_ps(_mm256_mul_ps(nx, nx), _mm256_mul_ps(ny, ny)), _mm256_mul_ps(nz, nz));
+            const __m256 better =
+                _mm256_cmp_ps(_mm256_mul_ps(num, bden), _mm256_mul_ps(bnum, den), _CMP_GT_OQ);
+            bu = _mm256_blendv_ps(bu, cu, better);
+            bv = _mm256_blendv_ps(bv, cv, better);
+            bnum = _mm256_blendv_ps(bnum, num, better);
+            bden = _mm256_blendv_ps(bden, den, better);
+        }
+        bu = _mm256_blendv_ps(bu, zc, flat);
+        bv = _mm256_blendv_ps(bv, zc, flat);
+        /* (u, v) interleaved: unpack works within 128-bit halves, so lanes
+         * 0-1, 4-5 | 2-3, 6-7; the packs keep that order per half */
+        const __m256i lo = _mm256_cvtps_epi32(_mm256_unpacklo_ps(bu, bv));
+        const __m256i hi = _mm256_cvtps_epi32(_mm256_unpackhi_ps(bu, bv));
+        /* per half: u0 v0 u1 v1 u2 v2 u3 v3 (half 0: voxels 0-3, half 1: 4-7) */
+        const __m256i w16 = _mm256_packs_epi32(lo, hi);
+        const __m256i w8 = _mm256_packs_epi16(w16, w16);
+        const int64_t h0 = _mm256_extract_epi64(w8, 0), h1 = _mm256_extract_epi64(w8, 2);
+        memcpy(out + 2 * i, &h0, 8);
+        memcpy(out + 2 * i + 8, &h1, 8);
+    }
+    if (i < n)
+        vv_oct_encode_n(gx + i, gy + i, gz + i, n - i, out + 2 * i);
+}
+
+/* vv_oct_decode4 eight lanes wide. */
+__attribute__((target("avx2"))) static inline void
+oct_decode8(__m256i u, __m256i v, __m256 *x, __m256 *y, __m256 *z) {
+    const __m256 sign = _mm256_set1_ps(-0.0f), zero = _mm256_setzero_ps();
+    const __m256 none = _mm256_castsi256_ps(_mm256_cmpeq_epi32(u, _mm256_set1_epi32(VV_OCT_ZERO)));
+    __m256 fu = _mm256_cvtepi32_ps(u), fv = _mm256_cvtepi32_ps(v);
+    const __m256 fz =
+        _mm256_sub_ps(_mm256_sub_ps(_mm256_set1_ps(127.0f), _mm256_andnot_ps(sign, fu)),
+                      _mm256_andnot_ps(sign, fv));
+    const __m256 t = _mm256_max_ps(_mm256_sub_ps(zero, fz), zero);
+    fu = _mm256_sub_ps(fu, _mm256_or_ps(t, _mm256_and_ps(fu, sign)));
+    fv = _mm256_sub_ps(fv, _mm256_or_ps(t, _mm256_and_ps(fv, sign)));
+    const __m256 len2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(fu, fu), _mm256_mul_ps(fv, fv)),
+                                      _mm256_mul_ps(fz, fz));
+    const __m256 r = _mm256_andnot_ps(none, _mm256_rsqrt_ps(len2));
+    *x = _mm256_mul_ps(fu, r);
+    *y = _mm256_mul_ps(fv, r);
+    *z = _mm256_mul_ps(fz, r);
+}
+
+/* vv_vcache_gradient_at of eight samples (cells cell[vis[q]], fractions
+ * fx, fy, fz at vis[q]; lanes past n8 repeat the first), one lane a
+ * sample: each of the cells' four x-pairs of octahedral codes decoded
+ * eight at a time, in the order of vv_vcache_gradient_at's operations so
+ * that the gradients are its own. Needs c->nrm. */
+__attribute__((target("avx2"))) static void
+gradient8_avx2(const vv_vcache *c, const size_t *cell, const float *fx, const float *fy,
+               const float *fz, const int *vis, int n8, float gx[8], float gy[8], float gz[8]) {
+    const size_t sy = 2 * c->sy, sz = 2 * c->sz;
+    int32_t row[4][8];
+    float wx[8], wy[8], wz[8];
+    for (int q = 0; q < 8; q++) {
+        const int s = vis[q < n8 ? q : 0];
+        const int8_t *p = c->nrm + 2 * cell[s];
+        memcpy(&row[0][q], p, 4);
+        memcpy(&row[1][q], p + sy, 4);
+        memcpy(&row[2][q], p + sz, 4);
+        memcpy(&row[3][q], p + sz + sy, 4);
+        wx[q] = fx[s];
+        wy[q] = fy[s];
+        wz[q] = fz[s];
+    }
+    const __m256 one = _mm256_set1_ps(1.0f), f0 = _mm256_loadu_ps(wx);
+    const __m256 f1 = _mm256_loadu_ps(wy), f2 = _mm256_loadu_ps(wz);
+    const __m256 g1 = _mm256_sub_ps(one, f1), g2 = _mm256_sub_ps(one, f2);
+    const __m256 w[4] = {_mm256_mul_ps(g1, g2), _mm256_mul_ps(f1, g2), _mm256_mul_ps(g1, f2),
+                         _mm256_mul_ps(f1, f2)};
+    __m256 X[4], Y[4], Z[4];
+    for (int r = 0; r < 4; r++) {
+        const __m256i b = _mm256_loadu_si256((const __m256i *)(const void *)row[r]);
+        __m256 x0, y0, z0, x1, y1, z1;
+        oct_decode8(_mm256_srai_epi32(_mm256_slli_epi32(b, 24), 24),
+                    _mm256_srai_epi32(_mm256_slli_epi32(b, 16), 24), &x0, &y0, &z0);
+        oct_decode8(_mm256_srai_epi32(_mm256_slli_epi32(b, 8), 24), _mm256_srai_epi32(b, 24), &x1,
+                    &y1, &z1);
+        X[r] = _mm256_mul_ps(_mm256_add_ps(x0, _mm256_mul_ps(_mm256_sub_ps(x1, x0), f0)), w[r]);
+        Y[r] = _mm256_mul_ps(_mm256_add_ps(y0, _mm256_mul_ps(_mm256_sub_ps(y1, y0), f0)), w[r]);
+        Z[r] = _mm256_mul_ps(_mm256_add_ps(z0, _mm256_mul_ps(_mm256_sub_ps(z1, z0), f0)), w[r]);
+    }
+    /* vv_vcache_gradient_at's sums: (r0 + r2) + (r1 + r3) */
+    _mm256_storeu_ps(gx, _mm256_add_ps(_mm256_add_ps(X[0], X[2]), _mm256_add_ps(X[1], X[3])));
+    _mm256_storeu_ps(gy, _mm256_add_ps(_mm256_add_ps(Y[0], Y[2]), _mm256_add_ps(Y[1], Y[3])));
+    _mm256_storeu_ps(gz, _mm256_add_ps(_mm256_add_ps(Z[0], Z[2]), _mm256_add_ps(Z[1], Z[3])));
+}
+
 int
 vv_vchunk_shade8(const vv_vcache *c, const float *lut, const vv_vshading *o,
                  const vv_vlight *lights, int n_lights, const float v[3], int m, const size_t *cell,
@@ -169,23 +306,18 @@ vv_vchunk_shade8(const vv_vcache *c, const float *lut, const vv_vshading *o,
             vis[nvis++] = s;
     for (int i0 = 0; i0 < nvis; i0 += 8) {
         const int n8 = nvis - i0 < 8 ? nvis - i0 : 8;
-        float gx[8] = {0}, gy[8] = {0}, gz[8] = {0}, al[8] = {0};
+        float gx[8], gy[8], gz[8], al[8] = {0};
         float cr[8] = {0}, cg[8] = {0}, cb[8] = {0}, sh[VV_MAX_LIGHTS * 8];
         float orr[8], org[8], orb[8];
         int shadowed = 0;
         if (shadow)
             memset(sh, 0, sizeof(float) * 8 * (size_t)n_lights);
+        gradient8_avx2(c, cell, fx, fy, fz, vis + i0, n8, gx, gy, gz);
         for (int q = 0; q < n8; q++) {
             const int s = vis[i0 + q];
             const float *e = lut + entry[s];
-            const float f[3] = {fx[s], fy[s], fz[s]};
-            float g[3];
-            vv_vcache_gradient_at(c, cell[s], f, g);
             if (shadow)
                 shadowed = shadow(ctx, s, sh + q, 8);
-            gx[q] = g[0];
-            gy[q] = g[1];
-            gz[q] = g[2];
             al[q] = e[0];
             cr[q] = e[1];
             cg[q] = e[2];

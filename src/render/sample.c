@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "core/internal.h"
+#include "render/kernels_avx2.h"
 #include "render/tf_tables.h"
 
 static void
@@ -50,45 +51,177 @@ fill_row(vv_vcache *c, const vv_volume *vol, int j, int k, size_t base) {
     }
 }
 
-/* Unit gradients by central differences in index units, one-sided at the
- * borders, quantised to int8. */
-static void
-fill_gradients(vv_vcache *c) {
-    const int nx = c->nx, ny = c->ny, nz = c->nz;
-#pragma omp parallel for schedule(static)
-    for (int k = 0; k < nz; k++)
-        for (int j = 0; j < ny; j++) {
-            size_t base = (size_t)k * c->sz + (size_t)j * c->sy;
-            int j0 = j > 0 ? j - 1 : j, j1 = j < ny - 1 ? j + 1 : j;
-            int k0 = k > 0 ? k - 1 : k, k1 = k < nz - 1 ? k + 1 : k;
-            float fy = 1.0f / (float)(j1 - j0), fz = 1.0f / (float)(k1 - k0);
-            size_t by0 = (size_t)k * c->sz + (size_t)j0 * c->sy;
-            size_t by1 = (size_t)k * c->sz + (size_t)j1 * c->sy;
-            size_t bz0 = (size_t)k0 * c->sz + (size_t)j * c->sy;
-            size_t bz1 = (size_t)k1 * c->sz + (size_t)j * c->sy;
-            for (int i = 0; i < nx; i++) {
-                int i0 = i > 0 ? i - 1 : i, i1 = i < nx - 1 ? i + 1 : i;
-                float gx = (vv_vcache_value(c, base + (size_t)i1) -
-                            vv_vcache_value(c, base + (size_t)i0)) /
-                           (float)(i1 - i0);
-                float gy =
-                    (vv_vcache_value(c, by1 + (size_t)i) - vv_vcache_value(c, by0 + (size_t)i)) *
-                    fy;
-                float gz =
-                    (vv_vcache_value(c, bz1 + (size_t)i) - vv_vcache_value(c, bz0 + (size_t)i)) *
-                    fz;
-                float g = sqrtf(gx * gx + gy * gy + gz * gz);
-                int8_t *o = c->nrm + 3 * (base + (size_t)i);
-                if (g > 0) {
-                    float sc = 127.0f / g;
-                    o[0] = (int8_t)lrintf(gx * sc);
-                    o[1] = (int8_t)lrintf(gy * sc);
-                    o[2] = (int8_t)lrintf(gz * sc);
-                } else {
-                    o[0] = o[1] = o[2] = 0;
-                }
+/* Each g is scaled to
+ * |x|+|y|+|z| = 1, the lower half (z < 0) folded over the upper's
+ * corners, x and y times 127; of the four roundings of the two codes, the
+ * one whose decoded vector is nearest g (Cigolle et al. 2014's "precise"
+ * encoding: about half the angular error of rounding to nearest), compared
+ * as cos^2 = (n.g)^2 / |n|^2 |g|^2 cross-multiplied (every candidate is
+ * within 90 degrees of g; g divided by its |x|+|y|+|z| first, so that
+ * neither a tiny nor a huge one under- or overflows): no division or root
+ * but the scaling's. Four
+ * directions at a time with SSE2, without a branch. */
+void
+vv_oct_encode_n(const float *gx, const float *gy, const float *gz, int n, int8_t *out) {
+    int i = 0;
+#ifdef __SSE2__
+    const __m128 sign = _mm_set1_ps(-0.0f), lim = _mm_set1_ps(127.0f), one = _mm_set1_ps(1.0f);
+    const __m128 zero = _mm_setzero_ps(), nlim = _mm_set1_ps(-127.0f);
+    for (; i + 4 <= n; i += 4) {
+        const __m128 gx0 = _mm_loadu_ps(gx + i), gy0 = _mm_loadu_ps(gy + i);
+        const __m128 gz0 = _mm_loadu_ps(gz + i);
+        const __m128 l1 = _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, gx0), _mm_andnot_ps(sign, gy0)),
+                                     _mm_andnot_ps(sign, gz0));
+        const __m128 flat = _mm_cmpeq_ps(l1, zero);
+        /* divided rather than scaled by 1 / l1, which overflows for a
+         * denormal l1 */
+        const __m128 dv = _mm_or_ps(l1, _mm_and_ps(flat, one));
+        const __m128 x0 = _mm_div_ps(gx0, dv), y0 = _mm_div_ps(gy0, dv), z0 = _mm_div_ps(gz0, dv);
+        __m128 x = _mm_mul_ps(x0, lim), y = _mm_mul_ps(y0, lim);
+        /* the fold: (127 - |y|) sign(x), (127 - |x|) sign(y) where z < 0 */
+        const __m128 fx = _mm_or_ps(_mm_sub_ps(lim, _mm_andnot_ps(sign, y)), _mm_and_ps(x, sign));
+        const __m128 fy = _mm_or_ps(_mm_sub_ps(lim, _mm_andnot_ps(sign, x)), _mm_and_ps(y, sign));
+        const __m128 low = _mm_cmplt_ps(z0, zero);
+        x = _mm_or_ps(_mm_and_ps(low, fx), _mm_andnot_ps(low, x));
+        y = _mm_or_ps(_mm_and_ps(low, fy), _mm_andnot_ps(low, y));
+        /* floor (|x|, |y| <= 127) */
+        const __m128 off = _mm_set1_ps(128.0f);
+        const __m128 bx = _mm_sub_ps(_mm_cvtepi32_ps(_mm_cvttps_epi32(_mm_add_ps(x, off))), off);
+        const __m128 by = _mm_sub_ps(_mm_cvtepi32_ps(_mm_cvttps_epi32(_mm_add_ps(y, off))), off);
+        __m128 bu = bx, bv = by, bnum = _mm_set1_ps(-1.0f), bden = one;
+        for (int d = 0; d < 4; d++) {
+            const __m128 cu = _mm_max_ps(_mm_min_ps(d & 1 ? _mm_add_ps(bx, one) : bx, lim), nlim);
+            const __m128 cv = _mm_max_ps(_mm_min_ps(d >> 1 ? _mm_add_ps(by, one) : by, lim), nlim);
+            const __m128 nz =
+                _mm_sub_ps(_mm_sub_ps(lim, _mm_andnot_ps(sign, cu)), _mm_andnot_ps(sign, cv));
+            const __m128 t = _mm_max_ps(_mm_sub_ps(zero, nz), zero);
+            const __m128 nx = _mm_sub_ps(cu, _mm_or_ps(t, _mm_and_ps(cu, sign)));
+            const __m128 ny = _mm_sub_ps(cv, _mm_or_ps(t, _mm_and_ps(cv, sign)));
+            const __m128 dot =
+                _mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, x0), _mm_mul_ps(ny, y0)), _mm_mul_ps(nz, z0));
+            const __m128 num = _mm_mul_ps(dot, dot);
+            const __m128 den =
+                _mm_add_ps(_mm_add_ps(_mm_mul_ps(nx, nx), _mm_mul_ps(ny, ny)), _mm_mul_ps(nz, nz));
+            const __m128 better = _mm_cmpgt_ps(_mm_mul_ps(num, bden), _mm_mul_ps(bnum, den));
+            bu = _mm_or_ps(_mm_and_ps(better, cu), _mm_andnot_ps(better, bu));
+            bv = _mm_or_ps(_mm_and_ps(better, cv), _mm_andnot_ps(better, bv));
+            bnum = _mm_or_ps(_mm_and_ps(better, num), _mm_andnot_ps(better, bnum));
+            bden = _mm_or_ps(_mm_and_ps(better, den), _mm_andnot_ps(better, bden));
+        }
+        const __m128 zc = _mm_set1_ps((float)VV_OCT_ZERO);
+        bu = _mm_or_ps(_mm_and_ps(flat, zc), _mm_andnot_ps(flat, bu));
+        bv = _mm_or_ps(_mm_and_ps(flat, zc), _mm_andnot_ps(flat, bv));
+        /* interleave u, v and pack to bytes */
+        const __m128i uv16 = _mm_packs_epi32(_mm_cvtps_epi32(_mm_unpacklo_ps(bu, bv)),
+                                             _mm_cvtps_epi32(_mm_unpackhi_ps(bu, bv)));
+        _mm_storel_epi64((__m128i *)(void *)(out + 2 * i), _mm_packs_epi16(uv16, uv16));
+    }
+#endif
+    for (; i < n; i++) {
+        const float l1 = fabsf(gx[i]) + fabsf(gy[i]) + fabsf(gz[i]);
+        if (l1 == 0) {
+            out[2 * i] = out[2 * i + 1] = VV_OCT_ZERO;
+            continue;
+        }
+        const float x0 = gx[i] / l1, y0 = gy[i] / l1, z0 = gz[i] / l1;
+        float x = x0 * 127.0f, y = y0 * 127.0f;
+        if (z0 < 0) {
+            const float fx = copysignf(127.0f - fabsf(y), x), fy = copysignf(127.0f - fabsf(x), y);
+            x = fx;
+            y = fy;
+        }
+        const float bx = (float)((int)(x + 128.0f) - 128), by = (float)((int)(y + 128.0f) - 128);
+        float best_num = -1, best_den = 1;
+        for (int d = 0; d < 4; d++) {
+            float u = bx + (float)(d & 1), v = by + (float)(d >> 1);
+            u = u > 127 ? 127 : u < -127 ? -127 : u;
+            v = v > 127 ? 127 : v < -127 ? -127 : v;
+            const float nz = 127.0f - fabsf(u) - fabsf(v), t = nz < 0 ? -nz : 0;
+            const float nx = u - copysignf(t, u), ny = v - copysignf(t, v);
+            const float dot = nx * x0 + ny * y0 + nz * z0;
+            const float num = dot * dot, den = nx * nx + ny * ny + nz * nz;
+            if (num * best_den > best_num * den) {
+                best_num = num;
+                best_den = den;
+                out[2 * i] = (int8_t)u;
+                out[2 * i + 1] = (int8_t)v;
             }
         }
+    }
+}
+
+/* The central differences of voxels r0 .. r0 + m - 1 of the row at base
+ * (rows y0, y1, z0, z1 its neighbours, fy and fz the reciprocals of their
+ * distances), fill_gradients's arithmetic: the 16-bit values' interior
+ * without a branch, so that the compiler vectorises it. */
+static void
+differences_run(const vv_vcache *c, size_t base, size_t y0, size_t y1, size_t z0, size_t z1,
+                float fy, float fz, int r0, int m, float *gx, float *gy, float *gz) {
+    const int nx = c->nx;
+    int q = 0;
+    if (c->q16) {
+        const uint16_t *v = c->q16, *vc = v + base, *vy0 = v + y0, *vy1 = v + y1;
+        const uint16_t *vz0 = v + z0, *vz1 = v + z1;
+        /* the interior, i in 1 .. nx - 2: (v[i+1] - v[i-1]) / 2 exactly */
+        const int qa = r0 == 0 ? 1 : 0, qb = r0 + m > nx - 1 ? nx - 1 - r0 : m;
+        for (q = 0; q < qa; q++) {
+            const int i = r0 + q, i1 = i < nx - 1 ? i + 1 : i;
+            gx[q] = ((float)vc[i1] - (float)vc[i]) / (float)(i1 - i);
+            gy[q] = ((float)vy1[i] - (float)vy0[i]) * fy;
+            gz[q] = ((float)vz1[i] - (float)vz0[i]) * fz;
+        }
+        for (q = qa; q < qb; q++) {
+            const int i = r0 + q;
+            gx[q] = ((float)vc[i + 1] - (float)vc[i - 1]) * 0.5f;
+            gy[q] = ((float)vy1[i] - (float)vy0[i]) * fy;
+            gz[q] = ((float)vz1[i] - (float)vz0[i]) * fz;
+        }
+    }
+    for (; q < m; q++) {
+        const int i = r0 + q;
+        const int i0 = i > 0 ? i - 1 : i, i1 = i < nx - 1 ? i + 1 : i;
+        gx[q] = (vv_vcache_value(c, base + (size_t)i1) - vv_vcache_value(c, base + (size_t)i0)) /
+                (float)(i1 - i0);
+        gy[q] = (vv_vcache_value(c, y1 + (size_t)i) - vv_vcache_value(c, y0 + (size_t)i)) * fy;
+        gz[q] = (vv_vcache_value(c, z1 + (size_t)i) - vv_vcache_value(c, z0 + (size_t)i)) * fz;
+    }
+}
+
+/* Unit gradients by central differences in index units, one-sided at the
+ * borders, in octahedral code (vv_oct_encode_n, with AVX2 where the
+ * processor has it: the same codes), a run of a row at a time. */
+static void
+fill_gradients(vv_vcache *c) {
+    enum { RUN = 256 };
+    const int nx = c->nx, ny = c->ny, nz = c->nz;
+    const int avx2 = VV_VC_HAVE_AVX2 && vv_vc_have_avx2();
+#pragma omp parallel for schedule(static)
+    for (int k = 0; k < nz; k++) {
+        float gx[RUN], gy[RUN], gz[RUN];
+        for (int j = 0; j < ny; j++) {
+            const size_t base = (size_t)k * c->sz + (size_t)j * c->sy;
+            const int j0 = j > 0 ? j - 1 : j, j1 = j < ny - 1 ? j + 1 : j;
+            const int k0 = k > 0 ? k - 1 : k, k1 = k < nz - 1 ? k + 1 : k;
+            const float fy = 1.0f / (float)(j1 - j0), fz = 1.0f / (float)(k1 - k0);
+            const size_t y0 = (size_t)k * c->sz + (size_t)j0 * c->sy;
+            const size_t y1 = (size_t)k * c->sz + (size_t)j1 * c->sy;
+            const size_t z0 = (size_t)k0 * c->sz + (size_t)j * c->sy;
+            const size_t z1 = (size_t)k1 * c->sz + (size_t)j * c->sy;
+            for (int r0 = 0; r0 < nx; r0 += RUN) {
+                const int m = nx - r0 < RUN ? nx - r0 : RUN;
+                differences_run(c, base, y0, y1, z0, z1, fy, fz, r0, m, gx, gy, gz);
+                int8_t *out = c->nrm + 2 * (base + (size_t)r0);
+#if VV_VC_HAVE_AVX2
+                if (avx2) {
+                    vv_oct_encode_n_avx2(gx, gy, gz, m, out);
+                    continue;
+                }
+#endif
+                vv_oct_encode_n(gx, gy, gz, m, out);
+            }
+        }
+    }
+    (void)avx2;
 }
 
 vv_status
@@ -269,12 +402,10 @@ vv_vcache_need_normals(const vv_vcache_set *s, vv_vcache *c) {
      * limit included): the cache is an optimisation, never a reason for the
      * OOM killer */
     uint64_t left = vv_memory_available();
-    if ((uint64_t)n * 3 <= s->gradient_budget && (uint64_t)n * 3 <= left / 2)
-        c->nrm = malloc(n * 3 + 1); /* NULL: gradients on the fly */
-    if (c->nrm) {
-        c->nrm[n * 3] = 0; /* the padding byte vv_vcache_normal reads past the last voxel */
+    if ((uint64_t)n * 2 <= s->gradient_budget && (uint64_t)n * 2 <= left / 2)
+        c->nrm = malloc(n * 2); /* NULL: gradients on the fly */
+    if (c->nrm)
         fill_gradients(c);
-    }
 }
 
 void
@@ -285,7 +416,7 @@ vv_vcache_set_init(vv_vcache_set *s) {
 
 void
 vv_vcache_set_default_budget(vv_vcache_set *s) {
-    /* cached gradients take 3 bytes a voxel: allow them up to a quarter of
+    /* cached gradients take 2 bytes a voxel: allow them up to a quarter of
      * physical memory (at most 8 GiB); beyond, gradients are computed on the
      * fly from the values */
     uint64_t budget = (uint64_t)8 << 30;

@@ -7,7 +7,8 @@
  * when the data are integers spanning at most 65535 (exact, and half the
  * memory traffic of float), else as float; all values inside the renderers
  * ("stored units") are real value - qoff. The unit gradient direction of
- * every voxel (central differences, computed once) is quantised to 3 x int8
+ * every voxel (central differences, computed once) is stored as a 16-bit
+ * octahedral code (vv_oct_decode: 2 bytes a voxel, where 3 x int8 took 3)
  * in a separate array, touched only where a sample is shaded, and every
  * subvolume of 4^3 cells has the min/max of its stored values (the PARC
  * grid of the VolVis paper's Navigator, section 4; computed from the stored
@@ -27,6 +28,7 @@
 #ifndef VV_RENDER_SAMPLE_H
 #define VV_RENDER_SAMPLE_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <string.h>
@@ -59,8 +61,8 @@ typedef struct vv_vcache {
     int q16_borrowed;   /* q16 is the volume's own u16 array (qoff 0), not a copy */
     float *f32;         /* values as float (qoff = 0), or NULL */
     double qoff;        /* offset of stored values */
-    int8_t *nrm;        /* unit gradients * 127 (index space), 3 bytes a voxel and one
-                           byte of padding at the end, or NULL: on the fly */
+    int8_t *nrm;        /* unit gradients (index space) in octahedral code (vv_oct_decode),
+                           2 bytes a voxel (u, v), or NULL: on the fly */
     int nrm_tried;      /* vv_vcache_need_normals ran (nrm NULL: over the budget) */
     float *gmag;        /* gradient magnitudes per voxel (vv_vcache_need_gmag), or NULL */
     int bx, by, bz;     /* subvolume grid */
@@ -107,6 +109,11 @@ vv_status vv_vcache_get(vv_vcache_set *s, vv_volume *vol, vv_vcache **out);
  * gradients are computed at each sample: slower, never wrong). A volume
  * shown only as MIP, MinIP or X-ray never pays for it. */
 void vv_vcache_need_normals(const vv_vcache_set *s, vv_vcache *c);
+
+/* The octahedral codes (vv_oct_decode) of the n directions (gx[i], gy[i],
+ * gz[i]) into out (2 n bytes: u, v), VV_OCT_ZERO where the direction is
+ * zero. Thread-safe. */
+void vv_oct_encode_n(const float *gx, const float *gy, const float *gz, int n, int8_t *out);
 
 /* Builds c->gmag once: the gradient magnitude of every cached voxel, in
  * data units per world unit of the volume's own coordinates (central
@@ -223,35 +230,95 @@ vv_vcache_sample(const vv_vcache *c, const float p[3]) {
 
 typedef float vv_v4f __attribute__((vector_size(16)));
 
-/* The cached unit gradient of voxel idx as 4 floats (x, y, z, w), times
- * 127; w is the next voxel's x and must be ignored: one 32-bit load (the
- * array has a byte of padding for the last voxel), sign-extended in
- * registers (compilers scalarise the generic int8 -> float vector
- * conversion). */
+/* The cached gradients' code for a voxel whose gradient is zero: no
+ * direction, contributes nothing to an interpolated gradient. */
+#define VV_OCT_ZERO (-128)
+
+/* Unit vector of octahedral code (u, v) (Meyer et al., "On floating-point
+ * normal vectors", EGSR 2010; Cigolle et al., "A survey of efficient
+ * representations for independent unit vectors", JCGT 2014): the point
+ * (u, v) / 127 of the square [-1, 1]^2 is the octahedron |x|+|y|+|z| = 1
+ * unfolded (the lower half folded over the upper's corners), projected
+ * onto the sphere. Zero vector for VV_OCT_ZERO. */
 static inline vv_v4f
-vv_vcache_normal(const vv_vcache *c, size_t idx) {
-#ifdef __SSE2__
-    int32_t word;
-    memcpy(&word, c->nrm + 3 * idx, sizeof word);
-    __m128i x = _mm_cvtsi32_si128(word);
-    x = _mm_unpacklo_epi8(x, x);
-    x = _mm_unpacklo_epi16(x, x);
-    x = _mm_srai_epi32(x, 24);
-    return (vv_v4f)_mm_cvtepi32_ps(x);
-#else
-    const int8_t *n = c->nrm + 3 * idx;
-    vv_v4f r = {n[0], n[1], n[2], 0};
-    return r;
-#endif
+vv_oct_decode(int u, int v) {
+    if (u == VV_OCT_ZERO) {
+        vv_v4f r = {0, 0, 0, 0};
+        return r;
+    }
+    float x = (float)u, y = (float)v, z = 127.0f - (x < 0 ? -x : x) - (y < 0 ? -y : y);
+    const float t = z < 0 ? -z : 0;
+    x += x >= 0 ? -t : t;
+    y += y >= 0 ? -t : t;
+    const float r = 1.0f / sqrtf(x * x + y * y + z * z);
+    vv_v4f n = {x * r, y * r, z * r, 0};
+    return n;
 }
 
+/* The cached unit gradient of voxel idx as 4 floats (x, y, z, 0); zero
+ * where the gradient is. */
+static inline vv_v4f
+vv_vcache_normal(const vv_vcache *c, size_t idx) {
+    return vv_oct_decode(c->nrm[2 * idx], c->nrm[2 * idx + 1]);
+}
+
+#ifdef __SSE2__
+/* vv_oct_decode of four codes, the lanes of u and v (int32). */
+static inline void
+vv_oct_decode4(__m128i u, __m128i v, __m128 *x, __m128 *y, __m128 *z) {
+    const __m128 sign = _mm_set1_ps(-0.0f), zero = _mm_setzero_ps();
+    const __m128 none = _mm_castsi128_ps(_mm_cmpeq_epi32(u, _mm_set1_epi32(VV_OCT_ZERO)));
+    __m128 fu = _mm_cvtepi32_ps(u), fv = _mm_cvtepi32_ps(v);
+    const __m128 fz = _mm_sub_ps(_mm_sub_ps(_mm_set1_ps(127.0f), _mm_andnot_ps(sign, fu)),
+                                 _mm_andnot_ps(sign, fv));
+    const __m128 t = _mm_max_ps(_mm_sub_ps(zero, fz), zero);
+    fu = _mm_sub_ps(fu, _mm_or_ps(t, _mm_and_ps(fu, sign)));
+    fv = _mm_sub_ps(fv, _mm_or_ps(t, _mm_and_ps(fv, sign)));
+    const __m128 len2 =
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(fu, fu), _mm_mul_ps(fv, fv)), _mm_mul_ps(fz, fz));
+    const __m128 r = _mm_andnot_ps(none, _mm_rsqrt_ps(len2));
+    *x = _mm_mul_ps(fu, r);
+    *y = _mm_mul_ps(fv, r);
+    *z = _mm_mul_ps(fz, r);
+}
+#endif
+
 /* Index-space gradient direction (not normalised) in the cell at offset o
- * with fractions f: trilinear interpolation of the cached unit gradients,
- * the same lerp tree as vv_vcache_value_at, four lanes at a time. Needs
- * c->nrm. */
+ * with fractions f: trilinear interpolation of the cached unit gradients
+ * of its eight corners. Needs c->nrm. */
 static inline void
 vv_vcache_gradient_at(const vv_vcache *c, size_t o, const float f[3], float g[3]) {
     const size_t sy = c->sy, sz = c->sz;
+#ifdef __SSE2__
+    /* the cell's four x-pairs of codes in one register (lane r: row r of
+     * (j, k), (j+1, k), (j, k+1), (j+1, k+1); bytes u0 v0 u1 v1), decoded
+     * four at a time, lerped in x, then weighted by the rows' bilinear
+     * weights and summed across the lanes */
+    const int8_t *q = c->nrm + 2 * o;
+    int32_t a0, a1, a2, a3;
+    memcpy(&a0, q, 4);
+    memcpy(&a1, q + 2 * sy, 4);
+    memcpy(&a2, q + 2 * sz, 4);
+    memcpy(&a3, q + 2 * (sz + sy), 4);
+    const __m128i w = _mm_set_epi32(a3, a2, a1, a0);
+    __m128 x0, y0, z0, x1, y1, z1;
+    vv_oct_decode4(_mm_srai_epi32(_mm_slli_epi32(w, 24), 24),
+                   _mm_srai_epi32(_mm_slli_epi32(w, 16), 24), &x0, &y0, &z0);
+    vv_oct_decode4(_mm_srai_epi32(_mm_slli_epi32(w, 8), 24), _mm_srai_epi32(w, 24), &x1, &y1, &z1);
+    const __m128 fx = _mm_set1_ps(f[0]);
+    const float gy = 1.0f - f[1], gz = 1.0f - f[2];
+    const __m128 wr = _mm_set_ps(f[1] * f[2], gy * f[2], f[1] * gz, gy * gz);
+    const __m128 x = _mm_mul_ps(_mm_add_ps(x0, _mm_mul_ps(_mm_sub_ps(x1, x0), fx)), wr);
+    const __m128 y = _mm_mul_ps(_mm_add_ps(y0, _mm_mul_ps(_mm_sub_ps(y1, y0), fx)), wr);
+    const __m128 z = _mm_mul_ps(_mm_add_ps(z0, _mm_mul_ps(_mm_sub_ps(z1, z0), fx)), wr);
+    /* (x0+x2, y0+y2, x1+x3, y1+y3), then the halves added */
+    const __m128 xy = _mm_add_ps(_mm_unpacklo_ps(x, y), _mm_unpackhi_ps(x, y));
+    const __m128 xys = _mm_add_ps(xy, _mm_movehl_ps(xy, xy));
+    const __m128 zs = _mm_add_ps(z, _mm_movehl_ps(z, z));
+    g[0] = _mm_cvtss_f32(xys);
+    g[1] = _mm_cvtss_f32(_mm_shuffle_ps(xys, xys, _MM_SHUFFLE(1, 1, 1, 1)));
+    g[2] = _mm_cvtss_f32(_mm_add_ss(zs, _mm_shuffle_ps(zs, zs, _MM_SHUFFLE(1, 1, 1, 1))));
+#else
     vv_v4f c00 = vv_vcache_normal(c, o), c01 = vv_vcache_normal(c, o + 1);
     vv_v4f c10 = vv_vcache_normal(c, o + sy), c11 = vv_vcache_normal(c, o + sy + 1);
     vv_v4f c20 = vv_vcache_normal(c, o + sz), c21 = vv_vcache_normal(c, o + sz + 1);
@@ -266,6 +333,7 @@ vv_vcache_gradient_at(const vv_vcache *c, size_t o, const float f[3], float g[3]
     g[0] = c00[0];
     g[1] = c00[1];
     g[2] = c00[2];
+#endif
 }
 
 /* Index-space gradient direction at p (not normalised): cached gradients

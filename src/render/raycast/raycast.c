@@ -5,8 +5,8 @@
  * min/max values (the PARC idea of the VolVis paper's Navigator, section 4).
  *
  * Per volume, a cache holds the voxels as 16-bit offsets (integer data) or
- * float, the unit gradient direction of every voxel quantised to 3 x int8
- * in a separate array (central differences, computed once), and the min/max
+ * float, the unit gradient direction of every voxel in a 16-bit octahedral
+ * code in a separate array (central differences, computed once), and the min/max
  * of every 4^3-cell subvolume. Per object, a transfer-function lookup table
  * (opacity corrected for the step) marks which subvolumes are visible, and
  * each subvolume gets its chessboard distance to the nearest visible one;
@@ -881,8 +881,11 @@ prepare_object(rc_frame *fr, rc_obj *ro, const vv_object *obj, const vv_world *w
             ro->dims[a] = region->dims[a] > 1 ? region->dims[a] : 2;
     }
     ro->shading = obj->shading;
-    if (ro->mode == VV_MODE_COMPOSITE || ro->mode == VV_MODE_ISO)
+    if (ro->mode == VV_MODE_COMPOSITE || ro->mode == VV_MODE_ISO) {
         vv_vcache_need_normals(&st->vc, ro->c);
+        if (obj->shading && !ro->c->nrm && fr->stats)
+            fr->stats->gradients_at_samples++;
+    }
     ro->iso = (float)(obj->isovalue - ro->c->qoff);
     return VV_OK;
 }
@@ -1039,7 +1042,7 @@ xray_sum_pixel(const rc_frame *fr, int x, int y, vv_render_stats *work) {
 static vv_status
 render_tile(void *user, const vv_frame_tile *t) {
     const rc_frame *fr = user;
-    vv_render_stats work = {0, 0};
+    vv_render_stats work = {0};
     if (fr->xsum) {
         for (int y = t->y0; y < t->y1; y++)
             for (int x = t->x0; x < t->x1; x++)
@@ -1069,7 +1072,7 @@ refine_pixel(void *user, int x, int y, float px[5], void *work) {
 static vv_status
 render_tile_refined(void *user, const vv_frame_tile *t) {
     const rc_frame *fr = user;
-    vv_render_stats work = {0, 0};
+    vv_render_stats work = {0};
     vv_frame_refine_tile(t, fr->out->width, fr->out->height, fr->tolerance, refine_pixel,
                          (void *)fr, &work, fr->out->rgba, fr->out->depth);
     tile_stats(fr, &work);
