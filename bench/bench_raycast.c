@@ -158,7 +158,7 @@ peak_shaded_rate(const vv_volume *like, const bench_cfg *cfg) {
     vv_render_options opt;
     vv_render_options_init(&opt);
     opt.threads = 1;
-    vv_render_stats st = {0, 0};
+    vv_render_stats st = {0};
     opt.stats = &st;
     if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK) /* warm-up, and the count */
         bench_die("bench_raycast", "peak render");
@@ -310,7 +310,7 @@ main(int argc, char **argv) {
             bench_die("bench_raycast", "render");
         double first = bench_now() - a;
         double *times = malloc(sizeof(double) * (size_t)cfg.runs);
-        vv_render_stats work = {0, 0};
+        vv_render_stats work = {0};
         opt.stats = &work; /* (the same counts every frame) */
         if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK) /* warm-up */
             bench_die("bench_raycast", "render");

@@ -205,6 +205,8 @@ cli_render_main(int argc, char **argv) {
     cli_progress pr;
     cli_progress_begin(&pr, r.quiet);
     ro.progress = pr.p;
+    vv_render_stats stats = {0};
+    ro.stats = &stats;
     if (tr) {
         cli_time_steps_gradients(&a, ren);
         rc = render_time_range(&r, range, w, ren, &ro, img);
@@ -257,6 +259,12 @@ cli_render_main(int argc, char **argv) {
     }
     if (steps > 0 && !r.quiet)
         printf("wrote %d progressive steps (_p0000 .. _p%04d)\n", steps, steps - 1);
+    if (stats.gradients_at_samples && !r.quiet)
+        fprintf(stderr,
+                "volvis: note: %d volume%s shaded with gradients computed at the samples "
+                "(slower): cached gradients (2 bytes a voxel) fit neither the gradient budget "
+                "(--set gradient_budget_mb) nor half the memory left\n",
+                (int)stats.gradients_at_samples, stats.gradients_at_samples == 1 ? "" : "s");
     cli_render_report(&r, w, img, seconds, &lod);
     rc = CLI_EXIT_OK;
 done:

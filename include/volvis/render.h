@@ -38,6 +38,11 @@ extern "C" {
 typedef struct vv_render_stats {
     uint64_t samples; /**< samples taken along rays (value and transfer-function entry) */
     uint64_t shaded;  /**< of those, the samples that contributed: shaded and composited */
+    /** shaded volumes (objects or channels) whose gradients were computed
+     * at the samples, slower, because their cached gradients (2 bytes a
+     * voxel) fit neither the renderer's gradient_budget_mb nor half the
+     * memory left (the ray caster counts them; others add nothing) */
+    uint32_t gradients_at_samples;
 } vv_render_stats;
 
 #define VV_LOD_MAX_LEVELS 16 /**< levels a level-of-detail frame draws from */

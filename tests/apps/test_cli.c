@@ -625,6 +625,25 @@ test_render_png(void **state) {
     free_result(&r);
     check_png(iso, 32, 32);
 
+    /* cached gradients over the budget: computed at the samples, said in
+     * one line (the default above fits and says nothing); -q silences it */
+    const char *otf = out_file("neghip-otf.png");
+    r = run_cli("render", vt_data("volumes/neghip.slc"), "-o", otf, "--size", "32x32", "--set",
+                "gradient_budget_mb=0");
+    if (r.status != 0)
+        fail_msg("exit %d: %s", r.status, r.err);
+    assert_string_equal(r.err,
+                        "volvis: note: 1 volume shaded with gradients computed at the samples "
+                        "(slower): cached gradients (2 bytes a voxel) fit neither the gradient "
+                        "budget (--set gradient_budget_mb) nor half the memory left\n");
+    free_result(&r);
+    r = run_cli("render", vt_data("volumes/neghip.slc"), "-o", otf, "--size", "32x32", "--set",
+                "gradient_budget_mb=0", "-q");
+    assert_int_equal(r.status, 0);
+    assert_string_equal(r.err, "");
+    free_result(&r);
+    check_png(otf, 32, 32);
+
     /* --iso alone implies --mode iso; it differs from composite */
     const char *iso2 = out_file("neghip-iso2.png");
     const char *comp = out_file("neghip-comp.png");

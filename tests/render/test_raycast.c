@@ -291,7 +291,7 @@ test_slab_sample_count(void **state) {
      * the 4 rays, all shaded; added to what the counts held, from any
      * thread count; a transparent object takes none (skipped) */
     for (int threads = 1; threads <= 2; threads++) {
-        vv_render_stats st = {1, 1};
+        vv_render_stats st = {1, 1, 0};
         vv_render_options opt;
         vv_render_options_init(&opt);
         opt.threads = threads;
@@ -1128,7 +1128,7 @@ test_adaptive_refinement(void **state) {
         vv_renderer *r = new_raycaster(), *on = new_raycaster(), *off = new_raycaster();
         vt_ok(vv_renderer_set_option(on, "refinement", "on"));
         vt_ok(vv_renderer_set_option(off, "refinement", "off"));
-        vv_render_stats s2 = {0, 0}, s2a = {0, 0}, s1 = {0, 0};
+        vv_render_stats s2 = {0}, s2a = {0}, s1 = {0};
         vv_image *q2 = vt_render_q(r, w, 2, 0, &s2);
         vv_image *q2a = vt_render_q(on, w, 2, 0, &s2a);
         vv_image *q1 = vt_render_q(r, w, 1, 1, &s1);
@@ -1157,7 +1157,7 @@ test_adaptive_refinement(void **state) {
         /* magnified four times (about eight pixels a voxel on neghip, the
          * benchmark's view): far fewer samples for nearly the same image */
         w->view.fov *= 0.25;
-        s1 = s2 = (vv_render_stats){0, 0};
+        s1 = s2 = (vv_render_stats){0};
         q2 = vt_render_q(r, w, 2, 0, &s2);
         q1 = vt_render_q(r, w, 1, 0, &s1);
         const double pz = vv_image_psnr(q1, q2);
