@@ -173,7 +173,7 @@ vv_frame_refine_scratch_bytes(void) {
 
 float
 vv_frame_refine_tolerance(int quality) {
-    static const float by_quality[3] = {1.0f / 16, 1.0f / 64, 1.0f / 512};
+    static const float by_quality[3] = {1.0f / 16, 1.0f / 64, 1.0f / 1024};
     return by_quality[quality < 0 ? 0 : quality > 2 ? 2 : quality];
 }
 

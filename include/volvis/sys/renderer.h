@@ -513,7 +513,8 @@ extern const char *const vv_frame_refine_auto[];
 
 /**
  * A renderer's refinement settings, the values of its
- * VV_FRAME_REFINE_OPTIONS: mode 0 auto (at quality 0 and 1), 1 on, 2 off;
+ * VV_FRAME_REFINE_OPTIONS: mode 0 auto (at quality 0 and 1, and where the
+ * renderer says), 1 on, 2 off;
  * tolerance < 0 by quality (vv_frame_refine_tolerance). A member of the
  * renderer's state that the two option rows bind to, read when a frame
  * starts.
@@ -526,23 +527,23 @@ typedef struct vv_frame_refine_settings {
 /**
  * The two option rows of a renderer that refines (its option table's
  * rows), bound to the vv_frame_refine_settings member @p field of its
- * state type @p type: `refinement` (enum auto/on/off: mode 0 auto, at
- * quality 0 and 1; 1 on; 2 off) and `refinement_tolerance` (real in
- * [0, 1], or auto: tolerance -1, vv_frame_refine_tolerance of the
- * quality).
+ * state type @p type: `refinement` (enum auto/on/off: mode 0 auto, when
+ * the string literal @p when says, at least at quality 0 and 1; 1 on; 2
+ * off) and `refinement_tolerance` (real in [0, 1], or auto: tolerance -1,
+ * vv_frame_refine_tolerance of the quality).
  */
 /* clang-format off */
-#define VV_FRAME_REFINE_OPTIONS(type, field)                                                       \
+#define VV_FRAME_REFINE_OPTIONS(type, field, when)                                                 \
     {"refinement", VV_OPTION_ENUM, "auto", 0, 0, 0, vv_frame_refine_modes,                         \
-     "adaptive image-space refinement from a lattice of every 4th pixel (auto: at quality 0 "     \
-     "and 1)", VV_OPTION_BIND(type, field.mode, INT)},                                            \
+     "adaptive image-space refinement from a lattice of every 4th pixel (auto: " when ")",        \
+     VV_OPTION_BIND(type, field.mode, INT)},                                                      \
     {"refinement_tolerance", VV_OPTION_REAL, "auto", 0, 1, 0, vv_frame_refine_auto,                \
      "colour or opacity error of a lattice cell's interpolation that casts its inner rays "       \
-     "(auto: 1/16, 1/64, 1/512 at quality 0, 1, 2)",                                              \
+     "(auto: 1/16, 1/64, 1/1024 at quality 0, 1, 2)",                                              \
      VV_OPTION_BIND_WORDS(type, field.tolerance, DOUBLE, VV_OPTION_WORD_VALUES(-1), NULL)}
 /* clang-format on */
 
-/** The tolerance the renderers use at @p quality (0, 1, 2): 1/16, 1/64, 1/512. */
+/** The tolerance the renderers use at @p quality (0, 1, 2): 1/16, 1/64, 1/1024. */
 float vv_frame_refine_tolerance(int quality);
 
 /**

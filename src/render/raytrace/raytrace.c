@@ -684,7 +684,7 @@ static const vv_option_spec rt_options[] = {
      VV_OPTION_BIND(rt_state, adaptive, INT)},
     {"adaptive_threshold", VV_OPTION_REAL, "0.05", 0, INFINITY, 0, NULL,
      "channel difference that triggers supersampling", VV_OPTION_BIND(rt_state, threshold, DOUBLE)},
-    VV_FRAME_REFINE_OPTIONS(rt_state, refine),
+    VV_FRAME_REFINE_OPTIONS(rt_state, refine, "at quality 0 and 1"),
     {"parc", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
      "leap over empty subvolumes on every ray (0 for measurements; same image)",
      VV_OPTION_BIND(rt_state, parc, INT)},
