@@ -258,19 +258,18 @@ __attribute__((target("avx2"))) static void
 gradient8_avx2(const vv_vcache *c, const size_t *cell, const float *fx, const float *fy,
                const float *fz, const int *vis, int n8, float gx[8], float gy[8], float gz[8]) {
     const size_t sy = 2 * c->sy, sz = 2 * c->sz;
-    int32_t row[4][8];
+    const int8_t *p[8];
     float wx[8], wy[8], wz[8];
     for (int q = 0; q < 8; q++) {
         const int s = vis[q < n8 ? q : 0];
-        const int8_t *p = c->nrm + 2 * cell[s];
-        memcpy(&row[0][q], p, 4);
-        memcpy(&row[1][q], p + sy, 4);
-        memcpy(&row[2][q], p + sz, 4);
-        memcpy(&row[3][q], p + sz + sy, 4);
+        p[q] = c->nrm + 2 * cell[s];
         wx[q] = fx[s];
         wy[q] = fy[s];
         wz[q] = fz[s];
     }
+    /* each row's eight 32-bit pairs put into lanes by inserts, not stored
+     * and reloaded (a vector load of eight scalar stores waits for all) */
+    const size_t off[4] = {0, sy, sz, sz + sy};
     const __m256 one = _mm256_set1_ps(1.0f), f0 = _mm256_loadu_ps(wx);
     const __m256 f1 = _mm256_loadu_ps(wy), f2 = _mm256_loadu_ps(wz);
     const __m256 g1 = _mm256_sub_ps(one, f1), g2 = _mm256_sub_ps(one, f2);
@@ -278,7 +277,10 @@ gradient8_avx2(const vv_vcache *c, const size_t *cell, const float *fx, const fl
                          _mm256_mul_ps(f1, f2)};
     __m256 X[4], Y[4], Z[4];
     for (int r = 0; r < 4; r++) {
-        const __m256i b = _mm256_loadu_si256((const __m256i *)(const void *)row[r]);
+        int32_t a[8];
+        for (int q = 0; q < 8; q++)
+            memcpy(&a[q], p[q] + off[r], 4);
+        const __m256i b = _mm256_setr_epi32(a[0], a[1], a[2], a[3], a[4], a[5], a[6], a[7]);
         __m256 x0, y0, z0, x1, y1, z1;
         oct_decode8(_mm256_srai_epi32(_mm256_slli_epi32(b, 24), 24),
                     _mm256_srai_epi32(_mm256_slli_epi32(b, 16), 24), &x0, &y0, &z0);
