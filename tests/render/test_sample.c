@@ -111,29 +111,49 @@ snorm8x3(const double g[3], double q[3]) {
         q[a] = l > 0 ? (double)lrint(g[a] / l * 127) : 0;
 }
 
+/* A cache set holding @p v's cache (*c) with its normals built. */
+static vv_vcache_set *
+cache_with_normals(vv_volume *v, vv_vcache **c) {
+    vv_vcache_set *s = malloc(sizeof *s);
+    assert_non_null(s);
+    vv_vcache_set_init(s);
+    vt_ok(vv_vcache_get(s, v, c));
+    vv_vcache_need_normals(s, *c);
+    assert_non_null((*c)->nrm);
+    return s;
+}
+
+static void
+cache_set_free(vv_vcache_set *s) {
+    vv_vcache_set_clear(s);
+    free(s);
+}
+
+/* voxel_errors of @p c, printed under @p label and checked: 255 x 255
+ * codes over the sphere lie about 0.8 degrees apart, the nearest of four
+ * within about 0.65 (3 x int8, 24 bits, does better, at 3 bytes instead
+ * of 2). */
+static void
+check_voxel_errors(const vv_vcache *c, const char *label) {
+    double mean = 0, s8[2];
+    size_t flat = 0;
+    const double worst = voxel_errors(c, &mean, s8, &flat);
+    print_message("%s: decoded against float gradients: octahedral 16-bit max %.3f mean %.3f deg; "
+                  "3 x int8 max %.3f mean %.3f deg; %zu flat voxels\n",
+                  label, worst, mean, s8[0], s8[1], flat);
+    assert_true(worst < 0.7);
+    assert_true(mean < 0.35);
+}
+
 static void
 test_distance_field(void **state) {
     (void)state;
     const int n = 40;
     const double cx = 19.3, cy = 20.6, cz = 18.8;
     vv_volume *v = distance_field(n, cx, cy, cz);
-    vv_vcache_set *s = malloc(sizeof *s);
-    vv_vcache_set_init(s);
     vv_vcache *c = NULL;
-    vt_ok(vv_vcache_get(s, v, &c));
-    vv_vcache_need_normals(s, c);
-    assert_non_null(c->nrm);
-    double mean = 0, s8[2];
-    size_t flat = 0;
-    const double worst = voxel_errors(c, &mean, s8, &flat);
-    print_message("distance field %d^3: decoded against float gradients: octahedral 16-bit max "
-                  "%.3f mean %.3f deg; 3 x int8 max %.3f mean %.3f deg\n",
-                  n, worst, mean, s8[0], s8[1]);
-    /* 255 x 255 codes over the sphere: about 0.8 degrees apart, the
-     * nearest of four within about 0.65; 3 x int8 (24 bits) does better,
-     * at 3 bytes instead of 2 */
-    assert_true(worst < 0.7);
-    assert_true(mean < 0.35);
+    vv_vcache_set *s = cache_with_normals(v, &c);
+    check_voxel_errors(c, "distance field 40^3");
 
     /* interpolated gradients at random points of the shell 4..16 voxels
      * from the centre (away from the kink at the centre and the one-sided
@@ -194,8 +214,7 @@ test_distance_field(void **state) {
      * (measured: 1.7 times the mean, 1.3 times the largest) */
     assert_true(e_oct < 1.0);
     assert_true(m_oct <= 2 * m_s8);
-    vv_vcache_set_clear(s);
-    free(s);
+    cache_set_free(s);
     vv_volume_free(v);
 }
 
@@ -207,20 +226,15 @@ test_flat_volume(void **state) {
     vt_ok(vv_volume_new(&v, dims, VV_U8));
     memset(v->data, 42, 9 * 7 * 5);
     vv_volume_update_range(v);
-    vv_vcache_set *s = malloc(sizeof *s);
-    vv_vcache_set_init(s);
     vv_vcache *c = NULL;
-    vt_ok(vv_vcache_get(s, v, &c));
-    vv_vcache_need_normals(s, c);
-    assert_non_null(c->nrm);
+    vv_vcache_set *s = cache_with_normals(v, &c);
     for (size_t i = 0; i < 9 * 7 * 5; i++)
         assert_int_equal(c->nrm[2 * i], VV_OCT_ZERO);
     const float p[3] = {3.3f, 2.7f, 1.5f};
     float f[3], g[3] = {1, 1, 1};
     vv_vcache_gradient_at(c, vv_vcache_cell_of(c, p, f), f, g);
     assert_true(g[0] == 0 && g[1] == 0 && g[2] == 0);
-    vv_vcache_set_clear(s);
-    free(s);
+    cache_set_free(s);
     vv_volume_free(v);
 }
 
@@ -231,22 +245,10 @@ test_real_volume(void **state) {
         vt_skip("../shared/data/volumes/headsq/quarter.nhdr is missing");
     vv_volume *v = NULL;
     vv_world *w = vt_volume_scene("volumes/headsq/quarter.nhdr", 16, &v);
-    vv_vcache_set *s = malloc(sizeof *s);
-    vv_vcache_set_init(s);
     vv_vcache *c = NULL;
-    vt_ok(vv_vcache_get(s, v, &c));
-    vv_vcache_need_normals(s, c);
-    assert_non_null(c->nrm);
-    double mean = 0, s8[2];
-    size_t flat = 0;
-    const double worst = voxel_errors(c, &mean, s8, &flat);
-    print_message("headsq/quarter: decoded against float gradients: octahedral 16-bit max %.3f "
-                  "mean %.3f deg; 3 x int8 max %.3f mean %.3f deg; %zu flat voxels\n",
-                  worst, mean, s8[0], s8[1], flat);
-    assert_true(worst < 0.7);
-    assert_true(mean < 0.35);
-    vv_vcache_set_clear(s);
-    free(s);
+    vv_vcache_set *s = cache_with_normals(v, &c);
+    check_voxel_errors(c, "headsq/quarter");
+    cache_set_free(s);
     vv_world_free(w);
     vv_volume_free(v);
 }
