@@ -10,7 +10,8 @@
  * (the plain ray caster on the same World and view at quality 2: it shows
  * the volume only), and the ratios raytrace_parc_speedup and
  * raytrace_vs_raycast. These ray-trace one ray a pixel (refinement=off),
- * as the ray caster at quality 2 does; raytrace_refined_frame and
+ * as the ray caster at quality 2 with refinement=off (set here: its
+ * default refines composite frames) does; raytrace_refined_frame and
  * raytrace_refined_vs_raycast are quality 1 as the renderer's default has
  * it, with adaptive image-space refinement (fewer primary rays).
  * Each time is the median of --runs renders after one warm-up render
@@ -112,6 +113,10 @@ main(int argc, char **argv) {
             vv_renderer_set_option(all[i], "parc", i == 1 ? "0" : "1") != VV_OK ||
             vv_renderer_set_option(all[i], "refinement", i == 2 ? "auto" : "off") != VV_OK)
             bench_die("bench_raytrace", "option");
+    /* one ray a pixel like the ray tracer's (the ray caster refines
+     * composite frames at quality 2 by default) */
+    if (vv_renderer_set_option(rc, "refinement", "off") != VV_OK)
+        bench_die("bench_raytrace", "option");
 
     /* interleaved, so that a slow phase of a shared machine hits both */
     double t_rt = time_renders(rt, w, 1, threads, runs, img);
