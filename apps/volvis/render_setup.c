@@ -534,9 +534,73 @@ cli_world_out_of_core(const vv_world *w) {
     return 0;
 }
 
+/* The bytes a volume of header @p h takes to render in memory: its
+ * voxels, the renderers' copy of them (none for u16, 16-bit offsets for
+ * the other 8- and 16-bit types, float for the rest) and, when shaded, the
+ * cached gradients (2 bytes a voxel): src/render/sample.h's caches. */
+static uint64_t
+in_memory_bytes(const vv_volume *h, int shaded) {
+    const uint64_t n = (uint64_t)h->dims[0] * (uint64_t)h->dims[1] * (uint64_t)h->dims[2];
+    const uint64_t vox = vv_voxel_type_size(h->type);
+    const uint64_t copy = h->type == VV_U16 ? 0 : vox <= 2 ? 2 : 4;
+    return n * (vox + copy + (shaded ? 2 : 0));
+}
+
+/* Whether the file must be read out of core because rendering it in
+ * memory would take more than the memory budget (--max-memory; by default
+ * half the memory available): a volume file that can be read out of core
+ * (bricks: .vvb, raw or uncompressed NRRD; levels: a pyramid), drawn by a
+ * renderer with the region contract (raycast, raytrace), one channel, no
+ * out-of-core option given. Then *od holds it opened out of core, the
+ * process cache's limit is set to a quarter of the budget
+ * (and of the memory available, at most 1 GiB) and the switch is said in
+ * one line. Returns 1 when switched. */
+static int
+too_big_for_memory(const cli_render_args *r, const vv_open_options *oo, vv_opened *od) {
+    const vv_renderer_info *in = vv_renderer_info_find(r->renderer ? r->renderer : "raycast");
+    if (oo->mode != VV_OPEN_DEFAULT || vv_parallel_launched() || r->all_channels || !in ||
+        !(in->caps & VV_RENDERER_REGION))
+        return 0;
+    const uint64_t budget = vv_memory_budget_get(), avail = vv_memory_available();
+    uint64_t limit = budget / 4;
+    limit = limit > avail / 4 ? avail / 4 : limit; /* a raised budget past a cgroup's limit */
+    limit = limit > ((uint64_t)1 << 30) ? (uint64_t)1 << 30 : limit;
+    /* the header alone first (no pass over the voxels) */
+    vv_open_options probe = *oo;
+    probe.mode = VV_OPEN_OUT_OF_CORE_ONLY;
+    probe.header_only = 1;
+    vv_cache_set_limit(vv_cache_process(), limit);
+    vv_error_clear();
+    memset(od, 0, sizeof *od);
+    uint64_t need = 0;
+    if (vv_open(od, r->input, &probe) == VV_OK && od->kind == VV_DATA_VOLUME) {
+        const vv_volume *h = vv_source_level(od->source, 0);
+        const int shaded = !r->has_mode || r->mode == VV_MODE_COMPOSITE || r->mode == VV_MODE_ISO;
+        need = h ? in_memory_bytes(h, shaded) : 0;
+    }
+    vv_opened_clear(od);
+    vv_error_clear();
+    probe.header_only = oo->header_only;
+    if (need <= budget || vv_open(od, r->input, &probe) != VV_OK) {
+        vv_opened_clear(od);
+        vv_error_clear(); /* read whole, as before */
+        vv_cache_set_limit(vv_cache_process(), r->memory_limit);
+        return 0;
+    }
+    if (!r->quiet)
+        fprintf(stderr,
+                "volvis: note: %s: rendering it in memory would take %llu MiB, more than the "
+                "memory budget of %llu MiB (--max-memory): read out of core (--memory-limit "
+                "%lluM)\n",
+                r->input, (unsigned long long)(need >> 20), (unsigned long long)(budget >> 20),
+                (unsigned long long)(limit >> 20));
+    return 1;
+}
+
 /* Builds the World for a file: opened once through the format table
- * (vv_open), a volume in memory or out of core as the options say, or an
- * irregular grid. */
+ * (vv_open), a volume in memory or out of core as the options say (or
+ * because it does not fit in memory: too_big_for_memory), or an irregular
+ * grid. */
 static int
 world_for_file(const cli_render_args *r, vv_world **out) {
     if (r->n_channels)
@@ -552,7 +616,11 @@ world_for_file(const cli_render_args *r, vv_world **out) {
         oo.mode = VV_OPEN_OUT_OF_CORE_ONLY;
     vv_opened od;
     vv_error_clear();
-    vv_status s = vv_open(&od, r->input, &oo);
+    vv_status s = VV_OK;
+    if (too_big_for_memory(r, &oo, &od))
+        oo.mode = VV_OPEN_OUT_OF_CORE_ONLY;
+    else
+        s = vv_open(&od, r->input, &oo);
     if (s == VV_ERR_UNSUPPORTED && vv_error_message()[0]) /* the store's reason */
         return cli_fail(s, r->input);
     if (s == VV_ERR_UNSUPPORTED) {
@@ -907,7 +975,12 @@ cli_render_print_options(FILE *out) {
                  "                   by level of detail (--lod); a scene: each of its\n"
                  "                   volume files so, all in the one cache of SIZE (others\n"
                  "                   read whole), side by side (composite and iso objects\n"
-                 "                   apart), by raycast\n"
+                 "                   apart), by raycast. Without it, a file that can be\n"
+                 "                   read so and would take more than the memory budget\n"
+                 "                   (--max-memory) to render in memory (its voxels, the\n"
+                 "                   renderers' copy and gradients) is read out of core\n"
+                 "                   anyway, by raycast or raytrace, in a quarter of the\n"
+                 "                   budget (at most 1G), said in one line\n"
                  "  --lod PIXELS     a pyramid out of core: each 64^3 node of the volume at\n"
                  "                   the coarsest level whose voxel covers at most PIXELS\n"
                  "                   pixels (default 1; larger is coarser and faster);\n"

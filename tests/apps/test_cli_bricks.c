@@ -15,7 +15,8 @@
  * bit); a scene of three heads side by side out of core (by bricks, from
  * the levels, one read whole): the in-memory image >= 50 dB, and its
  * refusals; `volvis measure --memory-limit` (box by box) against the whole
- * volume's measurements.
+ * volume's measurements; a file too big to render in memory read out of
+ * core without being asked.
  */
 #include "testutil.h"
 
@@ -97,6 +98,69 @@ test_convert_render(void **state) {
     free(a);
     free(b);
     free(c);
+}
+
+/* A file too big to render in memory under the memory budget is read out
+ * of core without --memory-limit (issue 65), said in one line, and gives
+ * the image --memory-limit gives; within the budget it is read whole and
+ * nothing is said; -q silences the note; a renderer without the region
+ * contract reads it whole. A 192^3 u8 ball (7 MiB) needs 35 MiB in memory
+ * (the voxels, the 16-bit copy, the gradients): over a budget of 24M. */
+static void
+test_too_big_for_memory(void **state) {
+    (void)state;
+    enum { N = 192 };
+    vv_volume *v = NULL;
+    const int dims[3] = {N, N, N};
+    vt_ok(vv_volume_new(&v, dims, VV_U8));
+    uint8_t *d = v->data;
+    const double c = (N - 1) / 2.0;
+    for (int k = 0; k < N; k++)
+        for (int j = 0; j < N; j++)
+            for (int i = 0; i < N; i++) {
+                const double r = sqrt((i - c) * (i - c) + (j - c) * (j - c) + (k - c) * (k - c));
+                const double x = 255 - 3 * r;
+                d[((size_t)k * N + (size_t)j) * N + (size_t)i] = (uint8_t)(x < 0     ? 0
+                                                                           : x > 255 ? 255
+                                                                                     : x);
+            }
+    vv_volume_update_range(v);
+    char nrrd[1200], a[1200], b[1200], m[1200];
+    snprintf(nrrd, sizeof nrrd, "%s/ball.nrrd", outdir());
+    snprintf(a, sizeof a, "%s/ball_auto.png", outdir());
+    snprintf(b, sizeof b, "%s/ball_limit.png", outdir());
+    snprintf(m, sizeof m, "%s/ball_mem.png", outdir());
+    vt_ok(vv_nrrd_write(v, nrrd, 0));
+    vv_volume_free(v);
+    vt_run_result r = run_cli("--max-memory", "24M", "render", nrrd, "--size", "64x64", "-o", a);
+    if (r.status != 0)
+        fail_msg("%s", r.err);
+    assert_non_null(strstr(r.out, "out of core: "));
+    char want[1400];
+    snprintf(want, sizeof want,
+             "volvis: note: %s: rendering it in memory would take 33 MiB, more than the memory "
+             "budget of 24 MiB (--max-memory): read out of core (--memory-limit 6M)\n",
+             nrrd);
+    assert_string_equal(r.err, want);
+    vt_run_result_free(&r);
+    cli_ok("render", nrrd, "--size", "64x64", "--memory-limit", "6M", "-o", b);
+    assert_true(isinf(vt_png_psnr(a, b)));
+    /* within the default budget: in memory, nothing said */
+    r = run_cli("render", nrrd, "--size", "64x64", "-o", m);
+    assert_int_equal(r.status, 0);
+    assert_null(strstr(r.out, "out of core"));
+    assert_string_equal(r.err, "");
+    vt_run_result_free(&r);
+    r = run_cli("--max-memory", "24M", "render", nrrd, "--size", "64x64", "-q", "-o", a);
+    assert_int_equal(r.status, 0);
+    assert_string_equal(r.err, "");
+    vt_run_result_free(&r);
+    /* splat has no region contract: read whole (the volume alone fits) */
+    r = run_cli("--max-memory", "24M", "render", nrrd, "--renderer", "splat", "--size", "32x32",
+                "-o", m);
+    assert_int_equal(r.status, 0);
+    assert_null(strstr(r.out, "out of core"));
+    vt_run_result_free(&r);
 }
 
 /* In memory and out of core (--memory-limit) with @p renderer at quality 1
@@ -397,9 +461,13 @@ test_errors(void **state) {
 int
 main(void) {
     const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_convert_render), cmocka_unit_test(test_renderers),
-        cmocka_unit_test(test_levels),         cmocka_unit_test(test_scene),
-        cmocka_unit_test(test_measure),        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_convert_render),
+        cmocka_unit_test(test_renderers),
+        cmocka_unit_test(test_levels),
+        cmocka_unit_test(test_scene),
+        cmocka_unit_test(test_measure),
+        cmocka_unit_test(test_errors),
+        cmocka_unit_test(test_too_big_for_memory),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
