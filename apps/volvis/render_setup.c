@@ -551,6 +551,7 @@ in_memory_bytes(const vv_volume *h, int shaded) {
  * half the memory available): a volume file that can be read out of core
  * (bricks: .vvb, raw or uncompressed NRRD; levels: a pyramid), drawn by a
  * renderer with the region contract (raycast, raytrace), one channel, no
+ * time step asked for (--time, --time-range: steps are read whole), no
  * out-of-core option given. Then *od holds it opened out of core, the
  * process cache's limit is set to a quarter of the budget
  * (and of the memory available, at most 1 GiB) and the switch is said in
@@ -558,8 +559,8 @@ in_memory_bytes(const vv_volume *h, int shaded) {
 static int
 too_big_for_memory(const cli_render_args *r, const vv_open_options *oo, vv_opened *od) {
     const vv_renderer_info *in = vv_renderer_info_find(r->renderer ? r->renderer : "raycast");
-    if (oo->mode != VV_OPEN_DEFAULT || vv_parallel_launched() || r->all_channels || !in ||
-        !(in->caps & VV_RENDERER_REGION))
+    if (oo->mode != VV_OPEN_DEFAULT || vv_parallel_launched() || r->all_channels || r->has_time ||
+        r->time_range || !in || !(in->caps & VV_RENDERER_REGION))
         return 0;
     const uint64_t budget = vv_memory_budget_get(), avail = vv_memory_available();
     uint64_t limit = budget / 4;
