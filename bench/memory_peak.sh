@@ -8,9 +8,13 @@
 #   anchor=volvis op=memory_peak_rss ... value=<MiB> unit=MiB
 #   anchor=volvis op=memory_bound ...    value=<MiB> unit=MiB
 #   anchor=volvis op=memory_load_and_frame ... value=<s> unit=s
-# and whether the peak is within the bound. OLD_VOLVIS, when set, is run
-# beside it on the same volume (a same-run A/B of two builds). The volume
-# is deleted after.
+# and whether the peak is within the bound. Each run passes --max-memory 1T
+# so that the volume is read whole even where the memory budget is
+# smaller than the render needs (volvis render would otherwise read it out
+# of core, which this script does not measure). OLD_VOLVIS, when set, is
+# run beside it on the same volume (a same-run A/B of two builds). The
+# working folder (a mktemp -d under $TMPDIR) and the volume in it are
+# deleted on exit.
 # usage: bench/memory_peak.sh [BUILD_DIR] [SIDE] [THREADS]
 set -euo pipefail
 build=${1:-build/release}
@@ -28,13 +32,13 @@ ds="synthetic_${side}_u8"
 run() { # label binary
   local start end kib
   start=$(date +%s.%N)
-  "$timer" -o "$tmp/time.txt" -f "%M" "$2" render "$tmp/big.raw" --raw "${side}x${side}x${side}:u8" \
+  "$timer" -o "$tmp/time.txt" -f "%M" "$2" --max-memory 1T render "$tmp/big.raw" --raw "${side}x${side}x${side}:u8" \
     --size 512x512 --tf 60:255 --threads "$threads" -o "$tmp/$1.png" --quiet
   end=$(date +%s.%N)
   kib=$(tail -1 "$tmp/time.txt")
   echo "anchor=$1 op=memory_peak_rss dataset=$ds value=$((kib / 1024)) unit=MiB"
   echo "anchor=$1 op=memory_load_and_frame dataset=$ds value=$(echo "$end - $start" | bc) unit=s"
-  echo "$((kib / 1024))"  > "$tmp/$1.mib"
+  echo "$((kib / 1024))" >"$tmp/$1.mib"
 }
 if [ -n "${OLD_VOLVIS:-}" ]; then
   run volvis_old "$(readlink -f "$OLD_VOLVIS")"

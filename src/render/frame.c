@@ -178,9 +178,10 @@ vv_frame_refine_tolerance(int quality) {
 }
 
 int
-vv_frame_refine_for(const vv_frame_refine_settings *s, int quality, int region, float *tolerance) {
+vv_frame_refine_for(const vv_frame_refine_settings *s, int quality, int region, int final_pays,
+                    float *tolerance) {
     *tolerance = s->tolerance >= 0 ? (float)s->tolerance : vv_frame_refine_tolerance(quality);
-    return !region && (s->mode == 1 || (s->mode == 0 && quality <= 1));
+    return !region && (s->mode == 1 || (s->mode == 0 && (quality <= 1 || final_pays)));
 }
 
 static inline float *

@@ -40,12 +40,12 @@ void vv_vray_classify_avx2(const vv_vcache *c, const vv_vtables *ob, const vv_vr
  * values) as project.c's scalar march finds it, the ray marched in chunks
  * of 64 samples (kernels_avx2.c describes the difference): *tbest_out the
  * parameter of its first sample. */
-/* oct_encode_n (sample.c) eight directions at a time, in its arithmetic:
- * the same codes. */
-void vv_oct_encode_n_avx2(const float *gx, const float *gy, const float *gz, int n, int8_t *out);
 float vv_vproj_from_avx2(const vv_vcache *c, const uint8_t *pdist, const vv_vray *r, double dt,
                          double k, double kend, float sg, float floor0, float stop, int skipping,
                          double *tbest_out);
+/* vv_oct_encode_n (sample.h) eight directions at a time, in its
+ * arithmetic: the same codes (out: 2 n bytes). */
+void vv_oct_encode_n_avx2(const float *gx, const float *gy, const float *gz, int n, int8_t *out);
 #endif
 
 #endif

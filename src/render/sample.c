@@ -51,16 +51,15 @@ fill_row(vv_vcache *c, const vv_volume *vol, int j, int k, size_t base) {
     }
 }
 
-/* Each g is scaled to
- * |x|+|y|+|z| = 1, the lower half (z < 0) folded over the upper's
+/* vv_oct_encode_n: each g is divided by its |x|+|y|+|z| (divided rather
+ * than scaled by the reciprocal, so that neither a tiny nor a huge g
+ * under- or overflows), the lower half (z < 0) folded over the upper's
  * corners, x and y times 127; of the four roundings of the two codes, the
- * one whose decoded vector is nearest g (Cigolle et al. 2014's "precise"
- * encoding: about half the angular error of rounding to nearest), compared
- * as cos^2 = (n.g)^2 / |n|^2 |g|^2 cross-multiplied (every candidate is
- * within 90 degrees of g; g divided by its |x|+|y|+|z| first, so that
- * neither a tiny nor a huge one under- or overflows): no division or root
- * but the scaling's. Four
- * directions at a time with SSE2, without a branch. */
+ * one whose decoded vector is nearest g (about half the angular error of
+ * rounding to nearest), compared as cos^2 = (n.g)^2 / |n|^2 cross-
+ * multiplied (every candidate is within 90 degrees of g): no division or
+ * root but the scaling's. Four directions at a time with SSE2, without a
+ * branch; the rest one at a time in the same arithmetic. */
 void
 vv_oct_encode_n(const float *gx, const float *gy, const float *gz, int n, int8_t *out) {
     int i = 0;
@@ -136,10 +135,10 @@ vv_oct_encode_n(const float *gx, const float *gy, const float *gz, int n, int8_t
             float u = bx + (float)(d & 1), v = by + (float)(d >> 1);
             u = u > 127 ? 127 : u < -127 ? -127 : u;
             v = v > 127 ? 127 : v < -127 ? -127 : v;
-            const float nz = 127.0f - fabsf(u) - fabsf(v), t = nz < 0 ? -nz : 0;
-            const float nx = u - copysignf(t, u), ny = v - copysignf(t, v);
-            const float dot = nx * x0 + ny * y0 + nz * z0;
-            const float num = dot * dot, den = nx * nx + ny * ny + nz * nz;
+            float p[3];
+            vv_oct_unfold(u, v, p);
+            const float dot = p[0] * x0 + p[1] * y0 + p[2] * z0;
+            const float num = dot * dot, den = p[0] * p[0] + p[1] * p[1] + p[2] * p[2];
             if (num * best_den > best_num * den) {
                 best_num = num;
                 best_den = den;
@@ -194,7 +193,11 @@ static void
 fill_gradients(vv_vcache *c) {
     enum { RUN = 256 };
     const int nx = c->nx, ny = c->ny, nz = c->nz;
-    const int avx2 = VV_VC_HAVE_AVX2 && vv_vc_have_avx2();
+    void (*encode)(const float *, const float *, const float *, int, int8_t *) = vv_oct_encode_n;
+#if VV_VC_HAVE_AVX2
+    if (vv_vc_have_avx2())
+        encode = vv_oct_encode_n_avx2;
+#endif
 #pragma omp parallel for schedule(static)
     for (int k = 0; k < nz; k++) {
         float gx[RUN], gy[RUN], gz[RUN];
@@ -210,18 +213,10 @@ fill_gradients(vv_vcache *c) {
             for (int r0 = 0; r0 < nx; r0 += RUN) {
                 const int m = nx - r0 < RUN ? nx - r0 : RUN;
                 differences_run(c, base, y0, y1, z0, z1, fy, fz, r0, m, gx, gy, gz);
-                int8_t *out = c->nrm + 2 * (base + (size_t)r0);
-#if VV_VC_HAVE_AVX2
-                if (avx2) {
-                    vv_oct_encode_n_avx2(gx, gy, gz, m, out);
-                    continue;
-                }
-#endif
-                vv_oct_encode_n(gx, gy, gz, m, out);
+                encode(gx, gy, gz, m, c->nrm + 2 * (base + (size_t)r0));
             }
         }
     }
-    (void)avx2;
 }
 
 vv_status

@@ -111,8 +111,10 @@ vv_status vv_vcache_get(vv_vcache_set *s, vv_volume *vol, vv_vcache **out);
 void vv_vcache_need_normals(const vv_vcache_set *s, vv_vcache *c);
 
 /* The octahedral codes (vv_oct_decode) of the n directions (gx[i], gy[i],
- * gz[i]) into out (2 n bytes: u, v), VV_OCT_ZERO where the direction is
- * zero. Thread-safe. */
+ * gz[i]) (any length, index space) into out (2 n bytes: u, v for each),
+ * VV_OCT_ZERO where the direction is zero; the rounding of the two codes
+ * is the one whose decoded vector is nearest the direction (Cigolle et
+ * al., JCGT 2014, "precise" encoding). Thread-safe; no errors. */
 void vv_oct_encode_n(const float *gx, const float *gy, const float *gz, int n, int8_t *out);
 
 /* Builds c->gmag once: the gradient magnitude of every cached voxel, in
@@ -240,18 +242,28 @@ typedef float vv_v4f __attribute__((vector_size(16)));
  * (u, v) / 127 of the square [-1, 1]^2 is the octahedron |x|+|y|+|z| = 1
  * unfolded (the lower half folded over the upper's corners), projected
  * onto the sphere. Zero vector for VV_OCT_ZERO. */
+/* The octahedron's point (n[0], n[1], n[2]), |x|+|y|+|z| = 127, of code
+ * (u, v) in [-127, 127]^2, not normalised: where z would be negative the
+ * square's corner folds back over the lower half. */
+static inline void
+vv_oct_unfold(float u, float v, float n[3]) {
+    const float z = 127.0f - (u < 0 ? -u : u) - (v < 0 ? -v : v);
+    const float t = z < 0 ? -z : 0;
+    n[0] = u + (u >= 0 ? -t : t);
+    n[1] = v + (v >= 0 ? -t : t);
+    n[2] = z;
+}
+
 static inline vv_v4f
 vv_oct_decode(int u, int v) {
     if (u == VV_OCT_ZERO) {
         vv_v4f r = {0, 0, 0, 0};
         return r;
     }
-    float x = (float)u, y = (float)v, z = 127.0f - (x < 0 ? -x : x) - (y < 0 ? -y : y);
-    const float t = z < 0 ? -z : 0;
-    x += x >= 0 ? -t : t;
-    y += y >= 0 ? -t : t;
-    const float r = 1.0f / sqrtf(x * x + y * y + z * z);
-    vv_v4f n = {x * r, y * r, z * r, 0};
+    float p[3];
+    vv_oct_unfold((float)u, (float)v, p);
+    const float r = 1.0f / sqrtf(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    vv_v4f n = {p[0] * r, p[1] * r, p[2] * r, 0};
     return n;
 }
 

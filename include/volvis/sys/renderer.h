@@ -549,9 +549,12 @@ float vv_frame_refine_tolerance(int quality);
 /**
  * Whether a frame at @p quality refines (never a region render, @p region
  * not 0: its pixels are composited with other ranks' by depth and key),
- * and with what tolerance (*tolerance, set either way).
+ * and with what tolerance (*tolerance, set either way). Mode auto refines
+ * at quality 0 and 1, and at quality 2 when @p final_pays (the renderer's
+ * word that refinement at vv_frame_refine_tolerance(2) costs no measurable
+ * accuracy for this frame: raycast's frames of composite objects).
  */
-int vv_frame_refine_for(const vv_frame_refine_settings *s, int quality, int region,
+int vv_frame_refine_for(const vv_frame_refine_settings *s, int quality, int region, int final_pays,
                         float *tolerance);
 
 /**

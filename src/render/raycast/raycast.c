@@ -1201,10 +1201,8 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
     if (s == VV_OK) {
         fr.key = region && fr.n_comp == 0 ? key : NULL;
         /* adaptive refinement: whole renders only (a region's pixels are
-         * composited with other ranks' by their depth and key) */
-        const int quality = opt ? opt->quality : 2;
-        fr.refine = vv_frame_refine_for(&st->refine, quality, region != NULL, &fr.tolerance);
-        /* auto at quality 2 too, where it was measured to pay (issue 65;
+         * composited with other ranks' by their depth and key); auto at
+         * quality 2 too where it was measured to pay (issue 65;
          * docs/rendering.md, "Quality and adaptive refinement"): frames of
          * composite objects, at the tolerance 1/1024, lose at most 0.001 dB
          * against the converged reference and are 4-17 % faster (calm
@@ -1215,8 +1213,8 @@ render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_rend
         int pays = fr.n_obj > 0;
         for (int i = 0; i < fr.n_obj; i++)
             pays &= objs[i].mode == VV_MODE_COMPOSITE;
-        if (!fr.refine && !region && st->refine.mode == 0 && quality >= 2 && pays)
-            fr.refine = 1;
+        fr.refine = vv_frame_refine_for(&st->refine, opt ? opt->quality : 2, region != NULL, pays,
+                                        &fr.tolerance);
         vv_frame_job job;
         vv_frame_job_init(&job, view->width, view->height,
                           fr.refine ? render_tile_refined : render_tile, &fr);

@@ -534,7 +534,7 @@ render_frame(rt_state *st, const vv_world *w, const vv_view *view, const vv_rend
     fr.nss = opt->quality >= 2 && !region ? st->samples : 1;
     /* adaptive image-space refinement: whole renders only (a region's
      * pixels are composited with other ranks' by depth and key) */
-    fr.refine = vv_frame_refine_for(&st->refine, opt->quality, region != NULL, &fr.tolerance);
+    fr.refine = vv_frame_refine_for(&st->refine, opt->quality, region != NULL, 0, &fr.tolerance);
     fr.adaptive = fr.nss > 1 && st->adaptive && !fr.refine;
     fr.view = view;
     fr.out = out;
