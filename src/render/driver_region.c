@@ -189,6 +189,119 @@ render_piece(vv_renderer *r, const vv_world *w, const vv_view *view, const vv_re
     return s;
 }
 
+/* The whole volume of a brick source read by boxes (vv_region_volume):
+ * each voxel of a box copied from the brick whose cells own it (brick i
+ * of an axis owns voxels cut[i] <= v < cut[i + 1], the last one the
+ * volume's last voxel too). */
+typedef struct brick_reader {
+    const vv_brick_source *src;
+    const vv_volume *hdr;
+    int nb[3];
+    int *cut[3]; /* nb[a] + 1 voxel indices a axis */
+} brick_reader;
+
+static void
+brick_reader_free(brick_reader *b) {
+    for (int a = 0; a < 3; a++)
+        free(b->cut[a]);
+}
+
+static vv_status
+brick_reader_init(brick_reader *b, const vv_brick_source *src, const vv_volume *hdr,
+                  const int nb[3]) {
+    memset(b, 0, sizeof *b);
+    b->src = src;
+    b->hdr = hdr;
+    for (int a = 0; a < 3; a++) {
+        b->nb[a] = nb[a];
+        b->cut[a] = malloc(sizeof(int) * (size_t)(nb[a] + 1));
+        if (!b->cut[a]) {
+            brick_reader_free(b);
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        }
+        for (int i = 0; i < nb[a]; i++) {
+            int at[3] = {0, 0, 0};
+            at[a] = i;
+            vv_brick_info in;
+            src->info(src->user, (at[2] * nb[1] + at[1]) * nb[0] + at[0], &in);
+            b->cut[a][i] = in.lo[a];
+        }
+        b->cut[a][nb[a]] = hdr->dims[a];
+    }
+    return VV_OK;
+}
+
+static vv_status
+brick_reader_box(void *user, const int lo[3], const int hi[3], vv_volume **out) {
+    const brick_reader *b = user;
+    const vv_volume *h = b->hdr;
+    *out = NULL;
+    int d[3], first[3], last[3];
+    for (int a = 0; a < 3; a++) {
+        if (lo[a] < 0 || hi[a] >= h->dims[a] || lo[a] > hi[a])
+            return vv_error_set(VV_ERR_INVALID, "bricks: box outside the volume");
+        d[a] = hi[a] - lo[a] + 1;
+        first[a] = 0;
+        while (first[a] + 1 < b->nb[a] && b->cut[a][first[a] + 1] <= lo[a])
+            first[a]++;
+        last[a] = first[a];
+        while (last[a] + 1 < b->nb[a] && b->cut[a][last[a] + 1] <= hi[a])
+            last[a]++;
+    }
+    vv_volume *v = NULL;
+    vv_status s = vv_volume_new(&v, d, h->type);
+    if (s != VV_OK)
+        return s;
+    const size_t es = vv_voxel_type_size(h->type);
+    for (int k = first[2]; k <= last[2] && s == VV_OK; k++)
+        for (int j = first[1]; j <= last[1] && s == VV_OK; j++)
+            for (int i = first[0]; i <= last[0] && s == VV_OK; i++) {
+                const int idx = (k * b->nb[1] + j) * b->nb[0] + i, at[3] = {i, j, k};
+                vv_brick_info in;
+                b->src->info(b->src->user, idx, &in);
+                int c0[3], c1[3]; /* the voxels this brick gives the box */
+                for (int a = 0; a < 3; a++) {
+                    const int own1 =
+                        at[a] + 1 < b->nb[a] ? b->cut[a][at[a] + 1] - 1 : h->dims[a] - 1;
+                    c0[a] = b->cut[a][at[a]] > lo[a] ? b->cut[a][at[a]] : lo[a];
+                    c1[a] = own1 < hi[a] ? own1 : hi[a];
+                }
+                vv_volume *bv = NULL;
+                if ((s = b->src->load(b->src->user, idx, &bv)) != VV_OK)
+                    break;
+                if (bv->type != h->type)
+                    s = vv_error_set(VV_ERR_FORMAT, "bricks: brick %d is %s, not %s", idx,
+                                     vv_voxel_type_name(bv->type), vv_voxel_type_name(h->type));
+                for (int z = c0[2]; z <= c1[2] && s == VV_OK; z++)
+                    for (int y = c0[1]; y <= c1[1]; y++) {
+                        const size_t from = (((size_t)(z - in.slo[2]) * (size_t)bv->dims[1] +
+                                              (size_t)(y - in.slo[1])) *
+                                                 (size_t)bv->dims[0] +
+                                             (size_t)(c0[0] - in.slo[0])) *
+                                            es;
+                        const size_t to =
+                            (((size_t)(z - lo[2]) * (size_t)d[1] + (size_t)(y - lo[1])) *
+                                 (size_t)d[0] +
+                             (size_t)(c0[0] - lo[0])) *
+                            es;
+                        memcpy((char *)v->data + to, (const char *)bv->data + from,
+                               (size_t)(c1[0] - c0[0] + 1) * es);
+                    }
+                vv_volume_free(bv);
+            }
+    if (s != VV_OK) {
+        vv_volume_free(v);
+        return s;
+    }
+    memcpy(v->spacing, h->spacing, sizeof v->spacing);
+    memcpy(v->origin, h->origin, sizeof v->origin);
+    memcpy(v->direction, h->direction, sizeof v->direction);
+    memcpy(v->range, h->range, sizeof v->range);
+    v->unit = h->unit;
+    *out = v;
+    return VV_OK;
+}
+
 vv_status
 drv_render_bricks(vv_renderer *r, const vv_world *w, int object, const vv_brick_source *src,
                   const vv_view *view, const vv_render_options *opt, vv_image *out) {
@@ -236,6 +349,16 @@ drv_render_bricks(vv_renderer *r, const vv_world *w, int object, const vv_brick_
 
     vv_region_image whole, piece;
     s = frame_images(view, out, mode, &whole, &piece);
+    /* the whole volume by boxes, where the World's volume is a coarse proxy */
+    brick_reader reader;
+    memset(&reader, 0, sizeof reader);
+    vv_region_volume wv = {.user = &reader, .header = hdr, .read_box = brick_reader_box};
+    const int proxy = obj->volume->dims[0] != hdr->dims[0] ||
+                      obj->volume->dims[1] != hdr->dims[1] || obj->volume->dims[2] != hdr->dims[2];
+    if (s == VV_OK && proxy && n > 0) {
+        s = brick_reader_init(&reader, src, hdr, nb);
+        wv.tile = reader.cut[0][1] - reader.cut[0][0];
+    }
     const int skip = mode == VV_MODE_COMPOSITE && obj->segmentation == VV_SEG_TRANSFER_FUNCTION;
     for (int oi = 0; oi < n && s == VV_OK; oi++) {
         const int idx = ord.list[oi];
@@ -253,6 +376,7 @@ drv_render_bricks(vv_renderer *r, const vv_world *w, int object, const vv_brick_
         vv_render_region rg;
         memset(&rg, 0, sizeof rg);
         rg.object = object;
+        rg.whole = proxy ? &wv : NULL;
         vv_region_rect(&rg, i2w, view, in.slo, in.shi);
         if (rg.x1 > rg.x0 && rg.y1 <= rg.y0)
             continue; /* off screen */
@@ -272,6 +396,7 @@ drv_render_bricks(vv_renderer *r, const vv_world *w, int object, const vv_brick_
     }
     if (s == VV_OK)
         vv_region_image_finish(&whole, w->background);
+    brick_reader_free(&reader);
     vv_image_free(piece.image);
     free(whole.key);
     free(ord.list);
@@ -726,6 +851,13 @@ render_tree(mr_frame *f, int depth, const int o[3]) {
     return VV_OK;
 }
 
+/* Level 0 of a multiresolution source by boxes (vv_region_volume). */
+static vv_status
+level0_box(void *user, const int lo[3], const int hi[3], vv_volume **out) {
+    const vv_multires_source *src = user;
+    return src->read_box(src->user, 0, lo, hi, out);
+}
+
 /* The levels' placements in level 0's index space and their voxel sizes. */
 static vv_status
 setup_levels(mr_frame *f) {
@@ -828,6 +960,19 @@ drv_render_multires(vv_renderer *r, const vv_world *w, int object, const vv_mult
         if (src->frame)
             src->frame(src->user, 1);
         s = render_tree(&f, depth, zero);
+        /* the whole volume by boxes of level 0 for the global effects of a
+         * frame drawn at level 0 from a coarse proxy (not of coarser
+         * levels: the sweep would read level 0 whole) */
+        const vv_volume *h0 = src->level(src->user, 0);
+        vv_region_volume wv = {
+            .user = (void *)src, .header = h0, .read_box = level0_box, .tile = f.leaf};
+        int at0 = !lod->progressive &&
+                  (f.obj->volume->dims[0] != h0->dims[0] || f.obj->volume->dims[1] != h0->dims[1] ||
+                   f.obj->volume->dims[2] != h0->dims[2]);
+        for (int i = 0; i < f.n_nodes && at0; i++)
+            at0 = f.nodes[i].level == 0;
+        for (int i = 0; i < f.n_nodes && at0; i++)
+            f.nodes[i].rg.whole = &wv;
         if (s == VV_OK)
             s = render_nodes(&f);
         if (src->frame)

@@ -81,6 +81,34 @@ typedef enum vv_region_op {
 } vv_region_op;
 
 /**
+ * The whole volume of a region's object at full resolution, read by boxes,
+ * for a region render's global effects: the ray tracer sweeps its light
+ * volumes through it, so that out of core its shadows are those of the
+ * in-memory render rather than of the World's coarse proxy. A driver that
+ * renders from a proxy and can read the whole volume offers it (out of
+ * core by bricks, or from a pyramid's level 0); NULL elsewhere (the World
+ * holds the whole volume, or nothing beyond the rank's own box can be
+ * read: distributed rendering). Borrowed for the region render; used from
+ * one thread at a time.
+ */
+typedef struct vv_region_volume {
+    void *user; /**< the reader's state */
+    /** Its geometry as a volume whose voxels must not be read: dims, type,
+     *  spacing, origin, direction, value range. */
+    const vv_volume *header;
+    /**
+     * Voxels lo .. hi (inclusive, within the volume) as a new volume
+     * reference whose voxel (0, 0, 0) is voxel lo, with the header's
+     * spacing, origin, direction and value range. Errors: VV_ERR_IO,
+     * VV_ERR_FORMAT, VV_ERR_LIMIT, VV_ERR_NOMEM.
+     */
+    vv_status (*read_box)(void *user, const int lo[3], const int hi[3], vv_volume **out);
+    /** Cells a side of the boxes worth reading at a time (the source's bricks or the nodes its
+     *  memory limit holds), > 0. */
+    int tile;
+} vv_region_volume;
+
+/**
  * One region of a volume object: the samples inside an axis-aligned box of
  * the object's index space (voxel units of its whole volume; the box is an
  * oriented box of the World when the object is turned). A region render
@@ -106,6 +134,9 @@ typedef struct vv_render_region {
     int offset[3];
     int x0, y0, x1, y1; /**< pixels x0 <= x < x1, y0 <= y < y1 that can see the region
                              (vv_region_rect); x1 <= x0: the whole image */
+    /** The whole volume, for global effects, when the World's own volume of the object is a
+     *  coarse proxy and the driver can read it (vv_region_volume); NULL: none. */
+    const vv_region_volume *whole;
 } vv_render_region;
 
 /** A region render's output: the partial image and how it combines. */
@@ -388,7 +419,8 @@ typedef struct vv_renderer_ops {
      * and holds real voxels: the whole volume (distributed rendering of an
      * in-memory volume) or a coarse proxy (out of core): a method with
      * global effects traces them through it, so they are exact only with
-     * the whole volume. Errors: VV_ERR_UNSUPPORTED (a mode or option it
+     * the whole volume, or where it reads region->whole (the ray tracer's
+     * light volumes of directional lights). Errors: VV_ERR_UNSUPPORTED (a mode or option it
      * cannot split), VV_ERR_NOMEM, VV_ERR_CANCELLED.
      */
     vv_status (*render_region)(void *state, const vv_world *world, const vv_view *view,

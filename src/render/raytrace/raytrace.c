@@ -499,7 +499,11 @@ prepare_frame(rt_frame *fr, const vv_world *w, const vv_view *view, const vv_ren
         ro->inv_form = ro->mode == VV_MODE_COMPOSITE && !ro->extras; /* march_one */
     }
     /* light volumes of the lights through composite volumes that cast
-     * shadows, then the shadow grids, now that every object is ready */
+     * shadows (a region's context: through its whole volume where it can,
+     * rt_light_whole.c), then the shadow grids, now that every object is
+     * ready */
+    if (s == VV_OK)
+        rt_context_whole(fr, region);
     for (int i = 0; i < fr->n_vobj && s == VV_OK && fr->shadows && st->light_volumes; i++) {
         rt_vobj *ro = &fr->vobjs[i];
         if (ro->mode != VV_MODE_COMPOSITE || !ro->obj->casts_shadows || ro->region)

@@ -64,6 +64,9 @@ typedef struct rt_lv {
     vv_plane planes[2 * VV_MAX_CUT_PLANES];
     float lut_lo, lut_scale;
     float ext[VV_VC_LUT];
+    const vv_volume *whole; /* swept through the whole volume of region renders
+                               (rt_vobj.whole's header; NULL: through vol) */
+    uint64_t whole_modified;
     float *T;
     uint64_t used; /* frame that last used it */
 } rt_lv;
@@ -180,8 +183,13 @@ typedef struct rt_vobj {
      * one, or a coarse proxy) casts the shadows and is invisible to rays. */
     const vv_render_region *region; /* the region part: its region, else NULL */
     int context;                    /* the context: shadows only */
-    double region_dt;               /* the step the region's samples are counted with */
-    int inv_form;                   /* vv_vray_clip_region's form for this object's kernel */
+    /* a context whose light volumes are swept through the region's whole
+     * volume (region->whole, rt_light_whole.c): its geometry is then the
+     * whole volume's, and whole_part (the region part) lends the tables */
+    const vv_region_volume *whole;
+    const struct rt_vobj *whole_part;
+    double region_dt; /* the step the region's samples are counted with */
+    int inv_form;     /* vv_vray_clip_region's form for this object's kernel */
     /* a channel of a multi-channel object (vv_object.channels), prepared as
      * a volume of its own (its own cache, tables and light volumes, so that
      * shadow rays cross every channel as independent absorbers): group is
@@ -392,6 +400,21 @@ void rt_lv_release(rt_lv *e);
  * function match, else swept with nt threads and cached (least recently
  * used slot replaced). */
 vv_status rt_build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt);
+
+/* Region renders with the whole volume (vv_render_region.whole): 1 when
+ * the context objects of the frame can take their light volumes from it
+ * (composite, shadows through light volumes, every light directional,
+ * shadow_grid 0 or 1: nothing else marches the context's proxy), and then
+ * each such context takes the region part's geometry (the whole volume's
+ * index space). */
+int rt_context_whole(rt_frame *fr, const vv_render_region *region);
+
+/* The light volume of directional light l through the whole volume of a
+ * region render (ob->whole), swept tile by tile in the light's order: the
+ * values sweep_grid gives the in-memory volume, the tiles read by boxes
+ * (a box a tile, with the voxels its samples reach towards the light).
+ * *out: ob->ldim points, malloc'd. Errors: those of the reads, VV_ERR_NOMEM. */
+vv_status rt_sweep_whole(const rt_frame *fr, const rt_vobj *ob, int l, int nt, float **out);
 
 /* The shadows rt_shade_volume gives a sample of object @p o (its lead) at
  * index point @p pi, world point @p pw: each light's transmittance into

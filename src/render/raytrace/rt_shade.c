@@ -513,6 +513,9 @@ lv_matches(const rt_lv *e, const rt_frame *fr, const rt_vobj *ob, int l) {
     for (int a = 0; a < 3; a++)
         if (lt->point ? e->pos[a] != lt->pos[a] : e->dir[a] != lt->dir[a])
             return 0;
+    const vv_volume *wh = ob->whole ? ob->whole->header : NULL;
+    if (e->whole != wh || (wh && e->whole_modified != wh->modified))
+        return 0;
     return memcmp(e->w2i, ob->w2i, sizeof e->w2i) == 0 &&
            memcmp(e->planes, ob->planes, (size_t)ob->n_planes * sizeof *ob->planes) == 0 &&
            memcmp(e->ext, ob->ext, sizeof e->ext) == 0;
@@ -538,7 +541,8 @@ rt_build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
             ob->lvol[l] = st->lv[i].T;
             return VV_OK;
         }
-    vv_status s = fr->lights[l].point
+    vv_status s = ob->whole ? rt_sweep_whole(fr, ob, l, nt, &ob->lvol[l])
+                  : fr->lights[l].point
                       ? sweep_point(fr, ob, l, nt, RT_LGRID, ob->ldim, &ob->lvol[l])
                       : sweep_grid(fr, ob, l, nt, RT_LGRID, ob->ldim, 1, &ob->lvol[l]);
     if (s != VV_OK || !ob->lvol[l])
@@ -566,6 +570,8 @@ rt_build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
     e->lut_lo = ob->tab.lut_lo;
     e->lut_scale = ob->tab.lut_scale;
     memcpy(e->ext, ob->ext, sizeof e->ext);
+    e->whole = ob->whole ? ob->whole->header : NULL;
+    e->whole_modified = ob->whole ? ob->whole->header->modified : 0;
     e->T = ob->lvol[l];
     e->used = st->frame;
     return VV_OK;
