@@ -915,7 +915,11 @@ vv_parallel_render(vv_parallel *p, const vv_world *w, const vv_view *view,
         }
         /* the background once, as the whole render adds it (xray: the means
          * classified first) */
-        vv_region_image fin = {out, keys, op, 0, cls.classify, cls.classify_ctx};
+        vv_region_image fin = {.image = out,
+                               .key = keys,
+                               .op = op,
+                               .classify = cls.classify,
+                               .classify_ctx = cls.classify_ctx};
         vv_region_image_finish(&fin, w->background);
     }
     free(keys);

@@ -163,6 +163,76 @@ piece_rect(const vv_render_region *rg, int W, int H, int r[4]) {
     r[3] = has ? rg->y1 : H;
 }
 
+/* Quality 2 by regions (vv_region_image.supersample): after the first
+ * pass (@p whole combined and finished into @p out), the renderer's points
+ * to trace again into *rays, and the images the second pass combines them
+ * in (@p rw, and @p rp each region's), of at least one entry a point, in
+ * rows of at most 4096; rays->n_pixels 0: no second pass. Free with
+ * rays_end, also on error. */
+static vv_status
+rays_begin(const vv_region_image *whole, const vv_image *out, vv_region_rays *rays,
+           vv_region_image *rw, vv_region_image *rp) {
+    memset(rays, 0, sizeof *rays);
+    *rw = (vv_region_image){0};
+    *rp = (vv_region_image){0};
+    if (!whole->supersample)
+        return VV_OK;
+    vv_status s = whole->supersample(whole->supersample_ctx, out, rays);
+    if (s != VV_OK || rays->n_pixels == 0)
+        return s;
+    const size_t n = (size_t)rays->per_pixel * rays->n_pixels;
+    const size_t cols = n < 4096 ? n : 4096, rows = (n + cols - 1) / cols;
+    if (rows > VV_IMAGE_MAX_SIDE)
+        return vv_error_set(VV_ERR_LIMIT, "%zu rays to trace again", n);
+    float *keys = malloc(sizeof(float) * 2 * cols * rows);
+    *rw = (vv_region_image){.key = keys,
+                            .op = whole->op,
+                            .classify = whole->classify,
+                            .classify_ctx = whole->classify_ctx};
+    *rp = (vv_region_image){.key = keys ? keys + cols * rows : NULL, .op = VV_REGION_OVER};
+    if (!keys)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    if ((s = vv_image_new(&rw->image, (int)cols, (int)rows)) != VV_OK ||
+        (s = vv_image_new(&rp->image, (int)cols, (int)rows)) != VV_OK)
+        return s;
+    vv_region_image_clear(rw);
+    vv_region_image_clear(rp);
+    return VV_OK;
+}
+
+/* The second pass's points (@p rw, combined) finished and averaged into
+ * their pixels of @p out: each pixel the mean of its points' colours (summed
+ * in order) and their nearest depth, as the whole render supersamples. */
+static void
+rays_finish(vv_region_image *rw, const vv_region_rays *rays, vv_vec3 background, vv_image *out) {
+    vv_region_image_finish(rw, background);
+    const int per = rays->per_pixel;
+    for (size_t i = 0; i < rays->n_pixels; i++) {
+        float acc[4] = {0, 0, 0, 0}, dmin = INFINITY;
+        for (int k = 0; k < per; k++) {
+            const size_t e = i * (size_t)per + (size_t)k;
+            for (int ch = 0; ch < 4; ch++)
+                acc[ch] += rw->image->rgba[4 * e + (size_t)ch];
+            const float d = rw->image->depth[e];
+            dmin = d < dmin ? d : dmin;
+        }
+        const size_t at = rays->pixel[i];
+        for (int ch = 0; ch < 4; ch++)
+            out->rgba[4 * at + (size_t)ch] = acc[ch] / (float)per;
+        out->depth[at] = dmin;
+    }
+}
+
+static void
+rays_end(vv_region_rays *rays, vv_region_image *rw, vv_region_image *rp) {
+    vv_region_rays_free(rays);
+    vv_image_free(rw->image);
+    vv_image_free(rp->image);
+    free(rw->key);
+    *rw = (vv_region_image){0};
+    *rp = (vv_region_image){0};
+}
+
 /* Region @p rg rendered by @p r into @p piece, which must combine by @p op. */
 static vv_status
 render_into(vv_renderer *r, const vv_world *w, const vv_view *view, const vv_render_region *rg,
@@ -180,8 +250,9 @@ render_into(vv_renderer *r, const vv_world *w, const vv_view *view, const vv_ren
 static vv_status
 render_piece(vv_renderer *r, const vv_world *w, const vv_view *view, const vv_render_region *rg,
              const vv_render_options *opt, vv_region_image *piece, vv_region_image *whole) {
-    int rc[4];
-    piece_rect(rg, view->width, view->height, rc);
+    int rc[4] = {0, 0, piece->image->width, piece->image->height}; /* points: every entry */
+    if (!rg->rays)
+        piece_rect(rg, view->width, view->height, rc);
     vv_status s = render_into(r, w, view, rg, opt, piece, whole->op);
     if (s == VV_OK) /* in front over it */
         vv_region_image_combine_rect(whole, piece, rc[0], rc[1], rc[2], rc[3]);
@@ -360,42 +431,59 @@ drv_render_bricks(vv_renderer *r, const vv_world *w, int object, const vv_brick_
         wv.tile = reader.cut[0][1] - reader.cut[0][0];
     }
     const int skip = mode == VV_MODE_COMPOSITE && obj->segmentation == VV_SEG_TRANSFER_FUNCTION;
-    for (int oi = 0; oi < n && s == VV_OK; oi++) {
-        const int idx = ord.list[oi];
-        vv_brick_info in;
-        src->info(src->user, idx, &in);
-        /* the ray caster's table maps a value to the entry at or below it:
-         * one entry's width lower too (src/render/classify.h) */
-        const double bin = (hdr->range[1] - hdr->range[0]) / (VV_VC_LUT - 1);
-        if ((skip && !(tf_max_opacity(&obj->tf, in.vmin - bin, in.vmax) > 0)) ||
-            iso_below(obj, hdr, in.vmax)) {
-            if (src->note_skip)
-                src->note_skip(src->user);
-            continue;
+    /* pass 0: a ray a pixel; pass 1 (quality 2 of a renderer that
+     * supersamples): the points it asks for, the bricks read again */
+    vv_region_rays rays;
+    vv_region_image rwhole, rpiece;
+    memset(&rays, 0, sizeof rays);
+    rwhole = rpiece = (vv_region_image){0};
+    for (int pass = 0; pass < 2 && s == VV_OK; pass++) {
+        for (int oi = 0; oi < n && s == VV_OK; oi++) {
+            const int idx = ord.list[oi];
+            vv_brick_info in;
+            src->info(src->user, idx, &in);
+            /* the ray caster's table maps a value to the entry at or below it:
+             * one entry's width lower too (src/render/classify.h) */
+            const double bin = (hdr->range[1] - hdr->range[0]) / (VV_VC_LUT - 1);
+            if ((skip && !(tf_max_opacity(&obj->tf, in.vmin - bin, in.vmax) > 0)) ||
+                iso_below(obj, hdr, in.vmax)) {
+                if (src->note_skip && pass == 0)
+                    src->note_skip(src->user);
+                continue;
+            }
+            vv_render_region rg;
+            memset(&rg, 0, sizeof rg);
+            rg.object = object;
+            rg.whole = proxy ? &wv : NULL;
+            rg.rays = pass ? &rays : NULL;
+            vv_region_rect(&rg, i2w, view, in.slo, in.shi);
+            if (rg.x1 > rg.x0 && rg.y1 <= rg.y0)
+                continue; /* off screen */
+            for (int a = 0; a < 3; a++) {
+                const int last = hdr->dims[a] - 1;
+                rg.dims[a] = hdr->dims[a];
+                rg.offset[a] = in.slo[a];
+                rg.lo[a] = in.lo[a] > 0 ? in.lo[a] : -INFINITY;
+                rg.hi[a] = in.hi[a] < last ? in.hi[a] : INFINITY;
+            }
+            vv_volume *bv = NULL;
+            if ((s = src->load(src->user, idx, &bv)) != VV_OK)
+                break;
+            rg.voxels = bv;
+            s = pass ? render_piece(r, w, view, &rg, opt, &rpiece, &rwhole)
+                     : render_piece(r, w, view, &rg, opt, &piece, &whole);
+            vv_volume_free(bv); /* the renderer's cache may keep its own reference */
         }
-        vv_render_region rg;
-        memset(&rg, 0, sizeof rg);
-        rg.object = object;
-        rg.whole = proxy ? &wv : NULL;
-        vv_region_rect(&rg, i2w, view, in.slo, in.shi);
-        if (rg.x1 > rg.x0 && rg.y1 <= rg.y0)
-            continue; /* off screen */
-        for (int a = 0; a < 3; a++) {
-            const int last = hdr->dims[a] - 1;
-            rg.dims[a] = hdr->dims[a];
-            rg.offset[a] = in.slo[a];
-            rg.lo[a] = in.lo[a] > 0 ? in.lo[a] : -INFINITY;
-            rg.hi[a] = in.hi[a] < last ? in.hi[a] : INFINITY;
+        if (s == VV_OK && pass == 0) {
+            vv_region_image_finish(&whole, w->background);
+            s = rays_begin(&whole, out, &rays, &rwhole, &rpiece);
+            if (rays.n_pixels == 0)
+                break;
+        } else if (s == VV_OK) {
+            rays_finish(&rwhole, &rays, w->background, out);
         }
-        vv_volume *bv = NULL;
-        if ((s = src->load(src->user, idx, &bv)) != VV_OK)
-            break;
-        rg.voxels = bv;
-        s = render_piece(r, w, view, &rg, opt, &piece, &whole);
-        vv_volume_free(bv); /* the renderer's cache may keep its own reference */
     }
-    if (s == VV_OK)
-        vv_region_image_finish(&whole, w->background);
+    rays_end(&rays, &rwhole, &rpiece);
     brick_reader_free(&reader);
     vv_image_free(piece.image);
     free(whole.key);
@@ -437,6 +525,7 @@ typedef struct mr_frame {
     double ppw;                    /* pixels a world unit at depth 1 (perspective) or anywhere */
     double bin;                    /* a transfer-function table entry's width */
     vv_region_image *whole, *piece;
+    const vv_region_rays *rays; /* the second pass of quality 2 (rays_begin), else NULL */
     /* render_nodes_concurrent: the renderers of threads 1.. (clones of r;
      * freed after the frame is finished: whole->classify may be theirs) */
     vv_renderer *clones[MR_MAX_THREADS];
@@ -781,7 +870,7 @@ render_nodes(mr_frame *f) {
         free(lo);
         free(hi);
     }
-    const int T = node_threads(f);
+    const int T = f->rays ? 1 : node_threads(f);
     if (T > 1)
         return render_nodes_concurrent(f, T);
     int budget = f->lod->load_budget;
@@ -796,12 +885,15 @@ render_nodes(mr_frame *f) {
         if (s != VV_OK)
             return s;
         nd->rg.voxels = bv;
+        nd->rg.rays = f->rays;
         s = render_piece(f->r, f->w, f->view, &nd->rg, f->opt, f->piece, f->whole);
         nd->rg.voxels = NULL;
+        nd->rg.rays = NULL;
         vv_volume_free(bv);
         if (s != VV_OK)
             return s;
-        f->lod->nodes[nd->level]++;
+        if (!f->rays) /* the second pass reads them again: not more nodes */
+            f->lod->nodes[nd->level]++;
     }
     return VV_OK;
 }
@@ -975,6 +1067,27 @@ drv_render_multires(vv_renderer *r, const vv_world *w, int object, const vv_mult
             f.nodes[i].rg.whole = &wv;
         if (s == VV_OK)
             s = render_nodes(&f);
+        /* quality 2 of a renderer that supersamples: its points, the nodes
+         * read again (not in progressive frames, whose nodes may be
+         * pending) */
+        vv_region_rays rays;
+        vv_region_image rwhole, rpiece;
+        memset(&rays, 0, sizeof rays);
+        rwhole = rpiece = (vv_region_image){0};
+        if (s == VV_OK && !lod->progressive) {
+            vv_region_image_finish(&whole, w->background);
+            s = rays_begin(&whole, out, &rays, &rwhole, &rpiece);
+            if (s == VV_OK && rays.n_pixels > 0) {
+                f.whole = &rwhole;
+                f.piece = &rpiece;
+                f.rays = &rays;
+                s = render_nodes(&f);
+                if (s == VV_OK)
+                    rays_finish(&rwhole, &rays, w->background, out);
+            }
+            whole.image = NULL; /* finished */
+        }
+        rays_end(&rays, &rwhole, &rpiece);
         if (src->frame)
             src->frame(src->user, 0);
         if (s == VV_OK && lod->progressive && lod->background)
@@ -982,7 +1095,7 @@ drv_render_multires(vv_renderer *r, const vv_world *w, int object, const vv_mult
     }
     free(f.nodes);
     free(f.want);
-    if (s == VV_OK)
+    if (s == VV_OK && whole.image)
         vv_region_image_finish(&whole, w->background);
     for (int t = 0; t < MR_MAX_THREADS; t++)
         vv_renderer_free(f.clones[t]); /* after the finish: classify may be theirs */

@@ -378,6 +378,15 @@ vv_render_region_part(const vv_world *w, const vv_render_region *rg, vv_region_o
 }
 
 void
+vv_region_rays_free(vv_region_rays *r) {
+    if (!r)
+        return;
+    free(r->pixel);
+    free(r->xy);
+    memset(r, 0, sizeof *r);
+}
+
+void
 vv_region_image_clear_rect(vv_region_image *img, int x0, int y0, int x1, int y1) {
     const int W = img->image->width;
     x0 = x0 < 0 ? 0 : x0;
@@ -407,6 +416,10 @@ vv_region_image_combine_rect(vv_region_image *front, const vv_region_image *back
     if (back->classify) { /* the renderer's table for the summed means */
         front->classify = back->classify;
         front->classify_ctx = back->classify_ctx;
+    }
+    if (back->supersample) { /* the renderer's rays of quality 2 */
+        front->supersample = back->supersample;
+        front->supersample_ctx = back->supersample_ctx;
     }
     x0 = x0 < 0 ? 0 : x0;
     y0 = y0 < 0 ? 0 : y0;

@@ -687,9 +687,19 @@ vv_renderer_render_region(vv_renderer *r, const vv_world *world, const vv_view *
                             "%s: renders no regions (out-of-core and distributed rendering "
                             "need a renderer with the region contract: `volvis renderers`)",
                             name);
-    if (out->image->width != view->width || out->image->height != view->height)
+    if (region->rays) {
+        const vv_region_rays *rr = region->rays;
+        if (rr->per_pixel < 1 || !rr->xy ||
+            (size_t)out->image->width * (size_t)out->image->height <
+                (size_t)rr->per_pixel * rr->n_pixels)
+            return vv_error_set(VV_ERR_INVALID,
+                                "%s: region image of %d x %d entries for %zu rays of %d a pixel",
+                                name, out->image->width, out->image->height, rr->n_pixels,
+                                rr->per_pixel);
+    } else if (out->image->width != view->width || out->image->height != view->height) {
         return vv_error_set(VV_ERR_INVALID, "%s: region image is %d x %d but the view is %d x %d",
                             name, out->image->width, out->image->height, view->width, view->height);
+    }
     if (region->object < 0 || region->object >= world->n_objects || !region->voxels)
         return vv_error_set(VV_ERR_INVALID, "%s: region of object %d without voxels", name,
                             region->object);
@@ -705,11 +715,13 @@ vv_renderer_render_region(vv_renderer *r, const vv_world *world, const vv_view *
                             obj->name);
     vv_status s = vv_renderer_check_world(&r->ops->info, world);
     if (s == VV_OK) {
-        if (out->clear_outside && region->x1 > region->x0)
+        if (out->clear_outside && region->x1 > region->x0 && !region->rays)
             vv_region_image_clear_rect(out, region->x0, region->y0, region->x1, region->y1);
         else
             vv_region_image_clear(out);
         out->op = VV_REGION_OVER;
+        out->supersample = NULL; /* the method's to set */
+        out->supersample_ctx = NULL;
         s = r->ops->render_region(r->state, world, view, region, opt, out);
     }
     return s == VV_OK ? s : vv_error_prefix(s, "%s", name);

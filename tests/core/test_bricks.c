@@ -293,6 +293,130 @@ test_ct_head(void **state) {
     vv_volume_free(head);
 }
 
+/* Quality 2 by regions: raytrace's region render names its supersampling
+ * (vv_region_image.supersample, not at quality 1; raycast never), traces
+ * the points it is given (vv_render_region.rays: a point at a pixel's
+ * centre is that pixel of the plain region render, bit for bit), refuses
+ * an image with fewer entries than points; and drv_render_bricks at
+ * quality 2 gives the in-memory supersampled image (MIP bit for bit,
+ * composite >= 50 dB), reading the bricks a second time. */
+static void
+test_quality2_regions(void **state) {
+    (void)state;
+    if (!vt_have_data("volumes/ct_head.nrrd"))
+        vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
+    vv_volume *head = NULL;
+    vt_ok(vv_volume_load(&head, vt_data("volumes/ct_head.nrrd"), NULL));
+    char vvb[1200];
+    snprintf(vvb, sizeof vvb, "%s/head_q2.vvb", outdir());
+    vt_ok(vv_volume_write_vvb(head, vvb, VV_VVB_ZSTD));
+    vv_bricked *b = NULL;
+    vt_ok(vv_bricked_open(&b, vvb, NULL, vt_cache(4 << 20)));
+    vv_brick_source src;
+    vv_bricked_source(b, &src);
+    int nb[3];
+    vv_bricked_grid(b, nb);
+    const int nbricks = nb[0] * nb[1] * nb[2];
+    vv_render_options ro;
+    vv_render_options_init(&ro); /* quality 2 */
+
+    /* the contract, on one region: the whole volume */
+    vv_world *w = head_world(head, VV_MODE_MIP, 0.6);
+    const int W = w->view.width, H = w->view.height;
+    vv_renderer *rt = NULL, *rc = NULL;
+    vt_ok(vv_renderer_new(&rt, "raytrace"));
+    vt_ok(vv_renderer_new(&rc, "raycast"));
+    vv_render_region rg;
+    memset(&rg, 0, sizeof rg);
+    rg.voxels = head;
+    for (int a = 0; a < 3; a++) {
+        rg.dims[a] = head->dims[a];
+        rg.lo[a] = -INFINITY;
+        rg.hi[a] = INFINITY;
+    }
+    float *keys = malloc(sizeof(float) * (size_t)W * (size_t)H);
+    assert_non_null(keys);
+    vv_region_image pix = {.key = keys};
+    vt_ok(vv_image_new(&pix.image, W, H));
+    vt_ok(vv_renderer_render_region(rc, w, &w->view, &rg, &ro, &pix));
+    assert_null(pix.supersample);
+    ro.quality = 1;
+    vt_ok(vv_renderer_render_region(rt, w, &w->view, &rg, &ro, &pix));
+    assert_null(pix.supersample);
+    ro.quality = 2;
+    vt_ok(vv_renderer_render_region(rt, w, &w->view, &rg, &ro, &pix));
+    assert_non_null(pix.supersample);
+    /* 12 pixel centres down the middle column, 3 points each */
+    size_t pxl[12];
+    double xy[2 * 36];
+    for (int i = 0; i < 12; i++) {
+        const int x = W / 2, y = H / 6 + i * (H * 2 / 3) / 12;
+        pxl[i] = (size_t)y * (size_t)W + (size_t)x;
+        for (int k = 0; k < 3; k++) {
+            xy[2 * (3 * i + k)] = x;
+            xy[2 * (3 * i + k) + 1] = y;
+        }
+    }
+    const vv_region_rays rays = {.per_pixel = 3, .n_pixels = 12, .pixel = pxl, .xy = xy};
+    float rkeys[40];
+    vv_region_image pts = {.key = rkeys};
+    vt_ok(vv_image_new(&pts.image, 8, 5)); /* 40 entries for 36 points */
+    rg.rays = &rays;
+    vt_ok(vv_renderer_render_region(rt, w, &w->view, &rg, &ro, &pts));
+    assert_null(pts.supersample);
+    for (int i = 0; i < 36; i++) {
+        const size_t at = pxl[i / 3];
+        assert_memory_equal(pts.image->rgba + 4 * i, pix.image->rgba + 4 * at, 4 * sizeof(float));
+        assert_memory_equal(pts.key + i, pix.key + at, sizeof(float));
+    }
+    for (int i = 36; i < 40; i++) /* past the last point: clear */
+        assert_true(pts.image->rgba[4 * i + 3] == 0 && isnan(pts.key[i]));
+    vv_image_free(pts.image);
+    vt_ok(vv_image_new(&pts.image, 5, 7)); /* 35 entries: too few */
+    assert_int_equal(vv_renderer_render_region(rt, w, &w->view, &rg, &ro, &pts), VV_ERR_INVALID);
+    assert_non_null(strstr(vv_error_message(), "rays"));
+    vv_image_free(pts.image);
+    vv_image_free(pix.image);
+    free(keys);
+    vv_renderer_free(rc);
+    vv_renderer_free(rt);
+    vv_world_free(w);
+
+    /* whole frames by bricks at quality 2 against memory */
+    for (int m = 0; m < 2; m++) {
+        w = head_world(head, m ? VV_MODE_COMPOSITE : VV_MODE_MIP, 0.6);
+        vv_renderer *mem = NULL, *ooc = NULL;
+        vt_ok(vv_renderer_new(&mem, "raytrace"));
+        vt_ok(vv_renderer_new(&ooc, "raytrace"));
+        vv_image *ref = NULL, *img = NULL;
+        vt_ok(vv_image_new(&ref, w->view.width, w->view.height));
+        vt_ok(vv_image_new(&img, w->view.width, w->view.height));
+        vt_ok(vv_renderer_render(mem, w, &w->view, &ro, ref));
+        vv_bricked_stats before, after;
+        vv_bricked_stats_get(b, &before);
+        vt_ok(drv_render_bricks(ooc, w, 0, &src, &w->view, &ro, img));
+        vv_bricked_stats_get(b, &after);
+        int same = 0;
+        const double db = vt_image_psnr(ref, img, &same);
+        const unsigned long long reads =
+            (unsigned long long)(after.loads - before.loads + after.hits - before.hits);
+        printf("quality 2 by bricks, %s: %s %.1f dB, %llu brick reads (of %d bricks)\n",
+               m ? "composite" : "mip", same ? "bit-identical" : "differs", db, reads, nbricks);
+        if (m == 0)
+            assert_true(same);
+        else
+            assert_true(db >= 50);
+        assert_true(reads > (unsigned long long)nbricks / 2 && reads <= 2ull * nbricks);
+        vv_image_free(ref);
+        vv_image_free(img);
+        vv_renderer_free(mem);
+        vv_renderer_free(ooc);
+        vv_world_free(w);
+    }
+    vv_bricked_free(b);
+    vv_volume_free(head);
+}
+
 static vv_volume *
 synthetic(void) {
     const int dims[3] = {70, 131, 9};
@@ -487,6 +611,7 @@ int
 main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_ct_head),
+        cmocka_unit_test(test_quality2_regions),
         cmocka_unit_test(test_round_trip),
         cmocka_unit_test(test_bad_vvb),
     };

@@ -109,6 +109,22 @@ typedef struct vv_region_volume {
 } vv_region_volume;
 
 /**
+ * Rays a frame drawn by regions traces again: the image-plane points of a
+ * renderer's supersampling (vv_region_image.supersample), per_pixel of them
+ * for each of n_pixels pixels, in the order the renderer averages them.
+ */
+typedef struct vv_region_rays {
+    int per_pixel;   /**< points a pixel, >= 1 */
+    size_t n_pixels; /**< pixels listed */
+    size_t *pixel;   /**< n_pixels pixel indices y width + x, ascending; malloc'd */
+    double *xy;      /**< n_pixels * per_pixel points (x, y), in the units of vv_camera_ray
+                          (pixel x's centre at x); malloc'd */
+} vv_region_rays;
+
+/** Frees what @p r holds and empties it. */
+void vv_region_rays_free(vv_region_rays *r);
+
+/**
  * One region of a volume object: the samples inside an axis-aligned box of
  * the object's index space (voxel units of its whole volume; the box is an
  * oriented box of the World when the object is turned). A region render
@@ -137,6 +153,15 @@ typedef struct vv_render_region {
     /** The whole volume, for global effects, when the World's own volume of the object is a
      *  coarse proxy and the driver can read it (vv_region_volume); NULL: none. */
     const vv_region_volume *whole;
+    /**
+     * NULL: one ray through each pixel centre into the view-sized image.
+     * Else these points only: point i of rays->xy into entry i (row-major)
+     * of an image of at least per_pixel * n_pixels entries (and its keys),
+     * each as a pixel is (colour, depth, key); points whose pixel lies
+     * outside the rectangle, and entries past the last point, stay clear.
+     * Borrowed.
+     */
+    const vv_region_rays *rays;
 } vv_render_region;
 
 /** A region render's output: the partial image and how it combines. */
@@ -177,6 +202,21 @@ typedef struct vv_region_image {
      */
     void (*classify)(const void *ctx, float v, float entry[4]);
     const void *classify_ctx;
+    /**
+     * Set by a region render whose whole render traces more rays than one
+     * a pixel at this quality (the ray tracer's supersampling at quality
+     * 2), else NULL (an initializer's default): given @p first, the frame's
+     * regions combined and finished (one ray a pixel), fills @p rays with
+     * the points to trace again (none: the frame is done). The driver then
+     * renders every region again on those points (vv_render_region.rays),
+     * combines and finishes each point as a pixel, and sets each listed
+     * pixel to its points' mean (their colours summed in order, divided by
+     * their count) and their nearest depth: the whole render's pixel.
+     * @p ctx is supersample_ctx, valid as classify_ctx is. Errors:
+     * VV_ERR_NOMEM.
+     */
+    vv_status (*supersample)(const void *ctx, const vv_image *first, vv_region_rays *rays);
+    const void *supersample_ctx;
 } vv_region_image;
 
 /** How the region renders of an object in @p mode combine. */
@@ -238,7 +278,8 @@ vv_region_pixel_combine(vv_region_op op, float f[4], float *fdepth, float *fkey,
 /**
  * Combines whole partial images: @p front becomes front combined with
  * @p back (same size and op); a back that has a classify (SUM) gives it to
- * front, which vv_region_image_finish then classifies with. Thread-safe
+ * front, which vv_region_image_finish then classifies with, and so does a
+ * back that has a supersample. Thread-safe
  * for distinct images.
  */
 void vv_region_image_combine(vv_region_image *front, const vv_region_image *back);
@@ -414,7 +455,8 @@ typedef struct vv_renderer_ops {
     /**
      * Optional (VV_RENDERER_REGION): renders only @p region of the World's
      * object region->object into @p out (vv_region_image), on one ray
-     * through each pixel centre. The World has that one visible object
+     * through each pixel centre, or on the points of region->rays (then it
+     * must not set out->supersample). The World has that one visible object
      * (vv_render_region_check); its own volume spans the same world box
      * and holds real voxels: the whole volume (distributed rendering of an
      * in-memory volume) or a coarse proxy (out of core): a method with

@@ -277,21 +277,30 @@ trace_primary(const rt_frame *fr, double px, double py, float rgba[4], float *de
     rt_trace_key(fr, &wr, 0, 1, 1.0f, rgba, &rgba[3], depth, key);
 }
 
-/* n x n supersamples of pixel (x, y), regular or jittered (seeded by the
- * pixel, so images do not depend on threads). */
+/* Supersample s of n x n of pixel (x, y): its offset from the pixel
+ * centre, regular or jittered (seeded by the pixel, so images do not
+ * depend on threads). */
+static void
+ss_offset(const rt_state *st, int x, int y, int s, int n, double *ox, double *oy) {
+    *ox = (s % n + 0.5) / n - 0.5;
+    *oy = (s / n + 0.5) / n - 0.5;
+    if (st->jitter) {
+        uint64_t h = mix64(st->seed ^ mix64(((uint64_t)(uint32_t)y << 32) ^ (uint64_t)(uint32_t)x) ^
+                           (uint64_t)s * 0x632BE59BD9B4E019ull);
+        *ox = (s % n + (double)(h >> 40) / 16777216.0) / n - 0.5;
+        *oy = (s / n + (double)(h & 0xFFFFFF) / 16777216.0) / n - 0.5;
+    }
+}
+
+/* n x n supersamples of pixel (x, y) (ss_offset), their mean colour and
+ * nearest depth. */
 static void
 supersample(const rt_frame *fr, int x, int y, int n, float rgba[4], float *depth) {
     float acc[4] = {0, 0, 0, 0};
     float dmin = INFINITY;
     for (int s = 0; s < n * n; s++) {
-        double ox = (s % n + 0.5) / n - 0.5, oy = (s / n + 0.5) / n - 0.5;
-        if (fr->st->jitter) {
-            uint64_t h =
-                mix64(fr->st->seed ^ mix64(((uint64_t)(uint32_t)y << 32) ^ (uint64_t)(uint32_t)x) ^
-                      (uint64_t)s * 0x632BE59BD9B4E019ull);
-            ox = (s % n + (double)(h >> 40) / 16777216.0) / n - 0.5;
-            oy = (s / n + (double)(h & 0xFFFFFF) / 16777216.0) / n - 0.5;
-        }
+        double ox, oy;
+        ss_offset(fr->st, x, y, s, n, &ox, &oy);
         float c[4], d;
         trace_primary(fr, x + ox, y + oy, c, &d, NULL);
         for (int ch = 0; ch < 4; ch++)
@@ -328,6 +337,103 @@ pass_first(void *user, const vv_frame_tile *t) {
             else
                 trace_primary(fr, x, y, pix, dp, fr->key ? fr->key + at : NULL);
         }
+    return VV_OK;
+}
+
+/* A region render on its rays' points only (vv_render_region.rays): each
+ * into its entry of the one-row image, as pass_first fills a pixel. */
+static void
+pass_rays(const rt_frame *fr, int nt) {
+    const vv_render_region *rg = fr->region;
+    const vv_region_rays *rr = rg->rays;
+    const long n = (long)rr->per_pixel * (long)rr->n_pixels;
+    const size_t W = (size_t)fr->view->width;
+    const int rect = rg->x1 > rg->x0;
+#pragma omp parallel for schedule(dynamic, 64) num_threads(nt)
+    for (long i = 0; i < n; i++) {
+        const size_t px = rr->pixel[i / rr->per_pixel];
+        const int x = (int)(px % W), y = (int)(px / W);
+        if (rect && (x < rg->x0 || x >= rg->x1 || y < rg->y0 || y >= rg->y1))
+            continue;
+        const double sx = rr->xy[2 * i], sy = rr->xy[2 * i + 1];
+        float *pix = fr->out->rgba + 4 * i;
+        float *dp = fr->out->depth + i;
+        if (fr->xsum) {
+            const rt_vobj *ob = fr->xsum;
+            const vv_ray wr = vv_camera_ray(&fr->cam, sx, sy);
+            vv_vray_xray_region_pixel(ob->c, ob->w2i, ob->dims, ob->planes, ob->n_planes,
+                                      ob->region, fr->dt, ob->inv_form, &wr, fr->avx2, pix, dp,
+                                      fr->key + i);
+        } else {
+            trace_primary(fr, sx, sy, pix, dp, fr->key ? fr->key + i : NULL);
+        }
+    }
+}
+
+/* The rays of quality 2 for a frame drawn by regions
+ * (vv_region_image.supersample): the pixels pass_refine would supersample
+ * in @p first (every pixel when not adaptive), each with its n x n points
+ * (ss_offset) in supersample's order. */
+static vv_status
+rt_region_supersample(const void *ctx, const vv_image *first, vv_region_rays *rays) {
+    const rt_state *st = ctx;
+    memset(rays, 0, sizeof *rays);
+    const int W = first->width, H = first->height, n = st->samples;
+    const float thr = (float)st->threshold;
+    const size_t np = (size_t)W * (size_t)H;
+    unsigned char *pick = malloc(np ? np : 1);
+    if (!pick)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    size_t count = 0;
+    for (int y = 0; y < H; y++)
+        for (int x = 0; x < W; x++) {
+            const float *c = first->rgba + 4 * ((size_t)y * (size_t)W + (size_t)x);
+            int differs = !st->adaptive;
+            const int nb[4][2] = {{x - 1, y}, {x + 1, y}, {x, y - 1}, {x, y + 1}};
+            for (int k = 0; k < 4 && !differs; k++) {
+                if (nb[k][0] < 0 || nb[k][0] >= W || nb[k][1] < 0 || nb[k][1] >= H)
+                    continue;
+                const float *q = first->rgba + 4 * ((size_t)nb[k][1] * (size_t)W + (size_t)nb[k][0]);
+                for (int ch = 0; ch < 4; ch++)
+                    differs |= fabsf(q[ch] - c[ch]) > thr;
+            }
+            pick[(size_t)y * (size_t)W + (size_t)x] = (unsigned char)differs;
+            count += (size_t)differs;
+        }
+    const size_t per = (size_t)n * (size_t)n;
+    if (count == 0 || n < 2) {
+        free(pick);
+        return VV_OK;
+    }
+    if (count * per > (size_t)INT32_MAX) {
+        free(pick);
+        return vv_error_set(VV_ERR_LIMIT, "%zu rays to trace again; at most %d", count * per,
+                            (int)INT32_MAX);
+    }
+    rays->pixel = malloc(count * sizeof *rays->pixel);
+    rays->xy = malloc(2 * count * per * sizeof *rays->xy);
+    if (!rays->pixel || !rays->xy) {
+        free(pick);
+        vv_region_rays_free(rays);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    rays->per_pixel = (int)per;
+    size_t k = 0;
+    for (size_t i = 0; i < np; i++) {
+        if (!pick[i])
+            continue;
+        const int x = (int)(i % (size_t)W), y = (int)(i / (size_t)W);
+        rays->pixel[k] = i;
+        for (int s = 0; s < (int)per; s++) {
+            double ox, oy;
+            ss_offset(st, x, y, s, n, &ox, &oy);
+            rays->xy[2 * (k * per + (size_t)s)] = x + ox;
+            rays->xy[2 * (k * per + (size_t)s) + 1] = y + oy;
+        }
+        k++;
+    }
+    rays->n_pixels = count;
+    free(pick);
     return VV_OK;
 }
 
@@ -573,6 +679,11 @@ render_frame(rt_state *st, const vv_world *w, const vv_view *view, const vv_rend
         frame_release(&fr);
         return s;
     }
+    if (region && region->rays) { /* the points of quality 2 only */
+        pass_rays(&fr, nt);
+        frame_release(&fr);
+        return VV_OK;
+    }
     vv_frame_job job;
     vv_frame_job_init(&job, view->width, view->height, fr.refine ? pass_refined : pass_first, &fr);
     if (fr.refine)
@@ -651,6 +762,11 @@ rt_render_region(void *state, const vv_world *w, const vv_view *view,
     /* xray: the regions' sums add up, their mean classified once */
     out->classify = out->op == VV_REGION_SUM ? vv_xray_table_classify : NULL;
     out->classify_ctx = out->op == VV_REGION_SUM ? &st->xray : NULL;
+    /* quality 2: the whole render's supersampling, ray by ray in every region */
+    const int ss = opt->quality >= 2 && st->samples > 1 && !region->rays &&
+                   vv_frame_refine_for(&st->refine, opt->quality, 0, 0, &(float){0}) == 0;
+    out->supersample = ss ? rt_region_supersample : NULL;
+    out->supersample_ctx = ss ? st : NULL;
     return s;
 }
 
