@@ -5,10 +5,11 @@
  * and `volvis render --memory-limit` (the same image as in memory with the
  * same transfer function; the `wrote` line counts the bricks read), with
  * raycast and raytrace (region renders trace one ray a pixel: the ray
- * tracer's quality 1; MIP byte for byte; composite with its shadows traced
- * through the proxy: >= 50 dB where the proxy is the whole volume, the nut;
+ * tracer's quality 1; MIP byte for byte; composite with its shadows:
+ * >= 50 dB where the proxy is the whole volume, the nut;
  * on the CT head, a 4x coarser proxy (the .vvb's coarse level), exact
- * without shadows and measured with them; X-ray bit for bit by both), and
+ * without shadows and with them (their light volumes swept through the
+ * bricks); X-ray bit for bit by both), quality 2 by regions, and
  * its errors: a memory limit smaller than one brick, a bad size, a
  * renderer without the region contract; the pyramid levels convert
  * writes (render --level and --lod read them: OME-Zarr's images bit for
@@ -227,7 +228,10 @@ test_renderers(void **state) {
  * were 35-43 dB off; swept through the whole volume they are the in-memory
  * light volume's (65 dB here). An OME-Zarr frame at coarser levels keeps
  * the proxy's shadows (the sweep would read level 0 whole), and so does
- * shadow_grid=2, whose swept shadow grids march the context itself. */
+ * shadow_grid=2, whose swept shadow grids march the context itself. Point
+ * lights from scene files, one outside the head and one inside it: at
+ * least the agreement of the bricks without shadows (what splitting the
+ * composite costs by itself), far above shadows marched through the proxy. */
 static void
 test_exact_shadows(void **state) {
     (void)state;
@@ -262,6 +266,48 @@ test_exact_shadows(void **state) {
     printf("CT head composite, shadow_grid=2 through the proxy: %.1f dB\n", db);
     assert_true(db < 50);
 #undef SHADOW_VIEW
+    /* a point light outside the head and one inside it (its light volume
+     * swept in order of distance to the light, the tiles centred on it):
+     * scenes of the file in memory and of the .vvb */
+    const char *lights[2] = {"[200, 500, 250]", "[128, 60, 80]"};
+    for (int l = 0; l < 2; l++) {
+        char scm[1200], sco[1200];
+        snprintf(scm, sizeof scm, "%s/point_mem.json", outdir());
+        snprintf(sco, sizeof sco, "%s/point_ooc.json", outdir());
+        for (int k = 0; k < 2; k++) {
+            char text[2400];
+            const int n = snprintf(
+                text, sizeof text,
+                "{\"view\": {\"eye\": [128, 700, 60], \"at\": [128, 128, 60], \"up\": [0, 0, "
+                "1], \"fov\": 30, \"width\": 96, \"height\": 96},\n"
+                " \"lights\": [{\"type\": \"point\", \"position\": %s, \"intensity\": 2}],\n"
+                " \"shading\": {\"ambient\": [0.2, 0.2, 0.2]},\n"
+                " \"objects\": [{\"name\": \"head\", \"type\": \"volume\", \"file\": \"%s\",\n"
+                "   \"mode\": \"composite\", \"step\": 0.5, \"transfer_function\": {\"opacity\": "
+                "[[-600, 0], [-300, 0.015], [-150, 0], [250, 0], [500, 0.3], [1500, 0.8]],\n"
+                "   \"color\": [[-600, [0.9, 0.6, 0.5]], [1500, [1, 1, 1]]]}}]}\n",
+                lights[l], k ? vvb : head);
+            vt_write_file(k ? sco : scm, text, (size_t)n);
+        }
+        /* with the light volume swept through the bricks; without shadows
+         * (what splitting the composite into bricks costs by itself, low
+         * with a light this near: its highlights); marched through the
+         * proxy (light_volumes=0) */
+        const char *sets[3] = {"shadows=1", "shadows=0", "light_volumes=0"};
+        double got[3];
+        for (int k = 0; k < 3; k++) {
+            cli_ok("render", scm, "--renderer", "raytrace", "--quality", "1", "--set",
+                   "refinement=off", "--set", sets[k], "-q", "-o", mem);
+            cli_ok("render", sco, "--memory-limit", "4M", "--renderer", "raytrace", "--quality",
+                   "1", "--set", sets[k], "-q", "-o", ooc);
+            got[k] = vt_png_psnr(mem, ooc);
+        }
+        printf("CT head composite, a point light at %s, .vvb by bricks: %.1f dB (without "
+               "shadows %.1f dB, shadows marched through the proxy %.1f dB)\n",
+               lights[l], got[0], got[1], got[2]);
+        assert_true(got[0] >= 48 && got[0] >= got[1] - 1);
+        assert_true(got[2] < got[0] - 5);
+    }
 }
 
 /* Quality 2 out of core: the ray tracer's adaptive supersampling by

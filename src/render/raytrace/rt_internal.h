@@ -403,17 +403,18 @@ vv_status rt_build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt);
 
 /* Region renders with the whole volume (vv_render_region.whole): 1 when
  * the context objects of the frame can take their light volumes from it
- * (composite, shadows through light volumes, every light directional,
- * shadow_grid 0 or 1: nothing else marches the context's proxy), and then
- * each such context takes the region part's geometry (the whole volume's
- * index space). */
+ * (composite, shadows through light volumes, every light directional or a
+ * point at a finite position, shadow_grid 0 or 1: nothing else marches
+ * the context's proxy), and then each such context takes the region
+ * part's geometry (the whole volume's index space). */
 int rt_context_whole(rt_frame *fr, const vv_render_region *region);
 
-/* The light volume of directional light l through the whole volume of a
- * region render (ob->whole), swept tile by tile in the light's order: the
- * values sweep_grid gives the in-memory volume, the tiles read by boxes
- * (a box a tile, with the voxels its samples reach towards the light).
- * *out: ob->ldim points, malloc'd. Errors: those of the reads, VV_ERR_NOMEM. */
+/* The light volume of light l through the whole volume of a region
+ * render (ob->whole), swept tile by tile in the light's order: the values
+ * sweep_grid (directional) or sweep_point (point) give the in-memory
+ * volume, the tiles read by boxes (a box a tile, with the voxels its
+ * samples reach towards the light). *out: ob->ldim points, malloc'd.
+ * Errors: those of the reads, VV_ERR_NOMEM. */
 vv_status rt_sweep_whole(const rt_frame *fr, const rt_vobj *ob, int l, int nt, float **out);
 
 /* The shadows rt_shade_volume gives a sample of object @p o (its lead) at

@@ -4,23 +4,34 @@
  * rather than through the World's coarse proxy, so that the shadows of a
  * volume rendered brick by brick are those of the in-memory render.
  *
- * A directional light's light volume (rt_shade.c, sweep_grid) is swept
- * layer by layer from the light's side: a grid point's transmittance is the
- * bilinear one of the layer before it, towards the light, times its own
- * segment's (one sample at the segment's middle); points whose way to the
- * light leaves the grid march to the volume's face. Every value therefore
- * depends only on points and voxels towards the light. Here the grid is cut
- * into tiles of the reader's size, swept one after another in the light's
- * order (a tile after every tile that lies towards the light on some axis
- * and not away from it on another: by the sum of their distances from the
- * light's corner), each from one box of voxels: the tile's own, and on the
- * light's side of each axis the three more that its samples reach (two
- * towards the light and the trilinear neighbour). The values are the
- * in-memory sweep's: the same points, sample positions and tables (the
- * region part's, built from voxels of the same type and value range); the
- * marches step through every subvolume rather than leaping over empty
- * ones, which adds zeros, and may place their cuts a rounding apart.
+ * A light volume (rt_shade.c) holds, every RT_LGRID voxels, the
+ * transmittance towards a directional light or the mean extinction of the
+ * way to a point light. Each point's value is computed from points one
+ * grid layer nearer the light (bilinear in that layer) and one sample of
+ * its own segment; points whose way to the light leaves the grid march to
+ * the volume's face. Every value therefore depends only on points and
+ * voxels towards the light. Here the grid is cut into tiles (two of the
+ * reader's boxes a side), swept one after another in the light's order:
+ * - a tile comes after every tile towards the light on some axis and not
+ *   away from it on another, i.e. by the sum of its distances in tiles from
+ *   the light's side of every axis (a directional light) or from the
+ *   light's own tile (a point light, the tiles centred on it so that no
+ *   point's way to it crosses a tile face towards the light's far side);
+ * - within a tile, a directional light's points go layer by layer from its
+ *   side (sweep_grid), a point light's in order of their L-infinity
+ *   distance to it (sweep_point), those of one layer or distance at once;
+ * - a tile's samples come from one box of voxels: the tile's own and, on
+ *   the light's side of each axis, the three more its samples reach (two
+ *   towards the light and the trilinear neighbour).
+ * The values are the in-memory sweep's: the same points in an order that
+ * respects the same dependencies, the same sample positions and tables
+ * (the region part's, built from voxels of the same type and value range);
+ * the marches step through every subvolume rather than leaping over empty
+ * ones, which adds zeros. On the CT head the light volumes came out bit for
+ * bit those of the in-memory render (five directional lights, four point
+ * lights inside and outside the volume).
  */
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -34,7 +45,9 @@ rt_context_whole(rt_frame *fr, const vv_render_region *region) {
         !fr->st->light_volumes || fr->st->shadow_grid == 2 || fr->n_vobj < 1)
         return 0;
     for (int l = 0; l < fr->n_lights; l++)
-        if (fr->lights[l].point)
+        if (fr->lights[l].point &&
+            !(isfinite(fr->lights[l].pos[0]) && isfinite(fr->lights[l].pos[1]) &&
+              isfinite(fr->lights[l].pos[2])))
             return 0;
     const rt_vobj *part = &fr->vobjs[0]; /* prepare_frame: the region part first */
     const vv_volume *h = region->whole->header;
@@ -98,12 +111,14 @@ tile_depth(const rt_vobj *ob, const lw_tile *t, const double p[3], const double 
 }
 
 /* volume_transmittance's march (rt_shade.c) from world point wp towards
- * the light, through the tile: each subvolume's piece cut into equal parts
- * no longer than the shadow step, sampled at their middles. */
+ * the light over (0, tmax), through the tile: each subvolume's piece cut
+ * into equal parts no longer than the shadow step, sampled at their
+ * middles. */
 static float
-tile_march(const rt_frame *fr, const rt_vobj *ob, const lw_tile *tl, vv_vec3 wp, vv_vec3 ldir) {
+tile_march(const rt_frame *fr, const rt_vobj *ob, const lw_tile *tl, vv_vec3 wp, vv_vec3 ldir,
+           double tmax) {
     vv_vray r;
-    if (!vray_setup(ob, &(vv_ray){wp, ldir}, 0, INFINITY, &r))
+    if (!vray_setup(ob, &(vv_ray){wp, ldir}, 0, tmax, &r))
         return 1.0f;
     const double dt = fr->dt;
     const double ds = 2 * ob->vox > dt ? 2 * ob->vox : dt;
@@ -137,60 +152,276 @@ lw_index_to_world(const rt_vobj *ob, const double q[3]) {
               ob->i2w[2][0] * q[0] + ob->i2w[2][1] * q[1] + ob->i2w[2][2] * q[2] + ob->i2w[2][3]);
 }
 
-vv_status
-rt_sweep_whole(const rt_frame *fr, const rt_vobj *ob, int l, int nt, float **out) {
-    const rt_light *lt = &fr->lights[l];
-    const vv_region_volume *wv = ob->whole;
-    *out = NULL;
+/* What the tiles of one light's sweep share. */
+typedef struct lw_sweep {
+    const rt_frame *fr;
+    const rt_vobj *ob;
+    const rt_light *lt;
+    int nt;
+    const int *gd; /* light volume points per axis */
+    float *T;      /* the light volume */
+    /* a directional light (sweep_grid): its index-space direction per world
+     * unit, the axis it is most along and the two others, the layer
+     * towards it, the first layer, a layer's segment */
+    double li[3], seg;
+    int A, B, Cc, up, first;
+    vv_vec3 ldir;
+    /* a point light (sweep_point): its position in grid units */
+    double Lg[3];
+} lw_sweep;
+
+/* The tile's points of a directional light, layer by layer from the light's
+ * side: sweep_grid's values. */
+static void
+tile_directional(const lw_sweep *w, const lw_tile *tl, const int g0[3], const int g1[3]) {
     const double G = RT_LGRID;
-    const int *gd = ob->ldim;
+    const int *gd = w->gd, A = w->A, B = w->B, Cc = w->Cc, up = w->up;
+    const int nb = gd[B], nc = gd[Cc];
+    const int nlay = g1[A] - g0[A], bw = g1[B] - g0[B], cw = g1[Cc] - g0[Cc];
+    for (int m = 0; m < nlay; m++) {
+        const int la = up > 0 ? g1[A] - 1 - m : g0[A] + m;
+#pragma omp parallel for schedule(dynamic, 16) num_threads(w->nt)
+        for (int bc = 0; bc < bw * cw; bc++) {
+            int id[3];
+            id[A] = la;
+            id[B] = g0[B] + bc % bw;
+            id[Cc] = g0[Cc] + bc / bw;
+            const double p[3] = {id[0] * G, id[1] * G, id[2] * G};
+            const vv_vec3 wp = lw_index_to_world(w->ob, p);
+            float tv = -1;
+            if (la != w->first) {
+                const double qb = (p[B] + w->li[B] * w->seg) / G,
+                             qc = (p[Cc] + w->li[Cc] * w->seg) / G;
+                if (qb >= 0 && qb <= nb - 1 && qc >= 0 && qc <= nc - 1) {
+                    int ib = (int)qb, ic = (int)qc;
+                    ib = ib > nb - 2 ? nb - 2 : ib;
+                    ic = ic > nc - 2 ? nc - 2 : ic;
+                    const float fb = (float)(qb - ib), fc = (float)(qc - ic);
+                    float v[4];
+                    for (int q = 0; q < 4; q++) {
+                        int at[3];
+                        at[A] = la + up;
+                        at[B] = ib + (q & 1);
+                        at[Cc] = ic + (q >> 1);
+                        v[q] =
+                            w->T[((size_t)at[2] * (size_t)gd[1] + (size_t)at[1]) * (size_t)gd[0] +
+                                 (size_t)at[0]];
+                    }
+                    const float tq =
+                        vv_lerpf(vv_lerpf(v[0], v[1], fb), vv_lerpf(v[2], v[3], fb), fc);
+                    tv = tq <= 0 ? 0.0f
+                                 : tq * expf(-tile_depth(w->ob, tl, p, w->li, w->seg, wp, w->ldir));
+                }
+            }
+            if (tv < 0)
+                tv = tile_march(w->fr, w->ob, tl, wp, w->ldir, INFINITY);
+            w->T[((size_t)id[2] * (size_t)gd[1] + (size_t)id[1]) * (size_t)gd[0] + (size_t)id[0]] =
+                tv;
+        }
+    }
+}
+
+/* One point of a point light's light volume from the tile: point_lv_value
+ * (rt_shade.c), the mean extinction of its way to the light. */
+static float
+tile_point_value(const lw_sweep *w, const lw_tile *tl, const int id[3]) {
+    const double G = RT_LGRID;
+    const rt_vobj *ob = w->ob;
+    const int *gd = w->gd;
+    const double p[3] = {id[0] * G, id[1] * G, id[2] * G};
+    const vv_vec3 wp = lw_index_to_world(ob, p);
+    const vv_vec3 to = v3sub(v3(w->lt->pos[0], w->lt->pos[1], w->lt->pos[2]), wp);
+    const double dist = v3len(to);
+    if (!(dist > 0))
+        return 0.0f;
+    const vv_vec3 ldir = v3scale(to, 1 / dist);
+    double d[3];
+    int A = 0;
+    for (int a = 0; a < 3; a++) {
+        d[a] = w->Lg[a] - id[a];
+        if (fabs(d[a]) > fabs(d[A]))
+            A = a;
+    }
+    const double k = fabs(d[A]);
     double li[3];
     for (int a = 0; a < 3; a++)
-        li[a] =
-            ob->w2i[a][0] * lt->dir[0] + ob->w2i[a][1] * lt->dir[1] + ob->w2i[a][2] * lt->dir[2];
-    int A = 0;
-    for (int a = 1; a < 3; a++)
-        if (fabs(li[a]) > fabs(li[A]))
-            A = a;
-    if (!(fabs(li[A]) > 0))
-        return VV_OK;
+        li[a] = d[a] * G / dist;
+    double tau;
     const int B = (A + 1) % 3, Cc = (A + 2) % 3;
-    const vv_vec3 ldir = v3(lt->dir[0], lt->dir[1], lt->dir[2]);
-    const size_t ng = (size_t)gd[0] * (size_t)gd[1] * (size_t)gd[2];
-    const double seg = G / fabs(li[A]);
-    const int up = li[A] > 0 ? 1 : -1; /* the layer towards the light */
-    const int first = up > 0 ? gd[A] - 1 : 0;
-    const int nb = gd[B], nc = gd[Cc];
-    /* tiles of TS cells a side (two of the reader's: fewer reads of the boxes' edges; a
-     * multiple of the grid's spacing) */
+    const int la = id[A] + (d[A] > 0 ? 1 : -1);
+    const double qb = id[B] + d[B] / (k > 0 ? k : 1), qc = id[Cc] + d[Cc] / (k > 0 ? k : 1);
+    if (k <= 1) { /* the light is within a layer: the segment to it */
+        tau = tile_depth(ob, tl, p, li, dist, wp, ldir);
+    } else if (la < 0 || la > gd[A] - 1 || !(qb >= 0 && qb <= gd[B] - 1) ||
+               !(qc >= 0 && qc <= gd[Cc] - 1)) {
+        const float T = tile_march(w->fr, ob, tl, wp, ldir, dist);
+        tau = T > 0 ? -log(T) : INFINITY;
+    } else {
+        const int ib = (int)qb, ic = (int)qc;
+        const float fb = (float)(qb - ib), fc = (float)(qc - ic);
+        float v[4] = {0, 0, 0, 0};
+        for (int m = 0; m < 4; m++) {
+            if (((m & 1) && fb == 0) || ((m >> 1) && fc == 0))
+                continue;
+            int q[3];
+            q[A] = la;
+            q[B] = ib + (m & 1);
+            q[Cc] = ic + (m >> 1);
+            v[m] =
+                w->T[((size_t)q[2] * (size_t)gd[1] + (size_t)q[1]) * (size_t)gd[0] + (size_t)q[0]];
+        }
+        const double seg = dist / k;
+        for (int m = 0; m < 4; m++)
+            v[m] = expf(-v[m] * (float)(dist - seg));
+        const double tq = vv_lerpf(vv_lerpf(v[0], v[1], fb), vv_lerpf(v[2], v[3], fb), fc);
+        tau = (tq > 0 ? -log(tq) : INFINITY) + tile_depth(ob, tl, p, li, seg, wp, ldir);
+    }
+    const double sv = tau / dist;
+    return (float)(sv < FLT_MAX ? sv : FLT_MAX);
+}
+
+typedef struct lw_key {
+    double k;
+    size_t at;
+} lw_key;
+
+static int
+lw_key_cmp(const void *a, const void *b) {
+    const lw_key *x = a, *y = b;
+    return x->k < y->k ? -1 : x->k > y->k ? 1 : (x->at > y->at) - (x->at < y->at);
+}
+
+/* The tile's points of a point light in order of their distance to it in
+ * the grid's L-infinity norm (sweep_point), those of one distance at once. */
+static vv_status
+tile_point(const lw_sweep *w, const lw_tile *tl, const int g0[3], const int g1[3]) {
+    const int *gd = w->gd;
+    const size_t bw = (size_t)(g1[0] - g0[0]), bh = (size_t)(g1[1] - g0[1]),
+                 n = bw * bh * (size_t)(g1[2] - g0[2]);
+    lw_key *ord = malloc((n ? n : 1) * sizeof *ord);
+    if (!ord)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for a light volume");
+    for (size_t i = 0; i < n; i++) {
+        const int id[3] = {g0[0] + (int)(i % bw), g0[1] + (int)(i / bw % bh),
+                           g0[2] + (int)(i / (bw * bh))};
+        double k = fabs(w->Lg[0] - (double)id[0]);
+        k = fmax(k, fabs(w->Lg[1] - (double)id[1]));
+        k = fmax(k, fabs(w->Lg[2] - (double)id[2]));
+        ord[i].k = k;
+        ord[i].at = ((size_t)id[2] * (size_t)gd[1] + (size_t)id[1]) * (size_t)gd[0] + (size_t)id[0];
+    }
+    qsort(ord, n, sizeof *ord, lw_key_cmp);
+    for (size_t s0 = 0; s0 < n;) {
+        size_t s1 = s0 + 1;
+        while (s1 < n && ord[s1].k == ord[s0].k)
+            s1++;
+#pragma omp parallel for schedule(dynamic, 64) num_threads(w->nt) if (s1 - s0 >= 256)
+        for (size_t i = s0; i < s1; i++) {
+            const size_t at = ord[i].at;
+            const int id[3] = {(int)(at % (size_t)gd[0]), (int)(at / (size_t)gd[0] % (size_t)gd[1]),
+                               (int)(at / ((size_t)gd[0] * (size_t)gd[1]))};
+            w->T[at] = tile_point_value(w, tl, id);
+        }
+        s0 = s1;
+    }
+    free(ord);
+    return VV_OK;
+}
+
+/* floor(a / b) for b > 0 */
+static inline long
+floor_div(long a, long b) {
+    return a >= 0 ? a / b : -((-a + b - 1) / b);
+}
+
+vv_status
+rt_sweep_whole(const rt_frame *fr, const rt_vobj *ob, int l, int nt, float **out) {
+    const double G = RT_LGRID;
+    const vv_region_volume *wv = ob->whole;
+    *out = NULL;
+    lw_sweep w;
+    memset(&w, 0, sizeof w);
+    w.fr = fr;
+    w.ob = ob;
+    w.lt = &fr->lights[l];
+    w.nt = nt;
+    w.gd = ob->ldim;
+    const int *gd = ob->ldim;
+    const int point = w.lt->point;
+    double L[3]; /* the light in voxel units, where the tiles centre on it */
+    if (point) {
+        for (int a = 0; a < 3; a++) {
+            w.Lg[a] = (ob->w2i[a][0] * w.lt->pos[0] + ob->w2i[a][1] * w.lt->pos[1] +
+                       ob->w2i[a][2] * w.lt->pos[2] + ob->w2i[a][3]) /
+                      G;
+            L[a] = w.Lg[a] * G;
+        }
+        if (!(isfinite(w.Lg[0]) && isfinite(w.Lg[1]) && isfinite(w.Lg[2])))
+            return vv_error_set(VV_ERR_INVALID, "a point light at no finite position");
+    } else {
+        for (int a = 0; a < 3; a++)
+            w.li[a] = ob->w2i[a][0] * w.lt->dir[0] + ob->w2i[a][1] * w.lt->dir[1] +
+                      ob->w2i[a][2] * w.lt->dir[2];
+        for (int a = 1; a < 3; a++)
+            if (fabs(w.li[a]) > fabs(w.li[w.A]))
+                w.A = a;
+        if (!(fabs(w.li[w.A]) > 0))
+            return VV_OK;
+        w.B = (w.A + 1) % 3;
+        w.Cc = (w.A + 2) % 3;
+        w.ldir = v3(w.lt->dir[0], w.lt->dir[1], w.lt->dir[2]);
+        w.seg = G / fabs(w.li[w.A]);
+        w.up = w.li[w.A] > 0 ? 1 : -1;
+        w.first = w.up > 0 ? gd[w.A] - 1 : 0;
+    }
+    /* tiles of TS cells a side (two of the reader's: fewer reads of the
+     * boxes' edges; a multiple of the grid's spacing), from off on each
+     * axis: 0 for a directional light (the reader's own boxes); centred on
+     * a point light, so that no point's way to it crosses a tile face
+     * towards the light's far side */
     int TS = 2 * (wv->tile > 0 ? wv->tile : 64);
     TS = (TS + RT_LGRID - 1) / RT_LGRID * RT_LGRID;
-    int ntile[3];
+    long off[3];
+    int ntile[3], tl[3];
     for (int a = 0; a < 3; a++) {
-        const int cells = ob->dims[a] - 1;
-        ntile[a] = cells > 0 ? (cells + TS - 1) / TS : 1;
+        off[a] = 0;
+        if (point && fabs(L[a]) < 1e9) {
+            const long c = (long)floor(L[a]) - TS / 2;
+            off[a] = c - floor_div(c, TS) * TS; /* in 0 .. TS - 1 */
+            off[a] = off[a] > 0 ? off[a] - TS : 0;
+            off[a] = (off[a] / RT_LGRID) * RT_LGRID; /* tiles start on grid points */
+        }
+        const long span = (long)(gd[a] - 1) * RT_LGRID - off[a];
+        ntile[a] = (int)(span / TS) + 1;
+        if (point) { /* the light's tile (the nearest one when outside) */
+            long t = fabs(L[a]) < 1e9 ? floor_div((long)floor(L[a]) - off[a], TS)
+                                      : (L[a] < 0 ? 0 : ntile[a] - 1);
+            tl[a] = (int)(t < 0 ? 0 : t > ntile[a] - 1 ? ntile[a] - 1 : t);
+        }
     }
+    const size_t ng = (size_t)gd[0] * (size_t)gd[1] * (size_t)gd[2];
     const int n = ntile[0] * ntile[1] * ntile[2];
     int *order = malloc(sizeof(int) * (size_t)n);
     int *rank = malloc(sizeof(int) * (size_t)n);
-    float *T = calloc(ng ? ng : 1, sizeof *T);
+    w.T = calloc(ng ? ng : 1, sizeof *w.T);
     vv_vcache_set *set = malloc(sizeof *set);
-    if (!order || !rank || !T || !set) {
+    if (!order || !rank || !w.T || !set) {
         free(order);
         free(rank);
-        free(T);
+        free(w.T);
         free(set);
         return vv_error_set(VV_ERR_NOMEM, "out of memory for a light volume");
     }
     vv_vcache_set_init(set);
     /* the light's order: by the sum of each tile's distances, in tiles,
-     * from the light's side of every axis (a counting sort, stable) */
+     * from the light's side of every axis (a directional light) or from the
+     * light's tile (a point light; a counting sort, stable) */
     int maxr = 0;
     for (int i = 0; i < n; i++) {
         const int t[3] = {i % ntile[0], i / ntile[0] % ntile[1], i / (ntile[0] * ntile[1])};
         rank[i] = 0;
         for (int a = 0; a < 3; a++)
-            rank[i] += li[a] > 0 ? ntile[a] - 1 - t[a] : t[a];
+            rank[i] += point ? abs(t[a] - tl[a]) : w.li[a] > 0 ? ntile[a] - 1 - t[a] : t[a];
         maxr = rank[i] > maxr ? rank[i] : maxr;
     }
     int k = 0;
@@ -205,21 +436,33 @@ rt_sweep_whole(const rt_frame *fr, const rt_vobj *ob, int l, int nt, float **out
         int g0[3], g1[3], lo[3], hi[3];
         int empty = 0;
         for (int a = 0; a < 3; a++) {
-            const int last = t[a] == ntile[a] - 1, x0 = t[a] * TS;
-            /* the grid points x0 <= id G < x0 + TS (the last tile: every one from x0) */
-            g0[a] = (x0 + RT_LGRID - 1) / RT_LGRID;
-            g1[a] = last ? gd[a] : (x0 + TS + RT_LGRID - 1) / RT_LGRID;
+            const int last = t[a] == ntile[a] - 1;
+            const long x0 = off[a] + (long)t[a] * TS, x1 = x0 + TS;
+            /* the grid points x0 <= id G < x1 (the last tile: every one from x0) */
+            g0[a] = x0 > 0 ? (int)((x0 + RT_LGRID - 1) / RT_LGRID) : 0;
+            g1[a] = last ? gd[a] : (int)((x1 + RT_LGRID - 1) / RT_LGRID);
+            g1[a] = g1[a] < gd[a] ? g1[a] : gd[a];
             empty |= g0[a] >= g1[a];
             /* its voxels, and those its samples reach towards the light */
-            int v0 = x0, v1 = last ? ob->dims[a] - 1 : x0 + TS;
-            if (li[a] > 0)
-                v1 += RT_LGRID + 1;
-            else if (li[a] < 0)
-                v0 -= RT_LGRID + 1;
-            else
+            long v0 = x0 > 0 ? x0 : 0, v1 = last ? ob->dims[a] - 1 : x1;
+            const int reach = RT_LGRID + 1;
+            if (point) {
+                if (L[a] >= v0)
+                    v1 += reach;
+                if (L[a] <= v1)
+                    v0 -= reach;
+            } else if (w.li[a] > 0) {
+                v1 += reach;
+            } else if (w.li[a] < 0) {
+                v0 -= reach;
+            } else {
                 v1 += 1;
-            lo[a] = v0 < 0 ? 0 : v0;
-            hi[a] = v1 > ob->dims[a] - 1 ? ob->dims[a] - 1 : v1;
+            }
+            /* within the volume, and at least its last cell for a tile of
+             * the grid's points past it (their samples clamp to it) */
+            lo[a] = (int)(v0 < 0 ? 0 : v0 > ob->dims[a] - 2 ? ob->dims[a] - 2 : v0);
+            hi[a] = (int)(v1 > ob->dims[a] - 1 ? ob->dims[a] - 1 : v1);
+            hi[a] = hi[a] > lo[a] ? hi[a] : lo[a] + 1;
         }
         if (empty)
             continue;
@@ -228,63 +471,23 @@ rt_sweep_whole(const rt_frame *fr, const rt_vobj *ob, int l, int nt, float **out
         s = wv->read_box(wv->user, lo, hi, &box);
         if (s == VV_OK)
             s = vv_vcache_get(set, box, &c);
-        if (s != VV_OK) {
-            vv_volume_free(box);
-            break;
-        }
-        const lw_tile tl = {c, {(float)lo[0], (float)lo[1], (float)lo[2]}};
-        const int nlay = g1[A] - g0[A];
-        const int bw = g1[B] - g0[B], cw = g1[Cc] - g0[Cc];
-        for (int m = 0; m < nlay; m++) {
-            const int la = up > 0 ? g1[A] - 1 - m : g0[A] + m;
-#pragma omp parallel for schedule(dynamic, 16) num_threads(nt)
-            for (int bc = 0; bc < bw * cw; bc++) {
-                int id[3];
-                id[A] = la;
-                id[B] = g0[B] + bc % bw;
-                id[Cc] = g0[Cc] + bc / bw;
-                const double p[3] = {id[0] * G, id[1] * G, id[2] * G};
-                const vv_vec3 wp = lw_index_to_world(ob, p);
-                float tv = -1;
-                if (la != first) {
-                    const double qb = (p[B] + li[B] * seg) / G, qc = (p[Cc] + li[Cc] * seg) / G;
-                    if (qb >= 0 && qb <= nb - 1 && qc >= 0 && qc <= nc - 1) {
-                        int ib = (int)qb, ic = (int)qc;
-                        ib = ib > nb - 2 ? nb - 2 : ib;
-                        ic = ic > nc - 2 ? nc - 2 : ic;
-                        const float fb = (float)(qb - ib), fc = (float)(qc - ic);
-                        float v[4];
-                        for (int q = 0; q < 4; q++) {
-                            int at[3];
-                            at[A] = la + up;
-                            at[B] = ib + (q & 1);
-                            at[Cc] = ic + (q >> 1);
-                            v[q] =
-                                T[((size_t)at[2] * (size_t)gd[1] + (size_t)at[1]) * (size_t)gd[0] +
-                                  (size_t)at[0]];
-                        }
-                        const float tq =
-                            vv_lerpf(vv_lerpf(v[0], v[1], fb), vv_lerpf(v[2], v[3], fb), fc);
-                        tv = tq <= 0 ? 0.0f : tq * expf(-tile_depth(ob, &tl, p, li, seg, wp, ldir));
-                    }
-                }
-                if (tv < 0)
-                    tv = tile_march(fr, ob, &tl, wp, ldir);
-                T[((size_t)id[2] * (size_t)gd[1] + (size_t)id[1]) * (size_t)gd[0] + (size_t)id[0]] =
-                    tv;
-            }
+        if (s == VV_OK) {
+            const lw_tile tile = {c, {(float)lo[0], (float)lo[1], (float)lo[2]}};
+            if (point)
+                s = tile_point(&w, &tile, g0, g1);
+            else
+                tile_directional(&w, &tile, g0, g1);
         }
         vv_vcache_set_clear(set);
         vv_volume_free(box);
     }
-    vv_vcache_set_clear(set);
     free(set);
     free(order);
     free(rank);
     if (s != VV_OK) {
-        free(T);
+        free(w.T);
         return s;
     }
-    *out = T;
+    *out = w.T;
     return VV_OK;
 }
