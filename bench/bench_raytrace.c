@@ -22,7 +22,9 @@
  * the volume's file read).
  *
  * usage: bench_raytrace [SCENE] [--size N] [--runs N] [--threads N]
- *                       [--max-depth N] [--outdir DIR]
+ *                       [--max-depth N] [--set NAME=VALUE ...] [--outdir DIR]
+ * (--set: a ray-tracer option for all its renders, e.g. shadows=0 for the
+ * floor without shadows)
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -69,6 +71,8 @@ int
 main(int argc, char **argv) {
     const char *scene = "examples/head_mirror.json", *outdir = NULL, *depth = "1";
     int size = 512, runs = 3, threads = 2;
+    const char *sets[16];
+    int nsets = 0;
     for (int i = 1; i < argc; i++) {
         if (strcmp(argv[i], "--size") == 0 && i + 1 < argc)
             size = atoi(argv[++i]);
@@ -80,11 +84,13 @@ main(int argc, char **argv) {
             depth = argv[++i];
         else if (strcmp(argv[i], "--outdir") == 0 && i + 1 < argc)
             outdir = argv[++i];
+        else if (strcmp(argv[i], "--set") == 0 && i + 1 < argc && nsets < 16)
+            sets[nsets++] = argv[++i];
         else if (argv[i][0] != '-')
             scene = argv[i];
         else {
             fprintf(stderr, "usage: bench_raytrace [SCENE] [--size N] [--runs N] [--threads N] "
-                            "[--max-depth N] [--outdir DIR]\n");
+                            "[--max-depth N] [--set NAME=VALUE ...] [--outdir DIR]\n");
             return 2;
         }
     }
@@ -113,6 +119,18 @@ main(int argc, char **argv) {
             vv_renderer_set_option(all[i], "parc", i == 1 ? "0" : "1") != VV_OK ||
             vv_renderer_set_option(all[i], "refinement", i == 2 ? "auto" : "off") != VV_OK)
             bench_die("bench_raytrace", "option");
+    /* the ray tracers' other options (--set: floors, e.g. shadows=0) */
+    for (int k = 0; k < nsets; k++) {
+        char name[64];
+        const char *eq = strchr(sets[k], '=');
+        if (!eq || eq == sets[k] || (size_t)(eq - sets[k]) >= sizeof name)
+            bench_die("bench_raytrace", "--set takes NAME=VALUE");
+        memcpy(name, sets[k], (size_t)(eq - sets[k]));
+        name[eq - sets[k]] = 0;
+        for (int i = 0; i < 3; i++)
+            if (vv_renderer_set_option(all[i], name, eq + 1) != VV_OK)
+                bench_die("bench_raytrace", sets[k]);
+    }
     /* one ray a pixel like the ray tracer's (the ray caster refines
      * composite frames at quality 2 by default) */
     if (vv_renderer_set_option(rc, "refinement", "off") != VV_OK)

@@ -220,6 +220,19 @@ test_renderers(void **state) {
     assert_true(isinf(mem_vs_ooc(head, hvvb, "raycast", "xray", "simd=1", "100:1500")));
 }
 
+/* The CT head @p head converted to @p tag.vvb and @p tag.ome.zarr (each
+ * path 1200 bytes), and the paths of the images in memory and out of
+ * core. */
+static void
+head_stores(const char *head, const char *tag, char *vvb, char *zarr, char *mem, char *ooc) {
+    snprintf(vvb, 1200, "%s/head_%s.vvb", outdir(), tag);
+    snprintf(zarr, 1200, "%s/head_%s.ome.zarr", outdir(), tag);
+    snprintf(mem, 1200, "%s/%s_mem.png", outdir(), tag);
+    snprintf(ooc, 1200, "%s/%s_ooc.png", outdir(), tag);
+    cli_ok("convert", "-q", head, vvb);
+    cli_ok("convert", "-q", head, zarr);
+}
+
 /* Exact ray-traced shadows out of core: the CT head seen (and lit by the
  * headlight) from an oblique direction, read by bricks from a .vvb whose
  * proxy is 4x coarser and by boxes of level 0 from an OME-Zarr pyramid
@@ -239,12 +252,7 @@ test_exact_shadows(void **state) {
     if (!vt_have_data("volumes/ct_head.nrrd"))
         vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
     char vvb[1200], zarr[1200], mem[1200], ooc[1200];
-    snprintf(vvb, sizeof vvb, "%s/head_s.vvb", outdir());
-    snprintf(zarr, sizeof zarr, "%s/head_s.ome.zarr", outdir());
-    snprintf(mem, sizeof mem, "%s/shadows_mem.png", outdir());
-    snprintf(ooc, sizeof ooc, "%s/shadows_ooc.png", outdir());
-    cli_ok("convert", "-q", head, vvb);
-    cli_ok("convert", "-q", head, zarr);
+    head_stores(head, "shadows", vvb, zarr, mem, ooc);
 #define SHADOW_VIEW                                                                                \
     "--renderer", "raytrace", "--quality", "1", "--tf", "100:1500", "--azimuth", "35",             \
         "--elevation", "25", "--size", "96x80", "-q"
@@ -324,12 +332,7 @@ test_quality2(void **state) {
     if (!vt_have_data("volumes/ct_head.nrrd"))
         vt_skip("../shared/data/volumes/ct_head.nrrd is missing");
     char vvb[1200], zarr[1200], mem[1200], ooc[1200];
-    snprintf(vvb, sizeof vvb, "%s/head_q.vvb", outdir());
-    snprintf(zarr, sizeof zarr, "%s/head_q.ome.zarr", outdir());
-    snprintf(mem, sizeof mem, "%s/q2_mem.png", outdir());
-    snprintf(ooc, sizeof ooc, "%s/q2_ooc.png", outdir());
-    cli_ok("convert", "-q", head, vvb);
-    cli_ok("convert", "-q", head, zarr);
+    head_stores(head, "q2", vvb, zarr, mem, ooc);
     const char *modes[] = {"mip", "composite"};
     for (int m = 0; m < 2; m++) {
 #define Q2_VIEW                                                                                    \

@@ -393,7 +393,8 @@ rt_region_supersample(const void *ctx, const vv_image *first, vv_region_rays *ra
             for (int k = 0; k < 4 && !differs; k++) {
                 if (nb[k][0] < 0 || nb[k][0] >= W || nb[k][1] < 0 || nb[k][1] >= H)
                     continue;
-                const float *q = first->rgba + 4 * ((size_t)nb[k][1] * (size_t)W + (size_t)nb[k][0]);
+                const float *q =
+                    first->rgba + 4 * ((size_t)nb[k][1] * (size_t)W + (size_t)nb[k][0]);
                 for (int ch = 0; ch < 4; ch++)
                     differs |= fabsf(q[ch] - c[ch]) > thr;
             }
@@ -606,7 +607,7 @@ prepare_frame(rt_frame *fr, const vv_world *w, const vv_view *view, const vv_ren
     }
     /* light volumes of the lights through composite volumes that cast
      * shadows (a region's context: through its whole volume where it can,
-     * rt_light_whole.c), then the shadow grids, now that every object is
+     * rt_light.c), then the shadow grids, now that every object is
      * ready */
     if (s == VV_OK)
         rt_context_whole(fr, region);

@@ -184,7 +184,7 @@ typedef struct rt_vobj {
     const vv_render_region *region; /* the region part: its region, else NULL */
     int context;                    /* the context: shadows only */
     /* a context whose light volumes are swept through the region's whole
-     * volume (region->whole, rt_light_whole.c): its geometry is then the
+     * volume (region->whole, rt_light.c): its geometry is then the
      * whole volume's, and whole_part (the region part) lends the tables */
     const vv_region_volume *whole;
     const struct rt_vobj *whole_part;
@@ -409,13 +409,40 @@ vv_status rt_build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt);
  * part's geometry (the whole volume's index space). */
 int rt_context_whole(rt_frame *fr, const vv_render_region *region);
 
-/* The light volume of light l through the whole volume of a region
- * render (ob->whole), swept tile by tile in the light's order: the values
- * sweep_grid (directional) or sweep_point (point) give the in-memory
- * volume, the tiles read by boxes (a box a tile, with the voxels its
- * samples reach towards the light). *out: ob->ldim points, malloc'd.
- * Errors: those of the reads, VV_ERR_NOMEM. */
-vv_status rt_sweep_whole(const rt_frame *fr, const rt_vobj *ob, int l, int nt, float **out);
+/* The light volume of light l for volume ob (rt_light.c): swept from the
+ * light's side (directional) or in order of distance to it (point), from
+ * the volume in memory, or for a region render's context tile by tile in
+ * the light's order through its whole volume (ob->whole), the tiles read by
+ * boxes, with the same values. *out: ob->ldim points, malloc'd; NULL when
+ * there is nothing to sweep (then shadow rays march). Errors: those of the
+ * reads, VV_ERR_NOMEM. */
+vv_status rt_sweep_light_volume(const rt_frame *fr, const rt_vobj *ob, int l, int nt, float **out);
+
+/* The swept shadow grid of directional light l for ob's samples
+ * (shadow_grid=2, every RT_SGRID voxels, ob->gdim points): the same sweep
+ * through every object that casts shadows (rt_shadow_segment). *out
+ * malloc'd, NULL for a point light. Errors: VV_ERR_NOMEM. */
+vv_status rt_sweep_shadow_grid(const rt_frame *fr, const rt_vobj *ob, int l, int nt, float **out);
+
+/* Transmittance from world point p towards light l over [start, limit]
+ * world units from p (limit INFINITY: up to the light), past every object
+ * that casts shadows (rt_shade.c). */
+float rt_shadow_segment(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start,
+                        double limit);
+
+/* A composite volume's transmittance along ray r (index space of ob),
+ * exp(-sum sigma h): each subvolume's piece cut into equal parts no longer
+ * than the shadow step, sampled at their middles and classified by tab's
+ * tables. From ob's own cache @p c (o NULL: it leaps over the subvolumes
+ * that cannot contribute, by ob's PARC flags and distances) or from the
+ * cache @p c of a box whose voxel (0, 0, 0) is index point o (every
+ * subvolume). */
+float rt_composite_march(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r,
+                         const vv_vcache *c, const float o[3], const rt_vobj *tab);
+
+/* Volume ob's own transmittance from world point wp along ldir over (0,
+ * tmax), marched through its samples (rt_shade.c). */
+float rt_volume_march(const rt_frame *fr, const rt_vobj *ob, vv_vec3 wp, vv_vec3 ldir, double tmax);
 
 /* The shadows rt_shade_volume gives a sample of object @p o (its lead) at
  * index point @p pi, world point @p pw: each light's transmittance into

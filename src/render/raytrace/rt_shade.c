@@ -1,8 +1,9 @@
 /*
  * Volumetric ray tracing, lighting: shadow rays through geometry and
- * volumes, the lazily filled shadow grids of volume samples and the light
- * volumes, and Phong shading with those shadows for volume samples and
- * geometric surfaces (with the reflected and transmitted rays they spawn).
+ * volumes, the lazily filled shadow grids of volume samples, the light
+ * volumes' cache and lookups (their sweeps: rt_light.c), and Phong shading
+ * with those shadows for volume samples and geometric surfaces (with the
+ * reflected and transmitted rays they spawn).
  */
 #include <float.h>
 #include <math.h>
@@ -54,6 +55,44 @@ light_volume_at(const rt_vobj *ob, int l, const float p[3], float r) {
     return vv_lerpf(vv_lerpf(x0, x1, f[1]), vv_lerpf(x2, x3, f[1]), f[2]);
 }
 
+float
+rt_composite_march(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_vcache *c,
+                   const float o[3], const rt_vobj *tab) {
+    /* exp(-sum sigma h): each visible subvolume's piece of the ray is cut
+     * into equal parts no longer than dt, sampled at their midpoints */
+    const double dt = fr->dt;
+    const double ds = 2 * ob->vox > dt ? 2 * ob->vox : dt; /* shadows are smooth */
+    const float z[3] = {0, 0, 0};
+    const float *off = o ? o : z;
+    double tau = 0;
+    double t = r->t0;
+    while (t < r->t1) {
+        float p[3];
+        vv_vray_point(r, t, p);
+        /* in memory, the PARC flags and distances; through a box, every subvolume */
+        const size_t b = o ? 0 : vv_vcache_block(c, p);
+        double te = !o && ob->bdist[b] ? leap_exit(ob, r, p, t, ob->bdist[b]) : block_exit(r, p, t);
+        te = te < r->t1 ? te : r->t1;
+        if (o || ob->bvis[b]) {
+            const double len = te - t;
+            int n = (int)vv_ceil_pos(len / ds);
+            n = n < 1 ? 1 : n;
+            const double h = len / n;
+            for (int s = 0; s < n; s++) {
+                float q[3];
+                vv_vray_point(r, t + (s + 0.5) * h, q);
+                for (int a = 0; a < 3; a++)
+                    q[a] -= off[a];
+                tau += tab->ext[(int)lut_index_f(tab, vv_vcache_sample(c, q))] * h;
+            }
+            if (tau > 5.6) /* T < 0.0037, under one 8-bit level */
+                return 0.0f;
+        }
+        t = te;
+    }
+    return (float)exp(-tau);
+}
+
 /* Transmittance of one volume along the world ray over (tmin, tmax).
  * light >= 0: the ray is a whole shadow ray towards that light (tmax
  * infinite for a directional light, the light's distance for a point
@@ -75,35 +114,8 @@ volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, do
                 : 0.0f;
         return light_volume_at(ob, light, r.o, dist);
     }
-    if (ob->mode == VV_MODE_COMPOSITE) {
-        /* exp(-sum sigma h): each visible subvolume's piece of the ray is cut
-         * into equal parts no longer than dt, sampled at their midpoints */
-        double tau = 0;
-        double t = r.t0;
-        const double ds = 2 * ob->vox > dt ? 2 * ob->vox : dt; /* shadows are smooth */
-        while (t < r.t1) {
-            float p[3];
-            vv_vray_point(&r, t, p);
-            const size_t b = vv_vcache_block(ob->c, p);
-            double te = ob->bdist[b] ? leap_exit(ob, &r, p, t, ob->bdist[b]) : block_exit(&r, p, t);
-            te = te < r.t1 ? te : r.t1;
-            if (ob->bvis[b]) {
-                const double len = te - t;
-                int n = (int)vv_ceil_pos(len / ds);
-                n = n < 1 ? 1 : n;
-                const double h = len / n;
-                for (int s = 0; s < n; s++) {
-                    float q[3];
-                    vv_vray_point(&r, t + (s + 0.5) * h, q);
-                    tau += ob->ext[(int)lut_index_f(ob, vv_vcache_sample(c, q))] * h;
-                }
-                if (tau > 5.6) /* T < 0.0037, under one 8-bit level */
-                    return 0.0f;
-            }
-            t = te;
-        }
-        return (float)exp(-tau);
-    }
+    if (ob->mode == VV_MODE_COMPOSITE)
+        return rt_composite_march(fr, ob, &r, c, NULL, ob);
     if (ob->mode == VV_MODE_ISO) {
         /* blocked where the ray is inside the surface (value >= isovalue) */
         double t = r.t0;
@@ -152,8 +164,8 @@ volume_transmittance(const rt_frame *fr, const rt_vobj *ob, const vv_ray *wr, do
 /* Transmittance from world point p towards light l over [start, limit]
  * world units from p (limit INFINITY: up to the light), past every object
  * that casts shadows. */
-static float
-shadow_segment(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start, double limit) {
+float
+rt_shadow_segment(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start, double limit) {
     vv_ray r;
     double tmax;
     if (l->point) {
@@ -188,9 +200,14 @@ shadow_segment(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start, d
     return T;
 }
 
+float
+rt_volume_march(const rt_frame *fr, const rt_vobj *ob, vv_vec3 wp, vv_vec3 ldir, double tmax) {
+    return volume_transmittance(fr, ob, &(vv_ray){wp, ldir}, 0, tmax, -1);
+}
+
 static float
 shadow_ray(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start) {
-    return shadow_segment(fr, p, l, start, INFINITY);
+    return rt_shadow_segment(fr, p, l, start, INFINITY);
 }
 
 static inline vv_vec3
@@ -200,294 +217,12 @@ index_to_world(const rt_vobj *ob, const double q[3]) {
               ob->i2w[2][0] * q[0] + ob->i2w[2][1] * q[1] + ob->i2w[2][2] * q[2] + ob->i2w[2][3]);
 }
 
-/* A composite volume's own optical depth over the segment of world length
- * seg from index point p (world wp) along the index direction li (world
- * direction ldir): one sample at its middle, sigma seg; 0 where the middle
- * is outside the volume, cut away or in a subvolume that cannot
- * contribute. */
-static float
-own_depth(const rt_vobj *ob, const double p[3], const double li[3], double seg, vv_vec3 wp,
-          vv_vec3 ldir) {
-    float q[3];
-    for (int a = 0; a < 3; a++) {
-        q[a] = (float)(p[a] + li[a] * seg * 0.5);
-        if (!(q[a] >= 0 && q[a] <= (float)(ob->dims[a] - 1)))
-            return 0.0f;
-    }
-    if (!ob->bvis[vv_vcache_block(ob->c, q)])
-        return 0.0f;
-    if (ob->n_planes) {
-        const vv_vec3 wm = v3add(wp, v3scale(ldir, 0.5 * seg));
-        for (int i = 0; i < ob->n_planes; i++)
-            if (vv_plane_distance(ob->planes[i], wm) < 0)
-                return 0.0f;
-    }
-    return ob->ext[(int)lut_index_f(ob, vv_vcache_sample(ob->c, q))] * (float)seg;
-}
-
-/* Its transmittance, exp(-own_depth). */
-static float
-own_segment(const rt_vobj *ob, const double p[3], const double li[3], double seg, vv_vec3 wp,
-            vv_vec3 ldir) {
-    return expf(-own_depth(ob, p, li, seg, wp, ldir));
-}
-
-/* The shadow grid of a directional light, swept layer by layer from the
- * light's side (a light volume): a grid point's transmittance is that of
- * the point one layer towards the light (bilinear in that layer) times the
- * transmittance of the segment between them (shadow_segment: this volume,
- * the other volumes and geometry). The first layer, and points whose
- * upstream point leaves the grid, trace a whole shadow ray. */
-static vv_status
-sweep_grid(const rt_frame *fr, const rt_vobj *ob, int l, int nt, double G, const int *gd, int own,
-           float **out) {
-    const rt_light *lt = &fr->lights[l];
-    *out = NULL;
-    double li[3];
-    for (int a = 0; a < 3; a++)
-        li[a] =
-            ob->w2i[a][0] * lt->dir[0] + ob->w2i[a][1] * lt->dir[1] + ob->w2i[a][2] * lt->dir[2];
-    int A = 0;
-    for (int a = 1; a < 3; a++)
-        if (fabs(li[a]) > fabs(li[A]))
-            A = a;
-    if (!(fabs(li[A]) > 0))
-        return VV_OK;
-    const int B = (A + 1) % 3, Cc = (A + 2) % 3;
-    const vv_vec3 ldir = v3(lt->dir[0], lt->dir[1], lt->dir[2]);
-    const size_t ng = (size_t)gd[0] * (size_t)gd[1] * (size_t)gd[2];
-    float *T = malloc(ng * sizeof *T);
-    if (!T)
-        return vv_error_set(VV_ERR_NOMEM, "out of memory for a shadow grid");
-    const double seg = G / fabs(li[A]);
-    const int up = li[A] > 0 ? 1 : -1; /* the layer towards the light */
-    const int first = up > 0 ? gd[A] - 1 : 0;
-    const int nb = gd[B], nc = gd[Cc];
-    for (int n = 0; n < gd[A]; n++) {
-        const int la = first - up * n;
-#pragma omp parallel for schedule(dynamic, 16) num_threads(nt)
-        for (int bc = 0; bc < nb * nc; bc++) {
-            int id[3];
-            id[A] = la;
-            id[B] = bc % nb;
-            id[Cc] = bc / nb;
-            const double p[3] = {id[0] * G, id[1] * G, id[2] * G};
-            const vv_vec3 wp = index_to_world(ob, p);
-            float t = -1;
-            if (n > 0) {
-                const double qb = (p[B] + li[B] * seg) / G, qc = (p[Cc] + li[Cc] * seg) / G;
-                if (qb >= 0 && qb <= nb - 1 && qc >= 0 && qc <= nc - 1) {
-                    int ib = (int)qb, ic = (int)qc;
-                    ib = ib > nb - 2 ? nb - 2 : ib;
-                    ic = ic > nc - 2 ? nc - 2 : ic;
-                    const float fb = (float)(qb - ib), fc = (float)(qc - ic);
-                    float v[4];
-                    for (int k = 0; k < 4; k++) {
-                        int q[3];
-                        q[A] = la + up;
-                        q[B] = ib + (k & 1);
-                        q[Cc] = ic + (k >> 1);
-                        v[k] = T[((size_t)q[2] * (size_t)gd[1] + (size_t)q[1]) * (size_t)gd[0] +
-                                 (size_t)q[0]];
-                    }
-                    const float tq =
-                        vv_lerpf(vv_lerpf(v[0], v[1], fb), vv_lerpf(v[2], v[3], fb), fc);
-                    t = tq <= 0 ? 0.0f
-                        : own   ? tq * own_segment(ob, p, li, seg, wp, ldir)
-                                : tq * shadow_segment(fr, wp, lt, 0, seg);
-                }
-            }
-            if (t < 0)
-                t = own ? volume_transmittance(fr, ob, &(vv_ray){wp, ldir}, 0, INFINITY, -1)
-                        : shadow_ray(fr, wp, lt, 0);
-            T[((size_t)id[2] * (size_t)gd[1] + (size_t)id[1]) * (size_t)gd[0] + (size_t)id[0]] = t;
-        }
-    }
-    *out = T;
-    return VV_OK;
-}
-
-/* Sorts n (key, index) pairs by key (non-negative doubles, whose bits
- * order as unsigned integers): least significant digit first, 16 bits a
- * pass. tmp: room for n more. Returns 0 when out of memory. */
-typedef struct rt_kidx {
-    uint64_t key;
-    uint32_t idx;
-} rt_kidx;
-
-static int
-radix_sort(rt_kidx *a, rt_kidx *tmp, size_t n) {
-    size_t *count = malloc(65536 * sizeof *count);
-    if (!count)
-        return 0;
-    for (int pass = 0; pass < 4; pass++) {
-        const int shift = 16 * pass;
-        memset(count, 0, 65536 * sizeof *count);
-        for (size_t i = 0; i < n; i++)
-            count[(a[i].key >> shift) & 0xFFFF]++;
-        size_t sum = 0;
-        for (int d = 0; d < 65536; d++) {
-            const size_t c = count[d];
-            count[d] = sum;
-            sum += c;
-        }
-        for (size_t i = 0; i < n; i++)
-            tmp[count[(a[i].key >> shift) & 0xFFFF]++] = a[i];
-        rt_kidx *t = a;
-        a = tmp;
-        tmp = t;
-    }
-    free(count); /* four passes: the result is back in the caller's array */
-    return 1;
-}
-
-/* One point of a point light's light volume (sweep_point): the mean
- * extinction of the way to the light, tau / r (r its world length), which
- * is constant in a constant medium (where the transmittance, exp(-sigma r),
- * is curved across the grid and bilinear interpolation would bias it).
- * tau: that of the point one grid layer nearer the light (bilinear in its
- * layer from points strictly nearer the light, as light_volume_at
- * interpolates) plus the segment's; within a layer of the light, the
- * segment to the light itself; where the nearer point leaves the grid, a
- * whole ray through this volume. */
-static float
-point_lv_value(const rt_frame *fr, const rt_vobj *ob, const rt_light *lt, double G, const int *gd,
-               const double Lg[3], const float *S, const int id[3]) {
-    const double p[3] = {id[0] * G, id[1] * G, id[2] * G};
-    const vv_vec3 wp = index_to_world(ob, p);
-    const vv_vec3 lp = v3(lt->pos[0], lt->pos[1], lt->pos[2]);
-    const vv_vec3 to = v3sub(lp, wp);
-    const double dist = v3len(to);
-    if (!(dist > 0))
-        return 0.0f;
-    const vv_vec3 ldir = v3scale(to, 1 / dist);
-    double d[3];
-    int A = 0;
-    for (int a = 0; a < 3; a++) {
-        d[a] = Lg[a] - id[a];
-        if (fabs(d[a]) > fabs(d[A]))
-            A = a;
-    }
-    const double k = fabs(d[A]);
-    double li[3]; /* index-space direction per world unit */
-    for (int a = 0; a < 3; a++)
-        li[a] = d[a] * G / dist;
-    double tau;
-    const int B = (A + 1) % 3, Cc = (A + 2) % 3;
-    const int la = id[A] + (d[A] > 0 ? 1 : -1);
-    const double qb = id[B] + d[B] / (k > 0 ? k : 1), qc = id[Cc] + d[Cc] / (k > 0 ? k : 1);
-    if (k <= 1) { /* the light is within a layer: the segment to it */
-        tau = own_depth(ob, p, li, dist, wp, ldir);
-    } else if (la < 0 || la > gd[A] - 1 || !(qb >= 0 && qb <= gd[B] - 1) ||
-               !(qc >= 0 && qc <= gd[Cc] - 1)) {
-        const float T = volume_transmittance(fr, ob, &(vv_ray){wp, ldir}, 0, dist, -1);
-        tau = T > 0 ? -log(T) : INFINITY;
-    } else {
-        const int ib = (int)qb, ic = (int)qc;
-        const float fb = (float)(qb - ib), fc = (float)(qc - ic);
-        /* a neighbour of weight 0 may be as far from the light as this
-         * point: not read */
-        float v[4] = {0, 0, 0, 0};
-        for (int m = 0; m < 4; m++) {
-            if (((m & 1) && fb == 0) || ((m >> 1) && fc == 0))
-                continue;
-            int q[3];
-            q[A] = la;
-            q[B] = ib + (m & 1);
-            q[Cc] = ic + (m >> 1);
-            v[m] = S[((size_t)q[2] * (size_t)gd[1] + (size_t)q[1]) * (size_t)gd[0] + (size_t)q[0]];
-        }
-        const double seg = dist / k; /* world length of one layer towards the light */
-        /* each neighbour's transmittance over the nearer point's distance
-         * (light_volume_at), interpolated */
-        for (int m = 0; m < 4; m++)
-            v[m] = expf(-v[m] * (float)(dist - seg));
-        const double tq = vv_lerpf(vv_lerpf(v[0], v[1], fb), vv_lerpf(v[2], v[3], fb), fc);
-        tau = (tq > 0 ? -log(tq) : INFINITY) + own_depth(ob, p, li, seg, wp, ldir);
-    }
-    const double s = tau / dist;
-    return (float)(s < FLT_MAX ? s : FLT_MAX);
-}
-
-/* The light volume of a point light: the volume's own mean extinction on
- * the way from every grid point to the light (point_lv_value; the
- * transmittance is exp(-value r), r the distance to the light). The light's rays diverge, so there
- * are no fixed layers to sweep; instead each point looks one grid layer towards the light along the
- * axis on which the light is farthest (its distance k in that axis, in grid units: the point's
- * L-infinity distance to the light), where the point it reaches and its bilinear neighbours are all
- * strictly nearer the light in that distance. The points are therefore
- * computed in order of k, the points of equal k in parallel (each depends
- * only on earlier ones: any thread count gives the same values). */
-static vv_status
-sweep_point(const rt_frame *fr, const rt_vobj *ob, int l, int nt, double G, const int *gd,
-            float **out) {
-    const rt_light *lt = &fr->lights[l];
-    *out = NULL;
-    double Lg[3];
-    for (int a = 0; a < 3; a++)
-        Lg[a] = (ob->w2i[a][0] * lt->pos[0] + ob->w2i[a][1] * lt->pos[1] +
-                 ob->w2i[a][2] * lt->pos[2] + ob->w2i[a][3]) /
-                G;
-    if (!(isfinite(Lg[0]) && isfinite(Lg[1]) && isfinite(Lg[2])))
-        return VV_OK;
-    const size_t ng = (size_t)gd[0] * (size_t)gd[1] * (size_t)gd[2];
-    if (ng > UINT32_MAX)
-        return VV_OK; /* shadow rays then march */
-    float *S = malloc(ng * sizeof *S);
-    rt_kidx *ord = malloc(2 * ng * sizeof *ord);
-    size_t *starts = malloc((ng + 1) * sizeof *starts);
-    if (!S || !ord || !starts) {
-        free(S);
-        free(ord);
-        free(starts);
-        return vv_error_set(VV_ERR_NOMEM, "out of memory for a light volume");
-    }
-#pragma omp parallel for schedule(static) num_threads(nt)
-    for (size_t i = 0; i < ng; i++) {
-        const size_t ix = i % (size_t)gd[0], iy = i / (size_t)gd[0] % (size_t)gd[1],
-                     iz = i / ((size_t)gd[0] * (size_t)gd[1]);
-        double k = fabs(Lg[0] - (double)ix);
-        k = fmax(k, fabs(Lg[1] - (double)iy));
-        k = fmax(k, fabs(Lg[2] - (double)iz));
-        uint64_t bits;
-        memcpy(&bits, &k, sizeof bits);
-        ord[i].key = bits;
-        ord[i].idx = (uint32_t)i;
-    }
-    if (!radix_sort(ord, ord + ng, ng)) {
-        free(S);
-        free(ord);
-        free(starts);
-        return vv_error_set(VV_ERR_NOMEM, "out of memory for a light volume");
-    }
-    size_t nb = 0;
-    for (size_t i = 0; i < ng; i++)
-        if (i == 0 || ord[i].key != ord[i - 1].key)
-            starts[nb++] = i;
-    starts[nb] = ng;
-    for (size_t b = 0; b < nb; b++) {
-        const size_t s0 = starts[b], s1 = starts[b + 1];
-#pragma omp parallel for schedule(dynamic, 64) num_threads(nt) if (s1 - s0 >= 256)
-        for (size_t i = s0; i < s1; i++) {
-            const size_t at = ord[i].idx;
-            const int id[3] = {(int)(at % (size_t)gd[0]), (int)(at / (size_t)gd[0] % (size_t)gd[1]),
-                               (int)(at / ((size_t)gd[0] * (size_t)gd[1]))};
-            S[at] = point_lv_value(fr, ob, lt, G, gd, Lg, S, id);
-        }
-    }
-    free(ord);
-    free(starts);
-    *out = S;
-    return VV_OK;
-}
-
 /* The shadow grid of directional light l for the volume's own samples
  * (shadow_grid=2): swept through every object that casts shadows, unless
  * ob->sweep[l] holds one kept from an earlier frame. */
 vv_status
 rt_sweep_light(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
-    vv_status s =
-        ob->sweep[l] ? VV_OK : sweep_grid(fr, ob, l, nt, RT_SGRID, ob->gdim, 0, &ob->sweep[l]);
+    vv_status s = ob->sweep[l] ? VV_OK : rt_sweep_shadow_grid(fr, ob, l, nt, &ob->sweep[l]);
     for (int a = 0; a < 3; a++)
         ob->lidx[l][a] =
             (float)(ob->w2i[a][0] * fr->lights[l].dir[0] + ob->w2i[a][1] * fr->lights[l].dir[1] +
@@ -541,10 +276,7 @@ rt_build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
             ob->lvol[l] = st->lv[i].T;
             return VV_OK;
         }
-    vv_status s = ob->whole ? rt_sweep_whole(fr, ob, l, nt, &ob->lvol[l])
-                  : fr->lights[l].point
-                      ? sweep_point(fr, ob, l, nt, RT_LGRID, ob->ldim, &ob->lvol[l])
-                      : sweep_grid(fr, ob, l, nt, RT_LGRID, ob->ldim, 1, &ob->lvol[l]);
+    vv_status s = rt_sweep_light_volume(fr, ob, l, nt, &ob->lvol[l]);
     if (s != VV_OK || !ob->lvol[l])
         return s;
     /* keep it: in a free slot, else in place of the least recently used one

@@ -1,10 +1,12 @@
 /*
- * Volumetric ray tracing, out of core: the light volumes of a region
- * render's context swept through the whole volume (vv_render_region.whole)
- * rather than through the World's coarse proxy, so that the shadows of a
- * volume rendered brick by brick are those of the in-memory render.
+ * Volumetric ray tracing: the sweeps of light volumes and swept shadow
+ * grids, from a volume in memory or, for a region render's context, tile
+ * by tile through the whole volume (vv_render_region.whole) rather than
+ * through the World's coarse proxy, so that the shadows of a volume
+ * rendered brick by brick out of core are those of the in-memory render.
+ * rt_shade.c looks them up.
  *
- * A light volume (rt_shade.c) holds, every RT_LGRID voxels, the
+ * A light volume holds, every RT_LGRID voxels, the
  * transmittance towards a directional light or the mean extinction of the
  * way to a point light. Each point's value is computed from points one
  * grid layer nearer the light (bilinear in that layer) and one sample of
@@ -23,7 +25,11 @@
  * - a tile's samples come from one box of voxels: the tile's own and, on
  *   the light's side of each axis, the three more its samples reach (two
  *   towards the light and the trilinear neighbour).
- * The values are the in-memory sweep's: the same points in an order that
+ * In memory the whole grid is one tile, sampled from the volume's own
+ * cache, and a swept shadow grid (shadow_grid=2, every RT_SGRID voxels)
+ * goes the same way with each segment's transmittance through every object
+ * that casts shadows. Through tiles the values are the in-memory sweep's:
+ * the same points in an order that
  * respects the same dependencies, the same sample positions and tables
  * (the region part's, built from voxels of the same type and value range);
  * the marches step through every subvolume rather than leaping over empty
@@ -73,10 +79,15 @@ rt_context_whole(rt_frame *fr, const vv_render_region *region) {
     return any;
 }
 
-/* A tile's voxels: their cache and the index of its voxel (0, 0, 0). */
+/* Where a sweep samples the volume: the whole volume in memory (its own
+ * cache, subvolume flags and tables), or a tile of a region render's whole
+ * volume (a box's cache, the index of its voxel (0, 0, 0), the region
+ * part's tables, no subvolume flags). */
 typedef struct lw_tile {
     const vv_vcache *c;
     float o[3];
+    const uint8_t *bvis; /* the volume's own (in memory), else NULL */
+    const rt_vobj *tab;  /* whose tables classify the samples */
 } lw_tile;
 
 static inline float
@@ -86,12 +97,15 @@ tile_sample(const lw_tile *t, const float q[3]) {
 }
 
 static inline float
-tile_ext(const rt_vobj *pt, float v) {
-    return pt->ext[(int)vv_vtables_index(&pt->tab, v)];
+tile_ext(const lw_tile *t, float v) {
+    return t->tab->ext[(int)vv_vtables_index(&t->tab->tab, v)];
 }
 
-/* own_depth (rt_shade.c) from the tile: the segment's optical depth, one
- * sample at its middle. */
+/* A composite volume's own optical depth over the segment of world length
+ * seg from index point p (world wp) along the index direction li (world
+ * direction ldir): one sample at its middle, sigma seg; 0 where the middle
+ * is outside the volume, cut away or (in memory) in a subvolume that
+ * cannot contribute, whose samples all have sigma 0. */
 static float
 tile_depth(const rt_vobj *ob, const lw_tile *t, const double p[3], const double li[3], double seg,
            vv_vec3 wp, vv_vec3 ldir) {
@@ -101,48 +115,31 @@ tile_depth(const rt_vobj *ob, const lw_tile *t, const double p[3], const double 
         if (!(q[a] >= 0 && q[a] <= (float)(ob->dims[a] - 1)))
             return 0.0f;
     }
+    if (t->bvis && !t->bvis[vv_vcache_block(t->c, q)])
+        return 0.0f;
     if (ob->n_planes) {
         const vv_vec3 wm = v3add(wp, v3scale(ldir, 0.5 * seg));
         for (int i = 0; i < ob->n_planes; i++)
             if (vv_plane_distance(ob->planes[i], wm) < 0)
                 return 0.0f;
     }
-    return tile_ext(ob->whole_part, tile_sample(t, q)) * (float)seg;
+    return tile_ext(t, tile_sample(t, q)) * (float)seg;
 }
 
-/* volume_transmittance's march (rt_shade.c) from world point wp towards
- * the light over (0, tmax), through the tile: each subvolume's piece cut
- * into equal parts no longer than the shadow step, sampled at their
- * middles. */
+/* The volume's own transmittance from world point wp towards the light
+ * over (0, tmax): in memory its shadow march (rt_volume_march); through a
+ * tile the same march (each subvolume's piece cut into equal parts no
+ * longer than the shadow step, sampled at their middles), stepping through
+ * every subvolume rather than leaping over empty ones, which adds zeros. */
 static float
 tile_march(const rt_frame *fr, const rt_vobj *ob, const lw_tile *tl, vv_vec3 wp, vv_vec3 ldir,
            double tmax) {
+    if (tl->bvis)
+        return rt_volume_march(fr, ob, wp, ldir, tmax);
     vv_vray r;
     if (!vray_setup(ob, &(vv_ray){wp, ldir}, 0, tmax, &r))
         return 1.0f;
-    const double dt = fr->dt;
-    const double ds = 2 * ob->vox > dt ? 2 * ob->vox : dt;
-    double tau = 0;
-    double t = r.t0;
-    while (t < r.t1) {
-        float p[3];
-        vv_vray_point(&r, t, p);
-        double te = block_exit(&r, p, t);
-        te = te < r.t1 ? te : r.t1;
-        const double len = te - t;
-        int n = (int)vv_ceil_pos(len / ds);
-        n = n < 1 ? 1 : n;
-        const double h = len / n;
-        for (int s = 0; s < n; s++) {
-            float q[3];
-            vv_vray_point(&r, t + (s + 0.5) * h, q);
-            tau += tile_ext(ob->whole_part, tile_sample(tl, q)) * h;
-        }
-        if (tau > 5.6) /* T < 0.0037, under one 8-bit level */
-            return 0.0f;
-        t = te;
-    }
-    return (float)exp(-tau);
+    return rt_composite_march(fr, ob, &r, tl->c, tl->o, tl->tab);
 }
 
 static inline vv_vec3
@@ -158,8 +155,11 @@ typedef struct lw_sweep {
     const rt_vobj *ob;
     const rt_light *lt;
     int nt;
-    const int *gd; /* light volume points per axis */
-    float *T;      /* the light volume */
+    double G;      /* grid spacing, voxels */
+    const int *gd; /* grid points per axis */
+    float *T;      /* the grid */
+    int own;       /* the volume's own light volume; 0: a shadow grid through every object that
+                      casts shadows (rt_shadow_segment) */
     /* a directional light (sweep_grid): its index-space direction per world
      * unit, the axis it is most along and the two others, the layer
      * towards it, the first layer, a layer's segment */
@@ -174,7 +174,7 @@ typedef struct lw_sweep {
  * side: sweep_grid's values. */
 static void
 tile_directional(const lw_sweep *w, const lw_tile *tl, const int g0[3], const int g1[3]) {
-    const double G = RT_LGRID;
+    const double G = w->G;
     const int *gd = w->gd, A = w->A, B = w->B, Cc = w->Cc, up = w->up;
     const int nb = gd[B], nc = gd[Cc];
     const int nlay = g1[A] - g0[A], bw = g1[B] - g0[B], cw = g1[Cc] - g0[Cc];
@@ -209,12 +209,14 @@ tile_directional(const lw_sweep *w, const lw_tile *tl, const int g0[3], const in
                     }
                     const float tq =
                         vv_lerpf(vv_lerpf(v[0], v[1], fb), vv_lerpf(v[2], v[3], fb), fc);
-                    tv = tq <= 0 ? 0.0f
-                                 : tq * expf(-tile_depth(w->ob, tl, p, w->li, w->seg, wp, w->ldir));
+                    tv = tq <= 0  ? 0.0f
+                         : w->own ? tq * expf(-tile_depth(w->ob, tl, p, w->li, w->seg, wp, w->ldir))
+                                  : tq * rt_shadow_segment(w->fr, wp, w->lt, 0, w->seg);
                 }
             }
             if (tv < 0)
-                tv = tile_march(w->fr, w->ob, tl, wp, w->ldir, INFINITY);
+                tv = w->own ? tile_march(w->fr, w->ob, tl, wp, w->ldir, INFINITY)
+                            : rt_shadow_segment(w->fr, wp, w->lt, 0, INFINITY);
             w->T[((size_t)id[2] * (size_t)gd[1] + (size_t)id[1]) * (size_t)gd[0] + (size_t)id[0]] =
                 tv;
         }
@@ -225,7 +227,7 @@ tile_directional(const lw_sweep *w, const lw_tile *tl, const int g0[3], const in
  * (rt_shade.c), the mean extinction of its way to the light. */
 static float
 tile_point_value(const lw_sweep *w, const lw_tile *tl, const int id[3]) {
-    const double G = RT_LGRID;
+    const double G = w->G;
     const rt_vobj *ob = w->ob;
     const int *gd = w->gd;
     const double p[3] = {id[0] * G, id[1] * G, id[2] * G};
@@ -280,15 +282,38 @@ tile_point_value(const lw_sweep *w, const lw_tile *tl, const int id[3]) {
     return (float)(sv < FLT_MAX ? sv : FLT_MAX);
 }
 
-typedef struct lw_key {
-    double k;
-    size_t at;
-} lw_key;
+/* Sorts n (key, index) pairs by key (non-negative doubles, whose bits
+ * order as unsigned integers): least significant digit first, 16 bits a
+ * pass. tmp: room for n more. Returns 0 when out of memory. */
+typedef struct rt_kidx {
+    uint64_t key;
+    uint32_t idx;
+} rt_kidx;
 
 static int
-lw_key_cmp(const void *a, const void *b) {
-    const lw_key *x = a, *y = b;
-    return x->k < y->k ? -1 : x->k > y->k ? 1 : (x->at > y->at) - (x->at < y->at);
+radix_sort(rt_kidx *a, rt_kidx *tmp, size_t n) {
+    size_t *count = malloc(65536 * sizeof *count);
+    if (!count)
+        return 0;
+    for (int pass = 0; pass < 4; pass++) {
+        const int shift = 16 * pass;
+        memset(count, 0, 65536 * sizeof *count);
+        for (size_t i = 0; i < n; i++)
+            count[(a[i].key >> shift) & 0xFFFF]++;
+        size_t sum = 0;
+        for (int d = 0; d < 65536; d++) {
+            const size_t c = count[d];
+            count[d] = sum;
+            sum += c;
+        }
+        for (size_t i = 0; i < n; i++)
+            tmp[count[(a[i].key >> shift) & 0xFFFF]++] = a[i];
+        rt_kidx *t = a;
+        a = tmp;
+        tmp = t;
+    }
+    free(count); /* four passes: the result is back in the caller's array */
+    return 1;
 }
 
 /* The tile's points of a point light in order of their distance to it in
@@ -298,29 +323,38 @@ tile_point(const lw_sweep *w, const lw_tile *tl, const int g0[3], const int g1[3
     const int *gd = w->gd;
     const size_t bw = (size_t)(g1[0] - g0[0]), bh = (size_t)(g1[1] - g0[1]),
                  n = bw * bh * (size_t)(g1[2] - g0[2]);
-    lw_key *ord = malloc((n ? n : 1) * sizeof *ord);
+    if (n > UINT32_MAX)
+        return vv_error_set(VV_ERR_LIMIT, "a light volume tile of %zu points", n);
+    rt_kidx *ord = malloc(2 * (n ? n : 1) * sizeof *ord);
     if (!ord)
         return vv_error_set(VV_ERR_NOMEM, "out of memory for a light volume");
+#pragma omp parallel for schedule(static) num_threads(w->nt)
     for (size_t i = 0; i < n; i++) {
-        const int id[3] = {g0[0] + (int)(i % bw), g0[1] + (int)(i / bw % bh),
-                           g0[2] + (int)(i / (bw * bh))};
-        double k = fabs(w->Lg[0] - (double)id[0]);
-        k = fmax(k, fabs(w->Lg[1] - (double)id[1]));
-        k = fmax(k, fabs(w->Lg[2] - (double)id[2]));
-        ord[i].k = k;
-        ord[i].at = ((size_t)id[2] * (size_t)gd[1] + (size_t)id[1]) * (size_t)gd[0] + (size_t)id[0];
+        const double x = (double)(g0[0] + (int)(i % bw)), y = (double)(g0[1] + (int)(i / bw % bh)),
+                     z = (double)(g0[2] + (int)(i / (bw * bh)));
+        double k = fabs(w->Lg[0] - x);
+        k = fmax(k, fabs(w->Lg[1] - y));
+        k = fmax(k, fabs(w->Lg[2] - z));
+        uint64_t bits;
+        memcpy(&bits, &k, sizeof bits);
+        ord[i].key = bits;
+        ord[i].idx = (uint32_t)i;
     }
-    qsort(ord, n, sizeof *ord, lw_key_cmp);
+    if (!radix_sort(ord, ord + n, n)) {
+        free(ord);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for a light volume");
+    }
     for (size_t s0 = 0; s0 < n;) {
         size_t s1 = s0 + 1;
-        while (s1 < n && ord[s1].k == ord[s0].k)
+        while (s1 < n && ord[s1].key == ord[s0].key)
             s1++;
 #pragma omp parallel for schedule(dynamic, 64) num_threads(w->nt) if (s1 - s0 >= 256)
         for (size_t i = s0; i < s1; i++) {
-            const size_t at = ord[i].at;
-            const int id[3] = {(int)(at % (size_t)gd[0]), (int)(at / (size_t)gd[0] % (size_t)gd[1]),
-                               (int)(at / ((size_t)gd[0] * (size_t)gd[1]))};
-            w->T[at] = tile_point_value(w, tl, id);
+            const size_t j = ord[i].idx;
+            const int id[3] = {g0[0] + (int)(j % bw), g0[1] + (int)(j / bw % bh),
+                               g0[2] + (int)(j / (bw * bh))};
+            w->T[((size_t)id[2] * (size_t)gd[1] + (size_t)id[1]) * (size_t)gd[0] + (size_t)id[0]] =
+                tile_point_value(w, tl, id);
         }
         s0 = s1;
     }
@@ -334,46 +368,83 @@ floor_div(long a, long b) {
     return a >= 0 ? a / b : -((-a + b - 1) / b);
 }
 
-vv_status
-rt_sweep_whole(const rt_frame *fr, const rt_vobj *ob, int l, int nt, float **out) {
-    const double G = RT_LGRID;
-    const vv_region_volume *wv = ob->whole;
-    *out = NULL;
-    lw_sweep w;
-    memset(&w, 0, sizeof w);
-    w.fr = fr;
-    w.ob = ob;
-    w.lt = &fr->lights[l];
-    w.nt = nt;
-    w.gd = ob->ldim;
-    const int *gd = ob->ldim;
-    const int point = w.lt->point;
-    double L[3]; /* the light in voxel units, where the tiles centre on it */
-    if (point) {
-        for (int a = 0; a < 3; a++) {
-            w.Lg[a] = (ob->w2i[a][0] * w.lt->pos[0] + ob->w2i[a][1] * w.lt->pos[1] +
-                       ob->w2i[a][2] * w.lt->pos[2] + ob->w2i[a][3]) /
-                      G;
-            L[a] = w.Lg[a] * G;
-        }
-        if (!(isfinite(w.Lg[0]) && isfinite(w.Lg[1]) && isfinite(w.Lg[2])))
-            return vv_error_set(VV_ERR_INVALID, "a point light at no finite position");
-    } else {
+/* Sets up @p w for light l over the grid of G voxels a side, gd points an
+ * axis; 0 when there is nothing to sweep (a directional light along no
+ * axis of the index space; a point light at no finite position). */
+static int
+lw_setup(lw_sweep *w, const rt_frame *fr, const rt_vobj *ob, int l, int nt, double G, const int *gd,
+         int own) {
+    memset(w, 0, sizeof *w);
+    w->fr = fr;
+    w->ob = ob;
+    w->lt = &fr->lights[l];
+    w->nt = nt;
+    w->G = G;
+    w->gd = gd;
+    w->own = own;
+    if (w->lt->point) {
         for (int a = 0; a < 3; a++)
-            w.li[a] = ob->w2i[a][0] * w.lt->dir[0] + ob->w2i[a][1] * w.lt->dir[1] +
-                      ob->w2i[a][2] * w.lt->dir[2];
-        for (int a = 1; a < 3; a++)
-            if (fabs(w.li[a]) > fabs(w.li[w.A]))
-                w.A = a;
-        if (!(fabs(w.li[w.A]) > 0))
-            return VV_OK;
-        w.B = (w.A + 1) % 3;
-        w.Cc = (w.A + 2) % 3;
-        w.ldir = v3(w.lt->dir[0], w.lt->dir[1], w.lt->dir[2]);
-        w.seg = G / fabs(w.li[w.A]);
-        w.up = w.li[w.A] > 0 ? 1 : -1;
-        w.first = w.up > 0 ? gd[w.A] - 1 : 0;
+            w->Lg[a] = (ob->w2i[a][0] * w->lt->pos[0] + ob->w2i[a][1] * w->lt->pos[1] +
+                        ob->w2i[a][2] * w->lt->pos[2] + ob->w2i[a][3]) /
+                       G;
+        return isfinite(w->Lg[0]) && isfinite(w->Lg[1]) && isfinite(w->Lg[2]);
     }
+    for (int a = 0; a < 3; a++)
+        w->li[a] = ob->w2i[a][0] * w->lt->dir[0] + ob->w2i[a][1] * w->lt->dir[1] +
+                   ob->w2i[a][2] * w->lt->dir[2];
+    for (int a = 1; a < 3; a++)
+        if (fabs(w->li[a]) > fabs(w->li[w->A]))
+            w->A = a;
+    if (!(fabs(w->li[w->A]) > 0))
+        return 0;
+    w->B = (w->A + 1) % 3;
+    w->Cc = (w->A + 2) % 3;
+    w->ldir = v3(w->lt->dir[0], w->lt->dir[1], w->lt->dir[2]);
+    w->seg = G / fabs(w->li[w->A]);
+    w->up = w->li[w->A] > 0 ? 1 : -1;
+    w->first = w->up > 0 ? gd[w->A] - 1 : 0;
+    return 1;
+}
+
+/* The whole grid at once from the volume in memory: one tile, its own
+ * cache, subvolume flags and tables. */
+static vv_status
+sweep_memory(lw_sweep *w, float **out) {
+    const int *gd = w->gd;
+    const size_t ng = (size_t)gd[0] * (size_t)gd[1] * (size_t)gd[2];
+    if (w->lt->point && ng > UINT32_MAX)
+        return VV_OK; /* shadow rays then march */
+    w->T = calloc(ng ? ng : 1, sizeof *w->T);
+    if (!w->T)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for a %s",
+                            w->own ? "light volume" : "shadow grid");
+    const lw_tile tile = {w->ob->c, {0, 0, 0}, w->ob->bvis, w->ob};
+    const int g0[3] = {0, 0, 0};
+    vv_status s = VV_OK;
+    if (w->lt->point)
+        s = tile_point(w, &tile, g0, gd);
+    else
+        tile_directional(w, &tile, g0, gd);
+    if (s != VV_OK) {
+        free(w->T);
+        return s;
+    }
+    *out = w->T;
+    return VV_OK;
+}
+
+/* The grid tile by tile through a region render's whole volume, read by
+ * boxes (w->ob->whole), in the light's order. */
+static vv_status
+sweep_tiles(lw_sweep *w, float **out) {
+    const rt_vobj *ob = w->ob;
+    const vv_region_volume *wv = ob->whole;
+    const int *gd = w->gd;
+    const int point = w->lt->point;
+    const double G = w->G;
+    double L[3]; /* the light in voxel units, where the tiles centre on it */
+    for (int a = 0; a < 3; a++)
+        L[a] = w->Lg[a] * G;
     /* tiles of TS cells a side (two of the reader's: fewer reads of the
      * boxes' edges; a multiple of the grid's spacing), from off on each
      * axis: 0 for a directional light (the reader's own boxes); centred on
@@ -403,12 +474,12 @@ rt_sweep_whole(const rt_frame *fr, const rt_vobj *ob, int l, int nt, float **out
     const int n = ntile[0] * ntile[1] * ntile[2];
     int *order = malloc(sizeof(int) * (size_t)n);
     int *rank = malloc(sizeof(int) * (size_t)n);
-    w.T = calloc(ng ? ng : 1, sizeof *w.T);
+    w->T = calloc(ng ? ng : 1, sizeof *w->T);
     vv_vcache_set *set = malloc(sizeof *set);
-    if (!order || !rank || !w.T || !set) {
+    if (!order || !rank || !w->T || !set) {
         free(order);
         free(rank);
-        free(w.T);
+        free(w->T);
         free(set);
         return vv_error_set(VV_ERR_NOMEM, "out of memory for a light volume");
     }
@@ -421,7 +492,7 @@ rt_sweep_whole(const rt_frame *fr, const rt_vobj *ob, int l, int nt, float **out
         const int t[3] = {i % ntile[0], i / ntile[0] % ntile[1], i / (ntile[0] * ntile[1])};
         rank[i] = 0;
         for (int a = 0; a < 3; a++)
-            rank[i] += point ? abs(t[a] - tl[a]) : w.li[a] > 0 ? ntile[a] - 1 - t[a] : t[a];
+            rank[i] += point ? abs(t[a] - tl[a]) : w->li[a] > 0 ? ntile[a] - 1 - t[a] : t[a];
         maxr = rank[i] > maxr ? rank[i] : maxr;
     }
     int k = 0;
@@ -451,9 +522,9 @@ rt_sweep_whole(const rt_frame *fr, const rt_vobj *ob, int l, int nt, float **out
                     v1 += reach;
                 if (L[a] <= v1)
                     v0 -= reach;
-            } else if (w.li[a] > 0) {
+            } else if (w->li[a] > 0) {
                 v1 += reach;
-            } else if (w.li[a] < 0) {
+            } else if (w->li[a] < 0) {
                 v0 -= reach;
             } else {
                 v1 += 1;
@@ -472,11 +543,12 @@ rt_sweep_whole(const rt_frame *fr, const rt_vobj *ob, int l, int nt, float **out
         if (s == VV_OK)
             s = vv_vcache_get(set, box, &c);
         if (s == VV_OK) {
-            const lw_tile tile = {c, {(float)lo[0], (float)lo[1], (float)lo[2]}};
+            const lw_tile tile = {
+                c, {(float)lo[0], (float)lo[1], (float)lo[2]}, NULL, ob->whole_part};
             if (point)
-                s = tile_point(&w, &tile, g0, g1);
+                s = tile_point(w, &tile, g0, g1);
             else
-                tile_directional(&w, &tile, g0, g1);
+                tile_directional(w, &tile, g0, g1);
         }
         vv_vcache_set_clear(set);
         vv_volume_free(box);
@@ -485,9 +557,27 @@ rt_sweep_whole(const rt_frame *fr, const rt_vobj *ob, int l, int nt, float **out
     free(order);
     free(rank);
     if (s != VV_OK) {
-        free(w.T);
+        free(w->T);
         return s;
     }
-    *out = w.T;
+    *out = w->T;
     return VV_OK;
+}
+
+vv_status
+rt_sweep_light_volume(const rt_frame *fr, const rt_vobj *ob, int l, int nt, float **out) {
+    *out = NULL;
+    lw_sweep w;
+    if (!lw_setup(&w, fr, ob, l, nt, RT_LGRID, ob->ldim, 1))
+        return VV_OK;
+    return ob->whole ? sweep_tiles(&w, out) : sweep_memory(&w, out);
+}
+
+vv_status
+rt_sweep_shadow_grid(const rt_frame *fr, const rt_vobj *ob, int l, int nt, float **out) {
+    *out = NULL;
+    lw_sweep w;
+    if (fr->lights[l].point || !lw_setup(&w, fr, ob, l, nt, RT_SGRID, ob->gdim, 0))
+        return VV_OK;
+    return sweep_memory(&w, out);
 }
