@@ -462,8 +462,10 @@ sweep_tiles(lw_sweep *w, float **out) {
             off[a] = off[a] > 0 ? off[a] - TS : 0;
             off[a] = (off[a] / RT_LGRID) * RT_LGRID; /* tiles start on grid points */
         }
-        const long span = (long)(gd[a] - 1) * RT_LGRID - off[a];
-        ntile[a] = (int)(span / TS) + 1;
+        /* tiles over the cells, the last one taking the grid's points past
+         * the last voxel too */
+        const long span = (long)(ob->dims[a] - 1) - off[a];
+        ntile[a] = span > 0 ? (int)((span + TS - 1) / TS) : 1;
         if (point) { /* the light's tile (the nearest one when outside) */
             long t = fabs(L[a]) < 1e9 ? floor_div((long)floor(L[a]) - off[a], TS)
                                       : (L[a] < 0 ? 0 : ntile[a] - 1);
