@@ -62,6 +62,20 @@ rt_context_whole(rt_frame *fr, const vv_render_region *region) {
     for (int a = 0; a < 3; a++)
         if (h->dims[a] != region->dims[a] || h->dims[a] < 2)
             return 0;
+    /* the light volumes (4 bytes every RT_LGRID^3 voxels a light) are held
+     * whole: past half the memory available, the proxy's (counting those
+     * the frame's earlier regions already keep, so that every region of a
+     * frame decides alike) */
+    uint64_t points = 1;
+    for (int a = 0; a < 3; a++)
+        points *= (uint64_t)((h->dims[a] - 1 + RT_LGRID - 1) / RT_LGRID + 1);
+    const uint64_t one = points * sizeof(float);
+    uint64_t avail = vv_memory_available();
+    for (int i = 0; i < RT_LV_CACHE && avail < UINT64_MAX - one; i++)
+        if (fr->st->lv[i].vol && fr->st->lv[i].whole == h)
+            avail += one;
+    if (one * (uint64_t)fr->n_lights > avail / 2)
+        return 0;
     int any = 0;
     for (int i = 1; i < fr->n_vobj; i++) {
         rt_vobj *ro = &fr->vobjs[i];
