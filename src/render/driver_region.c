@@ -223,6 +223,30 @@ rays_finish(vv_region_image *rw, const vv_region_rays *rays, vv_vec3 background,
     }
 }
 
+/* 1 when a pixel of @p rays lies in region @p rg's rectangle of a view
+ * @p W pixels wide (every region without one): a region without any is
+ * not read again. */
+static int
+rays_in_rect(const vv_region_rays *rays, int W, const vv_render_region *rg) {
+    if (rg->x1 <= rg->x0)
+        return rays->n_pixels > 0;
+    for (int y = rg->y0; y < rg->y1; y++) {
+        /* the first listed pixel at or after (x0, y): in the row, before x1? */
+        const size_t want = (size_t)y * (size_t)W + (size_t)(rg->x0 > 0 ? rg->x0 : 0);
+        size_t lo = 0, hi = rays->n_pixels;
+        while (lo < hi) {
+            const size_t mid = lo + (hi - lo) / 2;
+            if (rays->pixel[mid] < want)
+                lo = mid + 1;
+            else
+                hi = mid;
+        }
+        if (lo < rays->n_pixels && rays->pixel[lo] < (size_t)y * (size_t)W + (size_t)rg->x1)
+            return 1;
+    }
+    return 0;
+}
+
 static void
 rays_end(vv_region_rays *rays, vv_region_image *rw, vv_region_image *rp) {
     vv_region_rays_free(rays);
@@ -302,16 +326,14 @@ brick_reader_init(brick_reader *b, const vv_brick_source *src, const vv_volume *
     return VV_OK;
 }
 
-static vv_status
-brick_reader_box(void *user, const int lo[3], const int hi[3], vv_volume **out) {
-    const brick_reader *b = user;
-    const vv_volume *h = b->hdr;
-    *out = NULL;
-    int d[3], first[3], last[3];
+/* The bricks whose voxels a box lo .. hi takes (by the bricks' cells):
+ * first .. last along each axis; 0 when the box is outside the volume. */
+static int
+brick_reader_span(const brick_reader *b, const int lo[3], const int hi[3], int first[3],
+                  int last[3]) {
     for (int a = 0; a < 3; a++) {
-        if (lo[a] < 0 || hi[a] >= h->dims[a] || lo[a] > hi[a])
-            return vv_error_set(VV_ERR_INVALID, "bricks: box outside the volume");
-        d[a] = hi[a] - lo[a] + 1;
+        if (lo[a] < 0 || hi[a] >= b->hdr->dims[a] || lo[a] > hi[a])
+            return 0;
         first[a] = 0;
         while (first[a] + 1 < b->nb[a] && b->cut[a][first[a] + 1] <= lo[a])
             first[a]++;
@@ -319,6 +341,39 @@ brick_reader_box(void *user, const int lo[3], const int hi[3], vv_volume **out) 
         while (last[a] + 1 < b->nb[a] && b->cut[a][last[a] + 1] <= hi[a])
             last[a]++;
     }
+    return 1;
+}
+
+/* vv_region_volume.box_range: the union of those bricks' min and max. */
+static int
+brick_reader_range(void *user, const int lo[3], const int hi[3], float *vmin, float *vmax) {
+    const brick_reader *b = user;
+    int first[3], last[3];
+    if (!brick_reader_span(b, lo, hi, first, last))
+        return 0;
+    *vmin = INFINITY;
+    *vmax = -INFINITY;
+    for (int k = first[2]; k <= last[2]; k++)
+        for (int j = first[1]; j <= last[1]; j++)
+            for (int i = first[0]; i <= last[0]; i++) {
+                vv_brick_info in;
+                b->src->info(b->src->user, (k * b->nb[1] + j) * b->nb[0] + i, &in);
+                *vmin = in.vmin < *vmin ? in.vmin : *vmin;
+                *vmax = in.vmax > *vmax ? in.vmax : *vmax;
+            }
+    return 1;
+}
+
+static vv_status
+brick_reader_box(void *user, const int lo[3], const int hi[3], vv_volume **out) {
+    const brick_reader *b = user;
+    const vv_volume *h = b->hdr;
+    *out = NULL;
+    int d[3], first[3], last[3];
+    if (!brick_reader_span(b, lo, hi, first, last))
+        return vv_error_set(VV_ERR_INVALID, "bricks: box outside the volume");
+    for (int a = 0; a < 3; a++)
+        d[a] = hi[a] - lo[a] + 1;
     vv_volume *v = NULL;
     vv_status s = vv_volume_new(&v, d, h->type);
     if (s != VV_OK)
@@ -423,7 +478,10 @@ drv_render_bricks(vv_renderer *r, const vv_world *w, int object, const vv_brick_
     /* the whole volume by boxes, where the World's volume is a coarse proxy */
     brick_reader reader;
     memset(&reader, 0, sizeof reader);
-    vv_region_volume wv = {.user = &reader, .header = hdr, .read_box = brick_reader_box};
+    vv_region_volume wv = {.user = &reader,
+                           .header = hdr,
+                           .read_box = brick_reader_box,
+                           .box_range = brick_reader_range};
     const int proxy = obj->volume->dims[0] != hdr->dims[0] ||
                       obj->volume->dims[1] != hdr->dims[1] || obj->volume->dims[2] != hdr->dims[2];
     if (s == VV_OK && proxy && n > 0) {
@@ -459,6 +517,8 @@ drv_render_bricks(vv_renderer *r, const vv_world *w, int object, const vv_brick_
             vv_region_rect(&rg, i2w, view, in.slo, in.shi);
             if (rg.x1 > rg.x0 && rg.y1 <= rg.y0)
                 continue; /* off screen */
+            if (pass && !rays_in_rect(&rays, view->width, &rg))
+                continue; /* no ray of the second pass */
             for (int a = 0; a < 3; a++) {
                 const int last = hdr->dims[a] - 1;
                 rg.dims[a] = hdr->dims[a];
@@ -880,6 +940,8 @@ render_nodes(mr_frame *f) {
          * to read (the nearest nodes come first), else a coarser resident one */
         if (progressive && !progressive_level(f, nd, &budget))
             continue;
+        if (f->rays && !rays_in_rect(f->rays, f->view->width, &nd->rg))
+            continue; /* no ray of the second pass */
         vv_volume *bv = NULL;
         vv_status s = f->src->read_box(f->src->user, nd->level, nd->lo, nd->hi, &bv);
         if (s != VV_OK)
@@ -948,6 +1010,12 @@ static vv_status
 level0_box(void *user, const int lo[3], const int hi[3], vv_volume **out) {
     const vv_multires_source *src = user;
     return src->read_box(src->user, 0, lo, hi, out);
+}
+
+static int
+level0_range(void *user, const int lo[3], const int hi[3], float *vmin, float *vmax) {
+    const vv_multires_source *src = user;
+    return src->box_range && src->box_range(src->user, 0, lo, hi, vmin, vmax);
 }
 
 /* The levels' placements in level 0's index space and their voxel sizes. */
@@ -1056,8 +1124,11 @@ drv_render_multires(vv_renderer *r, const vv_world *w, int object, const vv_mult
          * frame drawn at level 0 from a coarse proxy (not of coarser
          * levels: the sweep would read level 0 whole) */
         const vv_volume *h0 = src->level(src->user, 0);
-        vv_region_volume wv = {
-            .user = (void *)src, .header = h0, .read_box = level0_box, .tile = f.leaf};
+        vv_region_volume wv = {.user = (void *)src,
+                               .header = h0,
+                               .read_box = level0_box,
+                               .box_range = level0_range,
+                               .tile = f.leaf};
         int at0 = !lod->progressive &&
                   (f.obj->volume->dims[0] != h0->dims[0] || f.obj->volume->dims[1] != h0->dims[1] ||
                    f.obj->volume->dims[2] != h0->dims[2]);

@@ -106,6 +106,14 @@ typedef struct vv_region_volume {
     /** Cells a side of the boxes worth reading at a time (the source's bricks or the nodes its
      *  memory limit holds), > 0. */
     int tile;
+    /**
+     * Optional (NULL): the least and greatest value (data units) of voxels
+     * lo .. hi when known without reading them (the bricks' min and max):
+     * 1 and *vmin, *vmax set (bounds: the box's voxels lie within them);
+     * 0 when unknown. A box the transfer function shows as empty need not
+     * be read.
+     */
+    int (*box_range)(void *user, const int lo[3], const int hi[3], float *vmin, float *vmax);
 } vv_region_volume;
 
 /**

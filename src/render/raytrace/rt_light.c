@@ -129,8 +129,8 @@ tile_depth(const rt_vobj *ob, const lw_tile *t, const double p[3], const double 
         if (!(q[a] >= 0 && q[a] <= (float)(ob->dims[a] - 1)))
             return 0.0f;
     }
-    if (t->bvis && !t->bvis[vv_vcache_block(t->c, q)])
-        return 0.0f;
+    if (!t->c || (t->bvis && !t->bvis[vv_vcache_block(t->c, q)]))
+        return 0.0f; /* an empty tile (no voxels read), or an empty subvolume */
     if (ob->n_planes) {
         const vv_vec3 wm = v3add(wp, v3scale(ldir, 0.5 * seg));
         for (int i = 0; i < ob->n_planes; i++)
@@ -148,6 +148,8 @@ tile_depth(const rt_vobj *ob, const lw_tile *t, const double p[3], const double 
 static float
 tile_march(const rt_frame *fr, const rt_vobj *ob, const lw_tile *tl, vv_vec3 wp, vv_vec3 ldir,
            double tmax) {
+    if (!tl->c) /* an empty tile: exp(-0) */
+        return 1.0f;
     if (tl->bvis)
         return rt_volume_march(fr, ob, wp, ldir, tmax);
     vv_vray r;
@@ -420,6 +422,25 @@ lw_setup(lw_sweep *w, const rt_frame *fr, const rt_vobj *ob, int l, int nt, doub
     return 1;
 }
 
+/* 1 when the reader knows the values of voxels lo .. hi and the region
+ * part's tables give every value between them (an entry either side for
+ * the rounding of a trilinear sample) no extinction. */
+static int
+box_transparent(const vv_region_volume *wv, const rt_vobj *pt, const int lo[3], const int hi[3]) {
+    float vmin, vmax;
+    if (!wv->box_range || !wv->box_range(wv->user, lo, hi, &vmin, &vmax) || !(vmin <= vmax))
+        return 0;
+    const float q = (float)pt->c->qoff; /* data units to stored ones */
+    int e0 = (int)vv_vtables_index(&pt->tab, vmin - q) - 1,
+        e1 = (int)vv_vtables_index(&pt->tab, vmax - q) + 1;
+    e0 = e0 < 0 ? 0 : e0;
+    e1 = e1 > VV_VC_LUT - 1 ? VV_VC_LUT - 1 : e1;
+    for (int e = e0; e <= e1; e++)
+        if (pt->ext[e] != 0)
+            return 0;
+    return 1;
+}
+
 /* The whole grid at once from the volume in memory: one tile, its own
  * cache, subvolume flags and tables. */
 static vv_status
@@ -555,9 +576,13 @@ sweep_tiles(lw_sweep *w, float **out) {
             continue;
         vv_volume *box = NULL;
         vv_vcache *c = NULL;
-        s = wv->read_box(wv->user, lo, hi, &box);
-        if (s == VV_OK)
-            s = vv_vcache_get(set, box, &c);
+        /* a box whose values the transfer function shows as empty is not
+         * read: every segment through it has optical depth 0 */
+        if (!box_transparent(wv, ob->whole_part, lo, hi)) {
+            s = wv->read_box(wv->user, lo, hi, &box);
+            if (s == VV_OK)
+                s = vv_vcache_get(set, box, &c);
+        }
         if (s == VV_OK) {
             const lw_tile tile = {
                 c, {(float)lo[0], (float)lo[1], (float)lo[2]}, NULL, ob->whole_part};
