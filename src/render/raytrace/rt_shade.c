@@ -309,6 +309,24 @@ rt_build_light_volume(const rt_frame *fr, rt_vobj *ob, int l, int nt) {
     return VV_OK;
 }
 
+/* The cell of the lazily traced shadow grid holding whole-volume index
+ * point pi: its first corner i0 (returned as a grid index) and the
+ * fractions f. */
+static inline size_t
+sgrid_cell(const rt_vobj *ob, const float pi[3], int i0[3], float f[3]) {
+    for (int a = 0; a < 3; a++) {
+        float x = pi[a] < 0 ? 0 : pi[a];
+        x *= 1.0f / RT_SGRID;
+        int i = (int)x;
+        i = i > ob->gdim[a] - 2 ? ob->gdim[a] - 2 : i;
+        i0[a] = i;
+        f[a] = x - (float)i;
+        f[a] = f[a] > 1 ? 1 : f[a];
+    }
+    return ((size_t)i0[2] * (size_t)ob->gdim[1] + (size_t)i0[1]) * (size_t)ob->gdim[0] +
+           (size_t)i0[0];
+}
+
 /* Shadow of a volume sample at index point pi (world pw) for light l. */
 static float
 volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float pi_in[3],
@@ -349,17 +367,7 @@ volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float p
     _Atomic uint32_t *g = ob->sgrid[l];
     float f[3];
     int i0[3];
-    for (int a = 0; a < 3; a++) {
-        float x = pi[a] < 0 ? 0 : pi[a];
-        x *= 1.0f / RT_SGRID;
-        int i = (int)x;
-        i = i > ob->gdim[a] - 2 ? ob->gdim[a] - 2 : i;
-        i0[a] = i;
-        f[a] = x - (float)i;
-        f[a] = f[a] > 1 ? 1 : f[a];
-    }
-    const size_t base =
-        ((size_t)i0[2] * (size_t)ob->gdim[1] + (size_t)i0[1]) * (size_t)ob->gdim[0] + (size_t)i0[0];
+    const size_t base = sgrid_cell(ob, pi, i0, f);
     float vloc[8], *v = vloc;
     if (sc) {
         if (sc->ob != ob) {
@@ -430,6 +438,36 @@ rt_volume_shadows(const rt_frame *fr, const rt_vobj *o, const float pi[3], const
                   rt_scache *sc, float *sh, int stride) {
     if (!(fr->shadows && o->obj->receives_shadows))
         return 0;
+    /* the common case, lazily traced grids: the sample's cell found once
+     * for every light, and each light's corners from the ray's cache while
+     * the ray stays in that cell (volume_sample_shadow's arithmetic) */
+    int cached = sc && sc->ob == o;
+    for (int l = 0; l < fr->n_lights && cached; l++)
+        cached = o->sgrid[l] && !o->sweep[l];
+    if (cached) {
+        float pr[3];
+        const float *pp = pi;
+        if (o->region) {
+            for (int a = 0; a < 3; a++)
+                pr[a] = pi[a] + (float)o->region->offset[a];
+            pp = pr;
+        }
+        float f[3];
+        int i0[3];
+        const size_t base = sgrid_cell(o, pp, i0, f);
+        for (int l = 0; l < fr->n_lights; l++) {
+            const float *v = sc->v[l];
+            if (sc->cell[l] != base) {
+                sh[(size_t)stride * (size_t)l] = volume_sample_shadow(fr, o, l, pi, pw, sc);
+                continue;
+            }
+            float x0 = vv_lerpf(v[0], v[1], f[0]), x1 = vv_lerpf(v[2], v[3], f[0]);
+            float x2 = vv_lerpf(v[4], v[5], f[0]), x3 = vv_lerpf(v[6], v[7], f[0]);
+            sh[(size_t)stride * (size_t)l] =
+                vv_lerpf(vv_lerpf(x0, x1, f[1]), vv_lerpf(x2, x3, f[1]), f[2]);
+        }
+        return 1;
+    }
     for (int l = 0; l < fr->n_lights; l++)
         sh[(size_t)stride * (size_t)l] = volume_sample_shadow(fr, o, l, pi, pw, sc);
     return 1;
