@@ -299,6 +299,14 @@ vray_setup(const rt_vobj *ob, const vv_ray *wr, double tmin, double tmax, vv_vra
     return vray_setup_cont(ob, wr, tmin, tmax, r, &cont);
 }
 
+/* World point of index point q of volume ob. */
+static inline vv_vec3
+rt_index_to_world(const rt_vobj *ob, const double q[3]) {
+    return v3(ob->i2w[0][0] * q[0] + ob->i2w[0][1] * q[1] + ob->i2w[0][2] * q[2] + ob->i2w[0][3],
+              ob->i2w[1][0] * q[0] + ob->i2w[1][1] * q[1] + ob->i2w[1][2] * q[2] + ob->i2w[1][3],
+              ob->i2w[2][0] * q[0] + ob->i2w[2][1] * q[1] + ob->i2w[2][2] * q[2] + ob->i2w[2][3]);
+}
+
 static inline float
 lut_index_f(const rt_vobj *o, float v) {
     return vv_vtables_index(&o->tab, v);

@@ -158,13 +158,6 @@ tile_march(const rt_frame *fr, const rt_vobj *ob, const lw_tile *tl, vv_vec3 wp,
     return rt_composite_march(fr, ob, &r, tl->c, tl->o, tl->tab);
 }
 
-static inline vv_vec3
-lw_index_to_world(const rt_vobj *ob, const double q[3]) {
-    return v3(ob->i2w[0][0] * q[0] + ob->i2w[0][1] * q[1] + ob->i2w[0][2] * q[2] + ob->i2w[0][3],
-              ob->i2w[1][0] * q[0] + ob->i2w[1][1] * q[1] + ob->i2w[1][2] * q[2] + ob->i2w[1][3],
-              ob->i2w[2][0] * q[0] + ob->i2w[2][1] * q[1] + ob->i2w[2][2] * q[2] + ob->i2w[2][3]);
-}
-
 /* What the tiles of one light's sweep share. */
 typedef struct lw_sweep {
     const rt_frame *fr;
@@ -203,7 +196,7 @@ tile_directional(const lw_sweep *w, const lw_tile *tl, const int g0[3], const in
             id[B] = g0[B] + bc % bw;
             id[Cc] = g0[Cc] + bc / bw;
             const double p[3] = {id[0] * G, id[1] * G, id[2] * G};
-            const vv_vec3 wp = lw_index_to_world(w->ob, p);
+            const vv_vec3 wp = rt_index_to_world(w->ob, p);
             float tv = -1;
             if (la != w->first) {
                 const double qb = (p[B] + w->li[B] * w->seg) / G,
@@ -247,7 +240,7 @@ tile_point_value(const lw_sweep *w, const lw_tile *tl, const int id[3]) {
     const rt_vobj *ob = w->ob;
     const int *gd = w->gd;
     const double p[3] = {id[0] * G, id[1] * G, id[2] * G};
-    const vv_vec3 wp = lw_index_to_world(ob, p);
+    const vv_vec3 wp = rt_index_to_world(ob, p);
     const vv_vec3 to = v3sub(v3(w->lt->pos[0], w->lt->pos[1], w->lt->pos[2]), wp);
     const double dist = v3len(to);
     if (!(dist > 0))

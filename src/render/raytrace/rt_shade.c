@@ -24,6 +24,15 @@
 /* ---------------------------------------------------------------------- */
 /* Shadow rays                                                               */
 
+/* Trilinear interpolation of a cell's eight corners v (x fastest, then y,
+ * then z) at fractions f. */
+static inline float
+cell_lerp(const float v[8], const float f[3]) {
+    const float x0 = vv_lerpf(v[0], v[1], f[0]), x1 = vv_lerpf(v[2], v[3], f[0]);
+    const float x2 = vv_lerpf(v[4], v[5], f[0]), x3 = vv_lerpf(v[6], v[7], f[0]);
+    return vv_lerpf(vv_lerpf(x0, x1, f[1]), vv_lerpf(x2, x3, f[1]), f[2]);
+}
+
 /* This volume's own transmittance towards light l from index point p: its
  * light volume, interpolated trilinearly. A point light's holds the mean
  * extinction s_i of each grid point's way to the light; each corner then
@@ -50,9 +59,7 @@ light_volume_at(const rt_vobj *ob, int l, const float p[3], float r) {
     if (r > 0)
         for (int k = 0; k < 8; k++)
             c[k] = expf(-c[k] * r);
-    float x0 = vv_lerpf(c[0], c[1], f[0]), x1 = vv_lerpf(c[2], c[3], f[0]);
-    float x2 = vv_lerpf(c[4], c[5], f[0]), x3 = vv_lerpf(c[6], c[7], f[0]);
-    return vv_lerpf(vv_lerpf(x0, x1, f[1]), vv_lerpf(x2, x3, f[1]), f[2]);
+    return cell_lerp(c, f);
 }
 
 float
@@ -208,13 +215,6 @@ rt_volume_march(const rt_frame *fr, const rt_vobj *ob, vv_vec3 wp, vv_vec3 ldir,
 static float
 shadow_ray(const rt_frame *fr, vv_vec3 p, const rt_light *l, double start) {
     return rt_shadow_segment(fr, p, l, start, INFINITY);
-}
-
-static inline vv_vec3
-index_to_world(const rt_vobj *ob, const double q[3]) {
-    return v3(ob->i2w[0][0] * q[0] + ob->i2w[0][1] * q[1] + ob->i2w[0][2] * q[2] + ob->i2w[0][3],
-              ob->i2w[1][0] * q[0] + ob->i2w[1][1] * q[1] + ob->i2w[1][2] * q[2] + ob->i2w[1][3],
-              ob->i2w[2][0] * q[0] + ob->i2w[2][1] * q[1] + ob->i2w[2][2] * q[2] + ob->i2w[2][3]);
 }
 
 /* The shadow grid of directional light l for the volume's own samples
@@ -377,9 +377,7 @@ volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float p
         }
         v = sc->v[l];
         if (sc->cell[l] == base) {
-            float x0 = vv_lerpf(v[0], v[1], f[0]), x1 = vv_lerpf(v[2], v[3], f[0]);
-            float x2 = vv_lerpf(v[4], v[5], f[0]), x3 = vv_lerpf(v[6], v[7], f[0]);
-            return vv_lerpf(vv_lerpf(x0, x1, f[1]), vv_lerpf(x2, x3, f[1]), f[2]);
+            return cell_lerp(v, f);
         }
         sc->cell[l] = base;
     }
@@ -398,10 +396,7 @@ volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float p
             double q[3] = {(double)gi * RT_SGRID, (double)gj * RT_SGRID, (double)gk * RT_SGRID};
             for (int a = 0; a < 3; a++)
                 q[a] = q[a] > ob->dims[a] - 1 ? ob->dims[a] - 1 : q[a];
-            vv_vec3 wp = v3(
-                ob->i2w[0][0] * q[0] + ob->i2w[0][1] * q[1] + ob->i2w[0][2] * q[2] + ob->i2w[0][3],
-                ob->i2w[1][0] * q[0] + ob->i2w[1][1] * q[1] + ob->i2w[1][2] * q[2] + ob->i2w[1][3],
-                ob->i2w[2][0] * q[0] + ob->i2w[2][1] * q[1] + ob->i2w[2][2] * q[2] + ob->i2w[2][3]);
+            const vv_vec3 wp = rt_index_to_world(ob, q);
             T = shadow_ray(fr, wp, &fr->lights[l], 1.5 * RT_SGRID * ob->vox);
             float x = T + 1.0f;
             memcpy(&bits, &x, sizeof bits);
@@ -411,9 +406,7 @@ volume_sample_shadow(const rt_frame *fr, const rt_vobj *ob, int l, const float p
         }
         v[k] = T;
     }
-    float x0 = vv_lerpf(v[0], v[1], f[0]), x1 = vv_lerpf(v[2], v[3], f[0]);
-    float x2 = vv_lerpf(v[4], v[5], f[0]), x3 = vv_lerpf(v[6], v[7], f[0]);
-    return vv_lerpf(vv_lerpf(x0, x1, f[1]), vv_lerpf(x2, x3, f[1]), f[2]);
+    return cell_lerp(v, f);
 }
 
 /* ---------------------------------------------------------------------- */
@@ -461,10 +454,7 @@ rt_volume_shadows(const rt_frame *fr, const rt_vobj *o, const float pi[3], const
                 sh[(size_t)stride * (size_t)l] = volume_sample_shadow(fr, o, l, pi, pw, sc);
                 continue;
             }
-            float x0 = vv_lerpf(v[0], v[1], f[0]), x1 = vv_lerpf(v[2], v[3], f[0]);
-            float x2 = vv_lerpf(v[4], v[5], f[0]), x3 = vv_lerpf(v[6], v[7], f[0]);
-            sh[(size_t)stride * (size_t)l] =
-                vv_lerpf(vv_lerpf(x0, x1, f[1]), vv_lerpf(x2, x3, f[1]), f[2]);
+            sh[(size_t)stride * (size_t)l] = cell_lerp(v, f);
         }
         return 1;
     }
