@@ -43,6 +43,10 @@ typedef struct vv_render_stats {
      * voxel) fit neither the renderer's gradient_budget_mb nor half the
      * memory left (the ray caster counts them; others add nothing) */
     uint32_t gradients_at_samples;
+    /** milliseconds the device spent on the frame's commands, between two
+     * timestamps around them (the gpu renderer: uploads, the ray casting
+     * dispatch and the copy back; others add nothing) */
+    double device_ms;
 } vv_render_stats;
 
 #define VV_LOD_MAX_LEVELS 16 /**< levels a level-of-detail frame draws from */
@@ -272,13 +276,34 @@ vv_status vv_renderer_check_world(const vv_renderer_info *info, const vv_world *
 /**
  * The renderer for @p w: the one its render settings name, else the default
  * chosen from the capabilities: the first renderer in registry order
- * (raycast, raytrace, irregular, splat, surface, radiosity, fourier) that
+ * (raycast, raytrace, irregular, splat, surface, radiosity, fourier, gpu) that
  * draws every visible object of the World, else the first that draws the
  * most of them. A World of volumes gets raycast, volumes with geometry
  * raytrace, grids irregular, grids with volumes or geometry surface; an
  * empty World raycast. Never NULL; the pointer is into @p w or static.
  */
 const char *vv_world_renderer(const vv_world *w);
+
+/* ---- GPU devices ----------------------------------------------------------- */
+
+/** A Vulkan device the gpu renderer can run on (vv_gpu_devices). */
+typedef struct vv_gpu_device {
+    char name[256];   /**< the driver's name, e.g. "NVIDIA H100 80GB HBM3", "llvmpipe (...)" */
+    const char *kind; /**< "discrete GPU", "integrated GPU", "virtual GPU", "CPU", "other" */
+    int cpu;          /**< 1: a CPU device (Mesa's lavapipe): never chosen on its own by the GUI */
+    uint32_t api_version;  /**< VK_MAKE_API_VERSION form */
+    uint64_t memory_bytes; /**< its largest device-local memory heap */
+} vv_gpu_device;
+
+/**
+ * The Vulkan devices there are, in the driver's order (the numbers of the
+ * gpu renderer's option `device`): up to @p max into @p out (may be NULL
+ * with @p max 0); returns how many there are, 0 where there is no Vulkan
+ * loader (libvulkan.so.1, opened at run time), no driver or the library
+ * was built without Vulkan, and *why (may be NULL) then gets the reason
+ * (a static string). The list is read once a process. Thread-safe.
+ */
+int vv_gpu_devices(vv_gpu_device *out, int max, const char **why);
 
 /* ---- renderer objects ------------------------------------------------------ */
 

@@ -35,10 +35,10 @@ struct vv_renderer {
  * (vv_world_renderer), hence the volume and grid ray casters first. Then
  * those vv_renderer_register adds: a slot is written before the count that
  * shows it is raised, and the array stays NULL-terminated. */
-#define N_BUILT_IN 7
+#define N_BUILT_IN 8
 static const vv_renderer_ops *registry[N_BUILT_IN + VV_RENDERERS_REGISTERED_MAX + 1] = {
-    &vv_raycast_ops, &vv_raytrace_ops,  &vv_irregular_ops, &vv_splat_ops,
-    &vv_surface_ops, &vv_radiosity_ops, &vv_fourier_ops,   NULL};
+    &vv_raycast_ops,   &vv_raytrace_ops, &vv_irregular_ops, &vv_splat_ops, &vv_surface_ops,
+    &vv_radiosity_ops, &vv_fourier_ops,  &vv_gpu_ops,       NULL};
 static atomic_int n_registry = N_BUILT_IN;
 static pthread_mutex_t register_lock = PTHREAD_MUTEX_INITIALIZER;
 
@@ -692,10 +692,9 @@ vv_renderer_render_region(vv_renderer *r, const vv_world *world, const vv_view *
         if (rr->per_pixel < 1 || !rr->xy ||
             (size_t)out->image->width * (size_t)out->image->height <
                 (size_t)rr->per_pixel * rr->n_pixels)
-            return vv_error_set(VV_ERR_INVALID,
-                                "%s: region image of %d x %d entries for %zu rays of %d a pixel",
-                                name, out->image->width, out->image->height, rr->n_pixels,
-                                rr->per_pixel);
+            return vv_error_set(
+                VV_ERR_INVALID, "%s: region image of %d x %d entries for %zu rays of %d a pixel",
+                name, out->image->width, out->image->height, rr->n_pixels, rr->per_pixel);
     } else if (out->image->width != view->width || out->image->height != view->height) {
         return vv_error_set(VV_ERR_INVALID, "%s: region image is %d x %d but the view is %d x %d",
                             name, out->image->width, out->image->height, view->width, view->height);

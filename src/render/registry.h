@@ -25,6 +25,9 @@ extern const vv_renderer_ops vv_irregular_ops;
 /** Object-order volume rendering by splatting (src/render/splat). */
 extern const vv_renderer_ops vv_splat_ops;
 
+/** Direct volume ray casting on a Vulkan device (src/render/gpu). */
+extern const vv_renderer_ops vv_gpu_ops;
+
 /** The method state behind @p r (what its create returned); borrowed. */
 void *vv_renderer_state(const vv_renderer *r);
 

@@ -1,0 +1,662 @@
+/*
+ * The GPU ray caster (renderer "gpu"): direct volume ray casting in a
+ * Vulkan 1.2 compute shader (raycast.comp, compiled to SPIR-V by glslc at
+ * build time and embedded), on any Vulkan device: a GPU, or Mesa's lavapipe
+ * on the CPU. The method is the CPU ray caster's (src/render/raycast;
+ * Levoy, IEEE CG&A 1988; the VolVis paper, section 5), and everything that
+ * decides the image is prepared by the same code on the host: the voxel
+ * cache (values in stored units, the octahedral gradient codes, the
+ * subvolumes' min/max: sample.h), the transfer-function tables with the
+ * opacity corrected for the step and the subvolume distances (classify.h),
+ * the lights and shading constants (shade.h) and the camera rays
+ * (vv_camera_rays). The shader repeats the per-sample arithmetic, so the
+ * images agree with raycast's to rounding (tests/render/test_gpu.c).
+ *
+ * Per renderer: one Vulkan context on the device of option `device` (auto:
+ * the first real GPU, else the first device), the volume as 3-D images
+ * (values as R16 unorm or R32 float, gradient codes as RG8 int) uploaded
+ * when the World's volume changes, and per frame the tables, the uniform
+ * block, one dispatch of 8 x 8 pixels a workgroup and the copy back of the
+ * RGBA float image and depth. vv_render_stats.device_ms gets the device's
+ * time for the frame's commands.
+ *
+ * Draws one volume object of one channel in composite, MIP, MinIP, X-ray
+ * and iso mode with a 1-D transfer function or a threshold, shading, lights
+ * and cut planes. Refused in one line: several volume objects, channels,
+ * 2-D transfer functions, solid textures and label colours (raycast draws
+ * them), volumes over the device's 3-D image side or memory.
+ * Thread-safety: a renderer serves one render at a time (render.h).
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/internal.h"
+#include "render/classify.h"
+#include "render/gpu/vk.h"
+#include "render/ray.h"
+#include "render/registry.h"
+#include "render/sample.h"
+#include "render/shade.h"
+#include "volvis/render.h"
+#include "volvis/sys/renderer.h"
+
+#if VV_HAVE_VULKAN
+static const uint32_t raycast_spv[] =
+#include "gpu_raycast.spv.h"
+    ;
+#endif
+
+/* The shader's uniform block (std140: every member 16 bytes). */
+typedef struct gpu_ubo {
+    float o00[4], ox[4], oy[4], d00[4], dx[4], dy[4];
+    float w2i[3][4];
+    float nrm[3][4];
+    float amb[4], bg[4], base[4];
+    float ldir[VV_MAX_LIGHTS][4], lpos[VV_MAX_LIGHTS][4], kd[VV_MAX_LIGHTS][4],
+        ks[VV_MAX_LIGHTS][4];
+    float planes[2 * VV_MAX_CUT_PLANES][4];
+    int32_t dims[4], bdims[4], misc[4], clipd[4];
+    float p0[4], p1[4];
+} gpu_ubo;
+
+enum { F_SHADING = 1, F_NORMALS = 2, F_SKIPPING = 4, F_POINT = 8, F_INTEGER = 16 };
+
+/* The buffers the shader reads and writes (bindings 0 and 3 .. 8). */
+enum { B_UBO, B_LUT, B_SPEC, B_DIST, B_MM, B_RGBA, B_DEPTH, N_BUF };
+static const int binding_of[N_BUF] = {0, 3, 4, 5, 6, 7, 8};
+
+typedef struct gpu_state {
+    vv_vcache_set vc;         /* the host's voxel caches (sample.h) */
+    double early_termination; /* option */
+    int skipping;             /* option empty_space_skipping */
+    int device;               /* option device: -1 auto */
+#if VV_HAVE_VULKAN
+    vv_vk vk;
+    int ready; /* vk, pipeline and descriptors made */
+    VkDescriptorSetLayout dsl;
+    VkPipelineLayout layout;
+    VkPipeline pipe;
+    VkDescriptorPool pool;
+    VkDescriptorSet set;
+    VkSampler sampler;
+    /* the volume on the device, and what it was made from */
+    const vv_volume *vol;
+    uint64_t vol_modified;
+    const void *vol_data;
+    const void *nrm_data;
+    vv_vk_image values, normals;
+    vv_vk_buffer buf[N_BUF]; /* device-local */
+    vv_vk_buffer staging;    /* host: the frame's uploads */
+    vv_vk_buffer readback;   /* host: the image back */
+#endif
+} gpu_state;
+
+#if VV_HAVE_VULKAN
+
+static void
+release_device(gpu_state *st) {
+    vv_vk *vk = &st->vk;
+    if (!vk->dev)
+        return;
+    vk->f.vkDestroyPipeline(vk->dev, st->pipe, NULL);
+    vk->f.vkDestroyPipelineLayout(vk->dev, st->layout, NULL);
+    vk->f.vkDestroyDescriptorPool(vk->dev, st->pool, NULL);
+    vk->f.vkDestroyDescriptorSetLayout(vk->dev, st->dsl, NULL);
+    vk->f.vkDestroySampler(vk->dev, st->sampler, NULL);
+    vv_vk_image_free(vk, &st->values);
+    vv_vk_image_free(vk, &st->normals);
+    for (int i = 0; i < N_BUF; i++)
+        vv_vk_buffer_free(vk, &st->buf[i]);
+    vv_vk_buffer_free(vk, &st->staging);
+    vv_vk_buffer_free(vk, &st->readback);
+    vv_vk_close(vk);
+    st->ready = 0;
+    st->vol = NULL;
+    st->pipe = VK_NULL_HANDLE;
+    st->layout = VK_NULL_HANDLE;
+    st->pool = VK_NULL_HANDLE;
+    st->dsl = VK_NULL_HANDLE;
+    st->sampler = VK_NULL_HANDLE;
+}
+
+static vv_status
+vk_check(const vv_vk *vk, VkResult r, const char *what) {
+    if (r == VK_SUCCESS)
+        return VV_OK;
+    return vv_error_set(r == VK_ERROR_OUT_OF_DEVICE_MEMORY || r == VK_ERROR_OUT_OF_HOST_MEMORY
+                            ? VV_ERR_NOMEM
+                            : VV_ERR_UNSUPPORTED,
+                        "gpu device %d (%s): %s failed: %s", vk->index, vk->props.deviceName, what,
+                        vv_vk_result_name(r));
+}
+
+/* The context, the pipeline of the embedded shader and its descriptor set. */
+static vv_status
+open_device(gpu_state *st) {
+    if (st->ready)
+        return VV_OK;
+    vv_status s = vv_vk_open(&st->vk, st->device);
+    if (s != VV_OK) {
+        vv_vk_close(&st->vk);
+        return s;
+    }
+    vv_vk *vk = &st->vk;
+    VkDescriptorSetLayoutBinding b[9];
+    for (int i = 0; i < 9; i++) {
+        b[i] = (VkDescriptorSetLayoutBinding){
+            .binding = (uint32_t)i,
+            .descriptorType = i == 0             ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER
+                              : i == 1 || i == 2 ? VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
+                                                 : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+            .descriptorCount = 1,
+            .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT};
+    }
+    const VkDescriptorSetLayoutCreateInfo li = {
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
+        .bindingCount = 9,
+        .pBindings = b};
+    s = vk_check(vk, vk->f.vkCreateDescriptorSetLayout(vk->dev, &li, NULL, &st->dsl),
+                 "vkCreateDescriptorSetLayout");
+    const VkPipelineLayoutCreateInfo pli = {.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO,
+                                            .setLayoutCount = 1,
+                                            .pSetLayouts = &st->dsl};
+    if (s == VV_OK)
+        s = vk_check(vk, vk->f.vkCreatePipelineLayout(vk->dev, &pli, NULL, &st->layout),
+                     "vkCreatePipelineLayout");
+    VkShaderModule mod = VK_NULL_HANDLE;
+    const VkShaderModuleCreateInfo mi = {.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO,
+                                         .codeSize = sizeof raycast_spv,
+                                         .pCode = raycast_spv};
+    if (s == VV_OK)
+        s = vk_check(vk, vk->f.vkCreateShaderModule(vk->dev, &mi, NULL, &mod),
+                     "vkCreateShaderModule");
+    const VkComputePipelineCreateInfo ci = {
+        .sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO,
+        .stage = {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO,
+                  .stage = VK_SHADER_STAGE_COMPUTE_BIT,
+                  .module = mod,
+                  .pName = "main"},
+        .layout = st->layout};
+    if (s == VV_OK)
+        s = vk_check(
+            vk, vk->f.vkCreateComputePipelines(vk->dev, VK_NULL_HANDLE, 1, &ci, NULL, &st->pipe),
+            "vkCreateComputePipelines");
+    if (mod)
+        vk->f.vkDestroyShaderModule(vk->dev, mod, NULL);
+    const VkDescriptorPoolSize ps[3] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
+                                        {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2},
+                                        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6}};
+    const VkDescriptorPoolCreateInfo pi = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO,
+                                           .maxSets = 1,
+                                           .poolSizeCount = 3,
+                                           .pPoolSizes = ps};
+    if (s == VV_OK)
+        s = vk_check(vk, vk->f.vkCreateDescriptorPool(vk->dev, &pi, NULL, &st->pool),
+                     "vkCreateDescriptorPool");
+    const VkDescriptorSetAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
+                                            .descriptorPool = st->pool,
+                                            .descriptorSetCount = 1,
+                                            .pSetLayouts = &st->dsl};
+    if (s == VV_OK)
+        s = vk_check(vk, vk->f.vkAllocateDescriptorSets(vk->dev, &ai, &st->set),
+                     "vkAllocateDescriptorSets");
+    const VkSamplerCreateInfo si = {.sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO,
+                                    .magFilter = VK_FILTER_NEAREST,
+                                    .minFilter = VK_FILTER_NEAREST,
+                                    .addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+                                    .addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+                                    .addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+                                    .unnormalizedCoordinates = VK_FALSE};
+    if (s == VV_OK)
+        s = vk_check(vk, vk->f.vkCreateSampler(vk->dev, &si, NULL, &st->sampler),
+                     "vkCreateSampler");
+    if (s != VV_OK) {
+        st->ready = 1; /* so that release_device frees what was made */
+        release_device(st);
+        return s;
+    }
+    st->ready = 1;
+    return VV_OK;
+}
+
+/* Makes @p b at least @p size bytes (device-local or host). */
+static vv_status
+ensure_buffer(gpu_state *st, vv_vk_buffer *b, VkDeviceSize size, VkBufferUsageFlags usage,
+              int host) {
+    if (b->buf && b->size >= size)
+        return VV_OK;
+    vv_vk_buffer_free(&st->vk, b);
+    /* room to grow a little, so a resized view does not reallocate each frame */
+    return vv_vk_buffer_new(&st->vk, size + size / 4, usage, host, b);
+}
+
+/* The volume of cache @p c on the device, uploaded when it changed:
+ * records the copies into the command buffer being recorded, through the
+ * staging buffer from @p at on (*used: bytes of staging used). */
+static vv_status
+upload_volume(gpu_state *st, const vv_vcache *c, VkDeviceSize *used) {
+    vv_vk *vk = &st->vk;
+    const void *data = c->q16 ? (const void *)c->q16 : (const void *)c->f32;
+    if (st->vol == c->vol && st->vol_modified == c->modified && st->vol_data == data &&
+        st->nrm_data == c->nrm && st->values.img)
+        return VV_OK;
+    vv_vk_image_free(vk, &st->values);
+    vv_vk_image_free(vk, &st->normals);
+    st->vol = NULL;
+    const int dims[3] = {c->nx, c->ny, c->nz};
+    const size_t n = (size_t)c->nx * (size_t)c->ny * (size_t)c->nz;
+    const size_t vbytes = n * (c->q16 ? 2 : 4);
+    const size_t nbytes = c->nrm ? 2 * n : 2;
+    vv_status s =
+        vv_vk_image_new(vk, dims, c->q16 ? VK_FORMAT_R16_UNORM : VK_FORMAT_R32_SFLOAT, &st->values);
+    const int one[3] = {1, 1, 1};
+    if (s == VV_OK)
+        s = vv_vk_image_new(vk, c->nrm ? dims : one, VK_FORMAT_R8G8_SINT, &st->normals);
+    const VkDeviceSize need = *used + ((vbytes + 15) & ~(size_t)15) + nbytes;
+    if (s == VV_OK)
+        s = ensure_buffer(st, &st->staging, need, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, 1);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "the volume (%d x %d x %d)", dims[0], dims[1], dims[2]);
+    unsigned char *m = st->staging.map;
+    memcpy(m + *used, data, vbytes);
+    vv_vk_copy_to_image(vk, &st->staging, *used, &st->values);
+    *used += (vbytes + 15) & ~(size_t)15;
+    if (c->nrm)
+        memcpy(m + *used, c->nrm, nbytes);
+    else
+        memset(m + *used, 0x80, 2); /* VV_OCT_ZERO: no gradient */
+    vv_vk_copy_to_image(vk, &st->staging, *used, &st->normals);
+    *used += (nbytes + 15) & ~(size_t)15;
+    st->vol = c->vol;
+    st->vol_modified = c->modified;
+    st->vol_data = data;
+    st->nrm_data = c->nrm;
+    return VV_OK;
+}
+
+static void
+vec4_of(float out[4], vv_vec3 v) {
+    out[0] = (float)v.x;
+    out[1] = (float)v.y;
+    out[2] = (float)v.z;
+    out[3] = 0;
+}
+
+/* The one volume object the World shows, or an error naming what the
+ * renderer does not draw. */
+static vv_status
+find_object(const vv_world *w, const vv_object **out) {
+    *out = NULL;
+    int n = 0;
+    for (int i = 0; i < w->n_objects; i++) {
+        const vv_object *ob = w->objects[i];
+        if (!ob->visible || ob->type != VV_OBJECT_VOLUME || !ob->volume)
+            continue;
+        if (n++ == 0)
+            *out = ob;
+    }
+    if (n > 1)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "gpu: draws one volume object, the World shows %d (raycast draws "
+                            "several)",
+                            n);
+    if (*out && (*out)->n_channels > 1)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "gpu: object '%s' has %d channels; the gpu renderer draws one "
+                            "(raycast draws channels)",
+                            (*out)->name, (*out)->n_channels);
+    return VV_OK;
+}
+
+static vv_status
+gpu_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+           vv_image *out) {
+    gpu_state *st = state;
+    const vv_object *obj;
+    vv_status s = find_object(w, &obj);
+    if (s != VV_OK)
+        return s;
+    s = open_device(st);
+    if (s != VV_OK)
+        return s;
+    vv_vk *vk = &st->vk;
+    st->vc.frame++;
+
+    gpu_ubo u;
+    memset(&u, 0, sizeof u);
+    float ambient[3], bg[3];
+    vv_frame_colours(w, 0, ambient, bg);
+    for (int a = 0; a < 3; a++)
+        u.bg[a] = bg[a];
+    vv_vlight lights[VV_MAX_LIGHTS];
+    const int n_lights = vv_vlights_prepare(lights, w, view);
+    vv_camera_rays cam;
+    vv_camera_rays_init(&cam, view);
+    vec4_of(u.o00, cam.o00);
+    vec4_of(u.ox, cam.ox);
+    vec4_of(u.oy, cam.oy);
+    vec4_of(u.d00, cam.d00);
+    vec4_of(u.dx, cam.dx);
+    vec4_of(u.dy, cam.dy);
+    u.misc[0] = view->width;
+    u.misc[1] = view->height;
+
+    vv_vcache *c = NULL;
+    vv_vtables tab;
+    memset(&tab, 0, sizeof tab);
+    int owns = 0;
+    size_t nblocks = 1;
+    vv_vshading sh; /* the object's shading constants (its specular table goes up) */
+    if (obj) {
+        if (!(obj->step > 0))
+            return vv_error_set(VV_ERR_INVALID, "object '%s': step must be > 0", obj->name);
+        s = vv_vcache_get(&st->vc, obj->volume, &c);
+        if (s != VV_OK)
+            return vv_error_prefix(s, "object '%s'", obj->name);
+        double w2i[3][4], i2w[3][4];
+        int dims[3], n_planes;
+        vv_plane planes[2 * VV_MAX_CUT_PLANES];
+        s = vv_vobject_prepare(obj, w, ambient, lights, n_lights, w2i, i2w, dims, planes, &n_planes,
+                               &sh);
+        if (s != VV_OK)
+            return s;
+        const vv_render_mode mode = obj->mode;
+        if (obj->shading && (mode == VV_MODE_COMPOSITE || mode == VV_MODE_ISO)) {
+            vv_vcache_need_normals(&st->vc, c);
+            if (!c->nrm && opt && opt->stats)
+                opt->stats->gradients_at_samples++;
+        }
+        const double dt = vv_vobject_step(obj);
+        const float iso = (float)(obj->isovalue - c->qoff);
+        s = vv_vtables_get(&st->vc, c, obj, mode, (float)dt, iso, st->skipping, 0, &tab, &owns);
+        if (s != VV_OK)
+            return s;
+        vv_vextra x;
+        if (vv_vextra_prepare(&x, obj, mode, &tab) || (mode == VV_MODE_ISO && obj->texture.image)) {
+            if (owns)
+                vv_vtables_free(&tab);
+            return vv_error_set(VV_ERR_UNSUPPORTED,
+                                "gpu: object '%s' has a 2-D transfer function, a solid texture "
+                                "or label colours; the gpu renderer draws a 1-D transfer "
+                                "function or a threshold (raycast draws them)",
+                                obj->name);
+        }
+        for (int a = 0; a < 3; a++) {
+            for (int b = 0; b < 4; b++)
+                u.w2i[a][b] = (float)w2i[a][b];
+            for (int b = 0; b < 3; b++)
+                u.nrm[a][b] = sh.nrm[a][b];
+            u.amb[a] = sh.amb[a];
+            u.base[a] = sh.base[a];
+        }
+        for (int l = 0; l < n_lights; l++) {
+            for (int a = 0; a < 3; a++) {
+                u.ldir[l][a] = lights[l].dir[a];
+                u.lpos[l][a] = lights[l].pos[a];
+                u.kd[l][a] = sh.kd_col[l][a];
+                u.ks[l][a] = sh.ks_col[l][a];
+            }
+            u.ldir[l][3] = lights[l].point ? 1.0f : 0.0f;
+        }
+        for (int p = 0; p < n_planes; p++) {
+            vec4_of(u.planes[p], planes[p].n);
+            u.planes[p][3] = (float)planes[p].d;
+        }
+        const int modes[] = {[VV_MODE_COMPOSITE] = 0,
+                             [VV_MODE_MIP] = 1,
+                             [VV_MODE_MINIP] = 2,
+                             [VV_MODE_XRAY] = 3,
+                             [VV_MODE_ISO] = 4};
+        u.dims[0] = c->nx;
+        u.dims[1] = c->ny;
+        u.dims[2] = c->nz;
+        u.dims[3] = modes[mode];
+        u.bdims[0] = c->bx;
+        u.bdims[1] = c->by;
+        u.bdims[2] = c->bz;
+        u.bdims[3] = n_lights;
+        u.misc[2] = n_planes;
+        int point = 0;
+        for (int l = 0; l < n_lights; l++)
+            point |= lights[l].point;
+        u.misc[3] = (obj->shading ? F_SHADING : 0) | (c->nrm ? F_NORMALS : 0) |
+                    (st->skipping && tab.bdist ? F_SKIPPING : 0) | (point ? F_POINT : 0) |
+                    (c->q16 ? F_INTEGER : 0);
+        for (int a = 0; a < 3; a++)
+            u.clipd[a] = dims[a];
+        u.p0[0] = (float)dt;
+        u.p0[1] = (float)st->early_termination;
+        u.p0[2] = tab.lut_lo;
+        u.p0[3] = tab.lut_scale;
+        u.p1[0] = c->q16 ? 65535.0f : 1.0f;
+        u.p1[1] = iso;
+        u.p1[2] = tab.pdist ? tab.plo : -INFINITY;
+        u.p1[3] = tab.pdist ? tab.phi : INFINITY;
+        nblocks = (size_t)c->bx * (size_t)c->by * (size_t)c->bz;
+    } else {
+        u.misc[2] = 1; /* nothing to draw: one plane that cuts every ray */
+        u.planes[0][3] = -1;
+        u.dims[0] = u.dims[1] = u.dims[2] = 2;
+        u.clipd[0] = u.clipd[1] = u.clipd[2] = 2;
+        u.bdims[0] = u.bdims[1] = u.bdims[2] = 1;
+        u.p0[0] = 1;
+    }
+
+    /* the frame's uploads, in the staging buffer */
+    const size_t npx = (size_t)view->width * (size_t)view->height;
+    const VkDeviceSize sizes[N_BUF] = {sizeof u,
+                                       (VkDeviceSize)VV_VC_LUT * 16,
+                                       (VV_VC_SPEC + 1) * sizeof(float),
+                                       (nblocks + 3) & ~(size_t)3,
+                                       nblocks * 8,
+                                       npx * 16,
+                                       npx * 4};
+    VkDeviceSize offs[N_BUF], total = 0;
+    for (int i = 0; i < B_RGBA; i++) {
+        offs[i] = total;
+        total += (sizes[i] + 255) & ~(VkDeviceSize)255;
+    }
+    const VkBufferUsageFlags dst = VK_BUFFER_USAGE_TRANSFER_DST_BIT;
+    for (int i = 0; i < N_BUF && s == VV_OK; i++)
+        s = ensure_buffer(
+            st, &st->buf[i], sizes[i],
+            (i == B_UBO ? VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT : VK_BUFFER_USAGE_STORAGE_BUFFER_BIT) |
+                (i < B_RGBA ? dst : VK_BUFFER_USAGE_TRANSFER_SRC_BIT),
+            0);
+    if (s == VV_OK)
+        s = ensure_buffer(st, &st->readback, npx * 20, dst, 1);
+    if (s == VV_OK)
+        s = vv_vk_begin(vk);
+    VkDeviceSize used = total;
+    if (s == VV_OK) {
+        vv_vk_timestamp(vk, 0);
+        /* the volume first (it may grow the staging buffer), then the frame's data */
+        if (c) {
+            s = upload_volume(st, c, &used);
+        } else if (!st->values.view) {
+            /* nothing drawn yet: a 2 x 2 x 2 volume of zeros without gradients, so
+             * that every binding holds an image */
+            static const float zeros[8];
+            vv_vcache zero;
+            memset(&zero, 0, sizeof zero);
+            zero.nx = zero.ny = zero.nz = 2;
+            zero.f32 = (float *)zeros;
+            s = upload_volume(st, &zero, &used);
+            st->vol = NULL; /* not a real volume: the next object uploads its own */
+        }
+        if (s == VV_OK)
+            s = ensure_buffer(st, &st->staging, total, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, 1);
+    }
+    if (s == VV_OK) {
+        unsigned char *m = st->staging.map;
+        memcpy(m + offs[B_UBO], &u, sizeof u);
+        if (tab.lut)
+            memcpy(m + offs[B_LUT], tab.lut, sizes[B_LUT]);
+        else
+            memset(m + offs[B_LUT], 0, sizes[B_LUT]);
+        if (c && obj->shading)
+            memcpy(m + offs[B_SPEC], sh.spec, sizes[B_SPEC]);
+        else
+            memset(m + offs[B_SPEC], 0, sizes[B_SPEC]);
+        memset(m + offs[B_DIST], 0, sizes[B_DIST]);
+        if (tab.bdist)
+            memcpy(m + offs[B_DIST], tab.bdist, nblocks);
+        float *mm = (float *)(m + offs[B_MM]);
+        for (size_t b = 0; b < nblocks; b++) {
+            mm[2 * b] = c ? c->bmin[b] : 0;
+            mm[2 * b + 1] = c ? c->bmax[b] : 0;
+        }
+        VkBufferCopy cp[B_RGBA];
+        for (int i = 0; i < B_RGBA; i++) {
+            cp[i] = (VkBufferCopy){.srcOffset = offs[i], .dstOffset = 0, .size = sizes[i]};
+            vk->f.vkCmdCopyBuffer(vk->cmd, st->staging.buf, st->buf[i].buf, 1, &cp[i]);
+        }
+        vv_vk_barrier(vk, 0);
+
+        VkDescriptorBufferInfo bi[N_BUF];
+        VkWriteDescriptorSet wr[N_BUF + 2];
+        for (int i = 0; i < N_BUF; i++) {
+            bi[i] = (VkDescriptorBufferInfo){st->buf[i].buf, 0, sizes[i]};
+            wr[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
+                                           .dstSet = st->set,
+                                           .dstBinding = (uint32_t)binding_of[i],
+                                           .descriptorCount = 1,
+                                           .descriptorType =
+                                               i == B_UBO ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER
+                                                          : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                                           .pBufferInfo = &bi[i]};
+        }
+        vv_vk_image *ims[2] = {&st->values, &st->normals};
+        VkDescriptorImageInfo ii[2];
+        int nw = N_BUF;
+        for (int i = 0; i < 2; i++) {
+            ii[i] = (VkDescriptorImageInfo){st->sampler, ims[i]->view,
+                                            VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+            wr[nw++] =
+                (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
+                                       .dstSet = st->set,
+                                       .dstBinding = (uint32_t)(1 + i),
+                                       .descriptorCount = 1,
+                                       .descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+                                       .pImageInfo = &ii[i]};
+        }
+        if (s == VV_OK) {
+            vk->f.vkUpdateDescriptorSets(vk->dev, (uint32_t)nw, wr, 0, NULL);
+            vk->f.vkCmdBindPipeline(vk->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, st->pipe);
+            vk->f.vkCmdBindDescriptorSets(vk->cmd, VK_PIPELINE_BIND_POINT_COMPUTE, st->layout, 0, 1,
+                                          &st->set, 0, NULL);
+            vk->f.vkCmdDispatch(vk->cmd, (uint32_t)(view->width + 7) / 8,
+                                (uint32_t)(view->height + 7) / 8, 1);
+            vv_vk_barrier(vk, 1);
+            const VkBufferCopy back[2] = {{0, 0, npx * 16}, {0, npx * 16, npx * 4}};
+            vk->f.vkCmdCopyBuffer(vk->cmd, st->buf[B_RGBA].buf, st->readback.buf, 1, &back[0]);
+            vk->f.vkCmdCopyBuffer(vk->cmd, st->buf[B_DEPTH].buf, st->readback.buf, 1, &back[1]);
+            vv_vk_timestamp(vk, 1);
+            double ms = 0;
+            s = vv_vk_submit_wait(vk, &ms);
+            if (s == VV_OK) {
+                const unsigned char *r = st->readback.map;
+                memcpy(out->rgba, r, npx * 16);
+                memcpy(out->depth, r + npx * 16, npx * 4);
+                if (opt && opt->stats)
+                    opt->stats->device_ms += ms;
+            } else {
+                /* a device that failed a frame is opened afresh next time */
+                release_device(st);
+            }
+        } else {
+            vk->f.vkEndCommandBuffer(vk->cmd);
+        }
+    } else if (vk->dev && s != VV_OK) {
+        vk->f.vkEndCommandBuffer(vk->cmd);
+    }
+    if (owns)
+        vv_vtables_free(&tab);
+    if (s == VV_OK && opt && opt->progress.fn && opt->progress.fn(opt->progress.user, 1.0))
+        s = vv_error_set(VV_ERR_CANCELLED, "gpu: cancelled");
+    vv_vcache_set_prune(&st->vc, w);
+    return s;
+}
+
+#else /* !VV_HAVE_VULKAN */
+
+static vv_status
+gpu_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+           vv_image *out) {
+    (void)state;
+    (void)w;
+    (void)view;
+    (void)opt;
+    (void)out;
+    const char *why;
+    vv_gpu_devices(NULL, 0, &why);
+    return vv_error_set(VV_ERR_UNSUPPORTED, "gpu: %s", why);
+}
+
+#endif
+
+static vv_status
+gpu_init(void *state) {
+    gpu_state *st = state;
+    vv_vcache_set_init(&st->vc);
+    return VV_OK;
+}
+
+static void
+gpu_release(void *state) {
+    gpu_state *st = state;
+#if VV_HAVE_VULKAN
+    release_device(st);
+#endif
+    vv_vcache_set_clear(&st->vc);
+}
+
+/* device: the context goes, and the next frame opens the device named. */
+static vv_status
+gpu_device_changed(void *state, const vv_option_spec *spec, const vv_option_value *v) {
+    (void)spec;
+    (void)v;
+#if VV_HAVE_VULKAN
+    release_device(state);
+#else
+    (void)state;
+#endif
+    return VV_OK;
+}
+
+static const char *const gpu_auto[] = {"auto", NULL};
+
+/* The gpu renderer's options (docs/rendering.md, "GPU ray casting"). */
+static const vv_option_spec gpu_options[] = {
+    {"device", VV_OPTION_INT, "auto", 0, 15, 0, gpu_auto,
+     "the Vulkan device to run on, by its number in `volvis renderers` (auto: the first GPU, "
+     "else the first device, such as Mesa's lavapipe)",
+     VV_OPTION_BIND_WORDS(gpu_state, device, INT, VV_OPTION_WORD_VALUES(-1), gpu_device_changed)},
+    {"early_termination", VV_OPTION_REAL, "0.99", 0, 1, VV_OPTION_MIN_OPEN, NULL,
+     "accumulated opacity that ends a composite ray",
+     VV_OPTION_BIND(gpu_state, early_termination, DOUBLE)},
+    {"empty_space_skipping", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
+     "leap over subvolumes the transfer function hides (0 for tests; same image)",
+     VV_OPTION_BIND(gpu_state, skipping, INT)},
+};
+
+const vv_renderer_ops vv_gpu_ops = {
+    .version = VV_RENDERER_OPS_VERSION,
+    .info =
+        {
+            .name = "gpu",
+            .description = "direct volume ray casting on a Vulkan device (a GPU, or lavapipe): "
+                           "composite, mip, minip, xray, iso; one volume object",
+            .draws = VV_DRAWS(VV_OBJECT_VOLUME),
+            .modes = VV_MODES_ALL,
+            .caps = 0,
+            .quality = "every quality casts one ray a pixel at the objects' step",
+            .options = gpu_options,
+            .n_options = VV_OPTIONS_COUNT(gpu_options),
+        },
+    .state_size = sizeof(gpu_state),
+    .init = gpu_init,
+    .release = gpu_release,
+    .render = gpu_render,
+};

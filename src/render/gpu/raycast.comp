@@ -1,0 +1,415 @@
+/*
+ * The GPU ray caster's kernel (src/render/gpu/gpu.c): one invocation a
+ * pixel, the CPU ray caster's method step for step (src/render/raycast,
+ * ray.h, sample.h, shade.h, project.h) so that the images agree: the
+ * world ray through the pixel centre mapped into the volume's index space
+ * and clipped to its grid box and the cut planes; samples at t = k dt (world
+ * units); trilinear values of the cached voxels (stored units); the
+ * object's transfer-function table (opacity corrected for the step); unit
+ * gradients from the cached octahedral codes, trilinearly interpolated (or
+ * central differences of samples where none are cached); Phong with the
+ * reflection vector, two-sided, with the World's lights; front-to-back
+ * compositing with early ray termination; leaps over cubes of subvolumes
+ * the transfer function hides (their chessboard distance); MIP and MinIP
+ * with the table's flat ends and the subvolumes' min/max; the X-ray mean;
+ * the first isosurface crossing refined by ten bisections.
+ * Levoy, "Display of Surfaces from Volume Data", IEEE CG&A 1988; the VolVis
+ * paper, section 5 (volume ray casting) and section 4 (PARC subvolumes).
+ */
+#version 450
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+const int MODE_COMPOSITE = 0, MODE_MIP = 1, MODE_MINIP = 2, MODE_XRAY = 3, MODE_ISO = 4;
+const int F_SHADING = 1, F_NORMALS = 2, F_SKIPPING = 4, F_POINT = 8, F_INTEGER = 16;
+const int MAX_LIGHTS = 16, MAX_PLANES = 16, LUT = 4096, SPEC = 2048, BLOCK = 4;
+
+layout(std140, set = 0, binding = 0) uniform Frame {
+    vec4 o00, ox, oy, d00, dx, dy; /* camera rays, affine in the pixel (xyz) */
+    vec4 w2i[3];                   /* world -> index, rows */
+    vec4 nrm[3];                   /* index-space gradient -> world normal, rows */
+    vec4 amb;                      /* ka * ambient */
+    vec4 bg;                       /* background (0 in a region render) */
+    vec4 base;                     /* material colour (iso) */
+    vec4 ldir[MAX_LIGHTS];         /* unit vector towards the light; w: 1 point light */
+    vec4 lpos[MAX_LIGHTS];         /* point light position */
+    vec4 kd[MAX_LIGHTS];           /* kd * light colour */
+    vec4 ks[MAX_LIGHTS];           /* ks * light colour */
+    vec4 planes[MAX_PLANES];       /* cut planes n.x + d >= 0 kept */
+    ivec4 dims;                    /* cached grid nx, ny, nz; mode */
+    ivec4 bdims;                   /* subvolumes bx, by, bz; lights */
+    ivec4 misc;                    /* width, height, planes, flags */
+    ivec4 clipd;                   /* the grid box [0, clipd - 1] */
+    vec4 p0;                       /* dt, early termination, table lo, table scale */
+    vec4 p1;                       /* value scale, iso, MIP floor, MIP stop */
+} fr;
+
+layout(set = 0, binding = 1) uniform sampler3D vol;   /* stored values (R16 unorm or R32F) */
+layout(set = 0, binding = 2) uniform isampler3D onrm; /* octahedral gradient codes (u, v) */
+layout(std430, set = 0, binding = 3) readonly buffer Lut { vec4 lut[]; };
+layout(std430, set = 0, binding = 4) readonly buffer Spec { float spec[]; };
+layout(std430, set = 0, binding = 5) readonly buffer Dist { uint bdist[]; }; /* bytes */
+layout(std430, set = 0, binding = 6) readonly buffer MinMax { vec2 bmm[]; };
+layout(std430, set = 0, binding = 7) writeonly buffer Rgba { vec4 out_rgba[]; };
+layout(std430, set = 0, binding = 8) writeonly buffer Depth { float out_depth[]; };
+
+ivec3 gmax;   /* dims - 2: the last cell */
+vec3 o_i;     /* index point at t = tb */
+vec3 d_i;     /* index direction per world unit */
+vec3 inv_d;   /* 1 / d_i, 0 where d_i is 0 */
+float tb;
+
+float
+voxel(ivec3 c) {
+    float v = texelFetch(vol, c, 0).r * fr.p1.x;
+    return (fr.misc.w & F_INTEGER) != 0 ? round(v) : v;
+}
+
+vec3
+point_at(float t) {
+    return o_i + (t - tb) * d_i;
+}
+
+/* sample.h vv_vcache_cell_of: the cell (clamped so its far corner is in the
+ * grid) and the fractions (at most 1) */
+ivec3
+cell_of(vec3 p, out vec3 f) {
+    p = max(p, vec3(0));
+    ivec3 i = min(ivec3(p), gmax);
+    f = min(p - vec3(i), vec3(1));
+    return i;
+}
+
+float
+value_at(ivec3 i, vec3 f) {
+    float c00 = mix(voxel(i), voxel(i + ivec3(1, 0, 0)), f.x);
+    float c10 = mix(voxel(i + ivec3(0, 1, 0)), voxel(i + ivec3(1, 1, 0)), f.x);
+    float c01 = mix(voxel(i + ivec3(0, 0, 1)), voxel(i + ivec3(1, 0, 1)), f.x);
+    float c11 = mix(voxel(i + ivec3(0, 1, 1)), voxel(i + ivec3(1, 1, 1)), f.x);
+    return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
+}
+
+float
+sample_at(vec3 p) {
+    vec3 f;
+    ivec3 i = cell_of(p, f);
+    return value_at(i, f);
+}
+
+vec3
+oct_decode(ivec3 c) {
+    ivec2 q = texelFetch(onrm, c, 0).xy;
+    if (q.x == -128)
+        return vec3(0);
+    float u = float(q.x), v = float(q.y);
+    float z = 127.0 - abs(u) - abs(v);
+    float t = max(-z, 0.0);
+    vec3 n = vec3(u + (u >= 0.0 ? -t : t), v + (v >= 0.0 ? -t : t), z);
+    return n / sqrt(dot(n, n));
+}
+
+/* sample.h vv_vcache_gradient: the cached unit gradients of the cell's
+ * corners interpolated, or central differences half a voxel apart */
+vec3
+gradient(vec3 p) {
+    if ((fr.misc.w & F_NORMALS) != 0) {
+        vec3 f;
+        ivec3 i = cell_of(p, f);
+        vec3 c00 = mix(oct_decode(i), oct_decode(i + ivec3(1, 0, 0)), f.x);
+        vec3 c10 = mix(oct_decode(i + ivec3(0, 1, 0)), oct_decode(i + ivec3(1, 1, 0)), f.x);
+        vec3 c20 = mix(oct_decode(i + ivec3(0, 0, 1)), oct_decode(i + ivec3(1, 0, 1)), f.x);
+        vec3 c30 = mix(oct_decode(i + ivec3(0, 1, 1)), oct_decode(i + ivec3(1, 1, 1)), f.x);
+        return mix(mix(c00, c10, f.y), mix(c20, c30, f.y), f.z);
+    }
+    vec3 g;
+    for (int a = 0; a < 3; a++) {
+        vec3 e = vec3(0);
+        e[a] = 0.5;
+        g[a] = sample_at(p + e) - sample_at(p - e);
+    }
+    return g;
+}
+
+/* shade.h vv_vshade: Phong with the reflection vector, two-sided */
+vec3
+shade(vec3 g, vec3 pw, vec3 v, vec3 col, float alpha) {
+    vec3 n = vec3(dot(fr.nrm[0].xyz, g), dot(fr.nrm[1].xyz, g), dot(fr.nrm[2].xyz, g));
+    float len2 = dot(n, n);
+    vec3 d = fr.amb.xyz, s = vec3(0);
+    if (len2 > 1e-12) {
+        float inv = 1.0 / sqrt(len2);
+        float nv = dot(n, v) * inv;
+        for (int l = 0; l < fr.bdims.w; l++) {
+            vec3 L = fr.ldir[l].xyz;
+            if (fr.ldir[l].w > 0.5) {
+                L = fr.lpos[l].xyz - pw;
+                float ll = sqrt(dot(L, L));
+                if (!(ll > 0.0))
+                    continue;
+                L /= ll;
+            }
+            float ndl = dot(n, L) * inv;
+            float ndv = ndl < 0.0 ? -nv : nv;
+            ndl = abs(ndl);
+            float rv = 2.0 * ndl * ndv - dot(L, v);
+            float sp = rv > 0.0 ? spec[min(int(rv * float(SPEC) + 0.5), SPEC)] : 0.0;
+            d += ndl * fr.kd[l].xyz;
+            s += sp * fr.ks[l].xyz;
+        }
+    }
+    return d * col + alpha * s;
+}
+
+vec4
+entry(float v) {
+    float x = clamp((v - fr.p0.z) * fr.p0.w, 0.0, float(LUT - 1));
+    return lut[int(x)];
+}
+
+uint
+block_of(vec3 p, out uvec3 bc) {
+    bc = min(uvec3(ivec3(max(p, vec3(0)) * 0.25)), uvec3(fr.bdims.xyz - 1));
+    return (bc.z * uint(fr.bdims.y) + bc.y) * uint(fr.bdims.x) + bc.x;
+}
+
+uint
+dist_of(uint b) {
+    return (bdist[b >> 2] >> (8u * (b & 3u))) & 255u;
+}
+
+/* ray.h vv_vray_leap: the sample index after the empty cube of 2 dist - 1
+ * subvolumes around bc */
+float
+leap(vec3 p, float t, uvec3 bc, uint dist, float inv_dt, float k) {
+    float te = 1.0 / 0.0;
+    for (int a = 0; a < 3; a++) {
+        if (inv_d[a] == 0.0)
+            continue;
+        float bound = d_i[a] > 0.0 ? float(int(bc[a]) + int(dist)) * float(BLOCK)
+                                   : float(int(bc[a]) - int(dist) + 1) * float(BLOCK);
+        te = min(te, (bound - p[a]) * inv_d[a]);
+    }
+    return max(ceil((t + te) * inv_dt), k + 1.0);
+}
+
+/* ray.h vv_vray_cube_exit: where the ray leaves the subvolume holding p */
+float
+block_exit(vec3 p, float t) {
+    float te = 1.0 / 0.0;
+    for (int a = 0; a < 3; a++) {
+        if (inv_d[a] == 0.0)
+            continue;
+        float b = max(float(int(p[a] * 0.25)), 0.0);
+        float bound = (d_i[a] > 0.0 ? b + 1.0 : b) * float(BLOCK);
+        te = min(te, (bound - p[a]) * inv_d[a]);
+    }
+    return t + te;
+}
+
+float
+iso_refine(float ta, float va, float tbb, float iso) {
+    for (int it = 0; it < 10; it++) {
+        float tm = 0.5 * (ta + tbb);
+        float vm = sample_at(point_at(tm));
+        if ((va < iso) == (vm < iso)) {
+            ta = tm;
+            va = vm;
+        } else {
+            tbb = tm;
+        }
+    }
+    return 0.5 * (ta + tbb);
+}
+
+void
+main() {
+    const ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (px.x >= fr.misc.x || px.y >= fr.misc.y)
+        return;
+    const uint at = uint(px.y) * uint(fr.misc.x) + uint(px.x);
+    const float INF = 1.0 / 0.0;
+    gmax = fr.dims.xyz - 2;
+    const vec3 o = fr.o00.xyz + float(px.x) * fr.ox.xyz + float(px.y) * fr.oy.xyz;
+    const vec3 dir = normalize(fr.d00.xyz + float(px.x) * fr.dx.xyz + float(px.y) * fr.dy.xyz);
+    const int mode = fr.dims.w, flags = fr.misc.w;
+    vec3 C = vec3(0);
+    float A = 0.0, depth = INF;
+    vec3 P = vec3(0);
+    float PA = 0.0, pdepth = INF;
+
+    /* the ray in index space, clipped to the grid box and the cut planes */
+    vec3 oi, di;
+    for (int a = 0; a < 3; a++) {
+        oi[a] = dot(fr.w2i[a].xyz, o) + fr.w2i[a].w;
+        di[a] = dot(fr.w2i[a].xyz, dir);
+    }
+    float t0 = 0.0, t1 = INF;
+    bool hit = true;
+    for (int a = 0; a < 3; a++) {
+        const float hi = float(fr.clipd[a] - 1);
+        if (abs(di[a]) < 1e-30) {
+            hit = hit && oi[a] >= 0.0 && oi[a] <= hi;
+            continue;
+        }
+        float ta = (0.0 - oi[a]) / di[a], tb2 = (hi - oi[a]) / di[a];
+        t0 = max(t0, min(ta, tb2));
+        t1 = min(t1, max(ta, tb2));
+    }
+    for (int q = 0; q < fr.misc.z && hit; q++) {
+        const float dn = dot(fr.planes[q].xyz, dir);
+        const float s0 = dot(fr.planes[q].xyz, o) + fr.planes[q].w;
+        if (dn == 0.0) {
+            hit = s0 >= 0.0;
+            continue;
+        }
+        const float t = -s0 / dn;
+        if (dn > 0.0)
+            t0 = max(t0, t);
+        else
+            t1 = min(t1, t);
+    }
+    hit = hit && t0 <= t1;
+    if (hit) {
+        tb = t0;
+        o_i = oi + t0 * di;
+        d_i = di;
+        for (int a = 0; a < 3; a++)
+            inv_d[a] = abs(di[a]) < 1e-30 ? 0.0 : 1.0 / di[a];
+        const float dt = fr.p0.x, inv_dt = 1.0 / dt;
+        const vec3 v = -dir;
+        const bool skipping = (flags & F_SKIPPING) != 0;
+        if (mode == MODE_COMPOSITE) {
+            float k = ceil(t0 * inv_dt);
+            const float kend = floor(t1 * inv_dt);
+            const float et = fr.p0.y;
+            while (k <= kend) {
+                const float t = k * dt;
+                const vec3 p = point_at(t);
+                if (skipping) {
+                    uvec3 bc;
+                    const uint dist = dist_of(block_of(p, bc));
+                    if (dist > 0u) {
+                        k = leap(p, t, bc, dist, inv_dt, k);
+                        continue;
+                    }
+                }
+                k += 1.0;
+                const vec4 e = entry(sample_at(p));
+                if (e.x <= 0.0)
+                    continue;
+                vec3 col = e.yzw;
+                if ((flags & F_SHADING) != 0)
+                    col = shade(gradient(p), o + t * dir, v, e.yzw, e.x);
+                const float w = 1.0 - A;
+                C += w * col;
+                A += w * e.x;
+                if (depth == INF)
+                    depth = t;
+                if (A >= et)
+                    break;
+            }
+            A = min(A, 1.0);
+        } else if (mode == MODE_ISO) {
+            const float iso = fr.p1.y;
+            const float k0 = ceil(t0 / dt), kend = floor(t1 / dt);
+            float k = k0, pt = 0.0, pv = 0.0, th = -1.0;
+            bool have = false;
+            while (k <= kend) {
+                const float t = k * dt;
+                const vec3 p = point_at(t);
+                if (skipping) {
+                    uvec3 bc;
+                    const uint dist = dist_of(block_of(p, bc));
+                    if (dist > 0u) {
+                        k = leap(p, t, bc, dist, inv_dt, k);
+                        have = false;
+                        continue;
+                    }
+                }
+                if (!have && k > k0) {
+                    /* after hidden samples: restart at the one before */
+                    pt = (k - 1.0) * dt;
+                    pv = sample_at(point_at(pt));
+                    have = true;
+                }
+                const float val = sample_at(p);
+                if (!have) {
+                    if (val >= iso && t - t0 < dt) {
+                        th = t;
+                        break;
+                    }
+                } else if ((pv < iso) != (val < iso)) {
+                    th = iso_refine(pt, pv, t, iso);
+                    break;
+                }
+                pv = val;
+                pt = t;
+                have = true;
+                k += 1.0;
+            }
+            if (th >= 0.0) {
+                const vec3 ph = point_at(th);
+                vec3 col = fr.base.xyz;
+                if ((flags & F_SHADING) != 0)
+                    col = shade(gradient(ph), o + th * dir, v, fr.base.xyz, 1.0);
+                C = col;
+                A = 1.0;
+                depth = th;
+            }
+        } else {
+            /* projections: MIP, MinIP, X-ray (project.h) */
+            float k = ceil(t0 / dt);
+            const float kend = floor(t1 / dt);
+            float value;
+            if (k > kend) {
+                const float tm = 0.5 * (t0 + t1);
+                value = sample_at(point_at(tm));
+                pdepth = tm;
+            } else if (mode == MODE_XRAY) {
+                float sum = 0.0, comp = 0.0, n = 0.0; /* Kahan's sum */
+                for (; k <= kend; k += 1.0) {
+                    const float y = sample_at(point_at(k * dt)) - comp;
+                    const float s = sum + y;
+                    comp = (s - sum) - y;
+                    sum = s;
+                    n += 1.0;
+                }
+                value = sum / n;
+                pdepth = t0;
+            } else {
+                const bool mip = mode == MODE_MIP;
+                const float sg = mip ? 1.0 : -1.0;
+                float best = mip ? fr.p1.z : -fr.p1.w;
+                const float stop = mip ? fr.p1.w : -fr.p1.z;
+                float tbest = t0;
+                while (k <= kend && best < stop) {
+                    const float t = k * dt;
+                    const vec3 p = point_at(t);
+                    if (skipping) {
+                        uvec3 bc;
+                        const vec2 mm = bmm[block_of(p, bc)];
+                        if ((mip ? mm.y : -mm.x) <= best) {
+                            k = max(ceil(block_exit(p, t) * inv_dt), k + 1.0);
+                            continue;
+                        }
+                    }
+                    const float x = sg * sample_at(p);
+                    if (x > best) {
+                        best = x;
+                        tbest = t;
+                    }
+                    k += 1.0;
+                }
+                value = sg * best;
+                pdepth = tbest;
+            }
+            const vec4 e = entry(value);
+            P = e.yzw * e.x;
+            PA = e.x;
+        }
+    }
+    const float rest = 1.0 - A;
+    const float A2 = A + rest * PA;
+    out_rgba[at] = vec4(C + rest * P + (1.0 - A2) * fr.bg.xyz, A2);
+    out_depth[at] = min(depth, pdepth);
+}
