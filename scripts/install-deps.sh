@@ -3,13 +3,15 @@
 # Safe to run again. Usage: scripts/install-deps.sh [build|demo|test|fuzz|bench]...
 #   build  compiler, CMake and the libraries (always included; Open MPI for src/parallel;
 #          libwebsockets and libjpeg-turbo for `volvis serve`;
-#          python3-dev, python3-cffi and python3-numpy for the Python package)
+#          python3-dev, python3-cffi and python3-numpy for the Python package;
+#          libvulkan-dev and glslc for the gpu renderer)
 #   demo   mricron-data (the real MRI head used by the quick-start demo)
 #   test   cmocka, ffmpeg (ffprobe checks the videos); Chromium, ChromeDriver, selenium and
 #          websockets for the browser tests (tests/web); Xvfb, xdotool and ImageMagick for the GUI tests;
 #          pytest, tqdm, ipywidgets, ipykernel and nbconvert (the Python package's tests and notebook);
 #          pydicom (writes the DICOM test series, and its test files), nibabel (its Siemens MR
-#          slices) and gdcmconv (compresses them); SciPy and Teem's unu (the filters' references)
+#          slices) and gdcmconv (compresses them); SciPy and Teem's unu (the filters' references);
+#          Mesa's lavapipe (mesa-vulkan-drivers) and the Vulkan validation layers for the gpu renderer
 #   fuzz   clang-14, libFuzzer and LLVM's OpenMP (the fuzz and tsan presets); Teem's tools,
 #          ImageMagick, gdcm tools, VTK, numpy, pydicom (tests/fuzz/make_corpus.sh)
 #   bench  VTK, numpy, pydicom, Xvfb, Teem's tools and the zfp CLI, to measure the peers side by side
@@ -19,15 +21,16 @@ pkgs=(build-essential cmake pkg-config libwebsockets-dev libturbojpeg0-dev libte
       libpng-dev zlib1g-dev libassimp-dev libfftw3-dev libcairo2-dev libgtk-4-dev
       libspnav-dev libsdl2-dev libxml2-dev libnetcdf-dev libavformat-dev libavcodec-dev
       libswscale-dev libavutil-dev libtiff-dev libgdcm-dev libseccomp-dev libhdf5-dev libopenmpi-dev openmpi-bin
-      python3-dev python3-cffi python3-numpy)
+      python3-dev python3-cffi python3-numpy libvulkan-dev glslc)
 for what in "$@"; do
   case "$what" in
     build) ;;
     demo) pkgs+=(mricron-data) ;;
     test) pkgs+=(libcmocka-dev openssl chromium chromium-driver python3-selenium python3-websockets ffmpeg xvfb xauth xdotool imagemagick at-spi2-core python3-pyatspi dbus-x11 python3-pydicom python3-nibabel python3-tifffile python3-pil python3-zarr python3-numcodecs python3-h5py python3-vtk9 libgdcm-tools python3-scipy teem-apps
-                 python3-pytest python3-tqdm python3-ipywidgets python3-ipykernel jupyter-nbconvert) ;;
+                 python3-pytest python3-tqdm python3-ipywidgets python3-ipykernel jupyter-nbconvert
+                 mesa-vulkan-drivers vulkan-validationlayers) ;;
     fuzz) pkgs+=(clang-14 libfuzzer-14-dev libomp-14-dev teem-apps imagemagick libgdcm-tools python3-vtk9 python3-numpy python3-pydicom) ;;
-    bench) pkgs+=(python3-vtk9 python3-numpy python3-pydicom xvfb libgl1-mesa-dri teem-apps zfp) ;;
+    bench) pkgs+=(python3-vtk9 python3-numpy python3-pydicom xvfb libgl1-mesa-dri teem-apps zfp mesa-vulkan-drivers) ;;
     *) echo "install-deps.sh: unknown group '$what' (build, demo, test, fuzz, bench)" >&2; exit 2 ;;
   esac
 done

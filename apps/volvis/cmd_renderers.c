@@ -3,7 +3,8 @@
  * draw (object kinds, modes), their capabilities and their typed options,
  * read from the one table every caller uses (include/volvis/render.h). The
  * JSON form is for scripts and tests: every option with its type, default,
- * range, words and one-line documentation.
+ * range, words and one-line documentation. The gpu renderer's Vulkan
+ * devices follow it (vv_gpu_devices), numbered as its option `device`.
  */
 #include <jansson.h>
 #include <math.h>
@@ -26,12 +27,18 @@ cli_renderers_usage(FILE *out) {
                  "renderer, else the first in this list that draws every object of the\n"
                  "World.\n"
                  "\n"
+                 "After the gpu renderer come the Vulkan devices it can run on, numbered\n"
+                 "as its option device (--set device=N): a GPU, or a CPU device such as\n"
+                 "Mesa's lavapipe; or why there is none (no loader, no driver).\n"
+                 "\n"
                  "Options:\n"
                  "  --json      one JSON document: {\"renderers\": [{\"name\", \"description\",\n"
                  "              \"draws\": [kinds], \"modes\": [modes], \"capabilities\": [...],\n"
                  "              \"quality\", \"options\": [{\"key\", \"type\", \"default\",\n"
                  "              \"min\", \"max\", \"min_open\", \"max_open\", \"values\",\n"
-                 "              \"accepts\", \"doc\"}]}]}\n"
+                 "              \"accepts\", \"doc\"}]}], \"gpu_devices\": [{\"index\",\n"
+                 "              \"name\", \"kind\", \"cpu\", \"memory_bytes\"}],\n"
+                 "              \"gpu_unavailable\": why, when none}\n"
                  "  -h, --help  show this help\n"
                  "\n"
                  "Examples:\n"
@@ -116,6 +123,32 @@ print_text(const vv_renderer_info *in) {
     }
 }
 
+/* The gpu renderer's devices, after its entry (text) or as "gpu_devices". */
+static void
+print_gpu_devices(json_t *root) {
+    vv_gpu_device d[16];
+    const char *why = NULL;
+    const int n = vv_gpu_devices(d, 16, &why);
+    json_t *list = root ? json_array() : NULL;
+    for (int i = 0; i < n && i < 16; i++) {
+        const double gib = (double)d[i].memory_bytes / (1024.0 * 1024.0 * 1024.0);
+        if (root)
+            json_array_append_new(list, json_pack("{s:i, s:s, s:s, s:b, s:I}", "index", i, "name",
+                                                  d[i].name, "kind", d[i].kind, "cpu", d[i].cpu,
+                                                  "memory_bytes", (json_int_t)d[i].memory_bytes));
+        else
+            printf("  device %d:     %s (%s, %.1f GiB)%s\n", i, d[i].name, d[i].kind, gib,
+                   d[i].cpu ? "; a CPU device: the GUI does not pick it on its own" : "");
+    }
+    if (root) {
+        json_object_set_new(root, "gpu_devices", list);
+        if (n == 0)
+            json_object_set_new(root, "gpu_unavailable", json_string(why ? why : "none"));
+    } else if (n == 0) {
+        printf("  devices:      none: %s\n", why ? why : "none found");
+    }
+}
+
 int
 cli_renderers_main(int argc, char **argv) {
     cli_args a;
@@ -145,9 +178,13 @@ cli_renderers_main(int argc, char **argv) {
             json_array_append_new(list, renderer_json(in));
         else
             print_text(in);
+        if (!json && !strcmp(in->name, "gpu"))
+            print_gpu_devices(NULL);
     }
     if (json) {
         json_object_set_new(root, "renderers", list);
+        if (!only || !strcmp(only->name, "gpu"))
+            print_gpu_devices(root);
         char *text = json_dumps(root, JSON_INDENT(2) | JSON_PRESERVE_ORDER);
         json_decref(root);
         if (!text) {

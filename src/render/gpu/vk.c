@@ -31,7 +31,6 @@ static struct {
  * counted, so that the tests can assert none. */
 static int validation_messages;
 
-int vv_gpu_validation_messages(void);
 int
 vv_gpu_validation_messages(void) {
     return __atomic_load_n(&validation_messages, __ATOMIC_RELAXED);
@@ -158,26 +157,18 @@ open_instance(void) {
 }
 
 /* The instance, its devices and the loader stay for the life of the
- * process; this hands them back at exit so that leak checkers see none. */
-static void
-close_instance(void) {
-    if (G.inst) {
-        if (messenger) {
-            PFN_vkDestroyDebugUtilsMessengerEXT dm = (PFN_vkDestroyDebugUtilsMessengerEXT)G.gipa(
-                G.inst, "vkDestroyDebugUtilsMessengerEXT");
-            if (dm)
-                dm(G.inst, messenger, NULL);
-        }
-        G.f.vkDestroyInstance(G.inst, NULL);
-        G.inst = VK_NULL_HANDLE;
-    }
-}
-
+ * process (reachable from G): destroying them at exit would unload the
+ * driver before leak checkers look, and they could no longer tell a
+ * driver's own allocations (Mesa's lavapipe keeps some) from ours. */
 static void
 open_once(void) {
     open_instance();
-    if (G.inst)
-        atexit(close_instance);
+}
+
+int
+vv_gpu_validation_enabled(void) {
+    pthread_once(&G.once, open_once);
+    return G.validation;
 }
 
 int
@@ -239,10 +230,10 @@ vv_vk_open(vv_vk *vk, int index) {
     const char *why;
     const int n = vv_gpu_devices(NULL, 0, &why);
     if (n == 0)
-        return vv_error_set(VV_ERR_UNSUPPORTED, "gpu: %s", why);
+        return vv_error_set(VV_ERR_UNSUPPORTED, "%s", why);
     if (index >= n)
         return vv_error_set(VV_ERR_INVALID,
-                            "gpu: no device %d (%d found: volvis renderers lists "
+                            "no Vulkan device %d (%d found: volvis renderers lists "
                             "them)",
                             index, n);
     if (index < 0) {
@@ -553,6 +544,16 @@ vv_vk_barrier(vv_vk *vk, int after_compute) {
 }
 
 #else /* !VV_HAVE_VULKAN */
+
+int
+vv_gpu_validation_messages(void) {
+    return 0;
+}
+
+int
+vv_gpu_validation_enabled(void) {
+    return 0;
+}
 
 int
 vv_gpu_devices(vv_gpu_device *out, int max, const char **why) {

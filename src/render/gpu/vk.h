@@ -165,4 +165,12 @@ void vv_vk_barrier(vv_vk *vk, int after_compute);
 const char *vv_vk_result_name(VkResult r);
 #endif /* VV_HAVE_VULKAN */
 
+/* The warnings and errors the Vulkan validation layers reported in this
+ * process: they are enabled when the environment has VV_GPU_VALIDATION=1
+ * before the first Vulkan call (and Debian's vulkan-validationlayers is
+ * installed), each printed to stderr; the tests assert none. Thread-safe. */
+int vv_gpu_validation_messages(void);
+/* 1 when the validation layers are on (VV_GPU_VALIDATION=1 and installed). */
+int vv_gpu_validation_enabled(void);
+
 #endif

@@ -1,0 +1,314 @@
+/*
+ * The gpu renderer (src/render/gpu) against the CPU ray caster, on the
+ * Vulkan device there is: in CI Mesa's lavapipe, which runs the same SPIR-V
+ * on the CPU. Images of real data agree (MIP, MinIP and X-ray >= 60 dB,
+ * composite and iso >= 45 dB; issue 64), with cut planes and point lights;
+ * empty-space skipping leaves the image bit for bit; what it does not draw
+ * is refused in one line; the Vulkan validation layers (VV_GPU_VALIDATION=1,
+ * set before the first Vulkan call) report nothing during the run.
+ * Where no Vulkan device exists the tests skip, saying why (CI installs
+ * mesa-vulkan-drivers: scripts/install-deps.sh test).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "render/gpu/vk.h"
+#include "testutil.h"
+
+#define SIZE 160 /* pixels a side: lavapipe casts about 0.4 M rays a second here */
+
+static int have_device;
+static const char *no_device;
+
+static int
+setup(void **state) {
+    (void)state;
+    setenv("VV_GPU_VALIDATION", "1", 0);
+    vv_gpu_device d[4];
+    have_device = vv_gpu_devices(d, 4, &no_device) > 0;
+    if (have_device)
+        printf("# gpu device 0: %s (%s); validation layers %s\n", d[0].name, d[0].kind,
+               vv_gpu_validation_enabled() ? "on" : "not installed");
+    return 0;
+}
+
+#define NEED_DEVICE()                                                                              \
+    do {                                                                                           \
+        if (!have_device)                                                                          \
+            vt_skip("no Vulkan device: %s", no_device);                                            \
+    } while (0)
+
+/* Renders @p w with @p name (options "k=v" pairs, NULL-terminated). */
+static vv_image *
+render(const char *name, const vv_world *w, const char *const *opts) {
+    vv_renderer *r;
+    vt_ok(vv_renderer_new(&r, name));
+    for (int i = 0; opts && opts[i]; i += 2)
+        vt_ok(vv_renderer_set_option(r, opts[i], opts[i + 1]));
+    vv_render_options o;
+    vv_render_options_init(&o);
+    vv_image *img;
+    vt_ok(vv_image_new(&img, w->view.width, w->view.height));
+    vt_ok(vv_renderer_render(r, w, &w->view, &o, img));
+    vv_renderer_free(r);
+    return img;
+}
+
+/* raycast without adaptive refinement: one ray a pixel, as the gpu casts */
+static const char *const raycast_plain[] = {"refinement", "off", NULL};
+
+static void
+save(const vv_image *img, const char *name) {
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s.png", vt_outdir("render_gpu"), name);
+    vt_ok(vv_image_write_png(img, path, 1.0, 0));
+}
+
+/* Compares gpu and raycast on @p w in @p mode; returns the PSNR. */
+static double
+agree(vv_world *w, vv_render_mode mode, double min_db, const char *label) {
+    for (int i = 0; i < w->n_objects; i++)
+        w->objects[i]->mode = mode;
+    vv_image *a = render("raycast", w, raycast_plain);
+    vv_image *b = render("gpu", w, NULL);
+    double lit = 0;
+    for (size_t i = 0; i < (size_t)SIZE * SIZE; i++)
+        lit += b->rgba[4 * i + 3] > 0.05;
+    const double db = vt_image_psnr(a, b, NULL);
+    printf("# %s: gpu against raycast %.1f dB (%.0f%% of the pixels seen)\n", label, db,
+           100 * lit / ((double)SIZE * SIZE));
+    save(b, label);
+    if (!(db >= min_db))
+        fail_msg("%s: %.2f dB < %.0f dB", label, db, min_db);
+    /* not an empty image agreeing with another */
+    assert_true(lit > 0.05 * SIZE * SIZE);
+    vv_image_free(a);
+    vv_image_free(b);
+    return db;
+}
+
+/* Projections seen through an opaque grey ramp over [lo, hi]: every ray
+ * that meets the volume gives an opaque pixel of its projected value. */
+static void
+grey_tf(vv_world *w, double lo, double hi) {
+    vv_tf *tf = &w->objects[0]->tf;
+    vv_tf_init(tf);
+    vv_tf_add_opacity(tf, lo, 1);
+    vv_tf_add_opacity(tf, hi, 1);
+    vv_tf_add_color(tf, lo, vv_vec3_make(0, 0, 0));
+    vv_tf_add_color(tf, hi, vv_vec3_make(1, 1, 1));
+}
+
+static void
+test_ct_head_modes(void **state) {
+    (void)state;
+    NEED_DEVICE();
+    vv_volume *vol;
+    vv_world *w = vt_volume_scene("volumes/ct_head.nrrd", SIZE, &vol);
+    agree(w, VV_MODE_COMPOSITE, 45, "ct_head_composite");
+    agree(w, VV_MODE_MIP, 60, "ct_head_mip");
+    w->objects[0]->isovalue = 0.5 * (vol->range[0] + vol->range[1]) * 0.3;
+    agree(w, VV_MODE_ISO, 45, "ct_head_iso");
+    grey_tf(w, vol->range[0], 0.3 * vol->range[1]);
+    agree(w, VV_MODE_XRAY, 60, "ct_head_xray");
+    agree(w, VV_MODE_MIP, 60, "ct_head_mip_grey");
+    vv_world_free(w);
+    vv_volume_free(vol);
+}
+
+/* neghip: 8-bit, 64^3, a small volume magnified (many samples a voxel) */
+static void
+test_neghip_modes(void **state) {
+    (void)state;
+    NEED_DEVICE();
+    vv_volume *vol;
+    vv_world *w = vt_volume_scene("volumes/neghip.slc", SIZE, &vol);
+    agree(w, VV_MODE_COMPOSITE, 45, "neghip_composite");
+    agree(w, VV_MODE_MIP, 60, "neghip_mip");
+    w->objects[0]->isovalue = 0.4 * (vol->range[0] + vol->range[1]);
+    agree(w, VV_MODE_ISO, 45, "neghip_iso");
+    grey_tf(w, vol->range[0], vol->range[1]);
+    agree(w, VV_MODE_XRAY, 60, "neghip_xray");
+    vv_world_free(w);
+    vv_volume_free(vol);
+}
+
+/* A float volume, anisotropic voxels: the values go up as R32 float; its
+ * minimum along a ray lies where the ray enters (MinIP). */
+static void
+test_float_anisotropic(void **state) {
+    (void)state;
+    NEED_DEVICE();
+    const int dims[3] = {40, 48, 24};
+    vv_volume *v;
+    vt_ok(vv_volume_new(&v, dims, VV_F32));
+    for (int k = 0; k < dims[2]; k++)
+        for (int j = 0; j < dims[1]; j++)
+            for (int i = 0; i < dims[0]; i++) {
+                const double x = i / 19.5 - 1, y = j / 23.5 - 1, z = k / 11.5 - 1;
+                vv_volume_set(v, i, j, k, 1.5 - sqrt(x * x + y * y + z * z) + 0.1 * sin(9 * x));
+            }
+    v->spacing[2] = 2.5;
+    vv_volume_update_range(v);
+    vv_default_scene_options so = vt_scene_options(SIZE);
+    vv_world *w;
+    vt_ok(vv_world_new_for_volume(&w, v, &so));
+    agree(w, VV_MODE_COMPOSITE, 45, "float_composite");
+    agree(w, VV_MODE_MIP, 60, "float_mip");
+    grey_tf(w, v->range[0], v->range[1]);
+    agree(w, VV_MODE_MINIP, 60, "float_minip");
+    agree(w, VV_MODE_XRAY, 60, "float_xray");
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
+/* Cut planes (a global one and the object's own) and a point light. */
+static void
+test_cut_planes_point_light(void **state) {
+    (void)state;
+    NEED_DEVICE();
+    vv_volume *vol;
+    vv_world *w = vt_volume_scene("volumes/ct_head.nrrd", SIZE, &vol);
+    vt_ok(vv_world_add_cut_plane(w, vv_vec3_make(0, 0, 0), vv_vec3_make(1, 0.3, 0)));
+    vv_object *o = w->objects[0];
+    o->n_cut_planes = 1;
+    o->cut_planes[0].point = vv_vec3_make(0, 0, 10);
+    o->cut_planes[0].normal = vv_vec3_make(0, 0, -1);
+    vv_light l;
+    memset(&l, 0, sizeof l);
+    l.type = VV_LIGHT_POINT;
+    l.position = vv_vec3_make(200, -300, 150);
+    l.color = vv_vec3_make(1, 0.8, 0.6);
+    l.intensity = 1;
+    vt_ok(vv_world_add_light(w, &l));
+    agree(w, VV_MODE_COMPOSITE, 45, "ct_head_cut_composite");
+    agree(w, VV_MODE_MIP, 60, "ct_head_cut_mip");
+    vv_world_free(w);
+    vv_volume_free(vol);
+}
+
+/* Leaping over hidden subvolumes skips only samples that add nothing. */
+static void
+test_skipping_same_image(void **state) {
+    (void)state;
+    NEED_DEVICE();
+    vv_volume *vol;
+    vv_world *w = vt_volume_scene("volumes/ct_head.nrrd", SIZE, &vol);
+    static const char *const off[] = {"empty_space_skipping", "0", NULL};
+    const vv_render_mode modes[] = {VV_MODE_COMPOSITE, VV_MODE_MIP};
+    for (int m = 0; m < 2; m++) {
+        w->objects[0]->mode = modes[m];
+        vv_image *a = render("gpu", w, NULL), *b = render("gpu", w, off);
+        int same = 0;
+        const double db = vt_image_psnr(a, b, &same);
+        printf("# mode %d: skipping on against off: %s (%.1f dB)\n", (int)modes[m],
+               same ? "bit for bit" : "differs", db);
+        assert_true(db >= 80);
+        vv_image_free(a);
+        vv_image_free(b);
+    }
+    vv_world_free(w);
+    vv_volume_free(vol);
+}
+
+/* What it does not draw, and a device it does not have, in one line each. */
+static void
+test_refusals(void **state) {
+    (void)state;
+    NEED_DEVICE();
+    vv_volume *vol;
+    vv_world *w = vt_volume_scene("volumes/neghip.slc", 32, &vol);
+    vv_renderer *r;
+    vt_ok(vv_renderer_new(&r, "gpu"));
+    vv_image *img;
+    vt_ok(vv_image_new(&img, 32, 32));
+    vv_render_options o;
+    vv_render_options_init(&o);
+    vv_object *second;
+    vt_ok(vv_object_clone(&second, w->objects[0]));
+    vt_ok(vv_world_add_object(w, second));
+    vt_expect_refusal("two objects", vv_renderer_render(r, w, &w->view, &o, img),
+                      VV_ERR_UNSUPPORTED, "one volume object", "gpu");
+    w->objects[1]->visible = 0;
+    vt_ok(vv_renderer_render(r, w, &w->view, &o, img));
+    vt_ok(vv_renderer_set_option(r, "device", "15"));
+    vt_expect_refusal("device 15", vv_renderer_render(r, w, &w->view, &o, img), VV_ERR_INVALID,
+                      "no Vulkan device 15", NULL);
+    vt_ok(vv_renderer_set_option(r, "device", "auto"));
+    vt_ok(vv_renderer_render(r, w, &w->view, &o, img));
+    vv_image_free(img);
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(vol);
+}
+
+/* An empty World is the background; a renderer survives its volume changing. */
+static void
+test_background_and_new_volume(void **state) {
+    (void)state;
+    NEED_DEVICE();
+    vv_volume *vol;
+    vv_world *w = vt_volume_scene("volumes/neghip.slc", 48, &vol);
+    w->background = vv_vec3_make(0.25, 0.5, 0.75);
+    vv_renderer *r;
+    vt_ok(vv_renderer_new(&r, "gpu"));
+    vv_image *img;
+    vt_ok(vv_image_new(&img, 48, 48));
+    vv_render_options o;
+    vv_render_options_init(&o);
+    w->objects[0]->visible = 0;
+    vt_ok(vv_renderer_render(r, w, &w->view, &o, img));
+    for (int i = 0; i < 48 * 48; i++) {
+        assert_near(img->rgba[4 * i + 0], 0.25, 1e-6);
+        assert_near(img->rgba[4 * i + 2], 0.75, 1e-6);
+        assert_true(img->depth[i] == INFINITY);
+    }
+    w->objects[0]->visible = 1;
+    vt_ok(vv_renderer_render(r, w, &w->view, &o, img));
+    const float before = img->rgba[4 * (24 * 48 + 24)];
+    /* the voxels change: the renderer uploads them again */
+    for (size_t i = 0; i < (size_t)vol->dims[0] * vol->dims[1] * vol->dims[2]; i++)
+        ((uint8_t *)vol->data)[i] = (uint8_t)(255 - ((uint8_t *)vol->data)[i]);
+    vol->modified++;
+    vv_volume_update_range(vol);
+    vt_ok(vv_renderer_render(r, w, &w->view, &o, img));
+    vv_image *ref = render("raycast", w, raycast_plain);
+    const double db = vt_image_psnr(ref, img, NULL);
+    printf("# after the voxels changed: %.1f dB against raycast (centre %.3f -> %.3f)\n", db,
+           before, img->rgba[4 * (24 * 48 + 24)]);
+    assert_true(db >= 45);
+    vv_image_free(ref);
+    vv_image_free(img);
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(vol);
+}
+
+/* Last: the validation layers saw nothing wrong in the whole run. */
+static void
+test_validation_quiet(void **state) {
+    (void)state;
+    NEED_DEVICE();
+    if (!vv_gpu_validation_enabled())
+        vt_skip("the Vulkan validation layers are not installed (vulkan-validationlayers)");
+    const int n = vv_gpu_validation_messages();
+    printf("# validation messages: %d\n", n);
+    assert_int_equal(n, 0);
+}
+
+int
+main(void) {
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_ct_head_modes),
+        cmocka_unit_test(test_neghip_modes),
+        cmocka_unit_test(test_float_anisotropic),
+        cmocka_unit_test(test_cut_planes_point_light),
+        cmocka_unit_test(test_skipping_same_image),
+        cmocka_unit_test(test_refusals),
+        cmocka_unit_test(test_background_and_new_volume),
+        cmocka_unit_test(test_validation_quiet),
+    };
+    return vt_run_tests(tests, setup, NULL);
+}
