@@ -34,6 +34,7 @@
 #include "core/internal.h"
 #include "render/classify.h"
 #include "render/gpu/vk.h"
+#include "render/project.h"
 #include "render/ray.h"
 #include "render/registry.h"
 #include "render/sample.h"
@@ -58,19 +59,25 @@ typedef struct gpu_ubo {
     float planes[2 * VV_MAX_CUT_PLANES][4];
     int32_t dims[4], bdims[4], misc[4], clipd[4];
     float p0[4], p1[4];
+    float rlo[4], rhi[4]; /* a region's owned samples (open sides: -+1e30) */
+    int32_t roff[4];      /* its voxels' offset; [3]: 1 in a region render */
+    int32_t rect[4];      /* its pixel rectangle x0, y0, x1, y1 (x1 <= x0: all) */
 } gpu_ubo;
 
 enum { F_SHADING = 1, F_NORMALS = 2, F_SKIPPING = 4, F_POINT = 8, F_INTEGER = 16 };
 
-/* The buffers the shader reads and writes (bindings 0 and 3 .. 8). */
-enum { B_UBO, B_LUT, B_SPEC, B_DIST, B_MM, B_RGBA, B_DEPTH, N_BUF };
-static const int binding_of[N_BUF] = {0, 3, 4, 5, 6, 7, 8};
+/* The buffers the shader reads and writes (bindings 0 and 3 .. 9). */
+enum { B_UBO, B_LUT, B_SPEC, B_DIST, B_MM, B_RGBA, B_DEPTH, B_KEY, N_BUF };
+static const int binding_of[N_BUF] = {0, 3, 4, 5, 6, 7, 8, 9};
 
 typedef struct gpu_state {
     vv_vcache_set vc;         /* the host's voxel caches (sample.h) */
     double early_termination; /* option */
     int skipping;             /* option empty_space_skipping */
     int device;               /* option device: -1 auto */
+    /* the X-ray table of the last region render in xray mode, which
+     * classifies the summed regions' means (vv_region_image.classify) */
+    vv_xray_table xray;
 #if VV_HAVE_VULKAN
     vv_vk vk;
     int ready; /* vk, pipeline and descriptors made */
@@ -142,8 +149,8 @@ open_device(gpu_state *st) {
         return s;
     }
     vv_vk *vk = &st->vk;
-    VkDescriptorSetLayoutBinding b[9];
-    for (int i = 0; i < 9; i++) {
+    VkDescriptorSetLayoutBinding b[10];
+    for (int i = 0; i < 10; i++) {
         b[i] = (VkDescriptorSetLayoutBinding){
             .binding = (uint32_t)i,
             .descriptorType = i == 0             ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER
@@ -154,7 +161,7 @@ open_device(gpu_state *st) {
     }
     const VkDescriptorSetLayoutCreateInfo li = {
         .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
-        .bindingCount = 9,
+        .bindingCount = 10,
         .pBindings = b};
     s = vk_check(vk, vk->f.vkCreateDescriptorSetLayout(vk->dev, &li, NULL, &st->dsl),
                  "vkCreateDescriptorSetLayout");
@@ -186,7 +193,7 @@ open_device(gpu_state *st) {
         vk->f.vkDestroyShaderModule(vk->dev, mod, NULL);
     const VkDescriptorPoolSize ps[3] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
                                         {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2},
-                                        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 6}};
+                                        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7}};
     const VkDescriptorPoolCreateInfo pi = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO,
                                            .maxSets = 1,
                                            .poolSizeCount = 3,
@@ -279,7 +286,7 @@ upload_volume(gpu_state *st, const vv_vcache *c, VkDeviceSize *used) {
  * frame's threads: one thread copies a 3840 x 2160 float image (166 MB) at
  * a few GB/s, several times the device's time for the frame. */
 static void
-copy_back(vv_image *out, const unsigned char *r, size_t npx, int threads) {
+copy_back(vv_image *out, float *key, const unsigned char *r, size_t npx, int threads) {
     const size_t slice = (size_t)1 << 16; /* pixels a piece */
     const long n = (long)((npx + slice - 1) / slice);
     const int nt = threads > 0 ? threads : vv_threads_get();
@@ -288,6 +295,8 @@ copy_back(vv_image *out, const unsigned char *r, size_t npx, int threads) {
         const size_t a = (size_t)i * slice, m = npx - a < slice ? npx - a : slice;
         memcpy(out->rgba + 4 * a, r + 16 * a, 16 * m);
         memcpy(out->depth + a, r + 16 * npx + 4 * a, 4 * m);
+        if (key)
+            memcpy(key + a, r + 20 * npx + 4 * a, 4 * m);
     }
 }
 
@@ -325,10 +334,12 @@ find_object(const vv_world *w, const vv_object **out) {
     return VV_OK;
 }
 
+/* A whole frame (@p rg NULL) or region @p rg of its one object (the
+ * region contract of include/volvis/sys/renderer.h: the samples it owns,
+ * from its voxels; no background; *key per pixel for projections). */
 static vv_status
-gpu_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
-           vv_image *out) {
-    gpu_state *st = state;
+render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+             const vv_render_region *rg, vv_image *out, float *key) {
     const vv_object *obj;
     vv_status s = find_object(w, &obj);
     if (s != VV_OK)
@@ -342,7 +353,7 @@ gpu_render(void *state, const vv_world *w, const vv_view *view, const vv_render_
     gpu_ubo u;
     memset(&u, 0, sizeof u);
     float ambient[3], bg[3];
-    vv_frame_colours(w, 0, ambient, bg);
+    vv_frame_colours(w, rg != NULL, ambient, bg);
     for (int a = 0; a < 3; a++)
         u.bg[a] = bg[a];
     vv_vlight lights[VV_MAX_LIGHTS];
@@ -440,7 +451,30 @@ gpu_render(void *state, const vv_world *w, const vv_view *view, const vv_render_
                     (st->skipping && tab.bdist ? F_SKIPPING : 0) | (point ? F_POINT : 0) |
                     (c->q16 ? F_INTEGER : 0);
         for (int a = 0; a < 3; a++)
-            u.clipd[a] = dims[a];
+            u.clipd[a] = rg ? (rg->dims[a] > 1 ? rg->dims[a] : 2) : dims[a];
+        if (rg) {
+            /* rays in the whole volume's index box, samples from the region's voxels */
+            for (int a = 0; a < 3; a++) {
+                u.rlo[a] = rg->lo[a] == -INFINITY ? -1e30f : (float)rg->lo[a];
+                u.rhi[a] = rg->hi[a] == INFINITY ? 1e30f : (float)rg->hi[a];
+                u.roff[a] = rg->offset[a];
+            }
+            u.roff[3] = 1;
+            if (rg->x1 > rg->x0) {
+                u.rect[0] = rg->x0;
+                u.rect[1] = rg->y0;
+                u.rect[2] = rg->x1;
+                u.rect[3] = rg->y1 > rg->y0 ? rg->y1 : rg->y0 + 1;
+                if (rg->y1 <= rg->y0) /* off screen: nothing to draw */
+                    u.rect[3] = u.rect[1], u.rect[2] = u.rect[0] + 1;
+            }
+        }
+        if (rg && mode == VV_MODE_XRAY) {
+            /* the table that classifies the summed means (vv_xray_table_classify) */
+            st->xray.lut_lo = tab.lut_lo;
+            st->xray.lut_scale = tab.lut_scale;
+            memcpy(st->xray.lut, tab.lut, sizeof st->xray.lut);
+        }
         u.p0[0] = (float)dt;
         u.p0[1] = (float)st->early_termination;
         u.p0[2] = tab.lut_lo;
@@ -467,6 +501,7 @@ gpu_render(void *state, const vv_world *w, const vv_view *view, const vv_render_
                                        (nblocks + 3) & ~(size_t)3,
                                        nblocks * 8,
                                        npx * 16,
+                                       npx * 4,
                                        npx * 4};
     VkDeviceSize offs[N_BUF], total = 0;
     for (int i = 0; i < B_RGBA; i++) {
@@ -481,7 +516,7 @@ gpu_render(void *state, const vv_world *w, const vv_view *view, const vv_render_
                 (i < B_RGBA ? dst : VK_BUFFER_USAGE_TRANSFER_SRC_BIT),
             0);
     if (s == VV_OK)
-        s = ensure_buffer(st, &st->readback, npx * 20, dst, 1);
+        s = ensure_buffer(st, &st->readback, npx * 24, dst, 1);
     if (s == VV_OK)
         s = vv_vk_begin(vk);
     VkDeviceSize used = total;
@@ -565,14 +600,17 @@ gpu_render(void *state, const vv_world *w, const vv_view *view, const vv_render_
             vk->f.vkCmdDispatch(vk->cmd, (uint32_t)(view->width + 7) / 8,
                                 (uint32_t)(view->height + 7) / 8, 1);
             vv_vk_barrier(vk, 1);
-            const VkBufferCopy back[2] = {{0, 0, npx * 16}, {0, npx * 16, npx * 4}};
+            const VkBufferCopy back[3] = {
+                {0, 0, npx * 16}, {0, npx * 16, npx * 4}, {0, npx * 20, npx * 4}};
             vk->f.vkCmdCopyBuffer(vk->cmd, st->buf[B_RGBA].buf, st->readback.buf, 1, &back[0]);
             vk->f.vkCmdCopyBuffer(vk->cmd, st->buf[B_DEPTH].buf, st->readback.buf, 1, &back[1]);
+            if (key)
+                vk->f.vkCmdCopyBuffer(vk->cmd, st->buf[B_KEY].buf, st->readback.buf, 1, &back[2]);
             vv_vk_timestamp(vk, 1);
             double ms = 0;
             s = vv_vk_submit_wait(vk, &ms);
             if (s == VV_OK) {
-                copy_back(out, st->readback.map, npx, opt ? opt->threads : 0);
+                copy_back(out, key, st->readback.map, npx, opt ? opt->threads : 0);
                 if (opt && opt->stats)
                     opt->stats->device_ms += ms;
             } else {
@@ -590,6 +628,36 @@ gpu_render(void *state, const vv_world *w, const vv_view *view, const vv_render_
     if (s == VV_OK && opt && opt->progress.fn && opt->progress.fn(opt->progress.user, 1.0))
         s = vv_error_set(VV_ERR_CANCELLED, "the gpu renderer: cancelled");
     vv_vcache_set_prune(&st->vc, w);
+    return s;
+}
+
+static vv_status
+gpu_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+           vv_image *out) {
+    return render_frame(state, w, view, opt, NULL, out, NULL);
+}
+
+/* The region contract: the World seen with the object's volume replaced by
+ * the region's voxels (which carry the whole volume's geometry and range),
+ * rays in the whole volume's index box, and only the region's samples
+ * taken: the out-of-core drivers page bricks through it, one region on the
+ * device at a time. */
+static vv_status
+gpu_render_region(void *state, const vv_world *w, const vv_view *view,
+                  const vv_render_region *region, const vv_render_options *opt,
+                  vv_region_image *out) {
+    vv_object copy;
+    vv_status s = vv_render_region_part(w, region, &out->op, &copy);
+    if (s != VV_OK)
+        return s;
+    vv_object *objs[1] = {&copy};
+    vv_world tmp = *w;
+    tmp.objects = objs;
+    tmp.n_objects = 1;
+    gpu_state *st = state;
+    s = render_frame(st, &tmp, view, opt, region, out->image, out->key);
+    out->classify = out->op == VV_REGION_SUM ? vv_xray_table_classify : NULL;
+    out->classify_ctx = out->op == VV_REGION_SUM ? &st->xray : NULL;
     return s;
 }
 
@@ -641,6 +709,12 @@ gpu_device_changed(void *state, const vv_option_spec *spec, const vv_option_valu
 
 static const char *const gpu_auto[] = {"auto", NULL};
 
+#if VV_HAVE_VULKAN
+#define GPU_CAPS VV_RENDERER_REGION /* out of core by bricks, and under MPI */
+#else
+#define GPU_CAPS 0
+#endif
+
 /* The gpu renderer's options (docs/rendering.md, "GPU ray casting"). */
 static const vv_option_spec gpu_options[] = {
     {"device", VV_OPTION_INT, "auto", 0, 15, 0, gpu_auto,
@@ -664,7 +738,7 @@ const vv_renderer_ops vv_gpu_ops = {
                            "composite, mip, minip, xray, iso; one volume object",
             .draws = VV_DRAWS(VV_OBJECT_VOLUME),
             .modes = VV_MODES_ALL,
-            .caps = 0,
+            .caps = GPU_CAPS,
             .quality = "every quality casts one ray a pixel at the objects' step",
             .options = gpu_options,
             .n_options = VV_OPTIONS_COUNT(gpu_options),
@@ -673,4 +747,7 @@ const vv_renderer_ops vv_gpu_ops = {
     .init = gpu_init,
     .release = gpu_release,
     .render = gpu_render,
+#if VV_HAVE_VULKAN
+    .render_region = gpu_render_region,
+#endif
 };

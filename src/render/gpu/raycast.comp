@@ -42,6 +42,9 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     ivec4 clipd;                   /* the grid box [0, clipd - 1] */
     vec4 p0;                       /* dt, early termination, table lo, table scale */
     vec4 p1;                       /* value scale, iso, MIP floor, MIP stop */
+    vec4 rlo, rhi;                 /* a region's samples: rlo <= p < rhi (whole index space) */
+    ivec4 roff;                    /* its voxels' offset in the whole volume; w: 1 region */
+    ivec4 rect;                    /* pixels x0 <= x < x1, y0 <= y < y1 (x1 <= x0: all) */
 } fr;
 
 layout(set = 0, binding = 1) uniform sampler3D vol;   /* stored values (R16 unorm or R32F) */
@@ -52,9 +55,12 @@ layout(std430, set = 0, binding = 5) readonly buffer Dist { uint bdist[]; }; /* 
 layout(std430, set = 0, binding = 6) readonly buffer MinMax { vec2 bmm[]; };
 layout(std430, set = 0, binding = 7) writeonly buffer Rgba { vec4 out_rgba[]; };
 layout(std430, set = 0, binding = 8) writeonly buffer Depth { float out_depth[]; };
+layout(std430, set = 0, binding = 9) writeonly buffer Key { float out_key[]; };
 
 ivec3 gmax;   /* dims - 2: the last cell */
-vec3 o_i;     /* index point at t = tb */
+vec3 o_i;     /* index point at t = tb (the whole volume's index space) */
+vec3 voff;    /* a region's voxel offset: its voxels' points are p - voff */
+bool region;
 vec3 d_i;     /* index direction per world unit */
 vec3 inv_d;   /* 1 / d_i, 0 where d_i is 0 */
 float tb;
@@ -65,9 +71,21 @@ voxel(ivec3 c) {
     return (fr.misc.w & F_INTEGER) != 0 ? round(v) : v;
 }
 
+/* the point of ray parameter t in the voxels' index space (a region's
+ * voxels start at voff: ray.h vv_vray_point) */
 vec3
 point_at(float t) {
-    return o_i + (t - tb) * d_i;
+    return (o_i + (t - tb) * d_i) - voff;
+}
+
+/* whether a region render owns sample t: rlo <= p < rhi (always outside
+ * region renders) */
+bool
+owned(float t) {
+    if (!region)
+        return true;
+    const vec3 p = o_i + (t - tb) * d_i;
+    return all(greaterThanEqual(p, fr.rlo.xyz)) && all(lessThan(p, fr.rhi.xyz));
 }
 
 /* sample.h vv_vcache_cell_of: the cell (clamped so its far corner is in the
@@ -228,6 +246,17 @@ main() {
         return;
     const uint at = uint(px.y) * uint(fr.misc.x) + uint(px.x);
     const float INF = 1.0 / 0.0;
+    const float NAN = uintBitsToFloat(0x7fc00000u);
+    region = fr.roff.w != 0;
+    voff = region ? vec3(fr.roff.xyz) : vec3(0);
+    if (fr.rect.z > fr.rect.x &&
+        (px.x < fr.rect.x || px.x >= fr.rect.z || px.y < fr.rect.y || px.y >= fr.rect.w)) {
+        out_rgba[at] = vec4(0);
+        out_depth[at] = INF;
+        out_key[at] = NAN;
+        return;
+    }
+    float key = NAN;
     gmax = fr.dims.xyz - 2;
     const vec3 o = fr.o00.xyz + float(px.x) * fr.ox.xyz + float(px.y) * fr.oy.xyz;
     const vec3 dir = normalize(fr.d00.xyz + float(px.x) * fr.dx.xyz + float(px.y) * fr.dy.xyz);
@@ -269,6 +298,21 @@ main() {
             t1 = min(t1, t);
     }
     hit = hit && t0 <= t1;
+    /* a region render: the stretch of the ray near its box (one voxel
+     * wider), whose samples it then tests one by one (owned) */
+    float ra = t0, rb = t1;
+    if (hit && region) {
+        for (int a = 0; a < 3; a++) {
+            if (abs(di[a]) < 1e-30)
+                continue;
+            const float lo = fr.rlo[a] - 1.0, hi = fr.rhi[a] + 1.0;
+            const float ta = (lo - oi[a]) / di[a], tb2 = (hi - oi[a]) / di[a];
+            ra = max(ra, min(ta, tb2));
+            rb = min(rb, max(ta, tb2));
+        }
+    }
+    bool xsum = false;          /* a region's X-ray sum (key, remainder, count) */
+    float xs = 0.0, xr = 0.0, xn = 0.0, xdepth = INF;
     if (hit) {
         tb = t0;
         o_i = oi + t0 * di;
@@ -280,7 +324,11 @@ main() {
         const bool skipping = (flags & F_SKIPPING) != 0;
         if (mode == MODE_COMPOSITE) {
             float k = ceil(t0 * inv_dt);
-            const float kend = floor(t1 * inv_dt);
+            float kend = floor(t1 * inv_dt);
+            if (region) {
+                k = max(k, ceil(ra * inv_dt));
+                kend = min(kend, floor(rb * inv_dt));
+            }
             const float et = fr.p0.y;
             while (k <= kend) {
                 const float t = k * dt;
@@ -294,6 +342,8 @@ main() {
                     }
                 }
                 k += 1.0;
+                if (!owned(t))
+                    continue;
                 const vec4 e = entry(sample_at(p));
                 if (e.x <= 0.0)
                     continue;
@@ -311,12 +361,36 @@ main() {
             A = min(A, 1.0);
         } else if (mode == MODE_ISO) {
             const float iso = fr.p1.y;
-            const float k0 = ceil(t0 / dt), kend = floor(t1 / dt);
-            float k = k0, pt = 0.0, pv = 0.0, th = -1.0;
+            const float k0 = ceil(t0 / dt);
+            float kend = floor(t1 / dt);
+            float k = k0;
+            if (region) {
+                k = max(k, ceil(ra / dt));
+                kend = min(kend, floor(rb / dt));
+            }
+            float pt = 0.0, pv = 0.0, th = -1.0;
             bool have = false;
+            if (region) {
+                /* the region's first sample; when it is not the ray's, the
+                 * search starts at the one before it (project.h
+                 * vv_vray_iso_first, cont) */
+                while (k <= kend && !owned(k * dt))
+                    k += 1.0;
+                if (k <= kend && k > k0) {
+                    pt = (k - 1.0) * dt;
+                    pv = sample_at(point_at(pt));
+                    have = true;
+                    if (pv >= iso) {
+                        th = pt;
+                        k = kend + 1.0;
+                    }
+                }
+            }
             while (k <= kend) {
                 const float t = k * dt;
                 const vec3 p = point_at(t);
+                if (!owned(t))
+                    break; /* past the region's samples */
                 if (skipping) {
                     uvec3 bc;
                     const uint dist = dist_of(block_of(p, bc));
@@ -358,24 +432,44 @@ main() {
             }
         } else {
             /* projections: MIP, MinIP, X-ray (project.h) */
-            float k = ceil(t0 / dt);
-            const float kend = floor(t1 / dt);
-            float value;
-            if (k > kend) {
+            const float k0 = ceil(t0 / dt);
+            float k = k0;
+            float kend = floor(t1 / dt);
+            const bool shortray = k > kend;
+            if (region) {
+                k = max(k, ceil(ra / dt));
+                kend = min(kend, floor(rb / dt));
+            }
+            float value = 0.0;
+            bool any = false;
+            if (shortray) {
+                /* one sample, in the middle */
                 const float tm = 0.5 * (t0 + t1);
+                any = owned(tm);
                 value = sample_at(point_at(tm));
                 pdepth = tm;
+                xs = value;
+                xn = 1.0;
+                xdepth = tm;
             } else if (mode == MODE_XRAY) {
                 float sum = 0.0, comp = 0.0, n = 0.0; /* Kahan's sum */
                 for (; k <= kend; k += 1.0) {
+                    if (!owned(k * dt))
+                        continue;
+                    if (n == 0.0 && k == k0)
+                        xdepth = t0; /* the region holds the ray's first sample */
                     const float y = sample_at(point_at(k * dt)) - comp;
-                    const float s = sum + y;
-                    comp = (s - sum) - y;
-                    sum = s;
+                    const float sm = sum + y;
+                    comp = (sm - sum) - y;
+                    sum = sm;
                     n += 1.0;
                 }
-                value = sum / n;
+                any = n > 0.0;
+                value = any ? sum / n : 0.0;
                 pdepth = t0;
+                xs = sum;
+                xr = -comp;
+                xn = n;
             } else {
                 const bool mip = mode == MODE_MIP;
                 const float sg = mip ? 1.0 : -1.0;
@@ -389,27 +483,60 @@ main() {
                         uvec3 bc;
                         const vec2 mm = bmm[block_of(p, bc)];
                         if ((mip ? mm.y : -mm.x) <= best) {
+                            if (owned(t))
+                                any = true;
                             k = max(ceil(block_exit(p, t) * inv_dt), k + 1.0);
                             continue;
                         }
                     }
+                    k += 1.0;
+                    if (!owned(t))
+                        continue;
+                    any = true;
                     const float x = sg * sample_at(p);
                     if (x > best) {
                         best = x;
                         tbest = t;
                     }
-                    k += 1.0;
                 }
                 value = sg * best;
                 pdepth = tbest;
+                if (region) {
+                    /* a region that took no sample has no key; one that
+                     * took only hidden ones may leave some untested:
+                     * any owned sample on the stretch counts */
+                    for (float j = max(ceil(t0 / dt), ceil(ra / dt));
+                         !any && j <= min(floor(t1 / dt), floor(rb / dt)); j += 1.0)
+                        any = owned(j * dt);
+                }
             }
-            const vec4 e = entry(value);
-            P = e.yzw * e.x;
-            PA = e.x;
+            if (!region || any) {
+                const vec4 e = entry(value);
+                P = e.yzw * e.x;
+                PA = e.x;
+                key = value; /* stored units, the same in every region */
+            } else {
+                pdepth = INF;
+            }
+            xsum = region && mode == MODE_XRAY;
+            if (xsum && !any) {
+                xs = 0.0;
+                xn = 0.0;
+                xdepth = INF;
+            }
         }
+    }
+    if (xsum) {
+        /* VV_REGION_SUM: the sum as key and remainder, the count; classified
+         * once the regions' sums are added (vv_region_image_finish) */
+        out_rgba[at] = vec4(xn > 0.0 ? xr : 0.0, xn, 0.0, 0.0);
+        out_depth[at] = xdepth;
+        out_key[at] = xn > 0.0 ? xs : NAN;
+        return;
     }
     const float rest = 1.0 - A;
     const float A2 = A + rest * PA;
     out_rgba[at] = vec4(C + rest * P + (1.0 - A2) * fr.bg.xyz, A2);
     out_depth[at] = min(depth, pdepth);
+    out_key[at] = key;
 }
