@@ -2,7 +2,8 @@
  * The gpu renderer (src/render/gpu) against the CPU ray caster, on the
  * Vulkan device there is: in CI Mesa's lavapipe, which runs the same SPIR-V
  * on the CPU. Images of real data agree (MIP, MinIP and X-ray >= 60 dB,
- * composite and iso >= 45 dB; issue 64), with cut planes and point lights;
+ * composite and iso >= 45 dB; issue 64), with cut planes, point lights and
+ * a 2-D transfer function;
  * empty-space skipping leaves the image bit for bit; what it does not draw
  * is refused in one line; out of core (the region contract: a .vvb of the
  * CT head (14 MB) 3.4 times the cache's budget of 4 MiB, paged brick by brick through the
@@ -192,6 +193,30 @@ test_cut_planes_point_light(void **state) {
     vv_volume_free(vol);
 }
 
+/* A 2-D transfer function (value x gradient magnitude, Kniss et al.): the
+ * boundaries of bone and of skin, as the GUI's editor makes them. */
+static void
+test_tf2d(void **state) {
+    (void)state;
+    NEED_DEVICE();
+    vv_volume *vol;
+    vv_world *w = vt_volume_scene("volumes/ct_head.nrrd", SIZE, &vol);
+    vv_object *o = w->objects[0];
+    vv_tf2d_init(&o->tf2d);
+    o->tf2d.opacity_unit_distance = 1;
+    vv_tf2d_widget wd;
+    vv_tf2d_widget_init_triangle(&wd, 700, 1400, 1500, vv_vec3_make(1, 0.95, 0.85), 0.9);
+    wd.gradient[0] = 150;
+    vt_ok(vv_tf2d_add_widget(&o->tf2d, &wd));
+    vv_tf2d_widget_init_rectangle(&wd, 80, 300, 20, 400, vv_vec3_make(0.9, 0.5, 0.4), 0.05);
+    wd.ramp = 30;
+    vt_ok(vv_tf2d_add_widget(&o->tf2d, &wd));
+    o->segmentation = VV_SEG_TRANSFER_FUNCTION_2D;
+    agree(w, VV_MODE_COMPOSITE, 45, "ct_head_tf2d");
+    vv_world_free(w);
+    vv_volume_free(vol);
+}
+
 /* Leaping over hidden subvolumes skips only samples that add nothing. */
 static void
 test_skipping_same_image(void **state) {
@@ -348,6 +373,7 @@ main(void) {
         cmocka_unit_test(test_neghip_modes),
         cmocka_unit_test(test_float_anisotropic),
         cmocka_unit_test(test_cut_planes_point_light),
+        cmocka_unit_test(test_tf2d),
         cmocka_unit_test(test_skipping_same_image),
         cmocka_unit_test(test_refusals),
         cmocka_unit_test(test_background_and_new_volume),

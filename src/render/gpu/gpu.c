@@ -62,13 +62,18 @@ typedef struct gpu_ubo {
     float rlo[4], rhi[4]; /* a region's owned samples (open sides: -+1e30) */
     int32_t roff[4];      /* its voxels' offset; [3]: 1 in a region render */
     int32_t rect[4];      /* its pixel rectangle x0, y0, x1, y1 (x1 <= x0: all) */
+    float p2[4];          /* 2-D TF: table index -> value bin, |gradient| -> bin */
 } gpu_ubo;
 
-enum { F_SHADING = 1, F_NORMALS = 2, F_SKIPPING = 4, F_POINT = 8, F_INTEGER = 16 };
+enum { F_SHADING = 1, F_NORMALS = 2, F_SKIPPING = 4, F_POINT = 8, F_INTEGER = 16, F_LUT2D = 32 };
 
-/* The buffers the shader reads and writes (bindings 0 and 3 .. 9). */
-enum { B_UBO, B_LUT, B_SPEC, B_DIST, B_MM, B_RGBA, B_DEPTH, B_KEY, N_BUF };
-static const int binding_of[N_BUF] = {0, 3, 4, 5, 6, 7, 8, 9};
+/* The buffers the shader reads and writes (bindings 0, 3 .. 9 and 11); the
+ * uploads (B_UBO .. B_LUT2) come first, then the outputs. */
+enum { B_UBO, B_LUT, B_SPEC, B_DIST, B_MM, B_LUT2, B_RGBA, B_DEPTH, B_KEY, N_BUF };
+static const int binding_of[N_BUF] = {0, 3, 4, 5, 6, 11, 7, 8, 9};
+/* the 3-D images (bindings 1, 2 and 10) */
+enum { I_VALUES, I_NORMALS, I_GMAG, N_IMG };
+static const int image_binding[N_IMG] = {1, 2, 10};
 
 typedef struct gpu_state {
     vv_vcache_set vc;         /* the host's voxel caches (sample.h) */
@@ -92,7 +97,8 @@ typedef struct gpu_state {
     uint64_t vol_modified;
     const void *vol_data;
     const void *nrm_data;
-    vv_vk_image values, normals;
+    const void *gmag_data;
+    vv_vk_image img[N_IMG];  /* values, gradient codes, gradient magnitudes */
     vv_vk_buffer buf[N_BUF]; /* device-local */
     vv_vk_buffer staging;    /* host: the frame's uploads */
     vv_vk_buffer readback;   /* host: the image back */
@@ -111,8 +117,8 @@ release_device(gpu_state *st) {
     vk->f.vkDestroyDescriptorPool(vk->dev, st->pool, NULL);
     vk->f.vkDestroyDescriptorSetLayout(vk->dev, st->dsl, NULL);
     vk->f.vkDestroySampler(vk->dev, st->sampler, NULL);
-    vv_vk_image_free(vk, &st->values);
-    vv_vk_image_free(vk, &st->normals);
+    for (int i = 0; i < N_IMG; i++)
+        vv_vk_image_free(vk, &st->img[i]);
     for (int i = 0; i < N_BUF; i++)
         vv_vk_buffer_free(vk, &st->buf[i]);
     vv_vk_buffer_free(vk, &st->staging);
@@ -149,19 +155,20 @@ open_device(gpu_state *st) {
         return s;
     }
     vv_vk *vk = &st->vk;
-    VkDescriptorSetLayoutBinding b[10];
-    for (int i = 0; i < 10; i++) {
-        b[i] = (VkDescriptorSetLayoutBinding){
-            .binding = (uint32_t)i,
-            .descriptorType = i == 0             ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER
-                              : i == 1 || i == 2 ? VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
-                                                 : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-            .descriptorCount = 1,
-            .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT};
+    VkDescriptorSetLayoutBinding b[12];
+    for (int i = 0; i < 12; i++) {
+        b[i] = (VkDescriptorSetLayoutBinding){.binding = (uint32_t)i,
+                                              .descriptorType =
+                                                  i == 0 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER
+                                                  : i == 1 || i == 2 || i == 10
+                                                      ? VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
+                                                      : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                                              .descriptorCount = 1,
+                                              .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT};
     }
     const VkDescriptorSetLayoutCreateInfo li = {
         .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
-        .bindingCount = 10,
+        .bindingCount = 12,
         .pBindings = b};
     s = vk_check(vk, vk->f.vkCreateDescriptorSetLayout(vk->dev, &li, NULL, &st->dsl),
                  "vkCreateDescriptorSetLayout");
@@ -192,8 +199,8 @@ open_device(gpu_state *st) {
     if (mod)
         vk->f.vkDestroyShaderModule(vk->dev, mod, NULL);
     const VkDescriptorPoolSize ps[3] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                        {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2},
-                                        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 7}};
+                                        {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 3},
+                                        {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 8}};
     const VkDescriptorPoolCreateInfo pi = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO,
                                            .maxSets = 1,
                                            .poolSizeCount = 3,
@@ -238,47 +245,49 @@ ensure_buffer(gpu_state *st, vv_vk_buffer *b, VkDeviceSize size, VkBufferUsageFl
     return vv_vk_buffer_new(&st->vk, size + size / 4, usage, host, b);
 }
 
-/* The volume of cache @p c on the device, uploaded when it changed:
+/* The volume of cache @p c on the device, uploaded when it changed: its
+ * values, gradient codes and (2-D transfer functions) gradient magnitudes
+ * as 3-D images, a 1 x 1 x 1 image standing for those it has none of;
  * records the copies into the command buffer being recorded, through the
- * staging buffer from @p at on (*used: bytes of staging used). */
+ * staging buffer from *used on (*used: bytes of staging used). */
 static vv_status
 upload_volume(gpu_state *st, const vv_vcache *c, VkDeviceSize *used) {
     vv_vk *vk = &st->vk;
     const void *data = c->q16 ? (const void *)c->q16 : (const void *)c->f32;
     if (st->vol == c->vol && st->vol_modified == c->modified && st->vol_data == data &&
-        st->nrm_data == c->nrm && st->values.img)
+        st->nrm_data == c->nrm && st->gmag_data == c->gmag && st->img[I_VALUES].img)
         return VV_OK;
-    vv_vk_image_free(vk, &st->values);
-    vv_vk_image_free(vk, &st->normals);
+    for (int i = 0; i < N_IMG; i++)
+        vv_vk_image_free(vk, &st->img[i]);
     st->vol = NULL;
-    const int dims[3] = {c->nx, c->ny, c->nz};
+    const int dims[3] = {c->nx, c->ny, c->nz}, one[3] = {1, 1, 1};
     const size_t n = (size_t)c->nx * (size_t)c->ny * (size_t)c->nz;
-    const size_t vbytes = n * (c->q16 ? 2 : 4);
-    const size_t nbytes = c->nrm ? 2 * n : 2;
-    vv_status s =
-        vv_vk_image_new(vk, dims, c->q16 ? VK_FORMAT_R16_UNORM : VK_FORMAT_R32_SFLOAT, &st->values);
-    const int one[3] = {1, 1, 1};
-    if (s == VV_OK)
-        s = vv_vk_image_new(vk, c->nrm ? dims : one, VK_FORMAT_R8G8_SINT, &st->normals);
-    const VkDeviceSize need = *used + ((vbytes + 15) & ~(size_t)15) + nbytes;
-    if (s == VV_OK)
-        s = ensure_buffer(st, &st->staging, need, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, 1);
+    static const uint8_t no_gradient[2] = {0x80, 0x80}; /* VV_OCT_ZERO */
+    static const float zero = 0;
+    const void *src[N_IMG] = {data, c->nrm ? (const void *)c->nrm : no_gradient,
+                              c->gmag ? (const void *)c->gmag : &zero};
+    const size_t bytes[N_IMG] = {n * (c->q16 ? 2 : 4), c->nrm ? 2 * n : 2, c->gmag ? 4 * n : 4};
+    const VkFormat fmt[N_IMG] = {c->q16 ? VK_FORMAT_R16_UNORM : VK_FORMAT_R32_SFLOAT,
+                                 VK_FORMAT_R8G8_SINT, VK_FORMAT_R32_SFLOAT};
+    VkDeviceSize need = *used;
+    for (int i = 0; i < N_IMG; i++)
+        need += (bytes[i] + 15) & ~(size_t)15;
+    vv_status s = ensure_buffer(st, &st->staging, need, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, 1);
+    for (int i = 0; i < N_IMG && s == VV_OK; i++) {
+        s = vv_vk_image_new(vk, i == I_VALUES || bytes[i] > 4 ? dims : one, fmt[i], &st->img[i]);
+        if (s != VV_OK)
+            break;
+        memcpy((unsigned char *)st->staging.map + *used, src[i], bytes[i]);
+        vv_vk_copy_to_image(vk, &st->staging, *used, &st->img[i]);
+        *used += (bytes[i] + 15) & ~(size_t)15;
+    }
     if (s != VV_OK)
         return vv_error_prefix(s, "the volume (%d x %d x %d)", dims[0], dims[1], dims[2]);
-    unsigned char *m = st->staging.map;
-    memcpy(m + *used, data, vbytes);
-    vv_vk_copy_to_image(vk, &st->staging, *used, &st->values);
-    *used += (vbytes + 15) & ~(size_t)15;
-    if (c->nrm)
-        memcpy(m + *used, c->nrm, nbytes);
-    else
-        memset(m + *used, 0x80, 2); /* VV_OCT_ZERO: no gradient */
-    vv_vk_copy_to_image(vk, &st->staging, *used, &st->normals);
-    *used += (nbytes + 15) & ~(size_t)15;
     st->vol = c->vol;
     st->vol_modified = c->modified;
     st->vol_data = data;
     st->nrm_data = c->nrm;
+    st->gmag_data = c->gmag;
     return VV_OK;
 }
 
@@ -374,7 +383,8 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
     memset(&tab, 0, sizeof tab);
     int owns = 0;
     size_t nblocks = 1;
-    vv_vshading sh; /* the object's shading constants (its specular table goes up) */
+    vv_vshading sh;            /* the object's shading constants (its specular table goes up) */
+    const float *lut2d = NULL; /* its 2-D transfer function's table, or NULL */
     if (obj) {
         if (!(obj->step > 0))
             return vv_error_set(VV_ERR_INVALID, "object '%s': step must be > 0", obj->name);
@@ -400,14 +410,25 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
         if (s != VV_OK)
             return s;
         vv_vextra x;
-        if (vv_vextra_prepare(&x, obj, mode, &tab) || (mode == VV_MODE_ISO && obj->texture.image)) {
+        vv_vextra_prepare(&x, obj, mode, &tab);
+        if (x.solid || x.labels || (mode == VV_MODE_ISO && obj->texture.image)) {
             if (owns)
                 vv_vtables_free(&tab);
             return vv_error_set(VV_ERR_UNSUPPORTED,
-                                "object '%s' has a 2-D transfer function, a solid texture "
-                                "or label colours; the gpu renderer draws a 1-D transfer "
-                                "function or a threshold (raycast draws them)",
+                                "object '%s' has a solid texture, an image texture or label "
+                                "colours; the gpu renderer draws 1-D and 2-D transfer "
+                                "functions and thresholds (raycast draws them)",
                                 obj->name);
+        }
+        if (x.lut2d) {
+            if (!c->gmag)
+                return vv_error_set(VV_ERR_NOMEM,
+                                    "object '%s': no gradient magnitudes for its "
+                                    "2-D transfer function",
+                                    obj->name);
+            lut2d = x.lut2d;
+            u.p2[0] = x.lut2_scale;
+            u.p2[1] = x.g_scale;
         }
         for (int a = 0; a < 3; a++) {
             for (int b = 0; b < 4; b++)
@@ -449,7 +470,7 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
             point |= lights[l].point;
         u.misc[3] = (obj->shading ? F_SHADING : 0) | (c->nrm ? F_NORMALS : 0) |
                     (st->skipping && tab.bdist ? F_SKIPPING : 0) | (point ? F_POINT : 0) |
-                    (c->q16 ? F_INTEGER : 0);
+                    (c->q16 ? F_INTEGER : 0) | (lut2d ? F_LUT2D : 0);
         for (int a = 0; a < 3; a++)
             u.clipd[a] = rg ? (rg->dims[a] > 1 ? rg->dims[a] : 2) : dims[a];
         if (rg) {
@@ -500,6 +521,7 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
                                        (VV_VC_SPEC + 1) * sizeof(float),
                                        (nblocks + 3) & ~(size_t)3,
                                        nblocks * 8,
+                                       lut2d ? (VkDeviceSize)VV_VC_LUT2_G * VV_VC_LUT2_V * 16 : 16,
                                        npx * 16,
                                        npx * 4,
                                        npx * 4};
@@ -525,7 +547,7 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
         /* the volume first (it may grow the staging buffer), then the frame's data */
         if (c) {
             s = upload_volume(st, c, &used);
-        } else if (!st->values.view) {
+        } else if (!st->img[I_VALUES].view) {
             /* nothing drawn yet: a 2 x 2 x 2 volume of zeros without gradients, so
              * that every binding holds an image */
             static const float zeros[8];
@@ -550,6 +572,10 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
             memcpy(m + offs[B_SPEC], sh.spec, sizes[B_SPEC]);
         else
             memset(m + offs[B_SPEC], 0, sizes[B_SPEC]);
+        if (lut2d)
+            memcpy(m + offs[B_LUT2], lut2d, sizes[B_LUT2]);
+        else
+            memset(m + offs[B_LUT2], 0, sizes[B_LUT2]);
         memset(m + offs[B_DIST], 0, sizes[B_DIST]);
         if (tab.bdist)
             memcpy(m + offs[B_DIST], tab.bdist, nblocks);
@@ -566,7 +592,7 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
         vv_vk_barrier(vk, 0);
 
         VkDescriptorBufferInfo bi[N_BUF];
-        VkWriteDescriptorSet wr[N_BUF + 2];
+        VkWriteDescriptorSet wr[N_BUF + N_IMG];
         for (int i = 0; i < N_BUF; i++) {
             bi[i] = (VkDescriptorBufferInfo){st->buf[i].buf, 0, sizes[i]};
             wr[i] = (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
@@ -578,16 +604,15 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
                                                           : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
                                            .pBufferInfo = &bi[i]};
         }
-        vv_vk_image *ims[2] = {&st->values, &st->normals};
-        VkDescriptorImageInfo ii[2];
+        VkDescriptorImageInfo ii[N_IMG];
         int nw = N_BUF;
-        for (int i = 0; i < 2; i++) {
-            ii[i] = (VkDescriptorImageInfo){st->sampler, ims[i]->view,
+        for (int i = 0; i < N_IMG; i++) {
+            ii[i] = (VkDescriptorImageInfo){st->sampler, st->img[i].view,
                                             VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
             wr[nw++] =
                 (VkWriteDescriptorSet){.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
                                        .dstSet = st->set,
-                                       .dstBinding = (uint32_t)(1 + i),
+                                       .dstBinding = (uint32_t)image_binding[i],
                                        .descriptorCount = 1,
                                        .descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
                                        .pImageInfo = &ii[i]};

@@ -22,6 +22,8 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 const int MODE_COMPOSITE = 0, MODE_MIP = 1, MODE_MINIP = 2, MODE_XRAY = 3, MODE_ISO = 4;
 const int F_SHADING = 1, F_NORMALS = 2, F_SKIPPING = 4, F_POINT = 8, F_INTEGER = 16;
+const int F_LUT2D = 32;
+const int LUT2_V = 1024, LUT2_G = 128;
 const int MAX_LIGHTS = 16, MAX_PLANES = 16, LUT = 4096, SPEC = 2048, BLOCK = 4;
 
 layout(std140, set = 0, binding = 0) uniform Frame {
@@ -45,6 +47,7 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     vec4 rlo, rhi;                 /* a region's samples: rlo <= p < rhi (whole index space) */
     ivec4 roff;                    /* its voxels' offset in the whole volume; w: 1 region */
     ivec4 rect;                    /* pixels x0 <= x < x1, y0 <= y < y1 (x1 <= x0: all) */
+    vec4 p2;                       /* 2-D TF: table index -> value bin, |gradient| -> bin */
 } fr;
 
 layout(set = 0, binding = 1) uniform sampler3D vol;   /* stored values (R16 unorm or R32F) */
@@ -56,6 +59,8 @@ layout(std430, set = 0, binding = 6) readonly buffer MinMax { vec2 bmm[]; };
 layout(std430, set = 0, binding = 7) writeonly buffer Rgba { vec4 out_rgba[]; };
 layout(std430, set = 0, binding = 8) writeonly buffer Depth { float out_depth[]; };
 layout(std430, set = 0, binding = 9) writeonly buffer Key { float out_key[]; };
+layout(set = 0, binding = 10) uniform sampler3D gmag; /* gradient magnitude per voxel */
+layout(std430, set = 0, binding = 11) readonly buffer Lut2 { vec4 lut2[]; };
 
 ivec3 gmax;   /* dims - 2: the last cell */
 vec3 o_i;     /* index point at t = tb (the whole volume's index space) */
@@ -176,6 +181,31 @@ shade(vec3 g, vec3 pw, vec3 v, vec3 col, float alpha) {
         }
     }
     return d * col + alpha * s;
+}
+
+/* sample.h vv_vcache_gmag: the voxels' gradient magnitudes, trilinearly */
+float
+gmag_at(vec3 p) {
+    vec3 f;
+    ivec3 i = cell_of(p, f);
+    float c00 = mix(texelFetch(gmag, i, 0).r, texelFetch(gmag, i + ivec3(1, 0, 0), 0).r, f.x);
+    float c10 = mix(texelFetch(gmag, i + ivec3(0, 1, 0), 0).r,
+                    texelFetch(gmag, i + ivec3(1, 1, 0), 0).r, f.x);
+    float c01 = mix(texelFetch(gmag, i + ivec3(0, 0, 1), 0).r,
+                    texelFetch(gmag, i + ivec3(1, 0, 1), 0).r, f.x);
+    float c11 = mix(texelFetch(gmag, i + ivec3(0, 1, 1), 0).r,
+                    texelFetch(gmag, i + ivec3(1, 1, 1), 0).r, f.x);
+    return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
+}
+
+/* classify.h vv_vextra_apply: the 2-D transfer function's entry (value x
+ * gradient magnitude, Kniss et al. 2002) in place of the 1-D one */
+vec4
+entry2d(float v, vec3 p) {
+    float li = clamp((v - fr.p0.z) * fr.p0.w, 0.0, float(LUT - 1));
+    int vb = int(li * fr.p2.x + 0.5);
+    int gb = clamp(int(gmag_at(p) * fr.p2.y + 0.5), 0, LUT2_G - 1);
+    return lut2[gb * LUT2_V + vb];
 }
 
 vec4
@@ -344,8 +374,11 @@ main() {
                 k += 1.0;
                 if (!owned(t))
                     continue;
-                const vec4 e = entry(sample_at(p));
+                const float val = sample_at(p);
+                vec4 e = entry(val);
                 if (e.x <= 0.0)
+                    continue;
+                if ((flags & F_LUT2D) != 0 && (e = entry2d(val, p)).x <= 0.0)
                     continue;
                 vec3 col = e.yzw;
                 if ((flags & F_SHADING) != 0)
