@@ -3,7 +3,7 @@
  * Vulkan device there is: in CI Mesa's lavapipe, which runs the same SPIR-V
  * on the CPU. Images of real data agree (MIP, MinIP and X-ray >= 60 dB,
  * composite and iso >= 45 dB; issue 64), with cut planes, point lights and
- * a 2-D transfer function;
+ * a 2-D transfer function, and three channels under each blend rule;
  * empty-space skipping leaves the image bit for bit; what it does not draw
  * is refused in one line; out of core (the region contract: a .vvb of the
  * CT head (14 MB) 3.4 times the cache's budget of 4 MiB, paged brick by brick through the
@@ -217,6 +217,54 @@ test_tf2d(void **state) {
     vv_volume_free(vol);
 }
 
+/* Three channels of one object (blobs of their own, overlapping; 8-bit,
+ * 16-bit and float), under the three blend rules. */
+static void
+test_channels(void **state) {
+    (void)state;
+    NEED_DEVICE();
+    const int dims[3] = {48, 40, 36};
+    const vv_voxel_type types[3] = {VV_U8, VV_U16, VV_F32};
+    const double cx[3] = {18, 28, 24}, cy[3] = {18, 20, 24}, scale[3] = {200, 40000, 1.5};
+    vv_volume *vols[3];
+    for (int c = 0; c < 3; c++) {
+        vt_ok(vv_volume_new(&vols[c], dims, types[c]));
+        for (int k = 0; k < dims[2]; k++)
+            for (int j = 0; j < dims[1]; j++)
+                for (int i = 0; i < dims[0]; i++) {
+                    const double d2 = (i - cx[c]) * (i - cx[c]) + (j - cy[c]) * (j - cy[c]) +
+                                      (k - 18.0) * (k - 18.0);
+                    vv_volume_set(vols[c], i, j, k,
+                                  scale[c] * exp(-d2 / 90.0) * (0.8 + 0.2 * sin(0.7 * i)));
+                }
+        vv_volume_update_range(vols[c]);
+    }
+    vv_default_scene_options so = vt_scene_options(SIZE);
+    vv_world *w;
+    vt_ok(vv_world_new_for_volume(&w, vols[0], &so));
+    vv_object *o = w->objects[0];
+    vt_ok(vv_object_set_channels(o, 3, vols, NULL));
+    static const vv_vec3 rgb[3] = {{1, 0.2, 0.2}, {0.2, 1, 0.2}, {0.3, 0.4, 1}};
+    for (int c = 0; c < 3; c++)
+        vt_ok(vv_tf_set_contrast(&o->channels[c].tf, 0.25 * scale[c], 0.9 * scale[c], 1.0, 0.6,
+                                 rgb[c], 1.0));
+    static const vv_channel_blend rules[3] = {VV_BLEND_COMPOSITE, VV_BLEND_ADDITIVE,
+                                              VV_BLEND_MAXIMUM};
+    static const char *const names[3] = {"channels_composite", "channels_additive",
+                                         "channels_maximum"};
+    for (int r = 0; r < 3; r++) {
+        o->blend = rules[r];
+        agree(w, o->mode, r == 2 ? 60 : 45, names[r]);
+    }
+    /* a hidden channel is left out, as raycast leaves it out */
+    o->channels[1].visible = 0;
+    o->blend = VV_BLEND_COMPOSITE;
+    agree(w, o->mode, 45, "channels_two_of_three");
+    vv_world_free(w);
+    for (int c = 0; c < 3; c++)
+        vv_volume_free(vols[c]);
+}
+
 /* Leaping over hidden subvolumes skips only samples that add nothing. */
 static void
 test_skipping_same_image(void **state) {
@@ -374,6 +422,7 @@ main(void) {
         cmocka_unit_test(test_float_anisotropic),
         cmocka_unit_test(test_cut_planes_point_light),
         cmocka_unit_test(test_tf2d),
+        cmocka_unit_test(test_channels),
         cmocka_unit_test(test_skipping_same_image),
         cmocka_unit_test(test_refusals),
         cmocka_unit_test(test_background_and_new_volume),

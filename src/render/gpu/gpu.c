@@ -48,6 +48,9 @@ static const uint32_t raycast_spv[] =
     ;
 #endif
 
+/* The channels of a multi-channel object the shader draws at most. */
+#define GPU_MAX_CH 4
+
 /* The shader's uniform block (std140: every member 16 bytes). */
 typedef struct gpu_ubo {
     float o00[4], ox[4], oy[4], d00[4], dx[4], dy[4];
@@ -59,10 +62,14 @@ typedef struct gpu_ubo {
     float planes[2 * VV_MAX_CUT_PLANES][4];
     int32_t dims[4], bdims[4], misc[4], clipd[4];
     float p0[4], p1[4];
-    float rlo[4], rhi[4]; /* a region's owned samples (open sides: -+1e30) */
-    int32_t roff[4];      /* its voxels' offset; [3]: 1 in a region render */
-    int32_t rect[4];      /* its pixel rectangle x0, y0, x1, y1 (x1 <= x0: all) */
-    float p2[4];          /* 2-D TF: table index -> value bin, |gradient| -> bin */
+    float rlo[4], rhi[4];       /* a region's owned samples (open sides: -+1e30) */
+    int32_t roff[4];            /* its voxels' offset; [3]: 1 in a region render */
+    int32_t rect[4];            /* its pixel rectangle x0, y0, x1, y1 (x1 <= x0: all) */
+    float p2[4];                /* 2-D TF: table index -> value bin, |gradient| -> bin */
+    float chp[GPU_MAX_CH][4];   /* per channel: table lo, table scale, value scale, MIP floor */
+    float chq[GPU_MAX_CH][4];   /* per channel: MIP stop */
+    int32_t chf[GPU_MAX_CH][4]; /* per channel: F_INTEGER | F_NORMALS */
+    int32_t chn[4];             /* channels (0: one-channel object), blend rule */
 } gpu_ubo;
 
 enum { F_SHADING = 1, F_NORMALS = 2, F_SKIPPING = 4, F_POINT = 8, F_INTEGER = 16, F_LUT2D = 32 };
@@ -71,9 +78,12 @@ enum { F_SHADING = 1, F_NORMALS = 2, F_SKIPPING = 4, F_POINT = 8, F_INTEGER = 16
  * uploads (B_UBO .. B_LUT2) come first, then the outputs. */
 enum { B_UBO, B_LUT, B_SPEC, B_DIST, B_MM, B_LUT2, B_RGBA, B_DEPTH, B_KEY, N_BUF };
 static const int binding_of[N_BUF] = {0, 3, 4, 5, 6, 11, 7, 8, 9};
-/* the 3-D images (bindings 1, 2 and 10) */
-enum { I_VALUES, I_NORMALS, I_GMAG, N_IMG };
-static const int image_binding[N_IMG] = {1, 2, 10};
+/* the 3-D images: channel k's values at I_VALUES + 2 k, its gradient codes
+ * at I_NORMALS + 2 k (k = 0: a one-channel object's), the gradient
+ * magnitudes of a 2-D transfer function at I_GMAG */
+enum { I_VALUES, I_NORMALS, I_GMAG = 2 * GPU_MAX_CH, N_IMG };
+static const int image_binding[N_IMG] = {1, 2, 12, 15, 13, 16, 14, 17, 10};
+#define N_BINDINGS 18
 
 typedef struct gpu_state {
     vv_vcache_set vc;         /* the host's voxel caches (sample.h) */
@@ -92,13 +102,15 @@ typedef struct gpu_state {
     VkDescriptorPool pool;
     VkDescriptorSet set;
     VkSampler sampler;
-    /* the volume on the device, and what it was made from */
-    const vv_volume *vol;
-    uint64_t vol_modified;
-    const void *vol_data;
-    const void *nrm_data;
-    const void *gmag_data;
-    vv_vk_image img[N_IMG];  /* values, gradient codes, gradient magnitudes */
+    vv_vk_image img[N_IMG]; /* values, gradient codes, gradient magnitudes */
+    /* what each image was made from: the cache's volume, its change count
+     * and the array (NULL: a 1 x 1 x 1 stand-in) */
+    struct {
+        const vv_volume *vol;
+        uint64_t modified;
+        const void *data;
+        int made;
+    } from[N_IMG];
     vv_vk_buffer buf[N_BUF]; /* device-local */
     vv_vk_buffer staging;    /* host: the frame's uploads */
     vv_vk_buffer readback;   /* host: the image back */
@@ -125,7 +137,7 @@ release_device(gpu_state *st) {
     vv_vk_buffer_free(vk, &st->readback);
     vv_vk_close(vk);
     st->ready = 0;
-    st->vol = NULL;
+    memset(st->from, 0, sizeof st->from);
     st->pipe = VK_NULL_HANDLE;
     st->layout = VK_NULL_HANDLE;
     st->pool = VK_NULL_HANDLE;
@@ -155,12 +167,12 @@ open_device(gpu_state *st) {
         return s;
     }
     vv_vk *vk = &st->vk;
-    VkDescriptorSetLayoutBinding b[12];
-    for (int i = 0; i < 12; i++) {
+    VkDescriptorSetLayoutBinding b[N_BINDINGS];
+    for (int i = 0; i < N_BINDINGS; i++) {
         b[i] = (VkDescriptorSetLayoutBinding){.binding = (uint32_t)i,
                                               .descriptorType =
                                                   i == 0 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER
-                                                  : i == 1 || i == 2 || i == 10
+                                                  : i == 1 || i == 2 || i == 10 || i >= 12
                                                       ? VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER
                                                       : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
                                               .descriptorCount = 1,
@@ -168,7 +180,7 @@ open_device(gpu_state *st) {
     }
     const VkDescriptorSetLayoutCreateInfo li = {
         .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
-        .bindingCount = 12,
+        .bindingCount = N_BINDINGS,
         .pBindings = b};
     s = vk_check(vk, vk->f.vkCreateDescriptorSetLayout(vk->dev, &li, NULL, &st->dsl),
                  "vkCreateDescriptorSetLayout");
@@ -199,7 +211,7 @@ open_device(gpu_state *st) {
     if (mod)
         vk->f.vkDestroyShaderModule(vk->dev, mod, NULL);
     const VkDescriptorPoolSize ps[3] = {{VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, 1},
-                                        {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 3},
+                                        {VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, N_IMG},
                                         {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, 8}};
     const VkDescriptorPoolCreateInfo pi = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO,
                                            .maxSets = 1,
@@ -245,49 +257,49 @@ ensure_buffer(gpu_state *st, vv_vk_buffer *b, VkDeviceSize size, VkBufferUsageFl
     return vv_vk_buffer_new(&st->vk, size + size / 4, usage, host, b);
 }
 
-/* The volume of cache @p c on the device, uploaded when it changed: its
- * values, gradient codes and (2-D transfer functions) gradient magnitudes
- * as 3-D images, a 1 x 1 x 1 image standing for those it has none of;
- * records the copies into the command buffer being recorded, through the
- * staging buffer from *used on (*used: bytes of staging used). */
+/* Image @p slot on the device from cache @p c (NULL: none) when it changed:
+ * @p what 0 its values, 1 its gradient codes, 2 its gradient magnitudes, a
+ * 1 x 1 x 1 image standing for an array it does not have; records the copy
+ * into the command buffer being recorded, through the staging buffer from
+ * *used on (*used: bytes of staging used). With @p dry, only adds to *used
+ * the bytes it would take: the caller makes the staging buffer large
+ * enough first, since a copy recorded from it must not see it replaced. */
 static vv_status
-upload_volume(gpu_state *st, const vv_vcache *c, VkDeviceSize *used) {
+upload_image(gpu_state *st, int slot, const vv_vcache *c, int what, VkDeviceSize *used, int dry) {
     vv_vk *vk = &st->vk;
-    const void *data = c->q16 ? (const void *)c->q16 : (const void *)c->f32;
-    if (st->vol == c->vol && st->vol_modified == c->modified && st->vol_data == data &&
-        st->nrm_data == c->nrm && st->gmag_data == c->gmag && st->img[I_VALUES].img)
-        return VV_OK;
-    for (int i = 0; i < N_IMG; i++)
-        vv_vk_image_free(vk, &st->img[i]);
-    st->vol = NULL;
-    const int dims[3] = {c->nx, c->ny, c->nz}, one[3] = {1, 1, 1};
-    const size_t n = (size_t)c->nx * (size_t)c->ny * (size_t)c->nz;
     static const uint8_t no_gradient[2] = {0x80, 0x80}; /* VV_OCT_ZERO */
     static const float zero = 0;
-    const void *src[N_IMG] = {data, c->nrm ? (const void *)c->nrm : no_gradient,
-                              c->gmag ? (const void *)c->gmag : &zero};
-    const size_t bytes[N_IMG] = {n * (c->q16 ? 2 : 4), c->nrm ? 2 * n : 2, c->gmag ? 4 * n : 4};
-    const VkFormat fmt[N_IMG] = {c->q16 ? VK_FORMAT_R16_UNORM : VK_FORMAT_R32_SFLOAT,
-                                 VK_FORMAT_R8G8_SINT, VK_FORMAT_R32_SFLOAT};
-    VkDeviceSize need = *used;
-    for (int i = 0; i < N_IMG; i++)
-        need += (bytes[i] + 15) & ~(size_t)15;
-    vv_status s = ensure_buffer(st, &st->staging, need, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, 1);
-    for (int i = 0; i < N_IMG && s == VV_OK; i++) {
-        s = vv_vk_image_new(vk, i == I_VALUES || bytes[i] > 4 ? dims : one, fmt[i], &st->img[i]);
-        if (s != VV_OK)
-            break;
-        memcpy((unsigned char *)st->staging.map + *used, src[i], bytes[i]);
-        vv_vk_copy_to_image(vk, &st->staging, *used, &st->img[i]);
-        *used += (bytes[i] + 15) & ~(size_t)15;
+    const void *data = !c          ? NULL
+                       : what == 0 ? (c->q16 ? (const void *)c->q16 : (const void *)c->f32)
+                       : what == 1 ? (const void *)c->nrm
+                                   : (const void *)c->gmag;
+    if (st->from[slot].made && st->from[slot].data == data &&
+        (!data || (st->from[slot].vol == c->vol && st->from[slot].modified == c->modified)))
+        return VV_OK;
+    const int one[3] = {1, 1, 1};
+    const int dims[3] = {data ? c->nx : 1, data ? c->ny : 1, data ? c->nz : 1};
+    const size_t n = (size_t)dims[0] * (size_t)dims[1] * (size_t)dims[2];
+    const size_t bytes = what == 0 ? n * (data && c->q16 ? 2 : 4) : what == 1 ? 2 * n : 4 * n;
+    const VkFormat fmt = what == 1                     ? VK_FORMAT_R8G8_SINT
+                         : what == 0 && data && c->q16 ? VK_FORMAT_R16_UNORM
+                                                       : VK_FORMAT_R32_SFLOAT;
+    const void *src = data ? data : what == 1 ? (const void *)no_gradient : (const void *)&zero;
+    if (dry) {
+        *used += (bytes + 15) & ~(size_t)15;
+        return VV_OK;
     }
+    vv_vk_image_free(vk, &st->img[slot]);
+    st->from[slot].made = 0;
+    vv_status s = vv_vk_image_new(vk, data ? dims : one, fmt, &st->img[slot]);
     if (s != VV_OK)
         return vv_error_prefix(s, "the volume (%d x %d x %d)", dims[0], dims[1], dims[2]);
-    st->vol = c->vol;
-    st->vol_modified = c->modified;
-    st->vol_data = data;
-    st->nrm_data = c->nrm;
-    st->gmag_data = c->gmag;
+    memcpy((unsigned char *)st->staging.map + *used, src, bytes);
+    vv_vk_copy_to_image(vk, &st->staging, *used, &st->img[slot]);
+    *used += (bytes + 15) & ~(size_t)15;
+    st->from[slot].vol = c ? c->vol : NULL;
+    st->from[slot].modified = c ? c->modified : 0;
+    st->from[slot].data = data;
+    st->from[slot].made = 1;
     return VV_OK;
 }
 
@@ -317,8 +329,7 @@ vec4_of(float out[4], vv_vec3 v) {
     out[3] = 0;
 }
 
-/* The one volume object the World shows, or an error naming what the
- * renderer does not draw. */
+/* The one volume object the World shows (NULL: none), or an error. */
 static vv_status
 find_object(const vv_world *w, const vv_object **out) {
     *out = NULL;
@@ -335,11 +346,6 @@ find_object(const vv_world *w, const vv_object **out) {
                             "the gpu renderer draws one volume object, the World shows %d "
                             "(raycast draws several)",
                             n);
-    if (*out && (*out)->n_channels > 1)
-        return vv_error_set(VV_ERR_UNSUPPORTED,
-                            "object '%s' has %d channels; the gpu renderer draws one "
-                            "(raycast draws channels)",
-                            (*out)->name, (*out)->n_channels);
     return VV_OK;
 }
 
@@ -378,58 +384,112 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
     u.misc[0] = view->width;
     u.misc[1] = view->height;
 
-    vv_vcache *c = NULL;
-    vv_vtables tab;
-    memset(&tab, 0, sizeof tab);
-    int owns = 0;
+    /* the object's channels: one (the object itself), or the visible
+     * channels of a multi-channel object, each as an object of its own
+     * (vv_vchannel_object: its volume and transfer function) */
+    int nch = 0; /* caches: 1 a one-channel object, 2 .. GPU_MAX_CH channels */
+    vv_object chobj[GPU_MAX_CH];
+    vv_vcache *cc[GPU_MAX_CH] = {NULL};
+    vv_vtables tabs[GPU_MAX_CH];
+    int owns[GPU_MAX_CH] = {0};
+    memset(tabs, 0, sizeof tabs);
+    vv_vcache *c = NULL;              /* channel 0's cache: the grid and its subvolumes */
+    const vv_vtables *tab = &tabs[0]; /* channel 0's tables */
     size_t nblocks = 1;
     vv_vshading sh;            /* the object's shading constants (its specular table goes up) */
     const float *lut2d = NULL; /* its 2-D transfer function's table, or NULL */
     if (obj) {
         if (!(obj->step > 0))
             return vv_error_set(VV_ERR_INVALID, "object '%s': step must be > 0", obj->name);
-        s = vv_vcache_get(&st->vc, obj->volume, &c);
-        if (s != VV_OK)
-            return vv_error_prefix(s, "object '%s'", obj->name);
-        double w2i[3][4], i2w[3][4];
-        int dims[3], n_planes;
-        vv_plane planes[2 * VV_MAX_CUT_PLANES];
-        s = vv_vobject_prepare(obj, w, ambient, lights, n_lights, w2i, i2w, dims, planes, &n_planes,
-                               &sh);
-        if (s != VV_OK)
-            return s;
-        const vv_render_mode mode = obj->mode;
-        if (obj->shading && (mode == VV_MODE_COMPOSITE || mode == VV_MODE_ISO)) {
-            vv_vcache_need_normals(&st->vc, c);
-            if (!c->nrm && opt && opt->stats)
-                opt->stats->gradients_at_samples++;
+        const int multi = obj->n_channels > 1;
+        if (multi) {
+            const int shown = vv_vchannels_shown(obj);
+            if (shown > GPU_MAX_CH)
+                return vv_error_set(VV_ERR_UNSUPPORTED,
+                                    "object '%s' shows %d channels; the gpu renderer draws up to "
+                                    "%d (raycast draws %d)",
+                                    obj->name, shown, GPU_MAX_CH, VV_MAX_CHANNELS);
+            if (rg)
+                return vv_error_set(VV_ERR_UNSUPPORTED,
+                                    "object '%s': the gpu renderer draws channels in memory, "
+                                    "not by regions (raycast does)",
+                                    obj->name);
+            for (int k = 0; k < obj->n_channels; k++)
+                if (obj->channels[k].visible && obj->channels[k].volume)
+                    vv_vchannel_object(obj, &obj->channels[k], &chobj[nch++]);
+        } else {
+            chobj[nch++] = *obj;
         }
         const double dt = vv_vobject_step(obj);
-        const float iso = (float)(obj->isovalue - c->qoff);
-        s = vv_vtables_get(&st->vc, c, obj, mode, (float)dt, iso, st->skipping, 0, &tab, &owns);
-        if (s != VV_OK)
+        for (int k = 0; k < nch && s == VV_OK; k++) {
+            const vv_object *ck = &chobj[k];
+            s = vv_vcache_get(&st->vc, ck->volume, &cc[k]);
+            if (s != VV_OK) {
+                s = vv_error_prefix(s, "object '%s'", obj->name);
+                break;
+            }
+            if (ck->shading && (ck->mode == VV_MODE_COMPOSITE || ck->mode == VV_MODE_ISO)) {
+                vv_vcache_need_normals(&st->vc, cc[k]);
+                if (!cc[k]->nrm && opt && opt->stats)
+                    opt->stats->gradients_at_samples++;
+            }
+            const float iso = (float)(ck->isovalue - cc[k]->qoff);
+            s = vv_vtables_get(&st->vc, cc[k], ck, ck->mode, (float)dt, iso, st->skipping, 0,
+                               &tabs[k], &owns[k]);
+            if (s != VV_OK)
+                break;
+            vv_vextra x;
+            vv_vextra_prepare(&x, ck, ck->mode, &tabs[k]);
+            if (x.solid || x.labels || (ck->mode == VV_MODE_ISO && ck->texture.image)) {
+                s = vv_error_set(VV_ERR_UNSUPPORTED,
+                                 "object '%s' has a solid texture, an image texture or label "
+                                 "colours; the gpu renderer draws 1-D and 2-D transfer "
+                                 "functions and thresholds (raycast draws them)",
+                                 obj->name);
+                break;
+            }
+            if (x.lut2d && !cc[k]->gmag) {
+                s = vv_error_set(VV_ERR_NOMEM,
+                                 "object '%s': no gradient magnitudes for its 2-D transfer "
+                                 "function",
+                                 obj->name);
+                break;
+            }
+            if (x.lut2d) {
+                lut2d = x.lut2d;
+                u.p2[0] = x.lut2_scale;
+                u.p2[1] = x.g_scale;
+            }
+            if (k > 0 &&
+                (cc[k]->nx != cc[0]->nx || cc[k]->ny != cc[0]->ny || cc[k]->nz != cc[0]->nz)) {
+                s = vv_error_set(VV_ERR_INVALID, "object '%s': its channels differ in size",
+                                 obj->name);
+                break;
+            }
+            u.chp[k][0] = tabs[k].lut_lo;
+            u.chp[k][1] = tabs[k].lut_scale;
+            u.chp[k][2] = cc[k]->q16 ? 65535.0f : 1.0f;
+            u.chp[k][3] = tabs[k].pdist ? tabs[k].plo : -INFINITY;
+            u.chq[k][0] = tabs[k].pdist ? tabs[k].phi : INFINITY;
+            u.chf[k][0] = (cc[k]->q16 ? F_INTEGER : 0) | (cc[k]->nrm ? F_NORMALS : 0);
+        }
+        c = cc[0];
+        double w2i[3][4], i2w[3][4];
+        int dims[3], n_planes = 0;
+        vv_plane planes[2 * VV_MAX_CUT_PLANES];
+        if (s == VV_OK)
+            s = vv_vobject_prepare(&chobj[0], w, ambient, lights, n_lights, w2i, i2w, dims, planes,
+                                   &n_planes, &sh);
+        if (s != VV_OK) {
+            for (int k = 0; k < nch; k++)
+                if (owns[k])
+                    vv_vtables_free(&tabs[k]);
             return s;
-        vv_vextra x;
-        vv_vextra_prepare(&x, obj, mode, &tab);
-        if (x.solid || x.labels || (mode == VV_MODE_ISO && obj->texture.image)) {
-            if (owns)
-                vv_vtables_free(&tab);
-            return vv_error_set(VV_ERR_UNSUPPORTED,
-                                "object '%s' has a solid texture, an image texture or label "
-                                "colours; the gpu renderer draws 1-D and 2-D transfer "
-                                "functions and thresholds (raycast draws them)",
-                                obj->name);
         }
-        if (x.lut2d) {
-            if (!c->gmag)
-                return vv_error_set(VV_ERR_NOMEM,
-                                    "object '%s': no gradient magnitudes for its "
-                                    "2-D transfer function",
-                                    obj->name);
-            lut2d = x.lut2d;
-            u.p2[0] = x.lut2_scale;
-            u.p2[1] = x.g_scale;
-        }
+        const vv_render_mode mode = obj->mode;
+        const float iso = (float)(obj->isovalue - c->qoff);
+        u.chn[0] = multi ? nch : 0;
+        u.chn[1] = (int)obj->blend;
         for (int a = 0; a < 3; a++) {
             for (int b = 0; b < 4; b++)
                 u.w2i[a][b] = (float)w2i[a][b];
@@ -469,7 +529,7 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
         for (int l = 0; l < n_lights; l++)
             point |= lights[l].point;
         u.misc[3] = (obj->shading ? F_SHADING : 0) | (c->nrm ? F_NORMALS : 0) |
-                    (st->skipping && tab.bdist ? F_SKIPPING : 0) | (point ? F_POINT : 0) |
+                    (st->skipping && tab->bdist ? F_SKIPPING : 0) | (point ? F_POINT : 0) |
                     (c->q16 ? F_INTEGER : 0) | (lut2d ? F_LUT2D : 0);
         for (int a = 0; a < 3; a++)
             u.clipd[a] = rg ? (rg->dims[a] > 1 ? rg->dims[a] : 2) : dims[a];
@@ -492,18 +552,18 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
         }
         if (rg && mode == VV_MODE_XRAY) {
             /* the table that classifies the summed means (vv_xray_table_classify) */
-            st->xray.lut_lo = tab.lut_lo;
-            st->xray.lut_scale = tab.lut_scale;
-            memcpy(st->xray.lut, tab.lut, sizeof st->xray.lut);
+            st->xray.lut_lo = tab->lut_lo;
+            st->xray.lut_scale = tab->lut_scale;
+            memcpy(st->xray.lut, tab->lut, sizeof st->xray.lut);
         }
         u.p0[0] = (float)dt;
         u.p0[1] = (float)st->early_termination;
-        u.p0[2] = tab.lut_lo;
-        u.p0[3] = tab.lut_scale;
+        u.p0[2] = tab->lut_lo;
+        u.p0[3] = tab->lut_scale;
         u.p1[0] = c->q16 ? 65535.0f : 1.0f;
         u.p1[1] = iso;
-        u.p1[2] = tab.pdist ? tab.plo : -INFINITY;
-        u.p1[3] = tab.pdist ? tab.phi : INFINITY;
+        u.p1[2] = tab->pdist ? tab->plo : -INFINITY;
+        u.p1[3] = tab->pdist ? tab->phi : INFINITY;
         nblocks = (size_t)c->bx * (size_t)c->by * (size_t)c->bz;
     } else {
         u.misc[2] = 1; /* nothing to draw: one plane that cuts every ray */
@@ -512,14 +572,15 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
         u.clipd[0] = u.clipd[1] = u.clipd[2] = 2;
         u.bdims[0] = u.bdims[1] = u.bdims[2] = 1;
         u.p0[0] = 1;
+        u.chp[0][2] = 1;
     }
 
     /* the frame's uploads, in the staging buffer */
     const size_t npx = (size_t)view->width * (size_t)view->height;
     const VkDeviceSize sizes[N_BUF] = {sizeof u,
-                                       (VkDeviceSize)VV_VC_LUT * 16,
+                                       (VkDeviceSize)VV_VC_LUT * 16 * GPU_MAX_CH,
                                        (VV_VC_SPEC + 1) * sizeof(float),
-                                       (nblocks + 3) & ~(size_t)3,
+                                       (nblocks * (nch > 1 ? nch : 1) + 3) & ~(size_t)3,
                                        nblocks * 8,
                                        lut2d ? (VkDeviceSize)VV_VC_LUT2_G * VV_VC_LUT2_V * 16 : 16,
                                        npx * 16,
@@ -544,30 +605,32 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
     VkDeviceSize used = total;
     if (s == VV_OK) {
         vv_vk_timestamp(vk, 0);
-        /* the volume first (it may grow the staging buffer), then the frame's data */
-        if (c) {
-            s = upload_volume(st, c, &used);
-        } else if (!st->img[I_VALUES].view) {
-            /* nothing drawn yet: a 2 x 2 x 2 volume of zeros without gradients, so
-             * that every binding holds an image */
-            static const float zeros[8];
-            vv_vcache zero;
-            memset(&zero, 0, sizeof zero);
-            zero.nx = zero.ny = zero.nz = 2;
-            zero.f32 = (float *)zeros;
-            s = upload_volume(st, &zero, &used);
-            st->vol = NULL; /* not a real volume: the next object uploads its own */
+        /* the frame's data, then the images that changed: each channel's values
+         * and gradient codes (stand-ins for the channels there are not), the
+         * gradient magnitudes of a 2-D transfer function; the staging buffer
+         * is made large enough for all of it before anything is recorded */
+        VkDeviceSize need = total;
+        for (int dry = 1; dry >= 0 && s == VV_OK; dry--) {
+            if (!dry)
+                s = ensure_buffer(st, &st->staging, need, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, 1);
+            VkDeviceSize *at = dry ? &need : &used;
+            for (int k = 0; k < GPU_MAX_CH && s == VV_OK; k++) {
+                s = upload_image(st, I_VALUES + 2 * k, k < nch ? cc[k] : NULL, 0, at, dry);
+                if (s == VV_OK)
+                    s = upload_image(st, I_NORMALS + 2 * k, k < nch ? cc[k] : NULL, 1, at, dry);
+            }
+            if (s == VV_OK)
+                s = upload_image(st, I_GMAG, lut2d ? c : NULL, 2, at, dry);
         }
-        if (s == VV_OK)
-            s = ensure_buffer(st, &st->staging, total, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, 1);
     }
     if (s == VV_OK) {
         unsigned char *m = st->staging.map;
         memcpy(m + offs[B_UBO], &u, sizeof u);
-        if (tab.lut)
-            memcpy(m + offs[B_LUT], tab.lut, sizes[B_LUT]);
-        else
-            memset(m + offs[B_LUT], 0, sizes[B_LUT]);
+        memset(m + offs[B_LUT], 0, sizes[B_LUT]);
+        for (int k = 0; k < nch; k++)
+            if (tabs[k].lut)
+                memcpy(m + offs[B_LUT] + (size_t)k * VV_VC_LUT * 16, tabs[k].lut,
+                       (size_t)VV_VC_LUT * 16);
         if (c && obj->shading)
             memcpy(m + offs[B_SPEC], sh.spec, sizes[B_SPEC]);
         else
@@ -577,8 +640,9 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
         else
             memset(m + offs[B_LUT2], 0, sizes[B_LUT2]);
         memset(m + offs[B_DIST], 0, sizes[B_DIST]);
-        if (tab.bdist)
-            memcpy(m + offs[B_DIST], tab.bdist, nblocks);
+        for (int k = 0; k < nch; k++)
+            if (tabs[k].bdist)
+                memcpy(m + offs[B_DIST] + (size_t)k * nblocks, tabs[k].bdist, nblocks);
         float *mm = (float *)(m + offs[B_MM]);
         for (size_t b = 0; b < nblocks; b++) {
             mm[2 * b] = c ? c->bmin[b] : 0;
@@ -648,8 +712,9 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
     } else if (vk->dev && s != VV_OK) {
         vk->f.vkEndCommandBuffer(vk->cmd);
     }
-    if (owns)
-        vv_vtables_free(&tab);
+    for (int k = 0; k < nch; k++)
+        if (owns[k])
+            vv_vtables_free(&tabs[k]);
     if (s == VV_OK && opt && opt->progress.fn && opt->progress.fn(opt->progress.user, 1.0))
         s = vv_error_set(VV_ERR_CANCELLED, "the gpu renderer: cancelled");
     vv_vcache_set_prune(&st->vc, w);
@@ -735,7 +800,8 @@ gpu_device_changed(void *state, const vv_option_spec *spec, const vv_option_valu
 static const char *const gpu_auto[] = {"auto", NULL};
 
 #if VV_HAVE_VULKAN
-#define GPU_CAPS VV_RENDERER_REGION /* out of core by bricks, and under MPI */
+/* out of core by bricks and under MPI; channels (up to GPU_MAX_CH, in memory) */
+#define GPU_CAPS (VV_RENDERER_REGION | VV_RENDERER_CHANNELS)
 #else
 #define GPU_CAPS 0
 #endif
@@ -760,7 +826,8 @@ const vv_renderer_ops vv_gpu_ops = {
         {
             .name = "gpu",
             .description = "direct volume ray casting on a Vulkan device (a GPU, or lavapipe): "
-                           "composite, mip, minip, xray, iso; one volume object",
+                           "composite, mip, minip, xray, iso; one volume object of up to 4 "
+                           "channels",
             .draws = VV_DRAWS(VV_OBJECT_VOLUME),
             .modes = VV_MODES_ALL,
             .caps = GPU_CAPS,

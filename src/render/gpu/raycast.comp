@@ -24,7 +24,8 @@ const int MODE_COMPOSITE = 0, MODE_MIP = 1, MODE_MINIP = 2, MODE_XRAY = 3, MODE_
 const int F_SHADING = 1, F_NORMALS = 2, F_SKIPPING = 4, F_POINT = 8, F_INTEGER = 16;
 const int F_LUT2D = 32;
 const int LUT2_V = 1024, LUT2_G = 128;
-const int MAX_LIGHTS = 16, MAX_PLANES = 16, LUT = 4096, SPEC = 2048, BLOCK = 4;
+const int MAX_LIGHTS = 16, MAX_PLANES = 16, LUT = 4096, SPEC = 2048, BLOCK = 4, MAX_CH = 4;
+const int BLEND_COMPOSITE = 0, BLEND_ADDITIVE = 1, BLEND_MAXIMUM = 2;
 
 layout(std140, set = 0, binding = 0) uniform Frame {
     vec4 o00, ox, oy, d00, dx, dy; /* camera rays, affine in the pixel (xyz) */
@@ -48,6 +49,10 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     ivec4 roff;                    /* its voxels' offset in the whole volume; w: 1 region */
     ivec4 rect;                    /* pixels x0 <= x < x1, y0 <= y < y1 (x1 <= x0: all) */
     vec4 p2;                       /* 2-D TF: table index -> value bin, |gradient| -> bin */
+    vec4 chp[MAX_CH];              /* per channel: table lo, table scale, value scale, MIP floor */
+    vec4 chq[MAX_CH];              /* per channel: MIP stop */
+    ivec4 chf[MAX_CH];             /* per channel: F_INTEGER | F_NORMALS */
+    ivec4 chn;                     /* channels (0: one-channel object), blend rule */
 } fr;
 
 layout(set = 0, binding = 1) uniform sampler3D vol;   /* stored values (R16 unorm or R32F) */
@@ -61,6 +66,13 @@ layout(std430, set = 0, binding = 8) writeonly buffer Depth { float out_depth[];
 layout(std430, set = 0, binding = 9) writeonly buffer Key { float out_key[]; };
 layout(set = 0, binding = 10) uniform sampler3D gmag; /* gradient magnitude per voxel */
 layout(std430, set = 0, binding = 11) readonly buffer Lut2 { vec4 lut2[]; };
+/* channels 1 .. 3 of a multi-channel object (channel 0: vol and onrm) */
+layout(set = 0, binding = 12) uniform sampler3D vol1;
+layout(set = 0, binding = 13) uniform sampler3D vol2;
+layout(set = 0, binding = 14) uniform sampler3D vol3;
+layout(set = 0, binding = 15) uniform isampler3D onrm1;
+layout(set = 0, binding = 16) uniform isampler3D onrm2;
+layout(set = 0, binding = 17) uniform isampler3D onrm3;
 
 ivec3 gmax;   /* dims - 2: the last cell */
 vec3 o_i;     /* index point at t = tb (the whole volume's index space) */
@@ -70,10 +82,23 @@ vec3 d_i;     /* index direction per world unit */
 vec3 inv_d;   /* 1 / d_i, 0 where d_i is 0 */
 float tb;
 
+/* voxel c of channel ch (0: a one-channel object's volume) in stored units */
 float
-voxel(ivec3 c) {
-    float v = texelFetch(vol, c, 0).r * fr.p1.x;
-    return (fr.misc.w & F_INTEGER) != 0 ? round(v) : v;
+voxel(int ch, ivec3 c) {
+    float r = ch == 0   ? texelFetch(vol, c, 0).r
+              : ch == 1 ? texelFetch(vol1, c, 0).r
+              : ch == 2 ? texelFetch(vol2, c, 0).r
+                        : texelFetch(vol3, c, 0).r;
+    float v = r * fr.chp[ch].z;
+    return (fr.chf[ch].x & F_INTEGER) != 0 ? round(v) : v;
+}
+
+ivec2
+code_of(int ch, ivec3 c) {
+    return ch == 0   ? texelFetch(onrm, c, 0).xy
+           : ch == 1 ? texelFetch(onrm1, c, 0).xy
+           : ch == 2 ? texelFetch(onrm2, c, 0).xy
+                     : texelFetch(onrm3, c, 0).xy;
 }
 
 /* the point of ray parameter t in the voxels' index space (a region's
@@ -104,24 +129,29 @@ cell_of(vec3 p, out vec3 f) {
 }
 
 float
-value_at(ivec3 i, vec3 f) {
-    float c00 = mix(voxel(i), voxel(i + ivec3(1, 0, 0)), f.x);
-    float c10 = mix(voxel(i + ivec3(0, 1, 0)), voxel(i + ivec3(1, 1, 0)), f.x);
-    float c01 = mix(voxel(i + ivec3(0, 0, 1)), voxel(i + ivec3(1, 0, 1)), f.x);
-    float c11 = mix(voxel(i + ivec3(0, 1, 1)), voxel(i + ivec3(1, 1, 1)), f.x);
+value_at(int ch, ivec3 i, vec3 f) {
+    float c00 = mix(voxel(ch, i), voxel(ch, i + ivec3(1, 0, 0)), f.x);
+    float c10 = mix(voxel(ch, i + ivec3(0, 1, 0)), voxel(ch, i + ivec3(1, 1, 0)), f.x);
+    float c01 = mix(voxel(ch, i + ivec3(0, 0, 1)), voxel(ch, i + ivec3(1, 0, 1)), f.x);
+    float c11 = mix(voxel(ch, i + ivec3(0, 1, 1)), voxel(ch, i + ivec3(1, 1, 1)), f.x);
     return mix(mix(c00, c10, f.y), mix(c01, c11, f.y), f.z);
 }
 
 float
-sample_at(vec3 p) {
+sample_ch(int ch, vec3 p) {
     vec3 f;
     ivec3 i = cell_of(p, f);
-    return value_at(i, f);
+    return value_at(ch, i, f);
+}
+
+float
+sample_at(vec3 p) {
+    return sample_ch(0, p);
 }
 
 vec3
-oct_decode(ivec3 c) {
-    ivec2 q = texelFetch(onrm, c, 0).xy;
+oct_decode(int ch, ivec3 c) {
+    ivec2 q = code_of(ch, c);
     if (q.x == -128)
         return vec3(0);
     float u = float(q.x), v = float(q.y);
@@ -134,23 +164,28 @@ oct_decode(ivec3 c) {
 /* sample.h vv_vcache_gradient: the cached unit gradients of the cell's
  * corners interpolated, or central differences half a voxel apart */
 vec3
-gradient(vec3 p) {
-    if ((fr.misc.w & F_NORMALS) != 0) {
+gradient_ch(int ch, vec3 p) {
+    if ((fr.chf[ch].x & F_NORMALS) != 0) {
         vec3 f;
         ivec3 i = cell_of(p, f);
-        vec3 c00 = mix(oct_decode(i), oct_decode(i + ivec3(1, 0, 0)), f.x);
-        vec3 c10 = mix(oct_decode(i + ivec3(0, 1, 0)), oct_decode(i + ivec3(1, 1, 0)), f.x);
-        vec3 c20 = mix(oct_decode(i + ivec3(0, 0, 1)), oct_decode(i + ivec3(1, 0, 1)), f.x);
-        vec3 c30 = mix(oct_decode(i + ivec3(0, 1, 1)), oct_decode(i + ivec3(1, 1, 1)), f.x);
+        vec3 c00 = mix(oct_decode(ch, i), oct_decode(ch, i + ivec3(1, 0, 0)), f.x);
+        vec3 c10 = mix(oct_decode(ch, i + ivec3(0, 1, 0)), oct_decode(ch, i + ivec3(1, 1, 0)), f.x);
+        vec3 c20 = mix(oct_decode(ch, i + ivec3(0, 0, 1)), oct_decode(ch, i + ivec3(1, 0, 1)), f.x);
+        vec3 c30 = mix(oct_decode(ch, i + ivec3(0, 1, 1)), oct_decode(ch, i + ivec3(1, 1, 1)), f.x);
         return mix(mix(c00, c10, f.y), mix(c20, c30, f.y), f.z);
     }
     vec3 g;
     for (int a = 0; a < 3; a++) {
         vec3 e = vec3(0);
         e[a] = 0.5;
-        g[a] = sample_at(p + e) - sample_at(p - e);
+        g[a] = sample_ch(ch, p + e) - sample_ch(ch, p - e);
     }
     return g;
+}
+
+vec3
+gradient(vec3 p) {
+    return gradient_ch(0, p);
 }
 
 /* shade.h vv_vshade: Phong with the reflection vector, two-sided */
@@ -208,10 +243,16 @@ entry2d(float v, vec3 p) {
     return lut2[gb * LUT2_V + vb];
 }
 
+/* channel ch's table entry of value v (stored units) */
+vec4
+entry_ch(int ch, float v) {
+    float x = clamp((v - fr.chp[ch].x) * fr.chp[ch].y, 0.0, float(LUT - 1));
+    return lut[ch * LUT + int(x)];
+}
+
 vec4
 entry(float v) {
-    float x = clamp((v - fr.p0.z) * fr.p0.w, 0.0, float(LUT - 1));
-    return lut[int(x)];
+    return entry_ch(0, v);
 }
 
 uint
@@ -220,9 +261,16 @@ block_of(vec3 p, out uvec3 bc) {
     return (bc.z * uint(fr.bdims.y) + bc.y) * uint(fr.bdims.x) + bc.x;
 }
 
+/* channel ch's subvolume b's distance to the nearest visible one */
+uint
+dist_ch(int ch, uint b) {
+    const uint i = uint(ch) * uint(fr.bdims.x * fr.bdims.y * fr.bdims.z) + b;
+    return (bdist[i >> 2] >> (8u * (i & 3u))) & 255u;
+}
+
 uint
 dist_of(uint b) {
-    return (bdist[b >> 2] >> (8u * (b & 3u))) & 255u;
+    return dist_ch(0, b);
 }
 
 /* ray.h vv_vray_leap: the sample index after the empty cube of 2 dist - 1
@@ -352,7 +400,116 @@ main() {
         const float dt = fr.p0.x, inv_dt = 1.0 / dt;
         const vec3 v = -dir;
         const bool skipping = (flags & F_SKIPPING) != 0;
-        if (mode == MODE_COMPOSITE) {
+        const int nch = fr.chn.x, blend = fr.chn.y;
+        if (nch > 0 && blend != BLEND_MAXIMUM) {
+            /* a multi-channel object (raycast.c trace_channels): composite,
+             * the channels mixed per sample (Kniss et al. 2003); additive,
+             * each composited on its own, the colours added */
+            vec3 Cc[MAX_CH];
+            float Ac[MAX_CH];
+            for (int ch = 0; ch < MAX_CH; ch++) {
+                Cc[ch] = vec3(0);
+                Ac[ch] = 0.0;
+            }
+            const bool additive = blend == BLEND_ADDITIVE;
+            const float et = fr.p0.y;
+            float k = ceil(t0 * inv_dt);
+            const float kend = floor(t1 * inv_dt);
+            int live = additive ? nch : 1;
+            while (k <= kend && live > 0) {
+                const float t = k * dt;
+                const vec3 p = point_at(t);
+                uvec3 bc;
+                const uint b = block_of(p, bc);
+                uint dist = 255u;
+                for (int ch = 0; ch < nch; ch++)
+                    if (Ac[additive ? ch : 0] < et)
+                        dist = min(dist, dist_ch(ch, b));
+                if (skipping && dist > 0u) {
+                    k = leap(p, t, bc, dist, inv_dt, k);
+                    continue;
+                }
+                k += 1.0;
+                float T = 1.0, sum_a = 0.0;
+                vec3 col = vec3(0);
+                for (int ch = 0; ch < nch; ch++) {
+                    if (dist_ch(ch, b) != 0u || Ac[additive ? ch : 0] >= et)
+                        continue;
+                    const vec4 e = entry_ch(ch, sample_ch(ch, p));
+                    if (e.x <= 0.0)
+                        continue;
+                    vec3 one = e.yzw;
+                    if ((flags & F_SHADING) != 0)
+                        one = shade(gradient_ch(ch, p), o + t * dir, v, e.yzw, e.x);
+                    if (depth == INF)
+                        depth = t;
+                    if (additive) {
+                        const float w = 1.0 - Ac[ch];
+                        Cc[ch] += w * one;
+                        Ac[ch] += w * e.x;
+                        live -= Ac[ch] >= et ? 1 : 0;
+                        continue;
+                    }
+                    col += one;
+                    sum_a += e.x;
+                    T *= 1.0 - e.x;
+                }
+                if (!additive && sum_a > 0.0) {
+                    const float a = 1.0 - T, w = 1.0 - Ac[0];
+                    Cc[0] += w * (a / sum_a) * col;
+                    Ac[0] += w * a;
+                    live = Ac[0] < et ? 1 : 0;
+                }
+            }
+            float Tt = 1.0;
+            for (int ch = 0; ch < (additive ? nch : 1); ch++) {
+                C += Cc[ch];
+                Tt *= 1.0 - min(Ac[ch], 1.0);
+            }
+            A = additive ? 1.0 - Tt : min(Ac[0], 1.0);
+        } else if (nch > 0) {
+            /* the maximum rule: a MIP per channel, each coloured by its
+             * table, the colours added (raycast.c trace_channels_maximum) */
+            float k = ceil(t0 / dt);
+            const float kend = floor(t1 / dt);
+            float best[MAX_CH], tbest[MAX_CH];
+            for (int ch = 0; ch < MAX_CH; ch++) {
+                best[ch] = fr.chp[ch].w;
+                tbest[ch] = t0;
+            }
+            if (k > kend) {
+                const float tm = 0.5 * (t0 + t1);
+                for (int ch = 0; ch < nch; ch++) {
+                    best[ch] = sample_ch(ch, point_at(tm));
+                    tbest[ch] = tm;
+                }
+            }
+            for (; k <= kend; k += 1.0) {
+                const float t = k * dt;
+                const vec3 p = point_at(t);
+                bool more = false;
+                for (int ch = 0; ch < nch; ch++) {
+                    if (best[ch] >= fr.chq[ch].x)
+                        continue;
+                    more = true;
+                    const float x = sample_ch(ch, p);
+                    if (x > best[ch]) {
+                        best[ch] = x;
+                        tbest[ch] = t;
+                    }
+                }
+                if (!more)
+                    break;
+            }
+            float T = 1.0;
+            for (int ch = 0; ch < nch; ch++) {
+                const vec4 e = entry_ch(ch, best[ch]);
+                P += e.yzw * e.x;
+                T *= 1.0 - e.x;
+                pdepth = min(pdepth, tbest[ch]);
+            }
+            PA = 1.0 - T;
+        } else if (mode == MODE_COMPOSITE) {
             float k = ceil(t0 * inv_dt);
             float kend = floor(t1 * inv_dt);
             if (region) {
