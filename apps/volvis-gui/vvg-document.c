@@ -303,8 +303,9 @@ open_scene(VvgDocument *doc, const char *path, GError **error) {
 
 /* The renderer that draws every object of @p w: a renderer the user chose
  * that draws them is kept, else the World's default (vv_world_renderer:
- * the first renderer whose capabilities cover every object), named in the
- * settings so the saved scene renders the same through the CLI. */
+ * the first renderer whose capabilities cover every object, or gpu in its
+ * place: vvg_gui_renderer), named in the settings so the saved scene
+ * renders the same through the CLI. */
 static void
 choose_renderer(vv_world *w) {
     const vv_renderer_info *info = vv_renderer_info_find(vv_render_settings_renderer(&w->render));
@@ -315,7 +316,10 @@ choose_renderer(vv_world *w) {
         return;
     w->render.renderer[0] = '\0';
     w->render.n_options = 0; /* the options belong to the other renderer */
-    g_strlcpy(w->render.renderer, vv_world_renderer(w), sizeof w->render.renderer);
+    /* on a machine with a real GPU the gpu renderer where it draws the World
+     * (vvg_gui_renderer; never on a CPU device such as lavapipe) */
+    g_strlcpy(w->render.renderer, vvg_gui_renderer(w, vv_world_renderer(w)),
+              sizeof w->render.renderer);
 }
 
 gboolean
@@ -432,6 +436,13 @@ add_volume_channels(VvgDocument *doc, vv_volume *const *v, int n, const vv_load_
         vv_world_free(doc->world);
         doc->world = w;
         vv_world_add_object(doc->world, obj);
+        if (!w->render.renderer[0]) {
+            /* no renderer named: the gpu renderer where the GUI picks it on
+             * its own (a real GPU: vvg_gui_renderer), else none (the default) */
+            const char *dflt = vv_world_renderer(w), *pick = vvg_gui_renderer(w, dflt);
+            if (strcmp(pick, dflt) != 0)
+                g_strlcpy(w->render.renderer, pick, sizeof w->render.renderer);
+        }
         if (resized) /* framed for the window's shape */
             vv_view_frame_box(&w->view, vv_world_bounds(w));
         doc->selected = 0;

@@ -308,3 +308,34 @@ vvg_tf_delete_color(vv_tf *tf, int i) {
     memmove(&tf->color[i], &tf->color[i + 1], (size_t)(tf->n_color - i - 1) * sizeof tf->color[0]);
     tf->n_color--;
 }
+
+const char *
+vvg_gui_renderer(const vv_world *w, const char *dflt) {
+    const char *env = getenv("VOLVIS_GUI_GPU");
+    if (!dflt || strcmp(dflt, "raycast") != 0 || (env && !strcmp(env, "0")))
+        return dflt;
+    const int any = env && !strcmp(env, "any");
+    int volumes = 0, drawn = 1;
+    for (int i = 0; i < w->n_objects; i++) {
+        const vv_object *o = w->objects[i];
+        if (!o->visible || o->type != VV_OBJECT_VOLUME || !o->volume)
+            continue;
+        volumes++;
+        int shown = 0;
+        for (int c = 0; c < o->n_channels; c++) {
+            const int on = o->channels[c].visible && o->channels[c].volume;
+            shown += on;
+            drawn &= !on || !o->channels[c].labels;
+        }
+        drawn &= (o->n_channels < 2 || shown <= 4) &&
+                 o->solid_texture.kind == VV_SOLID_TEXTURE_NONE && o->segmentation != VV_SEG_LABELS;
+    }
+    if (volumes != 1 || !drawn)
+        return dflt;
+    vv_gpu_device d[16];
+    const int n = vv_gpu_devices(d, 16, NULL);
+    for (int i = 0; i < n && i < 16; i++)
+        if (!d[i].cpu || any)
+            return "gpu";
+    return dflt;
+}

@@ -100,4 +100,16 @@ void vvg_tf_move_color(vv_tf *tf, int i, const vvg_tf_axes *a, double x);
 /** Deletes colour point @p i. */
 void vvg_tf_delete_color(vv_tf *tf, int i);
 
+/**
+ * The renderer the GUI picks on its own for @p w, given the World's default
+ * @p dflt (vv_world_renderer): "gpu" where the default is "raycast", the
+ * gpu renderer draws the World (one visible volume object of at most four
+ * channels, without solid textures or label colours) and a real GPU is
+ * there, never a CPU device such as Mesa's lavapipe; else @p dflt. The
+ * environment's VOLVIS_GUI_GPU changes the rule: 0 never picks it, `any`
+ * also picks a CPU device (for the tests). Returns a static string or
+ * @p dflt.
+ */
+const char *vvg_gui_renderer(const vv_world *w, const char *dflt);
+
 #endif

@@ -72,6 +72,8 @@ typedef struct frame {
     VvgSourceSet src;
     int nodes[VV_LOD_MAX_LEVELS], pending, stalled;
     char lod_note[128]; /* why the files were not drawn out of core ("" when they were) */
+    char
+        gpu_note[256]; /* why the gpu renderer did not draw it ("" when it did, or was not asked) */
 } frame;
 
 static void
@@ -181,6 +183,11 @@ render_one(VvgSceneView *self, const VvgSceneJob *j, vv_preview_kind kind, int c
     f->posted_us = j->posted_us;
     const vv_world *w = j->world;
     const char *rname = vv_world_renderer(w);
+    /* the gpu renderer failed in this view (no device, a device that
+     * failed): the CPU ray caster draws instead, and the status says so */
+    if (!strcmp(rname, "gpu") && self->gpu_failed[0])
+        rname = "raycast";
+    g_strlcpy(f->gpu_note, self->gpu_failed, sizeof f->gpu_note);
     vv_status s = VV_OK;
     vv_error_clear();
     if (!self->preview || strcmp(rname, self->preview_renderer) != 0) {
@@ -237,6 +244,15 @@ render_one(VvgSceneView *self, const VvgSceneJob *j, vv_preview_kind kind, int c
         return NULL;
     }
     f->render_ms = secs * 1e3;
+    if (s != VV_OK && !strcmp(rname, "gpu") && !self->gpu_failed[0]) {
+        /* once: from now on the frame is the CPU ray caster's */
+        g_strlcpy(self->gpu_failed, vv_error_message(), sizeof self->gpu_failed);
+        g_message("the gpu renderer failed (%s): the CPU ray caster draws instead",
+                  self->gpu_failed);
+        vv_image_free(img);
+        frame_free(f);
+        return render_one(self, j, kind, converged);
+    }
     if (s != VV_OK) {
         g_strlcpy(f->error, vv_error_message(), sizeof f->error);
         vv_image_free(img);
@@ -494,6 +510,7 @@ show_frame(gpointer data) {
     self->shown_pending = f->pending;
     self->shown_stalled = f->stalled;
     g_strlcpy(self->shown_lod_note, f->lod_note, sizeof self->shown_lod_note);
+    g_strlcpy(self->shown_gpu_note, f->gpu_note, sizeof self->shown_gpu_note);
     if (f->kind == VV_PREVIEW_FULL) {
         self->full_ms = f->render_ms;
         save_shown(self, f);

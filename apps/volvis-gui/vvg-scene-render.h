@@ -48,6 +48,9 @@ struct _VvgSceneView {
     guint64 cancel_below; /* refinement of a generation below this stops (atomic) */
     vv_preview *preview;  /* worker only */
     char preview_renderer[32];
+    /* worker only: why the gpu renderer failed in this view ("" while it has
+     * not): the CPU ray caster draws its frames from then on */
+    char gpu_failed[256];
     vv_preview_policy policy; /* under lock: written by the worker, read by the UI */
 
     /* UI */
@@ -80,6 +83,7 @@ struct _VvgSceneView {
     VvgSourceSet shown_src;
     int shown_nodes[VV_LOD_MAX_LEVELS], shown_pending, shown_stalled;
     char shown_lod_note[128];
+    char shown_gpu_note[256]; /* the frame on screen's gpu_failed ("" none) */
 
     /* flight */
     gboolean flight;

@@ -636,8 +636,23 @@ vvg_scene_view_full_ms(VvgSceneView *self) {
     return self->full_ms;
 }
 
+/* The cache's status below (out of core), after why the gpu renderer did
+ * not draw the frame on screen, when it did not. */
+static char *cache_status(VvgSceneView *self);
+
 char *
 vvg_scene_view_cache_status(VvgSceneView *self) {
+    char *t = cache_status(self);
+    if (!self->shown_gpu_note[0])
+        return t;
+    char *both = g_strdup_printf("the gpu renderer failed (%s): drawn by the CPU ray caster%s%s",
+                                 self->shown_gpu_note, t[0] ? "; " : "", t);
+    g_free(t);
+    return both;
+}
+
+static char *
+cache_status(VvgSceneView *self) {
     if (self->shown_lod_note[0])
         return g_strdup_printf("the proxies in memory: %s", self->shown_lod_note);
     if (self->shown_src.n == 0)

@@ -1,4 +1,8 @@
-/* The GUI's display-free models: the undo stack and transfer-function editing. */
+/* The GUI's display-free models: the undo stack, transfer-function editing
+ * and the renderer the GUI picks on its own (gpu only on a real GPU). */
+#include <stdio.h>
+#include <stdlib.h>
+
 #include "testutil.h"
 #include "vvg-models.h"
 
@@ -127,12 +131,55 @@ test_undo_clean(void **state) {
     vvg_undo_free(u);
 }
 
+/* The GUI picks gpu on its own only on a real GPU: never on a CPU device
+ * such as lavapipe (VOLVIS_GUI_GPU=any lets it, for this test), never for a
+ * World it does not draw, never when VOLVIS_GUI_GPU=0. */
+static void
+test_gui_renderer(void **state) {
+    (void)state;
+    vv_gpu_device d[16];
+    const int n = vv_gpu_devices(d, 16, NULL);
+    int real = 0;
+    for (int i = 0; i < n && i < 16; i++)
+        real |= !d[i].cpu;
+    const int dims[3] = {8, 8, 8};
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_new(&v, dims, VV_U8));
+    vv_world *w = NULL;
+    vt_ok(vv_world_new(&w));
+    vv_object *o = NULL;
+    vt_ok(vv_object_new_volume(&o, v, "v"));
+    vt_ok(vv_world_add_object(w, o));
+    unsetenv("VOLVIS_GUI_GPU");
+    assert_string_equal(vvg_gui_renderer(w, "raycast"), real ? "gpu" : "raycast");
+    assert_string_equal(vvg_gui_renderer(w, "raytrace"), "raytrace");
+    setenv("VOLVIS_GUI_GPU", "0", 1);
+    assert_string_equal(vvg_gui_renderer(w, "raycast"), "raycast");
+    setenv("VOLVIS_GUI_GPU", "any", 1);
+    assert_string_equal(vvg_gui_renderer(w, "raycast"), n > 0 ? "gpu" : "raycast");
+    /* two volume objects: raycast draws them, gpu does not */
+    vv_object *o2 = NULL;
+    vt_ok(vv_object_new_volume(&o2, v, "v2"));
+    vt_ok(vv_world_add_object(w, o2));
+    assert_string_equal(vvg_gui_renderer(w, "raycast"), "raycast");
+    o2->visible = 0;
+    /* label colours: raycast's */
+    o->segmentation = VV_SEG_LABELS;
+    assert_string_equal(vvg_gui_renderer(w, "raycast"), "raycast");
+    unsetenv("VOLVIS_GUI_GPU");
+    printf("# %d Vulkan device(s), %s: the GUI picks %s\n", n, real ? "a real GPU" : "no real GPU",
+           real ? "gpu" : "raycast");
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_undo),
         cmocka_unit_test(test_undo_clean),
         cmocka_unit_test(test_tf_editing),
+        cmocka_unit_test(test_gui_renderer),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
