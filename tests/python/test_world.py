@@ -84,6 +84,19 @@ def test_renderer_registry_help():
     assert isinstance(r, volvis.Renderer) and r.name == "raytrace"
 
 
+def test_render_gpu(ct_head):
+    """renderer="gpu" (the Vulkan ray caster; lavapipe in CI) gives the same
+    uint8 image as raycast without refinement, to a step of rounding."""
+    assert "gpu" in volvis.renderers
+    for mode in ("composite", "mip"):
+        a = volvis.render(ct_head, renderer="gpu", mode=mode, size=(64, 48))
+        b = volvis.render(ct_head, renderer="raycast", mode=mode, size=(64, 48),
+                          refinement="off")
+        assert a.shape == b.shape == (48, 64, 4)
+        assert np.abs(a.astype(int) - b.astype(int)).max() <= 2
+        assert a[..., :3].max() > 40  # something drawn
+
+
 def test_jupyter_png(ct_head):
     img = volvis.render(ct_head, size=(40, 30))
     png = img._repr_png_()
