@@ -15,6 +15,8 @@
  * usage: bench_gpu VOLUME [--tf-lo A] [--tf-hi B] [--runs N] [--device N]
  *                  [--modes composite,mip] [--sizes 512x512,1920x1080,3840x2160]
  *                  [--outdir DIR] [--no-cpu]
+ *        bench_gpu --phantom N ...  (the phantom of bench/phantom512.py, N^3 8-bit
+ *                  voxels made in memory: 2048^3 is 8 GiB, a pyramid's finest level)
  */
 #include <math.h>
 #include <stdio.h>
@@ -26,6 +28,34 @@
 #include "volvis/volvis.h"
 
 static const char *dataset;
+
+/* bench/phantom512.py's phantom, @p n voxels a side, 8-bit (0 .. 255 for
+ * its 0 .. 30000), made on all threads. */
+static vv_volume *
+phantom(int n) {
+    const int dims[3] = {n, n, n};
+    vv_volume *v = NULL;
+    if (vv_volume_new(&v, dims, VV_U8) != VV_OK)
+        return NULL;
+    uint8_t *d = v->data;
+    const double sig2 = 2 * 0.6 * 0.6;
+#pragma omp parallel for schedule(static)
+    for (int k = 0; k < n; k++) {
+        const double z = -1 + 2.0 * k / (n - 1);
+        for (int j = 0; j < n; j++) {
+            const double y = -1 + 2.0 * j / (n - 1);
+            uint8_t *row = d + ((size_t)k * n + (size_t)j) * (size_t)n;
+            for (int i = 0; i < n; i++) {
+                const double x = -1 + 2.0 * i / (n - 1);
+                const double blob = exp(-(x * x + y * y + z * z) / sig2);
+                const double tex = 0.6 + 0.4 * sin(18 * x) * sin(18 * y) * sin(18 * z);
+                row[i] = (uint8_t)(blob * tex * 255.0);
+            }
+        }
+    }
+    vv_volume_update_range(v);
+    return v;
+}
 
 static void
 setup(vv_world *w, vv_object *obj, vv_render_mode mode, double lo, double hi, int width,
@@ -71,10 +101,13 @@ static double
 time_frames(vv_renderer *r, const vv_world *w, vv_image *img, int runs, double *device_ms) {
     vv_render_options opt;
     vv_render_options_init(&opt);
+    const double t0 = bench_now();
     if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK) {
         fprintf(stderr, "bench_gpu: %s: %s\n", vv_renderer_name(r), vv_error_message());
         exit(1);
     }
+    printf("# %s: first frame %.3f s (caches, tables and uploads)\n", vv_renderer_name(r),
+           bench_now() - t0);
     double *t = calloc((size_t)runs, sizeof *t), *d = calloc((size_t)runs, sizeof *d);
     if (!t || !d)
         bench_die("bench_gpu", "out of memory");
@@ -99,7 +132,7 @@ main(int argc, char **argv) {
     const char *path = NULL, *modes = "composite,mip", *outdir = "build/bench-out";
     const char *sizes = "512x512,1920x1080,3840x2160", *device = "auto";
     double lo = NAN, hi = NAN;
-    int runs = 10, cpu = 1;
+    int runs = 10, cpu = 1, nphantom = 0;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *val = i + 1 < argc ? argv[i + 1] : NULL;
         if (a[0] != '-') {
@@ -128,13 +161,15 @@ main(int argc, char **argv) {
             sizes = val;
         else if (!strcmp(a, "--outdir"))
             outdir = val;
+        else if (!strcmp(a, "--phantom"))
+            nphantom = atoi(val);
         else {
             fprintf(stderr, "bench_gpu: unknown option %s\n", a);
             return 2;
         }
         i++;
     }
-    if (!path || runs < 1) {
+    if ((!path && nphantom < 2) || runs < 1) {
         fprintf(stderr, "usage: bench_gpu VOLUME [--tf-lo A] [--tf-hi B] [--runs N] [--device N] "
                         "[--modes composite,mip] [--sizes WxH,...] [--outdir DIR] [--no-cpu]\n");
         return 2;
@@ -149,10 +184,17 @@ main(int argc, char **argv) {
     for (int i = 0; i < nd && i < 16; i++)
         printf("# device %d: %s (%s, %.1f GiB)\n", i, devs[i].name, devs[i].kind,
                (double)devs[i].memory_bytes / (1 << 30));
-    dataset = strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
+    char pname[64];
+    snprintf(pname, sizeof pname, "phantom%d_u8", nphantom);
+    dataset = nphantom ? pname : strrchr(path, '/') ? strrchr(path, '/') + 1 : path;
     vv_volume *vol;
     double t0 = bench_now();
-    if (vv_volume_load(&vol, path, NULL) != VV_OK) {
+    if (nphantom) {
+        if (!(vol = phantom(nphantom))) {
+            fprintf(stderr, "bench_gpu: a %d^3 phantom: %s\n", nphantom, vv_error_message());
+            return 1;
+        }
+    } else if (vv_volume_load(&vol, path, NULL) != VV_OK) {
         fprintf(stderr, "bench_gpu: %s: %s\n", path, vv_error_message());
         return 1;
     }

@@ -422,6 +422,55 @@ test_out_of_core(void **state) {
     }
 }
 
+/* One renderer, the transfer function changed between frames: the
+ * subvolumes it shows go up again. A radial field, a band of low values
+ * (an outer shell: the core's subvolumes hidden) then of high ones (the
+ * core): a stale upload would leap over the core. */
+static void
+test_tf_change(void **state) {
+    (void)state;
+    NEED_DEVICE();
+    const int dims[3] = {48, 48, 48};
+    vv_volume *v;
+    vt_ok(vv_volume_new(&v, dims, VV_U8));
+    for (int k = 0; k < 48; k++)
+        for (int j = 0; j < 48; j++)
+            for (int i = 0; i < 48; i++) {
+                const double r = sqrt((i - 23.5) * (i - 23.5) + (j - 23.5) * (j - 23.5) +
+                                      (k - 23.5) * (k - 23.5));
+                vv_volume_set(v, i, j, k, r < 24 ? 250 - 10 * r : 10);
+            }
+    vv_volume_update_range(v);
+    vv_default_scene_options so = vt_scene_options(SIZE);
+    vv_world *w;
+    vt_ok(vv_world_new_for_volume(&w, v, &so));
+    vv_tf *tf = &w->objects[0]->tf;
+    vv_renderer *r;
+    vt_ok(vv_renderer_new(&r, "gpu"));
+    vv_image *img;
+    vt_ok(vv_image_new(&img, SIZE, SIZE));
+    vv_render_options o;
+    vv_render_options_init(&o);
+    static const double bands[2][2] = {{40, 90}, {180, 250}};
+    for (int b = 0; b < 2; b++) {
+        vv_tf_init(tf);
+        tf->opacity_unit_distance = 1;
+        vt_ok(vv_tf_add_opacity(tf, bands[b][0], 0));
+        vt_ok(vv_tf_add_opacity(tf, 0.5 * (bands[b][0] + bands[b][1]), 0.3));
+        vt_ok(vv_tf_add_opacity(tf, bands[b][1], 0));
+        vt_ok(vv_renderer_render(r, w, &w->view, &o, img));
+        vv_image *ref = render("raycast", w, raycast_plain);
+        const double db = vt_image_psnr(ref, img, NULL);
+        printf("# transfer function %d of one renderer: %.1f dB against raycast\n", b, db);
+        assert_true(db >= 45);
+        vv_image_free(ref);
+    }
+    vv_image_free(img);
+    vv_renderer_free(r);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
 /* Last: the validation layers saw nothing wrong in the whole run. */
 static void
 test_validation_quiet(void **state) {
@@ -446,6 +495,7 @@ main(void) {
         cmocka_unit_test(test_skipping_same_image),
         cmocka_unit_test(test_refusals),
         cmocka_unit_test(test_background_and_new_volume),
+        cmocka_unit_test(test_tf_change),
         cmocka_unit_test(test_out_of_core),
         cmocka_unit_test(test_validation_quiet),
     };

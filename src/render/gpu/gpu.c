@@ -113,7 +113,18 @@ typedef struct gpu_state {
     } from[N_IMG];
     vv_vk_buffer buf[N_BUF]; /* device-local */
     vv_vk_buffer staging;    /* host: the frame's uploads */
-    vv_vk_buffer readback;   /* host: the image back */
+    /* what the subvolume buffers on the device hold, so that they go up only
+     * when it changes (a 2048^3 volume has 134 M subvolumes: 1 GiB of
+     * min/max): the min/max of cache mm_vol at mm_modified, and each
+     * channel's distances from the tables of dist_key[k] over dist_vol[k] */
+    const vv_volume *mm_vol;
+    uint64_t mm_modified;
+    size_t mm_blocks;
+    int dist_n;
+    const vv_volume *dist_vol[GPU_MAX_CH];
+    uint64_t dist_modified[GPU_MAX_CH];
+    vv_vtables_key dist_key[GPU_MAX_CH];
+    vv_vk_buffer readback; /* host: the image back */
 #endif
 } gpu_state;
 
@@ -138,6 +149,9 @@ release_device(gpu_state *st) {
     vv_vk_close(vk);
     st->ready = 0;
     memset(st->from, 0, sizeof st->from);
+    st->mm_vol = NULL;
+    st->mm_blocks = 0;
+    st->dist_n = -1;
     st->pipe = VK_NULL_HANDLE;
     st->layout = VK_NULL_HANDLE;
     st->pool = VK_NULL_HANDLE;
@@ -592,12 +606,25 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
         total += (sizes[i] + 255) & ~(VkDeviceSize)255;
     }
     const VkBufferUsageFlags dst = VK_BUFFER_USAGE_TRANSFER_DST_BIT;
-    for (int i = 0; i < N_BUF && s == VV_OK; i++)
+    /* the subvolumes' min/max and distances go up only when they changed */
+    int mm_up =
+        !c || st->mm_vol != c->vol || st->mm_modified != c->modified || st->mm_blocks != nblocks;
+    int dist_up = st->dist_n != nch;
+    for (int k = 0; k < nch; k++)
+        dist_up |= owns[k] || st->dist_vol[k] != cc[k]->vol ||
+                   st->dist_modified[k] != cc[k]->modified ||
+                   memcmp(&st->dist_key[k], &cc[k]->key, sizeof cc[k]->key) != 0;
+    for (int i = 0; i < N_BUF && s == VV_OK; i++) {
+        const VkDeviceSize before = st->buf[i].buf ? st->buf[i].size : 0;
         s = ensure_buffer(
             st, &st->buf[i], sizes[i],
             (i == B_UBO ? VK_BUFFER_USAGE_UNIFORM_BUFFER_BIT : VK_BUFFER_USAGE_STORAGE_BUFFER_BIT) |
                 (i < B_RGBA ? dst : VK_BUFFER_USAGE_TRANSFER_SRC_BIT),
             0);
+        /* a buffer made anew (larger) holds nothing yet */
+        mm_up |= i == B_MM && st->buf[i].size != before;
+        dist_up |= i == B_DIST && st->buf[i].size != before;
+    }
     if (s == VV_OK)
         s = ensure_buffer(st, &st->readback, npx * 24, dst, 1);
     if (s == VV_OK)
@@ -639,17 +666,24 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
             memcpy(m + offs[B_LUT2], lut2d, sizes[B_LUT2]);
         else
             memset(m + offs[B_LUT2], 0, sizes[B_LUT2]);
-        memset(m + offs[B_DIST], 0, sizes[B_DIST]);
-        for (int k = 0; k < nch; k++)
-            if (tabs[k].bdist)
-                memcpy(m + offs[B_DIST] + (size_t)k * nblocks, tabs[k].bdist, nblocks);
-        float *mm = (float *)(m + offs[B_MM]);
-        for (size_t b = 0; b < nblocks; b++) {
-            mm[2 * b] = c ? c->bmin[b] : 0;
-            mm[2 * b + 1] = c ? c->bmax[b] : 0;
+        if (dist_up) {
+            memset(m + offs[B_DIST], 0, sizes[B_DIST]);
+            for (int k = 0; k < nch; k++)
+                if (tabs[k].bdist)
+                    memcpy(m + offs[B_DIST] + (size_t)k * nblocks, tabs[k].bdist, nblocks);
+        }
+        if (mm_up) {
+            float *mm = (float *)(m + offs[B_MM]);
+#pragma omp parallel for schedule(static) if (nblocks > 65536)
+            for (size_t b = 0; b < nblocks; b++) {
+                mm[2 * b] = c ? c->bmin[b] : 0;
+                mm[2 * b + 1] = c ? c->bmax[b] : 0;
+            }
         }
         VkBufferCopy cp[B_RGBA];
         for (int i = 0; i < B_RGBA; i++) {
+            if ((i == B_DIST && !dist_up) || (i == B_MM && !mm_up))
+                continue;
             cp[i] = (VkBufferCopy){.srcOffset = offs[i], .dstOffset = 0, .size = sizes[i]};
             vk->f.vkCmdCopyBuffer(vk->cmd, st->staging.buf, st->buf[i].buf, 1, &cp[i]);
         }
@@ -699,6 +733,18 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
             double ms = 0;
             s = vv_vk_submit_wait(vk, &ms);
             if (s == VV_OK) {
+                /* what the subvolume buffers now hold (tables borrowed from
+                 * their caches are known by their keys; tables built for
+                 * this frame alone go up again next time) */
+                st->mm_vol = c ? c->vol : NULL;
+                st->mm_modified = c ? c->modified : 0;
+                st->mm_blocks = nblocks;
+                st->dist_n = nch;
+                for (int k = 0; k < nch; k++) {
+                    st->dist_vol[k] = owns[k] ? NULL : cc[k]->vol;
+                    st->dist_modified[k] = cc[k]->modified;
+                    st->dist_key[k] = cc[k]->key;
+                }
                 copy_back(out, key, st->readback.map, npx, opt ? opt->threads : 0);
                 if (opt && opt->stats)
                     opt->stats->device_ms += ms;
