@@ -57,33 +57,17 @@ phantom(int n) {
     return v;
 }
 
+/* The peers' view (vvb_peer_view) of @p mode: composite a ramp lo .. hi to
+ * opacity 0.5, white, shaded; projections opaque grey lo .. hi. */
 static void
 setup(vv_world *w, vv_object *obj, vv_render_mode mode, double lo, double hi, int width,
       int height) {
+    vvb_peer_view(w, obj, width, height);
     const vv_volume *v = obj->volume;
-    double ext = 0, minsp = INFINITY;
-    for (int a = 0; a < 3; a++) {
-        const double e = (v->dims[a] - 1) * v->spacing[a];
-        ext = e > ext ? e : ext;
+    double minsp = INFINITY;
+    for (int a = 0; a < 3; a++)
         minsp = v->spacing[a] < minsp ? v->spacing[a] : minsp;
-    }
-    const vv_vec3 dir = vv_vec3_normalize(vv_vec3_make(1, -1.6, 1));
-    w->view.eye = vv_vec3_scale(dir, ext / 2 * 11);
-    w->view.at = vv_vec3_make(0, 0, 0);
-    w->view.up = vv_vec3_make(0, 0, 1);
-    w->view.fov = vv_deg_to_rad(20);
-    w->view.projection = VV_PROJECTION_PERSPECTIVE;
-    w->view.width = width;
-    w->view.height = height;
-    w->background = vv_vec3_make(0, 0, 0);
-    w->ambient = vv_vec3_make(1, 1, 1);
     obj->mode = mode;
-    obj->step = 0.5;
-    obj->material.ambient = 0.1;
-    obj->material.diffuse = 0.6;
-    obj->material.specular = 0.3;
-    obj->material.shininess = 30;
-    obj->material.color = vv_vec3_make(1, 1, 1);
     obj->segmentation = VV_SEG_TRANSFER_FUNCTION;
     vv_tf_init(&obj->tf);
     obj->tf.opacity_unit_distance = minsp;
@@ -200,12 +184,7 @@ main(int argc, char **argv) {
     }
     printf("# loaded %s (%d x %d x %d) in %.2f s\n", dataset, vol->dims[0], vol->dims[1],
            vol->dims[2], bench_now() - t0);
-    /* centred, axis-aligned: the peers' view (bench_raycast) */
-    for (int a = 0; a < 3; a++)
-        vol->origin[a] = -(vol->dims[a] - 1) * vol->spacing[a] / 2.0;
-    for (int a = 0; a < 9; a++)
-        vol->direction[a] = a % 4 == 0;
-    vol->modified++;
+    vvb_center(vol); /* the peers' placement (bench_raycast's) */
     if (!(lo == lo))
         lo = vol->range[0] + 0.25 * (vol->range[1] - vol->range[0]);
     if (!(hi == hi))

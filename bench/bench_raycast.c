@@ -41,34 +41,18 @@ typedef struct bench_cfg {
     int n_options;
 } bench_cfg;
 
-/* The peers' view: volume centred, eye at scale * 11 * normalize(1,-1.6,1). */
+/* The peers' view: volume centred, eye at scale * 11 * normalize(1,-1.6,1)
+ * (vvb_peer_view). */
 static void
 setup_world(vv_world *w, vv_object *obj, const bench_cfg *cfg, vv_render_mode mode) {
     const vv_volume *v = obj->volume;
-    double ext = 0, minsp = INFINITY;
-    for (int a = 0; a < 3; a++) {
-        double e = (v->dims[a] - 1) * v->spacing[a];
-        ext = e > ext ? e : ext;
+    double minsp = INFINITY;
+    for (int a = 0; a < 3; a++)
         minsp = v->spacing[a] < minsp ? v->spacing[a] : minsp;
-    }
-    double scale = ext / 2;
-    vv_vec3 dir = vv_vec3_normalize(vv_vec3_make(1, -1.6, 1));
-    w->view.eye = vv_vec3_scale(dir, scale * 11);
-    w->view.at = vv_vec3_make(0, 0, 0);
-    w->view.up = vv_vec3_make(0, 0, 1);
-    w->view.fov = vv_deg_to_rad(20);
-    w->view.projection = VV_PROJECTION_PERSPECTIVE;
-    w->view.width = w->view.height = cfg->size;
-    w->background = vv_vec3_make(0, 0, 0);
-    w->ambient = vv_vec3_make(1, 1, 1);
+    vvb_peer_view(w, obj, cfg->size, cfg->size);
     obj->mode = mode;
     obj->step = cfg->step_vox;
     obj->isovalue = cfg->iso;
-    obj->material.ambient = 0.1;
-    obj->material.diffuse = 0.6;
-    obj->material.specular = 0.3;
-    obj->material.shininess = 30;
-    obj->material.color = vv_vec3_make(1, 1, 1);
     obj->segmentation = VV_SEG_TRANSFER_FUNCTION;
     vv_tf_init(&obj->tf);
     obj->tf.opacity_unit_distance = minsp;
@@ -250,11 +234,7 @@ main(int argc, char **argv) {
         cfg.tf_lo = vol->range[0];
     if (isnan(cfg.tf_hi))
         cfg.tf_hi = vol->range[1];
-    for (int a = 0; a < 3; a++)
-        vol->origin[a] = -(vol->dims[a] - 1) * vol->spacing[a] / 2.0;
-    for (int a = 0; a < 9; a++)
-        vol->direction[a] = a % 4 == 0;
-    vol->modified++;
+    vvb_center(vol);
     char stem[256];
     snprintf(stem, sizeof stem, "%s", dataset);
     char *dot = strchr(stem, '.');

@@ -36,20 +36,18 @@ vvb_volume_world(vv_world **out, vv_object **out_obj, vv_volume *vol, const char
     return VV_OK;
 }
 
-vv_status
-vvb_surface_world(vv_world **out, vv_object **out_obj, vv_volume *vol, double iso, int size) {
-    /* centred, identity direction: the peers' placement */
+void
+vvb_center(vv_volume *vol) {
     for (int a = 0; a < 3; a++)
         vol->origin[a] = -(vol->dims[a] - 1) * vol->spacing[a] / 2.0;
     for (int a = 0; a < 9; a++)
         vol->direction[a] = a % 4 == 0;
     vol->modified++;
+}
 
-    vv_world *w = NULL;
-    vv_object *obj = NULL;
-    vv_status s = vvb_volume_world(&w, &obj, vol, "bench");
-    if (s != VV_OK)
-        return s;
+void
+vvb_peer_view(vv_world *w, vv_object *obj, int width, int height) {
+    const vv_volume *vol = obj->volume;
     double ext = 0;
     for (int a = 0; a < 3; a++) {
         double e = (vol->dims[a] - 1) * vol->spacing[a];
@@ -61,17 +59,29 @@ vvb_surface_world(vv_world **out, vv_object **out_obj, vv_volume *vol, double is
     w->view.up = vv_vec3_make(0, 0, 1);
     w->view.fov = vv_deg_to_rad(20);
     w->view.projection = VV_PROJECTION_PERSPECTIVE;
-    w->view.width = w->view.height = size;
+    w->view.width = width;
+    w->view.height = height;
     w->background = vv_vec3_make(0, 0, 0);
     w->ambient = vv_vec3_make(1, 1, 1);
-    obj->mode = VV_MODE_ISO;
-    obj->isovalue = iso;
     obj->step = 0.5;
     obj->material.ambient = 0.1;
     obj->material.diffuse = 0.6;
     obj->material.specular = 0.3;
     obj->material.shininess = 30;
     obj->material.color = vv_vec3_make(1, 1, 1);
+}
+
+vv_status
+vvb_surface_world(vv_world **out, vv_object **out_obj, vv_volume *vol, double iso, int size) {
+    vvb_center(vol); /* the peers' placement */
+    vv_world *w = NULL;
+    vv_object *obj = NULL;
+    vv_status s = vvb_volume_world(&w, &obj, vol, "bench");
+    if (s != VV_OK)
+        return s;
+    vvb_peer_view(w, obj, size, size);
+    obj->mode = VV_MODE_ISO;
+    obj->isovalue = iso;
     obj->shading = 1;
     *out = w;
     if (out_obj)

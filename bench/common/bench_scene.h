@@ -17,6 +17,17 @@
 vv_status vvb_volume_world(vv_world **w, vv_object **obj, vv_volume *vol, const char *name);
 
 /*
+ * The peers' placement and view of ../shared/BENCHMARKS.md: vol centred at
+ * the origin with an identity direction (vol->modified is bumped); a
+ * perspective view of width x height pixels, fov 20 degrees, eye at ext/2 *
+ * 11 * normalize(1, -1.6, 1) (ext the longest world extent of vol) looking
+ * at the origin with z up, black background, white ambient light; obj at
+ * step 0.5 with Phong ka 0.1 kd 0.6 ks 0.3 n 30, white.
+ */
+void vvb_center(vv_volume *vol);
+void vvb_peer_view(vv_world *w, vv_object *obj, int width, int height);
+
+/*
  * Builds the benchmark World around vol for the `surface` renderer: vol is
  * centred at the origin with an identity direction (the peers' placement;
  * vol->modified is bumped), drawn as its isosurface at iso (mode iso,
