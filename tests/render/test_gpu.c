@@ -471,6 +471,32 @@ test_tf_change(void **state) {
     vv_volume_free(v);
 }
 
+/* A volume over the device's memory budget (option device_memory_mb) is
+ * drawn brick by brick through the region contract: the whole render's
+ * image (composite up to re-associating over, MIP to rounding). */
+static void
+test_over_device_budget(void **state) {
+    (void)state;
+    NEED_DEVICE();
+    vv_volume *vol;
+    vv_world *w = vt_volume_scene("volumes/ct_head.nrrd", SIZE, &vol);
+    static const char *const paged[] = {"device_memory_mb", "2", NULL};
+    const vv_render_mode modes[] = {VV_MODE_COMPOSITE, VV_MODE_MIP};
+    for (int m = 0; m < 2; m++) {
+        w->objects[0]->mode = modes[m];
+        vv_image *a = render("gpu", w, NULL), *b = render("gpu", w, paged);
+        const double db = vt_image_psnr(a, b, NULL);
+        printf("# mode %d: bricks within 2 MiB of the device against the whole: %.1f dB\n",
+               (int)modes[m], db);
+        assert_true(db >= (m == 0 ? 50 : 60));
+        save(b, m == 0 ? "ct_head_paged_composite" : "ct_head_paged_mip");
+        vv_image_free(a);
+        vv_image_free(b);
+    }
+    vv_world_free(w);
+    vv_volume_free(vol);
+}
+
 /* Last: the validation layers saw nothing wrong in the whole run. */
 static void
 test_validation_quiet(void **state) {
@@ -496,6 +522,7 @@ main(void) {
         cmocka_unit_test(test_refusals),
         cmocka_unit_test(test_background_and_new_volume),
         cmocka_unit_test(test_tf_change),
+        cmocka_unit_test(test_over_device_budget),
         cmocka_unit_test(test_out_of_core),
         cmocka_unit_test(test_validation_quiet),
     };

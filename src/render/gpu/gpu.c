@@ -33,6 +33,7 @@
 
 #include "core/internal.h"
 #include "render/classify.h"
+#include "render/drivers.h"
 #include "render/gpu/vk.h"
 #include "render/project.h"
 #include "render/ray.h"
@@ -40,6 +41,7 @@
 #include "render/sample.h"
 #include "render/shade.h"
 #include "volvis/render.h"
+#include "volvis/source.h"
 #include "volvis/sys/renderer.h"
 
 #if VV_HAVE_VULKAN
@@ -90,6 +92,16 @@ typedef struct gpu_state {
     double early_termination; /* option */
     int skipping;             /* option empty_space_skipping */
     int device;               /* option device: -1 auto */
+    double budget_mb;         /* option device_memory_mb: -1 auto */
+    /* a volume over the device budget is drawn brick by brick by a gpu
+     * renderer of its own (region renders, drv_render_bricks), its bricks'
+     * min/max computed once a volume */
+    vv_renderer *pager;
+    const vv_volume *bricks_vol;
+    uint64_t bricks_modified;
+    int bricks_side, bricks_nb[3];
+    float *bricks_mm; /* per brick: min, max (data units) */
+    vv_source *bricks_src;
     /* the X-ray table of the last region render in xray mode, which
      * classifies the summed regions' means (vv_region_image.classify) */
     vv_xray_table xray;
@@ -767,10 +779,173 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
     return s;
 }
 
+/* ---- volumes over the device's memory: brick by brick ---------------------- */
+
+/* The brick view of an in-memory volume in cubes of st->bricks_side cells
+ * (vv_brick_source; the drivers' out-of-core path draws it). */
+static const vv_volume *
+pb_header(void *user) {
+    return ((gpu_state *)user)->bricks_vol;
+}
+
+static void
+pb_grid(void *user, int nb[3]) {
+    memcpy(nb, ((gpu_state *)user)->bricks_nb, 3 * sizeof(int));
+}
+
+static void
+pb_box(const gpu_state *st, int index, vv_brick_info *out) {
+    const int *nb = st->bricks_nb, n = st->bricks_side;
+    const int ix[3] = {index % nb[0], index / nb[0] % nb[1], index / (nb[0] * nb[1])};
+    for (int a = 0; a < 3; a++) {
+        const int last = st->bricks_vol->dims[a] - 1;
+        out->lo[a] = ix[a] * n;
+        out->hi[a] = out->lo[a] + n < last ? out->lo[a] + n : last;
+        out->slo[a] = out->lo[a] > 0 ? out->lo[a] - 1 : 0;
+        out->shi[a] = out->hi[a] < last ? out->hi[a] + 1 : last;
+    }
+}
+
+static void
+pb_info(void *user, int index, vv_brick_info *out) {
+    const gpu_state *st = user;
+    memset(out, 0, sizeof *out);
+    pb_box(st, index, out);
+    out->vmin = st->bricks_mm[2 * index];
+    out->vmax = st->bricks_mm[2 * index + 1];
+}
+
+static vv_status
+pb_load(void *user, int index, vv_volume **out) {
+    gpu_state *st = user;
+    vv_brick_info b;
+    pb_box(st, index, &b);
+    return vv_source_read_box(st->bricks_src, 0, b.slo, b.shi, out);
+}
+
+/* The bricks of @p v, cubes of @p side cells, and their min/max (the voxels
+ * each reads), kept while @p v is unchanged. Errors: VV_ERR_NOMEM. */
+static vv_status
+prepare_bricks(gpu_state *st, vv_volume *v, int side) {
+    if (st->bricks_vol == v && st->bricks_modified == v->modified && st->bricks_side == side)
+        return VV_OK;
+    free(st->bricks_mm);
+    st->bricks_mm = NULL;
+    vv_source_free(st->bricks_src);
+    st->bricks_src = NULL;
+    st->bricks_vol = NULL;
+    size_t n = 1;
+    for (int a = 0; a < 3; a++) {
+        st->bricks_nb[a] = v->dims[a] > 1 ? (v->dims[a] - 2) / side + 1 : 1;
+        n *= (size_t)st->bricks_nb[a];
+    }
+    st->bricks_side = side;
+    st->bricks_mm = malloc(2 * n * sizeof(float));
+    if (!st->bricks_mm)
+        return vv_error_set(VV_ERR_NOMEM, "gpu: out of memory (%zu bricks)", n);
+    vv_status s = vv_source_new_memory(&st->bricks_src, vv_volume_ref(v));
+    if (s != VV_OK)
+        return s;
+    st->bricks_vol = v; /* for pb_box */
+#pragma omp parallel for schedule(dynamic)
+    for (long i = 0; i < (long)n; i++) {
+        vv_brick_info b;
+        pb_box(st, (int)i, &b);
+        double lo = INFINITY, hi = -INFINITY;
+        for (int z = b.slo[2]; z <= b.shi[2]; z++)
+            for (int y = b.slo[1]; y <= b.shi[1]; y++) {
+                const size_t row =
+                    ((size_t)z * (size_t)v->dims[1] + (size_t)y) * (size_t)v->dims[0];
+                for (int x = b.slo[0]; x <= b.shi[0]; x++) {
+                    const double x0 = vv_voxel_value(v->type, v->data, row + (size_t)x);
+                    lo = x0 < lo ? x0 : lo;
+                    hi = x0 > hi ? x0 : hi;
+                }
+            }
+        st->bricks_mm[2 * i] = (float)lo;
+        st->bricks_mm[2 * i + 1] = (float)hi;
+    }
+    st->bricks_modified = v->modified;
+    return VV_OK;
+}
+
+/* The side of the bricks @p obj is drawn in, or 0 when its volume fits the
+ * device whole: its images (values as 16-bit or float, gradient codes,
+ * gradient magnitudes) against the budget (option device_memory_mb; auto:
+ * three quarters of the device's largest memory heap), and each side
+ * against the device's 3-D image side. */
+static int
+brick_side(const gpu_state *st, const vv_object *obj) {
+    const vv_volume *v = obj->volume;
+    const double per_voxel = (vv_voxel_type_size(v->type) <= 2 ? 2 : 4) + 2.0 + 4.0;
+    double budget = st->budget_mb >= 0 ? st->budget_mb * 1048576.0 : 0;
+    if (st->budget_mb < 0) {
+        vv_gpu_device d[16];
+        const int n = vv_gpu_devices(d, 16, NULL);
+        budget = n > st->vk.index ? 0.75 * (double)d[st->vk.index].memory_bytes : 0;
+    }
+    const uint32_t lim = st->vk.props.limits.maxImageDimension3D;
+    int over = 0;
+    for (int a = 0; a < 3; a++)
+        over |= (uint32_t)v->dims[a] > lim;
+    const double voxels = (double)v->dims[0] * v->dims[1] * v->dims[2];
+    if (!over && (budget <= 0 || voxels * per_voxel <= budget))
+        return 0;
+    /* the largest power-of-two cube a quarter of the budget holds, within
+     * the image side: bricks of 32 .. 1024 cells */
+    int side = 1024;
+    while (side > 32 &&
+           ((double)side * side * side * per_voxel > 0.25 * budget || (uint32_t)side + 3 > lim))
+        side /= 2;
+    return side;
+}
+
 static vv_status
 gpu_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
            vv_image *out) {
-    return render_frame(state, w, view, opt, NULL, out, NULL);
+    gpu_state *st = state;
+    const vv_object *obj;
+    vv_status s = find_object(w, &obj);
+    if (s == VV_OK && obj)
+        s = open_device(st);
+    const int side = s == VV_OK && obj && obj->n_channels < 2 ? brick_side(st, obj) : 0;
+    if (s != VV_OK || !side)
+        return s != VV_OK ? s : render_frame(st, w, view, opt, NULL, out, NULL);
+    /* over the device's memory: brick by brick through the region contract,
+     * by a gpu renderer of its own on the same device */
+    int object = 0;
+    while (w->objects[object] != obj)
+        object++;
+    if (!st->pager) {
+        char dev[16];
+        snprintf(dev, sizeof dev, "%d", st->vk.index);
+        s = vv_renderer_new(&st->pager, "gpu");
+        if (s == VV_OK)
+            s = vv_renderer_set_option(st->pager, "device", dev);
+        if (s == VV_OK)
+            s = vv_renderer_set_option(st->pager, "early_termination", "0.99");
+        if (s != VV_OK) {
+            vv_renderer_free(st->pager);
+            st->pager = NULL;
+            return s;
+        }
+    }
+    char et[32];
+    snprintf(et, sizeof et, "%.17g", st->early_termination);
+    s = vv_renderer_set_option(st->pager, "early_termination", et);
+    if (s == VV_OK)
+        s = vv_renderer_set_option(st->pager, "empty_space_skipping", st->skipping ? "1" : "0");
+    if (s == VV_OK)
+        s = prepare_bricks(st, obj->volume, side);
+    if (s != VV_OK)
+        return s;
+    const vv_brick_source src = {.version = VV_BRICK_SOURCE_VERSION,
+                                 .user = st,
+                                 .header = pb_header,
+                                 .grid = pb_grid,
+                                 .info = pb_info,
+                                 .load = pb_load};
+    return drv_render_bricks(st->pager, w, object, &src, view, opt, out);
 }
 
 /* The region contract: the World seen with the object's volume replaced by
@@ -826,6 +1001,13 @@ gpu_release(void *state) {
     gpu_state *st = state;
 #if VV_HAVE_VULKAN
     release_device(st);
+    vv_renderer_free(st->pager);
+    st->pager = NULL;
+    free(st->bricks_mm);
+    st->bricks_mm = NULL;
+    vv_source_free(st->bricks_src);
+    st->bricks_src = NULL;
+    st->bricks_vol = NULL;
 #endif
     vv_vcache_set_clear(&st->vc);
 }
@@ -836,7 +1018,10 @@ gpu_device_changed(void *state, const vv_option_spec *spec, const vv_option_valu
     (void)spec;
     (void)v;
 #if VV_HAVE_VULKAN
-    release_device(state);
+    gpu_state *st = state;
+    release_device(st);
+    vv_renderer_free(st->pager); /* it took the device before */
+    st->pager = NULL;
 #else
     (void)state;
 #endif
@@ -861,6 +1046,11 @@ static const vv_option_spec gpu_options[] = {
     {"early_termination", VV_OPTION_REAL, "0.99", 0, 1, VV_OPTION_MIN_OPEN, NULL,
      "accumulated opacity that ends a composite ray",
      VV_OPTION_BIND(gpu_state, early_termination, DOUBLE)},
+    {"device_memory_mb", VV_OPTION_REAL, "auto", 0, INFINITY, 0, gpu_auto,
+     "MiB of the device's memory a volume may take whole (its values, gradients and gradient "
+     "magnitudes); a larger one is drawn brick by brick, each brick uploaded in turn (auto: "
+     "three quarters of the device's memory; 0: no limit)",
+     VV_OPTION_BIND_WORDS(gpu_state, budget_mb, DOUBLE, VV_OPTION_WORD_VALUES(-1), NULL)},
     {"empty_space_skipping", VV_OPTION_BOOL, "1", 0, 1, 0, NULL,
      "leap over subvolumes the transfer function hides (0 for tests; same image)",
      VV_OPTION_BIND(gpu_state, skipping, INT)},
