@@ -843,7 +843,7 @@ prepare_bricks(gpu_state *st, vv_volume *v, int side) {
     st->bricks_mm = malloc(2 * n * sizeof(float));
     if (!st->bricks_mm)
         return vv_error_set(VV_ERR_NOMEM, "gpu: out of memory (%zu bricks)", n);
-    vv_status s = vv_source_new_memory(&st->bricks_src, vv_volume_ref(v));
+    vv_status s = vv_source_new_memory(&st->bricks_src, v); /* a reference of its own */
     if (s != VV_OK)
         return s;
     st->bricks_vol = v; /* for pb_box */
