@@ -420,6 +420,25 @@ test_out_of_core(void **state) {
         if (!(db >= (m == 0 || m == 4 ? 50 : 60)))
             fail_msg("out of core %s: %.1f dB", modes[m], db);
     }
+    /* the .vvb's pyramid by level of detail (the multiresolution driver):
+     * nodes of level 1 and 2 as regions */
+    char g[512], c[512];
+    snprintf(g, sizeof g, "%s/lod_gpu.png", dir);
+    snprintf(c, sizeof c, "%s/lod_raycast.png", dir);
+    static const char *const rc[2][3] = {{"gpu", "--set", "early_termination=0.99"},
+                                         {"raycast", "--set", "refinement=off"}};
+    for (int k = 0; k < 2; k++) {
+        r = run_cli("render", vvb, "--renderer", rc[k][0], rc[k][1], rc[k][2], "--lod", "2", "--tf",
+                    "100:1500", "--azimuth", "30", "--elevation", "20", "--size", "200x200", "-o",
+                    k ? c : g);
+        const int ok = r.status == 0 && strstr(r.out, "levels") != NULL;
+        vt_run_result_free(&r);
+        if (!ok)
+            fail_msg("%s --lod 2 failed or drew no levels", rc[k][0]);
+    }
+    const double db = vt_png_psnr(g, c);
+    printf("# by level of detail (--lod 2): gpu against raycast %.1f dB\n", db);
+    assert_true(db >= 50);
 }
 
 /* One renderer, the transfer function changed between frames: the
