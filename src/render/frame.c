@@ -377,6 +377,19 @@ vv_render_region_part(const vv_world *w, const vv_render_region *rg, vv_region_o
     return VV_OK;
 }
 
+vv_status
+vv_render_region_world(const vv_world *w, const vv_render_region *rg, vv_region_op *op,
+                       vv_region_world *out) {
+    vv_status s = vv_render_region_part(w, rg, op, &out->part);
+    if (s != VV_OK)
+        return s;
+    out->slot[0] = &out->part;
+    out->world = *w;
+    out->world.objects = out->slot;
+    out->world.n_objects = 1;
+    return VV_OK;
+}
+
 void
 vv_region_rays_free(vv_region_rays *r) {
     if (!r)

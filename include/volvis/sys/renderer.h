@@ -323,6 +323,26 @@ vv_status vv_render_region_part(const vv_world *w, const vv_render_region *rg, v
                                 vv_object *part);
 
 /**
+ * The World a region method renders: @p w's settings (view, lights, cut
+ * planes, shading) with the region's object alone, its volume replaced by
+ * the region's voxels (vv_render_region_part). Points into itself: filled
+ * in place by vv_render_region_world and not copied; nothing in it is
+ * released; it lives as long as @p w and the region.
+ */
+typedef struct vv_region_world {
+    vv_object part;     /**< the object, its volume the region's voxels */
+    vv_object *slot[1]; /**< world's object array: &part */
+    vv_world world;     /**< the World to render */
+} vv_region_world;
+
+/**
+ * vv_render_region_part into @p out->part, and @p out->world a shallow copy
+ * of @p w showing it alone. Errors as vv_render_region_check.
+ */
+vv_status vv_render_region_world(const vv_world *w, const vv_render_region *rg, vv_region_op *op,
+                                 vv_region_world *out);
+
+/**
  * The World's ambient light and background as floats for a frame; with
  * @p region non-zero the background is 0 (partial images of a region are
  * composited first and the background is added once, by

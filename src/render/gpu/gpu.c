@@ -13,18 +13,22 @@
  * images agree with raycast's to rounding (tests/render/test_gpu.c).
  *
  * Per renderer: one Vulkan context on the device of option `device` (auto:
- * the first real GPU, else the first device), the volume as 3-D images
- * (values as R16 unorm or R32 float, gradient codes as RG8 int) uploaded
- * when the World's volume changes, and per frame the tables, the uniform
- * block, one dispatch of 8 x 8 pixels a workgroup and the copy back of the
- * RGBA float image and depth. vv_render_stats.device_ms gets the device's
- * time for the frame's commands.
+ * the first real GPU, else the first device); the volume (each channel's)
+ * as 3-D images (values as R16 unorm or R32 float, gradient codes as RG8
+ * int, gradient magnitudes as R32 float for a 2-D transfer function)
+ * uploaded when it changes, and the subvolumes' min/max and distances when
+ * they change; per frame the tables, the uniform block, one dispatch of 8 x
+ * 8 pixels a workgroup and the copy back of the RGBA float image and depth
+ * (and keys, in a region render). vv_render_stats.device_ms gets the
+ * device's time for the frame's commands.
  *
- * Draws one volume object of one channel in composite, MIP, MinIP, X-ray
- * and iso mode with a 1-D transfer function or a threshold, shading, lights
- * and cut planes. Refused in one line: several volume objects, channels,
- * 2-D transfer functions, solid textures and label colours (raycast draws
- * them), volumes over the device's 3-D image side or memory.
+ * Draws one volume object (up to GPU_MAX_CH channels under the blend
+ * rules) in composite, MIP, MinIP, X-ray and iso mode with a 1-D or 2-D
+ * transfer function or a threshold, shading, lights and cut planes; regions
+ * (the out-of-core drivers); a volume over option device_memory_mb or the
+ * device's 3-D image side brick by brick. Refused in one line: several
+ * volume objects, more channels, channels by regions or by bricks, solid
+ * and image textures and label colours (raycast draws them).
  * Thread-safety: a renderer serves one render at a time (render.h).
  */
 #include <math.h>
@@ -63,7 +67,7 @@ typedef struct gpu_ubo {
         ks[VV_MAX_LIGHTS][4];
     float planes[2 * VV_MAX_CUT_PLANES][4];
     int32_t dims[4], bdims[4], misc[4], clipd[4];
-    float p0[4], p1[4];
+    float p0[4];                /* dt, early termination, iso (stored units), 0 */
     float rlo[4], rhi[4];       /* a region's owned samples (open sides: -+1e30) */
     int32_t roff[4];            /* its voxels' offset; [3]: 1 in a region render */
     int32_t rect[4];            /* its pixel rectangle x0, y0, x1, y1 (x1 <= x0: all) */
@@ -74,7 +78,9 @@ typedef struct gpu_ubo {
     int32_t chn[4];             /* channels (0: one-channel object), blend rule */
 } gpu_ubo;
 
-enum { F_SHADING = 1, F_NORMALS = 2, F_SKIPPING = 4, F_POINT = 8, F_INTEGER = 16, F_LUT2D = 32 };
+/* the frame's flags (misc[3]) and a channel's (chf[k][0]) */
+enum { F_SHADING = 1, F_SKIPPING = 4, F_LUT2D = 32 };
+enum { F_NORMALS = 2, F_INTEGER = 16 };
 
 /* The buffers the shader reads and writes (bindings 0, 3 .. 9 and 11); the
  * uploads (B_UBO .. B_LUT2) come first, then the outputs. */
@@ -171,17 +177,6 @@ release_device(gpu_state *st) {
     st->sampler = VK_NULL_HANDLE;
 }
 
-static vv_status
-vk_check(const vv_vk *vk, VkResult r, const char *what) {
-    if (r == VK_SUCCESS)
-        return VV_OK;
-    return vv_error_set(r == VK_ERROR_OUT_OF_DEVICE_MEMORY || r == VK_ERROR_OUT_OF_HOST_MEMORY
-                            ? VV_ERR_NOMEM
-                            : VV_ERR_UNSUPPORTED,
-                        "gpu device %d (%s): %s failed: %s", vk->index, vk->props.deviceName, what,
-                        vv_vk_result_name(r));
-}
-
 /* The context, the pipeline of the embedded shader and its descriptor set. */
 static vv_status
 open_device(gpu_state *st) {
@@ -208,21 +203,21 @@ open_device(gpu_state *st) {
         .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO,
         .bindingCount = N_BINDINGS,
         .pBindings = b};
-    s = vk_check(vk, vk->f.vkCreateDescriptorSetLayout(vk->dev, &li, NULL, &st->dsl),
-                 "vkCreateDescriptorSetLayout");
+    s = vv_vk_check(vk, vk->f.vkCreateDescriptorSetLayout(vk->dev, &li, NULL, &st->dsl),
+                    "vkCreateDescriptorSetLayout");
     const VkPipelineLayoutCreateInfo pli = {.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO,
                                             .setLayoutCount = 1,
                                             .pSetLayouts = &st->dsl};
     if (s == VV_OK)
-        s = vk_check(vk, vk->f.vkCreatePipelineLayout(vk->dev, &pli, NULL, &st->layout),
-                     "vkCreatePipelineLayout");
+        s = vv_vk_check(vk, vk->f.vkCreatePipelineLayout(vk->dev, &pli, NULL, &st->layout),
+                        "vkCreatePipelineLayout");
     VkShaderModule mod = VK_NULL_HANDLE;
     const VkShaderModuleCreateInfo mi = {.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO,
                                          .codeSize = sizeof raycast_spv,
                                          .pCode = raycast_spv};
     if (s == VV_OK)
-        s = vk_check(vk, vk->f.vkCreateShaderModule(vk->dev, &mi, NULL, &mod),
-                     "vkCreateShaderModule");
+        s = vv_vk_check(vk, vk->f.vkCreateShaderModule(vk->dev, &mi, NULL, &mod),
+                        "vkCreateShaderModule");
     const VkComputePipelineCreateInfo ci = {
         .sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO,
         .stage = {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO,
@@ -231,7 +226,7 @@ open_device(gpu_state *st) {
                   .pName = "main"},
         .layout = st->layout};
     if (s == VV_OK)
-        s = vk_check(
+        s = vv_vk_check(
             vk, vk->f.vkCreateComputePipelines(vk->dev, VK_NULL_HANDLE, 1, &ci, NULL, &st->pipe),
             "vkCreateComputePipelines");
     if (mod)
@@ -244,15 +239,15 @@ open_device(gpu_state *st) {
                                            .poolSizeCount = 3,
                                            .pPoolSizes = ps};
     if (s == VV_OK)
-        s = vk_check(vk, vk->f.vkCreateDescriptorPool(vk->dev, &pi, NULL, &st->pool),
-                     "vkCreateDescriptorPool");
+        s = vv_vk_check(vk, vk->f.vkCreateDescriptorPool(vk->dev, &pi, NULL, &st->pool),
+                        "vkCreateDescriptorPool");
     const VkDescriptorSetAllocateInfo ai = {.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
                                             .descriptorPool = st->pool,
                                             .descriptorSetCount = 1,
                                             .pSetLayouts = &st->dsl};
     if (s == VV_OK)
-        s = vk_check(vk, vk->f.vkAllocateDescriptorSets(vk->dev, &ai, &st->set),
-                     "vkAllocateDescriptorSets");
+        s = vv_vk_check(vk, vk->f.vkAllocateDescriptorSets(vk->dev, &ai, &st->set),
+                        "vkAllocateDescriptorSets");
     const VkSamplerCreateInfo si = {.sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO,
                                     .magFilter = VK_FILTER_NEAREST,
                                     .minFilter = VK_FILTER_NEAREST,
@@ -261,8 +256,8 @@ open_device(gpu_state *st) {
                                     .addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
                                     .unnormalizedCoordinates = VK_FALSE};
     if (s == VV_OK)
-        s = vk_check(vk, vk->f.vkCreateSampler(vk->dev, &si, NULL, &st->sampler),
-                     "vkCreateSampler");
+        s = vv_vk_check(vk, vk->f.vkCreateSampler(vk->dev, &si, NULL, &st->sampler),
+                        "vkCreateSampler");
     if (s != VV_OK) {
         st->ready = 1; /* so that release_device frees what was made */
         release_device(st);
@@ -551,12 +546,8 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
         u.bdims[2] = c->bz;
         u.bdims[3] = n_lights;
         u.misc[2] = n_planes;
-        int point = 0;
-        for (int l = 0; l < n_lights; l++)
-            point |= lights[l].point;
-        u.misc[3] = (obj->shading ? F_SHADING : 0) | (c->nrm ? F_NORMALS : 0) |
-                    (st->skipping && tab->bdist ? F_SKIPPING : 0) | (point ? F_POINT : 0) |
-                    (c->q16 ? F_INTEGER : 0) | (lut2d ? F_LUT2D : 0);
+        u.misc[3] = (obj->shading ? F_SHADING : 0) | (st->skipping && tab->bdist ? F_SKIPPING : 0) |
+                    (lut2d ? F_LUT2D : 0);
         for (int a = 0; a < 3; a++)
             u.clipd[a] = rg ? (rg->dims[a] > 1 ? rg->dims[a] : 2) : dims[a];
         if (rg) {
@@ -567,13 +558,11 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
                 u.roff[a] = rg->offset[a];
             }
             u.roff[3] = 1;
-            if (rg->x1 > rg->x0) {
+            if (rg->x1 > rg->x0) { /* y1 <= y0 (off screen): every pixel outside */
                 u.rect[0] = rg->x0;
                 u.rect[1] = rg->y0;
                 u.rect[2] = rg->x1;
-                u.rect[3] = rg->y1 > rg->y0 ? rg->y1 : rg->y0 + 1;
-                if (rg->y1 <= rg->y0) /* off screen: nothing to draw */
-                    u.rect[3] = u.rect[1], u.rect[2] = u.rect[0] + 1;
+                u.rect[3] = rg->y1;
             }
         }
         if (rg && mode == VV_MODE_XRAY) {
@@ -584,12 +573,7 @@ render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_ren
         }
         u.p0[0] = (float)dt;
         u.p0[1] = (float)st->early_termination;
-        u.p0[2] = tab->lut_lo;
-        u.p0[3] = tab->lut_scale;
-        u.p1[0] = c->q16 ? 65535.0f : 1.0f;
-        u.p1[1] = iso;
-        u.p1[2] = tab->pdist ? tab->plo : -INFINITY;
-        u.p1[3] = tab->pdist ? tab->phi : INFINITY;
+        u.p0[2] = iso;
         nblocks = (size_t)c->bx * (size_t)c->by * (size_t)c->bz;
     } else {
         u.misc[2] = 1; /* nothing to draw: one plane that cuts every ray */
@@ -878,11 +862,12 @@ static int
 brick_side(const gpu_state *st, const vv_object *obj) {
     const vv_volume *v = obj->volume;
     const double per_voxel = (vv_voxel_type_size(v->type) <= 2 ? 2 : 4) + 2.0 + 4.0;
-    double budget = st->budget_mb >= 0 ? st->budget_mb * 1048576.0 : 0;
-    if (st->budget_mb < 0) {
-        vv_gpu_device d[16];
-        const int n = vv_gpu_devices(d, 16, NULL);
-        budget = n > st->vk.index ? 0.75 * (double)d[st->vk.index].memory_bytes : 0;
+    double budget = st->budget_mb * 1048576.0;
+    if (st->budget_mb < 0) { /* auto: of the device's largest local heap */
+        budget = 0;
+        for (uint32_t h = 0; h < st->vk.mem.memoryHeapCount; h++)
+            if (st->vk.mem.memoryHeaps[h].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT)
+                budget = fmax(budget, 0.75 * (double)st->vk.mem.memoryHeaps[h].size);
     }
     const uint32_t lim = st->vk.props.limits.maxImageDimension3D;
     int over = 0;
@@ -922,8 +907,6 @@ gpu_render(void *state, const vv_world *w, const vv_view *view, const vv_render_
         s = vv_renderer_new(&st->pager, "gpu");
         if (s == VV_OK)
             s = vv_renderer_set_option(st->pager, "device", dev);
-        if (s == VV_OK)
-            s = vv_renderer_set_option(st->pager, "early_termination", "0.99");
         if (s != VV_OK) {
             vv_renderer_free(st->pager);
             st->pager = NULL;
@@ -957,16 +940,12 @@ static vv_status
 gpu_render_region(void *state, const vv_world *w, const vv_view *view,
                   const vv_render_region *region, const vv_render_options *opt,
                   vv_region_image *out) {
-    vv_object copy;
-    vv_status s = vv_render_region_part(w, region, &out->op, &copy);
+    vv_region_world rw;
+    vv_status s = vv_render_region_world(w, region, &out->op, &rw);
     if (s != VV_OK)
         return s;
-    vv_object *objs[1] = {&copy};
-    vv_world tmp = *w;
-    tmp.objects = objs;
-    tmp.n_objects = 1;
     gpu_state *st = state;
-    s = render_frame(st, &tmp, view, opt, region, out->image, out->key);
+    s = render_frame(st, &rw.world, view, opt, region, out->image, out->key);
     out->classify = out->op == VV_REGION_SUM ? vv_xray_table_classify : NULL;
     out->classify_ctx = out->op == VV_REGION_SUM ? &st->xray : NULL;
     return s;

@@ -21,8 +21,9 @@
 layout(local_size_x = 8, local_size_y = 8) in;
 
 const int MODE_COMPOSITE = 0, MODE_MIP = 1, MODE_MINIP = 2, MODE_XRAY = 3, MODE_ISO = 4;
-const int F_SHADING = 1, F_NORMALS = 2, F_SKIPPING = 4, F_POINT = 8, F_INTEGER = 16;
-const int F_LUT2D = 32;
+/* the frame's flags (misc.w) and a channel's (chf[ch].x) */
+const int F_SHADING = 1, F_SKIPPING = 4, F_LUT2D = 32;
+const int F_NORMALS = 2, F_INTEGER = 16;
 const int LUT2_V = 1024, LUT2_G = 128;
 const int MAX_LIGHTS = 16, MAX_PLANES = 16, LUT = 4096, SPEC = 2048, BLOCK = 4, MAX_CH = 4;
 const int BLEND_COMPOSITE = 0, BLEND_ADDITIVE = 1, BLEND_MAXIMUM = 2;
@@ -43,8 +44,7 @@ layout(std140, set = 0, binding = 0) uniform Frame {
     ivec4 bdims;                   /* subvolumes bx, by, bz; lights */
     ivec4 misc;                    /* width, height, planes, flags */
     ivec4 clipd;                   /* the grid box [0, clipd - 1] */
-    vec4 p0;                       /* dt, early termination, table lo, table scale */
-    vec4 p1;                       /* value scale, iso, MIP floor, MIP stop */
+    vec4 p0;                       /* dt, early termination, iso (stored units), 0 */
     vec4 rlo, rhi;                 /* a region's samples: rlo <= p < rhi (whole index space) */
     ivec4 roff;                    /* its voxels' offset in the whole volume; w: 1 region */
     ivec4 rect;                    /* pixels x0 <= x < x1, y0 <= y < y1 (x1 <= x0: all) */
@@ -237,7 +237,7 @@ gmag_at(vec3 p) {
  * gradient magnitude, Kniss et al. 2002) in place of the 1-D one */
 vec4
 entry2d(float v, vec3 p) {
-    float li = clamp((v - fr.p0.z) * fr.p0.w, 0.0, float(LUT - 1));
+    float li = clamp((v - fr.chp[0].x) * fr.chp[0].y, 0.0, float(LUT - 1));
     int vb = int(li * fr.p2.x + 0.5);
     int gb = clamp(int(gmag_at(p) * fr.p2.y + 0.5), 0, LUT2_G - 1);
     return lut2[gb * LUT2_V + vb];
@@ -550,7 +550,7 @@ main() {
             }
             A = min(A, 1.0);
         } else if (mode == MODE_ISO) {
-            const float iso = fr.p1.y;
+            const float iso = fr.p0.z;
             const float k0 = ceil(t0 / dt);
             float kend = floor(t1 / dt);
             float k = k0;
@@ -663,8 +663,8 @@ main() {
             } else {
                 const bool mip = mode == MODE_MIP;
                 const float sg = mip ? 1.0 : -1.0;
-                float best = mip ? fr.p1.z : -fr.p1.w;
-                const float stop = mip ? fr.p1.w : -fr.p1.z;
+                float best = mip ? fr.chp[0].w : -fr.chq[0].x;
+                const float stop = mip ? fr.chq[0].x : -fr.chp[0].w;
                 float tbest = t0;
                 while (k <= kend && best < stop) {
                     const float t = k * dt;

@@ -207,9 +207,10 @@ vv_vk_result_name(VkResult r) {
     }
 }
 
-/* A Vulkan failure as a library error naming the call and the device. */
-static vv_status
-vk_fail(const vv_vk *vk, const char *what, VkResult r) {
+vv_status
+vv_vk_check(const vv_vk *vk, VkResult r, const char *what) {
+    if (r == VK_SUCCESS)
+        return VV_OK;
     const vv_status s = r == VK_ERROR_OUT_OF_DEVICE_MEMORY || r == VK_ERROR_OUT_OF_HOST_MEMORY
                             ? VV_ERR_NOMEM
                             : VV_ERR_UNSUPPORTED;
@@ -221,7 +222,7 @@ vk_fail(const vv_vk *vk, const char *what, VkResult r) {
     do {                                                                                           \
         VkResult vk_r_ = (call);                                                                   \
         if (vk_r_ != VK_SUCCESS)                                                                   \
-            return vk_fail((vk), (what), vk_r_);                                                   \
+            return vv_vk_check((vk), vk_r_, (what));                                               \
     } while (0)
 
 vv_status
@@ -368,7 +369,7 @@ vv_vk_buffer_new(vv_vk *vk, VkDeviceSize size, VkBufferUsageFlags usage, int hos
         VkResult r = vk->f.vkMapMemory(vk->dev, out->mem, 0, VK_WHOLE_SIZE, 0, &out->map);
         if (r != VK_SUCCESS) {
             vv_vk_buffer_free(vk, out);
-            return vk_fail(vk, "vkMapMemory", r);
+            return vv_vk_check(vk, r, "vkMapMemory");
         }
     }
     return VV_OK;
@@ -415,7 +416,7 @@ vv_vk_image_new(vv_vk *vk, const int dims[3], VkFormat format, vv_vk_image *out)
     VkResult r = vk->f.vkCreateImage(vk->dev, &ii, NULL, &out->img);
     if (r != VK_SUCCESS)
         return r == VK_ERROR_OUT_OF_DEVICE_MEMORY || r == VK_ERROR_OUT_OF_HOST_MEMORY
-                   ? vk_fail(vk, "vkCreateImage", r)
+                   ? vv_vk_check(vk, r, "vkCreateImage")
                    : vv_error_set(VV_ERR_LIMIT, "gpu device %d (%s): a %d x %d x %d 3-D image: %s",
                                   vk->index, vk->props.deviceName, dims[0], dims[1], dims[2],
                                   vv_vk_result_name(r));
@@ -435,7 +436,7 @@ vv_vk_image_new(vv_vk *vk, const int dims[3], VkFormat format, vv_vk_image *out)
     r = vk->f.vkCreateImageView(vk->dev, &vi, NULL, &out->view);
     if (r != VK_SUCCESS) {
         vv_vk_image_free(vk, out);
-        return vk_fail(vk, "vkCreateImageView", r);
+        return vv_vk_check(vk, r, "vkCreateImageView");
     }
     out->format = format;
     memcpy(out->dims, dims, sizeof out->dims);

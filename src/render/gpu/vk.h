@@ -161,6 +161,10 @@ void vv_vk_copy_to_image(vv_vk *vk, const vv_vk_buffer *src, VkDeviceSize src_of
 /* A barrier: transfer writes before compute reads, or (@p after_compute)
  * compute writes before transfer reads. */
 void vv_vk_barrier(vv_vk *vk, int after_compute);
+/* VV_OK for VK_SUCCESS, else a one-line library error naming the call
+ * @p what and the device: VV_ERR_NOMEM for the out-of-memory results,
+ * VV_ERR_UNSUPPORTED for the others. */
+vv_status vv_vk_check(const vv_vk *vk, VkResult r, const char *what);
 /* "VK_ERROR_..." of @p r. */
 const char *vv_vk_result_name(VkResult r);
 #endif /* VV_HAVE_VULKAN */

@@ -1252,16 +1252,12 @@ static vv_status
 rc_render_region(void *state, const vv_world *w, const vv_view *view,
                  const vv_render_region *region, const vv_render_options *opt,
                  vv_region_image *out) {
-    vv_object copy;
-    vv_status s = vv_render_region_part(w, region, &out->op, &copy);
+    vv_region_world rw;
+    vv_status s = vv_render_region_world(w, region, &out->op, &rw);
     if (s != VV_OK)
         return s;
-    vv_object *objs[1] = {&copy};
-    vv_world tmp = *w;
-    tmp.objects = objs;
-    tmp.n_objects = 1;
     rc_state *st = state;
-    s = render_frame(st, &tmp, view, opt, region, out->image, out->key);
+    s = render_frame(st, &rw.world, view, opt, region, out->image, out->key);
     out->classify = out->op == VV_REGION_SUM ? vv_xray_table_classify : NULL;
     out->classify_ctx = out->op == VV_REGION_SUM ? &st->xray : NULL;
     return s;
