@@ -35,19 +35,17 @@ vv_vtables_free(vv_vtables *t) {
         vtables_clear(t);
 }
 
-/* Empty-space leaping: the chessboard distance from each subvolume to the
- * nearest visible one, capped at 255, by two chamfer passes over the 26
- * neighbours (exact for the chessboard metric). A ray in a subvolume at
- * distance d can jump to where it leaves the cube of 2d - 1 subvolumes
- * around it, all of them empty. */
-static uint8_t *
-chessboard_distance(const uint8_t *vis, int nx, int ny, int nz) {
+/* Empty-space leaping: into d (n = nx ny nz bytes), the chessboard
+ * distance from each subvolume to the nearest one with vis[b] == want,
+ * capped at 255, by two chamfer passes over the 26 neighbours (exact for
+ * the chessboard metric). With want 1, a ray in a subvolume at distance d
+ * can jump to where it leaves the cube of 2d - 1 subvolumes around it, all
+ * of them empty; with want 0, that cube is all visible. */
+static void
+chessboard_distance_to(const uint8_t *vis, int want, int nx, int ny, int nz, uint8_t *d) {
     const size_t n = (size_t)nx * (size_t)ny * (size_t)nz;
-    uint8_t *d = malloc(n);
-    if (!d)
-        return NULL;
     for (size_t b = 0; b < n; b++)
-        d[b] = vis[b] ? 0 : 255;
+        d[b] = !vis[b] == !want ? 0 : 255;
     for (int pass = 0; pass < 2; pass++) {
         const int step = pass == 0 ? 1 : -1;
         for (int k = pass == 0 ? 0 : nz - 1; k >= 0 && k < nz; k += step)
@@ -74,6 +72,14 @@ chessboard_distance(const uint8_t *vis, int nx, int ny, int nz) {
                     d[b] = (uint8_t)(best > 255 ? 255 : best);
                 }
     }
+}
+
+/* chessboard_distance_to the nearest visible subvolume, in a new array. */
+static uint8_t *
+chessboard_distance(const uint8_t *vis, int nx, int ny, int nz) {
+    uint8_t *d = malloc((size_t)nx * (size_t)ny * (size_t)nz);
+    if (d)
+        chessboard_distance_to(vis, 1, nx, ny, nz, d);
     return d;
 }
 
@@ -251,7 +257,13 @@ build_tables(const vv_vcache *c, const vv_object *obj, const vv_vtables_key *key
         }
         free(nz);
     }
-    t->bdist = chessboard_distance(t->bvis, c->bx, c->by, c->bz);
+    /* bdist, then vdist in the same allocation (tf_tables.h), and 3 bytes
+     * for the AVX2 run's 4-byte gathers */
+    t->bdist = malloc(2 * nb + 3);
+    if (t->bdist) {
+        chessboard_distance_to(t->bvis, 1, c->bx, c->by, c->bz, t->bdist);
+        chessboard_distance_to(t->bvis, 0, c->bx, c->by, c->bz, t->bdist + nb);
+    }
     if (!t->bdist) {
         vtables_clear(t);
         return vv_error_set(VV_ERR_NOMEM, "out of memory");

@@ -38,12 +38,12 @@
 /* The cells of eight index points (px, py, pz) inside the grid box, as
  * vv_vcache_cell_in computes them: their offsets (returned), fractions
  * (*wx, *wy, *wz) and the four x-pairs (v[o], v[o + 1]) of each cell's
- * edges, 16-bit values packed in 32-bit lanes, read by plain loads
- * (hardware gathers are microcoded and slow on processors with the Gather
- * Data Sampling mitigation). Needs c->q16. */
+ * edges, 16-bit values packed in 32-bit lanes, by hardware gathers of
+ * 4 bytes a lane. Needs c->q16 and fewer than 2^30 voxels (32-bit
+ * offsets). */
 __attribute__((target("avx2"))) static inline __m256i
 cell_pairs_avx2(const vv_vcache *c, __m256 px, __m256 py, __m256 pz, __m256 *wx, __m256 *wy,
-                __m256 *wz, int32_t p00[8], int32_t p10[8], int32_t p01[8], int32_t p11[8]) {
+                __m256 *wz, __m256i *p00, __m256i *p10, __m256i *p01, __m256i *p11) {
     const __m256i zero = _mm256_setzero_si256();
     __m256i i = _mm256_cvttps_epi32(px), j = _mm256_cvttps_epi32(py), k = _mm256_cvttps_epi32(pz);
     i = _mm256_max_epi32(_mm256_min_epi32(i, _mm256_set1_epi32(c->nx - 2)), zero);
@@ -56,23 +56,20 @@ cell_pairs_avx2(const vv_vcache *c, __m256 px, __m256 py, __m256 pz, __m256 *wx,
         _mm256_add_epi32(_mm256_add_epi32(_mm256_mullo_epi32(k, _mm256_set1_epi32((int)c->sz)),
                                           _mm256_mullo_epi32(j, _mm256_set1_epi32((int)c->sy))),
                          i);
-    int32_t oo[8];
-    _mm256_storeu_si256((__m256i *)(void *)oo, o);
-    for (int l = 0; l < 8; l++) {
-        const uint16_t *v = c->q16 + oo[l];
-        memcpy(&p00[l], v, 4);
-        memcpy(&p10[l], v + c->sy, 4);
-        memcpy(&p01[l], v + c->sz, 4);
-        memcpy(&p11[l], v + c->sz + c->sy, 4);
-    }
+    const int *base = (const int *)(const void *)c->q16;
+    const __m256i sy = _mm256_set1_epi32((int)c->sy), sz = _mm256_set1_epi32((int)c->sz);
+    const __m256i oz = _mm256_add_epi32(o, sz);
+    *p00 = _mm256_i32gather_epi32(base, o, 2);
+    *p10 = _mm256_i32gather_epi32(base, _mm256_add_epi32(o, sy), 2);
+    *p01 = _mm256_i32gather_epi32(base, oz, 2);
+    *p11 = _mm256_i32gather_epi32(base, _mm256_add_epi32(oz, sy), 2);
     return o;
 }
 
 /* Eight x-pairs of 16-bit values (low and high halves of each 32-bit
  * lane) lerped by wx: a + (b - a) * wx. */
 __attribute__((target("avx2"))) static inline __m256
-pair_lerp_avx2(const int32_t pairs[8], __m256 wx) {
-    const __m256i g = _mm256_loadu_si256((const __m256i *)(const void *)pairs);
+pair_lerp_avx2(__m256i g, __m256 wx) {
     const __m256 a = _mm256_cvtepi32_ps(_mm256_and_si256(g, _mm256_set1_epi32(0xFFFF)));
     const __m256 b = _mm256_cvtepi32_ps(_mm256_srli_epi32(g, 16));
     return _mm256_add_ps(a, _mm256_mul_ps(_mm256_sub_ps(b, a), wx));
@@ -121,13 +118,7 @@ vv_vshade8(const vv_vshading *o, const vv_vlight *lights, int n_lights, const fl
         const __m256 on = _mm256_and_ps(_mm256_cmp_ps(rv, zero, _CMP_GT_OQ), lit);
         const __m256i at =
             _mm256_cvttps_epi32(VS_ADD(VS_MUL(rv, VS_B((float)VV_VC_SPEC)), VS_B(0.5f)));
-        int32_t ix[8];
-        float sv[8];
-        _mm256_storeu_si256((__m256i *)(void *)ix, at);
-        const int onm = _mm256_movemask_ps(on);
-        for (int q = 0; q < 8; q++)
-            sv[q] = onm >> q & 1 ? o->spec[ix[q]] : 0.0f;
-        __m256 sp = _mm256_loadu_ps(sv);
+        __m256 sp = _mm256_mask_i32gather_ps(zero, o->spec, at, on, 4);
         __m256 wd = _mm256_and_ps(ndl, lit);
         if (shadow) { /* vv_vshade's wd = sh ndl, sp = sh sp */
             const __m256 sh = _mm256_loadu_ps(shadow + 8 * l);
@@ -268,7 +259,8 @@ gradient8_avx2(const vv_vcache *c, const size_t *cell, const float *fx, const fl
         wz[q] = fz[s];
     }
     /* each row's eight 32-bit pairs put into lanes by inserts, not stored
-     * and reloaded (a vector load of eight scalar stores waits for all) */
+     * and reloaded (a vector load of eight scalar stores waits for all);
+     * hardware gathers measured 10 % slower here (docs/rendering.md) */
     const size_t off[4] = {0, sy, sz, sz + sy};
     const __m256 one = _mm256_set1_ps(1.0f), f0 = _mm256_loadu_ps(wx);
     const __m256 f1 = _mm256_loadu_ps(wy), f2 = _mm256_loadu_ps(wz);
@@ -296,35 +288,39 @@ gradient8_avx2(const vv_vcache *c, const size_t *cell, const float *fx, const fl
     _mm256_storeu_ps(gz, _mm256_add_ps(_mm256_add_ps(Z[0], Z[2]), _mm256_add_ps(Z[1], Z[3])));
 }
 
-int
+__attribute__((target("avx2"))) int
 vv_vchunk_shade8(const vv_vcache *c, const float *lut, const vv_vshading *o,
                  const vv_vlight *lights, int n_lights, const float v[3], int m, const size_t *cell,
                  const float *fx, const float *fy, const float *fz, const int32_t *entry,
                  vv_vshadow8_fn shadow, void *ctx, float et, float C[3], float *A, int *first,
                  uint32_t *shaded) {
-    int vis[VV_VC_CHUNK], nvis = 0;
-    for (int s = 0; s < m; s++)
-        if (lut[entry[s]] > 0)
-            vis[nvis++] = s;
+    /* the visible samples, found without a branch a sample */
+    int vis[VV_VC_CHUNK + 8], nvis = 0;
+    for (int s = 0; s < m; s++) {
+        vis[nvis] = s;
+        nvis += lut[entry[s]] > 0;
+    }
     for (int i0 = 0; i0 < nvis; i0 += 8) {
         const int n8 = nvis - i0 < 8 ? nvis - i0 : 8;
-        float gx[8], gy[8], gz[8], al[8] = {0};
-        float cr[8] = {0}, cg[8] = {0}, cb[8] = {0}, sh[VV_MAX_LIGHTS * 8];
+        float gx[8], gy[8], gz[8], al[8], cr[8], cg[8], cb[8], sh[VV_MAX_LIGHTS * 8];
         float orr[8], org[8], orb[8];
         int shadowed = 0;
         if (shadow)
             memset(sh, 0, sizeof(float) * 8 * (size_t)n_lights);
         gradient8_avx2(c, cell, fx, fy, fz, vis + i0, n8, gx, gy, gz);
-        for (int q = 0; q < n8; q++) {
-            const int s = vis[i0 + q];
-            const float *e = lut + entry[s];
-            if (shadow)
-                shadowed = shadow(ctx, s, sh + q, 8);
-            al[q] = e[0];
-            cr[q] = e[1];
-            cg[q] = e[2];
-            cb[q] = e[3];
-        }
+        /* the table entries of the eight (zero in lanes past n8) */
+        const __m256i live =
+            _mm256_cmpgt_epi32(_mm256_set1_epi32(n8), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+        const __m256i at = _mm256_mask_i32gather_epi32(
+            _mm256_setzero_si256(), entry,
+            _mm256_loadu_si256((const __m256i *)(const void *)(vis + i0)), live, 4);
+        const __m256 zero = _mm256_setzero_ps(), lm = _mm256_castsi256_ps(live);
+        _mm256_storeu_ps(al, _mm256_mask_i32gather_ps(zero, lut, at, lm, 4));
+        _mm256_storeu_ps(cr, _mm256_mask_i32gather_ps(zero, lut + 1, at, lm, 4));
+        _mm256_storeu_ps(cg, _mm256_mask_i32gather_ps(zero, lut + 2, at, lm, 4));
+        _mm256_storeu_ps(cb, _mm256_mask_i32gather_ps(zero, lut + 3, at, lm, 4));
+        for (int q = 0; shadow && q < n8; q++)
+            shadowed = shadow(ctx, vis[i0 + q], sh + q, 8);
         vv_vshade8(o, lights, n_lights, v, shadowed ? sh : NULL, gx, gy, gz, al, cr, cg, cb, orr,
                    org, orb);
         for (int q = 0; q < n8; q++) {
@@ -370,8 +366,8 @@ points8_avx2(const vv_vray *r, double k, double dt, __m256 *px, __m256 *py, __m2
 __attribute__((target("avx2"))) static inline __m256
 values_at8_avx2(const vv_vcache *c, __m256 px, __m256 py, __m256 pz) {
     __m256 wx, wy, wz;
-    int32_t p00[8], p10[8], p01[8], p11[8];
-    (void)cell_pairs_avx2(c, px, py, pz, &wx, &wy, &wz, p00, p10, p01, p11);
+    __m256i p00, p10, p01, p11;
+    (void)cell_pairs_avx2(c, px, py, pz, &wx, &wy, &wz, &p00, &p10, &p01, &p11);
     const __m256 c00 = pair_lerp_avx2(p00, wx), c10 = pair_lerp_avx2(p10, wx);
     const __m256 c01 = pair_lerp_avx2(p01, wx), c11 = pair_lerp_avx2(p11, wx);
     const __m256 c0 = _mm256_add_ps(c00, _mm256_mul_ps(_mm256_sub_ps(c10, c00), wy));
@@ -428,9 +424,39 @@ blocks8_avx2(const vv_vcache *c, const vv_vray *r, double k, double dt) {
  * distance or more, and scans the samples ahead from one closer (1 measured
  * faster than 2 or 4, docs/rendering.md). */
 #define VRUN_LEAP 2
+
+/* Bit s of the result: sample k + s (s < n <= VV_VC_CHUNK <= 64) of r
+ * lies in a visible subvolume (bdist 0), eight lanes at a time by gathers
+ * that do not wait for one another (no early exit: a test between them
+ * would wait for each). */
+__attribute__((target("avx2"))) static uint64_t
+visible_bits_avx2(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double k, double dt,
+                  int n) {
+    uint64_t bits = 0;
+    for (int s = 0; s < n; s += 8) {
+        /* four bytes a lane (bdist is followed by vdist: vv_vtables) */
+        const __m256i d = _mm256_and_si256(_mm256_i32gather_epi32((const int *)(const void *)bdist,
+                                                                  blocks8_avx2(c, r, k + s, dt), 1),
+                                           _mm256_set1_epi32(0xFF));
+        bits |= (uint64_t)(uint32_t)_mm256_movemask_ps(
+                    _mm256_castsi256_ps(_mm256_cmpeq_epi32(d, _mm256_setzero_si256())))
+                << s;
+    }
+    return n < 64 ? bits & (((uint64_t)1 << n) - 1) : bits;
+}
+
+/* The number of ones at the bottom of x. */
+static inline int
+trailing_ones64(uint64_t x) {
+    return ~x ? __builtin_ctzll(~x) : 64;
+}
+
 __attribute__((target("avx2"))) int
 vv_vray_visible_run_avx2(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double dt,
                          double kend, double *kp, double *klastp) {
+    const uint8_t *vdist = vv_vtables_vdist(bdist, (size_t)c->bx * (size_t)c->by * (size_t)c->bz);
+    const unsigned bxm = (unsigned)c->bx - 1, bym = (unsigned)c->by - 1, bzm = (unsigned)c->bz - 1;
+    const double inv_dt = 1.0 / dt;
     double k = *kp;
     while (k <= kend) {
         float p[3];
@@ -438,29 +464,45 @@ vv_vray_visible_run_avx2(const vv_vcache *c, const uint8_t *bdist, const vv_vray
         unsigned bc[3];
         if (vv_vray_leap_from(c, bdist, r, dt, VRUN_LEAP, &k, p, &t, bc))
             continue;
-        /* near a visible subvolume: the first sample of the next VV_VC_CHUNK
-         * in a visible subvolume, and the run on from it while they are */
-        const int n = kend - k + 1 < VV_VC_CHUNK ? (int)(kend - k + 1) : VV_VC_CHUNK;
-        int first = -1, len = 0;
-        for (int s = 0, open = 1; open && s < n; s += 8) {
-            int32_t id[8];
-            _mm256_storeu_si256((__m256i *)(void *)id, blocks8_avx2(c, r, k + s, dt));
-            for (int l = 0; open && l < 8 && s + l < n; l++) {
-                const int vis = !bdist[id[l]];
-                if (first >= 0)
-                    open = vis;
-                else if (vis)
-                    first = s + l;
-                len += first >= 0 && open;
+        /* near or in a visible subvolume: a run of at most VV_VC_CHUNK
+         * samples from k */
+        const double cap = kend < k + (VV_VC_CHUNK - 1) ? kend : k + (VV_VC_CHUNK - 1);
+        double first = -1, klast = k - 1;
+        /* inside a cube of visible subvolumes (vdist >= 2) the run takes
+         * the samples up to the cube's exit whole, without a scan */
+        for (;;) {
+            const size_t b = ((size_t)bc[2] * (size_t)c->by + bc[1]) * (size_t)c->bx + bc[0];
+            if (bdist[b] || vdist[b] < 2)
+                break;
+            if (first < 0)
+                first = k;
+            const double ke = vv_floor_pos((t + vv_vray_cube_span(r, p, bc, vdist[b])) * inv_dt);
+            klast = ke < k ? k : ke < cap ? ke : cap;
+            k = klast + 1;
+            if (k > cap)
+                break;
+            t = k * dt;
+            vv_vray_point(r, t, p);
+            (void)vv_vblock_of(c, p, bxm, bym, bzm, bc);
+        }
+        if (k <= cap) {
+            /* the rest by each sample's subvolume, eight lanes at a time */
+            const int n = (int)(cap - k) + 1;
+            const uint64_t bits = visible_bits_avx2(c, bdist, r, k, dt, n);
+            if (first < 0) {
+                if (!bits) {
+                    k += n;
+                    continue;
+                }
+                const int f = __builtin_ctzll(bits);
+                first = k + f;
+                klast = first + trailing_ones64(bits >> f) - 1;
+            } else {
+                klast = k + trailing_ones64(bits) - 1;
             }
         }
-        if (first < 0) {
-            k += n;
-            continue;
-        }
-        k += first;
-        *kp = k;
-        *klastp = k + len - 1;
+        *kp = first;
+        *klastp = klast;
         return 1;
     }
     *kp = k;
@@ -590,12 +632,8 @@ vv_vray_classify_avx2(const vv_vcache *c, const vv_vtables *ob, const vv_vray *r
                      py = _mm256_sub_ps(_mm256_fmadd_ps(t, dy, oy), offy),
                      pz = _mm256_sub_ps(_mm256_fmadd_ps(t, dz, oz), offz);
         __m256 wx, wy, wz;
-        int32_t p00[8], p10[8], p01[8], p11[8];
-        const __m256i o = cell_pairs_avx2(c, px, py, pz, &wx, &wy, &wz, p00, p10, p01, p11);
-        const __m256i g00 = _mm256_loadu_si256((const __m256i *)(const void *)p00);
-        const __m256i g10 = _mm256_loadu_si256((const __m256i *)(const void *)p10);
-        const __m256i g01 = _mm256_loadu_si256((const __m256i *)(const void *)p01);
-        const __m256i g11 = _mm256_loadu_si256((const __m256i *)(const void *)p11);
+        __m256i g00, g10, g01, g11;
+        const __m256i o = cell_pairs_avx2(c, px, py, pz, &wx, &wy, &wz, &g00, &g10, &g01, &g11);
 #define VV_PAIR_LERP(g)                                                                            \
     _mm256_fmadd_ps(_mm256_sub_ps(_mm256_cvtepi32_ps(_mm256_srli_epi32(g, 16)),                    \
                                   _mm256_cvtepi32_ps(_mm256_and_si256(g, lo16))),                  \

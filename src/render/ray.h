@@ -101,11 +101,10 @@ vv_vray_cube_exit(const vv_vray *r, const float p[3], double t, int size) {
     return t + te;
 }
 
-/* The sample index after leaving the empty cube of 2 dist - 1 subvolumes
- * around subvolume bc (p, at ray parameter t, in it; k its sample index). */
-static inline double
-vv_vray_leap(const vv_vray *r, const float p[3], double t, const unsigned bc[3], int dist,
-             double inv_dt, double k) {
+/* The ray parameter from point p in subvolume bc to where r leaves the
+ * cube of 2 dist - 1 subvolumes around bc. */
+static inline float
+vv_vray_cube_span(const vv_vray *r, const float p[3], const unsigned bc[3], int dist) {
     float te = INFINITY;
     for (int a = 0; a < 3; a++) {
         if (r->inv[a] == 0)
@@ -115,6 +114,15 @@ vv_vray_leap(const vv_vray *r, const float p[3], double t, const unsigned bc[3],
         float ta = (bound - p[a]) * r->inv[a];
         te = ta < te ? ta : te;
     }
+    return te;
+}
+
+/* The sample index after leaving the empty cube of 2 dist - 1 subvolumes
+ * around subvolume bc (p, at ray parameter t, in it; k its sample index). */
+static inline double
+vv_vray_leap(const vv_vray *r, const float p[3], double t, const unsigned bc[3], int dist,
+             double inv_dt, double k) {
+    const float te = vv_vray_cube_span(r, p, bc, dist);
     double ks = vv_ceil_pos((t + te) * inv_dt);
     return ks > k + 1 ? ks : k + 1;
 }

@@ -44,7 +44,7 @@
 /* cached volumes per renderer: >= the objects of one render, so none in use
  * is evicted */
 #define VV_VC_MAX 64
-#define VV_VC_CHUNK 32 /* samples classified at a time (vv_vray_classify) */
+#define VV_VC_CHUNK 64 /* samples classified at a time (vv_vray_classify); at most 64 */
 #if defined(__x86_64__) && defined(__GNUC__)
 #define VV_VC_HAVE_AVX2 1
 #else

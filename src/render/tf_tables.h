@@ -20,6 +20,7 @@
 #ifndef VV_RENDER_TF_TABLES_H
 #define VV_RENDER_TF_TABLES_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "volvis/render.h"
@@ -44,7 +45,10 @@ typedef struct vv_vtables_key {
  * (projections); NULL in iso mode. ext: VV_VC_LUT extinctions per world
  * unit, -ln(1 - alpha) / opacity_unit_distance, or NULL when not asked
  * for. bvis: per subvolume, visible; bdist: chessboard distance in
- * subvolumes to the nearest visible one, at most 255 (0: visible). */
+ * subvolumes to the nearest visible one, at most 255 (0: visible),
+ * followed in the same allocation by vdist (vv_vtables_vdist): the
+ * chessboard distance to the nearest hidden one, at most 255 (0: hidden;
+ * d: the cube of 2d - 1 subvolumes around it is all visible). */
 /* lut2d (2-D transfer function, composite mode only; else NULL):
  * VV_VC_LUT2_G rows (gradient magnitude) of VV_VC_LUT2_V entries (value) of
  * {alpha, r*alpha, g*alpha, b*alpha}; value bin = nearest of table index *
@@ -75,6 +79,12 @@ typedef struct vv_vtables {
     double *pre;
     int32_t *pre_nz; /* VV_VC_LUT + 1: entries below i with tau > 0 */
 } vv_vtables;
+
+/* The vdist array that follows bdist (vv_vtables) of @p nb subvolumes. */
+static inline const uint8_t *
+vv_vtables_vdist(const uint8_t *bdist, size_t nb) {
+    return bdist + nb;
+}
 
 /* vv_vtables_get flags: also build the extinction table (ext), the
  * pre-integration table (pre). */
