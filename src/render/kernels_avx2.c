@@ -323,18 +323,32 @@ vv_vchunk_shade8(const vv_vcache *c, const float *lut, const vv_vshading *o,
             shadowed = shadow(ctx, vis[i0 + q], sh + q, 8);
         vv_vshade8(o, lights, n_lights, v, shadowed ? sh : NULL, gx, gy, gz, al, cr, cg, cb, orr,
                    org, orb);
-        for (int q = 0; q < n8; q++) {
-            ++*shaded;
-            const float w = 1 - *A;
-            C[0] += w * orr[q];
-            C[1] += w * org[q];
-            C[2] += w * orb[q];
-            *A += w * al[q];
-            if (*first < 0)
-                *first = vis[i0 + q];
-            if (*A >= et)
-                return 1;
+        if (*first < 0)
+            *first = vis[i0];
+        /* one at a time, in order (so that the image does not depend on
+         * which samples share a vector), the sums in locals rather than
+         * through the pointers, which may alias the arrays */
+        float c0 = C[0], c1 = C[1], c2 = C[2], acc = *A;
+        int q = 0, end = 0;
+        while (q < n8) {
+            const float w = 1 - acc;
+            c0 += w * orr[q];
+            c1 += w * org[q];
+            c2 += w * orb[q];
+            acc += w * al[q];
+            q++;
+            if (acc >= et) {
+                end = 1;
+                break;
+            }
         }
+        C[0] = c0;
+        C[1] = c1;
+        C[2] = c2;
+        *A = acc;
+        *shaded += (uint32_t)q;
+        if (end)
+            return 1;
     }
     return 0;
 }
