@@ -922,6 +922,85 @@ test_skipping_exact(void **state) {
     assert_true(same2);
 }
 
+/* The runs of visible samples (vv_vray_visible_run_avx2) take whole cubes
+ * of visible subvolumes where their distance to a hidden one (vdist) is 2
+ * or more, and scan sample by sample elsewhere; the samples they leave out
+ * must be transparent. Boxes of noise of every size in an empty 72^3
+ * volume (cubes of every vdist, edges everywhere), shaded, seen in
+ * perspective from six oblique directions: skipping on and off give the
+ * same image bit for bit, and the portable path the same to rounding. */
+static void
+test_runs_exact(void **state) {
+    (void)state;
+    const int n = 72;
+    vv_volume *v = new_volume(n, n, n, VV_U8, 1, 1, 1);
+    uint64_t seed = 0x9E3779B97F4A7C15ULL;
+    for (int b = 0; b < 40; b++) {
+        int lo[3], hi[3];
+        for (int a = 0; a < 3; a++) {
+            const int size = 1 + (int)(rnd(&seed) * 24);
+            lo[a] = (int)(rnd(&seed) * (n - size));
+            hi[a] = lo[a] + size;
+        }
+        for (int k = lo[2]; k < hi[2]; k++)
+            for (int j = lo[1]; j < hi[1]; j++)
+                for (int i = lo[0]; i < hi[0]; i++)
+                    vv_volume_set(v, i, j, k, 40 + 200 * rnd(&seed));
+    }
+    vv_volume_update_range(v);
+    vv_world *w = new_world();
+    w->n_lights = 1; /* one directional light: the eight-lane shading pass */
+    memset(&w->lights[0], 0, sizeof w->lights[0]);
+    w->lights[0].type = VV_LIGHT_DIRECTIONAL;
+    w->lights[0].direction = vv_vec3_make(-0.3, -0.4, -0.866);
+    w->lights[0].color = vv_vec3_make(1, 1, 1);
+    w->lights[0].intensity = 1;
+    vv_object *o = add_object(w, v, VV_MODE_COMPOSITE);
+    o->shading = 1;
+    vv_tf_init(&o->tf);
+    vt_ok(vv_tf_add_opacity(&o->tf, 20, 0.0));
+    vt_ok(vv_tf_add_opacity(&o->tf, 240, 0.6));
+    vt_ok(vv_tf_add_color(&o->tf, 20, vv_vec3_make(0.9, 0.6, 0.3)));
+    vt_ok(vv_tf_add_color(&o->tf, 240, vv_vec3_make(1, 1, 1)));
+    vv_renderer *on = new_raycaster(), *off = new_raycaster(), *plain = new_raycaster();
+    vt_ok(vv_renderer_set_option(off, "empty_space_skipping", "0"));
+    vt_ok(vv_renderer_set_option(plain, "simd", "0"));
+    const double eyes[6][3] = {{1, 0.3, 0.2}, {-0.4, 1, 0.7}, {0.2, -0.5, -1},
+                               {-1, -1, 0.9}, {0.7, 0.1, -1}, {0.05, 1, 0.02}};
+    const double c = 0.5 * (n - 1);
+    for (int e = 0; e < 6; e++) {
+        vv_view view;
+        memset(&view, 0, sizeof view);
+        const vv_vec3 d = vv_vec3_normalize(vv_vec3_make(eyes[e][0], eyes[e][1], eyes[e][2]));
+        view.eye = vv_vec3_make(c + 2.2 * n * d.x, c + 2.2 * n * d.y, c + 2.2 * n * d.z);
+        view.at = vv_vec3_make(c, c, c);
+        view.up = fabs(d.z) < 0.9 ? vv_vec3_make(0, 0, 1) : vv_vec3_make(0, 1, 0);
+        view.fov = vv_deg_to_rad(30);
+        view.projection = VV_PROJECTION_PERSPECTIVE;
+        view.width = view.height = 96;
+        vv_image *a = render(on, w, &view), *b = render(off, w, &view),
+                 *p = render(plain, w, &view);
+        const long lit = count_hits(a, 0, 96).n;
+        const double psnr = vv_image_psnr(a, p);
+        print_message("runs, view %d: %ld pixels lit; skipping on vs off %s; AVX2 vs portable "
+                      "%.1f dB\n",
+                      e, lit, images_identical(a, b) ? "identical" : "DIFFERENT", psnr);
+        if (e == 0)
+            write_png(a, "runs_boxes");
+        assert_true(lit > 1500);
+        assert_true(images_identical(a, b));
+        assert_true(psnr >= 60);
+        vv_image_free(a);
+        vv_image_free(b);
+        vv_image_free(p);
+    }
+    vv_renderer_free(on);
+    vv_renderer_free(off);
+    vv_renderer_free(plain);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
 /* MIP and MinIP march a ray one subvolume at a time (the portable path)
  * or in chunks of samples whose subvolumes are tested eight at a time
  * (AVX2, 16-bit values): both are exact, so on real data, where
@@ -1712,6 +1791,7 @@ main(void) {
         cmocka_unit_test(test_gradients_on_the_fly),
         cmocka_unit_test(test_determinism),
         cmocka_unit_test(test_skipping_exact),
+        cmocka_unit_test(test_runs_exact),
         cmocka_unit_test(test_simd_matches_portable),
         cmocka_unit_test(test_projection_paths_identical),
         cmocka_unit_test(test_single_slice),
