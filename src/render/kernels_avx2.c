@@ -8,9 +8,12 @@
  * and chosen at run time (vv_vc_have_avx2). Each keeps its scalar path's
  * arithmetic, so that the images are the portable code's; where they may
  * differ (the rounding of classification's fused multiply-adds, where a
- * projection stops) the functions say so. The methods are their stages'
- * (sample.h, classify.h, shade.h, ray.h, project.h); docs/rendering.md
- * ("SIMD", "Runs by sample", "MIP and MinIP") gives the measurements.
+ * projection stops) the functions say so. Voxels, table entries and
+ * subvolume distances are read by hardware gathers where they measured
+ * faster, and by scalar loads put into lanes where not (the normals' codes).
+ * The methods are their stages' (sample.h, classify.h, shade.h, ray.h,
+ * project.h); docs/rendering.md ("SIMD", "Runs by sample", "MIP and MinIP",
+ * "Issue 65: runs, gathers and refined MIP") gives the measurements.
  */
 #include "render/kernels_avx2.h"
 

@@ -194,18 +194,22 @@ vv_vray_visible_run(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, 
 }
 
 #if VV_VC_HAVE_AVX2
-/* vv_vray_visible_run with AVX2: from a sample in a visible subvolume the
- * run goes on, up to VV_VC_CHUNK samples, while the subvolume of each
- * sample (found eight lanes at a time, from the point its interpolation
- * uses) is visible, rather than by whole subvolumes from their exits; in
- * a hidden subvolume at chessboard distance 1 the next VV_VC_CHUNK
- * samples are scanned so for the first visible one instead of leaping
- * (distance 2 and more: vv_vray_leap). A run holds at most VV_VC_CHUNK
- * samples. The samples it leaves out lie in hidden subvolumes, their cells' values in
- * those subvolumes' ranges, so they are transparent: a kernel that
- * composites the runs gives the image of vv_vray_visible_run (and of no
- * skipping) bit for bit, with one traversal step a run instead of one a
- * subvolume. */
+/* vv_vray_visible_run with AVX2: from a sample in a visible subvolume
+ * whose distance to the nearest hidden one (vdist, vv_vtables) is d >= 2,
+ * the run takes every sample up to where the ray leaves the all-visible
+ * cube of 2 d - 1 subvolumes around it, and goes on so from the next; from
+ * one with vdist 1 it goes on while the subvolume of each sample (found
+ * eight lanes at a time by gathers, from the point its interpolation uses)
+ * is visible; in a hidden subvolume at chessboard distance 1 the next
+ * VV_VC_CHUNK samples are scanned so for the first visible one instead of
+ * leaping (distance 2 and more: vv_vray_leap). A run holds at most
+ * VV_VC_CHUNK samples. The samples it leaves out lie in hidden subvolumes,
+ * their cells' values in those subvolumes' ranges, so they are
+ * transparent (and a sample of a hidden subvolume that a cube's rounded
+ * exit takes in is transparent too): a kernel that composites the runs
+ * gives the image of vv_vray_visible_run (and of no skipping) bit for bit,
+ * with one traversal step a run instead of one a subvolume. @p bdist must
+ * be a vv_vtables' (vdist follows it). */
 int vv_vray_visible_run_avx2(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double dt,
                              double kend, double *kp, double *klastp);
 #endif
