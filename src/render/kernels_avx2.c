@@ -464,14 +464,21 @@ blocks8_avx2(const vv_vcache *c, const vv_vray *r, double k, double dt) {
 #define VRUN_LEAP 2
 
 /* Bit s of the result: sample k + s (s < n <= VV_VC_CHUNK <= 64) of r
- * lies in a visible subvolume (bdist 0), eight lanes at a time by gathers
- * that do not wait for one another (no early exit: a test between them
- * would wait for each). */
+ * lies in a visible subvolume (bdist 0), eight lanes at a time by gathers,
+ * sixteen samples between tests of whether the run has ended (a hidden
+ * sample after the first visible one): the bits are exact up to there and
+ * zero after. A test after each eight waited on each gather (measured 1 %
+ * slower than none; every sixteen, 0-3 % faster than none). */
 __attribute__((target("avx2"))) static uint64_t
 visible_bits_avx2(const vv_vcache *c, const uint8_t *bdist, const vv_vray *r, double k, double dt,
                   int n) {
     uint64_t bits = 0;
     for (int s = 0; s < n; s += 8) {
+        /* every 16: stop where the run has ended (a hidden sample after
+         * the first visible one) */
+        if (s && !(s & 15) && bits &&
+            (~bits & (((uint64_t)1 << s) - 1) & ~((bits & (0 - bits)) - 1)))
+            break;
         /* four bytes a lane (bdist is followed by vdist: vv_vtables) */
         const __m256i d = _mm256_and_si256(_mm256_i32gather_epi32((const int *)(const void *)bdist,
                                                                   blocks8_avx2(c, r, k + s, dt), 1),
