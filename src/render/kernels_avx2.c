@@ -268,20 +268,20 @@ gradient8_avx2(const vv_vcache *c, const size_t *cell, const float *fx, const fl
                const float *fz, const int *vis, int n8, __m256 *gx, __m256 *gy, __m256 *gz) {
     const size_t sy = 2 * c->sy, sz = 2 * c->sz;
     const int8_t *p[8];
-    float wx[8], wy[8], wz[8];
-    for (int q = 0; q < 8; q++) {
-        const int s = vis[q < n8 ? q : 0];
-        p[q] = c->nrm + 2 * cell[s];
-        wx[q] = fx[s];
-        wy[q] = fy[s];
-        wz[q] = fz[s];
-    }
+    for (int q = 0; q < 8; q++)
+        p[q] = c->nrm + 2 * cell[vis[q < n8 ? q : 0]];
+    /* the fractions by gathers (eight scalar stores and a vector load of
+     * them would wait for all eight) */
+    const __m256i live =
+        _mm256_cmpgt_epi32(_mm256_set1_epi32(n8), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
+    const __m256i at =
+        _mm256_blendv_epi8(_mm256_set1_epi32(vis[0]), _mm256_maskload_epi32(vis, live), live);
     /* each row's eight 32-bit pairs put into lanes by inserts, not stored
      * and reloaded (a vector load of eight scalar stores waits for all);
      * hardware gathers measured 10 % slower here (docs/rendering.md) */
     const size_t off[4] = {0, sy, sz, sz + sy};
-    const __m256 one = _mm256_set1_ps(1.0f), f0 = _mm256_loadu_ps(wx);
-    const __m256 f1 = _mm256_loadu_ps(wy), f2 = _mm256_loadu_ps(wz);
+    const __m256 one = _mm256_set1_ps(1.0f), f0 = _mm256_i32gather_ps(fx, at, 4);
+    const __m256 f1 = _mm256_i32gather_ps(fy, at, 4), f2 = _mm256_i32gather_ps(fz, at, 4);
     const __m256 g1 = _mm256_sub_ps(one, f1), g2 = _mm256_sub_ps(one, f2);
     const __m256 w[4] = {_mm256_mul_ps(g1, g2), _mm256_mul_ps(f1, g2), _mm256_mul_ps(g1, f2),
                          _mm256_mul_ps(f1, f2)};
@@ -330,8 +330,7 @@ vv_vchunk_shade8(const vv_vcache *c, const float *lut, const vv_vshading *o,
         const __m256i live =
             _mm256_cmpgt_epi32(_mm256_set1_epi32(n8), _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7));
         const __m256i at = _mm256_mask_i32gather_epi32(
-            _mm256_setzero_si256(), entry,
-            _mm256_loadu_si256((const __m256i *)(const void *)(vis + i0)), live, 4);
+            _mm256_setzero_si256(), entry, _mm256_maskload_epi32(vis + i0, live), live, 4);
         const __m256 zero = _mm256_setzero_ps(), lm = _mm256_castsi256_ps(live);
         const __m256 al = _mm256_mask_i32gather_ps(zero, lut, at, lm, 4);
         const __m256 cr = _mm256_mask_i32gather_ps(zero, lut + 1, at, lm, 4);
