@@ -1331,7 +1331,9 @@ const vv_renderer_ops vv_raycast_ops = {
             .caps = VV_RENDERER_REGION | VV_RENDERER_QUALITY | VV_RENDERER_PREVIEW |
                     VV_RENDERER_CHANNELS,
             .quality = "0 and 1: adaptive refinement from a lattice of every 4th pixel "
-                       "(option refinement); 2: one ray a pixel; all at the objects' step",
+                       "(option refinement); 2: the same at the tolerance 1/1024 in "
+                       "composite, MIP and MinIP frames, else one ray a pixel; all at the "
+                       "objects' step",
             .options = rc_options,
             .n_options = VV_OPTIONS_COUNT(rc_options),
         },
