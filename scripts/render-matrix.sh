@@ -129,4 +129,38 @@ for r in raycast raytrace; do
   done
   ooc_render "ooc_scene_${r}" "$ooc/two.json" --renderer "$r" --memory-limit 16M
 done
+# The door (vv_world_open): every kind of input a user names, with the
+# command line's overrides, read in memory, out of core and by channels.
+vol="$data/volumes"
+mri=/usr/share/mricron/templates/ch2better.nii.gz
+/usr/bin/python3 - "$ooc/channels.tif" <<'EOF'
+import sys
+import numpy as np
+import tifffile
+z, y, x = np.mgrid[0:24, 0:40, 0:48].astype(np.float32)
+a = 1000 * np.exp(-((x - 16) ** 2 + (y - 20) ** 2 + (z - 12) ** 2) / 60)
+b = 800 * np.exp(-((x - 32) ** 2 + (y - 20) ** 2 + (z - 12) ** 2) / 90)
+tifffile.imwrite(sys.argv[1], np.stack([a, b], 1).astype(np.uint16), imagej=True,
+                 metadata={"axes": "ZCYX"})
+EOF
+for mode in composite mip minip xray; do
+  ooc_render "door_ct_$mode" "$head" --mode "$mode"
+done
+ooc_render door_ct_iso "$head" --iso 600
+ooc_render door_ct_tf_turn "$head" --tf 100:1500 --azimuth 30 --elevation 10 --zoom 1.3
+ooc_render door_ct_step_ortho "$head" --step 1 --ortho
+ooc_render door_nut_labels "$vol/nut.slc" --labels
+ooc_render door_mhd "$vol/HeadMRVolume.mhd"
+ooc_render door_vtk "$vol/ironProt.vtk"
+ooc_render door_nifti "$vol/avg152T1_RL_nifti.nii.gz"
+ooc_render door_ch2better "$mri"
+ooc_render door_raw "$vol/headsq/quarter.1" --raw 256x256x1:u16:be
+ooc_render door_store "$ooc/levels.ome.zarr"
+ooc_render door_store_level1_mip "$ooc/levels.ome.zarr" --level 1 --mode mip
+ooc_render door_grid_blow "$data/grids/blow.vtk"
+ooc_render door_grid_fire_iso "$data/grids/fire_ug.vtu" --mode iso
+ooc_render door_channels "$ooc/channels.tif" --channels 0,1
+ooc_render door_channels_colors "$ooc/channels.tif" --colors red,cyan --blend maximum
+ooc_render door_channel1 "$ooc/channels.tif" --channel 1 --mode mip
+ooc_render door_scene_overrides examples/ct_head.json --tf 200:1200 --mode composite --step 1
 ls "$out" | wc -l

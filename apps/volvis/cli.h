@@ -253,24 +253,6 @@ int cli_animate_parallel(const cli_render_args *r, const vv_animation *anim, con
                          vv_renderer *ren, vv_anim_render_options *o, vv_anim_render_stats *stats,
                          vv_status *st);
 int cli_render_parse(cli_args *a, cli_render_args *r);
-/** The World for an already loaded volume @p v (the defaults of a volume file, with @p r's
- * options); 0 or an exit code. */
-int cli_render_world_volume(const cli_render_args *r, vv_volume *v, vv_world **out);
-/** The World for an opened file's @p src (vv_world_new_for_source: in memory, or its proxy
- * showing the source out of core, framed at --level), with @p r's options; 0 or an exit
- * code. */
-int cli_render_world_source(const cli_render_args *r, vv_source *src, vv_world **out);
-/**
- * How @p r's input opens (vv_open): out of core with --memory-limit,
- * --lod or --progressive (a pyramid by its levels with --lod, --level or
- * --progressive; else a .vvb with levels by its bricks), the format's way
- * otherwise (a .vvb out of core; under mpirun by bricks, the range left to
- * the ranks); its channel, time step, level, series and raw description.
- * Also sets the process's cache budget to --memory-limit (1 GiB unless
- * given). @p scene: for a scene's files (NULL result: read whole).
- */
-const vv_open_options *cli_render_open_options(const cli_render_args *r, int scene,
-                                               vv_open_options *o);
 /** The level of detail of --lod, --level and --progressive (vv_render_options.lod). */
 void cli_render_lod(const cli_render_args *r, vv_lod *lod);
 /** 1 when a visible volume object of @p w shows a file out of core. */
@@ -278,38 +260,28 @@ int cli_world_out_of_core(const vv_world *w);
 /**
  * The `wrote` line of a frame of @p w drawn out of core (what each object's
  * source read: bricks, or chunks by level, and the cache's peak), or the
- * plain one; @p lod what the frame used. Not printed with -q.
+ * plain one; @p lod what the frame used, @p scene 1 for a scene's World. Not printed
+ * with -q.
  */
 void cli_render_report(const cli_render_args *r, const vv_world *w, const vv_image *img,
-                       double seconds, const vv_lod *lod);
+                       double seconds, const vv_lod *lod, int scene);
 /**
- * The World for r->input (a scene file or a volume) with the overrides of
- * the options (mode, iso, tf, size, step) but not yet turned: see
- * cli_render_turn. 0 or CLI_EXIT_FAIL after printing the error.
+ * The World for r->input through the door (vv_world_open: a scene file, a
+ * volume file, folder or store, a grid) with the overrides of the options
+ * (mode, iso, tf, size, step, channels) but not yet turned: see
+ * cli_render_turn. What the door found in *@p info (may be NULL); a switch
+ * to out of core is said in one line unless -q. 0, CLI_EXIT_USAGE (options
+ * that do not fit the input) or CLI_EXIT_FAIL after printing the error.
  */
-int cli_render_world(const cli_render_args *r, vv_world **out);
-/** 1 when @p path is a scene file (by its name, or a JSON object inside). */
-int cli_is_scene_file(const char *path);
-/** The time steps of a volume file's object: a vv_time_series per channel. */
-typedef struct cli_time_source {
-    int n;                               /**< channels (1 for an object of one) */
-    vv_time_series *ts[VV_MAX_CHANNELS]; /**< channel c's steps */
-} cli_time_source;
-
+int cli_render_world(const cli_render_args *r, vv_world **out, vv_world_open_info *info);
 /**
- * Opens the time steps of r->input for volume object @p o of the World built
- * from it (its channels' file indices, r's series and raw description).
- * Errors: those of vv_time_series_open (src is left closed).
+ * Opens the time steps of r->input (or @p path when not NULL: a scene
+ * object's geometry.source, read with neither @p r's series nor channel)
+ * for volume object @p o (vv_time_steps_open with @p r's series, channel
+ * and raw description; @p r may be NULL with a @p path).
  */
-vv_status cli_time_source_open(const cli_render_args *r, const vv_object *o, cli_time_source *src);
-/**
- * The same for file @p path (a scene object's geometry.source), with @p r's
- * series, channel and raw description when @p r is not NULL.
- */
-vv_status cli_time_source_open_file(const char *path, const cli_render_args *r, const vv_object *o,
-                                    cli_time_source *src);
-/** Puts step @p t into @p o (vv_object_replace_volumes) and reads step @p next (>= 0) ahead. */
-vv_status cli_time_source_apply(cli_time_source *src, vv_object *o, int t, int next);
+vv_status cli_time_steps_open(const cli_render_args *r, const char *path, const vv_object *o,
+                              vv_time_steps **out);
 /**
  * Time steps are drawn once each: gradients at the samples drawn cost less
  * than a gradient cache of every voxel of every step (bench_time_steps: 3.5
@@ -318,8 +290,6 @@ vv_status cli_time_source_apply(cli_time_source *src, vv_object *o, int t, int n
  * renderer without the option is left as it is.
  */
 void cli_time_steps_gradients(const cli_args *a, vv_renderer *ren);
-/** Frees the series; the struct may have been zeroed only. */
-void cli_time_source_close(cli_time_source *src);
 
 /** The view turn of --azimuth, --elevation, --zoom (vv_anim_view_turn), then cli_render_ortho. */
 void cli_render_turn(const cli_render_args *r, vv_world *w);

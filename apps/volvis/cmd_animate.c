@@ -279,14 +279,14 @@ typedef struct time_frames {
     const vv_world *base; /* the World the frames come from: the steps its objects hold */
     int n;                /* objects of base */
     int *opened;          /* per object: src[i] is open */
-    cli_time_source *src; /* per object */
+    vv_time_steps **src;  /* per object */
 } time_frames;
 
 static void
 time_frames_close(time_frames *tf) {
     for (int i = 0; i < tf->n && tf->opened; i++)
         if (tf->opened[i])
-            cli_time_source_close(&tf->src[i]);
+            vv_time_steps_free(tf->src[i]);
     free(tf->opened);
     free(tf->src);
     tf->opened = NULL;
@@ -308,15 +308,14 @@ prepare_time_step(void *user, int frame, vv_world *w) {
                                 "from a file",
                                 o->name);
         if (!tf->opened[i]) {
-            s = tf->volume_file
-                    ? cli_time_source_open(tf->r, o, &tf->src[i])
-                    : cli_time_source_open_file(o->geometry.source, NULL, o, &tf->src[i]);
+            s = tf->volume_file ? cli_time_steps_open(tf->r, NULL, o, &tf->src[i])
+                                : cli_time_steps_open(NULL, o->geometry.source, o, &tf->src[i]);
             if (s != VV_OK)
                 return vv_error_prefix(s, "object '%s'", o->name);
             tf->opened[i] = 1;
         }
-        int next = o->time + 1 < vv_time_series_count(tf->src[i].ts[0]) ? o->time + 1 : -1;
-        if ((s = cli_time_source_apply(&tf->src[i], o, o->time, next)) != VV_OK)
+        int next = o->time + 1 < vv_time_steps_count(tf->src[i]) ? o->time + 1 : -1;
+        if ((s = vv_time_steps_show(tf->src[i], o, o->time, next)) != VV_OK)
             return vv_error_prefix(s, "object '%s': time %d", o->name, o->time);
     }
     return VV_OK;
@@ -338,7 +337,7 @@ has_time_track(const vv_animation *anim) {
  * prints what was written. */
 static int
 render_frames(cli_args *a, const cli_render_args *r, vv_animation *anim, vv_world *w,
-              vv_renderer *ren, int quality, int crf) {
+              vv_renderer *ren, int quality, int crf, int scene) {
     vv_anim_render_options o;
     vv_anim_render_options_init(&o);
     o.output = r->output;
@@ -357,7 +356,7 @@ render_frames(cli_args *a, const cli_render_args *r, vv_animation *anim, vv_worl
     /* a volume file's time steps, when a track animates them (a grid's
      * time is its field NAME<T>, a scene's volumes have no file axes here) */
     time_frames tf = {.r = r, .base = w, .n = w->n_objects};
-    tf.volume_file = r->input && !cli_is_scene_file(r->input) && w->n_objects > 0 &&
+    tf.volume_file = r->input && !scene && w->n_objects > 0 &&
                      w->objects[0]->type == VV_OBJECT_VOLUME; /* the World of a volume file */
     if (has_time_track(anim)) {
         for (int i = 0; i < w->n_objects && tf.volume_file; i++)
@@ -452,7 +451,8 @@ cli_animate_main(int argc, char **argv) {
     vv_status st;
     if ((rc = animation_from_args(&a, &r, anim_file, fps, frames, &anim, &scene_path)))
         return rc;
-    if ((rc = cli_render_world(&r, &w)))
+    vv_world_open_info opened = {0};
+    if ((rc = cli_render_world(&r, &w, &opened)))
         goto done;
     cli_render_ortho(&r, w);
     if ((rc = add_sequences(&a, &r, orbit, w, anim)))
@@ -475,7 +475,7 @@ cli_animate_main(int argc, char **argv) {
         goto done;
     if (r.threads > 0)
         vv_threads_set(r.threads);
-    rc = render_frames(&a, &r, anim, w, ren, quality, crf);
+    rc = render_frames(&a, &r, anim, w, ren, quality, crf, opened.input == VV_INPUT_SCENE);
 done:
     vv_renderer_free(ren);
     vv_world_free(w);

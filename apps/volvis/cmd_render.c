@@ -95,10 +95,10 @@ render_time_range(const cli_render_args *r, const int range[3], vv_world *w, vv_
         cli_error("%s: --time-range needs a volume file", r->input);
         return CLI_EXIT_USAGE;
     }
-    cli_time_source src;
-    vv_status s = cli_time_source_open(r, o, &src);
+    vv_time_steps *src = NULL;
+    vv_status s = cli_time_steps_open(r, NULL, o, &src);
     int rc = s == VV_OK ? 0 : cli_fail(s, r->input);
-    int steps = rc ? 0 : vv_time_series_count(src.ts[0]);
+    int steps = rc ? 0 : vv_time_steps_count(src);
     if (!rc && range[1] >= steps) {
         cli_error("%s: --time-range %d:%d: the file has %d time step%s (from 0)", r->input,
                   range[0], range[1], steps, steps == 1 ? "" : "s");
@@ -108,7 +108,7 @@ render_time_range(const cli_render_args *r, const int range[3], vv_world *w, vv_
     int frames = 0;
     for (int t = range[0]; !rc && t <= range[1]; t += range[2]) {
         vv_error_clear();
-        s = cli_time_source_apply(&src, o, t, t + range[2] <= range[1] ? t + range[2] : -1);
+        s = vv_time_steps_show(src, o, t, t + range[2] <= range[1] ? t + range[2] : -1);
         double t0 = cli_now();
         if (s == VV_OK)
             s = vv_renderer_render(ren, w, &w->view, ro, img);
@@ -135,7 +135,7 @@ render_time_range(const cli_render_args *r, const int range[3], vv_world *w, vv_
         printf("%d time steps in %.2f s (%.2f steps a second)\n", frames, secs,
                secs > 0 ? frames / secs : 0.0);
     }
-    cli_time_source_close(&src);
+    vv_time_steps_free(src);
     return rc;
 }
 
@@ -179,7 +179,8 @@ cli_render_main(int argc, char **argv) {
         return cli_render_parallel(&a, &r);
     }
     vv_world *w = NULL;
-    if ((rc = cli_render_world(&r, &w)))
+    vv_world_open_info opened;
+    if ((rc = cli_render_world(&r, &w, &opened)))
         return rc;
     cli_render_turn(&r, w);
 
@@ -265,7 +266,7 @@ cli_render_main(int argc, char **argv) {
                 "(slower): cached gradients (2 bytes a voxel) fit neither the gradient budget "
                 "(--set gradient_budget_mb) nor half the memory left\n",
                 (int)stats.gradients_at_samples, stats.gradients_at_samples == 1 ? "" : "s");
-    cli_render_report(&r, w, img, seconds, &lod);
+    cli_render_report(&r, w, img, seconds, &lod, opened.input == VV_INPUT_SCENE);
     rc = CLI_EXIT_OK;
 done:
     vv_image_free(img);

@@ -83,9 +83,9 @@ cli_render_parallel(cli_args *a, cli_render_args *r) {
     if (s != VV_OK)
         return cli_fail(s, NULL);
     /* every rank builds the same World; a file read by boxes out of core
-     * (cli_render_open_options: the range left to the ranks) is read by
+     * (vv_world_open_options.distributed: the range left to the ranks) is read by
      * each rank box by box, its own only, through the object's source */
-    rc = agree(cli_render_world(r, &w));
+    rc = agree(cli_render_world(r, &w, NULL));
     if (rc)
         goto done;
     vv_error_clear();

@@ -47,7 +47,7 @@ report_one(const cli_render_args *r, const vv_object *o, const vv_image *img, do
 
 void
 cli_render_report(const cli_render_args *r, const vv_world *w, const vv_image *img, double seconds,
-                  const vv_lod *lod) {
+                  const vv_lod *lod, int scene) {
     if (r->quiet)
         return;
     if (!cli_world_out_of_core(w)) {
@@ -66,7 +66,7 @@ cli_render_report(const cli_render_args *r, const vv_world *w, const vv_image *i
             one = o;
         }
     }
-    if (!cli_is_scene_file(r->input) && n == 1 && visible == 1) {
+    if (!scene && n == 1 && visible == 1) {
         report_one(r, one, img, seconds, lod);
         return;
     }

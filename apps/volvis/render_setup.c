@@ -52,48 +52,6 @@ renderer_known(const char *name) {
     return vv_renderer_info_find(name) != NULL;
 }
 
-/* A scene file: extension .json, or content that starts with '{' after whitespace. */
-int
-cli_is_scene_file(const char *path) {
-    size_t n = strlen(path);
-    if (n >= 5 && strcasecmp(path + n - 5, ".json") == 0)
-        return 1;
-    FILE *f = fopen(path, "rb");
-    if (!f)
-        return 0;
-    int c;
-    long k = 0;
-    while ((c = fgetc(f)) != EOF && isspace(c) && k++ < 65536)
-        ;
-    fclose(f);
-    return c == '{';
-}
-
-/* Maps every point of @p tf linearly from the extent of its opacity points onto [lo, hi]. */
-static void
-stretch_tf(vv_tf *tf, double lo, double hi) {
-    double a = 0, b = 0;
-    if (tf->n_opacity >= 2) {
-        a = tf->opacity[0].value;
-        b = tf->opacity[tf->n_opacity - 1].value;
-    }
-    if (!(b > a)) {
-        double peak = 0;
-        for (int i = 0; i < tf->n_opacity; i++)
-            if (tf->opacity[i].opacity > peak)
-                peak = tf->opacity[i].opacity;
-        vv_vec3 color = tf->n_color ? tf->color[tf->n_color - 1].color : vv_vec3_make(1, 1, 1);
-        double unit = tf->opacity_unit_distance > 0 ? tf->opacity_unit_distance : 1;
-        vv_tf_set_ramp(tf, lo, hi, peak > 0 ? peak : 1, color, unit);
-        return;
-    }
-    double s = (hi - lo) / (b - a);
-    for (int i = 0; i < tf->n_opacity; i++)
-        tf->opacity[i].value = lo + (tf->opacity[i].value - a) * s;
-    for (int i = 0; i < tf->n_color; i++)
-        tf->color[i].value = lo + (tf->color[i].value - a) * s;
-}
-
 /* One colour: a name of the table or #rrggbb. */
 static int
 parse_color(const char *text, size_t n, vv_vec3 *out) {
@@ -395,128 +353,99 @@ cli_render_parse(cli_args *a, cli_render_args *r) {
     return 0;
 }
 
-/* Builds the World for a grid file (vv_world_new_for_grid). */
-static int
-world_for_grid(const cli_render_args *r, vv_grid *g, vv_world **out) {
-    if (r->time_range) {
-        cli_error("%s: --time-range is for a volume file's time steps, not a grid", r->input);
-        return CLI_EXIT_FAIL;
-    }
-    vv_default_scene_options o;
-    vv_default_scene_options_init(&o);
-    if (r->has_mode)
-        o.mode = r->mode;
-    if (r->has_tf) {
-        o.has_tf_range = 1;
-        o.tf_lo = r->tf_lo;
-        o.tf_hi = r->tf_hi;
-    }
-    if (r->has_iso) {
-        o.has_isovalue = 1;
-        o.isovalue = r->iso;
-    }
-    if (r->has_size) {
-        o.width = r->width;
-        o.height = r->height;
-    }
-    vv_error_clear();
-    vv_status s = vv_world_new_for_grid(out, g, r->field, r->time, &o);
-    if (s != VV_OK)
-        return cli_fail(s, r->input);
-    return 0;
-}
-
-/* --channels: the file's channels as one object of several channels
- * (vv_object_set_channels), coloured and limited by --colors and
- * --contrast, combined by --blend; one channel alone is a one-channel
- * object with that colour and contrast. */
-static int
-world_for_channels(const cli_render_args *r, vv_world **out) {
-    vv_volume *v[VV_MAX_CHANNELS] = {NULL};
-    vv_load_info info[VV_MAX_CHANNELS];
-    char names[VV_MAX_CHANNELS][VV_CHANNEL_NAME_MAX];
-    const char *np[VV_MAX_CHANNELS];
-    int rc = 0;
-    for (int c = 0; c < r->n_channels && !rc; c++) {
-        rc = cli_load_volume_sc(r->input, r->has_raw ? &r->raw : NULL, r->series, r->channels[c],
-                                r->has_time ? r->time : -1, &info[c], &v[c]);
-        /* the file's name for the channel (OME Channel Name), else its index */
-        if (!rc && info[c].channel_name[0])
-            snprintf(names[c], sizeof names[c], "%s", info[c].channel_name);
-        else
-            snprintf(names[c], sizeof names[c], "channel %d", r->channels[c]);
-        np[c] = names[c];
-    }
-    if (!rc)
-        rc = cli_render_world_volume(r, v[0], out);
-    vv_object *o = rc ? NULL : (*out)->objects[0];
-    vv_status s = VV_OK;
-    if (o && r->n_channels > 1) {
-        vv_error_clear();
-        s = vv_object_set_channels(o, r->n_channels, v, np);
-        o->blend = r->has_blend ? r->blend : VV_BLEND_COMPOSITE;
-        for (int c = 0; s == VV_OK && c < r->n_channels; c++) {
-            o->channels[c].index = r->channels[c];
-            if (r->label_channel[c])
-                s = vv_object_set_channel_labels(o, c, 1);
-        }
-    }
-    for (int c = 0; o && s == VV_OK && c < r->n_channels; c++) {
-        vv_tf *tf = r->n_channels > 1 ? &o->channels[c].tf : &o->tf;
-        double lo, hi;
-        if (c < r->n_contrast) {
-            lo = r->contrast[c][0];
-            hi = r->contrast[c][1];
-        } else if (r->n_channels > 1) { /* vv_object_set_channels' quantiles */
-            lo = tf->opacity[0].value;
-            hi = tf->opacity[tf->n_opacity - 1].value;
-        } else {
-            vv_channel_default_contrast(v[0], &lo, &hi);
-        }
-        /* --colors, else the file's colour (OME Channel Color), else the default set */
-        vv_vec3 col = c < r->n_colors ? r->colors[c]
-                      : info[c].has_color
-                          ? vv_vec3_make(info[c].color[0], info[c].color[1], info[c].color[2])
-                          : vv_channel_default_color(c);
-        vv_error_clear();
-        s = vv_tf_set_contrast(tf, lo, hi, 1.0, 0.5, col, vv_tf_default_unit_distance(v[c]));
-        if (r->n_channels == 1 && r->has_blend && r->blend == VV_BLEND_MAXIMUM)
-            o->mode = VV_MODE_MIP;
-        if (r->n_channels == 1 && r->label_channel[0])
-            o->segmentation = VV_SEG_LABELS;
-    }
-    for (int c = 0; c < r->n_channels; c++)
-        vv_volume_free(v[c]); /* the object holds its own references */
-    if (s != VV_OK)
-        return cli_fail(s, r->input);
-    if (o && r->has_time)
-        o->time = r->time; /* the file's step it shows */
-    return rc;
-}
-
-const vv_open_options *
-cli_render_open_options(const cli_render_args *r, int scene, vv_open_options *o) {
-    vv_open_options_init(o);
-    vv_cache_set_limit(vv_cache_process(), r->memory_limit); /* 0: the default, 1 GiB */
-    const int ooc = r->memory_limit > 0 || r->has_lod || r->progressive > 0;
-    /* under mpirun a file read by boxes is read so by each rank: its own box */
-    const int ranks = vv_parallel_launched();
-    o->mode = ooc || (ranks && !scene) ? VV_OPEN_OUT_OF_CORE : VV_OPEN_DEFAULT;
-    o->levels = r->has_lod || r->progressive > 0 || r->has_level;
-    o->load.level = r->has_level ? r->level : 0;
-    if (scene)
-        return ooc ? o : NULL; /* a scene's files are read whole unless asked */
+/* @p r's options of the door (vv_world_open). */
+static void
+world_options(const cli_render_args *r, vv_world_open_options *o, cli_progress *pr) {
+    vv_world_open_options_init(o);
     o->load.series = r->series;
     o->load.channel = r->channel;
-    o->load.time = r->has_time ? r->time : -1;
+    o->load.time = r->has_time ? r->time : r->time_range ? 0 : -1;
     if (r->has_raw) {
         o->load.format = VV_FORMAT_RAW;
         o->load.has_raw = 1;
         o->load.raw = r->raw;
     }
-    /* under mpirun each rank reads its own box: the range comes from them */
-    o->header_only = ranks;
-    return o;
+    o->level = r->has_level ? r->level : -1;
+    o->levels = r->has_lod || r->progressive > 0;
+    o->memory = r->memory_limit > 0 || r->has_lod || r->progressive > 0 ? VV_WORLD_OUT_OF_CORE
+                                                                        : VV_WORLD_MEMORY_AUTO;
+    o->memory_limit = r->memory_limit;
+    /* under mpirun each rank reads its own box of a file read by boxes */
+    o->distributed = vv_parallel_launched();
+    o->renderer = r->renderer;
+    o->n_channels = r->n_channels;
+    memcpy(o->channels, r->channels, sizeof o->channels);
+    o->all_channels = r->all_channels;
+    o->n_colors = r->n_colors;
+    memcpy(o->colors, r->colors, sizeof o->colors);
+    o->n_contrast = r->n_contrast;
+    memcpy(o->contrast, r->contrast, sizeof o->contrast);
+    o->has_blend = r->has_blend;
+    o->blend = r->blend;
+    memcpy(o->label_channel, r->label_channel, sizeof o->label_channel);
+    o->has_mode = r->has_mode;
+    if (r->has_mode)
+        o->view.mode = r->mode;
+    if (r->has_tf) {
+        o->view.has_tf_range = 1;
+        o->view.tf_lo = r->tf_lo;
+        o->view.tf_hi = r->tf_hi;
+    }
+    if (r->has_iso) {
+        o->view.has_isovalue = 1;
+        o->view.isovalue = r->iso;
+    }
+    o->has_size = r->has_size;
+    if (r->has_size) {
+        o->view.width = r->width;
+        o->view.height = r->height;
+    }
+    o->field = r->field;
+    o->step = r->has_step ? r->step : 0;
+    o->labels = r->labels;
+    o->progress = &pr->p; /* a scene's geometry objects are voxelized while loading */
+}
+
+int
+cli_render_world(const cli_render_args *r, vv_world **out, vv_world_open_info *info) {
+    vv_world_open_info scratch;
+    if (!info)
+        info = &scratch;
+    *out = NULL;
+    vv_world_open_options o;
+    cli_progress pr;
+    cli_progress_begin(&pr, r->quiet);
+    world_options(r, &o, &pr);
+    vv_error_clear();
+    vv_status s = vv_world_open(out, r->input, &o, info);
+    cli_progress_end(&pr);
+    if (s != VV_OK) {
+        int rc = cli_fail(s, r->input);
+        return info->options_misfit && rc == CLI_EXIT_FAIL ? CLI_EXIT_USAGE : rc;
+    }
+    const char *refused = NULL;
+    if (r->time_range && info->input != VV_INPUT_VOLUME)
+        refused = info->input == VV_INPUT_SCENE ? "--time-range is for a volume file's time "
+                                                  "steps, not a scene"
+                                                : "--time-range is for a volume file's time "
+                                                  "steps, not a grid";
+    if (refused) {
+        vv_world_free(*out);
+        *out = NULL;
+        cli_error("%s: %s", r->input, refused);
+        return CLI_EXIT_FAIL;
+    }
+    if (info->switched && !r->quiet)
+        fprintf(stderr,
+                "volvis: note: %s: rendering it in memory would take %llu MiB, more than the "
+                "memory budget of %llu MiB (--max-memory): read out of core (--memory-limit "
+                "%lluM)\n",
+                r->input, (unsigned long long)(info->need_bytes >> 20),
+                (unsigned long long)(info->budget_bytes >> 20),
+                (unsigned long long)(info->cache_bytes >> 20));
+    if (r->file_channels)
+        *r->file_channels = info->n_channels;
+    return 0;
 }
 
 void
@@ -532,289 +461,6 @@ cli_world_out_of_core(const vv_world *w) {
         if (w->objects[i]->visible && w->objects[i]->source)
             return 1;
     return 0;
-}
-
-/* The bytes a volume of header @p h takes to render in memory: its
- * voxels, the renderers' copy of them (none for u16, 16-bit offsets for
- * the other 8- and 16-bit types, float for the rest) and, when shaded, the
- * cached gradients (2 bytes a voxel): src/render/sample.h's caches. */
-static uint64_t
-in_memory_bytes(const vv_volume *h, int shaded) {
-    const uint64_t n = (uint64_t)h->dims[0] * (uint64_t)h->dims[1] * (uint64_t)h->dims[2];
-    const uint64_t vox = vv_voxel_type_size(h->type);
-    const uint64_t copy = h->type == VV_U16 ? 0 : vox <= 2 ? 2 : 4;
-    return n * (vox + copy + (shaded ? 2 : 0));
-}
-
-/* Whether the file must be read out of core because rendering it in
- * memory would take more than the memory budget (--max-memory; by default
- * half the memory available): a volume file that can be read out of core
- * (bricks: .vvb, raw or uncompressed NRRD; levels: a pyramid), drawn by a
- * renderer with the region contract (raycast, raytrace), one channel, no
- * time step asked for (--time, --time-range: steps are read whole), no
- * out-of-core option given. Then *od holds it opened out of core, the
- * process cache's limit is set to a quarter of the budget
- * (and of the memory available, at most 1 GiB) and the switch is said in
- * one line. Returns 1 when switched. */
-static int
-too_big_for_memory(const cli_render_args *r, const vv_open_options *oo, vv_opened *od) {
-    const vv_renderer_info *in = vv_renderer_info_find(r->renderer ? r->renderer : "raycast");
-    if (oo->mode != VV_OPEN_DEFAULT || vv_parallel_launched() || r->all_channels || r->has_time ||
-        r->time_range || !in || !(in->caps & VV_RENDERER_REGION))
-        return 0;
-    const uint64_t budget = vv_memory_budget_get(), avail = vv_memory_available();
-    uint64_t limit = budget / 4;
-    limit = limit > avail / 4 ? avail / 4 : limit; /* a raised budget past a cgroup's limit */
-    limit = limit > ((uint64_t)1 << 30) ? (uint64_t)1 << 30 : limit;
-    /* the header alone first (no pass over the voxels) */
-    vv_open_options probe = *oo;
-    probe.mode = VV_OPEN_OUT_OF_CORE_ONLY;
-    probe.header_only = 1;
-    vv_cache_set_limit(vv_cache_process(), limit);
-    vv_error_clear();
-    memset(od, 0, sizeof *od);
-    uint64_t need = 0;
-    if (vv_open(od, r->input, &probe) == VV_OK && od->kind == VV_DATA_VOLUME) {
-        const vv_volume *h = vv_source_level(od->source, 0);
-        const int shaded = !r->has_mode || r->mode == VV_MODE_COMPOSITE || r->mode == VV_MODE_ISO;
-        need = h ? in_memory_bytes(h, shaded) : 0;
-    }
-    vv_opened_clear(od);
-    vv_error_clear();
-    probe.header_only = oo->header_only;
-    if (need <= budget || vv_open(od, r->input, &probe) != VV_OK) {
-        vv_opened_clear(od);
-        vv_error_clear(); /* read whole, as before */
-        vv_cache_set_limit(vv_cache_process(), r->memory_limit);
-        return 0;
-    }
-    if (!r->quiet)
-        fprintf(stderr,
-                "volvis: note: %s: rendering it in memory would take %llu MiB, more than the "
-                "memory budget of %llu MiB (--max-memory): read out of core (--memory-limit "
-                "%lluM)\n",
-                r->input, (unsigned long long)(need >> 20), (unsigned long long)(budget >> 20),
-                (unsigned long long)(limit >> 20));
-    return 1;
-}
-
-/* Builds the World for a file: opened once through the format table
- * (vv_open), a volume in memory or out of core as the options say (or
- * because it does not fit in memory: too_big_for_memory), or an irregular
- * grid. */
-static int
-world_for_file(const cli_render_args *r, vv_world **out) {
-    if (r->n_channels)
-        return world_for_channels(r, out);
-    int rc = r->has_raw ? cli_check_readable(r->input) : cli_check_readable_input(r->input);
-    if (rc)
-        return rc;
-    vv_open_options oo;
-    cli_render_open_options(r, 0, &oo);
-    /* out of core asked for (--memory-limit, --lod, --progressive): a file
-     * that cannot be is refused, not read whole */
-    if (oo.mode == VV_OPEN_OUT_OF_CORE && !vv_parallel_launched())
-        oo.mode = VV_OPEN_OUT_OF_CORE_ONLY;
-    vv_opened od;
-    vv_error_clear();
-    vv_status s = VV_OK;
-    if (too_big_for_memory(r, &oo, &od))
-        oo.mode = VV_OPEN_OUT_OF_CORE_ONLY;
-    else
-        s = vv_open(&od, r->input, &oo);
-    if (s == VV_ERR_UNSUPPORTED && vv_error_message()[0]) /* the store's reason */
-        return cli_fail(s, r->input);
-    if (s == VV_ERR_UNSUPPORTED) {
-        cli_error("%s: cannot be read out of core (by bricks: .vvb, raw or uncompressed NRRD; by "
-                  "levels: a pyramid); convert it to .vvb first (volvis convert IN OUT.vvb)",
-                  r->input);
-        return CLI_EXIT_FAIL;
-    }
-    if (s == VV_OK && od.kind == VV_DATA_VOLUME && r->all_channels) {
-        /* --colors, --contrast or --blend alone: the file's channels, all of them */
-        const int n = od.info.n_channels > 1 ? od.info.n_channels : 1;
-        vv_opened_clear(&od);
-        const char *opt = r->n_colors > n ? "--colors" : r->n_contrast > n ? "--contrast" : NULL;
-        if (opt) {
-            cli_error("%s: %s: %d given for the file's %d channel%s", r->input, opt,
-                      r->n_colors > n ? r->n_colors : r->n_contrast, n, n == 1 ? "" : "s");
-            return CLI_EXIT_USAGE;
-        }
-        if (n > VV_MAX_CHANNELS) {
-            cli_error("%s: %d channels: at most %d show as one object (--channels LIST)", r->input,
-                      n, VV_MAX_CHANNELS);
-            return CLI_EXIT_FAIL;
-        }
-        cli_render_args every = *r;
-        every.all_channels = 0;
-        every.n_channels = n;
-        for (int c = 0; c < n; c++)
-            every.channels[c] = c;
-        return world_for_channels(&every, out);
-    }
-    if (s == VV_OK && od.kind == VV_DATA_GRID) { /* an irregular grid: its own World */
-        rc = world_for_grid(r, od.grid, out);
-        vv_opened_clear(&od);
-        return rc;
-    }
-    if (s == VV_OK && od.kind != VV_DATA_VOLUME)
-        s = vv_error_set(VV_ERR_FORMAT, "%s: not a volume or grid file", r->input);
-    if (s != VV_OK) {
-        vv_opened_clear(&od);
-        return cli_fail(s, r->input);
-    }
-    if (oo.levels && (r->has_lod || r->progressive > 0 || r->level > 0) &&
-        vv_source_get_kind(od.source) != VV_SOURCE_PYRAMID && oo.mode == VV_OPEN_OUT_OF_CORE_ONLY) {
-        vv_opened_clear(&od);
-        cli_error("%s: --lod, --level and --progressive need a multiresolution file (OME-Zarr, "
-                  "BigDataViewer or Imaris HDF5, or a .vvb with pyramid levels)",
-                  r->input);
-        return CLI_EXIT_USAGE;
-    }
-    if (r->file_channels)
-        *r->file_channels = od.info.n_channels > 1 ? od.info.n_channels : 1;
-    rc = cli_render_world_source(r, od.source, out);
-    vv_opened_clear(&od); /* the World holds its own reference */
-    if (!rc && r->has_time)
-        (*out)->objects[0]->time = r->time; /* the file's step it shows */
-    return rc;
-}
-
-/* @p r's options of a default scene. */
-static void
-default_options(const cli_render_args *r, vv_default_scene_options *o) {
-    vv_default_scene_options_init(o);
-    if (r->has_mode)
-        o->mode = r->mode;
-    if (r->has_tf) {
-        o->has_tf_range = 1;
-        o->tf_lo = r->tf_lo;
-        o->tf_hi = r->tf_hi;
-    }
-    if (r->has_iso) {
-        o->has_isovalue = 1;
-        o->isovalue = r->iso;
-    }
-    if (r->has_size) {
-        o->width = r->width;
-        o->height = r->height;
-    }
-    /* the view turn (--azimuth, --elevation, --zoom) is cli_render_turn's */
-}
-
-/* The step override of --step on every object of *@p out. */
-static void
-apply_step(const cli_render_args *r, vv_world *w) {
-    if (r->has_step)
-        for (int i = 0; i < w->n_objects; i++)
-            w->objects[i]->step = r->step;
-}
-
-int
-cli_render_world_volume(const cli_render_args *r, vv_volume *v, vv_world **out) {
-    vv_default_scene_options o;
-    default_options(r, &o);
-    vv_error_clear();
-    vv_status s = vv_world_new_for_volume(out, v, &o);
-    if (s != VV_OK)
-        return cli_fail(s, r->input);
-    apply_step(r, *out);
-    return 0;
-}
-
-int
-cli_render_world_source(const cli_render_args *r, vv_source *src, vv_world **out) {
-    vv_default_scene_options o;
-    default_options(r, &o);
-    vv_error_clear();
-    /* out of core, the view frames level --level's box */
-    vv_status s = vv_world_new_for_source(out, src, r->has_level ? r->level : 0, &o);
-    if (s != VV_OK)
-        return cli_fail(s, r->input);
-    apply_step(r, *out);
-    return 0;
-}
-
-/* Loads a scene file (its volume files out of core when the options ask)
- * and applies the overrides given on the command line. */
-static int
-world_for_scene(const cli_render_args *r, vv_world **out) {
-    vv_error_clear();
-    cli_progress pr; /* geometry objects are voxelized while loading */
-    cli_progress_begin(&pr, r->quiet);
-    vv_open_options oo;
-    const vv_open_options *open = cli_render_open_options(r, 1, &oo);
-    vv_status s = vv_scene_load_open(out, r->input, &pr.p, NULL, open);
-    cli_progress_end(&pr);
-    if (s != VV_OK)
-        return cli_fail(s, r->input);
-    vv_world *w = *out;
-    for (int i = 0; i < w->n_objects; i++) {
-        vv_object *obj = w->objects[i];
-        if (!obj || (obj->type != VV_OBJECT_VOLUME && obj->type != VV_OBJECT_GRID))
-            continue;
-        if (obj->type == VV_OBJECT_GRID && r->field)
-            snprintf(obj->field, sizeof obj->field, "%s", r->field);
-        if (obj->type == VV_OBJECT_GRID && r->has_time)
-            obj->time = r->time;
-        if (r->has_mode)
-            obj->mode = r->mode;
-        if (r->has_iso)
-            obj->isovalue = r->iso;
-        if (r->has_tf) {
-            obj->segmentation = VV_SEG_TRANSFER_FUNCTION;
-            stretch_tf(&obj->tf, r->tf_lo, r->tf_hi);
-        }
-    }
-    if (r->has_size) {
-        w->view.width = r->width;
-        w->view.height = r->height;
-    }
-    return 0;
-}
-
-/* The end of every World's set-up: on failure (@p rc) *@p out freed and
- * NULL; else the overrides of the command line (step, labels). Returns
- * @p rc. */
-static int
-world_done(const cli_render_args *r, int rc, vv_world **out) {
-    if (rc) {
-        vv_world_free(*out);
-        *out = NULL;
-        return rc;
-    }
-    vv_world *w = *out;
-    if (r->has_step)
-        for (int i = 0; i < w->n_objects; i++)
-            if (w->objects[i])
-                w->objects[i]->step = r->step;
-    if (r->labels)
-        for (int i = 0; i < w->n_objects; i++)
-            if (w->objects[i] && w->objects[i]->type == VV_OBJECT_VOLUME)
-                w->objects[i]->segmentation = VV_SEG_LABELS;
-    return 0;
-}
-
-int
-cli_render_world(const cli_render_args *r, vv_world **out) {
-    *out = NULL;
-    int rc = cli_check_readable_input(r->input);
-    if (rc)
-        return rc;
-    int scene = !r->has_raw && cli_is_scene_file(r->input);
-    if (scene && (r->n_channels || r->all_channels || r->time_range)) {
-        fprintf(stderr, "volvis: %s: %s is for a volume file's %s, not a scene\n", r->input,
-                r->n_channels     ? "--channels"
-                : r->all_channels ? (r->n_colors     ? "--colors"
-                                     : r->n_contrast ? "--contrast"
-                                                     : "--blend")
-                                  : "--time-range",
-                r->n_channels || r->all_channels ? "channels" : "time steps");
-        return CLI_EXIT_FAIL;
-    }
-    /* a file: vv_open says what it holds (a volume, or an irregular grid) */
-    rc = scene ? world_for_scene(r, out) : world_for_file(r, out);
-    return world_done(r, rc, out);
 }
 
 void
@@ -1081,54 +727,20 @@ cli_render_note_left_out(const vv_renderer *ren, const vv_world *w) {
 }
 
 vv_status
-cli_time_source_open(const cli_render_args *r, const vv_object *o, cli_time_source *src) {
-    return cli_time_source_open_file(r->input, r, o, src);
-}
-
-vv_status
-cli_time_source_open_file(const char *path, const cli_render_args *r, const vv_object *o,
-                          cli_time_source *src) {
-    memset(src, 0, sizeof *src);
-    src->n = o->n_channels > 0 ? o->n_channels : 1;
-    vv_status s = VV_OK;
-    for (int c = 0; c < src->n && s == VV_OK; c++) {
-        vv_load_options opt;
-        vv_load_options_init(&opt);
-        opt.series = r ? r->series : 0;
-        opt.channel = o->n_channels > 0 ? o->channels[c].index : r ? r->channel : -1;
-        if (r && r->has_raw) {
-            opt.format = VV_FORMAT_RAW;
-            opt.has_raw = 1;
-            opt.raw = r->raw;
+cli_time_steps_open(const cli_render_args *r, const char *path, const vv_object *o,
+                    vv_time_steps **out) {
+    vv_load_options load;
+    vv_load_options_init(&load);
+    if (r && !path) {
+        load.series = r->series;
+        load.channel = r->channel;
+        if (r->has_raw) {
+            load.format = VV_FORMAT_RAW;
+            load.has_raw = 1;
+            load.raw = r->raw;
         }
-        vv_error_clear();
-        s = vv_time_series_open(&src->ts[c], path, &opt, 0);
     }
-    if (s != VV_OK)
-        cli_time_source_close(src);
-    return s;
-}
-
-vv_status
-cli_time_source_apply(cli_time_source *src, vv_object *o, int t, int next) {
-    vv_volume *v[VV_MAX_CHANNELS] = {NULL};
-    vv_status s = VV_OK;
-    for (int c = 0; c < src->n && s == VV_OK; c++)
-        s = vv_time_series_get(src->ts[c], t, &v[c]);
-    for (int c = 0; c < src->n && s == VV_OK && next >= 0; c++)
-        vv_time_series_prefetch(src->ts[c], next);
-    if (s == VV_OK && (s = vv_object_replace_volumes(o, src->n, v)) == VV_OK)
-        o->time = t;
-    for (int c = 0; c < src->n; c++)
-        vv_volume_free(v[c]); /* the object holds its own references */
-    return s;
-}
-
-void
-cli_time_source_close(cli_time_source *src) {
-    for (int c = 0; c < VV_MAX_CHANNELS; c++)
-        vv_time_series_free(src->ts[c]);
-    memset(src, 0, sizeof *src);
+    return vv_time_steps_open(out, path ? path : r->input, &load, o);
 }
 
 void

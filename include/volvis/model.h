@@ -923,6 +923,17 @@ vv_status vv_world_new_for_grid(vv_world **out, vv_grid *grid, const char *field
  */
 void vv_tf_default(vv_tf *tf, const vv_volume *v, vv_render_mode mode, double *iso_lo);
 
+/**
+ * The values of @p v's foreground between its quantiles @p q_lo and @p q_hi
+ * (fractions in [0, 1], q_lo < q_hi) into *@p lo < *@p hi: the voxels left
+ * when the histogram's background peak (air in CT, the dark surround of an
+ * MRI; vv_tf_default's rule) is set aside; every voxel when (almost) all
+ * are background. The value range when the quantiles coincide. Data
+ * values; never fails; thread-safe.
+ */
+void vv_volume_foreground_range(const vv_volume *v, double q_lo, double q_hi, double *lo,
+                                double *hi);
+
 #ifdef __cplusplus
 }
 #endif

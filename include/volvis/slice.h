@@ -171,8 +171,10 @@ void vv_slice_blend_channels(const vv_object *obj, const float *const *values, s
 double vv_slice_probe(const vv_object *obj, vv_vec3 world, double ijk[3]);
 
 /**
- * A window and level that show most of @p v: from its 1st to its 99.5th
- * percentile (vv_volume_quantile), the whole range when those coincide.
+ * A window and level that show most of @p v: from the 1st to the 99.5th
+ * percentile of its foreground (vv_volume_foreground_range: the
+ * histogram's background peak set aside), the whole range when those
+ * coincide.
  * *window > 0.
  */
 void vv_slice_auto_window(const vv_volume *v, double *window, double *level);

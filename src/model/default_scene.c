@@ -229,6 +229,36 @@ default_ranges(const vv_volume *v, double *lo, double *hi, double *plo, double *
 }
 
 void
+vv_volume_foreground_range(const vv_volume *v, double q_lo, double q_hi, double *lo,
+                           double *hi) {
+    double rmin = v->range[0], rmax = v->range[1];
+    if (!isfinite(rmin) || !isfinite(rmax)) {
+        rmin = 0.0;
+        rmax = 1.0;
+    }
+    if (!(rmax > rmin))
+        rmax = rmin + 1.0;
+    *lo = rmin;
+    *hi = rmax;
+    hist h;
+    if (!hist_build(&h, v))
+        return;
+    double bg = hist_background(&h);
+    double fg = h.total - bg;
+    if (fg < 0.001 * h.total) { /* (almost) everything is background */
+        bg = 0.0;
+        fg = h.total;
+    }
+    double l = clampd(hist_value_at_count(&h, bg + q_lo * fg), rmin, rmax);
+    double u = clampd(hist_value_at_count(&h, bg + q_hi * fg), rmin, rmax);
+    if (u > l) {
+        *lo = l;
+        *hi = u;
+    }
+    free(h.bins);
+}
+
+void
 vv_tf_default(vv_tf *tf, const vv_volume *v, vv_render_mode mode, double *iso_lo) {
     double lo, hi, plo, phi;
     default_ranges(v, &lo, &hi, &plo, &phi);

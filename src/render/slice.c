@@ -503,10 +503,10 @@ vv_slice_probe(const vv_object *obj, vv_vec3 world, double ijk[3]) {
 
 void
 vv_slice_auto_window(const vv_volume *v, double *window, double *level) {
-    static const double q[2] = {0.01, 0.995};
-    double lh[2];
-    vv_volume_quantiles(v, 2, q, lh);
-    double lo = lh[0], hi = lh[1];
+    /* the foreground's quantiles: a background of a single value that fills most of
+     * the volume (an MRI's surround) would otherwise take the window's lower half */
+    double lo, hi;
+    vv_volume_foreground_range(v, 0.01, 0.995, &lo, &hi);
     if (!(hi > lo) || !isfinite(lo) || !isfinite(hi)) {
         lo = v->range[0];
         hi = v->range[1];

@@ -194,12 +194,14 @@ int srv_session_close_code(srv_session *s, srv_client *c, char *reason, size_t c
 int srv_session_has_out(srv_session *s, srv_client *c);
 
 /**
- * The World of file @p path as `volvis render PATH` builds it (a scene, a
- * volume with the defaults of a volume file, a grid), out of core under
- * srv->memory_limit. 0, or -1 with the one-line error in @p why. Opens go
- * one at a time (the CLI keeps its last error line in one buffer).
+ * The World of file @p path through the door (vv_world_open: a scene, a
+ * volume file's every channel as one object, a grid), out of core under
+ * srv->memory_limit where the file can be read so; what the door found in
+ * *@p info (may be NULL), the slice views' window and level among it. 0,
+ * or -1 with the one-line error in @p why. Thread-safe.
  */
-int srv_open_world(const srv_server *srv, const char *path, vv_world **out, char *why, size_t cap);
+int srv_open_world(const srv_server *srv, const char *path, vv_world **out, vv_world_open_info *info,
+                   char *why, size_t cap);
 
 /** The World's first volume object with voxels (its data: slices, presets, state), or NULL. */
 vv_object *srv_first_volume(const vv_world *w);

@@ -238,7 +238,7 @@ srv_mpi_worker(srv_server *srv) {
             vv_world_free(ww->w);
             ww->w = NULL;
             snprintf(ww->path, sizeof ww->path, "%s", f->path);
-            if (srv_open_world(srv, f->path, &ww->w, why, sizeof why))
+            if (srv_open_world(srv, f->path, &ww->w, NULL, why, sizeof why))
                 local = vv_error_set(VV_ERR_IO, "%s", why);
         }
         if (!ww->w) {

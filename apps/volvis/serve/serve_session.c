@@ -92,7 +92,7 @@ struct srv_session {
     tjhandle tj;
     uint8_t *pix; /* 8-bit pixels of the frame being encoded */
     size_t pix_cap;
-    cli_time_source ts;
+    vv_time_steps *ts;
     int time_steps, time;
     vv_image *full; /* the last full frame, of full_gen */
     uint64_t full_gen;
@@ -374,97 +374,45 @@ state_json(srv_session *s) {
 
 /* ---- opening files (render thread) --------------------------------------------------------- */
 
-/* cli_error keeps its last line in one buffer: opens go one at a time. */
-static pthread_mutex_t open_lock = PTHREAD_MUTEX_INITIALIZER;
-
 int
-srv_open_world(const srv_server *srv, const char *path, vv_world **out, char *why, size_t cap) {
-    static const cli_opt_spec specs[] = {CLI_RENDER_OPT_SPECS};
-    char mem[32];
-    char *argv[12];
-    int argc = 0;
-    argv[argc++] = "serve";
-    argv[argc++] = (char *)path;
-    argv[argc++] = "-o";
-    argv[argc++] = "-";
-    argv[argc++] = "-q";
-    int ooc = argc;
+srv_open_world(const srv_server *srv, const char *path, vv_world **out, vv_world_open_info *info,
+               char *why, size_t cap) {
+    vv_world_open_options o;
+    vv_world_open_options_init(&o);
     if (srv->memory_limit) {
-        /* out of core: a pyramid by its levels, level of detail by screen-space error */
-        snprintf(mem, sizeof mem, "%llu", (unsigned long long)srv->memory_limit);
-        argv[argc++] = "--memory-limit";
-        argv[argc++] = mem;
-        argv[argc++] = "--lod";
-        argv[argc++] = "1";
+        /* out of core where the file can be (a pyramid by its levels, level of detail
+         * by screen-space error), whole where it cannot (a gzip NRRD) */
+        o.memory = VV_WORLD_OUT_OF_CORE_IF_ABLE;
+        o.memory_limit = srv->memory_limit;
+        o.levels = 1;
     }
-    argv[argc] = NULL;
-    pthread_mutex_lock(&open_lock);
-    cli_errors_quiet(1);
-    cli_args a;
-    cli_render_args r;
-    *out = NULL;
-    int rc = 0, channels = 1;
-    char list[8 * VV_MAX_CHANNELS];
-    for (int tries = 0; tries < 3; tries++) {
-        memset(&r, 0, sizeof r);
-        rc = cli_parse(&a, "serve", specs, (int)(sizeof specs / sizeof specs[0]), argc, argv);
-        if (!rc)
-            rc = cli_render_parse(&a, &r);
-        r.file_channels = &channels;
-        if (!rc)
-            rc = cli_render_world(&r, out);
-        /* a file that cannot be read out of core (a gzip NRRD) is read whole, into
-         * memory, as `volvis render` without --memory-limit reads it */
-        if (rc && argc > ooc && strstr(cli_last_error(), "cannot be read out of core")) {
-            argc = ooc;
-            argv[argc] = NULL;
-            continue;
-        }
-        /* a file of several channels: all of them, as one object (`--channels 0,1,...`) */
-        if (!rc && channels > 1 && channels <= VV_MAX_CHANNELS && argc <= ooc &&
-            srv_first_volume(*out) && srv_first_volume(*out)->n_channels == 0) {
-            size_t k = 0;
-            for (int c = 0; c < channels; c++)
-                k += (size_t)snprintf(list + k, sizeof list - k, c ? ",%d" : "%d", c);
-            vv_world_free(*out);
-            *out = NULL;
-            argv[argc++] = "--channels";
-            argv[argc++] = list;
-            argv[argc] = NULL;
-            continue;
-        }
-        break;
+    o.distributed = vv_parallel_launched(); /* the ranks of `mpirun volvis serve` */
+    o.all_channels = 1; /* a file of several channels: all of them, as one object */
+    o.slice_window = 1;
+    vv_error_clear();
+    vv_status st = vv_world_open(out, path, &o, info);
+    if (st != VV_OK) {
+        const char *m = vv_error_message();
+        snprintf(why, cap, "%s", m && *m ? m : "cannot open the file");
+        return -1;
     }
-    if (rc)
-        snprintf(why, cap, "%s", *cli_last_error() ? cli_last_error() : "cannot open the file");
-    cli_errors_quiet(0);
-    pthread_mutex_unlock(&open_lock);
-    return rc ? -1 : 0;
+    return 0;
 }
 
 /* A volume file's time steps into s->ts (more than one), one process only. */
 static void
-open_time_steps(srv_session *s, const char *path, vv_object *o) {
+open_time_steps(srv_session *s, const char *path, vv_object *o, const vv_world_open_info *info) {
     s->time_steps = 1;
     s->time = 0;
-    if (s->srv->ranks > 1 || !o || o->source || cli_is_scene_file(path))
+    if (s->srv->ranks > 1 || !o || o->source || info->input != VV_INPUT_VOLUME ||
+        info->n_times < 2)
         return;
-    cli_render_args r;
-    memset(&r, 0, sizeof r);
-    r.input = path;
-    r.channel = -1;
-    cli_time_source ts;
-    memset(&ts, 0, sizeof ts);
     vv_error_clear();
-    if (cli_time_source_open(&r, o, &ts) != VV_OK)
+    if (vv_time_steps_open(&s->ts, path, NULL, o) != VV_OK) {
+        vv_error_clear();
         return;
-    int n = vv_time_series_count(ts.ts[0]);
-    if (n > 1) {
-        s->ts = ts;
-        s->time_steps = n;
-    } else {
-        cli_time_source_close(&ts);
     }
+    s->time_steps = vv_time_steps_count(s->ts);
 }
 
 /* Opens s->open_path for the render thread: called without the lock. */
@@ -472,9 +420,10 @@ static void
 do_open(srv_session *s, const char *path, uint64_t client) {
     char why[1024];
     vv_world *w = NULL;
-    cli_time_source_close(&s->ts);
-    memset(&s->ts, 0, sizeof s->ts);
-    if (srv_open_world(s->srv, path, &w, why, sizeof why)) {
+    vv_time_steps_free(s->ts);
+    s->ts = NULL;
+    vv_world_open_info opened;
+    if (srv_open_world(s->srv, path, &w, &opened, why, sizeof why)) {
         pthread_mutex_lock(&s->lock);
         reply_error(s, client, "%s", why);
         pthread_mutex_unlock(&s->lock);
@@ -482,9 +431,11 @@ do_open(srv_session *s, const char *path, uint64_t client) {
     }
     double win = 1, lev = 0;
     vv_object *o = srv_first_volume(w);
-    if (o)
-        vv_slice_auto_window(o->volume, &win, &lev);
-    open_time_steps(s, path, o);
+    if (o) {
+        win = opened.window;
+        lev = opened.level;
+    }
+    open_time_steps(s, path, o, &opened);
     pthread_mutex_lock(&s->lock);
     vv_world_free(s->world);
     s->world = w;
@@ -804,7 +755,7 @@ render_main(void *arg) {
             if (o && s->time_steps > 1 && t < s->time_steps) {
                 vv_error_clear();
                 vv_status st =
-                    cli_time_source_apply(&s->ts, o, t, t + 1 < s->time_steps ? t + 1 : -1);
+                    vv_time_steps_show(s->ts, o, t, t + 1 < s->time_steps ? t + 1 : -1);
                 if (st == VV_OK) {
                     s->time = t;
                     s->gen++;
@@ -1007,7 +958,7 @@ srv_session_free(srv_session *s) {
         pthread_join(s->thread, NULL);
     vv_preview_free(s->preview);
     vv_image_free(s->full);
-    cli_time_source_close(&s->ts);
+    vv_time_steps_free(s->ts);
     vv_world_free(s->world);
     srv_buf_unref(s->frame);
     tjDestroy(s->tj_slice);
