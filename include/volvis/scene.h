@@ -94,7 +94,6 @@ vv_status vv_scene_load_open(vv_world **out, const char *path, const vv_progress
  */
 vv_status vv_scene_save(const vv_world *w, const char *path, const char *const *volume_files);
 
-
 /* ---- the door: what a user names, opened into a World ready to draw ---- */
 
 /** The version of vv_world_open_options this header describes. */
@@ -137,28 +136,28 @@ typedef struct vv_world_open_options {
     /** A volume file's format (VV_FORMAT_AUTO: detected once) and raw description, DICOM
      *  series, channel (-1: 0) and time step (-1: 0); also a grid's step (time >= 0). */
     vv_load_options load;
-    int level;         /**< a multiresolution file's level (0 the finest; -1: none given): in
-                            memory that level read whole, out of core every node at it */
+    int level; /**< a multiresolution file's level (0 the finest; -1: none given): in
+                    memory that level read whole, out of core every node at it */
     vv_world_memory memory;
     uint64_t memory_limit; /**< the process cache's budget in bytes (0: its default, 1 GiB) */
-    int levels; /**< 1: a pyramid by its levels (level of detail, progressive frames);
-                     with VV_WORLD_OUT_OF_CORE a file without levels is VV_ERR_INVALID */
-    int distributed; /**< 1: every MPI rank opens the same input and reads its own box (a
-                          file by bricks without the pass over its values) */
-    const char *renderer; /**< the method that will draw it (the switch of
-                               VV_WORLD_MEMORY_AUTO needs its region contract); NULL: raycast */
+    int levels;            /**< 1: a pyramid by its levels (level of detail, progressive frames);
+                                with VV_WORLD_OUT_OF_CORE a file without levels is VV_ERR_INVALID */
+    int distributed;       /**< 1: every MPI rank opens the same input and reads its own box (a
+                                file by bricks without the pass over its values) */
+    const char *renderer;  /**< the method that will draw it (the switch of
+                                VV_WORLD_MEMORY_AUTO needs its region contract); NULL: raycast */
     /* a volume file's channels as one object (vv_object_set_channels) */
-    int n_channels;                     /**< > 0: these channels of the file */
-    int channels[VV_MAX_CHANNELS];      /**< their indices in the file */
+    int n_channels;                /**< > 0: these channels of the file */
+    int channels[VV_MAX_CHANNELS]; /**< their indices in the file */
     /** 1: every channel of the file, in order: with colours, contrast or a blend rule
      *  given always (more of them than channels is a misfit), else when the file has
      *  more than one and is read whole */
     int all_channels;
-    int n_colors;                       /**< colours given for the first n_colors channels */
-    vv_vec3 colors[VV_MAX_CHANNELS];    /**< RGB in [0, 1] (else the file's, else defaults) */
-    int n_contrast;                     /**< contrast limits given for the first n_contrast */
+    int n_colors;                        /**< colours given for the first n_colors channels */
+    vv_vec3 colors[VV_MAX_CHANNELS];     /**< RGB in [0, 1] (else the file's, else defaults) */
+    int n_contrast;                      /**< contrast limits given for the first n_contrast */
     double contrast[VV_MAX_CHANNELS][2]; /**< lower and upper limits in data values */
-    int has_blend;                      /**< 1: blend given (else composite) */
+    int has_blend;                       /**< 1: blend given (else composite) */
     vv_channel_blend blend;
     int label_channel[VV_MAX_CHANNELS]; /**< 1 where channels[i] holds labels */
     /* the appearance, overriding the defaults guessed from the data (or a scene's) */
@@ -171,7 +170,7 @@ typedef struct vv_world_open_options {
     int labels;        /**< 1: every volume object a label volume (VV_SEG_LABELS) */
     int slice_window;  /**< 1: guess the slice views' window and level (info->window) */
     /* long work */
-    const vv_progress *progress; /**< voxelizing a scene's geometry; may be NULL */
+    const vv_progress *progress;   /**< voxelizing a scene's geometry; may be NULL */
     vv_filter_cache *filter_cache; /**< a scene's filtered volumes (NULL: none kept) */
 } vv_world_open_options;
 

@@ -229,8 +229,7 @@ default_ranges(const vv_volume *v, double *lo, double *hi, double *plo, double *
 }
 
 void
-vv_volume_foreground_range(const vv_volume *v, double q_lo, double q_hi, double *lo,
-                           double *hi) {
+vv_volume_foreground_range(const vv_volume *v, double q_lo, double q_hi, double *lo, double *hi) {
     double rmin = v->range[0], rmax = v->range[1];
     if (!isfinite(rmin) || !isfinite(rmax)) {
         rmin = 0.0;

@@ -482,17 +482,16 @@ vv_world_open(vv_world **out, const char *what, const vv_world_open_options *opt
                             "(vv_world_open_options_init)",
                             what, opt->version, VV_WORLD_OPEN_VERSION);
     if (opt->n_channels < 0 || opt->n_channels > VV_MAX_CHANNELS || opt->n_colors < 0 ||
-        opt->n_colors > VV_MAX_CHANNELS || opt->n_contrast < 0 ||
-        opt->n_contrast > VV_MAX_CHANNELS)
-        return vv_error_set(VV_ERR_INVALID, "%s: at most %d channels, colours and contrasts",
-                            what, VV_MAX_CHANNELS);
+        opt->n_colors > VV_MAX_CHANNELS || opt->n_contrast < 0 || opt->n_contrast > VV_MAX_CHANNELS)
+        return vv_error_set(VV_ERR_INVALID, "%s: at most %d channels, colours and contrasts", what,
+                            VV_MAX_CHANNELS);
     vv_status s = check_readable(what, 1);
     if (s != VV_OK)
         return s;
     const int scene = !opt->load.has_raw && is_scene_file(what);
     if (scene && (opt->n_channels || channels_asked(opt))) {
-        const char *which = opt->n_channels ? "--channels"
-                            : opt->n_colors ? "--colors"
+        const char *which = opt->n_channels   ? "--channels"
+                            : opt->n_colors   ? "--colors"
                             : opt->n_contrast ? "--contrast"
                                               : "--blend";
         char why[128];

@@ -200,8 +200,8 @@ int srv_session_has_out(srv_session *s, srv_client *c);
  * *@p info (may be NULL), the slice views' window and level among it. 0,
  * or -1 with the one-line error in @p why. Thread-safe.
  */
-int srv_open_world(const srv_server *srv, const char *path, vv_world **out, vv_world_open_info *info,
-                   char *why, size_t cap);
+int srv_open_world(const srv_server *srv, const char *path, vv_world **out,
+                   vv_world_open_info *info, char *why, size_t cap);
 
 /** The World's first volume object with voxels (its data: slices, presets, state), or NULL. */
 vv_object *srv_first_volume(const vv_world *w);

@@ -404,8 +404,7 @@ static void
 open_time_steps(srv_session *s, const char *path, vv_object *o, const vv_world_open_info *info) {
     s->time_steps = 1;
     s->time = 0;
-    if (s->srv->ranks > 1 || !o || o->source || info->input != VV_INPUT_VOLUME ||
-        info->n_times < 2)
+    if (s->srv->ranks > 1 || !o || o->source || info->input != VV_INPUT_VOLUME || info->n_times < 2)
         return;
     vv_error_clear();
     if (vv_time_steps_open(&s->ts, path, NULL, o) != VV_OK) {
@@ -754,8 +753,7 @@ render_main(void *arg) {
             vv_object *o = srv_first_volume(w);
             if (o && s->time_steps > 1 && t < s->time_steps) {
                 vv_error_clear();
-                vv_status st =
-                    vv_time_steps_show(s->ts, o, t, t + 1 < s->time_steps ? t + 1 : -1);
+                vv_status st = vv_time_steps_show(s->ts, o, t, t + 1 < s->time_steps ? t + 1 : -1);
                 if (st == VV_OK) {
                     s->time = t;
                     s->gen++;
