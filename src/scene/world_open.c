@@ -310,6 +310,52 @@ too_big_for_memory(const vv_world_open_options *o, const char *what, const vv_op
     return 1;
 }
 
+/* A pyramid's default appearance, the same whether it is read whole or out
+ * of core: the transfer function's range from the histogram of its
+ * coarsest level (what the proxy out of core holds; level 0 may be larger
+ * than memory) and its opacity unit from the spacing of the level shown
+ * (not the proxy's stretched one). @p src is the opened file; a memory
+ * source (read whole) has its coarsest level read once more, out of core.
+ * A failure to read it leaves the defaults of the level shown. */
+static void
+pyramid_appearance(const vv_world_open_options *o, const char *what, vv_source *src, vv_world *w) {
+    vv_object *obj = w->objects[0];
+    const int level = o->level > 0 ? o->level : 0;
+    const vv_volume *shown =
+        vv_source_volume(src) ? vv_source_volume(src) : vv_source_level(src, level);
+    vv_volume *coarse = NULL;
+    vv_opened again;
+    memset(&again, 0, sizeof again);
+    if (!o->view.has_tf_range) {
+        vv_source *from = src;
+        if (vv_source_volume(src)) {
+            vv_open_options oo;
+            open_options(o, 0, &oo);
+            oo.mode = VV_OPEN_OUT_OF_CORE_ONLY;
+            oo.levels = 1;
+            oo.load.level = 0;
+            oo.header_only = 1;
+            from = vv_open(&again, what, &oo) == VV_OK && again.kind == VV_DATA_VOLUME
+                       ? again.source
+                       : NULL;
+        }
+        if (!from || vv_source_proxy(from, 0, &coarse) != VV_OK)
+            coarse = NULL;
+        vv_error_clear(); /* the level shown's defaults stay */
+    }
+    if (coarse) {
+        const vv_render_mode mode = o->has_mode ? o->view.mode : VV_MODE_COMPOSITE;
+        double iso_lo;
+        vv_tf_default(&obj->tf, coarse, mode, &iso_lo);
+        if (!o->view.has_isovalue)
+            obj->isovalue = obj->threshold = iso_lo;
+    }
+    if (shown)
+        obj->tf.opacity_unit_distance = vv_tf_default_unit_distance(shown);
+    vv_volume_free(coarse);
+    vv_opened_clear(&again);
+}
+
 /* A volume file, a folder, a store or a grid: opened once through the
  * format table (vv_open), in memory or out of core as the options say (or
  * because it does not fit in memory: too_big_for_memory). */
@@ -391,6 +437,8 @@ world_for_file(const vv_world_open_options *o, const char *what, vv_world **out,
     vv_error_clear();
     /* out of core, the view frames the level's box */
     s = vv_world_new_for_source(out, od.source, o->level > 0 ? o->level : 0, &d);
+    if (s == VV_OK && od.info.n_levels > 1)
+        pyramid_appearance(o, what, od.source, *out);
     vv_opened_clear(&od); /* the World holds its own reference */
     if (s != VV_OK)
         return fail(s, what);

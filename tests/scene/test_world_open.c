@@ -106,6 +106,48 @@ test_out_of_core_choices(void **state) {
     vv_world_free(w);
 }
 
+/* A store's default appearance is the same read whole and out of core: the
+ * transfer function from its coarsest level's histogram, the opacity unit
+ * of the level shown (it was level 0's histogram in memory, the coarsest
+ * level's out of core: 34 dB apart on the CT head's default view). */
+static void
+test_store_same_defaults(void **state) {
+    (void)state;
+    const char *dir = vt_outdir("scene_world_open");
+    const char *store = vt_path(dir, "ct.ome.zarr");
+    const char *args[] = {"convert", "-q", vt_data("volumes/ct_head.nrrd"), store, NULL};
+    vt_run_cli_expect(dir, 0, NULL, args);
+    for (int mode = 0; mode < 2; mode++) {
+        vv_world_open_options o;
+        vv_world_open_options_init(&o);
+        o.has_mode = 1;
+        o.view.mode = mode ? VV_MODE_MIP : VV_MODE_COMPOSITE;
+        vv_world *mem = NULL, *ooc = NULL;
+        vv_world_open_info im, io;
+        vt_ok(vv_world_open(&mem, store, &o, &im));
+        o.memory = VV_WORLD_OUT_OF_CORE;
+        o.levels = 1;
+        vt_ok(vv_world_open(&ooc, store, &o, &io));
+        assert_int_equal(im.out_of_core, 0);
+        assert_int_equal(io.out_of_core, 1);
+        const vv_object *a = mem->objects[0], *b = ooc->objects[0];
+        assert_int_equal(a->tf.n_opacity, b->tf.n_opacity);
+        assert_int_equal(a->tf.n_color, b->tf.n_color);
+        for (int i = 0; i < a->tf.n_opacity; i++) {
+            assert_true(a->tf.opacity[i].value == b->tf.opacity[i].value);
+            assert_true(a->tf.opacity[i].opacity == b->tf.opacity[i].opacity);
+        }
+        for (int i = 0; i < a->tf.n_color; i++)
+            assert_true(a->tf.color[i].value == b->tf.color[i].value);
+        assert_true(a->tf.opacity_unit_distance == b->tf.opacity_unit_distance);
+        assert_true(a->tf.opacity_unit_distance == 0.957031 ||
+                    fabs(a->tf.opacity_unit_distance - 0.957031) < 1e-6);
+        assert_true(a->isovalue == b->isovalue);
+        vv_world_free(mem);
+        vv_world_free(ooc);
+    }
+}
+
 /* The version guards the layout; channels are for volume files; a missing
  * input is one line naming it. */
 static void
@@ -163,6 +205,7 @@ main(void) {
         cmocka_unit_test(test_foreground_window),
         cmocka_unit_test(test_window_without_background),
         cmocka_unit_test(test_out_of_core_choices),
+        cmocka_unit_test(test_store_same_defaults),
         cmocka_unit_test(test_refusals),
         cmocka_unit_test(test_scene_overrides),
     };
