@@ -964,8 +964,10 @@ class World:
     light, background colour and render settings.
 
     ``World()`` is empty (a 512x512 view from (0, -1000, 0), no lights).
-    :meth:`for_volume` builds the scene ``volvis render FILE`` builds;
-    :func:`load_scene` reads a scene file."""
+    :meth:`open` opens what a user names (a volume file, a folder, a store,
+    a scene, a grid) into the World ``volvis render WHAT`` draws;
+    :meth:`for_volume` builds the scene ``volvis render FILE`` builds of a
+    Volume in memory; :func:`load_scene` reads a scene file."""
     __slots__ = ("_c", "_proxies", "_opened", "__weakref__")
 
     def __init__(self):
