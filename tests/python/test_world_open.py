@@ -187,6 +187,36 @@ def test_out_of_core_if_able(store):
     assert w.opened["out_of_core"]
 
 
+# ---- a file of two channels ----------------------------------------------------------------
+@pytest.fixture(scope="module")
+def two_channels(tmp_path_factory):
+    """A NRRD of two uint8 channels (an axis of kind vector), a ball in each."""
+    z, y, x = np.mgrid[:20, :18, :16]
+    a = ((x - 8) ** 2 + (y - 9) ** 2 + (z - 10) ** 2 < 30) * 200
+    b = ((x - 4) ** 2 + (y - 5) ** 2 + (z - 6) ** 2 < 16) * 150
+    d = np.stack([a, b], -1).astype(np.uint8)
+    path = tmp_path_factory.mktemp("nrrd") / "two.nrrd"
+    path.write_bytes(b"NRRD0004\ntype: uint8\ndimension: 4\nsizes: 2 16 18 20\n"
+                     b"kinds: vector domain domain domain\nencoding: raw\n"
+                     b"spacings: nan 1 1 1\n\n" + d.tobytes())
+    return path
+
+
+def test_channels_equal_cli(tmp_path, two_channels):
+    w = volvis.World.open(two_channels)
+    assert w.opened["n_channels"] == 2
+    assert w._c.objects[0].n_channels == 0  # channel 0 alone, as volvis render FILE
+    w, img = opened_render(two_channels, (64, 64), channels=[0, 1], blend="maximum")
+    assert w._c.objects[0].n_channels == 2
+    np.testing.assert_array_equal(img, cli_render(tmp_path, two_channels, "--size", "64x64",
+                                                  "--channels", "0,1", "--blend", "maximum"))
+    w = volvis.World.open(two_channels, colors=[(1, 0, 0), (0, 1, 0)])
+    assert w._c.objects[0].n_channels == 2  # colours alone: every channel of the file
+    with pytest.raises(volvis.InvalidError) as e:
+        volvis.World.open(two_channels, colors=[(1, 0, 0)] * 3)
+    assert "two.nrrd" in str(e.value) and "2 channels" in str(e.value)
+
+
 # ---- a scene -------------------------------------------------------------------------------
 def test_scene_equals_cli(tmp_path):
     w, img = opened_render(SCENE, (120, 96))
