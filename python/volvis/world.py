@@ -1016,7 +1016,9 @@ class World:
         process cache's budget in bytes, or text such as "512M" (None: keep
         :func:`volvis.memory_limit`'s); lod: True to read a pyramid by its
         levels (level of detail; :func:`volvis.render`'s ``lod`` and
-        ``level`` then pick them).
+        ``level`` then pick them), out of core unless ``memory`` says
+        otherwise (a file read whole only then raises UnsupportedError,
+        one read by bricks without levels InvalidError).
 
         Channels: channels a list of the file's channel indices shown as one
         object of several channels, or "all" (every channel, in order);
@@ -1080,6 +1082,8 @@ class World:
         if memory not in _MEMORY:
             raise InvalidError("World.open: memory: expected one of %s, got %r"
                                % (", ".join(repr(k) for k in _MEMORY if k), memory))
+        if memory is None and lod:
+            memory = "out_of_core"  # as volvis render --lod
         o.memory = _MEMORY[memory]
         o.memory_limit = _bytes(memory_limit) if memory_limit is not None else \
             int(lib.vv_cache_limit(lib.vv_cache_process()))

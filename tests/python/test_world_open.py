@@ -254,6 +254,9 @@ def test_errors_name_the_input(tmp_path):
     assert NIFTI.name in str(e.value)
     with pytest.raises(volvis.InvalidError):
         volvis.World.open(NIFTI, channels=[0, 1, 2])
+    with pytest.raises(volvis.UnsupportedError) as e:
+        volvis.World.open(NIFTI, lod=True)  # out of core by levels: a file read whole only
+    assert NIFTI.name in str(e.value)
     for bad in (dict(memory="lots"), dict(blend="sum"), dict(channels="some"),
                 dict(tf=(5, 1)), dict(size=(0, 10)), dict(step=0), dict(mode="fancy")):
         with pytest.raises(volvis.InvalidError):
