@@ -5,6 +5,7 @@ compression, animation), over the C library libvolvis (cffi, API mode).
     import numpy as np, volvis
     vol = volvis.open("head.nrrd")               # or volvis.Volume(array, spacing=...)
     img = volvis.render(vol, mode="mip")         # (h, w, 4) uint8 numpy array
+    world = volvis.World.open("scan.ome.zarr", memory="out_of_core")  # file, folder, scene
     world = volvis.load_scene("examples/ct_head.json")
     img = volvis.render(world, renderer="raytrace", size=(512, 512))
 

@@ -964,9 +964,11 @@ class World:
     light, background colour and render settings.
 
     ``World()`` is empty (a 512x512 view from (0, -1000, 0), no lights).
-    :meth:`for_volume` builds the scene ``volvis render FILE`` builds;
-    :func:`load_scene` reads a scene file."""
-    __slots__ = ("_c", "_proxies", "__weakref__")
+    :meth:`open` opens what a user names (a volume file, a folder, a store,
+    a scene, a grid) into the World ``volvis render WHAT`` draws;
+    :meth:`for_volume` builds the scene ``volvis render FILE`` builds of a
+    Volume in memory; :func:`load_scene` reads a scene file."""
+    __slots__ = ("_c", "_proxies", "_opened", "__weakref__")
 
     def __init__(self):
         out = ffi.new("vv_world **")
@@ -976,12 +978,177 @@ class World:
     def _set(self, ptr):
         self._c = ffi.gc(ptr, lib.vv_world_free)
         self._proxies = weakref.WeakValueDictionary()
+        self._opened = None
 
     @classmethod
     def _own(cls, ptr):
         w = cls.__new__(cls)
         w._set(ptr)
         return w
+
+    @classmethod
+    def open(cls, what, *, channel=None, time=None, series=None, level=None, memory=None,
+             memory_limit=None, lod=False, channels=None, colors=None, contrast=None,
+             blend=None, labels=False, mode=None, tf=None, iso=None, size=None, renderer=None,
+             step=None, field=None, format=None, raw=None, slice_window=False, progress=None):
+        """The World ``volvis render WHAT`` draws, through the library's one
+        door (vv_world_open, docs/python.md "World.open"): ``what`` (a str or
+        path) names a volume file, a folder (a DICOM series, a TIFF stack, an
+        OME-Zarr store), a scene file (``.json``), a BigDataViewer XML or an
+        irregular grid. The input is opened once; a volume becomes the
+        default scene (centred, framed from the front, a headlight, a
+        transfer function from the data), in memory or out of core; a scene
+        is loaded with its files; a grid gets its default scene. The view is
+        fitted, not turned.
+
+        Which data: channel, time, series (None: the file's first; channel
+        and time 0-based, series 1-based as ``volvis info`` lists them);
+        level: a multiresolution file's level (0 the finest; None: none
+        given); format ("nrrd", ... as :func:`volvis.open`) and raw (a dict
+        as :func:`volvis.open`'s) for raw files; field: a grid's field (None:
+        its first scalar field).
+
+        Where it lives: memory None or "auto" (read whole, unless rendering
+        it in memory would take more than the memory budget: then out of
+        core where the file can be, said in ``opened["switched"]``),
+        "out_of_core" (a file that cannot be read so raises
+        UnsupportedError) or "out_of_core_if_able"; memory_limit: the
+        process cache's budget in bytes, or text such as "512M" (None: keep
+        :func:`volvis.memory_limit`'s); lod: True to read a pyramid by its
+        levels (level of detail; :func:`volvis.render`'s ``lod`` and
+        ``level`` then pick them), out of core unless ``memory`` says
+        otherwise (a file read whole only then raises UnsupportedError,
+        one read by bricks without levels InvalidError).
+
+        Channels: channels a list of the file's channel indices shown as one
+        object of several channels, or "all" (every channel, in order);
+        colors a list of (r, g, b) in [0, 1], contrast a list of (lo, hi)
+        data values, blend "composite", "additive" or "maximum", for them
+        (a scene, or more colours than the file has channels, raises
+        InvalidError).
+
+        Overrides of the guessed appearance: mode ("composite", "mip",
+        "minip", "xray", "iso"), tf (lo, hi) the transfer function's data
+        range (a scene's stretched onto it), iso the isovalue, size
+        (width, height) pixels of the view, renderer the method that will
+        draw it (the automatic out-of-core switch needs one with the region
+        contract; None: raycast; it is not stored in the World: pass it to
+        :func:`volvis.render`), step every object's sample step (in units
+        of the smallest spacing, > 0), labels True: every volume object a
+        label volume. slice_window: True to guess the slice views' window
+        and level of the first volume (``opened["slice_window"]``).
+        progress: as :func:`volvis.render` (a scene's geometry voxelized).
+
+        Returns a new :class:`World` that owns its objects (a file read out
+        of core stays open while the World lives; its pieces live in the
+        process cache). ``world.opened`` says what the door found: a dict of
+        "input" ("volume", "grid" or "scene"), "n_channels" and "n_times"
+        (of the volume file; 1 for a scene or a grid), "out_of_core"
+        (a visible object shows a file out of core), "switched" with
+        "need_bytes", "budget_bytes" and "cache_bytes" (the automatic switch
+        to out of core), and "slice_window" ((window, level) in data values
+        with ``slice_window=True``, else None).
+
+        Thread-safe, but for the process cache's budget it sets (the
+        process's). Errors: FileError (missing, unreadable), FormatError
+        (cannot tell the format, malformed), UnsupportedError (out of core
+        of a file that cannot be), InvalidError (options that do not fit
+        the input, a channel, time step or level past the file's), LimitError,
+        NoMemoryError, with the library's one-line message naming ``what``;
+        KeyboardInterrupt or CancelledError as :func:`volvis.render`."""
+        from . import _lib
+        from .pyramid import _bytes
+        from .volume import _raw_params
+        o = ffi.new("vv_world_open_options *")
+        lib.vv_world_open_options_init(o)
+        if channel is not None:
+            o.load.channel = int(channel)
+        if time is not None:
+            o.load.time = int(time)
+        if series is not None:
+            o.load.series = int(series)
+        if format is not None:
+            f = ffi.new("vv_format *")
+            check(lib.vv_format_parse(cstr(format), f))
+            o.load.format = f[0]
+        if raw is not None:
+            o.load.has_raw = 1
+            o.load.format = lib.VV_FORMAT_RAW
+            _raw_params(o.load.raw, raw)
+        if level is not None:
+            if int(level) < 0:
+                raise InvalidError("World.open: level %r is < 0" % (level,))
+            o.level = int(level)
+        if memory not in _MEMORY:
+            raise InvalidError("World.open: memory: expected one of %s, got %r"
+                               % (", ".join(repr(k) for k in _MEMORY if k), memory))
+        if memory is None and lod:
+            memory = "out_of_core"  # as volvis render --lod
+        o.memory = _MEMORY[memory]
+        o.memory_limit = _bytes(memory_limit) if memory_limit is not None else \
+            int(lib.vv_cache_limit(lib.vv_cache_process()))
+        o.levels = 1 if lod else 0
+        keep = []  # the C strings the options point to, alive through the call
+        if renderer is not None:
+            keep.append(ffi.new("char[]", cstr(renderer)))
+            o.renderer = keep[-1]
+        if field is not None:
+            keep.append(ffi.new("char[]", cstr(field)))
+            o.field = keep[-1]
+        _open_channels(o, channels, colors, contrast, blend)
+        if mode is not None:
+            o.has_mode = 1
+            o.view.mode = mode_code(mode)
+        if tf is not None:
+            lo, hi = float(tf[0]), float(tf[1])
+            if not (math.isfinite(lo) and math.isfinite(hi) and hi > lo):
+                raise InvalidError("World.open: tf (%r, %r): expected finite lo < hi" % (lo, hi))
+            o.view.has_tf_range = 1
+            o.view.tf_lo, o.view.tf_hi = lo, hi
+        if iso is not None:
+            o.view.has_isovalue = 1
+            o.view.isovalue = float(iso)
+        if size is not None:
+            w, h = int(size[0]), int(size[1])
+            if not (1 <= w <= lib.VV_IMAGE_MAX_SIDE and 1 <= h <= lib.VV_IMAGE_MAX_SIDE):
+                raise InvalidError("World.open: size %dx%d is outside 1..%d"
+                                   % (w, h, lib.VV_IMAGE_MAX_SIDE))
+            o.has_size = 1
+            o.view.width, o.view.height = w, h
+        if step is not None:
+            if not float(step) > 0:
+                raise InvalidError("World.open: step %r is not > 0" % (step,))
+            o.step = float(step)
+        o.labels = 1 if labels else 0
+        o.slice_window = 1 if slice_window else 0
+        out = ffi.new("vv_world **")
+        info = ffi.new("vv_world_open_info *")
+        p = cstr(what)
+        holder = {}
+
+        def run(prog):
+            holder["p"] = ffi.new("vv_progress *", prog)
+            o.progress = holder["p"]
+            return lib.vv_world_open(out, p, o, info)
+        _lib.call_long(run, progress, desc="open")
+        w = cls._own(out[0])
+        w._opened = {
+            "input": _INPUT_NAMES.get(info.input, "volume"),
+            "n_channels": int(info.n_channels), "n_times": int(info.n_times),
+            "out_of_core": bool(info.out_of_core), "switched": bool(info.switched),
+            "need_bytes": int(info.need_bytes), "budget_bytes": int(info.budget_bytes),
+            "cache_bytes": int(info.cache_bytes),
+            "slice_window": (info.window, info.level) if slice_window else None,
+        }
+        return w
+
+    @property
+    def opened(self):
+        """What :meth:`World.open` found and decided (a dict: input,
+        n_channels, n_times, out_of_core, switched, need_bytes,
+        budget_bytes, cache_bytes, slice_window), or None for a World made
+        otherwise (a clone too)."""
+        return None if self._opened is None else dict(self._opened)
 
     @classmethod
     def for_volume(cls, volume, mode="composite", tf_range=None, isovalue=None, size=None,
@@ -1212,6 +1379,55 @@ class World:
         from .notebook import png_bytes
         from .render import render
         return png_bytes(render(self))
+
+
+_MEMORY = {None: lib.VV_WORLD_MEMORY_AUTO, "auto": lib.VV_WORLD_MEMORY_AUTO,
+           "out_of_core": lib.VV_WORLD_OUT_OF_CORE,
+           "out_of_core_if_able": lib.VV_WORLD_OUT_OF_CORE_IF_ABLE}
+_INPUT_NAMES = {lib.VV_INPUT_VOLUME: "volume", lib.VV_INPUT_GRID: "grid",
+                lib.VV_INPUT_SCENE: "scene"}
+_BLENDS = {"composite": lib.VV_BLEND_COMPOSITE, "additive": lib.VV_BLEND_ADDITIVE,
+           "maximum": lib.VV_BLEND_MAXIMUM}
+
+
+def _open_channels(o, channels, colors, contrast, blend):
+    """World.open's channels, colours, contrast and blend into the options."""
+    n_max = lib.VV_MAX_CHANNELS
+    if isinstance(channels, str):
+        if channels != "all":
+            raise InvalidError("World.open: channels: expected a list of ints or 'all', got %r"
+                               % (channels,))
+        o.all_channels = 1
+    elif channels is not None:
+        idx = [int(c) for c in channels]
+        if not 1 <= len(idx) <= n_max or any(c < 0 for c in idx):
+            raise InvalidError("World.open: channels %r: 1 to %d indices, each >= 0"
+                               % (list(channels), n_max))
+        o.n_channels = len(idx)
+        for i, c in enumerate(idx):
+            o.channels[i] = c
+    elif colors is not None or contrast is not None or blend is not None:
+        o.all_channels = 1  # colours, contrast or a blend rule: every channel of the file
+    if colors is not None:
+        cols = [_color(c, "colors[%d]" % i) for i, c in enumerate(colors)]
+        if len(cols) > n_max:
+            raise InvalidError("World.open: %d colors, at most %d" % (len(cols), n_max))
+        o.n_colors = len(cols)
+        for i, c in enumerate(cols):
+            _set_v3(o.colors[i], c, "colors[%d]" % i)
+    if contrast is not None:
+        lims = [(float(a), float(b)) for a, b in contrast]
+        if len(lims) > n_max:
+            raise InvalidError("World.open: %d contrast limits, at most %d" % (len(lims), n_max))
+        o.n_contrast = len(lims)
+        for i, (a, b) in enumerate(lims):
+            o.contrast[i][0], o.contrast[i][1] = a, b
+    if blend is not None:
+        if blend not in _BLENDS:
+            raise InvalidError("World.open: blend: expected one of %s, got %r"
+                               % (", ".join(_BLENDS), blend))
+        o.has_blend = 1
+        o.blend = _BLENDS[blend]
 
 
 def _scene_options(mode, tf_range, isovalue, size, azimuth, elevation, zoom):
