@@ -69,6 +69,14 @@ class FakeX:
             lock = f"/tmp/.X{n}-lock"
             try:
                 fd = os.open(lock, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o444)
+            except FileExistsError:
+                if not self.stale(lock):
+                    continue
+                try:  # a lock left by a server that is gone, as X servers do
+                    os.unlink(lock)
+                    fd = os.open(lock, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o444)
+                except OSError:
+                    continue
             except OSError:
                 continue
             os.write(fd, b"%10d\n" % os.getpid())
@@ -103,6 +111,19 @@ class FakeX:
         print("skipped: no X display of :0 to :9 is free for the fake server")
         sys.exit(77)
 
+    @staticmethod
+    def stale(lock):
+        """The lock file names a process that no longer runs."""
+        try:
+            with open(lock) as fh:
+                pid = int(fh.read().strip())
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return True
+        except (OSError, ValueError):
+            return False
+        return False
+
     def serve(self, s):
         while True:
             try:
@@ -119,10 +140,10 @@ class FakeX:
                     cmd = fh.read().replace(b"\0", b" ").decode(errors="replace").strip()
             except OSError:
                 ours, exe, cmd = True, "?", "?"  # gone: count it, it may be ours
-            c.close()
-            if ours:
+            if ours:  # recorded before the client can go on and its run end
                 with self.lock:
                     self.clients.append((pid, exe, cmd))
+            c.close()
 
     def take(self):
         with self.lock:
