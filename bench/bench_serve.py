@@ -154,7 +154,10 @@ def main():
     for n in a.ranks:
         if not mpirun:
             sys.exit("bench_serve: --ranks needs mpirun (openmpi-bin)")
-        cases.append((str(n), [mpirun, "--allow-run-as-root", "--oversubscribe", "-n", str(n),
+        # no X display for mpirun or the ranks (Open MPI's hwloc probes the X
+        # servers :0 to :9 for GPUs otherwise: docs/parallel.md); env execs mpirun
+        cases.append((str(n), ["env", "-u", "DISPLAY", "HWLOC_COMPONENTS=-gl", mpirun,
+                               "--allow-run-as-root", "--oversubscribe", "-n", str(n),
                                a.cli, "serve", "--port", "0", a.volume]))
     for ranks, cmd in cases:
         r = run(cmd, size, a.drag)

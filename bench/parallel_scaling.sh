@@ -10,7 +10,9 @@ set -euo pipefail
 build=${1:-build/release}
 vol=${2:-../shared/data/volumes/ct_head.nrrd}
 bin=$build/bench/bench_parallel
-mpirun=(mpirun --allow-run-as-root --oversubscribe)
+# no X display for mpirun or the ranks (Open MPI's hwloc probes the X servers
+# :0 to :9 for GPUs otherwise: docs/parallel.md)
+mpirun=(env -u DISPLAY HWLOC_COMPONENTS=-gl mpirun --allow-run-as-root --oversubscribe)
 echo "# $(date -u +%FT%TZ) $(nproc) cores; paraview: $(command -v pvbatch || echo 'not installed (no pvbatch comparison)')"
 for np in 1 2 4 8; do
   for method in binary-swap radix-k; do

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The include-direction check: every #include under src/, apps/ and
-include/volvis/ must point down the layer map of DESIGN.md, or sideways to a
+include/volvis/ must point down the layer map (docs/architecture.md), or sideways to a
 sibling's public header, never up and never into a sibling's private header.
 With --objects BUILD_DIR the same rules are checked on the calls themselves:
 every vv_ function an object file of the build uses must be defined in its
@@ -8,7 +8,7 @@ own component or below, and a function of another component (core excepted)
 must be declared in include/volvis/ (a header can be avoided by declaring
 a function by hand; a call cannot).
 The GUI's names are checked too: apps/volvis-gui/ names its own functions,
-types and macros vvg_/Vvg/VVG_ (DESIGN.md), so every vv_, Vv or VV_ name
+types and macros vvg_/Vvg/VVG_ (docs/architecture.md), so every vv_, Vv or VV_ name
 its files use must be one the library declares in include/volvis/.
 
     apps, python -> scene -> manipulate, parallel -> render, modeling, filter,

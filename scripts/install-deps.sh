@@ -28,7 +28,7 @@ for what in "$@"; do
     demo) pkgs+=(mricron-data) ;;
     test) pkgs+=(libcmocka-dev openssl chromium chromium-driver python3-selenium python3-websockets ffmpeg xvfb xauth xdotool imagemagick at-spi2-core python3-pyatspi dbus-x11 python3-pydicom python3-nibabel python3-tifffile python3-pil python3-zarr python3-numcodecs python3-h5py python3-vtk9 libgdcm-tools python3-scipy teem-apps
                  python3-pytest python3-tqdm python3-ipywidgets python3-ipykernel jupyter-nbconvert
-                 mesa-vulkan-drivers vulkan-validationlayers) ;;
+                 mesa-vulkan-drivers vulkan-validationlayers graphviz) ;;
     fuzz) pkgs+=(clang-14 libfuzzer-14-dev libomp-14-dev teem-apps imagemagick libgdcm-tools python3-vtk9 python3-numpy python3-pydicom) ;;
     bench) pkgs+=(python3-vtk9 python3-numpy python3-pydicom xvfb libgl1-mesa-dri teem-apps zfp mesa-vulkan-drivers) ;;
     *) echo "install-deps.sh: unknown group '$what' (build, demo, test, fuzz, bench)" >&2; exit 2 ;;

@@ -18,6 +18,16 @@
 #define VV_DATA_DIR VV_SOURCE_DIR "/../shared/data"
 
 /*
+ * The environment of every mpiexec the tests run (a command-line prefix):
+ * no X display for the launcher or the ranks. Open MPI's hwloc probes the X
+ * servers :0 to :9 for GPUs (its "gl" component) in the launcher, whatever
+ * DISPLAY says, and a server that dies during the probe (another program's
+ * Xvfb) ends the launcher with "XIO: fatal IO error" (docs/parallel.md).
+ * tests/parallel/mpi_display.py checks that nothing connects.
+ */
+#define VT_MPI_ENV "env -u DISPLAY HWLOC_COMPONENTS=-gl"
+
+/*
  * Skipping honestly. Every test program exits through vt_run_tests, which
  * returns VT_SKIP_STATUS (CTest's SKIP_RETURN_CODE, set for every test in
  * tests/CMakeLists.txt) when a test was skipped and none failed, so CTest

@@ -105,6 +105,18 @@ vv_parallel_init(int *argc, char ***argv, int *rank, int *size) {
     int inited = 0;
     MPI_Initialized(&inited);
     if (!inited) {
+        /* A rank never opens an X display. Open MPI's hwloc looks for GPUs
+         * on the X servers :0 to :9 (its "gl" component), whatever DISPLAY
+         * says, in every process that discovers the topology itself: a
+         * singleton (MPI_Init without mpirun) and the orted it forks,
+         * which inherits this environment. A display that dies during the
+         * probe (another program's Xvfb) ends the process with "XIO: fatal
+         * IO error". Under mpirun the ranks adopt the launcher's topology
+         * and probe nothing: the launcher's environment must say it there
+         * (docs/parallel.md). A user's own HWLOC_COMPONENTS is kept. Set
+         * on the main thread, before MPI starts threads that read the
+         * environment. */
+        setenv("HWLOC_COMPONENTS", "-gl", 0);
         int provided = 0;
         if (MPI_Init_thread(argc, argv, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS)
             return vv_error_set(VV_ERR_IO, "MPI_Init_thread failed");

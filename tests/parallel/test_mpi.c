@@ -52,7 +52,7 @@ have_mpi(void) {
  * unwinding on every malloc (about 13 times slower for three ranks); the
  * run on 3 ranks has it, the run on 7 (the same cases, radix-k's other
  * rounds) ASan's other checks. Both are harmless without ASan. */
-#define MPIRUN_BASE "timeout 300 " VV_MPIEXEC " --allow-run-as-root --oversubscribe"
+#define MPIRUN_BASE "timeout 300 " VT_MPI_ENV " " VV_MPIEXEC " --allow-run-as-root --oversubscribe"
 #define MPIRUN_LEAKS                                                                               \
     MPIRUN_BASE " -x ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:fast_unwind_on_malloc=0"         \
                 " -x LSAN_OPTIONS=suppressions=" VV_SOURCE_DIR "/tests/parallel/mpi_lsan.supp"

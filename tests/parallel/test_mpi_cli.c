@@ -93,7 +93,7 @@ have_mpi(void) {
  * used on the runs whose paths differ most (a render, a .vvb read by boxes,
  * the ray tracer's regions, a rank's failed read) and MPIRUN, with ASan's
  * other checks, on the rest. Both are harmless without ASan. */
-#define MPIRUN_BASE "timeout 300 " VV_MPIEXEC " --allow-run-as-root --oversubscribe"
+#define MPIRUN_BASE "timeout 300 " VT_MPI_ENV " " VV_MPIEXEC " --allow-run-as-root --oversubscribe"
 #define MPIRUN_LEAKS                                                                               \
     MPIRUN_BASE " -x ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:fast_unwind_on_malloc=0"         \
                 " -x LSAN_OPTIONS=suppressions=" VV_SOURCE_DIR "/tests/parallel/mpi_lsan.supp"

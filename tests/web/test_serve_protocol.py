@@ -43,12 +43,18 @@ TIMEOUT = 180  # seconds for any one wait, on a loaded 2-core machine
 class Server:
     def __init__(self, args, mpi=0):
         cmd = [BIN, "serve", "--port", "0"] + args
+        env = None
         if mpi:
             cmd = [shutil.which("mpirun"), "--allow-run-as-root", "--oversubscribe", "-n",
                    str(mpi)] + cmd
+            # no X display for mpirun or the ranks: Open MPI's hwloc probes the X
+            # servers :0 to :9 for GPUs otherwise (docs/parallel.md)
+            env = {k: v for k, v in os.environ.items() if k != "DISPLAY"}
+            env["HWLOC_COMPONENTS"] = "-gl"
         self.mpi = mpi
         self.log = tempfile.TemporaryFile(mode="w+")
-        self.p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=self.log, text=True)
+        self.p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=self.log, text=True,
+                                  env=env)
         line = self.p.stdout.readline().strip()
         if not line.startswith("http"):
             self.log.seek(0)
