@@ -259,30 +259,26 @@ has_suffix(const char *path, const char *const *suffixes) {
 static const char *const mesh_suffixes[] = {".obj", ".ply", ".stl",  ".off", ".dae",
                                             ".3ds", ".fbx", ".gltf", ".glb", NULL};
 
-/* How the GUI opens volume files (vv_open): VV_OPEN_AUTO -- out of core
+/* How the GUI opens files: through the door (vv_world_open), out of core
  * when level 0 holds more than a quarter of the process's cache budget
- * (vvg_document_memory_limit, set at start-up), a .vvb always -- and a
- * file with pyramid levels by its levels (level of detail), not by bricks. */
+ * (vvg_document_memory_limit, set at start-up), a .vvb always, a file with
+ * pyramid levels by its levels (level of detail), not by bricks; a volume
+ * file's every channel as one object when it is read whole. */
 static void
-open_options(vv_open_options *oo) {
-    vv_open_options_init(oo);
-    oo->mode = VV_OPEN_AUTO;
-    oo->levels = 1;
+open_options(VvgDocument *doc, vv_world_open_options *o) {
+    vv_world_open_options_init(o);
+    o->memory = VV_WORLD_OUT_OF_CORE_IF_LARGE;
+    o->memory_limit = vvg_document_memory_limit();
+    o->all_channels = 1;
+    o->filter_cache = doc->filtered;
 }
 
-/* A scene replaces the World; its volumes' files are the scene's, each
- * opened as open_options says (the objects out of core own their files'
- * sources, all in the process's one cache). */
+/* Scene file @p path's World @p w (the door's; taken) replaces the World;
+ * its volumes' files are the scene's, each opened as open_options says
+ * (the objects out of core own their files' sources, all in the process's
+ * one cache). */
 static gboolean
-open_scene(VvgDocument *doc, const char *path, GError **error) {
-    vv_world *w = NULL;
-    vv_open_options oo;
-    open_options(&oo);
-    vv_error_clear();
-    if (vv_scene_load_open(&w, path, NULL, doc->filtered, &oo) != VV_OK) {
-        set_error(error, "cannot read the scene");
-        return FALSE;
-    }
+show_scene(VvgDocument *doc, const char *path, vv_world *w) {
     vvg_document_begin_edit(doc, "open scene");
     /* the view fills the window: the scene's camera at the window's size */
     if (doc->world->view.width > 0 && doc->world->view.height > 0) {
@@ -380,44 +376,17 @@ open_mesh(VvgDocument *doc, const char *path, GError **error) {
     return ok;
 }
 
-/* Adds the @p n channels @p v of one file (n == 1: a volume of one channel)
- * as one object; @p info[c]: what the read of channel c said (names,
- * colours), may be NULL. With @p ooc (a file out of core, v unused, n 1)
- * the object shows its proxy and owns the source (vv_world_new_for_source). */
+/* Shows the first object of @p w (a default World: the door's, or one of a
+ * volume in memory), named @p name, read from @p source (may be NULL): in
+ * an empty document @p w becomes the World (its view, lights and shading;
+ * the session's render settings and view size stay), else the object is
+ * added beside the others. Takes @p w. */
 static gboolean
-add_volume_channels(VvgDocument *doc, vv_volume *const *v, int n, const vv_load_info *info,
-                    const char *name, const char *source, vv_source *ooc, GError **error) {
-    vv_world *w = NULL;
-    vv_error_clear();
-    if ((ooc ? vv_world_new_for_source(&w, ooc, 0, NULL)
-             : vv_world_new_for_volume(&w, v[0], NULL)) != VV_OK) {
-        set_error(error, "cannot show the volume");
-        return FALSE;
-    }
+show_default_world(VvgDocument *doc, vv_world *w, const char *name, const char *source) {
     /* the object as `volvis render FILE` shows it */
     vv_object *obj = NULL;
     vv_world_take_object(w, 0, &obj);
     g_strlcpy(obj->name, name, sizeof obj->name);
-    if (n > 1) { /* as `volvis render FILE --channels 0,1,..`: the file's names and colours */
-        const char *names[VV_MAX_CHANNELS] = {NULL};
-        for (int c = 0; c < n && info; c++)
-            names[c] = info[c].channel_name[0] ? info[c].channel_name : NULL;
-        if (vv_object_set_channels(obj, n, v, names) != VV_OK) {
-            set_error(error, "cannot make the channels");
-            vv_object_free(obj);
-            vv_world_free(w);
-            return FALSE;
-        }
-        for (int c = 0; c < n && info; c++) {
-            vv_channel *ch = &obj->channels[c];
-            double lo, hi, g, op;
-            if (info[c].has_color && vv_tf_get_contrast(&ch->tf, &lo, &hi, &g, &op, NULL))
-                (void)vv_tf_set_contrast(
-                    &ch->tf, lo, hi, g, op,
-                    vv_vec3_make(info[c].color[0], info[c].color[1], info[c].color[2]),
-                    ch->tf.opacity_unit_distance);
-        }
-    }
     if (source)
         remember_source(obj, source);
     if (doc->world->n_objects == 0) {
@@ -460,7 +429,13 @@ add_volume_channels(VvgDocument *doc, vv_volume *const *v, int n, const vv_load_
 gboolean
 vvg_document_add_volume(VvgDocument *doc, vv_volume *v, const char *name, const char *source,
                         GError **error) {
-    return add_volume_channels(doc, &v, 1, NULL, name, source, NULL, error);
+    vv_world *w = NULL;
+    vv_error_clear();
+    if (vv_world_new_for_volume(&w, v, NULL) != VV_OK) {
+        set_error(error, "cannot show the volume");
+        return FALSE;
+    }
+    return show_default_world(doc, w, name, source);
 }
 
 /* ---- files out of core -------------------------------------------------------- */
@@ -499,79 +474,55 @@ volume_name(const char *path) {
     return base;
 }
 
-/* A volume file through vv_open (open_options): read whole, every channel
- * (the first VV_MAX_CHANNELS) at time step 0; or out of core, channel 0
- * alone (the drivers out of core draw objects of one channel), the object
- * owning the source. A mesh format that vv_open knows is added as a mesh. */
+/* A volume file, a folder (a DICOM series, a TIFF stack, a store) or a
+ * scene through the door (open_options): a volume read whole shows every
+ * channel (the first VV_MAX_CHANNELS) at time step 0, out of core channel
+ * 0 alone (the drivers out of core draw objects of one channel), the
+ * object owning the source; a mesh that the door names so is added as a
+ * mesh; a grid is refused. */
 static gboolean
-open_volume(VvgDocument *doc, const char *path, GError **error) {
-    vv_open_options oo;
-    open_options(&oo);
-    vv_opened od;
+open_input(VvgDocument *doc, const char *path, GError **error) {
+    vv_world_open_options o;
+    open_options(doc, &o);
+    vv_world *w = NULL;
+    vv_world_open_info info;
     vv_error_clear();
-    if (vv_open(&od, path, &oo) != VV_OK) {
-        set_error(error, "cannot read the volume");
+    if (vv_world_open(&w, path, &o, &info) != VV_OK) {
+        if (info.input == VV_INPUT_MESH) { /* the format table's mesh, by its content */
+            vv_error_clear();
+            return open_mesh(doc, path, error);
+        }
+        set_error(error, info.input == VV_INPUT_SCENE ? "cannot read the scene"
+                                                      : "cannot read the volume");
         return FALSE;
     }
-    if (od.kind != VV_DATA_VOLUME) { /* a grid or a mesh */
-        gboolean ok = FALSE;
-        if (od.mesh) {
-            ok = add_mesh(doc, path, od.mesh, error);
-        } else {
-            g_autofree char *base = g_path_get_basename(path);
-            g_set_error(error, VVG_ERROR, 1,
-                        "%s: an irregular grid; the GUI shows volumes and meshes (volvis render "
-                        "draws grids)",
-                        base);
-        }
-        vv_opened_clear(&od);
-        return ok;
+    if (info.input == VV_INPUT_SCENE)
+        return show_scene(doc, path, w);
+    if (info.input == VV_INPUT_GRID) {
+        vv_world_free(w);
+        g_autofree char *base = g_path_get_basename(path);
+        g_set_error(error, VVG_ERROR, 1,
+                    "%s: an irregular grid; the GUI shows volumes and meshes (volvis render "
+                    "draws grids)",
+                    base);
+        return FALSE;
     }
-    vv_volume *whole = vv_source_volume(od.source);
-    vv_volume *v[VV_MAX_CHANNELS] = {NULL};
-    vv_load_info info[VV_MAX_CHANNELS];
-    info[0] = od.info;
-    int n = 1;
-    gboolean ok = TRUE;
-    if (whole) {
-        v[0] = vv_volume_ref(whole);
-        n = info[0].n_channels < VV_MAX_CHANNELS ? info[0].n_channels : VV_MAX_CHANNELS;
-        for (int c = 1; c < n && ok; c++) {
-            vv_load_options opt;
-            vv_load_options_init(&opt);
-            opt.channel = c;
-            opt.info = &info[c];
-            vv_error_clear();
-            ok = vv_volume_load(&v[c], path, &opt) == VV_OK;
-            if (!ok)
-                set_error(error, "cannot read the volume");
-        }
-        if (ok && info[0].n_channels > VV_MAX_CHANNELS)
-            g_message("volvis-gui: %s has %d channels; the first %d are shown", path,
-                      info[0].n_channels, VV_MAX_CHANNELS);
-    } else if (info[0].n_channels > 1) {
+    if (info.n_channels > VV_MAX_CHANNELS && !info.out_of_core)
+        g_message("volvis-gui: %s has %d channels; the first %d are shown", path, info.n_channels,
+                  VV_MAX_CHANNELS);
+    else if (info.n_channels > 1 && info.out_of_core)
         g_message("volvis-gui: %s has %d channels; out of core the first is shown", path,
-                  info[0].n_channels);
-    }
+                  info.n_channels);
     g_autofree char *base = volume_name(path);
     /* before the object, whose "changed" the pages fill from; keyed as
      * remember_source names the file; a file out of core shows its step 0 */
-    if (ok)
-        g_hash_table_replace(doc->time_steps, g_canonicalize_filename(path, NULL),
-                             GINT_TO_POINTER(whole && info[0].n_times > 1 ? info[0].n_times : 1));
-    if (ok)
-        ok = add_volume_channels(doc, v, n, info, base, path, whole ? NULL : od.source, error);
-    for (int c = 0; c < n; c++)
-        vv_volume_free(v[c]);
-    vv_opened_clear(&od); /* an object out of core holds its own reference */
-    return ok;
+    g_hash_table_replace(doc->time_steps, g_canonicalize_filename(path, NULL),
+                         GINT_TO_POINTER(!info.out_of_core && info.n_times > 1 ? info.n_times : 1));
+    return show_default_world(doc, w, base, path);
 }
 
 gboolean
 vvg_document_open(VvgDocument *doc, const char *path, GError **error) {
-    static const char *const scene_suffixes[] = {".json", NULL};
-    if (has_suffix(path, scene_suffixes))
-        return open_scene(doc, path, error);
     vv_error_clear();
     if (has_suffix(path, mesh_suffixes))
         return open_mesh(doc, path, error);
@@ -581,9 +532,9 @@ vvg_document_open(VvgDocument *doc, const char *path, GError **error) {
         !strcmp(leaf, ".zattrs") || !strcmp(leaf, ".zgroup") || !strcmp(leaf, ".zarray")
             ? g_path_get_dirname(path)
             : NULL;
-    if (store) /* the folder is the store; vv_open says what it holds */
+    if (store) /* the folder is the store; the door says what it holds */
         path = store;
-    return open_volume(doc, path, error);
+    return open_input(doc, path, error);
 }
 
 int
@@ -1098,7 +1049,7 @@ vvg_document_restore(VvgDocument *doc, const char *dir, GError **error) {
     g_autofree char *was_path = g_strdup(doc->path);
     const gboolean was_untracked = doc->dirty_untracked;
     const int was_clean = vvg_undo_clean_index(doc->undo);
-    if (!open_scene(doc, scene, error))
+    if (!open_input(doc, scene, error))
         return FALSE;
     /* the autosave's own volumes are volumes of the session again: saving
      * writes them (the folder goes away once the new autosave stands), so

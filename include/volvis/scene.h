@@ -117,6 +117,13 @@ typedef enum vv_world_memory {
     VV_WORLD_OUT_OF_CORE = 1,
     /** Out of core where the file can be read so, whole otherwise (a browser's session). */
     VV_WORLD_OUT_OF_CORE_IF_ABLE = 2,
+    /**
+     * Out of core when the file's level 0 holds more than a quarter of the
+     * process cache's budget (vv_open's VV_OPEN_AUTO), a pyramid by its
+     * levels, whole otherwise; a scene's files each so (a desktop session,
+     * whose budget the user sets).
+     */
+    VV_WORLD_OUT_OF_CORE_IF_LARGE = 3,
 } vv_world_memory;
 
 /** What the user named, as vv_world_open found it (vv_world_open_info.input). */
@@ -124,6 +131,7 @@ typedef enum vv_world_input {
     VV_INPUT_VOLUME = 0, /**< a volume file, folder (DICOM series, TIFF stack) or store */
     VV_INPUT_GRID = 1,   /**< an irregular grid file */
     VV_INPUT_SCENE = 2,  /**< a scene file (docs/scene-format.md) */
+    VV_INPUT_MESH = 3,   /**< a triangle mesh: no World (VV_ERR_UNSUPPORTED; vv_mesh_load) */
 } vv_world_input;
 
 /**

@@ -150,7 +150,7 @@ world_for_grid(const vv_world_open_options *o, const char *what, vv_grid *g, vv_
  * one-channel object with that colour and contrast. */
 static vv_status
 world_for_channels(const vv_world_open_options *o, const char *what, int n, const int *channels,
-                   vv_world **out) {
+                   vv_world **out, vv_world_open_info *oi) {
     vv_volume *v[VV_MAX_CHANNELS] = {NULL};
     vv_load_info info[VV_MAX_CHANNELS];
     char names[VV_MAX_CHANNELS][VV_CHANNEL_NAME_MAX];
@@ -168,6 +168,10 @@ world_for_channels(const vv_world_open_options *o, const char *what, int n, cons
         else
             snprintf(names[c], sizeof names[c], "channel %d", channels[c]);
         np[c] = names[c];
+    }
+    if (s == VV_OK) { /* the file's channels and steps, as vv_open tells them */
+        oi->n_channels = info[0].n_channels > 1 ? info[0].n_channels : 1;
+        oi->n_times = info[0].n_times > 1 ? info[0].n_times : 1;
     }
     vv_default_scene_options d;
     scene_options(o, &d);
@@ -238,6 +242,10 @@ open_options(const vv_world_open_options *o, int scene, vv_open_options *oo) {
     const int ooc = o->memory != VV_WORLD_MEMORY_AUTO;
     oo->mode = ooc || (o->distributed && !scene) ? VV_OPEN_OUT_OF_CORE : VV_OPEN_DEFAULT;
     oo->levels = o->levels || o->level >= 0;
+    if (o->memory == VV_WORLD_OUT_OF_CORE_IF_LARGE) {
+        oo->mode = VV_OPEN_AUTO;
+        oo->levels = 1;
+    }
     oo->load.level = o->level > 0 ? o->level : 0;
     if (scene)
         return ooc ? oo : NULL; /* a scene's files are read whole unless asked */
@@ -363,7 +371,7 @@ static vv_status
 world_for_file(const vv_world_open_options *o, const char *what, vv_world **out,
                vv_world_open_info *info) {
     if (o->n_channels)
-        return world_for_channels(o, what, o->n_channels, o->channels, out);
+        return world_for_channels(o, what, o->n_channels, o->channels, out, info);
     vv_status s = check_readable(what, !o->load.has_raw);
     if (s != VV_OK)
         return s;
@@ -393,8 +401,9 @@ world_for_file(const vv_world_open_options *o, const char *what, vv_world **out,
     if (s == VV_OK && od.kind == VV_DATA_VOLUME &&
         (channels_asked(o) || (o->all_channels && info->n_channels > 1 &&
                                vv_source_get_kind(od.source) == VV_SOURCE_MEMORY))) {
-        /* every channel of the file, as one object */
-        const int n = info->n_channels;
+        /* every channel of the file, as one object (not asked for: the first ones) */
+        const int n = channels_asked(o) || info->n_channels <= VV_MAX_CHANNELS ? info->n_channels
+                                                                               : VV_MAX_CHANNELS;
         vv_opened_clear(&od);
         if (o->n_colors > n || o->n_contrast > n) {
             char why[160];
@@ -411,13 +420,18 @@ world_for_file(const vv_world_open_options *o, const char *what, vv_world **out,
         int every[VV_MAX_CHANNELS];
         for (int c = 0; c < n; c++)
             every[c] = c;
-        return world_for_channels(o, what, n, every, out);
+        return world_for_channels(o, what, n, every, out, info);
     }
     if (s == VV_OK && od.kind == VV_DATA_GRID) { /* an irregular grid: its own World */
         info->input = VV_INPUT_GRID;
         s = world_for_grid(o, what, od.grid, out);
         vv_opened_clear(&od);
         return s;
+    }
+    if (s == VV_OK && od.kind == VV_DATA_MESH) {
+        info->input = VV_INPUT_MESH;
+        s = vv_error_set(VV_ERR_UNSUPPORTED, "%s: a triangle mesh, not a volume or grid file",
+                         what);
     }
     if (s == VV_OK && od.kind != VV_DATA_VOLUME)
         s = vv_error_set(VV_ERR_FORMAT, "%s: not a volume or grid file", what);
