@@ -350,6 +350,28 @@ def main():
         finally:
             srv.stop()
 
+    def foreground_window():
+        """The slice views' window of mricron's MNI template (63 % of its voxels a
+        background at 0, the brain between 62 and 119) spans the brain: its lower
+        end at 50 or above, as the GUI's (vv_slice_auto_window through the door)."""
+        ch2 = "/usr/share/mricron/templates/ch2better.nii.gz"
+        if not os.path.exists(ch2):
+            raise AssertionError(f"{ch2} is missing (Debian's mricron-data)")
+        shutil.copy(ch2, root)
+        srv = Server(["--root", root, os.path.join(root, "ch2better.nii.gz")])
+        try:
+            async def run():
+                async with srv.connect() as ws:
+                    await ws.send(json.dumps({"type": "hello", "width": 64, "height": 64}))
+                    k, st, _ = await until(ws, lambda k, h, p: k == "TEXT" and
+                                           h["type"] == "state" and h["dims"], "state")
+                    lo, hi = st["level"] - st["window"] / 2, st["level"] + st["window"] / 2
+                    print(f"  ch2better: the browser's window {lo:.1f} .. {hi:.1f}")
+                    assert lo >= 50 and hi <= 131, (lo, hi)
+            asyncio.run(run())
+        finally:
+            srv.stop()
+
     def tls():
         if not shutil.which("openssl"):
             raise AssertionError("openssl is missing")
@@ -386,6 +408,7 @@ def main():
     check("thumbnails, the listing's store, refusals keep the connection", thumbnails_listing_errors)
     check("channels (OME-TIFF) and time steps (4-D NIfTI)", channels_and_time)
     check("--cert/--key: HTTPS, 403 without the token, frames over WSS", tls)
+    check("the slice window of ch2better.nii.gz spans its brain", foreground_window)
     if failures == 0:
         shutil.rmtree(tmp, ignore_errors=True)
     else:
