@@ -189,16 +189,46 @@ is_projection_mode(vv_render_mode m) {
     return m == VV_MODE_MIP || m == VV_MODE_MINIP || m == VV_MODE_XRAY;
 }
 
+/* @p v's value range made usable: [0, 1] when not finite, one wide when empty. */
+static void
+usable_range(const vv_volume *v, double *rmin, double *rmax) {
+    *rmin = v->range[0];
+    *rmax = v->range[1];
+    if (!isfinite(*rmin) || !isfinite(*rmax)) {
+        *rmin = 0.0;
+        *rmax = 1.0;
+    }
+    if (!(*rmax > *rmin))
+        *rmax = *rmin + 1.0;
+}
+
+/* The values between the foreground's quantiles @p q_lo and @p q_hi of
+ * histogram @p h (the background peak set aside; all voxels when almost
+ * all are background) into [*lo, *hi], left as they are when they
+ * coincide. */
+static void
+hist_foreground_range(const hist *h, double q_lo, double q_hi, double rmin, double rmax, double *lo,
+                      double *hi) {
+    double bg = hist_background(h);
+    double fg = h->total - bg;
+    if (fg < 0.001 * h->total) {
+        /* (almost) everything is background: show what is above it */
+        bg = 0.0;
+        fg = h->total;
+    }
+    double l = clampd(hist_value_at_count(h, bg + q_lo * fg), rmin, rmax);
+    double u = clampd(hist_value_at_count(h, bg + q_hi * fg), rmin, rmax);
+    if (u > l) {
+        *lo = l;
+        *hi = u;
+    }
+}
+
 /* The composite range [lo, hi] and the projection range [plo, phi]. */
 static void
 default_ranges(const vv_volume *v, double *lo, double *hi, double *plo, double *phi) {
-    double rmin = v->range[0], rmax = v->range[1];
-    if (!isfinite(rmin) || !isfinite(rmax)) {
-        rmin = 0.0;
-        rmax = 1.0;
-    }
-    if (!(rmax > rmin))
-        rmax = rmin + 1.0;
+    double rmin, rmax;
+    usable_range(v, &rmin, &rmax);
     *lo = rmin + 0.1 * (rmax - rmin);
     *hi = rmax;
     *plo = rmin;
@@ -206,19 +236,7 @@ default_ranges(const vv_volume *v, double *lo, double *hi, double *plo, double *
     hist h;
     if (!hist_build(&h, v))
         return;
-    double bg = hist_background(&h);
-    double fg = h.total - bg;
-    if (fg < 0.001 * h.total) {
-        /* (almost) everything is background: show what is above it */
-        bg = 0.0;
-        fg = h.total;
-    }
-    double l = clampd(hist_value_at_count(&h, bg + 0.02 * fg), rmin, rmax);
-    double u = clampd(hist_value_at_count(&h, bg + 0.995 * fg), rmin, rmax);
-    if (u > l) {
-        *lo = l;
-        *hi = u;
-    }
+    hist_foreground_range(&h, 0.02, 0.995, rmin, rmax, lo, hi);
     double pl = clampd(hist_value_at_count(&h, 0.01 * h.total), rmin, rmax);
     double pu = clampd(hist_value_at_count(&h, 0.999 * h.total), rmin, rmax);
     if (pu > pl) {
@@ -230,30 +248,14 @@ default_ranges(const vv_volume *v, double *lo, double *hi, double *plo, double *
 
 void
 vv_volume_foreground_range(const vv_volume *v, double q_lo, double q_hi, double *lo, double *hi) {
-    double rmin = v->range[0], rmax = v->range[1];
-    if (!isfinite(rmin) || !isfinite(rmax)) {
-        rmin = 0.0;
-        rmax = 1.0;
-    }
-    if (!(rmax > rmin))
-        rmax = rmin + 1.0;
+    double rmin, rmax;
+    usable_range(v, &rmin, &rmax);
     *lo = rmin;
     *hi = rmax;
     hist h;
     if (!hist_build(&h, v))
         return;
-    double bg = hist_background(&h);
-    double fg = h.total - bg;
-    if (fg < 0.001 * h.total) { /* (almost) everything is background */
-        bg = 0.0;
-        fg = h.total;
-    }
-    double l = clampd(hist_value_at_count(&h, bg + q_lo * fg), rmin, rmax);
-    double u = clampd(hist_value_at_count(&h, bg + q_hi * fg), rmin, rmax);
-    if (u > l) {
-        *lo = l;
-        *hi = u;
-    }
+    hist_foreground_range(&h, q_lo, q_hi, rmin, rmax, lo, hi);
     free(h.bins);
 }
 
