@@ -237,25 +237,6 @@ int vv_grid_file_detect(const char *path, vv_grid_format *fmt);
  */
 vv_status vv_grid_load(vv_grid **out, const char *path);
 
-/* Per-format readers, each with the contract of vv_grid_load (*out owned
- * by the caller, NULL on error; reentrant). */
-/** VTK legacy UNSTRUCTURED_GRID, ASCII or binary (also the 5.1 OFFSETS /
- *  CONNECTIVITY form). */
-vv_status vv_grid_read_vtk(vv_grid **out, const char *path);
-/** VTK XML UnstructuredGrid (.vtu, one piece) through libxml2: inline or
- *  appended, raw or base64, zlib; DOCTYPE and entities are refused. */
-vv_status vv_grid_read_vtu(vv_grid **out, const char *path);
-/** OpenDX native file: positions, connections (tetrahedra, cubes) and data,
- *  text or binary. */
-vv_status vv_grid_read_dx(vv_grid **out, const char *path);
-/** PLOT3D grid (.xyz / .bin) with its solution (.q) in @p q_path, which may
- *  be NULL (the grid alone); the layout (record markers, blocks, byte
- *  order, precision, IBLANK) is found from the file size. */
-vv_status vv_grid_read_plot3d(vv_grid **out, const char *xyz_path, const char *q_path);
-/** NetCDF with CF conventions (a spherical grid of cell data from
- *  longitude, latitude and depth axes); VV_ERR_UNSUPPORTED in a build
- *  without libnetcdf. */
-vv_status vv_grid_read_netcdf(vv_grid **out, const char *path);
 
 /**
  * Marching Tetrahedra: the isosurface f = @p isovalue of scalar field
