@@ -60,12 +60,8 @@ typedef enum vv_cell_type {
     VV_CELL_PYRAMID = 14
 } vv_cell_type;
 
-/** Points of a cell type (0 for types the grid model does not know). */
-int vv_cell_type_points(int type);
 /** Name of a cell type ("tetra", "hexahedron", ...); "unknown" otherwise. */
 const char *vv_cell_type_name(int type);
-/** 1 for the 3-D types (tetra, hexahedron, wedge, pyramid). */
-int vv_cell_type_is_3d(int type);
 
 /** A field on a grid. */
 typedef struct vv_grid_field {
@@ -236,7 +232,6 @@ int vv_grid_file_detect(const char *path, vv_grid_format *fmt);
  * VV_ERR_UNSUPPORTED (a format this build cannot read), VV_ERR_NOMEM.
  */
 vv_status vv_grid_load(vv_grid **out, const char *path);
-
 
 /**
  * Marching Tetrahedra: the isosurface f = @p isovalue of scalar field
