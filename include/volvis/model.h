@@ -244,7 +244,7 @@ typedef enum vv_texture_projection {
  * the unit part of X (or Y when W is within 25 degrees of X) perpendicular to W,
  * V = W x U; the angle is atan2(d.V, d.U) in [0, 2pi). Texture
  * coordinates (u, v) = (scale[0] s, scale[1] t), looked up with
- * vv_texture_image_sample; the texture colour multiplies the material
+ * bilinear filtering, repeating; the texture colour multiplies the material
  * colour.
  */
 typedef struct vv_texture_map {

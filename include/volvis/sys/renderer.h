@@ -293,8 +293,8 @@ void vv_region_image_finish(vv_region_image *img, vv_vec3 background);
 /**
  * The World a region method renders: @p w's settings (view, lights, cut
  * planes, shading) with the region's object alone, its volume replaced by
- * the region's voxels (vv_render_region_part). Points into itself: filled
- * in place by vv_render_region_world and not copied; nothing in it is
+ * the region's voxels. Points into itself: filled in place by the region
+ * helpers of src/render (frame.h) and not copied; nothing in it is
  * released; it lives as long as @p w and the region.
  */
 typedef struct vv_region_world {
@@ -428,7 +428,7 @@ typedef struct vv_renderer_ops {
      * object region->object into @p out (vv_region_image), on one ray
      * through each pixel centre, or on the points of region->rays (then it
      * must not set out->supersample). The World has that one visible object
-     * (vv_render_region_check); its own volume spans the same world box
+     * (checked by the frame runner before the call); its own volume spans the same world box
      * and holds real voxels: the whole volume (distributed rendering of an
      * in-memory volume) or a coarse proxy (out of core): a method with
      * global effects traces them through it, so they are exact only with
@@ -537,12 +537,12 @@ vv_status vv_frame_run(const vv_frame_job *job, const vv_render_options *opt);
  * One pixel of a refined tile: @p px gets the colour and opacity of pixel
  * centre (x, y) over the background (px[0..3], the image's layout) and its
  * depth (px[4]); @p work is the tile's own accumulator, passed through
- * (vv_frame_refine_tile). Called on the tile's thread; a pure function of
- * (x, y) for the frame, so that the image is the same for any thread count.
+ * (the frame runner's refinement, src/render/frame.c). Called on the tile's thread; a pure function
+ * of (x, y) for the frame, so that the image is the same for any thread count.
  */
 typedef void (*vv_frame_pixel_fn)(void *user, int x, int y, float px[5], void *work);
 
-/** The lattice of vv_frame_refine_tile: every 4th pixel in x and y. */
+/** The lattice of the refinement: every 4th pixel in x and y. */
 #define VV_FRAME_REFINE_LATTICE 4
 
 /** The words of the refinement options (VV_FRAME_REFINE_OPTIONS):
@@ -554,7 +554,7 @@ extern const char *const vv_frame_refine_auto[];
  * A renderer's refinement settings, the values of its
  * VV_FRAME_REFINE_OPTIONS: mode 0 auto (at quality 0 and 1, and where the
  * renderer says), 1 on, 2 off;
- * tolerance < 0 by quality (vv_frame_refine_tolerance). A member of the
+ * tolerance < 0 by quality (1/16, 1/64, 1/1024 at quality 0, 1, 2). A member of the
  * renderer's state that the two option rows bind to, read when a frame
  * starts.
  */
@@ -569,7 +569,7 @@ typedef struct vv_frame_refine_settings {
  * state type @p type: `refinement` (enum auto/on/off: mode 0 auto, when
  * the string literal @p when says, at least at quality 0 and 1; 1 on; 2
  * off) and `refinement_tolerance` (real in [0, 1], or auto: tolerance -1,
- * vv_frame_refine_tolerance of the quality).
+ * the tolerance of the quality).
  */
 /* clang-format off */
 #define VV_FRAME_REFINE_OPTIONS(type, field, when)                                                 \
