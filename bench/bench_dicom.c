@@ -26,6 +26,16 @@
 #define PROG "bench_dicom"
 #define PYTHON "/usr/bin/python3"
 
+/* Writes @p v uncompressed through the format table (vv_volume_save_with). */
+static vv_status
+save_plain(const vv_volume *v, const char *path, vv_format format) {
+    vv_save_options o;
+    vv_save_options_init(&o);
+    o.format = format;
+    o.compress = 0;
+    return vv_volume_save_with(v, path, &o);
+}
+
 static double
 time_load(const char *path, int repeat, vv_volume **keep) {
     double *t = malloc((size_t)repeat * sizeof *t);
@@ -97,7 +107,7 @@ main(int argc, char **argv) {
     snprintf(dataset, sizeof dataset, "ct%dx%dx%d", v->dims[0], v->dims[1], v->dims[2]);
     fprintf(stderr, "%s: %s: %d x %d x %d %s, range %g .. %g\n", PROG, folder, v->dims[0],
             v->dims[1], v->dims[2], vv_voxel_type_name(v->type), v->range[0], v->range[1]);
-    if (vv_nrrd_write(v, nrrd, 0) != VV_OK)
+    if (save_plain(v, nrrd, VV_FORMAT_NRRD) != VV_OK)
         bench_die(PROG, nrrd);
     vv_volume_free(v);
     double t_nrrd = time_load(nrrd, repeat, NULL);

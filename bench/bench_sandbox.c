@@ -33,6 +33,16 @@
 #define PROG "bench_sandbox"
 #define PYTHON "/usr/bin/python3"
 
+/* Writes @p v uncompressed through the format table (vv_volume_save_with). */
+static vv_status
+save_plain(const vv_volume *v, const char *path, vv_format format) {
+    vv_save_options o;
+    vv_save_options_init(&o);
+    o.format = format;
+    o.compress = 0;
+    return vv_volume_save_with(v, path, &o);
+}
+
 static double
 load_once(const char *path) {
     vv_volume *v = NULL;
@@ -135,11 +145,11 @@ measure_own(const char *self, int repeat, int keep) {
     }
     vv_volume *v = cube512();
     snprintf(path, sizeof path, "%s/cube512.mha", tmp);
-    if (vv_mhd_write(v, path, 0) != VV_OK)
+    if (save_plain(v, path, VV_FORMAT_MHD) != VV_OK)
         bench_die(PROG, path);
     measure(self, path, "mha512", repeat);
     snprintf(path, sizeof path, "%s/cube512.vvb", tmp);
-    if (vv_volume_write_vvb(v, path, 0) != VV_OK)
+    if (vv_volume_save(v, path, VV_FORMAT_VVB, 0) != VV_OK)
         bench_die(PROG, path);
     measure(self, path, "vvb512", repeat);
     vv_volume_free(v);
@@ -184,7 +194,7 @@ main(int argc, char **argv) {
     /* 512^3 u16, written raw */
     vv_volume *v = cube512();
     snprintf(path, sizeof path, "%s/cube512.nrrd", tmp);
-    if (vv_nrrd_write(v, path, 0) != VV_OK)
+    if (save_plain(v, path, VV_FORMAT_NRRD) != VV_OK)
         bench_die(PROG, path);
     vv_volume_free(v);
     measure(argv[0], path, "nrrd512", repeat);

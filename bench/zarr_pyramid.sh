@@ -7,7 +7,7 @@
 # (every node at level 0), the chunks decoded by the sandboxed readers, then
 # at full resolution decoded in-process; the folder is deleted after. Needs root (cgroup)
 # and about 2 SIDE^3 bytes of free disk. The conversion runs chunk by chunk
-# (vv_ome_zarr_write_boxes) inside the same cgroup limit: its time and its
+# (vv_volume_save_boxes to OME-Zarr) inside the same cgroup limit: its time and its
 # peak resident set (GNU time) are printed, in a cgroup of its own: the page
 # cache of the files it reads and writes stays charged to its cgroup.
 # With TYPE u16 the volume holds 16 times the values as u16 (issue 29's

@@ -115,6 +115,16 @@ vt_write_file(const char *path, const void *data, size_t n) {
     fclose(f);
 }
 
+vv_status
+vt_save(const vv_volume *v, const char *path, vv_format format, int compress, unsigned vvb_flags) {
+    vv_save_options o;
+    vv_save_options_init(&o);
+    o.format = format;
+    o.compress = compress;
+    o.vvb_flags = vvb_flags;
+    return vv_volume_save_with(v, path, &o);
+}
+
 unsigned char *
 vt_read_file(const char *path, size_t *n) {
     FILE *f = fopen(path, "rb");

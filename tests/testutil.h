@@ -78,6 +78,15 @@ vv_cache *vt_cache(uint64_t limit);
 /** Writes @p n bytes to @p path (overwrites); fails the test on error. */
 void vt_write_file(const char *path, const void *data, size_t n);
 
+/**
+ * Writes @p v to @p path through the format table (vv_volume_save_with) as
+ * @p format, compressed as @p compress says (-1: the format's default, 0:
+ * none, 1: compressed), a .vvb with @p vvb_flags: how a test writes a file
+ * it then reads. Returns the writer's status.
+ */
+vv_status vt_save(const vv_volume *v, const char *path, vv_format format, int compress,
+                  unsigned vvb_flags);
+
 /** Reads a whole file (malloc'ed, caller frees); fails the test on error. */
 unsigned char *vt_read_file(const char *path, size_t *n);
 

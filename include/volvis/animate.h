@@ -209,18 +209,11 @@ vv_status vv_animation_check_world(const vv_animation *a, const vv_world *world)
 vv_status vv_anim_track_eval(const vv_anim_track *track, double time, double value[4], vv_tf *tf);
 
 /**
- * Applies the animation at @p time to @p world in place: @p world must hold
- * the base state (a vv_world_clone of the World the animation was made for),
- * as the sequences are relative to it. Errors: VV_ERR_INVALID (a target is
- * missing, see vv_animation_check_world), VV_ERR_NOMEM.
- */
-vv_status vv_animation_apply(const vv_animation *a, vv_world *world, double time);
-
-/**
  * The World at @p time: a vv_world_clone of @p base (borrowed, unchanged)
  * with the animation applied; for previews and the final render. The caller
  * frees *out. Thread-safe for concurrent calls on one animation and base.
- * Errors: as vv_animation_apply.
+ * Errors: VV_ERR_INVALID (a target is missing, see vv_animation_check_world),
+ * VV_ERR_NOMEM.
  */
 vv_status vv_animation_eval(const vv_animation *a, const vv_world *base, double time,
                             vv_world **out);

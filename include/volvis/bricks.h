@@ -1,11 +1,13 @@
 /*
- * VolVis's bricked file format, .vvb (docs/file-formats.md): the writers.
+ * VolVis's bricked file format, .vvb (docs/file-formats.md): the writer's
+ * flags.
  * A .vvb holds a volume larger than memory as bricks of VV_BRICK_CELLS^3
  * cells with a one-voxel ghost border, each with its min and max in an
  * index, optionally a coarse level per brick and pyramid levels; vv_open
  * (io.h) opens one out of core by bricks or, with levels, as a pyramid.
- *
- * Thread-safety: the writers are reentrant.
+ * A .vvb is written through the format table: vv_volume_save_with or
+ * vv_volume_save_boxes (io.h) with VV_FORMAT_VVB (or the extension .vvb)
+ * and these flags in vv_save_options.vvb_flags.
  */
 #ifndef VOLVIS_BRICKS_H
 #define VOLVIS_BRICKS_H
@@ -21,7 +23,7 @@
 extern "C" {
 #endif
 
-/** vv_bricked_write_vvb flags: each brick also gets its coarse level
+/** vv_save_options.vvb_flags: each brick also gets its coarse level
  * (every 4th voxel; previews read those). */
 #define VV_VVB_COARSE 1u
 /** Each brick's voxels are one zstd frame (level 3), decoded when the brick
@@ -35,26 +37,6 @@ extern "C" {
  * (docs/file-formats.md). Written from level 0 read back, a chunk at a
  * time: memory stays bounded. */
 #define VV_VVB_LEVELS 4u
-
-/**
- * Writes the in-memory volume @p v as a .vvb file (for formats that cannot
- * be read by bricks: compressed NRRD, SLC, NIfTI, ...); @p flags as
- * vv_bricked_write_vvb. Errors: VV_ERR_IO, VV_ERR_NOMEM.
- */
-vv_status vv_volume_write_vvb(const vv_volume *v, const char *path, unsigned flags);
-
-/**
- * Writes a .vvb file of the volume @p hdr describes (dims, type, geometry;
- * its voxels are not read) from a box reader, one brick (with its ghost
- * voxels) at a time in brick order (i fastest, then j, then k): memory is
- * the reader's and a brick's (vv_slabs: one slab of 66 slices, the ghost
- * slices the next layer of bricks shares kept). @p flags as
- * vv_bricked_write_vvb. Atomic as it: on failure nothing is left. Errors:
- * VV_ERR_IO, VV_ERR_NOMEM, the reader's, VV_ERR_INVALID (a box of another
- * shape or type from @p read).
- */
-vv_status vv_boxes_write_vvb(const vv_volume *hdr, vv_box_reader read, void *ctx, const char *path,
-                             unsigned flags, const vv_progress *progress);
 
 #ifdef __cplusplus
 }

@@ -124,9 +124,6 @@ typedef enum vv_filter_kernel {
     VV_KERNEL_SINC         /**< Hann-windowed sinc, 3 lobes each side ["hann:1,3"] */
 } vv_filter_kernel;
 
-/** Parses "nearest", "linear", "bspline" (or "cubic"), "sinc"; VV_ERR_INVALID otherwise. */
-vv_status vv_filter_kernel_parse(const char *name, vv_filter_kernel *out);
-
 /**
  * Resamples to @p dims voxels (each 1..VV_VOLUME_MAX_DIM) over the same
  * extent: node-centred, output voxel 0 at input voxel 0 and the last at the

@@ -60,12 +60,8 @@ typedef enum vv_cell_type {
     VV_CELL_PYRAMID = 14
 } vv_cell_type;
 
-/** Points of a cell type (0 for types the grid model does not know). */
-int vv_cell_type_points(int type);
 /** Name of a cell type ("tetra", "hexahedron", ...); "unknown" otherwise. */
 const char *vv_cell_type_name(int type);
-/** 1 for the 3-D types (tetra, hexahedron, wedge, pyramid). */
-int vv_cell_type_is_3d(int type);
 
 /** A field on a grid. */
 typedef struct vv_grid_field {
@@ -236,26 +232,6 @@ int vv_grid_file_detect(const char *path, vv_grid_format *fmt);
  * VV_ERR_UNSUPPORTED (a format this build cannot read), VV_ERR_NOMEM.
  */
 vv_status vv_grid_load(vv_grid **out, const char *path);
-
-/* Per-format readers, each with the contract of vv_grid_load (*out owned
- * by the caller, NULL on error; reentrant). */
-/** VTK legacy UNSTRUCTURED_GRID, ASCII or binary (also the 5.1 OFFSETS /
- *  CONNECTIVITY form). */
-vv_status vv_grid_read_vtk(vv_grid **out, const char *path);
-/** VTK XML UnstructuredGrid (.vtu, one piece) through libxml2: inline or
- *  appended, raw or base64, zlib; DOCTYPE and entities are refused. */
-vv_status vv_grid_read_vtu(vv_grid **out, const char *path);
-/** OpenDX native file: positions, connections (tetrahedra, cubes) and data,
- *  text or binary. */
-vv_status vv_grid_read_dx(vv_grid **out, const char *path);
-/** PLOT3D grid (.xyz / .bin) with its solution (.q) in @p q_path, which may
- *  be NULL (the grid alone); the layout (record markers, blocks, byte
- *  order, precision, IBLANK) is found from the file size. */
-vv_status vv_grid_read_plot3d(vv_grid **out, const char *xyz_path, const char *q_path);
-/** NetCDF with CF conventions (a spherical grid of cell data from
- *  longitude, latitude and depth axes); VV_ERR_UNSUPPORTED in a build
- *  without libnetcdf. */
-vv_status vv_grid_read_netcdf(vv_grid **out, const char *path);
 
 /**
  * Marching Tetrahedra: the isosurface f = @p isovalue of scalar field

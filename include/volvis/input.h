@@ -180,8 +180,6 @@ typedef struct vv_input_raw_event {
 
 /** "key", "button", "pointer", "scroll", "axis", "motion6", "pose", "added", "removed". */
 const char *vv_input_raw_kind_name(vv_input_raw_kind k);
-/** Number of values a raw event of kind @p k carries (0..7). */
-int vv_input_raw_kind_values(vv_input_raw_kind k);
 
 /* ---- the virtual device and actions ---------------------------------------- */
 

@@ -412,79 +412,6 @@ vv_status vv_volume_save(const vv_volume *v, const char *path, vv_format format,
  */
 vv_status vv_texture_image_load(vv_texture_image **out, const char *path, const char *source);
 
-/* ---- per-format entry points (same contracts as above) ---------------- */
-
-vv_status vv_slc_read(vv_volume **out, const char *path);
-/** Writes 8-bit SLC, RLE-compressed when @p rle, with a maximum-projection icon. */
-vv_status vv_slc_write(const vv_volume *v, const char *path, int rle);
-
-/** NRRD through Teem (attached or detached header, lists, patterns). */
-vv_status vv_nrrd_read(vv_volume **out, const char *path);
-/** Writes NRRD with gzip encoding (raw when @p gzip is 0), spacing and origin. */
-vv_status vv_nrrd_write(const vv_volume *v, const char *path, int gzip);
-
-/** NIfTI-1/NIfTI-2 (.nii, .nii.gz, .hdr/.img) through nifti_clib; scaling applied. */
-vv_status vv_nifti_read(vv_volume **out, const char *path);
-/**
- * Writes NIfTI-1 (NIfTI-2 when opt->nifti_version is 2 or an axis is over
- * 32767 voxels) as one file: .nii, or .nii.gz gzip-compressed. Voxel type,
- * spacing, origin and direction are kept (an LPS volume's world turned into
- * NIfTI's RAS); sform always, qform when the direction is orthonormal;
- * intent NIFTI_INTENT_LABEL when opt->label. Atomic. @p opt may be NULL.
- * Errors: VV_ERR_UNSUPPORTED (another extension; a float label volume;
- * NIfTI-1 asked for a volume it cannot hold), VV_ERR_INVALID, VV_ERR_IO.
- */
-vv_status vv_nifti_write(const vv_volume *v, const char *path, const vv_save_options *opt);
-/** MetaImage .mhd (detached data) or .mha (LOCAL data), optionally zlib-compressed. */
-vv_status vv_mhd_read(vv_volume **out, const char *path);
-/**
- * Writes MetaImage: .mha (one file) or .mhd with its data beside it (.raw,
- * or .zraw when compressed), every voxel type, spacing, origin and
- * direction (a RAS volume's world turned into ITK's LPS); zlib-compressed
- * unless @p compress is 0. Atomic (an .mhd's data file is removed when its
- * header cannot be written). Errors: VV_ERR_UNSUPPORTED (another
- * extension), VV_ERR_INVALID, VV_ERR_IO, VV_ERR_NOMEM.
- */
-vv_status vv_mhd_write(const vv_volume *v, const char *path, int compress);
-/** VTK legacy STRUCTURED_POINTS, BINARY (big-endian) or ASCII, first SCALARS array
- *  (its first component; vv_volume_load's channel picks another of its 1..4). */
-vv_status vv_vtk_read(vv_volume **out, const char *path);
-/**
- * Writes VTK legacy STRUCTURED_POINTS, BINARY (big-endian voxels, as the
- * format defines them), every voxel type, origin and spacing; the format has
- * no direction matrix, so an oblique volume is written axis-aligned (the
- * format record's fits says so first). Atomic. Errors: VV_ERR_INVALID (no
- * data, non-finite geometry), VV_ERR_IO, VV_ERR_NOMEM.
- */
-vv_status vv_vtk_write(const vv_volume *v, const char *path);
-/**
- * Writes VTK XML image data (.vti, as ParaView reads it): WholeExtent,
- * Origin, Spacing and Direction (row-major, VTK >= 9), the voxels as one
- * point-data array "scalars" of the volume's type in one appended block,
- * zlib-compressed in VTK's block layout when @p compress, raw otherwise;
- * the host's byte order, UInt64 headers. Atomic. Errors: as vv_vtk_write.
- */
-vv_status vv_vti_write(const vv_volume *v, const char *path, int compress);
-/**
- * Writes @p v as an OME-Zarr 0.4 store (a Zarr v2 folder, src/io/zarr_write.c):
- * levels 0..L, each half the previous along every axis longer than one
- * voxel, until every axis fits a chunk; a voxel of the next level is the
- * mean of its 2x2x2 voxels (rounded for integers) or, with opt->label, the
- * first of them. Arrays [z][y][x] in C order, chunks of at most 64^3,
- * little-endian voxels of the volume's type, zlib level 1 unless
- * opt->compress is 0; "/" dimension separator. Metadata: multiscales with
- * axes z, y, x (space; the unit as OME-NGFF names it when known), each
- * level's scale (spacing x factor) and translation (origin, shifted to the
- * centre of the averaged voxels), omero (one channel, the value range as
- * its window), image-label for labels. No direction matrix (the record's
- * fits says so). Atomic: written into "<path>.tmp-XXXXXX", synced, then
- * renamed into place or exchanged with an old store (an existing path that
- * is not a Zarr store is refused and left as it is). Chunks are written on
- * every core. @p opt may be NULL. Errors: VV_ERR_INVALID (no data, a
- * non-positive spacing), VV_ERR_UNSUPPORTED (a float label volume), VV_ERR_IO
- * (nothing is left behind), VV_ERR_NOMEM.
- */
-vv_status vv_ome_zarr_write(const vv_volume *v, const char *path, const vv_save_options *opt);
 /**
  * A volume read slab by slab: boxes of a file larger than memory in a
  * format whose reader decodes a range of slices (VV_FORMAT_FLAG_SLICES:
@@ -495,7 +422,7 @@ vv_status vv_ome_zarr_write(const vv_volume *v, const char *path, const vv_save_
  * from slab to slab, from its start again only when a box goes back). The
  * slices of the last box read are kept, and a box within them is cut from
  * them: the boxes of one slab asked for in turn (what
- * vv_ome_zarr_write_boxes does: every row of chunks of a slab before the
+ * vv_volume_save_boxes does for OME-Zarr: every row of chunks of a slab before the
  * next slab) decode each slice once. Memory: the slices of one box, of the
  * volume's width x height. Not thread-safe: one call at a time (the
  * writer's reads are).
@@ -526,23 +453,6 @@ vv_status vv_slabs_read_box(void *slabs, const int lo[3], const int hi[3], vv_vo
 /** Frees @p s (NULL accepted). */
 void vv_slabs_free(vv_slabs *s);
 /**
- * Writes the OME-Zarr store of vv_ome_zarr_write (the same levels, chunks
- * and bytes) from a volume that need not fit in memory: level 0 a row of
- * chunks (the volume's width x 64 x 64 voxels) at a time from @p read,
- * called from one thread at a time, and each further level from the level
- * before, read back from the store being written (the 2x2x2 blocks under
- * each of its chunks). Memory a thread: one row of chunks for level 0, about
- * nine chunks for the others (128^3 voxels of the level before, one chunk
- * and their compressed bytes), whatever the volume's depth. @p hdr gives the
- * dims, type, spacing, origin and unit (its voxels are never read); the
- * omero window is the range of the voxels read. Chunks are compressed and
- * written on every core. Atomic as vv_ome_zarr_write. Errors: those of
- * vv_ome_zarr_write, the reader's first error (nothing is left behind),
- * VV_ERR_INVALID (a box of another shape or type from @p read).
- */
-vv_status vv_ome_zarr_write_boxes(const vv_volume *hdr, vv_box_reader read, void *ctx,
-                                  const char *path, const vv_save_options *opt);
-/**
  * Writes the volume @p hdr describes (dims, type, spacing, origin, unit;
  * its voxels are never read) from a box reader (@p read, called with @p ctx
  * from one thread at a time), in memory bounded by the format's pieces
@@ -555,55 +465,12 @@ vv_status vv_ome_zarr_write_boxes(const vv_volume *hdr, vv_box_reader read, void
 vv_status vv_volume_save_boxes(const vv_volume *hdr, vv_box_reader read, void *ctx,
                                const char *path, const vv_save_options *opt);
 
-/**
- * Writes @p m as VTK XML PolyData (.vtp): Float32 points, per-vertex normals
- * ("Normals") and scalars (named @p scalar_name, "scalars" when NULL: the
- * label or the field the surface was extracted from) when the mesh has
- * them, the triangles as Int64 connectivity and offsets, one raw appended
- * block each. Atomic. Errors: VV_ERR_INVALID (empty mesh, a name that is not
- * plain text), VV_ERR_IO, VV_ERR_NOMEM.
- */
-vv_status vv_vtp_write(const vv_mesh *m, const char *path, const char *scalar_name);
-/**
- * Raw voxels described by @p params (borrowed). The file must hold at least
- * header_skip + the volume's bytes; VV_ERR_FORMAT names both sizes otherwise.
- */
-vv_status vv_raw_read(vv_volume **out, const char *path, const vv_raw_params *params);
+/* ---- DICOM series -------------------------------------------------------- */
 
-/**
- * A TIFF stack: @p path is a multi-page TIFF (also BigTIFF) or a folder whose
- * .tif/.tiff files (sorted by name, digit runs compared as numbers) are the
- * pages in order. Pages must agree in size and sample type: 8/16/32-bit
- * integers (signed or not) and 32/64-bit floats, striped or tiled, any
- * compression libtiff decodes (none, LZW, deflate, PackBits, ...). OME-TIFF
- * (PhysicalSizeX/Y/Z, SizeZ/SizeC/SizeT, DimensionOrder) and ImageJ
- * hyperstacks (images/channels/slices/frames, spacing, unit, X/YResolution)
- * give the spacing and the channel layout; the volume is the first time
- * point of channel @p channel (-1: 0), which also picks a sample of a
- * multi-sample (RGB) page. Errors name the file, the page and the strip or
- * tile: VV_ERR_IO, VV_ERR_FORMAT, VV_ERR_LIMIT (sizes are checked before
- * allocation), VV_ERR_UNSUPPORTED, VV_ERR_INVALID (channel out of range).
- */
-vv_status vv_tiff_read(vv_volume **out, const char *path, int channel);
-
-/**
- * Writes @p v to @p path as a multi-page TIFF through libtiff, atomically:
- * page k is slice k (dims[0] x dims[1] pixels, one sample, row 0 first),
- * in the voxel type (8/16/32-bit integers with SampleFormat UINT or INT,
- * 32/64-bit IEEE floats), strips of at most 256 KiB, compressed by
- * opt->codec (deflate by default; integers with horizontal
- * differencing). A name ending .ome.tif or .ome.tiff gets OME-XML (OME
- * 2016-06: Pixels XYZCT, PhysicalSizeX/Y/Z in the volume's unit, "pixel"
- * when unknown, a Plane per slice with its position), any other name
- * ImageJ's keys (slices, spacing, unit, the origin in voxels) and
- * X/YResolution = 1 / spacing. BigTIFF when opt->bigtiff or the voxels
- * reach 3.75 GiB. The direction matrix is not held (the record's fits
- * says so). @p opt may be NULL (the defaults). Errors: VV_ERR_INVALID (no
- * data, a non-positive spacing, an unknown codec), VV_ERR_UNSUPPORTED (a
- * codec this libtiff lacks), VV_ERR_IO (with libtiff's message; nothing is
- * left behind), VV_ERR_NOMEM. Reentrant.
- */
-vv_status vv_tiff_write(const vv_volume *v, const char *path, const vv_save_options *opt);
+/* The one format-specific call left public: which series a DICOM folder
+ * holds is what a front end shows before reading (volvis info, the GUI's
+ * series chooser); the series is then read through vv_volume_load or
+ * vv_world_open with vv_load_options.series. */
 
 /** One DICOM image series found by vv_dicom_list. Strings are NUL-terminated. */
 typedef struct vv_dicom_series {
@@ -630,32 +497,6 @@ typedef struct vv_dicom_series {
  * images"), VV_ERR_UNSUPPORTED (built without GDCM), VV_ERR_NOMEM.
  */
 vv_status vv_dicom_list(vv_dicom_series **out, int *n, const char *path);
-
-/**
- * Reads series @p series (1-based as listed by vv_dicom_list; 0: the only
- * one) of @p path into a volume. Slices are sorted by Image Position
- * (Patient) along the slice normal (cross product of Image Orientation
- * (Patient)'s row and column directions); the slice spacing is the distance
- * between positions, and uneven spacing, a missing slice or two slices at one
- * position are errors naming the files and the gap. Rescale Slope and
- * Intercept are applied (CT in Hounsfield units): the volume is i16/u16/i32
- * when every slope is 1 and every intercept an integer and the rescaled range
- * fits, else f32. Multi-frame files (enhanced CT/MR, one file per series)
- * take their frame positions from the per-frame functional groups. Geometry:
- * direction columns are the row direction, the column direction and the
- * slice normal, origin the first slice's position, both converted from
- * DICOM's LPS to RAS (x and y negated) with space VV_SPACE_RAS, unit mm.
- * Compressed transfer syntaxes (JPEG baseline/extended/lossless, JPEG-LS,
- * JPEG 2000, RLE, deflate) are decoded by GDCM. @p channel picks a sample of
- * multi-sample (RGB) images (-1: 0). No patient identifier is kept.
- * Errors name the file: VV_ERR_IO, VV_ERR_FORMAT, VV_ERR_LIMIT,
- * VV_ERR_UNSUPPORTED, VV_ERR_INVALID (series out of range).
- */
-vv_status vv_dicom_read(vv_volume **out, const char *path, int series, int channel);
-
-/** Like vv_dicom_read for an explicit list of @p n DICOM files. */
-vv_status vv_dicom_read_files(vv_volume **out, const char *const *files, int n, int series,
-                              int channel);
 
 #ifdef __cplusplus
 }

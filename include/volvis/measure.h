@@ -128,14 +128,6 @@ vv_status vv_histogram2d_compute(vv_histogram2d **out, const vv_volume *v, int n
                                  double gradient_hi);
 /** Releases a joint histogram. Accepts NULL. */
 void vv_histogram2d_free(vv_histogram2d *h);
-/**
- * Gradient magnitude of voxel (i, j, k) of @p v as vv_histogram2d_compute
- * defines it; @p g2w is the 3x3 inverse transpose of the linear part of the
- * volume's index-to-world matrix (vv_histogram2d_gradient_matrix).
- */
-double vv_histogram2d_gradient_at(const vv_volume *v, const double g2w[3][3], int i, int j, int k);
-/** The index-gradient to world-gradient matrix of @p v. Returns 0 when singular. */
-int vv_histogram2d_gradient_matrix(const vv_volume *v, double g2w[3][3]);
 
 /* ---- isosurface volume and area ------------------------------------------- */
 

@@ -128,7 +128,7 @@ vv_status vv_mesh_load(vv_mesh **out, const char *path);
  * Writes @p m atomically in the format its extension names: .ply (binary
  * little-endian), .obj, .stl (binary), .glb (glTF 2.0 binary, for Blender
  * and the web; Assimp's exporter), .vtp (VTK XML PolyData with the
- * per-vertex scalars as a point field: vv_vtp_write); normals are written
+ * per-vertex scalars as a point field); normals are written
  * where the format holds them. Errors: VV_ERR_INVALID (unknown extension,
  * empty mesh), VV_ERR_IO.
  */

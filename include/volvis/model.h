@@ -229,11 +229,6 @@ vv_status vv_texture_image_new(vv_texture_image **out, vv_image *image, const ch
 vv_texture_image *vv_texture_image_ref(vv_texture_image *t);
 /** Drops one reference, freeing on the last. Accepts NULL. */
 void vv_texture_image_free(vv_texture_image *t);
-/**
- * Bilinear colour at texture coordinates (u, v), repeat wrap: u = 0 is the
- * left edge of the image, v = 0 its top edge (row 0), one repeat per unit.
- */
-vv_vec3 vv_texture_image_sample(const vv_texture_image *t, double u, double v);
 
 /** How object points map to texture coordinates. */
 typedef enum vv_texture_projection {
@@ -249,7 +244,7 @@ typedef enum vv_texture_projection {
  * the unit part of X (or Y when W is within 25 degrees of X) perpendicular to W,
  * V = W x U; the angle is atan2(d.V, d.U) in [0, 2pi). Texture
  * coordinates (u, v) = (scale[0] s, scale[1] t), looked up with
- * vv_texture_image_sample; the texture colour multiplies the material
+ * bilinear filtering, repeating; the texture colour multiplies the material
  * colour.
  */
 typedef struct vv_texture_map {
@@ -262,8 +257,6 @@ typedef struct vv_texture_map {
 
 /** No image, planar, centre 0, axis +z, scale (1, 1). */
 void vv_texture_map_init(vv_texture_map *m);
-/** Texture coordinates (u, v) of object point @p q (before wrapping). */
-void vv_texture_map_uv(const vv_texture_map *m, vv_vec3 q, double *u, double *v);
 /** Texture colour at object point @p q; white when there is no image. */
 vv_vec3 vv_texture_map_eval(const vv_texture_map *m, vv_vec3 q);
 /** Name of a projection ("planar", ...); never NULL. */

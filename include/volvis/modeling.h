@@ -210,8 +210,6 @@ vv_status vv_shape_csg(vv_shape **out, vv_csg_op op, int n, vv_shape **children)
 void vv_shape_free(vv_shape *s);
 /** Applies @p M after the node's current transform (node -> parent: M * old). */
 void vv_shape_transform(vv_shape *s, vv_mat4 M);
-/** The node's transform to its parent's coordinates. */
-vv_mat4 vv_shape_get_transform(const vv_shape *s);
 /**
  * Conservative bounding box of the solid in the coordinates above the node
  * (its transform applied): for a union the union of the children's boxes,

@@ -258,9 +258,6 @@ const vv_option_spec *vv_renderer_info_option(const vv_renderer_info *info, cons
  */
 vv_status vv_renderer_info_check_option(const vv_renderer_info *info, const char *key,
                                         const char *value);
-/** 1 when @p info draws @p obj: its kind, for volumes and grids its mode, and
- * for a volume of several channels VV_RENDERER_CHANNELS. */
-int vv_renderer_info_draws(const vv_renderer_info *info, const vv_object *obj);
 
 /**
  * Checks that @p info can draw @p w: it must draw at least one visible
@@ -375,12 +372,6 @@ int vv_render_settings_quality(const vv_render_settings *rs);
  * Errors: VV_ERR_INVALID for an option the renderer refuses, with its key.
  */
 vv_status vv_renderer_apply_settings(vv_renderer *r, const vv_render_settings *rs);
-/**
- * A new renderer as @p rs asks for it: vv_renderer_new of
- * vv_render_settings_renderer, then vv_renderer_apply_settings. On failure
- * *out is NULL. Errors: those of both.
- */
-vv_status vv_renderer_new_from_settings(vv_renderer **out, const vv_render_settings *rs);
 /**
  * A new renderer for @p w: vv_renderer_new of vv_world_renderer(w), then
  * the options of its render settings (vv_renderer_apply_settings; they

@@ -6,8 +6,9 @@
 
 #include "volvis/grid.h"
 
-int
-vv_cell_type_points(int type) {
+/** Points of a cell type (0 for types the grid model does not know). */
+static int
+cell_type_points(int type) {
     switch (type) {
     case VV_CELL_VERTEX:
         return 1;
@@ -55,8 +56,9 @@ vv_cell_type_name(int type) {
     }
 }
 
-int
-vv_cell_type_is_3d(int type) {
+/** 1 for the 3-D types (tetra, hexahedron, wedge, pyramid). */
+static int
+cell_type_is_3d(int type) {
     return type == VV_CELL_TETRA || type == VV_CELL_HEXAHEDRON || type == VV_CELL_WEDGE ||
            type == VV_CELL_PYRAMID;
 }
@@ -278,7 +280,7 @@ vv_grid_validate(const vv_grid *g) {
         const size_t o0 = g->cell_offsets[c], o1 = g->cell_offsets[c + 1];
         if (o1 < o0)
             return vv_error_set(VV_ERR_FORMAT, "grid: cell %zu: offsets decrease", c);
-        const int np = vv_cell_type_points(t);
+        const int np = cell_type_points(t);
         if (t == VV_CELL_POLYGON) {
             if (o1 - o0 < 3)
                 return vv_error_set(VV_ERR_FORMAT, "grid: cell %zu: polygon of %zu points", c,
@@ -327,7 +329,7 @@ vv_grid_count_cells(const vv_grid *g, size_t *n3d, size_t *n_surface) {
     size_t a = 0, s = 0;
     for (size_t c = 0; c < g->n_cells; c++) {
         const int t = g->cell_types[c];
-        a += vv_cell_type_is_3d(t);
+        a += cell_type_is_3d(t);
         s += t == VV_CELL_TRIANGLE || t == VV_CELL_QUAD || t == VV_CELL_POLYGON;
     }
     if (n3d)

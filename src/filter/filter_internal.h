@@ -110,4 +110,7 @@ vv_status vf_label_mask(const uint8_t *mask, const int dims[3], int connectivity
                         const vv_filter_options *o, double p0, double p1, uint32_t *labels,
                         uint64_t **sizes, uint64_t *count);
 
+/** Parses "nearest", "linear", "bspline" (or "cubic"), "sinc"; VV_ERR_INVALID otherwise. */
+vv_status vv_filter_kernel_parse(const char *name, vv_filter_kernel *out);
+
 #endif

@@ -114,4 +114,7 @@ vv_status vv_input_parse_event(char **tok, int ntok, vv_input_raw_event *ev, cha
 /** Splits @p line in place at blanks; returns the number of tokens (at most max). */
 int vv_input_tokenize(char *line, char **tok, int max);
 
+/** Number of values a raw event of kind @p k carries (0..7). */
+int vv_input_raw_kind_values(vv_input_raw_kind k);
+
 #endif

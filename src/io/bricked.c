@@ -29,6 +29,7 @@
 #include "core/internal.h"
 #include "io/bricked.h"
 #include "io/bricked_internal.h"
+#include "io/io_internal.h"
 #include "io/pyramid.h"
 #include "io/vvb_layout.h"
 #include "volvis/sys/format.h"

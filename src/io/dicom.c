@@ -22,6 +22,7 @@
 #include "core/internal.h"
 #include "io/dicom.h"
 #include "io/dicom_scan.h"
+#include "io/io_internal.h"
 #include "io/prescan.h"
 #include "io/transport.h"
 #include "volvis/io.h"

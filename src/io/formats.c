@@ -21,6 +21,7 @@
 #include <zlib.h>
 
 #include "core/internal.h"
+#include "io/io_internal.h"
 #include "io/transport.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"

@@ -20,6 +20,7 @@
 
 #include "core/internal.h"
 #include "io/grid_io_internal.h"
+#include "io/io_internal.h"
 #include "volvis/grid.h"
 #include "volvis/sys/format.h"
 

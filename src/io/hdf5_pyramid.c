@@ -40,6 +40,7 @@
 #include <libxml/tree.h>
 
 #include "core/internal.h"
+#include "io/io_internal.h"
 #include "io/pyramid.h"
 #include "volvis/sys/format.h"
 

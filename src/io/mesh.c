@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "core/internal.h"
+#include "io/io_internal.h"
 #include "io/prescan.h"
 #include "volvis/io.h"
 #include "volvis/mesh.h"

@@ -21,6 +21,7 @@
 #include <unistd.h>
 
 #include "core/internal.h"
+#include "io/io_internal.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 #include "zout.h"

@@ -43,6 +43,7 @@
 #include <zlib.h>
 
 #include "core/internal.h"
+#include "io/io_internal.h"
 #include "io/prescan.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"

@@ -40,6 +40,7 @@
 
 #include "core/internal.h"
 #include "io/bricked_internal.h"
+#include "io/io_internal.h"
 #include "io/prescan.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"

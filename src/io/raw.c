@@ -12,6 +12,7 @@
 
 #include "core/internal.h"
 #include "io/bricked.h"
+#include "io/io_internal.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 

@@ -23,6 +23,7 @@
 #include <tiffio.h>
 
 #include "core/internal.h"
+#include "io/io_internal.h"
 #include "io/tiff_msg.h"
 #include "volvis/io.h"
 

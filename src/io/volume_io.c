@@ -10,6 +10,7 @@
 #include <sys/stat.h>
 
 #include "core/internal.h"
+#include "io/io_internal.h"
 #include "io/transport.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"

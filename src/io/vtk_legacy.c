@@ -14,6 +14,7 @@
 #include <sys/types.h>
 
 #include "core/internal.h"
+#include "io/io_internal.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 

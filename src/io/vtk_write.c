@@ -28,6 +28,7 @@
 #include <zlib.h>
 
 #include "core/internal.h"
+#include "io/io_internal.h"
 #include "io/vti.h"
 #include "volvis/io.h"
 #include "volvis/mesh.h"

@@ -25,6 +25,7 @@
 
 #include "core/internal.h"
 #include "io/bricked.h"
+#include "io/io_internal.h"
 #include "io/pyramid.h"
 #include "io/vvb_layout.h"
 

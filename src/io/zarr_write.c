@@ -51,6 +51,7 @@
 
 #include "core/internal.h"
 #include "core/parallel_for.h"
+#include "io/io_internal.h"
 #include "io/pyramid.h"
 #include "io/zarr.h"
 #include "volvis/io.h"

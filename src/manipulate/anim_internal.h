@@ -21,4 +21,12 @@ vv_status vv_anim_track_validate(const vv_anim_track *t, int *bad_key);
 /** Checks one sequence's fields. Errors: VV_ERR_INVALID. */
 vv_status vv_anim_sequence_check(const vv_anim_sequence *q);
 
+/**
+ * Applies the animation at @p time to @p world in place: @p world must hold
+ * the base state (a vv_world_clone of the World the animation was made for),
+ * as the sequences are relative to it. Errors: VV_ERR_INVALID (a target is
+ * missing, see vv_animation_check_world), VV_ERR_NOMEM.
+ */
+vv_status vv_animation_apply(const vv_animation *a, vv_world *world, double time);
+
 #endif

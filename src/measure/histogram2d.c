@@ -9,8 +9,9 @@
 #include "core/internal.h"
 #include "volvis/measure.h"
 
-int
-vv_histogram2d_gradient_matrix(const vv_volume *v, double g2w[3][3]) {
+/** The index-gradient to world-gradient matrix of @p v. Returns 0 when singular. */
+static int
+gradient_matrix(const vv_volume *v, double g2w[3][3]) {
     vv_mat4 m = vv_volume_index_to_world(v);
     int ok = 0;
     vv_mat4 inv = vv_mat4_inverse(m, &ok);
@@ -23,8 +24,13 @@ vv_histogram2d_gradient_matrix(const vv_volume *v, double g2w[3][3]) {
     return 1;
 }
 
-double
-vv_histogram2d_gradient_at(const vv_volume *v, const double g2w[3][3], int i, int j, int k) {
+/**
+ * Gradient magnitude of voxel (i, j, k) of @p v as vv_histogram2d_compute
+ * defines it; @p g2w is the 3x3 inverse transpose of the linear part of the
+ * volume's index-to-world matrix (gradient_matrix).
+ */
+static double
+gradient_at(const vv_volume *v, const double g2w[3][3], int i, int j, int k) {
     const int idx[3] = {i, j, k};
     double g[3];
     for (int a = 0; a < 3; a++) {
@@ -66,7 +72,7 @@ vv_histogram2d_compute(vv_histogram2d **out, const vv_volume *v, int nbins_value
     if (!isfinite(value_lo) || !isfinite(value_hi) || !isfinite(gradient_hi))
         return vv_error_set(VV_ERR_INVALID, "joint histogram: non-finite range");
     double g2w[3][3];
-    if (!vv_histogram2d_gradient_matrix(v, g2w))
+    if (!gradient_matrix(v, g2w))
         return vv_error_set(VV_ERR_INVALID, "joint histogram: singular index-to-world matrix");
     const int nx = v->dims[0], ny = v->dims[1], nz = v->dims[2];
     const size_t n = (size_t)nx * (size_t)ny * (size_t)nz;
@@ -84,7 +90,7 @@ vv_histogram2d_compute(vv_histogram2d **out, const vv_volume *v, int nbins_value
     for (int k = 0; k < nz; k++)
         for (int j = 0; j < ny; j++)
             for (int i = 0; i < nx; i++) {
-                double g = vv_histogram2d_gradient_at(v, (const double(*)[3])g2w, i, j, k);
+                double g = gradient_at(v, (const double(*)[3])g2w, i, j, k);
                 gm[((size_t)k * ny + j) * nx + i] = (float)g;
                 if (g > gmax)
                     gmax = g;

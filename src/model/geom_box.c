@@ -2,6 +2,7 @@
 #include <math.h>
 
 #include "core/geom.h"
+#include "model/model_internal.h"
 #include "volvis/sys/geometry.h"
 
 static vv_status

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "core/geom.h"
+#include "model/model_internal.h"
 #include "volvis/sys/geometry.h"
 
 /* What intersect and distance need: the plane, and the axis dropped to test

@@ -8,6 +8,7 @@
 #include <stddef.h>
 
 #include "core/geom.h"
+#include "model/model_internal.h"
 
 extern const vv_geom_type vv_geom_plane;
 extern const vv_geom_type vv_geom_polygon;

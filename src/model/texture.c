@@ -64,8 +64,12 @@ wrap(long x, int n) {
     return (int)(r < 0 ? r + n : r);
 }
 
-vv_vec3
-vv_texture_image_sample(const vv_texture_image *t, double u, double v) {
+/**
+ * Bilinear colour at texture coordinates (u, v), repeat wrap: u = 0 is the
+ * left edge of the image, v = 0 its top edge (row 0), one repeat per unit.
+ */
+static vv_vec3
+texture_image_sample(const vv_texture_image *t, double u, double v) {
     if (!t || !t->image || !isfinite(u) || !isfinite(v))
         return vv_vec3_make(1, 1, 1);
     const vv_image *im = t->image;
@@ -114,8 +118,9 @@ texture_frame(vv_vec3 axis, vv_vec3 *U, vv_vec3 *V, vv_vec3 *W) {
     *W = w;
 }
 
-void
-vv_texture_map_uv(const vv_texture_map *m, vv_vec3 q, double *u, double *v) {
+/** Texture coordinates (u, v) of object point @p q (before wrapping). */
+static void
+texture_map_uv(const vv_texture_map *m, vv_vec3 q, double *u, double *v) {
     vv_vec3 U, V, W;
     texture_frame(m->axis, &U, &V, &W);
     vv_vec3 d = vv_vec3_sub(q, m->center);
@@ -153,8 +158,8 @@ vv_texture_map_eval(const vv_texture_map *m, vv_vec3 q) {
     if (!m || !m->image)
         return vv_vec3_make(1, 1, 1);
     double u, v;
-    vv_texture_map_uv(m, q, &u, &v);
-    return vv_texture_image_sample(m->image, u, v);
+    texture_map_uv(m, q, &u, &v);
+    return texture_image_sample(m->image, u, v);
 }
 
 static const char *const projection_names[] = {"planar", "cylindrical", "spherical"};

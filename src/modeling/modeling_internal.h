@@ -107,4 +107,7 @@ void vv_mesh_loop_centroid(const vv_mesh *m, const vv_mesh_holes *h, size_t l, d
  */
 double vv_solid_angle(const double a[3], const double b[3], const double c[3]);
 
+/** The node's transform to its parent's coordinates. */
+vv_mat4 vv_shape_get_transform(const vv_shape *s);
+
 #endif

@@ -23,6 +23,7 @@
 
 #include "core/internal.h"
 #include "render/drivers.h"
+#include "render/frame.h"
 #include "render/tf_tables.h"
 #include "volvis/render.h"
 #include "volvis/sys/renderer.h"

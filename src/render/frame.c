@@ -19,6 +19,7 @@
 #include <string.h>
 
 #include "core/internal.h"
+#include "render/frame.h"
 #include "volvis/render.h"
 #include "volvis/sys/renderer.h"
 

@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "render/drivers.h"
+#include "render/frame.h"
 #include "render/registry.h"
 #include "volvis/render.h"
 #include "volvis/sys/renderer.h"
@@ -311,8 +312,10 @@ has_mode(vv_object_type t) {
     return t == VV_OBJECT_VOLUME || t == VV_OBJECT_GRID;
 }
 
-int
-vv_renderer_info_draws(const vv_renderer_info *info, const vv_object *obj) {
+/** 1 when @p info draws @p obj: its kind, for volumes and grids its mode, and
+ * for a volume of several channels VV_RENDERER_CHANNELS. */
+static int
+renderer_info_draws(const vv_renderer_info *info, const vv_object *obj) {
     if (!info || !obj || !(info->draws & VV_DRAWS(obj->type)))
         return 0;
     if (obj->n_channels > 1 && !(info->caps & VV_RENDERER_CHANNELS))
@@ -332,7 +335,7 @@ static const char *
 drawn_by(const vv_object *obj, char *buf, size_t cap) {
     buf[0] = '\0';
     for (int i = 0; i < N_REGISTRY; i++)
-        if (vv_renderer_info_draws(&registry[i]->info, obj))
+        if (renderer_info_draws(&registry[i]->info, obj))
             append(buf, cap, buf[0] ? ", %s" : "%s", registry[i]->info.name, 0);
     if (!buf[0])
         snprintf(buf, cap, "none");
@@ -395,7 +398,7 @@ vv_world_renderer(const vv_world *w) {
         int k = 0;
         for (int i = 0; i < w->n_objects; i++)
             k += has_content(w->objects[i]) &&
-                 vv_renderer_info_draws(&registry[r]->info, w->objects[i]);
+                 renderer_info_draws(&registry[r]->info, w->objects[i]);
         if (k == n)
             return registry[r]->info.name;
         if (k > best_n) {

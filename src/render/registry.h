@@ -34,4 +34,11 @@ void *vv_renderer_state(const vv_renderer *r);
 /** The number of entries of a static option table. */
 #define VV_OPTIONS_COUNT(table) ((int)(sizeof(table) / sizeof((table)[0])))
 
+/**
+ * A new renderer as @p rs asks for it: vv_renderer_new of
+ * vv_render_settings_renderer, then vv_renderer_apply_settings. On failure
+ * *out is NULL. Errors: those of both.
+ */
+vv_status vv_renderer_new_from_settings(vv_renderer **out, const vv_render_settings *rs);
+
 #endif

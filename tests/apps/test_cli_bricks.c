@@ -78,7 +78,7 @@ test_convert_render(void **state) {
     /* an uncompressed NRRD: converted brick by brick */
     vv_volume *v = NULL;
     vt_ok(vv_volume_load(&v, nut, NULL));
-    vt_ok(vv_nrrd_write(v, nrrd, 0));
+    vt_ok(vt_save(v, nrrd, VV_FORMAT_NRRD, 0, 0));
     vv_volume_free(v);
     cli_ok("convert", nrrd, vvb2);
     cli_ok("render", nut, "--tf", "40:200", "--size", "96x80", "--mode", "mip", "-o", mem);
@@ -131,7 +131,7 @@ test_too_big_for_memory(void **state) {
     snprintf(a, sizeof a, "%s/ball_auto.png", outdir());
     snprintf(b, sizeof b, "%s/ball_limit.png", outdir());
     snprintf(m, sizeof m, "%s/ball_mem.png", outdir());
-    vt_ok(vv_nrrd_write(v, nrrd, 0));
+    vt_ok(vt_save(v, nrrd, VV_FORMAT_NRRD, 0, 0));
     vv_volume_free(v);
     vt_run_result r = run_cli("--max-memory", "24M", "render", nrrd, "--size", "64x64", "-o", a);
     if (r.status != 0)
@@ -337,7 +337,7 @@ test_exact_shadows(void **state) {
     char nrrd[1200], svvb[1200];
     snprintf(nrrd, sizeof nrrd, "%s/shell.nrrd", outdir());
     snprintf(svvb, sizeof svvb, "%s/shell.vvb", outdir());
-    vt_ok(vv_nrrd_write(v, nrrd, 0));
+    vt_ok(vt_save(v, nrrd, VV_FORMAT_NRRD, 0, 0));
     vv_volume_free(v);
     cli_ok("convert", "-q", nrrd, svvb);
 #define SHELL_VIEW                                                                                 \

@@ -253,8 +253,8 @@ test_ct_head(void **state) {
     snprintf(vvb, sizeof vvb, "%s/head.vvb", dir);
     snprintf(raw, sizeof raw, "%s/head.raw", dir);
     snprintf(nrrd, sizeof nrrd, "%s/head_raw.nrrd", dir);
-    vt_ok(vv_volume_write_vvb(head, vvb, 1));
-    vt_ok(vv_nrrd_write(head, nrrd, 0));
+    vt_ok(vt_save(head, vvb, VV_FORMAT_VVB, -1, 1));
+    vt_ok(vt_save(head, nrrd, VV_FORMAT_NRRD, 0, 0));
     FILE *f = fopen(raw, "wb");
     assert_non_null(f);
     const size_t n = (size_t)head->dims[0] * head->dims[1] * head->dims[2];
@@ -264,7 +264,7 @@ test_ct_head(void **state) {
     /* zstd bricks: the same voxels and images, a smaller file */
     char vvbz[1200];
     snprintf(vvbz, sizeof vvbz, "%s/head_zstd.vvb", dir);
-    vt_ok(vv_volume_write_vvb(head, vvbz, VV_VVB_ZSTD));
+    vt_ok(vt_save(head, vvbz, VV_FORMAT_VVB, -1, VV_VVB_ZSTD));
     struct stat sr, sz;
     assert_int_equal(stat(vvb, &sr), 0);
     assert_int_equal(stat(vvbz, &sz), 0);
@@ -309,7 +309,7 @@ test_quality2_regions(void **state) {
     vt_ok(vv_volume_load(&head, vt_data("volumes/ct_head.nrrd"), NULL));
     char vvb[1200];
     snprintf(vvb, sizeof vvb, "%s/head_q2.vvb", outdir());
-    vt_ok(vv_volume_write_vvb(head, vvb, VV_VVB_ZSTD));
+    vt_ok(vt_save(head, vvb, VV_FORMAT_VVB, -1, VV_VVB_ZSTD));
     vv_bricked *b = NULL;
     vt_ok(vv_bricked_open(&b, vvb, NULL, vt_cache(4 << 20)));
     vv_brick_source src;
@@ -446,7 +446,7 @@ round_trip(unsigned flags) {
     vv_volume *v = synthetic();
     char path[1200];
     snprintf(path, sizeof path, "%s/syn%u.vvb", outdir(), flags);
-    vt_ok(vv_volume_write_vvb(v, path, flags));
+    vt_ok(vt_save(v, path, VV_FORMAT_VVB, -1, flags));
     vv_bricked *b = NULL;
     vt_ok(vv_bricked_open(&b, path, NULL, vt_cache(0)));
     int nb[3];
@@ -509,7 +509,7 @@ test_bad_vvb(void **state) {
     char good[1200], bad[1200];
     snprintf(good, sizeof good, "%s/good.vvb", outdir());
     snprintf(bad, sizeof bad, "%s/bad.vvb", outdir());
-    vt_ok(vv_volume_write_vvb(v, good, 1));
+    vt_ok(vt_save(v, good, VV_FORMAT_VVB, -1, 1));
     vv_bricked *b = NULL;
     /* brick 3's offset past the end of the file (index at 256, 48 bytes a brick) */
     const unsigned char far[8] = {0, 0, 0, 0, 0, 1, 0, 0};
@@ -547,7 +547,7 @@ test_bad_vvb(void **state) {
     /* zstd bricks */
     char goodz[1200];
     snprintf(goodz, sizeof goodz, "%s/goodz.vvb", outdir());
-    vt_ok(vv_volume_write_vvb(v, goodz, VV_VVB_ZSTD));
+    vt_ok(vt_save(v, goodz, VV_FORMAT_VVB, -1, VV_VVB_ZSTD));
     vt_ok(vv_bricked_open(&b, goodz, NULL, vt_cache(0)));
     vv_brick_info bi;
     vv_bricked_info(b, 2, &bi);

@@ -139,8 +139,8 @@ test_two_heads(void **state) {
     char bricks_path[1200], levels_path[1200];
     snprintf(bricks_path, sizeof bricks_path, "%s/head.vvb", outdir());
     snprintf(levels_path, sizeof levels_path, "%s/head_levels.vvb", outdir());
-    vt_ok(vv_volume_write_vvb(head, bricks_path, VV_VVB_ZSTD));
-    vt_ok(vv_volume_write_vvb(head, levels_path, VV_VVB_ZSTD | VV_VVB_LEVELS));
+    vt_ok(vt_save(head, bricks_path, VV_FORMAT_VVB, -1, VV_VVB_ZSTD));
+    vt_ok(vt_save(head, levels_path, VV_FORMAT_VVB, -1, VV_VVB_ZSTD | VV_VVB_LEVELS));
     vv_cache *cache = NULL;
     vt_ok(vv_cache_new(&cache, 12 << 20));
     vv_source *bricks = open_ooc(bricks_path, 0, cache);

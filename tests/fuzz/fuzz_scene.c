@@ -21,6 +21,16 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
  * every path (the budget's refusal included) at a fraction of the cost. */
 #define SCENE_FUZZ_BUDGET ((uint64_t)4 << 20)
 
+/* Writes @p v uncompressed through the format table (vv_volume_save_with). */
+static vv_status
+save_plain(const vv_volume *v, const char *path, vv_format format) {
+    vv_save_options o;
+    vv_save_options_init(&o);
+    o.format = format;
+    o.compress = 0;
+    return vv_volume_save_with(v, path, &o);
+}
+
 /* The files the error tests' scenes name (tests/scene/test_errors.c, whose
  * scenes seed the corpus: tests/fuzz/corpus_from_tests.py), beside in.json,
  * so that mutations reach the fields read after a volume or grid is
@@ -37,10 +47,10 @@ scene_files(void) {
     vv_volume_update_range(v);
     char p[1024];
     snprintf(p, sizeof p, "%s/vol.mhd", fuzz_dir());
-    if (vv_mhd_write(v, p, 0) != VV_OK)
+    if (save_plain(v, p, VV_FORMAT_MHD) != VV_OK)
         abort();
     snprintf(p, sizeof p, "%s/vol.vvb", fuzz_dir());
-    if (vv_volume_write_vvb(v, p, 0) != VV_OK)
+    if (vv_volume_save(v, p, VV_FORMAT_VVB, 0) != VV_OK)
         abort();
     vv_volume_free(v);
     static const char grid[] = "# vtk DataFile Version 3.0\ng\nASCII\nDATASET UNSTRUCTURED_GRID\n"

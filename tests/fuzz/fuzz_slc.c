@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "fuzz_util.h"
+#include "io/io_internal.h"
 #include "volvis/volvis.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);

@@ -545,10 +545,10 @@ test_pyramid_out_of_core(void **state) {
     const char *store = vt_path(dir, "head.ome.zarr");
     vv_volume *v = NULL;
     vt_ok(vv_volume_load(&v, vt_data("volumes/ct_head.nrrd"), NULL));
-    vt_ok(vv_ome_zarr_write(v, store, NULL));
+    vt_ok(vt_save(v, store, VV_FORMAT_OME_ZARR, -1, 0));
     pyramid_out_of_core(dir, store, v, 0);
     const char *vvb = vt_path(dir, "head.vvb");
-    vt_ok(vv_volume_write_vvb(v, vvb, VV_VVB_ZSTD | VV_VVB_LEVELS));
+    vt_ok(vt_save(v, vvb, VV_FORMAT_VVB, -1, VV_VVB_ZSTD | VV_VVB_LEVELS));
     pyramid_out_of_core(dir, vvb, v, 1);
     two_files_share_the_cache(store, vvb, v);
     vv_volume_free(v);

@@ -8,6 +8,8 @@
  */
 #include "testutil.h"
 
+#include "io/io_internal.h"
+
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>

@@ -9,6 +9,8 @@
  */
 #include "testutil.h"
 
+#include "io/io_internal.h"
+
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>

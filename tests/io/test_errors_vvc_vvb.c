@@ -563,7 +563,7 @@ vvb_bytes(int k, size_t *n) {
     for (size_t i = 0; i < 70 * 20 * 10; i++)
         d[i] = (uint16_t)vt_rnd(&s, 0, 60000);
     vv_volume_update_range(v);
-    vt_ok(vv_volume_write_vvb(v, full, kind_flags[k]));
+    vt_ok(vt_save(v, full, VV_FORMAT_VVB, -1, kind_flags[k]));
     vv_volume_free(v);
     return vt_read_file(full, n);
 }

@@ -11,6 +11,8 @@
  */
 #include "testutil.h"
 
+#include "io/io_internal.h"
+
 #include <errno.h>
 #include <malloc.h>
 #include <stdarg.h>

@@ -1,6 +1,8 @@
 /* MetaImage reader: the real file, .mha, compression, lists, bad input. */
 #include "testutil.h"
 
+#include "io/io_internal.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>

@@ -6,6 +6,8 @@
  */
 #include "testutil.h"
 
+#include "io/io_internal.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>

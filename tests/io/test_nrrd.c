@@ -5,6 +5,8 @@
  */
 #include "testutil.h"
 
+#include "io/io_internal.h"
+
 #include <dirent.h>
 #include <math.h>
 #include <pthread.h>

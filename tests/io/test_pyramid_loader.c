@@ -49,9 +49,9 @@ setup(void **state) {
     vv_volume *v = NULL;
     vv_status s = vv_volume_load(&v, vt_data("volumes/ct_head.nrrd"), NULL);
     if (s == VV_OK)
-        s = vv_ome_zarr_write(v, g_store, NULL);
+        s = vt_save(v, g_store, VV_FORMAT_OME_ZARR, -1, 0);
     if (s == VV_OK)
-        s = vv_ome_zarr_write(v, g_broken, NULL);
+        s = vt_save(v, g_broken, VV_FORMAT_OME_ZARR, -1, 0);
     vv_volume_free(v);
     if (s != VV_OK) {
         fprintf(stderr, "setup: %s\n", vv_error_message());

@@ -1,6 +1,8 @@
 /* Raw reader: parameters, byte order, header skip, size checks. */
 #include "testutil.h"
 
+#include "io/io_internal.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>

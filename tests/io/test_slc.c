@@ -1,6 +1,8 @@
 /* SLC reader and writer: real files, round trips, hand-built and bad input. */
 #include "testutil.h"
 
+#include "io/io_internal.h"
+
 #include <dirent.h>
 #include <stdio.h>
 #include <stdlib.h>

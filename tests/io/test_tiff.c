@@ -7,6 +7,8 @@
  */
 #include "testutil.h"
 
+#include "io/io_internal.h"
+
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>

@@ -1,6 +1,8 @@
 /* VTK legacy STRUCTURED_POINTS reader: real files, synthetic and bad input. */
 #include "testutil.h"
 
+#include "io/io_internal.h"
+
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>

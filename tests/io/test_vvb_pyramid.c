@@ -100,8 +100,8 @@ test_ct_head(void **state) {
     char vvb[1200], zarr[1200];
     snprintf(vvb, sizeof vvb, "%s/head.vvb", outdir());
     snprintf(zarr, sizeof zarr, "%s/head.ome.zarr", outdir());
-    vt_ok(vv_volume_write_vvb(v, vvb, VV_VVB_ZSTD | VV_VVB_LEVELS));
-    vt_ok(vv_ome_zarr_write(v, zarr, NULL));
+    vt_ok(vt_save(v, vvb, VV_FORMAT_VVB, -1, VV_VVB_ZSTD | VV_VVB_LEVELS));
+    vt_ok(vt_save(v, zarr, VV_FORMAT_OME_ZARR, -1, 0));
     assert_true(opens_as_pyramid(vvb));
     vv_pyramid *a = NULL, *b = NULL;
     vv_load_info info;
@@ -167,7 +167,7 @@ check_odd(const int d[3], int want_levels) {
     vv_volume *v = odd_volume(d);
     char path[1200];
     snprintf(path, sizeof path, "%s/odd_%d_%d_%d.vvb", outdir(), d[0], d[1], d[2]);
-    vt_ok(vv_volume_write_vvb(v, path, VV_VVB_LEVELS)); /* raw bricks, no coarse levels */
+    vt_ok(vt_save(v, path, VV_FORMAT_VVB, -1, VV_VVB_LEVELS)); /* raw bricks, no coarse levels */
     vv_bricked *bk = NULL;
     vt_ok(vv_bricked_open(&bk, path, NULL, vt_cache(0)));
     assert_int_equal(vv_bricked_levels(bk), want_levels);
@@ -252,7 +252,7 @@ test_skip_unread(void **state) {
     vv_volume_update_range(v);
     char path[1200];
     snprintf(path, sizeof path, "%s/ball.vvb", outdir());
-    vt_ok(vv_volume_write_vvb(v, path, VV_VVB_ZSTD | VV_VVB_LEVELS));
+    vt_ok(vt_save(v, path, VV_FORMAT_VVB, -1, VV_VVB_ZSTD | VV_VVB_LEVELS));
     vv_pyramid *p = NULL;
     vt_ok(vv_pyramid_open(&p, path, -1, -1, vt_cache(0), NULL));
     vv_pyramid_stats st0, st1;
@@ -294,9 +294,13 @@ test_probe_and_writers(void **state) {
     snprintf(plain, sizeof plain, "%s/plain.vvb", outdir());
     snprintf(lv, sizeof lv, "%s/levels.vvb", outdir());
     snprintf(boxes, sizeof boxes, "%s/boxes.vvb", outdir());
-    vt_ok(vv_volume_write_vvb(v, plain, VV_VVB_ZSTD));
-    vt_ok(vv_volume_write_vvb(v, lv, VV_VVB_ZSTD | VV_VVB_LEVELS));
-    vt_ok(vv_boxes_write_vvb(v, read_mem_box, v, boxes, VV_VVB_ZSTD | VV_VVB_LEVELS, NULL));
+    vt_ok(vt_save(v, plain, VV_FORMAT_VVB, -1, VV_VVB_ZSTD));
+    vt_ok(vt_save(v, lv, VV_FORMAT_VVB, -1, VV_VVB_ZSTD | VV_VVB_LEVELS));
+    vv_save_options so;
+    vv_save_options_init(&so);
+    so.format = VV_FORMAT_VVB;
+    so.vvb_flags = VV_VVB_ZSTD | VV_VVB_LEVELS;
+    vt_ok(vv_volume_save_boxes(v, read_mem_box, v, boxes, &so));
     assert_false(opens_as_pyramid(plain));
     assert_true(opens_as_pyramid(lv));
     size_t n1, n2;
@@ -358,7 +362,7 @@ test_bad_levels(void **state) {
     char good[1200], bad[1200];
     snprintf(good, sizeof good, "%s/good.vvb", outdir());
     snprintf(bad, sizeof bad, "%s/bad.vvb", outdir());
-    vt_ok(vv_volume_write_vvb(v, good, VV_VVB_ZSTD | VV_VVB_LEVELS));
+    vt_ok(vt_save(v, good, VV_FORMAT_VVB, -1, VV_VVB_ZSTD | VV_VVB_LEVELS));
     size_t len;
     unsigned char *f = vt_read_file(good, &len);
     const uint64_t table = get_u64(f + 208);

@@ -5,8 +5,8 @@
 
 Inputs that can be read by boxes (raw, uncompressed NRRD, TIFF stacks
 slab by slab, and pyramids: OME-Zarr, BigDataViewer HDF5) are written
-chunk by chunk (vv_ome_zarr_write_boxes); everything else is read whole and
-written by vv_ome_zarr_write. Checks:
+chunk by chunk (vv_volume_save_boxes); everything else is read whole and
+written by vv_volume_save_with. Checks:
 
 - the two writers make the same store, byte for byte (every chunk, the
   .zarray and .zattrs files): raw f32 and u16 of odd sizes (edge chunks,

@@ -156,7 +156,7 @@ test_histogram_boxes(void **state) {
     boxed = NULL;
     char path[1200];
     snprintf(path, sizeof path, "%s/head.vvb", vt_outdir("measure"));
-    vt_ok(vv_volume_write_vvb(v, path, VV_VVB_ZSTD | VV_VVB_LEVELS));
+    vt_ok(vt_save(v, path, VV_FORMAT_VVB, -1, VV_VVB_ZSTD | VV_VVB_LEVELS));
     vv_pyramid *p = NULL;
     vt_ok(vv_pyramid_open(&p, path, -1, -1, vt_cache((uint64_t)8 << 20), NULL));
     vt_ok(vv_measure_histogram_boxes(&boxed, vv_pyramid_level(p, 0), vv_pyramid_level0_box, p, 128,

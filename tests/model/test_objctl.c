@@ -24,7 +24,7 @@ setup(void **state) {
     vv_volume_update_range(v);
     char path[1200];
     snprintf(path, sizeof path, "%s/vol.nrrd", g_dir);
-    vv_status st = vv_nrrd_write(v, path, 0);
+    vv_status st = vt_save(v, path, VV_FORMAT_NRRD, 0, 0);
     vv_volume_free(v);
     vv_image *im = NULL;
     if (st != VV_OK || vv_image_new(&im, 2, 2) != VV_OK)

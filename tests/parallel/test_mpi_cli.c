@@ -211,7 +211,7 @@ test_cli(void **state) {
         snprintf(three, sizeof three, "%s/vvb3.png", dir);
         vv_volume *v = NULL;
         vt_ok(vv_volume_load(&v, vt_data("volumes/neghip.slc"), NULL));
-        vt_ok(vv_volume_write_vvb(v, vvb, 1));
+        vt_ok(vt_save(v, vvb, VV_FORMAT_VVB, -1, 1));
         vv_volume_free(v);
         size_t len;
         unsigned char *bytes = vt_read_file(vvb, &len);

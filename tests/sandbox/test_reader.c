@@ -132,7 +132,7 @@ test_own_parsers_in_reader(void **state) {
         vt_skip("../shared/data/volumes/nut.slc is missing");
     vv_volume *v = NULL;
     vt_ok(vv_volume_load(&v, vt_data("volumes/nut.slc"), NULL));
-    vt_ok(vv_volume_write_vvb(v, vt_path(g_dir, "nut.vvb"), 0));
+    vt_ok(vt_save(v, vt_path(g_dir, "nut.vvb"), VV_FORMAT_VVB, -1, 0));
     vv_volume_free(v);
     const char *paths[] = {vt_data("volumes/nut.slc"), vt_data("volumes/HeadMRVolume.mhd"),
                            vt_data("volumes/ironProt.vtk"), vt_path(g_dir, "nut.vvb")};

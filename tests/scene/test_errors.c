@@ -46,7 +46,7 @@ setup(void **state) {
         vv_status s =
             vv_volume_save(v, vt_path(g_dir, f ? "volf.mhd" : "vol.mhd"), VV_FORMAT_MHD, 1);
         if (s == VV_OK && !f)
-            s = vv_volume_write_vvb(v, vt_path(g_dir, "vol.vvb"), 0);
+            s = vt_save(v, vt_path(g_dir, "vol.vvb"), VV_FORMAT_VVB, -1, 0);
         vv_volume_free(v);
         if (s != VV_OK)
             return -1;

@@ -33,7 +33,7 @@ object_files(const vv_world *w, const char *scene, const char *dir, const char *
             char name[300];
             snprintf(name, sizeof name, "%.200s_%d.nrrd", stem, i);
             const char *p = vt_path(dir, name);
-            vt_ok(vv_nrrd_write(o->volume, p, 0));
+            vt_ok(vt_save(o->volume, p, VV_FORMAT_NRRD, 0, 0));
             files[i] = realpath(p, NULL);
         } else if (o->type == VV_OBJECT_MESH || o->type == VV_OBJECT_VOLUME ||
                    o->type == VV_OBJECT_GRID) {

@@ -29,7 +29,7 @@ setup(void **state) {
     v->origin[2] = 3;
     char path[1200];
     snprintf(path, sizeof path, "%s/ct_head.nrrd", g_dir);
-    vv_status st = vv_nrrd_write(v, path, 0);
+    vv_status st = vt_save(v, path, VV_FORMAT_NRRD, 0, 0);
     vv_volume_free(v);
     return st == VV_OK ? 0 : -1;
 }

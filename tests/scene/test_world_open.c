@@ -97,7 +97,7 @@ test_out_of_core_choices(void **state) {
     const char *vvb = vt_path(dir, "ct.vvb");
     vv_volume *ct = NULL;
     vt_ok(vv_volume_load(&ct, vt_data("volumes/ct_head.nrrd"), NULL));
-    vt_ok(vv_volume_write_vvb(ct, vvb, 0));
+    vt_ok(vt_save(ct, vvb, VV_FORMAT_VVB, -1, 0));
     vv_volume_free(ct);
     vv_world_open_options_init(&o);
     vt_ok(vv_world_open(&w, vvb, &o, &info));

@@ -210,15 +210,6 @@ const vv_format_record *vv_format_record_of(vv_format f);
 vv_status vv_format_register(const vv_format_record *row, vv_format *id);
 
 /**
- * The format of @p path among those holding @p kind (-1: any), by asking
- * the records' looks_like once (signatures, then the deep tests unless
- * @p deep is 0): its id, or VV_FORMAT_UNKNOWN. The deep tests of
- * third-party formats may call their parsers: vv_open runs those in the
- * reader sandbox.
- */
-vv_format vv_format_detect_kind(const char *path, int kind, int deep);
-
-/**
  * The reader process (apps/volvis-reader; a program of one's own that
  * embeds the library and ships its own reader calls this from its main and
  * points VOLVIS_READER at it): serves the format table's rows to the
@@ -227,27 +218,6 @@ vv_format vv_format_detect_kind(const char *path, int kind, int deep);
  * library.
  */
 int vv_format_reader_main(int argc, char **argv);
-
-/**
- * Fills @p p for @p path: whether it is a folder, and for a file its first
- * VV_FORMAT_PROBE_BYTES bytes (decompressed when gzip) in @p buf, which must
- * hold VV_FORMAT_PROBE_BYTES + 1 bytes. Returns 0, or the errno of a file
- * that cannot be opened or read (the probe is then empty).
- */
-int vv_format_probe_fill(vv_format_probe *p, const char *path, unsigned char *buf, char *text);
-
-/** 1 when @p path ends in ".@p ext" (case-insensitive; @p ext may hold dots). */
-int vv_format_path_has_ext(const char *path, const char *ext);
-
-/**
- * For the folder tests of looks_like: calls @p match with each entry of
- * folder @p path (its path, its name, 1 for a folder), hidden entries
- * skipped and at most 4096 files looked at, until it returns 1. Returns 1
- * when an entry matched, 0 otherwise (also when the folder cannot be read).
- */
-int vv_format_folder_any(const char *path,
-                         int (*match)(const char *entry, const char *name, int is_dir, void *ctx),
-                         void *ctx);
 
 #ifdef __cplusplus
 }

@@ -54,9 +54,6 @@ typedef struct vv_geom_tess {
     double half;
 } vv_geom_tess;
 
-/** Segments around a circle of radius @p radius for @p opt (3..4096, even). */
-int vv_geom_tess_segments(const vv_geom_tess *opt, double radius);
-
 typedef struct vv_geom_type {
     int version; /**< VV_GEOM_TYPE_VERSION */
     vv_object_type type;
@@ -121,10 +118,6 @@ const vv_geom_type *const *vv_geom_types(int *n);
 
 /* ---- helpers of the record files (src/model/geom_*.c) --------------------- */
 
-/** A new empty mesh with normals and room for @p nv vertices, @p nt triangles. */
-vv_status vv_geom_mesh_new(vv_mesh **out, size_t nv, size_t nt);
-/** Appends a vertex at @p p with unit normal @p n. */
-vv_status vv_geom_mesh_vertex(vv_mesh *m, vv_vec3 p, vv_vec3 n);
 /** A unit vector perpendicular to unit @p e, and a second one with p1 x p2 = e. */
 void vv_geom_perpendicular(vv_vec3 e, vv_vec3 *p1, vv_vec3 *p2);
 /** Newell's normal of a closed polygon (not normalised; its length is twice the area). */

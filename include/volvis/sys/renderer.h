@@ -129,9 +129,6 @@ typedef struct vv_region_rays {
                           (pixel x's centre at x); malloc'd */
 } vv_region_rays;
 
-/** Frees what @p r holds and empties it. */
-void vv_region_rays_free(vv_region_rays *r);
-
 /**
  * One region of a volume object: the samples inside an axis-aligned box of
  * the object's index space (voxel units of its whole volume; the box is an
@@ -284,18 +281,6 @@ vv_region_pixel_combine(vv_region_op op, float f[4], float *fdepth, float *fkey,
 }
 
 /**
- * Combines whole partial images: @p front becomes front combined with
- * @p back (same size and op); a back that has a classify (SUM) gives it to
- * front, which vv_region_image_finish then classifies with, and so does a
- * back that has a supersample. Thread-safe
- * for distinct images.
- */
-void vv_region_image_combine(vv_region_image *front, const vv_region_image *back);
-/** vv_region_image_combine over pixels x0 <= x < x1, y0 <= y < y1 only. */
-void vv_region_image_combine_rect(vv_region_image *front, const vv_region_image *back, int x0,
-                                  int y0, int x1, int y1);
-
-/**
  * Turns a combined partial image into the final one: colour + (1 -
  * opacity) × @p background, opacity clamped to 1 (exactly as the whole
  * render writes a pixel). SUM: each pixel's colour is first its mean
@@ -306,27 +291,10 @@ void vv_region_image_combine_rect(vv_region_image *front, const vv_region_image 
 void vv_region_image_finish(vv_region_image *img, vv_vec3 background);
 
 /**
- * The checks every region method starts with: @p rg->object is the World's
- * only visible object, without a solid texture; *op receives how its
- * partial images combine (vv_region_op_for its mode).
- * Errors: VV_ERR_UNSUPPORTED naming the object.
- */
-vv_status vv_render_region_check(const vv_world *w, const vv_render_region *rg, vv_region_op *op);
-
-/**
- * vv_render_region_check, then *part = the region's object with its volume
- * replaced by the region's voxels (a shallow copy: nothing in it is
- * released; it lives as long as @p w and @p rg). Errors as
- * vv_render_region_check.
- */
-vv_status vv_render_region_part(const vv_world *w, const vv_render_region *rg, vv_region_op *op,
-                                vv_object *part);
-
-/**
  * The World a region method renders: @p w's settings (view, lights, cut
  * planes, shading) with the region's object alone, its volume replaced by
- * the region's voxels (vv_render_region_part). Points into itself: filled
- * in place by vv_render_region_world and not copied; nothing in it is
+ * the region's voxels. Points into itself: filled in place by the region
+ * helpers of src/render (frame.h) and not copied; nothing in it is
  * released; it lives as long as @p w and the region.
  */
 typedef struct vv_region_world {
@@ -335,33 +303,8 @@ typedef struct vv_region_world {
     vv_world world;     /**< the World to render */
 } vv_region_world;
 
-/**
- * vv_render_region_part into @p out->part, and @p out->world a shallow copy
- * of @p w showing it alone. Errors as vv_render_region_check.
- */
-vv_status vv_render_region_world(const vv_world *w, const vv_render_region *rg, vv_region_op *op,
-                                 vv_region_world *out);
-
-/**
- * The World's ambient light and background as floats for a frame; with
- * @p region non-zero the background is 0 (partial images of a region are
- * composited first and the background is added once, by
- * vv_region_image_finish).
- */
-static inline void
-vv_frame_colours(const vv_world *w, int region, float ambient[3], float background[3]) {
-    ambient[0] = (float)w->ambient.x;
-    ambient[1] = (float)w->ambient.y;
-    ambient[2] = (float)w->ambient.z;
-    background[0] = region ? 0.0f : (float)w->background.x;
-    background[1] = region ? 0.0f : (float)w->background.y;
-    background[2] = region ? 0.0f : (float)w->background.z;
-}
-
 /** Clears @p img to "nothing seen": colour 0, depth INFINITY, key NAN. */
 void vv_region_image_clear(vv_region_image *img);
-/** vv_region_image_clear over pixels x0 <= x < x1, y0 <= y < y1 only. */
-void vv_region_image_clear_rect(vv_region_image *img, int x0, int y0, int x1, int y1);
 
 /**
  * The pixel rectangle of @p view that can see the index box lo .. hi of a
@@ -485,7 +428,7 @@ typedef struct vv_renderer_ops {
      * object region->object into @p out (vv_region_image), on one ray
      * through each pixel centre, or on the points of region->rays (then it
      * must not set out->supersample). The World has that one visible object
-     * (vv_render_region_check); its own volume spans the same world box
+     * (checked by the frame runner before the call); its own volume spans the same world box
      * and holds real voxels: the whole volume (distributed rendering of an
      * in-memory volume) or a coarse proxy (out of core): a method with
      * global effects traces them through it, so they are exact only with
@@ -578,9 +521,6 @@ typedef struct vv_frame_job {
 /** A whole image, 16-pixel tiles, progress 0 to 1. */
 void vv_frame_job_init(vv_frame_job *job, int width, int height, vv_frame_tile_fn fn, void *user);
 
-/** Limits @p job to the pixel rectangle of region @p rg (none when it has none). */
-void vv_frame_job_region(vv_frame_job *job, const vv_render_region *rg);
-
 /**
  * Runs @p job: tiles row-major, taken dynamically by opt->threads OpenMP
  * threads (<= 0: vv_threads_get()); after each tile the fraction of tiles
@@ -597,16 +537,13 @@ vv_status vv_frame_run(const vv_frame_job *job, const vv_render_options *opt);
  * One pixel of a refined tile: @p px gets the colour and opacity of pixel
  * centre (x, y) over the background (px[0..3], the image's layout) and its
  * depth (px[4]); @p work is the tile's own accumulator, passed through
- * (vv_frame_refine_tile). Called on the tile's thread; a pure function of
- * (x, y) for the frame, so that the image is the same for any thread count.
+ * (the frame runner's refinement, src/render/frame.c). Called on the tile's thread; a pure function
+ * of (x, y) for the frame, so that the image is the same for any thread count.
  */
 typedef void (*vv_frame_pixel_fn)(void *user, int x, int y, float px[5], void *work);
 
-/** The lattice of vv_frame_refine_tile: every 4th pixel in x and y. */
+/** The lattice of the refinement: every 4th pixel in x and y. */
 #define VV_FRAME_REFINE_LATTICE 4
-
-/** Per-thread scratch vv_frame_refine_tile needs (vv_frame_job.scratch_bytes). */
-size_t vv_frame_refine_scratch_bytes(void);
 
 /** The words of the refinement options (VV_FRAME_REFINE_OPTIONS):
  * {"auto", "on", "off"} (the option's values 0, 1, 2) and {"auto"}. */
@@ -617,7 +554,7 @@ extern const char *const vv_frame_refine_auto[];
  * A renderer's refinement settings, the values of its
  * VV_FRAME_REFINE_OPTIONS: mode 0 auto (at quality 0 and 1, and where the
  * renderer says), 1 on, 2 off;
- * tolerance < 0 by quality (vv_frame_refine_tolerance). A member of the
+ * tolerance < 0 by quality (1/16, 1/64, 1/1024 at quality 0, 1, 2). A member of the
  * renderer's state that the two option rows bind to, read when a frame
  * starts.
  */
@@ -632,7 +569,7 @@ typedef struct vv_frame_refine_settings {
  * state type @p type: `refinement` (enum auto/on/off: mode 0 auto, when
  * the string literal @p when says, at least at quality 0 and 1; 1 on; 2
  * off) and `refinement_tolerance` (real in [0, 1], or auto: tolerance -1,
- * vv_frame_refine_tolerance of the quality).
+ * the tolerance of the quality).
  */
 /* clang-format off */
 #define VV_FRAME_REFINE_OPTIONS(type, field, when)                                                 \
@@ -644,41 +581,6 @@ typedef struct vv_frame_refine_settings {
      "(auto: 1/16, 1/64, 1/1024 at quality 0, 1, 2)",                                              \
      VV_OPTION_BIND_WORDS(type, field.tolerance, DOUBLE, VV_OPTION_WORD_VALUES(-1), NULL)}
 /* clang-format on */
-
-/** The tolerance the renderers use at @p quality (0, 1, 2): 1/16, 1/64, 1/1024. */
-float vv_frame_refine_tolerance(int quality);
-
-/**
- * Whether a frame at @p quality refines (never a region render, @p region
- * not 0: its pixels are composited with other ranks' by depth and key),
- * and with what tolerance (*tolerance, set either way). Mode auto refines
- * at quality 0 and 1, and at quality 2 when @p final_pays (the renderer's
- * word that refinement at vv_frame_refine_tolerance(2) costs no measurable
- * accuracy for this frame: raycast's frames of composite objects).
- */
-int vv_frame_refine_for(const vv_frame_refine_settings *s, int quality, int region, int final_pays,
-                        float *tolerance);
-
-/**
- * Fills tile @p t of a @p width x @p height image (@p rgba: 4 floats a
- * pixel, @p depth: one; row-major, the vv_image layout) by adaptive
- * image-space refinement (Levoy, "Volume Rendering by Adaptive
- * Refinement", The Visual Computer 6(1), 1990): @p fn casts the pixels of
- * a lattice of every VV_FRAME_REFINE_LATTICE-th pixel; a lattice cell whose
- * corners differ by at most 8 x @p tolerance in every channel gets its
- * centre cast, and if the centre is within @p tolerance of the corners'
- * bilinear interpolation the cell's other pixels are that interpolation;
- * otherwise the cell is cut in four and each quarter is tested the same
- * way, down to single pixels. A tile where most lattice cells differ
- * beyond the range is cast whole. The tile casts its own right and bottom
- * lattice corners (the next tile's first column and row), so its pixels
- * depend on it alone. The tile must be at most VV_FRAME_TILE square (the
- * default) and t->scratch hold vv_frame_refine_scratch_bytes(); it writes
- * the tile's pixels only (a larger tile, or no scratch: every pixel cast).
- * Thread-safe for disjoint tiles.
- */
-void vv_frame_refine_tile(const vv_frame_tile *t, int width, int height, float tolerance,
-                          vv_frame_pixel_fn fn, void *user, void *work, float *rgba, float *depth);
 
 /* ---- camera rays ------------------------------------------------------------------ */
 

@@ -38,6 +38,7 @@
 #include "core/internal.h"
 #include "render/classify.h"
 #include "render/drivers.h"
+#include "render/frame.h"
 #include "render/gpu/vk.h"
 #include "render/project.h"
 #include "render/ray.h"

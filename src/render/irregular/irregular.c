@@ -39,6 +39,7 @@
 #include "core/bvh.h"
 #include "core/geom.h"
 #include "core/grid_internal.h"
+#include "render/frame.h"
 #include "render/registry.h"
 #include "render/shade.h"
 #include "volvis/render.h"

@@ -40,6 +40,7 @@
 
 #include "core/internal.h"
 #include "render/classify.h"
+#include "render/frame.h"
 #include "render/kernels_avx2.h"
 #include "render/project.h"
 #include "render/ray.h"

@@ -43,6 +43,7 @@
 #include <time.h>
 
 #include "render/classify.h"
+#include "render/frame.h"
 #include "render/kernels_avx2.h"
 #include "render/project.h"
 #include "render/ray.h"

@@ -73,6 +73,7 @@
 #include <string.h>
 
 #include "core/internal.h"
+#include "render/frame.h"
 #include "render/splat/splat_internal.h"
 
 /* ---------------------------------------------------------------------- */
