@@ -235,7 +235,7 @@ typedef struct measure_req {
     double dp[2][3];
     int has_geodesic, gvox[2], steiner;
     double gp[2][3];
-    vv_region region;
+    vv_roi region;
 } measure_req;
 
 static int
@@ -966,7 +966,7 @@ cli_measure_main(int argc, char **argv) {
     }
     measure_req r;
     memset(&r, 0, sizeof r);
-    vv_region_init(&r.region);
+    vv_roi_init(&r.region);
     r.bins = 32;
     r.method = VV_MEASURE_MC;
     r.json = cli_count(&a, "json") > 0;

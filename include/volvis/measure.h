@@ -28,15 +28,16 @@
 extern "C" {
 #endif
 
-/** A region of a volume: a voxel box and cut planes. */
-typedef struct vv_region {
+/** A region of interest (ROI) of a volume, what Measurement measures within: a voxel
+ *  box and cut planes (not a render region: docs/architecture.md, "Glossary"). */
+typedef struct vv_roi {
     int roi_min[3], roi_max[3]; /**< voxel index box, inclusive; roi_max[0] < 0: whole volume */
     int n_cut_planes;           /**< world-space cut planes; a voxel counts when n·(x−p) >= 0 */
     vv_cut_plane cut_planes[VV_MAX_CUT_PLANES];
-} vv_region;
+} vv_roi;
 
 /** The whole volume, no cut planes. */
-void vv_region_init(vv_region *r);
+void vv_roi_init(vv_roi *r);
 
 /* ---- histogram ------------------------------------------------------------ */
 
@@ -61,7 +62,7 @@ typedef struct vv_histogram {
  * cut-plane normal, empty region), VV_ERR_NOMEM.
  */
 vv_status vv_measure_histogram(vv_histogram **out, const vv_volume *v, int nbins, double lo,
-                               double hi, const vv_region *region);
+                               double hi, const vv_roi *region);
 /**
  * vv_measure_histogram of the whole volume @p hdr describes (dims, type; its
  * voxels are not read), read box by box through @p read (boxes of at most
@@ -147,9 +148,9 @@ typedef struct vv_isosurface_measure_options {
     /** 1: measure only the surface-tracked section: the 6-connected component of inside
      * voxels (flood fill) containing the inside voxel nearest to seed. */
     int has_seed;
-    double seed[3];   /**< voxel index coordinates (fractional allowed) */
-    vv_region region; /**< default whole volume; both methods take cut planes */
-    int threads;      /**< <= 0: vv_threads_get() */
+    double seed[3]; /**< voxel index coordinates (fractional allowed) */
+    vv_roi region;  /**< default whole volume; both methods take cut planes */
+    int threads;    /**< <= 0: vv_threads_get() */
     vv_progress progress;
 } vv_isosurface_measure_options;
 

@@ -199,8 +199,8 @@ def colocalisation(a, b, mask=None, thresholds=(0.0, 0.0)):
 
 
 def _region(volume, roi, cut_planes):
-    r = ffi.new("vv_region *")
-    lib.vv_region_init(r)
+    r = ffi.new("vv_roi *")
+    lib.vv_roi_init(r)
     if roi is not None:
         for a in range(3):
             r.roi_min[a], r.roi_max[a] = int(roi[0][a]), int(roi[1][a])

@@ -13,7 +13,7 @@
 #include "measure/measure_internal.h"
 
 void
-vv_region_init(vv_region *r) {
+vv_roi_init(vv_roi *r) {
     if (!r)
         return;
     memset(r, 0, sizeof *r);
@@ -21,7 +21,7 @@ vv_region_init(vv_region *r) {
 }
 
 vv_status
-region_resolve(const vv_volume *v, const vv_region *r, region_box *out) {
+region_resolve(const vv_volume *v, const vv_roi *r, region_box *out) {
     memset(out, 0, sizeof *out);
     for (int a = 0; a < 3; a++) {
         out->lo[a] = 0;
@@ -197,7 +197,7 @@ check_args(int nbins, double lo, double hi) {
 
 vv_status
 vv_measure_histogram(vv_histogram **out, const vv_volume *v, int nbins, double lo, double hi,
-                     const vv_region *region) {
+                     const vv_roi *region) {
     if (out)
         *out = NULL;
     if (!out || !v || !v->data)

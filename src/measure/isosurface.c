@@ -33,7 +33,7 @@ vv_isosurface_measure_options_init(vv_isosurface_measure_options *o) {
         return;
     memset(o, 0, sizeof *o);
     o->method = VV_MEASURE_MC;
-    vv_region_init(&o->region);
+    vv_roi_init(&o->region);
 }
 
 static inline int

@@ -16,7 +16,7 @@ typedef struct region_box {
 } region_box;
 
 /** Checks @p r (NULL: whole volume) against @p v. Errors: VV_ERR_INVALID. */
-vv_status region_resolve(const vv_volume *v, const vv_region *r, region_box *out);
+vv_status region_resolve(const vv_volume *v, const vv_roi *r, region_box *out);
 
 /** 1 when voxel (i, j, k) is on the kept side of every cut plane. */
 static inline int

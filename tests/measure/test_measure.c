@@ -78,8 +78,8 @@ test_histogram(void **state) {
     assert_int_equal(h->counts[2], 48); /* 60,70,80,90 */
     vv_histogram_free(h);
     /* a region and a cut plane keeping x >= 4.5 */
-    vv_region r;
-    vv_region_init(&r);
+    vv_roi r;
+    vv_roi_init(&r);
     r.roi_min[0] = 2;
     r.roi_min[1] = 0;
     r.roi_min[2] = 1;
