@@ -99,10 +99,9 @@ typedef struct gpu_state {
     int skipping;             /* option empty_space_skipping */
     int device;               /* option device: -1 auto */
     double budget_mb;         /* option device_memory_mb: -1 auto */
-    /* a volume over the device budget is drawn brick by brick by a gpu
-     * renderer of its own (region renders, drv_render_bricks), its bricks'
-     * min/max computed once a volume */
-    vv_renderer *pager;
+    /* a volume over the device budget is drawn brick by brick by the
+     * brick driver (drv_render_bricks) with this state's region renders,
+     * its bricks' min/max computed once a volume */
     const vv_volume *bricks_vol;
     uint64_t bricks_modified;
     int bricks_side, bricks_nb[3];
@@ -896,31 +895,13 @@ gpu_render(void *state, const vv_world *w, const vv_view *view, const vv_render_
     const int side = s == VV_OK && obj && obj->n_channels < 2 ? brick_side(st, obj) : 0;
     if (s != VV_OK || !side)
         return s != VV_OK ? s : render_frame(st, w, view, opt, NULL, out, NULL);
-    /* over the device's memory: brick by brick through the region contract,
-     * by a gpu renderer of its own on the same device */
+    /* over the device's memory: brick by brick through the region contract
+     * (gpu_render_region, on this state: one region on the device at a
+     * time), by the brick driver as every renderer's out-of-core volumes */
     int object = 0;
     while (w->objects[object] != obj)
         object++;
-    if (!st->pager) {
-        char dev[16];
-        snprintf(dev, sizeof dev, "%d", st->vk.index);
-        s = vv_renderer_new(&st->pager, "gpu");
-        if (s == VV_OK)
-            s = vv_renderer_set_option(st->pager, "device", dev);
-        if (s != VV_OK) {
-            vv_renderer_free(st->pager);
-            st->pager = NULL;
-            return s;
-        }
-    }
-    char et[32];
-    snprintf(et, sizeof et, "%.17g", st->early_termination);
-    s = vv_renderer_set_option(st->pager, "early_termination", et);
-    if (s == VV_OK)
-        s = vv_renderer_set_option(st->pager, "empty_space_skipping", st->skipping ? "1" : "0");
-    if (s == VV_OK)
-        s = prepare_bricks(st, obj->volume, side);
-    if (s != VV_OK)
+    if ((s = prepare_bricks(st, obj->volume, side)) != VV_OK)
         return s;
     const vv_brick_source src = {.version = VV_BRICK_SOURCE_VERSION,
                                  .user = st,
@@ -928,7 +909,8 @@ gpu_render(void *state, const vv_world *w, const vv_view *view, const vv_render_
                                  .grid = pb_grid,
                                  .info = pb_info,
                                  .load = pb_load};
-    return drv_render_bricks(st->pager, w, object, &src, view, opt, out);
+    const drv_renderer self = {.ops = &vv_gpu_ops, .state = st};
+    return drv_render_bricks(&self, w, object, &src, view, opt, out);
 }
 
 /* The region contract: the World seen with the object's volume replaced by
@@ -980,8 +962,6 @@ gpu_release(void *state) {
     gpu_state *st = state;
 #if VV_HAVE_VULKAN
     release_device(st);
-    vv_renderer_free(st->pager);
-    st->pager = NULL;
     free(st->bricks_mm);
     st->bricks_mm = NULL;
     vv_source_free(st->bricks_src);
@@ -999,8 +979,6 @@ gpu_device_changed(void *state, const vv_option_spec *spec, const vv_option_valu
 #if VV_HAVE_VULKAN
     gpu_state *st = state;
     release_device(st);
-    vv_renderer_free(st->pager); /* it took the device before */
-    st->pager = NULL;
 #else
     (void)state;
 #endif
