@@ -373,8 +373,9 @@ find_object(const vv_world *w, const vv_object **out) {
  * region contract of include/volvis/sys/renderer.h: the samples it owns,
  * from its voxels; no background; *key per pixel for projections). */
 static vv_status
-render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+render_frame(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
              const vv_render_region *rg, vv_image *out, float *key) {
+    gpu_state *st = state;
     const vv_object *obj;
     vv_status s = find_object(w, &obj);
     if (s != VV_OK)
@@ -913,24 +914,15 @@ gpu_render(void *state, const vv_world *w, const vv_view *view, const vv_render_
     return drv_render_bricks(&self, w, object, &src, view, opt, out);
 }
 
-/* The region contract: the World seen with the object's volume replaced by
- * the region's voxels (which carry the whole volume's geometry and range),
- * rays in the whole volume's index box, and only the region's samples
- * taken: the out-of-core drivers page bricks through it, one region on the
- * device at a time. */
+/* The region contract: a frame of the region's World
+ * (vv_region_render_by_frame, as the ray caster's); the out-of-core
+ * drivers page bricks through it, one region on the device at a time. */
 static vv_status
 gpu_render_region(void *state, const vv_world *w, const vv_view *view,
                   const vv_render_region *region, const vv_render_options *opt,
                   vv_region_image *out) {
-    vv_region_world rw;
-    vv_status s = vv_render_region_world(w, region, &out->op, &rw);
-    if (s != VV_OK)
-        return s;
-    gpu_state *st = state;
-    s = render_frame(st, &rw.world, view, opt, region, out->image, out->key);
-    out->classify = out->op == VV_REGION_SUM ? vv_xray_table_classify : NULL;
-    out->classify_ctx = out->op == VV_REGION_SUM ? &st->xray : NULL;
-    return s;
+    return vv_region_render_by_frame(render_frame, state, &((gpu_state *)state)->xray, w, view,
+                                     region, opt, out);
 }
 
 #else /* !VV_HAVE_VULKAN */
