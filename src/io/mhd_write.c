@@ -22,6 +22,7 @@
 
 #include "core/internal.h"
 #include "io/io_internal.h"
+#include "io/write_check.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 #include "zout.h"
@@ -102,18 +103,8 @@ write_voxels(const vv_volume *v, FILE *fp, int compressed, uint64_t *n) {
 
 static vv_status
 check_volume(const vv_volume *v) {
-    if (!v->data)
-        return vv_error_set(VV_ERR_INVALID, "volume has no data");
-    if (!met_type(v->type))
-        return vv_error_set(VV_ERR_UNSUPPORTED, "voxel type %d cannot be written", (int)v->type);
-    for (int i = 0; i < 3; i++)
-        if (!(v->spacing[i] > 0) || !isfinite(v->spacing[i]) || !isfinite(v->origin[i]))
-            return vv_error_set(VV_ERR_INVALID, "axis %d: spacing %g, origin %g", i, v->spacing[i],
-                                v->origin[i]);
-    for (int i = 0; i < 9; i++)
-        if (!isfinite(v->direction[i]))
-            return vv_error_set(VV_ERR_INVALID, "the direction matrix is not finite");
-    return VV_OK;
+    vv_status s = io_write_check_voxels(v, v->data != NULL, met_type(v->type) != NULL);
+    return s != VV_OK ? s : io_write_check_geometry(v, 0);
 }
 
 /* One .mha: header with a CompressedDataSize field patched after the data. */

@@ -45,6 +45,7 @@
 #include "core/internal.h"
 #include "io/io_internal.h"
 #include "io/prescan.h"
+#include "io/write_check.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 #include "zout.h"
@@ -728,21 +729,16 @@ make_header(const vv_volume *v, const vv_save_options *opt, int version, unsigne
 
 static vv_status
 check_writable(const vv_volume *v, const vv_save_options *opt, int *version) {
-    if (!v->data)
-        return vv_error_set(VV_ERR_INVALID, "volume has no data");
-    if (nifti_datatype_of(v->type) == DT_UNKNOWN)
-        return vv_error_set(VV_ERR_UNSUPPORTED, "voxel type %d cannot be written", (int)v->type);
+    vv_status s =
+        io_write_check_voxels(v, v->data != NULL, nifti_datatype_of(v->type) != DT_UNKNOWN);
+    if (s != VV_OK)
+        return s;
     if (opt->label && (v->type == VV_F32 || v->type == VV_F64))
         return vv_error_set(VV_ERR_UNSUPPORTED,
                             "a label volume must hold integers, the volume is %s",
                             vv_voxel_type_name(v->type));
-    for (int i = 0; i < 3; i++)
-        if (!(v->spacing[i] > 0) || !isfinite(v->spacing[i]) || !isfinite(v->origin[i]))
-            return vv_error_set(VV_ERR_INVALID, "axis %d: spacing %g, origin %g", i, v->spacing[i],
-                                v->origin[i]);
-    for (int i = 0; i < 9; i++)
-        if (!isfinite(v->direction[i]))
-            return vv_error_set(VV_ERR_INVALID, "the direction matrix is not finite");
+    if ((s = io_write_check_geometry(v, 0)) != VV_OK)
+        return s;
     int need2 = v->dims[0] > 32767 || v->dims[1] > 32767 || v->dims[2] > 32767;
     if (opt->nifti_version != 0 && opt->nifti_version != 1 && opt->nifti_version != 2)
         return vv_error_set(VV_ERR_INVALID, "NIfTI version %d (1 or 2)", opt->nifti_version);

@@ -42,6 +42,7 @@
 #include "io/bricked_internal.h"
 #include "io/io_internal.h"
 #include "io/prescan.h"
+#include "io/write_check.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
 
@@ -969,21 +970,11 @@ done:
 
 static vv_status
 check_volume(const vv_volume *v) {
-    if (!v->data)
-        return vv_error_set(VV_ERR_INVALID, "volume has no data");
-    if (vv_type_to_nrrd(v->type) == nrrdTypeUnknown)
-        return vv_error_set(VV_ERR_INVALID, "voxel type %d", (int)v->type);
-    vv_status s = vv_volume_check_size(v->dims, v->type, NULL);
-    if (s != VV_OK)
-        return s;
-    for (int i = 0; i < 3; i++)
-        if (!(v->spacing[i] > 0) || !isfinite(v->spacing[i]) || !isfinite(v->origin[i]))
-            return vv_error_set(VV_ERR_INVALID, "axis %d: spacing %g, origin %g", i, v->spacing[i],
-                                v->origin[i]);
-    for (int i = 0; i < 9; i++)
-        if (!isfinite(v->direction[i]))
-            return vv_error_set(VV_ERR_INVALID, "direction matrix is not finite");
-    return VV_OK;
+    vv_status s =
+        io_write_check_voxels(v, v->data != NULL, vv_type_to_nrrd(v->type) != nrrdTypeUnknown);
+    if (s == VV_OK)
+        s = vv_volume_check_size(v->dims, v->type, NULL);
+    return s != VV_OK ? s : io_write_check_geometry(v, 0);
 }
 
 vv_status

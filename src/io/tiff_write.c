@@ -25,6 +25,7 @@
 #include "core/internal.h"
 #include "io/io_internal.h"
 #include "io/tiff_msg.h"
+#include "io/write_check.h"
 #include "volvis/io.h"
 
 /* libtiff's I/O on the atomic file's descriptor: positioned reads and writes
@@ -387,16 +388,10 @@ vv_tiff_write(const vv_volume *v, const char *path, const vv_save_options *opt) 
         vv_save_options_init(&defaults);
         opt = &defaults;
     }
-    vv_status s = VV_OK;
     uint16_t comp = COMPRESSION_NONE;
-    if (!v->data)
-        s = vv_error_set(VV_ERR_INVALID, "volume has no data");
-    else if ((unsigned)v->type > VV_F64)
-        s = vv_error_set(VV_ERR_UNSUPPORTED, "voxel type %d cannot be written", (int)v->type);
-    for (int i = 0; s == VV_OK && i < 3; i++)
-        if (!(v->spacing[i] > 0) || !isfinite(v->spacing[i]) || !isfinite(v->origin[i]))
-            s = vv_error_set(VV_ERR_INVALID, "axis %d: spacing %g, origin %g", i, v->spacing[i],
-                             v->origin[i]);
+    vv_status s = io_write_check_voxels(v, v->data != NULL, (unsigned)v->type <= VV_F64);
+    if (s == VV_OK)
+        s = io_write_check_geometry(v, IO_WRITE_NO_DIRECTION);
     if (s == VV_OK)
         s = tiff_codec(opt, &comp);
     vv_atomic_file af;

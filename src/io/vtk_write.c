@@ -30,6 +30,7 @@
 #include "core/internal.h"
 #include "io/io_internal.h"
 #include "io/vti.h"
+#include "io/write_check.h"
 #include "volvis/io.h"
 #include "volvis/mesh.h"
 #include "volvis/sys/format.h"
@@ -54,18 +55,8 @@ xml_type(vv_voxel_type t) {
 
 static vv_status
 check_volume(const vv_volume *v) {
-    if (!v->data)
-        return vv_error_set(VV_ERR_INVALID, "volume has no data");
-    if (!legacy_type(v->type))
-        return vv_error_set(VV_ERR_UNSUPPORTED, "voxel type %d cannot be written", (int)v->type);
-    for (int i = 0; i < 3; i++)
-        if (!isfinite(v->spacing[i]) || !isfinite(v->origin[i]))
-            return vv_error_set(VV_ERR_INVALID, "axis %d: spacing %g, origin %g", i, v->spacing[i],
-                                v->origin[i]);
-    for (int i = 0; i < 9; i++)
-        if (!isfinite(v->direction[i]))
-            return vv_error_set(VV_ERR_INVALID, "the direction matrix is not finite");
-    return VV_OK;
+    vv_status s = io_write_check_voxels(v, v->data != NULL, legacy_type(v->type) != NULL);
+    return s != VV_OK ? s : io_write_check_geometry(v, IO_WRITE_ANY_SPACING);
 }
 
 static vv_status

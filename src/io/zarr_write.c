@@ -53,6 +53,7 @@
 #include "core/parallel_for.h"
 #include "io/io_internal.h"
 #include "io/pyramid.h"
+#include "io/write_check.h"
 #include "io/zarr.h"
 #include "volvis/io.h"
 #include "volvis/sys/format.h"
@@ -765,20 +766,14 @@ write_atomic(const vv_volume *v, vv_box_reader read, void *ctx, const char *path
         vv_save_options_init(&defaults);
         opt = &defaults;
     }
-    vv_status s = VV_OK;
     struct stat st;
     int exists = lstat(path, &st) == 0;
-    if (!v->data && !read)
-        s = vv_error_set(VV_ERR_INVALID, "volume has no data");
-    else if (!zarr_dtype(v->type))
-        s = vv_error_set(VV_ERR_UNSUPPORTED, "voxel type %d cannot be written", (int)v->type);
-    else if (opt->label && (v->type == VV_F32 || v->type == VV_F64))
+    vv_status s = io_write_check_voxels(v, v->data || read, zarr_dtype(v->type) != NULL);
+    if (s == VV_OK && opt->label && (v->type == VV_F32 || v->type == VV_F64))
         s = vv_error_set(VV_ERR_UNSUPPORTED, "a label volume holds integers, not %s",
                          vv_voxel_type_name(v->type));
-    for (int i = 0; s == VV_OK && i < 3; i++)
-        if (!(v->spacing[i] > 0) || !isfinite(v->spacing[i]) || !isfinite(v->origin[i]))
-            s = vv_error_set(VV_ERR_INVALID, "axis %d: spacing %g, origin %g", i, v->spacing[i],
-                             v->origin[i]);
+    if (s == VV_OK)
+        s = io_write_check_geometry(v, IO_WRITE_NO_DIRECTION);
     if (s == VV_OK && strlen(path) > ZARR_PATH_MAX - 128)
         s = vv_error_set(VV_ERR_INVALID, "the name is longer than %d bytes", ZARR_PATH_MAX - 128);
     if (s == VV_OK && exists && (!S_ISDIR(st.st_mode) || !is_zarr_store(path)))

@@ -96,7 +96,7 @@ tf_max_opacity(const vv_tf *tf, double a, double b) {
 /* The argument checks of drv_render_bricks and drv_render_multires (the
  * source's own checked by the caller). */
 static vv_status
-check_args(vv_renderer *r, const vv_world *w, int object, const vv_view *view,
+check_args(const drv_renderer *r, const vv_world *w, int object, const vv_view *view,
            const vv_image *out) {
     if (!r || !w || !view || !out || object < 0 || object >= w->n_objects)
         return vv_error_set(VV_ERR_INVALID, "bricks: bad arguments");
@@ -106,7 +106,7 @@ check_args(vv_renderer *r, const vv_world *w, int object, const vv_view *view,
     const vv_object *obj = w->objects[object];
     if (obj->type != VV_OBJECT_VOLUME || !obj->volume)
         return vv_error_set(VV_ERR_INVALID, "bricks: object '%s' is not a volume", obj->name);
-    const vv_renderer_info *info = vv_renderer_get_info(r);
+    const vv_renderer_info *info = &r->ops->info;
     if (!(info->caps & VV_RENDERER_REGION))
         return vv_error_set(VV_ERR_UNSUPPORTED,
                             "bricks: %s renders no regions; out-of-core rendering needs a "
@@ -258,14 +258,71 @@ rays_end(vv_region_rays *rays, vv_region_image *rw, vv_region_image *rp) {
     *rp = (vv_region_image){0};
 }
 
+vv_status
+drv_render_region(const vv_renderer_ops *ops, void *state, const vv_world *world,
+                  const vv_view *view, const vv_render_region *region, const vv_render_options *opt,
+                  vv_region_image *out) {
+    vv_render_options def;
+    if (!opt) {
+        vv_render_options_init(&def);
+        opt = &def;
+    }
+    if (!ops || !world || !view || !region || !out || !out->image || !out->key)
+        return vv_error_set(VV_ERR_INVALID, "region render: NULL argument");
+    const char *name = ops->info.name;
+    if (!ops->render_region || !(ops->info.caps & VV_RENDERER_REGION))
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "%s: renders no regions (out-of-core and distributed rendering "
+                            "need a renderer with the region contract: `volvis renderers`)",
+                            name);
+    if (region->rays) {
+        const vv_region_rays *rr = region->rays;
+        if (rr->per_pixel < 1 || !rr->xy ||
+            (size_t)out->image->width * (size_t)out->image->height <
+                (size_t)rr->per_pixel * rr->n_pixels)
+            return vv_error_set(
+                VV_ERR_INVALID, "%s: region image of %d x %d entries for %zu rays of %d a pixel",
+                name, out->image->width, out->image->height, rr->n_pixels, rr->per_pixel);
+    } else if (out->image->width != view->width || out->image->height != view->height) {
+        return vv_error_set(VV_ERR_INVALID, "%s: region image is %d x %d but the view is %d x %d",
+                            name, out->image->width, out->image->height, view->width, view->height);
+    }
+    if (region->object < 0 || region->object >= world->n_objects || !region->voxels)
+        return vv_error_set(VV_ERR_INVALID, "%s: region of object %d without voxels", name,
+                            region->object);
+    if (world->objects[region->object]->n_channels > 1)
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            "%s: object '%s' has %d channels; region renders (out of core, "
+                            "distributed) draw one channel an object",
+                            name, world->objects[region->object]->name,
+                            world->objects[region->object]->n_channels);
+    const vv_object *obj = world->objects[region->object];
+    if (obj->type != VV_OBJECT_VOLUME || !obj->volume)
+        return vv_error_set(VV_ERR_INVALID, "%s: object '%s' is not a volume object", name,
+                            obj->name);
+    vv_status s = vv_renderer_check_world(&ops->info, world);
+    if (s == VV_OK) {
+        if (out->clear_outside && region->x1 > region->x0 && !region->rays)
+            vv_region_image_clear_rect(out, region->x0, region->y0, region->x1, region->y1);
+        else
+            vv_region_image_clear(out);
+        out->op = VV_REGION_OVER;
+        out->supersample = NULL; /* the method's to set */
+        out->supersample_ctx = NULL;
+        s = ops->render_region(state, world, view, region, opt, out);
+    }
+    return s == VV_OK ? s : vv_error_prefix(s, "%s", name);
+}
+
 /* Region @p rg rendered by @p r into @p piece, which must combine by @p op. */
 static vv_status
-render_into(vv_renderer *r, const vv_world *w, const vv_view *view, const vv_render_region *rg,
-            const vv_render_options *opt, vv_region_image *piece, vv_region_op op) {
-    vv_status s = vv_renderer_render_region(r, w, view, rg, opt, piece);
+render_into(const drv_renderer *r, const vv_world *w, const vv_view *view,
+            const vv_render_region *rg, const vv_render_options *opt, vv_region_image *piece,
+            vv_region_op op) {
+    vv_status s = drv_render_region(r->ops, r->state, w, view, rg, opt, piece);
     if (s == VV_OK && piece->op != op)
         s = vv_error_set(VV_ERR_INVALID, "bricks: %s combined its regions by %d, not %d",
-                         vv_renderer_name(r), (int)piece->op, (int)op);
+                         r->ops->info.name, (int)piece->op, (int)op);
     return s;
 }
 
@@ -273,8 +330,9 @@ render_into(vv_renderer *r, const vv_world *w, const vv_view *view, const vv_ren
  * rectangle; the piece is cleared there again after (it stays clear
  * outside every rectangle: the renderer clears only the next one). */
 static vv_status
-render_piece(vv_renderer *r, const vv_world *w, const vv_view *view, const vv_render_region *rg,
-             const vv_render_options *opt, vv_region_image *piece, vv_region_image *whole) {
+render_piece(const drv_renderer *r, const vv_world *w, const vv_view *view,
+             const vv_render_region *rg, const vv_render_options *opt, vv_region_image *piece,
+             vv_region_image *whole) {
     int rc[4] = {0, 0, piece->image->width, piece->image->height}; /* points: every entry */
     if (!rg->rays)
         piece_rect(rg, view->width, view->height, rc);
@@ -430,7 +488,7 @@ brick_reader_box(void *user, const int lo[3], const int hi[3], vv_volume **out) 
 }
 
 vv_status
-drv_render_bricks(vv_renderer *r, const vv_world *w, int object, const vv_brick_source *src,
+drv_render_bricks(const drv_renderer *r, const vv_world *w, int object, const vv_brick_source *src,
                   const vv_view *view, const vv_render_options *opt, vv_image *out) {
     if (src && src->version != VV_BRICK_SOURCE_VERSION)
         return vv_error_set(VV_ERR_UNSUPPORTED, "bricks: source interface version %d, not %d",
@@ -568,7 +626,7 @@ typedef struct mr_node {
 typedef struct mr_frame {
     mr_node *nodes; /* the frame's nodes front to back */
     int n_nodes, cap_nodes;
-    vv_renderer *r;
+    const drv_renderer *r;
     const vv_world *w;
     const vv_multires_source *src;
     const vv_view *view;
@@ -589,7 +647,7 @@ typedef struct mr_frame {
     const vv_region_rays *rays; /* the second pass of quality 2 (rays_begin), else NULL */
     /* render_nodes_concurrent: the renderers of threads 1.. (clones of r;
      * freed after the frame is finished: whole->classify may be theirs) */
-    vv_renderer *clones[MR_MAX_THREADS];
+    drv_renderer clones[MR_MAX_THREADS];
     /* progressive frames: the boxes its pending nodes want loaded (level,
      * lo[3], hi[3] each), front to back (vv_multires_source.request) */
     int *want, n_want, cap_want;
@@ -803,7 +861,7 @@ node_threads(const mr_frame *f) {
     t = t < boxes ? t : boxes;
     t = t < MR_MAX_THREADS ? t : MR_MAX_THREADS;
     if (t < 2 || f->n_nodes < 2 || omp_get_max_active_levels() > 1 || omp_in_parallel() ||
-        (vv_renderer_get_info(f->r)->caps & VV_RENDERER_GLOBAL))
+        (f->r->ops->info.caps & VV_RENDERER_GLOBAL) || !f->r->clone)
         return 1;
     return t;
 }
@@ -826,13 +884,13 @@ render_nodes_concurrent(mr_frame *f, int T) {
     const int W = f->view->width, H = f->view->height;
     const size_t np = (size_t)W * (size_t)H;
     vv_region_image pieces[MR_MAX_THREADS];
-    vv_renderer *rs[MR_MAX_THREADS];
+    const drv_renderer *rs[MR_MAX_THREADS];
     memset(pieces, 0, sizeof pieces);
     rs[0] = f->r;
     vv_status s = VV_OK;
     for (int t = 1; t < T && s == VV_OK; t++)
-        if ((s = vv_renderer_clone(&f->clones[t], f->r)) == VV_OK)
-            rs[t] = f->clones[t];
+        if ((s = f->r->clone(f->r, &f->clones[t])) == VV_OK)
+            rs[t] = &f->clones[t];
     pieces[0] = *f->piece; /* the frame's own (clear); the others made here */
     for (int t = 1; t < T && s == VV_OK; t++) {
         pieces[t].op = VV_REGION_OVER;
@@ -1071,8 +1129,9 @@ vv_lod_init(vv_lod *lod) {
 }
 
 vv_status
-drv_render_multires(vv_renderer *r, const vv_world *w, int object, const vv_multires_source *src,
-                    const vv_view *view, const vv_render_options *opt, vv_lod *lod, vv_image *out) {
+drv_render_multires(const drv_renderer *r, const vv_world *w, int object,
+                    const vv_multires_source *src, const vv_view *view,
+                    const vv_render_options *opt, vv_lod *lod, vv_image *out) {
     if (!src || !lod)
         return vv_error_set(VV_ERR_INVALID, "multires: no source or level-of-detail options");
     if (src->version < 1 || src->version > VV_MULTIRES_SOURCE_VERSION)
@@ -1170,7 +1229,8 @@ drv_render_multires(vv_renderer *r, const vv_world *w, int object, const vv_mult
     if (s == VV_OK && whole.image)
         vv_region_image_finish(&whole, w->background);
     for (int t = 0; t < MR_MAX_THREADS; t++)
-        vv_renderer_free(f.clones[t]); /* after the finish: classify may be theirs */
+        if (f.clones[t].release) /* after the finish: classify may be theirs */
+            f.clones[t].release(&f.clones[t]);
     vv_image_free(piece.image);
     free(whole.key);
     return s;

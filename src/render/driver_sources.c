@@ -114,7 +114,7 @@ lod_add(vv_lod *sum, const vv_lod *one) {
  * background (a layer), or with @p background on the World's (the one
  * object of a frame). */
 static vv_status
-render_layer(vv_renderer *r, const vv_world *w, src_layer *L, const vv_view *view,
+render_layer(const drv_renderer *r, const vv_world *w, src_layer *L, const vv_view *view,
              const vv_render_options *opt, vv_lod *lod, vv_lod *sum, int background) {
     vv_object *copies = malloc(sizeof *copies * (size_t)w->n_objects);
     vv_object **ptrs = malloc(sizeof *ptrs * (size_t)w->n_objects);
@@ -208,7 +208,7 @@ drv_world_out_of_core(const vv_world *w) {
 }
 
 vv_status
-drv_render_sources(vv_renderer *r, const vv_world *w, const vv_view *view,
+drv_render_sources(const drv_renderer *r, const vv_world *w, const vv_view *view,
                    const vv_render_options *opt, vv_lod *lod, vv_image *out) {
     if (!r || !w || !view || !out)
         return vv_error_set(VV_ERR_INVALID, "sources: bad arguments");
@@ -248,11 +248,11 @@ drv_render_sources(vv_renderer *r, const vv_world *w, const vv_view *view,
                              : o->volume;
         l->comp = o->mode == VV_MODE_COMPOSITE || o->mode == VV_MODE_ISO;
     }
-    if (n > 1 && (vv_renderer_get_info(r)->caps & VV_RENDERER_GLOBAL))
+    if (n > 1 && (r->ops->info.caps & VV_RENDERER_GLOBAL))
         return vv_error_set(VV_ERR_UNSUPPORTED,
                             "sources: %s draws light between objects (shadows); out of core "
                             "it draws one object (several: raycast)",
-                            vv_renderer_name(r));
+                            r->ops->info.name);
     /* composited objects one after another: their boxes apart */
     for (int a = 0; a < n; a++)
         for (int b = a + 1; b < n; b++) {

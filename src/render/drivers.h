@@ -15,6 +15,12 @@
  *                       front to back, each node one region render of the
  *                       level its screen-space error picks (driver_region.c)
  *
+ * A driver draws with what its caller hands it (drv_renderer: the
+ * method's operations and state, and how to have more of them for other
+ * threads) and never calls the registry: vv_renderer_render hands it the
+ * renderer it was given, the gpu renderer its own operations and state for
+ * a volume over its device's memory.
+ *
  * Thread-safety: as the renderer (one render at a time); the views are
  * used from the calling thread (the multiresolution driver renders several
  * nodes at once on its own threads, reading one at a time).
@@ -25,6 +31,38 @@
 #include "volvis/render.h"
 #include "volvis/sys/renderer.h"
 #include "volvis/sys/source.h"
+
+/** The renderer a driver draws with, handed in by its caller. */
+typedef struct drv_renderer {
+    const vv_renderer_ops *ops; /**< its name, capabilities and region method */
+    void *state;                /**< the state ops draw with (borrowed) */
+    /** Another renderer of the same method and options into *@p out, for
+     *  another thread (drv_render_multires draws nodes at once); NULL:
+     *  none, the nodes are drawn in turn. */
+    vv_status (*clone)(const struct drv_renderer *r, struct drv_renderer *out);
+    /** Frees what clone made. */
+    void (*release)(struct drv_renderer *r);
+    void *user; /**< the caller's, for clone and release */
+} drv_renderer;
+
+/**
+ * What the drivers draw with for renderer @p r, into @p out, returned
+ * (registry.c's, for vv_renderer_render and tests): its operations and
+ * state, cloned by vv_renderer_clone (the clones freed by their release).
+ */
+const drv_renderer *drv_renderer_of(vv_renderer *r, drv_renderer *out);
+
+/**
+ * One region render of @p ops with @p state: the region contract's checks
+ * of the arguments and the World, @p out cleared (over its rectangle with
+ * clear_outside), its operation over and no supersampling until the method
+ * sets them, then ops->render_region; errors prefixed with the method's
+ * name. vv_renderer_render_region is this for a vv_renderer. Errors: those
+ * vv_renderer_render_region documents.
+ */
+vv_status drv_render_region(const vv_renderer_ops *ops, void *state, const vv_world *w,
+                            const vv_view *view, const vv_render_region *region,
+                            const vv_render_options *opt, vv_region_image *out);
 
 /** 1 when a visible volume object of @p w holds a source out of core. */
 int drv_world_out_of_core(const vv_world *w);
@@ -41,7 +79,7 @@ int drv_world_out_of_core(const vv_world *w);
  * (one object alone is drawn straight into @p out).
  * Errors: those vv_renderer_render documents for out of core.
  */
-vv_status drv_render_sources(vv_renderer *r, const vv_world *w, const vv_view *view,
+vv_status drv_render_sources(const drv_renderer *r, const vv_world *w, const vv_view *view,
                              const vv_render_options *opt, vv_lod *lod, vv_image *out);
 
 /**
@@ -62,7 +100,7 @@ vv_status drv_render_sources(vv_renderer *r, const vv_world *w, const vv_view *v
  * VV_ERR_UNSUPPORTED (no region method, a mode it cannot split, other
  * visible objects), VV_ERR_INVALID, those of reading and rendering.
  */
-vv_status drv_render_bricks(vv_renderer *r, const vv_world *w, int object,
+vv_status drv_render_bricks(const drv_renderer *r, const vv_world *w, int object,
                             const vv_brick_source *src, const vv_view *view,
                             const vv_render_options *opt, vv_image *out);
 
@@ -84,7 +122,7 @@ vv_status drv_render_bricks(vv_renderer *r, const vv_world *w, int object,
  * object's transform and level 0's direction apply to every level. Errors
  * as drv_render_bricks; those of the source's reads.
  */
-vv_status drv_render_multires(vv_renderer *r, const vv_world *w, int object,
+vv_status drv_render_multires(const drv_renderer *r, const vv_world *w, int object,
                               const vv_multires_source *src, const vv_view *view,
                               const vv_render_options *opt, vv_lod *lod, vv_image *out);
 

@@ -134,6 +134,20 @@ vv_xray_table_classify(const void *ctx, float v, float e[4]) {
     memcpy(e, x->lut + 4 * (int)i, 4 * sizeof(float));
 }
 
+vv_status
+vv_region_render_by_frame(vv_region_frame_fn frame, void *state, const vv_xray_table *xray,
+                          const vv_world *w, const vv_view *view, const vv_render_region *region,
+                          const vv_render_options *opt, vv_region_image *out) {
+    vv_region_world rw;
+    vv_status s = vv_render_region_world(w, region, &out->op, &rw);
+    if (s != VV_OK)
+        return s;
+    s = frame(state, &rw.world, view, opt, region, out->image, out->key);
+    out->classify = out->op == VV_REGION_SUM ? vv_xray_table_classify : NULL;
+    out->classify_ctx = out->op == VV_REGION_SUM ? xray : NULL;
+    return s;
+}
+
 long
 vv_vray_xray_region_pixel(const vv_vcache *c, const double w2i[3][4], const int dims[3],
                           const vv_plane *planes, int n_planes, const vv_render_region *rg,

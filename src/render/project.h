@@ -93,6 +93,26 @@ typedef struct vv_xray_table {
  * value @p v (clamped to the table) into @p e. */
 void vv_xray_table_classify(const void *ctx, float v, float e[4]);
 
+/* A ray caster's frame (raycast's, gpu's render_frame): @p w through
+ * @p view into @p out, only the samples of @p region when not NULL (then
+ * with its keys in @p key, vv_region_image.key). */
+typedef vv_status (*vv_region_frame_fn)(void *state, const vv_world *w, const vv_view *view,
+                                        const vv_render_options *opt,
+                                        const vv_render_region *region, vv_image *out, float *key);
+
+/* The region contract (vv_renderer_ops.render_region) of a ray caster
+ * that draws a region as a frame: @p frame of @p state draws the World
+ * seen with the region's object alone, its volume the region's voxels
+ * (vv_render_region_world: they carry the whole volume's geometry and
+ * range, so rays stay in the whole volume's index box and only the
+ * region's samples are taken); in xray mode (VV_REGION_SUM) the summed
+ * means are classified by @p xray (the state's table, which the frame
+ * fills). Errors: those of vv_render_region_world and @p frame. */
+vv_status vv_region_render_by_frame(vv_region_frame_fn frame, void *state,
+                                    const vv_xray_table *xray, const vv_world *w,
+                                    const vv_view *view, const vv_render_region *region,
+                                    const vv_render_options *opt, vv_region_image *out);
+
 /* A region render's X-ray pixel (VV_REGION_SUM, include/volvis/sys/renderer.h)
  * along primary ray @p wr (world space) through the volume of cache @p c
  * (@p w2i, @p dims and cut planes as vv_vray_setup takes them; @p inv_form as

@@ -646,6 +646,35 @@ vv_renderer_set_option(vv_renderer *r, const char *key, const char *value) {
     return s == VV_OK ? s : vv_error_prefix(s, "%s", r->ops->info.name);
 }
 
+/* The drivers' clones of a renderer (drv_renderer.clone): a vv_renderer of
+ * the same method and options (vv_renderer_clone). */
+static vv_status
+driven_clone(const drv_renderer *d, drv_renderer *out) {
+    vv_renderer *c = NULL;
+    vv_status s = vv_renderer_clone(&c, d->user);
+    if (s == VV_OK)
+        drv_renderer_of(c, out);
+    else
+        *out = (drv_renderer){0};
+    return s;
+}
+
+static void
+driven_release(drv_renderer *d) {
+    vv_renderer_free(d->user);
+    *d = (drv_renderer){0};
+}
+
+const drv_renderer *
+drv_renderer_of(vv_renderer *r, drv_renderer *out) {
+    *out = (drv_renderer){.ops = r->ops,
+                          .state = r->state,
+                          .clone = driven_clone,
+                          .release = driven_release,
+                          .user = r};
+    return out;
+}
+
 vv_status
 vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
                    const vv_render_options *opt, vv_image *out) {
@@ -666,7 +695,9 @@ vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
         vv_lod lod;
         if (!opt->lod)
             vv_lod_init(&lod);
-        return drv_render_sources(r, world, view, opt, opt->lod ? opt->lod : &lod, out);
+        drv_renderer dr;
+        return drv_render_sources(drv_renderer_of(r, &dr), world, view, opt,
+                                  opt->lod ? opt->lod : &lod, out);
     }
     if (s == VV_OK)
         s = r->ops->render(r->state, world, view, opt, out);
@@ -677,56 +708,9 @@ vv_status
 vv_renderer_render_region(vv_renderer *r, const vv_world *world, const vv_view *view,
                           const vv_render_region *region, const vv_render_options *opt,
                           vv_region_image *out) {
-    vv_render_options def;
-    if (!opt) {
-        vv_render_options_init(&def);
-        opt = &def;
-    }
-    if (!r || !world || !view || !region || !out || !out->image || !out->key)
+    if (!r)
         return vv_error_set(VV_ERR_INVALID, "region render: NULL argument");
-    const char *name = r->ops->info.name;
-    if (!r->ops->render_region || !(r->ops->info.caps & VV_RENDERER_REGION))
-        return vv_error_set(VV_ERR_UNSUPPORTED,
-                            "%s: renders no regions (out-of-core and distributed rendering "
-                            "need a renderer with the region contract: `volvis renderers`)",
-                            name);
-    if (region->rays) {
-        const vv_region_rays *rr = region->rays;
-        if (rr->per_pixel < 1 || !rr->xy ||
-            (size_t)out->image->width * (size_t)out->image->height <
-                (size_t)rr->per_pixel * rr->n_pixels)
-            return vv_error_set(
-                VV_ERR_INVALID, "%s: region image of %d x %d entries for %zu rays of %d a pixel",
-                name, out->image->width, out->image->height, rr->n_pixels, rr->per_pixel);
-    } else if (out->image->width != view->width || out->image->height != view->height) {
-        return vv_error_set(VV_ERR_INVALID, "%s: region image is %d x %d but the view is %d x %d",
-                            name, out->image->width, out->image->height, view->width, view->height);
-    }
-    if (region->object < 0 || region->object >= world->n_objects || !region->voxels)
-        return vv_error_set(VV_ERR_INVALID, "%s: region of object %d without voxels", name,
-                            region->object);
-    if (world->objects[region->object]->n_channels > 1)
-        return vv_error_set(VV_ERR_UNSUPPORTED,
-                            "%s: object '%s' has %d channels; region renders (out of core, "
-                            "distributed) draw one channel an object",
-                            name, world->objects[region->object]->name,
-                            world->objects[region->object]->n_channels);
-    const vv_object *obj = world->objects[region->object];
-    if (obj->type != VV_OBJECT_VOLUME || !obj->volume)
-        return vv_error_set(VV_ERR_INVALID, "%s: object '%s' is not a volume object", name,
-                            obj->name);
-    vv_status s = vv_renderer_check_world(&r->ops->info, world);
-    if (s == VV_OK) {
-        if (out->clear_outside && region->x1 > region->x0 && !region->rays)
-            vv_region_image_clear_rect(out, region->x0, region->y0, region->x1, region->y1);
-        else
-            vv_region_image_clear(out);
-        out->op = VV_REGION_OVER;
-        out->supersample = NULL; /* the method's to set */
-        out->supersample_ctx = NULL;
-        s = r->ops->render_region(r->state, world, view, region, opt, out);
-    }
-    return s == VV_OK ? s : vv_error_prefix(s, "%s", name);
+    return drv_render_region(r->ops, r->state, world, view, region, opt, out);
 }
 
 /* Samples of the transfer function searched for its surface value. */

@@ -21,6 +21,7 @@
 #include <stdint.h>
 
 #include "render/classify.h"
+#include "render/phong.h"
 #include "render/ray.h"
 #include "render/sample.h"
 #include "volvis/render.h"
@@ -98,24 +99,10 @@ vv_vshade(const vv_vshading *o, const vv_vlight *lights, int n_lights, const flo
         const float nv = (n0 * v[0] + n1 * v[1] + n2 * v[2]) * inv;
         for (int l = 0; l < n_lights; l++) {
             const vv_vlight *lt = &lights[l];
-            float L0 = lt->dir[0], L1 = lt->dir[1], L2 = lt->dir[2];
-            if (lt->point) {
-                L0 = lt->pos[0] - pw[0];
-                L1 = lt->pos[1] - pw[1];
-                L2 = lt->pos[2] - pw[2];
-                const float ll = sqrtf(L0 * L0 + L1 * L1 + L2 * L2);
-                if (!(ll > 0))
-                    continue;
-                L0 /= ll;
-                L1 /= ll;
-                L2 /= ll;
-            }
-            float ndl = (n0 * L0 + n1 * L1 + n2 * L2) * inv;
-            /* two-sided: a normal facing away from the light is flipped */
-            const float ndv = ndl < 0 ? -nv : nv;
-            ndl = ndl < 0 ? -ndl : ndl;
-            /* Phong: R.V with R the mirror of L about n */
-            const float rv = 2 * ndl * ndv - (L0 * v[0] + L1 * v[1] + L2 * v[2]);
+            float L[3], ndl;
+            if (!vv_phong_light_dir(lt->point, lt->dir, lt->pos, pw, L))
+                continue;
+            const float rv = vv_phong_rv((n0 * L[0] + n1 * L[1] + n2 * L[2]) * inv, nv, L, v, &ndl);
             float sp = rv > 0 ? o->spec[(int)(rv * VV_VC_SPEC + 0.5f)] : 0;
             float wd = ndl;
             if (shadow) {

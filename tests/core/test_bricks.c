@@ -93,7 +93,8 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
                 vt_ok(vv_renderer_render(mem, w, &w->view, &ro, ref));
                 vv_bricked_stats before;
                 vv_bricked_stats_get(b, &before);
-                vt_ok(drv_render_bricks(ooc, w, 0, &src, &w->view, &ro, img));
+                vt_ok(drv_render_bricks(drv_renderer_of(ooc, &(drv_renderer){0}), w, 0, &src,
+                                        &w->view, &ro, img));
                 frames++;
                 vv_bricked_stats after;
                 vv_bricked_stats_get(b, &after);
@@ -144,7 +145,8 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
         vt_ok(vv_renderer_render(mem, w, &w->view, NULL, ref));
         vv_bricked_stats before, after;
         vv_bricked_stats_get(b, &before);
-        vt_ok(drv_render_bricks(ooc, w, 0, &src, &w->view, NULL, img));
+        vt_ok(drv_render_bricks(drv_renderer_of(ooc, &(drv_renderer){0}), w, 0, &src, &w->view,
+                                NULL, img));
         frames++;
         vv_bricked_stats_get(b, &after);
         int same = 0, lit = 0;
@@ -167,7 +169,8 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
         vt_ok(vv_renderer_new(&rtm, "raytrace"));
         vt_ok(vv_renderer_set_option(rtm, "refinement", "off"));
         vt_ok(vv_renderer_render(rtm, w, &w->view, &ro, ref));
-        vt_ok(drv_render_bricks(rt, w, 0, &src, &w->view, &ro, img));
+        vt_ok(drv_render_bricks(drv_renderer_of(rt, &(drv_renderer){0}), w, 0, &src, &w->view, &ro,
+                                img));
         frames++;
         const double dbr = vt_image_psnr(ref, img, &same);
         printf("%s raytrace iso 600: %s %.1f dB\n", what, same ? "bit-identical" : "differs", dbr);
@@ -180,7 +183,8 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
         vt_ok(vv_bricked_proxy(b, 64, &pv));
         vv_world *wp = head_world(pv, VV_MODE_ISO, 0.6);
         wp->objects[0]->isovalue = 600;
-        assert_int_equal(drv_render_bricks(rt, wp, 0, &src, &wp->view, &ro, img),
+        assert_int_equal(drv_render_bricks(drv_renderer_of(rt, &(drv_renderer){0}), wp, 0, &src,
+                                           &wp->view, &ro, img),
                          VV_ERR_UNSUPPORTED);
         frames++;
         assert_non_null(strstr(vv_error_message(), "iso regions need the whole volume"));
@@ -190,7 +194,8 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
          * the end as the whole render classifies it */
         vv_world *wx = head_world(head, VV_MODE_XRAY, 0.6);
         vt_ok(vv_renderer_render(mem, wx, &wx->view, NULL, ref));
-        vt_ok(drv_render_bricks(ooc, wx, 0, &src, &wx->view, NULL, img));
+        vt_ok(drv_render_bricks(drv_renderer_of(ooc, &(drv_renderer){0}), wx, 0, &src, &wx->view,
+                                NULL, img));
         vv_world_free(wx);
         frames++;
         const double dbx = vt_image_psnr(ref, img, &same);
@@ -218,7 +223,8 @@ check_source(vv_volume *head, const char *path, const vv_raw_params *raw, const 
         vv_image *img = NULL;
         vt_ok(vv_renderer_new(&sp, "splat"));
         vt_ok(vv_image_new(&img, w->view.width, w->view.height));
-        assert_int_equal(drv_render_bricks(sp, w, 0, &src, &w->view, NULL, img),
+        assert_int_equal(drv_render_bricks(drv_renderer_of(sp, &(drv_renderer){0}), w, 0, &src,
+                                           &w->view, NULL, img),
                          VV_ERR_UNSUPPORTED);
         assert_non_null(strstr(vv_error_message(), "splat renders no regions"));
         vv_image_free(img);
@@ -394,7 +400,8 @@ test_quality2_regions(void **state) {
         vt_ok(vv_renderer_render(mem, w, &w->view, &ro, ref));
         vv_bricked_stats before, after;
         vv_bricked_stats_get(b, &before);
-        vt_ok(drv_render_bricks(ooc, w, 0, &src, &w->view, &ro, img));
+        vt_ok(drv_render_bricks(drv_renderer_of(ooc, &(drv_renderer){0}), w, 0, &src, &w->view, &ro,
+                                img));
         vv_bricked_stats_get(b, &after);
         int same = 0;
         const double db = vt_image_psnr(ref, img, &same);

@@ -238,13 +238,15 @@ test_two_heads(void **state) {
         vv_render_options ro;
         vv_render_options_init(&ro);
         vt_ok(vv_image_new(&one, w->view.width, w->view.height));
-        vt_ok(drv_render_bricks(r, w, 0, &bs, &w->view, &ro, one));
+        vt_ok(drv_render_bricks(drv_renderer_of(r, &(drv_renderer){0}), w, 0, &bs, &w->view, &ro,
+                                one));
         int same = 0;
         vt_image_psnr(one, img, &same);
         assert_true(same);
         /* nothing visible: the background, transparent, at no depth */
         w->objects[0]->visible = 0;
-        vt_ok(drv_render_sources(r, w, &w->view, &ro, NULL, one));
+        vt_ok(drv_render_sources(drv_renderer_of(r, &(drv_renderer){0}), w, &w->view, &ro, NULL,
+                                 one));
         for (size_t i = 0; i < (size_t)one->width * (size_t)one->height; i++) {
             assert_float_equal(one->rgba[4 * i + 2], 0.3f, 1e-7);
             assert_float_equal(one->rgba[4 * i + 3], 0.0f, 0);

@@ -117,7 +117,8 @@ frame(vv_pyramid *p, vv_world *w, int level, int progressive, vv_lod *lod, vv_im
     lod->load_budget = 0;
     vv_render_options ro;
     vv_render_options_init(&ro);
-    const vv_status s = drv_render_multires(r, w, 0, &src, &w->view, &ro, lod, img);
+    const vv_status s = drv_render_multires(drv_renderer_of(r, &(drv_renderer){0}), w, 0, &src,
+                                            &w->view, &ro, lod, img);
     vv_renderer_free(r);
     return s;
 }

@@ -229,7 +229,8 @@ render_level0(vv_pyramid *p, int *skipped) {
     vv_lod lod;
     vv_lod_init(&lod);
     lod.level = 0;
-    vt_ok(drv_render_multires(ren, w, 0, &src, &w->view, NULL, &lod, img));
+    vt_ok(drv_render_multires(drv_renderer_of(ren, &(drv_renderer){0}), w, 0, &src, &w->view, NULL,
+                              &lod, img));
     *skipped = lod.skipped;
     vv_renderer_free(ren);
     vv_world_free(w);

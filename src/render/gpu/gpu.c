@@ -100,10 +100,9 @@ typedef struct gpu_state {
     int skipping;             /* option empty_space_skipping */
     int device;               /* option device: -1 auto */
     double budget_mb;         /* option device_memory_mb: -1 auto */
-    /* a volume over the device budget is drawn brick by brick by a gpu
-     * renderer of its own (region renders, drv_render_bricks), its bricks'
-     * min/max computed once a volume */
-    vv_renderer *pager;
+    /* a volume over the device budget is drawn brick by brick by the
+     * brick driver (drv_render_bricks) with this state's region renders,
+     * its bricks' min/max computed once a volume */
     const vv_volume *bricks_vol;
     uint64_t bricks_modified;
     int bricks_side, bricks_nb[3];
@@ -375,8 +374,9 @@ find_object(const vv_world *w, const vv_object **out) {
  * region contract of include/volvis/sys/renderer.h: the samples it owns,
  * from its voxels; no background; *key per pixel for projections). */
 static vv_status
-render_frame(gpu_state *st, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+render_frame(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
              const vv_render_region *rg, vv_image *out, float *key) {
+    gpu_state *st = state;
     const vv_object *obj;
     vv_status s = find_object(w, &obj);
     if (s != VV_OK)
@@ -897,31 +897,13 @@ gpu_render(void *state, const vv_world *w, const vv_view *view, const vv_render_
     const int side = s == VV_OK && obj && obj->n_channels < 2 ? brick_side(st, obj) : 0;
     if (s != VV_OK || !side)
         return s != VV_OK ? s : render_frame(st, w, view, opt, NULL, out, NULL);
-    /* over the device's memory: brick by brick through the region contract,
-     * by a gpu renderer of its own on the same device */
+    /* over the device's memory: brick by brick through the region contract
+     * (gpu_render_region, on this state: one region on the device at a
+     * time), by the brick driver as every renderer's out-of-core volumes */
     int object = 0;
     while (w->objects[object] != obj)
         object++;
-    if (!st->pager) {
-        char dev[16];
-        snprintf(dev, sizeof dev, "%d", st->vk.index);
-        s = vv_renderer_new(&st->pager, "gpu");
-        if (s == VV_OK)
-            s = vv_renderer_set_option(st->pager, "device", dev);
-        if (s != VV_OK) {
-            vv_renderer_free(st->pager);
-            st->pager = NULL;
-            return s;
-        }
-    }
-    char et[32];
-    snprintf(et, sizeof et, "%.17g", st->early_termination);
-    s = vv_renderer_set_option(st->pager, "early_termination", et);
-    if (s == VV_OK)
-        s = vv_renderer_set_option(st->pager, "empty_space_skipping", st->skipping ? "1" : "0");
-    if (s == VV_OK)
-        s = prepare_bricks(st, obj->volume, side);
-    if (s != VV_OK)
+    if ((s = prepare_bricks(st, obj->volume, side)) != VV_OK)
         return s;
     const vv_brick_source src = {.version = VV_BRICK_SOURCE_VERSION,
                                  .user = st,
@@ -929,27 +911,19 @@ gpu_render(void *state, const vv_world *w, const vv_view *view, const vv_render_
                                  .grid = pb_grid,
                                  .info = pb_info,
                                  .load = pb_load};
-    return drv_render_bricks(st->pager, w, object, &src, view, opt, out);
+    const drv_renderer self = {.ops = &vv_gpu_ops, .state = st};
+    return drv_render_bricks(&self, w, object, &src, view, opt, out);
 }
 
-/* The region contract: the World seen with the object's volume replaced by
- * the region's voxels (which carry the whole volume's geometry and range),
- * rays in the whole volume's index box, and only the region's samples
- * taken: the out-of-core drivers page bricks through it, one region on the
- * device at a time. */
+/* The region contract: a frame of the region's World
+ * (vv_region_render_by_frame, as the ray caster's); the out-of-core
+ * drivers page bricks through it, one region on the device at a time. */
 static vv_status
 gpu_render_region(void *state, const vv_world *w, const vv_view *view,
                   const vv_render_region *region, const vv_render_options *opt,
                   vv_region_image *out) {
-    vv_region_world rw;
-    vv_status s = vv_render_region_world(w, region, &out->op, &rw);
-    if (s != VV_OK)
-        return s;
-    gpu_state *st = state;
-    s = render_frame(st, &rw.world, view, opt, region, out->image, out->key);
-    out->classify = out->op == VV_REGION_SUM ? vv_xray_table_classify : NULL;
-    out->classify_ctx = out->op == VV_REGION_SUM ? &st->xray : NULL;
-    return s;
+    return vv_region_render_by_frame(render_frame, state, &((gpu_state *)state)->xray, w, view,
+                                     region, opt, out);
 }
 
 #else /* !VV_HAVE_VULKAN */
@@ -981,8 +955,6 @@ gpu_release(void *state) {
     gpu_state *st = state;
 #if VV_HAVE_VULKAN
     release_device(st);
-    vv_renderer_free(st->pager);
-    st->pager = NULL;
     free(st->bricks_mm);
     st->bricks_mm = NULL;
     vv_source_free(st->bricks_src);
@@ -1000,8 +972,6 @@ gpu_device_changed(void *state, const vv_option_spec *spec, const vv_option_valu
 #if VV_HAVE_VULKAN
     gpu_state *st = state;
     release_device(st);
-    vv_renderer_free(st->pager); /* it took the device before */
-    st->pager = NULL;
 #else
     (void)state;
 #endif

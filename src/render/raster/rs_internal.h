@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "render/phong.h"
 #include "volvis/raster.h"
 
 #define RS_TILE 32 /* tile side, pixels */
@@ -166,25 +167,13 @@ light_eval(const rs_draw *d, const float p[3], const float nin[3], float out[3])
             v2 = -d->fwd[2];
         }
         const float nv = n0 * v0 + n1 * v1 + n2 * v2;
+        const float v[3] = {v0, v1, v2};
         for (int l = 0; l < d->n_lights; l++) {
             const rs_light *lt = &d->lights[l];
-            float L0 = lt->dir[0], L1 = lt->dir[1], L2 = lt->dir[2];
-            if (lt->point) {
-                L0 = lt->pos[0] - p[0];
-                L1 = lt->pos[1] - p[1];
-                L2 = lt->pos[2] - p[2];
-                const float ll = sqrtf(L0 * L0 + L1 * L1 + L2 * L2);
-                if (!(ll > 0))
-                    continue;
-                L0 /= ll;
-                L1 /= ll;
-                L2 /= ll;
-            }
-            float ndl = n0 * L0 + n1 * L1 + n2 * L2;
-            /* two-sided: a normal facing away from the light is flipped */
-            const float ndv = ndl < 0 ? -nv : nv;
-            ndl = fabsf(ndl);
-            float rv = 2 * ndl * ndv - (L0 * v0 + L1 * v1 + L2 * v2);
+            float L[3], ndl;
+            if (!vv_phong_light_dir(lt->point, lt->dir, lt->pos, p, L))
+                continue;
+            float rv = vv_phong_rv(n0 * L[0] + n1 * L[1] + n2 * L[2], nv, L, v, &ndl);
             rv = rv > 1 ? 1 : rv;
             const float sp = rv > 0 ? powf(rv, d->shininess) : 0;
             dr += ndl * lt->kd[0];

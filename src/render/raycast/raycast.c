@@ -1095,8 +1095,9 @@ preint_applies(const vv_object *obj) {
 /* A whole render, or with @p region only its samples (the World then has
  * that one visible object, a copy whose volume is the region's voxels). */
 static vv_status
-render_frame(rc_state *st, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+render_frame(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
              const vv_render_region *region, vv_image *out, float *key) {
+    rc_state *st = state;
     rc_frame fr;
     memset(&fr, 0, sizeof fr);
     fr.st = st;
@@ -1248,23 +1249,14 @@ rc_render(void *state, const vv_world *w, const vv_view *view, const vv_render_o
     return render_frame(state, w, view, opt, NULL, out, NULL);
 }
 
-/* The region contract: the World seen with the object's volume replaced
- * by the region's voxels (which carry the whole volume's geometry and
- * range), rays in the whole volume's index box, and only the region's
- * samples taken. */
+/* The region contract: a frame of the region's World
+ * (vv_region_render_by_frame, as the gpu renderer's). */
 static vv_status
 rc_render_region(void *state, const vv_world *w, const vv_view *view,
                  const vv_render_region *region, const vv_render_options *opt,
                  vv_region_image *out) {
-    vv_region_world rw;
-    vv_status s = vv_render_region_world(w, region, &out->op, &rw);
-    if (s != VV_OK)
-        return s;
-    rc_state *st = state;
-    s = render_frame(st, &rw.world, view, opt, region, out->image, out->key);
-    out->classify = out->op == VV_REGION_SUM ? vv_xray_table_classify : NULL;
-    out->classify_ctx = out->op == VV_REGION_SUM ? &st->xray : NULL;
-    return s;
+    return vv_region_render_by_frame(render_frame, state, &((rc_state *)state)->xray, w, view,
+                                     region, opt, out);
 }
 
 static vv_status
