@@ -10,6 +10,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "render/frame.h"
 #include "render/kernels_avx2.h"
 
 /* The last sample (at most kend, at least k) in the subvolume of p. */
