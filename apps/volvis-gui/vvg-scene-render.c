@@ -122,10 +122,10 @@ static gboolean show_frame(gpointer data);
  * image size with the World's renderer (its settings applied): a
  * progressive frame from what the cache holds, asking the pyramids'
  * loaders for the rest (converged 0), or the converged frame, which reads
- * what it needs (1). VV_ERR_UNSUPPORTED when the renderer has no region
- * method or the World is not one that layers draw (overlapping composite
- * objects, geometry, several objects by the ray tracer): the caller then
- * draws the proxies in memory. */
+ * what it needs (1). Where the renderer has no region method or the World
+ * is not one that layers draw (overlapping composite objects, geometry,
+ * several objects by the ray tracer), the renderer draws the proxies in
+ * memory (vv_render_options.proxy_fallback) and f->lod_note says why. */
 static vv_status
 render_out_of_core(VvgSceneView *self, const VvgSceneJob *j, frame *f, int converged,
                    vv_render_options *ro, vv_image *img) {
@@ -134,9 +134,6 @@ render_out_of_core(VvgSceneView *self, const VvgSceneJob *j, frame *f, int conve
     vv_status s = vv_renderer_apply_settings(r, &w->render);
     if (s != VV_OK)
         return s;
-    if (!(vv_renderer_get_info(r)->caps & VV_RENDERER_REGION))
-        return vv_error_set(VV_ERR_UNSUPPORTED, "%s draws no regions",
-                            vv_renderer_get_info(r)->name);
     vv_view v = w->view;
     v.width = img->width;
     v.height = img->height;
@@ -146,8 +143,10 @@ render_out_of_core(VvgSceneView *self, const VvgSceneJob *j, frame *f, int conve
     lod.background = 1;
     lod.load_budget = 0;
     ro->lod = &lod;
+    ro->proxy_fallback = 1; /* the renderer draws the proxies where it cannot by regions */
     s = vv_renderer_render(r, w, &v, ro, img);
     ro->lod = NULL;
+    g_strlcpy(f->lod_note, lod.note, sizeof f->lod_note);
     if (s == VV_OK) {
         memcpy(f->nodes, lod.nodes, sizeof f->nodes);
         f->pending = lod.pending;
@@ -155,20 +154,6 @@ render_out_of_core(VvgSceneView *self, const VvgSceneJob *j, frame *f, int conve
         src_set_ref(&f->src, &j->src);
     }
     return s;
-}
-
-/* @p w with every object's file out of core dropped (vv_object_set_volume
- * of its own proxy): the proxies drawn in memory. NULL when it cannot be
- * made. */
-static vv_world *
-world_in_memory(const vv_world *w) {
-    vv_world *m = NULL;
-    if (vv_world_clone(&m, w) != VV_OK)
-        return NULL;
-    for (int i = 0; i < m->n_objects; i++)
-        if (vvg_object_source(m->objects[i]))
-            (void)vv_object_set_volume(m->objects[i], m->objects[i]->volume);
-    return m;
 }
 
 /* Draws one representation of a job (a pyramid's converged frame when
@@ -221,20 +206,12 @@ render_one(VvgSceneView *self, const VvgSceneJob *j, vv_preview_kind kind, int c
 #endif
     gint64 t0 = g_get_monotonic_time();
     gboolean drawn = FALSE;
-    vv_world *mem = NULL; /* the proxies in memory, when out of core cannot draw w */
     if (s == VV_OK && j->src.n > 0) {
         s = render_out_of_core(self, j, f, converged, &ro, img);
         drawn = s == VV_OK || s == VV_ERR_CANCELLED;
-        if (s == VV_ERR_UNSUPPORTED) { /* the proxies in memory, and why */
-            g_strlcpy(f->lod_note, vv_error_message(), sizeof f->lod_note);
-            vv_error_clear();
-            mem = world_in_memory(w);
-            s = mem ? VV_OK : VV_ERR_NOMEM;
-        }
     }
     if (s == VV_OK && !drawn)
-        s = vv_preview_render(self->preview, mem ? mem : w, &w->view, kind, &ro, img);
-    vv_world_free(mem);
+        s = vv_preview_render(self->preview, w, &w->view, kind, &ro, img);
     gint64 t1 = g_get_monotonic_time();
     f->rendered_us = t1;
     double secs = (t1 - t0) * 1e-6;

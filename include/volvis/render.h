@@ -100,6 +100,9 @@ typedef struct vv_lod {
      * progressive 0 streams the converged image through the cache.
      */
     int stalled;
+    /** Out: why the frame drew the objects' proxies in memory
+     *  (vv_render_options.proxy_fallback); "" when it drew them out of core. */
+    char note[160];
 } vv_lod;
 
 /** level -1 (screen-space error), voxel_pixels 1, counts 0. */
@@ -124,9 +127,18 @@ typedef struct vv_render_options {
      * Ignored by a World held in memory.
      */
     vv_lod *lod;
+    /**
+     * 1: objects out of core that the renderer cannot draw by regions (it
+     * has no region contract, or the World is not one that layers draw:
+     * overlapping composite objects, geometry beside them) are drawn from
+     * their proxies in memory (vv_source_proxy: coarse) by the renderer's
+     * whole-frame method, and lod->note says why; 0: that is
+     * VV_ERR_UNSUPPORTED (what the CLI reports).
+     */
+    int proxy_fallback;
 } vv_render_options;
 
-/** threads 0, quality 2, no progress callback, no stats, no lod. */
+/** threads 0, quality 2, no progress callback, no stats, no lod, no proxy fallback. */
 void vv_render_options_init(vv_render_options *o);
 
 /* ---- typed option tables ------------------------------------------------ */

@@ -15,7 +15,9 @@
 #include "render/drivers.h"
 #include "render/frame.h"
 #include "render/registry.h"
+#include "volvis/model.h"
 #include "volvis/render.h"
+#include "volvis/source.h"
 #include "volvis/sys/renderer.h"
 
 /* An option set on a renderer, kept for vv_renderer_clone. */
@@ -675,6 +677,25 @@ drv_renderer_of(vv_renderer *r, drv_renderer *out) {
     return out;
 }
 
+/* @p w with every object's file out of core dropped (vv_object_set_volume
+ * of its own proxy, which its volume already is): the proxies drawn in
+ * memory. */
+static vv_status
+proxies_in_memory(const vv_world *w, vv_world **out) {
+    vv_status s = vv_world_clone(out, w);
+    for (int i = 0; s == VV_OK && i < (*out)->n_objects; i++) {
+        vv_object *o = (*out)->objects[i];
+        if (o->type == VV_OBJECT_VOLUME && o->source && o->volume &&
+            vv_source_get_kind(o->source) != VV_SOURCE_MEMORY)
+            s = vv_object_set_volume(o, o->volume);
+    }
+    if (s != VV_OK) {
+        vv_world_free(*out);
+        *out = NULL;
+    }
+    return s;
+}
+
 vv_status
 vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
                    const vv_render_options *opt, vv_image *out) {
@@ -689,18 +710,31 @@ vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
         return vv_error_set(VV_ERR_INVALID, "render: image is %d x %d but the view is %d x %d",
                             out->width, out->height, view->width, view->height);
     vv_status s = vv_renderer_check_world(&r->ops->info, world);
+    vv_world *proxies = NULL;
     if (s == VV_OK && drv_world_out_of_core(world)) {
         /* objects out of core: object by object through the region
          * contract (its errors name their driver: "bricks:", "sources:") */
-        vv_lod lod;
-        if (!opt->lod)
-            vv_lod_init(&lod);
+        vv_lod own;
+        vv_lod *lod = opt->lod;
+        if (!lod) {
+            vv_lod_init(&own);
+            lod = &own;
+        }
+        lod->note[0] = '\0';
         drv_renderer dr;
-        return drv_render_sources(drv_renderer_of(r, &dr), world, view, opt,
-                                  opt->lod ? opt->lod : &lod, out);
+        s = drv_render_sources(drv_renderer_of(r, &dr), world, view, opt, lod, out);
+        if (s != VV_ERR_UNSUPPORTED || !opt->proxy_fallback)
+            return s;
+        /* the renderer, not the front end, falls back: the proxies in memory */
+        snprintf(lod->note, sizeof lod->note, "%s", vv_error_message());
+        vv_error_clear();
+        if ((s = proxies_in_memory(world, &proxies)) != VV_OK)
+            return s;
+        world = proxies;
     }
     if (s == VV_OK)
         s = r->ops->render(r->state, world, view, opt, out);
+    vv_world_free(proxies);
     return s == VV_OK ? s : vv_error_prefix(s, "%s", r->ops->info.name);
 }
 

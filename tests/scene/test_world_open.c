@@ -148,6 +148,61 @@ test_store_same_defaults(void **state) {
     }
 }
 
+/* The renderer, not the front end, falls back to the proxies: a .vvb out of
+ * core drawn by splat (no region contract) is VV_ERR_UNSUPPORTED unless the
+ * options allow the fallback; then it is the image of the proxies in
+ * memory, bit for bit, and the lod says why. */
+static void
+test_proxy_fallback(void **state) {
+    (void)state;
+    const char *dir = vt_outdir("scene_world_open");
+    const char *vvb = vt_path(dir, "fallback.vvb");
+    vv_volume *ct = NULL;
+    vt_ok(vv_volume_load(&ct, vt_data("volumes/ct_head.nrrd"), NULL));
+    vt_ok(vt_save(ct, vvb, VV_FORMAT_VVB, -1, 0));
+    vv_volume_free(ct);
+    vv_world_open_options o;
+    vv_world_open_options_init(&o);
+    o.has_size = 1;
+    o.view.width = 64;
+    o.view.height = 48;
+    vv_world *w = NULL;
+    vt_ok(vv_world_open(&w, vvb, &o, NULL));
+    assert_non_null(w->objects[0]->source);
+    vv_renderer *r = NULL;
+    vt_ok(vv_renderer_new(&r, "splat"));
+    vv_image *a = NULL, *b = NULL;
+    vt_ok(vv_image_new(&a, 64, 48));
+    vt_ok(vv_image_new(&b, 64, 48));
+    vv_render_options ro;
+    vv_render_options_init(&ro);
+    ro.threads = 1;
+    vv_lod lod;
+    vv_lod_init(&lod);
+    ro.lod = &lod;
+    vt_expect_refusal("splat out of core", vv_renderer_render(r, w, &w->view, &ro, a),
+                      VV_ERR_UNSUPPORTED, "region", NULL);
+    ro.proxy_fallback = 1;
+    vt_ok(vv_renderer_render(r, w, &w->view, &ro, a));
+    printf("the fallback's note: %s\n", lod.note);
+    assert_true(strstr(lod.note, "region") != NULL);
+    /* the proxies in memory, as a front end made them before */
+    vv_world *m = NULL;
+    vt_ok(vv_world_clone(&m, w));
+    vt_ok(vv_object_set_volume(m->objects[0], m->objects[0]->volume));
+    assert_null(m->objects[0]->source);
+    ro.lod = NULL;
+    vt_ok(vv_renderer_render(r, m, &m->view, &ro, b));
+    int identical = 0;
+    vt_image_psnr(a, b, &identical);
+    assert_true(identical);
+    vv_world_free(m);
+    vv_image_free(a);
+    vv_image_free(b);
+    vv_renderer_free(r);
+    vv_world_free(w);
+}
+
 /* The version guards the layout; channels are for volume files; a missing
  * input is one line naming it. */
 static void
@@ -206,6 +261,7 @@ main(void) {
         cmocka_unit_test(test_window_without_background),
         cmocka_unit_test(test_out_of_core_choices),
         cmocka_unit_test(test_store_same_defaults),
+        cmocka_unit_test(test_proxy_fallback),
         cmocka_unit_test(test_refusals),
         cmocka_unit_test(test_scene_overrides),
     };
