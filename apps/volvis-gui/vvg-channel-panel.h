@@ -1,6 +1,6 @@
 /*
- * VvgChannelPanel: the channels and time steps of the selected volume object
- * (issue: several channels and time steps). For an object of several
+ * VvgChannelPanel: the channels and time steps of the selected volume
+ * object. For an object of several
  * channels (vv_object_set_channels): the blend rule (vv_channel_blend) and
  * one row per channel, its name with its visibility, its colour, its
  * contrast limits and gamma over its histogram (vv_tf_set_contrast, the

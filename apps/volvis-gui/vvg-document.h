@@ -94,7 +94,7 @@ gboolean vvg_document_mesh_is_y_up(const char *path);
  */
 void vvg_document_set_view_size(VvgDocument *doc, int width, int height);
 /**
- * Autosave (issue 33): writes the World (the kept one while a transient
+ * Autosave: writes the World (the kept one while a transient
  * World is shown) into the folder @p dir as one unit: session.json and
  * volume_<i>.nrrd for each volume made in the session, staged in
  * "<dir>.tmp" and exchanged with @p dir in one rename (renameat2

@@ -127,7 +127,7 @@ vvg_spin(double lo, double hi, double step, int digits, double value) {
     GtkWidget *s = gtk_spin_button_new_with_range(lo, hi, step);
     gtk_spin_button_set_digits(GTK_SPIN_BUTTON(s), (guint)digits);
     /* as wide as a value usually needs, not as the range's widest value: the
-     * side bar stays narrow and the views get the window (issue 66); the
+     * side bar stays narrow and the views get the window; the
      * field scrolls a longer value */
     gtk_editable_set_width_chars(GTK_EDITABLE(s), 7);
     gtk_spin_button_set_value(GTK_SPIN_BUTTON(s), value);

@@ -13,7 +13,7 @@ G_BEGIN_DECLS
 /** Appends a bold @p title and a new grid to the vertical @p box; returns the grid. */
 GtkWidget *vvg_section(GtkWidget *box, const char *title);
 /** vvg_section folded: a closed expander titled @p title (its accessible name) holding the
- *  grid, for what few people change (issue 66: the first screen holds the common). */
+ *  grid, for what few people change (the first screen holds the common). */
 GtkWidget *vvg_section_folded(GtkWidget *box, const char *title);
 /** Rows used in @p grid so far. */
 int vvg_grid_rows(GtkWidget *grid);

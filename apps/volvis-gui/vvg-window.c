@@ -49,7 +49,7 @@ struct _VvgWindow {
     void *after_save_user;
     gboolean closing;         /* the close was confirmed: let the window go */
     const void *marks_volume; /* the volume the slice cursor belongs to (compared only) */
-    /* autosave (issue 33): this window's folder, its timers, and the folder of
+    /* autosave: this window's folder, its timers, and the folder of
      * a restored session, removed once this window's own autosave stands */
     char *autosave_dir;
     char *restore_from;
@@ -1041,7 +1041,7 @@ wrap_long_labels(GtkWidget *w) {
         wrap_long_labels(c);
 }
 
-/* The side bar (issue 66: the views get most of the window): a drop-down
+/* The side bar (the views get most of the window): a drop-down
  * of the pages above the page, one page per component, each scrolling on
  * its own, 340 pixels wide; hidden altogether by Controls. */
 static GtkWidget *

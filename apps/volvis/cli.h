@@ -284,8 +284,8 @@ vv_status cli_time_steps_open(const cli_render_args *r, const char *path, const 
                               vv_time_steps **out);
 /**
  * Time steps are drawn once each: gradients at the samples drawn cost less
- * than a gradient cache of every voxel of every step (bench_time_steps: 3.5
- * -> 6.9 steps a second on 256^3 through the sandbox). Sets
+ * than a gradient cache of every voxel of every step (docs/rendering.md,
+ * "Time steps", has the figures). Sets
  * gradient_budget_mb=0 on @p ren unless a --set of @p a names it; a
  * renderer without the option is left as it is.
  */

@@ -271,8 +271,8 @@ void vv_preview_policy_init(vv_preview_policy *pol);
 void vv_preview_policy_record(vv_preview_policy *pol, vv_preview_kind kind, double seconds);
 /**
  * The representation to draw while moving within @p budget seconds a frame
- * (issue 28: interaction shows the data, never boxes, where a reduced ray
- * cast can keep the rate): the finest allowed ray cast whose expected time
+ * (interaction shows the data, never boxes, where a reduced ray cast can
+ * keep the rate): the finest allowed ray cast whose expected time
  * fits; with nothing measured, the 1/8 cast. When the 1/8 cast is measured
  * over the budget, the best allowed surface representation that fits and
  * takes less than half the 1/8 cast's time (a load that slows everything

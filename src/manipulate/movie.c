@@ -254,12 +254,10 @@ remove_work_dir(const char *dir, int n) {
     rmdir(dir);
 }
 
-/* Kept whole (223 lines) for now: the output (a video writer and its work
- * folder, or a PNG pattern), the encoding thread and the frame loop (resume,
- * render, post) share one teardown that must run in one order (join the
- * thread, abort a partial video, keep finished frames); and the frame's
- * render call is what issue 27's renderer framework (frame.c) changes.
- * Split with that change rather than twice. */
+/* Kept whole: the output (a video writer and its work folder, or a PNG
+ * pattern), the encoding thread and the frame loop (resume, render, post)
+ * share one teardown that must run in one order (join the thread, abort a
+ * partial video, keep finished frames). */
 vv_status
 vv_animation_render(const vv_animation *a, const vv_world *base, vv_renderer *renderer,
                     const vv_anim_render_options *opt, vv_anim_render_stats *stats) {

@@ -1,5 +1,5 @@
 /*
- * Multi-channel volume objects (issue: several channels and time steps):
+ * Multi-channel volume objects:
  * the channels of one object, their default colours and the microscopy
  * shorthand for a channel's transfer function (colour, contrast limits,
  * gamma). The ray caster and the ray tracer draw them (src/render/raycast/,

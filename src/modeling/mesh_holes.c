@@ -114,11 +114,9 @@ edge_net(const edge_rec *E, size_t i, size_t j, const unsigned char *flip) {
     return net;
 }
 
-/* Kept whole (223 lines) for now: one pass after another over the edge
- * records it builds (weld, edges, grouping, orientation per component,
- * the boundary chain, its loops, the caps' area), all freed at one exit;
- * it is the Modeling side of the mesh work that issue 27's geometry table
- * reorganises, and is split with it rather than twice. */
+/* Kept whole: one pass after another over the edge records it builds
+ * (weld, edges, grouping, orientation per component, the boundary chain,
+ * its loops, the caps' area), all freed at one exit. */
 vv_status
 vv_mesh_holes_find(const vv_mesh *m, vv_mesh_holes *out) {
     memset(out, 0, sizeof *out);

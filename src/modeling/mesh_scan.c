@@ -717,12 +717,10 @@ caps_correct(const cap_info *caps, size_t nloops, const int dims[3], const doubl
     }
 }
 
-/* Kept whole (273 lines) for now: the passes of the winding-number scan
- * (the closed completion, crossings along x, y and z, medians, the
- * distance band, the caps' solid angles near holes) share grid-sized
- * arrays with one cleanup, and their OpenMP loops move to core's
- * vv_parallel_for with issue 27's geometry work (which also gives meshes a
- * BVH); the passes become functions with that change rather than twice. */
+/* Kept whole: the passes of the winding-number scan (the closed
+ * completion, crossings along x, y and z, medians, the distance band, the
+ * caps' solid angles near holes) share grid-sized arrays with one
+ * cleanup. */
 vv_status
 vv_mesh_scan(const vv_mesh *mesh, vv_mat4 to_world, int solid, double thickness, const int dims[3],
              const double spacing[3], const double origin[3], double band, float *sd, int threads) {

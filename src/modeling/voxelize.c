@@ -350,11 +350,9 @@ make_grid(vctx *c, const vv_shape *shape, const vv_voxelize_options *o) {
     return VV_OK;
 }
 
-/* Kept whole (243 lines) for now: the grid set-up, the meshes' scan
- * conversion, the brick classification and the parallel brick loop with
- * its progress share the classified bricks and one cleanup; voxelization
- * becomes an entry of issue 27's geometry-type table in the geometry work,
- * and this function is split with that change rather than twice. */
+/* Kept whole: the grid set-up, the meshes' scan conversion, the brick
+ * classification and the parallel brick loop with its progress share the
+ * classified bricks and one cleanup. */
 vv_status
 vv_voxelize(vv_volume **out, const vv_shape *shape, const vv_voxelize_options *opt) {
     if (!out)

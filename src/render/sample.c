@@ -333,7 +333,7 @@ cache_build(const vv_vcache_set *s, vv_vcache *c, vv_volume *vol) {
     const int ny = c->ny, nz = c->nz;
     const int whole = c->nx == vol->dims[0] && c->ny == vol->dims[1] && c->nz == vol->dims[2];
     if (vol->type == VV_U16 && whole) {
-        /* the volume's own array serves: no copy (memory: issue 14) */
+        /* the volume's own array serves: no copy of a large volume */
         c->qoff = 0;
         c->q16 = vol->data;
         c->q16_borrowed = 1;

@@ -168,7 +168,7 @@ vv_scene_parse_geometry_object(const sctx *c, json_t *e, const char *op, vv_worl
     return vv_world_add_object(w, o);
 }
 
-/* ---- geometry objects (issue 3, Modeling) ---------------------------------
+/* ---- geometry objects (Modeling) ------------------------------------------
  * A "geometry" object holds a primitive or a CSG tree, read by the Modeling
  * component (src/modeling/shape_json.c) and volume-sampled here at load, so
  * it becomes a volume object that every volume renderer draws. */

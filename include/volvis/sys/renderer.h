@@ -20,9 +20,8 @@
  * method writes no default and no setter of its own, only a hook for an
  * option whose change has a side effect (a cache to drop, a file to read).
  *
- * Room for what comes next (issues 29, 30, 32): a volume source
- * (sys/source.h) feeds region renders brick by brick today and levels of
- * detail later; a tile's work gets its rectangle and a per-thread scratch,
+ * A volume source (sys/source.h) feeds region renders brick by brick and
+ * by levels of detail; a tile's work gets its rectangle and a per-thread scratch,
  * so a kernel may trace a packet of rays (8 with AVX2) per call instead of
  * one; channels are a property of the object, not of this interface.
  *

@@ -28,9 +28,8 @@
  * path length, isosurfaces the exact crossing of the linear field.
  *
  * This file is one method's kernel, the cell-by-cell irregular-grid ray
- * caster, and is kept whole on purpose although it is over the 1,200 lines
- * of issue 62's rule: its entry, walk and segment compositing are one loop
- * best read together.
+ * caster, kept whole on purpose: its entry, walk and segment compositing
+ * are one loop best read together.
  */
 #include <math.h>
 #include <stdlib.h>

@@ -464,9 +464,9 @@ scene_size(const vv_world *w, const vv_view *view) {
     return scene;
 }
 
-/* Over 150 lines: the loop over the World's objects turns each kind into
- * meshes (isosurfaces, grid surfaces, tessellated primitives) and draws
- * them; the geometry-type table of issue 27 replaces its per-kind part. */
+/* One loop over the World's objects turns each kind into meshes
+ * (isosurfaces, grid surfaces, tessellated primitives) and draws them; the
+ * geometry-type table (model) gives each kind's part. */
 static vv_status
 sf_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
           vv_image *out) {
