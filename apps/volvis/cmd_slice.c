@@ -80,29 +80,23 @@ load(const cli_args *a, const char *input, vv_world **w, const vv_object **obj) 
     const char *t = cli_get(a, "object");
     if (t && (rc = cli_parse_int(a, "object", t, 0, 1 << 20, &obj_index)))
         return rc;
-    vv_status s;
-    if (cli_ends_with(input, ".json")) {
-        if ((rc = cli_check_readable(input)))
+    /* through the door, every voxel at hand: a scene, or a volume file's
+     * channel and step as `volvis render` shows it */
+    vv_world_open_options o;
+    vv_world_open_options_init(&o);
+    o.memory = VV_WORLD_IN_MEMORY;
+    if (cli_get(a, "raw")) {
+        if ((rc = cli_parse_raw(a, "raw", cli_get(a, "raw"), &o.load.raw)))
             return rc;
-        vv_error_clear();
-        if ((s = vv_scene_load(w, input)) != VV_OK)
-            return cli_fail(s, input);
-    } else {
-        vv_raw_params raw;
-        int has_raw = cli_get(a, "raw") != NULL, series = 0, channel = -1, time = -1;
-        if (has_raw && (rc = cli_parse_raw(a, "raw", cli_get(a, "raw"), &raw)))
-            return rc;
-        if ((rc = cli_parse_series_channel(a, &series, &channel, &time)))
-            return rc;
-        vv_volume *v = NULL;
-        if ((rc =
-                 cli_load_volume_sc(input, has_raw ? &raw : NULL, series, channel, time, NULL, &v)))
-            return rc;
-        s = vv_world_new_for_volume(w, v, NULL);
-        vv_volume_free(v);
-        if (s != VV_OK)
-            return cli_fail(s, input);
+        o.load.format = VV_FORMAT_RAW;
+        o.load.has_raw = 1;
     }
+    if ((rc = cli_parse_series_channel(a, &o.load.series, &o.load.channel, &o.load.time)))
+        return rc;
+    vv_error_clear();
+    vv_status s = vv_world_open(w, input, &o, NULL);
+    if (s != VV_OK)
+        return cli_fail(s, input);
     *obj = NULL;
     for (int i = 0, k = 0; i < (*w)->n_objects && !*obj; i++)
         if ((*w)->objects[i]->volume && (obj_index < 0 || k++ == obj_index))

@@ -124,6 +124,9 @@ typedef enum vv_world_memory {
      * whose budget the user sets).
      */
     VV_WORLD_OUT_OF_CORE_IF_LARGE = 3,
+    /** Read whole into memory whatever its size (a .vvb too; a scene's files too): for
+     *  front ends that want every voxel at hand (`volvis slice`). */
+    VV_WORLD_IN_MEMORY = 4,
 } vv_world_memory;
 
 /** What the user named, as vv_world_open found it (vv_world_open_info.input). */

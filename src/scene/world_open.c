@@ -246,9 +246,11 @@ open_options(const vv_world_open_options *o, int scene, vv_open_options *oo) {
         oo->mode = VV_OPEN_AUTO;
         oo->levels = 1;
     }
+    if (o->memory == VV_WORLD_IN_MEMORY)
+        oo->mode = VV_OPEN_WHOLE;
     oo->load.level = o->level > 0 ? o->level : 0;
-    if (scene)
-        return ooc ? oo : NULL; /* a scene's files are read whole unless asked */
+    if (scene) /* a scene's files are read whole unless asked */
+        return ooc && o->memory != VV_WORLD_IN_MEMORY ? oo : NULL;
     oo->load.series = o->load.series;
     oo->load.channel = o->load.channel;
     oo->load.time = o->load.time;
