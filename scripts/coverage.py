@@ -36,12 +36,13 @@ import tempfile
 # Our own parsers (issue 67): what reads a file's bytes or metadata in the
 # process without a third-party library doing the parsing.
 PARSERS = [
-    "src/io/slc.c", "src/io/mhd.c", "src/io/vtk_legacy.c", "src/io/grid_vtk.c",
-    "src/io/grid_plot3d.c", "src/io/grid_dx.c", "src/io/raw.c",
-    "src/compress/vvc_format.c", "src/io/vvb.c", "src/io/vvb_read.c",
-    "src/io/bricked.c", "src/io/zarr_read.c", "src/io/zarr_pyramid.c",
-    "src/io/bdv_xml.c", "src/io/hdf5_pyramid.c", "src/io/pyramid_open.c",
-    "src/io/pyramid_load.c", "src/scene/scene.c", "src/scene/scene_appearance.c",
+    "src/io/volume/slc.c", "src/io/volume/mhd.c", "src/io/volume/vtk_legacy.c",
+    "src/io/grid/grid_vtk.c", "src/io/grid/grid_plot3d.c", "src/io/grid/grid_dx.c",
+    "src/io/volume/raw.c", "src/compress/vvc_format.c", "src/io/store/vvb.c",
+    "src/io/store/vvb_read.c", "src/io/store/bricked.c", "src/io/store/zarr_read.c",
+    "src/io/store/zarr_pyramid.c", "src/io/store/bdv_xml.c",
+    "src/io/store/hdf5_pyramid.c", "src/io/store/pyramid_open.c",
+    "src/io/store/pyramid_load.c", "src/scene/scene.c", "src/scene/scene_appearance.c",
     "src/scene/scene_channels.c", "src/scene/scene_fields.c",
     "src/scene/scene_geometry.c", "src/scene/scene_objects.c",
     "src/manipulate/animation_json.c", "src/input/net.c", "src/input/replay.c",

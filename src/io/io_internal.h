@@ -78,7 +78,7 @@ vv_status vv_vtk_write(const vv_volume *v, const char *path);
  */
 vv_status vv_vti_write(const vv_volume *v, const char *path, int compress);
 /**
- * Writes @p v as an OME-Zarr 0.4 store (a Zarr v2 folder, src/io/zarr_write.c):
+ * Writes @p v as an OME-Zarr 0.4 store (a Zarr v2 folder, src/io/store/zarr_write.c):
  * levels 0..L, each half the previous along every axis longer than one
  * voxel, until every axis fits a chunk; a voxel of the next level is the
  * mean of its 2x2x2 voxels (rounded for integers) or, with opt->label, the

@@ -14,9 +14,9 @@
 #include <sys/stat.h>
 
 #include "core/internal.h"
-#include "io/bricked.h"
 #include "io/io_internal.h"
-#include "io/pyramid.h"
+#include "io/store/bricked.h"
+#include "io/store/pyramid.h"
 #include "io/transport.h"
 
 void

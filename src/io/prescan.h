@@ -26,11 +26,11 @@ vv_status vv_nifti_prescan(const char *path);
 
 /** DICOM: the walk of the data elements' lengths (explicit and implicit
  *  VR, both byte orders, nested sequences, encapsulated pixel data) and the
- *  meta-group patterns GDCM asserts on (src/io/dicom_gdcm.cpp). */
+ *  meta-group patterns GDCM asserts on (src/io/volume/dicom_gdcm.cpp). */
 vv_status vv_dicom_prescan(const char *path);
 
 /** Meshes: the file's size and, for OFF, STL and PLY, their structure
- *  against what the file holds, before Assimp (src/io/mesh.c). */
+ *  against what the file holds, before Assimp (src/io/mesh/mesh.c). */
 vv_status vv_mesh_prescan(const char *path);
 
 /** TIFF: the OME-XML or ImageJ ImageDescription @p desc (a NUL-terminated

@@ -20,7 +20,7 @@
 #include <zlib.h>
 
 #include "core/internal.h"
-#include "io/bricked_internal.h"
+#include "io/store/bricked_internal.h"
 #include "volvis/io.h"
 
 struct vv_slabs {

@@ -1,14 +1,14 @@
 /*
  * The out-of-core readers as volume sources (include/volvis/sys/source.h):
- * a bricked volume (src/io/bricked.c) as a source of kind
- * VV_SOURCE_BRICKS, a pyramid (src/io/pyramid.c) as one of kind
+ * a bricked volume (src/io/store/bricked.c) as a source of kind
+ * VV_SOURCE_BRICKS, a pyramid (src/io/store/pyramid.c) as one of kind
  * VV_SOURCE_PYRAMID. What vv_open returns for a file read out of core.
  */
 #include <string.h>
 
 #include "core/internal.h"
-#include "io/bricked.h"
-#include "io/pyramid.h"
+#include "io/store/bricked.h"
+#include "io/store/pyramid.h"
 
 /* ---- bricks ------------------------------------------------------------------------ */
 

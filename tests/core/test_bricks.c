@@ -1,5 +1,5 @@
 /*
- * Out-of-core volumes (the reader src/io/bricked.c, the render driver
+ * Out-of-core volumes (the reader src/io/store/bricked.c, the render driver
  * src/render/driver_region.c over the region contract):
  * - the CT head written as .vvb (with coarse levels), raw and raw-encoded
  *   NRRD, opened as bricked volumes with a 4 MB memory budget and rendered
@@ -20,7 +20,7 @@
  */
 #include "testutil.h"
 
-#include "io/bricked.h"
+#include "io/store/bricked.h"
 #include "render/drivers.h"
 
 #include "volvis/sys/renderer.h"

@@ -1,7 +1,7 @@
 /*
- * libFuzzer harness: BigDataViewer datasets (src/io/bdv_xml.c: the SpimData
+ * libFuzzer harness: BigDataViewer datasets (src/io/store/bdv_xml.c: the SpimData
  * XML, its setups, time points, registrations and the HDF5 file it names)
- * and the HDF5 pyramids beneath them (src/io/hdf5_pyramid.c: BigDataViewer's
+ * and the HDF5 pyramids beneath them (src/io/store/hdf5_pyramid.c: BigDataViewer's
  * t<T>/s<S>/<level>/cells, s<S>/resolutions and s<S>/subdivisions; Imaris's
  * DataSet/ResolutionLevel N/TimePoint T/Channel C/Data and DataSetInfo/Image
  * attributes; the companion XML's voxel size).

@@ -1,6 +1,6 @@
 /*
  * libFuzzer harness: our DICOM length walk (vv_dicom_prescan;
- * src/io/dicom_gdcm.cpp, check_lengths), made before GDCM sees a file:
+ * src/io/volume/dicom_gdcm.cpp, check_lengths), made before GDCM sees a file:
  * explicit and implicit VR, both byte orders, nested sequences and items,
  * encapsulated pixel data, the meta-group patterns GDCM asserts on. GDCM
  * itself runs in the reader sandbox (volvis-reader), whose parent side

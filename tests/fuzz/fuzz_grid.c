@@ -1,6 +1,6 @@
 /*
  * libFuzzer harness: our irregular-grid parsers (vv_grid_load;
- * src/io/grid_*.c): VTK legacy UNSTRUCTURED_GRID, OpenDX and PLOT3D. The
+ * src/io/grid/grid_*.c): VTK legacy UNSTRUCTURED_GRID, OpenDX and PLOT3D. The
  * name follows the content; anything else is a PLOT3D grid "inxyz.bin",
  * with the part after a line "--DATA--" as its solution "inq.bin". VTK XML
  * .vtu (libxml2) and NetCDF (libnetcdf) are read in the reader sandbox

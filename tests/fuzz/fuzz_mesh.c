@@ -1,6 +1,6 @@
 /*
  * libFuzzer harness: our checks of a mesh file before Assimp sees it
- * (vv_mesh_prescan; src/io/mesh.c): the size, and the structure of OFF,
+ * (vv_mesh_prescan; src/io/mesh/mesh.c): the size, and the structure of OFF,
  * STL and PLY files against what the file holds. Assimp itself runs in the
  * reader sandbox (volvis-reader), whose parent side fuzz_sandbox fuzzes;
  * it is not called here. The file name's extension follows the content

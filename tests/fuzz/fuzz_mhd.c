@@ -1,5 +1,5 @@
 /*
- * libFuzzer harness: MetaImage (vv_mhd_read; src/io/mhd.c). The input is an
+ * libFuzzer harness: MetaImage (vv_mhd_read; src/io/volume/mhd.c). The input is an
  * .mha (header and LOCAL data); when it holds a line "--DATA--", the part
  * before is the header in.mhd and the part after "data.raw" beside it.
  */

@@ -1,6 +1,6 @@
 /*
  * libFuzzer harness: our NIfTI-1/NIfTI-2 and Analyze header checks
- * (vv_nifti_prescan; src/io/nifti.c), made before nifti_clib sees a file.
+ * (vv_nifti_prescan; src/io/volume/nifti.c), made before nifti_clib sees a file.
  * nifti_clib itself runs in the reader sandbox (volvis-reader), whose
  * parent side fuzz_sandbox fuzzes; it is not called here. The input is a
  * single file (in.nii, gzip or not); when it holds a line "--DATA--", the

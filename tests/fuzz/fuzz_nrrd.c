@@ -1,5 +1,5 @@
 /*
- * libFuzzer harness: our NRRD header scan (vv_nrrd_prescan; src/io/nrrd.c),
+ * libFuzzer harness: our NRRD header scan (vv_nrrd_prescan; src/io/volume/nrrd.c),
  * the checks made before Teem sees a file. Teem itself runs in the reader
  * sandbox (volvis-reader), whose parent side fuzz_sandbox fuzzes; it is not
  * called here. The input is a header; when it holds a line "--DATA--", what

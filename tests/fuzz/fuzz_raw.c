@@ -2,7 +2,7 @@
  * libFuzzer harness: raw volumes and their descriptions. The first line of
  * the input is a --raw description as the CLI parses it
  * (cli_parse_raw, apps/volvis/options.c: "WxHxD:TYPE[:be|le][:SXxSYxSZ]
- * [:skip=N]"), the rest the file read with vv_volume_load (src/io/raw.c).
+ * [:skip=N]"), the rest the file read with vv_volume_load (src/io/volume/raw.c).
  */
 #include "cli.h"
 #include <stdint.h>

@@ -1,4 +1,4 @@
-/* libFuzzer harness: SLC volumes (vv_slc_read; src/io/slc.c). */
+/* libFuzzer harness: SLC volumes (vv_slc_read; src/io/volume/slc.c). */
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>

@@ -1,7 +1,7 @@
 /*
  * libFuzzer harness: our parsers of a TIFF stack's ImageDescription, the
  * OME-XML and ImageJ metadata (vv_tiff_prescan_description;
- * src/io/tiff.c), the text libtiff hands over. libtiff itself runs in the
+ * src/io/volume/tiff.c), the text libtiff hands over. libtiff itself runs in the
  * reader sandbox (volvis-reader), whose parent side fuzz_sandbox fuzzes;
  * it is not called here. The input is the description (cut at its first
  * NUL, as a TIFF ASCII tag is).

@@ -1,4 +1,5 @@
-/* libFuzzer harness: VTK legacy STRUCTURED_POINTS volumes (vv_vtk_read; src/io/vtk_legacy.c). */
+/* libFuzzer harness: VTK legacy STRUCTURED_POINTS volumes (vv_vtk_read;
+ * src/io/volume/vtk_legacy.c). */
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>

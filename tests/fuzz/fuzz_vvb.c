@@ -1,5 +1,5 @@
 /*
- * libFuzzer harness: .vvb bricked volumes (src/io/bricked.c, vvb_read.c): the header
+ * libFuzzer harness: .vvb bricked volumes (src/io/store/bricked.c, vvb_read.c): the header
  * and index checks of vv_bricked_open, then up to 8 bricks read (raw or
  * zstd frames decoded), a box across bricks and a small proxy (from the
  * coarse levels when the file has them); then the file as a pyramid
@@ -12,8 +12,8 @@
 #include <string.h>
 
 #include "fuzz_util.h"
-#include "io/bricked.h"
-#include "io/pyramid.h"
+#include "io/store/bricked.h"
+#include "io/store/pyramid.h"
 #include "volvis/volvis.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);

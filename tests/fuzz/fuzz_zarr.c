@@ -1,5 +1,5 @@
 /*
- * libFuzzer harness: whole OME-Zarr stores (src/io/zarr_read.c,
+ * libFuzzer harness: whole OME-Zarr stores (src/io/store/zarr_read.c,
  * zarr_pyramid.c): the root .zattrs (multiscales, datasets and their paths,
  * axes, coordinateTransformations, omero), .zgroup, each level's .zarray
  * (shape, chunks, dtype, compressor, fill_value, order, filters,
@@ -37,7 +37,7 @@
 #include <unistd.h>
 
 #include "fuzz_util.h"
-#include "io/zarr.h"
+#include "io/store/zarr.h"
 #include "volvis/volvis.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);

@@ -1,6 +1,6 @@
 /*
- * Every refusal of the BigDataViewer dataset XML (src/io/bdv_xml.c) and of
- * the HDF5 pyramid reader (src/io/hdf5_pyramid.c) on hostile files written
+ * Every refusal of the BigDataViewer dataset XML (src/io/store/bdv_xml.c) and of
+ * the HDF5 pyramid reader (src/io/store/hdf5_pyramid.c) on hostile files written
  * here (the HDF5 ones with the HDF5 C API): each row a file, the status and
  * a piece of the message naming the field; every message one line naming
  * the file, no volume or store left behind, nothing for the sanitizers.
@@ -34,7 +34,7 @@
 
 #include <hdf5.h>
 
-#include "io/pyramid.h"
+#include "io/store/pyramid.h"
 #include "volvis/sys/format.h"
 #include "volvis/volvis.h"
 

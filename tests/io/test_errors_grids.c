@@ -1,7 +1,7 @@
 /*
  * Every refusal of our own grid parsers (issue "Our own parsers under
- * attack"): VTK legacy UNSTRUCTURED_GRID (src/io/grid_vtk.c), OpenDX
- * (src/io/grid_dx.c) and PLOT3D (src/io/grid_plot3d.c). Each case is a
+ * attack"): VTK legacy UNSTRUCTURED_GRID (src/io/grid/grid_vtk.c), OpenDX
+ * (src/io/grid/grid_dx.c) and PLOT3D (src/io/grid/grid_plot3d.c). Each case is a
  * hostile file written here, the status expected and a piece of the
  * message that names the keyword or the problem; every message must also
  * name the file and be one printable line, and no grid is returned.

@@ -1,7 +1,7 @@
 /*
  * Every refusal of our own volume parsers (issue "Our own parsers under
- * attack"): SLC (src/io/slc.c), MetaImage (src/io/mhd.c), VTK legacy
- * STRUCTURED_POINTS (src/io/vtk_legacy.c), raw (src/io/raw.c) and the
+ * attack"): SLC (src/io/volume/slc.c), MetaImage (src/io/volume/mhd.c), VTK legacy
+ * STRUCTURED_POINTS (src/io/volume/vtk_legacy.c), raw (src/io/volume/raw.c) and the
  * CLI's --raw description (cli_parse_raw, apps/volvis/options.c). Each
  * case is a hostile file written here, the status expected and a piece of
  * the message that names the field or the problem; every message must

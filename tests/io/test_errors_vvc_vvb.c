@@ -8,7 +8,7 @@
  *   apart into its sections, one field or section changed, put together
  *   again with every CRC-32 right (so the check under test, not a CRC,
  *   refuses it), or broken after its CRCs were made (the CRC checks).
- * - .vvb (src/io/vvb_read.c, vvb.c, bricked.c): a valid file of each kind
+ * - .vvb (src/io/store/vvb_read.c, vvb.c, bricked.c): a valid file of each kind
  *   (raw, coarse, zstd, with levels) with one header field, index record,
  *   level record or zstd frame changed, read whole (vv_volume_load) and by
  *   bricks (vv_bricked_open); raw layouts past their file's end, a brick
@@ -20,8 +20,8 @@
     vt_expect_refusal(what, got, want, needle, name)
 
 #include "compress/vvc_internal.h"
-#include "io/bricked.h"
-#include "io/vvb_layout.h"
+#include "io/store/bricked.h"
+#include "io/store/vvb_layout.h"
 #include "volvis/bricks.h"
 
 #include <math.h>

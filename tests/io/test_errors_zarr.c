@@ -1,7 +1,7 @@
 /*
- * Every refusal of the OME-Zarr reader (src/io/zarr_read.c) and of its
- * pyramid (src/io/zarr_pyramid.c, src/io/pyramid_open.c,
- * src/io/pyramid_load.c) on hostile stores written here: each row a store
+ * Every refusal of the OME-Zarr reader (src/io/store/zarr_read.c) and of its
+ * pyramid (src/io/store/zarr_pyramid.c, src/io/store/pyramid_open.c,
+ * src/io/store/pyramid_load.c) on hostile stores written here: each row a store
  * (.zattrs, .zarray, a chunk), the status and a piece of the message that
  * names the field; every message one line naming the store, no volume
  * left behind, nothing for the sanitizers to report.
@@ -31,8 +31,8 @@
 #include <unistd.h>
 #include <zlib.h>
 
-#include "io/pyramid.h"
-#include "io/zarr.h"
+#include "io/store/pyramid.h"
+#include "io/store/zarr.h"
 #include "volvis/volvis.h"
 
 static char g_dir[4096];

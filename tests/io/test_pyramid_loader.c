@@ -28,7 +28,7 @@
 
 #include "testutil.h"
 
-#include "io/pyramid.h"
+#include "io/store/pyramid.h"
 #include "render/drivers.h"
 #include "volvis/volvis.h"
 

@@ -23,8 +23,8 @@
  */
 #include "testutil.h"
 
-#include "io/bricked.h"
-#include "io/pyramid.h"
+#include "io/store/bricked.h"
+#include "io/store/pyramid.h"
 #include "render/drivers.h"
 
 #include <math.h>

@@ -8,7 +8,7 @@
  */
 #include "testutil.h"
 
-#include "io/pyramid.h"
+#include "io/store/pyramid.h"
 
 #include <math.h>
 #include <stdio.h>

@@ -13,7 +13,8 @@
  * reader sandbox (src/sandbox: the row's read runs in volvis-reader); its
  * reader never knows it.
  *
- * Adding a format: write src/io/<format>.c defining
+ * Adding a format: write src/io/<kind>/<format>.c (volume, store, grid or
+ * mesh: what it reads) defining
  *     const vv_format_record vv_format_<name> = {VV_FORMAT_RECORD_VERSION, ...};
  * and add one row, X(<name>), to VV_FORMAT_TABLE in src/io/formats.c. Its id
  * (vv_format) is its row; `--format <name>` and vv_format_parse find it by

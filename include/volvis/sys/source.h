@@ -177,7 +177,7 @@ typedef struct vv_store_level {
 /**
  * A multiresolution file's store, filled by its record's open_store: what
  * its levels are and how to fetch one chunk's voxels. The pyramid over it
- * (src/io/pyramid.c, pyramid_load.c and pyramid_open.c: the cache, the
+ * (src/io/store/pyramid.c, pyramid_load.c and pyramid_open.c: the cache, the
  * frame's plan, the background loader, the source the renderers read) is
  * the library's.
  */

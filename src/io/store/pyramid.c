@@ -1,0 +1,519 @@
+/*
+ * Multiresolution pyramids out of core (src/io/store/pyramid.h, vv_pyramid; a
+ * source of kind VV_SOURCE_PYRAMID, include/volvis/source.h): the levels
+ * of one channel at one time step of an OME-Zarr store, a BigDataViewer /
+ * Imaris HDF5 file or a .vvb with levels (their stores, src/io/store/pyramid.h),
+ * read by boxes of voxels through the process's one cache of decoded
+ * pieces (src/core/cache.h), within its budget.
+ *
+ * Here, its chunks and boxes: a box of a level is assembled from the
+ * chunks it overlaps: those in the cache are used as they are, the others
+ * are fetched from the store (decoded on every core when the store allows,
+ * one scratch buffer a thread) and kept, least recently used first out.
+ * The min and max of every chunk decoded are remembered (a few bytes a
+ * chunk), so a later frame skips transparent boxes unread. Each chunk's
+ * reads within one frame are counted (frames are marked by the renderer
+ * through the source's frame method). Also the levels' geometry, the
+ * statistics, and a store's level read whole (vv_store_read_level).
+ *
+ * Above it, calling down: the frame's plan, which chooses the chunk
+ * evicted and fetches chunks ahead, the loader (vv_pyramid_request) and
+ * the multiresolution source interface (pyramid_load.c); opening, which
+ * reads the metadata only (the store's) and the coarsest level, and
+ * freeing (pyramid_open.c). The state the three files share is in
+ * pyramid_internal.h. One mutex, the cache's, guards the chunks, the plan,
+ * the queue and the statistics; reading and decoding run outside it.
+ */
+#include <limits.h>
+#include <malloc.h>
+#include <math.h>
+#include <omp.h>
+#include <pthread.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#include "core/cache.h"
+#include "core/internal.h"
+#include "io/store/pyramid.h"
+#include "io/store/pyramid_internal.h"
+#include "volvis/bricks.h"
+
+/* Chunk @p c out of the pyramid's index and freed (out of the cache
+ * already). */
+static void
+free_chunk(vv_pyramid *p, py_chunk *c) {
+    py_chunk **pp = &p->bucket[py_bucket_of(c->level, c->L)];
+    while (*pp != c)
+        pp = &(*pp)->hnext;
+    *pp = c->hnext;
+    p->n_ready -= c->state == PY_READY;
+    vv_volume_free(c->blk);
+    free(c);
+}
+
+/* Chunk @p c out of the cache and the index (lock held). */
+void
+py_drop_chunk(vv_pyramid *p, py_chunk *c) {
+    vv_cache_remove(p->cache, &c->ce);
+    free_chunk(p, c);
+}
+
+/* The cache evicts chunk @p e to make room (for this pyramid or another
+ * source): out of the index (lock held). */
+void
+py_client_drop(vv_cache_client *cl, vv_cache_entry *e) {
+    vv_pyramid *p = (vv_pyramid *)((char *)cl - offsetof(vv_pyramid, cl));
+    free_chunk(p, (py_chunk *)e);
+    p->st.evictions++;
+}
+
+/* The chunk box of chunk position c: its first voxel and size inside the level. */
+static void
+chunk_box(const py_level *l, const int c[3], int org[3], int n[3]) {
+    for (int k = 0; k < 3; k++) {
+        org[k] = c[k] * l->cdims[k];
+        const int e = org[k] + l->cdims[k];
+        n[k] = (e > l->dims[k] ? l->dims[k] : e) - org[k];
+    }
+}
+
+/* Notes a read of chunk L of level @p level in this frame. */
+static void
+count_read(vv_pyramid *p, int level, uint64_t L, uint64_t file_bytes) {
+    py_level *l = &p->lv[level];
+    p->st.chunk_reads[level]++;
+    p->st.bytes_read += file_bytes;
+    if (!l->read_frame)
+        return;
+    if (l->read_frame[L] != p->frame) {
+        l->read_frame[L] = p->frame;
+        l->frame_reads[L] = 0;
+    }
+    if (l->frame_reads[L] < UINT16_MAX)
+        l->frame_reads[L]++;
+    if (l->frame_reads[L] > p->st.max_reads_per_frame)
+        p->st.max_reads_per_frame = l->frame_reads[L];
+}
+
+/* Chunk entry @p c (position @p cc) read from the store into its block,
+ * one reader at a time when the store is not parallel; any thread, the
+ * pyramid's lock not held. */
+vv_status
+py_read_chunk(vv_pyramid *p, py_chunk *c, const int cc[3], unsigned char *scratch, int *missing,
+              uint64_t *file_bytes) {
+    const vv_store *st = &p->store;
+    if (!st->parallel)
+        pthread_mutex_lock(&p->store_lock);
+    const vv_status s = st->read_chunk(st->ctx, c->level, cc, scratch, c->blk->data, c->org,
+                                       c->blk->dims, missing, file_bytes);
+    if (!st->parallel)
+        pthread_mutex_unlock(&p->store_lock);
+    if (s == VV_OK)
+        vv_volume_update_range(c->blk);
+    return s;
+}
+
+/* Fetches the chunks in @p todo (n >= 1 of them, their blocks allocated)
+ * from the store, on every core when it allows, file bytes and missing
+ * flags per chunk into @p file_bytes and @p missing; the first failing
+ * chunk's error in order. */
+static vv_status
+decode_chunks(vv_pyramid *p, py_chunk **todo, int n, uint64_t *file_bytes, int *missing) {
+    const vv_store *st = &p->store;
+    long long first = -1;
+    vv_status first_status = VV_OK;
+    char first_msg[1024] = "";
+    const int nthreads = !st->parallel || st->scratch > ((size_t)64 << 20) || n < 2 ? 1
+                         : omp_get_max_threads() < n ? omp_get_max_threads()
+                                                     : n;
+#pragma omp parallel num_threads(nthreads)
+    {
+        unsigned char *buf = st->scratch ? malloc(st->scratch) : NULL;
+#pragma omp for schedule(dynamic, 1)
+        for (int i = 0; i < n; i++) {
+            py_chunk *c = todo[i];
+            const py_level *cl = &p->lv[c->level];
+            int cc[3];
+            for (int k = 0; k < 3; k++)
+                cc[k] = c->org[k] / cl->cdims[k];
+            vv_status cs =
+                buf || !st->scratch
+                    ? py_read_chunk(p, c, cc, buf, &missing[i], &file_bytes[i])
+                    : vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk of %zu bytes",
+                                   st->scratch);
+            if (cs != VV_OK) {
+#pragma omp critical(vv_pyramid_err)
+                if (first < 0 || i < first) {
+                    first = i;
+                    first_status = cs;
+                    snprintf(first_msg, sizeof first_msg, "%s", vv_error_message());
+                }
+            }
+        }
+        free(buf);
+    }
+    if (first >= 0)
+        return vv_error_set(first_status, "%s", first_msg);
+    return VV_OK;
+}
+
+/* Copies the part of chunk block @p c inside box lo .. of @p out. */
+static void
+copy_block(const py_chunk *c, const int lo[3], vv_volume *out) {
+    const size_t vs = vv_voxel_type_size(out->type);
+    int a[3], b[3];
+    for (int k = 0; k < 3; k++) {
+        a[k] = c->org[k] > lo[k] ? c->org[k] : lo[k];
+        const int ce = c->org[k] + c->blk->dims[k] - 1, oe = lo[k] + out->dims[k] - 1;
+        b[k] = ce < oe ? ce : oe;
+    }
+    const size_t n = (size_t)(b[0] - a[0] + 1) * vs;
+    const unsigned char *src = c->blk->data;
+    unsigned char *dst = out->data;
+    for (int z = a[2]; z <= b[2]; z++)
+        for (int y = a[1]; y <= b[1]; y++) {
+            const size_t si =
+                (((size_t)(z - c->org[2]) * (size_t)c->blk->dims[1] + (size_t)(y - c->org[1])) *
+                     (size_t)c->blk->dims[0] +
+                 (size_t)(a[0] - c->org[0])) *
+                vs;
+            const size_t di = (((size_t)(z - lo[2]) * (size_t)out->dims[1] + (size_t)(y - lo[1])) *
+                                   (size_t)out->dims[0] +
+                               (size_t)(a[0] - lo[0])) *
+                              vs;
+            memcpy(dst + di, src + si, n);
+        }
+}
+
+/* A new cache entry for chunk @p c (position) of level @p level in state
+ * PY_NEW, pinned once, not yet in the cache; NULL when out of memory. */
+py_chunk *
+py_new_entry(const vv_pyramid *p, int level, const int c[3]) {
+    const py_level *l = &p->lv[level];
+    py_chunk *e = calloc(1, sizeof *e);
+    if (!e)
+        return NULL;
+    e->level = level;
+    e->L = py_chunk_linear(l, c);
+    chunk_box(l, c, e->org, e->n);
+    e->bytes = (uint64_t)e->n[0] * (uint64_t)e->n[1] * (uint64_t)e->n[2] * l->esize;
+    e->state = PY_NEW;
+    e->ce.pins = 1;
+    return e;
+}
+
+/* Entry @p e into the cache (its bytes held, most recently used) and the
+ * pyramid's index. */
+void
+py_insert_entry(vv_pyramid *p, py_chunk *e) {
+    const unsigned b = py_bucket_of(e->level, e->L);
+    e->use = p->cl.planned ? py_find_use(p, e->level, e->L) : NULL;
+    e->hnext = p->bucket[b];
+    p->bucket[b] = e;
+    e->ce.ready = 1; /* a chunk being read stays pinned by its reader */
+    vv_cache_insert(p->cache, &p->cl, &e->ce, e->bytes);
+}
+
+/* Entry @p e decoded (by this thread or a loader; lock held): ready, its
+ * range known, the read counted. */
+void
+py_entry_ready(vv_pyramid *p, py_chunk *e, uint64_t file_bytes, int missing) {
+    py_level *l = &p->lv[e->level];
+    e->state = PY_READY;
+    p->n_ready++;
+    count_read(p, e->level, e->L, file_bytes);
+    p->st.missing += (uint64_t)missing;
+    if (l->known) {
+        l->cmin[e->L] = (float)e->blk->range[0];
+        l->cmax[e->L] = (float)e->blk->range[1];
+        l->known[e->L] = 1;
+    }
+    p->arrivals++;
+}
+
+/* Unpins entry @p e; a failed one nobody holds leaves the cache. */
+void
+py_unpin(vv_pyramid *p, py_chunk *e) {
+    if (--e->ce.pins == 0 && e->state == PY_FAILED)
+        py_drop_chunk(p, e);
+}
+
+/* Box lo .. hi of @p level into @p out from the cache (lock held; it is
+ * released while chunks are decoded): the chunks missing are reserved in
+ * the cache (PY_NEW) and decoded here, those a loader is decoding are
+ * waited for, and one whose loader failed is decoded again here. */
+static vv_status
+assemble(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume *out) {
+    py_level *l = &p->lv[level];
+    int c0[3], c1[3];
+    py_chunk_span(l, lo, hi, c0, c1);
+    const int n = (c1[0] - c0[0] + 1) * (c1[1] - c0[1] + 1) * (c1[2] - c0[2] + 1);
+    py_chunk **use = calloc((size_t)n, sizeof *use), **todo = calloc((size_t)n, sizeof *todo);
+    uint64_t *fbytes = calloc((size_t)n, sizeof *fbytes);
+    int *missing = calloc((size_t)n, sizeof *missing);
+    vv_status s =
+        use && todo && fbytes && missing ? VV_OK : vv_error_set(VV_ERR_NOMEM, "out of memory");
+    int nu = 0, nt = 0;
+    uint64_t need = 0;
+    /* the chunks: those held pinned, new entries for the others */
+    for (int z = c0[2]; z <= c1[2] && s == VV_OK; z++)
+        for (int y = c0[1]; y <= c1[1] && s == VV_OK; y++)
+            for (int x = c0[0]; x <= c1[0]; x++) {
+                const int c[3] = {x, y, z};
+                py_chunk *e = py_find_chunk(p, level, py_chunk_linear(l, c));
+                if (e) {
+                    vv_cache_touch(p->cache, &e->ce);
+                    p->st.chunk_hits += e->state == PY_READY;
+                    e->ce.pins++;
+                } else if ((e = py_new_entry(p, level, c))) {
+                    need += e->bytes;
+                    todo[nt++] = e;
+                } else {
+                    s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+                    break;
+                }
+                use[nu++] = e;
+            }
+    if (s == VV_OK && !vv_cache_make_room(p->cache, need, 0))
+        s = vv_error_set(VV_ERR_LIMIT,
+                         "memory limit of %llu bytes: the %d chunks of a box of level %d do not "
+                         "fit",
+                         (unsigned long long)p->limit, n, level);
+    for (int i = 0; i < nu; i++) {
+        if (s == VV_OK && use[i]->state == PY_NEW)
+            py_insert_entry(p, use[i]);
+        else if (s != VV_OK && use[i]->state == PY_NEW)
+            free(use[i]); /* never in the cache */
+        else if (s != VV_OK)
+            py_unpin(p, use[i]);
+    }
+    if (s != VV_OK)
+        nu = 0;
+    /* decode the new and failed entries here; wait for the loaders' */
+    while (s == VV_OK) {
+        nt = 0;
+        int waiting = 0;
+        for (int i = 0; i < nu; i++) {
+            py_chunk *e = use[i];
+            if (e->state == PY_NEW || e->state == PY_FAILED) {
+                e->state = PY_LOADING;
+                vv_volume_free(e->blk);
+                e->blk = NULL;
+                if ((s = vv_volume_new(&e->blk, e->n, l->type)) != VV_OK)
+                    e->state = PY_FAILED;
+                todo[nt++] = e;
+            } else if (e->state == PY_LOADING) {
+                waiting = 1;
+            }
+        }
+        if (s == VV_OK && nt > 0) {
+            pthread_mutex_unlock(p->lock);
+            s = decode_chunks(p, todo, nt, fbytes, missing);
+            pthread_mutex_lock(p->lock);
+        }
+        for (int i = 0; i < nt; i++) {
+            py_chunk *e = todo[i];
+            if (s == VV_OK) {
+                py_entry_ready(p, e, fbytes[i], missing[i]);
+            } else {
+                e->state = PY_FAILED;
+                vv_volume_free(e->blk);
+                e->blk = NULL;
+            }
+        }
+        if (nt > 0)
+            pthread_cond_broadcast(&p->arrived);
+        if (s != VV_OK || (!waiting && nt == 0))
+            break;
+        if (waiting && nt == 0)
+            pthread_cond_wait(&p->arrived, p->lock);
+    }
+    for (int i = 0; i < nu && s == VV_OK; i++)
+        copy_block(use[i], lo, out);
+    for (int i = 0; i < nu; i++)
+        py_unpin(p, use[i]);
+    free(use);
+    free(todo);
+    free(fbytes);
+    free(missing);
+    return s;
+}
+
+/* The header of a level: its geometry with the store's range. */
+static void
+set_geometry(vv_volume *v, const vv_pyramid *p, const py_level *l) {
+    memcpy(v->spacing, l->hdr->spacing, sizeof v->spacing);
+    memcpy(v->origin, l->hdr->origin, sizeof v->origin);
+    memcpy(v->direction, l->hdr->direction, sizeof v->direction);
+    v->unit = l->hdr->unit;
+    v->modification = l->hdr->modification;
+    v->range[0] = p->range[0];
+    v->range[1] = p->range[1];
+}
+
+/* Box lo .. hi of @p level into a new volume; @p planned (not NULL): a
+ * read of the frame's plan (the renderer's, through the multiresolution
+ * view), called with the lock held once the box is assembled, which moves
+ * the plan on and asks the store for the next boxes' chunks ahead
+ * (pyramid_load.c); any other read (a slice, a measurement, another
+ * thread) leaves the plan as it is. */
+vv_status
+py_box_read(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume **out,
+            void (*planned)(vv_pyramid *p, vv_status s)) {
+    if (!p || !out || level < 0 || level >= p->n_levels)
+        return vv_error_set(VV_ERR_INVALID, "pyramid: bad arguments");
+    *out = NULL;
+    const py_level *l = &p->lv[level];
+    int dims[3];
+    for (int k = 0; k < 3; k++) {
+        if (lo[k] < 0 || hi[k] < lo[k] || hi[k] >= l->dims[k])
+            return vv_error_set(VV_ERR_INVALID, "pyramid: box %d..%d outside level %d's %d voxels",
+                                lo[k], hi[k], level, l->dims[k]);
+        dims[k] = hi[k] - lo[k] + 1;
+    }
+    vv_volume *v = NULL;
+    vv_status s = vv_volume_new(&v, dims, l->type);
+    pthread_mutex_lock(p->lock);
+    if (s == VV_OK)
+        s = assemble(p, level, lo, hi, v);
+    if (planned)
+        planned(p, s);
+    pthread_mutex_unlock(p->lock);
+    if (s != VV_OK) {
+        vv_volume_free(v);
+        return vv_pyramid_prefix(s, p->store.name, p->path);
+    }
+    set_geometry(v, p, l);
+    *out = v;
+    return VV_OK;
+}
+
+vv_status
+vv_pyramid_read_box(vv_pyramid *p, int level, const int lo[3], const int hi[3], vv_volume **out) {
+    return py_box_read(p, level, lo, hi, out, NULL);
+}
+
+vv_status
+vv_pyramid_proxy(vv_pyramid *p, int level, vv_volume **out) {
+    if (!p || !out || level < 0 || level >= p->n_levels)
+        return vv_error_set(VV_ERR_INVALID, "pyramid: no level %d for a proxy", level);
+    const int top = p->n_levels - 1;
+    const vv_volume *h = p->lv[top].hdr, *f = p->lv[level].hdr;
+    const int lo[3] = {0, 0, 0}, hi[3] = {h->dims[0] - 1, h->dims[1] - 1, h->dims[2] - 1};
+    const vv_status s = vv_pyramid_read_box(p, top, lo, hi, out);
+    if (s != VV_OK)
+        return s;
+    vv_volume *v = *out;
+    for (int k = 0; k < 3; k++) {
+        v->origin[k] = f->origin[k];
+        v->spacing[k] =
+            h->dims[k] > 1 ? f->spacing[k] * (f->dims[k] - 1) / (h->dims[k] - 1) : f->spacing[k];
+    }
+    return VV_OK;
+}
+
+vv_status
+vv_pyramid_level0_box(void *pyramid, const int lo[3], const int hi[3], vv_volume **out) {
+    return vv_pyramid_read_box(pyramid, 0, lo, hi, out);
+}
+
+const char *
+vv_pyramid_path(const vv_pyramid *p) {
+    return p->path;
+}
+
+vv_cache *
+vv_pyramid_cache(const vv_pyramid *p) {
+    return p->cache;
+}
+
+int
+vv_pyramid_levels(const vv_pyramid *p) {
+    return p ? p->n_levels : 0;
+}
+
+const vv_volume *
+vv_pyramid_level(const vv_pyramid *p, int level) {
+    return p && level >= 0 && level < p->n_levels ? p->lv[level].hdr : NULL;
+}
+
+void
+vv_pyramid_stats_get(const vv_pyramid *p, vv_pyramid_stats *st) {
+    if (!p || !st)
+        return;
+    vv_pyramid *q = (vv_pyramid *)p; /* the lock only */
+    pthread_mutex_lock(q->lock);
+    *st = p->st;
+    st->loading = p->q_n - p->q_pos + p->in_flight;
+    st->stalled = p->stalled;
+    st->held_bytes = p->cl.held;
+    st->peak_bytes = p->cl.peak;
+    st->resident = p->n_ready;
+    st->limit_bytes = vv_cache_capacity(p->cache) + p->cl.reserve;
+    pthread_mutex_unlock(q->lock);
+}
+
+vv_status
+vv_store_read_level(vv_store *st, int level, vv_volume **out) {
+    *out = NULL;
+    if (!st || level < 0 || level >= st->n_levels || !st->lv[level].hdr)
+        return vv_error_set(VV_ERR_INVALID, "store: no level %d", level);
+    const vv_volume *h = st->lv[level].hdr;
+    const int *cd = st->lv[level].cdims;
+    vv_volume *v = NULL;
+    vv_status s = vv_volume_new(&v, h->dims, h->type);
+    if (s != VV_OK)
+        return s;
+    size_t chunk = vv_voxel_type_size(h->type);
+    for (int k = 0; k < 3; k++)
+        chunk *= (size_t)(cd[k] < h->dims[k] ? cd[k] : h->dims[k]);
+    unsigned char *buf = malloc(chunk), *scratch = st->scratch ? malloc(st->scratch) : NULL;
+    if (!buf || (st->scratch && !scratch))
+        s = vv_error_set(VV_ERR_NOMEM, "out of memory");
+    const size_t vs = vv_voxel_type_size(h->type);
+    for (int z = 0; s == VV_OK && z * cd[2] < h->dims[2]; z++)
+        for (int y = 0; s == VV_OK && y * cd[1] < h->dims[1]; y++)
+            for (int x = 0; s == VV_OK && x * cd[0] < h->dims[0]; x++) {
+                const int c[3] = {x, y, z}, org[3] = {x * cd[0], y * cd[1], z * cd[2]};
+                int n[3];
+                for (int k = 0; k < 3; k++)
+                    n[k] = (org[k] + cd[k] > h->dims[k] ? h->dims[k] : org[k] + cd[k]) - org[k];
+                int missing = 0;
+                uint64_t bytes = 0;
+                s = st->read_chunk(st->ctx, level, c, scratch, buf, org, n, &missing, &bytes);
+                for (int kz = 0; s == VV_OK && kz < n[2]; kz++)
+                    for (int ky = 0; ky < n[1]; ky++)
+                        memcpy((unsigned char *)v->data +
+                                   (((size_t)(org[2] + kz) * (size_t)h->dims[1] +
+                                     (size_t)(org[1] + ky)) *
+                                        (size_t)h->dims[0] +
+                                    (size_t)org[0]) *
+                                       vs,
+                               buf + ((size_t)kz * (size_t)n[1] + (size_t)ky) * (size_t)n[0] * vs,
+                               (size_t)n[0] * vs);
+            }
+    free(buf);
+    free(scratch);
+    if (s != VV_OK) {
+        vv_volume_free(v);
+        return s;
+    }
+    vv_volume_take_geometry(v, h);
+    v->modification = VV_MOD_ORIGINAL;
+    vv_volume_update_range(v);
+    *out = v;
+    return VV_OK;
+}
+
+vv_status
+vv_pyramid_prefix(vv_status s, const char *name, const char *path) {
+    char head[512];
+    const int n = snprintf(head, sizeof head, "%s: %s:", name, vv_path_basename(path));
+    if (n > 0 && n < (int)sizeof head && !strncmp(vv_error_message(), head, (size_t)n))
+        return s;
+    return vv_error_prefix(s, "%s: %s", name, vv_path_basename(path));
+}

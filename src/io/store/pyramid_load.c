@@ -1,0 +1,519 @@
+/*
+ * The loader, the frame's plan and the multiresolution source of a
+ * pyramid (src/io/store/pyramid.h; its state in pyramid_internal.h), on its
+ * chunks and boxes (pyramid.c); opened and freed by pyramid_open.c.
+ *
+ * When the renderer plans its frame (the boxes it will read, in order),
+ * each chunk's uses in the plan are known, and the chunk evicted is the
+ * one needed again farthest ahead or never (Belady's optimal policy):
+ * ghost voxels pull a node's neighbours' chunks in early, and they stay
+ * until their own node when the limit allows. Unplanned reads evict the
+ * least recently used. With a plan, after each box the chunks of the next
+ * few boxes that are not cached are asked of the store ahead (when it can
+ * fetch in the background: the sandboxed readers), so that they are
+ * decoded while the renderer draws.
+ *
+ * The loader (vv_pyramid_request): a few threads read a queue of chunks
+ * into the same cache, soonest first; a new request replaces the queue.
+ * A chunk being read by anyone sits in the cache reserved and pinned
+ * (PY_LOADING): a frame needing it waits on the arrival condition rather
+ * than reading it twice. One mutex, the cache's, guards the chunks, the
+ * plan, the queue and the statistics; reading and decoding run outside it.
+ */
+#include <limits.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "core/cache.h"
+#include "core/internal.h"
+#include "io/store/pyramid.h"
+#include "io/store/pyramid_internal.h"
+#include "volvis/bricks.h"
+
+/* ---- the frame's plan -------------------------------------------------------------- */
+
+static void
+forget_use(vv_pyramid *p, py_chunk *c) {
+    (void)p;
+    c->use = NULL;
+}
+
+void
+py_clear_plan(vv_pyramid *p) {
+    for (unsigned b = 0; b < PY_BUCKETS; b++)
+        while (p->ubucket[b]) {
+            py_use *u = p->ubucket[b];
+            p->ubucket[b] = u->hnext;
+            free(u->seq);
+            free(u);
+        }
+    py_each_chunk(p, forget_use);
+    p->cl.planned = 0;
+    p->cursor = 0;
+    free(p->plan_box);
+    p->plan_box = NULL;
+    p->plan_n = 0;
+}
+
+/* The plan's next box needing chunk @p c from the box being read on;
+ * INT_MAX: none. */
+static int
+next_use(const vv_pyramid *p, py_chunk *c) {
+    py_use *u = c->use;
+    if (!u)
+        return INT_MAX;
+    while (u->pos < u->n && u->seq[u->pos] < p->cursor)
+        u->pos++;
+    return u->pos < u->n ? u->seq[u->pos] : INT_MAX;
+}
+
+/* The cache asks when the plan needs chunk @p e next (lock held). */
+int
+py_client_next_use(vv_cache_client *cl, vv_cache_entry *e) {
+    vv_pyramid *p = (vv_pyramid *)((char *)cl - offsetof(vv_pyramid, cl));
+    return next_use(p, (py_chunk *)e);
+}
+
+/* The plan's boxes after the one just read (at most PY_LOOKAHEAD of them):
+ * their chunks not cached are asked of the store ahead (its prefetch),
+ * nearest in the plan first, until it has no reader free. The store
+ * decodes them while the renderer draws this box. */
+#define PY_LOOKAHEAD 4
+static void
+prefetch_ahead(vv_pyramid *p) {
+    if (!p->cl.planned || !p->store.prefetch || !p->plan_box)
+        return;
+    for (int b = p->cursor + 1; b < p->plan_n && b <= p->cursor + PY_LOOKAHEAD; b++) {
+        const int *box = p->plan_box + 7 * b, level = box[0];
+        const py_level *l = &p->lv[level];
+        int c0[3], c1[3];
+        py_chunk_span(l, box + 1, box + 4, c0, c1);
+        for (int z = c0[2]; z <= c1[2]; z++)
+            for (int y = c0[1]; y <= c1[1]; y++)
+                for (int x = c0[0]; x <= c1[0]; x++) {
+                    const int c[3] = {x, y, z};
+                    if (!py_find_chunk(p, level, py_chunk_linear(l, c)) &&
+                        !p->store.prefetch(p->store.ctx, level, c))
+                        return;
+                }
+    }
+}
+
+/* py_box_read's @p planned: a box of the plan read (lock held), the next
+ * boxes' chunks asked ahead, the plan moved on to the next box. */
+static void
+plan_box_read(vv_pyramid *p, vv_status s) {
+    if (s == VV_OK)
+        prefetch_ahead(p);
+    if (p->cl.planned)
+        p->cursor++;
+}
+
+/* ---- the loader ------------------------------------------------------------------ */
+
+/* A loader thread: takes the queue's chunks soonest first, reserves each in
+ * the cache (PY_LOADING, so that a frame needing it waits instead of
+ * reading it twice), decodes it without the lock and makes it ready; stops
+ * taking when the cache is full of chunks the request wants (the rest
+ * stay missing: a frame draws them coarser). */
+static void *
+loader_main(void *arg) {
+    vv_pyramid *p = arg;
+    unsigned char *scratch = p->store.scratch ? malloc(p->store.scratch) : NULL;
+    pthread_mutex_lock(p->lock);
+    while (!p->quit) {
+        if (p->q_pos >= p->q_n || (p->store.scratch && !scratch)) {
+            pthread_cond_wait(&p->work, p->lock);
+            continue;
+        }
+        const py_req q = p->queue[p->q_pos++];
+        const py_level *l = &p->lv[q.level];
+        if (py_find_chunk(p, q.level, q.L))
+            continue; /* held, or being read */
+        int c[3];
+        c[0] = (int)(q.L % (uint64_t)l->nchunks[0]);
+        c[1] = (int)(q.L / (uint64_t)l->nchunks[0] % (uint64_t)l->nchunks[1]);
+        c[2] = (int)(q.L / ((uint64_t)l->nchunks[0] * (uint64_t)l->nchunks[1]));
+        py_chunk *e = py_new_entry(p, q.level, c);
+        if (!e || !vv_cache_make_room(p->cache, e->bytes, 1) ||
+            vv_volume_new(&e->blk, e->n, l->type) != VV_OK) {
+            if (e)
+                vv_volume_free(e->blk);
+            free(e);
+            vv_error_clear();
+            p->st.load_stopped += (uint64_t)(p->q_n - p->q_pos + 1);
+            p->q_pos = p->q_n; /* full: the rest waits for the next request */
+            p->stalled = 1;
+            pthread_cond_broadcast(&p->arrived);
+            continue;
+        }
+        e->state = PY_LOADING;
+        e->ce.want = p->cl.want;
+        py_insert_entry(p, e);
+        p->in_flight++;
+        pthread_mutex_unlock(p->lock);
+        int missing = 0;
+        uint64_t fbytes = 0;
+        const vv_status s = py_read_chunk(p, e, c, scratch, &missing, &fbytes);
+        pthread_mutex_lock(p->lock);
+        p->in_flight--;
+        if (s == VV_OK) {
+            py_entry_ready(p, e, fbytes, missing);
+            p->st.loaded++;
+        } else {
+            vv_error_clear(); /* a frame reading it reports the error */
+            e->state = PY_FAILED;
+            vv_volume_free(e->blk);
+            e->blk = NULL;
+            p->st.load_errors++;
+            p->arrivals++;
+        }
+        py_unpin(p, e);
+        pthread_cond_broadcast(&p->arrived);
+    }
+    pthread_mutex_unlock(p->lock);
+    free(scratch);
+    return NULL;
+}
+
+/* The loader's threads, started at the first request (lock held): a few,
+ * one when the store reads one chunk at a time. */
+static vv_status
+start_loaders(vv_pyramid *p) {
+    int n = p->store.parallel ? vv_threads_get() : 1;
+    n = n < 1 ? 1 : n > PY_LOADERS_MAX ? PY_LOADERS_MAX : n;
+    if (p->store.scratch > ((size_t)64 << 20))
+        n = 1;
+    for (int i = 0; i < n; i++) {
+        if (pthread_create(&p->loader[i], NULL, loader_main, p) != 0)
+            return p->n_loaders ? VV_OK
+                                : vv_error_set(VV_ERR_NOMEM, "cannot start the loader's threads");
+        p->n_loaders++;
+    }
+    return VV_OK;
+}
+
+/* A small open-addressed set of (level, L) keys, to queue each chunk once. */
+static int
+seen_add(uint64_t *set, uint64_t mask, int level, uint64_t L) {
+    const uint64_t key = (L << 4 | (uint64_t)level) + 1;
+    for (uint64_t h = (key * 0x9E3779B97F4A7C15ull) >> 20 & mask;; h = (h + 1) & mask) {
+        if (set[h] == key)
+            return 0;
+        if (!set[h]) {
+            set[h] = key;
+            return 1;
+        }
+    }
+}
+
+vv_status
+vv_pyramid_request(vv_pyramid *p, int n, const int *level, const int *lo, const int *hi) {
+    if (!p || n < 0 || (n > 0 && (!level || !lo || !hi)))
+        return vv_error_set(VV_ERR_INVALID, "pyramid: bad request arguments");
+    /* the chunks, each once, in the boxes' order */
+    uint64_t count = 0;
+    for (int i = 0; i < n; i++) {
+        if (level[i] < 0 || level[i] >= p->n_levels)
+            return vv_error_set(VV_ERR_INVALID, "pyramid: request of level %d (0 .. %d)", level[i],
+                                p->n_levels - 1);
+        const py_level *l = &p->lv[level[i]];
+        uint64_t m = 1;
+        for (int k = 0; k < 3; k++) {
+            if (lo[3 * i + k] < 0 || hi[3 * i + k] < lo[3 * i + k] || hi[3 * i + k] >= l->dims[k])
+                return vv_error_set(VV_ERR_INVALID,
+                                    "pyramid: request box %d..%d outside level %d's %d voxels",
+                                    lo[3 * i + k], hi[3 * i + k], level[i], l->dims[k]);
+            m *= (uint64_t)(hi[3 * i + k] / l->cdims[k] - lo[3 * i + k] / l->cdims[k] + 1);
+        }
+        count += m;
+    }
+    if (count > (uint64_t)1 << 24)
+        return vv_error_set(VV_ERR_LIMIT, "pyramid: a request of %llu chunks (at most %d)",
+                            (unsigned long long)count, 1 << 24);
+    uint64_t slots = 16;
+    while (slots < 2 * count)
+        slots *= 2;
+    uint64_t *seen = calloc((size_t)slots, sizeof *seen);
+    py_req *q = malloc(sizeof *q * (size_t)(count ? count : 1));
+    if (!seen || !q) {
+        free(seen);
+        free(q);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    }
+    pthread_mutex_lock(p->lock);
+    p->cl.want++;
+    int nq = 0;
+    for (int i = 0; i < n; i++) {
+        const py_level *l = &p->lv[level[i]];
+        int c0[3], c1[3];
+        py_chunk_span(l, lo + 3 * i, hi + 3 * i, c0, c1);
+        for (int z = c0[2]; z <= c1[2]; z++)
+            for (int y = c0[1]; y <= c1[1]; y++)
+                for (int x = c0[0]; x <= c1[0]; x++) {
+                    const int c[3] = {x, y, z};
+                    const uint64_t L = py_chunk_linear(l, c);
+                    if (!seen_add(seen, slots - 1, level[i], L))
+                        continue;
+                    py_chunk *e = py_find_chunk(p, level[i], L);
+                    if (e && e->state != PY_FAILED)
+                        e->ce.want = p->cl.want; /* held: kept by the loader */
+                    else
+                        q[nq++] = (py_req){level[i], L};
+                }
+    }
+    p->st.cancelled += (uint64_t)(p->q_n - p->q_pos); /* what the view made stale */
+    p->stalled = 0;
+    free(p->queue);
+    p->queue = q;
+    p->q_n = nq;
+    p->q_pos = 0;
+    vv_status s = VV_OK;
+    if (nq > 0 && p->n_loaders == 0)
+        s = start_loaders(p);
+    pthread_cond_broadcast(&p->work);
+    pthread_mutex_unlock(p->lock);
+    free(seen);
+    return s;
+}
+
+int
+vv_pyramid_loading(vv_pyramid *p) {
+    if (!p)
+        return 0;
+    pthread_mutex_lock(p->lock);
+    const int n = p->q_n - p->q_pos + p->in_flight;
+    pthread_mutex_unlock(p->lock);
+    return n;
+}
+
+int
+vv_pyramid_wait(vv_pyramid *p, double seconds) {
+    if (!p)
+        return 0;
+    struct timespec until;
+    clock_gettime(CLOCK_REALTIME, &until);
+    const double t = seconds > 0 ? seconds : 0;
+    until.tv_sec += (time_t)t;
+    until.tv_nsec += (long)((t - floor(t)) * 1e9);
+    if (until.tv_nsec >= 1000000000L) {
+        until.tv_sec++;
+        until.tv_nsec -= 1000000000L;
+    }
+    pthread_mutex_lock(p->lock);
+    const uint64_t seen = p->arrivals;
+    while (p->q_n - p->q_pos + p->in_flight > 0 && p->arrivals == seen)
+        if (pthread_cond_timedwait(&p->arrived, p->lock, &until) != 0)
+            break;
+    const int n = p->q_n - p->q_pos + p->in_flight;
+    pthread_mutex_unlock(p->lock);
+    return n;
+}
+
+/* Stops the loader: the queue dropped, the chunks in flight finished. */
+void
+py_stop_loaders(vv_pyramid *p) {
+    pthread_mutex_lock(p->lock);
+    p->quit = 1;
+    p->q_pos = p->q_n;
+    pthread_cond_broadcast(&p->work);
+    pthread_mutex_unlock(p->lock);
+    for (int i = 0; i < p->n_loaders; i++)
+        pthread_join(p->loader[i], NULL);
+    p->n_loaders = 0;
+}
+
+/* ---- the source interface ----------------------------------------------------- */
+
+static int
+missing_chunks(const vv_pyramid *p, int level, const int lo[3], const int hi[3]) {
+    const py_level *l = &p->lv[level];
+    int c0[3], c1[3], n = 0;
+    py_chunk_span(l, lo, hi, c0, c1);
+    for (int z = c0[2]; z <= c1[2]; z++)
+        for (int y = c0[1]; y <= c1[1]; y++)
+            for (int x = c0[0]; x <= c1[0]; x++) {
+                const int c[3] = {x, y, z};
+                const py_chunk *e = py_find_chunk(p, level, py_chunk_linear(l, c));
+                n += !e || e->state != PY_READY;
+            }
+    return n;
+}
+
+static int
+box_range(const vv_pyramid *p, int level, const int lo[3], const int hi[3], float *vmin,
+          float *vmax) {
+    const py_level *l = &p->lv[level];
+    if (!l->known)
+        return 0;
+    int c0[3], c1[3];
+    py_chunk_span(l, lo, hi, c0, c1);
+    float a = INFINITY, b = -INFINITY;
+    for (int z = c0[2]; z <= c1[2]; z++)
+        for (int y = c0[1]; y <= c1[1]; y++)
+            for (int x = c0[0]; x <= c1[0]; x++) {
+                const int c[3] = {x, y, z};
+                const uint64_t L = py_chunk_linear(l, c);
+                if (!l->known[L])
+                    return 0;
+                a = l->cmin[L] < a ? l->cmin[L] : a;
+                b = l->cmax[L] > b ? l->cmax[L] : b;
+            }
+    *vmin = a;
+    *vmax = b;
+    return 1;
+}
+
+static const vv_volume *
+src_level(void *user, int level) {
+    return vv_pyramid_level(user, level);
+}
+
+static vv_status
+src_read_box(void *user, int level, const int lo[3], const int hi[3], vv_volume **out) {
+    return py_box_read(user, level, lo, hi, out, plan_box_read);
+}
+
+static int
+src_box_range(void *user, int level, const int lo[3], const int hi[3], float *vmin, float *vmax) {
+    vv_pyramid *p = user;
+    pthread_mutex_lock(p->lock);
+    const int r = box_range(p, level, lo, hi, vmin, vmax);
+    pthread_mutex_unlock(p->lock);
+    return r;
+}
+
+static int
+src_missing(void *user, int level, const int lo[3], const int hi[3]) {
+    vv_pyramid *p = user;
+    pthread_mutex_lock(p->lock);
+    const int n = missing_chunks(p, level, lo, hi);
+    pthread_mutex_unlock(p->lock);
+    return n;
+}
+
+static void
+src_frame(void *user, int begin) {
+    vv_pyramid *p = user;
+    pthread_mutex_lock(p->lock);
+    py_clear_plan(p);
+    if (begin) {
+        p->frame++;
+        p->st.frames++;
+    }
+    pthread_mutex_unlock(p->lock);
+}
+
+/* Notes box @p seq's use of chunk (level, L). */
+static vv_status
+add_use(vv_pyramid *p, int level, uint64_t L, int seq) {
+    py_use *u = py_find_use(p, level, L);
+    if (!u) {
+        if (!(u = calloc(1, sizeof *u)))
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        u->level = level;
+        u->L = L;
+        const unsigned b = py_bucket_of(level, L);
+        u->hnext = p->ubucket[b];
+        p->ubucket[b] = u;
+    }
+    if (u->n == u->cap) {
+        const int cap = u->cap ? 2 * u->cap : 4;
+        int *seq2 = realloc(u->seq, sizeof(int) * (size_t)cap);
+        if (!seq2)
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        u->seq = seq2;
+        u->cap = cap;
+    }
+    u->seq[u->n++] = seq;
+    return VV_OK;
+}
+
+static void
+find_uses(vv_pyramid *p, py_chunk *c) {
+    c->use = py_find_use(p, c->level, c->L);
+}
+
+static vv_status
+plan_locked(vv_pyramid *p, int n, const int *level, const int *lo, const int *hi) {
+    py_clear_plan(p);
+    vv_status s = VV_OK;
+    for (int i = 0; i < n && s == VV_OK; i++) {
+        if (level[i] < 0 || level[i] >= p->n_levels)
+            continue;
+        const py_level *l = &p->lv[level[i]];
+        int c0[3], c1[3];
+        py_chunk_span(l, lo + 3 * i, hi + 3 * i, c0, c1);
+        for (int z = c0[2]; z <= c1[2] && s == VV_OK; z++)
+            for (int y = c0[1]; y <= c1[1] && s == VV_OK; y++)
+                for (int x = c0[0]; x <= c1[0] && s == VV_OK; x++) {
+                    const int c[3] = {x, y, z};
+                    s = add_use(p, level[i], py_chunk_linear(l, c), i);
+                }
+    }
+    if (s != VV_OK) {
+        py_clear_plan(p);
+        return s;
+    }
+    py_each_chunk(p, find_uses);
+    if (p->store.prefetch && n > 0 && (p->plan_box = malloc(sizeof(int) * 7 * (size_t)n))) {
+        for (int i = 0; i < n; i++) {
+            const int ok = level[i] >= 0 && level[i] < p->n_levels;
+            int *box = p->plan_box + 7 * i;
+            box[0] = ok ? level[i] : 0;
+            for (int k = 0; k < 3; k++) { /* a box out of range: an empty one at level 0 */
+                box[1 + k] = ok ? lo[3 * i + k] : 0;
+                box[4 + k] = ok ? hi[3 * i + k] : 0;
+            }
+        }
+        p->plan_n = n;
+    }
+    p->cl.planned = 1;
+    p->cursor = 0;
+    return VV_OK;
+}
+
+static vv_status
+src_plan(void *user, int n, const int *level, const int *lo, const int *hi) {
+    vv_pyramid *p = user;
+    pthread_mutex_lock(p->lock);
+    const vv_status s = plan_locked(p, n, level, lo, hi);
+    pthread_mutex_unlock(p->lock);
+    return s;
+}
+
+static vv_status
+src_request(void *user, int n, const int *level, const int *lo, const int *hi) {
+    return vv_pyramid_request(user, n, level, lo, hi);
+}
+
+static int
+src_stalled(void *user) {
+    vv_pyramid *p = user;
+    pthread_mutex_lock(p->lock);
+    const int r = p->stalled;
+    pthread_mutex_unlock(p->lock);
+    return r;
+}
+
+void
+vv_pyramid_source(vv_pyramid *p, vv_multires_source *out) {
+    memset(out, 0, sizeof *out);
+    out->version = VV_MULTIRES_SOURCE_VERSION;
+    out->user = p;
+    out->n_levels = p->n_levels;
+    out->node_cells = p->node_cells;
+    out->level = src_level;
+    out->read_box = src_read_box;
+    out->box_range = src_box_range;
+    out->frame = src_frame;
+    out->plan = src_plan;
+    out->missing_chunks = src_missing;
+    out->boxes = p->boxes;
+    out->request = src_request;
+    out->stalled = src_stalled;
+}

@@ -1,0 +1,125 @@
+/*
+ * The OME-Zarr store of a pyramid (src/io/store/pyramid.h): the multiscales
+ * levels of one channel at one time step, each level's .zarray parsed
+ * once, and its chunks read and decoded in this process (reentrant: the
+ * pyramid decodes a box's chunks on every core, a scratch buffer of the
+ * largest chunk each). The level's chunk box is the store's own.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <jansson.h>
+
+#include "core/internal.h"
+#include "io/store/pyramid.h"
+#include "io/store/zarr.h"
+
+/* One level's parsed array and its layout (which points into it). */
+typedef struct zp_level {
+    zr_array a;
+    zr_layout J;
+} zp_level;
+
+typedef struct zp_store {
+    int n_levels;
+    zp_level lv[VV_PYRAMID_MAX_LEVELS];
+} zp_store;
+
+static vv_status
+zp_read_chunk(void *ctx, int level, const int c[3], unsigned char *scratch, unsigned char *dst,
+              const int org[3], const int dims[3], int *missing, uint64_t *file_bytes) {
+    const zp_level *l = &((const zp_store *)ctx)->lv[level];
+    return vv_zr_copy_chunk(&l->J, vv_zr_chunk_linear(&l->J, c), scratch, dst, org, dims, missing,
+                            file_bytes);
+}
+
+static void
+zp_close(void *ctx) {
+    free(ctx);
+}
+
+/* Level @p i's metadata and layout; each level must have level 0's axes,
+ * channels, steps and type. */
+static vv_status
+zp_open_level(zp_store *z, const char *path, int i, int channel, int time, vv_load_info *info) {
+    zp_level *l = &z->lv[i];
+    vv_status s = vv_zr_parse_store(path, i, &l->a, channel, i == 0 ? info : NULL, NULL);
+    if (s == VV_OK)
+        s = vv_zr_layout(&l->a, channel, time, &l->J);
+    /* each reading thread holds a scratch buffer of the largest chunk */
+    if (s == VV_OK)
+        s = vv_memory_budget_check((uint64_t)l->J.cbytes, "a Zarr chunk's buffer");
+    if (s != VV_OK)
+        return vv_error_prefix(s, "level %d", i);
+    l->J.a = &l->a; /* the layout points into the level it describes */
+    if (i > 0) {
+        const zp_level *l0 = &z->lv[0];
+        if (l->a.ndim != l0->a.ndim || l->a.type != l0->a.type || l->J.cax != l0->J.cax ||
+            l->J.tax != l0->J.tax || l->J.nc != l0->J.nc || l->J.nt != l0->J.nt)
+            return vv_error_set(VV_ERR_FORMAT,
+                                "level %d: its axes, channels, steps or type differ from level 0's "
+                                "(inconsistent multiscales)",
+                                i);
+    }
+    return VV_OK;
+}
+
+/* The omero window's min and max of @p channel when the store names them. */
+static int
+omero_range(const char *path, int channel, double r[2]) {
+    char f[4200];
+    snprintf(f, sizeof f, "%s/.zattrs", path);
+    json_error_t e;
+    json_t *j = json_load_file(f, JSON_REJECT_DUPLICATES, &e);
+    json_t *ch = json_array_get(json_object_get(json_object_get(j, "omero"), "channels"),
+                                (size_t)(channel < 0 ? 0 : channel));
+    json_t *w = json_object_get(ch, "window");
+    json_t *mn = json_object_get(w, "min"), *mx = json_object_get(w, "max");
+    int ok = json_is_number(mn) && json_is_number(mx) &&
+             json_number_value(mx) >= json_number_value(mn) && isfinite(json_number_value(mn)) &&
+             isfinite(json_number_value(mx));
+    if (ok) {
+        r[0] = json_number_value(mn);
+        r[1] = json_number_value(mx);
+    }
+    json_decref(j);
+    return ok;
+}
+
+vv_status
+vv_zr_pyramid_store(vv_store *st, const char *path, int channel, int time, vv_load_info *info) {
+    memset(st, 0, sizeof *st);
+    st->name = "zarr";
+    int n_levels = 1;
+    zr_array probe;
+    memset(&probe, 0, sizeof probe);
+    vv_status s = vv_zr_parse_store(path, 0, &probe, channel, NULL, &n_levels);
+    if (s != VV_OK)
+        return s;
+    if (n_levels > VV_PYRAMID_MAX_LEVELS)
+        return vv_error_set(VV_ERR_LIMIT, "%d levels (at most %d are read)", n_levels,
+                            VV_PYRAMID_MAX_LEVELS);
+    zp_store *z = calloc(1, sizeof *z);
+    if (!z)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    st->ctx = z;
+    st->close = zp_close;
+    st->read_chunk = zp_read_chunk;
+    st->parallel = 1;
+    for (int i = 0; i < n_levels; i++) {
+        if ((s = zp_open_level(z, path, i, channel, time, info)) != VV_OK)
+            return s;
+        z->n_levels = st->n_levels = i + 1;
+        const zp_level *l = &z->lv[i];
+        if ((s = vv_store_set_level(st, i, l->a.type, l->J.dims, l->J.cdims)) != VV_OK)
+            return s;
+        vv_zr_geometry(&l->J, st->lv[i].hdr);
+        st->scratch = l->J.cbytes > st->scratch ? l->J.cbytes : st->scratch;
+    }
+    st->n_channels = (int)z->lv[0].J.nc;
+    st->n_times = (int)z->lv[0].J.nt;
+    st->has_range = omero_range(path, channel, st->range);
+    return VV_OK;
+}

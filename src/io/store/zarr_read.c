@@ -1,0 +1,794 @@
+/*
+ * OME-Zarr / Zarr v2 reader: one channel at one time step of the full
+ * resolution level as a volume (vv_volume_load's contract).
+ *
+ * A store is a folder. Its root .zattrs holds the OME-NGFF multiscales
+ * metadata (0.4: "axes" objects with name, type and unit; 0.3: axis names;
+ * older: none, the axes then t, c, z, y, x of a 5-D array), the first
+ * dataset's path is level 0 and its coordinateTransformations (scale, then
+ * an optional translation; multiplied by the multiscale's own) give the
+ * spacing and origin of the spatial axes and the time between steps. The
+ * omero block names and colours the channels. A folder with a .zarray and
+ * no multiscales is a plain 3-D array (z, y, x).
+ *
+ * The array's .zarray (Zarr v2 spec): shape, chunks, dtype ("<u2", ">f4",
+ * "|u1": u1 u2 u4 i1 i2 i4 f4 f8, either byte order), compressor (null,
+ * zlib, gzip, zstd, blosc with any of its inner codecs and shuffles), C
+ * order, no filters, fill_value, dimension_separator "." or "/". Chunks
+ * are files named by their indices; a missing chunk is the fill value. Only
+ * the chunks holding the asked channel and step are read, each checked to
+ * decode to exactly the chunk's size.
+ *
+ * Axes: two or three spatial ones (type "space", or named x, y, z), at most
+ * one "channel" (or c) and one "time" (or t) axis, in any order. Every size
+ * is checked against the limits before anything is allocated; JSON files
+ * over 16 MiB and chunks over 1 GiB are refused.
+ */
+#include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <blosc.h>
+#include <jansson.h>
+#include <omp.h>
+#include <zlib.h>
+#include <zstd.h>
+
+#include "core/internal.h"
+#include "io/store/zarr.h"
+
+/* 1 when the real path @p real lies in or beneath the real folder @p dir. */
+static int
+zr_beneath(const char *real, const char *dir) {
+    const size_t n = strlen(dir);
+    return !strncmp(real, dir, n) &&
+           (real[n] == '/' || real[n] == '\0' || (n == 1 && dir[0] == '/'));
+}
+
+/* path/name loaded as JSON (at most ZR_JSON_MAX bytes); NULL with the error
+ * set, or NULL without an error when the file is absent and @p optional.
+ * The file must lie beneath the store's real path @p real ("": unchecked). */
+static json_t *
+load_json(const char *dir, const char *name, int optional, const char *real, vv_status *s) {
+    char p[4200];
+    snprintf(p, sizeof p, "%s/%s", dir, name);
+    struct stat st;
+    *s = VV_OK;
+    if (stat(p, &st) != 0) {
+        if (!optional)
+            *s = vv_error_set(VV_ERR_FORMAT, "no %s (not a Zarr array)", name);
+        return NULL;
+    }
+    if (!S_ISREG(st.st_mode)) { /* a FIFO would block the read forever */
+        *s = vv_error_set(VV_ERR_FORMAT, "%s is not a regular file", name);
+        return NULL;
+    }
+    if (real && real[0]) { /* a symbolic link may lead out of the store */
+        char *rp = realpath(p, NULL);
+        const int inside = rp && zr_beneath(rp, real);
+        free(rp);
+        if (!inside) {
+            *s = vv_error_set(VV_ERR_FORMAT, "%s leaves the store (a link to a file outside it)",
+                              name);
+            return NULL;
+        }
+    }
+    if (st.st_size > ZR_JSON_MAX) {
+        *s = vv_error_set(VV_ERR_LIMIT, "%s is %lld bytes (limit %u)", name, (long long)st.st_size,
+                          ZR_JSON_MAX);
+        return NULL;
+    }
+    json_error_t e;
+    json_t *j = json_load_file(p, JSON_REJECT_DUPLICATES, &e);
+    if (!j)
+        *s = vv_error_set(VV_ERR_FORMAT, "%s: line %d: %s", name, e.line, e.text);
+    return j;
+}
+
+static vv_status
+parse_dtype(const char *d, zr_array *a) {
+    if (!d || strlen(d) != 3 || !strchr("<>|", d[0]))
+        return vv_error_set(VV_ERR_UNSUPPORTED,
+                            ".zarray: dtype \"%s\" (supported: u1 u2 u4 i1 i2 "
+                            "i4 f4 f8, either byte order)",
+                            d ? d : "(none)");
+    static const struct {
+        const char *k;
+        vv_voxel_type t;
+    } map[] = {{"u1", VV_U8},  {"i1", VV_I8},  {"u2", VV_U16}, {"i2", VV_I16},
+               {"u4", VV_U32}, {"i4", VV_I32}, {"f4", VV_F32}, {"f8", VV_F64}};
+    for (size_t i = 0; i < sizeof map / sizeof map[0]; i++)
+        if (!strcmp(d + 1, map[i].k)) {
+            a->type = map[i].t;
+            a->esize = vv_voxel_type_size(a->type);
+            a->swap = a->esize > 1 && (d[0] == '>') == vv_host_is_little_endian();
+            return VV_OK;
+        }
+    return vv_error_set(VV_ERR_UNSUPPORTED,
+                        ".zarray: dtype \"%s\" (supported: u1 u2 u4 i1 i2 i4 f4 f8)", d);
+}
+
+/* The .zarray of folder @p dir into @p a. */
+static vv_status
+parse_zarray(zr_array *a) {
+    vv_status s;
+    json_t *j = load_json(a->dir, ".zarray", 0, a->real, &s);
+    if (!j)
+        return s;
+    json_t *shape = json_object_get(j, "shape"), *chunks = json_object_get(j, "chunks");
+    json_t *comp = json_object_get(j, "compressor"), *filt = json_object_get(j, "filters");
+    json_t *fmt = json_object_get(j, "zarr_format"), *order = json_object_get(j, "order");
+    json_t *fill = json_object_get(j, "fill_value"),
+           *sep = json_object_get(j, "dimension_separator");
+    s = VV_OK;
+    if (!json_is_integer(fmt) || json_integer_value(fmt) != 2)
+        s = vv_error_set(VV_ERR_UNSUPPORTED, ".zarray: zarr_format is not 2");
+    else if (!json_is_array(shape) || !json_is_array(chunks) ||
+             json_array_size(shape) != json_array_size(chunks) || json_array_size(shape) < 2 ||
+             json_array_size(shape) > ZR_MAX_DIM)
+        s = vv_error_set(VV_ERR_FORMAT,
+                         ".zarray: shape and chunks must be arrays of 2 to %d sizes, alike",
+                         ZR_MAX_DIM);
+    else if (order && (!json_is_string(order) || strcmp(json_string_value(order), "C")))
+        s = vv_error_set(VV_ERR_UNSUPPORTED, ".zarray: order \"%s\" (only C order is read)",
+                         json_is_string(order) ? json_string_value(order) : "?");
+    else if (filt && !json_is_null(filt) && !(json_is_array(filt) && json_array_size(filt) == 0))
+        s = vv_error_set(VV_ERR_UNSUPPORTED, ".zarray: filters are not supported");
+    if (s == VV_OK) {
+        a->ndim = (int)json_array_size(shape);
+        for (int i = 0; i < a->ndim && s == VV_OK; i++) {
+            json_t *x = json_array_get(shape, (size_t)i), *c = json_array_get(chunks, (size_t)i);
+            if (!json_is_integer(x) || !json_is_integer(c) || json_integer_value(x) < 1 ||
+                json_integer_value(c) < 1 || json_integer_value(x) > (1LL << 40) ||
+                json_integer_value(c) > (1LL << 40))
+                s = vv_error_set(VV_ERR_FORMAT, ".zarray: axis %d: shape or chunk size not a size",
+                                 i);
+            else {
+                a->shape[i] = (uint64_t)json_integer_value(x);
+                a->chunks[i] = (uint64_t)json_integer_value(c);
+            }
+        }
+    }
+    if (s == VV_OK)
+        s = parse_dtype(json_string_value(json_object_get(j, "dtype")), a);
+    if (s == VV_OK) {
+        a->codec[0] = '\0';
+        if (comp && !json_is_null(comp)) {
+            const char *id = json_string_value(json_object_get(comp, "id"));
+            if (!id || (strcmp(id, "zlib") && strcmp(id, "gzip") && strcmp(id, "zstd") &&
+                        strcmp(id, "blosc")))
+                s = vv_error_set(VV_ERR_UNSUPPORTED,
+                                 ".zarray: compressor \"%s\" (supported: zlib, gzip, zstd, blosc)",
+                                 id ? id : "?");
+            else
+                snprintf(a->codec, sizeof a->codec, "%s", id);
+        }
+        a->sep = '.';
+        if (sep && json_is_string(sep) && !strcmp(json_string_value(sep), "/"))
+            a->sep = '/';
+        else if (sep && !(json_is_string(sep) && !strcmp(json_string_value(sep), ".")))
+            s = vv_error_set(VV_ERR_FORMAT, ".zarray: dimension_separator is not \".\" or \"/\"");
+        a->fill = 0;
+        const char *fs = json_string_value(fill);
+        if (json_is_number(fill))
+            a->fill = json_number_value(fill);
+        else if (fs && !strcmp(fs, "NaN"))
+            a->fill = NAN;
+        else if (fs && !strcmp(fs, "Infinity"))
+            a->fill = INFINITY;
+        else if (fs && !strcmp(fs, "-Infinity"))
+            a->fill = -INFINITY;
+        else if (s == VV_OK && fill && !json_is_null(fill))
+            s = vv_error_set(VV_ERR_FORMAT, ".zarray: fill_value is not a number, null, \"NaN\" or "
+                                            "\"Infinity\"");
+    }
+    json_decref(j);
+    return s;
+}
+
+static int
+axis_kind(const char *name, const char *type) {
+    if (type && !strcmp(type, "channel"))
+        return 1;
+    if (type && !strcmp(type, "time"))
+        return 2;
+    if (type && !strcmp(type, "space"))
+        return 0;
+    if (!strcmp(name, "c"))
+        return 1;
+    if (!strcmp(name, "t"))
+        return 2;
+    if (!strcmp(name, "x") || !strcmp(name, "y") || !strcmp(name, "z"))
+        return 0;
+    return -1;
+}
+
+/* scale (and translation) of one coordinateTransformations list into
+ * sc/tr (multiplied, added: nested levels compose). A scale or translation
+ * that is not @p ndim numbers, a scale that is not positive and finite:
+ * VV_ERR_FORMAT naming @p where (a zero or non-finite spacing is never
+ * taken). Other transform types are ignored. */
+static vv_status
+apply_transforms(json_t *list, int ndim, double *sc, double *tr, const char *where) {
+    size_t i;
+    json_t *t;
+    json_array_foreach(list, i, t) {
+        const char *type = json_string_value(json_object_get(t, "type"));
+        if (!type || (strcmp(type, "scale") && strcmp(type, "translation")))
+            continue;
+        const int scale = !strcmp(type, "scale");
+        json_t *v = json_object_get(t, type);
+        if (!json_is_array(v) || (int)json_array_size(v) != ndim)
+            return vv_error_set(VV_ERR_FORMAT, ".zattrs: %s: the %s is not %d numbers", where, type,
+                                ndim);
+        for (int k = 0; k < ndim; k++) {
+            json_t *n = json_array_get(v, (size_t)k);
+            const double x = json_number_value(n);
+            if (!json_is_number(n) || !isfinite(x) || (scale && !(x > 0)))
+                return vv_error_set(VV_ERR_FORMAT, ".zattrs: %s: %s %d is not a %s number", where,
+                                    type, k, scale ? "positive finite" : "finite");
+            /* x' = s x (the translation so far scaled too), x' = x + t */
+            if (scale) {
+                sc[k] *= x;
+                tr[k] *= x;
+            } else {
+                tr[k] += x;
+            }
+            if (!isfinite(sc[k]) || !(sc[k] > 0) || !isfinite(tr[k]))
+                return vv_error_set(VV_ERR_FORMAT,
+                                    ".zattrs: %s: the composed %s along axis %d is not finite "
+                                    "and positive",
+                                    where, isfinite(sc[k]) && sc[k] > 0 ? "translation" : "scale",
+                                    k);
+        }
+    }
+    return VV_OK;
+}
+
+/* The OME metadata of the store at @p root (its .zattrs): level @p level's
+ * folder, axes, transforms; the channel's name and colour into @p info. */
+vv_status
+vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load_info *info,
+                  int *n_levels) {
+    vv_status s;
+    /* the store's real path: every file, folder and chunk read must lie
+     * beneath it (a symbolic link may lead out) */
+    char *rroot = realpath(root, NULL);
+    snprintf(a->real, sizeof a->real, "%s", rroot ? rroot : "");
+    free(rroot);
+    json_t *za = load_json(root, ".zattrs", 1, a->real, &s);
+    if (s != VV_OK)
+        return s;
+    json_t *ms = za ? json_array_get(json_object_get(za, "multiscales"), 0) : NULL;
+    snprintf(a->dir, sizeof a->dir, "%s", root);
+    json_t *axes = ms ? json_object_get(ms, "axes") : NULL;
+    json_t *dsl = ms ? json_object_get(ms, "datasets") : NULL;
+    json_t *ds0 = ms ? json_array_get(dsl, (size_t)level) : NULL;
+    if (ms && !json_array_get(dsl, 0)) {
+        json_decref(za);
+        return vv_error_set(VV_ERR_FORMAT, ".zattrs: multiscales without datasets");
+    }
+    const int count = ms ? (int)json_array_size(dsl) : 1;
+    if (n_levels)
+        *n_levels = count;
+    if (level < 0 || (ms ? !ds0 : level > 0)) {
+        json_decref(za);
+        return vv_error_set(VV_ERR_INVALID, "level %d asked, the store has %d", level, count);
+    }
+    if (ds0) {
+        const char *p = json_string_value(json_object_get(ds0, "path"));
+        if (!p || !*p || strstr(p, "..") || p[0] == '/') {
+            /* the message quotes the path: format it before the JSON that
+             * holds it is freed */
+            s = !p || !*p
+                    ? vv_error_set(VV_ERR_FORMAT, ".zattrs: dataset %d has no path", level)
+                    : vv_error_set(VV_ERR_FORMAT,
+                                   ".zattrs: dataset %d: path \"%s\" leaves the store", level, p);
+            json_decref(za);
+            return s;
+        }
+        snprintf(a->dir, sizeof a->dir, "%s/%s", root, p);
+        /* a symbolic link may still lead out of the store: compare the
+         * real paths (a folder that does not exist has no .zarray) */
+        char *rdir = realpath(a->dir, NULL);
+        const int inside = !rdir || !a->real[0] || zr_beneath(rdir, a->real);
+        free(rdir);
+        if (!inside) {
+            s = vv_error_set(VV_ERR_FORMAT,
+                             ".zattrs: dataset %d: path \"%s\" leaves the store (a link to a "
+                             "folder outside it)",
+                             level, p);
+            json_decref(za);
+            return s;
+        }
+    }
+    s = parse_zarray(a);
+    if (s != VV_OK) {
+        char lname[256];
+        snprintf(lname, sizeof lname, "%s",
+                 ds0 ? json_string_value(json_object_get(ds0, "path")) : ".");
+        json_decref(za);
+        return vv_error_prefix(s, "level %s", lname);
+    }
+    /* the axes: from the metadata, else (no OME axes) the last three are z,
+     * y, x after t and c */
+    static const char *const tczyx[5] = {"t", "c", "z", "y", "x"};
+    for (int i = 0; i < a->ndim; i++) {
+        json_t *ax = axes ? json_array_get(axes, (size_t)i) : NULL;
+        const char *name = json_is_string(ax) ? json_string_value(ax)
+                           : ax               ? json_string_value(json_object_get(ax, "name"))
+                                              : tczyx[5 - a->ndim + i];
+        const char *type =
+            ax && json_is_object(ax) ? json_string_value(json_object_get(ax, "type")) : NULL;
+        const char *unit =
+            ax && json_is_object(ax) ? json_string_value(json_object_get(ax, "unit")) : NULL;
+        if (axes && (int)json_array_size(axes) != a->ndim) {
+            s = vv_error_set(VV_ERR_FORMAT, ".zattrs: %zu axes for an array of %d dimensions",
+                             json_array_size(axes), a->ndim);
+            break;
+        }
+        if (!axes && a->ndim < 3) {
+            s = vv_error_set(VV_ERR_FORMAT, "a %d-D array without OME axes", a->ndim);
+            break;
+        }
+        snprintf(a->axes[i].name, sizeof a->axes[i].name, "%s", name ? name : "?");
+        snprintf(a->axes[i].unit, sizeof a->axes[i].unit, "%s", unit ? unit : "");
+        a->axes[i].kind = axis_kind(a->axes[i].name, type);
+        if (a->axes[i].kind < 0) {
+            s = vv_error_set(VV_ERR_UNSUPPORTED, ".zattrs: axis \"%s\" of type \"%s\"",
+                             a->axes[i].name, type ? type : "?");
+            break;
+        }
+        a->scale[i] = 1;
+        a->trans[i] = 0;
+    }
+    if (s == VV_OK && ds0) {
+        char where[64];
+        snprintf(where, sizeof where, "dataset %d", level);
+        s = apply_transforms(json_object_get(ds0, "coordinateTransformations"), a->ndim, a->scale,
+                             a->trans, where);
+        if (s == VV_OK)
+            s = apply_transforms(json_object_get(ms, "coordinateTransformations"), a->ndim,
+                                 a->scale, a->trans, "multiscales");
+    }
+    /* omero: the channel's label and colour (RRGGBB) */
+    json_t *chs = za ? json_object_get(json_object_get(za, "omero"), "channels") : NULL;
+    json_t *ch = json_array_get(chs, (size_t)(channel < 0 ? 0 : channel));
+    if (s == VV_OK && ch && info) {
+        const char *label = json_string_value(json_object_get(ch, "label"));
+        if (label)
+            snprintf(info->channel_name, sizeof info->channel_name, "%s", label);
+        const char *col = json_string_value(json_object_get(ch, "color"));
+        char *end = NULL;
+        unsigned long rgb = col && strlen(col) == 6 ? strtoul(col, &end, 16) : 0;
+        if (end && *end == '\0' && rgb != 0) {
+            for (int k = 0; k < 3; k++)
+                info->color[k] = (float)((rgb >> (16 - 8 * k)) & 0xffu) / 255.0f;
+            info->has_color = 1;
+        }
+    }
+    json_decref(za);
+    return s;
+}
+
+/* Reads and decodes chunk file @p path into @p out (exactly @p n bytes);
+ * 0 with *missing = 1 when the file does not exist. */
+vv_status
+vv_zr_read_chunk(const zr_array *a, const char *path, unsigned char *out, size_t n, int *missing,
+                 uint64_t *file_bytes) {
+    *missing = 0;
+    if (file_bytes)
+        *file_bytes = 0;
+    /* not blocking: a FIFO would block the open forever */
+    const int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
+        if (errno == ENOENT) {
+            *missing = 1;
+            return VV_OK;
+        }
+        return vv_error_set(VV_ERR_IO, "%s: %s", path, strerror(errno));
+    }
+    struct stat fst;
+    if (fstat(fd, &fst) != 0 || !S_ISREG(fst.st_mode)) {
+        close(fd);
+        return vv_error_set(VV_ERR_FORMAT, "%s: the chunk is not a regular file", path);
+    }
+    FILE *f = fdopen(fd, "rb");
+    if (!f) {
+        close(fd);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk");
+    }
+    /* a chunk (or a folder on its way) that is a link out of the store */
+    if (a->real[0]) {
+        char *real = realpath(path, NULL);
+        const int inside = real && zr_beneath(real, a->real);
+        free(real);
+        if (!inside) {
+            fclose(f);
+            return vv_error_set(VV_ERR_FORMAT, "%s: the chunk file resolves outside the store",
+                                path);
+        }
+    }
+    struct stat st;
+    if (fstat(fileno(f), &st) != 0 || st.st_size < 0 || (uint64_t)st.st_size > ZR_CHUNK_MAX) {
+        fclose(f);
+        return vv_error_set(VV_ERR_LIMIT, "%s: chunk file over %llu bytes", path,
+                            (unsigned long long)ZR_CHUNK_MAX);
+    }
+    size_t m = (size_t)st.st_size;
+    unsigned char *src = malloc(m ? m : 1);
+    if (!src) {
+        fclose(f);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk");
+    }
+    size_t got = fread(src, 1, m, f);
+    fclose(f);
+    if (file_bytes)
+        *file_bytes = got;
+    vv_status s = VV_OK;
+    if (got != m) {
+        s = vv_error_set(VV_ERR_IO, "%s: cannot read the chunk", path);
+    } else if (!a->codec[0]) {
+        if (m != n)
+            s = vv_error_set(VV_ERR_FORMAT, "%s: %zu bytes, an uncompressed chunk has %zu", path, m,
+                             n);
+        else
+            memcpy(out, src, n);
+    } else if (!strcmp(a->codec, "zlib") || !strcmp(a->codec, "gzip")) {
+        z_stream z;
+        memset(&z, 0, sizeof z);
+        int ok = inflateInit2(&z, !strcmp(a->codec, "gzip") ? 16 + MAX_WBITS : MAX_WBITS) == Z_OK;
+        size_t done = 0;
+        int r = Z_DATA_ERROR;
+        if (ok) {
+            z.next_in = src;
+            z.avail_in = (uInt)m;
+            z.next_out = out;
+            z.avail_out = (uInt)n;
+            r = inflate(&z, Z_FINISH);
+            done = n - z.avail_out;
+            inflateEnd(&z);
+        }
+        if (r != Z_STREAM_END || done != n)
+            s = vv_error_set(VV_ERR_FORMAT, "%s: the %s stream does not decode to %zu bytes", path,
+                             a->codec, n);
+    } else if (!strcmp(a->codec, "zstd")) {
+        unsigned long long fs = ZSTD_getFrameContentSize(src, m);
+        size_t r = fs == (unsigned long long)n ? ZSTD_decompress(out, n, src, m) : 0;
+        if (fs != (unsigned long long)n || ZSTD_isError(r) || r != n)
+            s = vv_error_set(VV_ERR_FORMAT, "%s: the zstd frame does not decode to %zu bytes", path,
+                             n);
+    } else { /* blosc */
+        size_t nb = 0;
+        if (blosc_cbuffer_validate(src, m, &nb) != 0 || nb != n ||
+            blosc_decompress_ctx(src, out, n, 1) != (int)n)
+            s = vv_error_set(VV_ERR_FORMAT, "%s: the blosc buffer does not decode to %zu bytes",
+                             path, n);
+    }
+    free(src);
+    return s;
+}
+
+/* Fills @p n voxels of type @p t at @p dst with @p x (the fill value, cast). */
+void
+vv_zr_fill(void *dst, size_t n, vv_voxel_type t, double x) {
+#define ZR_FILL(T)                                                                                 \
+    for (size_t i = 0; i < n; i++)                                                                 \
+        ((T *)dst)[i] = (T)x;
+    static const double lo[] = {0, -128, 0, -32768, 0, -2147483648.0},
+                        hi[] = {255, 127, 65535, 32767, 4294967295.0, 2147483647.0};
+    if (t <= VV_I32 && !(x >= lo[t] && x <= hi[t]))
+        x = 0; /* a fill value the type cannot hold (never cast out of range) */
+    if (t == VV_F32 && isfinite(x) && fabs(x) > 3.4e38)
+        x = 0;
+    switch (t) {
+    case VV_U8:
+        ZR_FILL(uint8_t) break;
+    case VV_I8:
+        ZR_FILL(int8_t) break;
+    case VV_U16:
+        ZR_FILL(uint16_t) break;
+    case VV_I16:
+        ZR_FILL(int16_t) break;
+    case VV_U32:
+        ZR_FILL(uint32_t) break;
+    case VV_I32:
+        ZR_FILL(int32_t) break;
+    case VV_F32:
+        ZR_FILL(float) break;
+    case VV_F64:
+        ZR_FILL(double) break;
+    }
+#undef ZR_FILL
+}
+
+vv_status
+vv_zr_layout(const zr_array *a, int channel, int time, zr_layout *J) {
+    memset(J, 0, sizeof *J);
+    J->a = a;
+    int sp[3], ns = 0;
+    J->cax = J->tax = -1;
+    for (int i = 0; i < a->ndim; i++) {
+        int *slot = a->axes[i].kind == 1 ? &J->cax : a->axes[i].kind == 2 ? &J->tax : NULL;
+        if (slot && *slot >= 0)
+            return vv_error_set(VV_ERR_UNSUPPORTED, "two %s axes",
+                                a->axes[i].kind == 1 ? "channel" : "time");
+        if (slot)
+            *slot = i;
+        else if (ns < 3)
+            sp[ns++] = i;
+        else
+            return vv_error_set(VV_ERR_UNSUPPORTED, "more than three spatial axes");
+    }
+    if (ns < 2)
+        return vv_error_set(VV_ERR_UNSUPPORTED, "%d spatial axes (2 or 3 are read)", ns);
+    /* volume axes i, j, k = the last, the middle, the first spatial axis */
+    J->vax[0] = sp[ns - 1];
+    J->vax[1] = sp[ns - 2];
+    J->vax[2] = ns == 3 ? sp[0] : -1;
+    for (int k = 0; k < 3; k++) {
+        uint64_t n = J->vax[k] >= 0 ? a->shape[J->vax[k]] : 1;
+        if (n > VV_VOLUME_MAX_DIM)
+            return vv_error_set(VV_ERR_LIMIT, "axis %s has %llu samples (limit %d)",
+                                a->axes[J->vax[k]].name, (unsigned long long)n, VV_VOLUME_MAX_DIM);
+        J->dims[k] = (int)n;
+    }
+    J->nc = J->cax >= 0 ? a->shape[J->cax] : 1;
+    J->nt = J->tax >= 0 ? a->shape[J->tax] : 1;
+    if (J->nc > INT_MAX || J->nt > INT_MAX) /* counted in ints (vv_load_info) */
+        return vv_error_set(VV_ERR_LIMIT, "%llu %s (limit %d)",
+                            (unsigned long long)(J->nc > INT_MAX ? J->nc : J->nt),
+                            J->nc > INT_MAX ? "channels" : "time steps", INT_MAX);
+    const int ch = channel < 0 ? 0 : channel, tp = time < 0 ? 0 : time;
+    if ((uint64_t)ch >= J->nc)
+        return vv_error_set(VV_ERR_INVALID, "channel %d asked, the store has %llu", ch,
+                            (unsigned long long)J->nc);
+    if ((uint64_t)tp >= J->nt)
+        return vv_error_set(VV_ERR_INVALID, "time step %d asked, the store has %llu", tp,
+                            (unsigned long long)J->nt);
+    J->ch = (uint64_t)ch;
+    J->tp = (uint64_t)tp;
+    uint64_t cbytes = a->esize;
+    for (int i = 0; i < a->ndim; i++) {
+        if (a->chunks[i] > ZR_CHUNK_MAX || cbytes > ZR_CHUNK_MAX / a->chunks[i])
+            return vv_error_set(VV_ERR_LIMIT, "chunks of over %llu bytes",
+                                (unsigned long long)ZR_CHUNK_MAX);
+        cbytes *= a->chunks[i];
+    }
+    J->cbytes = (size_t)cbytes;
+    /* element strides of a chunk (C order), chunks per axis */
+    J->cstride[a->ndim - 1] = 1;
+    for (int i = a->ndim - 2; i >= 0; i--)
+        J->cstride[i] = J->cstride[i + 1] * a->chunks[i + 1];
+    for (int i = 0; i < a->ndim; i++)
+        J->nchunk[i] = (a->shape[i] + a->chunks[i] - 1) / a->chunks[i];
+    for (int k = 0; k < 3; k++) {
+        J->cdims[k] = J->vax[k] >= 0 ? (int)a->chunks[J->vax[k]] : 1;
+        J->nchunks[k] = J->vax[k] >= 0 ? (int)J->nchunk[J->vax[k]] : 1;
+    }
+    return VV_OK;
+}
+
+void
+vv_zr_geometry(const zr_layout *J, vv_volume *v) {
+    for (int k = 0; k < 3; k++) {
+        v->spacing[k] = J->vax[k] >= 0 ? J->a->scale[J->vax[k]] : 1;
+        v->origin[k] = J->vax[k] >= 0 ? J->a->trans[J->vax[k]] : 0;
+    }
+    v->unit = vv_unit_parse(J->a->axes[J->vax[0]].unit);
+    v->modification = VV_MOD_ORIGINAL;
+}
+
+uint64_t
+vv_zr_chunk_linear(const zr_layout *J, const int c[3]) {
+    uint64_t L = 0;
+    for (int i = 0; i < J->a->ndim; i++) {
+        if (i == J->cax || i == J->tax)
+            continue;
+        const int k = i == J->vax[0] ? 0 : i == J->vax[1] ? 1 : 2;
+        L = L * J->nchunk[i] + (uint64_t)c[k];
+    }
+    return L;
+}
+
+vv_status
+vv_zr_copy_chunk(const zr_layout *J, uint64_t L, unsigned char *buf, unsigned char *dst,
+                 const int dorg[3], const int ddims[3], int *missing_out, uint64_t *file_bytes) {
+    const zr_array *a = J->a;
+    uint64_t idx[ZR_MAX_DIM];
+    for (int i = a->ndim - 1; i >= 0; i--) {
+        if (i == J->cax)
+            idx[i] = J->ch / a->chunks[i];
+        else if (i == J->tax)
+            idx[i] = J->tp / a->chunks[i];
+        else {
+            idx[i] = L % J->nchunk[i];
+            L /= J->nchunk[i];
+        }
+    }
+    char name[8192];
+    int len = snprintf(name, sizeof name, "%s/", a->dir);
+    for (int i = 0; i < a->ndim && len < (int)sizeof name; i++)
+        len += snprintf(name + len, sizeof name - (size_t)len, "%s%llu",
+                        i ? (char[2]){a->sep, 0} : "", (unsigned long long)idx[i]);
+    int missing = 0;
+    vv_status s = vv_zr_read_chunk(a, name, buf, J->cbytes, &missing, file_bytes);
+    if (s != VV_OK)
+        return s;
+    if (missing_out)
+        *missing_out = missing;
+    const size_t vs = a->esize;
+    if (missing)
+        vv_zr_fill(buf, J->cbytes / vs, a->type, a->fill);
+    else if (a->swap)
+        vv_byteswap(buf, J->cbytes / vs, vs);
+    /* the part inside the array, at the asked channel and step */
+    uint64_t base = 0;
+    if (J->cax >= 0)
+        base += (J->ch - idx[J->cax] * a->chunks[J->cax]) * J->cstride[J->cax];
+    if (J->tax >= 0)
+        base += (J->tp - idx[J->tax] * a->chunks[J->tax]) * J->cstride[J->tax];
+    uint64_t o[3], n[3];
+    for (int k = 0; k < 3; k++) {
+        const int ax = J->vax[k];
+        if (ax < 0) {
+            o[k] = 0;
+            n[k] = 1;
+            continue;
+        }
+        o[k] = idx[ax] * a->chunks[ax];
+        uint64_t e = o[k] + a->chunks[ax];
+        n[k] = (e > a->shape[ax] ? a->shape[ax] : e) - o[k];
+    }
+    const uint64_t si = J->cstride[J->vax[0]], sj = J->cstride[J->vax[1]],
+                   sk = J->vax[2] >= 0 ? J->cstride[J->vax[2]] : 0;
+    for (uint64_t kk = 0; kk < n[2]; kk++)
+        for (uint64_t jj = 0; jj < n[1]; jj++) {
+            unsigned char *d = dst + (((o[2] - (uint64_t)dorg[2] + kk) * (uint64_t)ddims[1] + o[1] -
+                                       (uint64_t)dorg[1] + jj) *
+                                          (uint64_t)ddims[0] +
+                                      o[0] - (uint64_t)dorg[0]) *
+                                         vs;
+            const unsigned char *src = buf + (base + kk * sk + jj * sj) * vs;
+            if (si == 1)
+                memcpy(d, src, (size_t)(n[0] * vs));
+            else
+                for (uint64_t ii = 0; ii < n[0]; ii++)
+                    memcpy(d + ii * vs, src + ii * si * vs, vs);
+        }
+    return VV_OK;
+}
+
+static vv_status
+read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
+    zr_array a;
+    memset(&a, 0, sizeof a);
+    vv_load_info *info = opt->info;
+    int n_levels = 1;
+    vv_status s = vv_zr_parse_store(path, opt->level, &a, opt->channel, info, &n_levels);
+    if (s != VV_OK)
+        return s;
+    zr_layout J;
+    if ((s = vv_zr_layout(&a, opt->channel, opt->time, &J)) != VV_OK)
+        return s;
+    const int *dims = J.dims;
+    const int cax = J.cax, tax = J.tax;
+    const uint64_t nc = J.nc, nt = J.nt;
+    if ((s = vv_volume_check_size(dims, a.type, NULL)) != VV_OK)
+        return s;
+    /* each thread decodes into a buffer of a whole chunk (one thread for
+     * chunks over 64 MiB): a store of a few bytes may declare chunks of
+     * 1 GiB, so the buffers count against the budget too (fewer threads
+     * when they would not fit) */
+    int nthreads = J.cbytes > ((size_t)64 << 20) ? 1 : omp_get_max_threads();
+    const uint64_t budget = vv_memory_budget_get();
+    if ((uint64_t)J.cbytes * (uint64_t)nthreads > budget)
+        nthreads = budget / J.cbytes > 1 ? (int)(budget / J.cbytes) : 1;
+    if ((s = vv_memory_budget_check((uint64_t)J.cbytes, "a Zarr chunk's buffer")) != VV_OK)
+        return s;
+    uint64_t n_spatial = 1;
+    for (int i = 0; i < a.ndim; i++)
+        if (i != cax && i != tax)
+            n_spatial *= J.nchunk[i]; /* at most 2^48: each axis is at most 65536 */
+    /* each chunk is a file to look for: chunks of a few voxels made a 4 MiB
+     * volume 4 million opens (a read of minutes; fuzz_zarr) */
+    if (n_spatial > ZR_READ_CHUNKS_MAX)
+        return vv_error_set(VV_ERR_LIMIT,
+                            ".zarray: %llu chunks of %d x %d x %d voxels to read whole (at most "
+                            "%d: rechunk the store, or open it out of core)",
+                            (unsigned long long)n_spatial, J.cdims[0], J.cdims[1], J.cdims[2],
+                            ZR_READ_CHUNKS_MAX);
+    vv_volume *v = NULL;
+    if ((s = vv_volume_new(&v, dims, a.type)) != VV_OK)
+        return s;
+    /* the chunks in parallel, each thread its own buffer; the error of the
+     * first failing chunk in order */
+    long long first = -1;
+    vv_status first_status = VV_OK;
+    char first_msg[1024] = "";
+    const int zero[3] = {0, 0, 0};
+#pragma omp parallel num_threads(nthreads)
+    {
+        unsigned char *buf = malloc(J.cbytes);
+#pragma omp for schedule(dynamic, 1)
+        for (long long L = 0; L < (long long)n_spatial; L++) {
+            vv_status cs =
+                buf ? vv_zr_copy_chunk(&J, (uint64_t)L, buf, v->data, zero, dims, NULL, NULL)
+                    : vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk of %zu bytes",
+                                   J.cbytes);
+            if (cs != VV_OK) {
+#pragma omp critical(vv_zarr_err)
+                if (first < 0 || L < first) {
+                    first = L;
+                    first_status = cs;
+                    snprintf(first_msg, sizeof first_msg, "%s", vv_error_message());
+                }
+            }
+        }
+        free(buf);
+    }
+    if (first >= 0) {
+        vv_volume_free(v);
+        return vv_error_set(first_status, "%s", first_msg);
+    }
+    vv_zr_geometry(&J, v);
+    vv_volume_update_range(v);
+    if (info) {
+        info->n_channels = (int)nc;
+        info->n_levels = n_levels;
+        info->n_times = (int)nt;
+        if (tax >= 0 && a.scale[tax] > 0) {
+            const char *u = a.axes[tax].unit;
+            double f = !strcmp(u, "second")        ? 1
+                       : !strcmp(u, "millisecond") ? 1e-3
+                       : !strcmp(u, "microsecond") ? 1e-6
+                       : !strcmp(u, "minute")      ? 60
+                       : !strcmp(u, "hour")        ? 3600
+                                                   : 0;
+            info->time_step = a.scale[tax] * f;
+        }
+    }
+    *out = v;
+    return VV_OK;
+}
+
+vv_status
+vv_ome_zarr_read(vv_volume **out, const char *path, const vv_load_options *opt) {
+    if (!out || !path || !opt)
+        return vv_error_set(VV_ERR_INVALID, "zarr: NULL argument");
+    *out = NULL;
+    vv_status s = read_store(out, path, opt);
+    if (s != VV_OK)
+        return vv_error_prefix(s, "zarr: %s", vv_path_basename(path));
+    return VV_OK;
+}
+
+/* A folder with a .zarray, or a .zattrs naming multiscales. */
+int
+vv_ome_zarr_looks_like(const vv_format_probe *p, int deep) {
+    if (!p->is_dir || deep)
+        return 0;
+    char f[4200];
+    struct stat st;
+    snprintf(f, sizeof f, "%s/.zarray", p->path);
+    if (stat(f, &st) == 0)
+        return 1;
+    snprintf(f, sizeof f, "%s/.zattrs", p->path);
+    if (stat(f, &st) != 0 || !S_ISREG(st.st_mode)) /* a FIFO would block the open */
+        return 0;
+    FILE *fp = fopen(f, "rb");
+    if (!fp)
+        return 0;
+    char head[4096];
+    size_t n = fread(head, 1, sizeof head - 1, fp);
+    fclose(fp);
+    head[n] = '\0';
+    return strstr(head, "\"multiscales\"") != NULL;
+}
