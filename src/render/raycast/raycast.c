@@ -42,6 +42,7 @@
 #include "render/classify.h"
 #include "render/frame.h"
 #include "render/kernels_avx2.h"
+#include "render/march.h"
 #include "render/project.h"
 #include "render/ray.h"
 #include "render/registry.h"
@@ -677,137 +678,115 @@ trace_iso_one(const rc_frame *fr, const rc_obj *ob, const vv_ray *wr, rc_result 
     result_set(res, C, A, depth);
 }
 
+/* trace_composite's march (vv_march): the objects along the ray (obs[ai])
+ * and what they gathered so far. */
+typedef struct rc_march {
+    const rc_frame *fr;
+    const vv_ray *wr;
+    const rc_obj *obs[RC_MAX_OBJ];
+    float v[3];
+    float C[3], A, depth;
+} rc_march;
+
+/* One object's sample at index point p (ray parameter t): a hidden
+ * subvolume leaps to its exit, a multi-channel object's channels mix, a
+ * composite object's sample composites, an iso object's value goes to
+ * the march's crossing search. */
+static inline int
+rc_march_sample(void *ctx, int ai, const vv_vray *r, const float p[3], double t,
+                vv_march_sample *out) {
+    rc_march *m = ctx;
+    const rc_obj *ob = m->obs[ai];
+    const vv_vcache *c = ob->c;
+    if (ob->nch) { /* a multi-channel object: its channels mixed */
+        const size_t b = vv_vcache_block(c, p);
+        int may = 0;
+        for (int ch = 0; ch < ob->nch; ch++)
+            may |= ob->ch[ch].bvis[b];
+        if (!may) {
+            out->te = vv_vray_cube_exit(r, p, t, VV_VC_BLOCK);
+            return VV_MARCH_EMPTY;
+        }
+        float f[3];
+        const size_t o = vv_vcache_cell_of(c, p, f);
+        const float *e[VV_MAX_CHANNELS];
+        float ebuf[VV_MAX_CHANNELS][4];
+        for (int ch = 0; ch < ob->nch; ch++) {
+            const rc_obj *co = &ob->ch[ch];
+            e[ch] =
+                co->bvis[b]
+                    ? channel_entry(
+                          co, co->lut + 4 * (int)lut_index_f(co, vv_vcache_value_at(co->c, o, f)),
+                          p, ebuf[ch])
+                    : NULL;
+        }
+        if (mix_channels(m->fr, ob, m->wr, m->v, e, o, f, p, t, m->C, &m->A) &&
+            m->depth == INFINITY)
+            m->depth = (float)t;
+        return VV_MARCH_SAMPLED;
+    }
+    size_t b = vv_vcache_block(c, p);
+    if (!ob->bvis[b]) {
+        out->te = vv_vray_cube_exit(r, p, t, VV_VC_BLOCK);
+        return VV_MARCH_EMPTY;
+    }
+    const float val = vv_vcache_sample(c, p);
+    if (ob->mode == VV_MODE_ISO) {
+        out->val = val;
+        out->iso = ob->iso;
+        out->c = c;
+        return VV_MARCH_ISO;
+    }
+    const float *e = ob->lut + 4 * (int)lut_index_f(ob, val);
+    if (e[0] <= 0)
+        return VV_MARCH_SAMPLED;
+    float ebuf[4];
+    if (ob->extras && (e = vv_vextra_apply(&ob->x, c, p, val, e, ebuf))[0] <= 0)
+        return VV_MARCH_SAMPLED;
+    float g[3] = {0, 0, 0};
+    if (ob->shading)
+        vv_vcache_gradient(c, p, g);
+    composite_sample(m->fr, ob, m->wr, m->v, e, t, g, m->C, &m->A);
+    if (m->depth == INFINITY)
+        m->depth = (float)t;
+    return VV_MARCH_SAMPLED;
+}
+
+/* Object ai's isosurface crossed at th. */
+static inline void
+rc_march_iso(void *ctx, int ai, const vv_vray *r, double th) {
+    rc_march *m = ctx;
+    iso_hit(m->fr, m->obs[ai], r, m->wr, m->v, th, m->C, &m->A);
+    if (th < m->depth)
+        m->depth = (float)th;
+}
+
 /* Front-to-back compositing of all composite and iso objects along one ray. */
 static void
 trace_composite(const rc_frame *fr, const vv_ray *wr, rc_result *res) {
     vv_vray rays[RC_MAX_OBJ];
-    int act[RC_MAX_OBJ];
+    rc_march m; /* fields set one by one: an initializer would clear obs[] on every ray */
+    m.fr = fr;
+    m.wr = wr;
+    m.v[0] = (float)-wr->dir.x;
+    m.v[1] = (float)-wr->dir.y;
+    m.v[2] = (float)-wr->dir.z;
+    m.C[0] = m.C[1] = m.C[2] = 0;
+    m.A = 0;
+    m.depth = INFINITY;
     int na = 0;
     double tmin = INFINITY, tmax = -INFINITY;
     for (int i = 0; i < fr->n_comp; i++)
-        if (ray_setup(&fr->objs[i], wr, &rays[i])) {
-            act[na++] = i;
-            tmin = rays[i].t0 < tmin ? rays[i].t0 : tmin;
-            tmax = rays[i].t1 > tmax ? rays[i].t1 : tmax;
+        if (ray_setup(&fr->objs[i], wr, &rays[na])) {
+            m.obs[na] = &fr->objs[i];
+            tmin = rays[na].t0 < tmin ? rays[na].t0 : tmin;
+            tmax = rays[na].t1 > tmax ? rays[na].t1 : tmax;
+            na++;
         }
-    float C[3] = {0, 0, 0}, A = 0;
-    float depth = INFINITY;
-    if (na == 0)
-        goto done;
-    const double dt = fr->dt;
-    const float v[3] = {(float)-wr->dir.x, (float)-wr->dir.y, (float)-wr->dir.z};
-    /* iso bookkeeping: previous sample per object */
-    float prev_v[RC_MAX_OBJ];
-    double prev_t[RC_MAX_OBJ];
-    int has_prev[RC_MAX_OBJ];
-    for (int i = 0; i < na; i++)
-        has_prev[i] = 0;
-
-    double k = vv_ceil_pos(tmin / dt);
-    const double kend = vv_floor_pos(tmax / dt);
-    while (k <= kend) {
-        const double t = k * dt;
-        double next_k = k + 1;
-        double skip_to = INFINITY; /* min block exit over objects in empty blocks */
-        int sampled = 0;
-        for (int ai = 0; ai < na; ai++) {
-            const rc_obj *ob = &fr->objs[act[ai]];
-            const vv_vray *r = &rays[act[ai]];
-            if (t < r->t0 || t > r->t1) {
-                if (t < r->t0 && r->t0 < skip_to)
-                    skip_to = r->t0;
-                has_prev[ai] = 0;
-                continue;
-            }
-            float p[3];
-            vv_vray_point(r, t, p);
-            const vv_vcache *c = ob->c;
-            if (ob->nch) { /* a multi-channel object: its channels mixed */
-                const size_t b = vv_vcache_block(c, p);
-                int may = 0;
-                for (int ch = 0; ch < ob->nch; ch++)
-                    may |= ob->ch[ch].bvis[b];
-                if (!may) {
-                    double te = vv_vray_cube_exit(r, p, t, VV_VC_BLOCK);
-                    skip_to = te < skip_to ? te : skip_to;
-                    continue;
-                }
-                sampled = 1;
-                float f[3];
-                const size_t o = vv_vcache_cell_of(c, p, f);
-                const float *e[VV_MAX_CHANNELS];
-                float ebuf[VV_MAX_CHANNELS][4];
-                for (int ch = 0; ch < ob->nch; ch++) {
-                    const rc_obj *co = &ob->ch[ch];
-                    e[ch] =
-                        co->bvis[b]
-                            ? channel_entry(co,
-                                            co->lut + 4 * (int)lut_index_f(
-                                                              co, vv_vcache_value_at(co->c, o, f)),
-                                            p, ebuf[ch])
-                            : NULL;
-                }
-                if (mix_channels(fr, ob, wr, v, e, o, f, p, t, C, &A) && depth == INFINITY)
-                    depth = (float)t;
-                continue;
-            }
-            size_t b = vv_vcache_block(c, p);
-            if (!ob->bvis[b]) {
-                double te = vv_vray_cube_exit(r, p, t, VV_VC_BLOCK);
-                if (te < skip_to)
-                    skip_to = te;
-                if (ob->mode == VV_MODE_ISO)
-                    has_prev[ai] = 2; /* restart at the sample before the next visible one */
-                continue;
-            }
-            sampled = 1;
-            const float val = vv_vcache_sample(c, p);
-            if (ob->mode == VV_MODE_ISO) {
-                float iso = ob->iso;
-                double th = -1;
-                if (has_prev[ai] == 2)
-                    vv_vray_iso_restart(c, r, k, dt, &prev_v[ai], &prev_t[ai], &has_prev[ai]);
-                if (!has_prev[ai]) {
-                    if (val >= iso && t - r->t0 < dt)
-                        th = t; /* entered already inside (cut face) */
-                } else if ((prev_v[ai] < iso) != (val < iso)) {
-                    /* bisection between the previous sample and this one */
-                    th = vv_vray_iso_refine(c, r, prev_t[ai], prev_v[ai], t, iso);
-                }
-                prev_v[ai] = val;
-                prev_t[ai] = t;
-                has_prev[ai] = 1;
-                if (th >= 0) {
-                    iso_hit(fr, ob, r, wr, v, th, C, &A);
-                    if (th < depth)
-                        depth = (float)th;
-                }
-                continue;
-            }
-            const float *e = ob->lut + 4 * (int)lut_index_f(ob, val);
-            if (e[0] <= 0)
-                continue;
-            float ebuf[4];
-            if (ob->extras && (e = vv_vextra_apply(&ob->x, c, p, val, e, ebuf))[0] <= 0)
-                continue;
-            float g[3] = {0, 0, 0};
-            if (ob->shading)
-                vv_vcache_gradient(c, p, g);
-            composite_sample(fr, ob, wr, v, e, t, g, C, &A);
-            if (depth == INFINITY)
-                depth = (float)t;
-        }
-        if (A >= fr->et)
-            break;
-        if (!sampled && skip_to < INFINITY) {
-            double ks = vv_ceil_pos(skip_to / dt);
-            if (ks > next_k)
-                next_k = ks;
-        }
-        k = next_k;
-    }
-done:
-    result_set(res, C, A, depth);
+    if (na > 0)
+        vv_march(rays, na, tmin, tmax, fr->dt, fr->et, &m.A, &m, NULL, rc_march_sample,
+                 rc_march_iso, NULL);
+    result_set(res, m.C, m.A, m.depth);
 }
 
 /* Maximum / minimum intensity projection and X-ray (mean) of one object

@@ -12,6 +12,7 @@
 #include <time.h>
 
 #include "render/classify.h"
+#include "render/march.h"
 #include "render/project.h"
 #include "render/ray.h"
 #include "render/raytrace/rt_internal.h"
@@ -235,9 +236,94 @@ iso_hit(const rt_frame *fr, const rt_vobj *ob, const vv_vray *r, const vv_ray *w
     *Ap = 1;
 }
 
-/* Over 150 lines on purpose: the multi-volume march keeps per-object ray
- * state (iso crossings, leaps) in arrays on the stack across the samples of
- * one ray, the ray caster's trace_composite for the ray tracer. */
+/* march_volumes' march (vv_march): the objects along the ray (obs[ai]),
+ * the channels being gathered and what the ray gathered so far. */
+typedef struct rt_march {
+    const rt_frame *fr;
+    const vv_ray *wr;
+    const rt_vobj *obs[RT_MAX_OBJ];
+    float v[3];
+    int depth;
+    float weight;
+    rt_scache sc;
+    rt_mix mix;
+    float *C, A, *dep;
+} rt_march;
+
+/* Before object ai's sample at t: the channels gathered so far flushed
+ * when ai is not one of them (an object's channels are consecutive). */
+static inline void
+rt_march_enter(void *ctx, int ai, double t) {
+    rt_march *m = ctx;
+    if (m->mix.group >= 0 && m->obs[ai]->group != m->mix.group)
+        mix_flush(&m->mix, t, m->C, &m->A, m->dep);
+}
+
+/* One object's sample at index point p (ray parameter t): a hidden
+ * subvolume leaps by its distance to the nearest visible one, a channel's
+ * sample is gathered with its object's other channels, a composite
+ * object's sample composites, an iso object's value goes to the march's
+ * crossing search. */
+static inline int
+rt_march_sample(void *ctx, int ai, const vv_vray *r, const float p[3], double t,
+                vv_march_sample *out) {
+    rt_march *m = ctx;
+    const rt_vobj *ob = m->obs[ai];
+    const vv_vcache *c = ob->c;
+    const size_t b = vv_vcache_block(ob->c, p);
+    if (!ob->bvis[b]) {
+        out->te = leap_exit(ob, r, p, t, ob->bdist[b]);
+        return VV_MARCH_EMPTY;
+    }
+    const float val = vv_vcache_sample(c, p);
+    if (ob->mode == VV_MODE_ISO) {
+        out->val = val;
+        out->iso = ob->iso;
+        out->c = c;
+        return VV_MARCH_ISO;
+    }
+    const float *e = ob->lut + 4 * (int)lut_index_f(ob, val);
+    if (e[0] <= 0)
+        return VV_MARCH_SAMPLED;
+    float ebuf[4];
+    if (ob->extras && (e = vv_vextra_apply(&ob->x, c, p, val, e, ebuf))[0] <= 0)
+        return VV_MARCH_SAMPLED;
+    if (ob->group >= 0) {
+        /* a channel: its shaded colour (composited under nothing)
+         * gathered with the object's other channels at this point */
+        float one[3] = {0, 0, 0}, a = 0;
+        composite_sample(m->fr, ob, m->wr, m->v, e, p, t, NULL, &m->sc, one, &a);
+        m->mix.group = ob->group;
+        m->mix.col[0] += one[0];
+        m->mix.col[1] += one[1];
+        m->mix.col[2] += one[2];
+        m->mix.sum_a += e[0];
+        m->mix.T *= 1 - e[0];
+        return VV_MARCH_SAMPLED;
+    }
+    composite_sample(m->fr, ob, m->wr, m->v, e, p, t, NULL, &m->sc, m->C, &m->A);
+    if (*m->dep == INFINITY)
+        *m->dep = (float)t;
+    return VV_MARCH_SAMPLED;
+}
+
+/* Object ai's isosurface crossed at th: a surface, shaded with shadows and
+ * reflections. */
+static inline void
+rt_march_iso(void *ctx, int ai, const vv_vray *r, double th) {
+    rt_march *m = ctx;
+    iso_hit(m->fr, m->obs[ai], r, m->wr, m->v, th, m->depth, m->weight, m->C, &m->A);
+    if (th < *m->dep)
+        *m->dep = (float)th;
+}
+
+/* After all objects' samples at t: the gathered channels composited. */
+static inline void
+rt_march_end(void *ctx, double t) {
+    rt_march *m = ctx;
+    mix_flush(&m->mix, t, m->C, &m->A, m->dep);
+}
+
 /* Front-to-back compositing of the composite and iso volumes along the ray
  * over [0, tlim] on the samples t = k dt (the ray caster's grid). An iso
  * hit is a surface: shaded with shadows and reflections, it ends the ray. */
@@ -246,8 +332,6 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
               float weight, float C[3], float *Aout, float *dep) {
     vv_vray rays[RT_MAX_OBJ];
     int act[RT_MAX_OBJ], cont[RT_MAX_OBJ];
-    rt_scache sc;
-    sc.ob = NULL; /* the rest is filled when first used */
     int na = 0;
     double tmin = INFINITY, tmax = -INFINITY;
     for (int i = 0; i < fr->n_vobj; i++) {
@@ -265,7 +349,6 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
             na++;
         }
     }
-    float A = 0;
     if (na == 0) {
         *Aout = 0;
         return;
@@ -281,6 +364,7 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
         /* one isosurface: the ray caster's search (vv_vray_iso_first; in a
          * region render from the sample before the region's: VV_REGION_NEAREST) */
         const rt_vobj *ob = &fr->vobjs[act[0]];
+        float A = 0;
         const double th =
             vv_vray_iso_first(ob->c, ob->bdist, &rays[0], dt, ob->iso, fr->avx2, cont[0]);
         if (th >= 0) {
@@ -290,99 +374,24 @@ march_volumes(const rt_frame *fr, const vv_ray *wr, double tlim, int depth, int 
         *Aout = A;
         return;
     }
-    float prev_v[RT_MAX_OBJ];
-    double prev_t[RT_MAX_OBJ];
-    int has_prev[RT_MAX_OBJ];
-    rt_mix mix = {-1, {0, 0, 0}, 0, 1};
+    /* fields set one by one: an initializer would clear obs[] and the
+     * shadow cache on every ray */
+    rt_march m;
+    m.fr = fr;
+    m.wr = wr;
+    memcpy(m.v, v, sizeof v);
+    m.depth = depth;
+    m.weight = weight;
+    m.mix = (rt_mix){-1, {0, 0, 0}, 0, 1};
+    m.C = C;
+    m.A = 0;
+    m.dep = dep;
+    m.sc.ob = NULL; /* the rest is filled when first used */
     for (int i = 0; i < na; i++)
-        has_prev[i] = 0;
-    double k = vv_ceil_pos(tmin / dt);
-    const double kend = floor(tmax / dt);
-    while (k <= kend) {
-        const double t = k * dt;
-        double next_k = k + 1;
-        double skip_to = INFINITY;
-        int sampled = 0;
-        for (int ai = 0; ai < na; ai++) {
-            const rt_vobj *ob = &fr->vobjs[act[ai]];
-            const vv_vray *r = &rays[ai];
-            if (mix.group >= 0 && ob->group != mix.group)
-                mix_flush(&mix, t, C, &A, dep); /* an object's channels are consecutive */
-            if (t < r->t0 || t > r->t1) {
-                if (t < r->t0 && r->t0 < skip_to)
-                    skip_to = r->t0;
-                has_prev[ai] = 0;
-                continue;
-            }
-            float p[3];
-            vv_vray_point(r, t, p);
-            const vv_vcache *c = ob->c;
-            const size_t b = vv_vcache_block(ob->c, p);
-            if (!ob->bvis[b]) {
-                double te = leap_exit(ob, r, p, t, ob->bdist[b]);
-                if (te < skip_to)
-                    skip_to = te;
-                if (ob->mode == VV_MODE_ISO)
-                    has_prev[ai] = 2; /* restart at the sample before the next visible one */
-                continue;
-            }
-            sampled = 1;
-            const float val = vv_vcache_sample(c, p);
-            if (ob->mode == VV_MODE_ISO) {
-                const float iso = ob->iso;
-                double th = -1;
-                if (has_prev[ai] == 2)
-                    vv_vray_iso_restart(c, r, k, dt, &prev_v[ai], &prev_t[ai], &has_prev[ai]);
-                if (!has_prev[ai]) {
-                    if (val >= iso && t - r->t0 < dt)
-                        th = t;
-                } else if ((prev_v[ai] < iso) != (val < iso)) {
-                    th = vv_vray_iso_refine(c, r, prev_t[ai], prev_v[ai], t, iso);
-                }
-                prev_v[ai] = val;
-                prev_t[ai] = t;
-                has_prev[ai] = 1;
-                if (th >= 0) {
-                    iso_hit(fr, ob, r, wr, v, th, depth, weight, C, &A);
-                    if (th < *dep)
-                        *dep = (float)th;
-                }
-                continue;
-            }
-            const float *e = ob->lut + 4 * (int)lut_index_f(ob, val);
-            if (e[0] <= 0)
-                continue;
-            float ebuf[4];
-            if (ob->extras && (e = vv_vextra_apply(&ob->x, c, p, val, e, ebuf))[0] <= 0)
-                continue;
-            if (ob->group >= 0) {
-                /* a channel: its shaded colour (composited under nothing)
-                 * gathered with the object's other channels at this point */
-                float one[3] = {0, 0, 0}, a = 0;
-                composite_sample(fr, ob, wr, v, e, p, t, NULL, &sc, one, &a);
-                mix.group = ob->group;
-                mix.col[0] += one[0];
-                mix.col[1] += one[1];
-                mix.col[2] += one[2];
-                mix.sum_a += e[0];
-                mix.T *= 1 - e[0];
-                continue;
-            }
-            composite_sample(fr, ob, wr, v, e, p, t, NULL, &sc, C, &A);
-            if (*dep == INFINITY)
-                *dep = (float)t;
-        }
-        mix_flush(&mix, t, C, &A, dep);
-        if (A >= et)
-            break;
-        if (!sampled && skip_to < INFINITY) {
-            double ks = vv_ceil_pos(skip_to / dt);
-            if (ks > next_k)
-                next_k = ks;
-        }
-        k = next_k;
-    }
-    *Aout = A > 1 ? 1 : A;
+        m.obs[i] = &fr->vobjs[act[i]];
+    vv_march(rays, na, tmin, tmax, dt, et, &m.A, &m, rt_march_enter, rt_march_sample, rt_march_iso,
+             rt_march_end);
+    *Aout = m.A > 1 ? 1 : m.A;
 }
 
 /* Maximum / minimum intensity projection or X-ray of one volume over the
