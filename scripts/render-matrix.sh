@@ -64,7 +64,7 @@ for s in examples/*.json; do inputs+=("$s"); done
 inputs+=("$data/volumes/ct_head.nrrd" "$data/volumes/neghip.slc" "$data/grids/fire_ug.vtu")
 for in in "${inputs[@]}"; do
   base="$(basename "$in")"
-  base="${base%%.*}"
+  base="${base//./_}" # ct_head.json and ct_head.nrrd apart
   for r in "${renderers[@]}"; do
     extra=()
     if [ "$r" = fourier ]; then extra=(--ortho); fi
