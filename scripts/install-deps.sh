@@ -12,7 +12,7 @@
 #          pydicom (writes the DICOM test series, and its test files), nibabel (its Siemens MR
 #          slices) and gdcmconv (compresses them); SciPy and Teem's unu (the filters' references);
 #          Mesa's lavapipe (mesa-vulkan-drivers) and the Vulkan validation layers for the gpu renderer
-#   fuzz   clang-14, libFuzzer and LLVM's OpenMP (the fuzz and tsan presets); Teem's tools,
+#   fuzz   clang-14 with its sanitizer runtimes (libclang-rt-14-dev), libFuzzer and LLVM's OpenMP (the fuzz and tsan presets); Teem's tools,
 #          ImageMagick, gdcm tools, VTK, numpy, pydicom (tests/fuzz/make_corpus.sh)
 #   bench  VTK, numpy, pydicom, Xvfb, Teem's tools and the zfp CLI, to measure the peers side by side
 set -euo pipefail
@@ -29,7 +29,7 @@ for what in "$@"; do
     test) pkgs+=(libcmocka-dev openssl chromium chromium-driver python3-selenium python3-websockets ffmpeg xvfb xauth xdotool imagemagick at-spi2-core python3-pyatspi dbus-x11 python3-pydicom python3-nibabel python3-tifffile python3-pil python3-zarr python3-numcodecs python3-h5py python3-vtk9 libgdcm-tools python3-scipy teem-apps
                  python3-pytest python3-tqdm python3-ipywidgets python3-ipykernel jupyter-nbconvert
                  mesa-vulkan-drivers vulkan-validationlayers graphviz) ;;
-    fuzz) pkgs+=(clang-14 libfuzzer-14-dev libomp-14-dev teem-apps imagemagick libgdcm-tools python3-vtk9 python3-numpy python3-pydicom) ;;
+    fuzz) pkgs+=(clang-14 libclang-rt-14-dev libfuzzer-14-dev libomp-14-dev teem-apps imagemagick libgdcm-tools python3-vtk9 python3-numpy python3-pydicom) ;;
     bench) pkgs+=(python3-vtk9 python3-numpy python3-pydicom xvfb libgl1-mesa-dri teem-apps zfp mesa-vulkan-drivers) ;;
     *) echo "install-deps.sh: unknown group '$what' (build, demo, test, fuzz, bench)" >&2; exit 2 ;;
   esac
