@@ -50,9 +50,13 @@ LIMIT_MIB = 64
 # narrower side bar of issue 66 came within 2 MiB of a margin without it);
 # the fixed part holds
 # the proxies and the renderers' caches of them, the pages filled for a
-# World and the readers' decode buffers. OMP_NUM_THREADS=2 keeps the
+# World and the readers' decode buffers, and the run-to-run spread of the
+# peak: four runs of one commit grew 135.8, 139.6, 143.6 and 144.3 MiB (two
+# of them fresh-clone CI runs; the last 0.1 MiB over a fixed part of 24), so
+# 6 MiB of the fixed part is that spread. Without the one budget the bricked
+# file alone adds 128 MiB, far past it. OMP_NUM_THREADS=2 keeps the
 # renderers' per-thread scratch that of the 2-core machines the suite runs on.
-MARGIN_FIXED_MIB = 24
+MARGIN_FIXED_MIB = 30
 MARGIN_BYTES_PER_PIXEL = 20 + 3 * 20 + 12 + 5
 # GTK's own drawing of the frames shown, a part per pixel of the window: under
 # Xvfb the GUI draws through GTK's cairo renderer (a software OpenGL gets it,
