@@ -15,7 +15,13 @@
 #   fuzz   clang-14 with its sanitizer runtimes (libclang-rt-14-dev), libFuzzer and LLVM's OpenMP (the fuzz and tsan presets); Teem's tools,
 #          ImageMagick, gdcm tools, VTK, numpy, pydicom (tests/fuzz/make_corpus.sh)
 #   bench  VTK, numpy, pydicom, Xvfb, Teem's tools and the zfp CLI, to measure the peers side by side
+#   test and bench also make .venv at the repository root: a virtual environment with the
+#          PyPI packages of scripts/requirements-pypi.txt, pinned (zarr 3, tensorstore, ome-zarr,
+#          ngff-zarr, ome-zarr-models: Zarr v3 / OME-Zarr 0.5 writers and readers to check ours
+#          against); remade when that file changes. Never installs into the system Python.
 set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+venv=0
 
 pkgs=(build-essential cmake pkg-config libwebsockets-dev libturbojpeg0-dev libteem-dev libnifti2-dev libjansson-dev libblosc-dev libzstd-dev libbz2-dev
       libpng-dev zlib1g-dev libassimp-dev libfftw3-dev libcairo2-dev libgtk-4-dev
@@ -28,9 +34,11 @@ for what in "$@"; do
     demo) pkgs+=(mricron-data) ;;
     test) pkgs+=(libcmocka-dev openssl chromium chromium-driver python3-selenium python3-websockets ffmpeg xvfb xauth xdotool imagemagick at-spi2-core python3-pyatspi dbus-x11 python3-pydicom python3-nibabel python3-tifffile python3-pil python3-zarr python3-numcodecs python3-h5py python3-vtk9 libgdcm-tools python3-scipy teem-apps
                  python3-pytest python3-tqdm python3-ipywidgets python3-ipykernel jupyter-nbconvert
-                 mesa-vulkan-drivers vulkan-validationlayers graphviz) ;;
+                 mesa-vulkan-drivers vulkan-validationlayers graphviz python3-venv)
+          venv=1 ;;
     fuzz) pkgs+=(clang-14 libclang-rt-14-dev libfuzzer-14-dev libomp-14-dev teem-apps imagemagick libgdcm-tools python3-vtk9 python3-numpy python3-pydicom) ;;
-    bench) pkgs+=(python3-vtk9 python3-numpy python3-pydicom xvfb libgl1-mesa-dri teem-apps zfp mesa-vulkan-drivers) ;;
+    bench) pkgs+=(python3-vtk9 python3-numpy python3-pydicom xvfb libgl1-mesa-dri teem-apps zfp mesa-vulkan-drivers python3-venv)
+           venv=1 ;;
     *) echo "install-deps.sh: unknown group '$what' (build, demo, test, fuzz, bench)" >&2; exit 2 ;;
   esac
 done
@@ -41,14 +49,27 @@ for p in "${pkgs[@]}"; do
     missing+=("$p")
   fi
 done
-if [ ${#missing[@]} -eq 0 ]; then
-  exit 0
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "install-deps.sh: installing ${missing[*]}" >&2
+  sudo=""
+  if [ "$(id -u)" -ne 0 ]; then
+    sudo="sudo"
+  fi
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update -qq
+  $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
-echo "install-deps.sh: installing ${missing[*]}" >&2
-sudo=""
-if [ "$(id -u)" -ne 0 ]; then
-  sudo="sudo"
+
+# The pinned PyPI packages, in .venv. Its stamp is written last: an
+# interrupted install has none, and is made again from scratch next time.
+if [ "$venv" = 1 ]; then
+  req="$root/scripts/requirements-pypi.txt"
+  want="$(sha256sum "$req" | cut -d' ' -f1)"
+  if [ "$(cat "$root/.venv/requirements.sha256" 2>/dev/null)" != "$want" ]; then
+    echo "install-deps.sh: making .venv from scripts/requirements-pypi.txt" >&2
+    rm -rf "$root/.venv"
+    /usr/bin/python3 -m venv "$root/.venv"
+    "$root/.venv/bin/python" -m pip install -q --disable-pip-version-check --no-input -r "$req"
+    echo "$want" >"$root/.venv/requirements.sha256"
+  fi
 fi
-export DEBIAN_FRONTEND=noninteractive
-$sudo apt-get update -qq
-$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
