@@ -31,6 +31,7 @@ struct vv_renderer {
     void *state;
     rn_option *opts; /* the options set, each key once, in the order first set */
     int n_opts;
+    vv_renderer *stand_in; /* the method ops->stand_in names, made on first use */
 };
 
 /* Every rendering method built in, in registry order: --help lists them so,
@@ -570,6 +571,7 @@ vv_renderer_free(vv_renderer *r) {
     if (!r)
         return;
     state_free(r->ops, r->state);
+    vv_renderer_free(r->stand_in);
     for (int i = 0; i < r->n_opts; i++)
         free(r->opts[i].value);
     free(r->opts);
@@ -732,8 +734,25 @@ vv_renderer_render(vv_renderer *r, const vv_world *world, const vv_view *view,
             return s;
         world = proxies;
     }
-    if (s == VV_OK)
+    const char *stand_in = NULL;
+    const vv_world *draw = NULL;
+    if (s == VV_OK && r->ops->stand_in)
+        s = r->ops->stand_in(r->state, world, opt, &stand_in, &draw);
+    if (s == VV_OK && stand_in) {
+        /* the frame drawn by another method, from the World this one made */
+        if (!strcmp(stand_in, r->ops->info.name) || !draw)
+            s = vv_error_set(VV_ERR_INVALID, "stands in for itself, or with no World");
+        if (s == VV_OK && r->stand_in && strcmp(r->stand_in->ops->info.name, stand_in)) {
+            vv_renderer_free(r->stand_in);
+            r->stand_in = NULL;
+        }
+        if (s == VV_OK && !r->stand_in)
+            s = vv_renderer_new(&r->stand_in, stand_in);
+        if (s == VV_OK)
+            s = vv_renderer_render(r->stand_in, draw, view, opt, out);
+    } else if (s == VV_OK) {
         s = r->ops->render(r->state, world, view, opt, out);
+    }
     vv_world_free(proxies);
     return s == VV_OK ? s : vv_error_prefix(s, "%s", r->ops->info.name);
 }

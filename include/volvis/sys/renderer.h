@@ -46,7 +46,7 @@ extern "C" {
 #endif
 
 /** The version of vv_renderer_ops this header describes. */
-#define VV_RENDERER_OPS_VERSION 2
+#define VV_RENDERER_OPS_VERSION 3
 
 /* ---- regions ---------------------------------------------------------------- */
 
@@ -438,6 +438,20 @@ typedef struct vv_renderer_ops {
     vv_status (*render_region)(void *state, const vv_world *world, const vv_view *view,
                                const vv_render_region *region, const vv_render_options *opt,
                                vv_region_image *out);
+    /**
+     * Optional: a frame this method draws as another method would, from a
+     * World of its own making (the Fourier method's modes other than X-ray:
+     * the ray caster on the decoded volumes). vv_renderer_render calls it
+     * before render; it sets *stand_in to the name of a method of the
+     * registry and *draw to the World that method draws (owned by the
+     * state, valid until the next call or release), and the registry draws
+     * the frame with that method (one instance kept with @p state's
+     * renderer, with no option set); or it leaves *stand_in NULL, and
+     * render draws the frame. So a method never reaches into the registry
+     * itself. Errors: those of preparing *draw (VV_ERR_NOMEM, ...).
+     */
+    vv_status (*stand_in)(void *state, const vv_world *world, const vv_render_options *opt,
+                          const char **stand_in, const vv_world **draw);
 } vv_renderer_ops;
 
 /** The registry: a NULL-terminated array of every method (built in, then

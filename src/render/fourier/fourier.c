@@ -79,7 +79,12 @@ typedef struct fr_state {
     double rate;                               /* > 0: compress to this rate instead */
     int block;
     double attenuation;
-    vv_renderer *raycast; /* for the modes other than xray, on the decoded volume */
+    /* the World the ray caster draws for the modes other than xray
+     * (fr_stand_in): the objects with their decoded volumes */
+    vv_world decoded_world;
+    vv_object **decoded_objs;
+    vv_object *decoded_copies;
+    size_t n_decoded;
     fftwf_plan plan2d[3]; /* 2M x 2M c2r for M = 8, 16, 32 (made once, executed on new arrays) */
 } fr_state;
 
@@ -103,7 +108,8 @@ fr_release(void *state) {
     fr_state *st = state;
     for (int i = 0; i < st->n_cache; i++)
         source_release(&st->cache[i]);
-    vv_renderer_free(st->raycast);
+    free(st->decoded_objs);
+    free(st->decoded_copies);
     vv_vvc_free(st->vvc);
     vv_fftw_lock();
     for (int i = 0; i < 3; i++)
@@ -863,28 +869,43 @@ box_hit(const double o[3], const double inv[3], const double lo[3], const double
 
 /* The modes other than xray are not linear along the ray (maximum, minimum,
  * compositing through a transfer function, the first isosurface crossing),
- * so no slice of the spectrum gives them: the frame is rendered by the ray
- * caster from the decoded volume (entropy decoding, dequantisation and one
- * inverse DFT per subcube, with the voxel corrections of an error-bounded
- * file; cached with the spectra) -- from the uncompressed volume when no
- * compression is asked for. */
+ * so no slice of the spectrum gives them: the frame is drawn by the ray
+ * caster (the registry's "raycast", through vv_renderer_ops.stand_in) from
+ * the decoded volume (entropy decoding, dequantisation and one inverse DFT
+ * per subcube, with the voxel corrections of an error-bounded file; cached
+ * with the spectra) -- from the uncompressed volume when no compression is
+ * asked for. *draw is st->decoded_world, whose objects are shallow copies
+ * of the World's with the decoded volumes (nothing in them is released). */
 static vv_status
-render_decoded(fr_state *st, const vv_world *w, const vv_view *view, const vv_render_options *opt,
-               vv_image *out) {
-    const int threads = opt->threads > 0 ? opt->threads : vv_threads_get();
-    vv_status s = VV_OK;
-    if (!st->raycast && (s = vv_renderer_new(&st->raycast, "raycast")) != VV_OK)
-        return s;
-    vv_object **objs = calloc((size_t)(w->n_objects > 0 ? w->n_objects : 1), sizeof *objs);
-    vv_object *copies = calloc((size_t)(w->n_objects > 0 ? w->n_objects : 1), sizeof *copies);
-    if (!objs || !copies) {
-        free(objs);
-        free(copies);
-        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+fr_stand_in(void *state, const vv_world *w, const vv_render_options *opt, const char **stand_in,
+            const vv_world **draw) {
+    fr_state *st = state;
+    int linear = 1;
+    for (int i = 0; i < w->n_objects; i++) {
+        const vv_object *obj = w->objects[i];
+        if (obj && obj->visible && obj->type == VV_OBJECT_VOLUME && obj->volume &&
+            obj->mode != VV_MODE_XRAY)
+            linear = 0;
     }
+    if (linear)
+        return VV_OK;
+    const int threads = opt->threads > 0 ? opt->threads : vv_threads_get();
+    const size_t n = (size_t)(w->n_objects > 0 ? w->n_objects : 1);
+    if (n > st->n_decoded) {
+        vv_object **objs = realloc(st->decoded_objs, n * sizeof *objs);
+        if (objs)
+            st->decoded_objs = objs;
+        vv_object *copies = realloc(st->decoded_copies, n * sizeof *copies);
+        if (copies)
+            st->decoded_copies = copies;
+        if (!objs || !copies)
+            return vv_error_set(VV_ERR_NOMEM, "out of memory");
+        st->n_decoded = n;
+    }
+    vv_status s = VV_OK;
     for (int i = 0; i < w->n_objects && s == VV_OK; i++) {
         const vv_object *obj = w->objects[i];
-        objs[i] = w->objects[i];
+        st->decoded_objs[i] = w->objects[i];
         if (!obj || obj->type != VV_OBJECT_VOLUME || !obj->volume || !obj->visible)
             continue;
         if (!st->vvc && !(st->quality >= 0 || st->rate > 0))
@@ -897,18 +918,17 @@ render_decoded(fr_state *st, const vv_world *w, const vv_view *view, const vv_re
             if ((s = vv_vvc_decompress(&src->decoded, c, threads, NULL)) != VV_OK)
                 break;
         }
-        copies[i] = *obj; /* a shallow copy: nothing in it is released */
-        copies[i].volume = src->decoded;
-        objs[i] = &copies[i];
+        st->decoded_copies[i] = *obj;
+        st->decoded_copies[i].volume = src->decoded;
+        st->decoded_objs[i] = &st->decoded_copies[i];
     }
-    if (s == VV_OK) {
-        vv_world tmp = *w;
-        tmp.objects = objs;
-        s = vv_renderer_render(st->raycast, &tmp, view, opt, out);
-    }
-    free(objs);
-    free(copies);
-    return s;
+    if (s != VV_OK)
+        return s;
+    st->decoded_world = *w;
+    st->decoded_world.objects = st->decoded_objs;
+    *stand_in = "raycast";
+    *draw = &st->decoded_world;
+    return VV_OK;
 }
 
 /* The object's projection geometry: the view direction in its index space,
@@ -974,13 +994,7 @@ build_lut(const vv_object *obj, float *lut, double *lo_out, double *scale_out) {
 static vv_status
 fr_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
           vv_image *out) {
-    fr_state *st = state;
-    for (int i = 0; i < w->n_objects; i++) {
-        const vv_object *obj = w->objects[i];
-        if (obj && obj->visible && obj->type == VV_OBJECT_VOLUME && obj->volume &&
-            obj->mode != VV_MODE_XRAY)
-            return render_decoded(st, w, view, opt, out);
-    }
+    fr_state *st = state; /* only X-ray frames: fr_stand_in gives the rest to the ray caster */
     if (view->projection != VV_PROJECTION_ORTHOGRAPHIC)
         return vv_error_set(VV_ERR_UNSUPPORTED,
                             "perspective projection is not supported: the projection-slice "
@@ -1144,4 +1158,5 @@ const vv_renderer_ops vv_fourier_ops = {
     .release = fr_release,
     .render = fr_render,
     .render_region = NULL,
+    .stand_in = fr_stand_in,
 };
