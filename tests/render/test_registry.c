@@ -736,6 +736,82 @@ test_region_ops(void **state) {
     assert_true(zk == 3 && zd == 4 && z[0] == 2);
 }
 
+/* vv_renderer_ops.stand_in: a method that names another draws the frame
+ * with it, from the World it hands over; one that names itself is refused. */
+typedef struct {
+    double unused;
+} standin_state;
+
+static const char *standin_target;
+
+static vv_status
+standin_render(void *state, const vv_world *w, const vv_view *view, const vv_render_options *opt,
+               vv_image *out) {
+    (void)state, (void)w, (void)view, (void)opt, (void)out;
+    return vv_error_set(VV_ERR_INVALID, "render called: the stand-in was not used");
+}
+
+static vv_status
+standin_hook(void *state, const vv_world *w, const vv_render_options *opt, const char **stand_in,
+             const vv_world **draw) {
+    (void)state, (void)opt;
+    *stand_in = standin_target;
+    *draw = w;
+    return VV_OK;
+}
+
+static const vv_renderer_ops standin_ops = {
+    .version = VV_RENDERER_OPS_VERSION,
+    .info = {.name = "test_standin",
+             .description = "draws every frame by another method",
+             .draws = VV_DRAWS(VV_OBJECT_VOLUME),
+             .modes = VV_MODES_ALL},
+    .state_size = sizeof(standin_state),
+    .render = standin_render,
+    .stand_in = standin_hook,
+};
+
+static void
+test_stand_in(void **state) {
+    (void)state;
+    vt_ok(vv_renderer_register(&standin_ops));
+    vv_volume *v = NULL;
+    const int dims[3] = {12, 10, 8};
+    vt_ok(vv_volume_new(&v, dims, VV_U8));
+    unsigned char *d = v->data;
+    for (size_t i = 0; i < 12 * 10 * 8; i++)
+        d[i] = (unsigned char)((i * 37u) % 251u);
+    vv_volume_update_range(v);
+    vv_default_scene_options o;
+    vv_default_scene_options_init(&o);
+    o.mode = VV_MODE_MIP;
+    o.width = 40;
+    o.height = 32;
+    vv_world *w = NULL;
+    vt_ok(vv_world_new_for_volume(&w, v, &o));
+    vv_image *a = NULL, *b = NULL;
+    vt_ok(vv_image_new(&a, 40, 32));
+    vt_ok(vv_image_new(&b, 40, 32));
+    vv_renderer *ray = NULL, *sub = NULL;
+    vt_ok(vv_renderer_new(&ray, "raycast"));
+    vt_ok(vv_renderer_new(&sub, "test_standin"));
+    vt_ok(vv_renderer_render(ray, w, &w->view, NULL, a));
+    standin_target = "raycast";
+    vt_ok(vv_renderer_render(sub, w, &w->view, NULL, b));
+    assert_memory_equal(a->rgba, b->rgba, sizeof(float) * 4 * 40 * 32);
+    standin_target = "test_standin";
+    assert_int_equal(vv_renderer_render(sub, w, &w->view, NULL, b), VV_ERR_INVALID);
+    assert_non_null(strstr(vv_error_message(), "stands in for itself"));
+    standin_target = "no_such_method";
+    assert_int_not_equal(vv_renderer_render(sub, w, &w->view, NULL, b), VV_OK);
+    vv_renderer_free(ray);
+    vv_renderer_free(sub);
+    vv_image_free(a);
+    vv_image_free(b);
+    vv_world_free(w);
+    vv_volume_free(v);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
@@ -744,7 +820,7 @@ main(void) {
         cmocka_unit_test(test_clone_fields),  cmocka_unit_test(test_radiosity_defaults),
         cmocka_unit_test(test_option_errors), cmocka_unit_test(test_world_checks),
         cmocka_unit_test(test_frame_runner),  cmocka_unit_test(test_camera_rays),
-        cmocka_unit_test(test_region_ops),
+        cmocka_unit_test(test_region_ops),    cmocka_unit_test(test_stand_in),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
