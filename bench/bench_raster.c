@@ -119,7 +119,7 @@ main(int argc, char **argv) {
     emit("raster_triangles", (double)mesh->n_triangles, "triangles");
 
     vv_renderer *r;
-    if (vv_renderer_new(&r, "surface") != VV_OK)
+    if (vv_renderer_new(&r, "raster") != VV_OK)
         bench_die("bench_raster", "surface renderer");
     t0 = bench_now();
     if (vv_renderer_render(r, w, &w->view, &opt, img) != VV_OK)
@@ -144,7 +144,7 @@ main(int argc, char **argv) {
     const char *names[3] = {"raster_frame_flat", "raster_frame_gouraud", "raster_frame_wireframe"};
     for (int v = 0; v < 3 && with_variants; v++) {
         vv_renderer *rv;
-        if (vv_renderer_new(&rv, "surface") != VV_OK ||
+        if (vv_renderer_new(&rv, "raster") != VV_OK ||
             vv_renderer_set_option(rv, variants[v][0], variants[v][1]) != VV_OK ||
             vv_renderer_render(rv, w, &w->view, &opt, img) != VV_OK)
             bench_die("bench_raster", "render variant");

@@ -202,7 +202,7 @@ main(int argc, char **argv) {
     vv_renderer *rr = NULL;
     vv_image *img = NULL;
     if (vvb_surface_world(&w, NULL, v, iso, 512) != VV_OK ||
-        vv_image_new(&img, 512, 512) != VV_OK || vv_renderer_new(&rr, "surface") != VV_OK)
+        vv_image_new(&img, 512, 512) != VV_OK || vv_renderer_new(&rr, "raster") != VV_OK)
         die("surface renderer");
     vv_render_options ro;
     vv_render_options_init(&ro);

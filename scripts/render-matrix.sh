@@ -58,7 +58,7 @@ volvis="$(realpath "$1")"
 out="$2"
 mkdir -p "$out"
 data=../shared/data
-renderers=(raycast raytrace radiosity splat surface fourier irregular)
+renderers=(raycast raytrace radiosity splat raster fourier irregular)
 inputs=()
 for s in examples/*.json; do inputs+=("$s"); done
 inputs+=("$data/volumes/ct_head.nrrd" "$data/volumes/neghip.slc" "$data/grids/fire_ug.vtu")

@@ -43,7 +43,7 @@ cli_render_usage(FILE *out) {
             "Examples:\n"
             "  volvis render ../shared/data/volumes/ct_head.nrrd --tf 100:1500 -o head.png\n"
             "  volvis render ../shared/data/volumes/neghip.slc --mode mip --azimuth 30 -o mip.png\n"
-            "  volvis render ../shared/data/volumes/ct_head.nrrd --iso 400 --renderer surface \\\n"
+            "  volvis render ../shared/data/volumes/ct_head.nrrd --iso 400 --renderer raster \\\n"
             "      --set shading=gouraud -o bone.png\n"
             "  volvis render ../shared/data/grids/fire_ug.vtu --field t -o fire.png\n"
             "  volvis render beating_heart.nii.gz --time-range 0:19 -o heart.png\n"

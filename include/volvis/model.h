@@ -896,7 +896,7 @@ vv_status vv_world_new_for_source(vv_world **out, vv_source *source, int level,
  * range to 0.5 at its top (or opt's range) per 1/20 of the grid's largest
  * extent; the isovalue is the middle of the range. The World's render
  * settings name the "irregular" renderer for a grid with 3-D cells and the
- * "surface" renderer for a grid of surface cells only (blow.vtk), which
+ * "raster" renderer for a grid of surface cells only (blow.vtk), which
  * shows the surface coloured by the field. Errors: VV_ERR_INVALID (bad
  * options, unknown field), VV_ERR_NOMEM.
  */

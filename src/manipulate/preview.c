@@ -117,7 +117,7 @@ vv_preview_new(vv_preview **out, const char *final_renderer) {
                : vv_error_set(VV_ERR_UNSUPPORTED, "preview: no renderer draws previews");
     }
     if (s == VV_OK)
-        s = vv_renderer_new(&p->surface, "surface");
+        s = vv_renderer_new(&p->surface, "raster");
     if (s != VV_OK) {
         vv_preview_free(p);
         return s;

@@ -489,7 +489,7 @@ vv_world_new_for_grid(vv_world **out, vv_grid *grid, const char *field, int time
     }
     size_t n3 = 0, ns = 0;
     vv_grid_count_cells(grid, &n3, &ns);
-    snprintf(w->render.renderer, sizeof w->render.renderer, "%s", n3 > 0 ? "irregular" : "surface");
+    snprintf(w->render.renderer, sizeof w->render.renderer, "%s", n3 > 0 ? "irregular" : "raster");
     vv_view *v = &w->view;
     v->width = opt->width;
     v->height = opt->height;

@@ -41,12 +41,25 @@ struct vv_renderer {
  * shows it is raised, and the array stays NULL-terminated. */
 #define N_BUILT_IN 8
 static const vv_renderer_ops *registry[N_BUILT_IN + VV_RENDERERS_REGISTERED_MAX + 1] = {
-    &vv_raycast_ops,   &vv_raytrace_ops, &vv_irregular_ops, &vv_splat_ops, &vv_surface_ops,
+    &vv_raycast_ops,   &vv_raytrace_ops, &vv_irregular_ops, &vv_splat_ops, &vv_raster_ops,
     &vv_radiosity_ops, &vv_fourier_ops,  &vv_gpu_ops,       NULL};
 static atomic_int n_registry = N_BUILT_IN;
 static pthread_mutex_t register_lock = PTHREAD_MUTEX_INITIALIZER;
 
 #define N_REGISTRY atomic_load_explicit(&n_registry, memory_order_acquire)
+
+/* Names a method once had: "surface" was the raster renderer's until
+ * "surface" came to mean only a Marching Cubes mesh (docs/architecture.md,
+ * the glossary); scenes and scripts that name it still work. */
+static const char *const renamed[][2] = {{"surface", "raster"}};
+
+static const char *
+current_name(const char *name) {
+    for (size_t i = 0; name && i < sizeof renamed / sizeof renamed[0]; i++)
+        if (!strcmp(name, renamed[i][0]))
+            return renamed[i][1];
+    return name;
+}
 
 const vv_renderer_ops *const *
 vv_renderer_registry(void) {
@@ -101,7 +114,7 @@ vv_renderer_register(const vv_renderer_ops *ops) {
     pthread_mutex_lock(&register_lock);
     const int n = atomic_load(&n_registry);
     for (int i = 0; i < n && s == VV_OK; i++)
-        if (!strcmp(registry[i]->info.name, ops->info.name))
+        if (!strcmp(registry[i]->info.name, current_name(ops->info.name)))
             s = vv_error_set(VV_ERR_INVALID, "renderer register: %s: a method of that name exists",
                              ops->info.name);
     if (s == VV_OK && n >= N_BUILT_IN + VV_RENDERERS_REGISTERED_MAX)
@@ -117,6 +130,7 @@ vv_renderer_register(const vv_renderer_ops *ops) {
 
 const vv_renderer_info *
 vv_renderer_info_find(const char *name) {
+    name = current_name(name);
     for (int i = 0; name && i < N_REGISTRY; i++)
         if (strcmp(registry[i]->info.name, name) == 0)
             return &registry[i]->info;
@@ -392,7 +406,7 @@ vv_world_renderer(const vv_world *w) {
     if (!w)
         return "raycast";
     if (w->render.renderer[0])
-        return w->render.renderer;
+        return current_name(w->render.renderer);
     int n = 0;
     for (int i = 0; i < w->n_objects; i++)
         n += has_content(w->objects[i]);
@@ -541,6 +555,7 @@ state_new(const vv_renderer_ops *ops, void **out) {
 vv_status
 vv_renderer_new(vv_renderer **out, const char *name) {
     *out = NULL;
+    name = current_name(name);
     for (int i = 0; name && registry[i]; i++) {
         if (strcmp(registry[i]->info.name, name) != 0)
             continue;

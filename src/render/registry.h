@@ -11,7 +11,7 @@ extern const vv_renderer_ops vv_raycast_ops;
 extern const vv_renderer_ops vv_raytrace_ops;
 
 /** Geometry rendering of isosurfaces and geometric objects (src/render/raster). */
-extern const vv_renderer_ops vv_surface_ops;
+extern const vv_renderer_ops vv_raster_ops;
 
 /** Volumetric radiosity (src/render/radiosity). */
 extern const vv_renderer_ops vv_radiosity_ops;

@@ -938,6 +938,7 @@ test_render_scene_settings(void **state) {
     const char *with = out_file("settings.json"), *plain = out_file("settings-plain.json");
     write_scene_with(
         with, "", 64, 64,
+        /* "surface": the raster renderer's old name, still taken */
         "  \"render\": {\"renderer\": \"surface\", \"options\": {\"wireframe\": 1}},\n");
     write_scene(plain, "", 64, 64);
     const char *p1 = out_file("settings-scene.png"), *p2 = out_file("settings-cli.png");
@@ -945,10 +946,10 @@ test_render_scene_settings(void **state) {
     const char *p5 = out_file("settings-raycast.png"), *p6 = out_file("settings-raycast-plain.png");
     unlink(p1);
     vv_image *a = render_image((const char *const[]){"render", with, "-q", "-o", p1, NULL});
-    vv_image *b = render_image((const char *const[]){"render", plain, "-q", "--renderer", "surface",
+    vv_image *b = render_image((const char *const[]){"render", plain, "-q", "--renderer", "raster",
                                                      "--set", "wireframe=1", "-o", p2, NULL});
     vv_image *c = render_image(
-        (const char *const[]){"render", plain, "-q", "--renderer", "surface", "-o", p3, NULL});
+        (const char *const[]){"render", plain, "-q", "--renderer", "raster", "-o", p3, NULL});
     vv_image *d = render_image(
         (const char *const[]){"render", with, "-q", "--set", "wireframe=0", "-o", p4, NULL});
     /* raycast does not know "wireframe": the scene's options are dropped */

@@ -88,7 +88,7 @@ test_measure_labels(void **state) {
 
     /* the ray caster, the ray tracer, splatting and the surface renderer:
      * both label colours, and no third one where they touch */
-    const char *const renderers[] = {"raycast", "raytrace", "splat", "surface"};
+    const char *const renderers[] = {"raycast", "raytrace", "splat", "raster"};
     for (int ri = 0; ri < 4; ri++) {
         const char *png = vt_path(outdir(), "labels.png");
         r = run_cli("render", path, "-o", png, "--labels", "--size", "160x160", "--renderer",

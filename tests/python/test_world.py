@@ -70,7 +70,7 @@ def test_transfer_functions(ct_head):
 
 
 def test_renderer_registry_help():
-    assert set(volvis.renderers) >= {"raycast", "raytrace", "splat", "surface"}
+    assert set(volvis.renderers) >= {"raycast", "raytrace", "splat", "raster"}
     info = volvis.renderers["raytrace"]
     assert "shadows" in info.__doc__ and info.description
     # the typed option table: every default is accepted by the renderer

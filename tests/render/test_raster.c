@@ -120,7 +120,7 @@ add_geometry(vv_world *w, vv_object_type t) {
 static vv_renderer *
 new_surface(void) {
     vv_renderer *r = NULL;
-    vt_ok(vv_renderer_new(&r, "surface"));
+    vt_ok(vv_renderer_new(&r, "raster"));
     return r;
 }
 

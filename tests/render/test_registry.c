@@ -173,7 +173,7 @@ test_validation(void **state) {
     vt_ok(vv_renderer_info_check_option(vv_renderer_info_find("fourier"), "quality", "exact"));
     vt_ok(vv_renderer_info_check_option(vv_renderer_info_find("fourier"), "quality", "75"));
     /* enumerations */
-    expect_invalid("surface", "shading", "smooth", "one of flat|gouraud|phong");
+    expect_invalid("raster", "shading", "smooth", "one of flat|gouraud|phong");
     expect_invalid("splat", "classification", "both", "post|pre");
     expect_invalid("fourier", "block", "12", "8|16|32");
     /* unknown keys list the known ones */
@@ -545,7 +545,7 @@ test_world_checks(void **state) {
                      VV_ERR_UNSUPPORTED);
     const char *m = vv_error_message();
     assert_non_null(strstr(m, "object 'fire' is a grid object, which raycast does not draw"));
-    assert_non_null(strstr(m, "drawn by irregular, surface"));
+    assert_non_null(strstr(m, "drawn by irregular, raster"));
     /* a volume: irregular draws nothing of it */
     assert_int_equal(vv_renderer_check_world(vv_renderer_info_find("irregular"), v),
                      VV_ERR_UNSUPPORTED);
@@ -572,10 +572,15 @@ test_world_checks(void **state) {
     assert_string_equal(vv_world_renderer(v), "raycast");
     assert_string_equal(vv_world_renderer(g), "irregular");
     assert_string_equal(vv_world_renderer(vp), "raytrace");
-    assert_string_equal(vv_world_renderer(vg), "surface");
+    assert_string_equal(vv_world_renderer(vg), "raster");
     assert_string_equal(vv_world_renderer(e), "raycast");
     snprintf(vp->render.renderer, sizeof vp->render.renderer, "splat");
     assert_string_equal(vv_world_renderer(vp), "splat");
+    /* a method's old name: "surface" is the raster renderer */
+    snprintf(vp->render.renderer, sizeof vp->render.renderer, "surface");
+    assert_string_equal(vv_world_renderer(vp), "raster");
+    snprintf(vp->render.renderer, sizeof vp->render.renderer, "splat");
+    assert_string_equal(vv_renderer_info_find("surface")->name, "raster");
     vv_renderer *d = NULL;
     vt_ok(vv_renderer_new_for_world(&d, g));
     assert_string_equal(vv_renderer_name(d), "irregular");

@@ -1,6 +1,7 @@
 /*
- * The `surface` renderer: the geometry-based rendering method of the VolVis
- * paper (section 5), drawn through the software rasterizer of raster.h.
+ * The `raster` renderer (called `surface` before; the registry still takes
+ * that name): the geometry-based rendering method of the VolVis paper
+ * (section 5), drawn through the software rasterizer of raster.h.
  *
  * Volume objects are shown as their isosurface, extracted with Marching
  * Cubes (vv_isosurface_extract) and cached until the isovalue or the
@@ -680,11 +681,11 @@ static const vv_option_spec sf_options[] = {
      "meridians of spheres and sides of cylinders", VV_OPTION_BIND(sf_state, segments, INT)},
 };
 
-const vv_renderer_ops vv_surface_ops = {
+const vv_renderer_ops vv_raster_ops = {
     .version = VV_RENDERER_OPS_VERSION,
     .info =
         {
-            .name = "surface",
+            .name = "raster",
             .description = "geometry rendering: Marching Cubes isosurfaces and geometric "
                            "objects, rasterized",
             .draws = VV_DRAWS(VV_OBJECT_VOLUME) | VV_DRAWS(VV_OBJECT_GRID) | VV_DRAWS_GEOMETRY,
