@@ -110,7 +110,7 @@ cli_voxelize_main(int argc, char **argv) {
     vv_error_clear();
     int is_scene = cli_ends_with(in, ".json");
     if (is_scene)
-        st = vv_model_load(&shape, in, &o);
+        st = vv_shape_load(&shape, in, &o);
     else
         st = vv_shape_mesh_load(&shape, in, mode, thickness);
     if (st != VV_OK)

@@ -266,7 +266,8 @@ void vv_voxelize_options_init(vv_voxelize_options *o);
 vv_status vv_voxelize(vv_volume **out, const vv_shape *shape, const vv_voxelize_options *opt);
 
 /**
- * Loads a model file: a triangle mesh (any format vv_mesh_load reads) or a
+ * Loads a geometric model file as one shape (a "model" alone is the World,
+ * model.h): a triangle mesh (any format vv_mesh_load reads) or a
  * scene file (JSON, docs/scene-format.md), of which every object of type
  * "geometry" is taken, its shape placed by the object's position, rotation
  * and scale, and all of them united. For a scene, the voxelization keys of
@@ -276,7 +277,7 @@ vv_status vv_voxelize(vv_volume **out, const vv_shape *shape, const vv_voxelize_
  * vv_mesh_load, VV_ERR_FORMAT with the file and the key path of the
  * offending value, VV_ERR_INVALID (a scene without geometry objects).
  */
-vv_status vv_model_load(vv_shape **out, const char *path, vv_voxelize_options *opt);
+vv_status vv_shape_load(vv_shape **out, const char *path, vv_voxelize_options *opt);
 
 /**
  * Reads a model tree given as JSON text (docs/scene-format.md, "Geometry

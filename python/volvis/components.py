@@ -450,7 +450,7 @@ def voxelize(model, size=None, voxel_spacing=None, dims=None, spacing=None, orig
     lib.vv_voxelize_options_init(o)
     if isinstance(model, (str, os.PathLike)):
         out = ffi.new("vv_shape **")
-        check(lib.vv_model_load(out, cstr(model), o))
+        check(lib.vv_shape_load(out, cstr(model), o))
         shape = ffi.gc(out[0], lib.vv_shape_free)
     else:
         if isinstance(model, Mesh) or isinstance(model, tuple):

@@ -2,7 +2,7 @@
  * Model trees in scene files (docs/scene-format.md, "Geometry objects"):
  * primitives {"type": "sphere", "radius": 10, ...} and operations
  * {"op": "difference", "children": [...]}, each with an optional transform
- * ("translate", "rotate", "scale"). Also vv_model_load, which reads a mesh
+ * ("translate", "rotate", "scale"). Also vv_shape_load, which reads a mesh
  * file or the geometry objects of a scene file into one model.
  */
 #include <math.h>
@@ -653,7 +653,7 @@ model_from_scene(vv_shape **out, const char *path, vv_voxelize_options *opt) {
 }
 
 vv_status
-vv_model_load(vv_shape **out, const char *path, vv_voxelize_options *opt) {
+vv_shape_load(vv_shape **out, const char *path, vv_voxelize_options *opt) {
     if (!out)
         return vv_error_set(VV_ERR_INVALID, "model: NULL output");
     *out = NULL;

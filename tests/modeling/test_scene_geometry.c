@@ -1,5 +1,5 @@
 /*
- * Geometry objects in scene files (voxelized at load), vv_model_load, the
+ * Geometry objects in scene files (voxelized at load), vv_shape_load, the
  * `volvis voxelize` command, and the example scenes (paper Figures 2 and 3)
  * rendered to PNG. Bad scene input gives file:line:col and the key path.
  */
@@ -65,11 +65,11 @@ test_geometry_object(void **state) {
     assert_true(vv_tf_eval_opacity(&o->tf, 10) == 0.0);
     vv_world_free(w);
 
-    /* vv_model_load: the same scene as a model, with the object transform */
+    /* vv_shape_load: the same scene as a model, with the object transform */
     vv_shape *s = NULL;
     vv_voxelize_options vo;
     vv_voxelize_options_init(&vo);
-    vt_ok(vv_model_load(&s, p, &vo));
+    vt_ok(vv_shape_load(&s, p, &vo));
     assert_int_equal(vo.size, 80);
     vv_box b = vv_shape_bounds(s);
     assert_near(b.min.x, 1 + 5 - 10, 1e-9);
@@ -125,7 +125,7 @@ test_examples(void **state) {
     }
     /* the nut is a difference: its bore is empty at the centre */
     vv_shape *s = NULL;
-    vt_ok(vv_model_load(&s, ex[0], NULL));
+    vt_ok(vv_shape_load(&s, ex[0], NULL));
     vv_shape_free(s);
 }
 
@@ -175,8 +175,8 @@ test_bad_scenes(void **state) {
                        "\"sphere\", \"radius\": 1, \"radiuss\": 2}}]}",
                        "objects[0].primitive.radiuss: unknown key");
     vv_shape *s = NULL;
-    vt_err(vv_model_load(&s, write_scene("none.json", "{\"objects\": []}"), NULL));
-    vt_err(vv_model_load(&s, "no/such/model.obj", NULL));
+    vt_err(vv_shape_load(&s, write_scene("none.json", "{\"objects\": []}"), NULL));
+    vt_err(vv_shape_load(&s, "no/such/model.obj", NULL));
 }
 
 /* ---- the CLI ------------------------------------------------------------- */
