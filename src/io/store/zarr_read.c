@@ -65,7 +65,7 @@ zr_store_get(const zr_array *a, const char *key, uint64_t off, uint64_t len, uin
     /* not blocking: a FIFO would block the open forever */
     const int fd = open(p, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) {
-        if (errno == ENOENT || errno == ENOTDIR) {
+        if (errno == ENOENT) {
             if (missing) {
                 *missing = 1;
                 return VV_OK;
@@ -112,8 +112,10 @@ zr_store_get(const zr_array *a, const char *key, uint64_t off, uint64_t len, uin
     }
     if (len > max) {
         close(fd);
-        return vv_error_set(VV_ERR_LIMIT, "%s: %llu bytes to read (limit %llu)", key,
-                            (unsigned long long)len, (unsigned long long)max);
+        return len == fsz ? vv_error_set(VV_ERR_LIMIT, "%s is %llu bytes (limit %llu)", key,
+                                         (unsigned long long)len, (unsigned long long)max)
+                          : vv_error_set(VV_ERR_LIMIT, "%s: %llu bytes to read (limit %llu)", key,
+                                         (unsigned long long)len, (unsigned long long)max);
     }
     unsigned char *buf = malloc(len ? (size_t)len : 1);
     if (!buf) {
