@@ -551,18 +551,32 @@ zr3_decode_bytes(const zr_chain *c, const unsigned char *src, size_t m, unsigned
         memcpy(out, src, n);
         return VV_OK;
     }
+    /* the size each codec was given when encoding: the chunk's, plus 4
+     * for each crc32c before it, known up to the first compressor (after
+     * one, a crc32c's input is what it is given less its 4 bytes) */
     size_t want[ZR_MAX_CODECS];
+    int known[ZR_MAX_CODECS];
     size_t sz = n;
+    int k = 1;
     for (int i = first; i < c->n; i++) {
         want[i] = sz;
+        known[i] = k;
         if (c->c[i].kind == ZC_CRC32C)
             sz += 4;
+        else
+            k = 0;
     }
     const unsigned char *cur = src;
     size_t cm = m;
     unsigned char *owned = NULL;
     vv_status s = VV_OK;
     for (int i = c->n - 1; i >= first && s == VV_OK; i--) {
+        if (!known[i] && c->c[i].kind != ZC_CRC32C) {
+            s = vv_error_set(VV_ERR_UNSUPPORTED, "%s: two compressors in one codec chain", what);
+            break;
+        }
+        if (!known[i]) /* a crc32c after a compressor */
+            want[i] = cm >= 4 ? cm - 4 : 0;
         unsigned char *dst = i == first ? out : malloc(want[i] ? want[i] : 1);
         if (!dst) {
             s = vv_error_set(VV_ERR_NOMEM, "out of memory for %zu bytes", want[i]);
