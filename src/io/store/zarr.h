@@ -23,7 +23,7 @@
 #define ZR_MAX_CODECS 8
 #define ZR_MAX_NEST 4
 #define ZR_SHARD_INNER_MAX (1u << 18)
-#define ZR_INDEX_CACHE_BYTES ((uint64_t)32 << 20)
+#define ZR_INDEX_CACHE_BYTES ((uint64_t)8 << 20)
 /* zr_store_get: the last @p len bytes; to the end of the object */
 #define ZR_SUFFIX UINT64_MAX
 #define ZR_ALL UINT64_MAX
@@ -138,6 +138,10 @@ vv_status vv_zr_copy_chunk(const zr_layout *J, uint64_t L, unsigned char *buf, u
 vv_status vv_zr_read_chunk(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned char *out,
                            size_t n, int *missing, uint64_t *file_bytes);
 
+/* The bytes one read of a chunk of @p n decoded bytes holds besides the
+ * caller's buffer (what is read, the steps of decoding), at most. */
+uint64_t vv_zr_read_held(const zr_array *a, size_t n);
+
 /* Frees what vv_zr_parse_store allocated in @p a (the shard index cache);
  * @p a may be NULL or never parsed (zeroed). */
 void vv_zr_array_release(zr_array *a);
@@ -162,6 +166,10 @@ vv_status zr3_parse_array(zr_array *a, void *j);
  * @p what names the chunk in errors. */
 vv_status zr3_decode_bytes(const zr_chain *c, const unsigned char *src, size_t m,
                            unsigned char *out, size_t n, const char *what);
+
+/* Zarr v3: the most bytes a chunk of @p n decoded bytes can take after
+ * the codecs of @p c (more is refused before it is read). */
+uint64_t zr3_encoded_max(const zr_chain *c, size_t n);
 
 /* Zarr v3: undoes @p c's transposes of a chunk of shape @p shape (decoded
  * axes) and element size @p es in @p buf, through @p tmp (as large). */

@@ -536,6 +536,21 @@ decode_one(const zr_codec *k, const unsigned char *src, size_t m, unsigned char 
     return vv_error_set(VV_ERR_FORMAT, "%s: not a bytes-to-bytes codec", what);
 }
 
+uint64_t
+zr3_encoded_max(const zr_chain *c, size_t n) {
+    uint64_t m = n;
+    int packed = 0;
+    for (int i = 0; i < c->n; i++) {
+        if (c->c[i].kind == ZC_CRC32C)
+            m += 4;
+        else if (is_b2b(c->c[i].kind))
+            packed = 1;
+    }
+    /* a compressor's worst case is a few bytes in a thousand over its
+     * input (stored blocks, headers): half again and 64 KiB is generous */
+    return packed ? m + m / 2 + 65536 : m;
+}
+
 vv_status
 zr3_decode_bytes(const zr_chain *c, const unsigned char *src, size_t m, unsigned char *out,
                  size_t n, const char *what) {
@@ -787,7 +802,9 @@ zr3_read_sharded(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned cha
     }
     unsigned char *src = NULL;
     size_t m = 0;
-    vv_status s = zr_store_get(a, key, off, len, ZR_CHUNK_MAX, &src, &m, NULL, NULL);
+    /* never more than the inner chunk's codecs can have made of it */
+    vv_status s = zr_store_get(a, key, off, len, zr3_encoded_max(&a->chain[a->nshard], n), &src, &m,
+                               NULL, NULL);
     if (s != VV_OK)
         return s;
     if (file_bytes)

@@ -48,9 +48,11 @@ zp_open_level(zp_store *z, const char *path, int i, int channel, int time, vv_lo
     vv_status s = vv_zr_parse_store(path, i, &l->a, channel, i == 0 ? info : NULL, NULL);
     if (s == VV_OK)
         s = vv_zr_layout(&l->a, channel, time, &l->J);
-    /* each reading thread holds a scratch buffer of the largest chunk */
+    /* each reading thread holds a scratch buffer of the largest chunk (an
+     * inner chunk of a shard), and what it reads and decodes it from */
     if (s == VV_OK)
-        s = vv_memory_budget_check((uint64_t)l->J.cbytes, "a Zarr chunk's buffer");
+        s = vv_memory_budget_check((uint64_t)l->J.cbytes + vv_zr_read_held(&l->a, l->J.cbytes),
+                                   "a Zarr chunk's buffer");
     if (s != VV_OK)
         return vv_error_prefix(s, "level %d", i);
     l->J.a = &l->a; /* the layout points into the level it describes */

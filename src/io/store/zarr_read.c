@@ -613,7 +613,9 @@ vv_zr_read_chunk(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned cha
     zr_chunk_key(a, idx, key, sizeof key);
     unsigned char *src = NULL;
     size_t m = 0;
-    vv_status s = zr_store_get(a, key, 0, ZR_ALL, ZR_CHUNK_MAX, &src, &m, NULL, missing);
+    /* a v3 chunk is never more than its codecs can have made of it */
+    const uint64_t max = a->zarr_format == 3 ? zr3_encoded_max(&a->chain[0], n) : ZR_CHUNK_MAX;
+    vv_status s = zr_store_get(a, key, 0, ZR_ALL, max, &src, &m, NULL, missing);
     if (s != VV_OK || *missing)
         return s;
     if (file_bytes)
@@ -632,6 +634,18 @@ vv_zr_read_chunk(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned cha
     }
     free(src);
     return s;
+}
+
+uint64_t
+vv_zr_read_held(const zr_array *a, size_t n) {
+    if (a->zarr_format != 3)
+        return 0; /* the v2 reader's count as it was: the decoded chunk */
+    const zr_chain *c = &a->chain[a->nshard];
+    uint64_t held = zr3_encoded_max(c, n) + n; /* the bytes read, one step decoded */
+    for (int i = 0; i < c->n; i++)
+        if (c->c[i].kind == ZC_TRANSPOSE)
+            return held + n; /* and the transposed copy */
+    return held;
 }
 
 void
