@@ -906,6 +906,13 @@ test_v3_hostile(void **state) {
         put(dir, "c/0/0/0", buf, gn + 132);
     }
     load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "the gzip stream does not decode to 64 bytes");
+    /* a raw chunk longer than its voxels: refused before it is read */
+    dir = v3_store("v3_long.zarr", V3_("[8, 8, 8]", "[4, 4, 4]", "uint8", V3RAW), 0, 0, -1, NULL);
+    {
+        static const unsigned char big[100];
+        put(dir, "c/0/0/0", big, sizeof big);
+    }
+    load_expect(dir, 0, -1, -1, VV_ERR_LIMIT, "c/0/0/0 is 100 bytes (limit 64)");
     /* codec chains */
     static const struct {
         const char *name, *codecs, *needle;
