@@ -906,6 +906,14 @@ test_v3_hostile(void **state) {
         put(dir, "c/0/0/0", buf, gn + 132);
     }
     load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "the gzip stream does not decode to 64 bytes");
+    /* an NGFF 0.5 group's level without its zarr.json */
+    dir = fresh("v3_nolevel.zarr");
+    put_text(dir, "zarr.json",
+             "{\"zarr_format\": 3, \"node_type\": \"group\", \"attributes\": {\"ome\": "
+             "{\"version\": \"0.5\", \"multiscales\": [{\"axes\": " AX3 ", \"datasets\": "
+             "[{\"path\": \"0\"}]}]}}}");
+    put_text(dir, "0/.zarray", ZA);
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "level 0: no 0/zarr.json (not a Zarr v3 array)");
     /* a raw chunk longer than its voxels: refused before it is read */
     dir = v3_store("v3_long.zarr", V3_("[8, 8, 8]", "[4, 4, 4]", "uint8", V3RAW), 0, 0, -1, NULL);
     {

@@ -208,6 +208,8 @@ parse_zarray(zr_array *a) {
         json_decref(j);
         return s;
     }
+    if (a->zarr_format == 3) /* an OME-Zarr 0.5 group's level */
+        return vv_error_set(VV_ERR_FORMAT, "no %s (not a Zarr v3 array)", key);
     a->zarr_format = 2;
     array_key(a, ".zarray", key, sizeof key);
     j = load_json(a, key, ".zarray", 0, &s);
@@ -403,6 +405,7 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
     const char *md = ".zattrs";
     if ((s = root_metadata(a, &za, &md)) != VV_OK)
         return s;
+    a->zarr_format = strcmp(md, "zarr.json") ? 2 : 3; /* the levels' format */
     json_t *ms = za ? json_array_get(json_object_get(za, "multiscales"), 0) : NULL;
     snprintf(a->dir, sizeof a->dir, "%s", root);
     json_t *axes = ms ? json_object_get(ms, "axes") : NULL;
