@@ -865,11 +865,14 @@ read_array(vv_volume **out, const zr_array *ap, const vv_load_options *opt, int 
      * chunks over 64 MiB): a store of a few bytes may declare chunks of
      * 1 GiB, so the buffers count against the budget too (fewer threads
      * when they would not fit) */
+    /* a thread holds its chunk buffer and, for Zarr v3, what it reads and
+     * decodes it from (an inner chunk of a shard) */
+    const uint64_t per = (uint64_t)J.cbytes + vv_zr_read_held(ap, J.cbytes);
     int nthreads = J.cbytes > ((size_t)64 << 20) ? 1 : omp_get_max_threads();
     const uint64_t budget = vv_memory_budget_get();
-    if ((uint64_t)J.cbytes * (uint64_t)nthreads > budget)
-        nthreads = budget / J.cbytes > 1 ? (int)(budget / J.cbytes) : 1;
-    if ((s = vv_memory_budget_check((uint64_t)J.cbytes, "a Zarr chunk's buffer")) != VV_OK)
+    if (per * (uint64_t)nthreads > budget)
+        nthreads = budget / per > 1 ? (int)(budget / per) : 1;
+    if ((s = vv_memory_budget_check(per, "a Zarr chunk's buffer")) != VV_OK)
         return s;
     uint64_t n_spatial = 1;
     for (int i = 0; i < ap->ndim; i++)
