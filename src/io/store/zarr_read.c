@@ -23,6 +23,13 @@
  * one "channel" (or c) and one "time" (or t) axis, in any order. Every size
  * is checked against the limits before anything is allocated; JSON files
  * over 16 MiB and chunks over 1 GiB are refused.
+ *
+ * Zarr v3 (OME-NGFF 0.5: the root's zarr.json, a group with
+ * attributes.ome, or an array) is parsed and decoded by zarr3.c through
+ * the same zr_array: the read unit of a sharded array is its inner chunk.
+ * Every byte read of the store goes through zr_store_get (a key beneath
+ * the root, an offset and a length), the one place a remote byte source
+ * will take.
  */
 #include <errno.h>
 #include <fcntl.h>
