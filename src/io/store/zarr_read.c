@@ -1006,10 +1006,16 @@ vv_ome_zarr_looks_like(const vv_format_probe *p, int deep) {
     if (!buf)
         return 0;
     int yes = 0;
-    if (file_head(p->path, "zarr.json", buf, cap))
-        yes = strstr(buf, "\"node_type\"") &&
-              (strstr(buf, "\"multiscales\"") || strstr(buf, "\"array\""));
-    else if (file_head(p->path, ".zattrs", buf, 4096))
+    if (file_head(p->path, "zarr.json", buf, cap)) {
+        /* "node_type": "array", or a group naming multiscales */
+        const char *nt = strstr(buf, "\"node_type\"");
+        if (nt) {
+            nt += strlen("\"node_type\"");
+            while (*nt == ' ' || *nt == '\t' || *nt == '\n' || *nt == '\r' || *nt == ':')
+                nt++;
+        }
+        yes = nt && (!strncmp(nt, "\"array\"", 7) || strstr(buf, "\"multiscales\""));
+    } else if (file_head(p->path, ".zattrs", buf, 4096))
         yes = strstr(buf, "\"multiscales\"") != NULL;
     free(buf);
     return yes;
