@@ -150,4 +150,6 @@ printf '{"volvis_animation": 1, "fps": 10, "duration": 2, "tracks": [\n {"proper
 printf 'volvis-input 1\ndevice 1 mouse m\ndevice 7 dataglove right hand\n0.0 pointer 1 0 10 20\n0.05 button 1 1 1\n0.1 pose 7 0 23 2 0 1 0 0 0\n0.2 button 7 0 1\n0.3 key 1 65 1\n' > $C/replay/mixed.rec
 # ---- OME-Zarr stores and BigDataViewer / Imaris HDF5 (zarr-python, h5py) ----
 $PY tests/fuzz/make_corpus_structured.py
+# Zarr v3 and OME-Zarr 0.5 (zarr-python 3, in the .venv of install-deps.sh test)
+if [ -x .venv/bin/python ]; then .venv/bin/python tests/fuzz/make_corpus_zarr3.py; fi
 ls -la $C/*/ | awk '$5 > 8192 {print "big seed:", $0}'

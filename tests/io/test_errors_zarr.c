@@ -78,9 +78,8 @@ static void
 put(const char *dir, const char *name, const void *data, size_t n) {
     char p[8400];
     snprintf(p, sizeof p, "%s/%s", dir, name);
-    char *slash = strrchr(p, '/');
-    if (slash > p + strlen(dir)) { /* a sub-folder first */
-        *slash = '\0';
+    for (char *slash = p + strlen(dir) + 1; (slash = strchr(slash, '/')) != NULL; slash++) {
+        *slash = '\0'; /* the sub-folders first */
         mkdir(p, 0755);
         *slash = '/';
     }
@@ -479,13 +478,13 @@ test_chunk_files(void **state) {
     assert_true(fd >= 0);
     assert_int_equal(ftruncate(fd, (off_t)ZR_CHUNK_MAX + 1), 0);
     close(fd);
-    load_expect(dir, 0, -1, -1, VV_ERR_LIMIT, "0.0.0: chunk file over 1073741824 bytes");
+    load_expect(dir, 0, -1, -1, VV_ERR_LIMIT, "0.0.0 is 1073741825 bytes (limit 1073741824)");
 
     dir = fresh("chunk_dir.zarr");
     put_text(dir, ".zarray", ZA);
     snprintf(p, sizeof p, "%s/0.0.0", dir);
     assert_int_equal(mkdir(p, 0755), 0);
-    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "0.0.0: the chunk is not a regular file");
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "0.0.0 is not a regular file");
 
     dir = fresh("chunk_notdir.zarr");
     put_text(dir, ".zarray",
@@ -512,18 +511,20 @@ test_chunk_files(void **state) {
     put_text(dir, ".zarray", ZA);
     snprintf(p, sizeof p, "%s/0.0.0", dir);
     assert_int_equal(symlink(target, p), 0);
-    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "0.0.0: the chunk file resolves outside the store");
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT,
+                "0.0.0 leaves the store (a link to a file outside it)");
     snprintf(target, sizeof target, "%s/0", out);
     dir = fresh("chunk_dir_link.zarr");
     put_text(dir, ".zarray",
              ZA_("[4, 4, 4]", "[4, 4, 4]", "|u1", ", \"dimension_separator\": \"/\""));
     snprintf(p, sizeof p, "%s/0", dir);
     assert_int_equal(symlink(target, p), 0);
-    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "0/0/0: the chunk file resolves outside the store");
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT,
+                "0/0/0 leaves the store (a link to a file outside it)");
     /* the pyramid reads its chunks in this process: refused there too */
     vv_pyramid *py = NULL;
     expect(vv_pyramid_open(&py, dir, 0, -1, vt_cache(64u << 20), NULL), VV_ERR_FORMAT,
-           "resolves outside the store", "chunk_dir_link.zarr");
+           "leaves the store", "chunk_dir_link.zarr");
     assert_null(py);
     /* a chunk linked inside the store is read */
     dir = fresh("chunk_inner_link.zarr");
@@ -559,7 +560,7 @@ test_fifos(void **state) {
     put_text(dir, ".zarray", ZA);
     snprintf(p, sizeof p, "%s/0.0.0", dir);
     assert_int_equal(mkfifo(p, 0644), 0);
-    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "0.0.0: the chunk is not a regular file");
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "0.0.0 is not a regular file");
 }
 
 /* The reader's own arguments. */
@@ -693,6 +694,332 @@ test_pyramid_requests(void **state) {
     vv_pyramid_free(p);
 }
 
+/* ---- Zarr v3: sharded stores built byte by byte ------------------------------------ */
+
+#define V3_(shape, grid, dtype, codecs)                                                            \
+    "{\"zarr_format\": 3, \"node_type\": \"array\", \"shape\": " shape ", \"data_type\": \"" dtype \
+    "\", \"chunk_grid\": {\"name\": \"regular\", \"configuration\": {\"chunk_shape\": " grid       \
+    "}}, \"chunk_key_encoding\": {\"name\": \"default\"}, \"fill_value\": 7, \"codecs\": " codecs  \
+    "}"
+#define V3IDX                                                                                      \
+    "\"index_codecs\": [{\"name\": \"bytes\", \"configuration\": {\"endian\": \"little\"}}, "      \
+    "{\"name\": \"crc32c\"}]"
+#define V3SHARD(inner, codecs)                                                                     \
+    "[{\"name\": \"sharding_indexed\", \"configuration\": {\"chunk_shape\": " inner                \
+    ", \"codecs\": " codecs ", " V3IDX "}}]"
+#define V3RAW "[{\"name\": \"bytes\"}]"
+
+/* One shard of n^3 u8 voxels in inner chunks of m^3, raw, written in
+ * order, inner chunk i filled with i + 1 (inner chunk @p empty, when
+ * >= 0, left empty), its index at the end with its crc32c: the file
+ * c/0/0/0 of folder @p dir. @p edit (may be NULL) changes the index
+ * entries (offset, length pairs) before the checksum is taken. Returns the
+ * shard's size. */
+static size_t
+put_shard(const char *dir, int n, int m, int empty, void (*edit)(uint64_t *e)) {
+    const int per = n / m, count = per * per * per, cb = m * m * m;
+    const size_t size = (size_t)count * (size_t)cb + (size_t)count * 16 + 4;
+    unsigned char *b = calloc(1, size);
+    assert_non_null(b);
+    uint64_t *e = calloc((size_t)count * 2, sizeof *e);
+    assert_non_null(e);
+    size_t off = 0;
+    for (int i = 0; i < count; i++) {
+        if (i == empty) {
+            e[2 * i] = e[2 * i + 1] = UINT64_MAX;
+            continue;
+        }
+        memset(b + off, i + 1, (size_t)cb);
+        e[2 * i] = off;
+        e[2 * i + 1] = (uint64_t)cb;
+        off += (size_t)cb;
+    }
+    if (edit)
+        edit(e);
+    unsigned char *ix = b + (size_t)count * (size_t)cb;
+    for (int i = 0; i < 2 * count; i++)
+        for (int k = 0; k < 8; k++)
+            ix[8 * i + k] = (unsigned char)(e[i] >> (8 * k));
+    const uint32_t c = zr_crc32c(ix, (size_t)count * 16);
+    for (int k = 0; k < 4; k++)
+        ix[(size_t)count * 16 + (size_t)k] = (unsigned char)(c >> (8 * k));
+    put(dir, "c/0/0/0", b, size);
+    free(b);
+    free(e);
+    return size;
+}
+
+static void
+edit_past(uint64_t *e) {
+    e[2 * 3] = 1u << 20; /* inner chunk 3 past the shard's end */
+}
+
+static void
+edit_overlap(uint64_t *e) {
+    e[2 * 5] = e[2 * 4] + 1; /* inner chunk 5 inside chunk 4 */
+}
+
+static void
+edit_huge(uint64_t *e) {
+    e[2 * 2] = 16;
+    e[2 * 2 + 1] = UINT64_MAX - 8; /* wraps around when added */
+}
+
+/* Builds the store @p name: zarr.json @p meta and, when @p n > 0, one
+ * shard (put_shard). */
+static const char *
+v3_store(const char *name, const char *meta, int n, int m, int empty, void (*edit)(uint64_t *e)) {
+    const char *dir = fresh(name);
+    put_text(dir, "zarr.json", meta);
+    if (n > 0)
+        put_shard(dir, n, m, empty, edit);
+    return dir;
+}
+
+#define V3OK V3_("[8, 8, 8]", "[8, 8, 8]", "uint8", V3SHARD("[4, 4, 4]", V3RAW))
+
+/* The reference values of CRC-32C, and a good shard read voxel for voxel:
+ * the empty inner chunk is the fill value. */
+static void
+test_v3_good(void **state) {
+    (void)state;
+    static const unsigned char digits[] = "123456789";
+    assert_int_equal(zr_crc32c(digits, 9), 0xe3069283u);
+    assert_int_equal(zr_crc32c(NULL, 0), 0);
+    const char *dir = v3_store("v3_ok.zarr", V3OK, 8, 4, 6, NULL);
+    vv_load_options o;
+    vv_load_options_init(&o);
+    o.format = VV_FORMAT_OME_ZARR;
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_load(&v, dir, &o));
+    assert_int_equal(v->dims[0], 8);
+    const unsigned char *d = v->data;
+    for (int k = 0; k < 8; k++)
+        for (int j = 0; j < 8; j++)
+            for (int i = 0; i < 8; i++) {
+                const int c = (k / 4) * 4 + (j / 4) * 2 + i / 4;
+                assert_int_equal(d[(k * 8 + j) * 8 + i], c == 6 ? 7 : c + 1);
+            }
+    vv_volume_free(v);
+}
+
+/* A box of a sharded level reads the shard's index and the inner chunks
+ * it needs, never the whole shard. */
+static void
+test_v3_box_bytes(void **state) {
+    (void)state;
+    const char *dir = fresh("v3_box.zarr");
+    put_text(dir, "zarr.json",
+             "{\"zarr_format\": 3, \"node_type\": \"group\", \"attributes\": {\"ome\": "
+             "{\"version\": \"0.5\", \"multiscales\": [{\"axes\": " AX3 ", \"datasets\": "
+             "[{\"path\": \"0\", \"coordinateTransformations\": " SC3 "}, {\"path\": \"1\", "
+             "\"coordinateTransformations\": [{\"type\": \"scale\", \"scale\": [2, 2, 2]}]}]}]}}}");
+    char sub[4400];
+    snprintf(sub, sizeof sub, "%s/0", dir);
+    mkdir(sub, 0755);
+    put_text(sub, "zarr.json",
+             V3_("[64, 64, 64]", "[64, 64, 64]", "uint8", V3SHARD("[16, 16, 16]", V3RAW)));
+    const size_t shard = put_shard(sub, 64, 16, -1, NULL);
+    put_text(dir, "1/zarr.json", V3_("[32, 32, 32]", "[32, 32, 32]", "uint8", V3RAW));
+    vv_pyramid *p = NULL;
+    vt_ok(vv_pyramid_open(&p, dir, 0, -1, vt_cache(64u << 20), NULL));
+    vv_pyramid_stats a, b;
+    vv_pyramid_stats_get(p, &a);
+    vv_volume *v = NULL;
+    vt_ok(vv_pyramid_read_box(p, 0, (const int[3]){20, 20, 20}, (const int[3]){30, 30, 30}, &v));
+    /* voxel (20, 20, 20) is in inner chunk (1, 1, 1): number 21 + 1 */
+    assert_int_equal(((const unsigned char *)v->data)[0], 22);
+    vv_volume_free(v);
+    vv_pyramid_stats_get(p, &b);
+    const uint64_t want = 64 * 16 + 4 + 16 * 16 * 16; /* the index and one inner chunk */
+    if (b.bytes_read - a.bytes_read != want)
+        fail_msg("a box in one inner chunk read %llu bytes (want %llu; the shard is %zu)",
+                 (unsigned long long)(b.bytes_read - a.bytes_read), (unsigned long long)want,
+                 shard);
+    /* a second box in the same shard: the index is cached */
+    vt_ok(vv_pyramid_read_box(p, 0, (const int[3]){40, 0, 0}, (const int[3]){47, 7, 7}, &v));
+    vv_volume_free(v);
+    vv_pyramid_stats_get(p, &a);
+    assert_int_equal(a.bytes_read - b.bytes_read, 16 * 16 * 16);
+    vv_pyramid_free(p);
+}
+
+/* Hostile sharded stores: one line naming the file and the field. */
+static void
+test_v3_hostile(void **state) {
+    (void)state;
+    load_expect(v3_store("v3_past.zarr", V3OK, 8, 4, -1, edit_past), 0, -1, -1, VV_ERR_FORMAT,
+                "c/0/0/0: shard index entry 3: bytes 1048576..1048640 past the shard's end");
+    load_expect(v3_store("v3_wrap.zarr", V3OK, 8, 4, -1, edit_huge), 0, -1, -1, VV_ERR_FORMAT,
+                "c/0/0/0: shard index entry 2: bytes 16..");
+    load_expect(v3_store("v3_overlap.zarr", V3OK, 8, 4, -1, edit_overlap), 0, -1, -1, VV_ERR_FORMAT,
+                "c/0/0/0: shard index: inner chunks (or the index) overlap");
+    /* a damaged index: the checksum */
+    const char *dir = v3_store("v3_crc.zarr", V3OK, 8, 4, -1, NULL);
+    char f[4400];
+    snprintf(f, sizeof f, "%s/c/0/0/0", dir);
+    FILE *fp = fopen(f, "r+b");
+    assert_non_null(fp);
+    fseek(fp, 8 * 64 + 3, SEEK_SET);
+    fputc(0x55, fp);
+    fclose(fp);
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT,
+                "c/0/0/0: shard index: crc32c checksum mismatch (damaged bytes)");
+    /* a shard shorter than its index */
+    dir = v3_store("v3_short.zarr", V3OK, 0, 0, -1, NULL);
+    put_text(dir, "c/0/0/0", "short");
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "c/0/0/0: 5 bytes, fewer than the 132 asked");
+    /* an inner chunk that decompresses past its size (a bomb): gzip of
+     * 64 KiB where 64 bytes are expected */
+    dir = v3_store("v3_bomb.zarr",
+                   V3_("[8, 8, 8]", "[8, 8, 8]", "uint8",
+                       V3SHARD("[4, 4, 4]", "[{\"name\": \"bytes\"}, {\"name\": \"gzip\"}]")),
+                   0, 0, -1, NULL);
+    {
+        static unsigned char zero[65536], gz[2048];
+        z_stream z;
+        memset(&z, 0, sizeof z);
+        assert_int_equal(deflateInit2(&z, 9, Z_DEFLATED, 16 + MAX_WBITS, 8, Z_DEFAULT_STRATEGY),
+                         Z_OK);
+        z.next_in = zero;
+        z.avail_in = sizeof zero;
+        z.next_out = gz;
+        z.avail_out = sizeof gz;
+        assert_int_equal(deflate(&z, Z_FINISH), Z_STREAM_END);
+        const size_t gn = sizeof gz - z.avail_out;
+        deflateEnd(&z);
+        unsigned char buf[4096];
+        memcpy(buf, gz, gn);
+        uint64_t e[16];
+        for (int i = 0; i < 8; i++) {
+            e[2 * i] = 0;
+            e[2 * i + 1] = gn; /* every inner chunk the same bytes (overlapping) */
+        }
+        e[2] = e[4] = e[6] = e[8] = e[10] = e[12] = e[14] = UINT64_MAX;
+        e[3] = e[5] = e[7] = e[9] = e[11] = e[13] = e[15] = UINT64_MAX;
+        for (int i = 0; i < 16; i++)
+            for (int k = 0; k < 8; k++)
+                buf[gn + 8 * (size_t)i + (size_t)k] = (unsigned char)(e[i] >> (8 * k));
+        const uint32_t c = zr_crc32c(buf + gn, 128);
+        for (int k = 0; k < 4; k++)
+            buf[gn + 128 + (size_t)k] = (unsigned char)(c >> (8 * k));
+        put(dir, "c/0/0/0", buf, gn + 132);
+    }
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "the gzip stream does not decode to 64 bytes");
+    /* an NGFF 0.5 group's level without its zarr.json */
+    dir = fresh("v3_nolevel.zarr");
+    put_text(dir, "zarr.json",
+             "{\"zarr_format\": 3, \"node_type\": \"group\", \"attributes\": {\"ome\": "
+             "{\"version\": \"0.5\", \"multiscales\": [{\"axes\": " AX3 ", \"datasets\": "
+             "[{\"path\": \"0\"}]}]}}}");
+    put_text(dir, "0/.zarray", ZA);
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "level 0: no 0/zarr.json (not a Zarr v3 array)");
+    /* a raw chunk longer than its voxels: refused before it is read */
+    dir = v3_store("v3_long.zarr", V3_("[8, 8, 8]", "[4, 4, 4]", "uint8", V3RAW), 0, 0, -1, NULL);
+    {
+        static const unsigned char big[100];
+        put(dir, "c/0/0/0", big, sizeof big);
+    }
+    load_expect(dir, 0, -1, -1, VV_ERR_LIMIT, "c/0/0/0 is 100 bytes (limit 64)");
+    /* codec chains */
+    static const struct {
+        const char *name, *codecs, *needle;
+        vv_status want;
+    } chains[] = {
+        {"v3_nobytes", "[{\"name\": \"gzip\"}]",
+         "zarr.json: codecs: codec \"gzip\" before the array-to-bytes codec", VV_ERR_FORMAT},
+        {"v3_empty", "[]", "zarr.json: codecs: not a list of codecs", VV_ERR_FORMAT},
+        {"v3_twice", "[{\"name\": \"bytes\"}, {\"name\": \"bytes\"}]",
+         "zarr.json: codecs: two array-to-bytes codecs", VV_ERR_FORMAT},
+        {"v3_order",
+         "[{\"name\": \"bytes\"}, {\"name\": \"transpose\", \"configuration\": "
+         "{\"order\": [2, 1, 0]}}]",
+         "zarr.json: codecs: transpose after the array-to-bytes codec", VV_ERR_FORMAT},
+        {"v3_perm",
+         "[{\"name\": \"transpose\", \"configuration\": {\"order\": [0, 0, 1]}}, "
+         "{\"name\": \"bytes\"}]",
+         "zarr.json: codecs: transpose order is not a permutation", VV_ERR_FORMAT},
+        {"v3_unknown", "[{\"name\": \"bytes\"}, {\"name\": \"lzma\"}]",
+         "zarr.json: codecs: codec \"lzma\" (supported:", VV_ERR_UNSUPPORTED},
+        {"v3_inner_nobytes", V3SHARD("[4, 4, 4]", "[{\"name\": \"crc32c\"}]"),
+         "zarr.json: sharding_indexed codecs: codec \"crc32c\" before the array-to-bytes codec",
+         VV_ERR_FORMAT},
+        {"v3_divide", V3SHARD("[3, 4, 4]", V3RAW),
+         "zarr.json: sharding_indexed: sharding_indexed chunk_shape 0 does not divide the "
+         "shard's 8",
+         VV_ERR_FORMAT},
+        {"v3_nest",
+         V3SHARD("[8, 8, 8]",
+                 V3SHARD("[8, 8, 8]",
+                         V3SHARD("[8, 8, 8]", V3SHARD("[8, 8, 8]", V3SHARD("[8, 8, 8]", V3RAW))))),
+         "shards nested over 4 deep", VV_ERR_LIMIT},
+    };
+    for (size_t i = 0; i < sizeof chains / sizeof chains[0]; i++) {
+        char meta[4096], name[64];
+        snprintf(meta, sizeof meta, V3_("[8, 8, 8]", "[8, 8, 8]", "uint8", "%s"), chains[i].codecs);
+        snprintf(name, sizeof name, "%s.zarr", chains[i].name);
+        print_message("%s\n", chains[i].name);
+        load_expect(v3_store(name, meta, 0, 0, -1, NULL), 0, -1, -1, chains[i].want,
+                    chains[i].needle);
+    }
+    /* 2^30 inner chunks in one shard: refused before its index is read */
+    load_expect(v3_store("v3_many.zarr",
+                         V3_("[1024, 1024, 1024]", "[1024, 1024, 1024]", "uint8",
+                             V3SHARD("[1, 1, 1]", V3RAW)),
+                         0, 0, -1, NULL),
+                0, -1, -1, VV_ERR_LIMIT, "over 262144 inner chunks in one shard");
+    /* data types and fill values */
+    load_expect(v3_store("v3_complex.zarr", V3_("[8, 8, 8]", "[8, 8, 8]", "complex64", V3RAW), 0, 0,
+                         -1, NULL),
+                0, -1, -1, VV_ERR_UNSUPPORTED, "zarr.json: data_type \"complex64\" (supported:");
+    load_expect(
+        v3_store("v3_f16.zarr", V3_("[8, 8, 8]", "[8, 8, 8]", "float16", V3RAW), 0, 0, -1, NULL), 0,
+        -1, -1, VV_ERR_UNSUPPORTED, "zarr.json: data_type \"float16\"");
+    /* deep JSON: jansson's depth limit, one line */
+    dir = fresh("v3_deep.zarr");
+    {
+        const int depth = 100000;
+        char *deep = malloc((size_t)depth * 2 + 1);
+        assert_non_null(deep);
+        memset(deep, '[', (size_t)depth);
+        memset(deep + depth, ']', (size_t)depth);
+        deep[2 * depth] = '\0';
+        put_text(dir, "zarr.json", deep);
+        free(deep);
+    }
+    load_expect(dir, 0, -1, -1, VV_ERR_FORMAT, "zarr.json: line 1:");
+}
+
+/* A store whose level 1 is "/etc/passwd": `volvis info` refuses it as a
+ * read of that level would (v2 and v3), one line. */
+static void
+test_info_level_paths(void **state) {
+    (void)state;
+    char dir[4400]; /* fresh() returns its own buffer */
+    snprintf(dir, sizeof dir, "%s", fresh("info_v2.zarr"));
+    put_text(dir, ".zattrs", MS_(AX3, "[{\"path\": \"0\"}, {\"path\": \"/etc/passwd\"}]", ""));
+    put_text(dir, "0/.zarray", ZA);
+    const char *d3 = fresh("info_v3.zarr");
+    put_text(d3, "zarr.json",
+             "{\"zarr_format\": 3, \"node_type\": \"group\", \"attributes\": {\"ome\": "
+             "{\"version\": \"0.5\", \"multiscales\": [{\"axes\": " AX3 ", \"datasets\": "
+             "[{\"path\": \"0\"}, {\"path\": \"a/../../x\"}]}]}}}");
+    put_text(d3, "0/zarr.json", V3_("[4, 4, 4]", "[4, 4, 4]", "uint8", V3RAW));
+    const char *dirs[2] = {dir, d3};
+    const char *needles[2] = {".zattrs: dataset 1: path \"/etc/passwd\" leaves the store",
+                              "zarr.json: dataset 1: path \"a/../../x\" leaves the store"};
+    for (int i = 0; i < 2; i++) {
+        const char *args[] = {"info", dirs[i], NULL};
+        vt_run_result r = vt_run_cli_v(g_dir, args);
+        assert_int_not_equal(r.status, 0);
+        if (!strstr(r.err, needles[i]) || !strstr(r.err, base(dirs[i])))
+            fail_msg("volvis info printed '%s'", r.err);
+        const char *nl = strchr(r.err, '\n');
+        assert_true(nl == NULL || nl[1] == '\0');
+        vt_run_result_free(&r);
+    }
+}
+
 int
 main(void) {
     setenv("VOLVIS_SANDBOX", "0", 1);
@@ -703,7 +1030,9 @@ main(void) {
         cmocka_unit_test(test_chunks),           cmocka_unit_test(test_chunk_files),
         cmocka_unit_test(test_chunk_budget),     cmocka_unit_test(test_fifos),
         cmocka_unit_test(test_arguments),        cmocka_unit_test(test_pyramid),
-        cmocka_unit_test(test_pyramid_requests),
+        cmocka_unit_test(test_pyramid_requests), cmocka_unit_test(test_v3_good),
+        cmocka_unit_test(test_v3_box_bytes),     cmocka_unit_test(test_v3_hostile),
+        cmocka_unit_test(test_info_level_paths),
     };
     return vt_run_tests(tests, NULL, NULL);
 }

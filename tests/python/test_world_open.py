@@ -4,6 +4,7 @@ and a scene file each open into the World `volvis render` draws, bit for
 bit; what the door found (world.opened); the store in memory and out of
 core; errors naming the input."""
 import gc
+import json
 import subprocess
 
 import numpy as np
@@ -137,6 +138,61 @@ def test_dicom_time_past_the_series(cine):
         volvis.World.open(folder, time=T)
     assert "\n" not in str(e.value)
     assert "time step %d" % T in str(e.value)
+
+
+# ---- an OME-Zarr 0.5 store (Zarr v3, sharded) ------------------------------------------------
+def _crc32c(data):
+    crc = 0xFFFFFFFF
+    for x in data:
+        crc ^= x
+        for _ in range(8):
+            crc = (crc >> 1) ^ (0x82F63B78 & -(crc & 1))
+    return crc ^ 0xFFFFFFFF
+
+
+@pytest.fixture(scope="module")
+def store_v3(tmp_path_factory):
+    """A 32^3 u16 NGFF 0.5 image in one shard of 2 x 2 x 2 raw inner chunks (16^3, index at
+    the end with its crc32c), written byte by byte as the Zarr v3 spec lays it out."""
+    out = tmp_path_factory.mktemp("zarr3") / "v3.ome.zarr"
+    arr = (np.arange(32 ** 3, dtype=np.uint32) * 7 % 4001).astype("<u2").reshape(32, 32, 32)
+    body, index = b"", b""
+    for k in range(2):
+        for j in range(2):
+            for i in range(2):
+                inner = arr[16 * k:16 * k + 16, 16 * j:16 * j + 16, 16 * i:16 * i + 16].tobytes()
+                index += np.array([len(body), len(inner)], "<u8").tobytes()
+                body += inner
+    shard = body + index + _crc32c(index).to_bytes(4, "little")
+    (out / "0" / "c" / "0" / "0").mkdir(parents=True)
+    (out / "0" / "c" / "0" / "0" / "0").write_bytes(shard)
+    (out / "zarr.json").write_text(json.dumps({
+        "zarr_format": 3, "node_type": "group", "attributes": {"ome": {
+            "version": "0.5", "multiscales": [{
+                "axes": [{"name": a, "type": "space", "unit": "millimeter"} for a in "zyx"],
+                "datasets": [{"path": "0", "coordinateTransformations": [
+                    {"type": "scale", "scale": [2.0, 1.0, 0.5]}]}]}]}}}))
+    (out / "0" / "zarr.json").write_text(json.dumps({
+        "zarr_format": 3, "node_type": "array", "shape": [32, 32, 32], "data_type": "uint16",
+        "chunk_grid": {"name": "regular", "configuration": {"chunk_shape": [32, 32, 32]}},
+        "chunk_key_encoding": {"name": "default"}, "fill_value": 0,
+        "codecs": [{"name": "sharding_indexed", "configuration": {
+            "chunk_shape": [16, 16, 16],
+            "codecs": [{"name": "bytes", "configuration": {"endian": "little"}}],
+            "index_codecs": [{"name": "bytes", "configuration": {"endian": "little"}},
+                             {"name": "crc32c"}]}}]}))
+    return out, arr
+
+
+def test_store_v3_sharded(store_v3):
+    path, arr = store_v3
+    v = volvis.open(path)
+    np.testing.assert_array_equal(v.array, arr)
+    mem = volvis.World.open(path, mode="mip", size=(64, 64), tf=(0, 4000))
+    ooc = volvis.World.open(path, mode="mip", size=(64, 64), tf=(0, 4000),
+                            memory="out_of_core", memory_limit="64M", lod=True)
+    assert ooc.opened["out_of_core"] and not mem.opened["out_of_core"]
+    assert volvis.render(ooc, alpha=False).max() > 0
 
 
 # ---- an OME-Zarr store ---------------------------------------------------------------------

@@ -17,6 +17,16 @@
 #define ZR_CHUNK_MAX ((uint64_t)1 << 30)
 /* The most chunks a whole read looks for (each a file to open). */
 #define ZR_READ_CHUNKS_MAX (1 << 20)
+/* Zarr v3: codecs in one chain, sharding levels (nested shards), inner
+ * chunks in one shard (its index: 16 bytes each), index bytes a shard
+ * index cache holds. */
+#define ZR_MAX_CODECS 8
+#define ZR_MAX_NEST 4
+#define ZR_SHARD_INNER_MAX (1u << 18)
+#define ZR_INDEX_CACHE_BYTES ((uint64_t)8 << 20)
+/* zr_store_get: the last @p len bytes; to the end of the object */
+#define ZR_SUFFIX UINT64_MAX
+#define ZR_ALL UINT64_MAX
 
 typedef struct zr_axis {
     char name[32];
@@ -24,10 +34,44 @@ typedef struct zr_axis {
     char unit[32];
 } zr_axis;
 
+/* A Zarr v3 codec (zarr.json "codecs"): its kind and configuration. */
+enum { ZC_BYTES, ZC_TRANSPOSE, ZC_GZIP, ZC_ZSTD, ZC_BLOSC, ZC_CRC32C, ZC_SHARD };
+typedef struct zr_codec {
+    int kind;
+    int big;               /* bytes: big-endian */
+    int order[ZR_MAX_DIM]; /* transpose: encoded axis i is decoded axis order[i] */
+} zr_codec;
+
+/* A codec chain in encoding order: array-to-array codecs, one
+ * array-to-bytes codec (bytes or sharding_indexed), bytes-to-bytes codecs. */
+typedef struct zr_chain {
+    int n;
+    zr_codec c[ZR_MAX_CODECS];
+} zr_chain;
+
+struct zr_index_cache;
+
 /* One level's array and what the metadata says of it. */
 typedef struct zr_array {
     char dir[4096];
-    char real[4096]; /* the store's real path: chunks must resolve beneath it ("": unknown) */
+    char real[4096];   /* the store's real path: chunks must resolve beneath it ("": unknown) */
+    char root[4096];   /* the store's root: every key is relative to it */
+    char prefix[1024]; /* the array's key beneath the root ("" the root itself) */
+    int zarr_format;   /* 2 or 3 */
+    /* v3: chunk key encoding "default" (c/0/1/2) or "v2" (0.1.2) */
+    int key_default;
+    /* v3: sharding levels (0: none); shape[l] the chunk shape at level l
+     * (shape[0] the chunk grid's, shape[nshard] the read unit, = chunks),
+     * chain[l] its codecs; index_chain, index_start of each sharding level */
+    int nshard;
+    uint64_t cshape[ZR_MAX_NEST + 1][ZR_MAX_DIM];
+    zr_chain chain[ZR_MAX_NEST + 1];
+    zr_chain index_chain[ZR_MAX_NEST];
+    int index_start[ZR_MAX_NEST];
+    int conv64;                   /* v3 int64 (1) or uint64 (2) stored, read as f64 */
+    struct zr_index_cache *cache; /* shard indexes (sharded arrays; vv_zr_array_release) */
+    int has_window;               /* the omero window of the asked channel */
+    double window[2];
     int ndim;
     uint64_t shape[ZR_MAX_DIM], chunks[ZR_MAX_DIM];
     vv_voxel_type type;
@@ -86,11 +130,66 @@ vv_status vv_zr_copy_chunk(const zr_layout *J, uint64_t L, unsigned char *buf, u
                            const int dorg[3], const int ddims[3], int *missing,
                            uint64_t *file_bytes);
 
-/* Reads and decodes chunk file @p path into @p out (exactly @p n bytes); 0
- * with *missing = 1 when the file does not exist; *file_bytes (may be NULL)
- * the bytes read. */
-vv_status vv_zr_read_chunk(const zr_array *a, const char *path, unsigned char *out, size_t n,
-                           int *missing, uint64_t *file_bytes);
+/* Reads and decodes the chunk at grid position @p idx (the read unit's
+ * grid: inner chunks of a sharded array) into @p out (exactly @p n bytes);
+ * 0 with *missing = 1 when the chunk is absent (no file, an empty inner
+ * chunk); *file_bytes (may be NULL) the bytes read (a shard's index and the
+ * inner chunk: never the whole shard). Reentrant. */
+vv_status vv_zr_read_chunk(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned char *out,
+                           size_t n, int *missing, uint64_t *file_bytes);
+
+/* The bytes one read of a chunk of @p n decoded bytes holds besides the
+ * caller's buffer (what is read, the steps of decoding), at most. */
+uint64_t vv_zr_read_held(const zr_array *a, size_t n);
+
+/* Frees what vv_zr_parse_store allocated in @p a (the shard index cache);
+ * @p a may be NULL or never parsed (zeroed). */
+void vv_zr_array_release(zr_array *a);
+
+/* The one byte source under the reader: bytes [off, off + len) of the
+ * object @p key (relative to the store's root @p a->root) into a new
+ * buffer *out (free it) of *n bytes; off = ZR_SUFFIX: the last len bytes;
+ * len = ZR_ALL: to the end. *size (may be NULL) = the object's size. At
+ * most @p max bytes are read (VV_ERR_LIMIT beyond). An absent object: VV_OK,
+ * *missing = 1 (when @p missing is NULL: VV_ERR_FORMAT "no KEY"). A range
+ * past the end: VV_ERR_FORMAT. The object must resolve beneath a->real.
+ * Local files today (pread); HTTP range requests will take its place. */
+vv_status zr_store_get(const zr_array *a, const char *key, uint64_t off, uint64_t len, uint64_t max,
+                       unsigned char **out, size_t *n, uint64_t *size, int *missing);
+
+/* Zarr v3 (zarr3.c): the array metadata @p j of zarr.json into @p a;
+ * errors name "zarr.json" and the field. */
+vv_status zr3_parse_array(zr_array *a, void *j);
+
+/* Zarr v3: decodes the bytes-to-bytes codecs of @p c (in reverse) from
+ * @p src (@p m bytes) into exactly @p n bytes at @p out (never more);
+ * @p what names the chunk in errors. */
+vv_status zr3_decode_bytes(const zr_chain *c, const unsigned char *src, size_t m,
+                           unsigned char *out, size_t n, const char *what);
+
+/* Zarr v3: the most bytes a chunk of @p n decoded bytes can take after
+ * the codecs of @p c (more is refused before it is read). */
+uint64_t zr3_encoded_max(const zr_chain *c, size_t n);
+
+/* Zarr v3: undoes @p c's transposes of a chunk of shape @p shape (decoded
+ * axes) and element size @p es in @p buf, through @p tmp (as large). */
+void zr3_untranspose(const zr_chain *c, int ndim, const uint64_t *shape, size_t es,
+                     unsigned char *buf, unsigned char *tmp);
+
+/* Zarr v3: reads and decodes the sharded chunk at read-unit grid
+ * position @p idx (vv_zr_read_chunk's contract). */
+vv_status zr3_read_sharded(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned char *out,
+                           size_t n, int *missing, uint64_t *file_bytes);
+
+/* The key (relative to the store's root) of the chunk at grid position
+ * @p idx of @p a's top chunk grid (a shard's, when sharded). */
+void zr_chunk_key(const zr_array *a, const uint64_t *idx, char *key, size_t cap);
+
+/* Frees @p a's shard index cache (zarr3.c). */
+void zr3_cache_free(zr_array *a);
+
+/* Castagnoli CRC-32C of @p n bytes (the crc32c codec's checksum). */
+uint32_t zr_crc32c(const unsigned char *p, size_t n);
 
 /* @p n voxels of type @p t at @p dst set to @p x (the fill value, cast). */
 void vv_zr_fill(void *dst, size_t n, vv_voxel_type t, double x);
@@ -107,7 +206,8 @@ void vv_zr_fill(void *dst, size_t n, vv_voxel_type t, double x);
  */
 vv_status vv_ome_zarr_read(vv_volume **out, const char *path, const vv_load_options *opt);
 
-/** A folder holding a .zarray, or a .zattrs with "multiscales" (deep 0 only). */
+/** A folder holding a .zarray, or a .zattrs with "multiscales", or a Zarr v3
+ * zarr.json of an array or of a group with "multiscales" (deep 0 only). */
 int vv_ome_zarr_looks_like(const vv_format_probe *p, int deep);
 
 #endif

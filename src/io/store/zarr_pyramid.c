@@ -5,12 +5,9 @@
  * pyramid decodes a box's chunks on every core, a scratch buffer of the
  * largest chunk each). The level's chunk box is the store's own.
  */
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-#include <jansson.h>
 
 #include "core/internal.h"
 #include "io/store/pyramid.h"
@@ -37,6 +34,9 @@ zp_read_chunk(void *ctx, int level, const int c[3], unsigned char *scratch, unsi
 
 static void
 zp_close(void *ctx) {
+    zp_store *z = ctx;
+    for (int i = 0; z && i < VV_PYRAMID_MAX_LEVELS; i++)
+        vv_zr_array_release(&z->lv[i].a);
     free(ctx);
 }
 
@@ -48,9 +48,11 @@ zp_open_level(zp_store *z, const char *path, int i, int channel, int time, vv_lo
     vv_status s = vv_zr_parse_store(path, i, &l->a, channel, i == 0 ? info : NULL, NULL);
     if (s == VV_OK)
         s = vv_zr_layout(&l->a, channel, time, &l->J);
-    /* each reading thread holds a scratch buffer of the largest chunk */
+    /* each reading thread holds a scratch buffer of the largest chunk (an
+     * inner chunk of a shard), and what it reads and decodes it from */
     if (s == VV_OK)
-        s = vv_memory_budget_check((uint64_t)l->J.cbytes, "a Zarr chunk's buffer");
+        s = vv_memory_budget_check((uint64_t)l->J.cbytes + vv_zr_read_held(&l->a, l->J.cbytes),
+                                   "a Zarr chunk's buffer");
     if (s != VV_OK)
         return vv_error_prefix(s, "level %d", i);
     l->J.a = &l->a; /* the layout points into the level it describes */
@@ -66,36 +68,17 @@ zp_open_level(zp_store *z, const char *path, int i, int channel, int time, vv_lo
     return VV_OK;
 }
 
-/* The omero window's min and max of @p channel when the store names them. */
-static int
-omero_range(const char *path, int channel, double r[2]) {
-    char f[4200];
-    snprintf(f, sizeof f, "%s/.zattrs", path);
-    json_error_t e;
-    json_t *j = json_load_file(f, JSON_REJECT_DUPLICATES, &e);
-    json_t *ch = json_array_get(json_object_get(json_object_get(j, "omero"), "channels"),
-                                (size_t)(channel < 0 ? 0 : channel));
-    json_t *w = json_object_get(ch, "window");
-    json_t *mn = json_object_get(w, "min"), *mx = json_object_get(w, "max");
-    int ok = json_is_number(mn) && json_is_number(mx) &&
-             json_number_value(mx) >= json_number_value(mn) && isfinite(json_number_value(mn)) &&
-             isfinite(json_number_value(mx));
-    if (ok) {
-        r[0] = json_number_value(mn);
-        r[1] = json_number_value(mx);
-    }
-    json_decref(j);
-    return ok;
-}
-
 vv_status
 vv_zr_pyramid_store(vv_store *st, const char *path, int channel, int time, vv_load_info *info) {
     memset(st, 0, sizeof *st);
     st->name = "zarr";
     int n_levels = 1;
-    zr_array probe;
-    memset(&probe, 0, sizeof probe);
-    vv_status s = vv_zr_parse_store(path, 0, &probe, channel, NULL, &n_levels);
+    zr_array *probe = calloc(1, sizeof *probe);
+    if (!probe)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    vv_status s = vv_zr_parse_store(path, 0, probe, channel, NULL, &n_levels);
+    vv_zr_array_release(probe);
+    free(probe);
     if (s != VV_OK)
         return s;
     if (n_levels > VV_PYRAMID_MAX_LEVELS)
@@ -120,6 +103,8 @@ vv_zr_pyramid_store(vv_store *st, const char *path, int channel, int time, vv_lo
     }
     st->n_channels = (int)z->lv[0].J.nc;
     st->n_times = (int)z->lv[0].J.nt;
-    st->has_range = omero_range(path, channel, st->range);
+    st->has_range = z->lv[0].a.has_window;
+    st->range[0] = z->lv[0].a.window[0];
+    st->range[1] = z->lv[0].a.window[1];
     return VV_OK;
 }

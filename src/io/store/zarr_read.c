@@ -23,6 +23,13 @@
  * one "channel" (or c) and one "time" (or t) axis, in any order. Every size
  * is checked against the limits before anything is allocated; JSON files
  * over 16 MiB and chunks over 1 GiB are refused.
+ *
+ * Zarr v3 (OME-NGFF 0.5: the root's zarr.json, a group with
+ * attributes.ome, or an array) is parsed and decoded by zarr3.c through
+ * the same zr_array: the read unit of a sharded array is its inner chunk.
+ * Every byte read of the store goes through zr_store_get (a key beneath
+ * the root, an offset and a length), the one place a remote byte source
+ * will take.
  */
 #include <errno.h>
 #include <fcntl.h>
@@ -52,44 +59,122 @@ zr_beneath(const char *real, const char *dir) {
            (real[n] == '/' || real[n] == '\0' || (n == 1 && dir[0] == '/'));
 }
 
-/* path/name loaded as JSON (at most ZR_JSON_MAX bytes); NULL with the error
- * set, or NULL without an error when the file is absent and @p optional.
- * The file must lie beneath the store's real path @p real ("": unchecked). */
-static json_t *
-load_json(const char *dir, const char *name, int optional, const char *real, vv_status *s) {
-    char p[4200];
-    snprintf(p, sizeof p, "%s/%s", dir, name);
+vv_status
+zr_store_get(const zr_array *a, const char *key, uint64_t off, uint64_t len, uint64_t max,
+             unsigned char **out, size_t *n, uint64_t *size, int *missing) {
+    *out = NULL;
+    *n = 0;
+    if (missing)
+        *missing = 0;
+    char p[8400];
+    if (snprintf(p, sizeof p, "%s/%s", a->root, key) >= (int)sizeof p)
+        return vv_error_set(VV_ERR_LIMIT, "%s: key too long", key);
+    /* not blocking: a FIFO would block the open forever */
+    const int fd = open(p, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) {
+        if (errno == ENOENT) {
+            if (missing) {
+                *missing = 1;
+                return VV_OK;
+            }
+            return vv_error_set(VV_ERR_FORMAT, "no %s", key);
+        }
+        return vv_error_set(VV_ERR_IO, "%s: %s", key, strerror(errno));
+    }
     struct stat st;
-    *s = VV_OK;
-    if (stat(p, &st) != 0) {
-        if (!optional)
-            *s = vv_error_set(VV_ERR_FORMAT, "no %s (not a Zarr array)", name);
-        return NULL;
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        close(fd);
+        return vv_error_set(VV_ERR_FORMAT, "%s is not a regular file", key);
     }
-    if (!S_ISREG(st.st_mode)) { /* a FIFO would block the read forever */
-        *s = vv_error_set(VV_ERR_FORMAT, "%s is not a regular file", name);
-        return NULL;
-    }
-    if (real && real[0]) { /* a symbolic link may lead out of the store */
+    /* a file (or a folder on its way) that is a link out of the store */
+    if (a->real[0]) {
         char *rp = realpath(p, NULL);
-        const int inside = rp && zr_beneath(rp, real);
+        const int inside = rp && zr_beneath(rp, a->real);
         free(rp);
         if (!inside) {
-            *s = vv_error_set(VV_ERR_FORMAT, "%s leaves the store (a link to a file outside it)",
-                              name);
-            return NULL;
+            close(fd);
+            return vv_error_set(VV_ERR_FORMAT, "%s leaves the store (a link to a file outside it)",
+                                key);
         }
     }
-    if (st.st_size > ZR_JSON_MAX) {
-        *s = vv_error_set(VV_ERR_LIMIT, "%s is %lld bytes (limit %u)", name, (long long)st.st_size,
-                          ZR_JSON_MAX);
-        return NULL;
+    const uint64_t fsz = st.st_size < 0 ? 0 : (uint64_t)st.st_size;
+    if (size)
+        *size = fsz;
+    if (off == ZR_SUFFIX) {
+        if (len > fsz) {
+            close(fd);
+            return vv_error_set(VV_ERR_FORMAT,
+                                "%s: %llu bytes, fewer than the %llu asked at its end", key,
+                                (unsigned long long)fsz, (unsigned long long)len);
+        }
+        off = fsz - len;
     }
+    if (len == ZR_ALL)
+        len = off <= fsz ? fsz - off : 0;
+    if (off > fsz || len > fsz - off) {
+        close(fd);
+        return vv_error_set(VV_ERR_FORMAT, "%s: bytes %llu..%llu past its end (%llu bytes)", key,
+                            (unsigned long long)off, (unsigned long long)(off + len),
+                            (unsigned long long)fsz);
+    }
+    if (len > max) {
+        close(fd);
+        return len == fsz ? vv_error_set(VV_ERR_LIMIT, "%s is %llu bytes (limit %llu)", key,
+                                         (unsigned long long)len, (unsigned long long)max)
+                          : vv_error_set(VV_ERR_LIMIT, "%s: %llu bytes to read (limit %llu)", key,
+                                         (unsigned long long)len, (unsigned long long)max);
+    }
+    unsigned char *buf = malloc(len ? (size_t)len : 1);
+    if (!buf) {
+        close(fd);
+        return vv_error_set(VV_ERR_NOMEM, "out of memory for %llu bytes of %s",
+                            (unsigned long long)len, key);
+    }
+    uint64_t got = 0;
+    while (got < len) {
+        const ssize_t r = pread(fd, buf + got, (size_t)(len - got), (off_t)(off + got));
+        if (r < 0 && errno == EINTR)
+            continue;
+        if (r <= 0)
+            break;
+        got += (uint64_t)r;
+    }
+    close(fd);
+    if (got != len) {
+        free(buf);
+        return vv_error_set(VV_ERR_IO, "%s: cannot read bytes %llu..%llu", key,
+                            (unsigned long long)off, (unsigned long long)(off + len));
+    }
+    *out = buf;
+    *n = (size_t)len;
+    return VV_OK;
+}
+
+/* The object @p key of the store loaded as JSON (at most ZR_JSON_MAX
+ * bytes); NULL with the error set (naming @p name), or NULL without an
+ * error when the object is absent and @p optional. */
+static json_t *
+load_json(const zr_array *a, const char *key, const char *name, int optional, vv_status *s) {
+    unsigned char *b = NULL;
+    size_t n = 0;
+    int missing = 0;
+    *s = zr_store_get(a, key, 0, ZR_ALL, ZR_JSON_MAX, &b, &n, NULL, &missing);
+    if (*s == VV_OK && missing && !optional)
+        *s = vv_error_set(VV_ERR_FORMAT, "no %s (not a Zarr array)", name);
+    if (*s != VV_OK || missing)
+        return NULL;
     json_error_t e;
-    json_t *j = json_load_file(p, JSON_REJECT_DUPLICATES, &e);
+    json_t *j = json_loadb((const char *)b, n, JSON_REJECT_DUPLICATES, &e);
+    free(b);
     if (!j)
         *s = vv_error_set(VV_ERR_FORMAT, "%s: line %d: %s", name, e.line, e.text);
     return j;
+}
+
+/* The key of @p name in the array's folder. */
+static void
+array_key(const zr_array *a, const char *name, char *k, size_t cap) {
+    snprintf(k, cap, "%s%s%s", a->prefix, a->prefix[0] ? "/" : "", name);
 }
 
 static vv_status
@@ -115,11 +200,26 @@ parse_dtype(const char *d, zr_array *a) {
                         ".zarray: dtype \"%s\" (supported: u1 u2 u4 i1 i2 i4 f4 f8)", d);
 }
 
-/* The .zarray of folder @p dir into @p a. */
+/* The array metadata of @p a's folder into @p a: its zarr.json (Zarr v3)
+ * or else its .zarray. */
 static vv_status
 parse_zarray(zr_array *a) {
     vv_status s;
-    json_t *j = load_json(a->dir, ".zarray", 0, a->real, &s);
+    char key[1100];
+    array_key(a, "zarr.json", key, sizeof key);
+    json_t *j = load_json(a, key, "zarr.json", 1, &s);
+    if (s != VV_OK)
+        return s;
+    if (j) {
+        s = zr3_parse_array(a, j);
+        json_decref(j);
+        return s;
+    }
+    if (a->zarr_format == 3) /* an OME-Zarr 0.5 group's level */
+        return vv_error_set(VV_ERR_FORMAT, "no %s (not a Zarr v3 array)", key);
+    a->zarr_format = 2;
+    array_key(a, ".zarray", key, sizeof key);
+    j = load_json(a, key, ".zarray", 0, &s);
     if (!j)
         return s;
     json_t *shape = json_object_get(j, "shape"), *chunks = json_object_get(j, "chunks");
@@ -216,7 +316,8 @@ axis_kind(const char *name, const char *type) {
  * VV_ERR_FORMAT naming @p where (a zero or non-finite spacing is never
  * taken). Other transform types are ignored. */
 static vv_status
-apply_transforms(json_t *list, int ndim, double *sc, double *tr, const char *where) {
+apply_transforms(json_t *list, int ndim, double *sc, double *tr, const char *md,
+                 const char *where) {
     size_t i;
     json_t *t;
     json_array_foreach(list, i, t) {
@@ -226,13 +327,13 @@ apply_transforms(json_t *list, int ndim, double *sc, double *tr, const char *whe
         const int scale = !strcmp(type, "scale");
         json_t *v = json_object_get(t, type);
         if (!json_is_array(v) || (int)json_array_size(v) != ndim)
-            return vv_error_set(VV_ERR_FORMAT, ".zattrs: %s: the %s is not %d numbers", where, type,
+            return vv_error_set(VV_ERR_FORMAT, "%s: %s: the %s is not %d numbers", md, where, type,
                                 ndim);
         for (int k = 0; k < ndim; k++) {
             json_t *n = json_array_get(v, (size_t)k);
             const double x = json_number_value(n);
             if (!json_is_number(n) || !isfinite(x) || (scale && !(x > 0)))
-                return vv_error_set(VV_ERR_FORMAT, ".zattrs: %s: %s %d is not a %s number", where,
+                return vv_error_set(VV_ERR_FORMAT, "%s: %s: %s %d is not a %s number", md, where,
                                     type, k, scale ? "positive finite" : "finite");
             /* x' = s x (the translation so far scaled too), x' = x + t */
             if (scale) {
@@ -243,29 +344,75 @@ apply_transforms(json_t *list, int ndim, double *sc, double *tr, const char *whe
             }
             if (!isfinite(sc[k]) || !(sc[k] > 0) || !isfinite(tr[k]))
                 return vv_error_set(VV_ERR_FORMAT,
-                                    ".zattrs: %s: the composed %s along axis %d is not finite "
+                                    "%s: %s: the composed %s along axis %d is not finite "
                                     "and positive",
-                                    where, isfinite(sc[k]) && sc[k] > 0 ? "translation" : "scale",
-                                    k);
+                                    md, where,
+                                    isfinite(sc[k]) && sc[k] > 0 ? "translation" : "scale", k);
         }
     }
     return VV_OK;
 }
 
-/* The OME metadata of the store at @p root (its .zattrs): level @p level's
- * folder, axes, transforms; the channel's name and colour into @p info. */
+/* The store's OME metadata into *za (a new reference; NULL: a plain
+ * array): the root's zarr.json (Zarr v3: a group's attributes.ome, or an
+ * array) or else its .zattrs; *md names the file. */
+static vv_status
+root_metadata(const zr_array *a, json_t **za, const char **md) {
+    vv_status s;
+    *za = NULL;
+    *md = ".zattrs";
+    json_t *z3 = load_json(a, "zarr.json", "zarr.json", 1, &s);
+    if (s != VV_OK)
+        return s;
+    if (!z3) {
+        *za = load_json(a, ".zattrs", ".zattrs", 1, &s);
+        return s;
+    }
+    *md = "zarr.json";
+    const char *nt = json_string_value(json_object_get(z3, "node_type"));
+    json_t *fmt = json_object_get(z3, "zarr_format");
+    if (!json_is_integer(fmt) || json_integer_value(fmt) != 3)
+        s = vv_error_set(VV_ERR_UNSUPPORTED, "zarr.json: zarr_format is not 3");
+    else if (nt && !strcmp(nt, "array"))
+        s = VV_OK; /* a plain array */
+    else if (!nt || strcmp(nt, "group"))
+        s = vv_error_set(VV_ERR_FORMAT, "zarr.json: node_type is not \"array\" or \"group\"");
+    else {
+        json_t *at = json_object_get(z3, "attributes");
+        json_t *ome = json_object_get(at, "ome");
+        /* NGFF 0.5 keeps its metadata under "ome"; drafts put it beside */
+        json_t *m = json_object_get(ome, "multiscales") ? ome : at;
+        if (!json_object_get(m, "multiscales"))
+            s = vv_error_set(VV_ERR_FORMAT, "zarr.json: a group without attributes.ome.multiscales "
+                                            "(not an OME-Zarr image)");
+        else
+            *za = json_incref(m);
+    }
+    json_decref(z3);
+    return s;
+}
+
+/* The OME metadata of the store at @p root (its .zattrs, or zarr.json):
+ * level @p level's folder, axes, transforms; the channel's name, colour
+ * and window into @p info and @p a. Every dataset's path is checked, not
+ * only the asked level's. */
 vv_status
 vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load_info *info,
                   int *n_levels) {
     vv_status s;
+    a->cache = NULL;
     /* the store's real path: every file, folder and chunk read must lie
      * beneath it (a symbolic link may lead out) */
     char *rroot = realpath(root, NULL);
     snprintf(a->real, sizeof a->real, "%s", rroot ? rroot : "");
     free(rroot);
-    json_t *za = load_json(root, ".zattrs", 1, a->real, &s);
-    if (s != VV_OK)
+    snprintf(a->root, sizeof a->root, "%s", root);
+    a->prefix[0] = '\0';
+    json_t *za = NULL;
+    const char *md = ".zattrs";
+    if ((s = root_metadata(a, &za, &md)) != VV_OK)
         return s;
+    a->zarr_format = strcmp(md, "zarr.json") ? 2 : 3; /* the levels' format */
     json_t *ms = za ? json_array_get(json_object_get(za, "multiscales"), 0) : NULL;
     snprintf(a->dir, sizeof a->dir, "%s", root);
     json_t *axes = ms ? json_object_get(ms, "axes") : NULL;
@@ -273,28 +420,34 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
     json_t *ds0 = ms ? json_array_get(dsl, (size_t)level) : NULL;
     if (ms && !json_array_get(dsl, 0)) {
         json_decref(za);
-        return vv_error_set(VV_ERR_FORMAT, ".zattrs: multiscales without datasets");
+        return vv_error_set(VV_ERR_FORMAT, "%s: multiscales without datasets", md);
     }
     const int count = ms ? (int)json_array_size(dsl) : 1;
     if (n_levels)
         *n_levels = count;
+    /* every level's path, so that `info` refuses a store whose level 2 is
+     * "/etc/passwd" as a read of that level would */
+    for (int i = 0; ms && i < count; i++) {
+        const char *p = json_string_value(json_object_get(json_array_get(dsl, (size_t)i), "path"));
+        if (!p || !*p || strstr(p, "..") || p[0] == '/' || strlen(p) >= sizeof a->prefix) {
+            /* the message quotes the path: format it before the JSON that
+             * holds it is freed */
+            s = !p || !*p
+                    ? vv_error_set(VV_ERR_FORMAT, "%s: dataset %d has no path", md, i)
+                    : vv_error_set(VV_ERR_FORMAT,
+                                   "%s: dataset %d: path \"%.200s\" leaves the store", md, i, p);
+            json_decref(za);
+            return s;
+        }
+    }
     if (level < 0 || (ms ? !ds0 : level > 0)) {
         json_decref(za);
         return vv_error_set(VV_ERR_INVALID, "level %d asked, the store has %d", level, count);
     }
     if (ds0) {
         const char *p = json_string_value(json_object_get(ds0, "path"));
-        if (!p || !*p || strstr(p, "..") || p[0] == '/') {
-            /* the message quotes the path: format it before the JSON that
-             * holds it is freed */
-            s = !p || !*p
-                    ? vv_error_set(VV_ERR_FORMAT, ".zattrs: dataset %d has no path", level)
-                    : vv_error_set(VV_ERR_FORMAT,
-                                   ".zattrs: dataset %d: path \"%s\" leaves the store", level, p);
-            json_decref(za);
-            return s;
-        }
         snprintf(a->dir, sizeof a->dir, "%s/%s", root, p);
+        snprintf(a->prefix, sizeof a->prefix, "%s", p);
         /* a symbolic link may still lead out of the store: compare the
          * real paths (a folder that does not exist has no .zarray) */
         char *rdir = realpath(a->dir, NULL);
@@ -302,9 +455,9 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
         free(rdir);
         if (!inside) {
             s = vv_error_set(VV_ERR_FORMAT,
-                             ".zattrs: dataset %d: path \"%s\" leaves the store (a link to a "
+                             "%s: dataset %d: path \"%s\" leaves the store (a link to a "
                              "folder outside it)",
-                             level, p);
+                             md, level, p);
             json_decref(za);
             return s;
         }
@@ -315,26 +468,35 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
         snprintf(lname, sizeof lname, "%s",
                  ds0 ? json_string_value(json_object_get(ds0, "path")) : ".");
         json_decref(za);
+        vv_zr_array_release(a);
         return vv_error_prefix(s, "level %s", lname);
     }
+    /* Zarr v3 dimension_names name the axes when the OME metadata does not
+     * (each one x, y, z, c or t) */
+    int dimnames = a->zarr_format == 3 && !axes;
+    for (int i = 0; dimnames && i < a->ndim; i++)
+        dimnames = axis_kind(a->axes[i].name, NULL) >= 0;
     /* the axes: from the metadata, else (no OME axes) the last three are z,
      * y, x after t and c */
     static const char *const tczyx[5] = {"t", "c", "z", "y", "x"};
     for (int i = 0; i < a->ndim; i++) {
         json_t *ax = axes ? json_array_get(axes, (size_t)i) : NULL;
+        char dname[32];
+        snprintf(dname, sizeof dname, "%s", a->axes[i].name);
         const char *name = json_is_string(ax) ? json_string_value(ax)
                            : ax               ? json_string_value(json_object_get(ax, "name"))
+                           : dimnames         ? dname
                                               : tczyx[5 - a->ndim + i];
         const char *type =
             ax && json_is_object(ax) ? json_string_value(json_object_get(ax, "type")) : NULL;
         const char *unit =
             ax && json_is_object(ax) ? json_string_value(json_object_get(ax, "unit")) : NULL;
         if (axes && (int)json_array_size(axes) != a->ndim) {
-            s = vv_error_set(VV_ERR_FORMAT, ".zattrs: %zu axes for an array of %d dimensions",
+            s = vv_error_set(VV_ERR_FORMAT, "%s: %zu axes for an array of %d dimensions", md,
                              json_array_size(axes), a->ndim);
             break;
         }
-        if (!axes && a->ndim < 3) {
+        if (!axes && !dimnames && a->ndim < 3) {
             s = vv_error_set(VV_ERR_FORMAT, "a %d-D array without OME axes", a->ndim);
             break;
         }
@@ -342,7 +504,7 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
         snprintf(a->axes[i].unit, sizeof a->axes[i].unit, "%s", unit ? unit : "");
         a->axes[i].kind = axis_kind(a->axes[i].name, type);
         if (a->axes[i].kind < 0) {
-            s = vv_error_set(VV_ERR_UNSUPPORTED, ".zattrs: axis \"%s\" of type \"%s\"",
+            s = vv_error_set(VV_ERR_UNSUPPORTED, "%s: axis \"%s\" of type \"%s\"", md,
                              a->axes[i].name, type ? type : "?");
             break;
         }
@@ -353,10 +515,10 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
         char where[64];
         snprintf(where, sizeof where, "dataset %d", level);
         s = apply_transforms(json_object_get(ds0, "coordinateTransformations"), a->ndim, a->scale,
-                             a->trans, where);
+                             a->trans, md, where);
         if (s == VV_OK)
             s = apply_transforms(json_object_get(ms, "coordinateTransformations"), a->ndim,
-                                 a->scale, a->trans, "multiscales");
+                                 a->scale, a->trans, md, "multiscales");
     }
     /* omero: the channel's label and colour (RRGGBB) */
     json_t *chs = za ? json_object_get(json_object_get(za, "omero"), "channels") : NULL;
@@ -374,68 +536,40 @@ vv_zr_parse_store(const char *root, int level, zr_array *a, int channel, vv_load
             info->has_color = 1;
         }
     }
+    /* the omero window's min and max (the contrast) */
+    json_t *w = json_object_get(ch, "window");
+    json_t *mn = json_object_get(w, "min"), *mx = json_object_get(w, "max");
+    a->has_window = json_is_number(mn) && json_is_number(mx) &&
+                    json_number_value(mx) >= json_number_value(mn) &&
+                    isfinite(json_number_value(mn)) && isfinite(json_number_value(mx));
+    if (a->has_window) {
+        a->window[0] = json_number_value(mn);
+        a->window[1] = json_number_value(mx);
+    }
     json_decref(za);
+    if (s != VV_OK)
+        vv_zr_array_release(a);
     return s;
 }
 
-/* Reads and decodes chunk file @p path into @p out (exactly @p n bytes);
- * 0 with *missing = 1 when the file does not exist. */
-vv_status
-vv_zr_read_chunk(const zr_array *a, const char *path, unsigned char *out, size_t n, int *missing,
-                 uint64_t *file_bytes) {
-    *missing = 0;
-    if (file_bytes)
-        *file_bytes = 0;
-    /* not blocking: a FIFO would block the open forever */
-    const int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-    if (fd < 0) {
-        if (errno == ENOENT) {
-            *missing = 1;
-            return VV_OK;
-        }
-        return vv_error_set(VV_ERR_IO, "%s: %s", path, strerror(errno));
-    }
-    struct stat fst;
-    if (fstat(fd, &fst) != 0 || !S_ISREG(fst.st_mode)) {
-        close(fd);
-        return vv_error_set(VV_ERR_FORMAT, "%s: the chunk is not a regular file", path);
-    }
-    FILE *f = fdopen(fd, "rb");
-    if (!f) {
-        close(fd);
-        return vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk");
-    }
-    /* a chunk (or a folder on its way) that is a link out of the store */
-    if (a->real[0]) {
-        char *real = realpath(path, NULL);
-        const int inside = real && zr_beneath(real, a->real);
-        free(real);
-        if (!inside) {
-            fclose(f);
-            return vv_error_set(VV_ERR_FORMAT, "%s: the chunk file resolves outside the store",
-                                path);
-        }
-    }
-    struct stat st;
-    if (fstat(fileno(f), &st) != 0 || st.st_size < 0 || (uint64_t)st.st_size > ZR_CHUNK_MAX) {
-        fclose(f);
-        return vv_error_set(VV_ERR_LIMIT, "%s: chunk file over %llu bytes", path,
-                            (unsigned long long)ZR_CHUNK_MAX);
-    }
-    size_t m = (size_t)st.st_size;
-    unsigned char *src = malloc(m ? m : 1);
-    if (!src) {
-        fclose(f);
-        return vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk");
-    }
-    size_t got = fread(src, 1, m, f);
-    fclose(f);
-    if (file_bytes)
-        *file_bytes = got;
+void
+zr_chunk_key(const zr_array *a, const uint64_t *idx, char *key, size_t cap) {
+    int len = snprintf(key, cap, "%s%s", a->prefix, a->prefix[0] ? "/" : "");
+    const int c = a->zarr_format == 3 && a->key_default;
+    if (c && len < (int)cap)
+        len += snprintf(key + len, cap - (size_t)len, "c");
+    for (int i = 0; i < a->ndim && len < (int)cap; i++)
+        len += snprintf(key + len, cap - (size_t)len, "%s%llu", i || c ? (char[2]){a->sep, 0} : "",
+                        (unsigned long long)idx[i]);
+}
+
+/* Decodes a Zarr v2 chunk of @p m bytes at @p src with the array's
+ * compressor into exactly @p n bytes at @p out. */
+static vv_status
+decode_v2(const zr_array *a, const unsigned char *src, size_t m, unsigned char *out, size_t n,
+          const char *path) {
     vv_status s = VV_OK;
-    if (got != m) {
-        s = vv_error_set(VV_ERR_IO, "%s: cannot read the chunk", path);
-    } else if (!a->codec[0]) {
+    if (!a->codec[0]) {
         if (m != n)
             s = vv_error_set(VV_ERR_FORMAT, "%s: %zu bytes, an uncompressed chunk has %zu", path, m,
                              n);
@@ -448,7 +582,7 @@ vv_zr_read_chunk(const zr_array *a, const char *path, unsigned char *out, size_t
         size_t done = 0;
         int r = Z_DATA_ERROR;
         if (ok) {
-            z.next_in = src;
+            z.next_in = (unsigned char *)src;
             z.avail_in = (uInt)m;
             z.next_out = out;
             z.avail_out = (uInt)n;
@@ -472,8 +606,62 @@ vv_zr_read_chunk(const zr_array *a, const char *path, unsigned char *out, size_t
             s = vv_error_set(VV_ERR_FORMAT, "%s: the blosc buffer does not decode to %zu bytes",
                              path, n);
     }
+    return s;
+}
+
+/* Reads and decodes the chunk at grid position @p idx into @p out
+ * (exactly @p n bytes); 0 with *missing = 1 when it is absent. */
+vv_status
+vv_zr_read_chunk(const zr_array *a, const uint64_t idx[ZR_MAX_DIM], unsigned char *out, size_t n,
+                 int *missing, uint64_t *file_bytes) {
+    *missing = 0;
+    if (file_bytes)
+        *file_bytes = 0;
+    if (a->zarr_format == 3 && a->nshard > 0)
+        return zr3_read_sharded(a, idx, out, n, missing, file_bytes);
+    char key[2200];
+    zr_chunk_key(a, idx, key, sizeof key);
+    unsigned char *src = NULL;
+    size_t m = 0;
+    /* a v3 chunk is never more than its codecs can have made of it */
+    const uint64_t max = a->zarr_format == 3 ? zr3_encoded_max(&a->chain[0], n) : ZR_CHUNK_MAX;
+    vv_status s = zr_store_get(a, key, 0, ZR_ALL, max, &src, &m, NULL, missing);
+    if (s != VV_OK || *missing)
+        return s;
+    if (file_bytes)
+        *file_bytes = m;
+    if (a->zarr_format != 3) {
+        s = decode_v2(a, src, m, out, n, key);
+    } else {
+        s = zr3_decode_bytes(&a->chain[0], src, m, out, n, key);
+        unsigned char *tmp = NULL;
+        for (int i = 0; s == VV_OK && i < a->chain[0].n && !tmp; i++)
+            if (a->chain[0].c[i].kind == ZC_TRANSPOSE && !(tmp = malloc(n)))
+                s = vv_error_set(VV_ERR_NOMEM, "out of memory for a chunk of %zu bytes", n);
+        if (s == VV_OK && tmp)
+            zr3_untranspose(&a->chain[0], a->ndim, a->chunks, a->esize, out, tmp);
+        free(tmp);
+    }
     free(src);
     return s;
+}
+
+uint64_t
+vv_zr_read_held(const zr_array *a, size_t n) {
+    if (a->zarr_format != 3)
+        return 0; /* the v2 reader's count as it was: the decoded chunk */
+    const zr_chain *c = &a->chain[a->nshard];
+    uint64_t held = zr3_encoded_max(c, n) + n; /* the bytes read, one step decoded */
+    for (int i = 0; i < c->n; i++)
+        if (c->c[i].kind == ZC_TRANSPOSE)
+            return held + n; /* and the transposed copy */
+    return held;
+}
+
+void
+vv_zr_array_release(zr_array *a) {
+    if (a)
+        zr3_cache_free(a);
 }
 
 /* Fills @p n voxels of type @p t at @p dst with @p x (the fill value, cast). */
@@ -613,13 +801,8 @@ vv_zr_copy_chunk(const zr_layout *J, uint64_t L, unsigned char *buf, unsigned ch
             L /= J->nchunk[i];
         }
     }
-    char name[8192];
-    int len = snprintf(name, sizeof name, "%s/", a->dir);
-    for (int i = 0; i < a->ndim && len < (int)sizeof name; i++)
-        len += snprintf(name + len, sizeof name - (size_t)len, "%s%llu",
-                        i ? (char[2]){a->sep, 0} : "", (unsigned long long)idx[i]);
     int missing = 0;
-    vv_status s = vv_zr_read_chunk(a, name, buf, J->cbytes, &missing, file_bytes);
+    vv_status s = vv_zr_read_chunk(a, idx, buf, J->cbytes, &missing, file_bytes);
     if (s != VV_OK)
         return s;
     if (missing_out)
@@ -629,6 +812,13 @@ vv_zr_copy_chunk(const zr_layout *J, uint64_t L, unsigned char *buf, unsigned ch
         vv_zr_fill(buf, J->cbytes / vs, a->type, a->fill);
     else if (a->swap)
         vv_byteswap(buf, J->cbytes / vs, vs);
+    if (!missing && a->conv64) /* 64-bit integers read as doubles, in place */
+        for (size_t i = 0; i < J->cbytes / 8; i++) {
+            uint64_t u;
+            memcpy(&u, buf + 8 * i, 8);
+            const double x = a->conv64 == 1 ? (double)(int64_t)u : (double)u;
+            memcpy(buf + 8 * i, &x, 8);
+        }
     /* the part inside the array, at the asked channel and step */
     uint64_t base = 0;
     if (J->cax >= 0)
@@ -667,34 +857,32 @@ vv_zr_copy_chunk(const zr_layout *J, uint64_t L, unsigned char *buf, unsigned ch
 }
 
 static vv_status
-read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
-    zr_array a;
-    memset(&a, 0, sizeof a);
+read_array(vv_volume **out, const zr_array *ap, const vv_load_options *opt, int n_levels) {
     vv_load_info *info = opt->info;
-    int n_levels = 1;
-    vv_status s = vv_zr_parse_store(path, opt->level, &a, opt->channel, info, &n_levels);
-    if (s != VV_OK)
-        return s;
+    vv_status s;
     zr_layout J;
-    if ((s = vv_zr_layout(&a, opt->channel, opt->time, &J)) != VV_OK)
+    if ((s = vv_zr_layout(ap, opt->channel, opt->time, &J)) != VV_OK)
         return s;
     const int *dims = J.dims;
     const int cax = J.cax, tax = J.tax;
     const uint64_t nc = J.nc, nt = J.nt;
-    if ((s = vv_volume_check_size(dims, a.type, NULL)) != VV_OK)
+    if ((s = vv_volume_check_size(dims, ap->type, NULL)) != VV_OK)
         return s;
     /* each thread decodes into a buffer of a whole chunk (one thread for
      * chunks over 64 MiB): a store of a few bytes may declare chunks of
      * 1 GiB, so the buffers count against the budget too (fewer threads
      * when they would not fit) */
+    /* a thread holds its chunk buffer and, for Zarr v3, what it reads and
+     * decodes it from (an inner chunk of a shard) */
+    const uint64_t per = (uint64_t)J.cbytes + vv_zr_read_held(ap, J.cbytes);
     int nthreads = J.cbytes > ((size_t)64 << 20) ? 1 : omp_get_max_threads();
     const uint64_t budget = vv_memory_budget_get();
-    if ((uint64_t)J.cbytes * (uint64_t)nthreads > budget)
-        nthreads = budget / J.cbytes > 1 ? (int)(budget / J.cbytes) : 1;
-    if ((s = vv_memory_budget_check((uint64_t)J.cbytes, "a Zarr chunk's buffer")) != VV_OK)
+    if (per * (uint64_t)nthreads > budget)
+        nthreads = budget / per > 1 ? (int)(budget / per) : 1;
+    if ((s = vv_memory_budget_check(per, "a Zarr chunk's buffer")) != VV_OK)
         return s;
     uint64_t n_spatial = 1;
-    for (int i = 0; i < a.ndim; i++)
+    for (int i = 0; i < ap->ndim; i++)
         if (i != cax && i != tax)
             n_spatial *= J.nchunk[i]; /* at most 2^48: each axis is at most 65536 */
     /* each chunk is a file to look for: chunks of a few voxels made a 4 MiB
@@ -706,7 +894,7 @@ read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
                             (unsigned long long)n_spatial, J.cdims[0], J.cdims[1], J.cdims[2],
                             ZR_READ_CHUNKS_MAX);
     vv_volume *v = NULL;
-    if ((s = vv_volume_new(&v, dims, a.type)) != VV_OK)
+    if ((s = vv_volume_new(&v, dims, ap->type)) != VV_OK)
         return s;
     /* the chunks in parallel, each thread its own buffer; the error of the
      * first failing chunk in order */
@@ -744,19 +932,33 @@ read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
         info->n_channels = (int)nc;
         info->n_levels = n_levels;
         info->n_times = (int)nt;
-        if (tax >= 0 && a.scale[tax] > 0) {
-            const char *u = a.axes[tax].unit;
+        if (tax >= 0 && ap->scale[tax] > 0) {
+            const char *u = ap->axes[tax].unit;
             double f = !strcmp(u, "second")        ? 1
                        : !strcmp(u, "millisecond") ? 1e-3
                        : !strcmp(u, "microsecond") ? 1e-6
                        : !strcmp(u, "minute")      ? 60
                        : !strcmp(u, "hour")        ? 3600
                                                    : 0;
-            info->time_step = a.scale[tax] * f;
+            info->time_step = ap->scale[tax] * f;
         }
     }
     *out = v;
     return VV_OK;
+}
+
+static vv_status
+read_store(vv_volume **out, const char *path, const vv_load_options *opt) {
+    zr_array *a = calloc(1, sizeof *a); /* 14 KiB: not on a reader thread's stack */
+    if (!a)
+        return vv_error_set(VV_ERR_NOMEM, "out of memory");
+    int n_levels = 1;
+    vv_status s = vv_zr_parse_store(path, opt->level, a, opt->channel, opt->info, &n_levels);
+    if (s == VV_OK)
+        s = read_array(out, a, opt, n_levels);
+    vv_zr_array_release(a);
+    free(a);
+    return s;
 }
 
 vv_status
@@ -770,7 +972,26 @@ vv_ome_zarr_read(vv_volume **out, const char *path, const vv_load_options *opt) 
     return VV_OK;
 }
 
-/* A folder with a .zarray, or a .zattrs naming multiscales. */
+/* The first bytes of file @p name in folder @p dir (a regular file) into
+ * @p head (NUL-terminated); 0 when there is none. */
+static int
+file_head(const char *dir, const char *name, char *head, size_t cap) {
+    char f[4200];
+    struct stat st;
+    snprintf(f, sizeof f, "%s/%s", dir, name);
+    if (stat(f, &st) != 0 || !S_ISREG(st.st_mode)) /* a FIFO would block the open */
+        return 0;
+    FILE *fp = fopen(f, "rb");
+    if (!fp)
+        return 0;
+    size_t n = fread(head, 1, cap - 1, fp);
+    fclose(fp);
+    head[n] = '\0';
+    return 1;
+}
+
+/* A folder with a .zarray, or a .zattrs naming multiscales, or a Zarr v3
+ * zarr.json of an array or of a group naming multiscales. */
 int
 vv_ome_zarr_looks_like(const vv_format_probe *p, int deep) {
     if (!p->is_dir || deep)
@@ -780,15 +1001,22 @@ vv_ome_zarr_looks_like(const vv_format_probe *p, int deep) {
     snprintf(f, sizeof f, "%s/.zarray", p->path);
     if (stat(f, &st) == 0)
         return 1;
-    snprintf(f, sizeof f, "%s/.zattrs", p->path);
-    if (stat(f, &st) != 0 || !S_ISREG(st.st_mode)) /* a FIFO would block the open */
+    const size_t cap = 65536; /* an NGFF group's zarr.json names multiscales early */
+    char *buf = malloc(cap);
+    if (!buf)
         return 0;
-    FILE *fp = fopen(f, "rb");
-    if (!fp)
-        return 0;
-    char head[4096];
-    size_t n = fread(head, 1, sizeof head - 1, fp);
-    fclose(fp);
-    head[n] = '\0';
-    return strstr(head, "\"multiscales\"") != NULL;
+    int yes = 0;
+    if (file_head(p->path, "zarr.json", buf, cap)) {
+        /* "node_type": "array", or a group naming multiscales */
+        const char *nt = strstr(buf, "\"node_type\"");
+        if (nt) {
+            nt += strlen("\"node_type\"");
+            while (*nt == ' ' || *nt == '\t' || *nt == '\n' || *nt == '\r' || *nt == ':')
+                nt++;
+        }
+        yes = nt && (!strncmp(nt, "\"array\"", 7) || strstr(buf, "\"multiscales\""));
+    } else if (file_head(p->path, ".zattrs", buf, 4096))
+        yes = strstr(buf, "\"multiscales\"") != NULL;
+    free(buf);
+    return yes;
 }
