@@ -17,6 +17,10 @@ static const cli_opt_spec convert_opts[] = {
     {"no-compress", 0, NULL},
     {"codec", 0, "NAME"},
     {"bigtiff", 0, NULL},
+    {"ngff", 0, "0.4|0.5"},
+    {"chunk", 0, "N|XxYxZ"},
+    {"shard", 0, "N|XxYxZ"},
+    {"compress", 0, "zstd|blosc|gzip|zlib|none"},
     {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
     {"series", 0, "N"},
     {"channel", 0, "C"},
@@ -284,6 +288,82 @@ convert_zarr_boxes(const char *in, const char *out, const vv_raw_params *raw, in
     return rc;
 }
 
+/* --OPT N or XxYxZ (voxels, 1 .. 4096 each) into @p out; 0 or CLI_EXIT_USAGE. */
+static int
+parse_shape(const cli_args *a, const char *opt, const char *text, int out[3]) {
+    char part[3][32];
+    int n = 0;
+    const char *p = text;
+    for (;;) {
+        const size_t len = strcspn(p, "x");
+        if (n == 3 || len == 0 || len >= sizeof part[0])
+            return cli_usage_error(a, "--%s: expected N or XxYxZ, got '%s'", opt, text);
+        memcpy(part[n], p, len);
+        part[n++][len] = '\0';
+        if (!p[len])
+            break;
+        p += len + 1;
+    }
+    if (n == 2)
+        return cli_usage_error(a, "--%s: expected N or XxYxZ, got '%s'", opt, text);
+    for (int i = 0; i < n; i++) {
+        int rc = cli_parse_int(a, opt, part[i], 1, 4096, &out[i]);
+        if (rc)
+            return rc;
+    }
+    if (n == 1)
+        out[1] = out[2] = out[0];
+    return 0;
+}
+
+/* The OME-Zarr options (--ngff, --chunk, --shard, --compress) into @p so;
+ * 0 or CLI_EXIT_USAGE (one line). */
+static int
+parse_zarr_options(const cli_args *a, vv_format format, vv_save_options *so) {
+    const char *ngff = cli_get(a, "ngff"), *chunk = cli_get(a, "chunk"),
+               *shard = cli_get(a, "shard"), *comp = cli_get(a, "compress");
+    if (format != VV_FORMAT_OME_ZARR) {
+        if (ngff || chunk || shard || comp)
+            return cli_usage_error(a, "--ngff, --chunk, --shard and --compress are for OME-Zarr "
+                                      "output");
+        return 0;
+    }
+    int rc;
+    if (ngff) {
+        if (!strcmp(ngff, "0.4"))
+            so->ngff_version = 4;
+        else if (!strcmp(ngff, "0.5"))
+            so->ngff_version = 5;
+        else
+            return cli_usage_error(a, "--ngff: '%s' is not written (0.4 or 0.5)", ngff);
+    }
+    const int v3 = (so->ngff_version ? so->ngff_version : VV_OME_ZARR_DEFAULT_NGFF) == 5;
+    if (chunk && (rc = parse_shape(a, "chunk", chunk, so->chunk)))
+        return rc;
+    if (shard) {
+        if (!v3)
+            return cli_usage_error(a, "--shard: sharding needs --ngff 0.5 (Zarr v3)");
+        if ((rc = parse_shape(a, "shard", shard, so->shard)))
+            return rc;
+        for (int i = 0; i < 3; i++) {
+            const int c = so->chunk[i] ? so->chunk[i] : 64;
+            if (so->shard[i] % c)
+                return cli_usage_error(a, "--shard: %d is not a multiple of the chunk's %d",
+                                       so->shard[i], c);
+        }
+    }
+    if (comp) {
+        if (strcmp(comp, "zstd") && strcmp(comp, "blosc") && strcmp(comp, "gzip") &&
+            strcmp(comp, "none") && (v3 || strcmp(comp, "zlib")))
+            return cli_usage_error(a, "--compress: '%s' (OME-Zarr %s: zstd, blosc, gzip%s or none)",
+                                   comp, v3 ? "0.5" : "0.4", v3 ? "" : ", zlib");
+        if (cli_count(a, "no-compress") > 0 && strcmp(comp, "none"))
+            return cli_usage_error(a, "--compress %s and --no-compress", comp);
+        so->codec = comp;
+    }
+    return 0;
+}
+
 int
 cli_convert_main(int argc, char **argv) {
     cli_args a;
@@ -336,6 +416,10 @@ cli_convert_main(int argc, char **argv) {
     const char *ls = cli_get(&a, "level");
     if (ls && (rc = cli_parse_int(&a, "level", ls, 0, 64, &level)))
         return rc;
+    vv_save_options so;
+    vv_save_options_init(&so);
+    if ((rc = parse_zarr_options(&a, format, &so)))
+        return rc;
     if (format == VV_FORMAT_VVB && level > 0)
         return cli_usage_error(&a, "--level: a .vvb is written from level 0");
     if (format == VV_FORMAT_VVB) {
@@ -349,15 +433,14 @@ cli_convert_main(int argc, char **argv) {
                                (cli_count(&a, "no-levels") == 0 ? VV_VVB_LEVELS : 0u);
         return convert_vvb(in, out, raw_spec ? &raw : NULL, series, channel, time, flags, quiet);
     }
-    vv_save_options so;
-    vv_save_options_init(&so);
     so.format = format;
     so.strict = strict;
     so.label = cli_count(&a, "label") > 0;
     so.nifti_version = cli_count(&a, "nifti2") > 0 ? 2 : 0;
     if (cli_count(&a, "no-compress") > 0)
         so.compress = 0;
-    so.codec = cli_get(&a, "codec");
+    if (format == VV_FORMAT_TIFF)
+        so.codec = cli_get(&a, "codec");
     so.bigtiff = cli_count(&a, "bigtiff") > 0;
     if (format == VV_FORMAT_OME_ZARR && level == 0 && series == 0 &&
         (rc = convert_zarr_boxes(in, out, raw_spec ? &raw : NULL, channel, time, &so, strict,
