@@ -997,9 +997,17 @@ write_level(const char *root, int index, const zarr_spec *z, const vv_volume *v,
     }
     if (s != VV_OK)
         return s;
-    if (feed && feed->read) /* level 0 from the reader: by rows of units */
-        vv_parallel_for((long)j.n[1] * j.n[2], 1, 0, row_body, &j, NULL);
-    else
+    if (feed && feed->read) {
+        /* level 0 from the reader: by rows of units, each worker holding one
+         * row's box (and the reader its slices): as many workers as a
+         * quarter of the memory budget holds such boxes (a row of big shards
+         * is many rows of chunks), at least one */
+        const uint64_t row =
+            (uint64_t)l->dims[0] * j.unit[1] * j.unit[2] * vv_voxel_type_size(v->type);
+        const uint64_t fit = vv_memory_budget_get() / 4 / (row ? row : 1);
+        const int threads = fit < (uint64_t)vv_threads_get() ? (fit ? (int)fit : 1) : 0;
+        vv_parallel_for((long)j.n[1] * j.n[2], 1, threads, row_body, &j, NULL);
+    } else
         vv_parallel_for((long)j.n[0] * j.n[1] * j.n[2], z->sharded ? 1 : 4, 0, unit_body, &j, NULL);
     if (j.failed == -2)
         return vv_error_set(feed->status, "%s", feed->message);
@@ -1238,8 +1246,9 @@ const vv_format_record vv_format_ome_zarr = {
     .title = "OME-Zarr",
     .extensions = zarr_extensions,
     .doc = "OME-Zarr 0.4 / Zarr v2 (a folder): read, level 0, one channel and time step (axes t, "
-           "c, z, y, x in any order; raw, zlib, gzip, zstd, blosc chunks); written as a pyramid of "
-           "2x2x2 means (labels: nearest), 64^3 chunks, zlib unless --no-compress",
+           "c, z, y, x in any order; raw, zlib, gzip, zstd, blosc chunks); written as OME-NGFF 0.5 "
+           "(Zarr v3, optionally sharded) or 0.4: a pyramid of 2x2x2 means (labels: nearest), "
+           "64^3 chunks, zstd (0.5) or zlib (0.4) unless --compress",
     .flags = VV_FORMAT_FLAG_FOLDER | VV_FORMAT_FLAG_THIRD_PARTY,
     .looks_like = vv_ome_zarr_looks_like,
     .fits = zarr_fits,
