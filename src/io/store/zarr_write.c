@@ -89,7 +89,7 @@
 
 /* ---- what is written ---------------------------------------------------------- */
 
-typedef enum zarr_codec { ZC_NONE, ZC_ZLIB, ZC_GZIP, ZC_ZSTD, ZC_BLOSC } zarr_codec;
+typedef enum zw_codec { ZW_NONE, ZW_ZLIB, ZW_GZIP, ZW_ZSTD, ZW_BLOSC } zw_codec;
 
 #define ZARR_LEVEL 1       /* zlib, gzip, zstd: fast, as the v2 writer always was */
 #define ZARR_BLOSC_LEVEL 5 /* blosc's (and numcodecs') default */
@@ -98,7 +98,7 @@ typedef enum zarr_codec { ZC_NONE, ZC_ZLIB, ZC_GZIP, ZC_ZSTD, ZC_BLOSC } zarr_co
  * and shard shapes asked for (x, y, z; shard 0: none). */
 typedef struct zarr_spec {
     int v3;
-    zarr_codec codec;
+    zw_codec codec;
     int chunk[3], shard[3];
     int sharded;
 } zarr_spec;
@@ -113,17 +113,17 @@ spec_of(const vv_save_options *opt, zarr_spec *z) {
     z->v3 = ngff == 5;
     const char *c = opt ? opt->codec : NULL;
     if (!c)
-        z->codec = opt && opt->compress == 0 ? ZC_NONE : z->v3 ? ZC_ZSTD : ZC_ZLIB;
+        z->codec = opt && opt->compress == 0 ? ZW_NONE : z->v3 ? ZW_ZSTD : ZW_ZLIB;
     else if (!strcmp(c, "none"))
-        z->codec = ZC_NONE;
+        z->codec = ZW_NONE;
     else if (!strcmp(c, "zlib") && !z->v3)
-        z->codec = ZC_ZLIB;
+        z->codec = ZW_ZLIB;
     else if (!strcmp(c, "gzip"))
-        z->codec = ZC_GZIP;
+        z->codec = ZW_GZIP;
     else if (!strcmp(c, "zstd"))
-        z->codec = ZC_ZSTD;
+        z->codec = ZW_ZSTD;
     else if (!strcmp(c, "blosc"))
-        z->codec = ZC_BLOSC;
+        z->codec = ZW_BLOSC;
     else
         return vv_error_set(VV_ERR_INVALID, "codec '%s' (OME-Zarr 0.%d: zstd, blosc, gzip%s, none)",
                             c, ngff, z->v3 ? "" : ", zlib");
@@ -149,8 +149,6 @@ spec_of(const vv_save_options *opt, zarr_spec *z) {
                           ZARR_SHARD_CHUNKS_MAX)
         return vv_error_set(VV_ERR_INVALID, "a shard of more than %d chunks",
                             ZARR_SHARD_CHUNKS_MAX);
-    if ((uint64_t)z->chunk[0] * z->chunk[1] * z->chunk[2] * 8 > ((uint64_t)1 << 31))
-        return vv_error_set(VV_ERR_INVALID, "a chunk of more than 2 GiB");
     return VV_OK;
 }
 
@@ -175,14 +173,14 @@ level_needs_next(const zarr_spec *z, const int dims[3]) {
 
 /* The most bytes @p n raw bytes encode to. */
 static size_t
-codec_bound(zarr_codec c, size_t n) {
+codec_bound(zw_codec c, size_t n) {
     switch (c) {
-    case ZC_ZLIB:
-    case ZC_GZIP:
+    case ZW_ZLIB:
+    case ZW_GZIP:
         return compressBound((uLong)n) + 32;
-    case ZC_ZSTD:
+    case ZW_ZSTD:
         return ZSTD_compressBound(n);
-    case ZC_BLOSC:
+    case ZW_BLOSC:
         return n + BLOSC_MAX_OVERHEAD;
     default:
         return n;
@@ -192,14 +190,13 @@ codec_bound(zarr_codec c, size_t n) {
 /* @p n bytes at @p src encoded into @p dst (@p cap bytes: codec_bound);
  * the size, or 0 on failure. */
 static size_t
-encode(zarr_codec c, size_t es, const unsigned char *src, size_t n, unsigned char *dst,
-       size_t cap) {
+encode(zw_codec c, size_t es, const unsigned char *src, size_t n, unsigned char *dst, size_t cap) {
     switch (c) {
-    case ZC_ZLIB: {
+    case ZW_ZLIB: {
         uLongf zn = (uLongf)cap;
         return compress2(dst, &zn, src, (uLong)n, ZARR_LEVEL) == Z_OK ? (size_t)zn : 0;
     }
-    case ZC_GZIP: {
+    case ZW_GZIP: {
         z_stream zs;
         memset(&zs, 0, sizeof zs);
         if (deflateInit2(&zs, ZARR_LEVEL, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)
@@ -213,11 +210,11 @@ encode(zarr_codec c, size_t es, const unsigned char *src, size_t n, unsigned cha
         deflateEnd(&zs);
         return r == Z_STREAM_END ? out : 0;
     }
-    case ZC_ZSTD: {
+    case ZW_ZSTD: {
         const size_t r = ZSTD_compress(dst, cap, src, n, ZARR_LEVEL);
         return ZSTD_isError(r) ? 0 : r;
     }
-    case ZC_BLOSC: {
+    case ZW_BLOSC: {
         const int r =
             blosc_compress_ctx(ZARR_BLOSC_LEVEL, BLOSC_SHUFFLE, es, n, src, dst, cap, "lz4", 0, 1);
         return r > 0 ? (size_t)r : 0;
@@ -230,13 +227,13 @@ encode(zarr_codec c, size_t es, const unsigned char *src, size_t n, unsigned cha
 
 /* @p m bytes at @p src decoded into @p dst, exactly @p n bytes: 0 or EILSEQ. */
 static int
-decode(zarr_codec c, const unsigned char *src, size_t m, unsigned char *dst, size_t n) {
+decode(zw_codec c, const unsigned char *src, size_t m, unsigned char *dst, size_t n) {
     switch (c) {
-    case ZC_ZLIB:
-    case ZC_GZIP: {
+    case ZW_ZLIB:
+    case ZW_GZIP: {
         z_stream zs;
         memset(&zs, 0, sizeof zs);
-        if (inflateInit2(&zs, c == ZC_GZIP ? 15 + 16 : 15) != Z_OK)
+        if (inflateInit2(&zs, c == ZW_GZIP ? 15 + 16 : 15) != Z_OK)
             return EILSEQ;
         zs.next_in = (Bytef *)src;
         zs.avail_in = (uInt)m;
@@ -247,11 +244,11 @@ decode(zarr_codec c, const unsigned char *src, size_t m, unsigned char *dst, siz
         inflateEnd(&zs);
         return r == Z_STREAM_END && out == n ? 0 : EILSEQ;
     }
-    case ZC_ZSTD: {
+    case ZW_ZSTD: {
         const size_t r = ZSTD_decompress(dst, n, src, m);
         return !ZSTD_isError(r) && r == n ? 0 : EILSEQ;
     }
-    case ZC_BLOSC:
+    case ZW_BLOSC:
         return blosc_decompress_ctx(src, dst, n, 1) == (int)n ? 0 : EILSEQ;
     default:
         if (m != n)
@@ -434,14 +431,14 @@ v3_codecs(const zarr_spec *z, size_t es) {
     json_t *a = json_pack("[{s:s, s:{s:s}}]", "name", "bytes", "configuration", "endian", "little");
     json_t *c = NULL;
     switch (z->codec) {
-    case ZC_GZIP:
+    case ZW_GZIP:
         c = json_pack("{s:s, s:{s:i}}", "name", "gzip", "configuration", "level", ZARR_LEVEL);
         break;
-    case ZC_ZSTD:
+    case ZW_ZSTD:
         c = json_pack("{s:s, s:{s:i, s:b}}", "name", "zstd", "configuration", "level", ZARR_LEVEL,
                       "checksum", 0);
         break;
-    case ZC_BLOSC:
+    case ZW_BLOSC:
         c = json_pack("{s:s, s:{s:s, s:i, s:s, s:i, s:i}}", "name", "blosc", "configuration",
                       "cname", "lz4", "clevel", ZARR_BLOSC_LEVEL, "shuffle", "shuffle", "typesize",
                       (int)es, "blocksize", 0);
@@ -462,15 +459,15 @@ write_array(const char *dir, const zarr_spec *z, const vv_volume *v, const zarr_
     if (!z->v3) {
         json_t *comp = NULL;
         switch (z->codec) {
-        case ZC_ZLIB:
-        case ZC_GZIP:
-            comp = json_pack("{s:s, s:i}", "id", z->codec == ZC_ZLIB ? "zlib" : "gzip", "level",
+        case ZW_ZLIB:
+        case ZW_GZIP:
+            comp = json_pack("{s:s, s:i}", "id", z->codec == ZW_ZLIB ? "zlib" : "gzip", "level",
                              ZARR_LEVEL);
             break;
-        case ZC_ZSTD:
+        case ZW_ZSTD:
             comp = json_pack("{s:s, s:i}", "id", "zstd", "level", ZARR_LEVEL);
             break;
-        case ZC_BLOSC:
+        case ZW_BLOSC:
             comp = json_pack("{s:s, s:s, s:i, s:i, s:i}", "id", "blosc", "cname", "lz4", "clevel",
                              ZARR_BLOSC_LEVEL, "shuffle", 1, "blocksize", 0);
             break;
@@ -1175,6 +1172,15 @@ write_atomic(const vv_volume *v, vv_box_reader read, void *ctx, const char *path
     vv_status s = spec_of(opt, &z);
     if (s == VV_OK)
         s = io_write_check_voxels(v, v->data || read, zarr_dtype(v->type) != NULL);
+    if (s == VV_OK) { /* level 0's chunks are the largest: what a reader allows */
+        int c[3], u[3];
+        level_grid(&z, v->dims, c, u);
+        const uint64_t bytes = (uint64_t)c[0] * c[1] * c[2] * vv_voxel_type_size(v->type);
+        if (bytes > ZR_CHUNK_MAX)
+            s = vv_error_set(
+                VV_ERR_INVALID, "a chunk of %d x %d x %d voxels is %llu bytes (at most %llu)", c[0],
+                c[1], c[2], (unsigned long long)bytes, (unsigned long long)ZR_CHUNK_MAX);
+    }
     if (s == VV_OK && opt->label && (v->type == VV_F32 || v->type == VV_F64))
         s = vv_error_set(VV_ERR_UNSUPPORTED, "a label volume holds integers, not %s",
                          vv_voxel_type_name(v->type));
