@@ -367,8 +367,9 @@ parse_zarr_options(const cli_args *a, vv_format format, vv_save_options *so) {
     if (comp) {
         if (strcmp(comp, "zstd") && strcmp(comp, "blosc") && strcmp(comp, "gzip") &&
             strcmp(comp, "none") && (v3 || strcmp(comp, "zlib")))
-            return cli_usage_error(a, "--compress: '%s' (OME-Zarr %s: zstd, blosc, gzip%s or none)",
-                                   comp, v3 ? "0.5" : "0.4", v3 ? "" : ", zlib");
+            return cli_usage_error(
+                a, "--compress: '%s' is not a codec of OME-Zarr %s (zstd, blosc, gzip%s or none)",
+                comp, v3 ? "0.5" : "0.4", v3 ? "" : ", zlib");
         if (cli_count(a, "no-compress") > 0 && strcmp(comp, "none"))
             return cli_usage_error(a, "--compress %s and --no-compress", comp);
         so->codec = comp;
