@@ -17,6 +17,10 @@ static const cli_opt_spec convert_opts[] = {
     {"no-compress", 0, NULL},
     {"codec", 0, "NAME"},
     {"bigtiff", 0, NULL},
+    {"ngff", 0, "0.4|0.5"},
+    {"chunk", 0, "N|XxYxZ"},
+    {"shard", 0, "N|XxYxZ"},
+    {"compress", 0, "zstd|blosc|gzip|zlib|none"},
     {"raw", 0, "WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]"},
     {"series", 0, "N"},
     {"channel", 0, "C"},
@@ -41,10 +45,11 @@ cli_convert_usage(FILE *out) {
                  "axis-aligned, with a warning; TIFF (.tif, .tiff: one page per slice in\n"
                  "the voxel type, ImageJ's spacing, unit and origin; .ome.tif, .ome.tiff:\n"
                  "OME-XML with physical sizes and plane positions) has no direction matrix\n"
-                 "either; OME-Zarr (.ome.zarr, .zarr: a Zarr v2 folder with a pyramid of\n"
-                 "2x2x2 means, labels by nearest, and each level's scale and translation;\n"
-                 "read back at any level with --level) has none either; it is written\n"
-                 "chunk by chunk, with memory bounded by a row of 64^3 chunks, when IN is raw,\n"
+                 "either; OME-Zarr (.ome.zarr, .zarr: OME-NGFF 0.5, a Zarr v3 folder, or\n"
+                 "with --ngff 0.4 a Zarr v2 folder, with a pyramid of 2x2x2 means, labels\n"
+                 "by nearest, and each level's scale and translation; read back at any\n"
+                 "level with --level) has none either; it is written chunk by chunk,\n"
+                 "with memory bounded by a row of chunks (or shards), when IN is raw,\n"
                  "an uncompressed NRRD or a pyramid (OME-Zarr, BigDataViewer, Imaris), and\n"
                  "by 64 slices when IN is a TIFF stack or a gzip or bzip2 NRRD (slab by slab);\n"
                  "SLC (.slc; VolVis's own 8-bit format)\n"
@@ -88,6 +93,15 @@ cli_convert_usage(FILE *out) {
             "  --codec NAME       TIFF: deflate (default), lzw, zstd, packbits or none\n"
             "  --bigtiff          TIFF: write BigTIFF (64-bit offsets) whatever the size\n"
             "                     (default: only when the voxels reach 3.75 GiB)\n"
+            "  --ngff 0.4|0.5     OME-Zarr: OME-NGFF 0.5 (Zarr v3, zarr.json; default) or\n"
+            "                     0.4 (Zarr v2, .zgroup/.zattrs/.zarray)\n"
+            "  --chunk N|XxYxZ    OME-Zarr: the chunk shape in voxels, clipped to each\n"
+            "                     level (default 64)\n"
+            "  --shard N|XxYxZ    OME-Zarr 0.5: shards of this shape in voxels, a multiple\n"
+            "                     of the chunk on each axis (sharding_indexed, the index\n"
+            "                     at the end with its crc32c; default: not sharded)\n"
+            "  --compress NAME    OME-Zarr: zstd (0.5's default), blosc (lz4, shuffle),\n"
+            "                     gzip, none, or at 0.4 zlib (0.4's default)\n"
             "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
             "                     read IN as raw voxels (see 'volvis info --help')\n"
             "  --series N         DICOM: series N as 'volvis info' lists them\n"
@@ -113,6 +127,8 @@ cli_convert_usage(FILE *out) {
                  "  volvis convert ../shared/data/volumes/ct_head.nrrd head.vti\n"
                  "  volvis convert ../shared/data/volumes/ct_head.nrrd head.ome.tif\n"
                  "  volvis convert ../shared/data/volumes/ct_head.nrrd head.ome.zarr\n"
+                 "  volvis convert --shard 256 ../shared/data/volumes/ct_head.nrrd head.ome.zarr\n"
+                 "  volvis convert --ngff 0.4 ../shared/data/volumes/ct_head.nrrd head.ome.zarr\n"
                  "  volvis convert --raw 64x64x64:f32 field.raw field.nrrd\n"
                  "  volvis convert --raw 2048x2048x2048:u8 big.raw big.vvb\n");
 }
@@ -284,6 +300,83 @@ convert_zarr_boxes(const char *in, const char *out, const vv_raw_params *raw, in
     return rc;
 }
 
+/* --OPT N or XxYxZ (voxels, 1 .. 4096 each) into @p out; 0 or CLI_EXIT_USAGE. */
+static int
+parse_shape(const cli_args *a, const char *opt, const char *text, int out[3]) {
+    char part[3][32];
+    int n = 0;
+    const char *p = text;
+    for (;;) {
+        const size_t len = strcspn(p, "x");
+        if (n == 3 || len == 0 || len >= sizeof part[0])
+            return cli_usage_error(a, "--%s: expected N or XxYxZ, got '%s'", opt, text);
+        memcpy(part[n], p, len);
+        part[n++][len] = '\0';
+        if (!p[len])
+            break;
+        p += len + 1;
+    }
+    if (n == 2)
+        return cli_usage_error(a, "--%s: expected N or XxYxZ, got '%s'", opt, text);
+    for (int i = 0; i < n; i++) {
+        int rc = cli_parse_int(a, opt, part[i], 1, 4096, &out[i]);
+        if (rc)
+            return rc;
+    }
+    if (n == 1)
+        out[1] = out[2] = out[0];
+    return 0;
+}
+
+/* The OME-Zarr options (--ngff, --chunk, --shard, --compress) into @p so;
+ * 0 or CLI_EXIT_USAGE (one line). */
+static int
+parse_zarr_options(const cli_args *a, vv_format format, vv_save_options *so) {
+    const char *ngff = cli_get(a, "ngff"), *chunk = cli_get(a, "chunk"),
+               *shard = cli_get(a, "shard"), *comp = cli_get(a, "compress");
+    if (format != VV_FORMAT_OME_ZARR) {
+        if (ngff || chunk || shard || comp)
+            return cli_usage_error(a, "--ngff, --chunk, --shard and --compress are for OME-Zarr "
+                                      "output");
+        return 0;
+    }
+    int rc;
+    if (ngff) {
+        if (!strcmp(ngff, "0.4"))
+            so->ngff_version = 4;
+        else if (!strcmp(ngff, "0.5"))
+            so->ngff_version = 5;
+        else
+            return cli_usage_error(a, "--ngff: '%s' is not written (0.4 or 0.5)", ngff);
+    }
+    const int v3 = (so->ngff_version ? so->ngff_version : VV_OME_ZARR_DEFAULT_NGFF) == 5;
+    if (chunk && (rc = parse_shape(a, "chunk", chunk, so->chunk)))
+        return rc;
+    if (shard) {
+        if (!v3)
+            return cli_usage_error(a, "--shard: sharding needs --ngff 0.5 (Zarr v3)");
+        if ((rc = parse_shape(a, "shard", shard, so->shard)))
+            return rc;
+        for (int i = 0; i < 3; i++) {
+            const int c = so->chunk[i] ? so->chunk[i] : 64;
+            if (so->shard[i] % c)
+                return cli_usage_error(a, "--shard: %d is not a multiple of the chunk's %d",
+                                       so->shard[i], c);
+        }
+    }
+    if (comp) {
+        if (strcmp(comp, "zstd") && strcmp(comp, "blosc") && strcmp(comp, "gzip") &&
+            strcmp(comp, "none") && (v3 || strcmp(comp, "zlib")))
+            return cli_usage_error(
+                a, "--compress: '%s' is not a codec of OME-Zarr %s (zstd, blosc, gzip%s or none)",
+                comp, v3 ? "0.5" : "0.4", v3 ? "" : ", zlib");
+        if (cli_count(a, "no-compress") > 0 && strcmp(comp, "none"))
+            return cli_usage_error(a, "--compress %s and --no-compress", comp);
+        so->codec = comp;
+    }
+    return 0;
+}
+
 int
 cli_convert_main(int argc, char **argv) {
     cli_args a;
@@ -336,6 +429,10 @@ cli_convert_main(int argc, char **argv) {
     const char *ls = cli_get(&a, "level");
     if (ls && (rc = cli_parse_int(&a, "level", ls, 0, 64, &level)))
         return rc;
+    vv_save_options so;
+    vv_save_options_init(&so);
+    if ((rc = parse_zarr_options(&a, format, &so)))
+        return rc;
     if (format == VV_FORMAT_VVB && level > 0)
         return cli_usage_error(&a, "--level: a .vvb is written from level 0");
     if (format == VV_FORMAT_VVB) {
@@ -349,15 +446,14 @@ cli_convert_main(int argc, char **argv) {
                                (cli_count(&a, "no-levels") == 0 ? VV_VVB_LEVELS : 0u);
         return convert_vvb(in, out, raw_spec ? &raw : NULL, series, channel, time, flags, quiet);
     }
-    vv_save_options so;
-    vv_save_options_init(&so);
     so.format = format;
     so.strict = strict;
     so.label = cli_count(&a, "label") > 0;
     so.nifti_version = cli_count(&a, "nifti2") > 0 ? 2 : 0;
     if (cli_count(&a, "no-compress") > 0)
         so.compress = 0;
-    so.codec = cli_get(&a, "codec");
+    if (format == VV_FORMAT_TIFF)
+        so.codec = cli_get(&a, "codec");
     so.bigtiff = cli_count(&a, "bigtiff") > 0;
     if (format == VV_FORMAT_OME_ZARR && level == 0 && series == 0 &&
         (rc = convert_zarr_boxes(in, out, raw_spec ? &raw : NULL, channel, time, &so, strict,

@@ -373,7 +373,10 @@ typedef struct vv_save_options {
      *  32767 voxels */
     int nifti_version;
     /** TIFF: the codec by name ("deflate", "lzw", "zstd", "packbits",
-     *  "none"); NULL: deflate, or none when compress is 0 */
+     *  "none"); NULL: deflate, or none when compress is 0. OME-Zarr: the
+     *  chunk codec ("zstd", "blosc" (lz4, byte shuffle), "gzip", "zlib"
+     *  (0.4 only), "none"); NULL: zstd for 0.5, zlib for 0.4, or none when
+     *  compress is 0 */
     const char *codec;
     /** TIFF: 1 writes BigTIFF (64-bit offsets) whatever the size; 0:
      *  BigTIFF only when the voxels come near classic TIFF's 4 GiB */
@@ -382,7 +385,19 @@ typedef struct vv_save_options {
     unsigned vvb_flags;
     /** Long work (a box-by-box write) reports here and may be cancelled; may be zeroed. */
     vv_progress progress;
+    /** OME-Zarr: the OME-NGFF version written, 4 (0.4: Zarr v2) or 5 (0.5:
+     *  Zarr v3); 0: VV_OME_ZARR_DEFAULT_NGFF */
+    int ngff_version;
+    /** OME-Zarr: the chunk shape in voxels (x, y, z), each >= 1 (clipped to
+     *  a level's size); 0: 64 */
+    int chunk[3];
+    /** OME-Zarr 0.5: the shard shape in voxels (x, y, z), each a multiple of
+     *  the chunk's (clipped to a level's chunks); 0: no sharding */
+    int shard[3];
 } vv_save_options;
+
+/** The OME-NGFF version (vv_save_options.ngff_version) written by default. */
+#define VV_OME_ZARR_DEFAULT_NGFF 5
 
 /** Format VV_FORMAT_AUTO, strict 0, compress -1. */
 void vv_save_options_init(vv_save_options *o);

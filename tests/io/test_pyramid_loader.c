@@ -58,11 +58,11 @@ setup(void **state) {
         return -1;
     }
     char chunk[4200];
-    snprintf(chunk, sizeof chunk, "%s/0/1/1/1", g_broken);
+    snprintf(chunk, sizeof chunk, "%s/0/c/1/1/1", g_broken); /* OME-NGFF 0.5: Zarr v3's key */
     FILE *f = fopen(chunk, "wb");
     if (!f)
         return -1;
-    fputs("this is not a zlib stream", f);
+    fputs("this is not a zstd frame", f);
     fclose(f);
     return 0;
 }

@@ -385,16 +385,28 @@ test_zarr_store(void **state) {
     assert_true(n == 4 && !memcmp(back, "mine", 4));
     free(back);
     unlink(p);
-    /* a store, then a smaller one over it: the old level 1 is gone */
+    /* a store (OME-NGFF 0.5 by default: Zarr v3), then a smaller one over
+     * it: the old level 1 is gone */
     p = vt_path(dir, "a.ome.zarr");
     vt_ok(vv_volume_save_with(v, p, NULL));
     char lvl[600];
-    snprintf(lvl, sizeof lvl, "%s/1/.zarray", p);
+    snprintf(lvl, sizeof lvl, "%s/1/zarr.json", p);
     assert_int_equal(access(lvl, F_OK), 0);
     vv_volume *small = make_volume(VV_U8, 20, 20, 20, VV_SPACE_RAS);
     for (int i = 0; i < 9; i++)
         small->direction[i] = i % 4 == 0;
     vt_ok(vv_volume_save_with(small, p, NULL));
+    assert_int_not_equal(access(lvl, F_OK), 0);
+    snprintf(lvl, sizeof lvl, "%s/0/zarr.json", p);
+    back = (char *)vt_read_file(lvl, &n);
+    assert_non_null(strstr(back, "\"uint8\""));
+    free(back);
+    assert_int_equal(entries(dir), 1);
+    /* and a Zarr v2 store (0.4) over the v3 one: no zarr.json left */
+    vv_save_options o4;
+    vv_save_options_init(&o4);
+    o4.ngff_version = 4;
+    vt_ok(vv_volume_save_with(small, p, &o4));
     assert_int_not_equal(access(lvl, F_OK), 0);
     snprintf(lvl, sizeof lvl, "%s/0/.zarray", p);
     back = (char *)vt_read_file(lvl, &n);

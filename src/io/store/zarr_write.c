@@ -1,19 +1,39 @@
 /*
- * OME-Zarr writer (vv_ome_zarr_write): a Zarr v2 store with the OME-NGFF
- * 0.4 multiscales metadata, as napari, Fiji (n5-zarr, MoBIE), BigDataViewer
- * and zarr-python read it.
+ * OME-Zarr writer (vv_ome_zarr_write): an OME-NGFF 0.5 store (Zarr v3),
+ * or with ngff_version 4 an OME-NGFF 0.4 store (Zarr v2), with the
+ * multiscales metadata, as napari, Fiji (n5-zarr, MoBIE), BigDataViewer,
+ * zarr-python, tensorstore and ome-zarr-py read it.
  *
- * Layout (a folder):
+ * Layout of 0.4 (a folder):
  *   .zgroup                 {"zarr_format": 2}
  *   .zattrs                 multiscales (axes z, y, x with the unit; one
  *                           dataset per level with its scale and
  *                           translation), omero (one channel, its window)
- *   <level>/.zarray         shape [nz, ny, nx], chunks of at most 64^3, the
- *                           voxel type little-endian, C order, "/" as the
- *                           dimension separator, zlib level 1 (numcodecs'
- *                           "zlib") unless uncompressed
+ *   <level>/.zarray         shape [nz, ny, nx], the chunk shape (64^3 unless
+ *                           asked, clipped to the level), the voxel type
+ *                           little-endian, C order, "/" as the dimension
+ *                           separator, the compressor (zlib level 1 by
+ *                           default; gzip, zstd, blosc) or none
  *   <level>/<cz>/<cy>/<cx>  one chunk, full chunk shape (edges padded with
  *                           the fill value 0), as Zarr v2 stores them
+ * Layout of 0.5:
+ *   zarr.json               a group; attributes.ome: version "0.5",
+ *                           multiscales and omero as above
+ *   <level>/zarr.json       an array: shape, data_type, a regular chunk grid
+ *                           (the chunk shape, or the shard shape when
+ *                           sharded), chunk key encoding "default" with
+ *                           "/", fill value 0, codecs [bytes little-endian,
+ *                           the compressor (zstd level 1 by default; gzip,
+ *                           blosc lz4 with byte shuffle) or none], or
+ *                           [sharding_indexed {the inner chunk shape, those
+ *                           codecs, index codecs [bytes, crc32c], index at
+ *                           the end}], dimension names z, y, x
+ *   <level>/c/<z>/<y>/<x>   one chunk (padded as above), or one shard: its
+ *                           inner chunks in C order, then the index (per
+ *                           inner chunk its offset and size, 64-bit
+ *                           little-endian; both all ones for an inner chunk
+ *                           wholly outside the array, which is not written),
+ *                           then the index's CRC-32C
  *
  * Levels: level 0 is the volume; each next level halves every axis longer
  * than 1 (rounding up) until every axis fits one chunk. A voxel of the next
@@ -27,10 +47,11 @@
  * temporary folder beside the target ("<path>.tmp-XXXXXX"), synced, then
  * exchanged with an existing store (renameat2 RENAME_EXCHANGE) or renamed
  * into place; the old store is removed after. An existing path that is not
- * a Zarr store (no .zgroup, .zattrs or .zarray) is never replaced. Chunks
- * are gathered and compressed on every core (vv_parallel_for).
+ * a Zarr store (no .zgroup, .zattrs, .zarray or zarr.json) is never
+ * replaced. Chunks (shards) are gathered and compressed on every core
+ * (vv_parallel_for).
  *
- * What OME-Zarr 0.4 cannot hold: a direction matrix (the record's fits).
+ * What OME-Zarr cannot hold: a direction matrix (the record's fits).
  */
 #define _GNU_SOURCE /* renameat2, syncfs */
 #include <errno.h>
@@ -46,9 +67,12 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <blosc.h>
 #include <jansson.h>
 #include <zlib.h>
+#include <zstd.h>
 
+#include "core/crc32c.h"
 #include "core/internal.h"
 #include "core/parallel_for.h"
 #include "io/io_internal.h"
@@ -60,6 +84,179 @@
 
 #define ZARR_CHUNK 64
 #define ZARR_MAX_LEVELS 24
+/* The most inner chunks of one shard (its index is 16 bytes each, held). */
+#define ZARR_SHARD_CHUNKS_MAX (1 << 20)
+
+/* ---- what is written ---------------------------------------------------------- */
+
+typedef enum zw_codec { ZW_NONE, ZW_ZLIB, ZW_GZIP, ZW_ZSTD, ZW_BLOSC } zw_codec;
+
+#define ZARR_LEVEL 1       /* zlib, gzip, zstd: fast, as the v2 writer always was */
+#define ZARR_BLOSC_LEVEL 5 /* blosc's (and numcodecs') default */
+
+/* The store's format: Zarr v3 (NGFF 0.5) or v2 (0.4), the codec, the chunk
+ * and shard shapes asked for (x, y, z; shard 0: none). */
+typedef struct zarr_spec {
+    int v3;
+    zw_codec codec;
+    int chunk[3], shard[3];
+    int sharded;
+} zarr_spec;
+
+/* The spec of @p opt (NULL: the defaults); VV_ERR_INVALID naming the option. */
+static vv_status
+spec_of(const vv_save_options *opt, zarr_spec *z) {
+    memset(z, 0, sizeof *z);
+    const int ngff = opt && opt->ngff_version ? opt->ngff_version : VV_OME_ZARR_DEFAULT_NGFF;
+    if (ngff != 4 && ngff != 5)
+        return vv_error_set(VV_ERR_INVALID, "OME-NGFF 0.%d (written: 0.4, 0.5)", ngff);
+    z->v3 = ngff == 5;
+    const char *c = opt ? opt->codec : NULL;
+    if (!c)
+        z->codec = opt && opt->compress == 0 ? ZW_NONE : z->v3 ? ZW_ZSTD : ZW_ZLIB;
+    else if (!strcmp(c, "none"))
+        z->codec = ZW_NONE;
+    else if (!strcmp(c, "zlib") && !z->v3)
+        z->codec = ZW_ZLIB;
+    else if (!strcmp(c, "gzip"))
+        z->codec = ZW_GZIP;
+    else if (!strcmp(c, "zstd"))
+        z->codec = ZW_ZSTD;
+    else if (!strcmp(c, "blosc"))
+        z->codec = ZW_BLOSC;
+    else
+        return vv_error_set(VV_ERR_INVALID, "codec '%s' (OME-Zarr 0.%d: zstd, blosc, gzip%s, none)",
+                            c, ngff, z->v3 ? "" : ", zlib");
+    for (int i = 0; i < 3; i++) {
+        const int ch = opt ? opt->chunk[i] : 0, sh = opt ? opt->shard[i] : 0;
+        if (ch < 0 || ch > 4096)
+            return vv_error_set(VV_ERR_INVALID, "chunk shape %d (1 .. 4096)", ch);
+        z->chunk[i] = ch ? ch : ZARR_CHUNK;
+        if (sh < 0 || (sh && sh % z->chunk[i]))
+            return vv_error_set(VV_ERR_INVALID,
+                                "shard shape %d is not a multiple of the chunk's %d", sh,
+                                z->chunk[i]);
+        z->shard[i] = sh;
+        z->sharded |= sh > 0;
+    }
+    if (z->sharded && !z->v3)
+        return vv_error_set(VV_ERR_INVALID, "sharding needs OME-NGFF 0.5 (Zarr v3)");
+    for (int i = 0; z->sharded && i < 3; i++)
+        if (!z->shard[i])
+            z->shard[i] = z->chunk[i];
+    if (z->sharded && (uint64_t)(z->shard[0] / z->chunk[0]) * (z->shard[1] / z->chunk[1]) *
+                              (z->shard[2] / z->chunk[2]) >
+                          ZARR_SHARD_CHUNKS_MAX)
+        return vv_error_set(VV_ERR_INVALID, "a shard of more than %d chunks",
+                            ZARR_SHARD_CHUNKS_MAX);
+    return VV_OK;
+}
+
+/* A level's chunk shape (the asked one clipped to the level) and unit (the
+ * shard, clipped to the level's chunks; the chunk when not sharded). */
+static void
+level_grid(const zarr_spec *z, const int dims[3], int chunk[3], int unit[3]) {
+    for (int i = 0; i < 3; i++) {
+        chunk[i] = dims[i] < z->chunk[i] ? dims[i] : z->chunk[i];
+        const int cover = (dims[i] + chunk[i] - 1) / chunk[i] * chunk[i];
+        unit[i] = z->sharded ? (z->shard[i] < cover ? z->shard[i] : cover) : chunk[i];
+    }
+}
+
+/* 1 when a level of @p dims needs a next one. */
+static int
+level_needs_next(const zarr_spec *z, const int dims[3]) {
+    return dims[0] > z->chunk[0] || dims[1] > z->chunk[1] || dims[2] > z->chunk[2];
+}
+
+/* ---- codecs ------------------------------------------------------------------- */
+
+/* The most bytes @p n raw bytes encode to. */
+static size_t
+codec_bound(zw_codec c, size_t n) {
+    switch (c) {
+    case ZW_ZLIB:
+    case ZW_GZIP:
+        return compressBound((uLong)n) + 32;
+    case ZW_ZSTD:
+        return ZSTD_compressBound(n);
+    case ZW_BLOSC:
+        return n + BLOSC_MAX_OVERHEAD;
+    default:
+        return n;
+    }
+}
+
+/* @p n bytes at @p src encoded into @p dst (@p cap bytes: codec_bound);
+ * the size, or 0 on failure. */
+static size_t
+encode(zw_codec c, size_t es, const unsigned char *src, size_t n, unsigned char *dst, size_t cap) {
+    switch (c) {
+    case ZW_ZLIB: {
+        uLongf zn = (uLongf)cap;
+        return compress2(dst, &zn, src, (uLong)n, ZARR_LEVEL) == Z_OK ? (size_t)zn : 0;
+    }
+    case ZW_GZIP: {
+        z_stream zs;
+        memset(&zs, 0, sizeof zs);
+        if (deflateInit2(&zs, ZARR_LEVEL, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK)
+            return 0;
+        zs.next_in = (Bytef *)src;
+        zs.avail_in = (uInt)n;
+        zs.next_out = dst;
+        zs.avail_out = (uInt)cap;
+        const int r = deflate(&zs, Z_FINISH);
+        const size_t out = zs.total_out;
+        deflateEnd(&zs);
+        return r == Z_STREAM_END ? out : 0;
+    }
+    case ZW_ZSTD: {
+        const size_t r = ZSTD_compress(dst, cap, src, n, ZARR_LEVEL);
+        return ZSTD_isError(r) ? 0 : r;
+    }
+    case ZW_BLOSC: {
+        const int r =
+            blosc_compress_ctx(ZARR_BLOSC_LEVEL, BLOSC_SHUFFLE, es, n, src, dst, cap, "lz4", 0, 1);
+        return r > 0 ? (size_t)r : 0;
+    }
+    default:
+        memcpy(dst, src, n);
+        return n;
+    }
+}
+
+/* @p m bytes at @p src decoded into @p dst, exactly @p n bytes: 0 or EILSEQ. */
+static int
+decode(zw_codec c, const unsigned char *src, size_t m, unsigned char *dst, size_t n) {
+    switch (c) {
+    case ZW_ZLIB:
+    case ZW_GZIP: {
+        z_stream zs;
+        memset(&zs, 0, sizeof zs);
+        if (inflateInit2(&zs, c == ZW_GZIP ? 15 + 16 : 15) != Z_OK)
+            return EILSEQ;
+        zs.next_in = (Bytef *)src;
+        zs.avail_in = (uInt)m;
+        zs.next_out = dst;
+        zs.avail_out = (uInt)n;
+        const int r = inflate(&zs, Z_FINISH);
+        const size_t out = zs.total_out;
+        inflateEnd(&zs);
+        return r == Z_STREAM_END && out == n ? 0 : EILSEQ;
+    }
+    case ZW_ZSTD: {
+        const size_t r = ZSTD_decompress(dst, n, src, m);
+        return !ZSTD_isError(r) && r == n ? 0 : EILSEQ;
+    }
+    case ZW_BLOSC:
+        return blosc_decompress_ctx(src, dst, n, 1) == (int)n ? 0 : EILSEQ;
+    default:
+        if (m != n)
+            return EILSEQ;
+        memcpy(dst, src, n);
+        return 0;
+    }
+}
 
 /* ---- folders ------------------------------------------------------------------ */
 
@@ -91,9 +288,9 @@ remove_tree(const char *path) {
 /* 1 when @p dir holds Zarr metadata. */
 static int
 is_zarr_store(const char *dir) {
-    static const char *const names[] = {".zgroup", ".zattrs", ".zarray"};
+    static const char *const names[] = {".zgroup", ".zattrs", ".zarray", "zarr.json"};
     char p[ZARR_PATH_MAX];
-    for (int i = 0; i < 3; i++) {
+    for (int i = 0; i < 4; i++) {
         store_path(p, "%s/%s", dir, names[i]);
         if (access(p, F_OK) == 0)
             return 1;
@@ -106,6 +303,14 @@ is_zarr_store(const char *dir) {
 static const char *
 zarr_dtype(vv_voxel_type t) {
     static const char *const names[] = {"|u1", "|i1", "<u2", "<i2", "<u4", "<i4", "<f4", "<f8"};
+    return (unsigned)t <= VV_F64 ? names[t] : NULL;
+}
+
+/* Zarr v3's data_type of @p t (the order of vv_voxel_type, as zarr_dtype). */
+static const char *
+zarr3_dtype(vv_voxel_type t) {
+    static const char *const names[] = {"uint8",  "int8",  "uint16",  "int16",
+                                        "uint32", "int32", "float32", "float64"};
     return (unsigned)t <= VV_F64 ? names[t] : NULL;
 }
 
@@ -154,9 +359,16 @@ xyz_reversed(const double a[3]) {
     return json_pack("[f, f, f]", a[2], a[1], a[0]);
 }
 
+static json_t *
+zyx_ints(const int a[3]) {
+    return json_pack("[i, i, i]", a[2], a[1], a[0]);
+}
+
+/* The store's group metadata: .zgroup and .zattrs (0.4), or zarr.json with
+ * the same under attributes.ome (0.5). */
 static vv_status
-write_zattrs(const char *dir, const vv_volume *v, const zarr_level *lv, int n, int label,
-             const char *name) {
+write_group(const char *dir, const zarr_spec *z, const vv_volume *v, const zarr_level *lv, int n,
+            int label, const char *name) {
     const char *unit = ngff_unit(v->unit);
     json_t *axes = json_array();
     static const char *const an[3] = {"z", "y", "x"};
@@ -180,31 +392,107 @@ write_zattrs(const char *dir, const vv_volume *v, const zarr_level *lv, int n, i
                                               xyz_reversed(scale), "type", "translation",
                                               "translation", xyz_reversed(tr)));
     }
-    json_t *ms = json_pack("{s:s, s:s, s:o, s:o, s:s, s:{s:s}}", "version", "0.4", "name", name,
-                           "axes", axes, "datasets", sets, "type", label ? "nearest" : "local_mean",
-                           "metadata", "method",
+    json_t *ms = json_pack("{s:s, s:o, s:o, s:s, s:{s:s}}", "name", name, "axes", axes, "datasets",
+                           sets, "type", label ? "nearest" : "local_mean", "metadata", "method",
                            label ? "VolVis: the first voxel of each 2x2x2 block"
                                  : "VolVis: the mean of each 2x2x2 block");
+    if (ms && !z->v3) /* 0.4 dates each multiscales; 0.5 the ome object once */
+        json_object_set_new(ms, "version", json_string("0.4"));
     json_t *omero = json_pack("{s:s, s:[{s:s, s:s, s:b, s:{s:f, s:f, s:f, s:f}}], s:{s:s}}", "name",
                               name, "channels", "label", name, "color", "FFFFFF", "active", 1,
                               "window", "min", v->range[0], "max", v->range[1], "start",
                               v->range[0], "end", v->range[1], "rdefs", "model", "greyscale");
-    json_t *root = json_pack("{s:[o], s:o}", "multiscales", ms, "omero", omero);
-    if (label && root)
-        json_object_set_new(root, "image-label", json_pack("{s:s}", "version", "0.4"));
-    return write_json(dir, ".zattrs", root);
+    json_t *attrs = json_pack("{s:[o], s:o}", "multiscales", ms, "omero", omero);
+    if (!z->v3) {
+        if (label && attrs)
+            json_object_set_new(attrs, "image-label", json_pack("{s:s}", "version", "0.4"));
+        vv_status s = write_json(dir, ".zgroup", json_pack("{s:i}", "zarr_format", 2));
+        if (s != VV_OK) {
+            json_decref(attrs);
+            return s;
+        }
+        return write_json(dir, ".zattrs", attrs);
+    }
+    json_t *ome = json_pack("{s:s}", "version", "0.5");
+    if (ome && attrs)
+        json_object_update(ome, attrs);
+    json_decref(attrs);
+    if (label && ome)
+        json_object_set_new(ome, "image-label", json_object());
+    return write_json(dir, "zarr.json",
+                      json_pack("{s:i, s:s, s:{s:o}}", "zarr_format", 3, "node_type", "group",
+                                "attributes", "ome", ome));
 }
 
+/* Zarr v3's codec objects for @p z's compressor of @p es-byte voxels
+ * appended to @p a (bytes first). */
+static json_t *
+v3_codecs(const zarr_spec *z, size_t es) {
+    json_t *a = json_pack("[{s:s, s:{s:s}}]", "name", "bytes", "configuration", "endian", "little");
+    json_t *c = NULL;
+    switch (z->codec) {
+    case ZW_GZIP:
+        c = json_pack("{s:s, s:{s:i}}", "name", "gzip", "configuration", "level", ZARR_LEVEL);
+        break;
+    case ZW_ZSTD:
+        c = json_pack("{s:s, s:{s:i, s:b}}", "name", "zstd", "configuration", "level", ZARR_LEVEL,
+                      "checksum", 0);
+        break;
+    case ZW_BLOSC:
+        c = json_pack("{s:s, s:{s:s, s:i, s:s, s:i, s:i}}", "name", "blosc", "configuration",
+                      "cname", "lz4", "clevel", ZARR_BLOSC_LEVEL, "shuffle", "shuffle", "typesize",
+                      (int)es, "blocksize", 0);
+        break;
+    default:
+        break;
+    }
+    if (c && a)
+        json_array_append_new(a, c);
+    return a;
+}
+
+/* The level's array metadata: .zarray (0.4) or zarr.json (0.5). */
 static vv_status
-write_zarray(const char *dir, const vv_volume *v, const zarr_level *l, const int chunk[3],
-             int compress) {
-    json_t *comp = compress ? json_pack("{s:s, s:i}", "id", "zlib", "level", 1) : json_null();
-    json_t *j =
-        json_pack("{s:i, s:[i, i, i], s:[i, i, i], s:s, s:o, s:i, s:s, s:n, s:s}", "zarr_format", 2,
-                  "shape", l->dims[2], l->dims[1], l->dims[0], "chunks", chunk[2], chunk[1],
-                  chunk[0], "dtype", zarr_dtype(v->type), "compressor", comp, "fill_value", 0,
-                  "order", "C", "filters", "dimension_separator", "/");
-    return write_json(dir, ".zarray", j);
+write_array(const char *dir, const zarr_spec *z, const vv_volume *v, const zarr_level *l,
+            const int chunk[3], const int unit[3]) {
+    const size_t es = vv_voxel_type_size(v->type);
+    if (!z->v3) {
+        json_t *comp = NULL;
+        switch (z->codec) {
+        case ZW_ZLIB:
+        case ZW_GZIP:
+            comp = json_pack("{s:s, s:i}", "id", z->codec == ZW_ZLIB ? "zlib" : "gzip", "level",
+                             ZARR_LEVEL);
+            break;
+        case ZW_ZSTD:
+            comp = json_pack("{s:s, s:i}", "id", "zstd", "level", ZARR_LEVEL);
+            break;
+        case ZW_BLOSC:
+            comp = json_pack("{s:s, s:s, s:i, s:i, s:i}", "id", "blosc", "cname", "lz4", "clevel",
+                             ZARR_BLOSC_LEVEL, "shuffle", 1, "blocksize", 0);
+            break;
+        default:
+            comp = json_null();
+        }
+        json_t *j = json_pack("{s:i, s:o, s:o, s:s, s:o, s:i, s:s, s:n, s:s}", "zarr_format", 2,
+                              "shape", zyx_ints(l->dims), "chunks", zyx_ints(chunk), "dtype",
+                              zarr_dtype(v->type), "compressor", comp, "fill_value", 0, "order",
+                              "C", "filters", "dimension_separator", "/");
+        return write_json(dir, ".zarray", j);
+    }
+    json_t *codecs = v3_codecs(z, es);
+    if (z->sharded)
+        codecs = json_pack("[{s:s, s:{s:o, s:o, s:[{s:s, s:{s:s}}, {s:s}], s:s}}]", "name",
+                           "sharding_indexed", "configuration", "chunk_shape", zyx_ints(chunk),
+                           "codecs", codecs, "index_codecs", "name", "bytes", "configuration",
+                           "endian", "little", "name", "crc32c", "index_location", "end");
+    json_t *j = json_pack(
+        "{s:i, s:s, s:o, s:s, s:{s:s, s:{s:o}}, s:{s:s, s:{s:s}}, s:i, s:o, s:{}, s:[s, s, s]}",
+        "zarr_format", 3, "node_type", "array", "shape", zyx_ints(l->dims), "data_type",
+        zarr3_dtype(v->type), "chunk_grid", "name", "regular", "configuration", "chunk_shape",
+        zyx_ints(unit), "chunk_key_encoding", "name", "default", "configuration", "separator", "/",
+        "fill_value", 0, "codecs", codecs, "attributes", "dimension_names", "z", "y", "x");
+    return write_json(dir, "zarr.json", j);
 }
 
 /* ---- levels ------------------------------------------------------------------- */
@@ -236,15 +524,21 @@ down_body(void *ctx, long k0, long k1, int worker) {
                   (char *)j->dst->owned + (size_t)k0 * dd[0] * dd[1] * vv_voxel_type_size(j->type));
 }
 
+/* The dims and factors of the level after @p src; the steps into @p step. */
+static void
+next_dims(const zarr_level *src, zarr_level *dst, int step[3]) {
+    for (int i = 0; i < 3; i++) {
+        step[i] = src->dims[i] > 1 ? 2 : 1;
+        dst->dims[i] = (src->dims[i] + step[i] - 1) / step[i];
+        dst->factor[i] = src->factor[i] * step[i];
+    }
+}
+
 /* The level after @p src. */
 static vv_status
 next_level(const zarr_level *src, zarr_level *dst, vv_voxel_type t, int label) {
     down_job j = {src, dst, t, label, {1, 1, 1}};
-    for (int i = 0; i < 3; i++) {
-        j.step[i] = src->dims[i] > 1 ? 2 : 1;
-        dst->dims[i] = (src->dims[i] + j.step[i] - 1) / j.step[i];
-        dst->factor[i] = src->factor[i] * j.step[i];
-    }
+    next_dims(src, dst, j.step);
     dst->owned = malloc((size_t)dst->dims[0] * dst->dims[1] * dst->dims[2] * vv_voxel_type_size(t));
     if (!dst->owned)
         return vv_error_set(VV_ERR_NOMEM, "out of memory");
@@ -256,10 +550,10 @@ next_level(const zarr_level *src, zarr_level *dst, vv_voxel_type t, int label) {
 /* ---- chunks ------------------------------------------------------------------- */
 
 /* Where a level's voxels come from when they are not in memory: level 0
- * from the caller's box reader (one box a row of chunks, one call at a
- * time: row_body), a further level from the level before it, read back from
- * the store being written (the 2x2x2 blocks under one chunk) and reduced as
- * next_level does (feed_chunk). */
+ * from the caller's box reader (one box a row of units -- chunks, or shards
+ * -- one call at a time: row_body), a further level from the level before
+ * it, read back from the store being written (the 2x2x2 blocks under one
+ * chunk) and reduced as next_level does (feed_chunk). */
 typedef struct box_feed {
     vv_box_reader read; /* level 0; NULL: the level before */
     void *ctx;
@@ -276,57 +570,152 @@ typedef struct box_feed {
     char message[1024];     /* its text (the error is the reading thread's) */
     const zarr_level *prev; /* the level before, written in prev_dir */
     const char *prev_dir;
-    int prev_chunk[3], step[3], label;
+    int prev_chunk[3], prev_unit[3], step[3], label;
 } box_feed;
 
 typedef struct chunk_job {
     const char *dir; /* the level's folder */
     const zarr_level *l;
+    const zarr_spec *spec;
     vv_voxel_type type;
-    int chunk[3], n[3]; /* chunk shape, chunks per axis (x, y, z) */
-    int compress;
-    int failed;     /* the first errno, or -1 for out of memory, -2 the feed's status */
-    box_feed *feed; /* NULL: l->data in memory */
+    int chunk[3], unit[3]; /* chunk and unit (shard or chunk) shapes */
+    int n[3], nin[3];      /* units per axis, chunks per unit and axis (x, y, z) */
+    int failed;            /* the first errno, or -1 for out of memory, -2 the feed's status */
+    box_feed *feed;        /* NULL: l->data in memory */
 } chunk_job;
 
-/* Reads chunk file @p p of @p raw_n bytes (zlib when @p compress) into
- * @p raw; 0 or an errno (EILSEQ: not a chunk of that size). */
+/* A worker's buffers: one chunk raw and encoded, a shard's index, and for a
+ * level read back, the box under a chunk and a chunk of the level before
+ * (raw and encoded). */
+typedef struct chunk_bufs {
+    unsigned char *raw, *z, *index;
+    size_t raw_n, cap;
+    unsigned char *work, *pchunk, *pz;
+    size_t pchunk_n, pcap;
+} chunk_bufs;
+
+static void
+bufs_free(chunk_bufs *b) {
+    free(b->raw);
+    free(b->z);
+    free(b->index);
+    free(b->work);
+    free(b->pchunk);
+    free(b->pz);
+}
+
+/* 0, or -1 out of memory. */
 static int
-read_chunk_file(const char *p, int compress, unsigned char *raw, size_t raw_n, unsigned char *z,
-                size_t zcap) {
-    int fd = open(p, O_RDONLY | O_CLOEXEC);
-    if (fd < 0)
-        return errno;
-    unsigned char *buf = compress ? z : raw;
-    const size_t cap = compress ? zcap : raw_n;
+bufs_alloc(const chunk_job *j, chunk_bufs *b) {
+    memset(b, 0, sizeof *b);
+    const size_t es = vv_voxel_type_size(j->type);
+    b->raw_n = (size_t)j->chunk[0] * j->chunk[1] * j->chunk[2] * es;
+    b->cap = codec_bound(j->spec->codec, b->raw_n);
+    b->raw = malloc(b->raw_n);
+    b->z = malloc(b->cap);
+    if (j->spec->sharded)
+        b->index = malloc((size_t)j->nin[0] * j->nin[1] * j->nin[2] * 16 + 4);
+    const box_feed *f = j->feed;
+    if (f && !f->read) {
+        b->work = malloc((size_t)f->step[0] * f->step[1] * f->step[2] * b->raw_n);
+        b->pchunk_n = (size_t)f->prev_chunk[0] * f->prev_chunk[1] * f->prev_chunk[2] * es;
+        b->pcap = codec_bound(j->spec->codec, b->pchunk_n);
+        b->pchunk = malloc(b->pchunk_n);
+        b->pz = malloc(b->pcap);
+    }
+    if (!b->raw || !b->z || (j->spec->sharded && !b->index) ||
+        (f && !f->read && (!b->work || !b->pchunk || !b->pz))) {
+        bufs_free(b);
+        memset(b, 0, sizeof *b);
+        return -1;
+    }
+    return 0;
+}
+
+/* pread of exactly @p n bytes at @p off: 0 or an errno (EILSEQ: the file
+ * ends first). */
+static int
+pread_all(int fd, void *buf, size_t n, off_t off) {
     size_t got = 0;
-    int err = 0;
-    for (;;) {
-        ssize_t r = read(fd, buf + got, cap - got);
+    while (got < n) {
+        ssize_t r = pread(fd, (char *)buf + got, n - got, off + (off_t)got);
         if (r < 0 && errno == EINTR)
             continue;
         if (r < 0)
-            err = errno;
-        if (r <= 0 || (got += (size_t)r) == cap)
-            break;
+            return errno;
+        if (r == 0)
+            return EILSEQ;
+        got += (size_t)r;
     }
+    return 0;
+}
+
+static uint64_t
+le64(const unsigned char *p) {
+    uint64_t x = 0;
+    for (int i = 7; i >= 0; i--)
+        x = x << 8 | p[i];
+    return x;
+}
+
+static void
+put_le64(unsigned char *p, uint64_t x) {
+    for (int i = 0; i < 8; i++, x >>= 8)
+        p[i] = (unsigned char)x;
+}
+
+/* Chunk (cx, cy, cz) of the level before (written) into b->pchunk: from its
+ * file, or from its shard by the shard's index. 0 or an errno (EILSEQ: not
+ * the chunk written). */
+static int
+read_prev_chunk(const box_feed *f, const zarr_spec *z, int cx, int cy, int cz, chunk_bufs *b) {
+    char p[ZARR_PATH_MAX];
+    const int *U = f->prev_unit, *C = f->prev_chunk;
+    const int nin[3] = {U[0] / C[0], U[1] / C[1], U[2] / C[2]};
+    if (z->sharded)
+        store_path(p, "%s/c/%d/%d/%d", f->prev_dir, cz / nin[2], cy / nin[1], cx / nin[0]);
+    else if (z->v3)
+        store_path(p, "%s/c/%d/%d/%d", f->prev_dir, cz, cy, cx);
+    else
+        store_path(p, "%s/%d/%d/%d", f->prev_dir, cz, cy, cx);
+    int fd = open(p, O_RDONLY | O_CLOEXEC);
+    if (fd < 0)
+        return errno;
+    struct stat st;
+    int err = fstat(fd, &st) != 0 ? errno : 0;
+    off_t off = 0;
+    size_t m = (size_t)st.st_size;
+    if (!err && z->sharded) {
+        const size_t n_in = (size_t)nin[0] * nin[1] * nin[2];
+        const size_t i = ((size_t)(cz % nin[2]) * nin[1] + cy % nin[1]) * nin[0] + cx % nin[0];
+        unsigned char e[16];
+        if ((size_t)st.st_size < n_in * 16 + 4)
+            err = EILSEQ;
+        else
+            err = pread_all(fd, e, 16, st.st_size - 4 - (off_t)(n_in * 16) + (off_t)(i * 16));
+        if (!err) {
+            const uint64_t o = le64(e), n = le64(e + 8);
+            if (o > (uint64_t)st.st_size || n > (uint64_t)st.st_size - o)
+                err = EILSEQ; /* (all ones: never written for a chunk inside the level) */
+            off = (off_t)o;
+            m = (size_t)n;
+        }
+    }
+    if (!err && m > b->pcap)
+        err = EILSEQ;
+    if (!err)
+        err = pread_all(fd, b->pz, m, off);
     close(fd);
-    if (err)
-        return err;
-    if (!compress)
-        return got == raw_n ? 0 : EILSEQ;
-    uLongf n = (uLongf)raw_n;
-    return uncompress(raw, &n, z, (uLong)got) == Z_OK && n == raw_n ? 0 : EILSEQ;
+    return err ? err : decode(z->codec, b->pz, m, b->pchunk, b->pchunk_n);
 }
 
 /* Voxels lo .. lo + n - 1 of the level before (f->prev, written) into
- * @p box (x fastest); @p cbuf and @p z hold one of its chunks. */
+ * b->work (x fastest). */
 static int
-read_prev_box(const box_feed *f, vv_voxel_type t, const int lo[3], const int n[3],
-              unsigned char *box, unsigned char *cbuf, unsigned char *z, size_t zcap) {
+read_prev_box(const box_feed *f, const zarr_spec *z, vv_voxel_type t, const int lo[3],
+              const int n[3], chunk_bufs *bf) {
     const size_t es = vv_voxel_type_size(t);
     const int *C = f->prev_chunk;
-    const size_t raw_n = (size_t)C[0] * C[1] * C[2] * es;
     int a[3], b[3];
     for (int i = 0; i < 3; i++) {
         a[i] = lo[i] / C[i];
@@ -335,9 +724,7 @@ read_prev_box(const box_feed *f, vv_voxel_type t, const int lo[3], const int n[3
     for (int cz = a[2]; cz <= b[2]; cz++)
         for (int cy = a[1]; cy <= b[1]; cy++)
             for (int cx = a[0]; cx <= b[0]; cx++) {
-                char p[ZARR_PATH_MAX];
-                store_path(p, "%s/%d/%d/%d", f->prev_dir, cz, cy, cx);
-                int err = read_chunk_file(p, z != NULL, cbuf, raw_n, z, zcap);
+                int err = read_prev_chunk(f, z, cx, cy, cz, bf);
                 if (err)
                     return err;
                 const int c0[3] = {cx * C[0], cy * C[1], cz * C[2]};
@@ -348,25 +735,24 @@ read_prev_box(const box_feed *f, vv_voxel_type t, const int lo[3], const int n[3
                 }
                 for (int k = g0[2]; k < g1[2]; k++)
                     for (int y = g0[1]; y < g1[1]; y++)
-                        memcpy(box + (((size_t)(k - lo[2]) * n[1] + (y - lo[1])) * n[0] +
-                                      (g0[0] - lo[0])) *
-                                         es,
-                               cbuf + (((size_t)(k - c0[2]) * C[1] + (y - c0[1])) * C[0] +
-                                       (g0[0] - c0[0])) *
-                                          es,
+                        memcpy(bf->work + (((size_t)(k - lo[2]) * n[1] + (y - lo[1])) * n[0] +
+                                           (g0[0] - lo[0])) *
+                                              es,
+                               bf->pchunk + (((size_t)(k - c0[2]) * C[1] + (y - c0[1])) * C[0] +
+                                             (g0[0] - c0[0])) *
+                                                es,
                                (size_t)(g1[0] - g0[0]) * es);
             }
     return 0;
 }
 
 /* The chunk at @p o (@p e voxels inside the level) of a level after the
- * first into @p raw (chunk-shaped, cleared): the 2x2x2 blocks under it read
- * back from the level before into @p work (@p cbuf and @p z hold one of its
- * chunks). 0 or an errno (EILSEQ: a chunk read back is not the one written). */
+ * first into b->raw (chunk-shaped, cleared): the 2x2x2 blocks under it read
+ * back from the level before. 0 or an errno (EILSEQ: a chunk read back is
+ * not the one written). */
 static int
-feed_chunk(chunk_job *j, const int o[3], const int e[3], unsigned char *raw, unsigned char *work,
-           unsigned char *cbuf, unsigned char *z, size_t zcap) {
-    box_feed *f = j->feed;
+feed_chunk(const chunk_job *j, const int o[3], const int e[3], chunk_bufs *bf) {
+    const box_feed *f = j->feed;
     /* the blocks under the chunk, in the level before */
     const int *sd = f->prev->dims, *st = f->step;
     int plo[3], pn[3];
@@ -374,11 +760,11 @@ feed_chunk(chunk_job *j, const int o[3], const int e[3], unsigned char *raw, uns
         plo[i] = o[i] * st[i];
         pn[i] = (o[i] + e[i]) * st[i] < sd[i] ? e[i] * st[i] : sd[i] - plo[i];
     }
-    int err = read_prev_box(f, j->type, plo, pn, work, cbuf, z, zcap);
+    int err = read_prev_box(f, j->spec, j->type, plo, pn, bf);
     if (err)
         return err;
     /* as down_body: the same voxels summed in the same order */
-    vv_pyr_reduce_box b = {.src = work,
+    vv_pyr_reduce_box b = {.src = bf->work,
                            .type = j->type,
                            .src_dims = {sd[0], sd[1], sd[2]},
                            .src_lo = {plo[0], plo[1], plo[2]},
@@ -388,64 +774,118 @@ feed_chunk(chunk_job *j, const int o[3], const int e[3], unsigned char *raw, uns
                            .lo = {o[0], o[1], o[2]},
                            .n = {e[0], e[1], e[2]},
                            .dst_dims = {j->chunk[0], j->chunk[1]}};
-    vv_pyr_reduce(&b, raw);
+    vv_pyr_reduce(&b, bf->raw);
     return 0;
 }
 
-/* Chunk @p raw (chunk-shaped) compressed into @p z (when the job
- * compresses) and written as cz/cy/cx of the level; 0, an errno or -1 (out
- * of memory). */
+/* write(2) of all @p n bytes: 0 or an errno. */
 static int
-put_chunk(const chunk_job *j, int cx, int cy, int cz, const unsigned char *raw, size_t raw_n,
-          unsigned char *z, uLong cap) {
-    const unsigned char *out = raw;
-    size_t out_n = raw_n;
-    if (j->compress) {
-        uLongf zn = cap;
-        if (compress2(z, &zn, raw, (uLong)raw_n, 1) != Z_OK)
-            return -1;
-        out = z;
-        out_n = zn;
-    }
-    char p[ZARR_PATH_MAX];
-    store_path(p, "%s/%d/%d/%d", j->dir, cz, cy, cx);
-    int fd = open(p, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+write_all(int fd, const unsigned char *p, size_t n) {
     size_t done = 0;
-    while (fd >= 0 && done < out_n) {
-        ssize_t r = write(fd, out + done, out_n - done);
+    while (done < n) {
+        ssize_t r = write(fd, p + done, n - done);
         if (r < 0 && errno == EINTR)
             continue;
         if (r <= 0)
-            break;
+            return r < 0 ? errno : EIO;
         done += (size_t)r;
     }
-    int err = fd < 0 || done < out_n ? (errno ? errno : EIO) : 0;
-    if (fd >= 0 && close(fd) != 0 && !err)
+    return 0;
+}
+
+/* Unit (ux, uy, uz) of the level -- a chunk, or a shard of chunks -- made
+ * and written: each chunk's voxels from @p box (voxels borg .. borg +
+ * bdims - 1 of the level, x fastest) or, with box NULL, from the level
+ * before (feed_chunk); encoded; written as its file, or appended to the
+ * shard's file, whose index and its CRC-32C end it. 0, an errno or -1 (out
+ * of memory). */
+static int
+put_unit(const chunk_job *j, chunk_bufs *b, int ux, int uy, int uz, const unsigned char *box,
+         const int borg[3], const int bdims[3]) {
+    const size_t es = vv_voxel_type_size(j->type);
+    const int *C = j->chunk, *D = j->l->dims;
+    char p[ZARR_PATH_MAX];
+    if (j->spec->v3)
+        store_path(p, "%s/c/%d/%d/%d", j->dir, uz, uy, ux);
+    else
+        store_path(p, "%s/%d/%d/%d", j->dir, uz, uy, ux);
+    int fd = open(p, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    if (fd < 0)
+        return errno;
+    int err = 0;
+    uint64_t at = 0; /* the shard's bytes so far */
+    size_t idx = 0;
+    for (int iz = 0; iz < j->nin[2] && !err; iz++)
+        for (int iy = 0; iy < j->nin[1] && !err; iy++)
+            for (int ix = 0; ix < j->nin[0] && !err; ix++, idx++) {
+                const int cx = ux * j->nin[0] + ix, cy = uy * j->nin[1] + iy,
+                          cz = uz * j->nin[2] + iz;
+                const int x0 = cx * C[0], y0 = cy * C[1], z0 = cz * C[2];
+                if (x0 >= D[0] || y0 >= D[1] || z0 >= D[2]) { /* past the level: empty */
+                    memset(b->index + idx * 16, 0xFF, 16);
+                    continue;
+                }
+                const int e[3] = {D[0] - x0 < C[0] ? D[0] - x0 : C[0],
+                                  D[1] - y0 < C[1] ? D[1] - y0 : C[1],
+                                  D[2] - z0 < C[2] ? D[2] - z0 : C[2]};
+                memset(b->raw, 0, b->raw_n); /* the padding of edge chunks: the fill value */
+                if (box) {
+                    for (int k = 0; k < e[2]; k++)
+                        for (int y = 0; y < e[1]; y++)
+                            memcpy(b->raw + ((size_t)k * C[1] + y) * C[0] * es,
+                                   box + (((size_t)(z0 + k - borg[2]) * bdims[1] +
+                                           (y0 + y - borg[1])) *
+                                              bdims[0] +
+                                          (x0 - borg[0])) *
+                                             es,
+                                   (size_t)e[0] * es);
+                } else {
+                    const int o[3] = {x0, y0, z0};
+                    if ((err = feed_chunk(j, o, e, b)))
+                        break;
+                }
+                const size_t zn = encode(j->spec->codec, es, b->raw, b->raw_n, b->z, b->cap);
+                if (!zn) {
+                    err = -1;
+                    break;
+                }
+                err = write_all(fd, b->z, zn);
+                if (j->spec->sharded) {
+                    put_le64(b->index + idx * 16, at);
+                    put_le64(b->index + idx * 16 + 8, zn);
+                }
+                at += zn;
+            }
+    if (!err && j->spec->sharded) {
+        const size_t in = idx * 16;
+        const uint32_t crc = vv_crc32c(0, b->index, in);
+        for (int i = 0; i < 4; i++)
+            b->index[in + i] = (unsigned char)(crc >> (8 * i));
+        err = write_all(fd, b->index, in + 4);
+    }
+    if (close(fd) != 0 && !err)
         err = errno;
     return err;
 }
 
-/* Level 0 from the box reader, a row of chunks (all x, one y and z) at a
+/* Level 0 from the box reader, a row of units (all x, one y and z) at a
  * time: one read of the row's box (the reader's rows are the volume's full
  * width, so one pread a row of voxels rather than one a chunk's row), then
- * each chunk cut from it. Rows [r0, r1) of n[1] x n[2]. */
+ * each unit cut from it. Rows [r0, r1) of n[1] x n[2]. */
 static void
 row_body(void *ctx, long r0, long r1, int worker) {
     (void)worker;
     chunk_job *j = ctx;
     box_feed *f = j->feed;
-    const size_t es = vv_voxel_type_size(j->type);
-    const size_t raw_n = (size_t)j->chunk[0] * j->chunk[1] * j->chunk[2] * es;
-    const uLong cap = compressBound((uLong)raw_n);
-    unsigned char *raw = malloc(raw_n), *z = j->compress ? malloc(cap) : NULL;
-    if (!raw || (j->compress && !z))
+    chunk_bufs b;
+    if (bufs_alloc(j, &b))
         j->failed = -1;
     const int *D = j->l->dims;
     for (long r = r0; r < r1 && !j->failed; r++) {
-        const int cy = (int)(r % j->n[1]), cz = (int)(r / j->n[1]);
-        const int y0 = cy * j->chunk[1], z0 = cz * j->chunk[2];
-        const int h = D[1] - y0 < j->chunk[1] ? D[1] - y0 : j->chunk[1];
-        const int d = D[2] - z0 < j->chunk[2] ? D[2] - z0 : j->chunk[2];
+        const int uy = (int)(r % j->n[1]), uz = (int)(r / j->n[1]);
+        const int y0 = uy * j->unit[1], z0 = uz * j->unit[2];
+        const int h = D[1] - y0 < j->unit[1] ? D[1] - y0 : j->unit[1];
+        const int d = D[2] - z0 < j->unit[2] ? D[2] - z0 : j->unit[2];
         const int lo[3] = {0, y0, z0}, hi[3] = {D[0] - 1, y0 + h - 1, z0 + d - 1};
         vv_volume *v = NULL;
         pthread_mutex_lock(&f->lock);
@@ -483,16 +923,9 @@ row_body(void *ctx, long r0, long r1, int worker) {
         f->range[1] = !f->have_range || mx > f->range[1] ? mx : f->range[1];
         f->have_range = 1;
         pthread_mutex_unlock(&f->lock);
-        for (int cx = 0; cx < j->n[0] && !j->failed; cx++) {
-            const int x0 = cx * j->chunk[0];
-            const int w = D[0] - x0 < j->chunk[0] ? D[0] - x0 : j->chunk[0];
-            memset(raw, 0, raw_n); /* the padding of edge chunks: the fill value */
-            for (int k = 0; k < d; k++)
-                for (int y = 0; y < h; y++)
-                    memcpy(raw + ((size_t)k * j->chunk[1] + y) * j->chunk[0] * es,
-                           (const char *)v->data + (((size_t)k * h + y) * D[0] + x0) * es,
-                           (size_t)w * es);
-            int err = put_chunk(j, cx, cy, cz, raw, raw_n, z, cap);
+        const int borg[3] = {0, y0, z0}, bdims[3] = {D[0], h, d};
+        for (int ux = 0; ux < j->n[0] && !j->failed; ux++) {
+            int err = put_unit(j, &b, ux, uy, uz, v->data, borg, bdims);
             if (err)
                 j->failed = err;
         }
@@ -504,101 +937,75 @@ row_body(void *ctx, long r0, long r1, int worker) {
         pthread_cond_broadcast(&f->turn);
         pthread_mutex_unlock(&f->lock);
     }
-    free(raw);
-    free(z);
+    bufs_free(&b);
 }
 
+/* Units [c0, c1) from the level in memory, or from the level before. */
 static void
-chunk_body(void *ctx, long c0, long c1, int worker) {
+unit_body(void *ctx, long c0, long c1, int worker) {
     (void)worker;
     chunk_job *j = ctx;
-    size_t es = vv_voxel_type_size(j->type);
-    size_t raw_n = (size_t)j->chunk[0] * j->chunk[1] * j->chunk[2] * es;
-    uLong cap = compressBound((uLong)raw_n);
-    unsigned char *raw = calloc(1, raw_n), *z = j->compress ? malloc(cap) : NULL;
-    /* a further level from the store: the box of the level before under a
-     * chunk, one of its chunks, and its compressed bytes */
-    box_feed *f = j->feed;
-    size_t work_n = 0, pchunk_n = 0, pcap = 0;
-    if (f && !f->read) {
-        work_n = (size_t)f->step[0] * f->step[1] * f->step[2] * raw_n;
-        pchunk_n = (size_t)f->prev_chunk[0] * f->prev_chunk[1] * f->prev_chunk[2] * es;
-        pcap = compressBound((uLong)pchunk_n);
-    }
-    unsigned char *work = work_n ? malloc(work_n) : NULL,
-                  *pchunk = work_n ? malloc(pchunk_n) : NULL,
-                  *pz = work_n && j->compress ? malloc(pcap) : NULL;
-    if (work_n && (!work || !pchunk || (j->compress && !pz)))
+    chunk_bufs b;
+    if (bufs_alloc(j, &b)) {
         j->failed = -1;
-    for (long c = c0; c < c1 && raw && (z || !j->compress) && !j->failed; c++) {
-        int cx = (int)(c % j->n[0]), cy = (int)(c / j->n[0] % j->n[1]),
-            cz = (int)(c / ((long)j->n[0] * j->n[1]));
-        int x0 = cx * j->chunk[0], y0 = cy * j->chunk[1], z0 = cz * j->chunk[2];
-        int w = j->l->dims[0] - x0 < j->chunk[0] ? j->l->dims[0] - x0 : j->chunk[0];
-        memset(raw, 0, raw_n); /* the padding of edge chunks: the fill value */
-        if (f) {
-            const int o[3] = {x0, y0, z0};
-            const int e[3] = {w,
-                              j->l->dims[1] - y0 < j->chunk[1] ? j->l->dims[1] - y0 : j->chunk[1],
-                              j->l->dims[2] - z0 < j->chunk[2] ? j->l->dims[2] - z0 : j->chunk[2]};
-            int err = feed_chunk(j, o, e, raw, work, pchunk, pz, pcap);
-            if (err) {
-                j->failed = err;
-                break;
-            }
-        } else
-            for (int k = 0; k < j->chunk[2] && z0 + k < j->l->dims[2]; k++)
-                for (int y = 0; y < j->chunk[1] && y0 + y < j->l->dims[1]; y++)
-                    memcpy(raw + ((size_t)k * j->chunk[1] + y) * j->chunk[0] * es,
-                           (const char *)j->l->data +
-                               (((size_t)(z0 + k) * j->l->dims[1] + y0 + y) * j->l->dims[0] + x0) *
-                                   es,
-                           (size_t)w * es);
-        int err = put_chunk(j, cx, cy, cz, raw, raw_n, z, cap);
-        if (err) {
+        return;
+    }
+    const int org[3] = {0, 0, 0};
+    for (long c = c0; c < c1 && !j->failed; c++) {
+        const int ux = (int)(c % j->n[0]), uy = (int)(c / j->n[0] % j->n[1]),
+                  uz = (int)(c / ((long)j->n[0] * j->n[1]));
+        int err = put_unit(j, &b, ux, uy, uz, j->feed ? NULL : j->l->data, org, j->l->dims);
+        if (err)
             j->failed = err;
-            break;
-        }
     }
-    if (!raw || (j->compress && !z))
-        j->failed = -1;
-    free(raw);
-    free(z);
-    free(work);
-    free(pchunk);
-    free(pz);
+    bufs_free(&b);
 }
 
 static vv_status
-write_level(const char *root, int index, const vv_volume *v, const zarr_level *l, int compress,
-            box_feed *feed) {
+write_level(const char *root, int index, const zarr_spec *z, const vv_volume *v,
+            const zarr_level *l, box_feed *feed) {
     char dir[ZARR_PATH_MAX];
     store_path(dir, "%s/%d", root, index);
-    chunk_job j = {dir, l, v->type, {0}, {0}, compress, 0, feed};
+    chunk_job j = {dir, l, z, v->type, {0}, {0}, {0}, {0}, 0, feed};
+    level_grid(z, l->dims, j.chunk, j.unit);
     for (int i = 0; i < 3; i++) {
-        j.chunk[i] = l->dims[i] < ZARR_CHUNK ? l->dims[i] : ZARR_CHUNK;
-        j.n[i] = (l->dims[i] + j.chunk[i] - 1) / j.chunk[i];
+        j.n[i] = (l->dims[i] + j.unit[i] - 1) / j.unit[i];
+        j.nin[i] = j.unit[i] / j.chunk[i];
     }
     if (mkdir(dir, 0777) != 0)
         return vv_error_set(VV_ERR_IO, "%d: cannot make the folder: %s", index, strerror(errno));
-    vv_status s = write_zarray(dir, v, l, j.chunk, compress);
-    char p[ZARR_PATH_MAX];
+    vv_status s = write_array(dir, z, v, l, j.chunk, j.unit);
+    char base[ZARR_PATH_MAX], p[ZARR_PATH_MAX];
+    if (z->v3) {
+        store_path(base, "%s/c", dir);
+        if (s == VV_OK && mkdir(base, 0777) != 0)
+            s = vv_error_set(VV_ERR_IO, "%d: cannot make a folder: %s", index, strerror(errno));
+    } else
+        store_path(base, "%s", dir);
     for (int cz = 0; s == VV_OK && cz < j.n[2]; cz++) {
-        store_path(p, "%s/%d", dir, cz);
+        store_path(p, "%s/%d", base, cz);
         if (mkdir(p, 0777) != 0)
             s = vv_error_set(VV_ERR_IO, "%d: cannot make a folder: %s", index, strerror(errno));
         for (int cy = 0; s == VV_OK && cy < j.n[1]; cy++) {
-            store_path(p, "%s/%d/%d", dir, cz, cy);
+            store_path(p, "%s/%d/%d", base, cz, cy);
             if (mkdir(p, 0777) != 0)
                 s = vv_error_set(VV_ERR_IO, "%d: cannot make a folder: %s", index, strerror(errno));
         }
     }
     if (s != VV_OK)
         return s;
-    if (feed && feed->read) /* level 0 from the reader: by rows of chunks */
-        vv_parallel_for((long)j.n[1] * j.n[2], 1, 0, row_body, &j, NULL);
-    else
-        vv_parallel_for((long)j.n[0] * j.n[1] * j.n[2], 4, 0, chunk_body, &j, NULL);
+    if (feed && feed->read) {
+        /* level 0 from the reader: by rows of units, each worker holding one
+         * row's box (and the reader its slices): as many workers as a
+         * quarter of the memory budget holds such boxes (a row of big shards
+         * is many rows of chunks), at least one */
+        const uint64_t row =
+            (uint64_t)l->dims[0] * j.unit[1] * j.unit[2] * vv_voxel_type_size(v->type);
+        const uint64_t fit = vv_memory_budget_get() / 4 / (row ? row : 1);
+        const int threads = fit < (uint64_t)vv_threads_get() ? (fit ? (int)fit : 1) : 0;
+        vv_parallel_for((long)j.n[1] * j.n[2], 1, threads, row_body, &j, NULL);
+    } else
+        vv_parallel_for((long)j.n[0] * j.n[1] * j.n[2], z->sharded ? 1 : 4, 0, unit_body, &j, NULL);
     if (j.failed == -2)
         return vv_error_set(feed->status, "%s", feed->message);
     if (j.failed == -1)
@@ -640,8 +1047,17 @@ put_in_place(const char *tmp, const char *path, int exists) {
     return VV_OK;
 }
 
+/* The store's name in its metadata: @p path's base name up to its first dot. */
+static void
+store_name(const char *path, char *name, size_t cap) {
+    const char *base = vv_path_basename(path);
+    size_t len = strcspn(base, ".");
+    snprintf(name, cap, "%.*s", (int)(len ? len : strlen(base)), base);
+}
+
 static vv_status
-write_store(const vv_volume *v, const char *path, const char *tmp, const vv_save_options *opt) {
+write_store(const vv_volume *v, const char *path, const char *tmp, const zarr_spec *z,
+            const vv_save_options *opt) {
     zarr_level lv[ZARR_MAX_LEVELS];
     memset(lv, 0, sizeof lv);
     for (int i = 0; i < 3; i++) {
@@ -651,10 +1067,8 @@ write_store(const vv_volume *v, const char *path, const char *tmp, const vv_save
     lv[0].data = v->data;
     int n = 1;
     vv_status s = VV_OK;
-    while (s == VV_OK && n < ZARR_MAX_LEVELS &&
-           (lv[n - 1].dims[0] > ZARR_CHUNK || lv[n - 1].dims[1] > ZARR_CHUNK ||
-            lv[n - 1].dims[2] > ZARR_CHUNK)) {
-        s = write_level(tmp, n - 1, v, &lv[n - 1], opt->compress != 0, NULL);
+    while (s == VV_OK && n < ZARR_MAX_LEVELS && level_needs_next(z, lv[n - 1].dims)) {
+        s = write_level(tmp, n - 1, z, v, &lv[n - 1], NULL);
         if (s == VV_OK)
             s = next_level(&lv[n - 1], &lv[n], v->type, opt->label);
         if (s == VV_OK) {
@@ -664,27 +1078,23 @@ write_store(const vv_volume *v, const char *path, const char *tmp, const vv_save
         }
     }
     if (s == VV_OK)
-        s = write_level(tmp, n - 1, v, &lv[n - 1], opt->compress != 0, NULL);
+        s = write_level(tmp, n - 1, z, v, &lv[n - 1], NULL);
     for (int l = 0; l < n; l++)
         free(lv[l].owned);
-    if (s == VV_OK)
-        s = write_json(tmp, ".zgroup", json_pack("{s:i}", "zarr_format", 2));
     if (s == VV_OK) {
         char name[256];
-        const char *base = vv_path_basename(path);
-        size_t len = strcspn(base, ".");
-        snprintf(name, sizeof name, "%.*s", (int)(len ? len : strlen(base)), base);
-        s = write_zattrs(tmp, v, lv, n, opt->label, name);
+        store_name(path, name, sizeof name);
+        s = write_group(tmp, z, v, lv, n, opt->label, name);
     }
     return s;
 }
 
-/* The store from a volume read box by box: level 0 a chunk at a time from
+/* The store from a volume read box by box: level 0 a unit row at a time from
  * @p read, each further level from the level before read back from @p tmp;
  * the omero window is the range of the voxels read. */
 static vv_status
 write_store_boxes(const vv_volume *hdr, vv_box_reader read, void *ctx, const char *path,
-                  const char *tmp, const vv_save_options *opt) {
+                  const char *tmp, const zarr_spec *z, const vv_save_options *opt) {
     zarr_level lv[ZARR_MAX_LEVELS];
     memset(lv, 0, sizeof lv);
     int n = 1;
@@ -692,14 +1102,9 @@ write_store_boxes(const vv_volume *hdr, vv_box_reader read, void *ctx, const cha
         lv[0].dims[i] = hdr->dims[i];
         lv[0].factor[i] = 1;
     }
-    while (n < ZARR_MAX_LEVELS &&
-           (lv[n - 1].dims[0] > ZARR_CHUNK || lv[n - 1].dims[1] > ZARR_CHUNK ||
-            lv[n - 1].dims[2] > ZARR_CHUNK)) {
-        for (int i = 0; i < 3; i++) {
-            const int step = lv[n - 1].dims[i] > 1 ? 2 : 1;
-            lv[n].dims[i] = (lv[n - 1].dims[i] + step - 1) / step;
-            lv[n].factor[i] = lv[n - 1].factor[i] * step;
-        }
+    int step[3];
+    while (n < ZARR_MAX_LEVELS && level_needs_next(z, lv[n - 1].dims)) {
+        next_dims(&lv[n - 1], &lv[n], step);
         n++;
     }
     box_feed f0;
@@ -708,7 +1113,7 @@ write_store_boxes(const vv_volume *hdr, vv_box_reader read, void *ctx, const cha
     f0.ctx = ctx;
     pthread_mutex_init(&f0.lock, NULL);
     pthread_cond_init(&f0.turn, NULL);
-    vv_status s = write_level(tmp, 0, hdr, &lv[0], opt->compress != 0, &f0);
+    vv_status s = write_level(tmp, 0, z, hdr, &lv[0], &f0);
     pthread_cond_destroy(&f0.turn);
     pthread_mutex_destroy(&f0.lock);
     char prev_dir[ZARR_PATH_MAX];
@@ -719,23 +1124,18 @@ write_store_boxes(const vv_volume *hdr, vv_box_reader read, void *ctx, const cha
         f.prev = &lv[l - 1];
         f.prev_dir = prev_dir;
         f.label = opt->label;
-        for (int i = 0; i < 3; i++) {
-            f.prev_chunk[i] = lv[l - 1].dims[i] < ZARR_CHUNK ? lv[l - 1].dims[i] : ZARR_CHUNK;
+        level_grid(z, lv[l - 1].dims, f.prev_chunk, f.prev_unit);
+        for (int i = 0; i < 3; i++)
             f.step[i] = lv[l - 1].dims[i] > 1 ? 2 : 1;
-        }
-        s = write_level(tmp, l, hdr, &lv[l], opt->compress != 0, &f);
+        s = write_level(tmp, l, z, hdr, &lv[l], &f);
     }
-    if (s == VV_OK)
-        s = write_json(tmp, ".zgroup", json_pack("{s:i}", "zarr_format", 2));
     if (s == VV_OK) {
         vv_volume v = *hdr; /* the geometry, and the range of the voxels read */
         v.range[0] = f0.range[0];
         v.range[1] = f0.range[1];
         char name[256];
-        const char *base = vv_path_basename(path);
-        size_t len = strcspn(base, ".");
-        snprintf(name, sizeof name, "%.*s", (int)(len ? len : strlen(base)), base);
-        s = write_zattrs(tmp, &v, lv, n, opt->label, name);
+        store_name(path, name, sizeof name);
+        s = write_group(tmp, z, &v, lv, n, opt->label, name);
     }
     return s;
 }
@@ -768,7 +1168,19 @@ write_atomic(const vv_volume *v, vv_box_reader read, void *ctx, const char *path
     }
     struct stat st;
     int exists = lstat(path, &st) == 0;
-    vv_status s = io_write_check_voxels(v, v->data || read, zarr_dtype(v->type) != NULL);
+    zarr_spec z;
+    vv_status s = spec_of(opt, &z);
+    if (s == VV_OK)
+        s = io_write_check_voxels(v, v->data || read, zarr_dtype(v->type) != NULL);
+    if (s == VV_OK) { /* level 0's chunks are the largest: what a reader allows */
+        int c[3], u[3];
+        level_grid(&z, v->dims, c, u);
+        const uint64_t bytes = (uint64_t)c[0] * c[1] * c[2] * vv_voxel_type_size(v->type);
+        if (bytes > ZR_CHUNK_MAX)
+            s = vv_error_set(
+                VV_ERR_INVALID, "a chunk of %d x %d x %d voxels is %llu bytes (at most %llu)", c[0],
+                c[1], c[2], (unsigned long long)bytes, (unsigned long long)ZR_CHUNK_MAX);
+    }
     if (s == VV_OK && opt->label && (v->type == VV_F32 || v->type == VV_F64))
         s = vv_error_set(VV_ERR_UNSUPPORTED, "a label volume holds integers, not %s",
                          vv_voxel_type_name(v->type));
@@ -794,7 +1206,8 @@ write_atomic(const vv_volume *v, vv_box_reader read, void *ctx, const char *path
         }
     }
     if (s == VV_OK)
-        s = read ? write_store_boxes(v, read, ctx, path, tmp, opt) : write_store(v, path, tmp, opt);
+        s = read ? write_store_boxes(v, read, ctx, path, tmp, &z, opt)
+                 : write_store(v, path, tmp, &z, opt);
     if (s == VV_OK)
         s = sync_store(tmp);
     if (s == VV_OK)
@@ -814,7 +1227,7 @@ zarr_fits(const vv_volume *v, char *why, size_t cap) {
     for (int r = 0; r < 3; r++)
         for (int c = 0; c < 3; c++)
             if (v->direction[r * 3 + c] != (r == c)) {
-                snprintf(why, cap, "OME-Zarr 0.4 holds no direction matrix (written axis-aligned)");
+                snprintf(why, cap, "OME-Zarr holds no direction matrix (written axis-aligned)");
                 return 0;
             }
     return 1;
@@ -839,8 +1252,9 @@ const vv_format_record vv_format_ome_zarr = {
     .title = "OME-Zarr",
     .extensions = zarr_extensions,
     .doc = "OME-Zarr 0.4 / Zarr v2 (a folder): read, level 0, one channel and time step (axes t, "
-           "c, z, y, x in any order; raw, zlib, gzip, zstd, blosc chunks); written as a pyramid of "
-           "2x2x2 means (labels: nearest), 64^3 chunks, zlib unless --no-compress",
+           "c, z, y, x in any order; raw, zlib, gzip, zstd, blosc chunks); written as OME-NGFF 0.5 "
+           "(Zarr v3, optionally sharded) or 0.4: a pyramid of 2x2x2 means (labels: nearest), "
+           "64^3 chunks, zstd (0.5) or zlib (0.4) unless --compress",
     .flags = VV_FORMAT_FLAG_FOLDER | VV_FORMAT_FLAG_THIRD_PARTY,
     .looks_like = vv_ome_zarr_looks_like,
     .fits = zarr_fits,
