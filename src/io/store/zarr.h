@@ -188,9 +188,6 @@ void zr_chunk_key(const zr_array *a, const uint64_t *idx, char *key, size_t cap)
 /* Frees @p a's shard index cache (zarr3.c). */
 void zr3_cache_free(zr_array *a);
 
-/* Castagnoli CRC-32C of @p n bytes (the crc32c codec's checksum). */
-uint32_t zr_crc32c(const unsigned char *p, size_t n);
-
 /* @p n voxels of type @p t at @p dst set to @p x (the fill value, cast). */
 void vv_zr_fill(void *dst, size_t n, vv_voxel_type t, double x);
 

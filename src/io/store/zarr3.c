@@ -31,32 +31,9 @@
 #include <zlib.h>
 #include <zstd.h>
 
+#include "core/crc32c.h"
 #include "core/internal.h"
 #include "io/store/zarr.h"
-
-/* ---- CRC-32C (Castagnoli, reflected polynomial 0x82f63b78) ---- */
-
-static uint32_t crc_table[256];
-static pthread_once_t crc_once = PTHREAD_ONCE_INIT;
-
-static void
-crc_init(void) {
-    for (uint32_t i = 0; i < 256; i++) {
-        uint32_t c = i;
-        for (int k = 0; k < 8; k++)
-            c = c & 1 ? (c >> 1) ^ 0x82f63b78u : c >> 1;
-        crc_table[i] = c;
-    }
-}
-
-uint32_t
-zr_crc32c(const unsigned char *p, size_t n) {
-    pthread_once(&crc_once, crc_init);
-    uint32_t c = 0xffffffffu;
-    for (size_t i = 0; i < n; i++)
-        c = crc_table[(c ^ p[i]) & 0xffu] ^ (c >> 8);
-    return c ^ 0xffffffffu;
-}
 
 /* ---- the shard index cache ---- */
 
@@ -488,7 +465,7 @@ decode_one(const zr_codec *k, const unsigned char *src, size_t m, unsigned char 
                                 n);
         const uint32_t want = (uint32_t)src[n] | (uint32_t)src[n + 1] << 8 |
                               (uint32_t)src[n + 2] << 16 | (uint32_t)src[n + 3] << 24;
-        if (zr_crc32c(src, n) != want)
+        if (vv_crc32c(0, src, n) != want)
             return vv_error_set(VV_ERR_FORMAT, "%s: crc32c checksum mismatch (damaged bytes)",
                                 what);
         memmove(out, src, n);

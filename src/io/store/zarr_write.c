@@ -1251,8 +1251,10 @@ const vv_format_record vv_format_ome_zarr = {
     .name = "zarr",
     .title = "OME-Zarr",
     .extensions = zarr_extensions,
-    .doc = "OME-Zarr 0.4 / Zarr v2 (a folder): read, level 0, one channel and time step (axes t, "
-           "c, z, y, x in any order; raw, zlib, gzip, zstd, blosc chunks); written as OME-NGFF 0.5 "
+    .doc = "OME-Zarr 0.1-0.5 / Zarr v2 and v3 (a folder): read, one level (0 unless --level), "
+           "channel and time step (axes t, c, z, y, x in any order; v2: raw, zlib, gzip, zstd, "
+           "blosc; v3: bytes, transpose, gzip, zstd, blosc, crc32c, sharding_indexed, read by "
+           "inner chunk); written as OME-NGFF 0.5 "
            "(Zarr v3, optionally sharded) or 0.4: a pyramid of 2x2x2 means (labels: nearest), "
            "64^3 chunks, zstd (0.5) or zlib (0.4) unless --compress",
     .flags = VV_FORMAT_FLAG_FOLDER | VV_FORMAT_FLAG_THIRD_PARTY,
