@@ -17,7 +17,8 @@ shuffle, gzip 1 or none). The files are read once by each reader before
 timing (all read from the page cache). Every reader's voxel sum is compared:
 a reader that reads other voxels fails the run. Prints the anchor lines of
 ../shared/BENCHMARKS.md and the ratios volvis / peer (time of the peer over
-VolVis's: above 1, VolVis is faster).
+VolVis's: above 1, VolVis is faster), in wall seconds and in CPU seconds
+(the process's, all threads: what a loaded machine distorts least).
 """
 import argparse
 import os
@@ -60,13 +61,16 @@ def make_store(path, size, chunk, shard, codec):
 
 
 def time_it(fn, repeat):
+    """Median wall seconds and median CPU seconds (the process's, all threads) of a read."""
     fn()  # warm: the files in the page cache, the readers' set-up done
-    times, out = [], None
+    times, cpus, out = [], [], None
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        out = None
+        t0, c0 = time.perf_counter(), time.process_time()
         out = fn()
         times.append(time.perf_counter() - t0)
-    return statistics.median(times), out
+        cpus.append(time.process_time() - c0)
+    return statistics.median(times), statistics.median(cpus), out
 
 
 def main():
@@ -86,13 +90,13 @@ def main():
     make_store(path, a.size, a.chunk, a.shard, a.codec)
 
     zarr.config.set({"threading.max_workers": a.threads, "async.concurrency": 2 * a.threads})
-    t_zarr, v = time_it(lambda: zarr.open_array(path, mode="r")[...], a.repeat)
+    t_zarr, c_zarr, v = time_it(lambda: zarr.open_array(path, mode="r")[...], a.repeat)
     sum_zarr = float(v.astype(np.float64).sum())
     del v
     ctx = ts.Context({"data_copy_concurrency": {"limit": a.threads},
                       "file_io_concurrency": {"limit": a.threads}})
     spec = {"driver": "zarr3", "kvstore": {"driver": "file", "path": path}}
-    t_ts, v = time_it(lambda: ts.open(spec, context=ctx, read=True).result().read().result(),
+    t_ts, c_ts, v = time_it(lambda: ts.open(spec, context=ctx, read=True).result().read().result(),
                       a.repeat)
     sum_ts = float(v.astype(np.float64).sum())
     del v
@@ -104,15 +108,18 @@ def main():
     for line in r.stdout.splitlines():
         f = dict(kv.split("=", 1) for kv in line.split())
         vals[f["op"]] = float(f["value"])
-    t_vv, sum_vv = vals["zarr_read"], vals["zarr_read_sum"]
+    t_vv, c_vv, sum_vv = vals["zarr_read"], vals["zarr_read_cpu"], vals["zarr_read_sum"]
     if not (sum_vv == sum_zarr == sum_ts):
         sys.exit(f"zarr_read_pairs: the readers disagree: volvis {sum_vv}, zarr-python "
                  f"{sum_zarr}, tensorstore {sum_ts}")
-    for who, t in (("zarr-python", t_zarr), ("tensorstore", t_ts), ("volvis", t_vv)):
+    for who, t, c in (("zarr-python", t_zarr, c_zarr), ("tensorstore", t_ts, c_ts),
+                      ("volvis", t_vv, c_vv)):
         print(f"anchor={who} op=zarr_read dataset={name} value={t:.4f} unit=s", flush=True)
-    print(f"# {name}, {a.threads} threads, median of {a.repeat}: volvis {t_vv:.3f} s; "
-          f"zarr-python {t_zarr:.3f} s ({t_zarr / t_vv:.2f}x); tensorstore {t_ts:.3f} s "
-          f"({t_ts / t_vv:.2f}x)")
+        print(f"anchor={who} op=zarr_read_cpu dataset={name} value={c:.4f} unit=s", flush=True)
+    print(f"# {name}, {a.threads} threads, median of {a.repeat}: wall: volvis {t_vv:.3f} s, "
+          f"zarr-python {t_zarr:.3f} s ({t_zarr / t_vv:.2f}x), tensorstore {t_ts:.3f} s "
+          f"({t_ts / t_vv:.2f}x); CPU: volvis {c_vv:.3f} s, zarr-python {c_zarr:.3f} s "
+          f"({c_zarr / c_vv:.2f}x), tensorstore {c_ts:.3f} s ({c_ts / c_vv:.2f}x)")
 
 
 if __name__ == "__main__":
