@@ -1,0 +1,94 @@
+#!/usr/bin/env bash
+# Seeds of fuzz_render (tests/fuzz/corpus/render/: a first line naming the
+# format and the options, then the file) and more .vvc seeds
+# (tests/fuzz/corpus/vvc/: every format version, subcube side, voxel type
+# and the corrections of --max-error), written by VolVis itself from small
+# volumes made here. Every seed is a few KB at most. Run from the repository
+# root; needs /usr/bin/python3 with NumPy and VolVis's CLI (VOLVIS, default
+# build/release/volvis). Never deletes anything.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+C=tests/fuzz/corpus
+V=${VOLVIS:-build/release/volvis}
+PY=/usr/bin/python3
+mkdir -p $C/render $C/vvc
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+
+# ---- small volumes: a blob in u8, i16, u16 and f32, and a 72x5x4 row and a 66x9x7 block (past one brick of 64: levels) -------
+$PY - "$T" <<'PYEOF'
+import sys, numpy as np
+T = sys.argv[1]
+def blob(nx, ny, nz):
+    z, y, x = np.mgrid[0:nz, 0:ny, 0:nx].astype(float)
+    r = np.sqrt(((x - nx / 2) / nx) ** 2 + ((y - ny / 2) / ny) ** 2 + ((z - nz / 2) / nz) ** 2)
+    return np.clip(1.2 - 2 * r, 0, 1)
+b = blob(9, 7, 6)
+(b * 255).astype('u1').tofile(T + '/u8.raw')
+(b * 3000 - 1000).astype('<i2').tofile(T + '/i16.raw')
+(b * 60000).astype('<u2').tofile(T + '/u16.raw')
+(b * 2.5 - 0.5).astype('<f4').tofile(T + '/f32.raw')
+(blob(72, 5, 4) * 200).astype('u1').tofile(T + '/row.raw')
+(blob(66, 9, 7) * 1000).astype('<i2').tofile(T + '/cube.raw')
+z, y, x = np.mgrid[0:4, 0:5, 0:140]
+((np.sin(x / 9.0) + 1) * 100 + y * 5 + z).astype('u1').tofile(T + '/long.raw')
+PYEOF
+R_U8=9x7x6:u8
+R_I16=9x7x6:i16:le:1x1x2
+R_U16=9x7x6:u16
+R_F32=9x7x6:f32:le:0.5x0.5x1
+R_ROW=72x5x4:u8
+R_CUBE=66x9x7:i16
+R_LONG=140x5x4:u8
+
+# ---- .vvc: both versions, the subcube sides 8 and 16 (32: tables of 40 KB),
+# the voxel types, corrections
+"$V" compress -q --raw $R_U8 --quality 60 --block 8 $T/u8.raw $C/vvc/v2_u8_b8.vvc
+"$V" compress -q --raw $R_I16 --format 1 --quality 70 --block 8 $T/i16.raw $C/vvc/v1_i16_b8.vvc
+"$V" compress -q --raw $R_U16 --quality 100 --block 16 $T/u16.raw $C/vvc/v2_u16_lossless.vvc
+"$V" compress -q --raw $R_F32 --max-error 0.01 --block 8 $T/f32.raw $C/vvc/v2_f32_maxerr.vvc
+"$V" compress -q --raw $R_CUBE --quality 40 --block 8 --slope 0 $T/cube.raw $C/vvc/v2_cube_flat.vvc
+"$V" compress -q --raw $R_CUBE --format 1 --quality 30 --block 8 $T/cube.raw $C/vvc/v1_cube.vvc
+
+# ---- render: a .vvb with levels or without, raw or zstd, the modes --------
+seed() { # NAME LINE FILE [DATA]: the line, the file, and --DATA-- then DATA
+  { printf '%s\n' "$2"; cat "$3"
+    if [ $# -ge 4 ]; then printf '\n--DATA--\n'; cat "$4"; fi; } > $C/render/$1
+}
+"$V" convert -q --raw $R_ROW $T/row.raw $T/row_levels.vvb
+"$V" convert -q --raw $R_ROW --no-compress $T/row.raw $T/row_levels_raw.vvb
+"$V" convert -q --raw $R_ROW --no-levels $T/row.raw $T/row_bricks.vvb
+"$V" convert -q --raw $R_CUBE $T/cube.raw $T/cube.vvb
+"$V" convert -q --raw $R_F32 --no-levels --no-compress $T/f32.raw $T/f32_raw.vvb
+seed vvb_levels.txt "vvb levels" $T/row_levels.vvb
+seed vvb_levels_progressive.txt "vvb levels progressive limit=64" $T/row_levels.vvb
+seed vvb_levels_raw_mip.txt "vvb levels mip level=1" $T/row_levels_raw.vvb
+seed vvb_cube_iso.txt "vvb levels iso lod=4" $T/cube.vvb
+seed vvb_cube_progressive.txt "vvb levels progressive xray" $T/cube.vvb
+seed vvb_bricks.txt "vvb" $T/row_bricks.vvb
+seed vvb_bricks_whole.txt "vvb whole minip" $T/row_bricks.vvb
+seed vvb_f32.txt "vvb mip" $T/f32_raw.vvb
+# three bricks in a cache of a few KB: chunks evicted by the plan, the loader stopped
+"$V" convert -q --raw $R_LONG $T/long.raw $T/long.vvb
+seed vvb_long_limit.txt "vvb levels limit=8" $T/long.vvb
+seed vvb_long_limit_progressive.txt "vvb levels progressive limit=8 lod=0.5" $T/long.vvb
+seed vvb_long_level0_progressive.txt "vvb levels level=0 progressive limit=8" $T/long.vvb
+seed vvb_long_level0_progressive_big.txt "vvb levels level=0 progressive iso" $T/long.vvb
+seed vvb_cube_fine_progressive.txt "vvb levels progressive lod=0.25 mip" $T/cube.vvb
+seed vvb_long_small.txt "vvb levels limit=4" $T/long.vvb
+seed raw_long_limit.txt "raw raw=$R_LONG limit=8" $T/long.raw
+# raw out of core (its layout scanned into bricks) and whole
+seed raw_u8.txt "raw raw=$R_ROW" $T/row.raw
+seed raw_i16_mip.txt "raw raw=$R_CUBE mip limit=128" $T/cube.raw
+seed raw_f32_whole.txt "raw raw=$R_F32 whole" $T/f32.raw
+seed raw_no_description.txt "raw" $T/u8.raw
+seed raw_u16_be.txt "raw raw=4x3x2:u16:be:skip=4" <(printf 'HEAD'; head -c 48 $T/u16.raw)
+# our other readers, whole
+"$V" convert -q --raw $R_U8 $T/u8.raw $T/u8.slc
+"$V" convert -q --raw $R_I16 $T/i16.raw $T/i16.mha
+"$V" convert -q --raw $R_F32 $T/f32.raw $T/f32.vtk
+seed slc.txt "slc" $T/u8.slc
+seed mha.txt "mha iso" $T/i16.mha
+seed vtk.txt "vtk mip" $T/f32.vtk
+printf 'ObjectType = Image\nNDims = 3\nDimSize = 9 7 6\nElementType = MET_UCHAR\nElementDataFile = data.raw\n' > $T/u8.mhd
+seed mhd_detached.txt "mhd" $T/u8.mhd $T/u8.raw
