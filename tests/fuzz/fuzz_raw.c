@@ -3,6 +3,11 @@
  * the input is a --raw description as the CLI parses it
  * (cli_parse_raw, apps/volvis/options.c: "WxHxD:TYPE[:be|le][:SXxSYxSZ]
  * [:skip=N]"), the rest the file read with vv_volume_load (src/io/volume/raw.c).
+ * Then the file is opened by bricks as the CLI opens a raw file out of
+ * core (vv_bricked_open: its layout, vv_raw_layout, and the scan for the
+ * range and every brick's min/max; vv_bricked_open_header: without the
+ * scan), each brick read, a box across bricks and a proxy, in a cache of
+ * its own small enough that bricks are evicted.
  */
 #include "cli.h"
 #include <stdint.h>
@@ -10,9 +15,51 @@
 #include <string.h>
 
 #include "fuzz_util.h"
+#include "io/store/bricked.h"
 #include "volvis/volvis.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+/* The file by bricks (with the scan for the range, or its header alone and
+ * a range set): every brick (at most 8), a box across the first two along
+ * x, a proxy, the statistics. */
+static void
+by_bricks(const char *path, const vv_raw_params *raw, int scan) {
+    static vv_cache *cache; /* one budget for every input, as a process has */
+    if (!cache && vv_cache_new(&cache, (uint64_t)1 << 20) != VV_OK)
+        __builtin_trap();
+    vv_bricked *b = NULL;
+    vv_status s =
+        scan ? vv_bricked_open(&b, path, raw, cache) : vv_bricked_open_header(&b, path, raw, cache);
+    fuzz_check_status(s);
+    if (s != VV_OK)
+        return;
+    if (!scan)
+        vv_bricked_set_range(b, 0, 1);
+    for (int i = 0; i < vv_bricked_count(b) && i < 8; i++) {
+        vv_volume *v = NULL;
+        if ((s = vv_bricked_load(b, i, &v)) == VV_OK)
+            fuzz_check_volume(v);
+        fuzz_check_status(s);
+    }
+    const vv_volume *h = vv_bricked_header(b);
+    int lo[3], hi[3];
+    for (int a = 0; a < 3; a++) {
+        lo[a] = h->dims[a] > 70 ? 60 : 0;
+        hi[a] = h->dims[a] - 1 < lo[a] + 9 ? h->dims[a] - 1 : lo[a] + 9;
+    }
+    vv_volume *v = NULL;
+    if ((s = vv_bricked_box(b, lo, hi, &v)) == VV_OK)
+        fuzz_check_volume(v);
+    fuzz_check_status(s);
+    v = NULL;
+    if ((s = vv_bricked_proxy(b, 8, &v)) == VV_OK)
+        fuzz_check_volume(v);
+    fuzz_check_status(s);
+    vv_bricked_stats st;
+    vv_bricked_stats_get(b, &st);
+    vv_bricked_free(b);
+}
 
 int
 LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
@@ -32,8 +79,11 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     o.has_raw = 1;
     if (cli_parse_raw(NULL, "raw", spec, &o.raw) != 0)
         return 0;
+    const char *path = fuzz_write("in.raw", d, nd);
     vv_volume *v = NULL;
-    if (vv_volume_load(&v, fuzz_write("in.raw", d, nd), &o) == VV_OK)
+    if (vv_volume_load(&v, path, &o) == VV_OK)
         fuzz_check_volume(v);
+    by_bricks(path, &o.raw, 1);
+    by_bricks(path, &o.raw, 0);
     return 0;
 }

@@ -155,7 +155,8 @@ render(vv_renderer *r, vv_world *w, const opts *o) {
             fuzz_check_status(vv_renderer_render(r, w, &w->view, &ro, img));
             if (lod.pending == 0)
                 break;
-            vv_source_wait(ob->source, 0.5);
+            if (vv_source_loading(ob->source) > 0)
+                vv_source_wait(ob->source, 0.5);
         }
     }
     /* the converged frame: every node at its level, read as the plan says */
@@ -163,6 +164,10 @@ render(vv_renderer *r, vv_world *w, const opts *o) {
     lod.level = o->level;
     lod.voxel_pixels = o->lod;
     fuzz_check_status(vv_renderer_render(r, w, &w->view, &ro, img));
+    if (ob && ob->source) {
+        vv_source_stats st;
+        vv_source_stats_get(ob->source, &st);
+    }
 }
 
 int

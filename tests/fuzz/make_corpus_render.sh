@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Seeds of fuzz_render (tests/fuzz/corpus/render/: a first line naming the
-# format and the options, then the file) and more .vvc seeds
+# format and the options, then the file), more .vvc seeds
 # (tests/fuzz/corpus/vvc/: every format version, subcube side, voxel type
 # and the corrections of --max-error), written by VolVis itself from small
-# volumes made here. Every seed is a few KB at most. Run from the repository
+# volumes made here, and raw files of several bricks and voxel types
+# (tests/fuzz/corpus/raw/: a --raw description line, then the file). Every seed is a few KB at most. Run from the repository
 # root; needs /usr/bin/python3 with NumPy and VolVis's CLI (VOLVIS, default
 # build/release/volvis). Never deletes anything.
 set -euo pipefail
@@ -11,7 +12,7 @@ cd "$(dirname "$0")/../.."
 C=tests/fuzz/corpus
 V=${VOLVIS:-build/release/volvis}
 PY=/usr/bin/python3
-mkdir -p $C/render $C/vvc
+mkdir -p $C/render $C/vvc $C/raw
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 
@@ -32,6 +33,8 @@ b = blob(9, 7, 6)
 (blob(66, 9, 7) * 1000).astype('<i2').tofile(T + '/cube.raw')
 z, y, x = np.mgrid[0:4, 0:5, 0:140]
 ((np.sin(x / 9.0) + 1) * 100 + y * 5 + z).astype('u1').tofile(T + '/long.raw')
+z, y, x = np.mgrid[0:3, 0:4, 0:400]
+((np.sin(x / 9.0) + 1) * 100 + y * 5 + z).astype('u1').tofile(T + '/wide.raw')
 PYEOF
 R_U8=9x7x6:u8
 R_I16=9x7x6:i16:le:1x1x2
@@ -75,6 +78,22 @@ seed vvb_long_limit_progressive.txt "vvb levels progressive limit=8 lod=0.5" $T/
 seed vvb_long_level0_progressive.txt "vvb levels level=0 progressive limit=8" $T/long.vvb
 seed vvb_long_level0_progressive_big.txt "vvb levels level=0 progressive iso" $T/long.vvb
 seed vvb_cube_fine_progressive.txt "vvb levels progressive lod=0.25 mip" $T/cube.vvb
+# five bricks in 6 to 7 KB: the plan's farthest next use evicts, the
+# loader stops when the cache is full of wanted chunks; a brick's zstd
+# frame corrupt: the loader's read fails, the frame reports it
+"$V" convert -q --raw 400x4x3:u8 $T/wide.raw $T/wide.vvb
+seed vvb_wide_evict.txt "vvb levels level=0 limit=6" $T/wide.vvb
+seed vvb_wide_loader_full.txt "vvb levels level=0 limit=7 progressive" $T/wide.vvb
+$PY - $T/wide.vvb $T/wide_bad.vvb <<'PYEOF'
+import sys
+b = bytearray(open(sys.argv[1], 'rb').read())
+frames = [i for i in range(len(b) - 4) if b[i:i + 4] == b'\x28\xb5\x2f\xfd']
+for f in frames[1:3]:
+    for k in range(8, 14):
+        b[f + k] ^= 0x5a
+open(sys.argv[2], 'wb').write(bytes(b))
+PYEOF
+seed vvb_wide_corrupt_progressive.txt "vvb levels level=0 progressive" $T/wide_bad.vvb
 seed vvb_long_small.txt "vvb levels limit=4" $T/long.vvb
 seed raw_long_limit.txt "raw raw=$R_LONG limit=8" $T/long.raw
 # raw out of core (its layout scanned into bricks) and whole
@@ -92,3 +111,18 @@ seed mha.txt "mha iso" $T/i16.mha
 seed vtk.txt "vtk mip" $T/f32.vtk
 printf 'ObjectType = Image\nNDims = 3\nDimSize = 9 7 6\nElementType = MET_UCHAR\nElementDataFile = data.raw\n' > $T/u8.mhd
 seed mhd_detached.txt "mhd" $T/u8.mhd $T/u8.raw
+
+# ---- raw: several bricks along x, every voxel type the scan reads its own way
+$PY - "$C/raw" <<'PYEOF'
+import sys, numpy as np
+C = sys.argv[1]
+x = np.arange(140 * 3 * 2)
+for name, desc, a in [
+        ('bricks_u8.txt', '140x3x2:u8', (x * 7 % 251).astype('u1')),
+        ('bricks_f32_be.txt', '140x3x2:f32:be:1x1x2', (x * 0.25 - 9).astype('>f4')),
+        ('bricks_i32_skip.txt', '140x3x2:i32:le:skip=3', (x * 1000 - 7).astype('<i4')),
+        ('bricks_f64_nan.txt', '70x2x2:f64', np.where(x[:280] % 17 == 0, np.nan, x[:280]).astype('<f8')),
+        ('bricks_u16_be.txt', '66x2x2:u16:be', (x[:264] * 211).astype('>u2'))]:
+    skip = b'abc' if 'skip' in desc else b''
+    open(C + '/' + name, 'wb').write(desc.encode() + b'\n' + skip + a.tobytes())
+PYEOF
