@@ -7,7 +7,11 @@
  * core (vv_bricked_open: its layout, vv_raw_layout, and the scan for the
  * range and every brick's min/max; vv_bricked_open_header: without the
  * scan), each brick read, a box across bricks and a proxy, in a cache of
- * its own small enough that bricks are evicted.
+ * its own (32 KiB for a file of an odd size, so that bricks are evicted;
+ * 1 MiB otherwise). An input starting with '@' is a vv_raw_params as it
+ * is in memory, then the file, read by vv_volume_load: vv_raw_read's own
+ * checks of what a library caller passes (a voxel type, sizes, spacing or
+ * origin the CLI's parser would refuse).
  */
 #include "cli.h"
 #include <stdint.h>
@@ -24,10 +28,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
  * a range set): every brick (at most 8), a box across the first two along
  * x, a proxy, the statistics. */
 static void
-by_bricks(const char *path, const vv_raw_params *raw, int scan) {
-    static vv_cache *cache; /* one budget for every input, as a process has */
-    if (!cache && vv_cache_new(&cache, (uint64_t)1 << 20) != VV_OK)
+by_bricks(const char *path, const vv_raw_params *raw, int scan, uint64_t limit) {
+    static vv_cache *cache; /* one cache for every input, as a process has */
+    if (!cache && vv_cache_new(&cache, limit) != VV_OK)
         __builtin_trap();
+    vv_cache_set_limit(cache, limit);
     vv_bricked *b = NULL;
     vv_status s =
         scan ? vv_bricked_open(&b, path, raw, cache) : vv_bricked_open_header(&b, path, raw, cache);
@@ -63,6 +68,21 @@ by_bricks(const char *path, const vv_raw_params *raw, int scan) {
 
 int
 LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+    if (size > sizeof(vv_raw_params) && data[0] == '@') {
+        /* the parameters as a library caller passes them, unchecked */
+        vv_load_options o;
+        vv_load_options_init(&o);
+        o.format = VV_FORMAT_RAW;
+        o.has_raw = 1;
+        memcpy(&o.raw, data + 1, sizeof o.raw);
+        const char *path = fuzz_write("in.raw", data + 1 + sizeof o.raw, size - 1 - sizeof o.raw);
+        vv_volume *v = NULL;
+        vv_status s = vv_volume_load(&v, path, &o);
+        fuzz_check_status(s);
+        if (s == VV_OK)
+            fuzz_check_volume(v);
+        return 0;
+    }
     const uint8_t *h, *d;
     size_t nh, nd;
     fuzz_split(data, size, "\n", &h, &nh, &d, &nd);
@@ -83,7 +103,9 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     vv_volume *v = NULL;
     if (vv_volume_load(&v, path, &o) == VV_OK)
         fuzz_check_volume(v);
-    by_bricks(path, &o.raw, 1);
-    by_bricks(path, &o.raw, 0);
+    /* a cache of 32 KiB for an odd file (bricks evicted), 1 MiB otherwise */
+    const uint64_t limit = nd & 1 ? (uint64_t)32 << 10 : (uint64_t)1 << 20;
+    by_bricks(path, &o.raw, 1, limit);
+    by_bricks(path, &o.raw, 0, limit);
     return 0;
 }

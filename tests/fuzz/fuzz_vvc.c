@@ -29,8 +29,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 #define SIZES 216 /* the tables', index's and data's sizes (3 x u64) */
 /* a valid file decompressed: at most this many voxel bytes (one exec, milliseconds) */
 #define MAX_RAW ((uint64_t)1 << 21)
-/* ... and compressed again: at most this many voxels */
-#define MAX_RECOMPRESS ((uint64_t)1 << 12)
+/* ... and compressed again: at most this many voxels in its subcubes */
+#define MAX_RECOMPRESS ((uint64_t)1 << 13)
 
 static uint32_t
 get32(const uint8_t *p) {
@@ -75,7 +75,10 @@ fix_crcs(uint8_t *b, size_t size) {
  * parse. */
 static void
 recompress(const vv_volume *v, const vv_vvc_info *info) {
-    if ((uint64_t)v->dims[0] * (uint64_t)v->dims[1] * (uint64_t)v->dims[2] > MAX_RECOMPRESS)
+    const uint64_t M = (uint64_t)info->block;
+    if ((uint64_t)info->subcubes[0] * (uint64_t)info->subcubes[1] * (uint64_t)info->subcubes[2] *
+            M * M * M >
+        MAX_RECOMPRESS)
         return;
     vv_vvc_params p;
     vv_vvc_params_init(&p);
@@ -130,7 +133,6 @@ read_one(const uint8_t *data, size_t size, int through_file) {
         float *vals = malloc(m * m * m * sizeof *vals);
         if (vals) {
             vv_vvc_decode_subcube(c, n - 1, vals);
-            vv_vvc_decode_subcube(c, 0, vals);
             free(vals);
         }
     }

@@ -33,6 +33,7 @@ b = blob(9, 7, 6)
 (blob(66, 9, 7) * 1000).astype('<i2').tofile(T + '/cube.raw')
 z, y, x = np.mgrid[0:4, 0:5, 0:140]
 ((np.sin(x / 9.0) + 1) * 100 + y * 5 + z).astype('u1').tofile(T + '/long.raw')
+np.ascontiguousarray(((np.sin(x / 9.0) + 1) * 100).astype('u1').transpose(0, 2, 1)).tofile(T + '/tall.raw')
 z, y, x = np.mgrid[0:3, 0:4, 0:400]
 ((np.sin(x / 9.0) + 1) * 100 + y * 5 + z).astype('u1').tofile(T + '/wide.raw')
 PYEOF
@@ -52,6 +53,11 @@ R_LONG=140x5x4:u8
 "$V" compress -q --raw $R_F32 --max-error 0.01 --block 8 $T/f32.raw $C/vvc/v2_f32_maxerr.vvc
 "$V" compress -q --raw $R_CUBE --quality 40 --block 8 --slope 0 $T/cube.raw $C/vvc/v2_cube_flat.vvc
 "$V" compress -q --raw $R_CUBE --format 1 --quality 30 --block 8 $T/cube.raw $C/vvc/v1_cube.vvc
+
+# ---- SLC: wider and taller than the writer's icon (64 pixels), run-length and not
+mkdir -p $C/slc
+"$V" convert -q --raw $R_LONG $T/long.raw $C/slc/icon_wide.slc
+"$V" convert -q --no-compress --raw 5x140x4:u8 $T/tall.raw $C/slc/icon_tall.slc
 
 # ---- render: a .vvb with levels or without, raw or zstd, the modes --------
 seed() { # NAME LINE FILE [DATA]: the line, the file, and --DATA-- then DATA
@@ -125,4 +131,21 @@ for name, desc, a in [
         ('bricks_u16_be.txt', '66x2x2:u16:be', (x[:264] * 211).astype('>u2'))]:
     skip = b'abc' if 'skip' in desc else b''
     open(C + '/' + name, 'wb').write(desc.encode() + b'\n' + skip + a.tobytes())
+# '@', a vv_raw_params as in memory (int dims[3], type, big_endian; double
+# spacing[3], origin[3]; uint64 skip), then the file: what a library caller passes
+import struct
+def params(dims, typ, be, sp, org, skip):
+    return b'@' + struct.pack('<3iii4x3d3dQ', *dims, typ, be, *sp, *org, skip)
+body = bytes(range(48))
+for name, p in [
+        ('params_ok.bin', params((4, 3, 2), 3, 1, (1, 1, 2), (0, 0, 0), 0)),
+        ('params_type.bin', params((4, 3, 2), 99, 0, (1, 1, 1), (0, 0, 0), 0)),
+        ('params_dims.bin', params((4, 0, 2), 0, 0, (1, 1, 1), (0, 0, 0), 0)),
+        ('params_spacing.bin', params((4, 3, 2), 0, 0, (1, -1, 1), (0, 0, 0), 0)),
+        ('params_origin.bin', params((4, 3, 2), 0, 0, (1, 1, 1), (0, float('inf'), 0), 0)),
+        ('params_short.bin', params((4, 3, 2), 7, 0, (1, 1, 1), (0, 0, 0), 8))]:
+    open(C + '/' + name, 'wb').write(p + body)
+# bricks evicted: four bricks along x in a cache of 32 KiB (an odd file)
+open(C + '/bricks_evicted.txt', 'wb').write(b'200x20x2:u8:le:skip=1\n' + b'\0' +
+                                            (np.arange(8000) * 13 % 256).astype('u1').tobytes())
 PYEOF
