@@ -37,7 +37,10 @@ is_integer_type(vv_voxel_type t) {
 }
 
 /* Fills one row of stored values from the source volume (clamping indices
- * of duplicated axes). */
+ * of duplicated axes). A 16-bit value outside the volume's range is
+ * clamped to it: a region's voxels carry the whole volume's range, which
+ * a .vvb's header states, and a file whose range does not hold its voxels
+ * made the cast to uint16_t undefined (found by fuzz_render). */
 static void
 fill_row(vv_vcache *c, const vv_volume *vol, int j, int k, size_t base) {
     int sj = j < vol->dims[1] ? j : vol->dims[1] - 1;
@@ -45,9 +48,10 @@ fill_row(vv_vcache *c, const vv_volume *vol, int j, int k, size_t base) {
     const int snx = vol->dims[0];
     for (int i = 0; i < c->nx; i++) {
         const double x = vv_volume_get(vol, i < snx ? i : snx - 1, sj, sk);
-        if (c->q16)
-            c->q16[base + (size_t)i] = (uint16_t)(x - c->qoff);
-        else
+        if (c->q16) {
+            const double q = x - c->qoff;
+            c->q16[base + (size_t)i] = (uint16_t)(q > 0 ? (q < 65535 ? q : 65535) : 0);
+        } else
             c->f32[base + (size_t)i] = x == x ? (float)x : (float)vol->range[0]; /* NaN: minimum */
     }
 }
