@@ -2,8 +2,9 @@
  * libFuzzer harness: SLC volumes (vv_slc_read; src/io/volume/slc.c). A
  * volume read is written back (vv_volume_save: run-length compressed and
  * not, with the icon) and read again, which must give the same voxels; a
- * copy of it in 16 bits is written too (rescaled to 8 bits by the writer)
- * and must read back with the same dimensions.
+ * copy of it in 16 bits is written too (refused when strict; rescaled to 8
+ * bits by the writer otherwise) and must read back with the same
+ * dimensions; what was written is detected as SLC.
  */
 #include <stdint.h>
 #include <stdio.h>
@@ -32,13 +33,21 @@ round_trip(const vv_volume *v, int rle, int same) {
     so.format = VV_FORMAT_SLC;
     so.compress = rle;
     const char *path = fuzz_write("out.slc", NULL, 0);
-    vv_status s = vv_volume_save_with(v, path, &so);
+    vv_status s;
+    if (v->type != VV_U8) { /* strict: what SLC cannot hold is refused */
+        so.strict = 1;
+        if ((s = vv_volume_save_with(v, path, &so)) != VV_ERR_UNSUPPORTED)
+            __builtin_trap();
+        fuzz_check_status(s);
+        so.strict = 0;
+    }
+    s = vv_volume_save_with(v, path, &so);
     fuzz_check_status(s);
     if (s != VV_OK)
         return;
     vv_volume *w = NULL;
     s = vv_slc_read(&w, path);
-    if (s != VV_OK)
+    if (s != VV_OK || vv_format_detect(path) != VV_FORMAT_SLC)
         __builtin_trap(); /* what the writer wrote, the reader reads */
     if (memcmp(w->dims, v->dims, sizeof v->dims) != 0 || w->type != VV_U8 ||
         (same && memcmp(w->data, v->data, (size_t)voxels(v)) != 0))
