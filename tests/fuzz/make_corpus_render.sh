@@ -4,8 +4,10 @@
 # (tests/fuzz/corpus/vvc/: every format version, subcube side, voxel type
 # and the corrections of --max-error), written by VolVis itself from small
 # volumes made here, and raw files of several bricks and voxel types
-# (tests/fuzz/corpus/raw/: a --raw description line, then the file). Every seed is a few KB at most. Run from the repository
-# root; needs /usr/bin/python3 with NumPy and VolVis's CLI (VOLVIS, default
+# (tests/fuzz/corpus/raw/: a --raw description line, then the file), SLC
+# wider and taller than its icon and VTK of two components a point. Every
+# seed is a few KB at most. Run from the repository root; needs
+# /usr/bin/python3 with NumPy and VolVis's CLI (VOLVIS, default
 # build/release/volvis). Never deletes anything.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -148,4 +150,18 @@ for name, p in [
 # bricks evicted: four bricks along x in a cache of 32 KiB (an odd file)
 open(C + '/bricks_evicted.txt', 'wb').write(b'200x20x2:u8:le:skip=1\n' + b'\0' +
                                             (np.arange(8000) * 13 % 256).astype('u1').tobytes())
+PYEOF
+
+# ---- VTK legacy: two components a point, binary and ASCII (the component's
+# values picked out of the tuples a block at a time)
+$PY - "$C/vtk" <<'PYEOF'
+import sys, numpy as np
+C = sys.argv[1]
+a = (np.arange(4 * 3 * 2 * 2) * 37 % 1000).astype('>i2')
+for name, binary in [('components_binary.vtk', True), ('components_ascii.vtk', False)]:
+    h = ('# vtk DataFile Version 3.0\ntwo components\n%s\nDATASET STRUCTURED_POINTS\n'
+         'DIMENSIONS 4 3 2\nSPACING 1 1 1\nORIGIN 0 0 0\nPOINT_DATA 24\nSCALARS v short 2\n'
+         'LOOKUP_TABLE default\n' % ('BINARY' if binary else 'ASCII')).encode()
+    open(C + '/' + name, 'wb').write(
+        h + (a.tobytes() if binary else ' '.join(map(str, a)).encode() + b'\n'))
 PYEOF
