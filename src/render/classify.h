@@ -38,11 +38,16 @@ vv_status vv_vtables_get(vv_vcache_set *s, vv_vcache *c, const vv_object *obj, v
                          double dt, float iso, int skipping, int flags, vv_vtables *out,
                          int *owned);
 
-/* Table index (as float) of stored value v. */
+/* Table index (as float) of stored value v; a NaN index is 0, as the AVX2
+ * kernel's max makes it: a float volume whose range is wider than a float
+ * holds (values near -FLT_MAX and +FLT_MAX) stores some as infinite, and a
+ * sample between them is NaN, and the callers' (int) of a NaN index was
+ * undefined behaviour (x86 gives INT_MIN, and 4 times it overflows; found
+ * by fuzz_render). */
 static inline float
 vv_vtables_index(const vv_vtables *t, float v) {
     float x = (v - t->lut_lo) * t->lut_scale;
-    return x < 0 ? 0 : x > VV_VC_LUT - 1 ? VV_VC_LUT - 1 : x;
+    return x > 0 ? (x < VV_VC_LUT - 1 ? x : VV_VC_LUT - 1) : 0;
 }
 
 /* An object's per-sample extras beyond the 1-D table: a 2-D transfer
@@ -104,7 +109,7 @@ vv_vextra_apply(const vv_vextra *x, const vv_vcache *c, const float p[3], float 
                 float buf[4]) {
     if (x->lut2d) {
         float li = (val - x->lut_lo) * x->lut_scale;
-        li = li < 0 ? 0 : li > VV_VC_LUT - 1 ? VV_VC_LUT - 1 : li;
+        li = li > 0 ? (li < VV_VC_LUT - 1 ? li : VV_VC_LUT - 1) : 0; /* NaN: 0 */
         const int vb = (int)(li * x->lut2_scale + 0.5f);
         int gb = (int)(vv_vcache_gmag(c, p) * x->g_scale + 0.5f);
         gb = gb < 0 ? 0 : gb > VV_VC_LUT2_G - 1 ? VV_VC_LUT2_G - 1 : gb;

@@ -17,6 +17,7 @@
  */
 #include "render/kernels_avx2.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 #if VV_VC_HAVE_AVX2
@@ -174,7 +175,7 @@ vv_oct_encode_n_avx2(const float *gx, const float *gy, const float *gz, int n, i
     const __m256 sign = _mm256_set1_ps(-0.0f), lim = _mm256_set1_ps(127.0f);
     const __m256 one = _mm256_set1_ps(1.0f), zero = _mm256_setzero_ps();
     const __m256 nlim = _mm256_set1_ps(-127.0f), off = _mm256_set1_ps(128.0f);
-    const __m256 zc = _mm256_set1_ps((float)VV_OCT_ZERO);
+    const __m256 zc = _mm256_set1_ps((float)VV_OCT_ZERO), fmax = _mm256_set1_ps(FLT_MAX);
     int i = 0;
     for (; i + 8 <= n; i += 8) {
         const __m256 gx0 = _mm256_loadu_ps(gx + i), gy0 = _mm256_loadu_ps(gy + i);
@@ -182,8 +183,10 @@ vv_oct_encode_n_avx2(const float *gx, const float *gy, const float *gz, int n, i
         const __m256 l1 =
             _mm256_add_ps(_mm256_add_ps(_mm256_andnot_ps(sign, gx0), _mm256_andnot_ps(sign, gy0)),
                           _mm256_andnot_ps(sign, gz0));
-        const __m256 flat = _mm256_cmp_ps(l1, zero, _CMP_EQ_OQ);
-        const __m256 dv = _mm256_or_ps(l1, _mm256_and_ps(flat, one));
+        /* no direction: 0, or not finite (NaN or infinite differences) */
+        const __m256 flat = _mm256_or_ps(_mm256_cmp_ps(l1, zero, _CMP_NGT_UQ),
+                                         _mm256_cmp_ps(l1, fmax, _CMP_NLE_UQ));
+        const __m256 dv = _mm256_blendv_ps(l1, one, flat);
         const __m256 x0 = _mm256_div_ps(gx0, dv), y0 = _mm256_div_ps(gy0, dv);
         const __m256 z0 = _mm256_div_ps(gz0, dv);
         __m256 x = _mm256_mul_ps(x0, lim), y = _mm256_mul_ps(y0, lim);

@@ -131,7 +131,7 @@ void
 vv_xray_table_classify(const void *ctx, float v, float e[4]) {
     const vv_xray_table *x = ctx;
     float i = (v - x->lut_lo) * x->lut_scale;
-    i = i < 0 ? 0 : i > VV_VC_LUT - 1 ? VV_VC_LUT - 1 : i;
+    i = i > 0 ? (i < VV_VC_LUT - 1 ? i : VV_VC_LUT - 1) : 0; /* NaN: 0 (vv_vtables_index) */
     memcpy(e, x->lut + 4 * (int)i, 4 * sizeof(float));
 }
 

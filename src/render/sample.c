@@ -6,6 +6,7 @@
  */
 #include "render/sample.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <unistd.h>
@@ -36,7 +37,10 @@ is_integer_type(vv_voxel_type t) {
 }
 
 /* Fills one row of stored values from the source volume (clamping indices
- * of duplicated axes). */
+ * of duplicated axes). A 16-bit value outside the volume's range is
+ * clamped to it: a region's voxels carry the whole volume's range, which
+ * a .vvb's header states, and a file whose range does not hold its voxels
+ * made the cast to uint16_t undefined (found by fuzz_render). */
 static void
 fill_row(vv_vcache *c, const vv_volume *vol, int j, int k, size_t base) {
     int sj = j < vol->dims[1] ? j : vol->dims[1] - 1;
@@ -44,9 +48,10 @@ fill_row(vv_vcache *c, const vv_volume *vol, int j, int k, size_t base) {
     const int snx = vol->dims[0];
     for (int i = 0; i < c->nx; i++) {
         const double x = vv_volume_get(vol, i < snx ? i : snx - 1, sj, sk);
-        if (c->q16)
-            c->q16[base + (size_t)i] = (uint16_t)(x - c->qoff);
-        else
+        if (c->q16) {
+            const double q = x - c->qoff;
+            c->q16[base + (size_t)i] = (uint16_t)(q > 0 ? (q < 65535 ? q : 65535) : 0);
+        } else
             c->f32[base + (size_t)i] = x == x ? (float)x : (float)vol->range[0]; /* NaN: minimum */
     }
 }
@@ -66,15 +71,17 @@ vv_oct_encode_n(const float *gx, const float *gy, const float *gz, int n, int8_t
 #ifdef __SSE2__
     const __m128 sign = _mm_set1_ps(-0.0f), lim = _mm_set1_ps(127.0f), one = _mm_set1_ps(1.0f);
     const __m128 zero = _mm_setzero_ps(), nlim = _mm_set1_ps(-127.0f);
+    const __m128 fmax = _mm_set1_ps(FLT_MAX);
     for (; i + 4 <= n; i += 4) {
         const __m128 gx0 = _mm_loadu_ps(gx + i), gy0 = _mm_loadu_ps(gy + i);
         const __m128 gz0 = _mm_loadu_ps(gz + i);
         const __m128 l1 = _mm_add_ps(_mm_add_ps(_mm_andnot_ps(sign, gx0), _mm_andnot_ps(sign, gy0)),
                                      _mm_andnot_ps(sign, gz0));
-        const __m128 flat = _mm_cmpeq_ps(l1, zero);
+        /* no direction: 0, or not finite (NaN or infinite differences) */
+        const __m128 flat = _mm_or_ps(_mm_cmpngt_ps(l1, zero), _mm_cmpnle_ps(l1, fmax));
         /* divided rather than scaled by 1 / l1, which overflows for a
          * denormal l1 */
-        const __m128 dv = _mm_or_ps(l1, _mm_and_ps(flat, one));
+        const __m128 dv = _mm_or_ps(_mm_andnot_ps(flat, l1), _mm_and_ps(flat, one));
         const __m128 x0 = _mm_div_ps(gx0, dv), y0 = _mm_div_ps(gy0, dv), z0 = _mm_div_ps(gz0, dv);
         __m128 x = _mm_mul_ps(x0, lim), y = _mm_mul_ps(y0, lim);
         /* the fold: (127 - |y|) sign(x), (127 - |x|) sign(y) where z < 0 */
@@ -118,7 +125,7 @@ vv_oct_encode_n(const float *gx, const float *gy, const float *gz, int n, int8_t
 #endif
     for (; i < n; i++) {
         const float l1 = fabsf(gx[i]) + fabsf(gy[i]) + fabsf(gz[i]);
-        if (l1 == 0) {
+        if (!(l1 > 0 && l1 <= FLT_MAX)) { /* 0, NaN or infinite: no direction */
             out[2 * i] = out[2 * i + 1] = VV_OCT_ZERO;
             continue;
         }

@@ -5,7 +5,8 @@
  * coarse levels when the file has them); then the file as a pyramid
  * (vv_pyramid_open: the level table and indices checked) and a small box
  * of every level read (level 0 from the bricks, the others from their
- * chunks). The input is the file.
+ * chunks); then every level asked of the background loader and waited
+ * for, and the requests it refuses. The input is the file.
  */
 #include <stdint.h>
 #include <stdio.h>
@@ -17,6 +18,48 @@
 #include "volvis/volvis.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+/* The background loader (vv_pyramid_request): every small level's whole
+ * box, coarse first, waited for; then the requests it refuses (a level past the
+ * last, a box past the level's end, a negative count) and a cancel. */
+static void
+background(vv_pyramid *p) {
+    const int n = vv_pyramid_levels(p);
+    int level[VV_PYRAMID_MAX_LEVELS + 1], lo[3 * (VV_PYRAMID_MAX_LEVELS + 1)],
+        hi[3 * (VV_PYRAMID_MAX_LEVELS + 1)];
+    if (n < 1 || n > VV_PYRAMID_MAX_LEVELS)
+        return;
+    int m = 0; /* the levels of at most 2^21 voxels: milliseconds */
+    for (int l = n - 1; l >= 0; l--) {
+        const vv_volume *h = vv_pyramid_level(p, l);
+        if ((uint64_t)h->dims[0] * (uint64_t)h->dims[1] * (uint64_t)h->dims[2] > (1u << 21))
+            continue;
+        level[m] = l;
+        for (int a = 0; a < 3; a++) {
+            lo[3 * m + a] = 0;
+            hi[3 * m + a] = h->dims[a] - 1;
+        }
+        m++;
+    }
+    vv_status s = vv_pyramid_request(p, m, level, lo, hi);
+    fuzz_check_status(s);
+    if (s == VV_OK)
+        for (int k = 0; k < 20 && vv_pyramid_loading(p) > 0; k++)
+            vv_pyramid_wait(p, 0.1);
+    for (int a = 0; a < 3; a++) {
+        lo[a] = 0;
+        hi[a] = 0;
+    }
+    level[0] = n;
+    fuzz_check_status(vv_pyramid_request(p, 1, level, lo, hi));
+    level[0] = 0;
+    hi[0] = vv_pyramid_level(p, 0)->dims[0];
+    fuzz_check_status(vv_pyramid_request(p, 1, level, lo, hi));
+    fuzz_check_status(vv_pyramid_request(p, -1, level, lo, hi));
+    fuzz_check_status(vv_pyramid_request(p, 0, level, lo, hi));
+    vv_pyramid_stats st;
+    vv_pyramid_stats_get(p, &st);
+}
 
 int
 LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
@@ -45,6 +88,8 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     v = NULL;
     if (vv_bricked_proxy(b, 16, &v) == VV_OK)
         fuzz_check_volume(v);
+    vv_bricked_stats st;
+    vv_bricked_stats_get(b, &st);
     vv_bricked_free(b);
     vv_pyramid *p = NULL;
     if (vv_pyramid_open(&p, path, -1, -1, cache, NULL) != VV_OK)
@@ -59,6 +104,7 @@ LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         if (vv_pyramid_read_box(p, l, lo, hi, &v) == VV_OK)
             fuzz_check_volume(v);
     }
+    background(p);
     vv_pyramid_free(p);
     return 0;
 }

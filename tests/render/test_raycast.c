@@ -1764,10 +1764,88 @@ test_denormal_range(void **state) {
     vv_volume_free(v);
 }
 
+/* A float volume whose values span more than a float holds (-2.5e38 and
+ * 3.2e38): the cache stores some of them as infinite, a sample between
+ * them is NaN, and its table index was a NaN cast to int, and so was the
+ * octahedral code of a NaN gradient (undefined; found by fuzz_render,
+ * tests/fuzz/corpus/render/crash-*); now every mode draws it with finite
+ * pixels. */
+static void
+test_range_past_float(void **state) {
+    (void)state;
+    const int d[3] = {9, 7, 6};
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_new(&v, d, VV_F32));
+    float *f = v->data;
+    /* two columns at the extremes (the last one reaches the scalar encoder
+     * of the gradients: 9 = 8 + 1), a NaN, a ramp elsewhere */
+    for (int z = 0, i = 0; z < d[2]; z++)
+        for (int y = 0; y < d[1]; y++)
+            for (int x = 0; x < d[0]; x++, i++)
+                f[i] = x == 7 ? -2.5e38f : x == 8 ? 3.2e38f : 0.1f * (float)(x + y + z);
+    f[40] = NAN;
+    vv_volume_update_range(v);
+    vv_render_mode modes[] = {VV_MODE_COMPOSITE, VV_MODE_MIP, VV_MODE_ISO, VV_MODE_XRAY,
+                              VV_MODE_MINIP};
+    for (size_t m = 0; m < sizeof modes / sizeof modes[0]; m++) {
+        vv_default_scene_options o;
+        vv_default_scene_options_init(&o);
+        o.width = o.height = 24;
+        o.mode = modes[m];
+        vv_world *w = NULL;
+        vt_ok(vv_world_new_for_volume(&w, v, &o));
+        vv_renderer *r = new_raycaster();
+        vv_image *img = render(r, w, &w->view);
+        for (size_t i = 0; i < (size_t)img->width * img->height * 4; i++)
+            assert_true(isfinite(img->rgba[i]));
+        vv_image_free(img);
+        vv_renderer_free(r);
+        vv_world_free(w);
+    }
+    vv_volume_free(v);
+}
+
+/* A volume whose range does not hold its voxels (a region of a .vvb
+ * carries the range its header states: found by fuzz_render,
+ * tests/fuzz/corpus/render/crash-1826d8a1...): the 16-bit copy's cast of a
+ * value below or past the range was undefined; now such values are clamped
+ * to the range, and every mode draws finite pixels. */
+static void
+test_range_narrower_than_voxels(void **state) {
+    (void)state;
+    const int d[3] = {10, 8, 6};
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_new(&v, d, VV_I32));
+    int32_t *f = v->data;
+    for (size_t i = 0; i < vv_volume_voxel_count(v); i++)
+        f[i] = (int32_t)(i % 11) * 20000 - 50000;
+    v->range[0] = 0;
+    v->range[1] = 100;
+    vv_render_mode modes[] = {VV_MODE_COMPOSITE, VV_MODE_MIP, VV_MODE_ISO};
+    for (size_t m = 0; m < sizeof modes / sizeof modes[0]; m++) {
+        vv_default_scene_options o;
+        vv_default_scene_options_init(&o);
+        o.width = o.height = 24;
+        o.mode = modes[m];
+        vv_world *w = NULL;
+        vt_ok(vv_world_new_for_volume(&w, v, &o));
+        vv_renderer *r = new_raycaster();
+        vv_image *img = render(r, w, &w->view);
+        for (size_t i = 0; i < (size_t)img->width * img->height * 4; i++)
+            assert_true(isfinite(img->rgba[i]));
+        vv_image_free(img);
+        vv_renderer_free(r);
+        vv_world_free(w);
+    }
+    vv_volume_free(v);
+}
+
 int
 main(void) {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_range_narrower_than_voxels),
         cmocka_unit_test(test_denormal_range),
+        cmocka_unit_test(test_range_past_float),
         cmocka_unit_test(test_adaptive_refinement),
         cmocka_unit_test(test_preintegration_analytic),
         cmocka_unit_test(test_preintegration_real),

@@ -593,8 +593,7 @@ bricked_open(vv_bricked **out, const char *path, const vv_raw_params *raw, vv_ca
         vv_load_options lo;
         vv_load_options_init(&lo);
         s = !r || !r->raw_layout
-                ? vv_error_set(VV_ERR_FORMAT, "%s: not a file read by bricks (.vvb, raw, raw NRRD)",
-                               vv_path_basename(path))
+                ? vv_error_set(VV_ERR_FORMAT, "not a file read by bricks (.vvb, raw, raw NRRD)")
                 : r->raw_layout(path, &lo, &h, &data, &off, &big);
         if (s == VV_ERR_UNSUPPORTED)
             s = VV_ERR_FORMAT; /* "must be converted first" */

@@ -163,7 +163,7 @@ ray_setup(const rc_obj *ob, const vv_ray *wr, vv_vray *r) {
 static inline float
 lut_index_f(const rc_obj *o, float v) {
     float x = (v - o->lut_lo) * o->lut_scale;
-    return x < 0 ? 0 : x > VV_VC_LUT - 1 ? VV_VC_LUT - 1 : x;
+    return x > 0 ? (x < VV_VC_LUT - 1 ? x : VV_VC_LUT - 1) : 0; /* NaN: 0 (vv_vtables_index) */
 }
 
 /* ---------------------------------------------------------------------- */
