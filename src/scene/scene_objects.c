@@ -79,6 +79,46 @@ vv_scene_get_object_name(const sctx *c, json_t *e, const char *op, const char **
  * or true/null for a filter without one). On error *@p bad_item is the
  * array index at fault (-1: the value itself) and the message says why.
  * Errors: VV_ERR_INVALID, VV_ERR_NOMEM. */
+/* The source an earlier object opened out of core for file @p full at
+ * step @p time (the same real path), or NULL. */
+static scene_source *
+find_source(const sctx *c, const char *full, int time) {
+    scene_sources *s = c->sources;
+    char *real = s && s->n ? realpath(full, NULL) : NULL;
+    scene_source *hit = NULL;
+    for (int i = 0; real && i < s->n && !hit; i++)
+        if (s->e[i].time == time && !strcmp(s->e[i].real, real))
+            hit = &s->e[i];
+    free(real);
+    return hit;
+}
+
+/* Keeps @p source (out of core) for the objects after this one that name
+ * file @p full at step @p time; past SCENE_SOURCES_MAX files they open
+ * their own. */
+static void
+keep_source(const sctx *c, const char *full, int time, vv_source *source) {
+    if (!c->sources || c->sources->n >= SCENE_SOURCES_MAX)
+        return;
+    char *real = realpath(full, NULL);
+    if (!real)
+        return;
+    scene_source *e = &c->sources->e[c->sources->n++];
+    e->real = real;
+    e->time = time;
+    e->source = vv_source_ref(source);
+}
+
+void
+vv_scene_sources_clear(scene_sources *s) {
+    for (int i = 0; s && i < s->n; i++) {
+        free(s->e[i].real);
+        vv_source_free(s->e[i].source);
+    }
+    if (s)
+        s->n = 0;
+}
+
 static vv_status
 chain_from_json(const json_t *j, vv_filter_chain **out, int *bad_item) {
     *bad_item = -1;
@@ -216,16 +256,24 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
         st = vv_filter_load_cached(c->fcache, full, has_origin ? o3 : NULL, has_spacing ? s3 : NULL,
                                    chain, &fo, &vol);
     } else if (c->open && c->open->mode != VV_OPEN_WHOLE) {
-        /* out of core where the file and the options allow (vv_open) */
-        vv_open_options oo = *c->open;
-        vv_load_options_init(&oo.load);
-        oo.load.time = time;
-        vv_opened od;
-        vv_error_clear();
-        st = vv_open(&od, full, &oo);
-        if (st == VV_OK && od.kind != 0)
-            st = vv_error_set(VV_ERR_FORMAT, "%s: not a volume file", full);
+        /* out of core where the file and the options allow (vv_open); a
+         * file an earlier object opened out of core: its source, shared */
         const int level = c->open->load.level > 0 ? c->open->load.level : 0;
+        scene_source *shared = find_source(c, full, time);
+        vv_opened od;
+        memset(&od, 0, sizeof od);
+        if (shared) {
+            od.source = vv_source_ref(shared->source);
+            st = VV_OK;
+        } else {
+            vv_open_options oo = *c->open;
+            vv_load_options_init(&oo.load);
+            oo.load.time = time;
+            vv_error_clear();
+            st = vv_open(&od, full, &oo);
+            if (st == VV_OK && od.kind != 0)
+                st = vv_error_set(VV_ERR_FORMAT, "%s: not a volume file", full);
+        }
         if (st == VV_OK && (vol = vv_source_volume(od.source))) {
             vv_volume_ref(vol);
         } else if (st == VV_OK && (st = vv_source_proxy(od.source, level, &vol)) == VV_OK) {
@@ -234,6 +282,8 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
             source_level = level;
             for (int k = 0; k < 3; k++) /* a "spacing" is the file's, of its level 0 */
                 scale[k] = vol->spacing[k] / h0->spacing[k];
+            if (!shared)
+                keep_source(c, full, time, source);
         }
         vv_opened_clear(&od);
     } else {

@@ -1021,6 +1021,54 @@ test_info_level_paths(void **state) {
     }
 }
 
+/* A scene naming one OME-Zarr store in three objects, out of core: the
+ * objects share one source (one client of the cache: its chunks, shard
+ * indexes and loader threads held once), not three that each hold and
+ * count the same chunks; another step of the store is a source of its own. */
+static void
+test_scene_shares_store(void **state) {
+    (void)state;
+    const char *dir = fresh("scene_share");
+    char store[4600], scene[4600], other[4600];
+    snprintf(store, sizeof store, "%s/img.ome.zarr", dir);
+    snprintf(other, sizeof other, "%s/two.ome.zarr", dir);
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_new(&v, (const int[3]){64, 48, 40}, VV_U16));
+    for (uint64_t i = 0; i < vv_volume_voxel_count(v); i++)
+        ((uint16_t *)v->data)[i] = (uint16_t)(i * 7 % 4000);
+    vv_save_options so;
+    vv_save_options_init(&so);
+    so.format = VV_FORMAT_OME_ZARR;
+    vt_ok(vv_volume_save_with(v, store, &so));
+    vt_ok(vv_volume_save_with(v, other, &so));
+    vv_volume_free(v);
+    snprintf(scene, sizeof scene, "%s/scene.json", dir);
+    put_text(dir, "scene.json",
+             "{\"objects\": [{\"name\": \"a\", \"file\": \"img.ome.zarr\"}, "
+             "{\"name\": \"b\", \"file\": \"img.ome.zarr\", \"position\": [80, 0, 0]}, "
+             "{\"name\": \"c\", \"file\": \"./img.ome.zarr\"}, "
+             "{\"name\": \"d\", \"file\": \"two.ome.zarr\"}]}");
+    vv_cache *cache = vt_cache(64u << 20);
+    vv_open_options oo;
+    vv_open_options_init(&oo);
+    oo.mode = VV_OPEN_OUT_OF_CORE;
+    oo.cache = cache;
+    vv_world *w = NULL;
+    vt_ok(vv_scene_load_open(&w, scene, NULL, NULL, &oo));
+    assert_int_equal(w->n_objects, 4);
+    for (int i = 0; i < 4; i++)
+        assert_non_null(w->objects[i]->source);
+    assert_ptr_equal(w->objects[0]->source, w->objects[1]->source);
+    assert_ptr_equal(w->objects[0]->source, w->objects[2]->source);
+    assert_ptr_not_equal(w->objects[0]->source, w->objects[3]->source);
+    vv_cache_stats st;
+    vv_cache_stats_get(cache, &st);
+    assert_int_equal(st.sources, 2); /* img.ome.zarr once, two.ome.zarr once */
+    vv_world_free(w);
+    vv_cache_stats_get(cache, &st);
+    assert_int_equal(st.sources, 0); /* the last object's reference closed it */
+}
+
 int
 main(void) {
     setenv("VOLVIS_SANDBOX", "0", 1);
@@ -1033,7 +1081,7 @@ main(void) {
         cmocka_unit_test(test_arguments),        cmocka_unit_test(test_pyramid),
         cmocka_unit_test(test_pyramid_requests), cmocka_unit_test(test_v3_good),
         cmocka_unit_test(test_v3_box_bytes),     cmocka_unit_test(test_v3_hostile),
-        cmocka_unit_test(test_info_level_paths),
+        cmocka_unit_test(test_info_level_paths), cmocka_unit_test(test_scene_shares_store),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
