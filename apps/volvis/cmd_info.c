@@ -41,6 +41,10 @@ cli_info_usage(FILE *out) {
                  "For an irregular grid (the grid formats below): its kind, point and cell\n"
                  "counts by cell type, blocks or axes, bounds, and each field with its range\n"
                  "and missing values.\n"
+                 "For OME-Zarr: an image's label images (labels/NAME: dimensions, type,\n"
+                 "levels, colours; each opens as a label volume by its path); an HCS plate's\n"
+                 "rows x columns, wells and fields per well, and the path that opens one\n"
+                 "field (PLATE/A/1/0); a well's fields; a labels group's label images.\n"
                  "\n"
                  "Options:\n"
                  "  --raw WxHxD:TYPE[:be|le][:SXxSYxSZ][:skip=N]\n"
@@ -65,6 +69,7 @@ cli_info_usage(FILE *out) {
                  "  volvis info ../shared/data/volumes/nut.slc\n"
                  "  volvis info --raw 256x256x128:u16:be:0.9x0.9x2 scan.raw\n"
                  "  volvis info --series 2 ~/scans/CT_folder\n"
+                 "  volvis info plate.ome.zarr\n"
                  "\n");
     cli_print_formats(out, 1);
 }
