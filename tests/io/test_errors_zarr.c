@@ -1069,6 +1069,146 @@ test_scene_shares_store(void **state) {
     assert_int_equal(st.sources, 0); /* the last object's reference closed it */
 }
 
+/* An HCS plate (v2) and an image with labels listed by
+ * vv_ome_zarr_contents_get; hostile plates and label groups refused in one
+ * line naming the file and the field, by the listing and by a read. */
+#define PLATE_(wells, more)                                                                        \
+    "{\"plate\": {\"rows\": [{\"name\": \"A\"}, {\"name\": \"B\"}], \"columns\": [{\"name\": "     \
+    "\"1\"}], \"wells\": " wells more "}}"
+#define WELL_A1 "{\"path\": \"A/1\", \"rowIndex\": 0, \"columnIndex\": 0}"
+
+static const char *
+plate_store(const char *name, const char *plate, const char *well) {
+    const char *dir = fresh(name);
+    put_text(dir, ".zattrs", plate);
+    put_text(dir, "A/1/.zattrs", well);
+    put_text(dir, "A/1/0/.zattrs", MS("0", SC3));
+    put_text(dir, "A/1/0/0/.zarray", ZA);
+    return dir;
+}
+
+static void
+contents_expect(const char *dir, vv_status want, const char *needle) {
+    vv_ome_zarr_contents c;
+    vv_status s = vv_ome_zarr_contents_get(dir, &c);
+    assert_null(c.wells);
+    assert_null(c.labels);
+    expect(s, want, needle, base(dir));
+    load_expect(dir, 0, 0, 0, want, needle); /* a read refuses it alike */
+}
+
+static void
+test_plate_labels(void **state) {
+    (void)state;
+    const char *wimg = "{\"well\": {\"images\": [{\"path\": \"0\"}, {\"path\": \"1\"}]}}";
+    const char *dir =
+        plate_store("plate.zarr", PLATE_("[" WELL_A1 "]", ", \"field_count\": 2"), wimg);
+    vv_ome_zarr_contents c;
+    vt_ok(vv_ome_zarr_contents_get(dir, &c));
+    assert_int_equal(c.kind, VV_OME_ZARR_PLATE);
+    assert_int_equal(c.n_rows, 2);
+    assert_int_equal(c.n_columns, 1);
+    assert_int_equal(c.field_count, 2);
+    assert_int_equal(c.n_wells, 1);
+    assert_string_equal(c.wells[0].path, "A/1");
+    assert_int_equal(c.wells[0].n_fields, 2);
+    assert_string_equal(c.wells[0].first_field, "0");
+    vv_ome_zarr_contents_clear(&c);
+    load_expect(dir, 0, 0, 0, VV_ERR_FORMAT, "plate.zarr/A/1/0)");
+    /* the field reads as an image */
+    char field[4600];
+    snprintf(field, sizeof field, "%s/A/1/0", dir);
+    vv_load_options o;
+    vv_load_options_init(&o);
+    vv_volume *v = NULL;
+    vt_ok(vv_volume_load(&v, field, &o));
+    assert_int_equal(v->dims[0], 4);
+    vv_volume_free(v);
+    /* hostile plates */
+    contents_expect(
+        plate_store("p_dotdot.zarr",
+                    PLATE_("[{\"path\": \"A/..\", \"rowIndex\": 0, \"columnIndex\": 0}]", ""),
+                    wimg),
+        VV_ERR_FORMAT, ".zattrs: plate.wells 0: path \"A/..\" leaves the store");
+    contents_expect(plate_store("p_abs.zarr",
+                                PLATE_("[{\"path\": \"/etc/x\", \"rowIndex\": 0, \"columnIndex\": "
+                                       "0}]",
+                                       ""),
+                                wimg),
+                    VV_ERR_FORMAT, "plate.wells 0: path \"/etc/x\" leaves the store");
+    contents_expect(plate_store("p_nopath.zarr", PLATE_("[{\"rowIndex\": 0}]", ""), wimg),
+                    VV_ERR_FORMAT, "plate.wells 0: no path");
+    contents_expect(
+        plate_store("p_col.zarr",
+                    PLATE_("[{\"path\": \"A/1\", \"rowIndex\": 0, \"columnIndex\": 1}]", ""), wimg),
+        VV_ERR_FORMAT, "plate.wells 0: rowIndex or columnIndex");
+    contents_expect(
+        plate_store("p_fc.zarr", PLATE_("[" WELL_A1 "]", ", \"field_count\": -1"), wimg),
+        VV_ERR_FORMAT, "plate.field_count is not a count");
+    contents_expect(plate_store("p_rows.zarr", "{\"plate\": {\"rows\": 3}}", wimg), VV_ERR_FORMAT,
+                    "plate.rows is not a list");
+    contents_expect(plate_store("p_field.zarr", PLATE_("[" WELL_A1 "]", ""),
+                                "{\"well\": {\"images\": [{\"path\": \"0/../../..\"}]}}"),
+                    VV_ERR_FORMAT, "A/1/.zattrs: well.images 0: path \"0/../../..\"");
+    contents_expect(plate_store("p_ctl.zarr", PLATE_("[" WELL_A1 "]", ""),
+                                "{\"well\": {\"images\": [{\"path\": \"0\\n1\"}]}}"),
+                    VV_ERR_FORMAT, "A/1/.zattrs: well.images 0: path");
+    /* 4097 wells */
+    char *big = malloc(4097 * 64 + 256);
+    assert_non_null(big);
+    int n = sprintf(big, "{\"plate\": {\"rows\": [], \"columns\": [], \"wells\": [");
+    for (int i = 0; i < 4097; i++)
+        n += sprintf(big + n, "%s" WELL_A1, i ? ", " : "");
+    sprintf(big + n, "]}}");
+    contents_expect(plate_store("p_many.zarr", big, wimg), VV_ERR_LIMIT,
+                    "plate.wells: 4097 entries (at most 4096 are read)");
+    free(big);
+    /* an image with labels; a label named out of the store */
+    char img[4600]; /* fresh's buffer is reused below */
+    snprintf(img, sizeof img, "%s", fresh("img_labels.zarr"));
+    dir = img;
+    put_text(dir, ".zattrs", MS("0", SC3));
+    put_text(dir, "0/.zarray", ZA);
+    put_text(dir, "labels/.zattrs", "{\"labels\": [\"cells\"]}");
+    put_text(dir, "labels/cells/.zattrs",
+             "{\"multiscales\": [{\"axes\": " AX3 ", \"datasets\": [{\"path\": \"0\"}]}], "
+             "\"image-label\": {\"colors\": [{\"label-value\": 1, \"rgba\": [1, 2, 3, 4]}]}}");
+    put_text(dir, "labels/cells/0/.zarray", ZA_("[4, 4, 4]", "[2, 2, 2]", "<u2", ""));
+    vt_ok(vv_ome_zarr_contents_get(dir, &c));
+    assert_int_equal(c.kind, VV_OME_ZARR_IMAGE);
+    assert_int_equal(c.n_labels, 1);
+    assert_string_equal(c.labels[0].name, "cells");
+    assert_int_equal(c.labels[0].type, VV_U16);
+    assert_int_equal(c.labels[0].n_colors, 1);
+    vv_ome_zarr_contents_clear(&c);
+    vv_load_info info;
+    memset(&info, 0, sizeof info);
+    vv_load_options_init(&o);
+    o.info = &info;
+    snprintf(field, sizeof field, "%s/labels/cells", dir);
+    vt_ok(vv_volume_load(&v, field, &o));
+    assert_int_equal(info.is_label, 1);
+    vv_volume_free(v);
+    put_text(dir, "labels/.zattrs", "{\"labels\": [\"../0\"]}");
+    vv_status s = vv_ome_zarr_contents_get(dir, &c);
+    expect(s, VV_ERR_FORMAT, "labels/.zattrs: labels 0: path \"../0\" leaves the store",
+           "img_labels.zarr");
+    put_text(dir, "labels/.zattrs", "{\"labels\": [\"0\"]}"); /* not a multiscales image */
+    s = vv_ome_zarr_contents_get(dir, &c);
+    expect(s, VV_ERR_FORMAT, "labels 0: \"0\" is not a multiscales image", "img_labels.zarr");
+    /* a label folder that is a link out of the store */
+    const char *out = fresh("outside_labels");
+    put_text(out, ".zattrs",
+             "{\"multiscales\": [{\"axes\": " AX3 ", \"datasets\": [{\"path\": "
+             "\"0\"}]}]}");
+    put_text(dir, "labels/.zattrs", "{\"labels\": [\"ext\"]}");
+    char link[4600];
+    snprintf(link, sizeof link, "%s/labels/ext", dir);
+    assert_int_equal(symlink(out, link), 0);
+    s = vv_ome_zarr_contents_get(dir, &c);
+    expect(s, VV_ERR_FORMAT, "labels/ext/.zattrs leaves the store", "img_labels.zarr");
+}
+
 int
 main(void) {
     setenv("VOLVIS_SANDBOX", "0", 1);
@@ -1082,6 +1222,7 @@ main(void) {
         cmocka_unit_test(test_pyramid_requests), cmocka_unit_test(test_v3_good),
         cmocka_unit_test(test_v3_box_bytes),     cmocka_unit_test(test_v3_hostile),
         cmocka_unit_test(test_info_level_paths), cmocka_unit_test(test_scene_shares_store),
+        cmocka_unit_test(test_plate_labels),
     };
     return vt_run_tests(tests, NULL, NULL);
 }
