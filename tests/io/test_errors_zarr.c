@@ -1116,7 +1116,7 @@ test_plate_labels(void **state) {
     vv_ome_zarr_contents_clear(&c);
     load_expect(dir, 0, 0, 0, VV_ERR_FORMAT, "plate.zarr/A/1/0)");
     /* the field reads as an image */
-    char field[4600];
+    char field[4700];
     snprintf(field, sizeof field, "%s/A/1/0", dir);
     vv_load_options o;
     vv_load_options_init(&o);
@@ -1202,7 +1202,7 @@ test_plate_labels(void **state) {
              "{\"multiscales\": [{\"axes\": " AX3 ", \"datasets\": [{\"path\": "
              "\"0\"}]}]}");
     put_text(dir, "labels/.zattrs", "{\"labels\": [\"ext\"]}");
-    char link[4600];
+    char link[4700];
     snprintf(link, sizeof link, "%s/labels/ext", dir);
     assert_int_equal(symlink(out, link), 0);
     s = vv_ome_zarr_contents_get(dir, &c);
