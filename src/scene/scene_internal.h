@@ -28,6 +28,7 @@ typedef struct scene_source {
     char *real; /* the file's real path (malloc) */
     int time;
     vv_source *source; /* a reference */
+    int is_label;      /* an OME-Zarr label image (vv_load_info.is_label) */
 } scene_source;
 
 typedef struct scene_sources {

@@ -97,7 +97,7 @@ find_source(const sctx *c, const char *full, int time) {
  * file @p full at step @p time; past SCENE_SOURCES_MAX files they open
  * their own. */
 static void
-keep_source(const sctx *c, const char *full, int time, vv_source *source) {
+keep_source(const sctx *c, const char *full, int time, vv_source *source, int is_label) {
     if (!c->sources || c->sources->n >= SCENE_SOURCES_MAX)
         return;
     char *real = realpath(full, NULL);
@@ -107,6 +107,7 @@ keep_source(const sctx *c, const char *full, int time, vv_source *source) {
     e->real = real;
     e->time = time;
     e->source = vv_source_ref(source);
+    e->is_label = is_label;
 }
 
 void
@@ -233,6 +234,7 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     vv_volume *vol = NULL;
     vv_source *source = NULL; /* the file out of core (vol its proxy) */
     int source_level = 0;
+    int is_label = 0;            /* the file is an OME-Zarr label image */
     double scale[3] = {1, 1, 1}; /* the volume's voxel over the file's */
     /* "filters": a filter chain applied at load (src/filter), the result cached */
     json_t *fj = json_object_get(e, "filters");
@@ -264,6 +266,7 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
         memset(&od, 0, sizeof od);
         if (shared) {
             od.source = vv_source_ref(shared->source);
+            od.info.is_label = shared->is_label;
             st = VV_OK;
         } else {
             vv_open_options oo = *c->open;
@@ -283,15 +286,20 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
             for (int k = 0; k < 3; k++) /* a "spacing" is the file's, of its level 0 */
                 scale[k] = vol->spacing[k] / h0->spacing[k];
             if (!shared)
-                keep_source(c, full, time, source);
+                keep_source(c, full, time, source, od.info.is_label);
         }
+        is_label = st == VV_OK && od.info.is_label;
         vv_opened_clear(&od);
     } else {
         vv_load_options lo;
         vv_load_options_init(&lo);
         lo.time = time;
+        vv_load_info li;
+        memset(&li, 0, sizeof li);
+        lo.info = &li;
         vv_error_clear();
         st = vv_volume_load(&vol, full, &lo);
+        is_label = st == VV_OK && li.is_label;
     }
     if (st != VV_OK) {
         vv_filter_chain_free(chain);
@@ -360,6 +368,12 @@ vv_scene_parse_object(const sctx *c, json_t *e, size_t idx, vv_world *w) {
     }
     vv_filter_chain_free(chain);
     st = vv_scene_parse_object_fields(c, e, op, o);
+    /* an OME-Zarr label image (image-label) without an appearance of its
+     * own shows as a label volume (a saved scene always names its
+     * transfer_function, so a saved one keeps what it had) */
+    if (st == VV_OK && is_label && !json_object_get(e, "segmentation") &&
+        !json_object_get(e, "transfer_function"))
+        o->segmentation = VV_SEG_LABELS;
     if (st == VV_OK)
         st = vv_scene_parse_effect_flags(c, e, op, o);
     if (st == VV_OK)

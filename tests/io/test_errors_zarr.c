@@ -1189,6 +1189,25 @@ test_plate_labels(void **state) {
     vt_ok(vv_volume_load(&v, field, &o));
     assert_int_equal(info.is_label, 1);
     vv_volume_free(v);
+    /* a scene object naming the label image, read whole and out of core:
+     * a label volume unless the object says otherwise */
+    put_text(dir, "scene.json",
+             "{\"objects\": [{\"file\": \"labels/cells\"}, {\"file\": \"labels/cells\", "
+             "\"position\": [9, 0, 0], \"segmentation\": \"transfer_function\"}]}");
+    char scene[4700];
+    snprintf(scene, sizeof scene, "%s/scene.json", dir);
+    for (int ooc = 0; ooc < 2; ooc++) {
+        vv_open_options oo;
+        vv_open_options_init(&oo);
+        oo.mode = VV_OPEN_OUT_OF_CORE;
+        oo.cache = vt_cache(64u << 20);
+        vv_world *w = NULL;
+        vt_ok(vv_scene_load_open(&w, scene, NULL, NULL, ooc ? &oo : NULL));
+        assert_int_equal(w->n_objects, 2);
+        assert_int_equal(w->objects[0]->segmentation, VV_SEG_LABELS);
+        assert_int_equal(w->objects[1]->segmentation, VV_SEG_TRANSFER_FUNCTION);
+        vv_world_free(w);
+    }
     put_text(dir, "labels/.zattrs", "{\"labels\": [\"../0\"]}");
     vv_status s = vv_ome_zarr_contents_get(dir, &c);
     expect(s, VV_ERR_FORMAT, "labels/.zattrs: labels 0: path \"../0\" leaves the store",
